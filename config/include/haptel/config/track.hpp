@@ -1,0 +1,85 @@
+#pragma once
+/// @file A grand-prix track: a closed corridor with walls, gates and obstacles.
+///
+/// The file gives a closed centre line; walls are the centre line offset by
+/// half the corridor width on each side. Gates are pairs of posts across the
+/// centre line at given distances along it; the start/finish line crosses the
+/// corridor at distance 0. Vehicles start `start_behind` metres before it.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "haptel/core/geometry2d.hpp"
+
+namespace haptel {
+
+struct GateSpec {
+  double along = 0.0;  ///< distance along the centre line from the start line, m
+  double width = 0.0;  ///< distance between the two posts' centres, m
+};
+
+struct CircleObstacle {
+  Vec2 center{0.0, 0.0};
+  double radius = 0.1;  ///< m
+};
+
+struct TrackConfig {
+  std::string name;
+  std::filesystem::path file;
+  std::vector<Vec2> centerline;  ///< closed loop (last point joins the first), m
+  double corridor_width = 1.0;   ///< m
+  double post_radius = 0.04;     ///< m
+  double start_behind = 0.3;     ///< m before the start line where vehicles start
+  double lap_cap_s = 600.0;
+  std::vector<GateSpec> gates;
+  std::vector<CircleObstacle> obstacles;
+};
+
+/// Loads and validates a track file. Throws ConfigError naming file, key, line.
+TrackConfig LoadTrack(const std::filesystem::path& file);
+
+/// A gate as placed on the track.
+struct Gate {
+  Vec2 center;
+  Vec2 tangent;       ///< unit direction of travel
+  Vec2 left_post;     ///< centre of the post on the driver's left
+  Vec2 right_post;
+  Segment2 line;      ///< across the whole corridor, right wall to left wall
+  double along = 0.0;
+};
+
+/// Geometry derived from a TrackConfig, computed once.
+class Track {
+ public:
+  explicit Track(TrackConfig config);
+
+  const TrackConfig& config() const { return config_; }
+  double length() const { return length_; }
+  const std::vector<Segment2>& walls() const { return walls_; }
+  const std::vector<Gate>& gates() const { return gates_; }
+  /// All round posts (gate posts), plus the circle obstacles.
+  const std::vector<CircleObstacle>& round_obstacles() const { return round_; }
+  const Segment2& start_line() const { return start_line_; }
+
+  /// Point and unit tangent on the centre line at arc length s (wraps).
+  Vec2 PointAt(double s) const;
+  Vec2 TangentAt(double s) const;
+  /// Arc length of the centre-line point closest to p.
+  double ClosestArcLength(const Vec2& p) const;
+  /// Where vehicles start, and their heading (rad).
+  Vec2 StartPosition() const;
+  double StartHeading() const;
+
+ private:
+  Segment2 CrossLine(double s, double half_width) const;
+
+  TrackConfig config_;
+  std::vector<double> cumulative_;  ///< arc length at each centre-line vertex
+  double length_ = 0.0;
+  std::vector<Segment2> walls_;
+  std::vector<Gate> gates_;
+  std::vector<CircleObstacle> round_;
+  Segment2 start_line_;
+};
+
+}  // namespace haptel

@@ -1,0 +1,18 @@
+#pragma once
+#include "haptel/config/link.hpp"
+#include "yaml_map.hpp"
+
+namespace haptel::config_detail {
+
+/// Reads a `link:` section (and finishes it).
+inline LinkConfig ReadLink(YamlMap& link) {
+  LinkConfig c;
+  c.domain_id = link.Integer("domain_id", c.domain_id, 0, 232);
+  c.interfaces = link.Strings("interfaces", c.interfaces);
+  c.peers = link.Strings("peers", c.peers);
+  c.command_deadline_s = link.Number("command_deadline_s", c.command_deadline_s, 0.001, 10.0);
+  link.Finish();
+  return c;
+}
+
+}  // namespace haptel::config_detail

@@ -1,0 +1,74 @@
+#include "haptel/config/run.hpp"
+
+#include <algorithm>
+
+#include "link_section.hpp"
+#include "yaml_map.hpp"
+
+namespace haptel {
+
+using config_detail::YamlMap;
+
+RunConfig LoadRun(const std::filesystem::path& file) {
+  YamlMap root = YamlMap::Load(file);
+  const std::filesystem::path dir = file.parent_path();
+  RunConfig r;
+  r.file = file;
+  r.name = root.String("name", r.name);
+  r.track = dir / root.RequireString("track");
+  r.vehicle = dir / root.RequireString("vehicle");
+  r.interface = root.String("interface", r.interface);
+  r.interfaces_dir = dir / root.String("interfaces_dir", "interfaces");
+  r.database = root.String("database", r.database.string());
+  r.vehicle_timeout_s = root.Number("vehicle_timeout_s", r.vehicle_timeout_s, 0.05, 60.0);
+  r.session_rate_hz = root.Number("session_rate_hz", r.session_rate_hz, 10.0, 1000.0);
+  r.video_decode = root.Bool("video_decode", r.video_decode);
+
+  YamlMap op = root.Map("operator");
+  r.op.reaction_delay_s = op.Number("reaction_delay_s", r.op.reaction_delay_s, 0.0, 2.0);
+  r.op.arm_time_constant_s = op.Number("arm_time_constant_s", r.op.arm_time_constant_s, 0.0, 2.0);
+  r.op.lookahead = op.Number("lookahead", r.op.lookahead, 0.05, 10.0);
+  r.op.cruise = op.Number("cruise", r.op.cruise, 0.05, 1.0);
+  r.op.min_forward = op.Number("min_forward", r.op.min_forward, 0.0, 1.0);
+  r.op.muscle_stiffness = op.Number("muscle_stiffness", r.op.muscle_stiffness, 1.0, 1e4);
+  r.op.muscle_damping = op.Number("muscle_damping", r.op.muscle_damping, 0.0, 1e3);
+  r.op.muscle_max_force = op.Number("muscle_max_force", r.op.muscle_max_force, 0.1, 100.0);
+  r.op.muscle_integral_gain =
+      op.Number("muscle_integral_gain", r.op.muscle_integral_gain, 0.0, 1e5);
+  r.op.backoff_s = op.Number("backoff_s", r.op.backoff_s, 0.0, 10.0);
+  op.Finish();
+
+  YamlMap device = root.Map("device");
+  r.device.arm_mass = device.Number("arm_mass", r.device.arm_mass, 0.01, 100.0);
+  r.device.damping = device.Number("damping", r.device.damping, 0.0, 1e3);
+  r.device.force_limit = device.Number("force_limit", r.device.force_limit, 0.0, 100.0);
+  device.Finish();
+
+  YamlMap servo = root.Map("servo");
+  r.servo.rate_hz = servo.Number("rate_hz", r.servo.rate_hz, 100.0, 10000.0);
+  r.servo.realtime_priority = servo.Integer("realtime_priority", r.servo.realtime_priority, 0, 99);
+  servo.Finish();
+
+  YamlMap link = root.Map("link");
+  r.link = config_detail::ReadLink(link);
+  root.Finish();
+  if (r.op.min_forward > r.op.cruise) root.Fail("operator", "min_forward <= cruise");
+  return r;
+}
+
+std::filesystem::path InterfaceFile(const RunConfig& run, const std::string& name) {
+  const std::filesystem::path file = run.interfaces_dir / (name + ".yaml");
+  if (std::filesystem::exists(file)) return file;
+  std::vector<std::string> names;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(run.interfaces_dir, ec)) {
+    if (entry.path().extension() == ".yaml") names.push_back(entry.path().stem().string());
+  }
+  std::sort(names.begin(), names.end());
+  std::string list;
+  for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
+  throw ConfigError(run.file.string() + ": key 'interface': expected one of: " + list +
+                    " (files in " + run.interfaces_dir.string() + "), got '" + name + "'");
+}
+
+}  // namespace haptel

@@ -1,0 +1,208 @@
+#include "yaml_map.hpp"
+
+#include <cmath>
+#include <sstream>
+
+namespace haptel::config_detail {
+namespace {
+std::string Range(double min, double max) {
+  std::ostringstream out;
+  out << "[" << min << ", " << max << "]";
+  return out.str();
+}
+}  // namespace
+
+YamlMap YamlMap::Load(const std::filesystem::path& file) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(file.string());
+  } catch (const YAML::BadFile&) {
+    throw ConfigError(file.string() + ": cannot open the file");
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(file.string() + ":" + std::to_string(e.mark.line + 1) + ":" +
+                      std::to_string(e.mark.column + 1) + ": not valid YAML: " + e.msg);
+  }
+  if (!root.IsMap()) {
+    throw ConfigError(file.string() + ": expected a mapping of keys at the top level");
+  }
+  return YamlMap(root, file.string(), "");
+}
+
+YamlMap::YamlMap(YAML::Node node, std::string file, std::string prefix)
+    : node_(std::move(node)), file_(std::move(file)), prefix_(std::move(prefix)) {}
+
+std::string YamlMap::Path(const std::string& key) const {
+  return prefix_.empty() ? key : prefix_ + "." + key;
+}
+
+std::string YamlMap::Where(const YAML::Node& node) const {
+  const YAML::Mark mark = node.Mark();
+  if (mark.is_null()) return file_;
+  return file_ + ":" + std::to_string(mark.line + 1) + ":" + std::to_string(mark.column + 1);
+}
+
+std::string YamlMap::Got(const YAML::Node& node) const {
+  if (node.IsScalar()) return "'" + node.Scalar() + "'";
+  if (node.IsSequence()) return "a list";
+  if (node.IsMap()) return "a mapping";
+  return "nothing";
+}
+
+void YamlMap::Fail(const std::string& key, const std::string& expected) const {
+  YAML::Node child = node_.IsMap() ? node_[key] : YAML::Node();
+  const bool present = child.IsDefined();
+  throw ConfigError(Where(present ? child : node_) + ": key '" + Path(key) + "': expected " +
+                    expected + (present ? ", got " + Got(child) : ", but it is missing"));
+}
+
+bool YamlMap::Has(const std::string& key) const { return node_.IsMap() && node_[key].IsDefined(); }
+
+YAML::Node YamlMap::Child(const std::string& key) {
+  read_.insert(key);
+  return node_.IsMap() ? node_[key] : YAML::Node();
+}
+
+double YamlMap::ToNumber(const YAML::Node& node, const std::string& key,
+                         const std::string& expected) const {
+  double value = 0.0;
+  if (!node.IsScalar() || !YAML::convert<double>::decode(node, value) || !std::isfinite(value)) {
+    Fail(key, expected);
+  }
+  return value;
+}
+
+double YamlMap::Number(const std::string& key, double fallback, double min, double max) {
+  const YAML::Node child = Child(key);
+  if (!child.IsDefined() || child.IsNull()) return fallback;
+  const std::string expected = "a number in " + Range(min, max);
+  const double value = ToNumber(child, key, expected);
+  if (value < min || value > max) Fail(key, expected);
+  return value;
+}
+
+double YamlMap::RequireNumber(const std::string& key, double min, double max) {
+  if (!Has(key)) Fail(key, "a number in " + Range(min, max));
+  return Number(key, 0.0, min, max);
+}
+
+int YamlMap::Integer(const std::string& key, int fallback, int min, int max) {
+  const YAML::Node child = Child(key);
+  if (!child.IsDefined() || child.IsNull()) return fallback;
+  const std::string expected = "a whole number in " + Range(min, max);
+  int value = 0;
+  if (!child.IsScalar() || !YAML::convert<int>::decode(child, value)) Fail(key, expected);
+  if (value < min || value > max) Fail(key, expected);
+  return value;
+}
+
+bool YamlMap::Bool(const std::string& key, bool fallback) {
+  const YAML::Node child = Child(key);
+  if (!child.IsDefined() || child.IsNull()) return fallback;
+  bool value = false;
+  if (!child.IsScalar() || !YAML::convert<bool>::decode(child, value)) {
+    Fail(key, "true or false");
+  }
+  return value;
+}
+
+std::string YamlMap::String(const std::string& key, const std::string& fallback) {
+  const YAML::Node child = Child(key);
+  if (!child.IsDefined() || child.IsNull()) return fallback;
+  if (!child.IsScalar() || child.Scalar().empty()) Fail(key, "a non-empty string");
+  return child.Scalar();
+}
+
+std::string YamlMap::RequireString(const std::string& key) {
+  if (!Has(key)) Fail(key, "a non-empty string");
+  return String(key, "");
+}
+
+std::array<double, 3> YamlMap::Vec3(const std::string& key, const std::array<double, 3>& fallback,
+                                    double min, double max) {
+  const YAML::Node child = Child(key);
+  if (!child.IsDefined() || child.IsNull()) return fallback;
+  const std::string expected = "a list of 3 numbers in " + Range(min, max);
+  if (!child.IsSequence() || child.size() != 3) Fail(key, expected);
+  std::array<double, 3> out{};
+  for (size_t i = 0; i < 3; ++i) {
+    out[i] = ToNumber(child[i], key, expected);
+    if (out[i] < min || out[i] > max) Fail(key, expected);
+  }
+  return out;
+}
+
+Vec2 YamlMap::Point(const std::string& key) {
+  const YAML::Node child = Child(key);
+  const std::string expected = "a point [x, y] in metres";
+  if (!child.IsSequence() || child.size() != 2) Fail(key, expected);
+  return Vec2(ToNumber(child[0], key, expected), ToNumber(child[1], key, expected));
+}
+
+std::vector<Vec2> YamlMap::Points(const std::string& key, size_t min_count) {
+  const YAML::Node child = Child(key);
+  const std::string expected =
+      "a list of at least " + std::to_string(min_count) + " points [x, y] in metres";
+  if (!child.IsSequence() || child.size() < min_count) Fail(key, expected);
+  std::vector<Vec2> out;
+  for (size_t i = 0; i < child.size(); ++i) {
+    const YAML::Node p = child[i];
+    if (!p.IsSequence() || p.size() != 2) {
+      throw ConfigError(Where(p) + ": key '" + Path(key) + "[" + std::to_string(i) +
+                        "]': expected a point [x, y] in metres, got " + Got(p));
+    }
+    out.emplace_back(ToNumber(p[0], key, expected), ToNumber(p[1], key, expected));
+  }
+  return out;
+}
+
+std::vector<std::string> YamlMap::Strings(const std::string& key,
+                                          const std::vector<std::string>& fallback) {
+  const YAML::Node child = Child(key);
+  if (!child.IsDefined() || child.IsNull()) return fallback;
+  if (!child.IsSequence()) Fail(key, "a list of strings");
+  std::vector<std::string> out;
+  for (const auto& item : child) {
+    if (!item.IsScalar() || item.Scalar().empty()) Fail(key, "a list of non-empty strings");
+    out.push_back(item.Scalar());
+  }
+  return out;
+}
+
+YamlMap YamlMap::Map(const std::string& key) {
+  const YAML::Node child = Child(key);
+  if (!child.IsDefined() || child.IsNull()) return YamlMap(YAML::Node(YAML::NodeType::Map), file_, Path(key));
+  if (!child.IsMap()) Fail(key, "a mapping of keys");
+  return YamlMap(child, file_, Path(key));
+}
+
+std::vector<YamlMap> YamlMap::MapList(const std::string& key) {
+  const YAML::Node child = Child(key);
+  std::vector<YamlMap> out;
+  if (!child.IsDefined() || child.IsNull()) return out;
+  if (!child.IsSequence()) Fail(key, "a list of mappings");
+  for (size_t i = 0; i < child.size(); ++i) {
+    const YAML::Node item = child[i];
+    const std::string path = Path(key) + "[" + std::to_string(i) + "]";
+    if (!item.IsMap()) {
+      throw ConfigError(Where(item) + ": key '" + path + "': expected a mapping of keys, got " +
+                        Got(item));
+    }
+    out.emplace_back(item, file_, path);
+  }
+  return out;
+}
+
+void YamlMap::Finish() const {
+  if (!node_.IsMap()) return;
+  for (const auto& entry : node_) {
+    const std::string key = entry.first.as<std::string>();
+    if (read_.count(key) == 0) {
+      std::string known;
+      for (const auto& k : read_) known += (known.empty() ? "" : ", ") + k;
+      throw ConfigError(Where(entry.first) + ": key '" + Path(key) + "': unknown key" +
+                        (known.empty() ? "" : " (expected one of: " + known + ")"));
+    }
+  }
+}
+
+}  // namespace haptel::config_detail

@@ -1,0 +1,62 @@
+#pragma once
+// Strict reading of one YAML mapping: every key read is remembered, and
+// Finish() rejects the keys nobody asked for. Errors name file:line:column,
+// the full key path and what was expected.
+#include <yaml-cpp/yaml.h>
+
+#include <array>
+#include <filesystem>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "haptel/config/error.hpp"
+#include "haptel/core/geometry2d.hpp"
+
+namespace haptel::config_detail {
+
+class YamlMap {
+ public:
+  /// Parses a file whose top level must be a mapping.
+  static YamlMap Load(const std::filesystem::path& file);
+
+  YamlMap(YAML::Node node, std::string file, std::string prefix);
+
+  bool Has(const std::string& key) const;
+
+  double Number(const std::string& key, double fallback, double min, double max);
+  double RequireNumber(const std::string& key, double min, double max);
+  int Integer(const std::string& key, int fallback, int min, int max);
+  bool Bool(const std::string& key, bool fallback);
+  std::string String(const std::string& key, const std::string& fallback);
+  std::string RequireString(const std::string& key);
+  std::array<double, 3> Vec3(const std::string& key, const std::array<double, 3>& fallback,
+                             double min, double max);
+  Vec2 Point(const std::string& key);
+  std::vector<Vec2> Points(const std::string& key, size_t min_count);
+  std::vector<std::string> Strings(const std::string& key, const std::vector<std::string>& fallback);
+  /// A nested mapping; an absent key yields an empty mapping (all defaults).
+  YamlMap Map(const std::string& key);
+  /// A list of mappings; an absent key yields an empty list.
+  std::vector<YamlMap> MapList(const std::string& key);
+
+  /// Throws for every key present in the file that was never read.
+  void Finish() const;
+
+  [[noreturn]] void Fail(const std::string& key, const std::string& expected) const;
+  const std::string& file() const { return file_; }
+
+ private:
+  YAML::Node Child(const std::string& key);
+  std::string Where(const YAML::Node& node) const;
+  std::string Path(const std::string& key) const;
+  std::string Got(const YAML::Node& node) const;
+  double ToNumber(const YAML::Node& node, const std::string& key, const std::string& expected) const;
+
+  YAML::Node node_;
+  std::string file_;
+  std::string prefix_;
+  std::set<std::string> read_;
+};
+
+}  // namespace haptel::config_detail

@@ -1,0 +1,25 @@
+#pragma once
+/// @file Time stamps as plain 64-bit nanosecond counts.
+///
+/// Loops, buffers and messages carry `int64_t` nanoseconds rather than
+/// std::chrono types so that they stay trivially copyable and can cross
+/// threads through a seqlock and processes through DDS unchanged.
+#include <cstdint>
+
+namespace haptel {
+
+/// Monotonic time (CLOCK_MONOTONIC) in ns: for periods, timeouts, latencies
+/// measured on one host.
+int64_t MonotonicNs();
+
+/// Wall-clock time (CLOCK_REALTIME) in ns since the Unix epoch: only for
+/// stamps compared across processes on one host (video capture time).
+int64_t WallNs();
+
+/// Sleeps until the given CLOCK_MONOTONIC time; returns at once if it passed.
+void SleepUntilNs(int64_t monotonic_ns);
+
+constexpr double NsToS(int64_t ns) { return static_cast<double>(ns) * 1e-9; }
+constexpr int64_t SToNs(double s) { return static_cast<int64_t>(s * 1e9); }
+
+}  // namespace haptel

@@ -1,0 +1,61 @@
+#pragma once
+/// @file Single-writer "latest value" hand-off that never blocks the writer.
+///
+/// The writer bumps a sequence number to odd, stores the value, and bumps it
+/// to even; a reader retries while the sequence is odd or changed under it.
+/// The payload is kept in relaxed atomic words, so the copy is data-race
+/// free in the C++ memory model (no torn reads are ever returned).
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <cstring>
+#include <type_traits>
+
+namespace haptel {
+
+template <typename T>
+class Seqlock {
+  static_assert(std::is_trivially_copyable_v<T>, "Seqlock needs a trivially copyable T");
+
+ public:
+  Seqlock() { Store(T{}); }
+  explicit Seqlock(const T& initial) { Store(initial); }
+
+  /// Publishes a new value. One writer thread only. Wait-free.
+  void Store(const T& value) {
+    Words words{};
+    std::memcpy(words.data(), &value, sizeof(T));
+    const uint64_t seq = seq_.load(std::memory_order_relaxed);
+    seq_.store(seq + 1, std::memory_order_relaxed);
+    std::atomic_thread_fence(std::memory_order_release);
+    for (size_t i = 0; i < kWords; ++i) data_[i].store(words[i], std::memory_order_relaxed);
+    seq_.store(seq + 2, std::memory_order_release);
+  }
+
+  /// Returns the latest complete value. Any number of readers; lock-free.
+  T Load() const {
+    Words words{};
+    uint64_t before = 0;
+    uint64_t after = 0;
+    do {
+      before = seq_.load(std::memory_order_acquire);
+      for (size_t i = 0; i < kWords; ++i) words[i] = data_[i].load(std::memory_order_relaxed);
+      std::atomic_thread_fence(std::memory_order_acquire);
+      after = seq_.load(std::memory_order_relaxed);
+    } while ((before & 1U) != 0 || before != after);
+    T value;
+    std::memcpy(&value, words.data(), sizeof(T));
+    return value;
+  }
+
+  /// Number of completed stores; lets a reader tell whether a value is new.
+  uint64_t Version() const { return seq_.load(std::memory_order_acquire) / 2; }
+
+ private:
+  static constexpr size_t kWords = (sizeof(T) + sizeof(uint64_t) - 1) / sizeof(uint64_t);
+  using Words = std::array<uint64_t, kWords>;
+  std::atomic<uint64_t> seq_{0};
+  std::array<std::atomic<uint64_t>, kWords> data_{};
+};
+
+}  // namespace haptel

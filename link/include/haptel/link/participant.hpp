@@ -1,0 +1,53 @@
+#pragma once
+/// @file A DDS participant set up from a LinkConfig, and Haptel's QoS profiles.
+///
+/// Transports are restricted to the configured interfaces (loopback by default)
+/// with unicast discovery through the configured peers, so a default
+/// installation sends nothing beyond the host.
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/publisher/Publisher.hpp>
+#include <fastdds/dds/publisher/qos/DataWriterQos.hpp>
+#include <fastdds/dds/subscriber/Subscriber.hpp>
+#include <fastdds/dds/subscriber/qos/DataReaderQos.hpp>
+#include <string>
+
+#include "haptel/config/link.hpp"
+
+namespace haptel::link {
+
+/// The three kinds of traffic, each with its own QoS (see DataWriterQosFor).
+enum class Profile {
+  kCommand,  ///< best effort, keep last 1, deadline = LinkConfig::command_deadline_s
+  kState,    ///< reliable, keep last 8
+  kVideo,    ///< best effort, keep last 1
+};
+
+eprosima::fastdds::dds::DataWriterQos DataWriterQosFor(Profile profile, const LinkConfig& config);
+eprosima::fastdds::dds::DataReaderQos DataReaderQosFor(Profile profile, const LinkConfig& config);
+
+/// "haptel/<vehicle>/<channel>": several vehicles can share one domain.
+std::string TopicName(const std::string& vehicle, const std::string& channel);
+
+/// Owns a DomainParticipant with one publisher and one subscriber.
+/// Writers and readers made on it must be destroyed before it.
+class Participant {
+ public:
+  /// Throws std::runtime_error when DDS refuses to create the participant.
+  Participant(const LinkConfig& config, const std::string& name);
+  ~Participant();
+  Participant(const Participant&) = delete;
+  Participant& operator=(const Participant&) = delete;
+
+  eprosima::fastdds::dds::DomainParticipant* get() const { return participant_; }
+  eprosima::fastdds::dds::Publisher* publisher() const { return publisher_; }
+  eprosima::fastdds::dds::Subscriber* subscriber() const { return subscriber_; }
+  const LinkConfig& config() const { return config_; }
+
+ private:
+  LinkConfig config_;
+  eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
+  eprosima::fastdds::dds::Publisher* publisher_ = nullptr;
+  eprosima::fastdds::dds::Subscriber* subscriber_ = nullptr;
+};
+
+}  // namespace haptel::link

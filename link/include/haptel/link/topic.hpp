@@ -1,0 +1,145 @@
+#pragma once
+/// @file Typed DDS writers and readers over a Participant.
+///
+/// Reader callbacks run on a DDS thread: keep them short (copy into a
+/// seqlock or queue) and never call them from a real-time loop.
+#include <fastdds/dds/core/status/DeadlineMissedStatus.hpp>
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/publisher/DataWriterListener.hpp>
+#include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastdds/dds/subscriber/DataReaderListener.hpp>
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <fastdds/dds/topic/Topic.hpp>
+#include <fastdds/dds/topic/TypeSupport.hpp>
+
+#include <atomic>
+#include <functional>
+#include <stdexcept>
+#include <string>
+
+#include "haptel/link/participant.hpp"
+#include "haptel/msg/haptel.h"
+#include "haptel/msg/haptelPubSubTypes.h"
+
+namespace haptel::link {
+
+namespace detail {
+/// Registers the type (once per participant) and creates the topic.
+template <typename PubSubType>
+eprosima::fastdds::dds::Topic* MakeTopic(Participant& p, const std::string& name) {
+  namespace dds = eprosima::fastdds::dds;
+  dds::TypeSupport type(new PubSubType());
+  type.register_type(p.get());
+  dds::Topic* topic = p.get()->create_topic(name, type.get_type_name(), dds::TOPIC_QOS_DEFAULT);
+  if (topic == nullptr) throw std::runtime_error("link: cannot create topic '" + name + "'");
+  return topic;
+}
+}  // namespace detail
+
+template <typename Msg, typename PubSubType>
+class Writer : private eprosima::fastdds::dds::DataWriterListener {
+ public:
+  Writer(Participant& participant, const std::string& topic, Profile profile)
+      : participant_(participant) {
+    topic_ = detail::MakeTopic<PubSubType>(participant, topic);
+    writer_ = participant.publisher()->create_datawriter(
+        topic_, DataWriterQosFor(profile, participant.config()), this);
+    if (writer_ == nullptr) throw std::runtime_error("link: cannot create writer on '" + topic + "'");
+  }
+  ~Writer() override {
+    participant_.publisher()->delete_datawriter(writer_);
+    participant_.get()->delete_topic(topic_);
+  }
+  Writer(const Writer&) = delete;
+  Writer& operator=(const Writer&) = delete;
+
+  /// Sends one sample; false if DDS refused it (counted in failed_writes()).
+  bool Write(Msg& msg) {
+    const bool ok = writer_->write(&msg);
+    if (!ok) failed_writes_.fetch_add(1, std::memory_order_relaxed);
+    return ok;
+  }
+  int matched() const { return matched_.load(); }
+  uint64_t failed_writes() const { return failed_writes_.load(); }
+  uint64_t deadlines_missed() const { return deadlines_missed_.load(); }
+
+ private:
+  void on_publication_matched(eprosima::fastdds::dds::DataWriter*,
+                              const eprosima::fastdds::dds::PublicationMatchedStatus& s) override {
+    matched_.store(s.current_count);
+  }
+  void on_offered_deadline_missed(eprosima::fastdds::dds::DataWriter*,
+                                  const eprosima::fastdds::dds::OfferedDeadlineMissedStatus&) override {
+    deadlines_missed_.fetch_add(1);
+  }
+
+  Participant& participant_;
+  eprosima::fastdds::dds::Topic* topic_ = nullptr;
+  eprosima::fastdds::dds::DataWriter* writer_ = nullptr;
+  std::atomic<int> matched_{0};
+  std::atomic<uint64_t> failed_writes_{0};
+  std::atomic<uint64_t> deadlines_missed_{0};
+};
+
+template <typename Msg, typename PubSubType>
+class Reader : private eprosima::fastdds::dds::DataReaderListener {
+ public:
+  using Callback = std::function<void(const Msg&)>;
+
+  Reader(Participant& participant, const std::string& topic, Profile profile, Callback on_sample)
+      : participant_(participant), on_sample_(std::move(on_sample)) {
+    topic_ = detail::MakeTopic<PubSubType>(participant, topic);
+    reader_ = participant.subscriber()->create_datareader(
+        topic_, DataReaderQosFor(profile, participant.config()), this);
+    if (reader_ == nullptr) throw std::runtime_error("link: cannot create reader on '" + topic + "'");
+  }
+  ~Reader() override {
+    // Detach the listener first so no callback runs into a half-destroyed object.
+    reader_->set_listener(nullptr);
+    participant_.subscriber()->delete_datareader(reader_);
+    participant_.get()->delete_topic(topic_);
+  }
+  Reader(const Reader&) = delete;
+  Reader& operator=(const Reader&) = delete;
+
+  int matched() const { return matched_.load(); }
+  uint64_t received() const { return received_.load(); }
+  uint64_t deadlines_missed() const { return deadlines_missed_.load(); }
+
+ private:
+  void on_data_available(eprosima::fastdds::dds::DataReader* reader) override {
+    eprosima::fastdds::dds::SampleInfo info;
+    while (reader->take_next_sample(&sample_, &info) == ReturnCode_t::RETCODE_OK) {
+      if (!info.valid_data) continue;
+      received_.fetch_add(1, std::memory_order_relaxed);
+      on_sample_(sample_);
+    }
+  }
+  void on_subscription_matched(eprosima::fastdds::dds::DataReader*,
+                               const eprosima::fastdds::dds::SubscriptionMatchedStatus& s) override {
+    matched_.store(s.current_count);
+  }
+  void on_requested_deadline_missed(
+      eprosima::fastdds::dds::DataReader*,
+      const eprosima::fastdds::dds::RequestedDeadlineMissedStatus&) override {
+    deadlines_missed_.fetch_add(1);
+  }
+
+  Participant& participant_;
+  Callback on_sample_;
+  Msg sample_;  ///< reused for every take: no allocation per sample for fixed-size types
+  eprosima::fastdds::dds::Topic* topic_ = nullptr;
+  eprosima::fastdds::dds::DataReader* reader_ = nullptr;
+  std::atomic<int> matched_{0};
+  std::atomic<uint64_t> received_{0};
+  std::atomic<uint64_t> deadlines_missed_{0};
+};
+
+using CommandWriter = Writer<msg::DriveCommand, msg::DriveCommandPubSubType>;
+using CommandReader = Reader<msg::DriveCommand, msg::DriveCommandPubSubType>;
+using StateWriter = Writer<msg::VehicleState, msg::VehicleStatePubSubType>;
+using StateReader = Reader<msg::VehicleState, msg::VehicleStatePubSubType>;
+using VideoWriter = Writer<msg::VideoFrame, msg::VideoFramePubSubType>;
+using VideoReader = Reader<msg::VideoFrame, msg::VideoFramePubSubType>;
+
+}  // namespace haptel::link

@@ -1,0 +1,126 @@
+#include "haptel/link/participant.hpp"
+
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
+#include <fastrtps/utils/IPLocator.h>
+
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+
+namespace haptel::link {
+
+namespace dds = eprosima::fastdds::dds;
+using eprosima::fastrtps::rtps::IPLocator;
+using eprosima::fastrtps::rtps::Locator_t;
+
+namespace {
+eprosima::fastrtps::Duration_t ToDuration(double seconds) {
+  const auto whole = static_cast<int32_t>(std::floor(seconds));
+  const auto ns = static_cast<uint32_t>(std::llround((seconds - whole) * 1e9));
+  return eprosima::fastrtps::Duration_t(whole, ns);
+}
+}  // namespace
+
+std::string TopicName(const std::string& vehicle, const std::string& channel) {
+  return "haptel/" + vehicle + "/" + channel;
+}
+
+dds::DataWriterQos DataWriterQosFor(Profile profile, const LinkConfig& config) {
+  dds::DataWriterQos qos = dds::DATAWRITER_QOS_DEFAULT;
+  qos.history().kind = dds::KEEP_LAST_HISTORY_QOS;
+  switch (profile) {
+    case Profile::kCommand:
+      qos.reliability().kind = dds::BEST_EFFORT_RELIABILITY_QOS;
+      qos.history().depth = 1;
+      qos.deadline().period = ToDuration(config.command_deadline_s);
+      break;
+    case Profile::kState:
+      qos.reliability().kind = dds::RELIABLE_RELIABILITY_QOS;
+      qos.history().depth = 8;
+      break;
+    case Profile::kVideo:
+      qos.reliability().kind = dds::BEST_EFFORT_RELIABILITY_QOS;
+      qos.history().depth = 1;
+      break;
+  }
+  return qos;
+}
+
+dds::DataReaderQos DataReaderQosFor(Profile profile, const LinkConfig& config) {
+  dds::DataReaderQos qos = dds::DATAREADER_QOS_DEFAULT;
+  qos.history().kind = dds::KEEP_LAST_HISTORY_QOS;
+  switch (profile) {
+    case Profile::kCommand:
+      qos.reliability().kind = dds::BEST_EFFORT_RELIABILITY_QOS;
+      qos.history().depth = 1;
+      qos.deadline().period = ToDuration(config.command_deadline_s);
+      break;
+    case Profile::kState:
+      qos.reliability().kind = dds::RELIABLE_RELIABILITY_QOS;
+      qos.history().depth = 8;
+      break;
+    case Profile::kVideo:
+      qos.reliability().kind = dds::BEST_EFFORT_RELIABILITY_QOS;
+      qos.history().depth = 1;
+      break;
+  }
+  return qos;
+}
+
+Participant::Participant(const LinkConfig& config, const std::string& name) : config_(config) {
+  dds::DomainParticipantQos qos = dds::PARTICIPANT_QOS_DEFAULT;
+  qos.name(name);
+  // Own transports instead of the built-in ones: UDP only on the allowed
+  // interfaces, and shared memory between processes of one host.
+  qos.transport().use_builtin_transports = false;
+  auto udp = std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>();
+  udp->interfaceWhiteList = config.interfaces;
+  // Room for many participants per host (tests run several at once).
+  udp->maxInitialPeersRange = 32;
+  qos.transport().user_transports.push_back(udp);
+  qos.transport().user_transports.push_back(
+      std::make_shared<eprosima::fastdds::rtps::SharedMemTransportDescriptor>());
+
+  // Unicast discovery only: a metatraffic unicast locator on the first allowed
+  // interface (port 0: derived from the participant id) disables multicast.
+  auto& builtin = qos.wire_protocol().builtin;
+  for (const std::string& address : config.interfaces) {
+    Locator_t meta;
+    meta.kind = LOCATOR_KIND_UDPv4;
+    IPLocator::setIPv4(meta, address);
+    builtin.metatrafficUnicastLocatorList.push_back(meta);
+  }
+  for (const std::string& peer : config.peers) {
+    Locator_t locator;
+    locator.kind = LOCATOR_KIND_UDPv4;
+    if (!IPLocator::setIPv4(locator, peer)) {
+      throw std::runtime_error("link: peer '" + peer + "' is not an IPv4 address");
+    }
+    builtin.initialPeersList.push_back(locator);
+  }
+  // Announce often at start so processes meet quickly.
+  builtin.discovery_config.initial_announcements.count = 10;
+  builtin.discovery_config.initial_announcements.period = ToDuration(0.05);
+
+  participant_ = dds::DomainParticipantFactory::get_instance()->create_participant(
+      static_cast<dds::DomainId_t>(config.domain_id), qos);
+  if (participant_ == nullptr) {
+    throw std::runtime_error("link: DDS refused to create participant '" + name + "' in domain " +
+                             std::to_string(config.domain_id));
+  }
+  publisher_ = participant_->create_publisher(dds::PUBLISHER_QOS_DEFAULT);
+  subscriber_ = participant_->create_subscriber(dds::SUBSCRIBER_QOS_DEFAULT);
+  if (publisher_ == nullptr || subscriber_ == nullptr) {
+    throw std::runtime_error("link: DDS refused to create a publisher or subscriber");
+  }
+}
+
+Participant::~Participant() {
+  if (participant_ == nullptr) return;
+  participant_->delete_contained_entities();
+  dds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
+}
+
+}  // namespace haptel::link

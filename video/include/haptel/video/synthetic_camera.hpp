@@ -1,0 +1,39 @@
+#pragma once
+/// @file A synthetic first-person camera for simulated vehicles.
+///
+/// Renders what a webcam on the robot would see of a Track: sky above the
+/// horizon, floor below it, the corridor walls as vertical panels, gate posts
+/// and round obstacles as vertical bars — with a narrow, webcam-like field of
+/// view. Plain OpenCV drawing, no GPU: a 320x240 frame costs a few ms.
+#include <opencv2/core.hpp>
+
+#include "haptel/config/track.hpp"
+#include "haptel/config/vehicle.hpp"
+
+namespace haptel::video {
+
+/// Camera position on the track (m) and heading (rad, counter-clockwise from +x).
+struct CameraPose {
+  double x = 0.0;
+  double y = 0.0;
+  double heading = 0.0;
+};
+
+class SyntheticCamera {
+ public:
+  /// Keeps a reference to `track`, which must outlive the camera.
+  SyntheticCamera(const Track& track, const CameraConfig& config);
+
+  /// Renders the view from `pose` into `image` (CV_8UC3, BGR, config size).
+  /// Reuses `image`'s buffer when it already has the right size and type.
+  void Render(const CameraPose& pose, cv::Mat& image) const;
+
+  int width() const { return config_.width; }
+  int height() const { return config_.height; }
+
+ private:
+  const Track& track_;
+  CameraConfig config_;
+};
+
+}  // namespace haptel::video
