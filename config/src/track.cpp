@@ -21,7 +21,9 @@ TrackConfig LoadTrack(const std::filesystem::path& file) {
   t.start_behind = root.Number("start_behind", t.start_behind, 0.0, 10.0);
   t.lap_cap_s = root.Number("lap_cap_s", t.lap_cap_s, 1.0, 24 * 3600.0);
   const double default_gate_width = root.Number("gate_width", 0.6 * t.corridor_width, 0.05, 20.0);
-  for (YamlMap& g : root.MapList("gates")) {
+  // Kept for the checks below, so their errors point at the gate's line.
+  std::vector<YamlMap> gate_maps = root.MapList("gates");
+  for (YamlMap& g : gate_maps) {
     GateSpec spec;
     spec.along = g.RequireNumber("along", 0.0, 1e6);
     spec.width = g.Number("width", default_gate_width, 0.05, 20.0);
@@ -54,16 +56,18 @@ TrackConfig LoadTrack(const std::filesystem::path& file) {
   double previous = 0.0;
   for (size_t i = 0; i < t.gates.size(); ++i) {
     const GateSpec& g = t.gates[i];
-    const std::string which = "gates[" + std::to_string(i) + "]";
+    YamlMap& map = gate_maps[i];
     if (g.along <= previous || g.along >= length) {
-      throw ConfigError(file.string() + ": key '" + which +
-                        ".along': expected gates in increasing order strictly between 0 and the "
-                        "track length " + std::to_string(length) + " m");
+      map.Fail("along", "gates in increasing order strictly between 0 and the track length " +
+                            std::to_string(length) + " m");
     }
     if (g.width / 2 + t.post_radius >= t.corridor_width / 2) {
-      throw ConfigError(file.string() + ": key '" + which +
-                        ".width': expected posts inside the corridor (width + 2*post_radius < "
-                        "corridor_width)");
+      const std::string expected =
+          "posts inside the corridor (width + 2*post_radius < corridor_width)";
+      if (map.Has("width")) map.Fail("width", expected);
+      // The width came from gate_width: name this gate, at its line.
+      throw ConfigError(map.Location() + ": key '" + map.Path("width") + "': expected " +
+                        expected + ", got " + std::to_string(g.width) + " (from gate_width)");
     }
     previous = g.along;
   }

@@ -45,11 +45,14 @@ class YamlMap {
 
   [[noreturn]] void Fail(const std::string& key, const std::string& expected) const;
   const std::string& file() const { return file_; }
+  /// "file:line:col" of this mapping (just "file" for an absent section).
+  std::string Location() const { return Where(node_); }
+  /// The full key path of key in this mapping, e.g. "gates[1].width".
+  std::string Path(const std::string& key) const;
 
  private:
   YAML::Node Child(const std::string& key);
   std::string Where(const YAML::Node& node) const;
-  std::string Path(const std::string& key) const;
   std::string Got(const YAML::Node& node) const;
   double ToNumber(const YAML::Node& node, const std::string& key, const std::string& expected) const;
 

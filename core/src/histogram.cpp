@@ -6,18 +6,29 @@
 
 namespace haptel {
 
-Histogram::Histogram(double bin_width_us, int bins)
-    : bin_width_us_(bin_width_us), bins_(bins), counts_(new std::atomic<uint64_t>[bins + 1]) {
+namespace {
+// Validates before the bins are allocated: a negative count must not reach new[].
+int CheckedBins(double bin_width_us, int bins) {
   if (!(bin_width_us > 0.0) || bins < 1) {
     throw std::invalid_argument("Histogram: bin width must be > 0 and bins >= 1");
   }
+  return bins;
+}
+}  // namespace
+
+Histogram::Histogram(double bin_width_us, int bins)
+    : bin_width_us_(bin_width_us),
+      bins_(CheckedBins(bin_width_us, bins)),
+      counts_(new std::atomic<uint64_t>[static_cast<size_t>(bins_) + 1]) {
   Reset();
 }
 
 void Histogram::Record(double value_us) {
   if (!std::isfinite(value_us)) return;
   const double clamped = std::max(0.0, value_us);
-  const int bin = std::min(bins_, static_cast<int>(clamped / bin_width_us_));
+  // Compare in double first: converting an index past INT_MAX to int is undefined.
+  const double index = clamped / bin_width_us_;
+  const int bin = index >= static_cast<double>(bins_) ? bins_ : static_cast<int>(index);
   counts_[bin].fetch_add(1, std::memory_order_relaxed);
   total_.fetch_add(1, std::memory_order_relaxed);
   // Single recorder per histogram, so a relaxed read-modify-write is enough.

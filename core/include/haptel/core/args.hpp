@@ -1,0 +1,38 @@
+#pragma once
+/// @file A small strict command-line parser: `--key value`, `--key=value` and
+/// `--flag`. Unknown options and missing values are errors (UsageError).
+#include <map>
+#include <optional>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace haptel {
+
+class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+class Args {
+ public:
+  /// @param value_options options that take a value (without "--").
+  /// @param flags options that take none.
+  Args(int argc, const char* const* argv, std::set<std::string> value_options,
+       std::set<std::string> flags);
+
+  std::optional<std::string> Value(const std::string& name) const;
+  /// An integer option in [min, max]; UsageError names the option otherwise.
+  std::optional<int> Int(const std::string& name, int min, int max) const;
+  bool Flag(const std::string& name) const { return flags_set_.count(name) != 0; }
+  /// Words that are not options (e.g. a sub-command), in order.
+  const std::vector<std::string>& positional() const { return positional_; }
+
+ private:
+  std::map<std::string, std::string> values_;
+  std::set<std::string> flags_set_;
+  std::vector<std::string> positional_;
+};
+
+}  // namespace haptel

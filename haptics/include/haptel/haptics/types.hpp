@@ -1,0 +1,49 @@
+#pragma once
+/// @file Plain data exchanged between the servo loop and slower threads.
+///
+/// All structs are trivially copyable so they cross threads through a
+/// seqlock. Device frame: x forward (away from the operator), y left, z up;
+/// metres, seconds, newtons.
+#include <array>
+#include <cstdint>
+
+namespace haptel::haptics {
+
+enum class Side : int { kLeft = 0, kRight = 1 };
+constexpr int kSides = 2;
+constexpr int Index(Side side) { return static_cast<int>(side); }
+
+/// Joint angles a data glove reports per hand.
+constexpr int kGloveJoints = 22;
+
+using Vec3d = std::array<double, 3>;
+
+/// One device reading for one hand, stamped on the servo thread.
+struct HandSample {
+  int64_t t_ns = 0;                           ///< CLOCK_MONOTONIC
+  bool valid = false;                         ///< false: no reading yet, or device lost
+  Vec3d position{};                           ///< wrist, m
+  Vec3d velocity{};                           ///< wrist, m/s
+  std::array<double, 4> orientation{1, 0, 0, 0};  ///< wrist quaternion (w, x, y, z)
+  std::array<double, kGloveJoints> finger_angles{};  ///< rad
+  Vec3d force{};                              ///< wrist force last commanded, N
+};
+
+/// A force field the interface sets and the servo loop evaluates every tick,
+/// so forces refresh at the servo rate whatever rate the interface runs at.
+/// Centring: F = -(k + k2·|d|)·d − b·v with d = p − neutral.
+/// Wall: F = −(k_w·pen + b_w·max(0, v·n))·n when pen = (p − wall_point)·n > 0.
+struct ForceField {
+  bool enabled = false;
+  Vec3d neutral{};
+  double stiffness = 0.0;         ///< N/m
+  double stiffness_growth = 0.0;  ///< N/m²
+  double damping = 0.0;           ///< N·s/m
+  bool wall_active = false;
+  Vec3d wall_point{};
+  Vec3d wall_normal{1, 0, 0};     ///< unit, pointing into the wall
+  double wall_stiffness = 0.0;    ///< N/m
+  double wall_damping = 0.0;      ///< N·s/m
+};
+
+}  // namespace haptel::haptics

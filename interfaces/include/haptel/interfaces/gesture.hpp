@@ -1,0 +1,36 @@
+#pragma once
+/// @file The gesture interface: no controls and no left hand.
+///
+/// The right hand's offset from a neutral point maps to forward speed (x) and
+/// turning (y), past a dead zone. A force field pulls the hand back to
+/// neutral, stronger with distance, so effort tells the driver how fast they
+/// go. When a bumper switch closes, a haptic wall resists further hand motion
+/// in the direction that drove the robot into the obstacle; it releases once
+/// the contact has been clear for `wall_release_s`.
+#include "haptel/config/gesture.hpp"
+#include "haptel/interfaces/interface.hpp"
+
+namespace haptel::interfaces {
+
+class GestureInterface final : public MediatorInterface {
+ public:
+  explicit GestureInterface(const GestureConfig& config);
+
+  std::string name() const override { return config_.name; }
+  MotorCommand Update(double t_s, const VehicleFeedback& feedback, haptics::Hal& hal) override;
+  HandTargets HandTargetsFor(const DriveIntent& intent) const override;
+  bool NeedsPhysics() const override { return false; }
+
+  /// Pure mapping from a right-hand position to motor commands.
+  MotorCommand Map(const haptics::Vec3d& right_hand) const;
+  /// The force field for the current state (what Update puts in the HAL).
+  const haptics::ForceField& field() const { return field_; }
+  bool wall_active() const { return field_.wall_active; }
+
+ private:
+  GestureConfig config_;
+  haptics::ForceField field_;
+  double last_contact_s_ = -1e9;
+};
+
+}  // namespace haptel::interfaces

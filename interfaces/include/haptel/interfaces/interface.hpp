@@ -1,0 +1,53 @@
+#pragma once
+/// @file A mediator interface: turns the operator's hands into vehicle
+/// commands and tells the operator, through forces, what the vehicle meets.
+#include <array>
+#include <optional>
+#include <string>
+
+#include "haptel/haptics/hal.hpp"
+
+namespace haptel::interfaces {
+
+/// What a driver wants, in motor terms: left = forward − turn,
+/// right = forward + turn (turn > 0 turns left). Both in [-1, 1].
+struct DriveIntent {
+  double forward = 0.0;
+  double turn = 0.0;
+};
+
+/// Normalised motor commands, each in [-1, 1].
+struct MotorCommand {
+  double left = 0.0;
+  double right = 0.0;
+};
+
+/// What the vehicle reports that an interface reacts to.
+struct VehicleFeedback {
+  bool bumper_left = false;
+  bool bumper_right = false;
+  double speed = 0.0;  ///< m/s
+};
+
+/// Where a driver's hands go to express an intent (per side; empty = that
+/// hand is not used by the interface).
+using HandTargets = std::array<std::optional<haptics::Vec3d>, haptics::kSides>;
+
+class MediatorInterface {
+ public:
+  virtual ~MediatorInterface() = default;
+  virtual std::string name() const = 0;
+
+  /// Session thread, at the session rate: reads the hands from the HAL,
+  /// sets the force fields in the HAL and returns the motor command.
+  virtual MotorCommand Update(double t_s, const VehicleFeedback& feedback, haptics::Hal& hal) = 0;
+
+  /// Where a person would put their hands to express `intent` — used by the
+  /// automatic operator, and by tests.
+  virtual HandTargets HandTargetsFor(const DriveIntent& intent) const = 0;
+
+  /// Whether the interface has physical controls that need a physics world.
+  virtual bool NeedsPhysics() const = 0;
+};
+
+}  // namespace haptel::interfaces

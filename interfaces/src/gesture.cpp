@@ -1,0 +1,85 @@
+#include "haptel/interfaces/gesture.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace haptel::interfaces {
+
+using haptics::Side;
+using haptics::Vec3d;
+
+namespace {
+/// Offset past the dead zone as a fraction of full scale, signed, in [-1, 1].
+double Shape(double offset, double dead_zone, double full_scale) {
+  const double past = std::max(0.0, std::abs(offset) - dead_zone);
+  return std::copysign(std::min(1.0, past / full_scale), offset);
+}
+/// Inverse of Shape for a fraction in [-1, 1].
+double Unshape(double fraction, double dead_zone, double full_scale) {
+  if (fraction == 0.0) return 0.0;
+  const double f = std::clamp(fraction, -1.0, 1.0);
+  return std::copysign(dead_zone + std::abs(f) * full_scale, f);
+}
+}  // namespace
+
+GestureInterface::GestureInterface(const GestureConfig& config) : config_(config) {
+  field_.enabled = true;
+  field_.neutral = config_.neutral;
+  field_.stiffness = config_.field_stiffness;
+  field_.stiffness_growth = config_.field_stiffness_growth;
+  field_.damping = config_.field_damping;
+  field_.wall_stiffness = config_.wall_stiffness;
+  // Critically damped-ish for a ~1 kg arm on the wall spring.
+  field_.wall_damping = 2.0 * std::sqrt(config_.wall_stiffness * 1.0);
+}
+
+MotorCommand GestureInterface::Map(const Vec3d& hand) const {
+  const double forward = Shape(hand[0] - config_.neutral[0], config_.dead_zone, config_.full_forward);
+  const double turn =
+      config_.turn_share * Shape(hand[1] - config_.neutral[1], config_.dead_zone, config_.full_turn);
+  MotorCommand cmd{forward - turn, forward + turn};
+  const double largest = std::max({1.0, std::abs(cmd.left), std::abs(cmd.right)});
+  cmd.left /= largest;
+  cmd.right /= largest;
+  return cmd;
+}
+
+HandTargets GestureInterface::HandTargetsFor(const DriveIntent& intent) const {
+  Vec3d target = config_.neutral;
+  target[0] += Unshape(intent.forward, config_.dead_zone, config_.full_forward);
+  const double turn_fraction = config_.turn_share > 0 ? intent.turn / config_.turn_share : 0.0;
+  target[1] += Unshape(turn_fraction, config_.dead_zone, config_.full_turn);
+  HandTargets targets;
+  targets[haptics::Index(Side::kRight)] = target;
+  return targets;
+}
+
+MotorCommand GestureInterface::Update(double t_s, const VehicleFeedback& feedback, haptics::Hal& hal) {
+  const haptics::HandSample hand = hal.LatestSample(Side::kRight);
+  if (!hand.valid) {
+    hal.ZeroForces();
+    return {};
+  }
+  const bool contact = feedback.bumper_left || feedback.bumper_right;
+  if (contact) {
+    if (!field_.wall_active) {
+      // The wall stands where the hand is, facing the motion that drove the
+      // robot in: forward, plus the turn towards the side that touched.
+      const double side = feedback.bumper_left == feedback.bumper_right ? 0.0
+                          : feedback.bumper_left                        ? 0.5
+                                                                        : -0.5;
+      const double norm = std::sqrt(1.0 + side * side);
+      field_.wall_normal = {1.0 / norm, side / norm, 0.0};
+      field_.wall_point = hand.position;
+      field_.wall_active = true;
+    }
+    last_contact_s_ = t_s;
+  } else if (field_.wall_active && t_s - last_contact_s_ >= config_.wall_release_s) {
+    field_.wall_active = false;
+  }
+  hal.SetField(Side::kRight, field_);
+  hal.SetField(Side::kLeft, haptics::ForceField{});
+  return Map(hand.position);
+}
+
+}  // namespace haptel::interfaces

@@ -1,0 +1,158 @@
+// haptel: the operator side. `haptel run` drives one grand-prix lap.
+#include <unistd.h>
+
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+#include <string>
+
+#include "haptel/config/error.hpp"
+#include "haptel/core/args.hpp"
+#include "haptel/core/log.hpp"
+#include "haptel/mediator/recorder.hpp"
+#include "haptel/mediator/session.hpp"
+
+namespace {
+
+std::atomic<bool> g_interrupted{false};
+void OnSignal(int) { g_interrupted.store(true); }
+
+constexpr const char* kUsage =
+    "usage: haptel run [options]\n"
+    "  --config FILE        run configuration (default config/haptel.yaml)\n"
+    "  --track FILE         track file (overrides the configuration's 'track')\n"
+    "  --interface NAME     mediator interface (a file interfaces/NAME.yaml)\n"
+    "  --vehicle-name NAME  vehicle name in DDS topic names\n"
+    "  --domain N           DDS domain id\n"
+    "  --database FILE      SQLite file for the results (overrides 'database')\n"
+    "  --json               end with one JSON line of results on stdout\n"
+    "  --quiet              no progress lines\n";
+
+std::filesystem::path DefaultConfig() {
+  if (std::filesystem::exists("config/haptel.yaml")) return "config/haptel.yaml";
+  return std::filesystem::path(HAPTEL_SOURCE_DIR) / "config/haptel.yaml";
+}
+
+std::filesystem::path SelfDirectory() {
+  std::error_code ec;
+  const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  return ec ? std::filesystem::path(".") : self.parent_path();
+}
+
+std::string JsonString(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", c);
+      out += buf;
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
+std::string Number(double v) {
+  if (!std::isfinite(v)) return "null";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace haptel;
+  using namespace haptel::mediator;
+  log::SetProgram("haptel");
+  SessionSetup setup;
+  bool json = false;
+  try {
+    const Args args(argc, argv, {"config", "track", "interface", "vehicle-name", "domain", "database"},
+                    {"json", "quiet", "help"});
+    if (args.Flag("help")) {
+      std::fputs(kUsage, stdout);
+      return 0;
+    }
+    if (args.positional().size() != 1 || args.positional()[0] != "run") {
+      throw UsageError(args.positional().empty() ? "missing command (run)"
+                                                 : "unknown command '" + args.positional()[0] + "'");
+    }
+    json = args.Flag("json");
+    setup.progress = !args.Flag("quiet");
+    setup.run = LoadRun(args.Value("config").value_or(DefaultConfig().string()));
+    if (auto track = args.Value("track")) setup.run.track = *track;
+    if (auto name = args.Value("interface")) setup.run.interface = *name;
+    if (auto domain = args.Int("domain", 0, 232)) setup.run.link.domain_id = *domain;
+    if (auto db = args.Value("database")) setup.run.database = *db;
+    setup.track = LoadTrack(setup.run.track);
+    setup.vehicle = LoadVehicle(setup.run.vehicle);
+    if (auto name = args.Value("vehicle-name")) setup.vehicle.name = *name;
+    setup.gesture = LoadGesture(InterfaceFile(setup.run, setup.run.interface));
+    setup.vehicle_program = SelfDirectory() / "haptel-vehicle";
+  } catch (const UsageError& e) {
+    std::fprintf(stderr, "haptel: %s\n%s", e.what(), kUsage);
+    return 2;
+  } catch (const ConfigError& e) {
+    std::fprintf(stderr, "haptel: %s\n", e.what());
+    return 2;
+  }
+
+  std::signal(SIGINT, OnSignal);
+  std::signal(SIGTERM, OnSignal);
+  SessionResult result;
+  int64_t run_id = 0;
+  try {
+    result = RunSession(setup, g_interrupted);
+    Recorder recorder(setup.run.database);
+    run_id = recorder.Save(result.record);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "haptel: %s\n", e.what());
+    return 1;
+  }
+
+  const RunRecord& r = result.record;
+  std::printf("haptel: %s — %s\n", ToString(result.outcome).c_str(), result.message.c_str());
+  std::printf("  track %s, interface %s, vehicle %s (pid %d)\n", r.track.c_str(), r.interface.c_str(),
+              r.vehicle.c_str(), r.vehicle_pid);
+  std::printf("  lap time %.2f s, gates passed %d/%d, missed %d, obstacles touched %d\n", r.lap_time_s,
+              r.gates_passed, r.gates_total, r.gates_missed, r.obstacles_touched);
+  for (const GateSplit& s : r.splits) {
+    if (s.split_s >= 0) std::printf("    gate %d  %7.2f s  %s\n", s.gate + 1, s.split_s, s.passed ? "passed" : "MISSED");
+  }
+  std::printf("  servo %.1f Hz (p99 period %.0f us, %llu overruns)\n", r.servo_rate_hz, r.servo_period_p99_us,
+              static_cast<unsigned long long>(result.servo_overruns));
+  std::printf("  command round trip p50 %.2f ms, p99 %.2f ms\n", r.command_rtt_ms_p50, r.command_rtt_ms_p99);
+  std::printf("  video %lld frames, %.1f fps, latency p50 %.1f ms\n", static_cast<long long>(r.video_frames),
+              r.video_fps, r.video_latency_ms_p50);
+  std::printf("  recorded as run %lld in %s\n", static_cast<long long>(run_id), setup.run.database.c_str());
+  if (json) {
+    std::ostringstream o;
+    o << "{\"completed\":" << (r.completed ? "true" : "false") << ",\"outcome\":" << JsonString(r.outcome)
+      << ",\"message\":" << JsonString(result.message) << ",\"lap_time_s\":" << Number(r.lap_time_s)
+      << ",\"gates_passed\":" << r.gates_passed << ",\"gates_total\":" << r.gates_total
+      << ",\"gates_missed\":" << r.gates_missed << ",\"obstacles_touched\":" << r.obstacles_touched
+      << ",\"vehicle_pid\":" << r.vehicle_pid << ",\"servo_rate_hz\":" << Number(r.servo_rate_hz)
+      << ",\"servo_period_p99_us\":" << Number(r.servo_period_p99_us)
+      << ",\"servo_overruns\":" << result.servo_overruns
+      << ",\"command_rtt_ms_p50\":" << Number(r.command_rtt_ms_p50)
+      << ",\"command_rtt_ms_p99\":" << Number(r.command_rtt_ms_p99) << ",\"video_frames\":" << r.video_frames
+      << ",\"video_fps\":" << Number(r.video_fps) << ",\"video_latency_ms_p50\":" << Number(r.video_latency_ms_p50)
+      << ",\"lost_detect_s\":" << Number(result.lost_detect_s) << ",\"interface\":" << JsonString(r.interface)
+      << ",\"track\":" << JsonString(r.track) << ",\"run_id\":" << run_id
+      << ",\"database\":" << JsonString(setup.run.database.string()) << "}";
+    std::printf("%s\n", o.str().c_str());
+  }
+  std::fflush(stdout);
+  switch (result.outcome) {
+    case Outcome::kCompleted: return 0;
+    case Outcome::kVehicleLost:
+    case Outcome::kVehicleDidNotStart: return 3;
+    default: return 1;
+  }
+}

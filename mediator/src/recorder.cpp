@@ -1,0 +1,391 @@
+/// @file SQLite-backed run recorder (see recorder.hpp).
+///
+/// Durability and atomicity: the database runs in WAL mode with
+/// synchronous=FULL. A run and its splits go in one BEGIN IMMEDIATE ... COMMIT
+/// transaction, so a process killed mid-write leaves either the whole run or
+/// nothing; the next connection recovers the WAL and sees only committed runs.
+/// Values are always bound to prepared statements, never formatted into SQL.
+///
+/// SQLite stores a NaN as NULL; LoadAll maps a NULL REAL back to NaN, so
+/// "not measured" metrics round-trip.
+#include "haptel/mediator/recorder.hpp"
+
+#include <sqlite3.h>
+
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <limits>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <system_error>
+#include <unordered_map>
+
+namespace haptel::mediator {
+namespace {
+
+/// Schema version stored in PRAGMA user_version.
+constexpr int kSchemaVersion = 1;
+constexpr int kBusyTimeoutMs = 2000;
+
+constexpr const char* kCreateSchema = R"sql(
+CREATE TABLE IF NOT EXISTS runs (
+  id INTEGER PRIMARY KEY,
+  started_utc TEXT NOT NULL,
+  started_wall_ns INTEGER NOT NULL,
+  config_name TEXT NOT NULL,
+  track TEXT NOT NULL,
+  interface TEXT NOT NULL,
+  vehicle TEXT NOT NULL,
+  completed INTEGER NOT NULL,
+  outcome TEXT NOT NULL,
+  lap_time_s REAL,
+  gates_passed INTEGER NOT NULL,
+  gates_total INTEGER NOT NULL,
+  gates_missed INTEGER NOT NULL,
+  obstacles_touched INTEGER NOT NULL,
+  vehicle_pid INTEGER NOT NULL,
+  servo_rate_hz REAL,
+  servo_period_p99_us REAL,
+  command_rtt_ms_p50 REAL,
+  command_rtt_ms_p99 REAL,
+  video_frames INTEGER NOT NULL,
+  video_fps REAL,
+  video_latency_ms_p50 REAL
+);
+CREATE TABLE IF NOT EXISTS gate_splits (
+  run_id INTEGER NOT NULL REFERENCES runs(id),
+  gate INTEGER NOT NULL,
+  passed INTEGER NOT NULL,
+  split_s REAL,
+  PRIMARY KEY (run_id, gate)
+);
+)sql";
+
+constexpr const char* kInsertRun = R"sql(
+INSERT INTO runs (started_utc, started_wall_ns, config_name, track, interface, vehicle,
+                  completed, outcome, lap_time_s, gates_passed, gates_total, gates_missed,
+                  obstacles_touched, vehicle_pid, servo_rate_hz, servo_period_p99_us,
+                  command_rtt_ms_p50, command_rtt_ms_p99, video_frames, video_fps,
+                  video_latency_ms_p50)
+VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)
+)sql";
+
+constexpr const char* kInsertSplit =
+    "INSERT INTO gate_splits (run_id, gate, passed, split_s) VALUES (?, ?, ?, ?)";
+
+constexpr const char* kSelectRuns = R"sql(
+SELECT id, started_wall_ns, config_name, track, interface, vehicle, completed, outcome,
+       lap_time_s, gates_passed, gates_total, gates_missed, obstacles_touched, vehicle_pid,
+       servo_rate_hz, servo_period_p99_us, command_rtt_ms_p50, command_rtt_ms_p99,
+       video_frames, video_fps, video_latency_ms_p50
+FROM runs ORDER BY id
+)sql";
+
+constexpr const char* kSelectSplits =
+    "SELECT run_id, gate, passed, split_s FROM gate_splits ORDER BY run_id, gate";
+
+struct DbCloser {
+  void operator()(sqlite3* db) const noexcept { sqlite3_close_v2(db); }
+};
+using DbHandle = std::unique_ptr<sqlite3, DbCloser>;
+
+struct StmtFinalizer {
+  void operator()(sqlite3_stmt* stmt) const noexcept { sqlite3_finalize(stmt); }
+};
+using Stmt = std::unique_ptr<sqlite3_stmt, StmtFinalizer>;
+
+/// Throws naming the database file, what was being done, and SQLite's message.
+[[noreturn]] void Fail(const std::filesystem::path& file, sqlite3* db, std::string_view what) {
+  std::string message = "Recorder: " + file.string() + ": " + std::string(what);
+  if (db != nullptr) message += ": " + std::string(sqlite3_errmsg(db));
+  throw std::runtime_error(message);
+}
+
+void Exec(const std::filesystem::path& file, sqlite3* db, const char* sql, std::string_view what) {
+  if (sqlite3_exec(db, sql, nullptr, nullptr, nullptr) != SQLITE_OK) Fail(file, db, what);
+}
+
+Stmt Prepare(const std::filesystem::path& file, sqlite3* db, const char* sql,
+             std::string_view what) {
+  sqlite3_stmt* raw = nullptr;
+  if (sqlite3_prepare_v2(db, sql, -1, &raw, nullptr) != SQLITE_OK) {
+    sqlite3_finalize(raw);
+    Fail(file, db, what);
+  }
+  return Stmt(raw);
+}
+
+/// Rolls back on scope exit unless committed. Works for read and write
+/// transactions alike.
+class Transaction {
+ public:
+  Transaction(const std::filesystem::path& file, sqlite3* db, const char* begin_sql)
+      : file_(file), db_(db) {
+    Exec(file_, db_, begin_sql, "cannot begin transaction");
+  }
+  ~Transaction() {
+    if (!committed_ && sqlite3_get_autocommit(db_) == 0) {
+      sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+    }
+  }
+  Transaction(const Transaction&) = delete;
+  Transaction& operator=(const Transaction&) = delete;
+
+  void Commit() {
+    Exec(file_, db_, "COMMIT", "cannot commit transaction");
+    committed_ = true;
+  }
+
+ private:
+  const std::filesystem::path& file_;
+  sqlite3* db_;
+  bool committed_ = false;
+};
+
+/// Binds parameters 1, 2, ... in order, failing with the file name on error.
+class Binder {
+ public:
+  Binder(const std::filesystem::path& file, sqlite3* db, sqlite3_stmt* stmt)
+      : file_(file), db_(db), stmt_(stmt) {}
+
+  Binder& Int(int64_t value) { return Check(sqlite3_bind_int64(stmt_, ++index_, value)); }
+  Binder& Real(double value) { return Check(sqlite3_bind_double(stmt_, ++index_, value)); }
+  Binder& Text(const std::string& value) {
+    return Check(sqlite3_bind_text64(stmt_, ++index_, value.data(), value.size(),
+                                     SQLITE_TRANSIENT, SQLITE_UTF8));
+  }
+
+ private:
+  Binder& Check(int rc) {
+    if (rc != SQLITE_OK) Fail(file_, db_, "cannot bind parameter " + std::to_string(index_));
+    return *this;
+  }
+
+  const std::filesystem::path& file_;
+  sqlite3* db_;
+  sqlite3_stmt* stmt_;
+  int index_ = 0;
+};
+
+/// Reads columns 0, 1, ... in order.
+class Reader {
+ public:
+  explicit Reader(sqlite3_stmt* stmt) : stmt_(stmt) {}
+
+  int64_t Int() { return sqlite3_column_int64(stmt_, index_++); }
+  bool Bool() { return Int() != 0; }
+  double Real() {
+    const int i = index_++;
+    if (sqlite3_column_type(stmt_, i) == SQLITE_NULL) {
+      return std::numeric_limits<double>::quiet_NaN();
+    }
+    return sqlite3_column_double(stmt_, i);
+  }
+  std::string Text() {
+    const int i = index_++;
+    const auto* text = reinterpret_cast<const char*>(sqlite3_column_text(stmt_, i));
+    const int bytes = sqlite3_column_bytes(stmt_, i);
+    return text == nullptr ? std::string() : std::string(text, static_cast<size_t>(bytes));
+  }
+
+ private:
+  sqlite3_stmt* stmt_;
+  int index_ = 0;
+};
+
+/// ISO-8601 UTC with milliseconds, e.g. "2024-05-01T12:34:56.789Z".
+std::string IsoUtc(int64_t wall_ns) {
+  constexpr int64_t kNsPerS = 1'000'000'000;
+  int64_t seconds = wall_ns / kNsPerS;
+  int64_t remainder_ns = wall_ns % kNsPerS;
+  if (remainder_ns < 0) {  // floor, so times before 1970 format correctly
+    remainder_ns += kNsPerS;
+    --seconds;
+  }
+  const auto t = static_cast<std::time_t>(seconds);
+  std::tm tm{};
+  if (gmtime_r(&t, &tm) == nullptr) return std::string();
+  char buffer[64];
+  const int n = std::snprintf(buffer, sizeof buffer, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ",
+                              tm.tm_year + 1900, tm.tm_mon + 1, tm.tm_mday, tm.tm_hour,
+                              tm.tm_min, tm.tm_sec, static_cast<int>(remainder_ns / 1'000'000));
+  if (n < 0 || static_cast<size_t>(n) >= sizeof buffer) return std::string();
+  return std::string(buffer, static_cast<size_t>(n));
+}
+
+/// Steps a statement that returns no rows.
+void StepDone(const std::filesystem::path& file, sqlite3* db, sqlite3_stmt* stmt,
+              std::string_view what) {
+  if (sqlite3_step(stmt) != SQLITE_DONE) Fail(file, db, what);
+}
+
+}  // namespace
+
+Recorder::Recorder(const std::filesystem::path& database) : path_(database) {
+  const std::filesystem::path parent = path_.parent_path();
+  if (!parent.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(parent, ec);
+    if (ec) {
+      throw std::runtime_error("Recorder: " + path_.string() + ": cannot create folder " +
+                               parent.string() + ": " + ec.message());
+    }
+  }
+
+  sqlite3* raw = nullptr;
+  const int rc =
+      sqlite3_open_v2(path_.c_str(), &raw, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr);
+  DbHandle db(raw);  // closed on every exit below, even if open failed
+  if (rc != SQLITE_OK) {
+    if (!db) throw std::runtime_error("Recorder: " + path_.string() + ": out of memory");
+    Fail(path_, db.get(), "cannot open database");
+  }
+  sqlite3_extended_result_codes(db.get(), 1);
+  if (sqlite3_busy_timeout(db.get(), kBusyTimeoutMs) != SQLITE_OK) {
+    Fail(path_, db.get(), "cannot set busy timeout");
+  }
+
+  // WAL keeps readers off the writer's back; either journal mode gives atomic
+  // commits, so a file system without WAL support (the pragma then reports the
+  // old mode) is acceptable. FULL sync makes a committed run survive power loss.
+  Exec(path_, db.get(), "PRAGMA journal_mode=WAL", "cannot set journal mode");
+  Exec(path_, db.get(), "PRAGMA synchronous=FULL", "cannot set synchronous mode");
+  Exec(path_, db.get(), "PRAGMA foreign_keys=ON", "cannot enable foreign keys");
+
+  {
+    Transaction txn(path_, db.get(), "BEGIN IMMEDIATE");
+    Stmt version = Prepare(path_, db.get(), "PRAGMA user_version", "cannot read schema version");
+    if (sqlite3_step(version.get()) != SQLITE_ROW) {
+      Fail(path_, db.get(), "cannot read schema version");
+    }
+    const int found = sqlite3_column_int(version.get(), 0);
+    version.reset();
+    if (found > kSchemaVersion) {
+      throw std::runtime_error("Recorder: " + path_.string() + ": schema version " +
+                               std::to_string(found) + " is newer than supported version " +
+                               std::to_string(kSchemaVersion));
+    }
+    Exec(path_, db.get(), kCreateSchema, "cannot create schema");
+    if (found < kSchemaVersion) {
+      // PRAGMA takes no bound parameters; the value is a compile-time constant.
+      const std::string set = "PRAGMA user_version = " + std::to_string(kSchemaVersion);
+      Exec(path_, db.get(), set.c_str(), "cannot set schema version");
+    }
+    txn.Commit();
+  }
+
+  db_ = db.release();
+}
+
+Recorder::~Recorder() { sqlite3_close_v2(db_); }
+
+int64_t Recorder::Save(const RunRecord& run) {
+  Transaction txn(path_, db_, "BEGIN IMMEDIATE");
+
+  Stmt insert_run = Prepare(path_, db_, kInsertRun, "cannot prepare run insert");
+  Binder(path_, db_, insert_run.get())
+      .Text(IsoUtc(run.started_wall_ns))
+      .Int(run.started_wall_ns)
+      .Text(run.config_name)
+      .Text(run.track)
+      .Text(run.interface)
+      .Text(run.vehicle)
+      .Int(run.completed ? 1 : 0)
+      .Text(run.outcome)
+      .Real(run.lap_time_s)
+      .Int(run.gates_passed)
+      .Int(run.gates_total)
+      .Int(run.gates_missed)
+      .Int(run.obstacles_touched)
+      .Int(run.vehicle_pid)
+      .Real(run.servo_rate_hz)
+      .Real(run.servo_period_p99_us)
+      .Real(run.command_rtt_ms_p50)
+      .Real(run.command_rtt_ms_p99)
+      .Int(run.video_frames)
+      .Real(run.video_fps)
+      .Real(run.video_latency_ms_p50);
+  StepDone(path_, db_, insert_run.get(), "cannot insert run");
+  const int64_t run_id = sqlite3_last_insert_rowid(db_);
+
+  Stmt insert_split = Prepare(path_, db_, kInsertSplit, "cannot prepare split insert");
+  for (const GateSplit& split : run.splits) {
+    sqlite3_reset(insert_split.get());
+    Binder(path_, db_, insert_split.get())
+        .Int(run_id)
+        .Int(split.gate)
+        .Int(split.passed ? 1 : 0)
+        .Real(split.split_s);
+    StepDone(path_, db_, insert_split.get(),
+             "cannot insert split for gate " + std::to_string(split.gate));
+  }
+
+  insert_run.reset();
+  insert_split.reset();
+  txn.Commit();
+  return run_id;
+}
+
+std::vector<RunRecord> Recorder::LoadAll() const {
+  // One read transaction: runs and splits come from the same snapshot even if
+  // another process is saving meanwhile.
+  Transaction txn(path_, db_, "BEGIN");
+
+  std::vector<RunRecord> runs;
+  std::unordered_map<int64_t, size_t> index_of;
+  {
+    Stmt select = Prepare(path_, db_, kSelectRuns, "cannot prepare run query");
+    int rc;
+    while ((rc = sqlite3_step(select.get())) == SQLITE_ROW) {
+      Reader r(select.get());
+      RunRecord run;
+      run.id = r.Int();
+      run.started_wall_ns = r.Int();
+      run.config_name = r.Text();
+      run.track = r.Text();
+      run.interface = r.Text();
+      run.vehicle = r.Text();
+      run.completed = r.Bool();
+      run.outcome = r.Text();
+      run.lap_time_s = r.Real();
+      run.gates_passed = static_cast<int>(r.Int());
+      run.gates_total = static_cast<int>(r.Int());
+      run.gates_missed = static_cast<int>(r.Int());
+      run.obstacles_touched = static_cast<int>(r.Int());
+      run.vehicle_pid = static_cast<int>(r.Int());
+      run.servo_rate_hz = r.Real();
+      run.servo_period_p99_us = r.Real();
+      run.command_rtt_ms_p50 = r.Real();
+      run.command_rtt_ms_p99 = r.Real();
+      run.video_frames = r.Int();
+      run.video_fps = r.Real();
+      run.video_latency_ms_p50 = r.Real();
+      index_of.emplace(run.id, runs.size());
+      runs.push_back(std::move(run));
+    }
+    if (rc != SQLITE_DONE) Fail(path_, db_, "cannot read runs");
+  }
+  {
+    Stmt select = Prepare(path_, db_, kSelectSplits, "cannot prepare split query");
+    int rc;
+    while ((rc = sqlite3_step(select.get())) == SQLITE_ROW) {
+      Reader r(select.get());
+      const int64_t run_id = r.Int();
+      GateSplit split;
+      split.gate = static_cast<int>(r.Int());
+      split.passed = r.Bool();
+      split.split_s = r.Real();
+      const auto it = index_of.find(run_id);
+      if (it != index_of.end()) runs[it->second].splits.push_back(split);
+    }
+    if (rc != SQLITE_DONE) Fail(path_, db_, "cannot read gate splits");
+  }
+
+  txn.Commit();
+  return runs;
+}
+
+}  // namespace haptel::mediator

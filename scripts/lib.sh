@@ -1,0 +1,42 @@
+# Shared by scripts/run and scripts/test: install what is missing (apt), then
+# configure and build into build/ (Release). Idempotent; fast when up to date.
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+BUILD_DIR="${HAPTEL_BUILD_DIR:-$ROOT/build}"
+
+# Debian 12 packages Haptel builds and runs with.
+HAPTEL_PACKAGES=(
+  build-essential cmake pkg-config
+  libeigen3-dev libbullet-dev
+  libfastrtps-dev libfastcdr-dev fastddsgen
+  libopencv-dev libyaml-cpp-dev catch2 libsqlite3-dev sqlite3
+)
+
+haptel_log() { echo "[haptel] $*" >&2; }
+
+haptel_install_deps() {
+  local missing=()
+  for p in "${HAPTEL_PACKAGES[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+  [ ${#missing[@]} -eq 0 ] && return 0
+  haptel_log "installing missing packages: ${missing[*]}"
+  local sudo=""
+  [ "$(id -u)" -ne 0 ] && sudo="sudo"
+  export DEBIAN_FRONTEND=noninteractive
+  $sudo apt-get update -qq
+  $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+}
+
+haptel_build() {
+  if [ ! -f "$BUILD_DIR/CMakeCache.txt" ]; then
+    haptel_log "configuring $BUILD_DIR"
+    cmake -S "$ROOT" -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release >/dev/null
+  fi
+  haptel_log "building (log: $BUILD_DIR/build.log)"
+  if ! cmake --build "$BUILD_DIR" -j"$(nproc)" >"$BUILD_DIR/build.log" 2>&1; then
+    grep -vE '^\[ *[0-9]+%\]' "$BUILD_DIR/build.log" | tail -n 80 >&2
+    haptel_log "build failed"
+    return 1
+  fi
+}

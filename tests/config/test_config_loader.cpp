@@ -1,0 +1,745 @@
+// The strict config loader: every shipped file loads with the values it says;
+// every kind of bad file is a ConfigError naming the file, the line and the key.
+// Runs from the repository root (ctest sets the working directory).
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "haptel/config/error.hpp"
+#include "haptel/config/gesture.hpp"
+#include "haptel/config/run.hpp"
+#include "haptel/config/track.hpp"
+#include "haptel/config/vehicle.hpp"
+
+namespace fs = std::filesystem;
+using Catch::Matchers::Contains;
+using haptel::ConfigError;
+
+namespace {
+
+std::string ReadText(const fs::path& file) {
+  std::ifstream in(file);
+  REQUIRE(in.good());
+  std::ostringstream out;
+  out << in.rdbuf();
+  return out.str();
+}
+
+std::vector<std::string> Lines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+// 1-based number of the first line of text that contains marker.
+int LineOf(const std::string& text, const std::string& marker) {
+  const auto lines = Lines(text);
+  for (size_t i = 0; i < lines.size(); ++i) {
+    if (lines[i].find(marker) != std::string::npos) return static_cast<int>(i) + 1;
+  }
+  FAIL("marker '" << marker << "' not in the fixture");
+  return 0;
+}
+
+// The value text of the first "key: value" line (any indentation), comment
+// and surrounding blanks removed: an independent reading of a shipped file.
+std::string ValueText(const std::string& text, const std::string& key) {
+  for (const auto& line : Lines(text)) {
+    const auto start = line.find_first_not_of(' ');
+    if (start == std::string::npos || line.compare(start, key.size() + 1, key + ":") != 0) continue;
+    std::string v = line.substr(start + key.size() + 1);
+    if (const auto hash = v.find('#'); hash != std::string::npos) v.resize(hash);
+    const auto b = v.find_first_not_of(' ');
+    const auto e = v.find_last_not_of(' ');
+    return b == std::string::npos ? "" : v.substr(b, e - b + 1);
+  }
+  FAIL("key '" << key << "' not in the file");
+  return "";
+}
+
+double NumberIn(const std::string& text, const std::string& key) {
+  return std::stod(ValueText(text, key));
+}
+
+// Number of lines that contain needle.
+int CountLines(const std::string& text, const std::string& needle) {
+  int n = 0;
+  for (const auto& line : Lines(text)) n += line.find(needle) != std::string::npos ? 1 : 0;
+  return n;
+}
+
+// A per-process scratch directory, removed at the end of the test case.
+class TempDir {
+ public:
+  TempDir() {
+    const char* env = std::getenv("HAPTEL_TEST_TMP");
+    const fs::path base = env != nullptr && *env != '\0' ? fs::path(env) : fs::temp_directory_path();
+    dir_ = base / ("test_config-" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+
+  fs::path Write(const std::string& name, const std::string& text) const {
+    const fs::path file = dir_ / name;
+    std::ofstream out(file);
+    out << text;
+    REQUIRE(out.good());
+    return file;
+  }
+  const fs::path& path() const { return dir_; }
+
+ private:
+  fs::path dir_;
+};
+
+// The message of the ConfigError that f throws.
+template <typename F>
+std::string ErrorOf(F&& f) {
+  try {
+    f();
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  FAIL("expected a ConfigError");
+  return "";
+}
+
+std::string LineTag(int line) {
+  // Appended piecewise: GCC 12 warns falsely (-Wrestrict) on ":" + std::string.
+  std::string tag = ":";
+  tag += std::to_string(line);
+  tag += ':';
+  return tag;
+}
+
+// A valid rectangular track (14 m of centre line) with the given gate lines.
+std::string TrackText(const std::string& gates,
+                      const std::string& extra = "post_radius: 0.04\n") {
+  return "name: fixture\n"
+         "corridor_width: 1.0\n" +
+         extra +
+         "centerline:\n"
+         "  - [0.0, 0.0]\n"
+         "  - [4.0, 0.0]\n"
+         "  - [4.0, 3.0]\n"
+         "  - [0.0, 3.0]\n"
+         "gates:\n" +
+         gates;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------- shipped files
+
+TEST_CASE("Shipped run config loads and resolves its paths", "[config][shipped]") {
+  const fs::path file = "config/haptel.yaml";
+  const std::string text = ReadText(file);
+  const haptel::RunConfig r = haptel::LoadRun(file);
+
+  CHECK(r.file == file);
+  CHECK(r.name == ValueText(text, "name"));
+  CHECK(r.interface == ValueText(text, "interface"));
+  // Config paths are relative to the config file ...
+  CHECK(r.track == file.parent_path() / ValueText(text, "track"));
+  CHECK(r.vehicle == file.parent_path() / ValueText(text, "vehicle"));
+  CHECK(fs::is_regular_file(r.track));
+  CHECK(fs::is_regular_file(r.vehicle));
+  CHECK(fs::is_directory(r.interfaces_dir));
+  // ... the database is relative to the working directory.
+  CHECK(r.database == fs::path(ValueText(text, "database")));
+
+  CHECK(r.vehicle_timeout_s == NumberIn(text, "vehicle_timeout_s"));
+  CHECK(r.session_rate_hz == NumberIn(text, "session_rate_hz"));
+  CHECK(r.video_decode == (ValueText(text, "video_decode") == "true"));
+  CHECK(r.op.reaction_delay_s == NumberIn(text, "reaction_delay_s"));
+  CHECK(r.op.lookahead == NumberIn(text, "lookahead"));
+  CHECK(r.op.cruise == NumberIn(text, "cruise"));
+  CHECK(r.op.min_forward == NumberIn(text, "min_forward"));
+  CHECK(r.op.backoff_s == NumberIn(text, "backoff_s"));
+  CHECK(r.device.arm_mass == NumberIn(text, "arm_mass"));
+  CHECK(r.device.force_limit == NumberIn(text, "force_limit"));
+  CHECK(r.servo.rate_hz == NumberIn(text, "rate_hz"));
+  CHECK(r.servo.realtime_priority == static_cast<int>(NumberIn(text, "realtime_priority")));
+  CHECK(r.link.domain_id == static_cast<int>(NumberIn(text, "domain_id")));
+  CHECK(r.link.command_deadline_s == NumberIn(text, "command_deadline_s"));
+  REQUIRE(r.link.interfaces.size() == 1);
+  CHECK("[" + r.link.interfaces[0] + "]" == ValueText(text, "interfaces"));
+  REQUIRE(r.link.peers.size() == 1);
+  CHECK("[" + r.link.peers[0] + "]" == ValueText(text, "peers"));
+  // Keys the file leaves out keep their defaults.
+  CHECK(r.op.muscle_stiffness == haptel::OperatorConfig{}.muscle_stiffness);
+
+  // The files it points at load too.
+  CHECK_NOTHROW(haptel::LoadTrack(r.track));
+  CHECK_NOTHROW(haptel::LoadVehicle(r.vehicle));
+  CHECK_NOTHROW(haptel::LoadGesture(haptel::InterfaceFile(r, r.interface)));
+}
+
+TEST_CASE("Run config paths resolve against the file wherever it is named from",
+          "[config][shipped]") {
+  const fs::path absolute = fs::absolute("config/haptel.yaml");
+  const haptel::RunConfig r = haptel::LoadRun(absolute);
+  CHECK(r.track.is_absolute());
+  CHECK(fs::is_regular_file(r.track));
+  CHECK(fs::is_regular_file(r.vehicle));
+  const haptel::RunConfig rel = haptel::LoadRun("config/haptel.yaml");
+  CHECK(fs::equivalent(r.track, rel.track));
+  CHECK(fs::equivalent(r.vehicle, rel.vehicle));
+  CHECK(fs::equivalent(r.interfaces_dir, rel.interfaces_dir));
+}
+
+TEST_CASE("Shipped grand-prix track loads", "[config][shipped]") {
+  const fs::path file = "config/tracks/grand-prix.yaml";
+  const std::string text = ReadText(file);
+  const haptel::TrackConfig t = haptel::LoadTrack(file);
+  CHECK(t.name == "grand-prix");
+  CHECK(t.file == file);
+  CHECK(t.corridor_width == NumberIn(text, "corridor_width"));
+  CHECK(t.post_radius == NumberIn(text, "post_radius"));
+  CHECK(t.start_behind == NumberIn(text, "start_behind"));
+  CHECK(t.lap_cap_s == NumberIn(text, "lap_cap_s"));
+  // The thesis's grand prix has five gates.
+  REQUIRE(t.gates.size() == 5);
+  CHECK(static_cast<int>(t.gates.size()) == CountLines(text, "along:"));
+  const std::vector<double> along{1.7, 5.2, 7.7, 10.4, 12.8};
+  for (size_t i = 0; i < t.gates.size(); ++i) {
+    CHECK(t.gates[i].along == along[i]);
+    // No per-gate width: the file-wide gate_width applies.
+    CHECK(t.gates[i].width == NumberIn(text, "gate_width"));
+  }
+  CHECK(static_cast<int>(t.centerline.size()) == CountLines(text, "  - [") );
+  CHECK(t.centerline.front() == haptel::Vec2(0.0, 0.0));
+  CHECK(t.centerline[1] == haptel::Vec2(3.4, 0.0));
+  CHECK(t.centerline.back() == haptel::Vec2(-0.3, 0.0));
+  REQUIRE(t.obstacles.size() == 2);
+  CHECK(t.obstacles[0].center == haptel::Vec2(2.6, -0.36));
+  CHECK(t.obstacles[0].radius == 0.08);
+  CHECK(t.obstacles[1].center == haptel::Vec2(0.4, 3.26));
+}
+
+TEST_CASE("Shipped test-short track loads", "[config][shipped]") {
+  const fs::path file = "config/tracks/test-short.yaml";
+  const std::string text = ReadText(file);
+  const haptel::TrackConfig t = haptel::LoadTrack(file);
+  CHECK(t.name == "test-short");
+  CHECK(t.corridor_width == NumberIn(text, "corridor_width"));
+  CHECK(t.post_radius == NumberIn(text, "post_radius"));
+  CHECK(t.lap_cap_s == NumberIn(text, "lap_cap_s"));
+  CHECK(static_cast<int>(t.centerline.size()) == CountLines(text, "  - ["));
+  REQUIRE(t.gates.size() == 2);
+  CHECK(t.gates[0].along == 0.3);
+  CHECK(t.gates[1].along == 1.9);
+  CHECK(t.gates[0].width == NumberIn(text, "gate_width"));
+  CHECK(t.obstacles.empty());
+}
+
+TEST_CASE("Shipped sim-robot vehicle loads", "[config][shipped]") {
+  const fs::path file = "config/vehicles/sim-robot.yaml";
+  const std::string text = ReadText(file);
+  const haptel::VehicleConfig v = haptel::LoadVehicle(file);
+  CHECK(v.name == ValueText(text, "name"));
+  CHECK(v.kind == "sim-robot");
+  CHECK(fs::is_regular_file(v.world));
+  CHECK(fs::equivalent(v.world, "config/tracks/grand-prix.yaml"));
+  CHECK(v.sim_rate_hz == NumberIn(text, "sim_rate_hz"));
+  CHECK(v.state_rate_hz == NumberIn(text, "state_rate_hz"));
+  CHECK(v.watchdog_timeout_s == NumberIn(text, "watchdog_timeout_s"));
+  CHECK(v.drive.speed_levels == 8);
+  CHECK(v.drive.max_speed == NumberIn(text, "max_speed"));
+  CHECK(v.drive.track_width == NumberIn(text, "track_width"));
+  CHECK(v.drive.left_gain == NumberIn(text, "left_gain"));
+  CHECK(v.drive.right_gain == NumberIn(text, "right_gain"));
+  CHECK(v.body.radius == NumberIn(text, "radius"));
+  CHECK(v.body.bumper_half_angle_deg == NumberIn(text, "bumper_half_angle_deg"));
+  CHECK(v.camera.rate_hz == NumberIn(text, "rate_hz"));
+  CHECK(v.camera.width == static_cast<int>(NumberIn(text, "width")));
+  CHECK(v.camera.height == static_cast<int>(NumberIn(text, "height")));
+  CHECK(v.camera.jpeg_quality == static_cast<int>(NumberIn(text, "jpeg_quality")));
+  CHECK(v.camera.fov_deg == NumberIn(text, "fov_deg"));
+  CHECK(v.link.domain_id == static_cast<int>(NumberIn(text, "domain_id")));
+}
+
+TEST_CASE("Shipped gesture interface loads", "[config][shipped]") {
+  const fs::path file = "config/interfaces/gesture.yaml";
+  const std::string text = ReadText(file);
+  const haptel::GestureConfig g = haptel::LoadGesture(file);
+  CHECK(g.name == "gesture");
+  CHECK(g.file == file);
+  CHECK(g.neutral == std::array<double, 3>{0.0, 0.0, 0.0});
+  CHECK(g.dead_zone == NumberIn(text, "dead_zone"));
+  CHECK(g.full_forward == NumberIn(text, "full_forward"));
+  CHECK(g.full_turn == NumberIn(text, "full_turn"));
+  CHECK(g.turn_share == NumberIn(text, "turn_share"));
+  CHECK(g.field_stiffness == NumberIn(text, "field_stiffness"));
+  CHECK(g.field_stiffness_growth == NumberIn(text, "field_stiffness_growth"));
+  CHECK(g.field_damping == NumberIn(text, "field_damping"));
+  CHECK(g.wall_stiffness == NumberIn(text, "wall_stiffness"));
+  CHECK(g.wall_release_s == NumberIn(text, "wall_release_s"));
+  CHECK(g.command_rate_hz == NumberIn(text, "command_rate_hz"));
+}
+
+TEST_CASE("Absent optional keys take their defaults", "[config]") {
+  TempDir tmp;
+  const haptel::VehicleConfig v = haptel::LoadVehicle(tmp.Write("v.yaml", "name: robot2\n"));
+  const haptel::VehicleConfig d;
+  CHECK(v.name == "robot2");
+  CHECK(v.world.empty());
+  CHECK(v.drive.speed_levels == d.drive.speed_levels);
+  CHECK(v.drive.max_speed == d.drive.max_speed);
+  CHECK(v.camera.width == d.camera.width);
+  CHECK(v.link.peers == d.link.peers);
+
+  const haptel::GestureConfig g =
+      haptel::LoadGesture(tmp.Write("g.yaml", "neutral: [0.01, -0.02, 0.03]\n"));
+  CHECK(g.name == "gesture");
+  CHECK(g.neutral == std::array<double, 3>{0.01, -0.02, 0.03});
+  CHECK(g.dead_zone == haptel::GestureConfig{}.dead_zone);
+}
+
+// ---------------------------------------------------------------- InterfaceFile
+
+TEST_CASE("InterfaceFile resolves names and lists the choices when it cannot",
+          "[config]") {
+  const haptel::RunConfig r = haptel::LoadRun("config/haptel.yaml");
+  const fs::path g = haptel::InterfaceFile(r, "gesture");
+  CHECK(fs::is_regular_file(g));
+  CHECK(g.filename() == "gesture.yaml");
+  CHECK(fs::equivalent(g, "config/interfaces/gesture.yaml"));
+
+  REQUIRE_THROWS_AS(haptel::InterfaceFile(r, "joystick"), ConfigError);
+  const std::string msg = ErrorOf([&] { haptel::InterfaceFile(r, "joystick"); });
+  CHECK_THAT(msg, Contains("haptel.yaml"));
+  CHECK_THAT(msg, Contains("'interface'"));
+  CHECK_THAT(msg, Contains("gesture"));
+  CHECK_THAT(msg, Contains("joystick"));
+}
+
+// ---------------------------------------------------------------- bad files
+
+TEST_CASE("Bad file: unknown top-level key", "[config][bad]") {
+  TempDir tmp;
+  const std::string text =
+      "name: robot1\n"
+      "sim_rate_hz: 200\n"
+      "watchdog_timeout: 0.3\n";
+  const fs::path file = tmp.Write("unknown-top.yaml", text);
+  REQUIRE_THROWS_AS(haptel::LoadVehicle(file), ConfigError);
+  const std::string msg = ErrorOf([&] { haptel::LoadVehicle(file); });
+  CHECK_THAT(msg, Contains(file.string()));
+  CHECK_THAT(msg, Contains("'watchdog_timeout'"));
+  CHECK_THAT(msg, Contains(LineTag(LineOf(text, "watchdog_timeout:"))));
+  CHECK_THAT(msg, Contains("unknown key"));
+}
+
+TEST_CASE("Bad file: unknown nested key", "[config][bad]") {
+  TempDir tmp;
+  SECTION("vehicle drive.speeed") {
+    const std::string text =
+        "name: robot1\n"
+        "drive:\n"
+        "  speed_levels: 8\n"
+        "  speeed: 0.3\n";
+    const fs::path file = tmp.Write("unknown-nested.yaml", text);
+    REQUIRE_THROWS_AS(haptel::LoadVehicle(file), ConfigError);
+    const std::string msg = ErrorOf([&] { haptel::LoadVehicle(file); });
+    CHECK_THAT(msg, Contains(file.string()));
+    CHECK_THAT(msg, Contains("'drive.speeed'"));
+    CHECK_THAT(msg, Contains(LineTag(LineOf(text, "speeed:"))));
+    // The message offers the keys the section does take.
+    CHECK_THAT(msg, Contains("speed_levels"));
+  }
+  SECTION("run link.domian_id") {
+    const std::string text =
+        "track: t.yaml\n"
+        "vehicle: v.yaml\n"
+        "link:\n"
+        "  domian_id: 3\n";
+    const fs::path file = tmp.Write("unknown-link.yaml", text);
+    REQUIRE_THROWS_AS(haptel::LoadRun(file), ConfigError);
+    const std::string msg = ErrorOf([&] { haptel::LoadRun(file); });
+    CHECK_THAT(msg, Contains(file.string()));
+    CHECK_THAT(msg, Contains("'link.domian_id'"));
+    CHECK_THAT(msg, Contains(LineTag(LineOf(text, "domian_id"))));
+  }
+  SECTION("track gates[1].widht") {
+    const std::string text = TrackText(
+        "  - {along: 1.0}\n"
+        "  - {along: 2.0, widht: 0.5}\n");
+    const fs::path file = tmp.Write("unknown-gate.yaml", text);
+    REQUIRE_THROWS_AS(haptel::LoadTrack(file), ConfigError);
+    const std::string msg = ErrorOf([&] { haptel::LoadTrack(file); });
+    CHECK_THAT(msg, Contains(file.string()));
+    CHECK_THAT(msg, Contains("'gates[1].widht'"));
+    CHECK_THAT(msg, Contains(LineTag(LineOf(text, "widht"))));
+  }
+}
+
+TEST_CASE("Bad file: value out of range", "[config][bad]") {
+  TempDir tmp;
+  SECTION("vehicle integer") {
+    const std::string text =
+        "name: robot1\n"
+        "drive:\n"
+        "  max_speed: 0.3\n"
+        "  speed_levels: 0\n";
+    const fs::path file = tmp.Write("range-int.yaml", text);
+    REQUIRE_THROWS_AS(haptel::LoadVehicle(file), ConfigError);
+    const std::string msg = ErrorOf([&] { haptel::LoadVehicle(file); });
+    CHECK_THAT(msg, Contains(file.string()));
+    CHECK_THAT(msg, Contains("'drive.speed_levels'"));
+    CHECK_THAT(msg, Contains(LineTag(LineOf(text, "speed_levels"))));
+    CHECK_THAT(msg, Contains("got '0'"));
+  }
+  SECTION("run number") {
+    const std::string text =
+        "track: t.yaml\n"
+        "vehicle: v.yaml\n"
+        "session_rate_hz: 5\n";
+    const fs::path file = tmp.Write("range-run.yaml", text);
+    REQUIRE_THROWS_AS(haptel::LoadRun(file), ConfigError);
+    const std::string msg = ErrorOf([&] { haptel::LoadRun(file); });
+    CHECK_THAT(msg, Contains(file.string()));
+    CHECK_THAT(msg, Contains("'session_rate_hz'"));
+    CHECK_THAT(msg, Contains(LineTag(LineOf(text, "session_rate_hz"))));
+    CHECK_THAT(msg, Contains("got '5'"));
+  }
+  SECTION("gesture vector element") {
+    const std::string text =
+        "name: gesture\n"
+        "neutral: [0.0, 5.0, 0.0]\n";
+    const fs::path file = tmp.Write("range-vec.yaml", text);
+    REQUIRE_THROWS_AS(haptel::LoadGesture(file), ConfigError);
+    const std::string msg = ErrorOf([&] { haptel::LoadGesture(file); });
+    CHECK_THAT(msg, Contains(file.string()));
+    CHECK_THAT(msg, Contains("'neutral'"));
+    CHECK_THAT(msg, Contains(LineTag(LineOf(text, "neutral"))));
+  }
+  SECTION("track corridor width") {
+    const std::string text =
+        "name: fixture\n"
+        "corridor_width: 50\n"
+        "centerline: [[0, 0], [4, 0], [4, 3], [0, 3]]\n"
+        "gates: [{along: 1.0}]\n";
+    const fs::path file = tmp.Write("range-track.yaml", text);
+    REQUIRE_THROWS_AS(haptel::LoadTrack(file), ConfigError);
+    const std::string msg = ErrorOf([&] { haptel::LoadTrack(file); });
+    CHECK_THAT(msg, Contains(file.string()));
+    CHECK_THAT(msg, Contains("'corridor_width'"));
+    CHECK_THAT(msg, Contains(LineTag(LineOf(text, "corridor_width"))));
+  }
+}
+
+TEST_CASE("Bad file: wrong type", "[config][bad]") {
+  TempDir tmp;
+  SECTION("string where a number is expected") {
+    const std::string text =
+        "name: robot1\n"
+        "state_rate_hz: 50\n"
+        "sim_rate_hz: fast\n";
+    const fs::path file = tmp.Write("type-string.yaml", text);
+    REQUIRE_THROWS_AS(haptel::LoadVehicle(file), ConfigError);
+    const std::string msg = ErrorOf([&] { haptel::LoadVehicle(file); });
+    CHECK_THAT(msg, Contains(file.string()));
+    CHECK_THAT(msg, Contains("'sim_rate_hz'"));
+    CHECK_THAT(msg, Contains(LineTag(LineOf(text, "sim_rate_hz"))));
+    CHECK_THAT(msg, Contains("got 'fast'"));
+  }
+  SECTION("fraction where a whole number is expected") {
+    const std::string text =
+        "name: robot1\n"
+        "camera:\n"
+        "  width: 320.5\n";
+    const fs::path file = tmp.Write("type-int.yaml", text);
+    REQUIRE_THROWS_AS(haptel::LoadVehicle(file), ConfigError);
+    const std::string msg = ErrorOf([&] { haptel::LoadVehicle(file); });
+    CHECK_THAT(msg, Contains("'camera.width'"));
+    CHECK_THAT(msg, Contains(LineTag(LineOf(text, "width"))));
+  }
+  SECTION("list where a number is expected") {
+    const std::string text =
+        "name: gesture\n"
+        "dead_zone: [0.01, 0.02]\n";
+    const fs::path file = tmp.Write("type-list.yaml", text);
+    REQUIRE_THROWS_AS(haptel::LoadGesture(file), ConfigError);
+    const std::string msg = ErrorOf([&] { haptel::LoadGesture(file); });
+    CHECK_THAT(msg, Contains("'dead_zone'"));
+    CHECK_THAT(msg, Contains(LineTag(LineOf(text, "dead_zone"))));
+    CHECK_THAT(msg, Contains("a list"));
+  }
+  SECTION("scalar where a section is expected") {
+    const std::string text =
+        "track: t.yaml\n"
+        "vehicle: v.yaml\n"
+        "servo: 1000\n";
+    const fs::path file = tmp.Write("type-map.yaml", text);
+    REQUIRE_THROWS_AS(haptel::LoadRun(file), ConfigError);
+    const std::string msg = ErrorOf([&] { haptel::LoadRun(file); });
+    CHECK_THAT(msg, Contains("'servo'"));
+    CHECK_THAT(msg, Contains(LineTag(LineOf(text, "servo"))));
+  }
+  SECTION("word where true/false is expected") {
+    const std::string text =
+        "track: t.yaml\n"
+        "vehicle: v.yaml\n"
+        "video_decode: sometimes\n";
+    const fs::path file = tmp.Write("type-bool.yaml", text);
+    REQUIRE_THROWS_AS(haptel::LoadRun(file), ConfigError);
+    const std::string msg = ErrorOf([&] { haptel::LoadRun(file); });
+    CHECK_THAT(msg, Contains("'video_decode'"));
+    CHECK_THAT(msg, Contains(LineTag(LineOf(text, "video_decode"))));
+  }
+  SECTION("malformed centre-line point") {
+    const std::string text =
+        "name: fixture\n"
+        "corridor_width: 1.0\n"
+        "centerline:\n"
+        "  - [0.0, 0.0]\n"
+        "  - [4.0, 0.0, 1.0]\n"
+        "  - [4.0, 3.0]\n"
+        "gates: [{along: 1.0}]\n";
+    const fs::path file = tmp.Write("type-point.yaml", text);
+    REQUIRE_THROWS_AS(haptel::LoadTrack(file), ConfigError);
+    const std::string msg = ErrorOf([&] { haptel::LoadTrack(file); });
+    CHECK_THAT(msg, Contains(file.string()));
+    CHECK_THAT(msg, Contains("'centerline[1]'"));
+    CHECK_THAT(msg, Contains(LineTag(LineOf(text, "[4.0, 0.0, 1.0]"))));
+  }
+}
+
+TEST_CASE("Bad file: missing required key", "[config][bad]") {
+  TempDir tmp;
+  SECTION("track without centerline") {
+    const std::string text =
+        "name: fixture\n"
+        "corridor_width: 1.0\n"
+        "gates: [{along: 1.0}]\n";
+    const fs::path file = tmp.Write("missing-centerline.yaml", text);
+    REQUIRE_THROWS_AS(haptel::LoadTrack(file), ConfigError);
+    const std::string msg = ErrorOf([&] { haptel::LoadTrack(file); });
+    CHECK_THAT(msg, Contains(file.string()));
+    CHECK_THAT(msg, Contains("'centerline'"));
+    CHECK_THAT(msg, Contains("missing"));
+  }
+  SECTION("track without gates") {
+    const std::string text =
+        "name: fixture\n"
+        "corridor_width: 1.0\n"
+        "centerline: [[0, 0], [4, 0], [4, 3], [0, 3]]\n";
+    const fs::path file = tmp.Write("missing-gates.yaml", text);
+    REQUIRE_THROWS_AS(haptel::LoadTrack(file), ConfigError);
+    const std::string msg = ErrorOf([&] { haptel::LoadTrack(file); });
+    CHECK_THAT(msg, Contains(file.string()));
+    CHECK_THAT(msg, Contains("'gates'"));
+  }
+  SECTION("gate without along") {
+    const std::string text = TrackText(
+        "  - {along: 1.0}\n"
+        "  - {width: 0.5}\n");
+    const fs::path file = tmp.Write("missing-along.yaml", text);
+    REQUIRE_THROWS_AS(haptel::LoadTrack(file), ConfigError);
+    const std::string msg = ErrorOf([&] { haptel::LoadTrack(file); });
+    CHECK_THAT(msg, Contains(file.string()));
+    CHECK_THAT(msg, Contains("'gates[1].along'"));
+    CHECK_THAT(msg, Contains(LineTag(LineOf(text, "{width: 0.5}"))));
+  }
+  SECTION("vehicle without name") {
+    const fs::path file = tmp.Write("missing-name.yaml", "sim_rate_hz: 200\n");
+    REQUIRE_THROWS_AS(haptel::LoadVehicle(file), ConfigError);
+    const std::string msg = ErrorOf([&] { haptel::LoadVehicle(file); });
+    CHECK_THAT(msg, Contains(file.string()));
+    CHECK_THAT(msg, Contains("'name'"));
+    CHECK_THAT(msg, Contains("missing"));
+  }
+  SECTION("run without track") {
+    const fs::path file = tmp.Write("missing-track.yaml", "vehicle: v.yaml\n");
+    REQUIRE_THROWS_AS(haptel::LoadRun(file), ConfigError);
+    const std::string msg = ErrorOf([&] { haptel::LoadRun(file); });
+    CHECK_THAT(msg, Contains(file.string()));
+    CHECK_THAT(msg, Contains("'track'"));
+    CHECK_THAT(msg, Contains("missing"));
+  }
+}
+
+TEST_CASE("Bad file: malformed YAML", "[config][bad]") {
+  TempDir tmp;
+  const std::string text =
+      "name: robot1\n"
+      "drive:\n"
+      "  speed_levels: 8\n"
+      "  max_speed: : 0.3\n"
+      "  track_width: 0.16\n";
+  const fs::path file = tmp.Write("malformed.yaml", text);
+  REQUIRE_THROWS_AS(haptel::LoadVehicle(file), ConfigError);
+  const std::string msg = ErrorOf([&] { haptel::LoadVehicle(file); });
+  CHECK_THAT(msg, Contains(file.string()));
+  CHECK_THAT(msg, Contains(LineTag(LineOf(text, "max_speed: :"))));
+  CHECK_THAT(msg, Contains("YAML"));
+}
+
+TEST_CASE("Bad file: top level is not a mapping", "[config][bad]") {
+  TempDir tmp;
+  const fs::path list = tmp.Write("list.yaml", "- name: robot1\n- name: robot2\n");
+  REQUIRE_THROWS_AS(haptel::LoadVehicle(list), ConfigError);
+  CHECK_THAT(ErrorOf([&] { haptel::LoadVehicle(list); }), Contains(list.string()));
+  const fs::path empty = tmp.Write("empty.yaml", "");
+  REQUIRE_THROWS_AS(haptel::LoadTrack(empty), ConfigError);
+  CHECK_THAT(ErrorOf([&] { haptel::LoadTrack(empty); }), Contains(empty.string()));
+}
+
+TEST_CASE("Bad file: missing file", "[config][bad]") {
+  TempDir tmp;
+  const fs::path file = tmp.path() / "does-not-exist.yaml";
+  REQUIRE_THROWS_AS(haptel::LoadTrack(file), ConfigError);
+  CHECK_THAT(ErrorOf([&] { haptel::LoadTrack(file); }), Contains(file.string()));
+  REQUIRE_THROWS_AS(haptel::LoadVehicle(file), ConfigError);
+  CHECK_THAT(ErrorOf([&] { haptel::LoadVehicle(file); }), Contains(file.string()));
+  REQUIRE_THROWS_AS(haptel::LoadGesture(file), ConfigError);
+  CHECK_THAT(ErrorOf([&] { haptel::LoadGesture(file); }), Contains(file.string()));
+  REQUIRE_THROWS_AS(haptel::LoadRun(file), ConfigError);
+  CHECK_THAT(ErrorOf([&] { haptel::LoadRun(file); }), Contains(file.string()));
+}
+
+TEST_CASE("Bad file: gates not in increasing order", "[config][bad]") {
+  TempDir tmp;
+  SECTION("a gate behind the one before it") {
+    const std::string text = TrackText(
+        "  - {along: 2.0}\n"
+        "  - {along: 6.0}\n"
+        "  - {along: 5.0}\n");
+    const fs::path file = tmp.Write("gates-order.yaml", text);
+    REQUIRE_THROWS_AS(haptel::LoadTrack(file), ConfigError);
+    const std::string msg = ErrorOf([&] { haptel::LoadTrack(file); });
+    CHECK_THAT(msg, Contains(file.string()));
+    CHECK_THAT(msg, Contains("'gates[2].along'"));
+    CHECK_THAT(msg, Contains(LineTag(LineOf(text, "{along: 5.0}"))));
+  }
+  SECTION("two gates at the same place") {
+    const std::string text = TrackText(
+        "  - {along: 2.0}\n"
+        "  - {along: 2.0}\n");
+    const fs::path file = tmp.Write("gates-equal.yaml", text);
+    REQUIRE_THROWS_AS(haptel::LoadTrack(file), ConfigError);
+    CHECK_THAT(ErrorOf([&] { haptel::LoadTrack(file); }), Contains("'gates[1].along'"));
+  }
+  SECTION("a gate past the end of the lap") {
+    // The fixture's centre line is 14 m long.
+    const std::string text = TrackText(
+        "  - {along: 2.0}\n"
+        "  - {along: 14.5}\n");
+    const fs::path file = tmp.Write("gates-past.yaml", text);
+    REQUIRE_THROWS_AS(haptel::LoadTrack(file), ConfigError);
+    const std::string msg = ErrorOf([&] { haptel::LoadTrack(file); });
+    CHECK_THAT(msg, Contains("'gates[1].along'"));
+    CHECK_THAT(msg, Contains(LineTag(LineOf(text, "{along: 14.5}"))));
+  }
+  SECTION("the valid fixture loads") {
+    // Guards the fixtures above: only their gates are wrong.
+    const std::string text = TrackText(
+        "  - {along: 2.0}\n"
+        "  - {along: 6.0}\n");
+    const haptel::TrackConfig t = haptel::LoadTrack(tmp.Write("gates-ok.yaml", text));
+    CHECK(t.gates.size() == 2);
+  }
+}
+
+TEST_CASE("Bad file: gate wider than the corridor", "[config][bad]") {
+  TempDir tmp;
+  SECTION("per-gate width") {
+    const std::string text = TrackText(
+        "  - {along: 2.0}\n"
+        "  - {along: 6.0, width: 0.95}\n");
+    const fs::path file = tmp.Write("gate-wide.yaml", text);
+    REQUIRE_THROWS_AS(haptel::LoadTrack(file), ConfigError);
+    const std::string msg = ErrorOf([&] { haptel::LoadTrack(file); });
+    CHECK_THAT(msg, Contains(file.string()));
+    CHECK_THAT(msg, Contains("'gates[1].width'"));
+    CHECK_THAT(msg, Contains(LineTag(LineOf(text, "width: 0.95"))));
+  }
+  SECTION("file-wide gate_width") {
+    const std::string text = TrackText("  - {along: 2.0}\n",
+                                       "post_radius: 0.04\n"
+                                       "gate_width: 1.2\n");
+    const fs::path file = tmp.Write("gate-wide-default.yaml", text);
+    REQUIRE_THROWS_AS(haptel::LoadTrack(file), ConfigError);
+    const std::string msg = ErrorOf([&] { haptel::LoadTrack(file); });
+    CHECK_THAT(msg, Contains(file.string()));
+    CHECK_THAT(msg, Contains("'gates[0].width'"));
+    CHECK_THAT(msg, Contains(LineTag(LineOf(text, "{along: 2.0}"))));
+  }
+  SECTION("posts that would touch the wall") {
+    // 0.9 m between post centres plus 2 * 0.06 m of post > 1.0 m corridor.
+    const std::string text = TrackText("  - {along: 2.0, width: 0.9}\n",
+                                       "post_radius: 0.06\n");
+    const fs::path file = tmp.Write("gate-posts.yaml", text);
+    REQUIRE_THROWS_AS(haptel::LoadTrack(file), ConfigError);
+    CHECK_THAT(ErrorOf([&] { haptel::LoadTrack(file); }), Contains("'gates[0].width'"));
+  }
+}
+
+TEST_CASE("Bad file: centre line turning back on itself", "[config][bad]") {
+  TempDir tmp;
+  const std::string text =
+      "name: fixture\n"
+      "corridor_width: 1.0\n"
+      "centerline:\n"
+      "  - [0.0, 0.0]\n"
+      "  - [4.0, 0.0]\n"
+      "  - [0.5, 0.3]\n"
+      "gates: [{along: 1.0}]\n";
+  const fs::path file = tmp.Write("sharp.yaml", text);
+  REQUIRE_THROWS_AS(haptel::LoadTrack(file), ConfigError);
+  const std::string msg = ErrorOf([&] { haptel::LoadTrack(file); });
+  CHECK_THAT(msg, Contains(file.string()));
+  CHECK_THAT(msg, Contains("'centerline'"));
+}
+
+TEST_CASE("Bad file: values the loaders check beyond their type", "[config][bad]") {
+  TempDir tmp;
+  SECTION("vehicle name unusable in topic names") {
+    const std::string text = "name: robot 1\n";
+    const fs::path file = tmp.Write("bad-name.yaml", text);
+    REQUIRE_THROWS_AS(haptel::LoadVehicle(file), ConfigError);
+    const std::string msg = ErrorOf([&] { haptel::LoadVehicle(file); });
+    CHECK_THAT(msg, Contains("'name'"));
+    CHECK_THAT(msg, Contains(LineTag(1)));
+  }
+  SECTION("unknown vehicle kind") {
+    const std::string text = "name: robot1\nkind: hovercraft\n";
+    const fs::path file = tmp.Write("bad-kind.yaml", text);
+    REQUIRE_THROWS_AS(haptel::LoadVehicle(file), ConfigError);
+    const std::string msg = ErrorOf([&] { haptel::LoadVehicle(file); });
+    CHECK_THAT(msg, Contains("'kind'"));
+    CHECK_THAT(msg, Contains(LineTag(LineOf(text, "hovercraft"))));
+  }
+  SECTION("gesture file for another interface") {
+    const std::string text = "name: cockpit\n";
+    const fs::path file = tmp.Write("bad-gesture.yaml", text);
+    REQUIRE_THROWS_AS(haptel::LoadGesture(file), ConfigError);
+    CHECK_THAT(ErrorOf([&] { haptel::LoadGesture(file); }), Contains("'name'"));
+  }
+  SECTION("operator slower in turns than on straights") {
+    const std::string text =
+        "track: t.yaml\n"
+        "vehicle: v.yaml\n"
+        "operator:\n"
+        "  cruise: 0.4\n"
+        "  min_forward: 0.6\n";
+    const fs::path file = tmp.Write("bad-operator.yaml", text);
+    REQUIRE_THROWS_AS(haptel::LoadRun(file), ConfigError);
+    const std::string msg = ErrorOf([&] { haptel::LoadRun(file); });
+    CHECK_THAT(msg, Contains(file.string()));
+    CHECK_THAT(msg, Contains("'operator'"));
+  }
+}

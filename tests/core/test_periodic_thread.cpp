@@ -1,0 +1,174 @@
+// PeriodicThread: calls the tick repeatedly, stops cleanly, counts itself.
+// Behaviour only: waits are generous loops, never rate or jitter bounds.
+#include "haptel/core/periodic_thread.hpp"
+
+#include <pthread.h>
+
+#include <atomic>
+#include <catch2/catch.hpp>
+#include <chrono>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <thread>
+
+using haptel::PeriodicThread;
+
+namespace {
+
+// Waits (up to a generous limit, for loaded machines) until pred() holds.
+bool WaitFor(const std::function<bool()>& pred,
+             std::chrono::seconds limit = std::chrono::seconds(60)) {
+  const auto deadline = std::chrono::steady_clock::now() + limit;
+  while (!pred()) {
+    if (std::chrono::steady_clock::now() > deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  return true;
+}
+
+PeriodicThread::Options Rate(double hz, std::string name = "test-loop") {
+  PeriodicThread::Options o;
+  o.name = std::move(name);
+  o.rate_hz = hz;
+  return o;
+}
+
+}  // namespace
+
+TEST_CASE("PeriodicThread: ticks repeatedly and stops cleanly", "[periodic]") {
+  std::atomic<uint64_t> calls{0};
+  std::atomic<bool> time_went_backwards{false};
+  std::atomic<int64_t> last_now{0};
+  PeriodicThread loop(Rate(1000.0), [&](int64_t now_ns) {
+    if (now_ns <= last_now.load()) time_went_backwards.store(true);
+    last_now.store(now_ns);
+    calls.fetch_add(1);
+  });
+  CHECK_FALSE(loop.running());
+  CHECK(calls.load() == 0);  // nothing runs before Start()
+
+  loop.Start();
+  CHECK(loop.running());
+  REQUIRE(WaitFor([&] { return calls.load() >= 50; }));
+  loop.Stop();
+  CHECK_FALSE(loop.running());
+
+  const uint64_t after_stop = calls.load();
+  CHECK(after_stop >= 50);
+  CHECK_FALSE(time_went_backwards.load());
+
+  // Stop() joined the thread: no tick runs afterwards.
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  CHECK(calls.load() == after_stop);
+
+  const haptel::LoopStats s = loop.Stats();
+  CHECK(s.ticks == after_stop);
+  // Every tick after the first records one start-to-start period.
+  CHECK(loop.period_histogram().Count() == after_stop - 1);
+  CHECK(s.elapsed_s > 0.0);
+  CHECK(s.rate_hz > 0.0);
+  CHECK(s.period_max_us > 0.0);
+  CHECK(s.period_p50_us <= s.period_p99_us);
+  CHECK_FALSE(s.realtime);  // not requested
+
+  // Safe to call twice.
+  loop.Stop();
+  CHECK(loop.Stats().ticks == after_stop);
+}
+
+TEST_CASE("PeriodicThread: Stats().ticks matches the ticks the test counted", "[periodic]") {
+  std::atomic<uint64_t> calls{0};
+  PeriodicThread loop(Rate(2000.0), [&](int64_t) { calls.fetch_add(1); });
+  loop.Start();
+  REQUIRE(WaitFor([&] { return calls.load() >= 10; }));
+  // While running, the counter is bumped after the tick returns.
+  CHECK(loop.Stats().ticks <= calls.load());
+  REQUIRE(WaitFor([&] { return calls.load() >= 30; }));
+  loop.Stop();
+  CHECK(loop.Stats().ticks == calls.load());
+}
+
+TEST_CASE("PeriodicThread: can be restarted after Stop", "[periodic]") {
+  std::atomic<uint64_t> calls{0};
+  PeriodicThread loop(Rate(1000.0), [&](int64_t) { calls.fetch_add(1); });
+  loop.Start();
+  loop.Start();  // a second Start while running is a no-op
+  REQUIRE(WaitFor([&] { return calls.load() >= 5; }));
+  loop.Stop();
+  const uint64_t first = calls.load();
+  loop.Start();
+  CHECK(loop.running());
+  REQUIRE(WaitFor([&] { return calls.load() >= first + 5; }));
+  loop.Stop();
+  CHECK(loop.Stats().ticks == calls.load());
+}
+
+TEST_CASE("PeriodicThread: the destructor stops a running loop", "[periodic]") {
+  std::atomic<uint64_t> calls{0};
+  {
+    PeriodicThread loop(Rate(1000.0), [&](int64_t) { calls.fetch_add(1); });
+    loop.Start();
+    REQUIRE(WaitFor([&] { return calls.load() >= 3; }));
+  }
+  const uint64_t after = calls.load();
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  CHECK(calls.load() == after);
+}
+
+TEST_CASE("PeriodicThread: Stop without Start is harmless", "[periodic]") {
+  std::atomic<uint64_t> calls{0};
+  PeriodicThread loop(Rate(100.0), [&](int64_t) { calls.fetch_add(1); });
+  loop.Stop();
+  CHECK_FALSE(loop.running());
+  CHECK(calls.load() == 0);
+  CHECK(loop.Stats().ticks == 0);
+  CHECK(loop.Stats().rate_hz == 0.0);
+}
+
+TEST_CASE("PeriodicThread: a tick longer than several periods counts overruns", "[periodic]") {
+  std::atomic<uint64_t> calls{0};
+  // 1 kHz, and the first tick takes 30 periods.
+  PeriodicThread loop(Rate(1000.0), [&](int64_t) {
+    if (calls.load() == 0) std::this_thread::sleep_for(std::chrono::milliseconds(30));
+    calls.fetch_add(1);
+  });
+  loop.Start();
+  REQUIRE(WaitFor([&] { return calls.load() >= 5; }));
+  loop.Stop();
+  const haptel::LoopStats s = loop.Stats();
+  CHECK(s.overruns > 0);
+  CHECK(s.ticks == calls.load());
+}
+
+TEST_CASE("PeriodicThread: the thread carries the loop's name", "[periodic]") {
+  std::atomic<bool> done{false};
+  std::string seen;
+  // Linux thread names hold 15 characters; longer names are cut.
+  const std::string name = "haptel-test-loop-with-a-long-name";
+  PeriodicThread loop(Rate(500.0, name), [&](int64_t) {
+    if (done.load()) return;
+    char buf[32] = {};
+    pthread_getname_np(pthread_self(), buf, sizeof(buf));
+    seen = buf;
+    done.store(true);
+  });
+  loop.Start();
+  REQUIRE(WaitFor([&] { return done.load(); }));
+  loop.Stop();
+  CHECK(seen == name.substr(0, 15));
+  CHECK(loop.options().name == name);
+}
+
+TEST_CASE("PeriodicThread: an invalid rate throws", "[periodic]") {
+  auto tick = [](int64_t) {};
+  CHECK_THROWS_AS(PeriodicThread(Rate(0.0), tick), std::invalid_argument);
+  CHECK_THROWS_AS(PeriodicThread(Rate(-100.0), tick), std::invalid_argument);
+  CHECK_THROWS_AS(PeriodicThread(Rate(std::numeric_limits<double>::quiet_NaN()), tick),
+                  std::invalid_argument);
+  CHECK_THROWS_AS(PeriodicThread(Rate(std::numeric_limits<double>::infinity()), tick),
+                  std::invalid_argument);
+  CHECK_NOTHROW(PeriodicThread(Rate(1.0), tick));
+}

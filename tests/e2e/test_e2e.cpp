@@ -1,0 +1,172 @@
+// End to end: the real `haptel` and `haptel-vehicle` programs, linked by DDS.
+#include <catch2/catch.hpp>
+#include <signal.h>
+
+#include <atomic>
+#include <mutex>
+
+#include "child.hpp"
+#include "haptel/link/topic.hpp"
+#include "haptel/mediator/recorder.hpp"
+#include "test_env.hpp"
+
+using namespace haptel;
+using haptel::test::Child;
+using haptel::test::JsonField;
+
+namespace {
+std::string Bin(const std::string& name) { return (test::BinDir() / name).string(); }
+}  // namespace
+
+TEST_CASE("haptel run completes the short track over DDS with a separate vehicle process") {
+  const auto dir = test::ScratchDir("e2e-lap");
+  const auto db = dir / "runs.db";
+  Child haptel({Bin("haptel"), "run", "--track", "config/tracks/test-short.yaml", "--json", "--quiet",
+                "--domain", std::to_string(test::UniqueDomain(11)), "--database", db.string()});
+  const int code = haptel.Wait(120.0);
+  INFO("stdout:\n" << haptel.out() << "\nstderr:\n" << haptel.err());
+  REQUIRE(code == 0);
+  const std::string json = haptel.LastLine();
+  REQUIRE(json.front() == '{');
+  CHECK(JsonField(json, "completed") == "true");
+  CHECK(JsonField(json, "gates_passed") == JsonField(json, "gates_total"));
+  CHECK(std::stoi(JsonField(json, "gates_total")) == 2);
+  const int vehicle_pid = std::stoi(JsonField(json, "vehicle_pid"));
+  CHECK(vehicle_pid > 0);
+  CHECK(vehicle_pid != haptel.pid());
+  CHECK(std::stod(JsonField(json, "lap_time_s")) > 0.0);
+  CHECK(std::stoi(JsonField(json, "video_frames")) > 0);
+  CHECK(std::stod(JsonField(json, "servo_rate_hz")) > 0.0);
+  CHECK(std::stod(JsonField(json, "command_rtt_ms_p50")) > 0.0);
+  // The vehicle process is gone after the run.
+  CHECK(kill(vehicle_pid, 0) != 0);
+
+  // The run is in the database with its splits.
+  mediator::Recorder recorder(db);
+  const auto runs = recorder.LoadAll();
+  REQUIRE(runs.size() == 1);
+  CHECK(runs[0].completed);
+  CHECK(runs[0].interface == "gesture");
+  CHECK(runs[0].track == "test-short");
+  CHECK(runs[0].vehicle_pid == vehicle_pid);
+  REQUIRE(runs[0].splits.size() == 2);
+  CHECK(runs[0].splits[0].passed);
+  CHECK(runs[0].splits[1].split_s > runs[0].splits[0].split_s);
+}
+
+TEST_CASE("killing the vehicle mid-lap: the mediator reports it lost and exits non-zero") {
+  const auto dir = test::ScratchDir("e2e-kill");
+  Child haptel({Bin("haptel"), "run", "--json", "--domain", std::to_string(test::UniqueDomain(12)),
+                "--database", (dir / "runs.db").string()});
+  // Wait for the vehicle to start and the lap to be under way.
+  pid_t vehicle = 0;
+  REQUIRE(test::WaitFor([&] {
+    haptel.Pump();
+    const auto at = haptel.err().find("started, pid ");
+    if (at == std::string::npos) return false;
+    vehicle = std::stoi(haptel.err().substr(at + 13));
+    return true;
+  }, 60.0));
+  REQUIRE(test::WaitFor([&] { haptel.Pump(); return haptel.err().find(" lap ") != std::string::npos; }, 60.0));
+  REQUIRE(kill(vehicle, SIGKILL) == 0);
+  const int code = haptel.Wait(30.0);
+  INFO("stdout:\n" << haptel.out() << "\nstderr:\n" << haptel.err());
+  CHECK(code == 3);
+  CHECK(haptel.out().find("vehicle lost") != std::string::npos);
+  CHECK(JsonField(haptel.LastLine(), "completed") == "false");
+  CHECK(JsonField(haptel.LastLine(), "outcome") == "vehicle lost");
+}
+
+TEST_CASE("when commands stop, the vehicle's watchdog stops its motors") {
+  const int domain = test::UniqueDomain(13);
+  Child vehicle({Bin("haptel-vehicle"), "--config", "config/vehicles/sim-robot.yaml", "--track",
+                 "config/tracks/grand-prix.yaml", "--name", "wd", "--domain", std::to_string(domain)});
+  LinkConfig config;
+  config.domain_id = domain;
+  link::Participant participant(config, "test-operator");
+  std::mutex m;
+  msg::VehicleState last;
+  std::atomic<int> states{0};
+  link::StateReader reader(participant, link::TopicName("wd", "state"), link::Profile::kState,
+                           [&](const msg::VehicleState& s) {
+                             std::lock_guard lock(m);
+                             last = s;
+                             ++states;
+                           });
+  link::CommandWriter writer(participant, link::TopicName("wd", "command"), link::Profile::kCommand);
+  auto latest = [&] {
+    std::lock_guard lock(m);
+    return last;
+  };
+  REQUIRE(test::WaitFor([&] { return states.load() > 0; }, 30.0));
+  CHECK(latest().watchdog_tripped());  // no command yet: stopped
+
+  // Drive forward at 50 Hz until the motors run.
+  msg::DriveCommand cmd;
+  uint64_t seq = 0;
+  auto send = [&](float left, float right) {
+    cmd.seq(++seq);
+    cmd.sent_ns(1);
+    cmd.left(left);
+    cmd.right(right);
+    writer.Write(cmd);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  };
+  REQUIRE(test::WaitFor([&] {
+    send(0.5F, 0.5F);
+    const auto s = latest();
+    return !s.watchdog_tripped() && s.motor_left_level() == 4 && s.motor_right_level() == 4 && s.speed() > 0.05F;
+  }, 20.0));
+
+  // A malformed command is counted and dropped: it does not reach the motors.
+  REQUIRE(test::WaitFor([&] { return latest().last_command_seq() == seq; }, 10.0));
+  const auto accepted_before = latest().commands_received();
+  for (int i = 0; i < 3; ++i) send(std::nanf(""), 0.5F);
+  for (int i = 0; i < 3; ++i) send(5.0F, 5.0F);
+  send(0.5F, 0.5F);
+  REQUIRE(test::WaitFor([&] { return latest().last_command_seq() == seq; }, 10.0));
+  CHECK(latest().commands_received() == accepted_before + 1);
+  CHECK(latest().motor_left_level() == 4);
+
+  // Silence: the watchdog must stop the motors.
+  REQUIRE(test::WaitFor([&] {
+    const auto s = latest();
+    return s.watchdog_tripped() && s.motor_left_level() == 0 && s.motor_right_level() == 0;
+  }, 10.0));
+  CHECK(test::WaitFor([&] { return std::abs(latest().speed()) < 1e-3F; }, 10.0));
+
+  // SIGTERM: a clean exit.
+  kill(vehicle.pid(), SIGTERM);
+  CHECK(vehicle.Wait(20.0) == 0);
+}
+
+TEST_CASE("bad options and bad config files exit 2 with a one-line error naming the problem") {
+  const auto dir = test::ScratchDir("e2e-bad");
+  {
+    Child c({Bin("haptel"), "run", "--no-such-option"});
+    CHECK(c.Wait(30.0) == 2);
+    CHECK(c.err().find("--no-such-option") != std::string::npos);
+  }
+  {
+    const auto bad = dir / "bad-track.yaml";
+    std::FILE* f = std::fopen(bad.c_str(), "w");
+    std::fputs("name: x\ncorridor_width: -1\ncenterline: [[0,0],[1,0],[1,1]]\ngates: [{along: 0.5}]\n", f);
+    std::fclose(f);
+    Child c({Bin("haptel"), "run", "--track", bad.string()});
+    CHECK(c.Wait(30.0) == 2);
+    CHECK(c.err().find("bad-track.yaml:2") != std::string::npos);
+    CHECK(c.err().find("corridor_width") != std::string::npos);
+    CHECK(c.err().find("terminate") == std::string::npos);  // no uncaught exception
+  }
+  {
+    Child c({Bin("haptel"), "run", "--interface", "telepathy"});
+    CHECK(c.Wait(30.0) == 2);
+    CHECK(c.err().find("telepathy") != std::string::npos);
+    CHECK(c.err().find("gesture") != std::string::npos);
+  }
+  {
+    Child c({Bin("haptel-vehicle"), "--config", (dir / "missing.yaml").string()});
+    CHECK(c.Wait(30.0) == 2);
+    CHECK(c.err().find("missing.yaml") != std::string::npos);
+  }
+}

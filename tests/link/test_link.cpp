@@ -1,0 +1,107 @@
+#include <catch2/catch.hpp>
+#include <atomic>
+#include <mutex>
+
+#include "haptel/link/topic.hpp"
+#include "test_env.hpp"
+
+using namespace haptel;
+using namespace haptel::link;
+
+namespace {
+LinkConfig Config(int salt) {
+  LinkConfig c;
+  c.domain_id = test::UniqueDomain(salt);
+  return c;
+}
+}  // namespace
+
+TEST_CASE("topic names carry the vehicle name") {
+  CHECK(TopicName("robot1", "command") == "haptel/robot1/command");
+  CHECK(TopicName("blimp", "video") == "haptel/blimp/video");
+}
+
+TEST_CASE("QoS profiles: command best effort with a deadline, state reliable, video best effort") {
+  LinkConfig c;
+  c.command_deadline_s = 0.1;
+  namespace dds = eprosima::fastdds::dds;
+  const auto cmd = DataWriterQosFor(Profile::kCommand, c);
+  CHECK(cmd.reliability().kind == dds::BEST_EFFORT_RELIABILITY_QOS);
+  CHECK(cmd.history().depth == 1);
+  CHECK(cmd.deadline().period.seconds == 0);
+  CHECK(cmd.deadline().period.nanosec == 100'000'000U);
+  CHECK(DataReaderQosFor(Profile::kState, c).reliability().kind == dds::RELIABLE_RELIABILITY_QOS);
+  CHECK(DataWriterQosFor(Profile::kVideo, c).reliability().kind == dds::BEST_EFFORT_RELIABILITY_QOS);
+  CHECK(DataWriterQosFor(Profile::kVideo, c).history().depth == 1);
+}
+
+TEST_CASE("a command crosses between two participants intact") {
+  const LinkConfig config = Config(1);
+  Participant a(config, "test-a");
+  Participant b(config, "test-b");
+  std::mutex m;
+  msg::DriveCommand got;
+  std::atomic<int> count{0};
+  CommandReader reader(b, TopicName("t", "command"), Profile::kCommand, [&](const msg::DriveCommand& c) {
+    std::lock_guard lock(m);
+    got = c;
+    ++count;
+  });
+  CommandWriter writer(a, TopicName("t", "command"), Profile::kCommand);
+  REQUIRE(test::WaitFor([&] { return writer.matched() > 0 && reader.matched() > 0; }, 20.0));
+  msg::DriveCommand c;
+  c.seq(42);
+  c.sent_ns(123456789);
+  c.left(0.25F);
+  c.right(-0.75F);
+  // Best effort: resend until one arrives.
+  REQUIRE(test::WaitFor([&] { writer.Write(c); return count.load() > 0; }, 10.0));
+  std::lock_guard lock(m);
+  CHECK(got.seq() == 42);
+  CHECK(got.sent_ns() == 123456789);
+  CHECK(got.left() == 0.25F);
+  CHECK(got.right() == -0.75F);
+}
+
+TEST_CASE("topics of different vehicles do not mix") {
+  const LinkConfig config = Config(2);
+  Participant a(config, "test-a");
+  Participant b(config, "test-b");
+  std::atomic<int> count{0};
+  StateReader reader(b, TopicName("other", "state"), Profile::kState,
+                     [&](const msg::VehicleState&) { ++count; });
+  StateReader mine(b, TopicName("mine", "state"), Profile::kState, [](const msg::VehicleState&) {});
+  StateWriter writer(a, TopicName("mine", "state"), Profile::kState);
+  REQUIRE(test::WaitFor([&] { return mine.matched() > 0; }, 20.0));
+  msg::VehicleState s;
+  for (int i = 0; i < 20; ++i) writer.Write(s);
+  REQUIRE(test::WaitFor([&] { return mine.received() >= 20; }, 10.0));
+  CHECK(count.load() == 0);
+  CHECK(reader.matched() == 0);
+}
+
+TEST_CASE("a video frame of realistic size arrives byte for byte") {
+  const LinkConfig config = Config(3);
+  Participant a(config, "test-a");
+  Participant b(config, "test-b");
+  std::mutex m;
+  std::vector<uint8_t> got;
+  VideoReader reader(b, TopicName("t", "video"), Profile::kVideo, [&](const msg::VideoFrame& f) {
+    std::lock_guard lock(m);
+    got = f.data();
+  });
+  VideoWriter writer(a, TopicName("t", "video"), Profile::kVideo);
+  REQUIRE(test::WaitFor([&] { return writer.matched() > 0; }, 20.0));
+  msg::VideoFrame f;
+  f.encoding("jpeg");
+  f.data().resize(90'000);  // larger than one UDP datagram: fragmented
+  for (size_t i = 0; i < f.data().size(); ++i) f.data()[i] = static_cast<uint8_t>(i * 31 + 7);
+  const std::vector<uint8_t> expected = f.data();
+  REQUIRE(test::WaitFor([&] {
+    writer.Write(f);
+    std::lock_guard lock(m);
+    return !got.empty();
+  }, 10.0));
+  std::lock_guard lock(m);
+  CHECK(got == expected);
+}

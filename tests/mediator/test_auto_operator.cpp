@@ -1,0 +1,88 @@
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <numbers>
+
+#include "haptel/interfaces/gesture.hpp"
+#include "haptel/mediator/auto_operator.hpp"
+
+using namespace haptel;
+using namespace haptel::mediator;
+
+namespace {
+const Track& ShortTrack() {
+  static const Track track(LoadTrack("config/tracks/test-short.yaml"));
+  return track;
+}
+Observation At(double t, const Vec2& p, double heading) {
+  return {t, p.x(), p.y(), heading, false, false};
+}
+}  // namespace
+
+TEST_CASE("the operator waits for its reaction delay before acting") {
+  OperatorConfig cfg;
+  cfg.reaction_delay_s = 0.15;
+  AutoOperator op(ShortTrack(), cfg, DriveConfig{});
+  op.Observe(At(1.0, ShortTrack().PointAt(0.0), 0.0));
+  const auto early = op.Decide(1.1);
+  CHECK(early.forward == 0.0);
+  CHECK(early.turn == 0.0);
+  const auto late = op.Decide(1.2);
+  CHECK(late.forward > 0.5);
+}
+
+TEST_CASE("on a straight, aligned with the track, the operator drives straight ahead") {
+  AutoOperator op(ShortTrack(), OperatorConfig{}, DriveConfig{});
+  const Vec2 p = ShortTrack().PointAt(0.1);  // first straight runs along +x
+  op.Observe(At(0.0, p, 0.0));
+  const auto intent = op.Decide(1.0);
+  CHECK(intent.forward == Approx(OperatorConfig{}.cruise).margin(0.1));
+  CHECK(std::abs(intent.turn) < 0.05);
+}
+
+TEST_CASE("displaced to the right of the line, the operator steers left") {
+  AutoOperator op(ShortTrack(), OperatorConfig{}, DriveConfig{});
+  const Vec2 p = ShortTrack().PointAt(0.1) + Vec2(0, -0.15);
+  op.Observe(At(0.0, p, 0.0));
+  CHECK(op.Decide(1.0).turn > 0.0);
+}
+
+TEST_CASE("facing backwards, the operator turns on the spot") {
+  AutoOperator op(ShortTrack(), OperatorConfig{}, DriveConfig{});
+  op.Observe(At(0.0, ShortTrack().PointAt(0.1), std::numbers::pi));
+  const auto intent = op.Decide(1.0);
+  CHECK(intent.forward == 0.0);
+  CHECK(std::abs(intent.turn) > 0.2);
+}
+
+TEST_CASE("after a bumper contact the operator backs off, turning away from the touched side") {
+  OperatorConfig cfg;
+  cfg.backoff_s = 0.8;
+  AutoOperator op(ShortTrack(), cfg, DriveConfig{});
+  Observation o = At(0.0, ShortTrack().PointAt(0.1), 0.0);
+  o.bumper_left = true;
+  op.Observe(o);
+  const auto intent = op.Decide(0.5);
+  CHECK(intent.forward < 0.0);
+  CHECK(intent.turn < 0.0);  // reversing, rotating clockwise: away from the left contact
+  CHECK(op.backing_off(1.0));
+  op.Observe(At(1.0, ShortTrack().PointAt(0.1), 0.0));
+  CHECK(op.Decide(1.5).forward > 0.0);  // contact gone, back to driving
+}
+
+TEST_CASE("the operator's arm lags its intent") {
+  OperatorConfig cfg;
+  cfg.arm_time_constant_s = 0.1;
+  AutoOperator op(ShortTrack(), cfg, DriveConfig{});
+  const interfaces::GestureInterface gesture{GestureConfig{}};
+  op.Observe(At(0.0, ShortTrack().PointAt(0.1), 0.0));
+  const auto first = op.Act(1.0, gesture);  // starts from neutral
+  const auto after = op.Act(1.1, gesture);  // one time constant later
+  const auto wanted = gesture.HandTargetsFor(op.Decide(1.1));
+  const int right = haptics::Index(haptics::Side::kRight);
+  REQUIRE(first[right]);
+  REQUIRE(after[right]);
+  const double goal = (*wanted[right])[0];
+  CHECK((*first[right])[0] == Approx(0.0));
+  CHECK((*after[right])[0] == Approx(goal * (1 - std::exp(-1.0))).epsilon(0.01));
+  CHECK_FALSE(after[haptics::Index(haptics::Side::kLeft)]);
+}

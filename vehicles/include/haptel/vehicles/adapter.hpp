@@ -1,0 +1,33 @@
+#pragma once
+/// @file The seam between a vehicle node and what it drives: a simulator or
+/// a hardware adapter (SocketCAN robot, servo-controller blimp).
+#include "haptel/vehicles/drive.hpp"
+
+namespace haptel::vehicles {
+
+/// What an adapter knows about its vehicle.
+struct AdapterState {
+  double speed = 0.0;     ///< m/s, forward positive
+  double yaw_rate = 0.0;  ///< rad/s, counter-clockwise positive
+  bool pose_valid = false;
+  double x = 0.0;         ///< m
+  double y = 0.0;
+  double heading = 0.0;   ///< rad
+  bool bumper_left = false;
+  bool bumper_right = false;
+  MotorLevels applied;    ///< levels the motors run at now
+};
+
+class VehicleAdapter {
+ public:
+  virtual ~VehicleAdapter() = default;
+  /// Sets the motor speed levels (already quantised).
+  virtual void SetMotors(const MotorLevels& levels) = 0;
+  /// Stops every motor at once (watchdog, shutdown).
+  void Stop() { SetMotors({}); }
+  /// Advances by dt seconds: simulators step, hardware polls its bus.
+  virtual void Update(double dt) = 0;
+  virtual AdapterState State() const = 0;
+};
+
+}  // namespace haptel::vehicles

@@ -1,0 +1,97 @@
+#pragma once
+/// @file A vehicle node: the command subscriber, the adapter's control loop,
+/// the state publisher and the camera streamer of one vehicle.
+///
+/// Threads: DDS delivers commands (validated, then handed over through a
+/// seqlock); the control loop runs at `sim_rate_hz`, applies the watchdog and
+/// quantisation, steps the adapter and publishes state at `state_rate_hz`;
+/// the camera loop renders, JPEG-encodes and publishes frames.
+#include <atomic>
+#include <cstdint>
+#include <memory>
+
+#include "haptel/config/track.hpp"
+#include "haptel/config/vehicle.hpp"
+#include "haptel/core/periodic_thread.hpp"
+#include "haptel/core/seqlock.hpp"
+#include "haptel/link/topic.hpp"
+#include "haptel/vehicles/adapter.hpp"
+#include "haptel/video/codec.hpp"
+#include "haptel/video/synthetic_camera.hpp"
+
+namespace haptel::vehicles {
+
+struct NodeCounters {
+  uint64_t commands_accepted = 0;
+  uint64_t commands_malformed = 0;  ///< non-finite or out-of-range values: dropped
+  uint64_t commands_stale = 0;      ///< older sequence than one already applied: dropped
+  uint64_t watchdog_trips = 0;
+  uint64_t states_published = 0;
+  uint64_t frames_published = 0;
+  uint64_t frames_failed = 0;
+  bool watchdog_expired = true;
+};
+
+class VehicleNode {
+ public:
+  /// `track` (the simulated world) must outlive the node.
+  VehicleNode(const VehicleConfig& config, const Track& track);
+  ~VehicleNode();
+
+  void Start();
+  /// Stops the motors, publishes a last state, stops every thread.
+  void Stop();
+  NodeCounters Counters() const;
+
+ private:
+  struct ReceivedCommand {
+    uint64_t seq = 0;
+    int64_t sent_ns = 0;
+    int64_t received_ns = 0;
+    float left = 0.0F;
+    float right = 0.0F;
+  };
+  void OnCommand(const msg::DriveCommand& cmd);
+  void ControlTick(int64_t now_ns);
+  void CameraTick(int64_t now_ns);
+  void PublishState(int64_t now_ns);
+
+  VehicleConfig config_;
+  std::unique_ptr<VehicleAdapter> adapter_;
+  Seqlock<ReceivedCommand> command_;
+  uint64_t applied_version_ = 0;
+  ReceivedCommand applied_;
+  struct Pose {
+    double x, y, heading;
+  };
+  Seqlock<Pose> pose_;
+  int64_t last_tick_ns_ = 0;
+  uint64_t tick_count_ = 0;
+  uint64_t state_seq_ = 0;
+  uint64_t frame_seq_ = 0;
+  int ticks_per_state_ = 1;
+  std::atomic<uint64_t> last_accepted_seq_{0};
+  std::atomic<int64_t> last_accepted_ns_{0};
+  std::atomic<uint64_t> accepted_{0}, malformed_{0}, stale_{0}, trips_{0}, states_{0}, frames_{0},
+      frames_failed_{0};
+  std::atomic<bool> expired_{true};
+  std::atomic<bool> stopped_{false};
+  CommandWatchdog watchdog_;
+
+  video::SyntheticCamera camera_;
+  video::JpegEncoder encoder_;
+  cv::Mat image_;
+  msg::VehicleState state_msg_;
+  msg::VideoFrame frame_msg_;
+  std::vector<uint8_t> jpeg_;
+
+  // Declared last: destroyed first, so no DDS callback outlives the rest.
+  std::unique_ptr<link::Participant> participant_;
+  std::unique_ptr<link::StateWriter> state_writer_;
+  std::unique_ptr<link::VideoWriter> video_writer_;
+  std::unique_ptr<link::CommandReader> command_reader_;
+  std::unique_ptr<PeriodicThread> control_;
+  std::unique_ptr<PeriodicThread> camera_loop_;
+};
+
+}  // namespace haptel::vehicles

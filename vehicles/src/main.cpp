@@ -1,0 +1,88 @@
+// haptel-vehicle: one vehicle node. Subscribes to its command topic, drives
+// its adapter, publishes state and camera video; stops the motors when
+// commands stop coming (watchdog) and on SIGTERM/SIGINT.
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <thread>
+
+#include "haptel/config/error.hpp"
+#include "haptel/core/args.hpp"
+#include "haptel/core/log.hpp"
+#include "haptel/vehicles/vehicle_node.hpp"
+
+namespace {
+volatile std::sig_atomic_t g_stop = 0;
+void OnSignal(int) { g_stop = 1; }
+
+constexpr const char* kUsage =
+    "usage: haptel-vehicle [--config FILE] [--track FILE] [--name NAME] [--domain N]\n"
+    "  --config FILE  vehicle configuration (default config/vehicles/sim-robot.yaml)\n"
+    "  --track FILE   track the simulator drives on (overrides the file's 'world')\n"
+    "  --name NAME    vehicle name, part of its DDS topic names\n"
+    "  --domain N     DDS domain id (overrides link.domain_id)\n";
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace haptel;
+  log::SetProgram("haptel-vehicle");
+  VehicleConfig config;
+  std::unique_ptr<Track> track;
+  try {
+    const Args args(argc, argv, {"config", "track", "name", "domain"}, {"help"});
+    if (args.Flag("help")) {
+      std::fputs(kUsage, stdout);
+      return 0;
+    }
+    if (!args.positional().empty()) throw UsageError("unexpected argument '" + args.positional()[0] + "'");
+    const std::filesystem::path file = args.Value("config").value_or(
+        std::filesystem::exists("config/vehicles/sim-robot.yaml")
+            ? std::string("config/vehicles/sim-robot.yaml")
+            : std::string(HAPTEL_SOURCE_DIR) + "/config/vehicles/sim-robot.yaml");
+    config = LoadVehicle(file);
+    if (auto name = args.Value("name")) config.name = *name;
+    if (auto domain = args.Int("domain", 0, 232)) config.link.domain_id = *domain;
+    if (auto world = args.Value("track")) config.world = *world;
+    if (config.world.empty()) {
+      throw ConfigError(file.string() + ": key 'world': expected the track file a simulated "
+                        "vehicle drives on (or --track FILE)");
+    }
+    track = std::make_unique<Track>(LoadTrack(config.world));
+  } catch (const UsageError& e) {
+    std::fprintf(stderr, "haptel-vehicle: %s\n%s", e.what(), kUsage);
+    return 2;
+  } catch (const ConfigError& e) {
+    std::fprintf(stderr, "haptel-vehicle: %s\n", e.what());
+    return 2;
+  }
+
+  std::signal(SIGTERM, OnSignal);
+  std::signal(SIGINT, OnSignal);
+  try {
+    vehicles::VehicleNode node(config, *track);
+    node.Start();
+    log::Info("vehicle '" + config.name + "' up on domain " + std::to_string(config.link.domain_id) +
+              ", track '" + track->config().name + "'");
+    uint64_t trips = 0;
+    while (g_stop == 0) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      const auto c = node.Counters();
+      if (c.watchdog_trips > trips) {
+        trips = c.watchdog_trips;
+        log::Warn("watchdog: no command for " + std::to_string(config.watchdog_timeout_s) +
+                  " s, motors stopped");
+      }
+    }
+    node.Stop();
+    const auto c = node.Counters();
+    log::Info("stopped: motors off; " + std::to_string(c.commands_accepted) + " commands, " +
+              std::to_string(c.commands_malformed) + " malformed, " +
+              std::to_string(c.commands_stale) + " stale, " + std::to_string(c.frames_published) +
+              " frames");
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "haptel-vehicle: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

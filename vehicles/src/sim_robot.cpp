@@ -1,0 +1,111 @@
+#include "haptel/vehicles/sim_robot.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace haptel::vehicles {
+
+namespace {
+constexpr double kDegToRad = std::numbers::pi / 180.0;
+/// A body this close to an obstacle is touching it (switch stays closed while
+/// the robot rests against it).
+constexpr double kTouchTolerance = 0.002;
+}  // namespace
+
+SimRobot::SimRobot(const Track& track, const VehicleConfig& config)
+    : track_(track), drive_(config.drive), body_(config.body) {
+  const Vec2 start = track.StartPosition();
+  Place(start.x(), start.y(), track.StartHeading());
+}
+
+void SimRobot::Place(double x, double y, double heading) {
+  state_ = AdapterState{};
+  state_.pose_valid = true;
+  state_.x = x;
+  state_.y = y;
+  state_.heading = heading;
+  v_left_ = v_right_ = 0.0;
+  levels_ = {};
+}
+
+void SimRobot::SetMotors(const MotorLevels& levels) {
+  levels_.left = std::clamp(levels.left, -drive_.speed_levels, drive_.speed_levels);
+  levels_.right = std::clamp(levels.right, -drive_.speed_levels, drive_.speed_levels);
+  state_.applied = levels_;
+}
+
+void SimRobot::Update(double dt) {
+  if (!(dt > 0.0)) return;
+  const double per_level = drive_.max_speed / drive_.speed_levels;
+  const double target_left = levels_.left * per_level * drive_.left_gain;
+  const double target_right = levels_.right * per_level * drive_.right_gain;
+  const double alpha =
+      drive_.motor_time_constant > 0 ? 1.0 - std::exp(-dt / drive_.motor_time_constant) : 1.0;
+  v_left_ += (target_left - v_left_) * alpha;
+  v_right_ += (target_right - v_right_) * alpha;
+
+  const double v = 0.5 * (v_left_ + v_right_);
+  const double omega = (v_right_ - v_left_) / drive_.track_width;
+  const Vec2 before(state_.x, state_.y);
+  // Exact integration of a constant-curvature arc over dt.
+  const double h0 = state_.heading;
+  const double h1 = h0 + omega * dt;
+  if (std::abs(omega) > 1e-9) {
+    state_.x += v / omega * (std::sin(h1) - std::sin(h0));
+    state_.y -= v / omega * (std::cos(h1) - std::cos(h0));
+  } else {
+    state_.x += v * dt * std::cos(h0);
+    state_.y += v * dt * std::sin(h0);
+  }
+  state_.heading = WrapAngle(h1);
+  ResolveContacts();
+  const Vec2 after(state_.x, state_.y);
+  const Vec2 forward(std::cos(state_.heading), std::sin(state_.heading));
+  state_.speed = (after - before).dot(forward) / dt;  // blocked robots report 0
+  state_.yaw_rate = omega;
+}
+
+void SimRobot::Contact(const Vec2& point) {
+  const double bearing =
+      WrapAngle(std::atan2(point.y() - state_.y, point.x() - state_.x) - state_.heading);
+  if (std::abs(bearing) > body_.bumper_half_angle_deg * kDegToRad) return;  // no rear bumper
+  if (std::abs(bearing) <= body_.bumper_both_deg * kDegToRad) {
+    state_.bumper_left = state_.bumper_right = true;
+  } else if (bearing > 0) {
+    state_.bumper_left = true;
+  } else {
+    state_.bumper_right = true;
+  }
+}
+
+void SimRobot::ResolveContacts() {
+  state_.bumper_left = state_.bumper_right = false;
+  const double r = body_.radius;
+  // A few passes settle corners where two walls push at once.
+  for (int pass = 0; pass < 3; ++pass) {
+    Vec2 p(state_.x, state_.y);
+    for (const Segment2& wall : track_.walls()) {
+      const Vec2 q = ClosestPointOnSegment(wall, p);
+      const Vec2 d = p - q;
+      const double dist = d.norm();
+      if (dist < r + kTouchTolerance) {
+        if (pass == 0) Contact(q);
+        if (dist < r && dist > 1e-12) p = q + d * (r / dist);
+      }
+    }
+    for (const CircleObstacle& c : track_.round_obstacles()) {
+      const Vec2 d = p - c.center;
+      const double dist = d.norm();
+      const double reach = r + c.radius;
+      if (dist < reach + kTouchTolerance) {
+        if (pass == 0) Contact(c.center + d.normalized() * c.radius);
+        if (dist < reach && dist > 1e-12) p = c.center + d * (reach / dist);
+      }
+    }
+    state_.x = p.x();
+    state_.y = p.y();
+  }
+}
+
+}  // namespace haptel::vehicles

@@ -1,0 +1,161 @@
+#include "haptel/vehicles/vehicle_node.hpp"
+
+#include <cmath>
+
+#include "haptel/core/clock.hpp"
+#include "haptel/vehicles/sim_robot.hpp"
+
+namespace haptel::vehicles {
+
+namespace {
+/// Commands a little past ±1 are rounding; anything further is malformed.
+constexpr float kMaxCommand = 1.001F;
+}  // namespace
+
+VehicleNode::VehicleNode(const VehicleConfig& config, const Track& track)
+    : config_(config),
+      adapter_(std::make_unique<SimRobot>(track, config)),
+      watchdog_(config.watchdog_timeout_s),
+      camera_(track, config.camera),
+      encoder_(config.camera.jpeg_quality) {
+  ticks_per_state_ = std::max(1, static_cast<int>(std::lround(config.sim_rate_hz / config.state_rate_hz)));
+  const AdapterState s = adapter_->State();
+  pose_.Store({s.x, s.y, s.heading});
+
+  participant_ = std::make_unique<link::Participant>(config.link, "haptel-vehicle-" + config.name);
+  state_writer_ = std::make_unique<link::StateWriter>(
+      *participant_, link::TopicName(config.name, "state"), link::Profile::kState);
+  video_writer_ = std::make_unique<link::VideoWriter>(
+      *participant_, link::TopicName(config.name, "video"), link::Profile::kVideo);
+  command_reader_ = std::make_unique<link::CommandReader>(
+      *participant_, link::TopicName(config.name, "command"), link::Profile::kCommand,
+      [this](const msg::DriveCommand& cmd) { OnCommand(cmd); });
+
+  control_ = std::make_unique<PeriodicThread>(
+      PeriodicThread::Options{.name = "vehicle-control", .rate_hz = config.sim_rate_hz},
+      [this](int64_t now) { ControlTick(now); });
+  camera_loop_ = std::make_unique<PeriodicThread>(
+      PeriodicThread::Options{.name = "vehicle-camera", .rate_hz = config.camera.rate_hz},
+      [this](int64_t now) { CameraTick(now); });
+}
+
+VehicleNode::~VehicleNode() { Stop(); }
+
+void VehicleNode::Start() {
+  control_->Start();
+  camera_loop_->Start();
+}
+
+void VehicleNode::Stop() {
+  if (stopped_.exchange(true)) return;
+  camera_loop_->Stop();
+  control_->Stop();
+  adapter_->Stop();
+  adapter_->Update(1e-3);
+  PublishState(MonotonicNs());
+}
+
+void VehicleNode::OnCommand(const msg::DriveCommand& cmd) {
+  const int64_t now = MonotonicNs();
+  if (!std::isfinite(cmd.left()) || !std::isfinite(cmd.right()) ||
+      std::abs(cmd.left()) > kMaxCommand || std::abs(cmd.right()) > kMaxCommand) {
+    malformed_.fetch_add(1, std::memory_order_relaxed);
+    return;
+  }
+  // Best-effort delivery may reorder; an older command never overrides a newer
+  // one — unless the sender restarted (its sequence began again) and the last
+  // accepted command is older than the watchdog timeout.
+  const uint64_t last = last_accepted_seq_.load();
+  const bool restarted = now - last_accepted_ns_.load() > SToNs(config_.watchdog_timeout_s);
+  if (cmd.seq() <= last && !restarted) {
+    stale_.fetch_add(1, std::memory_order_relaxed);
+    return;
+  }
+  last_accepted_seq_.store(cmd.seq());
+  last_accepted_ns_.store(now);
+  accepted_.fetch_add(1, std::memory_order_relaxed);
+  command_.Store({cmd.seq(), cmd.sent_ns(), now, cmd.left(), cmd.right()});
+}
+
+void VehicleNode::ControlTick(int64_t now_ns) {
+  const uint64_t version = command_.Version();
+  if (version != applied_version_) {
+    applied_version_ = version;
+    applied_ = command_.Load();
+    watchdog_.Feed(applied_.received_ns);
+  }
+  const bool expired = watchdog_.Check(now_ns);
+  expired_.store(expired, std::memory_order_relaxed);
+  trips_.store(watchdog_.trips(), std::memory_order_relaxed);
+  MotorLevels levels;
+  if (!expired) {
+    levels.left = QuantiseCommand(applied_.left, config_.drive.speed_levels);
+    levels.right = QuantiseCommand(applied_.right, config_.drive.speed_levels);
+  }
+  adapter_->SetMotors(levels);
+  const double dt = last_tick_ns_ == 0 ? 1.0 / config_.sim_rate_hz
+                                       : std::min(0.05, NsToS(now_ns - last_tick_ns_));
+  last_tick_ns_ = now_ns;
+  adapter_->Update(dt);
+  const AdapterState s = adapter_->State();
+  pose_.Store({s.x, s.y, s.heading});
+  if (tick_count_++ % static_cast<uint64_t>(ticks_per_state_) == 0) PublishState(now_ns);
+}
+
+void VehicleNode::PublishState(int64_t now_ns) {
+  const AdapterState s = adapter_->State();
+  msg::VehicleState& m = state_msg_;
+  m.seq(++state_seq_);
+  m.stamp_ns(now_ns);
+  m.speed(static_cast<float>(s.speed));
+  m.yaw_rate(static_cast<float>(s.yaw_rate));
+  m.pose_valid(s.pose_valid);
+  m.x(static_cast<float>(s.x));
+  m.y(static_cast<float>(s.y));
+  m.heading(static_cast<float>(s.heading));
+  m.bumper_left(s.bumper_left);
+  m.bumper_right(s.bumper_right);
+  m.motor_left_level(static_cast<int16_t>(s.applied.left));
+  m.motor_right_level(static_cast<int16_t>(s.applied.right));
+  m.watchdog_tripped(expired_.load());
+  m.last_command_seq(applied_.seq);
+  m.last_command_sent_ns(applied_.sent_ns);
+  m.last_command_age_ns(applied_.seq == 0 ? 0 : now_ns - applied_.received_ns);
+  m.commands_received(accepted_.load());
+  state_writer_->Write(m);
+  states_.fetch_add(1, std::memory_order_relaxed);
+}
+
+void VehicleNode::CameraTick(int64_t /*now_ns*/) {
+  const Pose pose = pose_.Load();
+  const int64_t capture_wall_ns = WallNs();
+  camera_.Render({pose.x, pose.y, pose.heading}, image_);
+  if (!encoder_.Encode(image_, jpeg_)) {
+    frames_failed_.fetch_add(1, std::memory_order_relaxed);
+    return;
+  }
+  msg::VideoFrame& f = frame_msg_;
+  f.seq(++frame_seq_);
+  f.capture_wall_ns(capture_wall_ns);
+  f.width(static_cast<uint16_t>(image_.cols));
+  f.height(static_cast<uint16_t>(image_.rows));
+  f.encoding("jpeg");
+  f.data().assign(jpeg_.begin(), jpeg_.end());
+  video_writer_->Write(f);
+  frames_.fetch_add(1, std::memory_order_relaxed);
+}
+
+NodeCounters VehicleNode::Counters() const {
+  NodeCounters c;
+  c.commands_accepted = accepted_.load();
+  c.commands_malformed = malformed_.load();
+  c.commands_stale = stale_.load();
+  c.watchdog_trips = trips_.load();
+  c.states_published = states_.load();
+  c.frames_published = frames_.load();
+  c.frames_failed = frames_failed_.load();
+  c.watchdog_expired = expired_.load();
+  return c;
+}
+
+}  // namespace haptel::vehicles
