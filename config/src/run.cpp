@@ -30,6 +30,7 @@ RunConfig LoadRun(const std::filesystem::path& file) {
   r.op.lookahead = op.Number("lookahead", r.op.lookahead, 0.05, 10.0);
   r.op.cruise = op.Number("cruise", r.op.cruise, 0.05, 1.0);
   r.op.min_forward = op.Number("min_forward", r.op.min_forward, 0.0, 1.0);
+  r.op.slow_radius = op.Number("slow_radius", r.op.slow_radius, 0.0, 100.0);
   r.op.muscle_stiffness = op.Number("muscle_stiffness", r.op.muscle_stiffness, 1.0, 1e4);
   r.op.muscle_damping = op.Number("muscle_damping", r.op.muscle_damping, 0.0, 1e3);
   r.op.muscle_max_force = op.Number("muscle_max_force", r.op.muscle_max_force, 0.1, 100.0);

@@ -195,7 +195,7 @@ std::vector<YamlMap> YamlMap::MapList(const std::string& key) {
 void YamlMap::Finish() const {
   if (!node_.IsMap()) return;
   for (const auto& entry : node_) {
-    const std::string key = entry.first.as<std::string>();
+    const std::string key = entry.first.IsScalar() ? entry.first.Scalar() : "<not a plain key>";
     if (read_.count(key) == 0) {
       std::string known;
       for (const auto& k : read_) known += (known.empty() ? "" : ", ") + k;

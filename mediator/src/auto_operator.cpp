@@ -41,8 +41,9 @@ interfaces::DriveIntent AutoOperator::Decide(double t_s) {
   const double alpha = WrapAngle(std::atan2(d.y(), d.x()) - o->heading);
   const double distance = std::max(d.norm(), 1e-3);
   const double curvature = 2.0 * std::sin(alpha) / distance;
-  // Slow down in turns: full cruise on straights, min_forward at a 0.25 m radius.
-  const double tightness = std::min(1.0, std::abs(curvature) * 0.25);
+  // Slow down in turns: full cruise on straights, min_forward on an arc of
+  // radius slow_radius or tighter.
+  const double tightness = std::min(1.0, std::abs(curvature) * config_.slow_radius);
   double forward = config_.cruise - (config_.cruise - config_.min_forward) * tightness;
   // Facing away from the goal: turn on the spot first.
   if (std::abs(alpha) > 1.2) forward = 0.0;

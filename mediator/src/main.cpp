@@ -101,6 +101,9 @@ int main(int argc, char** argv) {
   } catch (const ConfigError& e) {
     std::fprintf(stderr, "haptel: %s\n", e.what());
     return 2;
+  } catch (const std::exception& e) {  // anything else while reading the set-up is still bad input
+    std::fprintf(stderr, "haptel: configuration: %s\n", e.what());
+    return 2;
   }
 
   std::signal(SIGINT, OnSignal);

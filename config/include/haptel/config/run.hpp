@@ -14,6 +14,7 @@ struct OperatorConfig {
   double lookahead = 0.35;           ///< pure-pursuit look-ahead, m
   double cruise = 0.9;               ///< forward command on straights (0..1)
   double min_forward = 0.35;         ///< forward command in the tightest turn
+  double slow_radius = 0.15;         ///< turn radius at which it slows to min_forward, m
   double muscle_stiffness = 250.0;   ///< N/m
   double muscle_damping = 12.0;      ///< N·s/m
   double muscle_max_force = 8.0;     ///< N
