@@ -27,8 +27,10 @@ std::string TopicName(const std::string& vehicle, const std::string& channel) {
   return "haptel/" + vehicle + "/" + channel;
 }
 
-dds::DataWriterQos DataWriterQosFor(Profile profile, const LinkConfig& config) {
-  dds::DataWriterQos qos = dds::DATAWRITER_QOS_DEFAULT;
+namespace {
+/// Writer and reader QoS share these policies; both ends must agree.
+template <typename Qos>
+Qos WithProfile(Qos qos, Profile profile, const LinkConfig& config) {
   qos.history().kind = dds::KEEP_LAST_HISTORY_QOS;
   switch (profile) {
     case Profile::kCommand:
@@ -47,26 +49,14 @@ dds::DataWriterQos DataWriterQosFor(Profile profile, const LinkConfig& config) {
   }
   return qos;
 }
+}  // namespace
+
+dds::DataWriterQos DataWriterQosFor(Profile profile, const LinkConfig& config) {
+  return WithProfile(dds::DataWriterQos(dds::DATAWRITER_QOS_DEFAULT), profile, config);
+}
 
 dds::DataReaderQos DataReaderQosFor(Profile profile, const LinkConfig& config) {
-  dds::DataReaderQos qos = dds::DATAREADER_QOS_DEFAULT;
-  qos.history().kind = dds::KEEP_LAST_HISTORY_QOS;
-  switch (profile) {
-    case Profile::kCommand:
-      qos.reliability().kind = dds::BEST_EFFORT_RELIABILITY_QOS;
-      qos.history().depth = 1;
-      qos.deadline().period = ToDuration(config.command_deadline_s);
-      break;
-    case Profile::kState:
-      qos.reliability().kind = dds::RELIABLE_RELIABILITY_QOS;
-      qos.history().depth = 8;
-      break;
-    case Profile::kVideo:
-      qos.reliability().kind = dds::BEST_EFFORT_RELIABILITY_QOS;
-      qos.history().depth = 1;
-      break;
-  }
-  return qos;
+  return WithProfile(dds::DataReaderQos(dds::DATAREADER_QOS_DEFAULT), profile, config);
 }
 
 Participant::Participant(const LinkConfig& config, const std::string& name) : config_(config) {

@@ -141,6 +141,10 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   auto finish = [&](Outcome outcome, std::string message) {
     result.outcome = outcome;
     result.message = std::move(message);
+    // Said at once: the clean-up that follows may take a while.
+    if (outcome == Outcome::kVehicleLost || outcome == Outcome::kVehicleDidNotStart) {
+      log::Error(result.message + "; forces zeroed");
+    }
   };
 
   for (;;) {
