@@ -96,7 +96,7 @@ int main(int argc, char** argv) {
     setup.gesture = LoadGesture(InterfaceFile(setup.run, setup.run.interface));
     setup.vehicle_program = SelfDirectory() / "haptel-vehicle";
   } catch (const UsageError& e) {
-    std::fprintf(stderr, "haptel: %s\n%s", e.what(), kUsage);
+    std::fprintf(stderr, "haptel: %s (see haptel --help)\n", e.what());
     return 2;
   } catch (const ConfigError& e) {
     std::fprintf(stderr, "haptel: %s\n", e.what());

@@ -2,6 +2,7 @@
 #include <catch2/catch.hpp>
 #include <signal.h>
 
+#include <algorithm>
 #include <atomic>
 #include <mutex>
 
@@ -146,6 +147,7 @@ TEST_CASE("bad options and bad config files exit 2 with a one-line error naming 
     Child c({Bin("haptel"), "run", "--no-such-option"});
     CHECK(c.Wait(30.0) == 2);
     CHECK(c.err().find("--no-such-option") != std::string::npos);
+    CHECK(std::count(c.err().begin(), c.err().end(), '\n') == 1);  // one line
   }
   {
     const auto bad = dir / "bad-track.yaml";
@@ -157,6 +159,7 @@ TEST_CASE("bad options and bad config files exit 2 with a one-line error naming 
     CHECK(c.err().find("bad-track.yaml:2") != std::string::npos);
     CHECK(c.err().find("corridor_width") != std::string::npos);
     CHECK(c.err().find("terminate") == std::string::npos);  // no uncaught exception
+    CHECK(std::count(c.err().begin(), c.err().end(), '\n') == 1);
   }
   {
     Child c({Bin("haptel"), "run", "--interface", "telepathy"});

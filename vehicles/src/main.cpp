@@ -50,7 +50,7 @@ int main(int argc, char** argv) {
     }
     track = std::make_unique<Track>(LoadTrack(config.world));
   } catch (const UsageError& e) {
-    std::fprintf(stderr, "haptel-vehicle: %s\n%s", e.what(), kUsage);
+    std::fprintf(stderr, "haptel-vehicle: %s (see haptel-vehicle --help)\n", e.what());
     return 2;
   } catch (const ConfigError& e) {
     std::fprintf(stderr, "haptel-vehicle: %s\n", e.what());
