@@ -1,28 +1,52 @@
 #pragma once
 /// @file The haptic device interface the servo loop drives.
+///
+/// A device has up to two arms (sides). Each arm has fast channels (wrist
+/// tracker in, wrist force out, finger forces out), read and written every
+/// servo cycle, and slow channels (glove sensors and grasp strings in), read
+/// every N-th cycle. Values cross this interface in device units; the servo
+/// loop applies the calibration.
+#include <array>
+#include <string>
+
 #include "haptel/haptics/types.hpp"
 
 namespace haptel::haptics {
 
 enum class DeviceStatus {
-  kOk,       ///< fresh reading
-  kNoData,   ///< no new reading this tick (keep the last one)
+  kOk,       ///< fresh reading / command accepted
+  kNoData,   ///< no new reading this tick (keep the last one); not an error
   kLost,     ///< the device stopped answering: forces must be zero
 };
 
-/// A force-feedback device with up to two arms. Read and WriteForce are called
-/// from the servo thread only and must not allocate or block beyond the
-/// device's own I/O.
+/// What a device is and may be asked: from its driver or its YAML file.
+struct DeviceDescription {
+  std::string name = "device";
+  std::array<bool, kSides> has_side{true, true};
+  double wrist_force_limit = 7.0;   ///< N at the wrist
+  double finger_force_limit = 10.0; ///< N per finger
+  bool has_glove = true;
+  bool has_grasp = true;
+};
+
+/// Every call except description() comes from the servo thread that owns
+/// `side`; in two-sided mode the two sides run on two threads at once, so an
+/// implementation must keep per-side state apart. Calls must not allocate and
+/// must not block beyond the device's own I/O (bounded by its timeouts).
 class Device {
  public:
   virtual ~Device() = default;
-  virtual bool HasSide(Side side) const = 0;
-  /// Reads the hand on `side` at servo time `now_ns` into `out`.
-  virtual DeviceStatus Read(Side side, int64_t now_ns, HandSample& out) = 0;
-  /// Commands the wrist force on `side` (already limited by the servo loop).
-  virtual DeviceStatus WriteForce(Side side, const Vec3d& force) = 0;
-  /// Largest wrist force the device may be commanded, N.
-  virtual double wrist_force_limit() const = 0;
+  virtual const DeviceDescription& description() const = 0;
+  bool HasSide(Side side) const { return description().has_side[Index(side)]; }
+
+  /// Fast channel: the wrist tracker at servo time `now_ns`.
+  virtual DeviceStatus ReadWrist(Side side, int64_t now_ns, WristRaw& out) = 0;
+  /// Slow channels: glove sensors and grasp strings.
+  virtual DeviceStatus ReadGlove(Side side, int64_t now_ns, GloveRaw& out) = 0;
+  /// Wrist force command, device units (newtons / calibrated slope).
+  virtual DeviceStatus WriteWristForce(Side side, const Vec3d& command) = 0;
+  /// Finger force commands, device units, each ≥ 0.
+  virtual DeviceStatus WriteFingerForces(Side side, const std::array<double, kFingers>& command) = 0;
 };
 
 }  // namespace haptel::haptics

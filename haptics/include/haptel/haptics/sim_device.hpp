@@ -1,47 +1,98 @@
 #pragma once
-/// @file A simulated two-arm haptic device with a simulated operator's arm.
+/// @file The `sim` device: a simulated two-arm exoskeleton with data gloves
+/// and grasp strings, moved by a simulated operator.
 ///
-/// Each arm is a point mass moved by the operator's muscle force plus the
-/// device force, with viscous friction. The "muscle" is a spring-damper with
-/// a slow integral term toward a target the operator sets — a person who
-/// pushes harder when something pulls back, but cannot push through a stiff
-/// wall. Integration happens in Read, on the servo thread, at the servo rate.
+/// Each arm is a point mass (per-axis dynamics) moved by the operator's muscle
+/// force, the device force and an unbalanced exoskeleton weight that varies
+/// with position (`exo_unbalanced_mass` at the worst place), against viscous
+/// and Coulomb friction, inside a workspace box with hard stops. It reports
+/// in device units through hidden "true" calibration parameters derived from
+/// `seed` — tracker scale and offset, glove gains and offsets, force slopes —
+/// with encoder quantisation, so calibration and gravity compensation have
+/// something real to recover. Friction acts per axis (a simplification).
+///
+/// The muscle is a spring-damper with a slow, bounded integral term toward a
+/// target the operator sets: a person who pushes harder when something pulls
+/// back, but cannot push through a stiff wall. A released arm has no muscle.
 #include <array>
+#include <atomic>
 
+#include "haptel/config/device.hpp"
 #include "haptel/config/run.hpp"
 #include "haptel/core/seqlock.hpp"
 #include "haptel/haptics/device.hpp"
 
 namespace haptel::haptics {
 
+/// The parameters a perfect calibration would find for one simulated arm.
+struct SimArmTruth {
+  Vec3d tracker_scale{};   ///< metres = scale · raw + offset
+  Vec3d tracker_offset{};
+  std::array<double, kGloveJoints> glove_gain{};    ///< radians = gain · raw + offset
+  std::array<double, kGloveJoints> glove_offset{};
+  Vec3d force_slope{};     ///< newtons = slope · command
+  double finger_force_slope = 1.0;
+};
+
 class SimDevice final : public Device {
  public:
-  SimDevice(const SimDeviceConfig& device, const OperatorConfig& muscle);
+  static constexpr double kGravity = 9.81;  ///< m/s²
 
-  bool HasSide(Side) const override { return true; }
-  DeviceStatus Read(Side side, int64_t now_ns, HandSample& out) override;
-  DeviceStatus WriteForce(Side side, const Vec3d& force) override;
-  double wrist_force_limit() const override { return device_.force_limit; }
+  SimDevice(const DeviceConfig& config, const OperatorConfig& muscle);
 
-  /// Operator thread: where the simulated person wants the hand to be.
+  const DeviceDescription& description() const override { return description_; }
+  DeviceStatus ReadWrist(Side side, int64_t now_ns, WristRaw& out) override;
+  DeviceStatus ReadGlove(Side side, int64_t now_ns, GloveRaw& out) override;
+  DeviceStatus WriteWristForce(Side side, const Vec3d& command) override;
+  DeviceStatus WriteFingerForces(Side side, const std::array<double, kFingers>& command) override;
+
+  // --- The simulated operator (any thread). ---
+  /// Where the operator wants the wrist, true metres; the operator holds on.
   void SetOperatorTarget(Side side, const Vec3d& target);
-  /// Test hook: puts the arm at rest at `position`.
+  /// The operator lets go of the arm: no muscle force until the next target.
+  void Release(Side side);
+  /// The hand posture the operator makes, joint angles in radians.
+  void SetGlovePosture(Side side, const std::array<double, kGloveJoints>& angles);
+
+  // --- Set-up, tests and calibration procedures (not while a loop runs). ---
+  /// Puts the arm at rest at `position` (true metres), the operator holding it there.
   void Place(Side side, const Vec3d& position);
+  /// Makes the side answer kLost (a pulled cable) or recover.
+  void SetLost(Side side, bool lost) { lost_[Index(side)].store(lost); }
+  const SimArmTruth& truth(Side side) const { return truth_[Index(side)]; }
+  /// True wrist position and velocity (metres, m/s) after the last read.
+  Vec3d TruePosition(Side side) const { return arms_[Index(side)].position; }
+  Vec3d TrueVelocity(Side side) const { return arms_[Index(side)].velocity; }
+  /// Unbalanced exoskeleton mass at a position, kg (its weight pulls down).
+  double UnbalancedMass(const Vec3d& position) const;
+  /// What a force gauge on the wrist reads for a command: newtons actually applied.
+  Vec3d MeasureForce(Side side, const Vec3d& command) const;
+  const SimArmConfig& config() const { return config_; }
 
  private:
   struct Arm {
     Vec3d position{};
     Vec3d velocity{};
-    Vec3d device_force{};
-    Vec3d integral{};  ///< integral part of the muscle force, N
+    Vec3d device_force{};  ///< N actually applied
+    Vec3d integral{};      ///< integral part of the muscle force, N
+    std::array<double, kFingers> finger_force{};
     int64_t last_ns = 0;
   };
-  void Integrate(Arm& arm, const Vec3d& target, double dt);
+  struct OperatorInput {
+    Vec3d target{};
+    bool holding = false;
+  };
+  void Step(Side side, Arm& arm, const OperatorInput& input, double dt);
 
-  SimDeviceConfig device_;
+  SimArmConfig config_;
   OperatorConfig muscle_;
+  DeviceDescription description_;
+  std::array<SimArmTruth, kSides> truth_{};
   std::array<Arm, kSides> arms_{};
-  std::array<Seqlock<Vec3d>, kSides> targets_;
+  std::array<Seqlock<OperatorInput>, kSides> operator_;
+  std::array<Seqlock<std::array<double, kGloveJoints>>, kSides> posture_;
+  std::array<std::atomic<bool>, kSides> lost_{};
+  std::array<uint64_t, kSides> glove_noise_state_{};
 };
 
 }  // namespace haptel::haptics

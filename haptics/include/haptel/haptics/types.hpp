@@ -15,6 +15,8 @@ constexpr int Index(Side side) { return static_cast<int>(side); }
 
 /// Joint angles a data glove reports per hand.
 constexpr int kGloveJoints = 22;
+/// Fingers of a grasp (string) device per hand.
+constexpr int kFingers = 5;
 
 using Vec3d = std::array<double, 3>;
 
@@ -44,6 +46,37 @@ struct ForceField {
   Vec3d wall_normal{1, 0, 0};     ///< unit, pointing into the wall
   double wall_stiffness = 0.0;    ///< N/m
   double wall_damping = 0.0;      ///< N·s/m
+};
+
+/// A wrist tracker reading as the device reports it: position in device
+/// units (calibration turns it into metres), orientation as a unit quaternion.
+struct WristRaw {
+  int64_t t_ns = 0;
+  Vec3d position{};
+  std::array<double, 4> orientation{1, 0, 0, 0};  ///< (w, x, y, z)
+};
+
+/// The slow channels as the device reports them: glove sensor values (device
+/// units; calibration turns them into joint angles) and the grasp strings'
+/// measured forces (device units).
+struct GloveRaw {
+  int64_t t_ns = 0;
+  std::array<double, kGloveJoints> sensors{};
+  std::array<double, kFingers> grasp{};
+};
+
+/// Everything slower threads ask of the servo loop for one side. The servo
+/// loop turns it into forces every tick from the latest hand pose; when
+/// `stamp_ns` grows old (the feeder stalled) the forces fade to zero.
+struct ForceSetpoint {
+  int64_t stamp_ns = 0;        ///< CLOCK_MONOTONIC time the feeder wrote it; 0 = never
+  ForceField field;            ///< interface force field
+  bool coupling_enabled = false;  ///< proxy coupling: F = k·(target − p) − b·v
+  Vec3d coupling_target{};
+  double coupling_stiffness = 0.0;  ///< N/m
+  double coupling_damping = 0.0;    ///< N·s/m
+  Vec3d wrist_force{};              ///< added as is, N
+  std::array<double, kFingers> finger_forces{};  ///< N, pulling each finger back (≥ 0)
 };
 
 }  // namespace haptel::haptics

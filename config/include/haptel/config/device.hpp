@@ -1,0 +1,87 @@
+#pragma once
+/// @file A haptic device's configuration (config/devices/*.yaml): which
+/// driver, what the device may be asked, how the servo loop runs it, its
+/// safety limits, and the files that calibrate and gravity-compensate it.
+#include <array>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace haptel {
+
+/// How the servo loop runs.
+struct ServoLoopConfig {
+  double rate_hz = 1000.0;
+  /// One sub-thread per arm meeting at a rendezvous every cycle (the original's
+  /// scheme); false: both arms on one thread, one after the other.
+  bool two_sided = true;
+  /// Slow channels (glove, grasp strings) are read every N-th cycle.
+  int slow_channel_divider = 6;
+  int realtime_priority = 80;  ///< SCHED_FIFO priority when the process may (0: do not ask)
+  bool lock_memory = true;     ///< mlockall when the process may
+};
+
+/// Force safety, applied in the servo loop to every force before the device.
+struct SafetyConfig {
+  double wrist_force_limit = 7.0;     ///< N (also capped by the device description)
+  double finger_force_limit = 10.0;   ///< N
+  double max_force_rate = 2000.0;     ///< N/s, per axis / finger
+  double soft_start_s = 0.5;          ///< forces ramp in after connect or reconnect
+  double setpoint_timeout_s = 0.02;   ///< set-points older than this are stale
+  double fade_s = 0.03;               ///< stale set-points fade to zero over this
+};
+
+/// The simulated device: point-mass arms moved by a simulated operator, with
+/// the imperfections calibration and gravity compensation must fix.
+struct SimArmConfig {
+  double arm_mass = 0.8;               ///< kg
+  double damping = 1.0;                ///< N·s/m viscous
+  double coulomb_friction = 0.3;       ///< N
+  double exo_unbalanced_mass = 0.6;    ///< kg at the worst place in the workspace
+  double encoder_resolution = 60e-6;   ///< m
+  double force_limit = 7.0;            ///< N the hardware saturates at
+  double glove_noise = 0.0;            ///< raw units, standard deviation
+  /// Workspace box (hard stops), m, device frame.
+  std::array<double, 3> workspace_min{-0.20, -0.30, -0.20};
+  std::array<double, 3> workspace_max{0.30, 0.30, 0.25};
+  /// Seed of the hidden "true" calibration parameters (scale, offsets, gains).
+  int seed = 1;
+};
+
+struct UdpArmEndpoint {
+  std::string host = "127.0.0.1";
+  int port = 0;  ///< 0: no arm on this side
+};
+
+struct UdpDeviceConfig {
+  std::array<UdpArmEndpoint, 2> arms;  ///< [left, right]
+  double timeout_s = 0.002;   ///< per request
+  int retries = 1;            ///< extra attempts after a timeout
+  double lost_after_s = 0.1;  ///< no valid answer for this long: device lost
+};
+
+struct ReplayDeviceConfig {
+  std::filesystem::path trace;  ///< a trace file written by the session recorder
+  bool loop = false;
+};
+
+struct DeviceConfig {
+  std::filesystem::path file;
+  std::string name = "sim";
+  std::string driver = "sim";  ///< sim | udp | replay
+  std::array<bool, 2> sides{true, true};  ///< [left, right]
+  bool has_glove = true;
+  bool has_grasp = true;
+  ServoLoopConfig servo;
+  SafetyConfig safety;
+  SimArmConfig sim;
+  UdpDeviceConfig udp;
+  ReplayDeviceConfig replay;
+  /// Optional files (empty: none). Relative paths resolve against the working directory.
+  std::filesystem::path calibration;
+  std::filesystem::path gravity;
+};
+
+DeviceConfig LoadDevice(const std::filesystem::path& file);
+
+}  // namespace haptel
