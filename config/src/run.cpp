@@ -17,6 +17,7 @@ RunConfig LoadRun(const std::filesystem::path& file) {
   r.name = root.String("name", r.name);
   r.track = dir / root.RequireString("track");
   r.vehicle = dir / root.RequireString("vehicle");
+  r.device = dir / root.String("device", "devices/sim.yaml");
   r.interface = root.String("interface", r.interface);
   r.interfaces_dir = dir / root.String("interfaces_dir", "interfaces");
   r.database = root.String("database", r.database.string());
@@ -38,17 +39,6 @@ RunConfig LoadRun(const std::filesystem::path& file) {
       op.Number("muscle_integral_gain", r.op.muscle_integral_gain, 0.0, 1e5);
   r.op.backoff_s = op.Number("backoff_s", r.op.backoff_s, 0.0, 10.0);
   op.Finish();
-
-  YamlMap device = root.Map("device");
-  r.device.arm_mass = device.Number("arm_mass", r.device.arm_mass, 0.01, 100.0);
-  r.device.damping = device.Number("damping", r.device.damping, 0.0, 1e3);
-  r.device.force_limit = device.Number("force_limit", r.device.force_limit, 0.0, 100.0);
-  device.Finish();
-
-  YamlMap servo = root.Map("servo");
-  r.servo.rate_hz = servo.Number("rate_hz", r.servo.rate_hz, 100.0, 10000.0);
-  r.servo.realtime_priority = servo.Integer("realtime_priority", r.servo.realtime_priority, 0, 99);
-  servo.Finish();
 
   YamlMap link = root.Map("link");
   r.link = config_detail::ReadLink(link);

@@ -131,6 +131,29 @@ std::array<double, 3> YamlMap::Vec3(const std::string& key, const std::array<dou
   return out;
 }
 
+std::vector<double> YamlMap::Numbers(const std::string& key, size_t count, double min, double max,
+                                     bool nonzero) {
+  const std::string expected = "a list of " + std::to_string(count) + (nonzero ? " non-zero" : "") +
+                               " numbers in " + Range(min, max);
+  if (!Has(key)) Fail(key, expected);
+  const YAML::Node child = Child(key);
+  if (!child.IsSequence() || child.size() != count) Fail(key, expected);
+  std::vector<double> out;
+  for (size_t i = 0; i < count; ++i) {
+    const YAML::Node item = child[i];
+    double value = 0.0;
+    const bool ok = item.IsScalar() && YAML::convert<double>::decode(item, value) &&
+                    std::isfinite(value) && value >= min && value <= max && !(nonzero && value == 0.0);
+    if (!ok) {
+      throw ConfigError(Where(item) + ": key '" + Path(key) + "[" + std::to_string(i) +
+                        "]': expected a" + (nonzero ? " non-zero" : "") + " number in " +
+                        Range(min, max) + ", got " + Got(item));
+    }
+    out.push_back(value);
+  }
+  return out;
+}
+
 Vec2 YamlMap::Point(const std::string& key) {
   const YAML::Node child = Child(key);
   const std::string expected = "a point [x, y] in metres";

@@ -32,6 +32,10 @@ class YamlMap {
   std::string RequireString(const std::string& key);
   std::array<double, 3> Vec3(const std::string& key, const std::array<double, 3>& fallback,
                              double min, double max);
+  /// A required list of exactly `count` numbers in [min, max] (and != 0 when
+  /// `nonzero`); errors name the offending element, e.g. "gains[3]".
+  std::vector<double> Numbers(const std::string& key, size_t count, double min, double max,
+                              bool nonzero = false);
   Vec2 Point(const std::string& key);
   std::vector<Vec2> Points(const std::string& key, size_t min_count);
   std::vector<std::string> Strings(const std::string& key, const std::vector<std::string>& fallback);

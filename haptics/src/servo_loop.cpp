@@ -1,59 +1,196 @@
 #include "haptel/haptics/servo_loop.hpp"
 
-#include <cmath>
+#include <pthread.h>
+#include <sys/mman.h>
 
+#include <cmath>
+#include <string>
+
+#include "haptel/core/clock.hpp"
+#include "haptel/haptics/calibration.hpp"
 #include "haptel/haptics/force_field.hpp"
+#include "haptel/haptics/gravity.hpp"
 
 namespace haptel::haptics {
 
-ServoLoop::ServoLoop(Device& device, Hal& hal, const ServoConfig& config)
-    : device_(device),
-      hal_(hal),
-      thread_({.name = "haptel-servo",
-               .rate_hz = config.rate_hz,
-               .realtime_priority = config.realtime_priority,
-               .max_catch_up_periods = 10},
-              [this](int64_t now_ns) { Tick(now_ns); }) {}
+namespace {
+/// Velocity low-pass time constant: the tracker is quantised (tens of µm), so
+/// a raw 1 ms difference is noise; 5 ms keeps damping smooth and responsive.
+constexpr double kVelocityFilter_s = 0.005;
 
-ServoLoop::~ServoLoop() { Stop(); }
+}  // namespace
 
-void ServoLoop::Start() { thread_.Start(); }
-void ServoLoop::Stop() { thread_.Stop(); }
-
-void ServoLoop::Tick(int64_t now_ns) {
+ServoLoop::ServoLoop(Device& device, Hal& hal, const DeviceConfig& config, const DeviceCalibration& calibration,
+                     const GravityGrid* gravity)
+    : device_(device), hal_(hal), config_(config), calibration_(calibration), gravity_(gravity) {
+  const DeviceDescription& d = device.description();
   for (int i = 0; i < kSides; ++i) {
-    const auto side = static_cast<Side>(i);
-    if (!device_.HasSide(side)) continue;
-    const DeviceStatus status = device_.Read(side, now_ns, sample_);
-    if (status == DeviceStatus::kLost) {
-      device_lost_ticks_.fetch_add(1, std::memory_order_relaxed);
-      sample_.valid = false;
-      hal_.PublishSample(side, sample_);
-      last_force_[i] = Vec3d{};
-      device_.WriteForce(side, Vec3d{});
-      continue;
-    }
-    Vec3d force{};
-    if (status == DeviceStatus::kOk) {
-      const ForceField field = hal_.Field(side);
-      force = EvaluateForceField(field, sample_.position, sample_.velocity);
-      const bool finite = std::isfinite(force[0]) && std::isfinite(force[1]) && std::isfinite(force[2]);
-      if (!finite) non_finite_forces_.fetch_add(1, std::memory_order_relaxed);
-      if (LimitForce(force, device_.wrist_force_limit()) && finite) {
-        forces_limited_.fetch_add(1, std::memory_order_relaxed);
-      }
-      sample_.force = force;
-      hal_.PublishSample(side, sample_);
-      last_force_[i] = force;
-    } else {
-      force = last_force_[i];  // no new reading: hold the last force
-    }
-    device_.WriteForce(side, force);
+    arms_[i] = std::make_unique<Arm>(ForceSafety(config.safety, d.wrist_force_limit, d.finger_force_limit));
   }
 }
 
-ServoCounters ServoLoop::Counters() const {
-  return {device_lost_ticks_.load(), forces_limited_.load(), non_finite_forces_.load()};
+ServoLoop::~ServoLoop() { Stop(); }
+
+void ServoLoop::Tick(Side side, int64_t now_ns) {
+  Arm& arm = *arms_[Index(side)];
+  ServoCounters& c = arm.counters;
+  const ArmCalibration& cal = calibration_.arms[Index(side)];
+  ++c.cycles;
+
+  const DeviceDescription& d = device_.description();
+  if ((d.has_glove || d.has_grasp) && arm.cycle % static_cast<uint64_t>(config_.servo.slow_channel_divider) == 0) {
+    if (device_.ReadGlove(side, now_ns, arm.glove) == DeviceStatus::kOk) {
+      hal_.PublishGlove(side, arm.glove);
+      ++c.slow_reads;
+    }
+  }
+  ++arm.cycle;
+
+  const DeviceStatus status = device_.ReadWrist(side, now_ns, arm.wrist);
+  if (status == DeviceStatus::kLost) {
+    ++c.device_lost_ticks;
+    if (arm.connected) {
+      arm.connected = false;
+      arm.safety.OnLost();
+      hal_.PublishLost(side, true);
+    }
+    // Zero force, whatever the set-points say; a lost device may not hear it.
+    device_.WriteWristForce(side, Vec3d{});
+    device_.WriteFingerForces(side, {});
+    arm.have_previous = false;
+    arm.published.Store(c);
+    return;
+  }
+  if (!arm.connected) {
+    arm.connected = true;
+    arm.safety.OnConnect(now_ns);
+    hal_.PublishLost(side, false);
+  }
+  if (status == DeviceStatus::kOk) {
+    hal_.PublishWrist(side, arm.wrist);
+    const Vec3d p = TrackerToMetres(cal, arm.wrist.position);
+    if (arm.have_previous && now_ns > arm.previous_ns) {
+      const double dt = static_cast<double>(now_ns - arm.previous_ns) * 1e-9;
+      const double alpha = dt / (kVelocityFilter_s + dt);
+      for (int i = 0; i < 3; ++i) {
+        arm.velocity[i] += alpha * ((p[i] - arm.previous_position[i]) / dt - arm.velocity[i]);
+      }
+    }
+    arm.previous_position = p;
+    arm.previous_ns = now_ns;
+    arm.have_previous = true;
+  } else {
+    ++c.no_data_ticks;
+  }
+  if (!arm.have_previous) {
+    arm.published.Store(c);
+    return;  // nothing to compute forces from yet
+  }
+
+  // Forces from the latest set-point, at full rate whatever the feeders' rates.
+  const ForceSetpoint sp = hal_.Setpoint(side);
+  const Vec3d& p = arm.previous_position;
+  const Vec3d& v = arm.velocity;
+  Vec3d from_setpoint = EvaluateForceField(sp.field, p, v);
+  for (int i = 0; i < 3; ++i) {
+    if (sp.coupling_enabled) {
+      from_setpoint[i] += sp.coupling_stiffness * (sp.coupling_target[i] - p[i]) - sp.coupling_damping * v[i];
+    }
+    from_setpoint[i] += sp.wrist_force[i];
+  }
+  Vec3d local{};
+  if (gravity_ != nullptr) local[2] = gravity_->Evaluate(p);
+  Vec3d wrist{};
+  std::array<double, kFingers> fingers = sp.finger_forces;
+  arm.safety.Apply(now_ns, sp.stamp_ns, from_setpoint, local, wrist, fingers);
+
+  if (device_.WriteWristForce(side, NewtonsToCommand(cal, wrist)) != DeviceStatus::kOk) ++c.write_failures;
+  if (d.has_grasp) {
+    std::array<double, kFingers> finger_commands{};
+    for (int k = 0; k < kFingers; ++k) finger_commands[k] = FingerNewtonsToCommand(cal, fingers[k]);
+    if (device_.WriteFingerForces(side, finger_commands) != DeviceStatus::kOk) ++c.write_failures;
+  }
+  hal_.PublishForces(side, {now_ns, wrist, fingers});
+  c.safety = arm.safety.counters();
+  arm.published.Store(c);
 }
+
+void ServoLoop::Start() {
+  if (running_.exchange(true)) return;
+  stop_requested_.store(false);
+  stop_latched_ = false;
+  if (config_.servo.lock_memory) memory_locked_ = mlockall(MCL_CURRENT | MCL_FUTURE) == 0;
+  two_threads_ = config_.servo.two_sided && device_.HasSide(Side::kLeft) && device_.HasSide(Side::kRight);
+  rendezvous_ = std::make_unique<std::barrier<Completion>>(two_threads_ ? 2 : 1, Completion{this});
+  period_ns_ = static_cast<int64_t>(std::llround(1e9 / config_.servo.rate_hz));
+  anchor_ns_ = MonotonicNs() + 2 * period_ns_;
+  cycle_ = 0;
+  threads_[0] = std::thread([this] { RunThread(0); });
+  if (two_threads_) threads_[1] = std::thread([this] { RunThread(1); });
+}
+
+void ServoLoop::Stop() {
+  stop_requested_.store(true);
+  for (auto& t : threads_) {
+    if (t.joinable()) t.join();
+  }
+  if (memory_locked_) {
+    munlockall();
+    memory_locked_ = false;
+  }
+  running_.store(false);
+}
+
+void ServoLoop::EndCycle() noexcept {
+  stop_latched_ = stop_requested_.load();
+  ++cycle_;
+  const int64_t behind = MonotonicNs() - (anchor_ns_ + static_cast<int64_t>(cycle_) * period_ns_);
+  if (behind > 10 * period_ns_) {
+    // Too far behind to catch up: re-anchor and count the lost cycles.
+    const int64_t skipped = behind / period_ns_;
+    anchor_ns_ += skipped * period_ns_;
+    for (LoopMeter& m : meters_) m.RecordSkipped(static_cast<uint64_t>(skipped));
+  }
+}
+
+void ServoLoop::RunThread(int thread_index) {
+  const char* name = !two_threads_ ? "servo" : (thread_index == 0 ? "servo-left" : "servo-right");
+  pthread_setname_np(pthread_self(), name);
+  LoopMeter& meter = meters_[thread_index];
+  meter.SetRealtime(TryRealtime(config_.servo.realtime_priority));
+  // The right arm runs half a period after the left: staggered device I/O.
+  const int64_t phase = thread_index == 1 ? period_ns_ / 2 : 0;
+  for (;;) {
+    const int64_t next = anchor_ns_ + static_cast<int64_t>(cycle_) * period_ns_ + phase;
+    SleepUntilNs(next);
+    const int64_t start = MonotonicNs();
+    meter.RecordStart(start, next, period_ns_);
+    if (two_threads_) {
+      Tick(static_cast<Side>(thread_index), start);
+    } else {
+      for (int i = 0; i < kSides; ++i) {
+        const auto side = static_cast<Side>(i);
+        if (device_.HasSide(side)) Tick(side, i == 0 ? start : MonotonicNs());
+      }
+    }
+    rendezvous_->arrive_and_wait();  // both arms finish the cycle together
+    if (stop_latched_) break;
+  }
+}
+
+LoopStats ServoLoop::Stats(Side side) const { return meters_[two_threads_ ? Index(side) : 0].Stats(); }
+
+LoopStats ServoLoop::Stats() const {
+  const LoopStats a = meters_[0].Stats();
+  if (!two_threads_) return a;
+  const LoopStats b = meters_[1].Stats();
+  return a.rate_hz <= b.rate_hz ? a : b;
+}
+
+const Histogram& ServoLoop::period_histogram(Side side) const {
+  return meters_[two_threads_ ? Index(side) : 0].period_histogram();
+}
+
+ServoCounters ServoLoop::Counters(Side side) const { return arms_[Index(side)]->published.Load(); }
 
 }  // namespace haptel::haptics

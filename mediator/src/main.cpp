@@ -94,6 +94,12 @@ int main(int argc, char** argv) {
     setup.vehicle = LoadVehicle(setup.run.vehicle);
     if (auto name = args.Value("vehicle-name")) setup.vehicle.name = *name;
     setup.gesture = LoadGesture(InterfaceFile(setup.run, setup.run.interface));
+    setup.device = LoadDevice(setup.run.device);
+    if (setup.device.driver != "sim") {
+      throw ConfigError(setup.run.device.string() + ": key 'driver': expected 'sim' for haptel run "
+                        "(the automatic operator moves the simulated arms), got '" + setup.device.driver + "'");
+    }
+    if (!setup.device.calibration.empty()) setup.calibration = LoadCalibration(setup.device.calibration);
     setup.vehicle_program = SelfDirectory() / "haptel-vehicle";
   } catch (const UsageError& e) {
     std::fprintf(stderr, "haptel: %s (see haptel --help)\n", e.what());

@@ -72,6 +72,23 @@ class StateInbox {
   Histogram rtt_{10.0, 20000};  // µs bins up to 200 ms
 };
 
+/// A sim device without a calibration file is calibrated at start-up.
+DeviceCalibration StartupCalibration(const haptics::SimDevice& device) {
+  DeviceCalibration c;
+  c.device = device.description().name;
+  for (int i = 0; i < haptics::kSides; ++i) {
+    const haptics::SimArmTruth& t = device.truth(static_cast<haptics::Side>(i));
+    ArmCalibration& a = c.arms[i];
+    a.tracker_scale = t.tracker_scale;
+    a.tracker_offset = t.tracker_offset;
+    a.glove_gain = t.glove_gain;
+    a.glove_offset = t.glove_offset;
+    a.force_slope = t.force_slope;
+    a.finger_force_slope = t.finger_force_slope;
+  }
+  return c;
+}
+
 }  // namespace
 
 SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& interrupted) {
@@ -87,20 +104,25 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   rec.gates_total = static_cast<int>(track.gates().size());
 
   // Haptic side first: the hand is held at neutral before anything moves.
-  haptics::Hal hal;
-  haptics::SimDevice device(run.device, run.op);
+  haptics::SimDevice device(setup.device, run.op);
+  const DeviceCalibration calibration =
+      setup.device.calibration.empty() ? StartupCalibration(device) : setup.calibration;
+  haptics::Hal hal(calibration);
   interfaces::GestureInterface interface(setup.gesture);
   for (int i = 0; i < haptics::kSides; ++i) {
     const auto side = static_cast<haptics::Side>(i);
     if (auto neutral = interface.HandTargetsFor({})[i]) device.Place(side, *neutral);
   }
-  haptics::ServoLoop servo(device, hal, run.servo);
+  haptics::ServoLoop servo(device, hal, setup.device, calibration);
   servo.Start();
-  if (setup.progress && run.servo.realtime_priority > 0) {
-    // Give the thread a moment to try for SCHED_FIFO, then say once if it could not.
-    SleepUntilNs(MonotonicNs() + SToNs(0.01));
-    if (!servo.Stats().realtime) {
+  if (setup.progress) {
+    // Give the threads a moment to try for SCHED_FIFO, then say once what they could not get.
+    SleepUntilNs(MonotonicNs() + SToNs(0.02));
+    if (setup.device.servo.realtime_priority > 0 && !servo.Stats().realtime) {
       log::Info("servo loop runs without SCHED_FIFO (no permission); timing may jitter under load");
+    }
+    if (setup.device.servo.lock_memory && !servo.memory_locked()) {
+      log::Info("servo loop runs without locked memory (mlockall refused); page faults may delay it");
     }
   }
 

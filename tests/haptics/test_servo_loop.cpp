@@ -7,142 +7,213 @@
 #include "alloc_counter.hpp"
 #include "haptel/haptics/servo_loop.hpp"
 #include "haptel/haptics/sim_device.hpp"
+#include "scripted_device.hpp"
 
 using namespace haptel;
 using namespace haptel::haptics;
+using haptel::test::ScriptedDevice;
 
 namespace {
-/// A device that records what it was told and can be made to fail.
-class ScriptedDevice final : public Device {
- public:
-  bool HasSide(Side side) const override { return side == Side::kRight || both; }
-  DeviceStatus Read(Side, int64_t now_ns, HandSample& out) override {
-    out.t_ns = now_ns;
-    out.valid = true;
-    out.position = position;
-    out.velocity = {0, 0, 0};
-    return status;
-  }
-  DeviceStatus WriteForce(Side side, const Vec3d& force) override {
-    last_force[Index(side)] = force;
-    ++writes;
-    return DeviceStatus::kOk;
-  }
-  double wrist_force_limit() const override { return 7.0; }
+constexpr int64_t kMs = 1'000'000;
 
-  bool both = false;
-  DeviceStatus status = DeviceStatus::kOk;
-  Vec3d position{0.0, 0.0, 0.0};
-  std::array<Vec3d, 2> last_force{};
-  int writes = 0;
-};
-
+/// A configuration without soft start or rate limit, so one tick shows the force.
+DeviceConfig Immediate() {
+  DeviceConfig c;
+  c.safety.soft_start_s = 0.0;
+  c.safety.max_force_rate = 1e9;
+  c.servo.realtime_priority = 0;
+  c.servo.lock_memory = false;
+  return c;
+}
+/// Identity calibration: raw units are metres and newtons.
+DeviceCalibration Identity() {
+  DeviceCalibration c;
+  for (auto& a : c.arms) a.tracker_scale = {1, 1, 1};
+  return c;
+}
 ForceField Spring(double k) {
   ForceField f;
   f.enabled = true;
   f.stiffness = k;
   return f;
 }
+void SetField(Hal& hal, Side side, const ForceField& f, int64_t now_ns) {
+  ForceSetpoint sp;
+  sp.field = f;
+  hal.SetSetpoint(side, sp, now_ns);
+}
 }  // namespace
 
-TEST_CASE("a servo tick publishes the sample and applies the field's force") {
+TEST_CASE("a servo tick publishes the sample and applies the set-point's force") {
   ScriptedDevice dev;
-  Hal hal;
-  ServoLoop loop(dev, hal, ServoConfig{});
-  dev.position = {0.02, 0, 0};
-  hal.SetField(Side::kRight, Spring(100));
-  loop.Tick(1000);
-  CHECK(dev.last_force[1][0] == Approx(-2.0));
+  Hal hal(Identity());
+  ServoLoop loop(dev, hal, Immediate(), Identity());
+  dev.position[1] = {0.02, 0, 0};
+  SetField(hal, Side::kRight, Spring(100), 1 * kMs);
+  loop.Tick(Side::kRight, 1 * kMs);
+  CHECK(dev.wrist_command[1][0] == Approx(-2.0));
   const HandSample s = hal.LatestSample(Side::kRight);
   CHECK(s.valid);
-  CHECK(s.t_ns == 1000);
   CHECK(s.position[0] == Approx(0.02));
   CHECK(s.force[0] == Approx(-2.0));
   CHECK_FALSE(hal.LatestSample(Side::kLeft).valid);  // one-armed device: left untouched
 }
 
-TEST_CASE("the servo loop clamps forces to the device limit and counts it") {
+TEST_CASE("calibration turns raw units into metres and newtons into device commands") {
   ScriptedDevice dev;
-  Hal hal;
-  ServoLoop loop(dev, hal, ServoConfig{});
-  dev.position = {0.5, 0, 0};
-  hal.SetField(Side::kRight, Spring(1000));  // 500 N asked
-  loop.Tick(1);
-  CHECK(std::abs(dev.last_force[1][0]) == Approx(7.0));
-  CHECK(loop.Counters().forces_limited == 1);
+  DeviceCalibration cal;
+  cal.arms[1].tracker_scale = {0.01, 0.01, 0.01};  // device reports cm
+  cal.arms[1].tracker_offset = {0.1, 0, 0};
+  cal.arms[1].force_slope = {2.0, 2.0, 2.0};      // 2 N per command unit
+  Hal hal(cal);
+  ServoLoop loop(dev, hal, Immediate(), cal);
+  dev.position[1] = {2.0, 0, 0};  // 2 cm raw -> 0.12 m
+  ForceField f = Spring(100);
+  f.neutral = {0.1, 0, 0};
+  SetField(hal, Side::kRight, f, 1 * kMs);
+  loop.Tick(Side::kRight, 1 * kMs);
+  CHECK(hal.LatestSample(Side::kRight).position[0] == Approx(0.12));
+  CHECK(dev.wrist_command[1][0] == Approx(-2.0 / 2.0));  // -2 N at 2 N/unit
 }
 
-TEST_CASE("a non-finite force becomes zero and is counted") {
+TEST_CASE("slow channels are read every N-th cycle, the wrist every cycle") {
   ScriptedDevice dev;
-  Hal hal;
-  ServoLoop loop(dev, hal, ServoConfig{});
-  dev.position = {std::numeric_limits<double>::quiet_NaN(), 0, 0};
-  hal.SetField(Side::kRight, Spring(100));
-  loop.Tick(1);
-  CHECK(dev.last_force[1][0] == 0.0);
-  CHECK(loop.Counters().non_finite_forces == 1);
-  CHECK(loop.Counters().forces_limited == 0);
+  Hal hal(Identity());
+  DeviceConfig c = Immediate();
+  c.servo.slow_channel_divider = 6;
+  ServoLoop loop(dev, hal, c, Identity());
+  for (int i = 1; i <= 60; ++i) loop.Tick(Side::kRight, i * kMs);
+  CHECK(dev.wrist_reads[1] == 60);
+  CHECK(dev.glove_reads[1] == 10);
+  CHECK(loop.Counters(Side::kRight).slow_reads == 10);
+  CHECK(hal.glove_samples(Side::kRight) == 10);
 }
 
-TEST_CASE("a lost device gets zero force and an invalid sample") {
+TEST_CASE("a lost device gets zero force at once, and forces ramp in again after it returns") {
   ScriptedDevice dev;
-  Hal hal;
-  ServoLoop loop(dev, hal, ServoConfig{});
-  dev.position = {0.05, 0, 0};
-  hal.SetField(Side::kRight, Spring(100));
-  loop.Tick(1);
-  REQUIRE(dev.last_force[1][0] != 0.0);
-  dev.status = DeviceStatus::kLost;
-  loop.Tick(2);
-  CHECK(dev.last_force[1][0] == 0.0);
+  Hal hal(Identity());
+  DeviceConfig c = Immediate();
+  c.safety.soft_start_s = 0.1;
+  ServoLoop loop(dev, hal, c, Identity());
+  dev.position[1] = {0.05, 0, 0};
+  int64_t t = 0;
+  for (int i = 0; i < 200; ++i) {
+    t += kMs;
+    SetField(hal, Side::kRight, Spring(100), t);
+    loop.Tick(Side::kRight, t);
+  }
+  REQUIRE(dev.wrist_command[1][0] == Approx(-5.0));
+  dev.status[1] = DeviceStatus::kLost;
+  t += kMs;
+  loop.Tick(Side::kRight, t);
+  CHECK(dev.wrist_command[1][0] == 0.0);
   CHECK_FALSE(hal.LatestSample(Side::kRight).valid);
-  CHECK(loop.Counters().device_lost_ticks == 1);
+  CHECK(loop.Counters(Side::kRight).device_lost_ticks == 1);
+  dev.status[1] = DeviceStatus::kOk;
+  t += kMs;
+  SetField(hal, Side::kRight, Spring(100), t);
+  loop.Tick(Side::kRight, t);
+  CHECK(std::abs(dev.wrist_command[1][0]) < 0.1);  // soft start from zero
+  for (int i = 0; i < 150; ++i) {
+    t += kMs;
+    SetField(hal, Side::kRight, Spring(100), t);
+    loop.Tick(Side::kRight, t);
+  }
+  CHECK(dev.wrist_command[1][0] == Approx(-5.0));
+  CHECK(hal.LatestSample(Side::kRight).valid);
 }
 
-TEST_CASE("zeroing the HAL's forces zeroes the device force at the next tick") {
+TEST_CASE("forces fade to zero within 50 ms when the set-point feeder stalls") {
   ScriptedDevice dev;
-  Hal hal;
-  ServoLoop loop(dev, hal, ServoConfig{});
-  dev.position = {0.05, 0, 0};
-  hal.SetField(Side::kRight, Spring(100));
-  loop.Tick(1);
-  hal.ZeroForces();
-  loop.Tick(2);
-  CHECK(dev.last_force[1][0] == 0.0);
+  Hal hal(Identity());
+  ServoLoop loop(dev, hal, Immediate(), Identity());
+  dev.position[1] = {0.05, 0, 0};
+  SetField(hal, Side::kRight, Spring(100), 1 * kMs);  // the last set-point ever
+  int64_t t = 1 * kMs;
+  loop.Tick(Side::kRight, t);
+  REQUIRE(dev.wrist_command[1][0] == Approx(-5.0));
+  double at_stall_plus_10ms = 0.0;
+  while (t < 1 * kMs + 50 * kMs) {
+    t += kMs;
+    loop.Tick(Side::kRight, t);
+    if (t == 11 * kMs) at_stall_plus_10ms = dev.wrist_command[1][0];
+  }
+  CHECK(at_stall_plus_10ms == Approx(-5.0));  // still fresh within the timeout
+  CHECK(dev.wrist_command[1][0] == 0.0);      // gone 50 ms after the last set-point
+  CHECK(loop.Counters(Side::kRight).safety.stale_ticks > 0);
+}
+
+TEST_CASE("non-finite and oversized forces are made safe and counted") {
+  ScriptedDevice dev;
+  Hal hal(Identity());
+  ServoLoop loop(dev, hal, Immediate(), Identity());
+  dev.position[1] = {0.5, 0, 0};
+  SetField(hal, Side::kRight, Spring(1000), 1 * kMs);  // 500 N asked
+  loop.Tick(Side::kRight, 1 * kMs);
+  CHECK(std::abs(dev.wrist_command[1][0]) == Approx(7.0));
+  CHECK(loop.Counters(Side::kRight).safety.clamped == 1);
+  ForceSetpoint sp;
+  sp.wrist_force = {std::numeric_limits<double>::quiet_NaN(), 0, 0};
+  hal.SetSetpoint(Side::kRight, sp, 2 * kMs);
+  loop.Tick(Side::kRight, 2 * kMs);
+  CHECK(dev.wrist_command[1][0] == 0.0);
+  CHECK(loop.Counters(Side::kRight).safety.non_finite == 1);
 }
 
 TEST_CASE("a servo tick allocates nothing") {
-  SimDevice dev(SimDeviceConfig{}, OperatorConfig{});
-  Hal hal;
-  ServoLoop loop(dev, hal, ServoConfig{});
+  ScriptedDevice dev(true, true);
+  Hal hal(Identity());
+  ServoLoop loop(dev, hal, Immediate(), Identity());
   ForceField f = Spring(40);
   f.wall_active = true;
   f.wall_stiffness = 1000;
-  hal.SetField(Side::kRight, f);
-  hal.SetField(Side::kLeft, f);
-  dev.SetOperatorTarget(Side::kRight, {0.05, 0.01, 0});
-  loop.Tick(1'000'000);  // warm-up
+  for (int i = 1; i <= 10; ++i) {  // warm up
+    loop.Tick(Side::kLeft, i * kMs);
+    loop.Tick(Side::kRight, i * kMs);
+  }
+  SetField(hal, Side::kRight, f, 10 * kMs);
   const uint64_t before = test::ThreadAllocations();
-  for (int i = 2; i < 2000; ++i) loop.Tick(i * 1'000'000LL);
+  for (int i = 11; i < 2000; ++i) {
+    loop.Tick(Side::kLeft, i * kMs);
+    loop.Tick(Side::kRight, i * kMs);
+  }
   CHECK(test::ThreadAllocations() == before);
 }
 
-TEST_CASE("the servo thread allocates nothing while it runs") {
-  // Count allocations made on the loop thread itself, from inside a tick.
-  SimDevice dev(SimDeviceConfig{}, OperatorConfig{});
+TEST_CASE("two-sided mode: both arms run on their own threads and meet every cycle, allocating nothing") {
+  DeviceConfig c = DeviceConfig{};
+  c.servo.realtime_priority = 0;
+  c.servo.lock_memory = false;
+  c.servo.two_sided = true;
+  SimDevice dev(c, OperatorConfig{});
+  dev.Place(Side::kLeft, {0, 0.1, 0});
+  dev.Place(Side::kRight, {0, -0.1, 0});
   Hal hal;
-  hal.SetField(Side::kRight, Spring(40));
-  ServoLoop loop(dev, hal, ServoConfig{.rate_hz = 1000, .realtime_priority = 0});
+  ServoLoop loop(dev, hal, c, DeviceCalibration{});
   loop.Start();
-  // Wait for the loop to run, then compare the process-wide count against a
-  // window where only the loop thread is active (this thread just sleeps).
-  while (loop.Stats().ticks < 50) std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  const uint64_t ticks_before = loop.Stats().ticks;
+  while (loop.Stats(Side::kRight).ticks < 100) std::this_thread::sleep_for(std::chrono::milliseconds(5));
   const uint64_t before = test::TotalAllocations();
   std::this_thread::sleep_for(std::chrono::milliseconds(200));
   const uint64_t after = test::TotalAllocations();
-  const uint64_t ticks_after = loop.Stats().ticks;
   loop.Stop();
-  CHECK(ticks_after > ticks_before);
   CHECK(after == before);
+  // The rendezvous keeps the arms in lock-step: equal cycle counts.
+  CHECK(loop.Counters(Side::kLeft).cycles == loop.Counters(Side::kRight).cycles);
+  CHECK(loop.Stats(Side::kLeft).ticks == loop.Stats(Side::kRight).ticks);
+  CHECK(loop.Counters(Side::kLeft).cycles > 100);
+}
+
+TEST_CASE("one-sided mode drives both arms from one thread") {
+  DeviceConfig c = Immediate();
+  c.servo.two_sided = false;
+  ScriptedDevice dev(true, true);
+  Hal hal(Identity());
+  ServoLoop loop(dev, hal, c, Identity());
+  loop.Start();
+  while (loop.Counters(Side::kLeft).cycles < 50) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  loop.Stop();
+  const auto left = loop.Counters(Side::kLeft).cycles;
+  const auto right = loop.Counters(Side::kRight).cycles;
+  CHECK(left == right);
+  CHECK(loop.Stats(Side::kLeft).ticks == loop.Stats(Side::kRight).ticks);  // the same thread
 }

@@ -19,11 +19,17 @@ GestureConfig Config() {
   c.wall_release_s = 0.3;
   return c;
 }
+/// A HAL whose raw tracker units are metres.
+DeviceCalibration Metres() {
+  DeviceCalibration c;
+  for (auto& a : c.arms) a.tracker_scale = {1, 1, 1};
+  return c;
+}
 void PutHand(haptics::Hal& hal, const haptics::Vec3d& p) {
-  haptics::HandSample s;
-  s.valid = true;
-  s.position = p;
-  hal.PublishSample(Side::kRight, s);
+  haptics::WristRaw w;
+  w.t_ns = 1;
+  w.position = p;
+  hal.PublishWrist(Side::kRight, w);
 }
 }  // namespace
 
@@ -78,37 +84,37 @@ TEST_CASE("HandTargetsFor inverts the mapping and uses only the right hand") {
 
 TEST_CASE("Update puts a centring field for the right hand in the HAL") {
   GestureInterface g(Config());
-  haptics::Hal hal;
+  haptics::Hal hal(Metres());
   PutHand(hal, {0.15, 0, 0});
   const MotorCommand m = g.Update(0.0, {}, hal);
   CHECK(m.left > 0.0);
-  const haptics::ForceField right = hal.Field(Side::kRight);
+  const haptics::ForceField right = hal.Setpoint(Side::kRight).field;
   CHECK(right.enabled);
   const haptics::Vec3d f = haptics::EvaluateForceField(right, {0.15, 0, 0}, {0, 0, 0});
   CHECK(f[0] < 0.0);  // pulls back toward neutral
-  CHECK_FALSE(hal.Field(Side::kLeft).enabled);
+  CHECK_FALSE(hal.Setpoint(Side::kLeft).field.enabled);
 }
 
 TEST_CASE("without a valid hand sample Update commands stop and zero forces") {
   GestureInterface g(Config());
-  haptics::Hal hal;
+  haptics::Hal hal(Metres());
   hal.SetField(Side::kRight, g.field());
   const MotorCommand m = g.Update(0.0, {}, hal);
   CHECK(m.left == 0.0);
   CHECK(m.right == 0.0);
-  CHECK_FALSE(hal.Field(Side::kRight).enabled);
+  CHECK_FALSE(hal.Setpoint(Side::kRight).field.enabled);
 }
 
 TEST_CASE("a bumper contact raises a haptic wall that resists further forward motion") {
   GestureInterface g(Config());
-  haptics::Hal hal;
+  haptics::Hal hal(Metres());
   const haptics::Vec3d at_contact{0.16, 0.0, 0.0};
   PutHand(hal, at_contact);
   g.Update(0.0, {}, hal);
   CHECK_FALSE(g.wall_active());
   g.Update(0.1, {true, true, 0.0}, hal);
   REQUIRE(g.wall_active());
-  const haptics::ForceField field = hal.Field(Side::kRight);
+  const haptics::ForceField field = hal.Setpoint(Side::kRight).field;
   // Compare the force 1 cm further forward with and without the wall.
   haptics::ForceField no_wall = field;
   no_wall.wall_active = false;
@@ -124,7 +130,7 @@ TEST_CASE("a bumper contact raises a haptic wall that resists further forward mo
 
 TEST_CASE("a left-only contact tilts the wall toward the left") {
   GestureInterface g(Config());
-  haptics::Hal hal;
+  haptics::Hal hal(Metres());
   PutHand(hal, {0.16, 0.02, 0.0});
   g.Update(0.0, {true, false, 0.0}, hal);
   REQUIRE(g.wall_active());
@@ -137,7 +143,7 @@ TEST_CASE("a left-only contact tilts the wall toward the left") {
 
 TEST_CASE("the wall releases once the contact has been clear for wall_release_s") {
   GestureInterface g(Config());
-  haptics::Hal hal;
+  haptics::Hal hal(Metres());
   PutHand(hal, {0.16, 0, 0});
   g.Update(0.0, {true, false, 0.0}, hal);
   g.Update(1.0, {true, false, 0.0}, hal);  // still touching
@@ -147,5 +153,5 @@ TEST_CASE("the wall releases once the contact has been clear for wall_release_s"
   CHECK(g.wall_active());
   g.Update(1.31, {}, hal);
   CHECK_FALSE(g.wall_active());
-  CHECK_FALSE(hal.Field(Side::kRight).wall_active);
+  CHECK_FALSE(hal.Setpoint(Side::kRight).field.wall_active);
 }

@@ -22,18 +22,6 @@ struct OperatorConfig {
   double backoff_s = 0.8;            ///< reverse this long after a bumper contact
 };
 
-/// The simulated arm of the haptic device (per side).
-struct SimDeviceConfig {
-  double arm_mass = 0.8;       ///< kg moved by operator and device
-  double damping = 1.0;        ///< N·s/m of joint friction
-  double force_limit = 7.0;    ///< N at the wrist
-};
-
-struct ServoConfig {
-  double rate_hz = 1000.0;
-  int realtime_priority = 80;  ///< SCHED_FIFO priority when the process may
-};
-
 struct RunConfig {
   std::filesystem::path file;
   std::string name = "default";
@@ -45,9 +33,8 @@ struct RunConfig {
   double vehicle_timeout_s = 0.5;  ///< no state for this long: vehicle lost
   double session_rate_hz = 100.0;
   bool video_decode = true;
+  std::filesystem::path device;  ///< haptic device file (config/devices/*.yaml)
   OperatorConfig op;
-  SimDeviceConfig device;
-  ServoConfig servo;
   LinkConfig link;
 };
 

@@ -12,22 +12,9 @@
 #include <string>
 #include <thread>
 
-#include "haptel/core/histogram.hpp"
+#include "haptel/core/loop_meter.hpp"
 
 namespace haptel {
-
-/// What a loop measured about itself. Plain data; safe to copy anywhere.
-struct LoopStats {
-  uint64_t ticks = 0;
-  double elapsed_s = 0.0;
-  double rate_hz = 0.0;         ///< ticks per second over the measured span
-  double period_p50_us = 0.0;   ///< start-to-start period percentiles
-  double period_p99_us = 0.0;
-  double period_max_us = 0.0;
-  uint64_t overruns = 0;        ///< ticks that started more than one period late
-  double max_lateness_us = 0.0; ///< worst start delay against the schedule
-  bool realtime = false;        ///< SCHED_FIFO was granted
-};
 
 class PeriodicThread {
  public:
@@ -52,8 +39,8 @@ class PeriodicThread {
   void Stop();
   bool running() const { return running_.load(); }
 
-  LoopStats Stats() const;
-  const Histogram& period_histogram() const { return periods_; }
+  LoopStats Stats() const { return meter_.Stats(); }
+  const Histogram& period_histogram() const { return meter_.period_histogram(); }
   const Options& options() const { return options_; }
 
  private:
@@ -64,13 +51,7 @@ class PeriodicThread {
   std::thread thread_;
   std::atomic<bool> running_{false};
   std::atomic<bool> stop_{false};
-  Histogram periods_;
-  std::atomic<uint64_t> ticks_{0};
-  std::atomic<uint64_t> overruns_{0};
-  std::atomic<int64_t> first_tick_ns_{0};
-  std::atomic<int64_t> last_tick_ns_{0};
-  std::atomic<int64_t> max_lateness_ns_{0};
-  std::atomic<bool> realtime_{false};
+  LoopMeter meter_;
 };
 
 }  // namespace haptel

@@ -1,35 +1,85 @@
 #pragma once
 /// @file Hardware abstraction layer: the only place data crosses between the
-/// servo thread and slower threads.
+/// servo threads and slower threads.
 ///
-/// The servo thread publishes timestamped hand samples and reads force
-/// fields; slower threads do the opposite. Every hand-off is a seqlock, so
-/// the servo thread never waits for anyone.
+/// One component per channel and side — glove, wrist tracker, wrist force
+/// set-point, grasp forces — each a seqlock (or, for the tracker history, a
+/// ring of seqlocks): a servo thread never waits for anyone. Raw device values
+/// are stored; calibrated values are computed in the accessors, only when a
+/// slower thread asks. The tracker keeps its last 1000 samples; velocity and
+/// mean acceleration are computed from them on demand, never in the loop.
 #include <array>
 #include <atomic>
+#include <optional>
+#include <span>
 
+#include "haptel/config/calibration.hpp"
 #include "haptel/core/seqlock.hpp"
 #include "haptel/haptics/types.hpp"
 
 namespace haptel::haptics {
 
+/// One tracker sample as stored (raw device units).
+struct TrackerSample {
+  int64_t t_ns = 0;
+  Vec3d raw{};
+};
+
+/// What was last commanded to an arm, in newtons.
+struct AppliedForces {
+  int64_t t_ns = 0;
+  Vec3d wrist{};
+  std::array<double, kFingers> fingers{};
+};
+
 class Hal {
  public:
-  /// Servo thread.
-  void PublishSample(Side side, const HandSample& sample) { samples_[Index(side)].Store(sample); }
-  ForceField Field(Side side) const { return fields_[Index(side)].Load(); }
+  static constexpr int kTrackerHistory = 1000;
 
-  /// Slower threads.
-  HandSample LatestSample(Side side) const { return samples_[Index(side)].Load(); }
-  void SetField(Side side, const ForceField& field) { fields_[Index(side)].Store(field); }
-  /// Disables every field: forces go to zero at the next servo tick.
-  void ZeroForces() {
-    for (auto& f : fields_) f.Store(ForceField{});
-  }
+  explicit Hal(const DeviceCalibration& calibration = DeviceCalibration{});
+
+  // --- Servo threads: one writer per side. Wait-free, allocation-free. ---
+  void PublishWrist(Side side, const WristRaw& raw);
+  void PublishGlove(Side side, const GloveRaw& raw);
+  void PublishForces(Side side, const AppliedForces& forces);
+  /// The device on `side` was lost (true) or answers again (false).
+  void PublishLost(Side side, bool lost);
+  ForceSetpoint Setpoint(Side side) const { return setpoints_[Index(side)].Load(); }
+
+  // --- Slower threads. ---
+  /// The hand, calibrated now: position (m), velocity (m/s, second-order
+  /// backward difference over the history), glove angles (rad), last forces.
+  HandSample LatestSample(Side side) const;
+  /// Replaces the whole set-point for a side, stamped `now_ns`.
+  void SetSetpoint(Side side, ForceSetpoint setpoint, int64_t now_ns);
+  /// Replaces only the force field (keeps the rest of the set-point), stamped now.
+  void SetField(Side side, const ForceField& field);
+  /// Disables every set-point: forces go to zero at the next servo tick.
+  void ZeroForces();
+
+  /// Copies up to out.size() newest tracker samples, oldest first; returns the count.
+  size_t TrackerHistory(Side side, std::span<TrackerSample> out) const;
+  /// Velocity (m/s) by second-order backward difference on the newest three samples.
+  std::optional<Vec3d> TrackerVelocity(Side side) const;
+  /// Mean acceleration (m/s²) over the last `window_s`: velocity change over the window.
+  std::optional<Vec3d> MeanAcceleration(Side side, double window_s) const;
+
+  const ArmCalibration& calibration(Side side) const { return calibration_.arms[Index(side)]; }
+  uint64_t wrist_samples(Side side) const { return wrist_count_[Index(side)].load(); }
+  uint64_t glove_samples(Side side) const { return glove_count_[Index(side)].load(); }
 
  private:
-  std::array<Seqlock<HandSample>, kSides> samples_;
-  std::array<Seqlock<ForceField>, kSides> fields_;
+  Vec3d ToMetres(Side side, const Vec3d& raw) const;
+
+  DeviceCalibration calibration_;
+  std::array<Seqlock<WristRaw>, kSides> wrist_;
+  std::array<Seqlock<GloveRaw>, kSides> glove_;
+  std::array<Seqlock<AppliedForces>, kSides> forces_;
+  std::array<Seqlock<ForceSetpoint>, kSides> setpoints_;
+  std::array<std::atomic<bool>, kSides> lost_{};
+  std::array<std::atomic<uint64_t>, kSides> wrist_count_{};
+  std::array<std::atomic<uint64_t>, kSides> glove_count_{};
+  std::array<std::array<Seqlock<TrackerSample>, kTrackerHistory>, kSides> history_;
 };
 
 }  // namespace haptel::haptics

@@ -1,52 +1,116 @@
 #pragma once
 /// @file The haptic servo loop: device I/O and force computation at ~1 kHz.
 ///
-/// Each tick reads every arm, publishes the sample to the HAL, evaluates the
-/// arm's force field from the HAL, guards and limits the force and writes it.
-/// A tick allocates nothing, takes no lock, logs nothing: it counts.
+/// Two-sided mode (the original's scheme): one thread per arm, the right arm's
+/// schedule offset by half a period so the two sides' device I/O never hits a
+/// shared link at the same instant, both meeting at a rendezvous at the end of
+/// every cycle so they keep one rate. One-sided mode: both arms on one thread.
+///
+/// Each cycle, per arm: slow channels (glove, grasp strings) every N-th cycle;
+/// the wrist tracker; forces from the latest set-point (interface field, proxy
+/// coupling, direct force, finger forces) plus gravity compensation, through
+/// ForceSafety; the commands to the device. A cycle allocates nothing, takes
+/// no lock a slower thread can hold, and logs nothing: it counts.
 #include <array>
 #include <atomic>
+#include <barrier>
 #include <cstdint>
+#include <memory>
+#include <thread>
 
-#include "haptel/config/run.hpp"
-#include "haptel/core/periodic_thread.hpp"
+#include "haptel/config/calibration.hpp"
+#include "haptel/config/device.hpp"
+#include "haptel/core/loop_meter.hpp"
+#include "haptel/core/seqlock.hpp"
 #include "haptel/haptics/device.hpp"
 #include "haptel/haptics/hal.hpp"
+#include "haptel/haptics/safety.hpp"
 
 namespace haptel::haptics {
 
-/// Events the loop counts instead of logging.
+class GravityGrid;
+
+/// Events one arm's loop counts instead of logging.
 struct ServoCounters {
-  uint64_t device_lost_ticks = 0;  ///< ticks a side reported kLost (forces zeroed)
-  uint64_t forces_limited = 0;     ///< forces scaled to the device limit
-  uint64_t non_finite_forces = 0;  ///< NaN/Inf forces replaced by zero
+  uint64_t cycles = 0;
+  uint64_t slow_reads = 0;         ///< glove/grasp reads
+  uint64_t device_lost_ticks = 0;  ///< cycles the arm reported kLost (forces zeroed)
+  uint64_t no_data_ticks = 0;      ///< cycles without a fresh wrist reading
+  uint64_t write_failures = 0;     ///< force commands the device did not take
+  SafetyCounters safety;
 };
 
 class ServoLoop {
  public:
-  /// `device` and `hal` must outlive the loop.
-  ServoLoop(Device& device, Hal& hal, const ServoConfig& config);
+  /// `device`, `hal` and `gravity` (optional, may be null) must outlive the loop.
+  ServoLoop(Device& device, Hal& hal, const DeviceConfig& config, const DeviceCalibration& calibration,
+            const GravityGrid* gravity = nullptr);
   ~ServoLoop();
+  ServoLoop(const ServoLoop&) = delete;
+  ServoLoop& operator=(const ServoLoop&) = delete;
 
   void Start();
   void Stop();
-  /// One servo cycle at time `now_ns`. Called by the loop thread; public so
-  /// tests can drive it deterministically.
-  void Tick(int64_t now_ns);
+  bool running() const { return running_.load(); }
 
-  LoopStats Stats() const { return thread_.Stats(); }
-  const Histogram& period_histogram() const { return thread_.period_histogram(); }
-  ServoCounters Counters() const;
+  /// One cycle of one arm at `now_ns`. Called by the loop threads; public so
+  /// tests can drive it deterministically. Each side from one thread only.
+  void Tick(Side side, int64_t now_ns);
+
+  /// Rate and period statistics of an arm's thread (in one-sided mode both
+  /// sides report the single thread).
+  LoopStats Stats(Side side) const;
+  /// Stats of the loop as a whole: the slower of the arms.
+  LoopStats Stats() const;
+  const Histogram& period_histogram(Side side) const;
+  /// Counters of one arm. Safe to read while the loop runs.
+  ServoCounters Counters(Side side) const;
+  bool memory_locked() const { return memory_locked_; }
+  const DeviceConfig& config() const { return config_; }
 
  private:
+  struct Arm {
+    explicit Arm(ForceSafety s) : safety(s) {}
+    ForceSafety safety;
+    bool connected = false;
+    bool have_previous = false;
+    Vec3d previous_position{};
+    int64_t previous_ns = 0;
+    Vec3d velocity{};  ///< low-pass filtered, m/s
+    uint64_t cycle = 0;
+    WristRaw wrist{};
+    GloveRaw glove{};
+    ServoCounters counters;             ///< the arm's thread only
+    Seqlock<ServoCounters> published;   ///< copy for readers, every cycle
+  };
+  /// Runs once per cycle while both arms wait at the rendezvous: advances the
+  /// shared schedule, re-anchors it when hopelessly behind, latches stop.
+  struct Completion {
+    ServoLoop* loop;
+    void operator()() noexcept { loop->EndCycle(); }
+  };
+  void EndCycle() noexcept;
+  void RunThread(int thread_index);
+
   Device& device_;
   Hal& hal_;
-  PeriodicThread thread_;
-  HandSample sample_;  ///< scratch, reused every tick
-  std::array<Vec3d, kSides> last_force_{};
-  std::atomic<uint64_t> device_lost_ticks_{0};
-  std::atomic<uint64_t> forces_limited_{0};
-  std::atomic<uint64_t> non_finite_forces_{0};
+  DeviceConfig config_;
+  DeviceCalibration calibration_;
+  const GravityGrid* gravity_;
+  std::array<std::unique_ptr<Arm>, kSides> arms_;
+  std::array<LoopMeter, kSides> meters_;
+  std::unique_ptr<std::barrier<Completion>> rendezvous_;
+  std::array<std::thread, kSides> threads_;
+  std::atomic<bool> running_{false};
+  std::atomic<bool> stop_requested_{false};
+  // Written only in the completion step (or before the threads start); the
+  // barrier orders those writes before every arm's next read.
+  bool stop_latched_ = false;
+  int64_t anchor_ns_ = 0;   ///< schedule origin
+  uint64_t cycle_ = 0;      ///< cycles since the anchor
+  int64_t period_ns_ = 0;
+  bool two_threads_ = false;
+  bool memory_locked_ = false;
 };
 
 }  // namespace haptel::haptics

@@ -9,6 +9,8 @@
 #include <filesystem>
 #include <string>
 
+#include "haptel/config/calibration.hpp"
+#include "haptel/config/device.hpp"
 #include "haptel/config/gesture.hpp"
 #include "haptel/config/run.hpp"
 #include "haptel/config/track.hpp"
@@ -22,6 +24,10 @@ struct SessionSetup {
   TrackConfig track;
   VehicleConfig vehicle;
   GestureConfig gesture;
+  DeviceConfig device;
+  /// How the device's units map to SI (from device.calibration, or measured
+  /// at start-up for the sim device when it has no file).
+  DeviceCalibration calibration;
   /// haptel-vehicle to spawn; empty: the vehicle runs elsewhere, do not spawn.
   std::filesystem::path vehicle_program;
   bool progress = true;  ///< progress lines on stderr

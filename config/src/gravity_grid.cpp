@@ -1,0 +1,147 @@
+#include "haptel/config/gravity_grid.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <stdexcept>
+
+#include "haptel/config/error.hpp"
+#include "yaml_map.hpp"
+
+namespace haptel {
+
+using config_detail::YamlMap;
+
+namespace {
+
+constexpr double kCoordinateLimit = 1000.0;  // m: anything beyond is a typo
+
+std::string Where(const std::filesystem::path& file, const YAML::Node& node) {
+  const YAML::Mark mark = node.Mark();
+  if (mark.is_null()) return file.string();
+  return file.string() + ":" + std::to_string(mark.line + 1) + ":" + std::to_string(mark.column + 1);
+}
+
+std::string CountsText(const std::array<int, 3>& c) {
+  return std::to_string(c[0]) + "*" + std::to_string(c[1]) + "*" + std::to_string(c[2]);
+}
+
+}  // namespace
+
+std::string GravityGridProblem(const GravityGridData& grid) {
+  long product = 1;
+  for (int a = 0; a < 3; ++a) {
+    if (grid.counts[a] < 2 || grid.counts[a] > kGravityGridMaxCount) {
+      return "counts: expected at least 2 and at most " + std::to_string(kGravityGridMaxCount) +
+             " vertices on every axis, got " + CountsText(grid.counts);
+    }
+    product *= grid.counts[a];
+    if (!std::isfinite(grid.min[a]) || !std::isfinite(grid.max[a]) || !(grid.min[a] < grid.max[a])) {
+      return "min/max: expected finite corners with min < max on every axis (axis " + std::to_string(a) + ")";
+    }
+  }
+  if (product > kGravityGridMaxVertices) {
+    return "counts: " + CountsText(grid.counts) + " vertices exceed the limit of " +
+           std::to_string(kGravityGridMaxVertices);
+  }
+  if (grid.force_z.size() != static_cast<std::size_t>(product)) {
+    return "force_z: expected " + std::to_string(product) + " forces (" + CountsText(grid.counts) + "), got " +
+           std::to_string(grid.force_z.size());
+  }
+  for (std::size_t n = 0; n < grid.force_z.size(); ++n) {
+    if (!std::isfinite(grid.force_z[n])) return "force_z[" + std::to_string(n) + "]: expected a finite number";
+  }
+  return {};
+}
+
+GravityGridData LoadGravityGrid(const std::filesystem::path& file) {
+  YamlMap root = YamlMap::Load(file);  // reports unreadable files and bad YAML
+  // The same document again, for the line of each force_z element.
+  const YAML::Node raw = YAML::LoadFile(file.string());
+  GravityGridData g;
+  g.device = root.String("device", "");
+
+  const std::string corner = "a list of 3 numbers in metres";
+  if (!root.Has("min")) root.Fail("min", corner);
+  if (!root.Has("max")) root.Fail("max", corner);
+  g.min = root.Vec3("min", {}, -kCoordinateLimit, kCoordinateLimit);
+  g.max = root.Vec3("max", {}, -kCoordinateLimit, kCoordinateLimit);
+  for (int a = 0; a < 3; ++a) {
+    if (!(g.min[a] < g.max[a])) root.Fail("max", "a list of 3 numbers, each greater than 'min' on its axis");
+  }
+
+  const std::string counts_expected =
+      "a list of 3 whole numbers in [2, " + std::to_string(kGravityGridMaxCount) + "] (vertices per axis)";
+  if (!root.Has("counts")) root.Fail("counts", counts_expected);
+  const std::array<double, 3> counts = root.Vec3("counts", {}, 2.0, kGravityGridMaxCount);
+  long product = 1;
+  for (int a = 0; a < 3; ++a) {
+    if (counts[a] != std::floor(counts[a])) root.Fail("counts", counts_expected);
+    g.counts[a] = static_cast<int>(counts[a]);
+    product *= g.counts[a];
+  }
+  if (product > kGravityGridMaxVertices) {
+    root.Fail("counts", "at most " + std::to_string(kGravityGridMaxVertices) + " vertices in all");
+  }
+
+  const std::string forces_expected = "a list of " + std::to_string(product) + " forces in newtons (" +
+                                      CountsText(g.counts) + ", x fastest)";
+  const YAML::Node list = raw["force_z"];
+  if (!list.IsDefined() || !list.IsSequence()) root.Fail("force_z", forces_expected);
+  if (list.size() != static_cast<std::size_t>(product)) {
+    throw ConfigError(Where(file, list) + ": key 'force_z': expected " + forces_expected + ", got " +
+                      std::to_string(list.size()) + " values");
+  }
+  g.force_z.reserve(list.size());
+  for (std::size_t n = 0; n < list.size(); ++n) {
+    const YAML::Node item = list[n];
+    double value = 0.0;
+    if (!item.IsScalar() || !YAML::convert<double>::decode(item, value) || !std::isfinite(value)) {
+      throw ConfigError(Where(file, item) + ": key 'force_z[" + std::to_string(n) +
+                        "]': expected a finite number (N), got " +
+                        (item.IsScalar() ? "'" + item.Scalar() + "'" : std::string("no number")));
+    }
+    g.force_z.push_back(value);
+  }
+  (void)root.Strings("force_z", {});  // checked above; marks the key as read for Finish()
+  root.Finish();
+
+  if (const std::string problem = GravityGridProblem(g); !problem.empty()) {
+    throw ConfigError(file.string() + ": " + problem);  // unreachable after the checks above
+  }
+  return g;
+}
+
+void SaveGravityGrid(const std::filesystem::path& file, const GravityGridData& grid) {
+  if (const std::string problem = GravityGridProblem(grid); !problem.empty()) {
+    throw std::invalid_argument("gravity grid for " + file.string() + ": " + problem);
+  }
+  YAML::Emitter out;
+  out.SetDoublePrecision(std::numeric_limits<double>::max_digits10);
+  out << YAML::Comment("Gravity compensation grid: the upward force (N) that holds the arm still at each "
+                       "vertex. Vertex (i,j,k) = min + (i,j,k)*(max-min)/(counts-1); force_z is x fastest.");
+  out << YAML::BeginMap;
+  if (!grid.device.empty()) out << YAML::Key << "device" << YAML::Value << grid.device;
+  auto vec = [&out](const char* key, const auto& values) {
+    out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq;
+    for (const auto v : values) out << v;
+    out << YAML::EndSeq;
+  };
+  vec("min", grid.min);
+  vec("max", grid.max);
+  vec("counts", grid.counts);
+  out << YAML::Key << "force_z" << YAML::Value << YAML::BeginSeq;
+  for (const double f : grid.force_z) out << f;
+  out << YAML::EndSeq << YAML::EndMap;
+  if (!out.good()) throw std::runtime_error(file.string() + ": cannot encode the grid: " + out.GetLastError());
+
+  if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path());
+  std::ofstream stream(file);
+  stream << out.c_str() << "\n";
+  stream.close();
+  if (!stream) throw std::runtime_error(file.string() + ": cannot write the file");
+}
+
+}  // namespace haptel

@@ -1,0 +1,51 @@
+#pragma once
+/// @file What a periodic loop measures about itself: period distribution,
+/// overruns, worst lateness. Recording is wait-free and allocation-free; any
+/// thread may read Stats() while the loop runs.
+#include <atomic>
+#include <cstdint>
+
+#include "haptel/core/histogram.hpp"
+
+namespace haptel {
+
+/// What a loop measured about itself. Plain data; safe to copy anywhere.
+struct LoopStats {
+  uint64_t ticks = 0;
+  double elapsed_s = 0.0;
+  double rate_hz = 0.0;          ///< ticks per second over the measured span
+  double period_p50_us = 0.0;    ///< start-to-start period percentiles
+  double period_p99_us = 0.0;
+  double period_max_us = 0.0;
+  uint64_t overruns = 0;         ///< ticks that started more than one period late, plus skipped ones
+  double max_lateness_us = 0.0;  ///< worst start delay against the schedule
+  bool realtime = false;         ///< SCHED_FIFO was granted
+};
+
+class LoopMeter {
+ public:
+  LoopMeter() : periods_(10.0, 2000) {}
+
+  /// A tick started at `start_ns`, scheduled for `deadline_ns`, in a loop of `period_ns`.
+  void RecordStart(int64_t start_ns, int64_t deadline_ns, int64_t period_ns);
+  /// Ticks the loop skipped to re-anchor its schedule.
+  void RecordSkipped(uint64_t ticks) { overruns_.fetch_add(ticks, std::memory_order_relaxed); }
+  void SetRealtime(bool granted) { realtime_.store(granted); }
+
+  LoopStats Stats() const;
+  const Histogram& period_histogram() const { return periods_; }
+
+ private:
+  Histogram periods_;
+  std::atomic<uint64_t> ticks_{0};
+  std::atomic<uint64_t> overruns_{0};
+  std::atomic<int64_t> first_ns_{0};
+  std::atomic<int64_t> last_ns_{0};
+  std::atomic<int64_t> max_lateness_ns_{0};
+  std::atomic<bool> realtime_{false};
+};
+
+/// Asks for SCHED_FIFO at `priority` for the calling thread; true if granted.
+bool TryRealtime(int priority);
+
+}  // namespace haptel

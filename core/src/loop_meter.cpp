@@ -1,0 +1,49 @@
+#include "haptel/core/loop_meter.hpp"
+
+#include <pthread.h>
+#include <sched.h>
+
+#include "haptel/core/clock.hpp"
+
+namespace haptel {
+
+void LoopMeter::RecordStart(int64_t start_ns, int64_t deadline_ns, int64_t period_ns) {
+  const int64_t lateness = start_ns - deadline_ns;
+  if (lateness > max_lateness_ns_.load(std::memory_order_relaxed)) {
+    max_lateness_ns_.store(lateness, std::memory_order_relaxed);
+  }
+  if (lateness > period_ns) overruns_.fetch_add(1, std::memory_order_relaxed);
+  const int64_t last = last_ns_.load(std::memory_order_relaxed);
+  if (last != 0) {
+    periods_.Record(static_cast<double>(start_ns - last) * 1e-3);
+  } else {
+    first_ns_.store(start_ns, std::memory_order_relaxed);
+  }
+  last_ns_.store(start_ns, std::memory_order_relaxed);
+  ticks_.fetch_add(1, std::memory_order_relaxed);
+}
+
+LoopStats LoopMeter::Stats() const {
+  LoopStats s;
+  s.ticks = ticks_.load(std::memory_order_relaxed);
+  const int64_t first = first_ns_.load(std::memory_order_relaxed);
+  const int64_t last = last_ns_.load(std::memory_order_relaxed);
+  s.elapsed_s = s.ticks > 1 ? NsToS(last - first) : 0.0;
+  s.rate_hz = s.elapsed_s > 0.0 ? static_cast<double>(s.ticks - 1) / s.elapsed_s : 0.0;
+  s.period_p50_us = periods_.Percentile(0.50);
+  s.period_p99_us = periods_.Percentile(0.99);
+  s.period_max_us = periods_.MaxUs();
+  s.overruns = overruns_.load(std::memory_order_relaxed);
+  s.max_lateness_us = static_cast<double>(max_lateness_ns_.load(std::memory_order_relaxed)) * 1e-3;
+  s.realtime = realtime_.load();
+  return s;
+}
+
+bool TryRealtime(int priority) {
+  if (priority <= 0) return false;
+  sched_param param{};
+  param.sched_priority = priority;
+  return pthread_setschedparam(pthread_self(), SCHED_FIFO, &param) == 0;
+}
+
+}  // namespace haptel

@@ -1,0 +1,145 @@
+#pragma once
+/// @file The `udp` device: exoskeleton arms each served by their own computer
+/// over the protocol in haptics/PROTOCOL.md (one haptel-device-server per arm
+/// on a test machine).
+///
+/// One connected UDP socket per configured side. ReadWrist is one round trip
+/// (WRIST_REQUEST carrying the force commands in force → WRIST_REPLY);
+/// ReadGlove is one round trip (GLOVE_REQUEST → GLOVE_REPLY); the Write calls
+/// store the command and send it at once as a one-way WRIST_FORCE /
+/// FINGER_FORCE datagram, so they never wait. A request waits up to
+/// `udp.timeout_s` per attempt and is re-sent (same sequence number) up to
+/// `udp.retries` times. A reply is accepted only if it decodes cleanly and
+/// echoes the outstanding request's sequence number, side and expected type;
+/// anything else is counted and the wait goes on until the deadline.
+/// A side that has had no valid reply for `udp.lost_after_s` (or whose server
+/// reports ERROR device_lost) answers kLost until a valid reply comes back.
+///
+/// Threads: each side's calls come from that side's servo thread and touch
+/// only that side's socket, buffers and state; counters are atomics that any
+/// thread may read. Reads and writes allocate nothing.
+#include <array>
+#include <atomic>
+#include <cstdint>
+
+#include "haptel/config/device.hpp"
+#include "haptel/haptics/device.hpp"
+#include "haptel/haptics/udp_protocol.hpp"
+
+namespace haptel::haptics {
+
+namespace udp {
+/// Owns a file descriptor (a socket); closes it on destruction.
+class UniqueFd {
+ public:
+  UniqueFd() = default;
+  explicit UniqueFd(int fd) : fd_(fd) {}
+  UniqueFd(UniqueFd&& other) noexcept : fd_(other.release()) {}
+  UniqueFd& operator=(UniqueFd&& other) noexcept;
+  UniqueFd(const UniqueFd&) = delete;
+  UniqueFd& operator=(const UniqueFd&) = delete;
+  ~UniqueFd() { reset(); }
+  int get() const { return fd_; }
+  int release() {
+    const int fd = fd_;
+    fd_ = -1;
+    return fd;
+  }
+  void reset(int fd = -1);
+
+ private:
+  int fd_ = -1;
+};
+}  // namespace udp
+
+/// A snapshot of one side's (or both sides') counters.
+struct UdpCounters {
+  uint64_t requests = 0;     ///< ReadWrist/ReadGlove calls that sent a request
+  uint64_t replies = 0;      ///< valid replies accepted
+  uint64_t timeouts = 0;     ///< attempts that ended with no valid reply by their deadline
+  uint64_t retries = 0;      ///< extra attempts sent after a timeout
+  uint64_t unanswered = 0;   ///< requests that got no valid reply after every attempt
+  uint64_t stale = 0;        ///< well-formed replies to another sequence number (late, duplicate, out of order)
+  uint64_t unexpected = 0;   ///< well-formed, right sequence, wrong type or side
+  /// Datagrams rejected by Decode, per udp::DecodeStatus (index kOk unused).
+  std::array<uint64_t, udp::kDecodeStatuses> malformed{};
+  /// ERROR replies to the outstanding request, per udp::ErrorCode.
+  std::array<uint64_t, udp::kErrorCodes> errors{};
+  uint64_t forces_sent = 0;       ///< one-way WRIST_FORCE / FINGER_FORCE datagrams sent
+  uint64_t invalid_commands = 0;  ///< non-finite / negative commands replaced by zero
+  uint64_t socket_errors = 0;     ///< send()/recv() failures (e.g. ECONNREFUSED: no server on the port)
+  uint64_t lost_transitions = 0;  ///< ok → lost
+  uint64_t recoveries = 0;        ///< lost → ok
+
+  uint64_t malformed_total() const;
+  UdpCounters& operator+=(const UdpCounters& other);
+};
+
+class UdpDevice final : public Device {
+ public:
+  /// Resolves and connects one socket per side in `config.sides`. Throws
+  /// std::runtime_error naming the config file, the key (udp.left / udp.right)
+  /// and host:port when a side has no port, the host does not resolve or the
+  /// socket cannot be opened. Sends nothing: a server that is not up yet
+  /// simply makes the side kNoData, then kLost.
+  explicit UdpDevice(const DeviceConfig& config);
+  UdpDevice(const UdpDevice&) = delete;
+  UdpDevice& operator=(const UdpDevice&) = delete;
+
+  const DeviceDescription& description() const override { return description_; }
+  /// `out.t_ns` is set to `now_ns` (the server's clock is in the reply but is
+  /// not comparable); timeouts and lost_after_s run on CLOCK_MONOTONIC.
+  DeviceStatus ReadWrist(Side side, int64_t now_ns, WristRaw& out) override;
+  DeviceStatus ReadGlove(Side side, int64_t now_ns, GloveRaw& out) override;
+  /// Stores the command (carried by every later WRIST_REQUEST) and sends it
+  /// one-way at once. Returns kLost while the side is lost, else kOk.
+  DeviceStatus WriteWristForce(Side side, const Vec3d& command) override;
+  DeviceStatus WriteFingerForces(Side side, const std::array<double, kFingers>& command) override;
+
+  UdpCounters Counters(Side side) const;
+  UdpCounters Counters() const;  ///< both sides summed
+  bool Lost(Side side) const;
+
+ private:
+  struct AtomicCounters {
+    std::atomic<uint64_t> requests{0}, replies{0}, timeouts{0}, retries{0}, unanswered{0}, stale{0},
+        unexpected{0}, forces_sent{0}, invalid_commands{0}, socket_errors{0}, lost_transitions{0}, recoveries{0};
+    std::array<std::atomic<uint64_t>, udp::kDecodeStatuses> malformed{};
+    std::array<std::atomic<uint64_t>, udp::kErrorCodes> errors{};
+  };
+  /// Everything one side's thread touches, on its own cache lines.
+  struct alignas(64) SideState {
+    udp::UniqueFd socket;
+    uint32_t sequence = 0;
+    int64_t last_valid_ns = 0;  ///< CLOCK_MONOTONIC of the last valid reply (or of construction)
+    std::atomic<bool> lost{false};
+    Vec3d wrist_command{};
+    std::array<double, kFingers> finger_command{};
+    udp::Buffer tx{};
+    std::array<uint8_t, udp::kMaxMessageSize + 1> rx{};  ///< one spare byte: oversize datagrams show
+    udp::Message reply;
+    AtomicCounters counters;
+  };
+  enum class Wait { kReply, kTimeout, kError };
+
+  /// Sends the request in `s.tx` (`size` bytes) with retries and waits for a
+  /// reply of `type` to `sequence`; on kReply it is in `s.reply`.
+  Wait Transact(Side side, SideState& s, std::size_t size, uint32_t sequence, udp::MessageType type);
+  Wait AwaitReply(Side side, SideState& s, uint32_t sequence, udp::MessageType type, int64_t deadline_ns);
+  /// Reads and classifies whatever is queued (late replies) without waiting.
+  void Drain(Side side, SideState& s);
+  /// Classifies one received datagram; true if it is the awaited reply or an ERROR to it.
+  bool Accept(Side side, SideState& s, std::size_t size, uint32_t sequence, udp::MessageType type);
+  DeviceStatus Outcome(SideState& s, Wait wait);
+  /// The next sequence number of a side; 0 is never sent (it means "nothing outstanding").
+  static uint32_t NextSequence(SideState& s) { return ++s.sequence != 0 ? s.sequence : ++s.sequence; }
+  void SendOneWay(SideState& s, const udp::Message& message);
+
+  DeviceDescription description_;
+  int64_t lost_after_ns_;
+  int64_t timeout_ns_;
+  int retries_;
+  std::array<SideState, kSides> sides_;
+};
+
+}  // namespace haptel::haptics
