@@ -311,7 +311,8 @@ std::string Summary(const ServerCounters& c) {
   for (int i = 1; i < udp::kDecodeStatuses; ++i) {
     if (c.malformed[i] == 0) continue;
     total += c.malformed[i];
-    s += " " + std::string(udp::ToString(static_cast<udp::DecodeStatus>(i))) + "=" + std::to_string(c.malformed[i]);
+    s.append(" ").append(udp::ToString(static_cast<udp::DecodeStatus>(i))).append("=");
+    s.append(std::to_string(c.malformed[i]));
   }
   if (total == 0) s += " none";
   return s;

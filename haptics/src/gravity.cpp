@@ -238,7 +238,7 @@ bool GravitySampler::Tick(int64_t now_ns) {
   // The decision table, once per decision period.
   if (now_ns >= next_decision_ns_) {
     const ForceStep step = Decide(ClassifyPosition(z_error, config_.position_tolerance_m),
-                                  ClassifyMotion(v_motion[2], config_.speed_tolerance_m_s));
+                                  ClassifyMotion(v_motion[2], config_.motion_still_m_s));
     force_z_ = std::clamp(force_z_ + StepNewtons(step, config_.small_step_n, config_.large_step_n),
                           -config_.max_force_n, config_.max_force_n);
     ++decisions_;

@@ -2,6 +2,7 @@
 #include <unistd.h>
 
 #include <csignal>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <sstream>
@@ -26,6 +27,7 @@ constexpr const char* kUsage =
     "  --vehicle-name NAME  vehicle name in DDS topic names\n"
     "  --domain N           DDS domain id\n"
     "  --database FILE      SQLite file for the results (overrides 'database')\n"
+    "  --vehicle-timeout S  no vehicle state for S seconds: vehicle lost\n"
     "  --json               end with one JSON line of results on stdout\n"
     "  --quiet              no progress lines\n";
 
@@ -73,7 +75,7 @@ int main(int argc, char** argv) {
   SessionSetup setup;
   bool json = false;
   try {
-    const Args args(argc, argv, {"config", "track", "interface", "vehicle-name", "domain", "database"},
+    const Args args(argc, argv, {"config", "track", "interface", "vehicle-name", "domain", "database", "vehicle-timeout"},
                     {"json", "quiet", "help"});
     if (args.Flag("help")) {
       std::fputs(kUsage, stdout);
@@ -90,6 +92,14 @@ int main(int argc, char** argv) {
     if (auto name = args.Value("interface")) setup.run.interface = *name;
     if (auto domain = args.Int("domain", 0, 232)) setup.run.link.domain_id = *domain;
     if (auto db = args.Value("database")) setup.run.database = *db;
+    if (auto timeout = args.Value("vehicle-timeout")) {
+      char* end = nullptr;
+      const double s = std::strtod(timeout->c_str(), &end);
+      if (end == timeout->c_str() || *end != '\0' || !(s >= 0.05 && s <= 60.0)) {
+        throw UsageError("option --vehicle-timeout: expected seconds in [0.05, 60], got '" + *timeout + "'");
+      }
+      setup.run.vehicle_timeout_s = s;
+    }
     setup.track = LoadTrack(setup.run.track);
     setup.vehicle = LoadVehicle(setup.run.vehicle);
     if (auto name = args.Value("vehicle-name")) setup.vehicle.name = *name;

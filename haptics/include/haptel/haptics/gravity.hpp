@@ -121,6 +121,9 @@ struct GravitySamplerConfig {
   // displacement over the last period divided by the period.
   double decision_period_s = 0.05;
   double small_step_n = 0.01;  ///< "a little"
+  /// Below this speed the decision table calls the arm still (the
+  /// convergence test uses speed_tolerance_m_s).
+  double motion_still_m_s = 0.5e-3;
   double large_step_n = 0.1;   ///< "a lot"
   /// Force at the first vertex; each later vertex starts from the force found
   /// at the one before (vertices are visited in a snake order, neighbours).
