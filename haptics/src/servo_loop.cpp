@@ -10,6 +10,7 @@
 #include "haptel/haptics/calibration.hpp"
 #include "haptel/haptics/force_field.hpp"
 #include "haptel/haptics/gravity.hpp"
+#include "haptel/haptics/trace.hpp"
 
 namespace haptel::haptics {
 
@@ -41,6 +42,7 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
   if ((d.has_glove || d.has_grasp) && arm.cycle % static_cast<uint64_t>(config_.servo.slow_channel_divider) == 0) {
     if (device_.ReadGlove(side, now_ns, arm.glove) == DeviceStatus::kOk) {
       hal_.PublishGlove(side, arm.glove);
+      if (trace_ != nullptr) trace_->Push(TraceRecord::FromGlove(side, arm.glove));
       ++c.slow_reads;
     }
   }
@@ -68,6 +70,7 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
   }
   if (status == DeviceStatus::kOk) {
     hal_.PublishWrist(side, arm.wrist);
+    if (trace_ != nullptr) trace_->Push(TraceRecord::FromWrist(side, arm.wrist));
     const Vec3d p = TrackerToMetres(cal, arm.wrist.position);
     if (arm.have_previous && now_ns > arm.previous_ns) {
       const double dt = static_cast<double>(now_ns - arm.previous_ns) * 1e-9;

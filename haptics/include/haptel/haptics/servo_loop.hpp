@@ -29,6 +29,7 @@
 namespace haptel::haptics {
 
 class GravityGrid;
+class TraceWriter;
 
 /// Events one arm's loop counts instead of logging.
 struct ServoCounters {
@@ -49,6 +50,8 @@ class ServoLoop {
   ServoLoop(const ServoLoop&) = delete;
   ServoLoop& operator=(const ServoLoop&) = delete;
 
+  /// Records every device reading into `trace` (null: none). Before Start.
+  void SetTrace(TraceWriter* trace) { trace_ = trace; }
   void Start();
   void Stop();
   bool running() const { return running_.load(); }
@@ -97,6 +100,7 @@ class ServoLoop {
   DeviceConfig config_;
   DeviceCalibration calibration_;
   const GravityGrid* gravity_;
+  TraceWriter* trace_ = nullptr;
   std::array<std::unique_ptr<Arm>, kSides> arms_;
   std::array<LoopMeter, kSides> meters_;
   std::unique_ptr<std::barrier<Completion>> rendezvous_;

@@ -1,0 +1,98 @@
+#pragma once
+/// @file Device traces: what a session's device reported, recorded from the
+/// servo loop and played back by the `replay` driver at its original timing.
+///
+/// File format (little-endian): the 8 bytes "HAPTRC01", then records of
+/// {u8 kind, u8 side, 6 bytes zero, i64 t_ns, f64 values[27]} — a wrist record
+/// carries position (3, device units) and orientation (w, x, y, z); a glove
+/// record carries the 22 sensors and the 5 grasp values.
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <filesystem>
+#include <thread>
+#include <vector>
+
+#include "haptel/core/spsc_ring.hpp"
+#include "haptel/haptics/device.hpp"
+
+namespace haptel::haptics {
+
+struct TraceRecord {
+  enum Kind : uint8_t { kWrist = 1, kGlove = 2 };
+  uint8_t kind = kWrist;
+  uint8_t side = 0;
+  uint8_t reserved[6] = {};
+  int64_t t_ns = 0;
+  std::array<double, kGloveJoints + kFingers> values{};
+
+  static TraceRecord FromWrist(Side side, const WristRaw& raw);
+  static TraceRecord FromGlove(Side side, const GloveRaw& raw);
+  WristRaw ToWrist() const;
+  GloveRaw ToGlove() const;
+};
+
+/// Records a trace: the servo loop pushes (wait-free), a writer thread drains
+/// the ring to the file. Push drops (and counts) when the ring is full.
+class TraceWriter {
+ public:
+  /// Creates the file (and its folder). Throws std::runtime_error naming it.
+  explicit TraceWriter(const std::filesystem::path& file, size_t ring_capacity = 1 << 14);
+  /// Drains what is left and closes the file.
+  ~TraceWriter();
+  TraceWriter(const TraceWriter&) = delete;
+  TraceWriter& operator=(const TraceWriter&) = delete;
+
+  /// Servo thread(s): one producer per side, so each side has its own ring.
+  bool Push(const TraceRecord& record);
+  uint64_t written() const { return written_.load(); }
+  uint64_t dropped() const { return dropped_.load(); }
+
+ private:
+  void Drain();
+  std::filesystem::path file_;
+  std::FILE* out_ = nullptr;
+  std::array<std::unique_ptr<SpscRing<TraceRecord>>, kSides> rings_;
+  std::atomic<bool> stop_{false};
+  std::atomic<uint64_t> written_{0};
+  std::atomic<uint64_t> dropped_{0};
+  std::thread thread_;
+};
+
+/// Reads a whole trace. Throws std::runtime_error naming the file and the
+/// record on a bad header, a truncated record or an unknown kind.
+std::vector<TraceRecord> ReadTrace(const std::filesystem::path& file);
+
+/// The `replay` driver: plays a trace back at its original timing, relative to
+/// the first read. Force commands are accepted and ignored (counted). At the
+/// end of the trace it loops, or keeps the last sample (kNoData).
+class ReplayDevice final : public Device {
+ public:
+  ReplayDevice(std::vector<TraceRecord> records, const DeviceDescription& description, bool loop);
+
+  const DeviceDescription& description() const override { return description_; }
+  DeviceStatus ReadWrist(Side side, int64_t now_ns, WristRaw& out) override;
+  DeviceStatus ReadGlove(Side side, int64_t now_ns, GloveRaw& out) override;
+  DeviceStatus WriteWristForce(Side side, const Vec3d&) override;
+  DeviceStatus WriteFingerForces(Side side, const std::array<double, kFingers>&) override;
+
+  uint64_t commands_ignored(Side side) const { return ignored_[Index(side)].load(); }
+
+ private:
+  /// Index of the newest record of `kind` for `side` due at `now_ns`, or -1.
+  long Due(Side side, TraceRecord::Kind kind, int64_t now_ns, size_t& cursor, int64_t& round);
+
+  std::vector<TraceRecord> records_;
+  DeviceDescription description_;
+  bool loop_;
+  int64_t trace_start_ns_ = 0;
+  int64_t trace_span_ns_ = 1;
+  std::atomic<int64_t> start_ns_{0};
+  std::array<size_t, kSides> wrist_cursor_{};
+  std::array<size_t, kSides> glove_cursor_{};
+  std::array<int64_t, kSides> wrist_round_{};
+  std::array<int64_t, kSides> glove_round_{};
+  std::array<std::atomic<uint64_t>, kSides> ignored_{};
+};
+
+}  // namespace haptel::haptics

@@ -1,0 +1,178 @@
+#include "haptel/haptics/trace.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <stdexcept>
+
+namespace haptel::haptics {
+
+namespace {
+constexpr char kMagic[8] = {'H', 'A', 'P', 'T', 'R', 'C', '0', '1'};
+static_assert(sizeof(TraceRecord) == 16 + 8 * (kGloveJoints + kFingers), "trace records are packed");
+}  // namespace
+
+TraceRecord TraceRecord::FromWrist(Side side, const WristRaw& raw) {
+  TraceRecord r;
+  r.kind = kWrist;
+  r.side = static_cast<uint8_t>(Index(side));
+  r.t_ns = raw.t_ns;
+  for (int i = 0; i < 3; ++i) r.values[i] = raw.position[i];
+  for (int i = 0; i < 4; ++i) r.values[3 + i] = raw.orientation[i];
+  return r;
+}
+
+TraceRecord TraceRecord::FromGlove(Side side, const GloveRaw& raw) {
+  TraceRecord r;
+  r.kind = kGlove;
+  r.side = static_cast<uint8_t>(Index(side));
+  r.t_ns = raw.t_ns;
+  for (int j = 0; j < kGloveJoints; ++j) r.values[j] = raw.sensors[j];
+  for (int f = 0; f < kFingers; ++f) r.values[kGloveJoints + f] = raw.grasp[f];
+  return r;
+}
+
+WristRaw TraceRecord::ToWrist() const {
+  WristRaw w;
+  w.t_ns = t_ns;
+  for (int i = 0; i < 3; ++i) w.position[i] = values[i];
+  for (int i = 0; i < 4; ++i) w.orientation[i] = values[3 + i];
+  return w;
+}
+
+GloveRaw TraceRecord::ToGlove() const {
+  GloveRaw g;
+  g.t_ns = t_ns;
+  for (int j = 0; j < kGloveJoints; ++j) g.sensors[j] = values[j];
+  for (int f = 0; f < kFingers; ++f) g.grasp[f] = values[kGloveJoints + f];
+  return g;
+}
+
+TraceWriter::TraceWriter(const std::filesystem::path& file, size_t ring_capacity) : file_(file) {
+  if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path());
+  out_ = std::fopen(file.c_str(), "wb");
+  if (out_ == nullptr || std::fwrite(kMagic, 1, sizeof kMagic, out_) != sizeof kMagic) {
+    if (out_ != nullptr) std::fclose(out_);
+    throw std::runtime_error("trace: cannot write '" + file.string() + "': " + std::strerror(errno));
+  }
+  for (auto& ring : rings_) ring = std::make_unique<SpscRing<TraceRecord>>(ring_capacity);
+  thread_ = std::thread([this] { Drain(); });
+}
+
+TraceWriter::~TraceWriter() {
+  stop_.store(true);
+  thread_.join();
+  std::fclose(out_);
+}
+
+bool TraceWriter::Push(const TraceRecord& record) {
+  if (record.side >= kSides || !rings_[record.side]->Push(record)) {
+    dropped_.fetch_add(1, std::memory_order_relaxed);
+    return false;
+  }
+  return true;
+}
+
+void TraceWriter::Drain() {
+  TraceRecord r;
+  for (;;) {
+    const bool stopping = stop_.load();
+    bool any = false;
+    for (auto& ring : rings_) {
+      while (ring->Pop(r)) {
+        std::fwrite(&r, sizeof r, 1, out_);
+        written_.fetch_add(1, std::memory_order_relaxed);
+        any = true;
+      }
+    }
+    if (stopping && !any) break;
+    if (!any) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  std::fflush(out_);
+}
+
+std::vector<TraceRecord> ReadTrace(const std::filesystem::path& file) {
+  std::FILE* in = std::fopen(file.c_str(), "rb");
+  if (in == nullptr) throw std::runtime_error("trace: cannot open '" + file.string() + "'");
+  char magic[8] = {};
+  if (std::fread(magic, 1, sizeof magic, in) != sizeof magic || std::memcmp(magic, kMagic, sizeof magic) != 0) {
+    std::fclose(in);
+    throw std::runtime_error("trace: '" + file.string() + "' is not a Haptel trace (bad header)");
+  }
+  std::vector<TraceRecord> records;
+  TraceRecord r;
+  for (;;) {
+    const size_t got = std::fread(&r, 1, sizeof r, in);
+    if (got == 0) break;
+    if (got != sizeof r || (r.kind != TraceRecord::kWrist && r.kind != TraceRecord::kGlove) || r.side >= kSides) {
+      std::fclose(in);
+      throw std::runtime_error("trace: '" + file.string() + "': record " + std::to_string(records.size()) +
+                               (got != sizeof r ? " is truncated" : " is malformed"));
+    }
+    records.push_back(r);
+  }
+  std::fclose(in);
+  // Two sides were written by two rings: restore time order.
+  std::stable_sort(records.begin(), records.end(),
+                   [](const TraceRecord& a, const TraceRecord& b) { return a.t_ns < b.t_ns; });
+  return records;
+}
+
+ReplayDevice::ReplayDevice(std::vector<TraceRecord> records, const DeviceDescription& description, bool loop)
+    : records_(std::move(records)), description_(description), loop_(loop) {
+  if (records_.empty()) throw std::runtime_error("replay: the trace has no records");
+  trace_start_ns_ = records_.front().t_ns;
+  trace_span_ns_ = std::max<int64_t>(1, records_.back().t_ns - trace_start_ns_ + 1);
+  for (auto& i : ignored_) i.store(0);
+}
+
+long ReplayDevice::Due(Side side, TraceRecord::Kind kind, int64_t now_ns, size_t& cursor, int64_t& round) {
+  int64_t expected = 0;
+  start_ns_.compare_exchange_strong(expected, now_ns);
+  int64_t elapsed = now_ns - start_ns_.load();
+  if (loop_) {
+    if (elapsed / trace_span_ns_ != round) {
+      round = elapsed / trace_span_ns_;
+      cursor = 0;  // a new round from the top
+    }
+    elapsed %= trace_span_ns_;
+  }
+  const int64_t target = trace_start_ns_ + elapsed;
+  long found = -1;
+  size_t i = cursor;
+  for (; i < records_.size() && records_[i].t_ns <= target; ++i) {
+    if (records_[i].side == Index(side) && records_[i].kind == kind) found = static_cast<long>(i);
+  }
+  cursor = i;
+  return found;
+}
+
+DeviceStatus ReplayDevice::ReadWrist(Side side, int64_t now_ns, WristRaw& out) {
+  const long i = Due(side, TraceRecord::kWrist, now_ns, wrist_cursor_[Index(side)], wrist_round_[Index(side)]);
+  if (i < 0) return DeviceStatus::kNoData;
+  out = records_[static_cast<size_t>(i)].ToWrist();
+  out.t_ns = now_ns;
+  return DeviceStatus::kOk;
+}
+
+DeviceStatus ReplayDevice::ReadGlove(Side side, int64_t now_ns, GloveRaw& out) {
+  const long i = Due(side, TraceRecord::kGlove, now_ns, glove_cursor_[Index(side)], glove_round_[Index(side)]);
+  if (i < 0) return DeviceStatus::kNoData;
+  out = records_[static_cast<size_t>(i)].ToGlove();
+  out.t_ns = now_ns;
+  return DeviceStatus::kOk;
+}
+
+DeviceStatus ReplayDevice::WriteWristForce(Side side, const Vec3d&) {
+  ignored_[Index(side)].fetch_add(1, std::memory_order_relaxed);
+  return DeviceStatus::kOk;
+}
+
+DeviceStatus ReplayDevice::WriteFingerForces(Side side, const std::array<double, kFingers>&) {
+  ignored_[Index(side)].fetch_add(1, std::memory_order_relaxed);
+  return DeviceStatus::kOk;
+}
+
+}  // namespace haptel::haptics
