@@ -15,7 +15,7 @@
 #include "haptel/link/topic.hpp"
 #include "haptel/mediator/auto_operator.hpp"
 #include "haptel/mediator/lap_timer.hpp"
-#include "haptel/mediator/vehicle_process.hpp"
+#include "haptel/core/child_process.hpp"
 #include "haptel/mediator/video_receiver.hpp"
 
 namespace haptel::mediator {
@@ -126,9 +126,9 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
     }
   }
 
-  std::unique_ptr<VehicleProcess> vehicle;
+  std::unique_ptr<ChildProcess> vehicle;
   if (!setup.vehicle_program.empty()) {
-    vehicle = std::make_unique<VehicleProcess>(
+    vehicle = std::make_unique<ChildProcess>(
         setup.vehicle_program.string(),
         std::vector<std::string>{"--config", setup.vehicle.file.string(), "--track",
                                  setup.track.file.string(), "--name", setup.vehicle.name,

@@ -72,10 +72,12 @@ TEST_CASE("topics of different vehicles do not mix") {
                      [&](const msg::VehicleState&) { ++count; });
   StateReader mine(b, TopicName("mine", "state"), Profile::kState, [](const msg::VehicleState&) {});
   StateWriter writer(a, TopicName("mine", "state"), Profile::kState);
-  REQUIRE(test::WaitFor([&] { return mine.matched() > 0; }, 20.0));
+  REQUIRE(test::WaitFor([&] { return mine.matched() > 0 && writer.matched() > 0; }, 20.0));
   msg::VehicleState s;
-  for (int i = 0; i < 20; ++i) writer.Write(s);
-  REQUIRE(test::WaitFor([&] { return mine.received() >= 20; }, 10.0));
+  REQUIRE(test::WaitFor([&] {
+    writer.Write(s);
+    return mine.received() >= 20;
+  }, 10.0));
   CHECK(count.load() == 0);
   CHECK(reader.matched() == 0);
 }

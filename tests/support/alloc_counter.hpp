@@ -1,14 +1,8 @@
 #pragma once
-/// @file Counts heap allocations made by the calling thread, for tests that
-/// prove a loop allocates nothing. Linking haptel_test_support replaces the
-/// global operator new with a counting one.
-#include <cstdint>
+/// @file Tests' view of the allocation counter (haptel/core/alloc_counter.hpp).
+#include "haptel/core/alloc_counter.hpp"
 
 namespace haptel::test {
-
-/// Allocations made so far by the calling thread.
-uint64_t ThreadAllocations();
-/// Allocations made so far by all threads.
-uint64_t TotalAllocations();
-
+using haptel::alloc::ThreadAllocations;
+using haptel::alloc::TotalAllocations;
 }  // namespace haptel::test

@@ -1,4 +1,4 @@
-#include "haptel/mediator/vehicle_process.hpp"
+#include "haptel/core/child_process.hpp"
 
 #include <signal.h>
 #include <sys/prctl.h>
@@ -11,11 +11,11 @@
 #include <stdexcept>
 #include <thread>
 
-namespace haptel::mediator {
+namespace haptel {
 
-VehicleProcess::VehicleProcess(const std::string& program, const std::vector<std::string>& arguments) {
+ChildProcess::ChildProcess(const std::string& program, const std::vector<std::string>& arguments) {
   if (access(program.c_str(), X_OK) != 0) {
-    throw std::runtime_error("cannot start the vehicle: '" + program + "' is not an executable");
+    throw std::runtime_error("cannot start a child process: '" + program + "' is not an executable");
   }
   // Build argv before fork: the child may only make async-signal-safe calls.
   std::vector<std::string> words{program};
@@ -25,7 +25,7 @@ VehicleProcess::VehicleProcess(const std::string& program, const std::vector<std
   argv.push_back(nullptr);
   const pid_t parent = getpid();
   pid_ = fork();
-  if (pid_ < 0) throw std::runtime_error(std::string("cannot fork the vehicle: ") + std::strerror(errno));
+  if (pid_ < 0) throw std::runtime_error(std::string("cannot fork: ") + std::strerror(errno));
   if (pid_ == 0) {
     prctl(PR_SET_PDEATHSIG, SIGTERM);
     if (getppid() != parent) _exit(127);  // the parent died before prctl
@@ -34,11 +34,11 @@ VehicleProcess::VehicleProcess(const std::string& program, const std::vector<std
   }
 }
 
-VehicleProcess::~VehicleProcess() {
+ChildProcess::~ChildProcess() {
   if (!exited_) Terminate();
 }
 
-void VehicleProcess::Record(int status) {
+void ChildProcess::Record(int status) {
   exited_ = true;
   if (WIFEXITED(status)) {
     exit_description_ = "exited with code " + std::to_string(WEXITSTATUS(status));
@@ -48,7 +48,7 @@ void VehicleProcess::Record(int status) {
   }
 }
 
-bool VehicleProcess::Alive() {
+bool ChildProcess::Alive() {
   if (exited_) return false;
   int status = 0;
   const pid_t r = waitpid(pid_, &status, WNOHANG);
@@ -56,7 +56,7 @@ bool VehicleProcess::Alive() {
   return !exited_;
 }
 
-std::string VehicleProcess::Terminate(double grace_s) {
+std::string ChildProcess::Terminate(double grace_s) {
   if (!Alive()) return exit_description_;
   kill(pid_, SIGTERM);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(grace_s);
@@ -70,4 +70,4 @@ std::string VehicleProcess::Terminate(double grace_s) {
   return exit_description_;
 }
 
-}  // namespace haptel::mediator
+}  // namespace haptel

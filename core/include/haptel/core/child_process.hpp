@@ -1,23 +1,23 @@
 #pragma once
-/// @file Spawns and supervises a vehicle node as a child process.
+/// @file Spawns and supervises a child process (a vehicle node, a device server).
 ///
 /// The child gets SIGTERM if this process dies (PR_SET_PDEATHSIG), so no
-/// vehicle outlives its operator on the same host; a remote vehicle relies on
-/// its own command watchdog instead.
+/// child outlives its parent on the same host (a remote vehicle relies on its
+/// own command watchdog instead).
 #include <string>
 #include <sys/types.h>
 #include <vector>
 
-namespace haptel::mediator {
+namespace haptel {
 
-class VehicleProcess {
+class ChildProcess {
  public:
   /// Starts `program` with `arguments`. Throws std::runtime_error if it cannot.
-  VehicleProcess(const std::string& program, const std::vector<std::string>& arguments);
+  ChildProcess(const std::string& program, const std::vector<std::string>& arguments);
   /// Terminates the child if it still runs.
-  ~VehicleProcess();
-  VehicleProcess(const VehicleProcess&) = delete;
-  VehicleProcess& operator=(const VehicleProcess&) = delete;
+  ~ChildProcess();
+  ChildProcess(const ChildProcess&) = delete;
+  ChildProcess& operator=(const ChildProcess&) = delete;
 
   pid_t pid() const { return pid_; }
   /// Non-blocking: false once the child has exited (reaps it).
@@ -34,4 +34,4 @@ class VehicleProcess {
   std::string exit_description_ = "running";
 };
 
-}  // namespace haptel::mediator
+}  // namespace haptel
