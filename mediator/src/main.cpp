@@ -11,8 +11,10 @@
 #include "haptel/config/error.hpp"
 #include "haptel/core/args.hpp"
 #include "haptel/core/log.hpp"
+#include "haptel/haptics/calibration_procedure.hpp"
 #include "haptel/mediator/recorder.hpp"
 #include "haptel/mediator/session.hpp"
+#include "servo_bench.hpp"
 
 namespace {
 
@@ -20,7 +22,11 @@ std::atomic<bool> g_interrupted{false};
 void OnSignal(int) { g_interrupted.store(true); }
 
 constexpr const char* kUsage =
-    "usage: haptel run [options]\n"
+    "usage: haptel run [options]         drive one grand-prix lap\n"
+    "       haptel calibrate [options]   calibrate a haptic device (--help for options)\n"
+    "       haptel bench servo [options] servo loop benchmark (--help for options)\n"
+    "\n"
+    "haptel run options:\n"
     "  --config FILE        run configuration (default config/haptel.yaml)\n"
     "  --track FILE         track file (overrides the configuration's 'track')\n"
     "  --interface NAME     mediator interface (a file interfaces/NAME.yaml)\n"
@@ -72,6 +78,15 @@ int main(int argc, char** argv) {
   using namespace haptel;
   using namespace haptel::mediator;
   log::SetProgram("haptel");
+  // Sub-commands with their own options: each parses argv from its own name on.
+  const std::string command = argc > 1 ? argv[1] : "";
+  if (command == "calibrate") return haptics::CalibrateMain(argc - 1, argv + 1);
+  if (command == "bench") {
+    const std::string which = argc > 2 ? argv[2] : "";
+    if (which == "servo") return bench::BenchServoMain(argc - 2, argv + 2);
+    std::fprintf(stderr, "haptel bench: expected one of: servo (got '%s')\n", which.c_str());
+    return 2;
+  }
   SessionSetup setup;
   bool json = false;
   try {
