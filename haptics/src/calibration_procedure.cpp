@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 #include <random>
 #include <sstream>
 
@@ -113,13 +114,20 @@ struct Session {
 
 // ---------------------------------------------------------------- glove ----
 
-std::array<double, kGloveJoints> CaptureGlove(const Session& s, int posture, double formed) {
-  const GlovePosture& p = GlovePostures()[static_cast<size_t>(posture)];
+/// Captures a posture. Unattended, a `fumbled` posture is made only half-way
+/// from another one (the fist, or for the fist the flat hand).
+std::array<double, kGloveJoints> CaptureGlove(const Session& s, int posture, bool fumbled) {
+  const auto& postures = GlovePostures();
+  const GlovePosture& p = postures[static_cast<size_t>(posture)];
   if (s.sim != nullptr) {
-    std::array<double, kGloveJoints> angles{};
-    for (int j = 0; j < kGloveJoints; ++j) angles[j] = formed * p.angles[j];
+    const GlovePosture& from = postures[static_cast<size_t>(posture == 1 ? 0 : 1)];
+    std::array<double, kGloveJoints> angles = p.angles;
+    if (fumbled) {
+      for (int j = 0; j < kGloveJoints; ++j) angles[j] = 0.5 * (p.angles[j] + from.angles[j]);
+    }
     s.sim->SetGlovePosture(s.side, angles);
-    s.log << "  " << s.name() << " hand: '" << p.name << "'" << (formed < 1.0 ? " (fumbled: half-formed)" : "") << "\n";
+    s.log << "  " << s.name() << " hand: '" << p.name << "'"
+          << (fumbled ? " (fumbled: half-way from '" + std::string(from.name) + "')" : "") << "\n";
   } else {
     s.log << "  " << s.name() << " hand, posture '" << p.name << "': " << p.how << ". Hold it and press Enter."
           << std::endl;
@@ -139,14 +147,14 @@ void CalibrateGlove(const Session& s, ArmCalibration& arm) {
     std::shuffle(order.begin(), order.end(), rng);
   }
   for (size_t k = 0; k < order.size(); ++k) {
-    const double formed = (s.sim != nullptr && k == 0) ? 0.5 : 1.0;
-    calibrator.Capture(postures[static_cast<size_t>(order[k])].name, CaptureGlove(s, order[k], formed));
+    const bool fumbled = s.sim != nullptr && k == 0;
+    calibrator.Capture(postures[static_cast<size_t>(order[k])].name, CaptureGlove(s, order[k], fumbled));
   }
   // Redo postures: the operator names them; unattended, the fumbled first one.
   if (s.sim != nullptr) {
     const auto& p = postures[static_cast<size_t>(order[0])];
     s.log << "  redoing '" << p.name << "'\n";
-    calibrator.Recapture(p.name, CaptureGlove(s, order[0], 1.0));
+    calibrator.Recapture(p.name, CaptureGlove(s, order[0], false));
   } else {
     for (;;) {
       s.log << "  Redo a posture? Type its name (flat, fist, spread, bent) or press Enter to go on." << std::endl;
@@ -160,7 +168,7 @@ void CalibrateGlove(const Session& s, ArmCalibration& arm) {
         s.log << "  no posture '" << line << "'\n";
         continue;
       }
-      calibrator.Recapture(line, CaptureGlove(s, index, 1.0));
+      calibrator.Recapture(line, CaptureGlove(s, index, false));
     }
   }
   const GloveFit fit = calibrator.Fit();
@@ -343,10 +351,18 @@ void PrintCalibrationSummary(std::ostream& out, const DeviceCalibration& calibra
     out << "\n" << kSideNames[s] << " arm" << std::string(18, ' ') << std::setw(16) << "recovered";
     if (sim != nullptr) out << std::setw(16) << "true" << std::setw(16) << "error";
     out << "\n";
-    auto row = [&](const std::string& label, double value, double truth, const std::string& error) {
+    auto row = [&](const std::string& label, double value, std::optional<double> truth, const std::string& error) {
       out << "  " << std::left << std::setw(24) << label << std::right << std::setw(16) << std::setprecision(7)
           << value;
-      if (sim != nullptr) out << std::setw(16) << truth << std::setw(16) << error;
+      if (sim != nullptr) {
+        out << std::setw(16);
+        if (truth) {
+          out << *truth;
+        } else {
+          out << "";
+        }
+        out << std::setw(16) << error;
+      }
       out << "\n";
     };
     const SimArmTruth* t = sim != nullptr ? &sim->truth(static_cast<Side>(s)) : nullptr;
@@ -367,7 +383,7 @@ void PrintCalibrationSummary(std::ostream& out, const DeviceCalibration& calibra
       row(std::string("force slope ") + kAxisNames[i] + " (N/unit)", c.force_slope[i], truth,
           t != nullptr ? Percent(c.force_slope[i] / truth - 1.0) : "");
     }
-    row("force residual (N)", c.force_residual, 0.0, "");
+    row("force residual (N)", c.force_residual, std::nullopt, "");
     row("finger slope (N/unit)", c.finger_force_slope, t != nullptr ? t->finger_force_slope : 0.0,
         t != nullptr ? "not measured" : "");
     double gain_lo = c.glove_gain[0];

@@ -25,8 +25,8 @@
 /// of the measurement, asserted per sensor/axis by the tests):
 /// - Tracker: readings are exact but for encoder quantisation r (60 µm, so
 ///   ≤ r/2 per reading); with references at ±a about the centre c on each
-///   axis the least-squares errors are |Δscale/scale| ≤ r/(2a) = 0.025 %
-///   (a = 0.12 m) and |Δoffset| ≤ r/2 + r/(2a)·|c − offset| ≤ 0.06 mm.
+///   axis the least-squares errors are |Δscale/scale| ≤ r/(2a) = 0.024 %
+///   (a = 0.125 m) and |Δoffset| ≤ r/2 + r/(2a)·|c − offset| ≤ 0.06 mm.
 /// - Glove: counts are rounded (≤ 0.5 count each). With N = Δθ/gain counts
 ///   between the two postures used: |Δgain/gain| ≤ 1/(N − 1): ≤ 0.8 % for
 ///   flexions (Δθ ≥ 1.1 rad), ≤ 2.8 % for the finger abductions (Δθ = 0.3
@@ -52,7 +52,7 @@ struct SimArmTruth;
 
 /// Centre and half-span (m) of the default tracker reference poses.
 inline constexpr Vec3d kReferenceCentre{0.05, 0.0, 0.02};
-constexpr double kReferenceHalfSpan = 0.12;
+constexpr double kReferenceHalfSpan = 0.125;
 
 /// The default reference poses: the centre and ±kReferenceHalfSpan along each
 /// axis (7 poses), inside the sim's workspace and where its operator can
