@@ -5,10 +5,12 @@
 #include <deque>
 #include <memory>
 #include <mutex>
+#include <sstream>
 
 #include "haptel/core/clock.hpp"
 #include "haptel/core/histogram.hpp"
 #include "haptel/core/log.hpp"
+#include "haptel/haptics/calibration_procedure.hpp"
 #include "haptel/haptics/servo_loop.hpp"
 #include "haptel/haptics/sim_device.hpp"
 #include "haptel/interfaces/gesture.hpp"
@@ -72,23 +74,6 @@ class StateInbox {
   Histogram rtt_{10.0, 20000};  // µs bins up to 200 ms
 };
 
-/// A sim device without a calibration file is calibrated at start-up.
-DeviceCalibration StartupCalibration(const haptics::SimDevice& device) {
-  DeviceCalibration c;
-  c.device = device.description().name;
-  for (int i = 0; i < haptics::kSides; ++i) {
-    const haptics::SimArmTruth& t = device.truth(static_cast<haptics::Side>(i));
-    ArmCalibration& a = c.arms[i];
-    a.tracker_scale = t.tracker_scale;
-    a.tracker_offset = t.tracker_offset;
-    a.glove_gain = t.glove_gain;
-    a.glove_offset = t.glove_offset;
-    a.force_slope = t.force_slope;
-    a.finger_force_slope = t.finger_force_slope;
-  }
-  return c;
-}
-
 }  // namespace
 
 SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& interrupted) {
@@ -105,8 +90,15 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
 
   // Haptic side first: the hand is held at neutral before anything moves.
   haptics::SimDevice device(setup.device, run.op);
-  const DeviceCalibration calibration =
-      setup.device.calibration.empty() ? StartupCalibration(device) : setup.calibration;
+  DeviceCalibration calibration = setup.calibration;
+  if (setup.device.calibration.empty()) {
+    // No calibration file: calibrate the simulated device now, unattended,
+    // as `haptel calibrate --auto` would (a fraction of a second).
+    std::ostringstream quiet;
+    haptics::CalibrationOptions options;
+    options.auto_mode = true;
+    calibration = haptics::RunCalibration(device, options, quiet);
+  }
   haptics::Hal hal(calibration);
   interfaces::GestureInterface interface(setup.gesture);
   for (int i = 0; i < haptics::kSides; ++i) {
