@@ -34,6 +34,7 @@ constexpr const char* kUsage =
     "  --domain N           DDS domain id\n"
     "  --database FILE      SQLite file for the results (overrides 'database')\n"
     "  --vehicle-timeout S  no vehicle state for S seconds: vehicle lost\n"
+    "  --trace FILE         record the haptic device's readings (for the replay driver)\n"
     "  --json               end with one JSON line of results on stdout\n"
     "  --quiet              no progress lines\n";
 
@@ -90,7 +91,7 @@ int main(int argc, char** argv) {
   SessionSetup setup;
   bool json = false;
   try {
-    const Args args(argc, argv, {"config", "track", "interface", "vehicle-name", "domain", "database", "vehicle-timeout"},
+    const Args args(argc, argv, {"config", "track", "interface", "vehicle-name", "domain", "database", "vehicle-timeout", "trace"},
                     {"json", "quiet", "help"});
     if (args.Flag("help")) {
       std::fputs(kUsage, stdout);
@@ -107,6 +108,7 @@ int main(int argc, char** argv) {
     if (auto name = args.Value("interface")) setup.run.interface = *name;
     if (auto domain = args.Int("domain", 0, 232)) setup.run.link.domain_id = *domain;
     if (auto db = args.Value("database")) setup.run.database = *db;
+    if (auto trace = args.Value("trace")) setup.trace = *trace;
     if (auto timeout = args.Value("vehicle-timeout")) {
       char* end = nullptr;
       const double s = std::strtod(timeout->c_str(), &end);

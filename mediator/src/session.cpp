@@ -12,6 +12,7 @@
 #include "haptel/core/log.hpp"
 #include "haptel/haptics/calibration_procedure.hpp"
 #include "haptel/haptics/servo_loop.hpp"
+#include "haptel/haptics/trace.hpp"
 #include "haptel/haptics/sim_device.hpp"
 #include "haptel/interfaces/gesture.hpp"
 #include "haptel/link/topic.hpp"
@@ -105,7 +106,11 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
     const auto side = static_cast<haptics::Side>(i);
     if (auto neutral = interface.HandTargetsFor({})[i]) device.Place(side, *neutral);
   }
+  // Declared before the loop so it outlives the loop's threads.
+  std::unique_ptr<haptics::TraceWriter> trace;
+  if (!setup.trace.empty()) trace = std::make_unique<haptics::TraceWriter>(setup.trace);
   haptics::ServoLoop servo(device, hal, setup.device, calibration);
+  servo.SetTrace(trace.get());
   servo.Start();
   if (setup.progress) {
     // Give the threads a moment to try for SCHED_FIFO, then say once what they could not get.

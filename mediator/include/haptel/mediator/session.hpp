@@ -31,6 +31,8 @@ struct SessionSetup {
   /// haptel-vehicle to spawn; empty: the vehicle runs elsewhere, do not spawn.
   std::filesystem::path vehicle_program;
   bool progress = true;  ///< progress lines on stderr
+  /// Record the device's readings here for the `replay` driver (empty: none).
+  std::filesystem::path trace;
 };
 
 enum class Outcome { kCompleted, kLapCap, kVehicleLost, kVehicleDidNotStart, kInterrupted };
