@@ -3,6 +3,8 @@
 #include <thread>
 
 #include "haptel/core/spsc_ring.hpp"
+#include "haptel/config/error.hpp"
+#include "haptel/haptics/device_factory.hpp"
 #include "haptel/haptics/servo_loop.hpp"
 #include "haptel/haptics/trace.hpp"
 #include "scripted_device.hpp"
@@ -137,4 +139,27 @@ TEST_CASE("replay can loop") {
   CHECK(w.position[0] == 3.0);
   replay.ReadWrist(Side::kRight, 1 + 31 * kMs + 15 * kMs, w);  // 46 ms: second round, 15 ms in
   CHECK(w.position[0] == 1.0);
+}
+
+TEST_CASE("the replay driver opens from a device file, and a bad trace names the file and key") {
+  const auto dir = test::ScratchDir("replay-config");
+  {
+    TraceWriter writer(dir / "t.trace");
+    for (int i = 0; i < 10; ++i) writer.Push(TraceRecord::FromWrist(Side::kRight, Wrist(i * kMs, i)));
+  }
+  std::FILE* f = std::fopen((dir / "replay.yaml").c_str(), "w");
+  std::fputs("name: r\ndriver: replay\nsides: [right]\nreplay: {trace: t.trace}\n", f);
+  std::fclose(f);
+  auto device = MakeDevice(LoadDevice(dir / "replay.yaml"));
+  WristRaw w;
+  CHECK(device->ReadWrist(Side::kRight, 1, w) == DeviceStatus::kOk);
+  CHECK_FALSE(device->HasSide(Side::kLeft));
+  std::filesystem::resize_file(dir / "t.trace", 3);
+  try {
+    MakeDevice(LoadDevice(dir / "replay.yaml"));
+    FAIL("no error");
+  } catch (const ConfigError& e) {
+    CHECK(std::string(e.what()).find("replay.yaml") != std::string::npos);
+    CHECK(std::string(e.what()).find("replay.trace") != std::string::npos);
+  }
 }
