@@ -68,7 +68,9 @@ class SetupError : public std::runtime_error {
 struct Peer {
   sockaddr_storage addr{};
   socklen_t len = 0;
-  bool Same(const sockaddr_storage& a, socklen_t l) const { return l == len && std::memcmp(&a, &addr, len) == 0; }
+  bool Same(const sockaddr_storage& a, socklen_t l) const {
+    return l == len && std::memcmp(&a, &addr, len) == 0;
+  }
 };
 
 struct ServerCounters {
@@ -96,12 +98,13 @@ class ArmServer {
     while (g_stop == 0) {
       CheckWatchdog();
       pollfd p{fd_, POLLIN, 0};
-      const int ready = ::poll(&p, 1, 20);  // short: the watchdog and the stop flag are checked between
+      const int ready =
+          ::poll(&p, 1, 20);  // short: the watchdog and the stop flag are checked between
       if (ready <= 0) continue;
       for (;;) {
         from_len_ = sizeof from_;
-        const ssize_t n = ::recvfrom(fd_, rx_.data(), rx_.size(), MSG_DONTWAIT, reinterpret_cast<sockaddr*>(&from_),
-                                     &from_len_);
+        const ssize_t n = ::recvfrom(fd_, rx_.data(), rx_.size(), MSG_DONTWAIT,
+                                     reinterpret_cast<sockaddr*>(&from_), &from_len_);
         if (n < 0) break;
         Handle(static_cast<std::size_t>(n));
       }
@@ -118,12 +121,15 @@ class ArmServer {
     if (status != udp::DecodeStatus::kOk) {
       ++c_.malformed[static_cast<std::size_t>(status)];
       // A sound header with a type we do not know: say so, so a newer client sees why.
-      if (status == udp::DecodeStatus::kUnknownType) Reply(udp::ErrorReply{udp::ErrorCode::kUnsupported});
+      if (status == udp::DecodeStatus::kUnknownType)
+        Reply(udp::ErrorReply{udp::ErrorCode::kUnsupported});
       return;  // anything else is not trusted enough to answer
     }
     const udp::MessageType type = msg_.type();
-    const bool request = type == udp::MessageType::kWristRequest || type == udp::MessageType::kGloveRequest;
-    const bool command = type == udp::MessageType::kWristForce || type == udp::MessageType::kFingerForce;
+    const bool request =
+        type == udp::MessageType::kWristRequest || type == udp::MessageType::kGloveRequest;
+    const bool command =
+        type == udp::MessageType::kWristForce || type == udp::MessageType::kFingerForce;
     if (!request && !command) {
       ++c_.unexpected;
       return;
@@ -133,16 +139,14 @@ class ArmServer {
       if (request) Reply(udp::ErrorReply{udp::ErrorCode::kWrongSide});
       return;
     }
-    const int64_t now = MonotonicNs();
+    CheckWatchdog();  // a client quiet for too long loses the arm (forces zeroed) before anyone
+                      // takes over
     if (session_ && !peer_.Same(from_, from_len_)) {
-      if (now - last_heard_ns_ < session_timeout_ns_) {
-        ++c_.busy;
-        if (request) Reply(udp::ErrorReply{udp::ErrorCode::kBusy});
-        return;
-      }
-      ZeroForces();  // the old client went quiet: the new one takes over from zero
-      session_ = false;
+      ++c_.busy;
+      if (request) Reply(udp::ErrorReply{udp::ErrorCode::kBusy});
+      return;
     }
+    const int64_t now = MonotonicNs();
     if (!session_) {
       session_ = true;
       peer_.addr = from_;
@@ -180,7 +184,8 @@ class ArmServer {
 
   /// Applies a wrist command unless a newer one (by sequence) was applied already.
   void ApplyWrist(const Vec3d& command) {
-    if (has_wrist_seq_ && !udp::SequenceAfter(msg_.sequence, wrist_seq_) && msg_.sequence != wrist_seq_) {
+    if (has_wrist_seq_ && !udp::SequenceAfter(msg_.sequence, wrist_seq_) &&
+        msg_.sequence != wrist_seq_) {
       ++c_.stale_commands;
       return;
     }
@@ -190,7 +195,8 @@ class ArmServer {
     ++c_.forces_applied;
   }
   void ApplyFingers(const std::array<double, kFingers>& command) {
-    if (has_finger_seq_ && !udp::SequenceAfter(msg_.sequence, finger_seq_) && msg_.sequence != finger_seq_) {
+    if (has_finger_seq_ && !udp::SequenceAfter(msg_.sequence, finger_seq_) &&
+        msg_.sequence != finger_seq_) {
       ++c_.stale_commands;
       return;
     }
@@ -204,7 +210,8 @@ class ArmServer {
   void Reply(const udp::Payload& payload) {
     const udp::Message reply{msg_.sequence, msg_.side, payload};
     const std::size_t size = udp::Encode(reply, tx_);
-    if (size == 0 || ::sendto(fd_, tx_.data(), size, 0, reinterpret_cast<const sockaddr*>(&from_), from_len_) < 0) {
+    if (size == 0 || ::sendto(fd_, tx_.data(), size, 0, reinterpret_cast<const sockaddr*>(&from_),
+                              from_len_) < 0) {
       ++c_.send_errors;
     }
   }
@@ -246,7 +253,8 @@ Options ParseOptions(int argc, char** argv, bool& help) {
   help = args.Flag("help");
   Options o;
   if (help) return o;
-  if (!args.positional().empty()) throw UsageError("unexpected argument '" + args.positional()[0] + "'");
+  if (!args.positional().empty())
+    throw UsageError("unexpected argument '" + args.positional()[0] + "'");
   const auto side = args.Value("side");
   if (!side) throw UsageError("--side left|right is required");
   if (*side == "left") {
@@ -261,8 +269,9 @@ Options ParseOptions(int argc, char** argv, bool& help) {
   o.port = *port;
   o.bind = args.Value("bind").value_or(o.bind);
   o.device = args.Value("device").value_or(std::filesystem::exists("config/devices/sim.yaml")
-                                                ? std::string("config/devices/sim.yaml")
-                                                : std::string(HAPTEL_SOURCE_DIR) + "/config/devices/sim.yaml");
+                                               ? std::string("config/devices/sim.yaml")
+                                               : std::string(HAPTEL_SOURCE_DIR) +
+                                                     "/config/devices/sim.yaml");
   return o;
 }
 
@@ -294,19 +303,21 @@ udp::UniqueFd Bind(const Options& o, std::string& bound) {
       error = "cannot read the bound address";
       continue;
     }
-    bound = addr.ss_family == AF_INET6 ? "[" + std::string(host) + "]:" + port : std::string(host) + ":" + port;
+    bound = addr.ss_family == AF_INET6 ? "[" + std::string(host) + "]:" + port
+                                       : std::string(host) + ":" + port;
     return fd;
   }
   throw SetupError("cannot bind " + o.bind + ":" + service + ": " + error);
 }
 
 std::string Summary(const ServerCounters& c) {
-  std::string s = "stopped: " + std::to_string(c.datagrams) + " datagrams, " + std::to_string(c.wrist_requests) +
-                  " wrist and " + std::to_string(c.glove_requests) + " glove requests, " +
-                  std::to_string(c.forces_applied) + " commands applied, " + std::to_string(c.stale_commands) +
-                  " stale, " + std::to_string(c.busy) + " busy, " + std::to_string(c.wrong_side) + " wrong side, " +
-                  std::to_string(c.unexpected) + " unexpected, " + std::to_string(c.watchdog_trips) +
-                  " watchdog trips; malformed:";
+  std::string s =
+      "stopped: " + std::to_string(c.datagrams) + " datagrams, " +
+      std::to_string(c.wrist_requests) + " wrist and " + std::to_string(c.glove_requests) +
+      " glove requests, " + std::to_string(c.forces_applied) + " commands applied, " +
+      std::to_string(c.stale_commands) + " stale, " + std::to_string(c.busy) + " busy, " +
+      std::to_string(c.wrong_side) + " wrong side, " + std::to_string(c.unexpected) +
+      " unexpected, " + std::to_string(c.watchdog_trips) + " watchdog trips; malformed:";
   uint64_t total = 0;
   for (int i = 1; i < udp::kDecodeStatuses; ++i) {
     if (c.malformed[i] == 0) continue;
@@ -336,7 +347,8 @@ int main(int argc, char** argv) {
     config = LoadDevice(options.device);
     if (!config.sides[Index(options.side)]) {
       throw ConfigError(options.device.string() + ": key 'sides': expected the " +
-                        (options.side == Side::kLeft ? "left" : "right") + " arm this server was asked to serve");
+                        (options.side == Side::kLeft ? "left" : "right") +
+                        " arm this server was asked to serve");
     }
     socket = Bind(options, bound);
   } catch (const UsageError& e) {
@@ -358,8 +370,8 @@ int main(int argc, char** argv) {
   try {
     SimDevice sim(config, OperatorConfig{});
     ArmServer server(sim, options.side, socket.get(), config.udp.lost_after_s);
-    std::printf("%s: serving %s arm of '%s' on %s\n", kProgram, options.side == Side::kLeft ? "left" : "right",
-                config.name.c_str(), bound.c_str());
+    std::printf("%s: serving %s arm of '%s' on %s\n", kProgram,
+                options.side == Side::kLeft ? "left" : "right", config.name.c_str(), bound.c_str());
     std::fflush(stdout);
     server.Serve();
     log::Info(Summary(server.counters()));

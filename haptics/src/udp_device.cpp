@@ -35,7 +35,9 @@ constexpr int kMaxDrain = 64;
 
 /// Counters have one writer (the side's thread): a relaxed load + store is
 /// enough and cheaper than a locked read-modify-write.
-void Bump(std::atomic<uint64_t>& c) { c.store(c.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed); }
+void Bump(std::atomic<uint64_t>& c) {
+  c.store(c.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
+}
 
 /// Opens a non-blocking UDP socket connected to host:port; throws naming `where`.
 udp::UniqueFd Connect(const std::string& host, int port, const std::string& where) {
@@ -45,11 +47,13 @@ udp::UniqueFd Connect(const std::string& host, int port, const std::string& wher
   addrinfo* found = nullptr;
   const std::string service = std::to_string(port);
   const int rc = getaddrinfo(host.c_str(), service.c_str(), &hints, &found);
-  if (rc != 0) throw std::runtime_error(where + ": cannot resolve host '" + host + "': " + gai_strerror(rc));
+  if (rc != 0)
+    throw std::runtime_error(where + ": cannot resolve host '" + host + "': " + gai_strerror(rc));
   const std::unique_ptr<addrinfo, decltype(&freeaddrinfo)> list(found, &freeaddrinfo);
   std::string error = "no address";
   for (const addrinfo* a = list.get(); a != nullptr; a = a->ai_next) {
-    udp::UniqueFd fd(::socket(a->ai_family, a->ai_socktype | SOCK_NONBLOCK | SOCK_CLOEXEC, a->ai_protocol));
+    udp::UniqueFd fd(
+        ::socket(a->ai_family, a->ai_socktype | SOCK_NONBLOCK | SOCK_CLOEXEC, a->ai_protocol));
     if (fd.get() < 0) {
       error = std::string("socket: ") + std::strerror(errno);
       continue;
@@ -98,9 +102,11 @@ UdpDevice::UdpDevice(const DeviceConfig& config)
     : lost_after_ns_(SToNs(config.udp.lost_after_s)),
       timeout_ns_(SToNs(config.udp.timeout_s)),
       retries_(config.udp.retries) {
-  const std::string file = config.file.empty() ? "device '" + config.name + "'" : config.file.string();
+  const std::string file =
+      config.file.empty() ? "device '" + config.name + "'" : config.file.string();
   if (!(config.udp.timeout_s > 0.0) || !(config.udp.lost_after_s > 0.0) || config.udp.retries < 0) {
-    throw std::runtime_error(file + ": key 'udp': expected timeout_s > 0, lost_after_s > 0, retries >= 0");
+    throw std::runtime_error(file +
+                             ": key 'udp': expected timeout_s > 0, lost_after_s > 0, retries >= 0");
   }
   description_.name = config.name;
   description_.has_side = config.sides;
@@ -112,9 +118,10 @@ UdpDevice::UdpDevice(const DeviceConfig& config)
   for (int i = 0; i < kSides; ++i) {
     if (!config.sides[i]) continue;
     const UdpArmEndpoint& arm = config.udp.arms[i];
-    const std::string where = file + ": key 'udp." + kSideNames[i] + "' (" + kSideNames[i] + " arm at " + arm.host +
-                              ":" + std::to_string(arm.port) + ")";
-    if (arm.port <= 0 || arm.port > 65535) throw std::runtime_error(where + ": expected a port in 1..65535");
+    const std::string where = file + ": key 'udp." + kSideNames[i] + "' (" + kSideNames[i] +
+                              " arm at " + arm.host + ":" + std::to_string(arm.port) + ")";
+    if (arm.port <= 0 || arm.port > 65535)
+      throw std::runtime_error(where + ": expected a port in 1..65535");
     sides_[i].socket = Connect(arm.host, arm.port, where);
     sides_[i].last_valid_ns = now;
   }
@@ -213,20 +220,22 @@ UdpDevice::Wait UdpDevice::Transact(Side side, SideState& s, std::size_t size, u
   return Wait::kTimeout;
 }
 
-UdpDevice::Wait UdpDevice::AwaitReply(Side side, SideState& s, uint32_t sequence, udp::MessageType type,
-                                      int64_t deadline_ns) {
+UdpDevice::Wait UdpDevice::AwaitReply(Side side, SideState& s, uint32_t sequence,
+                                      udp::MessageType type, int64_t deadline_ns) {
   for (;;) {
     const int64_t remaining = deadline_ns - MonotonicNs();
     if (remaining <= 0) return Wait::kTimeout;
     pollfd p{s.socket.get(), POLLIN, 0};
-    const timespec ts{static_cast<time_t>(remaining / 1'000'000'000), static_cast<long>(remaining % 1'000'000'000)};
+    const timespec ts{static_cast<time_t>(remaining / 1'000'000'000),
+                      static_cast<long>(remaining % 1'000'000'000)};
     const int ready = ::ppoll(&p, 1, &ts, nullptr);
     if (ready < 0 && errno != EINTR) return Wait::kTimeout;
     if (ready <= 0) continue;  // the deadline check above ends the wait
     for (;;) {
       const ssize_t n = ::recv(s.socket.get(), s.rx.data(), s.rx.size(), 0);
       if (n < 0) {
-        if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) Bump(s.counters.socket_errors);
+        if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)
+          Bump(s.counters.socket_errors);
         break;
       }
       if (Accept(side, s, static_cast<std::size_t>(n), sequence, type)) {
@@ -249,8 +258,10 @@ void UdpDevice::Drain(Side side, SideState& s) {
   }
 }
 
-bool UdpDevice::Accept(Side side, SideState& s, std::size_t size, uint32_t sequence, udp::MessageType type) {
-  const udp::DecodeStatus status = udp::Decode(std::span<const uint8_t>(s.rx.data(), size), s.reply);
+bool UdpDevice::Accept(Side side, SideState& s, std::size_t size, uint32_t sequence,
+                       udp::MessageType type) {
+  const udp::DecodeStatus status =
+      udp::Decode(std::span<const uint8_t>(s.rx.data(), size), s.reply);
   if (status != udp::DecodeStatus::kOk) {
     Bump(s.counters.malformed[static_cast<std::size_t>(status)]);
     return false;
@@ -321,6 +332,8 @@ UdpCounters UdpDevice::Counters() const {
   return total;
 }
 
-bool UdpDevice::Lost(Side side) const { return sides_[Index(side)].lost.load(std::memory_order_relaxed); }
+bool UdpDevice::Lost(Side side) const {
+  return sides_[Index(side)].lost.load(std::memory_order_relaxed);
+}
 
 }  // namespace haptel::haptics

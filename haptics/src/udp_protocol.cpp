@@ -65,7 +65,8 @@ class Reader {
   uint8_t U8() { return in_[pos_++]; }
   uint16_t U16() {
     uint16_t v = 0;
-    for (int i = 0; i < 2; ++i) v = static_cast<uint16_t>(v | (static_cast<uint16_t>(in_[pos_++]) << (8 * i)));
+    for (int i = 0; i < 2; ++i)
+      v = static_cast<uint16_t>(v | (static_cast<uint16_t>(in_[pos_++]) << (8 * i)));
     return v;
   }
   uint32_t U32() {
@@ -125,15 +126,20 @@ bool KnownErrorCode(ErrorCode code) {
 bool Valid(const Payload& payload) {
   struct {
     bool operator()(const WristRequest& p) const {
-      return AllFinite(p.wrist_force) && AllFinite(p.finger_forces) && AllNonNegative(p.finger_forces);
+      return AllFinite(p.wrist_force) && AllFinite(p.finger_forces) &&
+             AllNonNegative(p.finger_forces);
     }
     bool operator()(const WristReply& p) const {
       return AllFinite(p.position) && AllFinite(p.orientation) && UnitQuaternion(p.orientation);
     }
     bool operator()(const GloveRequest&) const { return true; }
-    bool operator()(const GloveReply& p) const { return AllFinite(p.sensors) && AllFinite(p.grasp); }
+    bool operator()(const GloveReply& p) const {
+      return AllFinite(p.sensors) && AllFinite(p.grasp);
+    }
     bool operator()(const WristForce& p) const { return AllFinite(p.command); }
-    bool operator()(const FingerForce& p) const { return AllFinite(p.command) && AllNonNegative(p.command); }
+    bool operator()(const FingerForce& p) const {
+      return AllFinite(p.command) && AllNonNegative(p.command);
+    }
     bool operator()(const ErrorReply& p) const { return KnownErrorCode(p.code); }
   } check;
   return std::visit(check, payload);
@@ -241,52 +247,80 @@ uint32_t DatagramCrc(std::span<const uint8_t> datagram) {
 
 std::string_view ToString(DecodeStatus status) {
   switch (status) {
-    case DecodeStatus::kOk: return "ok";
-    case DecodeStatus::kShort: return "short";
-    case DecodeStatus::kBadMagic: return "bad_magic";
-    case DecodeStatus::kBadVersion: return "bad_version";
-    case DecodeStatus::kBadLength: return "bad_length";
-    case DecodeStatus::kBadChecksum: return "bad_checksum";
-    case DecodeStatus::kUnknownType: return "unknown_type";
-    case DecodeStatus::kBadHeader: return "bad_header";
-    case DecodeStatus::kNonFinite: return "non_finite";
-    case DecodeStatus::kBadValue: return "bad_value";
+    case DecodeStatus::kOk:
+      return "ok";
+    case DecodeStatus::kShort:
+      return "short";
+    case DecodeStatus::kBadMagic:
+      return "bad_magic";
+    case DecodeStatus::kBadVersion:
+      return "bad_version";
+    case DecodeStatus::kBadLength:
+      return "bad_length";
+    case DecodeStatus::kBadChecksum:
+      return "bad_checksum";
+    case DecodeStatus::kUnknownType:
+      return "unknown_type";
+    case DecodeStatus::kBadHeader:
+      return "bad_header";
+    case DecodeStatus::kNonFinite:
+      return "non_finite";
+    case DecodeStatus::kBadValue:
+      return "bad_value";
   }
   return "?";
 }
 
 std::string_view ToString(MessageType type) {
   switch (type) {
-    case MessageType::kWristRequest: return "WRIST_REQUEST";
-    case MessageType::kWristReply: return "WRIST_REPLY";
-    case MessageType::kGloveRequest: return "GLOVE_REQUEST";
-    case MessageType::kGloveReply: return "GLOVE_REPLY";
-    case MessageType::kWristForce: return "WRIST_FORCE";
-    case MessageType::kFingerForce: return "FINGER_FORCE";
-    case MessageType::kError: return "ERROR";
+    case MessageType::kWristRequest:
+      return "WRIST_REQUEST";
+    case MessageType::kWristReply:
+      return "WRIST_REPLY";
+    case MessageType::kGloveRequest:
+      return "GLOVE_REQUEST";
+    case MessageType::kGloveReply:
+      return "GLOVE_REPLY";
+    case MessageType::kWristForce:
+      return "WRIST_FORCE";
+    case MessageType::kFingerForce:
+      return "FINGER_FORCE";
+    case MessageType::kError:
+      return "ERROR";
   }
   return "?";
 }
 
 std::string_view ToString(ErrorCode code) {
   switch (code) {
-    case ErrorCode::kBusy: return "busy";
-    case ErrorCode::kWrongSide: return "wrong_side";
-    case ErrorCode::kDeviceLost: return "device_lost";
-    case ErrorCode::kUnsupported: return "unsupported";
+    case ErrorCode::kBusy:
+      return "busy";
+    case ErrorCode::kWrongSide:
+      return "wrong_side";
+    case ErrorCode::kDeviceLost:
+      return "device_lost";
+    case ErrorCode::kUnsupported:
+      return "unsupported";
   }
   return "?";
 }
 
 std::size_t PayloadSize(MessageType type) {
   switch (type) {
-    case MessageType::kWristRequest: return kWristRequestSize;
-    case MessageType::kWristReply: return kWristReplySize;
-    case MessageType::kGloveRequest: return kGloveRequestSize;
-    case MessageType::kGloveReply: return kGloveReplySize;
-    case MessageType::kWristForce: return kWristForceSize;
-    case MessageType::kFingerForce: return kFingerForceSize;
-    case MessageType::kError: return kErrorReplySize;
+    case MessageType::kWristRequest:
+      return kWristRequestSize;
+    case MessageType::kWristReply:
+      return kWristReplySize;
+    case MessageType::kGloveRequest:
+      return kGloveRequestSize;
+    case MessageType::kGloveReply:
+      return kGloveReplySize;
+    case MessageType::kWristForce:
+      return kWristForceSize;
+    case MessageType::kFingerForce:
+      return kFingerForceSize;
+    case MessageType::kError:
+      return kErrorReplySize;
   }
   return 0;
 }
@@ -311,7 +345,7 @@ std::size_t Encode(const Message& message, std::span<uint8_t> out) {
   w.U32(static_cast<uint32_t>(payload_size));
   w.U8(static_cast<uint8_t>(Index(message.side)));
   for (int i = 0; i < 3; ++i) w.U8(0);  // reserved
-  w.U32(0);                              // checksum, filled in below
+  w.U32(0);                             // checksum, filled in below
   WritePayload(w, message.payload);
   const std::span<uint8_t> datagram = out.first(total);
   const uint32_t crc = DatagramCrc(datagram);
@@ -337,7 +371,8 @@ DecodeStatus Decode(std::span<const uint8_t> datagram, Message& out) {
   if (datagram.size() < kHeaderSize + length) return DecodeStatus::kShort;
   if (datagram.size() > kHeaderSize + length) return DecodeStatus::kBadLength;
   if (DatagramCrc(datagram) != checksum) return DecodeStatus::kBadChecksum;
-  if (side > 1 || reserved[0] != 0 || reserved[1] != 0 || reserved[2] != 0) return DecodeStatus::kBadHeader;
+  if (side > 1 || reserved[0] != 0 || reserved[1] != 0 || reserved[2] != 0)
+    return DecodeStatus::kBadHeader;
   const auto type = static_cast<MessageType>(raw_type);
   if (raw_type < 1 || raw_type > std::variant_size_v<Payload>) {
     out.sequence = sequence;  // the header is sound: a server may answer kUnsupported

@@ -53,11 +53,11 @@ udp::UniqueFd BoundLoopback(int& port) {
 class FakeArm {
  public:
   enum class Mode {
-    kNormal,            ///< answer every request correctly
-    kSilent,            ///< answer nothing
-    kStaleFirst,        ///< before the answer: a reply to the previous and one to the next sequence
-    kGarbageFirst,      ///< before the answer: short, bad-magic, bad-version and bad-checksum datagrams
-    kDuplicate,         ///< the answer, twice
+    kNormal,        ///< answer every request correctly
+    kSilent,        ///< answer nothing
+    kStaleFirst,    ///< before the answer: a reply to the previous and one to the next sequence
+    kGarbageFirst,  ///< before the answer: short, bad-magic, bad-version and bad-checksum datagrams
+    kDuplicate,     ///< the answer, twice
     kWrongTypeFirst,    ///< before the answer: a reply of the other type with the right sequence
     kErrorBusy,         ///< ERROR busy
     kErrorDeviceLost,   ///< ERROR device_lost
@@ -96,11 +96,12 @@ class FakeArm {
       if (::poll(&p, 1, 10) <= 0) continue;
       sockaddr_storage from{};
       socklen_t from_len = sizeof from;
-      const ssize_t n =
-          ::recvfrom(socket_.get(), rx.data(), rx.size(), 0, reinterpret_cast<sockaddr*>(&from), &from_len);
+      const ssize_t n = ::recvfrom(socket_.get(), rx.data(), rx.size(), 0,
+                                   reinterpret_cast<sockaddr*>(&from), &from_len);
       if (n < 0) continue;
       udp::Message m;
-      if (udp::Decode(std::span<const uint8_t>(rx.data(), static_cast<std::size_t>(n)), m) != udp::DecodeStatus::kOk) {
+      if (udp::Decode(std::span<const uint8_t>(rx.data(), static_cast<std::size_t>(n)), m) !=
+          udp::DecodeStatus::kOk) {
         continue;
       }
       Handle(m, from, from_len);
@@ -113,7 +114,8 @@ class FakeArm {
     SendBytes(std::span<const uint8_t>(b.data(), n), to, len);
   }
   void SendBytes(std::span<const uint8_t> bytes, const sockaddr_storage& to, socklen_t len) {
-    ::sendto(socket_.get(), bytes.data(), bytes.size(), 0, reinterpret_cast<const sockaddr*>(&to), len);
+    ::sendto(socket_.get(), bytes.data(), bytes.size(), 0, reinterpret_cast<const sockaddr*>(&to),
+             len);
   }
 
   void Handle(const udp::Message& m, const sockaddr_storage& from, socklen_t len) {
@@ -126,8 +128,10 @@ class FakeArm {
         ++seen_.wrist_requests;
         seen_.last_request = *r;
         // A pose that changes every request and names the side: x counts, y is the side.
-        answer = udp::WristReply{MonotonicNs(), {static_cast<double>(seen_.wrist_requests), 10.0 * Index(side_), -1.0},
-                                 {1, 0, 0, 0}};
+        answer =
+            udp::WristReply{MonotonicNs(),
+                            {static_cast<double>(seen_.wrist_requests), 10.0 * Index(side_), -1.0},
+                            {1, 0, 0, 0}};
         wrong_type = udp::GloveReply{};
       } else if (std::holds_alternative<udp::GloveRequest>(m.payload)) {
         ++seen_.glove_requests;
@@ -189,7 +193,8 @@ class FakeArm {
         Send(udp::Message{m.sequence, m.side, udp::ErrorReply{udp::ErrorCode::kBusy}}, from, len);
         break;
       case Mode::kErrorDeviceLost:
-        Send(udp::Message{m.sequence, m.side, udp::ErrorReply{udp::ErrorCode::kDeviceLost}}, from, len);
+        Send(udp::Message{m.sequence, m.side, udp::ErrorReply{udp::ErrorCode::kDeviceLost}}, from,
+             len);
         break;
       case Mode::kDropFirstAttempt:
         if (m.sequence == dropped_) {
@@ -244,7 +249,8 @@ TEST_CASE("udp device: description comes from the config", "[udp][device]") {
   CHECK(device.description().finger_force_limit == 4.0);
   CHECK_FALSE(device.description().has_glove);
   WristRaw raw;
-  CHECK(device.ReadWrist(Side::kLeft, MonotonicNs(), raw) == DeviceStatus::kLost);  // not configured
+  CHECK(device.ReadWrist(Side::kLeft, MonotonicNs(), raw) ==
+        DeviceStatus::kLost);  // not configured
 }
 
 TEST_CASE("udp device: set-up errors name the key and host:port", "[udp][device]") {
@@ -262,7 +268,8 @@ TEST_CASE("udp device: set-up errors name the key and host:port", "[udp][device]
   }
   DeviceConfig no_port = LoopbackConfig(4000, 0);
   no_port.sides = {true, true};  // the right arm has no port
-  CHECK_THROWS_WITH(UdpDevice(no_port), Catch::Contains("udp.right") && Catch::Contains("127.0.0.1:0"));
+  CHECK_THROWS_WITH(UdpDevice(no_port),
+                    Catch::Contains("udp.right") && Catch::Contains("127.0.0.1:0"));
 }
 
 TEST_CASE("udp device: reads and commands go over the wire", "[udp][device]") {
@@ -307,15 +314,17 @@ TEST_CASE("udp device: invalid commands are sent as zero and counted", "[udp][de
   UdpDevice device(LoopbackConfig(arm.port(), 0));
   const double nan = std::numeric_limits<double>::quiet_NaN();
   device.WriteWristForce(Side::kLeft, {1.0, nan, 1.0});
-  device.WriteFingerForces(Side::kLeft, {1.0, -2.0, std::numeric_limits<double>::infinity(), 1.0, 1.0});
+  device.WriteFingerForces(Side::kLeft,
+                           {1.0, -2.0, std::numeric_limits<double>::infinity(), 1.0, 1.0});
   REQUIRE(test::WaitFor([&] { return arm.seen().finger_forces == 1; }, 5.0));
   CHECK(arm.seen().last_wrist_force == Vec3d{0, 0, 0});
   CHECK(arm.seen().last_finger_force == std::array<double, kFingers>{1, 0, 0, 1, 1});
   CHECK(device.Counters(Side::kLeft).invalid_commands == 2);
 }
 
-TEST_CASE("udp device: stale, out-of-order, malformed and mistyped replies are rejected and counted",
-          "[udp][device]") {
+TEST_CASE(
+    "udp device: stale, out-of-order, malformed and mistyped replies are rejected and counted",
+    "[udp][device]") {
   FakeArm arm(Side::kLeft);
   UdpDevice device(LoopbackConfig(arm.port(), 0));
   WristRaw raw;
@@ -367,15 +376,16 @@ TEST_CASE("udp device: a reply from the other arm's server is not trusted", "[ud
     std::array<uint8_t, 512> rx{};
     sockaddr_storage from{};
     socklen_t len = sizeof from;
-    const ssize_t n = ::recvfrom(forger.get(), rx.data(), rx.size(), 0, reinterpret_cast<sockaddr*>(&from), &len);
+    const ssize_t n =
+        ::recvfrom(forger.get(), rx.data(), rx.size(), 0, reinterpret_cast<sockaddr*>(&from), &len);
     udp::Message m;
-    if (n <= 0 || udp::Decode(std::span<const uint8_t>(rx.data(), static_cast<std::size_t>(n)), m) !=
-                      udp::DecodeStatus::kOk) {
+    if (n <= 0 || udp::Decode(std::span<const uint8_t>(rx.data(), static_cast<std::size_t>(n)),
+                              m) != udp::DecodeStatus::kOk) {
       return;
     }
     udp::Buffer b{};
-    const std::size_t size =
-        udp::Encode(udp::Message{m.sequence, Side::kRight, udp::WristReply{0, {1, 2, 3}, {1, 0, 0, 0}}}, b);
+    const std::size_t size = udp::Encode(
+        udp::Message{m.sequence, Side::kRight, udp::WristReply{0, {1, 2, 3}, {1, 0, 0, 0}}}, b);
     ::sendto(forger.get(), b.data(), size, 0, reinterpret_cast<const sockaddr*>(&from), len);
   });
   WristRaw raw;
@@ -416,7 +426,8 @@ TEST_CASE("udp device: timeouts and retries are counted", "[udp][device]") {
   }
 }
 
-TEST_CASE("udp device: silence turns a side lost after lost_after_s; answers bring it back", "[udp][device]") {
+TEST_CASE("udp device: silence turns a side lost after lost_after_s; answers bring it back",
+          "[udp][device]") {
   FakeArm arm(Side::kLeft);
   UdpDevice device(LoopbackConfig(arm.port(), 0, 0.02, 1, 0.3));
   WristRaw raw;
@@ -426,8 +437,9 @@ TEST_CASE("udp device: silence turns a side lost after lost_after_s; answers bri
   const DeviceStatus first = device.ReadWrist(Side::kLeft, 0, raw);
   CHECK(first != DeviceStatus::kOk);
   DeviceStatus status = first;
-  REQUIRE(test::WaitFor([&] { return (status = device.ReadWrist(Side::kLeft, 0, raw)) == DeviceStatus::kLost; },
-                        10.0));
+  REQUIRE(test::WaitFor(
+      [&] { return (status = device.ReadWrist(Side::kLeft, 0, raw)) == DeviceStatus::kLost; },
+      10.0));
   CHECK(device.Lost(Side::kLeft));
   CHECK(device.Counters(Side::kLeft).lost_transitions == 1);
   CHECK(device.WriteWristForce(Side::kLeft, {0, 0, 0}) == DeviceStatus::kLost);
@@ -448,6 +460,25 @@ TEST_CASE("udp device: silence turns a side lost after lost_after_s; answers bri
   CHECK(device.WriteWristForce(Side::kLeft, {0, 0, 0}) == DeviceStatus::kOk);
 }
 
+TEST_CASE("udp device: no server on the port: no data, then lost, errors counted",
+          "[udp][device]") {
+  int port = 0;
+  {
+    udp::UniqueFd closed = BoundLoopback(port);  // a port nobody listens on once this closes
+  }
+  UdpDevice device(LoopbackConfig(port, 0, 0.01, 0, 0.1));
+  WristRaw raw;
+  DeviceStatus status = DeviceStatus::kOk;
+  REQUIRE(test::WaitFor(
+      [&] { return (status = device.ReadWrist(Side::kLeft, 0, raw)) == DeviceStatus::kLost; },
+      10.0));
+  const UdpCounters c = device.Counters(Side::kLeft);
+  CHECK(c.replies == 0);
+  CHECK(c.unanswered == c.requests);
+  CHECK(c.socket_errors > 0);  // ICMP port unreachable shows as ECONNREFUSED on a connected socket
+  CHECK(c.lost_transitions == 1);
+}
+
 TEST_CASE("udp device: ERROR device_lost makes the side lost at once", "[udp][device]") {
   FakeArm arm(Side::kLeft);
   UdpDevice device(LoopbackConfig(arm.port(), 0, 0.25, 1, 60.0));
@@ -461,7 +492,8 @@ TEST_CASE("udp device: ERROR device_lost makes the side lost at once", "[udp][de
   CHECK(device.Counters(Side::kLeft).recoveries == 1);
 }
 
-TEST_CASE("udp device: the servo calls allocate nothing, on good and bad paths", "[udp][device][alloc]") {
+TEST_CASE("udp device: the servo calls allocate nothing, on good and bad paths",
+          "[udp][device][alloc]") {
   FakeArm arm(Side::kLeft);
   UdpDevice device(LoopbackConfig(arm.port(), 0, 0.02, 1, 0.05));
   WristRaw raw;
@@ -475,9 +507,10 @@ TEST_CASE("udp device: the servo calls allocate nothing, on good and bad paths",
     }
   };
   cycles(10);  // warm-up
-  for (const auto mode : {FakeArm::Mode::kNormal, FakeArm::Mode::kStaleFirst, FakeArm::Mode::kGarbageFirst,
-                          FakeArm::Mode::kDuplicate, FakeArm::Mode::kErrorBusy, FakeArm::Mode::kSilent,
-                          FakeArm::Mode::kNormal}) {
+  for (const auto mode :
+       {FakeArm::Mode::kNormal, FakeArm::Mode::kStaleFirst, FakeArm::Mode::kGarbageFirst,
+        FakeArm::Mode::kDuplicate, FakeArm::Mode::kErrorBusy, FakeArm::Mode::kSilent,
+        FakeArm::Mode::kNormal}) {
     arm.set_mode(mode);
     const uint64_t before = test::ThreadAllocations();
     cycles(mode == FakeArm::Mode::kSilent ? 5 : 200);
@@ -525,18 +558,20 @@ struct Server {
   test::Child child;
   int port = 0;
   Server(const std::string& side, const std::string& device)
-      : child({(test::BinDir() / "haptel-device-server").string(), "--device", device, "--side", side, "--port",
-               "0"}) {
+      : child({(test::BinDir() / "haptel-device-server").string(), "--device", device, "--side",
+               side, "--port", "0"}) {
     const bool ready = test::WaitFor(
         [&] {
           child.Pump();
-          return child.out().find('\n') != std::string::npos || child.Wait(0) != test::Child::kRunning;
+          return child.out().find('\n') != std::string::npos ||
+                 child.Wait(0) != test::Child::kRunning;
         },
         20.0);
     REQUIRE(ready);
     const std::string line = child.out().substr(0, child.out().find('\n'));
     INFO(line << child.err());
-    REQUIRE(line.find("haptel-device-server: serving " + side + " arm of 'sim' on 127.0.0.1:") == 0);
+    REQUIRE(line.find("haptel-device-server: serving " + side + " arm of 'sim' on 127.0.0.1:") ==
+            0);
     port = std::stoi(line.substr(line.rfind(':') + 1));
     REQUIRE(port > 0);
   }
@@ -591,7 +626,8 @@ TEST_CASE("udp device against two haptel-device-server processes", "[udp][server
       if (device.ReadWrist(side, MonotonicNs(), r) != DeviceStatus::kOk) continue;
       if (ok[s]++ == 0) start[s] = r.position;
       last[s] = r.position;
-      if (side == Side::kLeft && last[s][0] - start[s][0] > 5.0) moved = true;  // 5 raw units ≈ 5 cm
+      if (side == Side::kLeft && last[s][0] - start[s][0] > 5.0)
+        moved = true;  // 5 raw units ≈ 5 cm
       device.WriteWristForce(side, side == Side::kLeft ? Vec3d{3.0, 0, 0} : Vec3d{0, 0, 0});
       std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
@@ -622,7 +658,9 @@ TEST_CASE("udp device against two haptel-device-server processes", "[udp][server
     CHECK(swapped.ReadWrist(Side::kLeft, MonotonicNs(), raw) == DeviceStatus::kNoData);
     CHECK(swapped.Counters().errors[Idx(udp::ErrorCode::kWrongSide)] == 1);
   }
+  bool sent_garbage = false;
   SECTION("garbage does not hurt the server") {
+    sent_garbage = true;
     udp::UniqueFd raw_socket(::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0));
     sockaddr_in to{};
     to.sin_family = AF_INET;
@@ -633,7 +671,8 @@ TEST_CASE("udp device against two haptel-device-server processes", "[udp][server
     for (int i = 0; i < 500; ++i) {
       for (auto& b : junk) b = static_cast<uint8_t>(rng());
       if (i % 2 == 0) std::copy(udp::kMagic.begin(), udp::kMagic.end(), junk.begin());
-      ::sendto(raw_socket.get(), junk.data(), rng() % junk.size(), 0, reinterpret_cast<sockaddr*>(&to), sizeof to);
+      ::sendto(raw_socket.get(), junk.data(), rng() % junk.size(), 0,
+               reinterpret_cast<sockaddr*>(&to), sizeof to);
     }
     REQUIRE(device.ReadWrist(Side::kLeft, MonotonicNs(), raw) == DeviceStatus::kOk);
     CHECK(left.child.Wait(0) == test::Child::kRunning);
@@ -645,9 +684,34 @@ TEST_CASE("udp device against two haptel-device-server processes", "[udp][server
   CHECK(left.child.Wait(10.0) == 0);
   CHECK(right.child.Wait(10.0) == 0);
   CHECK(left.child.err().find("stopped:") != std::string::npos);
+  if (sent_garbage) {
+    CHECK(left.child.err().find("bad_magic=") != std::string::npos);
+    CHECK(left.child.err().find("short=") != std::string::npos);
+  }
 }
 
-TEST_CASE("haptel-device-server: bad arguments and configuration exit 2 with one line", "[udp][server]") {
+TEST_CASE("haptel-device-server: a silent client trips the watchdog and frees the arm",
+          "[udp][server]") {
+  Server left("left", DeviceFileWithWatchdog(0.05));
+  WristRaw raw;
+  {
+    UdpDevice first(LoopbackConfig(left.port, 0, 0.25, 2, 2.0));
+    REQUIRE(first.ReadWrist(Side::kLeft, MonotonicNs(), raw) == DeviceStatus::kOk);
+    first.WriteWristForce(Side::kLeft, {2.0, 0, 0});
+  }
+  // Once the first client has been quiet for the watchdog time, another takes over.
+  UdpDevice second(LoopbackConfig(left.port, 0, 0.25, 0, 60.0));
+  REQUIRE(test::WaitFor(
+      [&] { return second.ReadWrist(Side::kLeft, MonotonicNs(), raw) == DeviceStatus::kOk; },
+      10.0));
+  ::kill(left.child.pid(), SIGTERM);
+  REQUIRE(left.child.Wait(10.0) == 0);
+  INFO(left.child.err());
+  CHECK(left.child.err().find(" 0 watchdog trips") == std::string::npos);
+}
+
+TEST_CASE("haptel-device-server: bad arguments and configuration exit 2 with one line",
+          "[udp][server]") {
   const std::string bin = (test::BinDir() / "haptel-device-server").string();
   const std::vector<std::vector<std::string>> cases = {
       {bin, "--side", "middle", "--port", "0"},

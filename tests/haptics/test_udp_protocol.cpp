@@ -160,12 +160,14 @@ TEST_CASE("encode refuses small buffers and values the peer would reject", "[udp
 }
 
 TEST_CASE("decode rejects each kind of bad datagram with its status", "[udp][protocol]") {
-  const std::vector<uint8_t> good = Encoded(Message{42, Side::kLeft, WristRequest{{1, 2, 3}, {1, 1, 1, 1, 1}}});
+  const std::vector<uint8_t> good =
+      Encoded(Message{42, Side::kLeft, WristRequest{{1, 2, 3}, {1, 1, 1, 1, 1}}});
   REQUIRE(DecodeBytes(good) == DecodeStatus::kOk);
 
   SECTION("short") {
     CHECK(DecodeBytes({}) == DecodeStatus::kShort);
-    CHECK(DecodeBytes(std::vector<uint8_t>(good.begin(), good.begin() + kHeaderSize - 1)) == DecodeStatus::kShort);
+    CHECK(DecodeBytes(std::vector<uint8_t>(good.begin(), good.begin() + kHeaderSize - 1)) ==
+          DecodeStatus::kShort);
     CHECK(DecodeBytes(std::vector<uint8_t>(good.begin(), good.end() - 1)) == DecodeStatus::kShort);
   }
   SECTION("bad magic") {
@@ -226,12 +228,14 @@ TEST_CASE("decode rejects each kind of bad datagram with its status", "[udp][pro
     CHECK(DecodeBytes(reserved) == DecodeStatus::kBadHeader);
   }
   SECTION("non-finite values in any payload double") {
-    for (const double bad : {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(),
-                             -std::numeric_limits<double>::infinity(), std::numeric_limits<double>::signaling_NaN()}) {
+    for (const double bad :
+         {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(),
+          -std::numeric_limits<double>::infinity(), std::numeric_limits<double>::signaling_NaN()}) {
       for (const Message& m : Samples()) {
         const std::vector<uint8_t> base = Encoded(m);
         // Doubles start after the 8-byte device time in replies, at once otherwise.
-        const bool has_time = m.type() == MessageType::kWristReply || m.type() == MessageType::kGloveReply;
+        const bool has_time =
+            m.type() == MessageType::kWristReply || m.type() == MessageType::kGloveReply;
         const std::size_t first = kHeaderSize + (has_time ? 8 : 0);
         if (m.type() == MessageType::kGloveRequest || m.type() == MessageType::kError) continue;
         for (std::size_t at = first; at + 8 <= base.size(); at += 8) {
@@ -282,7 +286,8 @@ TEST_CASE("sequence numbers compare in serial-number order", "[udp][protocol]") 
   CHECK_FALSE(SequenceAfter(0xFFFFFFF0U, 3));
 }
 
-TEST_CASE("fuzz: random datagrams never decode by accident and never crash", "[udp][protocol][fuzz]") {
+TEST_CASE("fuzz: random datagrams never decode by accident and never crash",
+          "[udp][protocol][fuzz]") {
   std::mt19937_64 rng(20240601);
   std::uniform_int_distribution<int> byte(0, 255);
   std::uniform_int_distribution<std::size_t> length(0, 2 * kMaxMessageSize);

@@ -54,20 +54,22 @@ class UniqueFd {
 
 /// A snapshot of one side's (or both sides') counters.
 struct UdpCounters {
-  uint64_t requests = 0;     ///< ReadWrist/ReadGlove calls that sent a request
-  uint64_t replies = 0;      ///< valid replies accepted
-  uint64_t timeouts = 0;     ///< attempts that ended with no valid reply by their deadline
-  uint64_t retries = 0;      ///< extra attempts sent after a timeout
-  uint64_t unanswered = 0;   ///< requests that got no valid reply after every attempt
-  uint64_t stale = 0;        ///< well-formed replies to another sequence number (late, duplicate, out of order)
-  uint64_t unexpected = 0;   ///< well-formed, right sequence, wrong type or side
+  uint64_t requests = 0;    ///< ReadWrist/ReadGlove calls that sent a request
+  uint64_t replies = 0;     ///< valid replies accepted
+  uint64_t timeouts = 0;    ///< attempts that ended with no valid reply by their deadline
+  uint64_t retries = 0;     ///< extra attempts sent after a timeout
+  uint64_t unanswered = 0;  ///< requests that got no valid reply after every attempt
+  /// Well-formed replies to another sequence number (late, duplicate, out of order).
+  uint64_t stale = 0;
+  uint64_t unexpected = 0;  ///< well-formed, right sequence, wrong type or side
   /// Datagrams rejected by Decode, per udp::DecodeStatus (index kOk unused).
   std::array<uint64_t, udp::kDecodeStatuses> malformed{};
   /// ERROR replies to the outstanding request, per udp::ErrorCode.
   std::array<uint64_t, udp::kErrorCodes> errors{};
   uint64_t forces_sent = 0;       ///< one-way WRIST_FORCE / FINGER_FORCE datagrams sent
   uint64_t invalid_commands = 0;  ///< non-finite / negative commands replaced by zero
-  uint64_t socket_errors = 0;     ///< send()/recv() failures (e.g. ECONNREFUSED: no server on the port)
+  /// send()/recv() failures (e.g. ECONNREFUSED: no server listens on the port).
+  uint64_t socket_errors = 0;
   uint64_t lost_transitions = 0;  ///< ok → lost
   uint64_t recoveries = 0;        ///< lost → ok
 
@@ -103,7 +105,8 @@ class UdpDevice final : public Device {
  private:
   struct AtomicCounters {
     std::atomic<uint64_t> requests{0}, replies{0}, timeouts{0}, retries{0}, unanswered{0}, stale{0},
-        unexpected{0}, forces_sent{0}, invalid_commands{0}, socket_errors{0}, lost_transitions{0}, recoveries{0};
+        unexpected{0}, forces_sent{0}, invalid_commands{0}, socket_errors{0}, lost_transitions{0},
+        recoveries{0};
     std::array<std::atomic<uint64_t>, udp::kDecodeStatuses> malformed{};
     std::array<std::atomic<uint64_t>, udp::kErrorCodes> errors{};
   };
@@ -116,7 +119,8 @@ class UdpDevice final : public Device {
     Vec3d wrist_command{};
     std::array<double, kFingers> finger_command{};
     udp::Buffer tx{};
-    std::array<uint8_t, udp::kMaxMessageSize + 1> rx{};  ///< one spare byte: oversize datagrams show
+    std::array<uint8_t, udp::kMaxMessageSize + 1>
+        rx{};  ///< one spare byte: oversize datagrams show
     udp::Message reply;
     AtomicCounters counters;
   };
@@ -124,15 +128,19 @@ class UdpDevice final : public Device {
 
   /// Sends the request in `s.tx` (`size` bytes) with retries and waits for a
   /// reply of `type` to `sequence`; on kReply it is in `s.reply`.
-  Wait Transact(Side side, SideState& s, std::size_t size, uint32_t sequence, udp::MessageType type);
-  Wait AwaitReply(Side side, SideState& s, uint32_t sequence, udp::MessageType type, int64_t deadline_ns);
+  Wait Transact(Side side, SideState& s, std::size_t size, uint32_t sequence,
+                udp::MessageType type);
+  Wait AwaitReply(Side side, SideState& s, uint32_t sequence, udp::MessageType type,
+                  int64_t deadline_ns);
   /// Reads and classifies whatever is queued (late replies) without waiting.
   void Drain(Side side, SideState& s);
   /// Classifies one received datagram; true if it is the awaited reply or an ERROR to it.
   bool Accept(Side side, SideState& s, std::size_t size, uint32_t sequence, udp::MessageType type);
   DeviceStatus Outcome(SideState& s, Wait wait);
   /// The next sequence number of a side; 0 is never sent (it means "nothing outstanding").
-  static uint32_t NextSequence(SideState& s) { return ++s.sequence != 0 ? s.sequence : ++s.sequence; }
+  static uint32_t NextSequence(SideState& s) {
+    return ++s.sequence != 0 ? s.sequence : ++s.sequence;
+  }
   void SendOneWay(SideState& s, const udp::Message& message);
 
   DeviceDescription description_;

@@ -91,7 +91,8 @@ struct ErrorReply {
 };
 
 /// Alternative order matches MessageType − 1.
-using Payload = std::variant<WristRequest, WristReply, GloveRequest, GloveReply, WristForce, FingerForce, ErrorReply>;
+using Payload = std::variant<WristRequest, WristReply, GloveRequest, GloveReply, WristForce,
+                             FingerForce, ErrorReply>;
 
 struct Message {
   uint32_t sequence = 0;
@@ -135,6 +136,8 @@ DecodeStatus Decode(std::span<const uint8_t> datagram, Message& out);
 uint32_t Crc32(std::span<const uint8_t> bytes, uint32_t crc = 0);
 
 /// Serial-number order (RFC 1982): true when `a` is after `b`, modulo 2³².
-constexpr bool SequenceAfter(uint32_t a, uint32_t b) { return a != b && static_cast<int32_t>(a - b) > 0; }
+constexpr bool SequenceAfter(uint32_t a, uint32_t b) {
+  return a != b && static_cast<int32_t>(a - b) > 0;
+}
 
 }  // namespace haptel::haptics::udp
