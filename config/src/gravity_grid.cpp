@@ -21,7 +21,8 @@ constexpr double kCoordinateLimit = 1000.0;  // m: anything beyond is a typo
 std::string Where(const std::filesystem::path& file, const YAML::Node& node) {
   const YAML::Mark mark = node.Mark();
   if (mark.is_null()) return file.string();
-  return file.string() + ":" + std::to_string(mark.line + 1) + ":" + std::to_string(mark.column + 1);
+  return file.string() + ":" + std::to_string(mark.line + 1) + ":" +
+         std::to_string(mark.column + 1);
 }
 
 std::string CountsText(const std::array<int, 3>& c) {
@@ -38,8 +39,10 @@ std::string GravityGridProblem(const GravityGridData& grid) {
              " vertices on every axis, got " + CountsText(grid.counts);
     }
     product *= grid.counts[a];
-    if (!std::isfinite(grid.min[a]) || !std::isfinite(grid.max[a]) || !(grid.min[a] < grid.max[a])) {
-      return "min/max: expected finite corners with min < max on every axis (axis " + std::to_string(a) + ")";
+    if (!std::isfinite(grid.min[a]) || !std::isfinite(grid.max[a]) ||
+        !(grid.min[a] < grid.max[a])) {
+      return "min/max: expected finite corners with min < max on every axis (axis " +
+             std::to_string(a) + ")";
     }
   }
   if (product > kGravityGridMaxVertices) {
@@ -47,11 +50,12 @@ std::string GravityGridProblem(const GravityGridData& grid) {
            std::to_string(kGravityGridMaxVertices);
   }
   if (grid.force_z.size() != static_cast<std::size_t>(product)) {
-    return "force_z: expected " + std::to_string(product) + " forces (" + CountsText(grid.counts) + "), got " +
-           std::to_string(grid.force_z.size());
+    return "force_z: expected " + std::to_string(product) + " forces (" + CountsText(grid.counts) +
+           "), got " + std::to_string(grid.force_z.size());
   }
   for (std::size_t n = 0; n < grid.force_z.size(); ++n) {
-    if (!std::isfinite(grid.force_z[n])) return "force_z[" + std::to_string(n) + "]: expected a finite number";
+    if (!std::isfinite(grid.force_z[n]))
+      return "force_z[" + std::to_string(n) + "]: expected a finite number";
   }
   return {};
 }
@@ -69,11 +73,13 @@ GravityGridData LoadGravityGrid(const std::filesystem::path& file) {
   g.min = root.Vec3("min", {}, -kCoordinateLimit, kCoordinateLimit);
   g.max = root.Vec3("max", {}, -kCoordinateLimit, kCoordinateLimit);
   for (int a = 0; a < 3; ++a) {
-    if (!(g.min[a] < g.max[a])) root.Fail("max", "a list of 3 numbers, each greater than 'min' on its axis");
+    if (!(g.min[a] < g.max[a]))
+      root.Fail("max", "a list of 3 numbers, each greater than 'min' on its axis");
   }
 
-  const std::string counts_expected =
-      "a list of 3 whole numbers in [2, " + std::to_string(kGravityGridMaxCount) + "] (vertices per axis)";
+  const std::string counts_expected = "a list of 3 whole numbers in [2, " +
+                                      std::to_string(kGravityGridMaxCount) +
+                                      "] (vertices per axis)";
   if (!root.Has("counts")) root.Fail("counts", counts_expected);
   const std::array<double, 3> counts = root.Vec3("counts", {}, 2.0, kGravityGridMaxCount);
   long product = 1;
@@ -86,13 +92,14 @@ GravityGridData LoadGravityGrid(const std::filesystem::path& file) {
     root.Fail("counts", "at most " + std::to_string(kGravityGridMaxVertices) + " vertices in all");
   }
 
-  const std::string forces_expected = "a list of " + std::to_string(product) + " forces in newtons (" +
-                                      CountsText(g.counts) + ", x fastest)";
+  const std::string forces_expected = "a list of " + std::to_string(product) +
+                                      " forces in newtons (" + CountsText(g.counts) +
+                                      ", x fastest)";
   const YAML::Node list = raw["force_z"];
   if (!list.IsDefined() || !list.IsSequence()) root.Fail("force_z", forces_expected);
   if (list.size() != static_cast<std::size_t>(product)) {
-    throw ConfigError(Where(file, list) + ": key 'force_z': expected " + forces_expected + ", got " +
-                      std::to_string(list.size()) + " values");
+    throw ConfigError(Where(file, list) + ": key 'force_z': expected " + forces_expected +
+                      ", got " + std::to_string(list.size()) + " values");
   }
   g.force_z.reserve(list.size());
   for (std::size_t n = 0; n < list.size(); ++n) {
@@ -120,8 +127,9 @@ void SaveGravityGrid(const std::filesystem::path& file, const GravityGridData& g
   }
   YAML::Emitter out;
   out.SetDoublePrecision(std::numeric_limits<double>::max_digits10);
-  out << YAML::Comment("Gravity compensation grid: the upward force (N) that holds the arm still at each "
-                       "vertex. Vertex (i,j,k) = min + (i,j,k)*(max-min)/(counts-1); force_z is x fastest.");
+  out << YAML::Comment(
+      "Gravity compensation grid: the upward force (N) that holds the arm still at each "
+      "vertex. Vertex (i,j,k) = min + (i,j,k)*(max-min)/(counts-1); force_z is x fastest.");
   out << YAML::BeginMap;
   if (!grid.device.empty()) out << YAML::Key << "device" << YAML::Value << grid.device;
   auto vec = [&out](const char* key, const auto& values) {
@@ -135,7 +143,8 @@ void SaveGravityGrid(const std::filesystem::path& file, const GravityGridData& g
   out << YAML::Key << "force_z" << YAML::Value << YAML::BeginSeq;
   for (const double f : grid.force_z) out << f;
   out << YAML::EndSeq << YAML::EndMap;
-  if (!out.good()) throw std::runtime_error(file.string() + ": cannot encode the grid: " + out.GetLastError());
+  if (!out.good())
+    throw std::runtime_error(file.string() + ": cannot encode the grid: " + out.GetLastError());
 
   if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path());
   std::ofstream stream(file);

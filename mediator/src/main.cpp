@@ -14,6 +14,7 @@
 #include "haptel/haptics/calibration_procedure.hpp"
 #include "haptel/mediator/recorder.hpp"
 #include "haptel/mediator/session.hpp"
+#include "gravity_bench.hpp"
 #include "servo_bench.hpp"
 
 namespace {
@@ -25,6 +26,7 @@ constexpr const char* kUsage =
     "usage: haptel run [options]         drive one grand-prix lap\n"
     "       haptel calibrate [options]   calibrate a haptic device (--help for options)\n"
     "       haptel bench servo [options] servo loop benchmark (--help for options)\n"
+    "       haptel bench gravity [options] gravity compensation benchmark\n"
     "\n"
     "haptel run options:\n"
     "  --config FILE        run configuration (default config/haptel.yaml)\n"
@@ -85,7 +87,8 @@ int main(int argc, char** argv) {
   if (command == "bench") {
     const std::string which = argc > 2 ? argv[2] : "";
     if (which == "servo") return bench::BenchServoMain(argc - 2, argv + 2);
-    std::fprintf(stderr, "haptel bench: expected one of: servo (got '%s')\n", which.c_str());
+    if (which == "gravity") return bench::BenchGravityMain(argc - 2, argv + 2);
+    std::fprintf(stderr, "haptel bench: expected one of: servo, gravity (got '%s')\n", which.c_str());
     return 2;
   }
   SessionSetup setup;

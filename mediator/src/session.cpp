@@ -7,10 +7,12 @@
 #include <mutex>
 #include <sstream>
 
+#include "haptel/config/gravity_grid.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/core/histogram.hpp"
 #include "haptel/core/log.hpp"
 #include "haptel/haptics/calibration_procedure.hpp"
+#include "haptel/haptics/gravity.hpp"
 #include "haptel/haptics/servo_loop.hpp"
 #include "haptel/haptics/trace.hpp"
 #include "haptel/haptics/sim_device.hpp"
@@ -109,7 +111,11 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   // Declared before the loop so it outlives the loop's threads.
   std::unique_ptr<haptics::TraceWriter> trace;
   if (!setup.trace.empty()) trace = std::make_unique<haptics::TraceWriter>(setup.trace);
-  haptics::ServoLoop servo(device, hal, setup.device, calibration);
+  std::unique_ptr<haptics::GravityGrid> gravity;
+  if (!setup.device.gravity.empty()) {
+    gravity = std::make_unique<haptics::GravityGrid>(LoadGravityGrid(setup.device.gravity));
+  }
+  haptics::ServoLoop servo(device, hal, setup.device, calibration, gravity.get());
   servo.SetTrace(trace.get());
   servo.Start();
   if (setup.progress) {

@@ -22,11 +22,11 @@
 namespace haptel {
 
 struct GravityGridData {
-  std::array<double, 3> min{};     ///< box corner, m
-  std::array<double, 3> max{};     ///< opposite corner, m
-  std::array<int, 3> counts{};     ///< vertices per axis (≥ 2 each)
-  std::vector<double> force_z;     ///< N upward, x fastest: i + nx*(j + ny*k)
-  std::string device;              ///< device it was sampled on ("" = unknown)
+  std::array<double, 3> min{};  ///< box corner, m
+  std::array<double, 3> max{};  ///< opposite corner, m
+  std::array<int, 3> counts{};  ///< vertices per axis (≥ 2 each)
+  std::vector<double> force_z;  ///< N upward, x fastest: i + nx*(j + ny*k)
+  std::string device;           ///< device it was sampled on ("" = unknown)
 };
 
 /// Largest number of vertices per axis a grid file may have.
@@ -38,7 +38,8 @@ constexpr long kGravityGridMaxVertices = 10'000'000;
 inline std::size_t GravityVertexIndex(const std::array<int, 3>& counts, int i, int j, int k) {
   return static_cast<std::size_t>(i) +
          static_cast<std::size_t>(counts[0]) *
-             (static_cast<std::size_t>(j) + static_cast<std::size_t>(counts[1]) * static_cast<std::size_t>(k));
+             (static_cast<std::size_t>(j) +
+              static_cast<std::size_t>(counts[1]) * static_cast<std::size_t>(k));
 }
 
 /// What is wrong with a grid (empty string: nothing): counts in [2, 1000],
