@@ -1,5 +1,7 @@
 #include "haptel/haptics/calibration_procedure.hpp"
 
+#include "haptel/haptics/device_factory.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -430,13 +432,13 @@ int CalibrateMain(int argc, const char* const* argv) {
       device_file = std::filesystem::path(HAPTEL_SOURCE_DIR) / device_file;
     }
     config = LoadDevice(device_file);
-    if (config.driver != "sim") {
-      throw ConfigError(device_file.string() + ": key 'driver': expected 'sim' (the only driver haptel calibrate "
-                        "can open so far), got '" + config.driver + "'");
-    }
     options.auto_mode = args.Flag("auto");
-    if (!options.auto_mode) {
+    if (config.driver == "sim" && !options.auto_mode) {
       throw UsageError("the sim device has nobody to hold its arms: use --auto");
+    }
+    if (config.driver != "sim" && options.auto_mode) {
+      throw UsageError("--auto needs the sim device (" + device_file.string() + " names driver '" + config.driver +
+                       "'); a real device is calibrated with an operator at the prompts");
     }
     options.user = args.Value("user").value_or("default");
     out_file = args.Value("out").value_or((std::filesystem::path("calibration") / (config.name + ".yaml")).string());
@@ -452,11 +454,11 @@ int CalibrateMain(int argc, const char* const* argv) {
   }
 
   try {
-    SimDevice device(config, OperatorConfig{});
-    const DeviceCalibration calibration = RunCalibration(device, options, std::cout);
+    const std::unique_ptr<Device> device = MakeDevice(config);
+    const DeviceCalibration calibration = RunCalibration(*device, options, std::cout);
     SaveCalibration(out_file, calibration);
     std::cout << "\n";
-    PrintCalibrationSummary(std::cout, calibration, device);
+    PrintCalibrationSummary(std::cout, calibration, *device);
     std::cout << "\nwrote " << out_file.string() << "\n";
   } catch (const std::exception& e) {
     std::fprintf(stderr, "haptel calibrate: %s\n", e.what());
