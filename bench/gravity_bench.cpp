@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "haptel/config/paths.hpp"
+#include "haptel/haptics/calibration.hpp"
 #include "haptel/config/device.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/config/gravity_grid.hpp"
@@ -40,22 +42,10 @@ constexpr const char* kUsage =
     "  --grid-out FILE  where to save the sampled grid (default build/bench/gravity_grid.yaml)\n"
     "  --json           end with one JSON line of results\n";
 
-std::filesystem::path DefaultDevice() {
-  if (std::filesystem::exists("config/devices/sim.yaml")) return "config/devices/sim.yaml";
-  return std::filesystem::path(HAPTEL_SOURCE_DIR) / "config/devices/sim.yaml";
-}
-
-/// metres = scale · raw + offset; command = newtons / slope.
-Vec3d ToMetres(const ArmCalibration& c, const Vec3d& raw) {
-  return {c.tracker_scale[0] * raw[0] + c.tracker_offset[0],
-          c.tracker_scale[1] * raw[1] + c.tracker_offset[1],
-          c.tracker_scale[2] * raw[2] + c.tracker_offset[2]};
-}
-
 /// The compensation command for a tracker reading, as the servo loop does it.
 Vec3d CompensationCommand(const ArmCalibration& c, const GravityGrid* grid, const Vec3d& raw) {
   if (grid == nullptr) return {};
-  return {0.0, 0.0, grid->Evaluate(ToMetres(c, raw)) / c.force_slope[2]};
+  return {0.0, 0.0, grid->Evaluate(haptics::TrackerToMetres(c, raw)) / c.force_slope[2]};
 }
 
 double Distance(const Vec3d& a, const Vec3d& b) {
@@ -137,7 +127,7 @@ int BenchGravityMain(int argc, const char* const* argv) {
     seed = args.Int("seed", 0, 1 << 30).value_or(seed);
     counts = args.Int("counts", 2, 50).value_or(counts);
     const std::filesystem::path device_file =
-        args.Value("device").value_or(DefaultDevice().string());
+        args.Value("device").value_or(ShippedFile("config/devices/sim.yaml").string());
     config = LoadDevice(device_file);
     if (config.driver != "sim") {
       throw ConfigError(device_file.string() +

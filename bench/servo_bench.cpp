@@ -12,6 +12,7 @@
 #include <thread>
 #include <vector>
 
+#include "haptel/config/paths.hpp"
 #include "haptel/config/device.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/config/run.hpp"
@@ -103,7 +104,7 @@ int BenchServoMain(int argc, const char* const* argv) {
       seconds = std::stod(*s);
       if (!(seconds >= 0.5 && seconds <= 600)) throw UsageError("--seconds: expected a number in [0.5, 600]");
     }
-    base = LoadDevice(args.Value("device").value_or("config/devices/sim.yaml"));
+    base = LoadDevice(args.Value("device").value_or(ShippedFile("config/devices/sim.yaml").string()));
   } catch (const UsageError& e) {
     std::fprintf(stderr, "haptel bench servo: %s\n", e.what());
     return 2;

@@ -1,3 +1,4 @@
+#include "haptel/config/paths.hpp"
 #include "haptel/haptics/calibration_procedure.hpp"
 
 #include "haptel/haptics/device_factory.hpp"
@@ -425,12 +426,7 @@ int CalibrateMain(int argc, const char* const* argv) {
     if (words.size() > 1 || (words.size() == 1 && words[0] != "calibrate")) {
       throw UsageError("unexpected argument '" + words.back() + "'");
     }
-    std::filesystem::path device_file = "config/devices/sim.yaml";
-    if (auto value = args.Value("device")) {
-      device_file = *value;
-    } else if (!std::filesystem::exists(device_file)) {
-      device_file = std::filesystem::path(HAPTEL_SOURCE_DIR) / device_file;
-    }
+    const std::filesystem::path device_file = args.Value("device").value_or(ShippedFile("config/devices/sim.yaml"));
     config = LoadDevice(device_file);
     options.auto_mode = args.Flag("auto");
     if (config.driver == "sim" && !options.auto_mode) {

@@ -23,6 +23,7 @@
 #include <optional>
 #include <string>
 
+#include "haptel/config/paths.hpp"
 #include "haptel/config/device.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/config/run.hpp"
@@ -268,10 +269,7 @@ Options ParseOptions(int argc, char** argv, bool& help) {
   if (!port) throw UsageError("--port N is required (0: any free port)");
   o.port = *port;
   o.bind = args.Value("bind").value_or(o.bind);
-  o.device = args.Value("device").value_or(std::filesystem::exists("config/devices/sim.yaml")
-                                               ? std::string("config/devices/sim.yaml")
-                                               : std::string(HAPTEL_SOURCE_DIR) +
-                                                     "/config/devices/sim.yaml");
+  o.device = args.Value("device").value_or(ShippedFile("config/devices/sim.yaml").string());
   return o;
 }
 

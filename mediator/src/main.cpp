@@ -8,6 +8,7 @@
 #include <sstream>
 #include <string>
 
+#include "haptel/config/paths.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/core/args.hpp"
 #include "haptel/core/log.hpp"
@@ -39,11 +40,6 @@ constexpr const char* kUsage =
     "  --trace FILE         record the haptic device's readings (for the replay driver)\n"
     "  --json               end with one JSON line of results on stdout\n"
     "  --quiet              no progress lines\n";
-
-std::filesystem::path DefaultConfig() {
-  if (std::filesystem::exists("config/haptel.yaml")) return "config/haptel.yaml";
-  return std::filesystem::path(HAPTEL_SOURCE_DIR) / "config/haptel.yaml";
-}
 
 std::filesystem::path SelfDirectory() {
   std::error_code ec;
@@ -106,7 +102,7 @@ int main(int argc, char** argv) {
     }
     json = args.Flag("json");
     setup.progress = !args.Flag("quiet");
-    setup.run = LoadRun(args.Value("config").value_or(DefaultConfig().string()));
+    setup.run = LoadRun(args.Value("config").value_or(ShippedFile("config/haptel.yaml").string()));
     if (auto track = args.Value("track")) setup.run.track = *track;
     if (auto name = args.Value("interface")) setup.run.interface = *name;
     if (auto domain = args.Int("domain", 0, 232)) setup.run.link.domain_id = *domain;

@@ -7,6 +7,7 @@
 #include <string>
 #include <thread>
 
+#include "haptel/config/paths.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/core/args.hpp"
 #include "haptel/core/log.hpp"
@@ -36,10 +37,8 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (!args.positional().empty()) throw UsageError("unexpected argument '" + args.positional()[0] + "'");
-    const std::filesystem::path file = args.Value("config").value_or(
-        std::filesystem::exists("config/vehicles/sim-robot.yaml")
-            ? std::string("config/vehicles/sim-robot.yaml")
-            : std::string(HAPTEL_SOURCE_DIR) + "/config/vehicles/sim-robot.yaml");
+    const std::filesystem::path file =
+        args.Value("config").value_or(ShippedFile("config/vehicles/sim-robot.yaml").string());
     config = LoadVehicle(file);
     if (auto name = args.Value("name")) config.name = *name;
     if (auto domain = args.Int("domain", 0, 232)) config.link.domain_id = *domain;
