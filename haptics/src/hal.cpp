@@ -32,17 +32,24 @@ void Hal::PublishLost(Side side, bool lost) { lost_[Index(side)].store(lost, std
 
 void Hal::SetSetpoint(Side side, ForceSetpoint setpoint, int64_t now_ns) {
   setpoint.stamp_ns = now_ns;
-  setpoints_[Index(side)].Store(setpoint);
+  setpoint.field = ForceField{};
+  contacts_[Index(side)].Store(setpoint);
 }
 
-void Hal::SetField(Side side, const ForceField& field) {
-  ForceSetpoint sp = setpoints_[Index(side)].Load();
-  sp.field = field;
-  SetSetpoint(side, sp, MonotonicNs());
-}
+void Hal::SetField(Side side, const ForceField& field) { SetField(side, field, MonotonicNs()); }
+
+void Hal::SetField(Side side, const ForceField& field, int64_t now_ns) { fields_[Index(side)].Store({now_ns, field}); }
 
 void Hal::ZeroForces() {
-  for (auto& sp : setpoints_) sp.Store(ForceSetpoint{});
+  for (auto& f : fields_) f.Store(StampedField{});
+}
+
+ForceSetpoint Hal::Setpoint(Side side) const {
+  ForceSetpoint sp = contacts_[Index(side)].Load();
+  const StampedField f = fields_[Index(side)].Load();
+  sp.field = f.field;
+  if (sp.stamp_ns == 0 || (f.stamp_ns != 0 && f.stamp_ns < sp.stamp_ns)) sp.stamp_ns = f.stamp_ns;
+  return sp;
 }
 
 size_t Hal::TrackerHistory(Side side, std::span<TrackerSample> out) const {

@@ -100,22 +100,65 @@ TEST_CASE("a lost device makes the sample invalid until it returns") {
   CHECK(hal.LatestSample(Side::kRight).valid);
 }
 
-TEST_CASE("set-points are stamped, and SetField keeps the rest of the set-point") {
+TEST_CASE("field and physics set-points live apart and combine, stamped by the older feeder") {
   Hal hal;
   ForceSetpoint sp;
   sp.finger_forces = {1, 2, 3, 4, 5};
+  sp.field.enabled = true;  // ignored: fields belong to the interface
   hal.SetSetpoint(Side::kLeft, sp, 42);
-  CHECK(hal.Setpoint(Side::kLeft).stamp_ns == 42);
+  CHECK(hal.Setpoint(Side::kLeft).stamp_ns == 42);  // the field was never written: ignored
+  CHECK_FALSE(hal.Setpoint(Side::kLeft).field.enabled);
   ForceField f;
   f.enabled = true;
-  hal.SetField(Side::kLeft, f);
-  const ForceSetpoint after = hal.Setpoint(Side::kLeft);
+  hal.SetField(Side::kLeft, f, 50);
+  ForceSetpoint after = hal.Setpoint(Side::kLeft);
   CHECK(after.field.enabled);
   CHECK(after.finger_forces[4] == 5.0);
-  CHECK(after.stamp_ns > 42);
+  CHECK(after.stamp_ns == 42);  // the older of the two
+  hal.SetSetpoint(Side::kLeft, sp, 60);
+  CHECK(hal.Setpoint(Side::kLeft).stamp_ns == 50);
   hal.ZeroForces();
-  CHECK_FALSE(hal.Setpoint(Side::kLeft).field.enabled);
-  CHECK(hal.Setpoint(Side::kLeft).stamp_ns == 0);
+  after = hal.Setpoint(Side::kLeft);
+  CHECK_FALSE(after.field.enabled);
+  CHECK(after.finger_forces[4] == 5.0);  // the physics thread's part is its own
+  CHECK(after.stamp_ns == 60);
+}
+
+TEST_CASE("two feeders writing at once never tear each other's set-point") {
+  Hal hal;
+  std::atomic<bool> done{false};
+  std::thread physics([&] {
+    ForceSetpoint sp;
+    for (int i = 1; i <= 100000; ++i) {
+      sp.finger_forces.fill(i);
+      sp.coupling_stiffness = i;
+      hal.SetSetpoint(Side::kRight, sp, i);
+    }
+  });
+  std::thread interface([&] {
+    ForceField f;
+    for (int i = 1; i <= 100000; ++i) {
+      f.stiffness = i;
+      f.damping = i;
+      hal.SetField(Side::kRight, f, i);
+    }
+  });
+  uint64_t torn = 0;
+  std::thread reader([&] {
+    while (!done.load()) {
+      const ForceSetpoint sp = hal.Setpoint(Side::kRight);
+      if (sp.field.stiffness != sp.field.damping) ++torn;
+      if (sp.coupling_stiffness != sp.finger_forces[0] || sp.finger_forces[0] != sp.finger_forces[4]) ++torn;
+    }
+  });
+  physics.join();
+  interface.join();
+  done = true;
+  reader.join();
+  CHECK(torn == 0);
+  const ForceSetpoint last = hal.Setpoint(Side::kRight);
+  CHECK(last.field.stiffness == 100000);
+  CHECK(last.coupling_stiffness == 100000);
 }
 
 TEST_CASE("concurrent hand-off: readers never see a torn sample or history out of order") {

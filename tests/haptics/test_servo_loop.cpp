@@ -37,11 +37,7 @@ ForceField Spring(double k) {
   f.stiffness = k;
   return f;
 }
-void SetField(Hal& hal, Side side, const ForceField& f, int64_t now_ns) {
-  ForceSetpoint sp;
-  sp.field = f;
-  hal.SetSetpoint(side, sp, now_ns);
-}
+void SetField(Hal& hal, Side side, const ForceField& f, int64_t now_ns) { hal.SetField(side, f, now_ns); }
 }  // namespace
 
 TEST_CASE("a servo tick publishes the sample and applies the set-point's force") {

@@ -44,17 +44,25 @@ class Hal {
   void PublishForces(Side side, const AppliedForces& forces);
   /// The device on `side` was lost (true) or answers again (false).
   void PublishLost(Side side, bool lost);
-  ForceSetpoint Setpoint(Side side) const { return setpoints_[Index(side)].Load(); }
+  /// The combined set-point: the interface's field plus the physics thread's
+  /// coupling, direct and finger forces. Its stamp is the older of the two
+  /// feeders' stamps (a feeder that never wrote is ignored), so either one
+  /// stalling fades the forces.
+  ForceSetpoint Setpoint(Side side) const;
 
-  // --- Slower threads. ---
+  // --- Slower threads. Each slot has one writer: the interface (session)
+  // thread writes fields, the physics thread writes the rest. ---
   /// The hand, calibrated now: position (m), velocity (m/s, second-order
   /// backward difference over the history), glove angles (rad), last forces.
   HandSample LatestSample(Side side) const;
-  /// Replaces the whole set-point for a side, stamped `now_ns`.
-  void SetSetpoint(Side side, ForceSetpoint setpoint, int64_t now_ns);
-  /// Replaces only the force field (keeps the rest of the set-point), stamped now.
+  /// Interface thread: the force field, stamped `now_ns` (default: now).
   void SetField(Side side, const ForceField& field);
-  /// Disables every set-point: forces go to zero at the next servo tick.
+  void SetField(Side side, const ForceField& field, int64_t now_ns);
+  /// Physics thread: coupling, direct wrist force and finger forces of
+  /// `setpoint` (its `field` is ignored), stamped `now_ns`.
+  void SetSetpoint(Side side, ForceSetpoint setpoint, int64_t now_ns);
+  /// Interface thread: disables the fields: their forces go to zero at the
+  /// next servo tick. (The physics thread clears its own part when it stops.)
   void ZeroForces();
 
   /// Copies up to out.size() newest tracker samples, oldest first; returns the count.
@@ -75,7 +83,12 @@ class Hal {
   std::array<Seqlock<WristRaw>, kSides> wrist_;
   std::array<Seqlock<GloveRaw>, kSides> glove_;
   std::array<Seqlock<AppliedForces>, kSides> forces_;
-  std::array<Seqlock<ForceSetpoint>, kSides> setpoints_;
+  struct StampedField {
+    int64_t stamp_ns = 0;
+    ForceField field;
+  };
+  std::array<Seqlock<StampedField>, kSides> fields_;
+  std::array<Seqlock<ForceSetpoint>, kSides> contacts_;
   std::array<std::atomic<bool>, kSides> lost_{};
   std::array<std::atomic<uint64_t>, kSides> wrist_count_{};
   std::array<std::atomic<uint64_t>, kSides> glove_count_{};

@@ -1,0 +1,62 @@
+#pragma once
+/// @file The physics thread's configuration (config/physics.yaml): the fixed
+/// step, the solver, gravity, and the proxy ("mass-spring") hands — their
+/// bodies, the glove-driven joint drives, the wrist coupling to the tracked
+/// hand, and the force feedback the servo loop is asked to render.
+///
+/// Units are SI: m, kg, s, N, rad (stiffness N/m or N·m/rad, damping
+/// N·s/m or N·m·s/rad).
+#include <array>
+#include <filesystem>
+
+namespace haptel {
+
+/// Surface of a body: Bullet has one friction coefficient (static = dynamic);
+/// pairs combine by the average (DESIGN.md, "Haptic scene").
+struct PhysicsMaterial {
+  double friction = 0.8;
+  double restitution = 0.0;
+};
+
+/// One proxy hand (both sides alike; the left one is the mirror image).
+/// Hand frame: origin at the wrist, x along the fingers, y towards the thumb
+/// of a right hand, z out of the back of the hand (palm faces −z).
+struct ProxyHandConfig {
+  double palm_mass = 0.350;                                      ///< kg
+  std::array<double, 3> palm_half_extents{0.045, 0.040, 0.012};  ///< m
+  /// Per finger, from the palm out: metacarpal, proximal, distal.
+  std::array<double, 3> phalanx_mass{0.013, 0.010, 0.009};    ///< kg
+  std::array<double, 3> phalanx_length{0.045, 0.027, 0.022};  ///< m, joint to joint
+  double phalanx_radius = 0.008;                              ///< m (capsules)
+  /// Joint drives pulling every finger joint to the tracked glove angle.
+  double joint_stiffness = 1.0;  ///< N·m/rad
+  double joint_damping = 0.005;  ///< N·m·s/rad
+  /// Palm to tracked wrist: 3-DoF linear and 3-DoF angular spring-dampers.
+  double coupling_linear_stiffness = 3000.0;  ///< N/m
+  double coupling_linear_damping = 40.0;      ///< N·s/m
+  double coupling_angular_stiffness = 10.0;   ///< N·m/rad
+  double coupling_angular_damping = 0.1;      ///< N·m·s/rad
+  /// What the servo loop renders: wrist F = k·(proxy − tracked) − b·v, and per
+  /// finger F = k_f·max(0, (proxy − tracked tip)·nail normal).
+  double feedback_stiffness = 1000.0;        ///< N/m
+  double feedback_damping = 5.0;             ///< N·s/m
+  double finger_feedback_stiffness = 300.0;  ///< N/m
+  /// The operator's own hand is weightless to him: by default the proxy is too.
+  bool gravity = false;
+  PhysicsMaterial material{1.0, 0.0};
+};
+
+struct PhysicsConfig {
+  std::filesystem::path file;
+  double step_s = 0.001;  ///< fixed step of the physics thread
+  int solver_iterations = 20;
+  std::array<double, 3> gravity{0.0, 0.0, -9.81};  ///< m/s², device frame
+  int realtime_priority = 0;  ///< SCHED_FIFO priority for the thread (0: do not ask)
+  ProxyHandConfig hand;
+};
+
+/// Loads and validates a physics file (strict: unknown keys and out-of-range
+/// values are errors naming file, line, key and the expected value).
+PhysicsConfig LoadPhysics(const std::filesystem::path& file);
+
+}  // namespace haptel

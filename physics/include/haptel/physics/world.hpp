@@ -1,0 +1,140 @@
+#pragma once
+/// @file The physics world: Bullet in double precision, stepped at a fixed
+/// step on its own thread, with the proxy hands and the scene's bodies.
+///
+/// Each physics tick reads the calibrated hands from the HAL
+/// (Hal::LatestSample), moves the proxy hands' targets, steps once, and writes
+/// each side's set-point (read-modify-write: the interface's force field and
+/// any other field are kept) with the proxy coupling and the finger forces.
+/// The servo loop renders k·(proxy − tracked) at 1 kHz from the latest
+/// set-point; it never waits for this thread.
+///
+/// A body whose pose or velocity turns NaN or infinite is put back (a hand on
+/// the tracked hand, a scene body where it was created), counted, and the
+/// world goes on.
+///
+/// Threading: set the scene up (Add*) before Start; while the thread runs,
+/// only Counters, Stats, Poses, running and Stop may be called from other
+/// threads. Without Start, Step and Tick drive the world deterministically.
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "haptel/config/physics.hpp"
+#include "haptel/core/loop_meter.hpp"
+#include "haptel/core/seqlock.hpp"
+#include "haptel/haptics/hal.hpp"
+#include "haptel/physics/proxy_hand.hpp"
+
+class btDiscreteDynamicsWorld;
+class btRigidBody;
+
+namespace haptel {
+class PeriodicThread;
+}
+
+namespace haptel::physics {
+
+/// What a scene and its interface ask of physics. DESIGN.md: no physics world
+/// when the interface has no physical controls and the scene no bodies (the
+/// hands alone have nothing to touch: the tracked hand is drawn as is).
+struct PhysicsNeeds {
+  bool physical_controls = false;  ///< e.g. a steering wheel and throttle the hands grab
+  int scene_bodies = 0;            ///< touchable bodies in the haptic scene
+};
+/// Cheap: decides without creating anything.
+constexpr bool NeedsWorld(const PhysicsNeeds& needs) {
+  return needs.physical_controls || needs.scene_bodies > 0;
+}
+
+/// Events the physics thread counts instead of logging.
+struct PhysicsCounters {
+  uint64_t steps = 0;
+  uint64_t hand_resets = 0;      ///< hands reset to the tracked pose after a NaN/Inf body
+  uint64_t body_resets = 0;      ///< scene bodies put back after a NaN/Inf
+  uint64_t invalid_samples = 0;  ///< side-ticks without a valid, finite tracked hand
+  uint64_t setpoints = 0;        ///< set-points written to the HAL
+  double last_step_us = 0.0;     ///< compute time of the latest step
+  double max_step_us = 0.0;
+};
+
+/// Index of a scene body in its world.
+using BodyId = int;
+
+class PhysicsWorld {
+ public:
+  explicit PhysicsWorld(const PhysicsConfig& config);
+  ~PhysicsWorld();
+  PhysicsWorld(const PhysicsWorld&) = delete;
+  PhysicsWorld& operator=(const PhysicsWorld&) = delete;
+
+  /// A world only when `needs` calls for one; nullptr otherwise.
+  static std::unique_ptr<PhysicsWorld> CreateIfNeeded(const PhysicsConfig& config,
+                                                      const PhysicsNeeds& needs);
+  /// Worlds constructed in this process so far.
+  static uint64_t worlds_created();
+
+  // --- Scene set-up: before Start. Static bodies never move; dynamic ones
+  // may fall asleep when at rest and cost nothing until touched. ---
+  /// The half-space below the plane n·x = offset (n points out of it).
+  BodyId AddStaticPlane(const Vec3d& normal, double offset, const PhysicsMaterial& material = {});
+  BodyId AddStaticBox(const Vec3d& center, const Vec3d& half_extents,
+                      const PhysicsMaterial& material = {});
+  BodyId AddDynamicBox(const Vec3d& center, const Vec3d& half_extents, double mass,
+                       const PhysicsMaterial& material = {});
+  BodyId AddDynamicSphere(const Vec3d& center, double radius, double mass,
+                          const PhysicsMaterial& material = {});
+  /// The proxy hand of `side` (one per side; a second call returns the first).
+  ProxyHand& AddHand(Side side);
+  ProxyHand* hand(Side side) { return hands_[haptics::Index(side)].get(); }
+
+  Pose BodyPose(BodyId id) const;
+  Vec3d BodyVelocity(BodyId id) const;
+  bool BodySleeping(BodyId id) const;
+  btRigidBody& body(BodyId id);
+
+  /// One fixed step of config().step_s, then the NaN/Inf check.
+  void Step();
+  /// One physics-thread cycle at `now_ns`: tracked hands from `hal`, one step,
+  /// set-points to `hal`.
+  void Tick(haptics::Hal& hal, int64_t now_ns);
+  /// Runs Tick on a thread of its own at 1/step_s. `hal` must outlive Stop.
+  void Start(haptics::Hal& hal);
+  /// Stops and joins, then turns the proxy coupling and finger forces off in
+  /// the HAL (keeping the interface's field). Safe to call twice.
+  void Stop();
+  bool running() const { return running_.load(); }
+
+  /// Safe from any thread.
+  PhysicsCounters Counters() const { return published_counters_.Load(); }
+  /// The thread's rate and period statistics (zero before Start).
+  LoopStats Stats() const;
+  /// The latest poses of a side's hands (valid = false when there is no hand). Any thread.
+  HandPoses Poses(Side side) const { return poses_[haptics::Index(side)].Load(); }
+
+  const PhysicsConfig& config() const { return config_; }
+  btDiscreteDynamicsWorld& bullet();
+
+ private:
+  struct Bullet;
+  struct Body;
+  BodyId AddBody(std::unique_ptr<Body> body);
+  void CheckFinite();
+
+  PhysicsConfig config_;
+  std::unique_ptr<Bullet> bullet_;
+  std::vector<std::unique_ptr<Body>> bodies_;
+  std::array<std::unique_ptr<ProxyHand>, haptics::kSides> hands_;
+  std::array<bool, haptics::kSides> tracked_ok_{};  ///< this tick's sample was usable
+  PhysicsCounters counters_;                        ///< the stepping thread's own copy
+  Seqlock<PhysicsCounters> published_counters_;
+  std::array<Seqlock<HandPoses>, haptics::kSides> poses_;
+  std::unique_ptr<PeriodicThread> thread_;
+  haptics::Hal* hal_ = nullptr;
+  std::atomic<bool> running_{false};
+  int64_t last_tick_ns_ = 0;
+};
+
+}  // namespace haptel::physics
