@@ -10,6 +10,7 @@
 
 #include "haptel/config/paths.hpp"
 #include "haptel/config/error.hpp"
+#include "haptel/config/gravity_grid.hpp"
 #include "haptel/core/args.hpp"
 #include "haptel/core/log.hpp"
 #include "haptel/haptics/calibration_procedure.hpp"
@@ -119,13 +120,19 @@ int main(int argc, char** argv) {
     setup.track = LoadTrack(setup.run.track);
     setup.vehicle = LoadVehicle(setup.run.vehicle);
     if (auto name = args.Value("vehicle-name")) setup.vehicle.name = *name;
-    setup.gesture = LoadGesture(InterfaceFile(setup.run, setup.run.interface));
+    const std::filesystem::path interface_file = InterfaceFile(setup.run, setup.run.interface);
+    if (setup.run.interface.rfind("cockpit", 0) == 0) {
+      throw ConfigError(interface_file.string() + ": the cockpit interfaces need the physics world in the "
+                        "session, which is not wired in yet; use --interface gesture");
+    }
+    setup.gesture = LoadGesture(interface_file);
     setup.device = LoadDevice(setup.run.device);
     if (setup.device.driver != "sim") {
       throw ConfigError(setup.run.device.string() + ": key 'driver': expected 'sim' for haptel run "
                         "(the automatic operator moves the simulated arms), got '" + setup.device.driver + "'");
     }
     if (!setup.device.calibration.empty()) setup.calibration = LoadCalibration(setup.device.calibration);
+    if (!setup.device.gravity.empty()) setup.gravity = LoadGravityGrid(setup.device.gravity);
     setup.vehicle_program = SelfDirectory() / "haptel-vehicle";
   } catch (const UsageError& e) {
     std::fprintf(stderr, "haptel: %s (see haptel --help)\n", e.what());

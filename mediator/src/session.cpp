@@ -7,7 +7,6 @@
 #include <mutex>
 #include <sstream>
 
-#include "haptel/config/gravity_grid.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/core/histogram.hpp"
 #include "haptel/core/log.hpp"
@@ -112,9 +111,7 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   std::unique_ptr<haptics::TraceWriter> trace;
   if (!setup.trace.empty()) trace = std::make_unique<haptics::TraceWriter>(setup.trace);
   std::unique_ptr<haptics::GravityGrid> gravity;
-  if (!setup.device.gravity.empty()) {
-    gravity = std::make_unique<haptics::GravityGrid>(LoadGravityGrid(setup.device.gravity));
-  }
+  if (setup.gravity) gravity = std::make_unique<haptics::GravityGrid>(*setup.gravity);
   haptics::ServoLoop servo(device, hal, setup.device, calibration, gravity.get());
   servo.SetTrace(trace.get());
   servo.Start();

@@ -7,11 +7,13 @@
 /// interface's command rate, times the lap and watches the vehicle.
 #include <atomic>
 #include <filesystem>
+#include <optional>
 #include <string>
 
 #include "haptel/config/calibration.hpp"
 #include "haptel/config/device.hpp"
 #include "haptel/config/gesture.hpp"
+#include "haptel/config/gravity_grid.hpp"
 #include "haptel/config/run.hpp"
 #include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"
@@ -28,6 +30,8 @@ struct SessionSetup {
   /// How the device's units map to SI (from device.calibration, or measured
   /// at start-up for the sim device when it has no file).
   DeviceCalibration calibration;
+  /// Gravity compensation grid (from device.gravity; empty: none).
+  std::optional<GravityGridData> gravity;
   /// haptel-vehicle to spawn; empty: the vehicle runs elsewhere, do not spawn.
   std::filesystem::path vehicle_program;
   bool progress = true;  ///< progress lines on stderr
