@@ -181,43 +181,19 @@ Matrix3d ReadRotation(YamlMap& map) {
 Vector3d ToVector(const std::array<double, 3>& a) { return {a[0], a[1], a[2]}; }
 Vector3d ToVector(const std::vector<double>& a) { return {a[0], a[1], a[2]}; }
 
-// `points` of a convex shape: YamlMap has no reader for lists of 3-D points,
-// so they are read from the raw node, which is then removed from the mapping
-// (the raw node and `shape` share it) so that Finish() does not call it unknown.
-std::vector<Vector3d> TakeConvexPoints(YamlMap& shape, YAML::Node raw_shape) {
-  const std::string expected =
-      "a list of 4 to " + std::to_string(kMaxConvexPoints) + " points [x, y, z] in metres";
-  if (!shape.Has("points")) shape.Fail("points", expected);
-  const YAML::Node list = raw_shape["points"];
-  if (!list.IsSequence() || list.size() < 4 || list.size() > kMaxConvexPoints) {
-    shape.Fail("points", expected);
-  }
+// `points` of a convex shape, which must span a volume.
+std::vector<Vector3d> ReadConvexPoints(YamlMap& shape) {
   std::vector<Vector3d> points;
-  for (size_t i = 0; i < list.size(); ++i) {
-    const YAML::Node p = list[i];
-    Vector3d v;
-    bool ok = p.IsSequence() && p.size() == 3;
-    for (int k = 0; ok && k < 3; ++k) {
-      ok = p[k].IsScalar() && YAML::convert<double>::decode(p[k], v[k]) && std::isfinite(v[k]) &&
-           std::abs(v[k]) <= kMaxSize;
-    }
-    if (!ok) {
-      throw ConfigError(Where(shape.file(), p) + ": key '" + shape.Path("points") + "[" +
-                        std::to_string(i) +
-                        "]': expected a point [x, y, z] in metres (|x| <= 1000)");
-    }
-    points.push_back(v);
-  }
+  for (const auto& p : shape.Points3("points", 4, kMaxConvexPoints, kMaxSize)) points.emplace_back(p[0], p[1], p[2]);
   try {
     ComputeConvexHull(points);
   } catch (const std::invalid_argument& e) {
     shape.Fail("points", std::string("points spanning a volume (") + e.what() + ")");
   }
-  raw_shape.remove("points");
   return points;
 }
 
-SceneShape ReadShape(YamlMap& s, const YAML::Node& raw_shape, bool dynamic) {
+SceneShape ReadShape(YamlMap& s, bool dynamic) {
   SceneShape shape;
   const std::string type = s.RequireString("type");
   const std::string kinds = "one of: box, sphere, capsule, plane, convex";
@@ -245,7 +221,7 @@ SceneShape ReadShape(YamlMap& s, const YAML::Node& raw_shape, bool dynamic) {
     shape.offset = s.RequireNumber("offset", -kMaxCoordinate, kMaxCoordinate) / n.norm();
   } else if (type == "convex") {
     shape.kind = ShapeKind::kConvex;
-    shape.points = TakeConvexPoints(s, raw_shape);
+    shape.points = ReadConvexPoints(s);
   } else {
     s.Fail("type", kinds);
   }
@@ -255,17 +231,17 @@ SceneShape ReadShape(YamlMap& s, const YAML::Node& raw_shape, bool dynamic) {
   return shape;
 }
 
-Material ReadMaterial(YamlMap& o, const YAML::Node& raw_object) {
+Material ReadMaterial(YamlMap& o) {
   if (!o.Has("material")) return Material{};
   const std::string expected = std::string("a preset (") + kPresetList +
                                ") or a mapping {restitution, static_friction, dynamic_friction}";
-  if (raw_object["material"].IsScalar()) {
+  if (o.IsScalar("material")) {
     const std::string name = o.String("material", "");
     const auto preset = MaterialPreset(name);
     if (!preset) o.Fail("material", expected);
     return *preset;
   }
-  if (!raw_object["material"].IsMap()) o.Fail("material", expected);
+  if (!o.IsMap("material")) o.Fail("material", expected);
   YamlMap m = o.Map("material");
   Material out;
   out.restitution = m.RequireNumber("restitution", 0.0, 1.0);
@@ -278,28 +254,15 @@ Material ReadMaterial(YamlMap& o, const YAML::Node& raw_object) {
 }  // namespace
 
 Scene LoadScene(const std::filesystem::path& file) {
-  YAML::Node raw;
-  try {
-    raw = YAML::LoadFile(file.string());
-  } catch (const YAML::BadFile&) {
-    throw ConfigError(file.string() + ": cannot open the file");
-  } catch (const YAML::Exception& e) {
-    throw ConfigError(file.string() + ":" + std::to_string(e.mark.line + 1) + ":" +
-                      std::to_string(e.mark.column + 1) + ": not valid YAML: " + e.msg);
-  }
-  if (!raw.IsMap())
-    throw ConfigError(file.string() + ": expected a mapping of keys at the top level");
-  YamlMap root(raw, file.string(), "");
+  YamlMap root = YamlMap::Load(file);
 
   Scene scene;
   scene.file = file;
   std::vector<YamlMap> objects = root.MapList("objects");
   if (objects.empty()) root.Fail("objects", "a list of at least one object");
-  const YAML::Node raw_objects = raw["objects"];
   std::set<std::string> names;
   for (size_t i = 0; i < objects.size(); ++i) {
     YamlMap& o = objects[i];
-    const YAML::Node raw_object = raw_objects[i];
     SceneObject obj;
     obj.name = o.RequireString("name");
     if (!names.insert(obj.name).second) o.Fail("name", "a name no other object has");
@@ -322,14 +285,11 @@ Scene LoadScene(const std::filesystem::path& file) {
       if (has_mass) obj.mass = o.RequireNumber("mass", kMinMass, kMaxMass);
       if (has_density) obj.density = o.RequireNumber("density", kMinDensity, kMaxDensity);
     }
-    obj.material = ReadMaterial(o, raw_object);
+    obj.material = ReadMaterial(o);
 
     std::vector<YamlMap> shapes = o.MapList("shapes");
     if (shapes.empty()) o.Fail("shapes", "a list of at least one shape");
-    const YAML::Node raw_shapes = raw_object["shapes"];
-    for (size_t j = 0; j < shapes.size(); ++j) {
-      obj.shapes.push_back(ReadShape(shapes[j], raw_shapes[j], obj.dynamic));
-    }
+    for (YamlMap& shape : shapes) obj.shapes.push_back(ReadShape(shape, obj.dynamic));
     if (obj.dynamic) {
       const std::string problem = CheckMassProperties(obj);
       if (!problem.empty()) o.Fail("shapes", problem);

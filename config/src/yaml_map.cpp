@@ -57,6 +57,10 @@ void YamlMap::Fail(const std::string& key, const std::string& expected) const {
 
 bool YamlMap::Has(const std::string& key) const { return node_.IsMap() && node_[key].IsDefined(); }
 
+bool YamlMap::IsScalar(const std::string& key) const { return Has(key) && node_[key].IsScalar(); }
+
+bool YamlMap::IsMap(const std::string& key) const { return Has(key) && node_[key].IsMap(); }
+
 YAML::Node YamlMap::Child(const std::string& key) {
   read_.insert(key);
   return node_.IsMap() ? node_[key] : YAML::Node();
@@ -174,6 +178,32 @@ std::vector<Vec2> YamlMap::Points(const std::string& key, size_t min_count) {
                         "]': expected a point [x, y] in metres, got " + Got(p));
     }
     out.emplace_back(ToNumber(p[0], key, expected), ToNumber(p[1], key, expected));
+  }
+  return out;
+}
+
+std::vector<std::array<double, 3>> YamlMap::Points3(const std::string& key, size_t min_count, size_t max_count,
+                                                    double max_abs) {
+  const YAML::Node child = Child(key);
+  const std::string expected = "a list of " + std::to_string(min_count) + " to " + std::to_string(max_count) +
+                               " points [x, y, z] in metres";
+  if (!child.IsSequence() || child.size() < min_count || child.size() > max_count) Fail(key, expected);
+  std::vector<std::array<double, 3>> out;
+  for (size_t i = 0; i < child.size(); ++i) {
+    const YAML::Node p = child[i];
+    std::array<double, 3> v{};
+    bool ok = p.IsSequence() && p.size() == 3;
+    for (size_t k = 0; ok && k < 3; ++k) {
+      ok = p[k].IsScalar() && YAML::convert<double>::decode(p[k], v[k]) && std::isfinite(v[k]) &&
+           std::abs(v[k]) <= max_abs;
+    }
+    if (!ok) {
+      std::ostringstream limit;
+      limit << max_abs;
+      throw ConfigError(Where(p) + ": key '" + Path(key) + "[" + std::to_string(i) +
+                        "]': expected a point [x, y, z] in metres (|x| <= " + limit.str() + "), got " + Got(p));
+    }
+    out.push_back(v);
   }
   return out;
 }

@@ -23,6 +23,9 @@ class YamlMap {
   YamlMap(YAML::Node node, std::string file, std::string prefix);
 
   bool Has(const std::string& key) const;
+  /// Whether the key holds a plain value / a mapping (false when absent).
+  bool IsScalar(const std::string& key) const;
+  bool IsMap(const std::string& key) const;
 
   double Number(const std::string& key, double fallback, double min, double max);
   double RequireNumber(const std::string& key, double min, double max);
@@ -38,6 +41,9 @@ class YamlMap {
                               bool nonzero = false);
   Vec2 Point(const std::string& key);
   std::vector<Vec2> Points(const std::string& key, size_t min_count);
+  /// A list of [x, y, z] points, each coordinate within ±max_abs.
+  std::vector<std::array<double, 3>> Points3(const std::string& key, size_t min_count, size_t max_count,
+                                             double max_abs);
   std::vector<std::string> Strings(const std::string& key, const std::vector<std::string>& fallback);
   /// A nested mapping; an absent key yields an empty mapping (all defaults).
   YamlMap Map(const std::string& key);
