@@ -155,12 +155,6 @@ std::string CheckMassProperties(const SceneObject& object) {
 
 // ---- YAML ------------------------------------------------------------------
 
-std::string Where(const std::string& file, const YAML::Node& node) {
-  const YAML::Mark mark = node.Mark();
-  if (mark.is_null()) return file;
-  return file + ":" + std::to_string(mark.line + 1) + ":" + std::to_string(mark.column + 1);
-}
-
 Matrix3d ReadRotation(YamlMap& map) {
   Matrix3d out = Matrix3d::Identity();
   const bool has_matrix = map.Has("rotation");

@@ -43,6 +43,7 @@ struct PhysicsWorld::Bullet {
 };
 
 struct PhysicsWorld::Body {
+  std::vector<std::unique_ptr<btCollisionShape>> parts;  ///< a compound's children: outlive it
   std::unique_ptr<btCollisionShape> shape;
   std::unique_ptr<btRigidBody> body;
   btTransform spawn;
@@ -143,6 +144,35 @@ BodyId PhysicsWorld::AddDynamicSphere(const Vec3d& center, double radius, double
   b->shape = std::make_unique<btSphereShape>(radius);
   b->spawn = btTransform(btQuaternion::getIdentity(), ToBt(center));
   b->body = MakeBody(b->shape.get(), mass, b->spawn, material);
+  bullet_->world.addRigidBody(b->body.get());
+  return AddBody(std::move(b));
+}
+
+BodyId PhysicsWorld::AddRigidBody(std::unique_ptr<btCollisionShape> shape,
+                                  std::vector<std::unique_ptr<btCollisionShape>> parts, double mass,
+                                  const Vec3d& principal_inertia, const Pose& pose,
+                                  const PhysicsMaterial& material) {
+  if (!shape) throw std::invalid_argument("PhysicsWorld: AddRigidBody without a shape");
+  if (!(mass >= 0.0) || !std::isfinite(mass)) {
+    throw std::invalid_argument("PhysicsWorld: body mass must be finite and >= 0");
+  }
+  if (mass > 0.0) {
+    for (double i : principal_inertia) CheckPositive(i, "principal inertia");
+  }
+  const auto& q = pose.orientation;
+  btQuaternion rotation(q[1], q[2], q[3], q[0]);
+  CheckPositive(rotation.length(), "pose quaternion length");
+  rotation.normalize();
+  auto b = std::make_unique<Body>();
+  b->parts = std::move(parts);
+  b->shape = std::move(shape);
+  b->spawn = btTransform(rotation, ToBt(pose.position));
+  const btVector3 inertia = mass > 0.0 ? ToBt(principal_inertia) : btVector3(0, 0, 0);
+  btRigidBody::btRigidBodyConstructionInfo info(mass, nullptr, b->shape.get(), inertia);
+  info.m_startWorldTransform = b->spawn;
+  info.m_friction = material.friction;
+  info.m_restitution = material.restitution;
+  b->body = std::make_unique<btRigidBody>(info);
   bullet_->world.addRigidBody(b->body.get());
   return AddBody(std::move(b));
 }

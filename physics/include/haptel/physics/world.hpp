@@ -28,6 +28,7 @@
 #include "haptel/haptics/hal.hpp"
 #include "haptel/physics/proxy_hand.hpp"
 
+class btCollisionShape;
 class btDiscreteDynamicsWorld;
 class btRigidBody;
 
@@ -86,6 +87,15 @@ class PhysicsWorld {
                        const PhysicsMaterial& material = {});
   BodyId AddDynamicSphere(const Vec3d& center, double radius, double mass,
                           const PhysicsMaterial& material = {});
+  /// A body of any Bullet shape (for scene builders, see scene_builder.hpp).
+  /// The world owns `shape` and `parts` (the children a compound `shape`
+  /// refers to). `pose` places the body frame — for a dynamic body at its
+  /// centre of mass along its principal axes; mass 0 makes the body static;
+  /// `principal_inertia` (kg·m², body frame) is ignored when static.
+  BodyId AddRigidBody(std::unique_ptr<btCollisionShape> shape,
+                      std::vector<std::unique_ptr<btCollisionShape>> parts, double mass,
+                      const Vec3d& principal_inertia, const Pose& pose,
+                      const PhysicsMaterial& material = {});
   /// The proxy hand of `side` (one per side; a second call returns the first).
   ProxyHand& AddHand(Side side);
   ProxyHand* hand(Side side) { return hands_[haptics::Index(side)].get(); }
