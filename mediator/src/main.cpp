@@ -18,6 +18,7 @@
 #include "haptel/mediator/session.hpp"
 #include "gravity_bench.hpp"
 #include "servo_bench.hpp"
+#include "skip_bench.hpp"
 
 namespace {
 
@@ -29,6 +30,7 @@ constexpr const char* kUsage =
     "       haptel calibrate [options]   calibrate a haptic device (--help for options)\n"
     "       haptel bench servo [options] servo loop benchmark (--help for options)\n"
     "       haptel bench gravity [options] gravity compensation benchmark\n"
+    "       haptel bench skip [options]  physics CPU per simulated second: no world, hands, sleeping bodies\n"
     "\n"
     "haptel run options:\n"
     "  --config FILE        run configuration (default config/haptel.yaml)\n"
@@ -85,7 +87,8 @@ int main(int argc, char** argv) {
     const std::string which = argc > 2 ? argv[2] : "";
     if (which == "servo") return bench::BenchServoMain(argc - 2, argv + 2);
     if (which == "gravity") return bench::BenchGravityMain(argc - 2, argv + 2);
-    std::fprintf(stderr, "haptel bench: expected one of: servo, gravity (got '%s')\n", which.c_str());
+    if (which == "skip") return bench::BenchSkipMain(argc - 2, argv + 2);
+    std::fprintf(stderr, "haptel bench: expected one of: servo, gravity, skip (got '%s')\n", which.c_str());
     return 2;
   }
   SessionSetup setup;

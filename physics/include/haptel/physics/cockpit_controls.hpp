@@ -1,0 +1,91 @@
+#pragma once
+/// @file The physical controls of the cockpit interfaces: a steering wheel on
+/// a hinge and a throttle lever on a slider, as Bullet bodies the proxy hands
+/// touch, push and grasp (config/interfaces/cockpit*.yaml).
+///
+/// Device frame (x forward, y left, z up). The wheel is a rim of radius
+/// `wheel_radius` in the y–z plane, centred on `wheel_hub`, turning about the
+/// hinge axis −x (pointing at the driver): a positive angle is a turn to the
+/// left (counter-clockwise seen by the driver), limited to ±wheel_max_angle.
+/// The throttle is a knob sliding along x through `throttle_centre`, positive
+/// forward, limited to ±throttle_travel.
+///
+/// Physics does not depend on interfaces: Read and Apply use the plain
+/// structs below, field for field the interfaces' CockpitControls and
+/// ControlActuation (cockpit_logic.hpp); the interface layer translates.
+///
+/// The controls live in a PhysicsWorld that must outlive them, and are used
+/// only from the thread that steps it. Build them before the world's Start.
+#include <array>
+#include <memory>
+
+#include "haptel/config/cockpit.hpp"
+#include "haptel/config/physics.hpp"
+
+class btRigidBody;
+
+namespace haptel::physics {
+
+class PhysicsWorld;
+
+/// What the controls report (interfaces::CockpitControls, plus contact counts).
+struct ControlsState {
+  double wheel_angle = 0.0;    ///< rad, + = turned left
+  double throttle = 0.0;       ///< m from centre, + = forward
+  bool wheel_held = false;     ///< a proxy hand body touches the rim
+  bool throttle_held = false;  ///< a proxy hand body touches the knob
+  int wheel_contacts = 0;      ///< hand bodies touching the rim (palm, phalanges; both hands)
+  int throttle_contacts = 0;   ///< hand bodies touching the knob
+};
+
+/// What the controls must feel (interfaces::ControlActuation). Kept until the
+/// next Apply: the world may step several times between two calls.
+struct ControlsActuation {
+  double wheel_torque = 0.0;     ///< N·m about the hinge, + = toward left
+  double wheel_spring = 0.0;     ///< N·m/rad toward angle 0
+  double throttle_spring = 0.0;  ///< N/m toward throttle_target
+  double throttle_target = 0.0;  ///< m
+  bool throttle_locked = false;  ///< hold the lever at throttle_target rigidly
+};
+
+/// Bodies of the controls (beyond the positions in CockpitConfig).
+struct ControlsBodyConfig {
+  double wheel_mass = 0.3;      ///< kg, the rim
+  double rim_radius = 0.012;    ///< m, half the rim's thickness
+  int rim_segments = 16;        ///< capsules approximating the torus
+  double wheel_damping = 0.02;  ///< N·m·s/rad, steering column
+  double knob_mass = 0.1;       ///< kg
+  std::array<double, 3> knob_half_extents{0.015, 0.015, 0.025};  ///< m
+  double throttle_damping = 1.0;                                 ///< N·s/m
+  PhysicsMaterial material{1.0, 0.0};                            ///< rubbery: fingers grip it
+  double contact_distance = 0.002;  ///< m, a manifold point this close counts as touching
+};
+
+class CockpitControlsBody {
+ public:
+  /// Adds the wheel, the lever and their joints to `world` (the world's
+  /// gravity does not act on them). Throws std::invalid_argument on bad sizes.
+  CockpitControlsBody(PhysicsWorld& world, const CockpitConfig& cockpit,
+                      const ControlsBodyConfig& bodies = {});
+  ~CockpitControlsBody();
+  CockpitControlsBody(const CockpitControlsBody&) = delete;
+  CockpitControlsBody& operator=(const CockpitControlsBody&) = delete;
+
+  /// Angle, position and which controls the world's proxy hands touch (from
+  /// the dispatcher's contact manifolds of the latest step). A control whose
+  /// pose or velocity is not finite is first put back at zero, at rest.
+  ControlsState Read();
+  /// Sets the torque, springs and lock; they act on every following step.
+  void Apply(const ControlsActuation& actuation);
+
+  /// Controls put back after a NaN/Inf.
+  int resets() const;
+  btRigidBody& wheel_body();
+  btRigidBody& throttle_body();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace haptel::physics

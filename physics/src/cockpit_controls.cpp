@@ -1,0 +1,282 @@
+#include "haptel/physics/cockpit_controls.hpp"
+
+#include <btBulletDynamicsCommon.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "bullet_util.hpp"
+#include "haptel/physics/world.hpp"
+
+// ---------------------------------------------------------------------------
+// Which Bullet formulation, and why
+//
+// Each control is ONE btGeneric6DofSpring2Constraint to the fixed world (the
+// one-body constructor), like the proxy hand's joints: five axes locked, one
+// free between its end stops (wheel: angular X within ±max angle — the first
+// axis of RO_XYZ has the full ±π range; throttle: linear X within ±travel).
+// Everything the interface asks for is an axis setting that persists across
+// steps, solved with the contacts in the same sequential-impulse pass:
+//   - the return-to-zero spring and the column's damping: Bullet's own spring
+//     on the free axis (explicit; the values are far below its clamp: 0.6
+//     N·m/rad on 4.3e-3 kg·m² is ω·h ≈ 0.012, 60 N/m on 0.1 kg ω·h ≈ 0.025);
+//   - the wheel torque (shake): the axis's motor, not a servo, with a target
+//     velocity far out of reach in the torque's direction and a maximum force
+//     of |torque|, i.e. a constant torque inside the solver;
+//   - the throttle lock: the free axis's limits set to [target, target] (a
+//     hard stop row, like the locked axes), restored to ±travel on release.
+// Not chosen: btHingeConstraint / btSliderConstraint (no spring, and a second
+// set of conventions next to the hand's), and applyTorque / applyCentralForce
+// (Bullet clears them after each step, and PhysicsWorld has no pre-step hook
+// for bodies other than the hands).
+//
+// Bullet reports the 6-DoF angle about X as the rotation of the body about
+// −X (proxy_hand.cpp, SetTargets): with the frame's X along world +x that is
+// exactly the wheel angle about −x (+ = left), so the limits, the spring's
+// equilibrium and the motor's direction use the wheel angle as is.
+// ---------------------------------------------------------------------------
+
+namespace haptel::physics {
+namespace {
+
+/// The controls' collision group: they collide with the hands and dynamic
+/// bodies, not with static ones (a table under the wheel must not jam it).
+constexpr int kControlsGroup = 256;
+constexpr int kControlsMask =
+    btBroadphaseProxy::AllFilter & ~btBroadphaseProxy::StaticFilter & ~kControlsGroup;
+/// Motor target speed standing for "as fast as the torque can push".
+constexpr double kUnreachableSpeed = 1e4;
+
+void CheckPositive(double value, const char* what) {
+  if (!(value > 0.0) || !std::isfinite(value)) {
+    throw std::invalid_argument(std::string("CockpitControlsBody: ") + what +
+                                " must be finite and > 0");
+  }
+}
+
+}  // namespace
+
+struct CockpitControlsBody::Impl {
+  struct Control {
+    std::unique_ptr<btCollisionShape> shape;
+    std::vector<std::unique_ptr<btCollisionShape>> children;
+    std::unique_ptr<btRigidBody> body;
+    std::unique_ptr<btGeneric6DofSpring2Constraint> joint;
+    btTransform spawn;
+  };
+
+  PhysicsWorld& world;
+  CockpitConfig cockpit;
+  ControlsBodyConfig config;
+  double max_angle;
+  Control wheel;
+  Control knob;
+  bool locked = false;
+  int resets = 0;
+
+  Impl(PhysicsWorld& w, const CockpitConfig& c, const ControlsBodyConfig& b)
+      : world(w), cockpit(c), config(b), max_angle(c.wheel_max_angle_deg * M_PI / 180.0) {
+    CheckPositive(cockpit.wheel_radius, "wheel_radius");
+    CheckPositive(max_angle, "wheel_max_angle_deg");
+    if (max_angle >= M_PI)
+      throw std::invalid_argument("CockpitControlsBody: wheel_max_angle_deg must be < 180");
+    CheckPositive(cockpit.throttle_travel, "throttle_travel");
+    CheckPositive(config.wheel_mass, "wheel_mass");
+    CheckPositive(config.rim_radius, "rim_radius");
+    CheckPositive(config.knob_mass, "knob_mass");
+    for (double e : config.knob_half_extents) CheckPositive(e, "knob half extent");
+    if (config.rim_segments < 6)
+      throw std::invalid_argument("CockpitControlsBody: rim_segments must be >= 6");
+    BuildWheel();
+    BuildKnob();
+  }
+
+  ~Impl() {
+    btDiscreteDynamicsWorld& bw = world.bullet();
+    for (Control* c : {&wheel, &knob}) {
+      bw.removeConstraint(c->joint.get());
+      bw.removeRigidBody(c->body.get());
+    }
+  }
+
+  void AddBody(Control& c, double mass, const btVector3& inertia) {
+    btRigidBody::btRigidBodyConstructionInfo info(mass, nullptr, c.shape.get(), inertia);
+    info.m_startWorldTransform = c.spawn;
+    info.m_friction = config.material.friction;
+    info.m_restitution = config.material.restitution;
+    c.body = std::make_unique<btRigidBody>(info);
+    // Two bodies: never asleep, so a new actuation acts without waking them.
+    c.body->setActivationState(DISABLE_DEACTIVATION);
+    c.body->setFlags(c.body->getFlags() | BT_DISABLE_WORLD_GRAVITY);
+    world.bullet().addRigidBody(c.body.get(), kControlsGroup, kControlsMask);
+    c.body->setGravity(btVector3(0, 0, 0));
+  }
+
+  void BuildWheel() {
+    const double r = cockpit.wheel_radius;
+    const int n = config.rim_segments;
+    auto compound = std::make_unique<btCompoundShape>();
+    // n capsules along the chords of the rim circle; their round ends overlap.
+    const double half_angle = M_PI / n;
+    const double chord = 2.0 * r * std::sin(half_angle);
+    const double centre = r * std::cos(half_angle);
+    for (int i = 0; i < n; ++i) {
+      const btQuaternion q(btVector3(1, 0, 0), (2 * i + 1) * half_angle);
+      const btMatrix3x3 basis(q);
+      // Capsule axis (local y) tangent, its centre at local z on the chord.
+      auto capsule = std::make_unique<btCapsuleShape>(config.rim_radius, chord);
+      compound->addChildShape(btTransform(basis, basis * btVector3(0, 0, centre)), capsule.get());
+      wheel.children.push_back(std::move(capsule));
+    }
+    wheel.shape = std::move(compound);
+    wheel.spawn = btTransform(btQuaternion::getIdentity(), ToBt(cockpit.wheel_hub));
+    // A thin ring: m·r² about its axis, m·r²/2 about a diameter.
+    const double m = config.wheel_mass;
+    AddBody(wheel, m, btVector3(m * r * r, 0.5 * m * r * r, 0.5 * m * r * r));
+
+    wheel.joint = std::make_unique<btGeneric6DofSpring2Constraint>(
+        *wheel.body, btTransform::getIdentity(), RO_XYZ);
+    btGeneric6DofSpring2Constraint& j = *wheel.joint;
+    j.setLinearLowerLimit(btVector3(0, 0, 0));
+    j.setLinearUpperLimit(btVector3(0, 0, 0));
+    j.setAngularLowerLimit(btVector3(-max_angle, 0, 0));
+    j.setAngularUpperLimit(btVector3(max_angle, 0, 0));
+    j.enableSpring(3, true);
+    j.setStiffness(3, 0.0);
+    j.setDamping(3, config.wheel_damping);
+    j.setEquilibriumPoint(3, 0.0);
+    world.bullet().addConstraint(&j, true);
+  }
+
+  void BuildKnob() {
+    const auto& he = config.knob_half_extents;
+    auto box = std::make_unique<btBoxShape>(ToBt(he));
+    box->setMargin(BoxMargin(he));
+    btVector3 inertia;
+    box->calculateLocalInertia(config.knob_mass, inertia);
+    knob.shape = std::move(box);
+    knob.spawn = btTransform(btQuaternion::getIdentity(), ToBt(cockpit.throttle_centre));
+    AddBody(knob, config.knob_mass, inertia);
+
+    knob.joint = std::make_unique<btGeneric6DofSpring2Constraint>(
+        *knob.body, btTransform::getIdentity(), RO_XYZ);
+    btGeneric6DofSpring2Constraint& j = *knob.joint;
+    j.setLinearLowerLimit(btVector3(-cockpit.throttle_travel, 0, 0));
+    j.setLinearUpperLimit(btVector3(cockpit.throttle_travel, 0, 0));
+    j.setAngularLowerLimit(btVector3(0, 0, 0));
+    j.setAngularUpperLimit(btVector3(0, 0, 0));
+    j.enableSpring(0, true);
+    j.setStiffness(0, 0.0);
+    j.setDamping(0, config.throttle_damping);
+    j.setEquilibriumPoint(0, 0.0);
+    world.bullet().addConstraint(&j, true);
+  }
+
+  double WheelAngle() const {
+    // Where the rim's top (body +z) points, seen along the hinge axis.
+    const btVector3 top = wheel.body->getWorldTransform().getBasis().getColumn(2);
+    return std::atan2(top.y(), top.z());
+  }
+  double Throttle() const {
+    return knob.body->getWorldTransform().getOrigin().x() - knob.spawn.getOrigin().x();
+  }
+
+  void PutBack(Control& c) {
+    btRigidBody& b = *c.body;
+    b.setWorldTransform(c.spawn);
+    b.setInterpolationWorldTransform(c.spawn);
+    b.setLinearVelocity(btVector3(0, 0, 0));
+    b.setAngularVelocity(btVector3(0, 0, 0));
+    b.setInterpolationLinearVelocity(btVector3(0, 0, 0));
+    b.setInterpolationAngularVelocity(btVector3(0, 0, 0));
+    b.clearForces();
+    ForgetContacts(world.bullet(), b);
+    ++resets;
+  }
+
+  /// Hand bodies touching `c`, counted once each (a compound rim has one
+  /// manifold per touching capsule).
+  int HandContacts(const btRigidBody& control, const std::vector<const btRigidBody*>& hand) const {
+    std::vector<bool> touching(hand.size(), false);
+    btDispatcher& d = *world.bullet().getDispatcher();
+    for (int m = 0; m < d.getNumManifolds(); ++m) {
+      const btPersistentManifold& pm = *d.getManifoldByIndexInternal(m);
+      const btCollisionObject* other = nullptr;
+      if (pm.getBody0() == &control)
+        other = pm.getBody1();
+      else if (pm.getBody1() == &control)
+        other = pm.getBody0();
+      if (other == nullptr) continue;
+      const auto it = std::find(hand.begin(), hand.end(), other);
+      if (it == hand.end()) continue;
+      for (int p = 0; p < pm.getNumContacts(); ++p) {
+        if (pm.getContactPoint(p).getDistance() <= config.contact_distance) {
+          touching[static_cast<size_t>(it - hand.begin())] = true;
+          break;
+        }
+      }
+    }
+    return static_cast<int>(std::count(touching.begin(), touching.end(), true));
+  }
+
+  ControlsState Read() {
+    for (Control* c : {&wheel, &knob}) {
+      if (!IsFinite(*c->body)) PutBack(*c);
+    }
+    std::vector<const btRigidBody*> hand;
+    for (Side side : {Side::kLeft, Side::kRight}) {
+      ProxyHand* h = world.hand(side);
+      if (h == nullptr) continue;
+      hand.push_back(&h->palm_body());
+      for (int f = 0; f < kFingers; ++f) {
+        for (int p = 0; p < kPhalanges; ++p) hand.push_back(&h->phalanx_body(f, p));
+      }
+    }
+    ControlsState s;
+    s.wheel_angle = WheelAngle();
+    s.throttle = Throttle();
+    s.wheel_contacts = HandContacts(*wheel.body, hand);
+    s.throttle_contacts = HandContacts(*knob.body, hand);
+    s.wheel_held = s.wheel_contacts > 0;
+    s.throttle_held = s.throttle_contacts > 0;
+    return s;
+  }
+
+  void Apply(const ControlsActuation& a) {
+    btGeneric6DofSpring2Constraint& w = *wheel.joint;
+    const double torque = std::isfinite(a.wheel_torque) ? a.wheel_torque : 0.0;
+    w.enableMotor(3, torque != 0.0);
+    w.setMaxMotorForce(3, std::abs(torque));
+    w.setTargetVelocity(3, torque > 0.0 ? kUnreachableSpeed : -kUnreachableSpeed);
+    w.setStiffness(3, std::isfinite(a.wheel_spring) ? std::max(0.0, a.wheel_spring) : 0.0);
+
+    btGeneric6DofSpring2Constraint& t = *knob.joint;
+    const double travel = cockpit.throttle_travel;
+    const double target =
+        std::isfinite(a.throttle_target) ? std::clamp(a.throttle_target, -travel, travel) : 0.0;
+    t.setStiffness(0, std::isfinite(a.throttle_spring) ? std::max(0.0, a.throttle_spring) : 0.0);
+    t.setEquilibriumPoint(0, target);
+    if (a.throttle_locked) {
+      t.setLimit(0, target, target);
+    } else if (locked) {
+      t.setLimit(0, -travel, travel);
+    }
+    locked = a.throttle_locked;
+  }
+};
+
+CockpitControlsBody::CockpitControlsBody(PhysicsWorld& world, const CockpitConfig& cockpit,
+                                         const ControlsBodyConfig& bodies)
+    : impl_(std::make_unique<Impl>(world, cockpit, bodies)) {}
+CockpitControlsBody::~CockpitControlsBody() = default;
+
+ControlsState CockpitControlsBody::Read() { return impl_->Read(); }
+void CockpitControlsBody::Apply(const ControlsActuation& actuation) { impl_->Apply(actuation); }
+int CockpitControlsBody::resets() const { return impl_->resets; }
+btRigidBody& CockpitControlsBody::wheel_body() { return *impl_->wheel.body; }
+btRigidBody& CockpitControlsBody::throttle_body() { return *impl_->knob.body; }
+
+}  // namespace haptel::physics
