@@ -19,11 +19,7 @@ MotorCommand CockpitLogic::Map(const CockpitControls& c, double t_s) const {
   const double turn = config_.turn_share * std::clamp(c.wheel_angle / full, -1.0, 1.0);
   const double forward =
       throttle_locked(t_s) ? 0.0 : std::clamp(c.throttle / config_.throttle_travel, -1.0, 1.0);
-  MotorCommand cmd{forward - turn, forward + turn};
-  const double largest = std::max({1.0, std::abs(cmd.left), std::abs(cmd.right)});
-  cmd.left /= largest;
-  cmd.right /= largest;
-  return cmd;
+  return Mix(forward, turn);
 }
 
 CockpitControls CockpitLogic::ControlsFor(const DriveIntent& intent) const {

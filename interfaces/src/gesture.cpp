@@ -37,11 +37,7 @@ MotorCommand GestureInterface::Map(const Vec3d& hand) const {
   const double forward = Shape(hand[0] - config_.neutral[0], config_.dead_zone, config_.full_forward);
   const double turn =
       config_.turn_share * Shape(hand[1] - config_.neutral[1], config_.dead_zone, config_.full_turn);
-  MotorCommand cmd{forward - turn, forward + turn};
-  const double largest = std::max({1.0, std::abs(cmd.left), std::abs(cmd.right)});
-  cmd.left /= largest;
-  cmd.right /= largest;
-  return cmd;
+  return Mix(forward, turn);
 }
 
 HandTargets GestureInterface::HandTargetsFor(const DriveIntent& intent) const {

@@ -22,6 +22,10 @@ struct MotorCommand {
   double right = 0.0;
 };
 
+/// Differential mix: left = forward − turn, right = forward + turn, scaled
+/// down together (keeping their ratio) when either leaves [-1, 1].
+MotorCommand Mix(double forward, double turn);
+
 /// What the vehicle reports that an interface reacts to.
 struct VehicleFeedback {
   bool bumper_left = false;
