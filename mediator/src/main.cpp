@@ -18,7 +18,9 @@
 #include "haptel/mediator/session.hpp"
 #include "gravity_bench.hpp"
 #include "servo_bench.hpp"
+#include "physics_bench.hpp"
 #include "skip_bench.hpp"
+#include "stability_bench.hpp"
 
 namespace {
 
@@ -31,6 +33,8 @@ constexpr const char* kUsage =
     "       haptel bench servo [options] servo loop benchmark (--help for options)\n"
     "       haptel bench gravity [options] gravity compensation benchmark\n"
     "       haptel bench skip [options]  physics CPU per simulated second: no world, hands, sleeping bodies\n"
+    "       haptel bench physics [options] work-precision diagram: step x solver iterations x float/double\n"
+    "       haptel bench stability [options] physics stress tests: stiffness, mass ratio, squash, grasp\n"
     "\n"
     "haptel run options:\n"
     "  --config FILE        run configuration (default config/haptel.yaml)\n"
@@ -88,7 +92,9 @@ int main(int argc, char** argv) {
     if (which == "servo") return bench::BenchServoMain(argc - 2, argv + 2);
     if (which == "gravity") return bench::BenchGravityMain(argc - 2, argv + 2);
     if (which == "skip") return bench::BenchSkipMain(argc - 2, argv + 2);
-    std::fprintf(stderr, "haptel bench: expected one of: servo, gravity, skip (got '%s')\n", which.c_str());
+    if (which == "physics") return bench::BenchPhysicsMain(argc - 2, argv + 2);
+    if (which == "stability") return bench::BenchStabilityMain(argc - 2, argv + 2);
+    std::fprintf(stderr, "haptel bench: expected one of: servo, gravity, skip, stability, physics (got '%s')\n", which.c_str());
     return 2;
   }
   SessionSetup setup;

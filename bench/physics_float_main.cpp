@@ -1,0 +1,43 @@
+// haptel-physics-bench-float: the float-precision half of `haptel bench
+// physics` (physics_bench.hpp). Built from the physics sources against float
+// Bullet; links nothing that uses double Bullet. Reads the trajectory and the
+// reference the parent wrote, measures the grid, prints one JSON line:
+// {"points":[…]}.
+#include <cstdio>
+#include <exception>
+#include <string>
+
+#include "haptel/config/physics.hpp"
+#include "haptel/core/args.hpp"
+#include "physics_measure.hpp"
+
+int main(int argc, char** argv) {
+  using namespace haptel;
+  using namespace haptel::bench;
+  try {
+    const Args args(argc, argv, {"physics", "trajectory", "reference"}, {});
+    const auto traj_file = args.Value("trajectory");
+    const auto ref_file = args.Value("reference");
+    if (!traj_file || !ref_file) throw UsageError("--trajectory FILE and --reference FILE are required");
+    const auto tr = wp::LoadTrajectory(*traj_file);
+    const auto ref = wp::LoadReference(*ref_file);
+    if (!tr || !ref) throw std::runtime_error("cannot read the trajectory or the reference");
+    PhysicsConfig config;
+    if (const auto p = args.Value("physics")) config = LoadPhysics(*p);
+    std::string out = "{\"points\":[";
+    bool first = true;
+    for (const double step_ms : wp::kStepsMs) {
+      for (const int iterations : wp::kIterations) {
+        const wp::Point p = wp::Measure(config, *tr, *ref, step_ms, iterations, "float");
+        if (!first) out += ',';
+        out += wp::ToJson(p, true);
+        first = false;
+      }
+    }
+    std::printf("%s]}\n", out.c_str());
+    return 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "haptel-physics-bench-float: %s\n", e.what());
+    return 1;
+  }
+}
