@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "haptel/haptics/vec_math.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/haptics/calibration.hpp"
 #include "haptel/config/device.hpp"
@@ -26,6 +27,7 @@ namespace {
 
 using haptics::GravityGrid;
 using haptics::Side;
+using haptics::Distance;
 using haptics::SimDevice;
 using haptics::Vec3d;
 
@@ -46,11 +48,6 @@ constexpr const char* kUsage =
 Vec3d CompensationCommand(const ArmCalibration& c, const GravityGrid* grid, const Vec3d& raw) {
   if (grid == nullptr) return {};
   return {0.0, 0.0, grid->Evaluate(haptics::TrackerToMetres(c, raw)) / c.force_slope[2]};
-}
-
-double Distance(const Vec3d& a, const Vec3d& b) {
-  return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
-                   (a[2] - b[2]) * (a[2] - b[2]));
 }
 
 std::string Num(double v) {

@@ -10,6 +10,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "haptel/core/clock.hpp"
+#include "haptel/haptics/vec_math.hpp"
 #include "haptel/physics/world.hpp"
 
 namespace haptel::bench::wp {
@@ -18,30 +20,9 @@ namespace {
 
 using haptics::HandSample;
 using haptics::Side;
+using haptics::AxisAngle;
+using haptics::Distance;
 using physics::PhysicsWorld;
-
-double ThreadCpuS() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-
-std::array<double, 4> AxisAngle(const Vec3d& axis, double angle) {
-  const double s = std::sin(0.5 * angle);
-  return {std::cos(0.5 * angle), axis[0] * s, axis[1] * s, axis[2] * s};
-}
-
-HandSample Tracked(const Vec3d& wrist, const std::array<double, 4>& q = {1, 0, 0, 0}) {
-  HandSample s;
-  s.valid = true;
-  s.position = wrist;
-  s.orientation = q;
-  return s;
-}
-
-double Distance(const Vec3d& a, const Vec3d& b) {
-  return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
-}
 
 PhysicsConfig WithSolver(const PhysicsConfig& base, double step_s, int iterations) {
   PhysicsConfig c = base;
@@ -79,10 +60,10 @@ Scenario Push(const PhysicsConfig& config, double* rest_mm, double* worst_mm) {
   double worst = 0.0, rest = 0.0, cpu = 0.0;
   for (long i = 0; i < steps; ++i) {
     z = std::max(target_z, z - 0.1 * h);
-    const double c0 = ThreadCpuS();
-    hand.SetTracked(Tracked({0.0, 0.0, z}));
+    const double c0 = ThreadCpuSeconds();
+    hand.SetTracked(haptics::TrackedHand({0.0, 0.0, z}));
     world.Step();
-    cpu += ThreadCpuS() - c0;
+    cpu += ThreadCpuSeconds() - c0;
     const double pen = half_thickness - hand.ProxyWrist().position[2];
     worst = std::max(worst, pen);
     if (i >= steps - last) rest += pen / static_cast<double>(last);
@@ -113,11 +94,11 @@ Scenario Grasp(const PhysicsConfig& config, double* slip_mm) {
     const long n = std::lround(seconds / h);
     for (long i = 0; i < n; ++i) {
       const double z = z_of(static_cast<double>(i) * h);
-      const double c0 = ThreadCpuS();
-      world.hand(Side::kLeft)->SetTracked(Tracked({x, -palm_y, z}, q_left));
-      world.hand(Side::kRight)->SetTracked(Tracked({x, palm_y, z}, q_right));
+      const double c0 = ThreadCpuSeconds();
+      world.hand(Side::kLeft)->SetTracked(haptics::TrackedHand({x, -palm_y, z}, q_left));
+      world.hand(Side::kRight)->SetTracked(haptics::TrackedHand({x, palm_y, z}, q_right));
       world.Step();
-      cpu += ThreadCpuS() - c0;
+      cpu += ThreadCpuSeconds() - c0;
     }
     return static_cast<double>(n) * h;
   };
@@ -156,7 +137,7 @@ HandSample Trajectory::At(double t) const {
     n += q[k] * q[k];
   }
   for (double& c : q) c /= std::sqrt(n);
-  return Tracked(p, q);
+  return haptics::TrackedHand(p, q);
 }
 
 Trajectory MakeTrajectory() {
@@ -243,10 +224,10 @@ std::vector<Vec3d> TrackRun(const PhysicsConfig& base, const Trajectory& tr, dou
   double cpu = 0.0;
   for (long k = 0; k < steps; ++k) {
     const HandSample s = tr.At(static_cast<double>(k) * step_s);
-    const double c0 = ThreadCpuS();
+    const double c0 = ThreadCpuSeconds();
     hand.SetTracked(s);
     world.Step();
-    cpu += ThreadCpuS() - c0;
+    cpu += ThreadCpuSeconds() - c0;
     // After step k the proxy is at t = (k + 1)·step.
     if (finer) {
       if ((k + 1) % stride == 0) out[static_cast<size_t>((k + 1) / stride)] = hand.ProxyWrist().position;

@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include "haptel/core/clock.hpp"
+#include "haptel/haptics/vec_math.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/physics.hpp"
@@ -30,12 +32,6 @@ using haptics::Side;
 
 constexpr double kWarmupS = 2.5;  ///< Bullet: asleep after 2 s at rest
 constexpr double kBoxHalf = 0.05;
-
-double ThreadCpuS() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
 
 struct Result {
   std::string name;
@@ -88,13 +84,10 @@ std::vector<SceneObject> FloorBoxes(int n) {
 }
 
 /// The operator's hands hovering above the table, moving gently (2 cm, 0.5 Hz).
-haptics::HandSample Tracked(Side side, double t) {
-  haptics::HandSample s;
-  s.valid = true;
+haptics::HandSample HoveringHand(Side side, double t) {
   const double x = side == Side::kLeft ? -0.25 : 0.25;
   const double w = 2.0 * M_PI * 0.5;
-  s.position = {x + 0.02 * std::sin(w * t), -0.1 + 0.02 * std::cos(w * t), 0.95};
-  return s;
+  return haptics::TrackedHand({x + 0.02 * std::sin(w * t), -0.1 + 0.02 * std::cos(w * t), 0.95});
 }
 
 void Run(physics::PhysicsWorld& world, double& t, double seconds) {
@@ -102,7 +95,7 @@ void Run(physics::PhysicsWorld& world, double& t, double seconds) {
   const long steps = std::lround(seconds / h);
   for (long i = 0; i < steps; ++i) {
     for (Side side : {Side::kLeft, Side::kRight}) {
-      if (physics::ProxyHand* hand = world.hand(side)) hand->SetTracked(Tracked(side, t));
+      if (physics::ProxyHand* hand = world.hand(side)) hand->SetTracked(HoveringHand(side, t));
     }
     world.Step();
     t += h;
@@ -125,9 +118,9 @@ Result MeasureCockpit(const PhysicsConfig& config, const Scene& table, int boxes
   double t = 0.0;
   Run(*world, t, kWarmupS);
   const long steps_before = static_cast<long>(world->Counters().steps);
-  const double cpu0 = ThreadCpuS();
+  const double cpu0 = ThreadCpuSeconds();
   Run(*world, t, seconds);
-  r.cpu_s = ThreadCpuS() - cpu0;
+  r.cpu_s = ThreadCpuSeconds() - cpu0;
   r.steps = static_cast<long>(world->Counters().steps) - steps_before;
   r.sim_s = static_cast<double>(r.steps) * config.step_s;
   for (const physics::SceneBody& node : built.nodes) {

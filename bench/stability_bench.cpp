@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "haptel/haptics/vec_math.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/physics.hpp"
 #include "haptel/core/args.hpp"
@@ -24,6 +25,8 @@ namespace {
 
 using haptics::HandSample;
 using haptics::Side;
+using haptics::AxisAngle;
+using haptics::Distance;
 using physics::PhysicsWorld;
 using physics::Vec3d;
 
@@ -36,19 +39,6 @@ std::string Number(double v) {
 
 double WallS() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
-std::array<double, 4> AxisAngle(const Vec3d& axis, double angle) {
-  const double s = std::sin(0.5 * angle);
-  return {std::cos(0.5 * angle), axis[0] * s, axis[1] * s, axis[2] * s};
-}
-
-HandSample Tracked(const Vec3d& wrist, const std::array<double, 4>& q = {1, 0, 0, 0}) {
-  HandSample s;
-  s.valid = true;
-  s.position = wrist;
-  s.orientation = q;
-  return s;
 }
 
 double Norm(const btVector3& v) { return v.length(); }
@@ -135,7 +125,7 @@ StiffRun RunStiffness(const PhysicsConfig& base, double h, double k) {
     const double t = static_cast<double>(i) * h;
     Vec3d target = home;
     if (t >= 0.5) target[0] += 0.02;  // a 2 cm jump
-    hand.SetTracked(Tracked(target));
+    hand.SetTracked(haptics::TrackedHand(target));
     const bool push = t >= 1.0 && t < 1.5;
     if (push) {
       palm.activate();
@@ -283,8 +273,8 @@ struct Grip {
   /// Tracked palms at `depth` inside the box's faces (negative: a gap), box centre at `y0`.
   void Step(double depth, double z, double y0 = 0.0) {
     const double y = half + he_z - depth;
-    world.hand(Side::kLeft)->SetTracked(Tracked({x, y0 - y, z}, q_left));
-    world.hand(Side::kRight)->SetTracked(Tracked({x, y0 + y, z}, q_right));
+    world.hand(Side::kLeft)->SetTracked(haptics::TrackedHand({x, y0 - y, z}, q_left));
+    world.hand(Side::kRight)->SetTracked(haptics::TrackedHand({x, y0 + y, z}, q_right));
     world.Step();
   }
 };

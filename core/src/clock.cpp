@@ -14,6 +14,7 @@ int64_t Read(clockid_t id) {
 
 int64_t MonotonicNs() { return Read(CLOCK_MONOTONIC); }
 int64_t WallNs() { return Read(CLOCK_REALTIME); }
+double ThreadCpuSeconds() { return NsToS(Read(CLOCK_THREAD_CPUTIME_ID)); }
 
 void SleepUntilNs(int64_t monotonic_ns) {
   timespec ts{};

@@ -3,6 +3,7 @@
 #include <limits>
 
 #include "haptel/haptics/force_field.hpp"
+#include "haptel/haptics/vec_math.hpp"
 
 using namespace haptel::haptics;
 
@@ -16,7 +17,6 @@ ForceField Centring(double k, double k2, double b) {
   f.damping = b;
   return f;
 }
-double Norm(const Vec3d& v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
 }  // namespace
 
 TEST_CASE("a disabled field exerts no force") {

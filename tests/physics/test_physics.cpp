@@ -7,6 +7,7 @@
 #include <fstream>
 #include <limits>
 
+#include "haptel/haptics/vec_math.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/physics.hpp"
@@ -19,29 +20,13 @@ namespace {
 
 using haptel::PhysicsConfig;
 using haptel::haptics::HandSample;
+using haptel::haptics::AxisAngle;
+using haptel::haptics::Distance;
 using haptel::haptics::Side;
+using haptel::haptics::TrackedHand;
 using haptel::physics::PhysicsWorld;
 using haptel::physics::Vec3d;
 namespace ph = haptel::physics;
-
-/// Quaternion (w, x, y, z) of a rotation by `angle` about a unit axis.
-std::array<double, 4> AxisAngle(const Vec3d& axis, double angle) {
-  const double s = std::sin(0.5 * angle);
-  return {std::cos(0.5 * angle), axis[0] * s, axis[1] * s, axis[2] * s};
-}
-
-HandSample Tracked(const Vec3d& wrist, const std::array<double, 4>& q = {1, 0, 0, 0}) {
-  HandSample s;
-  s.valid = true;
-  s.position = wrist;
-  s.orientation = q;
-  return s;
-}
-
-double Distance(const Vec3d& a, const Vec3d& b) {
-  return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
-                   (a[2] - b[2]) * (a[2] - b[2]));
-}
 
 /// Angle (rad) between two unit quaternions.
 double AngleBetween(const std::array<double, 4>& a, const std::array<double, 4>& b) {
@@ -114,10 +99,10 @@ TEST_CASE("physics: the proxy palm follows a moving tracked wrist", "[physics]")
   for (int i = 0; i < moving; ++i) {
     const double t = i * h;
     p = {0.2 * t * 0.8, 0.2 * t * 0.6, 0.1};
-    Run(world, Side::kRight, Tracked(p, AxisAngle({0, 0, 1}, 1.2 * t)), 1);
+    Run(world, Side::kRight, TrackedHand(p, AxisAngle({0, 0, 1}, 1.2 * t)), 1);
     if (i > 100) worst_moving = std::max(worst_moving, Distance(hand.ProxyWrist().position, p));
   }
-  const HandSample hold = Tracked(p, AxisAngle({0, 0, 1}, 1.2 * moving * h));
+  const HandSample hold = TrackedHand(p, AxisAngle({0, 0, 1}, 1.2 * moving * h));
   Run(world, Side::kRight, hold, 500);
   const double steady = Distance(hand.ProxyWrist().position, hold.position);
   INFO("error while moving at 0.2 m/s: " << worst_moving * 1e3 << " mm; at rest: " << steady * 1e3
@@ -133,13 +118,13 @@ TEST_CASE("physics: finger joints follow the glove angles", "[physics]") {
   PhysicsWorld world{PhysicsConfig{}};
   world.AddHand(Side::kLeft);
   ph::ProxyHand& hand = *world.hand(Side::kLeft);
-  HandSample s = Tracked({0.0, 0.0, 0.2});
+  HandSample s = TrackedHand({0.0, 0.0, 0.2});
   s.finger_angles[4] = 0.6;   // index MCP
   s.finger_angles[5] = 0.8;   // index PIP
   s.finger_angles[6] = 0.4;   // index DIP
   s.finger_angles[16] = 0.2;  // index-middle abduction
   s.finger_angles[1] = 0.5;   // thumb MCP
-  Run(world, Side::kLeft, Tracked({0.0, 0.0, 0.2}), 10);
+  Run(world, Side::kLeft, TrackedHand({0.0, 0.0, 0.2}), 10);
   Run(world, Side::kLeft, s, 1500);
   CHECK(hand.FlexionAngle(ph::kIndex, 0) == Approx(0.6).margin(0.01));
   CHECK(hand.FlexionAngle(ph::kIndex, 1) == Approx(0.8).margin(0.01));
@@ -168,7 +153,7 @@ TEST_CASE("physics: a 10 N push into a table penetrates a few millimetres at mos
   double worst = 0.0;
   for (int i = 0; i < 2000; ++i) {
     z = std::max(target_z, z - 0.1 * world.config().step_s);
-    Run(world, Side::kRight, Tracked({0.0, 0.0, z}), 1);
+    Run(world, Side::kRight, TrackedHand({0.0, 0.0, z}), 1);
     worst = std::max(worst, half_thickness - hand.ProxyWrist().position[2]);
   }
   const double palm_z = hand.ProxyWrist().position[2];
@@ -197,7 +182,7 @@ TEST_CASE("physics: a NaN body resets its hand to the tracked pose and the world
   const ph::BodyId ball = world.AddDynamicSphere({0.5, 0.0, 1.0}, 0.02, 0.1);
   world.AddHand(Side::kRight);
   ph::ProxyHand& hand = *world.hand(Side::kRight);
-  const HandSample s = Tracked({0.0, 0.1, 0.2}, AxisAngle({1, 0, 0}, 0.3));
+  const HandSample s = TrackedHand({0.0, 0.1, 0.2}, AxisAngle({1, 0, 0}, 0.3));
   Run(world, Side::kRight, s, 50);
   REQUIRE(world.Counters().hand_resets == 0);
 
@@ -238,9 +223,9 @@ TEST_CASE("physics: finger forces are unilateral along the nail normal", "[physi
     world.AddStaticBox({x0 + 0.025, y, finger_bottom - 0.0005 - 0.01}, {0.025, 0.006, 0.01});
     world.AddHand(Side::kRight);
     ph::ProxyHand& hand = *world.hand(Side::kRight);
-    Run(world, Side::kRight, Tracked({0, 0, z}), 100);
+    Run(world, Side::kRight, TrackedHand({0, 0, z}), 100);
     CHECK(hand.FingerForces()[ph::kIndex] < 0.01);
-    HandSample s = Tracked({0, 0, z});
+    HandSample s = TrackedHand({0, 0, z});
     s.finger_angles[5] = 0.9;  // index PIP
     s.finger_angles[6] = 0.6;  // index DIP
     Run(world, Side::kRight, s, 1000);
@@ -255,8 +240,8 @@ TEST_CASE("physics: finger forces are unilateral along the nail normal", "[physi
     world.AddStaticBox({x0 + 0.025, y, finger_top + 0.0005 + 0.01}, {0.025, 0.006, 0.01});
     world.AddHand(Side::kRight);
     ph::ProxyHand& hand = *world.hand(Side::kRight);
-    Run(world, Side::kRight, Tracked({0, 0, z}), 100);
-    HandSample s = Tracked({0, 0, z});
+    Run(world, Side::kRight, TrackedHand({0, 0, z}), 100);
+    HandSample s = TrackedHand({0, 0, z});
     s.finger_angles[5] = -0.9;  // index PIP bent backwards, into the object above it
     s.finger_angles[6] = -0.6;
     Run(world, Side::kRight, s, 1000);
@@ -282,8 +267,8 @@ TEST_CASE("physics: two palms squeeze a 0.5 kg box and lift it", "[physics]") {
   const double z0 = 0.09;
 
   auto step = [&](double z) {
-    world.hand(Side::kLeft)->SetTracked(Tracked({x, -palm_y, z}, q_left));
-    world.hand(Side::kRight)->SetTracked(Tracked({x, palm_y, z}, q_right));
+    world.hand(Side::kLeft)->SetTracked(TrackedHand({x, -palm_y, z}, q_left));
+    world.hand(Side::kRight)->SetTracked(TrackedHand({x, palm_y, z}, q_right));
     world.Step();
   };
   for (int i = 0; i < 300; ++i) step(z0);  // close the grip

@@ -16,6 +16,10 @@ int64_t MonotonicNs();
 /// stamps compared across processes on one host (video capture time).
 int64_t WallNs();
 
+/// CPU time the calling thread has used (CLOCK_THREAD_CPUTIME_ID), s: for
+/// benchmarks that report CPU per simulated second.
+double ThreadCpuSeconds();
+
 /// Sleeps until the given CLOCK_MONOTONIC time; returns at once if it passed.
 void SleepUntilNs(int64_t monotonic_ns);
 
