@@ -86,7 +86,8 @@ std::string Json(const ModeResult& r) {
   o << "{\"rate_hz\":" << r.stats.rate_hz << ",\"period_p50_us\":" << r.stats.period_p50_us
     << ",\"period_p99_us\":" << r.stats.period_p99_us << ",\"period_max_us\":" << r.stats.period_max_us
     << ",\"overruns\":" << r.stats.overruns << ",\"allocations_in_loop\":" << r.allocations
-    << ",\"realtime\":" << (r.stats.realtime ? "true" : "false") << ",\"udp_unanswered\":" << r.udp_unanswered
+    << ",\"realtime\":" << (r.stats.realtime ? "true" : "false")
+    << ",\"memory_locked\":" << (r.memory_locked ? "true" : "false") << ",\"udp_unanswered\":" << r.udp_unanswered
     << ",\"udp_malformed\":" << r.udp_malformed << "}";
   return o.str();
 }
@@ -178,13 +179,14 @@ int BenchServoMain(int argc, const char* const* argv) {
 
   // Table.
   std::printf("haptel bench servo: %.1f s per mode, target rate %.0f Hz\n\n", seconds, base.servo.rate_hz);
-  std::printf("%-26s %9s %8s %8s %9s %9s %7s %9s %s\n", "mode", "rate Hz", "p50 us", "p99 us", "max us",
-              "overruns", "allocs", "udp lost", "realtime");
+  std::printf("%-26s %9s %8s %8s %9s %9s %7s %9s %-8s %s\n", "mode", "rate Hz", "p50 us", "p99 us", "max us",
+              "overruns", "allocs", "udp lost", "realtime", "mlock");
   for (const ModeResult& r : results) {
-    std::printf("%-26s %9.1f %8.0f %8.0f %9.0f %9llu %7llu %9llu %s\n", r.name.c_str(), r.stats.rate_hz,
+    std::printf("%-26s %9.1f %8.0f %8.0f %9.0f %9llu %7llu %9llu %-8s %s\n", r.name.c_str(), r.stats.rate_hz,
                 r.stats.period_p50_us, r.stats.period_p99_us, r.stats.period_max_us,
                 static_cast<unsigned long long>(r.stats.overruns), static_cast<unsigned long long>(r.allocations),
-                static_cast<unsigned long long>(r.udp_unanswered), r.stats.realtime ? "yes" : "no");
+                static_cast<unsigned long long>(r.udp_unanswered), r.stats.realtime ? "yes" : "no",
+                r.memory_locked ? "yes" : "no");
   }
   std::printf("\n  rate: cycles per second over the run; p50/p99/max: start-to-start period;\n"
               "  overruns: cycles started over one period late (or skipped); allocs: heap\n"

@@ -90,10 +90,9 @@ void SimDevice::Place(Side side, const Vec3d& position) {
   operator_[Index(side)].Store({position, true});
 }
 
-void SimDevice::Step(Side side, Arm& arm, const OperatorInput& input, double dt) {
+void SimDevice::Step(Arm& arm, const OperatorInput& input, double dt) {
   const double max_integral = 0.6 * muscle_.muscle_max_force;
   const double weight = UnbalancedMass(arm.position) * kGravity;
-  (void)side;
   for (int i = 0; i < 3; ++i) {
     double muscle = 0.0;
     if (input.holding) {
@@ -135,7 +134,7 @@ DeviceStatus SimDevice::ReadWrist(Side side, int64_t now_ns, WristRaw& out) {
     const OperatorInput input = operator_[s].Load();
     while (remaining > 1e-9) {
       const double dt = std::min(remaining, 1e-3);
-      Step(side, arm, input, dt);
+      Step(arm, input, dt);
       remaining -= dt;
     }
   }

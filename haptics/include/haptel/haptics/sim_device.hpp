@@ -82,7 +82,7 @@ class SimDevice final : public Device {
     Vec3d target{};
     bool holding = false;
   };
-  void Step(Side side, Arm& arm, const OperatorInput& input, double dt);
+  void Step(Arm& arm, const OperatorInput& input, double dt);
 
   SimArmConfig config_;
   OperatorConfig muscle_;
