@@ -18,6 +18,7 @@ RunConfig LoadRun(const std::filesystem::path& file) {
   r.track = dir / root.RequireString("track");
   r.vehicle = dir / root.RequireString("vehicle");
   r.device = dir / root.String("device", "devices/sim.yaml");
+  r.physics = dir / root.String("physics", "physics.yaml");
   r.interface = root.String("interface", r.interface);
   r.interfaces_dir = dir / root.String("interfaces_dir", "interfaces");
   r.database = root.String("database", r.database.string());
@@ -38,6 +39,8 @@ RunConfig LoadRun(const std::filesystem::path& file) {
   r.op.muscle_integral_gain =
       op.Number("muscle_integral_gain", r.op.muscle_integral_gain, 0.0, 1e5);
   r.op.backoff_s = op.Number("backoff_s", r.op.backoff_s, 0.0, 10.0);
+  r.op.grasp_reach_s = op.Number("grasp_reach_s", r.op.grasp_reach_s, 0.0, 10.0);
+  r.op.grasp_close_s = op.Number("grasp_close_s", r.op.grasp_close_s, 0.0, 10.0);
   op.Finish();
 
   YamlMap link = root.Map("link");
@@ -60,6 +63,10 @@ std::filesystem::path InterfaceFile(const RunConfig& run, const std::string& nam
   for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
   throw ConfigError(run.file.string() + ": key 'interface': expected one of: " + list +
                     " (files in " + run.interfaces_dir.string() + "), got '" + name + "'");
+}
+
+std::string InterfaceName(const std::filesystem::path& file) {
+  return YamlMap::Load(file).RequireString("name");
 }
 
 }  // namespace haptel

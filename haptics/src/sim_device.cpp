@@ -39,6 +39,7 @@ SimDevice::SimDevice(const DeviceConfig& config, const OperatorConfig& muscle)
   std::uniform_real_distribution<double> gain(0.004, 0.008);   // rad per sensor count
   std::uniform_real_distribution<double> offset(-0.3, 0.1);    // rad
   for (int s = 0; s < kSides; ++s) {
+    orientation_[s].Store({1.0, 0.0, 0.0, 0.0});
     SimArmTruth& t = truth_[s];
     for (int i = 0; i < 3; ++i) {
       t.tracker_scale[i] = 0.01 * (1.0 + percent(rng));  // device reports ~cm
@@ -77,6 +78,10 @@ void SimDevice::Release(Side side) {
 
 void SimDevice::SetGlovePosture(Side side, const std::array<double, kGloveJoints>& angles) {
   posture_[Index(side)].Store(angles);
+}
+
+void SimDevice::SetWristOrientation(Side side, const std::array<double, 4>& orientation) {
+  orientation_[Index(side)].Store(orientation);
 }
 
 void SimDevice::Place(Side side, const Vec3d& position) {
@@ -146,7 +151,7 @@ DeviceStatus SimDevice::ReadWrist(Side side, int64_t now_ns, WristRaw& out) {
     const double measured = res > 0 ? std::round(arm.position[i] / res) * res : arm.position[i];
     out.position[i] = (measured - t.tracker_offset[i]) / t.tracker_scale[i];
   }
-  out.orientation = {1, 0, 0, 0};
+  out.orientation = orientation_[s].Load();
   return DeviceStatus::kOk;
 }
 

@@ -46,7 +46,7 @@ HandTargets GestureInterface::HandTargetsFor(const DriveIntent& intent) const {
   const double turn_fraction = config_.turn_share > 0 ? intent.turn / config_.turn_share : 0.0;
   target[1] += Unshape(turn_fraction, config_.dead_zone, config_.full_turn);
   HandTargets targets;
-  targets[haptics::Index(Side::kRight)] = target;
+  targets[haptics::Index(Side::kRight)] = HandGoal{.position = target};
   return targets;
 }
 

@@ -53,7 +53,62 @@ interfaces::DriveIntent AutoOperator::Decide(double t_s) {
   return {forward, std::clamp(turn, -0.7, 0.7)};
 }
 
+namespace {
+
+/// 0 → 1 with zero slope at both ends (a hand eases in and out of a motion).
+double Smooth(double x) {
+  x = std::clamp(x, 0.0, 1.0);
+  return x * x * (3.0 - 2.0 * x);
+}
+
+/// Normalised linear blend of two unit quaternions (the shorter way round).
+std::array<double, 4> Blend(const std::array<double, 4>& from, const std::array<double, 4>& to, double a) {
+  const double dot = from[0] * to[0] + from[1] * to[1] + from[2] * to[2] + from[3] * to[3];
+  const double sign = dot < 0 ? -1.0 : 1.0;
+  std::array<double, 4> q{};
+  double norm = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    q[k] = from[k] + (sign * to[k] - from[k]) * a;
+    norm += q[k] * q[k];
+  }
+  norm = std::sqrt(norm);
+  if (!(norm > 1e-12)) return to;
+  for (double& v : q) v /= norm;
+  return q;
+}
+
+bool HasApproach(const interfaces::HandGoal& g) {
+  return g.approach[0] != 0.0 || g.approach[1] != 0.0 || g.approach[2] != 0.0;
+}
+
+}  // namespace
+
 interfaces::HandTargets AutoOperator::Act(double t_s, const interfaces::MediatorInterface& interface) {
+  const interfaces::HandTargets neutral = interface.HandTargetsFor({});
+  if (start_s_ < 0) {
+    start_s_ = t_s;
+    bool grasps = false;
+    for (const auto& g : neutral) grasps = grasps || (g && HasApproach(*g));
+    grasp_s_ = grasps ? config_.grasp_reach_s + config_.grasp_close_s : 0.0;
+  }
+  const double since = t_s - start_s_;
+  if (!grasped(t_s)) {
+    // Reach (open hand from the approach point down onto the control), then close.
+    const double reach = config_.grasp_reach_s > 0 ? Smooth(since / config_.grasp_reach_s) : 1.0;
+    const double close =
+        config_.grasp_close_s > 0 ? Smooth((since - config_.grasp_reach_s) / config_.grasp_close_s)
+                                  : (since >= config_.grasp_reach_s ? 1.0 : 0.0);
+    last_act_s_ = t_s;
+    for (size_t i = 0; i < neutral.size(); ++i) {
+      arm_[i] = neutral[i];
+      if (!arm_[i]) continue;
+      interfaces::HandGoal& g = *arm_[i];
+      for (int k = 0; k < 3; ++k) g.position[k] += g.approach[k] * (1.0 - reach);
+      for (double& angle : g.glove) angle *= close;
+    }
+    return arm_;
+  }
+
   const interfaces::HandTargets wanted = interface.HandTargetsFor(Decide(t_s));
   const double dt = last_act_s_ < 0 ? 0.0 : t_s - last_act_s_;
   last_act_s_ = t_s;
@@ -64,10 +119,12 @@ interfaces::HandTargets AutoOperator::Act(double t_s, const interfaces::Mediator
       arm_[i].reset();
       continue;
     }
-    if (!arm_[i]) {
-      arm_[i] = interface.HandTargetsFor({})[i];  // hands start at neutral
-    }
-    for (int k = 0; k < 3; ++k) (*arm_[i])[k] += ((*wanted[i])[k] - (*arm_[i])[k]) * alpha;
+    if (!arm_[i]) arm_[i] = neutral[i];  // hands start at neutral
+    interfaces::HandGoal& g = *arm_[i];
+    for (int k = 0; k < 3; ++k) g.position[k] += (wanted[i]->position[k] - g.position[k]) * alpha;
+    g.orientation = Blend(g.orientation, wanted[i]->orientation, alpha);
+    g.glove = wanted[i]->glove;  // the fingers keep their grip
+    g.approach = wanted[i]->approach;
   }
   return arm_;
 }

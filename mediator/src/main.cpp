@@ -8,7 +8,9 @@
 #include <sstream>
 #include <string>
 
+#include "haptel/config/cockpit.hpp"
 #include "haptel/config/paths.hpp"
+#include "haptel/config/physics.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/config/gravity_grid.hpp"
 #include "haptel/core/args.hpp"
@@ -130,11 +132,12 @@ int main(int argc, char** argv) {
     setup.vehicle = LoadVehicle(setup.run.vehicle);
     if (auto name = args.Value("vehicle-name")) setup.vehicle.name = *name;
     const std::filesystem::path interface_file = InterfaceFile(setup.run, setup.run.interface);
-    if (setup.run.interface.rfind("cockpit", 0) == 0) {
-      throw ConfigError(interface_file.string() + ": the cockpit interfaces need the physics world in the "
-                        "session, which is not wired in yet; use --interface gesture");
+    if (InterfaceName(interface_file).rfind("cockpit", 0) == 0) {
+      setup.cockpit = LoadCockpit(interface_file);
+      setup.physics = LoadPhysics(setup.run.physics);
+    } else {
+      setup.gesture = LoadGesture(interface_file);
     }
-    setup.gesture = LoadGesture(interface_file);
     setup.device = LoadDevice(setup.run.device);
     if (setup.device.driver != "sim") {
       throw ConfigError(setup.run.device.string() + ": key 'driver': expected 'sim' for haptel run "
@@ -178,6 +181,11 @@ int main(int argc, char** argv) {
   }
   std::printf("  servo %.1f Hz (p99 period %.0f us, %llu overruns)\n", r.servo_rate_hz, r.servo_period_p99_us,
               static_cast<unsigned long long>(result.servo_overruns));
+  if (result.physics_rate_hz > 0) {
+    std::printf("  physics %.1f Hz (p99 period %.0f us, longest step %.0f us, %llu hand resets), controls grasped after %.2f s\n",
+                result.physics_rate_hz, result.physics_period_p99_us, result.physics_step_max_us,
+                static_cast<unsigned long long>(result.physics_hand_resets), result.grasp_s);
+  }
   std::printf("  command round trip p50 %.2f ms, p99 %.2f ms\n", r.command_rtt_ms_p50, r.command_rtt_ms_p99);
   std::printf("  video %lld frames, %.1f fps, latency p50 %.1f ms\n", static_cast<long long>(r.video_frames),
               r.video_fps, r.video_latency_ms_p50);
@@ -194,7 +202,12 @@ int main(int argc, char** argv) {
       << ",\"command_rtt_ms_p50\":" << Number(r.command_rtt_ms_p50)
       << ",\"command_rtt_ms_p99\":" << Number(r.command_rtt_ms_p99) << ",\"video_frames\":" << r.video_frames
       << ",\"video_fps\":" << Number(r.video_fps) << ",\"video_latency_ms_p50\":" << Number(r.video_latency_ms_p50)
-      << ",\"lost_detect_s\":" << Number(result.lost_detect_s) << ",\"interface\":" << JsonString(r.interface)
+      << ",\"lost_detect_s\":" << Number(result.lost_detect_s)
+      << ",\"physics_rate_hz\":" << Number(result.physics_rate_hz)
+      << ",\"physics_period_p99_us\":" << Number(result.physics_period_p99_us)
+      << ",\"physics_step_max_us\":" << Number(result.physics_step_max_us)
+      << ",\"physics_hand_resets\":" << result.physics_hand_resets
+      << ",\"grasp_s\":" << Number(result.grasp_s) << ",\"interface\":" << JsonString(r.interface)
       << ",\"track\":" << JsonString(r.track) << ",\"run_id\":" << run_id
       << ",\"database\":" << JsonString(setup.run.database.string()) << "}";
     std::printf("%s\n", o.str().c_str());

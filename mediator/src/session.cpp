@@ -15,7 +15,10 @@
 #include "haptel/haptics/servo_loop.hpp"
 #include "haptel/haptics/trace.hpp"
 #include "haptel/haptics/sim_device.hpp"
+#include "haptel/interfaces/cockpit.hpp"
 #include "haptel/interfaces/gesture.hpp"
+#include "haptel/physics/cockpit_controls.hpp"
+#include "haptel/physics/world.hpp"
 #include "haptel/link/topic.hpp"
 #include "haptel/mediator/auto_operator.hpp"
 #include "haptel/mediator/lap_timer.hpp"
@@ -76,6 +79,55 @@ class StateInbox {
   Histogram rtt_{10.0, 20000};  // µs bins up to 200 ms
 };
 
+/// The cockpit interface's view of the controls in the physics world: the
+/// two layers keep their own structs (physics does not know interfaces).
+class PhysicsControlsPort final : public interfaces::ControlsPort {
+ public:
+  explicit PhysicsControlsPort(physics::ControlsLink& link) : link_(link) {}
+  interfaces::CockpitControls Controls() const override {
+    const physics::ControlsState s = link_.State();
+    return {s.wheel_angle, s.throttle, s.wheel_held, s.throttle_held};
+  }
+  void Actuate(const interfaces::ControlActuation& a) override {
+    link_.SetActuation({a.wheel_torque, a.wheel_spring, a.throttle_spring, a.throttle_target,
+                        a.throttle_locked});
+  }
+
+ private:
+  physics::ControlsLink& link_;
+};
+
+/// The physics side of a cockpit session. Its destructor stops the physics
+/// thread before the controls and their link (which the thread uses) go.
+struct CockpitPhysics {
+  std::unique_ptr<physics::PhysicsWorld> world;
+  std::unique_ptr<physics::CockpitControlsBody> controls;
+  std::unique_ptr<physics::ControlsLink> link;
+  std::unique_ptr<PhysicsControlsPort> port;
+
+  CockpitPhysics(const PhysicsConfig& config, const CockpitConfig& cockpit) {
+    world = physics::PhysicsWorld::CreateIfNeeded(config, {.physical_controls = true});
+    world->AddHand(haptics::Side::kLeft);
+    world->AddHand(haptics::Side::kRight);
+    controls = std::make_unique<physics::CockpitControlsBody>(*world, cockpit);
+    link = std::make_unique<physics::ControlsLink>(*world, *controls);
+    controls->Read();  // gathers the hands' bodies now, not on the physics thread
+    port = std::make_unique<PhysicsControlsPort>(*link);
+  }
+  ~CockpitPhysics() {
+    if (world) world->Stop();
+  }
+  CockpitPhysics(const CockpitPhysics&) = delete;
+  CockpitPhysics& operator=(const CockpitPhysics&) = delete;
+};
+
+/// The simulated person holds a hand as `goal` says.
+void ActOn(haptics::SimDevice& device, haptics::Side side, const interfaces::HandGoal& goal) {
+  device.SetOperatorTarget(side, goal.position);
+  device.SetWristOrientation(side, goal.orientation);
+  device.SetGlovePosture(side, goal.glove);
+}
+
 }  // namespace
 
 SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& interrupted) {
@@ -86,7 +138,7 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   rec.started_wall_ns = WallNs();
   rec.config_name = run.name;
   rec.track = setup.track.name;
-  rec.interface = setup.gesture.name;
+  rec.interface = setup.cockpit ? setup.cockpit->name : setup.gesture.name;
   rec.vehicle = setup.vehicle.name;
   rec.gates_total = static_cast<int>(track.gates().size());
 
@@ -102,10 +154,30 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
     calibration = haptics::RunCalibration(device, options, quiet);
   }
   haptics::Hal hal(calibration);
-  interfaces::GestureInterface interface(setup.gesture);
+  // The interface, and for a cockpit the physics world its controls live in.
+  std::unique_ptr<CockpitPhysics> physics_side;
+  std::unique_ptr<interfaces::MediatorInterface> interface_owner;
+  const interfaces::CockpitInterface* cockpit = nullptr;
+  if (setup.cockpit) {
+    physics_side = std::make_unique<CockpitPhysics>(setup.physics, *setup.cockpit);
+    auto owned = std::make_unique<interfaces::CockpitInterface>(*setup.cockpit, *physics_side->port);
+    cockpit = owned.get();
+    interface_owner = std::move(owned);
+  } else {
+    interface_owner = std::make_unique<interfaces::GestureInterface>(setup.gesture);
+  }
+  interfaces::MediatorInterface& interface = *interface_owner;
+  const double command_rate_hz = setup.cockpit ? setup.cockpit->command_rate_hz : setup.gesture.command_rate_hz;
+  // Hands at neutral — or, for controls to grasp, open above them.
   for (int i = 0; i < haptics::kSides; ++i) {
     const auto side = static_cast<haptics::Side>(i);
-    if (auto neutral = interface.HandTargetsFor({})[i]) device.Place(side, *neutral);
+    if (auto neutral = interface.HandTargetsFor({})[i]) {
+      interfaces::HandGoal start = *neutral;
+      for (int k = 0; k < 3; ++k) start.position[k] += start.approach[k];
+      start.glove = {};
+      device.Place(side, start.position);
+      ActOn(device, side, start);
+    }
   }
   // Declared before the loop so it outlives the loop's threads.
   std::unique_ptr<haptics::TraceWriter> trace;
@@ -115,6 +187,7 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   haptics::ServoLoop servo(device, hal, setup.device, calibration, gravity.get());
   servo.SetTrace(trace.get());
   servo.Start();
+  if (physics_side) physics_side->world->Start(hal);
   if (setup.progress) {
     // Give the threads a moment to try for SCHED_FIFO, then say once what they could not get.
     SleepUntilNs(MonotonicNs() + SToNs(0.02));
@@ -151,7 +224,7 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   uint64_t command_seq = 0;
   const int64_t t0 = MonotonicNs();
   const auto period_ns = static_cast<int64_t>(1e9 / run.session_rate_hz);
-  const auto command_period_ns = static_cast<int64_t>(1e9 / setup.gesture.command_rate_hz);
+  const auto command_period_ns = static_cast<int64_t>(1e9 / command_rate_hz);
   int64_t next_command_ns = t0;
   int64_t next_progress_ns = t0 + SToNs(2.0);
   int64_t next_tick = t0;
@@ -217,8 +290,9 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
     if (vehicle_up) {
       const interfaces::HandTargets targets = op.Act(t, interface);
       for (int i = 0; i < haptics::kSides; ++i) {
-        if (targets[i]) device.SetOperatorTarget(static_cast<haptics::Side>(i), *targets[i]);
+        if (targets[i]) ActOn(device, static_cast<haptics::Side>(i), *targets[i]);
       }
+      if (result.grasp_s == 0.0 && op.grasped(t) && physics_side) result.grasp_s = t;
     }
     motors = interface.Update(t, feedback, hal);
     if (now >= next_command_ns) {
@@ -248,6 +322,12 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
                     t, lap.lap_time_s(), lap.next_gate(), lap.gates_total(), lap.obstacles_touched(),
                     inbox.rtt().Percentile(0.5) * 1e-3, v.fps);
       log::Info(line);
+      if (cockpit != nullptr) {
+        const interfaces::CockpitControls& c = cockpit->controls();
+        std::snprintf(line, sizeof line, "         wheel %+.2f rad%s  throttle %+.3f m%s  motors %+.2f %+.2f", c.wheel_angle,
+                      c.wheel_held ? " (held)" : "", c.throttle, c.throttle_held ? " (held)" : "", motors.left, motors.right);
+        log::Info(line);
+      }
     }
   }
 
@@ -258,6 +338,16 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   command.right(0.0F);
   command.sent_ns(MonotonicNs());
   commands.Write(command);
+  if (physics_side) {
+    physics_side->world->Stop();
+    const LoopStats p = physics_side->world->Stats();
+    const physics::PhysicsCounters counters = physics_side->world->Counters();
+    result.physics_rate_hz = p.rate_hz;
+    result.physics_period_p99_us = p.period_p99_us;
+    result.physics_step_max_us = counters.max_step_us;
+    result.physics_hand_resets = counters.hand_resets;
+    if (result.grasp_s == 0.0) result.grasp_s = -1.0;
+  }
   servo.Stop();
   if (vehicle) vehicle->Terminate();
 

@@ -76,6 +76,9 @@ struct CockpitControlsBody::Impl {
   Control knob;
   bool locked = false;
   int resets = 0;
+  /// The proxy hands' bodies, gathered once: Read runs every physics step.
+  std::vector<const btRigidBody*> hand;
+  std::vector<bool> touching;
 
   Impl(PhysicsWorld& w, const CockpitConfig& c, const ControlsBodyConfig& b)
       : world(w), cockpit(c), config(b), max_angle(c.wheel_max_angle_deg * M_PI / 180.0) {
@@ -197,10 +200,10 @@ struct CockpitControlsBody::Impl {
     ++resets;
   }
 
-  /// Hand bodies touching `c`, counted once each (a compound rim has one
-  /// manifold per touching capsule).
-  int HandContacts(const btRigidBody& control, const std::vector<const btRigidBody*>& hand) const {
-    std::vector<bool> touching(hand.size(), false);
+  /// Hand bodies touching `control`, counted once each (a compound rim has
+  /// one manifold per touching capsule).
+  int HandContacts(const btRigidBody& control) {
+    std::fill(touching.begin(), touching.end(), false);
     btDispatcher& d = *world.bullet().getDispatcher();
     for (int m = 0; m < d.getNumManifolds(); ++m) {
       const btPersistentManifold& pm = *d.getManifoldByIndexInternal(m);
@@ -222,11 +225,15 @@ struct CockpitControlsBody::Impl {
     return static_cast<int>(std::count(touching.begin(), touching.end(), true));
   }
 
-  ControlsState Read() {
-    for (Control* c : {&wheel, &knob}) {
-      if (!IsFinite(*c->body)) PutBack(*c);
+  /// Gathers the hands' bodies when a hand was added since the last call
+  /// (allocates only then, i.e. on the first Read after set-up).
+  void GatherHands() {
+    size_t expected = 0;
+    for (Side side : {Side::kLeft, Side::kRight}) {
+      if (world.hand(side) != nullptr) expected += 1 + kFingers * kPhalanges;
     }
-    std::vector<const btRigidBody*> hand;
+    if (expected == hand.size()) return;
+    hand.clear();
     for (Side side : {Side::kLeft, Side::kRight}) {
       ProxyHand* h = world.hand(side);
       if (h == nullptr) continue;
@@ -235,11 +242,19 @@ struct CockpitControlsBody::Impl {
         for (int p = 0; p < kPhalanges; ++p) hand.push_back(&h->phalanx_body(f, p));
       }
     }
+    touching.assign(hand.size(), false);
+  }
+
+  ControlsState Read() {
+    for (Control* c : {&wheel, &knob}) {
+      if (!IsFinite(*c->body)) PutBack(*c);
+    }
+    GatherHands();
     ControlsState s;
     s.wheel_angle = WheelAngle();
     s.throttle = Throttle();
-    s.wheel_contacts = HandContacts(*wheel.body, hand);
-    s.throttle_contacts = HandContacts(*knob.body, hand);
+    s.wheel_contacts = HandContacts(*wheel.body);
+    s.throttle_contacts = HandContacts(*knob.body);
     s.wheel_held = s.wheel_contacts > 0;
     s.throttle_held = s.throttle_contacts > 0;
     return s;
@@ -278,5 +293,11 @@ void CockpitControlsBody::Apply(const ControlsActuation& actuation) { impl_->App
 int CockpitControlsBody::resets() const { return impl_->resets; }
 btRigidBody& CockpitControlsBody::wheel_body() { return *impl_->wheel.body; }
 btRigidBody& CockpitControlsBody::throttle_body() { return *impl_->knob.body; }
+
+ControlsLink::ControlsLink(PhysicsWorld& world, CockpitControlsBody& controls) : controls_(controls) {
+  world.AddStepHook(*this);
+}
+void ControlsLink::BeforeStep() { controls_.Apply(actuation_.Load()); }
+void ControlsLink::AfterStep() { state_.Store(controls_.Read()); }
 
 }  // namespace haptel::physics

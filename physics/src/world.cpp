@@ -199,9 +199,11 @@ void PhysicsWorld::Step() {
   for (auto& h : hands_) {
     if (h) h->PrepareStep();
   }
+  for (StepHook* hook : hooks_) hook->BeforeStep();
   // maxSubSteps = 0: exactly one step of step_s (the thread keeps the rate).
   bullet_->world.stepSimulation(config_.step_s, 0);
   CheckFinite();
+  for (StepHook* hook : hooks_) hook->AfterStep();
   ++counters_.steps;
   counters_.last_step_us = static_cast<double>(MonotonicNs() - t0) * 1e-3;
   counters_.max_step_us = std::max(counters_.max_step_us, counters_.last_step_us);

@@ -76,7 +76,7 @@ TEST_CASE("HandTargetsFor inverts the mapping and uses only the right hand") {
     const HandTargets targets = g.HandTargetsFor(intent);
     REQUIRE(targets[haptics::Index(Side::kRight)].has_value());
     CHECK_FALSE(targets[haptics::Index(Side::kLeft)].has_value());
-    const MotorCommand m = g.Map(*targets[haptics::Index(Side::kRight)]);
+    const MotorCommand m = g.Map(targets[haptics::Index(Side::kRight)]->position);
     CHECK(m.left == Approx(intent.forward - intent.turn).margin(1e-9));
     CHECK(m.right == Approx(intent.forward + intent.turn).margin(1e-9));
   }

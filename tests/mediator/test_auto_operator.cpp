@@ -81,8 +81,8 @@ TEST_CASE("the operator's arm lags its intent") {
   const int right = haptics::Index(haptics::Side::kRight);
   REQUIRE(first[right]);
   REQUIRE(after[right]);
-  const double goal = (*wanted[right])[0];
-  CHECK((*first[right])[0] == Approx(0.0));
-  CHECK((*after[right])[0] == Approx(goal * (1 - std::exp(-1.0))).epsilon(0.01));
+  const double goal = wanted[right]->position[0];
+  CHECK(first[right]->position[0] == Approx(0.0));
+  CHECK(after[right]->position[0] == Approx(goal * (1 - std::exp(-1.0))).epsilon(0.01));
   CHECK_FALSE(after[haptics::Index(haptics::Side::kLeft)]);
 }

@@ -20,6 +20,10 @@ struct OperatorConfig {
   double muscle_max_force = 8.0;     ///< N
   double muscle_integral_gain = 400.0;  ///< N/(m·s): pushing harder against a pull
   double backoff_s = 0.8;            ///< reverse this long after a bumper contact
+  /// Grasping a control (cockpit interfaces): come down onto it with an open
+  /// hand for this long, then close the fingers over grasp_close_s.
+  double grasp_reach_s = 0.8;
+  double grasp_close_s = 0.6;
 };
 
 struct RunConfig {
@@ -34,6 +38,7 @@ struct RunConfig {
   double session_rate_hz = 100.0;
   bool video_decode = true;
   std::filesystem::path device;  ///< haptic device file (config/devices/*.yaml)
+  std::filesystem::path physics;  ///< physics world file, for interfaces with bodies
   OperatorConfig op;
   LinkConfig link;
 };
@@ -43,5 +48,9 @@ RunConfig LoadRun(const std::filesystem::path& file);
 /// The interface file for a name: `<interfaces_dir>/<name>.yaml`. Throws
 /// ConfigError listing the available names when there is none.
 std::filesystem::path InterfaceFile(const RunConfig& run, const std::string& name);
+
+/// The `name` an interface file declares, which says which loader reads the
+/// rest (`gesture`, or `cockpit*`). Throws ConfigError naming the file.
+std::string InterfaceName(const std::filesystem::path& file);
 
 }  // namespace haptel

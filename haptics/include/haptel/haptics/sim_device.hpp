@@ -53,6 +53,9 @@ class SimDevice final : public Device {
   void Release(Side side);
   /// The hand posture the operator makes, joint angles in radians.
   void SetGlovePosture(Side side, const std::array<double, kGloveJoints>& angles);
+  /// How the operator turns the wrist, a unit quaternion (w, x, y, z). The
+  /// device renders forces, not torques, so the tracker reports it as is.
+  void SetWristOrientation(Side side, const std::array<double, 4>& orientation);
 
   // --- Set-up, tests and calibration procedures (not while a loop runs). ---
   /// Puts the arm at rest at `position` (true metres), the operator holding it there.
@@ -91,6 +94,7 @@ class SimDevice final : public Device {
   std::array<Arm, kSides> arms_{};
   std::array<Seqlock<OperatorInput>, kSides> operator_;
   std::array<Seqlock<std::array<double, kGloveJoints>>, kSides> posture_;
+  std::array<Seqlock<std::array<double, 4>>, kSides> orientation_;
   std::array<std::atomic<bool>, kSides> lost_{};
   std::array<uint64_t, kSides> glove_noise_state_{};
 };

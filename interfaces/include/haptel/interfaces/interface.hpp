@@ -33,9 +33,19 @@ struct VehicleFeedback {
   double speed = 0.0;  ///< m/s
 };
 
+/// How a driver holds one hand to express an intent.
+struct HandGoal {
+  haptics::Vec3d position{};                          ///< wrist, m, device frame
+  std::array<double, 4> orientation{1, 0, 0, 0};      ///< wrist quaternion (w, x, y, z)
+  std::array<double, haptics::kGloveJoints> glove{};  ///< joint angles, rad (all 0: open hand)
+  /// Where the hand comes in from, open, before it closes on a control: an
+  /// offset (m) from `position`. Zero when there is nothing to grasp.
+  haptics::Vec3d approach{};
+};
+
 /// Where a driver's hands go to express an intent (per side; empty = that
 /// hand is not used by the interface).
-using HandTargets = std::array<std::optional<haptics::Vec3d>, haptics::kSides>;
+using HandTargets = std::array<std::optional<HandGoal>, haptics::kSides>;
 
 class MediatorInterface {
  public:

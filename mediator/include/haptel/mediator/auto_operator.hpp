@@ -8,6 +8,11 @@
 /// decision (first-order), and the simulated device's muscle model makes it
 /// feel forces: a centring field must be pushed against, a wall stops it.
 /// After a bumper contact it backs off, turning away from the touched side.
+///
+/// When the interface has controls to grasp (a hand goal with an approach
+/// offset), the operator first brings its open hands down onto them over
+/// `grasp_reach_s`, closes its fingers over `grasp_close_s`, and only then
+/// starts driving; the interface reads the controls as they are meanwhile.
 #include <deque>
 
 #include "haptel/config/run.hpp"
@@ -36,10 +41,16 @@ class AutoOperator {
   void Observe(const Observation& observation);
   /// What the operator wants at time t_s, from what it saw reaction_delay ago.
   interfaces::DriveIntent Decide(double t_s);
-  /// Hand targets after the arm's lag, for the interface's inverse map.
+  /// Hand goals after the arm's lag, for the interface's inverse map. The
+  /// first call starts the grasp, if the interface has anything to grasp.
   interfaces::HandTargets Act(double t_s, const interfaces::MediatorInterface& interface);
 
   bool backing_off(double t_s) const { return t_s < backoff_until_s_; }
+  /// The hands hold their controls (or there is nothing to grasp) and the
+  /// operator drives.
+  bool grasped(double t_s) const {
+    return start_s_ >= 0 && t_s >= start_s_ + grasp_s_;
+  }
 
  private:
   const Track& track_;
@@ -50,6 +61,8 @@ class AutoOperator {
   double backoff_turn_ = 0.0;
   interfaces::HandTargets arm_;
   double last_act_s_ = -1.0;
+  double start_s_ = -1.0;  ///< first Act
+  double grasp_s_ = 0.0;   ///< reach + close, 0 when nothing is grasped
 };
 
 }  // namespace haptel::mediator

@@ -21,12 +21,12 @@
 
 #include "haptel/config/cockpit.hpp"
 #include "haptel/config/physics.hpp"
+#include "haptel/core/seqlock.hpp"
+#include "haptel/physics/world.hpp"
 
 class btRigidBody;
 
 namespace haptel::physics {
-
-class PhysicsWorld;
 
 /// What the controls report (interfaces::CockpitControls, plus contact counts).
 struct ControlsState {
@@ -55,7 +55,8 @@ struct ControlsBodyConfig {
   int rim_segments = 16;        ///< capsules approximating the torus
   double wheel_damping = 0.02;  ///< N·m·s/rad, steering column
   double knob_mass = 0.1;       ///< kg
-  std::array<double, 3> knob_half_extents{0.015, 0.015, 0.025};  ///< m
+  /// m: a bar across the lever (along y), grasped like the wheel's rim
+  std::array<double, 3> knob_half_extents{0.012, 0.04, 0.012};
   double throttle_damping = 1.0;                                 ///< N·s/m
   PhysicsMaterial material{1.0, 0.0};                            ///< rubbery: fingers grip it
   double contact_distance = 0.002;  ///< m, a manifold point this close counts as touching
@@ -86,6 +87,30 @@ class CockpitControlsBody {
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
+};
+
+/// Carries the controls' state and actuation between the physics thread and
+/// another thread (the interface's), without either waiting: registered as a
+/// step hook, it applies the latest actuation before every step and publishes
+/// the state after it.
+class ControlsLink final : public StepHook {
+ public:
+  /// Registers itself with `world`; `controls` and the link must outlive the
+  /// world's thread.
+  ControlsLink(PhysicsWorld& world, CockpitControlsBody& controls);
+
+  /// Any thread: the actuation for the following steps.
+  void SetActuation(const ControlsActuation& actuation) { actuation_.Store(actuation); }
+  /// Any thread: the state after the latest step (all zero before the first).
+  ControlsState State() const { return state_.Load(); }
+
+  void BeforeStep() override;
+  void AfterStep() override;
+
+ private:
+  CockpitControlsBody& controls_;
+  Seqlock<ControlsActuation> actuation_;
+  Seqlock<ControlsState> state_;
 };
 
 }  // namespace haptel::physics

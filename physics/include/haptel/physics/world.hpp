@@ -64,6 +64,16 @@ struct PhysicsCounters {
 /// Index of a scene body in its world.
 using BodyId = int;
 
+/// Work that must run on the stepping thread around every step, such as the
+/// cockpit controls trading their state for the interface's actuation. It
+/// runs inside the physics loop: no allocation, no blocking, no logging.
+class StepHook {
+ public:
+  virtual ~StepHook() = default;
+  virtual void BeforeStep() {}
+  virtual void AfterStep() {}
+};
+
 class PhysicsWorld {
  public:
   explicit PhysicsWorld(const PhysicsConfig& config);
@@ -99,6 +109,9 @@ class PhysicsWorld {
   /// The proxy hand of `side` (one per side; a second call returns the first).
   ProxyHand& AddHand(Side side);
   ProxyHand* hand(Side side) { return hands_[haptics::Index(side)].get(); }
+  /// Runs `hook` around every Step, in the order added. Before Start; the
+  /// hook must outlive the world (or at least its Stop).
+  void AddStepHook(StepHook& hook) { hooks_.push_back(&hook); }
 
   Pose BodyPose(BodyId id) const;
   Vec3d BodyVelocity(BodyId id) const;
@@ -137,6 +150,7 @@ class PhysicsWorld {
   std::unique_ptr<Bullet> bullet_;
   std::vector<std::unique_ptr<Body>> bodies_;
   std::array<std::unique_ptr<ProxyHand>, haptics::kSides> hands_;
+  std::vector<StepHook*> hooks_;
   std::array<bool, haptics::kSides> tracked_ok_{};  ///< this tick's sample was usable
   PhysicsCounters counters_;                        ///< the stepping thread's own copy
   Seqlock<PhysicsCounters> published_counters_;

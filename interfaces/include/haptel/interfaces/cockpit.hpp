@@ -1,0 +1,72 @@
+#pragma once
+/// @file The cockpit interfaces (`cockpit`, `cockpit-hud`, `cockpit-assisted`):
+/// a steering wheel and a throttle lever that live as bodies in the physics
+/// world, touched and grasped by the proxy hands.
+///
+/// The interface never touches physics itself: it reads the controls and
+/// actuates them through a ControlsPort (the session connects the port to
+/// the physics world's controls; tests use a plain one). The forces the
+/// operator feels come from the proxy hands' coupling, not from a field.
+///
+/// Hands: the left hand holds the wheel at the top of its rim and turns with
+/// it; the right hand holds the throttle lever's bar. Both grasp from above,
+/// palm down, fingers forward over the rim or bar and closed around it.
+#include "haptel/interfaces/cockpit_logic.hpp"
+#include "haptel/interfaces/interface.hpp"
+
+namespace haptel::interfaces {
+
+/// Where the cockpit's controls live: read their state, set what they feel.
+/// Both calls are made from the interface's (session) thread.
+class ControlsPort {
+ public:
+  virtual ~ControlsPort() = default;
+  virtual CockpitControls Controls() const = 0;
+  virtual void Actuate(const ControlActuation& actuation) = 0;
+};
+
+/// How the operator's hand sits on a bar-like grip (the wheel's rim, the
+/// lever's bar), from the proxy hand's shipped dimensions (config/physics.yaml)
+/// and the controls' bodies (physics/cockpit_controls.hpp).
+struct GripGeometry {
+  /// Wrist behind the bar's axis, along the fingers: palm (9 cm) plus half a
+  /// metacarpal, so the bar lies under the metacarpals and closing the
+  /// fingers wraps the other phalanges around it.
+  double reach = 0.115;
+  /// Wrist above the bar's axis: bar radius (1.2 cm) + phalanx radius (0.8 cm)
+  /// + 3 mm, so the closed fingers pull the bar up against the metacarpals.
+  double height = 0.023;
+  /// The open hand comes down from this far above its grip.
+  double approach = 0.05;
+  /// Closed hand: flexion of the four fingers' joints (MCP, PIP, DIP), rad.
+  std::array<double, 3> flexion{0.2, 1.6, 1.4};
+};
+
+class CockpitInterface final : public MediatorInterface {
+ public:
+  /// Keeps a reference to `port`, which must outlive the interface.
+  CockpitInterface(const CockpitConfig& config, ControlsPort& port, const GripGeometry& grip = {});
+
+  std::string name() const override { return logic_.config().name; }
+  /// Controls → motors; bumper → shake and lock; assisted → return springs.
+  MotorCommand Update(double t_s, const VehicleFeedback& feedback, haptics::Hal& hal) override;
+  /// Left hand on the wheel turned to the intent's angle, right hand on the
+  /// lever at the intent's position, both closed.
+  HandTargets HandTargetsFor(const DriveIntent& intent) const override;
+  bool NeedsPhysics() const override { return true; }
+
+  /// The view elements after the latest Update (all off without a HUD).
+  const HudState& hud() const { return hud_; }
+  /// The controls as read by the latest Update.
+  const CockpitControls& controls() const { return controls_; }
+  const CockpitLogic& logic() const { return logic_; }
+
+ private:
+  CockpitLogic logic_;
+  ControlsPort& port_;
+  GripGeometry grip_;
+  CockpitControls controls_;
+  HudState hud_;
+};
+
+}  // namespace haptel::interfaces
