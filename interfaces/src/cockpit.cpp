@@ -45,11 +45,15 @@ HandTargets CockpitInterface::HandTargetsFor(const DriveIntent& intent) const {
     g.approach = {0.0, sa * grip_.approach, ca * grip_.approach};
     targets[haptics::Index(Side::kLeft)] = g;
   }
-  // Throttle: the lever's bar, moved along x.
+  // Throttle: the lever's bar runs along x, the direction it slides, and the
+  // hand holds it as the other holds the rim's top: fingers across it (the
+  // hand turned −90° about z: fingers to −y, towards the driver's middle),
+  // so the grip carries the bar along its own axis, like the rim.
   {
     HandGoal g;
-    g.position = {c.throttle_centre[0] + wanted.throttle - grip_.reach, c.throttle_centre[1],
+    g.position = {c.throttle_centre[0] + wanted.throttle, c.throttle_centre[1] + grip_.reach,
                   c.throttle_centre[2] + grip_.height};
+    g.orientation = {std::sqrt(0.5), 0.0, 0.0, -std::sqrt(0.5)};
     g.glove = closed;
     g.approach = {0.0, 0.0, grip_.approach};
     targets[haptics::Index(Side::kRight)] = g;

@@ -58,6 +58,32 @@ TEST_CASE("haptel run completes the short track over DDS with a separate vehicle
   CHECK(runs[0].splits[1].split_s > runs[0].splits[0].split_s);
 }
 
+TEST_CASE("haptel run drives the short track through the assisted cockpit: hands grasp wheel and lever") {
+  const auto dir = test::ScratchDir("e2e-cockpit");
+  const auto db = dir / "runs.db";
+  Child haptel({Bin("haptel"), "run", "--interface", "cockpit-assisted", "--track", "config/tracks/test-short.yaml",
+                "--json", "--quiet", "--domain", std::to_string(test::UniqueDomain(14)), "--database", db.string(),
+                "--vehicle-timeout", "5"});
+  const int code = haptel.Wait(150.0);
+  INFO("stdout:\n" << haptel.out() << "\nstderr:\n" << haptel.err());
+  REQUIRE(code == 0);
+  const std::string json = haptel.LastLine();
+  REQUIRE(json.front() == '{');
+  CHECK(JsonField(json, "completed") == "true");
+  CHECK(JsonField(json, "gates_passed") == JsonField(json, "gates_total"));
+  CHECK(JsonField(json, "interface") == "cockpit-assisted");
+  // The physics world ran and the operator's hands closed on the controls.
+  CHECK(std::stod(JsonField(json, "physics_rate_hz")) > 0.0);
+  CHECK(std::stod(JsonField(json, "grasp_s")) > 0.0);
+  CHECK(JsonField(json, "physics_hand_resets") == "0");
+
+  mediator::Recorder recorder(db);
+  const auto runs = recorder.LoadAll();
+  REQUIRE(runs.size() == 1);
+  CHECK(runs[0].completed);
+  CHECK(runs[0].interface == "cockpit-assisted");
+}
+
 TEST_CASE("killing the vehicle mid-lap: the mediator reports it lost and exits non-zero") {
   const auto dir = test::ScratchDir("e2e-kill");
   Child haptel({Bin("haptel"), "run", "--json", "--domain", std::to_string(test::UniqueDomain(12)),

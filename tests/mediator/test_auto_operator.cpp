@@ -86,3 +86,68 @@ TEST_CASE("the operator's arm lags its intent") {
   CHECK(after[right]->position[0] == Approx(goal * (1 - std::exp(-1.0))).epsilon(0.01));
   CHECK_FALSE(after[haptics::Index(haptics::Side::kLeft)]);
 }
+
+namespace {
+/// An interface with one control to grasp: the left hand holds a grip at
+/// x = 0.1 + 0.05·forward, approached from 4 cm above, closed to 1 rad.
+struct GripInterface final : interfaces::MediatorInterface {
+  std::string name() const override { return "grip"; }
+  interfaces::MotorCommand Update(double, const interfaces::VehicleFeedback&, haptics::Hal&) override {
+    return {};
+  }
+  interfaces::HandTargets HandTargetsFor(const interfaces::DriveIntent& intent) const override {
+    interfaces::HandGoal g;
+    g.position = {0.1 + 0.05 * intent.forward, 0.0, 0.0};
+    g.glove.fill(1.0);
+    g.approach = {0.0, 0.0, 0.04};
+    interfaces::HandTargets t;
+    t[haptics::Index(haptics::Side::kLeft)] = g;
+    return t;
+  }
+  bool NeedsPhysics() const override { return true; }
+};
+}  // namespace
+
+TEST_CASE("with a control to grasp, the operator comes down open, closes, then drives") {
+  OperatorConfig cfg;
+  cfg.reaction_delay_s = 0.0;
+  cfg.grasp_reach_s = 0.8;
+  cfg.grasp_close_s = 0.6;
+  AutoOperator op(ShortTrack(), cfg, DriveConfig{});
+  op.Observe(At(0.0, ShortTrack().PointAt(0.1), 0.0));  // on a straight: it wants to go forward
+  const GripInterface grip;
+  const int left = haptics::Index(haptics::Side::kLeft);
+
+  auto at = [&](double t) { return *op.Act(t, grip)[left]; };
+  const interfaces::HandGoal start = at(10.0);  // the first Act starts the grasp
+  CHECK_FALSE(op.grasped(10.0));
+  CHECK(start.position[2] == Approx(0.04));  // above the grip, open, at neutral
+  CHECK(start.position[0] == Approx(0.1));
+  CHECK(start.glove[5] == 0.0);
+  const interfaces::HandGoal halfway = at(10.4);
+  CHECK(halfway.position[2] > 0.0);
+  CHECK(halfway.position[2] < 0.04);
+  CHECK(halfway.glove[5] == 0.0);
+  const interfaces::HandGoal down = at(10.8);  // on the grip, still open
+  CHECK(down.position[2] == Approx(0.0).margin(1e-12));
+  CHECK(down.glove[5] == Approx(0.0).margin(1e-12));
+  CHECK(down.position[0] == Approx(0.1));  // not driving yet
+  const interfaces::HandGoal closing = at(11.1);
+  CHECK(closing.glove[5] > 0.1);
+  CHECK(closing.glove[5] < 0.9);
+  CHECK_FALSE(op.grasped(11.1));
+  CHECK(op.grasped(11.4));
+  const interfaces::HandGoal closed = at(11.4);
+  CHECK(closed.glove[5] == Approx(1.0));
+  // Driving: the grip moves forward with the intent, the fingers stay closed.
+  const interfaces::HandGoal driving = at(12.4);
+  CHECK(driving.position[0] > 0.1 + 0.05 * 0.5);
+  CHECK(driving.glove[5] == 1.0);
+}
+
+TEST_CASE("with nothing to grasp the operator drives from its first act") {
+  AutoOperator op(ShortTrack(), OperatorConfig{}, DriveConfig{});
+  const interfaces::GestureInterface gesture{GestureConfig{}};
+  op.Act(5.0, gesture);
+  CHECK(op.grasped(5.0));
+}

@@ -55,8 +55,8 @@ struct ControlsBodyConfig {
   int rim_segments = 16;        ///< capsules approximating the torus
   double wheel_damping = 0.02;  ///< N·m·s/rad, steering column
   double knob_mass = 0.1;       ///< kg
-  /// m: a bar across the lever (along y), grasped like the wheel's rim
-  std::array<double, 3> knob_half_extents{0.012, 0.04, 0.012};
+  /// m: a bar along the lever's travel (x), grasped like the wheel's rim
+  std::array<double, 3> knob_half_extents{0.04, 0.012, 0.012};
   double throttle_damping = 1.0;                                 ///< N·s/m
   PhysicsMaterial material{1.0, 0.0};                            ///< rubbery: fingers grip it
   double contact_distance = 0.002;  ///< m, a manifold point this close counts as touching

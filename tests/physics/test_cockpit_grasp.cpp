@@ -1,0 +1,117 @@
+// The cockpit interface's hand goals against the real controls: proxy hands
+// that follow the goals (as a perfectly tracked operator would) grasp the rim
+// and the lever's bar, and moving the goals to an intent moves the controls
+// to the positions that express it.
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "haptel/config/cockpit.hpp"
+#include "haptel/config/paths.hpp"
+#include "haptel/config/physics.hpp"
+#include "haptel/interfaces/cockpit.hpp"
+#include "haptel/physics/cockpit_controls.hpp"
+#include "haptel/physics/world.hpp"
+
+using namespace haptel;
+using haptics::Side;
+
+namespace {
+
+struct LinkPort final : interfaces::ControlsPort {
+  physics::ControlsLink& link;
+  explicit LinkPort(physics::ControlsLink& l) : link(l) {}
+  interfaces::CockpitControls Controls() const override {
+    const physics::ControlsState s = link.State();
+    return {s.wheel_angle, s.throttle, s.wheel_held, s.throttle_held};
+  }
+  void Actuate(const interfaces::ControlActuation& a) override {
+    link.SetActuation({a.wheel_torque, a.wheel_spring, a.throttle_spring, a.throttle_target, a.throttle_locked});
+  }
+};
+
+struct Cockpit {
+  CockpitConfig config = LoadCockpit(ShippedFile("config/interfaces/cockpit.yaml"));
+  physics::PhysicsWorld world{LoadPhysics(ShippedFile("config/physics.yaml"))};
+  physics::CockpitControlsBody controls{world, config};
+  physics::ControlsLink link{world, controls};
+  LinkPort port{link};
+  interfaces::CockpitInterface cockpit{config, port};
+
+  Cockpit() {
+    world.AddHand(Side::kLeft);
+    world.AddHand(Side::kRight);
+  }
+
+  /// `seconds` of steps with the tracked hands on `goals`, shifted by
+  /// `lift` along each goal's approach direction (1 = at the approach point).
+  void Hold(const interfaces::HandTargets& goals, double seconds, double lift = 0.0, double close = 1.0) {
+    const int steps = static_cast<int>(seconds / world.config().step_s);
+    for (int i = 0; i < steps; ++i) Track(goals, lift, close);
+  }
+  void Track(const interfaces::HandTargets& goals, double lift, double close) {
+    for (int s = 0; s < haptics::kSides; ++s) {
+      if (!goals[s]) continue;
+      haptics::HandSample sample;
+      sample.valid = true;
+      for (int k = 0; k < 3; ++k) sample.position[k] = goals[s]->position[k] + lift * goals[s]->approach[k];
+      sample.orientation = goals[s]->orientation;
+      for (int j = 0; j < haptics::kGloveJoints; ++j) sample.finger_angles[j] = close * goals[s]->glove[j];
+      world.hand(static_cast<Side>(s))->SetTracked(sample);
+    }
+    world.Step();
+  }
+  /// Moves the goals from one intent to another over `seconds`, like the
+  /// operator's arm would.
+  void Move(const interfaces::DriveIntent& from, const interfaces::DriveIntent& to, double seconds) {
+    const int steps = static_cast<int>(seconds / world.config().step_s);
+    for (int i = 1; i <= steps; ++i) {
+      const double a = static_cast<double>(i) / steps;
+      Track(cockpit.HandTargetsFor({from.forward + (to.forward - from.forward) * a,
+                                    from.turn + (to.turn - from.turn) * a}),
+            0.0, 1.0);
+    }
+  }
+};
+
+}  // namespace
+
+TEST_CASE("cockpit grasp: the operator's hand goals hold the rim and the bar and set them", "[physics][cockpit]") {
+  Cockpit c;
+  const interfaces::HandTargets neutral = c.cockpit.HandTargetsFor({});
+  // Open hands above the controls: nothing touched.
+  c.Hold(neutral, 0.3, 1.0, 0.0);
+  physics::ControlsState s = c.link.State();
+  CHECK_FALSE(s.wheel_held);
+  CHECK_FALSE(s.throttle_held);
+  // Down onto them, open, then closed.
+  for (int i = 0; i <= 300; ++i) c.Hold(neutral, 0.002, 1.0 - i / 300.0, 0.0);
+  for (int i = 0; i <= 300; ++i) c.Hold(neutral, 0.002, 0.0, i / 300.0);
+  c.Hold(neutral, 0.2);
+  s = c.link.State();
+  INFO("grasped: wheel contacts " << s.wheel_contacts << ", lever contacts " << s.throttle_contacts);
+  CHECK(s.wheel_held);
+  CHECK(s.throttle_held);
+  CHECK(std::abs(s.wheel_angle) < 0.05);
+  CHECK(std::abs(s.throttle) < 0.005);
+
+  // Each intent, reached by moving the hands: the controls follow to the
+  // positions the interface's inverse map asks for.
+  interfaces::DriveIntent from{};
+  for (const interfaces::DriveIntent to : {interfaces::DriveIntent{0.9, 0.0}, interfaces::DriveIntent{0.4, 0.35},
+                                           interfaces::DriveIntent{0.4, -0.5}, interfaces::DriveIntent{-0.5, 0.0}}) {
+    c.Move(from, to, 1.0);
+    c.Hold(c.cockpit.HandTargetsFor(to), 0.3);
+    from = to;
+    s = c.link.State();
+    const interfaces::CockpitControls wanted = c.cockpit.logic().ControlsFor(to);
+    INFO("intent forward " << to.forward << " turn " << to.turn << ": wheel " << s.wheel_angle << " (wanted "
+                           << wanted.wheel_angle << "), lever " << s.throttle << " (wanted " << wanted.throttle
+                           << ")");
+    CHECK(s.wheel_angle == Approx(wanted.wheel_angle).margin(0.1));
+    CHECK(s.throttle == Approx(wanted.throttle).margin(0.006));
+    CHECK(s.wheel_held);
+    CHECK(s.throttle_held);
+  }
+  CHECK(c.world.Counters().hand_resets == 0);
+  CHECK(c.controls.resets() == 0);
+}
