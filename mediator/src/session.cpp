@@ -17,10 +17,9 @@
 #include "haptel/haptics/sim_device.hpp"
 #include "haptel/interfaces/cockpit.hpp"
 #include "haptel/interfaces/gesture.hpp"
-#include "haptel/physics/cockpit_controls.hpp"
-#include "haptel/physics/world.hpp"
 #include "haptel/link/topic.hpp"
 #include "haptel/mediator/auto_operator.hpp"
+#include "haptel/mediator/cockpit_physics.hpp"
 #include "haptel/mediator/lap_timer.hpp"
 #include "haptel/core/child_process.hpp"
 #include "haptel/mediator/video_receiver.hpp"
@@ -77,48 +76,6 @@ class StateInbox {
   int64_t last_received_ns_ = 0;
   uint64_t last_echo_seq_ = 0;
   Histogram rtt_{10.0, 20000};  // µs bins up to 200 ms
-};
-
-/// The cockpit interface's view of the controls in the physics world: the
-/// two layers keep their own structs (physics does not know interfaces).
-class PhysicsControlsPort final : public interfaces::ControlsPort {
- public:
-  explicit PhysicsControlsPort(physics::ControlsLink& link) : link_(link) {}
-  interfaces::CockpitControls Controls() const override {
-    const physics::ControlsState s = link_.State();
-    return {s.wheel_angle, s.throttle, s.wheel_held, s.throttle_held};
-  }
-  void Actuate(const interfaces::ControlActuation& a) override {
-    link_.SetActuation({a.wheel_torque, a.wheel_spring, a.throttle_spring, a.throttle_target,
-                        a.throttle_locked});
-  }
-
- private:
-  physics::ControlsLink& link_;
-};
-
-/// The physics side of a cockpit session. Its destructor stops the physics
-/// thread before the controls and their link (which the thread uses) go.
-struct CockpitPhysics {
-  std::unique_ptr<physics::PhysicsWorld> world;
-  std::unique_ptr<physics::CockpitControlsBody> controls;
-  std::unique_ptr<physics::ControlsLink> link;
-  std::unique_ptr<PhysicsControlsPort> port;
-
-  CockpitPhysics(const PhysicsConfig& config, const CockpitConfig& cockpit) {
-    world = physics::PhysicsWorld::CreateIfNeeded(config, {.physical_controls = true});
-    world->AddHand(haptics::Side::kLeft);
-    world->AddHand(haptics::Side::kRight);
-    controls = std::make_unique<physics::CockpitControlsBody>(*world, cockpit);
-    link = std::make_unique<physics::ControlsLink>(*world, *controls);
-    controls->Read();  // gathers the hands' bodies now, not on the physics thread
-    port = std::make_unique<PhysicsControlsPort>(*link);
-  }
-  ~CockpitPhysics() {
-    if (world) world->Stop();
-  }
-  CockpitPhysics(const CockpitPhysics&) = delete;
-  CockpitPhysics& operator=(const CockpitPhysics&) = delete;
 };
 
 /// The simulated person holds a hand as `goal` says.
@@ -324,8 +281,14 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
       log::Info(line);
       if (cockpit != nullptr) {
         const interfaces::CockpitControls& c = cockpit->controls();
-        std::snprintf(line, sizeof line, "         wheel %+.2f rad%s  throttle %+.3f m%s  motors %+.2f %+.2f", c.wheel_angle,
-                      c.wheel_held ? " (held)" : "", c.throttle, c.throttle_held ? " (held)" : "", motors.left, motors.right);
+        const interfaces::HudState& h = cockpit->hud();
+        char hud[80] = "";
+        if (setup.cockpit->hud) {
+          std::snprintf(hud, sizeof hud, "  HUD %.2f m/s%s%s%s", h.speed, h.turn_left ? " <" : "", h.turn_right ? " >" : "",
+                        h.throttle_locked ? " locked" : "");
+        }
+        std::snprintf(line, sizeof line, "         wheel %+.2f rad%s  throttle %+.3f m%s  motors %+.2f %+.2f%s", c.wheel_angle,
+                      c.wheel_held ? " (held)" : "", c.throttle, c.throttle_held ? " (held)" : "", motors.left, motors.right, hud);
         log::Info(line);
       }
     }

@@ -9,38 +9,20 @@
 #include "haptel/config/paths.hpp"
 #include "haptel/config/physics.hpp"
 #include "haptel/interfaces/cockpit.hpp"
-#include "haptel/physics/cockpit_controls.hpp"
-#include "haptel/physics/world.hpp"
+#include "haptel/mediator/cockpit_physics.hpp"
 
 using namespace haptel;
 using haptics::Side;
 
 namespace {
 
-struct LinkPort final : interfaces::ControlsPort {
-  physics::ControlsLink& link;
-  explicit LinkPort(physics::ControlsLink& l) : link(l) {}
-  interfaces::CockpitControls Controls() const override {
-    const physics::ControlsState s = link.State();
-    return {s.wheel_angle, s.throttle, s.wheel_held, s.throttle_held};
-  }
-  void Actuate(const interfaces::ControlActuation& a) override {
-    link.SetActuation({a.wheel_torque, a.wheel_spring, a.throttle_spring, a.throttle_target, a.throttle_locked});
-  }
-};
-
+/// The session's cockpit physics, stepped by the test instead of its thread.
 struct Cockpit {
   CockpitConfig config = LoadCockpit(ShippedFile("config/interfaces/cockpit.yaml"));
-  physics::PhysicsWorld world{LoadPhysics(ShippedFile("config/physics.yaml"))};
-  physics::CockpitControlsBody controls{world, config};
-  physics::ControlsLink link{world, controls};
-  LinkPort port{link};
-  interfaces::CockpitInterface cockpit{config, port};
-
-  Cockpit() {
-    world.AddHand(Side::kLeft);
-    world.AddHand(Side::kRight);
-  }
+  mediator::CockpitPhysics physics{LoadPhysics(ShippedFile("config/physics.yaml")), config};
+  physics::PhysicsWorld& world = *physics.world;
+  physics::ControlsLink& link = *physics.link;
+  interfaces::CockpitInterface cockpit{config, *physics.port};
 
   /// `seconds` of steps with the tracked hands on `goals`, shifted by
   /// `lift` along each goal's approach direction (1 = at the approach point).
@@ -113,5 +95,5 @@ TEST_CASE("cockpit grasp: the operator's hand goals hold the rim and the bar and
     CHECK(s.throttle_held);
   }
   CHECK(c.world.Counters().hand_resets == 0);
-  CHECK(c.controls.resets() == 0);
+  CHECK(c.physics.controls->resets() == 0);
 }
