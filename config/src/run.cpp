@@ -19,6 +19,7 @@ RunConfig LoadRun(const std::filesystem::path& file) {
   r.vehicle = dir / root.RequireString("vehicle");
   r.device = dir / root.String("device", "devices/sim.yaml");
   r.physics = dir / root.String("physics", "physics.yaml");
+  if (const std::string scene = root.String("scene", ""); !scene.empty()) r.scene = dir / scene;
   r.interface = root.String("interface", r.interface);
   r.interfaces_dir = dir / root.String("interfaces_dir", "interfaces");
   r.database = root.String("database", r.database.string());

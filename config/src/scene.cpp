@@ -849,4 +849,8 @@ Scene ImportMhapticXml(const std::filesystem::path& file) {
   return scene;
 }
 
+Scene LoadSceneFile(const std::filesystem::path& file) {
+  return file.extension() == ".xml" ? ImportMhapticXml(file) : LoadScene(file);
+}
+
 }  // namespace haptel

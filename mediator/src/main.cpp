@@ -11,6 +11,7 @@
 #include "haptel/config/cockpit.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/physics.hpp"
+#include "haptel/config/scene.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/config/gravity_grid.hpp"
 #include "haptel/core/args.hpp"
@@ -42,6 +43,7 @@ constexpr const char* kUsage =
     "  --config FILE        run configuration (default config/haptel.yaml)\n"
     "  --track FILE         track file (overrides the configuration's 'track')\n"
     "  --interface NAME     mediator interface (a file interfaces/NAME.yaml)\n"
+    "  --scene FILE         haptic scene for the hands (YAML, or MHaptic .xml)\n"
     "  --vehicle-name NAME  vehicle name in DDS topic names\n"
     "  --domain N           DDS domain id\n"
     "  --database FILE      SQLite file for the results (overrides 'database')\n"
@@ -102,7 +104,7 @@ int main(int argc, char** argv) {
   SessionSetup setup;
   bool json = false;
   try {
-    const Args args(argc, argv, {"config", "track", "interface", "vehicle-name", "domain", "database", "vehicle-timeout", "trace"},
+    const Args args(argc, argv, {"config", "track", "interface", "scene", "vehicle-name", "domain", "database", "vehicle-timeout", "trace"},
                     {"json", "quiet", "help"});
     if (args.Flag("help")) {
       std::fputs(kUsage, stdout);
@@ -134,10 +136,12 @@ int main(int argc, char** argv) {
     const std::filesystem::path interface_file = InterfaceFile(setup.run, setup.run.interface);
     if (InterfaceName(interface_file).rfind("cockpit", 0) == 0) {
       setup.cockpit = LoadCockpit(interface_file);
-      setup.physics = LoadPhysics(setup.run.physics);
     } else {
       setup.gesture = LoadGesture(interface_file);
     }
+    if (auto scene = args.Value("scene")) setup.run.scene = *scene;
+    if (!setup.run.scene.empty()) setup.scene = LoadSceneFile(setup.run.scene);
+    if (setup.cockpit || setup.scene) setup.physics = LoadPhysics(setup.run.physics);
     setup.device = LoadDevice(setup.run.device);
     if (setup.device.driver != "sim") {
       throw ConfigError(setup.run.device.string() + ": key 'driver': expected 'sim' for haptel run "
@@ -207,7 +211,7 @@ int main(int argc, char** argv) {
       << ",\"physics_period_p99_us\":" << Number(result.physics_period_p99_us)
       << ",\"physics_step_max_us\":" << Number(result.physics_step_max_us)
       << ",\"physics_hand_resets\":" << result.physics_hand_resets
-      << ",\"grasp_s\":" << Number(result.grasp_s) << ",\"interface\":" << JsonString(r.interface)
+      << ",\"grasp_s\":" << Number(result.grasp_s) << ",\"scene_bodies\":" << result.scene_bodies << ",\"interface\":" << JsonString(r.interface)
       << ",\"track\":" << JsonString(r.track) << ",\"run_id\":" << run_id
       << ",\"database\":" << JsonString(setup.run.database.string()) << "}";
     std::printf("%s\n", o.str().c_str());

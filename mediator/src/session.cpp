@@ -19,7 +19,7 @@
 #include "haptel/interfaces/gesture.hpp"
 #include "haptel/link/topic.hpp"
 #include "haptel/mediator/auto_operator.hpp"
-#include "haptel/mediator/cockpit_physics.hpp"
+#include "haptel/mediator/session_physics.hpp"
 #include "haptel/mediator/lap_timer.hpp"
 #include "haptel/core/child_process.hpp"
 #include "haptel/mediator/video_receiver.hpp"
@@ -111,17 +111,26 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
     calibration = haptics::RunCalibration(device, options, quiet);
   }
   haptics::Hal hal(calibration);
-  // The interface, and for a cockpit the physics world its controls live in.
-  std::unique_ptr<CockpitPhysics> physics_side;
+  // The interface, and the physics world when the interface's controls or
+  // the scene have bodies: the hands the interface uses become proxies.
+  const CockpitConfig* cockpit_config = setup.cockpit ? &*setup.cockpit : nullptr;
+  const Scene* scene = setup.scene ? &*setup.scene : nullptr;
+  std::unique_ptr<SessionPhysics> physics_side;
   std::unique_ptr<interfaces::MediatorInterface> interface_owner;
   const interfaces::CockpitInterface* cockpit = nullptr;
-  if (setup.cockpit) {
-    physics_side = std::make_unique<CockpitPhysics>(setup.physics, *setup.cockpit);
-    auto owned = std::make_unique<interfaces::CockpitInterface>(*setup.cockpit, *physics_side->port);
+  if (cockpit_config == nullptr) interface_owner = std::make_unique<interfaces::GestureInterface>(setup.gesture);
+  if (SessionPhysics::Needed(cockpit_config, scene)) {
+    std::array<bool, haptics::kSides> hands{true, true};  // a cockpit needs both
+    if (interface_owner) {
+      const interfaces::HandTargets used = interface_owner->HandTargetsFor({});
+      for (int i = 0; i < haptics::kSides; ++i) hands[i] = used[i].has_value();
+    }
+    physics_side = std::make_unique<SessionPhysics>(setup.physics, hands, cockpit_config, scene);
+  }
+  if (cockpit_config != nullptr) {
+    auto owned = std::make_unique<interfaces::CockpitInterface>(*cockpit_config, *physics_side->port);
     cockpit = owned.get();
     interface_owner = std::move(owned);
-  } else {
-    interface_owner = std::make_unique<interfaces::GestureInterface>(setup.gesture);
   }
   interfaces::MediatorInterface& interface = *interface_owner;
   const double command_rate_hz = setup.cockpit ? setup.cockpit->command_rate_hz : setup.gesture.command_rate_hz;
@@ -249,7 +258,7 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
       for (int i = 0; i < haptics::kSides; ++i) {
         if (targets[i]) ActOn(device, static_cast<haptics::Side>(i), *targets[i]);
       }
-      if (result.grasp_s == 0.0 && op.grasped(t) && physics_side) result.grasp_s = t;
+      if (result.grasp_s == 0.0 && op.grasped(t) && cockpit != nullptr) result.grasp_s = t;
     }
     motors = interface.Update(t, feedback, hal);
     if (now >= next_command_ns) {
@@ -309,8 +318,9 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
     result.physics_period_p99_us = p.period_p99_us;
     result.physics_step_max_us = counters.max_step_us;
     result.physics_hand_resets = counters.hand_resets;
-    if (result.grasp_s == 0.0) result.grasp_s = -1.0;
+    result.scene_bodies = static_cast<int>(physics_side->scene.nodes.size());
   }
+  if (cockpit != nullptr && result.grasp_s == 0.0) result.grasp_s = -1.0;
   servo.Stop();
   if (vehicle) vehicle->Terminate();
 

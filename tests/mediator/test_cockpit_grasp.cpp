@@ -9,7 +9,7 @@
 #include "haptel/config/paths.hpp"
 #include "haptel/config/physics.hpp"
 #include "haptel/interfaces/cockpit.hpp"
-#include "haptel/mediator/cockpit_physics.hpp"
+#include "haptel/mediator/session_physics.hpp"
 
 using namespace haptel;
 using haptics::Side;
@@ -19,7 +19,7 @@ namespace {
 /// The session's cockpit physics, stepped by the test instead of its thread.
 struct Cockpit {
   CockpitConfig config = LoadCockpit(ShippedFile("config/interfaces/cockpit.yaml"));
-  mediator::CockpitPhysics physics{LoadPhysics(ShippedFile("config/physics.yaml")), config};
+  mediator::SessionPhysics physics{LoadPhysics(ShippedFile("config/physics.yaml")), {true, true}, &config, nullptr};
   physics::PhysicsWorld& world = *physics.world;
   physics::ControlsLink& link = *physics.link;
   interfaces::CockpitInterface cockpit{config, *physics.port};

@@ -39,6 +39,7 @@ struct RunConfig {
   bool video_decode = true;
   std::filesystem::path device;  ///< haptic device file (config/devices/*.yaml)
   std::filesystem::path physics;  ///< physics world file, for interfaces with bodies
+  std::filesystem::path scene;    ///< haptic scene (YAML or MHaptic XML); empty: none
   OperatorConfig op;
   LinkConfig link;
 };

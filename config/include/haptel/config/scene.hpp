@@ -166,6 +166,10 @@ Scene LoadScene(const std::filesystem::path& file);
 /// ConfigError "file:line: element <name>…: …".
 Scene ImportMhapticXml(const std::filesystem::path& file);
 
+/// A scene file of either format: `.xml` is imported as MHaptic XML, anything
+/// else is read as YAML.
+Scene LoadSceneFile(const std::filesystem::path& file);
+
 /// The haptic scene's node order: every object becomes a node; dynamic nodes
 /// come first, static ones last (each group in file order), so synchronising
 /// poses for the view walks the nodes and stops at the first static node

@@ -18,6 +18,7 @@
 #include "haptel/config/gesture.hpp"
 #include "haptel/config/gravity_grid.hpp"
 #include "haptel/config/physics.hpp"
+#include "haptel/config/scene.hpp"
 #include "haptel/config/run.hpp"
 #include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"
@@ -32,8 +33,11 @@ struct SessionSetup {
   /// The interface: a cockpit when set, otherwise the gesture interface.
   GestureConfig gesture;
   std::optional<CockpitConfig> cockpit;
-  /// The physics world, used only when the interface has physical controls.
+  /// The physics world, used only when the interface's controls or the
+  /// scene have bodies.
   PhysicsConfig physics;
+  /// The haptic scene the hands can touch (none: nothing to touch).
+  std::optional<Scene> scene;
   DeviceConfig device;
   /// How the device's units map to SI (from device.calibration, or measured
   /// at start-up for the sim device when it has no file).
@@ -61,6 +65,7 @@ struct SessionResult {
   double physics_period_p99_us = 0.0;
   double physics_step_max_us = 0.0;
   uint64_t physics_hand_resets = 0;
+  int scene_bodies = 0;  ///< scene objects built into the world
   /// Seconds from the start until the operator's hands held the controls
   /// (0 when there was nothing to grasp; negative if they never did).
   double grasp_s = 0.0;
