@@ -24,6 +24,14 @@ btScalar AverageFriction(const btCollisionObject* a, const btCollisionObject* b)
 btScalar AverageRestitution(const btCollisionObject* a, const btCollisionObject* b) {
   return 0.5 * (a->getRestitution() + b->getRestitution());
 }
+// Rolling and spinning friction are lever arms that add up (PhysicsMaterial);
+// Bullet's default weighs each by the other body's friction coefficient.
+btScalar SumRollingFriction(const btCollisionObject* a, const btCollisionObject* b) {
+  return a->getRollingFriction() + b->getRollingFriction();
+}
+btScalar SumSpinningFriction(const btCollisionObject* a, const btCollisionObject* b) {
+  return a->getSpinningFriction() + b->getSpinningFriction();
+}
 
 void CheckPositive(double value, const char* what) {
   if (!(value > 0.0) || !std::isfinite(value)) {
@@ -57,6 +65,8 @@ PhysicsWorld::PhysicsWorld(const PhysicsConfig& config)
   g_worlds_created.fetch_add(1);
   gCalculateCombinedFrictionCallback = &AverageFriction;
   gCalculateCombinedRestitutionCallback = &AverageRestitution;
+  gCalculateCombinedRollingFrictionCallback = &SumRollingFriction;
+  gCalculateCombinedSpinningFrictionCallback = &SumSpinningFriction;
   btDiscreteDynamicsWorld& w = bullet_->world;
   w.setGravity(ToBt(config_.gravity));
   btContactSolverInfo& info = w.getSolverInfo();
@@ -92,9 +102,9 @@ std::unique_ptr<btRigidBody> MakeBody(btCollisionShape* shape, double mass, cons
   if (mass > 0.0) shape->calculateLocalInertia(mass, inertia);
   btRigidBody::btRigidBodyConstructionInfo info(mass, nullptr, shape, inertia);
   info.m_startWorldTransform = pose;
-  info.m_friction = material.friction;
-  info.m_restitution = material.restitution;
-  return std::make_unique<btRigidBody>(info);
+  auto body = std::make_unique<btRigidBody>(info);
+  SetMaterial(*body, material);
+  return body;
 }
 }  // namespace
 
@@ -170,9 +180,8 @@ BodyId PhysicsWorld::AddRigidBody(std::unique_ptr<btCollisionShape> shape,
   const btVector3 inertia = mass > 0.0 ? ToBt(principal_inertia) : btVector3(0, 0, 0);
   btRigidBody::btRigidBodyConstructionInfo info(mass, nullptr, b->shape.get(), inertia);
   info.m_startWorldTransform = b->spawn;
-  info.m_friction = material.friction;
-  info.m_restitution = material.restitution;
   b->body = std::make_unique<btRigidBody>(info);
+  SetMaterial(*b->body, material);
   bullet_->world.addRigidBody(b->body.get());
   return AddBody(std::move(b));
 }
