@@ -336,6 +336,41 @@ TEST_CASE("physics: a phalanx capsule resting or pressed on a box does not roll"
   CHECK(p[2] == Approx(2.0 * half + r).margin(0.001));
 }
 
+TEST_CASE("physics: a sleeping box stays put; a palm pushing it wakes it and slides it on the floor",
+          "[physics]") {
+  // The world skips sleeping bodies (no bounding-box refresh, no integration):
+  // a sleeping body must not move at all, and once woken it must collide
+  // where it went.
+  PhysicsWorld world{PhysicsConfig{}};
+  world.AddStaticPlane({0, 0, 1}, 0.0);
+  const double half = 0.05;
+  const ph::BodyId box = world.AddDynamicBox({0, 0, half}, {half, half, half}, 0.5);
+  world.AddHand(Side::kRight);
+  // Fingers up, the palm facing +x (turned −90° about y), level with the box.
+  const auto q = AxisAngle({0, 1, 0}, -M_PI / 2);
+  const double wrist_z = half + 0.005 - world.config().hand.palm_half_extents[0];
+  auto step_at = [&](double x) {
+    world.hand(Side::kRight)->SetTracked(TrackedHand({x, 0.0, wrist_z}, q));
+    world.Step();
+  };
+  for (int i = 0; i < 3000; ++i) step_at(-0.3);
+  REQUIRE(world.BodySleeping(box));
+  const ph::Pose asleep = world.BodyPose(box);
+  for (int i = 0; i < 500; ++i) step_at(-0.3);
+  CHECK(world.BodySleeping(box));
+  CHECK(world.BodyPose(box).position == asleep.position);
+  CHECK(world.BodyPose(box).orientation == asleep.orientation);
+
+  for (int i = 0; i < 1500; ++i) step_at(-0.3 + 0.4 * i / 1500.0);  // to x = 0.1 in 1.5 s
+  for (int i = 0; i < 500; ++i) step_at(0.1);
+  const Vec3d p = world.BodyPose(box).position;
+  INFO("box at " << p[0] << ", " << p[1] << ", " << p[2]);
+  CHECK(p[0] > 0.1);                           // pushed: its back face is at the palm
+  CHECK(p[2] == Approx(half).margin(0.002));   // still on the floor where it went
+  CHECK(std::abs(p[1]) < 0.02);
+  CHECK(world.Counters().body_resets == 0);
+}
+
 TEST_CASE("physics: a box at rest on a table falls asleep", "[physics]") {
   PhysicsWorld world{PhysicsConfig{}};
   world.AddStaticPlane({0, 0, 1}, 0.0);
