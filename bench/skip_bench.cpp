@@ -15,11 +15,13 @@
 
 #include "haptel/core/clock.hpp"
 #include "haptel/haptics/vec_math.hpp"
+#include "haptel/config/cockpit.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/physics.hpp"
 #include "haptel/config/scene.hpp"
 #include "haptel/core/args.hpp"
+#include "haptel/physics/cockpit_controls.hpp"
 #include "haptel/physics/scene_builder.hpp"
 #include "haptel/physics/world.hpp"
 #include "plot.hpp"
@@ -32,6 +34,9 @@ using haptics::Side;
 
 constexpr double kWarmupS = 2.5;  ///< Bullet: asleep after 2 s at rest
 constexpr double kBoxHalf = 0.05;
+/// m, device frame: a floor under the controls (the rim's bottom is at
+/// −0.13 m, the knob's at −0.075 m).
+constexpr double kFloorZ = -0.4;
 
 struct Result {
   std::string name;
@@ -42,12 +47,25 @@ struct Result {
   long steps = 0;
   double sim_s = 0.0;
   double cpu_s = 0.0;
+  int max_wheel_contacts = 0;  ///< hand bodies on the rim, at most, while timed
+  double wheel_min = 0.0, wheel_max = 0.0;  ///< rad, wheel angle range while timed
   double cpu_per_sim_s() const { return sim_s > 0.0 ? cpu_s / sim_s : 0.0; }
 };
 
-/// `n` boxes resting on the floor around the table: the cells of a 0.3 m grid
-/// outside the table's footprint, nearest first, each jittered and turned.
-std::vector<SceneObject> FloorBoxes(int n) {
+/// The floor under the cockpit and `n` 10 cm boxes resting on it: the cells
+/// of a 0.3 m grid outside the cockpit's footprint, nearest first, each
+/// jittered and turned. Dynamic boxes fall asleep; static ones never move.
+Scene FloorScene(int n, bool dynamic) {
+  Scene scene;
+  SceneObject floor;
+  floor.name = "floor";
+  SceneShape plane;
+  plane.kind = ShapeKind::kPlane;
+  plane.normal = Eigen::Vector3d::UnitZ();
+  plane.offset = kFloorZ;
+  floor.shapes.push_back(plane);
+  scene.objects.push_back(floor);
+
   struct Cell {
     double x, y;
   };
@@ -56,7 +74,7 @@ std::vector<SceneObject> FloorBoxes(int n) {
   for (int i = -40; i <= 40; ++i) {
     for (int j = -40; j <= 40; ++j) {
       const double x = i * pitch, y = j * pitch;
-      if (std::abs(x) < 0.8 && std::abs(y) < 0.6) continue;  // under and next to the table
+      if (std::abs(x) < 0.8 && std::abs(y) < 0.6) continue;  // under and next to the controls
       cells.push_back({x, y});
     }
   }
@@ -66,68 +84,103 @@ std::vector<SceneObject> FloorBoxes(int n) {
   std::mt19937 rng(42);
   std::uniform_real_distribution<double> jitter(-0.05, 0.05);
   std::uniform_real_distribution<double> yaw(-M_PI, M_PI);
-  std::vector<SceneObject> boxes;
   for (int k = 0; k < n && k < static_cast<int>(cells.size()); ++k) {
     SceneObject o;
     o.name = "floor_box_" + std::to_string(k);
-    o.dynamic = true;
-    o.mass = 0.5;
-    o.position = {cells[k].x + jitter(rng), cells[k].y + jitter(rng), kBoxHalf};
+    o.dynamic = dynamic;
+    o.mass = dynamic ? 0.5 : 0.0;
+    o.position = {cells[k].x + jitter(rng), cells[k].y + jitter(rng), kFloorZ + kBoxHalf};
     o.rotation = Eigen::AngleAxisd(yaw(rng), Eigen::Vector3d::UnitZ()).toRotationMatrix();
     SceneShape s;
     s.kind = ShapeKind::kBox;
     s.half_extents = Eigen::Vector3d::Constant(kBoxHalf);
     o.shapes.push_back(s);
-    boxes.push_back(std::move(o));
+    scene.objects.push_back(std::move(o));
   }
-  return boxes;
+  return scene;
 }
 
-/// The operator's hands hovering above the table, moving gently (2 cm, 0.5 Hz).
-haptics::HandSample HoveringHand(Side side, double t) {
-  const double x = side == Side::kLeft ? -0.25 : 0.25;
-  const double w = 2.0 * M_PI * 0.5;
-  return haptics::TrackedHand({x + 0.02 * std::sin(w * t), -0.1 + 0.02 * std::cos(w * t), 0.95});
-}
+/// The operator at the controls: the right palm resting on the top of the rim
+/// (3 mm into it, ≈ 9 N at the shipped coupling), fingers open over it, turning
+/// the wheel ±0.2 rad at 0.5 Hz; the left hand hovering 3 cm over the throttle
+/// knob, moving 2 cm at 0.5 Hz.
+struct Operator {
+  const CockpitConfig& cockpit;
+  const PhysicsConfig& physics;
 
-void Run(physics::PhysicsWorld& world, double& t, double seconds) {
+  haptics::HandSample Right(double t) const {
+    const auto& hub = cockpit.wheel_hub;
+    const double rim = physics::ControlsBodyConfig{}.rim_radius;
+    const double press = 0.003;
+    const double above = cockpit.wheel_radius + rim + physics.hand.phalanx_radius - press;
+    // Palm down, the rim under the metacarpals (as tests/physics/test_cockpit_controls.cpp).
+    const double x = hub[0] - 0.115;
+    const double angle = 0.2 * std::sin(M_PI * t);  // about −x: + = left
+    const double c = std::cos(angle), sn = std::sin(angle);
+    return haptics::TrackedHand({x, hub[1] + sn * above, hub[2] + c * above},
+                                {std::cos(0.5 * angle), -std::sin(0.5 * angle), 0.0, 0.0});
+  }
+
+  haptics::HandSample Left(double t) const {
+    const auto& knob = cockpit.throttle_centre;
+    const physics::ControlsBodyConfig body;
+    const double gap = 0.03;
+    const double z = knob[2] + body.knob_half_extents[2] + physics.hand.palm_half_extents[2] + gap;
+    const double w = M_PI;  // 0.5 Hz
+    return haptics::TrackedHand({knob[0] - physics.hand.palm_half_extents[0] + 0.02 * std::sin(w * t),
+                                 knob[1] + 0.02 * std::cos(w * t), z});
+  }
+};
+
+/// Steps for `seconds`; with `timed`, adds the thread CPU time of the stepping
+/// (blocks of 10 steps) to it and samples the controls between blocks, untimed
+/// (Read walks every contact manifold, the floor boxes' too).
+void Run(physics::PhysicsWorld& world, physics::CockpitControlsBody& controls, const Operator& op, double& t,
+         double seconds, Result* timed) {
   const double h = world.config().step_s;
   const long steps = std::lround(seconds / h);
-  for (long i = 0; i < steps; ++i) {
-    for (Side side : {Side::kLeft, Side::kRight}) {
-      if (physics::ProxyHand* hand = world.hand(side)) hand->SetTracked(HoveringHand(side, t));
+  constexpr long kBlock = 10;
+  for (long i = 0; i < steps;) {
+    const double cpu0 = ThreadCpuSeconds();
+    for (const long end = std::min(steps, i + kBlock); i < end; ++i) {
+      world.hand(Side::kRight)->SetTracked(op.Right(t));
+      world.hand(Side::kLeft)->SetTracked(op.Left(t));
+      world.Step();
+      t += h;
     }
-    world.Step();
-    t += h;
+    if (timed == nullptr) continue;
+    timed->cpu_s += ThreadCpuSeconds() - cpu0;
+    const physics::ControlsState s = controls.Read();
+    timed->max_wheel_contacts = std::max(timed->max_wheel_contacts, s.wheel_contacts);
+    timed->wheel_min = std::min(timed->wheel_min, s.wheel_angle);
+    timed->wheel_max = std::max(timed->wheel_max, s.wheel_angle);
   }
 }
 
-Result MeasureCockpit(const PhysicsConfig& config, const Scene& table, int boxes, double seconds,
-                      const std::string& name) {
+/// The cockpit's world: both proxy hands, the wheel and the throttle, and
+/// `scene` (nothing, or a floor with boxes).
+Result MeasureCockpit(const PhysicsConfig& config, const CockpitConfig& cockpit, const Scene& scene,
+                      double seconds, const std::string& name, const std::string& description) {
   Result r;
   r.name = name;
-  r.boxes = boxes;
-  Scene scene = table;
-  for (SceneObject& o : FloorBoxes(boxes)) scene.objects.push_back(std::move(o));
-  r.description = "hands + table + " + std::to_string(boxes) + " boxes on the floor";
+  r.description = description;
   auto world = physics::PhysicsWorld::CreateIfNeeded(config, physics::NeedsOf(scene, true));
   r.world = world != nullptr;
   world->AddHand(Side::kLeft);
   world->AddHand(Side::kRight);
+  physics::CockpitControlsBody controls(*world, cockpit);
   const physics::BuiltScene built = physics::BuildScene(*world, scene);
+  const Operator op{cockpit, config};
   double t = 0.0;
-  Run(*world, t, kWarmupS);
+  Run(*world, controls, op, t, kWarmupS, nullptr);
   const long steps_before = static_cast<long>(world->Counters().steps);
-  const double cpu0 = ThreadCpuSeconds();
-  Run(*world, t, seconds);
-  r.cpu_s = ThreadCpuSeconds() - cpu0;
+  Run(*world, controls, op, t, seconds, &r);
   r.steps = static_cast<long>(world->Counters().steps) - steps_before;
   r.sim_s = static_cast<double>(r.steps) * config.step_s;
   for (const physics::SceneBody& node : built.nodes) {
-    if (node.dynamic && scene.objects[node.object].name.rfind("floor_box_", 0) == 0 &&
-        world->BodySleeping(node.body)) {
-      ++r.boxes_asleep;
-    }
+    if (scene.objects[node.object].name.rfind("floor_box_", 0) != 0) continue;
+    ++r.boxes;
+    if (node.dynamic && world->BodySleeping(node.body)) ++r.boxes_asleep;
   }
   return r;
 }
@@ -144,7 +197,7 @@ int BenchSkipMain(int argc, const char* const* argv) {
   double seconds = 2.0;
   bool json = false;
   PhysicsConfig config;
-  Scene table;
+  CockpitConfig cockpit;
   try {
     const Args args(argc, argv, {"physics", "seconds"}, {"json"});
     json = args.Flag("json");
@@ -153,14 +206,14 @@ int BenchSkipMain(int argc, const char* const* argv) {
       if (!(seconds >= 0.1 && seconds <= 60)) throw UsageError("--seconds: expected a number in [0.1, 60]");
     }
     config = LoadPhysics(args.Value("physics").value_or(ShippedFile("config/physics.yaml").string()));
-    table = LoadScene(ShippedFile("config/scenes/table.yaml"));
+    cockpit = LoadCockpit(ShippedFile("config/interfaces/cockpit.yaml"));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "haptel bench skip: %s\n", e.what());
     return 2;
   }
   config.realtime_priority = 0;  // stepped on this thread, never started
 
-  std::vector<Result> results;
+  std::vector<Result> results;  // the JSON's entries, in its order
   {  // gesture: no physical controls, no scene bodies.
     Result r;
     r.name = "gesture";
@@ -173,39 +226,54 @@ int BenchSkipMain(int argc, const char* const* argv) {
     }
     results.push_back(r);
   }
-  Result cockpit = MeasureCockpit(config, table, 0, seconds, "cockpit");
-  cockpit.description = "two proxy hands + table scene";
-  results.push_back(cockpit);
+  results.push_back(MeasureCockpit(config, cockpit, Scene{}, seconds, "cockpit", "hands + wheel + throttle"));
   for (const int n : {0, 100, 1000}) {
-    results.push_back(MeasureCockpit(config, table, n, seconds, "cockpit_sleeping_" + std::to_string(n)));
+    results.push_back(MeasureCockpit(config, cockpit, FloorScene(n, true), seconds,
+                                     "cockpit_sleeping_" + std::to_string(n),
+                                     "cockpit + floor + " + std::to_string(n) + " dynamic boxes"));
   }
+  // For comparison (table and CSV, and outside cpu_per_sim_s in the JSON):
+  // the same 1000 boxes made static, which Bullet neither integrates nor
+  // pairs with the (static) floor nor puts in its simulation islands.
+  const Result statics = MeasureCockpit(config, cockpit, FloorScene(1000, false), seconds, "cockpit_static_1000",
+                                        "cockpit + floor + 1000 static boxes");
+  std::vector<Result> rows = results;
+  rows.push_back(statics);
   const double base = results[2].cpu_per_sim_s();
 
   std::printf("haptel bench skip: %.1f simulated s per world after %.1f s of warm-up, step %.4g s\n", seconds,
               kWarmupS, config.step_s);
-  std::printf("  cockpit = two proxy hands + the table scene, without the wheel and throttle bodies\n"
-              "  (CockpitControlsBody sits in the device frame, its hub at z = 0: in the table scene's floor)\n\n");
-  std::printf("%-22s %-42s %6s %8s %10s %12s %9s\n", "world", "what", "world", "asleep", "us/step",
-              "cpu s/sim s", "x slp_0");
-  for (const Result& r : results) {
-    const std::string asleep = r.boxes > 0 ? std::to_string(r.boxes_asleep) + "/" + std::to_string(r.boxes) : "-";
+  std::printf("  cockpit = both proxy hands + the wheel and throttle of %s; the right palm rests on\n"
+              "  the rim turning it +-0.2 rad, the left hand hovers over the knob; floor %.2f m below the hub\n\n",
+              cockpit.file.filename().c_str(), -kFloorZ);
+  std::printf("%-22s %-38s %6s %9s %10s %12s %9s %13s\n", "world", "what", "world", "asleep", "us/step",
+              "cpu s/sim s", "x slp_0", "rim contacts");
+  for (const Result& r : rows) {
+    const bool dynamic = r.name.rfind("cockpit_sleeping_", 0) == 0;
+    const std::string asleep = dynamic && r.boxes > 0 ? std::to_string(r.boxes_asleep) + "/" + std::to_string(r.boxes)
+                                                      : "-";
+    const std::string contacts = r.world ? std::to_string(r.max_wheel_contacts) : "-";
     const double us_per_step = r.steps > 0 ? 1e6 * r.cpu_s / static_cast<double>(r.steps) : 0.0;
-    std::printf("%-22s %-42s %6s %8s %10.1f %12.4f %9.2f\n", r.name.c_str(), r.description.c_str(),
+    std::printf("%-22s %-38s %6s %9s %10.1f %12.4f %9.2f %13s\n", r.name.c_str(), r.description.c_str(),
                 r.world ? "yes" : "no", asleep.c_str(), us_per_step, r.cpu_per_sim_s(),
-                base > 0.0 ? r.cpu_per_sim_s() / base : 0.0);
+                base > 0.0 ? r.cpu_per_sim_s() / base : 0.0, contacts.c_str());
   }
   std::printf("\n  cpu s/sim s: thread CPU time spent stepping per simulated second (the share of\n"
               "  one core the physics thread needs); x slp_0: ratio to cockpit_sleeping_0 in this run;\n"
-              "  asleep: floor boxes Bullet had put to sleep at the end.\n");
+              "  asleep: floor boxes Bullet had put to sleep at the end; rim contacts: most hand bodies\n"
+              "  touching the rim at once (the wheel turned %.2f..%.2f rad in the cockpit run).\n",
+              results[1].wheel_min, results[1].wheel_max);
 
   const auto dir = BenchDir();
   {
     std::ofstream csv(dir / "skip.csv");
-    csv << "world,has_world,boxes,boxes_asleep,steps,sim_s,cpu_s,cpu_per_sim_s,ratio_to_sleeping_0\n";
-    for (const Result& r : results) {
+    csv << "world,has_world,boxes,boxes_asleep,steps,sim_s,cpu_s,cpu_per_sim_s,ratio_to_sleeping_0,"
+           "max_rim_contacts,wheel_min_rad,wheel_max_rad\n";
+    for (const Result& r : rows) {
       csv << r.name << "," << (r.world ? 1 : 0) << "," << r.boxes << "," << r.boxes_asleep << "," << r.steps << ","
           << r.sim_s << "," << r.cpu_s << "," << r.cpu_per_sim_s() << ","
-          << (base > 0.0 ? r.cpu_per_sim_s() / base : 0.0) << "\n";
+          << (base > 0.0 ? r.cpu_per_sim_s() / base : 0.0) << "," << r.max_wheel_contacts << "," << r.wheel_min
+          << "," << r.wheel_max << "\n";
     }
   }
   std::printf("\n  wrote %s\n", (dir / "skip.csv").c_str());
@@ -216,7 +284,7 @@ int BenchSkipMain(int argc, const char* const* argv) {
     for (size_t i = 0; i < results.size(); ++i) {
       o << (i ? "," : "") << "\"" << results[i].name << "\":" << Number(results[i].cpu_per_sim_s());
     }
-    o << "}}";
+    o << "},\"cpu_per_sim_s_static_1000\":" << Number(statics.cpu_per_sim_s()) << "}";
     std::printf("%s\n", o.str().c_str());
   }
   return 0;

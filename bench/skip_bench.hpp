@@ -9,21 +9,24 @@
 /// rest):
 /// - gesture: no physical controls, no scene bodies → NeedsWorld is false, no
 ///   world is created, nothing is stepped: 0.
-/// - cockpit: two proxy hands, tracked hovering above the table and moving
-///   gently, and the shipped table scene (config/scenes/table.yaml). Without
-///   the wheel and throttle bodies (physics/cockpit_controls.hpp): they sit in
-///   the device frame around z = 0, inside the table scene's floor; the output
-///   says so.
-/// - cockpit_sleeping_N (N = 0, 100, 1000): the cockpit world plus N dynamic
-///   10 cm boxes resting on the floor around the table (seeded jittered grid,
-///   random yaw), asleep once the warm-up is over.
+/// - cockpit: the cockpit interface's world — both proxy hands and the wheel
+///   and throttle bodies (physics::CockpitControlsBody, built from the shipped
+///   config/interfaces/cockpit.yaml). The right palm rests on the top of the
+///   rim (3 mm into it) and turns the wheel ±0.2 rad at 0.5 Hz; the left hand
+///   hovers 3 cm over the throttle knob, moving 2 cm at 0.5 Hz.
+/// - cockpit_sleeping_N (N = 0, 100, 1000): the cockpit plus a floor 0.4 m
+///   below the hub and N dynamic 10 cm boxes resting on it outside the
+///   cockpit's footprint (seeded jittered grid, random yaw), asleep once the
+///   warm-up is over.
+/// - cockpit_static_1000 (table, CSV, and the JSON's cpu_per_sim_s_static_1000):
+///   the same 1000 boxes made static, for comparison.
 ///
 /// Figure: thread CPU time (CLOCK_THREAD_CPUTIME_ID) around the stepping, per
 /// simulated second, i.e. the share of one core the physics thread needs; and
 /// in the table the ratio of each world to cockpit_sleeping_0 from the same run.
 ///
 /// Prints a table; writes build/bench/skip.csv; with --json the last stdout
-/// line is {"cpu_per_sim_s":{"gesture":0,"cockpit":…,…}}.
+/// line is {"cpu_per_sim_s":{"gesture":0,"cockpit":…,…},"cpu_per_sim_s_static_1000":…}.
 namespace haptel::bench {
 
 /// `haptel bench skip [--physics FILE] [--seconds S] [--json]`; argv[0] is the

@@ -1,5 +1,7 @@
 #include "haptel/config/physics.hpp"
 
+#include <string>
+
 #include "yaml_map.hpp"
 
 namespace haptel {
@@ -11,6 +13,16 @@ PhysicsMaterial ReadMaterial(YamlMap map, const PhysicsMaterial& fallback) {
   PhysicsMaterial m;
   m.friction = map.Number("friction", fallback.friction, 0.0, 10.0);
   m.restitution = map.Number("restitution", fallback.restitution, 0.0, 1.0);
+  m.rolling_friction = map.Number("rolling_friction", fallback.rolling_friction, 0.0, 0.05);
+  m.spinning_friction = map.Number("spinning_friction", fallback.spinning_friction, 0.0, 0.05);
+  if (m.spinning_friction > 0.0 && !(m.rolling_friction > 0.0)) {
+    // Bullet adds the spinning-friction row only next to the rolling ones.
+    if (map.Has("spinning_friction")) {
+      map.Fail("spinning_friction", "0 unless rolling_friction > 0 (Bullet ignores it otherwise)");
+    }
+    map.Fail("rolling_friction", "> 0 while spinning_friction (default " +
+                                     std::to_string(m.spinning_friction) + " m) is > 0");
+  }
   map.Finish();
   return m;
 }

@@ -26,6 +26,15 @@ inline double BoxMargin(const std::array<double, 3>& half_extents) {
   return std::min(0.004, 0.2 * smallest);
 }
 
+/// Friction, restitution, rolling and spinning friction of `material` on
+/// `body` (Bullet reads them when a contact point is created).
+inline void SetMaterial(btCollisionObject& body, const PhysicsMaterial& material) {
+  body.setFriction(material.friction);
+  body.setRestitution(material.restitution);
+  body.setRollingFriction(material.rolling_friction);
+  body.setSpinningFriction(material.spinning_friction);
+}
+
 inline bool IsFinite(const btVector3& v) {
   return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z());
 }

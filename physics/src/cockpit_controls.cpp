@@ -108,9 +108,8 @@ struct CockpitControlsBody::Impl {
   void AddBody(Control& c, double mass, const btVector3& inertia) {
     btRigidBody::btRigidBodyConstructionInfo info(mass, nullptr, c.shape.get(), inertia);
     info.m_startWorldTransform = c.spawn;
-    info.m_friction = config.material.friction;
-    info.m_restitution = config.material.restitution;
     c.body = std::make_unique<btRigidBody>(info);
+    SetMaterial(*c.body, config.material);
     // Two bodies: never asleep, so a new actuation acts without waking them.
     c.body->setActivationState(DISABLE_DEACTIVATION);
     c.body->setFlags(c.body->getFlags() | BT_DISABLE_WORLD_GRAVITY);

@@ -223,9 +223,8 @@ struct ProxyHand::Impl {
       shape->calculateLocalInertia(mass, inertia);
       btRigidBody::btRigidBodyConstructionInfo info(mass, nullptr, shape, inertia);
       info.m_startWorldTransform = pose;
-      info.m_friction = config.material.friction;
-      info.m_restitution = config.material.restitution;
       auto body = std::make_unique<btRigidBody>(info);
+      SetMaterial(*body, config.material);
       body->setActivationState(DISABLE_DEACTIVATION);  // the hand is never asleep
       if (!config.gravity) body->setFlags(body->getFlags() | BT_DISABLE_WORLD_GRAVITY);
       world.addRigidBody(body.get(), group, mask);

@@ -24,6 +24,14 @@ btScalar AverageFriction(const btCollisionObject* a, const btCollisionObject* b)
 btScalar AverageRestitution(const btCollisionObject* a, const btCollisionObject* b) {
   return 0.5 * (a->getRestitution() + b->getRestitution());
 }
+// Rolling and spinning friction are lever arms that add up (PhysicsMaterial);
+// Bullet's default weighs each by the other body's friction coefficient.
+btScalar SumRollingFriction(const btCollisionObject* a, const btCollisionObject* b) {
+  return a->getRollingFriction() + b->getRollingFriction();
+}
+btScalar SumSpinningFriction(const btCollisionObject* a, const btCollisionObject* b) {
+  return a->getSpinningFriction() + b->getSpinningFriction();
+}
 
 void CheckPositive(double value, const char* what) {
   if (!(value > 0.0) || !std::isfinite(value)) {
@@ -33,13 +41,38 @@ void CheckPositive(double value, const char* what) {
 
 }  // namespace
 
+namespace {
+
+/// DESIGN.md: sleeping bodies cost nothing. Bullet's world damps and
+/// integrates every dynamic body before each step (predictUnconstraintMotion:
+/// two pow, a quaternion update), asleep or not — a fifth of a step with 1000
+/// sleeping boxes. A sleeping body's velocity is zero (Bullet zeroes it when
+/// the body falls asleep), so skipping it changes no result; Bullet's own
+/// integrateTransforms skips it the same way.
+class SleepAwareWorld final : public btDiscreteDynamicsWorld {
+ public:
+  using btDiscreteDynamicsWorld::btDiscreteDynamicsWorld;
+
+ protected:
+  void predictUnconstraintMotion(btScalar step) override {
+    for (int i = 0; i < m_nonStaticRigidBodies.size(); ++i) {
+      btRigidBody* body = m_nonStaticRigidBodies[i];
+      if (body->isStaticOrKinematicObject() || !body->isActive()) continue;
+      body->applyDamping(step);
+      body->predictIntegratedTransform(step, body->getInterpolationWorldTransform());
+    }
+  }
+};
+
+}  // namespace
+
 /// The Bullet machinery, in construction order (destroyed in reverse).
 struct PhysicsWorld::Bullet {
   btDefaultCollisionConfiguration collision_config;
   btCollisionDispatcher dispatcher{&collision_config};
   btDbvtBroadphase broadphase;
   btSequentialImpulseConstraintSolver solver;
-  btDiscreteDynamicsWorld world{&dispatcher, &broadphase, &solver, &collision_config};
+  SleepAwareWorld world{&dispatcher, &broadphase, &solver, &collision_config};
 };
 
 struct PhysicsWorld::Body {
@@ -57,7 +90,13 @@ PhysicsWorld::PhysicsWorld(const PhysicsConfig& config)
   g_worlds_created.fetch_add(1);
   gCalculateCombinedFrictionCallback = &AverageFriction;
   gCalculateCombinedRestitutionCallback = &AverageRestitution;
+  gCalculateCombinedRollingFrictionCallback = &SumRollingFriction;
+  gCalculateCombinedSpinningFrictionCallback = &SumSpinningFriction;
   btDiscreteDynamicsWorld& w = bullet_->world;
+  // Bounding boxes of active bodies only: static and sleeping ones do not
+  // move (Bullet's default recomputes every body's box each step). Code that
+  // moves a body by hand refreshes its box (ForgetContacts).
+  w.setForceUpdateAllAabbs(false);
   w.setGravity(ToBt(config_.gravity));
   btContactSolverInfo& info = w.getSolverInfo();
   info.m_numIterations = config_.solver_iterations;
@@ -92,9 +131,9 @@ std::unique_ptr<btRigidBody> MakeBody(btCollisionShape* shape, double mass, cons
   if (mass > 0.0) shape->calculateLocalInertia(mass, inertia);
   btRigidBody::btRigidBodyConstructionInfo info(mass, nullptr, shape, inertia);
   info.m_startWorldTransform = pose;
-  info.m_friction = material.friction;
-  info.m_restitution = material.restitution;
-  return std::make_unique<btRigidBody>(info);
+  auto body = std::make_unique<btRigidBody>(info);
+  SetMaterial(*body, material);
+  return body;
 }
 }  // namespace
 
@@ -170,9 +209,8 @@ BodyId PhysicsWorld::AddRigidBody(std::unique_ptr<btCollisionShape> shape,
   const btVector3 inertia = mass > 0.0 ? ToBt(principal_inertia) : btVector3(0, 0, 0);
   btRigidBody::btRigidBodyConstructionInfo info(mass, nullptr, b->shape.get(), inertia);
   info.m_startWorldTransform = b->spawn;
-  info.m_friction = material.friction;
-  info.m_restitution = material.restitution;
   b->body = std::make_unique<btRigidBody>(info);
+  SetMaterial(*b->body, material);
   bullet_->world.addRigidBody(b->body.get());
   return AddBody(std::move(b));
 }
@@ -222,7 +260,8 @@ void PhysicsWorld::CheckFinite() {
   }
   for (auto& b : bodies_) {
     btRigidBody& body = *b->body;
-    if (body.isStaticOrKinematicObject() || IsFinite(body)) continue;
+    // A sleeping body did not move this step: it is as finite as when it fell asleep.
+    if (body.isStaticOrKinematicObject() || !body.isActive() || IsFinite(body)) continue;
     body.setWorldTransform(b->spawn);
     body.setInterpolationWorldTransform(b->spawn);
     body.setLinearVelocity(btVector3(0, 0, 0));

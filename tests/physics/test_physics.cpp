@@ -6,6 +6,7 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <memory>
 
 #include "haptel/haptics/vec_math.hpp"
 #include "haptel/config/error.hpp"
@@ -54,6 +55,9 @@ TEST_CASE("physics: the shipped file loads, strictly", "[physics]") {
   CHECK(c.hand.coupling_linear_stiffness == d.hand.coupling_linear_stiffness);
   CHECK(c.hand.feedback_stiffness == d.hand.feedback_stiffness);
   CHECK(c.hand.material.friction == d.hand.material.friction);
+  CHECK(c.hand.material.rolling_friction == d.hand.material.rolling_friction);
+  CHECK(c.hand.material.spinning_friction == d.hand.material.spinning_friction);
+  CHECK(c.hand.material.rolling_friction > 0.0);
 
   const auto dir = haptel::test::ScratchDir("physics-config");
   const auto file = dir / "bad.yaml";
@@ -68,6 +72,21 @@ TEST_CASE("physics: the shipped file loads, strictly", "[physics]") {
     out << "step_s: 0.5\n";
   }
   REQUIRE_THROWS_WITH(haptel::LoadPhysics(file), Catch::Contains("step_s"));
+  {
+    std::ofstream out(file);
+    out << "hand:\n  material:\n    rolling_friction: 0.2\n";
+  }
+  REQUIRE_THROWS_WITH(haptel::LoadPhysics(file), Catch::Contains("hand.material.rolling_friction"));
+  {  // Bullet would silently ignore spinning friction without rolling friction.
+    std::ofstream out(file);
+    out << "hand:\n  material:\n    rolling_friction: 0\n    spinning_friction: 0.002\n";
+  }
+  REQUIRE_THROWS_WITH(haptel::LoadPhysics(file), Catch::Contains("hand.material.spinning_friction"));
+  {
+    std::ofstream out(file);
+    out << "hand:\n  material:\n    rolling_friction: 0\n";
+  }
+  REQUIRE_THROWS_WITH(haptel::LoadPhysics(file), Catch::Contains("hand.material.rolling_friction"));
 }
 
 TEST_CASE("physics: no world is created when nothing needs one", "[physics]") {
@@ -280,6 +299,76 @@ TEST_CASE("physics: two palms squeeze a 0.5 kg box and lift it", "[physics]") {
   CHECK(p[2] > half + 0.09);
   CHECK(std::abs(p[1]) < 0.005);
   CHECK(world.Counters().hand_resets == 0);
+}
+
+TEST_CASE("physics: a phalanx capsule resting or pressed on a box does not roll", "[physics]") {
+  // A distal phalanx alone (the hand's material) lying on a heavy box: no
+  // torque acts about its axis, so it must not roll. Without rolling friction
+  // Bullet's cached contact points trail the axis as it turns and the normal
+  // force on them spins it up until it rolls off (stability bench, mass_ratio).
+  const PhysicsConfig config;
+  PhysicsWorld world{config};
+  world.AddStaticPlane({0, 0, 1}, 0.0);
+  const double half = 0.1;
+  const ph::BodyId box = world.AddDynamicBox({0, 0, half}, {half, half, half}, 9.0);
+  const double r = config.hand.phalanx_radius, mass = config.hand.phalanx_mass[2];
+  auto shape = std::make_unique<btCapsuleShapeX>(r, config.hand.phalanx_length[2] - 2.0 * r);
+  btVector3 inertia;
+  shape->calculateLocalInertia(mass, inertia);
+  ph::Pose pose;
+  pose.position = {0.0, 0.0, 2.0 * half + r};
+  const ph::BodyId id = world.AddRigidBody(std::move(shape), {}, mass, {inertia.x(), inertia.y(), inertia.z()},
+                                           pose, config.hand.material);
+  btRigidBody& capsule = world.body(id);
+  capsule.setActivationState(DISABLE_DEACTIVATION);
+  world.body(box).setActivationState(DISABLE_DEACTIVATION);
+  double spin = 0.0;  // max |ω| about the capsule's axis after the first contact settled
+  for (int i = 0; i < 4000; ++i) {
+    if (i >= 2500) capsule.applyCentralForce(btVector3(0, 0, -5.0));  // a 5 N press
+    world.Step();
+    const btVector3 axis = capsule.getWorldTransform().getBasis().getColumn(0);
+    if (i >= 500) spin = std::max(spin, std::abs(capsule.getAngularVelocity().dot(axis)));
+  }
+  const Vec3d p = world.BodyPose(id).position;
+  INFO("spin " << spin << " rad/s, capsule at " << p[0] << ", " << p[1] << ", " << p[2]);
+  CHECK(spin < 0.1);  // the unfixed contact reached 0.6 rad/s at rest, tens of rad/s pressed
+  CHECK(std::hypot(p[0], p[1]) < 0.002);
+  CHECK(p[2] == Approx(2.0 * half + r).margin(0.001));
+}
+
+TEST_CASE("physics: a sleeping box stays put; a palm pushing it wakes it and slides it on the floor",
+          "[physics]") {
+  // The world skips sleeping bodies (no bounding-box refresh, no integration):
+  // a sleeping body must not move at all, and once woken it must collide
+  // where it went.
+  PhysicsWorld world{PhysicsConfig{}};
+  world.AddStaticPlane({0, 0, 1}, 0.0);
+  const double half = 0.05;
+  const ph::BodyId box = world.AddDynamicBox({0, 0, half}, {half, half, half}, 0.5);
+  world.AddHand(Side::kRight);
+  // Fingers up, the palm facing +x (turned −90° about y), level with the box.
+  const auto q = AxisAngle({0, 1, 0}, -M_PI / 2);
+  const double wrist_z = half + 0.005 - world.config().hand.palm_half_extents[0];
+  auto step_at = [&](double x) {
+    world.hand(Side::kRight)->SetTracked(TrackedHand({x, 0.0, wrist_z}, q));
+    world.Step();
+  };
+  for (int i = 0; i < 3000; ++i) step_at(-0.3);
+  REQUIRE(world.BodySleeping(box));
+  const ph::Pose asleep = world.BodyPose(box);
+  for (int i = 0; i < 500; ++i) step_at(-0.3);
+  CHECK(world.BodySleeping(box));
+  CHECK(world.BodyPose(box).position == asleep.position);
+  CHECK(world.BodyPose(box).orientation == asleep.orientation);
+
+  for (int i = 0; i < 1500; ++i) step_at(-0.3 + 0.4 * i / 1500.0);  // to x = 0.1 in 1.5 s
+  for (int i = 0; i < 500; ++i) step_at(0.1);
+  const Vec3d p = world.BodyPose(box).position;
+  INFO("box at " << p[0] << ", " << p[1] << ", " << p[2]);
+  CHECK(p[0] > 0.1);                           // pushed: its back face is at the palm
+  CHECK(p[2] == Approx(half).margin(0.002));   // still on the floor where it went
+  CHECK(std::abs(p[1]) < 0.02);
+  CHECK(world.Counters().body_resets == 0);
 }
 
 TEST_CASE("physics: a box at rest on a table falls asleep", "[physics]") {

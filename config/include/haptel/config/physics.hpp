@@ -13,9 +13,19 @@ namespace haptel {
 
 /// Surface of a body: Bullet has one friction coefficient (static = dynamic);
 /// pairs combine by the average (DESIGN.md, "Haptic scene").
+///
+/// Rolling and spinning friction are lever arms (m): a contact carrying the
+/// normal force N resists rolling (about the tangent axes) and spinning (about
+/// the normal) with a torque of at most lever·N. They stand for what a rigid
+/// point contact lacks: the contact patch of a soft surface such as a finger
+/// pad. A pair's lever is the sum of the two bodies' (each soft surface
+/// shifts the pressure centre by its own; a rigid one adds nothing). Bullet
+/// solves spinning friction only on contacts that also have rolling friction.
 struct PhysicsMaterial {
   double friction = 0.8;
   double restitution = 0.0;
+  double rolling_friction = 0.0;   ///< m
+  double spinning_friction = 0.0;  ///< m
 };
 
 /// One proxy hand (both sides alike; the left one is the mirror image).
@@ -43,7 +53,17 @@ struct ProxyHandConfig {
   double finger_feedback_stiffness = 300.0;  ///< N/m
   /// The operator's own hand is weightless to him: by default the proxy is too.
   bool gravity = false;
-  PhysicsMaterial material{1.0, 0.0};
+  /// The finger pads and the palm. Rolling friction: Bullet caches a
+  /// capsule's contact points on the capsule, so while it rolls they turn
+  /// with it and trail its axis (they are dropped only 0.3–0.5 mm out, the
+  /// manifold's breaking threshold); those still touching carry the normal
+  /// force behind the axis — at most √(2·r·d) for a penetration d, 0.2–0.6 mm
+  /// for the 2–20 µm of a resting or pressed fingertip — and drive the roll
+  /// on. A 1 mm lever outweighs that and is small beside a pressed finger
+  /// pad's contact patch (a radius of several millimetres).
+  /// Spinning friction: a Hertzian patch of radius a transmits at most
+  /// (3π/16)·μ·a·N about its normal, ≈ 2.4 mm·N for μ = 1, a = 4 mm.
+  PhysicsMaterial material{1.0, 0.0, 0.001, 0.002};
 };
 
 struct PhysicsConfig {
