@@ -1,5 +1,6 @@
 #include "haptel/interfaces/cockpit.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace haptel::interfaces {
@@ -11,8 +12,30 @@ CockpitInterface::CockpitInterface(const CockpitConfig& config, ControlsPort& po
                                    const GripGeometry& grip)
     : logic_(config), port_(port), grip_(grip) {}
 
-MotorCommand CockpitInterface::Update(double t_s, const VehicleFeedback& feedback, haptics::Hal&) {
+MotorCommand CockpitInterface::Update(double t_s, const VehicleFeedback& feedback, haptics::Hal& hal) {
   controls_ = port_.Controls();
+  // Slip: where each hand is against where its grip on the control would put
+  // it. Made up for in HandTargetsFor; forgotten while the control is not held.
+  const CockpitConfig& c = logic_.config();
+  const double dt = last_update_s_ < 0 ? 0.0 : std::max(0.0, t_s - last_update_s_);
+  last_update_s_ = t_s;
+  const double a = grip_.slip_time_constant > 0 ? 1.0 - std::exp(-dt / grip_.slip_time_constant) : 1.0;
+  const haptics::HandSample right = hal.LatestSample(Side::kRight);
+  // A locked lever holds against the hand: that is not a slip.
+  if (controls_.throttle_held && right.valid && !logic_.throttle_locked(t_s)) {
+    const double slip = right.position[0] - (c.throttle_centre[0] + controls_.throttle);
+    lever_slip_ += (std::clamp(slip, -grip_.max_lever_slip, grip_.max_lever_slip) - lever_slip_) * a;
+  } else if (!controls_.throttle_held) {
+    lever_slip_ = 0.0;
+  }
+  const haptics::HandSample left = hal.LatestSample(Side::kLeft);
+  if (controls_.wheel_held && left.valid) {
+    const double hand_angle = std::atan2(left.position[1] - c.wheel_hub[1], left.position[2] - c.wheel_hub[2]);
+    const double slip = std::remainder(hand_angle - controls_.wheel_angle, 2.0 * M_PI);
+    wheel_slip_ += (std::clamp(slip, -grip_.max_wheel_slip, grip_.max_wheel_slip) - wheel_slip_) * a;
+  } else {
+    wheel_slip_ = 0.0;
+  }
   port_.Actuate(logic_.Update(t_s, feedback, controls_));
   hud_ = logic_.Hud(feedback, controls_, t_s);
   return logic_.Map(controls_, t_s);
@@ -20,7 +43,9 @@ MotorCommand CockpitInterface::Update(double t_s, const VehicleFeedback& feedbac
 
 HandTargets CockpitInterface::HandTargetsFor(const DriveIntent& intent) const {
   const CockpitConfig& c = logic_.config();
-  const CockpitControls wanted = logic_.ControlsFor(intent);
+  CockpitControls wanted = logic_.ControlsFor(intent);
+  wanted.wheel_angle += wheel_slip_;
+  wanted.throttle += lever_slip_;
   std::array<double, haptics::kGloveJoints> closed{};
   // Glove layout (haptics/types.hpp): four thumb joints, then MCP, PIP, DIP
   // of index, middle, ring and pinky. The thumb stays open: over a bar it

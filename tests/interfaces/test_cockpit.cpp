@@ -163,3 +163,38 @@ TEST_CASE("cockpit: the hand goals sit on the rim and the bar where the intent p
   CHECK(neutral[0]->position[1] == Approx(c.wheel_hub[1]));
   CHECK(neutral[1]->position[0] == Approx(c.throttle_centre[0]));
 }
+
+TEST_CASE("cockpit: a control that slipped in the hand is made up for, as a person watching it would") {
+  PlainPort port;
+  const CockpitConfig c = Shipped("cockpit");
+  const GripGeometry grip;
+  CockpitInterface cockpit(c, port, grip);
+  haptics::Hal hal(Metres());
+  auto put = [&](Side side, const haptics::Vec3d& p, int64_t t_ns) {
+    haptics::WristRaw w;
+    w.t_ns = t_ns;
+    w.position = p;
+    hal.PublishWrist(side, w);
+  };
+  const DriveIntent intent{.forward = 0.5, .turn = 0.0};
+  const double nominal_x = cockpit.HandTargetsFor(intent)[haptics::Index(Side::kRight)]->position[0];
+  // The right hand is 2 cm further forward than its grip would put it on the
+  // lever; the wheel 0.1 rad behind the left hand (hand on the rim's top).
+  port.state = {.wheel_angle = -0.1, .throttle = 0.01, .wheel_held = true, .throttle_held = true};
+  for (int i = 1; i <= 300; ++i) {
+    put(Side::kRight, {c.throttle_centre[0] + 0.03, c.throttle_centre[1] + grip.reach, 0.0}, i * 10'000'000LL);
+    put(Side::kLeft, {c.wheel_hub[0] - grip.reach, c.wheel_hub[1], c.wheel_hub[2] + c.wheel_radius}, i * 10'000'000LL);
+    cockpit.Update(i * 0.01, {}, hal);
+  }
+  CHECK(cockpit.lever_slip() == Approx(0.02).margin(1e-4));
+  CHECK(cockpit.wheel_slip() == Approx(0.1).margin(1e-3));
+  const HandTargets t = cockpit.HandTargetsFor(intent);
+  CHECK(t[haptics::Index(Side::kRight)]->position[0] == Approx(nominal_x + 0.02).margin(1e-4));
+  CHECK(std::atan2(t[haptics::Index(Side::kLeft)]->position[1] - c.wheel_hub[1],
+                   t[haptics::Index(Side::kLeft)]->position[2] - c.wheel_hub[2]) == Approx(0.1).margin(1e-3));
+  // Let go: nothing to make up for.
+  port.state.throttle_held = port.state.wheel_held = false;
+  cockpit.Update(3.01, {}, hal);
+  CHECK(cockpit.lever_slip() == 0.0);
+  CHECK(cockpit.wheel_slip() == 0.0);
+}

@@ -97,3 +97,27 @@ TEST_CASE("cockpit grasp: the operator's hand goals hold the rim and the bar and
   CHECK(c.world.Counters().hand_resets == 0);
   CHECK(c.physics.controls->resets() == 0);
 }
+
+TEST_CASE("cockpit grasp: back and forth, the lever keeps its place in the hand", "[physics][cockpit]") {
+  Cockpit c;
+  const interfaces::HandTargets neutral = c.cockpit.HandTargetsFor({});
+  for (int i = 0; i <= 300; ++i) c.Hold(neutral, 0.002, 1.0 - i / 300.0, 0.0);
+  for (int i = 0; i <= 300; ++i) c.Hold(neutral, 0.002, 0.0, i / 300.0);
+  c.Hold(neutral, 0.2);
+  interfaces::DriveIntent from{};
+  for (int cycle = 0; cycle < 10; ++cycle) {
+    for (const interfaces::DriveIntent to : {interfaces::DriveIntent{0.9, 0.1}, interfaces::DriveIntent{0.3, -0.2}}) {
+      c.Move(from, to, 0.5);
+      from = to;
+    }
+  }
+  // Ten round trips of 3.6 cm and 0.39 rad: no ratchet, the grip holds.
+  const physics::ControlsState s = c.link.State();
+  const interfaces::CockpitControls wanted = c.cockpit.logic().ControlsFor(from);
+  INFO("lever " << s.throttle << " (wanted " << wanted.throttle << "), wheel " << s.wheel_angle << " (wanted "
+                << wanted.wheel_angle << ")");
+  CHECK(s.throttle == Approx(wanted.throttle).margin(0.003));
+  CHECK(s.wheel_angle == Approx(wanted.wheel_angle).margin(0.06));
+  CHECK(s.throttle_held);
+  CHECK(s.wheel_held);
+}

@@ -6,6 +6,9 @@
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <thread>
+
+#include "alloc_counter.hpp"
 
 #include "haptel/config/cockpit.hpp"
 #include "haptel/config/paths.hpp"
@@ -260,4 +263,26 @@ TEST_CASE("cockpit controls: a palm pushes the lever, not while it is locked",
   CHECK(s.throttle_held);
   CHECK(s.throttle == Approx(0.02).margin(0.005));
   CHECK_FALSE(s.wheel_held);
+}
+
+TEST_CASE("cockpit controls: the link trades state and actuation across threads' seqlocks, allocating nothing",
+          "[physics][cockpit]") {
+  Rig rig;
+  rig.world.AddHand(Side::kRight);
+  haptel::physics::ControlsLink link(rig.world, rig.controls);
+  rig.controls.Read();  // gathers the hands' bodies once, as the session does before Start
+  CHECK(link.State().wheel_angle == 0.0);
+  // An actuation set from another thread acts from the next step on: a
+  // steady torque turns the wheel to its stop, and the state says so.
+  std::thread interface_thread([&] { link.SetActuation(Torque(0.2)); });
+  interface_thread.join();
+  for (int i = 0; i < 1500; ++i) rig.world.Step();
+  CHECK(link.State().wheel_angle == Approx(rig.max_angle).margin(0.02));
+  // The hooks, as the physics thread runs them around each step, allocate nothing.
+  const uint64_t before = haptel::test::ThreadAllocations();
+  for (int i = 0; i < 1000; ++i) {
+    link.BeforeStep();
+    link.AfterStep();
+  }
+  CHECK(haptel::test::ThreadAllocations() == before);
 }

@@ -40,6 +40,12 @@ struct GripGeometry {
   double approach = 0.05;
   /// Closed hand: flexion of the four fingers' joints (MCP, PIP, DIP), rad.
   std::array<double, 3> flexion{0.2, 1.6, 1.4};
+  /// A held control that has slipped in the hand is seen and made up for, as
+  /// a person looking at it would: over this time constant, s.
+  double slip_time_constant = 0.3;
+  /// The most slip made up for: lever m, wheel rad (beyond: not a slip).
+  double max_lever_slip = 0.03;
+  double max_wheel_slip = 0.3;
 };
 
 class CockpitInterface final : public MediatorInterface {
@@ -51,7 +57,8 @@ class CockpitInterface final : public MediatorInterface {
   /// Controls → motors; bumper → shake and lock; assisted → return springs.
   MotorCommand Update(double t_s, const VehicleFeedback& feedback, haptics::Hal& hal) override;
   /// Left hand on the wheel turned to the intent's angle, right hand on the
-  /// lever at the intent's position, both closed.
+  /// lever at the intent's position, both closed — each shifted by how far
+  /// that control has slipped in the hand holding it (seen in Update).
   HandTargets HandTargetsFor(const DriveIntent& intent) const override;
   bool NeedsPhysics() const override { return true; }
 
@@ -60,6 +67,10 @@ class CockpitInterface final : public MediatorInterface {
   /// The controls as read by the latest Update.
   const CockpitControls& controls() const { return controls_; }
   const CockpitLogic& logic() const { return logic_; }
+  /// How far the held lever (m) and wheel (rad) sit behind the hands that
+  /// hold them, filtered; 0 while not held.
+  double lever_slip() const { return lever_slip_; }
+  double wheel_slip() const { return wheel_slip_; }
 
  private:
   CockpitLogic logic_;
@@ -67,6 +78,9 @@ class CockpitInterface final : public MediatorInterface {
   GripGeometry grip_;
   CockpitControls controls_;
   HudState hud_;
+  double lever_slip_ = 0.0;
+  double wheel_slip_ = 0.0;
+  double last_update_s_ = -1.0;
 };
 
 }  // namespace haptel::interfaces
