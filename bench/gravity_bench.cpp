@@ -1,3 +1,4 @@
+#include "haptel/core/json.hpp"
 #include "gravity_bench.hpp"
 
 #include <algorithm>
@@ -48,13 +49,6 @@ constexpr const char* kUsage =
 Vec3d CompensationCommand(const ArmCalibration& c, const GravityGrid* grid, const Vec3d& raw) {
   if (grid == nullptr) return {};
   return {0.0, 0.0, grid->Evaluate(haptics::TrackerToMetres(c, raw)) / c.force_slope[2]};
-}
-
-std::string Num(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
 }
 
 struct PointResult {
@@ -172,7 +166,7 @@ int BenchGravityMain(int argc, const char* const* argv) {
     std::fprintf(stderr, "haptel bench gravity: %s\n", report.error.c_str());
     if (json) {
       std::printf("{\"ok\":false,\"vertices_done\":%zu,\"sampling_sim_s\":%s}\n",
-                  report.vertices.size(), Num(report.sim_time_s).c_str());
+                  report.vertices.size(), JsonNumber(report.sim_time_s).c_str());
     }
     return 1;
   }
@@ -290,16 +284,16 @@ int BenchGravityMain(int argc, const char* const* argv) {
 
   if (json) {
     std::ostringstream o;
-    o << "{\"drift_mean_off_mm_s\":" << Num(mean_off * 1e3)
-      << ",\"drift_mean_on_mm_s\":" << Num(mean_on * 1e3) << ",\"drift_ratio\":" << Num(ratio)
+    o << "{\"drift_mean_off_mm_s\":" << JsonNumber(mean_off * 1e3)
+      << ",\"drift_mean_on_mm_s\":" << JsonNumber(mean_on * 1e3) << ",\"drift_ratio\":" << JsonNumber(ratio)
       << ",\"drift_ratio_floored\":" << (floored ? "true" : "false")
-      << ",\"drift_floor_mm_s\":" << Num(floor_m_s * 1e3) << ",\"drift_on_zero_points\":" << on_zero
-      << ",\"sampling_sim_s\":" << Num(report.sim_time_s)
-      << ",\"sampling_wall_s\":" << Num(report.wall_time_s)
-      << ",\"sampling_vertex_mean_s\":" << Num(vertex_mean_s)
-      << ",\"sampling_vertex_max_s\":" << Num(vertex_max_s)
-      << ",\"force_error_max_n\":" << Num(force_error_max)
-      << ",\"friction_n\":" << Num(sim.coulomb_friction)
+      << ",\"drift_floor_mm_s\":" << JsonNumber(floor_m_s * 1e3) << ",\"drift_on_zero_points\":" << on_zero
+      << ",\"sampling_sim_s\":" << JsonNumber(report.sim_time_s)
+      << ",\"sampling_wall_s\":" << JsonNumber(report.wall_time_s)
+      << ",\"sampling_vertex_mean_s\":" << JsonNumber(vertex_mean_s)
+      << ",\"sampling_vertex_max_s\":" << JsonNumber(vertex_max_s)
+      << ",\"force_error_max_n\":" << JsonNumber(force_error_max)
+      << ",\"friction_n\":" << JsonNumber(sim.coulomb_friction)
       << ",\"vertices\":" << report.vertices.size() << ",\"points\":" << points << "}";
     std::printf("%s\n", o.str().c_str());
   }

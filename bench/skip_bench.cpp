@@ -1,3 +1,4 @@
+#include "haptel/core/json.hpp"
 #include "skip_bench.hpp"
 
 #include <time.h>
@@ -185,12 +186,6 @@ Result MeasureCockpit(const PhysicsConfig& config, const CockpitConfig& cockpit,
   return r;
 }
 
-std::string Number(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
-
 }  // namespace
 
 int BenchSkipMain(int argc, const char* const* argv) {
@@ -282,9 +277,9 @@ int BenchSkipMain(int argc, const char* const* argv) {
     std::ostringstream o;
     o << "{\"cpu_per_sim_s\":{";
     for (size_t i = 0; i < results.size(); ++i) {
-      o << (i ? "," : "") << "\"" << results[i].name << "\":" << Number(results[i].cpu_per_sim_s());
+      o << (i ? "," : "") << "\"" << results[i].name << "\":" << JsonNumber(results[i].cpu_per_sim_s());
     }
-    o << "},\"cpu_per_sim_s_static_1000\":" << Number(statics.cpu_per_sim_s()) << "}";
+    o << "},\"cpu_per_sim_s_static_1000\":" << JsonNumber(statics.cpu_per_sim_s()) << "}";
     std::printf("%s\n", o.str().c_str());
   }
   return 0;

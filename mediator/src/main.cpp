@@ -8,6 +8,7 @@
 #include <sstream>
 #include <string>
 
+#include "haptel/core/json.hpp"
 #include "haptel/config/cockpit.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/physics.hpp"
@@ -56,30 +57,6 @@ std::filesystem::path SelfDirectory() {
   std::error_code ec;
   const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
   return ec ? std::filesystem::path(".") : self.parent_path();
-}
-
-std::string JsonString(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", c);
-      out += buf;
-    } else {
-      out += c;
-    }
-  }
-  return out + "\"";
-}
-
-std::string Number(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
 }
 
 }  // namespace
@@ -197,21 +174,21 @@ int main(int argc, char** argv) {
   if (json) {
     std::ostringstream o;
     o << "{\"completed\":" << (r.completed ? "true" : "false") << ",\"outcome\":" << JsonString(r.outcome)
-      << ",\"message\":" << JsonString(result.message) << ",\"lap_time_s\":" << Number(r.lap_time_s)
+      << ",\"message\":" << JsonString(result.message) << ",\"lap_time_s\":" << JsonNumber(r.lap_time_s)
       << ",\"gates_passed\":" << r.gates_passed << ",\"gates_total\":" << r.gates_total
       << ",\"gates_missed\":" << r.gates_missed << ",\"obstacles_touched\":" << r.obstacles_touched
-      << ",\"vehicle_pid\":" << r.vehicle_pid << ",\"servo_rate_hz\":" << Number(r.servo_rate_hz)
-      << ",\"servo_period_p99_us\":" << Number(r.servo_period_p99_us)
+      << ",\"vehicle_pid\":" << r.vehicle_pid << ",\"servo_rate_hz\":" << JsonNumber(r.servo_rate_hz)
+      << ",\"servo_period_p99_us\":" << JsonNumber(r.servo_period_p99_us)
       << ",\"servo_overruns\":" << result.servo_overruns
-      << ",\"command_rtt_ms_p50\":" << Number(r.command_rtt_ms_p50)
-      << ",\"command_rtt_ms_p99\":" << Number(r.command_rtt_ms_p99) << ",\"video_frames\":" << r.video_frames
-      << ",\"video_fps\":" << Number(r.video_fps) << ",\"video_latency_ms_p50\":" << Number(r.video_latency_ms_p50)
-      << ",\"lost_detect_s\":" << Number(result.lost_detect_s)
-      << ",\"physics_rate_hz\":" << Number(result.physics_rate_hz)
-      << ",\"physics_period_p99_us\":" << Number(result.physics_period_p99_us)
-      << ",\"physics_step_max_us\":" << Number(result.physics_step_max_us)
+      << ",\"command_rtt_ms_p50\":" << JsonNumber(r.command_rtt_ms_p50)
+      << ",\"command_rtt_ms_p99\":" << JsonNumber(r.command_rtt_ms_p99) << ",\"video_frames\":" << r.video_frames
+      << ",\"video_fps\":" << JsonNumber(r.video_fps) << ",\"video_latency_ms_p50\":" << JsonNumber(r.video_latency_ms_p50)
+      << ",\"lost_detect_s\":" << JsonNumber(result.lost_detect_s)
+      << ",\"physics_rate_hz\":" << JsonNumber(result.physics_rate_hz)
+      << ",\"physics_period_p99_us\":" << JsonNumber(result.physics_period_p99_us)
+      << ",\"physics_step_max_us\":" << JsonNumber(result.physics_step_max_us)
       << ",\"physics_hand_resets\":" << result.physics_hand_resets
-      << ",\"grasp_s\":" << Number(result.grasp_s) << ",\"scene_bodies\":" << result.scene_bodies << ",\"interface\":" << JsonString(r.interface)
+      << ",\"grasp_s\":" << JsonNumber(result.grasp_s) << ",\"scene_bodies\":" << result.scene_bodies << ",\"interface\":" << JsonString(r.interface)
       << ",\"track\":" << JsonString(r.track) << ",\"run_id\":" << run_id
       << ",\"database\":" << JsonString(setup.run.database.string()) << "}";
     std::printf("%s\n", o.str().c_str());
