@@ -1,3 +1,4 @@
+#include "haptel/core/json.hpp"
 #include "physics_measure.hpp"
 
 #include <time.h>
@@ -12,6 +13,7 @@
 
 #include "haptel/core/clock.hpp"
 #include "haptel/haptics/vec_math.hpp"
+#include "haptel/physics/box_grip.hpp"
 #include "haptel/physics/world.hpp"
 
 namespace haptel::bench::wp {
@@ -78,16 +80,8 @@ Scenario Push(const PhysicsConfig& config, double* rest_mm, double* worst_mm) {
 /// relative to the palms' midpoint during the hold.
 Scenario Grasp(const PhysicsConfig& config, double* slip_mm) {
   PhysicsWorld world{config};
-  world.AddStaticPlane({0, 0, 1}, 0.0);
-  const double half = 0.06;
-  const physics::BodyId box = world.AddDynamicBox({0, 0, half}, {half, half, half}, 0.5);
-  world.AddHand(Side::kLeft);
-  world.AddHand(Side::kRight);
-  const auto& hc = config.hand;
-  const double palm_y = half + hc.palm_half_extents[2] - 0.01;
-  const double x = -hc.palm_half_extents[0];
-  const auto q_left = AxisAngle({1, 0, 0}, M_PI / 2);
-  const auto q_right = AxisAngle({1, 0, 0}, -M_PI / 2);
+  const physics::BoxGrip grip(world);
+  const physics::BodyId box = grip.box;
   const double z0 = 0.09, h = config.step_s;
   double cpu = 0.0;
   auto run = [&](double seconds, auto z_of) {
@@ -95,8 +89,7 @@ Scenario Grasp(const PhysicsConfig& config, double* slip_mm) {
     for (long i = 0; i < n; ++i) {
       const double z = z_of(static_cast<double>(i) * h);
       const double c0 = ThreadCpuSeconds();
-      world.hand(Side::kLeft)->SetTracked(haptics::TrackedHand({x, -palm_y, z}, q_left));
-      world.hand(Side::kRight)->SetTracked(haptics::TrackedHand({x, palm_y, z}, q_right));
+      grip.Track(0.01, z);
       world.Step();
       cpu += ThreadCpuSeconds() - c0;
     }
@@ -114,12 +107,6 @@ Scenario Grasp(const PhysicsConfig& config, double* slip_mm) {
   sim += run(5.0, [&](double) { return z0 + 0.1; });
   *slip_mm = 1e3 * Distance(relative(), start);
   return {cpu, sim, Resets(world)};
-}
-
-std::string Num(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
 }
 
 }  // namespace
@@ -303,12 +290,12 @@ Point Measure(const PhysicsConfig& base, const Trajectory& tr, const std::vector
 }
 
 std::string ToJson(const Point& p, bool extra) {
-  std::string s = "{\"step_ms\":" + Num(p.step_ms) + ",\"iterations\":" + std::to_string(p.iterations) +
-                  ",\"precision\":\"" + p.precision + "\",\"cpu_per_sim_s\":" + Num(p.cpu_per_sim_s) +
-                  ",\"tracking_err_mm\":" + Num(p.tracking_err_mm) + ",\"penetration_mm\":" + Num(p.penetration_mm) +
-                  ",\"slip_mm\":" + Num(p.slip_mm);
+  std::string s = "{\"step_ms\":" + JsonNumber(p.step_ms) + ",\"iterations\":" + std::to_string(p.iterations) +
+                  ",\"precision\":\"" + p.precision + "\",\"cpu_per_sim_s\":" + JsonNumber(p.cpu_per_sim_s) +
+                  ",\"tracking_err_mm\":" + JsonNumber(p.tracking_err_mm) + ",\"penetration_mm\":" + JsonNumber(p.penetration_mm) +
+                  ",\"slip_mm\":" + JsonNumber(p.slip_mm);
   if (extra) {
-    s += ",\"lag_mm\":" + Num(p.lag_mm) + ",\"penetration_rest_mm\":" + Num(p.penetration_rest_mm) +
+    s += ",\"lag_mm\":" + JsonNumber(p.lag_mm) + ",\"penetration_rest_mm\":" + JsonNumber(p.penetration_rest_mm) +
          ",\"resets\":" + std::to_string(p.resets);
   }
   return s + "}";

@@ -1,9 +1,10 @@
+#include "haptel/core/clock.hpp"
+#include "haptel/core/json.hpp"
 #include "stability_bench.hpp"
 
 #include <btBulletDynamicsCommon.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -16,6 +17,7 @@
 #include "haptel/config/paths.hpp"
 #include "haptel/config/physics.hpp"
 #include "haptel/core/args.hpp"
+#include "haptel/physics/box_grip.hpp"
 #include "haptel/physics/world.hpp"
 #include "plot.hpp"
 
@@ -29,17 +31,6 @@ using haptics::AxisAngle;
 using haptics::Distance;
 using physics::PhysicsWorld;
 using physics::Vec3d;
-
-std::string Number(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
-
-double WallS() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
 
 double Norm(const btVector3& v) { return v.length(); }
 
@@ -311,34 +302,13 @@ constexpr double kSquashPenLimit = 0.01;
 /// residual, not for a grip that misses the box.
 constexpr double kSquashForceTolerance = 0.02;
 
-/// The two-palm grip of tests/physics: palms facing the box from ±y.
-struct Grip {
-  PhysicsWorld& world;
-  double half;
-  double x;
-  double he_z;
-  std::array<double, 4> q_left = AxisAngle({1, 0, 0}, M_PI / 2);
-  std::array<double, 4> q_right = AxisAngle({1, 0, 0}, -M_PI / 2);
-  /// Tracked palms at `depth` inside the box's faces (negative: a gap), box centre at `y0`.
-  void Step(double depth, double z, double y0 = 0.0) {
-    const double y = half + he_z - depth;
-    world.hand(Side::kLeft)->SetTracked(haptics::TrackedHand({x, y0 - y, z}, q_left));
-    world.hand(Side::kRight)->SetTracked(haptics::TrackedHand({x, y0 + y, z}, q_right));
-    world.Step();
-  }
-};
-
 SquashResult RunSquash(const PhysicsConfig& config) {
   SquashResult r;
   PhysicsWorld world(config);
-  world.AddStaticPlane({0, 0, 1}, 0.0);
-  const double half = 0.06;
-  const physics::BodyId box = world.AddDynamicBox({0, 0, half}, {half, half, half}, 0.5);
-  world.AddHand(Side::kLeft);
-  world.AddHand(Side::kRight);
-  const auto& hc = config.hand;
-  r.k = hc.coupling_linear_stiffness;
-  Grip grip{world, half, -hc.palm_half_extents[0], hc.palm_half_extents[2]};
+  const physics::BoxGrip grip(world);
+  const double half = physics::BoxGrip::kHalf;
+  const physics::BodyId box = grip.box;
+  r.k = config.hand.coupling_linear_stiffness;
   const double z0 = 0.09, h = config.step_s;
   const btCollisionObject* bx = &world.body(box);
   physics::ProxyHand& left = *world.hand(Side::kLeft);
@@ -351,7 +321,8 @@ SquashResult RunSquash(const PhysicsConfig& config) {
   for (long i = 0; i < n; ++i) {
     const double t = static_cast<double>(i) * h;
     const double force = std::min(r.force_asked, -3.0 + 53.0 * t / 4.0);
-    grip.Step(force / r.k, z0);
+    grip.Track(force / r.k, z0);
+    world.Step();
     if (t >= 4.0) {
       // Left hand pushes the box towards +y, right hand towards −y.
       const double squeeze = std::min(ContactForce(world, left, bx).y(), -ContactForce(world, right, bx).y());
@@ -413,17 +384,14 @@ GraspResult RunGrasp(const PhysicsConfig& base, double step_s, double seconds) {
   r.step_s = step_s;
   r.minutes = seconds / 60.0;
   PhysicsWorld world(config);
-  world.AddStaticPlane({0, 0, 1}, 0.0);
-  const double half = 0.06;
-  const physics::BodyId box = world.AddDynamicBox({0, 0, half}, {half, half, half}, 0.5);
-  world.AddHand(Side::kLeft);
-  world.AddHand(Side::kRight);
-  Grip grip{world, half, -config.hand.palm_half_extents[0], config.hand.palm_half_extents[2]};
+  const physics::BoxGrip grip(world);
+  const double half = physics::BoxGrip::kHalf;
+  const physics::BodyId box = grip.box;
   const double z0 = 0.09, squeeze = 0.01, open = -0.02;
   const long per_cycle = std::lround(kCycleS / step_s);
   const long n = std::lround(seconds / step_s);
   double top = 0.0;
-  const double t0 = WallS();
+  const double t0 = NsToS(MonotonicNs());
   for (long i = 0; i < n; ++i) {
     const double tc = static_cast<double>(i % per_cycle) * step_s;  // time in the cycle
     if (i % per_cycle == 0) {
@@ -441,14 +409,15 @@ GraspResult RunGrasp(const PhysicsConfig& base, double step_s, double seconds) {
     if (tc >= 2.0 && tc < 2.4) z = z0 + 0.1;
     if (tc >= 2.3 && tc < 2.4) depth = squeeze + (open - squeeze) * (tc - 2.3) / 0.1;
     if (tc >= 2.4 && tc < 3.4) z = z0 + 0.1 * (1.0 - (tc - 2.4));
-    grip.Step(depth, z);
+    grip.Track(depth, z);
+    world.Step();
     const Vec3d p = world.BodyPose(box).position;
     top = std::max(top, p[2]);
     r.max_box_offset = std::max(r.max_box_offset, std::hypot(p[0], p[1]));
     if (!(std::isfinite(p[2]) && std::hypot(p[0], p[1]) < 0.5 && p[2] > 0.0 && p[2] < 0.5)) r.bounded = false;
   }
   if (top > half + 0.05) ++r.lifted;
-  r.wall_s = WallS() - t0;
+  r.wall_s = NsToS(MonotonicNs()) - t0;
   r.resets = Resets(world);
   if (!r.energy.empty()) {
     r.drift = r.energy.back() - r.energy.front();
@@ -484,12 +453,12 @@ int BenchStabilityMain(int argc, const char* const* argv) {
               config.file.empty() ? "defaults" : config.file.c_str(), config.step_s, config.solver_iterations);
 
   // ---- stiffness
-  const double t_stiff = WallS();
+  const double t_stiff = NsToS(MonotonicNs());
   const std::vector<StiffRow> stiff = StiffnessSweep(config);
   bool stiff_passed = true;  // the configured stiffness must be stable at the configured step
   std::printf("[stiffness] palm (%.3g kg) coupled to a tracked wrist, damping b = %.3g N*s/m, K doubling from 1e2\n"
               "  to %.3g; diverged = NaN reset, error > 10 cm or energy growing while held (%.1f s wall)\n",
-              hc.palm_mass, hc.coupling_linear_damping, kStiffCap, WallS() - t_stiff);
+              hc.palm_mass, hc.coupling_linear_damping, kStiffCap, NsToS(MonotonicNs()) - t_stiff);
   std::printf("  %8s %12s %12s %12s %12s %12s %-16s %s\n", "T ms", "K_max", "K_eff@max", "2b/T", "m/(16T^2)",
               "K_implicit", "regime@K_max", "stopped by");
   for (const StiffRow& row : stiff) {
@@ -513,7 +482,7 @@ int BenchStabilityMain(int argc, const char* const* argv) {
     }
   }
   {
-    Series kmax{"K_max stable (sweep cap " + Number(kStiffCap) + ")", {}, {}};
+    Series kmax{"K_max stable (sweep cap " + JsonNumber(kStiffCap) + ")", {}, {}};
     Series keff{"K_eff measured at K_max", {}, {}};
     Series pass{"passivity 2b/T", {}, {}};
     Series clamp{"Bullet clamp m/(16T^2)", {}, {}};
@@ -587,9 +556,9 @@ int BenchStabilityMain(int argc, const char* const* argv) {
 
   // ---- grasp and release
   const double seconds = minutes * 60.0;
-  const double t_probe = WallS();
+  const double t_probe = NsToS(MonotonicNs());
   RunGrasp(config, 1e-3, 5.0);
-  const double probe = WallS() - t_probe;
+  const double probe = NsToS(MonotonicNs()) - t_probe;
   const double grasp_step = probe * seconds / 5.0 > 60.0 ? 2e-3 : 1e-3;
   GraspResult gr = RunGrasp(config, grasp_step, seconds);
   gr.probe_wall_s = probe;
@@ -619,35 +588,35 @@ int BenchStabilityMain(int argc, const char* const* argv) {
     std::ostringstream o;
     o << "{\"passed\":" << (passed ? "true" : "false") << ",\"tests\":{";
     o << "\"stiffness\":{\"passed\":" << (stiff_passed ? "true" : "false") << ",\"damping\":"
-      << Number(hc.coupling_linear_damping) << ",\"sweep_cap\":" << Number(kStiffCap) << ",\"steps\":[";
+      << JsonNumber(hc.coupling_linear_damping) << ",\"sweep_cap\":" << JsonNumber(kStiffCap) << ",\"steps\":[";
     for (size_t i = 0; i < stiff.size(); ++i) {
       const StiffRow& row = stiff[i];
-      o << (i ? "," : "") << "{\"step_ms\":" << Number(row.step_s * 1e3) << ",\"k_max\":" << Number(row.k_max)
-        << ",\"capped\":" << (row.capped ? "true" : "false") << ",\"k_eff_at_max\":" << Number(row.k_eff_at_max)
-        << ",\"k_passive\":" << Number(row.k_passive) << ",\"k_bullet_clamp\":" << Number(row.k_clamp)
-        << ",\"k_implicit\":" << Number(row.k_implicit) << ",\"regime_at_max\":\"" << row.regime_at_max << "\"}";
+      o << (i ? "," : "") << "{\"step_ms\":" << JsonNumber(row.step_s * 1e3) << ",\"k_max\":" << JsonNumber(row.k_max)
+        << ",\"capped\":" << (row.capped ? "true" : "false") << ",\"k_eff_at_max\":" << JsonNumber(row.k_eff_at_max)
+        << ",\"k_passive\":" << JsonNumber(row.k_passive) << ",\"k_bullet_clamp\":" << JsonNumber(row.k_clamp)
+        << ",\"k_implicit\":" << JsonNumber(row.k_implicit) << ",\"regime_at_max\":\"" << row.regime_at_max << "\"}";
     }
     o << "]},\"mass_ratio\":{\"passed\":" << (mass_passed ? "true" : "false") << ",\"ratios\":[";
     for (size_t i = 0; i < mass.size(); ++i) {
       const MassRow& r = mass[i];
-      o << (i ? "," : "") << "{\"heavy_kg\":" << Number(r.heavy) << ",\"ratio\":" << Number(r.heavy / r.light)
-        << ",\"pen_rest_mm\":" << Number(r.pen_rest * 1e3) << ",\"pen_pressed_mm\":" << Number(r.pen_pressed * 1e3)
-        << ",\"max_speed\":" << Number(r.max_speed) << ",\"spin_rest_rad_s\":" << Number(r.spin_rest)
-        << ",\"spin_pressed_rad_s\":" << Number(r.spin_pressed) << ",\"on_box\":" << (r.on_box ? "true" : "false")
+      o << (i ? "," : "") << "{\"heavy_kg\":" << JsonNumber(r.heavy) << ",\"ratio\":" << JsonNumber(r.heavy / r.light)
+        << ",\"pen_rest_mm\":" << JsonNumber(r.pen_rest * 1e3) << ",\"pen_pressed_mm\":" << JsonNumber(r.pen_pressed * 1e3)
+        << ",\"max_speed\":" << JsonNumber(r.max_speed) << ",\"spin_rest_rad_s\":" << JsonNumber(r.spin_rest)
+        << ",\"spin_pressed_rad_s\":" << JsonNumber(r.spin_pressed) << ",\"on_box\":" << (r.on_box ? "true" : "false")
         << ",\"resets\":" << r.resets << ",\"passed\":" << (r.passed ? "true" : "false") << "}";
     }
     o << "]},\"squash\":{\"passed\":" << (sq.passed ? "true" : "false")
-      << ",\"max_speed_7n\":" << Number(sq.speed_to_7n) << ",\"max_speed_50n\":" << Number(sq.speed_to_50n)
-      << ",\"pen_7n_mm\":" << Number(sq.pen_to_7n * 1e3) << ",\"pen_50n_mm\":" << Number(sq.pen_to_50n * 1e3)
-      << ",\"force_asked_n\":" << Number(sq.force_asked) << ",\"contact_force_mean_n\":" << Number(sq.contact_mean)
-      << ",\"contact_force_min_n\":" << Number(sq.contact_min) << ",\"coupling_force_mean_n\":"
-      << Number(sq.coupling_mean) << ",\"box_drift_mm\":" << Number(sq.box_drift * 1e3)
+      << ",\"max_speed_7n\":" << JsonNumber(sq.speed_to_7n) << ",\"max_speed_50n\":" << JsonNumber(sq.speed_to_50n)
+      << ",\"pen_7n_mm\":" << JsonNumber(sq.pen_to_7n * 1e3) << ",\"pen_50n_mm\":" << JsonNumber(sq.pen_to_50n * 1e3)
+      << ",\"force_asked_n\":" << JsonNumber(sq.force_asked) << ",\"contact_force_mean_n\":" << JsonNumber(sq.contact_mean)
+      << ",\"contact_force_min_n\":" << JsonNumber(sq.contact_min) << ",\"coupling_force_mean_n\":"
+      << JsonNumber(sq.coupling_mean) << ",\"box_drift_mm\":" << JsonNumber(sq.box_drift * 1e3)
       << ",\"between\":" << (sq.between ? "true" : "false") << ",\"resets\":" << sq.resets << "}";
-    o << ",\"grasp_release\":{\"passed\":" << (gr.passed ? "true" : "false") << ",\"minutes\":" << Number(gr.minutes)
-      << ",\"step_ms\":" << Number(gr.step_s * 1e3) << ",\"wall_s\":" << Number(gr.wall_s)
+    o << ",\"grasp_release\":{\"passed\":" << (gr.passed ? "true" : "false") << ",\"minutes\":" << JsonNumber(gr.minutes)
+      << ",\"step_ms\":" << JsonNumber(gr.step_s * 1e3) << ",\"wall_s\":" << JsonNumber(gr.wall_s)
       << ",\"cycles\":" << gr.cycles << ",\"lifted\":" << gr.lifted << ",\"energy_first_j\":"
-      << Number(gr.energy.empty() ? 0.0 : gr.energy.front()) << ",\"energy_drift_j\":" << Number(gr.drift)
-      << ",\"energy_max_excursion_j\":" << Number(gr.max_excursion) << ",\"resets\":" << gr.resets << "}}}";
+      << JsonNumber(gr.energy.empty() ? 0.0 : gr.energy.front()) << ",\"energy_drift_j\":" << JsonNumber(gr.drift)
+      << ",\"energy_max_excursion_j\":" << JsonNumber(gr.max_excursion) << ",\"resets\":" << gr.resets << "}}}";
     std::printf("%s\n", o.str().c_str());
   }
   return passed ? 0 : 1;

@@ -14,6 +14,7 @@
 #include "haptel/config/physics.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/haptics/hal.hpp"
+#include "haptel/physics/box_grip.hpp"
 #include "haptel/physics/world.hpp"
 #include "test_env.hpp"
 
@@ -271,23 +272,13 @@ TEST_CASE("physics: finger forces are unilateral along the nail normal", "[physi
 
 TEST_CASE("physics: two palms squeeze a 0.5 kg box and lift it", "[physics]") {
   PhysicsWorld world{PhysicsConfig{}};
-  world.AddStaticPlane({0, 0, 1}, 0.0);
-  const double half = 0.06;
-  const ph::BodyId box = world.AddDynamicBox({0, 0, half}, {half, half, half}, 0.5);
-  world.AddHand(Side::kLeft);
-  world.AddHand(Side::kRight);
-  const auto& hc = world.config().hand;
+  const ph::BoxGrip grip(world);
+  const double half = ph::BoxGrip::kHalf;
+  const ph::BodyId box = grip.box;
   const double squeeze = 0.01;  // tracked palms 1 cm inside the box: ≈30 N each
-  const double palm_y = half + hc.palm_half_extents[2] - squeeze;
-  const double x = -hc.palm_half_extents[0];  // palm centres over the box's centre
-  // Palms face the box: the left hand's −z turned to +y, the right's to −y.
-  const auto q_left = AxisAngle({1, 0, 0}, M_PI / 2);
-  const auto q_right = AxisAngle({1, 0, 0}, -M_PI / 2);
   const double z0 = 0.09;
-
   auto step = [&](double z) {
-    world.hand(Side::kLeft)->SetTracked(TrackedHand({x, -palm_y, z}, q_left));
-    world.hand(Side::kRight)->SetTracked(TrackedHand({x, palm_y, z}, q_right));
+    grip.Track(squeeze, z);
     world.Step();
   };
   for (int i = 0; i < 300; ++i) step(z0);  // close the grip
