@@ -78,7 +78,7 @@ struct CockpitControlsBody::Impl {
   int resets = 0;
   /// The proxy hands' bodies, gathered once: Read runs every physics step.
   std::vector<const btRigidBody*> hand;
-  std::vector<bool> touching;
+  std::array<std::vector<bool>, 2> touching;  ///< per control (wheel, knob): which hand bodies touch it
 
   Impl(PhysicsWorld& w, const CockpitConfig& c, const ControlsBodyConfig& b)
       : world(w), cockpit(c), config(b), max_angle(c.wheel_max_angle_deg * M_PI / 180.0) {
@@ -199,29 +199,33 @@ struct CockpitControlsBody::Impl {
     ++resets;
   }
 
-  /// Hand bodies touching `control`, counted once each (a compound rim has
-  /// one manifold per touching capsule).
-  int HandContacts(const btRigidBody& control) {
-    std::fill(touching.begin(), touching.end(), false);
+  /// Hand bodies touching the rim and the knob, each counted once per
+  /// control (a compound rim has one manifold per touching capsule); one pass
+  /// over the dispatcher's manifolds for both, as this runs every step.
+  std::array<int, 2> HandContacts() {
+    std::fill(touching[0].begin(), touching[0].end(), false);
+    std::fill(touching[1].begin(), touching[1].end(), false);
+    const std::array<const btCollisionObject*, 2> controls{wheel.body.get(), knob.body.get()};
     btDispatcher& d = *world.bullet().getDispatcher();
     for (int m = 0; m < d.getNumManifolds(); ++m) {
       const btPersistentManifold& pm = *d.getManifoldByIndexInternal(m);
-      const btCollisionObject* other = nullptr;
-      if (pm.getBody0() == &control)
-        other = pm.getBody1();
-      else if (pm.getBody1() == &control)
-        other = pm.getBody0();
-      if (other == nullptr) continue;
-      const auto it = std::find(hand.begin(), hand.end(), other);
-      if (it == hand.end()) continue;
-      for (int p = 0; p < pm.getNumContacts(); ++p) {
-        if (pm.getContactPoint(p).getDistance() <= config.contact_distance) {
-          touching[static_cast<size_t>(it - hand.begin())] = true;
-          break;
+      for (size_t c = 0; c < controls.size(); ++c) {
+        const btCollisionObject* other = pm.getBody0() == controls[c]   ? pm.getBody1()
+                                         : pm.getBody1() == controls[c] ? pm.getBody0()
+                                                                        : nullptr;
+        if (other == nullptr) continue;
+        const auto it = std::find(hand.begin(), hand.end(), other);
+        if (it == hand.end()) continue;
+        for (int p = 0; p < pm.getNumContacts(); ++p) {
+          if (pm.getContactPoint(p).getDistance() <= config.contact_distance) {
+            touching[c][static_cast<size_t>(it - hand.begin())] = true;
+            break;
+          }
         }
       }
     }
-    return static_cast<int>(std::count(touching.begin(), touching.end(), true));
+    return {static_cast<int>(std::count(touching[0].begin(), touching[0].end(), true)),
+            static_cast<int>(std::count(touching[1].begin(), touching[1].end(), true))};
   }
 
   /// Gathers the hands' bodies when a hand was added since the last call
@@ -241,7 +245,7 @@ struct CockpitControlsBody::Impl {
         for (int p = 0; p < kPhalanges; ++p) hand.push_back(&h->phalanx_body(f, p));
       }
     }
-    touching.assign(hand.size(), false);
+    for (auto& t : touching) t.assign(hand.size(), false);
   }
 
   ControlsState Read() {
@@ -252,8 +256,9 @@ struct CockpitControlsBody::Impl {
     ControlsState s;
     s.wheel_angle = WheelAngle();
     s.throttle = Throttle();
-    s.wheel_contacts = HandContacts(*wheel.body);
-    s.throttle_contacts = HandContacts(*knob.body);
+    const std::array<int, 2> contacts = HandContacts();
+    s.wheel_contacts = contacts[0];
+    s.throttle_contacts = contacts[1];
     s.wheel_held = s.wheel_contacts > 0;
     s.throttle_held = s.throttle_contacts > 0;
     return s;
