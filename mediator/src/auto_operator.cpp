@@ -84,8 +84,8 @@ bool HasApproach(const interfaces::HandGoal& g) {
 }  // namespace
 
 interfaces::HandTargets AutoOperator::Act(double t_s, const interfaces::MediatorInterface& interface) {
-  const interfaces::HandTargets neutral = interface.HandTargetsFor({});
   if (start_s_ < 0) {
+    const interfaces::HandTargets neutral = interface.HandTargetsFor({});
     start_s_ = t_s;
     bool grasps = false;
     for (const auto& g : neutral) grasps = grasps || (g && HasApproach(*g));
@@ -99,6 +99,7 @@ interfaces::HandTargets AutoOperator::Act(double t_s, const interfaces::Mediator
         config_.grasp_close_s > 0 ? Smooth((since - config_.grasp_reach_s) / config_.grasp_close_s)
                                   : (since >= config_.grasp_reach_s ? 1.0 : 0.0);
     last_act_s_ = t_s;
+    const interfaces::HandTargets neutral = interface.HandTargetsFor({});
     for (size_t i = 0; i < neutral.size(); ++i) {
       arm_[i] = neutral[i];
       if (!arm_[i]) continue;
@@ -119,7 +120,7 @@ interfaces::HandTargets AutoOperator::Act(double t_s, const interfaces::Mediator
       arm_[i].reset();
       continue;
     }
-    if (!arm_[i]) arm_[i] = neutral[i];  // hands start at neutral
+    if (!arm_[i]) arm_[i] = interface.HandTargetsFor({})[i];  // a hand new to the task starts at neutral
     interfaces::HandGoal& g = *arm_[i];
     for (int k = 0; k < 3; ++k) g.position[k] += (wanted[i]->position[k] - g.position[k]) * alpha;
     g.orientation = Blend(g.orientation, wanted[i]->orientation, alpha);
