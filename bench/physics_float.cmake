@@ -9,23 +9,9 @@ function(haptel_add_physics_float_bench)
   if(BULLET_DEFINITIONS MATCHES "BT_USE_DOUBLE_PRECISION")
     message(FATAL_ERROR "Bullet: ${Bullet_DIR}/BulletConfig.cmake is not the float build")
   endif()
-  set(libs "")
-  foreach(lib LinearMath BulletCollision BulletDynamics)
-    find_library(HAPTEL_BULLET_FLOAT_${lib} NAMES ${lib}
-      HINTS "${BULLET_ROOT_DIR}/${BULLET_LIBRARY_DIRS}" NO_DEFAULT_PATH)
-    if(NOT HAPTEL_BULLET_FLOAT_${lib})
-      message(FATAL_ERROR "Bullet: lib${lib} not found under ${BULLET_ROOT_DIR}/${BULLET_LIBRARY_DIRS}")
-    endif()
-    list(APPEND libs ${HAPTEL_BULLET_FLOAT_${lib}})
-  endforeach()
-  add_library(haptel_bullet_float INTERFACE IMPORTED)
-  set_target_properties(haptel_bullet_float PROPERTIES
-    INTERFACE_INCLUDE_DIRECTORIES "${BULLET_ROOT_DIR}/${BULLET_INCLUDE_DIRS}"
-    INTERFACE_LINK_LIBRARIES "${libs}")
+  haptel_import_bullet(haptel_bullet_float "" "${BULLET_ROOT_DIR}" "${BULLET_LIBRARY_DIRS}" "${BULLET_INCLUDE_DIRS}")
 
-  set(src "${PROJECT_SOURCE_DIR}/physics/src")
-  add_library(haptel_physics_float STATIC
-    ${src}/world.cpp ${src}/proxy_hand.cpp ${src}/cockpit_controls.cpp ${src}/scene_builder.cpp)
+  add_library(haptel_physics_float STATIC ${HAPTEL_PHYSICS_SOURCES})
   target_include_directories(haptel_physics_float PUBLIC "${PROJECT_SOURCE_DIR}/physics/include")
   target_link_libraries(haptel_physics_float PUBLIC haptel_haptics haptel_config haptel_core haptel_bullet_float
     PRIVATE haptel_warnings)
