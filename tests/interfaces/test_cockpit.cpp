@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
+#include "hal_fixture.hpp"
 #include "haptel/config/cockpit.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/haptics/hal.hpp"
@@ -11,6 +12,8 @@
 
 using namespace haptel;
 using namespace haptel::interfaces;
+using haptel::test::Metres;
+using haptel::test::PutHand;
 using haptics::Side;
 
 namespace {
@@ -29,12 +32,6 @@ struct PlainPort final : ControlsPort {
 
 CockpitConfig Shipped(const char* name) {
   return LoadCockpit(ShippedFile(std::string("config/interfaces/") + name + ".yaml"));
-}
-
-DeviceCalibration Metres() {
-  DeviceCalibration c;
-  for (auto& a : c.arms) a.tracker_scale = {1, 1, 1};
-  return c;
 }
 
 }  // namespace
@@ -170,20 +167,15 @@ TEST_CASE("cockpit: a control that slipped in the hand is made up for, as a pers
   const GripGeometry grip;
   CockpitInterface cockpit(c, port, grip);
   haptics::Hal hal(Metres());
-  auto put = [&](Side side, const haptics::Vec3d& p, int64_t t_ns) {
-    haptics::WristRaw w;
-    w.t_ns = t_ns;
-    w.position = p;
-    hal.PublishWrist(side, w);
-  };
   const DriveIntent intent{.forward = 0.5, .turn = 0.0};
   const double nominal_x = cockpit.HandTargetsFor(intent)[haptics::Index(Side::kRight)]->position[0];
   // The right hand is 2 cm further forward than its grip would put it on the
   // lever; the wheel 0.1 rad behind the left hand (hand on the rim's top).
   port.state = {.wheel_angle = -0.1, .throttle = 0.01, .wheel_held = true, .throttle_held = true};
   for (int i = 1; i <= 300; ++i) {
-    put(Side::kRight, {c.throttle_centre[0] + 0.03, c.throttle_centre[1] + grip.reach, 0.0}, i * 10'000'000LL);
-    put(Side::kLeft, {c.wheel_hub[0] - grip.reach, c.wheel_hub[1], c.wheel_hub[2] + c.wheel_radius}, i * 10'000'000LL);
+    PutHand(hal, {c.throttle_centre[0] + 0.03, c.throttle_centre[1] + grip.reach, 0.0}, Side::kRight, i * 10'000'000LL);
+    PutHand(hal, {c.wheel_hub[0] - grip.reach, c.wheel_hub[1], c.wheel_hub[2] + c.wheel_radius}, Side::kLeft,
+            i * 10'000'000LL);
     cockpit.Update(i * 0.01, {}, hal);
   }
   CHECK(cockpit.lever_slip() == Approx(0.02).margin(1e-4));

@@ -1,11 +1,14 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
+#include "hal_fixture.hpp"
 #include "haptel/haptics/force_field.hpp"
 #include "haptel/interfaces/gesture.hpp"
 
 using namespace haptel;
 using namespace haptel::interfaces;
+using haptel::test::Metres;
+using haptel::test::PutHand;
 using haptics::Side;
 
 namespace {
@@ -18,18 +21,6 @@ GestureConfig Config() {
   c.turn_share = 0.5;
   c.wall_release_s = 0.3;
   return c;
-}
-/// A HAL whose raw tracker units are metres.
-DeviceCalibration Metres() {
-  DeviceCalibration c;
-  for (auto& a : c.arms) a.tracker_scale = {1, 1, 1};
-  return c;
-}
-void PutHand(haptics::Hal& hal, const haptics::Vec3d& p) {
-  haptics::WristRaw w;
-  w.t_ns = 1;
-  w.position = p;
-  hal.PublishWrist(Side::kRight, w);
 }
 }  // namespace
 

@@ -42,6 +42,14 @@ struct Cockpit {
     }
     world.Step();
   }
+  /// The operator's grasp at neutral: down from the approach points with open
+  /// hands (0.6 s), fingers closed (0.6 s), held (0.2 s).
+  void Grasp() {
+    const interfaces::HandTargets neutral = cockpit.HandTargetsFor({});
+    for (int i = 0; i <= 300; ++i) Hold(neutral, 0.002, 1.0 - i / 300.0, 0.0);
+    for (int i = 0; i <= 300; ++i) Hold(neutral, 0.002, 0.0, i / 300.0);
+    Hold(neutral, 0.2);
+  }
   /// Moves the goals from one intent to another over `seconds`, like the
   /// operator's arm would.
   void Move(const interfaces::DriveIntent& from, const interfaces::DriveIntent& to, double seconds) {
@@ -66,9 +74,7 @@ TEST_CASE("cockpit grasp: the operator's hand goals hold the rim and the bar and
   CHECK_FALSE(s.wheel_held);
   CHECK_FALSE(s.throttle_held);
   // Down onto them, open, then closed.
-  for (int i = 0; i <= 300; ++i) c.Hold(neutral, 0.002, 1.0 - i / 300.0, 0.0);
-  for (int i = 0; i <= 300; ++i) c.Hold(neutral, 0.002, 0.0, i / 300.0);
-  c.Hold(neutral, 0.2);
+  c.Grasp();
   s = c.link.State();
   INFO("grasped: wheel contacts " << s.wheel_contacts << ", lever contacts " << s.throttle_contacts);
   CHECK(s.wheel_held);
@@ -100,10 +106,7 @@ TEST_CASE("cockpit grasp: the operator's hand goals hold the rim and the bar and
 
 TEST_CASE("cockpit grasp: back and forth, the lever keeps its place in the hand", "[physics][cockpit]") {
   Cockpit c;
-  const interfaces::HandTargets neutral = c.cockpit.HandTargetsFor({});
-  for (int i = 0; i <= 300; ++i) c.Hold(neutral, 0.002, 1.0 - i / 300.0, 0.0);
-  for (int i = 0; i <= 300; ++i) c.Hold(neutral, 0.002, 0.0, i / 300.0);
-  c.Hold(neutral, 0.2);
+  c.Grasp();
   interfaces::DriveIntent from{};
   for (int cycle = 0; cycle < 10; ++cycle) {
     for (const interfaces::DriveIntent to : {interfaces::DriveIntent{0.9, 0.1}, interfaces::DriveIntent{0.3, -0.2}}) {
