@@ -119,14 +119,12 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   std::unique_ptr<interfaces::MediatorInterface> interface_owner;
   const interfaces::CockpitInterface* cockpit = nullptr;
   if (cockpit_config == nullptr) interface_owner = std::make_unique<interfaces::GestureInterface>(setup.gesture);
-  if (SessionPhysics::Needed(cockpit_config, scene)) {
-    std::array<bool, haptics::kSides> hands{true, true};  // a cockpit needs both
-    if (interface_owner) {
-      const interfaces::HandTargets used = interface_owner->HandTargetsFor({});
-      for (int i = 0; i < haptics::kSides; ++i) hands[i] = used[i].has_value();
-    }
-    physics_side = std::make_unique<SessionPhysics>(setup.physics, hands, cockpit_config, scene);
+  std::array<bool, haptics::kSides> hands{true, true};  // a cockpit needs both
+  if (interface_owner) {
+    const interfaces::HandTargets used = interface_owner->HandTargetsFor({});
+    for (int i = 0; i < haptics::kSides; ++i) hands[i] = used[i].has_value();
   }
+  physics_side = SessionPhysics::CreateIfNeeded(setup.physics, hands, cockpit_config, scene);
   if (cockpit_config != nullptr) {
     auto owned = std::make_unique<interfaces::CockpitInterface>(*cockpit_config, *physics_side->port);
     cockpit = owned.get();

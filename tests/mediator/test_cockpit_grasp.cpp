@@ -19,10 +19,11 @@ namespace {
 /// The session's cockpit physics, stepped by the test instead of its thread.
 struct Cockpit {
   CockpitConfig config = LoadCockpit(ShippedFile("config/interfaces/cockpit.yaml"));
-  mediator::SessionPhysics physics{LoadPhysics(ShippedFile("config/physics.yaml")), {true, true}, &config, nullptr};
-  physics::PhysicsWorld& world = *physics.world;
-  physics::ControlsLink& link = *physics.link;
-  interfaces::CockpitInterface cockpit{config, *physics.port};
+  std::unique_ptr<mediator::SessionPhysics> physics =
+      mediator::SessionPhysics::CreateIfNeeded(LoadPhysics(ShippedFile("config/physics.yaml")), {true, true}, &config, nullptr);
+  physics::PhysicsWorld& world = *physics->world;
+  physics::ControlsLink& link = *physics->link;
+  interfaces::CockpitInterface cockpit{config, *physics->port};
 
   /// `seconds` of steps with the tracked hands on `goals`, shifted by
   /// `lift` along each goal's approach direction (1 = at the approach point).
@@ -101,7 +102,7 @@ TEST_CASE("cockpit grasp: the operator's hand goals hold the rim and the bar and
     CHECK(s.throttle_held);
   }
   CHECK(c.world.Counters().hand_resets == 0);
-  CHECK(c.physics.controls->resets() == 0);
+  CHECK(c.physics->controls->resets() == 0);
 }
 
 TEST_CASE("cockpit grasp: back and forth, the lever keeps its place in the hand", "[physics][cockpit]") {
@@ -123,4 +124,22 @@ TEST_CASE("cockpit grasp: back and forth, the lever keeps its place in the hand"
   CHECK(s.wheel_angle == Approx(wanted.wheel_angle).margin(0.06));
   CHECK(s.throttle_held);
   CHECK(s.wheel_held);
+}
+
+TEST_CASE("session physics: no world without controls or scene bodies; otherwise only what was asked for",
+          "[physics]") {
+  const PhysicsConfig config = LoadPhysics(ShippedFile("config/physics.yaml"));
+  const uint64_t before = physics::PhysicsWorld::worlds_created();
+  CHECK(mediator::SessionPhysics::CreateIfNeeded(config, {false, true}, nullptr, nullptr) == nullptr);
+  CHECK(physics::PhysicsWorld::worlds_created() == before);
+
+  // The gesture hand (right only) over a scene: its bodies, one proxy, no controls.
+  const Scene scene = LoadSceneFile(ShippedFile("config/scenes/table.xml"));
+  const auto p = mediator::SessionPhysics::CreateIfNeeded(config, {false, true}, nullptr, &scene);
+  REQUIRE(p);
+  CHECK(p->scene.nodes.size() == scene.objects.size());
+  CHECK(p->world->hand(Side::kLeft) == nullptr);
+  CHECK(p->world->hand(Side::kRight) != nullptr);
+  CHECK_FALSE(p->controls);
+  CHECK_FALSE(p->port);
 }

@@ -41,17 +41,20 @@ struct SessionPhysics {
   std::unique_ptr<physics::ControlsLink> link;
   std::unique_ptr<PhysicsControlsPort> port;
 
-  /// Whether a session with this cockpit (nullptr: none) and scene (nullptr:
-  /// none) needs a physics world at all.
-  static bool Needed(const CockpitConfig* cockpit, const Scene* scene);
-
-  /// A proxy hand for each side in `hands`; the scene's bodies; the cockpit's
-  /// controls. Throws std::invalid_argument for a scene the world cannot build.
-  SessionPhysics(const PhysicsConfig& config, const std::array<bool, haptics::kSides>& hands,
-                 const CockpitConfig* cockpit, const Scene* scene);
+  /// The physics side of a session with this cockpit (nullptr: none) and
+  /// scene (nullptr: none), or nullptr when neither has bodies — decided by
+  /// PhysicsWorld::CreateIfNeeded, like everything else that may need a
+  /// world. A proxy hand for each side in `hands`. Throws
+  /// std::invalid_argument for a scene the world cannot build.
+  static std::unique_ptr<SessionPhysics> CreateIfNeeded(const PhysicsConfig& config,
+                                                        const std::array<bool, haptics::kSides>& hands,
+                                                        const CockpitConfig* cockpit, const Scene* scene);
   ~SessionPhysics();
   SessionPhysics(const SessionPhysics&) = delete;
   SessionPhysics& operator=(const SessionPhysics&) = delete;
+
+ private:
+  explicit SessionPhysics(std::unique_ptr<physics::PhysicsWorld> w) : world(std::move(w)) {}
 };
 
 }  // namespace haptel::mediator
