@@ -1,0 +1,56 @@
+#pragma once
+/// @file What a person presses: keyboard keys and a game controller, as one
+/// trivially copyable value handed from the thread that owns the input
+/// devices (the view, or an input pump when there is no view) to the session
+/// thread through a seqlock (InputBox). Interfaces read it; they never see SDL.
+#include <array>
+#include <cstdint>
+
+#include "haptel/core/seqlock.hpp"
+
+namespace haptel::interfaces {
+
+/// Buttons of a game controller, in SDL's GameController order.
+enum class PadButton : int {
+  kA = 0, kB, kX, kY, kBack, kGuide, kStart, kLeftStick, kRightStick,
+  kLeftShoulder, kRightShoulder, kDpadUp, kDpadDown, kDpadLeft, kDpadRight, kCount
+};
+/// Axes of a game controller, in SDL's GameController order.
+enum class PadAxis : int { kLeftX = 0, kLeftY, kRightX, kRightY, kTriggerLeft, kTriggerRight, kCount };
+
+struct InputState {
+  // --- Keyboard: held now (arrows or W/A/S/D; space). ---
+  bool key_up = false;
+  bool key_down = false;
+  bool key_left = false;
+  bool key_right = false;
+  bool key_stop = false;
+  /// Presses so far (counters, so a press shorter than a session tick is
+  /// still seen): the interface steps one level per press it has not seen.
+  uint32_t presses_up = 0;
+  uint32_t presses_down = 0;
+  uint32_t presses_left = 0;
+  uint32_t presses_right = 0;
+  uint32_t presses_stop = 0;
+
+  // --- Game controller (the first one SDL knows). ---
+  bool pad_connected = false;
+  /// Controllers that went away during the run (a disconnect mid-run aborts).
+  uint32_t pad_disconnects = 0;
+  /// Sticks in [-1, 1] with SDL's sign (y down is +); triggers in [0, 1].
+  std::array<double, static_cast<int>(PadAxis::kCount)> pad_axes{};
+  std::array<bool, static_cast<int>(PadButton::kCount)> pad_buttons{};
+
+  // --- Session requests. ---
+  /// The window was closed (or the person asked to quit).
+  bool quit = false;
+  /// F1..F6 pressed: index 0..5 of the run's interface list; counted so
+  /// each press is one request.
+  int interface_request = -1;
+  uint32_t interface_requests = 0;
+};
+
+/// Latest InputState: one writer (the input thread), any readers. Wait-free.
+using InputBox = Seqlock<InputState>;
+
+}  // namespace haptel::interfaces

@@ -1,0 +1,97 @@
+#pragma once
+/// @file The operator's view: the mediator world drawn in 3-D with SDL2 and
+/// OpenGL 3.3 core on a thread of its own, at display rate, into a window or
+/// offscreen, optionally recorded to H.264 MP4.
+///
+/// The view thread owns SDL (video and game controllers) and the GL context.
+/// Each frame it asks its ViewSource for the latest ViewModel (the source
+/// reads seqlocks and shared pointers: it never blocks the servo loop, the
+/// physics thread or the link), draws it, swaps, and hands the SDL events to
+/// its EventSink (keyboard, controllers). Closing the window sets
+/// InputState::quit through the sink.
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include "haptel/view/view_model.hpp"
+
+union SDL_Event;
+
+namespace haptel::view {
+
+/// Set-up errors (no display for a window, no GL 3.3, an MP4 that cannot be
+/// opened): one line for the person, e.g. suggesting --record.
+class ViewError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+enum class ViewMode {
+  kWindow,     ///< a window on $DISPLAY
+  kOffscreen,  ///< no window: rendered for the recorder only (SDL offscreen driver / EGL)
+};
+
+struct ViewOptions {
+  ViewMode mode = ViewMode::kWindow;
+  int width = 1024;
+  int height = 576;
+  double rate_hz = 60.0;          ///< frames per second drawn (vsync off)
+  std::filesystem::path record;   ///< MP4 to write (empty: none)
+  double record_fps = 30.0;       ///< fixed frame rate of the MP4
+  std::string title = "Haptel";
+};
+
+/// Fills the frame's model on the view thread. Must not block on anything a
+/// real-time thread holds.
+class ViewSource {
+ public:
+  virtual ~ViewSource() = default;
+  virtual void Fill(ViewModel& model) = 0;
+};
+
+/// Receives every SDL event the view thread polls (keyboard, controllers,
+/// window). Runs on the view thread.
+class EventSink {
+ public:
+  virtual ~EventSink() = default;
+  virtual void OnEvent(const SDL_Event& event) = 0;
+};
+
+struct ViewStats {
+  uint64_t frames = 0;
+  double fps = 0.0;
+  double frame_ms_p50 = 0.0;        ///< render + swap time of a frame
+  double frame_ms_p99 = 0.0;
+  double cpu_share = 0.0;           ///< view thread CPU seconds per wall second
+  uint64_t video_frames_shown = 0;  ///< distinct camera frames that reached the screen
+  double video_to_screen_ms_p50 = 0.0;  ///< capture stamp -> the swap that first showed it
+  double video_to_screen_ms_p99 = 0.0;
+  uint64_t recorded_frames = 0;
+  uint64_t record_dropped = 0;      ///< frames the encoder could not take in time
+};
+
+class View {
+ public:
+  /// Starts the view thread and waits until its window (or offscreen
+  /// context) and recorder are up. Throws ViewError when they cannot be.
+  /// `sink` may be null; both must outlive the View.
+  View(const ViewOptions& options, ViewSource& source, EventSink* sink);
+  /// Stops the thread, finishes the MP4.
+  ~View();
+  View(const View&) = delete;
+  View& operator=(const View&) = delete;
+
+  void Stop();
+  ViewStats Stats() const;
+
+  /// Whether a window can be opened here ($DISPLAY set and reachable).
+  static bool DisplayAvailable();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace haptel::view

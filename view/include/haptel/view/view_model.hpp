@@ -1,0 +1,70 @@
+#pragma once
+/// @file What the operator's view draws in one frame, as flat data: shapes in
+/// the device frame (x forward, y left, z up; metres), the vehicle's latest
+/// video image for the virtual screen, and the overlay (lap clock, gates,
+/// contacts, HUD). Filled by a ViewSource on the view thread each frame.
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+namespace haptel::view {
+
+struct Rgba {
+  float r = 1, g = 1, b = 1, a = 1;
+};
+
+enum class ShapeKind : uint8_t {
+  kBox,       ///< size = half extents (x, y, z)
+  kSphere,    ///< size[0] = radius
+  kCapsule,   ///< size[0] = radius, size[1] = half length of the cylinder part; axis = local x
+  kCylinder,  ///< size[0] = radius, size[1] = half length; axis = local x
+};
+
+struct Shape {
+  ShapeKind kind = ShapeKind::kBox;
+  std::array<double, 3> position{};
+  std::array<double, 4> orientation{1, 0, 0, 0};  ///< (w, x, y, z)
+  std::array<double, 3> size{};
+  Rgba color;
+};
+
+/// A decoded camera image and when the vehicle captured it.
+struct VideoImage {
+  std::shared_ptr<const cv::Mat> image;  ///< BGR 8-bit; null before the first frame
+  uint64_t id = 0;                       ///< changes with each new frame
+  int64_t capture_wall_ns = 0;           ///< vehicle's CLOCK_REALTIME at capture
+};
+
+/// Text and indicators drawn over the world.
+struct Overlay {
+  char interface_name[32] = "";
+  char operator_name[16] = "";
+  double t_s = 0.0;          ///< run clock
+  double lap_time_s = 0.0;   ///< lap clock
+  double time_left_s = -1;   ///< until the time limit (negative: none)
+  int gates_passed = 0;
+  int gates_total = 0;
+  int obstacles_touched = 0;
+  char last_contact[40] = "";  ///< e.g. "left bumper at 12.3 s" (empty: none yet)
+  bool contact_now = false;    ///< a bumper is pressed now
+  /// HUD (the HUD interfaces; the gesture interface may show it too).
+  bool hud = false;
+  double speed_mps = 0.0;
+  bool turn_left = false;    ///< indicator: on while turning left (drawn flashing)
+  bool turn_right = false;
+  bool throttle_locked = false;
+  char message[96] = "";     ///< one line for the person (e.g. "grasp the wheel")
+};
+
+struct ViewModel {
+  /// Everything in the world: proxy or tracked hands, controls, scene bodies,
+  /// the gesture wall. Reserved once; Fill clears and refills it.
+  std::vector<Shape> shapes;
+  VideoImage video;
+  Overlay overlay;
+};
+
+}  // namespace haptel::view
