@@ -21,11 +21,15 @@ RunConfig LoadRun(const std::filesystem::path& file) {
   r.physics = dir / root.String("physics", "physics.yaml");
   if (const std::string scene = root.String("scene", ""); !scene.empty()) r.scene = dir / scene;
   r.interface = root.String("interface", r.interface);
+  r.interfaces = root.Strings("interfaces", r.interfaces);
+  if (r.interfaces.empty() || r.interfaces.size() > 6) root.Fail("interfaces", "a list of 1 to 6 interface names (F1-F6)");
   r.interfaces_dir = dir / root.String("interfaces_dir", "interfaces");
   r.database = root.String("database", r.database.string());
   r.vehicle_timeout_s = root.Number("vehicle_timeout_s", r.vehicle_timeout_s, 0.05, 60.0);
   r.session_rate_hz = root.Number("session_rate_hz", r.session_rate_hz, 10.0, 1000.0);
   r.video_decode = root.Bool("video_decode", r.video_decode);
+  r.person_time_limit_s = root.Number("person_time_limit_s", r.person_time_limit_s, 1.0, 86400.0);
+  r.switch_ramp_s = root.Number("switch_ramp_s", r.switch_ramp_s, 0.01, 5.0);
 
   YamlMap op = root.Map("operator");
   r.op.reaction_delay_s = op.Number("reaction_delay_s", r.op.reaction_delay_s, 0.0, 2.0);

@@ -44,11 +44,29 @@ void Hal::ZeroForces() {
   for (auto& f : fields_) f.Store(StampedField{});
 }
 
+void Hal::SetForceScale(double scale) {
+  force_scale_.store(std::clamp(scale, 0.0, 1.0), std::memory_order_relaxed);
+}
+
 ForceSetpoint Hal::Setpoint(Side side) const {
   ForceSetpoint sp = contacts_[Index(side)].Load();
   const StampedField f = fields_[Index(side)].Load();
   sp.field = f.field;
   if (sp.stamp_ns == 0 || (f.stamp_ns != 0 && f.stamp_ns < sp.stamp_ns)) sp.stamp_ns = f.stamp_ns;
+  const double k = force_scale_.load(std::memory_order_relaxed);
+  if (k != 1.0) {
+    // Every force is linear in these gains, so scaling them scales the force.
+    ForceField& field = sp.field;
+    field.stiffness *= k;
+    field.stiffness_growth *= k;
+    field.damping *= k;
+    field.wall_stiffness *= k;
+    field.wall_damping *= k;
+    sp.coupling_stiffness *= k;
+    sp.coupling_damping *= k;
+    for (double& w : sp.wrist_force) w *= k;
+    for (double& finger : sp.finger_forces) finger *= k;
+  }
   return sp;
 }
 

@@ -68,6 +68,7 @@ TraceWriter::~TraceWriter() {
 }
 
 bool TraceWriter::Push(const TraceRecord& record) {
+  if (!recording_.load(std::memory_order_acquire)) return true;
   if (record.side >= kSides || !rings_[record.side]->Push(record)) {
     dropped_.fetch_add(1, std::memory_order_relaxed);
     return false;
@@ -128,7 +129,19 @@ ReplayDevice::ReplayDevice(std::vector<TraceRecord> records, const DeviceDescrip
   for (auto& i : ignored_) i.store(0);
 }
 
+bool ReplayDevice::finished(int64_t now_ns) const {
+  const int64_t start = start_ns_.load();
+  return !loop_ && !holding_.load() && start != 0 && now_ns - start >= trace_span_ns_;
+}
+
 long ReplayDevice::Due(Side side, TraceRecord::Kind kind, int64_t now_ns, size_t& cursor, int64_t& round) {
+  if (holding_.load(std::memory_order_acquire)) {
+    // The first reading of this kind and side, without starting the clock.
+    for (size_t i = 0; i < records_.size(); ++i) {
+      if (records_[i].side == Index(side) && records_[i].kind == kind) return static_cast<long>(i);
+    }
+    return -1;
+  }
   int64_t expected = 0;
   start_ns_.compare_exchange_strong(expected, now_ns);
   int64_t elapsed = now_ns - start_ns_.load();

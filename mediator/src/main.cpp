@@ -1,7 +1,9 @@
 // haptel: the operator side. `haptel run` drives one grand-prix lap.
 #include <unistd.h>
 
+#include <algorithm>
 #include <csignal>
+#include <optional>
 #include <cstdlib>
 #include <cstdio>
 #include <filesystem>
@@ -18,6 +20,7 @@
 #include "haptel/core/args.hpp"
 #include "haptel/core/log.hpp"
 #include "haptel/haptics/calibration_procedure.hpp"
+#include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/recorder.hpp"
 #include "haptel/mediator/session.hpp"
 #include "gravity_bench.hpp"
@@ -43,7 +46,14 @@ constexpr const char* kUsage =
     "haptel run options:\n"
     "  --config FILE        run configuration (default config/haptel.yaml)\n"
     "  --track FILE         track file (overrides the configuration's 'track')\n"
-    "  --interface NAME     mediator interface (a file interfaces/NAME.yaml)\n"
+    "  --interface NAME     mediator interface to start with (a file interfaces/NAME.yaml);\n"
+    "                       F1-F6 switch between the run configuration's 'interfaces'\n"
+    "  --operator KIND      auto (the simulated driver; default without a display) or person\n"
+    "  --device FILE        haptic device file: sim, udp (haptel-device-server arms) or replay\n"
+    "  --trace-in FILE      the trace a replay device plays (overrides its 'replay.trace')\n"
+    "  --time-limit S       end the run after S seconds, outcome 'time limit' (person: 600)\n"
+    "  --view KIND          window (default with a display) or none\n"
+    "  --record FILE.mp4    record the operator's view as H.264 MP4 (offscreen without a window)\n"
     "  --scene FILE         haptic scene for the hands (YAML, or MHaptic .xml)\n"
     "  --vehicle-name NAME  vehicle name in DDS topic names\n"
     "  --domain N           DDS domain id\n"
@@ -52,6 +62,36 @@ constexpr const char* kUsage =
     "  --trace FILE         record the haptic device's readings (for the replay driver)\n"
     "  --json               end with one JSON line of results on stdout\n"
     "  --quiet              no progress lines\n";
+
+/// A seconds option in [min, max]; UsageError naming it otherwise.
+std::optional<double> Seconds(const haptel::Args& args, const std::string& name, double min, double max) {
+  const auto text = args.Value(name);
+  if (!text) return std::nullopt;
+  char* end = nullptr;
+  const double s = std::strtod(text->c_str(), &end);
+  if (end == text->c_str() || *end != '\0' || !(s >= min && s <= max)) {
+    throw haptel::UsageError("option --" + name + ": expected seconds in [" + haptel::JsonNumber(min) + ", " +
+                             haptel::JsonNumber(max) + "], got '" + *text + "'");
+  }
+  return s;
+}
+
+/// [{"t_s":…,"from":…,"to":…}, …]
+std::string SwitchesJson(const std::vector<haptel::mediator::SwitchRecord>& switches) {
+  std::string out = "[";
+  for (const auto& s : switches) {
+    if (out.size() > 1) out += ",";
+    out += "{\"t_s\":" + haptel::JsonNumber(s.t_s) + ",\"from\":" + haptel::JsonString(s.from) +
+           ",\"to\":" + haptel::JsonString(s.to) + "}";
+  }
+  return out + "]";
+}
+
+/// Whether a window could open: an X display is named.
+bool DisplayAvailable() {
+  const char* display = std::getenv("DISPLAY");
+  return display != nullptr && *display != '\0';
+}
 
 std::filesystem::path SelfDirectory() {
   std::error_code ec;
@@ -81,7 +121,9 @@ int main(int argc, char** argv) {
   SessionSetup setup;
   bool json = false;
   try {
-    const Args args(argc, argv, {"config", "track", "interface", "scene", "vehicle-name", "domain", "database", "vehicle-timeout", "trace"},
+    const Args args(argc, argv,
+                    {"config", "track", "interface", "scene", "vehicle-name", "domain", "database", "vehicle-timeout",
+                     "trace", "operator", "device", "trace-in", "time-limit", "view", "record"},
                     {"json", "quiet", "help"});
     if (args.Flag("help")) {
       std::fputs(kUsage, stdout);
@@ -99,32 +141,75 @@ int main(int argc, char** argv) {
     if (auto domain = args.Int("domain", 0, 232)) setup.run.link.domain_id = *domain;
     if (auto db = args.Value("database")) setup.run.database = *db;
     if (auto trace = args.Value("trace")) setup.trace = *trace;
-    if (auto timeout = args.Value("vehicle-timeout")) {
-      char* end = nullptr;
-      const double s = std::strtod(timeout->c_str(), &end);
-      if (end == timeout->c_str() || *end != '\0' || !(s >= 0.05 && s <= 60.0)) {
-        throw UsageError("option --vehicle-timeout: expected seconds in [0.05, 60], got '" + *timeout + "'");
-      }
-      setup.run.vehicle_timeout_s = s;
+    if (auto s = Seconds(args, "vehicle-timeout", 0.05, 60.0)) setup.run.vehicle_timeout_s = *s;
+    const bool display = DisplayAvailable();
+    setup.operator_kind = args.Value("operator").value_or(display ? "person" : "auto");
+    if (setup.operator_kind != "auto" && setup.operator_kind != "person") {
+      throw UsageError("option --operator: expected auto or person, got '" + setup.operator_kind + "'");
     }
+    const bool person = setup.operator_kind == "person";
+    const std::string view = args.Value("view").value_or(display ? "window" : "none");
+    if (view == "window") {
+      if (!display) {
+        throw UsageError("option --view window: there is no display (DISPLAY is not set); use --view none, "
+                         "and --record FILE.mp4 to record the operator's view headless");
+      }
+      setup.view = ViewKind::kWindow;
+    } else if (view != "none") {
+      throw UsageError("option --view: expected window or none, got '" + view + "'");
+    }
+    if (auto record = args.Value("record")) {
+      setup.record = *record;
+      if (setup.view == ViewKind::kNone) setup.view = ViewKind::kOffscreen;
+    }
+    if (auto s = Seconds(args, "time-limit", 1.0, 86400.0)) {
+      setup.time_limit_s = *s;
+    } else if (person) {
+      setup.time_limit_s = setup.run.person_time_limit_s;
+    }
+    if (auto device = args.Value("device")) setup.run.device = *device;
     setup.track = LoadTrack(setup.run.track);
     setup.vehicle = LoadVehicle(setup.run.vehicle);
     if (auto name = args.Value("vehicle-name")) setup.vehicle.name = *name;
-    const std::filesystem::path interface_file = InterfaceFile(setup.run, setup.run.interface);
-    if (InterfaceName(interface_file).rfind("cockpit", 0) == 0) {
-      setup.cockpit = LoadCockpit(interface_file);
-    } else {
-      setup.gesture = LoadGesture(interface_file);
+    setup.device = LoadDevice(setup.run.device);
+    if (auto trace_in = args.Value("trace-in")) {
+      if (setup.device.driver != "replay") {
+        throw UsageError("option --trace-in: the device '" + setup.run.device.string() + "' is not a replay device");
+      }
+      setup.device.replay.trace = *trace_in;
     }
+    if (setup.device.driver == "replay" && !std::filesystem::exists(setup.device.replay.trace)) {
+      throw ConfigError(setup.run.device.string() + ": key 'replay.trace': no trace '" +
+                        setup.device.replay.trace.string() + "'; record one with `haptel run --trace FILE`");
+    }
+    if (!person && setup.device.driver != "sim") {
+      throw UsageError("option --operator auto: the automatic operator moves the simulated arms, and device '" +
+                       setup.device.name + "' (" + setup.device.driver + ") is not simulated; use --operator person");
+    }
+    // The interface to start with: --interface, else the configuration's; a
+    // person at the simulated device has no arms to move, so the keyboard.
+    std::string start = setup.run.interface;
+    if (auto name = args.Value("interface")) {
+      start = *name;
+    } else if (person && setup.device.driver == "sim") {
+      start = "keyboard";
+    }
+    // The automatic operator never switches: it needs only the one it starts with.
+    std::vector<std::string> names = person ? setup.run.interfaces : std::vector<std::string>{start};
+    auto found = std::find(names.begin(), names.end(), start);
+    if (found == names.end()) {
+      names.insert(names.begin(), start);
+      if (names.size() > 6) names.pop_back();
+      found = names.begin();
+    }
+    setup.start_interface = static_cast<int>(found - names.begin());
+    for (const std::string& name : names) setup.interfaces.push_back(LoadInterfaceSpec(setup.run, name));
     if (auto scene = args.Value("scene")) setup.run.scene = *scene;
     if (!setup.run.scene.empty()) setup.scene = LoadSceneFile(setup.run.scene);
-    if (setup.cockpit || setup.scene) setup.physics = LoadPhysics(setup.run.physics);
-    setup.device = LoadDevice(setup.run.device);
-    if (setup.device.driver != "sim") {
-      throw ConfigError(setup.run.device.string() + ": key 'driver': expected 'sim' for haptel run "
-                        "(the automatic operator moves the simulated arms), got '" + setup.device.driver + "'");
-    }
-    if (!setup.device.calibration.empty()) setup.calibration = LoadCalibration(setup.device.calibration);
+    const bool any_physics = std::any_of(setup.interfaces.begin(), setup.interfaces.end(),
+                                         [](const InterfaceSpec& s) { return s.needs_physics(); });
+    if (any_physics || setup.scene) setup.physics = LoadPhysics(setup.run.physics);
+    setup.calibration = DeviceCalibrationFor(setup.device);
     if (!setup.device.gravity.empty()) setup.gravity = LoadGravityGrid(setup.device.gravity);
     setup.vehicle_program = SelfDirectory() / "haptel-vehicle";
   } catch (const UsageError& e) {
@@ -146,6 +231,9 @@ int main(int argc, char** argv) {
     result = RunSession(setup, g_interrupted);
     Recorder recorder(setup.run.database);
     run_id = recorder.Save(result.record);
+  } catch (const ConfigError& e) {  // a part that could not be set up: nothing moved
+    std::fprintf(stderr, "haptel: %s\n", e.what());
+    return 2;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "haptel: %s\n", e.what());
     return 1;
@@ -153,8 +241,9 @@ int main(int argc, char** argv) {
 
   const RunRecord& r = result.record;
   std::printf("haptel: %s — %s\n", ToString(result.outcome).c_str(), result.message.c_str());
-  std::printf("  track %s, interface %s, vehicle %s (pid %d)\n", r.track.c_str(), r.interface.c_str(),
-              r.vehicle.c_str(), r.vehicle_pid);
+  std::printf("  track %s, interface %s, vehicle %s (pid %d), operator %s, device %s\n", r.track.c_str(),
+              r.interface.c_str(), r.vehicle.c_str(), r.vehicle_pid, result.operator_kind.c_str(), result.device.c_str());
+  std::printf("  distance driven %.2f m, %zu interface switches\n", result.distance_m, result.switches.size());
   std::printf("  lap time %.2f s, gates passed %d/%d, missed %d, obstacles touched %d\n", r.lap_time_s,
               r.gates_passed, r.gates_total, r.gates_missed, r.obstacles_touched);
   for (const GateSplit& s : r.splits) {
@@ -188,16 +277,17 @@ int main(int argc, char** argv) {
       << ",\"physics_period_p99_us\":" << JsonNumber(result.physics_period_p99_us)
       << ",\"physics_step_max_us\":" << JsonNumber(result.physics_step_max_us)
       << ",\"physics_hand_resets\":" << result.physics_hand_resets
-      << ",\"grasp_s\":" << JsonNumber(result.grasp_s) << ",\"scene_bodies\":" << result.scene_bodies << ",\"interface\":" << JsonString(r.interface)
+      << ",\"grasp_s\":" << JsonNumber(result.grasp_s) << ",\"scene_bodies\":" << result.scene_bodies
+      << ",\"view_fps\":" << JsonNumber(result.view_fps) << ",\"view_frame_p99_ms\":" << JsonNumber(result.view_frame_p99_ms)
+      << ",\"video_to_screen_ms_p50\":" << JsonNumber(result.video_to_screen_ms_p50)
+      << ",\"video_to_screen_ms_p99\":" << JsonNumber(result.video_to_screen_ms_p99)
+      << ",\"distance_m\":" << JsonNumber(result.distance_m) << ",\"operator\":" << JsonString(result.operator_kind)
+      << ",\"device\":" << JsonString(result.device) << ",\"interface_switches\":" << SwitchesJson(result.switches)
+      << ",\"interface\":" << JsonString(r.interface)
       << ",\"track\":" << JsonString(r.track) << ",\"run_id\":" << run_id
       << ",\"database\":" << JsonString(setup.run.database.string()) << "}";
     std::printf("%s\n", o.str().c_str());
   }
   std::fflush(stdout);
-  switch (result.outcome) {
-    case Outcome::kCompleted: return 0;
-    case Outcome::kVehicleLost:
-    case Outcome::kVehicleDidNotStart: return 3;
-    default: return 1;
-  }
+  return ExitCode(result.outcome);
 }

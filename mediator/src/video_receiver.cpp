@@ -52,8 +52,10 @@ void VideoReceiver::DecodeLoop() {
     }
     const int64_t now_wall = WallNs();
     const int64_t now = MonotonicNs();
+    // A fresh image per frame: whoever holds the previous one keeps it intact.
+    std::shared_ptr<const cv::Mat> shown = decode_ ? std::make_shared<const cv::Mat>(image.clone()) : nullptr;
     std::lock_guard lock(mutex_);
-    if (decode_) image.copyTo(screen_);
+    if (decode_) latest_ = {std::move(shown), latest_.id + 1, capture_ns};
     latency_.Record(static_cast<double>(now_wall - capture_ns) * 1e-3);
     if (frames_++ == 0) first_frame_ns_ = now;
     last_frame_ns_ = now;
@@ -74,8 +76,13 @@ VideoStats VideoReceiver::Stats() const {
 }
 
 cv::Mat VideoReceiver::Screen() const {
+  const LatestFrame latest = Latest();
+  return latest.image ? latest.image->clone() : cv::Mat();
+}
+
+LatestFrame VideoReceiver::Latest() const {
   std::lock_guard lock(mutex_);
-  return screen_.clone();
+  return latest_;
 }
 
 }  // namespace haptel::mediator

@@ -2,6 +2,7 @@
 /// @file The operator side's run configuration (config/haptel.yaml).
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "haptel/config/link.hpp"
 
@@ -32,6 +33,12 @@ struct RunConfig {
   std::filesystem::path track;
   std::filesystem::path vehicle;
   std::string interface = "gesture";
+  /// The interfaces keys F1-F6 switch between during a run, in key order.
+  std::vector<std::string> interfaces{"gesture", "cockpit", "cockpit-hud", "cockpit-assisted", "keyboard", "gamepad"};
+  /// A person's run ends here unless --time-limit says otherwise (the thesis's 10-minute cap).
+  double person_time_limit_s = 600.0;
+  /// Forces ramp down and up over this when the interface changes.
+  double switch_ramp_s = 0.3;
   std::filesystem::path interfaces_dir;  ///< where <interface>.yaml files live
   std::filesystem::path database = "runs/haptel.db";
   double vehicle_timeout_s = 0.5;  ///< no state for this long: vehicle lost

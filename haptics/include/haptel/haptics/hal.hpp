@@ -44,6 +44,7 @@ class Hal {
   void PublishForces(Side side, const AppliedForces& forces);
   /// The device on `side` was lost (true) or answers again (false).
   void PublishLost(Side side, bool lost);
+  bool lost(Side side) const { return lost_[Index(side)].load(std::memory_order_acquire); }
   /// The combined set-point: the interface's field plus the physics thread's
   /// coupling, direct and finger forces. Its stamp is the older of the two
   /// feeders' stamps (a feeder that never wrote is ignored), so either one
@@ -64,6 +65,11 @@ class Hal {
   /// Interface thread: disables the fields: their forces go to zero at the
   /// next servo tick. (The physics thread clears its own part when it stops.)
   void ZeroForces();
+  /// Session thread: scales every force the set-points ask for (fields,
+  /// coupling, direct and finger forces) by `scale` in [0, 1] — ramped by the
+  /// session when it switches interfaces, so the hands feel no jolt.
+  void SetForceScale(double scale);
+  double force_scale() const { return force_scale_.load(std::memory_order_relaxed); }
 
   /// Copies up to out.size() newest tracker samples, oldest first; returns the count.
   size_t TrackerHistory(Side side, std::span<TrackerSample> out) const;
@@ -90,6 +96,7 @@ class Hal {
   std::array<Seqlock<StampedField>, kSides> fields_;
   std::array<Seqlock<ForceSetpoint>, kSides> contacts_;
   std::array<std::atomic<bool>, kSides> lost_{};
+  std::atomic<double> force_scale_{1.0};
   std::array<std::atomic<uint64_t>, kSides> wrist_count_{};
   std::array<std::atomic<uint64_t>, kSides> glove_count_{};
   std::array<std::array<Seqlock<TrackerSample>, kTrackerHistory>, kSides> history_;

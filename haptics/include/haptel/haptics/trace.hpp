@@ -44,7 +44,12 @@ class TraceWriter {
   TraceWriter& operator=(const TraceWriter&) = delete;
 
   /// Servo thread(s): one producer per side, so each side has its own ring.
+  /// While not recording, records are let go (not counted as dropped).
   bool Push(const TraceRecord& record);
+  /// Starts or pauses recording (default: recording). A session starts its
+  /// trace when the vehicle answers, so that a replay begun at that moment
+  /// lines up with the vehicle.
+  void SetRecording(bool recording) { recording_.store(recording, std::memory_order_release); }
   uint64_t written() const { return written_.load(); }
   uint64_t dropped() const { return dropped_.load(); }
 
@@ -54,6 +59,7 @@ class TraceWriter {
   std::FILE* out_ = nullptr;
   std::array<std::unique_ptr<SpscRing<TraceRecord>>, kSides> rings_;
   std::atomic<bool> stop_{false};
+  std::atomic<bool> recording_{true};
   std::atomic<uint64_t> written_{0};
   std::atomic<uint64_t> dropped_{0};
   std::thread thread_;
@@ -64,12 +70,22 @@ class TraceWriter {
 std::vector<TraceRecord> ReadTrace(const std::filesystem::path& file);
 
 /// The `replay` driver: plays a trace back at its original timing, relative to
-/// the first read. Force commands are accepted and ignored (counted). At the
-/// end of the trace it loops, or keeps the last sample (kNoData).
+/// the first read — or, when made to hold, relative to Begin, reporting the
+/// trace's first readings until then. Force commands are accepted and ignored
+/// (counted). At the end of the trace it loops, or keeps the last sample (kNoData).
 class ReplayDevice final : public Device {
  public:
   ReplayDevice(std::vector<TraceRecord> records, const DeviceDescription& description, bool loop);
 
+  /// Holds the first readings until Begin (before the servo loop starts).
+  void HoldUntilBegin() { holding_.store(true); }
+  /// Plays from the top from `now_ns` on. Any thread.
+  void Begin(int64_t now_ns) {
+    start_ns_.store(now_ns);
+    holding_.store(false, std::memory_order_release);
+  }
+  /// The trace has been played to its end (never, when looping).
+  bool finished(int64_t now_ns) const;
   const DeviceDescription& description() const override { return description_; }
   DeviceStatus ReadWrist(Side side, int64_t now_ns, WristRaw& out) override;
   DeviceStatus ReadGlove(Side side, int64_t now_ns, GloveRaw& out) override;
@@ -88,6 +104,7 @@ class ReplayDevice final : public Device {
   int64_t trace_start_ns_ = 0;
   int64_t trace_span_ns_ = 1;
   std::atomic<int64_t> start_ns_{0};
+  std::atomic<bool> holding_{false};
   std::array<size_t, kSides> wrist_cursor_{};
   std::array<size_t, kSides> glove_cursor_{};
   std::array<int64_t, kSides> wrist_round_{};

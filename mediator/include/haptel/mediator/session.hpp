@@ -1,47 +1,58 @@
 #pragma once
-/// @file One grand-prix session on the operator side.
+/// @file One session on the operator side, assembled from parts, each built,
+/// started and stopped on its own:
 ///
-/// Threads: the servo loop (1 kHz, HAL), DDS callbacks (state, video), the
-/// video decoder, the physics world when the interface has controls (a
-/// cockpit: proxy hands, wheel and lever at 1/step_s), and the session loop
-/// (this one, `session_rate_hz`): it
-/// feeds the automatic operator, runs the interface, sends commands at the
-/// interface's command rate, times the lap and watches the vehicle.
+/// - the haptic device (HapticSide: sim, udp or replay; HAL; servo loop at 1 kHz),
+/// - the physics world when an interface's controls or the scene need one
+///   (SessionPhysics: proxy hands, wheel and lever at 1/step_s),
+/// - the interfaces (InterfaceSet: the current one, and those F1–F6 switch to),
+/// - the operator (Operator: the automatic driver, or a person),
+/// - the vehicle link (VehicleLink: spawned simulator, DDS, video),
+/// - the view and a person's input (SessionView: window or offscreen, MP4),
+/// - and the session loop (this thread, `session_rate_hz`), which feeds the
+///   operator, runs the interface, sends commands at the interface's command
+///   rate, times the lap and watches the vehicle, the device and the person.
+///
+/// The recorder (Recorder) stores the result afterwards.
 #include <atomic>
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "haptel/config/calibration.hpp"
-#include "haptel/config/cockpit.hpp"
 #include "haptel/config/device.hpp"
-#include "haptel/config/gesture.hpp"
 #include "haptel/config/gravity_grid.hpp"
 #include "haptel/config/physics.hpp"
-#include "haptel/config/scene.hpp"
 #include "haptel/config/run.hpp"
+#include "haptel/config/scene.hpp"
 #include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"
+#include "haptel/mediator/interface_catalog.hpp"
+#include "haptel/mediator/interface_set.hpp"
 #include "haptel/mediator/recorder.hpp"
 
 namespace haptel::mediator {
+
+/// What the operator sees: nothing, a window, or an offscreen render (for
+/// the MP4 only).
+enum class ViewKind { kNone, kWindow, kOffscreen };
 
 struct SessionSetup {
   RunConfig run;
   TrackConfig track;
   VehicleConfig vehicle;
-  /// The interface: a cockpit when set, otherwise the gesture interface.
-  GestureConfig gesture;
-  std::optional<CockpitConfig> cockpit;
-  /// The physics world, used only when the interface's controls or the
+  /// The run's interfaces in F1–F6 order, and the one it starts with.
+  std::vector<InterfaceSpec> interfaces;
+  int start_interface = 0;
+  /// The physics world, used only when an interface's controls or the
   /// scene have bodies.
   PhysicsConfig physics;
   /// The haptic scene the hands can touch (none: nothing to touch).
   std::optional<Scene> scene;
   DeviceConfig device;
-  /// How the device's units map to SI (from device.calibration, or measured
-  /// at start-up for the sim device when it has no file).
-  DeviceCalibration calibration;
+  /// From DeviceCalibrationFor (nullopt: the sim calibrates itself at start).
+  std::optional<DeviceCalibration> calibration;
   /// Gravity compensation grid (from device.gravity; empty: none).
   std::optional<GravityGridData> gravity;
   /// haptel-vehicle to spawn; empty: the vehicle runs elsewhere, do not spawn.
@@ -49,17 +60,35 @@ struct SessionSetup {
   bool progress = true;  ///< progress lines on stderr
   /// Record the device's readings here for the `replay` driver (empty: none).
   std::filesystem::path trace;
+  /// "auto" (the simulated driver; needs the sim device) or "person".
+  std::string operator_kind = "auto";
+  /// End the run after this long, outcome "time limit" (0: no limit).
+  double time_limit_s = 0.0;
+  ViewKind view = ViewKind::kNone;
+  /// The operator's view as H.264 MP4 (empty: none; needs a view).
+  std::filesystem::path record;
 };
 
-enum class Outcome { kCompleted, kLapCap, kVehicleLost, kVehicleDidNotStart, kInterrupted };
+enum class Outcome {
+  kCompleted,
+  kLapCap,
+  kTimeLimit,
+  kVehicleLost,
+  kVehicleDidNotStart,
+  kDeviceLost,
+  kAborted,      ///< the person closed the window or lost their controller
+  kInterrupted,  ///< SIGINT / SIGTERM
+};
 std::string ToString(Outcome outcome);
+/// The process exit code for an outcome: 0 completed, 3 lost vehicle or device, 1 otherwise.
+int ExitCode(Outcome outcome);
 
 struct SessionResult {
   Outcome outcome = Outcome::kInterrupted;
   std::string message;  ///< one line: why it ended
   RunRecord record;     ///< everything measured, ready for the recorder
   uint64_t servo_overruns = 0;
-  double lost_detect_s = 0.0;  ///< vehicle lost: last state -> detection
+  double lost_detect_s = 0.0;  ///< vehicle or device lost: last sign of life -> detection
   /// The physics thread, when there was one (rate 0 otherwise).
   double physics_rate_hz = 0.0;
   double physics_period_p99_us = 0.0;
@@ -69,9 +98,28 @@ struct SessionResult {
   /// Seconds from the start until the operator's hands held the controls
   /// (0 when there was nothing to grasp; negative if they never did).
   double grasp_s = 0.0;
+  double video_to_screen_ms_p99 = 0.0;
+  /// Until the recorder holds them (RunRecord): the figures a person's run adds.
+  std::string operator_kind;
+  std::string device;
+  double distance_m = 0.0;
+  std::vector<SwitchRecord> switches;
+  struct PathPoint {
+    double t_s, x, y, speed;
+  };
+  struct ContactPoint {
+    double t_s, x, y;
+  };
+  std::vector<PathPoint> path;
+  std::vector<ContactPoint> contacts;
+  double view_fps = 0.0;
+  double view_frame_p99_ms = 0.0;
+  double video_to_screen_ms_p50 = 0.0;
 };
 
-/// Runs one lap (or until the cap, a lost vehicle or `interrupted`).
+/// Runs one lap (or until the cap, the time limit, a lost vehicle or device,
+/// the person's abort, or `interrupted`). Throws ConfigError /
+/// std::runtime_error for parts that cannot be set up (before anything moves).
 SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& interrupted);
 
 }  // namespace haptel::mediator

@@ -29,6 +29,13 @@ struct VideoStats {
   double latency_ms_p99 = 0.0;
 };
 
+/// The latest decoded image, shared (never copied) with whoever shows it.
+struct LatestFrame {
+  std::shared_ptr<const cv::Mat> image;  ///< BGR; null before the first frame
+  uint64_t id = 0;                       ///< grows with each decoded frame
+  int64_t capture_wall_ns = 0;           ///< the vehicle's capture stamp
+};
+
 class VideoReceiver {
  public:
   /// Subscribes to `topic` on `participant`. With `decode` false frames are
@@ -39,6 +46,8 @@ class VideoReceiver {
   VideoStats Stats() const;
   /// Copy of the latest decoded image (empty before the first).
   cv::Mat Screen() const;
+  /// The latest decoded image without copying it: a short lock, any thread.
+  LatestFrame Latest() const;
 
  private:
   void OnFrame(const msg::VideoFrame& frame);
@@ -51,7 +60,7 @@ class VideoReceiver {
   int64_t pending_capture_ns_ = 0;
   bool has_pending_ = false;
   bool stop_ = false;
-  cv::Mat screen_;
+  LatestFrame latest_;
   video::JpegDecoder decoder_;
   Histogram latency_{100.0, 5000};  // µs bins up to 500 ms
   uint64_t frames_ = 0;

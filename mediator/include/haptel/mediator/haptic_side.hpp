@@ -1,0 +1,87 @@
+#pragma once
+/// @file The haptic device part of a session: the device (sim, udp or
+/// replay), its calibration, the HAL, gravity compensation, the servo loop
+/// and the optional trace of its readings.
+///
+/// Calibration policy (DeviceCalibrationFor): a real device (`udp`) uses the
+/// file `haptel calibrate` wrote, named by the device file's `calibration:`
+/// key, and is never calibrated automatically; a missing file, or one
+/// measured on another device, is an error naming the command that makes
+/// one. The `sim` device without a file is calibrated at start-up, unattended.
+/// A `replay` device uses its file's calibration or the one recorded beside
+/// the trace (`<trace>.calibration.yaml`, written by `haptel run --trace`).
+#include <filesystem>
+#include <memory>
+#include <optional>
+
+#include "haptel/config/calibration.hpp"
+#include "haptel/config/device.hpp"
+#include "haptel/config/gravity_grid.hpp"
+#include "haptel/config/run.hpp"
+#include "haptel/core/loop_meter.hpp"
+#include "haptel/haptics/device.hpp"
+#include "haptel/haptics/hal.hpp"
+
+namespace haptel::haptics {
+class GravityGrid;
+class ReplayDevice;
+class ServoLoop;
+class SimDevice;
+class TraceWriter;
+}  // namespace haptel::haptics
+
+namespace haptel::mediator {
+
+/// The companion calibration file of a trace.
+std::filesystem::path TraceCalibrationFile(const std::filesystem::path& trace);
+
+/// The calibration a session must use for `device`, or nullopt when the sim
+/// device is to be calibrated at start-up. Throws ConfigError as described
+/// above (naming the device file and `haptel calibrate` or `haptel run --trace`).
+std::optional<DeviceCalibration> DeviceCalibrationFor(const DeviceConfig& device);
+
+class HapticSide {
+ public:
+  /// Opens the device and settles its calibration (see DeviceCalibrationFor;
+  /// `calibration` is its answer). `muscle` drives the sim's simulated
+  /// operator. `trace`: record the device's readings there (empty: none),
+  /// with the calibration beside it; recording starts at StartTrace.
+  HapticSide(const DeviceConfig& device, const std::optional<DeviceCalibration>& calibration,
+             const std::optional<GravityGridData>& gravity, const OperatorConfig& muscle,
+             const std::filesystem::path& trace);
+  ~HapticSide();
+  HapticSide(const HapticSide&) = delete;
+  HapticSide& operator=(const HapticSide&) = delete;
+
+  /// Starts the servo loop; with `progress`, says once what real-time
+  /// privileges it could not get.
+  void Start(bool progress);
+  /// Forces to zero, then stops the servo loop. Safe to call twice.
+  void Stop();
+  /// The vehicle answered: the trace starts recording and a replay starts playing.
+  void OnVehicleUp();
+
+  haptics::Hal& hal() { return *hal_; }
+  /// The simulated device, for the automatic operator (null for others).
+  haptics::SimDevice* sim() { return sim_; }
+  /// A replay that has played its whole trace.
+  bool replay_finished() const;
+  /// An arm the device has (has_side) stopped answering: forces are zero.
+  bool lost() const;
+  LoopStats Stats() const;
+  const DeviceConfig& config() const { return config_; }
+
+ private:
+  DeviceConfig config_;
+  std::unique_ptr<haptics::Device> device_;
+  haptics::SimDevice* sim_ = nullptr;
+  haptics::ReplayDevice* replay_ = nullptr;
+  DeviceCalibration calibration_;
+  std::unique_ptr<haptics::Hal> hal_;
+  std::unique_ptr<haptics::GravityGrid> gravity_;
+  std::unique_ptr<haptics::TraceWriter> trace_;
+  std::unique_ptr<haptics::ServoLoop> servo_;
+  bool stopped_ = false;
+};
+
+}  // namespace haptel::mediator

@@ -1,0 +1,99 @@
+#pragma once
+/// @file The session's link to its vehicle: the vehicle process it spawns
+/// (or none, for a vehicle that runs elsewhere), the DDS participant, the
+/// command writer, the state inbox and the video receiver.
+///
+/// Threads: DDS callbacks push states into the inbox (a short lock) and
+/// frames into the video receiver; the session thread drains the inbox,
+/// sends commands and asks whether the vehicle is still there.
+#include <cstdint>
+#include <deque>
+#include <filesystem>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include "haptel/config/link.hpp"
+#include "haptel/config/track.hpp"
+#include "haptel/config/vehicle.hpp"
+#include "haptel/core/child_process.hpp"
+#include "haptel/core/histogram.hpp"
+#include "haptel/link/topic.hpp"
+#include "haptel/mediator/video_receiver.hpp"
+
+namespace haptel::mediator {
+
+/// Vehicle states as they arrive (DDS thread), drained by the session loop.
+/// Measures the command round trip from the echo each state carries.
+class StateInbox {
+ public:
+  struct Entry {
+    msg::VehicleState state;
+    int64_t received_ns;
+  };
+  void Push(const msg::VehicleState& s);
+  std::deque<Entry> Drain();
+  int64_t last_received_ns() const;
+  /// Round trip of echoed commands minus their wait at the vehicle, µs
+  /// (the histogram is safe to read while the DDS thread records).
+  const Histogram& Rtt() const { return rtt_; }
+
+ private:
+  mutable std::mutex mutex_;
+  std::deque<Entry> entries_;
+  int64_t last_received_ns_ = 0;
+  uint64_t last_echo_seq_ = 0;
+  Histogram rtt_{10.0, 20000};  // µs bins up to 200 ms
+};
+
+struct VehicleLinkOptions {
+  VehicleConfig vehicle;
+  LinkConfig link;
+  /// The track the spawned simulator drives on.
+  std::filesystem::path track_file;
+  /// haptel-vehicle to spawn; empty: the vehicle runs elsewhere.
+  std::filesystem::path program;
+  /// Decode the video (only when something shows or records it).
+  bool decode_video = true;
+};
+
+class VehicleLink {
+ public:
+  /// Spawns the vehicle (if a program is given) and joins the DDS domain.
+  /// Throws std::runtime_error when either cannot be done.
+  explicit VehicleLink(const VehicleLinkOptions& options);
+  /// Stops the vehicle: a zero command, then the spawned process ends.
+  ~VehicleLink();
+  VehicleLink(const VehicleLink&) = delete;
+  VehicleLink& operator=(const VehicleLink&) = delete;
+
+  /// Sends a motor command (each in [-1, 1]) stamped now.
+  void Send(double left, double right);
+  /// Zero command, then ends the spawned process. Safe to call twice.
+  void Stop();
+
+  StateInbox& inbox() { return inbox_; }
+  const VideoReceiver& video() const { return *video_; }
+  /// False once a spawned vehicle process has exited (always true for a
+  /// vehicle that runs elsewhere).
+  bool ProcessAlive();
+  /// The spawned process's pid (0: none) and how it ended.
+  int pid() const;
+  std::string ExitDescription() const;
+  const std::string& name() const { return options_.vehicle.name; }
+  int domain() const { return options_.link.domain_id; }
+
+ private:
+  VehicleLinkOptions options_;
+  std::unique_ptr<ChildProcess> process_;
+  StateInbox inbox_;
+  std::unique_ptr<link::Participant> participant_;
+  std::unique_ptr<link::CommandWriter> commands_;
+  std::unique_ptr<link::StateReader> states_;
+  std::unique_ptr<VideoReceiver> video_;
+  msg::DriveCommand command_;
+  uint64_t seq_ = 0;
+  bool stopped_ = false;
+};
+
+}  // namespace haptel::mediator

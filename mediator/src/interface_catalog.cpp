@@ -1,0 +1,41 @@
+#include "haptel/mediator/interface_catalog.hpp"
+
+#include <stdexcept>
+
+#include "haptel/interfaces/cockpit.hpp"
+#include "haptel/interfaces/gesture.hpp"
+
+namespace haptel::mediator {
+
+std::array<bool, 2> InterfaceSpec::hands() const {
+  if (is_cockpit()) return {true, true};
+  if (std::holds_alternative<GestureConfig>(config)) return {false, true};
+  return {false, false};
+}
+
+double InterfaceSpec::command_rate_hz() const {
+  return std::visit([](const auto& c) { return c.command_rate_hz; }, config);
+}
+
+InterfaceSpec LoadInterfaceSpec(const RunConfig& run, const std::string& name) {
+  const std::filesystem::path file = InterfaceFile(run, name);
+  const std::string kind = InterfaceName(file);
+  InterfaceSpec spec;
+  spec.name = kind;
+  if (kind.rfind("cockpit", 0) == 0) {
+    spec.config = LoadCockpit(file);
+  } else {
+    spec.config = LoadGesture(file);
+  }
+  return spec;
+}
+
+std::unique_ptr<interfaces::MediatorInterface> MakeInterface(const InterfaceSpec& spec, const InterfaceParts& parts) {
+  if (const auto* cockpit = std::get_if<CockpitConfig>(&spec.config)) {
+    if (parts.controls == nullptr) throw std::invalid_argument("interface '" + spec.name + "' needs its controls");
+    return std::make_unique<interfaces::CockpitInterface>(*cockpit, *parts.controls);
+  }
+  return std::make_unique<interfaces::GestureInterface>(std::get<GestureConfig>(spec.config));
+}
+
+}  // namespace haptel::mediator

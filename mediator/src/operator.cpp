@@ -1,0 +1,41 @@
+#include "haptel/mediator/operator.hpp"
+
+#include "haptel/haptics/sim_device.hpp"
+
+namespace haptel::mediator {
+namespace {
+
+/// The simulated person holds a hand as `goal` says.
+void ActOn(haptics::SimDevice& device, haptics::Side side, const interfaces::HandGoal& goal) {
+  device.SetOperatorTarget(side, goal.position);
+  device.SetWristOrientation(side, goal.orientation);
+  device.SetGlovePosture(side, goal.glove);
+}
+
+}  // namespace
+
+AutomaticOperator::AutomaticOperator(const Track& track, const OperatorConfig& config, const DriveConfig& drive,
+                                     haptics::SimDevice& device)
+    : driver_(track, config, drive), device_(device) {}
+
+void AutomaticOperator::Prepare(const interfaces::MediatorInterface& interface) {
+  const interfaces::HandTargets neutral = interface.HandTargetsFor({});
+  for (int i = 0; i < haptics::kSides; ++i) {
+    if (!neutral[i]) continue;
+    interfaces::HandGoal start = *neutral[i];
+    for (int k = 0; k < 3; ++k) start.position[k] += start.approach[k];
+    start.glove = {};
+    const auto side = static_cast<haptics::Side>(i);
+    device_.Place(side, start.position);
+    ActOn(device_, side, start);
+  }
+}
+
+void AutomaticOperator::Act(double t_s, const interfaces::MediatorInterface& interface) {
+  const interfaces::HandTargets targets = driver_.Act(t_s, interface);
+  for (int i = 0; i < haptics::kSides; ++i) {
+    if (targets[i]) ActOn(device_, static_cast<haptics::Side>(i), *targets[i]);
+  }
+}
+
+}  // namespace haptel::mediator

@@ -1,0 +1,71 @@
+#include "haptel/mediator/vehicle_link.hpp"
+
+#include "haptel/core/clock.hpp"
+
+namespace haptel::mediator {
+
+void StateInbox::Push(const msg::VehicleState& s) {
+  const int64_t now = MonotonicNs();
+  std::lock_guard lock(mutex_);
+  // Round trip of the command this state echoes, minus the time it waited
+  // at the vehicle: no shared clock needed.
+  if (s.last_command_seq() != 0 && s.last_command_seq() != last_echo_seq_) {
+    last_echo_seq_ = s.last_command_seq();
+    rtt_.Record(static_cast<double>(now - s.last_command_sent_ns() - s.last_command_age_ns()) * 1e-3);
+  }
+  entries_.push_back({s, now});
+  last_received_ns_ = now;
+}
+
+std::deque<StateInbox::Entry> StateInbox::Drain() {
+  std::lock_guard lock(mutex_);
+  std::deque<Entry> out;
+  out.swap(entries_);
+  return out;
+}
+
+int64_t StateInbox::last_received_ns() const {
+  std::lock_guard lock(mutex_);
+  return last_received_ns_;
+}
+
+
+VehicleLink::VehicleLink(const VehicleLinkOptions& options) : options_(options) {
+  if (!options_.program.empty()) {
+    process_ = std::make_unique<ChildProcess>(
+        options_.program.string(),
+        std::vector<std::string>{"--config", options_.vehicle.file.string(), "--track", options_.track_file.string(),
+                                 "--name", options_.vehicle.name, "--domain", std::to_string(options_.link.domain_id)});
+  }
+  participant_ = std::make_unique<link::Participant>(options_.link, "haptel-mediator");
+  commands_ = std::make_unique<link::CommandWriter>(*participant_, link::TopicName(name(), "command"),
+                                                    link::Profile::kCommand);
+  states_ = std::make_unique<link::StateReader>(*participant_, link::TopicName(name(), "state"), link::Profile::kState,
+                                                [this](const msg::VehicleState& s) { inbox_.Push(s); });
+  video_ = std::make_unique<VideoReceiver>(*participant_, link::TopicName(name(), "video"), options_.decode_video);
+}
+
+VehicleLink::~VehicleLink() { Stop(); }
+
+void VehicleLink::Send(double left, double right) {
+  command_.seq(++seq_);
+  command_.left(static_cast<float>(left));
+  command_.right(static_cast<float>(right));
+  command_.sent_ns(MonotonicNs());
+  commands_->Write(command_);
+}
+
+void VehicleLink::Stop() {
+  if (stopped_) return;
+  stopped_ = true;
+  Send(0.0, 0.0);
+  if (process_) process_->Terminate();
+}
+
+bool VehicleLink::ProcessAlive() { return !process_ || process_->Alive(); }
+
+int VehicleLink::pid() const { return process_ ? process_->pid() : 0; }
+
+std::string VehicleLink::ExitDescription() const { return process_ ? process_->ExitDescription() : "running elsewhere"; }
+
+}  // namespace haptel::mediator
