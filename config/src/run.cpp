@@ -21,8 +21,8 @@ RunConfig LoadRun(const std::filesystem::path& file) {
   r.physics = dir / root.String("physics", "physics.yaml");
   if (const std::string scene = root.String("scene", ""); !scene.empty()) r.scene = dir / scene;
   r.interface = root.String("interface", r.interface);
-  r.interfaces = root.Strings("interfaces", r.interfaces);
-  if (r.interfaces.empty() || r.interfaces.size() > 6) root.Fail("interfaces", "a list of 1 to 6 interface names (F1-F6)");
+  r.interfaces = root.Strings("switchable_interfaces", r.interfaces);
+  if (r.interfaces.empty() || r.interfaces.size() > 6) root.Fail("switchable_interfaces", "a list of 1 to 6 interface names (F1-F6)");
   r.interfaces_dir = dir / root.String("interfaces_dir", "interfaces");
   r.database = root.String("database", r.database.string());
   r.vehicle_timeout_s = root.Number("vehicle_timeout_s", r.vehicle_timeout_s, 0.05, 60.0);

@@ -212,6 +212,11 @@ TEST_CASE("Shipped run config loads and resolves its paths", "[config][shipped]"
   CHECK(std::filesystem::exists(r.device));
   CHECK(r.link.domain_id == static_cast<int>(NumberIn(text, "domain_id")));
   CHECK(r.link.command_deadline_s == NumberIn(text, "command_deadline_s"));
+  std::string keys;
+  for (const auto& n : r.interfaces) keys += (keys.empty() ? "" : ", ") + n;
+  CHECK("[" + keys + "]" == ValueText(text, "switchable_interfaces"));
+  CHECK(r.switch_ramp_s == NumberIn(text, "switch_ramp_s"));
+  CHECK(r.person_time_limit_s == NumberIn(text, "person_time_limit_s"));
   REQUIRE(r.link.interfaces.size() == 1);
   CHECK("[" + r.link.interfaces[0] + "]" == ValueText(text, "interfaces"));
   REQUIRE(r.link.peers.size() == 1);
