@@ -1,0 +1,173 @@
+// End to end, the person's side of `haptel run`: a recorded device replayed
+// through the same interface, a UDP device behind real haptel-device-server
+// processes, and the bad input a person can give.
+#include <catch2/catch.hpp>
+#include <signal.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <regex>
+
+#include "child.hpp"
+#include "haptel/config/calibration.hpp"
+#include "test_env.hpp"
+
+using namespace haptel;
+using haptel::test::Child;
+using haptel::test::JsonField;
+
+namespace {
+
+std::string Bin(const std::string& name) { return (test::BinDir() / name).string(); }
+
+int OneLine(const std::string& text) { return static_cast<int>(std::count(text.begin(), text.end(), '\n')); }
+
+/// A haptel-device-server arm on a free port; returns the port it serves on.
+int StartArm(Child& server) {
+  int port = 0;
+  REQUIRE(test::WaitFor([&] {
+    server.Pump();
+    std::smatch m;
+    static const std::regex served(R"(on [^ ]*:(\d+))");
+    if (!std::regex_search(server.out(), m, served)) return false;
+    port = std::stoi(m[1]);
+    return true;
+  }, 30.0));
+  return port;
+}
+
+/// A udp device file for two local arms, naming `calibration` (empty: none).
+std::filesystem::path UdpDeviceFile(const std::filesystem::path& dir, int left, int right,
+                                    const std::filesystem::path& calibration) {
+  const auto file = dir / "udp.yaml";
+  std::ofstream out(file);
+  out << "name: udp\ndriver: udp\nsides: [left, right]\n";
+  if (!calibration.empty()) out << "calibration: " << calibration.string() << "\n";
+  out << "servo: {two_sided: true, slow_channel_divider: 6}\n"
+      << "udp:\n  left: {host: 127.0.0.1, port: " << left << "}\n  right: {host: 127.0.0.1, port: " << right
+      << "}\n  timeout_s: 0.002\n  retries: 1\n  lost_after_s: 0.1\n";
+  return file;
+}
+
+std::filesystem::path Calibration(const std::filesystem::path& dir, const std::string& device) {
+  DeviceCalibration c;
+  c.device = device;
+  const auto file = dir / ("calibration-" + device + ".yaml");
+  SaveCalibration(file, c);
+  return file;
+}
+
+}  // namespace
+
+TEST_CASE("a recorded device replayed through the same interface reproduces the lap") {
+  const auto dir = test::ScratchDir("e2e-replay");
+  const auto trace = dir / "lap.trace";
+  const std::string domain = std::to_string(test::UniqueDomain(21));
+  Child recorded({Bin("haptel"), "run", "--operator", "auto", "--view", "none", "--track",
+                  "config/tracks/test-short.yaml", "--json", "--quiet", "--domain", domain, "--database",
+                  (dir / "runs.db").string(), "--vehicle-timeout", "5", "--trace", trace.string()});
+  REQUIRE(recorded.Wait(120.0) == 0);
+  const std::string first = recorded.LastLine();
+  REQUIRE(std::filesystem::exists(trace.string() + ".calibration.yaml"));
+
+  Child replayed({Bin("haptel"), "run", "--operator", "person", "--view", "none", "--interface", "gesture",
+                  "--device", "config/devices/replay.yaml", "--trace-in", trace.string(), "--track",
+                  "config/tracks/test-short.yaml", "--json", "--quiet", "--domain", domain, "--database",
+                  (dir / "runs.db").string(), "--vehicle-timeout", "5"});
+  const int code = replayed.Wait(120.0);
+  INFO("recorded: " << first << "\nreplayed: " << replayed.out() << "\n" << replayed.err());
+  REQUIRE(code == 0);
+  const std::string second = replayed.LastLine();
+  CHECK(JsonField(second, "operator") == "person");
+  CHECK(JsonField(second, "device") == "replay");
+  CHECK(JsonField(second, "gates_passed") == JsonField(first, "gates_passed"));
+  CHECK(JsonField(second, "gates_missed") == JsonField(first, "gates_missed"));
+  const double lap_recorded = std::stod(JsonField(first, "lap_time_s"));
+  const double lap_replayed = std::stod(JsonField(second, "lap_time_s"));
+  CHECK(std::abs(lap_replayed - lap_recorded) <= 0.02 * lap_recorded);
+  CHECK(std::stod(JsonField(second, "distance_m")) > 1.0);
+}
+
+TEST_CASE("a person's run on a UDP device behind two haptel-device-server processes; a lost arm ends it safely") {
+  const auto dir = test::ScratchDir("e2e-udp");
+  Child left({Bin("haptel-device-server"), "--side", "left", "--port", "0"});
+  Child right({Bin("haptel-device-server"), "--side", "right", "--port", "0"});
+  const int left_port = StartArm(left);
+  const int right_port = StartArm(right);
+  const auto device = UdpDeviceFile(dir, left_port, right_port, Calibration(dir, "udp"));
+  const std::string domain = std::to_string(test::UniqueDomain(22));
+  const std::vector<std::string> base{Bin("haptel"), "run", "--operator", "person", "--view", "none",
+                                      "--interface", "gesture", "--device", device.string(), "--track",
+                                      "config/tracks/test-short.yaml", "--json", "--domain", domain,
+                                      "--database", (dir / "runs.db").string(), "--vehicle-timeout", "5"};
+  SECTION("the run holds the arms until its time limit") {
+    auto argv = base;
+    argv.insert(argv.end(), {"--time-limit", "3", "--quiet"});
+    Child run(argv);
+    const int code = run.Wait(90.0);
+    INFO(run.out() << run.err());
+    CHECK(code == 1);  // not completed: nobody drove
+    const std::string json = run.LastLine();
+    CHECK(JsonField(json, "outcome") == "time limit");
+    CHECK(JsonField(json, "device") == "udp");
+    CHECK(std::stod(JsonField(json, "servo_rate_hz")) > 500.0);
+  }
+  SECTION("an arm that stops answering: forces zeroed, vehicle stopped, exit 3") {
+    Child run(base);
+    REQUIRE(test::WaitFor([&] {
+      run.Pump();
+      return run.err().find("lap") != std::string::npos;  // the first progress line: running
+    }, 60.0));
+    kill(right.pid(), SIGKILL);
+    const int code = run.Wait(30.0);
+    INFO(run.out() << run.err());
+    CHECK(code == 3);
+    CHECK(JsonField(run.LastLine(), "outcome") == "device lost");
+    CHECK(run.err().find("device 'udp' lost") != std::string::npos);
+    CHECK(run.err().find("forces zeroed") != std::string::npos);
+  }
+}
+
+TEST_CASE("a person's bad input exits 2 with one line naming the fix") {
+  const auto dir = test::ScratchDir("e2e-person-bad");
+  SECTION("a window without a display suggests recording") {
+    unsetenv("DISPLAY");
+    Child c({Bin("haptel"), "run", "--view", "window"});
+    CHECK(c.Wait(30.0) == 2);
+    CHECK(c.err().find("no display") != std::string::npos);
+    CHECK(c.err().find("--record") != std::string::npos);
+    CHECK(OneLine(c.err()) == 1);
+  }
+  SECTION("a real device without a calibration names the command that makes one") {
+    const auto device = UdpDeviceFile(dir, 47001, 47002, "");
+    Child c({Bin("haptel"), "run", "--operator", "person", "--view", "none", "--device", device.string()});
+    CHECK(c.Wait(30.0) == 2);
+    CHECK(c.err().find("haptel calibrate") != std::string::npos);
+    CHECK(c.err().find("udp.yaml") != std::string::npos);
+    CHECK(OneLine(c.err()) == 1);
+  }
+  SECTION("a calibration measured on another device is stale") {
+    const auto device = UdpDeviceFile(dir, 47001, 47002, Calibration(dir, "other-arms"));
+    Child c({Bin("haptel"), "run", "--operator", "person", "--view", "none", "--device", device.string()});
+    CHECK(c.Wait(30.0) == 2);
+    CHECK(c.err().find("stale") != std::string::npos);
+    CHECK(c.err().find("haptel calibrate") != std::string::npos);
+  }
+  SECTION("the automatic operator cannot move a real device") {
+    const auto device = UdpDeviceFile(dir, 47001, 47002, Calibration(dir, "udp"));
+    Child c({Bin("haptel"), "run", "--operator", "auto", "--view", "none", "--device", device.string()});
+    CHECK(c.Wait(30.0) == 2);
+    CHECK(c.err().find("--operator person") != std::string::npos);
+  }
+  SECTION("a replay without its trace names the command that records one") {
+    Child c({Bin("haptel"), "run", "--operator", "person", "--view", "none", "--device",
+             "config/devices/replay.yaml", "--trace-in", (dir / "none.trace").string()});
+    CHECK(c.Wait(30.0) == 2);
+    CHECK(c.err().find("haptel run --trace") != std::string::npos);
+  }
+  SECTION("an unknown operator") {
+    Child c({Bin("haptel"), "run", "--operator", "robot"});
+    CHECK(c.Wait(30.0) == 2);
+    CHECK(c.err().find("auto or person") != std::string::npos);
+  }
+}
