@@ -52,13 +52,15 @@ std::vector<bool> InterfacesToBuild(const SessionSetup& setup, bool can_switch) 
 }
 
 /// Progress lines every 2 s on stderr.
-void LogProgress(double t, const LapTimer& lap, const VehicleLink& link, double rtt_p50_ms,
+void LogProgress(double t, const LapTimer& lap, const VehicleLink& link, double speed, double distance_m,
                  const interfaces::MediatorInterface& interface, const interfaces::MotorCommand& motors) {
   const VideoStats v = link.video().Stats();
-  char line[220];
-  std::snprintf(line, sizeof line, "%6.1f s  %s  lap %5.1f s  gates %d/%d  obstacles %d  rtt p50 %.2f ms  video %.1f fps",
+  char line[260];
+  std::snprintf(line, sizeof line,
+                "%6.1f s  %s  lap %5.1f s  gates %d/%d  obstacles %d  speed %.2f m/s  distance %.2f m  rtt p50 %.2f ms  "
+                "video %.1f fps",
                 t, interface.name().c_str(), lap.lap_time_s(), lap.next_gate(), lap.gates_total(),
-                lap.obstacles_touched(), rtt_p50_ms, v.fps);
+                lap.obstacles_touched(), speed, distance_m, link.inbox().Rtt().Percentile(0.5) * 1e-3, v.fps);
   log::Info(line);
   if (const auto* cockpit = dynamic_cast<const interfaces::CockpitInterface*>(&interface)) {
     const interfaces::CockpitControls& c = cockpit->controls();
@@ -289,7 +291,7 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
     }
     if (setup.progress && now >= next_progress_ns) {
       next_progress_ns += SToNs(2.0);
-      LogProgress(t, lap, vehicle, vehicle.inbox().Rtt().Percentile(0.5) * 1e-3, interfaces.current(), motors);
+      LogProgress(t, lap, vehicle, feedback.speed, result.distance_m, interfaces.current(), motors);
     }
   }
 

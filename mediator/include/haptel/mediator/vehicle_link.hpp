@@ -73,6 +73,7 @@ class VehicleLink {
   void Stop();
 
   StateInbox& inbox() { return inbox_; }
+  const StateInbox& inbox() const { return inbox_; }
   const VideoReceiver& video() const { return *video_; }
   /// False once a spawned vehicle process has exited (always true for a
   /// vehicle that runs elsewhere).
