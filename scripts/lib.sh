@@ -10,6 +10,7 @@ HAPTEL_PACKAGES=(
   libeigen3-dev libbullet-dev
   libfastrtps-dev libfastcdr-dev fastddsgen
   libopencv-dev libyaml-cpp-dev catch2 libsqlite3-dev sqlite3
+  libsdl2-dev
 )
 
 haptel_log() { echo "[haptel] $*" >&2; }

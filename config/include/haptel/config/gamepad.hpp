@@ -1,0 +1,31 @@
+#pragma once
+/// @file The gamepad interface: a game controller's sticks and triggers.
+#include <filesystem>
+#include <string>
+
+namespace haptel {
+
+/// Which stick steers.
+enum class GamepadTurnAxis { kLeftX, kRightX };
+
+/// The button that must be held to drive (teleop_twist_joy's enable_button).
+enum class GamepadDeadman { kNone, kA, kB, kX, kY, kLeftShoulder, kRightShoulder };
+
+struct GamepadConfig {
+  std::filesystem::path file;
+  std::string name = "gamepad";
+  /// Radial dead zone of each stick, as a fraction of full deflection; past
+  /// it the output is rescaled so it starts from 0 (no jump at the edge).
+  double dead_zone = 0.12;
+  /// A trigger pulled less than this fraction counts as released.
+  double trigger_dead_zone = 0.05;
+  GamepadTurnAxis turn_axis = GamepadTurnAxis::kLeftX;
+  double turn_share = 0.7;  ///< how much of the motor range turning may take
+  GamepadDeadman deadman = GamepadDeadman::kLeftShoulder;
+  double command_rate_hz = 50.0;
+};
+
+/// Strict: unknown keys are errors naming the file, the key and the line.
+GamepadConfig LoadGamepad(const std::filesystem::path& file);
+
+}  // namespace haptel

@@ -1,0 +1,25 @@
+#pragma once
+/// @file The keyboard interface: the thesis's practice-lap remote control
+/// (ch. 8.1.2), a PC whose arrow keys step the throttle and the steering.
+#include <filesystem>
+#include <string>
+
+namespace haptel {
+
+struct KeyboardConfig {
+  std::filesystem::path file;
+  std::string name = "keyboard";
+  /// A held up/down/left/right key steps its level again this often, s. The
+  /// first repeat comes `repeat_s` after the press, like a typematic key.
+  double repeat_s = 0.12;
+  /// Releasing both throttle (both steering) keys returns the throttle
+  /// (steering) to level 0; false keeps the level, as a real R/C remote trim.
+  bool release_to_zero = true;
+  double turn_share = 0.7;  ///< how much of the motor range turning may take
+  double command_rate_hz = 50.0;
+};
+
+/// Strict: unknown keys are errors naming the file, the key and the line.
+KeyboardConfig LoadKeyboard(const std::filesystem::path& file);
+
+}  // namespace haptel

@@ -1,0 +1,65 @@
+#pragma once
+/// @file The keyboard interface: the thesis's practice-lap remote control
+/// (ch. 8.1.2), a PC whose keyboard works the steering and the throttle.
+///
+/// Throttle and steering are integer levels in −L..+L (L: the vehicle's
+/// drive.speed_levels). Each press of up/down steps the throttle one level,
+/// each press of left/right the steering (left is +: turn > 0 turns left).
+/// Presses are read from InputState's counters, so a press shorter than a
+/// session tick still steps, and the command of that tick carries it. A held
+/// key steps again every `repeat_s`. With `release_to_zero`, a pair of keys
+/// both released returns its level to 0 (the session's next tick); space
+/// sets both levels to 0 at once and holds them there while held.
+///
+/// No hands and no forces: HandTargetsFor is empty, and Update keeps both
+/// force fields disabled in the HAL.
+#include <cstdint>
+
+#include "haptel/config/keyboard.hpp"
+#include "haptel/interfaces/input.hpp"
+#include "haptel/interfaces/interface.hpp"
+
+namespace haptel::interfaces {
+
+class KeyboardInterface final : public MediatorInterface {
+ public:
+  /// Keeps a reference to `input` (it must outlive the interface). Presses
+  /// counted before construction are not replayed. Throws
+  /// std::invalid_argument when speed_levels < 1.
+  KeyboardInterface(const KeyboardConfig& config, const InputBox& input, int speed_levels);
+
+  std::string name() const override { return config_.name; }
+  MotorCommand Update(double t_s, const VehicleFeedback& feedback, haptics::Hal& hal) override;
+  HandTargets HandTargetsFor(const DriveIntent& intent) const override;
+  bool NeedsPhysics() const override { return false; }
+
+  /// Reads one InputState at time `t_s` (s, non-decreasing) and returns the
+  /// command: what Update does, without the HAL.
+  MotorCommand Step(double t_s, const InputState& input);
+
+  int throttle_level() const { return throttle_.level; }
+  int steering_level() const { return steering_.level; }
+  int speed_levels() const { return levels_; }
+
+ private:
+  /// One pair of keys driving one level (up/down, or left/right).
+  struct Axis {
+    int level = 0;
+    uint32_t seen_plus = 0;   ///< press counters already acted on
+    uint32_t seen_minus = 0;
+    int held = 0;             ///< direction held at the last step: +1, −1, 0
+    double next_repeat_s = 0.0;
+  };
+  void StepAxis(Axis& axis, double t_s, bool plus_held, bool minus_held, uint32_t plus_presses,
+                uint32_t minus_presses) const;
+  MotorCommand Command() const;
+
+  KeyboardConfig config_;
+  const InputBox& input_;
+  int levels_;
+  Axis throttle_;
+  Axis steering_;
+  uint32_t seen_stop_ = 0;
+};
+
+}  // namespace haptel::interfaces
