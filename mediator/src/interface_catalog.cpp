@@ -3,7 +3,9 @@
 #include <stdexcept>
 
 #include "haptel/interfaces/cockpit.hpp"
+#include "haptel/interfaces/gamepad.hpp"
 #include "haptel/interfaces/gesture.hpp"
+#include "haptel/interfaces/keyboard.hpp"
 
 namespace haptel::mediator {
 
@@ -24,6 +26,10 @@ InterfaceSpec LoadInterfaceSpec(const RunConfig& run, const std::string& name) {
   spec.name = kind;
   if (kind.rfind("cockpit", 0) == 0) {
     spec.config = LoadCockpit(file);
+  } else if (kind == "keyboard") {
+    spec.config = LoadKeyboard(file);
+  } else if (kind == "gamepad") {
+    spec.config = LoadGamepad(file);
   } else {
     spec.config = LoadGesture(file);
   }
@@ -34,6 +40,14 @@ std::unique_ptr<interfaces::MediatorInterface> MakeInterface(const InterfaceSpec
   if (const auto* cockpit = std::get_if<CockpitConfig>(&spec.config)) {
     if (parts.controls == nullptr) throw std::invalid_argument("interface '" + spec.name + "' needs its controls");
     return std::make_unique<interfaces::CockpitInterface>(*cockpit, *parts.controls);
+  }
+  if (const auto* keyboard = std::get_if<KeyboardConfig>(&spec.config)) {
+    if (parts.input == nullptr) throw std::invalid_argument("interface '" + spec.name + "' needs a person's input");
+    return std::make_unique<interfaces::KeyboardInterface>(*keyboard, *parts.input, parts.speed_levels);
+  }
+  if (const auto* gamepad = std::get_if<GamepadConfig>(&spec.config)) {
+    if (parts.input == nullptr) throw std::invalid_argument("interface '" + spec.name + "' needs a person's input");
+    return std::make_unique<interfaces::GamepadInterface>(*gamepad, *parts.input);
   }
   return std::make_unique<interfaces::GestureInterface>(std::get<GestureConfig>(spec.config));
 }

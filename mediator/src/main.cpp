@@ -204,6 +204,15 @@ int main(int argc, char** argv) {
     }
     setup.start_interface = static_cast<int>(found - names.begin());
     for (const std::string& name : names) setup.interfaces.push_back(LoadInterfaceSpec(setup.run, name));
+    const InterfaceSpec& first = setup.interfaces[static_cast<size_t>(setup.start_interface)];
+    if (first.manual() && !person) {
+      throw UsageError("option --interface " + first.name + ": keys and controllers are a person's; use --operator person");
+    }
+    if (first.is_keyboard() && setup.view != ViewKind::kWindow) {
+      throw UsageError("option --interface keyboard: the keys are read in the view's window, and there is " +
+                       std::string(display ? "none (--view none)" : "no display") +
+                       "; use --view window, or --interface gamepad");
+    }
     if (auto scene = args.Value("scene")) setup.run.scene = *scene;
     if (!setup.run.scene.empty()) setup.scene = LoadSceneFile(setup.run.scene);
     const bool any_physics = std::any_of(setup.interfaces.begin(), setup.interfaces.end(),

@@ -7,7 +7,9 @@
 #include <variant>
 
 #include "haptel/config/cockpit.hpp"
+#include "haptel/config/gamepad.hpp"
 #include "haptel/config/gesture.hpp"
+#include "haptel/config/keyboard.hpp"
 #include "haptel/config/run.hpp"
 #include "haptel/interfaces/input.hpp"
 #include "haptel/interfaces/interface.hpp"
@@ -21,7 +23,7 @@ namespace haptel::mediator {
 /// One interface file, loaded: its config says which interface it is.
 struct InterfaceSpec {
   std::string name;
-  std::variant<GestureConfig, CockpitConfig> config;
+  std::variant<GestureConfig, CockpitConfig, KeyboardConfig, GamepadConfig> config;
 
   bool is_cockpit() const { return std::holds_alternative<CockpitConfig>(config); }
   /// The interface moves proxy hands among bodies (a physics world).
@@ -29,7 +31,9 @@ struct InterfaceSpec {
   /// Hands the interface uses ([left, right]).
   std::array<bool, 2> hands() const;
   /// Driven by a person's keys or controller, not by hands on a device.
-  bool manual() const { return false; }
+  bool manual() const { return is_keyboard() || is_gamepad(); }
+  bool is_keyboard() const { return std::holds_alternative<KeyboardConfig>(config); }
+  bool is_gamepad() const { return std::holds_alternative<GamepadConfig>(config); }
   double command_rate_hz() const;
 };
 
