@@ -1,5 +1,6 @@
 #include "haptel/mediator/haptic_side.hpp"
 
+#include <algorithm>
 #include <sstream>
 
 #include "haptel/config/error.hpp"
@@ -120,6 +121,19 @@ bool HapticSide::lost() const {
     if (config_.sides[i] && hal_->lost(side)) return true;
   }
   return false;
+}
+
+double HapticSide::silent_s() const {
+  const int64_t now = MonotonicNs();
+  double silent = 0.0;
+  for (int i = 0; i < haptics::kSides; ++i) {
+    const auto side = static_cast<haptics::Side>(i);
+    std::array<haptics::TrackerSample, 1> last{};
+    if (config_.sides[i] && hal_->lost(side) && hal_->TrackerHistory(side, last) == 1) {
+      silent = std::max(silent, NsToS(now - last[0].t_ns));
+    }
+  }
+  return silent;
 }
 
 LoopStats HapticSide::Stats() const { return servo_->Stats(); }

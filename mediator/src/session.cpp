@@ -193,7 +193,7 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
     }
     // The device first: a lost arm means no forces, so no driving either.
     if (haptic.lost()) {
-      result.lost_detect_s = haptic.config().udp.lost_after_s;
+      result.lost_detect_s = haptic.silent_s();
       finish(Outcome::kDeviceLost, "haptic device '" + setup.device.name + "' lost: an arm stopped answering");
       break;
     }

@@ -68,6 +68,9 @@ class HapticSide {
   bool replay_finished() const;
   /// An arm the device has (has_side) stopped answering: forces are zero.
   bool lost() const;
+  /// How long the lost arm has been silent: seconds since its newest wrist
+  /// reading (the longest, if both are lost; 0 when none is).
+  double silent_s() const;
   LoopStats Stats() const;
   const DeviceConfig& config() const { return config_; }
 
