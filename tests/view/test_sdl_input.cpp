@@ -153,8 +153,9 @@ TEST_CASE("sdl input: a new sink keeps the counters and drops held keys", "[sdl_
 TEST_CASE("sdl input: events allocate nothing", "[sdl_input][alloc]") {
   InputBox box;
   SdlInput input(box);
-  const SDL_Event events[] = {Down(SDL_SCANCODE_UP), Up(SDL_SCANCODE_UP),   Down(SDL_SCANCODE_A, 0),
-                              Down(SDL_SCANCODE_F2), Up(SDL_SCANCODE_SPACE), Down(SDL_SCANCODE_SPACE)};
+  const SDL_Event events[] = {Down(SDL_SCANCODE_UP),   Up(SDL_SCANCODE_UP),
+                              Down(SDL_SCANCODE_A, 0), Down(SDL_SCANCODE_F2),
+                              Up(SDL_SCANCODE_SPACE),  Down(SDL_SCANCODE_SPACE)};
   const uint64_t before = haptel::test::ThreadAllocations();
   for (int i = 0; i < 1000; ++i) {
     for (const SDL_Event& e : events) input.OnEvent(e);

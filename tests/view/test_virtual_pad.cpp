@@ -26,8 +26,9 @@ class VirtualPad {
  public:
   explicit VirtualPad(InputPump& pump) : pump_(pump) {
     pump_.RunOnPumpThread([this] {
-      const int device = SDL_JoystickAttachVirtual(SDL_JOYSTICK_TYPE_GAMECONTROLLER, SDL_CONTROLLER_AXIS_MAX,
-                                                   SDL_CONTROLLER_BUTTON_MISC1, 0);
+      const int device =
+          SDL_JoystickAttachVirtual(SDL_JOYSTICK_TYPE_GAMECONTROLLER, SDL_CONTROLLER_AXIS_MAX,
+                                    SDL_CONTROLLER_BUTTON_MISC1, 0);
       if (device < 0) return;
       id_ = SDL_JoystickGetDeviceInstanceID(device);
       joystick_ = SDL_JoystickOpen(device);
@@ -38,7 +39,8 @@ class VirtualPad {
 
   /// value in [-1, 1] (sticks) or [0, 1] (triggers), as InputState has it.
   void Axis(SDL_GameControllerAxis axis, double value) {
-    const auto raw = static_cast<Sint16>(std::lround(std::clamp(value, -1.0, 1.0) * 32767.0) - (value <= -1.0));
+    const auto raw =
+        static_cast<Sint16>(std::lround(std::clamp(value, -1.0, 1.0) * 32767.0) - (value <= -1.0));
     pump_.RunOnPumpThread([&] { SDL_JoystickSetVirtualAxis(joystick_, axis, raw); });
   }
   void Button(SDL_GameControllerButton button, bool down) {
@@ -79,8 +81,8 @@ TrackConfig Floor() {
 /// The session's part, in simulated time: the interface's command at 50 Hz,
 /// quantised to the vehicle's levels, the robot stepped at 200 Hz. Returns
 /// how much the heading turned (unwrapped, rad, counter-clockwise +).
-double Drive(GamepadInterface& pad, haptics::Hal& hal, vehicles::SimRobot& robot, const DriveConfig& drive,
-             double& t, double seconds) {
+double Drive(GamepadInterface& pad, haptics::Hal& hal, vehicles::SimRobot& robot,
+             const DriveConfig& drive, double& t, double seconds) {
   double turned = 0.0;
   for (int tick = 0; tick < static_cast<int>(seconds * 50); ++tick, t += 0.02) {
     const MotorCommand m = pad.Update(t, {}, hal);

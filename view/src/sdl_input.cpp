@@ -56,7 +56,8 @@ double SdlInput::AxisValue(int sdl_axis, int16_t raw) {
   // SDL's range is asymmetric (−32768..32767): divide by the positive end
   // and clamp, so both full deflections are exactly ±1.
   const double v = std::clamp(static_cast<double>(raw) / 32767.0, -1.0, 1.0);
-  const bool trigger = sdl_axis == SDL_CONTROLLER_AXIS_TRIGGERLEFT || sdl_axis == SDL_CONTROLLER_AXIS_TRIGGERRIGHT;
+  const bool trigger =
+      sdl_axis == SDL_CONTROLLER_AXIS_TRIGGERLEFT || sdl_axis == SDL_CONTROLLER_AXIS_TRIGGERRIGHT;
   return trigger ? std::max(0.0, v) : v;
 }
 
@@ -69,16 +70,44 @@ void SdlInput::OnKey(const SDL_KeyboardEvent& key, bool down) {
   int which = -1;
   uint32_t InputState::*presses = nullptr;
   switch (key.keysym.scancode) {
-    case SDL_SCANCODE_UP: which = kArrowUp; presses = &InputState::presses_up; break;
-    case SDL_SCANCODE_W: which = kW; presses = &InputState::presses_up; break;
-    case SDL_SCANCODE_DOWN: which = kArrowDown; presses = &InputState::presses_down; break;
-    case SDL_SCANCODE_S: which = kS; presses = &InputState::presses_down; break;
-    case SDL_SCANCODE_LEFT: which = kArrowLeft; presses = &InputState::presses_left; break;
-    case SDL_SCANCODE_A: which = kA; presses = &InputState::presses_left; break;
-    case SDL_SCANCODE_RIGHT: which = kArrowRight; presses = &InputState::presses_right; break;
-    case SDL_SCANCODE_D: which = kD; presses = &InputState::presses_right; break;
-    case SDL_SCANCODE_SPACE: which = kSpace; presses = &InputState::presses_stop; break;
-    default: break;
+    case SDL_SCANCODE_UP:
+      which = kArrowUp;
+      presses = &InputState::presses_up;
+      break;
+    case SDL_SCANCODE_W:
+      which = kW;
+      presses = &InputState::presses_up;
+      break;
+    case SDL_SCANCODE_DOWN:
+      which = kArrowDown;
+      presses = &InputState::presses_down;
+      break;
+    case SDL_SCANCODE_S:
+      which = kS;
+      presses = &InputState::presses_down;
+      break;
+    case SDL_SCANCODE_LEFT:
+      which = kArrowLeft;
+      presses = &InputState::presses_left;
+      break;
+    case SDL_SCANCODE_A:
+      which = kA;
+      presses = &InputState::presses_left;
+      break;
+    case SDL_SCANCODE_RIGHT:
+      which = kArrowRight;
+      presses = &InputState::presses_right;
+      break;
+    case SDL_SCANCODE_D:
+      which = kD;
+      presses = &InputState::presses_right;
+      break;
+    case SDL_SCANCODE_SPACE:
+      which = kSpace;
+      presses = &InputState::presses_stop;
+      break;
+    default:
+      break;
   }
   if (which >= 0) {
     held_[which] = down;
@@ -92,7 +121,8 @@ void SdlInput::OnKey(const SDL_KeyboardEvent& key, bool down) {
     state_.key_stop = held_[kSpace];
     return;
   }
-  if (down && key.repeat == 0 && key.keysym.scancode >= SDL_SCANCODE_F1 && key.keysym.scancode <= SDL_SCANCODE_F6) {
+  if (down && key.repeat == 0 && key.keysym.scancode >= SDL_SCANCODE_F1 &&
+      key.keysym.scancode <= SDL_SCANCODE_F6) {
     state_.interface_request = key.keysym.scancode - SDL_SCANCODE_F1;
     ++state_.interface_requests;
   }

@@ -53,7 +53,18 @@ class SdlInput : public EventSink {
 
  private:
   /// Physical keys that drive; two keys map to each direction.
-  enum Key : int { kArrowUp, kArrowDown, kArrowLeft, kArrowRight, kW, kS, kA, kD, kSpace, kKeyCount };
+  enum Key : int {
+    kArrowUp,
+    kArrowDown,
+    kArrowLeft,
+    kArrowRight,
+    kW,
+    kS,
+    kA,
+    kD,
+    kSpace,
+    kKeyCount
+  };
   void OnKey(const SDL_KeyboardEvent& key, bool down);
   void OnControllerAdded(int device_index);
   void OnControllerRemoved(SDL_JoystickID instance);
