@@ -242,7 +242,8 @@ InputPump::InputPump(interfaces::InputBox& box, double rate_hz) {
   impl_ = std::make_unique<Impl>(box, rate_hz);
   std::promise<std::string> started;
   std::future<std::string> result = started.get_future();
-  impl_->thread = std::thread([this, &started] { impl_->Run(started, polls_); });
+  // The promise moves to the thread: it must outlive its set_value call.
+  impl_->thread = std::thread([this, p = std::move(started)]() mutable { impl_->Run(p, polls_); });
   const std::string error = result.get();
   if (!error.empty()) {
     impl_->thread.join();
