@@ -27,13 +27,20 @@ double TriggerDeadZone(double t, double dz) {
 
 bool DeadmanHeld(const InputState& s, GamepadDeadman d) {
   switch (d) {
-    case GamepadDeadman::kNone: return true;
-    case GamepadDeadman::kA: return Button(s, PadButton::kA);
-    case GamepadDeadman::kB: return Button(s, PadButton::kB);
-    case GamepadDeadman::kX: return Button(s, PadButton::kX);
-    case GamepadDeadman::kY: return Button(s, PadButton::kY);
-    case GamepadDeadman::kLeftShoulder: return Button(s, PadButton::kLeftShoulder);
-    case GamepadDeadman::kRightShoulder: return Button(s, PadButton::kRightShoulder);
+    case GamepadDeadman::kNone:
+      return true;
+    case GamepadDeadman::kA:
+      return Button(s, PadButton::kA);
+    case GamepadDeadman::kB:
+      return Button(s, PadButton::kB);
+    case GamepadDeadman::kX:
+      return Button(s, PadButton::kX);
+    case GamepadDeadman::kY:
+      return Button(s, PadButton::kY);
+    case GamepadDeadman::kLeftShoulder:
+      return Button(s, PadButton::kLeftShoulder);
+    case GamepadDeadman::kRightShoulder:
+      return Button(s, PadButton::kRightShoulder);
   }
   return false;
 }
@@ -43,14 +50,18 @@ bool DeadmanHeld(const InputState& s, GamepadDeadman d) {
 GamepadInterface::GamepadInterface(const GamepadConfig& config, const InputBox& input)
     : config_(config), input_(input), disconnects_at_start_(input.Load().pad_disconnects) {}
 
-bool GamepadInterface::lost() const { return input_.Load().pad_disconnects != disconnects_at_start_; }
+bool GamepadInterface::lost() const {
+  return input_.Load().pad_disconnects != disconnects_at_start_;
+}
 
 DriveIntent GamepadInterface::Intent(const InputState& s) const {
   if (!s.pad_connected || s.pad_disconnects != disconnects_at_start_) return {};
   if (!DeadmanHeld(s, config_.deadman)) return {};
-  const auto left = RadialDeadZone(Axis(s, PadAxis::kLeftX), Axis(s, PadAxis::kLeftY), config_.dead_zone);
-  const double triggers = TriggerDeadZone(Axis(s, PadAxis::kTriggerRight), config_.trigger_dead_zone) -
-                          TriggerDeadZone(Axis(s, PadAxis::kTriggerLeft), config_.trigger_dead_zone);
+  const auto left =
+      RadialDeadZone(Axis(s, PadAxis::kLeftX), Axis(s, PadAxis::kLeftY), config_.dead_zone);
+  const double triggers =
+      TriggerDeadZone(Axis(s, PadAxis::kTriggerRight), config_.trigger_dead_zone) -
+      TriggerDeadZone(Axis(s, PadAxis::kTriggerLeft), config_.trigger_dead_zone);
   DriveIntent intent;
   intent.forward = std::clamp(-left[1] + triggers, -1.0, 1.0);
   double x = left[0];
@@ -66,7 +77,8 @@ MotorCommand GamepadInterface::Map(const InputState& s) const {
   return Mix(intent.forward, intent.turn);
 }
 
-MotorCommand GamepadInterface::Update(double /*t_s*/, const VehicleFeedback& /*feedback*/, haptics::Hal& hal) {
+MotorCommand GamepadInterface::Update(double /*t_s*/, const VehicleFeedback& /*feedback*/,
+                                      haptics::Hal& hal) {
   // No hands: both fields disabled, stamped now (see KeyboardInterface).
   hal.SetField(haptics::Side::kLeft, haptics::ForceField{});
   hal.SetField(haptics::Side::kRight, haptics::ForceField{});

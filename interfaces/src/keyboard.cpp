@@ -27,9 +27,12 @@ void KeyboardInterface::StepAxis(Axis& axis, double t_s, bool plus_held, bool mi
   const uint32_t new_minus = minus_presses - axis.seen_minus;
   axis.seen_plus = plus_presses;
   axis.seen_minus = minus_presses;
-  const auto clamp = [this](long v) { return static_cast<int>(std::clamp<long>(v, -levels_, levels_)); };
-  axis.level = clamp(static_cast<long>(axis.level) + static_cast<long>(std::min<uint32_t>(new_plus, 1000)) -
-                     static_cast<long>(std::min<uint32_t>(new_minus, 1000)));
+  const auto clamp = [this](long v) {
+    return static_cast<int>(std::clamp<long>(v, -levels_, levels_));
+  };
+  axis.level =
+      clamp(static_cast<long>(axis.level) + static_cast<long>(std::min<uint32_t>(new_plus, 1000)) -
+            static_cast<long>(std::min<uint32_t>(new_minus, 1000)));
 
   // Both keys held cancel out: no repeat either way.
   const int held = plus_held == minus_held ? 0 : (plus_held ? 1 : -1);
@@ -48,7 +51,8 @@ void KeyboardInterface::StepAxis(Axis& axis, double t_s, bool plus_held, bool mi
 
   // A press seen this tick counts even if already released: it returns to
   // zero on the next tick, not before the command carried it.
-  if (config_.release_to_zero && !plus_held && !minus_held && new_plus + new_minus == 0) axis.level = 0;
+  if (config_.release_to_zero && !plus_held && !minus_held && new_plus + new_minus == 0)
+    axis.level = 0;
 }
 
 MotorCommand KeyboardInterface::Step(double t_s, const InputState& s) {
@@ -69,7 +73,8 @@ MotorCommand KeyboardInterface::Command() const {
   return Mix(forward, turn);
 }
 
-MotorCommand KeyboardInterface::Update(double t_s, const VehicleFeedback& /*feedback*/, haptics::Hal& hal) {
+MotorCommand KeyboardInterface::Update(double t_s, const VehicleFeedback& /*feedback*/,
+                                       haptics::Hal& hal) {
   // No hands: both fields disabled, stamped now, so the servo loop renders
   // no force and sees a live (not stalled) interface.
   hal.SetField(haptics::Side::kLeft, haptics::ForceField{});

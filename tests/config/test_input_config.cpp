@@ -55,8 +55,10 @@ TEST_CASE("shipped gamepad.yaml loads with its values", "[config][shipped][gamep
   CHECK(g.deadman == haptel::GamepadDeadman::kLeftShoulder);
 }
 
-TEST_CASE("keyboard and gamepad files: absent keys take the defaults", "[config][keyboard][gamepad]") {
-  const haptel::KeyboardConfig k = haptel::LoadKeyboard(Write("k.yaml", "name: keyboard\nrepeat_s: 0.2\n"));
+TEST_CASE("keyboard and gamepad files: absent keys take the defaults",
+          "[config][keyboard][gamepad]") {
+  const haptel::KeyboardConfig k =
+      haptel::LoadKeyboard(Write("k.yaml", "name: keyboard\nrepeat_s: 0.2\n"));
   CHECK(k.repeat_s == Approx(0.2));
   CHECK(k.release_to_zero == haptel::KeyboardConfig{}.release_to_zero);
   const haptel::GamepadConfig g =

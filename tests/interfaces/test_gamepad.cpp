@@ -139,7 +139,8 @@ TEST_CASE("gamepad: stick left turns left (right motor faster), from either stic
   }
 }
 
-TEST_CASE("gamepad: no controller gives zero; a disconnect during the run is lost for good", "[gamepad]") {
+TEST_CASE("gamepad: no controller gives zero; a disconnect during the run is lost for good",
+          "[gamepad]") {
   InputBox box;
   InputState s = Pad();
   s.pad_disconnects = 2;  // earlier runs' controllers went away: not ours

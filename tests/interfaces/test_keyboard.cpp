@@ -37,7 +37,8 @@ KeyboardConfig Config() {
 constexpr double kTick = 0.02;  // a 50 Hz session
 }  // namespace
 
-TEST_CASE("keyboard: a press steps the throttle one level, even one shorter than a tick", "[keyboard]") {
+TEST_CASE("keyboard: a press steps the throttle one level, even one shorter than a tick",
+          "[keyboard]") {
   Keys k;
   haptics::Hal hal;
   KeyboardInterface kb(Config(), k.box, 8);
@@ -74,7 +75,8 @@ TEST_CASE("keyboard: a press steps the throttle one level, even one shorter than
   }
 }
 
-TEST_CASE("keyboard: a held key repeats every repeat_s and levels clamp at the vehicle's", "[keyboard]") {
+TEST_CASE("keyboard: a held key repeats every repeat_s and levels clamp at the vehicle's",
+          "[keyboard]") {
   Keys k;
   haptics::Hal hal;
   KeyboardInterface kb(Config(), k.box, 8);
@@ -117,7 +119,8 @@ TEST_CASE("keyboard: a held key repeats every repeat_s and levels clamp at the v
   }
 }
 
-TEST_CASE("keyboard: without release_to_zero a level stays when the keys are released", "[keyboard]") {
+TEST_CASE("keyboard: without release_to_zero a level stays when the keys are released",
+          "[keyboard]") {
   Keys k;
   haptics::Hal hal;
   KeyboardConfig c = Config();

@@ -45,9 +45,9 @@ class KeyboardInterface final : public MediatorInterface {
   /// One pair of keys driving one level (up/down, or left/right).
   struct Axis {
     int level = 0;
-    uint32_t seen_plus = 0;   ///< press counters already acted on
+    uint32_t seen_plus = 0;  ///< press counters already acted on
     uint32_t seen_minus = 0;
-    int held = 0;             ///< direction held at the last step: +1, −1, 0
+    int held = 0;  ///< direction held at the last step: +1, −1, 0
     double next_repeat_s = 0.0;
   };
   void StepAxis(Axis& axis, double t_s, bool plus_held, bool minus_held, uint32_t plus_presses,

@@ -1,0 +1,164 @@
+// SdlInput from hand-built SDL events: no SDL_Init, no display, no device.
+#include <catch2/catch.hpp>
+
+#include "alloc_counter.hpp"
+#include "haptel/view/sdl_input.hpp"
+
+using namespace haptel;
+using namespace haptel::interfaces;
+using haptel::view::SdlInput;
+
+namespace {
+SDL_Event Key(Uint32 type, SDL_Scancode code, Uint8 repeat = 0) {
+  SDL_Event e{};
+  e.type = type;
+  e.key.type = type;
+  e.key.state = type == SDL_KEYDOWN ? SDL_PRESSED : SDL_RELEASED;
+  e.key.repeat = repeat;
+  e.key.keysym.scancode = code;
+  return e;
+}
+SDL_Event Down(SDL_Scancode code, Uint8 repeat = 0) { return Key(SDL_KEYDOWN, code, repeat); }
+SDL_Event Up(SDL_Scancode code) { return Key(SDL_KEYUP, code); }
+}  // namespace
+
+TEST_CASE("sdl input: arrows and W/A/S/D set held flags and count presses", "[sdl_input]") {
+  InputBox box;
+  SdlInput input(box);
+  input.OnEvent(Down(SDL_SCANCODE_UP));
+  CHECK(box.Load().key_up);
+  CHECK(box.Load().presses_up == 1);
+  // Auto-repeat key-downs are not presses.
+  input.OnEvent(Down(SDL_SCANCODE_UP, 1));
+  input.OnEvent(Down(SDL_SCANCODE_UP, 1));
+  CHECK(box.Load().presses_up == 1);
+  // W is up too; up stays held until both are released.
+  input.OnEvent(Down(SDL_SCANCODE_W));
+  CHECK(box.Load().presses_up == 2);
+  input.OnEvent(Up(SDL_SCANCODE_UP));
+  CHECK(box.Load().key_up);
+  input.OnEvent(Up(SDL_SCANCODE_W));
+  CHECK_FALSE(box.Load().key_up);
+
+  input.OnEvent(Down(SDL_SCANCODE_S));
+  input.OnEvent(Down(SDL_SCANCODE_A));
+  input.OnEvent(Down(SDL_SCANCODE_RIGHT));
+  const InputState s = box.Load();
+  CHECK(s.key_down);
+  CHECK(s.key_left);
+  CHECK(s.key_right);
+  CHECK(s.presses_down == 1);
+  CHECK(s.presses_left == 1);
+  CHECK(s.presses_right == 1);
+  CHECK_FALSE(s.key_stop);
+}
+
+TEST_CASE("sdl input: a press shorter than a session tick is still counted", "[sdl_input]") {
+  InputBox box;
+  SdlInput input(box);
+  // Between two reads of the box the key went down and up again.
+  const InputState before = box.Load();
+  input.OnEvent(Down(SDL_SCANCODE_DOWN));
+  input.OnEvent(Up(SDL_SCANCODE_DOWN));
+  input.OnEvent(Down(SDL_SCANCODE_SPACE));
+  input.OnEvent(Up(SDL_SCANCODE_SPACE));
+  const InputState after = box.Load();
+  CHECK_FALSE(after.key_down);
+  CHECK(after.presses_down == before.presses_down + 1);
+  CHECK_FALSE(after.key_stop);
+  CHECK(after.presses_stop == before.presses_stop + 1);
+}
+
+TEST_CASE("sdl input: F1..F6 request interfaces 0..5, one request per press", "[sdl_input]") {
+  InputBox box;
+  SdlInput input(box);
+  CHECK(box.Load().interface_request == -1);
+  input.OnEvent(Down(SDL_SCANCODE_F3));
+  CHECK(box.Load().interface_request == 2);
+  CHECK(box.Load().interface_requests == 1);
+  input.OnEvent(Down(SDL_SCANCODE_F3, 1));  // held: no new request
+  CHECK(box.Load().interface_requests == 1);
+  input.OnEvent(Up(SDL_SCANCODE_F3));
+  input.OnEvent(Down(SDL_SCANCODE_F1));
+  CHECK(box.Load().interface_request == 0);
+  input.OnEvent(Down(SDL_SCANCODE_F6));
+  CHECK(box.Load().interface_request == 5);
+  CHECK(box.Load().interface_requests == 3);
+  input.OnEvent(Down(SDL_SCANCODE_F7));  // not an interface key
+  CHECK(box.Load().interface_request == 5);
+  CHECK(box.Load().interface_requests == 3);
+}
+
+TEST_CASE("sdl input: closing the window or SDL_QUIT asks to quit", "[sdl_input]") {
+  InputBox box;
+  SdlInput input(box);
+  SDL_Event e{};
+  e.type = SDL_WINDOWEVENT;
+  e.window.event = SDL_WINDOWEVENT_RESIZED;
+  input.OnEvent(e);
+  CHECK_FALSE(box.Load().quit);
+  SECTION("window close") {
+    e.window.event = SDL_WINDOWEVENT_CLOSE;
+    input.OnEvent(e);
+    CHECK(box.Load().quit);
+  }
+  SECTION("SDL_QUIT") {
+    SDL_Event q{};
+    q.type = SDL_QUIT;
+    input.OnEvent(q);
+    CHECK(box.Load().quit);
+  }
+}
+
+TEST_CASE("sdl input: controller events of no open controller are ignored", "[sdl_input]") {
+  InputBox box;
+  SdlInput input(box);
+  SDL_Event e{};
+  e.type = SDL_CONTROLLERAXISMOTION;
+  e.caxis.which = 0;
+  e.caxis.axis = SDL_CONTROLLER_AXIS_LEFTY;
+  e.caxis.value = -32768;
+  input.OnEvent(e);
+  SDL_Event r{};
+  r.type = SDL_CONTROLLERDEVICEREMOVED;
+  r.cdevice.which = 0;
+  input.OnEvent(r);
+  const InputState s = box.Load();
+  CHECK(s.pad_axes[static_cast<int>(PadAxis::kLeftY)] == 0.0);
+  CHECK_FALSE(s.pad_connected);
+  CHECK(s.pad_disconnects == 0);
+}
+
+TEST_CASE("sdl input: axis values are scaled to [-1, 1], triggers to [0, 1]", "[sdl_input]") {
+  CHECK(SdlInput::AxisValue(SDL_CONTROLLER_AXIS_LEFTX, 32767) == 1.0);
+  CHECK(SdlInput::AxisValue(SDL_CONTROLLER_AXIS_LEFTX, -32768) == -1.0);
+  CHECK(SdlInput::AxisValue(SDL_CONTROLLER_AXIS_LEFTY, 0) == 0.0);
+  CHECK(SdlInput::AxisValue(SDL_CONTROLLER_AXIS_RIGHTY, 16384) == Approx(0.5).margin(1e-4));
+  CHECK(SdlInput::AxisValue(SDL_CONTROLLER_AXIS_TRIGGERLEFT, 32767) == 1.0);
+  CHECK(SdlInput::AxisValue(SDL_CONTROLLER_AXIS_TRIGGERRIGHT, 0) == 0.0);
+  CHECK(SdlInput::AxisValue(SDL_CONTROLLER_AXIS_TRIGGERRIGHT, -100) == 0.0);
+}
+
+TEST_CASE("sdl input: a new sink keeps the counters and drops held keys", "[sdl_input]") {
+  InputBox box;
+  {
+    SdlInput first(box);
+    first.OnEvent(Down(SDL_SCANCODE_UP));
+  }
+  SdlInput second(box);
+  second.OnEvent(Down(SDL_SCANCODE_UP));
+  CHECK(box.Load().presses_up == 2);
+}
+
+TEST_CASE("sdl input: events allocate nothing", "[sdl_input][alloc]") {
+  InputBox box;
+  SdlInput input(box);
+  const SDL_Event events[] = {Down(SDL_SCANCODE_UP),   Up(SDL_SCANCODE_UP),
+                              Down(SDL_SCANCODE_A, 0), Down(SDL_SCANCODE_F2),
+                              Up(SDL_SCANCODE_SPACE),  Down(SDL_SCANCODE_SPACE)};
+  const uint64_t before = haptel::test::ThreadAllocations();
+  for (int i = 0; i < 1000; ++i) {
+    for (const SDL_Event& e : events) input.OnEvent(e);
+  }
+  CHECK(haptel::test::ThreadAllocations() == before);
+}

@@ -1,0 +1,187 @@
+// A virtual SDL game controller, seen through InputPump and SdlInput, drives
+// GamepadInterface, whose commands drive the simulated robot in-process.
+// SDL runs for real (its virtual joystick driver: no device, no display);
+// the robot is stepped in simulated time, so nothing here depends on timing
+// except bounded waits for the pump to deliver what the controller did.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <numbers>
+
+#include "haptel/interfaces/gamepad.hpp"
+#include "haptel/vehicles/drive.hpp"
+#include "haptel/vehicles/sim_robot.hpp"
+#include "haptel/view/sdl_input.hpp"
+#include "test_env.hpp"
+
+using namespace haptel;
+using namespace haptel::interfaces;
+using haptel::test::WaitFor;
+using haptel::view::InputPump;
+
+namespace {
+
+/// A virtual controller, attached, set and detached on the pump's thread
+/// (the thread that owns SDL). Catch's macros stay on the test's thread.
+class VirtualPad {
+ public:
+  explicit VirtualPad(InputPump& pump) : pump_(pump) {
+    pump_.RunOnPumpThread([this] {
+      const int device =
+          SDL_JoystickAttachVirtual(SDL_JOYSTICK_TYPE_GAMECONTROLLER, SDL_CONTROLLER_AXIS_MAX,
+                                    SDL_CONTROLLER_BUTTON_MISC1, 0);
+      if (device < 0) return;
+      id_ = SDL_JoystickGetDeviceInstanceID(device);
+      joystick_ = SDL_JoystickOpen(device);
+    });
+  }
+  ~VirtualPad() { Detach(); }
+  bool attached() const { return joystick_ != nullptr; }
+
+  /// value in [-1, 1] (sticks) or [0, 1] (triggers), as InputState has it.
+  void Axis(SDL_GameControllerAxis axis, double value) {
+    const auto raw =
+        static_cast<Sint16>(std::lround(std::clamp(value, -1.0, 1.0) * 32767.0) - (value <= -1.0));
+    pump_.RunOnPumpThread([&] { SDL_JoystickSetVirtualAxis(joystick_, axis, raw); });
+  }
+  void Button(SDL_GameControllerButton button, bool down) {
+    pump_.RunOnPumpThread([&] { SDL_JoystickSetVirtualButton(joystick_, button, down ? 1 : 0); });
+  }
+  /// Forgets it without detaching (the pump's SDL_Quit removes it).
+  void Abandon() { joystick_ = nullptr; }
+  /// Unplugs it.
+  void Detach() {
+    if (joystick_ == nullptr) return;
+    pump_.RunOnPumpThread([this] {
+      SDL_JoystickClose(joystick_);
+      for (int i = 0; i < SDL_NumJoysticks(); ++i) {
+        if (SDL_JoystickGetDeviceInstanceID(i) == id_) SDL_JoystickDetachVirtual(i);
+      }
+    });
+    joystick_ = nullptr;
+  }
+
+ private:
+  InputPump& pump_;
+  SDL_Joystick* joystick_ = nullptr;
+  SDL_JoystickID id_ = -1;
+};
+
+double AxisOf(const InputState& s, PadAxis a) { return s.pad_axes[static_cast<int>(a)]; }
+bool ButtonOf(const InputState& s, PadButton b) { return s.pad_buttons[static_cast<int>(b)]; }
+
+/// An open floor: a wide corridor around a 20 m × 12 m loop, no gates.
+TrackConfig Floor() {
+  TrackConfig t;
+  t.name = "floor";
+  t.centerline = {{0, 0}, {20, 0}, {20, 12}, {0, 12}};
+  t.corridor_width = 4.0;
+  return t;
+}
+
+/// The session's part, in simulated time: the interface's command at 50 Hz,
+/// quantised to the vehicle's levels, the robot stepped at 200 Hz. Returns
+/// how much the heading turned (unwrapped, rad, counter-clockwise +).
+double Drive(GamepadInterface& pad, haptics::Hal& hal, vehicles::SimRobot& robot,
+             const DriveConfig& drive, double& t, double seconds) {
+  double turned = 0.0;
+  for (int tick = 0; tick < static_cast<int>(seconds * 50); ++tick, t += 0.02) {
+    const MotorCommand m = pad.Update(t, {}, hal);
+    robot.SetMotors({vehicles::QuantiseCommand(m.left, drive.speed_levels),
+                     vehicles::QuantiseCommand(m.right, drive.speed_levels)});
+    for (int i = 0; i < 4; ++i) {
+      const double before = robot.State().heading;
+      robot.Update(0.005);
+      turned += std::remainder(robot.State().heading - before, 2 * std::numbers::pi);
+    }
+  }
+  return turned;
+}
+
+}  // namespace
+
+TEST_CASE("a virtual game controller drives the simulated robot, and unplugging it stops the run",
+          "[view_input][virtual_pad]") {
+  InputBox box;
+  InputPump pump(box);
+  VirtualPad stick(pump);
+  REQUIRE(stick.attached());
+  REQUIRE(WaitFor([&] { return box.Load().pad_connected; }, 10.0));
+
+  GamepadConfig config;  // defaults: left stick, left shoulder is the deadman
+  GamepadInterface pad(config, box);
+  haptics::Hal hal;
+  const Track track(Floor());
+  VehicleConfig vehicle;
+  vehicle.drive.right_gain = 1.0;  // no drift: straight means straight
+  vehicles::SimRobot robot(track, vehicle);
+  robot.Place(4.0, 0.0, 0.0);
+  double t = 0.0;
+
+  // Stick forward without the deadman: nothing moves.
+  stick.Axis(SDL_CONTROLLER_AXIS_LEFTY, -1.0);
+  REQUIRE(WaitFor([&] { return AxisOf(box.Load(), PadAxis::kLeftY) == -1.0; }, 10.0));
+  Drive(pad, hal, robot, vehicle.drive, t, 0.5);
+  CHECK(robot.State().x == Approx(4.0).margin(1e-9));
+
+  // Deadman held: forward. x grows, the heading stays.
+  stick.Button(SDL_CONTROLLER_BUTTON_LEFTSHOULDER, true);
+  REQUIRE(WaitFor([&] { return ButtonOf(box.Load(), PadButton::kLeftShoulder); }, 10.0));
+  const double turned_straight = Drive(pad, hal, robot, vehicle.drive, t, 2.0);
+  CHECK(robot.State().x > 4.0 + 0.4);
+  CHECK(std::abs(turned_straight) < 0.02);
+  CHECK(std::abs(robot.State().y) < 0.01);
+
+  // Stick half forward and full left: round a left turn (counter-clockwise).
+  stick.Axis(SDL_CONTROLLER_AXIS_LEFTX, -1.0);
+  stick.Axis(SDL_CONTROLLER_AXIS_LEFTY, -0.5);
+  REQUIRE(WaitFor(
+      [&] {
+        const InputState s = box.Load();
+        return AxisOf(s, PadAxis::kLeftX) == -1.0 && AxisOf(s, PadAxis::kLeftY) > -0.6;
+      },
+      10.0));
+  const double turned = Drive(pad, hal, robot, vehicle.drive, t, 3.0);
+  CHECK(turned > std::numbers::pi / 2);
+  CHECK_FALSE(robot.State().bumper_left);
+  CHECK_FALSE(robot.State().bumper_right);
+
+  // Unplugged mid-run: lost, zero command, the robot comes to rest.
+  CHECK_FALSE(pad.lost());
+  stick.Detach();
+  REQUIRE(WaitFor([&] { return box.Load().pad_disconnects == 1; }, 10.0));
+  CHECK_FALSE(box.Load().pad_connected);
+  CHECK(pad.lost());
+  const MotorCommand m = pad.Update(t, {}, hal);
+  CHECK(m.left == 0.0);
+  CHECK(m.right == 0.0);
+  Drive(pad, hal, robot, vehicle.drive, t, 1.0);
+  CHECK(std::abs(robot.State().speed) < 1e-3);
+}
+
+TEST_CASE("stopping the pump lets the controller go without a disconnect; a new pump starts clean",
+          "[view_input][virtual_pad]") {
+  InputBox box;
+  {
+    InputPump first(box);
+    VirtualPad stick(first);
+    REQUIRE(stick.attached());
+    REQUIRE(WaitFor([&] { return box.Load().pad_connected; }, 10.0));
+    stick.Button(SDL_CONTROLLER_BUTTON_A, true);
+    REQUIRE(WaitFor([&] { return ButtonOf(box.Load(), PadButton::kA); }, 10.0));
+    stick.Abandon();  // SDL_Quit takes the virtual device with it
+  }
+  InputState s = box.Load();
+  CHECK_FALSE(s.pad_connected);
+  CHECK_FALSE(ButtonOf(s, PadButton::kA));
+  CHECK(s.pad_disconnects == 0);
+
+  // SDL went down with the first pump and comes up again for the second.
+  InputPump second(box);
+  VirtualPad stick(second);
+  REQUIRE(stick.attached());
+  REQUIRE(WaitFor([&] { return box.Load().pad_connected; }, 10.0));
+  stick.Detach();
+  REQUIRE(WaitFor([&] { return box.Load().pad_disconnects == 1; }, 10.0));
+  s = box.Load();
+  CHECK_FALSE(s.pad_connected);
+}

@@ -1,0 +1,112 @@
+#pragma once
+/// @file A person's keyboard and game controller, from SDL events to an
+/// InputState in an InputBox (what the interfaces read; they never see SDL).
+///
+/// SdlInput is the view's EventSink: the thread that polls SDL (the view
+/// thread, or an InputPump when there is no view) hands it every event, and
+/// it publishes the updated state. It is the box's one writer.
+///
+/// Keys are read by scancode (physical position), so W/A/S/D sit where they
+/// do on a QWERTY keyboard whatever the layout: arrows or W/A/S/D drive,
+/// space stops, F1..F6 ask for interface 0..5 of the run, and closing the
+/// window asks to quit. The first game controller SDL reports is opened;
+/// another one is ignored until it goes away.
+#include <SDL2/SDL.h>
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <memory>
+
+#include "haptel/interfaces/input.hpp"
+#include "haptel/view/view.hpp"
+
+namespace haptel::view {
+
+class SdlInput : public EventSink {
+ public:
+  /// Publishes into `box` (which must outlive this); starts from `box`'s
+  /// current value so counters keep counting across sinks.
+  explicit SdlInput(interfaces::InputBox& box);
+  /// Closes the controller if SDL's game controller subsystem is still up
+  /// (after SDL_Quit SDL has freed it already).
+  ~SdlInput() override;
+  SdlInput(const SdlInput&) = delete;
+  SdlInput& operator=(const SdlInput&) = delete;
+
+  /// Allocation-free for key, axis, button and window events (opening a
+  /// newly added controller is SDL's own allocation, once per device).
+  void OnEvent(const SDL_Event& event) override;
+
+  /// Closes the open controller and publishes pad_connected = false (not
+  /// counted as a disconnect: it was let go on purpose). Call on the SDL
+  /// thread before SDL_Quit.
+  void Release();
+
+  /// The state as last published (the writer thread's copy).
+  const interfaces::InputState& state() const { return state_; }
+
+  /// An SDL GameController axis value as InputState holds it: sticks in
+  /// [-1, 1] (SDL's sign), triggers in [0, 1].
+  static double AxisValue(int sdl_axis, int16_t raw);
+
+ private:
+  /// Physical keys that drive; two keys map to each direction.
+  enum Key : int {
+    kArrowUp,
+    kArrowDown,
+    kArrowLeft,
+    kArrowRight,
+    kW,
+    kS,
+    kA,
+    kD,
+    kSpace,
+    kKeyCount
+  };
+  void OnKey(const SDL_KeyboardEvent& key, bool down);
+  void OnControllerAdded(int device_index);
+  void OnControllerRemoved(SDL_JoystickID instance);
+  void ClearPad();
+  void Close();
+
+  interfaces::InputBox& box_;
+  interfaces::InputState state_;
+  std::array<bool, kKeyCount> held_{};
+  SDL_GameController* pad_ = nullptr;
+  SDL_JoystickID pad_id_ = -1;
+};
+
+/// For runs with a game controller and no view: a thread that owns SDL's
+/// game controller subsystem and polls its events into an SdlInput at
+/// ~100 Hz.
+class InputPump {
+ public:
+  /// Starts the thread and waits for SDL_Init(SDL_INIT_GAMECONTROLLER) (with
+  /// background joystick events allowed, so no window focus is needed).
+  /// Throws std::runtime_error with SDL's message when it fails.
+  explicit InputPump(interfaces::InputBox& box, double rate_hz = 100.0);
+  /// Stop().
+  ~InputPump();
+  InputPump(const InputPump&) = delete;
+  InputPump& operator=(const InputPump&) = delete;
+
+  /// Closes the controller, shuts SDL down, joins. Idempotent.
+  void Stop();
+
+  /// Runs `fn` on the pump thread, between two polls, and waits for it
+  /// (SDL calls that belong to the thread owning SDL: tests attach virtual
+  /// controllers this way). Rethrows what `fn` throws.
+  void RunOnPumpThread(const std::function<void()>& fn);
+
+  /// Completed poll cycles: a test waits for "one more cycle after X".
+  uint64_t polls() const { return polls_.load(std::memory_order_acquire); }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::atomic<uint64_t> polls_{0};
+};
+
+}  // namespace haptel::view

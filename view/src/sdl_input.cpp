@@ -1,0 +1,278 @@
+#include "haptel/view/sdl_input.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <condition_variable>
+#include <exception>
+#include <future>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <thread>
+
+namespace haptel::view {
+
+using interfaces::InputState;
+using interfaces::PadAxis;
+using interfaces::PadButton;
+
+// InputState's enums are documented as SDL's order; hold them to it.
+static_assert(static_cast<int>(PadAxis::kLeftX) == SDL_CONTROLLER_AXIS_LEFTX);
+static_assert(static_cast<int>(PadAxis::kTriggerRight) == SDL_CONTROLLER_AXIS_TRIGGERRIGHT);
+static_assert(static_cast<int>(PadAxis::kCount) == SDL_CONTROLLER_AXIS_MAX);
+static_assert(static_cast<int>(PadButton::kA) == SDL_CONTROLLER_BUTTON_A);
+static_assert(static_cast<int>(PadButton::kLeftShoulder) == SDL_CONTROLLER_BUTTON_LEFTSHOULDER);
+static_assert(static_cast<int>(PadButton::kDpadRight) == SDL_CONTROLLER_BUTTON_DPAD_RIGHT);
+static_assert(static_cast<int>(PadButton::kCount) == SDL_CONTROLLER_BUTTON_MISC1);
+
+SdlInput::SdlInput(interfaces::InputBox& box) : box_(box), state_(box.Load()) {
+  // A fresh sink owns no controller and holds no key, whatever was before.
+  ClearPad();
+  state_.pad_connected = false;
+  state_.key_up = state_.key_down = state_.key_left = state_.key_right = state_.key_stop = false;
+}
+
+SdlInput::~SdlInput() {
+  if (pad_ != nullptr && SDL_WasInit(SDL_INIT_GAMECONTROLLER) != 0) SDL_GameControllerClose(pad_);
+}
+
+void SdlInput::Close() {
+  if (pad_ != nullptr) SDL_GameControllerClose(pad_);
+  pad_ = nullptr;
+  pad_id_ = -1;
+}
+
+void SdlInput::Release() {
+  const bool had_pad = pad_ != nullptr;
+  Close();
+  if (!had_pad) return;
+  // Let go on purpose: no controller any more, but not a disconnect.
+  ClearPad();
+  state_.pad_connected = false;
+  box_.Store(state_);
+}
+
+double SdlInput::AxisValue(int sdl_axis, int16_t raw) {
+  // SDL's range is asymmetric (−32768..32767): divide by the positive end
+  // and clamp, so both full deflections are exactly ±1.
+  const double v = std::clamp(static_cast<double>(raw) / 32767.0, -1.0, 1.0);
+  const bool trigger =
+      sdl_axis == SDL_CONTROLLER_AXIS_TRIGGERLEFT || sdl_axis == SDL_CONTROLLER_AXIS_TRIGGERRIGHT;
+  return trigger ? std::max(0.0, v) : v;
+}
+
+void SdlInput::ClearPad() {
+  state_.pad_axes = {};
+  state_.pad_buttons = {};
+}
+
+void SdlInput::OnKey(const SDL_KeyboardEvent& key, bool down) {
+  int which = -1;
+  uint32_t InputState::*presses = nullptr;
+  switch (key.keysym.scancode) {
+    case SDL_SCANCODE_UP:
+      which = kArrowUp;
+      presses = &InputState::presses_up;
+      break;
+    case SDL_SCANCODE_W:
+      which = kW;
+      presses = &InputState::presses_up;
+      break;
+    case SDL_SCANCODE_DOWN:
+      which = kArrowDown;
+      presses = &InputState::presses_down;
+      break;
+    case SDL_SCANCODE_S:
+      which = kS;
+      presses = &InputState::presses_down;
+      break;
+    case SDL_SCANCODE_LEFT:
+      which = kArrowLeft;
+      presses = &InputState::presses_left;
+      break;
+    case SDL_SCANCODE_A:
+      which = kA;
+      presses = &InputState::presses_left;
+      break;
+    case SDL_SCANCODE_RIGHT:
+      which = kArrowRight;
+      presses = &InputState::presses_right;
+      break;
+    case SDL_SCANCODE_D:
+      which = kD;
+      presses = &InputState::presses_right;
+      break;
+    case SDL_SCANCODE_SPACE:
+      which = kSpace;
+      presses = &InputState::presses_stop;
+      break;
+    default:
+      break;
+  }
+  if (which >= 0) {
+    held_[which] = down;
+    // Auto-repeat key-downs are not presses: the interface times its own
+    // repeats from the held flag, at its configured rate.
+    if (down && key.repeat == 0) ++(state_.*presses);
+    state_.key_up = held_[kArrowUp] || held_[kW];
+    state_.key_down = held_[kArrowDown] || held_[kS];
+    state_.key_left = held_[kArrowLeft] || held_[kA];
+    state_.key_right = held_[kArrowRight] || held_[kD];
+    state_.key_stop = held_[kSpace];
+    return;
+  }
+  if (down && key.repeat == 0 && key.keysym.scancode >= SDL_SCANCODE_F1 &&
+      key.keysym.scancode <= SDL_SCANCODE_F6) {
+    state_.interface_request = key.keysym.scancode - SDL_SCANCODE_F1;
+    ++state_.interface_requests;
+  }
+}
+
+void SdlInput::OnControllerAdded(int device_index) {
+  if (pad_ != nullptr) return;  // the first controller drives; others wait
+  SDL_GameController* pad = SDL_GameControllerOpen(device_index);
+  if (pad == nullptr) return;
+  pad_ = pad;
+  pad_id_ = SDL_JoystickInstanceID(SDL_GameControllerGetJoystick(pad));
+  ClearPad();
+  state_.pad_connected = true;
+}
+
+void SdlInput::OnControllerRemoved(SDL_JoystickID instance) {
+  if (pad_ == nullptr || instance != pad_id_) return;
+  Close();
+  ClearPad();
+  state_.pad_connected = false;
+  ++state_.pad_disconnects;
+}
+
+void SdlInput::OnEvent(const SDL_Event& event) {
+  switch (event.type) {
+    case SDL_KEYDOWN:
+    case SDL_KEYUP:
+      OnKey(event.key, event.type == SDL_KEYDOWN);
+      break;
+    case SDL_CONTROLLERDEVICEADDED:
+      OnControllerAdded(event.cdevice.which);  // a device index here
+      break;
+    case SDL_CONTROLLERDEVICEREMOVED:
+      OnControllerRemoved(event.cdevice.which);  // an instance id here
+      break;
+    case SDL_CONTROLLERAXISMOTION:
+      if (pad_ == nullptr || event.caxis.which != pad_id_) return;
+      if (event.caxis.axis >= static_cast<int>(PadAxis::kCount)) return;
+      state_.pad_axes[event.caxis.axis] = AxisValue(event.caxis.axis, event.caxis.value);
+      break;
+    case SDL_CONTROLLERBUTTONDOWN:
+    case SDL_CONTROLLERBUTTONUP:
+      if (pad_ == nullptr || event.cbutton.which != pad_id_) return;
+      if (event.cbutton.button >= static_cast<int>(PadButton::kCount)) return;
+      state_.pad_buttons[event.cbutton.button] = event.cbutton.state == SDL_PRESSED;
+      break;
+    case SDL_QUIT:
+      state_.quit = true;
+      break;
+    case SDL_WINDOWEVENT:
+      if (event.window.event != SDL_WINDOWEVENT_CLOSE) return;
+      state_.quit = true;
+      break;
+    default:
+      return;  // nothing changed: publish nothing
+  }
+  box_.Store(state_);
+}
+
+// ---------------------------------------------------------------- InputPump
+
+struct InputPump::Impl {
+  interfaces::InputBox& box;
+  std::chrono::duration<double> period;
+  std::thread thread;
+  std::mutex call_mutex;  // one RunOnPumpThread caller at a time
+  std::mutex mutex;
+  std::condition_variable cv;
+  bool stop = false;
+  const std::function<void()>* task = nullptr;  // guarded by mutex
+  bool task_done = false;
+  std::exception_ptr task_error;
+
+  Impl(interfaces::InputBox& b, double rate_hz) : box(b), period(1.0 / rate_hz) {}
+
+  void Run(std::promise<std::string>& started, std::atomic<uint64_t>& polls) {
+    // Without a window SDL has no focus to give: let the controller's events
+    // through anyway.
+    SDL_SetHint(SDL_HINT_JOYSTICK_ALLOW_BACKGROUND_EVENTS, "1");
+    if (SDL_Init(SDL_INIT_GAMECONTROLLER) != 0) {
+      started.set_value(SDL_GetError());
+      return;
+    }
+    started.set_value({});
+    SdlInput input(box);
+    std::unique_lock lock(mutex);
+    while (!stop) {
+      if (task != nullptr) {
+        // Run between polls, so what it does is seen by the poll below.
+        try {
+          (*task)();
+        } catch (...) {
+          task_error = std::current_exception();
+        }
+        task = nullptr;
+        task_done = true;
+        cv.notify_all();
+      }
+      lock.unlock();
+      SDL_Event event;
+      while (SDL_PollEvent(&event) != 0) input.OnEvent(event);
+      polls.fetch_add(1, std::memory_order_release);
+      lock.lock();
+      cv.wait_for(lock, period, [this] { return stop || task != nullptr; });
+    }
+    lock.unlock();
+    input.Release();
+    // Leave SDL as found: quit only our subsystem, and SDL itself only when
+    // no one else (a view) still uses it.
+    SDL_QuitSubSystem(SDL_INIT_GAMECONTROLLER);
+    if (SDL_WasInit(0) == 0) SDL_Quit();
+  }
+};
+
+InputPump::InputPump(interfaces::InputBox& box, double rate_hz) {
+  if (!(rate_hz > 0.0)) throw std::invalid_argument("InputPump: rate_hz must be > 0");
+  impl_ = std::make_unique<Impl>(box, rate_hz);
+  std::promise<std::string> started;
+  std::future<std::string> result = started.get_future();
+  // The promise moves to the thread: it must outlive its set_value call.
+  impl_->thread = std::thread([this, p = std::move(started)]() mutable { impl_->Run(p, polls_); });
+  const std::string error = result.get();
+  if (!error.empty()) {
+    impl_->thread.join();
+    throw std::runtime_error("SDL_Init(SDL_INIT_GAMECONTROLLER) failed: " + error);
+  }
+}
+
+InputPump::~InputPump() { Stop(); }
+
+void InputPump::Stop() {
+  if (!impl_ || !impl_->thread.joinable()) return;
+  {
+    std::lock_guard lock(impl_->mutex);
+    impl_->stop = true;
+  }
+  impl_->cv.notify_all();
+  impl_->thread.join();
+}
+
+void InputPump::RunOnPumpThread(const std::function<void()>& fn) {
+  std::lock_guard call(impl_->call_mutex);
+  std::unique_lock lock(impl_->mutex);
+  if (impl_->stop || !impl_->thread.joinable()) throw std::logic_error("InputPump: not running");
+  impl_->task = &fn;
+  impl_->task_done = false;
+  impl_->task_error = nullptr;
+  impl_->cv.notify_all();
+  impl_->cv.wait(lock, [this] { return impl_->task_done; });
+  if (impl_->task_error) std::rethrow_exception(impl_->task_error);
+}
+
+}  // namespace haptel::view
