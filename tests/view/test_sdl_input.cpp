@@ -89,7 +89,7 @@ TEST_CASE("sdl input: F1..F6 request interfaces 0..5, one request per press", "[
   CHECK(box.Load().interface_requests == 3);
 }
 
-TEST_CASE("sdl input: closing the window or SDL_QUIT asks to quit", "[sdl_input]") {
+TEST_CASE("sdl input: closing the window, SDL_QUIT or Escape asks to quit", "[sdl_input]") {
   InputBox box;
   SdlInput input(box);
   SDL_Event e{};
@@ -106,6 +106,10 @@ TEST_CASE("sdl input: closing the window or SDL_QUIT asks to quit", "[sdl_input]
     SDL_Event q{};
     q.type = SDL_QUIT;
     input.OnEvent(q);
+    CHECK(box.Load().quit);
+  }
+  SECTION("Escape") {
+    input.OnEvent(Down(SDL_SCANCODE_ESCAPE));
     CHECK(box.Load().quit);
   }
 }

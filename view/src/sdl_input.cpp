@@ -126,6 +126,8 @@ void SdlInput::OnKey(const SDL_KeyboardEvent& key, bool down) {
     state_.interface_request = key.keysym.scancode - SDL_SCANCODE_F1;
     ++state_.interface_requests;
   }
+  // Escape ends the run as closing the window does: what was measured is kept.
+  if (down && key.keysym.scancode == SDL_SCANCODE_ESCAPE) state_.quit = true;
 }
 
 void SdlInput::OnControllerAdded(int device_index) {
