@@ -14,6 +14,7 @@
 #include "haptel/mediator/operator.hpp"
 #include "haptel/mediator/session_physics.hpp"
 #include "haptel/mediator/vehicle_link.hpp"
+#include "haptel/view/sdl_input.hpp"
 
 namespace haptel::mediator {
 
@@ -135,6 +136,11 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   }
   InterfaceSet interfaces(std::move(built), setup.start_interface, run.switch_ramp_s);
   op->Prepare(interfaces.current());
+  // A person's controller without a view: a thread of its own polls it.
+  std::unique_ptr<view::InputPump> pump;
+  bool any_gamepad = false;
+  for (size_t i = 0; i < setup.interfaces.size(); ++i) any_gamepad = any_gamepad || (build[i] && setup.interfaces[i].is_gamepad());
+  if (any_gamepad && setup.view == ViewKind::kNone) pump = std::make_unique<view::InputPump>(input);
 
   haptic.Start(setup.progress);
   if (physics_side) physics_side->world->Start(haptic.hal());
