@@ -25,7 +25,10 @@
 #include "haptel/physics/cockpit_controls.hpp"
 #include "haptel/physics/scene_builder.hpp"
 #include "haptel/physics/world.hpp"
+#include "haptel/mediator/session.hpp"
+#include "haptel/video/codec.hpp"
 #include "plot.hpp"
+#include <opencv2/imgproc.hpp>
 
 namespace haptel::bench {
 
@@ -188,6 +191,32 @@ Result MeasureCockpit(const PhysicsConfig& config, const CockpitConfig& cockpit,
 
 }  // namespace
 
+/// CPU share of one core that decoding the vehicle's video takes for a
+/// session with `view`: 0 when the session does not decode (DecodesVideo),
+/// else the thread CPU time of decoding `seconds` of 640×480 JPEG frames at
+/// 30 fps, per wall second of video.
+double VideoDecodeShare(mediator::ViewKind view, double seconds) {
+  if (!mediator::DecodesVideo(view)) return 0.0;
+  // A camera-like image: gradients, edges and text, as JPEG at the camera's quality.
+  cv::Mat image(480, 640, CV_8UC3);
+  for (int y = 0; y < image.rows; ++y) {
+    for (int x = 0; x < image.cols; ++x) {
+      image.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<uint8_t>(x * 255 / 640), static_cast<uint8_t>(y * 255 / 480),
+                                            static_cast<uint8_t>((x ^ y) & 0xff));
+    }
+  }
+  cv::rectangle(image, {100, 120}, {300, 360}, {40, 200, 40}, cv::FILLED);
+  cv::putText(image, "haptel 640x480", {320, 240}, cv::FONT_HERSHEY_SIMPLEX, 1.2, {255, 255, 255}, 2);
+  std::vector<uint8_t> jpeg;
+  video::JpegEncoder(80).Encode(image, jpeg);
+  video::JpegDecoder decoder;
+  cv::Mat out;
+  const int frames = static_cast<int>(30.0 * seconds);
+  const double cpu0 = ThreadCpuSeconds();
+  for (int i = 0; i < frames; ++i) decoder.Decode(jpeg.data(), jpeg.size(), out);
+  return (ThreadCpuSeconds() - cpu0) / seconds;
+}
+
 int BenchSkipMain(int argc, const char* const* argv) {
   double seconds = 2.0;
   bool json = false;
@@ -259,6 +288,12 @@ int BenchSkipMain(int argc, const char* const* argv) {
               "  touching the rim at once (the wheel turned %.2f..%.2f rad in the cockpit run).\n",
               results[1].wheel_min, results[1].wheel_max);
 
+  const double decode_none = VideoDecodeShare(mediator::ViewKind::kNone, seconds);
+  const double decode_view = VideoDecodeShare(mediator::ViewKind::kWindow, seconds);
+  std::printf("\n  video decode (640x480 JPEG at 30 fps), share of one core: --view none without --record %.4f "
+              "(not decoded), with a view or --record %.4f\n",
+              decode_none, decode_view);
+
   const auto dir = BenchDir();
   {
     std::ofstream csv(dir / "skip.csv");
@@ -279,7 +314,9 @@ int BenchSkipMain(int argc, const char* const* argv) {
     for (size_t i = 0; i < results.size(); ++i) {
       o << (i ? "," : "") << "\"" << results[i].name << "\":" << JsonNumber(results[i].cpu_per_sim_s());
     }
-    o << "},\"cpu_per_sim_s_static_1000\":" << JsonNumber(statics.cpu_per_sim_s()) << "}";
+    o << "},\"cpu_per_sim_s_static_1000\":" << JsonNumber(statics.cpu_per_sim_s())
+      << ",\"video_decode_cpu_share\":{\"view_none\":" << JsonNumber(decode_none)
+      << ",\"view\":" << JsonNumber(decode_view) << "}}";
     std::printf("%s\n", o.str().c_str());
   }
   return 0;

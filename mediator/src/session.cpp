@@ -151,7 +151,7 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   link_options.link = run.link;
   link_options.track_file = setup.track.file;
   link_options.program = setup.vehicle_program;
-  link_options.decode_video = run.video_decode && setup.view != ViewKind::kNone;
+  link_options.decode_video = run.video_decode && DecodesVideo(setup.view);
   VehicleLink vehicle(link_options);
   rec.vehicle_pid = vehicle.pid();
   if (setup.progress && vehicle.pid() != 0) {

@@ -38,6 +38,10 @@ namespace haptel::mediator {
 /// the MP4 only).
 enum class ViewKind { kNone, kWindow, kOffscreen };
 
+/// Whether the session decodes the vehicle's video: only when a view shows or
+/// records it (frames are still received and counted without).
+constexpr bool DecodesVideo(ViewKind view) { return view != ViewKind::kNone; }
+
 struct SessionSetup {
   RunConfig run;
   TrackConfig track;
