@@ -1,0 +1,133 @@
+// End to end with the operator's view: a real X server (Xvfb), the real
+// `haptel` window, keys sent to it with xdotool, and the MP4 it records.
+#include <catch2/catch.hpp>
+#include <signal.h>
+
+#include <cstdlib>
+#include <opencv2/videoio.hpp>
+#include <regex>
+
+#include "child.hpp"
+#include "test_env.hpp"
+
+using namespace haptel;
+using haptel::test::Child;
+using haptel::test::JsonField;
+
+namespace {
+
+std::string Bin(const std::string& name) { return (test::BinDir() / name).string(); }
+
+/// An X server of the test's own; DISPLAY points at it while it lives.
+class XServer {
+ public:
+  XServer() : server_({"/usr/bin/Xvfb", "-displayfd", "1", "-screen", "0", "1280x800x24", "-nolisten", "tcp"}) {
+    REQUIRE(test::WaitFor([&] {
+      server_.Pump();
+      return server_.out().find('\n') != std::string::npos;
+    }, 30.0));
+    display_ = ":" + server_.out().substr(0, server_.out().find('\n'));
+    setenv("DISPLAY", display_.c_str(), 1);
+  }
+  ~XServer() { unsetenv("DISPLAY"); }
+  const std::string& display() const { return display_; }
+
+ private:
+  Child server_;
+  std::string display_;
+};
+
+/// Runs xdotool with `args`; returns its exit code.
+int XDoTool(std::vector<std::string> args) {
+  args.insert(args.begin(), "/usr/bin/xdotool");
+  Child c(args);
+  return c.Wait(30.0);
+}
+
+/// The speed in the newest progress line on stderr ("speed 0.12 m/s"), or -1.
+double LastSpeed(const std::string& err) {
+  static const std::regex speed(R"(speed (-?[0-9.]+) m/s)");
+  double last = -1.0;
+  for (auto it = std::sregex_iterator(err.begin(), err.end(), speed); it != std::sregex_iterator(); ++it) {
+    last = std::stod((*it)[1]);
+  }
+  return last;
+}
+
+}  // namespace
+
+TEST_CASE("a lap in a window under Xvfb, recorded to an MP4 that decodes at 25 frames per second of lap or more") {
+  XServer x;
+  const auto dir = test::ScratchDir("e2e-view-lap");
+  const auto mp4 = dir / "lap.mp4";
+  Child run({Bin("haptel"), "run", "--operator", "auto", "--view", "window", "--record", mp4.string(), "--track",
+             "config/tracks/test-short.yaml", "--json", "--quiet", "--domain", std::to_string(test::UniqueDomain(31)),
+             "--database", (dir / "runs.db").string(), "--vehicle-timeout", "5"});
+  const int code = run.Wait(180.0);
+  INFO(run.out() << run.err());
+  REQUIRE(code == 0);
+  const std::string json = run.LastLine();
+  for (const char* key : {"view_fps", "view_frame_p99_ms", "video_to_screen_ms_p50", "video_to_screen_ms_p99",
+                          "distance_m", "operator", "device", "interface_switches"}) {
+    CHECK_FALSE(JsonField(json, key).empty());
+  }
+  CHECK(std::stod(JsonField(json, "view_fps")) > 0.0);
+  CHECK(std::stod(JsonField(json, "video_to_screen_ms_p50")) > 0.0);
+  const double lap_s = std::stod(JsonField(json, "lap_time_s"));
+  cv::VideoCapture video(mp4.string(), cv::CAP_FFMPEG);
+  REQUIRE(video.isOpened());
+  int frames = 0;
+  cv::Mat frame;
+  while (video.read(frame)) ++frames;
+  CHECK(frame.empty());
+  CHECK(frames >= 25.0 * lap_s);
+}
+
+TEST_CASE("a person's keys drive the robot in the view's window, and releasing them stops it") {
+  XServer x;
+  const auto dir = test::ScratchDir("e2e-view-keys");
+  Child run({Bin("haptel"), "run", "--operator", "person", "--interface", "keyboard", "--view", "window",
+             "--time-limit", "10", "--track", "config/tracks/test-short.yaml", "--json", "--domain",
+             std::to_string(test::UniqueDomain(32)), "--database", (dir / "runs.db").string(), "--vehicle-timeout",
+             "5"});
+  // The window is up and the vehicle answers once the first progress line shows.
+  REQUIRE(test::WaitFor([&] {
+    run.Pump();
+    return run.err().find("distance") != std::string::npos;
+  }, 60.0));
+  REQUIRE(XDoTool({"search", "--sync", "--name", "Haptel", "windowfocus", "--sync"}) == 0);
+  REQUIRE(XDoTool({"keydown", "Up"}) == 0);
+  std::this_thread::sleep_for(std::chrono::seconds(3));
+  REQUIRE(XDoTool({"keyup", "Up"}) == 0);
+  // F2: the run's second interface; the switch is recorded.
+  REQUIRE(XDoTool({"key", "F2"}) == 0);
+  const int code = run.Wait(60.0);
+  INFO(run.out() << run.err());
+  CHECK(code == 1);  // time limit: a lap not completed
+  const std::string json = run.LastLine();
+  CHECK(JsonField(json, "outcome") == "time limit");
+  CHECK(JsonField(json, "operator") == "person");
+  CHECK(std::stod(JsonField(json, "distance_m")) > 0.5);
+  CHECK(json.find("\"to\":\"cockpit\"") != std::string::npos);
+  // The last progress line, seconds after the key came up: standing.
+  CHECK(LastSpeed(run.err()) == Approx(0.0).margin(0.02));
+}
+
+TEST_CASE("Escape in the window aborts the run, stops the vehicle and keeps what was measured") {
+  XServer x;
+  const auto dir = test::ScratchDir("e2e-view-abort");
+  Child run({Bin("haptel"), "run", "--operator", "person", "--interface", "keyboard", "--view", "window", "--track",
+             "config/tracks/test-short.yaml", "--json", "--domain", std::to_string(test::UniqueDomain(33)),
+             "--database", (dir / "runs.db").string(), "--vehicle-timeout", "5"});
+  REQUIRE(test::WaitFor([&] {
+    run.Pump();
+    return run.err().find("distance") != std::string::npos;
+  }, 60.0));
+  REQUIRE(XDoTool({"search", "--sync", "--name", "Haptel", "windowfocus", "--sync", "key", "Escape"}) == 0);
+  const int code = run.Wait(60.0);
+  INFO(run.out() << run.err());
+  CHECK(code == 1);
+  const std::string json = run.LastLine();
+  CHECK(JsonField(json, "outcome") == "aborted");
+  CHECK(std::stoi(JsonField(json, "run_id")) >= 1);
+}
