@@ -11,6 +11,10 @@ HAPTEL_PACKAGES=(
   libfastrtps-dev libfastcdr-dev fastddsgen
   libopencv-dev libyaml-cpp-dev catch2 libsqlite3-dev sqlite3
   libsdl2-dev
+  # The operator's view: OpenGL 3.3 core through Mesa (llvmpipe without a GPU),
+  # and an X server of its own for the window tests (Xvfb, xdotool for keys).
+  libgl-dev libegl-dev libgl1-mesa-dri libegl-mesa0
+  xvfb xauth xdotool
 )
 
 haptel_log() { echo "[haptel] $*" >&2; }

@@ -26,7 +26,10 @@ class XServer {
       server_.Pump();
       return server_.out().find('\n') != std::string::npos;
     }, 30.0));
-    display_ = ":" + server_.out().substr(0, server_.out().find('\n'));
+    // Appended, not `":" + substr(...)`: GCC 12 -O2 flags that form with a
+    // false -Werror=restrict.
+    display_ = ":";
+    display_.append(server_.out(), 0, server_.out().find('\n'));
     setenv("DISPLAY", display_.c_str(), 1);
   }
   ~XServer() { unsetenv("DISPLAY"); }
