@@ -22,6 +22,7 @@
 #include "haptel/haptics/calibration_procedure.hpp"
 #include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/recorder.hpp"
+#include "haptel/view/view.hpp"
 #include "haptel/mediator/session.hpp"
 #include "gravity_bench.hpp"
 #include "servo_bench.hpp"
@@ -243,6 +244,9 @@ int main(int argc, char** argv) {
   } catch (const ConfigError& e) {  // a part that could not be set up: nothing moved
     std::fprintf(stderr, "haptel: %s\n", e.what());
     return 2;
+  } catch (const view::ViewError& e) {  // no display, no GL 3.3, an MP4 that cannot be written
+    std::fprintf(stderr, "haptel: %s\n", e.what());
+    return 2;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "haptel: %s\n", e.what());
     return 1;
@@ -268,6 +272,14 @@ int main(int argc, char** argv) {
   std::printf("  command round trip p50 %.2f ms, p99 %.2f ms\n", r.command_rtt_ms_p50, r.command_rtt_ms_p99);
   std::printf("  video %lld frames, %.1f fps, latency p50 %.1f ms\n", static_cast<long long>(r.video_frames),
               r.video_fps, r.video_latency_ms_p50);
+  if (setup.view != ViewKind::kNone) {
+    std::printf("  view %.1f fps (frame p99 %.1f ms), video to screen p50 %.1f ms, p99 %.1f ms\n", result.view_fps,
+                result.view_frame_p99_ms, result.video_to_screen_ms_p50, result.video_to_screen_ms_p99);
+  }
+  if (!setup.record.empty()) {
+    std::printf("  operator's view recorded to %s (%llu frames dropped)\n", setup.record.c_str(),
+                static_cast<unsigned long long>(result.view_record_dropped));
+  }
   std::printf("  recorded as run %lld in %s\n", static_cast<long long>(run_id), setup.run.database.c_str());
   if (json) {
     std::ostringstream o;

@@ -13,6 +13,7 @@
 #include "haptel/mediator/lap_timer.hpp"
 #include "haptel/mediator/operator.hpp"
 #include "haptel/mediator/session_physics.hpp"
+#include "haptel/mediator/session_view.hpp"
 #include "haptel/mediator/vehicle_link.hpp"
 #include "haptel/view/sdl_input.hpp"
 
@@ -77,6 +78,71 @@ void LogProgress(double t, const LapTimer& lap, const VehicleLink& link, double 
     log::Info(line);
   }
 }
+
+/// The overlay the view shows, from the session loop's own state. Its text
+/// fields are fixed arrays: building one never allocates.
+class OverlayFeed {
+ public:
+  OverlayFeed(const SessionSetup& setup, const Track& track)
+      : setup_(setup), gates_total_(static_cast<int>(track.gates().size())) {}
+
+  view::Overlay Make(double t, const LapTimer& lap, const InterfaceSet& interfaces,
+                     const interfaces::VehicleFeedback& feedback, const interfaces::MotorCommand& motors,
+                     bool vehicle_up, bool touching) {
+    view::Overlay o;
+    const interfaces::MediatorInterface& current = interfaces.current();
+    std::snprintf(o.interface_name, sizeof o.interface_name, "%s", current.name().c_str());
+    std::snprintf(o.operator_name, sizeof o.operator_name, "%s", setup_.operator_kind.c_str());
+    o.t_s = t;
+    o.lap_time_s = lap.lap_time_s();
+    o.time_left_s = setup_.time_limit_s > 0 ? std::max(0.0, setup_.time_limit_s - t) : -1.0;
+    o.gates_passed = lap.gates_passed();
+    o.gates_total = gates_total_;
+    o.obstacles_touched = lap.obstacles_touched();
+    if (touching && !was_touching_) {
+      std::snprintf(last_contact_, sizeof last_contact_, "%s bumper at %.1f s",
+                    feedback.bumper_left && feedback.bumper_right ? "front"
+                    : feedback.bumper_left                        ? "left"
+                                                                  : "right",
+                    t);
+    }
+    was_touching_ = touching;
+    std::snprintf(o.last_contact, sizeof o.last_contact, "%s", last_contact_);
+    o.contact_now = touching;
+    o.speed_max_mps = setup_.vehicle.drive.max_speed;
+    if (const auto* cockpit = dynamic_cast<const interfaces::CockpitInterface*>(&current)) {
+      // The HUD cockpits show what their logic computed, exactly.
+      o.hud = cockpit->logic().config().hud;
+      const interfaces::HudState& h = cockpit->hud();
+      o.speed_mps = h.speed;
+      o.turn_left = h.turn_left;
+      o.turn_right = h.turn_right;
+      o.throttle_locked = h.throttle_locked;
+    } else if (current.name() == "gesture") {
+      // The thesis kept the speedometer and indicators on the gesture interface.
+      o.hud = true;
+      o.speed_mps = feedback.speed;
+      o.turn_left = motors.right - motors.left > kTurnShown;
+      o.turn_right = motors.left - motors.right > kTurnShown;
+    }
+    if (!vehicle_up) {
+      std::snprintf(o.message, sizeof o.message, "waiting for vehicle '%s'", setup_.vehicle.name.c_str());
+    } else if (interfaces.switching()) {
+      std::snprintf(o.message, sizeof o.message, "switching interface: hands off for a moment");
+    } else if (current.name() == "keyboard" && t < kHelpS) {
+      std::snprintf(o.message, sizeof o.message, "arrows or W/A/S/D drive, space stops, F1-F6 switch, Esc ends");
+    }
+    return o;
+  }
+
+ private:
+  static constexpr double kTurnShown = 0.1;  ///< motor difference that lights an indicator
+  static constexpr double kHelpS = 15.0;     ///< how long the keyboard's help line shows
+  const SessionSetup& setup_;
+  int gates_total_;
+  bool was_touching_ = false;
+  char last_contact_[40] = "";
+};
 
 }  // namespace
 
@@ -157,6 +223,24 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   if (setup.progress && vehicle.pid() != 0) {
     log::Info("vehicle '" + setup.vehicle.name + "' started, pid " + std::to_string(vehicle.pid()));
   }
+
+  // --- The view, when something shows it: a window, or offscreen for the MP4. ---
+  std::unique_ptr<SessionView> view_part;
+  if (setup.view != ViewKind::kNone) {
+    view::ViewOptions options;
+    options.mode = setup.view == ViewKind::kWindow ? view::ViewMode::kWindow : view::ViewMode::kOffscreen;
+    options.record = setup.record;
+    options.title = "Haptel - " + run.name;
+    SessionView::Parts view_parts;
+    view_parts.hal = &haptic.hal();
+    view_parts.physics = physics_side.get();
+    view_parts.physics_config = &setup.physics;
+    view_parts.cockpit = cockpit_config;
+    view_parts.video = &vehicle.video();
+    view_parts.hands = start_spec.hands();
+    view_part = std::make_unique<SessionView>(options, view_parts, input);
+  }
+  OverlayFeed overlay_feed(setup, track);
 
   LapTimer lap(track);
   const int64_t t0 = MonotonicNs();
@@ -295,6 +379,9 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
              "lap cap of " + std::to_string(static_cast<int>(setup.track.lap_cap_s)) + " s reached");
       break;
     }
+    if (view_part) {
+      view_part->Publish(overlay_feed.Make(t, lap, interfaces, feedback, motors, vehicle_up, touching));
+    }
     if (setup.progress && now >= next_progress_ns) {
       next_progress_ns += SToNs(2.0);
       LogProgress(t, lap, vehicle, feedback.speed, result.distance_m, interfaces.current(), motors);
@@ -304,6 +391,15 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   // Make safe: forces to zero, motors stopped, vehicle process ended.
   haptic.hal().ZeroForces();
   vehicle.Send(0.0, 0.0);
+  if (view_part) {
+    view_part->Stop();  // finishes the MP4
+    const view::ViewStats vs = view_part->Stats();
+    result.view_fps = vs.fps;
+    result.view_frame_p99_ms = vs.frame_ms_p99;
+    result.video_to_screen_ms_p50 = vs.video_to_screen_ms_p50;
+    result.video_to_screen_ms_p99 = vs.video_to_screen_ms_p99;
+    result.view_record_dropped = vs.record_dropped;
+  }
   if (physics_side) {
     physics_side->world->Stop();
     const LoopStats p = physics_side->world->Stats();

@@ -119,6 +119,7 @@ struct SessionResult {
   double view_fps = 0.0;
   double view_frame_p99_ms = 0.0;
   double video_to_screen_ms_p50 = 0.0;
+  uint64_t view_record_dropped = 0;  ///< MP4 frames the encoder could not take in time
 };
 
 /// Runs one lap (or until the cap, the time limit, a lost vehicle or device,

@@ -53,6 +53,7 @@ struct Overlay {
   /// HUD (the HUD interfaces; the gesture interface may show it too).
   bool hud = false;
   double speed_mps = 0.0;
+  double speed_max_mps = 1.0;  ///< the speedometer's full scale
   bool turn_left = false;    ///< indicator: on while turning left (drawn flashing)
   bool turn_right = false;
   bool throttle_locked = false;

@@ -1,0 +1,61 @@
+#pragma once
+/// @file The session's view part: the operator's view (a window, or
+/// offscreen for the MP4), fed from the session's parts without blocking
+/// them, with the person's keys and controller read in its window.
+///
+/// The view thread calls Fill at display rate: it reads the HAL and the
+/// physics poses (seqlocks), the controls (the controls link's seqlock), the
+/// decoded frame (a shared pointer taken under the receiver's short lock)
+/// and the overlay the session loop publishes (a seqlock). Nothing here
+/// waits on the servo loop, the physics thread or the link.
+#include <array>
+#include <memory>
+
+#include "haptel/config/cockpit.hpp"
+#include "haptel/config/physics.hpp"
+#include "haptel/core/seqlock.hpp"
+#include "haptel/haptics/hal.hpp"
+#include "haptel/interfaces/input.hpp"
+#include "haptel/physics/cockpit_controls.hpp"
+#include "haptel/view/sdl_input.hpp"
+#include "haptel/view/view.hpp"
+
+namespace haptel::mediator {
+
+struct SessionPhysics;
+class VideoReceiver;
+
+class SessionView final : public view::ViewSource {
+ public:
+  /// What the view shows; everything must outlive the SessionView.
+  struct Parts {
+    const haptics::Hal* hal = nullptr;
+    const SessionPhysics* physics = nullptr;  ///< null: no world (tracked hands)
+    const PhysicsConfig* physics_config = nullptr;
+    const CockpitConfig* cockpit = nullptr;  ///< the controls' geometry, when there are controls
+    physics::ControlsBodyConfig controls_bodies;  ///< as the world built them
+    const VideoReceiver* video = nullptr;
+    std::array<bool, 2> hands{false, true};  ///< tracked hands to draw without a world
+  };
+
+  /// Opens the view (throws view::ViewError when it cannot) and reads the
+  /// person's keys and controller into `input`.
+  SessionView(const view::ViewOptions& options, const Parts& parts, interfaces::InputBox& input);
+  ~SessionView() override;
+
+  /// Session thread: the overlay for the next frames (a seqlock store: never waits).
+  void Publish(const view::Overlay& overlay) { overlay_.Store(overlay); }
+  /// View thread.
+  void Fill(view::ViewModel& model) override;
+  view::ViewStats Stats() const;
+  /// Stops the view (and finishes the MP4).
+  void Stop();
+
+ private:
+  Parts parts_;
+  Seqlock<view::Overlay> overlay_;
+  view::SdlInput input_;
+  std::unique_ptr<view::View> view_;  // last: its thread uses the rest
+};
+
+}  // namespace haptel::mediator

@@ -1,0 +1,77 @@
+#pragma once
+/// @file Draws a ViewModel with OpenGL 3.3 core: the shapes lit from above,
+/// the vehicle's video on a virtual screen in front of the operator (thesis
+/// fig. 8.4), and the overlay (lap clock, gates, contacts, HUD) on top.
+///
+/// The camera sits behind and above the device workspace looking forward and
+/// down, so the hands, the wheel and the lever are in the lower half and the
+/// screen fills the upper half. Everything is in the device frame (x forward,
+/// y left, z up; metres). A Renderer needs a current GL 3.3 context on the
+/// calling thread for its whole life; it allocates its GL objects once.
+#include <array>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "haptel/view/view_model.hpp"
+
+namespace haptel::view {
+
+/// Where the virtual screen hangs (device frame): its centre and width; the
+/// height follows the video's aspect ratio (4:3 until the first frame).
+struct ScreenPlacement {
+  std::array<double, 3> centre{0.70, 0.0, 0.25};
+  double width = 0.80;
+};
+
+/// The text lines the overlay shows for `overlay`, top to bottom: what the
+/// person reads (the renderer draws exactly these, so tests read them here).
+std::vector<std::string> OverlayLines(const Overlay& overlay);
+/// The HUD's speedometer text ("0.42 m/s"), empty without a HUD.
+std::string HudSpeedText(const Overlay& overlay);
+/// Whether a turn indicator that is on is lit at time `t_s` (they flash at
+/// 1.5 Hz, lit for the first half of each period, as a car's do).
+bool IndicatorLit(double t_s);
+
+class Renderer {
+ public:
+  /// Compiles the shaders and builds the meshes and textures for a
+  /// `width`×`height` framebuffer. Throws ViewError when GL is below 3.3 or a
+  /// shader does not compile (with GL's log).
+  Renderer(int width, int height, const ScreenPlacement& screen = {});
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  /// Draws one frame into the current framebuffer; `t_s` drives the
+  /// indicators' flashing. Uploads the video image only when its id changes.
+  void Draw(const ViewModel& model, double t_s);
+
+  /// The framebuffer as drawn (after Draw, before the swap), BGR, top row
+  /// first, into `bgr` (reallocated only when its size differs).
+  void ReadPixels(cv::Mat& bgr) const;
+  /// The framebuffer as drawn, RGBA bottom row first (GL's order), straight
+  /// into `rgba` (CV_8UC4, height×width): the recorder converts it later.
+  void ReadPixelsRaw(cv::Mat& rgba) const;
+
+  /// Where a device-frame point lands in the image: pixels from the top-left
+  /// corner. False when the point is behind the camera.
+  bool Project(const std::array<double, 3>& point, double& px, double& py) const;
+  /// The screen's corners now (top-left, top-right, bottom-right,
+  /// bottom-left as the operator sees them), device frame.
+  std::array<std::array<double, 3>, 4> ScreenCorners() const;
+
+  int width() const { return width_; }
+  int height() const { return height_; }
+
+ private:
+  struct Gl;
+  int width_;
+  int height_;
+  ScreenPlacement screen_;
+  double screen_aspect_ = 3.0 / 4.0;  ///< height / width of the video
+  std::unique_ptr<Gl> gl_;
+};
+
+}  // namespace haptel::view

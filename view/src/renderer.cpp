@@ -1,0 +1,599 @@
+#include "haptel/view/renderer.hpp"
+
+#define GL_GLEXT_PROTOTYPES 1
+#include <GL/glcorearb.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <opencv2/imgproc.hpp>
+
+#include "haptel/view/view.hpp"
+
+namespace haptel::view {
+namespace {
+
+// The camera: behind and above the workspace, looking forward and down.
+const Eigen::Vector3f kEye(-0.45f, 0.0f, 0.30f);
+const Eigen::Vector3f kTarget(0.40f, 0.0f, 0.10f);
+constexpr float kFovYDeg = 60.0f;
+constexpr float kNear = 0.05f;
+constexpr float kFar = 20.0f;
+const Eigen::Vector3f kLightDir =
+    Eigen::Vector3f(0.3f, -0.2f, -1.0f).normalized();  // pointing down
+constexpr double kIndicatorHz = 1.5;
+
+const char* kLitVertex = R"(#version 330 core
+layout(location = 0) in vec3 position;
+layout(location = 1) in vec3 normal;
+uniform mat4 mvp;
+uniform mat3 normal_matrix;
+out vec3 world_normal;
+void main() {
+  gl_Position = mvp * vec4(position, 1.0);
+  world_normal = normal_matrix * normal;
+})";
+
+const char* kLitFragment = R"(#version 330 core
+in vec3 world_normal;
+uniform vec4 color;
+uniform vec3 light_dir;
+out vec4 frag;
+void main() {
+  float lambert = max(dot(normalize(world_normal), -light_dir), 0.0);
+  frag = vec4(color.rgb * (0.35 + 0.65 * lambert), color.a);
+})";
+
+const char* kTexVertex = R"(#version 330 core
+layout(location = 0) in vec3 position;
+layout(location = 1) in vec2 uv;
+uniform mat4 mvp;
+out vec2 tex_uv;
+void main() {
+  gl_Position = mvp * vec4(position, 1.0);
+  tex_uv = uv;
+})";
+
+const char* kTexFragment = R"(#version 330 core
+in vec2 tex_uv;
+uniform sampler2D image;
+out vec4 frag;
+void main() { frag = texture(image, tex_uv); })";
+
+GLuint Compile(GLenum type, const char* source) {
+  const GLuint shader = glCreateShader(type);
+  glShaderSource(shader, 1, &source, nullptr);
+  glCompileShader(shader);
+  GLint ok = 0;
+  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
+  if (ok == 0) {
+    char log[1024] = "";
+    glGetShaderInfoLog(shader, sizeof log, nullptr, log);
+    glDeleteShader(shader);
+    throw ViewError(std::string("view: shader does not compile: ") + log);
+  }
+  return shader;
+}
+
+GLuint Link(const char* vertex, const char* fragment) {
+  const GLuint vs = Compile(GL_VERTEX_SHADER, vertex);
+  const GLuint fs = Compile(GL_FRAGMENT_SHADER, fragment);
+  const GLuint program = glCreateProgram();
+  glAttachShader(program, vs);
+  glAttachShader(program, fs);
+  glLinkProgram(program);
+  glDeleteShader(vs);
+  glDeleteShader(fs);
+  GLint ok = 0;
+  glGetProgramiv(program, GL_LINK_STATUS, &ok);
+  if (ok == 0) {
+    char log[1024] = "";
+    glGetProgramInfoLog(program, sizeof log, nullptr, log);
+    glDeleteProgram(program);
+    throw ViewError(std::string("view: shader program does not link: ") + log);
+  }
+  return program;
+}
+
+/// Triangles with position and normal (lit) or position and uv (textured).
+struct Mesh {
+  GLuint vao = 0;
+  GLuint vbo = 0;
+  GLsizei vertices = 0;
+
+  /// `data` holds 6 floats per vertex: xyz then normal or (u, v, 0).
+  void Upload(const std::vector<float>& data, bool textured) {
+    glGenVertexArrays(1, &vao);
+    glGenBuffers(1, &vbo);
+    glBindVertexArray(vao);
+    glBindBuffer(GL_ARRAY_BUFFER, vbo);
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data.size() * sizeof(float)), data.data(),
+                 GL_STATIC_DRAW);
+    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
+    glEnableVertexAttribArray(0);
+    glVertexAttribPointer(1, textured ? 2 : 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float),
+                          reinterpret_cast<void*>(3 * sizeof(float)));
+    glEnableVertexAttribArray(1);
+    vertices = static_cast<GLsizei>(data.size() / 6);
+    glBindVertexArray(0);
+  }
+  void Release() {
+    if (vbo != 0) glDeleteBuffers(1, &vbo);
+    if (vao != 0) glDeleteVertexArrays(1, &vao);
+    vbo = vao = 0;
+  }
+  void Draw() const {
+    glBindVertexArray(vao);
+    glDrawArrays(GL_TRIANGLES, 0, vertices);
+  }
+};
+
+void Push(std::vector<float>& v, const Eigen::Vector3f& p, const Eigen::Vector3f& n) {
+  v.insert(v.end(), {p.x(), p.y(), p.z(), n.x(), n.y(), n.z()});
+}
+
+/// The unit cube (half extents 1).
+std::vector<float> CubeMesh() {
+  std::vector<float> v;
+  for (int axis = 0; axis < 3; ++axis) {
+    for (float sign : {-1.0f, 1.0f}) {
+      Eigen::Vector3f n = Eigen::Vector3f::Zero();
+      n[axis] = sign;
+      const Eigen::Vector3f a = Eigen::Vector3f::Unit((axis + 1) % 3);
+      const Eigen::Vector3f b = Eigen::Vector3f::Unit((axis + 2) % 3);
+      const Eigen::Vector3f c[4] = {n - a - b, n + a - b, n + a + b, n - a + b};
+      for (int i : {0, 1, 2, 0, 2, 3}) Push(v, c[i], n);
+    }
+  }
+  return v;
+}
+
+/// The unit sphere.
+std::vector<float> SphereMesh(int stacks = 12, int slices = 20) {
+  std::vector<float> v;
+  auto at = [&](int i, int j) {
+    const double theta = M_PI * i / stacks;
+    const double phi = 2 * M_PI * j / slices;
+    return Eigen::Vector3f(static_cast<float>(std::sin(theta) * std::cos(phi)),
+                           static_cast<float>(std::sin(theta) * std::sin(phi)),
+                           static_cast<float>(std::cos(theta)));
+  };
+  for (int i = 0; i < stacks; ++i) {
+    for (int j = 0; j < slices; ++j) {
+      const Eigen::Vector3f p00 = at(i, j), p01 = at(i, j + 1), p10 = at(i + 1, j),
+                            p11 = at(i + 1, j + 1);
+      for (const Eigen::Vector3f& p : {p00, p10, p11, p00, p11, p01}) Push(v, p, p);
+    }
+  }
+  return v;
+}
+
+/// The cylinder of radius 1 from x = −1 to x = 1, with caps.
+std::vector<float> CylinderMesh(int slices = 24) {
+  std::vector<float> v;
+  auto ring = [&](int j) {
+    const double phi = 2 * M_PI * j / slices;
+    return Eigen::Vector3f(0.0f, static_cast<float>(std::cos(phi)),
+                           static_cast<float>(std::sin(phi)));
+  };
+  const Eigen::Vector3f ex = Eigen::Vector3f::UnitX();
+  for (int j = 0; j < slices; ++j) {
+    const Eigen::Vector3f r0 = ring(j), r1 = ring(j + 1);
+    for (const Eigen::Vector3f& p :
+         {Eigen::Vector3f(r0 - ex), Eigen::Vector3f(r1 - ex), Eigen::Vector3f(r1 + ex),
+          Eigen::Vector3f(r0 - ex), Eigen::Vector3f(r1 + ex), Eigen::Vector3f(r0 + ex)}) {
+      Push(v, p, Eigen::Vector3f(0, p.y(), p.z()));
+    }
+    Push(v, ex, ex);
+    Push(v, r0 + ex, ex);
+    Push(v, r1 + ex, ex);
+    Push(v, -ex, -ex);
+    Push(v, r1 - ex, -ex);
+    Push(v, r0 - ex, -ex);
+  }
+  return v;
+}
+
+/// The unit quad in x = 0 facing −x, corners (y, z) ∈ [−1, 1]², uv with v = 0
+/// at the top and u = 0 on the left as seen from −x (which is +y).
+std::vector<float> ScreenQuadMesh() {
+  struct Corner {
+    float y, z, u, v;
+  };
+  const Corner c[4] = {{1, 1, 0, 0}, {-1, 1, 1, 0}, {-1, -1, 1, 1}, {1, -1, 0, 1}};
+  std::vector<float> v;
+  for (int i : {0, 3, 2, 0, 2, 1}) v.insert(v.end(), {0.0f, c[i].y, c[i].z, c[i].u, c[i].v, 0.0f});
+  return v;
+}
+
+/// A quad covering the viewport in clip space, v = 0 at the top.
+std::vector<float> FullscreenQuadMesh() {
+  const float c[4][4] = {{-1, 1, 0, 0}, {1, 1, 1, 0}, {1, -1, 1, 1}, {-1, -1, 0, 1}};
+  std::vector<float> v;
+  for (int i : {0, 3, 2, 0, 2, 1})
+    v.insert(v.end(), {c[i][0], c[i][1], 0.0f, c[i][2], c[i][3], 0.0f});
+  return v;
+}
+
+Eigen::Matrix4f LookAt(const Eigen::Vector3f& eye, const Eigen::Vector3f& target,
+                       const Eigen::Vector3f& up) {
+  const Eigen::Vector3f f = (target - eye).normalized();
+  const Eigen::Vector3f s = f.cross(up).normalized();
+  const Eigen::Vector3f u = s.cross(f);
+  Eigen::Matrix4f m = Eigen::Matrix4f::Identity();
+  m.block<1, 3>(0, 0) = s.transpose();
+  m.block<1, 3>(1, 0) = u.transpose();
+  m.block<1, 3>(2, 0) = -f.transpose();
+  m(0, 3) = -s.dot(eye);
+  m(1, 3) = -u.dot(eye);
+  m(2, 3) = f.dot(eye);
+  return m;
+}
+
+Eigen::Matrix4f Perspective(float fovy_deg, float aspect, float near, float far) {
+  const float f = 1.0f / std::tan(fovy_deg * static_cast<float>(M_PI) / 360.0f);
+  Eigen::Matrix4f m = Eigen::Matrix4f::Zero();
+  m(0, 0) = f / aspect;
+  m(1, 1) = f;
+  m(2, 2) = (far + near) / (near - far);
+  m(2, 3) = 2.0f * far * near / (near - far);
+  m(3, 2) = -1.0f;
+  return m;
+}
+
+Eigen::Matrix4f Model(const std::array<double, 3>& position, const std::array<double, 4>& q_wxyz,
+                      const Eigen::Vector3f& scale) {
+  Eigen::Quaternionf q(static_cast<float>(q_wxyz[0]), static_cast<float>(q_wxyz[1]),
+                       static_cast<float>(q_wxyz[2]), static_cast<float>(q_wxyz[3]));
+  if (q.norm() < 1e-6f) q = Eigen::Quaternionf::Identity();
+  Eigen::Affine3f a = Eigen::Affine3f::Identity();
+  a.translate(Eigen::Vector3f(static_cast<float>(position[0]), static_cast<float>(position[1]),
+                              static_cast<float>(position[2])));
+  a.rotate(q.normalized());
+  a.scale(scale);
+  return a.matrix();
+}
+
+cv::Scalar Bgra(double b, double g, double r, double a = 255) { return cv::Scalar(b, g, r, a); }
+
+}  // namespace
+
+std::vector<std::string> OverlayLines(const Overlay& o) {
+  std::vector<std::string> lines;
+  char line[160];
+  std::snprintf(line, sizeof line, "%s  (%s)", o.interface_name, o.operator_name);
+  lines.emplace_back(line);
+  if (o.time_left_s >= 0) {
+    std::snprintf(line, sizeof line, "lap %.1f s   time left %.0f s", o.lap_time_s, o.time_left_s);
+  } else {
+    std::snprintf(line, sizeof line, "lap %.1f s", o.lap_time_s);
+  }
+  lines.emplace_back(line);
+  std::snprintf(line, sizeof line, "gates %d/%d   obstacles %d", o.gates_passed, o.gates_total,
+                o.obstacles_touched);
+  lines.emplace_back(line);
+  std::snprintf(line, sizeof line, "last contact: %s",
+                o.last_contact[0] != '\0' ? o.last_contact : "none");
+  lines.emplace_back(line);
+  if (o.hud) {
+    lines.push_back("speed " + HudSpeedText(o));
+    if (o.throttle_locked) lines.emplace_back("THROTTLE LOCKED");
+  }
+  if (o.message[0] != '\0') lines.emplace_back(o.message);
+  return lines;
+}
+
+std::string HudSpeedText(const Overlay& o) {
+  if (!o.hud) return {};
+  char text[32];
+  std::snprintf(text, sizeof text, "%.2f m/s", std::abs(o.speed_mps));
+  return text;
+}
+
+bool IndicatorLit(double t_s) {
+  const double phase = t_s * kIndicatorHz;
+  return phase - std::floor(phase) < 0.5;
+}
+
+struct Renderer::Gl {
+  GLuint lit = 0;
+  GLint lit_mvp = -1, lit_normal = -1, lit_color = -1, lit_light = -1;
+  GLuint tex = 0;
+  GLint tex_mvp = -1, tex_image = -1;
+  Mesh cube, sphere, cylinder, screen, fullscreen;
+  GLuint video_texture = 0;
+  int video_cols = 0, video_rows = 0;
+  uint64_t video_id = 0;
+  bool have_video = false;
+  GLuint overlay_texture = 0;
+  cv::Mat overlay;  ///< BGRA, drawn on the CPU when its content changes
+  std::string overlay_key;
+  Eigen::Matrix4f view_projection;
+};
+
+Renderer::Renderer(int width, int height, const ScreenPlacement& screen)
+    : width_(width), height_(height), screen_(screen), gl_(std::make_unique<Gl>()) {
+  GLint major = 0, minor = 0;
+  glGetIntegerv(GL_MAJOR_VERSION, &major);
+  glGetIntegerv(GL_MINOR_VERSION, &minor);
+  if (major * 10 + minor < 33) {
+    throw ViewError("view: OpenGL 3.3 core is needed, this context has " + std::to_string(major) +
+                    "." + std::to_string(minor));
+  }
+  Gl& g = *gl_;
+  g.lit = Link(kLitVertex, kLitFragment);
+  g.lit_mvp = glGetUniformLocation(g.lit, "mvp");
+  g.lit_normal = glGetUniformLocation(g.lit, "normal_matrix");
+  g.lit_color = glGetUniformLocation(g.lit, "color");
+  g.lit_light = glGetUniformLocation(g.lit, "light_dir");
+  g.tex = Link(kTexVertex, kTexFragment);
+  g.tex_mvp = glGetUniformLocation(g.tex, "mvp");
+  g.tex_image = glGetUniformLocation(g.tex, "image");
+  g.cube.Upload(CubeMesh(), false);
+  g.sphere.Upload(SphereMesh(), false);
+  g.cylinder.Upload(CylinderMesh(), false);
+  g.screen.Upload(ScreenQuadMesh(), true);
+  g.fullscreen.Upload(FullscreenQuadMesh(), true);
+
+  auto make_texture = [](GLuint& t) {
+    glGenTextures(1, &t);
+    glBindTexture(GL_TEXTURE_2D, t);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  };
+  make_texture(g.video_texture);
+  const uint8_t grey[3] = {40, 40, 40};  // no video yet: a dark screen
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, 1, 1, 0, GL_BGR, GL_UNSIGNED_BYTE, grey);
+  make_texture(g.overlay_texture);
+  g.overlay = cv::Mat(height, width, CV_8UC4, cv::Scalar(0, 0, 0, 0));
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, width, height, 0, GL_BGRA, GL_UNSIGNED_BYTE,
+               g.overlay.data);
+
+  g.view_projection =
+      Perspective(kFovYDeg, static_cast<float>(width) / static_cast<float>(height), kNear, kFar) *
+      LookAt(kEye, kTarget, Eigen::Vector3f::UnitZ());
+  glViewport(0, 0, width, height);
+}
+
+Renderer::~Renderer() {
+  Gl& g = *gl_;
+  for (Mesh* m : {&g.cube, &g.sphere, &g.cylinder, &g.screen, &g.fullscreen}) m->Release();
+  glDeleteTextures(1, &g.video_texture);
+  glDeleteTextures(1, &g.overlay_texture);
+  glDeleteProgram(g.lit);
+  glDeleteProgram(g.tex);
+}
+
+std::array<std::array<double, 3>, 4> Renderer::ScreenCorners() const {
+  const auto& c = screen_.centre;
+  const double hw = screen_.width / 2.0;
+  const double hh = hw * screen_aspect_;
+  return {{{c[0], c[1] + hw, c[2] + hh},
+           {c[0], c[1] - hw, c[2] + hh},
+           {c[0], c[1] - hw, c[2] - hh},
+           {c[0], c[1] + hw, c[2] - hh}}};
+}
+
+bool Renderer::Project(const std::array<double, 3>& point, double& px, double& py) const {
+  const Eigen::Vector4f clip =
+      gl_->view_projection * Eigen::Vector4f(static_cast<float>(point[0]),
+                                             static_cast<float>(point[1]),
+                                             static_cast<float>(point[2]), 1.0f);
+  if (clip.w() <= 0.0f) return false;
+  const double ndc_x = clip.x() / clip.w();
+  const double ndc_y = clip.y() / clip.w();
+  px = (ndc_x + 1.0) / 2.0 * width_;
+  py = (1.0 - ndc_y) / 2.0 * height_;
+  return true;
+}
+
+void Renderer::Draw(const ViewModel& model, double t_s) {
+  Gl& g = *gl_;
+  glViewport(0, 0, width_, height_);
+  glClearColor(0.55f, 0.62f, 0.70f, 1.0f);  // a light room
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  glEnable(GL_DEPTH_TEST);
+  glDisable(GL_BLEND);
+  glDisable(GL_CULL_FACE);  // few triangles: both sides cost nothing, and no winding to get wrong
+
+  // --- Lit shapes: a floor and desk for depth, then the model's shapes. ---
+  glUseProgram(g.lit);
+  glEnable(GL_BLEND);  // the gesture wall is translucent
+  glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+  glUniform3f(g.lit_light, kLightDir.x(), kLightDir.y(), kLightDir.z());
+  auto draw = [&](const Mesh& mesh, const std::array<double, 3>& p, const std::array<double, 4>& q,
+                  const Eigen::Vector3f& scale, const Rgba& color) {
+    const Eigen::Matrix4f m = Model(p, q, scale);
+    const Eigen::Matrix4f mvp = g.view_projection * m;
+    const Eigen::Matrix3f n = m.block<3, 3>(0, 0).inverse().transpose();
+    glUniformMatrix4fv(g.lit_mvp, 1, GL_FALSE, mvp.data());
+    glUniformMatrix3fv(g.lit_normal, 1, GL_FALSE, n.data());
+    glUniform4f(g.lit_color, color.r, color.g, color.b, color.a);
+    mesh.Draw();
+  };
+  const std::array<double, 4> identity{1, 0, 0, 0};
+  draw(g.cube, {0.3, 0.0, -0.32}, identity, {3.0f, 3.0f, 0.01f},
+       {0.35f, 0.36f, 0.38f, 1});  // floor
+  const auto corners = ScreenCorners();
+  const double screen_h = corners[0][2] - corners[3][2];
+  const auto& sc = screen_.centre;
+  // The screen's bezel, just behind it.
+  draw(g.cube, {sc[0] + 0.012, sc[1], sc[2]}, identity,
+       {0.01f, static_cast<float>(screen_.width / 2 + 0.02),
+        static_cast<float>(screen_h / 2 + 0.02)},
+       {0.08f, 0.08f, 0.09f, 1});
+  draw(g.cube, {sc[0] + 0.03, sc[1], (sc[2] - screen_h / 2 + (-0.32)) / 2}, identity,
+       {0.015f, 0.03f, static_cast<float>((sc[2] - screen_h / 2 + 0.32) / 2)},
+       {0.1f, 0.1f, 0.1f, 1});  // its stand
+
+  for (const Shape& s : model.shapes) {
+    const auto& z = s.size;
+    switch (s.kind) {
+      case ShapeKind::kBox:
+        draw(g.cube, s.position, s.orientation,
+             {static_cast<float>(z[0]), static_cast<float>(z[1]), static_cast<float>(z[2])},
+             s.color);
+        break;
+      case ShapeKind::kSphere: {
+        const auto r = static_cast<float>(z[0]);
+        draw(g.sphere, s.position, s.orientation, {r, r, r}, s.color);
+        break;
+      }
+      case ShapeKind::kCylinder:
+      case ShapeKind::kCapsule: {
+        const auto r = static_cast<float>(z[0]);
+        const auto h = static_cast<float>(z[1]);
+        draw(g.cylinder, s.position, s.orientation, {h, r, r}, s.color);
+        if (s.kind == ShapeKind::kCapsule) {
+          // The caps: spheres at ±h along the shape's own x axis.
+          const Eigen::Quaternionf q(
+              static_cast<float>(s.orientation[0]), static_cast<float>(s.orientation[1]),
+              static_cast<float>(s.orientation[2]), static_cast<float>(s.orientation[3]));
+          const Eigen::Vector3f axis = q.normalized() * Eigen::Vector3f(h, 0, 0);
+          for (float sign : {-1.0f, 1.0f}) {
+            const std::array<double, 3> p{s.position[0] + sign * axis.x(),
+                                          s.position[1] + sign * axis.y(),
+                                          s.position[2] + sign * axis.z()};
+            draw(g.sphere, p, s.orientation, {r, r, r}, s.color);
+          }
+        }
+        break;
+      }
+    }
+  }
+
+  // --- The video screen. ---
+  glUseProgram(g.tex);
+  glActiveTexture(GL_TEXTURE0);
+  glUniform1i(g.tex_image, 0);
+  glBindTexture(GL_TEXTURE_2D, g.video_texture);
+  const cv::Mat* image = model.video.image.get();
+  if (image != nullptr && !image->empty() && image->type() == CV_8UC3 &&
+      model.video.id != g.video_id) {
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glPixelStorei(GL_UNPACK_ROW_LENGTH, static_cast<GLint>(image->step / 3));
+    if (image->cols != g.video_cols || image->rows != g.video_rows) {
+      glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, image->cols, image->rows, 0, GL_BGR, GL_UNSIGNED_BYTE,
+                   image->data);
+      g.video_cols = image->cols;
+      g.video_rows = image->rows;
+      screen_aspect_ = static_cast<double>(image->rows) / image->cols;
+    } else {
+      glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, image->cols, image->rows, GL_BGR, GL_UNSIGNED_BYTE,
+                      image->data);
+    }
+    glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
+    g.video_id = model.video.id;
+  }
+  {
+    const double hw = screen_.width / 2.0;
+    const Eigen::Matrix4f m = Model(
+        sc, identity, {1.0f, static_cast<float>(hw), static_cast<float>(hw * screen_aspect_)});
+    const Eigen::Matrix4f mvp = g.view_projection * m;
+    glUniformMatrix4fv(g.tex_mvp, 1, GL_FALSE, mvp.data());
+    g.screen.Draw();
+  }
+
+  // --- The overlay: redrawn on the CPU only when what it says changes. ---
+  const Overlay& o = model.overlay;
+  const bool lit = IndicatorLit(t_s);
+  const std::vector<std::string> lines = OverlayLines(o);
+  std::string key;
+  for (const auto& l : lines) key += l + '\n';
+  key += o.contact_now ? 'C' : '-';
+  key += (o.hud && o.turn_left && lit) ? 'L' : '-';
+  key += (o.hud && o.turn_right && lit) ? 'R' : '-';
+  char needle[16];
+  std::snprintf(needle, sizeof needle, "%.3f",
+                o.hud ? o.speed_mps / std::max(o.speed_max_mps, 1e-3) : 0.0);
+  key += needle;
+  glBindTexture(GL_TEXTURE_2D, g.overlay_texture);
+  if (key != g.overlay_key) {
+    g.overlay_key = key;
+    cv::Mat& ov = g.overlay;
+    ov.setTo(cv::Scalar(0, 0, 0, 0));
+    const int font = cv::FONT_HERSHEY_SIMPLEX;
+    const double scale = 0.55 * height_ / 576.0;
+    const int line_h = static_cast<int>(26 * height_ / 576.0);
+    const int panel_lines = 4;
+    cv::rectangle(ov, cv::Rect(8, 8, static_cast<int>(width_ * 0.36), line_h * panel_lines + 12),
+                  Bgra(0, 0, 0, 150), cv::FILLED);
+    for (int i = 0; i < panel_lines && i < static_cast<int>(lines.size()); ++i) {
+      cv::putText(ov, lines[i], cv::Point(16, 8 + line_h * (i + 1)), font, scale,
+                  Bgra(255, 255, 255), 1, cv::LINE_AA);
+    }
+    if (o.hud) {
+      // Speedometer: a 240° dial at the bottom centre, the indicators either side.
+      const int radius = static_cast<int>(58 * height_ / 576.0);
+      const cv::Point centre(width_ / 2, height_ - radius - 16);
+      cv::circle(ov, centre, radius + 6, Bgra(20, 20, 20, 190), cv::FILLED, cv::LINE_AA);
+      cv::ellipse(ov, centre, cv::Size(radius, radius), 0, 150, 390, Bgra(200, 200, 200), 2,
+                  cv::LINE_AA);
+      const double fraction =
+          std::clamp(std::abs(o.speed_mps) / std::max(o.speed_max_mps, 1e-3), 0.0, 1.0);
+      const double angle = (150.0 + 240.0 * fraction) * M_PI / 180.0;
+      cv::line(ov, centre,
+               centre + cv::Point(static_cast<int>(radius * 0.85 * std::cos(angle)),
+                                  static_cast<int>(radius * 0.85 * std::sin(angle))),
+               Bgra(40, 80, 255), 3, cv::LINE_AA);
+      const std::string speed = HudSpeedText(o);
+      int base = 0;
+      const cv::Size ts = cv::getTextSize(speed, font, scale, 1, &base);
+      cv::putText(ov, speed, centre + cv::Point(-ts.width / 2, radius / 2 + ts.height / 2), font,
+                  scale, Bgra(255, 255, 255), 1, cv::LINE_AA);
+      auto arrow = [&](int direction, bool on) {  // direction −1: left
+        const cv::Point tip(centre.x + direction * (radius + 50), centre.y);
+        const cv::Point pts[3] = {tip, tip + cv::Point(-direction * 26, -16),
+                                  tip + cv::Point(-direction * 26, 16)};
+        cv::fillConvexPoly(ov, pts, 3, on ? Bgra(60, 230, 60) : Bgra(60, 60, 60, 200), cv::LINE_AA);
+      };
+      arrow(-1, o.turn_left && lit);
+      arrow(1, o.turn_right && lit);
+      if (o.throttle_locked) {
+        cv::putText(ov, "THROTTLE LOCKED", cv::Point(centre.x + radius + 70, height_ - 20), font,
+                    scale, Bgra(0, 180, 255), 2, cv::LINE_AA);
+      }
+    }
+    if (o.message[0] != '\0') {
+      int base = 0;
+      const cv::Size ts = cv::getTextSize(o.message, font, scale * 1.2, 2, &base);
+      // Above the speedometer.
+      const cv::Point at((width_ - ts.width) / 2,
+                         height_ - static_cast<int>(160 * height_ / 576.0));
+      cv::rectangle(ov, cv::Rect(at.x - 8, at.y - ts.height - 8, ts.width + 16, ts.height + 16),
+                    Bgra(0, 0, 0, 160), cv::FILLED);
+      cv::putText(ov, o.message, at, font, scale * 1.2, Bgra(255, 255, 255), 2, cv::LINE_AA);
+    }
+    if (o.contact_now) cv::rectangle(ov, cv::Rect(0, 0, width_, height_), Bgra(0, 0, 255, 220), 10);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width_, height_, GL_BGRA, GL_UNSIGNED_BYTE, ov.data);
+  }
+  glDisable(GL_DEPTH_TEST);
+  glEnable(GL_BLEND);
+  glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+  const Eigen::Matrix4f identity4 = Eigen::Matrix4f::Identity();
+  glUniformMatrix4fv(g.tex_mvp, 1, GL_FALSE, identity4.data());
+  g.fullscreen.Draw();
+  glDisable(GL_BLEND);
+  glBindVertexArray(0);
+}
+
+void Renderer::ReadPixelsRaw(cv::Mat& rgba) const {
+  rgba.create(height_, width_, CV_8UC4);
+  glPixelStorei(GL_PACK_ALIGNMENT, 4);
+  glReadPixels(0, 0, width_, height_, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data);
+}
+
+void Renderer::ReadPixels(cv::Mat& bgr) const {
+  cv::Mat rgba;
+  ReadPixelsRaw(rgba);
+  cv::Mat flipped;
+  cv::flip(rgba, flipped, 0);
+  cv::cvtColor(flipped, bgr, cv::COLOR_RGBA2BGR);
+}
+
+}  // namespace haptel::view

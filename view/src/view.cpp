@@ -1,0 +1,315 @@
+#include "haptel/view/view.hpp"
+
+#include <SDL2/SDL.h>
+#include <time.h>
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdlib>
+#include <deque>
+#include <future>
+#include <mutex>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+#include <thread>
+
+#define GL_GLEXT_PROTOTYPES 1
+#include <GL/glcorearb.h>
+
+#include "haptel/core/histogram.hpp"
+#include "haptel/view/renderer.hpp"
+
+namespace haptel::view {
+namespace {
+
+int64_t Now(clockid_t clock) {
+  timespec ts{};
+  clock_gettime(clock, &ts);
+  return static_cast<int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec;
+}
+
+void SleepUntil(int64_t t_ns) {
+  timespec ts{};
+  ts.tv_sec = t_ns / 1000000000;
+  ts.tv_nsec = t_ns % 1000000000;
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+  }
+}
+
+/// The MP4: frames read back on the view thread go through a short queue to
+/// an encoder thread (H.264 is far slower than a readback); when the queue is
+/// full the frame is dropped and counted rather than stalling the view.
+class Mp4Recorder {
+ public:
+  Mp4Recorder(const std::filesystem::path& file, int width, int height, double fps) {
+    if (file.has_parent_path()) {
+      std::error_code ec;
+      std::filesystem::create_directories(file.parent_path(), ec);
+    }
+    // A fast x264 preset: the recording must keep up on a small machine
+    // beside the servo loop and the physics (the user's own options win).
+    setenv("OPENCV_FFMPEG_WRITER_OPTIONS", "preset;veryfast", 0);
+    writer_.open(file.string(), cv::CAP_FFMPEG, cv::VideoWriter::fourcc('a', 'v', 'c', '1'), fps,
+                 cv::Size(width, height));
+    if (!writer_.isOpened()) {
+      throw ViewError("view: cannot write " + file.string() +
+                      " (H.264 MP4 through OpenCV's FFmpeg backend; is the folder writable?)");
+    }
+    encoder_ = std::thread([this] { Encode(); });
+  }
+  ~Mp4Recorder() { Finish(); }
+
+  /// View thread: queue `rgba` (GL order) `copies` times (fixed-rate video:
+  /// a slow frame is shown for as long as it was on the screen).
+  void Push(const cv::Mat& rgba, int copies) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (int i = 0; i < copies; ++i) {
+      if (queue_.size() >= kCapacity) {
+        ++dropped_;
+        continue;
+      }
+      queue_.push_back(i == 0 ? rgba.clone() : queue_.back());
+    }
+    wake_.notify_one();
+  }
+  void Finish() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (done_) return;
+      done_ = true;
+    }
+    wake_.notify_one();
+    if (encoder_.joinable()) encoder_.join();
+    writer_.release();
+  }
+  uint64_t written() const { return written_.load(); }
+  uint64_t dropped() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return dropped_;
+  }
+
+ private:
+  static constexpr size_t kCapacity = 12;
+
+  void Encode() {
+    cv::Mat flipped;
+    cv::Mat bgr;
+    for (;;) {
+      cv::Mat rgba;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        wake_.wait(lock, [&] { return done_ || !queue_.empty(); });
+        if (queue_.empty()) return;  // done and drained
+        rgba = queue_.front();
+        queue_.pop_front();
+      }
+      cv::flip(rgba, flipped, 0);
+      cv::cvtColor(flipped, bgr, cv::COLOR_RGBA2BGR);
+      writer_.write(bgr);
+      written_.fetch_add(1);
+    }
+  }
+
+  cv::VideoWriter writer_;
+  std::thread encoder_;
+  mutable std::mutex mutex_;
+  std::condition_variable wake_;
+  std::deque<cv::Mat> queue_;
+  bool done_ = false;
+  uint64_t dropped_ = 0;
+  std::atomic<uint64_t> written_{0};
+};
+
+}  // namespace
+
+bool View::DisplayAvailable() {
+  const char* display = std::getenv("DISPLAY");
+  if (display == nullptr || display[0] == '\0') return false;
+  // The X socket of a local display must exist (":N" or ":N.S").
+  if (display[0] == ':') {
+    const std::string number(display + 1, std::strcspn(display + 1, "."));
+    return std::filesystem::exists("/tmp/.X11-unix/X" + number);
+  }
+  return true;  // a remote display: SDL will say if it cannot reach it
+}
+
+struct View::Impl {
+  ViewOptions options;
+  ViewSource& source;
+  EventSink* sink;
+  std::thread thread;
+  std::atomic<bool> stop{false};
+
+  // Measured on the view thread, read by Stats().
+  Histogram frame_us{100.0, 2000};            // 0.1 ms bins up to 200 ms
+  Histogram video_to_screen_us{500.0, 1000};  // 0.5 ms bins up to 500 ms
+  std::atomic<uint64_t> frames{0};
+  std::atomic<uint64_t> video_frames_shown{0};
+  std::atomic<double> fps{0.0};  // mean over the run
+  std::atomic<double> cpu_share{0.0};
+  std::unique_ptr<Mp4Recorder> recorder;
+
+  Impl(const ViewOptions& o, ViewSource& s, EventSink* k) : options(o), source(s), sink(k) {}
+
+  void Run(std::promise<void>& ready) {
+    SDL_Window* window = nullptr;
+    SDL_GLContext context = nullptr;
+    std::unique_ptr<Renderer> renderer;
+    bool sdl_up = false;
+    try {
+      if (options.mode == ViewMode::kOffscreen && std::getenv("SDL_VIDEODRIVER") == nullptr) {
+        SDL_SetHint(SDL_HINT_VIDEODRIVER, "offscreen");
+      }
+      if (options.mode == ViewMode::kWindow && !DisplayAvailable()) {
+        throw ViewError(
+            "no display for a window ($DISPLAY is not set or not reachable); use --record FILE.mp4 "
+            "to "
+            "render offscreen, or --view none");
+      }
+      SDL_SetHint(SDL_HINT_JOYSTICK_ALLOW_BACKGROUND_EVENTS, "1");
+      SDL_SetHint(SDL_HINT_NO_SIGNAL_HANDLERS, "1");  // Ctrl-C stays the session's
+      if (SDL_Init(SDL_INIT_VIDEO | SDL_INIT_GAMECONTROLLER) != 0) {
+        throw ViewError(std::string("view: SDL cannot start its video: ") + SDL_GetError());
+      }
+      sdl_up = true;
+      SDL_GL_SetAttribute(SDL_GL_CONTEXT_PROFILE_MASK, SDL_GL_CONTEXT_PROFILE_CORE);
+      SDL_GL_SetAttribute(SDL_GL_CONTEXT_MAJOR_VERSION, 3);
+      SDL_GL_SetAttribute(SDL_GL_CONTEXT_MINOR_VERSION, 3);
+      SDL_GL_SetAttribute(SDL_GL_DOUBLEBUFFER, 1);
+      SDL_GL_SetAttribute(SDL_GL_DEPTH_SIZE, 24);
+      const Uint32 flags =
+          SDL_WINDOW_OPENGL | (options.mode == ViewMode::kOffscreen ? SDL_WINDOW_HIDDEN : 0);
+      window = SDL_CreateWindow(options.title.c_str(), SDL_WINDOWPOS_CENTERED,
+                                SDL_WINDOWPOS_CENTERED, options.width, options.height, flags);
+      if (window == nullptr)
+        throw ViewError(std::string("view: cannot open a window: ") + SDL_GetError());
+      context = SDL_GL_CreateContext(window);
+      if (context == nullptr) {
+        throw ViewError(std::string("view: no OpenGL 3.3 core context: ") + SDL_GetError());
+      }
+      SDL_GL_SetSwapInterval(0);  // paced by rate_hz, not the display
+      renderer = std::make_unique<Renderer>(options.width, options.height);
+      if (!options.record.empty()) {
+        recorder = std::make_unique<Mp4Recorder>(options.record, options.width, options.height,
+                                                 options.record_fps);
+      }
+      ready.set_value();
+    } catch (...) {
+      renderer.reset();
+      if (context != nullptr) SDL_GL_DeleteContext(context);
+      if (window != nullptr) SDL_DestroyWindow(window);
+      if (sdl_up) SDL_Quit();
+      ready.set_exception(std::current_exception());
+      return;
+    }
+
+    Loop(*window, *renderer);
+
+    if (recorder) recorder->Finish();
+    renderer.reset();
+    SDL_GL_DeleteContext(context);
+    SDL_DestroyWindow(window);
+    SDL_Quit();
+  }
+
+  void Loop(SDL_Window& window, Renderer& renderer) {
+    ViewModel model;
+    model.shapes.reserve(256);
+    cv::Mat readback;
+    const auto period_ns = static_cast<int64_t>(1e9 / options.rate_hz);
+    const double record_period_s = 1.0 / options.record_fps;
+    const int64_t t0 = Now(CLOCK_MONOTONIC);
+    const int64_t cpu0 = Now(CLOCK_THREAD_CPUTIME_ID);
+    int64_t next = t0;
+    uint64_t recorded_ticks = 0;
+    uint64_t last_video_id = 0;
+    while (!stop.load()) {
+      SDL_Event event;
+      while (SDL_PollEvent(&event) != 0) {
+        if (sink != nullptr) sink->OnEvent(event);
+      }
+      const int64_t start = Now(CLOCK_MONOTONIC);
+      const double t_s = static_cast<double>(start - t0) * 1e-9;
+      source.Fill(model);
+      renderer.Draw(model, t_s);
+      // Read back before the swap: the back buffer is what was just drawn.
+      const auto due_ticks = static_cast<uint64_t>(t_s / record_period_s) + 1;
+      const bool record_now = recorder != nullptr && due_ticks > recorded_ticks;
+      if (record_now) renderer.ReadPixelsRaw(readback);
+      SDL_GL_SwapWindow(&window);
+      glFinish();  // the frame is on the screen (or in the offscreen buffer) now
+      const int64_t shown = Now(CLOCK_MONOTONIC);
+      const int64_t shown_wall = Now(CLOCK_REALTIME);
+      if (record_now) {
+        recorder->Push(readback,
+                       static_cast<int>(std::min<uint64_t>(due_ticks - recorded_ticks, 30)));
+        recorded_ticks = due_ticks;
+      }
+      frame_us.Record(static_cast<double>(shown - start) * 1e-3);
+      frames.fetch_add(1);
+      if (model.video.image && model.video.id != last_video_id) {
+        last_video_id = model.video.id;
+        video_frames_shown.fetch_add(1);
+        if (model.video.capture_wall_ns > 0) {
+          video_to_screen_us.Record(static_cast<double>(shown_wall - model.video.capture_wall_ns) *
+                                    1e-3);
+        }
+      }
+      fps.store(static_cast<double>(frames.load()) * 1e9 /
+                static_cast<double>(std::max<int64_t>(shown - t0, 1)));
+      cpu_share.store(static_cast<double>(Now(CLOCK_THREAD_CPUTIME_ID) - cpu0) /
+                      static_cast<double>(std::max<int64_t>(shown - t0, 1)));
+      next += period_ns;
+      const int64_t now = Now(CLOCK_MONOTONIC);
+      if (next < now - period_ns) next = now;  // fell behind: do not race to catch up
+      SleepUntil(next);
+    }
+  }
+};
+
+View::View(const ViewOptions& options, ViewSource& source, EventSink* sink)
+    : impl_(std::make_unique<Impl>(options, source, sink)) {
+  if (options.width <= 0 || options.height <= 0 || options.width % 2 != 0 ||
+      options.height % 2 != 0) {
+    throw ViewError("view: width and height must be positive and even (H.264), got " +
+                    std::to_string(options.width) + "x" + std::to_string(options.height));
+  }
+  if (!(options.rate_hz > 0) || !(options.record_fps > 0))
+    throw ViewError("view: rate_hz and record_fps must be > 0");
+  std::promise<void> ready;
+  std::future<void> up = ready.get_future();
+  impl_->thread = std::thread([this, &ready] { impl_->Run(ready); });
+  try {
+    up.get();
+  } catch (...) {
+    impl_->thread.join();
+    throw;
+  }
+}
+
+View::~View() { Stop(); }
+
+void View::Stop() {
+  impl_->stop.store(true);
+  if (impl_->thread.joinable()) impl_->thread.join();
+}
+
+ViewStats View::Stats() const {
+  const Impl& i = *impl_;
+  ViewStats s;
+  s.frames = i.frames.load();
+  s.fps = i.fps.load();
+  s.frame_ms_p50 = i.frame_us.Percentile(0.5) * 1e-3;
+  s.frame_ms_p99 = i.frame_us.Percentile(0.99) * 1e-3;
+  s.cpu_share = i.cpu_share.load();
+  s.video_frames_shown = i.video_frames_shown.load();
+  s.video_to_screen_ms_p50 = i.video_to_screen_us.Percentile(0.5) * 1e-3;
+  s.video_to_screen_ms_p99 = i.video_to_screen_us.Percentile(0.99) * 1e-3;
+  if (i.recorder) {
+    s.recorded_frames = i.recorder->written();
+    s.record_dropped = i.recorder->dropped();
+  }
+  return s;
+}
+
+}  // namespace haptel::view
