@@ -21,25 +21,36 @@ namespace haptel::mediator {
 
 std::string ToString(Outcome outcome) {
   switch (outcome) {
-    case Outcome::kCompleted: return "completed";
-    case Outcome::kLapCap: return "lap cap";
-    case Outcome::kTimeLimit: return "time limit";
-    case Outcome::kVehicleLost: return "vehicle lost";
-    case Outcome::kVehicleDidNotStart: return "vehicle did not start";
-    case Outcome::kDeviceLost: return "device lost";
-    case Outcome::kAborted: return "aborted";
-    case Outcome::kInterrupted: return "interrupted";
+    case Outcome::kCompleted:
+      return "completed";
+    case Outcome::kLapCap:
+      return "lap cap";
+    case Outcome::kTimeLimit:
+      return "time limit";
+    case Outcome::kVehicleLost:
+      return "vehicle lost";
+    case Outcome::kVehicleDidNotStart:
+      return "vehicle did not start";
+    case Outcome::kDeviceLost:
+      return "device lost";
+    case Outcome::kAborted:
+      return "aborted";
+    case Outcome::kInterrupted:
+      return "interrupted";
   }
   return "unknown";
 }
 
 int ExitCode(Outcome outcome) {
   switch (outcome) {
-    case Outcome::kCompleted: return 0;
+    case Outcome::kCompleted:
+      return 0;
     case Outcome::kVehicleLost:
     case Outcome::kVehicleDidNotStart:
-    case Outcome::kDeviceLost: return 3;
-    default: return 1;
+    case Outcome::kDeviceLost:
+      return 3;
+    default:
+      return 1;
   }
 }
 
@@ -54,95 +65,34 @@ std::vector<bool> InterfacesToBuild(const SessionSetup& setup, bool can_switch) 
 }
 
 /// Progress lines every 2 s on stderr.
-void LogProgress(double t, const LapTimer& lap, const VehicleLink& link, double speed, double distance_m,
-                 const interfaces::MediatorInterface& interface, const interfaces::MotorCommand& motors) {
+void LogProgress(double t, const LapTimer& lap, const VehicleLink& link, double speed,
+                 double distance_m, const interfaces::MediatorInterface& interface,
+                 const interfaces::MotorCommand& motors) {
   const VideoStats v = link.video().Stats();
   char line[260];
   std::snprintf(line, sizeof line,
-                "%6.1f s  %s  lap %5.1f s  gates %d/%d  obstacles %d  speed %.2f m/s  distance %.2f m  rtt p50 %.2f ms  "
+                "%6.1f s  %s  lap %5.1f s  gates %d/%d  obstacles %d  speed %.2f m/s  distance "
+                "%.2f m  rtt p50 %.2f ms  "
                 "video %.1f fps",
                 t, interface.name().c_str(), lap.lap_time_s(), lap.next_gate(), lap.gates_total(),
-                lap.obstacles_touched(), speed, distance_m, link.inbox().Rtt().Percentile(0.5) * 1e-3, v.fps);
+                lap.obstacles_touched(), speed, distance_m,
+                link.inbox().Rtt().Percentile(0.5) * 1e-3, v.fps);
   log::Info(line);
   if (const auto* cockpit = dynamic_cast<const interfaces::CockpitInterface*>(&interface)) {
     const interfaces::CockpitControls& c = cockpit->controls();
     const interfaces::HudState& h = cockpit->hud();
     char hud[80] = "";
     if (cockpit->logic().config().hud) {
-      std::snprintf(hud, sizeof hud, "  HUD %.2f m/s%s%s%s", h.speed, h.turn_left ? " <" : "", h.turn_right ? " >" : "",
-                    h.throttle_locked ? " locked" : "");
+      std::snprintf(hud, sizeof hud, "  HUD %.2f m/s%s%s%s", h.speed, h.turn_left ? " <" : "",
+                    h.turn_right ? " >" : "", h.throttle_locked ? " locked" : "");
     }
-    std::snprintf(line, sizeof line, "         wheel %+.2f rad%s  throttle %+.3f m%s  motors %+.2f %+.2f%s", c.wheel_angle,
-                  c.wheel_held ? " (held)" : "", c.throttle, c.throttle_held ? " (held)" : "", motors.left, motors.right,
-                  hud);
+    std::snprintf(line, sizeof line,
+                  "         wheel %+.2f rad%s  throttle %+.3f m%s  motors %+.2f %+.2f%s",
+                  c.wheel_angle, c.wheel_held ? " (held)" : "", c.throttle,
+                  c.throttle_held ? " (held)" : "", motors.left, motors.right, hud);
     log::Info(line);
   }
 }
-
-/// The overlay the view shows, from the session loop's own state. Its text
-/// fields are fixed arrays: building one never allocates.
-class OverlayFeed {
- public:
-  OverlayFeed(const SessionSetup& setup, const Track& track)
-      : setup_(setup), gates_total_(static_cast<int>(track.gates().size())) {}
-
-  view::Overlay Make(double t, const LapTimer& lap, const InterfaceSet& interfaces,
-                     const interfaces::VehicleFeedback& feedback, const interfaces::MotorCommand& motors,
-                     bool vehicle_up, bool touching) {
-    view::Overlay o;
-    const interfaces::MediatorInterface& current = interfaces.current();
-    std::snprintf(o.interface_name, sizeof o.interface_name, "%s", current.name().c_str());
-    std::snprintf(o.operator_name, sizeof o.operator_name, "%s", setup_.operator_kind.c_str());
-    o.t_s = t;
-    o.lap_time_s = lap.lap_time_s();
-    o.time_left_s = setup_.time_limit_s > 0 ? std::max(0.0, setup_.time_limit_s - t) : -1.0;
-    o.gates_passed = lap.gates_passed();
-    o.gates_total = gates_total_;
-    o.obstacles_touched = lap.obstacles_touched();
-    if (touching && !was_touching_) {
-      std::snprintf(last_contact_, sizeof last_contact_, "%s bumper at %.1f s",
-                    feedback.bumper_left && feedback.bumper_right ? "front"
-                    : feedback.bumper_left                        ? "left"
-                                                                  : "right",
-                    t);
-    }
-    was_touching_ = touching;
-    std::snprintf(o.last_contact, sizeof o.last_contact, "%s", last_contact_);
-    o.contact_now = touching;
-    o.speed_max_mps = setup_.vehicle.drive.max_speed;
-    if (const auto* cockpit = dynamic_cast<const interfaces::CockpitInterface*>(&current)) {
-      // The HUD cockpits show what their logic computed, exactly.
-      o.hud = cockpit->logic().config().hud;
-      const interfaces::HudState& h = cockpit->hud();
-      o.speed_mps = h.speed;
-      o.turn_left = h.turn_left;
-      o.turn_right = h.turn_right;
-      o.throttle_locked = h.throttle_locked;
-    } else if (current.name() == "gesture") {
-      // The thesis kept the speedometer and indicators on the gesture interface.
-      o.hud = true;
-      o.speed_mps = feedback.speed;
-      o.turn_left = motors.right - motors.left > kTurnShown;
-      o.turn_right = motors.left - motors.right > kTurnShown;
-    }
-    if (!vehicle_up) {
-      std::snprintf(o.message, sizeof o.message, "waiting for vehicle '%s'", setup_.vehicle.name.c_str());
-    } else if (interfaces.switching()) {
-      std::snprintf(o.message, sizeof o.message, "switching interface: hands off for a moment");
-    } else if (current.name() == "keyboard" && t < kHelpS) {
-      std::snprintf(o.message, sizeof o.message, "arrows or W/A/S/D drive, space stops, F1-F6 switch, Esc ends");
-    }
-    return o;
-  }
-
- private:
-  static constexpr double kTurnShown = 0.1;  ///< motor difference that lights an indicator
-  static constexpr double kHelpS = 15.0;     ///< how long the keyboard's help line shows
-  const SessionSetup& setup_;
-  int gates_total_;
-  bool was_touching_ = false;
-  char last_contact_[40] = "";
-};
 
 }  // namespace
 
@@ -165,8 +115,10 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   std::unique_ptr<Operator> op;
   if (setup.operator_kind == "auto") {
     if (haptic.sim() == nullptr) {
-      throw ConfigError(setup.device.file.string() + ": the automatic operator moves the simulated arms (driver 'sim'); "
-                        "device '" + setup.device.name + "' is driven by a person: use --operator person");
+      throw ConfigError(setup.device.file.string() +
+                        ": the automatic operator moves the simulated arms (driver 'sim'); "
+                        "device '" +
+                        setup.device.name + "' is driven by a person: use --operator person");
     }
     op = std::make_unique<AutomaticOperator>(track, run.op, setup.vehicle.drive, *haptic.sim());
   } else {
@@ -183,12 +135,14 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
     for (int s = 0; s < haptics::kSides; ++s) hands[s] = hands[s] || spec.hands()[s];
     // One set of controls for the cockpits: the one the run starts with, else the first listed.
     if (const auto* c = std::get_if<CockpitConfig>(&spec.config);
-        c != nullptr && (cockpit_config == nullptr || i == static_cast<size_t>(setup.start_interface))) {
+        c != nullptr &&
+        (cockpit_config == nullptr || i == static_cast<size_t>(setup.start_interface))) {
       cockpit_config = c;
     }
   }
   const Scene* scene = setup.scene ? &*setup.scene : nullptr;
-  std::unique_ptr<SessionPhysics> physics_side = SessionPhysics::CreateIfNeeded(setup.physics, hands, cockpit_config, scene);
+  std::unique_ptr<SessionPhysics> physics_side =
+      SessionPhysics::CreateIfNeeded(setup.physics, hands, cockpit_config, scene);
 
   // --- The interfaces. ---
   interfaces::InputBox input;
@@ -205,7 +159,8 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   // A person's controller without a view: a thread of its own polls it.
   std::unique_ptr<view::InputPump> pump;
   bool any_gamepad = false;
-  for (size_t i = 0; i < setup.interfaces.size(); ++i) any_gamepad = any_gamepad || (build[i] && setup.interfaces[i].is_gamepad());
+  for (size_t i = 0; i < setup.interfaces.size(); ++i)
+    any_gamepad = any_gamepad || (build[i] && setup.interfaces[i].is_gamepad());
   if (any_gamepad && setup.view == ViewKind::kNone) pump = std::make_unique<view::InputPump>(input);
 
   haptic.Start(setup.progress);
@@ -228,7 +183,8 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   std::unique_ptr<SessionView> view_part;
   if (setup.view != ViewKind::kNone) {
     view::ViewOptions options;
-    options.mode = setup.view == ViewKind::kWindow ? view::ViewMode::kWindow : view::ViewMode::kOffscreen;
+    options.mode =
+        setup.view == ViewKind::kWindow ? view::ViewMode::kWindow : view::ViewMode::kOffscreen;
     options.record = setup.record;
     options.title = "Haptel - " + run.name;
     SessionView::Parts view_parts;
@@ -284,7 +240,8 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
     // The device first: a lost arm means no forces, so no driving either.
     if (haptic.lost()) {
       result.lost_detect_s = haptic.silent_s();
-      finish(Outcome::kDeviceLost, "haptic device '" + setup.device.name + "' lost: an arm stopped answering");
+      finish(Outcome::kDeviceLost,
+             "haptic device '" + setup.device.name + "' lost: an arm stopped answering");
       break;
     }
     const interfaces::InputState person = input.Load();
@@ -295,8 +252,8 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
     if (!vehicle.ProcessAlive()) {
       result.lost_detect_s = vehicle_up ? NsToS(now - vehicle.inbox().last_received_ns()) : 0.0;
       finish(vehicle_up ? Outcome::kVehicleLost : Outcome::kVehicleDidNotStart,
-             "vehicle '" + setup.vehicle.name + "' lost: process " + std::to_string(vehicle.pid()) + " " +
-                 vehicle.ExitDescription());
+             "vehicle '" + setup.vehicle.name + "' lost: process " + std::to_string(vehicle.pid()) +
+                 " " + vehicle.ExitDescription());
       break;
     }
     for (const auto& e : vehicle.inbox().Drain()) {
@@ -331,9 +288,10 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
         break;
       }
     } else if (t > startup_timeout_s) {
-      finish(Outcome::kVehicleDidNotStart, "vehicle '" + setup.vehicle.name + "' did not answer within " +
-                                               std::to_string(static_cast<int>(startup_timeout_s)) + " s on domain " +
-                                               std::to_string(run.link.domain_id));
+      finish(Outcome::kVehicleDidNotStart,
+             "vehicle '" + setup.vehicle.name + "' did not answer within " +
+                 std::to_string(static_cast<int>(startup_timeout_s)) + " s on domain " +
+                 std::to_string(run.link.domain_id));
       break;
     }
 
@@ -343,7 +301,8 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
       if (!op->can_switch()) {
         if (setup.progress) log::Info("the automatic operator does not switch interfaces");
       } else if (interfaces.Request(person.interface_request, t) && setup.progress) {
-        log::Info("switching to interface '" + interfaces.at(person.interface_request)->name() + "'");
+        log::Info("switching to interface '" + interfaces.at(person.interface_request)->name() +
+                  "'");
       }
     }
     if (person.pad_disconnects != disconnects_seen) {
@@ -361,7 +320,9 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
     }
     motors = interfaces.Update(t, feedback, haptic.hal());
     if (now >= next_command_ns) {
-      next_command_ns += static_cast<int64_t>(1e9 / setup.interfaces[static_cast<size_t>(interfaces.current_index())].command_rate_hz());
+      next_command_ns += static_cast<int64_t>(
+          1e9 /
+          setup.interfaces[static_cast<size_t>(interfaces.current_index())].command_rate_hz());
       if (next_command_ns < now) next_command_ns = now;
       vehicle.Send(vehicle_up ? motors.left : 0.0, vehicle_up ? motors.right : 0.0);
     }
@@ -371,16 +332,20 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
       break;
     }
     if (setup.time_limit_s > 0 && t > setup.time_limit_s) {
-      finish(Outcome::kTimeLimit, "time limit of " + std::to_string(static_cast<int>(setup.time_limit_s)) + " s reached");
+      finish(
+          Outcome::kTimeLimit,
+          "time limit of " + std::to_string(static_cast<int>(setup.time_limit_s)) + " s reached");
       break;
     }
     if (t > setup.track.lap_cap_s) {
-      finish(Outcome::kLapCap,
-             "lap cap of " + std::to_string(static_cast<int>(setup.track.lap_cap_s)) + " s reached");
+      finish(
+          Outcome::kLapCap,
+          "lap cap of " + std::to_string(static_cast<int>(setup.track.lap_cap_s)) + " s reached");
       break;
     }
     if (view_part) {
-      view_part->Publish(overlay_feed.Make(t, lap, interfaces, feedback, motors, vehicle_up, touching));
+      view_part->Publish(
+          overlay_feed.Make(t, lap, interfaces, feedback, motors, vehicle_up, touching));
     }
     if (setup.progress && now >= next_progress_ns) {
       next_progress_ns += SToNs(2.0);

@@ -1,5 +1,9 @@
 #include "haptel/mediator/session_view.hpp"
 
+#include <algorithm>
+#include <cstdio>
+
+#include "haptel/interfaces/cockpit.hpp"
 #include "haptel/mediator/session_physics.hpp"
 #include "haptel/mediator/video_receiver.hpp"
 #include "haptel/mediator/world_shapes.hpp"
@@ -52,6 +56,61 @@ void SessionView::Fill(view::ViewModel& model) {
     model.video.id = frame.id;
     model.video.capture_wall_ns = frame.capture_wall_ns;
   }
+}
+
+OverlayFeed::OverlayFeed(const SessionSetup& setup, const Track& track)
+    : setup_(setup), gates_total_(static_cast<int>(track.gates().size())) {}
+
+view::Overlay OverlayFeed::Make(double t, const LapTimer& lap, const InterfaceSet& interfaces,
+                                const interfaces::VehicleFeedback& feedback,
+                                const interfaces::MotorCommand& motors, bool vehicle_up,
+                                bool touching) {
+  view::Overlay o;
+  const interfaces::MediatorInterface& current = interfaces.current();
+  std::snprintf(o.interface_name, sizeof o.interface_name, "%s", current.name().c_str());
+  std::snprintf(o.operator_name, sizeof o.operator_name, "%s", setup_.operator_kind.c_str());
+  o.t_s = t;
+  o.lap_time_s = lap.lap_time_s();
+  o.time_left_s = setup_.time_limit_s > 0 ? std::max(0.0, setup_.time_limit_s - t) : -1.0;
+  o.gates_passed = lap.gates_passed();
+  o.gates_total = gates_total_;
+  o.obstacles_touched = lap.obstacles_touched();
+  if (touching && !was_touching_) {
+    std::snprintf(last_contact_, sizeof last_contact_, "%s bumper at %.1f s",
+                  feedback.bumper_left && feedback.bumper_right ? "front"
+                  : feedback.bumper_left                        ? "left"
+                                                                : "right",
+                  t);
+  }
+  was_touching_ = touching;
+  std::snprintf(o.last_contact, sizeof o.last_contact, "%s", last_contact_);
+  o.contact_now = touching;
+  o.speed_max_mps = setup_.vehicle.drive.max_speed;
+  if (const auto* cockpit = dynamic_cast<const interfaces::CockpitInterface*>(&current)) {
+    // The HUD cockpits show what their logic computed, exactly.
+    o.hud = cockpit->logic().config().hud;
+    const interfaces::HudState& h = cockpit->hud();
+    o.speed_mps = h.speed;
+    o.turn_left = h.turn_left;
+    o.turn_right = h.turn_right;
+    o.throttle_locked = h.throttle_locked;
+  } else if (current.name() == "gesture") {
+    // The thesis kept the speedometer and indicators on the gesture interface.
+    o.hud = true;
+    o.speed_mps = feedback.speed;
+    o.turn_left = motors.right - motors.left > kTurnShown;
+    o.turn_right = motors.left - motors.right > kTurnShown;
+  }
+  if (!vehicle_up) {
+    std::snprintf(o.message, sizeof o.message, "waiting for vehicle '%s'",
+                  setup_.vehicle.name.c_str());
+  } else if (interfaces.switching()) {
+    std::snprintf(o.message, sizeof o.message, "switching interface: hands off for a moment");
+  } else if (current.name() == "keyboard" && t < kHelpS) {
+    std::snprintf(o.message, sizeof o.message,
+                  "arrows or W/A/S/D drive, space stops, F1-F6 switch, Esc ends");
+  }
+  return o;
 }
 
 }  // namespace haptel::mediator

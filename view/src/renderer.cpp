@@ -527,9 +527,10 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
                   Bgra(255, 255, 255), 1, cv::LINE_AA);
     }
     if (o.hud) {
-      // Speedometer: a 240° dial at the bottom centre, the indicators either side.
+      // Speedometer: a 240° dial at the bottom right (clear of the wheel),
+      // the indicators above it, left and right.
       const int radius = static_cast<int>(58 * height_ / 576.0);
-      const cv::Point centre(width_ / 2, height_ - radius - 16);
+      const cv::Point centre(width_ - radius - 24, height_ - radius - 16);
       cv::circle(ov, centre, radius + 6, Bgra(20, 20, 20, 190), cv::FILLED, cv::LINE_AA);
       cv::ellipse(ov, centre, cv::Size(radius, radius), 0, 150, 390, Bgra(200, 200, 200), 2,
                   cv::LINE_AA);
@@ -546,7 +547,7 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
       cv::putText(ov, speed, centre + cv::Point(-ts.width / 2, radius / 2 + ts.height / 2), font,
                   scale, Bgra(255, 255, 255), 1, cv::LINE_AA);
       auto arrow = [&](int direction, bool on) {  // direction −1: left
-        const cv::Point tip(centre.x + direction * (radius + 50), centre.y);
+        const cv::Point tip(centre.x + direction * (radius - 4), centre.y - radius - 34);
         const cv::Point pts[3] = {tip, tip + cv::Point(-direction * 26, -16),
                                   tip + cv::Point(-direction * 26, 16)};
         cv::fillConvexPoly(ov, pts, 3, on ? Bgra(60, 230, 60) : Bgra(60, 60, 60, 200), cv::LINE_AA);

@@ -16,6 +16,9 @@
 #include "haptel/core/seqlock.hpp"
 #include "haptel/haptics/hal.hpp"
 #include "haptel/interfaces/input.hpp"
+#include "haptel/mediator/interface_set.hpp"
+#include "haptel/mediator/lap_timer.hpp"
+#include "haptel/mediator/session.hpp"
 #include "haptel/physics/cockpit_controls.hpp"
 #include "haptel/view/sdl_input.hpp"
 #include "haptel/view/view.hpp"
@@ -56,6 +59,26 @@ class SessionView final : public view::ViewSource {
   Seqlock<view::Overlay> overlay_;
   view::SdlInput input_;
   std::unique_ptr<view::View> view_;  // last: its thread uses the rest
+};
+
+/// The overlay the view shows, from the session loop's state: the lap clock,
+/// gates, the last contact, and the HUD exactly as the interface computed it
+/// (the HUD cockpits' HudState; the gesture interface's speed and turn, as
+/// the thesis kept them there). Builds it without allocating.
+class OverlayFeed {
+ public:
+  OverlayFeed(const SessionSetup& setup, const Track& track);
+  view::Overlay Make(double t, const LapTimer& lap, const InterfaceSet& interfaces,
+                     const interfaces::VehicleFeedback& feedback,
+                     const interfaces::MotorCommand& motors, bool vehicle_up, bool touching);
+
+ private:
+  static constexpr double kTurnShown = 0.1;  ///< motor difference that lights an indicator
+  static constexpr double kHelpS = 15.0;     ///< how long the keyboard's help line shows
+  const SessionSetup& setup_;
+  int gates_total_;
+  bool was_touching_ = false;
+  char last_contact_[40] = "";
 };
 
 }  // namespace haptel::mediator

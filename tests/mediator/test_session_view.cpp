@@ -1,0 +1,159 @@
+// The session's view part on its own: the overlay it feeds the view (the HUD
+// exactly as the interface computed it, the lap clock, the last contact) and
+// the world's shapes (the wheel turns with the controls, the hands, the wall).
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstring>
+
+#include "../interfaces/hal_fixture.hpp"
+#include "haptel/config/cockpit.hpp"
+#include "haptel/config/paths.hpp"
+#include "haptel/config/track.hpp"
+#include "haptel/interfaces/cockpit.hpp"
+#include "haptel/interfaces/gesture.hpp"
+#include "haptel/mediator/session_view.hpp"
+#include "haptel/mediator/world_shapes.hpp"
+#include "haptel/view/renderer.hpp"
+
+using namespace haptel;
+using namespace haptel::mediator;
+using haptel::test::Metres;
+
+namespace {
+
+struct PlainPort final : interfaces::ControlsPort {
+  interfaces::CockpitControls state;
+  interfaces::CockpitControls Controls() const override { return state; }
+  void Actuate(const interfaces::ControlActuation&) override {}
+};
+
+CockpitConfig Shipped(const char* name) {
+  return LoadCockpit(ShippedFile(std::string("config/interfaces/") + name + ".yaml"));
+}
+
+InterfaceSet One(std::unique_ptr<interfaces::MediatorInterface> i) {
+  std::vector<std::unique_ptr<interfaces::MediatorInterface>> v;
+  v.push_back(std::move(i));
+  return InterfaceSet(std::move(v), 0, 0.3);
+}
+
+}  // namespace
+
+TEST_CASE("the overlay's HUD is the HUD cockpit's own, and only a HUD interface shows one") {
+  const Track track(LoadTrack(ShippedFile("config/tracks/test-short.yaml")));
+  SessionSetup setup;
+  setup.operator_kind = "person";
+  setup.time_limit_s = 600.0;
+  LapTimer lap(track);
+  haptics::Hal hal(Metres());
+  PlainPort port;
+  port.state.wheel_angle = 0.6;  // turned left
+  port.state.throttle = 0.03;
+  const interfaces::VehicleFeedback feedback{false, false, 0.2345};
+
+  auto hud_cockpit = std::make_unique<interfaces::CockpitInterface>(Shipped("cockpit-hud"), port);
+  const interfaces::CockpitInterface& cockpit = *hud_cockpit;
+  InterfaceSet hud_set = One(std::move(hud_cockpit));
+  const interfaces::MotorCommand motors = hud_set.Update(1.0, feedback, hal);
+  OverlayFeed feed(setup, track);
+  const view::Overlay o = feed.Make(12.0, lap, hud_set, feedback, motors, true, false);
+  CHECK(o.hud);
+  CHECK(o.speed_mps == cockpit.hud().speed);
+  CHECK(o.turn_left == cockpit.hud().turn_left);
+  CHECK(o.turn_right == cockpit.hud().turn_right);
+  CHECK(o.turn_left);
+  CHECK(std::string(o.interface_name) == "cockpit-hud");
+  CHECK(std::string(o.operator_name) == "person");
+  CHECK(o.time_left_s == Approx(588.0));
+  CHECK(o.gates_total == static_cast<int>(track.gates().size()));
+  const auto lines = view::OverlayLines(o);
+  CHECK(std::find(lines.begin(), lines.end(), "speed 0.23 m/s") != lines.end());
+
+  InterfaceSet plain_set =
+      One(std::make_unique<interfaces::CockpitInterface>(Shipped("cockpit"), port));
+  const interfaces::MotorCommand plain_motors = plain_set.Update(1.0, feedback, hal);
+  OverlayFeed plain_feed(setup, track);
+  const view::Overlay p =
+      plain_feed.Make(12.0, lap, plain_set, feedback, plain_motors, true, false);
+  CHECK_FALSE(p.hud);
+  CHECK(view::HudSpeedText(p).empty());
+}
+
+TEST_CASE("the overlay remembers the last contact and says when the vehicle is not up yet") {
+  const Track track(LoadTrack(ShippedFile("config/tracks/test-short.yaml")));
+  SessionSetup setup;
+  setup.operator_kind = "auto";
+  LapTimer lap(track);
+  haptics::Hal hal(Metres());
+  GestureConfig gesture;
+  InterfaceSet set = One(std::make_unique<interfaces::GestureInterface>(gesture));
+  OverlayFeed feed(setup, track);
+  const interfaces::MotorCommand still{};
+  view::Overlay o = feed.Make(0.5, lap, set, {}, still, false, false);
+  CHECK(std::string(o.message).find("waiting for vehicle") != std::string::npos);
+  CHECK(o.time_left_s < 0);  // no limit
+  CHECK(std::string(o.last_contact).empty());
+  o = feed.Make(3.25, lap, set, {true, false, 0.1}, still, true, true);
+  CHECK(o.contact_now);
+  CHECK(std::string(o.last_contact) == "left bumper at 3.2 s");
+  o = feed.Make(5.0, lap, set, {}, still, true, false);
+  CHECK_FALSE(o.contact_now);
+  CHECK(std::string(o.last_contact) == "left bumper at 3.2 s");
+  CHECK(std::string(o.message).empty());
+  // The gesture interface keeps the speedometer and indicators (as the thesis did).
+  o = feed.Make(6.0, lap, set, {false, false, 0.2}, {0.1, 0.5}, true, false);
+  CHECK(o.hud);
+  CHECK(o.turn_left);
+  CHECK_FALSE(o.turn_right);
+}
+
+TEST_CASE(
+    "world shapes: the wheel turns with the controls' angle, held controls are lit, the wall faces "
+    "its normal") {
+  const CockpitConfig cockpit = Shipped("cockpit");
+  const physics::ControlsBodyConfig bodies;
+  interfaces::CockpitControls controls;
+  std::vector<view::Shape> straight, turned;
+  AppendCockpit(straight, cockpit, bodies, controls, false);
+  controls.wheel_angle = M_PI / 2;  // a quarter turn left
+  controls.wheel_held = true;
+  AppendCockpit(turned, cockpit, bodies, controls, false);
+  REQUIRE(straight.size() == turned.size());
+  REQUIRE(straight.size() == static_cast<size_t>(bodies.rim_segments + 3 + 1 + 2));
+  // The rim segment at the top (largest z) ends up on the left (largest y).
+  auto top =
+      std::max_element(straight.begin(), straight.begin() + bodies.rim_segments,
+                       [](const auto& a, const auto& b) { return a.position[2] < b.position[2]; });
+  const size_t k = static_cast<size_t>(top - straight.begin());
+  const double r = cockpit.wheel_radius;
+  CHECK(straight[k].position[2] - cockpit.wheel_hub[2] == Approx(r).epsilon(0.05));
+  CHECK(turned[k].position[1] - cockpit.wheel_hub[1] == Approx(r).epsilon(0.05));
+  CHECK(turned[k].color.b > straight[k].color.b);  // held: lit blue
+  // The lever's knob sits at the throttle position along x.
+  controls.throttle = 0.04;
+  std::vector<view::Shape> lever;
+  AppendCockpit(lever, cockpit, bodies, controls, false);
+  CHECK(lever.back().position[0] == Approx(cockpit.throttle_centre[0] + 0.04));
+
+  haptics::ForceField field;
+  field.wall_active = true;
+  field.wall_point = {0.1, 0.0, 0.0};
+  field.wall_normal = {0.0, 1.0, 0.0};
+  std::vector<view::Shape> wall;
+  AppendWall(wall, field);
+  REQUIRE(wall.size() == 1);
+  // The slab's thin local x axis is the normal: rotate x by the quaternion.
+  const auto& q = wall[0].orientation;
+  const double x_y = 2 * (q[1] * q[2] + q[0] * q[3]);  // y component of R·x̂
+  CHECK(x_y == Approx(1.0).margin(1e-9));
+  CHECK(wall[0].color.a < 1.0f);
+
+  physics::HandPoses poses;
+  poses.valid = true;
+  std::vector<view::Shape> hand;
+  AppendProxyHand(hand, poses, ProxyHandConfig{}, haptics::Side::kRight);
+  CHECK(hand.size() == 1 + static_cast<size_t>(physics::kFingers * physics::kPhalanges));
+  CHECK(hand[0].kind == view::ShapeKind::kBox);
+  CHECK(hand[0].position[0] ==
+        Approx(ProxyHandConfig{}.palm_half_extents[0]));  // half a palm ahead of the wrist
+}

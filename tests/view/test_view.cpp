@@ -1,0 +1,330 @@
+// The operator's view, rendered offscreen (SDL's offscreen driver, Mesa):
+// the video on the screen quad, shapes, the overlay's contact border and
+// flashing indicators, the MP4 the View records, and its set-up errors.
+#include <SDL2/SDL.h>
+
+#include <catch2/catch.hpp>
+#include <cstdlib>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+#include <thread>
+
+#include "haptel/view/renderer.hpp"
+#include "haptel/view/view.hpp"
+#include "test_env.hpp"
+
+using namespace haptel;
+using namespace haptel::view;
+
+namespace {
+
+constexpr int kWidth = 640;
+constexpr int kHeight = 360;
+
+/// A hidden window with a GL 3.3 core context current on this thread.
+class OffscreenGl {
+ public:
+  OffscreenGl() {
+    setenv("SDL_VIDEODRIVER", "offscreen", 1);
+    REQUIRE(SDL_Init(SDL_INIT_VIDEO) == 0);
+    SDL_GL_SetAttribute(SDL_GL_CONTEXT_PROFILE_MASK, SDL_GL_CONTEXT_PROFILE_CORE);
+    SDL_GL_SetAttribute(SDL_GL_CONTEXT_MAJOR_VERSION, 3);
+    SDL_GL_SetAttribute(SDL_GL_CONTEXT_MINOR_VERSION, 3);
+    SDL_GL_SetAttribute(SDL_GL_DEPTH_SIZE, 24);
+    window_ =
+        SDL_CreateWindow("test", 0, 0, kWidth, kHeight, SDL_WINDOW_OPENGL | SDL_WINDOW_HIDDEN);
+    REQUIRE(window_ != nullptr);
+    context_ = SDL_GL_CreateContext(window_);
+    INFO(SDL_GetError());
+    REQUIRE(context_ != nullptr);
+  }
+  ~OffscreenGl() {
+    SDL_GL_DeleteContext(context_);
+    SDL_DestroyWindow(window_);
+    SDL_Quit();
+    unsetenv("SDL_VIDEODRIVER");
+  }
+
+ private:
+  SDL_Window* window_ = nullptr;
+  SDL_GLContext context_ = nullptr;
+};
+
+/// A 640×480 camera frame in four solid quadrants: red, green (top), blue,
+/// white (bottom), left to right as the camera saw them.
+std::shared_ptr<const cv::Mat> QuadrantFrame() {
+  auto frame = std::make_shared<cv::Mat>(480, 640, CV_8UC3);
+  (*frame)(cv::Rect(0, 0, 320, 240)).setTo(cv::Scalar(0, 0, 255));
+  (*frame)(cv::Rect(320, 0, 320, 240)).setTo(cv::Scalar(0, 255, 0));
+  (*frame)(cv::Rect(0, 240, 320, 240)).setTo(cv::Scalar(255, 0, 0));
+  (*frame)(cv::Rect(320, 240, 320, 240)).setTo(cv::Scalar(255, 255, 255));
+  return frame;
+}
+
+/// The image point of (u, v) ∈ [0,1]² on the screen (u right, v down, as the
+/// operator sees it), from the renderer's own screen corners and projection.
+cv::Point ScreenPoint(const Renderer& r, double u, double v) {
+  const auto c = r.ScreenCorners();  // top-left, top-right, bottom-right, bottom-left
+  std::array<double, 3> p{};
+  for (int k = 0; k < 3; ++k) {
+    const double top = c[0][k] + u * (c[1][k] - c[0][k]);
+    const double bottom = c[3][k] + u * (c[2][k] - c[3][k]);
+    p[k] = top + v * (bottom - top);
+  }
+  double px = 0, py = 0;
+  REQUIRE(r.Project(p, px, py));
+  return {static_cast<int>(px), static_cast<int>(py)};
+}
+
+cv::Vec3b At(const cv::Mat& bgr, cv::Point p) {
+  REQUIRE(p.x >= 0);
+  REQUIRE(p.y >= 0);
+  REQUIRE(p.x < bgr.cols);
+  REQUIRE(p.y < bgr.rows);
+  return bgr.at<cv::Vec3b>(p);
+}
+
+/// Colour classes that survive lighting and H.264.
+bool Red(cv::Vec3b c) { return c[2] > 150 && c[1] < 90 && c[0] < 90; }
+bool Green(cv::Vec3b c) { return c[1] > 150 && c[2] < 90 && c[0] < 90; }
+bool Blue(cv::Vec3b c) { return c[0] > 150 && c[1] < 90 && c[2] < 90; }
+bool White(cv::Vec3b c) { return c[0] > 200 && c[1] > 200 && c[2] > 200; }
+
+int DifferentPixels(const cv::Mat& a, const cv::Mat& b) {
+  cv::Mat diff;
+  cv::absdiff(a, b, diff);
+  cv::Mat grey;
+  cv::cvtColor(diff, grey, cv::COLOR_BGR2GRAY);
+  return cv::countNonZero(grey > 30);
+}
+
+}  // namespace
+
+TEST_CASE("the renderer puts a known video frame on the screen quad, the right way up and round") {
+  OffscreenGl gl;
+  Renderer renderer(kWidth, kHeight);
+  ViewModel model;
+  model.video.image = QuadrantFrame();
+  model.video.id = 1;
+  renderer.Draw(model, 0.0);
+  cv::Mat image;
+  renderer.ReadPixels(image);
+  REQUIRE(image.cols == kWidth);
+  REQUIRE(image.rows == kHeight);
+  // 4:3 video: the screen takes the frame's aspect ratio.
+  const auto c = renderer.ScreenCorners();
+  CHECK((c[0][2] - c[3][2]) / (c[0][1] - c[1][1]) == Approx(0.75));
+  CHECK(Red(At(image, ScreenPoint(renderer, 0.25, 0.25))));
+  CHECK(Green(At(image, ScreenPoint(renderer, 0.75, 0.25))));
+  CHECK(Blue(At(image, ScreenPoint(renderer, 0.25, 0.75))));
+  CHECK(White(At(image, ScreenPoint(renderer, 0.75, 0.75))));
+
+  // A new frame (new id) replaces the texture; the same id is not re-read.
+  auto black = std::make_shared<cv::Mat>(480, 640, CV_8UC3, cv::Scalar(0, 0, 0));
+  model.video.image = black;
+  renderer.Draw(model, 0.0);
+  renderer.ReadPixels(image);
+  CHECK(Red(At(image, ScreenPoint(renderer, 0.25, 0.25))));  // id 1 still: not uploaded again
+  model.video.id = 2;
+  renderer.Draw(model, 0.0);
+  renderer.ReadPixels(image);
+  const cv::Vec3b now = At(image, ScreenPoint(renderer, 0.25, 0.25));
+  CHECK(now[0] < 30);
+  CHECK(now[1] < 30);
+  CHECK(now[2] < 30);
+}
+
+TEST_CASE("the renderer draws shapes where the device frame puts them, in their colour") {
+  OffscreenGl gl;
+  Renderer renderer(kWidth, kHeight);
+  ViewModel model;
+  Shape box;
+  box.kind = ShapeKind::kBox;
+  box.position = {0.05, 0.10, -0.05};
+  box.size = {0.03, 0.03, 0.03};
+  box.color = {1.0f, 0.0f, 0.0f, 1.0f};
+  Shape ball;
+  ball.kind = ShapeKind::kSphere;
+  ball.position = {0.05, -0.10, -0.05};
+  ball.size = {0.03, 0, 0};
+  ball.color = {0.0f, 0.0f, 1.0f, 1.0f};
+  model.shapes = {box, ball};
+  renderer.Draw(model, 0.0);
+  cv::Mat image;
+  renderer.ReadPixels(image);
+  double bx = 0, by = 0, sx = 0, sy = 0;
+  REQUIRE(renderer.Project(box.position, bx, by));
+  REQUIRE(renderer.Project(ball.position, sx, sy));
+  CHECK(bx < sx);  // +y is the operator's left
+  const cv::Vec3b b = At(image, {static_cast<int>(bx), static_cast<int>(by)});
+  const cv::Vec3b s = At(image, {static_cast<int>(sx), static_cast<int>(sy)});
+  CHECK(b[2] > 80);
+  CHECK(b[2] > 3 * std::max(b[0], b[1]));
+  CHECK(s[0] > 80);
+  CHECK(s[0] > 3 * std::max(s[1], s[2]));
+  // A capsule and a cylinder draw too (with their caps).
+  Shape capsule = box;
+  capsule.kind = ShapeKind::kCapsule;
+  capsule.size = {0.01, 0.04, 0};
+  model.shapes = {capsule};
+  renderer.Draw(model, 0.0);
+  cv::Mat with_capsule;
+  renderer.ReadPixels(with_capsule);
+  model.shapes.clear();
+  renderer.Draw(model, 0.0);
+  cv::Mat without;
+  renderer.ReadPixels(without);
+  CHECK(DifferentPixels(with_capsule, without) > 50);
+}
+
+TEST_CASE(
+    "the overlay: a contact draws a red border; a turn indicator flashes; the speedometer moves") {
+  OffscreenGl gl;
+  Renderer renderer(kWidth, kHeight);
+  ViewModel model;
+  auto render = [&](double t) {
+    renderer.Draw(model, t);
+    cv::Mat image;
+    renderer.ReadPixels(image);
+    return image;
+  };
+  const cv::Mat plain = render(0.0);
+  CHECK_FALSE(Red(At(plain, {3, kHeight / 2})));
+  model.overlay.contact_now = true;
+  const cv::Mat contact = render(0.0);
+  CHECK(Red(At(contact, {3, kHeight / 2})));
+  CHECK(Red(At(contact, {kWidth - 3, 3})));
+  model.overlay.contact_now = false;
+
+  model.overlay.hud = true;
+  model.overlay.speed_mps = 0.1;
+  const cv::Mat hud = render(0.0);
+  model.overlay.turn_left = true;
+  REQUIRE(IndicatorLit(0.1));
+  REQUIRE_FALSE(IndicatorLit(0.5));
+  const cv::Mat lit = render(0.1);
+  const cv::Mat dark = render(0.5);
+  CHECK(DifferentPixels(lit, hud) > 100);  // the arrow lights up
+  CHECK(DifferentPixels(dark, hud) == 0);  // and goes out: it flashes
+  model.overlay.turn_left = false;
+  model.overlay.speed_mps = 0.25;
+  CHECK(DifferentPixels(render(0.0), hud) > 20);  // needle and digits
+}
+
+TEST_CASE("overlay lines: what the person reads, HUD only when the interface has one") {
+  Overlay o;
+  std::snprintf(o.interface_name, sizeof o.interface_name, "cockpit-hud");
+  std::snprintf(o.operator_name, sizeof o.operator_name, "person");
+  o.lap_time_s = 12.34;
+  o.time_left_s = 587.6;
+  o.gates_passed = 3;
+  o.gates_total = 8;
+  o.obstacles_touched = 1;
+  std::snprintf(o.last_contact, sizeof o.last_contact, "left bumper at 9.1 s");
+  auto lines = OverlayLines(o);
+  REQUIRE(lines.size() == 4);
+  CHECK(lines[0] == "cockpit-hud  (person)");
+  CHECK(lines[1] == "lap 12.3 s   time left 588 s");
+  CHECK(lines[2] == "gates 3/8   obstacles 1");
+  CHECK(lines[3] == "last contact: left bumper at 9.1 s");
+  CHECK(HudSpeedText(o).empty());
+  o.hud = true;
+  o.speed_mps = -0.237;  // reversing: the speedometer shows the magnitude
+  o.throttle_locked = true;
+  lines = OverlayLines(o);
+  REQUIRE(lines.size() == 6);
+  CHECK(lines[4] == "speed 0.24 m/s");
+  CHECK(lines[5] == "THROTTLE LOCKED");
+}
+
+namespace {
+
+/// Serves the quadrant frame, a new id every call.
+class QuadrantSource final : public ViewSource {
+ public:
+  void Fill(ViewModel& model) override {
+    model.video.image = frame_;
+    model.video.id = ++calls_;
+    model.video.capture_wall_ns = 0;
+  }
+  std::shared_ptr<const cv::Mat> frame_ = QuadrantFrame();
+  uint64_t calls_ = 0;
+};
+
+}  // namespace
+
+TEST_CASE("the View records what it draws offscreen to an H.264 MP4 at the fixed frame rate") {
+  const auto dir = test::ScratchDir("view-mp4");
+  const auto mp4 = dir / "view.mp4";
+  QuadrantSource source;
+  ViewOptions options;
+  options.mode = ViewMode::kOffscreen;
+  options.width = kWidth;
+  options.height = kHeight;
+  options.record = mp4;
+  options.record_fps = 30.0;
+  double seconds = 0.0;
+  {
+    View view(options, source, nullptr);
+    const auto start = std::chrono::steady_clock::now();
+    std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+    view.Stop();
+    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const ViewStats stats = view.Stats();
+    CHECK(stats.frames > 0);
+    CHECK(stats.video_frames_shown > 0);
+    CHECK(stats.recorded_frames + stats.record_dropped >=
+          static_cast<uint64_t>(seconds * 30.0 * 0.8));
+  }
+  cv::VideoCapture video(mp4.string(), cv::CAP_FFMPEG);
+  REQUIRE(video.isOpened());
+  CHECK(video.get(cv::CAP_PROP_FRAME_WIDTH) == kWidth);
+  CHECK(video.get(cv::CAP_PROP_FRAME_HEIGHT) == kHeight);
+  CHECK(video.get(cv::CAP_PROP_FPS) == Approx(30.0));
+  int frames = 0;
+  cv::Mat frame, last;
+  while (video.read(frame)) {
+    ++frames;
+    last = frame.clone();
+  }
+  CHECK(frames > 10);
+  REQUIRE_FALSE(last.empty());
+  // The picture in the file is the one drawn: the quadrants where the
+  // renderer projects them (same camera, same size).
+  OffscreenGl gl;
+  Renderer renderer(kWidth, kHeight);
+  ViewModel model;
+  model.video.image = QuadrantFrame();
+  model.video.id = 1;
+  renderer.Draw(model, 0.0);
+  CHECK(Red(At(last, ScreenPoint(renderer, 0.25, 0.25))));
+  CHECK(Green(At(last, ScreenPoint(renderer, 0.75, 0.25))));
+  CHECK(Blue(At(last, ScreenPoint(renderer, 0.25, 0.75))));
+  CHECK(White(At(last, ScreenPoint(renderer, 0.75, 0.75))));
+}
+
+TEST_CASE("view set-up errors are one clear line") {
+  QuadrantSource source;
+  ViewOptions options;
+  options.mode = ViewMode::kWindow;
+  const char* display = std::getenv("DISPLAY");
+  const std::string saved = display != nullptr ? display : "";
+  unsetenv("DISPLAY");
+  CHECK_FALSE(View::DisplayAvailable());
+  CHECK_THROWS_WITH(View(options, source, nullptr),
+                    Catch::Contains("no display") && Catch::Contains("--record"));
+  setenv("DISPLAY", ":97", 1);  // no such server here
+  CHECK_FALSE(View::DisplayAvailable());
+  if (!saved.empty()) {
+    setenv("DISPLAY", saved.c_str(), 1);
+  } else {
+    unsetenv("DISPLAY");
+  }
+
+  options.mode = ViewMode::kOffscreen;
+  options.record = "/proc/no-such-dir/view.mp4";
+  CHECK_THROWS_WITH(View(options, source, nullptr), Catch::Contains("/proc/no-such-dir/view.mp4"));
+  options.record.clear();
+  options.width = 641;  // H.264 needs even sizes
+  CHECK_THROWS_WITH(View(options, source, nullptr), Catch::Contains("even"));
+}
