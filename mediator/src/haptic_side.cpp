@@ -139,3 +139,12 @@ double HapticSide::silent_s() const {
 LoopStats HapticSide::Stats() const { return servo_->Stats(); }
 
 }  // namespace haptel::mediator
+
+namespace haptel::mediator {
+
+const Histogram& HapticSide::ServoPeriods() const {
+  const bool right = device_->HasSide(haptics::Side::kRight);
+  return servo_->period_histogram(right ? haptics::Side::kRight : haptics::Side::kLeft);
+}
+
+}  // namespace haptel::mediator

@@ -28,6 +28,7 @@
 #include "servo_bench.hpp"
 #include "physics_bench.hpp"
 #include "skip_bench.hpp"
+#include "view_bench.hpp"
 #include "stability_bench.hpp"
 
 namespace {
@@ -116,7 +117,8 @@ int main(int argc, char** argv) {
     if (which == "skip") return bench::BenchSkipMain(argc - 2, argv + 2);
     if (which == "physics") return bench::BenchPhysicsMain(argc - 2, argv + 2);
     if (which == "stability") return bench::BenchStabilityMain(argc - 2, argv + 2);
-    std::fprintf(stderr, "haptel bench: expected one of: servo, gravity, skip, stability, physics (got '%s')\n", which.c_str());
+    if (which == "view") return bench::BenchViewMain(argc - 2, argv + 2);
+    std::fprintf(stderr, "haptel bench: expected one of: servo, gravity, skip, stability, physics, view (got '%s')\n", which.c_str());
     return 2;
   }
   SessionSetup setup;

@@ -49,10 +49,11 @@ const char* kTexVertex = R"(#version 330 core
 layout(location = 0) in vec3 position;
 layout(location = 1) in vec2 uv;
 uniform mat4 mvp;
+uniform vec4 uv_rect;  // offset (xy) and scale (zw) of the texture window
 out vec2 tex_uv;
 void main() {
   gl_Position = mvp * vec4(position, 1.0);
-  tex_uv = uv;
+  tex_uv = uv_rect.xy + uv * uv_rect.zw;
 })";
 
 const char* kTexFragment = R"(#version 330 core
@@ -150,7 +151,7 @@ std::vector<float> CubeMesh() {
 }
 
 /// The unit sphere.
-std::vector<float> SphereMesh(int stacks = 12, int slices = 20) {
+std::vector<float> SphereMesh(int stacks = 8, int slices = 12) {
   std::vector<float> v;
   auto at = [&](int i, int j) {
     const double theta = M_PI * i / stacks;
@@ -170,7 +171,7 @@ std::vector<float> SphereMesh(int stacks = 12, int slices = 20) {
 }
 
 /// The cylinder of radius 1 from x = −1 to x = 1, with caps.
-std::vector<float> CylinderMesh(int slices = 24) {
+std::vector<float> CylinderMesh(int slices = 14) {
   std::vector<float> v;
   auto ring = [&](int j) {
     const double phi = 2 * M_PI * j / slices;
@@ -300,7 +301,7 @@ struct Renderer::Gl {
   GLuint lit = 0;
   GLint lit_mvp = -1, lit_normal = -1, lit_color = -1, lit_light = -1;
   GLuint tex = 0;
-  GLint tex_mvp = -1, tex_image = -1;
+  GLint tex_mvp = -1, tex_image = -1, tex_uv_rect = -1;
   Mesh cube, sphere, cylinder, screen, fullscreen;
   GLuint video_texture = 0;
   int video_cols = 0, video_rows = 0;
@@ -309,6 +310,9 @@ struct Renderer::Gl {
   GLuint overlay_texture = 0;
   cv::Mat overlay;  ///< BGRA, drawn on the CPU when its content changes
   std::string overlay_key;
+  /// Where the overlay has anything: only these are blended (a software
+  /// rasteriser pays for every blended pixel).
+  std::vector<cv::Rect> overlay_rects;
   Eigen::Matrix4f view_projection;
 };
 
@@ -330,6 +334,7 @@ Renderer::Renderer(int width, int height, const ScreenPlacement& screen)
   g.tex = Link(kTexVertex, kTexFragment);
   g.tex_mvp = glGetUniformLocation(g.tex, "mvp");
   g.tex_image = glGetUniformLocation(g.tex, "image");
+  g.tex_uv_rect = glGetUniformLocation(g.tex, "uv_rect");
   g.cube.Upload(CubeMesh(), false);
   g.sphere.Upload(SphereMesh(), false);
   g.cylinder.Upload(CylinderMesh(), false);
@@ -470,6 +475,7 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
   glUseProgram(g.tex);
   glActiveTexture(GL_TEXTURE0);
   glUniform1i(g.tex_image, 0);
+  glUniform4f(g.tex_uv_rect, 0.0f, 0.0f, 1.0f, 1.0f);
   glBindTexture(GL_TEXTURE_2D, g.video_texture);
   const cv::Mat* image = model.video.image.get();
   if (image != nullptr && !image->empty() && image->type() == CV_8UC3 &&
@@ -516,6 +522,7 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
     g.overlay_key = key;
     cv::Mat& ov = g.overlay;
     ov.setTo(cv::Scalar(0, 0, 0, 0));
+    g.overlay_rects.clear();
     const int font = cv::FONT_HERSHEY_SIMPLEX;
     const double scale = 0.55 * height_ / 576.0;
     const int line_h = static_cast<int>(26 * height_ / 576.0);
@@ -531,6 +538,8 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
       // the indicators above it, left and right.
       const int radius = static_cast<int>(58 * height_ / 576.0);
       const cv::Point centre(width_ - radius - 24, height_ - radius - 16);
+      g.overlay_rects.emplace_back(centre.x - radius - 10, centre.y - radius - 60, 2 * radius + 20,
+                                   2 * radius + 70);
       cv::circle(ov, centre, radius + 6, Bgra(20, 20, 20, 190), cv::FILLED, cv::LINE_AA);
       cv::ellipse(ov, centre, cv::Size(radius, radius), 0, 150, 390, Bgra(200, 200, 200), 2,
                   cv::LINE_AA);
@@ -569,16 +578,34 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
                     Bgra(0, 0, 0, 160), cv::FILLED);
       cv::putText(ov, o.message, at, font, scale * 1.2, Bgra(255, 255, 255), 2, cv::LINE_AA);
     }
-    if (o.contact_now) cv::rectangle(ov, cv::Rect(0, 0, width_, height_), Bgra(0, 0, 255, 220), 10);
+    if (o.contact_now) {
+      cv::rectangle(ov, cv::Rect(0, 0, width_, height_), Bgra(0, 0, 255, 220), 10);
+      const int b = 8;
+      g.overlay_rects.emplace_back(0, 0, width_, b);
+      g.overlay_rects.emplace_back(0, height_ - b, width_, b);
+      g.overlay_rects.emplace_back(0, 0, b, height_);
+      g.overlay_rects.emplace_back(width_ - b, 0, b, height_);
+    }
+    const cv::Rect frame(0, 0, width_, height_);
+    for (cv::Rect& r : g.overlay_rects) r &= frame;
     glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
     glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width_, height_, GL_BGRA, GL_UNSIGNED_BYTE, ov.data);
   }
   glDisable(GL_DEPTH_TEST);
   glEnable(GL_BLEND);
   glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
-  const Eigen::Matrix4f identity4 = Eigen::Matrix4f::Identity();
-  glUniformMatrix4fv(g.tex_mvp, 1, GL_FALSE, identity4.data());
-  g.fullscreen.Draw();
+  for (const cv::Rect& r : g.overlay_rects) {
+    const float w = static_cast<float>(width_), h = static_cast<float>(height_);
+    Eigen::Matrix4f m = Eigen::Matrix4f::Identity();
+    m(0, 0) = static_cast<float>(r.width) / w;
+    m(1, 1) = static_cast<float>(r.height) / h;
+    m(0, 3) = (2.0f * static_cast<float>(r.x) + static_cast<float>(r.width)) / w - 1.0f;
+    m(1, 3) = 1.0f - (2.0f * static_cast<float>(r.y) + static_cast<float>(r.height)) / h;
+    glUniformMatrix4fv(g.tex_mvp, 1, GL_FALSE, m.data());
+    glUniform4f(g.tex_uv_rect, static_cast<float>(r.x) / w, static_cast<float>(r.y) / h,
+                static_cast<float>(r.width) / w, static_cast<float>(r.height) / h);
+    g.fullscreen.Draw();
+  }
   glDisable(GL_BLEND);
   glBindVertexArray(0);
 }

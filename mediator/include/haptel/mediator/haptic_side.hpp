@@ -72,6 +72,8 @@ class HapticSide {
   /// reading (the longest, if both are lost; 0 when none is).
   double silent_s() const;
   LoopStats Stats() const;
+  /// The servo loop's period distribution (the right arm's when it has one).
+  const Histogram& ServoPeriods() const;
   const DeviceConfig& config() const { return config_; }
 
  private:
