@@ -21,11 +21,14 @@
 #include "haptel/config/paths.hpp"
 #include "haptel/config/physics.hpp"
 #include "haptel/config/scene.hpp"
+#include "haptel/config/track.hpp"
+#include "haptel/config/vehicle.hpp"
 #include "haptel/core/args.hpp"
 #include "haptel/physics/cockpit_controls.hpp"
 #include "haptel/physics/scene_builder.hpp"
 #include "haptel/physics/world.hpp"
 #include "haptel/mediator/session.hpp"
+#include "haptel/video/camera_source.hpp"
 #include "haptel/video/codec.hpp"
 #include "plot.hpp"
 #include <opencv2/imgproc.hpp>
@@ -217,11 +220,68 @@ double VideoDecodeShare(mediator::ViewKind view, double seconds) {
   return (ThreadCpuSeconds() - cpu0) / seconds;
 }
 
+namespace {
+
+/// What the vehicle's camera loop costs per frame with the synthetic camera:
+/// render (Grab) and JPEG encode, thread CPU time each, and the wall time of
+/// both, over `seconds` of frames at `camera.rate_hz` (not paced: back to
+/// back), the camera driven once round the track's centre line.
+struct CameraCost {
+  int width = 0, height = 0;
+  double rate_hz = 0.0;
+  int frames = 0;
+  double render_cpu_s = 0.0, encode_cpu_s = 0.0, wall_s = 0.0;
+  double jpeg_bytes = 0.0;
+  double per_frame_ms(double s) const { return frames > 0 ? 1e3 * s / frames : 0.0; }
+  double frame_cpu_ms() const { return per_frame_ms(render_cpu_s + encode_cpu_s); }
+  /// Share of one core the camera loop needs at rate_hz.
+  double cpu_share() const { return frame_cpu_ms() * 1e-3 * rate_hz; }
+};
+
+CameraCost MeasureSyntheticCamera(const CameraConfig& camera, const Track& track, double seconds) {
+  CameraCost c;
+  c.width = camera.width;
+  c.height = camera.height;
+  c.rate_hz = camera.rate_hz;
+  c.frames = std::max(30, static_cast<int>(std::lround(camera.rate_hz * seconds)));
+  const auto source = video::MakeCameraSource(camera, &track, "bench");
+  video::JpegEncoder encoder(camera.jpeg_quality);
+  cv::Mat image;
+  std::vector<uint8_t> jpeg;
+  const auto pose = [&](int i) {
+    const double s = track.length() * i / c.frames;
+    const Vec2 p = track.PointAt(s);
+    const Vec2 t = track.TangentAt(s);
+    return video::CameraPose{p.x(), p.y(), std::atan2(t.y(), t.x())};
+  };
+  for (int i = 0; i < 5; ++i) {  // warm-up: buffers, libjpeg tables
+    source->Grab(pose(i), image);
+    encoder.Encode(image, jpeg);
+  }
+  const int64_t wall0 = MonotonicNs();
+  for (int i = 0; i < c.frames; ++i) {
+    const double cpu0 = ThreadCpuSeconds();
+    source->Grab(pose(i), image);
+    const double cpu1 = ThreadCpuSeconds();
+    encoder.Encode(image, jpeg);
+    c.encode_cpu_s += ThreadCpuSeconds() - cpu1;
+    c.render_cpu_s += cpu1 - cpu0;
+    c.jpeg_bytes += static_cast<double>(jpeg.size());
+  }
+  c.wall_s = static_cast<double>(MonotonicNs() - wall0) * 1e-9;
+  c.jpeg_bytes /= c.frames;
+  return c;
+}
+
+}  // namespace
+
 int BenchSkipMain(int argc, const char* const* argv) {
   double seconds = 2.0;
   bool json = false;
   PhysicsConfig config;
   CockpitConfig cockpit;
+  VehicleConfig vehicle;
+  std::unique_ptr<Track> track;
   try {
     const Args args(argc, argv, {"physics", "seconds"}, {"json"});
     json = args.Flag("json");
@@ -231,6 +291,8 @@ int BenchSkipMain(int argc, const char* const* argv) {
     }
     config = LoadPhysics(args.Value("physics").value_or(ShippedFile("config/physics.yaml").string()));
     cockpit = LoadCockpit(ShippedFile("config/interfaces/cockpit.yaml"));
+    vehicle = LoadVehicle(ShippedFile("config/vehicles/sim-robot.yaml"));
+    track = std::make_unique<Track>(LoadTrack(vehicle.world));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "haptel bench skip: %s\n", e.what());
     return 2;
@@ -294,7 +356,46 @@ int BenchSkipMain(int argc, const char* const* argv) {
               "(not decoded), with a view or --record %.4f\n",
               decode_none, decode_view);
 
+  // The vehicle side's camera loop: the shipped camera (synthetic, its size
+  // and rate), and the same at 320x240 (the default before 640x480) for scale.
+  std::vector<CameraCost> cameras;
+  cameras.push_back(MeasureSyntheticCamera(vehicle.camera, *track, seconds));
+  {
+    CameraConfig small = vehicle.camera;
+    small.width = 320;
+    small.height = 240;
+    cameras.push_back(MeasureSyntheticCamera(small, *track, seconds));
+  }
+  std::printf("\n  vehicle camera loop (%s, synthetic, JPEG quality %d), thread CPU per frame:\n",
+              vehicle.file.filename().c_str(), vehicle.camera.jpeg_quality);
+  std::printf("  %-9s %7s %7s %10s %10s %10s %11s %9s %13s\n", "size", "rate", "frames",
+              "render ms", "encode ms", "total ms", "wall ms", "JPEG kB", "core at rate");
+  for (const CameraCost& c : cameras) {
+    const std::string size = std::to_string(c.width) + "x" + std::to_string(c.height);
+    std::printf("  %-9s %7.1f %7d %10.2f %10.2f %10.2f %11.2f %9.1f %13.3f\n", size.c_str(),
+                c.rate_hz, c.frames, c.per_frame_ms(c.render_cpu_s), c.per_frame_ms(c.encode_cpu_s),
+                c.frame_cpu_ms(), c.per_frame_ms(c.wall_s), c.jpeg_bytes / 1e3, c.cpu_share());
+  }
+  const CameraCost& shipped = cameras.front();
+  std::printf(
+      "  the shipped camera %s: %.2f ms of CPU per frame against a %.1f ms period (%.3f of a "
+      "core%s)\n",
+      shipped.cpu_share() < 1.0 ? "keeps up" : "CANNOT keep up", shipped.frame_cpu_ms(),
+      1e3 / shipped.rate_hz, shipped.cpu_share(),
+      shipped.cpu_share() < 1.0 ? "" : ": lower camera.rate_hz or the size");
+
   const auto dir = BenchDir();
+  {
+    std::ofstream csv(dir / "skip_camera.csv");
+    csv << "width,height,rate_hz,frames,render_ms,encode_ms,frame_cpu_ms,wall_ms,jpeg_bytes,cpu_"
+           "share\n";
+    for (const CameraCost& c : cameras) {
+      csv << c.width << "," << c.height << "," << c.rate_hz << "," << c.frames << ","
+          << c.per_frame_ms(c.render_cpu_s) << "," << c.per_frame_ms(c.encode_cpu_s) << ","
+          << c.frame_cpu_ms() << "," << c.per_frame_ms(c.wall_s) << "," << c.jpeg_bytes << ","
+          << c.cpu_share() << "\n";
+    }
+  }
   {
     std::ofstream csv(dir / "skip.csv");
     csv << "world,has_world,boxes,boxes_asleep,steps,sim_s,cpu_s,cpu_per_sim_s,ratio_to_sleeping_0,"
@@ -306,7 +407,8 @@ int BenchSkipMain(int argc, const char* const* argv) {
           << "," << r.wheel_max << "\n";
     }
   }
-  std::printf("\n  wrote %s\n", (dir / "skip.csv").c_str());
+  std::printf("\n  wrote %s and %s\n", (dir / "skip.csv").c_str(),
+              (dir / "skip_camera.csv").c_str());
 
   if (json) {
     std::ostringstream o;
@@ -316,7 +418,12 @@ int BenchSkipMain(int argc, const char* const* argv) {
     }
     o << "},\"cpu_per_sim_s_static_1000\":" << JsonNumber(statics.cpu_per_sim_s())
       << ",\"video_decode_cpu_share\":{\"view_none\":" << JsonNumber(decode_none)
-      << ",\"view\":" << JsonNumber(decode_view) << "}}";
+      << ",\"view\":" << JsonNumber(decode_view) << "}"
+      << ",\"vehicle_camera\":{\"width\":" << shipped.width << ",\"height\":" << shipped.height
+      << ",\"rate_hz\":" << JsonNumber(shipped.rate_hz)
+      << ",\"render_ms\":" << JsonNumber(shipped.per_frame_ms(shipped.render_cpu_s))
+      << ",\"encode_ms\":" << JsonNumber(shipped.per_frame_ms(shipped.encode_cpu_s))
+      << ",\"cpu_share\":" << JsonNumber(shipped.cpu_share()) << "}}";
     std::printf("%s\n", o.str().c_str());
   }
   return 0;

@@ -25,8 +25,15 @@
 /// simulated second, i.e. the share of one core the physics thread needs; and
 /// in the table the ratio of each world to cockpit_sleeping_0 from the same run.
 ///
+/// Also, for the vehicle side: what its camera loop costs with the synthetic
+/// camera of the shipped config/vehicles/sim-robot.yaml (its size and rate;
+/// 640x480 at 30 fps) and at 320x240 — thread CPU per frame of the render
+/// (CameraSource::Grab) and of the JPEG encode, the wall time of both, and the
+/// share of one core that is at camera.rate_hz (build/bench/skip_camera.csv).
+///
 /// Prints a table; writes build/bench/skip.csv; with --json the last stdout
-/// line is {"cpu_per_sim_s":{"gesture":0,"cockpit":…,…},"cpu_per_sim_s_static_1000":…}.
+/// line is {"cpu_per_sim_s":{"gesture":0,"cockpit":…,…},"cpu_per_sim_s_static_1000":…,
+/// "video_decode_cpu_share":{…},"vehicle_camera":{"width":640,…,"cpu_share":…}}.
 namespace haptel::bench {
 
 /// `haptel bench skip [--physics FILE] [--seconds S] [--json]`; argv[0] is the

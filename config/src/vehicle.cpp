@@ -7,6 +7,18 @@ namespace haptel {
 
 using config_detail::YamlMap;
 
+const char* CameraSourceName(CameraSourceKind kind) {
+  switch (kind) {
+    case CameraSourceKind::kSynthetic:
+      return "synthetic";
+    case CameraSourceKind::kDevice:
+      return "device";
+    case CameraSourceKind::kFile:
+      return "file";
+  }
+  return "?";
+}
+
 VehicleConfig LoadVehicle(const std::filesystem::path& file) {
   YamlMap root = YamlMap::Load(file);
   VehicleConfig v;
@@ -44,6 +56,36 @@ VehicleConfig LoadVehicle(const std::filesystem::path& file) {
   body.Finish();
 
   YamlMap camera = root.Map("camera");
+  const std::string source = camera.String("source", CameraSourceName(v.camera.source));
+  if (source == "synthetic") {
+    v.camera.source = CameraSourceKind::kSynthetic;
+  } else if (source == "device") {
+    v.camera.source = CameraSourceKind::kDevice;
+  } else if (source == "file") {
+    v.camera.source = CameraSourceKind::kFile;
+  } else {
+    camera.Fail("source", "one of: synthetic, device, file");
+  }
+  // device and file may stay in the file while another source is chosen (to
+  // switch back with one line), so they are read and checked whatever the source.
+  if (camera.Has("device")) {
+    v.camera.device = camera.String("device", "");
+    const std::string& d = v.camera.device;
+    const bool index = d.find_first_not_of("0123456789") == std::string::npos;
+    if (!index && d.front() != '/') {
+      camera.Fail("device", "a V4L2 device path such as /dev/video0, or a device index such as 0");
+    }
+    if (index && d.size() > 4) camera.Fail("device", "a device index in [0, 9999]");
+  } else if (v.camera.source == CameraSourceKind::kDevice) {
+    camera.Fail("device",
+                "a V4L2 device path such as /dev/video0, or a device index, for source: device");
+  }
+  if (camera.Has("file")) {
+    v.camera.file = file.parent_path() / camera.String("file", "");
+  } else if (v.camera.source == CameraSourceKind::kFile) {
+    camera.Fail("file", "a video file (relative to this file's folder) for source: file");
+  }
+  v.camera.loop = camera.Bool("loop", v.camera.loop);
   v.camera.rate_hz = camera.Number("rate_hz", v.camera.rate_hz, 1.0, 120.0);
   v.camera.width = camera.Integer("width", v.camera.width, 16, 4096);
   v.camera.height = camera.Integer("height", v.camera.height, 16, 4096);

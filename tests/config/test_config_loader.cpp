@@ -313,6 +313,8 @@ TEST_CASE("Shipped sim-robot vehicle loads", "[config][shipped]") {
   CHECK(v.camera.height == static_cast<int>(NumberIn(text, "height")));
   CHECK(v.camera.jpeg_quality == static_cast<int>(NumberIn(text, "jpeg_quality")));
   CHECK(v.camera.fov_deg == NumberIn(text, "fov_deg"));
+  CHECK(v.camera.source == haptel::CameraSourceKind::kSynthetic);
+  CHECK(ValueText(text, "source") == haptel::CameraSourceName(v.camera.source));
   CHECK(v.link.domain_id == static_cast<int>(NumberIn(text, "domain_id")));
 }
 
@@ -351,6 +353,96 @@ TEST_CASE("Absent optional keys take their defaults", "[config]") {
   CHECK(g.name == "gesture");
   CHECK(g.neutral == std::array<double, 3>{0.01, -0.02, 0.03});
   CHECK(g.dead_zone == haptel::GestureConfig{}.dead_zone);
+}
+
+TEST_CASE("The default camera is synthetic, 640x480 at 30 fps, in the struct and the shipped file",
+          "[config][shipped]") {
+  const haptel::CameraConfig d;
+  CHECK(d.source == haptel::CameraSourceKind::kSynthetic);
+  CHECK(d.width == 640);
+  CHECK(d.height == 480);
+  CHECK(d.rate_hz == 30.0);
+  CHECK(d.loop);
+  const haptel::VehicleConfig shipped = haptel::LoadVehicle("config/vehicles/sim-robot.yaml");
+  CHECK(shipped.camera.source == d.source);
+  CHECK(shipped.camera.width == d.width);
+  CHECK(shipped.camera.height == d.height);
+  CHECK(shipped.camera.rate_hz == d.rate_hz);
+}
+
+TEST_CASE("Camera sources: synthetic, device or file", "[config]") {
+  TempDir tmp;
+  SECTION("a file, relative to the config file's folder, looping unless told") {
+    const haptel::VehicleConfig v = haptel::LoadVehicle(
+        tmp.Write("file.yaml", "name: robot1\ncamera:\n  source: file\n  file: clips/lap.avi\n"));
+    CHECK(v.camera.source == haptel::CameraSourceKind::kFile);
+    CHECK(v.camera.file == tmp.path() / "clips/lap.avi");
+    CHECK(v.camera.loop);
+    const haptel::VehicleConfig once = haptel::LoadVehicle(tmp.Write(
+        "once.yaml", "name: robot1\ncamera: {source: file, file: /data/lap.mp4, loop: false}\n"));
+    CHECK(once.camera.file == "/data/lap.mp4");
+    CHECK_FALSE(once.camera.loop);
+  }
+  SECTION("a device by path or by index") {
+    const haptel::VehicleConfig path = haptel::LoadVehicle(
+        tmp.Write("dev.yaml", "name: robot1\ncamera:\n  source: device\n  device: /dev/video2\n"));
+    CHECK(path.camera.source == haptel::CameraSourceKind::kDevice);
+    CHECK(path.camera.device == "/dev/video2");
+    const haptel::VehicleConfig index = haptel::LoadVehicle(
+        tmp.Write("index.yaml", "name: robot1\ncamera: {source: device, device: 0}\n"));
+    CHECK(index.camera.device == "0");
+  }
+  SECTION("device and file may stay in the file while the camera is synthetic") {
+    const haptel::VehicleConfig v = haptel::LoadVehicle(tmp.Write(
+        "kept.yaml", "name: robot1\ncamera: {source: synthetic, device: 1, file: lap.avi}\n"));
+    CHECK(v.camera.source == haptel::CameraSourceKind::kSynthetic);
+  }
+}
+
+TEST_CASE("Bad file: camera source", "[config][bad]") {
+  TempDir tmp;
+  SECTION("unknown source") {
+    const std::string text = "name: robot1\ncamera:\n  width: 640\n  source: webcam\n";
+    const fs::path file = tmp.Write("bad-source.yaml", text);
+    const std::string msg = ErrorOf([&] { haptel::LoadVehicle(file); });
+    CHECK_THAT(msg, Contains(file.string()));
+    CHECK_THAT(msg, Contains(LineTag(LineOf(text, "webcam"))));
+    CHECK_THAT(msg, Contains("'camera.source'"));
+    CHECK_THAT(msg, Contains("synthetic, device, file"));
+    CHECK_THAT(msg, Contains("got 'webcam'"));
+  }
+  SECTION("file source without a file") {
+    const std::string text = "name: robot1\ncamera:\n  source: file\n";
+    const fs::path file = tmp.Write("no-file.yaml", text);
+    const std::string msg = ErrorOf([&] { haptel::LoadVehicle(file); });
+    CHECK_THAT(msg, Contains(file.string()));
+    CHECK_THAT(msg, Contains("'camera.file'"));
+    CHECK_THAT(msg, Contains("missing"));
+  }
+  SECTION("device source without a device") {
+    const std::string text = "name: robot1\ncamera:\n  source: device\n";
+    const fs::path file = tmp.Write("no-device.yaml", text);
+    const std::string msg = ErrorOf([&] { haptel::LoadVehicle(file); });
+    CHECK_THAT(msg, Contains(file.string()));
+    CHECK_THAT(msg, Contains("'camera.device'"));
+    CHECK_THAT(msg, Contains("missing"));
+  }
+  SECTION("a device that is neither a path nor an index") {
+    const std::string text = "name: robot1\ncamera:\n  source: device\n  device: video0\n";
+    const fs::path file = tmp.Write("bad-device.yaml", text);
+    const std::string msg = ErrorOf([&] { haptel::LoadVehicle(file); });
+    CHECK_THAT(msg, Contains("'camera.device'"));
+    CHECK_THAT(msg, Contains(LineTag(LineOf(text, "video0"))));
+    CHECK_THAT(msg, Contains("/dev/video0"));
+  }
+  SECTION("loop that is not true or false") {
+    const std::string text =
+        "name: robot1\ncamera:\n  source: file\n  file: a.avi\n  loop: forever\n";
+    const fs::path file = tmp.Write("bad-loop.yaml", text);
+    const std::string msg = ErrorOf([&] { haptel::LoadVehicle(file); });
+    CHECK_THAT(msg, Contains("'camera.loop'"));
+    CHECK_THAT(msg, Contains("true or false"));
+  }
 }
 
 // ---------------------------------------------------------------- InterfaceFile

@@ -1,6 +1,7 @@
 // End to end: the real `haptel` and `haptel-vehicle` programs, linked by DDS.
 #include <catch2/catch.hpp>
 #include <signal.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
@@ -200,5 +201,20 @@ TEST_CASE("bad options and bad config files exit 2 with a one-line error naming 
     Child c({Bin("haptel-vehicle"), "--config", (dir / "missing.yaml").string()});
     CHECK(c.Wait(30.0) == 2);
     CHECK(c.err().find("missing.yaml") != std::string::npos);
+  }
+  if (access("/dev/video9", F_OK) != 0) {  // a camera that is not there: exit 2 before publishing
+    const auto cfg = dir / "no-camera.yaml";
+    std::FILE* f = std::fopen(cfg.c_str(), "w");
+    std::fputs("name: nocam\ncamera:\n  source: device\n  device: /dev/video9\n", f);
+    std::fclose(f);
+    Child c({Bin("haptel-vehicle"), "--config", cfg.string(), "--track",
+             "config/tracks/grand-prix.yaml", "--domain", std::to_string(test::UniqueDomain(17))});
+    CHECK(c.Wait(30.0) == 2);
+    INFO("stderr:\n" << c.err());
+    CHECK(c.err().find("no-camera.yaml") != std::string::npos);
+    CHECK(c.err().find("camera.device") != std::string::npos);
+    CHECK(c.err().find("/dev/video9") != std::string::npos);
+    CHECK(c.err().find(" up on domain") == std::string::npos);  // the node never started
+    CHECK(std::count(c.err().begin(), c.err().end(), '\n') == 1);
   }
 }

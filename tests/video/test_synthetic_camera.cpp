@@ -58,6 +58,11 @@ double ColourDistance(const cv::Vec3b& a, const cv::Vec3b& b) {
   return std::abs(a[0] - b[0]) + std::abs(a[1] - b[1]) + std::abs(a[2] - b[2]);
 }
 
+/// Focal length in pixels: half the width over the tangent of half the FOV.
+double FocalPx(const CameraConfig& config) {
+  return (config.width / 2.0) / std::tan(config.fov_deg * std::numbers::pi / 360.0);
+}
+
 cv::Mat Render(const SyntheticCamera& camera, CameraPose pose) {
   cv::Mat image;
   camera.Render(pose, image);
@@ -81,8 +86,9 @@ TEST_CASE("synthetic camera renders a BGR image of the configured size") {
 }
 
 TEST_CASE("synthetic camera reuses the output buffer and resizes a wrong one") {
-  const SyntheticCamera camera(GrandPrix(), CameraConfig{});
-  cv::Mat image(240, 320, CV_8UC3, cv::Scalar::all(0));
+  const CameraConfig config;
+  const SyntheticCamera camera(GrandPrix(), config);
+  cv::Mat image(config.height, config.width, CV_8UC3, cv::Scalar::all(0));
   const uchar* data = image.data;
   camera.Render({0.5, 0.0, 0.0}, image);
   CHECK(image.data == data);
@@ -91,8 +97,8 @@ TEST_CASE("synthetic camera reuses the output buffer and resizes a wrong one") {
 
   cv::Mat wrong(10, 10, CV_8UC1);
   camera.Render({0.5, 0.0, 0.0}, wrong);
-  CHECK(wrong.cols == 320);
-  CHECK(wrong.rows == 240);
+  CHECK(wrong.cols == config.width);
+  CHECK(wrong.rows == config.height);
   CHECK(wrong.type() == CV_8UC3);
 }
 
@@ -156,6 +162,7 @@ TEST_CASE("synthetic camera shows gate posts red on the left and green on the ri
   const SyntheticCamera camera(GrandPrix(), config);
   const int row = config.height / 2 + 5;
   const int centre = config.width / 2;
+  const double f = FocalPx(config);  // 307 px at 320 wide and 55 deg
 
   SECTION("straight ahead the left post is in the centre column") {
     const cv::Mat image = Render(camera, {0.7, 0.3, 0.0});  // 1 m before it
@@ -170,8 +177,9 @@ TEST_CASE("synthetic camera shows gate posts red on the left and green on the ri
     const Run green = WidestRun(image, row, IsGreen);
     REQUIRE(red.width() > 0);
     REQUIRE(green.width() > 0);
-    CHECK(red.centre() < centre - 40);
-    CHECK(green.centre() > centre + 40);
+    // The posts are 0.3 m either side, 1 m ahead: f * 0.3 px off centre.
+    CHECK(red.centre() < centre - 0.13 * f);
+    CHECK(green.centre() > centre + 0.13 * f);
     // Symmetric view, symmetric posts.
     CHECK(std::abs((centre - red.centre()) - (green.centre() - centre)) <= 2.0);
     CHECK(std::abs(red.width() - green.width()) <= 1);
@@ -182,11 +190,12 @@ TEST_CASE("synthetic camera shows gate posts red on the left and green on the ri
     const Run yawed = WidestRun(Render(camera, {0.7, 0.3, -0.1}), row, IsRed);
     REQUIRE(ahead.width() > 0);
     REQUIRE(yawed.width() > 0);
-    // f = 160 / tan(27.5 deg) = 307 px; the post moves by f * tan(0.1) = 31 px.
-    CHECK(yawed.centre() < ahead.centre() - 25);
-    CHECK(yawed.centre() > ahead.centre() - 37);
+    // The post moves by f * tan(0.1) px (31 px at 320 wide).
+    const double shift = f * std::tan(0.1);
+    CHECK(yawed.centre() < ahead.centre() - 0.8 * shift);
+    CHECK(yawed.centre() > ahead.centre() - 1.2 * shift);
     const Run left_yaw = WidestRun(Render(camera, {0.7, 0.3, 0.1}), row, IsRed);
-    CHECK(left_yaw.centre() > ahead.centre() + 25);
+    CHECK(left_yaw.centre() > ahead.centre() + 0.8 * shift);
   }
 
   SECTION("a nearer post looks wider") {
@@ -194,9 +203,9 @@ TEST_CASE("synthetic camera shows gate posts red on the left and green on the ri
     const Run far = WidestRun(Render(camera, {-0.3, 0.3, 0.0}), row, IsRed);  // 2 m
     REQUIRE(far.width() > 0);
     CHECK(near.width() > far.width());
-    // 8 cm post: about 2 * 307 * 0.04 / d px.
-    CHECK(near.width() == Approx(24.6).margin(3));
-    CHECK(far.width() == Approx(12.3).margin(3));
+    // 8 cm post: about 2 * f * 0.04 / d px.
+    CHECK(near.width() == Approx(2 * f * 0.04 / 1.0).margin(3));
+    CHECK(far.width() == Approx(2 * f * 0.04 / 2.0).margin(3));
   }
 
   SECTION("a nearer post stands taller") {
@@ -221,7 +230,7 @@ TEST_CASE("synthetic camera draws nearer things over farther ones") {
   // From outside the track, 1 m behind the right wall (y = -0.5): the wall
   // hides the post (1.2 m away) but for its top, which stands 5 cm higher.
   const cv::Mat outside = Render(camera, {1.7, -1.5, std::numbers::pi / 2});
-  const int wall_top = static_cast<int>(config.height / 2 - 307.3 * (0.25 - 0.12) / 1.0);
+  const int wall_top = static_cast<int>(config.height / 2 - FocalPx(config) * (0.25 - 0.12) / 1.0);
   int above = 0;
   int below = 0;
   for (int r = 0; r < config.height; ++r) {
@@ -247,10 +256,12 @@ TEST_CASE("synthetic camera shows round obstacles in orange") {
 }
 
 TEST_CASE("synthetic camera: moving forward changes the floor") {
-  const SyntheticCamera camera(GrandPrix(), CameraConfig{});
+  const CameraConfig config;
+  const SyntheticCamera camera(GrandPrix(), config);
   const cv::Mat a = Render(camera, {0.0, 0.0, 0.0});
   const cv::Mat b = Render(camera, {0.1, 0.0, 0.0});
-  const cv::Rect bottom(0, 200, 320, 40);  // floor within half a metre
+  // The bottom sixth of the image: floor within half a metre.
+  const cv::Rect bottom(0, config.height * 5 / 6, config.width, config.height / 6);
   CHECK(cv::norm(a(bottom), b(bottom), cv::NORM_L1) > 0);
 }
 

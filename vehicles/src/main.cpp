@@ -1,17 +1,19 @@
 // haptel-vehicle: one vehicle node. Subscribes to its command topic, drives
 // its adapter, publishes state and camera video; stops the motors when
 // commands stop coming (watchdog) and on SIGTERM/SIGINT.
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <string>
 #include <thread>
 
-#include "haptel/config/paths.hpp"
 #include "haptel/config/error.hpp"
+#include "haptel/config/paths.hpp"
 #include "haptel/core/args.hpp"
 #include "haptel/core/log.hpp"
 #include "haptel/vehicles/vehicle_node.hpp"
+#include "haptel/video/camera_source.hpp"
 
 namespace {
 volatile std::sig_atomic_t g_stop = 0;
@@ -30,6 +32,7 @@ int main(int argc, char** argv) {
   log::SetProgram("haptel-vehicle");
   VehicleConfig config;
   std::unique_ptr<Track> track;
+  std::unique_ptr<video::CameraSource> camera;
   try {
     const Args args(argc, argv, {"config", "track", "name", "domain"}, {"help"});
     if (args.Flag("help")) {
@@ -48,6 +51,9 @@ int main(int argc, char** argv) {
                         "vehicle drives on (or --track FILE)");
     }
     track = std::make_unique<Track>(LoadTrack(config.world));
+    // Opened here, before any DDS participant exists: a camera that cannot
+    // open is a set-up error (exit 2) and nothing has been published.
+    camera = video::MakeCameraSource(config.camera, track.get(), file.string());
   } catch (const UsageError& e) {
     std::fprintf(stderr, "haptel-vehicle: %s (see haptel-vehicle --help)\n", e.what());
     return 2;
@@ -62,10 +68,14 @@ int main(int argc, char** argv) {
   std::signal(SIGTERM, OnSignal);
   std::signal(SIGINT, OnSignal);
   try {
-    vehicles::VehicleNode node(config, *track);
+    const std::string camera_name = camera->Describe();
+    vehicles::VehicleNode node(config, *track, std::move(camera));
     node.Start();
-    log::Info("vehicle '" + config.name + "' up on domain " + std::to_string(config.link.domain_id) +
-              ", track '" + track->config().name + "'");
+    log::Info("vehicle '" + config.name + "' up on domain " +
+              std::to_string(config.link.domain_id) + ", track '" + track->config().name +
+              "', camera " + camera_name + " " + std::to_string(config.camera.width) + "x" +
+              std::to_string(config.camera.height) + " at " +
+              std::to_string(static_cast<int>(std::lround(config.camera.rate_hz))) + " Hz");
     uint64_t trips = 0;
     while (g_stop == 0) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -81,7 +91,9 @@ int main(int argc, char** argv) {
     log::Info("stopped: motors off; " + std::to_string(c.commands_accepted) + " commands, " +
               std::to_string(c.commands_malformed) + " malformed, " +
               std::to_string(c.commands_stale) + " stale, " + std::to_string(c.frames_published) +
-              " frames");
+              " frames, " + std::to_string(c.grabs_failed) + " camera grabs failed" +
+              (c.camera_stalls > 0 ? " (" + std::to_string(c.camera_stalls) + " stalls)" : "") +
+              (c.camera_ended ? ", camera file ended" : ""));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "haptel-vehicle: %s\n", e.what());
     return 1;

@@ -1,8 +1,11 @@
 #include "haptel/vehicles/vehicle_node.hpp"
 
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include "haptel/core/clock.hpp"
+#include "haptel/core/log.hpp"
 #include "haptel/vehicles/sim_robot.hpp"
 
 namespace haptel::vehicles {
@@ -12,12 +15,14 @@ namespace {
 constexpr float kMaxCommand = 1.001F;
 }  // namespace
 
-VehicleNode::VehicleNode(const VehicleConfig& config, const Track& track)
+VehicleNode::VehicleNode(const VehicleConfig& config, const Track& track,
+                         std::unique_ptr<video::CameraSource> camera)
     : config_(config),
       adapter_(std::make_unique<SimRobot>(track, config)),
       watchdog_(config.watchdog_timeout_s),
-      camera_(track, config.camera),
+      camera_(std::move(camera)),
       encoder_(config.camera.jpeg_quality) {
+  if (camera_ == nullptr) throw std::invalid_argument("VehicleNode: no camera source");
   ticks_per_state_ = std::max(1, static_cast<int>(std::lround(config.sim_rate_hz / config.state_rate_hz)));
   const AdapterState s = adapter_->State();
   pose_.Store({s.x, s.y, s.heading});
@@ -126,10 +131,33 @@ void VehicleNode::PublishState(int64_t now_ns) {
   states_.fetch_add(1, std::memory_order_relaxed);
 }
 
-void VehicleNode::CameraTick(int64_t /*now_ns*/) {
+void VehicleNode::CameraTick(int64_t now_ns) {
+  if (camera_->Ended()) {
+    // The vehicle stays controllable; it just has no more video to send.
+    if (!end_reported_) {
+      end_reported_ = true;
+      camera_ended_.store(true);
+      log::Warn("camera file ended (" + camera_->Describe() +
+                "); no more video is published, the vehicle stays controllable");
+    }
+    return;
+  }
   const Pose pose = pose_.Load();
-  const int64_t capture_wall_ns = WallNs();
-  camera_.Render({pose.x, pose.y, pose.heading}, image_);
+  const int64_t before_grab_wall_ns = WallNs();
+  const bool grabbed = camera_->Grab({pose.x, pose.y, pose.heading}, image_);
+  // A device's Grab may wait up to a frame period for the frame: it exists
+  // when Grab returns. A rendered frame shows the pose read before Grab.
+  const int64_t capture_wall_ns = camera_->RendersAtGrab() ? before_grab_wall_ns : WallNs();
+  if (!grabbed && camera_->Ended()) return;  // an end, not a failure: reported next tick
+  if (grab_monitor_.OnGrab(grabbed, now_ns) == video::GrabMonitor::Event::kStalled) {
+    log::Warn("camera " + camera_->Describe() + " delivers no frames (" +
+              std::to_string(grab_monitor_.failures_in_a_row()) +
+              " grabs in a row failed); the vehicle runs on without video (reported once; "
+              "counted in the stop summary)");
+  }
+  grabs_failed_.store(grab_monitor_.failures(), std::memory_order_relaxed);
+  camera_stalls_.store(grab_monitor_.stalls(), std::memory_order_relaxed);
+  if (!grabbed) return;
   if (!encoder_.Encode(image_, jpeg_)) {
     frames_failed_.fetch_add(1, std::memory_order_relaxed);
     return;
@@ -154,6 +182,9 @@ NodeCounters VehicleNode::Counters() const {
   c.states_published = states_.load();
   c.frames_published = frames_.load();
   c.frames_failed = frames_failed_.load();
+  c.grabs_failed = grabs_failed_.load();
+  c.camera_stalls = camera_stalls_.load();
+  c.camera_ended = camera_ended_.load();
   c.watchdog_expired = expired_.load();
   return c;
 }

@@ -26,10 +26,29 @@ struct BodyConfig {
   double bumper_both_deg = 8.0;
 };
 
+/// Where a vehicle's camera frames come from.
+enum class CameraSourceKind {
+  kSynthetic,  ///< rendered from the simulated track (video::SyntheticCamera)
+  kDevice,     ///< a V4L2 capture device
+  kFile,       ///< a video file, played at rate_hz
+};
+
+/// "synthetic", "device" or "file", as written in the config file.
+const char* CameraSourceName(CameraSourceKind kind);
+
 struct CameraConfig {
-  double rate_hz = 15.0;
-  int width = 320;
-  int height = 240;
+  CameraSourceKind source = CameraSourceKind::kSynthetic;
+  /// V4L2 device for source: device, a path ("/dev/video0") or an index ("0").
+  std::string device;
+  /// Video file for source: file (resolved against the config file's folder).
+  std::filesystem::path file;
+  bool loop = true;  ///< source: file: start again at the first frame after the last
+  /// Frames per second published, for every source: a file is paced by this,
+  /// not by its own frame rate; a device is asked for it.
+  double rate_hz = 30.0;
+  /// Published frame size; captured frames of another size are resized.
+  int width = 640;
+  int height = 480;
   double fov_deg = 55.0;    ///< horizontal, webcam-like
   int jpeg_quality = 80;
   double mount_height = 0.12;  ///< m above the floor

@@ -5,7 +5,9 @@
 /// Threads: DDS delivers commands (validated, then handed over through a
 /// seqlock); the control loop runs at `sim_rate_hz`, applies the watchdog and
 /// quantisation, steps the adapter and publishes state at `state_rate_hz`;
-/// the camera loop renders, JPEG-encodes and publishes frames.
+/// the camera loop grabs a frame from the camera source (synthetic, device or
+/// file), JPEG-encodes and publishes it — on its own thread, so a slow or
+/// stalled camera never delays the control loop or the watchdog.
 #include <atomic>
 #include <cstdint>
 #include <memory>
@@ -16,8 +18,8 @@
 #include "haptel/core/seqlock.hpp"
 #include "haptel/link/topic.hpp"
 #include "haptel/vehicles/adapter.hpp"
+#include "haptel/video/camera_source.hpp"
 #include "haptel/video/codec.hpp"
-#include "haptel/video/synthetic_camera.hpp"
 
 namespace haptel::vehicles {
 
@@ -28,14 +30,21 @@ struct NodeCounters {
   uint64_t watchdog_trips = 0;
   uint64_t states_published = 0;
   uint64_t frames_published = 0;
-  uint64_t frames_failed = 0;
+  uint64_t frames_failed = 0;  ///< grabbed but not encoded
+  uint64_t grabs_failed = 0;   ///< the camera source delivered no frame
+  uint64_t camera_stalls = 0;  ///< stretches of failed grabs long enough to count (GrabMonitor)
+  bool camera_ended = false;   ///< a file source that does not loop has ended
   bool watchdog_expired = true;
 };
 
 class VehicleNode {
  public:
-  /// `track` (the simulated world) must outlive the node.
-  VehicleNode(const VehicleConfig& config, const Track& track);
+  /// `track` (the simulated world) must outlive the node. `camera` is the
+  /// opened source of its video (video::MakeCameraSource), made before the
+  /// node so that a camera that cannot open stops the vehicle before it
+  /// publishes anything; must not be null.
+  VehicleNode(const VehicleConfig& config, const Track& track,
+              std::unique_ptr<video::CameraSource> camera);
   ~VehicleNode();
 
   void Start();
@@ -73,12 +82,15 @@ class VehicleNode {
   std::atomic<uint64_t> last_accepted_seq_{0};
   std::atomic<int64_t> last_accepted_ns_{0};
   std::atomic<uint64_t> accepted_{0}, malformed_{0}, stale_{0}, trips_{0}, states_{0}, frames_{0},
-      frames_failed_{0};
+      frames_failed_{0}, grabs_failed_{0}, camera_stalls_{0};
+  std::atomic<bool> camera_ended_{false};
   std::atomic<bool> expired_{true};
   std::atomic<bool> stopped_{false};
   CommandWatchdog watchdog_;
 
-  video::SyntheticCamera camera_;
+  std::unique_ptr<video::CameraSource> camera_;
+  video::GrabMonitor grab_monitor_;
+  bool end_reported_ = false;
   video::JpegEncoder encoder_;
   cv::Mat image_;
   msg::VehicleState state_msg_;
