@@ -190,6 +190,14 @@ TEST_CASE(
   };
   const cv::Mat plain = render(0.0);
   CHECK_FALSE(Red(At(plain, {3, kHeight / 2})));
+  // The panel (lap clock, gates) darkens the top-left corner of the room.
+  auto brightness = [](cv::Vec3b c) { return c[0] + c[1] + c[2]; };
+  CHECK(brightness(At(plain, {12, 12})) < 300);
+  CHECK(brightness(At(plain, {kWidth / 2, 4})) > 400);  // the room's light wall
+  std::snprintf(model.overlay.message, sizeof model.overlay.message,
+                "waiting for vehicle 'robot1'");
+  CHECK(DifferentPixels(render(0.0), plain) > 500);  // the message line
+  model.overlay.message[0] = '\0';
   model.overlay.contact_now = true;
   const cv::Mat contact = render(0.0);
   CHECK(Red(At(contact, {3, kHeight / 2})));

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <opencv2/imgproc.hpp>
 
 #include "haptel/view/view.hpp"
@@ -24,20 +25,25 @@ const Eigen::Vector3f kLightDir =
     Eigen::Vector3f(0.3f, -0.2f, -1.0f).normalized();  // pointing down
 constexpr double kIndicatorHz = 1.5;
 
+// Lit shapes arrive already in the world frame (the CPU transforms them into
+// one batch): a software rasteriser's cost per draw call dwarfs its cost per
+// vertex, so the whole world is one draw.
 const char* kLitVertex = R"(#version 330 core
 layout(location = 0) in vec3 position;
 layout(location = 1) in vec3 normal;
+layout(location = 2) in vec4 vertex_color;
 uniform mat4 mvp;
-uniform mat3 normal_matrix;
 out vec3 world_normal;
+out vec4 color;
 void main() {
   gl_Position = mvp * vec4(position, 1.0);
-  world_normal = normal_matrix * normal;
+  world_normal = normal;
+  color = vertex_color;
 })";
 
 const char* kLitFragment = R"(#version 330 core
 in vec3 world_normal;
-uniform vec4 color;
+in vec4 color;
 uniform vec3 light_dir;
 out vec4 frag;
 void main() {
@@ -97,36 +103,58 @@ GLuint Link(const char* vertex, const char* fragment) {
   return program;
 }
 
-/// Triangles with position and normal (lit) or position and uv (textured).
+/// Indexed triangles with position and normal (lit) or position and uv
+/// (textured). Indexed, so a software rasteriser shades each shared vertex
+/// once (llvmpipe's vertex cache), not once per triangle.
 struct Mesh {
   GLuint vao = 0;
   GLuint vbo = 0;
-  GLsizei vertices = 0;
+  GLuint ebo = 0;
+  GLsizei indices = 0;
+  std::vector<float> unique;    ///< 6 floats per distinct vertex (kept for batching)
+  std::vector<uint32_t> index;  ///< triangles into `unique`
 
-  /// `data` holds 6 floats per vertex: xyz then normal or (u, v, 0).
+  /// `data` holds 6 floats per vertex of a triangle list: xyz then normal or
+  /// (u, v, 0). Identical vertices are merged.
   void Upload(const std::vector<float>& data, bool textured) {
+    std::map<std::array<float, 6>, uint32_t> seen;
+    unique.clear();
+    index.clear();
+    for (size_t i = 0; i + 6 <= data.size(); i += 6) {
+      std::array<float, 6> v{};
+      std::copy(data.begin() + static_cast<std::ptrdiff_t>(i),
+                data.begin() + static_cast<std::ptrdiff_t>(i + 6), v.begin());
+      auto [it, added] = seen.try_emplace(v, static_cast<uint32_t>(unique.size() / 6));
+      if (added) unique.insert(unique.end(), v.begin(), v.end());
+      index.push_back(it->second);
+    }
     glGenVertexArrays(1, &vao);
     glGenBuffers(1, &vbo);
+    glGenBuffers(1, &ebo);
     glBindVertexArray(vao);
     glBindBuffer(GL_ARRAY_BUFFER, vbo);
-    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data.size() * sizeof(float)), data.data(),
-                 GL_STATIC_DRAW);
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(unique.size() * sizeof(float)),
+                 unique.data(), GL_STATIC_DRAW);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ebo);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(index.size() * sizeof(uint32_t)),
+                 index.data(), GL_STATIC_DRAW);
     glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
     glEnableVertexAttribArray(0);
     glVertexAttribPointer(1, textured ? 2 : 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float),
                           reinterpret_cast<void*>(3 * sizeof(float)));
     glEnableVertexAttribArray(1);
-    vertices = static_cast<GLsizei>(data.size() / 6);
+    indices = static_cast<GLsizei>(index.size());
     glBindVertexArray(0);
   }
   void Release() {
+    if (ebo != 0) glDeleteBuffers(1, &ebo);
     if (vbo != 0) glDeleteBuffers(1, &vbo);
     if (vao != 0) glDeleteVertexArrays(1, &vao);
-    vbo = vao = 0;
+    ebo = vbo = vao = 0;
   }
   void Draw() const {
     glBindVertexArray(vao);
-    glDrawArrays(GL_TRIANGLES, 0, vertices);
+    glDrawElements(GL_TRIANGLES, indices, GL_UNSIGNED_INT, nullptr);
   }
 };
 
@@ -151,7 +179,7 @@ std::vector<float> CubeMesh() {
 }
 
 /// The unit sphere.
-std::vector<float> SphereMesh(int stacks = 8, int slices = 12) {
+std::vector<float> SphereMesh(int stacks = 6, int slices = 8) {
   std::vector<float> v;
   auto at = [&](int i, int j) {
     const double theta = M_PI * i / stacks;
@@ -171,7 +199,7 @@ std::vector<float> SphereMesh(int stacks = 8, int slices = 12) {
 }
 
 /// The cylinder of radius 1 from x = −1 to x = 1, with caps.
-std::vector<float> CylinderMesh(int slices = 14) {
+std::vector<float> CylinderMesh(int slices = 8) {
   std::vector<float> v;
   auto ring = [&](int j) {
     const double phi = 2 * M_PI * j / slices;
@@ -299,7 +327,10 @@ bool IndicatorLit(double t_s) {
 
 struct Renderer::Gl {
   GLuint lit = 0;
-  GLint lit_mvp = -1, lit_normal = -1, lit_color = -1, lit_light = -1;
+  GLint lit_mvp = -1, lit_light = -1;
+  GLuint batch_vao = 0, batch_vbo = 0, batch_ebo = 0;
+  std::vector<float> batch;  ///< position, normal, colour: 10 floats a vertex
+  std::vector<uint32_t> batch_index;
   GLuint tex = 0;
   GLint tex_mvp = -1, tex_image = -1, tex_uv_rect = -1;
   Mesh cube, sphere, cylinder, screen, fullscreen;
@@ -328,8 +359,23 @@ Renderer::Renderer(int width, int height, const ScreenPlacement& screen)
   Gl& g = *gl_;
   g.lit = Link(kLitVertex, kLitFragment);
   g.lit_mvp = glGetUniformLocation(g.lit, "mvp");
-  g.lit_normal = glGetUniformLocation(g.lit, "normal_matrix");
-  g.lit_color = glGetUniformLocation(g.lit, "color");
+  glGenVertexArrays(1, &g.batch_vao);
+  glGenBuffers(1, &g.batch_vbo);
+  glGenBuffers(1, &g.batch_ebo);
+  glBindVertexArray(g.batch_vao);
+  glBindBuffer(GL_ARRAY_BUFFER, g.batch_vbo);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g.batch_ebo);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 10 * sizeof(float), nullptr);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 10 * sizeof(float),
+                        reinterpret_cast<void*>(3 * sizeof(float)));
+  glEnableVertexAttribArray(1);
+  glVertexAttribPointer(2, 4, GL_FLOAT, GL_FALSE, 10 * sizeof(float),
+                        reinterpret_cast<void*>(6 * sizeof(float)));
+  glEnableVertexAttribArray(2);
+  glBindVertexArray(0);
+  g.batch.reserve(10 * 40000);
+  g.batch_index.reserve(200000);
   g.lit_light = glGetUniformLocation(g.lit, "light_dir");
   g.tex = Link(kTexVertex, kTexFragment);
   g.tex_mvp = glGetUniformLocation(g.tex, "mvp");
@@ -367,6 +413,9 @@ Renderer::Renderer(int width, int height, const ScreenPlacement& screen)
 Renderer::~Renderer() {
   Gl& g = *gl_;
   for (Mesh* m : {&g.cube, &g.sphere, &g.cylinder, &g.screen, &g.fullscreen}) m->Release();
+  glDeleteBuffers(1, &g.batch_ebo);
+  glDeleteBuffers(1, &g.batch_vbo);
+  glDeleteVertexArrays(1, &g.batch_vao);
   glDeleteTextures(1, &g.video_texture);
   glDeleteTextures(1, &g.overlay_texture);
   glDeleteProgram(g.lit);
@@ -410,15 +459,37 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
   glEnable(GL_BLEND);  // the gesture wall is translucent
   glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
   glUniform3f(g.lit_light, kLightDir.x(), kLightDir.y(), kLightDir.z());
+  glUniformMatrix4fv(g.lit_mvp, 1, GL_FALSE, g.view_projection.data());
+  g.batch.clear();
+  g.batch_index.clear();
   auto draw = [&](const Mesh& mesh, const std::array<double, 3>& p, const std::array<double, 4>& q,
                   const Eigen::Vector3f& scale, const Rgba& color) {
     const Eigen::Matrix4f m = Model(p, q, scale);
-    const Eigen::Matrix4f mvp = g.view_projection * m;
-    const Eigen::Matrix3f n = m.block<3, 3>(0, 0).inverse().transpose();
-    glUniformMatrix4fv(g.lit_mvp, 1, GL_FALSE, mvp.data());
-    glUniformMatrix3fv(g.lit_normal, 1, GL_FALSE, n.data());
-    glUniform4f(g.lit_color, color.r, color.g, color.b, color.a);
-    mesh.Draw();
+    const Eigen::Matrix3f rs = m.block<3, 3>(0, 0);
+    const Eigen::Matrix3f n = rs.inverse().transpose();
+    const Eigen::Vector3f t = m.block<3, 1>(0, 3);
+    const auto base = static_cast<uint32_t>(g.batch.size() / 10);
+    const size_t count = mesh.unique.size() / 6;
+    const size_t at = g.batch.size();
+    g.batch.resize(at + 10 * count);
+    float* out = g.batch.data() + at;
+    const float* in = mesh.unique.data();
+    for (size_t i = 0; i < count; ++i, in += 6, out += 10) {
+      for (int r = 0; r < 3; ++r) {
+        out[r] = rs(r, 0) * in[0] + rs(r, 1) * in[1] + rs(r, 2) * in[2] + t[r];
+        out[3 + r] = n(r, 0) * in[3] + n(r, 1) * in[4] + n(r, 2) * in[5];
+      }
+      const float len = std::sqrt(out[3] * out[3] + out[4] * out[4] + out[5] * out[5]);
+      const float inv = len > 0.0f ? 1.0f / len : 0.0f;
+      out[3] *= inv;
+      out[4] *= inv;
+      out[5] *= inv;
+      out[6] = color.r;
+      out[7] = color.g;
+      out[8] = color.b;
+      out[9] = color.a;
+    }
+    for (const uint32_t k : mesh.index) g.batch_index.push_back(base + k);
   };
   const std::array<double, 4> identity{1, 0, 0, 0};
   draw(g.cube, {0.3, 0.0, -0.32}, identity, {3.0f, 3.0f, 0.01f},
@@ -470,6 +541,17 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
       }
     }
   }
+
+  glBindVertexArray(g.batch_vao);
+  glBindBuffer(GL_ARRAY_BUFFER, g.batch_vbo);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(g.batch.size() * sizeof(float)),
+               g.batch.data(), GL_STREAM_DRAW);
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER,
+               static_cast<GLsizeiptr>(g.batch_index.size() * sizeof(uint32_t)),
+               g.batch_index.data(), GL_STREAM_DRAW);
+  glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(g.batch_index.size()), GL_UNSIGNED_INT,
+                 nullptr);
+  glBindVertexArray(0);
 
   // --- The video screen. ---
   glUseProgram(g.tex);
@@ -527,8 +609,9 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
     const double scale = 0.55 * height_ / 576.0;
     const int line_h = static_cast<int>(26 * height_ / 576.0);
     const int panel_lines = 4;
-    cv::rectangle(ov, cv::Rect(8, 8, static_cast<int>(width_ * 0.36), line_h * panel_lines + 12),
-                  Bgra(0, 0, 0, 150), cv::FILLED);
+    const cv::Rect panel(8, 8, static_cast<int>(width_ * 0.36), line_h * panel_lines + 12);
+    cv::rectangle(ov, panel, Bgra(0, 0, 0, 150), cv::FILLED);
+    g.overlay_rects.push_back(panel);
     for (int i = 0; i < panel_lines && i < static_cast<int>(lines.size()); ++i) {
       cv::putText(ov, lines[i], cv::Point(16, 8 + line_h * (i + 1)), font, scale,
                   Bgra(255, 255, 255), 1, cv::LINE_AA);
@@ -564,18 +647,18 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
       arrow(-1, o.turn_left && lit);
       arrow(1, o.turn_right && lit);
       if (o.throttle_locked) {
-        cv::putText(ov, "THROTTLE LOCKED", cv::Point(centre.x + radius + 70, height_ - 20), font,
-                    scale, Bgra(0, 180, 255), 2, cv::LINE_AA);
+        const cv::Point at(centre.x - radius - 190, height_ - 20);
+        g.overlay_rects.emplace_back(at.x - 5, at.y - 25, 190, 35);
+        cv::putText(ov, "THROTTLE LOCKED", at, font, scale, Bgra(0, 180, 255), 2, cv::LINE_AA);
       }
     }
     if (o.message[0] != '\0') {
       int base = 0;
       const cv::Size ts = cv::getTextSize(o.message, font, scale * 1.2, 2, &base);
-      // Above the speedometer.
-      const cv::Point at((width_ - ts.width) / 2,
-                         height_ - static_cast<int>(160 * height_ / 576.0));
-      cv::rectangle(ov, cv::Rect(at.x - 8, at.y - ts.height - 8, ts.width + 16, ts.height + 16),
-                    Bgra(0, 0, 0, 160), cv::FILLED);
+      const cv::Point at((width_ - ts.width) / 2, height_ - 24);
+      const cv::Rect box(at.x - 8, at.y - ts.height - 8, ts.width + 16, ts.height + 16);
+      cv::rectangle(ov, box, Bgra(0, 0, 0, 160), cv::FILLED);
+      g.overlay_rects.push_back(box);
       cv::putText(ov, o.message, at, font, scale * 1.2, Bgra(255, 255, 255), 2, cv::LINE_AA);
     }
     if (o.contact_now) {
