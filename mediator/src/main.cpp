@@ -89,12 +89,6 @@ std::string SwitchesJson(const std::vector<haptel::mediator::SwitchRecord>& swit
   return out + "]";
 }
 
-/// Whether a window could open: an X display is named.
-bool DisplayAvailable() {
-  const char* display = std::getenv("DISPLAY");
-  return display != nullptr && *display != '\0';
-}
-
 std::filesystem::path SelfDirectory() {
   std::error_code ec;
   const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
@@ -145,7 +139,7 @@ int main(int argc, char** argv) {
     if (auto db = args.Value("database")) setup.run.database = *db;
     if (auto trace = args.Value("trace")) setup.trace = *trace;
     if (auto s = Seconds(args, "vehicle-timeout", 0.05, 60.0)) setup.run.vehicle_timeout_s = *s;
-    const bool display = DisplayAvailable();
+    const bool display = view::View::DisplayAvailable();
     setup.operator_kind = args.Value("operator").value_or(display ? "person" : "auto");
     if (setup.operator_kind != "auto" && setup.operator_kind != "person") {
       throw UsageError("option --operator: expected auto or person, got '" + setup.operator_kind + "'");
@@ -154,7 +148,8 @@ int main(int argc, char** argv) {
     const std::string view = args.Value("view").value_or(display ? "window" : "none");
     if (view == "window") {
       if (!display) {
-        throw UsageError("option --view window: there is no display (DISPLAY is not set); use --view none, "
+        throw UsageError("option --view window: there is no display (DISPLAY is not set or its X server is not "
+                         "running); use --view none, "
                          "and --record FILE.mp4 to record the operator's view headless");
       }
       setup.view = ViewKind::kWindow;
