@@ -6,6 +6,7 @@
 #include <optional>
 #include <cstdlib>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <sstream>
 #include <string>
@@ -24,12 +25,6 @@
 #include "haptel/mediator/recorder.hpp"
 #include "haptel/view/view.hpp"
 #include "haptel/mediator/session.hpp"
-#include "gravity_bench.hpp"
-#include "servo_bench.hpp"
-#include "physics_bench.hpp"
-#include "skip_bench.hpp"
-#include "view_bench.hpp"
-#include "stability_bench.hpp"
 
 namespace {
 
@@ -105,14 +100,11 @@ int main(int argc, char** argv) {
   const std::string command = argc > 1 ? argv[1] : "";
   if (command == "calibrate") return haptics::CalibrateMain(argc - 1, argv + 1);
   if (command == "bench") {
-    const std::string which = argc > 2 ? argv[2] : "";
-    if (which == "servo") return bench::BenchServoMain(argc - 2, argv + 2);
-    if (which == "gravity") return bench::BenchGravityMain(argc - 2, argv + 2);
-    if (which == "skip") return bench::BenchSkipMain(argc - 2, argv + 2);
-    if (which == "physics") return bench::BenchPhysicsMain(argc - 2, argv + 2);
-    if (which == "stability") return bench::BenchStabilityMain(argc - 2, argv + 2);
-    if (which == "view") return bench::BenchViewMain(argc - 2, argv + 2);
-    std::fprintf(stderr, "haptel bench: expected one of: servo, gravity, skip, stability, physics, view (got '%s')\n", which.c_str());
+    // The benchmarks are a program of their own (haptel-bench, beside this one).
+    const std::string program = (SelfDirectory() / "haptel-bench").string();
+    argv[1] = const_cast<char*>("haptel-bench");
+    execv(program.c_str(), argv + 1);
+    std::fprintf(stderr, "haptel bench: cannot run %s: %s\n", program.c_str(), std::strerror(errno));
     return 2;
   }
   SessionSetup setup;
