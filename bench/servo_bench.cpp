@@ -23,6 +23,7 @@
 #include "haptel/haptics/servo_loop.hpp"
 #include "haptel/haptics/sim_device.hpp"
 #include "haptel/haptics/udp_device.hpp"
+#include "bare_loop.hpp"
 #include "plot.hpp"
 
 namespace haptel::bench {
@@ -81,9 +82,10 @@ ModeResult Measure(const std::string& name, const std::string& description, hapt
   return r;
 }
 
-std::string Json(const ModeResult& r) {
+std::string Json(const ModeResult& r, double bare_p99_us) {
   std::ostringstream o;
-  o << "{\"rate_hz\":" << r.stats.rate_hz << ",\"period_p50_us\":" << r.stats.period_p50_us
+  o << "{\"rate_hz\":" << r.stats.rate_hz << ",\"p99_ratio_to_bare\":"
+    << (bare_p99_us > 0 ? r.stats.period_p99_us / bare_p99_us : 0.0) << ",\"period_p50_us\":" << r.stats.period_p50_us
     << ",\"period_p99_us\":" << r.stats.period_p99_us << ",\"period_max_us\":" << r.stats.period_max_us
     << ",\"overruns\":" << r.stats.overruns << ",\"allocations_in_loop\":" << r.allocations
     << ",\"realtime\":" << (r.stats.realtime ? "true" : "false")
@@ -118,6 +120,16 @@ int BenchServoMain(int argc, const char* const* argv) {
   }
   base.driver = "sim";
   std::vector<ModeResult> results;
+
+  {  // The reference: an empty clock_nanosleep loop with the same rate and scheduling.
+    const BareLoop bare = MeasureBareLoop(base.servo.rate_hz, base.servo.realtime_priority, seconds);
+    ModeResult r;
+    r.name = "bare_clock_nanosleep";
+    r.description = "an empty loop: the machine's timing floor";
+    r.stats = bare.stats;
+    r.histogram = bare.histogram;
+    results.push_back(r);
+  }
 
   {  // (a) one local sim arm, its own thread
     DeviceConfig c = base;
@@ -179,16 +191,19 @@ int BenchServoMain(int argc, const char* const* argv) {
 
   // Table.
   std::printf("haptel bench servo: %.1f s per mode, target rate %.0f Hz\n\n", seconds, base.servo.rate_hz);
-  std::printf("%-26s %9s %8s %8s %9s %9s %7s %9s %-8s %s\n", "mode", "rate Hz", "p50 us", "p99 us", "max us",
-              "overruns", "allocs", "udp lost", "realtime", "mlock");
+  const double bare_p99 = results[0].stats.period_p99_us;
+  auto ratio = [&](const ModeResult& r) { return bare_p99 > 0 ? r.stats.period_p99_us / bare_p99 : 0.0; };
+  std::printf("%-26s %9s %8s %8s %7s %9s %9s %7s %9s %-8s %s\n", "mode", "rate Hz", "p50 us", "p99 us", "x bare",
+              "max us", "overruns", "allocs", "udp lost", "realtime", "mlock");
   for (const ModeResult& r : results) {
-    std::printf("%-26s %9.1f %8.0f %8.0f %9.0f %9llu %7llu %9llu %-8s %s\n", r.name.c_str(), r.stats.rate_hz,
-                r.stats.period_p50_us, r.stats.period_p99_us, r.stats.period_max_us,
+    std::printf("%-26s %9.1f %8.0f %8.0f %7.2f %9.0f %9llu %7llu %9llu %-8s %s\n", r.name.c_str(), r.stats.rate_hz,
+                r.stats.period_p50_us, r.stats.period_p99_us, ratio(r), r.stats.period_max_us,
                 static_cast<unsigned long long>(r.stats.overruns), static_cast<unsigned long long>(r.allocations),
                 static_cast<unsigned long long>(r.udp_unanswered), r.stats.realtime ? "yes" : "no",
                 r.memory_locked ? "yes" : "no");
   }
   std::printf("\n  rate: cycles per second over the run; p50/p99/max: start-to-start period;\n"
+              "  x bare: p99 over the empty loop's p99 in this run (the machine's floor);\n"
               "  overruns: cycles started over one period late (or skipped); allocs: heap\n"
               "  allocations anywhere in the process while the loop ran (must be 0);\n"
               "  udp lost: requests that got no valid reply after their retries.\n");
@@ -197,11 +212,11 @@ int BenchServoMain(int argc, const char* const* argv) {
   const auto dir = BenchDir();
   {
     std::ofstream csv(dir / "servo.csv");
-    csv << "mode,rate_hz,period_p50_us,period_p99_us,period_max_us,overruns,allocations_in_loop,udp_unanswered,"
-           "realtime\n";
+    csv << "mode,rate_hz,period_p50_us,period_p99_us,p99_ratio_to_bare,period_max_us,overruns,allocations_in_loop,"
+           "udp_unanswered,realtime\n";
     for (const ModeResult& r : results) {
       csv << r.name << "," << r.stats.rate_hz << "," << r.stats.period_p50_us << "," << r.stats.period_p99_us << ","
-          << r.stats.period_max_us << "," << r.stats.overruns << "," << r.allocations << "," << r.udp_unanswered
+          << ratio(r) << "," << r.stats.period_max_us << "," << r.stats.overruns << "," << r.allocations << "," << r.udp_unanswered
           << "," << (r.stats.realtime ? 1 : 0) << "\n";
     }
     std::ofstream hist(dir / "servo_periods.csv");
@@ -234,8 +249,12 @@ int BenchServoMain(int argc, const char* const* argv) {
   if (json) {
     std::ostringstream o;
     o << "{\"modes\":{";
-    for (size_t i = 0; i < results.size(); ++i) o << (i ? "," : "") << "\"" << results[i].name << "\":" << Json(results[i]);
-    o << "},\"rate_hz_udp_two_arms\":" << results[2].stats.rate_hz << ",\"seconds_per_mode\":" << seconds << "}";
+    double udp_two_arms_hz = 0.0;
+    for (size_t i = 0; i < results.size(); ++i) {
+      o << (i ? "," : "") << "\"" << results[i].name << "\":" << Json(results[i], bare_p99);
+      if (results[i].name == "udp_two_arms_decimated") udp_two_arms_hz = results[i].stats.rate_hz;
+    }
+    o << "},\"rate_hz_udp_two_arms\":" << udp_two_arms_hz << ",\"seconds_per_mode\":" << seconds << "}";
     std::printf("%s\n", o.str().c_str());
   }
   return 0;

@@ -23,12 +23,12 @@
 #include "haptel/core/args.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/core/json.hpp"
-#include "haptel/core/periodic_thread.hpp"
 #include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/session_physics.hpp"
 #include "haptel/mediator/session_view.hpp"
 #include "haptel/mediator/vehicle_link.hpp"
 #include "haptel/mediator/video_receiver.hpp"
+#include "bare_loop.hpp"
 #include "plot.hpp"
 
 namespace haptel::bench {
@@ -107,15 +107,10 @@ void CopyServo(Phase& p, const LoopStats& stats, const Histogram& h) {
 Phase Bare(const Parts& parts, double seconds) {
   Phase p;
   p.name = "bare";
-  PeriodicThread::Options o;
-  o.name = "bare";
-  o.rate_hz = parts.device.servo.rate_hz;
-  o.realtime_priority = parts.device.servo.realtime_priority;
-  PeriodicThread loop(o, [](int64_t) {});
-  loop.Start();
-  SleepUntilNs(MonotonicNs() + SToNs(seconds + 1.0));
-  loop.Stop();
-  CopyServo(p, loop.Stats(), loop.period_histogram());
+  const BareLoop bare = MeasureBareLoop(parts.device.servo.rate_hz, parts.device.servo.realtime_priority, seconds);
+  p.servo = bare.stats;
+  p.servo_histogram = bare.histogram;
+  p.servo_bin_us = bare.bin_us;
   return p;
 }
 
