@@ -103,10 +103,7 @@ int BenchServoMain(int argc, const char* const* argv) {
   try {
     const Args args(argc, argv, {"seconds", "device"}, {"json"});
     json = args.Flag("json");
-    if (auto s = args.Value("seconds")) {
-      seconds = std::stod(*s);
-      if (!(seconds >= 0.5 && seconds <= 600)) throw UsageError("--seconds: expected a number in [0.5, 600]");
-    }
+    if (auto v = args.Number("seconds", 0.5, 600)) seconds = *v;
     base = LoadDevice(args.Value("device").value_or(ShippedFile("config/devices/sim.yaml").string()));
   } catch (const UsageError& e) {
     std::fprintf(stderr, "haptel bench servo: %s\n", e.what());

@@ -285,10 +285,7 @@ int BenchSkipMain(int argc, const char* const* argv) {
   try {
     const Args args(argc, argv, {"physics", "seconds"}, {"json"});
     json = args.Flag("json");
-    if (auto s = args.Value("seconds")) {
-      seconds = std::stod(*s);
-      if (!(seconds >= 0.1 && seconds <= 60)) throw UsageError("--seconds: expected a number in [0.1, 60]");
-    }
+    if (auto v = args.Number("seconds", 0.1, 60)) seconds = *v;
     config = LoadPhysics(args.Value("physics").value_or(ShippedFile("config/physics.yaml").string()));
     cockpit = LoadCockpit(ShippedFile("config/interfaces/cockpit.yaml"));
     vehicle = LoadVehicle(ShippedFile("config/vehicles/sim-robot.yaml"));

@@ -437,10 +437,7 @@ int BenchStabilityMain(int argc, const char* const* argv) {
   try {
     const Args args(argc, argv, {"physics", "minutes"}, {"json"});
     json = args.Flag("json");
-    if (auto s = args.Value("minutes")) {
-      minutes = std::stod(*s);
-      if (!(minutes >= 0.1 && minutes <= 60)) throw UsageError("--minutes: expected a number in [0.1, 60]");
-    }
+    if (auto v = args.Number("minutes", 0.1, 60)) minutes = *v;
     config = LoadPhysics(args.Value("physics").value_or(ShippedFile("config/physics.yaml").string()));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "haptel bench stability: %s\n", e.what());

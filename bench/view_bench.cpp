@@ -212,11 +212,7 @@ int BenchViewMain(int argc, const char* const* argv) {
   try {
     const Args args(argc, argv, {"seconds"}, {"json"});
     json = args.Flag("json");
-    if (auto s = args.Value("seconds")) {
-      seconds = std::stod(*s);
-      if (!(seconds >= 1 && seconds <= 120))
-        throw UsageError("--seconds: expected a number in [1, 120]");
-    }
+    if (auto v = args.Number("seconds", 1, 120)) seconds = *v;
     parts.run = LoadRun(ShippedFile("config/haptel.yaml"));
     parts.device = LoadDevice(ShippedFile("config/devices/sim.yaml"));
     parts.physics = LoadPhysics(ShippedFile("config/physics.yaml"));

@@ -1,5 +1,9 @@
 #include "haptel/core/args.hpp"
 
+#include <cctype>
+#include <cstdlib>
+#include <sstream>
+
 namespace haptel {
 
 Args::Args(int argc, const char* const* argv, std::set<std::string> value_options,
@@ -27,7 +31,8 @@ Args::Args(int argc, const char* const* argv, std::set<std::string> value_option
       } else {
         throw UsageError("option --" + name + " expects a value");
       }
-      if (values_[name].empty()) throw UsageError("option --" + name + " expects a non-empty value");
+      if (values_[name].empty())
+        throw UsageError("option --" + name + " expects a non-empty value");
     } else {
       throw UsageError("unknown option --" + name);
     }
@@ -51,6 +56,20 @@ std::optional<int> Args::Int(const std::string& name, int min, int max) const {
   }
   throw UsageError("option --" + name + ": expected a whole number in [" + std::to_string(min) +
                    ", " + std::to_string(max) + "], got '" + *text + "'");
+}
+
+std::optional<double> Args::Number(const std::string& name, double min, double max) const {
+  const auto text = Value(name);
+  if (!text) return std::nullopt;
+  char* end = nullptr;
+  const double value = std::strtod(text->c_str(), &end);
+  const bool whole = !text->empty() && !std::isspace(static_cast<unsigned char>(text->front())) &&
+                     end != text->c_str() && *end == '\0';
+  if (whole && value >= min && value <= max) return value;
+  std::ostringstream range;
+  range << "[" << min << ", " << max << "]";
+  throw UsageError("option --" + name + ": expected a number in " + range.str() + ", got '" +
+                   *text + "'");
 }
 
 }  // namespace haptel

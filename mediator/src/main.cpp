@@ -61,17 +61,6 @@ constexpr const char* kUsage =
     "  --quiet              no progress lines\n";
 
 /// A seconds option in [min, max]; UsageError naming it otherwise.
-std::optional<double> Seconds(const haptel::Args& args, const std::string& name, double min, double max) {
-  const auto text = args.Value(name);
-  if (!text) return std::nullopt;
-  char* end = nullptr;
-  const double s = std::strtod(text->c_str(), &end);
-  if (end == text->c_str() || *end != '\0' || !(s >= min && s <= max)) {
-    throw haptel::UsageError("option --" + name + ": expected seconds in [" + haptel::JsonNumber(min) + ", " +
-                             haptel::JsonNumber(max) + "], got '" + *text + "'");
-  }
-  return s;
-}
 
 /// [{"t_s":…,"from":…,"to":…}, …]
 std::string SwitchesJson(const std::vector<haptel::mediator::SwitchRecord>& switches) {
@@ -130,7 +119,7 @@ int main(int argc, char** argv) {
     if (auto domain = args.Int("domain", 0, 232)) setup.run.link.domain_id = *domain;
     if (auto db = args.Value("database")) setup.run.database = *db;
     if (auto trace = args.Value("trace")) setup.trace = *trace;
-    if (auto s = Seconds(args, "vehicle-timeout", 0.05, 60.0)) setup.run.vehicle_timeout_s = *s;
+    if (auto s = args.Number("vehicle-timeout", 0.05, 60.0)) setup.run.vehicle_timeout_s = *s;
     const bool display = view::View::DisplayAvailable();
     setup.operator_kind = args.Value("operator").value_or(display ? "person" : "auto");
     if (setup.operator_kind != "auto" && setup.operator_kind != "person") {
@@ -152,7 +141,7 @@ int main(int argc, char** argv) {
       setup.record = *record;
       if (setup.view == ViewKind::kNone) setup.view = ViewKind::kOffscreen;
     }
-    if (auto s = Seconds(args, "time-limit", 1.0, 86400.0)) {
+    if (auto s = args.Number("time-limit", 1.0, 86400.0)) {
       setup.time_limit_s = *s;
     } else if (person) {
       setup.time_limit_s = setup.run.person_time_limit_s;

@@ -25,6 +25,9 @@ class Args {
   std::optional<std::string> Value(const std::string& name) const;
   /// An integer option in [min, max]; UsageError names the option otherwise.
   std::optional<int> Int(const std::string& name, int min, int max) const;
+  /// A number option in [min, max], the whole word a number ("5x" is not);
+  /// UsageError names the option, the range and what was given otherwise.
+  std::optional<double> Number(const std::string& name, double min, double max) const;
   bool Flag(const std::string& name) const { return flags_set_.count(name) != 0; }
   /// Words that are not options (e.g. a sub-command), in order.
   const std::vector<std::string>& positional() const { return positional_; }
