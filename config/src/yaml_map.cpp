@@ -13,12 +13,19 @@ std::string Range(double min, double max) {
 }  // namespace
 
 YamlMap YamlMap::Load(const std::filesystem::path& file) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(file, ec)) {
+    throw ConfigError(file.string() + ": is a folder; expected a YAML file");
+  }
   YAML::Node root;
   try {
     root = YAML::LoadFile(file.string());
   } catch (const YAML::BadFile&) {
     throw ConfigError(file.string() + ": cannot open the file");
+  } catch (const std::ios_base::failure& e) {
+    throw ConfigError(file.string() + ": cannot read the file: " + e.what());
   } catch (const YAML::Exception& e) {
+    if (e.mark.is_null()) throw ConfigError(file.string() + ": cannot read the file: " + e.msg);
     throw ConfigError(file.string() + ":" + std::to_string(e.mark.line + 1) + ":" +
                       std::to_string(e.mark.column + 1) + ": not valid YAML: " + e.msg);
   }

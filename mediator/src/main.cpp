@@ -107,9 +107,10 @@ int main(int argc, char** argv) {
       std::fputs(kUsage, stdout);
       return 0;
     }
-    if (args.positional().size() != 1 || args.positional()[0] != "run") {
-      throw UsageError(args.positional().empty() ? "missing command (run)"
-                                                 : "unknown command '" + args.positional()[0] + "'");
+    if (args.positional().empty()) throw UsageError("missing command (run)");
+    if (args.positional()[0] != "run") throw UsageError("unknown command '" + args.positional()[0] + "'");
+    if (args.positional().size() > 1) {
+      throw UsageError("unexpected argument '" + args.positional()[1] + "' after 'run' (options start with --)");
     }
     json = args.Flag("json");
     setup.progress = !args.Flag("quiet");
