@@ -251,8 +251,8 @@ int main(int argc, char** argv) {
   const RunRecord& r = result.record;
   std::printf("haptel: %s — %s\n", ToString(result.outcome).c_str(), result.message.c_str());
   std::printf("  track %s, interface %s, vehicle %s (pid %d), operator %s, device %s\n", r.track.c_str(),
-              r.interface.c_str(), r.vehicle.c_str(), r.vehicle_pid, result.operator_kind.c_str(), result.device.c_str());
-  std::printf("  distance driven %.2f m, %zu interface switches\n", result.distance_m, result.switches.size());
+              r.interface.c_str(), r.vehicle.c_str(), r.vehicle_pid, r.operator_kind.c_str(), r.device.c_str());
+  std::printf("  distance driven %.2f m, %zu interface switches\n", r.distance_m, r.switches.size());
   std::printf("  lap time %.2f s, gates passed %d/%d, missed %d, obstacles touched %d\n", r.lap_time_s,
               r.gates_passed, r.gates_total, r.gates_missed, r.obstacles_touched);
   for (const GateSplit& s : r.splits) {
@@ -287,11 +287,11 @@ int main(int argc, char** argv) {
       << ",\"physics_step_max_us\":" << JsonNumber(result.physics_step_max_us)
       << ",\"physics_hand_resets\":" << result.physics_hand_resets
       << ",\"grasp_s\":" << JsonNumber(result.grasp_s) << ",\"scene_bodies\":" << result.scene_bodies
-      << ",\"view_fps\":" << JsonNumber(result.view_fps) << ",\"view_frame_p99_ms\":" << JsonNumber(result.view_frame_p99_ms)
-      << ",\"video_to_screen_ms_p50\":" << JsonNumber(result.video_to_screen_ms_p50)
-      << ",\"video_to_screen_ms_p99\":" << JsonNumber(result.video_to_screen_ms_p99)
-      << ",\"distance_m\":" << JsonNumber(result.distance_m) << ",\"operator\":" << JsonString(result.operator_kind)
-      << ",\"device\":" << JsonString(result.device) << ",\"interface_switches\":" << SwitchesJson(result.switches)
+      << ",\"view_fps\":" << JsonNumber(r.view_fps) << ",\"view_frame_p99_ms\":" << JsonNumber(r.view_frame_p99_ms)
+      << ",\"video_to_screen_ms_p50\":" << JsonNumber(r.video_to_screen_ms_p50)
+      << ",\"video_to_screen_ms_p99\":" << JsonNumber(r.video_to_screen_ms_p99)
+      << ",\"distance_m\":" << JsonNumber(r.distance_m) << ",\"operator\":" << JsonString(r.operator_kind)
+      << ",\"device\":" << JsonString(r.device) << ",\"interface_switches\":" << SwitchesJson(r.switches)
       << ",\"interface\":" << JsonString(r.interface)
       << ",\"track\":" << JsonString(r.track) << ",\"run_id\":" << run_id
       << ",\"database\":" << JsonString(setup.run.database.string()) << "}";
