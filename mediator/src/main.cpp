@@ -22,6 +22,7 @@
 #include "haptel/haptics/calibration_procedure.hpp"
 #include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/recorder.hpp"
+#include "haptel/mediator/run_picture.hpp"
 #include "haptel/mediator/session.hpp"
 #include "gravity_bench.hpp"
 #include "servo_bench.hpp"
@@ -240,6 +241,22 @@ int main(int argc, char** argv) {
     result = RunSession(setup, g_interrupted);
     Recorder recorder(setup.run.database);
     run_id = recorder.Save(result.record);
+    result.record.id = run_id;
+    // The run is saved; its picture is a bonus: a failure is a warning.
+    try {
+      const std::filesystem::path png =
+          std::filesystem::absolute(RunPicturePath(setup.run.database, run_id));
+      DrawRunPicture(result.record, setup.track, png);
+      recorder.SetPicture(run_id, png);
+      result.record.picture = png.string();
+      if (setup.progress) {
+        std::fprintf(stderr, "[haptel] run %lld: picture %s\n", static_cast<long long>(run_id),
+                     png.c_str());
+      }
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "haptel: warning: run %lld is saved without its picture: %s\n",
+                   static_cast<long long>(run_id), e.what());
+    }
   } catch (const ConfigError& e) {  // a part that could not be set up: nothing moved
     std::fprintf(stderr, "haptel: %s\n", e.what());
     return 2;
@@ -269,6 +286,7 @@ int main(int argc, char** argv) {
   std::printf("  video %lld frames, %.1f fps, latency p50 %.1f ms\n", static_cast<long long>(r.video_frames),
               r.video_fps, r.video_latency_ms_p50);
   std::printf("  recorded as run %lld in %s\n", static_cast<long long>(run_id), setup.run.database.c_str());
+  if (!r.picture.empty()) std::printf("  picture %s\n", r.picture.c_str());
   if (json) {
     std::ostringstream o;
     o << "{\"completed\":" << (r.completed ? "true" : "false") << ",\"outcome\":" << JsonString(r.outcome)
@@ -294,7 +312,8 @@ int main(int argc, char** argv) {
       << ",\"device\":" << JsonString(r.device) << ",\"interface_switches\":" << SwitchesJson(r.switches)
       << ",\"interface\":" << JsonString(r.interface)
       << ",\"track\":" << JsonString(r.track) << ",\"run_id\":" << run_id
-      << ",\"database\":" << JsonString(setup.run.database.string()) << "}";
+      << ",\"database\":" << JsonString(setup.run.database.string())
+      << ",\"picture\":" << JsonString(r.picture) << "}";
     std::printf("%s\n", o.str().c_str());
   }
   std::fflush(stdout);
