@@ -23,6 +23,7 @@
 #include "haptel/haptics/calibration_procedure.hpp"
 #include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/recorder.hpp"
+#include "haptel/mediator/run_picture.hpp"
 #include "haptel/view/view.hpp"
 #include "haptel/mediator/session.hpp"
 
@@ -220,6 +221,22 @@ int main(int argc, char** argv) {
     result = RunSession(setup, g_interrupted);
     Recorder recorder(setup.run.database);
     run_id = recorder.Save(result.record);
+    result.record.id = run_id;
+    // The run is saved; its picture is a bonus: a failure is a warning.
+    try {
+      const std::filesystem::path png =
+          std::filesystem::absolute(RunPicturePath(setup.run.database, run_id));
+      DrawRunPicture(result.record, setup.track, png);
+      recorder.SetPicture(run_id, png);
+      result.record.picture = png.string();
+      if (setup.progress) {
+        std::fprintf(stderr, "[haptel] run %lld: picture %s\n", static_cast<long long>(run_id),
+                     png.c_str());
+      }
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "haptel: warning: run %lld is saved without its picture: %s\n",
+                   static_cast<long long>(run_id), e.what());
+    }
   } catch (const ConfigError& e) {  // a part that could not be set up: nothing moved
     std::fprintf(stderr, "haptel: %s\n", e.what());
     return 2;
@@ -234,8 +251,8 @@ int main(int argc, char** argv) {
   const RunRecord& r = result.record;
   std::printf("haptel: %s — %s\n", ToString(result.outcome).c_str(), result.message.c_str());
   std::printf("  track %s, interface %s, vehicle %s (pid %d), operator %s, device %s\n", r.track.c_str(),
-              r.interface.c_str(), r.vehicle.c_str(), r.vehicle_pid, result.operator_kind.c_str(), result.device.c_str());
-  std::printf("  distance driven %.2f m, %zu interface switches\n", result.distance_m, result.switches.size());
+              r.interface.c_str(), r.vehicle.c_str(), r.vehicle_pid, r.operator_kind.c_str(), r.device.c_str());
+  std::printf("  distance driven %.2f m, %zu interface switches\n", r.distance_m, r.switches.size());
   std::printf("  lap time %.2f s, gates passed %d/%d, missed %d, obstacles touched %d\n", r.lap_time_s,
               r.gates_passed, r.gates_total, r.gates_missed, r.obstacles_touched);
   for (const GateSplit& s : r.splits) {
@@ -252,14 +269,15 @@ int main(int argc, char** argv) {
   std::printf("  video %lld frames, %.1f fps, latency p50 %.1f ms\n", static_cast<long long>(r.video_frames),
               r.video_fps, r.video_latency_ms_p50);
   if (setup.view != ViewKind::kNone) {
-    std::printf("  view %.1f fps (frame p99 %.1f ms), video to screen p50 %.1f ms, p99 %.1f ms\n", result.view_fps,
-                result.view_frame_p99_ms, result.video_to_screen_ms_p50, result.video_to_screen_ms_p99);
+    std::printf("  view %.1f fps (frame p99 %.1f ms), video to screen p50 %.1f ms, p99 %.1f ms\n", r.view_fps,
+                r.view_frame_p99_ms, r.video_to_screen_ms_p50, r.video_to_screen_ms_p99);
   }
   if (!setup.record.empty()) {
     std::printf("  operator's view recorded to %s (%llu frames dropped)\n", setup.record.c_str(),
                 static_cast<unsigned long long>(result.view_record_dropped));
   }
   std::printf("  recorded as run %lld in %s\n", static_cast<long long>(run_id), setup.run.database.c_str());
+  if (!r.picture.empty()) std::printf("  picture %s\n", r.picture.c_str());
   if (json) {
     std::ostringstream o;
     o << "{\"completed\":" << (r.completed ? "true" : "false") << ",\"outcome\":" << JsonString(r.outcome)
@@ -278,14 +296,15 @@ int main(int argc, char** argv) {
       << ",\"physics_step_max_us\":" << JsonNumber(result.physics_step_max_us)
       << ",\"physics_hand_resets\":" << result.physics_hand_resets
       << ",\"grasp_s\":" << JsonNumber(result.grasp_s) << ",\"scene_bodies\":" << result.scene_bodies
-      << ",\"view_fps\":" << JsonNumber(result.view_fps) << ",\"view_frame_p99_ms\":" << JsonNumber(result.view_frame_p99_ms)
-      << ",\"video_to_screen_ms_p50\":" << JsonNumber(result.video_to_screen_ms_p50)
-      << ",\"video_to_screen_ms_p99\":" << JsonNumber(result.video_to_screen_ms_p99)
-      << ",\"distance_m\":" << JsonNumber(result.distance_m) << ",\"operator\":" << JsonString(result.operator_kind)
-      << ",\"device\":" << JsonString(result.device) << ",\"interface_switches\":" << SwitchesJson(result.switches)
+      << ",\"view_fps\":" << JsonNumber(r.view_fps) << ",\"view_frame_p99_ms\":" << JsonNumber(r.view_frame_p99_ms)
+      << ",\"video_to_screen_ms_p50\":" << JsonNumber(r.video_to_screen_ms_p50)
+      << ",\"video_to_screen_ms_p99\":" << JsonNumber(r.video_to_screen_ms_p99)
+      << ",\"distance_m\":" << JsonNumber(r.distance_m) << ",\"operator\":" << JsonString(r.operator_kind)
+      << ",\"device\":" << JsonString(r.device) << ",\"interface_switches\":" << SwitchesJson(r.switches)
       << ",\"interface\":" << JsonString(r.interface)
       << ",\"track\":" << JsonString(r.track) << ",\"run_id\":" << run_id
-      << ",\"database\":" << JsonString(setup.run.database.string()) << "}";
+      << ",\"database\":" << JsonString(setup.run.database.string())
+      << ",\"picture\":" << JsonString(r.picture) << "}";
     std::printf("%s\n", o.str().c_str());
   }
   std::fflush(stdout);

@@ -1,13 +1,15 @@
 /// @file SQLite-backed run recorder (see recorder.hpp).
 ///
 /// Durability and atomicity: the database runs in WAL mode with
-/// synchronous=FULL. A run and its splits go in one BEGIN IMMEDIATE ... COMMIT
-/// transaction, so a process killed mid-write leaves either the whole run or
-/// nothing; the next connection recovers the WAL and sees only committed runs.
-/// Values are always bound to prepared statements, never formatted into SQL.
+/// synchronous=FULL. A run with its splits, switches, path and contacts goes in
+/// one BEGIN IMMEDIATE ... COMMIT transaction, so a process killed mid-write
+/// leaves either the whole run or nothing; the next connection recovers the
+/// WAL and sees only committed runs. Values are always bound to prepared
+/// statements, never formatted into SQL.
 ///
 /// SQLite stores a NaN as NULL; LoadAll maps a NULL REAL back to NaN, so
-/// "not measured" metrics round-trip.
+/// "not measured" metrics round-trip. The path, contact and switch columns are
+/// NOT NULL: a NaN time or position there is an error, and the save rolls back.
 #include "haptel/mediator/recorder.hpp"
 
 #include <sqlite3.h>
@@ -15,6 +17,7 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <iterator>
 #include <limits>
 #include <memory>
 #include <stdexcept>
@@ -27,10 +30,15 @@ namespace haptel::mediator {
 namespace {
 
 /// Schema version stored in PRAGMA user_version.
-constexpr int kSchemaVersion = 1;
+constexpr int kSchemaVersion = 2;
 constexpr int kBusyTimeoutMs = 2000;
 
-constexpr const char* kCreateSchema = R"sql(
+/// Schema steps: kMigrations[v - 1] takes a database from version v - 1 to v.
+/// A new database runs them all, so the upgrade path of an old file is the
+/// same SQL every new file is built with.
+///
+/// v1: runs and their gate splits.
+constexpr const char* kSchemaV1 = R"sql(
 CREATE TABLE IF NOT EXISTS runs (
   id INTEGER PRIMARY KEY,
   started_utc TEXT NOT NULL,
@@ -64,28 +72,85 @@ CREATE TABLE IF NOT EXISTS gate_splits (
 );
 )sql";
 
+/// v2: who drove with what, the view's figures, the run's picture; and per run
+/// its interface switches, path and contacts. Runs from v1 get '' for the new
+/// text columns and NULL (loaded as NaN: not measured) for the new metrics.
+/// Rows of the new tables keep their insertion order in their rowid.
+constexpr const char* kSchemaV2 = R"sql(
+ALTER TABLE runs ADD COLUMN operator_kind TEXT NOT NULL DEFAULT '';
+ALTER TABLE runs ADD COLUMN device TEXT NOT NULL DEFAULT '';
+ALTER TABLE runs ADD COLUMN distance_m REAL DEFAULT NULL;
+ALTER TABLE runs ADD COLUMN view_fps REAL DEFAULT NULL;
+ALTER TABLE runs ADD COLUMN view_frame_p99_ms REAL DEFAULT NULL;
+ALTER TABLE runs ADD COLUMN video_to_screen_ms_p50 REAL DEFAULT NULL;
+ALTER TABLE runs ADD COLUMN video_to_screen_ms_p99 REAL DEFAULT NULL;
+ALTER TABLE runs ADD COLUMN picture TEXT NOT NULL DEFAULT '';
+CREATE TABLE interface_switches (
+  run_id INTEGER NOT NULL REFERENCES runs(id) ON DELETE CASCADE,
+  t_s REAL NOT NULL,
+  from_interface TEXT NOT NULL,
+  to_interface TEXT NOT NULL
+);
+CREATE INDEX interface_switches_run_id ON interface_switches(run_id);
+CREATE TABLE run_path (
+  run_id INTEGER NOT NULL REFERENCES runs(id) ON DELETE CASCADE,
+  t_s REAL NOT NULL,
+  x REAL NOT NULL,
+  y REAL NOT NULL,
+  speed_mps REAL NOT NULL
+);
+CREATE INDEX run_path_run_id ON run_path(run_id);
+CREATE TABLE run_contacts (
+  run_id INTEGER NOT NULL REFERENCES runs(id) ON DELETE CASCADE,
+  t_s REAL NOT NULL,
+  x REAL NOT NULL,
+  y REAL NOT NULL
+);
+CREATE INDEX run_contacts_run_id ON run_contacts(run_id);
+)sql";
+
+constexpr const char* kMigrations[] = {kSchemaV1, kSchemaV2};
+static_assert(std::size(kMigrations) == kSchemaVersion, "one migration per schema version");
+
 constexpr const char* kInsertRun = R"sql(
 INSERT INTO runs (started_utc, started_wall_ns, config_name, track, interface, vehicle,
                   completed, outcome, lap_time_s, gates_passed, gates_total, gates_missed,
                   obstacles_touched, vehicle_pid, servo_rate_hz, servo_period_p99_us,
                   command_rtt_ms_p50, command_rtt_ms_p99, video_frames, video_fps,
-                  video_latency_ms_p50)
-VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)
+                  video_latency_ms_p50, operator_kind, device, distance_m, view_fps,
+                  view_frame_p99_ms, video_to_screen_ms_p50, video_to_screen_ms_p99, picture)
+VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)
 )sql";
 
 constexpr const char* kInsertSplit =
     "INSERT INTO gate_splits (run_id, gate, passed, split_s) VALUES (?, ?, ?, ?)";
+constexpr const char* kInsertSwitch =
+    "INSERT INTO interface_switches (run_id, t_s, from_interface, to_interface) "
+    "VALUES (?, ?, ?, ?)";
+constexpr const char* kInsertPathPoint =
+    "INSERT INTO run_path (run_id, t_s, x, y, speed_mps) VALUES (?, ?, ?, ?, ?)";
+constexpr const char* kInsertContact =
+    "INSERT INTO run_contacts (run_id, t_s, x, y) VALUES (?, ?, ?, ?)";
+constexpr const char* kUpdatePicture = "UPDATE runs SET picture = ? WHERE id = ?";
 
 constexpr const char* kSelectRuns = R"sql(
 SELECT id, started_wall_ns, config_name, track, interface, vehicle, completed, outcome,
        lap_time_s, gates_passed, gates_total, gates_missed, obstacles_touched, vehicle_pid,
        servo_rate_hz, servo_period_p99_us, command_rtt_ms_p50, command_rtt_ms_p99,
-       video_frames, video_fps, video_latency_ms_p50
+       video_frames, video_fps, video_latency_ms_p50, operator_kind, device, distance_m,
+       view_fps, view_frame_p99_ms, video_to_screen_ms_p50, video_to_screen_ms_p99, picture
 FROM runs ORDER BY id
 )sql";
 
 constexpr const char* kSelectSplits =
     "SELECT run_id, gate, passed, split_s FROM gate_splits ORDER BY run_id, gate";
+constexpr const char* kSelectSwitches =
+    "SELECT run_id, t_s, from_interface, to_interface FROM interface_switches "
+    "ORDER BY run_id, rowid";
+constexpr const char* kSelectPath =
+    "SELECT run_id, t_s, x, y, speed_mps FROM run_path ORDER BY run_id, rowid";
+constexpr const char* kSelectContacts =
+    "SELECT run_id, t_s, x, y FROM run_contacts ORDER BY run_id, rowid";
 
 struct DbCloser {
   void operator()(sqlite3* db) const noexcept { sqlite3_close_v2(db); }
@@ -154,8 +219,8 @@ class Binder {
   Binder& Int(int64_t value) { return Check(sqlite3_bind_int64(stmt_, ++index_, value)); }
   Binder& Real(double value) { return Check(sqlite3_bind_double(stmt_, ++index_, value)); }
   Binder& Text(const std::string& value) {
-    return Check(sqlite3_bind_text64(stmt_, ++index_, value.data(), value.size(),
-                                     SQLITE_TRANSIENT, SQLITE_UTF8));
+    return Check(sqlite3_bind_text64(stmt_, ++index_, value.data(), value.size(), SQLITE_TRANSIENT,
+                                     SQLITE_UTF8));
   }
 
  private:
@@ -210,8 +275,8 @@ std::string IsoUtc(int64_t wall_ns) {
   if (gmtime_r(&t, &tm) == nullptr) return std::string();
   char buffer[64];
   const int n = std::snprintf(buffer, sizeof buffer, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ",
-                              tm.tm_year + 1900, tm.tm_mon + 1, tm.tm_mday, tm.tm_hour,
-                              tm.tm_min, tm.tm_sec, static_cast<int>(remainder_ns / 1'000'000));
+                              tm.tm_year + 1900, tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min,
+                              tm.tm_sec, static_cast<int>(remainder_ns / 1'000'000));
   if (n < 0 || static_cast<size_t>(n) >= sizeof buffer) return std::string();
   return std::string(buffer, static_cast<size_t>(n));
 }
@@ -263,12 +328,22 @@ Recorder::Recorder(const std::filesystem::path& database) : path_(database) {
     }
     const int found = sqlite3_column_int(version.get(), 0);
     version.reset();
+    if (found < 0) {
+      throw std::runtime_error("Recorder: " + path_.string() + ": schema version " +
+                               std::to_string(found) + " is not a Haptel schema");
+    }
     if (found > kSchemaVersion) {
       throw std::runtime_error("Recorder: " + path_.string() + ": schema version " +
                                std::to_string(found) + " is newer than supported version " +
                                std::to_string(kSchemaVersion));
     }
-    Exec(path_, db.get(), kCreateSchema, "cannot create schema");
+    // Every step up to the current version in this one transaction: a
+    // migration that fails part-way leaves the file at its old version.
+    for (int v = found + 1; v <= kSchemaVersion; ++v) {
+      Exec(path_, db.get(), kMigrations[v - 1],
+           "cannot " + std::string(found == 0 ? "create" : "migrate") + " schema to version " +
+               std::to_string(v));
+    }
     if (found < kSchemaVersion) {
       // PRAGMA takes no bound parameters; the value is a compile-time constant.
       const std::string set = "PRAGMA user_version = " + std::to_string(kSchemaVersion);
@@ -307,7 +382,15 @@ int64_t Recorder::Save(const RunRecord& run) {
       .Real(run.command_rtt_ms_p99)
       .Int(run.video_frames)
       .Real(run.video_fps)
-      .Real(run.video_latency_ms_p50);
+      .Real(run.video_latency_ms_p50)
+      .Text(run.operator_kind)
+      .Text(run.device)
+      .Real(run.distance_m)
+      .Real(run.view_fps)
+      .Real(run.view_frame_p99_ms)
+      .Real(run.video_to_screen_ms_p50)
+      .Real(run.video_to_screen_ms_p99)
+      .Text(run.picture);
   StepDone(path_, db_, insert_run.get(), "cannot insert run");
   const int64_t run_id = sqlite3_last_insert_rowid(db_);
 
@@ -323,10 +406,59 @@ int64_t Recorder::Save(const RunRecord& run) {
              "cannot insert split for gate " + std::to_string(split.gate));
   }
 
+  // One prepared statement per table, reset and rebound per row: a 10-minute
+  // lap's 12 000 path points cost one parse, and one sync at the commit.
+  Stmt insert_switch = Prepare(path_, db_, kInsertSwitch, "cannot prepare switch insert");
+  for (size_t i = 0; i < run.switches.size(); ++i) {
+    const SwitchRecord& s = run.switches[i];
+    sqlite3_reset(insert_switch.get());
+    Binder(path_, db_, insert_switch.get()).Int(run_id).Real(s.t_s).Text(s.from).Text(s.to);
+    StepDone(path_, db_, insert_switch.get(),
+             "cannot insert interface switch " + std::to_string(i));
+  }
+
+  Stmt insert_point = Prepare(path_, db_, kInsertPathPoint, "cannot prepare path insert");
+  for (size_t i = 0; i < run.path.size(); ++i) {
+    const PathPoint& p = run.path[i];
+    sqlite3_reset(insert_point.get());
+    Binder(path_, db_, insert_point.get())
+        .Int(run_id)
+        .Real(p.t_s)
+        .Real(p.x)
+        .Real(p.y)
+        .Real(p.speed_mps);
+    StepDone(path_, db_, insert_point.get(), "cannot insert path point " + std::to_string(i));
+  }
+
+  Stmt insert_contact = Prepare(path_, db_, kInsertContact, "cannot prepare contact insert");
+  for (size_t i = 0; i < run.contacts.size(); ++i) {
+    const ContactPoint& c = run.contacts[i];
+    sqlite3_reset(insert_contact.get());
+    Binder(path_, db_, insert_contact.get()).Int(run_id).Real(c.t_s).Real(c.x).Real(c.y);
+    StepDone(path_, db_, insert_contact.get(), "cannot insert contact " + std::to_string(i));
+  }
+
+  // Statements finalized before COMMIT, so none holds the transaction open.
   insert_run.reset();
   insert_split.reset();
+  insert_switch.reset();
+  insert_point.reset();
+  insert_contact.reset();
   txn.Commit();
   return run_id;
+}
+
+void Recorder::SetPicture(int64_t run_id, const std::filesystem::path& png) {
+  Transaction txn(path_, db_, "BEGIN IMMEDIATE");
+  Stmt update = Prepare(path_, db_, kUpdatePicture, "cannot prepare picture update");
+  Binder(path_, db_, update.get()).Text(png.string()).Int(run_id);
+  StepDone(path_, db_, update.get(), "cannot set the picture of run " + std::to_string(run_id));
+  if (sqlite3_changes(db_) != 1) {
+    throw std::runtime_error("Recorder: " + path_.string() + ": cannot set the picture of run " +
+                             std::to_string(run_id) + ": no such run");
+  }
+  update.reset();
+  txn.Commit();
 }
 
 std::vector<RunRecord> Recorder::LoadAll() const {
@@ -363,6 +495,14 @@ std::vector<RunRecord> Recorder::LoadAll() const {
       run.video_frames = r.Int();
       run.video_fps = r.Real();
       run.video_latency_ms_p50 = r.Real();
+      run.operator_kind = r.Text();
+      run.device = r.Text();
+      run.distance_m = r.Real();
+      run.view_fps = r.Real();
+      run.view_frame_p99_ms = r.Real();
+      run.video_to_screen_ms_p50 = r.Real();
+      run.video_to_screen_ms_p99 = r.Real();
+      run.picture = r.Text();
       index_of.emplace(run.id, runs.size());
       runs.push_back(std::move(run));
     }
@@ -383,6 +523,39 @@ std::vector<RunRecord> Recorder::LoadAll() const {
     }
     if (rc != SQLITE_DONE) Fail(path_, db_, "cannot read gate splits");
   }
+  // The rows of a run's child table go to that run, in the query's order.
+  auto read_children = [&](const char* sql, std::string_view what, auto&& add) {
+    Stmt select = Prepare(path_, db_, sql, "cannot prepare " + std::string(what) + " query");
+    int rc;
+    while ((rc = sqlite3_step(select.get())) == SQLITE_ROW) {
+      Reader r(select.get());
+      const auto it = index_of.find(r.Int());
+      if (it != index_of.end()) add(runs[it->second], r);
+    }
+    if (rc != SQLITE_DONE) Fail(path_, db_, "cannot read " + std::string(what));
+  };
+  read_children(kSelectSwitches, "interface switches", [](RunRecord& run, Reader& r) {
+    SwitchRecord s;
+    s.t_s = r.Real();
+    s.from = r.Text();
+    s.to = r.Text();
+    run.switches.push_back(std::move(s));
+  });
+  read_children(kSelectPath, "path", [](RunRecord& run, Reader& r) {
+    PathPoint p;
+    p.t_s = r.Real();
+    p.x = r.Real();
+    p.y = r.Real();
+    p.speed_mps = r.Real();
+    run.path.push_back(p);
+  });
+  read_children(kSelectContacts, "contacts", [](RunRecord& run, Reader& r) {
+    ContactPoint c;
+    c.t_s = r.Real();
+    c.x = r.Real();
+    c.y = r.Real();
+    run.contacts.push_back(c);
+  });
 
   txn.Commit();
   return runs;

@@ -106,8 +106,8 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   rec.track = setup.track.name;
   rec.vehicle = setup.vehicle.name;
   rec.gates_total = static_cast<int>(track.gates().size());
-  result.operator_kind = setup.operator_kind;
-  result.device = setup.device.name;
+  rec.operator_kind = setup.operator_kind;
+  rec.device = setup.device.name;
   const InterfaceSpec& start_spec = setup.interfaces.at(static_cast<size_t>(setup.start_interface));
 
   // --- The haptic side first: the hands are held before anything moves. ---
@@ -215,7 +215,7 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   double last_y = 0.0;
   double last_path_t = -1.0;
   bool touching = false;
-  result.path.reserve(8192);
+  rec.path.reserve(8192);
 
   auto finish = [&](Outcome outcome, std::string message) {
     result.outcome = outcome;
@@ -264,16 +264,16 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
       if (s.pose_valid()) {
         op->Observe({ts, s.x(), s.y(), s.heading(), s.bumper_left(), s.bumper_right()});
         lap.Update(ts, Vec2(s.x(), s.y()));
-        if (have_position) result.distance_m += std::hypot(s.x() - last_x, s.y() - last_y);
+        if (have_position) rec.distance_m += std::hypot(s.x() - last_x, s.y() - last_y);
         have_position = true;
         last_x = s.x();
         last_y = s.y();
         if (ts - last_path_t >= 0.05) {
-          result.path.push_back({ts, s.x(), s.y(), s.speed()});
+          rec.path.push_back({ts, s.x(), s.y(), s.speed()});
           last_path_t = ts;
         }
         const bool now_touching = s.bumper_left() || s.bumper_right();
-        if (now_touching && !touching) result.contacts.push_back({ts, s.x(), s.y()});
+        if (now_touching && !touching) rec.contacts.push_back({ts, s.x(), s.y()});
         touching = now_touching;
       }
       lap.UpdateContact(ts, s.bumper_left() || s.bumper_right());
@@ -349,7 +349,7 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
     }
     if (setup.progress && now >= next_progress_ns) {
       next_progress_ns += SToNs(2.0);
-      LogProgress(t, lap, vehicle, feedback.speed, result.distance_m, interfaces.current(), motors);
+      LogProgress(t, lap, vehicle, feedback.speed, rec.distance_m, interfaces.current(), motors);
     }
   }
 
@@ -359,10 +359,10 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   if (view_part) {
     view_part->Stop();  // finishes the MP4
     const view::ViewStats vs = view_part->Stats();
-    result.view_fps = vs.fps;
-    result.view_frame_p99_ms = vs.frame_ms_p99;
-    result.video_to_screen_ms_p50 = vs.video_to_screen_ms_p50;
-    result.video_to_screen_ms_p99 = vs.video_to_screen_ms_p99;
+    rec.view_fps = vs.fps;
+    rec.view_frame_p99_ms = vs.frame_ms_p99;
+    rec.video_to_screen_ms_p50 = vs.video_to_screen_ms_p50;
+    rec.video_to_screen_ms_p99 = vs.video_to_screen_ms_p99;
     result.view_record_dropped = vs.record_dropped;
   }
   if (physics_side) {
@@ -398,7 +398,7 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   rec.video_fps = v.fps;
   rec.video_latency_ms_p50 = v.latency_ms_p50;
   result.servo_overruns = servo_stats.overruns;
-  result.switches = interfaces.switches();
+  rec.switches = interfaces.switches();
   return result;
 }
 

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <filesystem>
 #include <mutex>
 
 #include "child.hpp"
@@ -57,6 +58,14 @@ TEST_CASE("haptel run completes the short track over DDS with a separate vehicle
   REQUIRE(runs[0].splits.size() == 2);
   CHECK(runs[0].splits[0].passed);
   CHECK(runs[0].splits[1].split_s > runs[0].splits[0].split_s);
+  // With who drove, the path (a point every 0.05 s) and the run's picture.
+  CHECK(runs[0].operator_kind == "auto");
+  CHECK(runs[0].device == JsonField(json, "device"));
+  CHECK(runs[0].distance_m == Approx(std::stod(JsonField(json, "distance_m"))).epsilon(1e-4));
+  CHECK(runs[0].path.size() > 100);
+  CHECK(runs[0].picture == JsonField(json, "picture"));
+  CHECK(runs[0].picture == std::filesystem::absolute(dir / "pictures" / "run-1.png").string());
+  CHECK(std::filesystem::file_size(runs[0].picture) > 0);
 }
 
 TEST_CASE("haptel run drives the short track through the assisted cockpit: hands grasp wheel and lever") {

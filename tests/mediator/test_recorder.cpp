@@ -1,5 +1,6 @@
-// Tests for haptel::mediator::Recorder: round trip, folder creation, errors
-// naming the file, rollback of a failing save, and that a process killed in the
+// Tests for haptel::mediator::Recorder: round trip (with switches, path and
+// contacts), folder creation, errors naming the file, migration of a v1
+// database, rollback of a failing save, and that a process killed in the
 // middle of a write leaves no half-written run behind.
 #include <signal.h>
 #include <sqlite3.h>
@@ -8,8 +9,8 @@
 #include <unistd.h>
 
 #include <atomic>
-#include <cerrno>
 #include <catch2/catch.hpp>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -24,9 +25,12 @@
 #include "haptel/mediator/recorder.hpp"
 
 namespace fs = std::filesystem;
+using haptel::mediator::ContactPoint;
 using haptel::mediator::GateSplit;
+using haptel::mediator::PathPoint;
 using haptel::mediator::Recorder;
 using haptel::mediator::RunRecord;
+using haptel::mediator::SwitchRecord;
 
 namespace {
 
@@ -37,8 +41,8 @@ class TempDir {
   TempDir() {
     static std::atomic<int> counter{0};
     const char* env = std::getenv("HAPTEL_TEST_TMP");
-    const fs::path base = (env != nullptr && *env != '\0') ? fs::path(env)
-                                                           : fs::temp_directory_path();
+    const fs::path base =
+        (env != nullptr && *env != '\0') ? fs::path(env) : fs::temp_directory_path();
     path_ = base / ("haptel-recorder-" + std::to_string(::getpid()) + "-" +
                     std::to_string(counter.fetch_add(1)));
     fs::remove_all(path_);
@@ -107,6 +111,14 @@ RunRecord MakeRun(int n, int split_count) {
   run.video_frames = 9'000'000'000LL + n;  // needs 64 bits
   run.video_fps = 29.97;
   run.video_latency_ms_p50 = 85.0 / 3.0;
+  run.operator_kind = (n % 2 == 0) ? "auto" : "person";
+  run.device = "sim arms « left/right »";
+  run.distance_m = 7.125 + n;
+  run.view_fps = 59.94;
+  run.view_frame_p99_ms = 17.5 + n;
+  run.video_to_screen_ms_p50 = 41.0 / 3.0;
+  run.video_to_screen_ms_p99 = 88.25;
+  run.picture = "/data/runs/pictures/run-" + std::to_string(n) + ".png";
   for (int g = 0; g < split_count; ++g) {
     GateSplit split;
     split.gate = g;
@@ -114,6 +126,11 @@ RunRecord MakeRun(int n, int split_count) {
     split.split_s = split.passed ? 12.5 * (g + 1) + 0.001 * n : -1.0;
     run.splits.push_back(split);
   }
+  run.switches = {{3.25, "gesture", "cockpit"}, {9.5 + n, "cockpit", "gesture"}};
+  for (int i = 0; i < 20 + n; ++i) {
+    run.path.push_back({0.05 * i, 0.01 * i - 1.0 / 3.0, -0.02 * i, 0.1 * (i % 7) - 0.2});
+  }
+  run.contacts = {{0.35, 0.5, -0.25}, {0.85 + n, -1.0 / 7.0, 2.0}};
   return run;
 }
 
@@ -141,11 +158,39 @@ void CheckSame(const RunRecord& got, const RunRecord& want) {
   CHECK(got.video_frames == want.video_frames);
   CHECK(SameReal(got.video_fps, want.video_fps));
   CHECK(SameReal(got.video_latency_ms_p50, want.video_latency_ms_p50));
+  CHECK(got.operator_kind == want.operator_kind);
+  CHECK(got.device == want.device);
+  CHECK(SameReal(got.distance_m, want.distance_m));
+  CHECK(SameReal(got.view_fps, want.view_fps));
+  CHECK(SameReal(got.view_frame_p99_ms, want.view_frame_p99_ms));
+  CHECK(SameReal(got.video_to_screen_ms_p50, want.video_to_screen_ms_p50));
+  CHECK(SameReal(got.video_to_screen_ms_p99, want.video_to_screen_ms_p99));
+  CHECK(got.picture == want.picture);
   REQUIRE(got.splits.size() == want.splits.size());
   for (size_t i = 0; i < want.splits.size(); ++i) {
     CHECK(got.splits[i].gate == want.splits[i].gate);
     CHECK(got.splits[i].passed == want.splits[i].passed);
     CHECK(SameReal(got.splits[i].split_s, want.splits[i].split_s));
+  }
+  REQUIRE(got.switches.size() == want.switches.size());
+  for (size_t i = 0; i < want.switches.size(); ++i) {
+    CHECK(got.switches[i].t_s == want.switches[i].t_s);
+    CHECK(got.switches[i].from == want.switches[i].from);
+    CHECK(got.switches[i].to == want.switches[i].to);
+  }
+  REQUIRE(got.path.size() == want.path.size());
+  for (size_t i = 0; i < want.path.size(); ++i) {
+    INFO("path point " << i);
+    CHECK(got.path[i].t_s == want.path[i].t_s);
+    CHECK(got.path[i].x == want.path[i].x);
+    CHECK(got.path[i].y == want.path[i].y);
+    CHECK(got.path[i].speed_mps == want.path[i].speed_mps);
+  }
+  REQUIRE(got.contacts.size() == want.contacts.size());
+  for (size_t i = 0; i < want.contacts.size(); ++i) {
+    CHECK(got.contacts[i].t_s == want.contacts[i].t_s);
+    CHECK(got.contacts[i].x == want.contacts[i].x);
+    CHECK(got.contacts[i].y == want.contacts[i].y);
   }
 }
 
@@ -211,6 +256,10 @@ TEST_CASE("Recorder round-trips runs and splits through a reopened database", "[
   second.lap_time_s = std::numeric_limits<double>::quiet_NaN();  // never finished
   second.splits[1].split_s = std::numeric_limits<double>::infinity();
   second.interface.clear();
+  second.view_fps = std::numeric_limits<double>::quiet_NaN();  // no view: not measured
+  second.picture.clear();
+  second.switches.clear();
+  second.contacts.clear();
 
   int64_t id1 = 0;
   int64_t id2 = 0;
@@ -250,7 +299,7 @@ TEST_CASE("Recorder stores the start time as ISO-8601 UTC and a schema version",
   }
   RawDb raw(file);
   CHECK(raw.Text("SELECT started_utc FROM runs") == "2024-05-01T12:34:56.789Z");
-  CHECK(raw.Integer("PRAGMA user_version") == 1);
+  CHECK(raw.Integer("PRAGMA user_version") == 2);
 }
 
 TEST_CASE("Recorder creates missing parent folders", "[recorder]") {
@@ -322,6 +371,223 @@ TEST_CASE("A failing Save rolls back and leaves the Recorder usable", "[recorder
   REQUIRE(runs.size() == 2);
   CHECK(runs[1].id == id);
   CheckSame(runs[1], after);
+}
+
+TEST_CASE("Recorder round-trips a 10-minute path and sets a saved run's picture", "[recorder]") {
+  TempDir tmp;
+  const fs::path file = tmp.path() / "runs.db";
+  RunRecord run = MakeRun(3, 5);
+  run.path.clear();
+  for (int i = 0; i < 12'000; ++i) {  // one point every 0.05 s for 600 s
+    run.path.push_back({0.05 * i, std::sin(i * 1e-3), std::cos(i * 1e-3) * 2.5, 0.001 * i});
+  }
+  run.picture.clear();
+  int64_t id = 0;
+  {
+    Recorder recorder(file);
+    id = recorder.Save(run);
+    recorder.Save(MakeRun(4, 2));  // a second run: children must not mix
+    const fs::path png = tmp.path() / "pictures" / "run-1.png";
+    recorder.SetPicture(id, png);
+    run.picture = png.string();
+    RequireThrowsMentioning([&] { recorder.SetPicture(id + 100, png); }, "no such run");
+  }
+  Recorder reopened(file);
+  const std::vector<RunRecord> runs = reopened.LoadAll();
+  REQUIRE(runs.size() == 2);
+  CHECK(runs[0].id == id);
+  CheckSame(runs[0], run);
+  CheckSame(runs[1], MakeRun(4, 2));
+  RawDb raw(file);
+  CHECK(raw.Integer("SELECT COUNT(*) FROM run_path") == 12'000 + 24);
+}
+
+namespace {
+
+// Schema v1 exactly as recorder.cpp created it (git show acd77c8:mediator/src/recorder.cpp).
+constexpr const char* kSchemaV1 = R"sql(
+CREATE TABLE IF NOT EXISTS runs (
+  id INTEGER PRIMARY KEY,
+  started_utc TEXT NOT NULL,
+  started_wall_ns INTEGER NOT NULL,
+  config_name TEXT NOT NULL,
+  track TEXT NOT NULL,
+  interface TEXT NOT NULL,
+  vehicle TEXT NOT NULL,
+  completed INTEGER NOT NULL,
+  outcome TEXT NOT NULL,
+  lap_time_s REAL,
+  gates_passed INTEGER NOT NULL,
+  gates_total INTEGER NOT NULL,
+  gates_missed INTEGER NOT NULL,
+  obstacles_touched INTEGER NOT NULL,
+  vehicle_pid INTEGER NOT NULL,
+  servo_rate_hz REAL,
+  servo_period_p99_us REAL,
+  command_rtt_ms_p50 REAL,
+  command_rtt_ms_p99 REAL,
+  video_frames INTEGER NOT NULL,
+  video_fps REAL,
+  video_latency_ms_p50 REAL
+);
+CREATE TABLE IF NOT EXISTS gate_splits (
+  run_id INTEGER NOT NULL REFERENCES runs(id),
+  gate INTEGER NOT NULL,
+  passed INTEGER NOT NULL,
+  split_s REAL,
+  PRIMARY KEY (run_id, gate)
+);
+PRAGMA user_version = 1;
+INSERT INTO runs (started_utc, started_wall_ns, config_name, track, interface, vehicle,
+                  completed, outcome, lap_time_s, gates_passed, gates_total, gates_missed,
+                  obstacles_touched, vehicle_pid, servo_rate_hz, servo_period_p99_us,
+                  command_rtt_ms_p50, command_rtt_ms_p99, video_frames, video_fps,
+                  video_latency_ms_p50)
+VALUES ('2024-05-01T12:34:56.789Z', 1714566896789000000, 'v1 run', 'grand-prix', 'gesture',
+        'tank-sim', 1, 'completed', 101.5, 5, 5, 0, 2, 4321, 999.0, 1040.0, 1.25, 6.5, 3000,
+        29.5, 80.0);
+INSERT INTO gate_splits (run_id, gate, passed, split_s) VALUES (1, 0, 1, 20.0), (1, 1, 0, 41.5);
+)sql";
+
+/// The v1 run above, as a v2 Recorder loads it: v2's text empty, its metrics
+/// NaN (not measured), no switches, path or contacts.
+RunRecord V1Run() {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  RunRecord run;
+  run.started_wall_ns = 1714566896789000000;
+  run.config_name = "v1 run";
+  run.track = "grand-prix";
+  run.interface = "gesture";
+  run.vehicle = "tank-sim";
+  run.completed = true;
+  run.outcome = "completed";
+  run.lap_time_s = 101.5;
+  run.gates_passed = 5;
+  run.gates_total = 5;
+  run.gates_missed = 0;
+  run.obstacles_touched = 2;
+  run.vehicle_pid = 4321;
+  run.servo_rate_hz = 999.0;
+  run.servo_period_p99_us = 1040.0;
+  run.command_rtt_ms_p50 = 1.25;
+  run.command_rtt_ms_p99 = 6.5;
+  run.video_frames = 3000;
+  run.video_fps = 29.5;
+  run.video_latency_ms_p50 = 80.0;
+  run.distance_m = nan;
+  run.view_fps = nan;
+  run.view_frame_p99_ms = nan;
+  run.video_to_screen_ms_p50 = nan;
+  run.video_to_screen_ms_p99 = nan;
+  run.splits = {{0, true, 20.0}, {1, false, 41.5}};
+  return run;
+}
+
+}  // namespace
+
+TEST_CASE("A v1 database is migrated to v2 in place and keeps its runs", "[recorder]") {
+  TempDir tmp;
+  const fs::path file = tmp.path() / "v1.db";
+  {
+    RawDb raw(file);
+    raw.Exec(kSchemaV1);
+    REQUIRE(raw.Integer("PRAGMA user_version") == 1);
+  }
+
+  const RunRecord fresh = MakeRun(5, 3);
+  {
+    Recorder recorder(file);
+    std::vector<RunRecord> runs = recorder.LoadAll();
+    REQUIRE(runs.size() == 1);
+    CHECK(runs[0].id == 1);
+    CheckSame(runs[0], V1Run());
+
+    const int64_t id = recorder.Save(fresh);
+    CHECK(id == 2);
+    runs = recorder.LoadAll();
+    REQUIRE(runs.size() == 2);
+    CheckSame(runs[0], V1Run());
+    CheckSame(runs[1], fresh);
+  }
+
+  RawDb raw(file);
+  CHECK(raw.Integer("PRAGMA user_version") == 2);
+  CHECK(raw.Text("PRAGMA integrity_check") == "ok");
+  CHECK(raw.Integer("SELECT COUNT(*) FROM pragma_foreign_key_check") == 0);
+  for (const char* table : {"interface_switches", "run_path", "run_contacts"}) {
+    INFO(table);
+    const std::string count_fk = std::string("SELECT COUNT(*) FROM pragma_foreign_key_list('") +
+                                 table + "') WHERE \"table\" = 'runs' AND \"from\" = 'run_id'";
+    CHECK(raw.Integer(count_fk.c_str()) == 1);
+    const std::string count_index =
+        std::string("SELECT COUNT(*) FROM pragma_index_list('") + table +
+        "') AS l JOIN pragma_index_info(l.name) AS i WHERE i.name = 'run_id'";
+    CHECK(raw.Integer(count_index.c_str()) == 1);
+  }
+  // Reopening a v2 database changes nothing.
+  {
+    Recorder again(file);
+    CHECK(again.LoadAll().size() == 2);
+  }
+  CHECK(raw.Integer("PRAGMA user_version") == 2);
+}
+
+TEST_CASE("A migration that fails leaves the v1 database as it was", "[recorder]") {
+  TempDir tmp;
+  const fs::path file = tmp.path() / "v1.db";
+  {
+    RawDb raw(file);
+    raw.Exec(kSchemaV1);
+    raw.Exec("CREATE TABLE run_path (something_else TEXT)");  // in v2's way
+  }
+  RequireThrowsMentioning([&] { Recorder recorder(file); }, file.string());
+  RequireThrowsMentioning([&] { Recorder recorder(file); }, "migrate schema to version 2");
+  RawDb raw(file);
+  CHECK(raw.Integer("PRAGMA user_version") == 1);
+  CHECK(raw.Integer("SELECT COUNT(*) FROM pragma_table_info('runs') WHERE name = 'picture'") == 0);
+  CHECK(raw.Integer("SELECT COUNT(*) FROM sqlite_master WHERE name = 'run_contacts'") == 0);
+  CHECK(raw.Integer("SELECT COUNT(*) FROM runs") == 1);
+}
+
+TEST_CASE("A save failing at the path's end leaves no part of the run", "[recorder]") {
+  TempDir tmp;
+  const fs::path file = tmp.path() / "runs.db";
+  Recorder recorder(file);
+  const RunRecord good = MakeRun(0, 5);
+  recorder.Save(good);
+
+  RunRecord bad = MakeRun(1, 5);
+  bad.config_name = "bad";
+  bad.path.clear();
+  for (int i = 0; i < 12'000; ++i) bad.path.push_back({0.05 * i, 0.001 * i, 0.0, 0.5});
+  bad.path[11'999].x = std::numeric_limits<double>::quiet_NaN();  // NOT NULL: the last row fails
+  RequireThrowsMentioning([&] { recorder.Save(bad); }, file.string());
+  RequireThrowsMentioning([&] { recorder.Save(bad); }, "path point 11999");
+
+  bad.path[11'999].x = 1.0;
+  bad.contacts[1].t_s = std::numeric_limits<double>::quiet_NaN();
+  RequireThrowsMentioning([&] { recorder.Save(bad); }, "contact 1");
+
+  {
+    RawDb raw(file);
+    CHECK(raw.Integer("SELECT COUNT(*) FROM runs") == 1);
+    CHECK(raw.Integer("SELECT COUNT(*) FROM gate_splits") == 5);
+    CHECK(raw.Integer("SELECT COUNT(*) FROM interface_switches") ==
+          static_cast<int64_t>(good.switches.size()));
+    CHECK(raw.Integer("SELECT COUNT(*) FROM run_path") == static_cast<int64_t>(good.path.size()));
+    CHECK(raw.Integer("SELECT COUNT(*) FROM run_contacts") ==
+          static_cast<int64_t>(good.contacts.size()));
+  }
+  std::vector<RunRecord> runs = recorder.LoadAll();
+  REQUIRE(runs.size() == 1);
+  CheckSame(runs[0], good);
+
+  bad.contacts[1].t_s = 2.0;
+  const int64_t id = recorder.Save(bad);
+  runs = recorder.LoadAll();
+  REQUIRE(runs.size() == 2);
+  CHECK(runs[1].id == id);
+  CheckSame(runs[1], bad);
 }
 
 TEST_CASE("A writer killed mid-transaction leaves no trace and no lock", "[recorder][fork]") {

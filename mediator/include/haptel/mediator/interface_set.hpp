@@ -10,14 +10,9 @@
 
 #include "haptel/haptics/hal.hpp"
 #include "haptel/interfaces/interface.hpp"
+#include "haptel/mediator/recorder.hpp"  // SwitchRecord: switches are recorded as they are kept
 
 namespace haptel::mediator {
-
-struct SwitchRecord {
-  double t_s = 0.0;
-  std::string from;
-  std::string to;
-};
 
 class InterfaceSet {
  public:

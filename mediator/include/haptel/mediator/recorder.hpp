@@ -1,8 +1,9 @@
 #pragma once
 /// @file Records finished runs in a SQLite database.
 ///
-/// One run is written in one transaction (the run row and its gate splits), so
-/// an interrupted write leaves nothing half-written.
+/// One run is written in one transaction (the run row, its gate splits,
+/// interface switches, path and contacts), so an interrupted write leaves
+/// nothing half-written.
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -20,16 +21,42 @@ struct GateSplit {
   double split_s = -1.0;
 };
 
-/// Everything a run reports, as stored in the database.
+/// A switch to another interface during a run (F1–F6), t_s since the session
+/// started.
+struct SwitchRecord {
+  double t_s = 0.0;
+  std::string from;
+  std::string to;
+};
+
+/// Where the vehicle was, world frame (m), and how fast it went; t_s since the
+/// session started.
+struct PathPoint {
+  double t_s = 0.0;
+  double x = 0.0;
+  double y = 0.0;
+  double speed_mps = 0.0;
+};
+
+/// Where the vehicle was when a bumper contact began.
+struct ContactPoint {
+  double t_s = 0.0;
+  double x = 0.0;
+  double y = 0.0;
+};
+
+/// Everything a run reports, as stored in the database. A metric that was not
+/// measured is NaN (stored as NULL); runs recorded before schema v2 load with
+/// NaN for v2's metrics, empty strings and empty vectors.
 struct RunRecord {
-  int64_t id = 0;                ///< set by Save / Load
-  int64_t started_wall_ns = 0;   ///< CLOCK_REALTIME at session start
+  int64_t id = 0;               ///< set by Save / Load
+  int64_t started_wall_ns = 0;  ///< CLOCK_REALTIME at session start
   std::string config_name;
   std::string track;
   std::string interface;
   std::string vehicle;
   bool completed = false;
-  std::string outcome;           ///< "completed", "lap cap", "vehicle lost", "interrupted", ...
+  std::string outcome;  ///< "completed", "lap cap", "vehicle lost", "interrupted", ...
   double lap_time_s = 0.0;
   int gates_passed = 0;
   int gates_total = 0;
@@ -43,23 +70,43 @@ struct RunRecord {
   int64_t video_frames = 0;
   double video_fps = 0.0;
   double video_latency_ms_p50 = 0.0;
+  std::string operator_kind;  ///< "auto" or "person"
+  std::string device;         ///< the haptic device's name
+  double distance_m = 0.0;    ///< driven, summed over the vehicle's positions
+  double view_fps = 0.0;      ///< the operator's view (0: none)
+  double view_frame_p99_ms = 0.0;
+  double video_to_screen_ms_p50 = 0.0;  ///< capture stamp -> first shown on screen
+  double video_to_screen_ms_p99 = 0.0;
+  std::string picture;  ///< the run's PNG (empty: none)
   std::vector<GateSplit> splits;
+  std::vector<SwitchRecord> switches;
+  std::vector<PathPoint> path;  ///< one point every 0.05 s
+  std::vector<ContactPoint> contacts;
 };
 
 class Recorder {
  public:
   /// Opens (creating it and its parent folders if needed) the database and its
-  /// schema. Throws std::runtime_error naming the file on failure.
+  /// schema; an older schema (v1) is migrated in place, in one transaction.
+  /// Throws std::runtime_error naming the file on failure, or when the
+  /// database's schema is newer than this build knows.
   explicit Recorder(const std::filesystem::path& database);
   ~Recorder();
   Recorder(const Recorder&) = delete;
   Recorder& operator=(const Recorder&) = delete;
 
-  /// Writes the run and its splits in one transaction; returns the run id.
-  /// On any failure rolls back and throws std::runtime_error.
+  /// Writes the run with its splits, switches, path and contacts in one
+  /// transaction; returns the run id. On any failure (for instance a NaN
+  /// time or coordinate in the path or contacts: those columns are NOT NULL)
+  /// rolls back and throws std::runtime_error.
   int64_t Save(const RunRecord& run);
 
-  /// All runs, oldest first, with their splits (gate order).
+  /// Sets the picture of a saved run. Throws std::runtime_error if there is
+  /// no run `run_id` or the write fails.
+  void SetPicture(int64_t run_id, const std::filesystem::path& png);
+
+  /// All runs, oldest first, with their splits (gate order), switches, path
+  /// and contacts (in the order saved).
   std::vector<RunRecord> LoadAll() const;
 
   const std::filesystem::path& path() const { return path_; }

@@ -102,23 +102,6 @@ struct SessionResult {
   /// Seconds from the start until the operator's hands held the controls
   /// (0 when there was nothing to grasp; negative if they never did).
   double grasp_s = 0.0;
-  double video_to_screen_ms_p99 = 0.0;
-  /// Until the recorder holds them (RunRecord): the figures a person's run adds.
-  std::string operator_kind;
-  std::string device;
-  double distance_m = 0.0;
-  std::vector<SwitchRecord> switches;
-  struct PathPoint {
-    double t_s, x, y, speed;
-  };
-  struct ContactPoint {
-    double t_s, x, y;
-  };
-  std::vector<PathPoint> path;
-  std::vector<ContactPoint> contacts;
-  double view_fps = 0.0;
-  double view_frame_p99_ms = 0.0;
-  double video_to_screen_ms_p50 = 0.0;
   uint64_t view_record_dropped = 0;  ///< MP4 frames the encoder could not take in time
 };
 

@@ -1,0 +1,53 @@
+#pragma once
+/// @file A picture of one run: the track from above, to scale, with the gates
+/// as the run took them, the driven path coloured by speed, the contacts, and
+/// a title saying what the run was and how it ended.
+///
+/// World frame: x right, y up (the image's rows are flipped). The map fits the
+/// track and the path with a margin; the picture is kLongSide pixels on its
+/// long side. Colours (BGR): a passed gate green, a missed one (crossed
+/// outside its posts) red, one never reached grey; the path by speed on the
+/// "plasma" colour map (dark blue at 0 m/s to yellow at the run's top speed,
+/// with no green or red in it, so gates and contacts read unambiguously);
+/// contacts as red crosses outlined in black.
+#include <cstdint>
+#include <filesystem>
+#include <opencv2/core.hpp>
+
+#include "haptel/config/track.hpp"
+#include "haptel/mediator/recorder.hpp"
+
+namespace haptel::mediator {
+
+/// The picture and where things are in it.
+struct RunPicture {
+  static constexpr int kLongSide = 1000;  ///< px
+
+  cv::Mat image;               ///< 8-bit BGR, kLongSide on its long side
+  double px_per_m = 0.0;       ///< the map's scale
+  double min_x = 0.0;          ///< world x at pixel column origin_px.x
+  double max_y = 0.0;          ///< world y at pixel row origin_px.y
+  cv::Point2d origin_px;       ///< pixel of (min_x, max_y): the map's top left
+  cv::Rect speed_legend;       ///< the colour bar: first column 0 m/s, last max_speed_mps
+  double max_speed_mps = 0.0;  ///< the top of the legend: the run's top speed (1 if it never moved)
+
+  /// The pixel (column, row) of a world point, sub-pixel.
+  cv::Point2d ToPixel(double x, double y) const {
+    return {origin_px.x + (x - min_x) * px_per_m, origin_px.y + (max_y - y) * px_per_m};
+  }
+};
+
+/// Draws `run` on `track` (see the file comment). Speeds are magnitudes
+/// (reversing counts as moving); non-finite path points and contacts are left out.
+RunPicture RenderRunPicture(const RunRecord& run, const TrackConfig& track);
+
+/// Renders the run and writes it as PNG to `png`, creating its folder.
+/// Throws std::runtime_error naming `png` if the folder or the file cannot be
+/// written.
+void DrawRunPicture(const RunRecord& run, const TrackConfig& track,
+                    const std::filesystem::path& png);
+
+/// Where a run's picture goes: <the database's folder>/pictures/run-<id>.png.
+std::filesystem::path RunPicturePath(const std::filesystem::path& database, int64_t run_id);
+
+}  // namespace haptel::mediator
