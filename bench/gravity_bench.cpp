@@ -13,13 +13,13 @@
 
 #include "haptel/haptics/vec_math.hpp"
 #include "haptel/config/paths.hpp"
-#include "haptel/haptics/calibration.hpp"
+#include "haptel/calibration/calibration.hpp"
 #include "haptel/config/device.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/config/gravity_grid.hpp"
 #include "haptel/config/run.hpp"
 #include "haptel/core/args.hpp"
-#include "haptel/haptics/calibration_procedure.hpp"
+#include "haptel/calibration/calibration_procedure.hpp"
 #include "plot.hpp"
 
 namespace haptel::bench {

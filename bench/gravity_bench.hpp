@@ -24,7 +24,7 @@
 #include <cstdint>
 
 #include "haptel/config/calibration.hpp"
-#include "haptel/haptics/gravity.hpp"
+#include "haptel/gravity/gravity_sampler.hpp"
 #include "haptel/haptics/sim_device.hpp"
 
 namespace haptel::bench {

@@ -13,7 +13,7 @@ function(haptel_add_physics_float_bench)
 
   add_library(haptel_physics_float STATIC ${HAPTEL_PHYSICS_SOURCES})
   target_include_directories(haptel_physics_float PUBLIC "${PROJECT_SOURCE_DIR}/physics/include")
-  target_link_libraries(haptel_physics_float PUBLIC haptel_haptics haptel_config haptel_core haptel_bullet_float
+  target_link_libraries(haptel_physics_float PUBLIC haptel_haptics haptel_config haptel_geometry haptel_core haptel_bullet_float
     PRIVATE haptel_warnings)
 
   add_executable(haptel-physics-bench-float

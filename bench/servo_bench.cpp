@@ -22,7 +22,7 @@
 #include "haptel/core/clock.hpp"
 #include "haptel/haptics/servo_loop.hpp"
 #include "haptel/haptics/sim_device.hpp"
-#include "haptel/haptics/udp_device.hpp"
+#include "haptel/udp/udp_device.hpp"
 #include "bare_loop.hpp"
 #include "plot.hpp"
 

@@ -15,7 +15,7 @@
 #include <stdexcept>
 
 #include "haptel/config/error.hpp"
-#include "haptel/config/mass_properties.hpp"
+#include "haptel/geometry/mass_properties.hpp"
 #include "yaml_map.hpp"
 
 namespace haptel {

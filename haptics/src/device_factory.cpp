@@ -3,7 +3,7 @@
 #include "haptel/config/error.hpp"
 #include "haptel/haptics/sim_device.hpp"
 #include "haptel/haptics/trace.hpp"
-#include "haptel/haptics/udp_device.hpp"
+#include "haptel/udp/udp_device.hpp"
 
 namespace haptel::haptics {
 

@@ -4,7 +4,7 @@
 #include <vector>
 
 #include "haptel/core/clock.hpp"
-#include "haptel/haptics/calibration.hpp"
+#include "haptel/haptics/calibrated_units.hpp"
 
 namespace haptel::haptics {
 

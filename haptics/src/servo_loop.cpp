@@ -7,7 +7,7 @@
 #include <string>
 
 #include "haptel/core/clock.hpp"
-#include "haptel/haptics/calibration.hpp"
+#include "haptel/haptics/calibrated_units.hpp"
 #include "haptel/haptics/force_field.hpp"
 #include "haptel/haptics/gravity.hpp"
 #include "haptel/haptics/trace.hpp"

@@ -6,7 +6,7 @@
 #include "haptel/config/error.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/core/log.hpp"
-#include "haptel/haptics/calibration_procedure.hpp"
+#include "haptel/calibration/calibration_procedure.hpp"
 #include "haptel/haptics/device_factory.hpp"
 #include "haptel/haptics/gravity.hpp"
 #include "haptel/haptics/servo_loop.hpp"

@@ -20,7 +20,7 @@
 #include "haptel/config/gravity_grid.hpp"
 #include "haptel/core/args.hpp"
 #include "haptel/core/log.hpp"
-#include "haptel/haptics/calibration_procedure.hpp"
+#include "haptel/calibration/calibration_procedure.hpp"
 #include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/recorder.hpp"
 #include "haptel/mediator/run_picture.hpp"

@@ -9,7 +9,7 @@
 #include <utility>
 
 #include "bullet_util.hpp"
-#include "haptel/config/mass_properties.hpp"
+#include "haptel/geometry/mass_properties.hpp"
 
 namespace haptel::physics {
 namespace {

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "haptel/config/error.hpp"
-#include "haptel/config/mass_properties.hpp"
+#include "haptel/geometry/mass_properties.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/scene.hpp"
 #include "test_env.hpp"

@@ -10,7 +10,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "haptel/config/mass_properties.hpp"
+#include "haptel/geometry/mass_properties.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/physics.hpp"
 #include "haptel/config/scene.hpp"

@@ -14,7 +14,7 @@
 #include "haptel/config/error.hpp"
 #include "haptel/config/gravity_grid.hpp"
 #include "haptel/config/run.hpp"
-#include "haptel/haptics/gravity.hpp"
+#include "haptel/gravity/gravity_sampler.hpp"
 #include "haptel/haptics/sim_device.hpp"
 #include "test_env.hpp"
 

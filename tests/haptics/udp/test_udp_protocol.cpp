@@ -9,7 +9,7 @@
 #include <string_view>
 #include <vector>
 
-#include "haptel/haptics/udp_protocol.hpp"
+#include "haptel/udp/udp_protocol.hpp"
 
 using namespace haptel::haptics;
 using namespace haptel::haptics::udp;

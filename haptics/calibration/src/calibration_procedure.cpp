@@ -1,5 +1,5 @@
 #include "haptel/config/paths.hpp"
-#include "haptel/haptics/calibration_procedure.hpp"
+#include "haptel/calibration/calibration_procedure.hpp"
 
 #include "haptel/haptics/device_factory.hpp"
 

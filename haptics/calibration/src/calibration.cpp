@@ -1,4 +1,4 @@
-#include "haptel/haptics/calibration.hpp"
+#include "haptel/calibration/calibration.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -15,8 +15,8 @@
 #include "alloc_counter.hpp"
 #include "haptel/config/device.hpp"
 #include "haptel/config/run.hpp"
-#include "haptel/haptics/calibration.hpp"
-#include "haptel/haptics/calibration_procedure.hpp"
+#include "haptel/calibration/calibration.hpp"
+#include "haptel/calibration/calibration_procedure.hpp"
 #include "haptel/haptics/sim_device.hpp"
 #include "test_env.hpp"
 

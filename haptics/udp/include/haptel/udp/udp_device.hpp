@@ -1,6 +1,6 @@
 #pragma once
 /// @file The `udp` device: exoskeleton arms each served by their own computer
-/// over the protocol in haptics/PROTOCOL.md (one haptel-device-server per arm
+/// over the protocol in haptics/udp/PROTOCOL.md (one haptel-device-server per arm
 /// on a test machine).
 ///
 /// One connected UDP socket per configured side. ReadWrist is one round trip
@@ -24,7 +24,7 @@
 
 #include "haptel/config/device.hpp"
 #include "haptel/haptics/device.hpp"
-#include "haptel/haptics/udp_protocol.hpp"
+#include "haptel/udp/udp_protocol.hpp"
 
 namespace haptel::haptics {
 

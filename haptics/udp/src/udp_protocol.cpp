@@ -1,4 +1,4 @@
-#include "haptel/haptics/udp_protocol.hpp"
+#include "haptel/udp/udp_protocol.hpp"
 
 #include <bit>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "haptel/haptics/udp_device.hpp"
+#include "haptel/udp/udp_device.hpp"
 
 #include <netdb.h>
 #include <poll.h>

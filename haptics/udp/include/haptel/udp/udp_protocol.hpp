@@ -1,5 +1,5 @@
 #pragma once
-/// @file The UDP device protocol's wire format (haptics/PROTOCOL.md): a fixed
+/// @file The UDP device protocol's wire format (haptics/udp/PROTOCOL.md): a fixed
 /// little-endian 24-byte header — magic, version, type, sequence, payload
 /// length, side, CRC-32 — followed by a fixed-size payload per message type.
 ///

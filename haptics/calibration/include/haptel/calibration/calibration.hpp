@@ -13,8 +13,7 @@
 /// - Force: per axis newtons = slope · command, least squares through the
 ///   origin over (command, gauge reading) pairs, with the fit's residual.
 ///
-/// The apply helpers at the end run in the servo loop: inline, noexcept,
-/// allocation-free.
+/// Applying a calibration is the real-time core's (haptics/calibrated_units.hpp).
 #include <array>
 #include <optional>
 #include <stdexcept>
@@ -23,6 +22,7 @@
 #include <vector>
 
 #include "haptel/config/calibration.hpp"
+#include "haptel/haptics/calibrated_units.hpp"
 #include "haptel/haptics/types.hpp"
 
 namespace haptel::haptics {
@@ -169,41 +169,5 @@ struct ForceFit {
 /// Per axis least squares through the origin. Throws CalibrationError for
 /// non-finite input or an axis with fewer than two non-zero commands.
 ForceFit FitForce(const std::vector<ForceSample>& samples);
-
-// ---------------------------------------------------------------- apply ----
-
-/// Tracker reading → metres in the device frame.
-inline Vec3d TrackerToMetres(const ArmCalibration& c, const Vec3d& raw) noexcept {
-  return {c.tracker_scale[0] * raw[0] + c.tracker_offset[0], c.tracker_scale[1] * raw[1] + c.tracker_offset[1],
-          c.tracker_scale[2] * raw[2] + c.tracker_offset[2]};
-}
-
-/// Metres → the tracker reading that would give them (inverse of TrackerToMetres).
-inline Vec3d MetresToTracker(const ArmCalibration& c, const Vec3d& metres) noexcept {
-  return {(metres[0] - c.tracker_offset[0]) / c.tracker_scale[0],
-          (metres[1] - c.tracker_offset[1]) / c.tracker_scale[1],
-          (metres[2] - c.tracker_offset[2]) / c.tracker_scale[2]};
-}
-
-/// Wrist force in newtons → device command (slopes are non-zero by validation).
-inline Vec3d NewtonsToCommand(const ArmCalibration& c, const Vec3d& newtons) noexcept {
-  return {newtons[0] / c.force_slope[0], newtons[1] / c.force_slope[1], newtons[2] / c.force_slope[2]};
-}
-
-/// One glove sensor's counts → joint angle, rad. `sensor` in [0, kGloveJoints).
-inline double GloveToRadians(const ArmCalibration& c, int sensor, double raw) noexcept {
-  return c.glove_gain[static_cast<size_t>(sensor)] * raw + c.glove_offset[static_cast<size_t>(sensor)];
-}
-
-/// All glove sensors → joint angles, rad.
-inline void GloveToRadians(const ArmCalibration& c, const std::array<double, kGloveJoints>& raw,
-                           std::array<double, kGloveJoints>& radians) noexcept {
-  for (int j = 0; j < kGloveJoints; ++j) radians[static_cast<size_t>(j)] = GloveToRadians(c, j, raw[static_cast<size_t>(j)]);
-}
-
-/// Finger force in newtons → device command.
-inline double FingerNewtonsToCommand(const ArmCalibration& c, double newtons) noexcept {
-  return newtons / c.finger_force_slope;
-}
 
 }  // namespace haptel::haptics

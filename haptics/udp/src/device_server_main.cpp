@@ -1,5 +1,5 @@
 // haptel-device-server: serves one arm of a simulated exoskeleton over the
-// UDP device protocol (haptics/PROTOCOL.md), as each arm of the original
+// UDP device protocol (haptics/udp/PROTOCOL.md), as each arm of the original
 // device was served by its own computer. Run one per arm; the `udp` device
 // driver (UdpDevice) talks to them.
 //
@@ -31,8 +31,8 @@
 #include "haptel/core/clock.hpp"
 #include "haptel/core/log.hpp"
 #include "haptel/haptics/sim_device.hpp"
-#include "haptel/haptics/udp_device.hpp"
-#include "haptel/haptics/udp_protocol.hpp"
+#include "haptel/udp/udp_device.hpp"
+#include "haptel/udp/udp_protocol.hpp"
 
 namespace {
 

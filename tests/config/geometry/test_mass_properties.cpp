@@ -10,7 +10,7 @@
 #include <stdexcept>
 #include <utility>
 
-#include "haptel/config/mass_properties.hpp"
+#include "haptel/geometry/mass_properties.hpp"
 
 using Eigen::Matrix3d;
 using Eigen::Vector3d;

@@ -42,7 +42,7 @@
 #include <vector>
 
 #include "haptel/config/calibration.hpp"
-#include "haptel/haptics/calibration.hpp"
+#include "haptel/calibration/calibration.hpp"
 #include "haptel/haptics/device.hpp"
 
 namespace haptel::haptics {

@@ -18,12 +18,12 @@
 #include <string>
 #include <thread>
 
-#include "../e2e/child.hpp"
+#include "../../e2e/child.hpp"
 #include "alloc_counter.hpp"
 #include "haptel/config/device.hpp"
 #include "haptel/core/clock.hpp"
-#include "haptel/haptics/udp_device.hpp"
-#include "haptel/haptics/udp_protocol.hpp"
+#include "haptel/udp/udp_device.hpp"
+#include "haptel/udp/udp_protocol.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;

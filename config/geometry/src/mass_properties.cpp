@@ -1,4 +1,4 @@
-#include "haptel/config/mass_properties.hpp"
+#include "haptel/geometry/mass_properties.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
