@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "haptel/haptics/vec_math.hpp"
+#include "haptel/testing/vec_math.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/calibration/calibration.hpp"
 #include "haptel/config/device.hpp"

@@ -18,7 +18,9 @@ function(haptel_add_physics_float_bench)
 
   add_executable(haptel-physics-bench-float
     ${CMAKE_CURRENT_SOURCE_DIR}/physics_float_main.cpp ${CMAKE_CURRENT_SOURCE_DIR}/physics_measure.cpp)
-  target_include_directories(haptel-physics-bench-float PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
+  # The test rigs as headers only: haptel_testing would link double Bullet.
+  target_include_directories(haptel-physics-bench-float PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}
+    ${PROJECT_SOURCE_DIR}/testing/include)
   target_link_libraries(haptel-physics-bench-float PRIVATE haptel_physics_float haptel_config haptel_core
     haptel_warnings)
 endfunction()

@@ -12,8 +12,8 @@
 #include <stdexcept>
 
 #include "haptel/core/clock.hpp"
-#include "haptel/haptics/vec_math.hpp"
-#include "haptel/physics/box_grip.hpp"
+#include "haptel/testing/vec_math.hpp"
+#include "haptel/testing/box_grip.hpp"
 #include "haptel/physics/world.hpp"
 
 namespace haptel::bench::wp {

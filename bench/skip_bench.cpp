@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "haptel/core/clock.hpp"
-#include "haptel/haptics/vec_math.hpp"
+#include "haptel/testing/vec_math.hpp"
 #include "haptel/config/cockpit.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/config/paths.hpp"

@@ -13,11 +13,11 @@
 #include <string>
 #include <vector>
 
-#include "haptel/haptics/vec_math.hpp"
+#include "haptel/testing/vec_math.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/physics.hpp"
 #include "haptel/core/args.hpp"
-#include "haptel/physics/box_grip.hpp"
+#include "haptel/testing/box_grip.hpp"
 #include "haptel/physics/world.hpp"
 #include "plot.hpp"
 

@@ -3,7 +3,7 @@
 #include <limits>
 
 #include "haptel/haptics/force_field.hpp"
-#include "haptel/haptics/vec_math.hpp"
+#include "haptel/testing/vec_math.hpp"
 
 using namespace haptel::haptics;
 

@@ -8,13 +8,13 @@
 #include <limits>
 #include <memory>
 
-#include "haptel/haptics/vec_math.hpp"
+#include "haptel/testing/vec_math.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/physics.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/haptics/hal.hpp"
-#include "haptel/physics/box_grip.hpp"
+#include "haptel/testing/box_grip.hpp"
 #include "haptel/physics/world.hpp"
 #include "test_env.hpp"
 

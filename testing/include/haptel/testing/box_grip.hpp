@@ -6,7 +6,7 @@
 #include <array>
 #include <cmath>
 
-#include "haptel/haptics/vec_math.hpp"
+#include "haptel/testing/vec_math.hpp"
 #include "haptel/physics/world.hpp"
 
 namespace haptel::physics {
