@@ -137,6 +137,10 @@ struct SceneShape {
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  ///< plane: unit normal (shape frame)
   double offset = 0.0;  ///< plane: n·x = offset on the surface, n·x < offset inside, m
   std::vector<Eigen::Vector3d> points;  ///< convex: the points whose hull is the shape
+  /// kg/m³. > 0: this shape's own density (the XML format gives a mass or
+  /// density per shape), which sets its share of the object's mass; 0: the
+  /// object's (ComputeMassProperties).
+  double density = 0.0;
 };
 
 struct SceneObject {
