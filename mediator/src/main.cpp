@@ -56,7 +56,8 @@ constexpr const char* kUsage =
     "  --time-limit S       end the run after S seconds, outcome 'time limit' (person: 600)\n"
     "  --view KIND          window (default with a display) or none\n"
     "  --record FILE.mp4    record the operator's view as H.264 MP4 (offscreen without a window)\n"
-    "  --scene FILE         haptic scene for the hands (YAML, or MHaptic .xml)\n"
+    "  --scene FILE         haptic scene for the hands (YAML, or the thesis's MHaptic .xml),\n"
+    "                       moved by the configuration's scene_placement\n"
     "  --vehicle-name NAME  vehicle name in DDS topic names\n"
     "  --domain N           DDS domain id\n"
     "  --database FILE      SQLite file for the results (overrides 'database')\n"
@@ -212,7 +213,7 @@ int main(int argc, char** argv) {
                        "; use --view window, or --interface gamepad");
     }
     if (auto scene = args.Value("scene")) setup.run.scene = *scene;
-    if (!setup.run.scene.empty()) setup.scene = LoadSceneFile(setup.run.scene);
+    if (!setup.run.scene.empty()) setup.scene = PlaceScene(LoadSceneFile(setup.run.scene), setup.run.scene_placement);
     const bool any_physics = std::any_of(setup.interfaces.begin(), setup.interfaces.end(),
                                          [](const InterfaceSpec& s) { return s.needs_physics(); });
     if (any_physics || setup.scene) setup.physics = LoadPhysics(setup.run.physics);
