@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <cstdio>
 #include <filesystem>
+#include <iostream>
 #include <sstream>
 #include <string>
 
@@ -22,6 +23,7 @@
 #include "haptel/haptics/calibration_procedure.hpp"
 #include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/recorder.hpp"
+#include "haptel/mediator/scene_command.hpp"
 #include "haptel/view/view.hpp"
 #include "haptel/mediator/session.hpp"
 #include "gravity_bench.hpp"
@@ -39,6 +41,7 @@ void OnSignal(int) { g_interrupted.store(true); }
 constexpr const char* kUsage =
     "usage: haptel run [options]         drive one grand-prix lap\n"
     "       haptel calibrate [options]   calibrate a haptic device (--help for options)\n"
+    "       haptel scene FILE [--json]   load a haptic scene, print its objects, mass and bounds\n"
     "       haptel bench servo [options] servo loop benchmark (--help for options)\n"
     "       haptel bench gravity [options] gravity compensation benchmark\n"
     "       haptel bench skip [options]  physics CPU per simulated second: no world, hands, sleeping bodies\n"
@@ -105,6 +108,7 @@ int main(int argc, char** argv) {
   // Sub-commands with their own options: each parses argv from its own name on.
   const std::string command = argc > 1 ? argv[1] : "";
   if (command == "calibrate") return haptics::CalibrateMain(argc - 1, argv + 1);
+  if (command == "scene") return SceneCommand(argc - 1, argv + 1, std::cout, std::cerr);
   if (command == "bench") {
     const std::string which = argc > 2 ? argv[2] : "";
     if (which == "servo") return bench::BenchServoMain(argc - 2, argv + 2);
