@@ -245,28 +245,31 @@ class Reader {
   // nothing else; `meaning` says what they are.
   std::vector<Number> Numbers(const XMLElement& e, size_t count, const std::string& meaning) const {
     Attributes(e, {});
-    const std::string expected = std::to_string(count) + (count == 1 ? " number" : " numbers") +
-                                 " (" + meaning + ") as <float>, <double> or <integer>";
+    const auto expected = [&] {  // (built only for a message: a large scene reads many)
+      return std::to_string(count) + (count == 1 ? " number" : " numbers") + " (" + meaning +
+             ") as <float>, <double> or <integer>";
+    };
     std::vector<Number> out;
+    out.reserve(count);
     for (const XMLNode* n = e.FirstChild(); n != nullptr; n = n->NextSibling()) {
       if (n->ToComment() != nullptr) continue;
       if (n->ToText() != nullptr) {
         if (!Trim(n->Value()).empty()) {
           Fail(n->GetLineNum(), e.Name(),
-               "expected " + expected + ", got text '" + Shown(n->Value()) + "'");
+               "expected " + expected() + ", got text '" + Shown(n->Value()) + "'");
         }
         continue;
       }
       const XMLElement* c = n->ToElement();
       if (c == nullptr || !(Is(*c, "float") || Is(*c, "double") || Is(*c, "integer"))) {
         Fail(n->GetLineNum(), e.Name(),
-             "expected " + expected + ", got " +
+             "expected " + expected() + ", got " +
                  (c != nullptr ? Tag(c->Name()) : "<!" + Shown(n->Value()) + ">"));
       }
       out.push_back(ParseNumber(*c));
     }
     if (out.size() != count) {
-      Fail(e, "expected " + expected + ", got " + std::to_string(out.size()));
+      Fail(e, "expected " + expected() + ", got " + std::to_string(out.size()));
     }
     return out;
   }
