@@ -10,6 +10,7 @@ HAPTEL_PACKAGES=(
   libeigen3-dev libbullet-dev
   libfastrtps-dev libfastcdr-dev fastddsgen
   libopencv-dev libyaml-cpp-dev catch2 libsqlite3-dev sqlite3
+  libtinyxml2-dev   # the MHaptic XML scene files (also a Fast DDS dependency)
   libsdl2-dev
   # The operator's view: OpenGL 3.3 core through Mesa (llvmpipe without a GPU),
   # and an X server of its own for the window tests (Xvfb, xdotool for keys).

@@ -20,6 +20,12 @@ RunConfig LoadRun(const std::filesystem::path& file) {
   r.device = dir / root.String("device", "devices/sim.yaml");
   r.physics = dir / root.String("physics", "physics.yaml");
   if (const std::string scene = root.String("scene", ""); !scene.empty()) r.scene = dir / scene;
+  YamlMap placement = root.Map("scene_placement");
+  const auto position = placement.Vec3("position", {0.0, 0.0, 0.0}, -100.0, 100.0);
+  const auto rpy_deg = placement.Vec3("rpy_deg", {0.0, 0.0, 0.0}, -360.0, 360.0);
+  placement.Finish();
+  r.scene_placement.position = {position[0], position[1], position[2]};
+  r.scene_placement.rotation = RotationFromRpyDeg({rpy_deg[0], rpy_deg[1], rpy_deg[2]});
   r.interface = root.String("interface", r.interface);
   r.interfaces = root.Strings("switchable_interfaces", r.interfaces);
   if (r.interfaces.empty() || r.interfaces.size() > 6) root.Fail("switchable_interfaces", "a list of 1 to 6 interface names (F1-F6)");

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <iostream>
 #include <sstream>
 #include <string>
 
@@ -24,6 +25,7 @@
 #include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/recorder.hpp"
 #include "haptel/mediator/run_picture.hpp"
+#include "haptel/mediator/scene_command.hpp"
 #include "haptel/view/view.hpp"
 #include "haptel/mediator/session.hpp"
 
@@ -35,6 +37,7 @@ void OnSignal(int) { g_interrupted.store(true); }
 constexpr const char* kUsage =
     "usage: haptel run [options]         drive one grand-prix lap\n"
     "       haptel calibrate [options]   calibrate a haptic device (--help for options)\n"
+    "       haptel scene FILE [--json]   load a haptic scene, print its objects, mass and bounds\n"
     "       haptel bench servo [options] servo loop benchmark (--help for options)\n"
     "       haptel bench gravity [options] gravity compensation benchmark\n"
     "       haptel bench skip [options]  physics CPU per simulated second: no world, hands, sleeping bodies\n"
@@ -52,7 +55,8 @@ constexpr const char* kUsage =
     "  --time-limit S       end the run after S seconds, outcome 'time limit' (person: 600)\n"
     "  --view KIND          window (default with a display) or none\n"
     "  --record FILE.mp4    record the operator's view as H.264 MP4 (offscreen without a window)\n"
-    "  --scene FILE         haptic scene for the hands (YAML, or MHaptic .xml)\n"
+    "  --scene FILE         haptic scene for the hands (YAML, or the thesis's MHaptic .xml),\n"
+    "                       moved by the configuration's scene_placement\n"
     "  --vehicle-name NAME  vehicle name in DDS topic names\n"
     "  --domain N           DDS domain id\n"
     "  --database FILE      SQLite file for the results (overrides 'database')\n"
@@ -89,6 +93,7 @@ int main(int argc, char** argv) {
   // Sub-commands with their own options: each parses argv from its own name on.
   const std::string command = argc > 1 ? argv[1] : "";
   if (command == "calibrate") return haptics::CalibrateMain(argc - 1, argv + 1);
+  if (command == "scene") return SceneCommand(argc - 1, argv + 1, std::cout, std::cerr);
   if (command == "bench") {
     // The benchmarks are a program of their own (haptel-bench, beside this one).
     const std::string program = (SelfDirectory() / "haptel-bench").string();
@@ -195,7 +200,7 @@ int main(int argc, char** argv) {
                        "; use --view window, or --interface gamepad");
     }
     if (auto scene = args.Value("scene")) setup.run.scene = *scene;
-    if (!setup.run.scene.empty()) setup.scene = LoadSceneFile(setup.run.scene);
+    if (!setup.run.scene.empty()) setup.scene = PlaceScene(LoadSceneFile(setup.run.scene), setup.run.scene_placement);
     const bool any_physics = std::any_of(setup.interfaces.begin(), setup.interfaces.end(),
                                          [](const InterfaceSpec& s) { return s.needs_physics(); });
     if (any_physics || setup.scene) setup.physics = LoadPhysics(setup.run.physics);

@@ -245,6 +245,34 @@ TEST_CASE("Run config paths resolve against the file wherever it is named from",
   CHECK(fs::equivalent(r.interfaces_dir, rel.interfaces_dir));
 }
 
+TEST_CASE("Run config: scene_placement (identity when shipped, a position and roll/pitch/yaw)",
+          "[config]") {
+  const haptel::RunConfig shipped = haptel::LoadRun("config/haptel.yaml");
+  CHECK(shipped.scene_placement.IsIdentity());
+
+  TempDir tmp;
+  const fs::path file = tmp.Write("placed.yaml",
+                                  "track: t.yaml\n"
+                                  "vehicle: v.yaml\n"
+                                  "scene_placement:\n"
+                                  "  position: [0.1, -0.2, -0.75]\n"
+                                  "  rpy_deg: [0, 0, 90]\n");
+  const haptel::RunConfig r = haptel::LoadRun(file);
+  CHECK(r.scene_placement.position.isApprox(Eigen::Vector3d(0.1, -0.2, -0.75)));
+  // Yaw 90°: forward (x) turns to the left (y).
+  CHECK((r.scene_placement.rotation * Eigen::Vector3d::UnitX() - Eigen::Vector3d::UnitY()).norm() <
+        1e-12);
+  CHECK_FALSE(r.scene_placement.IsIdentity());
+
+  const std::string text =
+      "track: t.yaml\n"
+      "vehicle: v.yaml\n"
+      "scene_placement: {position: [0, 0, 0], rpy: [0, 0, 90]}\n";
+  const fs::path bad = tmp.Write("placed-bad.yaml", text);
+  const std::string msg = ErrorOf([&] { haptel::LoadRun(bad); });
+  CHECK_THAT(msg, Contains("'scene_placement.rpy'") && Contains(LineTag(3)));
+}
+
 TEST_CASE("Shipped tracks load with the values their files give", "[config][shipped]") {
   const std::string name = GENERATE(as<std::string>{}, "grand-prix", "test-short");
   const fs::path file = "config/tracks/" + name + ".yaml";

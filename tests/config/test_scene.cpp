@@ -1,6 +1,7 @@
 // The haptic scene description: the shipped YAML and XML examples load to
-// the same scene; every kind of bad file is a ConfigError naming the file, the
-// line and the key or element; material presets; node order.
+// the same scene; every kind of bad YAML file is a ConfigError naming the
+// file, the line and the key (XML: test_scene_xml.cpp); material presets;
+// node order; placement and bounds.
 #include <Eigen/Geometry>
 #include <catch2/catch.hpp>
 #include <filesystem>
@@ -90,6 +91,13 @@ void RequireSameScene(const Scene& a, const Scene& b) {
     REQUIRE(x.mass == Approx(y.mass));
     REQUIRE(x.density == Approx(y.density));
     REQUIRE(x.material == y.material);
+    if (x.dynamic) {
+      const auto p = haptel::ComputeMassProperties(x);
+      const auto q = haptel::ComputeMassProperties(y);
+      REQUIRE(p.mass == Approx(q.mass));
+      RequireNearV(p.com, q.com);
+      RequireNearM(p.inertia, q.inertia, 1e-12);
+    }
     REQUIRE(x.shapes.size() == y.shapes.size());
     for (size_t j = 0; j < x.shapes.size(); ++j) {
       const auto& s = x.shapes[j];
@@ -123,7 +131,8 @@ const char* const kGoodObjects = R"(objects:
 
 }  // namespace
 
-TEST_CASE("the shipped table scene loads from YAML and XML to the same scene", "[scene]") {
+TEST_CASE("the shipped table scene loads from YAML and from XML (y up) to the same scene",
+          "[scene]") {
   const Scene yaml = LoadScene(haptel::ShippedFile("config/scenes/table.yaml"));
   const Scene xml = ImportMhapticXml(haptel::ShippedFile("config/scenes/table.xml"));
   RequireSameScene(yaml, xml);
@@ -422,159 +431,68 @@ TEST_CASE("YAML scene: bad files name the file, the line and the key", "[scene][
   }
 }
 
-TEST_CASE("MHaptic XML: the lenient forms load", "[scene][xml]") {
-  const fs::path file = Write("forms.xml", R"(<?xml version="1.0"?>
-<!-- a comment -->
-<mhaptic:Scene xmlns:MHAPTIC="urn:mhaptic">
-  <Object Type="dynamic" Name="a &amp; b &#x41;&#66;" position="1, 2, 3">
-    <shape type="capsule"><capsuleparams> 0.02 0.1 </capsuleparams></shape>
-    <shape type="SPHERE" sphereparams="+0.05" position="0 0 0.2"/>
-    <Density><![CDATA[ 700 ]]></Density>
-    <materialParams>0.25 0.5 0.45</materialParams>
-  </Object>
-  <object type="Static" materialparams="0.1 0.2 0.1">
-    <shape type="Plane" planeparams="0 0 2 1"/>
-    <mass>12</mass>
-  </object>
-</mhaptic:Scene>
-)");
-  const Scene s = ImportMhapticXml(file);
-  REQUIRE(s.objects.size() == 2);
-  const auto& a = s.objects[0];
-  REQUIRE(a.name == "a & b AB");
-  REQUIRE(a.dynamic);
-  RequireNearV(a.position, Vector3d(1, 2, 3));
-  REQUIRE(a.density == 700.0);
-  REQUIRE(a.material == Material{0.25, 0.5, 0.45});
-  REQUIRE(a.shapes[0].kind == ShapeKind::kCapsule);
-  REQUIRE(a.shapes[0].radius == 0.02);
-  REQUIRE(a.shapes[0].length == 0.1);
-  // PhysX capsules lie along y: the importer turns our z axis onto it.
-  RequireNearV(a.shapes[0].rotation * Vector3d::UnitZ(), Vector3d::UnitY(), 1e-12);
-  RequireNearV(a.shapes[1].position, Vector3d(0, 0, 0.2));
-  const auto& ground = s.objects[1];
-  REQUIRE(ground.name == "object2");
-  REQUIRE(ground.mass == 0.0);  // ignored on a static object
-  REQUIRE(ground.shapes[0].offset == Approx(0.5));
-  REQUIRE(ground.material == Material{0.1, 0.2, 0.1});
+TEST_CASE("placement: a scene moved and turned as a whole; roll, pitch, yaw about fixed axes",
+          "[scene][placement]") {
+  using haptel::RotationFromRpyDeg;
+  RequireNearM(RotationFromRpyDeg(Vector3d::Zero()), Matrix3d::Identity(), 0.0);
+  // Roll first (about x), then yaw (about z): y → z (roll 90°) stays z; x → y (yaw 90°).
+  const Matrix3d r = RotationFromRpyDeg(Vector3d(90, 0, 90));
+  RequireNearV(r * Vector3d::UnitY(), Vector3d::UnitZ(), 1e-12);
+  RequireNearV(r * Vector3d::UnitX(), Vector3d::UnitY(), 1e-12);
+  RequireNearM(RotationFromRpyDeg(Vector3d(10, 20, 30)),
+               (Eigen::AngleAxisd(30 * std::numbers::pi / 180, Vector3d::UnitZ()) *
+                Eigen::AngleAxisd(20 * std::numbers::pi / 180, Vector3d::UnitY()) *
+                Eigen::AngleAxisd(10 * std::numbers::pi / 180, Vector3d::UnitX()))
+                   .toRotationMatrix(),
+               1e-12);
+
+  const Scene table = LoadScene(haptel::ShippedFile("config/scenes/table.yaml"));
+  REQUIRE(haptel::PlaceScene(table, haptel::ScenePlacement{}).objects[2].position ==
+          table.objects[2].position);
+  haptel::ScenePlacement placement;
+  placement.position = Vector3d(0.2, 0.0, -0.75);
+  placement.rotation = RotationFromRpyDeg(Vector3d(0, 0, 90));
+  REQUIRE_FALSE(placement.IsIdentity());
+  const Scene placed = haptel::PlaceScene(table, placement);
+  const auto& box = placed.objects[2];
+  // The box at (0.1, 0, 0.8) turns to (0, 0.1, 0.8), then moves.
+  RequireNearV(box.position, Vector3d(0.2, 0.1, 0.05), 1e-12);
+  RequireNearM(box.rotation, placement.rotation * table.objects[2].rotation, 1e-12);
+  // Shapes stay where they are in their objects.
+  RequireNearV(placed.objects[1].shapes[0].position, table.objects[1].shapes[0].position, 0.0);
+  // The floor plane z = 0 becomes z = -0.75 in the world.
+  const auto& floor = placed.objects[0];
+  const Vector3d n = floor.rotation * floor.shapes[0].normal;
+  REQUIRE(n.dot(floor.position) + floor.shapes[0].offset == Approx(-0.75));
 }
 
-TEST_CASE("MHaptic XML: bad files name the file, the line and the element",
-          "[scene][xml][errors]") {
-  SECTION("unclosed tag") {
-    const std::string message = ErrorOf("unclosed.xml", R"(<MHAPTIC:scene>
-  <object type="Dynamic" name="cup">
-    <shape type="Sphere" sphereparams="0.1">
-    <mass>1</mass>
-  </object>
-</MHAPTIC:scene>
-)");
-    RequireLocated(message, Scratch() / "unclosed.xml", 5);
-    REQUIRE_THAT(message,
-                 Contains("<shape>") && Contains("opened at line 3") && Contains("</object>"));
-  }
-  SECTION("truncated file") {
-    const std::string message =
-        ErrorOf("truncated.xml", "<MHAPTIC:scene>\n  <object type=\"Static\">\n");
-    RequireLocated(message, Scratch() / "truncated.xml", 2);
-    REQUIRE_THAT(message, Contains("<object>") && Contains("not closed"));
-  }
-  SECTION("bad attribute number") {
-    const std::string message = ErrorOf("number.xml", R"(<MHAPTIC:scene>
-  <object type="Dynamic" name="cup">
-    <mass>0.2</mass>
-    <shape type="Box"
-           boxparams="0.1 0.1 0.1x"/>
-  </object>
-</MHAPTIC:scene>
-)");
-    RequireLocated(message, Scratch() / "number.xml", 5);
-    REQUIRE_THAT(message,
-                 Contains("<shape>") && Contains("'boxparams'") && Contains("'0.1 0.1 0.1x'"));
-  }
-  SECTION("bad element number") {
-    const std::string message = ErrorOf("mass.xml", R"(<MHAPTIC:scene>
-  <object type="Dynamic" name="cup">
-    <shape type="Sphere" sphereparams="0.1"/>
-    <mass>heavy</mass>
-  </object>
-</MHAPTIC:scene>
-)");
-    RequireLocated(message, Scratch() / "mass.xml", 4);
-    REQUIRE_THAT(message, Contains("<mass>") && Contains("'heavy'"));
-  }
-  SECTION("wrong number count") {
-    const std::string message = ErrorOf("count.xml", R"(<MHAPTIC:scene>
-  <object type="Static"><shape type="Box" boxparams="0.1 0.1"/></object>
-</MHAPTIC:scene>
-)");
-    RequireLocated(message, Scratch() / "count.xml", 2);
-    REQUIRE_THAT(message, Contains("3 numbers"));
-  }
-  SECTION("wrong root") {
-    const std::string message = ErrorOf("root.xml", "<?xml version=\"1.0\"?>\n<scene>\n</scene>\n");
-    RequireLocated(message, Scratch() / "root.xml", 2);
-    REQUIRE_THAT(message, Contains("<scene>") && Contains("MHAPTIC:scene"));
-  }
-  SECTION("plane on a dynamic object") {
-    const std::string message = ErrorOf("plane.xml", R"(<MHAPTIC:scene>
-  <object type="Dynamic" name="slab">
-    <mass>1</mass>
-    <shape type="Plane" planeparams="0 0 1 0"/>
-  </object>
-</MHAPTIC:scene>
-)");
-    RequireLocated(message, Scratch() / "plane.xml", 4);
-    REQUIRE_THAT(message, Contains("<shape>") && Contains("static"));
-  }
-  SECTION("mass and density both") {
-    const std::string message = ErrorOf("both.xml", R"(<MHAPTIC:scene>
-  <object type="Dynamic" name="cup" mass="1">
-    <shape type="Sphere" sphereparams="0.1"/>
-    <density>500</density>
-  </object>
-</MHAPTIC:scene>
-)");
-    RequireLocated(message, Scratch() / "both.xml", 4);
-    REQUIRE_THAT(message, Contains("<object>") && Contains("not both"));
-  }
-  SECTION("unknown element and attribute") {
-    REQUIRE_THAT(
-        ErrorOf("element.xml", R"(<MHAPTIC:scene>
-  <object type="Static">
-    <shape type="Sphere" sphereparams="0.1"/>
-    <mesh file="cup.obj"/>
-  </object>
-</MHAPTIC:scene>
-)"),
-        Contains("element.xml:4:") && Contains("<object>") && Contains("unknown element <mesh>"));
-    REQUIRE_THAT(ErrorOf("attribute.xml", R"(<MHAPTIC:scene>
-  <object type="Static">
-    <shape type="Sphere" sphereparams="0.1" colour="red"/>
-  </object>
-</MHAPTIC:scene>
-)"),
-                 Contains("attribute.xml:3:") && Contains("<shape>") && Contains("'colour'"));
-  }
-  SECTION("unknown shape type, missing params, unknown entity, bad syntax") {
-    REQUIRE_THAT(ErrorOf("cone.xml",
-                         "<MHAPTIC:scene>\n<object type=\"Static\">\n<shape "
-                         "type=\"Cone\"/>\n</object>\n</MHAPTIC:scene>"),
-                 Contains("cone.xml:3:") && Contains("'Cone'"));
-    REQUIRE_THAT(ErrorOf("params.xml",
-                         "<MHAPTIC:scene>\n<object type=\"Static\">\n<shape "
-                         "type=\"Box\"/>\n</object>\n</MHAPTIC:scene>"),
-                 Contains("params.xml:3:") && Contains("boxparams"));
-    REQUIRE_THAT(ErrorOf("entity.xml",
-                         "<MHAPTIC:scene>\n<object type=\"Static\" name=\"a &nbsp; "
-                         "b\">\n</object>\n</MHAPTIC:scene>"),
-                 Contains("entity.xml:2:") && Contains("&nbsp;"));
-    REQUIRE_THAT(
-        ErrorOf("quote.xml", "<MHAPTIC:scene>\n<object type=Static>\n</object>\n</MHAPTIC:scene>"),
-        Contains("quote.xml:2:") && Contains("quoted"));
-    REQUIRE_THAT(ErrorOf("twice.xml", "<MHAPTIC:scene/>\n<MHAPTIC:scene/>\n"),
-                 Contains("twice.xml:2:"));
-    REQUIRE_THAT(ErrorOf("noobject.xml", "<MHAPTIC:scene>\n</MHAPTIC:scene>\n"),
-                 Contains("noobject.xml:1:") && Contains("<object>"));
-  }
+TEST_CASE("bounds: each shape's world box; planes are unbounded", "[scene][bounds]") {
+  const Scene table = LoadScene(haptel::ShippedFile("config/scenes/table.yaml"));
+  REQUIRE_FALSE(haptel::ShapeBounds(table.objects[0], table.objects[0].shapes[0]));
+  const auto bounds = haptel::SceneBounds(table);
+  REQUIRE(bounds);
+  // The table top (1.2 × 0.8 m) spans x and y; z from the floor to the box's top.
+  RequireNearV(bounds->min, Vector3d(-0.6, -0.4, 0.0), 1e-12);
+  RequireNearV(bounds->max, Vector3d(0.6, 0.4, 0.85), 1e-12);
+  // The box, turned 30° about z: half width 0.05·(cos 30° + sin 30°).
+  const auto box = haptel::ShapeBounds(table.objects[2], table.objects[2].shapes[0]);
+  REQUIRE(box);
+  const double h = 0.05 * (std::cos(std::numbers::pi / 6) + std::sin(std::numbers::pi / 6));
+  RequireNearV(box->max - box->min, Vector3d(2 * h, 2 * h, 0.1), 1e-9);
+
+  haptel::SceneObject o;
+  o.rotation = Eigen::AngleAxisd(std::numbers::pi / 2, Vector3d::UnitX()).toRotationMatrix();
+  o.position = Vector3d(1, 2, 3);
+  haptel::SceneShape capsule;
+  capsule.kind = ShapeKind::kCapsule;
+  capsule.radius = 0.1;
+  capsule.length = 1.0;
+  const auto c = haptel::ShapeBounds(o, capsule);  // its axis (z) turned onto -y
+  REQUIRE(c);
+  RequireNearV(c->min, Vector3d(0.9, 1.4, 2.9), 1e-12);
+  RequireNearV(c->max, Vector3d(1.1, 2.6, 3.1), 1e-12);
+
+  Scene planes;
+  planes.objects.push_back(table.objects[0]);
+  REQUIRE_FALSE(haptel::SceneBounds(planes));
 }

@@ -282,15 +282,42 @@ MassProperties ComputeMassProperties(const std::vector<SceneShape>& shapes, doub
   return CombineMassProperties(parts);
 }
 
-MassProperties ComputeMassProperties(const SceneObject& object) {
+namespace {
+
+// Each shape's mass properties at its own density when it has one, else the
+// object's (else a uniform 1: only the ratios matter before the scaling to the
+// object's mass), and the factor that scales them to the object's mass.
+std::pair<std::vector<MassProperties>, double> ShapeParts(const SceneObject& object) {
   if (!object.dynamic) throw std::invalid_argument("a static object has no mass properties");
-  if (object.density > 0.0) return ComputeMassProperties(object.shapes, object.density);
-  CheckFinitePositive(object.mass, "mass (or density)");
-  MassProperties p = ComputeMassProperties(object.shapes, 1.0);
-  const double scale = object.mass / p.mass;
-  p.mass = object.mass;
+  if (object.density <= 0.0) CheckFinitePositive(object.mass, "mass (or density)");
+  const double uniform = object.density > 0.0 ? object.density : 1.0;
+  std::vector<MassProperties> parts;
+  parts.reserve(object.shapes.size());
+  double total = 0.0;
+  for (const SceneShape& shape : object.shapes) {
+    if (shape.density != 0.0) CheckFinitePositive(shape.density, "shape density");
+    parts.push_back(ShapeMassProperties(shape, shape.density > 0.0 ? shape.density : uniform));
+    total += parts.back().mass;
+  }
+  if (parts.empty()) throw std::invalid_argument("no shapes");
+  return {std::move(parts), object.density > 0.0 ? 1.0 : object.mass / total};
+}
+
+}  // namespace
+
+MassProperties ComputeMassProperties(const SceneObject& object) {
+  const auto [parts, scale] = ShapeParts(object);
+  MassProperties p = CombineMassProperties(parts);
+  p.mass *= scale;
   p.inertia *= scale;
   return p;
+}
+
+std::vector<double> ShapeMasses(const SceneObject& object) {
+  const auto [parts, scale] = ShapeParts(object);
+  std::vector<double> out;
+  for (const MassProperties& part : parts) out.push_back(part.mass * scale);
+  return out;
 }
 
 PrincipalInertia Diagonalize(const Matrix3d& inertia) {

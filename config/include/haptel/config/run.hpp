@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "haptel/config/link.hpp"
+#include "haptel/config/scene.hpp"
 
 namespace haptel {
 
@@ -47,6 +48,10 @@ struct RunConfig {
   std::filesystem::path device;  ///< haptic device file (config/devices/*.yaml)
   std::filesystem::path physics;  ///< physics world file, for interfaces with bodies
   std::filesystem::path scene;    ///< haptic scene (YAML or MHaptic XML); empty: none
+  /// Where the scene goes in the device frame (PlaceScene), from
+  /// `scene_placement: {position: [x, y, z] (m), rpy_deg: [roll, pitch, yaw]}`
+  /// (RotationFromRpyDeg); identity by default.
+  ScenePlacement scene_placement;
   OperatorConfig op;
   LinkConfig link;
 };

@@ -51,48 +51,66 @@
 ///
 /// ## MHaptic XML format (ImportMhapticXml)
 ///
-/// Reconstructed from the thesis' description (no original file was
-/// available). Accepted subset:
+/// The thesis's own format (Appendix I: "The Haptic Scene file format", its
+/// DTD and example; tests/config/data/thesis_appendix_i.xml is that example):
 ///
 /// ```xml
-/// <?xml version="1.0" encoding="UTF-8"?>
-/// <!-- comments anywhere -->
-/// <MHAPTIC:scene>
-///   <object type="Dynamic" name="cup">
-///     <position>x y z</position>
-///     <rotation>r00 r01 r02 r10 r11 r12 r20 r21 r22</rotation>
-///     <shape type="Box" boxparams="hx hy hz"/>
-///     <shape type="Sphere" sphereparams="r" position="x y z"/>
-///     <shape type="Capsule" capsuleparams="r h"/>
-///     <shape type="Plane" planeparams="nx ny nz d"/>
-///     <density>500</density>            (or <mass>0.2</mass>)
-///     <materialparams restitution="0.5" staticfriction="0.6" dynamicfriction="0.4"/>
-///   </object>
+/// <?xml version="1.0" encoding="ISO-8859-1" ?>
+/// <!DOCTYPE MHAPTIC:scene SYSTEM "HapticScene.dtd">
+/// <MHAPTIC:scene xmlns:MHAPTIC="http://vrlab.epfl.ch/~reno">
+///   <MHAPTIC:object type="Dynamic">              <!-- Static | Dynamic -->
+///     <MHAPTIC:name>cup</MHAPTIC:name>
+///     <MHAPTIC:position> <float>x</float> <float>y</float> <float>z</float> </MHAPTIC:position>
+///     <MHAPTIC:rotation> 9 numbers, row by row </MHAPTIC:rotation>
+///     <MHAPTIC:shape type="Box">                 <!-- Plane | Sphere | Box | Capsule -->
+///       <MHAPTIC:position> 3 numbers </MHAPTIC:position>   <!-- in the object frame -->
+///       <MHAPTIC:rotation> 9 numbers </MHAPTIC:rotation>
+///       <MHAPTIC:mass> 1 number </MHAPTIC:mass>  <!-- or <MHAPTIC:density> -->
+///       <MHAPTIC:materialparams> restitution, static, dynamic friction </MHAPTIC:materialparams>
+///       <MHAPTIC:boxparams> half sides: 3 numbers </MHAPTIC:boxparams>
+///     </MHAPTIC:shape>
+///   </MHAPTIC:object>
 /// </MHAPTIC:scene>
 /// ```
 ///
-/// - Syntax: elements, attributes ("…" or '…'), text, comments, CDATA, the
-///   `<?xml …?>` declaration; entities &lt; &gt; &amp; &quot; &apos; and
-///   numeric &#N; / &#xH;. No DOCTYPE, no namespace processing (`MHAPTIC:` is
-///   part of the root's name).
-/// - Names of elements and attributes and the values of `type` are matched
-///   case-insensitively (`Dynamic`, `dynamic`; `staticFriction`).
-/// - Every value (position, rotation, boxparams, density, mass, the material
-///   coefficients, name, type) may be an attribute of its element or a child
-///   element holding it as text — not both. `materialparams` may also be text:
-///   "restitution staticfriction dynamicfriction".
-/// - Number lists are separated by blanks and/or commas; every number must
-///   parse completely and be finite ("1.0x" is an error).
-/// - Conventions taken from AGEIA PhysX, which MHaptic ran on: `boxparams`
-///   are half extents; `capsuleparams` = "radius height", height between the
-///   hemisphere centres along the shape's local **y** axis (the importer turns
-///   it onto this format's z axis by a local rotation); `planeparams` =
-///   "nx ny nz d" with n·x = d; rotations are row-major.
-/// - `name` optional (default "object<N>", 1-based); names must be unique.
-///   `mass`/`density` on a static object are accepted and ignored; a dynamic
-///   object needs exactly one. Planes only on static objects. Unknown elements
-///   and attributes are errors naming file:line and the element (`xmlns…`
-///   attributes are ignored).
+/// - XML through tinyxml2. The `<?xml …?>` declaration may say UTF-8 or
+///   ISO-8859-1 (transcoded); the DOCTYPE must name MHAPTIC:scene and is not
+///   fetched; comments anywhere. Names are matched exactly as the DTD spells
+///   them, `MHAPTIC:` prefix included; the root needs its `xmlns:MHAPTIC`.
+/// - A number is an element `<float>`, `<double>` or `<integer>` holding one
+///   finite number (an integer for `<integer>`); position, rotation, mass,
+///   density, materialparams and the *params elements hold only those.
+/// - Scene: at least one object (the DTD allows none; an empty scene is
+///   refused, as in YAML). Object: `type` attribute, then name (unique,
+///   non-empty), position, rotation and one or more shapes. Shape: `type` attribute, position,
+///   rotation, mass or density, materialparams, and the parameters of its
+///   type. Each child at most once; order free (the DTD's order is the one
+///   written); unknown elements, attributes and text are errors.
+/// - Mass (PhysX 2 NxShapeDesc, per shape): `mass` > 0 is the shape's mass;
+///   `mass` ≤ 0 means density × volume with the default density 1 kg/m³;
+///   `density` (kg/m³) × volume otherwise. A dynamic object's shape needs
+///   exactly one of them; on a static object they are optional and ignored.
+///   The object's mass is the sum; SceneShape::density keeps each shape's share.
+/// - Parameters: `planeparams` a b c d for ax + by + cz = d (normal out of the
+///   solid; static objects only); `sphereparams` radius; `boxparams` half
+///   sides; `capsuleparams` radius and length, the length being the full
+///   distance between the two hemisphere centres (PhysX 2's
+///   NxCapsuleShapeDesc::height; overall extent length + 2·radius) along the
+///   shape's local y axis. `trimeshparams`/type Trimesh: "not supported"
+///   (the thesis marks it so too).
+/// - `materialparams` (not in the DTD; the example writes it in the shape):
+///   restitution, static friction, dynamic friction. Haptel has one material
+///   per object: the shapes of an object that give one must agree; none gives
+///   Material{}.
+/// - Frame: the file is in the thesis's world frame (y up, x to the
+///   operator's right, z towards the operator); the importer converts every
+///   pose and parameter to the device frame of this header (MhapticToDevice).
+///   Rotations are read row by row (the thesis does not say; its example
+///   has only identities).
+/// - Errors: ConfigError "file:line: <element>: what was expected", one line.
+///
+/// A run may move a loaded scene (either format) by a placement
+/// (RunConfig::scene_placement, PlaceScene).
 #include <Eigen/Core>
 #include <cstddef>
 #include <filesystem>
@@ -137,6 +155,10 @@ struct SceneShape {
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  ///< plane: unit normal (shape frame)
   double offset = 0.0;  ///< plane: n·x = offset on the surface, n·x < offset inside, m
   std::vector<Eigen::Vector3d> points;  ///< convex: the points whose hull is the shape
+  /// kg/m³. > 0: this shape's own density (the XML format gives a mass or
+  /// density per shape), which sets its share of the object's mass; 0: the
+  /// object's (ComputeMassProperties).
+  double density = 0.0;
 };
 
 struct SceneObject {
@@ -162,13 +184,44 @@ struct Scene {
 /// centre of mass and inertia.
 Scene LoadScene(const std::filesystem::path& file);
 
-/// Imports a scene in the original MHaptic XML format (subset above). Throws
-/// ConfigError "file:line: element <name>…: …".
+/// Imports a scene in the thesis's MHaptic XML format (above), converted to
+/// the device frame. Throws ConfigError "file:line: <element>: …".
 Scene ImportMhapticXml(const std::filesystem::path& file);
+
+/// The rotation taking the MHaptic file frame (y up) to the device frame
+/// (z up): v_device = MhapticToDevice() · v_file. Derivation in scene_xml.cpp.
+Eigen::Matrix3d MhapticToDevice();
 
 /// A scene file of either format: `.xml` is imported as MHaptic XML, anything
 /// else is read as YAML.
 Scene LoadSceneFile(const std::filesystem::path& file);
+
+/// Where a run puts a scene in the device frame: every object's pose p, R
+/// becomes position + rotation·p, rotation·R.
+struct ScenePlacement {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();      ///< m
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  ///< proper rotation
+  bool IsIdentity() const;
+};
+
+/// The rotation of roll, pitch, yaw in degrees about the fixed x, y, z axes,
+/// applied in that order: Rz(yaw)·Ry(pitch)·Rx(roll).
+Eigen::Matrix3d RotationFromRpyDeg(const Eigen::Vector3d& rpy_deg);
+
+/// The scene moved by `placement`.
+Scene PlaceScene(Scene scene, const ScenePlacement& placement);
+
+/// An axis-aligned box in the scene's (device) frame.
+struct Aabb {
+  Eigen::Vector3d min = Eigen::Vector3d::Zero();
+  Eigen::Vector3d max = Eigen::Vector3d::Zero();
+};
+/// The tight box around one shape of `object` in the world; nullopt for a
+/// plane (unbounded).
+std::optional<Aabb> ShapeBounds(const SceneObject& object, const SceneShape& shape);
+/// The box around every bounded shape of the scene; nullopt when there is
+/// none (only planes).
+std::optional<Aabb> SceneBounds(const Scene& scene);
 
 /// The haptic scene's node order: every object becomes a node; dynamic nodes
 /// come first, static ones last (each group in file order), so synchronising

@@ -37,9 +37,15 @@ MassProperties CombineMassProperties(const std::vector<MassProperties>& parts);
 /// All shapes at one density.
 MassProperties ComputeMassProperties(const std::vector<SceneShape>& shapes, double density);
 
-/// A dynamic object's mass properties: from its density, or its shapes at a
-/// uniform density scaled so the total is its mass.
+/// A dynamic object's mass properties. Each shape has its own density
+/// (SceneShape::density) when it gives one, else the object's density; with
+/// no object density the result is then scaled so the total is the object's
+/// mass (shapes without a density of their own count as uniform).
 MassProperties ComputeMassProperties(const SceneObject& object);
+
+/// The mass of each shape of a dynamic object (kg, in shape order, summing to
+/// the object's mass), by the rule of ComputeMassProperties.
+std::vector<double> ShapeMasses(const SceneObject& object);
 
 /// inertia about a point displaced by `offset` from the centre of mass
 /// (parallel-axis theorem): I + m (|d|² 1 − d dᵀ).
