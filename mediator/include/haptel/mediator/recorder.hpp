@@ -109,7 +109,7 @@ class Recorder {
   /// Opens (creating it and its parent folders if needed) the database and its
   /// schema; an older schema (v1, v2) is migrated in place, in one
   /// transaction. The schema is read inside a write transaction, so a file
-  /// that opens here can be written. Fails within about a second — a file
+  /// that opens here can be written. Fails within a second — a file
   /// another connection holds locked is waited for at most kOpenBusyTimeoutMs
   /// — throwing std::runtime_error with a one-line message "database FILE:
   /// what is wrong" (a folder, a path under a regular file, not a database, a
@@ -137,8 +137,11 @@ class Recorder {
 
   const std::filesystem::path& path() const { return path_; }
 
-  /// How long opening waits for a lock another connection holds.
-  static constexpr int kOpenBusyTimeoutMs = 1000;
+  /// How long opening waits for a lock another connection holds: long
+  /// enough for another haptel's save to finish, short enough that a
+  /// program that holds the file tells the user at once (`haptel run` itself
+  /// takes ~0.7 s to load its libraries on a busy machine: under 2 s in all).
+  static constexpr int kOpenBusyTimeoutMs = 500;
   /// How long a save waits for one: the run's results are worth the wait.
   static constexpr int kSaveBusyTimeoutMs = 10000;
 
