@@ -13,9 +13,12 @@
 #include "haptel/mediator/recorder.hpp"
 
 #include <sqlite3.h>
+#include <unistd.h>
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <ctime>
 #include <iterator>
 #include <limits>
@@ -345,6 +348,13 @@ Recorder::Recorder(const std::filesystem::path& database) : path_(database) {
   if (!parent.empty()) {
     std::filesystem::create_directories(parent, ec);
     if (ec) FailWith(path_, "cannot create folder " + parent.string() + ": " + ec.message());
+  }
+  // SQLite creates the file, and its journal files, beside it: the folder must
+  // be writable (SQLite alone would say "unable to open database file").
+  const std::filesystem::path folder = parent.empty() ? std::filesystem::path(".") : parent;
+  if (::access(folder.c_str(), W_OK) != 0) {
+    FailWith(path_,
+             "its folder " + folder.string() + " is not writable (" + std::strerror(errno) + ")");
   }
 
   sqlite3* raw = nullptr;
