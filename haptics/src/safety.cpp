@@ -48,7 +48,8 @@ void ForceSafety::Apply(int64_t now_ns, int64_t setpoint_stamp_ns, const Vec3d& 
     return;
   }
   const double fade = FadeGain(now_ns, setpoint_stamp_ns);
-  if (fade < 1.0) ++counters_.stale_ticks;
+  // A set-point never written is absent, not stale: no force, and nothing to count.
+  if (fade < 1.0 && setpoint_stamp_ns != 0) ++counters_.stale_ticks;
   for (int i = 0; i < 3; ++i) wrist[i] = fade * setpoint_wrist[i] + local_wrist[i];
   for (double& f : fingers) f *= fade;
 

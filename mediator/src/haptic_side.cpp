@@ -138,6 +138,24 @@ double HapticSide::silent_s() const {
 
 LoopStats HapticSide::Stats() const { return servo_->Stats(); }
 
+haptics::ServoCounters HapticSide::Counters() const {
+  haptics::ServoCounters sum;
+  for (int i = 0; i < haptics::kSides; ++i) {
+    if (!config_.sides[i]) continue;
+    const haptics::ServoCounters c = servo_->Counters(static_cast<haptics::Side>(i));
+    sum.cycles += c.cycles;
+    sum.slow_reads += c.slow_reads;
+    sum.device_lost_ticks += c.device_lost_ticks;
+    sum.no_data_ticks += c.no_data_ticks;
+    sum.write_failures += c.write_failures;
+    sum.safety.non_finite += c.safety.non_finite;
+    sum.safety.clamped += c.safety.clamped;
+    sum.safety.rate_limited += c.safety.rate_limited;
+    sum.safety.stale_ticks += c.safety.stale_ticks;
+  }
+  return sum;
+}
+
 }  // namespace haptel::mediator
 
 namespace haptel::mediator {

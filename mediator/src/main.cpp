@@ -9,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 #include <sstream>
 #include <string>
 
@@ -20,12 +21,15 @@
 #include "haptel/config/error.hpp"
 #include "haptel/config/gravity_grid.hpp"
 #include "haptel/core/args.hpp"
+#include "haptel/core/clock.hpp"
 #include "haptel/core/log.hpp"
 #include "haptel/calibration/calibration_procedure.hpp"
 #include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/recorder.hpp"
+#include "haptel/mediator/run_counters.hpp"
 #include "haptel/mediator/run_picture.hpp"
 #include "haptel/mediator/scene_command.hpp"
+#include "haptel/mediator/unsaved_run.hpp"
 #include "haptel/view/view.hpp"
 #include "haptel/mediator/session.hpp"
 
@@ -76,6 +80,16 @@ std::string SwitchesJson(const std::vector<haptel::mediator::SwitchRecord>& swit
            ",\"to\":" + haptel::JsonString(s.to) + "}";
   }
   return out + "]";
+}
+
+/// {"name":n,...}
+std::string CountersJson(const std::vector<haptel::mediator::RunCounter>& counters) {
+  std::string out = "{";
+  for (const auto& c : counters) {
+    if (out.size() > 1) out += ",";
+    out += haptel::JsonString(c.name) + ":" + std::to_string(c.value);
+  }
+  return out + "}";
 }
 
 std::filesystem::path SelfDirectory() {
@@ -218,30 +232,21 @@ int main(int argc, char** argv) {
     return 2;
   }
 
+  // The database before anything starts: a run it cannot take is not driven.
+  // Kept open for the run, and saved into at its end.
+  std::unique_ptr<Recorder> recorder;
+  try {
+    recorder = std::make_unique<Recorder>(setup.run.database);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "haptel: %s\n", e.what());
+    return 2;
+  }
+
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
   SessionResult result;
-  int64_t run_id = 0;
   try {
     result = RunSession(setup, g_interrupted);
-    Recorder recorder(setup.run.database);
-    run_id = recorder.Save(result.record);
-    result.record.id = run_id;
-    // The run is saved; its picture is a bonus: a failure is a warning.
-    try {
-      const std::filesystem::path png =
-          std::filesystem::absolute(RunPicturePath(setup.run.database, run_id));
-      DrawRunPicture(result.record, setup.track, png);
-      recorder.SetPicture(run_id, png);
-      result.record.picture = png.string();
-      if (setup.progress) {
-        std::fprintf(stderr, "[haptel] run %lld: picture %s\n", static_cast<long long>(run_id),
-                     png.c_str());
-      }
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "haptel: warning: run %lld is saved without its picture: %s\n",
-                   static_cast<long long>(run_id), e.what());
-    }
   } catch (const ConfigError& e) {  // a part that could not be set up: nothing moved
     std::fprintf(stderr, "haptel: %s\n", e.what());
     return 2;
@@ -251,6 +256,39 @@ int main(int argc, char** argv) {
   } catch (const std::exception& e) {
     std::fprintf(stderr, "haptel: %s\n", e.what());
     return 1;
+  }
+
+  // Saved, or — when the database fails at the end — kept in a file beside it.
+  int64_t run_id = 0;
+  std::filesystem::path unsaved;
+  try {
+    run_id = recorder->Save(result.record);
+    result.record.id = run_id;
+  } catch (const std::exception& e) {
+    try {
+      unsaved = WriteUnsavedRun(result.record, setup.run.database, WallNs());
+      std::fprintf(stderr, "haptel: run not recorded: %s; its results are in %s\n", e.what(),
+                   unsaved.c_str());
+    } catch (const std::exception& e2) {
+      std::fprintf(stderr, "haptel: run not recorded: %s; and %s\n", e.what(), e2.what());
+    }
+  }
+  if (run_id != 0) {
+    // The run is saved; its picture is a bonus: a failure is a warning.
+    try {
+      const std::filesystem::path png =
+          std::filesystem::absolute(RunPicturePath(setup.run.database, run_id));
+      DrawRunPicture(result.record, setup.track, png);
+      recorder->SetPicture(run_id, png);
+      result.record.picture = png.string();
+      if (setup.progress) {
+        std::fprintf(stderr, "[haptel] run %lld: picture %s\n", static_cast<long long>(run_id),
+                     png.c_str());
+      }
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "haptel: warning: run %lld is saved without its picture: %s\n",
+                   static_cast<long long>(run_id), e.what());
+    }
   }
 
   const RunRecord& r = result.record;
@@ -263,13 +301,20 @@ int main(int argc, char** argv) {
   for (const GateSplit& s : r.splits) {
     if (s.split_s >= 0) std::printf("    gate %d  %7.2f s  %s\n", s.gate + 1, s.split_s, s.passed ? "passed" : "MISSED");
   }
-  std::printf("  servo %.1f Hz (p99 period %.0f us, %llu overruns)\n", r.servo_rate_hz, r.servo_period_p99_us,
+  constexpr const char* kShort = " CANNOT KEEP ITS RATE";
+  std::printf("  servo %.1f Hz of %.0f Hz%s (p99 period %.0f us, %llu overruns)\n", r.servo_rate_hz,
+              r.servo_target_hz, r.servo_rate_short ? kShort : "", r.servo_period_p99_us,
               static_cast<unsigned long long>(result.servo_overruns));
   if (result.physics_rate_hz > 0) {
-    std::printf("  physics %.1f Hz (p99 period %.0f us, longest step %.0f us, %llu hand resets), controls grasped after %.2f s\n",
-                result.physics_rate_hz, result.physics_period_p99_us, result.physics_step_max_us,
-                static_cast<unsigned long long>(result.physics_hand_resets), result.grasp_s);
+    std::printf(
+        "  physics %.1f Hz of %.0f Hz%s (p99 period %.0f us, longest step %.0f us, %llu hand "
+        "resets), controls grasped after %.2f s\n",
+        result.physics_rate_hz, r.physics_target_hz, r.physics_rate_short ? kShort : "",
+        result.physics_period_p99_us, result.physics_step_max_us,
+        static_cast<unsigned long long>(result.physics_hand_resets), result.grasp_s);
   }
+  const std::string counters = NonZeroCounters(r.counters);
+  std::printf("  counters: %s\n", counters.empty() ? "all zero" : counters.c_str());
   std::printf("  command round trip p50 %.2f ms, p99 %.2f ms\n", r.command_rtt_ms_p50, r.command_rtt_ms_p99);
   std::printf("  video %lld frames, %.1f fps, latency p50 %.1f ms\n", static_cast<long long>(r.video_frames),
               r.video_fps, r.video_latency_ms_p50);
@@ -281,7 +326,13 @@ int main(int argc, char** argv) {
     std::printf("  operator's view recorded to %s (%llu frames dropped)\n", setup.record.c_str(),
                 static_cast<unsigned long long>(result.view_record_dropped));
   }
-  std::printf("  recorded as run %lld in %s\n", static_cast<long long>(run_id), setup.run.database.c_str());
+  if (run_id != 0) {
+    std::printf("  recorded as run %lld in %s\n", static_cast<long long>(run_id),
+                setup.run.database.c_str());
+  } else {
+    std::printf("  NOT recorded in %s; results in %s\n", setup.run.database.c_str(),
+                unsaved.empty() ? "no file either (see the error above)" : unsaved.c_str());
+  }
   if (!r.picture.empty()) std::printf("  picture %s\n", r.picture.c_str());
   if (json) {
     std::ostringstream o;
@@ -292,6 +343,8 @@ int main(int argc, char** argv) {
       << ",\"vehicle_pid\":" << r.vehicle_pid << ",\"servo_rate_hz\":" << JsonNumber(r.servo_rate_hz)
       << ",\"servo_period_p99_us\":" << JsonNumber(r.servo_period_p99_us)
       << ",\"servo_overruns\":" << result.servo_overruns
+      << ",\"servo_target_hz\":" << JsonNumber(r.servo_target_hz)
+      << ",\"servo_rate_short\":" << (r.servo_rate_short ? "true" : "false")
       << ",\"command_rtt_ms_p50\":" << JsonNumber(r.command_rtt_ms_p50)
       << ",\"command_rtt_ms_p99\":" << JsonNumber(r.command_rtt_ms_p99) << ",\"video_frames\":" << r.video_frames
       << ",\"video_fps\":" << JsonNumber(r.video_fps) << ",\"video_latency_ms_p50\":" << JsonNumber(r.video_latency_ms_p50)
@@ -300,6 +353,8 @@ int main(int argc, char** argv) {
       << ",\"physics_period_p99_us\":" << JsonNumber(result.physics_period_p99_us)
       << ",\"physics_step_max_us\":" << JsonNumber(result.physics_step_max_us)
       << ",\"physics_hand_resets\":" << result.physics_hand_resets
+      << ",\"physics_target_hz\":" << JsonNumber(r.physics_target_hz)
+      << ",\"physics_rate_short\":" << (r.physics_rate_short ? "true" : "false")
       << ",\"grasp_s\":" << JsonNumber(result.grasp_s) << ",\"scene_bodies\":" << result.scene_bodies
       << ",\"view_fps\":" << JsonNumber(r.view_fps) << ",\"view_frame_p99_ms\":" << JsonNumber(r.view_frame_p99_ms)
       << ",\"video_to_screen_ms_p50\":" << JsonNumber(r.video_to_screen_ms_p50)
@@ -307,11 +362,14 @@ int main(int argc, char** argv) {
       << ",\"distance_m\":" << JsonNumber(r.distance_m) << ",\"operator\":" << JsonString(r.operator_kind)
       << ",\"device\":" << JsonString(r.device) << ",\"interface_switches\":" << SwitchesJson(r.switches)
       << ",\"interface\":" << JsonString(r.interface)
-      << ",\"track\":" << JsonString(r.track) << ",\"run_id\":" << run_id
+      << ",\"track\":" << JsonString(r.track)
+      << ",\"counters\":" << CountersJson(r.counters)
+      << ",\"recorded\":" << (run_id != 0 ? "true" : "false") << ",\"run_id\":" << run_id
       << ",\"database\":" << JsonString(setup.run.database.string())
+      << ",\"unsaved_file\":" << JsonString(unsaved.string())
       << ",\"picture\":" << JsonString(r.picture) << "}";
     std::printf("%s\n", o.str().c_str());
   }
   std::fflush(stdout);
-  return ExitCode(result.outcome);
+  return run_id != 0 ? ExitCode(result.outcome) : kExitNotRecorded;
 }

@@ -13,9 +13,12 @@
 #include "haptel/mediator/recorder.hpp"
 
 #include <sqlite3.h>
+#include <unistd.h>
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <ctime>
 #include <iterator>
 #include <limits>
@@ -30,8 +33,7 @@ namespace haptel::mediator {
 namespace {
 
 /// Schema version stored in PRAGMA user_version.
-constexpr int kSchemaVersion = 2;
-constexpr int kBusyTimeoutMs = 2000;
+constexpr int kSchemaVersion = 3;
 
 /// Schema steps: kMigrations[v - 1] takes a database from version v - 1 to v.
 /// A new database runs them all, so the upgrade path of an old file is the
@@ -109,7 +111,25 @@ CREATE TABLE run_contacts (
 CREATE INDEX run_contacts_run_id ON run_contacts(run_id);
 )sql";
 
-constexpr const char* kMigrations[] = {kSchemaV1, kSchemaV2};
+/// v3: every loop counter of a run (run_counters: one row per counter, in the
+/// session's order), and whether the servo and physics loops kept their rates.
+/// Runs from v2 get NULL for the new columns (loaded as NaN and false) and no
+/// counters.
+constexpr const char* kSchemaV3 = R"sql(
+ALTER TABLE runs ADD COLUMN servo_target_hz REAL DEFAULT NULL;
+ALTER TABLE runs ADD COLUMN servo_rate_short INTEGER DEFAULT NULL;
+ALTER TABLE runs ADD COLUMN physics_rate_hz REAL DEFAULT NULL;
+ALTER TABLE runs ADD COLUMN physics_target_hz REAL DEFAULT NULL;
+ALTER TABLE runs ADD COLUMN physics_rate_short INTEGER DEFAULT NULL;
+CREATE TABLE run_counters (
+  run_id INTEGER NOT NULL REFERENCES runs(id) ON DELETE CASCADE,
+  name TEXT NOT NULL,
+  value INTEGER NOT NULL,
+  PRIMARY KEY (run_id, name)
+);
+)sql";
+
+constexpr const char* kMigrations[] = {kSchemaV1, kSchemaV2, kSchemaV3};
 static_assert(std::size(kMigrations) == kSchemaVersion, "one migration per schema version");
 
 constexpr const char* kInsertRun = R"sql(
@@ -118,8 +138,11 @@ INSERT INTO runs (started_utc, started_wall_ns, config_name, track, interface, v
                   obstacles_touched, vehicle_pid, servo_rate_hz, servo_period_p99_us,
                   command_rtt_ms_p50, command_rtt_ms_p99, video_frames, video_fps,
                   video_latency_ms_p50, operator_kind, device, distance_m, view_fps,
-                  view_frame_p99_ms, video_to_screen_ms_p50, video_to_screen_ms_p99, picture)
-VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)
+                  view_frame_p99_ms, video_to_screen_ms_p50, video_to_screen_ms_p99, picture,
+                  servo_target_hz, servo_rate_short, physics_rate_hz, physics_target_hz,
+                  physics_rate_short)
+VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?,
+        ?, ?, ?, ?, ?)
 )sql";
 
 constexpr const char* kInsertSplit =
@@ -131,6 +154,8 @@ constexpr const char* kInsertPathPoint =
     "INSERT INTO run_path (run_id, t_s, x, y, speed_mps) VALUES (?, ?, ?, ?, ?)";
 constexpr const char* kInsertContact =
     "INSERT INTO run_contacts (run_id, t_s, x, y) VALUES (?, ?, ?, ?)";
+constexpr const char* kInsertCounter =
+    "INSERT INTO run_counters (run_id, name, value) VALUES (?, ?, ?)";
 constexpr const char* kUpdatePicture = "UPDATE runs SET picture = ? WHERE id = ?";
 
 constexpr const char* kSelectRuns = R"sql(
@@ -138,7 +163,8 @@ SELECT id, started_wall_ns, config_name, track, interface, vehicle, completed, o
        lap_time_s, gates_passed, gates_total, gates_missed, obstacles_touched, vehicle_pid,
        servo_rate_hz, servo_period_p99_us, command_rtt_ms_p50, command_rtt_ms_p99,
        video_frames, video_fps, video_latency_ms_p50, operator_kind, device, distance_m,
-       view_fps, view_frame_p99_ms, video_to_screen_ms_p50, video_to_screen_ms_p99, picture
+       view_fps, view_frame_p99_ms, video_to_screen_ms_p50, video_to_screen_ms_p99, picture,
+       servo_target_hz, servo_rate_short, physics_rate_hz, physics_target_hz, physics_rate_short
 FROM runs ORDER BY id
 )sql";
 
@@ -151,6 +177,8 @@ constexpr const char* kSelectPath =
     "SELECT run_id, t_s, x, y, speed_mps FROM run_path ORDER BY run_id, rowid";
 constexpr const char* kSelectContacts =
     "SELECT run_id, t_s, x, y FROM run_contacts ORDER BY run_id, rowid";
+constexpr const char* kSelectCounters =
+    "SELECT run_id, name, value FROM run_counters ORDER BY run_id, rowid";
 
 struct DbCloser {
   void operator()(sqlite3* db) const noexcept { sqlite3_close_v2(db); }
@@ -162,11 +190,23 @@ struct StmtFinalizer {
 };
 using Stmt = std::unique_ptr<sqlite3_stmt, StmtFinalizer>;
 
-/// Throws naming the database file, what was being done, and SQLite's message.
+/// Throws "database FILE: what" (one line).
+[[noreturn]] void FailWith(const std::filesystem::path& file, std::string_view what) {
+  throw std::runtime_error("database " + file.string() + ": " + std::string(what));
+}
+
+/// Throws naming the database file, what was being done, and SQLite's message
+/// (with what a lock means: another connection holds the file).
 [[noreturn]] void Fail(const std::filesystem::path& file, sqlite3* db, std::string_view what) {
-  std::string message = "Recorder: " + file.string() + ": " + std::string(what);
-  if (db != nullptr) message += ": " + std::string(sqlite3_errmsg(db));
-  throw std::runtime_error(message);
+  std::string message(what);
+  if (db != nullptr) {
+    const int code = sqlite3_extended_errcode(db) & 0xff;
+    if (code == SQLITE_NOTADB)
+      FailWith(file, "is not a SQLite database (corrupt, or another kind of file)");
+    message += ": " + std::string(sqlite3_errmsg(db));
+    if (code == SQLITE_BUSY) message += " (another program holds it; gave up waiting)";
+  }
+  FailWith(file, message);
 }
 
 void Exec(const std::filesystem::path& file, sqlite3* db, const char* sql, std::string_view what) {
@@ -290,14 +330,31 @@ void StepDone(const std::filesystem::path& file, sqlite3* db, sqlite3_stmt* stmt
 }  // namespace
 
 Recorder::Recorder(const std::filesystem::path& database) : path_(database) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path_, ec)) FailWith(path_, "is a folder, not a database file");
+  // The nearest existing ancestor must be a folder, or nothing can be created under it.
+  for (std::filesystem::path up = path_.parent_path(); !up.empty(); up = up.parent_path()) {
+    const auto status = std::filesystem::status(up, ec);
+    if (status.type() == std::filesystem::file_type::not_found) {
+      if (up == up.parent_path()) break;
+      continue;
+    }
+    if (!ec && status.type() != std::filesystem::file_type::directory) {
+      FailWith(path_, "cannot create it: '" + up.string() + "' is a file, not a folder");
+    }
+    break;
+  }
   const std::filesystem::path parent = path_.parent_path();
   if (!parent.empty()) {
-    std::error_code ec;
     std::filesystem::create_directories(parent, ec);
-    if (ec) {
-      throw std::runtime_error("Recorder: " + path_.string() + ": cannot create folder " +
-                               parent.string() + ": " + ec.message());
-    }
+    if (ec) FailWith(path_, "cannot create folder " + parent.string() + ": " + ec.message());
+  }
+  // SQLite creates the file, and its journal files, beside it: the folder must
+  // be writable (SQLite alone would say "unable to open database file").
+  const std::filesystem::path folder = parent.empty() ? std::filesystem::path(".") : parent;
+  if (::access(folder.c_str(), W_OK) != 0) {
+    FailWith(path_,
+             "its folder " + folder.string() + " is not writable (" + std::strerror(errno) + ")");
   }
 
   sqlite3* raw = nullptr;
@@ -305,12 +362,15 @@ Recorder::Recorder(const std::filesystem::path& database) : path_(database) {
       sqlite3_open_v2(path_.c_str(), &raw, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr);
   DbHandle db(raw);  // closed on every exit below, even if open failed
   if (rc != SQLITE_OK) {
-    if (!db) throw std::runtime_error("Recorder: " + path_.string() + ": out of memory");
+    if (!db) FailWith(path_, "cannot open database: out of memory");
     Fail(path_, db.get(), "cannot open database");
   }
   sqlite3_extended_result_codes(db.get(), 1);
-  if (sqlite3_busy_timeout(db.get(), kBusyTimeoutMs) != SQLITE_OK) {
+  if (sqlite3_busy_timeout(db.get(), kOpenBusyTimeoutMs) != SQLITE_OK) {
     Fail(path_, db.get(), "cannot set busy timeout");
+  }
+  if (sqlite3_db_readonly(db.get(), "main") == 1) {
+    FailWith(path_, "is read-only: runs cannot be recorded in it");
   }
 
   // WAL keeps readers off the writer's back; either journal mode gives atomic
@@ -329,13 +389,25 @@ Recorder::Recorder(const std::filesystem::path& database) : path_(database) {
     const int found = sqlite3_column_int(version.get(), 0);
     version.reset();
     if (found < 0) {
-      throw std::runtime_error("Recorder: " + path_.string() + ": schema version " +
-                               std::to_string(found) + " is not a Haptel schema");
+      FailWith(path_, "schema version " + std::to_string(found) + " is not a Haptel schema");
     }
     if (found > kSchemaVersion) {
-      throw std::runtime_error("Recorder: " + path_.string() + ": schema version " +
-                               std::to_string(found) + " is newer than supported version " +
-                               std::to_string(kSchemaVersion));
+      FailWith(path_, "schema version " + std::to_string(found) + " is newer than this haptel's (" +
+                          std::to_string(kSchemaVersion) +
+                          "); record with a newer haptel or another --database");
+    }
+    if (found == 0) {
+      // Every Haptel file has a version >= 1: tables without one are another
+      // program's, and a run is not added to them.
+      Stmt tables =
+          Prepare(path_, db.get(), "SELECT name FROM sqlite_master WHERE type = 'table' LIMIT 1",
+                  "cannot read the tables");
+      const int rc = sqlite3_step(tables.get());
+      if (rc == SQLITE_ROW) {
+        FailWith(path_, "not a Haptel database (it has tables, such as '" +
+                            Reader(tables.get()).Text() + "', but no Haptel schema version)");
+      }
+      if (rc != SQLITE_DONE) Fail(path_, db.get(), "cannot read the tables");
     }
     // Every step up to the current version in this one transaction: a
     // migration that fails part-way leaves the file at its old version.
@@ -351,6 +423,9 @@ Recorder::Recorder(const std::filesystem::path& database) : path_(database) {
     }
     txn.Commit();
   }
+  if (sqlite3_busy_timeout(db.get(), kSaveBusyTimeoutMs) != SQLITE_OK) {
+    Fail(path_, db.get(), "cannot set busy timeout");
+  }
 
   db_ = db.release();
 }
@@ -358,6 +433,13 @@ Recorder::Recorder(const std::filesystem::path& database) : path_(database) {
 Recorder::~Recorder() { sqlite3_close_v2(db_); }
 
 int64_t Recorder::Save(const RunRecord& run) {
+  // A file deleted or replaced since it was opened: SQLite in WAL mode would
+  // write the run into the unlinked file, and it would be gone.
+  int moved = 0;
+  if (sqlite3_file_control(db_, "main", SQLITE_FCNTL_HAS_MOVED, &moved) == SQLITE_OK &&
+      moved != 0) {
+    FailWith(path_, "cannot save the run: the file was deleted or replaced since it was opened");
+  }
   Transaction txn(path_, db_, "BEGIN IMMEDIATE");
 
   Stmt insert_run = Prepare(path_, db_, kInsertRun, "cannot prepare run insert");
@@ -390,7 +472,12 @@ int64_t Recorder::Save(const RunRecord& run) {
       .Real(run.view_frame_p99_ms)
       .Real(run.video_to_screen_ms_p50)
       .Real(run.video_to_screen_ms_p99)
-      .Text(run.picture);
+      .Text(run.picture)
+      .Real(run.servo_target_hz)
+      .Int(run.servo_rate_short ? 1 : 0)
+      .Real(run.physics_rate_hz)
+      .Real(run.physics_target_hz)
+      .Int(run.physics_rate_short ? 1 : 0);
   StepDone(path_, db_, insert_run.get(), "cannot insert run");
   const int64_t run_id = sqlite3_last_insert_rowid(db_);
 
@@ -438,12 +525,23 @@ int64_t Recorder::Save(const RunRecord& run) {
     StepDone(path_, db_, insert_contact.get(), "cannot insert contact " + std::to_string(i));
   }
 
+  Stmt insert_counter = Prepare(path_, db_, kInsertCounter, "cannot prepare counter insert");
+  for (const RunCounter& c : run.counters) {
+    sqlite3_reset(insert_counter.get());
+    Binder(path_, db_, insert_counter.get())
+        .Int(run_id)
+        .Text(c.name)
+        .Int(static_cast<int64_t>(c.value));
+    StepDone(path_, db_, insert_counter.get(), "cannot insert counter " + c.name);
+  }
+
   // Statements finalized before COMMIT, so none holds the transaction open.
   insert_run.reset();
   insert_split.reset();
   insert_switch.reset();
   insert_point.reset();
   insert_contact.reset();
+  insert_counter.reset();
   txn.Commit();
   return run_id;
 }
@@ -454,8 +552,7 @@ void Recorder::SetPicture(int64_t run_id, const std::filesystem::path& png) {
   Binder(path_, db_, update.get()).Text(png.string()).Int(run_id);
   StepDone(path_, db_, update.get(), "cannot set the picture of run " + std::to_string(run_id));
   if (sqlite3_changes(db_) != 1) {
-    throw std::runtime_error("Recorder: " + path_.string() + ": cannot set the picture of run " +
-                             std::to_string(run_id) + ": no such run");
+    FailWith(path_, "cannot set the picture of run " + std::to_string(run_id) + ": no such run");
   }
   update.reset();
   txn.Commit();
@@ -503,6 +600,11 @@ std::vector<RunRecord> Recorder::LoadAll() const {
       run.video_to_screen_ms_p50 = r.Real();
       run.video_to_screen_ms_p99 = r.Real();
       run.picture = r.Text();
+      run.servo_target_hz = r.Real();
+      run.servo_rate_short = r.Bool();
+      run.physics_rate_hz = r.Real();
+      run.physics_target_hz = r.Real();
+      run.physics_rate_short = r.Bool();
       index_of.emplace(run.id, runs.size());
       runs.push_back(std::move(run));
     }
@@ -555,6 +657,12 @@ std::vector<RunRecord> Recorder::LoadAll() const {
     c.x = r.Real();
     c.y = r.Real();
     run.contacts.push_back(c);
+  });
+  read_children(kSelectCounters, "counters", [](RunRecord& run, Reader& r) {
+    RunCounter c;
+    c.name = r.Text();
+    c.value = static_cast<uint64_t>(r.Int());
+    run.counters.push_back(std::move(c));
   });
 
   txn.Commit();

@@ -12,6 +12,7 @@
 #include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/lap_timer.hpp"
 #include "haptel/mediator/operator.hpp"
+#include "haptel/mediator/run_counters.hpp"
 #include "haptel/mediator/session_physics.hpp"
 #include "haptel/mediator/session_view.hpp"
 #include "haptel/mediator/vehicle_link.hpp"
@@ -64,10 +65,12 @@ std::vector<bool> InterfacesToBuild(const SessionSetup& setup, bool can_switch) 
   return build;
 }
 
-/// Progress lines every 2 s on stderr.
+/// Progress lines every 2 s on stderr; then each loop that fell short of its
+/// rate over the interval, and the counters that are not zero.
 void LogProgress(double t, const LapTimer& lap, const VehicleLink& link, double speed,
                  double distance_m, const interfaces::MediatorInterface& interface,
-                 const interfaces::MotorCommand& motors) {
+                 const interfaces::MotorCommand& motors,
+                 const std::vector<std::string>& short_loops, const std::string& counters) {
   const VideoStats v = link.video().Stats();
   char line[260];
   std::snprintf(line, sizeof line,
@@ -92,6 +95,8 @@ void LogProgress(double t, const LapTimer& lap, const VehicleLink& link, double 
                   c.throttle_held ? " (held)" : "", motors.left, motors.right, hud);
     log::Info(line);
   }
+  for (const std::string& loop : short_loops) log::Warn(loop);
+  if (!counters.empty()) log::Info("         counters: " + counters);
 }
 
 }  // namespace
@@ -200,6 +205,7 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
 
   LapTimer lap(track);
   const int64_t t0 = MonotonicNs();
+  LoopWatch watch(haptic, physics_side.get(), vehicle, view_part.get(), t0);
   const auto period_ns = static_cast<int64_t>(1e9 / run.session_rate_hz);
   int64_t next_command_ns = t0;
   int64_t next_progress_ns = t0 + SToNs(2.0);
@@ -347,10 +353,17 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
       view_part->Publish(
           overlay_feed.Make(t, lap, interfaces, feedback, motors, vehicle_up, touching));
     }
-    if (setup.progress && now >= next_progress_ns) {
+    if (now >= next_progress_ns) {
       next_progress_ns += SToNs(2.0);
-      LogProgress(t, lap, vehicle, feedback.speed, rec.distance_m, interfaces.current(), motors);
+      const std::vector<std::string> short_loops = watch.EndInterval(now);
+      if (setup.progress) {
+        LogProgress(t, lap, vehicle, feedback.speed, rec.distance_m, interfaces.current(), motors,
+                    short_loops, NonZeroCounters(watch.Counters()));
+      }
     }
+  }
+  for (const std::string& loop : watch.EndInterval(MonotonicNs())) {
+    if (setup.progress) log::Warn(loop);
   }
 
   // Make safe: forces to zero, motors stopped, vehicle process ended.
@@ -399,6 +412,7 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   rec.video_latency_ms_p50 = v.latency_ms_p50;
   result.servo_overruns = servo_stats.overruns;
   rec.switches = interfaces.switches();
+  watch.Finish(rec);
   return result;
 }
 

@@ -1,5 +1,7 @@
 #include "haptel/mediator/vehicle_link.hpp"
 
+#include <algorithm>
+
 #include "haptel/core/clock.hpp"
 
 namespace haptel::mediator {
@@ -13,8 +15,39 @@ void StateInbox::Push(const msg::VehicleState& s) {
     last_echo_seq_ = s.last_command_seq();
     rtt_.Record(static_cast<double>(now - s.last_command_sent_ns() - s.last_command_age_ns()) * 1e-3);
   }
+  if (have_state_ && s.seq() > last_state_seq_) {
+    counts_.states_missed += s.seq() - last_state_seq_ - 1;
+  } else if (have_state_) {
+    have_baseline_ = false;  // a vehicle that started again: its counts start again
+  }
+  have_state_ = true;
+  last_state_seq_ = s.seq();
+  if (s.watchdog_tripped() && !watchdog_was_tripped_) ++counts_.watchdog_trips;
+  watchdog_was_tripped_ = s.watchdog_tripped();
+  // Commands sent before the vehicle listened are not its to drop: count from
+  // the first state that echoes an applied command.
+  if (!have_baseline_ && s.last_command_seq() != 0) {
+    have_baseline_ = true;
+    dropped_before_ = counts_.commands_dropped;
+    first_echo_seq_ = s.last_command_seq();
+    first_accepted_ = s.commands_received();
+  }
+  if (have_baseline_ && s.last_command_seq() >= first_echo_seq_ &&
+      s.commands_received() >= first_accepted_) {
+    const uint64_t echoed = s.last_command_seq() - first_echo_seq_;
+    const uint64_t accepted = s.commands_received() - first_accepted_;
+    if (echoed > accepted) {
+      counts_.commands_dropped =
+          std::max(counts_.commands_dropped, dropped_before_ + echoed - accepted);
+    }
+  }
   entries_.push_back({s, now});
   last_received_ns_ = now;
+}
+
+LinkCounts StateInbox::Counts() const {
+  std::lock_guard lock(mutex_);
+  return counts_;
 }
 
 std::deque<StateInbox::Entry> StateInbox::Drain() {

@@ -134,6 +134,13 @@ TEST_CASE("stale set-points fade to zero within timeout + fade; local forces sta
 TEST_CASE("a set-point never written gives no force") {
   ForceSafety s(Config(), 7.0, 10.0);
   CHECK(s.FadeGain(10 * kMs, 0) == 0.0);
+  // ... and is not counted as stale: every session starts that way.
+  s.OnConnect(0);
+  Vec3d out{};
+  std::array<double, kFingers> fingers{};
+  for (int i = 1; i <= 5; ++i) s.Apply(i * kMs, 0, {4, 0, 0}, {}, out, fingers);
+  CHECK(out[0] == 0.0);
+  CHECK(s.counters().stale_ticks == 0);
 }
 
 TEST_CASE("on loss the output is zero at once, bypassing the rate limit") {

@@ -1,13 +1,17 @@
-// Tests for haptel::mediator::Recorder: round trip (with switches, path and
-// contacts), folder creation, errors naming the file, migration of a v1
-// database, rollback of a failing save, and that a process killed in the
-// middle of a write leaves no half-written run behind.
+// Tests for haptel::mediator::Recorder: round trip (with switches, path,
+// contacts and counters), folder creation, errors naming the file (a folder,
+// a path under a file, garbage, a lock, a newer or foreign schema), migration
+// of v1 and v2 databases, rollback of a failing save, a file deleted under an
+// open Recorder, the fallback file of a run the database did not take, and
+// that a process killed in the middle of a write leaves no half-written run
+// behind.
 #include <signal.h>
 #include <sqlite3.h>
 #include <sys/types.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <catch2/catch.hpp>
 #include <cerrno>
@@ -16,6 +20,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -23,12 +28,14 @@
 #include <vector>
 
 #include "haptel/mediator/recorder.hpp"
+#include "haptel/mediator/unsaved_run.hpp"
 
 namespace fs = std::filesystem;
 using haptel::mediator::ContactPoint;
 using haptel::mediator::GateSplit;
 using haptel::mediator::PathPoint;
 using haptel::mediator::Recorder;
+using haptel::mediator::RunCounter;
 using haptel::mediator::RunRecord;
 using haptel::mediator::SwitchRecord;
 
@@ -131,6 +138,14 @@ RunRecord MakeRun(int n, int split_count) {
     run.path.push_back({0.05 * i, 0.01 * i - 1.0 / 3.0, -0.02 * i, 0.1 * (i % 7) - 0.2});
   }
   run.contacts = {{0.35, 0.5, -0.25}, {0.85 + n, -1.0 / 7.0, 2.0}};
+  run.servo_target_hz = 1000.0;
+  run.servo_rate_short = n % 2 == 1;
+  run.physics_rate_hz = 306.5 + n;
+  run.physics_target_hz = 10000.0;
+  run.physics_rate_short = true;
+  run.counters = {{"servo_overruns", uint64_t(3 + n)},
+                  {"servo_forces_clamped", 0},
+                  {"video_frames_dropped", uint64_t{1} << 40}};  // needs more than 32 bits
   return run;
 }
 
@@ -166,6 +181,16 @@ void CheckSame(const RunRecord& got, const RunRecord& want) {
   CHECK(SameReal(got.video_to_screen_ms_p50, want.video_to_screen_ms_p50));
   CHECK(SameReal(got.video_to_screen_ms_p99, want.video_to_screen_ms_p99));
   CHECK(got.picture == want.picture);
+  CHECK(SameReal(got.servo_target_hz, want.servo_target_hz));
+  CHECK(got.servo_rate_short == want.servo_rate_short);
+  CHECK(SameReal(got.physics_rate_hz, want.physics_rate_hz));
+  CHECK(SameReal(got.physics_target_hz, want.physics_target_hz));
+  CHECK(got.physics_rate_short == want.physics_rate_short);
+  REQUIRE(got.counters.size() == want.counters.size());
+  for (size_t i = 0; i < want.counters.size(); ++i) {
+    CHECK(got.counters[i].name == want.counters[i].name);
+    CHECK(got.counters[i].value == want.counters[i].value);
+  }
   REQUIRE(got.splits.size() == want.splits.size());
   for (size_t i = 0; i < want.splits.size(); ++i) {
     CHECK(got.splits[i].gate == want.splits[i].gate);
@@ -299,7 +324,7 @@ TEST_CASE("Recorder stores the start time as ISO-8601 UTC and a schema version",
   }
   RawDb raw(file);
   CHECK(raw.Text("SELECT started_utc FROM runs") == "2024-05-01T12:34:56.789Z");
-  CHECK(raw.Integer("PRAGMA user_version") == 2);
+  CHECK(raw.Integer("PRAGMA user_version") == 3);
 }
 
 TEST_CASE("Recorder creates missing parent folders", "[recorder]") {
@@ -341,6 +366,115 @@ TEST_CASE("Recorder set-up errors name the database file", "[recorder]") {
     RequireThrowsMentioning([&] { Recorder recorder(file); }, file.string());
     RequireThrowsMentioning([&] { Recorder recorder(file); }, "schema version 7");
   }
+
+  SECTION("the path is a folder") {
+    const fs::path file = tmp.path() / "folder.db";
+    fs::create_directories(file);
+    RequireThrowsMentioning([&] { Recorder recorder(file); }, file.string());
+    RequireThrowsMentioning([&] { Recorder recorder(file); }, "is a folder");
+  }
+
+  SECTION("the path's folder is a regular file") {
+    const fs::path blocker = tmp.path() / "file";
+    std::ofstream(blocker) << "a file\n";
+    const fs::path file = blocker / "runs.db";
+    RequireThrowsMentioning([&] { Recorder recorder(file); }, file.string());
+    RequireThrowsMentioning([&] { Recorder recorder(file); },
+                            "'" + blocker.string() + "' is a file");
+  }
+
+  SECTION("garbage is not a database") {
+    const fs::path file = tmp.path() / "garbage.db";
+    std::ofstream(file, std::ios::binary) << std::string(8192, '\x5a');
+    RequireThrowsMentioning([&] { Recorder recorder(file); }, "is not a SQLite database");
+  }
+
+  SECTION("another program's database is not touched") {
+    const fs::path file = tmp.path() / "foreign.db";
+    {
+      RawDb raw(file);
+      raw.Exec("CREATE TABLE invoices (id INTEGER PRIMARY KEY, amount REAL)");
+    }
+    RequireThrowsMentioning([&] { Recorder recorder(file); }, file.string());
+    RequireThrowsMentioning([&] { Recorder recorder(file); }, "not a Haptel database");
+    RawDb raw(file);
+    CHECK(raw.Integer("SELECT COUNT(*) FROM sqlite_master WHERE name = 'runs'") == 0);
+    CHECK(raw.Integer("PRAGMA user_version") == 0);
+  }
+
+  SECTION("a file another connection holds locked fails, after a bounded wait") {
+    const fs::path file = tmp.path() / "locked.db";
+    { Recorder first(file); }
+    RawDb holder(file);
+    holder.Exec("BEGIN EXCLUSIVE");
+    RequireThrowsMentioning([&] { Recorder recorder(file); }, file.string());
+    RequireThrowsMentioning([&] { Recorder recorder(file); }, "locked");
+    holder.Exec("ROLLBACK");
+    Recorder after(file);  // the lock gone, the file works
+    CHECK(after.LoadAll().empty());
+  }
+}
+
+TEST_CASE("A database deleted or replaced under an open Recorder is not written blind",
+          "[recorder]") {
+  TempDir tmp;
+  const fs::path file = tmp.path() / "runs.db";
+  Recorder recorder(file);
+  recorder.Save(MakeRun(0, 2));
+
+  SECTION("deleted") {
+    for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(file.string() + suffix);
+  }
+  SECTION("replaced") {
+    const fs::path other = tmp.path() / "other.db";
+    { Recorder fresh(other); }
+    fs::rename(other, file);
+  }
+  // SQLite would write the run into the unlinked file, and it would be lost.
+  RequireThrowsMentioning([&] { recorder.Save(MakeRun(1, 2)); }, "deleted or replaced");
+  RequireThrowsMentioning([&] { recorder.Save(MakeRun(1, 2)); }, file.string());
+}
+
+TEST_CASE("A run the database did not take is written whole beside it", "[recorder]") {
+  TempDir tmp;
+  const fs::path db = tmp.path() / "runs.db";
+  RunRecord run = MakeRun(2, 3);
+  run.lap_time_s = std::numeric_limits<double>::quiet_NaN();
+  run.config_name = "quote \" and\nnewline";
+  const int64_t wall_ns = 1'714'566'896'789'000'000;  // 2024-05-01T12:34:56.789Z
+
+  const fs::path file = haptel::mediator::WriteUnsavedRun(run, db, wall_ns);
+  CHECK(file == tmp.path() / "runs.db.unsaved-20240501T123456.789Z.json");
+  std::ifstream in(file);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  CHECK(text == haptel::mediator::RunRecordJson(run) + "\n");
+  CHECK(std::count(text.begin(), text.end(), '\n') == 1);  // one line: strings are escaped
+  for (const std::string& part :
+       {std::string("\"config_name\":\"quote \\\" and\\u000anewline\""),
+        std::string("\"lap_time_s\":null"), std::string("\"physics_rate_short\":true"),
+        std::string("\"counters\":{\"servo_overruns\":5,\"servo_forces_clamped\":0,"
+                    "\"video_frames_dropped\":1099511627776}"),
+        std::string("\"splits\":[{\"gate\":0,"), std::string("\"switches\":[{\"t_s\":3.25,"),
+        std::string("\"contacts\":[{\"t_s\":0.34999999999999998,"),
+        std::string("\"started_wall_ns\":") + std::to_string(run.started_wall_ns)}) {
+    INFO(part);
+    CHECK(text.find(part) != std::string::npos);
+  }
+  CHECK(text.find("\"path\":[{\"t_s\":0,\"x\":-0.33333333333333331,") != std::string::npos);
+
+  // Never overwritten: a second run in the same millisecond gets a name of its own.
+  const fs::path second = haptel::mediator::WriteUnsavedRun(MakeRun(3, 1), db, wall_ns);
+  CHECK(second == tmp.path() / "runs.db.unsaved-20240501T123456.789Z-2.json");
+  CHECK(fs::file_size(file) == text.size());
+
+  // A database folder that is gone: the system's temporary folder takes it.
+  const std::string name = tmp.path().filename().string() + ".db";  // unique to this test
+  const fs::path elsewhere =
+      haptel::mediator::WriteUnsavedRun(run, tmp.path() / "gone" / name, wall_ns + 1'000'000);
+  CHECK(elsewhere.parent_path() == fs::temp_directory_path());
+  CHECK(elsewhere.filename() == name + ".unsaved-20240501T123456.790Z.json");
+  CHECK(fs::file_size(elsewhere) == text.size());
+  fs::remove(elsewhere);
 }
 
 TEST_CASE("A failing Save rolls back and leaves the Recorder usable", "[recorder]") {
@@ -449,8 +583,9 @@ VALUES ('2024-05-01T12:34:56.789Z', 1714566896789000000, 'v1 run', 'grand-prix',
 INSERT INTO gate_splits (run_id, gate, passed, split_s) VALUES (1, 0, 1, 20.0), (1, 1, 0, 41.5);
 )sql";
 
-/// The v1 run above, as a v2 Recorder loads it: v2's text empty, its metrics
-/// NaN (not measured), no switches, path or contacts.
+/// The v1 run above, as the current Recorder loads it: v2's text empty, v2's
+/// and v3's metrics NaN (not measured), v3's flags false, no switches, path,
+/// contacts or counters.
 RunRecord V1Run() {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   RunRecord run;
@@ -479,13 +614,17 @@ RunRecord V1Run() {
   run.view_frame_p99_ms = nan;
   run.video_to_screen_ms_p50 = nan;
   run.video_to_screen_ms_p99 = nan;
+  run.servo_target_hz = nan;
+  run.physics_rate_hz = nan;
+  run.physics_target_hz = nan;
   run.splits = {{0, true, 20.0}, {1, false, 41.5}};
   return run;
 }
 
 }  // namespace
 
-TEST_CASE("A v1 database is migrated to v2 in place and keeps its runs", "[recorder]") {
+TEST_CASE("A v1 database is migrated to the current schema in place and keeps its runs",
+          "[recorder]") {
   TempDir tmp;
   const fs::path file = tmp.path() / "v1.db";
   {
@@ -511,10 +650,10 @@ TEST_CASE("A v1 database is migrated to v2 in place and keeps its runs", "[recor
   }
 
   RawDb raw(file);
-  CHECK(raw.Integer("PRAGMA user_version") == 2);
+  CHECK(raw.Integer("PRAGMA user_version") == 3);
   CHECK(raw.Text("PRAGMA integrity_check") == "ok");
   CHECK(raw.Integer("SELECT COUNT(*) FROM pragma_foreign_key_check") == 0);
-  for (const char* table : {"interface_switches", "run_path", "run_contacts"}) {
+  for (const char* table : {"interface_switches", "run_path", "run_contacts", "run_counters"}) {
     INFO(table);
     const std::string count_fk = std::string("SELECT COUNT(*) FROM pragma_foreign_key_list('") +
                                  table + "') WHERE \"table\" = 'runs' AND \"from\" = 'run_id'";
@@ -524,12 +663,106 @@ TEST_CASE("A v1 database is migrated to v2 in place and keeps its runs", "[recor
         "') AS l JOIN pragma_index_info(l.name) AS i WHERE i.name = 'run_id'";
     CHECK(raw.Integer(count_index.c_str()) == 1);
   }
-  // Reopening a v2 database changes nothing.
+  // Reopening a current database changes nothing.
   {
     Recorder again(file);
     CHECK(again.LoadAll().size() == 2);
   }
-  CHECK(raw.Integer("PRAGMA user_version") == 2);
+  CHECK(raw.Integer("PRAGMA user_version") == 3);
+}
+
+namespace {
+
+// Schema v2's step exactly as recorder.cpp ran it (git show e149374:mediator/src/recorder.cpp),
+// and a v2 run with a switch, a path point and a contact.
+constexpr const char* kSchemaV2 = R"sql(
+ALTER TABLE runs ADD COLUMN operator_kind TEXT NOT NULL DEFAULT '';
+ALTER TABLE runs ADD COLUMN device TEXT NOT NULL DEFAULT '';
+ALTER TABLE runs ADD COLUMN distance_m REAL DEFAULT NULL;
+ALTER TABLE runs ADD COLUMN view_fps REAL DEFAULT NULL;
+ALTER TABLE runs ADD COLUMN view_frame_p99_ms REAL DEFAULT NULL;
+ALTER TABLE runs ADD COLUMN video_to_screen_ms_p50 REAL DEFAULT NULL;
+ALTER TABLE runs ADD COLUMN video_to_screen_ms_p99 REAL DEFAULT NULL;
+ALTER TABLE runs ADD COLUMN picture TEXT NOT NULL DEFAULT '';
+CREATE TABLE interface_switches (
+  run_id INTEGER NOT NULL REFERENCES runs(id) ON DELETE CASCADE,
+  t_s REAL NOT NULL,
+  from_interface TEXT NOT NULL,
+  to_interface TEXT NOT NULL
+);
+CREATE INDEX interface_switches_run_id ON interface_switches(run_id);
+CREATE TABLE run_path (
+  run_id INTEGER NOT NULL REFERENCES runs(id) ON DELETE CASCADE,
+  t_s REAL NOT NULL,
+  x REAL NOT NULL,
+  y REAL NOT NULL,
+  speed_mps REAL NOT NULL
+);
+CREATE INDEX run_path_run_id ON run_path(run_id);
+CREATE TABLE run_contacts (
+  run_id INTEGER NOT NULL REFERENCES runs(id) ON DELETE CASCADE,
+  t_s REAL NOT NULL,
+  x REAL NOT NULL,
+  y REAL NOT NULL
+);
+CREATE INDEX run_contacts_run_id ON run_contacts(run_id);
+PRAGMA user_version = 2;
+UPDATE runs SET operator_kind = 'auto', device = 'sim', distance_m = 12.5, view_fps = 60.0,
+                view_frame_p99_ms = 4.0, video_to_screen_ms_p50 = 50.0,
+                video_to_screen_ms_p99 = 70.0, picture = '/runs/pictures/run-1.png';
+INSERT INTO interface_switches VALUES (1, 2.5, 'gesture', 'cockpit');
+INSERT INTO run_path VALUES (1, 0.05, 1.0, 2.0, 0.5);
+INSERT INTO run_contacts VALUES (1, 0.75, 1.5, 2.5);
+)sql";
+
+RunRecord V2Run() {
+  RunRecord run = V1Run();
+  run.operator_kind = "auto";
+  run.device = "sim";
+  run.distance_m = 12.5;
+  run.view_fps = 60.0;
+  run.view_frame_p99_ms = 4.0;
+  run.video_to_screen_ms_p50 = 50.0;
+  run.video_to_screen_ms_p99 = 70.0;
+  run.picture = "/runs/pictures/run-1.png";
+  run.switches = {{2.5, "gesture", "cockpit"}};
+  run.path = {{0.05, 1.0, 2.0, 0.5}};
+  run.contacts = {{0.75, 1.5, 2.5}};
+  return run;
+}
+
+}  // namespace
+
+TEST_CASE("A v2 database is migrated to v3: its runs keep everything, new runs keep counters",
+          "[recorder]") {
+  TempDir tmp;
+  const fs::path file = tmp.path() / "v2.db";
+  {
+    RawDb raw(file);
+    raw.Exec(kSchemaV1);
+    raw.Exec(kSchemaV2);
+    REQUIRE(raw.Integer("PRAGMA user_version") == 2);
+  }
+  const RunRecord fresh = MakeRun(6, 2);
+  {
+    Recorder recorder(file);
+    std::vector<RunRecord> runs = recorder.LoadAll();
+    REQUIRE(runs.size() == 1);
+    CheckSame(runs[0], V2Run());
+    recorder.Save(fresh);
+  }
+  Recorder reopened(file);
+  const std::vector<RunRecord> runs = reopened.LoadAll();
+  REQUIRE(runs.size() == 2);
+  CheckSame(runs[0], V2Run());
+  CheckSame(runs[1], fresh);
+  RawDb raw(file);
+  CHECK(raw.Integer("PRAGMA user_version") == 3);
+  CHECK(raw.Text("PRAGMA integrity_check") == "ok");
+  CHECK(raw.Integer(
+            "SELECT value FROM run_counters WHERE run_id = 2 AND name = 'servo_overruns'") == 9);
+  // The v2 run has no flags (NULL); the new one has its own.
+  CHECK(raw.Integer("SELECT COUNT(*) FROM runs WHERE servo_rate_short IS NULL") == 1);
 }
 
 TEST_CASE("A migration that fails leaves the v1 database as it was", "[recorder]") {

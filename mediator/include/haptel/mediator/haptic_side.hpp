@@ -21,6 +21,7 @@
 #include "haptel/core/loop_meter.hpp"
 #include "haptel/haptics/device.hpp"
 #include "haptel/haptics/hal.hpp"
+#include "haptel/haptics/servo_loop.hpp"
 
 namespace haptel::haptics {
 class GravityGrid;
@@ -72,6 +73,10 @@ class HapticSide {
   /// reading (the longest, if both are lost; 0 when none is).
   double silent_s() const;
   LoopStats Stats() const;
+  /// The servo loop's counters, summed over the arms the device has. Any thread.
+  haptics::ServoCounters Counters() const;
+  /// The servo loop's target rate (the device file's servo.rate_hz).
+  double target_hz() const { return config_.servo.rate_hz; }
   /// The servo loop's period distribution (the right arm's when it has one).
   const Histogram& ServoPeriods() const;
   const DeviceConfig& config() const { return config_; }

@@ -45,9 +45,18 @@ struct ContactPoint {
   double y = 0.0;
 };
 
+/// One of the counters the session's parts keep (servo overruns, clamped
+/// forces, dropped video frames, ...): names and meanings in README, "The
+/// JSON line".
+struct RunCounter {
+  std::string name;
+  uint64_t value = 0;
+};
+
 /// Everything a run reports, as stored in the database. A metric that was not
 /// measured is NaN (stored as NULL); runs recorded before schema v2 load with
-/// NaN for v2's metrics, empty strings and empty vectors.
+/// NaN for v2's metrics, empty strings and empty vectors; before v3, with NaN
+/// for v3's rates, false for its flags and no counters.
 struct RunRecord {
   int64_t id = 0;               ///< set by Save / Load
   int64_t started_wall_ns = 0;  ///< CLOCK_REALTIME at session start
@@ -78,6 +87,17 @@ struct RunRecord {
   double video_to_screen_ms_p50 = 0.0;  ///< capture stamp -> first shown on screen
   double video_to_screen_ms_p99 = 0.0;
   std::string picture;  ///< the run's PNG (empty: none)
+  /// The servo loop's target rate, and whether it fell below 90 % of it over
+  /// a progress interval or the run (DESIGN: a loop that cannot keep its rate
+  /// says so).
+  double servo_target_hz = 0.0;
+  bool servo_rate_short = false;
+  /// The physics thread's rate and target (0 and 0: no physics world).
+  double physics_rate_hz = 0.0;
+  double physics_target_hz = 0.0;
+  bool physics_rate_short = false;
+  /// Every counter, in the session's fixed order (zeros included).
+  std::vector<RunCounter> counters;
   std::vector<GateSplit> splits;
   std::vector<SwitchRecord> switches;
   std::vector<PathPoint> path;  ///< one point every 0.05 s
@@ -87,18 +107,24 @@ struct RunRecord {
 class Recorder {
  public:
   /// Opens (creating it and its parent folders if needed) the database and its
-  /// schema; an older schema (v1) is migrated in place, in one transaction.
-  /// Throws std::runtime_error naming the file on failure, or when the
-  /// database's schema is newer than this build knows.
+  /// schema; an older schema (v1, v2) is migrated in place, in one
+  /// transaction. The schema is read inside a write transaction, so a file
+  /// that opens here can be written. Fails within a second — a file
+  /// another connection holds locked is waited for at most kOpenBusyTimeoutMs
+  /// — throwing std::runtime_error with a one-line message "database FILE:
+  /// what is wrong" (a folder, a path under a regular file, not a database, a
+  /// newer or foreign schema, read-only, locked).
   explicit Recorder(const std::filesystem::path& database);
   ~Recorder();
   Recorder(const Recorder&) = delete;
   Recorder& operator=(const Recorder&) = delete;
 
-  /// Writes the run with its splits, switches, path and contacts in one
-  /// transaction; returns the run id. On any failure (for instance a NaN
-  /// time or coordinate in the path or contacts: those columns are NOT NULL)
-  /// rolls back and throws std::runtime_error.
+  /// Writes the run with its splits, switches, path, contacts and counters in
+  /// one transaction; returns the run id. On any failure (for instance a NaN
+  /// time or coordinate in the path or contacts: those columns are NOT NULL;
+  /// or the file was deleted or replaced since it was opened, which SQLite
+  /// would otherwise write into the unlinked file) rolls back and throws
+  /// std::runtime_error.
   int64_t Save(const RunRecord& run);
 
   /// Sets the picture of a saved run. Throws std::runtime_error if there is
@@ -110,6 +136,14 @@ class Recorder {
   std::vector<RunRecord> LoadAll() const;
 
   const std::filesystem::path& path() const { return path_; }
+
+  /// How long opening waits for a lock another connection holds: long
+  /// enough for another haptel's save to finish, short enough that a
+  /// program that holds the file tells the user at once (`haptel run` itself
+  /// takes ~0.7 s to load its libraries on a busy machine: under 2 s in all).
+  static constexpr int kOpenBusyTimeoutMs = 500;
+  /// How long a save waits for one: the run's results are worth the wait.
+  static constexpr int kSaveBusyTimeoutMs = 10000;
 
  private:
   std::filesystem::path path_;

@@ -13,7 +13,9 @@
 ///   operator, runs the interface, sends commands at the interface's command
 ///   rate, times the lap and watches the vehicle, the device and the person.
 ///
-/// The recorder (Recorder) stores the result afterwards.
+/// The recorder (Recorder) stores the result afterwards: `haptel run` opens
+/// and checks the database before the session starts, and saves into it at
+/// the end (or into a fallback file, see unsaved_run.hpp).
 #include <atomic>
 #include <filesystem>
 #include <optional>
@@ -86,6 +88,9 @@ enum class Outcome {
 std::string ToString(Outcome outcome);
 /// The process exit code for an outcome: 0 completed, 3 lost vehicle or device, 1 otherwise.
 int ExitCode(Outcome outcome);
+/// The exit code, whatever the outcome, of a run the database did not take
+/// at the end (its results went to a fallback file; the JSON line says which).
+constexpr int kExitNotRecorded = 4;
 
 struct SessionResult {
   Outcome outcome = Outcome::kInterrupted;

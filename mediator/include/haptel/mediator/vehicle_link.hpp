@@ -23,8 +23,24 @@
 
 namespace haptel::mediator {
 
+/// What the operator side can tell of the link and the vehicle's health from
+/// the states alone (the vehicle counts malformed and stale commands apart,
+/// in its own stop summary; a state carries only how many it accepted).
+struct LinkCounts {
+  /// States that never arrived: gaps in their sequence numbers.
+  uint64_t states_missed = 0;
+  /// Times the vehicle's command watchdog tripped after commands had driven it.
+  uint64_t watchdog_trips = 0;
+  /// Commands the vehicle did not accept — lost on the way, malformed or
+  /// stale — up to the last one it applied: the sequence numbers it echoed
+  /// minus the commands it counted as accepted, from the first state that
+  /// echoes one (commands sent before it listened are not counted).
+  uint64_t commands_dropped = 0;
+};
+
 /// Vehicle states as they arrive (DDS thread), drained by the session loop.
-/// Measures the command round trip from the echo each state carries.
+/// Measures the command round trip from the echo each state carries, and
+/// counts what the states show (LinkCounts).
 class StateInbox {
  public:
   struct Entry {
@@ -37,12 +53,22 @@ class StateInbox {
   /// Round trip of echoed commands minus their wait at the vehicle, µs
   /// (the histogram is safe to read while the DDS thread records).
   const Histogram& Rtt() const { return rtt_; }
+  LinkCounts Counts() const;
 
  private:
   mutable std::mutex mutex_;
   std::deque<Entry> entries_;
   int64_t last_received_ns_ = 0;
   uint64_t last_echo_seq_ = 0;
+  LinkCounts counts_;
+  bool have_state_ = false;
+  uint64_t last_state_seq_ = 0;
+  bool watchdog_was_tripped_ = true;
+  // The baseline of commands_dropped: the first state echoing an applied command.
+  bool have_baseline_ = false;
+  uint64_t first_echo_seq_ = 0;
+  uint64_t first_accepted_ = 0;
+  uint64_t dropped_before_ = 0;  ///< counted against earlier baselines
   Histogram rtt_{10.0, 20000};  // µs bins up to 200 ms
 };
 

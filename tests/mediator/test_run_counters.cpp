@@ -1,0 +1,98 @@
+// What reaches the user of the parts' counts: the counts the operator side
+// reads from the vehicle's states, a loop's rate against its target interval
+// by interval and over the run, and the progress line's list of non-zero
+// counters.
+#include <catch2/catch.hpp>
+
+#include "haptel/core/clock.hpp"
+#include "haptel/mediator/run_counters.hpp"
+#include "haptel/mediator/vehicle_link.hpp"
+
+using namespace haptel;
+using haptel::mediator::LinkCounts;
+using haptel::mediator::RateCheck;
+using haptel::mediator::StateInbox;
+
+namespace {
+
+msg::VehicleState State(uint64_t seq, bool tripped, uint64_t echoed, uint64_t accepted) {
+  msg::VehicleState s;
+  s.seq(seq);
+  s.watchdog_tripped(tripped);
+  s.last_command_seq(echoed);
+  s.commands_received(accepted);
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("the states tell missed states, watchdog trips and commands the vehicle did not accept") {
+  StateInbox inbox;
+  // Before any command: the watchdog is tripped; commands sent before the
+  // vehicle listened (seq 1..177) are not the vehicle's to drop.
+  inbox.Push(State(1, true, 0, 0));
+  inbox.Push(State(2, true, 0, 0));
+  inbox.Push(State(3, false, 178, 1));
+  CHECK(inbox.Counts().watchdog_trips == 0);
+  CHECK(inbox.Counts().commands_dropped == 0);
+  CHECK(inbox.Counts().states_missed == 0);
+
+  inbox.Push(State(4, false, 200, 23));  // every command taken
+  CHECK(inbox.Counts().commands_dropped == 0);
+  inbox.Push(State(7, false, 210, 30));  // 3 of 10 not taken; states 5 and 6 never came
+  CHECK(inbox.Counts().commands_dropped == 3);
+  CHECK(inbox.Counts().states_missed == 2);
+
+  inbox.Push(State(8, true, 210, 30));  // commands stopped: the watchdog trips
+  inbox.Push(State(9, true, 210, 30));  // still tripped: one trip
+  inbox.Push(State(10, false, 220, 40));
+  inbox.Push(State(11, true, 220, 40));
+  const LinkCounts counts = inbox.Counts();
+  CHECK(counts.watchdog_trips == 2);
+  CHECK(counts.commands_dropped == 3);
+  CHECK(counts.states_missed == 2);
+
+  // A vehicle that started again counts afresh, keeping what was counted.
+  inbox.Push(State(1, false, 230, 1));
+  inbox.Push(State(2, false, 240, 6));
+  CHECK(inbox.Counts().commands_dropped == 3 + 5);
+  CHECK(inbox.Counts().states_missed == 2);
+  CHECK(inbox.Drain().size() == 11);
+}
+
+TEST_CASE("a loop below 90 % of its target says so, interval by interval and for the run") {
+  const int64_t t0 = SToNs(100.0);
+  RateCheck servo("servo", 1000.0, 50, t0);
+  CHECK(servo.target_hz() == 1000.0);
+  CHECK_FALSE(servo.EndInterval(50 + 1950, t0 + SToNs(2.0)));  // 975 Hz: kept
+  CHECK_FALSE(servo.short_of_rate());
+  CHECK_FALSE(servo.EndInterval(2500, t0 + SToNs(2.1)));  // too short an interval to judge
+  const auto line = servo.EndInterval(2000 + 612, t0 + SToNs(4.0));  // 306 Hz
+  REQUIRE(line);
+  CHECK(*line == "servo 306 Hz of 1000 Hz: cannot keep its rate");
+  CHECK(servo.short_of_rate());
+  CHECK_FALSE(servo.EndInterval(2612 + 1990, t0 + SToNs(6.0)));
+  CHECK(servo.short_of_rate());  // once short, the run is marked
+
+  RateCheck physics("physics", 10000.0, 0, t0);
+  LoopStats run;
+  run.ticks = 26;
+  run.elapsed_s = 2.0;
+  run.rate_hz = 13.0;
+  const auto whole = physics.EndRun(run);
+  REQUIRE(whole);
+  CHECK(*whole == "physics 13 Hz of 10000 Hz: cannot keep its rate");
+  CHECK(physics.short_of_rate());
+
+  RateCheck kept("physics", 1000.0, 0, t0);
+  run.rate_hz = 950.0;
+  CHECK_FALSE(kept.EndRun(run));
+  CHECK_FALSE(kept.short_of_rate());
+}
+
+TEST_CASE("the progress line lists the counters that are not zero") {
+  CHECK(mediator::NonZeroCounters({{"a", 0}, {"b", 0}}).empty());
+  CHECK(
+      mediator::NonZeroCounters({{"servo_overruns", 3}, {"b", 0}, {"video_frames_dropped", 12}}) ==
+      "servo_overruns 3, video_frames_dropped 12");
+}
