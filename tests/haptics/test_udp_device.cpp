@@ -333,6 +333,24 @@ struct Rig {
 
 }  // namespace
 
+TEST_CASE("udp::MonotonicClock: a wait ends with data, or at once past its deadline",
+          "[udp][clock]") {
+  udp::Clock& clock = udp::SystemClock();
+  int fds[2];
+  REQUIRE(::socketpair(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0, fds) == 0);
+  const udp::UniqueFd a(fds[0]);
+  const udp::UniqueFd b(fds[1]);
+  const int64_t now = clock.NowNs();
+  CHECK(clock.NowNs() >= now);
+  // A deadline already passed: no wait at all.
+  CHECK(clock.WaitReadable(a.get(), now) == udp::Clock::WaitResult::kNotYet);
+  const uint8_t byte = 1;
+  REQUIRE(::send(b.get(), &byte, 1, 0) == 1);
+  // Data already queued: readable long before this deadline only a fault reaches.
+  CHECK(clock.WaitReadable(a.get(), clock.NowNs() + SToNs(kFaultAfter_s)) ==
+        udp::Clock::WaitResult::kReadable);
+}
+
 TEST_CASE("udp device: description comes from the config", "[udp][device]") {
   FakeArm right(Side::kRight);
   DeviceConfig config = LoopbackConfig(0, right.port());
