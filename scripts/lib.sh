@@ -46,3 +46,31 @@ haptel_build() {
     return 1
   fi
 }
+
+# scripts/test --tsan: the tests whose code runs on several threads at once
+# (seqlock, periodic thread, histogram; HAL and servo loop; UDP device and
+# server; physics thread and controls link; SDL input pump), built with
+# ThreadSanitizer into build-tsan/ and run with halt_on_error: the first
+# race fails its test. False positives would be listed, each with its
+# reason, in scripts/tsan.supp, which also says why the DDS, video and view
+# tests are not here (their reports are all inside uninstrumented libraries).
+HAPTEL_TSAN_TESTS=(test_core test_haptics test_udp test_physics test_view_input)
+
+haptel_test_tsan() {
+  local dir="${HAPTEL_TSAN_BUILD_DIR:-$ROOT/build-tsan}"
+  if [ ! -f "$dir/CMakeCache.txt" ]; then
+    haptel_log "configuring $dir (ThreadSanitizer)"
+    cmake -S "$ROOT" -B "$dir" -DCMAKE_BUILD_TYPE=Release -DHAPTEL_SANITIZE=thread >/dev/null
+  fi
+  haptel_log "building ${HAPTEL_TSAN_TESTS[*]} with ThreadSanitizer (log: $dir/build.log)"
+  if ! cmake --build "$dir" -j"$(nproc)" --target "${HAPTEL_TSAN_TESTS[@]}" >"$dir/build.log" 2>&1; then
+    grep -vE '^\[ *[0-9]+%\]' "$dir/build.log" | tail -n 80 >&2
+    haptel_log "build failed"
+    return 1
+  fi
+  local names
+  names="$(IFS='|'; echo "${HAPTEL_TSAN_TESTS[*]}")"
+  cd "$dir"
+  TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$ROOT/scripts/tsan.supp ${TSAN_OPTIONS:-}" \
+    ctest --output-on-failure --timeout 900 -j"$(nproc)" -R "^($names)\$" "$@"
+}

@@ -1,11 +1,13 @@
 // Seqlock: a single writer publishes, readers always see a complete value.
-#include "haptel/core/seqlock.hpp"
-
 #include <atomic>
 #include <catch2/catch.hpp>
 #include <cstdint>
+#include <memory>
 #include <thread>
 #include <vector>
+
+#include "haptel/core/seqlock.hpp"
+#include "test_env.hpp"
 
 namespace {
 
@@ -106,9 +108,9 @@ TEST_CASE("Seqlock: concurrent readers never see a torn or older value", "[seqlo
   // of base + k must return a value of at least k.
   const uint64_t base = lock.Version();
   std::vector<ReaderResult> results(kReaders);
-  std::vector<std::thread> readers;
+  std::vector<std::unique_ptr<haptel::test::Thread>> readers;
   for (int r = 0; r < kReaders; ++r) {
-    readers.emplace_back([&, r] {
+    readers.push_back(std::make_unique<haptel::test::Thread>("reader", [&, r] {
       ReaderResult& out = results[static_cast<size_t>(r)];
       started.fetch_add(1);
       uint64_t previous = 0;
@@ -129,17 +131,20 @@ TEST_CASE("Seqlock: concurrent readers never see a torn or older value", "[seqlo
         if (last_round) break;
       }
       out.last = previous;
-    });
+    }));
   }
-  // Let the readers get going so that stores and loads overlap.
-  while (started.load() < kReaders) std::this_thread::yield();
+  // Let the readers get going so that stores and loads overlap (they stop
+  // once the writer is done, started or not).
+  const haptel::test::Deadline deadline(60.0);
+  while (started.load() < kReaders && !deadline.passed()) std::this_thread::yield();
+  CHECK(started.load() == kReaders);
 
-  std::thread writer([&] {
+  haptel::test::Thread writer("writer", [&] {
     for (uint64_t i = 1; i <= kStores; ++i) lock.Store(MakeSample(i));
     done.store(true, std::memory_order_release);
   });
-  writer.join();
-  for (auto& t : readers) t.join();
+  writer.Join();
+  for (auto& t : readers) t->Join();
 
   for (const auto& r : results) {
     CHECK(r.loads > 0);

@@ -1,10 +1,11 @@
-#include <catch2/catch.hpp>
 #include <atomic>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <thread>
 #include <vector>
 
 #include "haptel/haptics/hal.hpp"
+#include "test_env.hpp"
 
 using namespace haptel;
 using namespace haptel::haptics;
@@ -127,7 +128,7 @@ TEST_CASE("field and physics set-points live apart and combine, stamped by the o
 TEST_CASE("two feeders writing at once never tear each other's set-point") {
   Hal hal;
   std::atomic<bool> done{false};
-  std::thread physics([&] {
+  test::Thread physics("physics feeder", [&] {
     ForceSetpoint sp;
     for (int i = 1; i <= 100000; ++i) {
       sp.finger_forces.fill(i);
@@ -135,7 +136,7 @@ TEST_CASE("two feeders writing at once never tear each other's set-point") {
       hal.SetSetpoint(Side::kRight, sp, i);
     }
   });
-  std::thread interface([&] {
+  test::Thread interface("interface feeder", [&] {
     ForceField f;
     for (int i = 1; i <= 100000; ++i) {
       f.stiffness = i;
@@ -144,17 +145,18 @@ TEST_CASE("two feeders writing at once never tear each other's set-point") {
     }
   });
   uint64_t torn = 0;
-  std::thread reader([&] {
+  test::Thread reader("reader", [&] {
     while (!done.load()) {
       const ForceSetpoint sp = hal.Setpoint(Side::kRight);
       if (sp.field.stiffness != sp.field.damping) ++torn;
-      if (sp.coupling_stiffness != sp.finger_forces[0] || sp.finger_forces[0] != sp.finger_forces[4]) ++torn;
+      if (sp.coupling_stiffness != sp.finger_forces[0] || sp.finger_forces[0] != sp.finger_forces[4])
+        ++torn;
     }
   });
-  physics.join();
-  interface.join();
+  physics.Join();
+  interface.Join();
   done = true;
-  reader.join();
+  reader.Join();
   CHECK(torn == 0);
   const ForceSetpoint last = hal.Setpoint(Side::kRight);
   CHECK(last.field.stiffness == 100000);
@@ -164,7 +166,7 @@ TEST_CASE("two feeders writing at once never tear each other's set-point") {
 TEST_CASE("concurrent hand-off: readers never see a torn sample or history out of order") {
   Hal hal;
   std::atomic<bool> done{false};
-  std::thread writer([&] {
+  test::Thread writer("writer", [&] {
     for (int i = 1; i <= 200000; ++i) {
       const double v = i;
       hal.PublishWrist(Side::kRight, At(i, {v, v, v}));
@@ -188,11 +190,11 @@ TEST_CASE("concurrent hand-off: readers never see a torn sample or history out o
       ++reads;
     }
   };
-  std::thread r1(reader);
-  std::thread r2(reader);
-  writer.join();
-  r1.join();
-  r2.join();
+  test::Thread r1("reader 1", reader);
+  test::Thread r2("reader 2", reader);
+  writer.Join();
+  r1.Join();
+  r2.Join();
   CHECK(reads.load() > 0);
   CHECK(torn.load() == 0);
   CHECK(disorder.load() == 0);

@@ -8,6 +8,7 @@
 #include "haptel/haptics/servo_loop.hpp"
 #include "haptel/haptics/sim_device.hpp"
 #include "scripted_device.hpp"
+#include "test_env.hpp"
 
 using namespace haptel;
 using namespace haptel::haptics;
@@ -187,7 +188,8 @@ TEST_CASE("two-sided mode: both arms run on their own threads and meet every cyc
   Hal hal;
   ServoLoop loop(dev, hal, c, DeviceCalibration{});
   loop.Start();
-  while (loop.Stats(Side::kRight).ticks < 100) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  // A loop that never ticks fails here instead of hanging the test.
+  REQUIRE(test::WaitFor([&] { return loop.Stats(Side::kRight).ticks >= 100; }, 30.0));
   const uint64_t before = test::TotalAllocations();
   std::this_thread::sleep_for(std::chrono::milliseconds(200));
   const uint64_t after = test::TotalAllocations();
@@ -206,7 +208,7 @@ TEST_CASE("one-sided mode drives both arms from one thread") {
   Hal hal(Identity());
   ServoLoop loop(dev, hal, c, Identity());
   loop.Start();
-  while (loop.Counters(Side::kLeft).cycles < 50) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  REQUIRE(test::WaitFor([&] { return loop.Counters(Side::kLeft).cycles >= 50; }, 30.0));
   loop.Stop();
   const auto left = loop.Counters(Side::kLeft).cycles;
   const auto right = loop.Counters(Side::kRight).cycles;

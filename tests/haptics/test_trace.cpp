@@ -1,9 +1,10 @@
+#include <atomic>
 #include <catch2/catch.hpp>
 #include <cstdio>
 #include <thread>
 
-#include "haptel/core/spsc_ring.hpp"
 #include "haptel/config/error.hpp"
+#include "haptel/core/spsc_ring.hpp"
 #include "haptel/haptics/device_factory.hpp"
 #include "haptel/haptics/servo_loop.hpp"
 #include "haptel/haptics/trace.hpp"
@@ -37,21 +38,27 @@ TEST_CASE("the SPSC ring keeps order, refuses when full, and survives a concurre
 
   SpscRing<uint64_t> big(64);
   constexpr uint64_t kCount = 200000;
-  std::thread producer([&] {
-    for (uint64_t i = 1; i <= kCount;) {
+  // A ring that loses or withholds an item would leave both loops spinning:
+  // they give up at a deadline and the test fails instead of hanging.
+  std::atomic<bool> give_up{false};
+  test::Thread producer("producer", [&] {
+    for (uint64_t i = 1; i <= kCount && !give_up.load(std::memory_order_relaxed);) {
       if (big.Push(i)) ++i;
     }
   });
   uint64_t expected = 1;
   bool in_order = true;
-  while (expected <= kCount) {
+  const test::Deadline deadline(60.0);
+  while (expected <= kCount && !deadline.passed()) {
     uint64_t got = 0;
     if (big.Pop(got)) {
       in_order &= got == expected;
       ++expected;
     }
   }
-  producer.join();
+  give_up = true;
+  producer.Join();
+  CHECK(expected == kCount + 1);  // every item came out
   CHECK(in_order);
 }
 

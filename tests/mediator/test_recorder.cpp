@@ -5,6 +5,7 @@
 // open Recorder, the fallback file of a run the database did not take, and
 // that a process killed in the middle of a write leaves no half-written run
 // behind.
+#include <poll.h>
 #include <signal.h>
 #include <sqlite3.h>
 #include <sys/types.h>
@@ -29,6 +30,7 @@
 
 #include "haptel/mediator/recorder.hpp"
 #include "haptel/mediator/unsaved_run.hpp"
+#include "test_env.hpp"
 
 namespace fs = std::filesystem;
 using haptel::mediator::ContactPoint;
@@ -71,22 +73,32 @@ class TempDir {
 /// Kills and reaps a forked child if the test leaves early.
 class ChildGuard {
  public:
+  /// Returned by Wait for a child that has not ended (never a wait status).
+  static constexpr int kStillRunning = -1;
+
   explicit ChildGuard(pid_t pid) : pid_(pid) {}
   ~ChildGuard() {
     if (pid_ > 0) {
       ::kill(pid_, SIGKILL);
-      int status = 0;
-      ::waitpid(pid_, &status, 0);
+      Wait(10.0);
     }
   }
   ChildGuard(const ChildGuard&) = delete;
   ChildGuard& operator=(const ChildGuard&) = delete;
 
-  /// Waits for the child and returns its wait status.
-  int Wait() {
+  /// Waits up to `timeout_s` for the child and returns its wait status, or
+  /// kStillRunning: a child that hangs fails the test instead of hanging it.
+  int Wait(double timeout_s) {
     int status = 0;
-    while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
-    }
+    const bool ended = haptel::test::WaitFor(
+        [&] {
+          pid_t got = 0;
+          while ((got = ::waitpid(pid_, &status, WNOHANG)) < 0 && errno == EINTR) {
+          }
+          return got == pid_;
+        },
+        timeout_s);
+    if (!ended) return kStillRunning;
     pid_ = -1;
     return status;
   }
@@ -861,8 +873,9 @@ TEST_CASE("A writer killed mid-transaction leaves no trace and no lock", "[recor
     _exit(12);  // not reached
   }
   ChildGuard child(pid);
-  const int status = child.Wait();
+  const int status = child.Wait(60.0);
   INFO("child wait status " << status);
+  REQUIRE(status != ChildGuard::kStillRunning);
   REQUIRE(WIFSIGNALED(status));
   REQUIRE(WTERMSIG(status) == SIGKILL);
 
@@ -926,13 +939,16 @@ TEST_CASE("Saves killed at an arbitrary point leave only whole runs", "[recorder
     ChildGuard child(pid);
     ::close(ready[1]);
     char byte = 0;
-    const ssize_t got = ::read(ready[0], &byte, 1);
+    pollfd first_commit{ready[0], POLLIN, 0};  // a child that hangs before it must not hang us
+    const bool readable = ::poll(&first_commit, 1, 60'000) == 1;
+    const ssize_t got = readable ? ::read(ready[0], &byte, 1) : 0;
     ::close(ready[0]);
     REQUIRE(got == 1);  // the child committed at least one run
     std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms));
     REQUIRE(::kill(child.pid(), SIGKILL) == 0);
-    const int status = child.Wait();
+    const int status = child.Wait(60.0);
     INFO("child wait status " << status);
+    REQUIRE(status != ChildGuard::kStillRunning);
     CHECK((WIFSIGNALED(status) || (WIFEXITED(status) && WEXITSTATUS(status) == 0)));
 
     Recorder recorder(file);

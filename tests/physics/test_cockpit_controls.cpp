@@ -9,12 +9,12 @@
 #include <thread>
 
 #include "alloc_counter.hpp"
-
 #include "haptel/config/cockpit.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/physics.hpp"
 #include "haptel/physics/cockpit_controls.hpp"
 #include "haptel/physics/world.hpp"
+#include "test_env.hpp"
 
 namespace {
 
@@ -274,8 +274,8 @@ TEST_CASE("cockpit controls: the link trades state and actuation across threads'
   CHECK(link.State().wheel_angle == 0.0);
   // An actuation set from another thread acts from the next step on: a
   // steady torque turns the wheel to its stop, and the state says so.
-  std::thread interface_thread([&] { link.SetActuation(Torque(0.2)); });
-  interface_thread.join();
+  haptel::test::Thread interface_thread("interface", [&] { link.SetActuation(Torque(0.2)); });
+  interface_thread.Join();
   for (int i = 0; i < 1500; ++i) rig.world.Step();
   CHECK(link.State().wheel_angle == Approx(rig.max_angle).margin(0.02));
   // The hooks, as the physics thread runs them around each step, allocate nothing.

@@ -5,10 +5,15 @@
 
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
+#include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <filesystem>
+#include <mutex>
 #include <string>
 #include <thread>
+#include <utility>
 
 namespace haptel::test {
 
@@ -42,5 +47,69 @@ bool WaitFor(Condition condition, double timeout_s) {
   }
   return condition();
 }
+
+/// A point in time after which a busy loop in a test gives up (and fails)
+/// instead of spinning forever on a fault. Bounds a wait; asserts no timing.
+class Deadline {
+ public:
+  explicit Deadline(double timeout_s)
+      : at_(std::chrono::steady_clock::now() +
+            std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                std::chrono::duration<double>(timeout_s))) {}
+  bool passed() const { return std::chrono::steady_clock::now() >= at_; }
+
+ private:
+  std::chrono::steady_clock::time_point at_;
+};
+
+/// How long a test waits for one of its threads to end once it should.
+inline constexpr double kJoinTimeout_s = 60.0;
+
+/// A test's own thread, joined with a deadline. A body still running when
+/// the deadline passes is a hang (a deadlock, a lost wake-up, a loop whose
+/// exit never comes): the test cannot go on, since the body uses the test's
+/// stack, so Join names the thread and the test on stderr and aborts; Catch
+/// reports the abort as the running test's failure. Without this, a fault
+/// hangs the test until ctest's timeout, which names nothing.
+/// Keep Catch's assertions on the test's thread; count in the body instead.
+class Thread {
+ public:
+  template <typename Body>
+  Thread(std::string name, Body body)
+      : name_(std::move(name)), thread_([this, body = std::move(body)]() mutable {
+          body();
+          const std::lock_guard<std::mutex> lock(mutex_);
+          done_ = true;
+          ended_.notify_all();
+        }) {}
+  Thread(const Thread&) = delete;
+  Thread& operator=(const Thread&) = delete;
+  ~Thread() { Join(); }
+
+  /// Waits up to `timeout_s` for the body to return, then joins it.
+  void Join(double timeout_s = kJoinTimeout_s) {
+    if (!thread_.joinable()) return;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      if (!ended_.wait_for(lock, std::chrono::duration<double>(timeout_s),
+                           [this] { return done_; })) {
+        std::fprintf(stderr,
+                     "test: thread '%s' still runs %.0f s after the test began to join it "
+                     "(a hang%s): aborting\n",
+                     name_.c_str(), timeout_s,
+                     std::uncaught_exceptions() > 0 ? ", while an assertion unwinds the test" : "");
+        std::abort();
+      }
+    }
+    thread_.join();
+  }
+
+ private:
+  std::string name_;
+  std::mutex mutex_;
+  std::condition_variable ended_;
+  bool done_ = false;
+  std::thread thread_;  // last: starts once the members above exist
+};
 
 }  // namespace haptel::test

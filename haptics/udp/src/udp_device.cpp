@@ -25,6 +25,25 @@ void UniqueFd::reset(int fd) {
   if (fd_ >= 0) ::close(fd_);
   fd_ = fd;
 }
+
+int64_t MonotonicClock::NowNs() { return MonotonicNs(); }
+
+Clock::WaitResult MonotonicClock::WaitReadable(int fd, int64_t deadline_ns) {
+  const int64_t remaining = deadline_ns - MonotonicNs();
+  if (remaining <= 0) return WaitResult::kNotYet;
+  pollfd p{fd, POLLIN, 0};
+  const timespec ts{static_cast<time_t>(remaining / 1'000'000'000),
+                    static_cast<long>(remaining % 1'000'000'000)};
+  const int ready = ::ppoll(&p, 1, &ts, nullptr);
+  if (ready > 0) return WaitResult::kReadable;
+  if (ready < 0 && errno != EINTR) return WaitResult::kError;
+  return WaitResult::kNotYet;
+}
+
+Clock& SystemClock() {
+  static MonotonicClock clock;  // stateless: shared by every device and thread
+  return clock;
+}
 }  // namespace udp
 
 namespace {
@@ -98,8 +117,9 @@ UdpCounters& UdpCounters::operator+=(const UdpCounters& o) {
   return *this;
 }
 
-UdpDevice::UdpDevice(const DeviceConfig& config)
-    : lost_after_ns_(SToNs(config.udp.lost_after_s)),
+UdpDevice::UdpDevice(const DeviceConfig& config, udp::Clock& clock)
+    : clock_(clock),
+      lost_after_ns_(SToNs(config.udp.lost_after_s)),
       timeout_ns_(SToNs(config.udp.timeout_s)),
       retries_(config.udp.retries) {
   const std::string file =
@@ -114,7 +134,7 @@ UdpDevice::UdpDevice(const DeviceConfig& config)
   description_.finger_force_limit = config.safety.finger_force_limit;
   description_.has_glove = config.has_glove;
   description_.has_grasp = config.has_grasp;
-  const int64_t now = MonotonicNs();
+  const int64_t now = clock_.NowNs();
   for (int i = 0; i < kSides; ++i) {
     if (!config.sides[i]) continue;
     const UdpArmEndpoint& arm = config.udp.arms[i];
@@ -212,7 +232,7 @@ UdpDevice::Wait UdpDevice::Transact(Side side, SideState& s, std::size_t size, u
     // Retries re-send the same datagram (same sequence): a late reply to any
     // attempt answers the request.
     if (::send(s.socket.get(), s.tx.data(), size, 0) < 0) Bump(s.counters.socket_errors);
-    const Wait wait = AwaitReply(side, s, sequence, type, MonotonicNs() + timeout_ns_);
+    const Wait wait = AwaitReply(side, s, sequence, type, clock_.NowNs() + timeout_ns_);
     if (wait != Wait::kTimeout) return wait;
     Bump(s.counters.timeouts);
   }
@@ -223,14 +243,10 @@ UdpDevice::Wait UdpDevice::Transact(Side side, SideState& s, std::size_t size, u
 UdpDevice::Wait UdpDevice::AwaitReply(Side side, SideState& s, uint32_t sequence,
                                       udp::MessageType type, int64_t deadline_ns) {
   for (;;) {
-    const int64_t remaining = deadline_ns - MonotonicNs();
-    if (remaining <= 0) return Wait::kTimeout;
-    pollfd p{s.socket.get(), POLLIN, 0};
-    const timespec ts{static_cast<time_t>(remaining / 1'000'000'000),
-                      static_cast<long>(remaining % 1'000'000'000)};
-    const int ready = ::ppoll(&p, 1, &ts, nullptr);
-    if (ready < 0 && errno != EINTR) return Wait::kTimeout;
-    if (ready <= 0) continue;  // the deadline check above ends the wait
+    if (clock_.NowNs() >= deadline_ns) return Wait::kTimeout;
+    const udp::Clock::WaitResult ready = clock_.WaitReadable(s.socket.get(), deadline_ns);
+    if (ready == udp::Clock::WaitResult::kError) return Wait::kTimeout;
+    if (ready == udp::Clock::WaitResult::kNotYet) continue;  // the deadline check ends the wait
     for (;;) {
       const ssize_t n = ::recv(s.socket.get(), s.rx.data(), s.rx.size(), 0);
       if (n < 0) {
@@ -287,7 +303,7 @@ bool UdpDevice::Accept(Side side, SideState& s, std::size_t size, uint32_t seque
 }
 
 DeviceStatus UdpDevice::Outcome(SideState& s, Wait wait) {
-  const int64_t now = MonotonicNs();
+  const int64_t now = clock_.NowNs();
   if (wait == Wait::kReply) {
     s.last_valid_ns = now;
     if (s.lost.exchange(false, std::memory_order_relaxed)) Bump(s.counters.recoveries);

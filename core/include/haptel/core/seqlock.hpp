@@ -3,8 +3,16 @@
 ///
 /// The writer bumps a sequence number to odd, stores the value, and bumps it
 /// to even; a reader retries while the sequence is odd or changed under it.
-/// The payload is kept in relaxed atomic words, so the copy is data-race
-/// free in the C++ memory model (no torn reads are ever returned).
+/// The payload is kept in atomic words, so the copy is data-race free in the
+/// C++ memory model (no torn reads are ever returned).
+///
+/// Ordering: each payload word is stored with release and loaded with
+/// acquire (Boehm, "Can seqlocks get along with programming language memory
+/// models?", 2012), instead of relaxed words between standalone fences. A
+/// reader that sees any word of a newer store therefore also sees that
+/// store's odd sequence number and retries. On x86-64 both are plain moves,
+/// as the fences were; unlike fences, ThreadSanitizer understands them
+/// (GCC warns, -Wtsan, that it does not model atomic_thread_fence).
 #include <array>
 #include <atomic>
 #include <cstdint>
@@ -27,8 +35,8 @@ class Seqlock {
     std::memcpy(words.data(), &value, sizeof(T));
     const uint64_t seq = seq_.load(std::memory_order_relaxed);
     seq_.store(seq + 1, std::memory_order_relaxed);
-    std::atomic_thread_fence(std::memory_order_release);
-    for (size_t i = 0; i < kWords; ++i) data_[i].store(words[i], std::memory_order_relaxed);
+    // Release: a reader that loads this word also sees the odd number above.
+    for (size_t i = 0; i < kWords; ++i) data_[i].store(words[i], std::memory_order_release);
     seq_.store(seq + 2, std::memory_order_release);
   }
 
@@ -39,8 +47,8 @@ class Seqlock {
     uint64_t after = 0;
     do {
       before = seq_.load(std::memory_order_acquire);
-      for (size_t i = 0; i < kWords; ++i) words[i] = data_[i].load(std::memory_order_relaxed);
-      std::atomic_thread_fence(std::memory_order_acquire);
+      // Acquire: the check below cannot move before these loads.
+      for (size_t i = 0; i < kWords; ++i) words[i] = data_[i].load(std::memory_order_acquire);
       after = seq_.load(std::memory_order_relaxed);
     } while ((before & 1U) != 0 || before != after);
     T value;

@@ -18,6 +18,12 @@
 /// Threads: each side's calls come from that side's servo thread and touch
 /// only that side's socket, buffers and state; counters are atomics that any
 /// thread may read. Reads and writes allocate nothing.
+///
+/// Time: every timeout, retry and lost decision reads a udp::Clock, which also
+/// does the waiting for a reply. The product's is CLOCK_MONOTONIC and ppoll();
+/// a test passes a fake whose time moves only when the test (or a wait that
+/// nothing will answer) moves it, so retry counts and the lost transition do
+/// not depend on how loaded the machine is.
 #include <array>
 #include <atomic>
 #include <cstdint>
@@ -50,6 +56,35 @@ class UniqueFd {
  private:
   int fd_ = -1;
 };
+
+/// What a UdpDevice knows of time. Each side's servo thread calls it, both at
+/// once in two-sided mode, so an implementation is stateless or thread-safe;
+/// it must not allocate, lock or block beyond WaitReadable's deadline (it runs
+/// in the servo loop).
+class Clock {
+ public:
+  enum class WaitResult {
+    kReadable,  ///< `fd` has something to read (or an error to report)
+    kNotYet,    ///< nothing yet: the deadline passed, or the wait was interrupted
+    kError,     ///< the wait itself failed; the caller gives up on this attempt
+  };
+  virtual ~Clock() = default;
+  /// Now, in nanoseconds on this clock.
+  virtual int64_t NowNs() = 0;
+  /// Waits until `fd` is readable or this clock reaches `deadline_ns`.
+  /// kNotYet may come early (EINTR): the caller re-reads NowNs() and decides.
+  virtual WaitResult WaitReadable(int fd, int64_t deadline_ns) = 0;
+};
+
+/// CLOCK_MONOTONIC, waiting with ppoll(). Stateless.
+class MonotonicClock final : public Clock {
+ public:
+  int64_t NowNs() override;
+  WaitResult WaitReadable(int fd, int64_t deadline_ns) override;
+};
+
+/// The process's MonotonicClock: what a UdpDevice uses unless given another.
+Clock& SystemClock();
 }  // namespace udp
 
 /// A snapshot of one side's (or both sides') counters.
@@ -83,14 +118,15 @@ class UdpDevice final : public Device {
   /// std::runtime_error naming the config file, the key (udp.left / udp.right)
   /// and host:port when a side has no port, the host does not resolve or the
   /// socket cannot be opened. Sends nothing: a server that is not up yet
-  /// simply makes the side kNoData, then kLost.
-  explicit UdpDevice(const DeviceConfig& config);
+  /// simply makes the side kNoData, then kLost. `clock` times every wait and
+  /// the lost timer; it must outlive the device.
+  explicit UdpDevice(const DeviceConfig& config, udp::Clock& clock = udp::SystemClock());
   UdpDevice(const UdpDevice&) = delete;
   UdpDevice& operator=(const UdpDevice&) = delete;
 
   const DeviceDescription& description() const override { return description_; }
   /// `out.t_ns` is set to `now_ns` (the server's clock is in the reply but is
-  /// not comparable); timeouts and lost_after_s run on CLOCK_MONOTONIC.
+  /// not comparable); timeouts and lost_after_s run on the device's clock.
   DeviceStatus ReadWrist(Side side, int64_t now_ns, WristRaw& out) override;
   DeviceStatus ReadGlove(Side side, int64_t now_ns, GloveRaw& out) override;
   /// Stores the command (carried by every later WRIST_REQUEST) and sends it
@@ -114,7 +150,7 @@ class UdpDevice final : public Device {
   struct alignas(64) SideState {
     udp::UniqueFd socket;
     uint32_t sequence = 0;
-    int64_t last_valid_ns = 0;  ///< CLOCK_MONOTONIC of the last valid reply (or of construction)
+    int64_t last_valid_ns = 0;  ///< clock_ time of the last valid reply (or of construction)
     std::atomic<bool> lost{false};
     Vec3d wrist_command{};
     std::array<double, kFingers> finger_command{};
@@ -144,6 +180,7 @@ class UdpDevice final : public Device {
   void SendOneWay(SideState& s, const udp::Message& message);
 
   DeviceDescription description_;
+  udp::Clock& clock_;
   int64_t lost_after_ns_;
   int64_t timeout_ns_;
   int retries_;
