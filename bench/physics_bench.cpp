@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -13,6 +14,7 @@
 #include "haptel/config/physics.hpp"
 #include "haptel/core/args.hpp"
 #include "physics_measure.hpp"
+#include "haptel/core/child_process.hpp"
 #include "plot.hpp"
 
 namespace haptel::bench {
@@ -20,12 +22,6 @@ namespace haptel::bench {
 namespace {
 
 using wp::Point;
-
-std::string Quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
 
 bool Usable(const Point& p) { return std::isfinite(p.tracking_err_mm) && p.resets == 0; }
 
@@ -91,7 +87,7 @@ int BenchPhysicsMain(int argc, const char* const* argv) {
     wp::SaveReference(ref_file, reference);
 
     // The float child runs on the other core while this thread measures double.
-    FILE* child = nullptr;
+    std::unique_ptr<ChildProcess> child;
     if (with_float) {
       std::error_code ec;
       const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
@@ -99,11 +95,15 @@ int BenchPhysicsMain(int argc, const char* const* argv) {
       if (ec || !std::filesystem::exists(exe)) {
         float_note = "float: " + exe.string() + " not found (build it: target haptel-physics-bench-float)";
       } else {
-        const std::string cmd = Quote(exe.string()) + " --trajectory " + Quote(traj_file.string()) + " --reference " +
-                                Quote(ref_file.string()) + " --physics " + Quote(physics_file);
-        std::fflush(stdout);
-        child = popen(cmd.c_str(), "r");
-        if (!child) float_note = "float: cannot start " + exe.string();
+        try {
+          child = std::make_unique<ChildProcess>(
+              exe.string(),
+              std::vector<std::string>{"--trajectory", traj_file.string(), "--reference", ref_file.string(),
+                                       "--physics", physics_file},
+              ChildProcess::Options{true});
+        } catch (const std::exception& e) {
+          float_note = std::string("float: ") + e.what();
+        }
       }
     } else {
       float_note = "float: skipped (--no-float)";
@@ -129,11 +129,10 @@ int BenchPhysicsMain(int argc, const char* const* argv) {
     }
 
     if (child) {
-      std::string text;
-      char buf[4096];
-      while (size_t n = std::fread(buf, 1, sizeof buf, child)) text.append(buf, n);
-      const int status = pclose(child);
-      const std::vector<Point> floats = wp::ParsePoints(text);
+      // Its few result lines fit the pipe; read them once it is done.
+      const int status = child->Wait(600.0);
+      const std::vector<Point> floats = wp::ParsePoints(child->out());
+      if (!child->err().empty()) std::fputs(child->err().c_str(), stderr);
       if (status != 0 || floats.empty()) {
         float_note = "float: haptel-physics-bench-float failed (status " + std::to_string(status) +
                      "): double points only";
