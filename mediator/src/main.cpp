@@ -219,8 +219,10 @@ int main(int argc, char** argv) {
     return 2;
   }
 
+  // Each ends the run at once, recorded as interrupted (SIGHUP: the terminal went away).
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
+  std::signal(SIGHUP, OnSignal);
   SessionResult result;
   int64_t run_id = 0;
   try {

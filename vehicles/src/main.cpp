@@ -72,6 +72,7 @@ int main(int argc, char** argv) {
 
   std::signal(SIGTERM, OnSignal);
   std::signal(SIGINT, OnSignal);
+  std::signal(SIGHUP, OnSignal);  // a hung-up terminal's process group: stop as for the others
   try {
     const std::string camera_name = camera->Describe();
     vehicles::VehicleNode node(config, *track, std::move(camera));
