@@ -17,6 +17,9 @@ using config_detail::YamlMap;
 namespace {
 
 constexpr double kCoordinateLimit = 1000.0;  // m: anything beyond is a typo
+/// A grid is sampled data, not a hand-written file: room for the largest grid
+/// a file may hold (kGravityGridMaxVertices forces of ~20 characters each).
+constexpr std::uintmax_t kMaxGridFileBytes = std::uintmax_t{256} << 20;
 
 std::string Where(const std::filesystem::path& file, const YAML::Node& node) {
   const YAML::Mark mark = node.Mark();
@@ -61,7 +64,7 @@ std::string GravityGridProblem(const GravityGridData& grid) {
 }
 
 GravityGridData LoadGravityGrid(const std::filesystem::path& file) {
-  YamlMap root = YamlMap::Load(file);  // reports unreadable files and bad YAML
+  YamlMap root = YamlMap::Load(file, kMaxGridFileBytes);  // unreadable files, bad YAML
   // The same document again, for the line of each force_z element.
   const YAML::Node raw = YAML::LoadFile(file.string());
   GravityGridData g;

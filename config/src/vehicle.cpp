@@ -1,5 +1,7 @@
 #include "haptel/config/vehicle.hpp"
 
+#include <cctype>
+
 #include "link_section.hpp"
 #include "yaml_map.hpp"
 
@@ -19,15 +21,27 @@ const char* CameraSourceName(CameraSourceKind kind) {
   return "?";
 }
 
+std::string VehicleNameProblem(const std::string& name) {
+  if (name.empty() || name.size() > kMaxVehicleNameLength) {
+    return "a name of 1 to " + std::to_string(kMaxVehicleNameLength) +
+           " characters (it is part of DDS topic names; this one has " +
+           std::to_string(name.size()) + ")";
+  }
+  for (char ch : name) {
+    if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '_' && ch != '-') {
+      return "letters, digits, '_' or '-' only (it is part of DDS topic names)";
+    }
+  }
+  return {};
+}
+
 VehicleConfig LoadVehicle(const std::filesystem::path& file) {
   YamlMap root = YamlMap::Load(file);
   VehicleConfig v;
   v.file = file;
   v.name = root.RequireString("name");
-  for (char ch : v.name) {
-    if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '_' && ch != '-') {
-      root.Fail("name", "letters, digits, '_' or '-' only (it is part of DDS topic names)");
-    }
+  if (const std::string problem = VehicleNameProblem(v.name); !problem.empty()) {
+    root.Fail("name", problem);
   }
   v.kind = root.String("kind", v.kind);
   if (v.kind != "sim-robot") root.Fail("kind", "one of: sim-robot");

@@ -1,6 +1,7 @@
 #include "yaml_map.hpp"
 
 #include <cmath>
+#include <iomanip>
 #include <sstream>
 
 namespace haptel::config_detail {
@@ -10,12 +11,26 @@ std::string Range(double min, double max) {
   out << "[" << min << ", " << max << "]";
   return out.str();
 }
+
+/// "4 MB", "0.5 MB", "64.1 MB" (MB = 2^20 bytes).
+std::string Megabytes(std::uintmax_t bytes) {
+  std::ostringstream out;
+  out << std::setprecision(3) << static_cast<double>(bytes) / static_cast<double>(1 << 20) << " MB";
+  return out.str();
+}
 }  // namespace
 
-YamlMap YamlMap::Load(const std::filesystem::path& file) {
+YamlMap YamlMap::Load(const std::filesystem::path& file, std::uintmax_t max_bytes) {
   std::error_code ec;
   if (std::filesystem::is_directory(file, ec)) {
     throw ConfigError(file.string() + ": is a folder; expected a YAML file");
+  }
+  // Before parsing: yaml-cpp takes seconds and many times the file's size in
+  // memory for a file of tens of megabytes, long before any check could speak.
+  if (const std::uintmax_t size = std::filesystem::file_size(file, ec); !ec && size > max_bytes) {
+    throw ConfigError(file.string() + ": the file is " + std::to_string(size) + " bytes (" +
+                      Megabytes(size) + ")" + "; expected a YAML file of at most " +
+                      Megabytes(max_bytes) + " (is it the right file?)");
   }
   YAML::Node root;
   try {
@@ -60,6 +75,26 @@ void YamlMap::Fail(const std::string& key, const std::string& expected) const {
   const bool present = child.IsDefined();
   throw ConfigError(Where(present ? child : node_) + ": key '" + Path(key) + "': expected " +
                     expected + (present ? ", got " + Got(child) : ", but it is missing"));
+}
+
+namespace {
+YAML::Node Item(const YAML::Node& map, const std::string& key, size_t index) {
+  const YAML::Node list = map.IsMap() ? map[key] : YAML::Node();
+  return list.IsSequence() && index < list.size() ? list[index] : YAML::Node();
+}
+}  // namespace
+
+void YamlMap::FailItem(const std::string& key, size_t index, const std::string& expected) const {
+  const YAML::Node item = Item(node_, key, index);
+  const bool present = item.IsDefined();
+  throw ConfigError(Where(present ? item : node_) + ": key '" + Path(key) + "[" +
+                    std::to_string(index) + "]': expected " + expected +
+                    (present ? ", got " + Got(item) : ", but it is missing"));
+}
+
+std::string YamlMap::ItemLocation(const std::string& key, size_t index) const {
+  const YAML::Node item = Item(node_, key, index);
+  return Where(item.IsDefined() ? item : node_);
 }
 
 bool YamlMap::Has(const std::string& key) const { return node_.IsMap() && node_[key].IsDefined(); }

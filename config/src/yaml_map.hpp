@@ -5,6 +5,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <array>
+#include <cstdint>
 #include <filesystem>
 #include <set>
 #include <string>
@@ -15,10 +16,17 @@
 
 namespace haptel::config_detail {
 
+/// The largest YAML file a loader parses (tracks, scenes, configurations):
+/// anything bigger is not a hand-written file, and parsing it would take
+/// seconds and gigabytes before any check could speak.
+constexpr std::uintmax_t kMaxYamlFileBytes = std::uintmax_t{4} << 20;
+
 class YamlMap {
  public:
-  /// Parses a file whose top level must be a mapping.
-  static YamlMap Load(const std::filesystem::path& file);
+  /// Parses a file whose top level must be a mapping. A file over `max_bytes`
+  /// is refused with its size before it is read.
+  static YamlMap Load(const std::filesystem::path& file,
+                      std::uintmax_t max_bytes = kMaxYamlFileBytes);
 
   YamlMap(YAML::Node node, std::string file, std::string prefix);
 
@@ -54,9 +62,16 @@ class YamlMap {
   void Finish() const;
 
   [[noreturn]] void Fail(const std::string& key, const std::string& expected) const;
+  /// Like Fail, for element `index` of the list under `key` ("key[index]",
+  /// at the element's line).
+  [[noreturn]] void FailItem(const std::string& key, size_t index,
+                             const std::string& expected) const;
   const std::string& file() const { return file_; }
   /// "file:line:col" of this mapping (just "file" for an absent section).
   std::string Location() const { return Where(node_); }
+  /// "file:line:col" of element `index` of the list under `key` (this
+  /// mapping's location when there is no such element).
+  std::string ItemLocation(const std::string& key, size_t index) const;
   /// The full key path of key in this mapping, e.g. "gates[1].width".
   std::string Path(const std::string& key) const;
 

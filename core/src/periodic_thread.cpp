@@ -3,6 +3,7 @@
 #include <pthread.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 
@@ -22,13 +23,34 @@ PeriodicThread::~PeriodicThread() { Stop(); }
 void PeriodicThread::Start() {
   if (running_.exchange(true)) return;
   stop_.store(false);
-  thread_ = std::thread([this] { Run(); });
+  {
+    std::lock_guard lock(ended_mutex_);
+    ended_ = false;
+  }
+  thread_ = std::thread([this] {
+    Run();
+    std::lock_guard lock(ended_mutex_);
+    ended_ = true;
+    ended_cv_.notify_all();
+  });
 }
 
 void PeriodicThread::Stop() {
   stop_.store(true);
   if (thread_.joinable()) thread_.join();
   running_.store(false);
+}
+
+bool PeriodicThread::StopWithin(double timeout_s) {
+  stop_.store(true);
+  if (!thread_.joinable()) return true;
+  {
+    std::unique_lock lock(ended_mutex_);
+    const auto timeout = std::chrono::duration<double>(std::max(timeout_s, 0.0));
+    if (!ended_cv_.wait_for(lock, timeout, [this] { return ended_; })) return false;
+  }
+  Stop();  // the thread has left Run: joins at once
+  return true;
 }
 
 void PeriodicThread::Run() {

@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 
+#include "haptel/config/error.hpp"
 #include "haptel/interfaces/cockpit.hpp"
 #include "haptel/interfaces/gamepad.hpp"
 #include "haptel/interfaces/gesture.hpp"
@@ -34,6 +35,23 @@ InterfaceSpec LoadInterfaceSpec(const RunConfig& run, const std::string& name) {
     spec.config = LoadGesture(file);
   }
   return spec;
+}
+
+void CheckHands(const std::vector<InterfaceSpec>& specs, const DeviceConfig& device) {
+  const char* names[2] = {"left", "right"};
+  std::string has;
+  for (int s = 0; s < 2; ++s) {
+    if (device.sides[s]) has += std::string(has.empty() ? "" : ", ") + names[s];
+  }
+  for (const InterfaceSpec& spec : specs) {
+    for (int s = 0; s < 2; ++s) {
+      if (!spec.hands()[s] || device.sides[s]) continue;
+      throw ConfigError(device.file.string() + ": key 'sides': expected the " + names[s] +
+                        " arm, which interface '" + spec.name + "' uses, got [" + has +
+                        "]; use a device with that arm, or another interface (--interface, or "
+                        "the run configuration's 'switchable_interfaces')");
+    }
+  }
 }
 
 std::unique_ptr<interfaces::MediatorInterface> MakeInterface(const InterfaceSpec& spec, const InterfaceParts& parts) {

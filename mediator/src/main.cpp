@@ -170,7 +170,12 @@ int main(int argc, char** argv) {
     if (auto device = args.Value("device")) setup.run.device = *device;
     setup.track = LoadTrack(setup.run.track);
     setup.vehicle = LoadVehicle(setup.run.vehicle);
-    if (auto name = args.Value("vehicle-name")) setup.vehicle.name = *name;
+    if (auto name = args.Value("vehicle-name")) {
+      if (const std::string problem = VehicleNameProblem(*name); !problem.empty()) {
+        throw UsageError("option --vehicle-name: expected " + problem);
+      }
+      setup.vehicle.name = *name;
+    }
     setup.device = LoadDevice(setup.run.device);
     if (auto trace_in = args.Value("trace-in")) {
       if (setup.device.driver != "replay") {
@@ -204,6 +209,7 @@ int main(int argc, char** argv) {
     }
     setup.start_interface = static_cast<int>(found - names.begin());
     for (const std::string& name : names) setup.interfaces.push_back(LoadInterfaceSpec(setup.run, name));
+    CheckHands(setup.interfaces, setup.device);
     const InterfaceSpec& first = setup.interfaces[static_cast<size_t>(setup.start_interface)];
     if (first.manual() && !person) {
       throw UsageError("option --interface " + first.name + ": keys and controllers are a person's; use --operator person");
@@ -242,8 +248,10 @@ int main(int argc, char** argv) {
     return 2;
   }
 
+  // Each ends the run at once, recorded as interrupted (SIGHUP: the terminal went away).
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
+  std::signal(SIGHUP, OnSignal);
   SessionResult result;
   try {
     result = RunSession(setup, g_interrupted);

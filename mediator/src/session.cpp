@@ -57,6 +57,9 @@ int ExitCode(Outcome outcome) {
 
 namespace {
 
+/// How long the end of a run waits for a physics step in progress.
+constexpr double kPhysicsStopWait_s = 0.1;
+
 /// The interfaces a run builds: the one it starts with, and — when the
 /// operator may switch — every other one listed.
 std::vector<bool> InterfacesToBuild(const SessionSetup& setup, bool can_switch) {
@@ -147,7 +150,20 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   }
   const Scene* scene = setup.scene ? &*setup.scene : nullptr;
   std::unique_ptr<SessionPhysics> physics_side =
-      SessionPhysics::CreateIfNeeded(setup.physics, hands, cockpit_config, scene);
+      SessionPhysics::CreateIfNeeded(setup.physics, hands, cockpit_config, scene, &interrupted);
+  if (interrupted.load()) {
+    // During the set-up (thousands of scene bodies take a while): nothing has
+    // started yet, nothing is spawned; the run ends here, recorded.
+    result.outcome = Outcome::kInterrupted;
+    result.message = "interrupted by the operator during the set-up";
+    rec.interface = start_spec.name;
+    rec.outcome = ToString(result.outcome);
+    if (physics_side) {
+      result.scene_bodies = static_cast<int>(physics_side->scene.nodes.size());
+      physics_side->DetachTeardown();
+    }
+    return result;
+  }
 
   // --- The interfaces. ---
   interfaces::InputBox input;
@@ -366,8 +382,10 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
     if (setup.progress) log::Warn(loop);
   }
 
-  // Make safe: forces to zero, motors stopped, vehicle process ended.
+  // Make safe: forces to zero, motors stopped, vehicle process ended. The
+  // physics world's forces leave the HAL at once too, whatever its step is doing.
   haptic.hal().ZeroForces();
+  if (physics_side) physics_side->world->RequestStop();
   vehicle.Send(0.0, 0.0);
   if (view_part) {
     view_part->Stop();  // finishes the MP4
@@ -379,7 +397,13 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
     result.view_record_dropped = vs.record_dropped;
   }
   if (physics_side) {
-    physics_side->world->Stop();
+    // A step of thousands of overlapping bodies takes seconds: give it a
+    // moment to give up (it does between contacts), then leave it, and the
+    // world's teardown, to a thread of their own; the run is recorded now.
+    if (!physics_side->world->Stop(kPhysicsStopWait_s) && setup.progress) {
+      log::Info("physics step still running at the end of the run; left to finish on its own");
+    }
+    physics_side->DetachTeardown();
     const LoopStats p = physics_side->world->Stats();
     const physics::PhysicsCounters counters = physics_side->world->Counters();
     result.physics_rate_hz = p.rate_hz;

@@ -3,6 +3,7 @@
 #include <btBulletDynamicsCommon.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -169,11 +170,16 @@ SceneBody BuildStatic(PhysicsWorld& world, const SceneObject& object, std::size_
 
 }  // namespace
 
-BuiltScene BuildScene(PhysicsWorld& world, const Scene& scene) {
+BuiltScene BuildScene(PhysicsWorld& world, const Scene& scene, const std::atomic<bool>* cancel) {
   BuiltScene built;
   built.order = OrderNodes(scene);
   built.nodes.reserve(built.order.objects.size());
   for (std::size_t i = 0; i < built.order.objects.size(); ++i) {
+    if (cancel != nullptr && cancel->load(std::memory_order_relaxed)) {
+      built.order.objects.resize(i);
+      built.order.dynamic_count = std::min(built.order.dynamic_count, i);
+      break;
+    }
     const std::size_t index = built.order.objects[i];
     const SceneObject& object = scene.objects.at(index);
     built.nodes.push_back(i < built.order.dynamic_count ? BuildDynamic(world, object, index)

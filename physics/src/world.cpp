@@ -6,6 +6,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 #include "bullet_util.hpp"
 #include "haptel/core/clock.hpp"
@@ -49,9 +50,35 @@ namespace {
 /// sleeping boxes. A sleeping body's velocity is zero (Bullet zeroes it when
 /// the body falls asleep), so skipping it changes no result; Bullet's own
 /// integrateTransforms skips it the same way.
+///
+/// A step can also be cut short: one step of thousands of overlapping bodies
+/// takes seconds (minutes for the first, which creates every contact), and a
+/// stopping session must not wait for it. Once `cancel` is set, the step's
+/// remaining phases do nothing (see CancellableDispatcher and
+/// CancellableSolver for the long loops inside them); the world is left
+/// mid-step, to be stopped.
 class SleepAwareWorld final : public btDiscreteDynamicsWorld {
  public:
-  using btDiscreteDynamicsWorld::btDiscreteDynamicsWorld;
+  SleepAwareWorld(btDispatcher* dispatcher, btBroadphaseInterface* broadphase,
+                  btConstraintSolver* solver, btCollisionConfiguration* config,
+                  const std::atomic<bool>& cancel)
+      : btDiscreteDynamicsWorld(dispatcher, broadphase, solver, config), cancel_(cancel) {}
+
+  void performDiscreteCollisionDetection() override {
+    if (!cancelled()) btDiscreteDynamicsWorld::performDiscreteCollisionDetection();
+  }
+  /// Bullet's, body by body: moving a body's box makes the broadphase meet
+  /// it with every box it overlaps, milliseconds each in a pile.
+  void updateAabbs() override {
+    for (int i = 0; i < m_collisionObjects.size(); ++i) {
+      if (cancelled()) return;
+      btCollisionObject* object = m_collisionObjects[i];
+      if (m_forceUpdateAllAabbs || object->isActive()) updateSingleAabb(object);
+    }
+  }
+  void computeOverlappingPairs() override {
+    if (!cancelled()) btDiscreteDynamicsWorld::computeOverlappingPairs();
+  }
 
  protected:
   void predictUnconstraintMotion(btScalar step) override {
@@ -62,17 +89,93 @@ class SleepAwareWorld final : public btDiscreteDynamicsWorld {
       body->predictIntegratedTransform(step, body->getInterpolationWorldTransform());
     }
   }
+  void calculateSimulationIslands() override {
+    if (!cancelled()) btDiscreteDynamicsWorld::calculateSimulationIslands();
+  }
+  void solveConstraints(btContactSolverInfo& info) override {
+    if (!cancelled()) btDiscreteDynamicsWorld::solveConstraints(info);
+  }
+  void integrateTransforms(btScalar step) override {
+    if (!cancelled()) btDiscreteDynamicsWorld::integrateTransforms(step);
+  }
+  void updateActivationState(btScalar step) override {
+    if (!cancelled()) btDiscreteDynamicsWorld::updateActivationState(step);
+  }
+
+ private:
+  bool cancelled() const { return cancel_.load(std::memory_order_relaxed); }
+  const std::atomic<bool>& cancel_;
+};
+
+/// How often the long loops look at the cancel flag (pairs, manifolds).
+constexpr int kCancelCheckEvery = 256;
+
+/// The narrow phase, pair by pair as Bullet's own (a hashed pair cache,
+/// non-deterministic order: what btDbvtBroadphase uses), and given up once
+/// `cancel` is set: the first step of a pile of overlapping bodies spends
+/// its minutes here, creating a contact manifold per pair.
+class CancellableDispatcher final : public btCollisionDispatcher {
+ public:
+  CancellableDispatcher(btCollisionConfiguration* config, const std::atomic<bool>& cancel)
+      : btCollisionDispatcher(config), cancel_(cancel) {}
+
+  void dispatchAllCollisionPairs(btOverlappingPairCache* cache, const btDispatcherInfo& info,
+                                 btDispatcher* /*dispatcher*/) override {
+    btBroadphasePairArray& pairs = cache->getOverlappingPairArray();
+    for (int i = 0; i < pairs.size(); ++i) {
+      if (i % kCancelCheckEvery == 0 && cancel_.load(std::memory_order_relaxed)) return;
+      getNearCallback()(pairs[i], *this, info);
+    }
+  }
+
+ private:
+  const std::atomic<bool>& cancel_;
+};
+
+/// The solver, given up once `cancel` is set: between manifolds while it
+/// turns contacts into constraints, and between iterations.
+class CancellableSolver final : public btSequentialImpulseConstraintSolver {
+ public:
+  explicit CancellableSolver(const std::atomic<bool>& cancel) : cancel_(cancel) {}
+
+ protected:
+  void convertContacts(btPersistentManifold** manifolds, int count,
+                       const btContactSolverInfo& info) override {
+    for (int i = 0; i < count; ++i) {
+      if (i % kCancelCheckEvery == 0 && cancel_.load(std::memory_order_relaxed)) return;
+      convertContact(manifolds[i], info);
+    }
+  }
+  btScalar solveSingleIteration(int iteration, btCollisionObject** bodies, int body_count,
+                                btPersistentManifold** manifolds, int manifold_count,
+                                btTypedConstraint** constraints, int constraint_count,
+                                const btContactSolverInfo& info, btIDebugDraw* draw) override {
+    // A residual of 0 ends Bullet's iteration loop.
+    if (cancel_.load(std::memory_order_relaxed)) return 0.0;
+    return btSequentialImpulseConstraintSolver::solveSingleIteration(
+        iteration, bodies, body_count, manifolds, manifold_count, constraints, constraint_count,
+        info, draw);
+  }
+
+ private:
+  const std::atomic<bool>& cancel_;
 };
 
 }  // namespace
 
-/// The Bullet machinery, in construction order (destroyed in reverse).
+/// The Bullet machinery, in construction order (destroyed in reverse). A
+/// step gives up once `cancel` is set (PhysicsWorld::RequestStop).
 struct PhysicsWorld::Bullet {
+  explicit Bullet(const std::atomic<bool>& cancel)
+      : dispatcher(&collision_config, cancel),
+        solver(cancel),
+        world(&dispatcher, &broadphase, &solver, &collision_config, cancel) {}
+
   btDefaultCollisionConfiguration collision_config;
-  btCollisionDispatcher dispatcher{&collision_config};
+  CancellableDispatcher dispatcher;
   btDbvtBroadphase broadphase;
-  btSequentialImpulseConstraintSolver solver;
-  SleepAwareWorld world{&dispatcher, &broadphase, &solver, &collision_config};
+  CancellableSolver solver;
+  SleepAwareWorld world;
 };
 
 struct PhysicsWorld::Body {
@@ -83,7 +186,7 @@ struct PhysicsWorld::Body {
 };
 
 PhysicsWorld::PhysicsWorld(const PhysicsConfig& config)
-    : config_(config), bullet_(std::make_unique<Bullet>()) {
+    : config_(config), bullet_(std::make_unique<Bullet>(stop_requested_)) {
   CheckPositive(config_.step_s, "step_s");
   if (config_.solver_iterations < 1)
     throw std::invalid_argument("PhysicsWorld: solver_iterations must be >= 1");
@@ -104,9 +207,23 @@ PhysicsWorld::PhysicsWorld(const PhysicsConfig& config)
 
 PhysicsWorld::~PhysicsWorld() {
   Stop();
+  ForgetAllPairs();
   for (auto& h : hands_) h.reset();  // removes its bodies and joints from the world
   for (auto& b : bodies_) bullet_->world.removeRigidBody(b->body.get());
   bodies_.clear();
+}
+
+void PhysicsWorld::ForgetAllPairs() {
+  // Removing a body makes Bullet walk every overlapping pair twice (to clean
+  // and to drop the body's own): tearing down n bodies costs n times the
+  // pairs, half a minute for 3000 overlapping spheres. Dropping the pairs
+  // first, each from the end of the cache, costs one visit per pair.
+  btOverlappingPairCache* cache = bullet_->broadphase.getOverlappingPairCache();
+  btBroadphasePairArray& pairs = cache->getOverlappingPairArray();
+  while (pairs.size() > 0) {
+    const btBroadphasePair& last = pairs[pairs.size() - 1];
+    cache->removeOverlappingPair(last.m_pProxy0, last.m_pProxy1, &bullet_->dispatcher);
+  }
 }
 
 std::unique_ptr<PhysicsWorld> PhysicsWorld::CreateIfNeeded(const PhysicsConfig& config,
@@ -275,16 +392,34 @@ void PhysicsWorld::CheckFinite() {
   }
 }
 
+bool PhysicsWorld::EnterHal() {
+  hal_users_.fetch_add(1);
+  if (!stop_requested_.load()) return true;
+  hal_users_.fetch_sub(1);
+  return false;
+}
+
+void PhysicsWorld::LeaveHal() { hal_users_.fetch_sub(1); }
+
 void PhysicsWorld::Tick(haptics::Hal& hal, int64_t now_ns) {
   last_tick_ns_ = now_ns;
+  // The HAL only between EnterHal and LeaveHal, and only to copy in and out
+  // (placing a hand the first time walks every contact pair: not in there):
+  // once a stop is requested this thread never touches it again (RequestStop).
+  std::array<haptics::HandSample, haptics::kSides> samples{};
+  if (!EnterHal()) return;
+  for (int s = 0; s < haptics::kSides; ++s) {
+    if (hands_[s]) samples[s] = hal.LatestSample(static_cast<Side>(s));
+  }
+  LeaveHal();
   for (int s = 0; s < haptics::kSides; ++s) {
     tracked_ok_[s] = false;
     if (!hands_[s]) continue;
-    const Side side = static_cast<Side>(s);
-    tracked_ok_[s] = hands_[s]->SetTracked(hal.LatestSample(side));
+    tracked_ok_[s] = hands_[s]->SetTracked(samples[s]);
     if (!tracked_ok_[s]) ++counters_.invalid_samples;
   }
   Step();
+  if (!EnterHal()) return;
   for (int s = 0; s < haptics::kSides; ++s) {
     if (!hands_[s]) continue;
     const Side side = static_cast<Side>(s);
@@ -299,12 +434,14 @@ void PhysicsWorld::Tick(haptics::Hal& hal, int64_t now_ns) {
     hal.SetSetpoint(side, sp, now_ns);
     ++counters_.setpoints;
   }
+  LeaveHal();
   published_counters_.Store(counters_);
 }
 
 void PhysicsWorld::Start(haptics::Hal& hal) {
   if (running_.load()) return;
   hal_ = &hal;
+  stop_requested_.store(false);
   PeriodicThread::Options options;
   options.name = "physics";
   options.rate_hz = 1.0 / config_.step_s;
@@ -315,10 +452,14 @@ void PhysicsWorld::Start(haptics::Hal& hal) {
   thread_->Start();
 }
 
-void PhysicsWorld::Stop() {
-  if (!running_.load()) return;
-  thread_->Stop();
-  running_.store(false);
+void PhysicsWorld::RequestStop() {
+  if (!running_.load() || stop_requested_.load()) return;
+  stop_requested_.store(true);
+  thread_->RequestStop();
+  // Wait out a HAL access in progress (a copy, microseconds; never the step):
+  // after this the thread does not touch the HAL again, and this thread is
+  // the set-points' only writer.
+  while (hal_users_.load() != 0) std::this_thread::yield();
   for (int s = 0; s < haptics::kSides; ++s) {
     if (!hands_[s]) continue;
     const Side side = static_cast<Side>(s);
@@ -327,6 +468,21 @@ void PhysicsWorld::Stop() {
     sp.finger_forces = {};
     hal_->SetSetpoint(side, sp, MonotonicNs());
   }
+}
+
+bool PhysicsWorld::Stop(double timeout_s) {
+  if (!running_.load()) return true;
+  RequestStop();
+  if (!thread_->StopWithin(timeout_s)) return false;
+  running_.store(false);
+  return true;
+}
+
+void PhysicsWorld::Stop() {
+  if (!running_.load()) return;
+  RequestStop();
+  thread_->Stop();
+  running_.store(false);
 }
 
 LoopStats PhysicsWorld::Stats() const { return thread_ ? thread_->Stats() : LoopStats{}; }

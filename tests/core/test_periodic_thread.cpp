@@ -176,3 +176,22 @@ TEST_CASE("PeriodicThread: an invalid rate throws", "[periodic]") {
                   std::invalid_argument);
   CHECK_NOTHROW(PeriodicThread(Rate(1.0), tick));
 }
+
+TEST_CASE(
+    "PeriodicThread: StopWithin does not wait out a tick that will not end, and joins once it has",
+    "[periodic]") {
+  std::atomic<bool> in_tick{false};
+  std::atomic<bool> release{false};
+  PeriodicThread loop(Rate(1000.0), [&](int64_t) {
+    in_tick.store(true);
+    WaitFor([&] { return release.load(); });  // bounded: never hangs the test
+  });
+  loop.Start();
+  REQUIRE(WaitFor([&] { return in_tick.load(); }));
+  CHECK_FALSE(loop.StopWithin(0.05));  // still inside its tick
+  CHECK(loop.running());
+  release.store(true);
+  CHECK(loop.StopWithin(60.0));
+  CHECK_FALSE(loop.running());
+  CHECK(loop.StopWithin(0.0));  // already stopped
+}

@@ -171,3 +171,38 @@ TEST_CASE("a person's bad input exits 2 with one line naming the fix") {
     CHECK(c.err().find("auto or person") != std::string::npos);
   }
 }
+
+TEST_CASE("a configuration that cannot work exits 2 before anything is spawned") {
+  const auto dir = test::ScratchDir("e2e-impossible");
+  const std::string domain = std::to_string(test::UniqueDomain(23));
+  const std::vector<std::string> base{
+      Bin("haptel"), "run",  "--operator", "auto",
+      "--view",      "none", "--track",    "config/tracks/test-short.yaml",
+      "--domain",    domain, "--database", (dir / "runs.db").string()};
+  SECTION("a left-handed device with the gesture interface, which uses the right hand") {
+    const auto device = dir / "left.yaml";
+    std::ofstream(device) << "name: left-arm\ndriver: sim\nsides: [left]\n";
+    auto argv = base;
+    argv.insert(argv.end(), {"--device", device.string(), "--interface", "gesture"});
+    Child c(argv);
+    const int code = c.Wait(60.0);
+    INFO(c.err());
+    CHECK(code == 2);
+    CHECK(c.err().find("left.yaml") != std::string::npos);
+    CHECK(c.err().find("'sides'") != std::string::npos);
+    CHECK(c.err().find("'gesture'") != std::string::npos);
+    CHECK(c.err().find("started") == std::string::npos);  // no vehicle was spawned
+    CHECK(OneLine(c.err()) == 1);
+  }
+  SECTION("a vehicle name longer than DDS topic names allow") {
+    auto argv = base;
+    argv.insert(argv.end(), {"--vehicle-name", std::string(241, 'r')});
+    Child c(argv);
+    const int code = c.Wait(60.0);
+    INFO(c.err());
+    CHECK(code == 2);
+    CHECK(c.err().find("--vehicle-name") != std::string::npos);
+    CHECK(c.err().find("started") == std::string::npos);
+    CHECK(OneLine(c.err()) == 1);
+  }
+}

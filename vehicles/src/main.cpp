@@ -43,7 +43,12 @@ int main(int argc, char** argv) {
     const std::filesystem::path file =
         args.Value("config").value_or(ShippedFile("config/vehicles/sim-robot.yaml").string());
     config = LoadVehicle(file);
-    if (auto name = args.Value("name")) config.name = *name;
+    if (auto name = args.Value("name")) {
+      if (const std::string problem = VehicleNameProblem(*name); !problem.empty()) {
+        throw UsageError("option --name: expected " + problem);
+      }
+      config.name = *name;
+    }
     if (auto domain = args.Int("domain", 0, 232)) config.link.domain_id = *domain;
     if (auto world = args.Value("track")) config.world = *world;
     if (config.world.empty()) {
@@ -67,6 +72,7 @@ int main(int argc, char** argv) {
 
   std::signal(SIGTERM, OnSignal);
   std::signal(SIGINT, OnSignal);
+  std::signal(SIGHUP, OnSignal);  // a hung-up terminal's process group: stop as for the others
   try {
     const std::string camera_name = camera->Describe();
     vehicles::VehicleNode node(config, *track, std::move(camera));

@@ -1,5 +1,6 @@
 #pragma once
 /// @file A vehicle node's configuration.
+#include <cstddef>
 #include <filesystem>
 #include <string>
 
@@ -69,5 +70,13 @@ struct VehicleConfig {
 };
 
 VehicleConfig LoadVehicle(const std::filesystem::path& file);
+
+/// The longest vehicle name. The name is part of the DDS topic names
+/// "haptel/<name>/<channel>" (channels: command, state, video), and RTPS
+/// carries a topic name in at most 255 characters: 255 - 15 = 240.
+constexpr std::size_t kMaxVehicleNameLength = 240;
+/// What a vehicle name needs and `name` lacks, as the "expected …" part of an
+/// error ("" when it is a good name): 1 to 240 letters, digits, '_' or '-'.
+std::string VehicleNameProblem(const std::string& name);
 
 }  // namespace haptel

@@ -7,8 +7,10 @@
 /// ticks are counted as overruns — the loop says it could not keep its rate,
 /// it does not silently slow down.
 #include <atomic>
+#include <condition_variable>
 #include <cstdint>
 #include <functional>
+#include <mutex>
 #include <string>
 #include <thread>
 
@@ -37,6 +39,12 @@ class PeriodicThread {
   void Start();
   /// Stops and joins. Safe to call twice.
   void Stop();
+  /// Asks the thread to stop after the tick in progress; does not wait.
+  void RequestStop() { stop_.store(true); }
+  /// Stops, waiting at most `timeout_s` for the tick in progress to return:
+  /// true when the thread has ended (joined), false when it is still inside
+  /// its tick (it ends after that tick; call Stop or StopWithin again).
+  bool StopWithin(double timeout_s);
   bool running() const { return running_.load(); }
 
   LoopStats Stats() const { return meter_.Stats(); }
@@ -51,6 +59,10 @@ class PeriodicThread {
   std::thread thread_;
   std::atomic<bool> running_{false};
   std::atomic<bool> stop_{false};
+  /// Set by the thread as it leaves Run (under ended_mutex_, for StopWithin).
+  bool ended_ = false;
+  std::mutex ended_mutex_;
+  std::condition_variable ended_cv_;
   LoopMeter meter_;
 };
 

@@ -5,8 +5,10 @@
 #include <memory>
 #include <string>
 #include <variant>
+#include <vector>
 
 #include "haptel/config/cockpit.hpp"
+#include "haptel/config/device.hpp"
 #include "haptel/config/gamepad.hpp"
 #include "haptel/config/gesture.hpp"
 #include "haptel/config/keyboard.hpp"
@@ -39,6 +41,11 @@ struct InterfaceSpec {
 
 /// Loads `<interfaces_dir>/<name>.yaml` (ConfigError naming the file otherwise).
 InterfaceSpec LoadInterfaceSpec(const RunConfig& run, const std::string& name);
+
+/// Throws ConfigError, naming the device file and its key 'sides', when one of
+/// the interfaces a run builds uses a hand the device has no arm for (the
+/// gesture interface the right, the cockpits both; keys and controllers none).
+void CheckHands(const std::vector<InterfaceSpec>& specs, const DeviceConfig& device);
 
 /// What an interface is built on.
 struct InterfaceParts {

@@ -83,7 +83,7 @@ enum class Outcome {
   kVehicleDidNotStart,
   kDeviceLost,
   kAborted,      ///< the person closed the window or lost their controller
-  kInterrupted,  ///< SIGINT / SIGTERM
+  kInterrupted,  ///< SIGINT / SIGTERM / SIGHUP
 };
 std::string ToString(Outcome outcome);
 /// The process exit code for an outcome: 0 completed, 3 lost vehicle or device, 1 otherwise.

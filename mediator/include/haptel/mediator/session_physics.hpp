@@ -8,6 +8,7 @@
 /// Nothing is built — no world, no thread — when neither the interface nor
 /// the scene has bodies (SessionPhysics::Needed).
 #include <array>
+#include <atomic>
 #include <memory>
 
 #include "haptel/config/cockpit.hpp"
@@ -45,16 +46,26 @@ struct SessionPhysics {
   /// scene (nullptr: none), or nullptr when neither has bodies — decided by
   /// PhysicsWorld::CreateIfNeeded, like everything else that may need a
   /// world. A proxy hand for each side in `hands`. Throws
-  /// std::invalid_argument for a scene the world cannot build.
-  static std::unique_ptr<SessionPhysics> CreateIfNeeded(const PhysicsConfig& config,
-                                                        const std::array<bool, haptics::kSides>& hands,
-                                                        const CockpitConfig* cockpit, const Scene* scene);
+  /// std::invalid_argument for a scene the world cannot build. Once
+  /// `*cancel` is set the scene's remaining bodies are not built.
+  static std::unique_ptr<SessionPhysics> CreateIfNeeded(
+      const PhysicsConfig& config, const std::array<bool, haptics::kSides>& hands,
+      const CockpitConfig* cockpit, const Scene* scene, const std::atomic<bool>* cancel = nullptr);
+  /// From now on the destructor does not wait: it takes the world's forces
+  /// out of the HAL (PhysicsWorld::RequestStop) and leaves the rest — a step
+  /// still in progress, then removing every body, seconds for thousands of
+  /// overlapping ones — to a thread of its own (which a process that exits
+  /// meanwhile simply ends). For a session that must record and exit promptly.
+  void DetachTeardown() { detach_teardown_ = true; }
+  /// Stops the world's thread (waiting for it, unless DetachTeardown), then
+  /// destroys the parts.
   ~SessionPhysics();
   SessionPhysics(const SessionPhysics&) = delete;
   SessionPhysics& operator=(const SessionPhysics&) = delete;
 
  private:
   explicit SessionPhysics(std::unique_ptr<physics::PhysicsWorld> w) : world(std::move(w)) {}
+  bool detach_teardown_ = false;
 };
 
 }  // namespace haptel::mediator

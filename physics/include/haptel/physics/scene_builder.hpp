@@ -20,6 +20,7 @@
 ///   the scene's static friction is used (what holds a grasped or resting
 ///   object), and its restitution. Pairs combine by the average (PhysicsWorld).
 #include <Eigen/Core>
+#include <atomic>
 #include <cstddef>
 #include <vector>
 
@@ -48,7 +49,11 @@ struct BuiltScene {
 /// Creates the scene's bodies in `world` (before Start). Throws
 /// std::invalid_argument for an object the world cannot build (e.g. a plane on
 /// a dynamic object); the world keeps any bodies made before the error.
-BuiltScene BuildScene(PhysicsWorld& world, const Scene& scene);
+/// Once `*cancel` is set (a run interrupted while thousands of bodies are
+/// added, each meeting every body it overlaps), no further object is built:
+/// the scene returned holds the nodes built so far (its order cut to match).
+BuiltScene BuildScene(PhysicsWorld& world, const Scene& scene,
+                      const std::atomic<bool>* cancel = nullptr);
 
 /// The pose of the object frame in the world (what the scene file's
 /// position/rotation describe), from its body's current pose.

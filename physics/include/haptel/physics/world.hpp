@@ -14,8 +14,14 @@
 /// world goes on.
 ///
 /// Threading: set the scene up (Add*) before Start; while the thread runs,
-/// only Counters, Stats, Poses, running and Stop may be called from other
-/// threads. Without Start, Step and Tick drive the world deterministically.
+/// only Counters, Stats, Poses, running, RequestStop and Stop may be called
+/// from other threads. Without Start, Step and Tick drive the world
+/// deterministically.
+///
+/// Stopping never waits for a step: RequestStop takes the world's forces out
+/// of the HAL at once and cuts the step in progress short (between contact
+/// pairs, manifolds and solver iterations); Stop(timeout) bounds the wait
+/// for the thread.
 #include <array>
 #include <atomic>
 #include <cstdint>
@@ -123,10 +129,21 @@ class PhysicsWorld {
   /// One physics-thread cycle at `now_ns`: tracked hands from `hal`, one step,
   /// set-points to `hal`.
   void Tick(haptics::Hal& hal, int64_t now_ns);
-  /// Runs Tick on a thread of its own at 1/step_s. `hal` must outlive Stop.
+  /// Runs Tick on a thread of its own at 1/step_s. `hal` must outlive
+  /// RequestStop (the thread uses it until then, and never after).
   void Start(haptics::Hal& hal);
-  /// Stops and joins, then turns the proxy coupling and finger forces off in
-  /// the HAL (keeping the interface's field). Safe to call twice.
+  /// Ends the thread's use of the HAL and turns the proxy coupling and finger
+  /// forces off there (keeping the interface's field) at once, and cuts the
+  /// step in progress short; does not wait for the thread to end (a single
+  /// step of thousands of overlapping bodies can take minutes). Returns within
+  /// microseconds. Safe to call twice.
+  void RequestStop();
+  /// RequestStop, then waits at most `timeout_s` for the thread to end: true
+  /// when it has (joined), false when it is still finishing its step — it
+  /// ends by itself; the world must not be destroyed before (the destructor
+  /// waits for it).
+  bool Stop(double timeout_s);
+  /// RequestStop, then waits for the thread to end. Safe to call twice.
   void Stop();
   bool running() const { return running_.load(); }
 
@@ -145,8 +162,18 @@ class PhysicsWorld {
   struct Body;
   BodyId AddBody(std::unique_ptr<Body> body);
   void CheckFinite();
+  /// Drops every overlapping pair in one pass (see the destructor).
+  void ForgetAllPairs();
+  /// The stepping thread's use of the HAL: EnterHal is false once a stop is
+  /// requested, and RequestStop waits for the uses in progress to leave.
+  bool EnterHal();
+  void LeaveHal();
 
   PhysicsConfig config_;
+  /// Set by RequestStop: the thread ends after its tick, the step in
+  /// progress gives up. Before bullet_, which watches it.
+  std::atomic<bool> stop_requested_{false};
+  std::atomic<int> hal_users_{0};
   std::unique_ptr<Bullet> bullet_;
   std::vector<std::unique_ptr<Body>> bodies_;
   std::array<std::unique_ptr<ProxyHand>, haptics::kSides> hands_;
