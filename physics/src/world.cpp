@@ -132,6 +132,24 @@ class CancellableDispatcher final : public btCollisionDispatcher {
   const std::atomic<bool>& cancel_;
 };
 
+/// The broadphase's pair table, which stops taking pairs once `cancel` is
+/// set: the first step after a pile of thousands of overlapping bodies is
+/// built meets every pair there (bodies are met at the next step, see the
+/// constructor), tens of millions of them, with table rehashes on the way.
+/// A cancelled step's world may lack pairs: it is to be stopped, not stepped.
+class CancellablePairCache final : public btHashedOverlappingPairCache {
+ public:
+  explicit CancellablePairCache(const std::atomic<bool>& cancel) : cancel_(cancel) {}
+
+  btBroadphasePair* addOverlappingPair(btBroadphaseProxy* a, btBroadphaseProxy* b) override {
+    if (cancel_.load(std::memory_order_relaxed)) return nullptr;  // the caller ignores it
+    return btHashedOverlappingPairCache::addOverlappingPair(a, b);
+  }
+
+ private:
+  const std::atomic<bool>& cancel_;
+};
+
 /// The solver, given up once `cancel` is set: between manifolds while it
 /// turns contacts into constraints, and between iterations.
 class CancellableSolver final : public btSequentialImpulseConstraintSolver {
@@ -168,11 +186,14 @@ class CancellableSolver final : public btSequentialImpulseConstraintSolver {
 struct PhysicsWorld::Bullet {
   explicit Bullet(const std::atomic<bool>& cancel)
       : dispatcher(&collision_config, cancel),
+        pairs(cancel),
+        broadphase(&pairs),
         solver(cancel),
         world(&dispatcher, &broadphase, &solver, &collision_config, cancel) {}
 
   btDefaultCollisionConfiguration collision_config;
   CancellableDispatcher dispatcher;
+  CancellablePairCache pairs;
   btDbvtBroadphase broadphase;
   CancellableSolver solver;
   SleepAwareWorld world;
@@ -200,6 +221,11 @@ PhysicsWorld::PhysicsWorld(const PhysicsConfig& config)
   // move (Bullet's default recomputes every body's box each step). Code that
   // moves a body by hand refreshes its box (ForgetContacts).
   w.setForceUpdateAllAabbs(false);
+  // A body added is met with the bodies it overlaps at the next step, on the
+  // stepping thread, not in AddRigidBody: building a pile of thousands of
+  // overlapping bodies would otherwise spend seconds in single, uninterruptible
+  // pair-table rehashes on the session's thread before the run even starts.
+  bullet_->broadphase.m_deferedcollide = true;
   w.setGravity(ToBt(config_.gravity));
   btContactSolverInfo& info = w.getSolverInfo();
   info.m_numIterations = config_.solver_iterations;
