@@ -89,10 +89,8 @@ int BenchPhysicsMain(int argc, const char* const* argv) {
     // The float child runs on the other core while this thread measures double.
     std::unique_ptr<ChildProcess> child;
     if (with_float) {
-      std::error_code ec;
-      const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
-      const auto exe = self.parent_path() / "haptel-physics-bench-float";
-      if (ec || !std::filesystem::exists(exe)) {
+      const auto exe = ProgramDirectory() / "haptel-physics-bench-float";
+      if (!std::filesystem::exists(exe)) {
         float_note = "float: " + exe.string() + " not found (build it: target haptel-physics-bench-float)";
       } else {
         try {

@@ -43,12 +43,6 @@ struct ModeResult {
   std::vector<double> histogram;  ///< counts per 10 µs bin
 };
 
-std::filesystem::path SelfDirectory() {
-  std::error_code ec;
-  const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
-  return ec ? std::filesystem::path(".") : self.parent_path();
-}
-
 /// Runs `device` under a servo loop for `seconds`, feeding a fresh spring
 /// field every 10 ms as an interface would, so forces are computed each tick.
 ModeResult Measure(const std::string& name, const std::string& description, haptics::Device& device,
@@ -143,7 +137,7 @@ int BenchServoMain(int argc, const char* const* argv) {
     results.push_back(Measure("local_two_arms", "two sim arms, two-sided", dev, c, seconds));
   }
   // (c) two arms behind two device servers on loopback, decimation on and off.
-  const std::string server = (SelfDirectory() / "haptel-device-server").string();
+  const std::string server = (ProgramDirectory() / "haptel-device-server").string();
   const int port_base = 20000 + static_cast<int>(getpid() % 20000);
   for (const int divider : {base.servo.slow_channel_divider, 1}) {
     std::vector<std::unique_ptr<ChildProcess>> servers;

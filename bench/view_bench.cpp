@@ -21,6 +21,7 @@
 #include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"
 #include "haptel/core/args.hpp"
+#include "haptel/core/child_process.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/core/json.hpp"
 #include "haptel/mediator/haptic_side.hpp"
@@ -59,12 +60,6 @@ double ProcessCpuSeconds() {
   getrusage(RUSAGE_SELF, &u);
   return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
          1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
-}
-
-std::filesystem::path SelfDirectory() {
-  std::error_code ec;
-  const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
-  return ec ? std::filesystem::path(".") : self.parent_path();
 }
 
 /// The shipped simulated robot with its camera at 640×480, 30 fps (the
@@ -126,7 +121,7 @@ Phase World(const std::string& name, const Parts& parts, double seconds,
   lo.link = parts.run.link;
   lo.link.domain_id = parts.domain;
   lo.track_file = parts.track;
-  lo.program = SelfDirectory() / "haptel-vehicle";
+  lo.program = ProgramDirectory() / "haptel-vehicle";
   lo.decode_video = p.view;
   VehicleLink link(lo);
   const int64_t give_up = MonotonicNs() + SToNs(30.0);

@@ -15,6 +15,12 @@
 
 namespace haptel {
 
+std::filesystem::path ProgramDirectory() {
+  std::error_code ec;
+  const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  return ec ? std::filesystem::path(".") : self.parent_path();
+}
+
 ChildProcess::ChildProcess(const std::string& program, const std::vector<std::string>& arguments)
     : ChildProcess(program, arguments, Options{}) {}
 

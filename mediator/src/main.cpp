@@ -21,6 +21,7 @@
 #include "haptel/config/error.hpp"
 #include "haptel/config/gravity_grid.hpp"
 #include "haptel/core/args.hpp"
+#include "haptel/core/child_process.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/core/log.hpp"
 #include "haptel/calibration/calibration_procedure.hpp"
@@ -92,12 +93,6 @@ std::string CountersJson(const std::vector<haptel::mediator::RunCounter>& counte
   return out + "}";
 }
 
-std::filesystem::path SelfDirectory() {
-  std::error_code ec;
-  const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
-  return ec ? std::filesystem::path(".") : self.parent_path();
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -110,7 +105,7 @@ int main(int argc, char** argv) {
   if (command == "scene") return SceneCommand(argc - 1, argv + 1, std::cout, std::cerr);
   if (command == "bench") {
     // The benchmarks are a program of their own (haptel-bench, beside this one).
-    const std::string program = (SelfDirectory() / "haptel-bench").string();
+    const std::string program = (ProgramDirectory() / "haptel-bench").string();
     argv[1] = const_cast<char*>("haptel-bench");
     execv(program.c_str(), argv + 1);
     std::fprintf(stderr, "haptel bench: cannot run %s: %s\n", program.c_str(), std::strerror(errno));
@@ -226,7 +221,7 @@ int main(int argc, char** argv) {
     if (any_physics || setup.scene) setup.physics = LoadPhysics(setup.run.physics);
     setup.calibration = DeviceCalibrationFor(setup.device);
     if (!setup.device.gravity.empty()) setup.gravity = LoadGravityGrid(setup.device.gravity);
-    setup.vehicle_program = SelfDirectory() / "haptel-vehicle";
+    setup.vehicle_program = ProgramDirectory() / "haptel-vehicle";
   } catch (const UsageError& e) {
     std::fprintf(stderr, "haptel: %s (see haptel --help)\n", e.what());
     return 2;

@@ -16,6 +16,7 @@
 #include "haptel/config/run.hpp"
 #include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"
+#include "test_env.hpp"
 
 namespace fs = std::filesystem;
 using Catch::Matchers::Contains;
@@ -148,13 +149,7 @@ class TempDir {
 // The message of the ConfigError that f throws.
 template <typename F>
 std::string ErrorOf(F&& f) {
-  try {
-    f();
-  } catch (const ConfigError& e) {
-    return e.what();
-  }
-  FAIL("expected a ConfigError");
-  return "";
+  return haptel::test::WhatOf<ConfigError>(std::forward<F>(f));
 }
 
 std::string LineTag(int line) {

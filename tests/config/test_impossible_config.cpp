@@ -14,6 +14,7 @@
 #include "haptel/config/scene.hpp"
 #include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"
+#include "test_env.hpp"
 
 namespace fs = std::filesystem;
 using Catch::Matchers::Contains;
@@ -42,22 +43,12 @@ const fs::path& Scratch() {
 }
 
 fs::path Write(const std::string& name, const std::string& text) {
-  const fs::path file = Scratch() / name;
-  std::ofstream out(file);
-  out << text;
-  REQUIRE(out.good());
-  return file;
+  return haptel::test::WriteFile(Scratch() / name, text);
 }
 
 template <typename F>
 std::string ErrorOf(F&& f) {
-  try {
-    f();
-  } catch (const ConfigError& e) {
-    return e.what();
-  }
-  FAIL("expected a ConfigError");
-  return "";
+  return haptel::test::WhatOf<ConfigError>(std::forward<F>(f));
 }
 
 /// The message is one line and names the file.

@@ -18,21 +18,11 @@ using haptel::ConfigError;
 namespace {
 fs::path Write(const std::string& name, const std::string& text) {
   static const fs::path dir = haptel::test::ScratchDir("test_input_config");
-  const fs::path file = dir / name;
-  std::ofstream out(file);
-  out << text;
-  REQUIRE(out.good());
-  return file;
+  return haptel::test::WriteFile(dir / name, text);
 }
 template <typename F>
 std::string ErrorOf(F&& f) {
-  try {
-    f();
-  } catch (const ConfigError& e) {
-    return e.what();
-  }
-  FAIL("expected a ConfigError");
-  return "";
+  return haptel::test::WhatOf<ConfigError>(std::forward<F>(f));
 }
 }  // namespace
 

@@ -44,11 +44,7 @@ const fs::path& Scratch() {
 }
 
 fs::path Write(const std::string& name, const std::string& text) {
-  const fs::path file = Scratch() / name;
-  std::ofstream out(file);
-  out << text;
-  REQUIRE(out.good());
-  return file;
+  return haptel::test::WriteFile(Scratch() / name, text);
 }
 
 // The ConfigError message of loading `text` (as YAML or XML by the name's

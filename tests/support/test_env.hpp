@@ -10,7 +10,9 @@
 #include <cstdlib>
 #include <exception>
 #include <filesystem>
+#include <fstream>
 #include <mutex>
+#include <stdexcept>
 #include <string>
 #include <thread>
 #include <utility>
@@ -31,6 +33,26 @@ inline std::filesystem::path ScratchDir(const std::string& name) {
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
+}
+
+/// Writes `text` to `file` (its folder must exist) and returns the path.
+inline std::filesystem::path WriteFile(const std::filesystem::path& file, const std::string& text) {
+  std::ofstream out(file);
+  out << text;
+  if (!out.good()) throw std::runtime_error("cannot write test file " + file.string());
+  return file;
+}
+
+/// The message of the `E` that `f` throws, or "(no exception)" when it
+/// throws none (so a check on the message fails, naming why).
+template <typename E, typename F>
+std::string WhatOf(F&& f) {
+  try {
+    f();
+  } catch (const E& e) {
+    return e.what();
+  }
+  return "(no exception)";
 }
 
 /// A DDS domain id unlikely to be shared with another test process (1..232).

@@ -94,13 +94,7 @@ CameraConfig FileCamera(const fs::path& file, bool loop, cv::Size size = kClipSi
 
 template <typename F>
 std::string ConfigErrorOf(F&& f) {
-  try {
-    f();
-  } catch (const ConfigError& e) {
-    return e.what();
-  }
-  FAIL("expected a ConfigError");
-  return "";
+  return haptel::test::WhatOf<ConfigError>(std::forward<F>(f));
 }
 
 }  // namespace

@@ -9,10 +9,15 @@
 /// go to pipes that Pump() drains without blocking.
 #include <sys/types.h>
 
+#include <filesystem>
 #include <string>
 #include <vector>
 
 namespace haptel {
+
+/// The folder of the running program, where Haptel's other programs sit
+/// (haptel-vehicle, haptel-bench, ...); "." if /proc cannot tell.
+std::filesystem::path ProgramDirectory();
 
 class ChildProcess {
  public:
