@@ -5,12 +5,17 @@
 #include <cstdio>
 #include <string>
 
+#include "haptel/core/args.hpp"
+#include "haptel/core/cli.hpp"
+
 #include "gravity_bench.hpp"
 #include "physics_bench.hpp"
 #include "servo_bench.hpp"
 #include "skip_bench.hpp"
 #include "stability_bench.hpp"
 #include "view_bench.hpp"
+
+using namespace haptel::bench;
 
 namespace {
 
@@ -34,39 +39,39 @@ constexpr Usage kUsage[] = {
      "the operator's view: frame rate, CPU, video-to-screen, servo beside it"},
 };
 
-bool WantsHelp(int argc, char** argv) {
-  for (int i = 1; i < argc; ++i) {
-    if (std::string(argv[i]) == "--help" || std::string(argv[i]) == "-h") return true;
+using BenchMain = int (*)(int argc, const char* const* argv);
+struct Bench {
+  const char* name;
+  BenchMain main;
+};
+constexpr Bench kBenches[] = {
+    {"servo", BenchServoMain},         {"gravity", BenchGravityMain}, {"skip", BenchSkipMain},
+    {"physics", BenchPhysicsMain},     {"stability", BenchStabilityMain}, {"view", BenchViewMain},
+};
+
+std::string UsageText(const std::string& only) {
+  std::string text =
+      "usage: haptel bench NAME [options]; each writes build/bench/NAME.csv, --json ends with one line\n";
+  for (const Usage& u : kUsage) {
+    if (!only.empty() && only != u.name) continue;
+    text += "  haptel bench " + std::string(u.name) + " " + u.options + "\n      " + u.what + "\n";
   }
-  return false;
+  return text;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  using namespace haptel::bench;
+  using namespace haptel;
   const std::string which = argc > 1 ? argv[1] : "";
-  if (WantsHelp(argc, argv) || which.empty()) {
-    std::printf(
-        "usage: haptel bench NAME [options]; each writes build/bench/NAME.csv, --json ends with "
-        "one line\n");
-    for (const Usage& u : kUsage) {
-      if (which.empty() || which == "--help" || which == "-h" || which == u.name) {
-        std::printf("  haptel bench %-9s %s\n      %s\n", u.name, u.options, u.what);
-      }
-    }
-    return which.empty() ? 2 : 0;
+  for (const Bench& bench : kBenches) {
+    if (which != bench.name) continue;
+    // Each benchmark parses argv from its own name on.
+    return cli::Main({"haptel bench " + which, UsageText(which)}, argc - 1, argv + 1,
+                     [&] { return bench.main(argc - 1, argv + 1); });
   }
-  // Each benchmark parses argv from its own name on.
-  if (which == "servo") return BenchServoMain(argc - 1, argv + 1);
-  if (which == "gravity") return BenchGravityMain(argc - 1, argv + 1);
-  if (which == "skip") return BenchSkipMain(argc - 1, argv + 1);
-  if (which == "physics") return BenchPhysicsMain(argc - 1, argv + 1);
-  if (which == "stability") return BenchStabilityMain(argc - 1, argv + 1);
-  if (which == "view") return BenchViewMain(argc - 1, argv + 1);
-  std::fprintf(
-      stderr,
-      "haptel bench: expected one of: servo, gravity, skip, physics, stability, view (got '%s')\n",
-      which.c_str());
-  return 2;
+  return cli::Main({"haptel bench", UsageText("")}, argc, argv, [&]() -> int {
+    throw UsageError(which.empty() ? "missing benchmark name"
+                                   : "unknown benchmark '" + which + "'");
+  });
 }

@@ -25,6 +25,7 @@
 
 #include "haptel/config/calibration.hpp"
 #include "haptel/gravity/gravity_sampler.hpp"
+#include "haptel/testing/gravity_on_sim.hpp"
 #include "haptel/haptics/sim_device.hpp"
 
 namespace haptel::bench {

@@ -9,19 +9,23 @@
 
 #include "haptel/config/physics.hpp"
 #include "haptel/core/args.hpp"
+#include "haptel/core/cli.hpp"
 #include "physics_measure.hpp"
 
 int main(int argc, char** argv) {
   using namespace haptel;
   using namespace haptel::bench;
-  try {
+  constexpr const char* kUsage =
+      "usage: haptel-physics-bench-float --trajectory FILE --reference FILE [--physics FILE]\n"
+      "  the float half of `haptel bench physics`, which runs it; prints one JSON line\n";
+  return cli::Main({"haptel-physics-bench-float", kUsage}, argc, argv, [&] {
     const Args args(argc, argv, {"physics", "trajectory", "reference"}, {});
     const auto traj_file = args.Value("trajectory");
     const auto ref_file = args.Value("reference");
     if (!traj_file || !ref_file) throw UsageError("--trajectory FILE and --reference FILE are required");
     const auto tr = wp::LoadTrajectory(*traj_file);
     const auto ref = wp::LoadReference(*ref_file);
-    if (!tr || !ref) throw std::runtime_error("cannot read the trajectory or the reference");
+    if (!tr || !ref) throw cli::InputError("cannot read the trajectory or the reference");
     PhysicsConfig config;
     if (const auto p = args.Value("physics")) config = LoadPhysics(*p);
     std::string out = "{\"points\":[";
@@ -35,9 +39,6 @@ int main(int argc, char** argv) {
       }
     }
     std::printf("%s]}\n", out.c_str());
-    return 0;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "haptel-physics-bench-float: %s\n", e.what());
-    return 1;
-  }
+    return cli::kExitOk;
+  });
 }

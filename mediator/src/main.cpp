@@ -1,378 +1,55 @@
-// haptel: the operator side. `haptel run` drives one grand-prix lap.
+// haptel: the operator side. Each command is its own part; this only
+// dispatches (`haptel run` drives one grand-prix lap).
 #include <unistd.h>
 
-#include <algorithm>
-#include <csignal>
-#include <optional>
-#include <cstdlib>
+#include <cerrno>
 #include <cstdio>
 #include <cstring>
-#include <filesystem>
 #include <iostream>
-#include <memory>
-#include <sstream>
 #include <string>
 
-#include "haptel/core/json.hpp"
-#include "haptel/config/cockpit.hpp"
-#include "haptel/config/paths.hpp"
-#include "haptel/config/physics.hpp"
-#include "haptel/config/scene.hpp"
-#include "haptel/config/error.hpp"
-#include "haptel/config/gravity_grid.hpp"
-#include "haptel/core/args.hpp"
-#include "haptel/core/child_process.hpp"
-#include "haptel/core/clock.hpp"
-#include "haptel/core/log.hpp"
 #include "haptel/calibration/calibration_procedure.hpp"
-#include "haptel/mediator/haptic_side.hpp"
-#include "haptel/mediator/recorder.hpp"
-#include "haptel/mediator/run_counters.hpp"
-#include "haptel/mediator/run_picture.hpp"
+#include "haptel/core/child_process.hpp"
+#include "haptel/core/cli.hpp"
+#include "haptel/core/log.hpp"
+#include "haptel/mediator/run_command.hpp"
 #include "haptel/mediator/scene_command.hpp"
-#include "haptel/mediator/unsaved_run.hpp"
-#include "haptel/view/view.hpp"
-#include "haptel/mediator/session.hpp"
 
 namespace {
 
-std::atomic<bool> g_interrupted{false};
-void OnSignal(int) { g_interrupted.store(true); }
-
 constexpr const char* kUsage =
-    "usage: haptel run [options]         drive one grand-prix lap\n"
+    "usage: haptel run [options]         drive one grand-prix lap (--help for options)\n"
     "       haptel calibrate [options]   calibrate a haptic device (--help for options)\n"
     "       haptel scene FILE [--json]   load a haptic scene, print its objects, mass and bounds\n"
-    "       haptel bench servo [options] servo loop benchmark (--help for options)\n"
-    "       haptel bench gravity [options] gravity compensation benchmark\n"
-    "       haptel bench skip [options]  physics CPU per simulated second: no world, hands, sleeping bodies\n"
-    "       haptel bench physics [options] work-precision diagram: step x solver iterations x float/double\n"
-    "       haptel bench stability [options] physics stress tests: stiffness, mass ratio, squash, grasp\n"
+    "       haptel bench NAME [options]  benchmarks: servo, gravity, skip, physics, stability, view\n"
+    "                                    (haptel bench --help lists them)\n"
     "\n"
-    "haptel run options:\n"
-    "  --config FILE        run configuration (default config/haptel.yaml)\n"
-    "  --track FILE         track file (overrides the configuration's 'track')\n"
-    "  --interface NAME     mediator interface to start with (a file interfaces/NAME.yaml);\n"
-    "                       F1-F6 switch between the run configuration's 'interfaces'\n"
-    "  --operator KIND      auto (the simulated driver; default without a display) or person\n"
-    "  --device FILE        haptic device file: sim, udp (haptel-device-server arms) or replay\n"
-    "  --trace-in FILE      the trace a replay device plays (overrides its 'replay.trace')\n"
-    "  --time-limit S       end the run after S seconds, outcome 'time limit' (person: 600)\n"
-    "  --view KIND          window (default with a display) or none\n"
-    "  --record FILE.mp4    record the operator's view as H.264 MP4 (offscreen without a window)\n"
-    "  --scene FILE         haptic scene for the hands (YAML, or the thesis's MHaptic .xml),\n"
-    "                       moved by the configuration's scene_placement\n"
-    "  --vehicle-name NAME  vehicle name in DDS topic names\n"
-    "  --domain N           DDS domain id\n"
-    "  --database FILE      SQLite file for the results (overrides 'database')\n"
-    "  --vehicle-timeout S  no vehicle state for S seconds: vehicle lost\n"
-    "  --trace FILE         record the haptic device's readings (for the replay driver)\n"
-    "  --json               end with one JSON line of results on stdout\n"
-    "  --quiet              no progress lines\n";
+    "Exit codes: 0 done, 1 failed while running, 2 bad arguments or configuration (nothing ran),\n"
+    "3 the vehicle or the haptic device was lost, 4 results not recorded in the database\n"
+    "(they are in the fallback file the message names).\n";
 
-/// A seconds option in [min, max]; UsageError naming it otherwise.
-
-/// [{"t_s":…,"from":…,"to":…}, …]
-std::string SwitchesJson(const std::vector<haptel::mediator::SwitchRecord>& switches) {
-  std::string out = "[";
-  for (const auto& s : switches) {
-    if (out.size() > 1) out += ",";
-    out += "{\"t_s\":" + haptel::JsonNumber(s.t_s) + ",\"from\":" + haptel::JsonString(s.from) +
-           ",\"to\":" + haptel::JsonString(s.to) + "}";
-  }
-  return out + "]";
-}
-
-/// {"name":n,...}
-std::string CountersJson(const std::vector<haptel::mediator::RunCounter>& counters) {
-  std::string out = "{";
-  for (const auto& c : counters) {
-    if (out.size() > 1) out += ",";
-    out += haptel::JsonString(c.name) + ":" + std::to_string(c.value);
-  }
-  return out + "}";
+/// The benchmarks are a program of their own (haptel-bench, beside this one).
+int ExecBench(char** argv) {
+  const std::string program = (haptel::ProgramDirectory() / "haptel-bench").string();
+  argv[0] = const_cast<char*>("haptel-bench");
+  execv(program.c_str(), argv);
+  std::fprintf(stderr, "haptel bench: cannot run %s: %s\n", program.c_str(), std::strerror(errno));
+  return haptel::cli::kExitFailed;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   using namespace haptel;
-  using namespace haptel::mediator;
   log::SetProgram("haptel");
-  // Sub-commands with their own options: each parses argv from its own name on.
+  // Each command parses argv from its own name on.
   const std::string command = argc > 1 ? argv[1] : "";
+  if (command == "run") return mediator::RunCommand(argc - 1, argv + 1);
   if (command == "calibrate") return haptics::CalibrateMain(argc - 1, argv + 1);
-  if (command == "scene") return SceneCommand(argc - 1, argv + 1, std::cout, std::cerr);
-  if (command == "bench") {
-    // The benchmarks are a program of their own (haptel-bench, beside this one).
-    const std::string program = (ProgramDirectory() / "haptel-bench").string();
-    argv[1] = const_cast<char*>("haptel-bench");
-    execv(program.c_str(), argv + 1);
-    std::fprintf(stderr, "haptel bench: cannot run %s: %s\n", program.c_str(), std::strerror(errno));
-    return 2;
-  }
-  SessionSetup setup;
-  bool json = false;
-  try {
-    const Args args(argc, argv,
-                    {"config", "track", "interface", "scene", "vehicle-name", "domain", "database", "vehicle-timeout",
-                     "trace", "operator", "device", "trace-in", "time-limit", "view", "record"},
-                    {"json", "quiet", "help"});
-    if (args.Flag("help")) {
-      std::fputs(kUsage, stdout);
-      return 0;
-    }
-    if (args.positional().empty()) throw UsageError("missing command (run)");
-    if (args.positional()[0] != "run") throw UsageError("unknown command '" + args.positional()[0] + "'");
-    if (args.positional().size() > 1) {
-      throw UsageError("unexpected argument '" + args.positional()[1] + "' after 'run' (options start with --)");
-    }
-    json = args.Flag("json");
-    setup.progress = !args.Flag("quiet");
-    setup.run = LoadRun(args.Value("config").value_or(ShippedFile("config/haptel.yaml").string()));
-    if (auto track = args.Value("track")) setup.run.track = *track;
-    if (auto name = args.Value("interface")) setup.run.interface = *name;
-    if (auto domain = args.Int("domain", 0, 232)) setup.run.link.domain_id = *domain;
-    if (auto db = args.Value("database")) setup.run.database = *db;
-    if (auto trace = args.Value("trace")) setup.trace = *trace;
-    if (auto s = args.Number("vehicle-timeout", 0.05, 60.0)) setup.run.vehicle_timeout_s = *s;
-    const bool display = view::View::DisplayAvailable();
-    setup.operator_kind = args.Value("operator").value_or(display ? "person" : "auto");
-    if (setup.operator_kind != "auto" && setup.operator_kind != "person") {
-      throw UsageError("option --operator: expected auto or person, got '" + setup.operator_kind + "'");
-    }
-    const bool person = setup.operator_kind == "person";
-    const std::string view = args.Value("view").value_or(display ? "window" : "none");
-    if (view == "window") {
-      if (!display) {
-        throw UsageError("option --view window: there is no display (DISPLAY is not set or its X server is not "
-                         "running); use --view none, "
-                         "and --record FILE.mp4 to record the operator's view headless");
-      }
-      setup.view = ViewKind::kWindow;
-    } else if (view != "none") {
-      throw UsageError("option --view: expected window or none, got '" + view + "'");
-    }
-    if (auto record = args.Value("record")) {
-      setup.record = *record;
-      if (setup.view == ViewKind::kNone) setup.view = ViewKind::kOffscreen;
-    }
-    if (auto s = args.Number("time-limit", 1.0, 86400.0)) {
-      setup.time_limit_s = *s;
-    } else if (person) {
-      setup.time_limit_s = setup.run.person_time_limit_s;
-    }
-    if (auto device = args.Value("device")) setup.run.device = *device;
-    setup.track = LoadTrack(setup.run.track);
-    setup.vehicle = LoadVehicle(setup.run.vehicle);
-    if (auto name = args.Value("vehicle-name")) {
-      if (const std::string problem = VehicleNameProblem(*name); !problem.empty()) {
-        throw UsageError("option --vehicle-name: expected " + problem);
-      }
-      setup.vehicle.name = *name;
-    }
-    setup.device = LoadDevice(setup.run.device);
-    if (auto trace_in = args.Value("trace-in")) {
-      if (setup.device.driver != "replay") {
-        throw UsageError("option --trace-in: the device '" + setup.run.device.string() + "' is not a replay device");
-      }
-      setup.device.replay.trace = *trace_in;
-    }
-    if (setup.device.driver == "replay" && !std::filesystem::exists(setup.device.replay.trace)) {
-      throw ConfigError(setup.run.device.string() + ": key 'replay.trace': no trace '" +
-                        setup.device.replay.trace.string() + "'; record one with `haptel run --trace FILE`");
-    }
-    if (!person && setup.device.driver != "sim") {
-      throw UsageError("option --operator auto: the automatic operator moves the simulated arms, and device '" +
-                       setup.device.name + "' (" + setup.device.driver + ") is not simulated; use --operator person");
-    }
-    // The interface to start with: --interface, else the configuration's; a
-    // person at the simulated device has no arms to move, so the keyboard.
-    std::string start = setup.run.interface;
-    if (auto name = args.Value("interface")) {
-      start = *name;
-    } else if (person && setup.device.driver == "sim") {
-      start = "keyboard";
-    }
-    // The automatic operator never switches: it needs only the one it starts with.
-    std::vector<std::string> names = person ? setup.run.interfaces : std::vector<std::string>{start};
-    auto found = std::find(names.begin(), names.end(), start);
-    if (found == names.end()) {
-      names.insert(names.begin(), start);
-      if (names.size() > 6) names.pop_back();
-      found = names.begin();
-    }
-    setup.start_interface = static_cast<int>(found - names.begin());
-    for (const std::string& name : names) setup.interfaces.push_back(LoadInterfaceSpec(setup.run, name));
-    CheckHands(setup.interfaces, setup.device);
-    const InterfaceSpec& first = setup.interfaces[static_cast<size_t>(setup.start_interface)];
-    if (first.manual() && !person) {
-      throw UsageError("option --interface " + first.name + ": keys and controllers are a person's; use --operator person");
-    }
-    if (first.is_keyboard() && setup.view != ViewKind::kWindow) {
-      throw UsageError("option --interface keyboard: the keys are read in the view's window, and there is " +
-                       std::string(display ? "none (--view none)" : "no display") +
-                       "; use --view window, or --interface gamepad");
-    }
-    if (auto scene = args.Value("scene")) setup.run.scene = *scene;
-    if (!setup.run.scene.empty()) setup.scene = PlaceScene(LoadSceneFile(setup.run.scene), setup.run.scene_placement);
-    const bool any_physics = std::any_of(setup.interfaces.begin(), setup.interfaces.end(),
-                                         [](const InterfaceSpec& s) { return s.needs_physics(); });
-    if (any_physics || setup.scene) setup.physics = LoadPhysics(setup.run.physics);
-    setup.calibration = DeviceCalibrationFor(setup.device);
-    if (!setup.device.gravity.empty()) setup.gravity = LoadGravityGrid(setup.device.gravity);
-    setup.vehicle_program = ProgramDirectory() / "haptel-vehicle";
-  } catch (const UsageError& e) {
-    std::fprintf(stderr, "haptel: %s (see haptel --help)\n", e.what());
-    return 2;
-  } catch (const ConfigError& e) {
-    std::fprintf(stderr, "haptel: %s\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {  // anything else while reading the set-up is still bad input
-    std::fprintf(stderr, "haptel: configuration: %s\n", e.what());
-    return 2;
-  }
-
-  // The database before anything starts: a run it cannot take is not driven.
-  // Kept open for the run, and saved into at its end.
-  std::unique_ptr<Recorder> recorder;
-  try {
-    recorder = std::make_unique<Recorder>(setup.run.database);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "haptel: %s\n", e.what());
-    return 2;
-  }
-
-  // Each ends the run at once, recorded as interrupted (SIGHUP: the terminal went away).
-  std::signal(SIGINT, OnSignal);
-  std::signal(SIGTERM, OnSignal);
-  std::signal(SIGHUP, OnSignal);
-  SessionResult result;
-  try {
-    result = RunSession(setup, g_interrupted);
-  } catch (const ConfigError& e) {  // a part that could not be set up: nothing moved
-    std::fprintf(stderr, "haptel: %s\n", e.what());
-    return 2;
-  } catch (const view::ViewError& e) {  // no display, no GL 3.3, an MP4 that cannot be written
-    std::fprintf(stderr, "haptel: %s\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "haptel: %s\n", e.what());
-    return 1;
-  }
-
-  // Saved, or — when the database fails at the end — kept in a file beside it.
-  int64_t run_id = 0;
-  std::filesystem::path unsaved;
-  try {
-    run_id = recorder->Save(result.record);
-    result.record.id = run_id;
-  } catch (const std::exception& e) {
-    try {
-      unsaved = WriteUnsavedRun(result.record, setup.run.database, WallNs());
-      std::fprintf(stderr, "haptel: run not recorded: %s; its results are in %s\n", e.what(),
-                   unsaved.c_str());
-    } catch (const std::exception& e2) {
-      std::fprintf(stderr, "haptel: run not recorded: %s; and %s\n", e.what(), e2.what());
-    }
-  }
-  if (run_id != 0) {
-    // The run is saved; its picture is a bonus: a failure is a warning.
-    try {
-      const std::filesystem::path png =
-          std::filesystem::absolute(RunPicturePath(setup.run.database, run_id));
-      DrawRunPicture(result.record, setup.track, png);
-      recorder->SetPicture(run_id, png);
-      result.record.picture = png.string();
-      if (setup.progress) {
-        std::fprintf(stderr, "[haptel] run %lld: picture %s\n", static_cast<long long>(run_id),
-                     png.c_str());
-      }
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "haptel: warning: run %lld is saved without its picture: %s\n",
-                   static_cast<long long>(run_id), e.what());
-    }
-  }
-
-  const RunRecord& r = result.record;
-  std::printf("haptel: %s — %s\n", ToString(result.outcome).c_str(), result.message.c_str());
-  std::printf("  track %s, interface %s, vehicle %s (pid %d), operator %s, device %s\n", r.track.c_str(),
-              r.interface.c_str(), r.vehicle.c_str(), r.vehicle_pid, r.operator_kind.c_str(), r.device.c_str());
-  std::printf("  distance driven %.2f m, %zu interface switches\n", r.distance_m, r.switches.size());
-  std::printf("  lap time %.2f s, gates passed %d/%d, missed %d, obstacles touched %d\n", r.lap_time_s,
-              r.gates_passed, r.gates_total, r.gates_missed, r.obstacles_touched);
-  for (const GateSplit& s : r.splits) {
-    if (s.split_s >= 0) std::printf("    gate %d  %7.2f s  %s\n", s.gate + 1, s.split_s, s.passed ? "passed" : "MISSED");
-  }
-  constexpr const char* kShort = " CANNOT KEEP ITS RATE";
-  std::printf("  servo %.1f Hz of %.0f Hz%s (p99 period %.0f us, %llu overruns)\n", r.servo_rate_hz,
-              r.servo_target_hz, r.servo_rate_short ? kShort : "", r.servo_period_p99_us,
-              static_cast<unsigned long long>(result.servo_overruns));
-  if (result.physics_rate_hz > 0) {
-    std::printf(
-        "  physics %.1f Hz of %.0f Hz%s (p99 period %.0f us, longest step %.0f us, %llu hand "
-        "resets), controls grasped after %.2f s\n",
-        result.physics_rate_hz, r.physics_target_hz, r.physics_rate_short ? kShort : "",
-        result.physics_period_p99_us, result.physics_step_max_us,
-        static_cast<unsigned long long>(result.physics_hand_resets), result.grasp_s);
-  }
-  const std::string counters = NonZeroCounters(r.counters);
-  std::printf("  counters: %s\n", counters.empty() ? "all zero" : counters.c_str());
-  std::printf("  command round trip p50 %.2f ms, p99 %.2f ms\n", r.command_rtt_ms_p50, r.command_rtt_ms_p99);
-  std::printf("  video %lld frames, %.1f fps, latency p50 %.1f ms\n", static_cast<long long>(r.video_frames),
-              r.video_fps, r.video_latency_ms_p50);
-  if (setup.view != ViewKind::kNone) {
-    std::printf("  view %.1f fps (frame p99 %.1f ms), video to screen p50 %.1f ms, p99 %.1f ms\n", r.view_fps,
-                r.view_frame_p99_ms, r.video_to_screen_ms_p50, r.video_to_screen_ms_p99);
-  }
-  if (!setup.record.empty()) {
-    std::printf("  operator's view recorded to %s (%llu frames dropped)\n", setup.record.c_str(),
-                static_cast<unsigned long long>(result.view_record_dropped));
-  }
-  if (run_id != 0) {
-    std::printf("  recorded as run %lld in %s\n", static_cast<long long>(run_id),
-                setup.run.database.c_str());
-  } else {
-    std::printf("  NOT recorded in %s; results in %s\n", setup.run.database.c_str(),
-                unsaved.empty() ? "no file either (see the error above)" : unsaved.c_str());
-  }
-  if (!r.picture.empty()) std::printf("  picture %s\n", r.picture.c_str());
-  if (json) {
-    std::ostringstream o;
-    o << "{\"completed\":" << (r.completed ? "true" : "false") << ",\"outcome\":" << JsonString(r.outcome)
-      << ",\"message\":" << JsonString(result.message) << ",\"lap_time_s\":" << JsonNumber(r.lap_time_s)
-      << ",\"gates_passed\":" << r.gates_passed << ",\"gates_total\":" << r.gates_total
-      << ",\"gates_missed\":" << r.gates_missed << ",\"obstacles_touched\":" << r.obstacles_touched
-      << ",\"vehicle_pid\":" << r.vehicle_pid << ",\"servo_rate_hz\":" << JsonNumber(r.servo_rate_hz)
-      << ",\"servo_period_p99_us\":" << JsonNumber(r.servo_period_p99_us)
-      << ",\"servo_overruns\":" << result.servo_overruns
-      << ",\"servo_target_hz\":" << JsonNumber(r.servo_target_hz)
-      << ",\"servo_rate_short\":" << (r.servo_rate_short ? "true" : "false")
-      << ",\"command_rtt_ms_p50\":" << JsonNumber(r.command_rtt_ms_p50)
-      << ",\"command_rtt_ms_p99\":" << JsonNumber(r.command_rtt_ms_p99) << ",\"video_frames\":" << r.video_frames
-      << ",\"video_fps\":" << JsonNumber(r.video_fps) << ",\"video_latency_ms_p50\":" << JsonNumber(r.video_latency_ms_p50)
-      << ",\"lost_detect_s\":" << JsonNumber(result.lost_detect_s)
-      << ",\"physics_rate_hz\":" << JsonNumber(result.physics_rate_hz)
-      << ",\"physics_period_p99_us\":" << JsonNumber(result.physics_period_p99_us)
-      << ",\"physics_step_max_us\":" << JsonNumber(result.physics_step_max_us)
-      << ",\"physics_hand_resets\":" << result.physics_hand_resets
-      << ",\"physics_target_hz\":" << JsonNumber(r.physics_target_hz)
-      << ",\"physics_rate_short\":" << (r.physics_rate_short ? "true" : "false")
-      << ",\"grasp_s\":" << JsonNumber(result.grasp_s) << ",\"scene_bodies\":" << result.scene_bodies
-      << ",\"view_fps\":" << JsonNumber(r.view_fps) << ",\"view_frame_p99_ms\":" << JsonNumber(r.view_frame_p99_ms)
-      << ",\"video_to_screen_ms_p50\":" << JsonNumber(r.video_to_screen_ms_p50)
-      << ",\"video_to_screen_ms_p99\":" << JsonNumber(r.video_to_screen_ms_p99)
-      << ",\"distance_m\":" << JsonNumber(r.distance_m) << ",\"operator\":" << JsonString(r.operator_kind)
-      << ",\"device\":" << JsonString(r.device) << ",\"interface_switches\":" << SwitchesJson(r.switches)
-      << ",\"interface\":" << JsonString(r.interface)
-      << ",\"track\":" << JsonString(r.track)
-      << ",\"counters\":" << CountersJson(r.counters)
-      << ",\"recorded\":" << (run_id != 0 ? "true" : "false") << ",\"run_id\":" << run_id
-      << ",\"database\":" << JsonString(setup.run.database.string())
-      << ",\"unsaved_file\":" << JsonString(unsaved.string())
-      << ",\"picture\":" << JsonString(r.picture) << "}";
-    std::printf("%s\n", o.str().c_str());
-  }
-  std::fflush(stdout);
-  return run_id != 0 ? ExitCode(result.outcome) : kExitNotRecorded;
+  if (command == "scene") return mediator::SceneCommand(argc - 1, argv + 1, std::cout, std::cerr);
+  if (command == "bench") return ExecBench(argv + 1);
+  return cli::Main({"haptel", kUsage}, argc, argv, [&]() -> int {
+    if (command.empty()) throw UsageError("missing command (run, calibrate, scene, bench)");
+    throw UsageError("unknown command '" + command + "' (run, calibrate, scene, bench)");
+  });
 }

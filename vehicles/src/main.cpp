@@ -2,7 +2,7 @@
 // its adapter, publishes state and camera video; stops the motors when
 // commands stop coming (watchdog) and on SIGTERM/SIGINT.
 #include <cmath>
-#include <csignal>
+#include <atomic>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -11,14 +11,13 @@
 #include "haptel/config/error.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/core/args.hpp"
+#include "haptel/core/cli.hpp"
+#include "haptel/core/stop_signals.hpp"
 #include "haptel/core/log.hpp"
 #include "haptel/vehicles/vehicle_node.hpp"
 #include "haptel/video/camera_source.hpp"
 
 namespace {
-volatile std::sig_atomic_t g_stop = 0;
-void OnSignal(int) { g_stop = 1; }
-
 constexpr const char* kUsage =
     "usage: haptel-vehicle [--config FILE] [--track FILE] [--name NAME] [--domain N]\n"
     "  --config FILE  vehicle configuration (default config/vehicles/sim-robot.yaml)\n"
@@ -30,50 +29,36 @@ constexpr const char* kUsage =
 int main(int argc, char** argv) {
   using namespace haptel;
   log::SetProgram("haptel-vehicle");
-  VehicleConfig config;
-  std::unique_ptr<Track> track;
-  std::unique_ptr<video::CameraSource> camera;
-  try {
-    const Args args(argc, argv, {"config", "track", "name", "domain"}, {"help"});
-    if (args.Flag("help")) {
-      std::fputs(kUsage, stdout);
-      return 0;
-    }
-    if (!args.positional().empty()) throw UsageError("unexpected argument '" + args.positional()[0] + "'");
-    const std::filesystem::path file =
-        args.Value("config").value_or(ShippedFile("config/vehicles/sim-robot.yaml").string());
-    config = LoadVehicle(file);
-    if (auto name = args.Value("name")) {
-      if (const std::string problem = VehicleNameProblem(*name); !problem.empty()) {
-        throw UsageError("option --name: expected " + problem);
+  // First: a signal while the files are read still stops the node cleanly.
+  const std::atomic<bool>& stop = InstallStopSignals();
+  return cli::Main({"haptel-vehicle", kUsage}, argc, argv, [&] {
+    VehicleConfig config;
+    std::unique_ptr<Track> track;
+    std::unique_ptr<video::CameraSource> camera;
+    cli::ReadInput([&] {
+      const Args args(argc, argv, {"config", "track", "name", "domain"}, {});
+      if (!args.positional().empty()) throw UsageError("unexpected argument '" + args.positional()[0] + "'");
+      const std::filesystem::path file =
+          args.Value("config").value_or(ShippedFile("config/vehicles/sim-robot.yaml").string());
+      config = LoadVehicle(file);
+      if (auto name = args.Value("name")) {
+        if (const std::string problem = VehicleNameProblem(*name); !problem.empty()) {
+          throw UsageError("option --name: expected " + problem);
+        }
+        config.name = *name;
       }
-      config.name = *name;
-    }
-    if (auto domain = args.Int("domain", 0, 232)) config.link.domain_id = *domain;
-    if (auto world = args.Value("track")) config.world = *world;
-    if (config.world.empty()) {
-      throw ConfigError(file.string() + ": key 'world': expected the track file a simulated "
-                        "vehicle drives on (or --track FILE)");
-    }
-    track = std::make_unique<Track>(LoadTrack(config.world));
-    // Opened here, before any DDS participant exists: a camera that cannot
-    // open is a set-up error (exit 2) and nothing has been published.
-    camera = video::MakeCameraSource(config.camera, track.get(), file.string());
-  } catch (const UsageError& e) {
-    std::fprintf(stderr, "haptel-vehicle: %s (see haptel-vehicle --help)\n", e.what());
-    return 2;
-  } catch (const ConfigError& e) {
-    std::fprintf(stderr, "haptel-vehicle: %s\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {  // anything else while reading the set-up is still bad input
-    std::fprintf(stderr, "haptel-vehicle: configuration: %s\n", e.what());
-    return 2;
-  }
+      if (auto domain = args.Int("domain", 0, 232)) config.link.domain_id = *domain;
+      if (auto world = args.Value("track")) config.world = *world;
+      if (config.world.empty()) {
+        throw ConfigError(file.string() + ": key 'world': expected the track file a simulated "
+                          "vehicle drives on (or --track FILE)");
+      }
+      track = std::make_unique<Track>(LoadTrack(config.world));
+      // Opened here, before any DDS participant exists: a camera that cannot
+      // open is a set-up error (exit 2) and nothing has been published.
+      camera = video::MakeCameraSource(config.camera, track.get(), file.string());
+    });
 
-  std::signal(SIGTERM, OnSignal);
-  std::signal(SIGINT, OnSignal);
-  std::signal(SIGHUP, OnSignal);  // a hung-up terminal's process group: stop as for the others
-  try {
     const std::string camera_name = camera->Describe();
     vehicles::VehicleNode node(config, *track, std::move(camera));
     node.Start();
@@ -83,7 +68,7 @@ int main(int argc, char** argv) {
               std::to_string(config.camera.height) + " at " +
               std::to_string(static_cast<int>(std::lround(config.camera.rate_hz))) + " Hz");
     uint64_t trips = 0;
-    while (g_stop == 0) {
+    while (!stop.load()) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
       const auto c = node.Counters();
       if (c.watchdog_trips > trips) {
@@ -100,9 +85,6 @@ int main(int argc, char** argv) {
               " frames, " + std::to_string(c.grabs_failed) + " camera grabs failed" +
               (c.camera_stalls > 0 ? " (" + std::to_string(c.camera_stalls) + " stalls)" : "") +
               (c.camera_ended ? ", camera file ended" : ""));
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "haptel-vehicle: %s\n", e.what());
-    return 1;
-  }
-  return 0;
+    return cli::kExitOk;
+  });
 }

@@ -17,6 +17,7 @@
 #include "haptel/config/error.hpp"
 #include "haptel/config/run.hpp"
 #include "haptel/core/args.hpp"
+#include "haptel/core/cli.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/haptics/sim_device.hpp"
 
@@ -413,54 +414,39 @@ int CalibrateMain(int argc, const char* const* argv) {
       "  --out FILE     calibration file to write (default calibration/<device>.yaml)\n"
       "  --auto         unattended: the sim device's simulated operator does every step\n"
       "  --user NAME    whose calibration this is (default 'default')\n";
-  DeviceConfig config;
-  std::filesystem::path out_file;
-  CalibrationOptions options;
-  try {
-    const Args args(argc, argv, {"device", "out", "user"}, {"auto", "help"});
-    if (args.Flag("help")) {
-      std::fputs(kUsage, stdout);
-      return 0;
-    }
-    const auto& words = args.positional();
-    if (words.size() > 1 || (words.size() == 1 && words[0] != "calibrate")) {
-      throw UsageError("unexpected argument '" + words.back() + "'");
-    }
-    const std::filesystem::path device_file = args.Value("device").value_or(ShippedFile("config/devices/sim.yaml"));
-    config = LoadDevice(device_file);
-    options.auto_mode = args.Flag("auto");
-    if (config.driver == "sim" && !options.auto_mode) {
-      throw UsageError("the sim device has nobody to hold its arms: use --auto");
-    }
-    if (config.driver != "sim" && options.auto_mode) {
-      throw UsageError("--auto needs the sim device (" + device_file.string() + " names driver '" + config.driver +
-                       "'); a real device is calibrated with an operator at the prompts");
-    }
-    options.user = args.Value("user").value_or("default");
-    out_file = args.Value("out").value_or((std::filesystem::path("calibration") / (config.name + ".yaml")).string());
-  } catch (const UsageError& e) {
-    std::fprintf(stderr, "haptel calibrate: %s (see haptel calibrate --help)\n", e.what());
-    return 2;
-  } catch (const ConfigError& e) {
-    std::fprintf(stderr, "haptel calibrate: %s\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "haptel calibrate: configuration: %s\n", e.what());
-    return 2;
-  }
-
-  try {
+  return cli::Main({"haptel calibrate", kUsage}, argc, argv, [&] {
+    DeviceConfig config;
+    std::filesystem::path out_file;
+    CalibrationOptions options;
+    cli::ReadInput([&] {
+      const Args args(argc, argv, {"device", "out", "user"}, {"auto"});
+      const auto& words = args.positional();
+      if (words.size() > 1 || (words.size() == 1 && words[0] != "calibrate")) {
+        throw UsageError("unexpected argument '" + words.back() + "'");
+      }
+      const std::filesystem::path device_file =
+          args.Value("device").value_or(ShippedFile("config/devices/sim.yaml"));
+      config = LoadDevice(device_file);
+      options.auto_mode = args.Flag("auto");
+      if (config.driver == "sim" && !options.auto_mode) {
+        throw UsageError("the sim device has nobody to hold its arms: use --auto");
+      }
+      if (config.driver != "sim" && options.auto_mode) {
+        throw UsageError("--auto needs the sim device (" + device_file.string() + " names driver '" +
+                         config.driver + "'); a real device is calibrated with an operator at the prompts");
+      }
+      options.user = args.Value("user").value_or("default");
+      out_file =
+          args.Value("out").value_or((std::filesystem::path("calibration") / (config.name + ".yaml")).string());
+    });
     const std::unique_ptr<Device> device = MakeDevice(config);
     const DeviceCalibration calibration = RunCalibration(*device, options, std::cout);
     SaveCalibration(out_file, calibration);
     std::cout << "\n";
     PrintCalibrationSummary(std::cout, calibration, *device);
     std::cout << "\nwrote " << out_file.string() << "\n";
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "haptel calibrate: %s\n", e.what());
-    return 1;
-  }
-  return 0;
+    return cli::kExitOk;
+  });
 }
 
 }  // namespace haptel::haptics

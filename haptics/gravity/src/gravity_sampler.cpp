@@ -1,17 +1,14 @@
 #include "haptel/gravity/gravity_sampler.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
 
-#include "haptel/haptics/sim_device.hpp"
 
 namespace haptel::haptics {
 namespace {
 
-constexpr int64_t kMs = 1'000'000;
 
 /// metres = scale · raw + offset (private so this file does not depend on the
 /// calibration helpers being written alongside).
@@ -243,22 +240,6 @@ bool GravitySampler::Tick(int64_t now_ns) {
   }
   WriteForce(force);
   return true;
-}
-
-GravitySampleReport SampleGravityOnSim(SimDevice& device, Side side,
-                                       const ArmCalibration& calibration,
-                                       const GravitySamplerConfig& config, int64_t start_ns) {
-  GravitySampler sampler(device, side, calibration, config, [&device, side](const Vec3d& vertex) {
-    device.Place(side, vertex);  // the calibrated frame taken for the true one
-    device.Release(side);        // only the device force holds the arm now
-  });
-  const auto wall_start = std::chrono::steady_clock::now();
-  int64_t now = start_ns;
-  while (sampler.Tick(now)) now += kMs;
-  GravitySampleReport report = sampler.report();
-  report.wall_time_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-  return report;
 }
 
 }  // namespace haptel::haptics

@@ -28,6 +28,7 @@
 #include "haptel/config/error.hpp"
 #include "haptel/config/run.hpp"
 #include "haptel/core/args.hpp"
+#include "haptel/core/cli.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/core/log.hpp"
 #include "haptel/haptics/sim_device.hpp"
@@ -58,12 +59,6 @@ struct Options {
   Side side = Side::kLeft;
   int port = 0;
   std::string bind = "127.0.0.1";
-};
-
-/// Set-up failures that are not the user's arguments (exit 1).
-class SetupError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
 };
 
 struct Peer {
@@ -249,11 +244,9 @@ class ArmServer {
   ServerCounters c_;
 };
 
-Options ParseOptions(int argc, char** argv, bool& help) {
-  const Args args(argc, argv, {"device", "side", "port", "bind"}, {"help"});
-  help = args.Flag("help");
+Options ParseOptions(int argc, char** argv) {
+  const Args args(argc, argv, {"device", "side", "port", "bind"}, {});
   Options o;
-  if (help) return o;
   if (!args.positional().empty())
     throw UsageError("unexpected argument '" + args.positional()[0] + "'");
   const auto side = args.Value("side");
@@ -301,11 +294,15 @@ udp::UniqueFd Bind(const Options& o, std::string& bound) {
       error = "cannot read the bound address";
       continue;
     }
-    bound = addr.ss_family == AF_INET6 ? "[" + std::string(host) + "]:" + port
-                                       : std::string(host) + ":" + port;
+    // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on "[" + string.
+    bound.clear();
+    if (addr.ss_family == AF_INET6) bound += '[';
+    bound += host;
+    if (addr.ss_family == AF_INET6) bound += ']';
+    bound.append(":").append(port);
     return fd;
   }
-  throw SetupError("cannot bind " + o.bind + ":" + service + ": " + error);
+  throw std::runtime_error("cannot bind " + o.bind + ":" + service + ": " + error);
 }
 
 std::string Summary(const ServerCounters& c) {
@@ -331,41 +328,27 @@ std::string Summary(const ServerCounters& c) {
 
 int main(int argc, char** argv) {
   log::SetProgram(kProgram);
-  Options options;
-  DeviceConfig config;
-  udp::UniqueFd socket;
-  std::string bound;
-  try {
-    bool help = false;
-    options = ParseOptions(argc, argv, help);
-    if (help) {
-      std::fputs(kUsage, stdout);
-      return 0;
-    }
-    config = LoadDevice(options.device);
-    if (!config.sides[Index(options.side)]) {
-      throw ConfigError(options.device.string() + ": key 'sides': expected the " +
-                        (options.side == Side::kLeft ? "left" : "right") +
-                        " arm this server was asked to serve");
-    }
-    socket = Bind(options, bound);
-  } catch (const UsageError& e) {
-    std::fprintf(stderr, "%s: %s (see %s --help)\n", kProgram, e.what(), kProgram);
-    return 2;
-  } catch (const SetupError& e) {
-    std::fprintf(stderr, "%s: %s\n", kProgram, e.what());
-    return 1;
-  } catch (const std::exception& e) {  // ConfigError, yaml errors: bad configuration
-    std::fprintf(stderr, "%s: %s\n", kProgram, e.what());
-    return 2;
-  }
+  return cli::Main({kProgram, kUsage}, argc, argv, [&] {
+    Options options;
+    DeviceConfig config;
+    cli::ReadInput([&] {
+      options = ParseOptions(argc, argv);
+      config = LoadDevice(options.device);
+      if (!config.sides[Index(options.side)]) {
+        throw ConfigError(options.device.string() + ": key 'sides': expected the " +
+                          (options.side == Side::kLeft ? "left" : "right") +
+                          " arm this server was asked to serve");
+      }
+    });
+    std::string bound;
+    const udp::UniqueFd socket = Bind(options, bound);  // a port in use: exit 1
 
-  struct sigaction action {};
-  action.sa_handler = OnSignal;
-  sigemptyset(&action.sa_mask);
-  sigaction(SIGTERM, &action, nullptr);
-  sigaction(SIGINT, &action, nullptr);
-  try {
+    // No SA_RESTART: the signal must wake the server from its blocking receive.
+    struct sigaction action {};
+    action.sa_handler = OnSignal;
+    sigemptyset(&action.sa_mask);
+    sigaction(SIGTERM, &action, nullptr);
+    sigaction(SIGINT, &action, nullptr);
     SimDevice sim(config, OperatorConfig{});
     ArmServer server(sim, options.side, socket.get(), config.udp.lost_after_s);
     std::printf("%s: serving %s arm of '%s' on %s\n", kProgram,
@@ -373,9 +356,6 @@ int main(int argc, char** argv) {
     std::fflush(stdout);
     server.Serve();
     log::Info(Summary(server.counters()));
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "%s: %s\n", kProgram, e.what());
-    return 1;
-  }
-  return 0;
+    return cli::kExitOk;
+  });
 }

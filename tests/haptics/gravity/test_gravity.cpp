@@ -15,6 +15,7 @@
 #include "haptel/config/gravity_grid.hpp"
 #include "haptel/config/run.hpp"
 #include "haptel/gravity/gravity_sampler.hpp"
+#include "haptel/testing/gravity_on_sim.hpp"
 #include "haptel/haptics/sim_device.hpp"
 #include "test_env.hpp"
 

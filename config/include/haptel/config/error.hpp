@@ -2,13 +2,15 @@
 #include <stdexcept>
 #include <string>
 
+#include "haptel/core/cli.hpp"
+
 namespace haptel {
 
 /// A configuration file (or command-line option) is wrong. The message names
 /// the file, the line, the key and what was expected, on one line.
-class ConfigError : public std::runtime_error {
+class ConfigError : public cli::InputError {
  public:
-  using std::runtime_error::runtime_error;
+  using cli::InputError::InputError;
 };
 
 }  // namespace haptel

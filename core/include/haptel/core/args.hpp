@@ -8,11 +8,14 @@
 #include <string>
 #include <vector>
 
+#include "haptel/core/cli.hpp"
+
 namespace haptel {
 
-class UsageError : public std::runtime_error {
+/// A command line that cannot work (exit 2, with a pointer to --help).
+class UsageError : public cli::InputError {
  public:
-  using std::runtime_error::runtime_error;
+  using cli::InputError::InputError;
 };
 
 class Args {

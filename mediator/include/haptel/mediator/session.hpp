@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "haptel/config/calibration.hpp"
+#include "haptel/core/cli.hpp"
 #include "haptel/config/device.hpp"
 #include "haptel/config/gravity_grid.hpp"
 #include "haptel/config/physics.hpp"
@@ -90,7 +91,7 @@ std::string ToString(Outcome outcome);
 int ExitCode(Outcome outcome);
 /// The exit code, whatever the outcome, of a run the database did not take
 /// at the end (its results went to a fallback file; the JSON line says which).
-constexpr int kExitNotRecorded = 4;
+constexpr int kExitNotRecorded = cli::kExitNotRecorded;
 
 struct SessionResult {
   Outcome outcome = Outcome::kInterrupted;

@@ -15,6 +15,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "haptel/core/cli.hpp"
 #include "haptel/view/view_model.hpp"
 
 union SDL_Event;
@@ -23,9 +24,9 @@ namespace haptel::view {
 
 /// Set-up errors (no display for a window, no GL 3.3, an MP4 that cannot be
 /// opened): one line for the person, e.g. suggesting --record.
-class ViewError : public std::runtime_error {
+class ViewError : public cli::InputError {
  public:
-  using std::runtime_error::runtime_error;
+  using cli::InputError::InputError;
 };
 
 enum class ViewMode {

@@ -22,8 +22,6 @@
 
 namespace haptel::haptics {
 
-class SimDevice;
-
 // --------------------------------------------------------------- offline ---
 
 /// Where the arm is relative to the vertex height, and how it moves.
@@ -199,14 +197,5 @@ class GravitySampler {
   int decisions_ = 0;
   GravitySampleReport report_;
 };
-
-/// Samples a grid on a simulated device in simulated time (1 ms ticks from
-/// start_ns): each vertex is reached with SimDevice::Place and then
-/// SimDevice::Release, so only the device force holds the arm. Measures the
-/// wall time too. Leaves the device with zero force commanded.
-GravitySampleReport SampleGravityOnSim(SimDevice& device, Side side,
-                                       const ArmCalibration& calibration,
-                                       const GravitySamplerConfig& config,
-                                       int64_t start_ns = 1'000'000);
 
 }  // namespace haptel::haptics

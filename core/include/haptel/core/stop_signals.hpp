@@ -1,0 +1,17 @@
+#pragma once
+/// @file SIGINT, SIGTERM and SIGHUP as a request to stop: installed first
+/// thing in a program that must end cleanly (record what it measured, stop
+/// motors), so that a signal arriving while it still reads its files is not
+/// fatal but seen by the loop as soon as it starts.
+#include <atomic>
+
+namespace haptel {
+
+/// Installs the handlers (idempotent) and returns the flag they set. The
+/// flag is lock-free and may be read from any thread, the servo loop included.
+const std::atomic<bool>& InstallStopSignals();
+
+/// The signal that set the flag (0 while none has).
+int StopSignal();
+
+}  // namespace haptel

@@ -1,0 +1,37 @@
+#include "haptel/core/cli.hpp"
+
+#include <cstdio>
+#include <cstring>
+
+#include "haptel/core/args.hpp"
+
+namespace haptel::cli {
+
+bool HelpRequested(int argc, const char* const* argv) {
+  for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--") == 0) return false;
+    if (std::strcmp(argv[i], "--help") == 0 || std::strcmp(argv[i], "-h") == 0) return true;
+  }
+  return false;
+}
+
+int Main(const Program& program, int argc, const char* const* argv, const std::function<int()>& body) {
+  if (HelpRequested(argc, argv)) {
+    std::fputs(program.usage.c_str(), stdout);
+    return kExitOk;
+  }
+  try {
+    return body();
+  } catch (const UsageError& e) {
+    std::fprintf(stderr, "%s: %s (see %s --help)\n", program.name.c_str(), e.what(), program.name.c_str());
+    return kExitBadInput;
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "%s: %s\n", program.name.c_str(), e.what());
+    return kExitBadInput;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: %s\n", program.name.c_str(), e.what());
+    return kExitFailed;
+  }
+}
+
+}  // namespace haptel::cli

@@ -1,0 +1,46 @@
+#pragma once
+/// @file `haptel run`: one lap from the command line — and the steps a study
+/// repeats for each trial: run a session that is set up, record it, print
+/// its summary and its JSON line.
+#include <atomic>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+#include "haptel/core/args.hpp"
+#include "haptel/mediator/recorder.hpp"
+#include "haptel/mediator/session.hpp"
+
+namespace haptel::mediator {
+
+/// A session's result and where it was stored.
+struct RecordedRun {
+  SessionResult result;
+  int64_t run_id = 0;             ///< its row in the database (0: not recorded)
+  std::filesystem::path unsaved;  ///< the fallback file when the database failed
+};
+
+/// The session `haptel run` would drive for these options: every file read
+/// and checked against the others; nothing started. Throws UsageError and
+/// ConfigError (bad input).
+SessionSetup RunSetupFromArgs(const Args& args);
+
+/// Runs the session, then saves it into `recorder` — or, if the database
+/// fails at the end, into a fallback file beside it — with its picture.
+/// Throws only for parts that cannot be set up (nothing moved).
+RecordedRun RunAndRecord(const SessionSetup& setup, Recorder& recorder,
+                         const std::atomic<bool>& interrupted);
+
+/// The process exit code: the outcome's, or kExitNotRecorded.
+int ExitCode(const RecordedRun& run);
+
+/// The lines `haptel run` prints after a lap.
+void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRun& run);
+/// The one JSON line of `haptel run --json` (no newline).
+std::string RunJson(const SessionSetup& setup, const RecordedRun& run);
+
+/// `haptel run`; argv[0] is "run". Returns the exit code.
+int RunCommand(int argc, const char* const* argv);
+
+}  // namespace haptel::mediator
