@@ -287,6 +287,16 @@ std::vector<YamlMap> YamlMap::MapList(const std::string& key) {
   return out;
 }
 
+std::vector<std::string> YamlMap::Keys() const {
+  std::vector<std::string> keys;
+  if (!node_.IsMap()) return keys;
+  for (const auto& entry : node_) {
+    if (!entry.first.IsScalar()) Fail("<not a plain key>", "plain keys");
+    keys.push_back(entry.first.Scalar());
+  }
+  return keys;
+}
+
 void YamlMap::Finish() const {
   if (!node_.IsMap()) return;
   for (const auto& entry : node_) {

@@ -55,6 +55,9 @@ class YamlMap {
   std::vector<std::string> Strings(const std::string& key, const std::vector<std::string>& fallback);
   /// A nested mapping; an absent key yields an empty mapping (all defaults).
   YamlMap Map(const std::string& key);
+  /// The keys this mapping holds, in file order (for mappings whose keys are
+  /// names the user chooses, e.g. profiles: {careful: ..., quick: ...}).
+  std::vector<std::string> Keys() const;
   /// A list of mappings; an absent key yields an empty list.
   std::vector<YamlMap> MapList(const std::string& key);
 

@@ -5,8 +5,14 @@
 
 namespace haptel::mediator {
 
-AutoOperator::AutoOperator(const Track& track, const OperatorConfig& config, const DriveConfig& drive)
-    : track_(track), config_(config), drive_(drive) {}
+AutoOperator::AutoOperator(const Track& track, const OperatorConfig& config, const DriveConfig& drive,
+                           const DriverProfile& profile, int experience)
+    : track_(track),
+      config_(config),
+      drive_(drive),
+      profile_(profile),
+      error_scale_(1.0 + profile.learning_gain * std::exp(-std::max(0, experience) / profile.learning_trials)),
+      random_(profile.seed * 0x9E3779B97F4A7C15ull + static_cast<uint64_t>(std::max(0, experience))) {}
 
 void AutoOperator::Observe(const Observation& observation) {
   seen_.push_back(observation);
@@ -51,6 +57,83 @@ interfaces::DriveIntent AutoOperator::Decide(double t_s) {
   double turn = curvature * speed * drive_.track_width / 2.0 / drive_.max_speed;
   if (forward == 0.0) turn = std::copysign(0.4, alpha);
   return {forward, std::clamp(turn, -0.7, 0.7)};
+}
+
+namespace {
+
+/// A standard normal draw (Box–Muller: the same on every standard library).
+double Normal(std::mt19937_64& random) {
+  const double u1 = (static_cast<double>(random() >> 11) + 0.5) * 0x1.0p-53;
+  const double u2 = static_cast<double>(random() >> 11) * 0x1.0p-53;
+  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
+}
+
+/// Below this, an intent axis means "at the centre".
+constexpr double kCentre = 0.05;
+
+}  // namespace
+
+interfaces::DriveIntent AutoOperator::Express(double t_s, const interfaces::DriveIntent& ideal,
+                                              const interfaces::MediatorInterface& interface) {
+  const double dt = last_express_s_ < 0 ? 0.0 : std::max(0.0, t_s - last_express_s_);
+  last_express_s_ = t_s;
+  interfaces::DriveIntent out = ideal;
+
+  // The steering wanders (an Ornstein–Uhlenbeck process: stationary spread
+  // steering_noise, correlation time noise_time_s).
+  const double spread = profile_.steering_noise * error_scale_;
+  if (spread > 0.0 && dt > 0.0) {
+    const double decay = std::exp(-dt / profile_.noise_time_s);
+    wander_ = wander_ * decay + spread * std::sqrt(1.0 - decay * decay) * Normal(random_);
+  }
+  out.turn += wander_;
+
+  // Without a speed cue the driver holds back; with a speedometer, only for
+  // the share of the time they do not read it.
+  if (out.forward > 0.0 && !backing_off(t_s)) {
+    const double unsure = 1.0 - std::min(0.9, (1.0 - profile_.unsure_cruise) * error_scale_);
+    const double cue = interface.ShowsSpeed() ? profile_.hud_use : 0.0;
+    out.forward *= cue + (1.0 - cue) * unsure;
+  }
+
+  // A control that stays where it is left must be brought back to its centre
+  // by aim: slower than moving it away, and it misses.
+  if (interface.ControlsStayPut() && grasp_s_ > 0.0) {
+    double* axes[2] = {&out.forward, &out.turn};
+    double* applied[2] = {&applied_.forward, &applied_.turn};
+    for (size_t k = 0; k < 2; ++k) {
+      double wanted = *axes[k];
+      if (std::abs(wanted) < kCentre) {
+        if (!at_centre_[k]) centre_miss_[k] = profile_.recentre_error * error_scale_ * Normal(random_);
+        at_centre_[k] = true;
+        wanted += centre_miss_[k];
+      } else {
+        at_centre_[k] = false;
+      }
+      double& a = *applied[k];
+      const bool towards_centre = std::abs(wanted) < std::abs(a) || wanted * a < 0.0;
+      const double tau = config_.arm_time_constant_s + profile_.recentre_s * error_scale_;
+      if (towards_centre && tau > 0.0) {
+        a += (wanted - a) * (1.0 - std::exp(-dt / tau));
+      } else {
+        a = wanted;
+      }
+      *axes[k] = a;
+    }
+  }
+  out.forward = std::clamp(out.forward, -1.0, 1.0);
+  out.turn = std::clamp(out.turn, -1.0, 1.0);
+  return out;
+}
+
+void AutoOperator::ScheduleSlip(size_t i, double t_s) {
+  const double rate = profile_.slip_rate_hz * error_scale_;
+  if (!(rate > 0.0)) {
+    next_slip_s_[i] = 1e300;
+    return;
+  }
+  const double u = (static_cast<double>(random_() >> 11) + 0.5) * 0x1.0p-53;
+  next_slip_s_[i] = t_s - std::log(u) / rate;
 }
 
 namespace {
@@ -110,7 +193,7 @@ interfaces::HandTargets AutoOperator::Act(double t_s, const interfaces::Mediator
     return arm_;
   }
 
-  const interfaces::HandTargets wanted = interface.HandTargetsFor(Decide(t_s));
+  const interfaces::HandTargets wanted = interface.HandTargetsFor(Express(t_s, Decide(t_s), interface));
   const double dt = last_act_s_ < 0 ? 0.0 : t_s - last_act_s_;
   last_act_s_ = t_s;
   const double alpha =
@@ -127,7 +210,29 @@ interfaces::HandTargets AutoOperator::Act(double t_s, const interfaces::Mediator
     g.glove = wanted[i]->glove;  // the fingers keep their grip
     g.approach = wanted[i]->approach;
   }
-  return arm_;
+  // A control slips out of the hand: it opens and lifts off, then comes back
+  // down and closes again, over regrasp_s; the arm goes on following the intent.
+  interfaces::HandTargets out = arm_;
+  for (size_t i = 0; i < out.size(); ++i) {
+    if (!out[i] || !HasApproach(*out[i])) continue;
+    if (next_slip_s_[i] < 0.0) ScheduleSlip(i, t_s);
+    if (slip_start_s_[i] < 0.0 && t_s >= next_slip_s_[i]) {
+      slip_start_s_[i] = t_s;
+      ++slips_;
+    }
+    if (slip_start_s_[i] < 0.0) continue;
+    const double a = (t_s - slip_start_s_[i]) / profile_.regrasp_s;
+    if (a >= 1.0) {
+      slip_start_s_[i] = -1.0;
+      ScheduleSlip(i, t_s);
+      continue;
+    }
+    const double open = a < 0.5 ? Smooth(2.0 * a) : 1.0 - Smooth(2.0 * a - 1.0);
+    interfaces::HandGoal& g = *out[i];
+    for (int k = 0; k < 3; ++k) g.position[k] += g.approach[k] * open;
+    for (double& angle : g.glove) angle *= 1.0 - open;
+  }
+  return out;
 }
 
 }  // namespace haptel::mediator

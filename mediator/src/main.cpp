@@ -14,6 +14,7 @@
 #include "haptel/core/log.hpp"
 #include "haptel/mediator/run_command.hpp"
 #include "haptel/mediator/scene_command.hpp"
+#include "haptel/study/study_command.hpp"
 
 namespace {
 
@@ -21,6 +22,7 @@ constexpr const char* kUsage =
     "usage: haptel run [options]         drive one grand-prix lap (--help for options)\n"
     "       haptel calibrate [options]   calibrate a haptic device (--help for options)\n"
     "       haptel scene FILE [--json]   load a haptic scene, print its objects, mass and bounds\n"
+    "       haptel study run FILE        run an A/B study; `haptel study report` reports on it\n"
     "       haptel bench NAME [options]  benchmarks: servo, gravity, skip, physics, stability, view\n"
     "                                    (haptel bench --help lists them)\n"
     "\n"
@@ -48,8 +50,9 @@ int main(int argc, char** argv) {
   if (command == "calibrate") return haptics::CalibrateMain(argc - 1, argv + 1);
   if (command == "scene") return mediator::SceneCommand(argc - 1, argv + 1, std::cout, std::cerr);
   if (command == "bench") return ExecBench(argv + 1);
+  if (command == "study") return study::StudyCommand(argc - 1, argv + 1);
   return cli::Main({"haptel", kUsage}, argc, argv, [&]() -> int {
-    if (command.empty()) throw UsageError("missing command (run, calibrate, scene, bench)");
-    throw UsageError("unknown command '" + command + "' (run, calibrate, scene, bench)");
+    if (command.empty()) throw UsageError("missing command (run, calibrate, scene, study, bench)");
+    throw UsageError("unknown command '" + command + "' (run, calibrate, scene, study, bench)");
   });
 }

@@ -15,8 +15,8 @@ void ActOn(haptics::SimDevice& device, haptics::Side side, const interfaces::Han
 }  // namespace
 
 AutomaticOperator::AutomaticOperator(const Track& track, const OperatorConfig& config, const DriveConfig& drive,
-                                     haptics::SimDevice& device)
-    : driver_(track, config, drive), device_(device) {}
+                                     haptics::SimDevice& device, const DriverProfile& profile, int experience)
+    : driver_(track, config, drive, profile, experience), device_(device) {}
 
 void AutomaticOperator::Prepare(const interfaces::MediatorInterface& interface) {
   const interfaces::HandTargets neutral = interface.HandTargetsFor({});

@@ -12,6 +12,8 @@
 /// NOT NULL: a NaN time or position there is an error, and the save rolls back.
 #include "haptel/mediator/recorder.hpp"
 
+#include "haptel/mediator/sqlite_util.hpp"
+
 #include <sqlite3.h>
 #include <unistd.h>
 
@@ -32,8 +34,10 @@
 namespace haptel::mediator {
 namespace {
 
+using namespace haptel::sql;
+
 /// Schema version stored in PRAGMA user_version.
-constexpr int kSchemaVersion = 3;
+constexpr int kSchemaVersion = 4;
 
 /// Schema steps: kMigrations[v - 1] takes a database from version v - 1 to v.
 /// A new database runs them all, so the upgrade path of an old file is the
@@ -129,7 +133,82 @@ CREATE TABLE run_counters (
 );
 )sql";
 
-constexpr const char* kMigrations[] = {kSchemaV1, kSchemaV2, kSchemaV3};
+/// v4: A/B studies (study/store.hpp). A study's plan is fixed when it is
+/// first run; each trial row links to its run and is written in the run's own
+/// transaction; each questionnaire's answers go in one transaction. The
+/// UNIQUE keys make a trial or an answer impossible to record twice.
+constexpr const char* kSchemaV4 = R"sql(
+CREATE TABLE studies (
+  id INTEGER PRIMARY KEY,
+  name TEXT NOT NULL UNIQUE,
+  file TEXT NOT NULL,
+  definition TEXT NOT NULL,
+  operators TEXT NOT NULL,
+  design TEXT NOT NULL,
+  trial_cap_s REAL NOT NULL,
+  created_utc TEXT NOT NULL
+);
+CREATE TABLE study_conditions (
+  study_id INTEGER NOT NULL REFERENCES studies(id) ON DELETE CASCADE,
+  position INTEGER NOT NULL,
+  name TEXT NOT NULL,
+  interface TEXT NOT NULL,
+  PRIMARY KEY (study_id, position),
+  UNIQUE (study_id, name)
+);
+CREATE TABLE study_participants (
+  study_id INTEGER NOT NULL REFERENCES studies(id) ON DELETE CASCADE,
+  participant TEXT NOT NULL,
+  row_index INTEGER NOT NULL,
+  profile TEXT NOT NULL,
+  added_utc TEXT NOT NULL,
+  PRIMARY KEY (study_id, participant),
+  UNIQUE (study_id, row_index)
+);
+CREATE TABLE study_plan (
+  study_id INTEGER NOT NULL REFERENCES studies(id) ON DELETE CASCADE,
+  participant TEXT NOT NULL,
+  position INTEGER NOT NULL,
+  condition TEXT NOT NULL,
+  repetition INTEGER NOT NULL,
+  PRIMARY KEY (study_id, participant, position)
+);
+CREATE TABLE study_trials (
+  study_id INTEGER NOT NULL REFERENCES studies(id) ON DELETE CASCADE,
+  participant TEXT NOT NULL,
+  position INTEGER NOT NULL,
+  condition TEXT NOT NULL,
+  run_id INTEGER NOT NULL REFERENCES runs(id),
+  lap_time_s REAL NOT NULL,
+  completed INTEGER NOT NULL,
+  obstacles INTEGER NOT NULL,
+  outcome TEXT NOT NULL,
+  attempt INTEGER NOT NULL,
+  finished_utc TEXT NOT NULL,
+  PRIMARY KEY (study_id, participant, position)
+);
+CREATE TABLE study_answers (
+  study_id INTEGER NOT NULL REFERENCES studies(id) ON DELETE CASCADE,
+  participant TEXT NOT NULL,
+  condition TEXT NOT NULL,
+  questionnaire TEXT NOT NULL,
+  item TEXT NOT NULL,
+  value TEXT NOT NULL,
+  answered_utc TEXT NOT NULL,
+  PRIMARY KEY (study_id, participant, condition, questionnaire, item)
+);
+CREATE TABLE study_events (
+  id INTEGER PRIMARY KEY,
+  study_id INTEGER NOT NULL REFERENCES studies(id) ON DELETE CASCADE,
+  t_utc TEXT NOT NULL,
+  kind TEXT NOT NULL,
+  participant TEXT NOT NULL DEFAULT '',
+  position INTEGER NOT NULL DEFAULT 0,
+  detail TEXT NOT NULL DEFAULT ''
+);
+)sql";
+
+constexpr const char* kMigrations[] = {kSchemaV1, kSchemaV2, kSchemaV3, kSchemaV4};
 static_assert(std::size(kMigrations) == kSchemaVersion, "one migration per schema version");
 
 constexpr const char* kInsertRun = R"sql(
@@ -180,152 +259,6 @@ constexpr const char* kSelectContacts =
 constexpr const char* kSelectCounters =
     "SELECT run_id, name, value FROM run_counters ORDER BY run_id, rowid";
 
-struct DbCloser {
-  void operator()(sqlite3* db) const noexcept { sqlite3_close_v2(db); }
-};
-using DbHandle = std::unique_ptr<sqlite3, DbCloser>;
-
-struct StmtFinalizer {
-  void operator()(sqlite3_stmt* stmt) const noexcept { sqlite3_finalize(stmt); }
-};
-using Stmt = std::unique_ptr<sqlite3_stmt, StmtFinalizer>;
-
-/// Throws "database FILE: what" (one line).
-[[noreturn]] void FailWith(const std::filesystem::path& file, std::string_view what) {
-  throw std::runtime_error("database " + file.string() + ": " + std::string(what));
-}
-
-/// Throws naming the database file, what was being done, and SQLite's message
-/// (with what a lock means: another connection holds the file).
-[[noreturn]] void Fail(const std::filesystem::path& file, sqlite3* db, std::string_view what) {
-  std::string message(what);
-  if (db != nullptr) {
-    const int code = sqlite3_extended_errcode(db) & 0xff;
-    if (code == SQLITE_NOTADB)
-      FailWith(file, "is not a SQLite database (corrupt, or another kind of file)");
-    message += ": " + std::string(sqlite3_errmsg(db));
-    if (code == SQLITE_BUSY) message += " (another program holds it; gave up waiting)";
-  }
-  FailWith(file, message);
-}
-
-void Exec(const std::filesystem::path& file, sqlite3* db, const char* sql, std::string_view what) {
-  if (sqlite3_exec(db, sql, nullptr, nullptr, nullptr) != SQLITE_OK) Fail(file, db, what);
-}
-
-Stmt Prepare(const std::filesystem::path& file, sqlite3* db, const char* sql,
-             std::string_view what) {
-  sqlite3_stmt* raw = nullptr;
-  if (sqlite3_prepare_v2(db, sql, -1, &raw, nullptr) != SQLITE_OK) {
-    sqlite3_finalize(raw);
-    Fail(file, db, what);
-  }
-  return Stmt(raw);
-}
-
-/// Rolls back on scope exit unless committed. Works for read and write
-/// transactions alike.
-class Transaction {
- public:
-  Transaction(const std::filesystem::path& file, sqlite3* db, const char* begin_sql)
-      : file_(file), db_(db) {
-    Exec(file_, db_, begin_sql, "cannot begin transaction");
-  }
-  ~Transaction() {
-    if (!committed_ && sqlite3_get_autocommit(db_) == 0) {
-      sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
-    }
-  }
-  Transaction(const Transaction&) = delete;
-  Transaction& operator=(const Transaction&) = delete;
-
-  void Commit() {
-    Exec(file_, db_, "COMMIT", "cannot commit transaction");
-    committed_ = true;
-  }
-
- private:
-  const std::filesystem::path& file_;
-  sqlite3* db_;
-  bool committed_ = false;
-};
-
-/// Binds parameters 1, 2, ... in order, failing with the file name on error.
-class Binder {
- public:
-  Binder(const std::filesystem::path& file, sqlite3* db, sqlite3_stmt* stmt)
-      : file_(file), db_(db), stmt_(stmt) {}
-
-  Binder& Int(int64_t value) { return Check(sqlite3_bind_int64(stmt_, ++index_, value)); }
-  Binder& Real(double value) { return Check(sqlite3_bind_double(stmt_, ++index_, value)); }
-  Binder& Text(const std::string& value) {
-    return Check(sqlite3_bind_text64(stmt_, ++index_, value.data(), value.size(), SQLITE_TRANSIENT,
-                                     SQLITE_UTF8));
-  }
-
- private:
-  Binder& Check(int rc) {
-    if (rc != SQLITE_OK) Fail(file_, db_, "cannot bind parameter " + std::to_string(index_));
-    return *this;
-  }
-
-  const std::filesystem::path& file_;
-  sqlite3* db_;
-  sqlite3_stmt* stmt_;
-  int index_ = 0;
-};
-
-/// Reads columns 0, 1, ... in order.
-class Reader {
- public:
-  explicit Reader(sqlite3_stmt* stmt) : stmt_(stmt) {}
-
-  int64_t Int() { return sqlite3_column_int64(stmt_, index_++); }
-  bool Bool() { return Int() != 0; }
-  double Real() {
-    const int i = index_++;
-    if (sqlite3_column_type(stmt_, i) == SQLITE_NULL) {
-      return std::numeric_limits<double>::quiet_NaN();
-    }
-    return sqlite3_column_double(stmt_, i);
-  }
-  std::string Text() {
-    const int i = index_++;
-    const auto* text = reinterpret_cast<const char*>(sqlite3_column_text(stmt_, i));
-    const int bytes = sqlite3_column_bytes(stmt_, i);
-    return text == nullptr ? std::string() : std::string(text, static_cast<size_t>(bytes));
-  }
-
- private:
-  sqlite3_stmt* stmt_;
-  int index_ = 0;
-};
-
-/// ISO-8601 UTC with milliseconds, e.g. "2024-05-01T12:34:56.789Z".
-std::string IsoUtc(int64_t wall_ns) {
-  constexpr int64_t kNsPerS = 1'000'000'000;
-  int64_t seconds = wall_ns / kNsPerS;
-  int64_t remainder_ns = wall_ns % kNsPerS;
-  if (remainder_ns < 0) {  // floor, so times before 1970 format correctly
-    remainder_ns += kNsPerS;
-    --seconds;
-  }
-  const auto t = static_cast<std::time_t>(seconds);
-  std::tm tm{};
-  if (gmtime_r(&t, &tm) == nullptr) return std::string();
-  char buffer[64];
-  const int n = std::snprintf(buffer, sizeof buffer, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ",
-                              tm.tm_year + 1900, tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min,
-                              tm.tm_sec, static_cast<int>(remainder_ns / 1'000'000));
-  if (n < 0 || static_cast<size_t>(n) >= sizeof buffer) return std::string();
-  return std::string(buffer, static_cast<size_t>(n));
-}
-
-/// Steps a statement that returns no rows.
-void StepDone(const std::filesystem::path& file, sqlite3* db, sqlite3_stmt* stmt,
-              std::string_view what) {
-  if (sqlite3_step(stmt) != SQLITE_DONE) Fail(file, db, what);
-}
 
 }  // namespace
 
@@ -432,7 +365,7 @@ Recorder::Recorder(const std::filesystem::path& database) : path_(database) {
 
 Recorder::~Recorder() { sqlite3_close_v2(db_); }
 
-int64_t Recorder::Save(const RunRecord& run) {
+int64_t Recorder::Save(const RunRecord& run, const AlsoSave& also) {
   // A file deleted or replaced since it was opened: SQLite in WAL mode would
   // write the run into the unlinked file, and it would be gone.
   int moved = 0;
@@ -542,6 +475,7 @@ int64_t Recorder::Save(const RunRecord& run) {
   insert_point.reset();
   insert_contact.reset();
   insert_counter.reset();
+  if (also) also(db_, run_id, run);  // e.g. the study's trial row: in the same transaction
   txn.Commit();
   return run_id;
 }

@@ -77,6 +77,13 @@ std::string CountersJson(const std::vector<haptel::mediator::RunCounter>& counte
 
 }  // namespace
 
+Args ParseRunArgs(int argc, const char* const* argv) {
+  return Args(argc, argv,
+              {"config", "track", "interface", "scene", "vehicle-name", "domain", "database", "vehicle-timeout",
+               "trace", "operator", "device", "trace-in", "time-limit", "view", "record"},
+              {"json", "quiet"});
+}
+
 SessionSetup RunSetupFromArgs(const Args& args) {
   SessionSetup setup;
   setup.progress = !args.Flag("quiet");
@@ -177,12 +184,12 @@ SessionSetup RunSetupFromArgs(const Args& args) {
 }
 
 RecordedRun RunAndRecord(const SessionSetup& setup, Recorder& recorder,
-                         const std::atomic<bool>& interrupted) {
+                         const std::atomic<bool>& interrupted, const Recorder::AlsoSave& also) {
   RecordedRun run;
   run.result = RunSession(setup, interrupted);
   // Saved, or — when the database fails at the end — kept in a file beside it.
   try {
-    run.run_id = recorder.Save(run.result.record);
+    run.run_id = recorder.Save(run.result.record, also);
     run.result.record.id = run.run_id;
   } catch (const std::exception& e) {
     try {
@@ -308,11 +315,7 @@ int RunCommand(int argc, const char* const* argv) {
   return cli::Main({"haptel run", kRunUsage}, argc, argv, [&] {
     bool json = false;
     const SessionSetup setup = cli::ReadInput([&] {
-      const Args args(argc, argv,
-                      {"config", "track", "interface", "scene", "vehicle-name", "domain", "database",
-                       "vehicle-timeout", "trace", "operator", "device", "trace-in", "time-limit", "view",
-                       "record"},
-                      {"json", "quiet"});
+      const Args args = ParseRunArgs(argc, argv);
       if (!args.positional().empty()) {
         throw UsageError("unexpected argument '" + args.positional()[0] + "' (options start with --)");
       }

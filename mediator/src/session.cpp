@@ -128,7 +128,8 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
                         "device '" +
                         setup.device.name + "' is driven by a person: use --operator person");
     }
-    op = std::make_unique<AutomaticOperator>(track, run.op, setup.vehicle.drive, *haptic.sim());
+    op = std::make_unique<AutomaticOperator>(track, run.op, setup.vehicle.drive, *haptic.sim(), setup.driver,
+                                             setup.driver_experience);
   } else {
     op = std::make_unique<PersonOperator>();
   }
@@ -413,6 +414,9 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
     result.scene_bodies = static_cast<int>(physics_side->scene.nodes.size());
   }
   if (start_spec.is_cockpit() && result.grasp_s == 0.0) result.grasp_s = -1.0;
+  if (const auto* automatic = dynamic_cast<const AutomaticOperator*>(op.get())) {
+    result.operator_slips = automatic->driver().slips();
+  }
   haptic.Stop();
   vehicle.Stop();
 

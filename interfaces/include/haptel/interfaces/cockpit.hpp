@@ -61,6 +61,8 @@ class CockpitInterface final : public MediatorInterface {
   /// that control has slipped in the hand holding it (seen in Update).
   HandTargets HandTargetsFor(const DriveIntent& intent) const override;
   bool NeedsPhysics() const override { return true; }
+  bool ShowsSpeed() const override { return logic_.config().hud; }
+  bool ControlsStayPut() const override { return !logic_.config().return_to_zero; }
 
   /// The view elements after the latest Update (all off without a HUD).
   const HudState& hud() const { return hud_; }

@@ -20,6 +20,8 @@ class GestureInterface final : public MediatorInterface {
   MotorCommand Update(double t_s, const VehicleFeedback& feedback, haptics::Hal& hal) override;
   HandTargets HandTargetsFor(const DriveIntent& intent) const override;
   bool NeedsPhysics() const override { return false; }
+  /// The thesis kept the speedometer and the indicators on the gesture interface.
+  bool ShowsSpeed() const override { return true; }
 
   /// Pure mapping from a right-hand position to motor commands.
   MotorCommand Map(const haptics::Vec3d& right_hand) const;

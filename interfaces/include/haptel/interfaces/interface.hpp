@@ -62,6 +62,13 @@ class MediatorInterface {
 
   /// Whether the interface has physical controls that need a physics world.
   virtual bool NeedsPhysics() const = 0;
+
+  /// What a driver perceives of the interface, for the simulated driver:
+  /// whether it shows the vehicle's speed (a speedometer)...
+  virtual bool ShowsSpeed() const { return false; }
+  /// ...and whether its controls stay where the hand leaves them (false:
+  /// there are none, or they spring back to zero when released).
+  virtual bool ControlsStayPut() const { return false; }
 };
 
 }  // namespace haptel::interfaces

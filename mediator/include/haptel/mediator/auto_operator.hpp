@@ -13,7 +13,17 @@
 /// offset), the operator first brings its open hands down onto them over
 /// `grasp_reach_s`, closes its fingers over `grasp_close_s`, and only then
 /// starts driving; the interface reads the controls as they are meanwhile.
+///
+/// Its DriverProfile makes it a particular person rather than the ideal
+/// driver (study/: the simulated participants): steering that wanders,
+/// controls that slip out of the hand and are grasped again, the effort of
+/// re-centring a control that stays where it was left, a speedometer read
+/// now and then, and errors that shrink with the trials done before.
+#include <array>
 #include <deque>
+#include <random>
+
+#include "haptel/config/study.hpp"
 
 #include "haptel/config/run.hpp"
 #include "haptel/config/track.hpp"
@@ -34,13 +44,20 @@ struct Observation {
 
 class AutoOperator {
  public:
-  /// Keeps a reference to `track`.
-  AutoOperator(const Track& track, const OperatorConfig& config, const DriveConfig& drive);
+  /// Keeps a reference to `track`. `experience`: trials this driver has done
+  /// before (the profile's errors shrink with it).
+  AutoOperator(const Track& track, const OperatorConfig& config, const DriveConfig& drive,
+               const DriverProfile& profile = {}, int experience = 0);
 
   /// Something the operator saw (e.g. each vehicle state as it arrives).
   void Observe(const Observation& observation);
-  /// What the operator wants at time t_s, from what it saw reaction_delay ago.
+  /// What the operator wants at time t_s, from what it saw reaction_delay ago
+  /// (the ideal intent: before the profile's errors).
   interfaces::DriveIntent Decide(double t_s);
+  /// The intent as this driver expresses it on `interface`: with the
+  /// profile's steering wander, speed cue and re-centring; t_s increasing.
+  interfaces::DriveIntent Express(double t_s, const interfaces::DriveIntent& ideal,
+                                  const interfaces::MediatorInterface& interface);
   /// Hand goals after the arm's lag, for the interface's inverse map. The
   /// first call starts the grasp, if the interface has anything to grasp.
   interfaces::HandTargets Act(double t_s, const interfaces::MediatorInterface& interface);
@@ -51,6 +68,10 @@ class AutoOperator {
   bool grasped(double t_s) const {
     return start_s_ >= 0 && t_s >= start_s_ + grasp_s_;
   }
+  /// Times a control slipped out of a hand so far.
+  int slips() const { return slips_; }
+  /// The profile's error scale for this driver's experience (1: practised).
+  double error_scale() const { return error_scale_; }
 
  private:
   const Track& track_;
@@ -63,6 +84,21 @@ class AutoOperator {
   double last_act_s_ = -1.0;
   double start_s_ = -1.0;  ///< first Act
   double grasp_s_ = 0.0;   ///< reach + close, 0 when nothing is grasped
+
+  // The profile's state (all inert for the ideal driver).
+  /// Draws the next slip of hand i after t_s (never, without slips).
+  void ScheduleSlip(size_t i, double t_s);
+  DriverProfile profile_;
+  double error_scale_ = 1.0;
+  std::mt19937_64 random_;
+  double wander_ = 0.0;  ///< the steering's Ornstein–Uhlenbeck state
+  double last_express_s_ = -1.0;
+  interfaces::DriveIntent applied_;      ///< the intent on controls that stay put
+  std::array<double, 2> centre_miss_{};  ///< forward, turn: where "centre" ends up
+  std::array<bool, 2> at_centre_{true, true};
+  std::array<double, 2> slip_start_s_{-1.0, -1.0};  ///< per hand; < 0: holding
+  std::array<double, 2> next_slip_s_{-1.0, -1.0};   ///< per hand; < 0: not scheduled
+  int slips_ = 0;
 };
 
 }  // namespace haptel::mediator

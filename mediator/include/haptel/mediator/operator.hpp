@@ -43,7 +43,7 @@ class AutomaticOperator final : public Operator {
  public:
   /// Keeps references to `track` and `device`.
   AutomaticOperator(const Track& track, const OperatorConfig& config, const DriveConfig& drive,
-                    haptics::SimDevice& device);
+                    haptics::SimDevice& device, const DriverProfile& profile = {}, int experience = 0);
   std::string kind() const override { return "auto"; }
   /// Hands at the interface's neutral — or, for controls to grasp, open above them.
   void Prepare(const interfaces::MediatorInterface& interface) override;
@@ -52,6 +52,7 @@ class AutomaticOperator final : public Operator {
   bool grasped(double t_s) const override { return driver_.grasped(t_s); }
   /// It learned one interface's grasp; it does not switch.
   bool can_switch() const override { return false; }
+  const AutoOperator& driver() const { return driver_; }
 
  private:
   AutoOperator driver_;

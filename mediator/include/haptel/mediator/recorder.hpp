@@ -6,6 +6,7 @@
 /// nothing half-written.
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -125,7 +126,10 @@ class Recorder {
   /// or the file was deleted or replaced since it was opened, which SQLite
   /// would otherwise write into the unlinked file) rolls back and throws
   /// std::runtime_error.
-  int64_t Save(const RunRecord& run);
+  /// What else to write in the run's transaction, given the connection and
+  /// the new run's id (throwing rolls the whole run back).
+  using AlsoSave = std::function<void(sqlite3* db, int64_t run_id, const RunRecord& run)>;
+  int64_t Save(const RunRecord& run, const AlsoSave& also = {});
 
   /// Sets the picture of a saved run. Throws std::runtime_error if there is
   /// no run `run_id` or the write fails.
@@ -136,6 +140,9 @@ class Recorder {
   std::vector<RunRecord> LoadAll() const;
 
   const std::filesystem::path& path() const { return path_; }
+  /// The open connection, for the tables other parts keep in the same file
+  /// (the study store); the schema is this recorder's (PRAGMA user_version).
+  sqlite3* handle() const { return db_; }
 
   /// How long opening waits for a lock another connection holds: long
   /// enough for another haptel's save to finish, short enough that a

@@ -21,6 +21,9 @@ struct RecordedRun {
   std::filesystem::path unsaved;  ///< the fallback file when the database failed
 };
 
+/// `haptel run`'s options (argv[0] is "run"; see its --help).
+Args ParseRunArgs(int argc, const char* const* argv);
+
 /// The session `haptel run` would drive for these options: every file read
 /// and checked against the others; nothing started. Throws UsageError and
 /// ConfigError (bad input).
@@ -29,8 +32,9 @@ SessionSetup RunSetupFromArgs(const Args& args);
 /// Runs the session, then saves it into `recorder` — or, if the database
 /// fails at the end, into a fallback file beside it — with its picture.
 /// Throws only for parts that cannot be set up (nothing moved).
+/// `also` is written in the run's own transaction (e.g. a study's trial row).
 RecordedRun RunAndRecord(const SessionSetup& setup, Recorder& recorder,
-                         const std::atomic<bool>& interrupted);
+                         const std::atomic<bool>& interrupted, const Recorder::AlsoSave& also = {});
 
 /// The process exit code: the outcome's, or kExitNotRecorded.
 int ExitCode(const RecordedRun& run);

@@ -29,6 +29,7 @@
 #include "haptel/config/physics.hpp"
 #include "haptel/config/run.hpp"
 #include "haptel/config/scene.hpp"
+#include "haptel/config/study.hpp"
 #include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"
 #include "haptel/mediator/interface_catalog.hpp"
@@ -69,6 +70,10 @@ struct SessionSetup {
   std::filesystem::path trace;
   /// "auto" (the simulated driver; needs the sim device) or "person".
   std::string operator_kind = "auto";
+  /// The simulated driver's profile (default: the ideal driver) and the
+  /// trials it has driven before (a study's simulated participants).
+  DriverProfile driver;
+  int driver_experience = 0;
   /// End the run after this long, outcome "time limit" (0: no limit).
   double time_limit_s = 0.0;
   ViewKind view = ViewKind::kNone;
@@ -109,6 +114,8 @@ struct SessionResult {
   /// (0 when there was nothing to grasp; negative if they never did).
   double grasp_s = 0.0;
   uint64_t view_record_dropped = 0;  ///< MP4 frames the encoder could not take in time
+  /// The simulated driver: times a control slipped out of its hand.
+  int operator_slips = 0;
 };
 
 /// Runs one lap (or until the cap, the time limit, a lost vehicle or device,

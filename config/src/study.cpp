@@ -1,0 +1,167 @@
+#include "haptel/config/study.hpp"
+
+#include <set>
+
+#include "haptel/config/error.hpp"
+#include "haptel/config/paths.hpp"
+#include "haptel/config/run.hpp"
+#include "yaml_map.hpp"
+
+namespace haptel {
+
+using config_detail::YamlMap;
+
+namespace {
+
+DriverProfile ReadProfile(YamlMap map) {
+  DriverProfile p;
+  p.steering_noise = map.Number("steering_noise", p.steering_noise, 0.0, 1.0);
+  p.noise_time_s = map.Number("noise_time_s", p.noise_time_s, 0.01, 10.0);
+  p.slip_rate_hz = map.Number("slip_rate_hz", p.slip_rate_hz, 0.0, 5.0);
+  p.regrasp_s = map.Number("regrasp_s", p.regrasp_s, 0.1, 10.0);
+  p.recentre_s = map.Number("recentre_s", p.recentre_s, 0.0, 10.0);
+  p.recentre_error = map.Number("recentre_error", p.recentre_error, 0.0, 0.5);
+  p.hud_use = map.Number("hud_use", p.hud_use, 0.0, 1.0);
+  p.unsure_cruise = map.Number("unsure_cruise", p.unsure_cruise, 0.1, 1.0);
+  p.learning_gain = map.Number("learning_gain", p.learning_gain, 0.0, 10.0);
+  p.learning_trials = map.Number("learning_trials", p.learning_trials, 0.1, 100.0);
+  p.seed = static_cast<uint64_t>(map.Integer("seed", static_cast<int>(p.seed), 0, 1 << 30));
+  map.Finish();
+  return p;
+}
+
+/// Names in reports, file names and web forms: short and plain.
+bool PlainName(const std::string& name) {
+  if (name.empty() || name.size() > 40) return false;
+  for (const char c : name) {
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' ||
+                    c == '_' || c == '.';
+    if (!ok) return false;
+  }
+  return true;
+}
+constexpr const char* kPlainName = "a name of 1 to 40 letters, digits, '-', '_' or '.'";
+
+}  // namespace
+
+std::string ToString(StudyOrder order) {
+  switch (order) {
+    case StudyOrder::kBalancedLatinSquare:
+      return "balanced-latin-square";
+    case StudyOrder::kRandom:
+      return "random";
+    case StudyOrder::kFixed:
+      return "fixed";
+  }
+  return "?";
+}
+
+StudyConfig LoadStudy(const std::filesystem::path& file) {
+  YamlMap root = YamlMap::Load(file);
+  const std::filesystem::path dir = file.parent_path();
+  StudyConfig s;
+  s.file = file;
+  s.name = root.RequireString("name");
+  if (!PlainName(s.name)) root.Fail("name", kPlainName);
+  s.description = root.String("description", "");
+  const std::string run = root.String("run", "");
+  s.run = run.empty() ? ShippedFile("config/haptel.yaml") : dir / run;
+  const RunConfig run_config = LoadRun(s.run);
+  const std::string track = root.String("track", "");
+  s.track = track.empty() ? run_config.track : dir / track;
+  if (const std::string db = root.String("database", ""); !db.empty()) s.database = db;
+  s.operators = root.String("operators", s.operators);
+  if (s.operators != "synthetic" && s.operators != "person") root.Fail("operators", "synthetic or person");
+  const bool synthetic = s.operators == "synthetic";
+
+  // Conditions: each names an interface file of the run configuration.
+  std::vector<YamlMap> conditions = root.MapList("conditions");
+  if (conditions.size() < 2 || conditions.size() > 10) {
+    root.Fail("conditions", "a list of 2 to 10 conditions, each {name, interface}");
+  }
+  std::set<std::string> condition_names;
+  for (YamlMap& c : conditions) {
+    StudyCondition condition;
+    condition.interface = c.RequireString("interface");
+    condition.name = c.String("name", condition.interface);
+    if (!PlainName(condition.name)) c.Fail("name", kPlainName);
+    if (!condition_names.insert(condition.name).second) {
+      c.Fail("name", "a name no other condition has ('" + condition.name + "' is taken)");
+    }
+    try {
+      const std::string declared = InterfaceName(InterfaceFile(run_config, condition.interface));
+      const bool manual = declared == "keyboard" || declared == "gamepad";
+      if (synthetic && manual) {
+        c.Fail("interface", "an interface a simulated driver can use (gesture or a cockpit); '" +
+                                condition.interface + "' is a person's keys or controller");
+      }
+    } catch (const ConfigError& e) {
+      if (std::string(e.what()).find(c.Path("interface")) != std::string::npos) throw;
+      c.Fail("interface", "an interface of " + s.run.string() + " (" + e.what() + ")");
+    }
+    c.Finish();
+    s.conditions.push_back(condition);
+  }
+
+  // Simulated drivers' profiles, by name.
+  YamlMap profiles = root.Map("profiles");
+  for (const std::string& name : profiles.Keys()) {
+    s.profiles[name] = ReadProfile(profiles.Map(name));
+  }
+  profiles.Finish();
+
+  std::vector<YamlMap> participants = root.MapList("participants");
+  std::set<std::string> ids;
+  for (YamlMap& p : participants) {
+    StudyParticipant participant;
+    participant.id = p.RequireString("id");
+    if (!PlainName(participant.id)) p.Fail("id", kPlainName);
+    if (!ids.insert(participant.id).second) {
+      p.Fail("id", "an id no other participant has ('" + participant.id + "' appears twice)");
+    }
+    participant.profile = p.String("profile", "");
+    if (synthetic) {
+      if (participant.profile.empty()) p.Fail("profile", "the profile of this simulated driver (a key of 'profiles')");
+      if (s.profiles.count(participant.profile) == 0) {
+        p.Fail("profile", "a key of 'profiles', got '" + participant.profile + "'");
+      }
+    } else if (!participant.profile.empty()) {
+      p.Fail("profile", "no profile: participants of a person study are people (operators: person)");
+    }
+    p.Finish();
+    s.participants.push_back(participant);
+  }
+  if (synthetic && s.participants.empty()) {
+    root.Fail("participants", "the simulated drivers, each {id, profile} (a synthetic study has no console to add them)");
+  }
+
+  YamlMap design = root.Map("design");
+  const std::string order = design.String("order", ToString(s.order));
+  if (order == "balanced-latin-square") {
+    s.order = StudyOrder::kBalancedLatinSquare;
+  } else if (order == "random") {
+    s.order = StudyOrder::kRandom;
+  } else if (order == "fixed") {
+    s.order = StudyOrder::kFixed;
+  } else {
+    design.Fail("order", "balanced-latin-square, random or fixed");
+  }
+  s.seed = static_cast<uint64_t>(design.Integer("seed", static_cast<int>(s.seed), 0, 1 << 30));
+  if (s.order != StudyOrder::kRandom && design.Has("seed")) design.Fail("seed", "no seed unless order: random");
+  s.repetitions = design.Integer("repetitions", s.repetitions, 1, 10);
+  design.Finish();
+
+  s.practice = root.Bool("practice", s.practice);
+  s.trial_cap_s = root.Number("trial_cap_s", s.trial_cap_s, 5.0, 3600.0);
+  s.questionnaires = root.Strings("questionnaires", {});
+  std::set<std::string> seen;
+  for (const std::string& q : s.questionnaires) {
+    if (!seen.insert(q).second) root.Fail("questionnaires", "each questionnaire once ('" + q + "' twice)");
+  }
+  const std::string qdir = root.String("questionnaires_dir", "");
+  s.questionnaires_dir = qdir.empty() ? ShippedFile("config/questionnaires") : dir / qdir;
+  root.Finish();
+  return s;
+}
+
+}  // namespace haptel

@@ -1,0 +1,103 @@
+#pragma once
+/// @file A study's tables in the run database (schema v4, recorder.cpp): the
+/// study and its plan, written once when it is first run; one trial row per
+/// planned trial, written in its run's own transaction; the questionnaire
+/// answers, one transaction per questionnaire; and an event log.
+///
+/// A study killed at any point (kill -9, power cut) finds on the next start
+/// exactly the trials and answers that were committed: it resumes at the
+/// first planned trial without a row, and nothing is recorded twice (the
+/// tables' keys forbid it).
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "haptel/config/study.hpp"
+#include "haptel/mediator/recorder.hpp"
+
+namespace haptel::study {
+
+/// One trial of the plan: a participant drives a condition at a position of
+/// their sequence (1-based).
+struct PlannedTrial {
+  std::string participant;
+  int position = 0;
+  std::string condition;
+  int repetition = 1;
+};
+
+/// A finished trial as recorded.
+struct TrialRow {
+  std::string participant;
+  int position = 0;
+  std::string condition;
+  int64_t run_id = 0;
+  double lap_time_s = 0.0;  ///< as scored: the cap for an unfinished lap
+  bool completed = false;
+  int obstacles = 0;
+  std::string outcome;
+  int attempt = 1;
+};
+
+struct AnswerRow {
+  std::string participant;
+  std::string condition;
+  std::string questionnaire;
+  std::string item;
+  std::string value;
+};
+
+/// A questionnaire answered a second time (a form submitted twice).
+class AlreadyAnswered : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+class StudyStore {
+ public:
+  /// Opens the study `config.name` in `recorder`'s database, creating it with
+  /// `plan` the first time. A study already there must have been planned the
+  /// same way (conditions, participants, order): otherwise throws
+  /// std::runtime_error saying what differs — a changed study is a new one,
+  /// under a new name. Keeps a reference to `recorder`.
+  StudyStore(mediator::Recorder& recorder, const StudyConfig& config, const std::vector<PlannedTrial>& plan);
+
+  int64_t id() const { return id_; }
+  /// Whether the study was already in the database (this run resumes it).
+  bool resumed() const { return resumed_; }
+
+  std::vector<PlannedTrial> Plan() const;
+  std::vector<TrialRow> Trials() const;
+  /// The first planned trial without a row (participants in plan order,
+  /// each by position); nullopt when all are done.
+  std::optional<PlannedTrial> NextTrial() const;
+  /// How many trials `participant` has finished.
+  int TrialsDone(const std::string& participant) const;
+
+  /// For Recorder::Save: writes the trial's row in the run's transaction,
+  /// scored from the run (an unfinished lap at the cap). Throws if the trial
+  /// already has a row (the run is then rolled back too).
+  mediator::Recorder::AlsoSave TrialWriter(const PlannedTrial& trial, double cap_s) const;
+
+  /// Whether `participant` answered `questionnaire` after `condition`.
+  bool Answered(const std::string& participant, const std::string& condition,
+                const std::string& questionnaire) const;
+  /// All answers of one questionnaire in one transaction; throws
+  /// AlreadyAnswered if any answer of it is there already.
+  void SaveAnswers(const std::string& participant, const std::string& condition, const std::string& questionnaire,
+                   const std::vector<std::pair<std::string, std::string>>& item_values);
+  std::vector<AnswerRow> Answers() const;
+
+  /// Appends to the study's event log (start, resume, trial failed, redo...).
+  void Event(const std::string& kind, const std::string& participant = "", int position = 0,
+             const std::string& detail = "");
+
+ private:
+  mediator::Recorder& recorder_;
+  int64_t id_ = 0;
+  bool resumed_ = false;
+};
+
+}  // namespace haptel::study

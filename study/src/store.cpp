@@ -1,0 +1,294 @@
+#include "haptel/study/store.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "haptel/core/clock.hpp"
+#include "haptel/mediator/sqlite_util.hpp"
+
+namespace haptel::study {
+namespace {
+
+using namespace haptel::sql;
+
+std::string NowUtc() { return IsoUtc(WallNs()); }
+
+std::string FileText(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+std::string Describe(const PlannedTrial& t) {
+  return t.participant + " #" + std::to_string(t.position) + " " + t.condition;
+}
+
+}  // namespace
+
+StudyStore::StudyStore(mediator::Recorder& recorder, const StudyConfig& config,
+                       const std::vector<PlannedTrial>& plan)
+    : recorder_(recorder) {
+  sqlite3* db = recorder_.handle();
+  const std::filesystem::path& file = recorder_.path();
+  Transaction txn(file, db, "BEGIN IMMEDIATE");
+  {
+    Stmt find = Prepare(file, db, "SELECT id FROM studies WHERE name = ?", "cannot look up the study");
+    Binder(file, db, find.get()).Text(config.name);
+    if (sqlite3_step(find.get()) == SQLITE_ROW) {
+      id_ = sqlite3_column_int64(find.get(), 0);
+      resumed_ = true;
+    }
+  }
+  if (!resumed_) {
+    Stmt insert = Prepare(file, db,
+                          "INSERT INTO studies (name, file, definition, operators, design, trial_cap_s, "
+                          "created_utc) VALUES (?, ?, ?, ?, ?, ?, ?)",
+                          "cannot insert the study");
+    Binder(file, db, insert.get())
+        .Text(config.name)
+        .Text(std::filesystem::absolute(config.file).string())
+        .Text(FileText(config.file))
+        .Text(config.operators)
+        .Text(ToString(config.order))
+        .Real(config.trial_cap_s)
+        .Text(NowUtc());
+    StepDone(file, db, insert.get(), "cannot insert the study");
+    id_ = sqlite3_last_insert_rowid(db);
+    Stmt condition = Prepare(file, db,
+                             "INSERT INTO study_conditions (study_id, position, name, interface) VALUES (?, ?, ?, ?)",
+                             "cannot insert a condition");
+    for (size_t i = 0; i < config.conditions.size(); ++i) {
+      sqlite3_reset(condition.get());
+      Binder(file, db, condition.get())
+          .Int(id_)
+          .Int(static_cast<int64_t>(i))
+          .Text(config.conditions[i].name)
+          .Text(config.conditions[i].interface);
+      StepDone(file, db, condition.get(), "cannot insert condition " + config.conditions[i].name);
+    }
+    Stmt participant = Prepare(file, db,
+                               "INSERT INTO study_participants (study_id, participant, row_index, profile, "
+                               "added_utc) VALUES (?, ?, ?, ?, ?)",
+                               "cannot insert a participant");
+    for (size_t i = 0; i < config.participants.size(); ++i) {
+      sqlite3_reset(participant.get());
+      Binder(file, db, participant.get())
+          .Int(id_)
+          .Text(config.participants[i].id)
+          .Int(static_cast<int64_t>(i))
+          .Text(config.participants[i].profile)
+          .Text(NowUtc());
+      StepDone(file, db, participant.get(), "cannot insert participant " + config.participants[i].id);
+    }
+    Stmt planned = Prepare(file, db,
+                           "INSERT INTO study_plan (study_id, participant, position, condition, repetition) "
+                           "VALUES (?, ?, ?, ?, ?)",
+                           "cannot insert the plan");
+    for (const PlannedTrial& t : plan) {
+      sqlite3_reset(planned.get());
+      Binder(file, db, planned.get()).Int(id_).Text(t.participant).Int(t.position).Text(t.condition).Int(t.repetition);
+      StepDone(file, db, planned.get(), "cannot insert planned trial " + Describe(t));
+    }
+    planned.reset();
+    participant.reset();
+    condition.reset();
+    insert.reset();
+    txn.Commit();
+    Event("planned", "", 0, std::to_string(plan.size()) + " trials, " + ToString(config.order));
+    return;
+  }
+  txn.Commit();
+  // Resuming: the plan on record is the plan.
+  const std::vector<PlannedTrial> recorded = Plan();
+  std::string difference;
+  if (recorded.size() != plan.size()) {
+    difference = std::to_string(recorded.size()) + " trials on record, " + std::to_string(plan.size()) +
+                 " in the file";
+  } else {
+    for (size_t i = 0; i < plan.size() && difference.empty(); ++i) {
+      const PlannedTrial& a = recorded[i];
+      const PlannedTrial& b = plan[i];
+      if (a.participant != b.participant || a.position != b.position || a.condition != b.condition) {
+        difference = "trial " + std::to_string(i + 1) + " is " + Describe(a) + " on record, " + Describe(b) +
+                     " in the file";
+      }
+    }
+  }
+  if (!difference.empty()) {
+    throw std::runtime_error("study '" + config.name + "' in " + file.string() +
+                             " was planned differently (" + difference +
+                             "); a changed study is a new one: give it another name");
+  }
+}
+
+std::vector<PlannedTrial> StudyStore::Plan() const {
+  sqlite3* db = recorder_.handle();
+  const std::filesystem::path& file = recorder_.path();
+  // Participants in the order they were added, each by position.
+  Stmt select = Prepare(file, db,
+                        "SELECT p.participant, p.position, p.condition, p.repetition FROM study_plan p "
+                        "JOIN study_participants s ON s.study_id = p.study_id AND s.participant = p.participant "
+                        "WHERE p.study_id = ? ORDER BY s.row_index, p.position",
+                        "cannot read the plan");
+  Binder(file, db, select.get()).Int(id_);
+  std::vector<PlannedTrial> plan;
+  while (sqlite3_step(select.get()) == SQLITE_ROW) {
+    Reader r(select.get());
+    PlannedTrial t;
+    t.participant = r.Text();
+    t.position = static_cast<int>(r.Int());
+    t.condition = r.Text();
+    t.repetition = static_cast<int>(r.Int());
+    plan.push_back(t);
+  }
+  return plan;
+}
+
+std::vector<TrialRow> StudyStore::Trials() const {
+  sqlite3* db = recorder_.handle();
+  const std::filesystem::path& file = recorder_.path();
+  Stmt select = Prepare(file, db,
+                        "SELECT t.participant, t.position, t.condition, t.run_id, t.lap_time_s, t.completed, "
+                        "t.obstacles, t.outcome, t.attempt FROM study_trials t JOIN study_participants s ON "
+                        "s.study_id = t.study_id AND s.participant = t.participant WHERE t.study_id = ? "
+                        "ORDER BY s.row_index, t.position",
+                        "cannot read the trials");
+  Binder(file, db, select.get()).Int(id_);
+  std::vector<TrialRow> rows;
+  while (sqlite3_step(select.get()) == SQLITE_ROW) {
+    Reader r(select.get());
+    TrialRow t;
+    t.participant = r.Text();
+    t.position = static_cast<int>(r.Int());
+    t.condition = r.Text();
+    t.run_id = r.Int();
+    t.lap_time_s = r.Real();
+    t.completed = r.Bool();
+    t.obstacles = static_cast<int>(r.Int());
+    t.outcome = r.Text();
+    t.attempt = static_cast<int>(r.Int());
+    rows.push_back(t);
+  }
+  return rows;
+}
+
+std::optional<PlannedTrial> StudyStore::NextTrial() const {
+  const std::vector<TrialRow> done = Trials();
+  for (const PlannedTrial& t : Plan()) {
+    bool found = false;
+    for (const TrialRow& row : done) found = found || (row.participant == t.participant && row.position == t.position);
+    if (!found) return t;
+  }
+  return std::nullopt;
+}
+
+int StudyStore::TrialsDone(const std::string& participant) const {
+  int count = 0;
+  for (const TrialRow& row : Trials()) count += row.participant == participant ? 1 : 0;
+  return count;
+}
+
+mediator::Recorder::AlsoSave StudyStore::TrialWriter(const PlannedTrial& trial, double cap_s) const {
+  const int64_t study = id_;
+  const std::filesystem::path file = recorder_.path();
+  return [study, file, trial, cap_s](sqlite3* db, int64_t run_id, const mediator::RunRecord& run) {
+    const bool completed = run.completed && std::isfinite(run.lap_time_s);
+    // The thesis's rule: an unfinished lap counts as the cap.
+    const double scored = completed ? std::min(run.lap_time_s, cap_s) : cap_s;
+    Stmt insert = Prepare(file, db,
+                          "INSERT INTO study_trials (study_id, participant, position, condition, run_id, "
+                          "lap_time_s, completed, obstacles, outcome, attempt, finished_utc) VALUES "
+                          "(?, ?, ?, ?, ?, ?, ?, ?, ?, 1 + (SELECT COUNT(*) FROM study_events WHERE study_id = ? "
+                          "AND kind = 'redo' AND participant = ? AND position = ?), ?)",
+                          "cannot prepare the trial row");
+    Binder(file, db, insert.get())
+        .Int(study)
+        .Text(trial.participant)
+        .Int(trial.position)
+        .Text(trial.condition)
+        .Int(run_id)
+        .Real(scored)
+        .Int(completed ? 1 : 0)
+        .Int(run.obstacles_touched)
+        .Text(run.outcome)
+        .Int(study)
+        .Text(trial.participant)
+        .Int(trial.position)
+        .Text(NowUtc());
+    StepDone(file, db, insert.get(), "cannot record trial " + Describe(trial) + " (already recorded?)");
+  };
+}
+
+bool StudyStore::Answered(const std::string& participant, const std::string& condition,
+                          const std::string& questionnaire) const {
+  sqlite3* db = recorder_.handle();
+  const std::filesystem::path& file = recorder_.path();
+  Stmt select = Prepare(file, db,
+                        "SELECT COUNT(*) FROM study_answers WHERE study_id = ? AND participant = ? AND "
+                        "condition = ? AND questionnaire = ?",
+                        "cannot read the answers");
+  Binder(file, db, select.get()).Int(id_).Text(participant).Text(condition).Text(questionnaire);
+  return sqlite3_step(select.get()) == SQLITE_ROW && sqlite3_column_int64(select.get(), 0) > 0;
+}
+
+void StudyStore::SaveAnswers(const std::string& participant, const std::string& condition,
+                             const std::string& questionnaire,
+                             const std::vector<std::pair<std::string, std::string>>& item_values) {
+  sqlite3* db = recorder_.handle();
+  const std::filesystem::path& file = recorder_.path();
+  Transaction txn(file, db, "BEGIN IMMEDIATE");
+  if (Answered(participant, condition, questionnaire)) {
+    throw AlreadyAnswered("participant " + participant + " has already answered '" + questionnaire +
+                          "' for condition " + condition);
+  }
+  Stmt insert = Prepare(file, db,
+                        "INSERT INTO study_answers (study_id, participant, condition, questionnaire, item, value, "
+                        "answered_utc) VALUES (?, ?, ?, ?, ?, ?, ?)",
+                        "cannot prepare the answers");
+  const std::string now = NowUtc();
+  for (const auto& [item, value] : item_values) {
+    sqlite3_reset(insert.get());
+    Binder(file, db, insert.get()).Int(id_).Text(participant).Text(condition).Text(questionnaire).Text(item).Text(value).Text(now);
+    StepDone(file, db, insert.get(), "cannot record the answer to '" + item + "'");
+  }
+  insert.reset();
+  txn.Commit();
+}
+
+std::vector<AnswerRow> StudyStore::Answers() const {
+  sqlite3* db = recorder_.handle();
+  const std::filesystem::path& file = recorder_.path();
+  Stmt select = Prepare(file, db,
+                        "SELECT participant, condition, questionnaire, item, value FROM study_answers WHERE "
+                        "study_id = ? ORDER BY rowid",
+                        "cannot read the answers");
+  Binder(file, db, select.get()).Int(id_);
+  std::vector<AnswerRow> rows;
+  while (sqlite3_step(select.get()) == SQLITE_ROW) {
+    Reader r(select.get());
+    AnswerRow a;
+    a.participant = r.Text();
+    a.condition = r.Text();
+    a.questionnaire = r.Text();
+    a.item = r.Text();
+    a.value = r.Text();
+    rows.push_back(a);
+  }
+  return rows;
+}
+
+void StudyStore::Event(const std::string& kind, const std::string& participant, int position,
+                       const std::string& detail) {
+  sqlite3* db = recorder_.handle();
+  const std::filesystem::path& file = recorder_.path();
+  Stmt insert = Prepare(file, db,
+                        "INSERT INTO study_events (study_id, t_utc, kind, participant, position, detail) VALUES "
+                        "(?, ?, ?, ?, ?, ?)",
+                        "cannot record a study event");
+  Binder(file, db, insert.get()).Int(id_).Text(NowUtc()).Text(kind).Text(participant).Int(position).Text(detail);
+  StepDone(file, db, insert.get(), "cannot record the event '" + kind + "'");
+}
+
+}  // namespace haptel::study

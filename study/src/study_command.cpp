@@ -1,0 +1,26 @@
+#include "haptel/study/study_command.hpp"
+
+#include <string>
+
+#include "haptel/core/args.hpp"
+#include "haptel/core/cli.hpp"
+
+namespace haptel::study {
+
+int StudyRunCommand(int argc, const char* const* argv);
+
+namespace {
+constexpr const char* kUsage =
+    "usage: haptel study run FILE [options]          run an A/B study (--help for options)\n"
+    "       haptel study report DATABASE --study NAME  tables, statistics, plots (--help for options)\n";
+}  // namespace
+
+int StudyCommand(int argc, const char* const* argv) {
+  const std::string sub = argc > 1 ? argv[1] : "";
+  if (sub == "run") return StudyRunCommand(argc, argv);
+  return cli::Main({"haptel study", kUsage}, argc, argv, [&]() -> int {
+    throw UsageError(sub.empty() ? "missing command (run, report)" : "unknown command '" + sub + "' (run, report)");
+  });
+}
+
+}  // namespace haptel::study

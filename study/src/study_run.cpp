@@ -1,0 +1,226 @@
+// `haptel study run FILE`: the planned trials, one session each, recorded as
+// they finish; a second start resumes at the first unfinished one.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "haptel/core/args.hpp"
+#include "haptel/core/cli.hpp"
+#include "haptel/core/json.hpp"
+#include "haptel/core/stop_signals.hpp"
+#include "haptel/mediator/run_command.hpp"
+#include "haptel/study/plan.hpp"
+#include "haptel/study/store.hpp"
+#include "haptel/study/study_command.hpp"
+
+namespace haptel::study {
+namespace {
+
+constexpr const char* kRunUsage =
+    "usage: haptel study run FILE [options]   run an A/B study (config/studies/*.yaml)\n"
+    "\n"
+    "Runs the planned trials in order, each a session like `haptel run`, and records each\n"
+    "as it finishes; run the same command again after a stop to resume at the first\n"
+    "unfinished trial.\n"
+    "options:\n"
+    "  --database FILE   SQLite file (overrides the study's and the run configuration's)\n"
+    "  --json            end with one JSON line: the trials and per-condition totals\n"
+    "  --verbose         the sessions' own progress lines\n";
+
+/// Whether a session's outcome finishes its trial (scored; an unfinished lap at the cap).
+bool FinishesTrial(mediator::Outcome outcome) {
+  return outcome == mediator::Outcome::kCompleted || outcome == mediator::Outcome::kLapCap ||
+         outcome == mediator::Outcome::kTimeLimit;
+}
+
+const StudyCondition& ConditionNamed(const StudyConfig& config, const std::string& name) {
+  for (const StudyCondition& c : config.conditions) {
+    if (c.name == name) return c;
+  }
+  throw std::runtime_error("condition '" + name + "' is not in " + config.file.string());
+}
+
+const StudyParticipant* ParticipantNamed(const StudyConfig& config, const std::string& id) {
+  for (const StudyParticipant& p : config.participants) {
+    if (p.id == id) return &p;
+  }
+  return nullptr;
+}
+
+/// The session of one trial: what `haptel run` would drive with these options.
+mediator::SessionSetup TrialSetup(const StudyConfig& config, const PlannedTrial& trial,
+                                  const std::filesystem::path& database, bool verbose, int experience) {
+  const StudyCondition& condition = ConditionNamed(config, trial.condition);
+  const bool synthetic = config.operators == "synthetic";
+  const std::string cap = std::to_string(config.trial_cap_s);
+  std::vector<std::string> words = {"run",
+                                    "--config",
+                                    config.run.string(),
+                                    "--track",
+                                    config.track.string(),
+                                    "--interface",
+                                    condition.interface,
+                                    "--operator",
+                                    synthetic ? "auto" : "person",
+                                    "--time-limit",
+                                    cap,
+                                    "--database",
+                                    database.string()};
+  if (synthetic) words.insert(words.end(), {"--view", "none"});
+  if (!verbose) words.push_back("--quiet");
+  std::vector<const char*> argv;
+  for (const std::string& w : words) argv.push_back(w.c_str());
+  mediator::SessionSetup setup =
+      mediator::RunSetupFromArgs(mediator::ParseRunArgs(static_cast<int>(argv.size()), argv.data()));
+  if (synthetic) {
+    const StudyParticipant* p = ParticipantNamed(config, trial.participant);
+    if (p == nullptr) throw std::runtime_error("participant '" + trial.participant + "' is not in the study file");
+    setup.driver = config.profiles.at(p->profile);
+    setup.driver_experience = experience;
+  }
+  return setup;
+}
+
+std::string Seconds(double s) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.2f", s);
+  return buffer;
+}
+
+}  // namespace
+
+int StudyRunCommand(int argc, const char* const* argv) {
+  // First: a signal while the files are read ends the study before its next trial.
+  const std::atomic<bool>& interrupted = InstallStopSignals();
+  return cli::Main({"haptel study run", kRunUsage}, argc, argv, [&] {
+    bool json = false;
+    bool verbose = false;
+    StudyConfig config;
+    std::vector<PlannedTrial> plan;
+    std::filesystem::path database;
+    cli::ReadInput([&] {
+      const Args args(argc, argv, {"database"}, {"json", "verbose"});
+      if (args.positional().size() != 2 || args.positional()[0] != "run") {
+        throw UsageError(args.positional().size() < 2 ? "missing the study file"
+                                                       : "unexpected argument '" + args.positional()[2] + "'");
+      }
+      json = args.Flag("json");
+      verbose = args.Flag("verbose");
+      config = LoadStudy(args.positional()[1]);
+      plan = PlanTrials(config);
+      database = args.Value("database").value_or(
+          !config.database.empty() ? config.database.string() : LoadRun(config.run).database.string());
+    });
+    // The database before anything runs, as for `haptel run`.
+    auto recorder = cli::ReadInput([&] { return std::make_unique<mediator::Recorder>(database); });
+    StudyStore store = cli::ReadInput([&] { return StudyStore(*recorder, config, plan); });
+    const size_t done_before = store.Trials().size();
+    store.Event(store.resumed() ? "resumed" : "started", "", 0,
+                std::to_string(done_before) + " of " + std::to_string(plan.size()) + " trials done");
+    std::fprintf(stderr, "[study] %s: %s, %zu trials (%zu done), %s order, database %s\n", config.name.c_str(),
+                 store.resumed() ? "resuming" : "starting", plan.size(), done_before, ToString(config.order).c_str(),
+                 database.c_str());
+
+    int exit_code = cli::kExitOk;
+    std::string stopped;
+    while (const std::optional<PlannedTrial> trial = store.NextTrial()) {
+      if (interrupted.load()) {
+        stopped = "interrupted";
+        exit_code = cli::kExitFailed;
+        break;
+      }
+      const int experience = store.TrialsDone(trial->participant) + (config.practice ? 1 : 0);
+      const mediator::SessionSetup setup =
+          cli::ReadInput([&] { return TrialSetup(config, *trial, database, verbose, experience); });
+      const size_t number = store.Trials().size() + 1;
+      std::fprintf(stderr, "[study] trial %zu/%zu: participant %s, position %d, %s ...\n", number, plan.size(),
+                   trial->participant.c_str(), trial->position, trial->condition.c_str());
+      const mediator::RecordedRun run =
+          mediator::RunAndRecord(setup, *recorder, interrupted, store.TrialWriter(*trial, config.trial_cap_s));
+      const mediator::RunRecord& r = run.result.record;
+      if (run.run_id != 0 && FinishesTrial(run.result.outcome)) {
+        std::fprintf(stderr, "[study]   %s: lap %s s%s, %d obstacles, %d slips (run %lld)\n",
+                     mediator::ToString(run.result.outcome).c_str(), Seconds(r.lap_time_s).c_str(),
+                     r.completed ? "" : (" (scored " + Seconds(config.trial_cap_s) + " s)").c_str(),
+                     r.obstacles_touched, run.result.operator_slips, static_cast<long long>(run.run_id));
+        continue;
+      }
+      // Not a finished trial: the run is recorded (or kept in a file), the trial is not.
+      store.Event("trial not finished", trial->participant, trial->position,
+                  mediator::ToString(run.result.outcome) + ": " + run.result.message);
+      stopped = mediator::ToString(run.result.outcome) + ": " + run.result.message;
+      exit_code = run.run_id == 0 ? cli::kExitNotRecorded : mediator::ExitCode(run.result.outcome);
+      if (exit_code == cli::kExitOk) exit_code = cli::kExitFailed;
+      break;
+    }
+
+    const std::vector<TrialRow> trials = store.Trials();
+    const bool finished = trials.size() == plan.size();
+    if (finished) store.Event("finished", "", 0, std::to_string(trials.size()) + " trials");
+    // The schedule as it stands: participants × conditions, scored lap times.
+    std::printf("study %s: %zu of %zu trials%s\n", config.name.c_str(), trials.size(), plan.size(),
+                finished ? ", finished" : (", stopped: " + stopped).c_str());
+    std::printf("  %-12s", "participant");
+    for (const StudyCondition& c : config.conditions) std::printf(" %16s", c.name.c_str());
+    std::printf("\n");
+    std::vector<std::string> participants;
+    for (const PlannedTrial& t : plan) {
+      if (std::find(participants.begin(), participants.end(), t.participant) == participants.end()) {
+        participants.push_back(t.participant);
+      }
+    }
+    std::map<std::string, double> totals;
+    std::map<std::string, int> counts;
+    for (const std::string& p : participants) {
+      std::printf("  %-12s", p.c_str());
+      for (const StudyCondition& c : config.conditions) {
+        std::string cell = "-";
+        for (const TrialRow& t : trials) {
+          if (t.participant != p || t.condition != c.name) continue;
+          cell = Seconds(t.lap_time_s) + (t.completed ? "" : "*") + " (" + std::to_string(t.position) + ")";
+          totals[c.name] += t.lap_time_s;
+          counts[c.name] += 1;
+        }
+        std::printf(" %16s", cell.c_str());
+      }
+      std::printf("\n");
+    }
+    std::printf("  %-12s", "total");
+    for (const StudyCondition& c : config.conditions) std::printf(" %16s", Seconds(totals[c.name]).c_str());
+    std::printf("\n  (lap time s as scored, position in brackets; * unfinished, scored at the %s s cap)\n",
+                Seconds(config.trial_cap_s).c_str());
+    std::printf("  report: haptel study report %s --study %s\n", database.c_str(), config.name.c_str());
+    if (json) {
+      std::string out = "{\"study\":" + JsonString(config.name) + ",\"database\":" + JsonString(database.string()) +
+                        ",\"finished\":" + (finished ? "true" : "false") +
+                        ",\"trials_planned\":" + std::to_string(plan.size()) +
+                        ",\"trials_done\":" + std::to_string(trials.size()) +
+                        ",\"trials_done_before\":" + std::to_string(done_before) +
+                        ",\"stopped\":" + JsonString(stopped) + ",\"conditions\":[";
+      for (size_t i = 0; i < config.conditions.size(); ++i) {
+        const std::string& name = config.conditions[i].name;
+        if (i > 0) out += ",";
+        out += "{\"name\":" + JsonString(name) + ",\"trials\":" + std::to_string(counts[name]) +
+               ",\"total_lap_time_s\":" + JsonNumber(totals[name]) + "}";
+      }
+      out += "],\"trials\":[";
+      for (size_t i = 0; i < trials.size(); ++i) {
+        const TrialRow& t = trials[i];
+        if (i > 0) out += ",";
+        out += "{\"participant\":" + JsonString(t.participant) + ",\"position\":" + std::to_string(t.position) +
+               ",\"condition\":" + JsonString(t.condition) + ",\"lap_time_s\":" + JsonNumber(t.lap_time_s) +
+               ",\"completed\":" + (t.completed ? "true" : "false") +
+               ",\"obstacles\":" + std::to_string(t.obstacles) + ",\"run_id\":" + std::to_string(t.run_id) + "}";
+      }
+      out += "]}";
+      std::printf("%s\n", out.c_str());
+    }
+    std::fflush(stdout);
+    return exit_code;
+  });
+}
+
+}  // namespace haptel::study
