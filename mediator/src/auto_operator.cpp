@@ -12,12 +12,13 @@ AutoOperator::AutoOperator(const Track& track, const OperatorConfig& config, con
       drive_(drive),
       profile_(profile),
       error_scale_(1.0 + profile.learning_gain * std::exp(-std::max(0, experience) / profile.learning_trials)),
-      random_(profile.seed * 0x9E3779B97F4A7C15ull + static_cast<uint64_t>(std::max(0, experience))) {}
+      random_(profile.seed * 0x9E3779B97F4A7C15ull + static_cast<uint64_t>(std::max(0, experience))),
+      reaction_s_(config.reaction_delay_s) {}
 
 void AutoOperator::Observe(const Observation& observation) {
   seen_.push_back(observation);
   // Keep a little more than the reaction delay's worth.
-  while (seen_.size() > 2 && seen_[1].t_s < observation.t_s - config_.reaction_delay_s - 0.5) {
+  while (seen_.size() > 2 && seen_[1].t_s < observation.t_s - reaction_s_ - 0.5) {
     seen_.pop_front();
   }
 }
@@ -26,7 +27,7 @@ interfaces::DriveIntent AutoOperator::Decide(double t_s) {
   // The newest observation at least reaction_delay old.
   const Observation* o = nullptr;
   for (const Observation& candidate : seen_) {
-    if (candidate.t_s <= t_s - config_.reaction_delay_s) o = &candidate;
+    if (candidate.t_s <= t_s - reaction_s_) o = &candidate;
   }
   if (o == nullptr) return {};
 
@@ -173,6 +174,7 @@ interfaces::HandTargets AutoOperator::Act(double t_s, const interfaces::Mediator
     bool grasps = false;
     for (const auto& g : neutral) grasps = grasps || (g && HasApproach(*g));
     grasp_s_ = grasps ? config_.grasp_reach_s + config_.grasp_close_s : 0.0;
+    if (grasps) reaction_s_ += profile_.holding_reaction_s * error_scale_;
   }
   const double since = t_s - start_s_;
   if (!grasped(t_s)) {

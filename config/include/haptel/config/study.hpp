@@ -32,6 +32,10 @@ struct DriverProfile {
   /// driving it as it was left.
   double slip_rate_hz = 0.0;
   double regrasp_s = 1.2;
+  /// Holding virtual controls takes attention from the road: the driver
+  /// reacts this much later while the interface has controls to grasp (the
+  /// thesis: drivers concentrated on grasping more than on driving).
+  double holding_reaction_s = 0.0;
   /// Bringing a control that stays where it is left back to its centre is
   /// aimed without a tactile reference: it takes this much longer than moving
   /// it away (s, added to the arm's time constant)...

@@ -91,6 +91,7 @@ class AutoOperator {
   DriverProfile profile_;
   double error_scale_ = 1.0;
   std::mt19937_64 random_;
+  double reaction_s_;  ///< reaction delay: the config's, plus the profile's while holding controls
   double wander_ = 0.0;  ///< the steering's Ornstein–Uhlenbeck state
   double last_express_s_ = -1.0;
   interfaces::DriveIntent applied_;      ///< the intent on controls that stay put
