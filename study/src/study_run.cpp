@@ -27,6 +27,7 @@ constexpr const char* kRunUsage =
     "unfinished trial.\n"
     "options:\n"
     "  --database FILE   SQLite file (overrides the study's and the run configuration's)\n"
+    "  --domain N        DDS domain id of the trials' vehicles (overrides the run configuration's)\n"
     "  --json            end with one JSON line: the trials and per-condition totals\n"
     "  --verbose         the sessions' own progress lines\n";
 
@@ -52,7 +53,8 @@ const StudyParticipant* ParticipantNamed(const StudyConfig& config, const std::s
 
 /// The session of one trial: what `haptel run` would drive with these options.
 mediator::SessionSetup TrialSetup(const StudyConfig& config, const PlannedTrial& trial,
-                                  const std::filesystem::path& database, bool verbose, int experience) {
+                                  const std::filesystem::path& database, const std::string& domain,
+                                  bool verbose, int experience) {
   const StudyCondition& condition = ConditionNamed(config, trial.condition);
   const bool synthetic = config.operators == "synthetic";
   const std::string cap = std::to_string(config.trial_cap_s);
@@ -70,6 +72,7 @@ mediator::SessionSetup TrialSetup(const StudyConfig& config, const PlannedTrial&
                                     "--database",
                                     database.string()};
   if (synthetic) words.insert(words.end(), {"--view", "none"});
+  if (!domain.empty()) words.insert(words.end(), {"--domain", domain});
   if (!verbose) words.push_back("--quiet");
   std::vector<const char*> argv;
   for (const std::string& w : words) argv.push_back(w.c_str());
@@ -101,8 +104,10 @@ int StudyRunCommand(int argc, const char* const* argv) {
     StudyConfig config;
     std::vector<PlannedTrial> plan;
     std::filesystem::path database;
+    std::string domain;
     cli::ReadInput([&] {
-      const Args args(argc, argv, {"database"}, {"json", "verbose"});
+      const Args args(argc, argv, {"database", "domain"}, {"json", "verbose"});
+      if (const auto d = args.Int("domain", 0, 232)) domain = std::to_string(*d);
       if (args.positional().size() != 2 || args.positional()[0] != "run") {
         throw UsageError(args.positional().size() < 2 ? "missing the study file"
                                                        : "unexpected argument '" + args.positional()[2] + "'");
@@ -134,7 +139,7 @@ int StudyRunCommand(int argc, const char* const* argv) {
       }
       const int experience = store.TrialsDone(trial->participant) + (config.practice ? 1 : 0);
       const mediator::SessionSetup setup =
-          cli::ReadInput([&] { return TrialSetup(config, *trial, database, verbose, experience); });
+          cli::ReadInput([&] { return TrialSetup(config, *trial, database, domain, verbose, experience); });
       const size_t number = store.Trials().size() + 1;
       std::fprintf(stderr, "[study] trial %zu/%zu: participant %s, position %d, %s ...\n", number, plan.size(),
                    trial->participant.c_str(), trial->position, trial->condition.c_str());

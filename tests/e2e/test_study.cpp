@@ -1,0 +1,153 @@
+// End to end: `haptel study run` killed with SIGKILL in the middle of a trial
+// (no handler runs, as in a power cut) and started again resumes at the
+// first unfinished trial, and ends with exactly one trial row per planned
+// trial. Behaviour only: the waits are generous bounds so a fault fails the
+// test instead of hanging it.
+#include <signal.h>
+#include <sqlite3.h>
+
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <string>
+#include <tuple>
+
+#include "child.hpp"
+#include "haptel/mediator/recorder.hpp"
+#include "test_env.hpp"
+
+using namespace haptel;
+using haptel::test::Child;
+
+namespace {
+
+std::string Bin(const std::string& name) { return (test::BinDir() / name).string(); }
+
+/// Two participants × two conditions (both the gesture interface), fixed
+/// order, simulated drivers; each trial ends at a 6 s cap (an unfinished lap
+/// is a finished trial, scored at the cap), which keeps the test short.
+std::filesystem::path SmallStudy(const std::filesystem::path& dir) {
+  const auto source = std::filesystem::current_path();
+  const auto file = dir / "small-study.yaml";
+  std::ofstream out(file);
+  out << "name: small-e2e\n"
+         "run: " << (source / "config/haptel.yaml").string() << "\n"
+         "track: " << (source / "config/tracks/test-short.yaml").string() << "\n"
+         "operators: synthetic\n"
+         "conditions:\n"
+         "  - {name: first, interface: gesture}\n"
+         "  - {name: second, interface: gesture}\n"
+         "design: {order: fixed}\n"
+         "trial_cap_s: 6\n"
+         "profiles:\n"
+         "  plain: {steering_noise: 0.02, seed: 3}\n"
+         "participants:\n"
+         "  - {id: P1, profile: plain}\n"
+         "  - {id: P2, profile: plain}\n";
+  return file;
+}
+
+}  // namespace
+
+TEST_CASE("a study killed mid-trial resumes and records each planned trial once") {
+  const auto dir = test::ScratchDir("e2e-study");
+  const auto study = SmallStudy(dir);
+  const auto db = dir / "study.db";
+  const std::string domain = std::to_string(test::UniqueDomain(41));
+  const std::vector<std::string> command = {Bin("haptel"), "study", "run", study.string(), "--database",
+                                            db.string(), "--domain", domain, "--json"};
+
+  {  // First start: kill -9 once the second trial is under way.
+    Child first(command);
+    const bool second_started = test::WaitFor(
+        [&] {
+          first.Pump();
+          return first.err().find("trial 2/4") != std::string::npos || !first.Alive();
+        },
+        180.0);
+    REQUIRE(second_started);
+    REQUIRE(first.Alive());
+    // Into the lap: the vehicle is up and driving (its first line), not yet done.
+    REQUIRE(test::WaitFor(
+        [&] {
+          first.Pump();
+          const auto at = first.err().find("trial 2/4");
+          return first.err().find("haptel-vehicle: info: vehicle", at) != std::string::npos || !first.Alive();
+        },
+        60.0));
+    REQUIRE(first.Alive());
+    kill(first.pid(), SIGKILL);
+    CHECK(first.Wait(30.0) == -SIGKILL);
+  }
+  const size_t runs_after_kill = mediator::Recorder(db).LoadAll().size();
+  CHECK(runs_after_kill == 1);  // the killed trial's run was never saved
+
+  Child second(command);
+  REQUIRE(second.Wait(300.0) == 0);
+  const std::string json = second.LastLine();
+  INFO(second.err());
+  CHECK(test::JsonField(json, "finished") == "true");
+  CHECK(test::JsonField(json, "trials_planned") == "4");
+  CHECK(test::JsonField(json, "trials_done") == "4");
+  CHECK(test::JsonField(json, "trials_done_before") == "1");
+  CHECK(second.err().find("resuming") != std::string::npos);
+
+  // Exactly one row per planned trial, each linked to its own run.
+  mediator::Recorder recorder(db);
+  CHECK(recorder.LoadAll().size() == 4);
+  std::set<std::tuple<std::string, int>> trials;
+  std::set<int64_t> runs;
+  sqlite3_stmt* select = nullptr;
+  REQUIRE(sqlite3_prepare_v2(recorder.handle(), "SELECT participant, position, run_id FROM study_trials", -1, &select,
+                             nullptr) == SQLITE_OK);
+  int rows = 0;
+  while (sqlite3_step(select) == SQLITE_ROW) {
+    ++rows;
+    trials.emplace(reinterpret_cast<const char*>(sqlite3_column_text(select, 0)), sqlite3_column_int(select, 1));
+    runs.insert(sqlite3_column_int64(select, 2));
+  }
+  sqlite3_finalize(select);
+  CHECK(rows == 4);
+  CHECK(trials == std::set<std::tuple<std::string, int>>{{"P1", 1}, {"P1", 2}, {"P2", 1}, {"P2", 2}});
+  CHECK(runs.size() == 4);
+
+  // A third start has nothing left to do, and says so.
+  Child third(command);
+  REQUIRE(third.Wait(60.0) == 0);
+  CHECK(test::JsonField(third.LastLine(), "trials_done_before") == "4");
+  CHECK(mediator::Recorder(db).LoadAll().size() == 4);
+}
+
+TEST_CASE("a study that cannot work is refused before anything runs") {
+  const auto dir = test::ScratchDir("e2e-study-bad");
+  const auto study = SmallStudy(dir);
+  const auto db = dir / "bad.db";
+  {  // The same study file, planned differently on record: refused, exit 2.
+    std::string text;
+    {
+      std::ifstream in(study);
+      text.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    Child first({Bin("haptel"), "study", "run", study.string(), "--database", db.string(), "--domain", std::to_string(test::UniqueDomain(43))});
+    REQUIRE(test::WaitFor([&] { first.Pump(); return first.err().find("trial 1/4") != std::string::npos || !first.Alive(); }, 120.0));
+    first.Terminate();
+    const auto changed = dir / "changed.yaml";
+    std::ofstream(changed) << text + "  - {id: P3, profile: plain}\n";
+    Child again({Bin("haptel"), "study", "run", changed.string(), "--database", db.string()});
+    CHECK(again.Wait(60.0) == 2);
+    CHECK(again.err().find("planned differently") != std::string::npos);
+  }
+  {  // A duplicate participant: exit 2 naming the file, no database touched.
+    const auto bad = dir / "dup.yaml";
+    std::ifstream in(study);
+    std::string text((std::istreambuf_iterator<char>(in)), {});
+    std::ofstream(bad) << text + "  - {id: P1, profile: plain}\n";
+    const auto fresh = dir / "fresh.db";
+    Child run({Bin("haptel"), "study", "run", bad.string(), "--database", fresh.string()});
+    CHECK(run.Wait(60.0) == 2);
+    CHECK(run.err().find("dup.yaml") != std::string::npos);
+    CHECK(run.err().find("participants[2].id") != std::string::npos);
+    CHECK_FALSE(std::filesystem::exists(fresh));
+  }
+}
