@@ -1,0 +1,417 @@
+#include "haptel/study/statistics.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+#include <numeric>
+#include <stdexcept>
+
+namespace haptel::study {
+namespace {
+
+std::string Number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+
+/// "0.05", "0.10", "0.01", "0.001": two decimals unless that would lose digits.
+std::string AlphaText(double alpha) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.2f", alpha);
+  if (std::abs(std::strtod(buf, nullptr) - alpha) < 1e-12) return buf;
+  return Number(alpha);
+}
+
+void RequireFinite(const std::vector<double>& values, const std::string& what) {
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    if (!std::isfinite(values[i])) {
+      throw std::invalid_argument(what + ": expected finite values, got " + Number(values[i]) +
+                                  " at index " + std::to_string(i));
+    }
+  }
+}
+
+/// Σ(t³ − t) over the groups of t equal values: what ties take from the
+/// variance of ranks.
+double TieTerm(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  double term = 0.0;
+  for (std::size_t first = 0; first < values.size();) {
+    std::size_t last = first;
+    while (last + 1 < values.size() && values[last + 1] == values[first]) ++last;
+    const double t = static_cast<double>(last - first + 1);
+    term += t * t * t - t;
+    first = last + 1;
+  }
+  return term;
+}
+
+/// The checked matrix's ranks and what Friedman's χ² and Kendall's W share.
+struct RankSummary {
+  int rows = 0;
+  int columns = 0;
+  std::vector<double> rank_sums;
+  double spread = 0.0;    ///< S = Σ_j (R_j − N(k+1)/2)²
+  double tie_term = 0.0;  ///< T = Σ over rows of Σ(t³ − t)
+  /// N(k³ − k) − T: N times what S would be at most without ties, over 12.
+  double tie_corrected_total = 0.0;
+};
+
+/// Throws unless `values` has at least 2 rows of the same k >= 2 finite values.
+void CheckShape(const BlockMatrix& values) {
+  if (values.size() < 2) {
+    throw std::invalid_argument(
+        "within-subject statistics: expected at least 2 participants (rows), got " +
+        std::to_string(values.size()));
+  }
+  const std::size_t k = values.front().size();
+  if (k < 2) {
+    throw std::invalid_argument(
+        "within-subject statistics: expected at least 2 conditions (columns), got " +
+        std::to_string(k));
+  }
+  for (std::size_t row = 0; row < values.size(); ++row) {
+    if (values[row].size() != k) {
+      throw std::invalid_argument("within-subject statistics: expected every row to have " +
+                                  std::to_string(k) + " values (as row 0 has), row " +
+                                  std::to_string(row) + " has " +
+                                  std::to_string(values[row].size()));
+    }
+    RequireFinite(values[row], "within-subject statistics, row " + std::to_string(row));
+  }
+}
+
+RankSummary SummarizeRanks(const BlockMatrix& values) {
+  CheckShape(values);
+  const std::size_t k = values.front().size();
+  RankSummary summary;
+  summary.rows = static_cast<int>(values.size());
+  summary.columns = static_cast<int>(k);
+  summary.rank_sums.assign(k, 0.0);
+  for (const auto& row : values) {
+    const std::vector<double> ranks = Ranks(row);
+    for (std::size_t j = 0; j < k; ++j) summary.rank_sums[j] += ranks[j];
+    summary.tie_term += TieTerm(row);
+  }
+  const double n = summary.rows;
+  const double kd = summary.columns;
+  const double expected_rank_sum = n * (kd + 1.0) / 2.0;
+  for (double r : summary.rank_sums) {
+    summary.spread += (r - expected_rank_sum) * (r - expected_rank_sum);
+  }
+  summary.tie_corrected_total = n * (kd * kd * kd - kd) - summary.tie_term;
+  if (summary.tie_corrected_total <= 0.0) {
+    throw std::invalid_argument(
+        "within-subject statistics: every participant has the same value for all " +
+        std::to_string(k) + " conditions; there is no ranking to test");
+  }
+  return summary;
+}
+
+double KendallWOf(const RankSummary& s) {
+  return 12.0 * s.spread / (s.rows * s.tie_corrected_total);
+}
+
+/// Two-sided exact p of W+ = `rank_sum_positive` under H0 (each sign ±
+/// with probability ½, independently). Ranks are doubled so that half
+/// ranks would count too; the subset sums are counted by dynamic programming.
+double ExactSignedRankP(const std::vector<double>& ranks, double rank_sum_positive) {
+  std::vector<int> doubled(ranks.size());
+  int total = 0;
+  for (std::size_t i = 0; i < ranks.size(); ++i) {
+    doubled[i] = static_cast<int>(std::lround(2.0 * ranks[i]));
+    total += doubled[i];
+  }
+  // ways[s]: sign assignments whose doubled W+ is s (exact in a double up to 2^53).
+  std::vector<double> ways(static_cast<std::size_t>(total) + 1, 0.0);
+  ways[0] = 1.0;
+  int reached = 0;
+  for (int w : doubled) {
+    for (int s = reached; s >= 0; --s) ways[static_cast<std::size_t>(s + w)] += ways[s];
+    reached += w;
+  }
+  const double assignments = std::ldexp(1.0, static_cast<int>(ranks.size()));
+  const int observed = static_cast<int>(std::lround(2.0 * rank_sum_positive));
+  double at_most = 0.0;
+  double at_least = 0.0;
+  for (int s = 0; s <= total; ++s) {
+    if (s <= observed) at_most += ways[static_cast<std::size_t>(s)];
+    if (s >= observed) at_least += ways[static_cast<std::size_t>(s)];
+  }
+  return std::min(1.0, 2.0 * std::min(at_most, at_least) / assignments);
+}
+
+constexpr int kMaxExactPairs = 25;
+
+}  // namespace
+
+std::vector<double> Ranks(const std::vector<double>& values) {
+  RequireFinite(values, "Ranks");
+  std::vector<std::size_t> order(values.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return values[a] < values[b]; });
+  std::vector<double> ranks(values.size());
+  for (std::size_t first = 0; first < order.size();) {
+    std::size_t last = first;
+    while (last + 1 < order.size() && values[order[last + 1]] == values[order[first]]) ++last;
+    // Positions first..last hold ranks first+1..last+1; ties share their mean.
+    const double average = (static_cast<double>(first + last) + 2.0) / 2.0;
+    for (std::size_t i = first; i <= last; ++i) ranks[order[i]] = average;
+    first = last + 1;
+  }
+  return ranks;
+}
+
+double RegularizedUpperGamma(double a, double x) {
+  if (!(a > 0.0) || !std::isfinite(a) || !(x >= 0.0) || !std::isfinite(x)) {
+    throw std::invalid_argument(
+        "RegularizedUpperGamma: expected finite a > 0 and x >= 0, got a = " + Number(a) +
+        ", x = " + Number(x));
+  }
+  if (x == 0.0) return 1.0;
+  constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
+  constexpr int kMaxIterations = 100000;
+  // x^a e^−x / Γ(a), the factor both expansions share. a > 0, so lgamma's sign is +.
+  const double prefactor = std::exp(-x + a * std::log(x) - std::lgamma(a));
+  if (x < a + 1.0) {
+    // P(a, x) = prefactor Σ_n x^n / (a (a+1) ... (a+n)).
+    double denominator = a;
+    double term = 1.0 / a;
+    double sum = term;
+    for (int n = 0; n < kMaxIterations; ++n) {
+      denominator += 1.0;
+      term *= x / denominator;
+      sum += term;
+      if (std::abs(term) < std::abs(sum) * kEpsilon) return 1.0 - sum * prefactor;
+    }
+  } else {
+    // Q(a, x) = prefactor / (x + 1 − a − 1(1−a)/(x + 3 − a − 2(2−a)/(x + 5 − a − ...))),
+    // evaluated by the modified Lentz method.
+    constexpr double kTiny = std::numeric_limits<double>::min() / kEpsilon;
+    double b = x + 1.0 - a;
+    double c = 1.0 / kTiny;
+    double d = 1.0 / b;
+    double fraction = d;
+    for (int i = 1; i < kMaxIterations; ++i) {
+      const double an = -i * (i - a);
+      b += 2.0;
+      d = an * d + b;
+      if (std::abs(d) < kTiny) d = kTiny;
+      c = b + an / c;
+      if (std::abs(c) < kTiny) c = kTiny;
+      d = 1.0 / d;
+      const double step = d * c;
+      fraction *= step;
+      if (std::abs(step - 1.0) < kEpsilon) return prefactor * fraction;
+    }
+  }
+  throw std::runtime_error("RegularizedUpperGamma: no convergence for a = " + Number(a) +
+                           ", x = " + Number(x));
+}
+
+double ChiSquareSurvival(double chi_square, int degrees_of_freedom) {
+  if (degrees_of_freedom < 1) {
+    throw std::invalid_argument("ChiSquareSurvival: expected at least 1 degree of freedom, got " +
+                                std::to_string(degrees_of_freedom));
+  }
+  if (!(chi_square >= 0.0) || !std::isfinite(chi_square)) {
+    throw std::invalid_argument("ChiSquareSurvival: expected a finite chi-square >= 0, got " +
+                                Number(chi_square));
+  }
+  return RegularizedUpperGamma(0.5 * degrees_of_freedom, 0.5 * chi_square);
+}
+
+FriedmanResult FriedmanTest(const BlockMatrix& values) {
+  const RankSummary s = SummarizeRanks(values);
+  FriedmanResult result;
+  result.participants = s.rows;
+  result.conditions = s.columns;
+  for (double r : s.rank_sums) result.ranks.push_back({r, r / s.rows});
+  result.degrees_of_freedom = s.columns - 1;
+  result.chi_square = 12.0 * s.spread * (s.columns - 1) / s.tie_corrected_total;
+  result.p_value = ChiSquareSurvival(result.chi_square, result.degrees_of_freedom);
+  result.kendall_w = KendallWOf(s);
+  return result;
+}
+
+double KendallW(const BlockMatrix& values) { return KendallWOf(SummarizeRanks(values)); }
+
+WilcoxonResult WilcoxonSignedRank(const std::vector<double>& x, const std::vector<double>& y) {
+  if (x.size() != y.size()) {
+    throw std::invalid_argument(
+        "Wilcoxon signed-rank: expected paired samples of equal length, got " +
+        std::to_string(x.size()) + " and " + std::to_string(y.size()));
+  }
+  if (x.empty()) {
+    throw std::invalid_argument("Wilcoxon signed-rank: expected at least 1 pair, got none");
+  }
+  RequireFinite(x, "Wilcoxon signed-rank, first sample");
+  RequireFinite(y, "Wilcoxon signed-rank, second sample");
+
+  WilcoxonResult result;
+  std::vector<double> differences;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    const double d = x[i] - y[i];
+    if (d == 0.0) {
+      ++result.zero_differences;
+    } else {
+      differences.push_back(d);
+    }
+  }
+  if (differences.empty()) {
+    throw std::invalid_argument("Wilcoxon signed-rank: all " + std::to_string(x.size()) +
+                                " differences are zero; expected at least one nonzero difference");
+  }
+  std::vector<double> magnitudes(differences.size());
+  std::transform(differences.begin(), differences.end(), magnitudes.begin(),
+                 [](double d) { return std::abs(d); });
+  const std::vector<double> ranks = Ranks(magnitudes);
+  for (std::size_t i = 0; i < differences.size(); ++i) {
+    (differences[i] > 0.0 ? result.rank_sum_positive : result.rank_sum_negative) += ranks[i];
+  }
+  result.pairs_used = static_cast<int>(differences.size());
+  result.statistic = std::min(result.rank_sum_positive, result.rank_sum_negative);
+
+  const double tie_term = TieTerm(magnitudes);
+  const double n = result.pairs_used;
+  result.exact =
+      result.pairs_used <= kMaxExactPairs && result.zero_differences == 0 && tie_term == 0.0;
+  if (result.exact) {
+    result.p_value = ExactSignedRankP(ranks, result.rank_sum_positive);
+  } else {
+    const double mean = n * (n + 1.0) / 4.0;
+    const double variance = (n * (n + 1.0) * (2.0 * n + 1.0) - 0.5 * tie_term) / 24.0;
+    const double z = (result.statistic - mean) / std::sqrt(variance);
+    result.z = z;
+    // 2 (1 − Φ(|z|)) without the cancellation of 1 − Φ.
+    result.p_value = std::erfc(std::abs(z) / std::sqrt(2.0));
+  }
+  return result;
+}
+
+std::vector<double> HolmAdjust(const std::vector<double>& p_values) {
+  for (std::size_t i = 0; i < p_values.size(); ++i) {
+    if (!(p_values[i] >= 0.0 && p_values[i] <= 1.0)) {
+      throw std::invalid_argument("HolmAdjust: expected p-values in [0, 1], got " +
+                                  Number(p_values[i]) + " at index " + std::to_string(i));
+    }
+  }
+  std::vector<std::size_t> order(p_values.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return p_values[a] < p_values[b]; });
+  std::vector<double> adjusted(p_values.size());
+  const double m = static_cast<double>(p_values.size());
+  double running_max = 0.0;  // keeps the adjusted values in the order of the raw ones
+  for (std::size_t rank = 0; rank < order.size(); ++rank) {
+    const double scaled = std::min(1.0, (m - static_cast<double>(rank)) * p_values[order[rank]]);
+    running_max = std::max(running_max, scaled);
+    adjusted[order[rank]] = running_max;
+  }
+  return adjusted;
+}
+
+double NemenyiCriticalValue(int conditions, double alpha) {
+  // Demšar (2006), "Statistical comparisons of classifiers over multiple data
+  // sets", JMLR 7, Table 5(a): q_α for k = 2..10.
+  static constexpr double kAlpha005[] = {1.960, 2.343, 2.569, 2.728, 2.850,
+                                         2.949, 3.031, 3.102, 3.164};
+  static constexpr double kAlpha010[] = {1.645, 2.052, 2.291, 2.459, 2.589,
+                                         2.693, 2.780, 2.855, 2.920};
+  if (conditions < 2 || conditions > 10) {
+    throw std::invalid_argument(
+        "Nemenyi: critical values are tabulated for 2 to 10 conditions, got " +
+        std::to_string(conditions));
+  }
+  if (std::abs(alpha - 0.05) < 1e-12) return kAlpha005[conditions - 2];
+  if (std::abs(alpha - 0.10) < 1e-12) return kAlpha010[conditions - 2];
+  throw std::invalid_argument(
+      "Nemenyi: critical values are tabulated for alpha 0.05 and 0.10, got " + Number(alpha));
+}
+
+double NemenyiCriticalDifference(int conditions, int participants, double alpha) {
+  const double q = NemenyiCriticalValue(conditions, alpha);
+  if (participants < 2) {
+    throw std::invalid_argument("Nemenyi: expected at least 2 participants, got " +
+                                std::to_string(participants));
+  }
+  const double k = conditions;
+  return q * std::sqrt(k * (k + 1.0) / (6.0 * participants));
+}
+
+PostHocResult NemenyiPostHoc(const FriedmanResult& friedman, double alpha) {
+  const double cd = NemenyiCriticalDifference(friedman.conditions, friedman.participants, alpha);
+  if (friedman.ranks.size() != static_cast<std::size_t>(friedman.conditions)) {
+    throw std::invalid_argument("Nemenyi: expected mean ranks of " +
+                                std::to_string(friedman.conditions) + " conditions, got " +
+                                std::to_string(friedman.ranks.size()));
+  }
+  PostHocResult result;
+  result.method = "Nemenyi (Demšar 2006), alpha " + AlphaText(alpha);
+  result.alpha = alpha;
+  for (int a = 0; a < friedman.conditions; ++a) {
+    for (int b = a + 1; b < friedman.conditions; ++b) {
+      PairComparison pair;
+      pair.condition_a = a;
+      pair.condition_b = b;
+      pair.statistic = std::abs(friedman.ranks[a].mean_rank - friedman.ranks[b].mean_rank);
+      pair.critical_difference = cd;
+      pair.significant = pair.statistic > cd;
+      result.pairs.push_back(pair);
+    }
+  }
+  return result;
+}
+
+PostHocResult WilcoxonHolmPostHoc(const BlockMatrix& values, double alpha) {
+  if (!(alpha > 0.0 && alpha < 1.0)) {
+    throw std::invalid_argument("Wilcoxon-Holm: expected alpha in (0, 1), got " + Number(alpha));
+  }
+  CheckShape(values);  // the same checks and messages as Friedman's test
+  const int k = static_cast<int>(values.front().size());
+  std::vector<std::vector<double>> columns(k);
+  for (const auto& row : values) {
+    for (int j = 0; j < k; ++j) columns[j].push_back(row[j]);
+  }
+  PostHocResult result;
+  result.method = "Wilcoxon signed-rank, Holm-adjusted, alpha " + AlphaText(alpha);
+  result.alpha = alpha;
+  std::vector<double> raw_p;
+  for (int a = 0; a < k; ++a) {
+    for (int b = a + 1; b < k; ++b) {
+      PairComparison pair;
+      pair.condition_a = a;
+      pair.condition_b = b;
+      if (columns[a] == columns[b]) {
+        raw_p.push_back(1.0);
+      } else {
+        const WilcoxonResult test = WilcoxonSignedRank(columns[a], columns[b]);
+        pair.statistic = test.statistic;
+        raw_p.push_back(test.p_value);
+      }
+      result.pairs.push_back(pair);
+    }
+  }
+  const std::vector<double> adjusted = HolmAdjust(raw_p);
+  for (std::size_t i = 0; i < result.pairs.size(); ++i) {
+    result.pairs[i].p_value = adjusted[i];
+    result.pairs[i].significant = adjusted[i] <= alpha;
+  }
+  return result;
+}
+
+WithinSubjectAnalysis AnalyzeWithinSubject(const BlockMatrix& values, PostHocMethod method,
+                                           double alpha) {
+  WithinSubjectAnalysis analysis;
+  analysis.friedman = FriedmanTest(values);
+  analysis.post_hoc = method == PostHocMethod::kNemenyi ? NemenyiPostHoc(analysis.friedman, alpha)
+                                                        : WilcoxonHolmPostHoc(values, alpha);
+  return analysis;
+}
+
+}  // namespace haptel::study
