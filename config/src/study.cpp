@@ -20,6 +20,8 @@ DriverProfile ReadProfile(YamlMap map) {
   p.slip_rate_hz = map.Number("slip_rate_hz", p.slip_rate_hz, 0.0, 5.0);
   p.regrasp_s = map.Number("regrasp_s", p.regrasp_s, 0.1, 10.0);
   p.holding_reaction_s = map.Number("holding_reaction_s", p.holding_reaction_s, 0.0, 2.0);
+  p.holding_cruise = map.Number("holding_cruise", p.holding_cruise, 0.1, 1.0);
+  p.stay_put_cruise = map.Number("stay_put_cruise", p.stay_put_cruise, 0.1, 1.0);
   p.recentre_s = map.Number("recentre_s", p.recentre_s, 0.0, 10.0);
   p.recentre_error = map.Number("recentre_error", p.recentre_error, 0.0, 0.5);
   p.hud_use = map.Number("hud_use", p.hud_use, 0.0, 1.0);

@@ -74,6 +74,11 @@ constexpr double kCentre = 0.05;
 
 }  // namespace
 
+double AutoOperator::Practised(double factor) const {
+  // The shortfall (1 − factor) is an error: it shrinks with practice.
+  return 1.0 - std::min(0.9, (1.0 - factor) * error_scale_);
+}
+
 interfaces::DriveIntent AutoOperator::Express(double t_s, const interfaces::DriveIntent& ideal,
                                               const interfaces::MediatorInterface& interface) {
   const double dt = last_express_s_ < 0 ? 0.0 : std::max(0.0, t_s - last_express_s_);
@@ -92,9 +97,12 @@ interfaces::DriveIntent AutoOperator::Express(double t_s, const interfaces::Driv
   // Without a speed cue the driver holds back; with a speedometer, only for
   // the share of the time they do not read it.
   if (out.forward > 0.0 && !backing_off(t_s)) {
-    const double unsure = 1.0 - std::min(0.9, (1.0 - profile_.unsure_cruise) * error_scale_);
+    const double unsure = Practised(profile_.unsure_cruise);
     const double cue = interface.ShowsSpeed() ? profile_.hud_use : 0.0;
     out.forward *= cue + (1.0 - cue) * unsure;
+    // Holding virtual controls, and aiming one that stays put, the driver holds back.
+    if (grasp_s_ > 0.0) out.forward *= Practised(profile_.holding_cruise);
+    if (grasp_s_ > 0.0 && interface.ControlsStayPut()) out.forward *= Practised(profile_.stay_put_cruise);
   }
 
   // A control that stays where it is left must be brought back to its centre

@@ -36,9 +36,16 @@ struct DriverProfile {
   /// reacts this much later while the interface has controls to grasp (the
   /// thesis: drivers concentrated on grasping more than on driving).
   double holding_reaction_s = 0.0;
-  /// Bringing a control that stays where it is left back to its centre is
-  /// aimed without a tactile reference: it takes this much longer than moving
-  /// it away (s, added to the arm's time constant)...
+  /// ...and drives slower: forward command factor while holding virtual
+  /// controls (1: as fast as with free hands).
+  double holding_cruise = 1.0;
+  /// A control that stays where it is left must be aimed back to its centre
+  /// without a tactile reference, so the driver watches their hands (the
+  /// thesis's drivers did) and holds back: forward command factor on such
+  /// controls (1: no holding back)...
+  double stay_put_cruise = 1.0;
+  /// ...bringing it back takes this much longer than moving it away (s,
+  /// added to the arm's time constant)...
   double recentre_s = 0.0;
   /// ...and misses the centre by this much (standard deviation, fraction of
   /// the control's range; drawn anew at each return).

@@ -86,6 +86,9 @@ class AutoOperator {
   double grasp_s_ = 0.0;   ///< reach + close, 0 when nothing is grasped
 
   // The profile's state (all inert for the ideal driver).
+  /// A profile's speed factor at this driver's experience (its shortfall
+  /// from 1 scaled like the other errors).
+  double Practised(double factor) const;
   /// Draws the next slip of hand i after t_s (never, without slips).
   void ScheduleSlip(size_t i, double t_s);
   DriverProfile profile_;
