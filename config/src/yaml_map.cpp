@@ -78,23 +78,32 @@ void YamlMap::Fail(const std::string& key, const std::string& expected) const {
 }
 
 namespace {
-YAML::Node Item(const YAML::Node& map, const std::string& key, size_t index) {
+/// Whether the list under `key` has element `index`.
+bool HasItem(const YAML::Node& map, const std::string& key, size_t index) {
   const YAML::Node list = map.IsMap() ? map[key] : YAML::Node();
-  return list.IsSequence() && index < list.size() ? list[index] : YAML::Node();
+  return list.IsSequence() && index < list.size();
+}
+/// Element `index` of the list under `key`; when there is none, the list
+/// itself (e.g. an empty one), or `map` when there is no list either. (A
+/// default YAML::Node counts as defined and has no mark: never return one.)
+YAML::Node ItemOrNearest(const YAML::Node& map, const std::string& key, size_t index) {
+  if (!map.IsMap()) return map;
+  const YAML::Node list = map[key];
+  if (HasItem(map, key, index)) return list[index];
+  return list.IsDefined() && !list.IsNull() ? list : map;
 }
 }  // namespace
 
 void YamlMap::FailItem(const std::string& key, size_t index, const std::string& expected) const {
-  const YAML::Node item = Item(node_, key, index);
-  const bool present = item.IsDefined();
-  throw ConfigError(Where(present ? item : node_) + ": key '" + Path(key) + "[" +
-                    std::to_string(index) + "]': expected " + expected +
+  const bool present = HasItem(node_, key, index);
+  const YAML::Node item = ItemOrNearest(node_, key, index);
+  throw ConfigError(Where(item) + ": key '" + Path(key) + "[" + std::to_string(index) +
+                    "]': expected " + expected +
                     (present ? ", got " + Got(item) : ", but it is missing"));
 }
 
 std::string YamlMap::ItemLocation(const std::string& key, size_t index) const {
-  const YAML::Node item = Item(node_, key, index);
-  return Where(item.IsDefined() ? item : node_);
+  return Where(ItemOrNearest(node_, key, index));
 }
 
 bool YamlMap::Has(const std::string& key) const { return node_.IsMap() && node_[key].IsDefined(); }

@@ -72,8 +72,8 @@ class YamlMap {
   const std::string& file() const { return file_; }
   /// "file:line:col" of this mapping (just "file" for an absent section).
   std::string Location() const { return Where(node_); }
-  /// "file:line:col" of element `index` of the list under `key` (this
-  /// mapping's location when there is no such element).
+  /// "file:line:col" of element `index` of the list under `key` (the list's
+  /// when it has no such element, this mapping's when there is no list).
   std::string ItemLocation(const std::string& key, size_t index) const;
   /// The full key path of key in this mapping, e.g. "gates[1].width".
   std::string Path(const std::string& key) const;
