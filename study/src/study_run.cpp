@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "haptel/config/error.hpp"
 #include "haptel/core/args.hpp"
 #include "haptel/core/cli.hpp"
 #include "haptel/core/json.hpp"
@@ -115,6 +116,18 @@ int StudyRunCommand(int argc, const char* const* argv) {
       json = args.Flag("json");
       verbose = args.Flag("verbose");
       config = LoadStudy(args.positional()[1]);
+      // Until the experimenter's console exists, nobody can add participants
+      // or fill in questionnaires during a study: refuse what needs them.
+      if (config.operators == "person" && config.participants.empty()) {
+        throw ConfigError(config.file.string() +
+                          ": key 'participants': expected the participants' ids (adding them in the "
+                          "experimenter's console is not built yet)");
+      }
+      if (!config.questionnaires.empty()) {
+        throw ConfigError(config.file.string() +
+                          ": key 'questionnaires': expected [] for now: the experimenter's console that asks "
+                          "them after each condition is not built yet");
+      }
       plan = PlanTrials(config);
       database = args.Value("database").value_or(
           !config.database.empty() ? config.database.string() : LoadRun(config.run).database.string());
