@@ -900,6 +900,6 @@ TEST_CASE("Bad file: values the loaders check beyond their type", "[config][bad]
     REQUIRE_THROWS_AS(haptel::LoadRun(file), ConfigError);
     const std::string msg = ErrorOf([&] { haptel::LoadRun(file); });
     CHECK_THAT(msg, Contains(file.string()));
-    CHECK_THAT(msg, Contains("'operator'"));
+    CHECK_THAT(msg, Contains("'operator.min_forward'"));
   }
 }
