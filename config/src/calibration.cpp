@@ -6,11 +6,13 @@
 #include <fstream>
 #include <system_error>
 
+#include "haptel/config/check.hpp"
 #include "yaml_map.hpp"
 
 namespace haptel {
 
 using config_detail::YamlMap;
+namespace check = config_check;
 
 namespace {
 
@@ -32,52 +34,32 @@ std::array<double, N> ToArray(const std::vector<double>& values) {
   return out;
 }
 
-ArmCalibration ReadArm(YamlMap& arm) {
-  ArmCalibration c;
-  c.tracker_scale = ToArray<3>(arm.Numbers("tracker_scale", 3, -kMaxTrackerScale, kMaxTrackerScale, true));
-  c.tracker_offset = ToArray<3>(arm.Numbers("tracker_offset", 3, -kMaxTrackerOffset, kMaxTrackerOffset));
-  c.glove_gain = ToArray<kCalibrationGloveSensors>(
-      arm.Numbers("glove_gain", kCalibrationGloveSensors, -kMaxGloveGain, kMaxGloveGain, true));
-  c.glove_offset = ToArray<kCalibrationGloveSensors>(
-      arm.Numbers("glove_offset", kCalibrationGloveSensors, -kMaxGloveOffset, kMaxGloveOffset));
-  c.force_slope = ToArray<3>(arm.Numbers("force_slope", 3, -kMaxForceSlope, kMaxForceSlope, true));
-  c.force_residual = arm.RequireNumber("force_residual", 0.0, kMaxResidual);
-  // Finger commands and forces are both >= 0: the slope must be positive.
-  const std::string finger_expected = "a positive number in (0, " + std::to_string(static_cast<int>(kMaxForceSlope)) + "]";
-  if (!arm.Has("finger_force_slope")) arm.Fail("finger_force_slope", finger_expected);
-  c.finger_force_slope = arm.Number("finger_force_slope", 1.0, -kMaxForceSlope, kMaxForceSlope);
-  if (!(c.finger_force_slope > 0.0)) arm.Fail("finger_force_slope", finger_expected);
-  arm.Finish();
-  return c;
+/// Every element finite, |v| <= max and (when `nonzero`) != 0; errors name the element.
+template <size_t N>
+void CheckList(const char* key, const std::array<double, N>& values, double max, bool nonzero) {
+  for (size_t i = 0; i < N; ++i) {
+    const double v = values[i];
+    if (!(std::abs(v) <= max) || (nonzero && v == 0.0)) {
+      check::Fail(std::string(key) + "[" + std::to_string(i) + "]",
+                  std::string("a") + (nonzero ? " non-zero" : "") + " number in " +
+                      check::Range(-max, max));
+    }
+  }
 }
 
-/// The first value the loader would reject, as "key = value", or "".
-std::string FirstInvalid(const ArmCalibration& c, const std::string& prefix) {
-  auto check = [&](const char* key, const auto& values, double max, bool nonzero) -> std::string {
-    for (size_t i = 0; i < values.size(); ++i) {
-      const double v = values[i];
-      if (!std::isfinite(v) || std::abs(v) > max || (nonzero && v == 0.0)) {
-        return prefix + key + "[" + std::to_string(i) + "] = " + std::to_string(v);
-      }
-    }
-    return "";
-  };
-  for (const std::string& bad :
-       {check("tracker_scale", c.tracker_scale, kMaxTrackerScale, true),
-        check("tracker_offset", c.tracker_offset, kMaxTrackerOffset, false),
-        check("glove_gain", c.glove_gain, kMaxGloveGain, true),
-        check("glove_offset", c.glove_offset, kMaxGloveOffset, false),
-        check("force_slope", c.force_slope, kMaxForceSlope, true)}) {
-    if (!bad.empty()) return bad;
-  }
-  if (!std::isfinite(c.force_residual) || c.force_residual < 0.0 || c.force_residual > kMaxResidual) {
-    return prefix + "force_residual = " + std::to_string(c.force_residual);
-  }
-  if (!std::isfinite(c.finger_force_slope) || c.finger_force_slope <= 0.0 ||
-      c.finger_force_slope > kMaxForceSlope) {
-    return prefix + "finger_force_slope = " + std::to_string(c.finger_force_slope);
-  }
-  return "";
+ArmCalibration ReadArm(YamlMap& arm) {
+  ArmCalibration c;
+  c.tracker_scale = ToArray<3>(arm.Numbers("tracker_scale", 3, "non-zero numbers"));
+  c.tracker_offset = ToArray<3>(arm.Numbers("tracker_offset", 3));
+  c.glove_gain = ToArray<kCalibrationGloveSensors>(
+      arm.Numbers("glove_gain", kCalibrationGloveSensors, "non-zero numbers"));
+  c.glove_offset =
+      ToArray<kCalibrationGloveSensors>(arm.Numbers("glove_offset", kCalibrationGloveSensors));
+  c.force_slope = ToArray<3>(arm.Numbers("force_slope", 3, "non-zero numbers"));
+  c.force_residual = arm.RequireNumber("force_residual");
+  c.finger_force_slope = arm.RequireNumber("finger_force_slope");
+  arm.Finish();
+  return c;
 }
 
 template <size_t N>
@@ -89,6 +71,24 @@ void EmitList(YAML::Emitter& out, const char* key, const std::array<double, N>& 
 }
 
 }  // namespace
+
+void ArmCalibration::ValidateOrThrow() const {
+  CheckList("tracker_scale", tracker_scale, kMaxTrackerScale, true);
+  CheckList("tracker_offset", tracker_offset, kMaxTrackerOffset, false);
+  CheckList("glove_gain", glove_gain, kMaxGloveGain, true);
+  CheckList("glove_offset", glove_offset, kMaxGloveOffset, false);
+  CheckList("force_slope", force_slope, kMaxForceSlope, true);
+  check::Number("force_residual", force_residual, 0.0, kMaxResidual);
+  // Finger commands and forces are both >= 0: the slope must be positive.
+  if (!(finger_force_slope > 0.0 && finger_force_slope <= kMaxForceSlope)) {
+    check::Fail("finger_force_slope", "a positive number in (0, " +
+                                          std::to_string(static_cast<int>(kMaxForceSlope)) + "]");
+  }
+}
+
+void DeviceCalibration::ValidateOrThrow() const {
+  for (int i = 0; i < 2; ++i) check::Nested(std::string("arms.") + kArmNames[i], arms[i]);
+}
 
 DeviceCalibration LoadCalibration(const std::filesystem::path& file) {
   YamlMap root = YamlMap::Load(file);
@@ -107,16 +107,15 @@ DeviceCalibration LoadCalibration(const std::filesystem::path& file) {
   }
   arms.Finish();
   root.Finish();
+  config_detail::ValidateIn(root, d);
   return d;
 }
 
 void SaveCalibration(const std::filesystem::path& file, const DeviceCalibration& calibration) {
-  for (int i = 0; i < 2; ++i) {
-    const std::string bad =
-        FirstInvalid(calibration.arms[i], std::string("arms.") + kArmNames[i] + ".");
-    if (!bad.empty()) {
-      throw ConfigError(file.string() + ": refusing to write an invalid calibration: " + bad);
-    }
+  try {
+    calibration.ValidateOrThrow();
+  } catch (const ConfigFieldError& e) {
+    throw ConfigError(file.string() + ": refusing to write an invalid calibration: " + e.what());
   }
   if (calibration.device.empty() || calibration.user.empty()) {
     throw ConfigError(file.string() + ": refusing to write a calibration without a device and user name");

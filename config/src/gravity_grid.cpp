@@ -5,14 +5,17 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
 
+#include "haptel/config/check.hpp"
 #include "haptel/config/error.hpp"
 #include "yaml_map.hpp"
 
 namespace haptel {
 
 using config_detail::YamlMap;
+namespace check = config_check;
 
 namespace {
 
@@ -34,33 +37,37 @@ std::string CountsText(const std::array<int, 3>& c) {
 
 }  // namespace
 
-std::string GravityGridProblem(const GravityGridData& grid) {
+void GravityGridData::ValidateOrThrow() const {
   long product = 1;
   for (int a = 0; a < 3; ++a) {
-    if (grid.counts[a] < 2 || grid.counts[a] > kGravityGridMaxCount) {
-      return "counts: expected at least 2 and at most " + std::to_string(kGravityGridMaxCount) +
-             " vertices on every axis, got " + CountsText(grid.counts);
+    if (counts[a] < 2 || counts[a] > kGravityGridMaxCount) {
+      check::Fail("counts", "a list of 3 whole numbers in [2, " +
+                                std::to_string(kGravityGridMaxCount) + "] (vertices per axis)");
     }
-    product *= grid.counts[a];
-    if (!std::isfinite(grid.min[a]) || !std::isfinite(grid.max[a]) ||
-        !(grid.min[a] < grid.max[a])) {
-      return "min/max: expected finite corners with min < max on every axis (axis " +
-             std::to_string(a) + ")";
-    }
+    product *= counts[a];
   }
   if (product > kGravityGridMaxVertices) {
-    return "counts: " + CountsText(grid.counts) + " vertices exceed the limit of " +
-           std::to_string(kGravityGridMaxVertices);
+    check::Fail("counts",
+                "at most " + std::to_string(kGravityGridMaxVertices) + " vertices in all");
   }
-  if (grid.force_z.size() != static_cast<std::size_t>(product)) {
-    return "force_z: expected " + std::to_string(product) + " forces (" + CountsText(grid.counts) +
-           "), got " + std::to_string(grid.force_z.size());
+  check::Vec3("min", min, -kCoordinateLimit, kCoordinateLimit);
+  check::Vec3("max", max, -kCoordinateLimit, kCoordinateLimit);
+  for (int a = 0; a < 3; ++a) {
+    if (!(min[a] < max[a])) {
+      check::Fail("max", "a list of 3 numbers, each greater than 'min' on its axis", {"min"});
+    }
   }
-  for (std::size_t n = 0; n < grid.force_z.size(); ++n) {
-    if (!std::isfinite(grid.force_z[n]))
-      return "force_z[" + std::to_string(n) + "]: expected a finite number";
+  if (force_z.size() != static_cast<std::size_t>(product)) {
+    throw ConfigFieldError(
+        "force_z",
+        std::to_string(product) + " forces in newtons (" + CountsText(counts) + ", x fastest)", {},
+        std::to_string(force_z.size()));
   }
-  return {};
+  for (std::size_t n = 0; n < force_z.size(); ++n) {
+    if (!std::isfinite(force_z[n])) {
+      check::Fail("force_z[" + std::to_string(n) + "]", "a finite number (N)");
+    }
+  }
 }
 
 GravityGridData LoadGravityGrid(const std::filesystem::path& file) {
@@ -73,36 +80,27 @@ GravityGridData LoadGravityGrid(const std::filesystem::path& file) {
   const std::string corner = "a list of 3 numbers in metres";
   if (!root.Has("min")) root.Fail("min", corner);
   if (!root.Has("max")) root.Fail("max", corner);
-  g.min = root.Vec3("min", {}, -kCoordinateLimit, kCoordinateLimit);
-  g.max = root.Vec3("max", {}, -kCoordinateLimit, kCoordinateLimit);
-  for (int a = 0; a < 3; ++a) {
-    if (!(g.min[a] < g.max[a]))
-      root.Fail("max", "a list of 3 numbers, each greater than 'min' on its axis");
-  }
+  g.min = root.Vec3("min", {});
+  g.max = root.Vec3("max", {});
 
-  const std::string counts_expected = "a list of 3 whole numbers in [2, " +
-                                      std::to_string(kGravityGridMaxCount) +
-                                      "] (vertices per axis)";
+  const std::string counts_expected = "a list of 3 whole numbers (vertices per axis)";
   if (!root.Has("counts")) root.Fail("counts", counts_expected);
-  const std::array<double, 3> counts = root.Vec3("counts", {}, 2.0, kGravityGridMaxCount);
-  long product = 1;
+  const std::array<double, 3> counts = root.Vec3("counts", {});
+  double product = 1.0;  // for the wording below; ValidateOrThrow checks the counts
   for (int a = 0; a < 3; ++a) {
-    if (counts[a] != std::floor(counts[a])) root.Fail("counts", counts_expected);
+    if (counts[a] != std::floor(counts[a]) || std::abs(counts[a]) > 1e9) {
+      root.Fail("counts", counts_expected);
+    }
     g.counts[a] = static_cast<int>(counts[a]);
-    product *= g.counts[a];
-  }
-  if (product > kGravityGridMaxVertices) {
-    root.Fail("counts", "at most " + std::to_string(kGravityGridMaxVertices) + " vertices in all");
+    product *= counts[a];
   }
 
-  const std::string forces_expected = "a list of " + std::to_string(product) +
-                                      " forces in newtons (" + CountsText(g.counts) +
-                                      ", x fastest)";
   const YAML::Node list = raw["force_z"];
-  if (!list.IsDefined() || !list.IsSequence()) root.Fail("force_z", forces_expected);
-  if (list.size() != static_cast<std::size_t>(product)) {
-    throw ConfigError(Where(file, list) + ": key 'force_z': expected " + forces_expected +
-                      ", got " + std::to_string(list.size()) + " values");
+  if (!list.IsDefined() || !list.IsSequence()) {
+    std::ostringstream forces;
+    forces << "a list of " << product << " forces in newtons (" << CountsText(g.counts)
+           << ", x fastest)";
+    root.Fail("force_z", forces.str());
   }
   g.force_z.reserve(list.size());
   for (std::size_t n = 0; n < list.size(); ++n) {
@@ -115,18 +113,17 @@ GravityGridData LoadGravityGrid(const std::filesystem::path& file) {
     }
     g.force_z.push_back(value);
   }
-  (void)root.Strings("force_z", {});  // checked above; marks the key as read for Finish()
+  (void)root.Strings("force_z", {});  // read above; marks the key as read for Finish()
   root.Finish();
-
-  if (const std::string problem = GravityGridProblem(g); !problem.empty()) {
-    throw ConfigError(file.string() + ": " + problem);  // unreachable after the checks above
-  }
+  config_detail::ValidateIn(root, g);
   return g;
 }
 
 void SaveGravityGrid(const std::filesystem::path& file, const GravityGridData& grid) {
-  if (const std::string problem = GravityGridProblem(grid); !problem.empty()) {
-    throw std::invalid_argument("gravity grid for " + file.string() + ": " + problem);
+  try {
+    grid.ValidateOrThrow();
+  } catch (const ConfigFieldError& e) {
+    throw std::invalid_argument("gravity grid for " + file.string() + ": " + e.what());
   }
   YAML::Emitter out;
   out.SetDoublePrecision(std::numeric_limits<double>::max_digits10);

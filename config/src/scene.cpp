@@ -11,6 +11,7 @@
 #include <set>
 #include <stdexcept>
 
+#include "haptel/config/check.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/geometry/mass_properties.hpp"
 #include "scene_detail.hpp"
@@ -296,6 +297,15 @@ Scene LoadSceneFile(const std::filesystem::path& file) {
 // ---- placement and bounds ------------------------------------------------------
 
 bool ScenePlacement::IsIdentity() const { return position.isZero(0.0) && rotation.isIdentity(0.0); }
+
+void ScenePlacement::ValidateOrThrow() const {
+  config_check::Vec3("position", {position.x(), position.y(), position.z()}, -100.0, 100.0);
+  const bool proper = rotation.allFinite() && (rotation * rotation.transpose()).isIdentity(1e-9) &&
+                      std::abs(rotation.determinant() - 1.0) < 1e-9;
+  if (!proper) {
+    config_check::Fail("rotation", "a proper rotation (orthonormal, determinant 1)");
+  }
+}
 
 Matrix3d RotationFromRpyDeg(const Vector3d& rpy_deg) {
   const Vector3d rad = rpy_deg * (std::numbers::pi / 180.0);

@@ -9,17 +9,25 @@
 #include <string>
 #include <vector>
 
+#include "haptel/config/check.hpp"
 #include "yaml_map.hpp"
 
 namespace haptel {
 
 using config_detail::YamlMap;
+namespace check = config_check;
 
 namespace {
 
 /// More points than any drawn track needs; the geometry checks below compare
 /// every segment with every other.
 constexpr size_t kMaxCenterlinePoints = 2000;
+
+std::string NumberText(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", v);
+  return text;
+}
 
 std::string PointText(const Vec2& p) {
   char text[64];
@@ -44,18 +52,17 @@ std::optional<Vec2> Meet(const Segment2& a, const Segment2& b) {
 bool Adjacent(size_t i, size_t j, size_t n) { return (i + 1) % n == j || (j + 1) % n == i; }
 
 /// The centre line must not cross itself (a figure 8, a bow tie).
-void CheckCenterlineSimple(const TrackConfig& t, const YamlMap& root) {
+void CheckCenterlineSimple(const TrackConfig& t) {
   const auto& c = t.centerline;
   const size_t n = c.size();
   for (size_t i = 0; i < n; ++i) {
     for (size_t j = i + 1; j < n; ++j) {
       if (Adjacent(i, j, n)) continue;
       if (const auto p = Meet({c[i], c[(i + 1) % n]}, {c[j], c[(j + 1) % n]})) {
-        throw ConfigError(root.ItemLocation("centerline", j) +
-                          ": key 'centerline': expected a closed line that does not cross "
-                          "itself, but the segment from point " +
-                          std::to_string(j) + " crosses the one from point " + std::to_string(i) +
-                          " at " + PointText(*p));
+        throw ConfigFieldError(
+            "centerline[" + std::to_string(j) + "]", "a closed line that does not cross itself", {},
+            "the segment from point " + std::to_string(j) + " crossing the one from point " +
+                std::to_string(i) + " at " + PointText(*p));
       }
     }
   }
@@ -64,23 +71,23 @@ void CheckCenterlineSimple(const TrackConfig& t, const YamlMap& root) {
 /// The corridor must not overlap itself: no wall crosses another, and no wall
 /// corner comes closer to the centre line than half the corridor (a corridor
 /// folded over itself in a tight turn, or two parts of the track too close).
-void CheckCorridorSimple(const TrackConfig& t, const Track& track, YamlMap& root) {
+void CheckCorridorSimple(const TrackConfig& t, const Track& track) {
   const auto& c = t.centerline;
   const size_t n = c.size();
   const auto& walls = track.walls();  // [2i]: left of segment i, [2i + 1]: right of it
   const char* side[2] = {"left", "right"};
-  const std::string fix = "; narrow the corridor or move the centre line's parts apart";
+  const std::string fix = " (narrow the corridor or move the centre line's parts apart)";
   for (size_t a = 0; a < walls.size(); ++a) {
     for (size_t b = a + 1; b < walls.size(); ++b) {
       const size_t i = a / 2;
       const size_t j = b / 2;
       if (a % 2 == b % 2 && Adjacent(i, j, n)) continue;  // joined end to end
       if (const auto p = Meet(walls[a], walls[b])) {
-        root.Fail("corridor_width", "walls that do not cross, but the " + std::string(side[a % 2]) +
-                                        " wall beside the segment from point " + std::to_string(i) +
-                                        " crosses the " + side[b % 2] +
-                                        " wall beside the one from point " + std::to_string(j) +
-                                        " at " + PointText(*p) + fix);
+        throw ConfigFieldError(
+            "corridor_width", "walls that do not cross" + fix, {},
+            "the " + std::string(side[a % 2]) + " wall beside the segment from point " +
+                std::to_string(i) + " crossing the " + side[b % 2] +
+                " wall beside the one from point " + std::to_string(j) + " at " + PointText(*p));
       }
     }
   }
@@ -90,11 +97,11 @@ void CheckCorridorSimple(const TrackConfig& t, const Track& track, YamlMap& root
     for (size_t j = 0; j < n; ++j) {
       const Vec2 q = ClosestPointOnSegment({c[j], c[(j + 1) % n]}, corner);
       if ((q - corner).norm() < h * (1 - 1e-6)) {
-        root.Fail("corridor_width", "a corridor that does not overlap itself, but the " +
-                                        std::string(side[w % 2]) + " wall's corner at point " +
-                                        std::to_string(w / 2) + " " + PointText(corner) +
-                                        " lies inside the corridor along the segment from point " +
-                                        std::to_string(j) + fix);
+        throw ConfigFieldError(
+            "corridor_width", "a corridor that does not overlap itself" + fix, {},
+            "the " + std::string(side[w % 2]) + " wall's corner at point " + std::to_string(w / 2) +
+                " " + PointText(corner) + " inside the corridor along the segment from point " +
+                std::to_string(j));
       }
     }
   }
@@ -141,82 +148,116 @@ std::string CrossLineProblem(const Segment2& line, const Track& track) {
 
 }  // namespace
 
+void TrackConfig::ValidateOrThrow() const {
+  check::NonEmpty("name", name);
+  const size_t n = centerline.size();
+  if (n < 3 || n > kMaxCenterlinePoints) {
+    check::Fail("centerline", "a list of 3 to " + std::to_string(kMaxCenterlinePoints) +
+                                  " points [x, y] in metres");
+  }
+  for (size_t i = 0; i < n; ++i) {
+    if (!centerline[i].allFinite()) {
+      check::Fail("centerline[" + std::to_string(i) + "]", "a point [x, y] in metres");
+    }
+  }
+  check::Number("corridor_width", corridor_width, 0.2, 20.0);
+  check::Number("post_radius", post_radius, 0.005, 1.0);
+  check::Number("start_behind", start_behind, 0.0, 10.0);
+  check::Number("lap_cap_s", lap_cap_s, 1.0, 24 * 3600.0);
+  for (size_t i = 0; i < gates.size(); ++i) {
+    const std::string key = "gates[" + std::to_string(i) + "]";
+    check::Number(key + ".along", gates[i].along, 0.0, 1e6);
+    check::Number(key + ".width", gates[i].width, 0.05, 20.0);
+  }
+  for (size_t i = 0; i < obstacles.size(); ++i) {
+    const std::string key = "obstacles[" + std::to_string(i) + "]";
+    if (!obstacles[i].center.allFinite()) check::Fail(key + ".center", "a point [x, y] in metres");
+    check::Number(key + ".radius", obstacles[i].radius, 0.005, 10.0);
+  }
+
+  // Rules between several values.
+  double length = 0.0;
+  for (size_t i = 0; i < n; ++i) {
+    const Vec2 d0 = centerline[i] - centerline[(i + n - 1) % n];
+    const Vec2 d1 = centerline[(i + 1) % n] - centerline[i];
+    if (d1.norm() < 1e-6) {
+      check::Fail("centerline[" + std::to_string((i + 1) % n) + "]",
+                  "a point distinct from the one before it");
+    }
+    const double turn = std::abs(WrapAngle(std::atan2(Cross2(d0, d1), d0.dot(d1))));
+    if (turn > 0.75 * std::numbers::pi) {
+      check::Fail("centerline[" + std::to_string(i) + "]",
+                  "a point where the centre line turns by at most 135 degrees");
+    }
+    length += d1.norm();
+  }
+  if (gates.empty()) check::Fail("gates", "a list of at least one gate");
+  double previous = 0.0;
+  for (size_t i = 0; i < gates.size(); ++i) {
+    const GateSpec& g = gates[i];
+    const std::string key = "gates[" + std::to_string(i) + "]";
+    if (g.along <= previous || g.along >= length) {
+      check::Fail(key + ".along",
+                  "gates in increasing order strictly between 0 and the track length " +
+                      std::to_string(length) + " m");
+    }
+    if (g.width / 2 + post_radius >= corridor_width / 2) {
+      check::Fail(key + ".width",
+                  "posts inside the corridor (width + 2*post_radius < corridor_width)");
+    }
+    previous = g.along;
+  }
+
+  // The corridor's shape: one lane that never meets itself, and lines that cross it.
+  CheckCenterlineSimple(*this);
+  const Track track(*this);
+  CheckCorridorSimple(*this, track);
+  for (size_t i = 0; i < gates.size(); ++i) {
+    const std::string problem = CrossLineProblem(track.gates()[i].line, track);
+    if (!problem.empty()) {
+      throw ConfigFieldError(
+          "gates[" + std::to_string(i) + "].along",
+          "a gate whose line crosses the corridor from wall to wall", {},
+          "a line at " + PointText(track.gates()[i].center) + " that " + problem);
+    }
+  }
+}
+
 TrackConfig LoadTrack(const std::filesystem::path& file) {
   YamlMap root = YamlMap::Load(file);
   TrackConfig t;
   t.file = file;
   t.name = root.RequireString("name");
-  t.centerline = root.Points("centerline", 3);
-  if (t.centerline.size() > kMaxCenterlinePoints) {
-    root.Fail("centerline", "at most " + std::to_string(kMaxCenterlinePoints) + " points");
-  }
-  t.corridor_width = root.RequireNumber("corridor_width", 0.2, 20.0);
-  t.post_radius = root.Number("post_radius", t.post_radius, 0.005, 1.0);
-  t.start_behind = root.Number("start_behind", t.start_behind, 0.0, 10.0);
-  t.lap_cap_s = root.Number("lap_cap_s", t.lap_cap_s, 1.0, 24 * 3600.0);
-  const double default_gate_width = root.Number("gate_width", 0.6 * t.corridor_width, 0.05, 20.0);
-  // Kept for the checks below, so their errors point at the gate's line.
-  std::vector<YamlMap> gate_maps = root.MapList("gates");
-  for (YamlMap& g : gate_maps) {
+  t.centerline = root.Points("centerline", 0);
+  t.corridor_width = root.RequireNumber("corridor_width");
+  t.post_radius = root.Number("post_radius", t.post_radius);
+  t.start_behind = root.Number("start_behind", t.start_behind);
+  t.lap_cap_s = root.Number("lap_cap_s", t.lap_cap_s);
+  // The width of every gate that gives none.
+  const double default_gate_width = root.Number("gate_width", 0.6 * t.corridor_width);
+  for (YamlMap& g : root.MapList("gates")) {
     GateSpec spec;
-    spec.along = g.RequireNumber("along", 0.0, 1e6);
-    spec.width = g.Number("width", default_gate_width, 0.05, 20.0);
+    spec.along = g.RequireNumber("along");
+    spec.width = g.Number("width", default_gate_width);
     g.Finish();
     t.gates.push_back(spec);
   }
   for (YamlMap& o : root.MapList("obstacles")) {
     CircleObstacle c;
     c.center = o.Point("center");
-    c.radius = o.RequireNumber("radius", 0.005, 10.0);
+    c.radius = o.RequireNumber("radius");
     o.Finish();
     t.obstacles.push_back(c);
   }
   root.Finish();
-
-  // Checks that need several keys at once.
-  const size_t n = t.centerline.size();
-  double length = 0.0;
-  for (size_t i = 0; i < n; ++i) {
-    const Vec2 d0 = t.centerline[i] - t.centerline[(i + n - 1) % n];
-    const Vec2 d1 = t.centerline[(i + 1) % n] - t.centerline[i];
-    if (d1.norm() < 1e-6) root.Fail("centerline", "distinct consecutive points");
-    const double turn = std::abs(WrapAngle(std::atan2(Cross2(d0, d1), d0.dot(d1))));
-    if (turn > 0.75 * std::numbers::pi) {
-      root.Fail("centerline", "no turn sharper than 135 degrees (point " + std::to_string(i) + ")");
-    }
-    length += d1.norm();
-  }
-  if (t.gates.empty()) root.Fail("gates", "a list of at least one gate");
-  double previous = 0.0;
-  for (size_t i = 0; i < t.gates.size(); ++i) {
-    const GateSpec& g = t.gates[i];
-    YamlMap& map = gate_maps[i];
-    if (g.along <= previous || g.along >= length) {
-      map.Fail("along", "gates in increasing order strictly between 0 and the track length " +
-                            std::to_string(length) + " m");
-    }
-    if (g.width / 2 + t.post_radius >= t.corridor_width / 2) {
-      const std::string expected =
-          "posts inside the corridor (width + 2*post_radius < corridor_width)";
-      if (map.Has("width")) map.Fail("width", expected);
-      // The width came from gate_width: name this gate, at its line.
-      throw ConfigError(map.Location() + ": key '" + map.Path("width") + "': expected " +
-                        expected + ", got " + std::to_string(g.width) + " (from gate_width)");
-    }
-    previous = g.along;
-  }
-
-  // The corridor's shape: one lane that never meets itself, and lines that cross it.
-  CheckCenterlineSimple(t, root);
-  const Track track(t);
-  CheckCorridorSimple(t, track, root);
-  for (size_t i = 0; i < t.gates.size(); ++i) {
-    const std::string problem = CrossLineProblem(track.gates()[i].line, track);
-    if (!problem.empty()) {
-      gate_maps[i].Fail("along",
-                        "a gate whose line crosses the corridor from wall to wall, but at " +
-                            PointText(track.gates()[i].center) + " it " + problem);
-    }
+  try {
+    t.ValidateOrThrow();
+  } catch (const ConfigFieldError& e) {
+    // A gate without a width of its own has gate_width's: say so at the gate.
+    const bool gate_width = e.key.rfind("gates[", 0) == 0 && e.key.size() > 6 &&
+                            e.key.compare(e.key.size() - 6, 6, ".width") == 0;
+    root.Fail(e, gate_width ? "got " + NumberText(default_gate_width) + " (from gate_width)"
+                            : "but it is missing");
   }
   return t;
 }

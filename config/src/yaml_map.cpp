@@ -1,16 +1,17 @@
 #include "yaml_map.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <limits>
 #include <sstream>
+
+#include "haptel/config/check.hpp"
 
 namespace haptel::config_detail {
 namespace {
-std::string Range(double min, double max) {
-  std::ostringstream out;
-  out << "[" << min << ", " << max << "]";
-  return out.str();
-}
+using config_check::Range;
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
 /// "4 MB", "0.5 MB", "64.1 MB" (MB = 2^20 bytes).
 std::string Megabytes(std::uintmax_t bytes) {
@@ -63,6 +64,17 @@ std::string YamlMap::Where(const YAML::Node& node) const {
   return file_ + ":" + std::to_string(mark.line + 1) + ":" + std::to_string(mark.column + 1);
 }
 
+std::string YamlMap::FlowText(const YAML::Node& node) const {
+  // A short list of plain values as written: "[0.0, 5.0, 0.0]".
+  if (!node.IsSequence() || node.size() > 8) return Got(node);
+  std::string text = "[";
+  for (size_t i = 0; i < node.size(); ++i) {
+    if (!node[i].IsScalar()) return Got(node);
+    text += (i == 0 ? "" : ", ") + node[i].Scalar();
+  }
+  return text + "]";
+}
+
 std::string YamlMap::Got(const YAML::Node& node) const {
   if (node.IsScalar()) return "'" + node.Scalar() + "'";
   if (node.IsSequence()) return "a list";
@@ -75,6 +87,61 @@ void YamlMap::Fail(const std::string& key, const std::string& expected) const {
   const bool present = child.IsDefined();
   throw ConfigError(Where(present ? child : node_) + ": key '" + Path(key) + "': expected " +
                     expected + (present ? ", got " + Got(child) : ", but it is missing"));
+}
+
+YAML::Node YamlMap::Find(const std::string& path, YAML::Node* deepest) const {
+  // Each step is a key, or an index into the list reached so far:
+  // "gates[1].width" is gates, [1], width. Nodes are copied and rebound
+  // (reset), never assigned: operator= would write into the document.
+  const auto step = [&path](const YAML::Node& node, size_t& pos) -> YAML::Node {
+    if (path[pos] == '[') {
+      const size_t close = path.find(']', pos);
+      const std::string digits =
+          close == std::string::npos ? "" : path.substr(pos + 1, close - pos - 1);
+      pos = close == std::string::npos ? path.size() : close + 1;
+      if (digits.empty() || digits.find_first_not_of("0123456789") != std::string::npos) {
+        return YAML::Node();
+      }
+      const size_t index = std::stoul(digits);
+      if (!node.IsSequence() || index >= node.size()) return YAML::Node();
+      return node[index];
+    }
+    if (path[pos] == '.') ++pos;
+    const size_t end = std::min(path.find_first_of(".[", pos), path.size());
+    const std::string key = path.substr(pos, end - pos);
+    pos = end;
+    if (!node.IsMap()) return YAML::Node();
+    const YAML::Node child = node[key];
+    return child.IsDefined() ? child : YAML::Node();
+  };
+  YAML::Node node;
+  node.reset(node_);
+  if (deepest != nullptr) deepest->reset(node_);
+  size_t pos = 0;
+  while (pos < path.size()) {
+    const YAML::Node next = step(node, pos);
+    if (!next.IsDefined() || next.IsNull()) return YAML::Node(YAML::NodeType::Undefined);
+    node.reset(next);
+    if (deepest != nullptr) deepest->reset(node);
+  }
+  return node;
+}
+
+void YamlMap::Fail(const ConfigFieldError& error, const std::string& if_absent) const {
+  const auto fail_at = [&](const YAML::Node& node, const std::string& key, const std::string& got) {
+    throw ConfigError(Where(node) + ": key '" + Path(key) + "': expected " + error.expected +
+                      ", got " + (got.empty() ? Got(node) : got));
+  };
+  if (const YAML::Node node = Find(error.key); node.IsDefined()) {
+    fail_at(node, error.key, error.got.empty() ? FlowText(node) : error.got);
+  }
+  for (const std::string& related : error.related) {
+    if (const YAML::Node node = Find(related); node.IsDefined()) fail_at(node, related, "");
+  }
+  YAML::Node deepest;
+  Find(error.key, &deepest);
+  throw ConfigError(Where(deepest) + ": key '" + Path(error.key) + "': expected " + error.expected +
+                    ", " + if_absent);
 }
 
 namespace {
@@ -126,13 +193,26 @@ double YamlMap::ToNumber(const YAML::Node& node, const std::string& key,
   return value;
 }
 
-double YamlMap::Number(const std::string& key, double fallback, double min, double max) {
+double YamlMap::ReadNumber(const std::string& key, double fallback, const std::string& expected,
+                           double min, double max) {
   const YAML::Node child = Child(key);
   if (!child.IsDefined() || child.IsNull()) return fallback;
-  const std::string expected = "a number in " + Range(min, max);
   const double value = ToNumber(child, key, expected);
   if (value < min || value > max) Fail(key, expected);
   return value;
+}
+
+double YamlMap::Number(const std::string& key, double fallback) {
+  return ReadNumber(key, fallback, "a number", -kInf, kInf);
+}
+
+double YamlMap::Number(const std::string& key, double fallback, double min, double max) {
+  return ReadNumber(key, fallback, "a number in " + Range(min, max), min, max);
+}
+
+double YamlMap::RequireNumber(const std::string& key) {
+  if (!Has(key)) Fail(key, "a number");
+  return Number(key, 0.0);
 }
 
 double YamlMap::RequireNumber(const std::string& key, double min, double max) {
@@ -140,14 +220,23 @@ double YamlMap::RequireNumber(const std::string& key, double min, double max) {
   return Number(key, 0.0, min, max);
 }
 
-int YamlMap::Integer(const std::string& key, int fallback, int min, int max) {
+int YamlMap::ReadInteger(const std::string& key, int fallback, const std::string& expected, int min,
+                         int max) {
   const YAML::Node child = Child(key);
   if (!child.IsDefined() || child.IsNull()) return fallback;
-  const std::string expected = "a whole number in " + Range(min, max);
   int value = 0;
   if (!child.IsScalar() || !YAML::convert<int>::decode(child, value)) Fail(key, expected);
   if (value < min || value > max) Fail(key, expected);
   return value;
+}
+
+int YamlMap::Integer(const std::string& key, int fallback) {
+  return ReadInteger(key, fallback, "a whole number", std::numeric_limits<int>::min(),
+                     std::numeric_limits<int>::max());
+}
+
+int YamlMap::Integer(const std::string& key, int fallback, int min, int max) {
+  return ReadInteger(key, fallback, "a whole number in " + Range(min, max), min, max);
 }
 
 bool YamlMap::Bool(const std::string& key, bool fallback) {
@@ -172,11 +261,11 @@ std::string YamlMap::RequireString(const std::string& key) {
   return String(key, "");
 }
 
-std::array<double, 3> YamlMap::Vec3(const std::string& key, const std::array<double, 3>& fallback,
-                                    double min, double max) {
+std::array<double, 3> YamlMap::ReadVec3(const std::string& key,
+                                        const std::array<double, 3>& fallback,
+                                        const std::string& expected, double min, double max) {
   const YAML::Node child = Child(key);
   if (!child.IsDefined() || child.IsNull()) return fallback;
-  const std::string expected = "a list of 3 numbers in " + Range(min, max);
   if (!child.IsSequence() || child.size() != 3) Fail(key, expected);
   std::array<double, 3> out{};
   for (size_t i = 0; i < 3; ++i) {
@@ -184,6 +273,15 @@ std::array<double, 3> YamlMap::Vec3(const std::string& key, const std::array<dou
     if (out[i] < min || out[i] > max) Fail(key, expected);
   }
   return out;
+}
+
+std::array<double, 3> YamlMap::Vec3(const std::string& key, const std::array<double, 3>& fallback) {
+  return ReadVec3(key, fallback, "a list of 3 numbers", -kInf, kInf);
+}
+
+std::array<double, 3> YamlMap::Vec3(const std::string& key, const std::array<double, 3>& fallback,
+                                    double min, double max) {
+  return ReadVec3(key, fallback, "a list of 3 numbers in " + Range(min, max), min, max);
 }
 
 std::vector<double> YamlMap::Numbers(const std::string& key, size_t count, double min, double max,
@@ -209,6 +307,25 @@ std::vector<double> YamlMap::Numbers(const std::string& key, size_t count, doubl
   return out;
 }
 
+std::vector<double> YamlMap::Numbers(const std::string& key, size_t count,
+                                     const std::string& noun) {
+  const std::string expected = "a list of " + std::to_string(count) + " " + noun;
+  if (!Has(key)) Fail(key, expected);
+  const YAML::Node child = Child(key);
+  if (!child.IsSequence() || child.size() != count) Fail(key, expected);
+  std::vector<double> out;
+  for (size_t i = 0; i < count; ++i) {
+    const YAML::Node item = child[i];
+    double value = 0.0;
+    if (!item.IsScalar() || !YAML::convert<double>::decode(item, value) || !std::isfinite(value)) {
+      throw ConfigError(Where(item) + ": key '" + Path(key) + "[" + std::to_string(i) +
+                        "]': expected a finite number, got " + Got(item));
+    }
+    out.push_back(value);
+  }
+  return out;
+}
+
 Vec2 YamlMap::Point(const std::string& key) {
   const YAML::Node child = Child(key);
   const std::string expected = "a point [x, y] in metres";
@@ -218,8 +335,9 @@ Vec2 YamlMap::Point(const std::string& key) {
 
 std::vector<Vec2> YamlMap::Points(const std::string& key, size_t min_count) {
   const YAML::Node child = Child(key);
-  const std::string expected =
-      "a list of at least " + std::to_string(min_count) + " points [x, y] in metres";
+  const std::string expected = min_count == 0 ? std::string("a list of points [x, y] in metres")
+                                              : "a list of at least " + std::to_string(min_count) +
+                                                    " points [x, y] in metres";
   if (!child.IsSequence() || child.size() < min_count) Fail(key, expected);
   std::vector<Vec2> out;
   for (size_t i = 0; i < child.size(); ++i) {

@@ -35,6 +35,13 @@ class YamlMap {
   bool IsScalar(const std::string& key) const;
   bool IsMap(const std::string& key) const;
 
+  /// A finite number, a whole number, a list of 3 finite numbers: only the
+  /// type is checked; the ranges are the config struct's (ValidateOrThrow).
+  double Number(const std::string& key, double fallback);
+  double RequireNumber(const std::string& key);
+  int Integer(const std::string& key, int fallback);
+  std::array<double, 3> Vec3(const std::string& key, const std::array<double, 3>& fallback);
+  /// The same, also checking a range (for values no config struct holds).
   double Number(const std::string& key, double fallback, double min, double max);
   double RequireNumber(const std::string& key, double min, double max);
   int Integer(const std::string& key, int fallback, int min, int max);
@@ -47,6 +54,10 @@ class YamlMap {
   /// `nonzero`); errors name the offending element, e.g. "gains[3]".
   std::vector<double> Numbers(const std::string& key, size_t count, double min, double max,
                               bool nonzero = false);
+  /// A required list of exactly `count` finite numbers (only the type is
+  /// checked); `noun` names them in errors: "a list of 22 non-zero numbers".
+  std::vector<double> Numbers(const std::string& key, size_t count,
+                              const std::string& noun = "numbers");
   Vec2 Point(const std::string& key);
   std::vector<Vec2> Points(const std::string& key, size_t min_count);
   /// A list of [x, y, z] points, each coordinate within ±max_abs.
@@ -65,6 +76,18 @@ class YamlMap {
   void Finish() const;
 
   [[noreturn]] void Fail(const std::string& key, const std::string& expected) const;
+  /// A config struct's ValidateOrThrow error (keys relative to this mapping)
+  /// as a ConfigError: at the line of `error.key` when the file has it; else
+  /// at the first of `error.related` the file has; else at the nearest
+  /// enclosing mapping or list the file has, saying `if_absent` (the value
+  /// refused is then a default, or was filled in from another key).
+  [[noreturn]] void Fail(const ConfigFieldError& error,
+                         const std::string& if_absent = "but it is missing") const;
+  /// The node at a key path below this mapping ("hand.material.friction",
+  /// "gates[1].width"); an undefined node when the file does not have it.
+  /// `deepest`, when given, receives the deepest node along the path the
+  /// file has (this mapping at least).
+  YAML::Node Find(const std::string& path, YAML::Node* deepest = nullptr) const;
   /// Like Fail, for element `index` of the list under `key` ("key[index]",
   /// at the element's line).
   [[noreturn]] void FailItem(const std::string& key, size_t index,
@@ -82,12 +105,31 @@ class YamlMap {
   YAML::Node Child(const std::string& key);
   std::string Where(const YAML::Node& node) const;
   std::string Got(const YAML::Node& node) const;
+  /// Got, but a short list of plain values as written ("[0.0, 5.0, 0.0]").
+  std::string FlowText(const YAML::Node& node) const;
   double ToNumber(const YAML::Node& node, const std::string& key, const std::string& expected) const;
+  double ReadNumber(const std::string& key, double fallback, const std::string& expected,
+                    double min, double max);
+  int ReadInteger(const std::string& key, int fallback, const std::string& expected, int min,
+                  int max);
+  std::array<double, 3> ReadVec3(const std::string& key, const std::array<double, 3>& fallback,
+                                 const std::string& expected, double min, double max);
 
   YAML::Node node_;
   std::string file_;
   std::string prefix_;
   std::set<std::string> read_;
 };
+
+/// Runs `config.ValidateOrThrow()`; a ConfigFieldError becomes the
+/// ConfigError at its key in `map`'s file (YamlMap::Fail).
+template <typename Config>
+void ValidateIn(const YamlMap& map, const Config& config) {
+  try {
+    config.ValidateOrThrow();
+  } catch (const ConfigFieldError& e) {
+    map.Fail(e);
+  }
+}
 
 }  // namespace haptel::config_detail

@@ -1,5 +1,7 @@
 #include "haptel/haptics/device_factory.hpp"
 
+#include <stdexcept>
+
 #include "haptel/config/error.hpp"
 #include "haptel/haptics/sim_device.hpp"
 #include "haptel/haptics/trace.hpp"
@@ -8,6 +10,7 @@
 namespace haptel::haptics {
 
 std::unique_ptr<Device> MakeDevice(const DeviceConfig& config, const OperatorConfig& muscle) {
+  config.ValidateOrThrow();
   if (config.driver == "sim") return std::make_unique<SimDevice>(config, muscle);
   if (config.driver == "udp") return std::make_unique<UdpDevice>(config);
   if (config.driver == "replay") {
@@ -26,8 +29,8 @@ std::unique_ptr<Device> MakeDevice(const DeviceConfig& config, const OperatorCon
     d.has_grasp = config.has_grasp;
     return std::make_unique<ReplayDevice>(std::move(records), d, config.replay.loop);
   }
-  throw ConfigError(config.file.string() + ": key 'driver': expected one of: sim, udp, replay, got '" +
-                    config.driver + "'");
+  throw std::logic_error("MakeDevice: driver '" + config.driver +
+                         "' passed DeviceConfig::ValidateOrThrow but has no device");
 }
 
 }  // namespace haptel::haptics

@@ -1,9 +1,12 @@
 #include "haptel/haptics/gravity.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
+
+#include "haptel/config/error.hpp"
 #include "haptel/haptics/sim_device.hpp"
 
 namespace haptel::haptics {
@@ -11,10 +14,7 @@ namespace haptel::haptics {
 // ---------------------------------------------------------------- online ---
 
 GravityGrid::GravityGrid(const GravityGridData& data, double fade_distance_m)
-    : data_(data), fade_distance_(fade_distance_m) {
-  if (const std::string problem = GravityGridProblem(data_); !problem.empty()) {
-    throw std::invalid_argument("gravity grid: " + problem);
-  }
+    : data_(Validated(data)), fade_distance_(fade_distance_m) {
   if (!std::isfinite(fade_distance_m) || fade_distance_m <= 0.0) {
     throw std::invalid_argument("gravity grid: fade_distance must be a finite distance > 0 m");
   }

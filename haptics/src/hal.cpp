@@ -3,12 +3,13 @@
 #include <algorithm>
 #include <vector>
 
+#include "haptel/config/error.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/haptics/calibrated_units.hpp"
 
 namespace haptel::haptics {
 
-Hal::Hal(const DeviceCalibration& calibration) : calibration_(calibration) {}
+Hal::Hal(const DeviceCalibration& calibration) : calibration_(Validated(calibration)) {}
 
 Vec3d Hal::ToMetres(Side side, const Vec3d& raw) const { return TrackerToMetres(calibration(side), raw); }
 

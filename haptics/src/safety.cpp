@@ -3,12 +3,14 @@
 #include <algorithm>
 #include <cmath>
 
+#include "haptel/config/error.hpp"
 #include "haptel/haptics/force_field.hpp"
 
 namespace haptel::haptics {
 
-ForceSafety::ForceSafety(const SafetyConfig& config, double device_wrist_limit, double device_finger_limit)
-    : config_(config),
+ForceSafety::ForceSafety(const SafetyConfig& config, double device_wrist_limit,
+                         double device_finger_limit)
+    : config_(Validated(config)),
       wrist_limit_(std::min(config.wrist_force_limit, device_wrist_limit)),
       finger_limit_(std::min(config.finger_force_limit, device_finger_limit)) {}
 

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <string>
 
+#include "haptel/config/error.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/haptics/calibrated_units.hpp"
 #include "haptel/haptics/force_field.hpp"
@@ -21,9 +22,13 @@ constexpr double kVelocityFilter_s = 0.005;
 
 }  // namespace
 
-ServoLoop::ServoLoop(Device& device, Hal& hal, const DeviceConfig& config, const DeviceCalibration& calibration,
-                     const GravityGrid* gravity)
-    : device_(device), hal_(hal), config_(config), calibration_(calibration), gravity_(gravity) {
+ServoLoop::ServoLoop(Device& device, Hal& hal, const DeviceConfig& config,
+                     const DeviceCalibration& calibration, const GravityGrid* gravity)
+    : device_(device),
+      hal_(hal),
+      config_(Validated(config)),
+      calibration_(Validated(calibration)),
+      gravity_(gravity) {
   const DeviceDescription& d = device.description();
   for (int i = 0; i < kSides; ++i) {
     arms_[i] = std::make_unique<Arm>(ForceSafety(config.safety, d.wrist_force_limit, d.finger_force_limit));

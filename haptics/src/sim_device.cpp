@@ -5,6 +5,7 @@
 #include <numbers>
 #include <random>
 
+#include "haptel/config/error.hpp"
 #include "haptel/haptics/force_field.hpp"
 
 namespace haptel::haptics {
@@ -25,7 +26,7 @@ double Noise(uint64_t& state) {
 }  // namespace
 
 SimDevice::SimDevice(const DeviceConfig& config, const OperatorConfig& muscle)
-    : config_(config.sim), muscle_(muscle) {
+    : config_(Validated(config).sim), muscle_(Validated(muscle)) {
   description_.name = config.name;
   description_.has_side = config.sides;
   description_.wrist_force_limit = config.sim.force_limit;

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "haptel/config/error.hpp"
+
 namespace haptel::interfaces {
 
 namespace {
@@ -12,7 +14,7 @@ constexpr double kDegToRad = std::numbers::pi / 180.0;
 constexpr double kIndicatorShare = 0.15;
 }  // namespace
 
-CockpitLogic::CockpitLogic(const CockpitConfig& config) : config_(config) {}
+CockpitLogic::CockpitLogic(const CockpitConfig& config) : config_(Validated(config)) {}
 
 MotorCommand CockpitLogic::Map(const CockpitControls& c, double t_s) const {
   const double full = config_.wheel_full_turn_deg * kDegToRad;

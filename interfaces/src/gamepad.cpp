@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "haptel/config/error.hpp"
+
 namespace haptel::interfaces {
 
 namespace {
@@ -48,7 +50,9 @@ bool DeadmanHeld(const InputState& s, GamepadDeadman d) {
 }  // namespace
 
 GamepadInterface::GamepadInterface(const GamepadConfig& config, const InputBox& input)
-    : config_(config), input_(input), disconnects_at_start_(input.Load().pad_disconnects) {}
+    : config_(Validated(config)),
+      input_(input),
+      disconnects_at_start_(input.Load().pad_disconnects) {}
 
 bool GamepadInterface::lost() const {
   return input_.Load().pad_disconnects != disconnects_at_start_;

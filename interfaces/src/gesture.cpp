@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "haptel/config/error.hpp"
+
 namespace haptel::interfaces {
 
 using haptics::Side;
@@ -22,7 +24,7 @@ double Unshape(double fraction, double dead_zone, double full_scale) {
 }
 }  // namespace
 
-GestureInterface::GestureInterface(const GestureConfig& config) : config_(config) {
+GestureInterface::GestureInterface(const GestureConfig& config) : config_(Validated(config)) {
   field_.enabled = true;
   field_.neutral = config_.neutral;
   field_.stiffness = config_.field_stiffness;

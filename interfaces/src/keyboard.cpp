@@ -4,11 +4,13 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "haptel/config/error.hpp"
+
 namespace haptel::interfaces {
 
 KeyboardInterface::KeyboardInterface(const KeyboardConfig& config, const InputBox& input,
                                      int speed_levels)
-    : config_(config), input_(input), levels_(speed_levels) {
+    : config_(Validated(config)), input_(input), levels_(speed_levels) {
   if (speed_levels < 1) throw std::invalid_argument("KeyboardInterface: speed_levels must be >= 1");
   // Presses made before this interface existed (e.g. under the previous
   // interface of the run) belong to that one.

@@ -1,13 +1,15 @@
 #include "haptel/link/participant.hpp"
 
-#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
 #include <fastrtps/utils/IPLocator.h>
 
 #include <cmath>
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <memory>
 #include <stdexcept>
+
+#include "haptel/config/error.hpp"
 
 namespace haptel::link {
 
@@ -59,7 +61,8 @@ dds::DataReaderQos DataReaderQosFor(Profile profile, const LinkConfig& config) {
   return WithProfile(dds::DataReaderQos(dds::DATAREADER_QOS_DEFAULT), profile, config);
 }
 
-Participant::Participant(const LinkConfig& config, const std::string& name) : config_(config) {
+Participant::Participant(const LinkConfig& config, const std::string& name)
+    : config_(Validated(config)) {
   dds::DomainParticipantQos qos = dds::PARTICIPANT_QOS_DEFAULT;
   qos.name(name);
   // Own transports instead of the built-in ones: UDP only on the allowed

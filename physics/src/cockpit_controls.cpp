@@ -9,6 +9,8 @@
 #include <vector>
 
 #include "bullet_util.hpp"
+#include "haptel/config/check.hpp"
+#include "haptel/config/error.hpp"
 #include "haptel/physics/world.hpp"
 
 // ---------------------------------------------------------------------------
@@ -50,14 +52,24 @@ constexpr int kControlsMask =
 /// Motor target speed standing for "as fast as the torque can push".
 constexpr double kUnreachableSpeed = 1e4;
 
-void CheckPositive(double value, const char* what) {
-  if (!(value > 0.0) || !std::isfinite(value)) {
-    throw std::invalid_argument(std::string("CockpitControlsBody: ") + what +
-                                " must be finite and > 0");
-  }
-}
-
 }  // namespace
+
+void ControlsBodyConfig::ValidateOrThrow() const {
+  namespace check = config_check;
+  check::Positive("wheel_mass", wheel_mass);
+  check::Positive("rim_radius", rim_radius);
+  check::Whole("rim_segments", rim_segments, 6, 1000);
+  check::NonNegative("wheel_damping", wheel_damping);
+  check::Positive("knob_mass", knob_mass);
+  for (double e : knob_half_extents) {
+    if (!(e > 0.0) || !std::isfinite(e)) {
+      check::Fail("knob_half_extents", "a list of 3 finite numbers > 0");
+    }
+  }
+  check::NonNegative("throttle_damping", throttle_damping);
+  check::Nested("material", material);
+  check::NonNegative("contact_distance", contact_distance);
+}
 
 struct CockpitControlsBody::Impl {
   struct Control {
@@ -81,18 +93,10 @@ struct CockpitControlsBody::Impl {
   std::array<std::vector<bool>, 2> touching;  ///< per control (wheel, knob): which hand bodies touch it
 
   Impl(PhysicsWorld& w, const CockpitConfig& c, const ControlsBodyConfig& b)
-      : world(w), cockpit(c), config(b), max_angle(c.wheel_max_angle_deg * M_PI / 180.0) {
-    CheckPositive(cockpit.wheel_radius, "wheel_radius");
-    CheckPositive(max_angle, "wheel_max_angle_deg");
-    if (max_angle >= M_PI)
-      throw std::invalid_argument("CockpitControlsBody: wheel_max_angle_deg must be < 180");
-    CheckPositive(cockpit.throttle_travel, "throttle_travel");
-    CheckPositive(config.wheel_mass, "wheel_mass");
-    CheckPositive(config.rim_radius, "rim_radius");
-    CheckPositive(config.knob_mass, "knob_mass");
-    for (double e : config.knob_half_extents) CheckPositive(e, "knob half extent");
-    if (config.rim_segments < 6)
-      throw std::invalid_argument("CockpitControlsBody: rim_segments must be >= 6");
+      : world(w),
+        cockpit(Validated(c)),
+        config(Validated(b)),
+        max_angle(c.wheel_max_angle_deg * M_PI / 180.0) {
     BuildWheel();
     BuildKnob();
   }

@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "bullet_util.hpp"
+#include "haptel/config/error.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/core/periodic_thread.hpp"
 
@@ -207,10 +208,7 @@ struct PhysicsWorld::Body {
 };
 
 PhysicsWorld::PhysicsWorld(const PhysicsConfig& config)
-    : config_(config), bullet_(std::make_unique<Bullet>(stop_requested_)) {
-  CheckPositive(config_.step_s, "step_s");
-  if (config_.solver_iterations < 1)
-    throw std::invalid_argument("PhysicsWorld: solver_iterations must be >= 1");
+    : config_(Validated(config)), bullet_(std::make_unique<Bullet>(stop_requested_)) {
   g_worlds_created.fetch_add(1);
   gCalculateCombinedFrictionCallback = &AverageFriction;
   gCalculateCombinedRestitutionCallback = &AverageRestitution;

@@ -862,7 +862,7 @@ TEST_CASE("Bad file: centre line turning back on itself", "[config][bad]") {
   REQUIRE_THROWS_AS(haptel::LoadTrack(file), ConfigError);
   const std::string msg = ErrorOf([&] { haptel::LoadTrack(file); });
   CHECK_THAT(msg, Contains(file.string()));
-  CHECK_THAT(msg, Contains("'centerline'"));
+  CHECK_THAT(msg, Contains("'centerline[0]'"));  // the point where it turns back
 }
 
 TEST_CASE("Bad file: values the loaders check beyond their type", "[config][bad]") {
@@ -900,6 +900,6 @@ TEST_CASE("Bad file: values the loaders check beyond their type", "[config][bad]
     REQUIRE_THROWS_AS(haptel::LoadRun(file), ConfigError);
     const std::string msg = ErrorOf([&] { haptel::LoadRun(file); });
     CHECK_THAT(msg, Contains(file.string()));
-    CHECK_THAT(msg, Contains("'operator'"));
+    CHECK_THAT(msg, Contains("'operator.min_forward'"));
   }
 }

@@ -74,7 +74,7 @@ TEST_CASE("A track whose centre line crosses itself is refused", "[config][bad][
     const fs::path file = Write("figure-8.yaml", text);
     const std::string msg = ErrorOf([&] { haptel::LoadTrack(file); });
     CheckOneLine(msg, file);
-    CHECK_THAT(msg, Contains("key 'centerline'"));
+    CHECK_THAT(msg, Contains("key 'centerline[5]'"));  // the segment that meets the first
     CHECK_THAT(msg, Contains("does not cross itself"));
   }
   SECTION("a loop with one side cut across by another") {
@@ -85,7 +85,7 @@ TEST_CASE("A track whose centre line crosses itself is refused", "[config][bad][
     const fs::path file = Write("self-crossing.yaml", text);
     const std::string msg = ErrorOf([&] { haptel::LoadTrack(file); });
     CheckOneLine(msg, file);
-    CHECK_THAT(msg, Contains("key 'centerline'"));
+    CHECK_THAT(msg, Contains("key 'centerline[3]'"));
     CHECK_THAT(msg, Contains("(3, 0)"));
     CHECK_THAT(msg, Contains(":9:"));  // the line of point 3, where the crossing segment starts
   }

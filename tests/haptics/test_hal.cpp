@@ -4,6 +4,7 @@
 #include <thread>
 #include <vector>
 
+#include "haptel/config/error.hpp"
 #include "haptel/haptics/hal.hpp"
 #include "test_env.hpp"
 
@@ -198,4 +199,11 @@ TEST_CASE("concurrent hand-off: readers never see a torn sample or history out o
   CHECK(reads.load() > 0);
   CHECK(torn.load() == 0);
   CHECK(disorder.load() == 0);
+}
+
+TEST_CASE("the HAL refuses a calibration DeviceCalibration::ValidateOrThrow refuses") {
+  DeviceCalibration c;
+  c.arms[1].tracker_scale[0] = std::nan("");
+  CHECK_THROWS_WITH(Hal(c), Catch::Contains("arms.right.tracker_scale[0]"));
+  CHECK_THROWS_AS(Hal(c), ConfigFieldError);
 }

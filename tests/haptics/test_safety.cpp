@@ -2,6 +2,7 @@
 #include <cmath>
 #include <limits>
 
+#include "haptel/config/error.hpp"
 #include "haptel/haptics/safety.hpp"
 
 using namespace haptel;
@@ -96,7 +97,7 @@ TEST_CASE("the rate limit bounds each change per tick") {
 TEST_CASE("NaN or Inf requests become zero and are counted") {
   SafetyConfig c = Config();
   c.soft_start_s = 0.0;
-  c.max_force_rate = 1e9;
+  c.max_force_rate = 1e6;  // the most SafetyConfig allows: 1000 N per 1 ms tick
   ForceSafety s(c, 7.0, 10.0);
   s.OnConnect(0);
   Vec3d out{};
@@ -111,7 +112,7 @@ TEST_CASE("NaN or Inf requests become zero and are counted") {
 TEST_CASE("stale set-points fade to zero within timeout + fade; local forces stay") {
   SafetyConfig c = Config();
   c.soft_start_s = 0.0;
-  c.max_force_rate = 1e9;
+  c.max_force_rate = 1e6;  // the most SafetyConfig allows: 1000 N per 1 ms tick
   ForceSafety s(c, 7.0, 10.0);
   s.OnConnect(0);
   const int64_t stamp = 1 * kMs;
@@ -158,4 +159,14 @@ TEST_CASE("on loss the output is zero at once, bypassing the rate limit") {
   s.OnConnect(t + 2 * kMs);
   s.Apply(t + 3 * kMs, t + 3 * kMs, {5, 0, 0}, {}, out, fingers);
   CHECK(out[0] <= 1.0 + 1e-9);  // ramps from zero again
+}
+
+TEST_CASE("force safety refuses a config SafetyConfig::ValidateOrThrow refuses") {
+  SafetyConfig c = Config();
+  c.setpoint_timeout_s = 0.04;  // 40 ms + 30 ms of fade: forces not gone 50 ms after a stall
+  CHECK_THROWS_WITH(ForceSafety(c, 7.0, 10.0),
+                    Catch::Contains("fade_s: expected setpoint_timeout_s + fade_s <= 0.05"));
+  c = Config();
+  c.wrist_force_limit = std::numeric_limits<double>::infinity();
+  CHECK_THROWS_AS(ForceSafety(c, 7.0, 10.0), ConfigFieldError);
 }

@@ -21,7 +21,7 @@ constexpr int64_t kMs = 1'000'000;
 DeviceConfig Immediate() {
   DeviceConfig c;
   c.safety.soft_start_s = 0.0;
-  c.safety.max_force_rate = 1e9;
+  c.safety.max_force_rate = 1e6;  // the most SafetyConfig allows: 1000 N per 1 ms tick
   c.servo.realtime_priority = 0;
   c.servo.lock_memory = false;
   return c;
@@ -214,4 +214,17 @@ TEST_CASE("one-sided mode drives both arms from one thread") {
   const auto right = loop.Counters(Side::kRight).cycles;
   CHECK(left == right);
   CHECK(loop.Stats(Side::kLeft).ticks == loop.Stats(Side::kRight).ticks);  // the same thread
+}
+
+TEST_CASE("the servo loop refuses a device config or calibration ValidateOrThrow refuses") {
+  ScriptedDevice dev;
+  Hal hal(Identity());
+  DeviceConfig c = Immediate();
+  c.servo.slow_channel_divider = 0;
+  CHECK_THROWS_WITH(ServoLoop(dev, hal, c, Identity()),
+                    Catch::Contains("servo.slow_channel_divider"));
+  DeviceCalibration cal = Identity();
+  cal.arms[0].force_slope[1] = 0.0;
+  CHECK_THROWS_WITH(ServoLoop(dev, hal, Immediate(), cal),
+                    Catch::Contains("arms.left.force_slope[1]: expected a non-zero number"));
 }

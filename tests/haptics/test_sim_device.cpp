@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
+#include "haptel/config/error.hpp"
 #include "haptel/haptics/sim_device.hpp"
 
 using namespace haptel;
@@ -152,4 +153,15 @@ TEST_CASE("a lost side answers kLost on every channel until it recovers") {
   CHECK(d.ReadWrist(Side::kRight, 1, w) == DeviceStatus::kOk);
   d.SetLost(Side::kLeft, false);
   CHECK(d.ReadWrist(Side::kLeft, 2, w) == DeviceStatus::kOk);
+}
+
+TEST_CASE("the sim device refuses a device or operator config ValidateOrThrow refuses") {
+  DeviceConfig c;
+  c.sim.arm_mass = 0.0;
+  CHECK_THROWS_WITH(SimDevice(c, OperatorConfig{}),
+                    Catch::Contains("sim.arm_mass: expected a number in [0.01, 100]"));
+  OperatorConfig muscle;
+  muscle.muscle_max_force = std::nan("");
+  CHECK_THROWS_WITH(SimDevice(DeviceConfig{}, muscle), Catch::Contains("muscle_max_force"));
+  CHECK_THROWS_AS(SimDevice(DeviceConfig{}, muscle), ConfigFieldError);
 }

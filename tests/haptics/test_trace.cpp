@@ -170,3 +170,13 @@ TEST_CASE("the replay driver opens from a device file, and a bad trace names the
     CHECK(std::string(e.what()).find("replay.trace") != std::string::npos);
   }
 }
+
+TEST_CASE(
+    "MakeDevice refuses a config DeviceConfig::ValidateOrThrow refuses, whatever the driver") {
+  DeviceConfig c;
+  c.driver = "replay";  // and no trace
+  CHECK_THROWS_WITH(MakeDevice(c), Catch::Contains("replay.trace"));
+  c = DeviceConfig{};
+  c.driver = "serial";
+  CHECK_THROWS_AS(MakeDevice(c), ConfigFieldError);
+}

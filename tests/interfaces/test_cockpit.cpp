@@ -190,3 +190,11 @@ TEST_CASE("cockpit: a control that slipped in the hand is made up for, as a pers
   CHECK(cockpit.lever_slip() == 0.0);
   CHECK(cockpit.wheel_slip() == 0.0);
 }
+
+TEST_CASE("cockpit: refuses a config CockpitConfig::ValidateOrThrow refuses") {
+  PlainPort port;
+  CockpitConfig c = Shipped("cockpit");
+  c.throttle_travel = 0.0;
+  CHECK_THROWS_WITH(CockpitInterface(c, port), Catch::Contains("throttle.travel"));
+  CHECK(port.actuations == 0);
+}

@@ -134,3 +134,12 @@ TEST_CASE("the shipped cockpit files load with their variants") {
   CHECK(plain.wheel_max_angle_deg == 135);
   CHECK_THROWS_AS(LoadCockpit("config/interfaces/gesture.yaml"), ConfigError);  // wrong name, unknown keys
 }
+
+TEST_CASE("cockpit logic: refuses a config CockpitConfig::ValidateOrThrow refuses") {
+  CockpitConfig c = Plain();
+  c.wheel_full_turn_deg = 150;  // past the end stops (135)
+  CHECK_THROWS_WITH(CockpitLogic(c),
+                    Catch::Contains("wheel.full_turn_deg: expected full_turn_deg <= "
+                                    "max_angle_deg"));
+  CHECK_THROWS_AS(CockpitLogic(c), ConfigFieldError);
+}

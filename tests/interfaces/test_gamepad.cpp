@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
+#include "haptel/config/error.hpp"
 #include "haptel/interfaces/gamepad.hpp"
 
 using namespace haptel;
@@ -187,4 +188,13 @@ TEST_CASE("gamepad: no hands, no physics, no forces", "[gamepad]") {
   g.Update(0.0, {}, hal);
   CHECK_FALSE(hal.Setpoint(haptics::Side::kLeft).field.enabled);
   CHECK_FALSE(hal.Setpoint(haptics::Side::kRight).field.enabled);
+}
+
+TEST_CASE("gamepad: refuses a config GamepadConfig::ValidateOrThrow refuses", "[gamepad]") {
+  InputBox box;
+  GamepadConfig c = Config();
+  c.dead_zone = std::nan("");
+  CHECK_THROWS_WITH(GamepadInterface(c, box),
+                    Catch::Contains("dead_zone: expected a number in [0, 0.9]"));
+  CHECK_THROWS_AS(GamepadInterface(c, box), ConfigFieldError);
 }

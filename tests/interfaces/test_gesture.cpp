@@ -2,6 +2,7 @@
 #include <cmath>
 
 #include "hal_fixture.hpp"
+#include "haptel/config/error.hpp"
 #include "haptel/haptics/force_field.hpp"
 #include "haptel/interfaces/gesture.hpp"
 
@@ -145,4 +146,12 @@ TEST_CASE("the wall releases once the contact has been clear for wall_release_s"
   g.Update(1.31, {}, hal);
   CHECK_FALSE(g.wall_active());
   CHECK_FALSE(hal.Setpoint(Side::kRight).field.wall_active);
+}
+
+TEST_CASE("gesture: refuses a config GestureConfig::ValidateOrThrow refuses") {
+  GestureConfig c;
+  c.full_forward = 0.0;
+  CHECK_THROWS_WITH(GestureInterface(c),
+                    Catch::Contains("full_forward: expected a number in [0.005, 0.5]"));
+  CHECK_THROWS_AS(GestureInterface(c), ConfigFieldError);
 }

@@ -1,5 +1,6 @@
 #include <catch2/catch.hpp>
 
+#include "haptel/config/error.hpp"
 #include "haptel/interfaces/keyboard.hpp"
 
 using namespace haptel;
@@ -195,4 +196,13 @@ TEST_CASE("keyboard: no hands, no physics, no forces", "[keyboard]") {
     CHECK_FALSE(hal.Setpoint(static_cast<haptics::Side>(side)).field.enabled);
   }
   CHECK_THROWS_AS(KeyboardInterface(Config(), k.box, 0), std::invalid_argument);
+}
+
+TEST_CASE("keyboard: refuses a config KeyboardConfig::ValidateOrThrow refuses") {
+  Keys k;
+  KeyboardConfig c = Config();
+  c.turn_share = 1.5;
+  CHECK_THROWS_WITH(KeyboardInterface(c, k.box, 8),
+                    Catch::Contains("turn_share: expected a number in [0, 1]"));
+  CHECK_THROWS_AS(KeyboardInterface(c, k.box, 8), ConfigFieldError);
 }

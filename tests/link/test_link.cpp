@@ -1,7 +1,8 @@
-#include <catch2/catch.hpp>
 #include <atomic>
+#include <catch2/catch.hpp>
 #include <mutex>
 
+#include "haptel/config/error.hpp"
 #include "haptel/link/topic.hpp"
 #include "test_env.hpp"
 
@@ -106,4 +107,16 @@ TEST_CASE("a video frame of realistic size arrives byte for byte") {
   }, 10.0));
   std::lock_guard lock(m);
   CHECK(got == expected);
+}
+
+TEST_CASE("a participant refuses a link config LinkConfig::ValidateOrThrow refuses") {
+  LinkConfig c = Config(4);
+  c.domain_id = 300;
+  CHECK_THROWS_WITH(Participant(c, "test-bad"),
+                    Catch::Contains("domain_id: expected a whole number in [0, 232]"));
+  c = Config(4);
+  c.interfaces = {"eth0"};
+  CHECK_THROWS_WITH(Participant(c, "test-bad"),
+                    Catch::Contains("interfaces[0]: expected an IPv4 address"));
+  CHECK_THROWS_AS(Participant(c, "test-bad"), ConfigFieldError);
 }

@@ -10,6 +10,7 @@
 
 #include "alloc_counter.hpp"
 #include "haptel/config/cockpit.hpp"
+#include "haptel/config/error.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/physics.hpp"
 #include "haptel/physics/cockpit_controls.hpp"
@@ -285,4 +286,38 @@ TEST_CASE("cockpit controls: the link trades state and actuation across threads'
     link.AfterStep();
   }
   CHECK(haptel::test::ThreadAllocations() == before);
+}
+
+TEST_CASE("cockpit controls: refuse a cockpit or body config ValidateOrThrow refuses",
+          "[physics][cockpit]") {
+  PhysicsWorld world{PhysicsConfig{}};
+  CockpitConfig cockpit = Cockpit();
+  cockpit.wheel_max_angle_deg = 200.0;  // the hinge turns less than half a turn each way
+  CHECK_THAT(haptel::test::WhatOf<haptel::ConfigFieldError>(
+                 [&] { CockpitControlsBody controls(world, cockpit); }),
+             Catch::Contains("wheel.max_angle_deg"));
+  haptel::physics::ControlsBodyConfig bodies;
+  bodies.rim_segments = 3;
+  CHECK_THAT(haptel::test::WhatOf<haptel::ConfigFieldError>(
+                 [&] { CockpitControlsBody controls(world, Cockpit(), bodies); }),
+             Catch::Contains("rim_segments: expected a whole number in [6, 1000]"));
+  bodies = {};
+  bodies.material.restitution = 2.0;
+  CHECK_THAT(haptel::test::WhatOf<haptel::ConfigFieldError>(
+                 [&] { CockpitControlsBody controls(world, Cockpit(), bodies); }),
+             Catch::Contains("material.restitution"));
+}
+
+TEST_CASE("cockpit controls: ControlsBodyConfig validates its defaults and names a bad key",
+          "[physics][cockpit]") {
+  using haptel::physics::ControlsBodyConfig;
+  CHECK_NOTHROW(ControlsBodyConfig{}.ValidateOrThrow());
+  ControlsBodyConfig c;
+  c.wheel_mass = 0.0;
+  CHECK_THAT(haptel::test::WhatOf<haptel::ConfigFieldError>([&] { c.ValidateOrThrow(); }),
+             Catch::Contains("wheel_mass: expected a finite number > 0"));
+  c = {};
+  c.knob_half_extents[1] = std::nan("");
+  CHECK_THAT(haptel::test::WhatOf<haptel::ConfigFieldError>([&] { c.ValidateOrThrow(); }),
+             Catch::Contains("knob_half_extents"));
 }

@@ -412,3 +412,15 @@ TEST_CASE("physics: the thread reads hands from the HAL and writes set-points", 
   CHECK_FALSE(after.coupling_enabled);
   CHECK(after.field.stiffness == 42.0);
 }
+
+TEST_CASE("physics: a world refuses a config ValidateOrThrow refuses, before building anything",
+          "[physics]") {
+  PhysicsConfig c;
+  c.hand.phalanx_radius = 0.2;
+  const std::string what =
+      haptel::test::WhatOf<haptel::ConfigFieldError>([&] { PhysicsWorld world(c); });
+  CHECK_THAT(what, Catch::Contains("hand.phalanx_radius: expected a number in [0.001, 0.05]"));
+  c = PhysicsConfig{};
+  c.step_s = std::numeric_limits<double>::quiet_NaN();
+  CHECK_THROWS_AS(PhysicsWorld(c), std::invalid_argument);  // the type derives from it
+}

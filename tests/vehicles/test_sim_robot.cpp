@@ -2,7 +2,10 @@
 #include <cmath>
 #include <numbers>
 
+#include "haptel/config/error.hpp"
 #include "haptel/vehicles/sim_robot.hpp"
+#include "haptel/vehicles/vehicle_node.hpp"
+#include "haptel/video/camera_source.hpp"
 
 using namespace haptel;
 using namespace haptel::vehicles;
@@ -125,4 +128,18 @@ TEST_CASE("stopping the adapter brings the treads to rest") {
   Drive(r, {0, 0}, 1.0);
   CHECK(r.State().applied.left == 0);
   CHECK(std::abs(r.State().speed) < 1e-3);
+}
+
+TEST_CASE(
+    "the sim robot and the vehicle node refuse a config VehicleConfig::ValidateOrThrow refuses") {
+  const Track track(Corridor());
+  VehicleConfig cfg;
+  cfg.drive.track_width = 0.0;
+  CHECK_THROWS_WITH(SimRobot(track, cfg),
+                    Catch::Contains("drive.track_width: expected a number in [0.02, 5]"));
+  CHECK_THROWS_AS(SimRobot(track, cfg), ConfigFieldError);
+  // Before any DDS participant is made: the node's config is checked first.
+  auto camera = video::MakeCameraSource(cfg.camera, &track, "test");
+  CHECK_THROWS_WITH(VehicleNode(cfg, track, std::move(camera)),
+                    Catch::Contains("drive.track_width"));
 }

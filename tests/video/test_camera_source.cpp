@@ -269,3 +269,16 @@ TEST_CASE("grab monitor: a stall is reported once, counted every time") {
     CHECK(slow.OnGrab(false, 2200 * kMs) == Event::kStalled);
   }
 }
+
+TEST_CASE("capture camera: refuses a config CameraConfig::ValidateOrThrow refuses") {
+  CameraConfig c = FileCamera(Clip(), true);
+  c.width = 8;
+  CHECK_THAT(
+      haptel::test::WhatOf<haptel::ConfigFieldError>([&] { CaptureCamera camera(c, kConfigFile); }),
+      Contains("width: expected a whole number in [16, 4096]"));
+  c = CameraConfig{};
+  c.source = CameraSourceKind::kDevice;  // and no device
+  CHECK_THAT(
+      haptel::test::WhatOf<haptel::ConfigFieldError>([&] { CaptureCamera camera(c, kConfigFile); }),
+      Contains("device: expected a V4L2 device path"));
+}

@@ -1,12 +1,12 @@
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <opencv2/core.hpp>
 #include <random>
 #include <vector>
 
-#include <catch2/catch.hpp>
-#include <opencv2/core.hpp>
-
+#include "haptel/config/error.hpp"
 #include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"
 #include "haptel/video/synthetic_camera.hpp"
@@ -354,4 +354,14 @@ TEST_CASE("synthetic camera rejects a meaningless camera configuration") {
   bad = CameraConfig{};
   bad.mount_height = 0.0;
   CHECK_THROWS_AS(SyntheticCamera(GrandPrix(), bad), std::invalid_argument);
+}
+
+TEST_CASE("synthetic camera: the refusal names the key CameraConfig::ValidateOrThrow found") {
+  CameraConfig bad;
+  bad.height = 8;
+  CHECK_THROWS_WITH(SyntheticCamera(GrandPrix(), bad),
+                    Catch::Contains("height: expected a whole number in [16, 4096]"));
+  bad = CameraConfig{};
+  bad.fov_deg = std::numeric_limits<double>::quiet_NaN();
+  CHECK_THROWS_AS(SyntheticCamera(GrandPrix(), bad), haptel::ConfigFieldError);
 }

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "haptel/config/error.hpp"
+
 namespace haptel::vehicles {
 
 namespace {
@@ -14,7 +16,7 @@ constexpr double kTouchTolerance = 0.002;
 }  // namespace
 
 SimRobot::SimRobot(const Track& track, const VehicleConfig& config)
-    : track_(track), drive_(config.drive), body_(config.body) {
+    : track_(track), drive_(Validated(config).drive), body_(config.body) {
   const Vec2 start = track.StartPosition();
   Place(start.x(), start.y(), track.StartHeading());
 }

@@ -4,6 +4,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "haptel/config/error.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/core/log.hpp"
 #include "haptel/vehicles/sim_robot.hpp"
@@ -17,7 +18,7 @@ constexpr float kMaxCommand = 1.001F;
 
 VehicleNode::VehicleNode(const VehicleConfig& config, const Track& track,
                          std::unique_ptr<video::CameraSource> camera)
-    : config_(config),
+    : config_(Validated(config)),
       adapter_(std::make_unique<SimRobot>(track, config)),
       watchdog_(config.watchdog_timeout_s),
       camera_(std::move(camera)),

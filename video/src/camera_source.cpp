@@ -64,24 +64,14 @@ std::string FileProblem(const fs::path& path) {
 }  // namespace
 
 CaptureCamera::CaptureCamera(const CameraConfig& config, const std::string& config_file)
-    : config_(config), config_file_(config_file) {
-  if (config_.width < 1 || config_.height < 1) {
-    throw std::invalid_argument("CaptureCamera: expected width and height >= 1, got " +
-                                std::to_string(config_.width) + "x" +
-                                std::to_string(config_.height));
-  }
+    : config_(Validated(config)), config_file_(config_file) {
   const auto fail = [&](const std::string& key, const std::string& why) {
     throw ConfigError(config_file_ + ": key 'camera." + key + "': cannot open " + target_ + " (" +
                       why + ")");
   };
 
   if (config_.source == CameraSourceKind::kDevice) {
-    const std::string& d = config_.device;
-    if (d.empty()) {
-      throw ConfigError(config_file_ +
-                        ": key 'camera.device': expected a V4L2 device path or index for "
-                        "source: device, but it is missing");
-    }
+    const std::string& d = config_.device;  // not empty: CameraConfig::ValidateOrThrow
     target_ = IsIndex(d) ? "/dev/video" + d : d;
     if (const std::string why = DeviceProblem(target_); !why.empty()) fail("device", why);
     // OpenCV waits up to 10 s (its default) for each frame of a device that
@@ -112,12 +102,7 @@ CaptureCamera::CaptureCamera(const CameraConfig& config, const std::string& conf
   }
 
   if (config_.source == CameraSourceKind::kFile) {
-    if (config_.file.empty()) {
-      throw ConfigError(config_file_ +
-                        ": key 'camera.file': expected a video file for source: file, but it "
-                        "is missing");
-    }
-    target_ = config_.file.string();
+    target_ = config_.file.string();  // not empty: CameraConfig::ValidateOrThrow
     if (const std::string why = FileProblem(config_.file); !why.empty()) fail("file", why);
     if (!OpenFile()) fail("file", "not a video OpenCV can read");
     // The first frame now: a file with none is an error at set-up, not an

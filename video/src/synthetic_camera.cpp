@@ -3,11 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
-#include <opencv2/imgproc.hpp>
+#include "haptel/config/error.hpp"
 
 // How the view is drawn, back to front:
 //  1. sky (rows above the horizon): a vertical blue gradient;
@@ -287,17 +288,7 @@ void DrawBar(cv::Mat& image, const Item& item) {
 }  // namespace
 
 SyntheticCamera::SyntheticCamera(const Track& track, const CameraConfig& config)
-    : track_(track), config_(config) {
-  if (config_.width < 1 || config_.height < 1 || !(config_.fov_deg >= 1.0) ||
-      !(config_.fov_deg <= 179.0) || !(config_.mount_height > 0.0) ||
-      !(config_.mount_height <= 100.0)) {
-    throw std::invalid_argument(
-        "SyntheticCamera: expected width and height >= 1, fov_deg in [1, 179] and mount_height "
-        "in (0, 100] m; got " +
-        std::to_string(config_.width) + "x" + std::to_string(config_.height) + ", fov_deg " +
-        std::to_string(config_.fov_deg) + ", mount_height " + std::to_string(config_.mount_height));
-  }
-}
+    : track_(track), config_(Validated(config)) {}
 
 // Render keeps no state between calls: concurrent calls on one camera are safe.
 // Non-finite poses, and poses farther than kMaxPoseCoord from the origin, give a

@@ -12,6 +12,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "haptel/config/error.hpp"
 #include "haptel/core/clock.hpp"
 
 namespace haptel::haptics {
@@ -119,15 +120,17 @@ UdpCounters& UdpCounters::operator+=(const UdpCounters& o) {
 
 UdpDevice::UdpDevice(const DeviceConfig& config, udp::Clock& clock)
     : clock_(clock),
-      lost_after_ns_(SToNs(config.udp.lost_after_s)),
+      lost_after_ns_(SToNs(Validated(config).udp.lost_after_s)),
       timeout_ns_(SToNs(config.udp.timeout_s)),
       retries_(config.udp.retries) {
+  // DeviceConfig::ValidateOrThrow (above) requires a port for every side
+  // used when the driver is udp: this device is that driver.
+  if (config.driver != "udp") {
+    throw std::invalid_argument("UdpDevice: the config's driver is '" + config.driver +
+                                "', not udp");
+  }
   const std::string file =
       config.file.empty() ? "device '" + config.name + "'" : config.file.string();
-  if (!(config.udp.timeout_s > 0.0) || !(config.udp.lost_after_s > 0.0) || config.udp.retries < 0) {
-    throw std::runtime_error(file +
-                             ": key 'udp': expected timeout_s > 0, lost_after_s > 0, retries >= 0");
-  }
   description_.name = config.name;
   description_.has_side = config.sides;
   description_.wrist_force_limit = config.safety.wrist_force_limit;
@@ -140,8 +143,6 @@ UdpDevice::UdpDevice(const DeviceConfig& config, udp::Clock& clock)
     const UdpArmEndpoint& arm = config.udp.arms[i];
     const std::string where = file + ": key 'udp." + kSideNames[i] + "' (" + kSideNames[i] +
                               " arm at " + arm.host + ":" + std::to_string(arm.port) + ")";
-    if (arm.port <= 0 || arm.port > 65535)
-      throw std::runtime_error(where + ": expected a port in 1..65535");
     sides_[i].socket = Connect(arm.host, arm.port, where);
     sides_[i].last_valid_ns = now;
   }

@@ -388,7 +388,7 @@ TEST_CASE(
   CheckSampledForces(dev, d, cfg, r);
   CHECK(r.error.empty());
   CHECK(r.grid.device == "sim");
-  CHECK(GravityGridProblem(r.grid).empty());
+  CHECK_NOTHROW(r.grid.ValidateOrThrow());
   double total = 0.0;
   for (const GravityVertexReport& v : r.vertices) {
     CHECK(v.sim_time_s >= cfg.hold_s);  // the 1 s hold is part of every vertex
@@ -545,4 +545,12 @@ TEST_CASE("haptel bench gravity refuses bad usage") {
   CHECK(bench::BenchGravityMain(3, zero_points) == 2);
   const char* no_file[] = {"gravity", "--device", "no/such/device.yaml"};
   CHECK(bench::BenchGravityMain(3, no_file) == 2);
+}
+
+TEST_CASE("an invalid grid is refused with the key GravityGridData::ValidateOrThrow names") {
+  GravityGridData g = MakeGrid({2, 2, 2}, [](const Vec3d&) { return 1.0; });
+  g.counts = {2, 1, 2};
+  CHECK_THROWS_AS(GravityGrid(g), ConfigFieldError);
+  CHECK_THROWS_WITH(GravityGrid(g),
+                    Contains("counts: expected a list of 3 whole numbers in [2, 1000]"));
 }

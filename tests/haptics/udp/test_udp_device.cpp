@@ -29,6 +29,7 @@
 #include "../../e2e/child.hpp"
 #include "alloc_counter.hpp"
 #include "haptel/config/device.hpp"
+#include "haptel/config/error.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/udp/udp_device.hpp"
 #include "haptel/udp/udp_protocol.hpp"
@@ -878,4 +879,17 @@ TEST_CASE("haptel-device-server: bad arguments and configuration exit 2 with one
     CHECK(std::count(child.err().begin(), child.err().end(), '\n') == 1);
     CHECK(child.out().empty());
   }
+}
+
+TEST_CASE("udp device: refuses a config DeviceConfig::ValidateOrThrow refuses", "[udp][device]") {
+  DeviceConfig c = LoopbackConfig(4000, 0);
+  c.udp.timeout_s = 0.0;
+  CHECK_THROWS_WITH(UdpDevice(c),
+                    Catch::Contains("udp.timeout_s: expected a number in [1e-05, 5]"));
+  c = LoopbackConfig(4000, 0);
+  c.udp.retries = -1;
+  CHECK_THROWS_AS(UdpDevice(c), ConfigFieldError);
+  c = LoopbackConfig(4000, 0);
+  c.driver = "sim";  // a valid config, for another driver
+  CHECK_THROWS_WITH(UdpDevice(c), Catch::Contains("not udp"));
 }

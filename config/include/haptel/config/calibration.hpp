@@ -25,6 +25,11 @@ struct ArmCalibration {
   double finger_force_slope = 1.0;
 
   ArmCalibration() { glove_gain.fill(1.0); }
+
+  /// Throws ConfigFieldError (naming the element: "glove_gain[3]") unless
+  /// every value is finite and plausible, and scales, gains and slopes are
+  /// non-zero (the finger slope > 0).
+  void ValidateOrThrow() const;
 };
 
 struct DeviceCalibration {
@@ -32,12 +37,20 @@ struct DeviceCalibration {
   std::string device;  ///< name of the device it was measured on
   std::string user = "default";
   std::array<ArmCalibration, 2> arms;  ///< [left, right]
+
+  /// Throws ConfigFieldError unless both arms are valid ("arms.left.*",
+  /// "arms.right.*"). The names are not checked (a calibration made in code
+  /// may have none; SaveCalibration requires them).
+  void ValidateOrThrow() const;
 };
 
-/// Loads and validates a calibration file (strict: unknown keys, non-finite
-/// or zero slopes/scales are errors naming file, key and line).
+/// Loads and validates (DeviceCalibration::ValidateOrThrow) a calibration file
+/// (strict: unknown keys, non-finite or zero slopes/scales are errors naming
+/// file, key and line).
 DeviceCalibration LoadCalibration(const std::filesystem::path& file);
-/// Writes a calibration file (creating parent folders) that LoadCalibration reads back.
+/// Writes a calibration file (creating parent folders) that LoadCalibration
+/// reads back. ConfigError for a calibration without device and user names
+/// or one DeviceCalibration::ValidateOrThrow refuses.
 void SaveCalibration(const std::filesystem::path& file, const DeviceCalibration& calibration);
 
 }  // namespace haptel

@@ -40,10 +40,14 @@ struct CockpitConfig {
   double throttle_return_stiffness = 60.0; ///< N/m
 
   double command_rate_hz = 50.0;
+
+  /// Throws ConfigFieldError (keys as in the file: "wheel.radius") unless the
+  /// name is set, every value is in range and full_turn_deg <= max_angle_deg < 180.
+  void ValidateOrThrow() const;
 };
 
-/// Loads and validates a cockpit interface file (strict: unknown keys are
-/// errors naming file, key and line).
+/// Loads and validates (CockpitConfig::ValidateOrThrow) a cockpit interface
+/// file (strict: unknown keys are errors naming file, key and line).
 CockpitConfig LoadCockpit(const std::filesystem::path& file);
 
 }  // namespace haptel

@@ -19,6 +19,9 @@ struct ServoLoopConfig {
   int slow_channel_divider = 6;
   int realtime_priority = 80;  ///< SCHED_FIFO priority when the process may (0: do not ask)
   bool lock_memory = true;     ///< mlockall when the process may
+
+  /// Throws ConfigFieldError unless the rate, divider and priority are in range.
+  void ValidateOrThrow() const;
 };
 
 /// Force safety, applied in the servo loop to every force before the device.
@@ -29,6 +32,10 @@ struct SafetyConfig {
   double soft_start_s = 0.5;          ///< forces ramp in after connect or reconnect
   double setpoint_timeout_s = 0.02;   ///< set-points older than this are stale
   double fade_s = 0.03;               ///< stale set-points fade to zero over this
+
+  /// Throws ConfigFieldError unless every value is in range and
+  /// setpoint_timeout_s + fade_s <= 0.05 (forces gone 50 ms after a stall).
+  void ValidateOrThrow() const;
 };
 
 /// The simulated device: point-mass arms moved by a simulated operator, with
@@ -46,11 +53,18 @@ struct SimArmConfig {
   std::array<double, 3> workspace_max{0.30, 0.30, 0.25};
   /// Seed of the hidden "true" calibration parameters (scale, offsets, gains).
   int seed = 1;
+
+  /// Throws ConfigFieldError unless every value is in range and
+  /// workspace_min < workspace_max on every axis.
+  void ValidateOrThrow() const;
 };
 
 struct UdpArmEndpoint {
   std::string host = "127.0.0.1";
   int port = 0;  ///< 0: no arm on this side
+
+  /// Throws ConfigFieldError unless the host is set and the port in [0, 65535].
+  void ValidateOrThrow() const;
 };
 
 struct UdpDeviceConfig {
@@ -58,11 +72,19 @@ struct UdpDeviceConfig {
   double timeout_s = 0.002;   ///< per request
   int retries = 1;            ///< extra attempts after a timeout
   double lost_after_s = 0.1;  ///< no valid answer for this long: device lost
+
+  /// Throws ConfigFieldError unless the endpoints ("left.*", "right.*") and
+  /// the timing values are valid.
+  void ValidateOrThrow() const;
 };
 
 struct ReplayDeviceConfig {
   std::filesystem::path trace;  ///< a trace file written by the session recorder
   bool loop = false;
+
+  /// Nothing to check on its own (DeviceConfig requires a trace for the
+  /// replay driver); there for uniformity: never throws.
+  void ValidateOrThrow() const;
 };
 
 struct DeviceConfig {
@@ -80,8 +102,15 @@ struct DeviceConfig {
   /// Optional files (empty: none). Relative paths resolve against the working directory.
   std::filesystem::path calibration;
   std::filesystem::path gravity;
+
+  /// Throws ConfigFieldError unless the driver is known, a side is used, the
+  /// parts are valid ("servo.*", "safety.*", ...), the udp driver has a port
+  /// for every side used, and the replay driver a trace.
+  void ValidateOrThrow() const;
 };
 
+/// Loads and validates (DeviceConfig::ValidateOrThrow) a device file (strict:
+/// unknown keys are errors naming file, key and line).
 DeviceConfig LoadDevice(const std::filesystem::path& file);
 
 }  // namespace haptel

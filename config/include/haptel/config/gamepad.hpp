@@ -23,9 +23,13 @@ struct GamepadConfig {
   double turn_share = 0.7;  ///< how much of the motor range turning may take
   GamepadDeadman deadman = GamepadDeadman::kLeftShoulder;
   double command_rate_hz = 50.0;
+
+  /// Throws ConfigFieldError unless the name is set and every value is in range.
+  void ValidateOrThrow() const;
 };
 
-/// Strict: unknown keys are errors naming the file, the key and the line.
+/// Loads and validates (GamepadConfig::ValidateOrThrow). Strict: unknown
+/// keys are errors naming the file, the key and the line.
 GamepadConfig LoadGamepad(const std::filesystem::path& file);
 
 }  // namespace haptel

@@ -22,8 +22,13 @@ struct GestureConfig {
   double wall_stiffness = 1500.0;           ///< N/m
   double wall_release_s = 0.3;  ///< the wall stays this long after the contact clears
   double command_rate_hz = 50.0;
+
+  /// Throws ConfigFieldError unless the name is set and every value is in range.
+  void ValidateOrThrow() const;
 };
 
+/// Loads and validates (GestureConfig::ValidateOrThrow) a gesture interface
+/// file (strict: unknown keys are errors naming file, key and line).
 GestureConfig LoadGesture(const std::filesystem::path& file);
 
 }  // namespace haptel

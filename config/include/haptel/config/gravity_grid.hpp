@@ -27,6 +27,12 @@ struct GravityGridData {
   std::array<int, 3> counts{};  ///< vertices per axis (≥ 2 each)
   std::vector<double> force_z;  ///< N upward, x fastest: i + nx*(j + ny*k)
   std::string device;           ///< device it was sampled on ("" = unknown)
+
+  /// Throws ConfigFieldError unless counts are in [2, 1000] (10 000 000
+  /// vertices at most), min < max within ±1000 m on every axis, and force_z
+  /// holds one finite force per vertex. A default-constructed grid is empty,
+  /// not valid.
+  void ValidateOrThrow() const;
 };
 
 /// Largest number of vertices per axis a grid file may have.
@@ -42,16 +48,13 @@ inline std::size_t GravityVertexIndex(const std::array<int, 3>& counts, int i, i
               static_cast<std::size_t>(counts[1]) * static_cast<std::size_t>(k));
 }
 
-/// What is wrong with a grid (empty string: nothing): counts in [2, 1000],
-/// finite min < max, force_z.size() == product of counts, all forces finite.
-std::string GravityGridProblem(const GravityGridData& grid);
-
-/// Loads and validates a grid file. ConfigError names file:line:column, the
-/// key and what was expected (unknown keys are errors).
+/// Loads and validates (GravityGridData::ValidateOrThrow) a grid file. ConfigError names
+/// file:line:column, the key and what was expected (unknown keys are errors).
 GravityGridData LoadGravityGrid(const std::filesystem::path& file);
 
 /// Writes a grid file (full double precision, so it loads back bit for bit),
-/// creating parent folders. std::invalid_argument for an invalid grid,
+/// creating parent folders. std::invalid_argument naming the file and what
+/// GravityGridData::ValidateOrThrow refuses for an invalid grid,
 /// std::runtime_error when the file cannot be written.
 void SaveGravityGrid(const std::filesystem::path& file, const GravityGridData& grid);
 

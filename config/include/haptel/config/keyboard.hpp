@@ -17,9 +17,13 @@ struct KeyboardConfig {
   bool release_to_zero = true;
   double turn_share = 0.7;  ///< how much of the motor range turning may take
   double command_rate_hz = 50.0;
+
+  /// Throws ConfigFieldError unless the name is set and every value is in range.
+  void ValidateOrThrow() const;
 };
 
-/// Strict: unknown keys are errors naming the file, the key and the line.
+/// Loads and validates (KeyboardConfig::ValidateOrThrow). Strict: unknown
+/// keys are errors naming the file, the key and the line.
 KeyboardConfig LoadKeyboard(const std::filesystem::path& file);
 
 }  // namespace haptel

@@ -15,6 +15,10 @@ struct LinkConfig {
   std::vector<std::string> peers{"127.0.0.1"};
   /// Command topic deadline: a writer or reader that misses it is reported.
   double command_deadline_s = 0.1;
+
+  /// Throws ConfigFieldError unless the domain and deadline are in range and
+  /// every interface and peer is a dotted IPv4 address ("peers[1]").
+  void ValidateOrThrow() const;
 };
 
 }  // namespace haptel

@@ -26,6 +26,10 @@ struct PhysicsMaterial {
   double restitution = 0.0;
   double rolling_friction = 0.0;   ///< m
   double spinning_friction = 0.0;  ///< m
+
+  /// Throws ConfigFieldError unless every value is in range and spinning
+  /// friction comes with rolling friction (Bullet ignores it otherwise).
+  void ValidateOrThrow() const;
 };
 
 /// One proxy hand (both sides alike; the left one is the mirror image).
@@ -64,6 +68,10 @@ struct ProxyHandConfig {
   /// Spinning friction: a Hertzian patch of radius a transmits at most
   /// (3π/16)·μ·a·N about its normal, ≈ 2.4 mm·N for μ = 1, a = 4 mm.
   PhysicsMaterial material{1.0, 0.0, 0.001, 0.002};
+
+  /// Throws ConfigFieldError unless every value is in range (the material's
+  /// too) and every phalanx_length >= 2 * phalanx_radius.
+  void ValidateOrThrow() const;
 };
 
 struct PhysicsConfig {
@@ -73,10 +81,15 @@ struct PhysicsConfig {
   std::array<double, 3> gravity{0.0, 0.0, -9.81};  ///< m/s², device frame
   int realtime_priority = 0;  ///< SCHED_FIFO priority for the thread (0: do not ask)
   ProxyHandConfig hand;
+
+  /// Throws ConfigFieldError unless the step, solver, gravity and priority
+  /// are in range and the hand is valid (keys "hand.*").
+  void ValidateOrThrow() const;
 };
 
-/// Loads and validates a physics file (strict: unknown keys and out-of-range
-/// values are errors naming file, line, key and the expected value).
+/// Loads and validates (PhysicsConfig::ValidateOrThrow) a physics file
+/// (strict: unknown keys and out-of-range values are errors naming file,
+/// line, key and the expected value).
 PhysicsConfig LoadPhysics(const std::filesystem::path& file);
 
 }  // namespace haptel

@@ -26,6 +26,9 @@ struct OperatorConfig {
   /// hand for this long, then close the fingers over grasp_close_s.
   double grasp_reach_s = 0.8;
   double grasp_close_s = 0.6;
+
+  /// Throws ConfigFieldError unless every value is in range and min_forward <= cruise.
+  void ValidateOrThrow() const;
 };
 
 struct RunConfig {
@@ -54,8 +57,15 @@ struct RunConfig {
   ScenePlacement scene_placement;
   OperatorConfig op;
   LinkConfig link;
+
+  /// Throws ConfigFieldError (keys as in the file: "operator.cruise") unless
+  /// the names and timing values are valid and every part is ("operator.*",
+  /// "scene_placement.*", "link.*").
+  void ValidateOrThrow() const;
 };
 
+/// Loads and validates (RunConfig::ValidateOrThrow) a run file (strict:
+/// unknown keys are errors naming file, key and line).
 RunConfig LoadRun(const std::filesystem::path& file);
 
 /// The interface file for a name: `<interfaces_dir>/<name>.yaml`. Throws

@@ -202,6 +202,10 @@ struct ScenePlacement {
   Eigen::Vector3d position = Eigen::Vector3d::Zero();      ///< m
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  ///< proper rotation
   bool IsIdentity() const;
+
+  /// Throws ConfigFieldError unless the position is within ±100 m and the
+  /// rotation is a proper rotation (orthonormal, determinant 1).
+  void ValidateOrThrow() const;
 };
 
 /// The rotation of roll, pitch, yaw in degrees about the fixed x, y, z axes,

@@ -33,9 +33,18 @@ struct TrackConfig {
   double lap_cap_s = 600.0;
   std::vector<GateSpec> gates;
   std::vector<CircleObstacle> obstacles;
+
+  /// Throws ConfigFieldError ("gates[1].along", "centerline[3]") unless the
+  /// values are in range, the centre line (3 to 2000 points) turns by at most
+  /// 135 degrees at a point and never meets itself, the corridor does not
+  /// overlap itself, and at least one gate, in increasing order along the
+  /// lap, has its posts inside the corridor and its line across it. A
+  /// default-constructed TrackConfig has no centre line: it is not valid.
+  void ValidateOrThrow() const;
 };
 
-/// Loads and validates a track file. Throws ConfigError naming file, key, line.
+/// Loads and validates (TrackConfig::ValidateOrThrow) a track file. Throws
+/// ConfigError naming file, key, line.
 TrackConfig LoadTrack(const std::filesystem::path& file);
 
 /// A gate as placed on the track.

@@ -17,6 +17,9 @@ struct DriveConfig {
   double motor_time_constant = 0.08; ///< first-order motor lag, s
   double left_gain = 1.0;            ///< per-motor gain: uneven turning
   double right_gain = 0.95;
+
+  /// Throws ConfigFieldError unless every value is in range.
+  void ValidateOrThrow() const;
 };
 
 struct BodyConfig {
@@ -25,6 +28,9 @@ struct BodyConfig {
   double bumper_half_angle_deg = 70.0;
   /// Contacts within this angle of straight ahead press both switches.
   double bumper_both_deg = 8.0;
+
+  /// Throws ConfigFieldError unless every value is in range.
+  void ValidateOrThrow() const;
 };
 
 /// Where a vehicle's camera frames come from.
@@ -53,6 +59,10 @@ struct CameraConfig {
   double fov_deg = 55.0;    ///< horizontal, webcam-like
   int jpeg_quality = 80;
   double mount_height = 0.12;  ///< m above the floor
+
+  /// Throws ConfigFieldError unless every value is in range, `device` (when
+  /// set) is a V4L2 path or index, and the source has the device or file it needs.
+  void ValidateOrThrow() const;
 };
 
 struct VehicleConfig {
@@ -67,8 +77,14 @@ struct VehicleConfig {
   BodyConfig body;
   CameraConfig camera;
   LinkConfig link;
+
+  /// Throws ConfigFieldError unless the name suits DDS topic names, the kind
+  /// is known, the rates are in range and every part is valid ("drive.*", ...).
+  void ValidateOrThrow() const;
 };
 
+/// Loads and validates (VehicleConfig::ValidateOrThrow) a vehicle file
+/// (strict: unknown keys are errors naming file, key and line).
 VehicleConfig LoadVehicle(const std::filesystem::path& file);
 
 /// The longest vehicle name. The name is part of the DDS topic names

@@ -8,8 +8,9 @@
 
 namespace haptel::haptics {
 
-/// Throws ConfigError (bad trace file, naming it) or std::runtime_error (a
-/// socket that cannot be opened) at set-up. `muscle` drives the sim's operator.
+/// Throws ConfigFieldError (a `config` DeviceConfig::ValidateOrThrow refuses),
+/// ConfigError (bad trace file, naming it) or std::runtime_error (a socket
+/// that cannot be opened) at set-up. `muscle` drives the sim's operator.
 std::unique_ptr<Device> MakeDevice(const DeviceConfig& config, const OperatorConfig& muscle = OperatorConfig{});
 
 }  // namespace haptel::haptics

@@ -33,8 +33,9 @@ class GravityGrid {
  public:
   static constexpr double kDefaultFadeDistance = 0.03;  ///< m
 
-  /// Validates `data` (std::invalid_argument naming the problem) and copies
-  /// it: the only allocation. fade_distance_m must be finite and > 0.
+  /// Validates `data` (GravityGridData::ValidateOrThrow: ConfigFieldError, a
+  /// std::invalid_argument) and copies it: the only allocation.
+  /// fade_distance_m must be finite and > 0 (std::invalid_argument).
   explicit GravityGrid(const GravityGridData& data, double fade_distance_m = kDefaultFadeDistance);
   /// LoadGravityGrid + constructor (ConfigError for a bad file).
   static GravityGrid Load(const std::filesystem::path& file,

@@ -36,6 +36,7 @@ class Hal {
  public:
   static constexpr int kTrackerHistory = 1000;
 
+  /// Validates `calibration` first (DeviceCalibration::ValidateOrThrow: ConfigFieldError).
   explicit Hal(const DeviceCalibration& calibration = DeviceCalibration{});
 
   // --- Servo threads: one writer per side. Wait-free, allocation-free. ---

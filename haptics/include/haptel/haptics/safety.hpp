@@ -25,7 +25,8 @@ struct SafetyCounters {
 
 class ForceSafety {
  public:
-  /// Limits are the smaller of the configured and the device's own.
+  /// Limits are the smaller of the configured and the device's own. Validates
+  /// `config` first (SafetyConfig::ValidateOrThrow: ConfigFieldError).
   ForceSafety(const SafetyConfig& config, double device_wrist_limit, double device_finger_limit);
 
   /// The device (re)connected at `now_ns`: forces ramp in from zero.

@@ -43,7 +43,8 @@ struct ServoCounters {
 
 class ServoLoop {
  public:
-  /// `device`, `hal` and `gravity` (optional, may be null) must outlive the loop.
+  /// `device`, `hal` and `gravity` (optional, may be null) must outlive the
+  /// loop. Validates `config` and `calibration` first (ConfigFieldError).
   ServoLoop(Device& device, Hal& hal, const DeviceConfig& config, const DeviceCalibration& calibration,
             const GravityGrid* gravity = nullptr);
   ~ServoLoop();

@@ -38,6 +38,7 @@ class SimDevice final : public Device {
  public:
   static constexpr double kGravity = 9.81;  ///< m/s²
 
+  /// Validates `config` and `muscle` first (ValidateOrThrow: ConfigFieldError).
   SimDevice(const DeviceConfig& config, const OperatorConfig& muscle);
 
   const DeviceDescription& description() const override { return description_; }

@@ -50,7 +50,8 @@ struct GripGeometry {
 
 class CockpitInterface final : public MediatorInterface {
  public:
-  /// Keeps a reference to `port`, which must outlive the interface.
+  /// Keeps a reference to `port`, which must outlive the interface. Validates
+  /// `config` first (CockpitConfig::ValidateOrThrow: ConfigFieldError).
   CockpitInterface(const CockpitConfig& config, ControlsPort& port, const GripGeometry& grip = {});
 
   std::string name() const override { return logic_.config().name; }

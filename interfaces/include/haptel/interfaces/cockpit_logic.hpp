@@ -38,6 +38,7 @@ struct HudState {
 
 class CockpitLogic {
  public:
+  /// Validates `config` first (CockpitConfig::ValidateOrThrow: ConfigFieldError).
   explicit CockpitLogic(const CockpitConfig& config);
 
   /// Wheel → turn, throttle → forward; zero forward while the throttle is locked.

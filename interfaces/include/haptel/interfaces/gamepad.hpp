@@ -23,7 +23,8 @@ namespace haptel::interfaces {
 class GamepadInterface final : public MediatorInterface {
  public:
   /// Keeps a reference to `input` (it must outlive the interface).
-  /// Disconnects counted before construction do not count as lost.
+  /// Disconnects counted before construction do not count as lost. Validates
+  /// `config` first (GamepadConfig::ValidateOrThrow: ConfigFieldError).
   GamepadInterface(const GamepadConfig& config, const InputBox& input);
 
   std::string name() const override { return config_.name; }

@@ -14,6 +14,7 @@ namespace haptel::interfaces {
 
 class GestureInterface final : public MediatorInterface {
  public:
+  /// Validates `config` first (GestureConfig::ValidateOrThrow: ConfigFieldError).
   explicit GestureInterface(const GestureConfig& config);
 
   std::string name() const override { return config_.name; }

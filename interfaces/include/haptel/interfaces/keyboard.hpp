@@ -25,7 +25,8 @@ class KeyboardInterface final : public MediatorInterface {
  public:
   /// Keeps a reference to `input` (it must outlive the interface). Presses
   /// counted before construction are not replayed. Throws
-  /// std::invalid_argument when speed_levels < 1.
+  /// std::invalid_argument when speed_levels < 1, ConfigFieldError (one) for a
+  /// `config` KeyboardConfig::ValidateOrThrow refuses.
   KeyboardInterface(const KeyboardConfig& config, const InputBox& input, int speed_levels);
 
   std::string name() const override { return config_.name; }

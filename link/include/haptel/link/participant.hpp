@@ -32,7 +32,8 @@ std::string TopicName(const std::string& vehicle, const std::string& channel);
 /// Writers and readers made on it must be destroyed before it.
 class Participant {
  public:
-  /// Throws std::runtime_error when DDS refuses to create the participant.
+  /// Throws std::runtime_error when DDS refuses to create the participant,
+  /// ConfigFieldError for a `config` LinkConfig::ValidateOrThrow refuses.
   Participant(const LinkConfig& config, const std::string& name);
   ~Participant();
   Participant(const Participant&) = delete;

@@ -60,12 +60,17 @@ struct ControlsBodyConfig {
   double throttle_damping = 1.0;                                 ///< N·s/m
   PhysicsMaterial material{1.0, 0.0};                            ///< rubbery: fingers grip it
   double contact_distance = 0.002;  ///< m, a manifold point this close counts as touching
+
+  /// Throws ConfigFieldError unless masses, radii and extents are finite and
+  /// > 0, dampings >= 0, rim_segments in [6, 1000] and the material is valid.
+  void ValidateOrThrow() const;
 };
 
 class CockpitControlsBody {
  public:
   /// Adds the wheel, the lever and their joints to `world` (the world's
-  /// gravity does not act on them). Throws std::invalid_argument on bad sizes.
+  /// gravity does not act on them). Validates both structs first
+  /// (ValidateOrThrow: ConfigFieldError, a std::invalid_argument).
   CockpitControlsBody(PhysicsWorld& world, const CockpitConfig& cockpit,
                       const ControlsBodyConfig& bodies = {});
   ~CockpitControlsBody();

@@ -82,6 +82,7 @@ class StepHook {
 
 class PhysicsWorld {
  public:
+  /// Validates `config` first (PhysicsConfig::ValidateOrThrow: ConfigFieldError).
   explicit PhysicsWorld(const PhysicsConfig& config);
   ~PhysicsWorld();
   PhysicsWorld(const PhysicsWorld&) = delete;

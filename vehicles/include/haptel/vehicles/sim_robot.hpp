@@ -14,7 +14,8 @@ namespace haptel::vehicles {
 
 class SimRobot final : public VehicleAdapter {
  public:
-  /// Keeps a reference to `track`; starts at the track's start pose.
+  /// Keeps a reference to `track`; starts at the track's start pose. Validates
+  /// `config` first (VehicleConfig::ValidateOrThrow: ConfigFieldError).
   SimRobot(const Track& track, const VehicleConfig& config);
 
   void SetMotors(const MotorLevels& levels) override;

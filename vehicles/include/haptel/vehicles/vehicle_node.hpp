@@ -42,7 +42,8 @@ class VehicleNode {
   /// `track` (the simulated world) must outlive the node. `camera` is the
   /// opened source of its video (video::MakeCameraSource), made before the
   /// node so that a camera that cannot open stops the vehicle before it
-  /// publishes anything; must not be null.
+  /// publishes anything; must not be null. Validates `config` first
+  /// (VehicleConfig::ValidateOrThrow: ConfigFieldError).
   VehicleNode(const VehicleConfig& config, const Track& track,
               std::unique_ptr<video::CameraSource> camera);
   ~VehicleNode();

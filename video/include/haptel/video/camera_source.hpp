@@ -67,8 +67,9 @@ class CaptureCamera final : public CameraSource {
  public:
   /// Opens `config.device` (source kDevice) or `config.file` (kFile); throws
   /// ConfigError "<config_file>: key 'camera.device': cannot open /dev/video9
-  /// (no such device)" and the like when it cannot, and std::invalid_argument
-  /// for a synthetic source or a size below 1x1.
+  /// (no such device)" and the like when it cannot, std::invalid_argument for
+  /// a synthetic source, and ConfigFieldError (a std::invalid_argument) for a
+  /// `config` CameraConfig::ValidateOrThrow refuses.
   CaptureCamera(const CameraConfig& config, const std::string& config_file);
 
   bool Grab(const CameraPose& pose, cv::Mat& bgr_out) override;

@@ -22,7 +22,8 @@ struct CameraPose {
 
 class SyntheticCamera {
  public:
-  /// Keeps a reference to `track`, which must outlive the camera.
+  /// Keeps a reference to `track`, which must outlive the camera. Validates
+  /// `config` first (CameraConfig::ValidateOrThrow: ConfigFieldError).
   SyntheticCamera(const Track& track, const CameraConfig& config);
 
   /// Renders the view from `pose` into `image` (CV_8UC3, BGR, config size).

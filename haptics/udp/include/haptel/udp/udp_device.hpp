@@ -115,9 +115,12 @@ struct UdpCounters {
 class UdpDevice final : public Device {
  public:
   /// Resolves and connects one socket per side in `config.sides`. Throws
-  /// std::runtime_error naming the config file, the key (udp.left / udp.right)
-  /// and host:port when a side has no port, the host does not resolve or the
-  /// socket cannot be opened. Sends nothing: a server that is not up yet
+  /// ConfigFieldError for a `config` DeviceConfig::ValidateOrThrow refuses (a
+  /// side without a port: "udp.right.port", with host:port),
+  /// std::invalid_argument when its driver is not udp, and std::runtime_error
+  /// naming the config file, the key (udp.left / udp.right) and host:port
+  /// when the host does not resolve or the socket cannot be opened. Sends
+  /// nothing: a server that is not up yet
   /// simply makes the side kNoData, then kLost. `clock` times every wait and
   /// the lost timer; it must outlive the device.
   explicit UdpDevice(const DeviceConfig& config, udp::Clock& clock = udp::SystemClock());
