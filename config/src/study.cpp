@@ -5,31 +5,34 @@
 #include "haptel/config/error.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/run.hpp"
+#include "haptel/config/check.hpp"
 #include "yaml_map.hpp"
 
 namespace haptel {
 
 using config_detail::YamlMap;
+namespace check = config_check;
 
 namespace {
 
 DriverProfile ReadProfile(YamlMap map) {
   DriverProfile p;
-  p.steering_noise = map.Number("steering_noise", p.steering_noise, 0.0, 1.0);
-  p.noise_time_s = map.Number("noise_time_s", p.noise_time_s, 0.01, 10.0);
-  p.slip_rate_hz = map.Number("slip_rate_hz", p.slip_rate_hz, 0.0, 5.0);
-  p.regrasp_s = map.Number("regrasp_s", p.regrasp_s, 0.1, 10.0);
-  p.holding_reaction_s = map.Number("holding_reaction_s", p.holding_reaction_s, 0.0, 2.0);
-  p.holding_cruise = map.Number("holding_cruise", p.holding_cruise, 0.1, 1.0);
-  p.stay_put_cruise = map.Number("stay_put_cruise", p.stay_put_cruise, 0.1, 1.0);
-  p.recentre_s = map.Number("recentre_s", p.recentre_s, 0.0, 10.0);
-  p.recentre_error = map.Number("recentre_error", p.recentre_error, 0.0, 0.5);
-  p.hud_use = map.Number("hud_use", p.hud_use, 0.0, 1.0);
-  p.unsure_cruise = map.Number("unsure_cruise", p.unsure_cruise, 0.1, 1.0);
-  p.learning_gain = map.Number("learning_gain", p.learning_gain, 0.0, 10.0);
-  p.learning_trials = map.Number("learning_trials", p.learning_trials, 0.1, 100.0);
+  p.steering_noise = map.Number("steering_noise", p.steering_noise);
+  p.noise_time_s = map.Number("noise_time_s", p.noise_time_s);
+  p.slip_rate_hz = map.Number("slip_rate_hz", p.slip_rate_hz);
+  p.regrasp_s = map.Number("regrasp_s", p.regrasp_s);
+  p.holding_reaction_s = map.Number("holding_reaction_s", p.holding_reaction_s);
+  p.holding_cruise = map.Number("holding_cruise", p.holding_cruise);
+  p.stay_put_cruise = map.Number("stay_put_cruise", p.stay_put_cruise);
+  p.recentre_s = map.Number("recentre_s", p.recentre_s);
+  p.recentre_error = map.Number("recentre_error", p.recentre_error);
+  p.hud_use = map.Number("hud_use", p.hud_use);
+  p.unsure_cruise = map.Number("unsure_cruise", p.unsure_cruise);
+  p.learning_gain = map.Number("learning_gain", p.learning_gain);
+  p.learning_trials = map.Number("learning_trials", p.learning_trials);
   p.seed = static_cast<uint64_t>(map.Integer("seed", static_cast<int>(p.seed), 0, 1 << 30));
   map.Finish();
+  config_detail::ValidateIn(map, p);
   return p;
 }
 
@@ -46,6 +49,33 @@ bool PlainName(const std::string& name) {
 constexpr const char* kPlainName = "a name of 1 to 40 letters, digits, '-', '_' or '.'";
 
 }  // namespace
+
+void DriverProfile::ValidateOrThrow() const {
+  check::Number("steering_noise", steering_noise, 0.0, 1.0);
+  check::Number("noise_time_s", noise_time_s, 0.01, 10.0);
+  check::Number("slip_rate_hz", slip_rate_hz, 0.0, 5.0);
+  check::Number("regrasp_s", regrasp_s, 0.1, 10.0);
+  check::Number("holding_reaction_s", holding_reaction_s, 0.0, 2.0);
+  check::Number("holding_cruise", holding_cruise, 0.1, 1.0);
+  check::Number("stay_put_cruise", stay_put_cruise, 0.1, 1.0);
+  check::Number("recentre_s", recentre_s, 0.0, 10.0);
+  check::Number("recentre_error", recentre_error, 0.0, 0.5);
+  check::Number("hud_use", hud_use, 0.0, 1.0);
+  check::Number("unsure_cruise", unsure_cruise, 0.1, 1.0);
+  check::Number("learning_gain", learning_gain, 0.0, 10.0);
+  check::Number("learning_trials", learning_trials, 0.1, 100.0);
+}
+
+void StudyConfig::ValidateOrThrow() const {
+  check::NonEmpty("name", name);
+  if (operators != "synthetic" && operators != "person") check::Fail("operators", "synthetic or person");
+  check::Number("trial_cap_s", trial_cap_s, 5.0, 3600.0);
+  check::Whole("design.repetitions", repetitions, 1, 10);
+  if (conditions.size() < 2 || conditions.size() > 10) {
+    check::Fail("conditions", "a list of 2 to 10 conditions, each {name, interface}");
+  }
+  for (const auto& [name, profile] : profiles) check::Nested("profiles." + name, profile);
+}
 
 std::string ToString(StudyOrder order) {
   switch (order) {
@@ -155,7 +185,7 @@ StudyConfig LoadStudy(const std::filesystem::path& file) {
   design.Finish();
 
   s.practice = root.Bool("practice", s.practice);
-  s.trial_cap_s = root.Number("trial_cap_s", s.trial_cap_s, 5.0, 3600.0);
+  s.trial_cap_s = root.Number("trial_cap_s", s.trial_cap_s);
   s.questionnaires = root.Strings("questionnaires", {});
   std::set<std::string> seen;
   for (const std::string& q : s.questionnaires) {
@@ -164,6 +194,7 @@ StudyConfig LoadStudy(const std::filesystem::path& file) {
   const std::string qdir = root.String("questionnaires_dir", "");
   s.questionnaires_dir = qdir.empty() ? ShippedFile("config/questionnaires") : dir / qdir;
   root.Finish();
+  config_detail::ValidateIn(root, s);
   return s;
 }
 

@@ -13,7 +13,10 @@ AutoOperator::AutoOperator(const Track& track, const OperatorConfig& config, con
       profile_(profile),
       error_scale_(1.0 + profile.learning_gain * std::exp(-std::max(0, experience) / profile.learning_trials)),
       random_(profile.seed * 0x9E3779B97F4A7C15ull + static_cast<uint64_t>(std::max(0, experience))),
-      reaction_s_(config.reaction_delay_s) {}
+      reaction_s_(config.reaction_delay_s) {
+  config.ValidateOrThrow();
+  profile.ValidateOrThrow();
+}
 
 void AutoOperator::Observe(const Observation& observation) {
   seen_.push_back(observation);

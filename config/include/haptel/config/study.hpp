@@ -63,6 +63,9 @@ struct DriverProfile {
   double learning_trials = 2.0;
   /// Seeds the driver's random processes (with the trial's position).
   uint64_t seed = 1;
+
+  /// Throws ConfigFieldError naming the first field out of its range.
+  void ValidateOrThrow() const;
 };
 
 /// One compared variant: a mediator interface (a file interfaces/NAME.yaml of
@@ -110,6 +113,10 @@ struct StudyConfig {
   /// Filled in after each condition (names of config/questionnaires/*.yaml).
   std::vector<std::string> questionnaires;
   std::filesystem::path questionnaires_dir;
+
+  /// Throws ConfigFieldError naming the first field that cannot work (the
+  /// checks against files — interfaces, profiles named — are the loader's).
+  void ValidateOrThrow() const;
 };
 
 /// "balanced-latin-square", "random", "fixed".
