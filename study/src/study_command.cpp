@@ -8,6 +8,7 @@
 namespace haptel::study {
 
 int StudyRunCommand(int argc, const char* const* argv);
+int StudyReportCommand(int argc, const char* const* argv);
 
 namespace {
 constexpr const char* kUsage =
@@ -18,6 +19,7 @@ constexpr const char* kUsage =
 int StudyCommand(int argc, const char* const* argv) {
   const std::string sub = argc > 1 ? argv[1] : "";
   if (sub == "run") return StudyRunCommand(argc, argv);
+  if (sub == "report") return StudyReportCommand(argc, argv);
   return cli::Main({"haptel study", kUsage}, argc, argv, [&]() -> int {
     throw UsageError(sub.empty() ? "missing command (run, report)" : "unknown command '" + sub + "' (run, report)");
   });

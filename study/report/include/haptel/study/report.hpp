@@ -1,0 +1,116 @@
+#pragma once
+/// @file The report on a study: the thesis's tables (per condition: each
+/// participant's lap time as scored, their rank of the condition, obstacles)
+/// with totals, the Friedman test, Kendall's W and a post-hoc test, the
+/// questionnaires' summaries; written as CSV (long format, for R or pandas),
+/// PNG plots and one HTML page, and printed.
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "haptel/study/statistics.hpp"
+
+namespace haptel::study {
+
+/// A study as recorded, read from the run database (read-only).
+struct StudyResults {
+  std::filesystem::path database;
+  std::string name;
+  std::string operators;
+  double trial_cap_s = 0.0;
+  std::vector<std::string> conditions;    ///< in the study file's order
+  std::vector<std::string> participants;  ///< in the order they were added
+  int trials_planned = 0;
+  struct Trial {
+    std::string participant;
+    int position = 0;
+    std::string condition;
+    double lap_time_s = 0.0;  ///< as scored (an unfinished lap: the cap)
+    bool completed = false;
+    int obstacles = 0;
+    int64_t run_id = 0;
+    std::string outcome;
+    int attempt = 1;
+  };
+  std::vector<Trial> trials;
+  struct Answer {
+    std::string participant;
+    std::string condition;
+    std::string questionnaire;
+    std::string item;
+    std::string value;
+  };
+  std::vector<Answer> answers;
+};
+
+/// Reads study `name`. Throws std::runtime_error with one line: no such
+/// database, or no such study (listing the studies there).
+StudyResults LoadStudyResults(const std::filesystem::path& database, const std::string& name);
+
+/// One condition's row of the report.
+struct ConditionSummary {
+  std::string name;
+  /// Per participant (StudyResults::participants order): mean scored lap
+  /// time over repetitions, rank among the conditions (1 fastest, ties
+  /// averaged), obstacles; NaN / 0 where the participant has no trial.
+  std::vector<double> lap_time_s;
+  std::vector<double> rank;
+  std::vector<int> obstacles;
+  double total_lap_time_s = 0.0;
+  double mean_lap_time_s = 0.0;
+  double median_lap_time_s = 0.0;
+  double mean_rank = 0.0;  ///< over the participants used in the statistics
+  int total_obstacles = 0;
+  int trials = 0;
+  int unfinished = 0;
+};
+
+/// A numeric questionnaire item's answers for one condition.
+struct ItemSummary {
+  std::string questionnaire;
+  std::string item;
+  std::string condition;
+  int n = 0;
+  double mean = 0.0;
+  double median = 0.0;
+  double min = 0.0;
+  double max = 0.0;
+};
+
+struct StudyReport {
+  std::vector<ConditionSummary> conditions;
+  /// Participants with a trial in every condition: the statistics' rows.
+  std::vector<std::string> participants_used;
+  /// The statistics (nullopt with fewer than 2 participants used; `why` says so).
+  std::optional<WithinSubjectAnalysis> analysis;
+  std::string why_no_statistics;
+  std::vector<ItemSummary> items;
+};
+
+/// Tables, ranks and statistics from the results.
+StudyReport ComputeReport(const StudyResults& results, PostHocMethod post_hoc, double alpha = 0.05);
+
+/// Files written into a folder.
+struct ReportFiles {
+  std::filesystem::path html, trials_csv, answers_csv, summary_csv, lap_times_png, ranks_png, ratings_png;
+};
+
+/// Writes trials.csv, answers.csv, summary.csv, lap_times.png, ranks.png,
+/// ratings.png (when there are scored questionnaires) and index.html into
+/// `dir` (created). Throws std::runtime_error naming a file it cannot write.
+ReportFiles WriteReport(const StudyResults& results, const StudyReport& report, const std::filesystem::path& dir);
+
+/// The tables (one block per condition, participants as columns, as the
+/// thesis's tables 8.1–8.4) and the statistics, readable.
+std::string FormatReport(const StudyResults& results, const StudyReport& report);
+/// One JSON line (no newline).
+std::string ReportJson(const StudyResults& results, const StudyReport& report, const ReportFiles& files);
+
+/// Draws the plots (report_plots.cpp).
+void DrawLapTimes(const StudyResults& results, const StudyReport& report, const std::filesystem::path& png);
+void DrawRanks(const StudyReport& report, const std::filesystem::path& png);
+/// Returns false (and writes nothing) when no answer is a questionnaire's score.
+bool DrawRatings(const StudyResults& results, const std::filesystem::path& png);
+
+}  // namespace haptel::study

@@ -1,0 +1,446 @@
+#include "haptel/study/report.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "haptel/core/json.hpp"
+#include "haptel/mediator/sqlite_util.hpp"
+
+namespace haptel::study {
+namespace {
+
+using namespace haptel::sql;
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+double Median(std::vector<double> values) {
+  if (values.empty()) return kNaN;
+  std::sort(values.begin(), values.end());
+  const size_t n = values.size();
+  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+std::string Fixed(double value, int decimals) {
+  if (!std::isfinite(value)) return "-";
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, "%.*f", decimals, value);
+  return buffer;
+}
+
+/// A CSV field: quoted when it holds a comma, a quote or a line break.
+std::string Csv(const std::string& text) {
+  if (text.find_first_of(",\"\n\r") == std::string::npos) return text;
+  std::string out = "\"";
+  for (const char c : text) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return out + "\"";
+}
+
+std::string Html(const std::string& text) {
+  std::string out;
+  for (const char c : text) {
+    switch (c) {
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '&': out += "&amp;"; break;
+      case '"': out += "&quot;"; break;
+      case '\'': out += "&#39;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+std::string Ordinal(double rank) {
+  if (std::abs(rank - std::round(rank)) > 1e-9) return Fixed(rank, 1);
+  const int r = static_cast<int>(std::lround(rank));
+  const char* suffix = r % 10 == 1 && r != 11 ? "st" : r % 10 == 2 && r != 12 ? "nd" : r % 10 == 3 && r != 13 ? "rd" : "th";
+  return std::to_string(r) + suffix;
+}
+
+void WriteFile(const std::filesystem::path& file, const std::string& text) {
+  std::ofstream out(file, std::ios::binary);
+  out << text;
+  out.close();
+  if (!out) throw std::runtime_error("cannot write " + file.string());
+}
+
+bool IsNumber(const std::string& text, double& value) {
+  if (text.empty()) return false;
+  char* end = nullptr;
+  value = std::strtod(text.c_str(), &end);
+  return end == text.c_str() + text.size() && std::isfinite(value);
+}
+
+}  // namespace
+
+StudyResults LoadStudyResults(const std::filesystem::path& database, const std::string& name) {
+  if (!std::filesystem::is_regular_file(database)) {
+    throw std::runtime_error("database " + database.string() + ": no such file (run `haptel study run` first)");
+  }
+  sqlite3* raw = nullptr;
+  if (sqlite3_open_v2(database.c_str(), &raw, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
+    const std::string what = raw != nullptr ? sqlite3_errmsg(raw) : "cannot open";
+    sqlite3_close_v2(raw);
+    throw std::runtime_error("database " + database.string() + ": " + what);
+  }
+  const DbHandle db(raw);
+  sqlite3_busy_timeout(raw, 2000);
+  StudyResults r;
+  r.database = database;
+  r.name = name;
+  int64_t id = 0;
+  {
+    sqlite3_stmt* probe = nullptr;
+    if (sqlite3_prepare_v2(raw, "SELECT id, operators, trial_cap_s FROM studies WHERE name = ?", -1, &probe, nullptr) !=
+        SQLITE_OK) {
+      sqlite3_finalize(probe);
+      throw std::runtime_error("database " + database.string() + ": holds no studies (" + sqlite3_errmsg(raw) + ")");
+    }
+    Stmt find(probe);
+    Binder(database, raw, find.get()).Text(name);
+    if (sqlite3_step(find.get()) == SQLITE_ROW) {
+      Reader row(find.get());
+      id = row.Int();
+      r.operators = row.Text();
+      r.trial_cap_s = row.Real();
+    }
+  }
+  if (id == 0) {
+    Stmt all = Prepare(database, raw, "SELECT name FROM studies ORDER BY id", "cannot list the studies");
+    std::string names;
+    while (sqlite3_step(all.get()) == SQLITE_ROW) names += (names.empty() ? "" : ", ") + Reader(all.get()).Text();
+    throw std::runtime_error("database " + database.string() + ": no study '" + name + "' (" +
+                             (names.empty() ? "it holds none" : "it holds: " + names) + ")");
+  }
+  Stmt conditions = Prepare(database, raw, "SELECT name FROM study_conditions WHERE study_id = ? ORDER BY position",
+                            "cannot read the conditions");
+  Binder(database, raw, conditions.get()).Int(id);
+  while (sqlite3_step(conditions.get()) == SQLITE_ROW) r.conditions.push_back(Reader(conditions.get()).Text());
+  Stmt participants = Prepare(database, raw,
+                              "SELECT participant FROM study_participants WHERE study_id = ? ORDER BY row_index",
+                              "cannot read the participants");
+  Binder(database, raw, participants.get()).Int(id);
+  while (sqlite3_step(participants.get()) == SQLITE_ROW) r.participants.push_back(Reader(participants.get()).Text());
+  Stmt planned = Prepare(database, raw, "SELECT COUNT(*) FROM study_plan WHERE study_id = ?", "cannot read the plan");
+  Binder(database, raw, planned.get()).Int(id);
+  if (sqlite3_step(planned.get()) == SQLITE_ROW) r.trials_planned = static_cast<int>(Reader(planned.get()).Int());
+  Stmt trials = Prepare(database, raw,
+                        "SELECT t.participant, t.position, t.condition, t.lap_time_s, t.completed, t.obstacles, "
+                        "t.run_id, t.outcome, t.attempt FROM study_trials t JOIN study_participants s ON "
+                        "s.study_id = t.study_id AND s.participant = t.participant WHERE t.study_id = ? "
+                        "ORDER BY s.row_index, t.position",
+                        "cannot read the trials");
+  Binder(database, raw, trials.get()).Int(id);
+  while (sqlite3_step(trials.get()) == SQLITE_ROW) {
+    Reader row(trials.get());
+    StudyResults::Trial t;
+    t.participant = row.Text();
+    t.position = static_cast<int>(row.Int());
+    t.condition = row.Text();
+    t.lap_time_s = row.Real();
+    t.completed = row.Bool();
+    t.obstacles = static_cast<int>(row.Int());
+    t.run_id = row.Int();
+    t.outcome = row.Text();
+    t.attempt = static_cast<int>(row.Int());
+    r.trials.push_back(t);
+  }
+  Stmt answers = Prepare(database, raw,
+                         "SELECT participant, condition, questionnaire, item, value FROM study_answers WHERE "
+                         "study_id = ? ORDER BY rowid",
+                         "cannot read the answers");
+  Binder(database, raw, answers.get()).Int(id);
+  while (sqlite3_step(answers.get()) == SQLITE_ROW) {
+    Reader row(answers.get());
+    StudyResults::Answer a;
+    a.participant = row.Text();
+    a.condition = row.Text();
+    a.questionnaire = row.Text();
+    a.item = row.Text();
+    a.value = row.Text();
+    r.answers.push_back(a);
+  }
+  return r;
+}
+
+StudyReport ComputeReport(const StudyResults& results, PostHocMethod post_hoc, double alpha) {
+  StudyReport report;
+  const size_t k = results.conditions.size();
+  const size_t n = results.participants.size();
+  // Mean scored lap time per participant and condition (over repetitions).
+  std::vector<std::vector<std::vector<double>>> laps(n, std::vector<std::vector<double>>(k));
+  std::vector<std::vector<int>> obstacles(n, std::vector<int>(k, 0));
+  for (size_t c = 0; c < k; ++c) {
+    ConditionSummary summary;
+    summary.name = results.conditions[c];
+    report.conditions.push_back(summary);
+  }
+  for (const StudyResults::Trial& t : results.trials) {
+    const auto p = std::find(results.participants.begin(), results.participants.end(), t.participant);
+    const auto c = std::find(results.conditions.begin(), results.conditions.end(), t.condition);
+    if (p == results.participants.end() || c == results.conditions.end()) continue;
+    const size_t pi = static_cast<size_t>(p - results.participants.begin());
+    const size_t ci = static_cast<size_t>(c - results.conditions.begin());
+    laps[pi][ci].push_back(t.lap_time_s);
+    obstacles[pi][ci] += t.obstacles;
+    report.conditions[ci].trials += 1;
+    report.conditions[ci].unfinished += t.completed ? 0 : 1;
+    report.conditions[ci].total_lap_time_s += t.lap_time_s;
+    report.conditions[ci].total_obstacles += t.obstacles;
+  }
+  BlockMatrix matrix;
+  for (size_t p = 0; p < n; ++p) {
+    std::vector<double> row(k, kNaN);
+    bool complete = true;
+    for (size_t c = 0; c < k; ++c) {
+      if (laps[p][c].empty()) {
+        complete = false;
+        continue;
+      }
+      double sum = 0.0;
+      for (const double v : laps[p][c]) sum += v;
+      row[c] = sum / static_cast<double>(laps[p][c].size());
+    }
+    std::vector<double> ranks(k, kNaN);
+    if (complete) {
+      ranks = Ranks(row);
+      matrix.push_back(row);
+      report.participants_used.push_back(results.participants[p]);
+    }
+    for (size_t c = 0; c < k; ++c) {
+      report.conditions[c].lap_time_s.push_back(row[c]);
+      report.conditions[c].rank.push_back(ranks[c]);
+      report.conditions[c].obstacles.push_back(obstacles[p][c]);
+    }
+  }
+  for (ConditionSummary& c : report.conditions) {
+    std::vector<double> values;
+    for (const double v : c.lap_time_s) {
+      if (std::isfinite(v)) values.push_back(v);
+    }
+    c.mean_lap_time_s = values.empty() ? kNaN : c.total_lap_time_s / static_cast<double>(c.trials);
+    c.median_lap_time_s = Median(values);
+    double rank_sum = 0.0;
+    int used = 0;
+    for (const double r : c.rank) {
+      if (std::isfinite(r)) {
+        rank_sum += r;
+        ++used;
+      }
+    }
+    c.mean_rank = used > 0 ? rank_sum / used : kNaN;
+  }
+  if (matrix.size() < 2) {
+    report.why_no_statistics = "the statistics need at least 2 participants with a trial in every condition (" +
+                               std::to_string(matrix.size()) + " so far)";
+  } else {
+    try {
+      report.analysis = AnalyzeWithinSubject(matrix, post_hoc, alpha);
+    } catch (const std::invalid_argument& e) {
+      report.why_no_statistics = std::string("no statistics: ") + e.what();
+    }
+  }
+  // Numeric questionnaire answers, per questionnaire × item × condition.
+  std::map<std::tuple<std::string, std::string, std::string>, std::vector<double>> numeric;
+  for (const StudyResults::Answer& a : results.answers) {
+    double value = 0.0;
+    if (IsNumber(a.value, value)) numeric[{a.questionnaire, a.item, a.condition}].push_back(value);
+  }
+  for (const auto& [key, values] : numeric) {
+    ItemSummary s;
+    std::tie(s.questionnaire, s.item, s.condition) = key;
+    s.n = static_cast<int>(values.size());
+    double sum = 0.0;
+    for (const double v : values) sum += v;
+    s.mean = sum / s.n;
+    s.median = Median(values);
+    s.min = *std::min_element(values.begin(), values.end());
+    s.max = *std::max_element(values.begin(), values.end());
+    report.items.push_back(s);
+  }
+  return report;
+}
+
+std::string FormatReport(const StudyResults& results, const StudyReport& report) {
+  std::ostringstream o;
+  o << "study " << results.name << ": " << results.trials.size() << " of " << results.trials_planned
+    << " trials, " << results.participants.size() << " participants, " << results.conditions.size()
+    << " conditions (lap times in s as scored; unfinished laps count as the " << Fixed(results.trial_cap_s, 0)
+    << " s cap)\n";
+  for (const ConditionSummary& c : report.conditions) {
+    o << "\n  " << c.name << "\n    " << std::string(10, ' ');
+    for (const std::string& p : results.participants) o << " " << std::string(std::max<int>(0, 8 - static_cast<int>(p.size())), ' ') << p;
+    o << "\n    Time      ";
+    for (const double v : c.lap_time_s) o << " " << std::string(std::max(0, 8 - static_cast<int>(Fixed(v, 2).size())), ' ') << Fixed(v, 2);
+    o << "\n    Rank      ";
+    for (const double r : c.rank) {
+      const std::string text = std::isfinite(r) ? Ordinal(r) : "-";
+      o << " " << std::string(std::max(0, 8 - static_cast<int>(text.size())), ' ') << text;
+    }
+    o << "\n    Obstacles ";
+    for (const int v : c.obstacles) o << " " << std::string(std::max(0, 8 - static_cast<int>(std::to_string(v).size())), ' ') << v;
+    o << "\n    total " << Fixed(c.total_lap_time_s, 2) << " s, mean " << Fixed(c.mean_lap_time_s, 2) << " s, median "
+      << Fixed(c.median_lap_time_s, 2) << " s, mean rank " << Fixed(c.mean_rank, 2) << ", obstacles "
+      << c.total_obstacles << (c.unfinished > 0 ? ", unfinished " + std::to_string(c.unfinished) : "") << "\n";
+  }
+  o << "\n";
+  if (!report.analysis) {
+    o << "  " << report.why_no_statistics << "\n";
+  } else {
+    const WithinSubjectAnalysis& a = *report.analysis;
+    o << "  Friedman: chi2 = " << Fixed(a.friedman.chi_square, 3) << ", df = " << a.friedman.degrees_of_freedom
+      << ", p = " << Fixed(a.friedman.p_value, 4) << "; Kendall's W = " << Fixed(a.friedman.kendall_w, 3)
+      << " (N = " << a.friedman.participants << ", k = " << a.friedman.conditions << ")\n";
+    o << "  post-hoc: " << a.post_hoc.method;
+    if (!a.post_hoc.pairs.empty() && a.post_hoc.pairs[0].critical_difference) {
+      o << ", critical difference " << Fixed(*a.post_hoc.pairs[0].critical_difference, 3) << " (mean ranks)";
+    }
+    o << "\n";
+    for (const PairComparison& pair : a.post_hoc.pairs) {
+      o << "    " << report.conditions[static_cast<size_t>(pair.condition_a)].name << " vs "
+        << report.conditions[static_cast<size_t>(pair.condition_b)].name << ": " << Fixed(pair.statistic, 3);
+      if (pair.p_value) o << ", p = " << Fixed(*pair.p_value, 4);
+      o << (pair.significant ? "  significant" : "") << "\n";
+    }
+  }
+  if (!report.items.empty()) {
+    o << "\n  questionnaires (mean, median, n):\n";
+    for (const ItemSummary& s : report.items) {
+      o << "    " << s.questionnaire << "." << s.item << " " << s.condition << ": " << Fixed(s.mean, 2) << ", "
+        << Fixed(s.median, 2) << ", " << s.n << "\n";
+    }
+  }
+  return o.str();
+}
+
+ReportFiles WriteReport(const StudyResults& results, const StudyReport& report, const std::filesystem::path& dir) {
+  std::filesystem::create_directories(dir);
+  ReportFiles files;
+  files.trials_csv = dir / "trials.csv";
+  files.answers_csv = dir / "answers.csv";
+  files.summary_csv = dir / "summary.csv";
+  files.lap_times_png = dir / "lap_times.png";
+  files.ranks_png = dir / "ranks.png";
+  files.html = dir / "index.html";
+
+  std::string trials = "study,participant,condition,position,lap_time_s,completed,obstacles,run_id,outcome,attempt\n";
+  for (const StudyResults::Trial& t : results.trials) {
+    trials += Csv(results.name) + "," + Csv(t.participant) + "," + Csv(t.condition) + "," +
+              std::to_string(t.position) + "," + Fixed(t.lap_time_s, 3) + "," + (t.completed ? "true" : "false") +
+              "," + std::to_string(t.obstacles) + "," + std::to_string(t.run_id) + "," + Csv(t.outcome) + "," +
+              std::to_string(t.attempt) + "\n";
+  }
+  WriteFile(files.trials_csv, trials);
+  std::string answers = "study,participant,condition,questionnaire,item,value\n";
+  for (const StudyResults::Answer& a : results.answers) {
+    answers += Csv(results.name) + "," + Csv(a.participant) + "," + Csv(a.condition) + "," + Csv(a.questionnaire) +
+               "," + Csv(a.item) + "," + Csv(a.value) + "\n";
+  }
+  WriteFile(files.answers_csv, answers);
+  std::string summary = "study,condition,trials,unfinished,total_lap_time_s,mean_lap_time_s,median_lap_time_s,mean_rank,obstacles\n";
+  for (const ConditionSummary& c : report.conditions) {
+    summary += Csv(results.name) + "," + Csv(c.name) + "," + std::to_string(c.trials) + "," +
+               std::to_string(c.unfinished) + "," + Fixed(c.total_lap_time_s, 3) + "," + Fixed(c.mean_lap_time_s, 3) +
+               "," + Fixed(c.median_lap_time_s, 3) + "," + Fixed(c.mean_rank, 3) + "," +
+               std::to_string(c.total_obstacles) + "\n";
+  }
+  WriteFile(files.summary_csv, summary);
+
+  DrawLapTimes(results, report, files.lap_times_png);
+  DrawRanks(report, files.ranks_png);
+  if (DrawRatings(results, dir / "ratings.png")) files.ratings_png = dir / "ratings.png";
+
+  // The page: the thesis's tables, the statistics, the questionnaires, the plots.
+  std::ostringstream h;
+  h << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>Study " << Html(results.name)
+    << "</title>\n<style>body{font-family:sans-serif;margin:2em;max-width:70em}table{border-collapse:collapse;"
+       "margin:0.5em 0 1.5em}td,th{border:1px solid #999;padding:0.2em 0.6em;text-align:right}"
+       "th{background:#eee}caption{text-align:left;font-weight:bold}</style></head><body>\n";
+  h << "<h1>Study " << Html(results.name) << "</h1>\n<p>" << results.trials.size() << " of " << results.trials_planned
+    << " trials; lap times in seconds as scored (an unfinished lap counts as the " << Fixed(results.trial_cap_s, 0)
+    << " s cap).</p>\n";
+  for (const ConditionSummary& c : report.conditions) {
+    h << "<table><caption>" << Html(c.name) << "</caption><tr><th>People</th>";
+    for (const std::string& p : results.participants) h << "<th>" << Html(p) << "</th>";
+    h << "<th>total</th></tr>\n<tr><th>Time</th>";
+    for (const double v : c.lap_time_s) h << "<td>" << Fixed(v, 2) << "</td>";
+    h << "<td>" << Fixed(c.total_lap_time_s, 2) << "</td></tr>\n<tr><th>Rank</th>";
+    for (const double r : c.rank) h << "<td>" << (std::isfinite(r) ? Ordinal(r) : "-") << "</td>";
+    h << "<td>mean " << Fixed(c.mean_rank, 2) << "</td></tr>\n<tr><th>Obstacles</th>";
+    for (const int v : c.obstacles) h << "<td>" << v << "</td>";
+    h << "<td>" << c.total_obstacles << "</td></tr></table>\n";
+  }
+  h << "<h2>Statistics</h2>\n<pre>";
+  const std::string text = FormatReport(results, report);
+  const size_t at = text.find("  Friedman");
+  h << Html(at != std::string::npos ? text.substr(at) : report.why_no_statistics) << "</pre>\n";
+  bool remarks = false;
+  for (const StudyResults::Answer& a : results.answers) {
+    double value = 0.0;
+    if (IsNumber(a.value, value) || a.item.find(".path") != std::string::npos) continue;
+    if (!remarks) h << "<h2>Remarks</h2>\n<ul>\n";
+    remarks = true;
+    h << "<li>" << Html(a.participant) << ", " << Html(a.condition) << " (" << Html(a.questionnaire) << "."
+      << Html(a.item) << "): " << Html(a.value) << "</li>\n";
+  }
+  if (remarks) h << "</ul>\n";
+  h << "<h2>Plots</h2>\n<p><img src=\"lap_times.png\" alt=\"lap times per condition\"></p>\n"
+    << "<p><img src=\"ranks.png\" alt=\"mean ranks per condition\"></p>\n";
+  if (!files.ratings_png.empty()) h << "<p><img src=\"ratings.png\" alt=\"questionnaire scores\"></p>\n";
+  h << "<p>Data: <a href=\"trials.csv\">trials.csv</a>, <a href=\"answers.csv\">answers.csv</a>, "
+       "<a href=\"summary.csv\">summary.csv</a>.</p>\n</body></html>\n";
+  WriteFile(files.html, h.str());
+  return files;
+}
+
+std::string ReportJson(const StudyResults& results, const StudyReport& report, const ReportFiles& files) {
+  auto number = [](double v) { return std::isfinite(v) ? JsonNumber(v) : std::string("null"); };
+  std::string out = "{\"study\":" + JsonString(results.name) +
+                    ",\"trials\":" + std::to_string(results.trials.size()) +
+                    ",\"trials_planned\":" + std::to_string(results.trials_planned) +
+                    ",\"participants_used\":" + std::to_string(report.participants_used.size()) + ",\"conditions\":[";
+  for (size_t i = 0; i < report.conditions.size(); ++i) {
+    const ConditionSummary& c = report.conditions[i];
+    if (i > 0) out += ",";
+    out += "{\"name\":" + JsonString(c.name) + ",\"total_lap_time_s\":" + number(c.total_lap_time_s) +
+           ",\"mean_lap_time_s\":" + number(c.mean_lap_time_s) + ",\"mean_rank\":" + number(c.mean_rank) +
+           ",\"obstacles\":" + std::to_string(c.total_obstacles) + "}";
+  }
+  out += "]";
+  if (report.analysis) {
+    const WithinSubjectAnalysis& a = *report.analysis;
+    out += ",\"friedman_chi2\":" + number(a.friedman.chi_square) +
+           ",\"friedman_df\":" + std::to_string(a.friedman.degrees_of_freedom) +
+           ",\"friedman_p\":" + number(a.friedman.p_value) + ",\"kendall_w\":" + number(a.friedman.kendall_w) +
+           ",\"post_hoc\":{\"method\":" + JsonString(a.post_hoc.method) + ",\"alpha\":" + number(a.post_hoc.alpha) +
+           ",\"pairs\":[";
+    for (size_t i = 0; i < a.post_hoc.pairs.size(); ++i) {
+      const PairComparison& p = a.post_hoc.pairs[i];
+      if (i > 0) out += ",";
+      out += "{\"a\":" + JsonString(report.conditions[static_cast<size_t>(p.condition_a)].name) +
+             ",\"b\":" + JsonString(report.conditions[static_cast<size_t>(p.condition_b)].name) +
+             ",\"statistic\":" + number(p.statistic) +
+             ",\"critical_difference\":" + (p.critical_difference ? number(*p.critical_difference) : "null") +
+             ",\"p\":" + (p.p_value ? number(*p.p_value) : "null") +
+             ",\"significant\":" + (p.significant ? "true" : "false") + "}";
+    }
+    out += "]}";
+  } else {
+    out += ",\"friedman_chi2\":null,\"friedman_df\":null,\"friedman_p\":null,\"kendall_w\":null,\"post_hoc\":null";
+  }
+  out += ",\"why_no_statistics\":" + JsonString(report.why_no_statistics);
+  out += ",\"files\":{\"html\":" + JsonString(files.html.string()) + ",\"trials_csv\":" +
+         JsonString(files.trials_csv.string()) + ",\"answers_csv\":" + JsonString(files.answers_csv.string()) +
+         ",\"summary_csv\":" + JsonString(files.summary_csv.string()) + ",\"lap_times_png\":" +
+         JsonString(files.lap_times_png.string()) + ",\"ranks_png\":" + JsonString(files.ranks_png.string()) +
+         ",\"ratings_png\":" + JsonString(files.ratings_png.string()) + "}}";
+  return out;
+}
+
+}  // namespace haptel::study

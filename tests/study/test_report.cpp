@@ -1,0 +1,154 @@
+// The study report on the thesis's own data (tables 8.1–8.4: drivers A–E,
+// lap times in s, obstacles), recorded through the real store: the tables,
+// the ranks, the statistics, the CSV, the plots and the page.
+#include <catch2/catch.hpp>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <sstream>
+
+#include "haptel/config/study.hpp"
+#include "haptel/mediator/recorder.hpp"
+#include "haptel/study/report.hpp"
+#include "haptel/study/store.hpp"
+#include "test_env.hpp"
+
+using namespace haptel;
+using namespace haptel::study;
+
+namespace {
+
+const std::vector<std::string> kConditions = {"cockpit", "cockpit-hud", "assisted", "gesture"};
+const std::vector<std::string> kDrivers = {"A", "B", "C", "D", "E"};
+// Tables 8.1–8.4 (B reached the 10-minute cap with both plain cockpits).
+const double kTimes[4][5] = {{210, 600, 245, 320, 310}, {225, 600, 220, 405, 240}, {170, 150, 190, 325, 220},
+                             {120, 120, 110, 210, 200}};
+const int kObstacles[4][5] = {{1, 5, 1, 1, 1}, {1, 5, 0, 1, 0}, {0, 1, 1, 1, 0}, {0, 1, 1, 0, 0}};
+
+mediator::RunRecord Run(double lap_s, bool completed, int obstacles) {
+  mediator::RunRecord run;
+  run.started_wall_ns = 1'714'566'896'000'000'000;
+  run.config_name = "thesis";
+  run.track = "grand-prix";
+  run.interface = "x";
+  run.vehicle = "robot";
+  run.completed = completed;
+  run.outcome = completed ? "completed" : "time limit";
+  run.lap_time_s = lap_s;
+  run.obstacles_touched = obstacles;
+  run.operator_kind = "person";
+  run.device = "sim";
+  return run;
+}
+
+std::string Read(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+/// The thesis's study recorded in `db`: every trial, and two answers.
+void RecordThesis(const std::filesystem::path& dir, const std::filesystem::path& db, int drivers = 5) {
+  StudyConfig config;
+  config.file = dir / "thesis.yaml";
+  test::WriteFile(config.file, "name: thesis\n");
+  config.name = "thesis";
+  config.trial_cap_s = 600;
+  config.order = StudyOrder::kFixed;
+  for (const std::string& c : kConditions) config.conditions.push_back({c, c});
+  std::vector<PlannedTrial> plan;
+  for (int p = 0; p < drivers; ++p) {
+    config.participants.push_back({kDrivers[static_cast<size_t>(p)], ""});
+    for (int c = 0; c < 4; ++c) plan.push_back({kDrivers[static_cast<size_t>(p)], c + 1, kConditions[static_cast<size_t>(c)], 1});
+  }
+  mediator::Recorder recorder(db);
+  StudyStore store(recorder, config, plan);
+  for (const PlannedTrial& t : plan) {
+    const size_t c = static_cast<size_t>(t.position - 1);
+    const size_t p = static_cast<size_t>(std::find(kDrivers.begin(), kDrivers.end(), t.participant) - kDrivers.begin());
+    const double lap = kTimes[c][p];
+    recorder.Save(Run(lap, lap < 600, kObstacles[c][p]), store.TrialWriter(t, config.trial_cap_s));
+  }
+  store.SaveAnswers("A", "gesture", "thesis", {{"easy_to_learn", "3"}, {"remarks", "<script>alert(1)</script>, \"odd\""}});
+  store.SaveAnswers("A", "gesture", "rating", {{"rating", "2"}, {"score", "2"}});
+}
+
+}  // namespace
+
+TEST_CASE("The report on the thesis's data gives its tables, ranks and statistics") {
+  const auto dir = test::ScratchDir("study-report");
+  const auto db = dir / "thesis.db";
+  RecordThesis(dir, db);
+  const StudyResults results = LoadStudyResults(db, "thesis");
+  REQUIRE(results.trials.size() == 20);
+  REQUIRE(results.conditions == kConditions);
+  const StudyReport report = ComputeReport(results, PostHocMethod::kNemenyi);
+
+  // Times as recorded, totals as the thesis adds them (28m05, 28m10, 17m35, 12m40).
+  const double totals[4] = {1685, 1690, 1055, 760};
+  for (size_t c = 0; c < 4; ++c) {
+    INFO(kConditions[c]);
+    CHECK(report.conditions[c].total_lap_time_s == Approx(totals[c]));
+    for (size_t p = 0; p < 5; ++p) CHECK(report.conditions[c].lap_time_s[p] == kTimes[c][p]);
+  }
+  // Gesture first for every driver (table 8.4); B's two capped cockpits tie at 3.5.
+  for (size_t p = 0; p < 5; ++p) CHECK(report.conditions[3].rank[p] == 1.0);
+  CHECK(report.conditions[0].rank[1] == 3.5);
+  CHECK(report.conditions[1].rank[1] == 3.5);
+  // A: assisted 170 < cockpit 210 < hud 225: 2nd, 3rd, 4th as in tables 8.1–8.3.
+  CHECK(report.conditions[2].rank[0] == 2.0);
+  CHECK(report.conditions[0].rank[0] == 3.0);
+  CHECK(report.conditions[1].rank[0] == 4.0);
+  CHECK(report.conditions[0].unfinished == 1);
+
+  // The statistics equal SciPy's for this data (tests/study/stats: friedmanchisquare).
+  REQUIRE(report.analysis);
+  CHECK(report.analysis->friedman.chi_square == Approx(12.183673469387752).epsilon(1e-12));
+  CHECK(report.analysis->friedman.p_value == Approx(0.0067797401305199397).epsilon(1e-9));
+  CHECK(report.analysis->friedman.kendall_w == Approx(0.812244897959184).epsilon(1e-12));
+  CHECK(report.participants_used.size() == 5);
+
+  // The files.
+  const ReportFiles files = WriteReport(results, report, dir / "out");
+  const std::string trials = Read(files.trials_csv);
+  CHECK(trials.rfind("study,participant,condition,position,lap_time_s,completed,obstacles", 0) == 0);
+  CHECK(trials.find("\nthesis,B,cockpit,1,600.000,false,5,") != std::string::npos);
+  CHECK(trials.find("\nthesis,E,gesture,4,200.000,true,0,") != std::string::npos);
+  CHECK(std::count(trials.begin(), trials.end(), '\n') == 21);
+  const std::string answers = Read(files.answers_csv);
+  CHECK(answers.find("thesis,A,gesture,thesis,remarks,\"<script>alert(1)</script>, \"\"odd\"\"\"") != std::string::npos);
+  for (const auto& png : {files.lap_times_png, files.ranks_png, files.ratings_png}) {
+    INFO(png);
+    const cv::Mat image = cv::imread(png.string());
+    REQUIRE_FALSE(image.empty());
+    CHECK(image.cols >= 600);
+    CHECK(image.rows >= 300);
+  }
+  const std::string html = Read(files.html);
+  CHECK(html.find("&lt;script&gt;alert(1)&lt;/script&gt;") != std::string::npos);
+  CHECK(html.find("<script>") == std::string::npos);
+  CHECK(html.find("<caption>assisted</caption>") != std::string::npos);
+  CHECK(html.find("lap_times.png") != std::string::npos);
+
+  const std::string json = ReportJson(results, report, files);
+  CHECK(json.find("\"friedman_chi2\":12.18") != std::string::npos);
+  CHECK(json.find("\"participants_used\":5") != std::string::npos);
+  CHECK(json.find("\"method\":\"Nemenyi (Demšar 2006), alpha 0.05\"") != std::string::npos);
+  CHECK(std::count(json.begin(), json.end(), '\n') == 0);
+}
+
+TEST_CASE("The report says what it lacks instead of failing") {
+  const auto dir = test::ScratchDir("study-report-lacks");
+  const auto db = dir / "one.db";
+  RecordThesis(dir, db, 1);  // one driver: tables, no statistics
+  const StudyResults results = LoadStudyResults(db, "thesis");
+  const StudyReport report = ComputeReport(results, PostHocMethod::kWilcoxonHolm);
+  CHECK_FALSE(report.analysis);
+  CHECK(report.why_no_statistics.find("at least 2 participants") != std::string::npos);
+  const ReportFiles files = WriteReport(results, report, dir / "out");
+  CHECK(std::filesystem::exists(files.lap_times_png));
+  CHECK(ReportJson(results, report, files).find("\"friedman_chi2\":null") != std::string::npos);
+
+  CHECK_THROWS_WITH(LoadStudyResults(db, "other"), Catch::Contains("no study 'other'") && Catch::Contains("thesis"));
+  CHECK_THROWS_WITH(LoadStudyResults(dir / "none.db", "thesis"), Catch::Contains("no such file"));
+}
