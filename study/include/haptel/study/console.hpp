@@ -1,0 +1,58 @@
+#pragma once
+/// @file The experimenter's console: a web page served by `haptel study run`
+/// on 127.0.0.1 (cpp-httplib; plain HTML, no JavaScript needed). It shows the
+/// schedule (each participant's conditions in their order, with the trials'
+/// results), the live trial, and the questionnaire forms a participant fills
+/// in after each condition; submissions go through SubmitAnswers (checked,
+/// in order, never twice).
+///
+/// Routes: `GET /` the schedule; `GET /questionnaire?participant=P&condition=C&name=Q`
+/// a form; `POST /answers` a filled-in form; `GET /status.json` the counts.
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "haptel/config/study.hpp"
+#include "haptel/study/questionnaire.hpp"
+#include "haptel/study/store.hpp"
+
+namespace haptel::study {
+
+/// The console cannot serve (its port is taken, the address is wrong).
+class ConsoleError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct ConsoleOptions {
+  std::string host = "127.0.0.1";  ///< only this machine: the page takes answers
+  int port = 8470;                 ///< 0: any free port (tests)
+};
+
+class StudyConsole {
+ public:
+  /// Opens its own connection to `database` (the study must be planned there
+  /// already) and serves from threads of its own. Throws ConsoleError naming
+  /// the address when it cannot bind ("port 8470 on 127.0.0.1 is in use").
+  StudyConsole(const StudyConfig& config, const std::vector<PlannedTrial>& plan,
+               const std::filesystem::path& database, const std::map<std::string, Questionnaire>& questionnaires,
+               const ConsoleOptions& options);
+  ~StudyConsole();
+  StudyConsole(const StudyConsole&) = delete;
+  StudyConsole& operator=(const StudyConsole&) = delete;
+
+  int port() const;
+  /// e.g. "http://127.0.0.1:8470/"
+  std::string url() const;
+  /// The line the page shows for the trial under way (empty: none).
+  void SetLive(const std::string& text);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace haptel::study

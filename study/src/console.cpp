@@ -1,0 +1,278 @@
+#include "haptel/study/console.hpp"
+
+#include <httplib.h>
+#include <sys/socket.h>
+
+#include <chrono>
+
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include "haptel/core/json.hpp"
+#include "haptel/mediator/recorder.hpp"
+#include "haptel/study/submission.hpp"
+
+namespace haptel::study {
+namespace {
+
+std::string Html(const std::string& text) {
+  std::string out;
+  for (const char c : text) {
+    switch (c) {
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '&': out += "&amp;"; break;
+      case '"': out += "&quot;"; break;
+      case '\'': out += "&#39;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+std::string Page(const std::string& title, const std::string& body, const std::string& head_extra = "") {
+  return "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>" + Html(title) + "</title>" + head_extra +
+         "<style>body{font-family:sans-serif;margin:2em;max-width:60em}table{border-collapse:collapse}"
+         "td,th{border:1px solid #999;padding:0.2em 0.6em}.done{background:#e6f4e6}.error{color:#b00}"
+         "fieldset{margin:0.8em 0}</style></head><body>\n" +
+         body + "\n</body></html>\n";
+}
+
+std::string Query(const std::string& participant, const std::string& condition, const std::string& name) {
+  return "/questionnaire?participant=" + httplib::detail::encode_query_param(participant) +
+         "&condition=" + httplib::detail::encode_query_param(condition) +
+         "&name=" + httplib::detail::encode_query_param(name);
+}
+
+std::string FormatSeconds(double s) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.2f s", s);
+  return text;
+}
+
+/// A tree item's yes/no fields ("<id>.node.<node>") turned into its path
+/// ("<id>.path": node=yes,... from the first node to a band).
+void TreePath(const Item& item, std::map<std::string, std::string>& fields) {
+  std::string path;
+  const TreeNode* node = item.tree.nodes.empty() ? nullptr : &item.tree.nodes.front();
+  for (size_t guard = 0; node != nullptr && guard <= item.tree.nodes.size(); ++guard) {
+    const auto answer = fields.find(item.id + ".node." + node->id);
+    if (answer == fields.end() || (answer->second != "yes" && answer->second != "no")) break;
+    path += (path.empty() ? "" : ",") + node->id + "=" + answer->second;
+    node = item.tree.FindNode(answer->second == "yes" ? node->if_yes : node->if_no);
+  }
+  for (auto it = fields.begin(); it != fields.end();) {
+    it = it->first.rfind(item.id + ".node.", 0) == 0 ? fields.erase(it) : std::next(it);
+  }
+  if (!path.empty()) fields[PathKey(item.id)] = path;
+}
+
+std::string Form(const Questionnaire& q, const std::string& participant, const std::string& condition) {
+  std::ostringstream h;
+  h << "<h1>" << Html(q.title) << "</h1>\n<p>Participant <b>" << Html(participant) << "</b>, after <b>"
+    << Html(condition) << "</b></p>\n";
+  if (!q.instructions.empty()) h << "<p>" << Html(q.instructions) << "</p>\n";
+  h << "<form method=\"post\" action=\"/answers\" id=\"questionnaire\">\n"
+    << "<input type=\"hidden\" name=\"participant\" value=\"" << Html(participant) << "\">\n"
+    << "<input type=\"hidden\" name=\"condition\" value=\"" << Html(condition) << "\">\n"
+    << "<input type=\"hidden\" name=\"questionnaire\" value=\"" << Html(q.name) << "\">\n";
+  for (const Item& item : q.items) {
+    h << "<fieldset id=\"item-" << Html(item.id) << "\"><legend>" << Html(item.text)
+      << (item.required ? "" : " (optional)") << "</legend>\n";
+    switch (item.type) {
+      case ItemType::kScale:
+        if (!item.scale.min_label.empty()) h << Html(item.scale.min_label) << " ";
+        for (int v = item.scale.min; v <= item.scale.max; v += item.scale.step) {
+          h << "<label><input type=\"radio\" name=\"" << Html(item.id) << "\" value=\"" << v << "\">" << v
+            << "</label> ";
+        }
+        if (!item.scale.max_label.empty()) h << Html(item.scale.max_label);
+        break;
+      case ItemType::kChoice:
+        for (const ChoiceOption& o : item.options) {
+          h << "<label><input type=\"radio\" name=\"" << Html(item.id) << "\" value=\"" << Html(o.value) << "\">"
+            << Html(o.label) << "</label><br>\n";
+        }
+        break;
+      case ItemType::kText:
+        h << "<textarea name=\"" << Html(item.id) << "\" rows=\"3\" cols=\"60\" maxlength=\"" << item.max_length
+          << "\"></textarea>";
+        break;
+      case ItemType::kTree:
+        // Every question of the tree, in order; the page follows the answers
+        // to the band and the rating within it (later questions off the
+        // path are ignored).
+        for (const TreeNode& node : item.tree.nodes) {
+          h << "<p>" << Html(node.question) << " <label><input type=\"radio\" name=\"" << Html(item.id) << ".node."
+            << Html(node.id) << "\" value=\"yes\">yes</label> <label><input type=\"radio\" name=\""
+            << Html(item.id) << ".node." << Html(node.id) << "\" value=\"no\">no</label></p>\n";
+        }
+        for (const TreeBand& band : item.tree.bands) {
+          h << "<p><b>" << Html(band.text) << "</b><br>\n";
+          for (const BandRating& r : band.ratings) {
+            h << "<label><input type=\"radio\" name=\"" << Html(item.id) << "\" value=\"" << r.rating << "\">"
+              << r.rating << ": " << Html(r.text) << "</label><br>\n";
+          }
+          h << "</p>\n";
+        }
+        break;
+    }
+    h << "</fieldset>\n";
+  }
+  h << "<button type=\"submit\" id=\"submit\">Submit</button>\n</form>\n<p><a href=\"/\">schedule</a></p>";
+  return h.str();
+}
+
+}  // namespace
+
+struct StudyConsole::Impl {
+  StudyConfig config;
+  std::map<std::string, Questionnaire> questionnaires;
+  ConsoleOptions options;
+  mediator::Recorder recorder;
+  std::unique_ptr<StudyStore> store;
+  std::mutex mutex;  ///< the store and `live`: the server answers from several threads
+  std::string live;
+  httplib::Server server;
+  std::thread thread;
+  int port = 0;
+
+  Impl(const StudyConfig& c, const std::vector<PlannedTrial>& plan, const std::filesystem::path& database,
+       const std::map<std::string, Questionnaire>& q, const ConsoleOptions& o)
+      : config(c), questionnaires(q), options(o), recorder(database) {
+    store = std::make_unique<StudyStore>(recorder, config, plan);
+  }
+
+  std::string Schedule() {
+    const std::lock_guard<std::mutex> lock(mutex);
+    const std::vector<PlannedTrial> plan = store->Plan();
+    const std::vector<TrialRow> trials = store->Trials();
+    std::ostringstream h;
+    h << "<h1>Study " << Html(config.name) << "</h1>\n<p id=\"progress\">" << trials.size() << " of " << plan.size()
+      << " trials done</p>\n<p id=\"live\">" << (live.empty() ? "No trial under way." : Html(live)) << "</p>\n";
+    h << "<table id=\"schedule\"><tr><th>participant</th><th>position</th><th>condition</th><th>lap</th>"
+         "<th>questionnaires</th></tr>\n";
+    for (const PlannedTrial& t : plan) {
+      const TrialRow* row = nullptr;
+      for (const TrialRow& r : trials) {
+        if (r.participant == t.participant && r.position == t.position) row = &r;
+      }
+      h << "<tr" << (row != nullptr ? " class=\"done\"" : "") << "><td>" << Html(t.participant) << "</td><td>"
+        << t.position << "</td><td>" << Html(t.condition) << "</td><td>"
+        << (row == nullptr ? "" : FormatSeconds(row->lap_time_s) + (row->completed ? "" : " (cap)")) << "</td><td>";
+      if (row != nullptr) {
+        for (const std::string& name : config.questionnaires) {
+          if (store->Answered(t.participant, t.condition, name)) {
+            h << Html(name) << " &#10003; ";
+          } else {
+            h << "<a href=\"" << Html(Query(t.participant, t.condition, name)) << "\">" << Html(name) << "</a> ";
+          }
+        }
+      }
+      h << "</td></tr>\n";
+    }
+    h << "</table>\n";
+    return Page("Study " + config.name, h.str(), "<meta http-equiv=\"refresh\" content=\"2\">");
+  }
+};
+
+StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedTrial>& plan,
+                           const std::filesystem::path& database,
+                           const std::map<std::string, Questionnaire>& questionnaires, const ConsoleOptions& options)
+    : impl_(std::make_unique<Impl>(config, plan, database, questionnaires, options)) {
+  Impl& s = *impl_;
+  s.server.Get("/", [&s](const httplib::Request&, httplib::Response& res) {
+    res.set_content(s.Schedule(), "text/html; charset=utf-8");
+  });
+  s.server.Get("/status.json", [&s](const httplib::Request&, httplib::Response& res) {
+    const std::lock_guard<std::mutex> lock(s.mutex);
+    res.set_content("{\"study\":" + JsonString(s.config.name) +
+                        ",\"trials_done\":" + std::to_string(s.store->Trials().size()) +
+                        ",\"trials_planned\":" + std::to_string(s.store->Plan().size()) +
+                        ",\"live\":" + JsonString(s.live) + "}",
+                    "application/json");
+  });
+  s.server.Get("/questionnaire", [&s](const httplib::Request& req, httplib::Response& res) {
+    const auto q = s.questionnaires.find(req.get_param_value("name"));
+    if (q == s.questionnaires.end()) {
+      res.status = 404;
+      res.set_content(Page("Not found", "<p class=\"error\">No such questionnaire in this study.</p>"),
+                      "text/html; charset=utf-8");
+      return;
+    }
+    res.set_content(Page(q->second.title, Form(q->second, req.get_param_value("participant"),
+                                                 req.get_param_value("condition"))),
+                    "text/html; charset=utf-8");
+  });
+  s.server.Post("/answers", [&s](const httplib::Request& req, httplib::Response& res) {
+    std::map<std::string, std::string> fields;
+    for (const auto& [key, value] : req.params) fields[key] = value;
+    const std::string participant = fields["participant"];
+    const std::string condition = fields["condition"];
+    const std::string name = fields["questionnaire"];
+    fields.erase("participant");
+    fields.erase("condition");
+    fields.erase("questionnaire");
+    const auto q = s.questionnaires.find(name);
+    if (q != s.questionnaires.end()) {
+      for (const Item& item : q->second.items) {
+        if (item.type == ItemType::kTree) TreePath(item, fields);
+      }
+    }
+    SubmissionResult result;
+    {
+      const std::lock_guard<std::mutex> lock(s.mutex);
+      result = SubmitAnswers(*s.store, s.questionnaires, participant, condition, name, fields);
+    }
+    res.status = result.status;
+    std::string body = std::string("<p id=\"result\" class=\"") + (result.accepted ? "ok" : "error") + "\">" +
+                       Html(result.message) + "</p>\n";
+    if (!result.errors.empty()) {
+      body += "<ul id=\"errors\">\n";
+      for (const AnswerError& e : result.errors) body += "<li>" + Html(e.message) + "</li>\n";
+      body += "</ul>\n<p><a href=\"" + Html(Query(participant, condition, name)) + "\">back to the form</a></p>\n";
+    }
+    body += "<p><a href=\"/\">schedule</a></p>";
+    res.set_content(Page(result.accepted ? "Recorded" : "Not recorded", body), "text/html; charset=utf-8");
+  });
+  // SO_REUSEADDR only: httplib's default adds SO_REUSEPORT, with which a
+  // second console would share the port silently instead of being refused.
+  s.server.set_socket_options([](socket_t sock) {
+    int yes = 1;
+    setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+  });
+  if (options.port == 0) {
+    s.port = s.server.bind_to_any_port(options.host);
+  } else if (s.server.bind_to_port(options.host, options.port)) {
+    s.port = options.port;
+  }
+  if (s.port <= 0) {
+    throw ConsoleError("the console cannot listen on " + options.host + ":" + std::to_string(options.port) +
+                       " (the port is in use, or the address is not this machine's); choose another with --port N");
+  }
+  s.thread = std::thread([&s] { s.server.listen_after_bind(); });
+  // Serving before the constructor returns: a stop() before the listening
+  // loop has started would be lost, and the destructor would wait forever.
+  for (int i = 0; i < 500 && !s.server.is_running(); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+}
+
+StudyConsole::~StudyConsole() {
+  impl_->server.stop();
+  if (impl_->thread.joinable()) impl_->thread.join();
+}
+
+int StudyConsole::port() const { return impl_->port; }
+
+std::string StudyConsole::url() const {
+  return "http://" + impl_->options.host + ":" + std::to_string(impl_->port) + "/";
+}
+
+void StudyConsole::SetLive(const std::string& text) {
+  const std::lock_guard<std::mutex> lock(impl_->mutex);
+  impl_->live = text;
+}
+
+}  // namespace haptel::study

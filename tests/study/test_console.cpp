@@ -1,0 +1,120 @@
+// The experimenter's console through real HTTP on 127.0.0.1: the schedule,
+// a questionnaire's form, submissions (accepted once; refused twice, out of
+// order or incomplete, with a status and a message), and a port in use.
+#include <httplib.h>
+
+#include <catch2/catch.hpp>
+
+#include "haptel/config/paths.hpp"
+#include "haptel/mediator/recorder.hpp"
+#include "haptel/study/console.hpp"
+#include "test_env.hpp"
+
+using namespace haptel;
+using namespace haptel::study;
+
+namespace {
+
+mediator::RunRecord Lap(double lap_s) {
+  mediator::RunRecord run;
+  run.started_wall_ns = 1'714'566'896'000'000'000;
+  run.config_name = "console";
+  run.track = "t";
+  run.interface = "i";
+  run.vehicle = "v";
+  run.completed = true;
+  run.outcome = "completed";
+  run.lap_time_s = lap_s;
+  run.operator_kind = "person";
+  run.device = "sim";
+  return run;
+}
+
+}  // namespace
+
+TEST_CASE("The console serves the schedule and forms, and takes each questionnaire once") {
+  const auto dir = test::ScratchDir("study-console");
+  StudyConfig config;
+  config.file = dir / "s.yaml";
+  test::WriteFile(config.file, "name: s\n");
+  config.name = "console-study";
+  config.conditions = {{"cockpit", "cockpit"}, {"gesture", "gesture"}};
+  config.participants = {{"A", ""}};
+  config.questionnaires = {"thesis", "rating"};
+  const std::vector<PlannedTrial> plan = {{"A", 1, "gesture", 1}, {"A", 2, "cockpit", 1}};
+  const auto db = dir / "s.db";
+  {
+    mediator::Recorder recorder(db);
+    StudyStore store(recorder, config, plan);
+    recorder.Save(Lap(21.5), store.TrialWriter(plan[0], 600.0));  // A drove gesture
+  }
+  const std::filesystem::path shipped = ShippedFile("config/questionnaires");
+  const std::map<std::string, Questionnaire> questionnaires = {
+      {"thesis", FindQuestionnaire(shipped, "thesis")}, {"rating", FindQuestionnaire(shipped, "rating")}};
+  ConsoleOptions options;
+  options.port = 0;  // any free port
+  StudyConsole console(config, plan, db, questionnaires, options);
+  console.SetLive("participant A, cockpit: lap 3.2 s");
+  httplib::Client client("127.0.0.1", console.port());
+  client.set_read_timeout(10, 0);
+
+  const auto schedule = client.Get("/");
+  REQUIRE(schedule);
+  CHECK(schedule->status == 200);
+  CHECK(schedule->body.find("1 of 2 trials done") != std::string::npos);
+  CHECK(schedule->body.find("21.50 s") != std::string::npos);
+  CHECK(schedule->body.find("participant A, cockpit: lap 3.2 s") != std::string::npos);
+  CHECK(schedule->body.find("/questionnaire?participant=A&amp;condition=gesture&amp;name=thesis") != std::string::npos);
+
+  const auto form = client.Get("/questionnaire?participant=A&condition=gesture&name=thesis");
+  REQUIRE(form);
+  CHECK(form->status == 200);
+  CHECK(form->body.find("name=\"easy_to_learn\" value=\"5\"") != std::string::npos);
+  CHECK(form->body.find("<textarea name=\"remarks\"") != std::string::npos);
+
+  const httplib::Params good = {{"participant", "A"}, {"condition", "gesture"}, {"questionnaire", "thesis"},
+                                {"easy_to_learn", "4"}, {"efficient", "5"}, {"remarks", "fine"}};
+  const auto first = client.Post("/answers", good);
+  REQUIRE(first);
+  CHECK(first->status == 200);
+  const auto twice = client.Post("/answers", good);
+  REQUIRE(twice);
+  CHECK(twice->status == 409);
+  CHECK(twice->body.find("already answered") != std::string::npos);
+
+  const auto incomplete = client.Post("/answers", httplib::Params{{"participant", "A"}, {"condition", "gesture"},
+                                                   {"questionnaire", "rating"}, {"rating", "5"}});
+  REQUIRE(incomplete);
+  CHECK(incomplete->status == 422);
+  const auto early = client.Post("/answers", httplib::Params{{"participant", "A"}, {"condition", "cockpit"},
+                                              {"questionnaire", "thesis"}, {"easy_to_learn", "4"},
+                                              {"efficient", "5"}});
+  REQUIRE(early);
+  CHECK(early->status == 409);
+  CHECK(early->body.find("has not finished condition cockpit") != std::string::npos);
+
+  // The rating tree as the form sends it: a yes/no per question, then the rating.
+  const auto rating = client.Post("/answers", httplib::Params{{"participant", "A"}, {"condition", "gesture"},
+                                               {"questionnaire", "rating"}, {"rating.node.controllable", "yes"},
+                                               {"rating.node.adequate", "yes"}, {"rating.node.satisfactory", "no"},
+                                               {"rating", "5"}});
+  REQUIRE(rating);
+  CHECK(rating->status == 200);
+
+  // What is stored: one set of thesis answers, the rating with its path and score.
+  mediator::Recorder recorder(db);
+  StudyStore store(recorder, config, plan);
+  std::map<std::string, std::string> stored;
+  for (const AnswerRow& a : store.Answers()) stored[a.questionnaire + "." + a.item] = a.value;
+  CHECK(store.Answers().size() == 6);
+  CHECK(stored["thesis.easy_to_learn"] == "4");
+  CHECK(stored["rating.rating"] == "5");
+  CHECK(stored["rating.rating.path"] == "controllable=yes,adequate=yes,satisfactory=no");
+  CHECK(stored["rating.score"] == "5");
+
+  // A second console on the same port: a clear error naming it.
+  ConsoleOptions taken;
+  taken.port = console.port();
+  CHECK_THROWS_WITH(StudyConsole(config, plan, db, questionnaires, taken),
+                    Catch::Contains("127.0.0.1:" + std::to_string(console.port())) && Catch::Contains("in use"));
+}
