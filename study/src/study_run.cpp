@@ -13,6 +13,7 @@
 #include "haptel/core/json.hpp"
 #include "haptel/core/stop_signals.hpp"
 #include "haptel/mediator/run_command.hpp"
+#include "haptel/study/console.hpp"
 #include "haptel/study/plan.hpp"
 #include "haptel/study/store.hpp"
 #include "haptel/study/study_command.hpp"
@@ -30,6 +31,8 @@ constexpr const char* kRunUsage =
     "  --database FILE   SQLite file (overrides the study's and the run configuration's)\n"
     "  --domain N        DDS domain id of the trials' vehicles (overrides the run configuration's)\n"
     "  --json            end with one JSON line: the trials and per-condition totals\n"
+    "  --console         serve the experimenter's console (schedule, live trial) on 127.0.0.1\n"
+    "  --port N          the console's port (default 8470)\n"
     "  --verbose         the sessions' own progress lines\n";
 
 /// Whether a session's outcome finishes its trial (scored; an unfinished lap at the cap).
@@ -106,8 +109,12 @@ int StudyRunCommand(int argc, const char* const* argv) {
     std::vector<PlannedTrial> plan;
     std::filesystem::path database;
     std::string domain;
+    ConsoleOptions console_options;
+    bool want_console = false;
     cli::ReadInput([&] {
-      const Args args(argc, argv, {"database", "domain"}, {"json", "verbose"});
+      const Args args(argc, argv, {"database", "domain", "port"}, {"json", "verbose", "console"});
+      console_options.port = args.Int("port", 1, 65535).value_or(console_options.port);
+      want_console = args.Flag("console") || args.Value("port").has_value();
       if (const auto d = args.Int("domain", 0, 232)) domain = std::to_string(*d);
       if (args.positional().size() != 2 || args.positional()[0] != "run") {
         throw UsageError(args.positional().size() < 2 ? "missing the study file"
@@ -135,6 +142,14 @@ int StudyRunCommand(int argc, const char* const* argv) {
     // The database before anything runs, as for `haptel run`.
     auto recorder = cli::ReadInput([&] { return std::make_unique<mediator::Recorder>(database); });
     StudyStore store = cli::ReadInput([&] { return StudyStore(*recorder, config, plan); });
+    std::unique_ptr<StudyConsole> console;
+    if (want_console) {
+      console = cli::ReadInput([&] {
+        return std::make_unique<StudyConsole>(config, plan, database, std::map<std::string, Questionnaire>{},
+                                              console_options);
+      });
+      std::fprintf(stderr, "[study] console: %s\n", console->url().c_str());
+    }
     const size_t done_before = store.Trials().size();
     store.Event(store.resumed() ? "resumed" : "started", "", 0,
                 std::to_string(done_before) + " of " + std::to_string(plan.size()) + " trials done");
@@ -154,6 +169,11 @@ int StudyRunCommand(int argc, const char* const* argv) {
       const mediator::SessionSetup setup =
           cli::ReadInput([&] { return TrialSetup(config, *trial, database, domain, verbose, experience); });
       const size_t number = store.Trials().size() + 1;
+      if (console) {
+        console->SetLive("trial " + std::to_string(number) + " of " + std::to_string(plan.size()) +
+                         ": participant " + trial->participant + ", " + trial->condition + " (position " +
+                         std::to_string(trial->position) + ")");
+      }
       std::fprintf(stderr, "[study] trial %zu/%zu: participant %s, position %d, %s ...\n", number, plan.size(),
                    trial->participant.c_str(), trial->position, trial->condition.c_str());
       const mediator::RecordedRun run =
