@@ -13,6 +13,7 @@ HAPTEL_PACKAGES=(
   libtinyxml2-dev   # the MHaptic XML scene files (also a Fast DDS dependency)
   libsdl2-dev
   libcpp-httplib-dev   # the study's experimenter's console (a web page on 127.0.0.1)
+  chromium chromium-driver python3-selenium   # ...tested in a real browser
   # The operator's view: OpenGL 3.3 core through Mesa (llvmpipe without a GPU),
   # and an X server of its own for the window tests (Xvfb, xdotool for keys).
   libgl-dev libegl-dev libgl1-mesa-dri libegl-mesa0
