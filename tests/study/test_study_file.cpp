@@ -1,0 +1,99 @@
+// The study file: the shipped synthetic study loads and plans; every file
+// that cannot work is refused before anything runs, naming the file, the key
+// and what was expected.
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <set>
+#include <string>
+
+#include "haptel/config/error.hpp"
+#include "haptel/config/study.hpp"
+#include "haptel/study/design.hpp"
+#include "haptel/study/plan.hpp"
+#include "test_env.hpp"
+
+using namespace haptel;
+using namespace haptel::study;
+
+namespace {
+
+/// A valid synthetic study with `tail` appended (or replacing a section).
+std::string Study(const std::string& conditions, const std::string& participants, const std::string& extra = "") {
+  const auto source = std::filesystem::current_path();
+  return "name: s\nrun: " + (source / "config/haptel.yaml").string() + "\noperators: synthetic\nconditions:\n" +
+         conditions + "profiles:\n  p: {steering_noise: 0.02}\nparticipants:\n" + participants + extra;
+}
+
+const std::string kFour = "  - {name: a, interface: gesture}\n  - {name: b, interface: cockpit}\n"
+                          "  - {name: c, interface: cockpit-hud}\n  - {name: d, interface: cockpit-assisted}\n";
+std::string People(int n) {
+  std::string out;
+  for (int i = 0; i < n; ++i) out += "  - {id: P" + std::to_string(i) + ", profile: p}\n";
+  return out;
+}
+
+std::string ErrorOf(const std::string& text) {
+  const auto dir = test::ScratchDir("study-file");
+  const auto file = dir / "bad.yaml";
+  test::WriteFile(file, text);
+  return test::WhatOf<ConfigError>([&] { PlanTrials(LoadStudy(file)); });
+}
+
+}  // namespace
+
+TEST_CASE("The shipped synthetic study loads and plans a balanced Latin square") {
+  const StudyConfig s = LoadStudy("config/studies/grand-prix-synthetic.yaml");
+  CHECK(s.name == "grand-prix-synthetic");
+  REQUIRE(s.conditions.size() == 4);
+  CHECK(s.conditions[2].interface == "cockpit-assisted");
+  REQUIRE(s.participants.size() == 4);
+  CHECK(s.profiles.at(s.participants[3].profile).learning_gain > 0.0);
+  CHECK(s.track.filename() == "test-short.yaml");
+  const std::vector<PlannedTrial> plan = PlanTrials(s);
+  REQUIRE(plan.size() == 16);
+  // Each condition once per position (a Latin square), checked independently of the design code.
+  for (int position = 1; position <= 4; ++position) {
+    std::set<std::string> at;
+    for (const PlannedTrial& t : plan) {
+      if (t.position == position) at.insert(t.condition);
+    }
+    CHECK(at.size() == 4);
+  }
+}
+
+TEST_CASE("A study file that cannot work is refused naming the file, the key and what was expected") {
+  SECTION("an unknown interface") {
+    const std::string e = ErrorOf(Study("  - {name: a, interface: gesture}\n  - {name: b, interface: wheelchair}\n", People(2)));
+    CHECK_THAT(e, Catch::Contains("bad.yaml") && Catch::Contains("conditions[1].interface") &&
+                      Catch::Contains("wheelchair"));
+  }
+  SECTION("a duplicate participant") {
+    const std::string e = ErrorOf(Study(kFour, People(4) + "  - {id: P1, profile: p}\n"));
+    CHECK_THAT(e, Catch::Contains("participants[4].id") && Catch::Contains("'P1' appears twice"));
+  }
+  SECTION("a balanced Latin square that does not fit the participants") {
+    const std::string e = ErrorOf(Study(kFour, People(3)));
+    CHECK_THAT(e, Catch::Contains("bad.yaml") && Catch::Contains("'design'") && Catch::Contains("multiple of 4") &&
+                      Catch::Contains("3"));
+  }
+  SECTION("a person's keyboard for a simulated driver") {
+    const std::string e = ErrorOf(Study("  - {name: a, interface: gesture}\n  - {name: k, interface: keyboard}\n", People(2)));
+    CHECK_THAT(e, Catch::Contains("conditions[1].interface") && Catch::Contains("simulated driver"));
+  }
+  SECTION("an unknown profile") {
+    const std::string e = ErrorOf(Study(kFour, "  - {id: A, profile: ghost}\n"));
+    CHECK_THAT(e, Catch::Contains("participants[0].profile") && Catch::Contains("ghost"));
+  }
+  SECTION("a profile value out of range") {
+    std::string text = Study(kFour, People(4));
+    text.replace(text.find("steering_noise: 0.02"), 20, "steering_noise: 3.0");
+    const std::string e = ErrorOf(text);
+    CHECK_THAT(e, Catch::Contains("steering_noise") && Catch::Contains("[0, 1]"));
+  }
+  SECTION("a name with spaces, a seed without random order, an unknown key") {
+    CHECK_THAT(ErrorOf("name: my study\n"), Catch::Contains("'name'"));
+    CHECK_THAT(ErrorOf(Study(kFour, People(4), "design: {order: fixed, seed: 3}\n")),
+               Catch::Contains("design.seed") && Catch::Contains("order: random"));
+    CHECK_THAT(ErrorOf(Study(kFour, People(4), "lap_count: 3\n")), Catch::Contains("lap_count") && Catch::Contains("unknown key"));
+  }
+}
