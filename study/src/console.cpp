@@ -9,6 +9,7 @@
 #include <sstream>
 #include <thread>
 
+#include "haptel/core/html.hpp"
 #include "haptel/core/json.hpp"
 #include "haptel/mediator/recorder.hpp"
 #include "haptel/study/submission.hpp"
@@ -16,20 +17,7 @@
 namespace haptel::study {
 namespace {
 
-std::string Html(const std::string& text) {
-  std::string out;
-  for (const char c : text) {
-    switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&#39;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
+std::string Html(const std::string& text) { return HtmlEscape(text); }
 
 std::string Page(const std::string& title, const std::string& body, const std::string& head_extra = "") {
   return "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>" + Html(title) + "</title>" + head_extra +

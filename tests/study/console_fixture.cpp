@@ -8,6 +8,7 @@
 #include "haptel/config/paths.hpp"
 #include "haptel/mediator/recorder.hpp"
 #include "haptel/study/console.hpp"
+#include "study_test_run.hpp"
 
 using namespace haptel;
 using namespace haptel::study;
@@ -32,18 +33,7 @@ int main(int argc, char** argv) {
   {
     mediator::Recorder recorder(db);
     StudyStore store(recorder, config, plan);
-    mediator::RunRecord run;
-    run.started_wall_ns = 1'714'566'896'000'000'000;
-    run.config_name = "browser";
-    run.track = "t";
-    run.interface = "gesture";
-    run.vehicle = "v";
-    run.completed = true;
-    run.outcome = "completed";
-    run.lap_time_s = 18.25;
-    run.operator_kind = "person";
-    run.device = "sim";
-    recorder.Save(run, store.TrialWriter(plan[0], 600.0));
+    recorder.Save(test::TrialRun(18.25), store.TrialWriter(plan[0], 600.0));
   }
   const std::filesystem::path shipped = ShippedFile("config/questionnaires");
   const std::map<std::string, Questionnaire> questionnaires = {

@@ -8,6 +8,7 @@
 #include "haptel/config/paths.hpp"
 #include "haptel/mediator/recorder.hpp"
 #include "haptel/study/console.hpp"
+#include "study_test_run.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;
@@ -15,20 +16,6 @@ using namespace haptel::study;
 
 namespace {
 
-mediator::RunRecord Lap(double lap_s) {
-  mediator::RunRecord run;
-  run.started_wall_ns = 1'714'566'896'000'000'000;
-  run.config_name = "console";
-  run.track = "t";
-  run.interface = "i";
-  run.vehicle = "v";
-  run.completed = true;
-  run.outcome = "completed";
-  run.lap_time_s = lap_s;
-  run.operator_kind = "person";
-  run.device = "sim";
-  return run;
-}
 
 }  // namespace
 
@@ -46,7 +33,7 @@ TEST_CASE("The console serves the schedule and forms, and takes each questionnai
   {
     mediator::Recorder recorder(db);
     StudyStore store(recorder, config, plan);
-    recorder.Save(Lap(21.5), store.TrialWriter(plan[0], 600.0));  // A drove gesture
+    recorder.Save(test::TrialRun(21.5), store.TrialWriter(plan[0], 600.0));  // A drove gesture
   }
   const std::filesystem::path shipped = ShippedFile("config/questionnaires");
   const std::map<std::string, Questionnaire> questionnaires = {

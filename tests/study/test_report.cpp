@@ -10,6 +10,7 @@
 #include "haptel/mediator/recorder.hpp"
 #include "haptel/study/report.hpp"
 #include "haptel/study/store.hpp"
+#include "study_test_run.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;
@@ -24,21 +25,6 @@ const double kTimes[4][5] = {{210, 600, 245, 320, 310}, {225, 600, 220, 405, 240
                              {120, 120, 110, 210, 200}};
 const int kObstacles[4][5] = {{1, 5, 1, 1, 1}, {1, 5, 0, 1, 0}, {0, 1, 1, 1, 0}, {0, 1, 1, 0, 0}};
 
-mediator::RunRecord Run(double lap_s, bool completed, int obstacles) {
-  mediator::RunRecord run;
-  run.started_wall_ns = 1'714'566'896'000'000'000;
-  run.config_name = "thesis";
-  run.track = "grand-prix";
-  run.interface = "x";
-  run.vehicle = "robot";
-  run.completed = completed;
-  run.outcome = completed ? "completed" : "time limit";
-  run.lap_time_s = lap_s;
-  run.obstacles_touched = obstacles;
-  run.operator_kind = "person";
-  run.device = "sim";
-  return run;
-}
 
 std::string Read(const std::filesystem::path& file) {
   std::ifstream in(file);
@@ -67,7 +53,7 @@ void RecordThesis(const std::filesystem::path& dir, const std::filesystem::path&
     const size_t c = static_cast<size_t>(t.position - 1);
     const size_t p = static_cast<size_t>(std::find(kDrivers.begin(), kDrivers.end(), t.participant) - kDrivers.begin());
     const double lap = kTimes[c][p];
-    recorder.Save(Run(lap, lap < 600, kObstacles[c][p]), store.TrialWriter(t, config.trial_cap_s));
+    recorder.Save(test::TrialRun(lap, lap < 600, kObstacles[c][p]), store.TrialWriter(t, config.trial_cap_s));
   }
   store.SaveAnswers("A", "gesture", "thesis", {{"easy_to_learn", "3"}, {"remarks", "<script>alert(1)</script>, \"odd\""}});
   store.SaveAnswers("A", "gesture", "rating", {{"rating", "2"}, {"score", "2"}});

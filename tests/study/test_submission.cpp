@@ -6,6 +6,7 @@
 #include "haptel/config/paths.hpp"
 #include "haptel/mediator/recorder.hpp"
 #include "haptel/study/submission.hpp"
+#include "study_test_run.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;
@@ -13,20 +14,6 @@ using namespace haptel::study;
 
 namespace {
 
-mediator::RunRecord Lap(double lap_s) {
-  mediator::RunRecord run;
-  run.started_wall_ns = 1'714'566'896'000'000'000;
-  run.config_name = "submission";
-  run.track = "t";
-  run.interface = "i";
-  run.vehicle = "v";
-  run.completed = true;
-  run.outcome = "completed";
-  run.lap_time_s = lap_s;
-  run.operator_kind = "person";
-  run.device = "sim";
-  return run;
-}
 
 size_t Rows(const StudyStore& store) { return store.Answers().size(); }
 
@@ -44,7 +31,7 @@ TEST_CASE("Submitted questionnaires are checked, ordered, never doubled, and sco
                                           {"B", 2, "gesture", 1}};
   mediator::Recorder recorder(dir / "s.db");
   StudyStore store(recorder, config, plan);
-  recorder.Save(Lap(20.0), store.TrialWriter(plan[0], 600.0));  // A has driven gesture, nothing else
+  recorder.Save(test::TrialRun(20.0), store.TrialWriter(plan[0], 600.0));  // A has driven gesture, nothing else
   const std::filesystem::path shipped = ShippedFile("config/questionnaires");
   const std::map<std::string, Questionnaire> questionnaires = {
       {"thesis", FindQuestionnaire(shipped, "thesis")}, {"rating", FindQuestionnaire(shipped, "rating")}};

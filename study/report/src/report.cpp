@@ -9,6 +9,7 @@
 #include <set>
 #include <sstream>
 
+#include "haptel/core/html.hpp"
 #include "haptel/core/json.hpp"
 #include "haptel/mediator/sqlite_util.hpp"
 
@@ -41,20 +42,7 @@ std::string Csv(const std::string& text) {
   return out + "\"";
 }
 
-std::string Html(const std::string& text) {
-  std::string out;
-  for (const char c : text) {
-    switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&#39;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
+std::string Html(const std::string& text) { return HtmlEscape(text); }
 
 std::string Ordinal(double rank) {
   if (std::abs(rank - std::round(rank)) > 1e-9) return Fixed(rank, 1);
