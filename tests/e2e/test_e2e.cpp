@@ -1,5 +1,6 @@
 // End to end: the real `haptel` and `haptel-vehicle` programs, linked by DDS.
 #include <catch2/catch.hpp>
+#include <cstdlib>
 #include <signal.h>
 #include <unistd.h>
 
@@ -107,7 +108,14 @@ TEST_CASE("killing the vehicle mid-lap: the mediator reports it lost and exits n
     vehicle = std::stoi(haptel.err().substr(at + 13));
     return true;
   }, 60.0));
-  REQUIRE(test::WaitFor([&] { haptel.Pump(); return haptel.err().find(" lap ") != std::string::npos; }, 60.0));
+  // Under way means the vehicle has answered and moved (a progress line with
+  // a distance): killed before that, it would be "did not start", not "lost".
+  REQUIRE(test::WaitFor([&] {
+    haptel.Pump();
+    const std::string& err = haptel.err();
+    const auto at = err.rfind(" distance ");
+    return at != std::string::npos && std::atof(err.c_str() + at + 10) > 0.0;
+  }, 60.0));
   REQUIRE(kill(vehicle, SIGKILL) == 0);
   const int code = haptel.Wait(30.0);
   INFO("stdout:\n" << haptel.out() << "\nstderr:\n" << haptel.err());
