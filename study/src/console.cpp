@@ -5,6 +5,8 @@
 
 #include <chrono>
 
+#include <atomic>
+#include <condition_variable>
 #include <mutex>
 #include <sstream>
 #include <thread>
@@ -122,6 +124,13 @@ struct StudyConsole::Impl {
   std::unique_ptr<StudyStore> store;
   std::mutex mutex;  ///< the store and `live`: the server answers from several threads
   std::string live;
+  /// The trial the experimenter may start (empty: none waits), and whether
+  /// they did; what the study waits for otherwise (questionnaires).
+  std::string next;
+  bool start_requested = false;
+  std::string waiting;
+  std::condition_variable started;
+  std::atomic<bool> abort_requested{false};
   httplib::Server server;
   std::thread thread;
   int port = 0;
@@ -139,6 +148,15 @@ struct StudyConsole::Impl {
     std::ostringstream h;
     h << "<h1>Study " << Html(config.name) << "</h1>\n<p id=\"progress\">" << trials.size() << " of " << plan.size()
       << " trials done</p>\n<p id=\"live\">" << (live.empty() ? "No trial under way." : Html(live)) << "</p>\n";
+    if (!live.empty()) {
+      h << "<form method=\"post\" action=\"/abort\"><button id=\"abort\">Abort this trial</button> (it is "
+           "run again)</form>\n";
+    }
+    if (!waiting.empty()) h << "<p id=\"waiting\">Waiting for " << Html(waiting) << "</p>\n";
+    if (!next.empty()) {
+      h << "<form method=\"post\" action=\"/start\"><p id=\"next\">Next: " << Html(next)
+        << " <button id=\"start\">Start</button></p></form>\n";
+    }
     h << "<table id=\"schedule\"><tr><th>participant</th><th>position</th><th>condition</th><th>lap</th>"
          "<th>questionnaires</th></tr>\n";
     for (const PlannedTrial& t : plan) {
@@ -178,8 +196,27 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
     res.set_content("{\"study\":" + JsonString(s.config.name) +
                         ",\"trials_done\":" + std::to_string(s.store->Trials().size()) +
                         ",\"trials_planned\":" + std::to_string(s.store->Plan().size()) +
-                        ",\"live\":" + JsonString(s.live) + "}",
+                        ",\"live\":" + JsonString(s.live) + ",\"next\":" + JsonString(s.next) +
+                        ",\"waiting\":" + JsonString(s.waiting) + "}",
                     "application/json");
+  });
+  s.server.Post("/start", [&s](const httplib::Request&, httplib::Response& res) {
+    std::unique_lock<std::mutex> lock(s.mutex);
+    if (s.next.empty()) {
+      res.status = 409;
+      const std::string why = s.waiting.empty() ? "no trial is waiting to start" : "waiting for " + s.waiting;
+      res.set_content(Page("Not started", "<p id=\"result\" class=\"error\">" + Html(why) +
+                                              "</p><p><a href=\"/\">schedule</a></p>"),
+                      "text/html; charset=utf-8");
+      return;
+    }
+    s.start_requested = true;
+    s.started.notify_all();
+    res.set_redirect("/", 303);
+  });
+  s.server.Post("/abort", [&s](const httplib::Request&, httplib::Response& res) {
+    s.abort_requested.store(true);
+    res.set_redirect("/", 303);
   });
   s.server.Get("/questionnaire", [&s](const httplib::Request& req, httplib::Response& res) {
     const auto q = s.questionnaires.find(req.get_param_value("name"));
@@ -262,5 +299,27 @@ void StudyConsole::SetLive(const std::string& text) {
   const std::lock_guard<std::mutex> lock(impl_->mutex);
   impl_->live = text;
 }
+
+void StudyConsole::SetWaiting(const std::string& text) {
+  const std::lock_guard<std::mutex> lock(impl_->mutex);
+  impl_->waiting = text;
+}
+
+bool StudyConsole::WaitForStart(const std::string& next, const std::atomic<bool>& stop) {
+  std::unique_lock<std::mutex> lock(impl_->mutex);
+  impl_->next = next;
+  impl_->start_requested = false;
+  // Polled as well: a signal sets `stop` without notifying.
+  while (!impl_->start_requested && !stop.load()) {
+    impl_->started.wait_for(lock, std::chrono::milliseconds(50));
+  }
+  impl_->next.clear();
+  const bool start = impl_->start_requested;
+  impl_->start_requested = false;
+  impl_->abort_requested.store(false);
+  return start;
+}
+
+const std::atomic<bool>& StudyConsole::abort_requested() const { return impl_->abort_requested; }
 
 }  // namespace haptel::study

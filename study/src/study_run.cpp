@@ -1,6 +1,9 @@
 // `haptel study run FILE`: the planned trials, one session each, recorded as
 // they finish; a second start resumes at the first unfinished one.
 #include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <thread>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -31,7 +34,9 @@ constexpr const char* kRunUsage =
     "  --database FILE   SQLite file (overrides the study's and the run configuration's)\n"
     "  --domain N        DDS domain id of the trials' vehicles (overrides the run configuration's)\n"
     "  --json            end with one JSON line: the trials and per-condition totals\n"
-    "  --console         serve the experimenter's console (schedule, live trial) on 127.0.0.1\n"
+    "  --console         serve the experimenter's console (schedule, live trial) on 127.0.0.1;\n"
+    "                    a person study always does: its trials start from it, its\n"
+    "                    questionnaires are filled in there after each condition\n"
     "  --port N          the console's port (default 8470)\n"
     "  --verbose         the sessions' own progress lines\n";
 
@@ -91,6 +96,35 @@ mediator::SessionSetup TrialSetup(const StudyConfig& config, const PlannedTrial&
   return setup;
 }
 
+/// Waits until every participant has answered every questionnaire of each
+/// condition they have finished (all its planned trials), showing what is
+/// awaited on the console. False if `stop` came first.
+bool AwaitQuestionnaires(const StudyStore& store, const StudyConfig& config, StudyConsole& console,
+                         const std::atomic<bool>& stop) {
+  while (!stop.load()) {
+    std::string pending;
+    const std::vector<PlannedTrial> plan = store.Plan();
+    const std::vector<TrialRow> trials = store.Trials();
+    for (const PlannedTrial& t : plan) {
+      int planned = 0;
+      int done = 0;
+      for (const PlannedTrial& u : plan) planned += u.participant == t.participant && u.condition == t.condition;
+      for (const TrialRow& u : trials) done += u.participant == t.participant && u.condition == t.condition;
+      if (done < planned) continue;
+      for (const std::string& q : config.questionnaires) {
+        if (!store.Answered(t.participant, t.condition, q) &&
+            pending.find(t.participant + ": " + q + " after " + t.condition) == std::string::npos) {
+          pending += (pending.empty() ? "" : "; ") + t.participant + ": " + q + " after " + t.condition;
+        }
+      }
+    }
+    console.SetWaiting(pending.empty() ? "" : "questionnaires (" + pending + ")");
+    if (pending.empty()) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  }
+  return false;
+}
+
 std::string Seconds(double s) {
   char buffer[32];
   std::snprintf(buffer, sizeof buffer, "%.2f", s);
@@ -111,6 +145,7 @@ int StudyRunCommand(int argc, const char* const* argv) {
     std::string domain;
     ConsoleOptions console_options;
     bool want_console = false;
+    std::map<std::string, Questionnaire> questionnaires;
     cli::ReadInput([&] {
       const Args args(argc, argv, {"database", "domain", "port"}, {"json", "verbose", "console"});
       console_options.port = args.Int("port", 1, 65535).value_or(console_options.port);
@@ -123,17 +158,19 @@ int StudyRunCommand(int argc, const char* const* argv) {
       json = args.Flag("json");
       verbose = args.Flag("verbose");
       config = LoadStudy(args.positional()[1]);
-      // Until the experimenter's console exists, nobody can add participants
-      // or fill in questionnaires during a study: refuse what needs them.
+      // Refused rather than skipped: what the console cannot do yet.
       if (config.operators == "person" && config.participants.empty()) {
         throw ConfigError(config.file.string() +
                           ": key 'participants': expected the participants' ids (adding them in the "
                           "experimenter's console is not built yet)");
       }
-      if (!config.questionnaires.empty()) {
+      if (config.operators == "synthetic" && !config.questionnaires.empty()) {
         throw ConfigError(config.file.string() +
-                          ": key 'questionnaires': expected [] for now: the experimenter's console that asks "
-                          "them after each condition is not built yet");
+                          ": key 'questionnaires': expected [] for simulated drivers (they do not answer "
+                          "questionnaires yet)");
+      }
+      for (const std::string& name : config.questionnaires) {
+        questionnaires[name] = FindQuestionnaire(config.questionnaires_dir, name);
       }
       plan = PlanTrials(config);
       database = args.Value("database").value_or(
@@ -142,11 +179,12 @@ int StudyRunCommand(int argc, const char* const* argv) {
     // The database before anything runs, as for `haptel run`.
     auto recorder = cli::ReadInput([&] { return std::make_unique<mediator::Recorder>(database); });
     StudyStore store = cli::ReadInput([&] { return StudyStore(*recorder, config, plan); });
+    // People are started, aborted and asked from the console.
+    const bool person = config.operators == "person";
     std::unique_ptr<StudyConsole> console;
-    if (want_console) {
+    if (want_console || person) {
       console = cli::ReadInput([&] {
-        return std::make_unique<StudyConsole>(config, plan, database, std::map<std::string, Questionnaire>{},
-                                              console_options);
+        return std::make_unique<StudyConsole>(config, plan, database, questionnaires, console_options);
       });
       std::fprintf(stderr, "[study] console: %s\n", console->url().c_str());
     }
@@ -165,6 +203,16 @@ int StudyRunCommand(int argc, const char* const* argv) {
         exit_code = cli::kExitFailed;
         break;
       }
+      if (person) {
+        // The questionnaires of the conditions already driven come first;
+        // then the experimenter starts the trial.
+        if (!AwaitQuestionnaires(store, config, *console, interrupted)) continue;
+        if (!console->WaitForStart("participant " + trial->participant + ", " + trial->condition +
+                                       " (position " + std::to_string(trial->position) + ")",
+                                   interrupted)) {
+          continue;  // interrupted: the loop's first check ends the study
+        }
+      }
       const int experience = store.TrialsDone(trial->participant) + (config.practice ? 1 : 0);
       const mediator::SessionSetup setup =
           cli::ReadInput([&] { return TrialSetup(config, *trial, database, domain, verbose, experience); });
@@ -176,9 +224,32 @@ int StudyRunCommand(int argc, const char* const* argv) {
       }
       std::fprintf(stderr, "[study] trial %zu/%zu: participant %s, position %d, %s ...\n", number, plan.size(),
                    trial->participant.c_str(), trial->position, trial->condition.c_str());
-      const mediator::RecordedRun run =
-          mediator::RunAndRecord(setup, *recorder, interrupted, store.TrialWriter(*trial, config.trial_cap_s));
+      // The session stops on a signal, or on the console's Abort.
+      std::atomic<bool> trial_stop{false};
+      std::atomic<bool> trial_over{false};
+      std::thread watch([&] {
+        while (!trial_over.load()) {
+          if (interrupted.load() || (console && console->abort_requested().load())) trial_stop.store(true);
+          std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        }
+      });
+      mediator::RecordedRun run;
+      try {
+        run = mediator::RunAndRecord(setup, *recorder, trial_stop, store.TrialWriter(*trial, config.trial_cap_s));
+      } catch (...) {
+        trial_over.store(true);
+        watch.join();
+        throw;
+      }
+      trial_over.store(true);
+      watch.join();
+      if (console) console->SetLive("");
       const mediator::RunRecord& r = run.result.record;
+      if (console && console->abort_requested().load() && !interrupted.load()) {
+        store.Event("aborted", trial->participant, trial->position, "from the console; the trial is run again");
+        std::fprintf(stderr, "[study]   aborted from the console: the trial is run again\n");
+        continue;
+      }
       if (run.run_id != 0 && FinishesTrial(run.result.outcome)) {
         std::fprintf(stderr, "[study]   %s: lap %s s%s, %d obstacles, %d slips (run %lld)\n",
                      mediator::ToString(run.result.outcome).c_str(), Seconds(r.lap_time_s).c_str(),
@@ -195,8 +266,11 @@ int StudyRunCommand(int argc, const char* const* argv) {
       break;
     }
 
+    if (person && exit_code == cli::kExitOk && !store.NextTrial()) {
+      AwaitQuestionnaires(store, config, *console, interrupted);  // the last condition's
+    }
     const std::vector<TrialRow> trials = store.Trials();
-    const bool finished = trials.size() == plan.size();
+    const bool finished = trials.size() == plan.size() && !interrupted.load();
     if (finished) store.Event("finished", "", 0, std::to_string(trials.size()) + " trials");
     // The schedule as it stands: participants × conditions, scored lap times.
     std::printf("study %s: %zu of %zu trials%s\n", config.name.c_str(), trials.size(), plan.size(),

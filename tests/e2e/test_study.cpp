@@ -3,6 +3,7 @@
 // first unfinished trial, and ends with exactly one trial row per planned
 // trial. Behaviour only: the waits are generous bounds so a fault fails the
 // test instead of hanging it.
+#include <httplib.h>
 #include <signal.h>
 #include <sqlite3.h>
 
@@ -150,4 +151,64 @@ TEST_CASE("a study that cannot work is refused before anything runs") {
     CHECK(run.err().find("participants[2].id") != std::string::npos);
     CHECK_FALSE(std::filesystem::exists(fresh));
   }
+}
+
+TEST_CASE("a person study is started from the console and waits for each condition's questionnaires") {
+  const auto dir = test::ScratchDir("e2e-study-person");
+  const auto source = std::filesystem::current_path();
+  const auto file = dir / "person.yaml";
+  std::ofstream(file) << "name: person-e2e\n"
+                         "run: " << (source / "config/haptel.yaml").string() << "\n"
+                         "track: " << (source / "config/tracks/test-short.yaml").string() << "\n"
+                         "operators: person\n"
+                         "conditions:\n"
+                         "  - {name: first, interface: gesture}\n"
+                         "  - {name: second, interface: gesture}\n"
+                         "design: {order: fixed}\n"
+                         "trial_cap_s: 5\n"  // nobody holds the simulated arms: each trial ends at the cap
+                         "questionnaires: [thesis]\n"
+                         "participants:\n"
+                         "  - {id: P1}\n";
+  const auto db = dir / "person.db";
+  const int port = 20000 + static_cast<int>(getpid() % 20000);
+  Child study({Bin("haptel"), "study", "run", file.string(), "--database", db.string(), "--domain",
+               std::to_string(test::UniqueDomain(47)), "--port", std::to_string(port), "--json"});
+  httplib::Client console("127.0.0.1", port);
+  console.set_read_timeout(10, 0);
+  auto status = [&](const std::string& key) {
+    const auto r = console.Get("/status.json");
+    return r ? test::JsonField(r->body, key) : std::string();  // not serving yet
+  };
+  const httplib::Params answers = {{"participant", "P1"}, {"questionnaire", "thesis"}, {"easy_to_learn", "3"},
+                                   {"efficient", "4"}};
+  for (const std::string condition : {"first", "second"}) {
+    INFO(condition << "\n" << study.err());
+    REQUIRE(test::WaitFor([&] { study.Pump(); return !status("next").empty() || !study.Alive(); }, 60.0));
+    REQUIRE(status("next").find(condition) != std::string::npos);
+    const auto start = console.Post("/start");
+    REQUIRE(start);
+    CHECK(start->status == 303);
+    // The trial runs to its cap, then the study waits for the questionnaire.
+    REQUIRE(test::WaitFor([&] { study.Pump(); return !status("waiting").empty() || !study.Alive(); }, 90.0));
+    CHECK(status("waiting").find("thesis after " + condition) != std::string::npos);
+    const auto early = console.Post("/start");  // nothing to start while answers are awaited
+    REQUIRE(early);
+    CHECK(early->status == 409);
+    httplib::Params form = answers;
+    form.emplace("condition", condition);
+    const auto answered = console.Post("/answers", form);
+    REQUIRE(answered);
+    CHECK(answered->status == 200);
+  }
+  REQUIRE(study.Wait(60.0) == 0);
+  const std::string json = study.LastLine();
+  CHECK(test::JsonField(json, "finished") == "true");
+  CHECK(test::JsonField(json, "trials_done") == "2");
+  mediator::Recorder recorder(db);
+  sqlite3_stmt* count = nullptr;
+  REQUIRE(sqlite3_prepare_v2(recorder.handle(), "SELECT COUNT(*) FROM study_answers", -1, &count, nullptr) ==
+          SQLITE_OK);
+  REQUIRE(sqlite3_step(count) == SQLITE_ROW);
+  CHECK(sqlite3_column_int(count, 0) == 4);  // two answers after each condition
+  sqlite3_finalize(count);
 }

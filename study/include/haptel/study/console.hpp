@@ -7,7 +7,10 @@
 /// in order, never twice).
 ///
 /// Routes: `GET /` the schedule; `GET /questionnaire?participant=P&condition=C&name=Q`
-/// a form; `POST /answers` a filled-in form; `GET /status.json` the counts.
+/// a form; `POST /answers` a filled-in form; `POST /start` starts the trial
+/// offered; `POST /abort` aborts the trial under way (it is run again);
+/// `GET /status.json` the counts, the live trial, the next, what is awaited.
+#include <atomic>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -49,6 +52,14 @@ class StudyConsole {
   std::string url() const;
   /// The line the page shows for the trial under way (empty: none).
   void SetLive(const std::string& text);
+  /// What the study waits for before the next trial (empty: nothing), e.g.
+  /// "participant A's questionnaires after gesture".
+  void SetWaiting(const std::string& text);
+  /// Offers `next` with a Start button and blocks until the experimenter
+  /// presses it (true) or `stop` is set (false). Clears a previous abort.
+  bool WaitForStart(const std::string& next, const std::atomic<bool>& stop);
+  /// Set by the page's Abort button during a trial.
+  const std::atomic<bool>& abort_requested() const;
 
  private:
   struct Impl;
