@@ -179,7 +179,10 @@ struct StudyConsole::Impl {
       h << "</td></tr>\n";
     }
     h << "</table>\n";
-    return Page("Study " + config.name, h.str(), "<meta http-equiv=\"refresh\" content=\"2\">");
+    // Refreshed while something changes by itself (a trial under way, answers
+    // awaited from another screen); still otherwise, so that links hold.
+    const bool changing = !live.empty() || !waiting.empty();
+    return Page("Study " + config.name, h.str(), changing ? "<meta http-equiv=\"refresh\" content=\"2\">" : "");
   }
 };
 

@@ -14,6 +14,8 @@ from selenium import webdriver
 from selenium.webdriver.chrome.options import Options
 from selenium.webdriver.chrome.service import Service
 from selenium.webdriver.common.by import By
+from selenium.webdriver.support import expected_conditions
+from selenium.webdriver.support.ui import WebDriverWait
 
 
 def main():
@@ -56,7 +58,11 @@ def form_url(browser, url, name):
 
 
 def result(browser):
-    return browser.find_element(By.ID, "result").text
+    """The result page's message: waited for, since a click on submit returns
+    before the next page has loaded (the form page has no #result)."""
+    element = WebDriverWait(browser, 30).until(
+        expected_conditions.presence_of_element_located((By.ID, "result")))
+    return element.text
 
 
 def run(browser, url):
@@ -73,13 +79,16 @@ def run(browser, url):
         browser.find_element(By.ID, "submit").click()
 
     fill_thesis()
-    assert "recorded thesis" in result(browser), result(browser)
+    message = result(browser)
+    assert "recorded thesis" in message, message
     fill_thesis()  # the same form again
-    assert "already answered" in result(browser), result(browser)
+    message = result(browser)
+    assert "already answered" in message, message
 
     browser.get(rating)  # submitted empty: refused, each problem listed
     browser.find_element(By.ID, "submit").click()
-    assert "to correct" in result(browser), result(browser)
+    message = result(browser)
+    assert "to correct" in message, message
     assert browser.find_elements(By.CSS_SELECTOR, "#errors li")
 
     browser.get(rating)
@@ -87,7 +96,8 @@ def run(browser, url):
         browser.find_element(By.CSS_SELECTOR, f'input[name="rating.node.{node}"][value="{answer}"]').click()
     browser.find_element(By.CSS_SELECTOR, 'input[name="rating"][value="5"]').click()
     browser.find_element(By.ID, "submit").click()
-    assert "recorded rating" in result(browser), result(browser)
+    message = result(browser)
+    assert "recorded rating" in message, message
 
 
 if __name__ == "__main__":
