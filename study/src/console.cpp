@@ -166,7 +166,14 @@ struct StudyConsole::Impl {
       }
       h << "<tr" << (row != nullptr ? " class=\"done\"" : "") << "><td>" << Html(t.participant) << "</td><td>"
         << t.position << "</td><td>" << Html(t.condition) << "</td><td>"
-        << (row == nullptr ? "" : FormatSeconds(row->lap_time_s) + (row->completed ? "" : " (cap)")) << "</td><td>";
+        << (row == nullptr ? "" : FormatSeconds(row->lap_time_s) + (row->completed ? "" : " (cap)"));
+      if (row != nullptr) {
+        h << " <form method=\"post\" action=\"/redo\" style=\"display:inline\"><input type=\"hidden\" "
+             "name=\"participant\" value=\""
+          << Html(t.participant) << "\"><input type=\"hidden\" name=\"position\" value=\"" << t.position
+          << "\"><button>redo</button></form>";
+      }
+      h << "</td><td>";
       if (row != nullptr) {
         for (const std::string& name : config.questionnaires) {
           if (store->Answered(t.participant, t.condition, name)) {
@@ -215,6 +222,29 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
     }
     s.start_requested = true;
     s.started.notify_all();
+    res.set_redirect("/", 303);
+  });
+  s.server.Post("/redo", [&s](const httplib::Request& req, httplib::Response& res) {
+    const std::string participant = req.get_param_value("participant");
+    int position = 0;
+    try {
+      position = std::stoi(req.get_param_value("position"));
+    } catch (const std::exception&) {
+      position = 0;
+    }
+    bool taken = false;
+    {
+      const std::lock_guard<std::mutex> lock(s.mutex);
+      taken = position > 0 && s.store->Redo(participant, position, "from the console");
+    }
+    if (!taken) {
+      res.status = 409;
+      res.set_content(Page("Not redone", "<p id=\"result\" class=\"error\">participant " + Html(participant) +
+                                             " has no finished trial at position " + Html(req.get_param_value("position")) +
+                                             "</p><p><a href=\"/\">schedule</a></p>"),
+                      "text/html; charset=utf-8");
+      return;
+    }
     res.set_redirect("/", 303);
   });
   s.server.Post("/abort", [&s](const httplib::Request&, httplib::Response& res) {

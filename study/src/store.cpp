@@ -221,6 +221,21 @@ mediator::Recorder::AlsoSave StudyStore::TrialWriter(const PlannedTrial& trial, 
   };
 }
 
+bool StudyStore::Redo(const std::string& participant, int position, const std::string& why) {
+  sqlite3* db = recorder_.handle();
+  const std::filesystem::path& file = recorder_.path();
+  Transaction txn(file, db, "BEGIN IMMEDIATE");
+  Stmt remove = Prepare(file, db, "DELETE FROM study_trials WHERE study_id = ? AND participant = ? AND position = ?",
+                        "cannot take the trial back");
+  Binder(file, db, remove.get()).Int(id_).Text(participant).Int(position);
+  StepDone(file, db, remove.get(), "cannot take the trial back");
+  if (sqlite3_changes(db) == 0) return false;  // rolled back: nothing to redo
+  remove.reset();
+  Event("redo", participant, position, why);
+  txn.Commit();
+  return true;
+}
+
 bool StudyStore::Answered(const std::string& participant, const std::string& condition,
                           const std::string& questionnaire) const {
   sqlite3* db = recorder_.handle();

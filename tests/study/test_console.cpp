@@ -99,6 +99,21 @@ TEST_CASE("The console serves the schedule and forms, and takes each questionnai
   CHECK(stored["rating.rating.path"] == "controllable=yes,adequate=yes,satisfactory=no");
   CHECK(stored["rating.score"] == "5");
 
+  // Redo: the finished trial is taken back (its run stays), once; run again it is attempt 2.
+  const auto redo = client.Post("/redo", httplib::Params{{"participant", "A"}, {"position", "1"}});
+  REQUIRE(redo);
+  CHECK(redo->status == 303);
+  const auto again = client.Post("/redo", httplib::Params{{"participant", "A"}, {"position", "1"}});
+  REQUIRE(again);
+  CHECK(again->status == 409);
+  CHECK(store.Trials().empty());
+  CHECK(store.NextTrial()->position == 1);
+  recorder.Save(test::TrialRun(19.0), store.TrialWriter(plan[0], 600.0));
+  REQUIRE(store.Trials().size() == 1);
+  CHECK(store.Trials()[0].attempt == 2);
+  CHECK(store.Trials()[0].lap_time_s == 19.0);
+  CHECK(recorder.LoadAll().size() == 2);  // the first run is kept
+
   // A second console on the same port: a clear error naming it.
   ConsoleOptions taken;
   taken.port = console.port();

@@ -9,6 +9,8 @@
 /// Routes: `GET /` the schedule; `GET /questionnaire?participant=P&condition=C&name=Q`
 /// a form; `POST /answers` a filled-in form; `POST /start` starts the trial
 /// offered; `POST /abort` aborts the trial under way (it is run again);
+/// `POST /redo` (participant, position) takes a finished trial back, to be
+/// run again;
 /// `GET /status.json` the counts, the live trial, the next, what is awaited.
 #include <atomic>
 #include <filesystem>

@@ -81,6 +81,12 @@ class StudyStore {
   /// already has a row (the run is then rolled back too).
   mediator::Recorder::AlsoSave TrialWriter(const PlannedTrial& trial, double cap_s) const;
 
+  /// Takes a finished trial back, to be run again (the experimenter's Redo):
+  /// its row goes, its run stays, and a 'redo' event records it — in one
+  /// transaction; the next row's `attempt` counts it. False if the trial has
+  /// no row.
+  bool Redo(const std::string& participant, int position, const std::string& why);
+
   /// Whether `participant` answered `questionnaire` after `condition`.
   bool Answered(const std::string& participant, const std::string& condition,
                 const std::string& questionnaire) const;
