@@ -209,6 +209,7 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
         setup.view == ViewKind::kWindow ? view::ViewMode::kWindow : view::ViewMode::kOffscreen;
     options.record = setup.record;
     options.title = "Haptel - " + run.name;
+    if (setup.direct_view) options.screen = view::DirectViewScreen();
     SessionView::Parts view_parts;
     view_parts.hal = &haptic.hal();
     view_parts.physics = physics_side.get();
@@ -226,6 +227,7 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   const auto period_ns = static_cast<int64_t>(1e9 / run.session_rate_hz);
   int64_t next_command_ns = t0;
   int64_t next_progress_ns = t0 + SToNs(2.0);
+  int64_t next_live_ns = t0;
   int64_t next_tick = t0;
   bool vehicle_up = false;
   const double startup_timeout_s = 15.0;
@@ -366,9 +368,14 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
           "lap cap of " + std::to_string(static_cast<int>(setup.track.lap_cap_s)) + " s reached");
       break;
     }
-    if (view_part) {
-      view_part->Publish(
-          overlay_feed.Make(t, lap, interfaces, feedback, motors, vehicle_up, touching));
+    if (view_part || setup.on_live) {
+      // Made every tick: the overlay notices contacts by their edges.
+      const view::Overlay overlay = overlay_feed.Make(t, lap, interfaces, feedback, motors, vehicle_up, touching);
+      if (view_part) view_part->Publish(overlay);
+      if (setup.on_live && now >= next_live_ns) {
+        next_live_ns = now + SToNs(0.5);
+        setup.on_live(overlay);
+      }
     }
     if (now >= next_progress_ns) {
       next_progress_ns += SToNs(2.0);

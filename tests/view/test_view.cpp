@@ -134,6 +134,33 @@ TEST_CASE("the renderer puts a known video frame on the screen quad, the right w
   CHECK(now[2] < 30);
 }
 
+TEST_CASE("the direct view puts the camera's picture over most of the frame (the practice lap)") {
+  OffscreenGl gl;
+  Renderer renderer(kWidth, kHeight, DirectViewScreen());
+  Renderer usual(kWidth, kHeight);
+  ViewModel model;
+  model.video.image = QuadrantFrame();
+  model.video.id = 1;
+  renderer.Draw(model, 0.0);
+  cv::Mat image;
+  renderer.ReadPixels(image);
+  // The picture's four quadrants, the right way up.
+  CHECK(Red(At(image, ScreenPoint(renderer, 0.25, 0.25))));
+  CHECK(Green(At(image, ScreenPoint(renderer, 0.75, 0.25))));
+  CHECK(Blue(At(image, ScreenPoint(renderer, 0.25, 0.75))));
+  CHECK(White(At(image, ScreenPoint(renderer, 0.75, 0.75))));
+  // The whole picture in the frame, and much larger than on the usual screen.
+  const cv::Point corner_a = ScreenPoint(renderer, 0.0, 0.0);
+  const cv::Point corner_b = ScreenPoint(renderer, 1.0, 1.0);
+  CHECK(corner_a.x >= 0);
+  CHECK(corner_a.y >= 0);
+  CHECK(corner_b.x < kWidth);
+  CHECK(corner_b.y < kHeight);
+  const double height = corner_b.y - corner_a.y;
+  CHECK(height > 0.8 * kHeight);
+  CHECK(height > 1.5 * (ScreenPoint(usual, 0.0, 1.0).y - ScreenPoint(usual, 0.0, 0.0).y));
+}
+
 TEST_CASE("the renderer draws shapes where the device frame puts them, in their colour") {
   OffscreenGl gl;
   Renderer renderer(kWidth, kHeight);

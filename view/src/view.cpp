@@ -188,7 +188,7 @@ struct View::Impl {
         throw ViewError(std::string("view: no OpenGL 3.3 core context: ") + SDL_GetError());
       }
       SDL_GL_SetSwapInterval(0);  // paced by rate_hz, not the display
-      renderer = std::make_unique<Renderer>(options.width, options.height);
+      renderer = std::make_unique<Renderer>(options.width, options.height, options.screen);
       if (!options.record.empty()) {
         recorder = std::make_unique<Mp4Recorder>(options.record, options.width, options.height,
                                                  options.record_fps);

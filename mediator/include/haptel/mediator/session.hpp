@@ -18,6 +18,7 @@
 /// the end (or into a fallback file, see unsaved_run.hpp).
 #include <atomic>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -35,6 +36,7 @@
 #include "haptel/mediator/interface_catalog.hpp"
 #include "haptel/mediator/interface_set.hpp"
 #include "haptel/mediator/recorder.hpp"
+#include "haptel/view/view_model.hpp"
 
 namespace haptel::mediator {
 
@@ -79,6 +81,14 @@ struct SessionSetup {
   ViewKind view = ViewKind::kNone;
   /// The operator's view as H.264 MP4 (empty: none; needs a view).
   std::filesystem::path record;
+  /// The camera's picture fills the view (the thesis's practice lap: the
+  /// keyboard and a direct view of the camera) instead of hanging on a
+  /// screen before the hands.
+  bool direct_view = false;
+  /// Called on the session thread twice a second with what the view's
+  /// overlay shows (lap clock, gates, contacts), view or not: a study's
+  /// console shows the live trial with it. Must return quickly.
+  std::function<void(const view::Overlay&)> on_live;
 };
 
 enum class Outcome {

@@ -25,6 +25,10 @@ struct ScreenPlacement {
   double width = 0.80;
 };
 
+/// The screen close before the eye, filling the picture: the camera's view
+/// with nothing in front of it (no hands to show).
+inline ScreenPlacement DirectViewScreen() { return {{0.35, 0.0, 0.10}, 1.05}; }
+
 /// The text lines the overlay shows for `overlay`, top to bottom: what the
 /// person reads (the renderer draws exactly these, so tests read them here).
 std::vector<std::string> OverlayLines(const Overlay& overlay);

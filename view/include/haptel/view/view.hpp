@@ -16,6 +16,7 @@
 #include <string>
 
 #include "haptel/core/cli.hpp"
+#include "haptel/view/renderer.hpp"
 #include "haptel/view/view_model.hpp"
 
 union SDL_Event;
@@ -42,6 +43,7 @@ struct ViewOptions {
   std::filesystem::path record;   ///< MP4 to write (empty: none)
   double record_fps = 30.0;       ///< fixed frame rate of the MP4
   std::string title = "Haptel";
+  ScreenPlacement screen;         ///< where the camera's picture hangs
 };
 
 /// Fills the frame's model on the view thread. Must not block on anything a
