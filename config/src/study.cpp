@@ -37,7 +37,13 @@ DriverProfile ReadProfile(YamlMap map) {
 }
 
 /// Names in reports, file names and web forms: short and plain.
-bool PlainName(const std::string& name) {
+bool PlainName(const std::string& name) { return IsPlainName(name); }
+
+constexpr const char* kPlainName = "a name of 1 to 40 letters, digits, '-', '_' or '.'";
+
+}  // namespace
+
+bool IsPlainName(const std::string& name) {
   if (name.empty() || name.size() > 40) return false;
   for (const char c : name) {
     const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' ||
@@ -46,9 +52,6 @@ bool PlainName(const std::string& name) {
   }
   return true;
 }
-constexpr const char* kPlainName = "a name of 1 to 40 letters, digits, '-', '_' or '.'";
-
-}  // namespace
 
 void DriverProfile::ValidateOrThrow() const {
   check::Number("steering_noise", steering_noise, 0.0, 1.0);

@@ -13,7 +13,10 @@
 
 #include "haptel/core/html.hpp"
 #include "haptel/core/json.hpp"
+#include "haptel/link/participant.hpp"
+#include "haptel/link/topic.hpp"
 #include "haptel/mediator/recorder.hpp"
+#include "haptel/study/plan.hpp"
 #include "haptel/study/submission.hpp"
 
 namespace haptel::study {
@@ -40,6 +43,41 @@ std::string FormatSeconds(double s) {
   std::snprintf(text, sizeof text, "%.2f s", s);
   return text;
 }
+
+std::string ErrorPage(const std::string& title, const std::string& why) {
+  return Page(title, "<p id=\"result\" class=\"error\">" + Html(why) + "</p><p><a href=\"/\">schedule</a></p>");
+}
+
+/// The vehicle's latest camera picture, as it came (JPEG), from a DDS reader
+/// of the console's own: the DDS thread only swaps bytes under a short lock.
+class Thumbnail {
+ public:
+  explicit Thumbnail(const ConsoleVideo& video) : participant_(video.link, "haptel-study-console") {
+    reader_ = std::make_unique<link::VideoReader>(participant_, video.topic, link::Profile::kVideo,
+                                                  [this](const msg::VideoFrame& f) {
+                                                    const std::lock_guard<std::mutex> lock(mutex_);
+                                                    if (f.encoding() != "jpeg") return;
+                                                    jpeg_.assign(f.data().begin(), f.data().end());
+                                                    ++frames_;
+                                                  });
+  }
+  ~Thumbnail() { reader_.reset(); }  // no callback after this
+  std::vector<uint8_t> Latest() const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return jpeg_;
+  }
+  uint64_t frames() const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return frames_;
+  }
+
+ private:
+  link::Participant participant_;
+  mutable std::mutex mutex_;
+  std::vector<uint8_t> jpeg_;
+  uint64_t frames_ = 0;
+  std::unique_ptr<link::VideoReader> reader_;
+};
 
 /// A tree item's yes/no fields ("<id>.node.<node>") turned into its path
 /// ("<id>.path": node=yes,... from the first node to a band).
@@ -124,6 +162,12 @@ struct StudyConsole::Impl {
   std::unique_ptr<StudyStore> store;
   std::mutex mutex;  ///< the store and `live`: the server answers from several threads
   std::string live;
+  LiveProgress progress;
+  bool have_progress = false;
+  /// An open study with nothing left to run waits for a participant or Finish.
+  bool waiting_for_more = false;
+  bool finish_requested = false;
+  std::unique_ptr<Thumbnail> thumbnail;
   /// The trial the experimenter may start (empty: none waits), and whether
   /// they did; what the study waits for otherwise (questionnaires).
   std::string next;
@@ -139,6 +183,19 @@ struct StudyConsole::Impl {
        const std::map<std::string, Questionnaire>& q, const ConsoleOptions& o)
       : config(c), questionnaires(q), options(o), recorder(database) {
     store = std::make_unique<StudyStore>(recorder, config, plan);
+    if (options.video) thumbnail = std::make_unique<Thumbnail>(*options.video);
+  }
+
+  /// The participants' count, and how many more complete a balanced block.
+  std::string Blocks(size_t participants) const {
+    const size_t block = static_cast<size_t>(BlockSize(config));
+    std::string text = std::to_string(participants) + " participant" + (participants == 1 ? "" : "s");
+    if (block > 1 && participants % block != 0) {
+      const size_t more = block - participants % block;
+      text += "; the balanced Latin square is balanced over blocks of " + std::to_string(block) + ": add " +
+              std::to_string(more) + " more to complete the block";
+    }
+    return text;
   }
 
   std::string Schedule() {
@@ -149,6 +206,16 @@ struct StudyConsole::Impl {
     h << "<h1>Study " << Html(config.name) << "</h1>\n<p id=\"progress\">" << trials.size() << " of " << plan.size()
       << " trials done</p>\n<p id=\"live\">" << (live.empty() ? "No trial under way." : Html(live)) << "</p>\n";
     if (!live.empty()) {
+      if (have_progress) {
+        h << "<p id=\"progress-live\">lap " << FormatSeconds(progress.lap_time_s) << " &middot; gates "
+          << progress.gates_passed << " of " << progress.gates_total << " &middot; contacts " << progress.obstacles;
+        if (!progress.last_contact.empty()) h << " (last: " << Html(progress.last_contact) << ")";
+        h << "</p>\n";
+      }
+      if (thumbnail) {
+        h << "<p><img id=\"thumbnail\" src=\"/video.jpg?n=" << thumbnail->frames()
+          << "\" width=\"320\" alt=\"the vehicle's camera (no picture yet)\"></p>\n";
+      }
       h << "<form method=\"post\" action=\"/abort\"><button id=\"abort\">Abort this trial</button> (it is "
            "run again)</form>\n";
     }
@@ -186,6 +253,15 @@ struct StudyConsole::Impl {
       h << "</td></tr>\n";
     }
     h << "</table>\n";
+    if (config.operators == "person") {
+      h << "<p id=\"participants\">" << Html(Blocks(store->Participants().size())) << "</p>\n"
+        << "<form method=\"post\" action=\"/participants\"><label>New participant <input name=\"id\" "
+           "id=\"new-participant\" size=\"12\"></label> <button id=\"add\">Add</button></form>\n";
+    }
+    if (waiting_for_more) {
+      h << "<form method=\"post\" action=\"/finish\"><p id=\"more\">Every trial is done: add a participant, or "
+           "<button id=\"finish\">Finish the study</button></p></form>\n";
+    }
     // Refreshed while something changes by itself (a trial under way, answers
     // awaited from another screen); still otherwise, so that links hold.
     const bool changing = !live.empty() || !waiting.empty();
@@ -206,8 +282,13 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
     res.set_content("{\"study\":" + JsonString(s.config.name) +
                         ",\"trials_done\":" + std::to_string(s.store->Trials().size()) +
                         ",\"trials_planned\":" + std::to_string(s.store->Plan().size()) +
-                        ",\"live\":" + JsonString(s.live) + ",\"next\":" + JsonString(s.next) +
-                        ",\"waiting\":" + JsonString(s.waiting) + "}",
+                        ",\"participants\":" + std::to_string(s.store->Participants().size()) +
+                        ",\"live\":" + JsonString(s.live) + ",\"lap_time_s\":" + JsonNumber(s.progress.lap_time_s) +
+                        ",\"gates_passed\":" + std::to_string(s.progress.gates_passed) +
+                        ",\"obstacles\":" + std::to_string(s.progress.obstacles) +
+                        ",\"video_frames\":" + std::to_string(s.thumbnail ? s.thumbnail->frames() : 0) +
+                        ",\"next\":" + JsonString(s.next) + ",\"waiting\":" + JsonString(s.waiting) +
+                        ",\"waiting_for_participants\":" + (s.waiting_for_more ? "true" : "false") + "}",
                     "application/json");
   });
   s.server.Post("/start", [&s](const httplib::Request&, httplib::Response& res) {
@@ -246,6 +327,56 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
       return;
     }
     res.set_redirect("/", 303);
+  });
+  s.server.Post("/participants", [&s](const httplib::Request& req, httplib::Response& res) {
+    const std::string id = req.get_param_value("id");
+    if (s.config.operators != "person") {
+      res.status = 409;
+      res.set_content(ErrorPage("Not added", "simulated drivers come from the study file, each with a profile"),
+                      "text/html; charset=utf-8");
+      return;
+    }
+    if (!IsPlainName(id)) {
+      res.status = 422;
+      res.set_content(ErrorPage("Not added", "a participant's id is 1 to 40 letters, digits, '-', '_' or '.', got '" +
+                                                 id + "'"),
+                      "text/html; charset=utf-8");
+      return;
+    }
+    try {
+      const std::lock_guard<std::mutex> lock(s.mutex);
+      const int row = static_cast<int>(s.store->Participants().size());
+      s.store->AddParticipant(id, PlanParticipant(s.config, id, row));
+    } catch (const AlreadyAnswered& e) {
+      res.status = 409;
+      res.set_content(ErrorPage("Not added", e.what()), "text/html; charset=utf-8");
+      return;
+    }
+    s.started.notify_all();
+    res.set_redirect("/", 303);
+  });
+  s.server.Post("/finish", [&s](const httplib::Request&, httplib::Response& res) {
+    {
+      const std::lock_guard<std::mutex> lock(s.mutex);
+      if (!s.waiting_for_more) {
+        res.status = 409;
+        res.set_content(ErrorPage("Not finished", "the study still has trials to run"), "text/html; charset=utf-8");
+        return;
+      }
+      s.finish_requested = true;
+    }
+    s.started.notify_all();
+    res.set_redirect("/", 303);
+  });
+  s.server.Get("/video.jpg", [&s](const httplib::Request&, httplib::Response& res) {
+    const std::vector<uint8_t> jpeg = s.thumbnail ? s.thumbnail->Latest() : std::vector<uint8_t>();
+    if (jpeg.empty()) {
+      res.status = 404;
+      res.set_content("no picture from the vehicle's camera yet", "text/plain");
+      return;
+    }
+    res.set_header("Cache-Control", "no-store");
+    res.set_content(std::string(jpeg.begin(), jpeg.end()), "image/jpeg");
   });
   s.server.Post("/abort", [&s](const httplib::Request&, httplib::Response& res) {
     s.abort_requested.store(true);
@@ -331,7 +462,29 @@ std::string StudyConsole::url() const {
 void StudyConsole::SetLive(const std::string& text) {
   const std::lock_guard<std::mutex> lock(impl_->mutex);
   impl_->live = text;
+  impl_->progress = {};
+  impl_->have_progress = false;
 }
+
+void StudyConsole::SetLiveProgress(const LiveProgress& progress) {
+  const std::lock_guard<std::mutex> lock(impl_->mutex);
+  impl_->progress = progress;
+  impl_->have_progress = true;
+}
+
+bool StudyConsole::WaitForMore(const std::atomic<bool>& stop) {
+  std::unique_lock<std::mutex> lock(impl_->mutex);
+  impl_->waiting_for_more = true;
+  impl_->finish_requested = false;
+  bool more = false;
+  while (!stop.load() && !impl_->finish_requested && !(more = impl_->store->NextTrial().has_value())) {
+    impl_->started.wait_for(lock, std::chrono::milliseconds(100));
+  }
+  impl_->waiting_for_more = false;
+  return more;
+}
+
+uint64_t StudyConsole::video_frames() const { return impl_->thumbnail ? impl_->thumbnail->frames() : 0; }
 
 void StudyConsole::SetWaiting(const std::string& text) {
   const std::lock_guard<std::mutex> lock(impl_->mutex);

@@ -36,4 +36,36 @@ std::vector<PlannedTrial> PlanTrials(const StudyConfig& config) {
   return plan;
 }
 
+std::vector<PlannedTrial> PlanParticipant(const StudyConfig& config, const std::string& id, int row_index) {
+  const int k = static_cast<int>(config.conditions.size());
+  std::vector<int> order;
+  switch (config.order) {
+    case StudyOrder::kBalancedLatinSquare: {
+      const std::vector<std::vector<int>> rows = WilliamsRows(k);
+      order = rows[static_cast<size_t>(row_index) % rows.size()];
+      break;
+    }
+    case StudyOrder::kRandom:
+      // Earlier participants' orders do not change as participants are added.
+      order = RandomOrders(k, row_index + 1, config.seed).back();
+      break;
+    case StudyOrder::kFixed:
+      for (int i = 0; i < k; ++i) order.push_back(i);
+      break;
+  }
+  std::vector<PlannedTrial> trials;
+  for (int r = 0; r < config.repetitions; ++r) {
+    for (const int c : order) {
+      trials.push_back({id, static_cast<int>(trials.size()) + 1, config.conditions.at(static_cast<size_t>(c)).name,
+                        r + 1});
+    }
+  }
+  return trials;
+}
+
+int BlockSize(const StudyConfig& config) {
+  if (config.order != StudyOrder::kBalancedLatinSquare) return 1;
+  return static_cast<int>(WilliamsRows(static_cast<int>(config.conditions.size())).size());
+}
+
 }  // namespace haptel::study

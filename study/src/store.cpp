@@ -1,5 +1,6 @@
 #include "haptel/study/store.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -103,7 +104,9 @@ StudyStore::StudyStore(mediator::Recorder& recorder, const StudyConfig& config,
   // Resuming: the plan on record is the plan.
   const std::vector<PlannedTrial> recorded = Plan();
   std::string difference;
-  if (recorded.size() != plan.size()) {
+  // Participants added in the console come after the file's: the file's
+  // plan is the record's beginning.
+  if (recorded.size() < plan.size()) {
     difference = std::to_string(recorded.size()) + " trials on record, " + std::to_string(plan.size()) +
                  " in the file";
   } else {
@@ -121,6 +124,46 @@ StudyStore::StudyStore(mediator::Recorder& recorder, const StudyConfig& config,
                              " was planned differently (" + difference +
                              "); a changed study is a new one: give it another name");
   }
+}
+
+std::vector<std::string> StudyStore::Participants() const {
+  sqlite3* db = recorder_.handle();
+  const std::filesystem::path& file = recorder_.path();
+  Stmt select = Prepare(file, db, "SELECT participant FROM study_participants WHERE study_id = ? ORDER BY row_index",
+                        "cannot read the participants");
+  Binder(file, db, select.get()).Int(id_);
+  std::vector<std::string> ids;
+  while (sqlite3_step(select.get()) == SQLITE_ROW) ids.push_back(Reader(select.get()).Text());
+  return ids;
+}
+
+void StudyStore::AddParticipant(const std::string& participant, const std::vector<PlannedTrial>& trials) {
+  sqlite3* db = recorder_.handle();
+  const std::filesystem::path& file = recorder_.path();
+  Transaction txn(file, db, "BEGIN IMMEDIATE");
+  const std::vector<std::string> ids = Participants();
+  if (std::find(ids.begin(), ids.end(), participant) != ids.end()) {
+    throw AlreadyAnswered("participant " + participant + " is in the study already");
+  }
+  {
+    Stmt insert = Prepare(file, db,
+                          "INSERT INTO study_participants (study_id, participant, row_index, profile, added_utc) "
+                          "VALUES (?, ?, ?, '', ?)",
+                          "cannot insert a participant");
+    Binder(file, db, insert.get()).Int(id_).Text(participant).Int(static_cast<int64_t>(ids.size())).Text(NowUtc());
+    StepDone(file, db, insert.get(), "cannot insert participant " + participant);
+    Stmt planned = Prepare(file, db,
+                           "INSERT INTO study_plan (study_id, participant, position, condition, repetition) "
+                           "VALUES (?, ?, ?, ?, ?)",
+                           "cannot insert the plan");
+    for (const PlannedTrial& t : trials) {
+      sqlite3_reset(planned.get());
+      Binder(file, db, planned.get()).Int(id_).Text(participant).Int(t.position).Text(t.condition).Int(t.repetition);
+      StepDone(file, db, planned.get(), "cannot insert planned trial " + Describe(t));
+    }
+    Event("participant added", participant, 0, std::to_string(trials.size()) + " trials planned");
+  }
+  txn.Commit();
 }
 
 std::vector<PlannedTrial> StudyStore::Plan() const {
@@ -292,6 +335,16 @@ std::vector<AnswerRow> StudyStore::Answers() const {
     rows.push_back(a);
   }
   return rows;
+}
+
+bool StudyStore::Practised(const std::string& participant) const {
+  sqlite3* db = recorder_.handle();
+  const std::filesystem::path& file = recorder_.path();
+  Stmt select = Prepare(file, db,
+                        "SELECT COUNT(*) FROM study_events WHERE study_id = ? AND kind = 'practice' AND participant = ?",
+                        "cannot read the events");
+  Binder(file, db, select.get()).Int(id_).Text(participant);
+  return sqlite3_step(select.get()) == SQLITE_ROW && sqlite3_column_int(select.get(), 0) > 0;
 }
 
 void StudyStore::Event(const std::string& kind, const std::string& participant, int position,

@@ -15,6 +15,8 @@
 #include "haptel/core/cli.hpp"
 #include "haptel/core/json.hpp"
 #include "haptel/core/stop_signals.hpp"
+#include "haptel/link/participant.hpp"
+#include "haptel/view/view.hpp"
 #include "haptel/mediator/run_command.hpp"
 #include "haptel/study/console.hpp"
 #include "haptel/study/plan.hpp"
@@ -96,6 +98,24 @@ mediator::SessionSetup TrialSetup(const StudyConfig& config, const PlannedTrial&
   return setup;
 }
 
+/// A person's practice lap (the thesis's): the keyboard and the camera's
+/// picture filling the window, recorded as a run but not as a trial.
+mediator::SessionSetup PracticeSetup(const StudyConfig& config, const std::filesystem::path& database,
+                                     const std::string& domain, bool verbose) {
+  const std::string cap = std::to_string(config.trial_cap_s);
+  std::vector<std::string> words = {"run",         "--config",   config.run.string(), "--track",  config.track.string(),
+                                    "--interface", "keyboard",   "--operator",        "person",   "--view",
+                                    "window",      "--time-limit", cap,               "--database", database.string()};
+  if (!domain.empty()) words.insert(words.end(), {"--domain", domain});
+  if (!verbose) words.push_back("--quiet");
+  std::vector<const char*> argv;
+  for (const std::string& w : words) argv.push_back(w.c_str());
+  mediator::SessionSetup setup =
+      mediator::RunSetupFromArgs(mediator::ParseRunArgs(static_cast<int>(argv.size()), argv.data()));
+  setup.direct_view = true;
+  return setup;
+}
+
 /// Waits until every participant has answered every questionnaire of each
 /// condition they have finished (all its planned trials), showing what is
 /// awaited on the console. False if `stop` came first.
@@ -158,11 +178,12 @@ int StudyRunCommand(int argc, const char* const* argv) {
       json = args.Flag("json");
       verbose = args.Flag("verbose");
       config = LoadStudy(args.positional()[1]);
-      // Refused rather than skipped: what the console cannot do yet.
-      if (config.operators == "person" && config.participants.empty()) {
+      // The practice lap is driven with the keys, read in the view's window.
+      if (config.operators == "person" && config.practice && !view::View::DisplayAvailable()) {
         throw ConfigError(config.file.string() +
-                          ": key 'participants': expected the participants' ids (adding them in the "
-                          "experimenter's console is not built yet)");
+                          ": key 'practice': expected false when there is no display (DISPLAY is not set or "
+                          "its X server is not running): the practice lap is driven with the keyboard in the "
+                          "view's window");
       }
       if (config.operators == "synthetic" && !config.questionnaires.empty()) {
         throw ConfigError(config.file.string() +
@@ -173,8 +194,15 @@ int StudyRunCommand(int argc, const char* const* argv) {
         questionnaires[name] = FindQuestionnaire(config.questionnaires_dir, name);
       }
       plan = PlanTrials(config);
+      const RunConfig run_config = LoadRun(config.run);
       database = args.Value("database").value_or(
-          !config.database.empty() ? config.database.string() : LoadRun(config.run).database.string());
+          !config.database.empty() ? config.database.string() : run_config.database.string());
+      // The console's thumbnail: the trials' vehicle's camera, on their domain.
+      ConsoleVideo video;
+      video.link = run_config.link;
+      if (!domain.empty()) video.link.domain_id = std::stoi(domain);
+      video.topic = link::TopicName(LoadVehicle(run_config.vehicle).name, "video");
+      console_options.video = video;
     });
     // The database before anything runs, as for `haptel run`.
     auto recorder = cli::ReadInput([&] { return std::make_unique<mediator::Recorder>(database); });
@@ -197,34 +225,8 @@ int StudyRunCommand(int argc, const char* const* argv) {
 
     int exit_code = cli::kExitOk;
     std::string stopped;
-    while (const std::optional<PlannedTrial> trial = store.NextTrial()) {
-      if (interrupted.load()) {
-        stopped = "interrupted";
-        exit_code = cli::kExitFailed;
-        break;
-      }
-      if (person) {
-        // The questionnaires of the conditions already driven come first;
-        // then the experimenter starts the trial.
-        if (!AwaitQuestionnaires(store, config, *console, interrupted)) continue;
-        if (!console->WaitForStart("participant " + trial->participant + ", " + trial->condition +
-                                       " (position " + std::to_string(trial->position) + ")",
-                                   interrupted)) {
-          continue;  // interrupted: the loop's first check ends the study
-        }
-      }
-      const int experience = store.TrialsDone(trial->participant) + (config.practice ? 1 : 0);
-      const mediator::SessionSetup setup =
-          cli::ReadInput([&] { return TrialSetup(config, *trial, database, domain, verbose, experience); });
-      const size_t number = store.Trials().size() + 1;
-      if (console) {
-        console->SetLive("trial " + std::to_string(number) + " of " + std::to_string(plan.size()) +
-                         ": participant " + trial->participant + ", " + trial->condition + " (position " +
-                         std::to_string(trial->position) + ")");
-      }
-      std::fprintf(stderr, "[study] trial %zu/%zu: participant %s, position %d, %s ...\n", number, plan.size(),
-                   trial->participant.c_str(), trial->position, trial->condition.c_str());
-      // The session stops on a signal, or on the console's Abort.
+    // A session that stops on a signal, or on the console's Abort.
+    auto run_watched = [&](const mediator::SessionSetup& setup, const mediator::Recorder::AlsoSave& also) {
       std::atomic<bool> trial_stop{false};
       std::atomic<bool> trial_over{false};
       std::thread watch([&] {
@@ -235,7 +237,7 @@ int StudyRunCommand(int argc, const char* const* argv) {
       });
       mediator::RecordedRun run;
       try {
-        run = mediator::RunAndRecord(setup, *recorder, trial_stop, store.TrialWriter(*trial, config.trial_cap_s));
+        run = mediator::RunAndRecord(setup, *recorder, trial_stop, also);
       } catch (...) {
         trial_over.store(true);
         watch.join();
@@ -244,6 +246,69 @@ int StudyRunCommand(int argc, const char* const* argv) {
       trial_over.store(true);
       watch.join();
       if (console) console->SetLive("");
+      return run;
+    };
+    // An open study (no participants in its file) goes on while the
+    // experimenter adds participants, until they press Finish.
+    const bool open_study = person && config.participants.empty();
+    for (;;) {
+      const std::optional<PlannedTrial> trial = store.NextTrial();
+      if (!trial && open_study && !interrupted.load()) {
+        if (!AwaitQuestionnaires(store, config, *console, interrupted)) continue;
+        if (console->WaitForMore(interrupted)) continue;
+      }
+      if (!trial) break;
+      if (interrupted.load()) {
+        stopped = "interrupted";
+        exit_code = cli::kExitFailed;
+        break;
+      }
+      if (person) {
+        // The questionnaires of the conditions already driven come first;
+        // then the experimenter starts the trial.
+        if (!AwaitQuestionnaires(store, config, *console, interrupted)) continue;
+        if (config.practice && store.TrialsDone(trial->participant) == 0 && !store.Practised(trial->participant)) {
+          const std::string who = "participant " + trial->participant;
+          if (!console->WaitForStart("practice lap for " + who + ": the keyboard, the camera's view", interrupted)) {
+            continue;
+          }
+          const mediator::SessionSetup practice =
+              cli::ReadInput([&] { return PracticeSetup(config, database, domain, verbose); });
+          console->SetLive("practice lap: " + who + " (keyboard; Abort ends it)");
+          std::fprintf(stderr, "[study] practice lap: %s ...\n", who.c_str());
+          const mediator::RecordedRun run = run_watched(practice, {});
+          if (interrupted.load()) continue;
+          const mediator::RunRecord& r = run.result.record;
+          store.Event("practice", trial->participant, 0,
+                      "run " + std::to_string(run.run_id) + ": " + mediator::ToString(run.result.outcome) +
+                          (r.completed ? ", lap " + Seconds(r.lap_time_s) + " s" : ""));
+          std::fprintf(stderr, "[study]   practice: %s (run %lld)\n", mediator::ToString(run.result.outcome).c_str(),
+                       static_cast<long long>(run.run_id));
+          continue;  // the trial is offered next
+        }
+        if (!console->WaitForStart("participant " + trial->participant + ", " + trial->condition +
+                                       " (position " + std::to_string(trial->position) + ")",
+                                   interrupted)) {
+          continue;  // interrupted: the loop's first check ends the study
+        }
+      }
+      const int experience = store.TrialsDone(trial->participant) + (config.practice ? 1 : 0);
+      mediator::SessionSetup setup =
+          cli::ReadInput([&] { return TrialSetup(config, *trial, database, domain, verbose, experience); });
+      const size_t planned = store.Plan().size();
+      const size_t number = store.Trials().size() + 1;
+      if (console) {
+        console->SetLive("trial " + std::to_string(number) + " of " + std::to_string(planned) +
+                         ": participant " + trial->participant + ", " + trial->condition + " (position " +
+                         std::to_string(trial->position) + ")");
+        StudyConsole* page = console.get();
+        setup.on_live = [page](const view::Overlay& o) {
+          page->SetLiveProgress({o.lap_time_s, o.gates_passed, o.gates_total, o.obstacles_touched, o.last_contact});
+        };
+      }
+      std::fprintf(stderr, "[study] trial %zu/%zu: participant %s, position %d, %s ...\n", number, planned,
+                   trial->participant.c_str(), trial->position, trial->condition.c_str());
+      const mediator::RecordedRun run = run_watched(setup, store.TrialWriter(*trial, config.trial_cap_s));
       const mediator::RunRecord& r = run.result.record;
       if (console && console->abort_requested().load() && !interrupted.load()) {
         store.Event("aborted", trial->participant, trial->position, "from the console; the trial is run again");
@@ -266,9 +331,10 @@ int StudyRunCommand(int argc, const char* const* argv) {
       break;
     }
 
-    if (person && exit_code == cli::kExitOk && !store.NextTrial()) {
+    if (person && !open_study && exit_code == cli::kExitOk && !store.NextTrial()) {
       AwaitQuestionnaires(store, config, *console, interrupted);  // the last condition's
     }
+    plan = store.Plan();  // with the participants added in the console
     const std::vector<TrialRow> trials = store.Trials();
     const bool finished = trials.size() == plan.size() && !interrupted.load();
     if (finished) store.Event("finished", "", 0, std::to_string(trials.size()) + " trials");

@@ -8,6 +8,7 @@
 #include <sqlite3.h>
 
 #include <catch2/catch.hpp>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -15,6 +16,7 @@
 #include <tuple>
 
 #include "child.hpp"
+#include "xserver.hpp"
 #include "haptel/mediator/recorder.hpp"
 #include "test_env.hpp"
 
@@ -151,9 +153,32 @@ TEST_CASE("a study that cannot work is refused before anything runs") {
     CHECK(run.err().find("participants[2].id") != std::string::npos);
     CHECK_FALSE(std::filesystem::exists(fresh));
   }
+  {  // A person's practice lap is driven in a window: without a display, exit 2 naming the key.
+    const char* display = std::getenv("DISPLAY");
+    const std::string saved = display != nullptr ? display : "";
+    unsetenv("DISPLAY");
+    const auto source = std::filesystem::current_path();
+    const auto person = dir / "practice.yaml";
+    std::ofstream(person) << "name: practice-e2e\n"
+                             "run: " << (source / "config/haptel.yaml").string() << "\n"
+                             "track: " << (source / "config/tracks/test-short.yaml").string() << "\n"
+                             "operators: person\n"
+                             "conditions: [{name: one, interface: gesture}, {name: two, interface: cockpit}]\n"
+                             "design: {order: fixed}\n";
+    const auto fresh = dir / "practice.db";
+    Child run({Bin("haptel"), "study", "run", person.string(), "--database", fresh.string()});
+    const int code = run.Wait(60.0);
+    if (!saved.empty()) setenv("DISPLAY", saved.c_str(), 1);
+    CHECK(code == 2);
+    CHECK(run.err().find("practice.yaml: key 'practice'") != std::string::npos);
+    CHECK(run.err().find("no display") != std::string::npos);
+    CHECK_FALSE(std::filesystem::exists(fresh));
+  }
 }
 
-TEST_CASE("a person study is started from the console and waits for each condition's questionnaires") {
+TEST_CASE("a person study from the console: a participant added, a practice lap, trials, questionnaires") {
+  // A display of the test's own: the practice lap is driven with the keys in a window.
+  const test::XServer x;
   const auto dir = test::ScratchDir("e2e-study-person");
   const auto source = std::filesystem::current_path();
   const auto file = dir / "person.yaml";
@@ -165,10 +190,9 @@ TEST_CASE("a person study is started from the console and waits for each conditi
                          "  - {name: first, interface: gesture}\n"
                          "  - {name: second, interface: gesture}\n"
                          "design: {order: fixed}\n"
+                         "practice: true\n"
                          "trial_cap_s: 5\n"  // nobody holds the simulated arms: each trial ends at the cap
-                         "questionnaires: [thesis]\n"
-                         "participants:\n"
-                         "  - {id: P1}\n";
+                         "questionnaires: [thesis]\n";  // no participants: added in the console
   const auto db = dir / "person.db";
   const int port = 20000 + static_cast<int>(getpid() % 20000);
   Child study({Bin("haptel"), "study", "run", file.string(), "--database", db.string(), "--domain",
@@ -179,15 +203,50 @@ TEST_CASE("a person study is started from the console and waits for each conditi
     const auto r = console.Get("/status.json");
     return r ? test::JsonField(r->body, key) : std::string();  // not serving yet
   };
+  INFO(study.err());
+  // An open study waits for its participants.
+  REQUIRE(test::WaitFor([&] { study.Pump(); return status("waiting_for_participants") == "true" || !study.Alive(); },
+                        60.0));
+  const auto added = console.Post("/participants", httplib::Params{{"id", "P1"}});
+  REQUIRE(added);
+  CHECK(added->status == 303);
+
+  // The practice lap first: the keyboard, the camera's picture; the console
+  // shows the camera's thumbnail, and Abort ends the practice.
+  REQUIRE(test::WaitFor([&] { study.Pump(); return !status("next").empty() || !study.Alive(); }, 60.0));
+  CHECK(status("next").find("practice lap for participant P1") != std::string::npos);
+  REQUIRE(console.Post("/start"));
+  REQUIRE(test::WaitFor([&] {
+    study.Pump();
+    const std::string frames = status("video_frames");
+    return (!frames.empty() && std::stoi(frames) > 0) || !study.Alive();
+  }, 60.0));
+  CHECK(status("live").find("practice lap") != std::string::npos);
+  const auto picture = console.Get("/video.jpg");
+  REQUIRE(picture);
+  CHECK(picture->status == 200);
+  CHECK(picture->get_header_value("Content-Type") == "image/jpeg");
+  REQUIRE(picture->body.size() > 100);
+  CHECK(static_cast<unsigned char>(picture->body[0]) == 0xFF);  // a JPEG's start of image
+  CHECK(static_cast<unsigned char>(picture->body[1]) == 0xD8);
+  REQUIRE(console.Post("/abort"));
+
   const httplib::Params answers = {{"participant", "P1"}, {"questionnaire", "thesis"}, {"easy_to_learn", "3"},
                                    {"efficient", "4"}};
   for (const std::string condition : {"first", "second"}) {
     INFO(condition << "\n" << study.err());
-    REQUIRE(test::WaitFor([&] { study.Pump(); return !status("next").empty() || !study.Alive(); }, 60.0));
-    REQUIRE(status("next").find(condition) != std::string::npos);
+    REQUIRE(test::WaitFor([&] { study.Pump(); return status("next").find(condition) != std::string::npos ||
+                                                     !study.Alive(); }, 60.0));
     const auto start = console.Post("/start");
     REQUIRE(start);
     CHECK(start->status == 303);
+    // The live trial's lap clock reaches the page.
+    REQUIRE(test::WaitFor([&] {
+      study.Pump();
+      const std::string lap = status("lap_time_s");
+      return (!lap.empty() && std::stod(lap) > 0.0) || !study.Alive();
+    }, 60.0));
+    CHECK(status("live").find("participant P1, " + condition) != std::string::npos);
     // The trial runs to its cap, then the study waits for the questionnaire.
     REQUIRE(test::WaitFor([&] { study.Pump(); return !status("waiting").empty() || !study.Alive(); }, 90.0));
     CHECK(status("waiting").find("thesis after " + condition) != std::string::npos);
@@ -200,15 +259,28 @@ TEST_CASE("a person study is started from the console and waits for each conditi
     REQUIRE(answered);
     CHECK(answered->status == 200);
   }
+  // Every trial done: the open study waits for another participant or Finish.
+  REQUIRE(test::WaitFor([&] { study.Pump(); return status("waiting_for_participants") == "true" || !study.Alive(); },
+                        60.0));
+  const auto finish = console.Post("/finish");
+  REQUIRE(finish);
+  CHECK(finish->status == 303);
   REQUIRE(study.Wait(60.0) == 0);
   const std::string json = study.LastLine();
   CHECK(test::JsonField(json, "finished") == "true");
   CHECK(test::JsonField(json, "trials_done") == "2");
   mediator::Recorder recorder(db);
-  sqlite3_stmt* count = nullptr;
-  REQUIRE(sqlite3_prepare_v2(recorder.handle(), "SELECT COUNT(*) FROM study_answers", -1, &count, nullptr) ==
-          SQLITE_OK);
-  REQUIRE(sqlite3_step(count) == SQLITE_ROW);
-  CHECK(sqlite3_column_int(count, 0) == 4);  // two answers after each condition
-  sqlite3_finalize(count);
+  auto count = [&](const char* sql) {
+    sqlite3_stmt* stmt = nullptr;
+    REQUIRE(sqlite3_prepare_v2(recorder.handle(), sql, -1, &stmt, nullptr) == SQLITE_OK);
+    REQUIRE(sqlite3_step(stmt) == SQLITE_ROW);
+    const int n = sqlite3_column_int(stmt, 0);
+    sqlite3_finalize(stmt);
+    return n;
+  };
+  CHECK(count("SELECT COUNT(*) FROM study_answers") == 4);  // two answers after each condition
+  CHECK(count("SELECT COUNT(*) FROM study_participants WHERE participant = 'P1'") == 1);
+  CHECK(count("SELECT COUNT(*) FROM study_events WHERE kind = 'practice' AND participant = 'P1'") == 1);
+  CHECK(count("SELECT COUNT(*) FROM study_trials") == 2);
+  CHECK(count("SELECT COUNT(*) FROM runs WHERE interface = 'keyboard'") == 1);  // the practice lap's run
 }

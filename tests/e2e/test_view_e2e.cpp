@@ -8,37 +8,17 @@
 #include <regex>
 
 #include "child.hpp"
+#include "xserver.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;
 using haptel::test::Child;
 using haptel::test::JsonField;
+using haptel::test::XServer;
 
 namespace {
 
 std::string Bin(const std::string& name) { return (test::BinDir() / name).string(); }
-
-/// An X server of the test's own; DISPLAY points at it while it lives.
-class XServer {
- public:
-  XServer() : server_({"/usr/bin/Xvfb", "-displayfd", "1", "-screen", "0", "1280x800x24", "-nolisten", "tcp"}) {
-    REQUIRE(test::WaitFor([&] {
-      server_.Pump();
-      return server_.out().find('\n') != std::string::npos;
-    }, 30.0));
-    // Appended, not `":" + substr(...)`: GCC 12 -O2 flags that form with a
-    // false -Werror=restrict.
-    display_ = ":";
-    display_.append(server_.out(), 0, server_.out().find('\n'));
-    setenv("DISPLAY", display_.c_str(), 1);
-  }
-  ~XServer() { unsetenv("DISPLAY"); }
-  const std::string& display() const { return display_; }
-
- private:
-  Child server_;
-  std::string display_;
-};
 
 /// Runs xdotool with `args`; returns its exit code.
 int XDoTool(std::vector<std::string> args) {

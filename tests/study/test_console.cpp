@@ -3,6 +3,10 @@
 // order or incomplete, with a status and a message), and a port in use.
 #include <httplib.h>
 
+#include <atomic>
+#include <chrono>
+#include <thread>
+
 #include <catch2/catch.hpp>
 
 #include "haptel/config/paths.hpp"
@@ -119,4 +123,90 @@ TEST_CASE("The console serves the schedule and forms, and takes each questionnai
   taken.port = console.port();
   CHECK_THROWS_WITH(StudyConsole(config, plan, db, questionnaires, taken),
                     Catch::Contains("127.0.0.1:" + std::to_string(console.port())) && Catch::Contains("in use"));
+}
+
+TEST_CASE("The console adds participants to an open study, each once, and finishes it on request") {
+  const auto dir = test::ScratchDir("study-console-open");
+  StudyConfig config;
+  config.file = dir / "open.yaml";
+  test::WriteFile(config.file, "name: open\n");
+  config.name = "open-study";
+  config.operators = "person";
+  config.conditions = {{"cockpit", "cockpit"}, {"gesture", "gesture"}};
+  const auto db = dir / "open.db";
+  ConsoleOptions options;
+  options.port = 0;
+  StudyConsole console(config, {}, db, {}, options);
+  httplib::Client client("127.0.0.1", console.port());
+  client.set_read_timeout(10, 0);
+
+  const auto added = client.Post("/participants", httplib::Params{{"id", "P1"}});
+  REQUIRE(added);
+  CHECK(added->status == 303);
+  const auto twice = client.Post("/participants", httplib::Params{{"id", "P1"}});
+  REQUIRE(twice);
+  CHECK(twice->status == 409);
+  CHECK(twice->body.find("P1 is in the study already") != std::string::npos);
+  const auto bad = client.Post("/participants", httplib::Params{{"id", "P 2<"}});
+  REQUIRE(bad);
+  CHECK(bad->status == 422);
+  CHECK(bad->body.find("1 to 40 letters") != std::string::npos);
+  const auto page = client.Get("/");
+  REQUIRE(page);
+  // Two conditions: Williams' square has two rows, so a block is two people.
+  CHECK(page->body.find("1 participant; the balanced Latin square is balanced over blocks of 2: add 1 more") !=
+        std::string::npos);
+  CHECK(client.Post("/participants", httplib::Params{{"id", "P2"}})->status == 303);
+
+  mediator::Recorder recorder(db);
+  StudyStore store(recorder, config, {});
+  const std::vector<PlannedTrial> plan = store.Plan();
+  REQUIRE(plan.size() == 4);
+  CHECK(plan[0].participant == "P1");
+  CHECK(plan[0].condition == "cockpit");
+  CHECK(plan[2].participant == "P2");
+  CHECK(plan[2].condition == "gesture");  // the square's second row
+
+  // Finish only while nothing is left to run.
+  CHECK(client.Post("/finish")->status == 409);
+  for (const PlannedTrial& t : plan) recorder.Save(test::TrialRun(30.0), store.TrialWriter(t, 600.0));
+  std::atomic<bool> stop{false};
+  std::thread press([&] {
+    for (int i = 0; i < 500; ++i) {
+      const auto r = client.Post("/finish");
+      if (r && r->status == 303) return;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    stop.store(true);  // never accepted: end the wait, fail below
+  });
+  const bool more = console.WaitForMore(stop);
+  press.join();
+  CHECK_FALSE(more);
+  CHECK_FALSE(stop.load());
+
+  // No camera configured: no thumbnail, and the picture's address says so.
+  const auto picture = client.Get("/video.jpg");
+  REQUIRE(picture);
+  CHECK(picture->status == 404);
+  CHECK(console.video_frames() == 0);
+}
+
+TEST_CASE("Simulated drivers come from the study file, not the console") {
+  const auto dir = test::ScratchDir("study-console-synthetic");
+  StudyConfig config;
+  config.file = dir / "syn.yaml";
+  test::WriteFile(config.file, "name: syn\n");
+  config.name = "syn-study";
+  config.operators = "synthetic";
+  config.conditions = {{"gesture", "gesture"}};
+  config.participants = {{"A", "p"}};
+  const std::vector<PlannedTrial> plan = {{"A", 1, "gesture", 1}};
+  ConsoleOptions options;
+  options.port = 0;
+  StudyConsole console(config, plan, dir / "syn.db", {}, options);
+  httplib::Client client("127.0.0.1", console.port());
+  const auto added = client.Post("/participants", httplib::Params{{"id", "B"}});
+  REQUIRE(added);
+  CHECK(added->status == 409);
+  CHECK(added->body.find("study file") != std::string::npos);
 }

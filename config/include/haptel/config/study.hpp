@@ -119,6 +119,10 @@ struct StudyConfig {
   void ValidateOrThrow() const;
 };
 
+/// Whether `name` can name a study, a condition or a participant: 1 to 40
+/// letters, digits, '-', '_' or '.' (safe in file names, URLs and CSV).
+bool IsPlainName(const std::string& name);
+
 /// "balanced-latin-square", "random", "fixed".
 std::string ToString(StudyOrder order);
 

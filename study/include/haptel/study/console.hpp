@@ -11,15 +11,20 @@
 /// offered; `POST /abort` aborts the trial under way (it is run again);
 /// `POST /redo` (participant, position) takes a finished trial back, to be
 /// run again;
+/// `POST /participants` (id) adds a participant, planned by the design;
+/// `POST /finish` ends an open study (one whose file lists no participants);
+/// `GET /video.jpg` the vehicle's latest camera picture (the thumbnail);
 /// `GET /status.json` the counts, the live trial, the next, what is awaited.
 #include <atomic>
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "haptel/config/link.hpp"
 #include "haptel/config/study.hpp"
 #include "haptel/study/questionnaire.hpp"
 #include "haptel/study/store.hpp"
@@ -32,9 +37,26 @@ class ConsoleError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// Where the console watches the vehicle's camera for its thumbnail: a DDS
+/// reader of its own on the trials' domain, beside the session's.
+struct ConsoleVideo {
+  LinkConfig link;
+  std::string topic;  ///< e.g. "haptel/robot1/video"
+};
+
 struct ConsoleOptions {
   std::string host = "127.0.0.1";  ///< only this machine: the page takes answers
   int port = 8470;                 ///< 0: any free port (tests)
+  std::optional<ConsoleVideo> video;  ///< none: no thumbnail
+};
+
+/// The live trial as the page shows it, beside its title line.
+struct LiveProgress {
+  double lap_time_s = 0.0;
+  int gates_passed = 0;
+  int gates_total = 0;
+  int obstacles = 0;
+  std::string last_contact;  ///< e.g. "left bumper at 12.3 s"
 };
 
 class StudyConsole {
@@ -52,8 +74,11 @@ class StudyConsole {
   int port() const;
   /// e.g. "http://127.0.0.1:8470/"
   std::string url() const;
-  /// The line the page shows for the trial under way (empty: none).
+  /// The line the page shows for the trial under way (empty: none); clears
+  /// the progress.
   void SetLive(const std::string& text);
+  /// The lap clock, gates and contacts of the trial under way.
+  void SetLiveProgress(const LiveProgress& progress);
   /// What the study waits for before the next trial (empty: nothing), e.g.
   /// "participant A's questionnaires after gesture".
   void SetWaiting(const std::string& text);
@@ -62,6 +87,12 @@ class StudyConsole {
   bool WaitForStart(const std::string& next, const std::atomic<bool>& stop);
   /// Set by the page's Abort button during a trial.
   const std::atomic<bool>& abort_requested() const;
+  /// Blocks while nothing is left to run in an open study, until the
+  /// experimenter adds a participant (true) or presses Finish, or `stop` is
+  /// set (false).
+  bool WaitForMore(const std::atomic<bool>& stop);
+  /// Camera pictures the thumbnail has received (0 without video).
+  uint64_t video_frames() const;
 
  private:
   struct Impl;

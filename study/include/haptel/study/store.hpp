@@ -49,7 +49,8 @@ struct AnswerRow {
   std::string value;
 };
 
-/// A questionnaire answered a second time (a form submitted twice).
+/// A questionnaire answered a second time (a form submitted twice), or a
+/// participant added twice.
 class AlreadyAnswered : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
@@ -69,6 +70,12 @@ class StudyStore {
   bool resumed() const { return resumed_; }
 
   std::vector<PlannedTrial> Plan() const;
+  /// The participants in the order they joined (the file's first).
+  std::vector<std::string> Participants() const;
+  /// A participant added in the console, with their planned trials
+  /// (PlanParticipant), in one transaction with a 'participant added' event.
+  /// Throws AlreadyAnswered if the id is taken.
+  void AddParticipant(const std::string& participant, const std::vector<PlannedTrial>& trials);
   std::vector<TrialRow> Trials() const;
   /// The first planned trial without a row (participants in plan order,
   /// each by position); nullopt when all are done.
@@ -95,6 +102,9 @@ class StudyStore {
   void SaveAnswers(const std::string& participant, const std::string& condition, const std::string& questionnaire,
                    const std::vector<std::pair<std::string, std::string>>& item_values);
   std::vector<AnswerRow> Answers() const;
+
+  /// Whether `participant` has driven their practice lap (a 'practice' event).
+  bool Practised(const std::string& participant) const;
 
   /// Appends to the study's event log (start, resume, trial failed, redo...).
   void Event(const std::string& kind, const std::string& participant = "", int position = 0,
