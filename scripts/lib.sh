@@ -14,6 +14,7 @@ HAPTEL_PACKAGES=(
   libsdl2-dev
   libcpp-httplib-dev   # the study's experimenter's console (a web page on 127.0.0.1)
   chromium chromium-driver python3-selenium   # ...tested in a real browser
+  python3-can can-utils   # the CAN logs checked with python-can's LogReader and log2asc
   # The operator's view: OpenGL 3.3 core through Mesa (llvmpipe without a GPU),
   # and an X server of its own for the window tests (Xvfb, xdotool for keys).
   libgl-dev libegl-dev libgl1-mesa-dri libegl-mesa0

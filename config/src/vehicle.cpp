@@ -1,3 +1,4 @@
+#include <algorithm>
 #include "haptel/config/vehicle.hpp"
 
 #include <cctype>
@@ -80,11 +81,37 @@ void CameraConfig::ValidateOrThrow() const {
   check::Number("mount_height", mount_height, 0.01, 5.0);
 }
 
+bool IsVehicleKind(const std::string& kind) {
+  return kind == "sim-robot" || kind == "can-robot" || kind == "can-robot-sim";
+}
+
+void CanConfig::ValidateOrThrow(int levels) const {
+  if (interface.empty() || interface.size() >= 16) check::Fail("interface", "a network interface name such as can0");
+  check::Whole("left_node", left_node, 0, 63);
+  check::Whole("right_node", right_node, 0, 63);
+  check::Whole("io_node", io_node, 0, 63);
+  if (right_node == left_node) check::Fail("right_node", "a node id other than left_node's");
+  if (io_node == left_node || io_node == right_node) check::Fail("io_node", "a node id other than the wheels'");
+  if (static_cast<int>(level_turns_per_s.size()) != levels) {
+    check::Fail("level_turns_per_s", "one velocity per speed level: " + std::to_string(levels) + " numbers");
+  }
+  for (size_t i = 0; i < level_turns_per_s.size(); ++i) {
+    const double previous = i == 0 ? 0.0 : level_turns_per_s[i - 1];
+    const std::string key = "level_turns_per_s[" + std::to_string(i) + "]";
+    check::Number(key, level_turns_per_s[i], 1e-3, 100.0);
+    if (level_turns_per_s[i] <= previous) check::Fail(key, "more than the level below");
+  }
+  check::Number("wheel_circumference", wheel_circumference, 0.01, 5.0);
+  check::Number("command_rate_hz", command_rate_hz, 10.0, 1000.0);
+  check::Number("heartbeat_period_s", heartbeat_period_s, 0.005, 2.0);
+  check::Number("vel_ramp_rate", vel_ramp_rate, 0.1, 1000.0);
+}
+
 void VehicleConfig::ValidateOrThrow() const {
   if (const std::string problem = VehicleNameProblem(name); !problem.empty()) {
     check::Fail("name", problem);
   }
-  if (kind != "sim-robot") check::Fail("kind", "one of: sim-robot");
+  if (!IsVehicleKind(kind)) check::Fail("kind", "one of: sim-robot, can-robot, can-robot-sim");
   check::Number("sim_rate_hz", sim_rate_hz, 50.0, 5000.0);
   check::Number("state_rate_hz", state_rate_hz, 1.0, 1000.0);
   check::Number("watchdog_timeout_s", watchdog_timeout_s, 0.01, 10.0);
@@ -92,6 +119,13 @@ void VehicleConfig::ValidateOrThrow() const {
   check::Nested("body", body);
   check::Nested("camera", camera);
   check::Nested("link", link);
+  if (UsesCan(kind)) {
+    try {
+      can.ValidateOrThrow(drive.speed_levels);
+    } catch (const ConfigFieldError& e) {
+      throw e.Within("can");
+    }
+  }
 }
 
 VehicleConfig LoadVehicle(const std::filesystem::path& file) {
@@ -146,6 +180,26 @@ VehicleConfig LoadVehicle(const std::filesystem::path& file) {
 
   YamlMap link = root.Map("link");
   v.link = config_detail::ReadLink(link);
+  if (root.Has("can")) {
+    YamlMap can = root.Map("can");
+    v.can.interface = can.String("interface", v.can.interface);
+    v.can.left_node = can.Integer("left_node", v.can.left_node);
+    v.can.right_node = can.Integer("right_node", v.can.right_node);
+    v.can.io_node = can.Integer("io_node", v.can.io_node);
+    v.can.right_reversed = can.Bool("right_reversed", v.can.right_reversed);
+    if (can.Has("level_turns_per_s")) {
+      v.can.level_turns_per_s =
+          can.Numbers("level_turns_per_s", static_cast<size_t>(std::max(1, v.drive.speed_levels)), "wheel velocities");
+    }
+    v.can.wheel_circumference = can.Number("wheel_circumference", v.can.wheel_circumference);
+    v.can.command_rate_hz = can.Number("command_rate_hz", v.can.command_rate_hz);
+    v.can.heartbeat_period_s = can.Number("heartbeat_period_s", v.can.heartbeat_period_s);
+    v.can.vel_ramp_rate = can.Number("vel_ramp_rate", v.can.vel_ramp_rate);
+    if (can.Has("log_dir")) v.can.log_dir = file.parent_path() / can.String("log_dir", "");
+    can.Finish();
+  } else if (UsesCan(v.kind)) {
+    root.Fail("can", "a 'can' section for kind " + v.kind + " (its nodes and wheel velocities)");
+  }
   root.Finish();
   config_detail::ValidateIn(root, v);
   return v;

@@ -37,7 +37,7 @@ namespace {
 using namespace haptel::sql;
 
 /// Schema version stored in PRAGMA user_version.
-constexpr int kSchemaVersion = 4;
+constexpr int kSchemaVersion = 5;
 
 /// Schema steps: kMigrations[v - 1] takes a database from version v - 1 to v.
 /// A new database runs them all, so the upgrade path of an old file is the
@@ -208,7 +208,12 @@ CREATE TABLE study_events (
 );
 )sql";
 
-constexpr const char* kMigrations[] = {kSchemaV1, kSchemaV2, kSchemaV3, kSchemaV4};
+// v5: which kind of vehicle a run drove (sim-robot, can-robot, can-robot-sim).
+constexpr const char* kSchemaV5 = R"sql(
+ALTER TABLE runs ADD COLUMN vehicle_kind TEXT NOT NULL DEFAULT '';
+)sql";
+
+constexpr const char* kMigrations[] = {kSchemaV1, kSchemaV2, kSchemaV3, kSchemaV4, kSchemaV5};
 static_assert(std::size(kMigrations) == kSchemaVersion, "one migration per schema version");
 
 constexpr const char* kInsertRun = R"sql(
@@ -219,9 +224,9 @@ INSERT INTO runs (started_utc, started_wall_ns, config_name, track, interface, v
                   video_latency_ms_p50, operator_kind, device, distance_m, view_fps,
                   view_frame_p99_ms, video_to_screen_ms_p50, video_to_screen_ms_p99, picture,
                   servo_target_hz, servo_rate_short, physics_rate_hz, physics_target_hz,
-                  physics_rate_short)
+                  physics_rate_short, vehicle_kind)
 VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?,
-        ?, ?, ?, ?, ?)
+        ?, ?, ?, ?, ?, ?)
 )sql";
 
 constexpr const char* kInsertSplit =
@@ -243,7 +248,8 @@ SELECT id, started_wall_ns, config_name, track, interface, vehicle, completed, o
        servo_rate_hz, servo_period_p99_us, command_rtt_ms_p50, command_rtt_ms_p99,
        video_frames, video_fps, video_latency_ms_p50, operator_kind, device, distance_m,
        view_fps, view_frame_p99_ms, video_to_screen_ms_p50, video_to_screen_ms_p99, picture,
-       servo_target_hz, servo_rate_short, physics_rate_hz, physics_target_hz, physics_rate_short
+       servo_target_hz, servo_rate_short, physics_rate_hz, physics_target_hz, physics_rate_short,
+       vehicle_kind
 FROM runs ORDER BY id
 )sql";
 
@@ -410,7 +416,8 @@ int64_t Recorder::Save(const RunRecord& run, const AlsoSave& also) {
       .Int(run.servo_rate_short ? 1 : 0)
       .Real(run.physics_rate_hz)
       .Real(run.physics_target_hz)
-      .Int(run.physics_rate_short ? 1 : 0);
+      .Int(run.physics_rate_short ? 1 : 0)
+      .Text(run.vehicle_kind);
   StepDone(path_, db_, insert_run.get(), "cannot insert run");
   const int64_t run_id = sqlite3_last_insert_rowid(db_);
 
@@ -539,6 +546,7 @@ std::vector<RunRecord> Recorder::LoadAll() const {
       run.physics_rate_hz = r.Real();
       run.physics_target_hz = r.Real();
       run.physics_rate_short = r.Bool();
+      run.vehicle_kind = r.Text();
       index_of.emplace(run.id, runs.size());
       runs.push_back(std::move(run));
     }

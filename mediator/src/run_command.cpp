@@ -46,6 +46,8 @@ constexpr const char* kRunUsage =
     "  --record FILE.mp4    record the operator's view as H.264 MP4 (offscreen without a window)\n"
     "  --scene FILE         haptic scene for the hands (YAML, or the thesis's MHaptic .xml),\n"
     "                       moved by the configuration's scene_placement\n"
+    "  --vehicle FILE       vehicle configuration the spawned vehicle runs (overrides 'vehicle'),\n"
+    "                       e.g. config/vehicles/can-robot-sim.yaml (the CAN code path)\n"
     "  --vehicle-name NAME  vehicle name in DDS topic names\n"
     "  --domain N           DDS domain id\n"
     "  --database FILE      SQLite file for the results (overrides 'database')\n"
@@ -80,7 +82,7 @@ std::string CountersJson(const std::vector<haptel::mediator::RunCounter>& counte
 Args ParseRunArgs(int argc, const char* const* argv) {
   return Args(argc, argv,
               {"config", "track", "interface", "scene", "vehicle-name", "domain", "database", "vehicle-timeout",
-               "trace", "operator", "device", "trace-in", "time-limit", "view", "record"},
+               "trace", "operator", "device", "trace-in", "time-limit", "view", "record", "vehicle"},
               {"json", "quiet"});
 }
 
@@ -121,6 +123,7 @@ SessionSetup RunSetupFromArgs(const Args& args) {
   setup.time_limit_s = setup.run.person_time_limit_s;
   }
   if (auto device = args.Value("device")) setup.run.device = *device;
+  if (auto vehicle = args.Value("vehicle")) setup.run.vehicle = *vehicle;
   setup.track = LoadTrack(setup.run.track);
   setup.vehicle = LoadVehicle(setup.run.vehicle);
   if (auto name = args.Value("vehicle-name")) {
@@ -278,6 +281,7 @@ std::string RunJson(const SessionSetup& setup, const RecordedRun& run) {
     << ",\"message\":" << JsonString(run.result.message) << ",\"lap_time_s\":" << JsonNumber(r.lap_time_s)
     << ",\"gates_passed\":" << r.gates_passed << ",\"gates_total\":" << r.gates_total
     << ",\"gates_missed\":" << r.gates_missed << ",\"obstacles_touched\":" << r.obstacles_touched
+    << ",\"vehicle\":" << JsonString(r.vehicle) << ",\"vehicle_kind\":" << JsonString(r.vehicle_kind)
     << ",\"vehicle_pid\":" << r.vehicle_pid << ",\"servo_rate_hz\":" << JsonNumber(r.servo_rate_hz)
     << ",\"servo_period_p99_us\":" << JsonNumber(r.servo_period_p99_us)
     << ",\"servo_overruns\":" << run.result.servo_overruns

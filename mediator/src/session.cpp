@@ -113,6 +113,7 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   rec.config_name = run.name;
   rec.track = setup.track.name;
   rec.vehicle = setup.vehicle.name;
+  rec.vehicle_kind = setup.vehicle.kind;
   rec.gates_total = static_cast<int>(track.gates().size());
   rec.operator_kind = setup.operator_kind;
   rec.device = setup.device.name;
@@ -281,8 +282,10 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
                  " " + vehicle.ExitDescription());
       break;
     }
+    std::string vehicle_fault;
     for (const auto& e : vehicle.inbox().Drain()) {
       const msg::VehicleState& s = e.state;
+      if (s.fault() && vehicle_fault.empty()) vehicle_fault = s.fault_message();
       const double ts = NsToS(e.received_ns - t0);
       if (!vehicle_up) haptic.OnVehicleUp();
       vehicle_up = true;
@@ -303,6 +306,10 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
       }
       lap.UpdateContact(ts, s.bumper_left() || s.bumper_right());
       feedback = {s.bumper_left(), s.bumper_right(), s.speed()};
+    }
+    if (!vehicle_fault.empty()) {
+      finish(Outcome::kVehicleLost, "vehicle '" + setup.vehicle.name + "' stopped itself: " + vehicle_fault);
+      break;
     }
     if (vehicle_up) {
       const double silent_s = NsToS(now - vehicle.inbox().last_received_ns());

@@ -61,6 +61,8 @@ TEST_CASE("haptel run completes the short track over DDS with a separate vehicle
   CHECK(runs[0].splits[1].split_s > runs[0].splits[0].split_s);
   // With who drove, the path (a point every 0.05 s) and the run's picture.
   CHECK(runs[0].operator_kind == "auto");
+  CHECK(runs[0].vehicle_kind == "sim-robot");
+  CHECK(JsonField(json, "vehicle_kind") == "sim-robot");
   CHECK(runs[0].device == JsonField(json, "device"));
   CHECK(runs[0].distance_m == Approx(std::stod(JsonField(json, "distance_m"))).epsilon(1e-4));
   CHECK(runs[0].path.size() > 100);

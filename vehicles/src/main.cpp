@@ -19,8 +19,9 @@
 
 namespace {
 constexpr const char* kUsage =
-    "usage: haptel-vehicle [--config FILE] [--track FILE] [--name NAME] [--domain N]\n"
+    "usage: haptel-vehicle [--config FILE] [--track FILE] [--name NAME] [--domain N] [--can IFACE]\n"
     "  --config FILE  vehicle configuration (default config/vehicles/sim-robot.yaml)\n"
+    "  --can IFACE    SocketCAN interface of a can-robot (overrides can.interface)\n"
     "  --track FILE   track the simulator drives on (overrides the file's 'world')\n"
     "  --name NAME    vehicle name, part of its DDS topic names\n"
     "  --domain N     DDS domain id (overrides link.domain_id)\n";
@@ -35,8 +36,9 @@ int main(int argc, char** argv) {
     VehicleConfig config;
     std::unique_ptr<Track> track;
     std::unique_ptr<video::CameraSource> camera;
+    std::unique_ptr<vehicles::VehicleAdapter> adapter;
     cli::ReadInput([&] {
-      const Args args(argc, argv, {"config", "track", "name", "domain"}, {});
+      const Args args(argc, argv, {"config", "track", "name", "domain", "can"}, {});
       if (!args.positional().empty()) throw UsageError("unexpected argument '" + args.positional()[0] + "'");
       const std::filesystem::path file =
           args.Value("config").value_or(ShippedFile("config/vehicles/sim-robot.yaml").string());
@@ -49,20 +51,31 @@ int main(int argc, char** argv) {
       }
       if (auto domain = args.Int("domain", 0, 232)) config.link.domain_id = *domain;
       if (auto world = args.Value("track")) config.world = *world;
+      if (auto can = args.Value("can")) {
+        if (!UsesCan(config.kind)) {
+          throw UsageError("option --can: the vehicle '" + file.string() + "' is of kind " + config.kind +
+                           ", not on a CAN bus");
+        }
+        config.can.interface = *can;
+        config.ValidateOrThrow();
+      }
       if (config.world.empty()) {
         throw ConfigError(file.string() + ": key 'world': expected the track file a simulated "
                           "vehicle drives on (or --track FILE)");
       }
       track = std::make_unique<Track>(LoadTrack(config.world));
+      // The bus first: a robot whose bus cannot open stops here (exit 2),
+      // before a camera or a DDS participant exists.
+      adapter = vehicles::MakeVehicleAdapter(config, *track);
       // Opened here, before any DDS participant exists: a camera that cannot
       // open is a set-up error (exit 2) and nothing has been published.
       camera = video::MakeCameraSource(config.camera, track.get(), file.string());
     });
 
     const std::string camera_name = camera->Describe();
-    vehicles::VehicleNode node(config, *track, std::move(camera));
+    vehicles::VehicleNode node(config, *track, std::move(camera), std::move(adapter));
     node.Start();
-    log::Info("vehicle '" + config.name + "' up on domain " +
+    log::Info("vehicle '" + config.name + "' (" + config.kind + ") up on domain " +
               std::to_string(config.link.domain_id) + ", track '" + track->config().name +
               "', camera " + camera_name + " " + std::to_string(config.camera.width) + "x" +
               std::to_string(config.camera.height) + " at " +

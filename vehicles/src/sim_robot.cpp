@@ -35,13 +35,20 @@ void SimRobot::SetMotors(const MotorLevels& levels) {
   levels_.left = std::clamp(levels.left, -drive_.speed_levels, drive_.speed_levels);
   levels_.right = std::clamp(levels.right, -drive_.speed_levels, drive_.speed_levels);
   state_.applied = levels_;
+  use_treads_ = false;
+}
+
+void SimRobot::SetTreadTargets(double left, double right) {
+  use_treads_ = true;
+  tread_left_ = std::isfinite(left) ? left : 0.0;
+  tread_right_ = std::isfinite(right) ? right : 0.0;
 }
 
 void SimRobot::Update(double dt) {
   if (!(dt > 0.0)) return;
   const double per_level = drive_.max_speed / drive_.speed_levels;
-  const double target_left = levels_.left * per_level * drive_.left_gain;
-  const double target_right = levels_.right * per_level * drive_.right_gain;
+  const double target_left = (use_treads_ ? tread_left_ : levels_.left * per_level) * drive_.left_gain;
+  const double target_right = (use_treads_ ? tread_right_ : levels_.right * per_level) * drive_.right_gain;
   const double alpha =
       drive_.motor_time_constant > 0 ? 1.0 - std::exp(-dt / drive_.motor_time_constant) : 1.0;
   v_left_ += (target_left - v_left_) * alpha;

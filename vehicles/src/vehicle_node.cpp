@@ -1,25 +1,59 @@
 #include "haptel/vehicles/vehicle_node.hpp"
 
 #include <cmath>
+#include <ctime>
 #include <stdexcept>
 #include <string>
 
 #include "haptel/config/error.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/core/log.hpp"
+#include "haptel/vehicles/can_robot.hpp"
+#include "haptel/vehicles/sim_can_robot.hpp"
 #include "haptel/vehicles/sim_robot.hpp"
 
 namespace haptel::vehicles {
 
 namespace {
+/// "20261124T153012Z": a log file's time of creation, UTC.
+std::string FileStamp(int64_t wall_ns) {
+  const time_t seconds = static_cast<time_t>(wall_ns / 1'000'000'000);
+  tm utc{};
+  gmtime_r(&seconds, &utc);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y%m%dT%H%M%SZ", &utc);
+  return text;
+}
+
 /// Commands a little past ±1 are rounding; anything further is malformed.
 constexpr float kMaxCommand = 1.001F;
 }  // namespace
 
+std::unique_ptr<VehicleAdapter> MakeVehicleAdapter(const VehicleConfig& config, const Track& track) {
+  if (config.kind == "sim-robot") return std::make_unique<SimRobot>(track, config);
+  std::unique_ptr<CandumpWriter> log;
+  auto open_log = [&] {
+    if (config.can.log_dir.empty()) return;
+    const std::string stamp = FileStamp(WallNs());
+    log = std::make_unique<CandumpWriter>(config.can.log_dir / (config.name + "-" + stamp + ".log"),
+                                          config.can.interface);
+  };
+  if (config.kind == "can-robot") {
+    auto bus = std::make_unique<SocketCanBus>(config.can.interface);  // CanUnavailable: set-up error
+    open_log();
+    return std::make_unique<CanRobot>(std::move(bus), config, std::move(log));
+  }
+  if (config.kind == "can-robot-sim") {
+    open_log();
+    return std::make_unique<SimulatedCanRobot>(track, config, std::move(log));
+  }
+  throw std::invalid_argument("vehicle kind '" + config.kind + "' has no adapter");
+}
+
 VehicleNode::VehicleNode(const VehicleConfig& config, const Track& track,
-                         std::unique_ptr<video::CameraSource> camera)
+                         std::unique_ptr<video::CameraSource> camera, std::unique_ptr<VehicleAdapter> adapter)
     : config_(Validated(config)),
-      adapter_(std::make_unique<SimRobot>(track, config)),
+      adapter_(adapter != nullptr ? std::move(adapter) : MakeVehicleAdapter(config, track)),
       watchdog_(config.watchdog_timeout_s),
       camera_(std::move(camera)),
       encoder_(config.camera.jpeg_quality) {
@@ -93,12 +127,12 @@ void VehicleNode::ControlTick(int64_t now_ns) {
   const bool expired = watchdog_.Check(now_ns);
   expired_.store(expired, std::memory_order_relaxed);
   trips_.store(watchdog_.trips(), std::memory_order_relaxed);
-  MotorLevels levels;
-  if (!expired) {
-    levels.left = QuantiseCommand(applied_.left, config_.drive.speed_levels);
-    levels.right = QuantiseCommand(applied_.right, config_.drive.speed_levels);
+  if (expired) {
+    adapter_->Stop();  // hardware: zero velocity, then idle
+  } else {
+    adapter_->SetMotors({QuantiseCommand(applied_.left, config_.drive.speed_levels),
+                         QuantiseCommand(applied_.right, config_.drive.speed_levels)});
   }
-  adapter_->SetMotors(levels);
   const double dt = last_tick_ns_ == 0 ? 1.0 / config_.sim_rate_hz
                                        : std::min(0.05, NsToS(now_ns - last_tick_ns_));
   last_tick_ns_ = now_ns;
@@ -128,6 +162,8 @@ void VehicleNode::PublishState(int64_t now_ns) {
   m.last_command_sent_ns(applied_.sent_ns);
   m.last_command_age_ns(applied_.seq == 0 ? 0 : now_ns - applied_.received_ns);
   m.commands_received(accepted_.load());
+  m.fault(s.fault);
+  m.fault_message(s.fault_message);
   state_writer_->Write(m);
   states_.fetch_add(1, std::memory_order_relaxed);
 }

@@ -3,6 +3,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "haptel/config/link.hpp"
 
@@ -65,6 +66,34 @@ struct CameraConfig {
   void ValidateOrThrow() const;
 };
 
+/// The robot's CAN bus (kinds can-robot and can-robot-sim): two ODrive motor
+/// controllers (CAN Simple protocol, firmware 0.5.x), one per wheel, and the
+/// bumper I/O node (vehicles/CAN.md).
+struct CanConfig {
+  std::string interface = "can0";  ///< SocketCAN interface (can-robot)
+  int left_node = 1;               ///< ODrive node ids, 0..63, all distinct
+  int right_node = 2;
+  int io_node = 3;                 ///< the bumper I/O node
+  /// The right motor is mounted mirrored: positive turns drive it backwards.
+  bool right_reversed = true;
+  /// Wheel velocity of each speed level 1..drive.speed_levels (turn/s,
+  /// increasing); the negative levels are the same backwards.
+  std::vector<double> level_turns_per_s{0.2, 0.4, 0.6, 0.8, 1.0, 1.2, 1.4, 1.6};
+  double wheel_circumference = 0.1885;  ///< m per wheel turn (speed from the encoders)
+  double command_rate_hz = 100.0;       ///< velocity set-points sent per second
+  /// The nodes' heartbeat period (ODrive axis.config.can.heartbeat_rate_ms);
+  /// a node silent for 3 periods stops the robot.
+  double heartbeat_period_s = 0.03;
+  /// The simulated ODrives' velocity ramp (turn/s², vel_ramp_rate).
+  double vel_ramp_rate = 8.0;
+  /// Folder for the candump -L logs of each run (empty: no log).
+  std::filesystem::path log_dir;
+
+  /// Throws ConfigFieldError naming the first field out of range; `levels`
+  /// is drive.speed_levels (one velocity per level).
+  void ValidateOrThrow(int levels = 8) const;
+};
+
 struct VehicleConfig {
   std::filesystem::path file;
   std::string name = "robot1";
@@ -77,11 +106,19 @@ struct VehicleConfig {
   BodyConfig body;
   CameraConfig camera;
   LinkConfig link;
+  CanConfig can;  ///< kinds can-robot and can-robot-sim only
 
   /// Throws ConfigFieldError unless the name suits DDS topic names, the kind
   /// is known, the rates are in range and every part is valid ("drive.*", ...).
   void ValidateOrThrow() const;
 };
+
+/// The kinds a vehicle file may name: "sim-robot" (the simulated tank),
+/// "can-robot" (the real one on SocketCAN), "can-robot-sim" (the simulated
+/// tank behind emulated CAN nodes, through the real adapter).
+bool IsVehicleKind(const std::string& kind);
+/// Whether the kind drives its motors over CAN (has a `can` section).
+inline bool UsesCan(const std::string& kind) { return kind == "can-robot" || kind == "can-robot-sim"; }
 
 /// Loads and validates (VehicleConfig::ValidateOrThrow) a vehicle file
 /// (strict: unknown keys are errors naming file, key and line).

@@ -65,6 +65,7 @@ struct RunRecord {
   std::string track;
   std::string interface;
   std::string vehicle;
+  std::string vehicle_kind;  ///< sim-robot, can-robot, can-robot-sim (v5; "" before)
   bool completed = false;
   std::string outcome;  ///< "completed", "lap cap", "vehicle lost", "interrupted", ...
   double lap_time_s = 0.0;

@@ -1,6 +1,8 @@
 #pragma once
 /// @file The seam between a vehicle node and what it drives: a simulator or
 /// a hardware adapter (SocketCAN robot, servo-controller blimp).
+#include <string>
+
 #include "haptel/vehicles/drive.hpp"
 
 namespace haptel::vehicles {
@@ -16,6 +18,10 @@ struct AdapterState {
   bool bumper_left = false;
   bool bumper_right = false;
   MotorLevels applied;    ///< levels the motors run at now
+  /// The vehicle stopped itself (a motor controller's error, a silent node,
+  /// bus-off) and will not move until its faults are cleared.
+  bool fault = false;
+  std::string fault_message;  ///< one line: what, where (empty: no fault)
 };
 
 class VehicleAdapter {
@@ -23,8 +29,9 @@ class VehicleAdapter {
   virtual ~VehicleAdapter() = default;
   /// Sets the motor speed levels (already quantised).
   virtual void SetMotors(const MotorLevels& levels) = 0;
-  /// Stops every motor at once (watchdog, shutdown).
-  void Stop() { SetMotors({}); }
+  /// Stops every motor at once (the command watchdog, shutdown); the next
+  /// SetMotors drives again. Hardware may do more (idle the controllers).
+  virtual void Stop() { SetMotors({}); }
   /// Advances by dt seconds: simulators step, hardware polls its bus.
   virtual void Update(double dt) = 0;
   virtual AdapterState State() const = 0;

@@ -19,6 +19,10 @@ class SimRobot final : public VehicleAdapter {
   SimRobot(const Track& track, const VehicleConfig& config);
 
   void SetMotors(const MotorLevels& levels) override;
+  /// Drives the treads at these speeds (m/s) instead of the levels (the
+  /// emulated motor controllers of the simulated CAN robot); each still
+  /// follows with the motor lag and its gain. SetMotors switches back.
+  void SetTreadTargets(double left, double right);
   void Update(double dt) override;
   AdapterState State() const override { return state_; }
 
@@ -37,6 +41,9 @@ class SimRobot final : public VehicleAdapter {
   DriveConfig drive_;
   BodyConfig body_;
   MotorLevels levels_;
+  bool use_treads_ = false;
+  double tread_left_ = 0.0;
+  double tread_right_ = 0.0;
   double v_left_ = 0.0;
   double v_right_ = 0.0;
   AdapterState state_;

@@ -37,6 +37,13 @@ struct NodeCounters {
   bool watchdog_expired = true;
 };
 
+/// The adapter a vehicle file's kind names: "sim-robot" the simulated tank;
+/// "can-robot" the robot on SocketCAN (config.can.interface; throws
+/// CanUnavailable when the bus cannot be opened); "can-robot-sim" the
+/// simulated tank behind emulated CAN nodes. The CAN kinds log their bus
+/// traffic to config.can.log_dir/<name>-<UTC>.log (candump -L) when set.
+std::unique_ptr<VehicleAdapter> MakeVehicleAdapter(const VehicleConfig& config, const Track& track);
+
 class VehicleNode {
  public:
   /// `track` (the simulated world) must outlive the node. `camera` is the
@@ -44,8 +51,10 @@ class VehicleNode {
   /// node so that a camera that cannot open stops the vehicle before it
   /// publishes anything; must not be null. Validates `config` first
   /// (VehicleConfig::ValidateOrThrow: ConfigFieldError).
+  /// `adapter`: made by the caller (to open a bus before anything else), or
+  /// null for MakeVehicleAdapter's.
   VehicleNode(const VehicleConfig& config, const Track& track,
-              std::unique_ptr<video::CameraSource> camera);
+              std::unique_ptr<video::CameraSource> camera, std::unique_ptr<VehicleAdapter> adapter = nullptr);
   ~VehicleNode();
 
   void Start();
