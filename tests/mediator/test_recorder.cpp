@@ -115,6 +115,7 @@ RunRecord MakeRun(int n, int split_count) {
   run.track = "grand prix, O'Brien's \"hall\"; DROP TABLE runs; --";  // bound, not formatted
   run.interface = (n % 2 == 0) ? "gesture" : "cockpit+hud";
   run.vehicle = "tank-sim Zürich";
+  run.vehicle_kind = (n % 2 == 0) ? "can-robot-sim" : "sim-robot";
   run.completed = (n % 2 == 0);
   run.outcome = run.completed ? "completed" : "lap cap";
   run.lap_time_s = 110.25 + n;
@@ -170,6 +171,7 @@ void CheckSame(const RunRecord& got, const RunRecord& want) {
   CHECK(got.track == want.track);
   CHECK(got.interface == want.interface);
   CHECK(got.vehicle == want.vehicle);
+  CHECK(got.vehicle_kind == want.vehicle_kind);
   CHECK(got.completed == want.completed);
   CHECK(got.outcome == want.outcome);
   CHECK(SameReal(got.lap_time_s, want.lap_time_s));
@@ -336,7 +338,7 @@ TEST_CASE("Recorder stores the start time as ISO-8601 UTC and a schema version",
   }
   RawDb raw(file);
   CHECK(raw.Text("SELECT started_utc FROM runs") == "2024-05-01T12:34:56.789Z");
-  CHECK(raw.Integer("PRAGMA user_version") == 4);
+  CHECK(raw.Integer("PRAGMA user_version") == 5);
 }
 
 TEST_CASE("Recorder creates missing parent folders", "[recorder]") {
@@ -662,7 +664,7 @@ TEST_CASE("A v1 database is migrated to the current schema in place and keeps it
   }
 
   RawDb raw(file);
-  CHECK(raw.Integer("PRAGMA user_version") == 4);
+  CHECK(raw.Integer("PRAGMA user_version") == 5);
   CHECK(raw.Text("PRAGMA integrity_check") == "ok");
   CHECK(raw.Integer("SELECT COUNT(*) FROM pragma_foreign_key_check") == 0);
   for (const char* table : {"interface_switches", "run_path", "run_contacts", "run_counters"}) {
@@ -680,7 +682,7 @@ TEST_CASE("A v1 database is migrated to the current schema in place and keeps it
     Recorder again(file);
     CHECK(again.LoadAll().size() == 2);
   }
-  CHECK(raw.Integer("PRAGMA user_version") == 4);
+  CHECK(raw.Integer("PRAGMA user_version") == 5);
 }
 
 namespace {
@@ -769,7 +771,7 @@ TEST_CASE("A v2 database is migrated to v3: its runs keep everything, new runs k
   CheckSame(runs[0], V2Run());
   CheckSame(runs[1], fresh);
   RawDb raw(file);
-  CHECK(raw.Integer("PRAGMA user_version") == 4);
+  CHECK(raw.Integer("PRAGMA user_version") == 5);
   CHECK(raw.Text("PRAGMA integrity_check") == "ok");
   CHECK(raw.Integer(
             "SELECT value FROM run_counters WHERE run_id = 2 AND name = 'servo_overruns'") == 9);
