@@ -23,6 +23,7 @@ void OperatorConfig::ValidateOrThrow() const {
   check::Number("muscle_max_force", muscle_max_force, 0.1, 100.0);
   check::Number("muscle_integral_gain", muscle_integral_gain, 0.0, 1e5);
   check::Number("backoff_s", backoff_s, 0.0, 10.0);
+  check::Number("careful_s", careful_s, 0.0, 60.0);
   check::Number("grasp_reach_s", grasp_reach_s, 0.0, 10.0);
   check::Number("grasp_close_s", grasp_close_s, 0.0, 10.0);
   if (min_forward > cruise) check::Fail("min_forward", "min_forward <= cruise", {"cruise"});
@@ -86,6 +87,7 @@ RunConfig LoadRun(const std::filesystem::path& file) {
   r.op.muscle_max_force = op.Number("muscle_max_force", r.op.muscle_max_force);
   r.op.muscle_integral_gain = op.Number("muscle_integral_gain", r.op.muscle_integral_gain);
   r.op.backoff_s = op.Number("backoff_s", r.op.backoff_s);
+  r.op.careful_s = op.Number("careful_s", r.op.careful_s);
   r.op.grasp_reach_s = op.Number("grasp_reach_s", r.op.grasp_reach_s);
   r.op.grasp_close_s = op.Number("grasp_close_s", r.op.grasp_close_s);
   op.Finish();

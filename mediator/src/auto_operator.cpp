@@ -36,7 +36,11 @@ interfaces::DriveIntent AutoOperator::Decide(double t_s) {
 
   const bool touching = o->bumper_left || o->bumper_right;
   if (touching && !backing_off(t_s)) {
-    backoff_until_s_ = t_s + config_.backoff_s;
+    // Hitting again while still aiming: the last attempt had too little
+    // room, so back off further each time (up to four back-offs' worth).
+    repeat_contacts_ = careful(t_s) ? std::min(repeat_contacts_ + 1, 3) : 0;
+    backoff_until_s_ = t_s + config_.backoff_s * (1 + repeat_contacts_);
+    careful_until_s_ = backoff_until_s_ + config_.careful_s;
     // Reverse while turning away from the side that touched.
     backoff_turn_ = o->bumper_left && !o->bumper_right ? -0.25 : o->bumper_right && !o->bumper_left ? 0.25 : 0.0;
   }
@@ -46,7 +50,9 @@ interfaces::DriveIntent AutoOperator::Decide(double t_s) {
   // centre line.
   const Vec2 p(o->x, o->y);
   const double s = track_.ClosestArcLength(p);
-  const Vec2 goal = track_.PointAt(s + config_.lookahead);
+  // Aiming after a contact, the driver looks closer ahead (tighter tracking).
+  const double lookahead = careful(t_s) ? config_.lookahead / 2.0 : config_.lookahead;
+  const Vec2 goal = track_.PointAt(s + lookahead);
   const Vec2 d = goal - p;
   const double alpha = WrapAngle(std::atan2(d.y(), d.x()) - o->heading);
   const double distance = std::max(d.norm(), 1e-3);
@@ -95,7 +101,9 @@ interfaces::DriveIntent AutoOperator::Express(double t_s, const interfaces::Driv
     const double decay = std::exp(-dt / profile_.noise_time_s);
     wander_ = wander_ * decay + spread * std::sqrt(1.0 - decay * decay) * Normal(random_);
   }
-  out.turn += wander_;
+  // Aiming after a contact, the driver's attention is on the steering.
+  const bool attentive = careful(t_s);
+  if (!attentive) out.turn += wander_;
 
   // Without a speed cue the driver holds back; with a speedometer, only for
   // the share of the time they do not read it.
@@ -115,7 +123,7 @@ interfaces::DriveIntent AutoOperator::Express(double t_s, const interfaces::Driv
     double* applied[2] = {&applied_.forward, &applied_.turn};
     for (size_t k = 0; k < 2; ++k) {
       double wanted = *axes[k];
-      if (std::abs(wanted) < kCentre) {
+      if (std::abs(wanted) < kCentre && !attentive) {
         if (!at_centre_[k]) centre_miss_[k] = profile_.recentre_error * error_scale_ * Normal(random_);
         at_centre_[k] = true;
         wanted += centre_miss_[k];

@@ -69,6 +69,58 @@ TEST_CASE("after a bumper contact the operator backs off, turning away from the 
   CHECK(op.Decide(1.5).forward > 0.0);  // contact gone, back to driving
 }
 
+TEST_CASE("hitting again while aiming backs the operator off longer each time, and it looks closer ahead") {
+  OperatorConfig cfg;
+  cfg.reaction_delay_s = 0.0;
+  cfg.backoff_s = 0.8;
+  cfg.careful_s = 4.0;
+  AutoOperator op(ShortTrack(), cfg, DriveConfig{});
+  Observation o = At(0.0, ShortTrack().PointAt(0.1), 0.0);
+  o.bumper_right = true;
+  op.Observe(o);
+  op.Decide(0.0);
+  CHECK(op.backing_off(0.79));
+  CHECK_FALSE(op.backing_off(0.81));
+  // A second contact at t = 2 (aiming until 4.8): twice as long.
+  o.t_s = 2.0;
+  op.Observe(o);
+  op.Decide(2.0);
+  CHECK(op.backing_off(3.59));
+  CHECK_FALSE(op.backing_off(3.61));
+  // A third: three times; the fourth and later stay at four.
+  o.t_s = 4.0;
+  op.Observe(o);
+  op.Decide(4.0);
+  CHECK(op.backing_off(6.39));
+  CHECK_FALSE(op.backing_off(6.41));
+  for (double t : {7.0, 11.0}) {
+    o.t_s = t;
+    op.Observe(o);
+    op.Decide(t);
+    CHECK(op.backing_off(t + 3.19));
+    CHECK_FALSE(op.backing_off(t + 3.21));
+  }
+  // Long after, a contact is a first one again.
+  o.t_s = 40.0;
+  op.Observe(o);
+  op.Decide(40.0);
+  CHECK_FALSE(op.backing_off(40.81));
+
+  // Aiming, the operator steers harder onto the line from the same offset
+  // (half the look-ahead: a sharper pursuit arc).
+  const Vec2 beside = ShortTrack().PointAt(0.1) + Vec2(0.0, 0.06);
+  AutoOperator relaxed(ShortTrack(), cfg, DriveConfig{});
+  relaxed.Observe(At(0.0, beside, 0.0));
+  const double relaxed_turn = relaxed.Decide(0.0).turn;
+  // op is aiming until 40.8 + 4 = 44.8.
+  op.Observe(At(41.0, beside, 0.0));
+  REQUIRE(op.careful(41.0));
+  REQUIRE_FALSE(op.backing_off(41.0));
+  const double aiming_turn = op.Decide(41.0).turn;
+  CHECK(relaxed_turn < 0.0);  // left of the line: steer right
+  CHECK(aiming_turn < relaxed_turn * 1.5);
+}
+
 TEST_CASE("the operator's arm lags its intent") {
   OperatorConfig cfg;
   cfg.arm_time_constant_s = 0.1;

@@ -214,3 +214,41 @@ TEST_CASE("a control that stays put comes back to its centre slowly and misses i
   spring.Express(1.0, {0.0, 0.8}, returns);
   CHECK(spring.Express(1.5, {0.0, 0.0}, returns).turn == 0.0);
 }
+
+TEST_CASE("after a contact the driver aims: no wander and no centre miss for careful_s, then both return") {
+  DriverProfile p;
+  p.steering_noise = 0.1;
+  p.noise_time_s = 0.5;
+  p.recentre_s = 0.2;
+  p.recentre_error = 0.05;
+  p.seed = 9;
+  Controls stays;
+  stays.stay_put = true;
+  OperatorConfig c = Quick();
+  c.arm_time_constant_s = 0.0;
+  c.backoff_s = 0.8;
+  c.careful_s = 4.0;
+  AutoOperator op(ShortTrack(), c, DriveConfig{}, p, 100);
+  const Vec2 at = ShortTrack().PointAt(0.1);
+  op.Act(0.0, stays);
+  // Before any contact a small wanted turn is wandered and snapped to a missed centre.
+  double before = 0.0;
+  for (double t = 1.0; t < 3.0; t += 0.05) before = std::max(before, std::abs(op.Express(t, {0.5, 0.02}, stays).turn - 0.02));
+  CHECK(before > 0.02);
+  REQUIRE_FALSE(op.careful(3.0));
+  // A contact at t = 3: backing off until 3.8, aiming until 7.8.
+  Observation o{3.0, at.x(), at.y(), 0.0, true, false};
+  op.Observe(o);
+  op.Decide(3.0);
+  CHECK(op.backing_off(3.5));
+  CHECK(op.careful(7.7));
+  CHECK_FALSE(op.careful(7.9));
+  // Aiming: a small turn is given as wanted once the control has come to it.
+  double during = 1.0;
+  for (double t = 5.0; t < 7.7; t += 0.05) during = std::abs(op.Express(t, {0.5, 0.02}, stays).turn - 0.02);
+  CHECK(during < 1e-3);
+  // Attention lapses again.
+  double after = 0.0;
+  for (double t = 7.9; t < 10.0; t += 0.05) after = std::max(after, std::abs(op.Express(t, {0.5, 0.02}, stays).turn - 0.02));
+  CHECK(after > 0.02);
+}

@@ -22,6 +22,11 @@ struct OperatorConfig {
   double muscle_max_force = 8.0;     ///< N
   double muscle_integral_gain = 400.0;  ///< N/(m·s): pushing harder against a pull
   double backoff_s = 0.8;            ///< reverse this long after a bumper contact
+  /// After backing off, steer this long with full attention: a person who
+  /// has just hit something aims the next attempt (half the look-ahead, no
+  /// steering wander, and a control that stays put is brought exactly where
+  /// it is wanted); hitting again meanwhile backs off longer each time.
+  double careful_s = 4.0;
   /// Grasping a control (cockpit interfaces): come down onto it with an open
   /// hand for this long, then close the fingers over grasp_close_s.
   double grasp_reach_s = 0.8;

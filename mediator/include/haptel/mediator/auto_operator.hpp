@@ -7,7 +7,10 @@
 /// hand targets through the interface's own inverse map. Its arm lags the
 /// decision (first-order), and the simulated device's muscle model makes it
 /// feel forces: a centring field must be pushed against, a wall stops it.
-/// After a bumper contact it backs off, turning away from the touched side.
+/// After a bumper contact it backs off, turning away from the touched side,
+/// then aims its next attempt: for careful_s it looks half as far ahead and
+/// its steering has full attention (none of the profile's wander or
+/// re-centring miss, below). A contact while aiming backs it off further.
 ///
 /// When the interface has controls to grasp (a hand goal with an approach
 /// offset), the operator first brings its open hands down onto them over
@@ -63,6 +66,8 @@ class AutoOperator {
   interfaces::HandTargets Act(double t_s, const interfaces::MediatorInterface& interface);
 
   bool backing_off(double t_s) const { return t_s < backoff_until_s_; }
+  /// Backing off, or aiming the attempt after it (config careful_s).
+  bool careful(double t_s) const { return t_s < careful_until_s_; }
   /// The hands hold their controls (or there is nothing to grasp) and the
   /// operator drives.
   bool grasped(double t_s) const {
@@ -80,6 +85,8 @@ class AutoOperator {
   std::deque<Observation> seen_;
   double backoff_until_s_ = -1.0;
   double backoff_turn_ = 0.0;
+  double careful_until_s_ = -1.0;
+  int repeat_contacts_ = 0;  ///< contacts in a row, each while aiming after the last
   interfaces::HandTargets arm_;
   double last_act_s_ = -1.0;
   double start_s_ = -1.0;  ///< first Act
