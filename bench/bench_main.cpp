@@ -13,6 +13,7 @@
 #include "servo_bench.hpp"
 #include "skip_bench.hpp"
 #include "stability_bench.hpp"
+#include "blimp_bench.hpp"
 #include "view_bench.hpp"
 
 using namespace haptel::bench;
@@ -37,6 +38,7 @@ constexpr Usage kUsage[] = {
     {"stability", "[--physics FILE] [--minutes M] [--json]", "physics stress tests"},
     {"view", "[--seconds S] [--json]",
      "the operator's view: frame rate, CPU, video-to-screen, servo beside it"},
+    {"blimp", "[--vehicle FILE] [--json]", "airship model: integrators x steps, error against CPU; physics checks"},
 };
 
 using BenchMain = int (*)(int argc, const char* const* argv);
@@ -47,6 +49,7 @@ struct Bench {
 constexpr Bench kBenches[] = {
     {"servo", BenchServoMain},         {"gravity", BenchGravityMain}, {"skip", BenchSkipMain},
     {"physics", BenchPhysicsMain},     {"stability", BenchStabilityMain}, {"view", BenchViewMain},
+    {"blimp", BenchBlimpMain},
 };
 
 std::string UsageText(const std::string& only) {

@@ -4,6 +4,7 @@
 #include <cctype>
 
 #include "haptel/config/check.hpp"
+#include "airship_section.hpp"
 #include "link_section.hpp"
 #include "yaml_map.hpp"
 
@@ -82,7 +83,7 @@ void CameraConfig::ValidateOrThrow() const {
 }
 
 bool IsVehicleKind(const std::string& kind) {
-  return kind == "sim-robot" || kind == "can-robot" || kind == "can-robot-sim";
+  return kind == "sim-robot" || kind == "can-robot" || kind == "can-robot-sim" || kind == "sim-blimp";
 }
 
 void CanConfig::ValidateOrThrow(int levels) const {
@@ -111,7 +112,7 @@ void VehicleConfig::ValidateOrThrow() const {
   if (const std::string problem = VehicleNameProblem(name); !problem.empty()) {
     check::Fail("name", problem);
   }
-  if (!IsVehicleKind(kind)) check::Fail("kind", "one of: sim-robot, can-robot, can-robot-sim");
+  if (!IsVehicleKind(kind)) check::Fail("kind", "one of: sim-robot, can-robot, can-robot-sim, sim-blimp");
   check::Number("sim_rate_hz", sim_rate_hz, 50.0, 5000.0);
   check::Number("state_rate_hz", state_rate_hz, 1.0, 1000.0);
   check::Number("watchdog_timeout_s", watchdog_timeout_s, 0.01, 10.0);
@@ -126,6 +127,7 @@ void VehicleConfig::ValidateOrThrow() const {
       throw e.Within("can");
     }
   }
+  if (UsesAirship(kind)) check::Nested("airship", airship);
 }
 
 VehicleConfig LoadVehicle(const std::filesystem::path& file) {
@@ -199,6 +201,12 @@ VehicleConfig LoadVehicle(const std::filesystem::path& file) {
     can.Finish();
   } else if (UsesCan(v.kind)) {
     root.Fail("can", "a 'can' section for kind " + v.kind + " (its nodes and wheel velocities)");
+  }
+  if (root.Has("airship")) {
+    YamlMap airship = root.Map("airship");
+    v.airship = config_detail::ReadAirship(airship);
+  } else if (UsesAirship(v.kind)) {
+    root.Fail("airship", "an 'airship' section for kind " + v.kind + " (its hull, fins and motors)");
   }
   root.Finish();
   config_detail::ValidateIn(root, v);

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "haptel/config/airship.hpp"
 #include "haptel/config/link.hpp"
 
 namespace haptel {
@@ -107,6 +108,7 @@ struct VehicleConfig {
   CameraConfig camera;
   LinkConfig link;
   CanConfig can;  ///< kinds can-robot and can-robot-sim only
+  AirshipConfig airship;  ///< kind sim-blimp only
 
   /// Throws ConfigFieldError unless the name suits DDS topic names, the kind
   /// is known, the rates are in range and every part is valid ("drive.*", ...).
@@ -115,10 +117,13 @@ struct VehicleConfig {
 
 /// The kinds a vehicle file may name: "sim-robot" (the simulated tank),
 /// "can-robot" (the real one on SocketCAN), "can-robot-sim" (the simulated
-/// tank behind emulated CAN nodes, through the real adapter).
+/// tank behind emulated CAN nodes, through the real adapter), "sim-blimp"
+/// (the simulated airship).
 bool IsVehicleKind(const std::string& kind);
 /// Whether the kind drives its motors over CAN (has a `can` section).
 inline bool UsesCan(const std::string& kind) { return kind == "can-robot" || kind == "can-robot-sim"; }
+/// Whether the kind is an airship (has an `airship` section).
+inline bool UsesAirship(const std::string& kind) { return kind == "sim-blimp"; }
 
 /// Loads and validates (VehicleConfig::ValidateOrThrow) a vehicle file
 /// (strict: unknown keys are errors naming file, key and line).
