@@ -4,25 +4,15 @@
 #include <cmath>
 
 #include "haptel/config/error.hpp"
+#include "offset_shape.hpp"
 
 namespace haptel::interfaces {
 
 using haptics::Side;
 using haptics::Vec3d;
 
-namespace {
-/// Offset past the dead zone as a fraction of full scale, signed, in [-1, 1].
-double Shape(double offset, double dead_zone, double full_scale) {
-  const double past = std::max(0.0, std::abs(offset) - dead_zone);
-  return std::copysign(std::min(1.0, past / full_scale), offset);
-}
-/// Inverse of Shape for a fraction in [-1, 1].
-double Unshape(double fraction, double dead_zone, double full_scale) {
-  if (fraction == 0.0) return 0.0;
-  const double f = std::clamp(fraction, -1.0, 1.0);
-  return std::copysign(dead_zone + std::abs(f) * full_scale, f);
-}
-}  // namespace
+using detail::Shape;
+using detail::Unshape;
 
 GestureInterface::GestureInterface(const GestureConfig& config) : config_(Validated(config)) {
   field_.enabled = true;

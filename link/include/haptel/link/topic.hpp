@@ -141,5 +141,10 @@ using StateWriter = Writer<msg::VehicleState, msg::VehicleStatePubSubType>;
 using StateReader = Reader<msg::VehicleState, msg::VehicleStatePubSubType>;
 using VideoWriter = Writer<msg::VideoFrame, msg::VideoFramePubSubType>;
 using VideoReader = Reader<msg::VideoFrame, msg::VideoFramePubSubType>;
+// The blimp's, on the same topic names (haptel/<vehicle>/command, .../state).
+using BlimpCommandWriter = Writer<msg::BlimpCommand, msg::BlimpCommandPubSubType>;
+using BlimpCommandReader = Reader<msg::BlimpCommand, msg::BlimpCommandPubSubType>;
+using BlimpStateWriter = Writer<msg::BlimpState, msg::BlimpStatePubSubType>;
+using BlimpStateReader = Reader<msg::BlimpState, msg::BlimpStatePubSubType>;
 
 }  // namespace haptel::link

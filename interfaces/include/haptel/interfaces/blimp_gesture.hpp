@@ -1,0 +1,51 @@
+#pragma once
+/// @file The blimp gesture cockpit (thesis ch. 8.2.2): both hands, no
+/// controls, and the pilot's head aims the camera.
+///
+/// The mapping and the fields are BlimpGestureConfig's. The camera's pan and
+/// tilt are the operator's head orientation (the view's head input, or the
+/// automatic pilot's gaze), passed through and clamped to the camera head's
+/// range.
+#include "haptel/config/blimp_gesture.hpp"
+#include "haptel/core/blimp_command.hpp"
+#include "haptel/haptics/hal.hpp"
+#include "haptel/interfaces/interface.hpp"
+
+namespace haptel::interfaces {
+
+/// Where the operator looks, relative to straight ahead, rad.
+struct HeadDirection {
+  double pan = 0.0;   ///< positive: left
+  double tilt = 0.0;  ///< positive: up
+};
+
+class BlimpGestureInterface {
+ public:
+  /// Validates `config` first (BlimpGestureConfig::ValidateOrThrow: ConfigFieldError).
+  explicit BlimpGestureInterface(const BlimpGestureConfig& config);
+
+  const std::string& name() const { return config_.name; }
+  const BlimpGestureConfig& config() const { return config_; }
+
+  /// Session thread: reads both hands from the HAL, puts the centring fields
+  /// in it and returns the command. A hand without a valid sample gives the
+  /// neutral command and no forces (the device is not holding it).
+  BlimpCommand Update(const HeadDirection& head, haptics::Hal& hal);
+
+  /// Pure mapping from both hands' positions (and the head) to a command.
+  BlimpCommand Map(const haptics::Vec3d& left, const haptics::Vec3d& right, const HeadDirection& head) const;
+
+  /// Where a pilot would hold their hands to give `command` (its camera
+  /// angles are not the hands' business). Tail rotor commands need zero
+  /// power: with power the left hand's sideways offset means nothing.
+  HandTargets HandTargetsFor(const BlimpCommand& command) const;
+
+  /// The field on each hand (what Update puts in the HAL).
+  const haptics::ForceField& field(haptics::Side side) const { return fields_[haptics::Index(side)]; }
+
+ private:
+  BlimpGestureConfig config_;
+  std::array<haptics::ForceField, haptics::kSides> fields_;
+};
+
+}  // namespace haptel::interfaces
