@@ -1,0 +1,84 @@
+#pragma once
+/// @file The blimp's servo controller (the `servo:` section of a blimp
+/// vehicle file): which USB servo controller drives the seven channels, on
+/// which serial port, and each channel's calibration from a command in
+/// [-1, 1] to a pulse width. Read by haptel_servo (haptel/servo/*.hpp).
+#include <array>
+#include <string>
+
+namespace haptel {
+
+/// The blimp's channels, in this order everywhere (thesis ch. 8.2.1).
+enum class BlimpChannel { kElevator, kRudder, kPower, kHelix, kTailRotor, kCameraPan, kCameraTilt };
+constexpr int kBlimpChannels = 7;
+
+/// "elevator", "rudder", "power", "helix", "tail_rotor", "camera_pan",
+/// "camera_tilt": as written in a file (the keys under `channels:`).
+const char* BlimpChannelName(BlimpChannel c);
+/// The channel at `index` (0..6) of the order above.
+constexpr BlimpChannel BlimpChannelAt(int index) { return static_cast<BlimpChannel>(index); }
+
+/// The controller's wire protocol: a Pololu Maestro (compact protocol) or
+/// Tom's RC SC-8000.
+enum class ServoProtocol { kMaestro, kSc8000 };
+/// "maestro", "sc8000", as written in a file.
+const char* ServoProtocolName(ServoProtocol protocol);
+/// The protocol a name means; false when none does.
+bool ParseServoProtocol(const std::string& name, ServoProtocol* protocol);
+
+/// Pulse widths any channel may be calibrated to, µs (hobby servos).
+constexpr double kServoMinPulse_us = 500.0;
+constexpr double kServoMaxPulse_us = 2500.0;
+/// The Maestro's outputs: 0..23 (the 24-channel Mini Maestro; smaller
+/// models simply lack the upper ones).
+constexpr int kMaestroChannels = 24;
+/// The SC-8000's outputs, 0..7, and its pulse range, µs.
+constexpr int kSc8000Channels = 8;
+constexpr double kSc8000MinPulse_us = 800.0;
+constexpr double kSc8000MaxPulse_us = 2200.0;
+
+/// One channel's output number and calibration. A command v in [-1, 1]
+/// maps to neutral_us + v·(max_us − neutral_us) for v >= 0 and to
+/// neutral_us + v·(neutral_us − min_us) below (haptel/servo/calibration.hpp);
+/// `power` uses [0, 1] with its neutral at its min.
+struct ServoChannelConfig {
+  int channel = 0;             ///< the controller's output number (maestro 0..23, sc8000 0..7)
+  double min_us = 1000.0;      ///< pulse at command −1
+  double neutral_us = 1500.0;  ///< pulse at command 0, and the controller's home position
+  double max_us = 2000.0;      ///< pulse at command +1
+  bool reversed = false;       ///< the command is negated before the mapping
+
+  /// Throws ConfigFieldError: min_us < max_us, min_us <= neutral_us <=
+  /// max_us, every pulse in [500, 2500] µs, channel in [0, 23] (the
+  /// controller's config narrows these for the SC-8000).
+  void ValidateOrThrow() const;
+};
+
+struct ServoControllerConfig {
+  ServoProtocol protocol = ServoProtocol::kMaestro;
+  /// Serial device path, e.g. /dev/ttyACM0 (may be empty in a file: given by --serial-port).
+  std::string port;
+  /// Maestro: one of 1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200
+  /// (ignored by its USB virtual port, used on its TTL pins); SC-8000: 9600.
+  int baud = 115200;
+  /// Maestro: a CRC-7 byte after each command (the device's "Enable CRC"
+  /// setting must match). The SC-8000 has none: false.
+  bool crc = false;
+  /// s: the controller's own serial timeout (set the same value in the
+  /// Maestro's settings): after this long without a valid command it sends
+  /// every channel to its home (neutral_us) position.
+  double controller_timeout_s = 0.5;
+  /// s: Maestro: how often the adapter asks Get Errors.
+  double error_poll_s = 0.5;
+  /// Per BlimpChannel, in its order.
+  std::array<ServoChannelConfig, kBlimpChannels> channels;
+
+  /// Throws ConfigFieldError naming the first field out of range. A
+  /// channel's errors are prefixed "channels.<name>." (e.g.
+  /// "channels.rudder.min_us"); output numbers must be distinct; the
+  /// SC-8000 needs outputs 0..7, pulses within 800..2200 µs, baud 9600 and
+  /// no CRC; the Maestro outputs 0..23.
+  void ValidateOrThrow() const;
+};
+
+}  // namespace haptel
