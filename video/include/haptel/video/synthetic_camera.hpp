@@ -13,11 +13,19 @@
 
 namespace haptel::video {
 
-/// Camera position on the track (m) and heading (rad, counter-clockwise from +x).
+/// Camera position (m, world frame: x east, y north, z up) and orientation.
+/// The robot's SyntheticCamera uses x, y and heading only (its camera is
+/// level, `mount_height` above the floor); the 3-D fields, all 0 by default,
+/// are for flying vehicles (video::BlimpCourseCamera).
 struct CameraPose {
   double x = 0.0;
   double y = 0.0;
-  double heading = 0.0;
+  double heading = 0.0;  ///< body yaw, rad, counter-clockwise from +x
+  double z = 0.0;        ///< height of the camera above the ground, m
+  double pitch = 0.0;    ///< body attitude, rad: nose up positive
+  double roll = 0.0;     ///< body attitude, rad: right side down positive
+  double pan = 0.0;      ///< camera head relative to the body, rad: look left positive
+  double tilt = 0.0;     ///< camera head relative to the body, rad: look up positive
 };
 
 class SyntheticCamera {
