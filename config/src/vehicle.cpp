@@ -6,6 +6,7 @@
 #include "haptel/config/check.hpp"
 #include "airship_section.hpp"
 #include "link_section.hpp"
+#include "servo_section.hpp"
 #include "yaml_map.hpp"
 
 namespace haptel {
@@ -83,7 +84,7 @@ void CameraConfig::ValidateOrThrow() const {
 }
 
 bool IsVehicleKind(const std::string& kind) {
-  return kind == "sim-robot" || kind == "can-robot" || kind == "can-robot-sim" || kind == "sim-blimp";
+  return kind == "sim-robot" || kind == "can-robot" || kind == "can-robot-sim" || IsBlimpKind(kind);
 }
 
 void CanConfig::ValidateOrThrow(int levels) const {
@@ -112,7 +113,7 @@ void VehicleConfig::ValidateOrThrow() const {
   if (const std::string problem = VehicleNameProblem(name); !problem.empty()) {
     check::Fail("name", problem);
   }
-  if (!IsVehicleKind(kind)) check::Fail("kind", "one of: sim-robot, can-robot, can-robot-sim, sim-blimp");
+  if (!IsVehicleKind(kind)) check::Fail("kind", "one of: sim-robot, can-robot, can-robot-sim, sim-blimp, servo-blimp, servo-blimp-sim");
   check::Number("sim_rate_hz", sim_rate_hz, 50.0, 5000.0);
   check::Number("state_rate_hz", state_rate_hz, 1.0, 1000.0);
   check::Number("watchdog_timeout_s", watchdog_timeout_s, 0.01, 10.0);
@@ -128,6 +129,7 @@ void VehicleConfig::ValidateOrThrow() const {
     }
   }
   if (UsesAirship(kind)) check::Nested("airship", airship);
+  if (UsesServo(kind)) check::Nested("servo", servo);
 }
 
 VehicleConfig LoadVehicle(const std::filesystem::path& file) {
@@ -207,6 +209,12 @@ VehicleConfig LoadVehicle(const std::filesystem::path& file) {
     v.airship = config_detail::ReadAirship(airship);
   } else if (UsesAirship(v.kind)) {
     root.Fail("airship", "an 'airship' section for kind " + v.kind + " (its hull, fins and motors)");
+  }
+  if (root.Has("servo")) {
+    YamlMap servo = root.Map("servo");
+    v.servo = config_detail::ReadServoController(servo);
+  } else if (UsesServo(v.kind)) {
+    root.Fail("servo", "a 'servo' section for kind " + v.kind + " (its controller's protocol and channels)");
   }
   root.Finish();
   config_detail::ValidateIn(root, v);

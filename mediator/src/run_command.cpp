@@ -124,8 +124,14 @@ SessionSetup RunSetupFromArgs(const Args& args) {
   }
   if (auto device = args.Value("device")) setup.run.device = *device;
   if (auto vehicle = args.Value("vehicle")) setup.run.vehicle = *vehicle;
-  setup.track = LoadTrack(setup.run.track);
   setup.vehicle = LoadVehicle(setup.run.vehicle);
+  const bool blimp = IsBlimpKind(setup.vehicle.kind);
+  // A blimp flies a blimp course; the robot drives a track.
+  if (blimp) {
+    setup.course = LoadBlimpCourse(setup.run.track);
+  } else {
+    setup.track = LoadTrack(setup.run.track);
+  }
   if (auto name = args.Value("vehicle-name")) {
     if (const std::string problem = VehicleNameProblem(*name); !problem.empty()) {
       throw UsageError("option --vehicle-name: expected " + problem);
@@ -146,6 +152,26 @@ SessionSetup RunSetupFromArgs(const Args& args) {
   if (!person && setup.device.driver != "sim") {
     throw UsageError("option --operator auto: the automatic operator moves the simulated arms, and device '" +
                    setup.device.name + "' (" + setup.device.driver + ") is not simulated; use --operator person");
+  }
+  if (blimp) {
+    // The blimp gesture cockpit is the blimp's interface (thesis 8.2.2).
+    const std::string name = args.Value("interface").value_or(setup.run.interface);
+    if (name != "blimp-gesture") {
+      throw UsageError("option --interface " + name + ": the blimp '" + setup.run.vehicle.string() +
+                       "' is flown with the blimp gesture cockpit (--interface blimp-gesture)");
+    }
+    if (setup.view != ViewKind::kNone) {
+      throw UsageError("the blimp's flight has no view yet: use --view none (and no --record)");
+    }
+    if (person && setup.device.driver == "sim") {
+      throw UsageError("option --operator person: the blimp is flown with both hands on a haptic device; the "
+                       "simulated device has no arms for a person (use --device with a real one)");
+    }
+    setup.blimp_interface = LoadBlimpGesture(InterfaceFile(setup.run, name));
+    setup.calibration = DeviceCalibrationFor(setup.device);
+    if (!setup.device.gravity.empty()) setup.gravity = LoadGravityGrid(setup.device.gravity);
+    setup.vehicle_program = ProgramDirectory() / "haptel-vehicle";
+    return setup;
   }
   // The interface to start with: --interface, else the configuration's; a
   // person at the simulated device has no arms to move, so the keyboard.
@@ -203,8 +229,9 @@ RecordedRun RunAndRecord(const SessionSetup& setup, Recorder& recorder,
       std::fprintf(stderr, "haptel: run not recorded: %s; and %s\n", e.what(), e2.what());
     }
   }
-  if (run.run_id != 0) {
+  if (run.run_id != 0 && !setup.course) {
     // The run is saved; its picture is a bonus: a failure is a warning.
+    // (A blimp's flight has no picture yet: the picture draws a track.)
     try {
       const std::filesystem::path png =
           std::filesystem::absolute(RunPicturePath(setup.run.database, run.run_id));

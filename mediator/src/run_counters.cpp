@@ -19,7 +19,7 @@ std::vector<RunCounter> CollectCounters(const HapticSide& haptic, const SessionP
     world = physics->world->Counters();
     physics_overruns = physics->world->Stats().overruns;
   }
-  const LinkCounts link = vehicle.inbox().Counts();
+  const LinkCounts link = vehicle.Counts();
   const VideoStats video = vehicle.video().Stats();
   const uint64_t record_dropped = view != nullptr ? view->Stats().record_dropped : 0;
   return {

@@ -9,6 +9,7 @@
 #include "haptel/core/log.hpp"
 #include "haptel/haptics/sim_device.hpp"
 #include "haptel/interfaces/cockpit.hpp"
+#include "haptel/mediator/blimp_session.hpp"
 #include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/lap_timer.hpp"
 #include "haptel/mediator/operator.hpp"
@@ -38,6 +39,8 @@ std::string ToString(Outcome outcome) {
       return "aborted";
     case Outcome::kInterrupted:
       return "interrupted";
+    case Outcome::kCrashed:
+      return "crashed";
   }
   return "unknown";
 }
@@ -105,6 +108,7 @@ void LogProgress(double t, const LapTimer& lap, const VehicleLink& link, double 
 }  // namespace
 
 SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& interrupted) {
+  if (setup.course) return RunBlimpSession(setup, interrupted);
   const RunConfig& run = setup.run;
   const Track track(setup.track);
   SessionResult result;

@@ -6,7 +6,14 @@
 
 namespace haptel::mediator {
 
-void StateInbox::Push(const msg::VehicleState& s) {
+namespace {
+/// The vehicle's command watchdog holds it stopped (robot) or in its failsafe (blimp).
+bool WatchdogTripped(const msg::VehicleState& s) { return s.watchdog_tripped(); }
+bool WatchdogTripped(const msg::BlimpState& s) { return s.failsafe(); }
+}  // namespace
+
+template <typename State>
+void StateInboxOf<State>::Push(const State& s) {
   const int64_t now = MonotonicNs();
   std::lock_guard lock(mutex_);
   // Round trip of the command this state echoes, minus the time it waited
@@ -22,8 +29,8 @@ void StateInbox::Push(const msg::VehicleState& s) {
   }
   have_state_ = true;
   last_state_seq_ = s.seq();
-  if (s.watchdog_tripped() && !watchdog_was_tripped_) ++counts_.watchdog_trips;
-  watchdog_was_tripped_ = s.watchdog_tripped();
+  if (WatchdogTripped(s) && !watchdog_was_tripped_) ++counts_.watchdog_trips;
+  watchdog_was_tripped_ = WatchdogTripped(s);
   // Commands sent before the vehicle listened are not its to drop: count from
   // the first state that echoes an applied command.
   if (!have_baseline_ && s.last_command_seq() != 0) {
@@ -45,22 +52,28 @@ void StateInbox::Push(const msg::VehicleState& s) {
   last_received_ns_ = now;
 }
 
-LinkCounts StateInbox::Counts() const {
+template <typename State>
+LinkCounts StateInboxOf<State>::Counts() const {
   std::lock_guard lock(mutex_);
   return counts_;
 }
 
-std::deque<StateInbox::Entry> StateInbox::Drain() {
+template <typename State>
+std::deque<typename StateInboxOf<State>::Entry> StateInboxOf<State>::Drain() {
   std::lock_guard lock(mutex_);
   std::deque<Entry> out;
   out.swap(entries_);
   return out;
 }
 
-int64_t StateInbox::last_received_ns() const {
+template <typename State>
+int64_t StateInboxOf<State>::last_received_ns() const {
   std::lock_guard lock(mutex_);
   return last_received_ns_;
 }
+
+template class StateInboxOf<msg::VehicleState>;
+template class StateInboxOf<msg::BlimpState>;
 
 
 VehicleLink::VehicleLink(const VehicleLinkOptions& options) : options_(options) {
@@ -71,16 +84,26 @@ VehicleLink::VehicleLink(const VehicleLinkOptions& options) : options_(options) 
                                  "--name", options_.vehicle.name, "--domain", std::to_string(options_.link.domain_id)});
   }
   participant_ = std::make_unique<link::Participant>(options_.link, "haptel-mediator");
-  commands_ = std::make_unique<link::CommandWriter>(*participant_, link::TopicName(name(), "command"),
-                                                    link::Profile::kCommand);
-  states_ = std::make_unique<link::StateReader>(*participant_, link::TopicName(name(), "state"), link::Profile::kState,
-                                                [this](const msg::VehicleState& s) { inbox_.Push(s); });
+  if (IsBlimpKind(options_.vehicle.kind)) {
+    blimp_commands_ = std::make_unique<link::BlimpCommandWriter>(*participant_, link::TopicName(name(), "command"),
+                                                                 link::Profile::kCommand);
+    blimp_states_ = std::make_unique<link::BlimpStateReader>(
+        *participant_, link::TopicName(name(), "state"), link::Profile::kState,
+        [this](const msg::BlimpState& s) { blimp_inbox_.Push(s); });
+  } else {
+    commands_ = std::make_unique<link::CommandWriter>(*participant_, link::TopicName(name(), "command"),
+                                                      link::Profile::kCommand);
+    states_ = std::make_unique<link::StateReader>(*participant_, link::TopicName(name(), "state"),
+                                                  link::Profile::kState,
+                                                  [this](const msg::VehicleState& s) { inbox_.Push(s); });
+  }
   video_ = std::make_unique<VideoReceiver>(*participant_, link::TopicName(name(), "video"), options_.decode_video);
 }
 
 VehicleLink::~VehicleLink() { Stop(); }
 
 void VehicleLink::Send(double left, double right) {
+  if (!commands_) return;
   command_.seq(++seq_);
   command_.left(static_cast<float>(left));
   command_.right(static_cast<float>(right));
@@ -88,10 +111,26 @@ void VehicleLink::Send(double left, double right) {
   commands_->Write(command_);
 }
 
+void VehicleLink::Send(const BlimpCommand& command) {
+  if (!blimp_commands_) return;
+  msg::BlimpCommand& m = blimp_command_;
+  m.seq(++seq_);
+  m.elevator(static_cast<float>(command.elevator));
+  m.rudder(static_cast<float>(command.rudder));
+  m.power(static_cast<float>(command.power));
+  m.helix(static_cast<float>(command.helix));
+  m.tail_rotor(static_cast<float>(command.tail_rotor));
+  m.camera_pan(static_cast<float>(command.camera_pan));
+  m.camera_tilt(static_cast<float>(command.camera_tilt));
+  m.sent_ns(MonotonicNs());
+  blimp_commands_->Write(m);
+}
+
 void VehicleLink::Stop() {
   if (stopped_) return;
   stopped_ = true;
   Send(0.0, 0.0);
+  Send(BlimpCommand{});
   if (process_) process_->Terminate();
 }
 

@@ -141,15 +141,26 @@ void Airship::Loads(double t_s, const AirshipState& s, const AirshipControls& c,
 Airship::Derivative Airship::Evaluate(double t_s, const AirshipState& s, const AirshipControls& c) const {
   Eigen::Vector3d force, moment;
   Loads(t_s, s, c, &force, &moment);
+  if (contact_ != nullptr) {
+    Eigen::Vector3d contact_force = Eigen::Vector3d::Zero(), contact_moment = Eigen::Vector3d::Zero();
+    contact_->Loads(s, &contact_force, &contact_moment);
+    force += contact_force;
+    moment += contact_moment;
+  }
   const Eigen::Vector3d& M = mass_.inertia_mass;
   const Eigen::Vector3d& J = mass_.inertia_moment;
-  const Eigen::Vector3d momentum = M.cwiseProduct(s.velocity);
   const Eigen::Vector3d angular = J.cwiseProduct(s.rates);
+  // The rigid body's momentum goes with the ground velocity, the added
+  // mass's with the velocity through the air: in a steady wind the hull
+  // feels only its motion through the air (Galilean invariance).
+  const Eigen::Vector3d air = s.velocity - s.attitude.conjugate() * Wind(t_s);
+  const Eigen::Vector3d added = (M - Eigen::Vector3d::Constant(mass_.mass)).cwiseProduct(air);
+  const Eigen::Vector3d momentum = mass_.mass * s.velocity + added;
   Derivative d;
   // Kirchhoff's equations in the body frame: the -v × Mv term is the
   // Munk moment that turns a moving hull broadside.
   d.velocity_dot = (force - s.rates.cross(momentum)).cwiseQuotient(M);
-  d.rates_dot = (moment - s.rates.cross(angular) - s.velocity.cross(momentum)).cwiseQuotient(J);
+  d.rates_dot = (moment - s.rates.cross(angular) - air.cross(added)).cwiseQuotient(J);
   d.position_dot = s.attitude * s.velocity;
   const Eigen::Quaterniond spin = s.attitude * Eigen::Quaterniond(0.0, s.rates.x(), s.rates.y(), s.rates.z());
   d.attitude_dot = 0.5 * spin.coeffs();

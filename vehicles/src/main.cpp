@@ -14,17 +14,63 @@
 #include "haptel/core/cli.hpp"
 #include "haptel/core/stop_signals.hpp"
 #include "haptel/core/log.hpp"
+#include "haptel/config/blimp_course.hpp"
+#include "haptel/vehicles/blimp_adapters.hpp"
+#include "haptel/vehicles/blimp_node.hpp"
 #include "haptel/vehicles/vehicle_node.hpp"
+#include "haptel/video/blimp_camera.hpp"
 #include "haptel/video/camera_source.hpp"
 
 namespace {
 constexpr const char* kUsage =
     "usage: haptel-vehicle [--config FILE] [--track FILE] [--name NAME] [--domain N] [--can IFACE]\n"
+    "                      [--serial-port PATH]\n"
     "  --config FILE  vehicle configuration (default config/vehicles/sim-robot.yaml)\n"
     "  --can IFACE    SocketCAN interface of a can-robot (overrides can.interface)\n"
-    "  --track FILE   track the simulator drives on (overrides the file's 'world')\n"
+    "  --serial-port PATH  the servo controller of a servo-blimp (overrides servo.port)\n"
+    "  --track FILE   track the simulator drives on, or a blimp's course (overrides the file's 'world')\n"
     "  --name NAME    vehicle name, part of its DDS topic names\n"
     "  --domain N     DDS domain id (overrides link.domain_id)\n";
+}  // namespace
+
+namespace {
+/// The blimp's node until a signal, or until its servo controller's port
+/// vanishes (exit 3: the vehicle is lost; the controller's own serial
+/// timeout takes every channel to neutral).
+int RunBlimp(const haptel::VehicleConfig& config, const haptel::BlimpCourseConfig& course,
+             std::unique_ptr<haptel::video::CameraSource> camera, std::unique_ptr<haptel::vehicles::BlimpAdapter> adapter,
+             const std::string& camera_name, const std::atomic<bool>& stop) {
+  using namespace haptel;
+  vehicles::BlimpNode node(config, std::move(camera), std::move(adapter));
+  node.Start();
+  log::Info("vehicle '" + config.name + "' (" + config.kind + ") up on domain " +
+            std::to_string(config.link.domain_id) + ", course '" + course.name + "', camera " + camera_name +
+            (UsesServo(config.kind) && !config.servo.port.empty() ? ", servo controller on " + config.servo.port : ""));
+  uint64_t trips = 0;
+  std::string failure;
+  while (!stop.load()) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    failure = node.AdapterFailure();
+    if (!failure.empty()) break;
+    const auto c = node.Counters();
+    if (c.watchdog_trips > trips) {
+      trips = c.watchdog_trips;
+      log::Warn("watchdog: no command for " + std::to_string(config.watchdog_timeout_s) +
+                " s, every channel to neutral");
+    }
+  }
+  node.Stop();
+  const auto c = node.Counters();
+  if (!failure.empty()) {
+    log::Error("the servo controller is lost: " + failure + "; stopped (its own serial timeout sends every "
+               "channel to neutral)");
+    return cli::kExitLost;
+  }
+  log::Info("stopped: every channel at neutral; " + std::to_string(c.commands_accepted) + " commands, " +
+            std::to_string(c.commands_malformed) + " malformed, " + std::to_string(c.commands_stale) + " stale, " +
+            std::to_string(c.frames_published) + " frames");
+  return cli::kExitOk;
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -37,8 +83,10 @@ int main(int argc, char** argv) {
     std::unique_ptr<Track> track;
     std::unique_ptr<video::CameraSource> camera;
     std::unique_ptr<vehicles::VehicleAdapter> adapter;
+    std::unique_ptr<BlimpCourseConfig> course;
+    std::unique_ptr<vehicles::BlimpAdapter> blimp;
     cli::ReadInput([&] {
-      const Args args(argc, argv, {"config", "track", "name", "domain", "can"}, {});
+      const Args args(argc, argv, {"config", "track", "name", "domain", "can", "serial-port"}, {});
       if (!args.positional().empty()) throw UsageError("unexpected argument '" + args.positional()[0] + "'");
       const std::filesystem::path file =
           args.Value("config").value_or(ShippedFile("config/vehicles/sim-robot.yaml").string());
@@ -59,9 +107,28 @@ int main(int argc, char** argv) {
         config.can.interface = *can;
         config.ValidateOrThrow();
       }
+      if (auto port = args.Value("serial-port")) {
+        if (!UsesServo(config.kind)) {
+          throw UsageError("option --serial-port: the vehicle '" + file.string() + "' is of kind " + config.kind +
+                           ", not behind a servo controller");
+        }
+        config.servo.port = *port;
+        config.ValidateOrThrow();
+      }
+      if (config.kind == "servo-blimp" && config.servo.port.empty()) {
+        throw UsageError("the servo controller's serial port: give --serial-port PATH (or servo.port in " +
+                         file.string() + ")");
+      }
       if (config.world.empty()) {
         throw ConfigError(file.string() + ": key 'world': expected the track file a simulated "
                           "vehicle drives on (or --track FILE)");
+      }
+      if (IsBlimpKind(config.kind)) {
+        course = std::make_unique<BlimpCourseConfig>(LoadBlimpCourse(config.world));
+        // The port first: a controller that cannot be opened stops here (exit 2).
+        blimp = vehicles::MakeBlimpAdapter(config, *course);
+        camera = video::MakeBlimpCameraSource(config.camera, *course, file.string());
+        return;
       }
       track = std::make_unique<Track>(LoadTrack(config.world));
       // The bus first: a robot whose bus cannot open stops here (exit 2),
@@ -73,6 +140,7 @@ int main(int argc, char** argv) {
     });
 
     const std::string camera_name = camera->Describe();
+    if (blimp) return RunBlimp(config, *course, std::move(camera), std::move(blimp), camera_name, stop);
     vehicles::VehicleNode node(config, *track, std::move(camera), std::move(adapter));
     node.Start();
     log::Info("vehicle '" + config.name + "' (" + config.kind + ") up on domain " +

@@ -54,19 +54,17 @@ VehicleNode::VehicleNode(const VehicleConfig& config, const Track& track,
                          std::unique_ptr<video::CameraSource> camera, std::unique_ptr<VehicleAdapter> adapter)
     : config_(Validated(config)),
       adapter_(adapter != nullptr ? std::move(adapter) : MakeVehicleAdapter(config, track)),
-      watchdog_(config.watchdog_timeout_s),
-      camera_(std::move(camera)),
-      encoder_(config.camera.jpeg_quality) {
-  if (camera_ == nullptr) throw std::invalid_argument("VehicleNode: no camera source");
+      sequence_(config.watchdog_timeout_s),
+      watchdog_(config.watchdog_timeout_s) {
+  if (camera == nullptr) throw std::invalid_argument("VehicleNode: no camera source");
   ticks_per_state_ = std::max(1, static_cast<int>(std::lround(config.sim_rate_hz / config.state_rate_hz)));
-  const AdapterState s = adapter_->State();
-  pose_.Store({s.x, s.y, s.heading});
 
   participant_ = std::make_unique<link::Participant>(config.link, "haptel-vehicle-" + config.name);
   state_writer_ = std::make_unique<link::StateWriter>(
       *participant_, link::TopicName(config.name, "state"), link::Profile::kState);
-  video_writer_ = std::make_unique<link::VideoWriter>(
-      *participant_, link::TopicName(config.name, "video"), link::Profile::kVideo);
+  camera_ = std::make_unique<CameraStreamer>(config.camera, std::move(camera), *participant_, config.name);
+  const AdapterState s = adapter_->State();
+  camera_->SetPose({.x = s.x, .y = s.y, .heading = s.heading});
   command_reader_ = std::make_unique<link::CommandReader>(
       *participant_, link::TopicName(config.name, "command"), link::Profile::kCommand,
       [this](const msg::DriveCommand& cmd) { OnCommand(cmd); });
@@ -74,21 +72,18 @@ VehicleNode::VehicleNode(const VehicleConfig& config, const Track& track,
   control_ = std::make_unique<PeriodicThread>(
       PeriodicThread::Options{.name = "vehicle-control", .rate_hz = config.sim_rate_hz},
       [this](int64_t now) { ControlTick(now); });
-  camera_loop_ = std::make_unique<PeriodicThread>(
-      PeriodicThread::Options{.name = "vehicle-camera", .rate_hz = config.camera.rate_hz},
-      [this](int64_t now) { CameraTick(now); });
 }
 
 VehicleNode::~VehicleNode() { Stop(); }
 
 void VehicleNode::Start() {
   control_->Start();
-  camera_loop_->Start();
+  camera_->Start();
 }
 
 void VehicleNode::Stop() {
   if (stopped_.exchange(true)) return;
-  camera_loop_->Stop();
+  camera_->Stop();
   control_->Stop();
   adapter_->Stop();
   adapter_->Update(1e-3);
@@ -102,17 +97,10 @@ void VehicleNode::OnCommand(const msg::DriveCommand& cmd) {
     malformed_.fetch_add(1, std::memory_order_relaxed);
     return;
   }
-  // Best-effort delivery may reorder; an older command never overrides a newer
-  // one — unless the sender restarted (its sequence began again) and the last
-  // accepted command is older than the watchdog timeout.
-  const uint64_t last = last_accepted_seq_.load();
-  const bool restarted = now - last_accepted_ns_.load() > SToNs(config_.watchdog_timeout_s);
-  if (cmd.seq() <= last && !restarted) {
+  if (!sequence_.Accept(cmd.seq(), now)) {
     stale_.fetch_add(1, std::memory_order_relaxed);
     return;
   }
-  last_accepted_seq_.store(cmd.seq());
-  last_accepted_ns_.store(now);
   accepted_.fetch_add(1, std::memory_order_relaxed);
   command_.Store({cmd.seq(), cmd.sent_ns(), now, cmd.left(), cmd.right()});
 }
@@ -138,7 +126,7 @@ void VehicleNode::ControlTick(int64_t now_ns) {
   last_tick_ns_ = now_ns;
   adapter_->Update(dt);
   const AdapterState s = adapter_->State();
-  pose_.Store({s.x, s.y, s.heading});
+  camera_->SetPose({.x = s.x, .y = s.y, .heading = s.heading});
   if (tick_count_++ % static_cast<uint64_t>(ticks_per_state_) == 0) PublishState(now_ns);
 }
 
@@ -168,48 +156,6 @@ void VehicleNode::PublishState(int64_t now_ns) {
   states_.fetch_add(1, std::memory_order_relaxed);
 }
 
-void VehicleNode::CameraTick(int64_t now_ns) {
-  if (camera_->Ended()) {
-    // The vehicle stays controllable; it just has no more video to send.
-    if (!end_reported_) {
-      end_reported_ = true;
-      camera_ended_.store(true);
-      log::Warn("camera file ended (" + camera_->Describe() +
-                "); no more video is published, the vehicle stays controllable");
-    }
-    return;
-  }
-  const Pose pose = pose_.Load();
-  const int64_t before_grab_wall_ns = WallNs();
-  const bool grabbed = camera_->Grab({pose.x, pose.y, pose.heading}, image_);
-  // A device's Grab may wait up to a frame period for the frame: it exists
-  // when Grab returns. A rendered frame shows the pose read before Grab.
-  const int64_t capture_wall_ns = camera_->RendersAtGrab() ? before_grab_wall_ns : WallNs();
-  if (!grabbed && camera_->Ended()) return;  // an end, not a failure: reported next tick
-  if (grab_monitor_.OnGrab(grabbed, now_ns) == video::GrabMonitor::Event::kStalled) {
-    log::Warn("camera " + camera_->Describe() + " delivers no frames (" +
-              std::to_string(grab_monitor_.failures_in_a_row()) +
-              " grabs in a row failed); the vehicle runs on without video (reported once; "
-              "counted in the stop summary)");
-  }
-  grabs_failed_.store(grab_monitor_.failures(), std::memory_order_relaxed);
-  camera_stalls_.store(grab_monitor_.stalls(), std::memory_order_relaxed);
-  if (!grabbed) return;
-  if (!encoder_.Encode(image_, jpeg_)) {
-    frames_failed_.fetch_add(1, std::memory_order_relaxed);
-    return;
-  }
-  msg::VideoFrame& f = frame_msg_;
-  f.seq(++frame_seq_);
-  f.capture_wall_ns(capture_wall_ns);
-  f.width(static_cast<uint16_t>(image_.cols));
-  f.height(static_cast<uint16_t>(image_.rows));
-  f.encoding("jpeg");
-  f.data().assign(jpeg_.begin(), jpeg_.end());
-  video_writer_->Write(f);
-  frames_.fetch_add(1, std::memory_order_relaxed);
-}
-
 NodeCounters VehicleNode::Counters() const {
   NodeCounters c;
   c.commands_accepted = accepted_.load();
@@ -217,11 +163,12 @@ NodeCounters VehicleNode::Counters() const {
   c.commands_stale = stale_.load();
   c.watchdog_trips = trips_.load();
   c.states_published = states_.load();
-  c.frames_published = frames_.load();
-  c.frames_failed = frames_failed_.load();
-  c.grabs_failed = grabs_failed_.load();
-  c.camera_stalls = camera_stalls_.load();
-  c.camera_ended = camera_ended_.load();
+  const CameraCounters camera = camera_->Counters();
+  c.frames_published = camera.frames_published;
+  c.frames_failed = camera.frames_failed;
+  c.grabs_failed = camera.grabs_failed;
+  c.camera_stalls = camera.camera_stalls;
+  c.camera_ended = camera.camera_ended;
   c.watchdog_expired = expired_.load();
   return c;
 }

@@ -7,6 +7,7 @@
 
 #include "haptel/config/airship.hpp"
 #include "haptel/config/link.hpp"
+#include "haptel/config/servo.hpp"
 
 namespace haptel {
 
@@ -108,7 +109,8 @@ struct VehicleConfig {
   CameraConfig camera;
   LinkConfig link;
   CanConfig can;  ///< kinds can-robot and can-robot-sim only
-  AirshipConfig airship;  ///< kind sim-blimp only
+  AirshipConfig airship;  ///< the simulated blimp kinds only (UsesAirship)
+  ServoControllerConfig servo;  ///< the servo-controller blimp kinds only (UsesServo)
 
   /// Throws ConfigFieldError unless the name suits DDS topic names, the kind
   /// is known, the rates are in range and every part is valid ("drive.*", ...).
@@ -118,12 +120,20 @@ struct VehicleConfig {
 /// The kinds a vehicle file may name: "sim-robot" (the simulated tank),
 /// "can-robot" (the real one on SocketCAN), "can-robot-sim" (the simulated
 /// tank behind emulated CAN nodes, through the real adapter), "sim-blimp"
-/// (the simulated airship).
+/// (the simulated airship), "servo-blimp" (the real blimp's servo
+/// controller on a serial port), "servo-blimp-sim" (the simulated airship
+/// behind a simulated servo controller on a pseudo-terminal, through the
+/// real adapter).
 bool IsVehicleKind(const std::string& kind);
 /// Whether the kind drives its motors over CAN (has a `can` section).
 inline bool UsesCan(const std::string& kind) { return kind == "can-robot" || kind == "can-robot-sim"; }
 /// Whether the kind is an airship (has an `airship` section).
-inline bool UsesAirship(const std::string& kind) { return kind == "sim-blimp"; }
+inline bool UsesAirship(const std::string& kind) { return kind == "sim-blimp" || kind == "servo-blimp-sim"; }
+/// Whether the kind drives servo channels through a controller (has a `servo` section).
+inline bool UsesServo(const std::string& kind) { return kind == "servo-blimp" || kind == "servo-blimp-sim"; }
+/// Whether the vehicle is a blimp (BlimpCommand and BlimpState on the link,
+/// a blimp course for its world) rather than the robot.
+inline bool IsBlimpKind(const std::string& kind) { return kind == "sim-blimp" || UsesServo(kind); }
 
 /// Loads and validates (VehicleConfig::ValidateOrThrow) a vehicle file
 /// (strict: unknown keys are errors naming file, key and line).

@@ -23,6 +23,8 @@
 #include <string>
 #include <vector>
 
+#include "haptel/config/blimp_course.hpp"
+#include "haptel/config/blimp_gesture.hpp"
 #include "haptel/config/calibration.hpp"
 #include "haptel/core/cli.hpp"
 #include "haptel/config/device.hpp"
@@ -89,6 +91,10 @@ struct SessionSetup {
   /// overlay shows (lap clock, gates, contacts), view or not: a study's
   /// console shows the live trial with it. Must return quickly.
   std::function<void(const view::Overlay&)> on_live;
+  /// A blimp's flight (the vehicle is a blimp kind): its course, instead of
+  /// `track`, and its interface, instead of `interfaces` (RunBlimpSession).
+  std::optional<BlimpCourseConfig> course;
+  std::optional<BlimpGestureConfig> blimp_interface;
 };
 
 enum class Outcome {
@@ -100,6 +106,7 @@ enum class Outcome {
   kDeviceLost,
   kAborted,      ///< the person closed the window or lost their controller
   kInterrupted,  ///< SIGINT / SIGTERM / SIGHUP
+  kCrashed,      ///< the blimp hit a building or the ground too fast
 };
 std::string ToString(Outcome outcome);
 /// The process exit code for an outcome: 0 completed, 3 lost vehicle or device, 1 otherwise.

@@ -16,6 +16,7 @@
 #include "haptel/config/link.hpp"
 #include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"
+#include "haptel/core/blimp_command.hpp"
 #include "haptel/core/child_process.hpp"
 #include "haptel/core/histogram.hpp"
 #include "haptel/link/topic.hpp"
@@ -40,14 +41,16 @@ struct LinkCounts {
 
 /// Vehicle states as they arrive (DDS thread), drained by the session loop.
 /// Measures the command round trip from the echo each state carries, and
-/// counts what the states show (LinkCounts).
-class StateInbox {
+/// counts what the states show (LinkCounts). One for each vehicle type's
+/// state: msg::VehicleState (the robot) and msg::BlimpState.
+template <typename State>
+class StateInboxOf {
  public:
   struct Entry {
-    msg::VehicleState state;
+    State state;
     int64_t received_ns;
   };
-  void Push(const msg::VehicleState& s);
+  void Push(const State& s);
   std::deque<Entry> Drain();
   int64_t last_received_ns() const;
   /// Round trip of echoed commands minus their wait at the vehicle, µs
@@ -71,6 +74,8 @@ class StateInbox {
   uint64_t dropped_before_ = 0;  ///< counted against earlier baselines
   Histogram rtt_{10.0, 20000};  // µs bins up to 200 ms
 };
+using StateInbox = StateInboxOf<msg::VehicleState>;
+using BlimpStateInbox = StateInboxOf<msg::BlimpState>;
 
 struct VehicleLinkOptions {
   VehicleConfig vehicle;
@@ -93,13 +98,23 @@ class VehicleLink {
   VehicleLink(const VehicleLink&) = delete;
   VehicleLink& operator=(const VehicleLink&) = delete;
 
-  /// Sends a motor command (each in [-1, 1]) stamped now.
+  /// Whether the vehicle is a blimp (BlimpCommand and BlimpState on the
+  /// link) rather than the robot (DriveCommand and VehicleState).
+  bool blimp() const { return blimp_commands_ != nullptr; }
+  /// Sends a motor command (each in [-1, 1]) stamped now; the robot only.
   void Send(double left, double right);
+  /// Sends a blimp command stamped now; a blimp only.
+  void Send(const BlimpCommand& command);
   /// Zero command, then ends the spawned process. Safe to call twice.
   void Stop();
 
   StateInbox& inbox() { return inbox_; }
   const StateInbox& inbox() const { return inbox_; }
+  BlimpStateInbox& blimp_inbox() { return blimp_inbox_; }
+  /// The round trip, whichever vehicle it is.
+  const Histogram& Rtt() const { return blimp() ? blimp_inbox_.Rtt() : inbox_.Rtt(); }
+  int64_t last_received_ns() const { return blimp() ? blimp_inbox_.last_received_ns() : inbox_.last_received_ns(); }
+  LinkCounts Counts() const { return blimp() ? blimp_inbox_.Counts() : inbox_.Counts(); }
   const VideoReceiver& video() const { return *video_; }
   /// False once a spawned vehicle process has exited (always true for a
   /// vehicle that runs elsewhere).
@@ -114,9 +129,13 @@ class VehicleLink {
   VehicleLinkOptions options_;
   std::unique_ptr<ChildProcess> process_;
   StateInbox inbox_;
+  BlimpStateInbox blimp_inbox_;
   std::unique_ptr<link::Participant> participant_;
   std::unique_ptr<link::CommandWriter> commands_;
   std::unique_ptr<link::StateReader> states_;
+  std::unique_ptr<link::BlimpCommandWriter> blimp_commands_;
+  std::unique_ptr<link::BlimpStateReader> blimp_states_;
+  msg::BlimpCommand blimp_command_;
   std::unique_ptr<VideoReceiver> video_;
   msg::DriveCommand command_;
   uint64_t seq_ = 0;

@@ -56,6 +56,18 @@ struct AirshipMassProperties {
   double lamb_k1 = 0.0, lamb_k2 = 0.0, lamb_k_rot = 0.0;      ///< Lamb's factors used
 };
 
+/// An external load that depends on the state alone (contact with the
+/// ground and buildings): evaluated inside the integrator's every
+/// derivative evaluation, as stiff loads must be, not held over a step.
+/// Implementations must be allocation-free and deterministic.
+class AirshipContact {
+ public:
+  virtual ~AirshipContact() = default;
+  /// Adds nothing when there is no contact; otherwise writes the body-frame
+  /// force (N) and moment about the centre of gravity (N·m).
+  virtual void Loads(const AirshipState& state, Eigen::Vector3d* force_body, Eigen::Vector3d* moment_body) const = 0;
+};
+
 /// Lamb's added-mass factors of a prolate spheroid with this length/diameter
 /// ratio (> 1): k1 axial, k2 transverse, k' rotational (about a transverse axis).
 void LambFactors(double fineness, double* k1, double* k2, double* k_rot);
@@ -90,6 +102,10 @@ class Airship {
   Eigen::Vector3d YawPitchRoll() const;
   /// Whether every state variable is finite.
   bool Finite() const;
+  /// The external contact load added to the body loads in every derivative
+  /// evaluation (null: none). Not owned: it must outlive its use here.
+  void set_contact(const AirshipContact* contact) { contact_ = contact; }
+  const AirshipContact* contact() const { return contact_; }
 
   /// Body-frame force and moment at a state (for tests and the integrators).
   void Loads(double t_s, const AirshipState& s, const AirshipControls& c, Eigen::Vector3d* force,
@@ -108,6 +124,7 @@ class Airship {
   AirshipMassProperties mass_;
   AirshipState state_;
   double time_s_ = 0.0;
+  const AirshipContact* contact_ = nullptr;
   // Gust components: per axis, 6 sinusoids.
   static constexpr int kGustTerms = 6;
   /// The helix-plane servo follows its target with this lag, within its slew rate.

@@ -18,8 +18,8 @@
 #include "haptel/core/seqlock.hpp"
 #include "haptel/link/topic.hpp"
 #include "haptel/vehicles/adapter.hpp"
+#include "haptel/vehicles/camera_streamer.hpp"
 #include "haptel/video/camera_source.hpp"
-#include "haptel/video/codec.hpp"
 
 namespace haptel::vehicles {
 
@@ -72,7 +72,6 @@ class VehicleNode {
   };
   void OnCommand(const msg::DriveCommand& cmd);
   void ControlTick(int64_t now_ns);
-  void CameraTick(int64_t now_ns);
   void PublishState(int64_t now_ns);
 
   VehicleConfig config_;
@@ -80,40 +79,23 @@ class VehicleNode {
   Seqlock<ReceivedCommand> command_;
   uint64_t applied_version_ = 0;
   ReceivedCommand applied_;
-  struct Pose {
-    double x, y, heading;
-  };
-  Seqlock<Pose> pose_;
   int64_t last_tick_ns_ = 0;
   uint64_t tick_count_ = 0;
   uint64_t state_seq_ = 0;
-  uint64_t frame_seq_ = 0;
   int ticks_per_state_ = 1;
-  std::atomic<uint64_t> last_accepted_seq_{0};
-  std::atomic<int64_t> last_accepted_ns_{0};
-  std::atomic<uint64_t> accepted_{0}, malformed_{0}, stale_{0}, trips_{0}, states_{0}, frames_{0},
-      frames_failed_{0}, grabs_failed_{0}, camera_stalls_{0};
-  std::atomic<bool> camera_ended_{false};
+  CommandSequence sequence_;
+  std::atomic<uint64_t> accepted_{0}, malformed_{0}, stale_{0}, trips_{0}, states_{0};
   std::atomic<bool> expired_{true};
   std::atomic<bool> stopped_{false};
   CommandWatchdog watchdog_;
-
-  std::unique_ptr<video::CameraSource> camera_;
-  video::GrabMonitor grab_monitor_;
-  bool end_reported_ = false;
-  video::JpegEncoder encoder_;
-  cv::Mat image_;
   msg::VehicleState state_msg_;
-  msg::VideoFrame frame_msg_;
-  std::vector<uint8_t> jpeg_;
 
   // Declared last: destroyed first, so no DDS callback outlives the rest.
   std::unique_ptr<link::Participant> participant_;
   std::unique_ptr<link::StateWriter> state_writer_;
-  std::unique_ptr<link::VideoWriter> video_writer_;
+  std::unique_ptr<CameraStreamer> camera_;
   std::unique_ptr<link::CommandReader> command_reader_;
   std::unique_ptr<PeriodicThread> control_;
-  std::unique_ptr<PeriodicThread> camera_loop_;
 };
 
 }  // namespace haptel::vehicles

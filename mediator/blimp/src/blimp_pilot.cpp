@@ -1,0 +1,280 @@
+#include "haptel/mediator/blimp/blimp_pilot.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include "haptel/config/check.hpp"
+#include "haptel/config/error.hpp"
+#include "haptel/core/geometry2d.hpp"
+
+namespace haptel::mediator {
+
+namespace check = config_check;
+
+namespace {
+
+Eigen::Vector2d Horizontal(const Eigen::Vector3d& v) { return {v.x(), v.y()}; }
+
+double Bearing(const Eigen::Vector2d& d) { return std::atan2(d.y(), d.x()); }
+
+}  // namespace
+
+void BlimpPilotConfig::ValidateOrThrow() const {
+  check::Number("cruise_airspeed", cruise_airspeed, 0.5, 15.0);
+  check::Number("reaction_delay_s", reaction_delay_s, 0.0, 2.0);
+  check::Number("lookahead", lookahead, 1.0, 200.0);
+  check::Number("exit_distance", exit_distance, 0.0, 200.0);
+  check::Number("turn_back_distance", turn_back_distance, 1.0, 500.0);
+  check::Number("approach_slope", approach_slope, 0.0, 10.0);
+  check::Number("building_clearance", building_clearance, 0.0, 100.0);
+  check::Number("building_margin", building_margin, 0.0, 100.0);
+  check::Number("takeoff_height", takeoff_height, 0.1, 50.0);
+  check::Number("height_gain", height_gain, 0.01, 10.0);
+  check::Number("max_climb", max_climb, 0.05, 10.0);
+  check::Number("max_sink", max_sink, 0.05, 10.0);
+  check::Number("vertical_gain", vertical_gain, 0.0, 1000.0);
+  check::Number("vertical_integral", vertical_integral, 0.0, 1000.0);
+  check::Number("vertical_drag_per_speed2", vertical_drag_per_speed2, 0.0, 100.0);
+  check::Number("speed_gain", speed_gain, 0.0, 1000.0);
+  check::Number("speed_integral", speed_integral, 0.0, 1000.0);
+  check::Number("drag_per_speed2", drag_per_speed2, 0.0, 100.0);
+  check::Number("landing_speed", landing_speed, 0.05, 5.0);
+  check::Number("landing_coast_length", landing_coast_length, 1.0, 1000.0);
+  check::Number("landing_hover", landing_hover, 0.0, 20.0);
+  check::Number("landing_glide", landing_glide, 0.0, 1.0);
+  check::Number("landing_climb", landing_climb, 0.01, 5.0);
+  check::Number("landed_press_power", landed_press_power, 0.0, 1.0);
+  check::Number("heading_gain", heading_gain, 0.0, 100.0);
+  check::Number("yaw_rate_gain", yaw_rate_gain, 0.0, 100.0);
+  check::Number("tail_rotor_speed", tail_rotor_speed, 0.0, 20.0);
+  check::Number("pitch_gain", pitch_gain, 0.0, 100.0);
+  check::Number("pitch_rate_gain", pitch_rate_gain, 0.0, 100.0);
+  check::Number("pitch_per_climb", pitch_per_climb, 0.0, 1.0);
+  check::Number("full_thrust_n", full_thrust_n, 0.01, 1e5);
+  check::Number("max_helix_deg", max_helix_deg, 1.0, 180.0);
+}
+
+BlimpAutoPilot::BlimpAutoPilot(const BlimpCourseConfig& course, const BlimpPilotConfig& config)
+    : course_(Validated(course)), config_(Validated(config)), gates_(MakeGateFrames(course)) {}
+
+void BlimpAutoPilot::Observe(const BlimpObservation& observation) {
+  seen_[seen_count_ % kSeen] = observation;
+  ++seen_count_;
+}
+
+const BlimpObservation* BlimpAutoPilot::Seen(double t) const {
+  const size_t held = std::min(seen_count_, kSeen);
+  for (size_t k = 0; k < held; ++k) {
+    const BlimpObservation& o = seen_[(seen_count_ - 1 - k) % kSeen];
+    if (o.t_s <= t) return &o;
+  }
+  return nullptr;
+}
+
+double BlimpAutoPilot::SafeHeight(const Eigen::Vector3d& p, const Eigen::Vector2d& target) const {
+  double z = -std::numeric_limits<double>::infinity();
+  for (const BlimpBuildingSpec& b : course_.buildings) {
+    if (FootprintDistance(b, Horizontal(p), target) < config_.building_margin) {
+      z = std::max(z, b.height + config_.building_clearance);
+    }
+  }
+  return z;
+}
+
+Eigen::Vector2d BlimpAutoPilot::Pursue(const BlimpGateFrame& gate, const Eigen::Vector3d& p) const {
+  const Eigen::Vector2d c = Horizontal(gate.centre), forward = Horizontal(gate.forward);
+  const Eigen::Vector2d d = Horizontal(p) - c;
+  const double along = d.dot(forward);
+  if (along > 0.0) return c - config_.turn_back_distance * forward;  // past it: go round and come again
+  const double off = std::abs(d.dot(Horizontal(gate.left)));
+  double ahead = std::min(along + config_.lookahead, config_.exit_distance);
+  if (off > gate.half_width) ahead = std::min(ahead, -config_.approach_slope * (off - gate.half_width));
+  return c + ahead * forward;
+}
+
+BlimpCommand BlimpAutoPilot::Decide(double t_s) {
+  const double dt = decided_ ? std::clamp(t_s - last_decide_t_, 0.0, 0.5) : 0.0;
+  decided_ = true;
+  last_decide_t_ = t_s;
+  const BlimpObservation* seen = Seen(t_s - config_.reaction_delay_s);
+  if (seen == nullptr) return BlimpCommand{};
+  const BlimpObservation o = *seen;
+  const int gates = static_cast<int>(gates_.size());
+
+  if (!have_used_) {
+    have_used_ = true;
+    start_z_ = o.position.z();
+    phase_ = Phase::kTakeOff;
+    used_ = o;
+  } else if (o.t_s > used_.t_s) {
+    const double h = o.t_s - used_.t_s;
+    yaw_rate_ = WrapAngle(o.yaw - used_.yaw) / h;
+    pitch_rate_ = (o.pitch - used_.pitch) / h;
+    // The gate flown to, crossed (through it, or near it: missed, on to the next).
+    if (phase_ == Phase::kGates && gate_ < gates) {
+      const BlimpGateFrame& g = gates_[static_cast<size_t>(gate_)];
+      const double s0 = g.Along(used_.position), s1 = g.Along(o.position);
+      if (s0 < 0.0 && s1 >= 0.0) {
+        const Eigen::Vector3d at = used_.position + s0 / (s0 - s1) * (o.position - used_.position);
+        if (ClassifyCrossing(g, at) != BlimpGateCrossing::kIgnored) ++gate_;
+      }
+      if (gate_ >= gates) phase_ = Phase::kLanding;
+    }
+    // The wind: what the ground speed has beyond the airspeed along the
+    // heading (sideslip neglected), smoothed over a few seconds.
+    if (!o.contact) {
+      const Eigen::Vector2d heading(std::cos(o.yaw), std::sin(o.yaw));
+      const Eigen::Vector2d measured = Horizontal(o.velocity) - o.airspeed * heading;
+      wind_ += (measured - wind_) * std::min(1.0, h / 4.0);
+    }
+    used_ = o;
+  }
+
+  const Eigen::Vector2d position = Horizontal(o.position);
+  const Eigen::Vector2d heading(std::cos(o.yaw), std::sin(o.yaw));
+  const double height = o.position.z() - start_z_;
+  const Eigen::Vector2d ground = Horizontal(o.velocity);
+  const Eigen::Vector2d landing(course_.landing.centre[0], course_.landing.centre[1]);
+
+  // Where to, how high, how fast.
+  double bearing = o.yaw;        // the direction wanted over the ground
+  bool crab = true;              // head into the wind enough to make good the bearing
+  double forward_speed = config_.cruise_airspeed;
+  bool ground_speed = false;     // control the ground speed along the heading, not the airspeed
+  bool landing_vertical = false; // thrust up only: it sinks on its own weight
+  if (phase_ == Phase::kTakeOff && height > config_.takeoff_height) phase_ = gates > 0 ? Phase::kGates : Phase::kLanding;
+  if (phase_ == Phase::kLanding && o.contact && height < course_.takeoff_height &&
+      (position - landing).norm() <= course_.landing.radius) {
+    phase_ = Phase::kLanded;
+  }
+  switch (phase_) {
+    case Phase::kGround:
+    case Phase::kTakeOff: {
+      const BlimpGateFrame& g = gates_.front();
+      bearing = Bearing(Pursue(g, o.position) - position);
+      target_z_ = std::max(g.centre.z(), SafeHeight(o.position, Horizontal(g.centre)));
+      forward_speed = 1.0;
+      crab = false;
+      break;
+    }
+    case Phase::kGates: {
+      const BlimpGateFrame& g = gates_[static_cast<size_t>(gate_)];
+      bearing = Bearing(Pursue(g, o.position) - position);
+      target_z_ = std::max(g.centre.z(), SafeHeight(o.position, Horizontal(g.centre)));
+      break;
+    }
+    case Phase::kLanding: {
+      const Eigen::Vector2d to = landing - position;
+      const double distance = to.norm();
+      const double last_gate_z = gates > 0 ? gates_.back().centre.z() : start_z_ + 5.0;
+      // A glide down to a little above the ground, then, over the circle
+      // and slow, down onto it.
+      target_z_ = std::min(last_gate_z, start_z_ + config_.landing_hover + config_.landing_glide * distance);
+      // Once sinking it sinks on, unless it drifts out towards the circle's edge.
+      if (distance < 0.4 * course_.landing.radius && ground.norm() < 0.9 * course_.landing.max_speed) sinking_ = true;
+      if (distance > 0.8 * course_.landing.radius) sinking_ = false;
+      if (sinking_) target_z_ = start_z_ - 2.0;
+      target_z_ = std::max(target_z_, SafeHeight(o.position, landing));
+      landing_vertical = true;
+      // The ground velocity wanted: towards the centre, slowing as it nears
+      // it as fast as the hull coasts down on its own drag.
+      const double speed = std::min(config_.cruise_airspeed,
+                                    config_.landing_speed * std::exp(distance / config_.landing_coast_length)) *
+                           std::min(1.0, distance / 2.0);
+      const Eigen::Vector2d wanted = distance > 1e-6 ? Eigen::Vector2d(to / distance * speed) : Eigen::Vector2d::Zero();
+      ground_speed = true;
+      forward_speed = wanted.dot(heading);
+      if (distance > 3.0) {
+        bearing = Bearing(to);
+      } else {
+        // Close: face into the wind (the thrust can only push forwards).
+        bearing = wind_.norm() > 0.4 ? Bearing(-wind_) : o.yaw;
+        crab = false;
+      }
+      break;
+    }
+    case Phase::kLanded:
+      break;
+  }
+
+  BlimpCommand c;
+  // The camera: at the next gate, or at the landing circle.
+  const Eigen::Vector3d look = phase_ == Phase::kGates || phase_ == Phase::kTakeOff
+                                   ? gates_[static_cast<size_t>(std::min(gate_, gates - 1))].centre
+                                   : Eigen::Vector3d(landing.x(), landing.y(), 0.0);
+  const Eigen::Vector3d sight = look - o.position;
+  c.camera_pan = std::clamp(WrapAngle(Bearing(Horizontal(sight)) - o.yaw), -kBlimpCameraPanMax, kBlimpCameraPanMax);
+  c.camera_tilt = std::clamp(std::atan2(sight.z(), Horizontal(sight).norm()) - o.pitch, -kBlimpCameraTiltMax,
+                             kBlimpCameraTiltMax);
+  if (phase_ == Phase::kLanded) {
+    // Down: the helix plane down, pressing the gondola onto the ground
+    // until it stops sliding, then the power off; surfaces centred.
+    c.helix = -1.0;
+    c.power = ground.norm() > 0.3 ? config_.landed_press_power : 0.0;
+    speed_i_ = vertical_i_ = 0.0;
+    return c;
+  }
+
+  // Steering on the heading: the bearing, turned into the wind by the wind
+  // triangle's angle (steering on the track over the ground instead lags the
+  // heading by the hull's sideways inertia, and weaves).
+  double heading_wanted = bearing;
+  if (crab && o.airspeed > 1.5) {
+    const double across = wind_.dot(Eigen::Vector2d(-std::sin(bearing), std::cos(bearing)));
+    heading_wanted -= std::asin(std::clamp(across / o.airspeed, -0.7, 0.7));
+  }
+  const double error = WrapAngle(heading_wanted - o.yaw);
+  const double turn = std::clamp(config_.heading_gain * error - config_.yaw_rate_gain * yaw_rate_, -1.0, 1.0);
+  c.rudder = turn;
+  // The tail rotor below 8 km/h, fading out a metre per second above.
+  const double tail_weight = std::clamp(config_.tail_rotor_speed + 1.0 - o.airspeed, 0.0, 1.0);
+
+  // Height: a climb rate towards the target, a vertical force for it.
+  const double climb = std::clamp(config_.height_gain * (target_z_ - o.position.z()), -config_.max_sink,
+                                  landing_vertical ? config_.landing_climb : config_.max_climb);
+  const double climb_error = climb - o.velocity.z();
+  vertical_i_ = std::clamp(vertical_i_ + config_.vertical_integral * climb_error * dt, landing_vertical ? 0.0 : -6.0, 6.0);
+  double up_force = config_.vertical_gain * climb_error + vertical_i_ +
+                          config_.vertical_drag_per_speed2 * climb * std::abs(climb);
+
+  // Speed: a forward force (the propellers push only forwards).
+  const double measured = ground_speed ? ground.dot(heading) : o.airspeed;
+  const double speed_error = forward_speed - measured;
+  const double air_target = ground_speed ? std::max(0.0, forward_speed - wind_.dot(heading)) : forward_speed;
+  double forward_force = config_.drag_per_speed2 * air_target * air_target + config_.speed_gain * speed_error + speed_i_;
+  if (forward_force > 0.0 || speed_error > 0.0) {
+    speed_i_ = std::clamp(speed_i_ + config_.speed_integral * speed_error * dt, -8.0, 8.0);
+  }
+  forward_force = std::max(0.0, forward_force);
+
+  // Landing, slow: no thrust downwards (turning the helix plane over from
+  // up to down passes through forwards, and the lag rocks the blimp up and
+  // down); its 40 g of weight sink it. Else, slow, the plane turns over only
+  // for a firm need.
+  if (landing_vertical) {
+    up_force = std::max(0.0, up_force);
+  } else if (forward_force < 2.0) {
+    if (up_force > 1.5) helix_up_ = true;
+    if (up_force < -1.5) helix_up_ = false;
+    up_force = helix_up_ ? std::max(0.0, up_force) : std::min(0.0, up_force);
+  } else {
+    helix_up_ = up_force >= 0.0;
+  }
+  // The two forces as power and the helix plane's tilt.
+  const double thrust = std::min(std::hypot(forward_force, up_force), config_.full_thrust_n);
+  if (thrust > 1.0) helix_ = std::atan2(up_force, forward_force);  // (a weak thrust's direction is noise)
+  c.power = thrust / config_.full_thrust_n;
+  c.helix = std::clamp(helix_ / (config_.max_helix_deg * std::numbers::pi / 180.0), -1.0, 1.0);
+  c.tail_rotor = c.power < 0.02 ? turn : turn * tail_weight;
+
+  // The elevator: a little nose-up to climb, damped; landing, level only
+  // (slow, the surface's own force is most of what it does: nose-down
+  // pushes the tail, and so the blimp, up).
+  const double pitch_wanted = landing_vertical ? 0.0 : std::clamp(config_.pitch_per_climb * climb, -0.15, 0.15);
+  c.elevator = std::clamp(config_.pitch_gain * (pitch_wanted - o.pitch) - config_.pitch_rate_gain * pitch_rate_, -1.0, 1.0);
+  return Clamped(c);
+}
+
+}  // namespace haptel::mediator

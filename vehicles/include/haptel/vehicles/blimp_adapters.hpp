@@ -1,0 +1,93 @@
+#pragma once
+/// @file The blimp's adapters, one per vehicle kind:
+///
+/// - "sim-blimp": the simulated airship (SimBlimp) flown directly;
+/// - "servo-blimp": the real blimp's seven channels through its USB servo
+///   controller (Maestro or SC-8000) on a serial port — the adapter knows
+///   only what it sent and the controller's error register, no pose;
+/// - "servo-blimp-sim": that same adapter code on one end of a
+///   pseudo-terminal, a simulated servo controller on the other end decoding
+///   the bytes as the device would, and its pulse widths flying SimBlimp.
+#include <array>
+#include <memory>
+
+#include "haptel/config/blimp_course.hpp"
+#include "haptel/config/vehicle.hpp"
+#include "haptel/servo/serial_port.hpp"
+#include "haptel/servo/servo_output.hpp"
+#include "haptel/servo/sim_servo_controller.hpp"
+#include "haptel/vehicles/blimp_adapter.hpp"
+#include "haptel/vehicles/sim_blimp.hpp"
+
+namespace haptel::vehicles {
+
+/// A command's seven channels as fractions of their travel ([-1, 1]; power
+/// [0, 1]), in BlimpChannel order: the camera's angles over its range.
+std::array<double, kBlimpChannels> ChannelValues(const BlimpCommand& command);
+/// The inverse: channel fractions back to a command.
+BlimpCommand CommandFromChannels(const std::array<double, kBlimpChannels>& values);
+
+class SimBlimpAdapter final : public BlimpAdapter {
+ public:
+  SimBlimpAdapter(const AirshipConfig& airship, const BlimpCourseConfig& course);
+  void Apply(const BlimpCommand& command) override { command_ = command; }
+  void Update(double dt) override { sim_.Step(dt, command_); }
+  BlimpAdapterState State() const override;
+  const SimBlimp& sim() const { return sim_; }
+
+ private:
+  SimBlimp sim_;
+  BlimpCommand command_;
+};
+
+/// Fills the pose part of `state` from the simulator.
+void PoseFromSim(const SimBlimp& sim, BlimpAdapterState& state);
+
+class ServoBlimpAdapter final : public BlimpAdapter {
+ public:
+  /// `config` validated; `port` opened (SerialPort). Sends the neutral
+  /// pulses first.
+  ServoBlimpAdapter(const ServoControllerConfig& config, std::unique_ptr<servo::ByteStream> port);
+  void Apply(const BlimpCommand& command) override;
+  /// Sends the pulses every kSendPeriod_s and polls the controller's
+  /// errors. Throws servo::SerialLost when the port has vanished.
+  void Update(double dt) override;
+  BlimpAdapterState State() const override;
+  const servo::ServoOutput& output() const { return output_; }
+
+  /// How often the pulses go out: every channel's target at 50 Hz, the
+  /// servos' own frame rate (an SC-8000 at 9600 baud takes 53 frames/s).
+  static constexpr double kSendPeriod_s = 0.02;
+
+ private:
+  ServoControllerConfig config_;
+  servo::ServoOutput output_;
+  BlimpCommand applied_;
+  std::array<double, kBlimpChannels> pulse_us_{};
+  double time_s_ = 0.0;
+  double next_send_s_ = 0.0;
+};
+
+class SimulatedServoBlimp final : public BlimpAdapter {
+ public:
+  SimulatedServoBlimp(const ServoControllerConfig& config, const AirshipConfig& airship,
+                      const BlimpCourseConfig& course);
+  void Apply(const BlimpCommand& command) override { adapter_->Apply(command); }
+  void Update(double dt) override;
+  BlimpAdapterState State() const override;
+  const servo::SimServoController& controller() const { return *controller_; }
+
+ private:
+  ServoControllerConfig config_;
+  servo::PtyPair pty_;
+  std::unique_ptr<ServoBlimpAdapter> adapter_;
+  std::unique_ptr<servo::SimServoController> controller_;
+  SimBlimp sim_;
+  double time_s_ = 0.0;
+};
+
+/// The adapter for a blimp kind. `serial_port` overrides config.servo.port.
+/// Throws servo::SerialUnavailable (a set-up error) when the port cannot open.
+std::unique_ptr<BlimpAdapter> MakeBlimpAdapter(const VehicleConfig& config, const BlimpCourseConfig& course);
+
+}  // namespace haptel::vehicles

@@ -1,0 +1,125 @@
+#include "haptel/vehicles/blimp_adapters.hpp"
+
+#include <stdexcept>
+
+#include "haptel/servo/calibration.hpp"
+
+namespace haptel::vehicles {
+
+std::array<double, kBlimpChannels> ChannelValues(const BlimpCommand& c) {
+  return {c.elevator, c.rudder, c.power, c.helix, c.tail_rotor, c.camera_pan / kBlimpCameraPanMax,
+          c.camera_tilt / kBlimpCameraTiltMax};
+}
+
+BlimpCommand CommandFromChannels(const std::array<double, kBlimpChannels>& v) {
+  BlimpCommand c;
+  c.elevator = v[0];
+  c.rudder = v[1];
+  c.power = v[2];
+  c.helix = v[3];
+  c.tail_rotor = v[4];
+  c.camera_pan = v[5] * kBlimpCameraPanMax;
+  c.camera_tilt = v[6] * kBlimpCameraTiltMax;
+  return Clamped(c);
+}
+
+void PoseFromSim(const SimBlimp& sim, BlimpAdapterState& s) {
+  s.pose_valid = true;
+  const Eigen::Vector3d p = sim.position();
+  const Eigen::Vector3d v = sim.ground_velocity();
+  s.x = p.x();
+  s.y = p.y();
+  s.z = p.z();
+  s.yaw = sim.yaw();
+  s.pitch = sim.pitch();
+  s.roll = sim.roll();
+  s.vx = v.x();
+  s.vy = v.y();
+  s.vz = v.z();
+  s.airspeed = sim.airspeed();
+  s.contact = sim.in_contact();
+  s.impact_speed = sim.last_impact_speed();
+  s.contacts = static_cast<uint32_t>(sim.contacts());
+}
+
+SimBlimpAdapter::SimBlimpAdapter(const AirshipConfig& airship, const BlimpCourseConfig& course)
+    : sim_(airship, course) {}
+
+BlimpAdapterState SimBlimpAdapter::State() const {
+  BlimpAdapterState s;
+  PoseFromSim(sim_, s);
+  s.applied = sim_.applied();
+  return s;
+}
+
+ServoBlimpAdapter::ServoBlimpAdapter(const ServoControllerConfig& config, std::unique_ptr<servo::ByteStream> port)
+    : config_(config), output_(config, std::move(port)) {
+  Apply(BlimpCommand{});
+  output_.Send(pulse_us_);
+}
+
+void ServoBlimpAdapter::Apply(const BlimpCommand& command) {
+  applied_ = Clamped(command);
+  const std::array<double, kBlimpChannels> values = ChannelValues(applied_);
+  for (int i = 0; i < kBlimpChannels; ++i) pulse_us_[i] = servo::PulseFromCommand(config_.channels[i], values[i]);
+}
+
+void ServoBlimpAdapter::Update(double dt) {
+  time_s_ += dt;
+  if (time_s_ >= next_send_s_) {
+    next_send_s_ = std::max(next_send_s_ + kSendPeriod_s, time_s_ - kSendPeriod_s);
+    output_.Send(pulse_us_);
+  }
+  output_.Update(time_s_);
+}
+
+BlimpAdapterState ServoBlimpAdapter::State() const {
+  BlimpAdapterState s;
+  s.applied = applied_;
+  for (int i = 0; i < kBlimpChannels; ++i) s.pulse_us[i] = pulse_us_[i];
+  s.controller_errors = output_.last_errors();
+  return s;
+}
+
+SimulatedServoBlimp::SimulatedServoBlimp(const ServoControllerConfig& config, const AirshipConfig& airship,
+                                         const BlimpCourseConfig& course)
+    : config_(config), sim_(airship, course) {
+  // The adapter opens the pty's far end by its path, as it would a device.
+  adapter_ = std::make_unique<ServoBlimpAdapter>(
+      config_, std::make_unique<servo::SerialPort>(pty_.slave_path(), config_.baud));
+  controller_ = std::make_unique<servo::SimServoController>(config_, pty_.TakeMaster());
+}
+
+void SimulatedServoBlimp::Update(double dt) {
+  time_s_ += dt;
+  adapter_->Update(dt);
+  controller_->Update(time_s_);
+  // The controller's pulses, read back through each channel's calibration,
+  // are what the airship's actuators do.
+  std::array<double, kBlimpChannels> values{};
+  for (int i = 0; i < kBlimpChannels; ++i) {
+    values[i] = servo::CommandFromPulse(config_.channels[i], controller_->pulse_us()[i]);
+  }
+  sim_.Step(dt, CommandFromChannels(values));
+}
+
+BlimpAdapterState SimulatedServoBlimp::State() const {
+  BlimpAdapterState s = adapter_->State();
+  PoseFromSim(sim_, s);
+  s.applied = sim_.applied();
+  return s;
+}
+
+std::unique_ptr<BlimpAdapter> MakeBlimpAdapter(const VehicleConfig& config, const BlimpCourseConfig& course) {
+  if (config.kind == "sim-blimp") return std::make_unique<SimBlimpAdapter>(config.airship, course);
+  if (config.kind == "servo-blimp") {
+    return std::make_unique<ServoBlimpAdapter>(
+        config.servo, std::make_unique<servo::SerialPort>(config.servo.port, config.servo.baud));
+  }
+  if (config.kind == "servo-blimp-sim") {
+    return std::make_unique<SimulatedServoBlimp>(config.servo, config.airship, course);
+  }
+  throw std::invalid_argument("vehicle kind '" + config.kind + "' is not a blimp");
+}
+
+}  // namespace haptel::vehicles
