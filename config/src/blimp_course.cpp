@@ -80,7 +80,8 @@ std::string Text(double v) {
 void Point2(const std::string& key, const std::array<double, 2>& p) {
   for (double v : p) {
     if (!(std::abs(v) <= kMaxCoordinate)) {
-      check::Fail(key, "a point [x, y] within " + check::Range(-kMaxCoordinate, kMaxCoordinate) + " m");
+      check::Fail(key,
+                  "a point [x, y] within " + check::Range(-kMaxCoordinate, kMaxCoordinate) + " m");
     }
   }
 }
@@ -99,7 +100,8 @@ void BlimpCourseConfig::ValidateOrThrow() const {
   Point2("start.position", start.position);
   check::Number("start.heading_deg", start.heading_deg, -360.0, 360.0);
 
-  if (gates.empty()) check::Fail("gates", "a list of at least one gate {name, centre, heading_deg, width, height}");
+  if (gates.empty())
+    check::Fail("gates", "a list of at least one gate {name, centre, heading_deg, width, height}");
   std::set<std::string> gate_names;
   for (size_t i = 0; i < gates.size(); ++i) {
     const BlimpGateSpec& g = gates[i];
@@ -111,9 +113,9 @@ void BlimpCourseConfig::ValidateOrThrow() const {
     check::Number(key + ".width", g.width, 1.0, 1000.0);
     check::Number(key + ".height", g.height, 1.0, 1000.0);
     if (!(g.centre[2] >= g.height / 2 && g.centre[2] <= 1000.0)) {
-      throw ConfigFieldError(key + ".centre", "an opening above the ground: centre z >= height / 2 and <= 1000 m",
-                             {key + ".height"},
-                             "z " + Text(g.centre[2]) + " with height " + Text(g.height));
+      throw ConfigFieldError(
+          key + ".centre", "an opening above the ground: centre z >= height / 2 and <= 1000 m",
+          {key + ".height"}, "z " + Text(g.centre[2]) + " with height " + Text(g.height));
     }
   }
 
@@ -122,10 +124,12 @@ void BlimpCourseConfig::ValidateOrThrow() const {
     const BlimpBuildingSpec& b = buildings[i];
     const std::string key = "buildings[" + std::to_string(i) + "]";
     check::NonEmpty(key + ".name", b.name);
-    if (!building_names.insert(b.name).second) check::Fail(key + ".name", "a name no other building has");
+    if (!building_names.insert(b.name).second)
+      check::Fail(key + ".name", "a name no other building has");
     Point2(key + ".centre", b.centre);
     for (double s : b.size) {
-      if (!(s >= 0.1 && s <= 1e4)) check::Fail(key + ".size", "a list of 2 numbers [sx, sy] in [0.1, 10000] m");
+      if (!(s >= 0.1 && s <= 1e4))
+        check::Fail(key + ".size", "a list of 2 numbers [sx, sy] in [0.1, 10000] m");
     }
     check::Number(key + ".height", b.height, 0.1, 1000.0);
     check::Number(key + ".yaw_deg", b.yaw_deg, -360.0, 360.0);
@@ -145,21 +149,25 @@ void BlimpCourseConfig::ValidateOrThrow() const {
       const double h = Radians(g.heading_deg);
       const double lx = -std::sin(h) * g.width / 2, ly = std::cos(h) * g.width / 2;
       const bool below_roof = g.centre[2] - g.height / 2 < buildings[j].height;
-      if (below_roof && f.Meets(g.centre[0] - lx, g.centre[1] - ly, g.centre[0] + lx, g.centre[1] + ly)) {
-        throw ConfigFieldError("gates[" + std::to_string(i) + "].centre", "a gate clear of the buildings",
+      if (below_roof &&
+          f.Meets(g.centre[0] - lx, g.centre[1] - ly, g.centre[0] + lx, g.centre[1] + ly)) {
+        throw ConfigFieldError("gates[" + std::to_string(i) + "].centre",
+                               "a gate clear of the buildings",
                                {"buildings[" + std::to_string(j) + "].centre"},
                                "an opening that meets " + BuildingName(buildings, j));
       }
     }
     if (f.Distance(landing.centre[0], landing.centre[1]) < landing.radius) {
-      throw ConfigFieldError("landing.centre", "a landing circle clear of the buildings", {"landing.radius"},
+      throw ConfigFieldError("landing.centre", "a landing circle clear of the buildings",
+                             {"landing.radius"},
                              "a circle that overlaps " + BuildingName(buildings, j));
     }
     if (f.Distance(start.position[0], start.position[1]) < kBlimpStartClearance) {
-      throw ConfigFieldError("start.position",
-                             "a start at least " + Text(kBlimpStartClearance) + " m from every building", {},
-                             "a start " + Text(f.Distance(start.position[0], start.position[1])) + " m from " +
-                                 BuildingName(buildings, j));
+      throw ConfigFieldError(
+          "start.position",
+          "a start at least " + Text(kBlimpStartClearance) + " m from every building", {},
+          "a start " + Text(f.Distance(start.position[0], start.position[1])) + " m from " +
+              BuildingName(buildings, j));
     }
   }
 }
@@ -180,7 +188,8 @@ BlimpCourseConfig LoadBlimpCourse(const std::filesystem::path& file) {
   c.start.heading_deg = start.Number("heading_deg", c.start.heading_deg);
   start.Finish();
 
-  if (!root.Has("gates")) root.Fail("gates", "a list of at least one gate {name, centre, heading_deg, width, height}");
+  if (!root.Has("gates"))
+    root.Fail("gates", "a list of at least one gate {name, centre, heading_deg, width, height}");
   for (YamlMap& g : root.MapList("gates")) {
     BlimpGateSpec spec;
     spec.name = g.RequireString("name");

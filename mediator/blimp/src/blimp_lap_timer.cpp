@@ -13,9 +13,11 @@ BlimpLapTimer::BlimpLapTimer(const BlimpCourseConfig& course)
 }
 
 bool BlimpLapTimer::OnLandingGround(const BlimpObservation& o) const {
-  const double dx = o.position.x() - course_.landing.centre[0], dy = o.position.y() - course_.landing.centre[1];
+  const double dx = o.position.x() - course_.landing.centre[0],
+               dy = o.position.y() - course_.landing.centre[1];
   // Near the ground: no higher than the lap's start threshold above where it rested.
-  return std::hypot(dx, dy) <= course_.landing.radius && o.position.z() < start_z_ + course_.takeoff_height;
+  return std::hypot(dx, dy) <= course_.landing.radius &&
+         o.position.z() < start_z_ + course_.takeoff_height;
 }
 
 void BlimpLapTimer::Update(const BlimpObservation& o) {
@@ -76,7 +78,8 @@ void BlimpLapTimer::Update(const BlimpObservation& o) {
     }
     if (!(all_gates && OnLandingGround(o))) ++touches_;
   }
-  if (all_gates && o.contact && OnLandingGround(o) && o.velocity.norm() < course_.landing.max_speed) {
+  if (all_gates && o.contact && OnLandingGround(o) &&
+      o.velocity.norm() < course_.landing.max_speed) {
     completed_ = true;
     end_t_ = o.t_s;
   }
@@ -89,12 +92,14 @@ double BlimpLapTimer::lap_time_s() const {
 
 int BlimpLapTimer::gates_passed() const {
   return static_cast<int>(
-      std::count_if(splits_.begin(), splits_.end(), [](const BlimpGateSplit& s) { return s.split_s >= 0 && s.passed; }));
+      std::count_if(splits_.begin(), splits_.end(),
+                    [](const BlimpGateSplit& s) { return s.split_s >= 0 && s.passed; }));
 }
 
 int BlimpLapTimer::gates_missed() const {
   return static_cast<int>(
-      std::count_if(splits_.begin(), splits_.end(), [](const BlimpGateSplit& s) { return s.split_s >= 0 && !s.passed; }));
+      std::count_if(splits_.begin(), splits_.end(),
+                    [](const BlimpGateSplit& s) { return s.split_s >= 0 && !s.passed; }));
 }
 
 }  // namespace haptel::mediator

@@ -70,7 +70,8 @@ const BlimpObservation* BlimpAutoPilot::Seen(double t) const {
     const BlimpObservation& o = seen_[(seen_count_ - 1 - k) % kSeen];
     if (o.t_s <= t) return &o;
   }
-  return nullptr;
+  // All newer: nothing seen long enough ago yet, or (the ring overrun) the oldest kept.
+  return seen_count_ > kSeen ? &seen_[seen_count_ % kSeen] : nullptr;
 }
 
 double BlimpAutoPilot::SafeHeight(const Eigen::Vector3d& p, const Eigen::Vector2d& target) const {
@@ -87,10 +88,12 @@ Eigen::Vector2d BlimpAutoPilot::Pursue(const BlimpGateFrame& gate, const Eigen::
   const Eigen::Vector2d c = Horizontal(gate.centre), forward = Horizontal(gate.forward);
   const Eigen::Vector2d d = Horizontal(p) - c;
   const double along = d.dot(forward);
-  if (along > 0.0) return c - config_.turn_back_distance * forward;  // past it: go round and come again
+  if (along > 0.0)
+    return c - config_.turn_back_distance * forward;  // past it: go round and come again
   const double off = std::abs(d.dot(Horizontal(gate.left)));
   double ahead = std::min(along + config_.lookahead, config_.exit_distance);
-  if (off > gate.half_width) ahead = std::min(ahead, -config_.approach_slope * (off - gate.half_width));
+  if (off > gate.half_width)
+    ahead = std::min(ahead, -config_.approach_slope * (off - gate.half_width));
   return c + ahead * forward;
 }
 
@@ -139,12 +142,13 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
   const Eigen::Vector2d landing(course_.landing.centre[0], course_.landing.centre[1]);
 
   // Where to, how high, how fast.
-  double bearing = o.yaw;        // the direction wanted over the ground
-  bool crab = true;              // head into the wind enough to make good the bearing
+  double bearing = o.yaw;  // the direction wanted over the ground
+  bool crab = true;        // head into the wind enough to make good the bearing
   double forward_speed = config_.cruise_airspeed;
-  bool ground_speed = false;     // control the ground speed along the heading, not the airspeed
-  bool landing_vertical = false; // thrust up only: it sinks on its own weight
-  if (phase_ == Phase::kTakeOff && height > config_.takeoff_height) phase_ = gates > 0 ? Phase::kGates : Phase::kLanding;
+  bool ground_speed = false;      // control the ground speed along the heading, not the airspeed
+  bool landing_vertical = false;  // thrust up only: it sinks on its own weight
+  if (phase_ == Phase::kTakeOff && height > config_.takeoff_height)
+    phase_ = gates > 0 ? Phase::kGates : Phase::kLanding;
   if (phase_ == Phase::kLanding && o.contact && height < course_.takeoff_height &&
       (position - landing).norm() <= course_.landing.radius) {
     phase_ = Phase::kLanded;
@@ -171,22 +175,27 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
       const double last_gate_z = gates > 0 ? gates_.back().centre.z() : start_z_ + 5.0;
       // A glide down to a little above the ground, then, over the circle
       // and slow, down onto it.
-      target_z_ = std::min(last_gate_z, start_z_ + config_.landing_hover + config_.landing_glide * distance);
+      target_z_ = std::min(last_gate_z,
+                           start_z_ + config_.landing_hover + config_.landing_glide * distance);
       // Once sinking it sinks on, unless it drifts out towards the circle's edge.
-      if (distance < 0.4 * course_.landing.radius && ground.norm() < 0.9 * course_.landing.max_speed) sinking_ = true;
+      if (distance < 0.4 * course_.landing.radius &&
+          ground.norm() < 0.9 * course_.landing.max_speed)
+        sinking_ = true;
       if (distance > 0.8 * course_.landing.radius) sinking_ = false;
       if (sinking_) target_z_ = start_z_ - 2.0;
       target_z_ = std::max(target_z_, SafeHeight(o.position, landing));
       landing_vertical = true;
       // The ground velocity wanted: towards the centre, slowing as it nears
       // it as fast as the hull coasts down on its own drag.
-      const double speed = std::min(config_.cruise_airspeed,
-                                    config_.landing_speed * std::exp(distance / config_.landing_coast_length)) *
-                           std::min(1.0, distance / 2.0);
-      const Eigen::Vector2d wanted = distance > 1e-6 ? Eigen::Vector2d(to / distance * speed) : Eigen::Vector2d::Zero();
+      const double speed =
+          std::min(config_.cruise_airspeed,
+                   config_.landing_speed * std::exp(distance / config_.landing_coast_length)) *
+          std::min(1.0, distance / 2.0);
+      const Eigen::Vector2d wanted =
+          distance > 1e-6 ? Eigen::Vector2d(to / distance * speed) : Eigen::Vector2d::Zero();
       ground_speed = true;
       forward_speed = wanted.dot(heading);
-      if (distance > 3.0) {
+      if (distance > (wind_.norm() > 0.4 ? 0.8 * course_.landing.radius : 3.0)) {
         bearing = Bearing(to);
       } else {
         // Close: face into the wind (the thrust can only push forwards).
@@ -205,14 +214,15 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
                                    ? gates_[static_cast<size_t>(std::min(gate_, gates - 1))].centre
                                    : Eigen::Vector3d(landing.x(), landing.y(), 0.0);
   const Eigen::Vector3d sight = look - o.position;
-  c.camera_pan = std::clamp(WrapAngle(Bearing(Horizontal(sight)) - o.yaw), -kBlimpCameraPanMax, kBlimpCameraPanMax);
-  c.camera_tilt = std::clamp(std::atan2(sight.z(), Horizontal(sight).norm()) - o.pitch, -kBlimpCameraTiltMax,
-                             kBlimpCameraTiltMax);
+  c.camera_pan = std::clamp(WrapAngle(Bearing(Horizontal(sight)) - o.yaw), -kBlimpCameraPanMax,
+                            kBlimpCameraPanMax);
+  c.camera_tilt = std::clamp(std::atan2(sight.z(), Horizontal(sight).norm()) - o.pitch,
+                             -kBlimpCameraTiltMax, kBlimpCameraTiltMax);
   if (phase_ == Phase::kLanded) {
     // Down: the helix plane down, pressing the gondola onto the ground
     // until it stops sliding, then the power off; surfaces centred.
     c.helix = -1.0;
-    c.power = ground.norm() > 0.3 ? config_.landed_press_power : 0.0;
+    c.power = config_.landed_press_power;
     speed_i_ = vertical_i_ = 0.0;
     return c;
   }
@@ -226,35 +236,43 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
     heading_wanted -= std::asin(std::clamp(across / o.airspeed, -0.7, 0.7));
   }
   const double error = WrapAngle(heading_wanted - o.yaw);
-  const double turn = std::clamp(config_.heading_gain * error - config_.yaw_rate_gain * yaw_rate_, -1.0, 1.0);
+  const double turn =
+      std::clamp(config_.heading_gain * error - config_.yaw_rate_gain * yaw_rate_, -1.0, 1.0);
   c.rudder = turn;
   // The tail rotor below 8 km/h, fading out a metre per second above.
   const double tail_weight = std::clamp(config_.tail_rotor_speed + 1.0 - o.airspeed, 0.0, 1.0);
 
   // Height: a climb rate towards the target, a vertical force for it.
-  const double climb = std::clamp(config_.height_gain * (target_z_ - o.position.z()), -config_.max_sink,
-                                  landing_vertical ? config_.landing_climb : config_.max_climb);
+  const double climb =
+      std::clamp(config_.height_gain * (target_z_ - o.position.z()), -config_.max_sink,
+                 landing_vertical ? config_.landing_climb : config_.max_climb);
   const double climb_error = climb - o.velocity.z();
-  vertical_i_ = std::clamp(vertical_i_ + config_.vertical_integral * climb_error * dt, landing_vertical ? 0.0 : -6.0, 6.0);
+  vertical_i_ = std::clamp(vertical_i_ + config_.vertical_integral * climb_error * dt, -6.0, 6.0);
   double up_force = config_.vertical_gain * climb_error + vertical_i_ +
-                          config_.vertical_drag_per_speed2 * climb * std::abs(climb);
+                    config_.vertical_drag_per_speed2 * climb * std::abs(climb);
 
   // Speed: a forward force (the propellers push only forwards).
   const double measured = ground_speed ? ground.dot(heading) : o.airspeed;
   const double speed_error = forward_speed - measured;
-  const double air_target = ground_speed ? std::max(0.0, forward_speed - wind_.dot(heading)) : forward_speed;
-  double forward_force = config_.drag_per_speed2 * air_target * air_target + config_.speed_gain * speed_error + speed_i_;
+  const double air_target =
+      ground_speed ? std::max(0.0, forward_speed - wind_.dot(heading)) : forward_speed;
+  double forward_force = config_.drag_per_speed2 * air_target * air_target +
+                         config_.speed_gain * speed_error + speed_i_;
   if (forward_force > 0.0 || speed_error > 0.0) {
     speed_i_ = std::clamp(speed_i_ + config_.speed_integral * speed_error * dt, -8.0, 8.0);
   }
   forward_force = std::max(0.0, forward_force);
 
-  // Landing, slow: no thrust downwards (turning the helix plane over from
-  // up to down passes through forwards, and the lag rocks the blimp up and
-  // down); its 40 g of weight sink it. Else, slow, the plane turns over only
-  // for a firm need.
-  if (landing_vertical) {
-    up_force = std::max(0.0, up_force);
+  // Slow, the helix plane must not turn over between up and down (through
+  // forwards: a push forwards, and the lag rocks the blimp up and down).
+  // Sinking onto the circle: thrust only down, forwards, or between. On the
+  // way to it: some forward thrust with any vertical thrust, so the tilt
+  // passes smoothly through level. Else the plane turns over only for a
+  // firm need.
+  if (landing_vertical && sinking_) {
+    up_force = std::min(0.0, up_force);
+  } else if (landing_vertical) {
+    forward_force = std::max(forward_force, 0.5 * std::abs(up_force));
   } else if (forward_force < 2.0) {
     if (up_force > 1.5) helix_up_ = true;
     if (up_force < -1.5) helix_up_ = false;
@@ -264,7 +282,8 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
   }
   // The two forces as power and the helix plane's tilt.
   const double thrust = std::min(std::hypot(forward_force, up_force), config_.full_thrust_n);
-  if (thrust > 1.0) helix_ = std::atan2(up_force, forward_force);  // (a weak thrust's direction is noise)
+  if (thrust > 1.0)
+    helix_ = std::atan2(up_force, forward_force);  // (a weak thrust's direction is noise)
   c.power = thrust / config_.full_thrust_n;
   c.helix = std::clamp(helix_ / (config_.max_helix_deg * std::numbers::pi / 180.0), -1.0, 1.0);
   c.tail_rotor = c.power < 0.02 ? turn : turn * tail_weight;
@@ -272,8 +291,11 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
   // The elevator: a little nose-up to climb, damped; landing, level only
   // (slow, the surface's own force is most of what it does: nose-down
   // pushes the tail, and so the blimp, up).
-  const double pitch_wanted = landing_vertical ? 0.0 : std::clamp(config_.pitch_per_climb * climb, -0.15, 0.15);
-  c.elevator = std::clamp(config_.pitch_gain * (pitch_wanted - o.pitch) - config_.pitch_rate_gain * pitch_rate_, -1.0, 1.0);
+  const double pitch_wanted =
+      landing_vertical ? 0.0 : std::clamp(config_.pitch_per_climb * climb, -0.15, 0.15);
+  c.elevator = std::clamp(
+      config_.pitch_gain * (pitch_wanted - o.pitch) - config_.pitch_rate_gain * pitch_rate_, -1.0,
+      1.0);
   return Clamped(c);
 }
 

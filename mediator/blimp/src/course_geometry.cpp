@@ -21,7 +21,8 @@ double BoxDistance(const Eigen::Vector2d& half, const Eigen::Vector2d& local) {
   return (local.cwiseAbs() - half).cwiseMax(0.0).norm();
 }
 
-double PointSegmentDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+double PointSegmentDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
+                            const Eigen::Vector2d& b) {
   const Eigen::Vector2d ab = b - a;
   const double length2 = ab.squaredNorm();
   const double t = length2 > 0.0 ? std::clamp((p - a).dot(ab) / length2, 0.0, 1.0) : 0.0;
@@ -29,7 +30,8 @@ double PointSegmentDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& a, 
 }
 
 /// Whether the segment a–b (local frame) meets the box |x| <= half.
-bool SegmentMeetsBox(const Eigen::Vector2d& half, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+bool SegmentMeetsBox(const Eigen::Vector2d& half, const Eigen::Vector2d& a,
+                     const Eigen::Vector2d& b) {
   double t_in = 0.0, t_out = 1.0;
   const Eigen::Vector2d d = b - a;
   for (int axis = 0; axis < 2; ++axis) {
@@ -66,11 +68,14 @@ std::vector<BlimpGateFrame> MakeGateFrames(const BlimpCourseConfig& course) {
   return frames;
 }
 
-BlimpGateCrossing ClassifyCrossing(const BlimpGateFrame& gate, const Eigen::Vector3d& p, double near_widths) {
+BlimpGateCrossing ClassifyCrossing(const BlimpGateFrame& gate, const Eigen::Vector3d& p,
+                                   double near_widths) {
   const Eigen::Vector3d d = p - gate.centre;
   const double across = d.dot(gate.left), up = d.z();
-  if (std::abs(across) <= gate.half_width && std::abs(up) <= gate.half_height) return BlimpGateCrossing::kPassed;
-  if (std::hypot(across, up) <= near_widths * 2.0 * gate.half_width) return BlimpGateCrossing::kMissed;
+  if (std::abs(across) <= gate.half_width && std::abs(up) <= gate.half_height)
+    return BlimpGateCrossing::kPassed;
+  if (std::hypot(across, up) <= near_widths * 2.0 * gate.half_width)
+    return BlimpGateCrossing::kMissed;
   return BlimpGateCrossing::kIgnored;
 }
 
@@ -79,7 +84,8 @@ double FootprintDistance(const BlimpBuildingSpec& building, double x, double y) 
   return BoxDistance(half, Local(building, {x, y}));
 }
 
-double FootprintDistance(const BlimpBuildingSpec& building, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+double FootprintDistance(const BlimpBuildingSpec& building, const Eigen::Vector2d& a,
+                         const Eigen::Vector2d& b) {
   const Eigen::Vector2d half(building.size[0] / 2, building.size[1] / 2);
   const Eigen::Vector2d la = Local(building, a), lb = Local(building, b);
   if (SegmentMeetsBox(half, la, lb)) return 0.0;

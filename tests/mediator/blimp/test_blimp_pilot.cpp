@@ -1,2 +1,542 @@
-// The blimp course, its lap timer and the automatic pilot.
+// The blimp course (its strict loader), the 3-D lap timer on hand-made
+// observation sequences, the automatic pilot's decisions, and the pilot
+// flying the shipped course against the simulated blimp in-process (the
+// pilot library links no vehicle; this test links both).
 #include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "alloc_counter.hpp"
+#include "haptel/config/blimp_course.hpp"
+#include "haptel/config/error.hpp"
+#include "haptel/config/vehicle.hpp"
+#include "haptel/mediator/blimp/blimp_lap_timer.hpp"
+#include "haptel/mediator/blimp/blimp_pilot.hpp"
+#include "haptel/vehicles/sim_blimp.hpp"
+#include "test_env.hpp"
+
+using namespace haptel;
+using namespace haptel::mediator;
+namespace fs = std::filesystem;
+
+namespace {
+
+const char* const kCourse = "config/tracks/blimp-course.yaml";
+
+fs::path Write(const std::string& name, const std::string& text) {
+  static const fs::path dir = haptel::test::ScratchDir("test_blimp_pilot");
+  return haptel::test::WriteFile(dir / name, text);
+}
+
+/// A valid course file with `replace` substituted for `of` (once).
+std::string Edited(const std::string& of, const std::string& replace) {
+  std::string text =
+      "name: edited\n"
+      "start: {position: [0, 0], heading_deg: 0}\n"
+      "gates:\n"
+      "  - {name: one, centre: [40, 0, 5], heading_deg: 0, width: 10, height: 6}\n"
+      "  - {name: two, centre: [80, 0, 8], heading_deg: 0, width: 10, height: 6}\n"
+      "buildings:\n"
+      "  - {name: block, centre: [60, 30], size: [10, 10], height: 10}\n"
+      "landing: {centre: [120, 0], radius: 8, max_speed: 1.0}\n";
+  const size_t at = text.find(of);
+  REQUIRE(at != std::string::npos);
+  text.replace(at, of.size(), replace);
+  return text;
+}
+
+std::string LoadError(const std::string& name, const std::string& text) {
+  const fs::path file = Write(name, text);
+  return haptel::test::WhatOf<ConfigError>([&] { LoadBlimpCourse(file); });
+}
+
+/// Two gates on the x axis, 20 m apart, 10 m wide and 6 m high, and a
+/// landing circle beyond them.
+BlimpCourseConfig Line() {
+  BlimpCourseConfig c;
+  c.name = "line";
+  c.start.position = {0.0, 0.0};
+  BlimpGateSpec a;
+  a.name = "a";
+  a.centre = {20.0, 0.0, 5.0};
+  a.width = 10.0;
+  a.height = 6.0;
+  BlimpGateSpec b = a;
+  b.name = "b";
+  b.centre = {40.0, 0.0, 8.0};
+  c.gates = {a, b};
+  c.landing.centre = {60.0, 0.0};
+  c.landing.radius = 5.0;
+  c.landing.max_speed = 1.0;
+  c.lap_cap_s = 100.0;
+  return c;
+}
+
+BlimpObservation At(double t, double x, double y, double z, bool contact = false,
+                    double impact = 0.0, double speed = 1.0) {
+  BlimpObservation o;
+  o.t_s = t;
+  o.position = {x, y, z};
+  o.velocity = {speed, 0.0, 0.0};
+  o.airspeed = speed;
+  o.contact = contact;
+  o.impact_speed = impact;
+  return o;
+}
+
+/// Rests at the start, then rises to 2 m at t = 2: the lap starts at t = 1.5.
+void TakeOff(BlimpLapTimer& lap) {
+  lap.Update(At(0.0, 0.0, 0.0, 0.8, true));
+  lap.Update(At(1.0, 0.0, 0.0, 0.8, true));
+  lap.Update(At(2.0, 1.0, 0.0, 2.8));
+}
+
+}  // namespace
+
+// --- The course file. ---
+
+TEST_CASE(
+    "the shipped blimp course loads: five gates at several heights, a block to climb over, a "
+    "landing") {
+  const BlimpCourseConfig c = LoadBlimpCourse(kCourse);
+  CHECK(c.name == "blimp-course");
+  REQUIRE(c.gates.size() >= 4);
+  CHECK(c.gates.size() <= 5);
+  double low = 1e9, high = 0.0, length = 0.0;
+  Eigen::Vector2d at(c.start.position[0], c.start.position[1]);
+  for (const BlimpGateSpec& g : c.gates) {
+    CHECK(g.width >= 8.0);   // the hull is 6.75 m long
+    CHECK(g.height >= 6.0);  // and 2.2 m across
+    low = std::min(low, g.centre[2]);
+    high = std::max(high, g.centre[2]);
+    const Eigen::Vector2d next(g.centre[0], g.centre[1]);
+    length += (next - at).norm();
+    at = next;
+  }
+  length += (Eigen::Vector2d(c.landing.centre[0], c.landing.centre[1]) - at).norm();
+  CHECK(low <= 5.0);
+  CHECK(high >= 14.0);
+  CHECK(length > 300.0);
+  CHECK(length < 550.0);
+  double tallest = 0.0;
+  for (const BlimpBuildingSpec& b : c.buildings) tallest = std::max(tallest, b.height);
+  CHECK(tallest >= 10.0);
+  CHECK(c.landing.radius > 0.0);
+  CHECK(c.crash_speed == Approx(1.5));
+  CHECK(c.lap_cap_s == Approx(600.0));
+}
+
+TEST_CASE("blimp course errors name the file, the line and the key") {
+  SECTION("an unknown key") {
+    const std::string e =
+        LoadError("unknown.yaml", Edited("name: edited\n", "name: edited\ncolour: red\n"));
+    CHECK_THAT(e, Catch::Contains("unknown.yaml:2:"));
+    CHECK_THAT(e, Catch::Contains("'colour'"));
+    CHECK_THAT(e, Catch::Contains("unknown key"));
+  }
+  SECTION("an unknown key in a gate") {
+    const std::string e =
+        LoadError("gate_key.yaml", Edited("height: 6}", "height: 6, colour: red}"));
+    CHECK_THAT(e, Catch::Contains("gate_key.yaml:4:"));
+    CHECK_THAT(e, Catch::Contains("'gates[0].colour'"));
+  }
+  SECTION("a gate inside a building") {
+    const std::string e =
+        LoadError("inside.yaml", Edited("centre: [80, 0, 8]", "centre: [60, 28, 8]"));
+    CHECK_THAT(e, Catch::Contains("inside.yaml:5:"));
+    CHECK_THAT(e, Catch::Contains("'gates[1].centre'"));
+    CHECK_THAT(e, Catch::Contains("building 'block'"));
+  }
+  SECTION("a gate above a building's roof is fine") {
+    const fs::path file = Write("above.yaml", Edited("centre: [80, 0, 8]", "centre: [60, 28, 14]"));
+    CHECK(LoadBlimpCourse(file).gates[1].centre[2] == Approx(14.0));
+  }
+  SECTION("a gate of no width") {
+    const std::string e = LoadError("width.yaml", Edited("width: 10, height: 6}\n  - {name: two",
+                                                         "width: 0, height: 6}\n  - {name: two"));
+    CHECK_THAT(e, Catch::Contains("width.yaml:4:"));
+    CHECK_THAT(e, Catch::Contains("'gates[0].width'"));
+    CHECK_THAT(e, Catch::Contains("[1, 1000]"));
+  }
+  SECTION("no landing") {
+    const std::string e = LoadError(
+        "no_landing.yaml", Edited("landing: {centre: [120, 0], radius: 8, max_speed: 1.0}\n", ""));
+    CHECK_THAT(e, Catch::Contains("no_landing.yaml"));
+    CHECK_THAT(e, Catch::Contains("'landing'"));
+    CHECK_THAT(e, Catch::Contains("missing"));
+  }
+  SECTION("a landing circle of no radius") {
+    const std::string e = LoadError("radius.yaml", Edited("radius: 8", "radius: 0"));
+    CHECK_THAT(e, Catch::Contains("radius.yaml:8:"));
+    CHECK_THAT(e, Catch::Contains("'landing.radius'"));
+  }
+  SECTION("no gates") {
+    const std::string e = LoadError(
+        "no_gates.yaml",
+        Edited("  - {name: one, centre: [40, 0, 5], heading_deg: 0, width: 10, height: 6}\n"
+               "  - {name: two, centre: [80, 0, 8], heading_deg: 0, width: 10, height: 6}\n",
+               "  []\n"));
+    CHECK_THAT(e, Catch::Contains("no_gates.yaml"));
+    CHECK_THAT(e, Catch::Contains("'gates'"));
+    CHECK_THAT(e, Catch::Contains("at least one gate"));
+  }
+}
+
+// --- The lap timer. ---
+
+TEST_CASE(
+    "blimp lap timer: the lap starts when the blimp first rises take-off height above its start") {
+  BlimpLapTimer lap(Line());
+  lap.Update(At(0.0, 0.0, 0.0, 0.8, true));
+  lap.Update(At(1.0, 0.0, 0.0, 1.5));  // 0.7 m up: not yet
+  CHECK_FALSE(lap.started());
+  CHECK(lap.lap_time_s() == 0.0);
+  lap.Update(At(2.0, 0.0, 0.0, 2.1));  // 1.0 m up at t = 1.5 (interpolated)
+  CHECK(lap.started());
+  CHECK(lap.start_height() == Approx(0.8));
+  lap.Update(At(3.0, 0.0, 0.0, 3.0));
+  CHECK(lap.lap_time_s() == Approx(1.5));
+  CHECK(lap.obstacles_touched() == 0);  // resting at the start is no touch
+}
+
+TEST_CASE("blimp lap timer: a gate's plane crossed inside, outside, far away and backwards") {
+  SECTION("inside the opening: passed, with its split") {
+    BlimpLapTimer lap(Line());
+    TakeOff(lap);
+    lap.Update(At(10.0, 18.0, 2.0, 6.0));
+    lap.Update(At(11.0, 22.0, 2.0, 6.0));  // x = 20 at t = 10.5
+    CHECK(lap.gates_passed() == 1);
+    CHECK(lap.next_gate() == 1);
+    REQUIRE(lap.splits().size() == 2);
+    CHECK(lap.splits()[0].passed);
+    CHECK(lap.splits()[0].split_s == Approx(9.0));
+    CHECK(lap.splits()[1].split_s < 0.0);
+  }
+  SECTION("beside it (within three widths): missed, and on to the next") {
+    BlimpLapTimer lap(Line());
+    TakeOff(lap);
+    lap.Update(At(10.0, 18.0, 7.0, 5.0));
+    lap.Update(At(11.0, 22.0, 7.0, 5.0));  // 7 m off the centre of a 10 m gate
+    CHECK(lap.gates_missed() == 1);
+    CHECK(lap.gates_passed() == 0);
+    CHECK(lap.next_gate() == 1);
+  }
+  SECTION("above it: missed") {
+    BlimpLapTimer lap(Line());
+    TakeOff(lap);
+    lap.Update(At(10.0, 18.0, 0.0, 9.0));
+    lap.Update(At(11.0, 22.0, 0.0, 9.0));  // 4 m above the centre of a 6 m high gate
+    CHECK(lap.gates_missed() == 1);
+  }
+  SECTION("far away: no crossing of that gate at all") {
+    BlimpLapTimer lap(Line());
+    TakeOff(lap);
+    lap.Update(At(10.0, 18.0, 40.0, 5.0));
+    lap.Update(At(11.0, 22.0, 40.0, 5.0));  // 4 widths off
+    CHECK(lap.next_gate() == 0);
+    CHECK(lap.gates_missed() == 0);
+    // Back round, and through it.
+    lap.Update(At(20.0, 15.0, 0.0, 5.0));
+    lap.Update(At(21.0, 25.0, 0.0, 5.0));
+    CHECK(lap.gates_passed() == 1);
+  }
+  SECTION("backwards: not counted") {
+    BlimpLapTimer lap(Line());
+    TakeOff(lap);
+    lap.Update(At(5.0, 25.0, 60.0, 5.0));  // round it, far off
+    lap.Update(At(10.0, 25.0, 0.0, 5.0));
+    lap.Update(At(11.0, 15.0, 0.0, 5.0));  // through it the wrong way
+    CHECK(lap.next_gate() == 0);
+    lap.Update(At(12.0, 25.0, 0.0, 5.0));  // and the right way
+    CHECK(lap.gates_passed() == 1);
+    CHECK(lap.splits()[0].split_s == Approx(10.0));
+  }
+  SECTION("in order: the second gate's plane first counts for nothing") {
+    BlimpLapTimer lap(Line());
+    TakeOff(lap);
+    lap.Update(At(5.0, 10.0, 80.0, 8.0));
+    lap.Update(At(10.0, 38.0, 0.0, 8.0));  // round the first, far off
+    lap.Update(At(11.0, 42.0, 0.0, 8.0));  // through the second
+    CHECK(lap.next_gate() == 0);
+    CHECK(lap.gates_passed() == 0);
+  }
+}
+
+TEST_CASE(
+    "blimp lap timer: a contact faster than crash_speed is a crash, a slower one an obstacle "
+    "touched") {
+  SECTION("a crash ends the lap") {
+    BlimpLapTimer lap(Line());
+    TakeOff(lap);
+    lap.Update(At(5.0, 10.0, 0.0, 5.0));
+    lap.Update(At(6.0, 11.0, 0.0, 5.0, true, 2.0));
+    CHECK(lap.crashed());
+    CHECK(lap.finished());
+    CHECK_FALSE(lap.completed());
+    CHECK(lap.crash_speed() == Approx(2.0));
+    CHECK(lap.lap_time_s() == Approx(4.5));
+    lap.Update(At(9.0, 12.0, 0.0, 5.0));
+    CHECK(lap.lap_time_s() == Approx(4.5));
+  }
+  SECTION("touches below it are counted, each onset once") {
+    BlimpLapTimer lap(Line());
+    TakeOff(lap);
+    lap.Update(At(5.0, 10.0, 0.0, 5.0, true, 0.5));
+    lap.Update(At(6.0, 10.0, 0.0, 5.0, true, 0.5));  // the same contact
+    CHECK(lap.obstacles_touched() == 1);
+    lap.Update(At(7.0, 10.0, 0.0, 5.0, true, 0.8));  // a new onset between two observations
+    CHECK(lap.obstacles_touched() == 2);
+    lap.Update(At(8.0, 10.0, 0.0, 5.0));
+    lap.Update(At(9.0, 10.0, 0.0, 5.0, true, 0.8));
+    CHECK(lap.obstacles_touched() == 3);
+    CHECK_FALSE(lap.crashed());
+  }
+  SECTION("contacts before the lap starts do not count") {
+    BlimpLapTimer lap(Line());
+    lap.Update(At(0.0, 0.0, 0.0, 0.8, true));
+    lap.Update(At(1.0, 0.0, 0.0, 1.2));
+    lap.Update(At(2.0, 0.0, 0.0, 0.8, true, 0.3));  // a hop on take-off
+    lap.Update(At(3.0, 0.0, 0.0, 2.5));
+    CHECK(lap.started());
+    CHECK(lap.obstacles_touched() == 0);
+  }
+}
+
+TEST_CASE(
+    "blimp lap timer: the lap completes on the ground in the circle, slowly, after the last gate") {
+  const auto through_both = [](BlimpLapTimer& lap) {
+    TakeOff(lap);
+    lap.Update(At(10.0, 18.0, 0.0, 5.0));
+    lap.Update(At(11.0, 22.0, 0.0, 5.0));
+    lap.Update(At(20.0, 38.0, 0.0, 8.0));
+    lap.Update(At(21.0, 42.0, 0.0, 8.0));
+    REQUIRE(lap.gates_passed() == 2);
+  };
+  SECTION("landed") {
+    BlimpLapTimer lap(Line());
+    through_both(lap);
+    lap.Update(At(30.0, 59.0, 1.0, 2.0, false, 0.0, 0.6));
+    lap.Update(At(31.0, 59.5, 1.0, 0.8, true, 0.4, 0.6));
+    CHECK(lap.completed());
+    CHECK(lap.obstacles_touched() == 0);  // the touchdown is no obstacle
+    CHECK(lap.lap_time_s() == Approx(29.5));
+  }
+  SECTION("touching down too fast to count, then slowing on the ground") {
+    BlimpLapTimer lap(Line());
+    through_both(lap);
+    lap.Update(At(31.0, 58.0, 0.0, 0.8, true, 0.5, 1.4));
+    CHECK_FALSE(lap.completed());
+    lap.Update(At(32.0, 59.0, 0.0, 0.8, true, 0.5, 0.5));
+    CHECK(lap.completed());
+    CHECK(lap.obstacles_touched() == 0);
+  }
+  SECTION("a touchdown in the circle faster than crash_speed is a crash") {
+    BlimpLapTimer lap(Line());
+    through_both(lap);
+    lap.Update(At(31.0, 60.0, 0.0, 0.8, true, 1.8, 0.2));
+    CHECK(lap.crashed());
+    CHECK_FALSE(lap.completed());
+  }
+  SECTION("outside the circle: a touch, not a landing") {
+    BlimpLapTimer lap(Line());
+    through_both(lap);
+    lap.Update(At(31.0, 50.0, 0.0, 0.8, true, 0.3, 0.2));
+    CHECK_FALSE(lap.completed());
+    CHECK(lap.obstacles_touched() == 1);
+  }
+  SECTION("in the circle before the last gate: not a landing") {
+    BlimpLapTimer lap(Line());
+    TakeOff(lap);
+    lap.Update(At(10.0, 18.0, 0.0, 5.0));
+    lap.Update(At(11.0, 22.0, 0.0, 5.0));
+    lap.Update(At(15.0, 30.0, 80.0, 5.0));
+    lap.Update(At(20.0, 60.0, 0.0, 0.8, true, 0.3, 0.2));  // round the second gate, far from it
+    CHECK_FALSE(lap.completed());
+    CHECK(lap.obstacles_touched() == 1);
+  }
+  SECTION("the lap cap") {
+    BlimpLapTimer lap(Line());
+    TakeOff(lap);
+    lap.Update(At(120.0, 10.0, 0.0, 5.0));
+    CHECK(lap.timed_out());
+    CHECK(lap.lap_time_s() == Approx(100.0));
+  }
+}
+
+// --- The pilot's decisions. ---
+
+TEST_CASE(
+    "blimp pilot: neutral until it has seen the blimp, then it acts on what it saw a reaction "
+    "ago") {
+  BlimpAutoPilot pilot(Line());
+  BlimpCommand c = pilot.Decide(0.0);
+  CHECK(c.power == 0.0);
+  pilot.Observe(At(0.0, 0.0, 0.0, 0.8, true, 0.0, 0.0));
+  c = pilot.Decide(0.1);  // seen 0.1 s ago: not yet taken in
+  CHECK(c.power == 0.0);
+  CHECK(pilot.phase() == BlimpAutoPilot::Phase::kGround);
+  c = pilot.Decide(0.2);
+  CHECK(pilot.phase() == BlimpAutoPilot::Phase::kTakeOff);
+  CHECK(c.power > 0.2);
+  CHECK(c.helix > 0.5);  // the helix plane up
+  CHECK(InRange(c));
+}
+
+TEST_CASE(
+    "blimp pilot: the rudder above 8 km/h, the tail rotor below; the camera at the next gate") {
+  BlimpCourseConfig course = Line();
+  course.gates[0].centre = {40.0, 40.0, 15.0};  // ahead to the left, above
+  course.gates[1].centre = {80.0, 40.0, 15.0};
+  BlimpPilotConfig config;
+  config.reaction_delay_s = 0.0;
+  // Cruising east at 6 m/s, 5 m up.
+  BlimpAutoPilot fast(course, config);
+  fast.Observe(At(0.0, 0.0, 0.0, 0.8, true, 0.0, 0.0));
+  fast.Decide(0.0);
+  BlimpObservation o = At(1.0, 0.0, 0.0, 5.0, false, 0.0, 6.0);
+  fast.Observe(o);
+  fast.Decide(1.0);
+  o.t_s = 1.05;
+  o.position.x() += 0.3;
+  fast.Observe(o);
+  BlimpCommand c = fast.Decide(1.05);
+  CHECK(fast.phase() == BlimpAutoPilot::Phase::kGates);
+  CHECK(c.rudder > 0.2);  // left
+  CHECK(c.tail_rotor == 0.0);
+  CHECK(c.camera_pan > 0.3);  // the gate is to the left
+  CHECK(c.camera_pan < 1.2);
+  CHECK(c.camera_tilt > 0.05);  // and above
+  CHECK(c.camera_tilt <= kBlimpCameraTiltMax);
+  CHECK(fast.target_height() == Approx(15.0));
+  CHECK(c.helix > 0.0);  // climbing towards it
+
+  // Hovering: the tail rotor turns it.
+  BlimpAutoPilot slow(course, config);
+  slow.Observe(At(0.0, 0.0, 0.0, 0.8, true, 0.0, 0.0));
+  slow.Decide(0.0);
+  o = At(1.0, 0.0, 0.0, 5.0, false, 0.0, 0.3);
+  slow.Observe(o);
+  slow.Decide(1.0);
+  o.t_s = 1.05;
+  slow.Observe(o);
+  c = slow.Decide(1.05);
+  CHECK(c.tail_rotor > 0.2);
+
+  // Facing away from the gate, the camera stops at its pan limit.
+  BlimpAutoPilot behind(course, config);
+  behind.Observe(At(0.0, 0.0, 0.0, 0.8, true, 0.0, 0.0));
+  behind.Decide(0.0);
+  o = At(1.0, 0.0, 0.0, 5.0, false, 0.0, 6.0);
+  o.yaw = -2.0;
+  behind.Observe(o);
+  c = behind.Decide(1.0);
+  CHECK(std::abs(c.camera_pan) == Approx(kBlimpCameraPanMax));
+}
+
+TEST_CASE("blimp pilot: Observe and Decide allocate nothing") {
+  const BlimpCourseConfig course = LoadBlimpCourse(kCourse);
+  BlimpAutoPilot pilot(course);
+  pilot.Observe(At(0.0, 0.0, 0.0, 0.8, true));
+  pilot.Decide(0.0);
+  const uint64_t before = haptel::test::ThreadAllocations();
+  for (int i = 1; i < 2000; ++i) {
+    const double t = 0.02 * i;
+    pilot.Observe(At(t, 3.0 * t, 0.1 * t, 0.8 + 0.2 * t, false, 0.0, 3.0));
+    pilot.Decide(t);
+  }
+  CHECK(haptel::test::ThreadAllocations() == before);
+}
+
+// --- The pilot flies the course. ---
+
+namespace {
+
+struct Flight {
+  bool completed = false, crashed = false, timed_out = false;
+  double lap_time_s = 0.0;
+  int gates_passed = 0, gates_missed = 0, obstacles = 0;
+  Eigen::Vector3d end = Eigen::Vector3d::Zero();
+  bool finite = true;
+};
+
+BlimpObservation Observed(const vehicles::SimBlimp& sim) {
+  BlimpObservation o;
+  o.t_s = sim.time_s();
+  o.position = sim.position();
+  o.yaw = sim.yaw();
+  o.pitch = sim.pitch();
+  o.roll = sim.roll();
+  o.velocity = sim.ground_velocity();
+  o.airspeed = sim.airspeed();
+  o.contact = sim.in_contact();
+  o.impact_speed = sim.last_impact_speed();
+  return o;
+}
+
+/// The simulator stepped at its own rate, its state observed at 50 Hz by
+/// the lap timer and the pilot, the pilot deciding at 20 Hz (on what it
+/// saw its reaction delay before); simulated time only.
+Flight Fly(const AirshipConfig& airship, const BlimpCourseConfig& course) {
+  vehicles::SimBlimp sim(airship, course);
+  BlimpAutoPilot pilot(course);
+  BlimpLapTimer lap(course);
+  const double step = airship.step_s;                                    // 200 Hz
+  const int observe_every = static_cast<int>(std::lround(0.02 / step));  // 50 Hz
+  const int decide_every = static_cast<int>(std::lround(0.05 / step));   // 20 Hz
+  BlimpCommand command;
+  Flight f;
+  const int steps = static_cast<int>((course.lap_cap_s + 60.0) / step);
+  for (int k = 0; k < steps && !lap.finished(); ++k) {
+    if (k % observe_every == 0) {
+      const BlimpObservation o = Observed(sim);
+      pilot.Observe(o);
+      lap.Update(o);
+    }
+    if (k % decide_every == 0) command = pilot.Decide(sim.time_s());
+    sim.Step(step, command);
+    f.finite = f.finite && sim.airship().Finite();
+  }
+  f.completed = lap.completed();
+  f.crashed = lap.crashed();
+  f.timed_out = lap.timed_out();
+  f.lap_time_s = lap.lap_time_s();
+  f.gates_passed = lap.gates_passed();
+  f.gates_missed = lap.gates_missed();
+  f.obstacles = lap.obstacles_touched();
+  f.end = sim.position();
+  return f;
+}
+
+void CheckLap(const Flight& f, const BlimpCourseConfig& course, const char* what) {
+  std::printf(
+      "blimp lap (%s): %.1f s, gates %d passed / %d missed, obstacles %d, landed at (%.1f, %.1f)\n",
+      what, f.lap_time_s, f.gates_passed, f.gates_missed, f.obstacles, f.end.x(), f.end.y());
+  INFO(what);
+  CHECK(f.finite);
+  CHECK(f.completed);
+  CHECK_FALSE(f.crashed);
+  CHECK_FALSE(f.timed_out);
+  CHECK(f.gates_passed == static_cast<int>(course.gates.size()));
+  CHECK(f.gates_missed == 0);
+  CHECK(f.lap_time_s < course.lap_cap_s);
+  const Eigen::Vector2d landing(course.landing.centre[0], course.landing.centre[1]);
+  CHECK((f.end.head<2>() - landing).norm() <= course.landing.radius);
+}
+
+}  // namespace
+
+TEST_CASE(
+    "the automatic pilot flies the shipped course: every gate, no crash, landed in the circle") {
+  const BlimpCourseConfig course = LoadBlimpCourse(kCourse);
+  const AirshipConfig airship = LoadVehicle("config/vehicles/sim-blimp.yaml").airship;
+  CheckLap(Fly(airship, course), course, "still air");
+}
+
+TEST_CASE("the automatic pilot flies the shipped course in a 1.5 m/s wind with gusts") {
+  const BlimpCourseConfig course = LoadBlimpCourse(kCourse);
+  AirshipConfig airship = LoadVehicle("config/vehicles/sim-blimp.yaml").airship;
+  airship.wind.mean = {1.5, 0.0, 0.0};
+  airship.wind.gust_rms = 0.8;
+  CheckLap(Fly(airship, course), course, "wind 1.5 m/s east, gusts 0.8 m/s rms");
+}

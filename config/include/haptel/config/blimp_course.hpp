@@ -25,9 +25,9 @@ struct BlimpStartSpec {
 struct BlimpGateSpec {
   std::string name;
   std::array<double, 3> centre{0.0, 0.0, 0.0};  ///< m: the opening's centre
-  double heading_deg = 0.0;  ///< the direction of travel through the gate
-  double width = 0.0;        ///< m, across the direction of travel
-  double height = 0.0;       ///< m
+  double heading_deg = 0.0;                     ///< the direction of travel through the gate
+  double width = 0.0;                           ///< m, across the direction of travel
+  double height = 0.0;                          ///< m
 };
 
 struct BlimpBuildingSpec {

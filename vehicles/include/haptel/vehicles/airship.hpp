@@ -14,8 +14,10 @@
 /// centre of gravity. Yaw is counter-clockwise positive, like the robot's
 /// heading (YawPitchRoll gives pitch nose-up positive).
 ///
-/// Approximations, named: the added mass acts on the ground velocity (exact
-/// in still or steady air; a gust's own acceleration force is left out);
+/// Approximations, named: the added mass's inertia acts on the ground
+/// acceleration, its Munk and Coriolis terms on the velocity through the
+/// air (exact in still or steady air; a gust's own acceleration force is
+/// left out);
 /// the hull's rigid inertia is that of a solid spheroid of the whole mass;
 /// the added-mass terms are taken about the centre of gravity.
 #include <Eigen/Core>

@@ -18,10 +18,9 @@
 /// (RK4 is stable to 2.8): the configured step stays. Even all eight
 /// features on the ground at once under the heaviest vertical mode keep
 /// ω·h below 0.3.
+#include <Eigen/Core>
 #include <memory>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "haptel/config/airship.hpp"
 #include "haptel/config/blimp_course.hpp"
@@ -32,15 +31,18 @@ namespace haptel::vehicles {
 
 /// The contact model's parameters (per contact feature).
 struct BlimpContactConfig {
-  double stiffness = 1.0e4;        ///< N/m along the normal
-  double damping = 300.0;          ///< N·s/m along the normal (a bounce keeps about a quarter of its speed)
-  double friction = 0.6;           ///< Coulomb coefficient (envelope fabric, gondola skids)
-  double friction_damping = 300.0; ///< N·s/m: the viscous slope below sliding
+  double stiffness = 1.0e4;  ///< N/m along the normal
+  /// N·s/m along the normal: damping ratio 0.4 against the hull's axial
+  /// mass (a head-on bounce keeps about a quarter of its speed), 0.7 against
+  /// the light pitching mode.
+  double damping = 300.0;
+  double friction = 0.6;            ///< Coulomb coefficient (envelope fabric, gondola skids)
+  double friction_damping = 300.0;  ///< N·s/m: the viscous slope below sliding
   /// m: the gondola's keel below the centre of gravity. The envelope's
-  /// bottom is at cg_below_cb − diameter/2 (0.6 m below for the thesis's
+  /// bottom is diameter/2 − cg_below_cb below it (0.6 m for the thesis's
   /// blimp); the gondola hangs 0.2 m lower and carries the blimp at rest.
   double gondola_below_cg = 0.8;
-  double gondola_radius = 0.1;     ///< m
+  double gondola_radius = 0.1;  ///< m
   /// m: a feature counts as clear of an obstacle again once this far from
   /// it (no chatter of contact onsets while resting).
   double release_distance = 0.01;
@@ -58,17 +60,19 @@ struct ContactSphere {
 /// course's buildings (what SimBlimp hands its Airship).
 class BlimpWorldContact : public AirshipContact {
  public:
-  BlimpWorldContact(const AirshipConfig& airship, const BlimpCourseConfig& course, const BlimpContactConfig& config);
+  BlimpWorldContact(const AirshipConfig& airship, const BlimpCourseConfig& course,
+                    const BlimpContactConfig& config);
 
-  void Loads(const AirshipState& state, Eigen::Vector3d* force_body, Eigen::Vector3d* moment_body) const override;
+  void Loads(const AirshipState& state, Eigen::Vector3d* force_body,
+             Eigen::Vector3d* moment_body) const override;
 
   /// One feature against one obstacle (0: the ground, 1 + i: building i).
   struct Touch {
     int obstacle = 0;
-    double depth = 0.0;             ///< m, > 0: penetrating; < 0: the gap
-    Eigen::Vector3d normal;         ///< world, out of the obstacle
-    Eigen::Vector3d point;          ///< world, the feature's deepest point
-    double closing_speed = 0.0;     ///< m/s along -normal (> 0: approaching)
+    double depth = 0.0;          ///< m, > 0: penetrating; < 0: the gap
+    Eigen::Vector3d normal;      ///< world, out of the obstacle
+    Eigen::Vector3d point;       ///< world, the feature's deepest point
+    double closing_speed = 0.0;  ///< m/s along -normal (> 0: approaching)
   };
   /// Calls `visit(const Touch&)` for every feature–obstacle pair whose gap
   /// is at most `max_gap` m. Allocation-free.
@@ -88,8 +92,8 @@ class BlimpWorldContact : public AirshipContact {
     Eigen::Vector3d half;  ///< half sizes: x, y in the box's frame, z (height / 2)
     double reach;          ///< horizontal half diagonal, for a quick rejection
   };
-  bool BoxTouch(const Box& box, const Eigen::Vector3d& centre, double radius, double max_gap, Eigen::Vector3d* normal,
-                double* depth) const;
+  bool BoxTouch(const Box& box, const Eigen::Vector3d& centre, double radius, double max_gap,
+                Eigen::Vector3d* normal, double* depth) const;
 
   BlimpContactConfig config_;
   std::vector<ContactSphere> spheres_;
@@ -103,7 +107,8 @@ class SimBlimp {
  public:
   /// Validates all three (ConfigFieldError). Starts resting on the ground at
   /// the course's start, facing its heading, motors off.
-  SimBlimp(const AirshipConfig& airship, const BlimpCourseConfig& course, const BlimpContactConfig& contact = {});
+  SimBlimp(const AirshipConfig& airship, const BlimpCourseConfig& course,
+           const BlimpContactConfig& contact = {});
   SimBlimp(const SimBlimp&) = delete;
   SimBlimp& operator=(const SimBlimp&) = delete;
   SimBlimp(SimBlimp&&) = default;
@@ -126,7 +131,9 @@ class SimBlimp {
   double pitch() const { return airship_.YawPitchRoll().y(); }
   double roll() const { return airship_.YawPitchRoll().z(); }
   /// Ground velocity, world frame, m/s.
-  Eigen::Vector3d ground_velocity() const { return airship_.state().attitude * airship_.state().velocity; }
+  Eigen::Vector3d ground_velocity() const {
+    return airship_.state().attitude * airship_.state().velocity;
+  }
   /// Speed through the air, m/s.
   double airspeed() const { return airship_.Airspeed().norm(); }
 
@@ -135,7 +142,8 @@ class SimBlimp {
   bool in_contact() const;
   /// Touching the ground.
   bool on_ground() const { return touching_[0] != 0; }
-  /// The normal closing speed at the onset of the latest contact, m/s.
+  /// The normal closing speed at the onset of the latest contact (of the
+  /// features near the obstacle just before the step that began it), m/s.
   double last_impact_speed() const { return last_impact_speed_; }
   /// Contact onsets so far (with the ground or any building; resting at
   /// the start is none).
@@ -160,10 +168,11 @@ class SimBlimp {
   BlimpCourseConfig course_;
   std::unique_ptr<BlimpWorldContact> contact_;  ///< on the heap: the airship points at it
   Airship airship_;
+  AirshipState previous_;  ///< before the step in progress
   BlimpCommand applied_;
-  std::vector<char> touching_;  ///< per obstacle
-  std::vector<char> scratch_;   ///< per obstacle, this step
-  std::vector<double> closing_; ///< per obstacle, this step
+  std::vector<char> touching_;   ///< per obstacle
+  std::vector<char> scratch_;    ///< per obstacle, this step
+  std::vector<double> closing_;  ///< per obstacle, this step
   int contacts_ = 0;
   double last_impact_speed_ = 0.0;
   int last_obstacle_ = -1;

@@ -10,9 +10,9 @@
 /// above any building near the way to it — then the landing: power cut back
 /// to coast down to a slow approach, gliding down to a metre above the
 /// ground; over the circle and slow, facing into the wind it estimates, it
-/// sinks onto the ground on its own 40 g of weight (thrust only ever up
-/// then); on touchdown the helix plane goes down, pressing the gondola onto
-/// the ground until it stops sliding, and the power off.
+/// sinks onto the ground (thrust forwards to hold its place, down to sink);
+/// on touchdown the helix plane goes down and a little power holds the
+/// gondola on the ground.
 ///
 /// Its hands: a forward force (airspeed, or ground speed when landing) and
 /// a vertical force (climb rate towards the target height) become the power
@@ -20,8 +20,9 @@
 /// climb. It steers its heading — turned into a cross wind by the wind
 /// triangle, from the wind it estimates — with the rudder, which bites above
 /// about 8 km/h, and with the tail rotor at low speed or zero power (the
-/// thesis's quick turnabout). The
-/// pilot camera looks at the next gate (then at the landing circle).
+/// thesis's quick turnabout). The pilot camera looks at the next gate (then
+/// at the landing circle): pan its bearing off the heading, tilt its
+/// elevation off the hull's pitch, each within the head's range.
 #include <array>
 #include <vector>
 
@@ -33,12 +34,13 @@
 namespace haptel::mediator {
 
 struct BlimpPilotConfig {
-  double cruise_airspeed = 6.0;     ///< m/s
-  double reaction_delay_s = 0.15;   ///< the pilot acts on what it saw this long ago
+  double cruise_airspeed = 6.0;    ///< m/s
+  double reaction_delay_s = 0.15;  ///< the pilot acts on what it saw this long ago
   // Guidance.
-  double lookahead = 18.0;          ///< m: the pursued point, ahead along the approach line
-  double exit_distance = 12.0;      ///< m beyond a gate: the furthest point pursued through it
-  double turn_back_distance = 25.0; ///< m before a gate: where to go when past its plane without passing it
+  double lookahead = 18.0;      ///< m: the pursued point, ahead along the approach line
+  double exit_distance = 12.0;  ///< m beyond a gate: the furthest point pursued through it
+  double turn_back_distance =
+      25.0;  ///< m before a gate: where to go when past its plane without passing it
   /// Off the approach line by more than half the gate's width, the pursued
   /// point stays this many metres before the gate per metre off the line.
   double approach_slope = 1.0;
@@ -46,41 +48,43 @@ struct BlimpPilotConfig {
   double building_margin = 6.0;     ///< m: buildings this close to the way ahead are climbed over
   double takeoff_height = 2.5;      ///< m above the start before heading off at speed
   // Height.
-  double height_gain = 0.6;         ///< 1/s: climb rate per metre of height error
-  double max_climb = 1.5;           ///< m/s
-  double max_sink = 1.5;            ///< m/s
-  double vertical_gain = 10.0;      ///< N per m/s of climb-rate error
-  double vertical_integral = 3.0;   ///< N per m of integrated climb-rate error (trims the weight)
-  double vertical_drag_per_speed2 = 2.9;  ///< N/(m/s)²: the feel for the hull's resistance to climbing
+  double height_gain = 0.6;        ///< 1/s: climb rate per metre of height error
+  double max_climb = 1.5;          ///< m/s
+  double max_sink = 1.5;           ///< m/s
+  double vertical_gain = 10.0;     ///< N per m/s of climb-rate error
+  double vertical_integral = 3.0;  ///< N per m of integrated climb-rate error (trims the weight)
+  double vertical_drag_per_speed2 =
+      2.9;  ///< N/(m/s)²: the feel for the hull's resistance to climbing
   // Speed.
-  double speed_gain = 6.0;          ///< N per m/s of speed error
-  double speed_integral = 1.5;      ///< N per m of integrated speed error
-  double drag_per_speed2 = 0.31;    ///< N/(m/s)²: the pilot's feel for the hull's drag (feed-forward)
+  double speed_gain = 6.0;        ///< N per m/s of speed error
+  double speed_integral = 1.5;    ///< N per m of integrated speed error
+  double drag_per_speed2 = 0.31;  ///< N/(m/s)²: the pilot's feel for the hull's drag (feed-forward)
   /// Landing: the ground speed wanted d metres from the circle's centre is
   /// landing_speed·exp(d / landing_coast_length) (at most the cruise), the
   /// speed a hull coasting on its axial drag alone keeps — it cannot
   /// reverse its propellers to brake — tapering to nothing over the last 2 m.
-  double landing_speed = 0.6;         ///< m/s
-  double landing_coast_length = 48.0; ///< m: axial added mass over the drag's factor
+  double landing_speed = 0.6;          ///< m/s
+  double landing_coast_length = 48.0;  ///< m: axial added mass over the drag's factor
   /// The glide down: landing_hover + landing_glide·d above the start's
   /// height (at most the last gate's); over the circle (within 0.4 of its
   /// radius) and slower than 0.9 of its max_speed, down onto the ground
   /// (and on down, unless it drifts out beyond 0.8 of the radius).
-  double landing_hover = 1.0;         ///< m
-  double landing_glide = 0.1;         ///< m per m
-  double landing_climb = 0.3;         ///< m/s: the fastest climb while landing
-  /// Landed: the helix plane down at this power until the blimp stops sliding.
+  double landing_hover = 1.0;  ///< m
+  double landing_glide = 0.1;  ///< m per m
+  double landing_climb = 0.3;  ///< m/s: the fastest climb while landing
+  /// Landed: the helix plane down at this power, holding the gondola on the
+  /// ground (friction against the wind).
   double landed_press_power = 0.3;
   // Steering.
-  double heading_gain = 3.0;        ///< rudder per rad of course error
-  double yaw_rate_gain = 2.5;       ///< rudder per rad/s of yaw rate
-  double tail_rotor_speed = 2.2;    ///< m/s: below this airspeed the tail rotor turns (8 km/h)
-  double pitch_gain = 2.0;          ///< elevator per rad of pitch error
-  double pitch_rate_gain = 1.0;     ///< elevator per rad/s of pitch rate
-  double pitch_per_climb = 0.08;    ///< rad of nose-up per m/s of climb wanted
+  double heading_gain = 3.0;      ///< rudder per rad of course error
+  double yaw_rate_gain = 2.5;     ///< rudder per rad/s of yaw rate
+  double tail_rotor_speed = 2.2;  ///< m/s: below this airspeed the tail rotor turns (8 km/h)
+  double pitch_gain = 2.0;        ///< elevator per rad of pitch error
+  double pitch_rate_gain = 1.0;   ///< elevator per rad/s of pitch rate
+  double pitch_per_climb = 0.08;  ///< rad of nose-up per m/s of climb wanted
   // What the pilot knows of its blimp.
-  double full_thrust_n = 29.4;      ///< both main motors at full power
-  double max_helix_deg = 90.0;      ///< the helix plane's tilt at full command
+  double full_thrust_n = 29.4;  ///< both main motors at full power
+  double max_helix_deg = 90.0;  ///< the helix plane's tilt at full command
 
   void ValidateOrThrow() const;
 };
@@ -117,14 +121,15 @@ class BlimpAutoPilot {
   BlimpCourseConfig course_;
   BlimpPilotConfig config_;
   std::vector<BlimpGateFrame> gates_;
-  static constexpr size_t kSeen = 256;
+  /// Observations kept: 10 s at 50 Hz (the oldest stands in for older ones).
+  static constexpr size_t kSeen = 512;
   std::array<BlimpObservation, kSeen> seen_{};
-  size_t seen_count_ = 0;   ///< total ever observed
+  size_t seen_count_ = 0;  ///< total ever observed
   Phase phase_ = Phase::kGround;
   int gate_ = 0;
   double start_z_ = 0.0;
   bool have_used_ = false;
-  BlimpObservation used_;   ///< the observation the last decision used
+  BlimpObservation used_;  ///< the observation the last decision used
   double yaw_rate_ = 0.0, pitch_rate_ = 0.0;
   double last_decide_t_ = 0.0;
   bool decided_ = false;

@@ -29,12 +29,14 @@ enum class BlimpGateCrossing { kPassed, kMissed, kIgnored };
 /// A crossing of the gate's plane at p: through the opening, near it (within
 /// `near_widths` gate widths of the centre: the gate is missed), or far away
 /// (not a crossing of this gate at all).
-BlimpGateCrossing ClassifyCrossing(const BlimpGateFrame& gate, const Eigen::Vector3d& p, double near_widths = 3.0);
+BlimpGateCrossing ClassifyCrossing(const BlimpGateFrame& gate, const Eigen::Vector3d& p,
+                                   double near_widths = 3.0);
 
 /// Horizontal distance from (x, y) to a building's footprint (0 inside).
 double FootprintDistance(const BlimpBuildingSpec& building, double x, double y);
 /// Horizontal distance from the segment a–b to a building's footprint (0
 /// when it crosses it).
-double FootprintDistance(const BlimpBuildingSpec& building, const Eigen::Vector2d& a, const Eigen::Vector2d& b);
+double FootprintDistance(const BlimpBuildingSpec& building, const Eigen::Vector2d& a,
+                         const Eigen::Vector2d& b);
 
 }  // namespace haptel::mediator

@@ -7,13 +7,14 @@ namespace haptel::mediator {
 
 struct BlimpObservation {
   double t_s = 0.0;  ///< s, any monotonic origin
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();  ///< centre of gravity, world (x east, y north, z up), m
-  double yaw = 0.0;    ///< rad, counter-clockwise from +x
-  double pitch = 0.0;  ///< rad, nose up positive
-  double roll = 0.0;   ///< rad
+  Eigen::Vector3d position =
+      Eigen::Vector3d::Zero();  ///< centre of gravity, world (x east, y north, z up), m
+  double yaw = 0.0;             ///< rad, counter-clockwise from +x
+  double pitch = 0.0;           ///< rad, nose up positive
+  double roll = 0.0;            ///< rad
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  ///< ground velocity, world, m/s
-  double airspeed = 0.0;      ///< m/s
-  bool contact = false;       ///< touching the ground or a building
+  double airspeed = 0.0;                               ///< m/s
+  bool contact = false;                                ///< touching the ground or a building
   /// m/s: the normal closing speed at the onset of the latest contact (a
   /// change while in contact is a new onset).
   double impact_speed = 0.0;
