@@ -20,15 +20,8 @@ BlimpCommand FromMessage(const msg::BlimpCommand& m) {
   c.camera_tilt = m.camera_tilt();
   return c;
 }
-/// A float's rounding past a range's end is not malformed: allow 1e-3.
-bool Acceptable(const BlimpCommand& c) {
-  BlimpCommand shrunk = c;
-  for (double* v : {&shrunk.elevator, &shrunk.rudder, &shrunk.helix, &shrunk.tail_rotor}) *v /= 1.001;
-  shrunk.power = c.power / 1.001;
-  shrunk.camera_pan /= 1.001;
-  shrunk.camera_tilt /= 1.001;
-  return InRange(shrunk) && c.power >= -1e-6;
-}
+/// A float's rounding past a range's end is not malformed.
+constexpr double kRangeSlack = 1e-3;
 }  // namespace
 
 BlimpNode::BlimpNode(const VehicleConfig& config, std::unique_ptr<video::CameraSource> camera,
@@ -81,7 +74,7 @@ void BlimpNode::Stop() {
 void BlimpNode::OnCommand(const msg::BlimpCommand& cmd) {
   const int64_t now = MonotonicNs();
   const BlimpCommand command = FromMessage(cmd);
-  if (!Acceptable(command)) {
+  if (!InRange(command, kRangeSlack)) {
     malformed_.fetch_add(1, std::memory_order_relaxed);
     return;
   }

@@ -18,14 +18,6 @@
 namespace haptel::haptics {
 
 namespace udp {
-UniqueFd& UniqueFd::operator=(UniqueFd&& other) noexcept {
-  if (this != &other) reset(other.release());
-  return *this;
-}
-void UniqueFd::reset(int fd) {
-  if (fd_ >= 0) ::close(fd_);
-  fd_ = fd;
-}
 
 int64_t MonotonicClock::NowNs() { return MonotonicNs(); }
 

@@ -104,11 +104,6 @@ bool MakeRaw(int fd, speed_t speed) {
 
 }  // namespace
 
-void UniqueFd::reset(int fd) {
-  if (fd_ >= 0) ::close(fd_);
-  fd_ = fd;
-}
-
 bool SerialBaudSupported(int baud) {
   for (const Baud& b : kBauds) {
     if (b.rate == baud) return true;

@@ -22,10 +22,13 @@ struct BlimpCommand {
 constexpr double kBlimpCameraPanMax = 1.5708;   ///< rad each way (±90°)
 constexpr double kBlimpCameraTiltMax = 0.7854;  ///< rad each way (±45°)
 
-/// Whether every value is finite and within its range (what a vehicle
-/// accepts; anything else is a malformed command, counted and dropped).
-inline bool InRange(const BlimpCommand& c) {
-  auto in = [](double v, double lo, double hi) { return std::isfinite(v) && v >= lo && v <= hi; };
+/// Whether every value is finite and within its range, widened by `slack`
+/// at each end (a float's rounding past an end is not malformed). What a vehicle accepts; anything else is a malformed
+/// command, counted and dropped.
+inline bool InRange(const BlimpCommand& c, double slack = 0.0) {
+  auto in = [slack](double v, double lo, double hi) {
+    return std::isfinite(v) && v >= lo - slack && v <= hi + slack;
+  };
   return in(c.elevator, -1, 1) && in(c.rudder, -1, 1) && in(c.power, 0, 1) && in(c.helix, -1, 1) &&
          in(c.tail_rotor, -1, 1) && in(c.camera_pan, -kBlimpCameraPanMax, kBlimpCameraPanMax) &&
          in(c.camera_tilt, -kBlimpCameraTiltMax, kBlimpCameraTiltMax);

@@ -24,6 +24,7 @@
 /// a test passes a fake whose time moves only when the test (or a wait that
 /// nothing will answer) moves it, so retry counts and the lost transition do
 /// not depend on how loaded the machine is.
+#include "haptel/core/unique_fd.hpp"
 #include <array>
 #include <atomic>
 #include <cstdint>
@@ -35,27 +36,8 @@
 namespace haptel::haptics {
 
 namespace udp {
-/// Owns a file descriptor (a socket); closes it on destruction.
-class UniqueFd {
- public:
-  UniqueFd() = default;
-  explicit UniqueFd(int fd) : fd_(fd) {}
-  UniqueFd(UniqueFd&& other) noexcept : fd_(other.release()) {}
-  UniqueFd& operator=(UniqueFd&& other) noexcept;
-  UniqueFd(const UniqueFd&) = delete;
-  UniqueFd& operator=(const UniqueFd&) = delete;
-  ~UniqueFd() { reset(); }
-  int get() const { return fd_; }
-  int release() {
-    const int fd = fd_;
-    fd_ = -1;
-    return fd;
-  }
-  void reset(int fd = -1);
-
- private:
-  int fd_ = -1;
-};
+/// The shared file descriptor owner (core/unique_fd.hpp).
+using UniqueFd = haptel::UniqueFd;
 
 /// What a UdpDevice knows of time. Each side's servo thread calls it, both at
 /// once in two-sided mode, so an implementation is stateless or thread-safe;

@@ -7,6 +7,7 @@
 /// Reads and writes never block. Set-up errors throw SerialUnavailable (bad
 /// input, exit 2); a port that goes away while in use throws SerialLost
 /// (the vehicle node's exit 3).
+#include "haptel/core/unique_fd.hpp"
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -33,34 +34,8 @@ class SerialLost : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// An owned file descriptor, closed when destroyed (-1: none).
-class UniqueFd {
- public:
-  UniqueFd() = default;
-  explicit UniqueFd(int fd) : fd_(fd) {}
-  ~UniqueFd() { reset(); }
-  UniqueFd(UniqueFd&& other) noexcept : fd_(other.release()) {}
-  UniqueFd& operator=(UniqueFd&& other) noexcept {
-    if (this != &other) reset(other.release());
-    return *this;
-  }
-  UniqueFd(const UniqueFd&) = delete;
-  UniqueFd& operator=(const UniqueFd&) = delete;
-
-  int get() const { return fd_; }
-  explicit operator bool() const { return fd_ >= 0; }
-  /// Gives the descriptor up without closing it.
-  int release() {
-    const int fd = fd_;
-    fd_ = -1;
-    return fd;
-  }
-  /// Closes the descriptor held (if any) and holds `fd`.
-  void reset(int fd = -1);
-
- private:
-  int fd_ = -1;
-};
+/// The shared file descriptor owner (core/unique_fd.hpp).
+using UniqueFd = haptel::UniqueFd;
 
 class ByteStream {
  public:
