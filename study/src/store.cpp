@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "haptel/core/clock.hpp"
+#include "haptel/mediator/session.hpp"
 #include "haptel/mediator/sqlite_util.hpp"
 
 namespace haptel::study {
@@ -233,10 +234,17 @@ int StudyStore::TrialsDone(const std::string& participant) const {
   return count;
 }
 
+bool FinishesTrial(const std::string& outcome) {
+  using mediator::Outcome;
+  return outcome == ToString(Outcome::kCompleted) || outcome == ToString(Outcome::kLapCap) ||
+         outcome == ToString(Outcome::kTimeLimit);
+}
+
 mediator::Recorder::AlsoSave StudyStore::TrialWriter(const PlannedTrial& trial, double cap_s) const {
   const int64_t study = id_;
   const std::filesystem::path file = recorder_.path();
   return [study, file, trial, cap_s](sqlite3* db, int64_t run_id, const mediator::RunRecord& run) {
+    if (!FinishesTrial(run.outcome)) return;
     const bool completed = run.completed && std::isfinite(run.lap_time_s);
     // The thesis's rule: an unfinished lap counts as the cap.
     const double scored = completed ? std::min(run.lap_time_s, cap_s) : cap_s;

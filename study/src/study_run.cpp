@@ -43,11 +43,6 @@ constexpr const char* kRunUsage =
     "  --verbose         the sessions' own progress lines\n";
 
 /// Whether a session's outcome finishes its trial (scored; an unfinished lap at the cap).
-bool FinishesTrial(mediator::Outcome outcome) {
-  return outcome == mediator::Outcome::kCompleted || outcome == mediator::Outcome::kLapCap ||
-         outcome == mediator::Outcome::kTimeLimit;
-}
-
 const StudyCondition& ConditionNamed(const StudyConfig& config, const std::string& name) {
   for (const StudyCondition& c : config.conditions) {
     if (c.name == name) return c;
@@ -315,7 +310,7 @@ int StudyRunCommand(int argc, const char* const* argv) {
         std::fprintf(stderr, "[study]   aborted from the console: the trial is run again\n");
         continue;
       }
-      if (run.run_id != 0 && FinishesTrial(run.result.outcome)) {
+      if (run.run_id != 0 && FinishesTrial(mediator::ToString(run.result.outcome))) {
         std::fprintf(stderr, "[study]   %s: lap %s s%s, %d obstacles, %d slips (run %lld)\n",
                      mediator::ToString(run.result.outcome).c_str(), Seconds(r.lap_time_s).c_str(),
                      r.completed ? "" : (" (scored " + Seconds(config.trial_cap_s) + " s)").c_str(),

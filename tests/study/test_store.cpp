@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 
 #include "haptel/mediator/recorder.hpp"
+#include "haptel/mediator/session.hpp"
 #include "haptel/study/plan.hpp"
 #include "haptel/study/store.hpp"
 #include "study_test_run.hpp"
@@ -90,6 +91,12 @@ TEST_CASE("The store keeps a study's plan, trials and answers across restarts, e
     // A finished trial and an unfinished one, scored at the cap.
     recorder.Save(test::TrialRun(42.0, true, 2), store.TrialWriter(plan[0], 600.0));
     recorder.Save(test::TrialRun(700.0, false), store.TrialWriter(plan[1], 600.0));
+    // A run that ended in a fault: recorded, but the trial is not done.
+    mediator::RunRecord lost = test::TrialRun(5.1, false, 1);
+    lost.outcome = mediator::ToString(mediator::Outcome::kVehicleLost);
+    recorder.Save(lost, store.TrialWriter(plan[2], 600.0));
+    CHECK(store.Trials().size() == 2);
+    CHECK(store.NextTrial()->position == 3);
     // The same trial again: refused, and its run rolled back with it.
     const size_t runs = recorder.LoadAll().size();
     CHECK_THROWS(recorder.Save(test::TrialRun(40.0), store.TrialWriter(plan[0], 600.0)));

@@ -28,6 +28,11 @@ struct PlannedTrial {
   int repetition = 1;
 };
 
+/// Whether a run with this outcome (mediator::ToString) finishes a trial:
+/// completed, or ended by the lap cap or the time limit (scored at the
+/// cap). Faults — a lost vehicle or device, an interruption — do not.
+bool FinishesTrial(const std::string& outcome);
+
 /// A finished trial as recorded.
 struct TrialRow {
   std::string participant;
@@ -84,8 +89,11 @@ class StudyStore {
   int TrialsDone(const std::string& participant) const;
 
   /// For Recorder::Save: writes the trial's row in the run's transaction,
-  /// scored from the run (an unfinished lap at the cap). Throws if the trial
-  /// already has a row (the run is then rolled back too).
+  /// scored from the run (an unfinished lap at the cap) — only when the
+  /// run's outcome finishes a trial (FinishesTrial): a run that ended in a
+  /// fault (vehicle or device lost, interrupted) is recorded, the trial is
+  /// not, and a resumed study runs it again. Throws if the trial already
+  /// has a row (the run is then rolled back too).
   mediator::Recorder::AlsoSave TrialWriter(const PlannedTrial& trial, double cap_s) const;
 
   /// Takes a finished trial back, to be run again (the experimenter's Redo):
