@@ -34,6 +34,7 @@ void BlimpPilotConfig::ValidateOrThrow() const {
   check::Number("height_gain", height_gain, 0.01, 10.0);
   check::Number("max_climb", max_climb, 0.05, 10.0);
   check::Number("max_sink", max_sink, 0.05, 10.0);
+  check::Number("touchdown_sink", touchdown_sink, 0.05, max_sink);
   check::Number("vertical_gain", vertical_gain, 0.0, 1000.0);
   check::Number("vertical_integral", vertical_integral, 0.0, 1000.0);
   check::Number("vertical_drag_per_speed2", vertical_drag_per_speed2, 0.0, 100.0);
@@ -49,6 +50,9 @@ void BlimpPilotConfig::ValidateOrThrow() const {
   check::Number("heading_gain", heading_gain, 0.0, 100.0);
   check::Number("yaw_rate_gain", yaw_rate_gain, 0.0, 100.0);
   check::Number("tail_rotor_speed", tail_rotor_speed, 0.0, 20.0);
+  check::Number("turnabout_error", turnabout_error, 0.01, 3.2);
+  check::Number("turnabout_done_error", turnabout_done_error, 0.0, turnabout_error);
+  check::Number("turnabout_max_s", turnabout_max_s, 0.5, 120.0);
   check::Number("pitch_gain", pitch_gain, 0.0, 100.0);
   check::Number("pitch_rate_gain", pitch_rate_gain, 0.0, 100.0);
   check::Number("pitch_per_climb", pitch_per_climb, 0.0, 1.0);
@@ -88,9 +92,9 @@ Eigen::Vector2d BlimpAutoPilot::Pursue(const BlimpGateFrame& gate, const Eigen::
   const Eigen::Vector2d c = Horizontal(gate.centre), forward = Horizontal(gate.forward);
   const Eigen::Vector2d d = Horizontal(p) - c;
   const double along = d.dot(forward);
+  const double off = std::abs(d.dot(Horizontal(gate.left)));
   if (along > 0.0)
     return c - config_.turn_back_distance * forward;  // past it: go round and come again
-  const double off = std::abs(d.dot(Horizontal(gate.left)));
   double ahead = std::min(along + config_.lookahead, config_.exit_distance);
   if (off > gate.half_width)
     ahead = std::min(ahead, -config_.approach_slope * (off - gate.half_width));
@@ -153,6 +157,11 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
       (position - landing).norm() <= course_.landing.radius) {
     phase_ = Phase::kLanded;
   }
+  // Slid out of the circle on the ground: up and in again.
+  if (phase_ == Phase::kLanded && (position - landing).norm() > course_.landing.radius) {
+    phase_ = Phase::kLanding;
+    sinking_ = false;
+  }
   switch (phase_) {
     case Phase::kGround:
     case Phase::kTakeOff: {
@@ -167,6 +176,14 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
       const BlimpGateFrame& g = gates_[static_cast<size_t>(gate_)];
       bearing = Bearing(Pursue(g, o.position) - position);
       target_z_ = std::max(g.centre.z(), SafeHeight(o.position, Horizontal(g.centre)));
+      // The landing near after the last gate: through it no faster than
+      // the approach's speed there, or the hull coasts past the circle.
+      if (gate_ == gates - 1) {
+        const double to_landing = (Horizontal(g.centre) - position).norm() + (landing - Horizontal(g.centre)).norm();
+        forward_speed = std::clamp(config_.landing_speed * std::exp(to_landing / config_.landing_coast_length),
+                                   std::min(2.0 * config_.tail_rotor_speed, config_.cruise_airspeed),
+                                   config_.cruise_airspeed);
+      }
       break;
     }
     case Phase::kLanding: {
@@ -239,15 +256,40 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
   const double turn =
       std::clamp(config_.heading_gain * error - config_.yaw_rate_gain * yaw_rate_, -1.0, 1.0);
   c.rudder = turn;
-  // The tail rotor below 8 km/h, fading out a metre per second above.
-  const double tail_weight = std::clamp(config_.tail_rotor_speed + 1.0 - o.airspeed, 0.0, 1.0);
+  // Slow and off course, a turnabout: the gesture cockpit's tail rotor turns
+  // only with the power off (the left hand sideways at zero power), so the
+  // pilot lets go of the power and turns on the tail rotor until it heads
+  // nearly right. Faster, the rudder bites and the power stays on.
+  // A turnabout that does not get there — the wind weathercocks the hull
+  // against the small tail rotor: after 2 s it turns the wrong way or
+  // slower than 3°/s — gives way to power for turnabout_max_s.
+  if (turnabout_) {
+    const double lasted = t_s - turnabout_since_;
+    const bool stuck = lasted > 2.0 && yaw_rate_ * (error > 0.0 ? 1.0 : -1.0) < 0.05;
+    if (std::abs(error) < config_.turnabout_done_error || o.airspeed > config_.tail_rotor_speed + 1.0 ||
+        lasted > config_.turnabout_max_s || stuck) {
+      turnabout_ = false;
+      turnabout_since_ = t_s;
+    }
+  } else if (o.airspeed < config_.tail_rotor_speed && std::abs(error) > config_.turnabout_error &&
+             t_s - turnabout_since_ > config_.turnabout_max_s) {
+    turnabout_ = true;
+    turnabout_since_ = t_s;
+  }
 
   // Height: a climb rate towards the target, a vertical force for it.
+  // Landing, the sink slows as the ground nears (a flare): touchdown well
+  // under the course's crash speed.
+  const double max_sink =
+      landing_vertical ? std::min(config_.max_sink, config_.touchdown_sink + 0.5 * std::max(0.0, height))
+                       : config_.max_sink;
   const double climb =
-      std::clamp(config_.height_gain * (target_z_ - o.position.z()), -config_.max_sink,
+      std::clamp(config_.height_gain * (target_z_ - o.position.z()), -max_sink,
                  landing_vertical ? config_.landing_climb : config_.max_climb);
   const double climb_error = climb - o.velocity.z();
-  vertical_i_ = std::clamp(vertical_i_ + config_.vertical_integral * climb_error * dt, -6.0, 6.0);
+  // (The integrators hold still while the power is off for a turnabout.)
+  if (!turnabout_)
+    vertical_i_ = std::clamp(vertical_i_ + config_.vertical_integral * climb_error * dt, -6.0, 6.0);
   double up_force = config_.vertical_gain * climb_error + vertical_i_ +
                     config_.vertical_drag_per_speed2 * climb * std::abs(climb);
 
@@ -258,7 +300,7 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
       ground_speed ? std::max(0.0, forward_speed - wind_.dot(heading)) : forward_speed;
   double forward_force = config_.drag_per_speed2 * air_target * air_target +
                          config_.speed_gain * speed_error + speed_i_;
-  if (forward_force > 0.0 || speed_error > 0.0) {
+  if (!turnabout_ && (forward_force > 0.0 || speed_error > 0.0)) {
     speed_i_ = std::clamp(speed_i_ + config_.speed_integral * speed_error * dt, -8.0, 8.0);
   }
   forward_force = std::max(0.0, forward_force);
@@ -271,8 +313,12 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
   // firm need.
   if (landing_vertical && sinking_) {
     up_force = std::min(0.0, up_force);
-  } else if (landing_vertical) {
+  } else if (landing_vertical && speed_error > 0.0) {
     forward_force = std::max(forward_force, 0.5 * std::abs(up_force));
+  } else if (landing_vertical) {
+    // Too fast for the approach: no forward thrust at all, whatever the
+    // height wants (the plane may turn straight up or down).
+    forward_force = 0.0;
   } else if (forward_force < 2.0) {
     if (up_force > 1.5) helix_up_ = true;
     if (up_force < -1.5) helix_up_ = false;
@@ -286,7 +332,12 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
     helix_ = std::atan2(up_force, forward_force);  // (a weak thrust's direction is noise)
   c.power = thrust / config_.full_thrust_n;
   c.helix = std::clamp(helix_ / (config_.max_helix_deg * std::numbers::pi / 180.0), -1.0, 1.0);
-  c.tail_rotor = c.power < 0.02 ? turn : turn * tail_weight;
+  // The tail rotor with the power off, as the cockpit allows; a weak thrust
+  // is let go too, so that the tail rotor can hold the heading.
+  if (turnabout_ || c.power < 0.02) {
+    c.power = 0.0;
+    c.tail_rotor = turn;
+  }
 
   // The elevator: a little nose-up to climb, damped; landing, level only
   // (slow, the surface's own force is most of what it does: nose-down

@@ -9,9 +9,11 @@
 
 #include "alloc_counter.hpp"
 #include "haptel/config/blimp_course.hpp"
+#include "haptel/config/blimp_gesture.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/config/vehicle.hpp"
 #include "haptel/mediator/blimp/blimp_lap_timer.hpp"
+#include "haptel/interfaces/blimp_gesture.hpp"
 #include "haptel/mediator/blimp/blimp_pilot.hpp"
 #include "haptel/vehicles/sim_blimp.hpp"
 #include "test_env.hpp"
@@ -458,6 +460,8 @@ struct Flight {
   int gates_passed = 0, gates_missed = 0, obstacles = 0;
   Eigen::Vector3d end = Eigen::Vector3d::Zero();
   bool finite = true;
+  bool cockpit_ok = true;  ///< never the tail rotor with the power on
+  int turnabouts = 0;      ///< decisions with the tail rotor turning, power off, during the lap
 };
 
 BlimpObservation Observed(const vehicles::SimBlimp& sim) {
@@ -476,11 +480,15 @@ BlimpObservation Observed(const vehicles::SimBlimp& sim) {
 
 /// The simulator stepped at its own rate, its state observed at 50 Hz by
 /// the lap timer and the pilot, the pilot deciding at 20 Hz (on what it
-/// saw its reaction delay before); simulated time only.
+/// saw its reaction delay before) with its hands on the blimp gesture
+/// cockpit: the command is what the cockpit reads from the hands where the
+/// pilot holds them (so the tail rotor turns only at zero power); simulated
+/// time only.
 Flight Fly(const AirshipConfig& airship, const BlimpCourseConfig& course) {
   vehicles::SimBlimp sim(airship, course);
   BlimpAutoPilot pilot(course);
   BlimpLapTimer lap(course);
+  const interfaces::BlimpGestureInterface cockpit(LoadBlimpGesture("config/interfaces/blimp-gesture.yaml"));
   const double step = airship.step_s;                                    // 200 Hz
   const int observe_every = static_cast<int>(std::lround(0.02 / step));  // 50 Hz
   const int decide_every = static_cast<int>(std::lround(0.05 / step));   // 20 Hz
@@ -493,7 +501,16 @@ Flight Fly(const AirshipConfig& airship, const BlimpCourseConfig& course) {
       pilot.Observe(o);
       lap.Update(o);
     }
-    if (k % decide_every == 0) command = pilot.Decide(sim.time_s());
+    if (k % decide_every == 0) {
+      const BlimpCommand intent = pilot.Decide(sim.time_s());
+      // The pilot flies only what the cockpit can express.
+      f.cockpit_ok = f.cockpit_ok && (intent.tail_rotor == 0.0 || intent.power == 0.0);
+      const interfaces::HandTargets hands = cockpit.HandTargetsFor(intent);
+      command = cockpit.Map(hands[haptics::Index(haptics::Side::kLeft)]->position,
+                            hands[haptics::Index(haptics::Side::kRight)]->position,
+                            {intent.camera_pan, intent.camera_tilt});
+      f.turnabouts += command.power == 0.0 && command.tail_rotor != 0.0 && lap.started() ? 1 : 0;
+    }
     sim.Step(step, command);
     f.finite = f.finite && sim.airship().Finite();
   }
@@ -510,10 +527,13 @@ Flight Fly(const AirshipConfig& airship, const BlimpCourseConfig& course) {
 
 void CheckLap(const Flight& f, const BlimpCourseConfig& course, const char* what) {
   std::printf(
-      "blimp lap (%s): %.1f s, gates %d passed / %d missed, obstacles %d, landed at (%.1f, %.1f)\n",
-      what, f.lap_time_s, f.gates_passed, f.gates_missed, f.obstacles, f.end.x(), f.end.y());
+      "blimp lap (%s): %s in %.1f s, gates %d passed / %d missed, obstacles %d, ended at (%.1f, %.1f), "
+      "%d turnabout decisions\n",
+      what, f.completed ? "completed" : f.crashed ? "crashed" : f.timed_out ? "timed out" : "unfinished",
+      f.lap_time_s, f.gates_passed, f.gates_missed, f.obstacles, f.end.x(), f.end.y(), f.turnabouts);
   INFO(what);
   CHECK(f.finite);
+  CHECK(f.cockpit_ok);
   CHECK(f.completed);
   CHECK_FALSE(f.crashed);
   CHECK_FALSE(f.timed_out);
@@ -539,4 +559,10 @@ TEST_CASE("the automatic pilot flies the shipped course in a 1.5 m/s wind with g
   airship.wind.mean = {1.5, 0.0, 0.0};
   airship.wind.gust_rms = 0.8;
   CheckLap(Fly(airship, course), course, "wind 1.5 m/s east, gusts 0.8 m/s rms");
+}
+
+TEST_CASE("the automatic pilot flies the short hop (the end-to-end tests' course)") {
+  const BlimpCourseConfig course = LoadBlimpCourse("config/tracks/blimp-hop.yaml");
+  const AirshipConfig airship = LoadVehicle("config/vehicles/sim-blimp.yaml").airship;
+  CheckLap(Fly(airship, course), course, "the hop, still air");
 }

@@ -19,8 +19,9 @@
 /// and the helix plane's tilt; the elevator holds a small pitch towards the
 /// climb. It steers its heading — turned into a cross wind by the wind
 /// triangle, from the wind it estimates — with the rudder, which bites above
-/// about 8 km/h, and with the tail rotor at low speed or zero power (the
-/// thesis's quick turnabout). The pilot camera looks at the next gate (then
+/// about 8 km/h; slow and off course, it lets go of the power and turns on
+/// the tail rotor (the thesis's quick turnabout: the gesture cockpit drives
+/// the tail rotor only at zero power, and so does the pilot). The pilot camera looks at the next gate (then
 /// at the landing circle): pan its bearing off the heading, tilt its
 /// elevation off the hull's pitch, each within the head's range.
 #include <array>
@@ -51,6 +52,9 @@ struct BlimpPilotConfig {
   double height_gain = 0.6;        ///< 1/s: climb rate per metre of height error
   double max_climb = 1.5;          ///< m/s
   double max_sink = 1.5;           ///< m/s
+  /// m/s: landing, the fastest sink at the ground, growing by 0.5 m/s per
+  /// metre above it (up to max_sink).
+  double touchdown_sink = 0.4;
   double vertical_gain = 10.0;     ///< N per m/s of climb-rate error
   double vertical_integral = 3.0;  ///< N per m of integrated climb-rate error (trims the weight)
   double vertical_drag_per_speed2 =
@@ -78,7 +82,14 @@ struct BlimpPilotConfig {
   // Steering.
   double heading_gain = 3.0;      ///< rudder per rad of course error
   double yaw_rate_gain = 2.5;     ///< rudder per rad/s of yaw rate
-  double tail_rotor_speed = 2.2;  ///< m/s: below this airspeed the tail rotor turns (8 km/h)
+  double tail_rotor_speed = 2.2;  ///< m/s: below this airspeed the rudder barely bites (8 km/h)
+  /// rad: slower than tail_rotor_speed and further off the heading wanted,
+  /// a turnabout (power off, the tail rotor on) until within turnabout_done_error.
+  double turnabout_error = 0.8;
+  double turnabout_done_error = 0.2;  ///< rad
+  /// s: a turnabout lasts at most this long, and the next begins no sooner
+  /// after it (flying on with power in between).
+  double turnabout_max_s = 8.0;
   double pitch_gain = 2.0;        ///< elevator per rad of pitch error
   double pitch_rate_gain = 1.0;   ///< elevator per rad/s of pitch rate
   double pitch_per_climb = 0.08;  ///< rad of nose-up per m/s of climb wanted
@@ -138,6 +149,8 @@ class BlimpAutoPilot {
   double helix_ = 0.0;
   bool helix_up_ = true;
   bool sinking_ = false;  ///< over the landing circle, on the way down
+  bool turnabout_ = false;  ///< power off, turning on the tail rotor
+  double turnabout_since_ = -1e9;  ///< when the turnabout began, or the last one ended
   Eigen::Vector2d wind_ = Eigen::Vector2d::Zero();
 };
 
