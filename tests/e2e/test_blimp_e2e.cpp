@@ -1,0 +1,180 @@
+// End to end, the blimp: `haptel run` flies the short hop through DDS with
+// the real servo adapter talking Maestro through a pty to the simulated
+// controller; and `haptel-vehicle` for the real blimp, on a pty we read as
+// the controller would, sends the commanded pulses on all seven channels
+// and goes to neutral on its own once the commands stop.
+#include <catch2/catch.hpp>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <thread>
+
+#include "child.hpp"
+#include "haptel/config/vehicle.hpp"
+#include "haptel/core/clock.hpp"
+#include "haptel/link/participant.hpp"
+#include "haptel/link/topic.hpp"
+#include "haptel/mediator/recorder.hpp"
+#include "haptel/servo/calibration.hpp"
+#include "haptel/servo/serial_port.hpp"
+#include "haptel/servo/sim_servo_controller.hpp"
+#include "haptel/vehicles/blimp_adapters.hpp"
+#include "test_env.hpp"
+
+using namespace haptel;
+using haptel::test::Child;
+using haptel::test::JsonField;
+
+namespace {
+
+std::string Bin(const std::string& name) { return (test::BinDir() / name).string(); }
+
+/// Every channel within a quarter µs (the Maestro's resolution) of `want`.
+bool PulsesAre(const std::array<double, kBlimpChannels>& have, const std::array<double, kBlimpChannels>& want) {
+  for (size_t i = 0; i < have.size(); ++i) {
+    if (std::abs(have[i] - want[i]) > 0.26) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+TEST_CASE("a blimp hop over DDS through the Maestro adapter and a pty: completed, the JSON and the database "
+          "name the vehicle and the interface") {
+  const auto dir = test::ScratchDir("e2e-blimp");
+  const auto db = dir / "runs.db";
+  Child haptel({Bin("haptel"), "run", "--config", "config/blimp.yaml", "--vehicle",
+                "config/vehicles/sim-blimp-maestro.yaml", "--track", "config/tracks/blimp-hop.yaml", "--json",
+                "--quiet", "--domain", std::to_string(test::UniqueDomain(71)), "--database", db.string(),
+                "--vehicle-timeout", "5"});
+  const int code = haptel.Wait(300.0);
+  INFO("stdout:\n" << haptel.out() << "\nstderr:\n" << haptel.err());
+  REQUIRE(code == 0);
+  const std::string json = haptel.LastLine();
+  REQUIRE(json.front() == '{');
+  CHECK(JsonField(json, "outcome") == "completed");
+  CHECK(JsonField(json, "completed") == "true");
+  CHECK(JsonField(json, "gates_total") == "1");
+  CHECK(JsonField(json, "gates_passed") == "1");
+  CHECK(JsonField(json, "vehicle_kind") == "servo-blimp-sim");
+  CHECK(JsonField(json, "interface") == "blimp-gesture");
+  CHECK(JsonField(json, "track") == "blimp-hop");
+  CHECK(std::stod(JsonField(json, "lap_time_s")) > 5.0);
+  CHECK(std::stod(JsonField(json, "command_rtt_ms_p50")) > 0.0);
+
+  mediator::Recorder recorder(db);
+  const auto runs = recorder.LoadAll();
+  REQUIRE(runs.size() == 1);
+  CHECK(runs[0].completed);
+  CHECK(runs[0].outcome == "completed");
+  CHECK(runs[0].vehicle_kind == "servo-blimp-sim");
+  CHECK(runs[0].interface == "blimp-gesture");
+  CHECK(runs[0].track == "blimp-hop");
+  REQUIRE(runs[0].splits.size() == 1);
+  CHECK(runs[0].splits[0].passed);
+  CHECK_FALSE(runs[0].path.empty());
+}
+
+TEST_CASE("haptel-vehicle on a pty: the commanded pulses on all seven channels, then neutral from its own "
+          "watchdog once the commands stop") {
+  const VehicleConfig config = LoadVehicle("config/vehicles/blimp-maestro.yaml");
+  REQUIRE(config.servo.protocol == ServoProtocol::kMaestro);
+  REQUIRE(config.servo.crc);
+  // The controller's own timeout out of the way: only the node's watchdog
+  // can bring the neutral pulses back.
+  ServoControllerConfig controller_config = config.servo;
+  controller_config.controller_timeout_s = 60.0;
+  servo::PtyPair pty;
+  servo::SimServoController controller(controller_config, pty.TakeMaster());
+  const std::array<double, kBlimpChannels> neutral = servo::NeutralPulses(config.servo);
+
+  const int domain = test::UniqueDomain(73);
+  const std::string name = "blimp-e2e";
+  Child vehicle({Bin("haptel-vehicle"), "--config", "config/vehicles/blimp-maestro.yaml", "--serial-port",
+                 pty.slave_path(), "--domain", std::to_string(domain), "--name", name});
+  LinkConfig link = config.link;
+  link.domain_id = domain;
+  link::Participant participant(link, "test-operator");
+  link::BlimpCommandWriter commands(participant, link::TopicName(name, "command"), link::Profile::kCommand);
+
+  const auto now_s = [] { return NsToS(MonotonicNs()); };
+  const auto pump_until = [&](double timeout_s, const auto& done) {
+    const double until = now_s() + timeout_s;
+    while (now_s() < until) {
+      controller.Update(now_s());
+      vehicle.Pump();
+      if (done()) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    return false;
+  };
+  INFO("vehicle stderr:\n" << vehicle.err());
+
+  // Before any command: valid frames, every channel at neutral.
+  REQUIRE(pump_until(20.0, [&] { return controller.counters().commands >= 7; }));
+  CHECK(PulsesAre(controller.pulse_us(), neutral));
+
+  // Commands at 50 Hz: every channel where the calibration puts it.
+  BlimpCommand c;
+  c.elevator = 0.5;
+  c.rudder = -0.5;
+  c.power = 0.6;
+  c.helix = 0.25;
+  c.tail_rotor = 0.0;  // with power on, the cockpit never turns the tail rotor
+  c.camera_pan = 0.5;
+  c.camera_tilt = -0.3;
+  const std::array<double, kBlimpChannels> commanded =
+      servo::PulsesFromCommands(config.servo, vehicles::ChannelValues(c));
+  msg::BlimpCommand m;
+  uint64_t seq = 0;
+  double last_sent_s = 0.0;
+  bool reached = false;
+  const double until = now_s() + 10.0;
+  double sent_after_reached_until = 0.0;
+  while (now_s() < until) {
+    m.seq(++seq);
+    m.sent_ns(MonotonicNs());
+    m.elevator(static_cast<float>(c.elevator));
+    m.rudder(static_cast<float>(c.rudder));
+    m.power(static_cast<float>(c.power));
+    m.helix(static_cast<float>(c.helix));
+    m.tail_rotor(static_cast<float>(c.tail_rotor));
+    m.camera_pan(static_cast<float>(c.camera_pan));
+    m.camera_tilt(static_cast<float>(c.camera_tilt));
+    commands.Write(m);
+    last_sent_s = now_s();
+    pump_until(0.02, [] { return false; });
+    if (!reached && PulsesAre(controller.pulse_us(), commanded)) {
+      reached = true;
+      sent_after_reached_until = now_s() + 1.0;  // a second more of steady commands
+    }
+    if (reached && now_s() > sent_after_reached_until) break;
+  }
+  INFO("pulses: " << controller.pulse_us()[0] << " " << controller.pulse_us()[1] << " " << controller.pulse_us()[2]
+                  << " " << controller.pulse_us()[3] << " " << controller.pulse_us()[4] << " "
+                  << controller.pulse_us()[5] << " " << controller.pulse_us()[6]);
+  REQUIRE(reached);
+  CHECK(PulsesAre(controller.pulse_us(), commanded));  // held while the commands come
+  CHECK(controller.pulse_us()[5] < neutral[5]);        // pan is reversed on this blimp
+
+  // The commands stop: the node's watchdog sends every channel to neutral.
+  REQUIRE(pump_until(5.0, [&] { return PulsesAre(controller.pulse_us(), neutral); }));
+  const double neutral_after_s = now_s() - last_sent_s;
+  std::printf("haptel-vehicle on a pty: neutral pulses %.0f ms after the last command (watchdog %.0f ms)\n",
+              neutral_after_s * 1e3, config.watchdog_timeout_s * 1e3);
+  // The node's watchdog, not the controller's (60 s here); the 0.25 s
+  // itself is measured, not asserted: a loaded machine may add latency.
+  CHECK(neutral_after_s < 5.0);
+  CHECK_FALSE(controller.timed_out());
+
+  // Every byte decoded as the Maestro would: no CRC errors, nothing dropped.
+  CHECK(controller.counters().crc_errors == 0);
+  CHECK(controller.counters().malformed_bytes == 0);
+  CHECK(controller.counters().frames_dropped == 0);
+  CHECK(controller.errors() == 0);
+  CHECK(controller.counters().commands > 100);
+
+  const std::string ended = vehicle.Terminate(5.0);
+  CHECK(ended == "exited with code 0");
+}
