@@ -53,6 +53,7 @@ void BlimpPilotConfig::ValidateOrThrow() const {
   check::Number("turnabout_error", turnabout_error, 0.01, 3.2);
   check::Number("turnabout_done_error", turnabout_done_error, 0.0, turnabout_error);
   check::Number("turnabout_max_s", turnabout_max_s, 0.5, 120.0);
+  check::Number("landing_turnabout_error", landing_turnabout_error, turnabout_done_error, 3.2);
   check::Number("pitch_gain", pitch_gain, 0.0, 100.0);
   check::Number("pitch_rate_gain", pitch_rate_gain, 0.0, 100.0);
   check::Number("pitch_per_climb", pitch_per_climb, 0.0, 1.0);
@@ -271,7 +272,9 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
       turnabout_ = false;
       turnabout_since_ = t_s;
     }
-  } else if (o.airspeed < config_.tail_rotor_speed && std::abs(error) > config_.turnabout_error &&
+  } else if (o.airspeed < config_.tail_rotor_speed &&
+             std::abs(error) > (phase_ == Phase::kLanding ? config_.landing_turnabout_error
+                                                           : config_.turnabout_error) &&
              t_s - turnabout_since_ > config_.turnabout_max_s) {
     turnabout_ = true;
     turnabout_since_ = t_s;

@@ -87,6 +87,9 @@ struct BlimpPilotConfig {
   /// a turnabout (power off, the tail rotor on) until within turnabout_done_error.
   double turnabout_error = 0.8;
   double turnabout_done_error = 0.2;  ///< rad
+  /// rad: landing, slow all the way, the tail rotor is the only steering
+  /// left: a turnabout for smaller errors.
+  double landing_turnabout_error = 0.35;
   /// s: a turnabout lasts at most this long, and the next begins no sooner
   /// after it (flying on with power in between).
   double turnabout_max_s = 8.0;
