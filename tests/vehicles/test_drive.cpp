@@ -2,6 +2,7 @@
 #include <cmath>
 #include <limits>
 
+#include "haptel/vehicles/command_intake.hpp"
 #include "haptel/vehicles/drive.hpp"
 
 using namespace haptel::vehicles;
@@ -60,4 +61,38 @@ TEST_CASE("the watchdog expires exactly after the timeout without commands") {
 TEST_CASE("the watchdog rejects a non-positive timeout") {
   CHECK_THROWS_AS(CommandWatchdog(0.0), std::invalid_argument);
   CHECK_THROWS_AS(CommandWatchdog(-1.0), std::invalid_argument);
+}
+
+TEST_CASE("command intake: malformed and stale commands are counted and dropped, the newest is applied") {
+  CommandIntake<int> in(0.25);
+  const int64_t ms = 1'000'000;
+  CHECK(in.Poll(0));  // nothing yet: expired
+  CHECK(in.AppliedAgeNs(5 * ms) == 0);
+  CHECK_FALSE(in.Offer(false, 1, 0, 7, 10 * ms));  // fails its range check
+  CHECK(in.Offer(true, 2, 0, 8, 20 * ms));
+  CHECK_FALSE(in.Offer(true, 2, 0, 9, 30 * ms));  // not newer
+  CHECK_FALSE(in.Offer(true, 1, 0, 9, 40 * ms));  // older: reordered
+  CHECK_FALSE(in.Poll(50 * ms));
+  CHECK(in.applied().command == 8);
+  CHECK(in.applied().seq == 2);
+  CHECK(in.AppliedAgeNs(50 * ms) == 30 * ms);
+  CHECK(in.accepted() == 1);
+  CHECK(in.malformed() == 1);
+  CHECK(in.stale() == 2);
+  // Silence past the timeout: expired, one trip.
+  CHECK(in.Poll(300 * ms));
+  CHECK(in.watchdog_expired());
+  CHECK(in.watchdog_trips() == 1);
+  // A restarted sender (sequence from 1 again) is taken once the last
+  // command is older than the timeout.
+  CHECK(in.Offer(true, 1, 0, 5, 400 * ms));
+  CHECK_FALSE(in.Poll(410 * ms));
+  CHECK(in.applied().command == 5);
+}
+
+TEST_CASE("control step: nominal first, then the time since the last tick, at most 50 ms") {
+  int64_t last = 0;
+  CHECK(ControlStep(last, 1'000'000'000, 200.0) == Approx(0.005));
+  CHECK(ControlStep(last, 1'010'000'000, 200.0) == Approx(0.010));
+  CHECK(ControlStep(last, 2'000'000'000, 200.0) == Approx(0.05));
 }

@@ -28,8 +28,7 @@ BlimpNode::BlimpNode(const VehicleConfig& config, std::unique_ptr<video::CameraS
                      std::unique_ptr<BlimpAdapter> adapter)
     : config_(Validated(config)),
       adapter_(std::move(adapter)),
-      sequence_(config.watchdog_timeout_s),
-      watchdog_(config.watchdog_timeout_s) {
+      commands_(config.watchdog_timeout_s) {
   if (adapter_ == nullptr) throw std::invalid_argument("BlimpNode: no adapter");
   if (camera == nullptr) throw std::invalid_argument("BlimpNode: no camera source");
   ticks_per_state_ = std::max(1, static_cast<int>(std::lround(config.sim_rate_hz / config.state_rate_hz)));
@@ -72,38 +71,19 @@ void BlimpNode::Stop() {
 }
 
 void BlimpNode::OnCommand(const msg::BlimpCommand& cmd) {
-  const int64_t now = MonotonicNs();
   const BlimpCommand command = FromMessage(cmd);
-  if (!InRange(command, kRangeSlack)) {
-    malformed_.fetch_add(1, std::memory_order_relaxed);
-    return;
-  }
-  if (!sequence_.Accept(cmd.seq(), now)) {
-    stale_.fetch_add(1, std::memory_order_relaxed);
-    return;
-  }
-  accepted_.fetch_add(1, std::memory_order_relaxed);
-  command_.Store({cmd.seq(), cmd.sent_ns(), now, Clamped(command)});
+  commands_.Offer(InRange(command, kRangeSlack), cmd.seq(), cmd.sent_ns(), Clamped(command), MonotonicNs());
 }
 
 void BlimpNode::ControlTick(int64_t now_ns) {
   if (failed_.load(std::memory_order_relaxed)) return;
-  const uint64_t version = command_.Version();
-  if (version != applied_version_) {
-    applied_version_ = version;
-    applied_ = command_.Load();
-    watchdog_.Feed(applied_.received_ns);
-  }
-  const bool expired = watchdog_.Check(now_ns);
-  expired_.store(expired, std::memory_order_relaxed);
-  trips_.store(watchdog_.trips(), std::memory_order_relaxed);
-  const double dt = last_tick_ns_ == 0 ? 1.0 / config_.sim_rate_hz : std::min(0.05, NsToS(now_ns - last_tick_ns_));
-  last_tick_ns_ = now_ns;
+  const bool expired = commands_.Poll(now_ns);
+  const double dt = ControlStep(last_tick_ns_, now_ns, config_.sim_rate_hz);
   try {
     if (expired) {
       adapter_->Failsafe();
     } else {
-      adapter_->Apply(applied_.command);
+      adapter_->Apply(commands_.applied().command);
     }
     adapter_->Update(dt);
   } catch (const std::exception& e) {
@@ -152,12 +132,12 @@ void BlimpNode::PublishState(int64_t now_ns) {
   std::array<float, 7> pulses{};
   for (size_t i = 0; i < pulses.size(); ++i) pulses[i] = static_cast<float>(s.pulse_us[i]);
   m.pulse_us(pulses);
-  m.failsafe(expired_.load());
+  m.failsafe(commands_.watchdog_expired());
   m.controller_errors(s.controller_errors);
-  m.last_command_seq(applied_.seq);
-  m.last_command_sent_ns(applied_.sent_ns);
-  m.last_command_age_ns(applied_.seq == 0 ? 0 : now_ns - applied_.received_ns);
-  m.commands_received(accepted_.load());
+  m.last_command_seq(commands_.applied().seq);
+  m.last_command_sent_ns(commands_.applied().sent_ns);
+  m.last_command_age_ns(commands_.AppliedAgeNs(now_ns));
+  m.commands_received(commands_.accepted());
   const bool failed = failed_.load();
   m.fault(s.fault || failed);
   m.fault_message(failed ? failure_ : s.fault_message);
@@ -166,20 +146,7 @@ void BlimpNode::PublishState(int64_t now_ns) {
 }
 
 NodeCounters BlimpNode::Counters() const {
-  NodeCounters c;
-  c.commands_accepted = accepted_.load();
-  c.commands_malformed = malformed_.load();
-  c.commands_stale = stale_.load();
-  c.watchdog_trips = trips_.load();
-  c.states_published = states_.load();
-  const CameraCounters camera = camera_->Counters();
-  c.frames_published = camera.frames_published;
-  c.frames_failed = camera.frames_failed;
-  c.grabs_failed = camera.grabs_failed;
-  c.camera_stalls = camera.camera_stalls;
-  c.camera_ended = camera.camera_ended;
-  c.watchdog_expired = expired_.load();
-  return c;
+  return MakeNodeCounters(commands_, camera_->Counters(), states_.load());
 }
 
 std::string BlimpNode::AdapterFailure() const { return failed_.load() ? failure_ : std::string(); }

@@ -54,8 +54,7 @@ VehicleNode::VehicleNode(const VehicleConfig& config, const Track& track,
                          std::unique_ptr<video::CameraSource> camera, std::unique_ptr<VehicleAdapter> adapter)
     : config_(Validated(config)),
       adapter_(adapter != nullptr ? std::move(adapter) : MakeVehicleAdapter(config, track)),
-      sequence_(config.watchdog_timeout_s),
-      watchdog_(config.watchdog_timeout_s) {
+      commands_(config.watchdog_timeout_s) {
   if (camera == nullptr) throw std::invalid_argument("VehicleNode: no camera source");
   ticks_per_state_ = std::max(1, static_cast<int>(std::lround(config.sim_rate_hz / config.state_rate_hz)));
 
@@ -91,40 +90,20 @@ void VehicleNode::Stop() {
 }
 
 void VehicleNode::OnCommand(const msg::DriveCommand& cmd) {
-  const int64_t now = MonotonicNs();
-  if (!std::isfinite(cmd.left()) || !std::isfinite(cmd.right()) ||
-      std::abs(cmd.left()) > kMaxCommand || std::abs(cmd.right()) > kMaxCommand) {
-    malformed_.fetch_add(1, std::memory_order_relaxed);
-    return;
-  }
-  if (!sequence_.Accept(cmd.seq(), now)) {
-    stale_.fetch_add(1, std::memory_order_relaxed);
-    return;
-  }
-  accepted_.fetch_add(1, std::memory_order_relaxed);
-  command_.Store({cmd.seq(), cmd.sent_ns(), now, cmd.left(), cmd.right()});
+  const bool valid = std::isfinite(cmd.left()) && std::isfinite(cmd.right()) &&
+                     std::abs(cmd.left()) <= kMaxCommand && std::abs(cmd.right()) <= kMaxCommand;
+  commands_.Offer(valid, cmd.seq(), cmd.sent_ns(), {cmd.left(), cmd.right()}, MonotonicNs());
 }
 
 void VehicleNode::ControlTick(int64_t now_ns) {
-  const uint64_t version = command_.Version();
-  if (version != applied_version_) {
-    applied_version_ = version;
-    applied_ = command_.Load();
-    watchdog_.Feed(applied_.received_ns);
-  }
-  const bool expired = watchdog_.Check(now_ns);
-  expired_.store(expired, std::memory_order_relaxed);
-  trips_.store(watchdog_.trips(), std::memory_order_relaxed);
-  if (expired) {
+  if (commands_.Poll(now_ns)) {
     adapter_->Stop();  // hardware: zero velocity, then idle
   } else {
-    adapter_->SetMotors({QuantiseCommand(applied_.left, config_.drive.speed_levels),
-                         QuantiseCommand(applied_.right, config_.drive.speed_levels)});
+    const Wheels& w = commands_.applied().command;
+    adapter_->SetMotors({QuantiseCommand(w.left, config_.drive.speed_levels),
+                         QuantiseCommand(w.right, config_.drive.speed_levels)});
   }
-  const double dt = last_tick_ns_ == 0 ? 1.0 / config_.sim_rate_hz
-                                       : std::min(0.05, NsToS(now_ns - last_tick_ns_));
-  last_tick_ns_ = now_ns;
-  adapter_->Update(dt);
+  adapter_->Update(ControlStep(last_tick_ns_, now_ns, config_.sim_rate_hz));
   const AdapterState s = adapter_->State();
   camera_->SetPose({.x = s.x, .y = s.y, .heading = s.heading});
   if (tick_count_++ % static_cast<uint64_t>(ticks_per_state_) == 0) PublishState(now_ns);
@@ -145,11 +124,11 @@ void VehicleNode::PublishState(int64_t now_ns) {
   m.bumper_right(s.bumper_right);
   m.motor_left_level(static_cast<int16_t>(s.applied.left));
   m.motor_right_level(static_cast<int16_t>(s.applied.right));
-  m.watchdog_tripped(expired_.load());
-  m.last_command_seq(applied_.seq);
-  m.last_command_sent_ns(applied_.sent_ns);
-  m.last_command_age_ns(applied_.seq == 0 ? 0 : now_ns - applied_.received_ns);
-  m.commands_received(accepted_.load());
+  m.watchdog_tripped(commands_.watchdog_expired());
+  m.last_command_seq(commands_.applied().seq);
+  m.last_command_sent_ns(commands_.applied().sent_ns);
+  m.last_command_age_ns(commands_.AppliedAgeNs(now_ns));
+  m.commands_received(commands_.accepted());
   m.fault(s.fault);
   m.fault_message(s.fault_message);
   state_writer_->Write(m);
@@ -157,20 +136,7 @@ void VehicleNode::PublishState(int64_t now_ns) {
 }
 
 NodeCounters VehicleNode::Counters() const {
-  NodeCounters c;
-  c.commands_accepted = accepted_.load();
-  c.commands_malformed = malformed_.load();
-  c.commands_stale = stale_.load();
-  c.watchdog_trips = trips_.load();
-  c.states_published = states_.load();
-  const CameraCounters camera = camera_->Counters();
-  c.frames_published = camera.frames_published;
-  c.frames_failed = camera.frames_failed;
-  c.grabs_failed = camera.grabs_failed;
-  c.camera_stalls = camera.camera_stalls;
-  c.camera_ended = camera.camera_ended;
-  c.watchdog_expired = expired_.load();
-  return c;
+  return MakeNodeCounters(commands_, camera_->Counters(), states_.load());
 }
 
 }  // namespace haptel::vehicles

@@ -9,11 +9,9 @@
 
 #include "haptel/config/vehicle.hpp"
 #include "haptel/core/periodic_thread.hpp"
-#include "haptel/core/seqlock.hpp"
 #include "haptel/link/topic.hpp"
 #include "haptel/vehicles/blimp_adapter.hpp"
 #include "haptel/vehicles/camera_streamer.hpp"
-#include "haptel/vehicles/drive.hpp"
 #include "haptel/vehicles/vehicle_node.hpp"
 
 namespace haptel::vehicles {
@@ -36,32 +34,21 @@ class BlimpNode {
   std::string AdapterFailure() const;
 
  private:
-  struct ReceivedCommand {
-    uint64_t seq = 0;
-    int64_t sent_ns = 0;
-    int64_t received_ns = 0;
-    BlimpCommand command;
-  };
   void OnCommand(const msg::BlimpCommand& cmd);
   void ControlTick(int64_t now_ns);
   void PublishState(int64_t now_ns);
 
   VehicleConfig config_;
   std::unique_ptr<BlimpAdapter> adapter_;
-  Seqlock<ReceivedCommand> command_;
-  uint64_t applied_version_ = 0;
-  ReceivedCommand applied_;
+  CommandIntake<BlimpCommand> commands_;
   int64_t last_tick_ns_ = 0;
   uint64_t tick_count_ = 0;
   uint64_t state_seq_ = 0;
   int ticks_per_state_ = 1;
-  CommandSequence sequence_;
-  std::atomic<uint64_t> accepted_{0}, malformed_{0}, stale_{0}, trips_{0}, states_{0};
-  std::atomic<bool> expired_{true};
+  std::atomic<uint64_t> states_{0};
   std::atomic<bool> stopped_{false};
   std::atomic<bool> failed_{false};
   std::string failure_;  ///< written once before failed_ is set
-  CommandWatchdog watchdog_;
   msg::BlimpState state_msg_;
 
   // Declared last: destroyed first, so no DDS callback outlives the rest.

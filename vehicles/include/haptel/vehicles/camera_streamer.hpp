@@ -59,26 +59,4 @@ class CameraStreamer {
   std::unique_ptr<PeriodicThread> loop_;
 };
 
-/// Which commands a vehicle takes: newer sequence numbers only, since
-/// best-effort delivery may reorder — unless the sender restarted (its
-/// sequence began again) and the last accepted command is older than the
-/// watchdog timeout. Called from the DDS thread only.
-class CommandSequence {
- public:
-  explicit CommandSequence(double restart_after_s) : restart_after_ns_(static_cast<int64_t>(restart_after_s * 1e9)) {}
-  /// True (and remembered) when `seq` received at `now_ns` is to be applied.
-  bool Accept(uint64_t seq, int64_t now_ns) {
-    const bool restarted = now_ns - last_ns_ > restart_after_ns_;
-    if (seq <= last_seq_ && !restarted) return false;
-    last_seq_ = seq;
-    last_ns_ = now_ns;
-    return true;
-  }
-
- private:
-  int64_t restart_after_ns_;
-  uint64_t last_seq_ = 0;
-  int64_t last_ns_ = 0;
-};
-
 }  // namespace haptel::vehicles

@@ -19,6 +19,7 @@
 #include "haptel/link/topic.hpp"
 #include "haptel/vehicles/adapter.hpp"
 #include "haptel/vehicles/camera_streamer.hpp"
+#include "haptel/vehicles/command_intake.hpp"
 #include "haptel/video/camera_source.hpp"
 
 namespace haptel::vehicles {
@@ -36,6 +37,25 @@ struct NodeCounters {
   bool camera_ended = false;   ///< a file source that does not loop has ended
   bool watchdog_expired = true;
 };
+
+/// A node's counters: its commands' and its camera's.
+template <typename Command>
+NodeCounters MakeNodeCounters(const CommandIntake<Command>& commands, const CameraCounters& camera,
+                              uint64_t states_published) {
+  NodeCounters c;
+  c.commands_accepted = commands.accepted();
+  c.commands_malformed = commands.malformed();
+  c.commands_stale = commands.stale();
+  c.watchdog_trips = commands.watchdog_trips();
+  c.watchdog_expired = commands.watchdog_expired();
+  c.states_published = states_published;
+  c.frames_published = camera.frames_published;
+  c.frames_failed = camera.frames_failed;
+  c.grabs_failed = camera.grabs_failed;
+  c.camera_stalls = camera.camera_stalls;
+  c.camera_ended = camera.camera_ended;
+  return c;
+}
 
 /// The adapter a vehicle file's kind names: "sim-robot" the simulated tank;
 /// "can-robot" the robot on SocketCAN (config.can.interface; throws
@@ -63,10 +83,7 @@ class VehicleNode {
   NodeCounters Counters() const;
 
  private:
-  struct ReceivedCommand {
-    uint64_t seq = 0;
-    int64_t sent_ns = 0;
-    int64_t received_ns = 0;
+  struct Wheels {
     float left = 0.0F;
     float right = 0.0F;
   };
@@ -76,18 +93,13 @@ class VehicleNode {
 
   VehicleConfig config_;
   std::unique_ptr<VehicleAdapter> adapter_;
-  Seqlock<ReceivedCommand> command_;
-  uint64_t applied_version_ = 0;
-  ReceivedCommand applied_;
+  CommandIntake<Wheels> commands_;
   int64_t last_tick_ns_ = 0;
   uint64_t tick_count_ = 0;
   uint64_t state_seq_ = 0;
   int ticks_per_state_ = 1;
-  CommandSequence sequence_;
-  std::atomic<uint64_t> accepted_{0}, malformed_{0}, stale_{0}, trips_{0}, states_{0};
-  std::atomic<bool> expired_{true};
+  std::atomic<uint64_t> states_{0};
   std::atomic<bool> stopped_{false};
-  CommandWatchdog watchdog_;
   msg::VehicleState state_msg_;
 
   // Declared last: destroyed first, so no DDS callback outlives the rest.

@@ -1,0 +1,118 @@
+#pragma once
+/// @file How commands reach a vehicle node's control loop — the same for
+/// every vehicle, whatever its command type: the DDS thread drops a
+/// malformed command (counted) and a stale one (counted, CommandSequence)
+/// and hands the rest over through a seqlock; the control thread takes the
+/// newest, feeds the watchdog with its arrival time and asks it whether the
+/// vehicle is to be made safe. Allocation-free on both threads.
+#include <algorithm>
+#include <atomic>
+#include <cstdint>
+
+#include "haptel/core/seqlock.hpp"
+#include "haptel/vehicles/drive.hpp"
+
+namespace haptel::vehicles {
+
+/// Which commands a vehicle takes: newer sequence numbers only, since
+/// best-effort delivery may reorder — unless the sender restarted (its
+/// sequence began again) and the last accepted command is older than the
+/// watchdog timeout. Called from the DDS thread only.
+class CommandSequence {
+ public:
+  explicit CommandSequence(double restart_after_s) : restart_after_ns_(static_cast<int64_t>(restart_after_s * 1e9)) {}
+  /// True (and remembered) when `seq` received at `now_ns` is to be applied.
+  bool Accept(uint64_t seq, int64_t now_ns) {
+    const bool restarted = now_ns - last_ns_ > restart_after_ns_;
+    if (seq <= last_seq_ && !restarted) return false;
+    last_seq_ = seq;
+    last_ns_ = now_ns;
+    return true;
+  }
+
+ private:
+  int64_t restart_after_ns_;
+  uint64_t last_seq_ = 0;
+  int64_t last_ns_ = 0;
+};
+
+/// A command as the control loop applies it, with what the state echoes.
+template <typename Command>
+struct ReceivedCommand {
+  uint64_t seq = 0;  ///< 0: none yet
+  int64_t sent_ns = 0;
+  int64_t received_ns = 0;
+  Command command{};
+};
+
+template <typename Command>
+class CommandIntake {
+ public:
+  /// The watchdog's timeout, also the sequence's restart age (s, > 0).
+  explicit CommandIntake(double watchdog_timeout_s)
+      : sequence_(watchdog_timeout_s), watchdog_(watchdog_timeout_s), applied_version_(latest_.Version()) {}
+
+  /// DDS thread: a command received at `now_ns`; `valid` is its range check.
+  /// Returns whether it was taken.
+  bool Offer(bool valid, uint64_t seq, int64_t sent_ns, const Command& command, int64_t now_ns) {
+    if (!valid) {
+      malformed_.fetch_add(1, std::memory_order_relaxed);
+      return false;
+    }
+    if (!sequence_.Accept(seq, now_ns)) {
+      stale_.fetch_add(1, std::memory_order_relaxed);
+      return false;
+    }
+    accepted_.fetch_add(1, std::memory_order_relaxed);
+    latest_.Store({seq, sent_ns, now_ns, command});
+    return true;
+  }
+
+  /// Control thread, once a tick: takes the newest command and checks the
+  /// watchdog. True when expired (no command within the timeout, or none
+  /// yet): the vehicle is to be made safe.
+  bool Poll(int64_t now_ns) {
+    const uint64_t version = latest_.Version();
+    if (version != applied_version_) {
+      applied_version_ = version;
+      applied_ = latest_.Load();
+      watchdog_.Feed(applied_.received_ns);
+    }
+    const bool expired = watchdog_.Check(now_ns);
+    expired_.store(expired, std::memory_order_relaxed);
+    trips_.store(watchdog_.trips(), std::memory_order_relaxed);
+    return expired;
+  }
+
+  /// Control thread: the command taken by the last Poll.
+  const ReceivedCommand<Command>& applied() const { return applied_; }
+  /// Age of the applied command at `now_ns` (0 before the first).
+  int64_t AppliedAgeNs(int64_t now_ns) const { return applied_.seq == 0 ? 0 : now_ns - applied_.received_ns; }
+
+  // Any thread.
+  uint64_t accepted() const { return accepted_.load(); }
+  uint64_t malformed() const { return malformed_.load(); }
+  uint64_t stale() const { return stale_.load(); }
+  uint64_t watchdog_trips() const { return trips_.load(); }
+  bool watchdog_expired() const { return expired_.load(); }
+
+ private:
+  CommandSequence sequence_;  // DDS thread
+  Seqlock<ReceivedCommand<Command>> latest_;
+  CommandWatchdog watchdog_;  // control thread
+  uint64_t applied_version_;  ///< the seqlock's version last taken (its initial value is no command)
+  ReceivedCommand<Command> applied_;
+  std::atomic<uint64_t> accepted_{0}, malformed_{0}, stale_{0}, trips_{0};
+  std::atomic<bool> expired_{true};
+};
+
+/// The control loop's step (s) at `now_ns`: the nominal period on the first
+/// tick, then the time since the last, at most 50 ms (a stalled thread does
+/// not make the simulation leap).
+inline double ControlStep(int64_t& last_tick_ns, int64_t now_ns, double rate_hz) {
+  const double dt = last_tick_ns == 0 ? 1.0 / rate_hz : std::min(0.05, static_cast<double>(now_ns - last_tick_ns) * 1e-9);
+  last_tick_ns = now_ns;
+  return dt;
+}
+
+}  // namespace haptel::vehicles
