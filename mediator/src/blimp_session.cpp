@@ -13,18 +13,13 @@
 #include "haptel/mediator/blimp/blimp_pilot.hpp"
 #include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/run_counters.hpp"
+#include "haptel/mediator/operator.hpp"
 #include "haptel/mediator/vehicle_link.hpp"
+#include "session_loop.hpp"
 
 namespace haptel::mediator {
 
 namespace {
-
-/// The simulated pilot holds a hand where `goal` says.
-void ActOn(haptics::SimDevice& device, haptics::Side side, const interfaces::HandGoal& goal) {
-  device.SetOperatorTarget(side, goal.position);
-  device.SetWristOrientation(side, goal.orientation);
-  device.SetGlovePosture(side, goal.glove);
-}
 
 BlimpObservation Observe(double t_s, const msg::BlimpState& s) {
   BlimpObservation o;
@@ -85,7 +80,7 @@ SessionResult RunBlimpSession(const SessionSetup& setup, const std::atomic<bool>
     for (int i = 0; i < haptics::kSides; ++i) {
       if (!neutral[i]) continue;
       haptic.sim()->Place(static_cast<haptics::Side>(i), neutral[i]->position);
-      ActOn(*haptic.sim(), static_cast<haptics::Side>(i), *neutral[i]);
+      HoldHand(*haptic.sim(), static_cast<haptics::Side>(i), *neutral[i]);
     }
   }
   haptic.Start(setup.progress);
@@ -112,24 +107,12 @@ SessionResult RunBlimpSession(const SessionSetup& setup, const std::atomic<bool>
   int64_t next_command_ns = t0;
   int64_t next_progress_ns = t0 + SToNs(2.0);
   int64_t next_tick = t0;
-  bool vehicle_up = false;
-  const double startup_timeout_s = 15.0;
+  VehicleHealth health(setup.vehicle.name, run.link.domain_id, run.vehicle_timeout_s);
   msg::BlimpState last;
   BlimpCommand command;
-  bool have_position = false;
-  Eigen::Vector3d last_position = Eigen::Vector3d::Zero();
-  double last_path_t = -1.0;
-  bool touching = false;
+  RunTrace trace(rec);
   rec.path.reserve(16384);
-
-  auto finish = [&](Outcome outcome, std::string message) {
-    result.outcome = outcome;
-    result.message = std::move(message);
-    if (outcome == Outcome::kVehicleLost || outcome == Outcome::kVehicleDidNotStart ||
-        outcome == Outcome::kDeviceLost) {
-      log::Error(result.message + "; forces zeroed, blimp to neutral");
-    }
-  };
+  const auto finish = [&](LoopEnd end) { Finish(result, std::move(end), "forces zeroed, blimp to neutral"); };
 
   for (;;) {
     SleepUntilNs(next_tick);
@@ -137,62 +120,30 @@ SessionResult RunBlimpSession(const SessionSetup& setup, const std::atomic<bool>
     const int64_t now = MonotonicNs();
     const double t = NsToS(now - t0);
 
-    if (interrupted.load()) {
-      finish(Outcome::kInterrupted, "interrupted by the operator");
+    if (auto end = CheckOperatorSide(interrupted, haptic, setup.device.name)) {
+      finish(std::move(*end));
       break;
     }
-    if (haptic.lost()) {
-      result.lost_detect_s = haptic.silent_s();
-      finish(Outcome::kDeviceLost, "haptic device '" + setup.device.name + "' lost: an arm stopped answering");
+    if (auto end = health.CheckProcess(vehicle, now)) {
+      finish(std::move(*end));
       break;
     }
-    if (!vehicle.ProcessAlive()) {
-      result.lost_detect_s = vehicle_up ? NsToS(now - vehicle.last_received_ns()) : 0.0;
-      finish(vehicle_up ? Outcome::kVehicleLost : Outcome::kVehicleDidNotStart,
-             "vehicle '" + setup.vehicle.name + "' lost: process " + std::to_string(vehicle.pid()) + " " +
-                 vehicle.ExitDescription());
-      break;
-    }
-    std::string vehicle_fault;
     for (const auto& e : vehicle.blimp_inbox().Drain()) {
       const msg::BlimpState& s = e.state;
-      if (s.fault() && vehicle_fault.empty()) vehicle_fault = s.fault_message();
       const double ts = NsToS(e.received_ns - t0);
-      if (!vehicle_up) haptic.OnVehicleUp();
-      vehicle_up = true;
+      if (health.OnState(s.fault(), s.fault_message())) haptic.OnVehicleUp();
       last = s;
       if (!s.pose_valid()) continue;
       const BlimpObservation o = Observe(ts, s);
       if (pilot) pilot->Observe(o);
       lap.Update(o);
-      if (have_position) rec.distance_m += (o.position - last_position).norm();
-      have_position = true;
-      last_position = o.position;
-      if (ts - last_path_t >= 0.05) {
-        rec.path.push_back({ts, s.x(), s.y(), o.velocity.norm()});
-        last_path_t = ts;
-      }
-      if (s.contact() && !touching) rec.contacts.push_back({ts, s.x(), s.y()});
-      touching = s.contact();
+      trace.Add(ts, s.x(), s.y(), s.z(), o.velocity.norm(), s.contact());
     }
-    if (!vehicle_fault.empty()) {
-      finish(Outcome::kVehicleLost, "vehicle '" + setup.vehicle.name + "' stopped itself: " + vehicle_fault);
+    if (auto end = health.CheckStates(vehicle, now, t)) {
+      finish(std::move(*end));
       break;
     }
-    if (vehicle_up) {
-      const double silent_s = NsToS(now - vehicle.last_received_ns());
-      if (silent_s > run.vehicle_timeout_s) {
-        result.lost_detect_s = silent_s;
-        finish(Outcome::kVehicleLost, "vehicle '" + setup.vehicle.name + "' lost: no state for " +
-                                          std::to_string(silent_s).substr(0, 4) + " s");
-        break;
-      }
-    } else if (t > startup_timeout_s) {
-      finish(Outcome::kVehicleDidNotStart, "vehicle '" + setup.vehicle.name + "' did not answer within " +
-                                               std::to_string(static_cast<int>(startup_timeout_s)) +
-                                               " s on domain " + std::to_string(run.link.domain_id));
-      break;
-    }
+    const bool vehicle_up = health.up();
 
     // The pilot's hands and gaze; a person's head would come from the view.
     interfaces::HeadDirection head;
@@ -200,34 +151,24 @@ SessionResult RunBlimpSession(const SessionSetup& setup, const std::atomic<bool>
       const BlimpCommand intent = pilot->Decide(t);
       const interfaces::HandTargets targets = interface.HandTargetsFor(intent);
       for (int i = 0; i < haptics::kSides; ++i) {
-        if (targets[i]) ActOn(*haptic.sim(), static_cast<haptics::Side>(i), *targets[i]);
+        if (targets[i]) HoldHand(*haptic.sim(), static_cast<haptics::Side>(i), *targets[i]);
       }
       head = {intent.camera_pan, intent.camera_tilt};
     }
     command = interface.Update(head, haptic.hal());
-    if (now >= next_command_ns) {
-      next_command_ns += command_period_ns;
-      if (next_command_ns < now) next_command_ns = now;
-      vehicle.Send(vehicle_up ? command : BlimpCommand{});
-    }
+    if (CommandDue(next_command_ns, now, command_period_ns)) vehicle.Send(vehicle_up ? command : BlimpCommand{});
 
     if (lap.crashed()) {
-      finish(Outcome::kCrashed, "the blimp crashed: a contact at " +
-                                    std::to_string(lap.crash_speed()).substr(0, 4) + " m/s (more than " +
-                                    std::to_string(course.crash_speed).substr(0, 4) + " m/s)");
+      finish({Outcome::kCrashed, "the blimp crashed: a contact at " + std::to_string(lap.crash_speed()).substr(0, 4) +
+                                     " m/s (more than " + std::to_string(course.crash_speed).substr(0, 4) + " m/s)"});
       break;
     }
     if (lap.completed()) {
-      finish(Outcome::kCompleted, "landed: lap completed");
+      finish({Outcome::kCompleted, "landed: lap completed"});
       break;
     }
-    if (setup.time_limit_s > 0 && t > setup.time_limit_s) {
-      finish(Outcome::kTimeLimit,
-             "time limit of " + std::to_string(static_cast<int>(setup.time_limit_s)) + " s reached");
-      break;
-    }
-    if (t > course.lap_cap_s) {
-      finish(Outcome::kLapCap, "lap cap of " + std::to_string(static_cast<int>(course.lap_cap_s)) + " s reached");
+    if (auto end = CheckLimits(t, setup.time_limit_s, course.lap_cap_s)) {
+      finish(std::move(*end));
       break;
     }
     if (now >= next_progress_ns) {
@@ -249,24 +190,12 @@ SessionResult RunBlimpSession(const SessionSetup& setup, const std::atomic<bool>
   haptic.Stop();
   vehicle.Stop();
 
-  const LoopStats servo_stats = haptic.Stats();
-  const VideoStats v = vehicle.video().Stats();
-  const Histogram& rtt = vehicle.Rtt();
-  rec.completed = result.outcome == Outcome::kCompleted;
-  rec.outcome = ToString(result.outcome);
+  RecordLinkFigures(haptic, vehicle, result);
   rec.lap_time_s = lap.lap_time_s();
   rec.gates_passed = lap.gates_passed();
   rec.gates_missed = lap.gates_missed();
   rec.obstacles_touched = lap.obstacles_touched();
   for (const BlimpGateSplit& split : lap.splits()) rec.splits.push_back({split.gate, split.passed, split.split_s});
-  rec.servo_rate_hz = servo_stats.rate_hz;
-  rec.servo_period_p99_us = servo_stats.period_p99_us;
-  rec.command_rtt_ms_p50 = rtt.Percentile(0.5) * 1e-3;
-  rec.command_rtt_ms_p99 = rtt.Percentile(0.99) * 1e-3;
-  rec.video_frames = static_cast<int64_t>(v.frames);
-  rec.video_fps = v.fps;
-  rec.video_latency_ms_p50 = v.latency_ms_p50;
-  result.servo_overruns = servo_stats.overruns;
   watch.Finish(rec);
   return result;
 }

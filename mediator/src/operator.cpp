@@ -3,16 +3,12 @@
 #include "haptel/haptics/sim_device.hpp"
 
 namespace haptel::mediator {
-namespace {
 
-/// The simulated person holds a hand as `goal` says.
-void ActOn(haptics::SimDevice& device, haptics::Side side, const interfaces::HandGoal& goal) {
+void HoldHand(haptics::SimDevice& device, haptics::Side side, const interfaces::HandGoal& goal) {
   device.SetOperatorTarget(side, goal.position);
   device.SetWristOrientation(side, goal.orientation);
   device.SetGlovePosture(side, goal.glove);
 }
-
-}  // namespace
 
 AutomaticOperator::AutomaticOperator(const Track& track, const OperatorConfig& config, const DriveConfig& drive,
                                      haptics::SimDevice& device, const DriverProfile& profile, int experience)
@@ -27,14 +23,14 @@ void AutomaticOperator::Prepare(const interfaces::MediatorInterface& interface) 
     start.glove = {};
     const auto side = static_cast<haptics::Side>(i);
     device_.Place(side, start.position);
-    ActOn(device_, side, start);
+    HoldHand(device_, side, start);
   }
 }
 
 void AutomaticOperator::Act(double t_s, const interfaces::MediatorInterface& interface) {
   const interfaces::HandTargets targets = driver_.Act(t_s, interface);
   for (int i = 0; i < haptics::kSides; ++i) {
-    if (targets[i]) ActOn(device_, static_cast<haptics::Side>(i), *targets[i]);
+    if (targets[i]) HoldHand(device_, static_cast<haptics::Side>(i), *targets[i]);
   }
 }
 

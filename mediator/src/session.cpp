@@ -17,6 +17,7 @@
 #include "haptel/mediator/session_physics.hpp"
 #include "haptel/mediator/session_view.hpp"
 #include "haptel/mediator/vehicle_link.hpp"
+#include "session_loop.hpp"
 #include "haptel/view/sdl_input.hpp"
 
 namespace haptel::mediator {
@@ -234,28 +235,14 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   int64_t next_progress_ns = t0 + SToNs(2.0);
   int64_t next_live_ns = t0;
   int64_t next_tick = t0;
-  bool vehicle_up = false;
-  const double startup_timeout_s = 15.0;
+  VehicleHealth health(setup.vehicle.name, run.link.domain_id, run.vehicle_timeout_s);
   interfaces::VehicleFeedback feedback;
   interfaces::MotorCommand motors;
   uint32_t requests_seen = 0;
   uint32_t disconnects_seen = 0;
-  bool have_position = false;
-  double last_x = 0.0;
-  double last_y = 0.0;
-  double last_path_t = -1.0;
-  bool touching = false;
+  RunTrace trace(rec);
   rec.path.reserve(8192);
-
-  auto finish = [&](Outcome outcome, std::string message) {
-    result.outcome = outcome;
-    result.message = std::move(message);
-    // Said at once: the clean-up that follows may take a while.
-    if (outcome == Outcome::kVehicleLost || outcome == Outcome::kVehicleDidNotStart ||
-        outcome == Outcome::kDeviceLost) {
-      log::Error(result.message + "; forces zeroed, vehicle stopped");
-    }
-  };
+  const auto finish = [&](LoopEnd end) { Finish(result, std::move(end), "forces zeroed, vehicle stopped"); };
 
   for (;;) {
     SleepUntilNs(next_tick);
@@ -263,73 +250,37 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
     const int64_t now = MonotonicNs();
     const double t = NsToS(now - t0);
 
-    if (interrupted.load()) {
-      finish(Outcome::kInterrupted, "interrupted by the operator");
-      break;
-    }
-    // The device first: a lost arm means no forces, so no driving either.
-    if (haptic.lost()) {
-      result.lost_detect_s = haptic.silent_s();
-      finish(Outcome::kDeviceLost,
-             "haptic device '" + setup.device.name + "' lost: an arm stopped answering");
+    if (auto end = CheckOperatorSide(interrupted, haptic, setup.device.name)) {
+      finish(std::move(*end));
       break;
     }
     const interfaces::InputState person = input.Load();
     if (person.quit) {
-      finish(Outcome::kAborted, "the view was closed");
+      finish({Outcome::kAborted, "the view was closed"});
       break;
     }
-    if (!vehicle.ProcessAlive()) {
-      result.lost_detect_s = vehicle_up ? NsToS(now - vehicle.inbox().last_received_ns()) : 0.0;
-      finish(vehicle_up ? Outcome::kVehicleLost : Outcome::kVehicleDidNotStart,
-             "vehicle '" + setup.vehicle.name + "' lost: process " + std::to_string(vehicle.pid()) +
-                 " " + vehicle.ExitDescription());
+    if (auto end = health.CheckProcess(vehicle, now)) {
+      finish(std::move(*end));
       break;
     }
-    std::string vehicle_fault;
     for (const auto& e : vehicle.inbox().Drain()) {
       const msg::VehicleState& s = e.state;
-      if (s.fault() && vehicle_fault.empty()) vehicle_fault = s.fault_message();
       const double ts = NsToS(e.received_ns - t0);
-      if (!vehicle_up) haptic.OnVehicleUp();
-      vehicle_up = true;
+      if (health.OnState(s.fault(), s.fault_message())) haptic.OnVehicleUp();
+      const bool touching = s.bumper_left() || s.bumper_right();
       if (s.pose_valid()) {
         op->Observe({ts, s.x(), s.y(), s.heading(), s.bumper_left(), s.bumper_right()});
         lap.Update(ts, Vec2(s.x(), s.y()));
-        if (have_position) rec.distance_m += std::hypot(s.x() - last_x, s.y() - last_y);
-        have_position = true;
-        last_x = s.x();
-        last_y = s.y();
-        if (ts - last_path_t >= 0.05) {
-          rec.path.push_back({ts, s.x(), s.y(), s.speed()});
-          last_path_t = ts;
-        }
-        const bool now_touching = s.bumper_left() || s.bumper_right();
-        if (now_touching && !touching) rec.contacts.push_back({ts, s.x(), s.y()});
-        touching = now_touching;
+        trace.Add(ts, s.x(), s.y(), 0.0, s.speed(), touching);
       }
-      lap.UpdateContact(ts, s.bumper_left() || s.bumper_right());
+      lap.UpdateContact(ts, touching);
       feedback = {s.bumper_left(), s.bumper_right(), s.speed()};
     }
-    if (!vehicle_fault.empty()) {
-      finish(Outcome::kVehicleLost, "vehicle '" + setup.vehicle.name + "' stopped itself: " + vehicle_fault);
+    if (auto end = health.CheckStates(vehicle, now, t)) {
+      finish(std::move(*end));
       break;
     }
-    if (vehicle_up) {
-      const double silent_s = NsToS(now - vehicle.inbox().last_received_ns());
-      if (silent_s > run.vehicle_timeout_s) {
-        result.lost_detect_s = silent_s;
-        finish(Outcome::kVehicleLost, "vehicle '" + setup.vehicle.name + "' lost: no state for " +
-                                          std::to_string(silent_s).substr(0, 4) + " s");
-        break;
-      }
-    } else if (t > startup_timeout_s) {
-      finish(Outcome::kVehicleDidNotStart,
-             "vehicle '" + setup.vehicle.name + "' did not answer within " +
-                 std::to_string(static_cast<int>(startup_timeout_s)) + " s on domain " +
-                 std::to_string(run.link.domain_id));
-      break;
-    }
+    const bool vehicle_up = health.up();
 
     // A person's requests: another interface (F1–F6); a controller that went away.
     if (person.interface_requests != requests_seen) {
@@ -344,7 +295,7 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
     if (person.pad_disconnects != disconnects_seen) {
       disconnects_seen = person.pad_disconnects;
       if (interfaces.current().name() == "gamepad") {
-        finish(Outcome::kAborted, "the game controller was disconnected");
+        finish({Outcome::kAborted, "the game controller was disconnected"});
         break;
       }
     }
@@ -355,33 +306,23 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
       if (result.grasp_s == 0.0 && op->grasped(t) && start_spec.is_cockpit()) result.grasp_s = t;
     }
     motors = interfaces.Update(t, feedback, haptic.hal());
-    if (now >= next_command_ns) {
-      next_command_ns += static_cast<int64_t>(
-          1e9 /
-          setup.interfaces[static_cast<size_t>(interfaces.current_index())].command_rate_hz());
-      if (next_command_ns < now) next_command_ns = now;
+    const auto command_period_ns = static_cast<int64_t>(
+        1e9 / setup.interfaces[static_cast<size_t>(interfaces.current_index())].command_rate_hz());
+    if (CommandDue(next_command_ns, now, command_period_ns)) {
       vehicle.Send(vehicle_up ? motors.left : 0.0, vehicle_up ? motors.right : 0.0);
     }
 
     if (lap.completed()) {
-      finish(Outcome::kCompleted, "lap completed");
+      finish({Outcome::kCompleted, "lap completed"});
       break;
     }
-    if (setup.time_limit_s > 0 && t > setup.time_limit_s) {
-      finish(
-          Outcome::kTimeLimit,
-          "time limit of " + std::to_string(static_cast<int>(setup.time_limit_s)) + " s reached");
-      break;
-    }
-    if (t > setup.track.lap_cap_s) {
-      finish(
-          Outcome::kLapCap,
-          "lap cap of " + std::to_string(static_cast<int>(setup.track.lap_cap_s)) + " s reached");
+    if (auto end = CheckLimits(t, setup.time_limit_s, setup.track.lap_cap_s)) {
+      finish(std::move(*end));
       break;
     }
     if (view_part || setup.on_live) {
       // Made every tick: the overlay notices contacts by their edges.
-      const view::Overlay overlay = overlay_feed.Make(t, lap, interfaces, feedback, motors, vehicle_up, touching);
+      const view::Overlay overlay = overlay_feed.Make(t, lap, interfaces, feedback, motors, vehicle_up, trace.touching());
       if (view_part) view_part->Publish(overlay);
       if (setup.on_live && now >= next_live_ns) {
         next_live_ns = now + SToNs(0.5);
@@ -438,25 +379,13 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   haptic.Stop();
   vehicle.Stop();
 
-  const LoopStats servo_stats = haptic.Stats();
-  const VideoStats v = vehicle.video().Stats();
-  const Histogram& rtt = vehicle.inbox().Rtt();
+  RecordLinkFigures(haptic, vehicle, result);
   rec.interface = start_spec.name;
-  rec.completed = result.outcome == Outcome::kCompleted;
-  rec.outcome = ToString(result.outcome);
   rec.lap_time_s = lap.lap_time_s();
   rec.gates_passed = lap.gates_passed();
   rec.gates_missed = lap.gates_missed();
   rec.obstacles_touched = lap.obstacles_touched();
   rec.splits = lap.splits();
-  rec.servo_rate_hz = servo_stats.rate_hz;
-  rec.servo_period_p99_us = servo_stats.period_p99_us;
-  rec.command_rtt_ms_p50 = rtt.Percentile(0.5) * 1e-3;
-  rec.command_rtt_ms_p99 = rtt.Percentile(0.99) * 1e-3;
-  rec.video_frames = static_cast<int64_t>(v.frames);
-  rec.video_fps = v.fps;
-  rec.video_latency_ms_p50 = v.latency_ms_p50;
-  result.servo_overruns = servo_stats.overruns;
   rec.switches = interfaces.switches();
   watch.Finish(rec);
   return result;

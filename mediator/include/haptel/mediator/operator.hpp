@@ -20,6 +20,10 @@ class SimDevice;
 
 namespace haptel::mediator {
 
+/// A simulated person holds a hand of the simulated device as `goal` says:
+/// where the wrist is, how it turns, the glove's posture.
+void HoldHand(haptics::SimDevice& device, haptics::Side side, const interfaces::HandGoal& goal);
+
 class Operator {
  public:
   virtual ~Operator() = default;

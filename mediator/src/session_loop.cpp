@@ -1,0 +1,123 @@
+#include "session_loop.hpp"
+
+#include <cmath>
+
+#include "haptel/core/clock.hpp"
+#include "haptel/core/log.hpp"
+
+namespace haptel::mediator {
+
+void Finish(SessionResult& result, LoopEnd end, const char* made_safe) {
+  result.outcome = end.outcome;
+  result.message = std::move(end.message);
+  if (end.lost_detect_s > 0.0) result.lost_detect_s = end.lost_detect_s;
+  if (end.outcome == Outcome::kVehicleLost || end.outcome == Outcome::kVehicleDidNotStart ||
+      end.outcome == Outcome::kDeviceLost) {
+    log::Error(result.message + "; " + made_safe);
+  }
+}
+
+std::optional<LoopEnd> CheckOperatorSide(const std::atomic<bool>& interrupted, const HapticSide& haptic,
+                                         const std::string& device_name) {
+  if (interrupted.load()) return LoopEnd{Outcome::kInterrupted, "interrupted by the operator"};
+  if (haptic.lost()) {
+    return LoopEnd{Outcome::kDeviceLost, "haptic device '" + device_name + "' lost: an arm stopped answering",
+                   haptic.silent_s()};
+  }
+  return std::nullopt;
+}
+
+VehicleHealth::VehicleHealth(const std::string& vehicle_name, int domain_id, double vehicle_timeout_s,
+                             double startup_timeout_s)
+    : name_(vehicle_name),
+      domain_id_(domain_id),
+      timeout_s_(vehicle_timeout_s),
+      startup_timeout_s_(startup_timeout_s) {}
+
+std::optional<LoopEnd> VehicleHealth::CheckProcess(VehicleLink& vehicle, int64_t now_ns) const {
+  if (vehicle.ProcessAlive()) return std::nullopt;
+  return LoopEnd{up_ ? Outcome::kVehicleLost : Outcome::kVehicleDidNotStart,
+                 "vehicle '" + name_ + "' lost: process " + std::to_string(vehicle.pid()) + " " +
+                     vehicle.ExitDescription(),
+                 up_ ? NsToS(now_ns - vehicle.last_received_ns()) : 0.0};
+}
+
+bool VehicleHealth::OnState(bool fault, const std::string& fault_message) {
+  if (fault && fault_.empty()) fault_ = fault_message;
+  const bool first = !up_;
+  up_ = true;
+  return first;
+}
+
+std::optional<LoopEnd> VehicleHealth::CheckStates(const VehicleLink& vehicle, int64_t now_ns, double t_s) {
+  if (!fault_.empty()) {
+    std::string fault;
+    fault.swap(fault_);
+    return LoopEnd{Outcome::kVehicleLost, "vehicle '" + name_ + "' stopped itself: " + fault};
+  }
+  if (up_) {
+    const double silent_s = NsToS(now_ns - vehicle.last_received_ns());
+    if (silent_s > timeout_s_) {
+      return LoopEnd{Outcome::kVehicleLost,
+                     "vehicle '" + name_ + "' lost: no state for " + std::to_string(silent_s).substr(0, 4) + " s",
+                     silent_s};
+    }
+  } else if (t_s > startup_timeout_s_) {
+    return LoopEnd{Outcome::kVehicleDidNotStart, "vehicle '" + name_ + "' did not answer within " +
+                                                     std::to_string(static_cast<int>(startup_timeout_s_)) +
+                                                     " s on domain " + std::to_string(domain_id_)};
+  }
+  return std::nullopt;
+}
+
+void RunTrace::Add(double t_s, double x, double y, double z, double speed, bool touching) {
+  if (have_position_) record_.distance_m += std::sqrt((x - last_x_) * (x - last_x_) + (y - last_y_) * (y - last_y_) +
+                                                     (z - last_z_) * (z - last_z_));
+  have_position_ = true;
+  last_x_ = x;
+  last_y_ = y;
+  last_z_ = z;
+  if (t_s - last_path_t_ >= 0.05) {
+    record_.path.push_back({t_s, x, y, speed});
+    last_path_t_ = t_s;
+  }
+  if (touching && !touching_) record_.contacts.push_back({t_s, x, y});
+  touching_ = touching;
+}
+
+bool CommandDue(int64_t& next_ns, int64_t now_ns, int64_t period_ns) {
+  if (now_ns < next_ns) return false;
+  next_ns += period_ns;
+  if (next_ns < now_ns) next_ns = now_ns;
+  return true;
+}
+
+std::optional<LoopEnd> CheckLimits(double t_s, double time_limit_s, double lap_cap_s) {
+  if (time_limit_s > 0 && t_s > time_limit_s) {
+    return LoopEnd{Outcome::kTimeLimit,
+                   "time limit of " + std::to_string(static_cast<int>(time_limit_s)) + " s reached"};
+  }
+  if (t_s > lap_cap_s) {
+    return LoopEnd{Outcome::kLapCap, "lap cap of " + std::to_string(static_cast<int>(lap_cap_s)) + " s reached"};
+  }
+  return std::nullopt;
+}
+
+void RecordLinkFigures(const HapticSide& haptic, const VehicleLink& vehicle, SessionResult& result) {
+  RunRecord& rec = result.record;
+  const LoopStats servo = haptic.Stats();
+  const VideoStats v = vehicle.video().Stats();
+  const Histogram& rtt = vehicle.Rtt();
+  rec.completed = result.outcome == Outcome::kCompleted;
+  rec.outcome = ToString(result.outcome);
+  rec.servo_rate_hz = servo.rate_hz;
+  rec.servo_period_p99_us = servo.period_p99_us;
+  rec.command_rtt_ms_p50 = rtt.Percentile(0.5) * 1e-3;
+  rec.command_rtt_ms_p99 = rtt.Percentile(0.99) * 1e-3;
+  rec.video_frames = static_cast<int64_t>(v.frames);
+  rec.video_fps = v.fps;
+  rec.video_latency_ms_p50 = v.latency_ms_p50;
+  result.servo_overruns = servo.overruns;
+}
+
+}  // namespace haptel::mediator

@@ -1,0 +1,86 @@
+#pragma once
+// What every session loop does the same way, whatever the vehicle (the
+// robot's RunSession, the blimp's RunBlimpSession): watch the vehicle's
+// health, trace the run, pace the commands, stop at the limits, and put the
+// link's figures in the record. Internal to the mediator library.
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "haptel/mediator/haptic_side.hpp"
+#include "haptel/mediator/recorder.hpp"
+#include "haptel/mediator/session.hpp"
+#include "haptel/mediator/vehicle_link.hpp"
+
+namespace haptel::mediator {
+
+/// Why a session loop ends.
+struct LoopEnd {
+  Outcome outcome = Outcome::kInterrupted;
+  std::string message;
+  double lost_detect_s = 0.0;  ///< vehicle or device lost: last sign of life -> detection
+};
+
+/// Ends `result` as `end` says; a lost vehicle or device is said at once
+/// (the clean-up that follows may take a while), with how it was made safe.
+void Finish(SessionResult& result, LoopEnd end, const char* made_safe);
+
+/// The stops every loop checks first, each tick: an interruption, then the
+/// haptic device (a lost arm means no forces, so no driving either).
+std::optional<LoopEnd> CheckOperatorSide(const std::atomic<bool>& interrupted, const HapticSide& haptic,
+                                         const std::string& device_name);
+
+/// The vehicle's health as the loop sees it: its process, the faults its
+/// states report, their silence, and, until it first answers, the start-up
+/// timeout.
+class VehicleHealth {
+ public:
+  VehicleHealth(const std::string& vehicle_name, int domain_id, double vehicle_timeout_s,
+                double startup_timeout_s = 15.0);
+  /// Whether a state has arrived yet.
+  bool up() const { return up_; }
+  /// Before the states are drained: the spawned process still runs.
+  std::optional<LoopEnd> CheckProcess(VehicleLink& vehicle, int64_t now_ns) const;
+  /// For each state drained; true for the first one (the vehicle just came up).
+  bool OnState(bool fault, const std::string& fault_message);
+  /// After the states are drained: a fault one of them reported, their
+  /// silence, or no answer yet `t_s` after the start.
+  std::optional<LoopEnd> CheckStates(const VehicleLink& vehicle, int64_t now_ns, double t_s);
+
+ private:
+  std::string name_;
+  int domain_id_;
+  double timeout_s_;
+  double startup_timeout_s_;
+  bool up_ = false;
+  std::string fault_;  ///< the first fault reported since the last check
+};
+
+/// The run's trace in the record: distance flown or driven, the path every
+/// 50 ms, and where each contact began.
+class RunTrace {
+ public:
+  explicit RunTrace(RunRecord& record) : record_(record) {}
+  /// A pose at `t_s` (z: 0 for a ground vehicle); `touching`: in contact.
+  void Add(double t_s, double x, double y, double z, double speed, bool touching);
+  bool touching() const { return touching_; }
+
+ private:
+  RunRecord& record_;
+  bool have_position_ = false;
+  double last_x_ = 0.0, last_y_ = 0.0, last_z_ = 0.0;
+  double last_path_t_ = -1.0;
+  bool touching_ = false;
+};
+
+/// True when a command is due at `now_ns`, at most one per `period_ns`; a
+/// late loop sends one, it does not catch up.
+bool CommandDue(int64_t& next_ns, int64_t now_ns, int64_t period_ns);
+
+/// The session's own limits at `t_s`: the time limit (0: none), then the lap cap.
+std::optional<LoopEnd> CheckLimits(double t_s, double time_limit_s, double lap_cap_s);
+
+/// The figures of the servo loop and the link into the record (after both stopped).
+void RecordLinkFigures(const HapticSide& haptic, const VehicleLink& vehicle, SessionResult& result);
+
+}  // namespace haptel::mediator
