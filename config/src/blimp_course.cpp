@@ -7,6 +7,7 @@
 #include <set>
 #include <string>
 
+#include "haptel/config/blimp_course_geometry.hpp"
 #include "haptel/config/check.hpp"
 #include "yaml_map.hpp"
 
@@ -19,57 +20,6 @@ namespace {
 
 /// No course is larger than this (m from the origin, each coordinate).
 constexpr double kMaxCoordinate = 1e5;
-
-double Radians(double deg) { return deg * std::numbers::pi / 180.0; }
-
-/// A building's footprint: a rectangle of half sizes hx, hy turned by yaw.
-struct Footprint {
-  double cx, cy, hx, hy, cos_yaw, sin_yaw;
-
-  explicit Footprint(const BlimpBuildingSpec& b)
-      : cx(b.centre[0]),
-        cy(b.centre[1]),
-        hx(b.size[0] / 2),
-        hy(b.size[1] / 2),
-        cos_yaw(std::cos(Radians(b.yaw_deg))),
-        sin_yaw(std::sin(Radians(b.yaw_deg))) {}
-
-  /// A world point in the footprint's own frame.
-  void Local(double x, double y, double* lx, double* ly) const {
-    const double dx = x - cx, dy = y - cy;
-    *lx = cos_yaw * dx + sin_yaw * dy;
-    *ly = -sin_yaw * dx + cos_yaw * dy;
-  }
-
-  /// Horizontal distance from a point to the footprint (0 inside).
-  double Distance(double x, double y) const {
-    double lx = 0, ly = 0;
-    Local(x, y, &lx, &ly);
-    return std::hypot(std::max(std::abs(lx) - hx, 0.0), std::max(std::abs(ly) - hy, 0.0));
-  }
-
-  /// Whether the segment a–b meets the footprint (slab clipping).
-  bool Meets(double ax, double ay, double bx, double by) const {
-    double x0 = 0, y0 = 0, x1 = 0, y1 = 0;
-    Local(ax, ay, &x0, &y0);
-    Local(bx, by, &x1, &y1);
-    double t_in = 0.0, t_out = 1.0;
-    const double start[2] = {x0, y0}, delta[2] = {x1 - x0, y1 - y0}, half[2] = {hx, hy};
-    for (int axis = 0; axis < 2; ++axis) {
-      if (std::abs(delta[axis]) < 1e-12) {
-        if (std::abs(start[axis]) > half[axis]) return false;
-        continue;
-      }
-      double t0 = (-half[axis] - start[axis]) / delta[axis];
-      double t1 = (half[axis] - start[axis]) / delta[axis];
-      if (t0 > t1) std::swap(t0, t1);
-      t_in = std::max(t_in, t0);
-      t_out = std::min(t_out, t1);
-      if (t_in > t_out) return false;
-    }
-    return true;
-  }
-};
 
 std::string Text(double v) {
   char text[32];
@@ -143,30 +93,29 @@ void BlimpCourseConfig::ValidateOrThrow() const {
 
   // The places against the buildings.
   for (size_t j = 0; j < buildings.size(); ++j) {
-    const Footprint f(buildings[j]);
+    const BlimpFootprint f(buildings[j]);
     for (size_t i = 0; i < gates.size(); ++i) {
       const BlimpGateSpec& g = gates[i];
-      const double h = Radians(g.heading_deg);
-      const double lx = -std::sin(h) * g.width / 2, ly = std::cos(h) * g.width / 2;
+      const BlimpGateFrame frame = MakeGateFrame(g);
+      const Eigen::Vector2d centre = frame.centre.head<2>(), half_span = frame.left.head<2>() * frame.half_width;
       const bool below_roof = g.centre[2] - g.height / 2 < buildings[j].height;
-      if (below_roof &&
-          f.Meets(g.centre[0] - lx, g.centre[1] - ly, g.centre[0] + lx, g.centre[1] + ly)) {
+      if (below_roof && f.Meets(centre - half_span, centre + half_span)) {
         throw ConfigFieldError("gates[" + std::to_string(i) + "].centre",
                                "a gate clear of the buildings",
                                {"buildings[" + std::to_string(j) + "].centre"},
                                "an opening that meets " + BuildingName(buildings, j));
       }
     }
-    if (f.Distance(landing.centre[0], landing.centre[1]) < landing.radius) {
+    if (f.Distance(Eigen::Vector2d(landing.centre[0], landing.centre[1])) < landing.radius) {
       throw ConfigFieldError("landing.centre", "a landing circle clear of the buildings",
                              {"landing.radius"},
                              "a circle that overlaps " + BuildingName(buildings, j));
     }
-    if (f.Distance(start.position[0], start.position[1]) < kBlimpStartClearance) {
+    if (f.Distance(Eigen::Vector2d(start.position[0], start.position[1])) < kBlimpStartClearance) {
       throw ConfigFieldError(
           "start.position",
           "a start at least " + Text(kBlimpStartClearance) + " m from every building", {},
-          "a start " + Text(f.Distance(start.position[0], start.position[1])) + " m from " +
+          "a start " + Text(f.Distance(Eigen::Vector2d(start.position[0], start.position[1]))) + " m from " +
               BuildingName(buildings, j));
     }
   }

@@ -27,10 +27,10 @@ BlimpObservation Observe(double t_s, const msg::BlimpState& s) {
   o.position = Eigen::Vector3d(s.x(), s.y(), s.z());
   o.yaw = s.yaw();
   o.pitch = s.pitch();
-  o.roll = s.roll();
   o.velocity = Eigen::Vector3d(s.vx(), s.vy(), s.vz());
   o.airspeed = s.airspeed();
   o.contact = s.contact();
+  o.contacts = s.contacts();
   o.impact_speed = s.impact_speed();
   return o;
 }
@@ -75,7 +75,7 @@ SessionResult RunBlimpSession(const SessionSetup& setup, const std::atomic<bool>
                         ": the automatic pilot moves the simulated arms (driver 'sim'); device '" +
                         setup.device.name + "' is flown by a person: use --operator person");
     }
-    pilot = std::make_unique<BlimpAutoPilot>(course, BlimpPilotConfig{});
+    pilot = std::make_unique<BlimpAutoPilot>(course, PilotKnowing(setup.vehicle.airship));
     const interfaces::HandTargets neutral = interface.HandTargetsFor({});
     for (int i = 0; i < haptics::kSides; ++i) {
       if (!neutral[i]) continue;

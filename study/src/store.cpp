@@ -237,7 +237,7 @@ int StudyStore::TrialsDone(const std::string& participant) const {
 bool FinishesTrial(const std::string& outcome) {
   using mediator::Outcome;
   return outcome == ToString(Outcome::kCompleted) || outcome == ToString(Outcome::kLapCap) ||
-         outcome == ToString(Outcome::kTimeLimit);
+         outcome == ToString(Outcome::kTimeLimit) || outcome == ToString(Outcome::kCrashed);
 }
 
 mediator::Recorder::AlsoSave StudyStore::TrialWriter(const PlannedTrial& trial, double cap_s) const {

@@ -42,7 +42,6 @@ constexpr const char* kRunUsage =
     "  --port N          the console's port (default 8470)\n"
     "  --verbose         the sessions' own progress lines\n";
 
-/// Whether a session's outcome finishes its trial (scored; an unfinished lap at the cap).
 const StudyCondition& ConditionNamed(const StudyConfig& config, const std::string& name) {
   for (const StudyCondition& c : config.conditions) {
     if (c.name == name) return c;

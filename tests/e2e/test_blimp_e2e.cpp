@@ -165,7 +165,7 @@ TEST_CASE("haptel-vehicle on a pty: the commanded pulses on all seven channels, 
               neutral_after_s * 1e3, config.watchdog_timeout_s * 1e3);
   // The node's watchdog, not the controller's (60 s here); the 0.25 s
   // itself is measured, not asserted: a loaded machine may add latency.
-  CHECK(neutral_after_s < 5.0);
+  CHECK(controller.counters().timeouts == 0);
   CHECK_FALSE(controller.timed_out());
 
   // Every byte decoded as the Maestro would: no CRC errors, nothing dropped.

@@ -97,6 +97,9 @@ TEST_CASE("The store keeps a study's plan, trials and answers across restarts, e
     recorder.Save(lost, store.TrialWriter(plan[2], 600.0));
     CHECK(store.Trials().size() == 2);
     CHECK(store.NextTrial()->position == 3);
+    CHECK(FinishesTrial("crashed"));  // the pilot's own doing: a finished, unfinished lap
+    CHECK_FALSE(FinishesTrial("device lost"));
+    CHECK_FALSE(FinishesTrial("interrupted"));
     // The same trial again: refused, and its run rolled back with it.
     const size_t runs = recorder.LoadAll().size();
     CHECK_THROWS(recorder.Save(test::TrialRun(40.0), store.TrialWriter(plan[0], 600.0)));

@@ -6,6 +6,7 @@
 
 #include "haptel/config/check.hpp"
 #include "haptel/config/error.hpp"
+#include "haptel/core/geometry2d.hpp"
 
 namespace haptel::vehicles {
 
@@ -18,7 +19,6 @@ namespace {
 /// 2 % past the tips).
 constexpr double kHullStations[] = {0.0, 0.33, -0.33, 0.62, -0.62, 0.85, -0.85};
 
-double Radians(double deg) { return deg * std::numbers::pi / 180.0; }
 
 /// m: the features this near an obstacle just before a contact began are
 /// the ones whose closing speed the impact is (a step moves 5 cm at 10 m/s).

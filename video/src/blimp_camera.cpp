@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "haptel/config/error.hpp"
+#include "haptel/core/geometry2d.hpp"
 
 // How the view is drawn, back to front:
 //  1. sky and ground, per pixel from a colour table indexed by the height of
@@ -93,7 +94,6 @@ cv::Vec3b ToPixel(const cv::Vec3d& c) {
 cv::Scalar ToScalar(const cv::Vec3d& c) { return {c[0], c[1], c[2]}; }
 cv::Vec3d Mix(const cv::Vec3d& a, const cv::Vec3d& b, double t) { return a * (1 - t) + b * t; }
 
-double Rad(double deg) { return deg * std::numbers::pi / 180.0; }
 
 /// A colour seen through `dist` metres of air.
 cv::Vec3d Hazed(const cv::Vec3d& c, double dist) {
@@ -464,7 +464,7 @@ BlimpCourseCamera::BlimpCourseCamera(const BlimpCourseConfig& course, const Came
   // Start pad: a square with an arrow along the start heading.
   {
     const Vec3 c(course.start.position[0], course.start.position[1], 0.0);
-    const double yaw = Rad(course.start.heading_deg);
+    const double yaw = Radians(course.start.heading_deg);
     const Vec3 a(std::cos(yaw), std::sin(yaw), 0.0);
     const Vec3 b(-a.y(), a.x(), 0.0);
     const double h = kStartPadM / 2;
@@ -489,7 +489,7 @@ BlimpCourseCamera::BlimpCourseCamera(const BlimpCourseConfig& course, const Came
   for (size_t i = 0; i < course.buildings.size(); ++i) {
     const auto& bld = course.buildings[i];
     const cv::Vec3d colour = kBuildings[i % kBuildings.size()];
-    boxes_.push_back(MakeBox(Vec3(bld.centre[0], bld.centre[1], bld.height / 2), Rad(bld.yaw_deg),
+    boxes_.push_back(MakeBox(Vec3(bld.centre[0], bld.centre[1], bld.height / 2), Radians(bld.yaw_deg),
                              Vec3(bld.size[0] / 2, bld.size[1] / 2, bld.height / 2), colour,
                              colour * 0.8, kBuildingAmbient));
   }
@@ -497,7 +497,7 @@ BlimpCourseCamera::BlimpCourseCamera(const BlimpCourseConfig& course, const Came
   for (size_t i = 0; i < course.gates.size(); ++i) {
     const auto& gate = course.gates[i];
     const Vec3 c(gate.centre[0], gate.centre[1], gate.centre[2]);
-    const double yaw = Rad(gate.heading_deg);
+    const double yaw = Radians(gate.heading_deg);
     const Vec3 left(-std::sin(yaw), std::cos(yaw), 0.0);
     const double w = gate.width / 2;
     const double h = gate.height / 2;
@@ -541,7 +541,7 @@ void BlimpCourseCamera::Render(const CameraPose& pose, cv::Mat& image) const {
   frame.F = r.col(0);
   frame.L = r.col(1);
   frame.U = r.col(2);
-  frame.f = (config_.width / 2.0) / std::tan(Rad(config_.fov_deg) / 2.0);
+  frame.f = (config_.width / 2.0) / std::tan(Radians(config_.fov_deg) / 2.0);
   frame.cx = config_.width / 2.0;
   frame.cy = config_.height / 2.0;
   frame.tu = (frame.cx + kMarginPx) / frame.f;

@@ -12,14 +12,6 @@ BlimpLapTimer::BlimpLapTimer(const BlimpCourseConfig& course)
   for (int i = 0; i < static_cast<int>(gates_.size()); ++i) splits_.push_back({i, false, -1.0});
 }
 
-bool BlimpLapTimer::OnLandingGround(const BlimpObservation& o) const {
-  const double dx = o.position.x() - course_.landing.centre[0],
-               dy = o.position.y() - course_.landing.centre[1];
-  // Near the ground: no higher than the lap's start threshold above where it rested.
-  return std::hypot(dx, dy) <= course_.landing.radius &&
-         o.position.z() < start_z_ + course_.takeoff_height;
-}
-
 void BlimpLapTimer::Update(const BlimpObservation& o) {
   if (!have_previous_) {
     have_previous_ = true;
@@ -32,7 +24,8 @@ void BlimpLapTimer::Update(const BlimpObservation& o) {
   previous_ = o;
   if (finished()) return;
   last_t_ = o.t_s;
-  const bool onset = o.contact && (!p.contact || o.impact_speed != p.impact_speed);
+  // Contacts begun since the last observation (none when the vehicle's count began again).
+  const uint32_t onsets = o.contacts > p.contacts ? o.contacts - p.contacts : 0;
 
   if (!started_) {
     const double lift = start_z_ + course_.takeoff_height;
@@ -53,33 +46,26 @@ void BlimpLapTimer::Update(const BlimpObservation& o) {
 
   // The next gate's plane, crossed forwards between the two observations.
   if (next_gate_ < gates_total()) {
-    const BlimpGateFrame& g = gates_[static_cast<size_t>(next_gate_)];
-    const double s0 = g.Along(p.position), s1 = g.Along(o.position);
-    if (s0 < 0.0 && s1 >= 0.0) {
-      const double f = s0 / (s0 - s1);
-      const Eigen::Vector3d at = p.position + f * (o.position - p.position);
-      const BlimpGateCrossing c = ClassifyCrossing(g, at);
-      if (c != BlimpGateCrossing::kIgnored) {
-        BlimpGateSplit& split = splits_[static_cast<size_t>(next_gate_)];
-        split.passed = c == BlimpGateCrossing::kPassed;
-        split.split_s = p.t_s + f * (o.t_s - p.t_s) - start_t_;
-        ++next_gate_;
-      }
+    const auto pass = CrossGate(gates_[static_cast<size_t>(next_gate_)], p.position, o.position);
+    if (pass && pass->crossing != BlimpGateCrossing::kIgnored) {
+      BlimpGateSplit& split = splits_[static_cast<size_t>(next_gate_)];
+      split.passed = pass->crossing == BlimpGateCrossing::kPassed;
+      split.split_s = p.t_s + pass->fraction * (o.t_s - p.t_s) - start_t_;
+      ++next_gate_;
     }
   }
 
-  const bool all_gates = next_gate_ >= gates_total();
-  if (onset) {
+  const bool landing_ground = next_gate_ >= gates_total() && OnLandingGround(course_, o.position, start_z_);
+  if (onsets > 0) {
     if (o.impact_speed > course_.crash_speed) {
       crashed_ = true;
       crash_impact_ = o.impact_speed;
       end_t_ = o.t_s;
       return;
     }
-    if (!(all_gates && OnLandingGround(o))) ++touches_;
+    if (!landing_ground) touches_ += static_cast<int>(onsets);
   }
-  if (all_gates && o.contact && OnLandingGround(o) &&
-      o.velocity.norm() < course_.landing.max_speed) {
+  if (landing_ground && o.contact && o.velocity.norm() < course_.landing.max_speed) {
     completed_ = true;
     end_t_ = o.t_s;
   }
@@ -92,14 +78,9 @@ double BlimpLapTimer::lap_time_s() const {
 
 int BlimpLapTimer::gates_passed() const {
   return static_cast<int>(
-      std::count_if(splits_.begin(), splits_.end(),
-                    [](const BlimpGateSplit& s) { return s.split_s >= 0 && s.passed; }));
+      std::count_if(splits_.begin(), splits_.end(), [](const BlimpGateSplit& s) { return s.passed; }));
 }
 
-int BlimpLapTimer::gates_missed() const {
-  return static_cast<int>(
-      std::count_if(splits_.begin(), splits_.end(),
-                    [](const BlimpGateSplit& s) { return s.split_s >= 0 && !s.passed; }));
-}
+int BlimpLapTimer::gates_missed() const { return next_gate_ - gates_passed(); }
 
 }  // namespace haptel::mediator

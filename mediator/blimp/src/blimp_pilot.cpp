@@ -61,8 +61,21 @@ void BlimpPilotConfig::ValidateOrThrow() const {
   check::Number("max_helix_deg", max_helix_deg, 1.0, 180.0);
 }
 
+BlimpPilotConfig PilotKnowing(const AirshipConfig& airship, BlimpPilotConfig config) {
+  config.full_thrust_n = airship.max_thrust;
+  config.max_helix_deg = airship.max_helix_deg;
+  return config;
+}
+
 BlimpAutoPilot::BlimpAutoPilot(const BlimpCourseConfig& course, const BlimpPilotConfig& config)
-    : course_(Validated(course)), config_(Validated(config)), gates_(MakeGateFrames(course)) {}
+    : course_(Validated(course)),
+      config_(Validated(config)),
+      gates_(MakeGateFrames(course)),
+      footprints_(MakeFootprints(course)) {}
+
+double BlimpAutoPilot::ApproachSpeed(double distance) const {
+  return std::min(config_.cruise_airspeed, config_.landing_speed * std::exp(distance / config_.landing_coast_length));
+}
 
 void BlimpAutoPilot::Observe(const BlimpObservation& observation) {
   seen_[seen_count_ % kSeen] = observation;
@@ -81,10 +94,8 @@ const BlimpObservation* BlimpAutoPilot::Seen(double t) const {
 
 double BlimpAutoPilot::SafeHeight(const Eigen::Vector3d& p, const Eigen::Vector2d& target) const {
   double z = -std::numeric_limits<double>::infinity();
-  for (const BlimpBuildingSpec& b : course_.buildings) {
-    if (FootprintDistance(b, Horizontal(p), target) < config_.building_margin) {
-      z = std::max(z, b.height + config_.building_clearance);
-    }
+  for (const BlimpFootprint& b : footprints_) {
+    if (b.Distance(Horizontal(p), target) < config_.building_margin) z = std::max(z, b.height() + config_.building_clearance);
   }
   return z;
 }
@@ -121,13 +132,9 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
     yaw_rate_ = WrapAngle(o.yaw - used_.yaw) / h;
     pitch_rate_ = (o.pitch - used_.pitch) / h;
     // The gate flown to, crossed (through it, or near it: missed, on to the next).
-    if (phase_ == Phase::kGates && gate_ < gates) {
-      const BlimpGateFrame& g = gates_[static_cast<size_t>(gate_)];
-      const double s0 = g.Along(used_.position), s1 = g.Along(o.position);
-      if (s0 < 0.0 && s1 >= 0.0) {
-        const Eigen::Vector3d at = used_.position + s0 / (s0 - s1) * (o.position - used_.position);
-        if (ClassifyCrossing(g, at) != BlimpGateCrossing::kIgnored) ++gate_;
-      }
+    if (phase_ == Phase::kGates) {
+      const auto pass = CrossGate(gates_[static_cast<size_t>(gate_)], used_.position, o.position);
+      if (pass && pass->crossing != BlimpGateCrossing::kIgnored) ++gate_;
       if (gate_ >= gates) phase_ = Phase::kLanding;
     }
     // The wind: what the ground speed has beyond the airspeed along the
@@ -153,11 +160,8 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
   bool ground_speed = false;      // control the ground speed along the heading, not the airspeed
   bool landing_vertical = false;  // thrust up only: it sinks on its own weight
   if (phase_ == Phase::kTakeOff && height > config_.takeoff_height)
-    phase_ = gates > 0 ? Phase::kGates : Phase::kLanding;
-  if (phase_ == Phase::kLanding && o.contact && height < course_.takeoff_height &&
-      (position - landing).norm() <= course_.landing.radius) {
-    phase_ = Phase::kLanded;
-  }
+    phase_ = Phase::kGates;  // a course has at least one gate
+  if (phase_ == Phase::kLanding && o.contact && OnLandingGround(course_, o.position, start_z_)) phase_ = Phase::kLanded;
   // Slid out of the circle on the ground: up and in again.
   if (phase_ == Phase::kLanded && (position - landing).norm() > course_.landing.radius) {
     phase_ = Phase::kLanding;
@@ -181,16 +185,14 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
       // the approach's speed there, or the hull coasts past the circle.
       if (gate_ == gates - 1) {
         const double to_landing = (Horizontal(g.centre) - position).norm() + (landing - Horizontal(g.centre)).norm();
-        forward_speed = std::clamp(config_.landing_speed * std::exp(to_landing / config_.landing_coast_length),
-                                   std::min(2.0 * config_.tail_rotor_speed, config_.cruise_airspeed),
-                                   config_.cruise_airspeed);
+        forward_speed = std::max(ApproachSpeed(to_landing), std::min(2.0 * config_.tail_rotor_speed, config_.cruise_airspeed));
       }
       break;
     }
     case Phase::kLanding: {
       const Eigen::Vector2d to = landing - position;
       const double distance = to.norm();
-      const double last_gate_z = gates > 0 ? gates_.back().centre.z() : start_z_ + 5.0;
+      const double last_gate_z = gates_.back().centre.z();
       // A glide down to a little above the ground, then, over the circle
       // and slow, down onto it.
       target_z_ = std::min(last_gate_z,
@@ -205,10 +207,7 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
       landing_vertical = true;
       // The ground velocity wanted: towards the centre, slowing as it nears
       // it as fast as the hull coasts down on its own drag.
-      const double speed =
-          std::min(config_.cruise_airspeed,
-                   config_.landing_speed * std::exp(distance / config_.landing_coast_length)) *
-          std::min(1.0, distance / 2.0);
+      const double speed = ApproachSpeed(distance) * std::min(1.0, distance / 2.0);
       const Eigen::Vector2d wanted =
           distance > 1e-6 ? Eigen::Vector2d(to / distance * speed) : Eigen::Vector2d::Zero();
       ground_speed = true;
@@ -229,7 +228,7 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
   BlimpCommand c;
   // The camera: at the next gate, or at the landing circle.
   const Eigen::Vector3d look = phase_ == Phase::kGates || phase_ == Phase::kTakeOff
-                                   ? gates_[static_cast<size_t>(std::min(gate_, gates - 1))].centre
+                                   ? gates_[static_cast<size_t>(gate_)].centre
                                    : Eigen::Vector3d(landing.x(), landing.y(), 0.0);
   const Eigen::Vector3d sight = look - o.position;
   c.camera_pan = std::clamp(WrapAngle(Bearing(Horizontal(sight)) - o.yaw), -kBlimpCameraPanMax,

@@ -75,14 +75,16 @@ BlimpCourseConfig Line() {
   return c;
 }
 
+/// An observation; `contacts`: the vehicle's count of contact onsets so far.
 BlimpObservation At(double t, double x, double y, double z, bool contact = false,
-                    double impact = 0.0, double speed = 1.0) {
+                    double impact = 0.0, double speed = 1.0, uint32_t contacts = 0) {
   BlimpObservation o;
   o.t_s = t;
   o.position = {x, y, z};
   o.velocity = {speed, 0.0, 0.0};
   o.airspeed = speed;
   o.contact = contact;
+  o.contacts = contacts;
   o.impact_speed = impact;
   return o;
 }
@@ -272,34 +274,39 @@ TEST_CASE(
     BlimpLapTimer lap(Line());
     TakeOff(lap);
     lap.Update(At(5.0, 10.0, 0.0, 5.0));
-    lap.Update(At(6.0, 11.0, 0.0, 5.0, true, 2.0));
+    lap.Update(At(6.0, 11.0, 0.0, 5.0, true, 2.0, 1.0, 1));
     CHECK(lap.crashed());
     CHECK(lap.finished());
     CHECK_FALSE(lap.completed());
     CHECK(lap.crash_speed() == Approx(2.0));
     CHECK(lap.lap_time_s() == Approx(4.5));
-    lap.Update(At(9.0, 12.0, 0.0, 5.0));
+    lap.Update(At(9.0, 12.0, 0.0, 5.0, false, 0.0, 1.0, 1));
     CHECK(lap.lap_time_s() == Approx(4.5));
   }
   SECTION("touches below it are counted, each onset once") {
     BlimpLapTimer lap(Line());
     TakeOff(lap);
-    lap.Update(At(5.0, 10.0, 0.0, 5.0, true, 0.5));
-    lap.Update(At(6.0, 10.0, 0.0, 5.0, true, 0.5));  // the same contact
+    lap.Update(At(5.0, 10.0, 0.0, 5.0, true, 0.5, 1.0, 1));
+    lap.Update(At(6.0, 10.0, 0.0, 5.0, true, 0.5, 1.0, 1));  // the same contact
     CHECK(lap.obstacles_touched() == 1);
-    lap.Update(At(7.0, 10.0, 0.0, 5.0, true, 0.8));  // a new onset between two observations
+    lap.Update(At(7.0, 10.0, 0.0, 5.0, true, 0.8, 1.0, 2));  // a new onset between two observations
     CHECK(lap.obstacles_touched() == 2);
-    lap.Update(At(8.0, 10.0, 0.0, 5.0));
-    lap.Update(At(9.0, 10.0, 0.0, 5.0, true, 0.8));
+    lap.Update(At(8.0, 10.0, 0.0, 5.0, false, 0.8, 1.0, 2));
+    lap.Update(At(9.0, 10.0, 0.0, 5.0, true, 0.8, 1.0, 3));
     CHECK(lap.obstacles_touched() == 3);
+    // A contact that began and ended between two observations: the
+    // vehicle's count shows it.
+    lap.Update(At(10.0, 10.0, 0.0, 5.0, false, 0.8, 1.0, 3));
+    lap.Update(At(11.0, 10.0, 0.0, 5.0, false, 0.6, 1.0, 4));
+    CHECK(lap.obstacles_touched() == 4);
     CHECK_FALSE(lap.crashed());
   }
   SECTION("contacts before the lap starts do not count") {
     BlimpLapTimer lap(Line());
     lap.Update(At(0.0, 0.0, 0.0, 0.8, true));
     lap.Update(At(1.0, 0.0, 0.0, 1.2));
-    lap.Update(At(2.0, 0.0, 0.0, 0.8, true, 0.3));  // a hop on take-off
-    lap.Update(At(3.0, 0.0, 0.0, 2.5));
+    lap.Update(At(2.0, 0.0, 0.0, 0.8, true, 0.3, 1.0, 1));  // a hop on take-off
+    lap.Update(At(3.0, 0.0, 0.0, 2.5, false, 0.3, 1.0, 1));
     CHECK(lap.started());
     CHECK(lap.obstacles_touched() == 0);
   }
@@ -319,7 +326,7 @@ TEST_CASE(
     BlimpLapTimer lap(Line());
     through_both(lap);
     lap.Update(At(30.0, 59.0, 1.0, 2.0, false, 0.0, 0.6));
-    lap.Update(At(31.0, 59.5, 1.0, 0.8, true, 0.4, 0.6));
+    lap.Update(At(31.0, 59.5, 1.0, 0.8, true, 0.4, 0.6, 1));
     CHECK(lap.completed());
     CHECK(lap.obstacles_touched() == 0);  // the touchdown is no obstacle
     CHECK(lap.lap_time_s() == Approx(29.5));
@@ -327,23 +334,23 @@ TEST_CASE(
   SECTION("touching down too fast to count, then slowing on the ground") {
     BlimpLapTimer lap(Line());
     through_both(lap);
-    lap.Update(At(31.0, 58.0, 0.0, 0.8, true, 0.5, 1.4));
+    lap.Update(At(31.0, 58.0, 0.0, 0.8, true, 0.5, 1.4, 1));
     CHECK_FALSE(lap.completed());
-    lap.Update(At(32.0, 59.0, 0.0, 0.8, true, 0.5, 0.5));
+    lap.Update(At(32.0, 59.0, 0.0, 0.8, true, 0.5, 0.5, 1));
     CHECK(lap.completed());
     CHECK(lap.obstacles_touched() == 0);
   }
   SECTION("a touchdown in the circle faster than crash_speed is a crash") {
     BlimpLapTimer lap(Line());
     through_both(lap);
-    lap.Update(At(31.0, 60.0, 0.0, 0.8, true, 1.8, 0.2));
+    lap.Update(At(31.0, 60.0, 0.0, 0.8, true, 1.8, 0.2, 1));
     CHECK(lap.crashed());
     CHECK_FALSE(lap.completed());
   }
   SECTION("outside the circle: a touch, not a landing") {
     BlimpLapTimer lap(Line());
     through_both(lap);
-    lap.Update(At(31.0, 50.0, 0.0, 0.8, true, 0.3, 0.2));
+    lap.Update(At(31.0, 50.0, 0.0, 0.8, true, 0.3, 0.2, 1));
     CHECK_FALSE(lap.completed());
     CHECK(lap.obstacles_touched() == 1);
   }
@@ -353,7 +360,7 @@ TEST_CASE(
     lap.Update(At(10.0, 18.0, 0.0, 5.0));
     lap.Update(At(11.0, 22.0, 0.0, 5.0));
     lap.Update(At(15.0, 30.0, 80.0, 5.0));
-    lap.Update(At(20.0, 60.0, 0.0, 0.8, true, 0.3, 0.2));  // round the second gate, far from it
+    lap.Update(At(20.0, 60.0, 0.0, 0.8, true, 0.3, 0.2, 1));  // round the second gate, far from it
     CHECK_FALSE(lap.completed());
     CHECK(lap.obstacles_touched() == 1);
   }
@@ -436,15 +443,19 @@ TEST_CASE(
   CHECK(std::abs(c.camera_pan) == Approx(kBlimpCameraPanMax));
 }
 
-TEST_CASE("blimp pilot: Observe and Decide allocate nothing") {
+TEST_CASE("blimp pilot and lap timer: Observe, Decide and Update allocate nothing") {
   const BlimpCourseConfig course = LoadBlimpCourse(kCourse);
   BlimpAutoPilot pilot(course);
+  BlimpLapTimer lap(course);
   pilot.Observe(At(0.0, 0.0, 0.0, 0.8, true));
+  lap.Update(At(0.0, 0.0, 0.0, 0.8, true));
   pilot.Decide(0.0);
   const uint64_t before = haptel::test::ThreadAllocations();
   for (int i = 1; i < 2000; ++i) {
     const double t = 0.02 * i;
-    pilot.Observe(At(t, 3.0 * t, 0.1 * t, 0.8 + 0.2 * t, false, 0.0, 3.0));
+    const BlimpObservation o = At(t, 3.0 * t, 0.1 * t, 0.8 + 0.2 * t, false, 0.0, 3.0);
+    pilot.Observe(o);
+    lap.Update(o);
     pilot.Decide(t);
   }
   CHECK(haptel::test::ThreadAllocations() == before);
@@ -470,10 +481,10 @@ BlimpObservation Observed(const vehicles::SimBlimp& sim) {
   o.position = sim.position();
   o.yaw = sim.yaw();
   o.pitch = sim.pitch();
-  o.roll = sim.roll();
   o.velocity = sim.ground_velocity();
   o.airspeed = sim.airspeed();
   o.contact = sim.in_contact();
+  o.contacts = static_cast<uint32_t>(sim.contacts());
   o.impact_speed = sim.last_impact_speed();
   return o;
 }
@@ -486,7 +497,7 @@ BlimpObservation Observed(const vehicles::SimBlimp& sim) {
 /// time only.
 Flight Fly(const AirshipConfig& airship, const BlimpCourseConfig& course) {
   vehicles::SimBlimp sim(airship, course);
-  BlimpAutoPilot pilot(course);
+  BlimpAutoPilot pilot(course, PilotKnowing(airship));
   BlimpLapTimer lap(course);
   const interfaces::BlimpGestureInterface cockpit(LoadBlimpGesture("config/interfaces/blimp-gesture.yaml"));
   const double step = airship.step_s;                                    // 200 Hz
@@ -503,12 +514,17 @@ Flight Fly(const AirshipConfig& airship, const BlimpCourseConfig& course) {
     }
     if (k % decide_every == 0) {
       const BlimpCommand intent = pilot.Decide(sim.time_s());
-      // The pilot flies only what the cockpit can express.
-      f.cockpit_ok = f.cockpit_ok && (intent.tail_rotor == 0.0 || intent.power == 0.0);
       const interfaces::HandTargets hands = cockpit.HandTargetsFor(intent);
       command = cockpit.Map(hands[haptics::Index(haptics::Side::kLeft)]->position,
                             hands[haptics::Index(haptics::Side::kRight)]->position,
                             {intent.camera_pan, intent.camera_tilt});
+      // The pilot wants only what the cockpit can express: from where it
+      // holds its hands the cockpit reads back the command it wanted.
+      for (int ch = 0; ch < 5; ++ch) {
+        const double want[5] = {intent.elevator, intent.rudder, intent.power, intent.helix, intent.tail_rotor};
+        const double got[5] = {command.elevator, command.rudder, command.power, command.helix, command.tail_rotor};
+        f.cockpit_ok = f.cockpit_ok && std::abs(want[ch] - got[ch]) < 1e-9;
+      }
       f.turnabouts += command.power == 0.0 && command.tail_rotor != 0.0 && lap.started() ? 1 : 0;
     }
     sim.Step(step, command);

@@ -1,5 +1,6 @@
 #pragma once
 /// @file Planar geometry shared by track timing and the vehicle simulator.
+#include <numbers>
 #include <optional>
 
 #include <Eigen/Core>
@@ -27,6 +28,9 @@ std::optional<Crossing> SegmentCrossing(const Vec2& p0, const Vec2& p1, const Se
 
 /// 2-D cross product (z of the 3-D cross product).
 inline double Cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+/// Degrees to radians.
+constexpr double Radians(double degrees) { return degrees * std::numbers::pi / 180.0; }
 
 /// Wraps an angle to (-pi, pi].
 double WrapAngle(double angle_rad);

@@ -29,8 +29,9 @@ struct PlannedTrial {
 };
 
 /// Whether a run with this outcome (mediator::ToString) finishes a trial:
-/// completed, or ended by the lap cap or the time limit (scored at the
-/// cap). Faults — a lost vehicle or device, an interruption — do not.
+/// completed, or ended by the lap cap, the time limit or a crash (the
+/// pilot's own doing: scored at the cap). Faults — a lost vehicle or
+/// device, an interruption — do not.
 bool FinishesTrial(const std::string& outcome);
 
 /// A finished trial as recorded.

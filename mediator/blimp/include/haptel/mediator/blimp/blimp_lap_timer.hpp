@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "haptel/config/blimp_course.hpp"
-#include "haptel/mediator/blimp/course_geometry.hpp"
+#include "haptel/config/blimp_course_geometry.hpp"
 #include "haptel/mediator/blimp/observation.hpp"
 
 namespace haptel::mediator {
@@ -56,8 +56,6 @@ class BlimpLapTimer {
   double start_height() const { return start_z_; }
 
  private:
-  bool OnLandingGround(const BlimpObservation& o) const;
-
   BlimpCourseConfig course_;
   std::vector<BlimpGateFrame> gates_;
   std::vector<BlimpGateSplit> splits_;

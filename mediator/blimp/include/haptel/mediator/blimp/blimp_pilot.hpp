@@ -27,9 +27,10 @@
 #include <array>
 #include <vector>
 
+#include "haptel/config/airship.hpp"
 #include "haptel/config/blimp_course.hpp"
 #include "haptel/core/blimp_command.hpp"
-#include "haptel/mediator/blimp/course_geometry.hpp"
+#include "haptel/config/blimp_course_geometry.hpp"
 #include "haptel/mediator/blimp/observation.hpp"
 
 namespace haptel::mediator {
@@ -96,12 +97,20 @@ struct BlimpPilotConfig {
   double pitch_gain = 2.0;        ///< elevator per rad of pitch error
   double pitch_rate_gain = 1.0;   ///< elevator per rad/s of pitch rate
   double pitch_per_climb = 0.08;  ///< rad of nose-up per m/s of climb wanted
-  // What the pilot knows of its blimp.
+  // What the pilot knows of its blimp (PilotKnowing).
   double full_thrust_n = 29.4;  ///< both main motors at full power
   double max_helix_deg = 90.0;  ///< the helix plane's tilt at full command
 
   void ValidateOrThrow() const;
 };
+
+/// The pilot's knowledge of its blimp taken from the airship's own
+/// parameters — full thrust and the helix plane's range — so that its
+/// hands give the forces it means on the blimp the vehicle file describes;
+/// the rest of `config` as given. (Its feel for the drag stays its own:
+/// drag_per_speed2 is a rounded 0.31 where ½·ρ·Cd·V^⅔ of sim-blimp.yaml is
+/// 0.312.)
+BlimpPilotConfig PilotKnowing(const AirshipConfig& airship, BlimpPilotConfig config = {});
 
 class BlimpAutoPilot {
  public:
@@ -118,12 +127,8 @@ class BlimpAutoPilot {
   BlimpCommand Decide(double t_s);
 
   Phase phase() const { return phase_; }
-  /// The gate the pilot flies to (gates once all are behind it).
-  int target_gate() const { return gate_; }
   /// The height it aims at now, m.
   double target_height() const { return target_z_; }
-  /// The wind it estimates (horizontal, world), m/s.
-  Eigen::Vector2d wind_estimate() const { return wind_; }
 
  private:
   /// The newest observation seen at or before t; null when none.
@@ -131,10 +136,14 @@ class BlimpAutoPilot {
   /// The lowest safe height on the way from p to the target point.
   double SafeHeight(const Eigen::Vector3d& p, const Eigen::Vector2d& target) const;
   Eigen::Vector2d Pursue(const BlimpGateFrame& gate, const Eigen::Vector3d& p) const;
+  /// The ground speed wanted `distance` metres from the landing circle's
+  /// centre: what a hull coasting on its drag keeps, at most the cruise.
+  double ApproachSpeed(double distance) const;
 
   BlimpCourseConfig course_;
   BlimpPilotConfig config_;
   std::vector<BlimpGateFrame> gates_;
+  std::vector<BlimpFootprint> footprints_;
   /// Observations kept: 10 s at 50 Hz (the oldest stands in for older ones).
   static constexpr size_t kSeen = 512;
   std::array<BlimpObservation, kSeen> seen_{};
