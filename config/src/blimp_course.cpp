@@ -21,6 +21,10 @@ namespace {
 /// No course is larger than this (m from the origin, each coordinate).
 constexpr double kMaxCoordinate = 1e5;
 
+/// How far the start must be from any building's footprint (m): room for
+/// a 6.75 m hull to rest there and swing in the wind.
+constexpr double kBlimpStartClearance = 4.0;
+
 std::string Text(double v) {
   char text[32];
   std::snprintf(text, sizeof text, "%g", v);

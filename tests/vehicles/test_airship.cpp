@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "haptel/config/error.hpp"
+#include "haptel/config/vehicle.hpp"
 #include "haptel/vehicles/airship.hpp"
 #include "haptel/vehicles/airship_trials.hpp"
 
@@ -166,4 +167,13 @@ TEST_CASE("bad airship parameters are refused by name") {
   AirshipConfig light;
   light.helium_density = 2.0;
   CHECK_THROWS_AS(light.ValidateOrThrow(), ConfigFieldError);
+}
+
+TEST_CASE("the model's defaults are the shipped sim-blimp.yaml's values, which the pty twins rely on") {
+  // sim-blimp-maestro.yaml and sim-blimp-sc8000.yaml say `airship: {}`: the
+  // defaults, which must be the thesis's blimp as sim-blimp.yaml writes it.
+  const VehicleConfig shipped = LoadVehicle("config/vehicles/sim-blimp.yaml");
+  CHECK(shipped.airship == AirshipConfig{});
+  const VehicleConfig twin = LoadVehicle("config/vehicles/sim-blimp-maestro.yaml");
+  CHECK(twin.airship == shipped.airship);
 }

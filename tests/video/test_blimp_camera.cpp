@@ -380,6 +380,8 @@ TEST_CASE("blimp camera survives poses inside, against and around buildings and 
       double lo = 0, hi = 0;
       cv::minMaxLoc(image.reshape(1), &lo, &hi);
       CHECK(lo == hi);
+      CHECK(lo > 0.0);    // grey: not black,
+      CHECK(hi < 255.0);  // not white
     }
   }
 }

@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "haptel/config/blimp_course_geometry.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/core/geometry2d.hpp"
 
@@ -496,11 +497,11 @@ BlimpCourseCamera::BlimpCourseCamera(const BlimpCourseConfig& course, const Came
   // Gates: four bars around each opening, the posts spanning the corners.
   for (size_t i = 0; i < course.gates.size(); ++i) {
     const auto& gate = course.gates[i];
-    const Vec3 c(gate.centre[0], gate.centre[1], gate.centre[2]);
+    const BlimpGateFrame frame = MakeGateFrame(gate);
+    const Vec3 c = frame.centre, left = frame.left;
     const double yaw = Radians(gate.heading_deg);
-    const Vec3 left(-std::sin(yaw), std::cos(yaw), 0.0);
-    const double w = gate.width / 2;
-    const double h = gate.height / 2;
+    const double w = frame.half_width;
+    const double h = frame.half_height;
     const double t = std::clamp(0.08 * std::min(gate.width, gate.height), 0.15, 1.0);  // bar
     const Vec3 post(t / 2, t / 2, h + t);
     const Vec3 bar(t / 2, w, t / 2);

@@ -16,10 +16,11 @@ namespace haptel {
 struct WindConfig {
   std::array<double, 3> mean{0.0, 0.0, 0.0};  ///< m/s
   double gust_rms = 0.0;       ///< m/s per horizontal axis (a third of it vertically)
-  double gust_time_s = 5.0;    ///< period of the slowest gust component
+  double gust_time_s = 8.0;    ///< period of the slowest gust component
   uint64_t seed = 1;
 
   void ValidateOrThrow() const;
+  bool operator==(const WindConfig&) const = default;
 };
 
 /// How the airship model advances in time.
@@ -84,6 +85,7 @@ struct AirshipConfig {
 
   /// Throws ConfigFieldError naming the first field out of range.
   void ValidateOrThrow() const;
+  bool operator==(const AirshipConfig&) const = default;
 };
 
 }  // namespace haptel

@@ -71,8 +71,5 @@ struct BlimpCourseConfig {
 /// the key and what was expected (unknown keys too).
 BlimpCourseConfig LoadBlimpCourse(const std::filesystem::path& file);
 
-/// How far the start must be from any building's footprint (m): room for
-/// a 6.75 m hull to rest there and swing in the wind.
-constexpr double kBlimpStartClearance = 4.0;
 
 }  // namespace haptel

@@ -15,8 +15,6 @@ constexpr int kBlimpChannels = 7;
 /// "elevator", "rudder", "power", "helix", "tail_rotor", "camera_pan",
 /// "camera_tilt": as written in a file (the keys under `channels:`).
 const char* BlimpChannelName(BlimpChannel c);
-/// The channel at `index` (0..6) of the order above.
-constexpr BlimpChannel BlimpChannelAt(int index) { return static_cast<BlimpChannel>(index); }
 
 /// The controller's wire protocol: a Pololu Maestro (compact protocol) or
 /// Tom's RC SC-8000.

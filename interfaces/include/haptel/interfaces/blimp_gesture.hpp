@@ -25,7 +25,6 @@ class BlimpGestureInterface {
   explicit BlimpGestureInterface(const BlimpGestureConfig& config);
 
   const std::string& name() const { return config_.name; }
-  const BlimpGestureConfig& config() const { return config_; }
 
   /// Session thread: reads both hands from the HAL, puts the centring fields
   /// in it and returns the command. A hand without a valid sample gives the
