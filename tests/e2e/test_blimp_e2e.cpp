@@ -163,8 +163,9 @@ TEST_CASE("haptel-vehicle on a pty: the commanded pulses on all seven channels, 
   const double neutral_after_s = now_s() - last_sent_s;
   std::printf("haptel-vehicle on a pty: neutral pulses %.0f ms after the last command (watchdog %.0f ms)\n",
               neutral_after_s * 1e3, config.watchdog_timeout_s * 1e3);
-  // The node's watchdog, not the controller's (60 s here); the 0.25 s
-  // itself is measured, not asserted: a loaded machine may add latency.
+  // The node's watchdog (0.2 s), not the controller's (60 s here): the
+  // time on the wire is measured and printed, not asserted (a loaded
+  // machine adds latency).
   CHECK(controller.counters().timeouts == 0);
   CHECK_FALSE(controller.timed_out());
 

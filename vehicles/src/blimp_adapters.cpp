@@ -60,16 +60,11 @@ ServoBlimpAdapter::ServoBlimpAdapter(const ServoControllerConfig& config, std::u
 
 void ServoBlimpAdapter::Apply(const BlimpCommand& command) {
   applied_ = Clamped(command);
-  const std::array<double, kBlimpChannels> values = ChannelValues(applied_);
-  bool changed = false;
-  for (int i = 0; i < kBlimpChannels; ++i) {
-    const double pulse = servo::PulseFromCommand(config_.channels[i], values[i]);
-    changed = changed || pulse != pulse_us_[i];
-    pulse_us_[i] = pulse;
-  }
+  const std::array<double, kBlimpChannels> pulses = servo::PulsesFromCommands(config_, ChannelValues(applied_));
   // A change (a new command, the failsafe's neutral) goes out at the next
   // update, not at the next refresh: the watchdog's neutral is not held back.
-  if (changed) next_send_s_ = std::min(next_send_s_, time_s_);
+  if (pulses != pulse_us_) next_send_s_ = std::min(next_send_s_, time_s_);
+  pulse_us_ = pulses;
 }
 
 void ServoBlimpAdapter::Update(double dt) {

@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "haptel/config/error.hpp"
+#include "haptel/core/cli.hpp"
 #include "haptel/core/clock.hpp"
 
 namespace haptel::vehicles {
@@ -62,7 +63,7 @@ void BlimpNode::Stop() {
     try {
       adapter_->Failsafe();
       adapter_->Update(1e-3);
-    } catch (const std::exception&) {
+    } catch (const cli::HardwareLost&) {
       // The port is gone: nothing more can be sent; the controller's own
       // serial timeout takes the channels to neutral.
     }
@@ -86,7 +87,7 @@ void BlimpNode::ControlTick(int64_t now_ns) {
       adapter_->Apply(commands_.applied().command);
     }
     adapter_->Update(dt);
-  } catch (const std::exception& e) {
+  } catch (const cli::HardwareLost& e) {
     // A serial port that vanished: stop driving it and say so once; the
     // node's owner ends the process (exit 3).
     failure_ = e.what();

@@ -34,43 +34,48 @@ constexpr const char* kUsage =
 }  // namespace
 
 namespace {
-/// The blimp's node until a signal, or until its servo controller's port
-/// vanishes (exit 3: the vehicle is lost; the controller's own serial
-/// timeout takes every channel to neutral).
-int RunBlimp(const haptel::VehicleConfig& config, const haptel::BlimpCourseConfig& course,
-             std::unique_ptr<haptel::video::CameraSource> camera, std::unique_ptr<haptel::vehicles::BlimpAdapter> adapter,
-             const std::string& camera_name, const std::atomic<bool>& stop) {
+
+/// What a node counted, for its last line.
+std::string Summary(const haptel::vehicles::NodeCounters& c) {
+  return std::to_string(c.commands_accepted) + " commands, " + std::to_string(c.commands_malformed) + " malformed, " +
+         std::to_string(c.commands_stale) + " stale, " + std::to_string(c.frames_published) + " frames, " +
+         std::to_string(c.grabs_failed) + " camera grabs failed" +
+         (c.camera_stalls > 0 ? " (" + std::to_string(c.camera_stalls) + " stalls)" : "") +
+         (c.camera_ended ? ", camera file ended" : "");
+}
+
+/// Runs a started node until a signal — or, for a node that can lose its
+/// hardware (AdapterFailure), until it does — saying each watchdog trip;
+/// `tripped` and `stopped` say how the vehicle was made safe. Then stops
+/// it. Returns the exit code: 0, or 3 with the loss said.
+template <class Node>
+int RunNode(Node& node, const haptel::VehicleConfig& config, const std::atomic<bool>& stop, const std::string& tripped,
+            const std::string& stopped) {
   using namespace haptel;
-  vehicles::BlimpNode node(config, std::move(camera), std::move(adapter));
-  node.Start();
-  log::Info("vehicle '" + config.name + "' (" + config.kind + ") up on domain " +
-            std::to_string(config.link.domain_id) + ", course '" + course.name + "', camera " + camera_name +
-            (UsesServo(config.kind) && !config.servo.port.empty() ? ", servo controller on " + config.servo.port : ""));
   uint64_t trips = 0;
   std::string failure;
   while (!stop.load()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    failure = node.AdapterFailure();
-    if (!failure.empty()) break;
+    if constexpr (requires { node.AdapterFailure(); }) {
+      failure = node.AdapterFailure();
+      if (!failure.empty()) break;
+    }
     const auto c = node.Counters();
     if (c.watchdog_trips > trips) {
       trips = c.watchdog_trips;
-      log::Warn("watchdog: no command for " + std::to_string(config.watchdog_timeout_s) +
-                " s, every channel to neutral");
+      log::Warn("watchdog: no command for " + std::to_string(config.watchdog_timeout_s) + " s, " + tripped);
     }
   }
   node.Stop();
-  const auto c = node.Counters();
   if (!failure.empty()) {
     log::Error("the servo controller is lost: " + failure + "; stopped (its own serial timeout sends every "
                "channel to neutral)");
     return cli::kExitLost;
   }
-  log::Info("stopped: every channel at neutral; " + std::to_string(c.commands_accepted) + " commands, " +
-            std::to_string(c.commands_malformed) + " malformed, " + std::to_string(c.commands_stale) + " stale, " +
-            std::to_string(c.frames_published) + " frames");
+  log::Info("stopped: " + stopped + "; " + Summary(node.Counters()));
   return cli::kExitOk;
 }
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -140,7 +145,15 @@ int main(int argc, char** argv) {
     });
 
     const std::string camera_name = camera->Describe();
-    if (blimp) return RunBlimp(config, *course, std::move(camera), std::move(blimp), camera_name, stop);
+    if (blimp) {
+      vehicles::BlimpNode node(config, std::move(camera), std::move(blimp));
+      node.Start();
+      log::Info("vehicle '" + config.name + "' (" + config.kind + ") up on domain " +
+                std::to_string(config.link.domain_id) + ", course '" + course->name + "', camera " + camera_name +
+                (UsesServo(config.kind) && !config.servo.port.empty() ? ", servo controller on " + config.servo.port
+                                                                        : ""));
+      return RunNode(node, config, stop, "every channel to neutral", "every channel at neutral");
+    }
     vehicles::VehicleNode node(config, *track, std::move(camera), std::move(adapter));
     node.Start();
     log::Info("vehicle '" + config.name + "' (" + config.kind + ") up on domain " +
@@ -148,24 +161,6 @@ int main(int argc, char** argv) {
               "', camera " + camera_name + " " + std::to_string(config.camera.width) + "x" +
               std::to_string(config.camera.height) + " at " +
               std::to_string(static_cast<int>(std::lround(config.camera.rate_hz))) + " Hz");
-    uint64_t trips = 0;
-    while (!stop.load()) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-      const auto c = node.Counters();
-      if (c.watchdog_trips > trips) {
-        trips = c.watchdog_trips;
-        log::Warn("watchdog: no command for " + std::to_string(config.watchdog_timeout_s) +
-                  " s, motors stopped");
-      }
-    }
-    node.Stop();
-    const auto c = node.Counters();
-    log::Info("stopped: motors off; " + std::to_string(c.commands_accepted) + " commands, " +
-              std::to_string(c.commands_malformed) + " malformed, " +
-              std::to_string(c.commands_stale) + " stale, " + std::to_string(c.frames_published) +
-              " frames, " + std::to_string(c.grabs_failed) + " camera grabs failed" +
-              (c.camera_stalls > 0 ? " (" + std::to_string(c.camera_stalls) + " stalls)" : "") +
-              (c.camera_ended ? ", camera file ended" : ""));
-    return cli::kExitOk;
+    return RunNode(node, config, stop, "motors stopped", "motors off");
   });
 }

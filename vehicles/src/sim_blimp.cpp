@@ -133,8 +133,7 @@ void BlimpWorldContact::Loads(const AirshipState& s, Eigen::Vector3d* force_body
 
 SimBlimp::SimBlimp(const AirshipConfig& airship, const BlimpCourseConfig& course,
                    const BlimpContactConfig& contact)
-    : course_(Validated(course)),
-      contact_(std::make_unique<BlimpWorldContact>(Validated(airship), course, contact)),
+    : contact_(std::make_unique<BlimpWorldContact>(Validated(airship), Validated(course), contact)),
       airship_(airship),
       touching_(static_cast<size_t>(contact_->obstacles()), 0),
       scratch_(touching_.size(), 0),

@@ -715,13 +715,12 @@ TEST_CASE("A fuzz of 10^5 random byte strings never crashes the decoders") {
   }
   CHECK(in_range == 100000);
   const SimServoCounters& c = m.sim->counters();
+  INFO("commands " << c.commands << ", malformed " << c.malformed_bytes << ", dropped "
+                   << c.frames_dropped << ", crc " << c.crc_errors);
   CHECK(c.commands > 0);
   CHECK(c.malformed_bytes > 0);
   CHECK(c.frames_dropped > 0);
   if (kind == 1) CHECK(c.crc_errors > 0);
-  INFO("commands " << c.commands << ", malformed " << c.malformed_bytes << ", dropped "
-                   << c.frames_dropped << ", crc " << c.crc_errors);
-  SUCCEED();
 }
 
 TEST_CASE("The output resynchronises on stray reply bytes and a port that takes little") {

@@ -8,6 +8,7 @@
 #include "haptel/config/error.hpp"
 #include "haptel/servo/maestro.hpp"
 #include "haptel/servo/sc8000.hpp"
+#include "haptel/servo/calibration.hpp"
 
 namespace haptel::servo {
 namespace {
@@ -87,9 +88,7 @@ void ServoOutput::GoHome() {
     WriteFrame(p.data(), p.size);
     return;
   }
-  std::array<double, kBlimpChannels> neutral{};
-  for (size_t i = 0; i < neutral.size(); ++i) neutral[i] = config_.channels[i].neutral_us;
-  Send(neutral);
+  Send(NeutralPulses(config_));
 }
 
 void ServoOutput::ReadReplies() {

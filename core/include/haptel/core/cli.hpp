@@ -26,6 +26,13 @@ class InputError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// Hardware went away while in use (exit 3): a serial port, a CAN bus. An
+/// adapter throws it; its node stops driving the hardware and says so.
+class HardwareLost : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 struct Program {
   std::string name;   ///< as the user types it, e.g. "haptel calibrate"
   std::string usage;  ///< printed for --help (stdout, exit 0)

@@ -88,7 +88,6 @@ class Airship {
   const AirshipState& state() const { return state_; }
   void set_state(const AirshipState& state) { state_ = state; }
   double time_s() const { return time_s_; }
-  void set_time_s(double t) { time_s_ = t; }
   const AirshipConfig& config() const { return config_; }
   const AirshipMassProperties& mass_properties() const { return mass_; }
 

@@ -53,7 +53,6 @@ class ServoBlimpAdapter final : public BlimpAdapter {
   /// errors. Throws servo::SerialLost when the port has vanished.
   void Update(double dt) override;
   BlimpAdapterState State() const override;
-  const servo::ServoOutput& output() const { return output_; }
 
   /// How often the pulses go out: every channel's target at 50 Hz, the
   /// servos' own frame rate (an SC-8000 at 9600 baud takes 53 frames/s).
@@ -75,7 +74,6 @@ class SimulatedServoBlimp final : public BlimpAdapter {
   void Apply(const BlimpCommand& command) override { adapter_->Apply(command); }
   void Update(double dt) override;
   BlimpAdapterState State() const override;
-  const servo::SimServoController& controller() const { return *controller_; }
 
  private:
   ServoControllerConfig config_;

@@ -29,7 +29,7 @@ class BlimpNode {
   /// Every channel to neutral, a last state, every thread stopped.
   void Stop();
   NodeCounters Counters() const;
-  /// The adapter failed in the loop (a serial port that vanished): its
+  /// The adapter lost its hardware in the loop (cli::HardwareLost: a serial port that vanished): its
   /// message, once; the node has stopped driving it. Empty: none.
   std::string AdapterFailure() const;
 

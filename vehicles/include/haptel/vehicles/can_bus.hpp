@@ -27,9 +27,9 @@ class CanUnavailable : public cli::InputError {
 };
 
 /// The bus went away while in use (interface down, socket closed).
-class CanBusLost : public std::runtime_error {
+class CanBusLost : public cli::HardwareLost {
  public:
-  using std::runtime_error::runtime_error;
+  using cli::HardwareLost::HardwareLost;
 };
 
 class CanBus {

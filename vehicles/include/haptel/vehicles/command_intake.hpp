@@ -9,6 +9,7 @@
 #include <atomic>
 #include <cstdint>
 
+#include "haptel/core/clock.hpp"
 #include "haptel/core/seqlock.hpp"
 #include "haptel/vehicles/drive.hpp"
 
@@ -20,7 +21,7 @@ namespace haptel::vehicles {
 /// watchdog timeout. Called from the DDS thread only.
 class CommandSequence {
  public:
-  explicit CommandSequence(double restart_after_s) : restart_after_ns_(static_cast<int64_t>(restart_after_s * 1e9)) {}
+  explicit CommandSequence(double restart_after_s) : restart_after_ns_(SToNs(restart_after_s)) {}
   /// True (and remembered) when `seq` received at `now_ns` is to be applied.
   bool Accept(uint64_t seq, int64_t now_ns) {
     const bool restarted = now_ns - last_ns_ > restart_after_ns_;
@@ -110,7 +111,7 @@ class CommandIntake {
 /// tick, then the time since the last, at most 50 ms (a stalled thread does
 /// not make the simulation leap).
 inline double ControlStep(int64_t& last_tick_ns, int64_t now_ns, double rate_hz) {
-  const double dt = last_tick_ns == 0 ? 1.0 / rate_hz : std::min(0.05, static_cast<double>(now_ns - last_tick_ns) * 1e-9);
+  const double dt = last_tick_ns == 0 ? 1.0 / rate_hz : std::min(0.05, NsToS(now_ns - last_tick_ns));
   last_tick_ns = now_ns;
   return dt;
 }

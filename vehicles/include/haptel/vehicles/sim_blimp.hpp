@@ -160,12 +160,10 @@ class SimBlimp {
   const Airship& airship() const { return airship_; }
   Airship& airship() { return airship_; }
   const BlimpWorldContact& contact_model() const { return *contact_; }
-  const BlimpCourseConfig& course() const { return course_; }
 
  private:
   void TrackContacts();
 
-  BlimpCourseConfig course_;
   std::unique_ptr<BlimpWorldContact> contact_;  ///< on the heap: the airship points at it
   Airship airship_;
   AirshipState previous_;  ///< before the step in progress

@@ -29,9 +29,9 @@ class SerialUnavailable : public cli::InputError {
 /// The port went away while in use (the device unplugged, the pty's other
 /// end closed): a read or write failed with EIO, ENXIO, EBADF and the like,
 /// or the port hung up.
-class SerialLost : public std::runtime_error {
+class SerialLost : public cli::HardwareLost {
  public:
-  using std::runtime_error::runtime_error;
+  using cli::HardwareLost::HardwareLost;
 };
 
 /// The shared file descriptor owner (core/unique_fd.hpp).

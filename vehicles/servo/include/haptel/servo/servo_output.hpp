@@ -57,7 +57,6 @@ class ServoOutput {
   uint16_t errors_seen() const { return errors_seen_; }
   const ServoOutputCounters& counters() const { return counters_; }
   const ServoControllerConfig& config() const { return config_; }
-  std::string port_name() const { return port_->name(); }
 
  private:
   /// Writes the waiting tail; true when nothing waits any more.
