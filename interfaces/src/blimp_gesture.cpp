@@ -1,6 +1,7 @@
 #include "haptel/interfaces/blimp_gesture.hpp"
 
 #include "haptel/config/error.hpp"
+#include "haptel/core/clock.hpp"
 #include "offset_shape.hpp"
 
 namespace haptel::interfaces {
@@ -54,6 +55,10 @@ HandTargets BlimpGestureInterface::HandTargetsFor(const BlimpCommand& command) c
 }
 
 BlimpCommand BlimpGestureInterface::Update(const HeadDirection& head, haptics::Hal& hal) {
+  return Update(head, hal, MonotonicNs());
+}
+
+BlimpCommand BlimpGestureInterface::Update(const HeadDirection& head, haptics::Hal& hal, int64_t now_ns) {
   const haptics::HandSample left = hal.LatestSample(Side::kLeft);
   const haptics::HandSample right = hal.LatestSample(Side::kRight);
   if (!left.valid || !right.valid) {
@@ -63,8 +68,8 @@ BlimpCommand BlimpGestureInterface::Update(const HeadDirection& head, haptics::H
     neutral.camera_tilt = head.tilt;
     return Clamped(neutral);
   }
-  hal.SetField(Side::kLeft, fields_[haptics::Index(Side::kLeft)]);
-  hal.SetField(Side::kRight, fields_[haptics::Index(Side::kRight)]);
+  hal.SetField(Side::kLeft, fields_[haptics::Index(Side::kLeft)], now_ns);
+  hal.SetField(Side::kRight, fields_[haptics::Index(Side::kRight)], now_ns);
   return Map(left.position, right.position, head);
 }
 

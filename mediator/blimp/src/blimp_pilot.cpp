@@ -46,6 +46,10 @@ void BlimpPilotConfig::ValidateOrThrow() const {
   check::Number("landing_hover", landing_hover, 0.0, 20.0);
   check::Number("landing_glide", landing_glide, 0.0, 1.0);
   check::Number("landing_climb", landing_climb, 0.01, 5.0);
+  check::Number("flare_gain", flare_gain, 0.0, 10.0);
+  check::Number("landing_max_sink", landing_max_sink, touchdown_sink, max_sink);
+  check::Number("sink_share", sink_share, 0.05, 1.0);
+  check::Number("rise_share", rise_share, sink_share, 1.0);
   check::Number("landed_press_power", landed_press_power, 0.0, 1.0);
   check::Number("heading_gain", heading_gain, 0.0, 100.0);
   check::Number("yaw_rate_gain", yaw_rate_gain, 0.0, 100.0);
@@ -53,6 +57,8 @@ void BlimpPilotConfig::ValidateOrThrow() const {
   check::Number("turnabout_error", turnabout_error, 0.01, 3.2);
   check::Number("turnabout_done_error", turnabout_done_error, 0.0, turnabout_error);
   check::Number("turnabout_max_s", turnabout_max_s, 0.5, 120.0);
+  check::Number("turnabout_height_error", turnabout_height_error, 0.05, 100.0);
+  check::Number("turnabout_climb", turnabout_climb, 0.01, 10.0);
   check::Number("landing_turnabout_error", landing_turnabout_error, turnabout_done_error, 3.2);
   check::Number("pitch_gain", pitch_gain, 0.0, 100.0);
   check::Number("pitch_rate_gain", pitch_rate_gain, 0.0, 100.0);
@@ -198,10 +204,10 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
       target_z_ = std::min(last_gate_z,
                            start_z_ + config_.landing_hover + config_.landing_glide * distance);
       // Once sinking it sinks on, unless it drifts out towards the circle's edge.
-      if (distance < 0.4 * course_.landing.radius &&
+      if (distance < config_.sink_share * course_.landing.radius &&
           ground.norm() < 0.9 * course_.landing.max_speed)
         sinking_ = true;
-      if (distance > 0.8 * course_.landing.radius) sinking_ = false;
+      if (distance > config_.rise_share * course_.landing.radius) sinking_ = false;
       if (sinking_) target_z_ = start_z_ - 2.0;
       target_z_ = std::max(target_z_, SafeHeight(o.position, landing));
       landing_vertical = true;
@@ -263,18 +269,28 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
   // A turnabout that does not get there — the wind weathercocks the hull
   // against the small tail rotor: after 2 s it turns the wrong way or
   // slower than 3°/s — gives way to power for turnabout_max_s.
+  // The power is the only way up or down: landing, near the ground, a
+  // turnabout waits for the height to settle, and ends when it drifts off
+  // (higher up, the height can wait for the heading).
+  const double height_error = target_z_ - o.position.z();
+  const bool high = phase_ != Phase::kLanding;
+  const bool height_settled = high || (std::abs(height_error) < config_.turnabout_height_error &&
+                                             std::abs(o.velocity.z()) < config_.turnabout_climb);
+  const bool height_lost =
+      !high && (std::abs(height_error) > 2.0 * config_.turnabout_height_error ||
+                      (std::abs(o.velocity.z()) > 2.0 * config_.turnabout_climb && o.velocity.z() * height_error < 0.0));
   if (turnabout_) {
     const double lasted = t_s - turnabout_since_;
     const bool stuck = lasted > 2.0 && yaw_rate_ * (error > 0.0 ? 1.0 : -1.0) < 0.05;
     if (std::abs(error) < config_.turnabout_done_error || o.airspeed > config_.tail_rotor_speed + 1.0 ||
-        lasted > config_.turnabout_max_s || stuck) {
+        lasted > config_.turnabout_max_s || stuck || height_lost) {
       turnabout_ = false;
       turnabout_since_ = t_s;
     }
   } else if (o.airspeed < config_.tail_rotor_speed &&
              std::abs(error) > (phase_ == Phase::kLanding ? config_.landing_turnabout_error
                                                            : config_.turnabout_error) &&
-             t_s - turnabout_since_ > config_.turnabout_max_s) {
+             t_s - turnabout_since_ > config_.turnabout_max_s && height_settled) {
     turnabout_ = true;
     turnabout_since_ = t_s;
   }
@@ -283,7 +299,7 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
   // Landing, the sink slows as the ground nears (a flare): touchdown well
   // under the course's crash speed.
   const double max_sink =
-      landing_vertical ? std::min(config_.max_sink, config_.touchdown_sink + 0.5 * std::max(0.0, height))
+      landing_vertical ? std::min(config_.landing_max_sink, config_.touchdown_sink + config_.flare_gain * std::max(0.0, height))
                        : config_.max_sink;
   const double climb =
       std::clamp(config_.height_gain * (target_z_ - o.position.z()), -max_sink,
@@ -294,6 +310,12 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
     vertical_i_ = std::clamp(vertical_i_ + config_.vertical_integral * climb_error * dt, -6.0, 6.0);
   double up_force = config_.vertical_gain * climb_error + vertical_i_ +
                     config_.vertical_drag_per_speed2 * climb * std::abs(climb);
+  // Landing, near enough the height and steady: no vertical thrust, so the
+  // power can stay off and the tail rotor steer (the hull floats level).
+  if (landing_vertical && !sinking_ && height_settled) {
+    up_force = 0.0;
+    vertical_i_ = 0.0;
+  }
 
   // Speed: a forward force (the propellers push only forwards).
   const double measured = ground_speed ? ground.dot(heading) : o.airspeed;

@@ -28,7 +28,11 @@ class BlimpGestureInterface {
 
   /// Session thread: reads both hands from the HAL, puts the centring fields
   /// in it and returns the command. A hand without a valid sample gives the
-  /// neutral command and no forces (the device is not holding it).
+  /// neutral command and no forces (the device is not holding it). The
+  /// fields are stamped `now_ns` (the HAL's clock: MonotonicNs, or a
+  /// simulated clock that also drives the servo loop's Tick).
+  BlimpCommand Update(const HeadDirection& head, haptics::Hal& hal, int64_t now_ns);
+  /// Update stamped now.
   BlimpCommand Update(const HeadDirection& head, haptics::Hal& hal);
 
   /// Pure mapping from both hands' positions (and the head) to a command.

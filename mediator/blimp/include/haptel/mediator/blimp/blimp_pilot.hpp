@@ -21,7 +21,11 @@
 /// triangle, from the wind it estimates — with the rudder, which bites above
 /// about 8 km/h; slow and off course, it lets go of the power and turns on
 /// the tail rotor (the thesis's quick turnabout: the gesture cockpit drives
-/// the tail rotor only at zero power, and so does the pilot). The pilot camera looks at the next gate (then
+/// the tail rotor only at zero power, and so does the pilot). Landing, the
+/// power is also the only way up or down: near enough its height and
+/// steady, it gives no vertical thrust (the hull floats), so the power
+/// stays off and the tail rotor can steer; a turnabout waits for the height
+/// to settle and ends when it drifts off. The pilot camera looks at the next gate (then
 /// at the landing circle): pan its bearing off the heading, tilt its
 /// elevation off the hull's pitch, each within the head's range.
 #include <array>
@@ -53,9 +57,11 @@ struct BlimpPilotConfig {
   double height_gain = 0.6;        ///< 1/s: climb rate per metre of height error
   double max_climb = 1.5;          ///< m/s
   double max_sink = 1.5;           ///< m/s
-  /// m/s: landing, the fastest sink at the ground, growing by 0.5 m/s per
-  /// metre above it (up to max_sink).
+  /// m/s: landing, the fastest sink at the ground, growing by flare_gain
+  /// per metre above it (up to landing_max_sink).
   double touchdown_sink = 0.4;
+  double flare_gain = 0.3;        ///< 1/s
+  double landing_max_sink = 0.8;  ///< m/s (the course's crash speed is 1.5)
   double vertical_gain = 10.0;     ///< N per m/s of climb-rate error
   double vertical_integral = 3.0;  ///< N per m of integrated climb-rate error (trims the weight)
   double vertical_drag_per_speed2 =
@@ -71,12 +77,16 @@ struct BlimpPilotConfig {
   double landing_speed = 0.6;          ///< m/s
   double landing_coast_length = 48.0;  ///< m: axial added mass over the drag's factor
   /// The glide down: landing_hover + landing_glide·d above the start's
-  /// height (at most the last gate's); over the circle (within 0.4 of its
-  /// radius) and slower than 0.9 of its max_speed, down onto the ground
-  /// (and on down, unless it drifts out beyond 0.8 of the radius).
+  /// height (at most the last gate's); over the circle (within sink_share
+  /// of its radius) and slower than 0.9 of its max_speed, down onto the
+  /// ground (and on down, unless it drifts out beyond rise_share).
   double landing_hover = 1.0;  ///< m
   double landing_glide = 0.1;  ///< m per m
   double landing_climb = 0.3;  ///< m/s: the fastest climb while landing
+  /// Shares of the circle's radius: within sink_share (and slow) it sinks,
+  /// beyond rise_share it rises again.
+  double sink_share = 0.6;
+  double rise_share = 0.85;
   /// Landed: the helix plane down at this power, holding the gondola on the
   /// ground (friction against the wind).
   double landed_press_power = 0.3;
@@ -94,6 +104,11 @@ struct BlimpPilotConfig {
   /// s: a turnabout lasts at most this long, and the next begins no sooner
   /// after it (flying on with power in between).
   double turnabout_max_s = 8.0;
+  /// The power is the only way up or down: a turnabout begins only with
+  /// the height within this (m) of the target and the climb rate under
+  /// turnabout_climb (m/s), and ends at twice either, drifting away.
+  double turnabout_height_error = 1.5;
+  double turnabout_climb = 0.35;
   double pitch_gain = 2.0;        ///< elevator per rad of pitch error
   double pitch_rate_gain = 1.0;   ///< elevator per rad/s of pitch rate
   double pitch_per_climb = 0.08;  ///< rad of nose-up per m/s of climb wanted
