@@ -1,6 +1,8 @@
 #pragma once
 /// @file Where tests find binaries and scratch space, and a DDS domain of
 /// their own so tests running in parallel never hear each other.
+#include <fcntl.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -11,6 +13,7 @@
 #include <exception>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <mutex>
 #include <stdexcept>
 #include <string>
@@ -55,8 +58,34 @@ std::string WhatOf(F&& f) {
   return "(no exception)";
 }
 
-/// A DDS domain id unlikely to be shared with another test process (1..232).
-inline int UniqueDomain(int salt = 0) { return 1 + static_cast<int>((getpid() * 7 + salt) % 230); }
+/// A DDS domain id (1..230) no other test process holds: each is claimed by
+/// an exclusive lock on a file of its own under the temporary directory,
+/// kept until this process ends, so test programs running side by side
+/// (ctest -j) never hear each other. The same salt gives the same domain
+/// within a process; different salts, different domains.
+inline int UniqueDomain(int salt = 0) {
+  static std::mutex mutex;
+  static std::map<int, int> claimed;  // salt -> domain
+  const std::lock_guard<std::mutex> lock(mutex);
+  if (const auto it = claimed.find(salt); it != claimed.end()) return it->second;
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "haptel-test-domains";
+  std::filesystem::create_directories(dir);
+  std::filesystem::permissions(dir, std::filesystem::perms::all, std::filesystem::perm_options::add);
+  for (int k = 0; k < 230; ++k) {
+    const int domain = 1 + static_cast<int>((getpid() * 7 + salt + k) % 230);
+    bool mine = false;
+    for (const auto& [s, d] : claimed) mine = mine || d == domain;
+    if (mine) continue;
+    const int fd = ::open((dir / std::to_string(domain)).c_str(), O_CREAT | O_RDONLY | O_CLOEXEC, 0666);
+    if (fd < 0) continue;
+    if (::flock(fd, LOCK_EX | LOCK_NB) == 0) {  // held (fd kept open) until the process ends
+      claimed[salt] = domain;
+      return domain;
+    }
+    ::close(fd);
+  }
+  throw std::runtime_error("UniqueDomain: every DDS domain 1..230 is held by another test process");
+}
 
 /// Polls `condition` every 10 ms until it holds or `timeout_s` passes.
 /// Generous timeouts only: this bounds a wait, it asserts no timing.
