@@ -262,6 +262,16 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
   const double turn =
       std::clamp(config_.heading_gain * error - config_.yaw_rate_gain * yaw_rate_, -1.0, 1.0);
   c.rudder = turn;
+  // The power is the only way up or down: landing, near the ground, a
+  // turnabout waits for the height to settle, and ends when it drifts off
+  // (higher up, the height can wait for the heading).
+  const double height_error = target_z_ - o.position.z();
+  const bool high = phase_ != Phase::kLanding;
+  const double sink_rate = std::abs(o.velocity.z());
+  const bool height_settled = high || (std::abs(height_error) < config_.turnabout_height_error &&
+                                       sink_rate < config_.turnabout_climb);
+  const bool height_lost = !high && (std::abs(height_error) > 2.0 * config_.turnabout_height_error ||
+                                     (sink_rate > 2.0 * config_.turnabout_climb && o.velocity.z() * height_error < 0.0));
   // Slow and off course, a turnabout: the gesture cockpit's tail rotor turns
   // only with the power off (the left hand sideways at zero power), so the
   // pilot lets go of the power and turns on the tail rotor until it heads
@@ -269,16 +279,6 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
   // A turnabout that does not get there — the wind weathercocks the hull
   // against the small tail rotor: after 2 s it turns the wrong way or
   // slower than 3°/s — gives way to power for turnabout_max_s.
-  // The power is the only way up or down: landing, near the ground, a
-  // turnabout waits for the height to settle, and ends when it drifts off
-  // (higher up, the height can wait for the heading).
-  const double height_error = target_z_ - o.position.z();
-  const bool high = phase_ != Phase::kLanding;
-  const bool height_settled = high || (std::abs(height_error) < config_.turnabout_height_error &&
-                                             std::abs(o.velocity.z()) < config_.turnabout_climb);
-  const bool height_lost =
-      !high && (std::abs(height_error) > 2.0 * config_.turnabout_height_error ||
-                      (std::abs(o.velocity.z()) > 2.0 * config_.turnabout_climb && o.velocity.z() * height_error < 0.0));
   if (turnabout_) {
     const double lasted = t_s - turnabout_since_;
     const bool stuck = lasted > 2.0 && yaw_rate_ * (error > 0.0 ? 1.0 : -1.0) < 0.05;
