@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "haptel/config/device.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/core/args.hpp"
 #include "haptel/core/cli.hpp"
@@ -160,6 +161,7 @@ int StudyRunCommand(int argc, const char* const* argv) {
     ConsoleOptions console_options;
     bool want_console = false;
     std::map<std::string, Questionnaire> questionnaires;
+    std::string simulated_device;  ///< the run's haptic device, when it is the simulated one
     cli::ReadInput([&] {
       const Args args(argc, argv, {"database", "domain", "port"}, {"json", "verbose", "console"});
       console_options.port = args.Int("port", 1, 65535).value_or(console_options.port);
@@ -189,6 +191,8 @@ int StudyRunCommand(int argc, const char* const* argv) {
       }
       plan = PlanTrials(config);
       const RunConfig run_config = LoadRun(config.run);
+      const DeviceConfig device = LoadDevice(run_config.device);
+      if (device.driver == "sim") simulated_device = run_config.device.lexically_normal().string();
       database = args.Value("database").value_or(
           !config.database.empty() ? config.database.string() : run_config.database.string());
       // The console's thumbnail: the trials' vehicle's camera, on their domain.
@@ -209,6 +213,15 @@ int StudyRunCommand(int argc, const char* const* argv) {
         return std::make_unique<StudyConsole>(config, plan, database, questionnaires, console_options);
       });
       std::fprintf(stderr, "[study] console: %s\n", console->url().c_str());
+    }
+    // People hold the haptic conditions' controls with a real device: the
+    // simulated one has no arms a person can move (its trials end at the cap).
+    if (person && !simulated_device.empty()) {
+      std::fprintf(stderr,
+                   "[study] note: the run's device '%s' is simulated: nobody can move its arms, so the "
+                   "haptic conditions' trials end at the cap; for people name a run file whose device is a "
+                   "real one (e.g. devices/udp.yaml, the exoskeleton's arms)\n",
+                   simulated_device.c_str());
     }
     const size_t done_before = store.Trials().size();
     store.Event(store.resumed() ? "resumed" : "started", "", 0,

@@ -61,6 +61,20 @@ TEST_CASE("The shipped synthetic study loads and plans a balanced Latin square")
   }
 }
 
+TEST_CASE("The shipped people's study loads and plans the thesis's study: four people, four interfaces, questionnaires") {
+  const StudyConfig s = LoadStudy("config/studies/grand-prix.yaml");
+  CHECK(s.name == "grand-prix");
+  CHECK(s.operators == "person");
+  REQUIRE(s.conditions.size() == 4);
+  CHECK(s.conditions[3].interface == "gesture");
+  CHECK(s.participants.size() == 4);
+  CHECK(s.trial_cap_s == Approx(600.0));
+  CHECK(s.repetitions == 1);
+  CHECK(s.track.filename() == "grand-prix.yaml");
+  CHECK(s.questionnaires.size() == 2);
+  CHECK(PlanTrials(s).size() == 16);
+}
+
 TEST_CASE("A study file that cannot work is refused naming the file, the key and what was expected") {
   SECTION("an unknown interface") {
     const std::string e = ErrorOf(Study("  - {name: a, interface: gesture}\n  - {name: b, interface: wheelchair}\n", People(2)));
