@@ -76,12 +76,7 @@ SessionResult RunBlimpSession(const SessionSetup& setup, const std::atomic<bool>
                         setup.device.name + "' is flown by a person: use --operator person");
     }
     pilot = std::make_unique<BlimpAutoPilot>(course, PilotKnowing(setup.vehicle.airship));
-    const interfaces::HandTargets neutral = interface.HandTargetsFor({});
-    for (int i = 0; i < haptics::kSides; ++i) {
-      if (!neutral[i]) continue;
-      haptic.sim()->Place(static_cast<haptics::Side>(i), neutral[i]->position);
-      HoldHand(*haptic.sim(), static_cast<haptics::Side>(i), *neutral[i]);
-    }
+    PlaceHands(*haptic.sim(), interface.HandTargetsFor({}));
   }
   haptic.Start(setup.progress);
 
@@ -149,10 +144,7 @@ SessionResult RunBlimpSession(const SessionSetup& setup, const std::atomic<bool>
     interfaces::HeadDirection head;
     if (pilot && vehicle_up) {
       const BlimpCommand intent = pilot->Decide(t);
-      const interfaces::HandTargets targets = interface.HandTargetsFor(intent);
-      for (int i = 0; i < haptics::kSides; ++i) {
-        if (targets[i]) HoldHand(*haptic.sim(), static_cast<haptics::Side>(i), *targets[i]);
-      }
+      HoldHands(*haptic.sim(), interface.HandTargetsFor(intent));
       head = {intent.camera_pan, intent.camera_tilt};
     }
     command = interface.Update(head, haptic.hal());

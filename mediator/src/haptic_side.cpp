@@ -108,6 +108,12 @@ void HapticSide::Stop() {
   servo_->Stop();
 }
 
+void HapticSide::Tick(int64_t now_ns) {
+  for (const haptics::Side side : {haptics::Side::kLeft, haptics::Side::kRight}) {
+    if (device_->HasSide(side)) servo_->Tick(side, now_ns);
+  }
+}
+
 void HapticSide::OnVehicleUp() {
   if (trace_) trace_->SetRecording(true);
   if (replay_ != nullptr) replay_->Begin(MonotonicNs());

@@ -10,6 +10,19 @@ void HoldHand(haptics::SimDevice& device, haptics::Side side, const interfaces::
   device.SetGlovePosture(side, goal.glove);
 }
 
+void HoldHands(haptics::SimDevice& device, const interfaces::HandTargets& targets) {
+  for (int i = 0; i < haptics::kSides; ++i) {
+    if (targets[i]) HoldHand(device, static_cast<haptics::Side>(i), *targets[i]);
+  }
+}
+
+void PlaceHands(haptics::SimDevice& device, const interfaces::HandTargets& targets) {
+  for (int i = 0; i < haptics::kSides; ++i) {
+    if (targets[i]) device.Place(static_cast<haptics::Side>(i), targets[i]->position);
+  }
+  HoldHands(device, targets);
+}
+
 AutomaticOperator::AutomaticOperator(const Track& track, const OperatorConfig& config, const DriveConfig& drive,
                                      haptics::SimDevice& device, const DriverProfile& profile, int experience)
     : driver_(track, config, drive, profile, experience), device_(device) {}
@@ -28,10 +41,7 @@ void AutomaticOperator::Prepare(const interfaces::MediatorInterface& interface) 
 }
 
 void AutomaticOperator::Act(double t_s, const interfaces::MediatorInterface& interface) {
-  const interfaces::HandTargets targets = driver_.Act(t_s, interface);
-  for (int i = 0; i < haptics::kSides; ++i) {
-    if (targets[i]) HoldHand(device_, static_cast<haptics::Side>(i), *targets[i]);
-  }
+  HoldHands(device_, driver_.Act(t_s, interface));
 }
 
 }  // namespace haptel::mediator

@@ -266,12 +266,12 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
   // turnabout waits for the height to settle, and ends when it drifts off
   // (higher up, the height can wait for the heading).
   const double height_error = target_z_ - o.position.z();
-  const bool high = phase_ != Phase::kLanding;
-  const double sink_rate = std::abs(o.velocity.z());
-  const bool height_settled = high || (std::abs(height_error) < config_.turnabout_height_error &&
-                                       sink_rate < config_.turnabout_climb);
-  const bool height_lost = !high && (std::abs(height_error) > 2.0 * config_.turnabout_height_error ||
-                                     (sink_rate > 2.0 * config_.turnabout_climb && o.velocity.z() * height_error < 0.0));
+  const double climb_rate = std::abs(o.velocity.z());
+  const bool height_settled = !landing_vertical || (std::abs(height_error) < config_.turnabout_height_error &&
+                                                    climb_rate < config_.turnabout_climb);
+  const bool height_lost =
+      landing_vertical && (std::abs(height_error) > 2.0 * config_.turnabout_height_error ||
+                           (climb_rate > 2.0 * config_.turnabout_climb && o.velocity.z() * height_error < 0.0));
   // Slow and off course, a turnabout: the gesture cockpit's tail rotor turns
   // only with the power off (the left hand sideways at zero power), so the
   // pilot lets go of the power and turns on the tail rotor until it heads

@@ -59,6 +59,9 @@ class HapticSide {
   void Start(bool progress);
   /// Forces to zero, then stops the servo loop. Safe to call twice.
   void Stop();
+  /// One servo cycle of every arm the device has, at `now_ns`: for a caller
+  /// that runs the loop in simulated time (tests) instead of Start.
+  void Tick(int64_t now_ns);
   /// The vehicle answered: the trace starts recording and a replay starts playing.
   void OnVehicleUp();
 

@@ -23,6 +23,11 @@ namespace haptel::mediator {
 /// A simulated person holds a hand of the simulated device as `goal` says:
 /// where the wrist is, how it turns, the glove's posture.
 void HoldHand(haptics::SimDevice& device, haptics::Side side, const interfaces::HandGoal& goal);
+/// HoldHand for each hand `targets` has (the others as they are).
+void HoldHands(haptics::SimDevice& device, const interfaces::HandTargets& targets);
+/// Before the servo loop runs: puts each hand `targets` has at rest at its
+/// target, held there.
+void PlaceHands(haptics::SimDevice& device, const interfaces::HandTargets& targets);
 
 class Operator {
  public:
