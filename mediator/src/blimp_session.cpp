@@ -1,5 +1,6 @@
 #include "haptel/mediator/blimp_session.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -14,6 +15,7 @@
 #include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/run_counters.hpp"
 #include "haptel/mediator/operator.hpp"
+#include "haptel/mediator/session_view.hpp"
 #include "haptel/mediator/vehicle_link.hpp"
 #include "session_loop.hpp"
 
@@ -40,13 +42,67 @@ void LogProgress(double t, const BlimpLapTimer& lap, const VehicleLink& link, co
   char line[300];
   std::snprintf(line, sizeof line,
                 "%6.1f s  blimp  lap %5.1f s  gates %d/%d  obstacles %d  height %.1f m  airspeed %.1f m/s  "
-                "power %.2f  helix %+.2f  rudder %+.2f  elevator %+.2f  tail %+.2f  rtt p50 %.2f ms  video %.1f fps",
+                "power %.2f  helix %+.2f  rudder %+.2f  elevator %+.2f  tail %+.2f  camera %+.2f %+.2f rad  "
+                "rtt p50 %.2f ms  video %.1f fps",
                 t, lap.lap_time_s(), lap.next_gate(), lap.gates_total(), lap.obstacles_touched(), s.z(),
                 s.airspeed(), command.power, command.helix, command.rudder, command.elevator, command.tail_rotor,
-                link.Rtt().Percentile(0.5) * 1e-3, link.video().Stats().fps);
+                s.outputs()[5], s.outputs()[6], link.Rtt().Percentile(0.5) * 1e-3, link.video().Stats().fps);
   log::Info(line);
   if (!counters.empty()) log::Info("         counters: " + counters);
 }
+
+/// What the blimp's view shows over the picture: the lap, the gates, the
+/// last contact, the airspeed on the HUD's dial (full scale: the thesis's top
+/// speed) and a line of height and engine. Builds it without allocating.
+class BlimpOverlay {
+ public:
+  BlimpOverlay(const SessionSetup& setup, int gates_total) : setup_(setup), gates_total_(gates_total) {}
+
+  view::Overlay Make(double t, const BlimpLapTimer& lap, const msg::BlimpState& s, const BlimpCommand& c,
+                     bool vehicle_up) {
+    view::Overlay o;
+    std::snprintf(o.interface_name, sizeof o.interface_name, "blimp-gesture");
+    std::snprintf(o.operator_name, sizeof o.operator_name, "%s", setup_.operator_kind.c_str());
+    o.t_s = t;
+    o.lap_time_s = lap.lap_time_s();
+    o.time_left_s = setup_.time_limit_s > 0 ? std::max(0.0, setup_.time_limit_s - t) : -1.0;
+    o.gates_passed = lap.next_gate();
+    o.gates_total = gates_total_;
+    o.obstacles_touched = lap.obstacles_touched();
+    // A new contact onset, not the blimp resting on its pad at the start.
+    if (s.pose_valid() && contacts_seen_ < 0) contacts_seen_ = s.contacts();
+    if (contacts_seen_ >= 0 && s.contacts() > static_cast<uint32_t>(contacts_seen_)) {
+      contacts_seen_ = s.contacts();
+      touched_ = true;
+      std::snprintf(last_contact_, sizeof last_contact_, "%.1f m/s at %.1f s", s.impact_speed(), t);
+    }
+    if (!s.contact()) touched_ = false;
+    std::snprintf(o.last_contact, sizeof o.last_contact, "%s", last_contact_);
+    o.contact_now = touched_;
+    o.hud = true;
+    o.speed_mps = s.airspeed();
+    o.speed_max_mps = kTopSpeed_mps;
+    std::snprintf(o.status, sizeof o.status, "height %.1f m  power %.0f%%  helix %+.0f%%", s.z(), 100.0 * c.power,
+                  100.0 * c.helix);
+    if (!vehicle_up) {
+      std::snprintf(o.message, sizeof o.message, "waiting for vehicle '%s'", setup_.vehicle.name.c_str());
+    } else if (s.failsafe()) {
+      std::snprintf(o.message, sizeof o.message, "failsafe: every channel at neutral");
+    } else if (setup_.operator_kind == "person" && t < kHelpS) {
+      std::snprintf(o.message, sizeof o.message, "drag the mouse to look around, Home looks ahead, Esc ends");
+    }
+    return o;
+  }
+
+ private:
+  static constexpr double kTopSpeed_mps = 35.0 / 3.6;  ///< thesis ch. 8.2: 35 km/h
+  static constexpr double kHelpS = 15.0;
+  const SessionSetup& setup_;
+  int gates_total_;
+  int64_t contacts_seen_ = -1;  ///< contact onsets when the first pose came; -1: none yet
+  bool touched_ = false;        ///< in a contact that began in flight (the border shows it)
+  char last_contact_[40] = "";
+};
 
 }  // namespace
 
@@ -86,7 +142,7 @@ SessionResult RunBlimpSession(const SessionSetup& setup, const std::atomic<bool>
   link_options.link = run.link;
   link_options.track_file = course.file;
   link_options.program = setup.vehicle_program;
-  link_options.decode_video = false;  // nothing shows it yet
+  link_options.decode_video = run.video_decode && DecodesVideo(setup.view);
   VehicleLink vehicle(link_options);
   rec.vehicle_pid = vehicle.pid();
   if (setup.progress && vehicle.pid() != 0) {
@@ -94,9 +150,26 @@ SessionResult RunBlimpSession(const SessionSetup& setup, const std::atomic<bool>
               std::to_string(vehicle.pid()));
   }
 
+  // --- The view: the pilot camera's picture on a screen that turns with the
+  // camera, the view turning with the head (mouse-look in the window). ---
+  interfaces::InputBox input;
+  std::unique_ptr<SessionView> view_part;
+  if (setup.view != ViewKind::kNone) {
+    SessionView::Parts view_parts;
+    view_parts.hal = &haptic.hal();
+    view_parts.physics_config = &setup.physics;  // the tracked hands' size
+    view_parts.video = &vehicle.video();
+    view_parts.hands = {true, true};
+    view::ViewOptions options = ViewOptionsFor(setup);
+    options.screen = view::HeadTrackedScreen();
+    view_part = std::make_unique<SessionView>(options, view_parts, input);
+  }
+  BlimpOverlay overlay_feed(setup, static_cast<int>(course.gates.size()));
+
   BlimpLapTimer lap(course);
   const int64_t t0 = MonotonicNs();
-  LoopWatch watch(haptic, nullptr, vehicle, nullptr, t0);
+  LoopWatch watch(haptic, nullptr, vehicle, view_part.get(), t0);
+  int64_t next_live_ns = t0;
   const auto period_ns = static_cast<int64_t>(1e9 / run.session_rate_hz);
   const auto command_period_ns = static_cast<int64_t>(1e9 / setup.blimp_interface->command_rate_hz);
   int64_t next_command_ns = t0;
@@ -117,6 +190,11 @@ SessionResult RunBlimpSession(const SessionSetup& setup, const std::atomic<bool>
 
     if (auto end = CheckOperatorSide(interrupted, haptic, setup.device.name)) {
       finish(std::move(*end));
+      break;
+    }
+    const interfaces::InputState person = input.Load();
+    if (person.quit) {
+      finish({Outcome::kAborted, "the view was closed"});
       break;
     }
     if (auto end = health.CheckProcess(vehicle, now)) {
@@ -140,15 +218,30 @@ SessionResult RunBlimpSession(const SessionSetup& setup, const std::atomic<bool>
     }
     const bool vehicle_up = health.up();
 
-    // The pilot's hands and gaze; a person's head would come from the view.
-    interfaces::HeadDirection head;
-    if (pilot && vehicle_up) {
-      const BlimpCommand intent = pilot->Decide(t);
-      HoldHands(*haptic.sim(), interface.HandTargetsFor(intent));
-      head = {intent.camera_pan, intent.camera_tilt};
+    // The pilot's hands and gaze; a person's head turns with mouse-look.
+    interfaces::HeadDirection head{person.head_pan, person.head_tilt};
+    if (pilot) {
+      head = {};
+      if (vehicle_up) {
+        const BlimpCommand intent = pilot->Decide(t);
+        HoldHands(*haptic.sim(), interface.HandTargetsFor(intent));
+        head = {intent.camera_pan, intent.camera_tilt};
+      }
     }
     command = interface.Update(head, haptic.hal());
     if (CommandDue(next_command_ns, now, command_period_ns)) vehicle.Send(vehicle_up ? command : BlimpCommand{});
+    if (view_part || setup.on_live) {
+      const view::Overlay overlay = overlay_feed.Make(t, lap, last, command, vehicle_up);
+      if (view_part) {
+        view_part->Publish(overlay);
+        // The screen hangs where the camera points as the vehicle applied it.
+        view_part->Publish(view::Gaze{true, head.pan, head.tilt, last.outputs()[5], last.outputs()[6]});
+      }
+      if (setup.on_live && now >= next_live_ns) {
+        next_live_ns = now + SToNs(0.5);
+        setup.on_live(overlay);
+      }
+    }
 
     if (lap.crashed()) {
       finish({Outcome::kCrashed, "the blimp crashed: a contact at " + std::to_string(lap.crash_speed()).substr(0, 4) +
@@ -180,6 +273,7 @@ SessionResult RunBlimpSession(const SessionSetup& setup, const std::atomic<bool>
   haptic.hal().ZeroForces();
   vehicle.Send(BlimpCommand{});
   haptic.Stop();
+  if (view_part) StopAndRecord(*view_part, result);
   vehicle.Stop();
 
   RecordLinkFigures(haptic, vehicle, result);

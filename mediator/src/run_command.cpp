@@ -160,9 +160,6 @@ SessionSetup RunSetupFromArgs(const Args& args) {
       throw UsageError("option --interface " + name + ": the blimp '" + setup.run.vehicle.string() +
                        "' is flown with the blimp gesture cockpit (--interface blimp-gesture)");
     }
-    if (setup.view != ViewKind::kNone) {
-      throw UsageError("the blimp's flight has no view yet: use --view none (and no --record)");
-    }
     if (person && setup.device.driver == "sim") {
       throw UsageError("option --operator person: the blimp is flown with both hands on a haptic device; the "
                        "simulated device has no arms for a person (use --device with a real one)");

@@ -210,12 +210,7 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   // --- The view, when something shows it: a window, or offscreen for the MP4. ---
   std::unique_ptr<SessionView> view_part;
   if (setup.view != ViewKind::kNone) {
-    view::ViewOptions options;
-    options.mode =
-        setup.view == ViewKind::kWindow ? view::ViewMode::kWindow : view::ViewMode::kOffscreen;
-    options.record = setup.record;
-    options.title = "Haptel - " + run.name;
-    if (setup.direct_view) options.screen = view::DirectViewScreen();
+    const view::ViewOptions options = ViewOptionsFor(setup);
     SessionView::Parts view_parts;
     view_parts.hal = &haptic.hal();
     view_parts.physics = physics_side.get();
@@ -347,15 +342,7 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   haptic.hal().ZeroForces();
   if (physics_side) physics_side->world->RequestStop();
   vehicle.Send(0.0, 0.0);
-  if (view_part) {
-    view_part->Stop();  // finishes the MP4
-    const view::ViewStats vs = view_part->Stats();
-    rec.view_fps = vs.fps;
-    rec.view_frame_p99_ms = vs.frame_ms_p99;
-    rec.video_to_screen_ms_p50 = vs.video_to_screen_ms_p50;
-    rec.video_to_screen_ms_p99 = vs.video_to_screen_ms_p99;
-    result.view_record_dropped = vs.record_dropped;
-  }
+  if (view_part) StopAndRecord(*view_part, result);
   if (physics_side) {
     // A step of thousands of overlapping bodies takes seconds: give it a
     // moment to give up (it does between contacts), then leave it, and the

@@ -27,6 +27,7 @@ view::ViewStats SessionView::Stats() const { return view_->Stats(); }
 void SessionView::Fill(view::ViewModel& model) {
   model.shapes.clear();
   model.overlay = overlay_.Load();
+  model.gaze = gaze_.Load();
   // The hands: the proxies where a world moves them, the tracked hands otherwise.
   for (int i = 0; i < haptics::kSides; ++i) {
     const auto side = static_cast<haptics::Side>(i);
@@ -56,6 +57,26 @@ void SessionView::Fill(view::ViewModel& model) {
     model.video.id = frame.id;
     model.video.capture_wall_ns = frame.capture_wall_ns;
   }
+}
+
+view::ViewOptions ViewOptionsFor(const SessionSetup& setup) {
+  view::ViewOptions options;
+  options.mode = setup.view == ViewKind::kWindow ? view::ViewMode::kWindow : view::ViewMode::kOffscreen;
+  options.record = setup.record;
+  options.title = "Haptel - " + setup.run.name;
+  if (setup.direct_view) options.screen = view::DirectViewScreen();
+  return options;
+}
+
+void StopAndRecord(SessionView& view, SessionResult& result) {
+  view.Stop();  // finishes the MP4
+  const view::ViewStats vs = view.Stats();
+  RunRecord& rec = result.record;
+  rec.view_fps = vs.fps;
+  rec.view_frame_p99_ms = vs.frame_ms_p99;
+  rec.video_to_screen_ms_p50 = vs.video_to_screen_ms_p50;
+  rec.video_to_screen_ms_p99 = vs.video_to_screen_ms_p99;
+  result.view_record_dropped = vs.record_dropped;
 }
 
 OverlayFeed::OverlayFeed(const SessionSetup& setup, const Track& track)

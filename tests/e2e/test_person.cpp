@@ -1,20 +1,26 @@
 // End to end, the person's side of `haptel run`: a recorded device replayed
 // through the same interface, a UDP device behind real haptel-device-server
-// processes, and the bad input a person can give.
+// processes, a blimp flown in a window with mouse-look, and the bad input a
+// person can give.
 #include <catch2/catch.hpp>
 #include <signal.h>
 
+#include <cmath>
 #include <cstdlib>
+#include <opencv2/videoio.hpp>
 #include <fstream>
 #include <regex>
 
 #include "child.hpp"
 #include "haptel/config/calibration.hpp"
 #include "test_env.hpp"
+#include "xserver.hpp"
 
 using namespace haptel;
 using haptel::test::Child;
 using haptel::test::JsonField;
+using haptel::test::XDoTool;
+using haptel::test::XServer;
 
 namespace {
 
@@ -126,6 +132,59 @@ TEST_CASE("a person's run on a UDP device behind two haptel-device-server proces
     CHECK(run.err().find("device 'udp' lost") != std::string::npos);
     CHECK(run.err().find("forces zeroed") != std::string::npos);
   }
+}
+
+/// The pilot camera's pan in the newest blimp progress line ("camera -0.79 +0.31 rad"), or NaN.
+double LastCameraPan(const std::string& err) {
+  static const std::regex camera(R"(camera ([-+0-9.]+) ([-+0-9.]+) rad)");
+  double last = std::nan("");
+  for (auto it = std::sregex_iterator(err.begin(), err.end(), camera); it != std::sregex_iterator(); ++it) {
+    last = std::stod((*it)[1]);
+  }
+  return last;
+}
+
+TEST_CASE("a person flies the blimp in a window: dragging the mouse turns the pilot camera through the link") {
+  XServer x;
+  const auto dir = test::ScratchDir("e2e-blimp-person");
+  Child left({Bin("haptel-device-server"), "--side", "left", "--port", "0"});
+  Child right({Bin("haptel-device-server"), "--side", "right", "--port", "0"});
+  const auto device = UdpDeviceFile(dir, StartArm(left), StartArm(right), Calibration(dir, "udp"));
+  const auto mp4 = dir / "flight.mp4";
+  Child run({Bin("haptel"), "run", "--config", "config/blimp.yaml", "--operator", "person", "--device",
+             device.string(), "--view", "window", "--record", mp4.string(), "--json", "--domain",
+             std::to_string(test::UniqueDomain(23)), "--database", (dir / "runs.db").string(), "--vehicle-timeout",
+             "5", "--time-limit", "120"});
+  // Flying: the vehicle's state reports the camera straight ahead.
+  REQUIRE(test::WaitFor([&] {
+    run.Pump();
+    return LastCameraPan(run.err()) == 0.0;
+  }, 90.0));
+  // Drag 150 px to the right: the head turns right by 150 × 5.236 mrad.
+  REQUIRE(XDoTool({"search", "--sync", "--name", "Haptel", "windowfocus", "--sync", "mousemove", "--window", "%1",
+                   "400", "300", "mousedown", "1", "mousemove_relative", "--sync", "--", "150", "0", "mouseup", "1"}) ==
+          0);
+  // The camera as the vehicle applied it follows (a state seen in the next progress lines).
+  const bool followed = test::WaitFor([&] {
+    run.Pump();
+    return LastCameraPan(run.err()) < -0.7;
+  }, 30.0);
+  INFO(run.err());
+  CHECK(followed);
+  REQUIRE(XDoTool({"search", "--sync", "--name", "Haptel", "windowfocus", "--sync", "key", "Escape"}) == 0);
+  const int code = run.Wait(60.0);
+  INFO(run.out() << run.err());
+  CHECK(code == 1);
+  const std::string json = run.LastLine();
+  CHECK(JsonField(json, "outcome") == "aborted");
+  CHECK(JsonField(json, "operator") == "person");
+  CHECK(JsonField(json, "interface") == "blimp-gesture");
+  CHECK(JsonField(json, "vehicle_kind") == "sim-blimp");
+  CHECK(std::stod(JsonField(json, "view_fps")) > 0.0);
+  CHECK(std::stod(JsonField(json, "video_to_screen_ms_p50")) > 0.0);
+  cv::VideoCapture video(mp4.string(), cv::CAP_FFMPEG);
+  REQUIRE(video.isOpened());
+  CHECK(video.get(cv::CAP_PROP_FRAME_COUNT) > 30);
 }
 
 TEST_CASE("a person's bad input exits 2 with one line naming the fix") {

@@ -14,18 +14,12 @@
 using namespace haptel;
 using haptel::test::Child;
 using haptel::test::JsonField;
+using haptel::test::XDoTool;
 using haptel::test::XServer;
 
 namespace {
 
 std::string Bin(const std::string& name) { return (test::BinDir() / name).string(); }
-
-/// Runs xdotool with `args`; returns its exit code.
-int XDoTool(std::vector<std::string> args) {
-  args.insert(args.begin(), "/usr/bin/xdotool");
-  Child c(args);
-  return c.Wait(30.0);
-}
 
 /// The speed in the newest progress line on stderr ("speed 0.12 m/s"), or -1.
 double LastSpeed(const std::string& err) {

@@ -1,9 +1,11 @@
 #pragma once
-// An X server of the test's own (Xvfb) for the end-to-end tests with a window.
+// An X server of the test's own (Xvfb) for the end-to-end tests with a
+// window, and xdotool to type and move the mouse in it.
 #include <catch2/catch.hpp>
 
 #include <cstdlib>
 #include <string>
+#include <vector>
 
 #include "child.hpp"
 #include "test_env.hpp"
@@ -31,5 +33,12 @@ class XServer {
   Child server_;
   std::string display_;
 };
+
+/// Runs xdotool with `args` on the current DISPLAY; returns its exit code.
+inline int XDoTool(std::vector<std::string> args) {
+  args.insert(args.begin(), "/usr/bin/xdotool");
+  Child c(args);
+  return c.Wait(30.0);
+}
 
 }  // namespace haptel::test

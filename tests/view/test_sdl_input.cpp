@@ -2,6 +2,7 @@
 #include <catch2/catch.hpp>
 
 #include "alloc_counter.hpp"
+#include "haptel/core/blimp_command.hpp"
 #include "haptel/view/sdl_input.hpp"
 
 using namespace haptel;
@@ -154,12 +155,53 @@ TEST_CASE("sdl input: a new sink keeps the counters and drops held keys", "[sdl_
   CHECK(box.Load().presses_up == 2);
 }
 
+namespace {
+SDL_Event Motion(int xrel, int yrel, Uint32 buttons) {
+  SDL_Event e{};
+  e.type = SDL_MOUSEMOTION;
+  e.motion.type = SDL_MOUSEMOTION;
+  e.motion.state = buttons;
+  e.motion.xrel = xrel;
+  e.motion.yrel = yrel;
+  return e;
+}
+}  // namespace
+
+TEST_CASE("sdl input: dragging the mouse turns the head, within the camera's range; Home looks ahead",
+          "[sdl_input]") {
+  InputBox box;
+  SdlInput input(box);
+  // The pointer passing over the window without a button held turns nothing.
+  input.OnEvent(Motion(200, 50, 0));
+  CHECK(box.Load().head_pan == 0.0);
+  CHECK(box.Load().head_tilt == 0.0);
+  // Dragging right looks right (pan is positive left), dragging up looks up.
+  input.OnEvent(Motion(100, 0, SDL_BUTTON_LMASK));
+  CHECK(box.Load().head_pan == Approx(-100 * SdlInput::kHeadRadPerPixel));
+  input.OnEvent(Motion(-40, -30, SDL_BUTTON_RMASK));
+  CHECK(box.Load().head_pan == Approx(-60 * SdlInput::kHeadRadPerPixel));
+  CHECK(box.Load().head_tilt == Approx(30 * SdlInput::kHeadRadPerPixel));
+  // 300 px is a quarter turn; far past the camera's range stops at its end.
+  input.OnEvent(Motion(-360, 0, SDL_BUTTON_LMASK));
+  CHECK(box.Load().head_pan == Approx(kBlimpCameraPanMax).margin(1e-3));
+  input.OnEvent(Motion(-5000, 5000, SDL_BUTTON_LMASK));
+  CHECK(box.Load().head_pan == Approx(kBlimpCameraPanMax));
+  CHECK(box.Load().head_tilt == Approx(-kBlimpCameraTiltMax));
+  // Coming back needs only the way back, not the overshoot.
+  input.OnEvent(Motion(300, 0, SDL_BUTTON_LMASK));
+  CHECK(box.Load().head_pan == Approx(0.0).margin(1e-3));
+  input.OnEvent(Down(SDL_SCANCODE_HOME));
+  CHECK(box.Load().head_pan == 0.0);
+  CHECK(box.Load().head_tilt == 0.0);
+}
+
 TEST_CASE("sdl input: events allocate nothing", "[sdl_input][alloc]") {
   InputBox box;
   SdlInput input(box);
   const SDL_Event events[] = {Down(SDL_SCANCODE_UP),   Up(SDL_SCANCODE_UP),
                               Down(SDL_SCANCODE_A, 0), Down(SDL_SCANCODE_F2),
-                              Up(SDL_SCANCODE_SPACE),  Down(SDL_SCANCODE_SPACE)};
+                              Up(SDL_SCANCODE_SPACE),  Down(SDL_SCANCODE_SPACE),
+                              Motion(3, -2, SDL_BUTTON_LMASK)};
   const uint64_t before = haptel::test::ThreadAllocations();
   for (int i = 0; i < 1000; ++i) {
     for (const SDL_Event& e : events) input.OnEvent(e);

@@ -161,6 +161,62 @@ TEST_CASE("the direct view puts the camera's picture over most of the frame (the
   CHECK(height > 1.5 * (ScreenPoint(usual, 0.0, 1.0).y - ScreenPoint(usual, 0.0, 0.0).y));
 }
 
+TEST_CASE("a tracked gaze: the screen hangs where the vehicle camera looks, the view turns with the head") {
+  OffscreenGl gl;
+  Renderer renderer(kWidth, kHeight, HeadTrackedScreen());
+  ViewModel model;
+  model.video.image = QuadrantFrame();
+  model.video.id = 1;
+  model.gaze.tracked = true;
+  cv::Mat image;
+  const auto centre_of_screen = [&] { return ScreenPoint(renderer, 0.5, 0.5); };
+  const cv::Point middle(kWidth / 2, kHeight / 2);
+  const auto is_picture = [](cv::Vec3b c) { return Red(c) || Green(c) || Blue(c) || White(c); };
+
+  // Head and camera ahead: the picture in the middle of the view, upright.
+  renderer.Draw(model, 0.0);
+  renderer.ReadPixels(image);
+  CHECK(std::abs(centre_of_screen().x - middle.x) <= 2);
+  CHECK(std::abs(centre_of_screen().y - middle.y) <= 2);
+  CHECK(Red(At(image, ScreenPoint(renderer, 0.25, 0.25))));
+  CHECK(White(At(image, ScreenPoint(renderer, 0.75, 0.75))));
+
+  // The camera turned left, the head not yet (the link's lag): the screen
+  // has moved left, out of the middle of the view.
+  model.gaze.screen_pan = 0.6;
+  renderer.Draw(model, 0.0);
+  renderer.ReadPixels(image);
+  CHECK(centre_of_screen().x < middle.x - kWidth / 5);
+  CHECK(std::abs(centre_of_screen().y - middle.y) <= 10);
+  CHECK(Green(At(image, ScreenPoint(renderer, 0.75, 0.25))));
+  CHECK_FALSE(is_picture(At(image, middle)));
+
+  // The head caught up: the picture is in the middle again, still upright.
+  model.gaze.look_pan = 0.6;
+  renderer.Draw(model, 0.0);
+  renderer.ReadPixels(image);
+  CHECK(std::abs(centre_of_screen().x - middle.x) <= 2);
+  CHECK(std::abs(centre_of_screen().y - middle.y) <= 2);
+  CHECK(Green(At(image, ScreenPoint(renderer, 0.75, 0.25))));
+  CHECK(Blue(At(image, ScreenPoint(renderer, 0.25, 0.75))));
+
+  // The camera tilted up, the head level: the screen is higher in the view.
+  model.gaze = Gaze{true, 0.0, 0.0, 0.0, 0.3};
+  renderer.Draw(model, 0.0);
+  CHECK(centre_of_screen().y < middle.y - kHeight / 8);
+  CHECK(std::abs(centre_of_screen().x - middle.x) <= 2);
+  model.gaze.look_tilt = 0.3;
+  renderer.Draw(model, 0.0);
+  CHECK(std::abs(centre_of_screen().y - middle.y) <= 2);
+
+  // Untracked again: the fixed view and the screen where it was placed.
+  Renderer fixed(kWidth, kHeight, HeadTrackedScreen());
+  fixed.Draw(ViewModel{}, 0.0);
+  model.gaze = Gaze{};
+  renderer.Draw(model, 0.0);
+  CHECK(centre_of_screen() == ScreenPoint(fixed, 0.5, 0.5));
+}
+
 TEST_CASE("the renderer draws shapes where the device frame puts them, in their colour") {
   OffscreenGl gl;
   Renderer renderer(kWidth, kHeight);

@@ -15,7 +15,8 @@
 namespace haptel::view {
 namespace {
 
-// The camera: behind and above the workspace, looking forward and down.
+// The camera: behind and above the workspace, looking forward and down (a
+// tracked gaze looks level, turned by the head).
 const Eigen::Vector3f kEye(-0.45f, 0.0f, 0.30f);
 const Eigen::Vector3f kTarget(0.40f, 0.0f, 0.10f);
 constexpr float kFovYDeg = 60.0f;
@@ -271,6 +272,21 @@ Eigen::Matrix4f Perspective(float fovy_deg, float aspect, float near, float far)
   return m;
 }
 
+/// A turn about the eye: pan about +z (positive left), then tilt (positive
+/// up, i.e. about -y in the device frame).
+Eigen::Quaternionf Turn(double pan, double tilt) {
+  return Eigen::Quaternionf(Eigen::AngleAxisf(static_cast<float>(pan), Eigen::Vector3f::UnitZ()) *
+                            Eigen::AngleAxisf(static_cast<float>(-tilt), Eigen::Vector3f::UnitY()));
+}
+
+/// `point` turned about the eye by `turn`.
+std::array<double, 3> AboutEye(const Eigen::Quaternionf& turn, const std::array<double, 3>& point) {
+  const Eigen::Vector3f p = kEye + turn * (Eigen::Vector3f(static_cast<float>(point[0]), static_cast<float>(point[1]),
+                                                           static_cast<float>(point[2])) -
+                                           kEye);
+  return {p.x(), p.y(), p.z()};
+}
+
 Eigen::Matrix4f Model(const std::array<double, 3>& position, const std::array<double, 4>& q_wxyz,
                       const Eigen::Vector3f& scale) {
   Eigen::Quaternionf q(static_cast<float>(q_wxyz[0]), static_cast<float>(q_wxyz[1]),
@@ -305,6 +321,7 @@ std::vector<std::string> OverlayLines(const Overlay& o) {
   std::snprintf(line, sizeof line, "last contact: %s",
                 o.last_contact[0] != '\0' ? o.last_contact : "none");
   lines.emplace_back(line);
+  if (o.status[0] != '\0') lines.emplace_back(o.status);
   if (o.hud) {
     lines.push_back("speed " + HudSpeedText(o));
     if (o.throttle_locked) lines.emplace_back("THROTTLE LOCKED");
@@ -344,6 +361,7 @@ struct Renderer::Gl {
   /// Where the overlay has anything: only these are blended (a software
   /// rasteriser pays for every blended pixel).
   std::vector<cv::Rect> overlay_rects;
+  Eigen::Matrix4f projection;
   Eigen::Matrix4f view_projection;
 };
 
@@ -404,9 +422,8 @@ Renderer::Renderer(int width, int height, const ScreenPlacement& screen)
   glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, width, height, 0, GL_BGRA, GL_UNSIGNED_BYTE,
                g.overlay.data);
 
-  g.view_projection =
-      Perspective(kFovYDeg, static_cast<float>(width) / static_cast<float>(height), kNear, kFar) *
-      LookAt(kEye, kTarget, Eigen::Vector3f::UnitZ());
+  g.projection = Perspective(kFovYDeg, static_cast<float>(width) / static_cast<float>(height), kNear, kFar);
+  g.view_projection = g.projection * LookAt(kEye, kTarget, Eigen::Vector3f::UnitZ());
   glViewport(0, 0, width, height);
 }
 
@@ -426,10 +443,15 @@ std::array<std::array<double, 3>, 4> Renderer::ScreenCorners() const {
   const auto& c = screen_.centre;
   const double hw = screen_.width / 2.0;
   const double hh = hw * screen_aspect_;
-  return {{{c[0], c[1] + hw, c[2] + hh},
-           {c[0], c[1] - hw, c[2] + hh},
-           {c[0], c[1] - hw, c[2] - hh},
-           {c[0], c[1] + hw, c[2] - hh}}};
+  std::array<std::array<double, 3>, 4> corners{{{c[0], c[1] + hw, c[2] + hh},
+                                                {c[0], c[1] - hw, c[2] + hh},
+                                                {c[0], c[1] - hw, c[2] - hh},
+                                                {c[0], c[1] + hw, c[2] - hh}}};
+  if (gaze_.tracked) {
+    const Eigen::Quaternionf turn = Turn(gaze_.screen_pan, gaze_.screen_tilt);
+    for (auto& corner : corners) corner = AboutEye(turn, corner);
+  }
+  return corners;
 }
 
 bool Renderer::Project(const std::array<double, 3>& point, double& px, double& py) const {
@@ -447,6 +469,20 @@ bool Renderer::Project(const std::array<double, 3>& point, double& px, double& p
 
 void Renderer::Draw(const ViewModel& model, double t_s) {
   Gl& g = *gl_;
+  // A tracked gaze turns the view with the head and the screen with the camera.
+  const bool was_tracked = gaze_.tracked;
+  gaze_ = model.gaze;
+  if (gaze_.tracked || was_tracked) {
+    // A tracked head looks level when it looks ahead (a pilot's eyes, not a
+    // desk's): the screen should hang at the eye's height in front of it.
+    const Eigen::Vector3f target =
+        gaze_.tracked ? Eigen::Vector3f(kEye + Turn(gaze_.look_pan, gaze_.look_tilt) * Eigen::Vector3f::UnitX())
+                      : kTarget;
+    g.view_projection = g.projection * LookAt(kEye, target, Eigen::Vector3f::UnitZ());
+  }
+  const Eigen::Quaternionf screen_turn =
+      gaze_.tracked ? Turn(gaze_.screen_pan, gaze_.screen_tilt) : Eigen::Quaternionf::Identity();
+  const std::array<double, 4> screen_q{screen_turn.w(), screen_turn.x(), screen_turn.y(), screen_turn.z()};
   glViewport(0, 0, width_, height_);
   glClearColor(0.55f, 0.62f, 0.70f, 1.0f);  // a light room
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
@@ -494,17 +530,19 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
   const std::array<double, 4> identity{1, 0, 0, 0};
   draw(g.cube, {0.3, 0.0, -0.32}, identity, {3.0f, 3.0f, 0.01f},
        {0.35f, 0.36f, 0.38f, 1});  // floor
-  const auto corners = ScreenCorners();
-  const double screen_h = corners[0][2] - corners[3][2];
-  const auto& sc = screen_.centre;
+  const double screen_h = screen_.width * screen_aspect_;
+  const auto& placed = screen_.centre;
+  const std::array<double, 3> sc = AboutEye(screen_turn, placed);
   // The screen's bezel, just behind it.
-  draw(g.cube, {sc[0] + 0.012, sc[1], sc[2]}, identity,
+  draw(g.cube, AboutEye(screen_turn, {placed[0] + 0.012, placed[1], placed[2]}), screen_q,
        {0.01f, static_cast<float>(screen_.width / 2 + 0.02),
         static_cast<float>(screen_h / 2 + 0.02)},
        {0.08f, 0.08f, 0.09f, 1});
-  draw(g.cube, {sc[0] + 0.03, sc[1], (sc[2] - screen_h / 2 + (-0.32)) / 2}, identity,
-       {0.015f, 0.03f, static_cast<float>((sc[2] - screen_h / 2 + 0.32) / 2)},
-       {0.1f, 0.1f, 0.1f, 1});  // its stand
+  if (!gaze_.tracked) {  // a screen that turns with the camera hangs in the air
+    draw(g.cube, {sc[0] + 0.03, sc[1], (sc[2] - screen_h / 2 + (-0.32)) / 2}, identity,
+         {0.015f, 0.03f, static_cast<float>((sc[2] - screen_h / 2 + 0.32) / 2)},
+         {0.1f, 0.1f, 0.1f, 1});  // its stand
+  }
 
   for (const Shape& s : model.shapes) {
     const auto& z = s.size;
@@ -580,7 +618,7 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
   {
     const double hw = screen_.width / 2.0;
     const Eigen::Matrix4f m = Model(
-        sc, identity, {1.0f, static_cast<float>(hw), static_cast<float>(hw * screen_aspect_)});
+        sc, screen_q, {1.0f, static_cast<float>(hw), static_cast<float>(hw * screen_aspect_)});
     const Eigen::Matrix4f mvp = g.view_projection * m;
     glUniformMatrix4fv(g.tex_mvp, 1, GL_FALSE, mvp.data());
     g.screen.Draw();
@@ -608,7 +646,7 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
     const int font = cv::FONT_HERSHEY_SIMPLEX;
     const double scale = 0.55 * height_ / 576.0;
     const int line_h = static_cast<int>(26 * height_ / 576.0);
-    const int panel_lines = 4;
+    const int panel_lines = o.status[0] != '\0' ? 5 : 4;
     const cv::Rect panel(8, 8, static_cast<int>(width_ * 0.36), line_h * panel_lines + 12);
     cv::rectangle(ov, panel, Bgra(0, 0, 0, 150), cv::FILLED);
     g.overlay_rects.push_back(panel);

@@ -10,6 +10,8 @@
 #include <string>
 #include <thread>
 
+#include "haptel/core/blimp_command.hpp"
+
 namespace haptel::view {
 
 using interfaces::InputState;
@@ -126,8 +128,22 @@ void SdlInput::OnKey(const SDL_KeyboardEvent& key, bool down) {
     state_.interface_request = key.keysym.scancode - SDL_SCANCODE_F1;
     ++state_.interface_requests;
   }
+  if (down && key.keysym.scancode == SDL_SCANCODE_HOME) {
+    state_.head_pan = 0.0;
+    state_.head_tilt = 0.0;
+  }
   // Escape ends the run as closing the window does: what was measured is kept.
   if (down && key.keysym.scancode == SDL_SCANCODE_ESCAPE) state_.quit = true;
+}
+
+void SdlInput::OnMouseMotion(const SDL_MouseMotionEvent& motion) {
+  // Dragging right looks right (pan is positive left); dragging up looks up
+  // (SDL's y grows downward). The range is the pilot camera's: a head that
+  // could turn past it would have to drag back over nothing.
+  state_.head_pan = std::clamp(state_.head_pan - motion.xrel * kHeadRadPerPixel, -kBlimpCameraPanMax,
+                               kBlimpCameraPanMax);
+  state_.head_tilt = std::clamp(state_.head_tilt - motion.yrel * kHeadRadPerPixel, -kBlimpCameraTiltMax,
+                                kBlimpCameraTiltMax);
 }
 
 void SdlInput::OnControllerAdded(int device_index) {
@@ -153,6 +169,10 @@ void SdlInput::OnEvent(const SDL_Event& event) {
     case SDL_KEYDOWN:
     case SDL_KEYUP:
       OnKey(event.key, event.type == SDL_KEYDOWN);
+      break;
+    case SDL_MOUSEMOTION:
+      if (event.motion.state == 0) return;  // no button held: the pointer only passes
+      OnMouseMotion(event.motion);
       break;
     case SDL_CONTROLLERDEVICEADDED:
       OnControllerAdded(event.cdevice.which);  // a device index here

@@ -41,6 +41,13 @@ struct InputState {
   std::array<double, static_cast<int>(PadAxis::kCount)> pad_axes{};
   std::array<bool, static_cast<int>(PadButton::kCount)> pad_buttons{};
 
+  // --- Mouse-look: where the person's head turns (the view's window). ---
+  /// Dragging with a mouse button held turns the head (rad; pan positive
+  /// left, tilt positive up, within the pilot camera's range); Home looks
+  /// straight ahead again. Interfaces with a camera head follow it.
+  double head_pan = 0.0;
+  double head_tilt = 0.0;
+
   // --- Session requests. ---
   /// The window was closed (or the person asked to quit).
   bool quit = false;

@@ -48,6 +48,9 @@ class SessionView final : public view::ViewSource {
 
   /// Session thread: the overlay for the next frames (a seqlock store: never waits).
   void Publish(const view::Overlay& overlay) { overlay_.Store(overlay); }
+  /// Session thread: where the head and the vehicle camera look (a tracked
+  /// gaze turns the view and the screen; the robot's view never sets one).
+  void Publish(const view::Gaze& gaze) { gaze_.Store(gaze); }
   /// View thread.
   void Fill(view::ViewModel& model) override;
   view::ViewStats Stats() const;
@@ -57,9 +60,17 @@ class SessionView final : public view::ViewSource {
  private:
   Parts parts_;
   Seqlock<view::Overlay> overlay_;
+  Seqlock<view::Gaze> gaze_;
   view::SdlInput input_;
   std::unique_ptr<view::View> view_;  // last: its thread uses the rest
 };
+
+/// The view's options for `setup`'s run: window or offscreen, the MP4, the
+/// title, and where the screen hangs.
+view::ViewOptions ViewOptionsFor(const SessionSetup& setup);
+
+/// Stops the view (finishing the MP4) and records its figures in `result`.
+void StopAndRecord(SessionView& view, SessionResult& result);
 
 /// The overlay the view shows, from the session loop's state: the lap clock,
 /// gates, the last contact, and the HUD exactly as the interface computed it

@@ -5,7 +5,9 @@
 ///
 /// The camera sits behind and above the device workspace looking forward and
 /// down, so the hands, the wheel and the lever are in the lower half and the
-/// screen fills the upper half. Everything is in the device frame (x forward,
+/// screen fills the upper half. With a tracked gaze (the blimp) the camera
+/// looks level and turns with the head, and the screen turns about the eye
+/// with the vehicle camera. Everything is in the device frame (x forward,
 /// y left, z up; metres). A Renderer needs a current GL 3.3 context on the
 /// calling thread for its whole life; it allocates its GL objects once.
 #include <array>
@@ -28,6 +30,10 @@ struct ScreenPlacement {
 /// The screen close before the eye, filling the picture: the camera's view
 /// with nothing in front of it (no hands to show).
 inline ScreenPlacement DirectViewScreen() { return {{0.35, 0.0, 0.10}, 1.05}; }
+
+/// For a tracked gaze (Gaze::tracked): the screen a metre straight ahead at
+/// the eye's height, square to the level look; the hands show below it.
+inline ScreenPlacement HeadTrackedScreen() { return {{0.55, 0.0, 0.30}, 0.90}; }
 
 /// The text lines the overlay shows for `overlay`, top to bottom: what the
 /// person reads (the renderer draws exactly these, so tests read them here).
@@ -59,11 +65,13 @@ class Renderer {
   /// into `rgba` (CV_8UC4, height×width): the recorder converts it later.
   void ReadPixelsRaw(cv::Mat& rgba) const;
 
-  /// Where a device-frame point lands in the image: pixels from the top-left
-  /// corner. False when the point is behind the camera.
+  /// Where a device-frame point lands in the image as last drawn (the view
+  /// turns with a tracked gaze): pixels from the top-left corner. False when
+  /// the point is behind the camera.
   bool Project(const std::array<double, 3>& point, double& px, double& py) const;
   /// The screen's corners now (top-left, top-right, bottom-right,
-  /// bottom-left as the operator sees them), device frame.
+  /// bottom-left as the operator sees them), device frame: turned about the
+  /// eye by the last drawn model's gaze when it is tracked.
   std::array<std::array<double, 3>, 4> ScreenCorners() const;
 
   int width() const { return width_; }
@@ -75,6 +83,7 @@ class Renderer {
   int height_;
   ScreenPlacement screen_;
   double screen_aspect_ = 3.0 / 4.0;  ///< height / width of the video
+  Gaze gaze_;                         ///< as last drawn
   std::unique_ptr<Gl> gl_;
 };
 

@@ -9,7 +9,9 @@
 /// Keys are read by scancode (physical position), so W/A/S/D sit where they
 /// do on a QWERTY keyboard whatever the layout: arrows or W/A/S/D drive,
 /// space stops, F1..F6 ask for interface 0..5 of the run, and closing the
-/// window asks to quit. The first game controller SDL reports is opened;
+/// window asks to quit. Dragging the mouse with a button held turns the
+/// head (mouse-look: kHeadRadPerPixel, clamped to the pilot camera's range);
+/// Home looks straight ahead. The first game controller SDL reports is opened;
 /// another one is ignored until it goes away.
 #include <SDL2/SDL.h>
 
@@ -51,6 +53,9 @@ class SdlInput : public EventSink {
   /// [-1, 1] (SDL's sign), triggers in [0, 1].
   static double AxisValue(int sdl_axis, int16_t raw);
 
+  /// Mouse-look's turn per pixel dragged: 300 px turns the head 90°.
+  static constexpr double kHeadRadPerPixel = 0.005236;
+
  private:
   /// Physical keys that drive; two keys map to each direction.
   enum Key : int {
@@ -66,6 +71,7 @@ class SdlInput : public EventSink {
     kKeyCount
   };
   void OnKey(const SDL_KeyboardEvent& key, bool down);
+  void OnMouseMotion(const SDL_MouseMotionEvent& motion);
   void OnControllerAdded(int device_index);
   void OnControllerRemoved(SDL_JoystickID instance);
   void ClearPad();

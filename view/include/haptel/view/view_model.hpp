@@ -58,6 +58,19 @@ struct Overlay {
   bool turn_right = false;
   bool throttle_locked = false;
   char message[96] = "";     ///< one line for the person (e.g. "grasp the wheel")
+  char status[64] = "";      ///< the vehicle's own line (the blimp: height, power); empty: none
+};
+
+/// A head-tracked view (the blimp's pilot camera, thesis 8.2.3): the view
+/// turns with the person's head, and the video screen hangs where the vehicle
+/// camera actually points, so the picture stays where it looks. Angles turn
+/// about the eye: pan positive left, tilt positive up, rad.
+struct Gaze {
+  bool tracked = false;      ///< false: the fixed view, the screen where it was placed
+  double look_pan = 0.0;     ///< the person's head
+  double look_tilt = 0.0;
+  double screen_pan = 0.0;   ///< the vehicle camera's direction as applied (lags the head by the link)
+  double screen_tilt = 0.0;
 };
 
 struct ViewModel {
@@ -66,6 +79,7 @@ struct ViewModel {
   std::vector<Shape> shapes;
   VideoImage video;
   Overlay overlay;
+  Gaze gaze;
 };
 
 }  // namespace haptel::view
