@@ -145,6 +145,10 @@ SessionResult RunBlimpSession(const SessionSetup& setup, const std::atomic<bool>
   link_options.decode_video = run.video_decode && DecodesVideo(setup.view);
   VehicleLink vehicle(link_options);
   rec.vehicle_pid = vehicle.pid();
+  if (setup.progress && setup.attach) {
+    log::Info("attached to vehicle '" + setup.vehicle.name + "' on domain " + std::to_string(run.link.domain_id) +
+              " (session " + std::to_string(vehicle.session()) + "): spawning none");
+  }
   if (setup.progress && vehicle.pid() != 0) {
     log::Info("vehicle '" + setup.vehicle.name + "' (" + setup.vehicle.kind + ") started, pid " +
               std::to_string(vehicle.pid()));
@@ -175,7 +179,7 @@ SessionResult RunBlimpSession(const SessionSetup& setup, const std::atomic<bool>
   int64_t next_command_ns = t0;
   int64_t next_progress_ns = t0 + SToNs(2.0);
   int64_t next_tick = t0;
-  VehicleHealth health(setup.vehicle.name, run.link.domain_id, run.vehicle_timeout_s);
+  VehicleHealth health(setup.vehicle.name, run.link.domain_id, vehicle.session(), run.vehicle_timeout_s);
   msg::BlimpState last;
   BlimpCommand command;
   RunTrace trace(rec);
@@ -204,7 +208,7 @@ SessionResult RunBlimpSession(const SessionSetup& setup, const std::atomic<bool>
     for (const auto& e : vehicle.blimp_inbox().Drain()) {
       const msg::BlimpState& s = e.state;
       const double ts = NsToS(e.received_ns - t0);
-      if (health.OnState(s.fault(), s.fault_message())) haptic.OnVehicleUp();
+      if (health.OnState(s, e.received_ns)) haptic.OnVehicleUp();
       last = s;
       if (!s.pose_valid()) continue;
       const BlimpObservation o = Observe(ts, s);

@@ -49,6 +49,9 @@ constexpr const char* kRunUsage =
     "  --vehicle FILE       vehicle configuration the spawned vehicle runs (overrides 'vehicle'),\n"
     "                       e.g. config/vehicles/can-robot-sim.yaml (the CAN code path)\n"
     "  --vehicle-name NAME  vehicle name in DDS topic names\n"
+    "  --attach             spawn no vehicle: drive the one already running under that name\n"
+    "                       on the domain (a haptel-vehicle started by hand, here or on\n"
+    "                       another host); --vehicle still says what kind it is\n"
     "  --domain N           DDS domain id\n"
     "  --database FILE      SQLite file for the results (overrides 'database')\n"
     "  --vehicle-timeout S  no vehicle state for S seconds: vehicle lost\n"
@@ -83,12 +86,13 @@ Args ParseRunArgs(int argc, const char* const* argv) {
   return Args(argc, argv,
               {"config", "track", "interface", "scene", "vehicle-name", "domain", "database", "vehicle-timeout",
                "trace", "operator", "device", "trace-in", "time-limit", "view", "record", "vehicle"},
-              {"json", "quiet"});
+              {"json", "quiet", "attach"});
 }
 
 SessionSetup RunSetupFromArgs(const Args& args) {
   SessionSetup setup;
   setup.progress = !args.Flag("quiet");
+  setup.attach = args.Flag("attach");
   setup.run = LoadRun(args.Value("config").value_or(ShippedFile("config/haptel.yaml").string()));
   if (auto track = args.Value("track")) setup.run.track = *track;
   if (auto name = args.Value("interface")) setup.run.interface = *name;
@@ -167,7 +171,7 @@ SessionSetup RunSetupFromArgs(const Args& args) {
     setup.blimp_interface = LoadBlimpGesture(InterfaceFile(setup.run, name));
     setup.calibration = DeviceCalibrationFor(setup.device);
     if (!setup.device.gravity.empty()) setup.gravity = LoadGravityGrid(setup.device.gravity);
-    setup.vehicle_program = ProgramDirectory() / "haptel-vehicle";
+    if (!setup.attach) setup.vehicle_program = ProgramDirectory() / "haptel-vehicle";
     return setup;
   }
   // The interface to start with: --interface, else the configuration's; a
@@ -205,7 +209,7 @@ SessionSetup RunSetupFromArgs(const Args& args) {
   if (any_physics || setup.scene) setup.physics = LoadPhysics(setup.run.physics);
   setup.calibration = DeviceCalibrationFor(setup.device);
   if (!setup.device.gravity.empty()) setup.gravity = LoadGravityGrid(setup.device.gravity);
-  setup.vehicle_program = ProgramDirectory() / "haptel-vehicle";
+  if (!setup.attach) setup.vehicle_program = ProgramDirectory() / "haptel-vehicle";
   return setup;
 }
 

@@ -42,6 +42,10 @@ std::string ToString(Outcome outcome) {
       return "interrupted";
     case Outcome::kCrashed:
       return "crashed";
+    case Outcome::kConflict:
+      return "conflict";
+    case Outcome::kRefused:
+      return "refused";
   }
   return "unknown";
 }
@@ -54,6 +58,9 @@ int ExitCode(Outcome outcome) {
     case Outcome::kVehicleDidNotStart:
     case Outcome::kDeviceLost:
       return 3;
+    case Outcome::kConflict:
+    case Outcome::kRefused:
+      return 2;
     default:
       return 1;
   }
@@ -203,6 +210,10 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   link_options.decode_video = run.video_decode && DecodesVideo(setup.view);
   VehicleLink vehicle(link_options);
   rec.vehicle_pid = vehicle.pid();
+  if (setup.progress && setup.attach) {
+    log::Info("attached to vehicle '" + setup.vehicle.name + "' on domain " + std::to_string(run.link.domain_id) +
+              " (session " + std::to_string(vehicle.session()) + "): spawning none");
+  }
   if (setup.progress && vehicle.pid() != 0) {
     log::Info("vehicle '" + setup.vehicle.name + "' started, pid " + std::to_string(vehicle.pid()));
   }
@@ -230,7 +241,7 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   int64_t next_progress_ns = t0 + SToNs(2.0);
   int64_t next_live_ns = t0;
   int64_t next_tick = t0;
-  VehicleHealth health(setup.vehicle.name, run.link.domain_id, run.vehicle_timeout_s);
+  VehicleHealth health(setup.vehicle.name, run.link.domain_id, vehicle.session(), run.vehicle_timeout_s);
   interfaces::VehicleFeedback feedback;
   interfaces::MotorCommand motors;
   uint32_t requests_seen = 0;
@@ -261,7 +272,7 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
     for (const auto& e : vehicle.inbox().Drain()) {
       const msg::VehicleState& s = e.state;
       const double ts = NsToS(e.received_ns - t0);
-      if (health.OnState(s.fault(), s.fault_message())) haptic.OnVehicleUp();
+      if (health.OnState(s, e.received_ns)) haptic.OnVehicleUp();
       const bool touching = s.bumper_left() || s.bumper_right();
       if (s.pose_valid()) {
         op->Observe({ts, s.x(), s.y(), s.heading(), s.bumper_left(), s.bumper_right()});

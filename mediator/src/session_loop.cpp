@@ -27,14 +27,28 @@ std::optional<LoopEnd> CheckOperatorSide(const std::atomic<bool>& interrupted, c
   return std::nullopt;
 }
 
-VehicleHealth::VehicleHealth(const std::string& vehicle_name, int domain_id, double vehicle_timeout_s,
-                             double startup_timeout_s)
+VehicleHealth::VehicleHealth(const std::string& vehicle_name, int domain_id, uint64_t session,
+                             double vehicle_timeout_s, double startup_timeout_s)
     : name_(vehicle_name),
       domain_id_(domain_id),
+      session_(session),
       timeout_s_(vehicle_timeout_s),
       startup_timeout_s_(startup_timeout_s) {}
 
-std::optional<LoopEnd> VehicleHealth::CheckProcess(VehicleLink& vehicle, int64_t now_ns) const {
+std::optional<LoopEnd> VehicleHealth::CheckProcess(VehicleLink& vehicle, int64_t now_ns) {
+  if (vehicle.VehiclesOnTopic() > 1) {
+    if (conflict_since_ns_ == 0) conflict_since_ns_ = now_ns;
+    if (NsToS(now_ns - conflict_since_ns_) >= kConflictAfter_s) {
+      return LoopEnd{Outcome::kConflict,
+                     std::to_string(vehicle.VehiclesOnTopic()) + " vehicles answer as '" + name_ + "' on domain " +
+                         std::to_string(domain_id_) +
+                         ": their states would mix and both would obey; give each vehicle its own name "
+                         "(haptel-vehicle --name, haptel run --vehicle-name) or domain (one that has just "
+                         "ended may take a few seconds to leave the domain)"};
+    }
+  } else {
+    conflict_since_ns_ = 0;
+  }
   if (vehicle.ProcessAlive()) return std::nullopt;
   return LoopEnd{up_ ? Outcome::kVehicleLost : Outcome::kVehicleDidNotStart,
                  "vehicle '" + name_ + "' lost: process " + std::to_string(vehicle.pid()) + " " +
@@ -42,8 +56,17 @@ std::optional<LoopEnd> VehicleHealth::CheckProcess(VehicleLink& vehicle, int64_t
                  up_ ? NsToS(now_ns - vehicle.last_received_ns()) : 0.0};
 }
 
-bool VehicleHealth::OnState(bool fault, const std::string& fault_message) {
+bool VehicleHealth::OnState(bool fault, const std::string& fault_message, uint64_t owner_session, const char* owner,
+                            int64_t now_ns) {
   if (fault && fault_.empty()) fault_ = fault_message;
+  if (owner_session != 0 && owner_session != session_) {
+    if (refused_since_ns_ == 0) {
+      refused_since_ns_ = now_ns;
+      owner_ = owner;
+    }
+  } else {
+    refused_since_ns_ = 0;  // ours, or free (our next command takes it)
+  }
   const bool first = !up_;
   up_ = true;
   return first;
@@ -54,6 +77,11 @@ std::optional<LoopEnd> VehicleHealth::CheckStates(const VehicleLink& vehicle, in
     std::string fault;
     fault.swap(fault_);
     return LoopEnd{Outcome::kVehicleLost, "vehicle '" + name_ + "' stopped itself: " + fault};
+  }
+  if (refused_since_ns_ != 0 && NsToS(now_ns - refused_since_ns_) >= kRefusedAfter_s) {
+    return LoopEnd{Outcome::kRefused, "vehicle '" + name_ + "' on domain " + std::to_string(domain_id_) +
+                                          " is driven by another operator (" + owner_ +
+                                          "): a vehicle obeys one operator at a time; wait until that run ends"};
   }
   if (up_) {
     const double silent_s = NsToS(now_ns - vehicle.last_received_ns());

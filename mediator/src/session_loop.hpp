@@ -32,28 +32,49 @@ std::optional<LoopEnd> CheckOperatorSide(const std::atomic<bool>& interrupted, c
 
 /// The vehicle's health as the loop sees it: its process, the faults its
 /// states report, their silence, and, until it first answers, the start-up
-/// timeout.
+/// timeout; and whether it is ours to drive: one vehicle under its name on
+/// the domain, obeying this run's session.
 class VehicleHealth {
  public:
-  VehicleHealth(const std::string& vehicle_name, int domain_id, double vehicle_timeout_s,
+  /// `session`: this run's (VehicleLink::session()).
+  VehicleHealth(const std::string& vehicle_name, int domain_id, uint64_t session, double vehicle_timeout_s,
                 double startup_timeout_s = 15.0);
   /// Whether a state has arrived yet.
   bool up() const { return up_; }
-  /// Before the states are drained: the spawned process still runs.
-  std::optional<LoopEnd> CheckProcess(VehicleLink& vehicle, int64_t now_ns) const;
-  /// For each state drained; true for the first one (the vehicle just came up).
-  bool OnState(bool fault, const std::string& fault_message);
-  /// After the states are drained: a fault one of them reported, their
-  /// silence, or no answer yet `t_s` after the start.
+  /// Before the states are drained: the spawned process still runs, and no
+  /// second vehicle answers under the same name (for kConflictAfter_s).
+  std::optional<LoopEnd> CheckProcess(VehicleLink& vehicle, int64_t now_ns);
+  /// For each state drained (received at `now_ns`); true for the first one
+  /// (the vehicle just came up).
+  template <typename State>
+  bool OnState(const State& s, int64_t now_ns) {
+    return OnState(s.fault(), s.fault_message(), s.owner_session(), s.owner().c_str(), now_ns);
+  }
+  bool OnState(bool fault, const std::string& fault_message, uint64_t owner_session, const char* owner,
+               int64_t now_ns);
+  /// After the states are drained: a fault one of them reported, another
+  /// session owning the vehicle (for kRefusedAfter_s), their silence, or no
+  /// answer yet `t_s` after the start.
   std::optional<LoopEnd> CheckStates(const VehicleLink& vehicle, int64_t now_ns, double t_s);
+
+  /// A second vehicle must answer this long before it is a conflict
+  /// (discovery is not atomic), and another owner hold the vehicle this
+  /// long before this run is refused (a previous run's release may still be
+  /// on its way). Both well within a second.
+  static constexpr double kConflictAfter_s = 0.3;
+  static constexpr double kRefusedAfter_s = 0.5;
 
  private:
   std::string name_;
   int domain_id_;
+  uint64_t session_;
   double timeout_s_;
   double startup_timeout_s_;
   bool up_ = false;
   std::string fault_;  ///< the first fault reported since the last check
+  int64_t conflict_since_ns_ = 0;  ///< 0: one vehicle (or none) answers
+  int64_t refused_since_ns_ = 0;   ///< 0: the vehicle is ours or free
+  std::string owner_;              ///< who holds it, while refused_since_ns_ is set
 };
 
 /// The run's trace in the record: distance flown or driven, the path every

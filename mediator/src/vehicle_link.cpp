@@ -1,6 +1,11 @@
 #include "haptel/mediator/vehicle_link.hpp"
 
+#include <pwd.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cstdlib>
+#include <random>
 
 #include "haptel/core/clock.hpp"
 
@@ -76,7 +81,39 @@ template class StateInboxOf<msg::VehicleState>;
 template class StateInboxOf<msg::BlimpState>;
 
 
-VehicleLink::VehicleLink(const VehicleLinkOptions& options) : options_(options) {
+namespace {
+
+/// A random session id, never 0.
+uint64_t NewSession() {
+  std::random_device random;
+  uint64_t id = 0;
+  while (id == 0) id = (static_cast<uint64_t>(random()) << 32) ^ random();
+  return id;
+}
+
+/// "haptel run, user@host pid N": what another operator is told of this one.
+std::string OperatorName() {
+  char host[64] = "?";
+  gethostname(host, sizeof host - 1);
+  const char* user = std::getenv("USER");
+  if (user == nullptr) {
+    const passwd* entry = getpwuid(getuid());
+    if (entry != nullptr) user = entry->pw_name;
+  }
+  std::string name = "haptel run, " + std::string(user != nullptr ? user : "?") + "@" + host + " pid " +
+                     std::to_string(getpid());
+  if (name.size() > 63) name.resize(63);
+  return name;
+}
+
+}  // namespace
+
+VehicleLink::VehicleLink(const VehicleLinkOptions& options)
+    : options_(options), session_(NewSession()), operator_name_(OperatorName()) {
+  command_.session(session_);
+  command_.operator_name(operator_name_);
+  blimp_command_.session(session_);
+  blimp_command_.operator_name(operator_name_);
   if (!options_.program.empty()) {
     process_ = std::make_unique<ChildProcess>(
         options_.program.string(),
@@ -129,9 +166,21 @@ void VehicleLink::Send(const BlimpCommand& command) {
 void VehicleLink::Stop() {
   if (stopped_) return;
   stopped_ = true;
-  Send(0.0, 0.0);
-  Send(BlimpCommand{});
+  // The last commands stop the vehicle and release it for the next operator
+  // (twice: they are best effort; a lost release frees it after
+  // CommandOwner::kFreeAfter_s anyway).
+  command_.release(true);
+  blimp_command_.release(true);
+  for (int i = 0; i < 2; ++i) {
+    Send(0.0, 0.0);
+    Send(BlimpCommand{});
+  }
   if (process_) process_->Terminate();
+}
+
+int VehicleLink::VehiclesOnTopic() const {
+  if (blimp()) return std::max(blimp_states_->matched(), blimp_commands_->matched());
+  return std::max(states_->matched(), commands_->matched());
 }
 
 bool VehicleLink::ProcessAlive() { return !process_ || process_->Alive(); }

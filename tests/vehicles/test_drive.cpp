@@ -2,6 +2,7 @@
 #include <cmath>
 #include <limits>
 
+#include "alloc_counter.hpp"
 #include "haptel/vehicles/command_intake.hpp"
 #include "haptel/vehicles/drive.hpp"
 
@@ -88,6 +89,61 @@ TEST_CASE("command intake: malformed and stale commands are counted and dropped,
   CHECK(in.Offer(true, 1, 0, 5, 400 * ms));
   CHECK_FALSE(in.Poll(410 * ms));
   CHECK(in.applied().command == 5);
+}
+
+TEST_CASE("command intake: one operator session at a time; a release or the owner's silence frees the vehicle") {
+  CommandIntake<int> in(0.25);
+  const int64_t ms = 1'000'000;
+  const CommandSender ana{11, "ana's run", false};
+  const CommandSender bo{22, "bo's run", false};
+  CHECK(in.owner().session == 0);
+  // The first session takes the vehicle; the state can name it.
+  CHECK(in.Offer(true, ana, 1, 0, 1, 10 * ms));
+  CHECK(in.owner().session == 11);
+  CHECK(std::string(in.owner().name) == "ana's run");
+  // Another session's commands are refused and counted, newer or not.
+  CHECK_FALSE(in.Offer(true, bo, 50, 0, 2, 20 * ms));
+  CHECK(in.Offer(true, ana, 2, 0, 3, 30 * ms));
+  CHECK_FALSE(in.Offer(true, bo, 51, 0, 4, 40 * ms));
+  CHECK(in.refused() == 2);
+  CHECK(in.stale() == 0);
+  CHECK_FALSE(in.Poll(45 * ms));
+  CHECK(in.applied().command == 3);
+  // A malformed command is malformed whoever sends it; it does not claim.
+  CHECK_FALSE(in.Offer(false, bo, 52, 0, 5, 50 * ms));
+  CHECK(in.malformed() == 1);
+  CHECK(in.owner().session == 11);
+
+  // The owner's last command releases it: the next session takes it at
+  // once, its sequence from 1 (not stale against the last owner's).
+  CHECK(in.Offer(true, {11, "ana's run", true}, 3, 0, 0, 60 * ms));
+  CHECK(in.owner().session == 0);
+  CHECK(in.Offer(true, bo, 1, 0, 6, 61 * ms));
+  CHECK(in.owner().session == 22);
+  CHECK(std::string(in.owner().name) == "bo's run");
+  CHECK(in.stale() == 0);
+
+  // An owner that falls silent keeps the vehicle through a link's hiccup...
+  CHECK_FALSE(in.Offer(true, ana, 1, 0, 7, 61 * ms + haptel::SToNs(1.0)));
+  CHECK(in.owner().session == 22);
+  // ...and loses it after CommandOwner::kFreeAfter_s.
+  CHECK(in.Offer(true, ana, 1, 0, 8, 62 * ms + haptel::SToNs(CommandOwner::kFreeAfter_s)));
+  CHECK(in.owner().session == 11);
+  CHECK(in.refused() == 3);
+}
+
+TEST_CASE("command intake: ownership allocates nothing on the DDS thread", "[alloc]") {
+  CommandIntake<int> in(0.25);
+  const CommandSender ana{11, "ana's run", false};
+  const CommandSender bo{22, "bo's run", false};
+  in.Offer(true, ana, 1, 0, 1, 1);
+  const uint64_t before = haptel::test::ThreadAllocations();
+  for (uint64_t i = 2; i < 1000; ++i) {
+    in.Offer(true, ana, i, 0, 1, static_cast<int64_t>(i) * 1000);
+    in.Offer(true, bo, i, 0, 1, static_cast<int64_t>(i) * 1000);
+    if (i % 100 == 0) in.Offer(true, {11, "ana's run", true}, i, 0, 0, static_cast<int64_t>(i) * 1000 + 1);
+  }
+  CHECK(haptel::test::ThreadAllocations() == before);
 }
 
 TEST_CASE("control step: nominal first, then the time since the last tick, at most 50 ms") {

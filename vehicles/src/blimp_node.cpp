@@ -73,7 +73,8 @@ void BlimpNode::Stop() {
 
 void BlimpNode::OnCommand(const msg::BlimpCommand& cmd) {
   const BlimpCommand command = FromMessage(cmd);
-  commands_.Offer(InRange(command, kRangeSlack), cmd.seq(), cmd.sent_ns(), Clamped(command), MonotonicNs());
+  commands_.Offer(InRange(command, kRangeSlack), {cmd.session(), cmd.operator_name().c_str(), cmd.release()},
+                  cmd.seq(), cmd.sent_ns(), Clamped(command), MonotonicNs());
 }
 
 void BlimpNode::ControlTick(int64_t now_ns) {
@@ -139,6 +140,10 @@ void BlimpNode::PublishState(int64_t now_ns) {
   m.last_command_sent_ns(commands_.applied().sent_ns);
   m.last_command_age_ns(commands_.AppliedAgeNs(now_ns));
   m.commands_received(commands_.accepted());
+  const CommandOwnerInfo owner = commands_.owner();
+  m.owner_session(owner.session);
+  m.owner(owner.name);
+  m.commands_refused(commands_.refused());
   const bool failed = failed_.load();
   m.fault(s.fault || failed);
   m.fault_message(failed ? failure_ : s.fault_message);

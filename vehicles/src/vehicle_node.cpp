@@ -92,7 +92,8 @@ void VehicleNode::Stop() {
 void VehicleNode::OnCommand(const msg::DriveCommand& cmd) {
   const bool valid = std::isfinite(cmd.left()) && std::isfinite(cmd.right()) &&
                      std::abs(cmd.left()) <= kMaxCommand && std::abs(cmd.right()) <= kMaxCommand;
-  commands_.Offer(valid, cmd.seq(), cmd.sent_ns(), {cmd.left(), cmd.right()}, MonotonicNs());
+  commands_.Offer(valid, {cmd.session(), cmd.operator_name().c_str(), cmd.release()}, cmd.seq(), cmd.sent_ns(),
+                  {cmd.left(), cmd.right()}, MonotonicNs());
 }
 
 void VehicleNode::ControlTick(int64_t now_ns) {
@@ -129,6 +130,10 @@ void VehicleNode::PublishState(int64_t now_ns) {
   m.last_command_sent_ns(commands_.applied().sent_ns);
   m.last_command_age_ns(commands_.AppliedAgeNs(now_ns));
   m.commands_received(commands_.accepted());
+  const CommandOwnerInfo owner = commands_.owner();
+  m.owner_session(owner.session);
+  m.owner(owner.name);
+  m.commands_refused(commands_.refused());
   m.fault(s.fault);
   m.fault_message(s.fault_message);
   state_writer_->Write(m);

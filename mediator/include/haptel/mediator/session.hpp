@@ -69,6 +69,10 @@ struct SessionSetup {
   std::optional<GravityGridData> gravity;
   /// haptel-vehicle to spawn; empty: the vehicle runs elsewhere, do not spawn.
   std::filesystem::path vehicle_program;
+  /// Drive a vehicle already running on the domain (`--attach`): nothing is
+  /// spawned (vehicle_program is empty) and nothing is stopped at the end
+  /// but this run's hold on it.
+  bool attach = false;
   bool progress = true;  ///< progress lines on stderr
   /// Record the device's readings here for the `replay` driver (empty: none).
   std::filesystem::path trace;
@@ -107,9 +111,13 @@ enum class Outcome {
   kAborted,      ///< the person closed the window or lost their controller
   kInterrupted,  ///< SIGINT / SIGTERM / SIGHUP
   kCrashed,      ///< the blimp hit a building or the ground too fast
+  kConflict,     ///< a second vehicle publishes under the same name on the domain
+  kRefused,      ///< the vehicle obeys another operator session
 };
 std::string ToString(Outcome outcome);
-/// The process exit code for an outcome: 0 completed, 3 lost vehicle or device, 1 otherwise.
+/// The process exit code for an outcome: 0 completed, 3 lost vehicle or
+/// device, 2 a link conflict or refusal (nothing of the vehicle was ours to
+/// drive), 1 otherwise.
 int ExitCode(Outcome outcome);
 /// The exit code, whatever the outcome, of a run the database did not take
 /// at the end (its results went to a fallback file; the JSON line says which).

@@ -125,6 +125,17 @@ class VehicleLink {
   const std::string& name() const { return options_.vehicle.name; }
   int domain() const { return options_.link.domain_id; }
 
+  /// This run's operator session (random, never 0): every command carries
+  /// it, and the vehicle obeys one session at a time (its state names the
+  /// owner). The last command, in Stop, releases the vehicle.
+  uint64_t session() const { return session_; }
+  /// Who this session is, as the vehicle names its owner to others.
+  const std::string& operator_name() const { return operator_name_; }
+  /// How many vehicles answer under this name: the participants writing its
+  /// state or reading its commands (DDS discovery). More than one is a
+  /// conflict: two vehicles named alike on one domain.
+  int VehiclesOnTopic() const;
+
  private:
   VehicleLinkOptions options_;
   std::unique_ptr<ChildProcess> process_;
@@ -139,6 +150,8 @@ class VehicleLink {
   std::unique_ptr<VideoReceiver> video_;
   msg::DriveCommand command_;
   uint64_t seq_ = 0;
+  uint64_t session_ = 0;
+  std::string operator_name_;
   bool stopped_ = false;
 };
 

@@ -1,13 +1,15 @@
 #pragma once
 /// @file How commands reach a vehicle node's control loop — the same for
 /// every vehicle, whatever its command type: the DDS thread drops a
-/// malformed command (counted) and a stale one (counted, CommandSequence)
-/// and hands the rest over through a seqlock; the control thread takes the
+/// malformed command (counted), one from an operator session other than the
+/// vehicle's owner (counted, CommandOwner) and a stale one (counted,
+/// CommandSequence) and hands the rest over through a seqlock; the control thread takes the
 /// newest, feeds the watchdog with its arrival time and asks it whether the
 /// vehicle is to be made safe. Allocation-free on both threads.
 #include <algorithm>
 #include <atomic>
 #include <cstdint>
+#include <cstdio>
 
 #include "haptel/core/clock.hpp"
 #include "haptel/core/seqlock.hpp"
@@ -37,6 +39,70 @@ class CommandSequence {
   int64_t last_ns_ = 0;
 };
 
+/// Who sent a command: the operator session (a random id, one per run) and
+/// its operator's name; `release` on a session's last command frees the
+/// vehicle at once.
+struct CommandSender {
+  uint64_t session = 0;
+  const char* name = "";
+  bool release = false;
+};
+
+/// The session a vehicle obeys, as its state reports it.
+struct CommandOwnerInfo {
+  uint64_t session = 0;  ///< 0: nobody owns the vehicle
+  char name[64] = "";
+};
+
+/// One operator session at a time drives a vehicle. The first session to
+/// send takes it and keeps it while its commands keep coming; it is free
+/// again when that session releases it (its last command says so) or falls
+/// silent for `free_after_s` — longer than any watchdog, so a link's hiccup
+/// does not hand the vehicle to somebody else. Other sessions' commands are
+/// refused (counted); the state names the owner so their operator can say
+/// who has it. Called from the DDS thread only; owner() from any thread.
+class CommandOwner {
+ public:
+  static constexpr double kFreeAfter_s = 2.0;
+  explicit CommandOwner(double free_after_s = kFreeAfter_s) : free_after_ns_(SToNs(free_after_s)) {}
+
+  enum class Verdict {
+    kOwner,     ///< the owner's command (it kept or just took the vehicle)
+    kNewOwner,  ///< the owner's command, and the owner changed with it
+    kRefused,   ///< another session owns the vehicle
+  };
+  Verdict Admit(const CommandSender& from, int64_t now_ns) {
+    const bool free = !owned_ || now_ns - last_ns_ > free_after_ns_;
+    if (!free && from.session != session_) {
+      refused_.fetch_add(1, std::memory_order_relaxed);
+      return Verdict::kRefused;
+    }
+    const bool changed = !owned_ || from.session != session_;
+    session_ = from.session;
+    last_ns_ = now_ns;
+    owned_ = !from.release;
+    if (changed || from.release) {
+      CommandOwnerInfo info;
+      if (owned_) {
+        info.session = session_;
+        std::snprintf(info.name, sizeof info.name, "%s", from.name != nullptr ? from.name : "");
+      }
+      info_.Store(info);
+    }
+    return changed ? Verdict::kNewOwner : Verdict::kOwner;
+  }
+  CommandOwnerInfo owner() const { return info_.Load(); }
+  uint64_t refused() const { return refused_.load(); }
+
+ private:
+  int64_t free_after_ns_;
+  bool owned_ = false;
+  uint64_t session_ = 0;
+  int64_t last_ns_ = 0;
+  Seqlock<CommandOwnerInfo> info_;
+  std::atomic<uint64_t> refused_{0};
+};
+
 /// A command as the control loop applies it, with what the state echoes.
 template <typename Command>
 struct ReceivedCommand {
@@ -51,15 +117,23 @@ class CommandIntake {
  public:
   /// The watchdog's timeout, also the sequence's restart age (s, > 0).
   explicit CommandIntake(double watchdog_timeout_s)
-      : sequence_(watchdog_timeout_s), watchdog_(watchdog_timeout_s), applied_version_(latest_.Version()) {}
+      : restart_after_s_(watchdog_timeout_s),
+        sequence_(watchdog_timeout_s),
+        watchdog_(watchdog_timeout_s),
+        applied_version_(latest_.Version()) {}
 
-  /// DDS thread: a command received at `now_ns`; `valid` is its range check.
-  /// Returns whether it was taken.
-  bool Offer(bool valid, uint64_t seq, int64_t sent_ns, const Command& command, int64_t now_ns) {
+  /// DDS thread: a command received at `now_ns` from `from`; `valid` is its
+  /// range check. Returns whether it was taken.
+  bool Offer(bool valid, const CommandSender& from, uint64_t seq, int64_t sent_ns, const Command& command,
+             int64_t now_ns) {
     if (!valid) {
       malformed_.fetch_add(1, std::memory_order_relaxed);
       return false;
     }
+    const CommandOwner::Verdict verdict = owner_.Admit(from, now_ns);
+    if (verdict == CommandOwner::Verdict::kRefused) return false;
+    // A new owner's sequence starts afresh, whatever the last one's reached.
+    if (verdict == CommandOwner::Verdict::kNewOwner) sequence_ = CommandSequence(restart_after_s_);
     if (!sequence_.Accept(seq, now_ns)) {
       stale_.fetch_add(1, std::memory_order_relaxed);
       return false;
@@ -67,6 +141,10 @@ class CommandIntake {
     accepted_.fetch_add(1, std::memory_order_relaxed);
     latest_.Store({seq, sent_ns, now_ns, command});
     return true;
+  }
+  /// Offer from an anonymous session (session 0).
+  bool Offer(bool valid, uint64_t seq, int64_t sent_ns, const Command& command, int64_t now_ns) {
+    return Offer(valid, CommandSender{}, seq, sent_ns, command, now_ns);
   }
 
   /// Control thread, once a tick: takes the newest command and checks the
@@ -94,10 +172,16 @@ class CommandIntake {
   uint64_t accepted() const { return accepted_.load(); }
   uint64_t malformed() const { return malformed_.load(); }
   uint64_t stale() const { return stale_.load(); }
+  /// Commands from a session that did not own the vehicle: dropped.
+  uint64_t refused() const { return owner_.refused(); }
+  /// The session the vehicle obeys now.
+  CommandOwnerInfo owner() const { return owner_.owner(); }
   uint64_t watchdog_trips() const { return trips_.load(); }
   bool watchdog_expired() const { return expired_.load(); }
 
  private:
+  double restart_after_s_;
+  CommandOwner owner_;        // DDS thread
   CommandSequence sequence_;  // DDS thread
   Seqlock<ReceivedCommand<Command>> latest_;
   CommandWatchdog watchdog_;  // control thread

@@ -28,6 +28,7 @@ struct NodeCounters {
   uint64_t commands_accepted = 0;
   uint64_t commands_malformed = 0;  ///< non-finite or out-of-range values: dropped
   uint64_t commands_stale = 0;      ///< older sequence than one already applied: dropped
+  uint64_t commands_refused = 0;    ///< from a session that did not own the vehicle: dropped
   uint64_t watchdog_trips = 0;
   uint64_t states_published = 0;
   uint64_t frames_published = 0;
@@ -46,6 +47,7 @@ NodeCounters MakeNodeCounters(const CommandIntake<Command>& commands, const Came
   c.commands_accepted = commands.accepted();
   c.commands_malformed = commands.malformed();
   c.commands_stale = commands.stale();
+  c.commands_refused = commands.refused();
   c.watchdog_trips = commands.watchdog_trips();
   c.watchdog_expired = commands.watchdog_expired();
   c.states_published = states_published;
