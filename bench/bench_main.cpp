@@ -14,6 +14,7 @@
 #include "skip_bench.hpp"
 #include "stability_bench.hpp"
 #include "blimp_bench.hpp"
+#include "link_bench.hpp"
 #include "view_bench.hpp"
 
 using namespace haptel::bench;
@@ -39,6 +40,8 @@ constexpr Usage kUsage[] = {
     {"view", "[--seconds S] [--json]",
      "the operator's view: frame rate, CPU, video-to-screen, servo beside it"},
     {"blimp", "[--vehicle FILE] [--json]", "airship model: integrators x steps, error against CPU; physics checks"},
+    {"link", "[--seconds S] [--track FILE] [--delays MS,...] [--losses PERCENT,...] [--json]",
+     "DDS round trip against raw Fast DDS; the lap against the link's delay and loss"},
 };
 
 using BenchMain = int (*)(int argc, const char* const* argv);
@@ -49,7 +52,7 @@ struct Bench {
 constexpr Bench kBenches[] = {
     {"servo", BenchServoMain},         {"gravity", BenchGravityMain}, {"skip", BenchSkipMain},
     {"physics", BenchPhysicsMain},     {"stability", BenchStabilityMain}, {"view", BenchViewMain},
-    {"blimp", BenchBlimpMain},
+    {"blimp", BenchBlimpMain},         {"link", BenchLinkMain},
 };
 
 std::string UsageText(const std::string& only) {

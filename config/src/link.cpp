@@ -2,7 +2,12 @@
 
 #include <arpa/inet.h>
 
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
 #include "haptel/config/check.hpp"
+#include "haptel/core/args.hpp"
 
 namespace haptel {
 
@@ -27,6 +32,98 @@ void LinkConfig::ValidateOrThrow() const {
   CheckIpv4List("interfaces", interfaces);
   CheckIpv4List("peers", peers);
   check::Number("command_deadline_s", command_deadline_s, 0.001, 10.0);
+  check::Nested("fault", fault);
+}
+
+void LinkFault::ValidateOrThrow() const {
+  check::Number("delay_s", delay_s, 0.0, 10.0);
+  check::Number("jitter_s", jitter_s, 0.0, 10.0);
+  check::Number("loss", loss, 0.0, 0.99);
+}
+
+namespace {
+
+/// "100ms", "0.1s", "250us" -> seconds; throws naming `part`.
+double ParseDuration(const std::string& part, const std::string& value) {
+  size_t used = 0;
+  double number = 0.0;
+  try {
+    number = std::stod(value, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  const std::string unit = value.substr(used);
+  double scale = 0.0;
+  if (unit == "s") scale = 1.0;
+  if (unit == "ms") scale = 1e-3;
+  if (unit == "us") scale = 1e-6;
+  if (used == 0 || scale == 0.0 || !std::isfinite(number) || number < 0.0) {
+    throw std::invalid_argument("a time >= 0 with its unit, such as 100ms, 0.1s or 250us (not '" + part + "')");
+  }
+  return number * scale;
+}
+
+/// "5%" or "0.05" -> fraction; throws naming `part`.
+double ParseFraction(const std::string& part, const std::string& value) {
+  size_t used = 0;
+  double number = -1.0;
+  try {
+    number = std::stod(value, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  const std::string rest = value.substr(used);
+  if (rest == "%") number /= 100.0;
+  if (used == 0 || (!rest.empty() && rest != "%") || !(number >= 0.0 && number <= 0.99)) {
+    throw std::invalid_argument("a loss from 0 to 99%, such as 5% or 0.05 (not '" + part + "')");
+  }
+  return number;
+}
+
+}  // namespace
+
+LinkFault ParseLinkFault(const std::string& text) {
+  LinkFault fault;
+  fault.enabled = true;
+  if (text == "on") return fault;
+  size_t start = 0;
+  while (start <= text.size()) {
+    const size_t comma = text.find(',', start);
+    const std::string part = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    const size_t eq = part.find('=');
+    const std::string key = part.substr(0, eq);
+    const std::string value = eq == std::string::npos ? "" : part.substr(eq + 1);
+    if (key == "delay" && eq != std::string::npos) {
+      fault.delay_s = ParseDuration(part, value);
+    } else if (key == "jitter" && eq != std::string::npos) {
+      fault.jitter_s = ParseDuration(part, value);
+    } else if (key == "loss" && eq != std::string::npos) {
+      fault.loss = ParseFraction(part, value);
+    } else {
+      throw std::invalid_argument("delay=TIME, jitter=TIME or loss=PERCENT, comma-separated (e.g. "
+                                  "delay=100ms,jitter=20ms,loss=5%), or 'on' (not '" + part + "')");
+    }
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  if (fault.delay_s > 10.0 || fault.jitter_s > 10.0) {
+    throw std::invalid_argument("a delay and jitter of at most 10 s (not '" + text + "')");
+  }
+  return fault;
+}
+
+LinkFault ParseLinkFaultOption(const std::string& text) {
+  try {
+    return ParseLinkFault(text);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("option --link-fault: expected ") + e.what());
+  }
+}
+
+std::string LinkFaultText(const LinkFault& fault) {
+  char text[128];
+  std::snprintf(text, sizeof text, "delay=%.9gs,jitter=%.9gs,loss=%.9g", fault.delay_s, fault.jitter_s, fault.loss);
+  return text;
 }
 
 }  // namespace haptel

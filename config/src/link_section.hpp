@@ -1,4 +1,7 @@
 #pragma once
+#include <stdexcept>
+#include <string>
+
 #include "haptel/config/link.hpp"
 #include "yaml_map.hpp"
 
@@ -12,6 +15,14 @@ inline LinkConfig ReadLink(YamlMap& link) {
   c.interfaces = link.Strings("interfaces", c.interfaces);
   c.peers = link.Strings("peers", c.peers);
   c.command_deadline_s = link.Number("command_deadline_s", c.command_deadline_s);
+  if (link.Has("fault")) {
+    const std::string text = link.RequireString("fault");
+    try {
+      c.fault = ParseLinkFault(text);
+    } catch (const std::invalid_argument& e) {
+      link.Fail("fault", e.what());
+    }
+  }
   link.Finish();
   return c;
 }

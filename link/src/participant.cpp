@@ -3,10 +3,12 @@
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
 #include <fastrtps/utils/IPLocator.h>
+#include <fastrtps/xmlparser/XMLProfileManager.h>
 
 #include <cmath>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <memory>
+#include <random>
 #include <stdexcept>
 
 #include "haptel/config/error.hpp"
@@ -49,6 +51,9 @@ Qos WithProfile(Qos qos, Profile profile, const LinkConfig& config) {
       qos.history().depth = 1;
       break;
   }
+  // Data sharing hands samples over in shared memory, past any transport:
+  // off when the transport is to inject faults.
+  if (config.fault.enabled) qos.data_sharing().off();
   return qos;
 }
 }  // namespace
@@ -72,9 +77,19 @@ Participant::Participant(const LinkConfig& config, const std::string& name)
   udp->interfaceWhiteList = config.interfaces;
   // Room for many participants per host (tests run several at once).
   udp->maxInitialPeersRange = 32;
-  qos.transport().user_transports.push_back(udp);
-  qos.transport().user_transports.push_back(
-      std::make_shared<eprosima::fastdds::rtps::SharedMemTransportDescriptor>());
+  if (config.fault.enabled) {
+    // Every packet through the fault transport: no shared memory beside it,
+    // and no intra-process shortcut (a process-wide setting).
+    line_ = std::make_shared<FaultLine>(config.fault, std::random_device{}());
+    qos.transport().user_transports.push_back(MakeFaultTransport(udp, line_));
+    eprosima::fastrtps::LibrarySettingsAttributes library;
+    library.intraprocess_delivery = eprosima::fastrtps::INTRAPROCESS_OFF;
+    eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings(library);
+  } else {
+    qos.transport().user_transports.push_back(udp);
+    qos.transport().user_transports.push_back(
+        std::make_shared<eprosima::fastdds::rtps::SharedMemTransportDescriptor>());
+  }
 
   // Unicast discovery only: a metatraffic unicast locator on the first allowed
   // interface (port 0: derived from the participant id) disables multicast.
@@ -111,6 +126,8 @@ Participant::Participant(const LinkConfig& config, const std::string& name)
 }
 
 Participant::~Participant() {
+  // No delayed packet may reach a receiver the participant is tearing down.
+  if (line_) line_->Shutdown();
   if (participant_ == nullptr) return;
   participant_->delete_contained_entities();
   dds::DomainParticipantFactory::get_instance()->delete_participant(participant_);

@@ -19,7 +19,9 @@
 #include "haptel/core/cli.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/core/json.hpp"
+#include "haptel/core/log.hpp"
 #include "haptel/core/stop_signals.hpp"
+#include "haptel/link/fault_transport.hpp"
 #include "haptel/calibration/calibration_procedure.hpp"
 #include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/run_counters.hpp"
@@ -53,6 +55,9 @@ constexpr const char* kRunUsage =
     "                       on the domain (a haptel-vehicle started by hand, here or on\n"
     "                       another host); --vehicle still says what kind it is\n"
     "  --domain N           DDS domain id\n"
+    "  --link-fault SPEC    inject faults into what both processes receive, e.g.\n"
+    "                       delay=100ms,jitter=20ms,loss=5% (overrides link.fault; the spawned\n"
+    "                       vehicle gets it too); with it, SIGUSR1 cuts the link both ways\n"
     "  --database FILE      SQLite file for the results (overrides 'database')\n"
     "  --vehicle-timeout S  no vehicle state for S seconds: vehicle lost\n"
     "  --trace FILE         record the haptic device's readings (for the replay driver)\n"
@@ -85,7 +90,8 @@ std::string CountersJson(const std::vector<haptel::mediator::RunCounter>& counte
 Args ParseRunArgs(int argc, const char* const* argv) {
   return Args(argc, argv,
               {"config", "track", "interface", "scene", "vehicle-name", "domain", "database", "vehicle-timeout",
-               "trace", "operator", "device", "trace-in", "time-limit", "view", "record", "vehicle"},
+               "trace", "operator", "device", "trace-in", "time-limit", "view", "record", "vehicle",
+               "link-fault"},
               {"json", "quiet", "attach"});
 }
 
@@ -97,6 +103,7 @@ SessionSetup RunSetupFromArgs(const Args& args) {
   if (auto track = args.Value("track")) setup.run.track = *track;
   if (auto name = args.Value("interface")) setup.run.interface = *name;
   if (auto domain = args.Int("domain", 0, 232)) setup.run.link.domain_id = *domain;
+  if (auto fault = args.Value("link-fault")) setup.run.link.fault = ParseLinkFaultOption(*fault);
   if (auto db = args.Value("database")) setup.run.database = *db;
   if (auto trace = args.Value("trace")) setup.trace = *trace;
   if (auto s = args.Number("vehicle-timeout", 0.05, 60.0)) setup.run.vehicle_timeout_s = *s;
@@ -357,6 +364,13 @@ int RunCommand(int argc, const char* const* argv) {
     // The database before anything starts: a run it cannot take is not driven.
     // Kept open for the run, and saved into at its end.
     auto recorder = cli::ReadInput([&] { return std::make_unique<Recorder>(setup.run.database); });
+    if (setup.run.link.fault.enabled) {
+      link::InstallLinkDownSignal();
+      if (setup.progress) {
+        log::Info("link faults on what both ends receive: " + LinkFaultText(setup.run.link.fault) +
+                  " (SIGUSR1 cuts the link and restores it)");
+      }
+    }
     const RecordedRun run = RunAndRecord(setup, *recorder, interrupted);
     PrintRunSummary(stdout, setup, run);
     if (json) std::printf("%s\n", RunJson(setup, run).c_str());

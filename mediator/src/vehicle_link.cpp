@@ -115,10 +115,12 @@ VehicleLink::VehicleLink(const VehicleLinkOptions& options)
   blimp_command_.session(session_);
   blimp_command_.operator_name(operator_name_);
   if (!options_.program.empty()) {
-    process_ = std::make_unique<ChildProcess>(
-        options_.program.string(),
-        std::vector<std::string>{"--config", options_.vehicle.file.string(), "--track", options_.track_file.string(),
-                                 "--name", options_.vehicle.name, "--domain", std::to_string(options_.link.domain_id)});
+    std::vector<std::string> arguments{"--config", options_.vehicle.file.string(), "--track",
+                                       options_.track_file.string(), "--name", options_.vehicle.name, "--domain",
+                                       std::to_string(options_.link.domain_id)};
+    // The run's link faults on both ends: each delays and drops what it receives.
+    if (options_.link.fault.enabled) arguments.insert(arguments.end(), {"--link-fault", LinkFaultText(options_.link.fault)});
+    process_ = std::make_unique<ChildProcess>(options_.program.string(), arguments);
   }
   participant_ = std::make_unique<link::Participant>(options_.link, "haptel-mediator");
   if (IsBlimpKind(options_.vehicle.kind)) {

@@ -49,10 +49,10 @@ TEST_CASE("haptel run --attach drives a vehicle started by hand, leaves it runni
   const int domain = test::UniqueDomain(41);
   const auto dir = test::ScratchDir("e2e-attach");
   HandStartedVehicle vehicle(domain);
-  for (int lap = 0; lap < 2; ++lap) {
+  {
     Child run(AttachArgs(domain, dir / "runs.db"));
     const int code = run.Wait(120.0);
-    INFO("lap " << lap << "\n" << run.out() << run.err());
+    INFO(run.out() << run.err());
     REQUIRE(code == 0);
     const std::string json = run.LastLine();
     CHECK(JsonField(json, "outcome") == "completed");
@@ -61,6 +61,17 @@ TEST_CASE("haptel run --attach drives a vehicle started by hand, leaves it runni
     CHECK(run.err().find("attached to vehicle 'robot1' on domain " + std::to_string(domain)) != std::string::npos);
     // The vehicle is not the run's to end.
     CHECK(kill(vehicle.child().pid(), 0) == 0);
+  }
+  {
+    // The first run let go of it: a second one drives it at once (not refused).
+    auto argv = AttachArgs(domain, dir / "runs.db");
+    argv.insert(argv.end(), {"--time-limit", "3"});
+    Child run(argv);
+    run.Wait(60.0);
+    INFO(run.out() << run.err());
+    const std::string json = run.LastLine();
+    CHECK(JsonField(json, "outcome") == "time limit");
+    CHECK(std::stod(JsonField(json, "distance_m")) > 0.05);
   }
   kill(vehicle.child().pid(), SIGTERM);
   CHECK(vehicle.child().Wait(30.0) == 0);
@@ -116,4 +127,45 @@ TEST_CASE("a second vehicle under the same name is a conflict: exit 2, nothing d
         std::string::npos);
   // Reported as soon as both answer: the run never got far into its lap.
   CHECK(std::stod(JsonField(json, "distance_m")) < 0.5);
+}
+
+TEST_CASE("with 100 ms delay, 20 ms jitter and 5 % loss both ways the automatic operator still completes the short track") {
+  const auto dir = test::ScratchDir("e2e-link-fault");
+  Child run({Bin("haptel"), "run", "--link-fault", "delay=100ms,jitter=20ms,loss=5%", "--track",
+             "config/tracks/test-short.yaml", "--json", "--domain", std::to_string(test::UniqueDomain(44)),
+             "--database", (dir / "runs.db").string(), "--vehicle-timeout", "5"});
+  const int code = run.Wait(180.0);
+  INFO(run.out() << run.err());
+  CHECK(code == 0);
+  const std::string json = run.LastLine();
+  CHECK(JsonField(json, "outcome") == "completed");
+  // Both ends were faulted: the vehicle said so, and the round trip carries
+  // both delays (each at least 80 ms).
+  CHECK(run.err().find("haptel-vehicle: info: link faults on what this vehicle receives: delay=0.1s") !=
+        std::string::npos);
+  CHECK(std::stod(JsonField(json, "command_rtt_ms_p50")) > 160.0);
+}
+
+TEST_CASE("link down: the vehicle stops within its watchdog and the run reports the loss within a second") {
+  const auto dir = test::ScratchDir("e2e-link-down");
+  Child run({Bin("haptel"), "run", "--link-fault", "on", "--track", "config/tracks/test-short.yaml", "--json",
+             "--domain", std::to_string(test::UniqueDomain(45)), "--database", (dir / "runs.db").string(),
+             "--vehicle-timeout", "0.5"});
+  static const std::regex started(R"(vehicle 'robot1' started, pid ([0-9]+))");
+  std::smatch m;
+  REQUIRE(test::WaitFor([&] {
+    run.Pump();
+    return std::regex_search(run.err(), m, started) && run.err().find("distance") != std::string::npos;
+  }, 60.0));
+  const pid_t vehicle = std::stoi(m[1]);
+  const size_t before = run.err().size();
+  REQUIRE(kill(vehicle, SIGUSR1) == 0);  // the vehicle's link is cut both ways
+  const int code = run.Wait(60.0);
+  INFO(run.out() << run.err());
+  CHECK(code == 3);
+  const std::string json = run.LastLine();
+  CHECK(JsonField(json, "outcome") == "vehicle lost");
+  CHECK(std::stod(JsonField(json, "lost_detect_s")) < 1.0);
+  // After the cut, the vehicle's watchdog stopped its motors.
+  CHECK(run.err().find("watchdog: no command for 0.25", before) != std::string::npos);
 }

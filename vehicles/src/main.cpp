@@ -14,6 +14,7 @@
 #include "haptel/core/cli.hpp"
 #include "haptel/core/stop_signals.hpp"
 #include "haptel/core/log.hpp"
+#include "haptel/link/fault_transport.hpp"
 #include "haptel/config/blimp_course.hpp"
 #include "haptel/vehicles/blimp_adapters.hpp"
 #include "haptel/vehicles/blimp_node.hpp"
@@ -24,13 +25,16 @@
 namespace {
 constexpr const char* kUsage =
     "usage: haptel-vehicle [--config FILE] [--track FILE] [--name NAME] [--domain N] [--can IFACE]\n"
-    "                      [--serial-port PATH]\n"
+    "                      [--serial-port PATH] [--link-fault SPEC]\n"
     "  --config FILE  vehicle configuration (default config/vehicles/sim-robot.yaml)\n"
     "  --can IFACE    SocketCAN interface of a can-robot (overrides can.interface)\n"
     "  --serial-port PATH  the servo controller of a servo-blimp (overrides servo.port)\n"
     "  --track FILE   track the simulator drives on, or a blimp's course (overrides the file's 'world')\n"
     "  --name NAME    vehicle name, part of its DDS topic names\n"
-    "  --domain N     DDS domain id (overrides link.domain_id)\n";
+    "  --domain N     DDS domain id (overrides link.domain_id)\n"
+    "  --link-fault SPEC  inject faults into what this process receives, e.g.\n"
+    "                 delay=100ms,jitter=20ms,loss=5% (overrides link.fault); with it,\n"
+    "                 SIGUSR1 cuts the link both ways and restores it\n";
 }  // namespace
 
 namespace {
@@ -93,7 +97,8 @@ int main(int argc, char** argv) {
     std::unique_ptr<BlimpCourseConfig> course;
     std::unique_ptr<vehicles::BlimpAdapter> blimp;
     cli::ReadInput([&] {
-      const Args args(argc, argv, {"config", "track", "name", "domain", "can", "serial-port"}, {});
+      const Args args(argc, argv, {"config", "track", "name", "domain", "can", "serial-port", "link-fault"},
+                      {});
       if (!args.positional().empty()) throw UsageError("unexpected argument '" + args.positional()[0] + "'");
       const std::filesystem::path file =
           args.Value("config").value_or(ShippedFile("config/vehicles/sim-robot.yaml").string());
@@ -105,6 +110,7 @@ int main(int argc, char** argv) {
         config.name = *name;
       }
       if (auto domain = args.Int("domain", 0, 232)) config.link.domain_id = *domain;
+      if (auto fault = args.Value("link-fault")) config.link.fault = ParseLinkFaultOption(*fault);
       if (auto world = args.Value("track")) config.world = *world;
       if (auto can = args.Value("can")) {
         if (!UsesCan(config.kind)) {
@@ -146,6 +152,11 @@ int main(int argc, char** argv) {
       camera = video::MakeCameraSource(config.camera, track.get(), file.string());
     });
 
+    if (config.link.fault.enabled) {
+      link::InstallLinkDownSignal();
+      log::Info("link faults on what this vehicle receives: " + LinkFaultText(config.link.fault) +
+                " (SIGUSR1 cuts the link and restores it)");
+    }
     const std::string camera_name = camera->Describe();
     if (blimp) {
       vehicles::BlimpNode node(config, std::move(camera), std::move(blimp));

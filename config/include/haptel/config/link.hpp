@@ -5,6 +5,35 @@
 
 namespace haptel {
 
+/// Faults injected into the link by the process's own DDS transport (a
+/// chaining transport over UDP; shared memory, data sharing and
+/// intra-process delivery are off while it is in, since they bypass any
+/// transport). Each process delays and drops what it receives, so with the
+/// same fault on both ends each direction gets it once. Written
+/// "delay=100ms,jitter=20ms,loss=5%" (link.fault, --link-fault).
+struct LinkFault {
+  bool enabled = false;  ///< the fault transport is in (also for the link-down switch, SIGUSR1)
+  double delay_s = 0.0;  ///< added to every packet received
+  double jitter_s = 0.0; ///< each packet's delay varies uniformly by ± this (packets may reorder)
+  double loss = 0.0;     ///< fraction of packets received that are dropped, in [0, 1)
+
+  /// Throws ConfigFieldError ("delay_s", "loss") unless delay and jitter are
+  /// in [0, 10] s and loss in [0, 0.99].
+  void ValidateOrThrow() const;
+};
+
+/// Parses "delay=100ms,jitter=20ms,loss=5%" (any of the three, in any order;
+/// times in s, ms or us; loss in % or as a fraction; "on" alone enables the
+/// transport with no fault). Throws std::invalid_argument whose what() is
+/// what was expected, naming the part that is not ("a loss from 0 to 99%,
+/// such as 5% or 0.05 (not 'loss=200%')").
+LinkFault ParseLinkFault(const std::string& text);
+/// ParseLinkFault for the --link-fault option of haptel run and
+/// haptel-vehicle: a UsageError ("option --link-fault: expected ...").
+LinkFault ParseLinkFaultOption(const std::string& text);
+/// The text ParseLinkFault reads back as `fault` (what a spawned vehicle is given).
+std::string LinkFaultText(const LinkFault& fault);
+
 struct LinkConfig {
   /// DDS domain; processes meet only inside one domain (0..232).
   int domain_id = 0;
@@ -15,6 +44,8 @@ struct LinkConfig {
   std::vector<std::string> peers{"127.0.0.1"};
   /// Command topic deadline: a writer or reader that misses it is reported.
   double command_deadline_s = 0.1;
+  /// Injected faults (none by default).
+  LinkFault fault;
 
   /// Throws ConfigFieldError unless the domain and deadline are in range and
   /// every interface and peer is a dotted IPv4 address ("peers[1]").

@@ -3,7 +3,10 @@
 ///
 /// Transports are restricted to the configured interfaces (loopback by default)
 /// with unicast discovery through the configured peers, so a default
-/// installation sends nothing beyond the host.
+/// installation sends nothing beyond the host. With LinkConfig::fault the
+/// UDP transport is wrapped in the fault transport (fault_transport.hpp)
+/// and everything that would bypass it is off: shared memory, data sharing
+/// and intra-process delivery.
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
 #include <fastdds/dds/publisher/qos/DataWriterQos.hpp>
@@ -12,6 +15,7 @@
 #include <string>
 
 #include "haptel/config/link.hpp"
+#include "haptel/link/fault_transport.hpp"
 
 namespace haptel::link {
 
@@ -43,9 +47,12 @@ class Participant {
   eprosima::fastdds::dds::Publisher* publisher() const { return publisher_; }
   eprosima::fastdds::dds::Subscriber* subscriber() const { return subscriber_; }
   const LinkConfig& config() const { return config_; }
+  /// What the injected faults did (zeros without LinkConfig::fault).
+  FaultCounts fault_counts() const { return line_ ? line_->Counts() : FaultCounts{}; }
 
  private:
   LinkConfig config_;
+  std::shared_ptr<FaultLine> line_;  ///< with LinkConfig::fault: its delay line
   eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
   eprosima::fastdds::dds::Publisher* publisher_ = nullptr;
   eprosima::fastdds::dds::Subscriber* subscriber_ = nullptr;

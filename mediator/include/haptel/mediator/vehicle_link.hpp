@@ -72,7 +72,7 @@ class StateInboxOf {
   uint64_t first_echo_seq_ = 0;
   uint64_t first_accepted_ = 0;
   uint64_t dropped_before_ = 0;  ///< counted against earlier baselines
-  Histogram rtt_{10.0, 20000};  // µs bins up to 200 ms
+  Histogram rtt_{10.0, 200000};  // 10 µs bins up to 2 s (a faulted link: 400 ms each way and more)
 };
 using StateInbox = StateInboxOf<msg::VehicleState>;
 using BlimpStateInbox = StateInboxOf<msg::BlimpState>;

@@ -1,0 +1,332 @@
+#include "link_bench.hpp"
+
+#include <signal.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "haptel/config/paths.hpp"
+#include "haptel/config/vehicle.hpp"
+#include "haptel/core/args.hpp"
+#include "haptel/core/child_process.hpp"
+#include "haptel/core/clock.hpp"
+#include "haptel/core/histogram.hpp"
+#include "haptel/core/json.hpp"
+#include "haptel/core/stop_signals.hpp"
+#include "haptel/link/topic.hpp"
+#include "haptel/mediator/vehicle_link.hpp"
+#include "plot.hpp"
+
+namespace haptel::bench {
+
+namespace {
+
+constexpr double kRateHz = 100.0;
+
+/// The value of `key` in a flat JSON line (numbers, booleans, strings).
+std::string Field(const std::string& json, const std::string& key) {
+  const std::string needle = "\"" + key + "\":";
+  const auto at = json.find(needle);
+  if (at == std::string::npos) return "";
+  auto start = at + needle.size();
+  if (json[start] == '"') return json.substr(start + 1, json.find('"', start + 1) - start - 1);
+  return json.substr(start, json.find_first_of(",}", start) - start);
+}
+
+double Number(const std::string& json, const std::string& key) {
+  const std::string v = Field(json, key);
+  return v.empty() ? std::nan("") : std::stod(v);
+}
+
+std::vector<double> ParseList(const std::string& option, const std::string& text) {
+  std::vector<double> out;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    try {
+      out.push_back(std::stod(item));
+    } catch (const std::exception&) {
+      throw UsageError("option --" + option + ": expected comma-separated numbers, got '" + text + "'");
+    }
+    if (!(out.back() >= 0.0)) throw UsageError("option --" + option + ": expected numbers >= 0");
+  }
+  if (out.empty()) throw UsageError("option --" + option + ": expected at least one number");
+  return out;
+}
+
+/// `haptel-bench link --echo --domain D`: echoes every ping as a pong until stopped.
+int Echo(int domain) {
+  const std::atomic<bool>& stop = InstallStopSignals();
+  LinkConfig config;
+  config.domain_id = domain;
+  link::Participant participant(config, "haptel-bench-echo");
+  link::CommandWriter pong(participant, "bench/pong", link::Profile::kCommand);
+  msg::DriveCommand copy;
+  link::CommandReader ping(participant, "bench/ping", link::Profile::kCommand, [&](const msg::DriveCommand& c) {
+    copy = c;
+    pong.Write(copy);
+  });
+  std::printf("echo up\n");
+  std::fflush(stdout);
+  while (!stop.load()) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  return 0;
+}
+
+struct RttFigures {
+  double p50_ms = 0.0;
+  double p99_ms = 0.0;
+  uint64_t samples = 0;
+};
+
+RttFigures Figures(const Histogram& h) {
+  return {h.Percentile(0.5) * 1e-3, h.Percentile(0.99) * 1e-3, h.Count()};
+}
+
+/// Waits up to `timeout_s` for `ready`.
+template <typename Ready>
+bool WaitFor(Ready ready, double timeout_s) {
+  const int64_t until = MonotonicNs() + SToNs(timeout_s);
+  while (MonotonicNs() < until) {
+    if (ready()) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return ready();
+}
+
+/// The raw ping-pong: pings at kRateHz for `seconds` to an echo process.
+RttFigures RawPingPong(int domain, double seconds) {
+  ChildProcess echo((ProgramDirectory() / "haptel-bench").string(),
+                    {"link", "--echo", "--domain", std::to_string(domain)});
+  LinkConfig config;
+  config.domain_id = domain;
+  link::Participant participant(config, "haptel-bench-ping");
+  Histogram rtt(10.0, 200000);
+  link::CommandReader pongs(participant, "bench/pong", link::Profile::kCommand, [&](const msg::DriveCommand& c) {
+    if (c.sent_ns() != 0) rtt.Record(static_cast<double>(MonotonicNs() - c.sent_ns()) * 1e-3);
+  });
+  link::CommandWriter pings(participant, "bench/ping", link::Profile::kCommand);
+  if (!WaitFor([&] { return pings.matched() > 0 && pongs.matched() > 0; }, 15.0)) {
+    throw std::runtime_error("the echo process did not answer");
+  }
+  msg::DriveCommand m;
+  const auto period = static_cast<int64_t>(1e9 / kRateHz);
+  int64_t next = MonotonicNs();
+  const int64_t end = next + SToNs(seconds);
+  // The first second warms both ends up and is not counted.
+  const int64_t counted_from = next + SToNs(1.0);
+  uint64_t seq = 0;
+  while (MonotonicNs() < end) {
+    SleepUntilNs(next);
+    next += period;
+    const int64_t now = MonotonicNs();
+    if (now < counted_from) rtt.Reset();
+    m.seq(++seq);
+    m.sent_ns(now);
+    pings.Write(m);
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  return Figures(rtt);
+}
+
+/// Haptel's command round trip to a spawned haptel-vehicle at kRateHz.
+RttFigures HaptelRoundTrip(int domain, double seconds) {
+  mediator::VehicleLinkOptions options;
+  options.vehicle = LoadVehicle(ShippedFile("config/vehicles/sim-robot.yaml"));
+  options.link.domain_id = domain;
+  options.track_file = ShippedFile("config/tracks/test-short.yaml");
+  options.program = ProgramDirectory() / "haptel-vehicle";
+  options.decode_video = false;
+  mediator::VehicleLink vehicle(options);
+  if (!WaitFor([&] { return vehicle.last_received_ns() != 0; }, 20.0)) {
+    throw std::runtime_error("the vehicle did not answer");
+  }
+  const auto period = static_cast<int64_t>(1e9 / kRateHz);
+  int64_t next = MonotonicNs();
+  const int64_t end = next + SToNs(seconds);
+  const int64_t counted_from = next + SToNs(1.0);
+  bool counted = false;
+  Histogram& rtt = const_cast<Histogram&>(vehicle.Rtt());
+  int tick = 0;
+  while (MonotonicNs() < end) {
+    SleepUntilNs(next);
+    next += period;
+    if (!counted && MonotonicNs() >= counted_from) {
+      rtt.Reset();
+      counted = true;
+    }
+    // A gentle back-and-forth, so the robot stays near where it started.
+    const double v = 0.2 * std::sin(++tick * 0.02);
+    vehicle.Send(v, v);
+    vehicle.inbox().Drain();
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  const RttFigures figures = Figures(vehicle.Rtt());
+  vehicle.Stop();
+  return figures;
+}
+
+struct LapRow {
+  double delay_ms = 0.0;
+  double loss_percent = 0.0;
+  bool ran = false;
+  bool completed = false;
+  std::string outcome;
+  double lap_time_s = std::nan("");
+  int obstacles = 0;
+  int gates_passed = 0;
+  int gates_total = 0;
+  double rtt_p50_ms = std::nan("");
+  double wall_s = 0.0;
+};
+
+LapRow Lap(const std::string& track, int domain, double delay_ms, double loss_percent) {
+  LapRow row;
+  row.delay_ms = delay_ms;
+  row.loss_percent = loss_percent;
+  char fault[96];
+  std::snprintf(fault, sizeof fault, "delay=%gms,loss=%g%%", delay_ms, loss_percent);
+  const std::string db = (BenchDir() / "link.db").string();
+  const int64_t start = MonotonicNs();
+  ChildProcess run((ProgramDirectory() / "haptel").string(),
+                   {"run", "--operator", "auto", "--view", "none", "--link-fault", fault, "--track", track, "--json",
+                    "--quiet", "--domain", std::to_string(domain), "--database", db, "--vehicle-timeout", "5"},
+                   ChildProcess::Options{true});
+  run.Wait(1800.0);
+  row.wall_s = NsToS(MonotonicNs() - start);
+  const std::string json = run.LastLine();
+  if (json.empty() || json.front() != '{') {
+    std::fprintf(stderr, "haptel bench link: the lap at %s gave no result: %s\n", fault, run.err().c_str());
+    return row;
+  }
+  row.ran = true;
+  row.completed = Field(json, "completed") == "true";
+  row.outcome = Field(json, "outcome");
+  row.lap_time_s = Number(json, "lap_time_s");
+  row.obstacles = static_cast<int>(Number(json, "obstacles_touched"));
+  row.gates_passed = static_cast<int>(Number(json, "gates_passed"));
+  row.gates_total = static_cast<int>(Number(json, "gates_total"));
+  row.rtt_p50_ms = Number(json, "command_rtt_ms_p50");
+  return row;
+}
+
+}  // namespace
+
+int BenchLinkMain(int argc, const char* const* argv) {
+  bool json = false;
+  double seconds = 10.0;
+  std::string track;
+  std::vector<double> delays{0, 50, 100, 200, 400};
+  std::vector<double> losses{0, 5};
+  try {
+    const Args args(argc, argv, {"seconds", "track", "delays", "losses", "domain"}, {"json", "echo"});
+    if (args.Flag("echo")) return Echo(args.Int("domain", 0, 232).value_or(0));
+    json = args.Flag("json");
+    seconds = args.Number("seconds", 2.0, 600.0).value_or(seconds);
+    track = args.Value("track").value_or(ShippedFile("config/tracks/grand-prix.yaml").string());
+    if (auto d = args.Value("delays")) delays = ParseList("delays", *d);
+    if (auto l = args.Value("losses")) losses = ParseList("losses", *l);
+    for (const double l : losses) {
+      if (l > 99.0) throw UsageError("option --losses: expected percentages below 100");
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "haptel bench link: %s\n", e.what());
+    return 2;
+  }
+  // Domains of the bench's own, away from a default installation's 0.
+  const int domain = 200 + static_cast<int>(getpid() % 30);
+  const auto dir = BenchDir();
+  std::filesystem::create_directories(dir);
+  std::printf("haptel bench link: round trip at %.0f Hz for %.0f s, then laps on %s\n\n", kRateHz, seconds,
+              track.c_str());
+
+  RttFigures raw, haptel;
+  bool rtt_ok = true;
+  try {
+    raw = RawPingPong(domain, seconds);
+    haptel = HaptelRoundTrip(domain, seconds);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "haptel bench link: round trip: %s\n", e.what());
+    rtt_ok = false;
+  }
+  const double ratio = raw.p50_ms > 0.0 ? haptel.p50_ms / raw.p50_ms : std::nan("");
+  std::printf("  round trip            p50 ms   p99 ms   samples\n");
+  std::printf("  raw Fast DDS ping     %6.3f   %6.3f   %7llu\n", raw.p50_ms, raw.p99_ms,
+              static_cast<unsigned long long>(raw.samples));
+  std::printf("  haptel command->state %6.3f   %6.3f   %7llu\n", haptel.p50_ms, haptel.p99_ms,
+              static_cast<unsigned long long>(haptel.samples));
+  std::printf("  ratio of p50: %.2f (target <= 2)\n\n", ratio);
+  {
+    std::ofstream csv(dir / "link_rtt.csv");
+    csv << "path,p50_ms,p99_ms,samples\n";
+    csv << "raw," << raw.p50_ms << "," << raw.p99_ms << "," << raw.samples << "\n";
+    csv << "haptel," << haptel.p50_ms << "," << haptel.p99_ms << "," << haptel.samples << "\n";
+  }
+
+  std::vector<LapRow> rows;
+  std::printf("  delay ms  loss %%  outcome         lap s   gates  obstacles  rtt p50 ms  wall s\n");
+  for (const double loss : losses) {
+    for (const double delay : delays) {
+      const LapRow row = Lap(track, domain + 1, delay, loss);
+      rows.push_back(row);
+      std::printf("  %8.0f  %6.1f  %-14s %6.2f   %d/%d   %9d  %10.2f  %6.1f\n", delay, loss,
+                  row.ran ? row.outcome.c_str() : "no result", row.lap_time_s, row.gates_passed, row.gates_total,
+                  row.obstacles, row.rtt_p50_ms, row.wall_s);
+      std::fflush(stdout);
+    }
+  }
+  {
+    std::ofstream csv(dir / "link_laps.csv");
+    csv << "delay_ms,loss_percent,outcome,completed,lap_time_s,gates_passed,gates_total,obstacles,rtt_p50_ms\n";
+    for (const LapRow& r : rows) {
+      csv << r.delay_ms << "," << r.loss_percent << "," << r.outcome << "," << (r.completed ? 1 : 0) << ","
+          << r.lap_time_s << "," << r.gates_passed << "," << r.gates_total << "," << r.obstacles << ","
+          << r.rtt_p50_ms << "\n";
+    }
+  }
+  std::vector<Series> series;
+  for (const double loss : losses) {
+    Series s;
+    char name[48];
+    std::snprintf(name, sizeof name, "lap time, %g%% loss", loss);
+    s.name = name;
+    for (const LapRow& r : rows) {
+      if (r.loss_percent != loss || !r.completed) continue;
+      s.x.push_back(r.delay_ms);
+      s.y.push_back(r.lap_time_s);
+    }
+    if (!s.x.empty()) series.push_back(s);
+  }
+  if (!series.empty()) {
+    PlotLines(dir / "link_laps.png", series,
+              {"The automatic operator's lap against the link's delay (each way)", "delay each way, ms",
+               "lap time, s (completed laps)"});
+  }
+  const bool all_ran = std::all_of(rows.begin(), rows.end(), [](const LapRow& r) { return r.ran; });
+  std::printf("\n  wrote %s/link_{rtt,laps}.csv, link_laps.png\n", dir.c_str());
+  if (json) {
+    std::ostringstream o;
+    o << "{\"rtt\":{\"raw_p50_ms\":" << JsonNumber(raw.p50_ms) << ",\"raw_p99_ms\":" << JsonNumber(raw.p99_ms)
+      << ",\"haptel_p50_ms\":" << JsonNumber(haptel.p50_ms) << ",\"haptel_p99_ms\":" << JsonNumber(haptel.p99_ms)
+      << ",\"p50_ratio\":" << JsonNumber(ratio) << ",\"within_2x\":" << (ratio <= 2.0 ? "true" : "false")
+      << "},\"laps\":[";
+    for (size_t i = 0; i < rows.size(); ++i) {
+      const LapRow& r = rows[i];
+      o << (i ? "," : "") << "{\"delay_ms\":" << JsonNumber(r.delay_ms) << ",\"loss_percent\":"
+        << JsonNumber(r.loss_percent) << ",\"outcome\":" << JsonString(r.outcome)
+        << ",\"completed\":" << (r.completed ? "true" : "false") << ",\"lap_time_s\":"
+        << JsonNumber(std::isfinite(r.lap_time_s) ? r.lap_time_s : -1.0) << ",\"obstacles\":" << r.obstacles
+        << ",\"rtt_p50_ms\":" << JsonNumber(std::isfinite(r.rtt_p50_ms) ? r.rtt_p50_ms : -1.0) << "}";
+    }
+    o << "]}";
+    std::printf("%s\n", o.str().c_str());
+  }
+  return rtt_ok && all_ran ? 0 : 1;
+}
+
+}  // namespace haptel::bench

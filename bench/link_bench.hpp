@@ -1,0 +1,27 @@
+#pragma once
+/// @file `haptel bench link`: what the DDS link costs and what a bad network
+/// does to a lap.
+///
+/// - Round trip, in one run: a raw Fast DDS ping-pong (a DriveCommand echoed
+///   at once by a second process, `haptel-bench link --echo`, on the same
+///   transports: UDP and shared memory on loopback) against Haptel's own
+///   command round trip to a spawned haptel-vehicle (the echo in its state,
+///   its wait at the vehicle subtracted, as `haptel run` measures it). Both
+///   at 100 Hz for --seconds. Target: Haptel's p50 within 2x of raw.
+/// - The lap against the network: `haptel run --link-fault delay=D,loss=L`
+///   with the automatic operator on --track (default the grand prix) for each
+///   delay (--delays, ms, default 0,50,100,200,400) and loss (--losses, %,
+///   default 0,5): lap time, obstacles touched, completion, measured round
+///   trip. Each end delays what it receives by D, so the round trip is 2D.
+///
+/// Prints both tables; writes build/bench/link_rtt.csv, link_laps.csv and
+/// link_laps.png; with --json the last stdout line is
+/// {"rtt":{…},"laps":[…]}.
+namespace haptel::bench {
+
+/// `haptel bench link [--seconds S] [--track FILE] [--delays LIST] [--losses LIST] [--json]`.
+/// Returns 0 when every lap ran and the round trip was measured, 1 when one
+/// could not be, 2 for bad usage.
+int BenchLinkMain(int argc, const char* const* argv);
+
+}  // namespace haptel::bench
