@@ -19,6 +19,7 @@
 #include "haptel/core/histogram.hpp"
 #include "haptel/core/json.hpp"
 #include "haptel/core/stop_signals.hpp"
+#include "haptel/link/security.hpp"
 #include "haptel/link/topic.hpp"
 #include "haptel/mediator/vehicle_link.hpp"
 #include "plot.hpp"
@@ -82,6 +83,8 @@ struct RttFigures {
   double p50_ms = 0.0;
   double p99_ms = 0.0;
   uint64_t samples = 0;
+  double video_p50_ms = std::nan("");  ///< capture -> decoded (Haptel's link only)
+  double video_p99_ms = std::nan("");
 };
 
 RttFigures Figures(const Histogram& h) {
@@ -134,14 +137,17 @@ RttFigures RawPingPong(int domain, double seconds) {
   return Figures(rtt);
 }
 
-/// Haptel's command round trip to a spawned haptel-vehicle at kRateHz.
-RttFigures HaptelRoundTrip(int domain, double seconds) {
+/// Haptel's command round trip to a spawned haptel-vehicle at kRateHz, and
+/// its video's latency (decoded, as the view shows it); secured with the
+/// folder `security` when it is not empty.
+RttFigures HaptelRoundTrip(int domain, double seconds, const std::filesystem::path& security) {
   mediator::VehicleLinkOptions options;
   options.vehicle = LoadVehicle(ShippedFile("config/vehicles/sim-robot.yaml"));
   options.link.domain_id = domain;
+  options.link.security = security;
   options.track_file = ShippedFile("config/tracks/test-short.yaml");
   options.program = ProgramDirectory() / "haptel-vehicle";
-  options.decode_video = false;
+  options.decode_video = true;
   mediator::VehicleLink vehicle(options);
   if (!WaitFor([&] { return vehicle.last_received_ns() != 0; }, 20.0)) {
     throw std::runtime_error("the vehicle did not answer");
@@ -166,7 +172,10 @@ RttFigures HaptelRoundTrip(int domain, double seconds) {
     vehicle.inbox().Drain();
   }
   std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  const RttFigures figures = Figures(vehicle.Rtt());
+  RttFigures figures = Figures(vehicle.Rtt());
+  const mediator::VideoStats video = vehicle.video().Stats();
+  figures.video_p50_ms = video.latency_ms_p50;
+  figures.video_p99_ms = video.latency_ms_p99;
   vehicle.Stop();
   return figures;
 }
@@ -245,27 +254,38 @@ int BenchLinkMain(int argc, const char* const* argv) {
   std::printf("haptel bench link: round trip at %.0f Hz for %.0f s, then laps on %s\n\n", kRateHz, seconds,
               track.c_str());
 
-  RttFigures raw, haptel;
+  RttFigures raw, haptel, secured;
   bool rtt_ok = true;
   try {
     raw = RawPingPong(domain, seconds);
-    haptel = HaptelRoundTrip(domain, seconds);
+    haptel = HaptelRoundTrip(domain, seconds, {});
+    // The cost of DDS Security: the same, authenticated and encrypted.
+    const std::filesystem::path security = dir / "security";
+    if (!std::filesystem::exists(security / "ca.pem")) link::InitSecurity(security, {"robot1"}, 365);
+    secured = HaptelRoundTrip(domain, seconds, security);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "haptel bench link: round trip: %s\n", e.what());
     rtt_ok = false;
   }
   const double ratio = raw.p50_ms > 0.0 ? haptel.p50_ms / raw.p50_ms : std::nan("");
-  std::printf("  round trip            p50 ms   p99 ms   samples\n");
-  std::printf("  raw Fast DDS ping     %6.3f   %6.3f   %7llu\n", raw.p50_ms, raw.p99_ms,
-              static_cast<unsigned long long>(raw.samples));
-  std::printf("  haptel command->state %6.3f   %6.3f   %7llu\n", haptel.p50_ms, haptel.p99_ms,
-              static_cast<unsigned long long>(haptel.samples));
-  std::printf("  ratio of p50: %.2f (target <= 2)\n\n", ratio);
+  std::printf("  round trip                   p50 ms   p99 ms   samples   video p50 ms   p99 ms\n");
+  const auto print = [](const char* name, const RttFigures& f) {
+    std::printf("  %-26s %7.3f  %7.3f   %7llu   %12.2f  %7.2f\n", name, f.p50_ms, f.p99_ms,
+                static_cast<unsigned long long>(f.samples), f.video_p50_ms, f.video_p99_ms);
+  };
+  print("raw Fast DDS ping-pong", raw);
+  print("haptel command -> state", haptel);
+  print("haptel, DDS Security", secured);
+  std::printf("  ratio of p50, haptel to raw: %.2f (target <= 2); security costs %+.3f ms of round trip, %+.2f ms "
+              "of video latency (p50)\n\n",
+              ratio, secured.p50_ms - haptel.p50_ms, secured.video_p50_ms - haptel.video_p50_ms);
   {
     std::ofstream csv(dir / "link_rtt.csv");
-    csv << "path,p50_ms,p99_ms,samples\n";
-    csv << "raw," << raw.p50_ms << "," << raw.p99_ms << "," << raw.samples << "\n";
-    csv << "haptel," << haptel.p50_ms << "," << haptel.p99_ms << "," << haptel.samples << "\n";
+    csv << "path,p50_ms,p99_ms,samples,video_p50_ms,video_p99_ms\n";
+    for (const auto& [name, f] : {std::pair{"raw", raw}, std::pair{"haptel", haptel}, std::pair{"secured", secured}}) {
+      csv << name << "," << f.p50_ms << "," << f.p99_ms << "," << f.samples << "," << f.video_p50_ms << ","
+          << f.video_p99_ms << "\n";
+    }
   }
 
   std::vector<LapRow> rows;
@@ -314,7 +334,9 @@ int BenchLinkMain(int argc, const char* const* argv) {
     o << "{\"rtt\":{\"raw_p50_ms\":" << JsonNumber(raw.p50_ms) << ",\"raw_p99_ms\":" << JsonNumber(raw.p99_ms)
       << ",\"haptel_p50_ms\":" << JsonNumber(haptel.p50_ms) << ",\"haptel_p99_ms\":" << JsonNumber(haptel.p99_ms)
       << ",\"p50_ratio\":" << JsonNumber(ratio) << ",\"within_2x\":" << (ratio <= 2.0 ? "true" : "false")
-      << "},\"laps\":[";
+      << ",\"secured_p50_ms\":" << JsonNumber(secured.p50_ms) << ",\"secured_p99_ms\":" << JsonNumber(secured.p99_ms)
+      << ",\"video_p50_ms\":" << JsonNumber(haptel.video_p50_ms)
+      << ",\"secured_video_p50_ms\":" << JsonNumber(secured.video_p50_ms) << "},\"laps\":[";
     for (size_t i = 0; i < rows.size(); ++i) {
       const LapRow& r = rows[i];
       o << (i ? "," : "") << "{\"delay_ms\":" << JsonNumber(r.delay_ms) << ",\"loss_percent\":"

@@ -7,7 +7,10 @@
 ///   transports: UDP and shared memory on loopback) against Haptel's own
 ///   command round trip to a spawned haptel-vehicle (the echo in its state,
 ///   its wait at the vehicle subtracted, as `haptel run` measures it). Both
-///   at 100 Hz for --seconds. Target: Haptel's p50 within 2x of raw.
+///   at 100 Hz for --seconds. Target: Haptel's p50 within 2x of raw. Then
+///   the cost of DDS Security: Haptel's round trip and video latency again
+///   with the link authenticated and encrypted (build/bench/security, made
+///   by `haptel security init` the first time).
 /// - The lap against the network: `haptel run --link-fault delay=D,loss=L`
 ///   with the automatic operator on --track (default the grand prix) for each
 ///   delay (--delays, ms, default 0,50,100,200,400) and loss (--losses, %,

@@ -120,6 +120,23 @@ LinkFault ParseLinkFaultOption(const std::string& text) {
   }
 }
 
+std::vector<std::string> ParseAddressOption(const std::string& option, const std::string& text) {
+  std::vector<std::string> out;
+  size_t start = 0;
+  while (start <= text.size()) {
+    const size_t comma = text.find(',', start);
+    out.push_back(text.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    in_addr parsed{};
+    if (inet_pton(AF_INET, out.back().c_str(), &parsed) != 1) {
+      throw UsageError("option --" + option + ": expected IPv4 addresses such as 192.168.1.20, comma-separated (not '" +
+                       out.back() + "')");
+    }
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return out;
+}
+
 std::string LinkFaultText(const LinkFault& fault) {
   char text[128];
   std::snprintf(text, sizeof text, "delay=%.9gs,jitter=%.9gs,loss=%.9g", fault.delay_s, fault.jitter_s, fault.loss);

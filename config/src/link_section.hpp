@@ -7,9 +7,10 @@
 
 namespace haptel::config_detail {
 
-/// Reads a `link:` section (and finishes it). LinkConfig::ValidateOrThrow,
-/// run by the enclosing config's, checks the values.
-inline LinkConfig ReadLink(YamlMap& link) {
+/// Reads a `link:` section (and finishes it); `dir` is the file's folder,
+/// which `security` is relative to. LinkConfig::ValidateOrThrow, run by the
+/// enclosing config's, checks the values.
+inline LinkConfig ReadLink(YamlMap& link, const std::filesystem::path& dir) {
   LinkConfig c;
   c.domain_id = link.Integer("domain_id", c.domain_id);
   c.interfaces = link.Strings("interfaces", c.interfaces);
@@ -23,6 +24,7 @@ inline LinkConfig ReadLink(YamlMap& link) {
       link.Fail("fault", e.what());
     }
   }
+  if (link.Has("security")) c.security = dir / link.RequireString("security");
   link.Finish();
   return c;
 }

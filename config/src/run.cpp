@@ -93,7 +93,7 @@ RunConfig LoadRun(const std::filesystem::path& file) {
   op.Finish();
 
   YamlMap link = root.Map("link");
-  r.link = config_detail::ReadLink(link);
+  r.link = config_detail::ReadLink(link, dir);
   root.Finish();
   config_detail::ValidateIn(root, r);
   return r;

@@ -183,7 +183,7 @@ VehicleConfig LoadVehicle(const std::filesystem::path& file) {
   camera.Finish();
 
   YamlMap link = root.Map("link");
-  v.link = config_detail::ReadLink(link);
+  v.link = config_detail::ReadLink(link, file.parent_path());
   if (root.Has("can")) {
     YamlMap can = root.Map("can");
     v.can.interface = can.String("interface", v.can.interface);

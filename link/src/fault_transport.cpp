@@ -101,9 +101,26 @@ bool FaultLine::DropSend() {
   return true;
 }
 
+void FaultLine::CaptureReceived(size_t max_packets) {
+  std::lock_guard lock(mutex_);
+  capture_max_ = max_packets;
+  captured_.reserve(max_packets);
+}
+
+std::vector<std::vector<uint8_t>> FaultLine::TakeCaptured() {
+  std::lock_guard lock(mutex_);
+  std::vector<std::vector<uint8_t>> out;
+  out.swap(captured_);
+  return out;
+}
+
 void FaultLine::Receive(rtps::TransportReceiverInterface* next, const uint8_t* data, uint32_t size,
                         const Locator_t& local, const Locator_t& remote) {
   received_.fetch_add(1, std::memory_order_relaxed);
+  if (capture_max_ > 0) {
+    std::lock_guard lock(mutex_);
+    if (captured_.size() < capture_max_) captured_.emplace_back(data, data + size);
+  }
   if (LinkDown()) {
     dropped_down_.fetch_add(1, std::memory_order_relaxed);
     return;

@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "haptel/config/error.hpp"
+#include "haptel/link/security.hpp"
 
 namespace haptel::link {
 
@@ -107,6 +108,17 @@ Participant::Participant(const LinkConfig& config, const std::string& name)
       throw std::runtime_error("link: peer '" + peer + "' is not an IPv4 address");
     }
     builtin.initialPeersList.push_back(locator);
+  }
+  if (!config.security.empty()) {
+    if (config.security_identity.empty()) {
+      throw std::logic_error("link: security on without an identity (LinkConfig::security_identity)");
+    }
+    // Missing files or an expired certificate: a clear line now, not a
+    // silent participant that never authenticates.
+    CheckSecurity(config.security, config.security_identity);
+    for (const auto& [key, value] : SecurityProperties(config.security, config.security_identity)) {
+      qos.properties().properties().emplace_back(key, value);
+    }
   }
   // Announce often at start so processes meet quickly.
   builtin.discovery_config.initial_announcements.count = 10;

@@ -14,6 +14,7 @@
 #include "haptel/core/log.hpp"
 #include "haptel/mediator/run_command.hpp"
 #include "haptel/mediator/scene_command.hpp"
+#include "haptel/mediator/security_command.hpp"
 #include "haptel/study/study_command.hpp"
 
 namespace {
@@ -23,6 +24,7 @@ constexpr const char* kUsage =
     "       haptel calibrate [options]   calibrate a haptic device (--help for options)\n"
     "       haptel scene FILE [--json]   load a haptic scene, print its objects, mass and bounds\n"
     "       haptel study run FILE        run an A/B study; `haptel study report` reports on it\n"
+    "       haptel security init DIR     DDS Security: a CA and signed identities for the link\n"
     "       haptel bench NAME [options]  benchmarks: servo, gravity, skip, physics, stability, view\n"
     "                                    (haptel bench --help lists them)\n"
     "\n"
@@ -51,8 +53,9 @@ int main(int argc, char** argv) {
   if (command == "scene") return mediator::SceneCommand(argc - 1, argv + 1, std::cout, std::cerr);
   if (command == "bench") return ExecBench(argv + 1);
   if (command == "study") return study::StudyCommand(argc - 1, argv + 1);
+  if (command == "security") return mediator::SecurityCommand(argc - 1, argv + 1);
   return cli::Main({"haptel", kUsage}, argc, argv, [&]() -> int {
-    if (command.empty()) throw UsageError("missing command (run, calibrate, scene, study, bench)");
-    throw UsageError("unknown command '" + command + "' (run, calibrate, scene, study, bench)");
+    if (command.empty()) throw UsageError("missing command (run, calibrate, scene, study, security, bench)");
+    throw UsageError("unknown command '" + command + "' (run, calibrate, scene, study, security, bench)");
   });
 }

@@ -22,6 +22,7 @@
 #include "haptel/core/log.hpp"
 #include "haptel/core/stop_signals.hpp"
 #include "haptel/link/fault_transport.hpp"
+#include "haptel/link/security.hpp"
 #include "haptel/calibration/calibration_procedure.hpp"
 #include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/run_counters.hpp"
@@ -58,6 +59,11 @@ constexpr const char* kRunUsage =
     "  --link-fault SPEC    inject faults into what both processes receive, e.g.\n"
     "                       delay=100ms,jitter=20ms,loss=5% (overrides link.fault; the spawned\n"
     "                       vehicle gets it too); with it, SIGUSR1 cuts the link both ways\n"
+    "  --security DIR       DDS Security with the folder `haptel security init DIR` made\n"
+    "                       (overrides link.security; the spawned vehicle gets it too)\n"
+    "  --dds-interfaces LIST  network interfaces (IPv4, comma-separated) DDS may use\n"
+    "                       (overrides link.interfaces; the spawned vehicle keeps its own)\n"
+    "  --dds-peers LIST     the vehicles' hosts, for unicast discovery (overrides link.peers)\n"
     "  --database FILE      SQLite file for the results (overrides 'database')\n"
     "  --vehicle-timeout S  no vehicle state for S seconds: vehicle lost\n"
     "  --trace FILE         record the haptic device's readings (for the replay driver)\n"
@@ -91,7 +97,7 @@ Args ParseRunArgs(int argc, const char* const* argv) {
   return Args(argc, argv,
               {"config", "track", "interface", "scene", "vehicle-name", "domain", "database", "vehicle-timeout",
                "trace", "operator", "device", "trace-in", "time-limit", "view", "record", "vehicle",
-               "link-fault"},
+               "link-fault", "security", "dds-interfaces", "dds-peers"},
               {"json", "quiet", "attach"});
 }
 
@@ -104,6 +110,11 @@ SessionSetup RunSetupFromArgs(const Args& args) {
   if (auto name = args.Value("interface")) setup.run.interface = *name;
   if (auto domain = args.Int("domain", 0, 232)) setup.run.link.domain_id = *domain;
   if (auto fault = args.Value("link-fault")) setup.run.link.fault = ParseLinkFaultOption(*fault);
+  if (auto security = args.Value("security")) setup.run.link.security = *security;
+  if (auto list = args.Value("dds-interfaces")) setup.run.link.interfaces = ParseAddressOption("dds-interfaces", *list);
+  if (auto list = args.Value("dds-peers")) setup.run.link.peers = ParseAddressOption("dds-peers", *list);
+  // Before anything is spawned: a missing identity or an expired certificate is one line.
+  if (!setup.run.link.security.empty()) link::CheckSecurity(setup.run.link.security, link::OperatorIdentity());
   if (auto db = args.Value("database")) setup.run.database = *db;
   if (auto trace = args.Value("trace")) setup.trace = *trace;
   if (auto s = args.Number("vehicle-timeout", 0.05, 60.0)) setup.run.vehicle_timeout_s = *s;

@@ -8,6 +8,7 @@
 #include <random>
 
 #include "haptel/core/clock.hpp"
+#include "haptel/link/security.hpp"
 
 namespace haptel::mediator {
 
@@ -120,9 +121,12 @@ VehicleLink::VehicleLink(const VehicleLinkOptions& options)
                                        std::to_string(options_.link.domain_id)};
     // The run's link faults on both ends: each delays and drops what it receives.
     if (options_.link.fault.enabled) arguments.insert(arguments.end(), {"--link-fault", LinkFaultText(options_.link.fault)});
+    if (!options_.link.security.empty()) arguments.insert(arguments.end(), {"--security", options_.link.security.string()});
     process_ = std::make_unique<ChildProcess>(options_.program.string(), arguments);
   }
-  participant_ = std::make_unique<link::Participant>(options_.link, "haptel-mediator");
+  LinkConfig link = options_.link;
+  link.security_identity = link::OperatorIdentity();
+  participant_ = std::make_unique<link::Participant>(link, "haptel-mediator");
   if (IsBlimpKind(options_.vehicle.kind)) {
     blimp_commands_ = std::make_unique<link::BlimpCommandWriter>(*participant_, link::TopicName(name(), "command"),
                                                                  link::Profile::kCommand);

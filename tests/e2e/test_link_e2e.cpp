@@ -5,6 +5,9 @@
 #include <catch2/catch.hpp>
 #include <signal.h>
 
+#include <unistd.h>
+
+#include <fstream>
 #include <regex>
 #include <string>
 #include <vector>
@@ -168,4 +171,127 @@ TEST_CASE("link down: the vehicle stops within its watchdog and the run reports 
   CHECK(std::stod(JsonField(json, "lost_detect_s")) < 1.0);
   // After the cut, the vehicle's watchdog stopped its motors.
   CHECK(run.err().find("watchdog: no command for 0.25", before) != std::string::npos);
+}
+
+TEST_CASE("haptel security init, then a secured lap: the spawned vehicle is secured too; a missing identity is one line") {
+  const auto dir = test::ScratchDir("e2e-security");
+  const auto security = dir / "deployment";
+  {
+    Child init({Bin("haptel"), "security", "init", security.string(), "--vehicles", "robot1", "--days", "30"});
+    INFO(init.out() << init.err());
+    REQUIRE(init.Wait(120.0) == 0);
+    CHECK(init.out().find("identities operator, vehicle-robot1 (valid 30 days)") != std::string::npos);
+  }
+  {
+    // Again: refused, nothing overwritten.
+    Child again({Bin("haptel"), "security", "init", security.string()});
+    CHECK(again.Wait(60.0) == 2);
+    CHECK(again.err().find("already holds a CA") != std::string::npos);
+  }
+  const int domain = test::UniqueDomain(46);
+  Child run({Bin("haptel"), "run", "--security", security.string(), "--track", "config/tracks/test-short.yaml",
+             "--json", "--domain", std::to_string(domain), "--database", (dir / "runs.db").string(),
+             "--vehicle-timeout", "5"});
+  const int code = run.Wait(180.0);
+  INFO(run.out() << run.err());
+  CHECK(code == 0);
+  CHECK(JsonField(run.LastLine(), "outcome") == "completed");
+
+  // A vehicle the folder has no identity for stops at once, saying so.
+  Child stray({Bin("haptel-vehicle"), "--name", "blimp9", "--track", "config/tracks/test-short.yaml", "--security",
+               security.string(), "--domain", std::to_string(domain)});
+  CHECK(stray.Wait(30.0) == 2);
+  CHECK(stray.err().find("no vehicle-blimp9.key for identity 'vehicle-blimp9'") != std::string::npos);
+}
+
+namespace {
+
+/// Runs `argv`; its exit code.
+int Run(const std::vector<std::string>& argv) {
+  Child c(argv);
+  return c.Wait(30.0);
+}
+
+/// A network namespace joined to this one by a veth pair: this side
+/// 10.231.N.1 on "hxaPID", the other 10.231.N.2 on "hxbPID" inside it.
+class OtherHost {
+ public:
+  OtherHost() {
+    const std::string id = std::to_string(getpid());
+    const int subnet = static_cast<int>(getpid() % 250) + 1;
+    name_ = "haptel-test-" + id;
+    here_ = "hxa" + id;
+    there_ = "hxb" + id;
+    address_here_ = "10.231." + std::to_string(subnet) + ".1";
+    address_there_ = "10.231." + std::to_string(subnet) + ".2";
+    const std::string ip = "/usr/sbin/ip";
+    ok_ = Run({ip, "netns", "add", name_}) == 0 &&
+          Run({ip, "link", "add", here_, "type", "veth", "peer", "name", there_}) == 0 &&
+          Run({ip, "link", "set", there_, "netns", name_}) == 0 &&
+          Run({ip, "addr", "add", address_here_ + "/24", "dev", here_}) == 0 &&
+          Run({ip, "link", "set", here_, "up"}) == 0 &&
+          Run({ip, "netns", "exec", name_, ip, "addr", "add", address_there_ + "/24", "dev", there_}) == 0 &&
+          Run({ip, "netns", "exec", name_, ip, "link", "set", there_, "up"}) == 0 &&
+          Run({ip, "netns", "exec", name_, ip, "link", "set", "lo", "up"}) == 0;
+  }
+  ~OtherHost() {
+    Run({"/usr/sbin/ip", "netns", "del", name_});
+    Run({"/usr/sbin/ip", "link", "del", here_});
+  }
+  bool ok() const { return ok_; }
+  /// `argv` run inside the other namespace.
+  std::vector<std::string> Inside(std::vector<std::string> argv) const {
+    argv.insert(argv.begin(), {"/usr/sbin/ip", "netns", "exec", name_});
+    return argv;
+  }
+  const std::string& address_here() const { return address_here_; }
+  const std::string& address_there() const { return address_there_; }
+  /// Bytes received on this side of the veth pair so far.
+  uint64_t received_bytes() const {
+    std::ifstream in("/sys/class/net/" + here_ + "/statistics/rx_bytes");
+    uint64_t bytes = 0;
+    in >> bytes;
+    return bytes;
+  }
+
+ private:
+  std::string name_, here_, there_, address_here_, address_there_;
+  bool ok_ = false;
+};
+
+}  // namespace
+
+TEST_CASE("haptel run --attach drives a vehicle in another network namespace, over a veth pair") {
+  if (geteuid() != 0) {
+    WARN("SKIPPED: another network namespace needs root (ip netns); the link across hosts was not tested");
+    return;
+  }
+  OtherHost host;
+  if (!host.ok()) {
+    WARN("SKIPPED: ip netns or a veth pair could not be made here; the link across hosts was not tested");
+    return;
+  }
+  const int domain = test::UniqueDomain(47);
+  const auto dir = test::ScratchDir("e2e-netns");
+  Child vehicle(host.Inside({Bin("haptel-vehicle"), "--track", "config/tracks/test-short.yaml", "--domain",
+                             std::to_string(domain), "--dds-interfaces", host.address_there(), "--dds-peers",
+                             host.address_here()}));
+  REQUIRE(test::WaitFor([&] {
+    vehicle.Pump();
+    return vehicle.err().find(" up on domain") != std::string::npos;
+  }, 30.0));
+  const uint64_t before = host.received_bytes();
+  Child run({Bin("haptel"), "run", "--attach", "--track", "config/tracks/test-short.yaml", "--json", "--domain",
+             std::to_string(domain), "--dds-interfaces", host.address_here(), "--dds-peers", host.address_there(),
+             "--database", (dir / "runs.db").string(), "--vehicle-timeout", "5"});
+  const int code = run.Wait(120.0);
+  INFO(run.out() << run.err());
+  CHECK(code == 0);
+  CHECK(JsonField(run.LastLine(), "outcome") == "completed");
+  // The state and the video crossed the veth pair (a lap's video is megabytes).
+  const uint64_t crossed = host.received_bytes() - before;
+  INFO("bytes received over the veth pair: " << crossed);
+  CHECK(crossed > 1000000);
+  kill(vehicle.pid(), SIGTERM);
+  CHECK(vehicle.Wait(30.0) == 0);
 }

@@ -15,6 +15,7 @@
 #include "haptel/core/stop_signals.hpp"
 #include "haptel/core/log.hpp"
 #include "haptel/link/fault_transport.hpp"
+#include "haptel/link/security.hpp"
 #include "haptel/config/blimp_course.hpp"
 #include "haptel/vehicles/blimp_adapters.hpp"
 #include "haptel/vehicles/blimp_node.hpp"
@@ -25,7 +26,8 @@
 namespace {
 constexpr const char* kUsage =
     "usage: haptel-vehicle [--config FILE] [--track FILE] [--name NAME] [--domain N] [--can IFACE]\n"
-    "                      [--serial-port PATH] [--link-fault SPEC]\n"
+    "                      [--serial-port PATH] [--link-fault SPEC] [--security DIR]\n"
+    "                      [--dds-interfaces ADDR,...] [--dds-peers ADDR,...]\n"
     "  --config FILE  vehicle configuration (default config/vehicles/sim-robot.yaml)\n"
     "  --can IFACE    SocketCAN interface of a can-robot (overrides can.interface)\n"
     "  --serial-port PATH  the servo controller of a servo-blimp (overrides servo.port)\n"
@@ -34,7 +36,11 @@ constexpr const char* kUsage =
     "  --domain N     DDS domain id (overrides link.domain_id)\n"
     "  --link-fault SPEC  inject faults into what this process receives, e.g.\n"
     "                 delay=100ms,jitter=20ms,loss=5% (overrides link.fault); with it,\n"
-    "                 SIGUSR1 cuts the link both ways and restores it\n";
+    "                 SIGUSR1 cuts the link both ways and restores it\n"
+    "  --security DIR DDS Security with the folder `haptel security init` made (overrides\n"
+    "                 link.security); this vehicle is identity vehicle-NAME\n"
+    "  --dds-interfaces LIST  the network interfaces (IPv4) DDS may use (overrides link.interfaces)\n"
+    "  --dds-peers LIST       where the operator's host is: unicast discovery (overrides link.peers)\n";
 }  // namespace
 
 namespace {
@@ -97,7 +103,8 @@ int main(int argc, char** argv) {
     std::unique_ptr<BlimpCourseConfig> course;
     std::unique_ptr<vehicles::BlimpAdapter> blimp;
     cli::ReadInput([&] {
-      const Args args(argc, argv, {"config", "track", "name", "domain", "can", "serial-port", "link-fault"},
+      const Args args(argc, argv, {"config", "track", "name", "domain", "can", "serial-port", "link-fault", "security",
+                                       "dds-interfaces", "dds-peers"},
                       {});
       if (!args.positional().empty()) throw UsageError("unexpected argument '" + args.positional()[0] + "'");
       const std::filesystem::path file =
@@ -111,6 +118,13 @@ int main(int argc, char** argv) {
       }
       if (auto domain = args.Int("domain", 0, 232)) config.link.domain_id = *domain;
       if (auto fault = args.Value("link-fault")) config.link.fault = ParseLinkFaultOption(*fault);
+      if (auto security = args.Value("security")) config.link.security = *security;
+      if (auto list = args.Value("dds-interfaces")) config.link.interfaces = ParseAddressOption("dds-interfaces", *list);
+      if (auto list = args.Value("dds-peers")) config.link.peers = ParseAddressOption("dds-peers", *list);
+      if (!config.link.security.empty()) {
+        config.link.security_identity = link::VehicleIdentity(config.name);
+        link::CheckSecurity(config.link.security, config.link.security_identity);
+      }
       if (auto world = args.Value("track")) config.world = *world;
       if (auto can = args.Value("can")) {
         if (!UsesCan(config.kind)) {

@@ -1,5 +1,6 @@
 #pragma once
 /// @file How a process joins the DDS link.
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,10 @@ LinkFault ParseLinkFault(const std::string& text);
 /// ParseLinkFault for the --link-fault option of haptel run and
 /// haptel-vehicle: a UsageError ("option --link-fault: expected ...").
 LinkFault ParseLinkFaultOption(const std::string& text);
+/// A comma-separated list of IPv4 addresses for option `--option` (the
+/// --dds-interfaces and --dds-peers of haptel run and haptel-vehicle):
+/// a UsageError naming the option and the address that is not one.
+std::vector<std::string> ParseAddressOption(const std::string& option, const std::string& text);
 /// The text ParseLinkFault reads back as `fault` (what a spawned vehicle is given).
 std::string LinkFaultText(const LinkFault& fault);
 
@@ -46,6 +51,13 @@ struct LinkConfig {
   double command_deadline_s = 0.1;
   /// Injected faults (none by default).
   LinkFault fault;
+  /// DDS Security (empty: off): the folder `haptel security init` made, with
+  /// the CA, each identity's certificate, key and signed permissions, and the
+  /// signed governance. `link.security` in a file is relative to that file.
+  std::filesystem::path security;
+  /// Which identity of `security` this process is ("operator",
+  /// "vehicle-robot1"): set by the program, never read from a file.
+  std::string security_identity;
 
   /// Throws ConfigFieldError unless the domain and deadline are in range and
   /// every interface and peer is a dotted IPv4 address ("peers[1]").

@@ -65,6 +65,12 @@ class FaultLine {
   /// Whether a packet about to be sent is dropped (the link is down).
   bool DropSend();
 
+  /// The transport's own capture (what a packet capture would see on the
+  /// wire): from now on, keep a copy of up to `max_packets` packets as they
+  /// arrive, before any fault. TakeCaptured hands them over.
+  void CaptureReceived(size_t max_packets);
+  std::vector<std::vector<uint8_t>> TakeCaptured();
+
  private:
   struct Packet {
     int64_t due_ns = 0;
@@ -86,6 +92,8 @@ class FaultLine {
   std::mt19937_64 random_;
   uint64_t order_ = 0;
   bool stopped_ = false;
+  std::atomic<size_t> capture_max_{0};
+  std::vector<std::vector<uint8_t>> captured_;
   std::atomic<uint64_t> received_{0}, lost_{0}, delayed_{0}, dropped_down_{0};
   std::thread thread_;  // last: it uses the rest
 };

@@ -49,6 +49,8 @@ class Participant {
   const LinkConfig& config() const { return config_; }
   /// What the injected faults did (zeros without LinkConfig::fault).
   FaultCounts fault_counts() const { return line_ ? line_->Counts() : FaultCounts{}; }
+  /// The fault transport's line (null without LinkConfig::fault).
+  FaultLine* fault_line() const { return line_.get(); }
 
  private:
   LinkConfig config_;

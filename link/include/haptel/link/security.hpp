@@ -1,0 +1,53 @@
+#pragma once
+/// @file DDS Security for the link (Fast DDS's builtin plugins: PKI-DH
+/// authentication, Access-Permissions, AES-GCM-GMAC encryption): the folder
+/// `haptel security init` makes, the check a process runs on it at start,
+/// and the participant properties that turn it on.
+///
+/// One folder holds one deployment: a CA that signs every identity and the
+/// documents, the signed governance (everything authenticated and
+/// encrypted: discovery, liveliness, metadata and data), and per identity a
+/// certificate, its key and signed permissions. The operator may publish
+/// commands and read states and video of any vehicle; vehicle NAME may
+/// publish only haptel/NAME/state and haptel/NAME/video and read only
+/// haptel/NAME/command. Anything else is denied.
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace haptel::link {
+
+/// The identity of the operator's side (every `haptel run`).
+std::string OperatorIdentity();
+/// The identity of vehicle `name` ("vehicle-robot1").
+std::string VehicleIdentity(const std::string& name);
+
+/// The files of `identity` in security folder `dir`.
+struct SecurityFiles {
+  std::filesystem::path ca;           ///< ca.pem: identity and permissions CA
+  std::filesystem::path governance;   ///< governance.p7s (S/MIME, signed by the CA)
+  std::filesystem::path certificate;  ///< IDENTITY.pem
+  std::filesystem::path private_key;  ///< IDENTITY.key
+  std::filesystem::path permissions;  ///< IDENTITY-permissions.p7s
+};
+SecurityFiles SecurityFilesFor(const std::filesystem::path& dir, const std::string& identity);
+
+/// At start: every file of `identity` is there, and the CA's and the
+/// identity's certificates are valid now. Throws ConfigError naming the
+/// folder, the file and what to do (a missing identity: `haptel security
+/// init` with it; an expired certificate: when it expired).
+void CheckSecurity(const std::filesystem::path& dir, const std::string& identity);
+
+/// The Fast DDS participant properties for `identity` in `dir`.
+std::vector<std::pair<std::string, std::string>> SecurityProperties(const std::filesystem::path& dir,
+                                                                     const std::string& identity);
+
+/// `haptel security init DIR`: creates the CA, the operator's identity and
+/// one for each of `vehicles`, the governance and each identity's
+/// permissions, all signed, with the `openssl` program; valid for `days`.
+/// Refuses a folder that already holds a CA (nothing is overwritten).
+/// Throws std::runtime_error with openssl's message when a step fails.
+void InitSecurity(const std::filesystem::path& dir, const std::vector<std::string>& vehicles, int days);
+
+}  // namespace haptel::link

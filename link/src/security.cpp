@@ -1,0 +1,244 @@
+#include "haptel/link/security.hpp"
+
+#include <openssl/pem.h>
+#include <openssl/x509.h>
+
+#include <cstdio>
+#include <ctime>
+#include <fstream>
+#include <memory>
+#include <stdexcept>
+
+#include "haptel/config/error.hpp"
+#include "haptel/core/child_process.hpp"
+
+namespace haptel::link {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr int kMaxDomain = 232;
+
+/// The subject of an identity's certificate: one CN, so the permissions'
+/// subject_name matches it whatever order a library prints names in.
+std::string Subject(const std::string& identity) { return "CN=haptel-" + identity; }
+
+/// Runs openssl with `arguments` in `dir`; throws with its output on failure.
+void OpenSsl(const fs::path& dir, std::vector<std::string> arguments) {
+  ChildProcess openssl("/usr/bin/openssl", arguments, ChildProcess::Options{true});
+  const int code = openssl.Wait(120.0);
+  if (code != 0) {
+    std::string line;
+    for (const auto& a : arguments) line += " " + a;
+    throw std::runtime_error("openssl" + line + " (in " + dir.string() + ") failed: " + openssl.err());
+  }
+}
+
+void Write(const fs::path& file, const std::string& text) {
+  std::ofstream out(file);
+  out << text;
+  if (!out) throw std::runtime_error("cannot write " + file.string());
+}
+
+std::string Governance() {
+  return R"(<?xml version="1.0" encoding="UTF-8"?>
+<!-- Haptel's link: only participants the CA vouches for join, and everything
+     they say is encrypted. Written by `haptel security init`. -->
+<dds xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance"
+     xsi:noNamespaceSchemaLocation="http://www.omg.org/spec/DDS-SECURITY/20170901/omg_shared_ca_governance.xsd">
+  <domain_access_rules>
+    <domain_rule>
+      <domains><id_range><min>0</min><max>)" +
+         std::to_string(kMaxDomain) + R"(</max></id_range></domains>
+      <allow_unauthenticated_participants>false</allow_unauthenticated_participants>
+      <enable_join_access_control>true</enable_join_access_control>
+      <discovery_protection_kind>ENCRYPT</discovery_protection_kind>
+      <liveliness_protection_kind>ENCRYPT</liveliness_protection_kind>
+      <rtps_protection_kind>NONE</rtps_protection_kind>
+      <topic_access_rules>
+        <topic_rule>
+          <topic_expression>*</topic_expression>
+          <enable_discovery_protection>true</enable_discovery_protection>
+          <enable_liveliness_protection>true</enable_liveliness_protection>
+          <enable_read_access_control>true</enable_read_access_control>
+          <enable_write_access_control>true</enable_write_access_control>
+          <metadata_protection_kind>ENCRYPT</metadata_protection_kind>
+          <data_protection_kind>ENCRYPT</data_protection_kind>
+        </topic_rule>
+      </topic_access_rules>
+    </domain_rule>
+  </domain_access_rules>
+</dds>
+)";
+}
+
+std::string Iso(std::time_t t) {
+  char text[32];
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%S", &tm);
+  return text;
+}
+
+std::string Topics(const std::vector<std::string>& topics) {
+  std::string out;
+  for (const auto& t : topics) out += "<topic>" + t + "</topic>";
+  return out;
+}
+
+std::string Permissions(const std::string& identity, const std::vector<std::string>& publish,
+                        const std::vector<std::string>& subscribe, int days) {
+  const std::time_t now = std::time(nullptr);
+  return R"(<?xml version="1.0" encoding="UTF-8"?>
+<!-- What ')" + identity + R"(' may do on Haptel's link. Written by `haptel security init`. -->
+<dds xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance"
+     xsi:noNamespaceSchemaLocation="http://www.omg.org/spec/DDS-SECURITY/20170901/omg_shared_ca_permissions.xsd">
+  <permissions>
+    <grant name=")" + identity + R"(">
+      <subject_name>)" + Subject(identity) + R"(</subject_name>
+      <validity><not_before>)" + Iso(now - 3600) + "</not_before><not_after>" + Iso(now + 86400L * days) +
+         R"(</not_after></validity>
+      <allow_rule>
+        <domains><id_range><min>0</min><max>)" + std::to_string(kMaxDomain) + R"(</max></id_range></domains>
+        <publish><topics>)" + Topics(publish) + R"(</topics></publish>
+        <subscribe><topics>)" + Topics(subscribe) + R"(</topics></subscribe>
+      </allow_rule>
+      <default>DENY</default>
+    </grant>
+  </permissions>
+</dds>
+)";
+}
+
+/// A key and a certificate for `identity`, signed by the CA.
+void MakeIdentity(const fs::path& dir, const std::string& identity, int days) {
+  const std::string key = identity + ".key";
+  const std::string csr = (dir / (identity + ".csr")).string();
+  // Appended, not `"/" + ...`: GCC 12 -O2 flags that form with a false -Werror=restrict.
+  std::string subject = "/";
+  subject.append(Subject(identity));
+  OpenSsl(dir, {"req", "-new", "-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1", "-nodes", "-keyout",
+                (dir / key).string(), "-out", csr, "-subj", subject});
+  OpenSsl(dir, {"x509", "-req", "-in", csr, "-CA", (dir / "ca.pem").string(), "-CAkey", (dir / "ca.key").string(),
+                "-CAcreateserial", "-days", std::to_string(days), "-sha256", "-out",
+                (dir / (identity + ".pem")).string()});
+  fs::remove(csr);
+}
+
+/// `document`.xml signed by the CA into `document`.p7s (S/MIME, clear text).
+void Sign(const fs::path& dir, const std::string& document) {
+  OpenSsl(dir, {"smime", "-sign", "-text", "-in", (dir / (document + ".xml")).string(), "-out",
+                (dir / (document + ".p7s")).string(), "-signer", (dir / "ca.pem").string(), "-inkey",
+                (dir / "ca.key").string()});
+}
+
+struct X509Free {
+  void operator()(X509* x) const { X509_free(x); }
+};
+
+/// Loads a PEM certificate; throws ConfigError naming it.
+std::unique_ptr<X509, X509Free> LoadCertificate(const fs::path& dir, const fs::path& file) {
+  FILE* f = std::fopen(file.c_str(), "r");
+  if (f == nullptr) {
+    throw ConfigError("security " + dir.string() + ": no " + file.filename().string() +
+                      "; make the folder with `haptel security init " + dir.string() + "`");
+  }
+  std::unique_ptr<X509, X509Free> cert(PEM_read_X509(f, nullptr, nullptr, nullptr));
+  std::fclose(f);
+  if (!cert) throw ConfigError("security " + dir.string() + ": " + file.filename().string() + " is not a PEM certificate");
+  return cert;
+}
+
+std::string TimeText(const ASN1_TIME* t) {
+  std::tm tm{};
+  if (ASN1_TIME_to_tm(t, &tm) != 1) return "?";
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%d %H:%M UTC", &tm);
+  return text;
+}
+
+void CheckValidNow(const fs::path& dir, const fs::path& file) {
+  const auto cert = LoadCertificate(dir, file);
+  if (X509_cmp_current_time(X509_get0_notBefore(cert.get())) > 0) {
+    throw ConfigError("security " + dir.string() + ": certificate " + file.filename().string() +
+                      " is not valid before " + TimeText(X509_get0_notBefore(cert.get())) +
+                      " (is this host's clock right?)");
+  }
+  if (X509_cmp_current_time(X509_get0_notAfter(cert.get())) < 0) {
+    throw ConfigError("security " + dir.string() + ": certificate " + file.filename().string() + " expired on " +
+                      TimeText(X509_get0_notAfter(cert.get())) + "; make new ones with `haptel security init`");
+  }
+}
+
+}  // namespace
+
+std::string OperatorIdentity() { return "operator"; }
+std::string VehicleIdentity(const std::string& name) { return "vehicle-" + name; }
+
+SecurityFiles SecurityFilesFor(const fs::path& dir, const std::string& identity) {
+  return {dir / "ca.pem", dir / "governance.p7s", dir / (identity + ".pem"), dir / (identity + ".key"),
+          dir / (identity + "-permissions.p7s")};
+}
+
+void CheckSecurity(const fs::path& dir, const std::string& identity) {
+  if (!fs::is_directory(dir)) {
+    throw ConfigError("security " + dir.string() + ": no such folder; make it with `haptel security init " +
+                      dir.string() + "`");
+  }
+  const SecurityFiles f = SecurityFilesFor(dir, identity);
+  for (const fs::path& file : {f.governance, f.private_key, f.permissions}) {
+    if (!fs::exists(file)) {
+      throw ConfigError("security " + dir.string() + ": no " + file.filename().string() + " for identity '" +
+                        identity + "'; `haptel security init` makes one for the operator and each vehicle it is "
+                        "given (--vehicles)");
+    }
+  }
+  CheckValidNow(dir, f.ca);
+  CheckValidNow(dir, f.certificate);
+}
+
+std::vector<std::pair<std::string, std::string>> SecurityProperties(const fs::path& dir,
+                                                                     const std::string& identity) {
+  const SecurityFiles f = SecurityFilesFor(fs::absolute(dir), identity);
+  const auto file = [](const fs::path& p) { return "file://" + p.string(); };  // file:// then an absolute path
+  return {
+      {"dds.sec.auth.plugin", "builtin.PKI-DH"},
+      {"dds.sec.auth.builtin.PKI-DH.identity_ca", file(f.ca)},
+      {"dds.sec.auth.builtin.PKI-DH.identity_certificate", file(f.certificate)},
+      {"dds.sec.auth.builtin.PKI-DH.private_key", file(f.private_key)},
+      {"dds.sec.access.plugin", "builtin.Access-Permissions"},
+      {"dds.sec.access.builtin.Access-Permissions.permissions_ca", file(f.ca)},
+      {"dds.sec.access.builtin.Access-Permissions.governance", file(f.governance)},
+      {"dds.sec.access.builtin.Access-Permissions.permissions", file(f.permissions)},
+      {"dds.sec.crypto.plugin", "builtin.AES-GCM-GMAC"},
+  };
+}
+
+void InitSecurity(const fs::path& dir, const std::vector<std::string>& vehicles, int days) {
+  if (fs::exists(dir / "ca.pem")) {
+    throw std::runtime_error(dir.string() + " already holds a CA (ca.pem); remove the folder or choose another");
+  }
+  fs::create_directories(dir);
+  OpenSsl(dir, {"req", "-x509", "-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1", "-nodes", "-keyout",
+                (dir / "ca.key").string(), "-out", (dir / "ca.pem").string(), "-days", std::to_string(days),
+                "-sha256", "-subj", "/CN=haptel-ca"});
+  fs::permissions(dir / "ca.key", fs::perms::owner_read | fs::perms::owner_write);
+  Write(dir / "governance.xml", Governance());
+  Sign(dir, "governance");
+  const std::string op = OperatorIdentity();
+  MakeIdentity(dir, op, days);
+  Write(dir / (op + "-permissions.xml"),
+        Permissions(op, {"haptel/*/command"}, {"haptel/*/state", "haptel/*/video"}, days));
+  Sign(dir, op + "-permissions");
+  for (const std::string& name : vehicles) {
+    const std::string id = VehicleIdentity(name);
+    MakeIdentity(dir, id, days);
+    Write(dir / (id + "-permissions.xml"),
+          Permissions(id, {"haptel/" + name + "/state", "haptel/" + name + "/video"}, {"haptel/" + name + "/command"},
+                      days));
+    Sign(dir, id + "-permissions");
+  }
+}
+
+}  // namespace haptel::link

@@ -1,0 +1,13 @@
+#pragma once
+/// @file `haptel security init DIR [--vehicles A,B] [--days N]`: makes the
+/// folder DDS Security needs (link/security.hpp): a CA, the operator's and
+/// each vehicle's identity, the signed governance and permissions. Then
+/// `--security DIR` (or link.security) on haptel run and haptel-vehicle.
+
+namespace haptel::mediator {
+
+/// `argv[0]` is "security". Exit 0 done, 2 bad arguments or a folder that
+/// already holds a CA, 1 when openssl fails.
+int SecurityCommand(int argc, const char* const* argv);
+
+}  // namespace haptel::mediator

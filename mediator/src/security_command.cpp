@@ -1,0 +1,65 @@
+#include "haptel/mediator/security_command.hpp"
+
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "haptel/config/vehicle.hpp"
+#include "haptel/core/args.hpp"
+#include "haptel/core/cli.hpp"
+#include "haptel/link/security.hpp"
+
+namespace haptel::mediator {
+
+namespace {
+
+constexpr const char* kUsage =
+    "usage: haptel security init DIR [--vehicles NAME,...] [--days N]\n"
+    "  makes DIR for DDS Security: a CA (ca.pem, ca.key: keep it safe), the operator's identity\n"
+    "  and one per vehicle (default robot1,blimp1), the signed governance (everything\n"
+    "  authenticated and encrypted) and each identity's signed permissions (the operator\n"
+    "  commands, a vehicle publishes only its own state and video), valid for N days\n"
+    "  (default 365). Then: haptel run --security DIR, haptel-vehicle --security DIR.\n";
+
+}  // namespace
+
+int SecurityCommand(int argc, const char* const* argv) {
+  return cli::Main({"haptel security", kUsage}, argc, argv, [&]() -> int {
+    std::filesystem::path dir;
+    std::vector<std::string> vehicles{"robot1", "blimp1"};
+    int days = 365;
+    cli::ReadInput([&] {
+      const Args args(argc, argv, {"vehicles", "days"}, {});
+      const auto& words = args.positional();
+      if (words.empty() || words[0] != "init") throw UsageError("expected `haptel security init DIR`");
+      if (words.size() != 2) throw UsageError("expected one folder: `haptel security init DIR`");
+      dir = words[1];
+      if (auto list = args.Value("vehicles")) {
+        vehicles.clear();
+        std::stringstream in(*list);
+        std::string name;
+        while (std::getline(in, name, ',')) {
+          if (const std::string problem = VehicleNameProblem(name); !problem.empty()) {
+            throw UsageError("option --vehicles: '" + name + "': expected " + problem);
+          }
+          vehicles.push_back(name);
+        }
+      }
+      days = args.Int("days", 1, 3650).value_or(days);
+      if (std::filesystem::exists(dir / "ca.pem")) {
+        throw UsageError(dir.string() + " already holds a CA (ca.pem): nothing was changed; remove the folder or "
+                         "choose another");
+      }
+      return 0;
+    });
+    link::InitSecurity(dir, vehicles, days);
+    std::string names = link::OperatorIdentity();
+    for (const auto& v : vehicles) names += ", " + link::VehicleIdentity(v);
+    std::printf("wrote %s: CA, governance, identities %s (valid %d days)\n", dir.c_str(), names.c_str(), days);
+    return 0;
+  });
+}
+
+}  // namespace haptel::mediator

@@ -1,0 +1,218 @@
+// DDS Security on the link: the folder `haptel security init` makes, the
+// check at start, and what it does on the wire: commands from a participant
+// without certificates, from another CA, or without permission for the
+// command topic never reach a vehicle; the operator's do, and no command
+// payload crosses the wire in plain text (the fault transport's own capture
+// of every packet received).
+#include <openssl/evp.h>
+#include <openssl/pem.h>
+#include <openssl/x509.h>
+
+#include <catch2/catch.hpp>
+#include <atomic>
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <thread>
+
+#include "haptel/config/error.hpp"
+#include "haptel/core/child_process.hpp"
+#include "haptel/link/security.hpp"
+#include "haptel/link/topic.hpp"
+#include "test_env.hpp"
+
+using namespace haptel;
+namespace fs = std::filesystem;
+
+namespace {
+
+/// One security folder for the whole test program (openssl takes a moment).
+const fs::path& Folder() {
+  static const fs::path dir = [] {
+    const fs::path d = test::ScratchDir("security") / "deployment";
+    link::InitSecurity(d, {"robot1"}, 30);
+    return d;
+  }();
+  return dir;
+}
+
+/// A participant on `domain`, through the fault transport (so intra-process
+/// delivery is off and every packet crosses the socket), with `security`
+/// as `identity` (none when empty).
+LinkConfig Link(int domain, const fs::path& security = {}, const std::string& identity = {}) {
+  LinkConfig c;
+  c.domain_id = domain;
+  c.fault = ParseLinkFault("on");
+  c.security = security;
+  c.security_identity = identity;
+  return c;
+}
+
+/// A vehicle's side: counts the commands that reach it.
+struct Vehicle {
+  explicit Vehicle(int domain)
+      : participant(Link(domain, Folder(), link::VehicleIdentity("robot1")), "vehicle"),
+        commands(participant, link::TopicName("robot1", "command"), link::Profile::kCommand,
+                 [this](const msg::DriveCommand&) { received.fetch_add(1); }) {}
+  link::Participant participant;
+  std::atomic<int> received{0};
+  link::CommandReader commands;
+};
+
+/// Commands at 100 Hz for `seconds` from a participant made with `config`.
+void Command(const LinkConfig& config, double seconds, const std::string& marker = "") {
+  link::Participant participant(config, "operator");
+  link::CommandWriter writer(participant, link::TopicName("robot1", "command"), link::Profile::kCommand);
+  msg::DriveCommand m;
+  m.left(0.25f);
+  m.operator_name(marker);
+  for (int i = 0; i < static_cast<int>(seconds * 100); ++i) {
+    m.seq(static_cast<uint64_t>(i + 1));
+    writer.Write(m);
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+}
+
+/// Signs `xml` with the folder's CA into `p7s` (openssl smime, as init does).
+void SignWithCa(const fs::path& xml, const fs::path& p7s) {
+  ChildProcess openssl("/usr/bin/openssl",
+                       {"smime", "-sign", "-text", "-in", xml.string(), "-out", p7s.string(), "-signer",
+                        (Folder() / "ca.pem").string(), "-inkey", (Folder() / "ca.key").string()},
+                       ChildProcess::Options{true});
+  REQUIRE(openssl.Wait(60.0) == 0);
+}
+
+/// A self-signed certificate that expired yesterday, written to `file`.
+void WriteExpiredCertificate(const fs::path& file) {
+  EVP_PKEY* key = EVP_EC_gen("P-256");
+  REQUIRE(key != nullptr);
+  X509* cert = X509_new();
+  X509_set_version(cert, 2);
+  X509_gmtime_adj(X509_getm_notBefore(cert), -2 * 86400L);
+  X509_gmtime_adj(X509_getm_notAfter(cert), -1 * 86400L);
+  X509_set_pubkey(cert, key);
+  X509_NAME* name = X509_get_subject_name(cert);
+  X509_NAME_add_entry_by_txt(name, "CN", MBSTRING_ASC, reinterpret_cast<const unsigned char*>("haptel-operator"), -1,
+                             -1, 0);
+  X509_set_issuer_name(cert, name);
+  REQUIRE(X509_sign(cert, key, EVP_sha256()) > 0);
+  FILE* out = std::fopen(file.c_str(), "w");
+  REQUIRE(out != nullptr);
+  PEM_write_X509(out, cert);
+  std::fclose(out);
+  X509_free(cert);
+  EVP_PKEY_free(key);
+}
+
+std::string CheckMessage(const fs::path& dir, const std::string& identity) {
+  try {
+    link::CheckSecurity(dir, identity);
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "valid";
+}
+
+}  // namespace
+
+TEST_CASE("security init: a CA, the identities and signed documents; the check names what is missing or expired") {
+  const fs::path& dir = Folder();
+  for (const char* file : {"ca.pem", "governance.p7s", "operator.pem", "operator.key", "operator-permissions.p7s",
+                           "vehicle-robot1.pem", "vehicle-robot1.key", "vehicle-robot1-permissions.p7s"}) {
+    CHECK(fs::exists(dir / file));
+  }
+  CHECK(CheckMessage(dir, "operator") == "valid");
+  CHECK(CheckMessage(dir, link::VehicleIdentity("robot1")) == "valid");
+  CHECK(CheckMessage(dir, link::VehicleIdentity("blimp9")).find("no vehicle-blimp9.key for identity 'vehicle-blimp9'") !=
+        std::string::npos);
+  CHECK(CheckMessage(dir / "nowhere", "operator").find("no such folder") != std::string::npos);
+  // Nothing is overwritten.
+  CHECK_THROWS_WITH(link::InitSecurity(dir, {"robot1"}, 30), Catch::Contains("already holds a CA"));
+
+  // An expired certificate is named with the day it expired.
+  const fs::path expired = test::ScratchDir("security-expired");
+  for (const char* file : {"ca.pem", "governance.p7s", "operator.key", "operator-permissions.p7s"}) {
+    fs::copy_file(dir / file, expired / file, fs::copy_options::overwrite_existing);
+  }
+  WriteExpiredCertificate(expired / "operator.pem");
+  const std::string message = CheckMessage(expired, "operator");
+  CHECK(message.find("certificate operator.pem expired on") != std::string::npos);
+  CHECK(message.find("haptel security init") != std::string::npos);
+}
+
+TEST_CASE("secured: only the operator's commands reach the vehicle; no certificates, another CA or no permission: none") {
+  const int domain = test::UniqueDomain(61);
+  Vehicle vehicle(domain);
+  SECTION("a participant without certificates") { Command(Link(domain), 2.0); }
+  SECTION("an operator whose certificates come from another CA") {
+    const fs::path other = test::ScratchDir("security-other") / "deployment";
+    if (!fs::exists(other / "ca.pem")) link::InitSecurity(other, {"robot1"}, 30);
+    Command(Link(domain, other, link::OperatorIdentity()), 2.0);
+  }
+  SECTION("an operator whose permissions do not cover the command topic") {
+    // The folder's own CA signs permissions that only let it read states.
+    const fs::path dir = test::ScratchDir("security-narrow");
+    for (const char* file : {"ca.pem", "governance.p7s", "operator.pem", "operator.key"}) {
+      fs::copy_file(Folder() / file, dir / file, fs::copy_options::overwrite_existing);
+    }
+    std::ifstream in(Folder() / "operator-permissions.xml");
+    std::string xml((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string allowed = "<topic>haptel/*/command</topic>";
+    REQUIRE(xml.find(allowed) != std::string::npos);
+    xml.replace(xml.find(allowed), allowed.size(), "<topic>haptel/*/nothing</topic>");
+    std::ofstream(dir / "operator-permissions.xml") << xml;
+    SignWithCa(dir / "operator-permissions.xml", dir / "operator-permissions.p7s");
+    // Its participant starts (the documents are valid), but may not write commands.
+    try {
+      Command(Link(domain, dir, link::OperatorIdentity()), 2.0);
+    } catch (const std::runtime_error& e) {
+      CHECK(std::string(e.what()).find("cannot create writer") != std::string::npos);
+    }
+  }
+  CHECK(vehicle.received.load() == 0);
+  // The control: the deployment's own operator is heard.
+  Command(Link(domain, Folder(), link::OperatorIdentity()), 1.5);
+  CHECK(test::WaitFor([&] { return vehicle.received.load() > 0; }, 10.0));
+}
+
+TEST_CASE("secured: no command payload crosses the wire in plain text (without security it does)") {
+  const std::string marker = "PLAINTEXT-MARKER-4242";
+  const auto payload_seen = [&](bool secured) {
+    const int domain = test::UniqueDomain(62);
+    Vehicle* secured_vehicle = nullptr;
+    std::unique_ptr<Vehicle> v;
+    std::unique_ptr<link::Participant> plain;
+    std::unique_ptr<link::CommandReader> plain_reader;
+    std::atomic<int> plain_received{0};
+    link::FaultLine* line = nullptr;
+    if (secured) {
+      v = std::make_unique<Vehicle>(domain);
+      secured_vehicle = v.get();
+      line = v->participant.fault_line();
+    } else {
+      plain = std::make_unique<link::Participant>(Link(domain), "vehicle");
+      plain_reader = std::make_unique<link::CommandReader>(*plain, link::TopicName("robot1", "command"),
+                                                           link::Profile::kCommand,
+                                                           [&](const msg::DriveCommand&) { plain_received.fetch_add(1); });
+      line = plain->fault_line();
+    }
+    REQUIRE(line != nullptr);
+    line->CaptureReceived(100000);
+    Command(secured ? Link(domain, Folder(), link::OperatorIdentity()) : Link(domain), 2.0, marker);
+    // The commands arrived: what was captured is what carried them.
+    if (secured) {
+      CHECK(test::WaitFor([&] { return secured_vehicle->received.load() > 0; }, 10.0));
+    } else {
+      CHECK(test::WaitFor([&] { return plain_received.load() > 0; }, 10.0));
+    }
+    int with_marker = 0;
+    const auto packets = line->TakeCaptured();
+    CHECK(packets.size() > 50);
+    for (const auto& p : packets) {
+      if (std::search(p.begin(), p.end(), marker.begin(), marker.end()) != p.end()) ++with_marker;
+    }
+    return with_marker;
+  };
+  CHECK(payload_seen(false) > 0);
+  CHECK(payload_seen(true) == 0);
+}
