@@ -14,6 +14,7 @@
 #include "skip_bench.hpp"
 #include "stability_bench.hpp"
 #include "blimp_bench.hpp"
+#include "fuzz_bench.hpp"
 #include "link_bench.hpp"
 #include "view_bench.hpp"
 
@@ -42,6 +43,8 @@ constexpr Usage kUsage[] = {
     {"blimp", "[--vehicle FILE] [--json]", "airship model: integrators x steps, error against CPU; physics checks"},
     {"link", "[--seconds S] [--track FILE] [--delays MS,...] [--losses PERCENT,...] [--json]",
      "DDS round trip against raw Fast DDS; the lap against the link's delay and loss"},
+    {"fuzz", "[--inputs N] [--target NAME] [--seed S] [--json]",
+     "every parser fed 10^6 mutated inputs: configs, scenes, UDP, servo bytes, CAN, DDS samples"},
 };
 
 using BenchMain = int (*)(int argc, const char* const* argv);
@@ -53,6 +56,7 @@ constexpr Bench kBenches[] = {
     {"servo", BenchServoMain},         {"gravity", BenchGravityMain}, {"skip", BenchSkipMain},
     {"physics", BenchPhysicsMain},     {"stability", BenchStabilityMain}, {"view", BenchViewMain},
     {"blimp", BenchBlimpMain},         {"link", BenchLinkMain},
+    {"fuzz", BenchFuzzMain},
 };
 
 std::string UsageText(const std::string& only) {

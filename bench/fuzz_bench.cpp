@@ -1,0 +1,582 @@
+#include "fuzz_bench.hpp"
+
+#include <fcntl.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
+
+#include <fastdds/rtps/common/SerializedPayload.h>
+
+#include "haptel/config/blimp_course.hpp"
+#include "haptel/config/blimp_gesture.hpp"
+#include "haptel/config/calibration.hpp"
+#include "haptel/config/cockpit.hpp"
+#include "haptel/config/device.hpp"
+#include "haptel/config/gamepad.hpp"
+#include "haptel/config/gesture.hpp"
+#include "haptel/config/keyboard.hpp"
+#include "haptel/config/paths.hpp"
+#include "haptel/config/physics.hpp"
+#include "haptel/config/run.hpp"
+#include "haptel/config/scene.hpp"
+#include "haptel/config/study.hpp"
+#include "haptel/config/track.hpp"
+#include "haptel/config/vehicle.hpp"
+#include "haptel/core/args.hpp"
+#include "haptel/core/blimp_command.hpp"
+#include "haptel/core/clock.hpp"
+#include "haptel/core/json.hpp"
+#include "haptel/link/topic.hpp"
+#include "haptel/servo/servo_output.hpp"
+#include "haptel/servo/sim_servo_controller.hpp"
+#include "haptel/udp/udp_protocol.hpp"
+#include "haptel/vehicles/candump_log.hpp"
+#include "haptel/vehicles/odrive_can.hpp"
+#include "plot.hpp"
+
+namespace haptel::bench {
+
+namespace fs = std::filesystem;
+namespace udp = haptics::udp;
+using Bytes = std::vector<uint8_t>;
+
+namespace {
+
+// --- What a crash or a hang leaves behind: the input, written where the
+// signal handler can (no allocation, only write(2)). ---
+constexpr size_t kMaxInput = 1 << 20;
+uint8_t g_input[kMaxInput];
+std::atomic<size_t> g_input_size{0};
+char g_crash_file[512] = "";
+std::atomic<int64_t> g_started_ns{0};
+constexpr double kHang_s = 5.0;
+
+void WriteInput(const char* file) {
+  const int fd = ::open(file, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  if (fd < 0) return;
+  const ssize_t ignored = ::write(fd, g_input, g_input_size.load());
+  (void)ignored;
+  ::close(fd);
+}
+
+void OnCrash(int sig) {
+  WriteInput(g_crash_file);
+  const char message[] = "haptel bench fuzz: CRASH: the input is in the file named fuzz-<target>-crash.bin\n";
+  const ssize_t ignored = ::write(2, message, sizeof message - 1);
+  (void)ignored;
+  signal(sig, SIG_DFL);
+  raise(sig);
+}
+
+/// Stops the process when one input takes longer than kHang_s.
+class HangWatch {
+ public:
+  explicit HangWatch(std::string file) : file_(std::move(file)) {
+    thread_ = std::thread([this] {
+      while (!stop_.load()) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+        const int64_t started = g_started_ns.load();
+        if (started != 0 && NsToS(MonotonicNs() - started) > kHang_s) {
+          WriteInput(file_.c_str());
+          std::fprintf(stderr, "haptel bench fuzz: HANG: one input took more than %.0f s; it is in %s\n", kHang_s,
+                       file_.c_str());
+          std::_Exit(1);
+        }
+      }
+    });
+  }
+  ~HangWatch() {
+    stop_.store(true);
+    thread_.join();
+  }
+
+ private:
+  std::string file_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+Bytes ReadBytes(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  return Bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+void WriteBytes(const fs::path& file, const Bytes& bytes) {
+  std::ofstream out(file, std::ios::binary | std::ios::trunc);
+  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+}
+
+/// Seeded mutations of seed inputs.
+class Mutator {
+ public:
+  Mutator(uint64_t seed, bool text) : random_(seed), text_(text) {}
+
+  Bytes Mutate(const std::vector<Bytes>& seeds, size_t which) {
+    Bytes b = seeds[which];
+    const int rounds = 1 + static_cast<int>(Below(4));
+    for (int r = 0; r < rounds; ++r) Once(b, seeds);
+    if (b.size() > kMaxInput) b.resize(kMaxInput);
+    return b;
+  }
+  uint64_t Below(uint64_t n) { return n == 0 ? 0 : random_() % n; }
+  std::mt19937_64& random() { return random_; }
+
+ private:
+  void Once(Bytes& b, const std::vector<Bytes>& seeds) {
+    static const char* const kText[] = {"nan", "-nan", "inf", "-1e308", "1e400", "-0", "0x7fffffff", "-2147483649",
+                                        "[", "]", "{", "}", ":", ": ", "- ", "\n", "  ", "\t", "&a ", "*a", "!!binary ",
+                                        "''", "\"", "~", "null", "<", ">", "</", "/>", "&amp;", "<![CDATA[", "\xff\xfe",
+                                        "#", ",", "999999999999999999999", "1.5", "true", "yes", "?"};
+    static const uint8_t kBinary[] = {0x00, 0xff, 0x7f, 0x80, 0x01, 0xfe};
+    const uint64_t op = Below(b.empty() ? 3 : 8);
+    switch (op) {
+      case 0: {  // insert an interesting token or byte
+        const size_t at = Below(b.size() + 1);
+        if (text_) {
+          const char* t = kText[Below(std::size(kText))];
+          b.insert(b.begin() + static_cast<long>(at), t, t + std::strlen(t));
+        } else {
+          b.insert(b.begin() + static_cast<long>(at), kBinary[Below(std::size(kBinary))]);
+        }
+        break;
+      }
+      case 1: {  // splice: this one's head, another seed's tail
+        const Bytes& other = seeds[Below(seeds.size())];
+        const size_t keep = Below(b.size() + 1);
+        const size_t from = Below(other.size() + 1);
+        b.resize(keep);
+        b.insert(b.end(), other.begin() + static_cast<long>(from), other.end());
+        break;
+      }
+      case 2: {  // a few random bytes
+        const size_t at = Below(b.size() + 1);
+        const size_t n = 1 + Below(8);
+        for (size_t i = 0; i < n; ++i) b.insert(b.begin() + static_cast<long>(at), static_cast<uint8_t>(random_()));
+        break;
+      }
+      case 3:  // flip a bit
+        b[Below(b.size())] ^= static_cast<uint8_t>(1u << Below(8));
+        break;
+      case 4:  // set a byte
+        b[Below(b.size())] = static_cast<uint8_t>(random_());
+        break;
+      case 5: {  // delete a chunk
+        const size_t at = Below(b.size());
+        const size_t n = std::min(b.size() - at, 1 + Below(32));
+        b.erase(b.begin() + static_cast<long>(at), b.begin() + static_cast<long>(at + n));
+        break;
+      }
+      case 6: {  // duplicate a chunk somewhere
+        const size_t at = Below(b.size());
+        const size_t n = std::min(b.size() - at, 1 + Below(64));
+        const Bytes chunk(b.begin() + static_cast<long>(at), b.begin() + static_cast<long>(at + n));
+        const size_t to = Below(b.size() + 1);
+        b.insert(b.begin() + static_cast<long>(to), chunk.begin(), chunk.end());
+        break;
+      }
+      default:  // truncate
+        b.resize(Below(b.size() + 1));
+        break;
+    }
+  }
+
+  std::mt19937_64 random_;
+  bool text_;
+};
+
+/// One target: its seeds, and how one input is parsed (true: a value).
+struct Target {
+  std::vector<Bytes> seeds;
+  bool text = true;
+  std::function<bool(size_t seed, const Bytes& input)> parse;
+};
+
+/// A byte stream in memory: reads what it is given, takes what is written.
+class MemoryStream final : public servo::ByteStream {
+ public:
+  explicit MemoryStream(Bytes in, Bytes* written = nullptr) : in_(std::move(in)), written_(written) {}
+  size_t Write(const uint8_t* data, size_t size) override {
+    if (written_ != nullptr) written_->insert(written_->end(), data, data + size);
+    return size;
+  }
+  size_t Read(uint8_t* data, size_t size) override {
+    const size_t n = std::min(size, in_.size() - at_);
+    std::memcpy(data, in_.data() + at_, n);
+    at_ += n;
+    return n;
+  }
+  std::string name() const override { return "memory"; }
+
+ private:
+  Bytes in_;
+  size_t at_ = 0;
+  Bytes* written_;
+};
+
+// ------------------------------------------------------------------ targets
+
+/// A copy of the shipped config folder to fuzz in (relative references keep working).
+fs::path FuzzCopy() {
+  const fs::path dir = fs::temp_directory_path() / ("haptel-fuzz-" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  fs::copy(ShippedFile("config"), dir / "config", fs::copy_options::recursive);
+  return dir / "config";
+}
+
+Target ConfigTarget(const fs::path& copy) {
+  using Loader = std::function<void(const fs::path&)>;
+  const std::vector<Loader> loaders = {
+      [](const fs::path& f) { LoadRun(f); },           [](const fs::path& f) { LoadTrack(f); },
+      [](const fs::path& f) { LoadBlimpCourse(f); },   [](const fs::path& f) { LoadVehicle(f); },
+      [](const fs::path& f) { LoadDevice(f); },        [](const fs::path& f) { LoadPhysics(f); },
+      [](const fs::path& f) { LoadStudy(f); },         [](const fs::path& f) { LoadCockpit(f); },
+      [](const fs::path& f) { LoadGesture(f); },       [](const fs::path& f) { LoadKeyboard(f); },
+      [](const fs::path& f) { LoadGamepad(f); },       [](const fs::path& f) { LoadBlimpGesture(f); },
+      [](const fs::path& f) { LoadCalibration(f); },
+  };
+  auto files = std::make_shared<std::vector<std::pair<fs::path, Loader>>>();
+  Target t;
+  for (const auto& entry : fs::recursive_directory_iterator(copy)) {
+    if (entry.path().extension() != ".yaml" || entry.path().parent_path().filename() == "scenes") continue;
+    for (const Loader& load : loaders) {
+      try {
+        load(entry.path());
+      } catch (const std::exception&) {
+        continue;
+      }
+      files->emplace_back(entry.path(), load);
+      t.seeds.push_back(ReadBytes(entry.path()));
+      break;
+    }
+  }
+  auto originals = std::make_shared<std::vector<Bytes>>(t.seeds);
+  t.parse = [files, originals](size_t seed, const Bytes& input) {
+    const auto& [file, load] = (*files)[seed];
+    WriteBytes(file, input);
+    bool ok = true;
+    try {
+      load(file);
+    } catch (const std::exception&) {
+      ok = false;
+    }
+    WriteBytes(file, (*originals)[seed]);
+    return ok;
+  };
+  return t;
+}
+
+Target SceneTarget(const fs::path& copy) {
+  Target t;
+  auto files = std::make_shared<std::vector<fs::path>>();
+  for (const char* name : {"scenes/table.yaml", "scenes/table.xml"}) {
+    files->push_back(copy / name);
+    t.seeds.push_back(ReadBytes(copy / name));
+  }
+  auto originals = std::make_shared<std::vector<Bytes>>(t.seeds);
+  t.parse = [files, originals](size_t seed, const Bytes& input) {
+    const fs::path& file = (*files)[seed];
+    WriteBytes(file, input);
+    bool ok = true;
+    try {
+      LoadSceneFile(file);
+    } catch (const std::exception&) {
+      ok = false;
+    }
+    WriteBytes(file, (*originals)[seed]);
+    return ok;
+  };
+  return t;
+}
+
+Target UdpTarget() {
+  Target t;
+  t.text = false;
+  std::vector<udp::Message> messages(5);
+  messages[0].payload = udp::GloveRequest{};
+  messages[1].payload = udp::WristForce{};
+  messages[2].payload = udp::FingerForce{};
+  messages[3].payload = udp::ErrorReply{};
+  udp::GloveReply glove;
+  glove.device_ns = 123456789;
+  messages[4].payload = glove;
+  for (size_t i = 0; i < messages.size(); ++i) {
+    messages[i].sequence = static_cast<uint32_t>(i + 1);
+    udp::Buffer buffer{};
+    const size_t n = udp::Encode(messages[i], buffer);
+    if (n > 0) t.seeds.emplace_back(buffer.begin(), buffer.begin() + static_cast<long>(n));
+  }
+  t.parse = [](size_t, const Bytes& input) {
+    udp::Message out;
+    return udp::Decode(input, out) == udp::DecodeStatus::kOk;
+  };
+  return t;
+}
+
+Target ServoTarget() {
+  Target t;
+  t.text = false;
+  auto configs = std::make_shared<std::vector<ServoControllerConfig>>();
+  for (const char* file : {"config/vehicles/sim-blimp-maestro.yaml", "config/vehicles/sim-blimp-sc8000.yaml"}) {
+    ServoControllerConfig c = LoadVehicle(ShippedFile(file)).servo;
+    configs->push_back(c);
+    // The adapter's own frames: valid commands of each protocol.
+    Bytes written;
+    servo::ServoOutput out(c, std::make_unique<MemoryStream>(Bytes{}, &written));
+    for (double p : {1000.0, 1500.0, 2000.0}) {
+      std::array<double, kBlimpChannels> pulses;
+      pulses.fill(p);
+      out.Send(pulses);
+      out.Update(0.5);
+    }
+    t.seeds.push_back(written);
+  }
+  // Replies a Maestro sends (Get Errors: two bytes), as seeds for the adapter's reader.
+  t.seeds.push_back({0x00, 0x00, 0x10, 0x00});
+  t.parse = [configs](size_t seed, const Bytes& input) {
+    if (seed < 2) {
+      // The device's decoder (the simulated controller), both protocols.
+      servo::SimServoController device((*configs)[seed], std::make_unique<MemoryStream>(input));
+      device.Update(0.01);
+      return device.counters().commands > 0;
+    }
+    // The real adapter reading whatever the controller sends back.
+    servo::ServoOutput out((*configs)[0], std::make_unique<MemoryStream>(input));
+    std::array<double, kBlimpChannels> pulses;
+    pulses.fill(1500.0);
+    out.Send(pulses);
+    out.Update(0.0);
+    out.Update(1.0);
+    return out.counters().error_replies > 0;
+  };
+  return t;
+}
+
+Target CanTarget() {
+  Target t;
+  t.text = true;
+  // Candump lines; the raw frames come from the same bytes.
+  for (const char* line : {"02D#0000C03F00000000", "021#0100000008000000", "03E#0300", "001#0100", "7FF#",
+                           "12345678#DEADBEEF"}) {
+    t.seeds.emplace_back(line, line + std::strlen(line));
+  }
+  t.parse = [](size_t, const Bytes& input) {
+    bool any = false;
+    can_frame parsed{};
+    any |= vehicles::ParseCandumpFrame(std::string(input.begin(), input.end()), parsed);
+    can_frame f{};
+    if (!input.empty()) {
+      f.can_id = (input[0] | (input.size() > 1 ? input[1] << 8 : 0)) & 0x7ff;
+      f.can_dlc = static_cast<uint8_t>(input.size() > 2 ? input[2] % 16 : 0);  // past 8 is malformed
+      for (size_t i = 0; i < 8 && 3 + i < input.size(); ++i) f.data[i] = input[3 + i];
+    }
+    namespace od = vehicles::odrive;
+    any |= od::DecodeHeartbeat(f).has_value();
+    any |= od::DecodeEncoderEstimates(f).has_value();
+    any |= od::DecodeSetInputVel(f).has_value();
+    any |= od::DecodeControllerMode(f).has_value();
+    any |= od::DecodeAxisState(f).has_value();
+    any |= vehicles::io_node::DecodeInputs(f).has_value();
+    any |= vehicles::io_node::DecodeHeartbeat(f).has_value();
+    return any;
+  };
+  return t;
+}
+
+template <typename PubSub, typename Msg>
+Bytes Serialized(Msg m) {
+  PubSub type;
+  eprosima::fastrtps::rtps::SerializedPayload_t payload(type.m_typeSize);
+  type.serialize(&m, &payload);
+  return Bytes(payload.data, payload.data + payload.length);
+}
+
+template <typename PubSub, typename Msg>
+bool Deserialize(const Bytes& input, Msg& out) {
+  PubSub type;
+  eprosima::fastrtps::rtps::SerializedPayload_t payload(static_cast<uint32_t>(std::max<size_t>(input.size(), 1)));
+  std::memcpy(payload.data, input.data(), input.size());
+  payload.length = static_cast<uint32_t>(input.size());
+  try {
+    return type.deserialize(&payload, &out);
+  } catch (const std::exception&) {
+    return false;  // Fast CDR throws NotEnoughMemoryException on a short buffer
+  }
+}
+
+Target DdsTarget() {
+  Target t;
+  t.text = false;
+  msg::DriveCommand drive;
+  drive.seq(7);
+  drive.left(0.5f);
+  drive.right(-0.25f);
+  drive.session(42);
+  drive.operator_name("haptel run, ana@lab pid 1");
+  t.seeds.push_back(Serialized<msg::DriveCommandPubSubType>(drive));
+  msg::BlimpCommand blimp;
+  blimp.power(0.5f);
+  blimp.camera_pan(0.3f);
+  blimp.operator_name("haptel run, bo@lab pid 2");
+  t.seeds.push_back(Serialized<msg::BlimpCommandPubSubType>(blimp));
+  msg::VehicleState state;
+  state.fault_message("a motor controller's error");
+  state.owner("haptel run, ana@lab pid 1");
+  t.seeds.push_back(Serialized<msg::VehicleStatePubSubType>(state));
+  msg::BlimpState bstate;
+  bstate.owner("x");
+  t.seeds.push_back(Serialized<msg::BlimpStatePubSubType>(bstate));
+  t.parse = [](size_t seed, const Bytes& input) {
+    switch (seed) {
+      case 0: {
+        msg::DriveCommand c;
+        if (!Deserialize<msg::DriveCommandPubSubType>(input, c)) return false;
+        // The robot's check (VehicleNode::OnCommand).
+        return std::isfinite(c.left()) && std::isfinite(c.right()) && std::abs(c.left()) <= 1.001f &&
+               std::abs(c.right()) <= 1.001f;
+      }
+      case 1: {
+        msg::BlimpCommand c;
+        if (!Deserialize<msg::BlimpCommandPubSubType>(input, c)) return false;
+        const BlimpCommand command{c.elevator(), c.rudder(), c.power(), c.helix(), c.tail_rotor(), c.camera_pan(),
+                                   c.camera_tilt()};
+        return InRange(command, 1e-3);
+      }
+      case 2: {
+        msg::VehicleState s;
+        return Deserialize<msg::VehicleStatePubSubType>(input, s) && std::isfinite(s.x());
+      }
+      default: {
+        msg::BlimpState s;
+        return Deserialize<msg::BlimpStatePubSubType>(input, s) && std::isfinite(s.z());
+      }
+    }
+  };
+  return t;
+}
+
+}  // namespace
+
+std::vector<std::string> FuzzTargets() { return {"config", "scene", "udp", "servo", "can", "dds"}; }
+
+FuzzResult Fuzz(const std::string& name, uint64_t inputs, uint64_t seed) {
+  std::optional<fs::path> copy;
+  Target target;
+  if (name == "config" || name == "scene") {
+    copy = FuzzCopy();
+    target = name == "config" ? ConfigTarget(*copy) : SceneTarget(*copy);
+  } else if (name == "udp") {
+    target = UdpTarget();
+  } else if (name == "servo") {
+    target = ServoTarget();
+  } else if (name == "can") {
+    target = CanTarget();
+  } else if (name == "dds") {
+    target = DdsTarget();
+  } else {
+    throw std::invalid_argument("unknown fuzz target '" + name + "'");
+  }
+  if (target.seeds.empty()) throw std::runtime_error("fuzz target '" + name + "' has no seeds");
+  const fs::path dir = BenchDir();
+  fs::create_directories(dir);
+  std::snprintf(g_crash_file, sizeof g_crash_file, "%s/fuzz-%s-crash.bin", dir.c_str(), name.c_str());
+  for (int sig : {SIGSEGV, SIGABRT, SIGBUS, SIGFPE, SIGILL}) signal(sig, OnCrash);
+  HangWatch watch((dir / ("fuzz-" + name + "-hang.bin")).string());
+
+  FuzzResult r;
+  r.target = name;
+  Mutator mutator(seed, target.text);
+  const int64_t start = MonotonicNs();
+  for (uint64_t i = 0; i < inputs; ++i) {
+    const size_t which = static_cast<size_t>(mutator.Below(target.seeds.size()));
+    // One in 64 inputs is the seed itself, so the valid path stays covered.
+    const Bytes input = i % 64 == 0 ? target.seeds[which] : mutator.Mutate(target.seeds, which);
+    std::memcpy(g_input, input.data(), input.size());
+    g_input_size.store(input.size());
+    const int64_t t0 = MonotonicNs();
+    g_started_ns.store(t0);
+    const bool accepted = target.parse(which, input);
+    const int64_t t1 = MonotonicNs();
+    g_started_ns.store(0);
+    r.slowest_ms = std::max(r.slowest_ms, NsToS(t1 - t0) * 1e3);
+    ++r.inputs;
+    (accepted ? r.accepted : r.rejected)++;
+  }
+  r.seconds = NsToS(MonotonicNs() - start);
+  for (int sig : {SIGSEGV, SIGABRT, SIGBUS, SIGFPE, SIGILL}) signal(sig, SIG_DFL);
+  if (copy) fs::remove_all(copy->parent_path());
+  return r;
+}
+
+int BenchFuzzMain(int argc, const char* const* argv) {
+  bool json = false;
+  uint64_t inputs = 1000000;
+  uint64_t seed = 1;
+  std::vector<std::string> targets = FuzzTargets();
+  try {
+    const Args args(argc, argv, {"inputs", "target", "seed"}, {"json"});
+    json = args.Flag("json");
+    if (auto n = args.Number("inputs", 1.0, 1e9)) inputs = static_cast<uint64_t>(*n);
+    if (auto s = args.Number("seed", 0.0, 1e18)) seed = static_cast<uint64_t>(*s);
+    if (auto t = args.Value("target")) {
+      const auto all = FuzzTargets();
+      if (std::find(all.begin(), all.end(), *t) == all.end()) {
+        throw UsageError("option --target: expected one of config, scene, udp, servo, can, dds");
+      }
+      targets = {*t};
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "haptel bench fuzz: %s\n", e.what());
+    return 2;
+  }
+  std::printf("haptel bench fuzz: %llu inputs per target, seed %llu\n\n", static_cast<unsigned long long>(inputs),
+              static_cast<unsigned long long>(seed));
+  std::printf("  target   inputs      accepted   rejected   time s   inputs/s   slowest ms\n");
+  std::vector<FuzzResult> results;
+  for (const std::string& t : targets) {
+    const FuzzResult r = Fuzz(t, inputs, seed);
+    results.push_back(r);
+    std::printf("  %-7s  %-10llu  %-9llu  %-9llu  %7.1f  %9.0f  %10.2f\n", t.c_str(),
+                static_cast<unsigned long long>(r.inputs), static_cast<unsigned long long>(r.accepted),
+                static_cast<unsigned long long>(r.rejected), r.seconds, r.inputs / std::max(r.seconds, 1e-9),
+                r.slowest_ms);
+    std::fflush(stdout);
+  }
+  {
+    std::ofstream csv(BenchDir() / "fuzz.csv");
+    csv << "target,inputs,accepted,rejected,seconds,slowest_ms\n";
+    for (const auto& r : results) {
+      csv << r.target << "," << r.inputs << "," << r.accepted << "," << r.rejected << "," << r.seconds << ","
+          << r.slowest_ms << "\n";
+    }
+  }
+  std::printf("\n  no crash, no hang; wrote %s/fuzz.csv\n", BenchDir().c_str());
+  if (json) {
+    std::ostringstream o;
+    o << "{\"crashes\":0,\"hangs\":0,\"targets\":[";
+    for (size_t i = 0; i < results.size(); ++i) {
+      const auto& r = results[i];
+      o << (i ? "," : "") << "{\"target\":" << JsonString(r.target) << ",\"inputs\":" << r.inputs
+        << ",\"accepted\":" << r.accepted << ",\"rejected\":" << r.rejected << ",\"seconds\":" << JsonNumber(r.seconds)
+        << ",\"slowest_ms\":" << JsonNumber(r.slowest_ms) << "}";
+    }
+    o << "]}";
+    std::printf("%s\n", o.str().c_str());
+  }
+  return 0;
+}
+
+}  // namespace haptel::bench
