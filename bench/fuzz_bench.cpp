@@ -237,32 +237,14 @@ fs::path FuzzCopy() {
   return dir / "config";
 }
 
-Target ConfigTarget(const fs::path& copy) {
-  using Loader = std::function<void(const fs::path&)>;
-  const std::vector<Loader> loaders = {
-      [](const fs::path& f) { LoadRun(f); },           [](const fs::path& f) { LoadTrack(f); },
-      [](const fs::path& f) { LoadBlimpCourse(f); },   [](const fs::path& f) { LoadVehicle(f); },
-      [](const fs::path& f) { LoadDevice(f); },        [](const fs::path& f) { LoadPhysics(f); },
-      [](const fs::path& f) { LoadStudy(f); },         [](const fs::path& f) { LoadCockpit(f); },
-      [](const fs::path& f) { LoadGesture(f); },       [](const fs::path& f) { LoadKeyboard(f); },
-      [](const fs::path& f) { LoadGamepad(f); },       [](const fs::path& f) { LoadBlimpGesture(f); },
-      [](const fs::path& f) { LoadCalibration(f); },
-  };
-  auto files = std::make_shared<std::vector<std::pair<fs::path, Loader>>>();
+using Loader = std::function<void(const fs::path&)>;
+
+/// A target whose inputs are files: each seed is written over its file in
+/// the copy, read by its loader, and put back.
+Target FileTarget(std::vector<std::pair<fs::path, Loader>> loaded) {
   Target t;
-  for (const auto& entry : fs::recursive_directory_iterator(copy)) {
-    if (entry.path().extension() != ".yaml" || entry.path().parent_path().filename() == "scenes") continue;
-    for (const Loader& load : loaders) {
-      try {
-        load(entry.path());
-      } catch (const std::exception&) {
-        continue;
-      }
-      files->emplace_back(entry.path(), load);
-      t.seeds.push_back(ReadBytes(entry.path()));
-      break;
-    }
-  }
+  for (const auto& [file, load] : loaded) t.seeds.push_back(ReadBytes(file));
+  auto files = std::make_shared<std::vector<std::pair<fs::path, Loader>>>(std::move(loaded));
   auto originals = std::make_shared<std::vector<Bytes>>(t.seeds);
   t.parse = [files, originals](size_t seed, const Bytes& input) {
     const auto& [file, load] = (*files)[seed];
@@ -279,27 +261,36 @@ Target ConfigTarget(const fs::path& copy) {
   return t;
 }
 
-Target SceneTarget(const fs::path& copy) {
-  Target t;
-  auto files = std::make_shared<std::vector<fs::path>>();
-  for (const char* name : {"scenes/table.yaml", "scenes/table.xml"}) {
-    files->push_back(copy / name);
-    t.seeds.push_back(ReadBytes(copy / name));
-  }
-  auto originals = std::make_shared<std::vector<Bytes>>(t.seeds);
-  t.parse = [files, originals](size_t seed, const Bytes& input) {
-    const fs::path& file = (*files)[seed];
-    WriteBytes(file, input);
-    bool ok = true;
-    try {
-      LoadSceneFile(file);
-    } catch (const std::exception&) {
-      ok = false;
-    }
-    WriteBytes(file, (*originals)[seed]);
-    return ok;
+Target ConfigTarget(const fs::path& copy) {
+  const std::vector<Loader> loaders = {
+      [](const fs::path& f) { LoadRun(f); },           [](const fs::path& f) { LoadTrack(f); },
+      [](const fs::path& f) { LoadBlimpCourse(f); },   [](const fs::path& f) { LoadVehicle(f); },
+      [](const fs::path& f) { LoadDevice(f); },        [](const fs::path& f) { LoadPhysics(f); },
+      [](const fs::path& f) { LoadStudy(f); },         [](const fs::path& f) { LoadCockpit(f); },
+      [](const fs::path& f) { LoadGesture(f); },       [](const fs::path& f) { LoadKeyboard(f); },
+      [](const fs::path& f) { LoadGamepad(f); },       [](const fs::path& f) { LoadBlimpGesture(f); },
+      [](const fs::path& f) { LoadCalibration(f); },
   };
-  return t;
+  // Each file's loader is the first that takes it unmutated.
+  std::vector<std::pair<fs::path, Loader>> loaded;
+  for (const auto& entry : fs::recursive_directory_iterator(copy)) {
+    if (entry.path().extension() != ".yaml" || entry.path().parent_path().filename() == "scenes") continue;
+    for (const Loader& load : loaders) {
+      try {
+        load(entry.path());
+      } catch (const std::exception&) {
+        continue;
+      }
+      loaded.emplace_back(entry.path(), load);
+      break;
+    }
+  }
+  return FileTarget(std::move(loaded));
+}
+
+Target SceneTarget(const fs::path& copy) {
+  const Loader load = [](const fs::path& f) { LoadSceneFile(f); };
+  return FileTarget({{copy / "scenes/table.yaml", load}, {copy / "scenes/table.xml", load}});
 }
 
 Target UdpTarget() {

@@ -60,15 +60,8 @@ class BlimpOverlay {
 
   view::Overlay Make(double t, const BlimpLapTimer& lap, const msg::BlimpState& s, const BlimpCommand& c,
                      bool vehicle_up) {
-    view::Overlay o;
-    std::snprintf(o.interface_name, sizeof o.interface_name, "blimp-gesture");
-    std::snprintf(o.operator_name, sizeof o.operator_name, "%s", setup_.operator_kind.c_str());
-    o.t_s = t;
-    o.lap_time_s = lap.lap_time_s();
-    o.time_left_s = setup_.time_limit_s > 0 ? std::max(0.0, setup_.time_limit_s - t) : -1.0;
-    o.gates_passed = lap.next_gate();
-    o.gates_total = gates_total_;
-    o.obstacles_touched = lap.obstacles_touched();
+    view::Overlay o = LapOverlay(setup_, "blimp-gesture", t, lap.lap_time_s(), lap.next_gate(), gates_total_,
+                                 lap.obstacles_touched());
     // A new contact onset, not the blimp resting on its pad at the start.
     if (s.pose_valid() && contacts_seen_ < 0) contacts_seen_ = s.contacts();
     if (contacts_seen_ >= 0 && s.contacts() > static_cast<uint32_t>(contacts_seen_)) {

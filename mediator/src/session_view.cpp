@@ -79,6 +79,20 @@ void StopAndRecord(SessionView& view, SessionResult& result) {
   result.view_record_dropped = vs.record_dropped;
 }
 
+view::Overlay LapOverlay(const SessionSetup& setup, const char* interface_name, double t, double lap_time_s,
+                         int gates_passed, int gates_total, int obstacles_touched) {
+  view::Overlay o;
+  std::snprintf(o.interface_name, sizeof o.interface_name, "%s", interface_name);
+  std::snprintf(o.operator_name, sizeof o.operator_name, "%s", setup.operator_kind.c_str());
+  o.t_s = t;
+  o.lap_time_s = lap_time_s;
+  o.time_left_s = setup.time_limit_s > 0 ? std::max(0.0, setup.time_limit_s - t) : -1.0;
+  o.gates_passed = gates_passed;
+  o.gates_total = gates_total;
+  o.obstacles_touched = obstacles_touched;
+  return o;
+}
+
 OverlayFeed::OverlayFeed(const SessionSetup& setup, const Track& track)
     : setup_(setup), gates_total_(static_cast<int>(track.gates().size())) {}
 
@@ -86,16 +100,9 @@ view::Overlay OverlayFeed::Make(double t, const LapTimer& lap, const InterfaceSe
                                 const interfaces::VehicleFeedback& feedback,
                                 const interfaces::MotorCommand& motors, bool vehicle_up,
                                 bool touching) {
-  view::Overlay o;
   const interfaces::MediatorInterface& current = interfaces.current();
-  std::snprintf(o.interface_name, sizeof o.interface_name, "%s", current.name().c_str());
-  std::snprintf(o.operator_name, sizeof o.operator_name, "%s", setup_.operator_kind.c_str());
-  o.t_s = t;
-  o.lap_time_s = lap.lap_time_s();
-  o.time_left_s = setup_.time_limit_s > 0 ? std::max(0.0, setup_.time_limit_s - t) : -1.0;
-  o.gates_passed = lap.gates_passed();
-  o.gates_total = gates_total_;
-  o.obstacles_touched = lap.obstacles_touched();
+  view::Overlay o = LapOverlay(setup_, current.name().c_str(), t, lap.lap_time_s(), lap.gates_passed(), gates_total_,
+                               lap.obstacles_touched());
   if (touching && !was_touching_) {
     std::snprintf(last_contact_, sizeof last_contact_, "%s bumper at %.1f s",
                   feedback.bumper_left && feedback.bumper_right ? "front"

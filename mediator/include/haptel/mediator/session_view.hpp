@@ -72,6 +72,11 @@ view::ViewOptions ViewOptionsFor(const SessionSetup& setup);
 /// Stops the view (finishing the MP4) and records its figures in `result`.
 void StopAndRecord(SessionView& view, SessionResult& result);
 
+/// The overlay's lines every vehicle's view has: the interface and operator,
+/// the run and lap clocks, the time left, the gates and obstacles.
+view::Overlay LapOverlay(const SessionSetup& setup, const char* interface_name, double t, double lap_time_s,
+                         int gates_passed, int gates_total, int obstacles_touched);
+
 /// The overlay the view shows, from the session loop's state: the lap clock,
 /// gates, the last contact, and the HUD exactly as the interface computed it
 /// (the HUD cockpits' HudState; the gesture interface's speed and turn, as
