@@ -33,6 +33,33 @@ void LinkConfig::ValidateOrThrow() const {
   CheckIpv4List("peers", peers);
   check::Number("command_deadline_s", command_deadline_s, 0.001, 10.0);
   check::Nested("fault", fault);
+  if (!discovery_server.empty()) {
+    try {
+      ParseServerAddress(discovery_server);
+    } catch (const std::invalid_argument& e) {
+      check::Fail("discovery_server", e.what());
+    }
+  }
+}
+
+std::pair<std::string, int> ParseServerAddress(const std::string& text) {
+  const size_t colon = text.rfind(':');
+  const std::string address = text.substr(0, colon);
+  in_addr parsed{};
+  int port = 0;
+  if (colon != std::string::npos) {
+    try {
+      size_t used = 0;
+      port = std::stoi(text.substr(colon + 1), &used);
+      if (used != text.size() - colon - 1) port = 0;
+    } catch (const std::exception&) {
+      port = 0;
+    }
+  }
+  if (colon == std::string::npos || inet_pton(AF_INET, address.c_str(), &parsed) != 1 || port < 1 || port > 65535) {
+    throw std::invalid_argument("an IPv4 address and a port, such as 192.168.1.10:11811 (not '" + text + "')");
+  }
+  return {address, port};
 }
 
 void LinkFault::ValidateOrThrow() const {
@@ -135,6 +162,15 @@ std::vector<std::string> ParseAddressOption(const std::string& option, const std
     start = comma + 1;
   }
   return out;
+}
+
+std::string ServerOption(const std::string& text) {
+  try {
+    ParseServerAddress(text);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("option --discovery-server: expected ") + e.what());
+  }
+  return text;
 }
 
 std::string LinkFaultText(const LinkFault& fault) {

@@ -25,6 +25,7 @@ inline LinkConfig ReadLink(YamlMap& link, const std::filesystem::path& dir) {
     }
   }
   if (link.Has("security")) c.security = dir / link.RequireString("security");
+  c.discovery_server = link.String("discovery_server", c.discovery_server);
   link.Finish();
   return c;
 }

@@ -3,12 +3,14 @@
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
 #include <fastrtps/utils/IPLocator.h>
+#include <fastdds/rtps/attributes/ServerAttributes.h>
 #include <fastrtps/xmlparser/XMLProfileManager.h>
 
 #include <cmath>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <memory>
 #include <random>
+#include <sstream>
 #include <stdexcept>
 
 #include "haptel/config/error.hpp"
@@ -21,6 +23,18 @@ using eprosima::fastrtps::rtps::IPLocator;
 using eprosima::fastrtps::rtps::Locator_t;
 
 namespace {
+/// The server's GUID prefix: Fast DDS's own default for server 0 (what
+/// `fastdds discovery -i 0` uses), so either server serves either client.
+constexpr const char* kServerPrefix = "44.53.00.5f.45.50.52.4f.53.49.4d.41";
+
+Locator_t UdpLocator(const std::string& address, int port) {
+  Locator_t locator;
+  locator.kind = LOCATOR_KIND_UDPv4;
+  IPLocator::setIPv4(locator, address);
+  locator.port = static_cast<uint32_t>(port);
+  return locator;
+}
+
 eprosima::fastrtps::Duration_t ToDuration(double seconds) {
   const auto whole = static_cast<int32_t>(std::floor(seconds));
   const auto ns = static_cast<uint32_t>(std::llround((seconds - whole) * 1e9));
@@ -120,6 +134,16 @@ Participant::Participant(const LinkConfig& config, const std::string& name)
       qos.properties().properties().emplace_back(key, value);
     }
   }
+  if (!config.discovery_server.empty()) {
+    // A client of the server: discovery goes through it alone.
+    const auto [address, port] = ParseServerAddress(config.discovery_server);
+    eprosima::fastdds::rtps::RemoteServerAttributes server;
+    server.ReadguidPrefix(kServerPrefix);
+    server.metatrafficUnicastLocatorList.push_back(UdpLocator(address, port));
+    builtin.discovery_config.discoveryProtocol = eprosima::fastrtps::rtps::DiscoveryProtocol_t::CLIENT;
+    builtin.discovery_config.m_DiscoveryServers.push_back(server);
+    builtin.initialPeersList.clear();
+  }
   // Announce often at start so processes meet quickly.
   builtin.discovery_config.initial_announcements.count = 10;
   builtin.discovery_config.initial_announcements.period = ToDuration(0.05);
@@ -143,6 +167,24 @@ Participant::~Participant() {
   if (participant_ == nullptr) return;
   participant_->delete_contained_entities();
   dds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
+}
+
+DiscoveryServer::DiscoveryServer(const std::string& address, int port) {
+  dds::DomainParticipantQos qos = dds::PARTICIPANT_QOS_DEFAULT;
+  qos.name("haptel-discovery-server");
+  auto& builtin = qos.wire_protocol().builtin;
+  builtin.discovery_config.discoveryProtocol = eprosima::fastrtps::rtps::DiscoveryProtocol_t::SERVER;
+  std::istringstream(kServerPrefix) >> qos.wire_protocol().prefix;
+  builtin.metatrafficUnicastLocatorList.push_back(UdpLocator(address, port));
+  participant_ = dds::DomainParticipantFactory::get_instance()->create_participant(0, qos);
+  if (participant_ == nullptr) {
+    throw std::runtime_error("link: cannot serve discovery on " + address + ":" + std::to_string(port) +
+                             " (is the port taken, or the address not this host's?)");
+  }
+}
+
+DiscoveryServer::~DiscoveryServer() {
+  if (participant_ != nullptr) dds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
 }
 
 }  // namespace haptel::link

@@ -25,6 +25,7 @@ constexpr const char* kUsage =
     "       haptel scene FILE [--json]   load a haptic scene, print its objects, mass and bounds\n"
     "       haptel study run FILE        run an A/B study; `haptel study report` reports on it\n"
     "       haptel security init DIR     DDS Security: a CA and signed identities for the link\n"
+    "       haptel discovery-server [--listen ADDR:PORT]  a Fast DDS discovery server for the link\n"
     "       haptel bench NAME [options]  benchmarks: servo, gravity, skip, physics, stability, view\n"
     "                                    (haptel bench --help lists them)\n"
     "\n"
@@ -54,8 +55,10 @@ int main(int argc, char** argv) {
   if (command == "bench") return ExecBench(argv + 1);
   if (command == "study") return study::StudyCommand(argc - 1, argv + 1);
   if (command == "security") return mediator::SecurityCommand(argc - 1, argv + 1);
+  if (command == "discovery-server") return mediator::DiscoveryServerCommand(argc - 1, argv + 1);
   return cli::Main({"haptel", kUsage}, argc, argv, [&]() -> int {
-    if (command.empty()) throw UsageError("missing command (run, calibrate, scene, study, security, bench)");
-    throw UsageError("unknown command '" + command + "' (run, calibrate, scene, study, security, bench)");
+    if (command.empty()) throw UsageError("missing command (run, calibrate, scene, study, security, discovery-server, bench)");
+    throw UsageError("unknown command '" + command +
+                     "' (run, calibrate, scene, study, security, discovery-server, bench)");
   });
 }

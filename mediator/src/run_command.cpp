@@ -64,6 +64,8 @@ constexpr const char* kRunUsage =
     "  --dds-interfaces LIST  network interfaces (IPv4, comma-separated) DDS may use\n"
     "                       (overrides link.interfaces; the spawned vehicle keeps its own)\n"
     "  --dds-peers LIST     the vehicles' hosts, for unicast discovery (overrides link.peers)\n"
+    "  --discovery-server ADDR:PORT  meet the vehicle through a Fast DDS discovery server\n"
+    "                       (haptel discovery-server; the spawned vehicle uses it too)\n"
     "  --database FILE      SQLite file for the results (overrides 'database')\n"
     "  --vehicle-timeout S  no vehicle state for S seconds: vehicle lost\n"
     "  --trace FILE         record the haptic device's readings (for the replay driver)\n"
@@ -97,7 +99,7 @@ Args ParseRunArgs(int argc, const char* const* argv) {
   return Args(argc, argv,
               {"config", "track", "interface", "scene", "vehicle-name", "domain", "database", "vehicle-timeout",
                "trace", "operator", "device", "trace-in", "time-limit", "view", "record", "vehicle",
-               "link-fault", "security", "dds-interfaces", "dds-peers"},
+               "link-fault", "security", "dds-interfaces", "dds-peers", "discovery-server"},
               {"json", "quiet", "attach"});
 }
 
@@ -113,6 +115,7 @@ SessionSetup RunSetupFromArgs(const Args& args) {
   if (auto security = args.Value("security")) setup.run.link.security = *security;
   if (auto list = args.Value("dds-interfaces")) setup.run.link.interfaces = ParseAddressOption("dds-interfaces", *list);
   if (auto list = args.Value("dds-peers")) setup.run.link.peers = ParseAddressOption("dds-peers", *list);
+  if (auto server = args.Value("discovery-server")) setup.run.link.discovery_server = ServerOption(*server);
   // Before anything is spawned: a missing identity or an expired certificate is one line.
   if (!setup.run.link.security.empty()) link::CheckSecurity(setup.run.link.security, link::OperatorIdentity());
   if (auto db = args.Value("database")) setup.run.database = *db;

@@ -1,6 +1,9 @@
 #include "haptel/mediator/security_command.hpp"
 
+#include <atomic>
+#include <chrono>
 #include <cstdio>
+#include <thread>
 #include <filesystem>
 #include <sstream>
 #include <string>
@@ -9,6 +12,8 @@
 #include "haptel/config/vehicle.hpp"
 #include "haptel/core/args.hpp"
 #include "haptel/core/cli.hpp"
+#include "haptel/core/stop_signals.hpp"
+#include "haptel/link/participant.hpp"
 #include "haptel/link/security.hpp"
 
 namespace haptel::mediator {
@@ -60,6 +65,35 @@ int SecurityCommand(int argc, const char* const* argv) {
     std::printf("wrote %s: CA, governance, identities %s (valid %d days)\n", dir.c_str(), names.c_str(), days);
     return 0;
   });
+}
+
+int DiscoveryServerCommand(int argc, const char* const* argv) {
+  const std::atomic<bool>& stop = InstallStopSignals();
+  return cli::Main({"haptel discovery-server",
+                    "usage: haptel discovery-server [--listen ADDR:PORT]   (default 127.0.0.1:11811)\n"
+                    "  serves Fast DDS discovery; then --discovery-server ADDR:PORT on haptel run and\n"
+                    "  haptel-vehicle. Ends on SIGINT or SIGTERM.\n"},
+                   argc, argv, [&]() -> int {
+                     std::string listen = "127.0.0.1:11811";
+                     cli::ReadInput([&] {
+                       const Args args(argc, argv, {"listen"}, {});
+                       if (auto l = args.Value("listen")) {
+                         try {
+                           ParseServerAddress(*l);
+                         } catch (const std::invalid_argument& e) {
+                           throw UsageError(std::string("option --listen: expected ") + e.what());
+                         }
+                         listen = *l;
+                       }
+                       return 0;
+                     });
+                     const auto [address, port] = ParseServerAddress(listen);
+                     link::DiscoveryServer server(address, port);
+                     std::printf("haptel discovery-server: serving on %s\n", listen.c_str());
+                     std::fflush(stdout);
+                     while (!stop.load()) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+                     return 0;
+                   });
 }
 
 }  // namespace haptel::mediator

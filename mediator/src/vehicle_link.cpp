@@ -122,6 +122,9 @@ VehicleLink::VehicleLink(const VehicleLinkOptions& options)
     // The run's link faults on both ends: each delays and drops what it receives.
     if (options_.link.fault.enabled) arguments.insert(arguments.end(), {"--link-fault", LinkFaultText(options_.link.fault)});
     if (!options_.link.security.empty()) arguments.insert(arguments.end(), {"--security", options_.link.security.string()});
+    if (!options_.link.discovery_server.empty()) {
+      arguments.insert(arguments.end(), {"--discovery-server", options_.link.discovery_server});
+    }
     process_ = std::make_unique<ChildProcess>(options_.program.string(), arguments);
   }
   LinkConfig link = options_.link;

@@ -295,3 +295,34 @@ TEST_CASE("haptel run --attach drives a vehicle in another network namespace, ov
   kill(vehicle.pid(), SIGTERM);
   CHECK(vehicle.Wait(30.0) == 0);
 }
+
+TEST_CASE("through a discovery server: a vehicle and an operator that only know the server's address meet and drive") {
+  const int domain = test::UniqueDomain(48);
+  const auto dir = test::ScratchDir("e2e-discovery-server");
+  const std::string server_address = "127.0.0.1:" + std::to_string(20000 + domain * 10);
+  Child server({Bin("haptel"), "discovery-server", "--listen", server_address});
+  REQUIRE(test::WaitFor([&] {
+    server.Pump();
+    return server.out().find("serving on " + server_address) != std::string::npos;
+  }, 30.0));
+  Child vehicle({Bin("haptel-vehicle"), "--track", "config/tracks/test-short.yaml", "--domain",
+                 std::to_string(domain), "--discovery-server", server_address});
+  REQUIRE(test::WaitFor([&] {
+    vehicle.Pump();
+    return vehicle.err().find(" up on domain") != std::string::npos;
+  }, 30.0));
+  Child run({Bin("haptel"), "run", "--attach", "--discovery-server", server_address, "--track",
+             "config/tracks/test-short.yaml", "--json", "--domain", std::to_string(domain), "--database",
+             (dir / "runs.db").string(), "--vehicle-timeout", "5"});
+  const int code = run.Wait(120.0);
+  INFO(run.out() << run.err());
+  CHECK(code == 0);
+  CHECK(JsonField(run.LastLine(), "outcome") == "completed");
+  // A bad address is one line, before anything starts.
+  Child bad({Bin("haptel"), "run", "--discovery-server", "localhost:99999"});
+  CHECK(bad.Wait(30.0) == 2);
+  CHECK(bad.err().find("option --discovery-server: expected an IPv4 address and a port") != std::string::npos);
+  kill(vehicle.pid(), SIGTERM);
+  kill(server.pid(), SIGTERM);
+  CHECK(server.Wait(30.0) == 0);
+}

@@ -27,7 +27,7 @@ namespace {
 constexpr const char* kUsage =
     "usage: haptel-vehicle [--config FILE] [--track FILE] [--name NAME] [--domain N] [--can IFACE]\n"
     "                      [--serial-port PATH] [--link-fault SPEC] [--security DIR]\n"
-    "                      [--dds-interfaces ADDR,...] [--dds-peers ADDR,...]\n"
+    "                      [--dds-interfaces ADDR,...] [--dds-peers ADDR,...] [--discovery-server ADDR:PORT]\n"
     "  --config FILE  vehicle configuration (default config/vehicles/sim-robot.yaml)\n"
     "  --can IFACE    SocketCAN interface of a can-robot (overrides can.interface)\n"
     "  --serial-port PATH  the servo controller of a servo-blimp (overrides servo.port)\n"
@@ -40,7 +40,8 @@ constexpr const char* kUsage =
     "  --security DIR DDS Security with the folder `haptel security init` made (overrides\n"
     "                 link.security); this vehicle is identity vehicle-NAME\n"
     "  --dds-interfaces LIST  the network interfaces (IPv4) DDS may use (overrides link.interfaces)\n"
-    "  --dds-peers LIST       where the operator's host is: unicast discovery (overrides link.peers)\n";
+    "  --dds-peers LIST       where the operator's host is: unicast discovery (overrides link.peers)\n"
+    "  --discovery-server ADDR:PORT  meet through a Fast DDS discovery server (haptel discovery-server)\n";
 }  // namespace
 
 namespace {
@@ -104,7 +105,7 @@ int main(int argc, char** argv) {
     std::unique_ptr<vehicles::BlimpAdapter> blimp;
     cli::ReadInput([&] {
       const Args args(argc, argv, {"config", "track", "name", "domain", "can", "serial-port", "link-fault", "security",
-                                       "dds-interfaces", "dds-peers"},
+                                       "dds-interfaces", "dds-peers", "discovery-server"},
                       {});
       if (!args.positional().empty()) throw UsageError("unexpected argument '" + args.positional()[0] + "'");
       const std::filesystem::path file =
@@ -121,6 +122,7 @@ int main(int argc, char** argv) {
       if (auto security = args.Value("security")) config.link.security = *security;
       if (auto list = args.Value("dds-interfaces")) config.link.interfaces = ParseAddressOption("dds-interfaces", *list);
       if (auto list = args.Value("dds-peers")) config.link.peers = ParseAddressOption("dds-peers", *list);
+      if (auto server = args.Value("discovery-server")) config.link.discovery_server = ServerOption(*server);
       if (!config.link.security.empty()) {
         config.link.security_identity = link::VehicleIdentity(config.name);
         link::CheckSecurity(config.link.security, config.link.security_identity);

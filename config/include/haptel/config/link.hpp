@@ -2,6 +2,7 @@
 /// @file How a process joins the DDS link.
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace haptel {
@@ -36,6 +37,12 @@ LinkFault ParseLinkFaultOption(const std::string& text);
 /// --dds-interfaces and --dds-peers of haptel run and haptel-vehicle):
 /// a UsageError naming the option and the address that is not one.
 std::vector<std::string> ParseAddressOption(const std::string& option, const std::string& text);
+/// "ADDR:PORT" -> (IPv4 address, port 1..65535); throws std::invalid_argument
+/// saying what was expected.
+std::pair<std::string, int> ParseServerAddress(const std::string& text);
+/// ParseServerAddress for the --discovery-server option: the text as given,
+/// or a UsageError ("option --discovery-server: expected ...").
+std::string ServerOption(const std::string& text);
 /// The text ParseLinkFault reads back as `fault` (what a spawned vehicle is given).
 std::string LinkFaultText(const LinkFault& fault);
 
@@ -55,6 +62,11 @@ struct LinkConfig {
   /// the CA, each identity's certificate, key and signed permissions, and the
   /// signed governance. `link.security` in a file is relative to that file.
   std::filesystem::path security;
+  /// A Fast DDS discovery server to meet through, "ADDR:PORT" (empty: none;
+  /// unicast discovery through `peers`): for networks without multicast
+  /// where the hosts do not know each other's addresses, only the server's
+  /// (`haptel discovery-server`).
+  std::string discovery_server;
   /// Which identity of `security` this process is ("operator",
   /// "vehicle-robot1"): set by the program, never read from a file.
   std::string security_identity;

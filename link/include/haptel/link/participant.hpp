@@ -60,4 +60,20 @@ class Participant {
   eprosima::fastdds::dds::Subscriber* subscriber_ = nullptr;
 };
 
+/// A Fast DDS discovery server (`haptel discovery-server`): participants
+/// with LinkConfig::discovery_server = its address meet through it instead
+/// of finding each other. Serves while it lives.
+class DiscoveryServer {
+ public:
+  /// Listens on `address`:`port` (UDP). Throws std::runtime_error when DDS
+  /// refuses (the port taken, the address not this host's).
+  DiscoveryServer(const std::string& address, int port);
+  ~DiscoveryServer();
+  DiscoveryServer(const DiscoveryServer&) = delete;
+  DiscoveryServer& operator=(const DiscoveryServer&) = delete;
+
+ private:
+  eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
+};
+
 }  // namespace haptel::link
