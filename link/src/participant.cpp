@@ -8,7 +8,10 @@
 
 #include <cmath>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/log/Log.hpp>
+#include <fastdds/dds/log/StdoutErrConsumer.hpp>
 #include <memory>
+#include <mutex>
 #include <random>
 #include <sstream>
 #include <stdexcept>
@@ -33,6 +36,17 @@ Locator_t UdpLocator(const std::string& address, int port) {
   IPLocator::setIPv4(locator, address);
   locator.port = static_cast<uint32_t>(port);
   return locator;
+}
+
+/// Fast DDS's own warnings and errors (a security refusal, a port taken) on
+/// stderr, where the programs' messages go: stdout carries results (the
+/// --json line).
+void LogToStderr() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    dds::Log::ClearConsumers();
+    dds::Log::RegisterConsumer(std::make_unique<dds::StdoutErrConsumer>());
+  });
 }
 
 eprosima::fastrtps::Duration_t ToDuration(double seconds) {
@@ -83,6 +97,7 @@ dds::DataReaderQos DataReaderQosFor(Profile profile, const LinkConfig& config) {
 
 Participant::Participant(const LinkConfig& config, const std::string& name)
     : config_(Validated(config)) {
+  LogToStderr();
   dds::DomainParticipantQos qos = dds::PARTICIPANT_QOS_DEFAULT;
   qos.name(name);
   // Own transports instead of the built-in ones: UDP only on the allowed
@@ -170,6 +185,7 @@ Participant::~Participant() {
 }
 
 DiscoveryServer::DiscoveryServer(const std::string& address, int port) {
+  LogToStderr();
   dds::DomainParticipantQos qos = dds::PARTICIPANT_QOS_DEFAULT;
   qos.name("haptel-discovery-server");
   auto& builtin = qos.wire_protocol().builtin;
