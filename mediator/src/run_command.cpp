@@ -251,13 +251,16 @@ RecordedRun RunAndRecord(const SessionSetup& setup, Recorder& recorder,
       std::fprintf(stderr, "haptel: run not recorded: %s; and %s\n", e.what(), e2.what());
     }
   }
-  if (run.run_id != 0 && !setup.course) {
+  if (run.run_id != 0) {
     // The run is saved; its picture is a bonus: a failure is a warning.
-    // (A blimp's flight has no picture yet: the picture draws a track.)
     try {
       const std::filesystem::path png =
           std::filesystem::absolute(RunPicturePath(setup.run.database, run.run_id));
-      DrawRunPicture(run.result.record, setup.track, png);
+      if (setup.course) {
+        WriteRunPicture(RenderBlimpRunPicture(run.result.record, *setup.course), png);
+      } else {
+        DrawRunPicture(run.result.record, setup.track, png);
+      }
       recorder.SetPicture(run.run_id, png);
       run.result.record.picture = png.string();
       if (setup.progress) {

@@ -166,7 +166,7 @@ cv::Scalar SpeedColour(const cv::Mat& colours, double speed_mps, double max_spee
 
 }  // namespace
 
-RunPicture RenderRunPicture(const RunRecord& run, const TrackConfig& track) {
+RunPicture RenderRunPicture(const RunRecord& run, const TrackConfig& track, const std::vector<Vec2>& also_show) {
   // A loaded track has at least 3 centre-line points; anything less is drawn
   // as no track at all (the path and contacts still are).
   std::optional<Track> geometry;
@@ -192,6 +192,7 @@ RunPicture RenderRunPicture(const RunRecord& run, const TrackConfig& track) {
     }
   }
   for (const ContactPoint& c : run.contacts) bounds.Add(c.x, c.y);
+  for (const Vec2& v : also_show) bounds.Add(v.x(), v.y());
   if (bounds.empty()) bounds.Add(0.0, 0.0, 0.5);
   // A map at least 0.1 m across on each axis (a path that is a single point).
   const double cx = (bounds.min_x + bounds.max_x) / 2;
@@ -379,10 +380,75 @@ RunPicture RenderRunPicture(const RunRecord& run, const TrackConfig& track) {
 
 void DrawRunPicture(const RunRecord& run, const TrackConfig& track,
                     const std::filesystem::path& png) {
+  WriteRunPicture(RenderRunPicture(run, track), png);
+}
+
+RunPicture RenderBlimpRunPicture(const RunRecord& run, const BlimpCourseConfig& course) {
+  // The map takes in the path and the whole course (a margin round the
+  // buildings' and gates' ends and the landing circle).
+  std::vector<Vec2> course_points;
+  const auto around = [&](double x, double y, double r) {
+    for (const auto& [dx, dy] : {std::pair{r, r}, std::pair{-r, -r}}) course_points.emplace_back(x + dx, y + dy);
+  };
+  for (const BlimpBuildingSpec& b : course.buildings) {
+    around(b.centre[0], b.centre[1], std::hypot(b.size[0], b.size[1]) / 2);
+  }
+  for (const BlimpGateSpec& g : course.gates) around(g.centre[0], g.centre[1], g.width / 2 + 3.0);
+  around(course.landing.centre[0], course.landing.centre[1], course.landing.radius + 3.0);
+  around(course.start.position[0], course.start.position[1], 3.0);
+  TrackConfig no_track;
+  no_track.name = course.name;
+  RunPicture picture = RenderRunPicture(run, no_track, course_points);
+  Painter paint(picture);
+  const auto px = [&](double x, double y) {
+    const cv::Point2d p = picture.ToPixel(x, y);
+    return cv::Point(static_cast<int>(std::lround(p.x)), static_cast<int>(std::lround(p.y)));
+  };
+  for (const BlimpBuildingSpec& b : course.buildings) {
+    const double yaw = b.yaw_deg * M_PI / 180.0;
+    const Vec2 ax(std::cos(yaw), std::sin(yaw));
+    const Vec2 ay(-ax.y(), ax.x());
+    const Vec2 c(b.centre[0], b.centre[1]);
+    std::vector<cv::Point> corners;
+    for (const auto& [sx, sy] : {std::pair{1, 1}, std::pair{-1, 1}, std::pair{-1, -1}, std::pair{1, -1}}) {
+      const Vec2 v = c + ax * (sx * b.size[0] / 2) + ay * (sy * b.size[1] / 2);
+      corners.push_back(px(v.x(), v.y()));
+    }
+    cv::polylines(picture.image, corners, true, kWall, 2, cv::LINE_AA);
+    paint.TextCentred(Ascii(b.name) + Format(" %.0f m", b.height), px(c.x(), c.y()), 0.4);
+  }
+  {
+    const cv::Point centre = px(course.landing.centre[0], course.landing.centre[1]);
+    const int radius = std::max(4, static_cast<int>(std::lround(course.landing.radius * picture.px_per_m)));
+    cv::circle(picture.image, centre, radius, kBlack, 2, cv::LINE_AA);
+    paint.TextCentred("landing", cv::Point2d(centre) + cv::Point2d(0, radius + 12), 0.45);
+    const cv::Point start = px(course.start.position[0], course.start.position[1]);
+    cv::circle(picture.image, start, 6, kBlack, 2, cv::LINE_AA);
+    paint.TextCentred("start", cv::Point2d(start) + cv::Point2d(0, 18), 0.45);
+  }
+  for (size_t g = 0; g < course.gates.size(); ++g) {
+    const BlimpGateSpec& gate = course.gates[g];
+    cv::Scalar colour = kNotReached;
+    for (const GateSplit& split : run.splits) {
+      if (split.gate != static_cast<int>(g)) continue;
+      colour = split.passed ? kPassed : (split.split_s >= 0.0 ? kMissed : kNotReached);
+    }
+    const double heading = gate.heading_deg * M_PI / 180.0;
+    const Vec2 across(-std::sin(heading), std::cos(heading));
+    const Vec2 c(gate.centre[0], gate.centre[1]);
+    const Vec2 a = c + across * (gate.width / 2);
+    const Vec2 b = c - across * (gate.width / 2);
+    cv::line(picture.image, px(a.x(), a.y()), px(b.x(), b.y()), colour, 4, cv::LINE_AA);
+    paint.TextCentred(std::to_string(g + 1) + Format(" (%.0f m)", gate.centre[2]),
+                      cv::Point2d(px(a.x(), a.y())) + cv::Point2d(0, -12), 0.45);
+  }
+  return picture;
+}
+
+void WriteRunPicture(const RunPicture& picture, const std::filesystem::path& png) {
   const auto fail = [&](const std::string& why) {
     throw std::runtime_error("run picture: " + png.string() + ": " + why);
   };
-  const RunPicture picture = RenderRunPicture(run, track);
 
   const std::filesystem::path folder = png.parent_path();
   if (!folder.empty()) {

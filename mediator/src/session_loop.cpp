@@ -99,6 +99,9 @@ std::optional<LoopEnd> VehicleHealth::CheckStates(const VehicleLink& vehicle, in
 }
 
 void RunTrace::Add(double t_s, double x, double y, double z, double speed, bool touching) {
+  // A contact the run starts in (the blimp resting on its pad) did not begin
+  // during the run: only later onsets are contacts.
+  if (!have_position_) touching_ = touching;
   if (have_position_) record_.distance_m += std::sqrt((x - last_x_) * (x - last_x_) + (y - last_y_) * (y - last_y_) +
                                                      (z - last_z_) * (z - last_z_));
   have_position_ = true;

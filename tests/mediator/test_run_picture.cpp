@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "haptel/config/blimp_course.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/track.hpp"
 #include "haptel/mediator/run_picture.hpp"
@@ -208,4 +209,40 @@ TEST_CASE("DrawRunPicture writes a PNG and names the file it cannot write", "[ru
     CHECK(std::string(e.what()).find(bad.string()) != std::string::npos);
   }
   fs::remove_all(dir);
+}
+
+TEST_CASE("The blimp's flight picture: the whole course to scale, gates by outcome, the flown path",
+          "[run_picture]") {
+  const haptel::BlimpCourseConfig course = haptel::LoadBlimpCourse(ShippedFile("config/tracks/blimp-hop.yaml"));
+  REQUIRE(course.gates.size() == 1);
+  REQUIRE(course.buildings.size() == 1);
+  RunRecord run;
+  run.config_name = "blimp";
+  run.track = course.name;
+  run.outcome = "completed";
+  run.gates_total = 1;
+  // A straight flight from the start along y = 0, through the gate, and on.
+  for (int i = 0; i <= 60; ++i) run.path.push_back({0.5 * i, 1.0 * i, 0.0, 3.0});
+  run.splits.push_back({0, true, 12.0});
+  const RunPicture picture = haptel::mediator::RenderBlimpRunPicture(run, course);
+
+  // The building is in the picture although the path never comes near it:
+  // its outline at a corner, in the wall's grey.
+  const auto& shed = course.buildings[0];
+  const cv::Vec3b corner =
+      At(picture, Vec2(shed.centre[0] + shed.size[0] / 2, shed.centre[1] + shed.size[1] / 2));
+  CHECK(Red(corner) < 140);
+  CHECK(std::abs(Red(corner) - Green(corner)) < 20);
+  // The passed gate is a green bar across its opening, off the path too.
+  const auto& gate = course.gates[0];
+  CHECK(GreenDominant(At(picture, Vec2(gate.centre[0], gate.centre[1] + gate.width / 2 - 0.5))));
+  // The landing circle's rim is black; the path is drawn where it flew.
+  const cv::Vec3b rim = At(picture, Vec2(course.landing.centre[0] + course.landing.radius, course.landing.centre[1]));
+  CHECK(Red(rim) < 90);
+  CHECK(Green(rim) < 90);
+  CHECK(At(picture, Vec2(20.0, 0.0)) != cv::Vec3b(255, 255, 255));
+  // Not reached: the same gate grey.
+  run.splits[0] = {0, false, -1.0};
+  const RunPicture unreached = haptel::mediator::RenderBlimpRunPicture(run, course);
+  CHECK_FALSE(GreenDominant(At(unreached, Vec2(gate.centre[0], gate.centre[1] + gate.width / 2 - 0.5))));
 }

@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <opencv2/core.hpp>
 
+#include "haptel/config/blimp_course.hpp"
 #include "haptel/config/track.hpp"
 #include "haptel/mediator/recorder.hpp"
 
@@ -39,7 +40,20 @@ struct RunPicture {
 
 /// Draws `run` on `track` (see the file comment). Speeds are magnitudes
 /// (reversing counts as moving); non-finite path points and contacts are left out.
-RunPicture RenderRunPicture(const RunRecord& run, const TrackConfig& track);
+/// `also_show`: world points the map must take in besides the track and the
+/// path (a blimp course's buildings and gates).
+RunPicture RenderRunPicture(const RunRecord& run, const TrackConfig& track, const std::vector<Vec2>& also_show = {});
+
+/// The picture of a blimp's flight: the course from above (buildings
+/// outlined, each gate a bar across its opening coloured as the run took it,
+/// the landing circle, the start), the flown path coloured by speed, the
+/// contacts, and the title, on RenderRunPicture's map and legend.
+RunPicture RenderBlimpRunPicture(const RunRecord& run, const BlimpCourseConfig& course);
+
+/// Writes `picture` as PNG to `png` (written beside and renamed over, so a
+/// reader never sees half of it), creating its folder. Throws
+/// std::runtime_error naming `png` if the folder or the file cannot be written.
+void WriteRunPicture(const RunPicture& picture, const std::filesystem::path& png);
 
 /// Renders the run and writes it as PNG to `png`, creating its folder.
 /// Throws std::runtime_error naming `png` if the folder or the file cannot be
