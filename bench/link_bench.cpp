@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -30,26 +31,14 @@ namespace {
 
 constexpr double kRateHz = 100.0;
 
-/// The value of `key` in a flat JSON line (numbers, booleans, strings).
-std::string Field(const std::string& json, const std::string& key) {
-  const std::string needle = "\"" + key + "\":";
-  const auto at = json.find(needle);
-  if (at == std::string::npos) return "";
-  auto start = at + needle.size();
-  if (json[start] == '"') return json.substr(start + 1, json.find('"', start + 1) - start - 1);
-  return json.substr(start, json.find_first_of(",}", start) - start);
-}
-
 double Number(const std::string& json, const std::string& key) {
-  const std::string v = Field(json, key);
+  const std::string v = JsonFieldOf(json, key);
   return v.empty() ? std::nan("") : std::stod(v);
 }
 
 std::vector<double> ParseList(const std::string& option, const std::string& text) {
   std::vector<double> out;
-  std::stringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) {
+  for (const std::string& item : SplitList(text)) {
     try {
       out.push_back(std::stod(item));
     } catch (const std::exception&) {
@@ -102,6 +91,27 @@ bool WaitFor(Ready ready, double timeout_s) {
   return ready();
 }
 
+/// Calls `send` (with the time) at kRateHz for `seconds`; after the first
+/// second, which warms both ends up, calls `warmed_up` once (to forget what
+/// was measured so far).
+void Paced(double seconds, const std::function<void()>& warmed_up, const std::function<void(int64_t)>& send) {
+  const auto period = static_cast<int64_t>(1e9 / kRateHz);
+  int64_t next = MonotonicNs();
+  const int64_t end = next + SToNs(seconds);
+  const int64_t counted_from = next + SToNs(1.0);
+  bool counted = false;
+  while (MonotonicNs() < end) {
+    SleepUntilNs(next);
+    next += period;
+    const int64_t now = MonotonicNs();
+    if (!counted && now >= counted_from) {
+      warmed_up();
+      counted = true;
+    }
+    send(now);
+  }
+}
+
 /// The raw ping-pong: pings at kRateHz for `seconds` to an echo process.
 RttFigures RawPingPong(int domain, double seconds) {
   ChildProcess echo((ProgramDirectory() / "haptel-bench").string(),
@@ -118,21 +128,12 @@ RttFigures RawPingPong(int domain, double seconds) {
     throw std::runtime_error("the echo process did not answer");
   }
   msg::DriveCommand m;
-  const auto period = static_cast<int64_t>(1e9 / kRateHz);
-  int64_t next = MonotonicNs();
-  const int64_t end = next + SToNs(seconds);
-  // The first second warms both ends up and is not counted.
-  const int64_t counted_from = next + SToNs(1.0);
   uint64_t seq = 0;
-  while (MonotonicNs() < end) {
-    SleepUntilNs(next);
-    next += period;
-    const int64_t now = MonotonicNs();
-    if (now < counted_from) rtt.Reset();
+  Paced(seconds, [&] { rtt.Reset(); }, [&](int64_t now) {
     m.seq(++seq);
     m.sent_ns(now);
     pings.Write(m);
-  }
+  });
   std::this_thread::sleep_for(std::chrono::milliseconds(100));
   return Figures(rtt);
 }
@@ -152,25 +153,13 @@ RttFigures HaptelRoundTrip(int domain, double seconds, const std::filesystem::pa
   if (!WaitFor([&] { return vehicle.last_received_ns() != 0; }, 20.0)) {
     throw std::runtime_error("the vehicle did not answer");
   }
-  const auto period = static_cast<int64_t>(1e9 / kRateHz);
-  int64_t next = MonotonicNs();
-  const int64_t end = next + SToNs(seconds);
-  const int64_t counted_from = next + SToNs(1.0);
-  bool counted = false;
-  Histogram& rtt = const_cast<Histogram&>(vehicle.Rtt());
   int tick = 0;
-  while (MonotonicNs() < end) {
-    SleepUntilNs(next);
-    next += period;
-    if (!counted && MonotonicNs() >= counted_from) {
-      rtt.Reset();
-      counted = true;
-    }
+  Paced(seconds, [&] { vehicle.ResetRtt(); }, [&](int64_t) {
     // A gentle back-and-forth, so the robot stays near where it started.
     const double v = 0.2 * std::sin(++tick * 0.02);
     vehicle.Send(v, v);
     vehicle.inbox().Drain();
-  }
+  });
   std::this_thread::sleep_for(std::chrono::milliseconds(100));
   RttFigures figures = Figures(vehicle.Rtt());
   const mediator::VideoStats video = vehicle.video().Stats();
@@ -214,8 +203,8 @@ LapRow Lap(const std::string& track, int domain, double delay_ms, double loss_pe
     return row;
   }
   row.ran = true;
-  row.completed = Field(json, "completed") == "true";
-  row.outcome = Field(json, "outcome");
+  row.completed = JsonFieldOf(json, "completed") == "true";
+  row.outcome = JsonFieldOf(json, "outcome");
   row.lap_time_s = Number(json, "lap_time_s");
   row.obstacles = static_cast<int>(Number(json, "obstacles_touched"));
   row.gates_passed = static_cast<int>(Number(json, "gates_passed"));

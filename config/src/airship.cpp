@@ -1,5 +1,7 @@
 #include "haptel/config/airship.hpp"
 
+#include <cmath>
+
 #include "airship_section.hpp"
 #include "haptel/config/check.hpp"
 
@@ -114,4 +116,8 @@ AirshipConfig ReadAirship(YamlMap& section) {
 }
 
 }  // namespace config_detail
+double AirshipConfig::StillAirTopSpeed() const {
+  return std::sqrt(2.0 * max_thrust / (air_density * axial_drag_coefficient * std::pow(volume, 2.0 / 3.0)));
+}
+
 }  // namespace haptel

@@ -113,10 +113,7 @@ LinkFault ParseLinkFault(const std::string& text) {
   LinkFault fault;
   fault.enabled = true;
   if (text == "on") return fault;
-  size_t start = 0;
-  while (start <= text.size()) {
-    const size_t comma = text.find(',', start);
-    const std::string part = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+  for (const std::string& part : SplitList(text)) {
     const size_t eq = part.find('=');
     const std::string key = part.substr(0, eq);
     const std::string value = eq == std::string::npos ? "" : part.substr(eq + 1);
@@ -130,8 +127,6 @@ LinkFault ParseLinkFault(const std::string& text) {
       throw std::invalid_argument("delay=TIME, jitter=TIME or loss=PERCENT, comma-separated (e.g. "
                                   "delay=100ms,jitter=20ms,loss=5%), or 'on' (not '" + part + "')");
     }
-    if (comma == std::string::npos) break;
-    start = comma + 1;
   }
   if (fault.delay_s > 10.0 || fault.jitter_s > 10.0) {
     throw std::invalid_argument("a delay and jitter of at most 10 s (not '" + text + "')");
@@ -148,18 +143,13 @@ LinkFault ParseLinkFaultOption(const std::string& text) {
 }
 
 std::vector<std::string> ParseAddressOption(const std::string& option, const std::string& text) {
-  std::vector<std::string> out;
-  size_t start = 0;
-  while (start <= text.size()) {
-    const size_t comma = text.find(',', start);
-    out.push_back(text.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+  const std::vector<std::string> out = SplitList(text);
+  for (const std::string& address : out) {
     in_addr parsed{};
-    if (inet_pton(AF_INET, out.back().c_str(), &parsed) != 1) {
+    if (inet_pton(AF_INET, address.c_str(), &parsed) != 1) {
       throw UsageError("option --" + option + ": expected IPv4 addresses such as 192.168.1.20, comma-separated (not '" +
-                       out.back() + "')");
+                       address + "')");
     }
-    if (comma == std::string::npos) break;
-    start = comma + 1;
   }
   return out;
 }

@@ -29,4 +29,17 @@ std::string JsonString(const std::string& s) {
   return out + "\"";
 }
 
+std::string JsonFieldOf(const std::string& json, const std::string& key) {
+  const std::string needle = "\"" + key + "\":";
+  const auto at = json.find(needle);
+  if (at == std::string::npos) return "";
+  const auto start = at + needle.size();
+  if (start < json.size() && json[start] == '"') {
+    const auto end = json.find('"', start + 1);
+    return json.substr(start + 1, end == std::string::npos ? std::string::npos : end - start - 1);
+  }
+  const auto end = json.find_first_of(",}", start);
+  return json.substr(start, end == std::string::npos ? std::string::npos : end - start);
+}
+
 }  // namespace haptel

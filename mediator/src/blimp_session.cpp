@@ -52,8 +52,8 @@ void LogProgress(double t, const BlimpLapTimer& lap, const VehicleLink& link, co
 }
 
 /// What the blimp's view shows over the picture: the lap, the gates, the
-/// last contact, the airspeed on the HUD's dial (full scale: the thesis's top
-/// speed) and a line of height and engine. Builds it without allocating.
+/// last contact, the airspeed on the HUD's dial (full scale: the model's top
+/// speed in still air) and a line of height and engine. Builds it without allocating.
 class BlimpOverlay {
  public:
   BlimpOverlay(const SessionSetup& setup, int gates_total) : setup_(setup), gates_total_(gates_total) {}
@@ -74,7 +74,7 @@ class BlimpOverlay {
     o.contact_now = touched_;
     o.hud = true;
     o.speed_mps = s.airspeed();
-    o.speed_max_mps = kTopSpeed_mps;
+    o.speed_max_mps = setup_.vehicle.airship.StillAirTopSpeed();
     std::snprintf(o.status, sizeof o.status, "height %.1f m  power %.0f%%  helix %+.0f%%", s.z(), 100.0 * c.power,
                   100.0 * c.helix);
     if (!vehicle_up) {
@@ -88,7 +88,6 @@ class BlimpOverlay {
   }
 
  private:
-  static constexpr double kTopSpeed_mps = 35.0 / 3.6;  ///< thesis ch. 8.2: 35 km/h
   static constexpr double kHelpS = 15.0;
   const SessionSetup& setup_;
   int gates_total_;

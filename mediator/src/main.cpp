@@ -14,7 +14,7 @@
 #include "haptel/core/log.hpp"
 #include "haptel/mediator/run_command.hpp"
 #include "haptel/mediator/scene_command.hpp"
-#include "haptel/mediator/security_command.hpp"
+#include "haptel/mediator/link_commands.hpp"
 #include "haptel/study/study_command.hpp"
 
 namespace {

@@ -110,11 +110,12 @@ std::string OperatorName() {
 }  // namespace
 
 VehicleLink::VehicleLink(const VehicleLinkOptions& options)
-    : options_(options), session_(NewSession()), operator_name_(OperatorName()) {
+    : options_(options), session_(NewSession()) {
+  const std::string who = OperatorName();
   command_.session(session_);
-  command_.operator_name(operator_name_);
+  command_.operator_name(who);
   blimp_command_.session(session_);
-  blimp_command_.operator_name(operator_name_);
+  blimp_command_.operator_name(who);
   if (!options_.program.empty()) {
     std::vector<std::string> arguments{"--config", options_.vehicle.file.string(), "--track",
                                        options_.track_file.string(), "--name", options_.vehicle.name, "--domain",

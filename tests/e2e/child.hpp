@@ -5,6 +5,8 @@
 #include <vector>
 
 #include "haptel/core/child_process.hpp"
+#include "haptel/core/json.hpp"
+#include "test_env.hpp"
 
 namespace haptel::test {
 
@@ -17,18 +19,16 @@ class Child : public ChildProcess {
   static constexpr int kRunning = kStillRunning;
 };
 
-/// Value of a top-level key in a flat JSON object line (numbers, bools, strings).
-inline std::string JsonField(const std::string& json, const std::string& key) {
-  const std::string needle = "\"" + key + "\":";
-  const auto at = json.find(needle);
-  if (at == std::string::npos) return "";
-  auto start = at + needle.size();
-  if (json[start] == '"') {
-    const auto end = json.find('"', start + 1);
-    return json.substr(start + 1, end - start - 1);
-  }
-  const auto end = json.find_first_of(",}", start);
-  return json.substr(start, end - start);
+/// Pumps `child` until its stderr contains `text` (at most `timeout_s`;
+/// bounds a wait, asserts no timing). False if it never did.
+inline bool WaitForErr(Child& child, const std::string& text, double timeout_s) {
+  return WaitFor([&] {
+    child.Pump();
+    return child.err().find(text) != std::string::npos;
+  }, timeout_s);
 }
+
+/// Value of a top-level key in a flat JSON object line (numbers, bools, strings).
+inline std::string JsonField(const std::string& json, const std::string& key) { return JsonFieldOf(json, key); }
 
 }  // namespace haptel::test

@@ -23,17 +23,16 @@ namespace {
 
 std::string Bin(const std::string& name) { return (test::BinDir() / name).string(); }
 
-/// A simulated robot started by hand on `domain`, up (its ready line seen).
+/// A vehicle started by hand, up (its ready line seen): `argv`, or a
+/// simulated robot on the short track and `domain`.
 class HandStartedVehicle {
  public:
-  explicit HandStartedVehicle(int domain)
-      : child_({Bin("haptel-vehicle"), "--track", "config/tracks/test-short.yaml", "--domain",
-                std::to_string(domain)}) {
-    REQUIRE(test::WaitFor([&] {
-      child_.Pump();
-      return child_.err().find(" up on domain") != std::string::npos;
-    }, 30.0));
+  explicit HandStartedVehicle(std::vector<std::string> argv) : child_(std::move(argv)) {
+    REQUIRE(test::WaitForErr(child_, " up on domain", 30.0));
   }
+  explicit HandStartedVehicle(int domain)
+      : HandStartedVehicle(std::vector<std::string>{Bin("haptel-vehicle"), "--track", "config/tracks/test-short.yaml",
+                                                    "--domain", std::to_string(domain)}) {}
   Child& child() { return child_; }
 
  private:
@@ -87,10 +86,7 @@ TEST_CASE("a second operator is refused, naming the one driving; the first compl
   const auto dir = test::ScratchDir("e2e-owner");
   HandStartedVehicle vehicle(domain);
   Child first(AttachArgs(domain, dir / "first.db"));
-  REQUIRE(test::WaitFor([&] {
-    first.Pump();
-    return first.err().find("distance") != std::string::npos;  // a progress line: driving
-  }, 60.0));
+  REQUIRE(test::WaitForErr(first, "distance", 60.0));  // a progress line: driving
   Child second(AttachArgs(domain, dir / "second.db"));
   const int second_code = second.Wait(60.0);
   INFO(second.out() << second.err());
@@ -273,13 +269,9 @@ TEST_CASE("haptel run --attach drives a vehicle in another network namespace, ov
   }
   const int domain = test::UniqueDomain(47);
   const auto dir = test::ScratchDir("e2e-netns");
-  Child vehicle(host.Inside({Bin("haptel-vehicle"), "--track", "config/tracks/test-short.yaml", "--domain",
-                             std::to_string(domain), "--dds-interfaces", host.address_there(), "--dds-peers",
-                             host.address_here()}));
-  REQUIRE(test::WaitFor([&] {
-    vehicle.Pump();
-    return vehicle.err().find(" up on domain") != std::string::npos;
-  }, 30.0));
+  HandStartedVehicle vehicle(host.Inside({Bin("haptel-vehicle"), "--track", "config/tracks/test-short.yaml",
+                                          "--domain", std::to_string(domain), "--dds-interfaces",
+                                          host.address_there(), "--dds-peers", host.address_here()}));
   const uint64_t before = host.received_bytes();
   Child run({Bin("haptel"), "run", "--attach", "--track", "config/tracks/test-short.yaml", "--json", "--domain",
              std::to_string(domain), "--dds-interfaces", host.address_here(), "--dds-peers", host.address_there(),
@@ -292,8 +284,8 @@ TEST_CASE("haptel run --attach drives a vehicle in another network namespace, ov
   const uint64_t crossed = host.received_bytes() - before;
   INFO("bytes received over the veth pair: " << crossed);
   CHECK(crossed > 1000000);
-  kill(vehicle.pid(), SIGTERM);
-  CHECK(vehicle.Wait(30.0) == 0);
+  kill(vehicle.child().pid(), SIGTERM);
+  CHECK(vehicle.child().Wait(30.0) == 0);
 }
 
 TEST_CASE("through a discovery server: a vehicle and an operator that only know the server's address meet and drive") {
@@ -305,12 +297,8 @@ TEST_CASE("through a discovery server: a vehicle and an operator that only know 
     server.Pump();
     return server.out().find("serving on " + server_address) != std::string::npos;
   }, 30.0));
-  Child vehicle({Bin("haptel-vehicle"), "--track", "config/tracks/test-short.yaml", "--domain",
-                 std::to_string(domain), "--discovery-server", server_address});
-  REQUIRE(test::WaitFor([&] {
-    vehicle.Pump();
-    return vehicle.err().find(" up on domain") != std::string::npos;
-  }, 30.0));
+  HandStartedVehicle vehicle({Bin("haptel-vehicle"), "--track", "config/tracks/test-short.yaml", "--domain",
+                              std::to_string(domain), "--discovery-server", server_address});
   Child run({Bin("haptel"), "run", "--attach", "--discovery-server", server_address, "--track",
              "config/tracks/test-short.yaml", "--json", "--domain", std::to_string(domain), "--database",
              (dir / "runs.db").string(), "--vehicle-timeout", "5"});
@@ -322,7 +310,7 @@ TEST_CASE("through a discovery server: a vehicle and an operator that only know 
   Child bad({Bin("haptel"), "run", "--discovery-server", "localhost:99999"});
   CHECK(bad.Wait(30.0) == 2);
   CHECK(bad.err().find("option --discovery-server: expected an IPv4 address and a port") != std::string::npos);
-  kill(vehicle.pid(), SIGTERM);
+  kill(vehicle.child().pid(), SIGTERM);
   kill(server.pid(), SIGTERM);
   CHECK(server.Wait(30.0) == 0);
 }

@@ -49,10 +49,12 @@ LinkConfig Link(int domain, const fs::path& security = {}, const std::string& id
   return c;
 }
 
-/// A vehicle's side: counts the commands that reach it.
+/// A vehicle's side: counts the commands that reach it. Secured as
+/// vehicle-robot1 of the folder, or with `config`.
 struct Vehicle {
-  explicit Vehicle(int domain)
-      : participant(Link(domain, Folder(), link::VehicleIdentity("robot1")), "vehicle"),
+  explicit Vehicle(int domain) : Vehicle(Link(domain, Folder(), link::VehicleIdentity("robot1"))) {}
+  explicit Vehicle(const LinkConfig& config)
+      : participant(config, "vehicle"),
         commands(participant, link::TopicName("robot1", "command"), link::Profile::kCommand,
                  [this](const msg::DriveCommand&) { received.fetch_add(1); }) {}
   link::Participant participant;
@@ -185,33 +187,16 @@ TEST_CASE("secured: no command payload crosses the wire in plain text (without s
   const std::string marker = "PLAINTEXT-MARKER-4242";
   const auto payload_seen = [&](bool secured) {
     const int domain = test::UniqueDomain(62);
-    Vehicle* secured_vehicle = nullptr;
-    std::unique_ptr<Vehicle> v;
-    std::unique_ptr<link::Participant> plain;
-    std::unique_ptr<link::CommandReader> plain_reader;
-    std::atomic<int> plain_received{0};
-    link::FaultLine* line = nullptr;
-    if (secured) {
-      v = std::make_unique<Vehicle>(domain);
-      secured_vehicle = v.get();
-      line = v->participant.fault_line();
-    } else {
-      plain = std::make_unique<link::Participant>(Link(domain), "vehicle");
-      plain_reader = std::make_unique<link::CommandReader>(*plain, link::TopicName("robot1", "command"),
-                                                           link::Profile::kCommand,
-                                                           [&](const msg::DriveCommand&) { plain_received.fetch_add(1); });
-      line = plain->fault_line();
-    }
+    Vehicle vehicle(secured ? Link(domain, Folder(), link::VehicleIdentity("robot1")) : Link(domain));
+    link::FaultLine* line = vehicle.participant.fault_line();
     REQUIRE(line != nullptr);
     line->CaptureReceived(100000);
     // Commands until some have arrived, then a second more of them: what was
     // captured is what carried them.
-    const auto arrived = [&] {
-      return secured ? secured_vehicle->received.load() > 0 : plain_received.load() > 0;
-    };
-    Command(secured ? Link(domain, Folder(), link::OperatorIdentity()) : Link(domain), 60.0, marker, arrived);
-    CHECK(arrived());
-    Command(secured ? Link(domain, Folder(), link::OperatorIdentity()) : Link(domain), 1.0, marker);
+    const LinkConfig sender = secured ? Link(domain, Folder(), link::OperatorIdentity()) : Link(domain);
+    Command(sender, 60.0, marker, [&] { return vehicle.received.load() > 0; });
+    CHECK(vehicle.received.load() > 0);
+    Command(sender, 1.0, marker);
     int with_marker = 0;
     const auto packets = line->TakeCaptured();
     CHECK(packets.size() > 50);

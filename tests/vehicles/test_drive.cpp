@@ -69,10 +69,10 @@ TEST_CASE("command intake: malformed and stale commands are counted and dropped,
   const int64_t ms = 1'000'000;
   CHECK(in.Poll(0));  // nothing yet: expired
   CHECK(in.AppliedAgeNs(5 * ms) == 0);
-  CHECK_FALSE(in.Offer(false, 1, 0, 7, 10 * ms));  // fails its range check
-  CHECK(in.Offer(true, 2, 0, 8, 20 * ms));
-  CHECK_FALSE(in.Offer(true, 2, 0, 9, 30 * ms));  // not newer
-  CHECK_FALSE(in.Offer(true, 1, 0, 9, 40 * ms));  // older: reordered
+  CHECK_FALSE(in.Offer(false, {}, 1, 0, 7, 10 * ms));  // fails its range check
+  CHECK(in.Offer(true, {}, 2, 0, 8, 20 * ms));
+  CHECK_FALSE(in.Offer(true, {}, 2, 0, 9, 30 * ms));  // not newer
+  CHECK_FALSE(in.Offer(true, {}, 1, 0, 9, 40 * ms));  // older: reordered
   CHECK_FALSE(in.Poll(50 * ms));
   CHECK(in.applied().command == 8);
   CHECK(in.applied().seq == 2);
@@ -86,7 +86,7 @@ TEST_CASE("command intake: malformed and stale commands are counted and dropped,
   CHECK(in.watchdog_trips() == 1);
   // A restarted sender (sequence from 1 again) is taken once the last
   // command is older than the timeout.
-  CHECK(in.Offer(true, 1, 0, 5, 400 * ms));
+  CHECK(in.Offer(true, {}, 1, 0, 5, 400 * ms));
   CHECK_FALSE(in.Poll(410 * ms));
   CHECK(in.applied().command == 5);
 }

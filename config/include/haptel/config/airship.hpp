@@ -84,6 +84,11 @@ struct AirshipConfig {
   bool aerodynamics = true;
 
   /// Throws ConfigFieldError naming the first field out of range.
+  /// m/s: the airspeed at which both main motors at full thrust meet the
+  /// hull's axial drag, ½·ρ·C·V^⅔·u² = max_thrust (the model's top speed in
+  /// still air; 35 km/h for the thesis's blimp).
+  double StillAirTopSpeed() const;
+
   void ValidateOrThrow() const;
   bool operator==(const AirshipConfig&) const = default;
 };

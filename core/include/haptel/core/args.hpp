@@ -18,6 +18,10 @@ class UsageError : public cli::InputError {
   using cli::InputError::InputError;
 };
 
+/// "a,b,,c" -> {"a", "b", "", "c"}: an option's comma-separated list, empty
+/// parts kept (so a parser can name them); "" -> {""}.
+std::vector<std::string> SplitList(const std::string& text, char separator = ',');
+
 class Args {
  public:
   /// @param value_options options that take a value (without "--").

@@ -1,6 +1,7 @@
 #pragma once
 /// @file The two pieces every one-line JSON report needs (`--json` on the
-/// benchmarks and on `haptel run`): a number and a quoted string.
+/// benchmarks and on `haptel run`): a number and a quoted string; and the
+/// one thing read back from such a line (a benchmark reading `haptel run`'s).
 #include <string>
 
 namespace haptel {
@@ -10,5 +11,8 @@ namespace haptel {
 std::string JsonNumber(double v);
 /// `s` in double quotes, with quotes, backslashes and control characters escaped.
 std::string JsonString(const std::string& s);
+/// The value of top-level `key` in a flat one-line JSON object, as text
+/// (a string without its quotes; escapes are not undone); "" when absent.
+std::string JsonFieldOf(const std::string& json, const std::string& key);
 
 }  // namespace haptel

@@ -57,7 +57,6 @@ class FaultLine {
   /// every packet is dropped. Idempotent.
   void Shutdown();
   FaultCounts Counts() const;
-  const LinkFault& fault() const { return fault_; }
 
   /// A packet the transport received: dropped, delivered now, or queued.
   void Receive(eprosima::fastdds::rtps::TransportReceiverInterface* next, const uint8_t* data, uint32_t size,

@@ -47,8 +47,6 @@ class Participant {
   eprosima::fastdds::dds::Publisher* publisher() const { return publisher_; }
   eprosima::fastdds::dds::Subscriber* subscriber() const { return subscriber_; }
   const LinkConfig& config() const { return config_; }
-  /// What the injected faults did (zeros without LinkConfig::fault).
-  FaultCounts fault_counts() const { return line_ ? line_->Counts() : FaultCounts{}; }
   /// The fault transport's line (null without LinkConfig::fault).
   FaultLine* fault_line() const { return line_.get(); }
 

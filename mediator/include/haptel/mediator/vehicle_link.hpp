@@ -56,6 +56,8 @@ class StateInboxOf {
   /// Round trip of echoed commands minus their wait at the vehicle, µs
   /// (the histogram is safe to read while the DDS thread records).
   const Histogram& Rtt() const { return rtt_; }
+  /// Forgets the round trips so far (a benchmark's warm-up).
+  void ResetRtt() { rtt_.Reset(); }
   LinkCounts Counts() const;
 
  private:
@@ -113,6 +115,7 @@ class VehicleLink {
   BlimpStateInbox& blimp_inbox() { return blimp_inbox_; }
   /// The round trip, whichever vehicle it is.
   const Histogram& Rtt() const { return blimp() ? blimp_inbox_.Rtt() : inbox_.Rtt(); }
+  void ResetRtt() { blimp() ? blimp_inbox_.ResetRtt() : inbox_.ResetRtt(); }
   int64_t last_received_ns() const { return blimp() ? blimp_inbox_.last_received_ns() : inbox_.last_received_ns(); }
   LinkCounts Counts() const { return blimp() ? blimp_inbox_.Counts() : inbox_.Counts(); }
   const VideoReceiver& video() const { return *video_; }
@@ -126,11 +129,10 @@ class VehicleLink {
   int domain() const { return options_.link.domain_id; }
 
   /// This run's operator session (random, never 0): every command carries
-  /// it, and the vehicle obeys one session at a time (its state names the
-  /// owner). The last command, in Stop, releases the vehicle.
+  /// it and the operator's name ("haptel run, user@host pid N"), and the
+  /// vehicle obeys one session at a time (its state names the owner). The
+  /// last command, in Stop, releases the vehicle.
   uint64_t session() const { return session_; }
-  /// Who this session is, as the vehicle names its owner to others.
-  const std::string& operator_name() const { return operator_name_; }
   /// How many vehicles answer under this name: the participants writing its
   /// state or reading its commands (DDS discovery). More than one is a
   /// conflict: two vehicles named alike on one domain.
@@ -151,7 +153,6 @@ class VehicleLink {
   msg::DriveCommand command_;
   uint64_t seq_ = 0;
   uint64_t session_ = 0;
-  std::string operator_name_;
   bool stopped_ = false;
 };
 

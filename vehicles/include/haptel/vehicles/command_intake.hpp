@@ -32,6 +32,12 @@ class CommandSequence {
     last_ns_ = now_ns;
     return true;
   }
+  /// Forgets the last command: the next one is taken whatever its number (a
+  /// new sender, whose sequence starts afresh).
+  void Reset() {
+    last_seq_ = 0;
+    last_ns_ = 0;
+  }
 
  private:
   int64_t restart_after_ns_;
@@ -117,8 +123,7 @@ class CommandIntake {
  public:
   /// The watchdog's timeout, also the sequence's restart age (s, > 0).
   explicit CommandIntake(double watchdog_timeout_s)
-      : restart_after_s_(watchdog_timeout_s),
-        sequence_(watchdog_timeout_s),
+      : sequence_(watchdog_timeout_s),
         watchdog_(watchdog_timeout_s),
         applied_version_(latest_.Version()) {}
 
@@ -133,7 +138,7 @@ class CommandIntake {
     const CommandOwner::Verdict verdict = owner_.Admit(from, now_ns);
     if (verdict == CommandOwner::Verdict::kRefused) return false;
     // A new owner's sequence starts afresh, whatever the last one's reached.
-    if (verdict == CommandOwner::Verdict::kNewOwner) sequence_ = CommandSequence(restart_after_s_);
+    if (verdict == CommandOwner::Verdict::kNewOwner) sequence_.Reset();
     if (!sequence_.Accept(seq, now_ns)) {
       stale_.fetch_add(1, std::memory_order_relaxed);
       return false;
@@ -141,10 +146,6 @@ class CommandIntake {
     accepted_.fetch_add(1, std::memory_order_relaxed);
     latest_.Store({seq, sent_ns, now_ns, command});
     return true;
-  }
-  /// Offer from an anonymous session (session 0).
-  bool Offer(bool valid, uint64_t seq, int64_t sent_ns, const Command& command, int64_t now_ns) {
-    return Offer(valid, CommandSender{}, seq, sent_ns, command, now_ns);
   }
 
   /// Control thread, once a tick: takes the newest command and checks the
@@ -180,7 +181,6 @@ class CommandIntake {
   bool watchdog_expired() const { return expired_.load(); }
 
  private:
-  double restart_after_s_;
   CommandOwner owner_;        // DDS thread
   CommandSequence sequence_;  // DDS thread
   Seqlock<ReceivedCommand<Command>> latest_;

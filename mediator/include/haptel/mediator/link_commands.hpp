@@ -1,12 +1,13 @@
 #pragma once
-/// @file The link's deployment commands. `haptel security init DIR
-/// [--vehicles A,B] [--days N]`: makes the
-/// folder DDS Security needs (link/security.hpp): a CA, the operator's and
-/// each vehicle's identity, the signed governance and permissions. Then
-/// `--security DIR` (or link.security) on haptel run and haptel-vehicle.
+/// @file The commands that set a link up across hosts: `haptel security
+/// init` (DDS Security's folder) and `haptel discovery-server`.
 
 namespace haptel::mediator {
 
+/// `haptel security init DIR [--vehicles A,B] [--days N]`: makes the folder
+/// DDS Security needs (link/security.hpp): a CA, the operator's and each
+/// vehicle's identity, the signed governance and permissions. Then
+/// `--security DIR` (or link.security) on haptel run and haptel-vehicle.
 /// `argv[0]` is "security". Exit 0 done, 2 bad arguments or a folder that
 /// already holds a CA, 1 when openssl fails.
 int SecurityCommand(int argc, const char* const* argv);

@@ -1,11 +1,10 @@
-#include "haptel/mediator/security_command.hpp"
+#include "haptel/mediator/link_commands.hpp"
 
 #include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <thread>
 #include <filesystem>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -43,9 +42,7 @@ int SecurityCommand(int argc, const char* const* argv) {
       dir = words[1];
       if (auto list = args.Value("vehicles")) {
         vehicles.clear();
-        std::stringstream in(*list);
-        std::string name;
-        while (std::getline(in, name, ',')) {
+        for (const std::string& name : SplitList(*list)) {
           if (const std::string problem = VehicleNameProblem(name); !problem.empty()) {
             throw UsageError("option --vehicles: '" + name + "': expected " + problem);
           }
