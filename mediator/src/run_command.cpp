@@ -186,8 +186,14 @@ SessionSetup RunSetupFromArgs(const Args& args) {
                        "' is flown with the blimp gesture cockpit (--interface blimp-gesture)");
     }
     if (person && setup.device.driver == "sim") {
-      throw UsageError("option --operator person: the blimp is flown with both hands on a haptic device; the "
-                       "simulated device has no arms for a person (use --device with a real one)");
+      if (args.Value("operator")) {
+        throw UsageError("option --operator person: the blimp is flown with both hands on a haptic device; the "
+                         "simulated device has no arms for a person (use --device with a real one)");
+      }
+      // At a display with no haptic device named, nobody could fly: the
+      // automatic pilot flies it, in the window, for the person to watch.
+      setup.operator_kind = "auto";
+      if (!args.Value("time-limit")) setup.time_limit_s = 0.0;
     }
     setup.blimp_interface = LoadBlimpGesture(InterfaceFile(setup.run, name));
     setup.calibration = DeviceCalibrationFor(setup.device);

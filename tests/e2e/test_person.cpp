@@ -187,6 +187,25 @@ TEST_CASE("a person flies the blimp in a window: dragging the mouse turns the pi
   CHECK(video.get(cv::CAP_PROP_FRAME_COUNT) > 30);
 }
 
+TEST_CASE("the blimp at a display without a haptic device: the automatic pilot flies it in a window to watch") {
+  XServer x;
+  const auto dir = test::ScratchDir("e2e-blimp-watch");
+  Child run({Bin("haptel"), "run", "--config", "config/blimp.yaml", "--time-limit", "4", "--json", "--quiet",
+             "--domain", std::to_string(test::UniqueDomain(24)), "--database", (dir / "runs.db").string(),
+             "--vehicle-timeout", "5"});
+  const int code = run.Wait(90.0);
+  INFO(run.out() << run.err());
+  CHECK(code == 1);  // the time limit, not a refusal (2)
+  const std::string json = run.LastLine();
+  CHECK(JsonField(json, "outcome") == "time limit");
+  CHECK(JsonField(json, "operator") == "auto");
+  CHECK(std::stod(JsonField(json, "view_fps")) > 0.0);  // the window was up
+  // Asking for a person at the simulated device is still refused, saying why.
+  Child person({Bin("haptel"), "run", "--config", "config/blimp.yaml", "--operator", "person"});
+  CHECK(person.Wait(30.0) == 2);
+  CHECK(person.err().find("no arms for a person") != std::string::npos);
+}
+
 TEST_CASE("a person's bad input exits 2 with one line naming the fix") {
   const auto dir = test::ScratchDir("e2e-person-bad");
   SECTION("a window without a display suggests recording") {
