@@ -12,21 +12,6 @@ namespace {
 double Axis(const InputState& s, PadAxis a) { return s.pad_axes[static_cast<int>(a)]; }
 bool Button(const InputState& s, PadButton b) { return s.pad_buttons[static_cast<int>(b)]; }
 
-/// Radial dead zone on a stick: inside it 0; outside, the radius is mapped
-/// from [dz, 1] to [0, 1] along the same direction, so there is no step at
-/// the edge and full deflection is still 1.
-std::array<double, 2> RadialDeadZone(double x, double y, double dz) {
-  const double r = std::hypot(x, y);
-  if (!(r > dz)) return {0.0, 0.0};  // also catches NaN
-  const double scaled = std::min(1.0, (r - dz) / (1.0 - dz));
-  return {x / r * scaled, y / r * scaled};
-}
-
-double TriggerDeadZone(double t, double dz) {
-  if (!(t > dz)) return 0.0;
-  return std::min(1.0, (t - dz) / (1.0 - dz));
-}
-
 bool DeadmanHeld(const InputState& s, GamepadDeadman d) {
   switch (d) {
     case GamepadDeadman::kNone:
@@ -48,6 +33,18 @@ bool DeadmanHeld(const InputState& s, GamepadDeadman d) {
 }
 
 }  // namespace
+
+std::array<double, 2> RadialDeadZone(double x, double y, double dz) {
+  const double r = std::hypot(x, y);
+  if (!(r > dz)) return {0.0, 0.0};  // also catches NaN
+  const double scaled = std::min(1.0, (r - dz) / (1.0 - dz));
+  return {x / r * scaled, y / r * scaled};
+}
+
+double TriggerDeadZone(double t, double dz) {
+  if (!(t > dz)) return 0.0;
+  return std::min(1.0, (t - dz) / (1.0 - dz));
+}
 
 GamepadInterface::GamepadInterface(const GamepadConfig& config, const InputBox& input)
     : config_(Validated(config)),

@@ -4,12 +4,16 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <optional>
+#include <string>
+#include <utility>
 
 #include "haptel/config/error.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/core/log.hpp"
 #include "haptel/haptics/sim_device.hpp"
 #include "haptel/interfaces/blimp_gesture.hpp"
+#include "haptel/interfaces/blimp_manual.hpp"
 #include "haptel/mediator/blimp/blimp_lap_timer.hpp"
 #include "haptel/mediator/blimp/blimp_pilot.hpp"
 #include "haptel/mediator/haptic_side.hpp"
@@ -41,11 +45,11 @@ void LogProgress(double t, const BlimpLapTimer& lap, const VehicleLink& link, co
                  const BlimpCommand& command, const std::string& counters) {
   char line[300];
   std::snprintf(line, sizeof line,
-                "%6.1f s  blimp  lap %5.1f s  gates %d/%d  obstacles %d  height %.1f m  airspeed %.1f m/s  "
+                "%6.1f s  blimp  lap %5.1f s  gates %d/%d  obstacles %d  at %.0f %.0f m  height %.1f m  airspeed %.1f m/s  "
                 "power %.2f  helix %+.2f  rudder %+.2f  elevator %+.2f  tail %+.2f  camera %+.2f %+.2f rad  "
                 "rtt p50 %.2f ms  video %.1f fps",
-                t, lap.lap_time_s(), lap.next_gate(), lap.gates_total(), lap.obstacles_touched(), s.z(),
-                s.airspeed(), command.power, command.helix, command.rudder, command.elevator, command.tail_rotor,
+                t, lap.lap_time_s(), lap.next_gate(), lap.gates_total(), lap.obstacles_touched(), s.x(),
+                s.y(), s.z(), s.airspeed(), command.power, command.helix, command.rudder, command.elevator, command.tail_rotor,
                 s.outputs()[5], s.outputs()[6], link.Rtt().Percentile(0.5) * 1e-3, link.video().Stats().fps);
   log::Info(line);
   if (!counters.empty()) log::Info("         counters: " + counters);
@@ -56,11 +60,12 @@ void LogProgress(double t, const BlimpLapTimer& lap, const VehicleLink& link, co
 /// speed in still air) and a line of height and engine. Builds it without allocating.
 class BlimpOverlay {
  public:
-  BlimpOverlay(const SessionSetup& setup, int gates_total) : setup_(setup), gates_total_(gates_total) {}
+  BlimpOverlay(const SessionSetup& setup, std::string interface, int gates_total)
+      : setup_(setup), interface_(std::move(interface)), gates_total_(gates_total) {}
 
   view::Overlay Make(double t, const BlimpLapTimer& lap, const msg::BlimpState& s, const BlimpCommand& c,
                      bool vehicle_up) {
-    view::Overlay o = LapOverlay(setup_, "blimp-gesture", t, lap.lap_time_s(), lap.next_gate(), gates_total_,
+    view::Overlay o = LapOverlay(setup_, interface_.c_str(), t, lap.lap_time_s(), lap.next_gate(), gates_total_,
                                  lap.obstacles_touched());
     // A new contact onset, not the blimp resting on its pad at the start.
     if (s.pose_valid() && contacts_seen_ < 0) contacts_seen_ = s.contacts();
@@ -82,14 +87,22 @@ class BlimpOverlay {
     } else if (s.failsafe()) {
       std::snprintf(o.message, sizeof o.message, "failsafe: every channel at neutral");
     } else if (setup_.operator_kind == "person" && t < kHelpS) {
-      std::snprintf(o.message, sizeof o.message, "drag the mouse to look around, Home looks ahead, Esc ends");
+      std::snprintf(o.message, sizeof o.message, "%s", Help());
     }
     return o;
   }
 
  private:
+  const char* Help() const {
+    if (!setup_.blimp_manual) return "drag the mouse to look around, Home looks ahead, Esc ends";
+    if (setup_.blimp_manual->input() == BlimpManualInput::kGamepad) {
+      return "left stick power (sideways: tail rotor), right stick elevator/rudder, triggers climb";
+    }
+    return "W/S power, up/down climb, A/D turn, PgUp/PgDn elevator, space neutral, drag to look";
+  }
   static constexpr double kHelpS = 15.0;
   const SessionSetup& setup_;
+  std::string interface_;
   int gates_total_;
   int64_t contacts_seen_ = -1;  ///< contact onsets when the first pose came; -1: none yet
   bool touched_ = false;        ///< in a contact that began in flight (the border shows it)
@@ -111,20 +124,32 @@ SessionResult RunBlimpSession(const SessionSetup& setup, const std::atomic<bool>
   rec.gates_total = static_cast<int>(course.gates.size());
   rec.operator_kind = setup.operator_kind;
   rec.device = setup.device.name;
-  interfaces::BlimpGestureInterface interface(*setup.blimp_interface);
-  rec.interface = interface.name();
+  // The gesture cockpit, or a person's keys or game controller.
+  interfaces::InputBox input;
+  std::optional<interfaces::BlimpGestureInterface> gesture;
+  std::optional<interfaces::BlimpManualInterface> manual;
+  if (setup.blimp_manual) {
+    manual.emplace(*setup.blimp_manual, input.Load());
+    rec.interface = manual->name();
+  } else {
+    gesture.emplace(*setup.blimp_interface);
+    rec.interface = gesture->name();
+  }
+  const double command_rate_hz =
+      manual ? setup.blimp_manual->command_rate_hz : setup.blimp_interface->command_rate_hz;
 
   // --- The haptic side: the hands are held before anything flies. ---
   HapticSide haptic(setup.device, setup.calibration, setup.gravity, run.op, setup.trace);
   std::unique_ptr<BlimpAutoPilot> pilot;
   if (setup.operator_kind == "auto") {
+    if (!gesture) throw ConfigError("the automatic pilot flies the blimp gesture cockpit, not '" + rec.interface + "'");
     if (haptic.sim() == nullptr) {
       throw ConfigError(setup.device.file.string() +
                         ": the automatic pilot moves the simulated arms (driver 'sim'); device '" +
                         setup.device.name + "' is flown by a person: use --operator person");
     }
     pilot = std::make_unique<BlimpAutoPilot>(course, PilotKnowing(setup.vehicle.airship));
-    PlaceHands(*haptic.sim(), interface.HandTargetsFor({}));
+    PlaceHands(*haptic.sim(), gesture->HandTargetsFor({}));
   }
   haptic.Start(setup.progress);
 
@@ -148,26 +173,30 @@ SessionResult RunBlimpSession(const SessionSetup& setup, const std::atomic<bool>
 
   // --- The view: the pilot camera's picture on a screen that turns with the
   // camera, the view turning with the head (mouse-look in the window). ---
-  interfaces::InputBox input;
   std::unique_ptr<SessionView> view_part;
   if (setup.view != ViewKind::kNone) {
     SessionView::Parts view_parts;
     view_parts.hal = &haptic.hal();
     view_parts.physics_config = &setup.physics;  // the tracked hands' size
     view_parts.video = &vehicle.video();
-    view_parts.hands = {true, true};
+    view_parts.hands = {gesture.has_value(), gesture.has_value()};
     view::ViewOptions options = ViewOptionsFor(setup);
     options.screen = view::HeadTrackedScreen();
     view_part = std::make_unique<SessionView>(options, view_parts, input);
   }
-  BlimpOverlay overlay_feed(setup, static_cast<int>(course.gates.size()));
+  // A person's controller without a view: a thread of its own polls it.
+  std::unique_ptr<view::InputPump> pump;
+  if (manual && manual->input_kind() == BlimpManualInput::kGamepad && !view_part) {
+    pump = std::make_unique<view::InputPump>(input);
+  }
+  BlimpOverlay overlay_feed(setup, rec.interface, static_cast<int>(course.gates.size()));
 
   BlimpLapTimer lap(course);
   const int64_t t0 = MonotonicNs();
   LoopWatch watch(haptic, nullptr, vehicle, view_part.get(), t0);
   int64_t next_live_ns = t0;
   const auto period_ns = static_cast<int64_t>(1e9 / run.session_rate_hz);
-  const auto command_period_ns = static_cast<int64_t>(1e9 / setup.blimp_interface->command_rate_hz);
+  const auto command_period_ns = static_cast<int64_t>(1e9 / command_rate_hz);
   int64_t next_command_ns = t0;
   int64_t next_progress_ns = t0 + SToNs(2.0);
   int64_t next_tick = t0;
@@ -220,11 +249,15 @@ SessionResult RunBlimpSession(const SessionSetup& setup, const std::atomic<bool>
       head = {};
       if (vehicle_up) {
         const BlimpCommand intent = pilot->Decide(t);
-        HoldHands(*haptic.sim(), interface.HandTargetsFor(intent));
+        HoldHands(*haptic.sim(), gesture->HandTargetsFor(intent));
         head = {intent.camera_pan, intent.camera_tilt};
       }
     }
-    command = interface.Update(head, haptic.hal());
+    command = manual ? manual->Update(t, person, haptic.hal()) : gesture->Update(head, haptic.hal());
+    if (manual && manual->lost()) {
+      finish({Outcome::kAborted, "the game controller was disconnected"});
+      break;
+    }
     if (CommandDue(next_command_ns, now, command_period_ns)) vehicle.Send(vehicle_up ? command : BlimpCommand{});
     if (view_part || setup.on_live) {
       const view::Overlay overlay = overlay_feed.Make(t, lap, last, command, vehicle_up);
@@ -269,6 +302,7 @@ SessionResult RunBlimpSession(const SessionSetup& setup, const std::atomic<bool>
   haptic.hal().ZeroForces();
   vehicle.Send(BlimpCommand{});
   haptic.Stop();
+  if (pump) pump->Stop();
   if (view_part) StopAndRecord(*view_part, result);
   vehicle.Stop();
 

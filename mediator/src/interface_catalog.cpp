@@ -25,6 +25,10 @@ InterfaceSpec LoadInterfaceSpec(const RunConfig& run, const std::string& name) {
   const std::string kind = InterfaceName(file);
   InterfaceSpec spec;
   spec.name = kind;
+  if (kind.rfind("blimp-", 0) == 0) {
+    throw ConfigError(file.string() + ": interface '" + kind + "' flies a blimp; the robot is driven with " +
+                      "gesture, a cockpit, keyboard or gamepad");
+  }
   if (kind.rfind("cockpit", 0) == 0) {
     spec.config = LoadCockpit(file);
   } else if (kind == "keyboard") {

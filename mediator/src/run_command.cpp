@@ -8,6 +8,7 @@
 #include <sstream>
 #include <string>
 
+#include "haptel/config/blimp_manual.hpp"
 #include "haptel/config/cockpit.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/config/gravity_grid.hpp"
@@ -40,7 +41,9 @@ constexpr const char* kRunUsage =
     "  --config FILE        run configuration (default config/haptel.yaml)\n"
     "  --track FILE         track file (overrides the configuration's 'track')\n"
     "  --interface NAME     mediator interface to start with (a file interfaces/NAME.yaml);\n"
-    "                       F1-F6 switch between the run configuration's 'interfaces'\n"
+    "                       F1-F6 switch between the run configuration's 'interfaces';\n"
+    "                       a blimp: blimp-gesture (a haptic device's two arms), blimp-keys\n"
+    "                       (the default for a person at the simulated device) or blimp-gamepad\n"
     "  --operator KIND      auto (the simulated driver; default without a display) or person\n"
     "  --device FILE        haptic device file: sim, udp (haptel-device-server arms) or replay\n"
     "  --trace-in FILE      the trace a replay device plays (overrides its 'replay.trace')\n"
@@ -179,23 +182,32 @@ SessionSetup RunSetupFromArgs(const Args& args) {
                    setup.device.name + "' (" + setup.device.driver + ") is not simulated; use --operator person");
   }
   if (blimp) {
-    // The blimp gesture cockpit is the blimp's interface (thesis 8.2.2).
-    const std::string name = args.Value("interface").value_or(setup.run.interface);
-    if (name != "blimp-gesture") {
+    // The blimp gesture cockpit (thesis 8.2.2) needs both arms of a haptic
+    // device; a person without one flies with keys or a game controller.
+    std::string name = args.Value("interface").value_or(setup.run.interface);
+    if (!args.Value("interface") && person && setup.device.driver == "sim") name = "blimp-keys";
+    if (name != "blimp-gesture" && !IsBlimpManual(name)) {
       throw UsageError("option --interface " + name + ": the blimp '" + setup.run.vehicle.string() +
-                       "' is flown with the blimp gesture cockpit (--interface blimp-gesture)");
+                       "' is flown with blimp-gesture (both hands on a haptic device), blimp-keys or blimp-gamepad");
     }
-    if (person && setup.device.driver == "sim") {
-      if (args.Value("operator")) {
-        throw UsageError("option --operator person: the blimp is flown with both hands on a haptic device; the "
-                         "simulated device has no arms for a person (use --device with a real one)");
+    if (IsBlimpManual(name)) {
+      if (!person) {
+        throw UsageError("option --interface " + name + ": keys and controllers are a person's; use --operator person");
       }
-      // At a display with no haptic device named, nobody could fly: the
-      // automatic pilot flies it, in the window, for the person to watch.
-      setup.operator_kind = "auto";
-      if (!args.Value("time-limit")) setup.time_limit_s = 0.0;
+      setup.blimp_manual = LoadBlimpManual(InterfaceFile(setup.run, name));
+      if (setup.blimp_manual->input() == BlimpManualInput::kKeys && setup.view != ViewKind::kWindow) {
+        throw UsageError("option --interface blimp-keys: the keys are read in the view's window, and there is " +
+                         std::string(display ? "none (--view none)" : "no display") +
+                         "; use --view window, or --interface blimp-gamepad");
+      }
+    } else {
+      if (person && setup.device.driver == "sim") {
+        throw UsageError("option --interface blimp-gesture: the gesture cockpit is flown with both hands on a haptic "
+                         "device, and the simulated device has no arms for a person; use --device with a real one, "
+                         "--interface blimp-keys or blimp-gamepad, or --operator auto to watch the automatic pilot");
+      }
+      setup.blimp_interface = LoadBlimpGesture(InterfaceFile(setup.run, name));
     }
-    setup.blimp_interface = LoadBlimpGesture(InterfaceFile(setup.run, name));
     setup.calibration = DeviceCalibrationFor(setup.device);
     if (!setup.device.gravity.empty()) setup.gravity = LoadGravityGrid(setup.device.gravity);
     if (!setup.attach) setup.vehicle_program = ProgramDirectory() / "haptel-vehicle";

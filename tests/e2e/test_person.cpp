@@ -1,7 +1,7 @@
 // End to end, the person's side of `haptel run`: a recorded device replayed
 // through the same interface, a UDP device behind real haptel-device-server
-// processes, a blimp flown in a window with mouse-look, and the bad input a
-// person can give.
+// processes, a blimp flown in a window with mouse-look and by keys, and the
+// bad input a person can give.
 #include <catch2/catch.hpp>
 #include <signal.h>
 
@@ -187,23 +187,50 @@ TEST_CASE("a person flies the blimp in a window: dragging the mouse turns the pi
   CHECK(video.get(cv::CAP_PROP_FRAME_COUNT) > 30);
 }
 
-TEST_CASE("the blimp at a display without a haptic device: the automatic pilot flies it in a window to watch") {
+TEST_CASE("a person at a display without a haptic device flies the blimp by keys, through the hop's gate") {
   XServer x;
-  const auto dir = test::ScratchDir("e2e-blimp-watch");
-  Child run({Bin("haptel"), "run", "--config", "config/blimp.yaml", "--time-limit", "4", "--json", "--quiet",
-             "--domain", std::to_string(test::UniqueDomain(24)), "--database", (dir / "runs.db").string(),
-             "--vehicle-timeout", "5"});
-  const int code = run.Wait(90.0);
-  INFO(run.out() << run.err());
-  CHECK(code == 1);  // the time limit, not a refusal (2)
+  const auto dir = test::ScratchDir("e2e-blimp-keys");
+  // No --operator, no --interface: at a display with the simulated device,
+  // a person and the blimp's keys.
+  Child run({Bin("haptel"), "run", "--config", "config/blimp.yaml", "--track", "config/tracks/blimp-hop.yaml",
+             "--json", "--domain", std::to_string(test::UniqueDomain(24)), "--database", (dir / "runs.db").string(),
+             "--vehicle-timeout", "5", "--time-limit", "150"});
+  // The blimp is up and resting on its pad, nothing pressed.
+  REQUIRE(test::WaitFor([&] {
+    run.Pump();
+    return run.err().find("power 0.00  helix +0.00") != std::string::npos;
+  }, 90.0));
+  // W five times: half power; up once: the helix plane a quarter up (a gentle climb).
+  REQUIRE(XDoTool({"search", "--sync", "--name", "Haptel", "windowfocus", "--sync", "key", "--delay", "60", "w", "w",
+                   "w", "w", "w", "Up"}) == 0);
+  const bool through = test::WaitFor([&] {
+    run.Pump();
+    return run.err().find("gates 1/1") != std::string::npos;
+  }, 90.0);
+  INFO(run.err());
+  CHECK(run.err().find("power 0.50  helix +0.25") != std::string::npos);
+  CHECK(through);
+  REQUIRE(XDoTool({"search", "--sync", "--name", "Haptel", "windowfocus", "--sync", "key", "Escape"}) == 0);
+  const int code = run.Wait(60.0);
+  INFO(run.out());
+  CHECK(code == 1);
   const std::string json = run.LastLine();
-  CHECK(JsonField(json, "outcome") == "time limit");
-  CHECK(JsonField(json, "operator") == "auto");
-  CHECK(std::stod(JsonField(json, "view_fps")) > 0.0);  // the window was up
-  // Asking for a person at the simulated device is still refused, saying why.
-  Child person({Bin("haptel"), "run", "--config", "config/blimp.yaml", "--operator", "person"});
-  CHECK(person.Wait(30.0) == 2);
-  CHECK(person.err().find("no arms for a person") != std::string::npos);
+  CHECK(JsonField(json, "outcome") == "aborted");
+  CHECK(JsonField(json, "operator") == "person");
+  CHECK(JsonField(json, "interface") == "blimp-keys");
+  CHECK(JsonField(json, "gates_passed") == "1");
+  CHECK(JsonField(json, "obstacles_touched") == "0");
+
+  // The gesture cockpit wants a haptic device's arms: refused, saying why and what else flies.
+  Child gesture({Bin("haptel"), "run", "--config", "config/blimp.yaml", "--operator", "person", "--interface",
+                 "blimp-gesture"});
+  CHECK(gesture.Wait(30.0) == 2);
+  CHECK(gesture.err().find("no arms for a person") != std::string::npos);
+  CHECK(gesture.err().find("blimp-keys") != std::string::npos);
+  // Keys without a window cannot be read.
+  Child blind({Bin("haptel"), "run", "--config", "config/blimp.yaml", "--operator", "person", "--view", "none"});
+  CHECK(blind.Wait(30.0) == 2);
+  CHECK(blind.err().find("--interface blimp-gamepad") != std::string::npos);
 }
 
 TEST_CASE("a person's bad input exits 2 with one line naming the fix") {

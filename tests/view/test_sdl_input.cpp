@@ -54,6 +54,35 @@ TEST_CASE("sdl input: arrows and W/A/S/D set held flags and count presses", "[sd
   CHECK_FALSE(s.key_stop);
 }
 
+TEST_CASE("sdl input: each physical key is also seen on its own (the blimp's keys)", "[sdl_input]") {
+  using haptel::interfaces::Key;
+  const auto held = [](const InputState& s, Key k) { return s.keys_held[static_cast<size_t>(k)]; };
+  const auto presses = [](const InputState& s, Key k) { return s.key_presses[static_cast<size_t>(k)]; };
+  InputBox box;
+  SdlInput input(box);
+  input.OnEvent(Down(SDL_SCANCODE_W));
+  input.OnEvent(Down(SDL_SCANCODE_W, 1));  // auto-repeat: not a press
+  input.OnEvent(Down(SDL_SCANCODE_PAGEUP));
+  InputState s = box.Load();
+  CHECK(held(s, Key::kW));
+  CHECK(presses(s, Key::kW) == 1);
+  CHECK_FALSE(held(s, Key::kArrowUp));  // W is not the up arrow here,
+  CHECK(presses(s, Key::kArrowUp) == 0);
+  CHECK(s.key_up);  // though the robot's keyboard reads both as up
+  CHECK(held(s, Key::kPageUp));
+  CHECK(presses(s, Key::kPageUp) == 1);
+  input.OnEvent(Up(SDL_SCANCODE_W));
+  input.OnEvent(Down(SDL_SCANCODE_UP));
+  input.OnEvent(Up(SDL_SCANCODE_PAGEUP));
+  input.OnEvent(Down(SDL_SCANCODE_PAGEDOWN));
+  s = box.Load();
+  CHECK_FALSE(held(s, Key::kW));
+  CHECK(held(s, Key::kArrowUp));
+  CHECK(presses(s, Key::kArrowUp) == 1);
+  CHECK_FALSE(held(s, Key::kPageUp));
+  CHECK(presses(s, Key::kPageDown) == 1);
+}
+
 TEST_CASE("sdl input: a press shorter than a session tick is still counted", "[sdl_input]") {
   InputBox box;
   SdlInput input(box);
@@ -201,6 +230,7 @@ TEST_CASE("sdl input: events allocate nothing", "[sdl_input][alloc]") {
   const SDL_Event events[] = {Down(SDL_SCANCODE_UP),   Up(SDL_SCANCODE_UP),
                               Down(SDL_SCANCODE_A, 0), Down(SDL_SCANCODE_F2),
                               Up(SDL_SCANCODE_SPACE),  Down(SDL_SCANCODE_SPACE),
+                              Down(SDL_SCANCODE_PAGEUP), Up(SDL_SCANCODE_PAGEUP),
                               Motion(3, -2, SDL_BUTTON_LMASK)};
   const uint64_t before = haptel::test::ThreadAllocations();
   for (int i = 0; i < 1000; ++i) {

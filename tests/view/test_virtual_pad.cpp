@@ -1,5 +1,6 @@
 // A virtual SDL game controller, seen through InputPump and SdlInput, drives
-// GamepadInterface, whose commands drive the simulated robot in-process.
+// GamepadInterface (BlimpManualInterface), whose commands drive the simulated
+// robot (blimp) in-process.
 // SDL runs for real (its virtual joystick driver: no device, no display);
 // the robot is stepped in simulated time, so nothing here depends on timing
 // except bounded waits for the pump to deliver what the controller did.
@@ -7,8 +8,11 @@
 #include <cmath>
 #include <numbers>
 
+#include "haptel/config/blimp_course.hpp"
+#include "haptel/interfaces/blimp_manual.hpp"
 #include "haptel/interfaces/gamepad.hpp"
 #include "haptel/vehicles/drive.hpp"
+#include "haptel/vehicles/sim_blimp.hpp"
 #include "haptel/vehicles/sim_robot.hpp"
 #include "haptel/view/sdl_input.hpp"
 #include "test_env.hpp"
@@ -184,4 +188,57 @@ TEST_CASE("stopping the pump lets the controller go without a disconnect; a new 
   REQUIRE(WaitFor([&] { return box.Load().pad_disconnects == 1; }, 10.0));
   s = box.Load();
   CHECK_FALSE(s.pad_connected);
+}
+
+TEST_CASE("a virtual game controller flies the simulated blimp: climb away, tail-rotor turnabout, unplug",
+          "[view_input][virtual_pad][blimp]") {
+  InputBox box;
+  InputPump pump(box);
+  VirtualPad stick(pump);
+  REQUIRE(stick.attached());
+  REQUIRE(WaitFor([&] { return box.Load().pad_connected; }, 10.0));
+
+  BlimpManualConfig config;
+  config.name = "blimp-gamepad";
+  BlimpManualInterface pad(config, box.Load());
+  haptics::Hal hal;
+  vehicles::SimBlimp blimp(AirshipConfig{}, LoadBlimpCourse("config/tracks/blimp-hop.yaml"));
+  double t = 0.0;
+  // The session's part in simulated time: the command at 50 Hz, the airship at 200 Hz.
+  const auto fly = [&](double seconds) {
+    for (int tick = 0; tick < static_cast<int>(seconds * 50); ++tick, t += 0.02) {
+      const BlimpCommand c = pad.Update(t, box.Load(), hal);
+      for (int i = 0; i < 4; ++i) blimp.Step(0.005, c);
+    }
+  };
+  const double ground = blimp.position().z();
+
+  // Left stick up and the right trigger: power, the helix plane up. Away and up.
+  stick.Axis(SDL_CONTROLLER_AXIS_LEFTY, -1.0);
+  stick.Axis(SDL_CONTROLLER_AXIS_TRIGGERRIGHT, 0.6);
+  REQUIRE(WaitFor([&] { return AxisOf(box.Load(), PadAxis::kTriggerRight) > 0.5; }, 10.0));
+  fly(10.0);
+  CHECK(blimp.position().x() > 10.0);
+  CHECK(blimp.position().z() > ground + 1.0);
+  CHECK(blimp.applied().power > 0.8);
+
+  // Stick back to centre, then sideways at zero power: the tail rotor turns it about (left).
+  stick.Axis(SDL_CONTROLLER_AXIS_LEFTY, 0.0);
+  stick.Axis(SDL_CONTROLLER_AXIS_TRIGGERRIGHT, 0.0);
+  fly(8.0);  // coast down to a crawl
+  const double yaw_before = blimp.yaw();
+  stick.Axis(SDL_CONTROLLER_AXIS_LEFTX, -1.0);
+  REQUIRE(WaitFor([&] { return AxisOf(box.Load(), PadAxis::kLeftX) == -1.0; }, 10.0));
+  fly(4.0);
+  CHECK(blimp.applied().power == 0.0);
+  CHECK(blimp.applied().tail_rotor > 0.8);
+  CHECK(std::remainder(blimp.yaw() - yaw_before, 2 * std::numbers::pi) > 0.3);
+
+  // Unplugged: lost, every channel to neutral.
+  stick.Detach();
+  REQUIRE(WaitFor([&] { return box.Load().pad_disconnects == 1; }, 10.0));
+  fly(0.1);
+  CHECK(pad.lost());
+  CHECK(blimp.applied().tail_rotor == 0.0);
+  CHECK(blimp.applied().power == 0.0);
 }

@@ -32,6 +32,7 @@ SdlInput::SdlInput(interfaces::InputBox& box) : box_(box), state_(box.Load()) {
   ClearPad();
   state_.pad_connected = false;
   state_.key_up = state_.key_down = state_.key_left = state_.key_right = state_.key_stop = false;
+  state_.keys_held = {};
 }
 
 SdlInput::~SdlInput() {
@@ -69,58 +70,38 @@ void SdlInput::ClearPad() {
 }
 
 void SdlInput::OnKey(const SDL_KeyboardEvent& key, bool down) {
-  int which = -1;
-  uint32_t InputState::*presses = nullptr;
+  using interfaces::Key;
+  Key which = Key::kCount;
+  uint32_t InputState::*presses = nullptr;  // the robot's counter: arrows and W/A/S/D are one set
   switch (key.keysym.scancode) {
-    case SDL_SCANCODE_UP:
-      which = kArrowUp;
-      presses = &InputState::presses_up;
-      break;
-    case SDL_SCANCODE_W:
-      which = kW;
-      presses = &InputState::presses_up;
-      break;
-    case SDL_SCANCODE_DOWN:
-      which = kArrowDown;
-      presses = &InputState::presses_down;
-      break;
-    case SDL_SCANCODE_S:
-      which = kS;
-      presses = &InputState::presses_down;
-      break;
-    case SDL_SCANCODE_LEFT:
-      which = kArrowLeft;
-      presses = &InputState::presses_left;
-      break;
-    case SDL_SCANCODE_A:
-      which = kA;
-      presses = &InputState::presses_left;
-      break;
-    case SDL_SCANCODE_RIGHT:
-      which = kArrowRight;
-      presses = &InputState::presses_right;
-      break;
-    case SDL_SCANCODE_D:
-      which = kD;
-      presses = &InputState::presses_right;
-      break;
-    case SDL_SCANCODE_SPACE:
-      which = kSpace;
-      presses = &InputState::presses_stop;
-      break;
-    default:
-      break;
+    case SDL_SCANCODE_UP: which = Key::kArrowUp; presses = &InputState::presses_up; break;
+    case SDL_SCANCODE_W: which = Key::kW; presses = &InputState::presses_up; break;
+    case SDL_SCANCODE_DOWN: which = Key::kArrowDown; presses = &InputState::presses_down; break;
+    case SDL_SCANCODE_S: which = Key::kS; presses = &InputState::presses_down; break;
+    case SDL_SCANCODE_LEFT: which = Key::kArrowLeft; presses = &InputState::presses_left; break;
+    case SDL_SCANCODE_A: which = Key::kA; presses = &InputState::presses_left; break;
+    case SDL_SCANCODE_RIGHT: which = Key::kArrowRight; presses = &InputState::presses_right; break;
+    case SDL_SCANCODE_D: which = Key::kD; presses = &InputState::presses_right; break;
+    case SDL_SCANCODE_SPACE: which = Key::kSpace; presses = &InputState::presses_stop; break;
+    case SDL_SCANCODE_PAGEUP: which = Key::kPageUp; break;
+    case SDL_SCANCODE_PAGEDOWN: which = Key::kPageDown; break;
+    default: break;
   }
-  if (which >= 0) {
-    held_[which] = down;
+  if (which != Key::kCount) {
+    const auto i = static_cast<size_t>(which);
+    state_.keys_held[i] = down;
     // Auto-repeat key-downs are not presses: the interface times its own
     // repeats from the held flag, at its configured rate.
-    if (down && key.repeat == 0) ++(state_.*presses);
-    state_.key_up = held_[kArrowUp] || held_[kW];
-    state_.key_down = held_[kArrowDown] || held_[kS];
-    state_.key_left = held_[kArrowLeft] || held_[kA];
-    state_.key_right = held_[kArrowRight] || held_[kD];
-    state_.key_stop = held_[kSpace];
+    if (down && key.repeat == 0) {
+      ++state_.key_presses[i];
+      if (presses != nullptr) ++(state_.*presses);
+    }
+    const auto held = [this](Key k) { return state_.keys_held[static_cast<size_t>(k)]; };
+    state_.key_up = held(Key::kArrowUp) || held(Key::kW);
+    state_.key_down = held(Key::kArrowDown) || held(Key::kS);
+    state_.key_left = held(Key::kArrowLeft) || held(Key::kA);
+    state_.key_right = held(Key::kArrowRight) || held(Key::kD);
+    state_.key_stop = held(Key::kSpace);
     return;
   }
   if (down && key.repeat == 0 && key.keysym.scancode >= SDL_SCANCODE_F1 &&

@@ -12,6 +12,7 @@
 ///
 /// No hands and no forces: HandTargetsFor is empty, and Update keeps both
 /// force fields disabled in the HAL.
+#include <array>
 #include <cstdint>
 
 #include "haptel/config/gamepad.hpp"
@@ -19,6 +20,13 @@
 #include "haptel/interfaces/interface.hpp"
 
 namespace haptel::interfaces {
+
+/// Radial dead zone on a stick: inside it 0; outside, the radius is mapped
+/// from [dz, 1] to [0, 1] along the same direction, so there is no step at
+/// the edge and full deflection is still 1. NaN reads as 0.
+std::array<double, 2> RadialDeadZone(double x, double y, double dz);
+/// A trigger's pull past its dead zone, rescaled to [0, 1].
+double TriggerDeadZone(double t, double dz);
 
 class GamepadInterface final : public MediatorInterface {
  public:

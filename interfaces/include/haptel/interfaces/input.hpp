@@ -18,6 +18,13 @@ enum class PadButton : int {
 /// Axes of a game controller, in SDL's GameController order.
 enum class PadAxis : int { kLeftX = 0, kLeftY, kRightX, kRightY, kTriggerLeft, kTriggerRight, kCount };
 
+/// The physical keys that drive, by position (scancode): the robot's
+/// keyboard reads arrows and W/A/S/D as one set, the blimp's gives them
+/// different jobs.
+enum class Key : int {
+  kArrowUp = 0, kArrowDown, kArrowLeft, kArrowRight, kW, kS, kA, kD, kSpace, kPageUp, kPageDown, kCount
+};
+
 struct InputState {
   // --- Keyboard: held now (arrows or W/A/S/D; space). ---
   bool key_up = false;
@@ -32,6 +39,9 @@ struct InputState {
   uint32_t presses_left = 0;
   uint32_t presses_right = 0;
   uint32_t presses_stop = 0;
+  /// Each physical key on its own (Key): held now, and presses so far.
+  std::array<bool, static_cast<int>(Key::kCount)> keys_held{};
+  std::array<uint32_t, static_cast<int>(Key::kCount)> key_presses{};
 
   // --- Game controller (the first one SDL knows). ---
   bool pad_connected = false;

@@ -18,6 +18,7 @@
 #include "haptel/config/keyboard.hpp"
 #include "haptel/interfaces/input.hpp"
 #include "haptel/interfaces/interface.hpp"
+#include "haptel/interfaces/key_level.hpp"
 
 namespace haptel::interfaces {
 
@@ -38,28 +39,18 @@ class KeyboardInterface final : public MediatorInterface {
   /// command: what Update does, without the HAL.
   MotorCommand Step(double t_s, const InputState& input);
 
-  int throttle_level() const { return throttle_.level; }
-  int steering_level() const { return steering_.level; }
+  int throttle_level() const { return throttle_.level(); }
+  int steering_level() const { return steering_.level(); }
   int speed_levels() const { return levels_; }
 
  private:
-  /// One pair of keys driving one level (up/down, or left/right).
-  struct Axis {
-    int level = 0;
-    uint32_t seen_plus = 0;  ///< press counters already acted on
-    uint32_t seen_minus = 0;
-    int held = 0;  ///< direction held at the last step: +1, −1, 0
-    double next_repeat_s = 0.0;
-  };
-  void StepAxis(Axis& axis, double t_s, bool plus_held, bool minus_held, uint32_t plus_presses,
-                uint32_t minus_presses) const;
   MotorCommand Command() const;
 
   KeyboardConfig config_;
   const InputBox& input_;
   int levels_;
-  Axis throttle_;
-  Axis steering_;
+  KeyLevel throttle_;  ///< up/down (or W/S)
+  KeyLevel steering_;  ///< left/right (or A/D)
   uint32_t seen_stop_ = 0;
 };
 

@@ -25,6 +25,7 @@
 
 #include "haptel/config/blimp_course.hpp"
 #include "haptel/config/blimp_gesture.hpp"
+#include "haptel/config/blimp_manual.hpp"
 #include "haptel/config/calibration.hpp"
 #include "haptel/core/cli.hpp"
 #include "haptel/config/device.hpp"
@@ -96,9 +97,12 @@ struct SessionSetup {
   /// console shows the live trial with it. Must return quickly.
   std::function<void(const view::Overlay&)> on_live;
   /// A blimp's flight (the vehicle is a blimp kind): its course, instead of
-  /// `track`, and its interface, instead of `interfaces` (RunBlimpSession).
+  /// `track`, and its interface, instead of `interfaces` (RunBlimpSession):
+  /// the gesture cockpit (`blimp_interface`) or a person's keys or game
+  /// controller (`blimp_manual`), one of the two.
   std::optional<BlimpCourseConfig> course;
   std::optional<BlimpGestureConfig> blimp_interface;
+  std::optional<BlimpManualConfig> blimp_manual;
 };
 
 enum class Outcome {

@@ -7,7 +7,8 @@
 /// it publishes the updated state. It is the box's one writer.
 ///
 /// Keys are read by scancode (physical position), so W/A/S/D sit where they
-/// do on a QWERTY keyboard whatever the layout: arrows or W/A/S/D drive,
+/// do on a QWERTY keyboard whatever the layout: arrows or W/A/S/D drive
+/// (each key also on its own, with Page Up/Down, for the blimp's keys),
 /// space stops, F1..F6 ask for interface 0..5 of the run, and closing the
 /// window asks to quit. Dragging the mouse with a button held turns the
 /// head (mouse-look: kHeadRadPerPixel, clamped to the pilot camera's range);
@@ -57,19 +58,6 @@ class SdlInput : public EventSink {
   static constexpr double kHeadRadPerPixel = 0.005236;
 
  private:
-  /// Physical keys that drive; two keys map to each direction.
-  enum Key : int {
-    kArrowUp,
-    kArrowDown,
-    kArrowLeft,
-    kArrowRight,
-    kW,
-    kS,
-    kA,
-    kD,
-    kSpace,
-    kKeyCount
-  };
   void OnKey(const SDL_KeyboardEvent& key, bool down);
   void OnMouseMotion(const SDL_MouseMotionEvent& motion);
   void OnControllerAdded(int device_index);
@@ -79,7 +67,6 @@ class SdlInput : public EventSink {
 
   interfaces::InputBox& box_;
   interfaces::InputState state_;
-  std::array<bool, kKeyCount> held_{};
   SDL_GameController* pad_ = nullptr;
   SDL_JoystickID pad_id_ = -1;
 };

@@ -1,0 +1,58 @@
+#pragma once
+/// @file The blimp flown by a person's keys or game controller, for a pilot
+/// without a haptic device (the gesture cockpit needs both arms).
+///
+/// Keys (`blimp-keys`, read in the view's window):
+/// - W/S step the main power by 1/power_steps per press (0..1); it stays.
+/// - ↑/↓ step the helix plane's tilt by 1/helix_steps (−1..1): up climbs.
+/// - Page Up/Down step the elevator trim by 1/elevator_steps: up is nose up.
+/// - A/D (or ←/→) swing the rudder towards full at rudder_rate while held,
+///   and back to centre when let go; with the power at zero they drive the
+///   tail rotor instead (the gesture cockpit's quick turnabout).
+/// - Space: everything to neutral (power off, plane level, surfaces centred).
+///
+/// Game controller (`blimp-gamepad`):
+/// - left stick up: main power (down gives none); left stick sideways at
+///   zero power: the tail rotor
+/// - right stick: elevator (pull back: nose up) and rudder
+/// - right trigger tilts the helix plane up, left trigger down
+///
+/// Both: the mouse dragged in the window turns the head, and so the camera.
+#include <filesystem>
+#include <string>
+
+namespace haptel {
+
+enum class BlimpManualInput { kKeys, kGamepad };
+
+struct BlimpManualConfig {
+  std::filesystem::path file;
+  /// "blimp-keys" or "blimp-gamepad": which input flies.
+  std::string name = "blimp-keys";
+  // --- Keys ---
+  int power_steps = 10;     ///< presses of W from no power to full
+  int helix_steps = 4;      ///< presses of ↑ from a level helix plane to full tilt
+  int elevator_steps = 4;   ///< presses of Page Up from centred to full elevator
+  double repeat_s = 0.15;   ///< s: a held key steps again this often
+  double rudder_rate = 3.0; ///< full deflections per second the rudder (tail rotor) swings at
+  // --- Game controller ---
+  double dead_zone = 0.12;          ///< radial, fraction of each stick's full deflection
+  double trigger_dead_zone = 0.05;  ///< fraction of a trigger's full pull
+  double command_rate_hz = 50.0;
+
+  BlimpManualInput input() const {
+    return name == "blimp-gamepad" ? BlimpManualInput::kGamepad : BlimpManualInput::kKeys;
+  }
+
+  /// Throws ConfigFieldError naming the first field out of range.
+  void ValidateOrThrow() const;
+};
+
+/// Whether `name` is one of the blimp's manual interfaces.
+inline bool IsBlimpManual(const std::string& name) { return name == "blimp-keys" || name == "blimp-gamepad"; }
+
+/// Loads and validates (BlimpManualConfig::ValidateOrThrow). Strict: unknown
+/// keys, including the other input's, are errors naming file, key and line.
+BlimpManualConfig LoadBlimpManual(const std::filesystem::path& file);
+
+}  // namespace haptel
