@@ -12,6 +12,7 @@ HAPTEL_PACKAGES=(
   libopencv-dev libyaml-cpp-dev catch2 libsqlite3-dev sqlite3
   libtinyxml2-dev   # the MHaptic XML scene files (also a Fast DDS dependency)
   libsdl2-dev
+  cyclonedds-dev cyclonedds-tools   # the ROS 2 adapter's test: an independent DDS (Cyclone) stands in for a ROS 2 robot
   iproute2   # the link test's second host: another network namespace joined by a veth pair
   openssl libssl-dev   # DDS Security: `haptel security init` and the certificates' check at start
   libcpp-httplib-dev   # the study's experimenter's console (a web page on 127.0.0.1)
