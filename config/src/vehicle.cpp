@@ -1,6 +1,6 @@
-#include <algorithm>
 #include "haptel/config/vehicle.hpp"
 
+#include <algorithm>
 #include <cctype>
 
 #include "haptel/config/check.hpp"
@@ -84,7 +84,41 @@ void CameraConfig::ValidateOrThrow() const {
 }
 
 bool IsVehicleKind(const std::string& kind) {
-  return kind == "sim-robot" || kind == "can-robot" || kind == "can-robot-sim" || IsBlimpKind(kind);
+  return kind == "sim-robot" || kind == "can-robot" || kind == "can-robot-sim" || kind == "ros2" ||
+         IsBlimpKind(kind);
+}
+
+namespace {
+/// A ROS 2 topic name: absolute, of letters, digits, '_' and '/' tokens
+/// that do not start with a digit (ROS 2's rules, without ~ and {}).
+bool IsRosTopicName(const std::string& name) {
+  if (name.size() < 2 || name[0] != '/' || name.back() == '/') return false;
+  bool token_start = true;
+  for (size_t i = 1; i < name.size(); ++i) {
+    const char c = name[i];
+    if (c == '/') {
+      if (token_start) return false;  // "//"
+      token_start = true;
+      continue;
+    }
+    const bool ok = std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_';
+    if (!ok || (token_start && std::isdigit(static_cast<unsigned char>(c)) != 0)) return false;
+    token_start = false;
+  }
+  return true;
+}
+}  // namespace
+
+std::string Ros2DdsTopic(const std::string& ros_name) { return "rt" + ros_name; }
+
+void Ros2Config::ValidateOrThrow() const {
+  check::Whole("domain_id", domain_id, 0, 232);
+  const char* expected = "a ROS 2 topic name such as /cmd_vel (absolute; letters, digits, _ and /)";
+  if (!IsRosTopicName(cmd_vel)) check::Fail("cmd_vel", expected);
+  if (!IsRosTopicName(odom)) check::Fail("odom", expected);
+  if (!image.empty() && !IsRosTopicName(image)) check::Fail("image", std::string(expected) + ", or empty for none");
+  check::Number("cmd_rate_hz", cmd_rate_hz, 1.0, 1000.0);
+  check::Number("odom_timeout_s", odom_timeout_s, 0.05, 60.0);
 }
 
 void CanConfig::ValidateOrThrow(int levels) const {
@@ -113,7 +147,9 @@ void VehicleConfig::ValidateOrThrow() const {
   if (const std::string problem = VehicleNameProblem(name); !problem.empty()) {
     check::Fail("name", problem);
   }
-  if (!IsVehicleKind(kind)) check::Fail("kind", "one of: sim-robot, can-robot, can-robot-sim, sim-blimp, servo-blimp, servo-blimp-sim");
+  if (!IsVehicleKind(kind)) {
+    check::Fail("kind", "one of: sim-robot, can-robot, can-robot-sim, ros2, sim-blimp, servo-blimp, servo-blimp-sim");
+  }
   check::Number("sim_rate_hz", sim_rate_hz, 50.0, 5000.0);
   check::Number("state_rate_hz", state_rate_hz, 1.0, 1000.0);
   check::Number("watchdog_timeout_s", watchdog_timeout_s, 0.01, 10.0);
@@ -130,6 +166,7 @@ void VehicleConfig::ValidateOrThrow() const {
   }
   if (UsesAirship(kind)) check::Nested("airship", airship);
   if (UsesServo(kind)) check::Nested("servo", servo);
+  if (kind == "ros2") check::Nested("ros2", ros2);
 }
 
 VehicleConfig LoadVehicle(const std::filesystem::path& file) {
@@ -215,6 +252,16 @@ VehicleConfig LoadVehicle(const std::filesystem::path& file) {
     v.servo = config_detail::ReadServoController(servo);
   } else if (UsesServo(v.kind)) {
     root.Fail("servo", "a 'servo' section for kind " + v.kind + " (its controller's protocol and channels)");
+  }
+  if (root.Has("ros2")) {
+    YamlMap ros2 = root.Map("ros2");
+    v.ros2.domain_id = ros2.Integer("domain_id", v.ros2.domain_id);
+    v.ros2.cmd_vel = ros2.String("cmd_vel", v.ros2.cmd_vel);
+    v.ros2.odom = ros2.String("odom", v.ros2.odom);
+    v.ros2.image = ros2.String("image", v.ros2.image);
+    v.ros2.cmd_rate_hz = ros2.Number("cmd_rate_hz", v.ros2.cmd_rate_hz);
+    v.ros2.odom_timeout_s = ros2.Number("odom_timeout_s", v.ros2.odom_timeout_s);
+    ros2.Finish();
   }
   root.Finish();
   config_detail::ValidateIn(root, v);

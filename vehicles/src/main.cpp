@@ -19,6 +19,7 @@
 #include "haptel/config/blimp_course.hpp"
 #include "haptel/vehicles/blimp_adapters.hpp"
 #include "haptel/vehicles/blimp_node.hpp"
+#include "haptel/vehicles/ros2_robot.hpp"
 #include "haptel/vehicles/vehicle_node.hpp"
 #include "haptel/video/blimp_camera.hpp"
 #include "haptel/video/camera_source.hpp"
@@ -163,9 +164,11 @@ int main(int argc, char** argv) {
       // The bus first: a robot whose bus cannot open stops here (exit 2),
       // before a camera or a DDS participant exists.
       adapter = vehicles::MakeVehicleAdapter(config, *track);
+      // A ROS 2 robot's camera is its image topic (unless it names none).
+      if (auto* ros = dynamic_cast<vehicles::Ros2Robot*>(adapter.get())) camera = ros->MakeCamera();
       // Opened here, before any DDS participant exists: a camera that cannot
       // open is a set-up error (exit 2) and nothing has been published.
-      camera = video::MakeCameraSource(config.camera, track.get(), file.string());
+      if (!camera) camera = video::MakeCameraSource(config.camera, track.get(), file.string());
     });
 
     if (config.link.fault.enabled) {
@@ -183,13 +186,18 @@ int main(int argc, char** argv) {
                                                                         : ""));
       return RunNode(node, config, stop, "every channel to neutral", "every channel at neutral");
     }
+    std::string robot_graph;
+    if (config.kind == "ros2") {
+      robot_graph = ", ROS 2 robot on domain " + std::to_string(config.ros2.domain_id) + " (" + config.ros2.cmd_vel +
+                    " out, " + config.ros2.odom + " in)";
+    }
     vehicles::VehicleNode node(config, *track, std::move(camera), std::move(adapter));
     node.Start();
     log::Info("vehicle '" + config.name + "' (" + config.kind + ") up on domain " +
               std::to_string(config.link.domain_id) + ", track '" + track->config().name +
               "', camera " + camera_name + " " + std::to_string(config.camera.width) + "x" +
               std::to_string(config.camera.height) + " at " +
-              std::to_string(static_cast<int>(std::lround(config.camera.rate_hz))) + " Hz");
+              std::to_string(static_cast<int>(std::lround(config.camera.rate_hz))) + " Hz" + robot_graph);
     return RunNode(node, config, stop, "motors stopped", "motors off");
   });
 }

@@ -9,6 +9,7 @@
 #include "haptel/core/clock.hpp"
 #include "haptel/core/log.hpp"
 #include "haptel/vehicles/can_robot.hpp"
+#include "haptel/vehicles/ros2_robot.hpp"
 #include "haptel/vehicles/sim_can_robot.hpp"
 #include "haptel/vehicles/sim_robot.hpp"
 
@@ -47,6 +48,7 @@ std::unique_ptr<VehicleAdapter> MakeVehicleAdapter(const VehicleConfig& config, 
     open_log();
     return std::make_unique<SimulatedCanRobot>(track, config, std::move(log));
   }
+  if (config.kind == "ros2") return std::make_unique<Ros2Robot>(config, track);
   throw std::invalid_argument("vehicle kind '" + config.kind + "' has no adapter");
 }
 

@@ -96,6 +96,32 @@ struct CanConfig {
   void ValidateOrThrow(int levels = 8) const;
 };
 
+/// A ROS 2 robot (kind ros2), driven through its own topics: Haptel's
+/// motor levels become geometry_msgs/Twist on `cmd_vel` (v and ω from
+/// drive.max_speed and drive.track_width, as a differential drive), its
+/// nav_msgs/Odometry is the pose (the odometry frame's origin placed at the
+/// track's start) and its sensor_msgs/CompressedImage the video. Topic names
+/// are ROS names ("/cmd_vel"); on DDS they carry ROS 2's "rt" prefix.
+struct Ros2Config {
+  int domain_id = 0;  ///< the robot's ROS_DOMAIN_ID
+  std::string cmd_vel = "/cmd_vel";
+  std::string odom = "/odom";
+  /// Empty: no camera topic, the `camera` section's source is used instead.
+  std::string image = "/camera/image_raw/compressed";
+  /// Twist messages per second while driving (ROS bases stop without them).
+  double cmd_rate_hz = 20.0;
+  /// No odometry for this long, once it came: the robot is reported silent
+  /// (a fault) and sent zero velocity.
+  double odom_timeout_s = 0.5;
+
+  /// Throws ConfigFieldError naming the first field out of range or the
+  /// topic name that is not a ROS name.
+  void ValidateOrThrow() const;
+};
+
+/// The DDS topic of a ROS 2 topic name: "/cmd_vel" → "rt/cmd_vel".
+std::string Ros2DdsTopic(const std::string& ros_name);
+
 struct VehicleConfig {
   std::filesystem::path file;
   std::string name = "robot1";
@@ -111,6 +137,7 @@ struct VehicleConfig {
   CanConfig can;  ///< kinds can-robot and can-robot-sim only
   AirshipConfig airship;  ///< the simulated blimp kinds only (UsesAirship)
   ServoControllerConfig servo;  ///< the servo-controller blimp kinds only (UsesServo)
+  Ros2Config ros2;  ///< kind ros2 only
 
   /// Throws ConfigFieldError unless the name suits DDS topic names, the kind
   /// is known, the rates are in range and every part is valid ("drive.*", ...).
@@ -123,7 +150,7 @@ struct VehicleConfig {
 /// (the simulated airship), "servo-blimp" (the real blimp's servo
 /// controller on a serial port), "servo-blimp-sim" (the simulated airship
 /// behind a simulated servo controller on a pseudo-terminal, through the
-/// real adapter).
+/// real adapter), "ros2" (any ROS 2 robot, through its topics).
 bool IsVehicleKind(const std::string& kind);
 /// Whether the kind drives its motors over CAN (has a `can` section).
 inline bool UsesCan(const std::string& kind) { return kind == "can-robot" || kind == "can-robot-sim"; }

@@ -1,0 +1,250 @@
+// The ROS 2 adapter in-process, against Fast DDS endpoints of the test's own
+// on a domain of its own: what it sends on cmd_vel, how odometry becomes the
+// track-frame pose, the silent robot, bad odometry, the camera topic, and the
+// configuration's checks.
+#include <catch2/catch.hpp>
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <fastdds/dds/topic/Topic.hpp>
+#include <fastdds/dds/topic/TypeSupport.hpp>
+
+#include <cmath>
+#include <numbers>
+#include <opencv2/imgcodecs.hpp>
+#include <thread>
+
+#include "haptel/config/error.hpp"
+#include "haptel/link/participant.hpp"
+#include "haptel/ros2/ros2.h"
+#include "haptel/ros2/ros2PubSubTypes.h"
+#include "haptel/vehicles/ros2_robot.hpp"
+#include "test_env.hpp"
+
+using namespace haptel;
+using namespace haptel::vehicles;
+namespace fdds = eprosima::fastdds::dds;
+
+namespace {
+
+/// A track whose start faces north (+y), so the odometry frame is turned.
+TrackConfig NorthTrack() {
+  TrackConfig t;
+  t.name = "north";
+  t.centerline = {{0, 0}, {0, 4}, {-3, 4}, {-3, 0}};
+  t.corridor_width = 1.0;
+  t.start_behind = 0.0;
+  return t;
+}
+
+VehicleConfig Ros2Vehicle(int domain) {
+  VehicleConfig v = LoadVehicle("config/vehicles/ros2-robot.yaml");
+  v.ros2.domain_id = domain;
+  v.ros2.odom_timeout_s = 0.3;
+  return v;
+}
+
+/// The robot's side, in Fast DDS: reads twists, writes odometry and images.
+struct FakeRobot {
+  explicit FakeRobot(int domain) : participant(Link(domain), "test-robot") {
+    cmd = MakeTopic<geometry_msgs::msg::dds_::Twist_PubSubType>("rt/cmd_vel");
+    odom = MakeTopic<nav_msgs::msg::dds_::Odometry_PubSubType>("rt/odom");
+    image = MakeTopic<sensor_msgs::msg::dds_::CompressedImage_PubSubType>("rt/camera/image_raw/compressed");
+    fdds::DataReaderQos rq = fdds::DATAREADER_QOS_DEFAULT;
+    rq.reliability().kind = fdds::RELIABLE_RELIABILITY_QOS;  // as a ROS 2 subscriber: the adapter must match it
+    twist_reader = participant.subscriber()->create_datareader(cmd, rq);
+    odom_writer = participant.publisher()->create_datawriter(odom, fdds::DATAWRITER_QOS_DEFAULT);
+    image_writer = participant.publisher()->create_datawriter(image, fdds::DATAWRITER_QOS_DEFAULT);
+  }
+  ~FakeRobot() {
+    participant.subscriber()->delete_datareader(twist_reader);
+    participant.publisher()->delete_datawriter(odom_writer);
+    participant.publisher()->delete_datawriter(image_writer);
+    for (fdds::Topic* t : {cmd, odom, image}) participant.get()->delete_topic(t);
+  }
+  static LinkConfig Link(int domain) {
+    LinkConfig l;
+    l.domain_id = domain;
+    return l;
+  }
+  template <typename PubSub>
+  fdds::Topic* MakeTopic(const std::string& name) {
+    fdds::TypeSupport type(new PubSub());
+    type.register_type(participant.get());
+    return participant.get()->create_topic(name, type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
+  }
+  void Odom(double x, double y, double yaw, double v, double w) {
+    nav_msgs::msg::dds_::Odometry_ o;
+    o.pose().pose().position().x(x);
+    o.pose().pose().position().y(y);
+    o.pose().pose().orientation().z(std::sin(yaw / 2));
+    o.pose().pose().orientation().w(std::cos(yaw / 2));
+    o.twist().twist().linear().x(v);
+    o.twist().twist().angular().z(w);
+    odom_writer->write(&o);
+  }
+  /// The newest twist received, {v, ω}; false when none came.
+  bool LastTwist(double& v, double& w) {
+    geometry_msgs::msg::dds_::Twist_ t;
+    fdds::SampleInfo info;
+    bool got = false;
+    while (twist_reader->take_next_sample(&t, &info) == ReturnCode_t::RETCODE_OK) {
+      if (!info.valid_data) continue;
+      v = t.linear().x();
+      w = t.angular().z();
+      got = true;
+    }
+    return got;
+  }
+
+  link::Participant participant;
+  fdds::Topic* cmd = nullptr;
+  fdds::Topic* odom = nullptr;
+  fdds::Topic* image = nullptr;
+  fdds::DataReader* twist_reader = nullptr;
+  fdds::DataWriter* odom_writer = nullptr;
+  fdds::DataWriter* image_writer = nullptr;
+};
+
+}  // namespace
+
+TEST_CASE("ros2: motor levels are a differential drive's twist") {
+  DriveConfig d;
+  d.speed_levels = 8;
+  d.max_speed = 0.3;
+  d.track_width = 0.16;
+  std::array<double, 2> t = Ros2Robot::TwistFor({8, 8}, d);
+  CHECK(t[0] == Approx(0.3));
+  CHECK(t[1] == Approx(0.0));
+  t = Ros2Robot::TwistFor({-4, 4}, d);  // turning on the spot, left
+  CHECK(t[0] == Approx(0.0));
+  CHECK(t[1] == Approx(0.3 / 0.16));
+  t = Ros2Robot::TwistFor({2, 6}, d);
+  CHECK(t[0] == Approx(0.15));
+  CHECK(t[1] == Approx(0.15 / 0.16));
+}
+
+TEST_CASE("ros2: twists out, odometry in the track's frame, a silent robot is a fault and told to stop") {
+  const int domain = test::UniqueDomain(61);
+  const Track track(NorthTrack());
+  Ros2Robot adapter(Ros2Vehicle(domain), track);
+  FakeRobot robot(domain);
+  CHECK_FALSE(adapter.State().pose_valid);
+
+  // Until the twists arrive (discovery), keep asking for half speed ahead.
+  double v = 0.0;
+  double w = 0.0;
+  REQUIRE(test::WaitFor([&] {
+    adapter.SetMotors({4, 4});
+    adapter.Update(0.05);
+    return robot.LastTwist(v, w) && v > 0.0;
+  }, 30.0));
+  CHECK(v == Approx(0.15));
+  CHECK(w == Approx(0.0));
+
+  // 1 m ahead and a quarter turn left in the odometry frame: with the start
+  // facing north that is 1 m north of the start, heading west.
+  const Vec2 start = track.StartPosition();
+  REQUIRE(test::WaitFor([&] {
+    robot.Odom(1.0, 0.0, std::numbers::pi / 2, 0.2, 0.1);
+    adapter.Update(0.01);
+    return adapter.State().pose_valid;
+  }, 30.0));
+  AdapterState s = adapter.State();
+  CHECK(s.x == Approx(start.x()).margin(1e-9));
+  CHECK(s.y == Approx(start.y() + 1.0));
+  CHECK(std::abs(std::remainder(s.heading - std::numbers::pi, 2 * std::numbers::pi)) < 1e-9);
+  CHECK(s.speed == Approx(0.2));
+  CHECK(s.yaw_rate == Approx(0.1));
+  CHECK_FALSE(s.fault);
+
+  // Non-finite odometry is dropped and counted; the pose stays.
+  robot.Odom(std::nan(""), 0.0, 0.0, 0.0, 0.0);
+  REQUIRE(test::WaitFor([&] {
+    adapter.Update(0.01);
+    return adapter.Counters().odom_dropped == 1;
+  }, 30.0));
+  CHECK(adapter.State().y == Approx(start.y() + 1.0));
+
+  // Silent past odom_timeout_s: a fault, and zero velocity though the command holds.
+  std::this_thread::sleep_for(std::chrono::milliseconds(400));
+  adapter.SetMotors({4, 4});
+  adapter.Update(0.01);
+  s = adapter.State();
+  CHECK(s.fault);
+  CHECK(s.fault_message.find("no odometry on /odom") != std::string::npos);
+  REQUIRE(test::WaitFor([&] {
+    adapter.Update(0.06);
+    return robot.LastTwist(v, w) && v == 0.0;
+  }, 30.0));
+  // Odometry again: the fault clears.
+  robot.Odom(1.0, 0.0, 0.0, 0.0, 0.0);
+  REQUIRE(test::WaitFor([&] {
+    adapter.Update(0.01);
+    return !adapter.State().fault;
+  }, 30.0));
+
+  // Stop: zero velocity at once.
+  adapter.Stop();
+  REQUIRE(test::WaitFor([&] { return robot.LastTwist(v, w) && v == 0.0 && w == 0.0; }, 30.0));
+}
+
+TEST_CASE("ros2: the image topic is the camera; an image that does not decode is dropped") {
+  const int domain = test::UniqueDomain(62);
+  const Track track(NorthTrack());
+  VehicleConfig config = Ros2Vehicle(domain);
+  Ros2Robot adapter(config, track);
+  auto camera = adapter.MakeCamera();
+  REQUIRE(camera != nullptr);
+  CHECK(camera->Describe() == "ros2 rt/camera/image_raw/compressed");
+  FakeRobot robot(domain);
+
+  cv::Mat red(120, 160, CV_8UC3, cv::Scalar(0, 0, 255));
+  std::vector<uint8_t> jpeg;
+  REQUIRE(cv::imencode(".jpg", red, jpeg));
+  cv::Mat frame;
+  bool grabbed = false;
+  REQUIRE(test::WaitFor([&] {
+    sensor_msgs::msg::dds_::CompressedImage_ image;
+    image.format("jpeg");
+    image.data(jpeg);
+    robot.image_writer->write(&image);
+    grabbed = camera->Grab({}, frame);
+    return grabbed;
+  }, 30.0));
+  CHECK(frame.cols == config.camera.width);  // resized to what is streamed
+  CHECK(frame.rows == config.camera.height);
+  const cv::Vec3b centre = frame.at<cv::Vec3b>(frame.rows / 2, frame.cols / 2);
+  CHECK(centre[2] > 200);
+  CHECK(centre[0] < 50);
+
+  sensor_msgs::msg::dds_::CompressedImage_ junk;
+  junk.format("jpeg");
+  junk.data({1, 2, 3, 4});
+  REQUIRE(test::WaitFor([&] {
+    robot.image_writer->write(&junk);
+    camera->Grab({}, frame);
+    return adapter.Counters().images_dropped > 0;
+  }, 30.0));
+}
+
+TEST_CASE("ros2: the configuration names a bad topic or domain") {
+  const VehicleConfig shipped = LoadVehicle("config/vehicles/ros2-robot.yaml");
+  CHECK(shipped.kind == "ros2");
+  CHECK(Ros2DdsTopic(shipped.ros2.cmd_vel) == "rt/cmd_vel");
+  VehicleConfig bad = shipped;
+  bad.ros2.cmd_vel = "cmd_vel";  // not absolute
+  CHECK_THROWS_WITH(bad.ValidateOrThrow(), Catch::Contains("ros2.cmd_vel"));
+  bad = shipped;
+  bad.ros2.odom = "/robot//odom";
+  CHECK_THROWS_WITH(bad.ValidateOrThrow(), Catch::Contains("ros2.odom"));
+  bad = shipped;
+  bad.ros2.image = "/camera/1st";
+  CHECK_THROWS_WITH(bad.ValidateOrThrow(), Catch::Contains("ros2.image"));
+  bad = shipped;
+  bad.ros2.image.clear();  // no camera topic: allowed
+  CHECK_NOTHROW(bad.ValidateOrThrow());
+  bad.ros2.domain_id = 300;
+  CHECK_THROWS_WITH(bad.ValidateOrThrow(), Catch::Contains("ros2.domain_id"));
+}

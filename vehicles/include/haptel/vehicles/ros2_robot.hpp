@@ -1,0 +1,87 @@
+#pragma once
+/// @file Any ROS 2 robot as a Haptel vehicle (kind ros2), through its topics
+/// alone: no ROS 2 installation, the wire types are generated from
+/// link/idl/ros2.idl and spoken by a Fast DDS participant of its own on the
+/// robot's domain (Ros2Config).
+///
+/// - Motor levels become geometry_msgs/Twist on `cmd_vel`, as a differential
+///   drive: each side's level is a wheel speed (level / speed_levels ×
+///   drive.max_speed), v their mean and ω their difference over
+///   drive.track_width. RELIABLE, as ROS 2 subscribers ask by default. Sent
+///   when the command changes and at ros2.cmd_rate_hz while it holds.
+/// - nav_msgs/Odometry is the pose, its frame's origin placed at the track's
+///   start (where the robot was put down); the twist is the speed and yaw rate.
+/// - sensor_msgs/CompressedImage (JPEG or PNG) is the camera (MakeCamera).
+///
+/// Readers are BEST_EFFORT, so they match publishers of either reliability.
+/// Odometry that stops for ros2.odom_timeout_s after it came is a fault (the
+/// robot is silent), and the robot is sent zero velocity; odometry that
+/// comes back clears it. A non-finite odometry sample is counted and dropped.
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "haptel/config/track.hpp"
+#include "haptel/config/vehicle.hpp"
+#include "haptel/vehicles/adapter.hpp"
+#include "haptel/video/camera_source.hpp"
+
+namespace haptel::vehicles {
+
+/// What went over the ROS 2 topics so far.
+struct Ros2Counters {
+  uint64_t twists_sent = 0;
+  uint64_t odom_received = 0;
+  uint64_t odom_dropped = 0;   ///< non-finite pose or twist
+  uint64_t images_received = 0;
+  uint64_t images_dropped = 0; ///< not decodable
+};
+
+class Ros2Robot final : public VehicleAdapter {
+ public:
+  /// Joins the robot's domain (config.ros2.domain_id, on config.link's
+  /// interfaces and peers, without Haptel's security or faults). Throws
+  /// std::runtime_error when DDS refuses, ConfigFieldError for a bad config.
+  Ros2Robot(const VehicleConfig& config, const Track& track);
+  ~Ros2Robot() override;
+  Ros2Robot(const Ros2Robot&) = delete;
+  Ros2Robot& operator=(const Ros2Robot&) = delete;
+
+  void SetMotors(const MotorLevels& levels) override;
+  /// Zero velocity, sent at once.
+  void Stop() override;
+  /// Takes the odometry that came, sends the twist when due.
+  void Update(double dt) override;
+  AdapterState State() const override;
+
+  /// The robot's camera topic as a camera source (frames resized to
+  /// config.camera's size); null when ros2.image is empty. It shares the
+  /// adapter's participant and may outlive the adapter.
+  std::unique_ptr<video::CameraSource> MakeCamera();
+
+  Ros2Counters Counters() const;
+
+  /// The twist a differential drive's levels mean: {v m/s, ω rad/s}.
+  static std::array<double, 2> TwistFor(const MotorLevels& levels, const DriveConfig& drive);
+
+  /// The participant and endpoints on the robot's domain (shared with the camera).
+  struct Graph;
+
+ private:
+  void SendTwist(double v, double w);
+
+  VehicleConfig config_;
+  std::shared_ptr<Graph> graph_;
+  double start_x_ = 0.0;
+  double start_y_ = 0.0;
+  double start_heading_ = 0.0;
+  AdapterState state_;
+  double v_ = 0.0;  ///< commanded twist
+  double w_ = 0.0;
+  double since_twist_s_ = 0.0;
+  bool twist_due_ = true;
+  int64_t last_odom_ns_ = 0;  ///< 0: none yet
+};
+
+}  // namespace haptel::vehicles
