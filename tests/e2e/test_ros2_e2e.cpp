@@ -43,6 +43,13 @@ std::vector<std::string> StandIn(int ros_domain) {
           "--max-speed", "0.3"};
 }
 
+/// `haptel run` of the short track with the vehicle file in `dir`, on a domain of its own.
+std::vector<std::string> Lap(const std::filesystem::path& dir, const std::filesystem::path& vehicle, int salt) {
+  return {Bin("haptel"), "run", "--vehicle", vehicle.string(), "--track", "config/tracks/test-short.yaml",
+          "--domain", std::to_string(test::UniqueDomain(salt)), "--database", (dir / "runs.db").string(), "--json",
+          "--vehicle-timeout", "5"};
+}
+
 }  // namespace
 
 TEST_CASE("the ROS 2 adapter drives a Cyclone DDS robot round the short track, its camera on the operator's screen") {
@@ -51,9 +58,7 @@ TEST_CASE("the ROS 2 adapter drives a Cyclone DDS robot round the short track, i
   const auto vehicle = VehicleFile(dir, ros_domain);
   Child robot(StandIn(ros_domain));
   REQUIRE(test::WaitForErr(robot, "up on domain", 30.0));
-  Child run({Bin("haptel"), "run", "--vehicle", vehicle.string(), "--track", "config/tracks/test-short.yaml",
-             "--domain", std::to_string(test::UniqueDomain(40)), "--database", (dir / "runs.db").string(), "--json",
-             "--vehicle-timeout", "5"});
+  Child run(Lap(dir, vehicle, 40));
   const int code = run.Wait(180.0);
   INFO(run.out() << run.err());
   CHECK(code == 0);
@@ -82,9 +87,7 @@ TEST_CASE("a ROS 2 robot that goes silent mid-lap is reported lost and the run m
   const auto vehicle = VehicleFile(dir, ros_domain);
   Child robot(StandIn(ros_domain));
   REQUIRE(test::WaitForErr(robot, "up on domain", 30.0));
-  Child run({Bin("haptel"), "run", "--vehicle", vehicle.string(), "--track", "config/tracks/test-short.yaml",
-             "--domain", std::to_string(test::UniqueDomain(42)), "--database", (dir / "runs.db").string(), "--json",
-             "--vehicle-timeout", "5"});
+  Child run(Lap(dir, vehicle, 42));
   // Driving: the first progress line with a lap clock running.
   REQUIRE(test::WaitFor([&] {
     run.Pump();

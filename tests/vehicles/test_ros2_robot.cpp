@@ -17,6 +17,7 @@
 
 #include "haptel/config/error.hpp"
 #include "haptel/link/participant.hpp"
+#include "haptel/link/topic.hpp"
 #include "haptel/ros2/ros2.h"
 #include "haptel/ros2/ros2PubSubTypes.h"
 #include "haptel/vehicles/ros2_robot.hpp"
@@ -48,9 +49,10 @@ VehicleConfig Ros2Vehicle(int domain) {
 /// The robot's side, in Fast DDS: reads twists, writes odometry and images.
 struct FakeRobot {
   explicit FakeRobot(int domain) : participant(Link(domain), "test-robot") {
-    cmd = MakeTopic<geometry_msgs::msg::dds_::Twist_PubSubType>("rt/cmd_vel");
-    odom = MakeTopic<nav_msgs::msg::dds_::Odometry_PubSubType>("rt/odom");
-    image = MakeTopic<sensor_msgs::msg::dds_::CompressedImage_PubSubType>("rt/camera/image_raw/compressed");
+    using link::detail::MakeTopic;
+    cmd = MakeTopic<geometry_msgs::msg::dds_::Twist_PubSubType>(participant, "rt/cmd_vel");
+    odom = MakeTopic<nav_msgs::msg::dds_::Odometry_PubSubType>(participant, "rt/odom");
+    image = MakeTopic<sensor_msgs::msg::dds_::CompressedImage_PubSubType>(participant, "rt/camera/image_raw/compressed");
     fdds::DataReaderQos rq = fdds::DATAREADER_QOS_DEFAULT;
     rq.reliability().kind = fdds::RELIABLE_RELIABILITY_QOS;  // as a ROS 2 subscriber: the adapter must match it
     twist_reader = participant.subscriber()->create_datareader(cmd, rq);
@@ -67,12 +69,6 @@ struct FakeRobot {
     LinkConfig l;
     l.domain_id = domain;
     return l;
-  }
-  template <typename PubSub>
-  fdds::Topic* MakeTopic(const std::string& name) {
-    fdds::TypeSupport type(new PubSub());
-    type.register_type(participant.get());
-    return participant.get()->create_topic(name, type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
   }
   void Odom(double x, double y, double yaw, double v, double w) {
     nav_msgs::msg::dds_::Odometry_ o;

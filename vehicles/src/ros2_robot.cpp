@@ -17,6 +17,7 @@
 #include "haptel/config/error.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/link/participant.hpp"
+#include "haptel/link/topic.hpp"
 #include "haptel/ros2/ros2.h"
 #include "haptel/ros2/ros2PubSubTypes.h"
 
@@ -39,15 +40,6 @@ LinkConfig RobotLink(const VehicleConfig& config) {
   link.fault = {};
   link.discovery_server = {};
   return link;
-}
-
-template <typename PubSubType>
-dds::Topic* MakeTopic(link::Participant& p, const std::string& name) {
-  dds::TypeSupport type(new PubSubType());
-  type.register_type(p.get());
-  dds::Topic* topic = p.get()->create_topic(name, type.get_type_name(), dds::TOPIC_QOS_DEFAULT);
-  if (topic == nullptr) throw std::runtime_error("ros2: cannot create topic '" + name + "'");
-  return topic;
 }
 
 /// BEST_EFFORT matches publishers of either reliability.
@@ -79,6 +71,7 @@ bool Finite(const Odometry_& o) {
 struct Ros2Robot::Graph {
   explicit Graph(const VehicleConfig& config)
       : participant(RobotLink(config), "haptel-ros2-" + config.name) {
+    using link::detail::MakeTopic;
     cmd_topic = MakeTopic<geometry_msgs::msg::dds_::Twist_PubSubType>(participant, Ros2DdsTopic(config.ros2.cmd_vel));
     odom_topic = MakeTopic<nav_msgs::msg::dds_::Odometry_PubSubType>(participant, Ros2DdsTopic(config.ros2.odom));
     // ROS 2's default for a subscriber: RELIABLE, VOLATILE, keep last 10.
