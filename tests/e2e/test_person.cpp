@@ -171,12 +171,7 @@ TEST_CASE("a person flies the blimp in a window: dragging the mouse turns the pi
   }, 30.0);
   INFO(run.err());
   CHECK(followed);
-  REQUIRE(XDoTool({"search", "--sync", "--name", "Haptel", "windowfocus", "--sync", "key", "Escape"}) == 0);
-  const int code = run.Wait(60.0);
-  INFO(run.out() << run.err());
-  CHECK(code == 1);
-  const std::string json = run.LastLine();
-  CHECK(JsonField(json, "outcome") == "aborted");
+  const std::string json = test::EndWithEscape(run);
   CHECK(JsonField(json, "operator") == "person");
   CHECK(JsonField(json, "interface") == "blimp-gesture");
   CHECK(JsonField(json, "vehicle_kind") == "sim-blimp");
@@ -210,12 +205,7 @@ TEST_CASE("a person at a display without a haptic device flies the blimp by keys
   INFO(run.err());
   CHECK(run.err().find("power 0.50  helix +0.25") != std::string::npos);
   CHECK(through);
-  REQUIRE(XDoTool({"search", "--sync", "--name", "Haptel", "windowfocus", "--sync", "key", "Escape"}) == 0);
-  const int code = run.Wait(60.0);
-  INFO(run.out());
-  CHECK(code == 1);
-  const std::string json = run.LastLine();
-  CHECK(JsonField(json, "outcome") == "aborted");
+  const std::string json = test::EndWithEscape(run);
   CHECK(JsonField(json, "operator") == "person");
   CHECK(JsonField(json, "interface") == "blimp-keys");
   CHECK(JsonField(json, "gates_passed") == "1");

@@ -100,11 +100,6 @@ TEST_CASE("Escape in the window aborts the run, stops the vehicle and keeps what
     run.Pump();
     return run.err().find("distance") != std::string::npos;
   }, 60.0));
-  REQUIRE(XDoTool({"search", "--sync", "--name", "Haptel", "windowfocus", "--sync", "key", "Escape"}) == 0);
-  const int code = run.Wait(60.0);
-  INFO(run.out() << run.err());
-  CHECK(code == 1);
-  const std::string json = run.LastLine();
-  CHECK(JsonField(json, "outcome") == "aborted");
+  const std::string json = test::EndWithEscape(run);
   CHECK(std::stoi(JsonField(json, "run_id")) >= 1);
 }

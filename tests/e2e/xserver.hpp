@@ -41,4 +41,16 @@ inline int XDoTool(std::vector<std::string> args) {
   return c.Wait(30.0);
 }
 
+/// Presses Escape in Haptel's window and waits for `run` to end as a person
+/// ending it does: outcome "aborted", exit 1. Returns its JSON line.
+inline std::string EndWithEscape(Child& run) {
+  REQUIRE(XDoTool({"search", "--sync", "--name", "Haptel", "windowfocus", "--sync", "key", "Escape"}) == 0);
+  const int code = run.Wait(60.0);
+  INFO(run.out() << run.err());
+  CHECK(code == 1);
+  const std::string json = run.LastLine();
+  CHECK(JsonFieldOf(json, "outcome") == "aborted");
+  return json;
+}
+
 }  // namespace haptel::test
