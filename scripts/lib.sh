@@ -4,31 +4,40 @@ set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 BUILD_DIR="${HAPTEL_BUILD_DIR:-$ROOT/build}"
 
-# Debian 12 packages Haptel builds and runs with.
+# Debian 12 packages Haptel builds and runs with (scripts/run installs these).
 HAPTEL_PACKAGES=(
   build-essential cmake pkg-config
   libeigen3-dev libbullet-dev
   libfastrtps-dev libfastcdr-dev fastddsgen
-  libopencv-dev libyaml-cpp-dev catch2 libsqlite3-dev sqlite3
+  libopencv-dev libyaml-cpp-dev libsqlite3-dev sqlite3
   libtinyxml2-dev   # the MHaptic XML scene files (also a Fast DDS dependency)
   libsdl2-dev
-  cyclonedds-dev cyclonedds-tools   # the ROS 2 adapter's test: an independent DDS (Cyclone) stands in for a ROS 2 robot
-  iproute2   # the link test's second host: another network namespace joined by a veth pair
   openssl libssl-dev   # DDS Security: `haptel security init` and the certificates' check at start
   libcpp-httplib-dev   # the study's experimenter's console (a web page on 127.0.0.1)
-  chromium chromium-driver python3-selenium   # ...tested in a real browser
-  python3-can can-utils   # the CAN logs checked with python-can's LogReader and log2asc
-  # The operator's view: OpenGL 3.3 core through Mesa (llvmpipe without a GPU),
-  # and an X server of its own for the window tests (Xvfb, xdotool for keys).
+  # The operator's view: OpenGL 3.3 core through Mesa (llvmpipe without a GPU).
   libgl-dev libegl-dev libgl1-mesa-dri libegl-mesa0
-  xvfb xauth xdotool
+)
+
+# What only the test suite needs (scripts/test adds these; a fresh
+# `scripts/run` does not wait for them).
+HAPTEL_TEST_PACKAGES=(
+  catch2
+  cyclonedds-dev cyclonedds-tools   # the ROS 2 adapter's test: an independent DDS (Cyclone) stands in for a ROS 2 robot
+  iproute2   # the link test's second host: another network namespace joined by a veth pair
+  chromium chromium-driver python3-selenium   # the study console tested in a real browser
+  python3-can can-utils   # the CAN logs checked with python-can's LogReader and log2asc
+  xvfb xauth xdotool   # an X server of its own for the window tests, xdotool for keys
 )
 
 haptel_log() { echo "[haptel] $*" >&2; }
 
+# haptel_install_deps [PACKAGE...]: installs what is missing of the given
+# packages (default: what running needs).
 haptel_install_deps() {
+  local wanted=("$@")
+  [ ${#wanted[@]} -eq 0 ] && wanted=("${HAPTEL_PACKAGES[@]}")
   local missing=()
-  for p in "${HAPTEL_PACKAGES[@]}"; do
+  for p in "${wanted[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
   done
   [ ${#missing[@]} -eq 0 ] && return 0
@@ -40,13 +49,22 @@ haptel_install_deps() {
   $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 }
 
+# haptel_build tests|product: configures build/ (Release) and builds. With
+# `tests`, everything (the suite included); with `product`, the programs
+# alone (haptel, which depends on haptel-vehicle, haptel-device-server and
+# haptel-bench), configured without the tests when build/ is new.
 haptel_build() {
+  local what="${1:-tests}" testing=OFF target=(--target haptel)
+  [ "$what" = "tests" ] && { testing=ON; target=(); }
   if [ ! -f "$BUILD_DIR/CMakeCache.txt" ]; then
     haptel_log "configuring $BUILD_DIR"
-    cmake -S "$ROOT" -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release >/dev/null
+    cmake -S "$ROOT" -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release -DBUILD_TESTING=$testing >/dev/null
+  elif [ "$testing" = ON ] && grep -q '^BUILD_TESTING:BOOL=OFF' "$BUILD_DIR/CMakeCache.txt"; then
+    haptel_log "configuring $BUILD_DIR with the tests"
+    cmake -S "$ROOT" -B "$BUILD_DIR" -DBUILD_TESTING=ON >/dev/null
   fi
-  haptel_log "building (log: $BUILD_DIR/build.log)"
-  if ! cmake --build "$BUILD_DIR" -j"$(nproc)" >"$BUILD_DIR/build.log" 2>&1; then
+  haptel_log "building $what (log: $BUILD_DIR/build.log)"
+  if ! cmake --build "$BUILD_DIR" -j"$(nproc)" "${target[@]}" >"$BUILD_DIR/build.log" 2>&1; then
     grep -vE '^\[ *[0-9]+%\]' "$BUILD_DIR/build.log" | tail -n 80 >&2
     haptel_log "build failed"
     return 1
