@@ -62,7 +62,7 @@ int BenchBlimpMain(int argc, const char* const* argv) {
     const Args args(argc, argv, {"vehicle"}, {"json"});
     json = args.Flag("json");
     vehicle = LoadVehicle(args.Value("vehicle").value_or(ShippedFile("config/vehicles/sim-blimp.yaml").string()));
-    if (!UsesAirship(vehicle.kind)) {
+    if (!vehicle.Kind().Uses(kAirshipSection)) {
       throw std::invalid_argument(vehicle.file.string() + ": kind " + vehicle.kind + " is not a blimp");
     }
   } catch (const std::exception& e) {

@@ -157,8 +157,8 @@ RttFigures HaptelRoundTrip(int domain, double seconds, const std::filesystem::pa
   Paced(seconds, [&] { vehicle.ResetRtt(); }, [&](int64_t) {
     // A gentle back-and-forth, so the robot stays near where it started.
     const double v = 0.2 * std::sin(++tick * 0.02);
-    vehicle.Send(v, v);
-    vehicle.inbox().Drain();
+    vehicle.Send(TreadCommand{v, v});
+    vehicle.channel<link::RobotMessages>().inbox().Drain();
   });
   std::this_thread::sleep_for(std::chrono::milliseconds(100));
   RttFigures figures = Figures(vehicle.Rtt());

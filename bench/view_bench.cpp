@@ -170,7 +170,7 @@ Phase World(const std::string& name, const Parts& parts, double seconds,
       wall0 = MonotonicNs();
     }
     const double t = NsToS(next - t0);
-    link.Send(0.0, 0.0);
+    link.SendSafe();
     if (view_part) {
       view::Overlay o;
       std::snprintf(o.interface_name, sizeof o.interface_name, "cockpit-hud");

@@ -83,11 +83,6 @@ void CameraConfig::ValidateOrThrow() const {
   check::Number("mount_height", mount_height, 0.01, 5.0);
 }
 
-bool IsVehicleKind(const std::string& kind) {
-  return kind == "sim-robot" || kind == "can-robot" || kind == "can-robot-sim" || kind == "ros2" ||
-         IsBlimpKind(kind);
-}
-
 namespace {
 /// A ROS 2 topic name: absolute, of letters, digits, '_' and '/' tokens
 /// that do not start with a digit (ROS 2's rules, without ~ and {}).
@@ -147,9 +142,8 @@ void VehicleConfig::ValidateOrThrow() const {
   if (const std::string problem = VehicleNameProblem(name); !problem.empty()) {
     check::Fail("name", problem);
   }
-  if (!IsVehicleKind(kind)) {
-    check::Fail("kind", "one of: sim-robot, can-robot, can-robot-sim, ros2, sim-blimp, servo-blimp, servo-blimp-sim");
-  }
+  const VehicleKindInfo* info = FindVehicleKind(kind);
+  if (info == nullptr) check::Fail("kind", "one of: " + VehicleKindNames());
   check::Number("sim_rate_hz", sim_rate_hz, 50.0, 5000.0);
   check::Number("state_rate_hz", state_rate_hz, 1.0, 1000.0);
   check::Number("watchdog_timeout_s", watchdog_timeout_s, 0.01, 10.0);
@@ -157,17 +151,25 @@ void VehicleConfig::ValidateOrThrow() const {
   check::Nested("body", body);
   check::Nested("camera", camera);
   check::Nested("link", link);
-  if (UsesCan(kind)) {
+  if (info->Uses(kCanSection)) {
     try {
       can.ValidateOrThrow(drive.speed_levels);
     } catch (const ConfigFieldError& e) {
       throw e.Within("can");
     }
   }
-  if (UsesAirship(kind)) check::Nested("airship", airship);
-  if (UsesServo(kind)) check::Nested("servo", servo);
-  if (kind == "ros2") check::Nested("ros2", ros2);
+  if (info->Uses(kAirshipSection)) check::Nested("airship", airship);
+  if (info->Uses(kServoSection)) check::Nested("servo", servo);
+  if (info->Uses(kRos2Section)) check::Nested("ros2", ros2);
 }
+
+namespace {
+/// Whether a known kind reads `section` (an unknown kind is refused later, by name).
+bool UsesSection(const std::string& kind, VehicleSection section) {
+  const VehicleKindInfo* info = FindVehicleKind(kind);
+  return info != nullptr && info->Uses(section);
+}
+}  // namespace
 
 VehicleConfig LoadVehicle(const std::filesystem::path& file) {
   YamlMap root = YamlMap::Load(file);
@@ -238,19 +240,19 @@ VehicleConfig LoadVehicle(const std::filesystem::path& file) {
     v.can.vel_ramp_rate = can.Number("vel_ramp_rate", v.can.vel_ramp_rate);
     if (can.Has("log_dir")) v.can.log_dir = file.parent_path() / can.String("log_dir", "");
     can.Finish();
-  } else if (UsesCan(v.kind)) {
+  } else if (UsesSection(v.kind, kCanSection)) {
     root.Fail("can", "a 'can' section for kind " + v.kind + " (its nodes and wheel velocities)");
   }
   if (root.Has("airship")) {
     YamlMap airship = root.Map("airship");
     v.airship = config_detail::ReadAirship(airship);
-  } else if (UsesAirship(v.kind)) {
+  } else if (UsesSection(v.kind, kAirshipSection)) {
     root.Fail("airship", "an 'airship' section for kind " + v.kind + " (its hull, fins and motors)");
   }
   if (root.Has("servo")) {
     YamlMap servo = root.Map("servo");
     v.servo = config_detail::ReadServoController(servo);
-  } else if (UsesServo(v.kind)) {
+  } else if (UsesSection(v.kind, kServoSection)) {
     root.Fail("servo", "a 'servo' section for kind " + v.kind + " (its controller's protocol and channels)");
   }
   if (root.Has("ros2")) {

@@ -1,5 +1,6 @@
-#include "haptel/mediator/blimp_session.hpp"
-
+// The blimp family's part of a session (family_session.hpp): its course
+// and lap timer, the gesture cockpit or a person's keys or game controller,
+// the automatic pilot or a person, and the view's head-tracked screen.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -19,9 +20,7 @@
 #include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/run_counters.hpp"
 #include "haptel/mediator/operator.hpp"
-#include "haptel/mediator/session_view.hpp"
-#include "haptel/mediator/vehicle_link.hpp"
-#include "session_loop.hpp"
+#include "family_session.hpp"
 
 namespace haptel::mediator {
 
@@ -41,8 +40,8 @@ BlimpObservation Observe(double t_s, const msg::BlimpState& s) {
   return o;
 }
 
-void LogProgress(double t, const BlimpLapTimer& lap, const VehicleLink& link, const msg::BlimpState& s,
-                 const BlimpCommand& command, const std::string& counters) {
+void LogBlimpProgress(double t, const BlimpLapTimer& lap, const VehicleLink& link, const msg::BlimpState& s,
+                 const BlimpCommand& command) {
   char line[300];
   std::snprintf(line, sizeof line,
                 "%6.1f s  blimp  lap %5.1f s  gates %d/%d  obstacles %d  at %.0f %.0f m  height %.1f m  airspeed %.1f m/s  "
@@ -52,7 +51,6 @@ void LogProgress(double t, const BlimpLapTimer& lap, const VehicleLink& link, co
                 s.y(), s.z(), s.airspeed(), command.power, command.helix, command.rudder, command.elevator, command.tail_rotor,
                 s.outputs()[5], s.outputs()[6], link.Rtt().Percentile(0.5) * 1e-3, link.video().Stats().fps);
   log::Info(line);
-  if (!counters.empty()) log::Info("         counters: " + counters);
 }
 
 /// What the blimp's view shows over the picture: the lap, the gates, the
@@ -109,211 +107,138 @@ class BlimpOverlay {
   char last_contact_[40] = "";
 };
 
-}  // namespace
-
-SessionResult RunBlimpSession(const SessionSetup& setup, const std::atomic<bool>& interrupted) {
-  const RunConfig& run = setup.run;
-  const BlimpCourseConfig& course = *setup.course;
-  SessionResult result;
-  RunRecord& rec = result.record;
-  rec.started_wall_ns = WallNs();
-  rec.config_name = run.name;
-  rec.track = course.name;
-  rec.vehicle = setup.vehicle.name;
-  rec.vehicle_kind = setup.vehicle.kind;
-  rec.gates_total = static_cast<int>(course.gates.size());
-  rec.operator_kind = setup.operator_kind;
-  rec.device = setup.device.name;
-  // The gesture cockpit, or a person's keys or game controller.
-  interfaces::InputBox input;
-  std::optional<interfaces::BlimpGestureInterface> gesture;
-  std::optional<interfaces::BlimpManualInterface> manual;
-  if (setup.blimp_manual) {
-    manual.emplace(*setup.blimp_manual, input.Load());
-    rec.interface = manual->name();
-  } else {
-    gesture.emplace(*setup.blimp_interface);
-    rec.interface = gesture->name();
-  }
-  const double command_rate_hz =
-      manual ? setup.blimp_manual->command_rate_hz : setup.blimp_interface->command_rate_hz;
-
-  // --- The haptic side: the hands are held before anything flies. ---
-  HapticSide haptic(setup.device, setup.calibration, setup.gravity, run.op, setup.trace);
-  std::unique_ptr<BlimpAutoPilot> pilot;
-  if (setup.operator_kind == "auto") {
-    if (!gesture) throw ConfigError("the automatic pilot flies the blimp gesture cockpit, not '" + rec.interface + "'");
-    if (haptic.sim() == nullptr) {
-      throw ConfigError(setup.device.file.string() +
-                        ": the automatic pilot moves the simulated arms (driver 'sim'); device '" +
-                        setup.device.name + "' is flown by a person: use --operator person");
+class BlimpSession final : public FamilySession {
+ public:
+  BlimpSession(const SessionSetup& setup, HapticSide& haptic, interfaces::InputBox& input, RunRecord& rec)
+      : setup_(setup),
+        course_(*setup.course),
+        lap_(course_),
+        overlay_feed_(setup, setup.blimp_manual ? setup.blimp_manual->name : setup.blimp_interface->name,
+                      static_cast<int>(course_.gates.size())) {
+    rec.track = course_.name;
+    rec.gates_total = static_cast<int>(course_.gates.size());
+    // The gesture cockpit, or a person's keys or game controller.
+    if (setup.blimp_manual) {
+      manual_.emplace(*setup.blimp_manual, input.Load());
+      rec.interface = manual_->name();
+      command_rate_hz_ = setup.blimp_manual->command_rate_hz;
+    } else {
+      gesture_.emplace(*setup.blimp_interface);
+      rec.interface = gesture_->name();
+      command_rate_hz_ = setup.blimp_interface->command_rate_hz;
     }
-    pilot = std::make_unique<BlimpAutoPilot>(course, PilotKnowing(setup.vehicle.airship));
-    PlaceHands(*haptic.sim(), gesture->HandTargetsFor({}));
-  }
-  haptic.Start(setup.progress);
-
-  // --- The vehicle. ---
-  VehicleLinkOptions link_options;
-  link_options.vehicle = setup.vehicle;
-  link_options.link = run.link;
-  link_options.track_file = course.file;
-  link_options.program = setup.vehicle_program;
-  link_options.decode_video = run.video_decode && DecodesVideo(setup.view);
-  VehicleLink vehicle(link_options);
-  rec.vehicle_pid = vehicle.pid();
-  if (setup.progress && setup.attach) {
-    log::Info("attached to vehicle '" + setup.vehicle.name + "' on domain " + std::to_string(run.link.domain_id) +
-              " (session " + std::to_string(vehicle.session()) + "): spawning none");
-  }
-  if (setup.progress && vehicle.pid() != 0) {
-    log::Info("vehicle '" + setup.vehicle.name + "' (" + setup.vehicle.kind + ") started, pid " +
-              std::to_string(vehicle.pid()));
+    if (setup.operator_kind == "auto") {
+      if (!gesture_) {
+        throw ConfigError("the automatic pilot flies the blimp gesture cockpit, not '" + rec.interface + "'");
+      }
+      if (haptic.sim() == nullptr) {
+        throw ConfigError(setup.device.file.string() +
+                          ": the automatic pilot moves the simulated arms (driver 'sim'); device '" +
+                          setup.device.name + "' is flown by a person: use --operator person");
+      }
+      pilot_ = std::make_unique<BlimpAutoPilot>(course_, PilotKnowing(setup.vehicle.airship));
+      PlaceHands(*haptic.sim(), gesture_->HandTargetsFor({}));
+    }
   }
 
-  // --- The view: the pilot camera's picture on a screen that turns with the
-  // camera, the view turning with the head (mouse-look in the window). ---
-  std::unique_ptr<SessionView> view_part;
-  if (setup.view != ViewKind::kNone) {
-    SessionView::Parts view_parts;
-    view_parts.hal = &haptic.hal();
-    view_parts.physics_config = &setup.physics;  // the tracked hands' size
-    view_parts.video = &vehicle.video();
-    view_parts.hands = {gesture.has_value(), gesture.has_value()};
-    view::ViewOptions options = ViewOptionsFor(setup);
+  void Start(HapticSide&) override {}
+  void AbandonSetup(SessionResult&) override {}
+
+  /// The pilot camera's picture on a screen that turns with the camera, the
+  /// view turning with the head (mouse-look in the window).
+  void ConfigureView(SessionView::Parts& parts, view::ViewOptions& options) const override {
+    parts.hands = {gesture_.has_value(), gesture_.has_value()};
     options.screen = view::HeadTrackedScreen();
-    view_part = std::make_unique<SessionView>(options, view_parts, input);
   }
-  // A person's controller without a view: a thread of its own polls it.
-  std::unique_ptr<view::InputPump> pump;
-  if (manual && manual->input_kind() == BlimpManualInput::kGamepad && !view_part) {
-    pump = std::make_unique<view::InputPump>(input);
-  }
-  BlimpOverlay overlay_feed(setup, rec.interface, static_cast<int>(course.gates.size()));
+  bool UsesGamepad() const override { return manual_ && manual_->input_kind() == BlimpManualInput::kGamepad; }
 
-  BlimpLapTimer lap(course);
-  const int64_t t0 = MonotonicNs();
-  LoopWatch watch(haptic, nullptr, vehicle, view_part.get(), t0);
-  int64_t next_live_ns = t0;
-  const auto period_ns = static_cast<int64_t>(1e9 / run.session_rate_hz);
-  const auto command_period_ns = static_cast<int64_t>(1e9 / command_rate_hz);
-  int64_t next_command_ns = t0;
-  int64_t next_progress_ns = t0 + SToNs(2.0);
-  int64_t next_tick = t0;
-  VehicleHealth health(setup.vehicle.name, run.link.domain_id, vehicle.session(), run.vehicle_timeout_s);
-  msg::BlimpState last;
-  BlimpCommand command;
-  RunTrace trace(rec);
-  rec.path.reserve(16384);
-  const auto finish = [&](LoopEnd end) { Finish(result, std::move(end), "forces zeroed, blimp to neutral"); };
-
-  for (;;) {
-    SleepUntilNs(next_tick);
-    next_tick += period_ns;
-    const int64_t now = MonotonicNs();
-    const double t = NsToS(now - t0);
-
-    if (auto end = CheckOperatorSide(interrupted, haptic, setup.device.name)) {
-      finish(std::move(*end));
-      break;
-    }
-    const interfaces::InputState person = input.Load();
-    if (person.quit) {
-      finish({Outcome::kAborted, "the view was closed"});
-      break;
-    }
-    if (auto end = health.CheckProcess(vehicle, now)) {
-      finish(std::move(*end));
-      break;
-    }
-    for (const auto& e : vehicle.blimp_inbox().Drain()) {
+  void Drain(VehicleLink& link, VehicleHealth& health, HapticSide& haptic, RunTrace& trace, int64_t t0) override {
+    for (const auto& e : link.channel<link::BlimpMessages>().inbox().Drain()) {
       const msg::BlimpState& s = e.state;
       const double ts = NsToS(e.received_ns - t0);
       if (health.OnState(s, e.received_ns)) haptic.OnVehicleUp();
-      last = s;
+      last_ = s;
       if (!s.pose_valid()) continue;
       const BlimpObservation o = Observe(ts, s);
-      if (pilot) pilot->Observe(o);
-      lap.Update(o);
+      if (pilot_) pilot_->Observe(o);
+      lap_.Update(o);
       trace.Add(ts, s.x(), s.y(), s.z(), o.velocity.norm(), s.contact());
     }
-    if (auto end = health.CheckStates(vehicle, now, t)) {
-      finish(std::move(*end));
-      break;
-    }
-    const bool vehicle_up = health.up();
+  }
 
+  std::optional<LoopEnd> Drive(double t, int64_t now, const interfaces::InputState& person, bool vehicle_up,
+                               HapticSide& haptic, VehicleLink& link) override {
     // The pilot's hands and gaze; a person's head turns with mouse-look.
-    interfaces::HeadDirection head{person.head_pan, person.head_tilt};
-    if (pilot) {
-      head = {};
+    head_ = {person.head_pan, person.head_tilt};
+    if (pilot_) {
+      head_ = {};
       if (vehicle_up) {
-        const BlimpCommand intent = pilot->Decide(t);
-        HoldHands(*haptic.sim(), gesture->HandTargetsFor(intent));
-        head = {intent.camera_pan, intent.camera_tilt};
+        const BlimpCommand intent = pilot_->Decide(t);
+        HoldHands(*haptic.sim(), gesture_->HandTargetsFor(intent));
+        head_ = {intent.camera_pan, intent.camera_tilt};
       }
     }
-    command = manual ? manual->Update(t, person, haptic.hal()) : gesture->Update(head, haptic.hal());
-    if (manual && manual->lost()) {
-      finish({Outcome::kAborted, "the game controller was disconnected"});
-      break;
+    command_ = manual_ ? manual_->Update(t, person, haptic.hal()) : gesture_->Update(head_, haptic.hal());
+    if (manual_ && manual_->lost()) return LoopEnd{Outcome::kAborted, "the game controller was disconnected"};
+    if (next_command_ns_ == 0) next_command_ns_ = now;
+    if (CommandDue(next_command_ns_, now, static_cast<int64_t>(1e9 / command_rate_hz_))) {
+      link.Send(vehicle_up ? command_ : BlimpCommand{});
     }
-    if (CommandDue(next_command_ns, now, command_period_ns)) vehicle.Send(vehicle_up ? command : BlimpCommand{});
-    if (view_part || setup.on_live) {
-      const view::Overlay overlay = overlay_feed.Make(t, lap, last, command, vehicle_up);
-      if (view_part) {
-        view_part->Publish(overlay);
-        // The screen hangs where the camera points as the vehicle applied it.
-        view_part->Publish(view::Gaze{true, head.pan, head.tilt, last.outputs()[5], last.outputs()[6]});
-      }
-      if (setup.on_live && now >= next_live_ns) {
-        next_live_ns = now + SToNs(0.5);
-        setup.on_live(overlay);
-      }
-    }
-
-    if (lap.crashed()) {
-      finish({Outcome::kCrashed, "the blimp crashed: a contact at " + std::to_string(lap.crash_speed()).substr(0, 4) +
-                                     " m/s (more than " + std::to_string(course.crash_speed).substr(0, 4) + " m/s)"});
-      break;
-    }
-    if (lap.completed()) {
-      finish({Outcome::kCompleted, "landed: lap completed"});
-      break;
-    }
-    if (auto end = CheckLimits(t, setup.time_limit_s, course.lap_cap_s)) {
-      finish(std::move(*end));
-      break;
-    }
-    if (now >= next_progress_ns) {
-      next_progress_ns += SToNs(2.0);
-      const std::vector<std::string> short_loops = watch.EndInterval(now);
-      if (setup.progress) {
-        LogProgress(t, lap, vehicle, last, command, NonZeroCounters(watch.Counters()));
-        for (const std::string& loop : short_loops) log::Warn(loop);
-      }
-    }
-  }
-  for (const std::string& loop : watch.EndInterval(MonotonicNs())) {
-    if (setup.progress) log::Warn(loop);
+    return std::nullopt;
   }
 
-  // Make safe: forces to zero, every channel to neutral, the vehicle ended.
-  haptic.hal().ZeroForces();
-  vehicle.Send(BlimpCommand{});
-  haptic.Stop();
-  if (pump) pump->Stop();
-  if (view_part) StopAndRecord(*view_part, result);
-  vehicle.Stop();
+  std::optional<LoopEnd> LapEnd() const override {
+    if (lap_.crashed()) {
+      return LoopEnd{Outcome::kCrashed, "the blimp crashed: a contact at " + std::to_string(lap_.crash_speed()).substr(0, 4) +
+                                            " m/s (more than " + std::to_string(course_.crash_speed).substr(0, 4) +
+                                            " m/s)"};
+    }
+    if (lap_.completed()) return LoopEnd{Outcome::kCompleted, "landed: lap completed"};
+    return std::nullopt;
+  }
+  double lap_cap_s() const override { return course_.lap_cap_s; }
 
-  RecordLinkFigures(haptic, vehicle, result);
-  rec.lap_time_s = lap.lap_time_s();
-  rec.gates_passed = lap.gates_passed();
-  rec.gates_missed = lap.gates_missed();
-  rec.obstacles_touched = lap.obstacles_touched();
-  for (const BlimpGateSplit& split : lap.splits()) rec.splits.push_back({split.gate, split.passed, split.split_s});
-  watch.Finish(rec);
-  return result;
+  view::Overlay Overlay(double t, bool vehicle_up, bool) override {
+    return overlay_feed_.Make(t, lap_, last_, command_, vehicle_up);
+  }
+  /// The screen hangs where the camera points as the vehicle applied it.
+  std::optional<view::Gaze> Gaze() const override {
+    return view::Gaze{true, head_.pan, head_.tilt, last_.outputs()[5], last_.outputs()[6]};
+  }
+  void LogProgress(double t, const VehicleLink& link, double) const override {
+    LogBlimpProgress(t, lap_, link, last_, command_);
+  }
+  const char* MadeSafe() const override { return "forces zeroed, blimp to neutral"; }
+
+  void Finish(SessionResult& result, bool) override {
+    RunRecord& rec = result.record;
+    rec.lap_time_s = lap_.lap_time_s();
+    rec.gates_passed = lap_.gates_passed();
+    rec.gates_missed = lap_.gates_missed();
+    rec.obstacles_touched = lap_.obstacles_touched();
+    for (const BlimpGateSplit& split : lap_.splits()) rec.splits.push_back({split.gate, split.passed, split.split_s});
+  }
+
+ private:
+  const SessionSetup& setup_;
+  const BlimpCourseConfig& course_;
+  BlimpLapTimer lap_;
+  BlimpOverlay overlay_feed_;
+  std::optional<interfaces::BlimpGestureInterface> gesture_;
+  std::optional<interfaces::BlimpManualInterface> manual_;
+  double command_rate_hz_ = 20.0;
+  std::unique_ptr<BlimpAutoPilot> pilot_;
+  msg::BlimpState last_;
+  BlimpCommand command_;
+  interfaces::HeadDirection head_;
+  int64_t next_command_ns_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<FamilySession> MakeBlimpSession(const SessionSetup& setup, HapticSide& haptic,
+                                                interfaces::InputBox& input, RunRecord& rec) {
+  return std::make_unique<BlimpSession>(setup, haptic, input, rec);
 }
 
 }  // namespace haptel::mediator

@@ -153,7 +153,7 @@ SessionSetup RunSetupFromArgs(const Args& args) {
   if (auto device = args.Value("device")) setup.run.device = *device;
   if (auto vehicle = args.Value("vehicle")) setup.run.vehicle = *vehicle;
   setup.vehicle = LoadVehicle(setup.run.vehicle);
-  const bool blimp = IsBlimpKind(setup.vehicle.kind);
+  const bool blimp = setup.vehicle.family() == VehicleFamily::kBlimp;
   // A blimp flies a blimp course; the robot drives a track.
   if (blimp) {
     setup.course = LoadBlimpCourse(setup.run.track);

@@ -1,8 +1,8 @@
 #pragma once
-// What every session loop does the same way, whatever the vehicle (the
-// robot's RunSession, the blimp's RunBlimpSession): watch the vehicle's
-// health, trace the run, pace the commands, stop at the limits, and put the
-// link's figures in the record. Internal to the mediator library.
+// What the session loop (RunSession) does whatever the vehicle's family:
+// watch the vehicle's health, trace the run, pace the commands, stop at the
+// limits, and put the link's figures in the record. Internal to the
+// mediator library.
 #include <cstdint>
 #include <optional>
 #include <string>

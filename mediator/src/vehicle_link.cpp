@@ -14,8 +14,8 @@ namespace haptel::mediator {
 
 namespace {
 /// The vehicle's command watchdog holds it stopped (robot) or in its failsafe (blimp).
-bool WatchdogTripped(const msg::VehicleState& s) { return s.watchdog_tripped(); }
-bool WatchdogTripped(const msg::BlimpState& s) { return s.failsafe(); }
+bool WatchdogTripped(const msg::VehicleState& s) { return link::RobotMessages::WatchdogTripped(s); }
+bool WatchdogTripped(const msg::BlimpState& s) { return link::BlimpMessages::WatchdogTripped(s); }
 }  // namespace
 
 template <typename State>
@@ -109,13 +109,41 @@ std::string OperatorName() {
 
 }  // namespace
 
-VehicleLink::VehicleLink(const VehicleLinkOptions& options)
-    : options_(options), session_(NewSession()) {
-  const std::string who = OperatorName();
-  command_.session(session_);
-  command_.operator_name(who);
-  blimp_command_.session(session_);
-  blimp_command_.operator_name(who);
+template <class Messages>
+CommandChannel<Messages>::CommandChannel(link::Participant& participant, const std::string& vehicle, uint64_t session,
+                                         const std::string& operator_name) {
+  message_.session(session);
+  message_.operator_name(operator_name);
+  writer_ = std::make_unique<typename Messages::CommandWriter>(participant, link::TopicName(vehicle, "command"),
+                                                               link::Profile::kCommand);
+  reader_ = std::make_unique<typename Messages::StateReader>(
+      participant, link::TopicName(vehicle, "state"), link::Profile::kState,
+      [this](const typename Messages::StateMsg& s) { inbox_.Push(s); });
+}
+
+template <class Messages>
+void CommandChannel<Messages>::Send(const Command& command) {
+  message_.seq(++seq_);
+  Messages::Encode(command, message_);
+  message_.sent_ns(MonotonicNs());
+  writer_->Write(message_);
+}
+
+template <class Messages>
+void CommandChannel<Messages>::SendSafe(bool release) {
+  message_.release(release);
+  Send(Command{});
+}
+
+template <class Messages>
+int CommandChannel<Messages>::VehiclesOnTopic() const {
+  return std::max(reader_->matched(), writer_->matched());
+}
+
+template class CommandChannel<link::RobotMessages>;
+template class CommandChannel<link::BlimpMessages>;
+
+VehicleLink::VehicleLink(const VehicleLinkOptions& options) : options_(options), session_(NewSession()) {
   if (!options_.program.empty()) {
     std::vector<std::string> arguments{"--config", options_.vehicle.file.string(), "--track",
                                        options_.track_file.string(), "--name", options_.vehicle.name, "--domain",
@@ -131,47 +159,19 @@ VehicleLink::VehicleLink(const VehicleLinkOptions& options)
   LinkConfig link = options_.link;
   link.security_identity = link::OperatorIdentity();
   participant_ = std::make_unique<link::Participant>(link, "haptel-mediator");
-  if (IsBlimpKind(options_.vehicle.kind)) {
-    blimp_commands_ = std::make_unique<link::BlimpCommandWriter>(*participant_, link::TopicName(name(), "command"),
-                                                                 link::Profile::kCommand);
-    blimp_states_ = std::make_unique<link::BlimpStateReader>(
-        *participant_, link::TopicName(name(), "state"), link::Profile::kState,
-        [this](const msg::BlimpState& s) { blimp_inbox_.Push(s); });
-  } else {
-    commands_ = std::make_unique<link::CommandWriter>(*participant_, link::TopicName(name(), "command"),
-                                                      link::Profile::kCommand);
-    states_ = std::make_unique<link::StateReader>(*participant_, link::TopicName(name(), "state"),
-                                                  link::Profile::kState,
-                                                  [this](const msg::VehicleState& s) { inbox_.Push(s); });
+  const std::string who = OperatorName();
+  switch (family()) {
+    case VehicleFamily::kRobot:
+      channel_ = std::make_unique<RobotChannel>(*participant_, name(), session_, who);
+      break;
+    case VehicleFamily::kBlimp:
+      channel_ = std::make_unique<BlimpChannel>(*participant_, name(), session_, who);
+      break;
   }
   video_ = std::make_unique<VideoReceiver>(*participant_, link::TopicName(name(), "video"), options_.decode_video);
 }
 
 VehicleLink::~VehicleLink() { Stop(); }
-
-void VehicleLink::Send(double left, double right) {
-  if (!commands_) return;
-  command_.seq(++seq_);
-  command_.left(static_cast<float>(left));
-  command_.right(static_cast<float>(right));
-  command_.sent_ns(MonotonicNs());
-  commands_->Write(command_);
-}
-
-void VehicleLink::Send(const BlimpCommand& command) {
-  if (!blimp_commands_) return;
-  msg::BlimpCommand& m = blimp_command_;
-  m.seq(++seq_);
-  m.elevator(static_cast<float>(command.elevator));
-  m.rudder(static_cast<float>(command.rudder));
-  m.power(static_cast<float>(command.power));
-  m.helix(static_cast<float>(command.helix));
-  m.tail_rotor(static_cast<float>(command.tail_rotor));
-  m.camera_pan(static_cast<float>(command.camera_pan));
-  m.camera_tilt(static_cast<float>(command.camera_tilt));
-  m.sent_ns(MonotonicNs());
-  blimp_commands_->Write(m);
-}
 
 void VehicleLink::Stop() {
   if (stopped_) return;
@@ -179,18 +179,8 @@ void VehicleLink::Stop() {
   // The last commands stop the vehicle and release it for the next operator
   // (twice: they are best effort; a lost release frees it after
   // CommandOwner::kFreeAfter_s anyway).
-  command_.release(true);
-  blimp_command_.release(true);
-  for (int i = 0; i < 2; ++i) {
-    Send(0.0, 0.0);
-    Send(BlimpCommand{});
-  }
+  for (int i = 0; i < 2; ++i) channel_->SendSafe(true);
   if (process_) process_->Terminate();
-}
-
-int VehicleLink::VehiclesOnTopic() const {
-  if (blimp()) return std::max(blimp_states_->matched(), blimp_commands_->matched());
-  return std::max(states_->matched(), commands_->matched());
 }
 
 bool VehicleLink::ProcessAlive() { return !process_ || process_->Alive(); }

@@ -113,16 +113,4 @@ BlimpAdapterState SimulatedServoBlimp::State() const {
   return s;
 }
 
-std::unique_ptr<BlimpAdapter> MakeBlimpAdapter(const VehicleConfig& config, const BlimpCourseConfig& course) {
-  if (config.kind == "sim-blimp") return std::make_unique<SimBlimpAdapter>(config.airship, course);
-  if (config.kind == "servo-blimp") {
-    return std::make_unique<ServoBlimpAdapter>(
-        config.servo, std::make_unique<servo::SerialPort>(config.servo.port, config.servo.baud));
-  }
-  if (config.kind == "servo-blimp-sim") {
-    return std::make_unique<SimulatedServoBlimp>(config.servo, config.airship, course);
-  }
-  throw std::invalid_argument("vehicle kind '" + config.kind + "' is not a blimp");
-}
-
 }  // namespace haptel::vehicles

@@ -16,13 +16,7 @@
 #include "haptel/core/log.hpp"
 #include "haptel/link/fault_transport.hpp"
 #include "haptel/link/security.hpp"
-#include "haptel/config/blimp_course.hpp"
-#include "haptel/vehicles/blimp_adapters.hpp"
-#include "haptel/vehicles/blimp_node.hpp"
-#include "haptel/vehicles/ros2_robot.hpp"
-#include "haptel/vehicles/vehicle_node.hpp"
-#include "haptel/video/blimp_camera.hpp"
-#include "haptel/video/camera_source.hpp"
+#include "haptel/vehicles/vehicle_kinds.hpp"
 
 namespace {
 constexpr const char* kUsage =
@@ -58,35 +52,30 @@ std::string Summary(const haptel::vehicles::NodeCounters& c) {
          (c.camera_ended ? ", camera file ended" : "");
 }
 
-/// Runs a started node until a signal — or, for a node that can lose its
-/// hardware (AdapterFailure), until it does — saying each watchdog trip;
-/// `tripped` and `stopped` say how the vehicle was made safe. Then stops
-/// it. Returns the exit code: 0, or 3 with the loss said.
-template <class Node>
-int RunNode(Node& node, const haptel::VehicleConfig& config, const std::atomic<bool>& stop, const std::string& tripped,
-            const std::string& stopped) {
+/// Runs a started node until a signal or until it loses its hardware
+/// (AdapterFailure), saying each watchdog trip; then stops it. Returns the
+/// exit code: 0, or 3 with the loss said.
+int RunNode(haptel::vehicles::Node& node, const haptel::VehicleConfig& config, const std::atomic<bool>& stop) {
   using namespace haptel;
   uint64_t trips = 0;
   std::string failure;
   while (!stop.load()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    if constexpr (requires { node.AdapterFailure(); }) {
-      failure = node.AdapterFailure();
-      if (!failure.empty()) break;
-    }
+    failure = node.AdapterFailure();
+    if (!failure.empty()) break;
     const auto c = node.Counters();
     if (c.watchdog_trips > trips) {
       trips = c.watchdog_trips;
-      log::Warn("watchdog: no command for " + std::to_string(config.watchdog_timeout_s) + " s, " + tripped);
+      log::Warn("watchdog: no command for " + std::to_string(config.watchdog_timeout_s) + " s, " + node.MadeSafe());
     }
   }
   node.Stop();
   if (!failure.empty()) {
-    log::Error("the servo controller is lost: " + failure + "; stopped (its own serial timeout sends every "
-               "channel to neutral)");
+    log::Error("the vehicle's hardware is lost: " + failure + "; stopped (the hardware's own time-out makes it "
+               "safe: a servo controller's serial timeout, a motor controller's watchdog)");
     return cli::kExitLost;
   }
-  log::Info("stopped: " + stopped + "; " + Summary(node.Counters()));
+  log::Info(std::string("stopped: ") + node.AtRest() + "; " + Summary(node.Counters()));
   return cli::kExitOk;
 }
 
@@ -99,11 +88,7 @@ int main(int argc, char** argv) {
   const std::atomic<bool>& stop = InstallStopSignals();
   return cli::Main({"haptel-vehicle", kUsage}, argc, argv, [&] {
     VehicleConfig config;
-    std::unique_ptr<Track> track;
-    std::unique_ptr<video::CameraSource> camera;
-    std::unique_ptr<vehicles::VehicleAdapter> adapter;
-    std::unique_ptr<BlimpCourseConfig> course;
-    std::unique_ptr<vehicles::BlimpAdapter> blimp;
+    vehicles::OpenedVehicle vehicle;
     cli::ReadInput([&] {
       const Args args(argc, argv, {"config", "track", "name", "domain", "can", "serial-port", "link-fault", "security",
                                        "dds-interfaces", "dds-peers", "discovery-server"},
@@ -130,7 +115,7 @@ int main(int argc, char** argv) {
       }
       if (auto world = args.Value("track")) config.world = *world;
       if (auto can = args.Value("can")) {
-        if (!UsesCan(config.kind)) {
+        if (!config.Kind().Uses(kCanSection)) {
           throw UsageError("option --can: the vehicle '" + file.string() + "' is of kind " + config.kind +
                            ", not on a CAN bus");
         }
@@ -138,37 +123,16 @@ int main(int argc, char** argv) {
         config.ValidateOrThrow();
       }
       if (auto port = args.Value("serial-port")) {
-        if (!UsesServo(config.kind)) {
+        if (!config.Kind().Uses(kServoSection)) {
           throw UsageError("option --serial-port: the vehicle '" + file.string() + "' is of kind " + config.kind +
                            ", not behind a servo controller");
         }
         config.servo.port = *port;
         config.ValidateOrThrow();
       }
-      if (config.kind == "servo-blimp" && config.servo.port.empty()) {
-        throw UsageError("the servo controller's serial port: give --serial-port PATH (or servo.port in " +
-                         file.string() + ")");
-      }
-      if (config.world.empty()) {
-        throw ConfigError(file.string() + ": key 'world': expected the track file a simulated "
-                          "vehicle drives on (or --track FILE)");
-      }
-      if (IsBlimpKind(config.kind)) {
-        course = std::make_unique<BlimpCourseConfig>(LoadBlimpCourse(config.world));
-        // The port first: a controller that cannot be opened stops here (exit 2).
-        blimp = vehicles::MakeBlimpAdapter(config, *course);
-        camera = video::MakeBlimpCameraSource(config.camera, *course, file.string());
-        return;
-      }
-      track = std::make_unique<Track>(LoadTrack(config.world));
-      // The bus first: a robot whose bus cannot open stops here (exit 2),
-      // before a camera or a DDS participant exists.
-      adapter = vehicles::MakeVehicleAdapter(config, *track);
-      // A ROS 2 robot's camera is its image topic (unless it names none).
-      if (auto* ros = dynamic_cast<vehicles::Ros2Robot*>(adapter.get())) camera = ros->MakeCamera();
-      // Opened here, before any DDS participant exists: a camera that cannot
-      // open is a set-up error (exit 2) and nothing has been published.
-      if (!camera) camera = video::MakeCameraSource(config.camera, track.get(), file.string());
+      // The world, then the hardware, then the camera: a bus or port that
+      // cannot open stops here (exit 2), before any DDS participant exists.
+      vehicle = vehicles::OpenVehicle(config, file.string());
     });
 
     if (config.link.fault.enabled) {
@@ -176,28 +140,10 @@ int main(int argc, char** argv) {
       log::Info("link faults on what this vehicle receives: " + LinkFaultText(config.link.fault) +
                 " (SIGUSR1 cuts the link and restores it)");
     }
-    const std::string camera_name = camera->Describe();
-    if (blimp) {
-      vehicles::BlimpNode node(config, std::move(camera), std::move(blimp));
-      node.Start();
-      log::Info("vehicle '" + config.name + "' (" + config.kind + ") up on domain " +
-                std::to_string(config.link.domain_id) + ", course '" + course->name + "', camera " + camera_name +
-                (UsesServo(config.kind) && !config.servo.port.empty() ? ", servo controller on " + config.servo.port
-                                                                        : ""));
-      return RunNode(node, config, stop, "every channel to neutral", "every channel at neutral");
-    }
-    std::string robot_graph;
-    if (config.kind == "ros2") {
-      robot_graph = ", ROS 2 robot on domain " + std::to_string(config.ros2.domain_id) + " (" + config.ros2.cmd_vel +
-                    " out, " + config.ros2.odom + " in)";
-    }
-    vehicles::VehicleNode node(config, *track, std::move(camera), std::move(adapter));
-    node.Start();
+    const std::unique_ptr<vehicles::Node> node = vehicle.make_node();
+    node->Start();
     log::Info("vehicle '" + config.name + "' (" + config.kind + ") up on domain " +
-              std::to_string(config.link.domain_id) + ", track '" + track->config().name +
-              "', camera " + camera_name + " " + std::to_string(config.camera.width) + "x" +
-              std::to_string(config.camera.height) + " at " +
-              std::to_string(static_cast<int>(std::lround(config.camera.rate_hz))) + " Hz" + robot_graph);
-    return RunNode(node, config, stop, "motors stopped", "motors off");
+              std::to_string(config.link.domain_id) + ", " + vehicle.description);
+    return RunNode(*node, config, stop);
   });
 }

@@ -1,133 +1,104 @@
 #include "haptel/vehicles/vehicle_node.hpp"
 
 #include <cmath>
-#include <ctime>
 #include <stdexcept>
 #include <string>
 
 #include "haptel/config/error.hpp"
+#include "haptel/core/cli.hpp"
 #include "haptel/core/clock.hpp"
-#include "haptel/core/log.hpp"
-#include "haptel/vehicles/can_robot.hpp"
-#include "haptel/vehicles/ros2_robot.hpp"
-#include "haptel/vehicles/sim_can_robot.hpp"
-#include "haptel/vehicles/sim_robot.hpp"
 
 namespace haptel::vehicles {
 
-namespace {
-/// "20261124T153012Z": a log file's time of creation, UTC.
-std::string FileStamp(int64_t wall_ns) {
-  const time_t seconds = static_cast<time_t>(wall_ns / 1'000'000'000);
-  tm utc{};
-  gmtime_r(&seconds, &utc);
-  char text[32];
-  std::strftime(text, sizeof text, "%Y%m%dT%H%M%SZ", &utc);
-  return text;
-}
-
-/// Commands a little past ±1 are rounding; anything further is malformed.
-constexpr float kMaxCommand = 1.001F;
-}  // namespace
-
-std::unique_ptr<VehicleAdapter> MakeVehicleAdapter(const VehicleConfig& config, const Track& track) {
-  if (config.kind == "sim-robot") return std::make_unique<SimRobot>(track, config);
-  std::unique_ptr<CandumpWriter> log;
-  auto open_log = [&] {
-    if (config.can.log_dir.empty()) return;
-    const std::string stamp = FileStamp(WallNs());
-    log = std::make_unique<CandumpWriter>(config.can.log_dir / (config.name + "-" + stamp + ".log"),
-                                          config.can.interface);
-  };
-  if (config.kind == "can-robot") {
-    auto bus = std::make_unique<SocketCanBus>(config.can.interface);  // CanUnavailable: set-up error
-    open_log();
-    return std::make_unique<CanRobot>(std::move(bus), config, std::move(log));
-  }
-  if (config.kind == "can-robot-sim") {
-    open_log();
-    return std::make_unique<SimulatedCanRobot>(track, config, std::move(log));
-  }
-  if (config.kind == "ros2") return std::make_unique<Ros2Robot>(config, track);
-  throw std::invalid_argument("vehicle kind '" + config.kind + "' has no adapter");
-}
-
-VehicleNode::VehicleNode(const VehicleConfig& config, const Track& track,
-                         std::unique_ptr<video::CameraSource> camera, std::unique_ptr<VehicleAdapter> adapter)
-    : config_(Validated(config)),
-      adapter_(adapter != nullptr ? std::move(adapter) : MakeVehicleAdapter(config, track)),
-      commands_(config.watchdog_timeout_s) {
-  if (camera == nullptr) throw std::invalid_argument("VehicleNode: no camera source");
+template <class Family>
+VehicleNodeOf<Family>::VehicleNodeOf(const VehicleConfig& config, std::unique_ptr<video::CameraSource> camera,
+                                     std::unique_ptr<Adapter> adapter)
+    : config_(Validated(config)), adapter_(std::move(adapter)), commands_(config.watchdog_timeout_s) {
+  if (adapter_ == nullptr) throw std::invalid_argument("vehicle node: no adapter");
+  if (camera == nullptr) throw std::invalid_argument("vehicle node: no camera source");
   ticks_per_state_ = std::max(1, static_cast<int>(std::lround(config.sim_rate_hz / config.state_rate_hz)));
+  Family::Prepare(*adapter_);
 
   participant_ = std::make_unique<link::Participant>(config.link, "haptel-vehicle-" + config.name);
-  state_writer_ = std::make_unique<link::StateWriter>(
+  state_writer_ = std::make_unique<typename Family::StateWriter>(
       *participant_, link::TopicName(config.name, "state"), link::Profile::kState);
   camera_ = std::make_unique<CameraStreamer>(config.camera, std::move(camera), *participant_, config.name);
-  const AdapterState s = adapter_->State();
-  camera_->SetPose({.x = s.x, .y = s.y, .heading = s.heading});
-  command_reader_ = std::make_unique<link::CommandReader>(
+  camera_->SetPose(Family::CameraPoseOf(adapter_->State()));
+  command_reader_ = std::make_unique<typename Family::CommandReader>(
       *participant_, link::TopicName(config.name, "command"), link::Profile::kCommand,
-      [this](const msg::DriveCommand& cmd) { OnCommand(cmd); });
-
+      [this](const typename Family::CommandMsg& cmd) { OnCommand(cmd); });
   control_ = std::make_unique<PeriodicThread>(
       PeriodicThread::Options{.name = "vehicle-control", .rate_hz = config.sim_rate_hz},
       [this](int64_t now) { ControlTick(now); });
 }
 
-VehicleNode::~VehicleNode() { Stop(); }
+template <class Family>
+VehicleNodeOf<Family>::~VehicleNodeOf() {
+  Stop();
+}
 
-void VehicleNode::Start() {
+template <class Family>
+void VehicleNodeOf<Family>::Start() {
   control_->Start();
   camera_->Start();
 }
 
-void VehicleNode::Stop() {
+template <class Family>
+void VehicleNodeOf<Family>::Stop() {
   if (stopped_.exchange(true)) return;
   camera_->Stop();
   control_->Stop();
-  adapter_->Stop();
-  adapter_->Update(1e-3);
+  if (!failed_.load()) {
+    try {
+      Family::MakeSafe(*adapter_);
+      adapter_->Update(1e-3);
+    } catch (const cli::HardwareLost&) {
+      // The bus or port is gone: nothing more can be sent; the hardware's own
+      // time-out (a servo controller's serial timeout, an ODrive's watchdog)
+      // makes it safe.
+    }
+  }
   PublishState(MonotonicNs());
 }
 
-void VehicleNode::OnCommand(const msg::DriveCommand& cmd) {
-  const bool valid = std::isfinite(cmd.left()) && std::isfinite(cmd.right()) &&
-                     std::abs(cmd.left()) <= kMaxCommand && std::abs(cmd.right()) <= kMaxCommand;
+template <class Family>
+void VehicleNodeOf<Family>::OnCommand(const typename Family::CommandMsg& cmd) {
+  typename Family::Command command;
+  const bool valid = Family::Decode(cmd, command);
   commands_.Offer(valid, {cmd.session(), cmd.operator_name().c_str(), cmd.release()}, cmd.seq(), cmd.sent_ns(),
-                  {cmd.left(), cmd.right()}, MonotonicNs());
+                  command, MonotonicNs());
 }
 
-void VehicleNode::ControlTick(int64_t now_ns) {
-  if (commands_.Poll(now_ns)) {
-    adapter_->Stop();  // hardware: zero velocity, then idle
-  } else {
-    const Wheels& w = commands_.applied().command;
-    adapter_->SetMotors({QuantiseCommand(w.left, config_.drive.speed_levels),
-                         QuantiseCommand(w.right, config_.drive.speed_levels)});
+template <class Family>
+void VehicleNodeOf<Family>::ControlTick(int64_t now_ns) {
+  if (failed_.load(std::memory_order_relaxed)) return;
+  const bool expired = commands_.Poll(now_ns);
+  const double dt = ControlStep(last_tick_ns_, now_ns, config_.sim_rate_hz);
+  try {
+    if (expired) {
+      Family::MakeSafe(*adapter_);
+    } else {
+      Family::Apply(*adapter_, commands_.applied().command, config_);
+    }
+    adapter_->Update(dt);
+  } catch (const cli::HardwareLost& e) {
+    // A port or bus that vanished: stop driving it and say so once; the
+    // node's owner ends the process (exit 3).
+    failure_ = e.what();
+    failed_.store(true);
+    return;
   }
-  adapter_->Update(ControlStep(last_tick_ns_, now_ns, config_.sim_rate_hz));
-  const AdapterState s = adapter_->State();
-  camera_->SetPose({.x = s.x, .y = s.y, .heading = s.heading});
+  camera_->SetPose(Family::CameraPoseOf(adapter_->State()));
   if (tick_count_++ % static_cast<uint64_t>(ticks_per_state_) == 0) PublishState(now_ns);
 }
 
-void VehicleNode::PublishState(int64_t now_ns) {
-  const AdapterState s = adapter_->State();
-  msg::VehicleState& m = state_msg_;
+template <class Family>
+void VehicleNodeOf<Family>::PublishState(int64_t now_ns) {
+  const typename Family::AdapterState s = adapter_->State();
+  typename Family::StateMsg& m = state_msg_;
   m.seq(++state_seq_);
   m.stamp_ns(now_ns);
-  m.speed(static_cast<float>(s.speed));
-  m.yaw_rate(static_cast<float>(s.yaw_rate));
-  m.pose_valid(s.pose_valid);
-  m.x(static_cast<float>(s.x));
-  m.y(static_cast<float>(s.y));
-  m.heading(static_cast<float>(s.heading));
-  m.bumper_left(s.bumper_left);
-  m.bumper_right(s.bumper_right);
-  m.motor_left_level(static_cast<int16_t>(s.applied.left));
-  m.motor_right_level(static_cast<int16_t>(s.applied.right));
-  m.watchdog_tripped(commands_.watchdog_expired());
+  Family::FillState(s, commands_.watchdog_expired(), m);
   m.last_command_seq(commands_.applied().seq);
   m.last_command_sent_ns(commands_.applied().sent_ns);
   m.last_command_age_ns(commands_.AppliedAgeNs(now_ns));
@@ -136,14 +107,24 @@ void VehicleNode::PublishState(int64_t now_ns) {
   m.owner_session(owner.session);
   m.owner(owner.name);
   m.commands_refused(commands_.refused());
-  m.fault(s.fault);
-  m.fault_message(s.fault_message);
+  const bool failed = failed_.load();
+  m.fault(s.fault || failed);
+  m.fault_message(failed ? failure_ : s.fault_message);
   state_writer_->Write(m);
   states_.fetch_add(1, std::memory_order_relaxed);
 }
 
-NodeCounters VehicleNode::Counters() const {
+template <class Family>
+NodeCounters VehicleNodeOf<Family>::Counters() const {
   return MakeNodeCounters(commands_, camera_->Counters(), states_.load());
 }
+
+template <class Family>
+std::string VehicleNodeOf<Family>::AdapterFailure() const {
+  return failed_.load() ? failure_ : std::string();
+}
+
+template class VehicleNodeOf<RobotFamily>;
+template class VehicleNodeOf<BlimpFamily>;
 
 }  // namespace haptel::vehicles

@@ -8,6 +8,7 @@
 #include "haptel/config/airship.hpp"
 #include "haptel/config/link.hpp"
 #include "haptel/config/servo.hpp"
+#include "haptel/config/vehicle_kinds.hpp"
 
 namespace haptel {
 
@@ -125,7 +126,7 @@ std::string Ros2DdsTopic(const std::string& ros_name);
 struct VehicleConfig {
   std::filesystem::path file;
   std::string name = "robot1";
-  std::string kind = "sim-robot";
+  std::string kind = "sim-robot";  ///< a kind of the table (vehicle_kinds.hpp)
   std::filesystem::path world;  ///< track the simulator drives on
   double sim_rate_hz = 200.0;
   double state_rate_hz = 50.0;
@@ -134,33 +135,19 @@ struct VehicleConfig {
   BodyConfig body;
   CameraConfig camera;
   LinkConfig link;
-  CanConfig can;  ///< kinds can-robot and can-robot-sim only
-  AirshipConfig airship;  ///< the simulated blimp kinds only (UsesAirship)
-  ServoControllerConfig servo;  ///< the servo-controller blimp kinds only (UsesServo)
-  Ros2Config ros2;  ///< kind ros2 only
+  CanConfig can;                ///< kinds that use kCanSection
+  AirshipConfig airship;        ///< kinds that use kAirshipSection (the simulated airship)
+  ServoControllerConfig servo;  ///< kinds that use kServoSection
+  Ros2Config ros2;              ///< kinds that use kRos2Section
+
+  /// The kind's entry in the table (valid once validated).
+  const VehicleKindInfo& Kind() const { return VehicleKind(kind); }
+  VehicleFamily family() const { return Kind().family; }
 
   /// Throws ConfigFieldError unless the name suits DDS topic names, the kind
   /// is known, the rates are in range and every part is valid ("drive.*", ...).
   void ValidateOrThrow() const;
 };
-
-/// The kinds a vehicle file may name: "sim-robot" (the simulated tank),
-/// "can-robot" (the real one on SocketCAN), "can-robot-sim" (the simulated
-/// tank behind emulated CAN nodes, through the real adapter), "sim-blimp"
-/// (the simulated airship), "servo-blimp" (the real blimp's servo
-/// controller on a serial port), "servo-blimp-sim" (the simulated airship
-/// behind a simulated servo controller on a pseudo-terminal, through the
-/// real adapter), "ros2" (any ROS 2 robot, through its topics).
-bool IsVehicleKind(const std::string& kind);
-/// Whether the kind drives its motors over CAN (has a `can` section).
-inline bool UsesCan(const std::string& kind) { return kind == "can-robot" || kind == "can-robot-sim"; }
-/// Whether the kind is an airship (has an `airship` section).
-inline bool UsesAirship(const std::string& kind) { return kind == "sim-blimp" || kind == "servo-blimp-sim"; }
-/// Whether the kind drives servo channels through a controller (has a `servo` section).
-inline bool UsesServo(const std::string& kind) { return kind == "servo-blimp" || kind == "servo-blimp-sim"; }
-/// Whether the vehicle is a blimp (BlimpCommand and BlimpState on the link,
-/// a blimp course for its world) rather than the robot.
-inline bool IsBlimpKind(const std::string& kind) { return kind == "sim-blimp" || UsesServo(kind); }
 
 /// Loads and validates (VehicleConfig::ValidateOrThrow) a vehicle file
 /// (strict: unknown keys are errors naming file, key and line).

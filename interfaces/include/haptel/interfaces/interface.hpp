@@ -5,6 +5,7 @@
 #include <optional>
 #include <string>
 
+#include "haptel/core/tread_command.hpp"
 #include "haptel/haptics/hal.hpp"
 
 namespace haptel::interfaces {
@@ -16,11 +17,8 @@ struct DriveIntent {
   double turn = 0.0;
 };
 
-/// Normalised motor commands, each in [-1, 1].
-struct MotorCommand {
-  double left = 0.0;
-  double right = 0.0;
-};
+/// Normalised motor commands, each in [-1, 1]: the robot's command.
+using MotorCommand = TreadCommand;
 
 /// Differential mix: left = forward − turn, right = forward + turn, scaled
 /// down together (keeping their ratio) when either leaves [-1, 1].

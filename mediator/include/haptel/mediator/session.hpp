@@ -97,7 +97,7 @@ struct SessionSetup {
   /// console shows the live trial with it. Must return quickly.
   std::function<void(const view::Overlay&)> on_live;
   /// A blimp's flight (the vehicle is a blimp kind): its course, instead of
-  /// `track`, and its interface, instead of `interfaces` (RunBlimpSession):
+  /// `track`, and its interface, instead of `interfaces`:
   /// the gesture cockpit (`blimp_interface`) or a person's keys or game
   /// controller (`blimp_manual`), one of the two.
   std::optional<BlimpCourseConfig> course;

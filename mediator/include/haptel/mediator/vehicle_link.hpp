@@ -1,7 +1,8 @@
 #pragma once
 /// @file The session's link to its vehicle: the vehicle process it spawns
 /// (or none, for a vehicle that runs elsewhere), the DDS participant, the
-/// command writer, the state inbox and the video receiver.
+/// video receiver, and the command and state topics of the vehicle's
+/// family (CommandChannel, over link's families.hpp) with their inbox.
 ///
 /// Threads: DDS callbacks push states into the inbox (a short lock) and
 /// frames into the video receiver; the session thread drains the inbox,
@@ -11,14 +12,15 @@
 #include <filesystem>
 #include <memory>
 #include <mutex>
+#include <stdexcept>
 #include <string>
 
 #include "haptel/config/link.hpp"
 #include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"
-#include "haptel/core/blimp_command.hpp"
 #include "haptel/core/child_process.hpp"
 #include "haptel/core/histogram.hpp"
+#include "haptel/link/families.hpp"
 #include "haptel/link/topic.hpp"
 #include "haptel/mediator/video_receiver.hpp"
 
@@ -41,8 +43,8 @@ struct LinkCounts {
 
 /// Vehicle states as they arrive (DDS thread), drained by the session loop.
 /// Measures the command round trip from the echo each state carries, and
-/// counts what the states show (LinkCounts). One for each vehicle type's
-/// state: msg::VehicleState (the robot) and msg::BlimpState.
+/// counts what the states show (LinkCounts). One for each family's state:
+/// msg::VehicleState (the robot) and msg::BlimpState.
 template <typename State>
 class StateInboxOf {
  public:
@@ -79,10 +81,59 @@ class StateInboxOf {
 using StateInbox = StateInboxOf<msg::VehicleState>;
 using BlimpStateInbox = StateInboxOf<msg::BlimpState>;
 
+/// What the session asks of its vehicle's topics, whatever the family.
+class LinkChannel {
+ public:
+  virtual ~LinkChannel() = default;
+  /// Round trip of echoed commands minus their wait at the vehicle, µs.
+  virtual const Histogram& Rtt() const = 0;
+  virtual void ResetRtt() = 0;
+  virtual int64_t last_received_ns() const = 0;
+  virtual LinkCounts Counts() const = 0;
+  /// Participants writing the state or reading the commands (discovery).
+  virtual int VehiclesOnTopic() const = 0;
+  /// Sends the family's safe command (every value zero: motors stopped,
+  /// every channel neutral); `release` frees the vehicle for another operator.
+  virtual void SendSafe(bool release) = 0;
+};
+
+/// One family's command writer and state reader (Messages: link's
+/// RobotMessages or BlimpMessages), stamping each command with the run's
+/// session and sequence.
+template <class Messages>
+class CommandChannel final : public LinkChannel {
+ public:
+  using Command = typename Messages::Command;
+  using Inbox = StateInboxOf<typename Messages::StateMsg>;
+  CommandChannel(link::Participant& participant, const std::string& vehicle, uint64_t session,
+                 const std::string& operator_name);
+  /// Sends `command` stamped now.
+  void Send(const Command& command);
+  Inbox& inbox() { return inbox_; }
+  const Inbox& inbox() const { return inbox_; }
+
+  const Histogram& Rtt() const override { return inbox_.Rtt(); }
+  void ResetRtt() override { inbox_.ResetRtt(); }
+  int64_t last_received_ns() const override { return inbox_.last_received_ns(); }
+  LinkCounts Counts() const override { return inbox_.Counts(); }
+  int VehiclesOnTopic() const override;
+  void SendSafe(bool release) override;
+
+ private:
+  Inbox inbox_;
+  typename Messages::CommandMsg message_;
+  uint64_t seq_ = 0;
+  // Last: destroyed first, so no DDS callback outlives the inbox.
+  std::unique_ptr<typename Messages::CommandWriter> writer_;
+  std::unique_ptr<typename Messages::StateReader> reader_;
+};
+using RobotChannel = CommandChannel<link::RobotMessages>;
+using BlimpChannel = CommandChannel<link::BlimpMessages>;
+
 struct VehicleLinkOptions {
   VehicleConfig vehicle;
   LinkConfig link;
-  /// The track the spawned simulator drives on.
+  /// The world the spawned simulator drives or flies in (a track, a course).
   std::filesystem::path track_file;
   /// haptel-vehicle to spawn; empty: the vehicle runs elsewhere.
   std::filesystem::path program;
@@ -92,32 +143,34 @@ struct VehicleLinkOptions {
 
 class VehicleLink {
  public:
-  /// Spawns the vehicle (if a program is given) and joins the DDS domain.
-  /// Throws std::runtime_error when either cannot be done.
+  /// Spawns the vehicle (if a program is given) and joins the DDS domain
+  /// with the topics of the vehicle's family. Throws std::runtime_error when
+  /// either cannot be done.
   explicit VehicleLink(const VehicleLinkOptions& options);
-  /// Stops the vehicle: a zero command, then the spawned process ends.
+  /// Stops the vehicle: a safe command, then the spawned process ends.
   ~VehicleLink();
   VehicleLink(const VehicleLink&) = delete;
   VehicleLink& operator=(const VehicleLink&) = delete;
 
-  /// Whether the vehicle is a blimp (BlimpCommand and BlimpState on the
-  /// link) rather than the robot (DriveCommand and VehicleState).
-  bool blimp() const { return blimp_commands_ != nullptr; }
-  /// Sends a motor command (each in [-1, 1]) stamped now; the robot only.
-  void Send(double left, double right);
-  /// Sends a blimp command stamped now; a blimp only.
-  void Send(const BlimpCommand& command);
-  /// Zero command, then ends the spawned process. Safe to call twice.
+  VehicleFamily family() const { return options_.vehicle.family(); }
+  /// The command and state topics of the vehicle's family (Messages:
+  /// link::RobotMessages or link::BlimpMessages); std::logic_error when
+  /// the vehicle is of the other family.
+  template <class Messages>
+  CommandChannel<Messages>& channel();
+  /// Sends a robot's tread commands (each in [-1, 1]) stamped now.
+  void Send(const TreadCommand& command) { channel<link::RobotMessages>().Send(command); }
+  /// Sends a blimp's command stamped now.
+  void Send(const BlimpCommand& command) { channel<link::BlimpMessages>().Send(command); }
+  /// The family's safe command: motors stopped, every channel neutral.
+  void SendSafe() { channel_->SendSafe(false); }
+  /// Safe command (releasing the vehicle), then ends the spawned process. Safe to call twice.
   void Stop();
 
-  StateInbox& inbox() { return inbox_; }
-  const StateInbox& inbox() const { return inbox_; }
-  BlimpStateInbox& blimp_inbox() { return blimp_inbox_; }
-  /// The round trip, whichever vehicle it is.
-  const Histogram& Rtt() const { return blimp() ? blimp_inbox_.Rtt() : inbox_.Rtt(); }
-  void ResetRtt() { blimp() ? blimp_inbox_.ResetRtt() : inbox_.ResetRtt(); }
-  int64_t last_received_ns() const { return blimp() ? blimp_inbox_.last_received_ns() : inbox_.last_received_ns(); }
-  LinkCounts Counts() const { return blimp() ? blimp_inbox_.Counts() : inbox_.Counts(); }
+  const Histogram& Rtt() const { return channel_->Rtt(); }
+  void ResetRtt() { channel_->ResetRtt(); }
+  int64_t last_received_ns() const { return channel_->last_received_ns(); }
+  LinkCounts Counts() const { return channel_->Counts(); }
   const VideoReceiver& video() const { return *video_; }
   /// False once a spawned vehicle process has exited (always true for a
   /// vehicle that runs elsewhere).
@@ -136,24 +189,28 @@ class VehicleLink {
   /// How many vehicles answer under this name: the participants writing its
   /// state or reading its commands (DDS discovery). More than one is a
   /// conflict: two vehicles named alike on one domain.
-  int VehiclesOnTopic() const;
+  int VehiclesOnTopic() const { return channel_->VehiclesOnTopic(); }
 
  private:
   VehicleLinkOptions options_;
-  std::unique_ptr<ChildProcess> process_;
-  StateInbox inbox_;
-  BlimpStateInbox blimp_inbox_;
-  std::unique_ptr<link::Participant> participant_;
-  std::unique_ptr<link::CommandWriter> commands_;
-  std::unique_ptr<link::StateReader> states_;
-  std::unique_ptr<link::BlimpCommandWriter> blimp_commands_;
-  std::unique_ptr<link::BlimpStateReader> blimp_states_;
-  msg::BlimpCommand blimp_command_;
-  std::unique_ptr<VideoReceiver> video_;
-  msg::DriveCommand command_;
-  uint64_t seq_ = 0;
   uint64_t session_ = 0;
+  std::unique_ptr<ChildProcess> process_;
+  std::unique_ptr<link::Participant> participant_;
+  std::unique_ptr<LinkChannel> channel_;
+  std::unique_ptr<VideoReceiver> video_;
   bool stopped_ = false;
 };
+
+template <class Messages>
+CommandChannel<Messages>& VehicleLink::channel() {
+  if (family() != Messages::kFamily) {
+    throw std::logic_error(std::string("vehicle link: '") + name() + "' is a " + ToString(family()) + ", not a " +
+                           ToString(Messages::kFamily));
+  }
+  return static_cast<CommandChannel<Messages>&>(*channel_);
+}
+
+extern template class CommandChannel<link::RobotMessages>;
+extern template class CommandChannel<link::BlimpMessages>;
 
 }  // namespace haptel::mediator

@@ -84,8 +84,4 @@ class SimulatedServoBlimp final : public BlimpAdapter {
   double time_s_ = 0.0;
 };
 
-/// The adapter for a blimp kind. `serial_port` overrides config.servo.port.
-/// Throws servo::SerialUnavailable (a set-up error) when the port cannot open.
-std::unique_ptr<BlimpAdapter> MakeBlimpAdapter(const VehicleConfig& config, const BlimpCourseConfig& course);
-
 }  // namespace haptel::vehicles

@@ -1,25 +1,27 @@
 #pragma once
-/// @file A vehicle node: the command subscriber, the adapter's control loop,
-/// the state publisher and the camera streamer of one vehicle.
+/// @file A vehicle node, one for every kind: the command subscriber, the
+/// adapter's control loop with the command watchdog, the state publisher
+/// and the camera streamer of one vehicle. Written once over the vehicle's
+/// family (families.hpp: the robot's treads or the blimp's channels).
 ///
 /// Threads: DDS delivers commands (validated, then handed over through a
-/// seqlock); the control loop runs at `sim_rate_hz`, applies the watchdog and
-/// quantisation, steps the adapter and publishes state at `state_rate_hz`;
-/// the camera loop grabs a frame from the camera source (synthetic, device or
-/// file), JPEG-encodes and publishes it — on its own thread, so a slow or
-/// stalled camera never delays the control loop or the watchdog.
+/// seqlock, CommandIntake); the control loop runs at `sim_rate_hz`, applies
+/// the watchdog (no fresh command within `watchdog_timeout_s`: the vehicle
+/// is made safe — motors stopped, every channel to neutral), steps the
+/// adapter and publishes state at `state_rate_hz`; the camera loop grabs,
+/// encodes and publishes on its own thread, so a slow or stalled camera never
+/// delays the control loop or the watchdog.
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <string>
 
-#include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"
 #include "haptel/core/periodic_thread.hpp"
-#include "haptel/core/seqlock.hpp"
 #include "haptel/link/topic.hpp"
-#include "haptel/vehicles/adapter.hpp"
 #include "haptel/vehicles/camera_streamer.hpp"
 #include "haptel/vehicles/command_intake.hpp"
+#include "haptel/vehicles/families.hpp"
 #include "haptel/video/camera_source.hpp"
 
 namespace haptel::vehicles {
@@ -59,57 +61,73 @@ NodeCounters MakeNodeCounters(const CommandIntake<Command>& commands, const Came
   return c;
 }
 
-/// The adapter a vehicle file's kind names: "sim-robot" the simulated tank;
-/// "can-robot" the robot on SocketCAN (config.can.interface; throws
-/// CanUnavailable when the bus cannot be opened); "can-robot-sim" the
-/// simulated tank behind emulated CAN nodes. The CAN kinds log their bus
-/// traffic to config.can.log_dir/<name>-<UTC>.log (candump -L) when set.
-std::unique_ptr<VehicleAdapter> MakeVehicleAdapter(const VehicleConfig& config, const Track& track);
-
-class VehicleNode {
+/// A running vehicle node, whatever its family.
+class Node {
  public:
-  /// `track` (the simulated world) must outlive the node. `camera` is the
-  /// opened source of its video (video::MakeCameraSource), made before the
-  /// node so that a camera that cannot open stops the vehicle before it
-  /// publishes anything; must not be null. Validates `config` first
-  /// (VehicleConfig::ValidateOrThrow: ConfigFieldError).
-  /// `adapter`: made by the caller (to open a bus before anything else), or
-  /// null for MakeVehicleAdapter's.
-  VehicleNode(const VehicleConfig& config, const Track& track,
-              std::unique_ptr<video::CameraSource> camera, std::unique_ptr<VehicleAdapter> adapter = nullptr);
-  ~VehicleNode();
+  virtual ~Node() = default;
+  virtual void Start() = 0;
+  /// Makes the vehicle safe, publishes a last state, stops every thread.
+  virtual void Stop() = 0;
+  virtual NodeCounters Counters() const = 0;
+  /// The adapter lost its hardware in the loop (cli::HardwareLost: a serial
+  /// port or CAN bus that vanished): its message, once; the node has stopped
+  /// driving it. Empty: none.
+  virtual std::string AdapterFailure() const = 0;
+  /// How the watchdog and the end leave the vehicle: "motors stopped", ….
+  virtual const char* MadeSafe() const = 0;
+  virtual const char* AtRest() const = 0;
+};
 
-  void Start();
-  /// Stops the motors, publishes a last state, stops every thread.
-  void Stop();
-  NodeCounters Counters() const;
+template <class Family>
+class VehicleNodeOf : public Node {
+ public:
+  using Adapter = typename Family::Adapter;
+  /// Validates `config` first (VehicleConfig::ValidateOrThrow:
+  /// ConfigFieldError), before any DDS participant exists. `camera` (the
+  /// opened source of its video) and `adapter` must not be null.
+  VehicleNodeOf(const VehicleConfig& config, std::unique_ptr<video::CameraSource> camera,
+                std::unique_ptr<Adapter> adapter);
+  ~VehicleNodeOf() override;
+  VehicleNodeOf(const VehicleNodeOf&) = delete;
+  VehicleNodeOf& operator=(const VehicleNodeOf&) = delete;
+
+  void Start() override;
+  void Stop() override;
+  NodeCounters Counters() const override;
+  std::string AdapterFailure() const override;
+  const char* MadeSafe() const override { return Family::kMadeSafe; }
+  const char* AtRest() const override { return Family::kAtRest; }
 
  private:
-  struct Wheels {
-    float left = 0.0F;
-    float right = 0.0F;
-  };
-  void OnCommand(const msg::DriveCommand& cmd);
+  void OnCommand(const typename Family::CommandMsg& cmd);
   void ControlTick(int64_t now_ns);
   void PublishState(int64_t now_ns);
 
   VehicleConfig config_;
-  std::unique_ptr<VehicleAdapter> adapter_;
-  CommandIntake<Wheels> commands_;
+  std::unique_ptr<Adapter> adapter_;
+  CommandIntake<typename Family::Command> commands_;
   int64_t last_tick_ns_ = 0;
   uint64_t tick_count_ = 0;
   uint64_t state_seq_ = 0;
   int ticks_per_state_ = 1;
   std::atomic<uint64_t> states_{0};
   std::atomic<bool> stopped_{false};
-  msg::VehicleState state_msg_;
+  std::atomic<bool> failed_{false};
+  std::string failure_;  ///< written once before failed_ is set
+  typename Family::StateMsg state_msg_;
 
   // Declared last: destroyed first, so no DDS callback outlives the rest.
   std::unique_ptr<link::Participant> participant_;
-  std::unique_ptr<link::StateWriter> state_writer_;
+  std::unique_ptr<typename Family::StateWriter> state_writer_;
   std::unique_ptr<CameraStreamer> camera_;
-  std::unique_ptr<link::CommandReader> command_reader_;
+  std::unique_ptr<typename Family::CommandReader> command_reader_;
   std::unique_ptr<PeriodicThread> control_;
 };
+
+using RobotNode = VehicleNodeOf<RobotFamily>;
+using BlimpNode = VehicleNodeOf<BlimpFamily>;
+
+extern template class VehicleNodeOf<RobotFamily>;
+extern template class VehicleNodeOf<BlimpFamily>;
 
 }  // namespace haptel::vehicles

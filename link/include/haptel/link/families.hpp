@@ -1,0 +1,77 @@
+#pragma once
+/// @file What each vehicle family's link carries, shared by both ends: the
+/// command and state messages, their writers and readers, and how a command
+/// goes into its message and comes out of it (with the vehicle's range
+/// check). The vehicle node (vehicles/families.hpp) and the operator's link
+/// (mediator/vehicle_link.hpp) are written once over these.
+#include <cmath>
+
+#include "haptel/config/vehicle_kinds.hpp"
+#include "haptel/core/blimp_command.hpp"
+#include "haptel/core/tread_command.hpp"
+#include "haptel/link/topic.hpp"
+
+namespace haptel::link {
+
+/// The robot: each tread's command (DriveCommand), the ground state (VehicleState).
+struct RobotMessages {
+  static constexpr VehicleFamily kFamily = VehicleFamily::kRobot;
+  using Command = TreadCommand;
+  using CommandMsg = msg::DriveCommand;
+  using StateMsg = msg::VehicleState;
+  using CommandWriter = link::CommandWriter;
+  using CommandReader = link::CommandReader;
+  using StateWriter = link::StateWriter;
+  using StateReader = link::StateReader;
+
+  /// Commands a little past ±1 are a float's rounding; anything further is malformed.
+  static constexpr float kMaxCommand = 1.001F;
+  /// The values of `c` into `m` (the caller stamps sequence and time).
+  static void Encode(const Command& c, CommandMsg& m) {
+    m.left(static_cast<float>(c.left));
+    m.right(static_cast<float>(c.right));
+  }
+  /// The command in `m`; false when it is malformed (non-finite, out of range).
+  static bool Decode(const CommandMsg& m, Command& out) {
+    out = {m.left(), m.right()};
+    return std::isfinite(m.left()) && std::isfinite(m.right()) && std::abs(m.left()) <= kMaxCommand &&
+           std::abs(m.right()) <= kMaxCommand;
+  }
+  /// The vehicle's command watchdog holds it stopped.
+  static bool WatchdogTripped(const StateMsg& s) { return s.watchdog_tripped(); }
+};
+
+/// The blimp: seven channels (BlimpCommand), the flight state (BlimpState).
+struct BlimpMessages {
+  static constexpr VehicleFamily kFamily = VehicleFamily::kBlimp;
+  using Command = BlimpCommand;
+  using CommandMsg = msg::BlimpCommand;
+  using StateMsg = msg::BlimpState;
+  using CommandWriter = link::BlimpCommandWriter;
+  using CommandReader = link::BlimpCommandReader;
+  using StateWriter = link::BlimpStateWriter;
+  using StateReader = link::BlimpStateReader;
+
+  /// A float's rounding past a range's end is not malformed.
+  static constexpr double kRangeSlack = 1e-3;
+  static void Encode(const Command& c, CommandMsg& m) {
+    m.elevator(static_cast<float>(c.elevator));
+    m.rudder(static_cast<float>(c.rudder));
+    m.power(static_cast<float>(c.power));
+    m.helix(static_cast<float>(c.helix));
+    m.tail_rotor(static_cast<float>(c.tail_rotor));
+    m.camera_pan(static_cast<float>(c.camera_pan));
+    m.camera_tilt(static_cast<float>(c.camera_tilt));
+  }
+  /// The command in `m`, clamped into range; false when it was malformed.
+  static bool Decode(const CommandMsg& m, Command& out) {
+    const BlimpCommand c{m.elevator(),   m.rudder(),     m.power(),      m.helix(),
+                         m.tail_rotor(), m.camera_pan(), m.camera_tilt()};
+    out = Clamped(c);
+    return InRange(c, kRangeSlack);
+  }
+  /// The vehicle's command watchdog holds every channel at neutral.
+  static bool WatchdogTripped(const StateMsg& s) { return s.failsafe(); }
+};
+
+}  // namespace haptel::link

@@ -1,0 +1,86 @@
+#pragma once
+// The part of a session that depends on the vehicle's family (VehicleFamily):
+// its world and lap timer, the interfaces that make its commands, the
+// operator who drives it, and what its view and progress lines add. The one
+// session loop (RunSession) is written over it; the robot's part is in
+// robot_session.cpp, the blimp's in blimp_session.cpp. Internal to the
+// mediator library.
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "haptel/interfaces/input.hpp"
+#include "haptel/mediator/haptic_side.hpp"
+#include "haptel/mediator/session.hpp"
+#include "haptel/mediator/session_physics.hpp"
+#include "haptel/mediator/session_view.hpp"
+#include "haptel/mediator/vehicle_link.hpp"
+#include "session_loop.hpp"
+
+namespace haptel::mediator {
+
+class FamilySession {
+ public:
+  virtual ~FamilySession() = default;
+
+  /// The haptic side has started: start what runs on it (a physics world).
+  virtual void Start(HapticSide& haptic) = 0;
+  /// The set-up was interrupted before anything started: what was built is
+  /// recorded in `result` and left to tear down on its own.
+  virtual void AbandonSetup(SessionResult& result) = 0;
+
+  /// The view's parts and options for this family (physics, controls,
+  /// hands, where the screen hangs).
+  virtual void ConfigureView(SessionView::Parts& parts, view::ViewOptions& options) const = 0;
+  /// Whether a person's game controller is to be polled (without a view, a
+  /// thread of its own does it).
+  virtual bool UsesGamepad() const = 0;
+  /// The physics world, while there is one (its loop is watched).
+  virtual const SessionPhysics* physics() const { return nullptr; }
+
+  /// Each tick, the states that arrived: the health hears of each, the lap,
+  /// the trace and the operator see each pose.
+  virtual void Drain(VehicleLink& link, VehicleHealth& health, HapticSide& haptic, RunTrace& trace,
+                     int64_t t0_ns) = 0;
+  /// Each tick: the person's requests, the operator's act, the interface's
+  /// command (sent when due; a safe one while the vehicle is not up). Ends
+  /// the run when the person's controller went away.
+  virtual std::optional<LoopEnd> Drive(double t_s, int64_t now_ns, const interfaces::InputState& person,
+                                       bool vehicle_up, HapticSide& haptic, VehicleLink& link) = 0;
+  /// The lap's own end: completed (or crashed).
+  virtual std::optional<LoopEnd> LapEnd() const = 0;
+  /// The lap cap of the track or course, s.
+  virtual double lap_cap_s() const = 0;
+  /// The view's overlay now; `touching`: the run's trace is in a contact.
+  /// Builds it without allocating.
+  virtual view::Overlay Overlay(double t_s, bool vehicle_up, bool touching) = 0;
+  /// Where the head and the vehicle's camera look (a tracked screen), or none.
+  virtual std::optional<view::Gaze> Gaze() const { return std::nullopt; }
+  /// The progress line(s) on stderr.
+  virtual void LogProgress(double t_s, const VehicleLink& link, double distance_m) const = 0;
+  /// How the end leaves the vehicle, for a lost vehicle's or device's line.
+  virtual const char* MadeSafe() const = 0;
+
+  /// The loop has ended: forces out of the HAL from anything still running.
+  virtual void RequestStop() {}
+  /// Stops what the part runs and puts its figures (lap, splits, interface
+  /// switches, physics, the operator's) into `result`.
+  virtual void Finish(SessionResult& result, bool progress) = 0;
+};
+
+/// The robot's part: the grand-prix track, the switchable interfaces (and
+/// a physics world when their controls or the scene need one), the
+/// automatic driver or a person. Throws ConfigError for parts that cannot be
+/// set up. Its record fields (track, gates, interface) are set in `rec`.
+std::unique_ptr<FamilySession> MakeRobotSession(const SessionSetup& setup, HapticSide& haptic,
+                                                interfaces::InputBox& input, const std::atomic<bool>& interrupted,
+                                                RunRecord& rec);
+/// The blimp's part: its course, the gesture cockpit (or a person's keys or
+/// game controller), the automatic pilot or a person.
+std::unique_ptr<FamilySession> MakeBlimpSession(const SessionSetup& setup, HapticSide& haptic,
+                                                interfaces::InputBox& input, RunRecord& rec);
+
+}  // namespace haptel::mediator

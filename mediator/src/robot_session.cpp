@@ -1,0 +1,256 @@
+// The robot family's part of a session (family_session.hpp): the track and
+// its lap timer, the switchable interfaces and the physics world their
+// controls (or the scene) need, the automatic driver or a person.
+#include <array>
+#include <cstdio>
+#include <memory>
+#include <vector>
+
+#include "family_session.hpp"
+#include "haptel/config/error.hpp"
+#include "haptel/core/clock.hpp"
+#include "haptel/core/log.hpp"
+#include "haptel/haptics/sim_device.hpp"
+#include "haptel/interfaces/cockpit.hpp"
+#include "haptel/mediator/interface_catalog.hpp"
+#include "haptel/mediator/interface_set.hpp"
+#include "haptel/mediator/lap_timer.hpp"
+#include "haptel/mediator/operator.hpp"
+
+namespace haptel::mediator {
+
+namespace {
+
+/// How long the end of a run waits for a physics step in progress.
+constexpr double kPhysicsStopWait_s = 0.1;
+
+/// The interfaces a run builds: the one it starts with, and — when the
+/// operator may switch — every other one listed.
+std::vector<bool> InterfacesToBuild(const SessionSetup& setup, bool can_switch) {
+  std::vector<bool> build(setup.interfaces.size(), can_switch);
+  build[static_cast<size_t>(setup.start_interface)] = true;
+  return build;
+}
+
+class RobotSession final : public FamilySession {
+ public:
+  RobotSession(const SessionSetup& setup, HapticSide& haptic, interfaces::InputBox& input,
+               const std::atomic<bool>& interrupted, RunRecord& rec)
+      : setup_(setup), track_(setup.track), lap_(track_), overlay_feed_(setup, track_) {
+    rec.track = setup.track.name;
+    rec.gates_total = static_cast<int>(track_.gates().size());
+    rec.interface = start_spec().name;
+    if (setup.operator_kind == "auto") {
+      if (haptic.sim() == nullptr) {
+        throw ConfigError(setup.device.file.string() +
+                          ": the automatic operator moves the simulated arms (driver 'sim'); "
+                          "device '" +
+                          setup.device.name + "' is driven by a person: use --operator person");
+      }
+      automatic_ = std::make_unique<AutomaticOperator>(track_, setup.run.op, setup.vehicle.drive, *haptic.sim(),
+                                                       setup.driver, setup.driver_experience);
+      op_ = automatic_.get();
+    } else {
+      person_ = std::make_unique<PersonOperator>();
+      op_ = person_.get();
+    }
+
+    // Physics, when an interface the run builds or the scene needs it.
+    const std::vector<bool> build = InterfacesToBuild(setup, op_->can_switch());
+    std::array<bool, haptics::kSides> hands{false, false};
+    for (size_t i = 0; i < setup.interfaces.size(); ++i) {
+      if (!build[i]) continue;
+      const InterfaceSpec& spec = setup.interfaces[i];
+      for (int s = 0; s < haptics::kSides; ++s) hands[s] = hands[s] || spec.hands()[s];
+      // One set of controls for the cockpits: the one the run starts with, else the first listed.
+      if (const auto* c = std::get_if<CockpitConfig>(&spec.config);
+          c != nullptr && (cockpit_config_ == nullptr || i == static_cast<size_t>(setup.start_interface))) {
+        cockpit_config_ = c;
+      }
+      gamepad_ = gamepad_ || spec.is_gamepad();
+    }
+    const Scene* scene = setup.scene ? &*setup.scene : nullptr;
+    physics_ = SessionPhysics::CreateIfNeeded(setup.physics, hands, cockpit_config_, scene, &interrupted);
+    if (interrupted.load()) return;  // the session abandons the set-up
+
+    // The interfaces.
+    InterfaceParts parts;
+    parts.controls = physics_ && physics_->port ? physics_->port.get() : nullptr;
+    parts.input = &input;
+    parts.speed_levels = setup.vehicle.drive.speed_levels;
+    std::vector<std::unique_ptr<interfaces::MediatorInterface>> built;
+    for (size_t i = 0; i < setup.interfaces.size(); ++i) {
+      built.push_back(build[i] ? MakeInterface(setup.interfaces[i], parts) : nullptr);
+    }
+    interfaces_ = std::make_unique<InterfaceSet>(std::move(built), setup.start_interface, setup.run.switch_ramp_s);
+    op_->Prepare(interfaces_->current());
+  }
+
+  void Start(HapticSide& haptic) override {
+    if (physics_) physics_->world->Start(haptic.hal());
+  }
+
+  void AbandonSetup(SessionResult& result) override {
+    if (!physics_) return;
+    result.scene_bodies = static_cast<int>(physics_->scene.nodes.size());
+    physics_->DetachTeardown();
+  }
+
+  void ConfigureView(SessionView::Parts& parts, view::ViewOptions&) const override {
+    parts.physics = physics_.get();
+    parts.cockpit = cockpit_config_;
+    parts.hands = start_spec().hands();
+  }
+  bool UsesGamepad() const override { return gamepad_; }
+  const SessionPhysics* physics() const override { return physics_.get(); }
+
+  void Drain(VehicleLink& link, VehicleHealth& health, HapticSide& haptic, RunTrace& trace, int64_t t0) override {
+    for (const auto& e : link.channel<link::RobotMessages>().inbox().Drain()) {
+      const msg::VehicleState& s = e.state;
+      const double ts = NsToS(e.received_ns - t0);
+      if (health.OnState(s, e.received_ns)) haptic.OnVehicleUp();
+      const bool touching = s.bumper_left() || s.bumper_right();
+      if (s.pose_valid()) {
+        op_->Observe({ts, s.x(), s.y(), s.heading(), s.bumper_left(), s.bumper_right()});
+        lap_.Update(ts, Vec2(s.x(), s.y()));
+        trace.Add(ts, s.x(), s.y(), 0.0, s.speed(), touching);
+      }
+      lap_.UpdateContact(ts, touching);
+      feedback_ = {s.bumper_left(), s.bumper_right(), s.speed()};
+    }
+  }
+
+  std::optional<LoopEnd> Drive(double t, int64_t now, const interfaces::InputState& person, bool vehicle_up,
+                               HapticSide& haptic, VehicleLink& link) override {
+    // A person's requests: another interface (F1–F6); a controller that went away.
+    if (person.interface_requests != requests_seen_) {
+      requests_seen_ = person.interface_requests;
+      if (!op_->can_switch()) {
+        if (setup_.progress) log::Info("the automatic operator does not switch interfaces");
+      } else if (interfaces_->Request(person.interface_request, t) && setup_.progress) {
+        log::Info("switching to interface '" + interfaces_->at(person.interface_request)->name() + "'");
+      }
+    }
+    if (person.pad_disconnects != disconnects_seen_) {
+      disconnects_seen_ = person.pad_disconnects;
+      if (interfaces_->current().name() == "gamepad") return LoopEnd{Outcome::kAborted, "the game controller was disconnected"};
+    }
+    // The operator acts on the device; the interface reads the device.
+    if (vehicle_up) {
+      op_->Act(t, interfaces_->current());
+      if (grasp_s_ == 0.0 && op_->grasped(t) && start_spec().is_cockpit()) grasp_s_ = t;
+    }
+    motors_ = interfaces_->Update(t, feedback_, haptic.hal());
+    const auto command_period_ns = static_cast<int64_t>(
+        1e9 / setup_.interfaces[static_cast<size_t>(interfaces_->current_index())].command_rate_hz());
+    if (next_command_ns_ == 0) next_command_ns_ = now;
+    if (CommandDue(next_command_ns_, now, command_period_ns)) {
+      link.Send(vehicle_up ? motors_ : interfaces::MotorCommand{});
+    }
+    return std::nullopt;
+  }
+
+  std::optional<LoopEnd> LapEnd() const override {
+    if (lap_.completed()) return LoopEnd{Outcome::kCompleted, "lap completed"};
+    return std::nullopt;
+  }
+  double lap_cap_s() const override { return setup_.track.lap_cap_s; }
+
+  view::Overlay Overlay(double t, bool vehicle_up, bool touching) override {
+    return overlay_feed_.Make(t, lap_, *interfaces_, feedback_, motors_, vehicle_up, touching);
+  }
+
+  /// Progress lines every 2 s on stderr: the lap, the vehicle and the link,
+  /// and a cockpit's controls.
+  void LogProgress(double t, const VehicleLink& link, double distance_m) const override {
+    const interfaces::MediatorInterface& interface = interfaces_->current();
+    char line[260];
+    std::snprintf(line, sizeof line,
+                  "%6.1f s  %s  lap %5.1f s  gates %d/%d  obstacles %d  speed %.2f m/s  distance "
+                  "%.2f m  rtt p50 %.2f ms  "
+                  "video %.1f fps",
+                  t, interface.name().c_str(), lap_.lap_time_s(), lap_.next_gate(), lap_.gates_total(),
+                  lap_.obstacles_touched(), feedback_.speed, distance_m, link.Rtt().Percentile(0.5) * 1e-3,
+                  link.video().Stats().fps);
+    log::Info(line);
+    if (const auto* cockpit = dynamic_cast<const interfaces::CockpitInterface*>(&interface)) {
+      const interfaces::CockpitControls& c = cockpit->controls();
+      const interfaces::HudState& h = cockpit->hud();
+      char hud[80] = "";
+      if (cockpit->logic().config().hud) {
+        std::snprintf(hud, sizeof hud, "  HUD %.2f m/s%s%s%s", h.speed, h.turn_left ? " <" : "",
+                      h.turn_right ? " >" : "", h.throttle_locked ? " locked" : "");
+      }
+      std::snprintf(line, sizeof line, "         wheel %+.2f rad%s  throttle %+.3f m%s  motors %+.2f %+.2f%s",
+                    c.wheel_angle, c.wheel_held ? " (held)" : "", c.throttle, c.throttle_held ? " (held)" : "",
+                    motors_.left, motors_.right, hud);
+      log::Info(line);
+    }
+  }
+
+  const char* MadeSafe() const override { return "forces zeroed, vehicle stopped"; }
+
+  void RequestStop() override {
+    if (physics_) physics_->world->RequestStop();
+  }
+
+  void Finish(SessionResult& result, bool progress) override {
+    if (physics_) {
+      // A step of thousands of overlapping bodies takes seconds: give it a
+      // moment to give up (it does between contacts), then leave it, and the
+      // world's teardown, to a thread of their own; the run is recorded now.
+      if (!physics_->world->Stop(kPhysicsStopWait_s) && progress) {
+        log::Info("physics step still running at the end of the run; left to finish on its own");
+      }
+      physics_->DetachTeardown();
+      const LoopStats p = physics_->world->Stats();
+      const physics::PhysicsCounters counters = physics_->world->Counters();
+      result.physics_rate_hz = p.rate_hz;
+      result.physics_period_p99_us = p.period_p99_us;
+      result.physics_step_max_us = counters.max_step_us;
+      result.physics_hand_resets = counters.hand_resets;
+      result.scene_bodies = static_cast<int>(physics_->scene.nodes.size());
+    }
+    result.grasp_s = grasp_s_;
+    if (start_spec().is_cockpit() && result.grasp_s == 0.0) result.grasp_s = -1.0;
+    if (automatic_) result.operator_slips = automatic_->driver().slips();
+    RunRecord& rec = result.record;
+    rec.lap_time_s = lap_.lap_time_s();
+    rec.gates_passed = lap_.gates_passed();
+    rec.gates_missed = lap_.gates_missed();
+    rec.obstacles_touched = lap_.obstacles_touched();
+    rec.splits = lap_.splits();
+    rec.switches = interfaces_->switches();
+  }
+
+ private:
+  const InterfaceSpec& start_spec() const { return setup_.interfaces.at(static_cast<size_t>(setup_.start_interface)); }
+
+  const SessionSetup& setup_;
+  const Track track_;
+  LapTimer lap_;
+  OverlayFeed overlay_feed_;
+  std::unique_ptr<AutomaticOperator> automatic_;
+  std::unique_ptr<PersonOperator> person_;
+  Operator* op_ = nullptr;
+  const CockpitConfig* cockpit_config_ = nullptr;
+  bool gamepad_ = false;
+  std::unique_ptr<SessionPhysics> physics_;
+  std::unique_ptr<InterfaceSet> interfaces_;
+  interfaces::VehicleFeedback feedback_;
+  interfaces::MotorCommand motors_;
+  uint32_t requests_seen_ = 0;
+  uint32_t disconnects_seen_ = 0;
+  int64_t next_command_ns_ = 0;
+  double grasp_s_ = 0.0;
+};
+
+}  // namespace
+
+std::unique_ptr<FamilySession> MakeRobotSession(const SessionSetup& setup, HapticSide& haptic,
+                                                interfaces::InputBox& input, const std::atomic<bool>& interrupted,
+                                                RunRecord& rec) {
+  return std::make_unique<RobotSession>(setup, haptic, input, interrupted, rec);
+}
+
+}  // namespace haptel::mediator
