@@ -3,6 +3,7 @@
 #include <set>
 
 #include "haptel/config/error.hpp"
+#include "haptel/config/interface_kinds.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/run.hpp"
 #include "haptel/config/check.hpp"
@@ -126,7 +127,8 @@ StudyConfig LoadStudy(const std::filesystem::path& file) {
     }
     try {
       const std::string declared = InterfaceName(InterfaceFile(run_config, condition.interface));
-      const bool manual = declared == "keyboard" || declared == "gamepad";
+      const InterfaceKindInfo* kind = FindInterfaceKind(declared);
+      const bool manual = kind != nullptr && kind->manual();
       if (synthetic && manual) {
         c.Fail("interface", "an interface a simulated driver can use (gesture or a cockpit); '" +
                                 condition.interface + "' is a person's keys or controller");

@@ -1,5 +1,6 @@
 #include "haptel/mediator/interface_catalog.hpp"
 
+#include <map>
 #include <stdexcept>
 
 #include "haptel/config/error.hpp"
@@ -10,34 +11,53 @@
 
 namespace haptel::mediator {
 
-std::array<bool, 2> InterfaceSpec::hands() const {
-  if (is_cockpit()) return {true, true};
-  if (std::holds_alternative<GestureConfig>(config)) return {false, true};
-  return {false, false};
+const InterfaceKindInfo& InterfaceSpec::kind() const {
+  const InterfaceKindInfo* kind = FindInterfaceKind(name);
+  if (kind == nullptr) throw std::logic_error("interface '" + name + "' is not in the interface table");
+  return *kind;
 }
 
 double InterfaceSpec::command_rate_hz() const {
   return std::visit([](const auto& c) { return c.command_rate_hz; }, config);
 }
 
+namespace {
+
+/// Each robot interface's config loader, beside its row in the interface table.
+using Loader = InterfaceSpec::Config (*)(const std::filesystem::path&);
+const std::map<std::string, Loader>& Loaders() {
+  static const std::map<std::string, Loader> loaders{
+      {"gesture", [](const std::filesystem::path& f) -> InterfaceSpec::Config { return LoadGesture(f); }},
+      {"cockpit", [](const std::filesystem::path& f) -> InterfaceSpec::Config { return LoadCockpit(f); }},
+      {"cockpit-hud", [](const std::filesystem::path& f) -> InterfaceSpec::Config { return LoadCockpit(f); }},
+      {"cockpit-assisted", [](const std::filesystem::path& f) -> InterfaceSpec::Config { return LoadCockpit(f); }},
+      {"keyboard", [](const std::filesystem::path& f) -> InterfaceSpec::Config { return LoadKeyboard(f); }},
+      {"gamepad", [](const std::filesystem::path& f) -> InterfaceSpec::Config { return LoadGamepad(f); }},
+  };
+  return loaders;
+}
+
+}  // namespace
+
 InterfaceSpec LoadInterfaceSpec(const RunConfig& run, const std::string& name) {
   const std::filesystem::path file = InterfaceFile(run, name);
-  const std::string kind = InterfaceName(file);
+  const std::string declared = InterfaceName(file);
+  const InterfaceKindInfo* kind = FindInterfaceKind(declared);
+  if (kind == nullptr) {
+    throw ConfigError(file.string() + ": key 'name': expected one of " + InterfaceKindNames(VehicleFamily::kRobot) +
+                      ", got '" + declared + "'");
+  }
+  if (kind->family != VehicleFamily::kRobot) {
+    throw ConfigError(file.string() + ": interface '" + declared + "' flies a " + ToString(kind->family) +
+                      "; the robot is driven with " + InterfaceKindNames(VehicleFamily::kRobot));
+  }
+  const auto loader = Loaders().find(declared);
+  if (loader == Loaders().end()) {
+    throw std::logic_error("interface '" + declared + "' has no loader in the interface catalog");
+  }
   InterfaceSpec spec;
-  spec.name = kind;
-  if (kind.rfind("blimp-", 0) == 0) {
-    throw ConfigError(file.string() + ": interface '" + kind + "' flies a blimp; the robot is driven with " +
-                      "gesture, a cockpit, keyboard or gamepad");
-  }
-  if (kind.rfind("cockpit", 0) == 0) {
-    spec.config = LoadCockpit(file);
-  } else if (kind == "keyboard") {
-    spec.config = LoadKeyboard(file);
-  } else if (kind == "gamepad") {
-    spec.config = LoadGamepad(file);
-  } else {
-    spec.config = LoadGesture(file);
-  }
+  spec.name = declared;
+  spec.config = loader->second(file);
   return spec;
 }
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <stdexcept>
+#include <string>
 
 namespace haptel::mediator {
 
@@ -15,6 +16,13 @@ InterfaceSet::InterfaceSet(std::vector<std::unique_ptr<interfaces::MediatorInter
 
 interfaces::MediatorInterface* InterfaceSet::at(int index) {
   return index >= 0 && index < size() ? interfaces_[static_cast<size_t>(index)].get() : nullptr;
+}
+
+void InterfaceSet::Provide(int index, std::unique_ptr<interfaces::MediatorInterface> interface) {
+  if (index < 0 || index >= size() || interfaces_[static_cast<size_t>(index)] || !interface) {
+    throw std::invalid_argument("InterfaceSet::Provide: place " + std::to_string(index) + " is not an empty place");
+  }
+  interfaces_[static_cast<size_t>(index)] = std::move(interface);
 }
 
 bool InterfaceSet::Request(int index, double t_s) {

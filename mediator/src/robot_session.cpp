@@ -1,6 +1,7 @@
 // The robot family's part of a session (family_session.hpp): the track and
 // its lap timer, the switchable interfaces and the physics world their
 // controls (or the scene) need, the automatic driver or a person.
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <memory>
@@ -36,7 +37,7 @@ class RobotSession final : public FamilySession {
  public:
   RobotSession(const SessionSetup& setup, HapticSide& haptic, interfaces::InputBox& input,
                const std::atomic<bool>& interrupted, RunRecord& rec)
-      : setup_(setup), track_(setup.track), lap_(track_), overlay_feed_(setup, track_) {
+      : setup_(setup), track_(setup.track), lap_(track_), overlay_feed_(setup, track_), input_(&input) {
     rec.track = setup.track.name;
     rec.gates_total = static_cast<int>(track_.gates().size());
     rec.interface = start_spec().name;
@@ -55,32 +56,35 @@ class RobotSession final : public FamilySession {
       op_ = person_.get();
     }
 
-    // Physics, when an interface the run builds or the scene needs it.
+    // Physics, when an interface the run builds or the scene needs it — and
+    // for an interface a person may switch to later (a cockpit while driving
+    // by keys), not before it is first asked for: two proxy hands nobody
+    // holds would otherwise run at 1 kHz all along.
     const std::vector<bool> build = InterfacesToBuild(setup, op_->can_switch());
-    std::array<bool, haptics::kSides> hands{false, false};
+    const bool defer_world = !start_spec().needs_physics() && !setup.scene;
+    deferred_.assign(setup.interfaces.size(), false);
     for (size_t i = 0; i < setup.interfaces.size(); ++i) {
       if (!build[i]) continue;
       const InterfaceSpec& spec = setup.interfaces[i];
-      for (int s = 0; s < haptics::kSides; ++s) hands[s] = hands[s] || spec.hands()[s];
+      for (int s = 0; s < haptics::kSides; ++s) hands_[s] = hands_[s] || spec.hands()[s];
       // One set of controls for the cockpits: the one the run starts with, else the first listed.
       if (const auto* c = std::get_if<CockpitConfig>(&spec.config);
           c != nullptr && (cockpit_config_ == nullptr || i == static_cast<size_t>(setup.start_interface))) {
         cockpit_config_ = c;
       }
       gamepad_ = gamepad_ || spec.is_gamepad();
+      deferred_[i] = defer_world && spec.needs_physics();
     }
-    const Scene* scene = setup.scene ? &*setup.scene : nullptr;
-    physics_ = SessionPhysics::CreateIfNeeded(setup.physics, hands, cockpit_config_, scene, &interrupted);
-    if (interrupted.load()) return;  // the session abandons the set-up
+    if (!defer_world) {
+      const Scene* scene = setup.scene ? &*setup.scene : nullptr;
+      physics_ = SessionPhysics::CreateIfNeeded(setup.physics, hands_, cockpit_config_, scene, &interrupted);
+      if (interrupted.load()) return;  // the session abandons the set-up
+    }
 
-    // The interfaces.
-    InterfaceParts parts;
-    parts.controls = physics_ && physics_->port ? physics_->port.get() : nullptr;
-    parts.input = &input;
-    parts.speed_levels = setup.vehicle.drive.speed_levels;
+    // The interfaces (a deferred one's place stays empty until it is asked for).
     std::vector<std::unique_ptr<interfaces::MediatorInterface>> built;
     for (size_t i = 0; i < setup.interfaces.size(); ++i) {
-      built.push_back(build[i] ? MakeInterface(setup.interfaces[i], parts) : nullptr);
+      built.push_back(build[i] && !deferred_[i] ? MakeInterface(setup.interfaces[i], Parts()) : nullptr);
     }
     interfaces_ = std::make_unique<InterfaceSet>(std::move(built), setup.start_interface, setup.run.switch_ramp_s);
     op_->Prepare(interfaces_->current());
@@ -127,7 +131,8 @@ class RobotSession final : public FamilySession {
       requests_seen_ = person.interface_requests;
       if (!op_->can_switch()) {
         if (setup_.progress) log::Info("the automatic operator does not switch interfaces");
-      } else if (interfaces_->Request(person.interface_request, t) && setup_.progress) {
+      } else if (BuildDeferred(person.interface_request, haptic) &&
+                 interfaces_->Request(person.interface_request, t) && setup_.progress) {
         log::Info("switching to interface '" + interfaces_->at(person.interface_request)->name() + "'");
       }
     }
@@ -226,6 +231,44 @@ class RobotSession final : public FamilySession {
  private:
   const InterfaceSpec& start_spec() const { return setup_.interfaces.at(static_cast<size_t>(setup_.start_interface)); }
 
+  /// What the interfaces are built on.
+  InterfaceParts Parts() const {
+    InterfaceParts parts;
+    parts.controls = physics_ && physics_->port ? physics_->port.get() : nullptr;
+    parts.input = input_;
+    parts.speed_levels = setup_.vehicle.drive.speed_levels;
+    return parts;
+  }
+
+  /// Before a switch to `index`: when its interface waits for the physics
+  /// world, builds the world (started on the HAL) and every interface that
+  /// waited for it. False when it cannot be built (said once).
+  bool BuildDeferred(int index, HapticSide& haptic) {
+    if (index < 0 || index >= static_cast<int>(deferred_.size()) || !deferred_[static_cast<size_t>(index)]) {
+      return true;
+    }
+    const int64_t start_ns = MonotonicNs();
+    try {
+      physics_ = SessionPhysics::CreateIfNeeded(setup_.physics, hands_, cockpit_config_, nullptr);
+      if (physics_) physics_->world->Start(haptic.hal());
+      for (size_t i = 0; i < deferred_.size(); ++i) {
+        if (!deferred_[i]) continue;
+        interfaces_->Provide(static_cast<int>(i), MakeInterface(setup_.interfaces[i], Parts()));
+        deferred_[i] = false;
+      }
+    } catch (const std::exception& e) {
+      log::Error("interface '" + setup_.interfaces[static_cast<size_t>(index)].name +
+                 "' cannot be built: " + e.what());
+      std::fill(deferred_.begin(), deferred_.end(), false);
+      return false;
+    }
+    if (setup_.progress) {
+      log::Info("physics world built for '" + setup_.interfaces[static_cast<size_t>(index)].name + "' in " +
+                std::to_string(static_cast<int>(NsToS(MonotonicNs() - start_ns) * 1e3)) + " ms");
+    }
+    return true;
+  }
+
   const SessionSetup& setup_;
   const Track track_;
   LapTimer lap_;
@@ -233,7 +276,11 @@ class RobotSession final : public FamilySession {
   std::unique_ptr<AutomaticOperator> automatic_;
   std::unique_ptr<PersonOperator> person_;
   Operator* op_ = nullptr;
+  interfaces::InputBox* input_ = nullptr;
+  std::array<bool, haptics::kSides> hands_{false, false};  ///< proxy hands a world gives the interfaces built
   const CockpitConfig* cockpit_config_ = nullptr;
+  /// Interfaces waiting for the physics world (built when first asked for).
+  std::vector<bool> deferred_;
   bool gamepad_ = false;
   std::unique_ptr<SessionPhysics> physics_;
   std::unique_ptr<InterfaceSet> interfaces_;

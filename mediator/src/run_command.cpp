@@ -27,8 +27,8 @@
 #include "haptel/calibration/calibration_procedure.hpp"
 #include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/run_counters.hpp"
-#include "haptel/mediator/run_picture.hpp"
-#include "haptel/mediator/unsaved_run.hpp"
+#include "haptel/record/run_picture.hpp"
+#include "haptel/record/unsaved_run.hpp"
 #include "haptel/view/view.hpp"
 
 namespace haptel::mediator {
@@ -76,7 +76,7 @@ constexpr const char* kRunUsage =
     "  --quiet              no progress lines\n";
 
 /// [{"t_s":…,"from":…,"to":…}, …]
-std::string SwitchesJson(const std::vector<haptel::mediator::SwitchRecord>& switches) {
+std::string SwitchesJson(const std::vector<haptel::record::SwitchRecord>& switches) {
   std::string out = "[";
   for (const auto& s : switches) {
     if (out.size() > 1) out += ",";
@@ -87,7 +87,7 @@ std::string SwitchesJson(const std::vector<haptel::mediator::SwitchRecord>& swit
 }
 
 /// {"name":n,...}
-std::string CountersJson(const std::vector<haptel::mediator::RunCounter>& counters) {
+std::string CountersJson(const std::vector<haptel::record::RunCounter>& counters) {
   std::string out = "{";
   for (const auto& c : counters) {
     if (out.size() > 1) out += ",";
@@ -186,9 +186,11 @@ SessionSetup RunSetupFromArgs(const Args& args) {
     // device; a person without one flies with keys or a game controller.
     std::string name = args.Value("interface").value_or(setup.run.interface);
     if (!args.Value("interface") && person && setup.device.driver == "sim") name = "blimp-keys";
-    if (name != "blimp-gesture" && !IsBlimpManual(name)) {
+    const InterfaceKindInfo* kind = FindInterfaceKind(name);
+    if (kind == nullptr || kind->family != VehicleFamily::kBlimp) {
       throw UsageError("option --interface " + name + ": the blimp '" + setup.run.vehicle.string() +
-                       "' is flown with blimp-gesture (both hands on a haptic device), blimp-keys or blimp-gamepad");
+                       "' is flown with " + InterfaceKindNames(VehicleFamily::kBlimp) +
+                       " (blimp-gesture: both hands on a haptic device)");
     }
     if (IsBlimpManual(name)) {
       if (!person) {
@@ -262,7 +264,7 @@ RecordedRun RunAndRecord(const SessionSetup& setup, Recorder& recorder,
     run.result.record.id = run.run_id;
   } catch (const std::exception& e) {
     try {
-      run.unsaved = WriteUnsavedRun(run.result.record, setup.run.database, WallNs());
+      run.unsaved = record::WriteUnsavedRun(run.result.record, setup.run.database, WallNs());
       std::fprintf(stderr, "haptel: run not recorded: %s; its results are in %s\n", e.what(),
                    run.unsaved.c_str());
     } catch (const std::exception& e2) {
@@ -273,11 +275,11 @@ RecordedRun RunAndRecord(const SessionSetup& setup, Recorder& recorder,
     // The run is saved; its picture is a bonus: a failure is a warning.
     try {
       const std::filesystem::path png =
-          std::filesystem::absolute(RunPicturePath(setup.run.database, run.run_id));
+          std::filesystem::absolute(record::RunPicturePath(setup.run.database, run.run_id));
       if (setup.course) {
-        WriteRunPicture(RenderBlimpRunPicture(run.result.record, *setup.course), png);
+        record::WriteRunPicture(record::RenderBlimpRunPicture(run.result.record, *setup.course), png);
       } else {
-        DrawRunPicture(run.result.record, setup.track, png);
+        record::DrawRunPicture(run.result.record, setup.track, png);
       }
       recorder.SetPicture(run.run_id, png);
       run.result.record.picture = png.string();

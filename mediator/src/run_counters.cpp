@@ -87,14 +87,18 @@ namespace haptel::mediator {
 LoopWatch::LoopWatch(const HapticSide& haptic, const SessionPhysics* physics,
                      const VehicleLink& vehicle, const SessionView* view, int64_t now_ns)
     : haptic_(haptic),
-      physics_(physics != nullptr && physics->world ? physics : nullptr),
+      physics_(nullptr),
       vehicle_(vehicle),
       view_(view),
       servo_("servo", haptic.target_hz(), haptic.Stats().ticks, now_ns) {
-  if (physics_ != nullptr) {
-    const physics::PhysicsWorld& world = *physics_->world;
-    physics_rate_.emplace("physics", 1.0 / world.config().step_s, world.Stats().ticks, now_ns);
-  }
+  AddPhysics(physics, now_ns);
+}
+
+void LoopWatch::AddPhysics(const SessionPhysics* physics, int64_t now_ns) {
+  if (physics == nullptr || !physics->world) return;
+  physics_ = physics;
+  const physics::PhysicsWorld& world = *physics_->world;
+  physics_rate_.emplace("physics", 1.0 / world.config().step_s, world.Stats().ticks, now_ns);
 }
 
 std::vector<std::string> LoopWatch::EndInterval(int64_t now_ns) {

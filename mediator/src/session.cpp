@@ -131,6 +131,7 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   const auto period_ns = static_cast<int64_t>(1e9 / run.session_rate_hz);
   int64_t next_progress_ns = t0 + SToNs(2.0);
   int64_t next_live_ns = t0;
+  uint64_t pictures_seen = 0;
   int64_t next_tick = t0;
   VehicleHealth health(setup.vehicle.name, run.link.domain_id, vehicle.session(), run.vehicle_timeout_s);
   RunTrace trace(rec);
@@ -166,6 +167,11 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
       finish(std::move(*end));
       break;
     }
+    if (family->physics() != watch.physics()) {
+      // A world built for an interface just asked for: watched and drawn from now on.
+      watch.AddPhysics(family->physics(), now);
+      if (view_part) view_part->SetPhysics(family->physics());
+    }
     if (view_part || setup.on_live) {
       // Made every tick: the overlay notices contacts by their edges.
       const view::Overlay overlay = family->Overlay(t, vehicle_up, trace.touching());
@@ -176,6 +182,13 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
       if (setup.on_live && now >= next_live_ns) {
         next_live_ns = now + SToNs(0.5);
         setup.on_live(overlay);
+        if (setup.on_picture) {
+          const uint64_t frames = vehicle.video().Stats().frames;
+          if (frames != pictures_seen) {
+            pictures_seen = frames;
+            setup.on_picture(vehicle.video().LatestPicture(), frames);
+          }
+        }
       }
     }
     if (auto end = family->LapEnd()) {

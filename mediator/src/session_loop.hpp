@@ -8,7 +8,7 @@
 #include <string>
 
 #include "haptel/mediator/haptic_side.hpp"
-#include "haptel/mediator/recorder.hpp"
+#include "haptel/mediator/run_record.hpp"
 #include "haptel/mediator/session.hpp"
 #include "haptel/mediator/vehicle_link.hpp"
 

@@ -12,7 +12,7 @@ namespace haptel::mediator {
 
 SessionView::SessionView(const view::ViewOptions& options, const Parts& parts,
                          interfaces::InputBox& input)
-    : parts_(parts), input_(input) {
+    : parts_(parts), physics_(parts.physics), input_(input) {
   view_ = std::make_unique<view::View>(options, *this, &input_);
 }
 
@@ -29,10 +29,11 @@ void SessionView::Fill(view::ViewModel& model) {
   model.overlay = overlay_.Load();
   model.gaze = gaze_.Load();
   // The hands: the proxies where a world moves them, the tracked hands otherwise.
+  const SessionPhysics* physics = physics_.load(std::memory_order_acquire);
   for (int i = 0; i < haptics::kSides; ++i) {
     const auto side = static_cast<haptics::Side>(i);
-    if (parts_.physics != nullptr) {
-      const physics::HandPoses poses = parts_.physics->world->Poses(side);
+    if (physics != nullptr) {
+      const physics::HandPoses poses = physics->world->Poses(side);
       if (poses.valid) {
         AppendProxyHand(model.shapes, poses, parts_.physics_config->hand, side);
         continue;
@@ -43,9 +44,9 @@ void SessionView::Fill(view::ViewModel& model) {
       if (sample.valid) AppendTrackedHand(model.shapes, sample, parts_.physics_config->hand);
     }
   }
-  if (parts_.physics != nullptr && parts_.physics->port && parts_.cockpit != nullptr) {
-    AppendCockpit(model.shapes, *parts_.cockpit, parts_.controls_bodies,
-                  parts_.physics->port->Controls(), model.overlay.contact_now);
+  if (physics != nullptr && physics->port && parts_.cockpit != nullptr) {
+    AppendCockpit(model.shapes, *parts_.cockpit, parts_.controls_bodies, physics->port->Controls(),
+                  model.overlay.contact_now);
   }
   for (int i = 0; i < haptics::kSides; ++i) {
     const haptics::ForceField field = parts_.hal->Setpoint(static_cast<haptics::Side>(i)).field;

@@ -56,6 +56,8 @@ void VideoReceiver::DecodeLoop() {
     std::shared_ptr<const cv::Mat> shown = decode_ ? std::make_shared<const cv::Mat>(image.clone()) : nullptr;
     std::lock_guard lock(mutex_);
     if (decode_) latest_ = {std::move(shown), latest_.id + 1, capture_ns};
+    // Kept as it came (a swap: the buffers go round, nothing is copied here).
+    last_bytes_.swap(bytes);
     latency_.Record(static_cast<double>(now_wall - capture_ns) * 1e-3);
     if (frames_++ == 0) first_frame_ns_ = now;
     last_frame_ns_ = now;
@@ -78,6 +80,11 @@ VideoStats VideoReceiver::Stats() const {
 cv::Mat VideoReceiver::Screen() const {
   const LatestFrame latest = Latest();
   return latest.image ? latest.image->clone() : cv::Mat();
+}
+
+std::vector<uint8_t> VideoReceiver::LatestPicture() const {
+  std::lock_guard lock(mutex_);
+  return last_bytes_;
 }
 
 LatestFrame VideoReceiver::Latest() const {

@@ -13,9 +13,7 @@
 
 #include "haptel/core/html.hpp"
 #include "haptel/core/json.hpp"
-#include "haptel/link/participant.hpp"
-#include "haptel/link/topic.hpp"
-#include "haptel/mediator/recorder.hpp"
+#include "haptel/record/recorder.hpp"
 #include "haptel/study/plan.hpp"
 #include "haptel/study/submission.hpp"
 
@@ -48,20 +46,15 @@ std::string ErrorPage(const std::string& title, const std::string& why) {
   return Page(title, "<p id=\"result\" class=\"error\">" + Html(why) + "</p><p><a href=\"/\">schedule</a></p>");
 }
 
-/// The vehicle's latest camera picture, as it came (JPEG), from a DDS reader
-/// of the console's own: the DDS thread only swaps bytes under a short lock.
+/// The vehicle's latest camera picture, as it came (JPEG), handed over by
+/// the session that runs the trial (SessionSetup::on_picture).
 class Thumbnail {
  public:
-  explicit Thumbnail(const ConsoleVideo& video) : participant_(video.link, "haptel-study-console") {
-    reader_ = std::make_unique<link::VideoReader>(participant_, video.topic, link::Profile::kVideo,
-                                                  [this](const msg::VideoFrame& f) {
-                                                    const std::lock_guard<std::mutex> lock(mutex_);
-                                                    if (f.encoding() != "jpeg") return;
-                                                    jpeg_.assign(f.data().begin(), f.data().end());
-                                                    ++frames_;
-                                                  });
+  void Set(std::vector<uint8_t> jpeg, uint64_t frames) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    jpeg_ = std::move(jpeg);
+    frames_ = frames;
   }
-  ~Thumbnail() { reader_.reset(); }  // no callback after this
   std::vector<uint8_t> Latest() const {
     const std::lock_guard<std::mutex> lock(mutex_);
     return jpeg_;
@@ -72,11 +65,9 @@ class Thumbnail {
   }
 
  private:
-  link::Participant participant_;
   mutable std::mutex mutex_;
   std::vector<uint8_t> jpeg_;
   uint64_t frames_ = 0;
-  std::unique_ptr<link::VideoReader> reader_;
 };
 
 /// A tree item's yes/no fields ("<id>.node.<node>") turned into its path
@@ -158,7 +149,7 @@ struct StudyConsole::Impl {
   StudyConfig config;
   std::map<std::string, Questionnaire> questionnaires;
   ConsoleOptions options;
-  mediator::Recorder recorder;
+  record::Recorder recorder;
   std::unique_ptr<StudyStore> store;
   std::mutex mutex;  ///< the store and `live`: the server answers from several threads
   std::string live;
@@ -183,7 +174,7 @@ struct StudyConsole::Impl {
        const std::map<std::string, Questionnaire>& q, const ConsoleOptions& o)
       : config(c), questionnaires(q), options(o), recorder(database) {
     store = std::make_unique<StudyStore>(recorder, config, plan);
-    if (options.video) thumbnail = std::make_unique<Thumbnail>(*options.video);
+    if (options.thumbnail) thumbnail = std::make_unique<Thumbnail>();
   }
 
   /// The participants' count, and how many more complete a balanced block.
@@ -482,6 +473,10 @@ bool StudyConsole::WaitForMore(const std::atomic<bool>& stop) {
   }
   impl_->waiting_for_more = false;
   return more;
+}
+
+void StudyConsole::SetPicture(std::vector<uint8_t> jpeg, uint64_t frames) {
+  if (impl_->thumbnail) impl_->thumbnail->Set(std::move(jpeg), frames);
 }
 
 uint64_t StudyConsole::video_frames() const { return impl_->thumbnail ? impl_->thumbnail->frames() : 0; }

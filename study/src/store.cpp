@@ -7,7 +7,7 @@
 
 #include "haptel/core/clock.hpp"
 #include "haptel/mediator/session.hpp"
-#include "haptel/mediator/sqlite_util.hpp"
+#include "haptel/record/sqlite_util.hpp"
 
 namespace haptel::study {
 namespace {
@@ -29,7 +29,7 @@ std::string Describe(const PlannedTrial& t) {
 
 }  // namespace
 
-StudyStore::StudyStore(mediator::Recorder& recorder, const StudyConfig& config,
+StudyStore::StudyStore(record::Recorder& recorder, const StudyConfig& config,
                        const std::vector<PlannedTrial>& plan)
     : recorder_(recorder) {
   sqlite3* db = recorder_.handle();
@@ -240,10 +240,10 @@ bool FinishesTrial(const std::string& outcome) {
          outcome == ToString(Outcome::kTimeLimit) || outcome == ToString(Outcome::kCrashed);
 }
 
-mediator::Recorder::AlsoSave StudyStore::TrialWriter(const PlannedTrial& trial, double cap_s) const {
+record::Recorder::AlsoSave StudyStore::TrialWriter(const PlannedTrial& trial, double cap_s) const {
   const int64_t study = id_;
   const std::filesystem::path file = recorder_.path();
-  return [study, file, trial, cap_s](sqlite3* db, int64_t run_id, const mediator::RunRecord& run) {
+  return [study, file, trial, cap_s](sqlite3* db, int64_t run_id, const record::RunRecord& run) {
     if (!FinishesTrial(run.outcome)) return;
     const bool completed = run.completed && std::isfinite(run.lap_time_s);
     // The thesis's rule: an unfinished lap counts as the cap.

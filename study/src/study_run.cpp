@@ -16,7 +16,6 @@
 #include "haptel/core/cli.hpp"
 #include "haptel/core/json.hpp"
 #include "haptel/core/stop_signals.hpp"
-#include "haptel/link/participant.hpp"
 #include "haptel/view/view.hpp"
 #include "haptel/mediator/run_command.hpp"
 #include "haptel/study/console.hpp"
@@ -195,15 +194,11 @@ int StudyRunCommand(int argc, const char* const* argv) {
       if (device.driver == "sim") simulated_device = run_config.device.lexically_normal().string();
       database = args.Value("database").value_or(
           !config.database.empty() ? config.database.string() : run_config.database.string());
-      // The console's thumbnail: the trials' vehicle's camera, on their domain.
-      ConsoleVideo video;
-      video.link = run_config.link;
-      if (!domain.empty()) video.link.domain_id = std::stoi(domain);
-      video.topic = link::TopicName(LoadVehicle(run_config.vehicle).name, "video");
-      console_options.video = video;
+      // The console's thumbnail: the trial's camera, through its session.
+      console_options.thumbnail = true;
     });
     // The database before anything runs, as for `haptel run`.
-    auto recorder = cli::ReadInput([&] { return std::make_unique<mediator::Recorder>(database); });
+    auto recorder = cli::ReadInput([&] { return std::make_unique<record::Recorder>(database); });
     StudyStore store = cli::ReadInput([&] { return StudyStore(*recorder, config, plan); });
     // People are started, aborted and asked from the console.
     const bool person = config.operators == "person";
@@ -233,7 +228,7 @@ int StudyRunCommand(int argc, const char* const* argv) {
     int exit_code = cli::kExitOk;
     std::string stopped;
     // A session that stops on a signal, or on the console's Abort.
-    auto run_watched = [&](const mediator::SessionSetup& setup, const mediator::Recorder::AlsoSave& also) {
+    auto run_watched = [&](const mediator::SessionSetup& setup, const record::Recorder::AlsoSave& also) {
       std::atomic<bool> trial_stop{false};
       std::atomic<bool> trial_over{false};
       std::thread watch([&] {
@@ -285,7 +280,7 @@ int StudyRunCommand(int argc, const char* const* argv) {
           std::fprintf(stderr, "[study] practice lap: %s ...\n", who.c_str());
           const mediator::RecordedRun run = run_watched(practice, {});
           if (interrupted.load()) continue;
-          const mediator::RunRecord& r = run.result.record;
+          const record::RunRecord& r = run.result.record;
           store.Event("practice", trial->participant, 0,
                       "run " + std::to_string(run.run_id) + ": " + mediator::ToString(run.result.outcome) +
                           (r.completed ? ", lap " + Seconds(r.lap_time_s) + " s" : ""));
@@ -312,11 +307,14 @@ int StudyRunCommand(int argc, const char* const* argv) {
         setup.on_live = [page](const view::Overlay& o) {
           page->SetLiveProgress({o.lap_time_s, o.gates_passed, o.gates_total, o.obstacles_touched, o.last_contact});
         };
+        setup.on_picture = [page](std::vector<uint8_t> jpeg, uint64_t frames) {
+          page->SetPicture(std::move(jpeg), frames);
+        };
       }
       std::fprintf(stderr, "[study] trial %zu/%zu: participant %s, position %d, %s ...\n", number, planned,
                    trial->participant.c_str(), trial->position, trial->condition.c_str());
       const mediator::RecordedRun run = run_watched(setup, store.TrialWriter(*trial, config.trial_cap_s));
-      const mediator::RunRecord& r = run.result.record;
+      const record::RunRecord& r = run.result.record;
       if (console && console->abort_requested().load() && !interrupted.load()) {
         store.Event("aborted", trial->participant, trial->position, "from the console; the trial is run again");
         std::fprintf(stderr, "[study]   aborted from the console: the trial is run again\n");

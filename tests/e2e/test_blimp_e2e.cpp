@@ -15,7 +15,7 @@
 #include "haptel/core/clock.hpp"
 #include "haptel/link/participant.hpp"
 #include "haptel/link/topic.hpp"
-#include "haptel/mediator/recorder.hpp"
+#include "haptel/record/recorder.hpp"
 #include "haptel/servo/calibration.hpp"
 #include "haptel/servo/serial_port.hpp"
 #include "haptel/servo/sim_servo_controller.hpp"
@@ -63,7 +63,7 @@ TEST_CASE("a blimp hop over DDS through the Maestro adapter and a pty: completed
   CHECK(std::stod(JsonField(json, "lap_time_s")) > 5.0);
   CHECK(std::stod(JsonField(json, "command_rtt_ms_p50")) > 0.0);
 
-  mediator::Recorder recorder(db);
+  record::Recorder recorder(db);
   const auto runs = recorder.LoadAll();
   REQUIRE(runs.size() == 1);
   CHECK(runs[0].completed);

@@ -15,7 +15,7 @@
 #include <string>
 
 #include "child.hpp"
-#include "haptel/mediator/recorder.hpp"
+#include "haptel/record/recorder.hpp"
 #include "haptel/vehicles/can_bus.hpp"
 #include "haptel/vehicles/candump_log.hpp"
 #include "test_env.hpp"
@@ -53,7 +53,7 @@ TEST_CASE("a lap through the CAN adapter: the JSON and the database name the kin
   const std::string json = haptel.LastLine();
   CHECK(JsonField(json, "completed") == "true");
   CHECK(JsonField(json, "vehicle_kind") == "can-robot-sim");
-  mediator::Recorder recorder(db);
+  record::Recorder recorder(db);
   const auto runs = recorder.LoadAll();
   REQUIRE(runs.size() == 1);
   CHECK(runs[0].vehicle_kind == "can-robot-sim");

@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "child.hpp"
-#include "haptel/mediator/recorder.hpp"
+#include "haptel/record/recorder.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;
@@ -126,7 +126,7 @@ TEST_CASE("a database that cannot work stops haptel run before the vehicle start
   }
   SECTION("a file another connection holds locked") {
     const auto db = dir / "locked.db";
-    { mediator::Recorder first(db); }
+    { record::Recorder first(db); }
     RawDb holder(db);
     holder.Exec("BEGIN EXCLUSIVE");
     RequireRefusedBeforeStart(db, "locked", 34);
@@ -240,7 +240,7 @@ TEST_CASE(
   CHECK(haptel.err().find("physics ") != std::string::npos);
   CHECK(haptel.out().find("CANNOT KEEP ITS RATE") != std::string::npos);
 
-  mediator::Recorder recorder(db);
+  record::Recorder recorder(db);
   const auto runs = recorder.LoadAll();
   REQUIRE(runs.size() == 1);
   CHECK(runs[0].physics_rate_short);

@@ -11,7 +11,7 @@
 
 #include "child.hpp"
 #include "haptel/link/topic.hpp"
-#include "haptel/mediator/recorder.hpp"
+#include "haptel/record/recorder.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;
@@ -49,7 +49,7 @@ TEST_CASE("haptel run completes the short track over DDS with a separate vehicle
   CHECK(kill(vehicle_pid, 0) != 0);
 
   // The run is in the database with its splits.
-  mediator::Recorder recorder(db);
+  record::Recorder recorder(db);
   const auto runs = recorder.LoadAll();
   REQUIRE(runs.size() == 1);
   CHECK(runs[0].completed);
@@ -90,7 +90,7 @@ TEST_CASE("haptel run drives the short track through the assisted cockpit: hands
   CHECK(std::stod(JsonField(json, "grasp_s")) > 0.0);
   CHECK(JsonField(json, "physics_hand_resets") == "0");
 
-  mediator::Recorder recorder(db);
+  record::Recorder recorder(db);
   const auto runs = recorder.LoadAll();
   REQUIRE(runs.size() == 1);
   CHECK(runs[0].completed);

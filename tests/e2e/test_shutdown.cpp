@@ -16,7 +16,7 @@
 #include <utility>
 
 #include "child.hpp"
-#include "haptel/mediator/recorder.hpp"
+#include "haptel/record/recorder.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;
@@ -75,7 +75,7 @@ TEST_CASE("a signal ends a run whose physics is stuck in a long step, and the ru
   REQUIRE(code != Child::kRunning);
   CHECK(code == 1);  // interrupted: not completed, nothing lost
 
-  mediator::Recorder recorder(db);
+  record::Recorder recorder(db);
   const auto runs = recorder.LoadAll();
   REQUIRE(runs.size() == 1);
   CHECK(runs[0].outcome == "interrupted");

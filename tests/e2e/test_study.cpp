@@ -17,7 +17,7 @@
 
 #include "child.hpp"
 #include "xserver.hpp"
-#include "haptel/mediator/recorder.hpp"
+#include "haptel/record/recorder.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;
@@ -83,7 +83,7 @@ TEST_CASE("a study killed mid-trial resumes and records each planned trial once"
     kill(first.pid(), SIGKILL);
     CHECK(first.Wait(30.0) == -SIGKILL);
   }
-  const size_t runs_after_kill = mediator::Recorder(db).LoadAll().size();
+  const size_t runs_after_kill = record::Recorder(db).LoadAll().size();
   CHECK(runs_after_kill == 1);  // the killed trial's run was never saved
 
   Child second(command);
@@ -97,7 +97,7 @@ TEST_CASE("a study killed mid-trial resumes and records each planned trial once"
   CHECK(second.err().find("resuming") != std::string::npos);
 
   // Exactly one row per planned trial, each linked to its own run.
-  mediator::Recorder recorder(db);
+  record::Recorder recorder(db);
   CHECK(recorder.LoadAll().size() == 4);
   std::set<std::tuple<std::string, int>> trials;
   std::set<int64_t> runs;
@@ -119,7 +119,7 @@ TEST_CASE("a study killed mid-trial resumes and records each planned trial once"
   Child third(command);
   REQUIRE(third.Wait(60.0) == 0);
   CHECK(test::JsonField(third.LastLine(), "trials_done_before") == "4");
-  CHECK(mediator::Recorder(db).LoadAll().size() == 4);
+  CHECK(record::Recorder(db).LoadAll().size() == 4);
 }
 
 TEST_CASE("a study that cannot work is refused before anything runs") {
@@ -272,7 +272,7 @@ TEST_CASE("a person study from the console: a participant added, a practice lap,
   const std::string json = study.LastLine();
   CHECK(test::JsonField(json, "finished") == "true");
   CHECK(test::JsonField(json, "trials_done") == "2");
-  mediator::Recorder recorder(db);
+  record::Recorder recorder(db);
   auto count = [&](const char* sql) {
     sqlite3_stmt* stmt = nullptr;
     REQUIRE(sqlite3_prepare_v2(recorder.handle(), sql, -1, &stmt, nullptr) == SQLITE_OK);

@@ -86,6 +86,9 @@ TEST_CASE("a person's keys drive the robot in the view's window, and releasing t
   CHECK(JsonField(json, "operator") == "person");
   CHECK(std::stod(JsonField(json, "distance_m")) > 0.5);
   CHECK(json.find("\"to\":\"cockpit\"") != std::string::npos);
+  // The cockpit's physics world was built when it was asked for, and ran from then on.
+  CHECK(run.err().find("physics world built for 'cockpit'") != std::string::npos);
+  CHECK(std::stod(JsonField(json, "physics_rate_hz")) > 0.0);
   // The last progress line, seconds after the key came up: standing.
   CHECK(LastSpeed(run.err()) == Approx(0.0).margin(0.02));
 }
@@ -102,4 +105,9 @@ TEST_CASE("Escape in the window aborts the run, stops the vehicle and keeps what
   }, 60.0));
   const std::string json = test::EndWithEscape(run);
   CHECK(std::stoi(JsonField(json, "run_id")) >= 1);
+  // Keys only, no cockpit asked for: no physics world, so no proxy hands
+  // nobody holds pushing against the servo loop's force clamp.
+  CHECK(std::stod(JsonField(json, "physics_rate_hz")) == 0.0);
+  CHECK(run.err().find("physics world built") == std::string::npos);
+  CHECK(json.find("\"servo_forces_clamped\":0") != std::string::npos);
 }

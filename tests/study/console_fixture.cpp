@@ -6,7 +6,7 @@
 #include <string>
 
 #include "haptel/config/paths.hpp"
-#include "haptel/mediator/recorder.hpp"
+#include "haptel/record/recorder.hpp"
 #include "haptel/study/console.hpp"
 #include "study_test_run.hpp"
 
@@ -31,7 +31,7 @@ int main(int argc, char** argv) {
   const std::filesystem::path db = dir / "browser.db";
   std::filesystem::remove(db);
   {
-    mediator::Recorder recorder(db);
+    record::Recorder recorder(db);
     StudyStore store(recorder, config, plan);
     recorder.Save(test::TrialRun(18.25), store.TrialWriter(plan[0], 600.0));
   }

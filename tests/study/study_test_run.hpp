@@ -3,14 +3,14 @@
 // reads set (lap, completion, obstacles): for the study's tests and fixture.
 #include <string>
 
-#include "haptel/mediator/recorder.hpp"
+#include "haptel/record/recorder.hpp"
 
 namespace haptel::test {
 
-inline mediator::RunRecord TrialRun(double lap_s, bool completed = true, int obstacles = 0) {
+inline record::RunRecord TrialRun(double lap_s, bool completed = true, int obstacles = 0) {
   // Strings moved in, not assigned from literals: GCC 12 warns falsely
   // (-Wrestrict) on literal assignment once this is inlined into a main().
-  mediator::RunRecord run;
+  record::RunRecord run;
   run.started_wall_ns = 1'714'566'896'000'000'000;
   run.config_name = std::string("study test");
   run.track = std::string("t");

@@ -10,7 +10,7 @@
 #include <catch2/catch.hpp>
 
 #include "haptel/config/paths.hpp"
-#include "haptel/mediator/recorder.hpp"
+#include "haptel/record/recorder.hpp"
 #include "haptel/study/console.hpp"
 #include "study_test_run.hpp"
 #include "test_env.hpp"
@@ -35,7 +35,7 @@ TEST_CASE("The console serves the schedule and forms, and takes each questionnai
   const std::vector<PlannedTrial> plan = {{"A", 1, "gesture", 1}, {"A", 2, "cockpit", 1}};
   const auto db = dir / "s.db";
   {
-    mediator::Recorder recorder(db);
+    record::Recorder recorder(db);
     StudyStore store(recorder, config, plan);
     recorder.Save(test::TrialRun(21.5), store.TrialWriter(plan[0], 600.0));  // A drove gesture
   }
@@ -93,7 +93,7 @@ TEST_CASE("The console serves the schedule and forms, and takes each questionnai
   CHECK(rating->status == 200);
 
   // What is stored: one set of thesis answers, the rating with its path and score.
-  mediator::Recorder recorder(db);
+  record::Recorder recorder(db);
   StudyStore store(recorder, config, plan);
   std::map<std::string, std::string> stored;
   for (const AnswerRow& a : store.Answers()) stored[a.questionnaire + "." + a.item] = a.value;
@@ -158,7 +158,7 @@ TEST_CASE("The console adds participants to an open study, each once, and finish
         std::string::npos);
   CHECK(client.Post("/participants", httplib::Params{{"id", "P2"}})->status == 303);
 
-  mediator::Recorder recorder(db);
+  record::Recorder recorder(db);
   StudyStore store(recorder, config, {});
   const std::vector<PlannedTrial> plan = store.Plan();
   REQUIRE(plan.size() == 4);
@@ -189,6 +189,34 @@ TEST_CASE("The console adds participants to an open study, each once, and finish
   REQUIRE(picture);
   CHECK(picture->status == 404);
   CHECK(console.video_frames() == 0);
+}
+
+TEST_CASE("the thumbnail is the picture the trial's session hands over, as it came") {
+  const auto dir = test::ScratchDir("study-console-thumbnail");
+  StudyConfig config;
+  config.file = dir / "thumb.yaml";
+  test::WriteFile(config.file, "name: thumb\n");
+  config.name = "thumb-study";
+  config.operators = "person";
+  config.conditions = {{"cockpit", "cockpit"}};
+  ConsoleOptions options;
+  options.port = 0;
+  options.thumbnail = true;
+  StudyConsole console(config, {}, dir / "thumb.db", {}, options);
+  httplib::Client client("127.0.0.1", console.port());
+  client.set_read_timeout(10, 0);
+  // Before any picture: nothing to show yet.
+  const auto none = client.Get("/video.jpg");
+  REQUIRE(none);
+  CHECK(none->status == 404);
+  const std::vector<uint8_t> jpeg{0xFF, 0xD8, 0xFF, 0xE0, 1, 2, 3, 0xFF, 0xD9};
+  console.SetPicture(jpeg, 17);
+  const auto picture = client.Get("/video.jpg");
+  REQUIRE(picture);
+  CHECK(picture->status == 200);
+  CHECK(picture->get_header_value("Content-Type") == "image/jpeg");
+  CHECK(std::vector<uint8_t>(picture->body.begin(), picture->body.end()) == jpeg);
+  CHECK(console.video_frames() == 17);
 }
 
 TEST_CASE("Simulated drivers come from the study file, not the console") {

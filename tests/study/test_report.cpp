@@ -7,7 +7,7 @@
 #include <sstream>
 
 #include "haptel/config/study.hpp"
-#include "haptel/mediator/recorder.hpp"
+#include "haptel/record/recorder.hpp"
 #include "haptel/study/report.hpp"
 #include "haptel/study/store.hpp"
 #include "study_test_run.hpp"
@@ -47,7 +47,7 @@ void RecordThesis(const std::filesystem::path& dir, const std::filesystem::path&
     config.participants.push_back({kDrivers[static_cast<size_t>(p)], ""});
     for (int c = 0; c < 4; ++c) plan.push_back({kDrivers[static_cast<size_t>(p)], c + 1, kConditions[static_cast<size_t>(c)], 1});
   }
-  mediator::Recorder recorder(db);
+  record::Recorder recorder(db);
   StudyStore store(recorder, config, plan);
   for (const PlannedTrial& t : plan) {
     const size_t c = static_cast<size_t>(t.position - 1);

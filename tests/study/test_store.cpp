@@ -4,7 +4,7 @@
 // twice, participants added in the console after the file's.
 #include <catch2/catch.hpp>
 
-#include "haptel/mediator/recorder.hpp"
+#include "haptel/record/recorder.hpp"
 #include "haptel/mediator/session.hpp"
 #include "haptel/study/plan.hpp"
 #include "haptel/study/store.hpp"
@@ -80,7 +80,7 @@ TEST_CASE("The store keeps a study's plan, trials and answers across restarts, e
   const std::vector<PlannedTrial> plan = PlanTrials(config);
   const auto db = dir / "s.db";
   {
-    mediator::Recorder recorder(db);
+    record::Recorder recorder(db);
     StudyStore store(recorder, config, plan);
     CHECK_FALSE(store.resumed());
     CHECK(store.Plan().size() == 16);
@@ -92,7 +92,7 @@ TEST_CASE("The store keeps a study's plan, trials and answers across restarts, e
     recorder.Save(test::TrialRun(42.0, true, 2), store.TrialWriter(plan[0], 600.0));
     recorder.Save(test::TrialRun(700.0, false), store.TrialWriter(plan[1], 600.0));
     // A run that ended in a fault: recorded, but the trial is not done.
-    mediator::RunRecord lost = test::TrialRun(5.1, false, 1);
+    record::RunRecord lost = test::TrialRun(5.1, false, 1);
     lost.outcome = mediator::ToString(mediator::Outcome::kVehicleLost);
     recorder.Save(lost, store.TrialWriter(plan[2], 600.0));
     CHECK(store.Trials().size() == 2);
@@ -106,7 +106,7 @@ TEST_CASE("The store keeps a study's plan, trials and answers across restarts, e
     CHECK(recorder.LoadAll().size() == runs);
   }
   // Restarted (a kill -9 leaves exactly what was committed).
-  mediator::Recorder recorder(db);
+  record::Recorder recorder(db);
   StudyStore store(recorder, config, plan);
   CHECK(store.resumed());
   const std::vector<TrialRow> trials = store.Trials();

@@ -4,7 +4,7 @@
 #include <catch2/catch.hpp>
 
 #include "haptel/config/paths.hpp"
-#include "haptel/mediator/recorder.hpp"
+#include "haptel/record/recorder.hpp"
 #include "haptel/study/submission.hpp"
 #include "study_test_run.hpp"
 #include "test_env.hpp"
@@ -29,7 +29,7 @@ TEST_CASE("Submitted questionnaires are checked, ordered, never doubled, and sco
   config.participants = {{"A", ""}, {"B", ""}};
   const std::vector<PlannedTrial> plan = {{"A", 1, "gesture", 1}, {"A", 2, "cockpit", 1}, {"B", 1, "cockpit", 1},
                                           {"B", 2, "gesture", 1}};
-  mediator::Recorder recorder(dir / "s.db");
+  record::Recorder recorder(dir / "s.db");
   StudyStore store(recorder, config, plan);
   recorder.Save(test::TrialRun(20.0), store.TrialWriter(plan[0], 600.0));  // A has driven gesture, nothing else
   const std::filesystem::path shipped = ShippedFile("config/questionnaires");

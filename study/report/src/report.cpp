@@ -11,7 +11,7 @@
 
 #include "haptel/core/html.hpp"
 #include "haptel/core/json.hpp"
-#include "haptel/mediator/sqlite_util.hpp"
+#include "haptel/record/sqlite_util.hpp"
 
 namespace haptel::study {
 namespace {

@@ -21,6 +21,8 @@
 #include <filesystem>
 #include <string>
 
+#include "haptel/config/interface_kinds.hpp"
+
 namespace haptel {
 
 enum class BlimpManualInput { kKeys, kGamepad };
@@ -40,16 +42,22 @@ struct BlimpManualConfig {
   double trigger_dead_zone = 0.05;  ///< fraction of a trigger's full pull
   double command_rate_hz = 50.0;
 
+  /// Which input flies, as the interface table says of `name`.
   BlimpManualInput input() const {
-    return name == "blimp-gamepad" ? BlimpManualInput::kGamepad : BlimpManualInput::kKeys;
+    const InterfaceKindInfo* kind = FindInterfaceKind(name);
+    return kind != nullptr && kind->input == InterfaceInput::kGamepad ? BlimpManualInput::kGamepad
+                                                                      : BlimpManualInput::kKeys;
   }
 
   /// Throws ConfigFieldError naming the first field out of range.
   void ValidateOrThrow() const;
 };
 
-/// Whether `name` is one of the blimp's manual interfaces.
-inline bool IsBlimpManual(const std::string& name) { return name == "blimp-keys" || name == "blimp-gamepad"; }
+/// Whether `name` is one of the blimp's manual interfaces (keys or a controller).
+inline bool IsBlimpManual(const std::string& name) {
+  const InterfaceKindInfo* kind = FindInterfaceKind(name);
+  return kind != nullptr && kind->family == VehicleFamily::kBlimp && kind->manual();
+}
 
 /// Loads and validates (BlimpManualConfig::ValidateOrThrow). Strict: unknown
 /// keys, including the other input's, are errors naming file, key and line.

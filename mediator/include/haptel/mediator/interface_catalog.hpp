@@ -11,6 +11,7 @@
 #include "haptel/config/device.hpp"
 #include "haptel/config/gamepad.hpp"
 #include "haptel/config/gesture.hpp"
+#include "haptel/config/interface_kinds.hpp"
 #include "haptel/config/keyboard.hpp"
 #include "haptel/config/run.hpp"
 #include "haptel/interfaces/input.hpp"
@@ -22,20 +23,24 @@ class ControlsPort;
 
 namespace haptel::mediator {
 
-/// One interface file, loaded: its config says which interface it is.
+/// One interface file of the robot family, loaded: its row in the interface
+/// table (config/interface_kinds.hpp) says what it is, its config how it is set.
 struct InterfaceSpec {
+  using Config = std::variant<GestureConfig, CockpitConfig, KeyboardConfig, GamepadConfig>;
   std::string name;
-  std::variant<GestureConfig, CockpitConfig, KeyboardConfig, GamepadConfig> config;
+  Config config;
 
+  /// Its row in the interface table.
+  const InterfaceKindInfo& kind() const;
   bool is_cockpit() const { return std::holds_alternative<CockpitConfig>(config); }
   /// The interface moves proxy hands among bodies (a physics world).
-  bool needs_physics() const { return is_cockpit(); }
+  bool needs_physics() const { return kind().physics; }
   /// Hands the interface uses ([left, right]).
-  std::array<bool, 2> hands() const;
+  std::array<bool, 2> hands() const { return kind().hands; }
   /// Driven by a person's keys or controller, not by hands on a device.
-  bool manual() const { return is_keyboard() || is_gamepad(); }
-  bool is_keyboard() const { return std::holds_alternative<KeyboardConfig>(config); }
-  bool is_gamepad() const { return std::holds_alternative<GamepadConfig>(config); }
+  bool manual() const { return kind().manual(); }
+  bool is_keyboard() const { return kind().input == InterfaceInput::kKeys; }
+  bool is_gamepad() const { return kind().input == InterfaceInput::kGamepad; }
   double command_rate_hz() const;
 };
 

@@ -10,7 +10,7 @@
 
 #include "haptel/haptics/hal.hpp"
 #include "haptel/interfaces/interface.hpp"
-#include "haptel/mediator/recorder.hpp"  // SwitchRecord: switches are recorded as they are kept
+#include "haptel/mediator/run_record.hpp"  // SwitchRecord: switches are recorded as they are kept
 
 namespace haptel::mediator {
 
@@ -28,6 +28,10 @@ class InterfaceSet {
   /// The interface at `index`, or null.
   interfaces::MediatorInterface* at(int index);
 
+  /// Puts a built interface into the empty place `index` (one whose parts —
+  /// a physics world — were built when it was first asked for).
+  /// std::invalid_argument when the place is taken or out of range.
+  void Provide(int index, std::unique_ptr<interfaces::MediatorInterface> interface);
   /// Asks for the interface at `index` from t_s on. False (and nothing
   /// happens) when it is the current one, missing, or a switch is under way.
   bool Request(int index, double t_s);

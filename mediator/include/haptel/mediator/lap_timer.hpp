@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "haptel/config/track.hpp"
-#include "haptel/mediator/recorder.hpp"
+#include "haptel/mediator/run_record.hpp"
 
 namespace haptel::mediator {
 

@@ -9,7 +9,7 @@
 #include <string>
 
 #include "haptel/core/args.hpp"
-#include "haptel/mediator/recorder.hpp"
+#include "haptel/mediator/run_record.hpp"
 #include "haptel/mediator/session.hpp"
 
 namespace haptel::mediator {

@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "haptel/core/loop_meter.hpp"
-#include "haptel/mediator/recorder.hpp"
+#include "haptel/mediator/run_record.hpp"
 
 namespace haptel::mediator {
 
@@ -77,6 +77,10 @@ class LoopWatch {
   LoopWatch(const HapticSide& haptic, const SessionPhysics* physics, const VehicleLink& vehicle,
             const SessionView* view, int64_t now_ns);
 
+  /// A physics world built during the run (an interface that needs one was
+  /// switched to): its loop is watched from `now_ns` on.
+  void AddPhysics(const SessionPhysics* physics, int64_t now_ns);
+  const SessionPhysics* physics() const { return physics_; }
   /// Ends an interval (a progress interval, or the run's last stretch) at
   /// `now_ns`: a line for each loop that fell short of its rate over it.
   std::vector<std::string> EndInterval(int64_t now_ns);

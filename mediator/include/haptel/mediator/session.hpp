@@ -3,10 +3,13 @@
 /// started and stopped on its own:
 ///
 /// - the haptic device (HapticSide: sim, udp or replay; HAL; servo loop at 1 kHz),
-/// - the physics world when an interface's controls or the scene need one
-///   (SessionPhysics: proxy hands, wheel and lever at 1/step_s),
-/// - the interfaces (InterfaceSet: the current one, and those F1–F6 switch to),
-/// - the operator (Operator: the automatic driver, or a person),
+/// - the vehicle family's part (robot_session.cpp, blimp_session.cpp): its
+///   track or course and lap timer, its interfaces (the robot's InterfaceSet:
+///   the current one, and those F1–F6 switch to), the physics world when an
+///   interface's controls or the scene need one (SessionPhysics: proxy hands,
+///   wheel and lever at 1/step_s; built when such an interface is first
+///   asked for, not before), and its operator (the automatic driver or
+///   pilot, or a person),
 /// - the vehicle link (VehicleLink: spawned simulator, DDS, video),
 /// - the view and a person's input (SessionView: window or offscreen, MP4),
 /// - and the session loop (this thread, `session_rate_hz`), which feeds the
@@ -38,7 +41,7 @@
 #include "haptel/config/vehicle.hpp"
 #include "haptel/mediator/interface_catalog.hpp"
 #include "haptel/mediator/interface_set.hpp"
-#include "haptel/mediator/recorder.hpp"
+#include "haptel/mediator/run_record.hpp"
 #include "haptel/view/view_model.hpp"
 
 namespace haptel::mediator {
@@ -96,6 +99,10 @@ struct SessionSetup {
   /// overlay shows (lap clock, gates, contacts), view or not: a study's
   /// console shows the live trial with it. Must return quickly.
   std::function<void(const view::Overlay&)> on_live;
+  /// Called with on_live (twice a second) with the vehicle's latest camera
+  /// picture as it came (JPEG), when a new one arrived: a study's console
+  /// shows it as its thumbnail, through this session's link. Must return quickly.
+  std::function<void(std::vector<uint8_t> jpeg, uint64_t frames)> on_picture;
   /// A blimp's flight (the vehicle is a blimp kind): its course, instead of
   /// `track`, and its interface, instead of `interfaces`:
   /// the gesture cockpit (`blimp_interface`) or a person's keys or game

@@ -9,6 +9,7 @@
 /// and the overlay the session loop publishes (a seqlock). Nothing here
 /// waits on the servo loop, the physics thread or the link.
 #include <array>
+#include <atomic>
 #include <memory>
 
 #include "haptel/config/cockpit.hpp"
@@ -33,7 +34,7 @@ class SessionView final : public view::ViewSource {
   /// What the view shows; everything must outlive the SessionView.
   struct Parts {
     const haptics::Hal* hal = nullptr;
-    const SessionPhysics* physics = nullptr;  ///< null: no world (tracked hands)
+    const SessionPhysics* physics = nullptr;  ///< null: no world (yet; SetPhysics): tracked hands
     const PhysicsConfig* physics_config = nullptr;
     const CockpitConfig* cockpit = nullptr;  ///< the controls' geometry, when there are controls
     physics::ControlsBodyConfig controls_bodies;  ///< as the world built them
@@ -51,6 +52,9 @@ class SessionView final : public view::ViewSource {
   /// Session thread: where the head and the vehicle camera look (a tracked
   /// gaze turns the view and the screen; the robot's view never sets one).
   void Publish(const view::Gaze& gaze) { gaze_.Store(gaze); }
+  /// Session thread: a physics world built during the run (its proxy hands
+  /// and controls are drawn from the next frame on). It must outlive the view.
+  void SetPhysics(const SessionPhysics* physics) { physics_.store(physics, std::memory_order_release); }
   /// View thread.
   void Fill(view::ViewModel& model) override;
   view::ViewStats Stats() const;
@@ -59,6 +63,7 @@ class SessionView final : public view::ViewSource {
 
  private:
   Parts parts_;
+  std::atomic<const SessionPhysics*> physics_;
   Seqlock<view::Overlay> overlay_;
   Seqlock<view::Gaze> gaze_;
   view::SdlInput input_;

@@ -48,6 +48,9 @@ class VideoReceiver {
   cv::Mat Screen() const;
   /// The latest decoded image without copying it: a short lock, any thread.
   LatestFrame Latest() const;
+  /// The latest good frame as it came (JPEG), copied; empty before the
+  /// first. Any thread, now and then (a console's thumbnail), decoding or not.
+  std::vector<uint8_t> LatestPicture() const;
 
  private:
   void OnFrame(const msg::VideoFrame& frame);
@@ -61,6 +64,7 @@ class VideoReceiver {
   bool has_pending_ = false;
   bool stop_ = false;
   LatestFrame latest_;
+  std::vector<uint8_t> last_bytes_;  ///< the latest good frame's bytes
   video::JpegDecoder decoder_;
   Histogram latency_{100.0, 5000};  // µs bins up to 500 ms
   uint64_t frames_ = 0;

@@ -19,12 +19,10 @@
 #include <filesystem>
 #include <map>
 #include <memory>
-#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
-#include "haptel/config/link.hpp"
 #include "haptel/config/study.hpp"
 #include "haptel/study/questionnaire.hpp"
 #include "haptel/study/store.hpp"
@@ -37,17 +35,11 @@ class ConsoleError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// Where the console watches the vehicle's camera for its thumbnail: a DDS
-/// reader of its own on the trials' domain, beside the session's.
-struct ConsoleVideo {
-  LinkConfig link;
-  std::string topic;  ///< e.g. "haptel/robot1/video"
-};
-
 struct ConsoleOptions {
   std::string host = "127.0.0.1";  ///< only this machine: the page takes answers
   int port = 8470;                 ///< 0: any free port (tests)
-  std::optional<ConsoleVideo> video;  ///< none: no thumbnail
+  /// Show the vehicle's camera (SetPicture, from the trial's session).
+  bool thumbnail = false;
 };
 
 /// The live trial as the page shows it, beside its title line.
@@ -91,7 +83,10 @@ class StudyConsole {
   /// experimenter adds a participant (true) or presses Finish, or `stop` is
   /// set (false).
   bool WaitForMore(const std::atomic<bool>& stop);
-  /// Camera pictures the thumbnail has received (0 without video).
+  /// The trial's latest camera picture (JPEG) for the thumbnail, and how many
+  /// frames the session has received; ignored without `thumbnail`.
+  void SetPicture(std::vector<uint8_t> jpeg, uint64_t frames);
+  /// Frames the trial's session had received at the last picture (0 without one).
   uint64_t video_frames() const;
 
  private:

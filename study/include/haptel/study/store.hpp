@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "haptel/config/study.hpp"
-#include "haptel/mediator/recorder.hpp"
+#include "haptel/record/recorder.hpp"
 
 namespace haptel::study {
 
@@ -69,7 +69,7 @@ class StudyStore {
   /// same way (conditions, participants, order): otherwise throws
   /// std::runtime_error saying what differs — a changed study is a new one,
   /// under a new name. Keeps a reference to `recorder`.
-  StudyStore(mediator::Recorder& recorder, const StudyConfig& config, const std::vector<PlannedTrial>& plan);
+  StudyStore(record::Recorder& recorder, const StudyConfig& config, const std::vector<PlannedTrial>& plan);
 
   int64_t id() const { return id_; }
   /// Whether the study was already in the database (this run resumes it).
@@ -95,7 +95,7 @@ class StudyStore {
   /// fault (vehicle or device lost, interrupted) is recorded, the trial is
   /// not, and a resumed study runs it again. Throws if the trial already
   /// has a row (the run is then rolled back too).
-  mediator::Recorder::AlsoSave TrialWriter(const PlannedTrial& trial, double cap_s) const;
+  record::Recorder::AlsoSave TrialWriter(const PlannedTrial& trial, double cap_s) const;
 
   /// Takes a finished trial back, to be run again (the experimenter's Redo):
   /// its row goes, its run stays, and a 'redo' event records it — in one
@@ -120,7 +120,7 @@ class StudyStore {
              const std::string& detail = "");
 
  private:
-  mediator::Recorder& recorder_;
+  record::Recorder& recorder_;
   int64_t id_ = 0;
   bool resumed_ = false;
 };

@@ -13,8 +13,8 @@
 #include "haptel/core/cli.hpp"
 #include "haptel/core/log.hpp"
 #include "haptel/mediator/run_command.hpp"
-#include "haptel/mediator/scene_command.hpp"
-#include "haptel/mediator/link_commands.hpp"
+#include "haptel/app/scene_command.hpp"
+#include "haptel/app/link_commands.hpp"
 #include "haptel/study/study_command.hpp"
 
 namespace {
@@ -51,11 +51,11 @@ int main(int argc, char** argv) {
   const std::string command = argc > 1 ? argv[1] : "";
   if (command == "run") return mediator::RunCommand(argc - 1, argv + 1);
   if (command == "calibrate") return haptics::CalibrateMain(argc - 1, argv + 1);
-  if (command == "scene") return mediator::SceneCommand(argc - 1, argv + 1, std::cout, std::cerr);
+  if (command == "scene") return app::SceneCommand(argc - 1, argv + 1, std::cout, std::cerr);
   if (command == "bench") return ExecBench(argv + 1);
   if (command == "study") return study::StudyCommand(argc - 1, argv + 1);
-  if (command == "security") return mediator::SecurityCommand(argc - 1, argv + 1);
-  if (command == "discovery-server") return mediator::DiscoveryServerCommand(argc - 1, argv + 1);
+  if (command == "security") return app::SecurityCommand(argc - 1, argv + 1);
+  if (command == "discovery-server") return app::DiscoveryServerCommand(argc - 1, argv + 1);
   return cli::Main({"haptel", kUsage}, argc, argv, [&]() -> int {
     if (command.empty()) throw UsageError("missing command (run, calibrate, scene, study, security, discovery-server, bench)");
     throw UsageError("unknown command '" + command +

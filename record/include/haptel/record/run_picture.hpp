@@ -16,9 +16,9 @@
 
 #include "haptel/config/blimp_course.hpp"
 #include "haptel/config/track.hpp"
-#include "haptel/mediator/recorder.hpp"
+#include "haptel/record/recorder.hpp"
 
-namespace haptel::mediator {
+namespace haptel::record {
 
 /// The picture and where things are in it.
 struct RunPicture {
@@ -64,4 +64,4 @@ void DrawRunPicture(const RunRecord& run, const TrackConfig& track,
 /// Where a run's picture goes: <the database's folder>/pictures/run-<id>.png.
 std::filesystem::path RunPicturePath(const std::filesystem::path& database, int64_t run_id);
 
-}  // namespace haptel::mediator
+}  // namespace haptel::record

@@ -9,10 +9,10 @@
 /// --json prints the same as one JSON line.
 #include <iosfwd>
 
-namespace haptel::mediator {
+namespace haptel::app {
 
 /// argv[0] is "scene". Returns the exit code: 0 with the report on `out`, or
 /// 2 with one line on `err` (a bad scene: "haptel: file:line: <element>: …").
 int SceneCommand(int argc, const char* const* argv, std::ostream& out, std::ostream& err);
 
-}  // namespace haptel::mediator
+}  // namespace haptel::app

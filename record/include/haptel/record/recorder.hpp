@@ -12,7 +12,7 @@
 
 struct sqlite3;
 
-namespace haptel::mediator {
+namespace haptel::record {
 
 /// One gate of a lap: whether it was passed between its posts, and when its
 /// line was crossed, in s since the lap started (negative: never reached).
@@ -158,4 +158,4 @@ class Recorder {
   sqlite3* db_ = nullptr;
 };
 
-}  // namespace haptel::mediator
+}  // namespace haptel::record

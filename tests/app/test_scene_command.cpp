@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "haptel/config/paths.hpp"
-#include "haptel/mediator/scene_command.hpp"
+#include "haptel/app/scene_command.hpp"
 #include "test_env.hpp"
 
 namespace fs = std::filesystem;
@@ -30,7 +30,7 @@ Outcome Run(std::vector<std::string> words) {
   std::ostringstream out;
   std::ostringstream err;
   Outcome o;
-  o.code = haptel::mediator::SceneCommand(static_cast<int>(argv.size()), argv.data(), out, err);
+  o.code = haptel::app::SceneCommand(static_cast<int>(argv.size()), argv.data(), out, err);
   o.out = out.str();
   o.err = err.str();
   return o;

@@ -1,4 +1,4 @@
-#include "haptel/mediator/scene_command.hpp"
+#include "haptel/app/scene_command.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -15,7 +15,7 @@
 #include "haptel/core/args.hpp"
 #include "haptel/core/json.hpp"
 
-namespace haptel::mediator {
+namespace haptel::app {
 namespace {
 
 using Eigen::Matrix3d;
@@ -225,4 +225,4 @@ int SceneCommand(int argc, const char* const* argv, std::ostream& out, std::ostr
   return 2;
 }
 
-}  // namespace haptel::mediator
+}  // namespace haptel::app

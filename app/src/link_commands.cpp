@@ -1,4 +1,4 @@
-#include "haptel/mediator/link_commands.hpp"
+#include "haptel/app/link_commands.hpp"
 
 #include <atomic>
 #include <chrono>
@@ -15,7 +15,7 @@
 #include "haptel/link/participant.hpp"
 #include "haptel/link/security.hpp"
 
-namespace haptel::mediator {
+namespace haptel::app {
 
 namespace {
 
@@ -93,4 +93,4 @@ int DiscoveryServerCommand(int argc, const char* const* argv) {
                    });
 }
 
-}  // namespace haptel::mediator
+}  // namespace haptel::app

@@ -9,9 +9,9 @@
 #include <filesystem>
 #include <string>
 
-#include "haptel/mediator/recorder.hpp"
+#include "haptel/record/recorder.hpp"
 
-namespace haptel::mediator {
+namespace haptel::record {
 
 /// The whole run as one JSON object: every field of RunRecord under its own
 /// name, with its splits, switches, path, contacts and counters (as an object
@@ -30,4 +30,4 @@ std::filesystem::path UnsavedRunPath(const std::filesystem::path& database, int6
 std::filesystem::path WriteUnsavedRun(const RunRecord& run, const std::filesystem::path& database,
                                       int64_t wall_ns);
 
-}  // namespace haptel::mediator
+}  // namespace haptel::record

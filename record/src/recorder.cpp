@@ -10,9 +10,9 @@
 /// SQLite stores a NaN as NULL; LoadAll maps a NULL REAL back to NaN, so
 /// "not measured" metrics round-trip. The path, contact and switch columns are
 /// NOT NULL: a NaN time or position there is an error, and the save rolls back.
-#include "haptel/mediator/recorder.hpp"
+#include "haptel/record/recorder.hpp"
 
-#include "haptel/mediator/sqlite_util.hpp"
+#include "haptel/record/sqlite_util.hpp"
 
 #include <sqlite3.h>
 #include <unistd.h>
@@ -31,7 +31,7 @@
 #include <system_error>
 #include <unordered_map>
 
-namespace haptel::mediator {
+namespace haptel::record {
 namespace {
 
 using namespace haptel::sql;
@@ -611,4 +611,4 @@ std::vector<RunRecord> Recorder::LoadAll() const {
   return runs;
 }
 
-}  // namespace haptel::mediator
+}  // namespace haptel::record

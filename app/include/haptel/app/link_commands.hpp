@@ -2,7 +2,7 @@
 /// @file The commands that set a link up across hosts: `haptel security
 /// init` (DDS Security's folder) and `haptel discovery-server`.
 
-namespace haptel::mediator {
+namespace haptel::app {
 
 /// `haptel security init DIR [--vehicles A,B] [--days N]`: makes the folder
 /// DDS Security needs (link/security.hpp): a CA, the operator's and each
@@ -18,4 +18,4 @@ int SecurityCommand(int argc, const char* const* argv);
 /// `--discovery-server ADDR:PORT` on haptel run and haptel-vehicle.
 int DiscoveryServerCommand(int argc, const char* const* argv);
 
-}  // namespace haptel::mediator
+}  // namespace haptel::app

@@ -14,7 +14,7 @@
 #include "haptel/config/blimp_course.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/track.hpp"
-#include "haptel/mediator/run_picture.hpp"
+#include "haptel/record/run_picture.hpp"
 
 namespace fs = std::filesystem;
 using haptel::LoadTrack;
@@ -22,11 +22,11 @@ using haptel::ShippedFile;
 using haptel::Track;
 using haptel::TrackConfig;
 using haptel::Vec2;
-using haptel::mediator::DrawRunPicture;
-using haptel::mediator::RenderRunPicture;
-using haptel::mediator::RunPicture;
-using haptel::mediator::RunPicturePath;
-using haptel::mediator::RunRecord;
+using haptel::record::DrawRunPicture;
+using haptel::record::RenderRunPicture;
+using haptel::record::RunPicture;
+using haptel::record::RunPicturePath;
+using haptel::record::RunRecord;
 
 namespace {
 
@@ -224,7 +224,7 @@ TEST_CASE("The blimp's flight picture: the whole course to scale, gates by outco
   // A straight flight from the start along y = 0, through the gate, and on.
   for (int i = 0; i <= 60; ++i) run.path.push_back({0.5 * i, 1.0 * i, 0.0, 3.0});
   run.splits.push_back({0, true, 12.0});
-  const RunPicture picture = haptel::mediator::RenderBlimpRunPicture(run, course);
+  const RunPicture picture = haptel::record::RenderBlimpRunPicture(run, course);
 
   // The building is in the picture although the path never comes near it:
   // its outline at a corner, in the wall's grey.
@@ -243,6 +243,6 @@ TEST_CASE("The blimp's flight picture: the whole course to scale, gates by outco
   CHECK(At(picture, Vec2(20.0, 0.0)) != cv::Vec3b(255, 255, 255));
   // Not reached: the same gate grey.
   run.splits[0] = {0, false, -1.0};
-  const RunPicture unreached = haptel::mediator::RenderBlimpRunPicture(run, course);
+  const RunPicture unreached = haptel::record::RenderBlimpRunPicture(run, course);
   CHECK_FALSE(GreenDominant(At(unreached, Vec2(gate.centre[0], gate.centre[1] + gate.width / 2 - 0.5))));
 }

@@ -1,4 +1,4 @@
-// Tests for haptel::mediator::Recorder: round trip (with switches, path,
+// Tests for haptel::record::Recorder: round trip (with switches, path,
 // contacts and counters), folder creation, errors naming the file (a folder,
 // a path under a file, garbage, a lock, a newer or foreign schema), migration
 // of v1 and v2 databases, rollback of a failing save, a file deleted under an
@@ -28,18 +28,18 @@
 #include <thread>
 #include <vector>
 
-#include "haptel/mediator/recorder.hpp"
-#include "haptel/mediator/unsaved_run.hpp"
+#include "haptel/record/recorder.hpp"
+#include "haptel/record/unsaved_run.hpp"
 #include "test_env.hpp"
 
 namespace fs = std::filesystem;
-using haptel::mediator::ContactPoint;
-using haptel::mediator::GateSplit;
-using haptel::mediator::PathPoint;
-using haptel::mediator::Recorder;
-using haptel::mediator::RunCounter;
-using haptel::mediator::RunRecord;
-using haptel::mediator::SwitchRecord;
+using haptel::record::ContactPoint;
+using haptel::record::GateSplit;
+using haptel::record::PathPoint;
+using haptel::record::Recorder;
+using haptel::record::RunCounter;
+using haptel::record::RunRecord;
+using haptel::record::SwitchRecord;
 
 namespace {
 
@@ -457,11 +457,11 @@ TEST_CASE("A run the database did not take is written whole beside it", "[record
   run.config_name = "quote \" and\nnewline";
   const int64_t wall_ns = 1'714'566'896'789'000'000;  // 2024-05-01T12:34:56.789Z
 
-  const fs::path file = haptel::mediator::WriteUnsavedRun(run, db, wall_ns);
+  const fs::path file = haptel::record::WriteUnsavedRun(run, db, wall_ns);
   CHECK(file == tmp.path() / "runs.db.unsaved-20240501T123456.789Z.json");
   std::ifstream in(file);
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  CHECK(text == haptel::mediator::RunRecordJson(run) + "\n");
+  CHECK(text == haptel::record::RunRecordJson(run) + "\n");
   CHECK(std::count(text.begin(), text.end(), '\n') == 1);  // one line: strings are escaped
   for (const std::string& part :
        {std::string("\"config_name\":\"quote \\\" and\\u000anewline\""),
@@ -477,14 +477,14 @@ TEST_CASE("A run the database did not take is written whole beside it", "[record
   CHECK(text.find("\"path\":[{\"t_s\":0,\"x\":-0.33333333333333331,") != std::string::npos);
 
   // Never overwritten: a second run in the same millisecond gets a name of its own.
-  const fs::path second = haptel::mediator::WriteUnsavedRun(MakeRun(3, 1), db, wall_ns);
+  const fs::path second = haptel::record::WriteUnsavedRun(MakeRun(3, 1), db, wall_ns);
   CHECK(second == tmp.path() / "runs.db.unsaved-20240501T123456.789Z-2.json");
   CHECK(fs::file_size(file) == text.size());
 
   // A database folder that is gone: the system's temporary folder takes it.
   const std::string name = tmp.path().filename().string() + ".db";  // unique to this test
   const fs::path elsewhere =
-      haptel::mediator::WriteUnsavedRun(run, tmp.path() / "gone" / name, wall_ns + 1'000'000);
+      haptel::record::WriteUnsavedRun(run, tmp.path() / "gone" / name, wall_ns + 1'000'000);
   CHECK(elsewhere.parent_path() == fs::temp_directory_path());
   CHECK(elsewhere.filename() == name + ".unsaved-20240501T123456.790Z.json");
   CHECK(fs::file_size(elsewhere) == text.size());

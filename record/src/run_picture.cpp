@@ -3,7 +3,7 @@
 /// Layout, top to bottom: a title band (two lines), the map (the track and
 /// the path, to scale, with a margin), and a legend band (the speed colour bar
 /// on the left, a metre scale bar on the right).
-#include "haptel/mediator/run_picture.hpp"
+#include "haptel/record/run_picture.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -18,7 +18,7 @@
 #include <system_error>
 #include <vector>
 
-namespace haptel::mediator {
+namespace haptel::record {
 namespace {
 
 constexpr int kMarginPx = 28;      ///< around the map's content
@@ -490,4 +490,4 @@ std::filesystem::path RunPicturePath(const std::filesystem::path& database, int6
   return database.parent_path() / "pictures" / ("run-" + std::to_string(run_id) + ".png");
 }
 
-}  // namespace haptel::mediator
+}  // namespace haptel::record

@@ -1,4 +1,4 @@
-#include "haptel/mediator/unsaved_run.hpp"
+#include "haptel/record/unsaved_run.hpp"
 
 #include <cerrno>
 #include <cmath>
@@ -9,7 +9,7 @@
 
 #include "haptel/core/json.hpp"
 
-namespace haptel::mediator {
+namespace haptel::record {
 namespace {
 
 /// A number that reads back to the same double (JsonNumber keeps 6 digits).
@@ -167,4 +167,4 @@ std::filesystem::path WriteUnsavedRun(const RunRecord& run, const std::filesyste
                            ") nor to " + temp.string() + " (" + temp_error + ")");
 }
 
-}  // namespace haptel::mediator
+}  // namespace haptel::record

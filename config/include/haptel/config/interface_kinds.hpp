@@ -1,0 +1,48 @@
+#pragma once
+/// @file The mediator interfaces a run or a study may name, in one table:
+/// the vehicle family each drives, the device's arms it uses, how its input
+/// comes (hands on the device, a person's keys or game controller) and
+/// whether its controls are bodies in a physics world. The loaders and the
+/// run's checks read this table instead of telling interfaces apart by name;
+/// each interface's config loader and factory sit beside it on the operator
+/// side (mediator/interface_catalog.hpp, the blimp's session).
+#include <array>
+#include <deque>
+#include <string>
+
+#include "haptel/config/vehicle_kinds.hpp"
+
+namespace haptel {
+
+/// How an interface takes its input.
+enum class InterfaceInput {
+  kHands,    ///< both or one hand on the haptic device
+  kKeys,     ///< a person's keyboard, in the view's window
+  kGamepad,  ///< a person's game controller
+};
+
+struct InterfaceKindInfo {
+  std::string name;  ///< as its file names it (`name:`), and the file's stem
+  VehicleFamily family = VehicleFamily::kRobot;
+  std::array<bool, 2> hands{false, false};  ///< the device's arms it uses: [left, right]
+  InterfaceInput input = InterfaceInput::kHands;
+  /// Its controls are bodies the proxy hands move (a physics world).
+  bool physics = false;
+  std::string summary;  ///< one line
+  /// Driven by a person's keys or controller, not by hands on a device
+  /// (the automatic operator cannot drive it).
+  bool manual() const { return input != InterfaceInput::kHands; }
+};
+
+/// Every interface: the built-in ones, then any registered since (a deque:
+/// what FindInterfaceKind returned stays valid).
+const std::deque<InterfaceKindInfo>& InterfaceKinds();
+/// The interface named `name`, or null.
+const InterfaceKindInfo* FindInterfaceKind(const std::string& name);
+/// Adds an interface (a plug-in's, a test's). std::invalid_argument when the
+/// name is taken. Register before any thread reads the table.
+void RegisterInterfaceKind(const InterfaceKindInfo& info);
+/// "gesture, cockpit, …": the interfaces that drive `family`, for an error's "expected".
+std::string InterfaceKindNames(VehicleFamily family);
+
+}  // namespace haptel

@@ -1,0 +1,195 @@
+// The vehicle seam: a new robot-like kind is an adapter, its registration and
+// a vehicle file — here a toy kind registered the way docs/vehicles.md shows,
+// loaded from its file, opened by OpenVehicle and driven through the one
+// vehicle node over DDS, with the watchdog stopping it.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <mutex>
+#include <optional>
+
+#include "haptel/config/vehicle.hpp"
+#include "haptel/config/vehicle_kinds.hpp"
+#include "haptel/core/clock.hpp"
+#include "haptel/link/families.hpp"
+#include "haptel/vehicles/vehicle_kinds.hpp"
+#include "test_env.hpp"
+
+using namespace haptel;
+using namespace haptel::vehicles;
+
+namespace {
+
+/// The toy: a point that rolls along its heading at the mean of its treads'
+/// levels (max_speed at the top level) and turns at their difference.
+class ToyRobot final : public VehicleAdapter {
+ public:
+  explicit ToyRobot(const VehicleConfig& config) : drive_(config.drive) { state_.pose_valid = true; }
+  void SetMotors(const MotorLevels& levels) override { state_.applied = levels; }
+  void Update(double dt) override {
+    const double top = drive_.max_speed / drive_.speed_levels;
+    const double left = top * state_.applied.left, right = top * state_.applied.right;
+    state_.speed = 0.5 * (left + right);
+    state_.yaw_rate = (right - left) / drive_.track_width;
+    state_.heading += state_.yaw_rate * dt;
+    state_.x += state_.speed * std::cos(state_.heading) * dt;
+    state_.y += state_.speed * std::sin(state_.heading) * dt;
+  }
+  AdapterState State() const override { return state_; }
+
+ private:
+  DriveConfig drive_;
+  AdapterState state_;
+};
+
+VehicleKindInfo Kind(const std::string& name, const std::string& summary = "") {
+  VehicleKindInfo info;
+  info.name = name;
+  info.summary = summary;
+  return info;
+}
+
+/// Registers the toy once per process (a second registration is refused).
+void RegisterToy() {
+  static const bool registered = [] {
+    RegisterKind<RobotFamily>(Kind("toy-robot", "a toy robot for the seam's test"),
+                              [](const VehicleConfig& c, const Track&) {
+                                KindParts<RobotFamily> parts;
+                                parts.adapter = std::make_unique<ToyRobot>(c);
+                                return parts;
+                              });
+    return true;
+  }();
+  (void)registered;
+}
+
+/// The toy's vehicle file: only what differs from the defaults.
+std::filesystem::path ToyFile(const std::filesystem::path& dir, int domain) {
+  return test::WriteFile(dir / "toy.yaml",
+                         "name: toy1\n"
+                         "kind: toy-robot\n"
+                         "world: " + std::filesystem::absolute("config/tracks/test-short.yaml").string() +
+                             "\n"
+                             "watchdog_timeout_s: 0.2\n"
+                             "camera: {rate_hz: 5, width: 64, height: 48}\n"
+                             "link: {domain_id: " +
+                             std::to_string(domain) + "}\n");
+}
+
+/// The operator's end, on the link's own types.
+struct OperatorEnd {
+  explicit OperatorEnd(const LinkConfig& config)
+      : participant(config, "test-operator"),
+        commands(participant, link::TopicName("toy1", "command"), link::Profile::kCommand),
+        states(participant, link::TopicName("toy1", "state"), link::Profile::kState,
+               [this](const msg::VehicleState& s) {
+                 std::lock_guard lock(mutex);
+                 last = s;
+               }) {
+    message.session(42);
+    message.operator_name("test");
+  }
+  void Send(const TreadCommand& c) {
+    message.seq(++seq);
+    link::RobotMessages::Encode(c, message);
+    message.sent_ns(MonotonicNs());
+    commands.Write(message);
+  }
+  std::optional<msg::VehicleState> Last() {
+    std::lock_guard lock(mutex);
+    return last;
+  }
+
+  link::Participant participant;
+  link::CommandWriter commands;
+  msg::DriveCommand message;
+  uint64_t seq = 0;
+  std::mutex mutex;
+  std::optional<msg::VehicleState> last;
+  link::StateReader states;
+};
+
+}  // namespace
+
+TEST_CASE("a registered kind is in the table with its family; names are checked") {
+  RegisterToy();
+  const VehicleKindInfo* toy = FindVehicleKind("toy-robot");
+  REQUIRE(toy != nullptr);
+  CHECK(toy->family == VehicleFamily::kRobot);
+  CHECK_FALSE(toy->Uses(kCanSection));
+  CHECK(FindKindFactory<RobotFamily>("toy-robot") != nullptr);
+  CHECK(FindKindFactory<BlimpFamily>("toy-robot") == nullptr);
+  CHECK_THAT(VehicleKindNames(), Catch::Contains("sim-robot") && Catch::Contains("toy-robot"));
+  // Taken, malformed, or without a factory: refused, and the table unchanged.
+  const size_t kinds = VehicleKinds().size();
+  CHECK_THROWS_WITH(RegisterKind<RobotFamily>(Kind("toy-robot"), [](const VehicleConfig&, const Track&) {
+                      return KindParts<RobotFamily>{};
+                    }),
+                    Catch::Contains("registered already"));
+  CHECK_THROWS_WITH(RegisterVehicleKind(Kind("toy robot")), Catch::Contains("letters, digits and '-'"));
+  CHECK_THROWS_WITH(RegisterKind<RobotFamily>(Kind("no-factory"), nullptr), Catch::Contains("no factory"));
+  CHECK(VehicleKinds().size() == kinds);
+}
+
+TEST_CASE("every built-in kind has a factory in its family, and only there") {
+  for (const VehicleKindInfo& kind : VehicleKinds()) {
+    INFO(kind.name);
+    const bool robot = FindKindFactory<RobotFamily>(kind.name) != nullptr;
+    const bool blimp = FindKindFactory<BlimpFamily>(kind.name) != nullptr;
+    CHECK(robot == (kind.family == VehicleFamily::kRobot));
+    CHECK(blimp == (kind.family == VehicleFamily::kBlimp));
+  }
+}
+
+TEST_CASE("a vehicle file naming an unknown kind is refused with the known kinds") {
+  const auto dir = test::ScratchDir("kinds");
+  const auto file = test::WriteFile(dir / "odd.yaml", "name: odd\nkind: hovercraft\nworld: x.yaml\n");
+  const std::string what = test::WhatOf<std::exception>([&] { LoadVehicle(file); });
+  CHECK_THAT(what, Catch::Contains("kind") && Catch::Contains("sim-robot, can-robot"));
+}
+
+TEST_CASE("a toy kind registered as the docs show is loaded, opened and driven through the one node") {
+  RegisterToy();
+  const int domain = test::UniqueDomain(71);
+  const auto dir = test::ScratchDir("toy-kind");
+  const auto file = ToyFile(dir, domain);
+  const VehicleConfig config = LoadVehicle(file);
+  REQUIRE(config.family() == VehicleFamily::kRobot);
+
+  OpenedVehicle opened = OpenVehicle(config, file.string());
+  CHECK_THAT(opened.description, Catch::Contains("track '") && Catch::Contains("64x48"));
+  const std::unique_ptr<Node> node = opened.make_node();
+  node->Start();
+  OperatorEnd op(config.link);
+
+  // Full ahead on both treads until the toy has rolled 5 cm.
+  std::optional<msg::VehicleState> s;
+  const bool rolled = test::WaitFor(
+      [&] {
+        op.Send({1.0, 1.0});
+        s = op.Last();
+        return s && s->x() > 0.05f;
+      },
+      20.0);
+  REQUIRE(rolled);
+  CHECK(s->motor_left_level() == config.drive.speed_levels);
+  CHECK(s->motor_right_level() == config.drive.speed_levels);
+  CHECK(std::abs(s->y()) < 1e-3f);  // straight ahead: the toy's treads are even
+  CHECK(s->owner_session() == 42);
+
+  // No more commands: the watchdog stops it, the toy stands still.
+  REQUIRE(test::WaitFor(
+      [&] {
+        s = op.Last();
+        return s && s->watchdog_tripped();
+      },
+      10.0));
+  CHECK(s->motor_left_level() == 0);
+  CHECK(s->motor_right_level() == 0);
+  node->Stop();
+  const NodeCounters counters = node->Counters();
+  CHECK(counters.commands_accepted > 0);
+  CHECK(counters.watchdog_trips >= 1);
+  CHECK(node->AdapterFailure().empty());
+  CHECK(std::string(node->MadeSafe()) == "motors stopped");
+}
