@@ -172,6 +172,9 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
       watch.AddPhysics(family->physics(), now);
       if (view_part) view_part->SetPhysics(family->physics());
     }
+    // Twice a second, whoever watches the run live (a study's console).
+    const bool live_due = (setup.on_live || setup.on_picture) && now >= next_live_ns;
+    if (live_due) next_live_ns = now + SToNs(0.5);
     if (view_part || setup.on_live) {
       // Made every tick: the overlay notices contacts by their edges.
       const view::Overlay overlay = family->Overlay(t, vehicle_up, trace.touching());
@@ -179,16 +182,13 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
         view_part->Publish(overlay);
         if (const std::optional<view::Gaze> gaze = family->Gaze()) view_part->Publish(*gaze);
       }
-      if (setup.on_live && now >= next_live_ns) {
-        next_live_ns = now + SToNs(0.5);
-        setup.on_live(overlay);
-        if (setup.on_picture) {
-          const uint64_t frames = vehicle.video().Stats().frames;
-          if (frames != pictures_seen) {
-            pictures_seen = frames;
-            setup.on_picture(vehicle.video().LatestPicture(), frames);
-          }
-        }
+      if (setup.on_live && live_due) setup.on_live(overlay);
+    }
+    if (setup.on_picture && live_due) {
+      const uint64_t frames = vehicle.video().Stats().frames;
+      if (frames != pictures_seen) {
+        pictures_seen = frames;
+        setup.on_picture(vehicle.video().LatestPicture(), frames);
       }
     }
     if (auto end = family->LapEnd()) {

@@ -92,6 +92,13 @@ mediator::SessionSetup TrialSetup(const StudyConfig& config, const PlannedTrial&
   return setup;
 }
 
+/// The console's thumbnail shows the session's camera pictures.
+void ShowPictures(mediator::SessionSetup& setup, StudyConsole& console) {
+  setup.on_picture = [page = &console](std::vector<uint8_t> jpeg, uint64_t frames) {
+    page->SetPicture(std::move(jpeg), frames);
+  };
+}
+
 /// A person's practice lap (the thesis's): the keyboard and the camera's
 /// picture filling the window, recorded as a run but not as a trial.
 mediator::SessionSetup PracticeSetup(const StudyConfig& config, const std::filesystem::path& database,
@@ -274,8 +281,9 @@ int StudyRunCommand(int argc, const char* const* argv) {
           if (!console->WaitForStart("practice lap for " + who + ": the keyboard, the camera's view", interrupted)) {
             continue;
           }
-          const mediator::SessionSetup practice =
+          mediator::SessionSetup practice =
               cli::ReadInput([&] { return PracticeSetup(config, database, domain, verbose); });
+          ShowPictures(practice, *console);
           console->SetLive("practice lap: " + who + " (keyboard; Abort ends it)");
           std::fprintf(stderr, "[study] practice lap: %s ...\n", who.c_str());
           const mediator::RecordedRun run = run_watched(practice, {});
@@ -307,9 +315,7 @@ int StudyRunCommand(int argc, const char* const* argv) {
         setup.on_live = [page](const view::Overlay& o) {
           page->SetLiveProgress({o.lap_time_s, o.gates_passed, o.gates_total, o.obstacles_touched, o.last_contact});
         };
-        setup.on_picture = [page](std::vector<uint8_t> jpeg, uint64_t frames) {
-          page->SetPicture(std::move(jpeg), frames);
-        };
+        ShowPictures(setup, *page);
       }
       std::fprintf(stderr, "[study] trial %zu/%zu: participant %s, position %d, %s ...\n", number, planned,
                    trial->participant.c_str(), trial->position, trial->condition.c_str());

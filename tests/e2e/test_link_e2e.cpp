@@ -150,7 +150,7 @@ TEST_CASE("link down: the vehicle stops within its watchdog and the run reports 
   Child run({Bin("haptel"), "run", "--link-fault", "on", "--track", "config/tracks/test-short.yaml", "--json",
              "--domain", std::to_string(test::UniqueDomain(45)), "--database", (dir / "runs.db").string(),
              "--vehicle-timeout", "0.5"});
-  static const std::regex started(R"(vehicle 'robot1' started, pid ([0-9]+))");
+  static const std::regex started(R"(vehicle 'robot1' \(sim-robot\) started, pid ([0-9]+))");
   std::smatch m;
   REQUIRE(test::WaitFor([&] {
     run.Pump();

@@ -99,9 +99,10 @@ struct SessionSetup {
   /// overlay shows (lap clock, gates, contacts), view or not: a study's
   /// console shows the live trial with it. Must return quickly.
   std::function<void(const view::Overlay&)> on_live;
-  /// Called with on_live (twice a second) with the vehicle's latest camera
-  /// picture as it came (JPEG), when a new one arrived: a study's console
-  /// shows it as its thumbnail, through this session's link. Must return quickly.
+  /// Called twice a second on the session thread with the vehicle's latest
+  /// camera picture as it came (JPEG), when a new one arrived: a study's
+  /// console shows it as its thumbnail, through this session's link. Must
+  /// return quickly.
   std::function<void(std::vector<uint8_t> jpeg, uint64_t frames)> on_picture;
   /// A blimp's flight (the vehicle is a blimp kind): its course, instead of
   /// `track`, and its interface, instead of `interfaces`:
