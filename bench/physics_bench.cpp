@@ -82,8 +82,7 @@ int BenchPhysicsMain(int argc, const char* const* argv) {
     const wp::Trajectory& tr = *loaded;
     std::printf("haptel bench physics: trajectory %s (%s, %.1f s, %zu samples at %.2f ms)\n", traj_file.c_str(),
                 made ? "written" : "read back", tr.duration(), tr.position.size(), 1e3 * tr.dt);
-    const std::vector<wp::Vec3d> reference =
-        wp::TrackRun(config, tr, 1e-3 * wp::kReferenceStepMs, wp::kReferenceIterations);
+    const std::vector<wp::Vec3d> reference = wp::ReferenceRun(config, tr);
     wp::SaveReference(ref_file, reference);
 
     // The float child runs on the other core while this thread measures double.

@@ -227,6 +227,12 @@ std::vector<Vec3d> TrackRun(const PhysicsConfig& base, const Trajectory& tr, dou
   return out;
 }
 
+std::vector<Vec3d> ReferenceRun(const PhysicsConfig& base, const Trajectory& trajectory) {
+  PhysicsConfig config = base;
+  config.reference = true;
+  return TrackRun(config, trajectory, 1e-3 * kReferenceStepMs, kReferenceIterations);
+}
+
 void SaveReference(const std::filesystem::path& file, const std::vector<Vec3d>& reference) {
   std::ofstream out(file);
   out << "x_m,y_m,z_m\n";

@@ -49,6 +49,10 @@ std::optional<Trajectory> LoadTrajectory(const std::filesystem::path& file);
 /// t = i·dt; index 0 is the placement), simulated at `step_s`, `iterations`.
 std::vector<Vec3d> TrackRun(const PhysicsConfig& base, const Trajectory& trajectory, double step_s,
                             int iterations, double* cpu_s = nullptr, long* resets = nullptr);
+/// The ground truth: TrackRun at kReferenceStepMs and kReferenceIterations,
+/// its config marked a reference run (PhysicsConfig::reference: a step finer
+/// than a physics thread may ask for, on a world stepped here, never a thread).
+std::vector<Vec3d> ReferenceRun(const PhysicsConfig& base, const Trajectory& trajectory);
 void SaveReference(const std::filesystem::path& file, const std::vector<Vec3d>& reference);
 std::optional<std::vector<Vec3d>> LoadReference(const std::filesystem::path& file);
 
