@@ -29,21 +29,24 @@ struct Usage {
   const char* what;
 };
 constexpr Usage kUsage[] = {
-    {"servo", "[--seconds S] [--device FILE] [--json]",
+    {"servo", "[--seconds S] [--device FILE] [--smoke] [--json]",
      "servo loop modes against an empty clock_nanosleep loop"},
-    {"gravity", "[--device FILE] [--points N] [--counts N] [--seed S] [--grid-out FILE] [--json]",
+    {"gravity", "[--device FILE] [--points N] [--counts N] [--seed S] [--grid-out FILE] [--smoke] [--json]",
      "gravity compensation: drift with it off and on"},
-    {"skip", "[--physics FILE] [--seconds S] [--json]",
+    {"skip", "[--physics FILE] [--seconds S] [--smoke] [--json]",
      "physics CPU per simulated second; what a scene skips"},
-    {"physics", "[--physics FILE] [--no-float] [--json]",
+    {"physics", "[--physics FILE] [--no-float] [--smoke] [--json]",
      "work-precision: step x iterations x float/double"},
-    {"stability", "[--physics FILE] [--minutes M] [--json]", "physics stress tests"},
-    {"view", "[--seconds S] [--json]",
+    {"stability", "[--physics FILE] [--minutes M] [--smoke] [--json]", "physics stress tests"},
+    {"view", "[--seconds S] [--domain D] [--smoke] [--json]",
      "the operator's view: frame rate, CPU, video-to-screen, servo beside it"},
-    {"blimp", "[--vehicle FILE] [--json]", "airship model: integrators x steps, error against CPU; physics checks"},
-    {"link", "[--seconds S] [--track FILE] [--delays MS,...] [--losses PERCENT,...] [--json]",
+    {"blimp", "[--vehicle FILE] [--smoke] [--json]",
+     "airship model: integrators x steps, error against CPU; physics checks"},
+    {"link",
+     "[--seconds S] [--track FILE] [--delays MS,...] [--losses PERCENT,...] [--domain D] [--lap-domain D] "
+     "[--smoke] [--json]",
      "DDS round trip against raw Fast DDS; the lap against the link's delay and loss"},
-    {"fuzz", "[--inputs N] [--target NAME] [--seed S] [--json]",
+    {"fuzz", "[--inputs N] [--target NAME] [--seed S] [--smoke] [--json]",
      "every parser fed 10^6 mutated inputs: configs, scenes, UDP, servo bytes, CAN, DDS samples"},
 };
 
@@ -61,7 +64,9 @@ constexpr Bench kBenches[] = {
 
 std::string UsageText(const std::string& only) {
   std::string text =
-      "usage: haptel bench NAME [options]; each writes build/bench/NAME.csv, --json ends with one line\n";
+      "usage: haptel bench NAME [options]; each writes build/bench/NAME.csv, --json ends with one line;\n"
+      "  --smoke: the same run shortened to seconds, for the tests (outputs in build/bench/smoke/,\n"
+      "  \"smoke\":true in the JSON line: its figures are no measurements)\n";
   for (const Usage& u : kUsage) {
     if (!only.empty() && only != u.name) continue;
     text += "  haptel bench " + std::string(u.name) + " " + u.options + "\n      " + u.what + "\n";

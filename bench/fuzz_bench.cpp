@@ -46,6 +46,7 @@
 #include "haptel/vehicles/candump_log.hpp"
 #include "haptel/vehicles/odrive_can.hpp"
 #include "plot.hpp"
+#include "smoke.hpp"
 
 namespace haptel::bench {
 
@@ -513,13 +514,15 @@ FuzzResult Fuzz(const std::string& name, uint64_t inputs, uint64_t seed) {
 }
 
 int BenchFuzzMain(int argc, const char* const* argv) {
-  bool json = false;
+  bool json = false, smoke = false;
   uint64_t inputs = 1000000;
   uint64_t seed = 1;
   std::vector<std::string> targets = FuzzTargets();
   try {
-    const Args args(argc, argv, {"inputs", "target", "seed"}, {"json"});
+    const Args args(argc, argv, {"inputs", "target", "seed"}, {"json", kSmokeFlag});
     json = args.Flag("json");
+    smoke = args.Flag(kSmokeFlag);
+    if (smoke) inputs = 300;  // every target; the config and scene loaders take about 1 ms an input
     if (auto n = args.Number("inputs", 1.0, 1e9)) inputs = static_cast<uint64_t>(*n);
     if (auto s = args.Number("seed", 0.0, 1e18)) seed = static_cast<uint64_t>(*s);
     if (auto t = args.Value("target")) {
@@ -533,6 +536,8 @@ int BenchFuzzMain(int argc, const char* const* argv) {
     std::fprintf(stderr, "haptel bench fuzz: %s\n", e.what());
     return 2;
   }
+  PrintSmokeNote("fuzz", smoke, "%llu inputs per target", static_cast<unsigned long long>(inputs));
+  const auto dir = OutputDir(smoke);
   std::printf("haptel bench fuzz: %llu inputs per target, seed %llu\n\n", static_cast<unsigned long long>(inputs),
               static_cast<unsigned long long>(seed));
   std::printf("  target   inputs      accepted   rejected   time s   inputs/s   slowest ms\n");
@@ -547,14 +552,14 @@ int BenchFuzzMain(int argc, const char* const* argv) {
     std::fflush(stdout);
   }
   {
-    std::ofstream csv(BenchDir() / "fuzz.csv");
+    std::ofstream csv(dir / "fuzz.csv");
     csv << "target,inputs,accepted,rejected,seconds,slowest_ms\n";
     for (const auto& r : results) {
       csv << r.target << "," << r.inputs << "," << r.accepted << "," << r.rejected << "," << r.seconds << ","
           << r.slowest_ms << "\n";
     }
   }
-  std::printf("\n  no crash, no hang; wrote %s/fuzz.csv\n", BenchDir().c_str());
+  std::printf("\n  no crash, no hang; wrote %s/fuzz.csv\n", dir.c_str());
   if (json) {
     std::ostringstream o;
     o << "{\"crashes\":0,\"hangs\":0,\"targets\":[";
@@ -565,7 +570,7 @@ int BenchFuzzMain(int argc, const char* const* argv) {
         << ",\"slowest_ms\":" << JsonNumber(r.slowest_ms) << "}";
     }
     o << "]}";
-    std::printf("%s\n", o.str().c_str());
+    std::printf("%s\n", JsonLine(o.str(), smoke).c_str());
   }
   return 0;
 }

@@ -45,7 +45,8 @@ std::vector<std::string> FuzzTargets();
 /// process (see the file comment).
 FuzzResult Fuzz(const std::string& target, uint64_t inputs, uint64_t seed);
 
-/// `haptel bench fuzz [--inputs N] [--target NAME] [--seed S] [--json]`.
+/// `haptel bench fuzz [--inputs N] [--target NAME] [--seed S] [--smoke] [--json]`;
+/// --smoke (smoke.hpp): 300 inputs per target.
 int BenchFuzzMain(int argc, const char* const* argv);
 
 }  // namespace haptel::bench

@@ -21,6 +21,7 @@
 #include "haptel/core/args.hpp"
 #include "haptel/calibration/calibration_procedure.hpp"
 #include "plot.hpp"
+#include "smoke.hpp"
 
 namespace haptel::bench {
 
@@ -43,6 +44,7 @@ constexpr const char* kUsage =
     "  --seed S         seed of the release points (default 1)\n"
     "  --counts N       grid vertices per axis (default 5)\n"
     "  --grid-out FILE  where to save the sampled grid (default build/bench/gravity_grid.yaml)\n"
+    "  --smoke          a short run for the tests: 3 points, a 2x2x2 grid (outputs in build/bench/smoke/)\n"
     "  --json           end with one JSON line of results\n";
 
 /// The compensation command for a tracker reading, as the servo loop does it.
@@ -100,11 +102,11 @@ int BenchGravityMain(int argc, const char* const* argv) {
   int points = 50;
   int seed = 1;
   int counts = 5;
-  bool json = false;
+  bool json = false, smoke = false;
   std::filesystem::path grid_out;
   try {
     const Args args(argc, argv, {"device", "points", "seed", "counts", "grid-out"},
-                    {"json", "help"});
+                    {"json", "help", kSmokeFlag});
     if (args.Flag("help")) {
       std::fputs(kUsage, stdout);
       return 0;
@@ -114,6 +116,11 @@ int BenchGravityMain(int argc, const char* const* argv) {
         throw UsageError("unexpected argument '" + word + "'");
     }
     json = args.Flag("json");
+    smoke = args.Flag(kSmokeFlag);
+    if (smoke) {  // the fewest vertices a trilinear grid has, and a few releases
+      points = 3;
+      counts = 2;
+    }
     points = args.Int("points", 1, 100000).value_or(points);
     seed = args.Int("seed", 0, 1 << 30).value_or(seed);
     counts = args.Int("counts", 2, 50).value_or(counts);
@@ -135,6 +142,7 @@ int BenchGravityMain(int argc, const char* const* argv) {
     return 2;
   }
 
+  PrintSmokeNote("gravity", smoke, "%d release points, a %dx%dx%d grid", points, counts, counts, counts);
   SimDevice device(config, OperatorConfig{});
   const Side side = config.sides[1] ? Side::kRight : Side::kLeft;
   // The bench sees the device as a user would: through a measured calibration.
@@ -165,12 +173,13 @@ int BenchGravityMain(int argc, const char* const* argv) {
   if (!report.ok) {
     std::fprintf(stderr, "haptel bench gravity: %s\n", report.error.c_str());
     if (json) {
-      std::printf("{\"ok\":false,\"vertices_done\":%zu,\"sampling_sim_s\":%s}\n",
-                  report.vertices.size(), JsonNumber(report.sim_time_s).c_str());
+      const std::string line = "{\"ok\":false,\"vertices_done\":" + std::to_string(report.vertices.size()) +
+                               ",\"sampling_sim_s\":" + JsonNumber(report.sim_time_s) + "}";
+      std::printf("%s\n", JsonLine(line, smoke).c_str());
     }
     return 1;
   }
-  const auto dir = BenchDir();
+  const auto dir = OutputDir(smoke);
   if (grid_out.empty()) grid_out = dir / "gravity_grid.yaml";
   SaveGravityGrid(grid_out, report.grid);
   const GravityGrid grid(report.grid);
@@ -295,7 +304,7 @@ int BenchGravityMain(int argc, const char* const* argv) {
       << ",\"force_error_max_n\":" << JsonNumber(force_error_max)
       << ",\"friction_n\":" << JsonNumber(sim.coulomb_friction)
       << ",\"vertices\":" << report.vertices.size() << ",\"points\":" << points << "}";
-    std::printf("%s\n", o.str().c_str());
+    std::printf("%s\n", JsonLine(o.str(), smoke).c_str());
   }
   std::fflush(stdout);
   return 0;

@@ -21,6 +21,8 @@
 /// (drift per point, off and on) and the sampled grid
 /// (build/bench/gravity_grid.yaml or --grid-out); with --json the last stdout
 /// line is one JSON object.
+///
+/// --smoke (smoke.hpp): a 2×2×2 grid and 3 release points.
 #include <cstdint>
 
 #include "haptel/config/calibration.hpp"
@@ -45,7 +47,7 @@ double MeasureDrift(haptics::SimDevice& device, haptics::Side side,
                     const haptics::Vec3d& start, double seconds, int64_t& now_ns);
 
 /// `haptel bench gravity [--device FILE] [--points N] [--seed S] [--counts N]
-/// [--grid-out FILE] [--json]`; argv[0] is the sub-command's name.
+/// [--grid-out FILE] [--smoke] [--json]`; argv[0] is the sub-command's name.
 /// Returns 0, 1 when sampling failed, 2 for bad usage or configuration.
 int BenchGravityMain(int argc, const char* const* argv);
 

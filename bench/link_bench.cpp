@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <fstream>
 #include <functional>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -24,6 +25,7 @@
 #include "haptel/link/topic.hpp"
 #include "haptel/mediator/vehicle_link.hpp"
 #include "plot.hpp"
+#include "smoke.hpp"
 
 namespace haptel::bench {
 
@@ -183,13 +185,14 @@ struct LapRow {
   double wall_s = 0.0;
 };
 
-LapRow Lap(const std::string& track, int domain, double delay_ms, double loss_percent) {
+LapRow Lap(const std::filesystem::path& dir, const std::string& track, int domain, double delay_ms,
+           double loss_percent) {
   LapRow row;
   row.delay_ms = delay_ms;
   row.loss_percent = loss_percent;
   char fault[96];
   std::snprintf(fault, sizeof fault, "delay=%gms,loss=%g%%", delay_ms, loss_percent);
-  const std::string db = (BenchDir() / "link.db").string();
+  const std::string db = (dir / "link.db").string();
   const int64_t start = MonotonicNs();
   ChildProcess run((ProgramDirectory() / "haptel").string(),
                    {"run", "--operator", "auto", "--view", "none", "--link-fault", fault, "--track", track, "--json",
@@ -216,17 +219,30 @@ LapRow Lap(const std::string& track, int domain, double delay_ms, double loss_pe
 }  // namespace
 
 int BenchLinkMain(int argc, const char* const* argv) {
-  bool json = false;
+  bool json = false, smoke = false;
   double seconds = 10.0;
-  std::string track;
+  std::string track = ShippedFile("config/tracks/grand-prix.yaml").string();
   std::vector<double> delays{0, 50, 100, 200, 400};
   std::vector<double> losses{0, 5};
+  // Domains of the bench's own, away from a default installation's 0.
+  int domain = 200 + static_cast<int>(getpid() % 30);
+  std::optional<int> lap_domain;
   try {
-    const Args args(argc, argv, {"seconds", "track", "delays", "losses", "domain"}, {"json", "echo"});
+    const Args args(argc, argv, {"seconds", "track", "delays", "losses", "domain", "lap-domain"},
+                    {"json", "echo", kSmokeFlag});
     if (args.Flag("echo")) return Echo(args.Int("domain", 0, 232).value_or(0));
     json = args.Flag("json");
+    smoke = args.Flag(kSmokeFlag);
+    if (smoke) {  // every part once: the shortest round trips, one lap of the short track, no fault
+      seconds = 2.0;
+      track = ShippedFile("config/tracks/test-short.yaml").string();
+      delays = {0};
+      losses = {0};
+    }
     seconds = args.Number("seconds", 2.0, 600.0).value_or(seconds);
-    track = args.Value("track").value_or(ShippedFile("config/tracks/grand-prix.yaml").string());
+    track = args.Value("track").value_or(track);
+    domain = args.Int("domain", 0, 231).value_or(domain);  // the laps default to the next one
+    lap_domain = args.Int("lap-domain", 0, 232);
     if (auto d = args.Value("delays")) delays = ParseList("delays", *d);
     if (auto l = args.Value("losses")) losses = ParseList("losses", *l);
     for (const double l : losses) {
@@ -236,10 +252,9 @@ int BenchLinkMain(int argc, const char* const* argv) {
     std::fprintf(stderr, "haptel bench link: %s\n", e.what());
     return 2;
   }
-  // Domains of the bench's own, away from a default installation's 0.
-  const int domain = 200 + static_cast<int>(getpid() % 30);
-  const auto dir = BenchDir();
-  std::filesystem::create_directories(dir);
+  const auto dir = OutputDir(smoke);
+  PrintSmokeNote("link", smoke, "%.0f s per round trip, %zu lap(s) on %s", seconds, delays.size() * losses.size(),
+                 std::filesystem::path(track).filename().c_str());
   std::printf("haptel bench link: round trip at %.0f Hz for %.0f s, then laps on %s\n\n", kRateHz, seconds,
               track.c_str());
 
@@ -281,7 +296,7 @@ int BenchLinkMain(int argc, const char* const* argv) {
   std::printf("  delay ms  loss %%  outcome         lap s   gates  obstacles  rtt p50 ms  wall s\n");
   for (const double loss : losses) {
     for (const double delay : delays) {
-      const LapRow row = Lap(track, domain + 1, delay, loss);
+      const LapRow row = Lap(dir, track, lap_domain.value_or(domain + 1), delay, loss);
       rows.push_back(row);
       std::printf("  %8.0f  %6.1f  %-14s %6.2f   %d/%d   %9d  %10.2f  %6.1f\n", delay, loss,
                   row.ran ? row.outcome.c_str() : "no result", row.lap_time_s, row.gates_passed, row.gates_total,
@@ -335,7 +350,7 @@ int BenchLinkMain(int argc, const char* const* argv) {
         << ",\"rtt_p50_ms\":" << JsonNumber(std::isfinite(r.rtt_p50_ms) ? r.rtt_p50_ms : -1.0) << "}";
     }
     o << "]}";
-    std::printf("%s\n", o.str().c_str());
+    std::printf("%s\n", JsonLine(o.str(), smoke).c_str());
   }
   return rtt_ok && all_ran ? 0 : 1;
 }

@@ -20,9 +20,15 @@
 /// Prints both tables; writes build/bench/link_rtt.csv, link_laps.csv and
 /// link_laps.png; with --json the last stdout line is
 /// {"rtt":{…},"laps":[…]}.
+///
+/// DDS domains: the round trips on --domain D (default 200 + pid % 30), the
+/// laps on --lap-domain (default D + 1).
+/// --smoke (smoke.hpp): 2 s per round trip (1 s of it warm-up), one lap of
+/// config/tracks/test-short.yaml without delay or loss.
 namespace haptel::bench {
 
-/// `haptel bench link [--seconds S] [--track FILE] [--delays LIST] [--losses LIST] [--json]`.
+/// `haptel bench link [--seconds S] [--track FILE] [--delays LIST] [--losses LIST]
+/// [--domain D] [--lap-domain D] [--smoke] [--json]`.
 /// Returns 0 when every lap ran and the round trip was measured, 1 when one
 /// could not be, 2 for bad usage.
 int BenchLinkMain(int argc, const char* const* argv);

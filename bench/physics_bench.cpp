@@ -16,6 +16,7 @@
 #include "physics_measure.hpp"
 #include "haptel/core/child_process.hpp"
 #include "plot.hpp"
+#include "smoke.hpp"
 
 namespace haptel::bench {
 
@@ -49,12 +50,13 @@ bool Same(const Point& a, const Point& b) {
 }  // namespace
 
 int BenchPhysicsMain(int argc, const char* const* argv) {
-  bool json = false, with_float = true;
+  bool json = false, with_float = true, smoke = false;
   PhysicsConfig config;
   std::string physics_file;
   try {
-    const Args args(argc, argv, {"physics"}, {"json", "no-float"});
+    const Args args(argc, argv, {"physics"}, {"json", "no-float", kSmokeFlag});
     json = args.Flag("json");
+    smoke = args.Flag(kSmokeFlag);
     with_float = !args.Flag("no-float");
     physics_file = args.Value("physics").value_or(ShippedFile("config/physics.yaml").string());
     config = LoadPhysics(physics_file);
@@ -65,25 +67,27 @@ int BenchPhysicsMain(int argc, const char* const* argv) {
   config.realtime_priority = 0;
   const double default_step_ms = 1e3 * config.step_s;
   const int default_iterations = config.solver_iterations;
+  const wp::Plan plan = smoke ? wp::SmokePlan() : wp::FullPlan();
+  PrintSmokeNote("physics", smoke, "%zu steps x %zu iteration counts, %.1f s trajectory, %.1f s push, %.1f s hold",
+                 plan.steps_ms.size(), plan.iterations.size(), plan.trajectory_s, plan.push_s, plan.grasp_hold_s);
 
-  const auto dir = BenchDir();
+  const auto dir = OutputDir(smoke);
   const auto traj_file = dir / "trajectory.csv";
   const auto ref_file = dir / "physics_reference.csv";
   std::vector<Point> points;
   Point def;
   std::string float_note;
   try {
-    std::optional<wp::Trajectory> loaded = wp::LoadTrajectory(traj_file);
+    std::optional<wp::Trajectory> loaded = wp::LoadTrajectory(traj_file, plan.trajectory_s);
     const bool made = !loaded;
     if (made) {
-      loaded = wp::MakeTrajectory();
+      loaded = wp::MakeTrajectory(plan.trajectory_s);
       wp::SaveTrajectory(traj_file, *loaded);
     }
     const wp::Trajectory& tr = *loaded;
     std::printf("haptel bench physics: trajectory %s (%s, %.1f s, %zu samples at %.2f ms)\n", traj_file.c_str(),
                 made ? "written" : "read back", tr.duration(), tr.position.size(), 1e3 * tr.dt);
-    const std::vector<wp::Vec3d> reference =
-        wp::TrackRun(config, tr, 1e-3 * wp::kReferenceStepMs, wp::kReferenceIterations);
+    const std::vector<wp::Vec3d> reference = wp::ReferenceRun(config, tr);
     wp::SaveReference(ref_file, reference);
 
     // The float child runs on the other core while this thread measures double.
@@ -94,11 +98,10 @@ int BenchPhysicsMain(int argc, const char* const* argv) {
         float_note = "float: " + exe.string() + " not found (build it: target haptel-physics-bench-float)";
       } else {
         try {
-          child = std::make_unique<ChildProcess>(
-              exe.string(),
-              std::vector<std::string>{"--trajectory", traj_file.string(), "--reference", ref_file.string(),
-                                       "--physics", physics_file},
-              ChildProcess::Options{true});
+          std::vector<std::string> child_args{"--trajectory", traj_file.string(), "--reference", ref_file.string(),
+                                              "--physics", physics_file};
+          if (smoke) child_args.push_back("--smoke");
+          child = std::make_unique<ChildProcess>(exe.string(), child_args, ChildProcess::Options{true});
         } catch (const std::exception& e) {
           float_note = std::string("float: ") + e.what();
         }
@@ -108,9 +111,9 @@ int BenchPhysicsMain(int argc, const char* const* argv) {
     }
 
     bool default_in_grid = false;
-    for (const double step_ms : wp::kStepsMs) {
-      for (const int iterations : wp::kIterations) {
-        points.push_back(wp::Measure(config, tr, reference, step_ms, iterations, "double"));
+    for (const double step_ms : plan.steps_ms) {
+      for (const int iterations : plan.iterations) {
+        points.push_back(wp::Measure(config, tr, reference, step_ms, iterations, "double", plan));
         if (std::abs(step_ms - default_step_ms) < 1e-9 && iterations == default_iterations) {
           def = points.back();
           default_in_grid = true;
@@ -122,7 +125,7 @@ int BenchPhysicsMain(int argc, const char* const* argv) {
       if (std::abs(ratio - std::round(ratio)) > 1e-9) {
         throw std::runtime_error("the default step is not a multiple of 0.25 ms");
       }
-      def = wp::Measure(config, tr, reference, default_step_ms, default_iterations, "double");
+      def = wp::Measure(config, tr, reference, default_step_ms, default_iterations, "double", plan);
       points.push_back(def);
     }
 
@@ -161,7 +164,7 @@ int BenchPhysicsMain(int argc, const char* const* argv) {
   const double cpu_ratio = std::isfinite(best_cpu_at_err) && best_cpu_at_err > 0 ? def.cpu_per_sim_s / best_cpu_at_err : 1.0;
 
   std::printf("  reference: double, %.3g ms step, %d iterations; tracking error = RMS |proxy - reference proxy| over %.1f s\n\n",
-              wp::kReferenceStepMs, wp::kReferenceIterations, wp::kTrajectoryS);
+              wp::kReferenceStepMs, wp::kReferenceIterations, plan.trajectory_s);
   std::printf("%8s %5s %-6s %11s %11s %9s %9s %9s %9s %6s %6s\n", "step ms", "iter", "prec", "cpu s/sim s",
               "track mm", "lag mm", "pen mm", "pen rest", "slip mm", "reset", "front");
   for (size_t i = 0; i < points.size(); ++i) {
@@ -170,12 +173,13 @@ int BenchPhysicsMain(int argc, const char* const* argv) {
                 p.precision.c_str(), p.cpu_per_sim_s, p.tracking_err_mm, p.lag_mm, p.penetration_mm,
                 p.penetration_rest_mm, p.slip_mm, p.resets, front[i] ? "*" : "", Same(p, def) ? "  <- default" : "");
   }
-  std::printf("\n  sorted by cpu s/sim s: thread CPU per simulated second over the three scenarios (2 s tracking,\n"
-              "  1 s push, 6.3 s two-hand grasp); track: RMS vs the reference; lag: RMS |proxy - tracked wrist|;\n"
+  std::printf("\n  sorted by cpu s/sim s: thread CPU per simulated second over the three scenarios (%g s tracking,\n"
+              "  %g s push, %g s two-hand grasp); track: RMS vs the reference; lag: RMS |proxy - tracked wrist|;\n"
               "  pen: deepest penetration of a 10 N push, touch-down at 0.1 m/s included; pen rest: mean over its last\n"
               "  0.2 s (negative: resting above the surface);\n"
-              "  slip: box motion relative to the palms over a 5 s hold; reset: NaN/Inf resets (such points are\n"
-              "  left off the front); front: Pareto front over (cpu, track), both precisions.\n");
+              "  slip: box motion relative to the palms over a %g s hold; reset: NaN/Inf resets (such points are\n"
+              "  left off the front); front: Pareto front over (cpu, track), both precisions.\n",
+              plan.trajectory_s, plan.push_s, plan.grasp_s(), plan.grasp_hold_s);
   std::printf("  %s\n", float_note.c_str());
   if (def_on_front) {
     std::printf("  default (%g ms, %d iterations, double): on the Pareto front\n", default_step_ms, default_iterations);
@@ -204,7 +208,7 @@ int BenchPhysicsMain(int argc, const char* const* argv) {
     // table and the CSV, not drawn).
     std::vector<Series> series;
     for (const char* precision : {"double", "float"}) {
-      for (const int iterations : wp::kIterations) {
+      for (const int iterations : plan.iterations) {
         Series s{std::string(precision) + ", " + std::to_string(iterations) + " iterations", {}, {}};
         for (const Point& p : points) {  // already sorted by cpu
           if (p.precision != precision || p.iterations != iterations) continue;
@@ -244,7 +248,7 @@ int BenchPhysicsMain(int argc, const char* const* argv) {
       first = false;
     }
     o << "]}";
-    std::printf("%s\n", o.str().c_str());
+    std::printf("%s\n", JsonLine(o.str(), smoke).c_str());
   }
   return 0;
 }

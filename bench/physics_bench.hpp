@@ -33,9 +33,13 @@
 /// Prints a sorted table; writes build/bench/physics.csv and
 /// build/bench/physics_pareto.png; with --json the last stdout line is
 /// {"points":[…],"default":{…},…}.
+///
+/// --smoke (smoke.hpp): steps {1, 8} ms × iterations {5, 20}, both
+/// precisions, a 0.5 s trajectory, a 0.6 s push and a 1 s hold, against the
+/// same 0.025 ms reference (wp::SmokePlan).
 namespace haptel::bench {
 
-/// `haptel bench physics [--physics FILE] [--no-float] [--json]`; argv[0] is
+/// `haptel bench physics [--physics FILE] [--no-float] [--smoke] [--json]`; argv[0] is
 /// the sub-command's name. Returns 0, 1 when a measurement fails, 2 for bad usage.
 int BenchPhysicsMain(int argc, const char* const* argv);
 

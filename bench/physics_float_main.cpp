@@ -16,23 +16,25 @@ int main(int argc, char** argv) {
   using namespace haptel;
   using namespace haptel::bench;
   constexpr const char* kUsage =
-      "usage: haptel-physics-bench-float --trajectory FILE --reference FILE [--physics FILE]\n"
-      "  the float half of `haptel bench physics`, which runs it; prints one JSON line\n";
+      "usage: haptel-physics-bench-float --trajectory FILE --reference FILE [--physics FILE] [--smoke]\n"
+      "  the float half of `haptel bench physics`, which runs it; prints one JSON line;\n"
+      "  --smoke: the smoke run's grid and scenarios (`haptel bench physics --smoke`)\n";
   return cli::Main({"haptel-physics-bench-float", kUsage}, argc, argv, [&] {
-    const Args args(argc, argv, {"physics", "trajectory", "reference"}, {});
+    const Args args(argc, argv, {"physics", "trajectory", "reference"}, {"smoke"});
+    const wp::Plan plan = args.Flag("smoke") ? wp::SmokePlan() : wp::FullPlan();
     const auto traj_file = args.Value("trajectory");
     const auto ref_file = args.Value("reference");
     if (!traj_file || !ref_file) throw UsageError("--trajectory FILE and --reference FILE are required");
-    const auto tr = wp::LoadTrajectory(*traj_file);
+    const auto tr = wp::LoadTrajectory(*traj_file, plan.trajectory_s);
     const auto ref = wp::LoadReference(*ref_file);
     if (!tr || !ref) throw cli::InputError("cannot read the trajectory or the reference");
     PhysicsConfig config;
     if (const auto p = args.Value("physics")) config = LoadPhysics(*p);
     std::string out = "{\"points\":[";
     bool first = true;
-    for (const double step_ms : wp::kStepsMs) {
-      for (const int iterations : wp::kIterations) {
-        const wp::Point p = wp::Measure(config, *tr, *ref, step_ms, iterations, "float");
+    for (const double step_ms : plan.steps_ms) {
+      for (const int iterations : plan.iterations) {
+        const wp::Point p = wp::Measure(config, *tr, *ref, step_ms, iterations, "float", plan);
         if (!first) out += ',';
         out += wp::ToJson(p, true);
         first = false;

@@ -46,8 +46,8 @@ struct Scenario {
 };
 
 /// (b) The palm comes down on a table at 0.1 m/s and is held with the tracked
-/// wrist F/k below the surface (10 N through the coupling), 1 s in all.
-Scenario Push(const PhysicsConfig& config, double* rest_mm, double* worst_mm) {
+/// wrist F/k below the surface (10 N through the coupling), `seconds` in all.
+Scenario Push(const PhysicsConfig& config, double seconds, double* rest_mm, double* worst_mm) {
   PhysicsWorld world{config};
   world.AddStaticBox({0.0, 0.0, -0.05}, {0.5, 0.5, 0.05});  // table top at z = 0
   world.AddHand(Side::kRight);
@@ -56,7 +56,7 @@ Scenario Push(const PhysicsConfig& config, double* rest_mm, double* worst_mm) {
   const double half_thickness = hc.palm_half_extents[2];
   const double target_z = half_thickness - 10.0 / hc.coupling_linear_stiffness;
   const double h = config.step_s;
-  const long steps = std::lround(1.0 / h);
+  const long steps = std::lround(seconds / h);
   const long last = std::lround(0.2 / h);
   double z = half_thickness + 0.03;
   double worst = 0.0, rest = 0.0, cpu = 0.0;
@@ -76,9 +76,9 @@ Scenario Push(const PhysicsConfig& config, double* rest_mm, double* worst_mm) {
 }
 
 /// (c) Two palms squeeze a 0.5 kg box (tracked 1 cm inside it: ≈30 N each),
-/// lift it 10 cm in 1 s and hold it 5 s; slip = how far the box moved
+/// lift it 10 cm in 1 s and hold it `hold_s`; slip = how far the box moved
 /// relative to the palms' midpoint during the hold.
-Scenario Grasp(const PhysicsConfig& config, double* slip_mm) {
+Scenario Grasp(const PhysicsConfig& config, double hold_s, double* slip_mm) {
   PhysicsWorld world{config};
   const physics::BoxGrip grip(world);
   const physics::BodyId box = grip.box;
@@ -101,15 +101,27 @@ Scenario Grasp(const PhysicsConfig& config, double* slip_mm) {
     const Vec3d r = world.hand(Side::kRight)->ProxyWrist().position;
     return Vec3d{b[0] - 0.5 * (l[0] + r[0]), b[1] - 0.5 * (l[1] + r[1]), b[2] - 0.5 * (l[2] + r[2])};
   };
-  double sim = run(0.3, [&](double) { return z0; });
-  sim += run(1.0, [&](double t) { return z0 + 0.1 * t; });
+  double sim = run(kGraspSettleS, [&](double) { return z0; });
+  sim += run(kGraspLiftS, [&](double t) { return z0 + 0.1 / kGraspLiftS * t; });
   const Vec3d start = relative();
-  sim += run(5.0, [&](double) { return z0 + 0.1; });
+  sim += run(hold_s, [&](double) { return z0 + 0.1; });
   *slip_mm = 1e3 * Distance(relative(), start);
   return {cpu, sim, Resets(world)};
 }
 
 }  // namespace
+
+Plan FullPlan() { return Plan{}; }
+
+Plan SmokePlan() {
+  Plan p;
+  p.steps_ms = {1.0, 8.0};  // the default step and the coarsest
+  p.iterations = {5, 20};   // the fewest and the default
+  p.trajectory_s = 0.5;     // the ease-in: the 0.025 ms reference is most of a smoke run's time
+  p.push_s = 0.6;           // touch-down at 0.3 s, then 0.3 s pressed in
+  p.grasp_hold_s = 1.0;
+  return p;
+}
 
 HandSample Trajectory::At(double t) const {
   const double u = std::clamp(t / dt, 0.0, static_cast<double>(position.size() - 1));
@@ -127,7 +139,7 @@ HandSample Trajectory::At(double t) const {
   return haptics::TrackedHand(p, q);
 }
 
-Trajectory MakeTrajectory() {
+Trajectory MakeTrajectory(double seconds) {
   // Per axis: {amplitude (arbitrary), frequency Hz, phase}; scaled below.
   struct Term {
     double a, f, phi;
@@ -138,7 +150,7 @@ Trajectory MakeTrajectory() {
       {{{0.5, 0.55, 1.9}, {0.25, 1.3, 0.2}, {0.08, 1.5, 1.3}}},
   }};
   Trajectory tr;
-  const size_t n = static_cast<size_t>(std::lround(kTrajectoryS / tr.dt)) + 1;
+  const size_t n = static_cast<size_t>(std::lround(seconds / tr.dt)) + 1;
   std::vector<Vec3d> raw(n);
   for (size_t i = 0; i < n; ++i) {
     const double t = static_cast<double>(i) * tr.dt;
@@ -175,7 +187,7 @@ void SaveTrajectory(const std::filesystem::path& file, const Trajectory& tr) {
   if (!out) throw std::runtime_error("cannot write " + file.string());
 }
 
-std::optional<Trajectory> LoadTrajectory(const std::filesystem::path& file) {
+std::optional<Trajectory> LoadTrajectory(const std::filesystem::path& file, double seconds) {
   std::ifstream in(file);
   std::string line;
   if (!std::getline(in, line) || line != "t_s,x_m,y_m,z_m,qw,qx,qy,qz") return std::nullopt;
@@ -188,7 +200,7 @@ std::optional<Trajectory> LoadTrajectory(const std::filesystem::path& file) {
     tr.position.push_back({x, y, z});
     tr.orientation.push_back({qw, qx, qy, qz});
   }
-  if (tr.position.size() < 2 || std::abs(tr.duration() - kTrajectoryS) > 1e-6) return std::nullopt;
+  if (tr.position.size() < 2 || std::abs(tr.duration() - seconds) > 1e-6) return std::nullopt;
   return tr;
 }
 
@@ -227,6 +239,12 @@ std::vector<Vec3d> TrackRun(const PhysicsConfig& base, const Trajectory& tr, dou
   return out;
 }
 
+std::vector<Vec3d> ReferenceRun(const PhysicsConfig& base, const Trajectory& trajectory) {
+  PhysicsConfig config = base;
+  config.reference = true;
+  return TrackRun(config, trajectory, 1e-3 * kReferenceStepMs, kReferenceIterations);
+}
+
 void SaveReference(const std::filesystem::path& file, const std::vector<Vec3d>& reference) {
   std::ofstream out(file);
   out << "x_m,y_m,z_m\n";
@@ -252,7 +270,7 @@ std::optional<std::vector<Vec3d>> LoadReference(const std::filesystem::path& fil
 }
 
 Point Measure(const PhysicsConfig& base, const Trajectory& tr, const std::vector<Vec3d>& reference, double step_ms,
-              int iterations, const std::string& precision) {
+              int iterations, const std::string& precision, const Plan& plan) {
   Point p;
   p.step_ms = step_ms;
   p.iterations = iterations;
@@ -277,8 +295,8 @@ Point Measure(const PhysicsConfig& base, const Trajectory& tr, const std::vector
   p.lag_mm = n ? 1e3 * std::sqrt(sum_lag / n) : NAN;
   Scenario total{cpu, tr.duration(), resets};
 
-  const Scenario push = Push(config, &p.penetration_rest_mm, &p.penetration_mm);
-  const Scenario grasp = Grasp(config, &p.slip_mm);
+  const Scenario push = Push(config, plan.push_s, &p.penetration_rest_mm, &p.penetration_mm);
+  const Scenario grasp = Grasp(config, plan.grasp_hold_s, &p.slip_mm);
   for (const Scenario& s : {push, grasp}) {
     total.cpu_s += s.cpu_s;
     total.sim_s += s.sim_s;

@@ -26,6 +26,25 @@ constexpr int kReferenceIterations = 40;
 constexpr double kTrajectoryDtS = 0.00025;  ///< recorded at 4 kHz
 constexpr double kTrajectoryS = 2.0;
 constexpr double kPeakSpeed = 0.3;  ///< m/s
+constexpr double kPushS = 1.0;       ///< the push into the table, touch-down included
+constexpr double kGraspSettleS = 0.3;  ///< the grasp: the palms close on the box,
+constexpr double kGraspLiftS = 1.0;    ///< lift it 10 cm,
+constexpr double kGraspHoldS = 5.0;    ///< and hold it
+
+/// What a run measures: the grid and the scenarios' lengths. The full run's
+/// is the constants above; a smoke run's (`--smoke`) a corner of the grid
+/// with the default in it, and shorter scenarios, the reference step and
+/// iterations unchanged.
+struct Plan {
+  std::vector<double> steps_ms = kStepsMs;
+  std::vector<int> iterations = kIterations;
+  double trajectory_s = kTrajectoryS;
+  double push_s = kPushS;
+  double grasp_hold_s = kGraspHoldS;
+  double grasp_s() const { return kGraspSettleS + kGraspLiftS + grasp_hold_s; }
+};
+Plan FullPlan();
+Plan SmokePlan();
 
 /// A recorded wrist trajectory: pose samples every dt.
 struct Trajectory {
@@ -37,18 +56,22 @@ struct Trajectory {
   haptics::HandSample At(double t) const;
 };
 
-/// A deterministic human-like reach: sums of sines (0.3–1.7 Hz) per axis,
-/// eased in over 0.5 s, scaled to a peak speed of 0.3 m/s, with the wrist
-/// turning ±0.3 rad about z.
-Trajectory MakeTrajectory();
+/// A deterministic human-like reach of `seconds`: sums of sines (0.3–1.7 Hz)
+/// per axis, eased in over 0.5 s, scaled to a peak speed of 0.3 m/s, with the
+/// wrist turning ±0.3 rad about z.
+Trajectory MakeTrajectory(double seconds = kTrajectoryS);
 void SaveTrajectory(const std::filesystem::path& file, const Trajectory& trajectory);
-/// nullopt when the file is missing or not a trajectory of this bench.
-std::optional<Trajectory> LoadTrajectory(const std::filesystem::path& file);
+/// nullopt when the file is missing or not a trajectory of this bench `seconds` long.
+std::optional<Trajectory> LoadTrajectory(const std::filesystem::path& file, double seconds = kTrajectoryS);
 
 /// Proxy wrist positions along `trajectory` at every sample time (index i ↔
 /// t = i·dt; index 0 is the placement), simulated at `step_s`, `iterations`.
 std::vector<Vec3d> TrackRun(const PhysicsConfig& base, const Trajectory& trajectory, double step_s,
                             int iterations, double* cpu_s = nullptr, long* resets = nullptr);
+/// The ground truth: TrackRun at kReferenceStepMs and kReferenceIterations,
+/// its config marked a reference run (PhysicsConfig::reference: a step finer
+/// than a physics thread may ask for, on a world stepped here, never a thread).
+std::vector<Vec3d> ReferenceRun(const PhysicsConfig& base, const Trajectory& trajectory);
 void SaveReference(const std::filesystem::path& file, const std::vector<Vec3d>& reference);
 std::optional<std::vector<Vec3d>> LoadReference(const std::filesystem::path& file);
 
@@ -66,8 +89,9 @@ struct Point {
   long resets = 0;                  ///< NaN/Inf resets of hands and bodies
 };
 
+/// One point of the grid; the push and the grasp's hold last as long as `plan` says.
 Point Measure(const PhysicsConfig& base, const Trajectory& trajectory, const std::vector<Vec3d>& reference,
-              double step_ms, int iterations, const std::string& precision);
+              double step_ms, int iterations, const std::string& precision, const Plan& plan = {});
 
 /// {"step_ms":…,"iterations":…,"precision":"…",…} with the JSON fields, plus
 /// the CSV-only ones when `extra`.

@@ -25,6 +25,7 @@
 #include "haptel/udp/udp_device.hpp"
 #include "bare_loop.hpp"
 #include "plot.hpp"
+#include "smoke.hpp"
 
 namespace haptel::bench {
 
@@ -92,11 +93,13 @@ std::string Json(const ModeResult& r, double bare_p99_us) {
 
 int BenchServoMain(int argc, const char* const* argv) {
   double seconds = 3.0;
-  bool json = false;
+  bool json = false, smoke = false;
   DeviceConfig base;
   try {
-    const Args args(argc, argv, {"seconds", "device"}, {"json"});
+    const Args args(argc, argv, {"seconds", "device"}, {"json", kSmokeFlag});
     json = args.Flag("json");
+    smoke = args.Flag(kSmokeFlag);
+    if (smoke) seconds = 0.5;  // every mode still runs, each for the shortest --seconds allowed
     if (auto v = args.Number("seconds", 0.5, 600)) seconds = *v;
     base = LoadDevice(args.Value("device").value_or(ShippedFile("config/devices/sim.yaml").string()));
   } catch (const UsageError& e) {
@@ -110,6 +113,7 @@ int BenchServoMain(int argc, const char* const* argv) {
     return 2;
   }
   base.driver = "sim";
+  PrintSmokeNote("servo", smoke, "every mode for %.1f s", seconds);
   std::vector<ModeResult> results;
 
   {  // The reference: an empty clock_nanosleep loop with the same rate and scheduling.
@@ -200,7 +204,7 @@ int BenchServoMain(int argc, const char* const* argv) {
               "  udp lost: requests that got no valid reply after their retries.\n");
 
   // CSV and plot.
-  const auto dir = BenchDir();
+  const auto dir = OutputDir(smoke);
   {
     std::ofstream csv(dir / "servo.csv");
     csv << "mode,rate_hz,period_p50_us,period_p99_us,p99_ratio_to_bare,period_max_us,overruns,allocations_in_loop,"
@@ -246,7 +250,7 @@ int BenchServoMain(int argc, const char* const* argv) {
       if (results[i].name == "udp_two_arms_decimated") udp_two_arms_hz = results[i].stats.rate_hz;
     }
     o << "},\"rate_hz_udp_two_arms\":" << udp_two_arms_hz << ",\"seconds_per_mode\":" << seconds << "}";
-    std::printf("%s\n", o.str().c_str());
+    std::printf("%s\n", JsonLine(o.str(), smoke).c_str());
   }
   return 0;
 }

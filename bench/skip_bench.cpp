@@ -31,6 +31,7 @@
 #include "haptel/video/camera_source.hpp"
 #include "haptel/video/codec.hpp"
 #include "plot.hpp"
+#include "smoke.hpp"
 #include <opencv2/imgproc.hpp>
 
 namespace haptel::bench {
@@ -277,14 +278,16 @@ CameraCost MeasureSyntheticCamera(const CameraConfig& camera, const Track& track
 
 int BenchSkipMain(int argc, const char* const* argv) {
   double seconds = 2.0;
-  bool json = false;
+  bool json = false, smoke = false;
   PhysicsConfig config;
   CockpitConfig cockpit;
   VehicleConfig vehicle;
   std::unique_ptr<Track> track;
   try {
-    const Args args(argc, argv, {"physics", "seconds"}, {"json"});
+    const Args args(argc, argv, {"physics", "seconds"}, {"json", kSmokeFlag});
     json = args.Flag("json");
+    smoke = args.Flag(kSmokeFlag);
+    if (smoke) seconds = 0.2;  // every kind of world, after the same warm-up (the boxes must fall asleep)
     if (auto v = args.Number("seconds", 0.1, 60)) seconds = *v;
     config = LoadPhysics(args.Value("physics").value_or(ShippedFile("config/physics.yaml").string()));
     cockpit = LoadCockpit(ShippedFile("config/interfaces/cockpit.yaml"));
@@ -295,6 +298,8 @@ int BenchSkipMain(int argc, const char* const* argv) {
     return 2;
   }
   config.realtime_priority = 0;  // stepped on this thread, never started
+  PrintSmokeNote("skip", smoke, "%.2g simulated s per world, video and camera; 10 and 100 floor boxes for 100 and 1000",
+                 seconds);
 
   std::vector<Result> results;  // the JSON's entries, in its order
   {  // gesture: no physical controls, no scene bodies.
@@ -310,16 +315,21 @@ int BenchSkipMain(int argc, const char* const* argv) {
     results.push_back(r);
   }
   results.push_back(MeasureCockpit(config, cockpit, Scene{}, seconds, "cockpit", "hands + wheel + throttle"));
-  for (const int n : {0, 100, 1000}) {
+  // Floor boxes: a smoke run has a tenth of them (the warm-up, while they
+  // are awake, is most of its time).
+  const std::vector<int> box_counts = smoke ? std::vector<int>{0, 10, 100} : std::vector<int>{0, 100, 1000};
+  const int most = box_counts.back();
+  for (const int n : box_counts) {
     results.push_back(MeasureCockpit(config, cockpit, FloorScene(n, true), seconds,
                                      "cockpit_sleeping_" + std::to_string(n),
                                      "cockpit + floor + " + std::to_string(n) + " dynamic boxes"));
   }
   // For comparison (table and CSV, and outside cpu_per_sim_s in the JSON):
-  // the same 1000 boxes made static, which Bullet neither integrates nor
+  // the same `most` boxes made static, which Bullet neither integrates nor
   // pairs with the (static) floor nor puts in its simulation islands.
-  const Result statics = MeasureCockpit(config, cockpit, FloorScene(1000, false), seconds, "cockpit_static_1000",
-                                        "cockpit + floor + 1000 static boxes");
+  const Result statics =
+      MeasureCockpit(config, cockpit, FloorScene(most, false), seconds, "cockpit_static_" + std::to_string(most),
+                     "cockpit + floor + " + std::to_string(most) + " static boxes");
   std::vector<Result> rows = results;
   rows.push_back(statics);
   const double base = results[2].cpu_per_sim_s();
@@ -381,7 +391,7 @@ int BenchSkipMain(int argc, const char* const* argv) {
       1e3 / shipped.rate_hz, shipped.cpu_share(),
       shipped.cpu_share() < 1.0 ? "" : ": lower camera.rate_hz or the size");
 
-  const auto dir = BenchDir();
+  const auto dir = OutputDir(smoke);
   {
     std::ofstream csv(dir / "skip_camera.csv");
     csv << "width,height,rate_hz,frames,render_ms,encode_ms,frame_cpu_ms,wall_ms,jpeg_bytes,cpu_"
@@ -413,7 +423,7 @@ int BenchSkipMain(int argc, const char* const* argv) {
     for (size_t i = 0; i < results.size(); ++i) {
       o << (i ? "," : "") << "\"" << results[i].name << "\":" << JsonNumber(results[i].cpu_per_sim_s());
     }
-    o << "},\"cpu_per_sim_s_static_1000\":" << JsonNumber(statics.cpu_per_sim_s())
+    o << "},\"cpu_per_sim_s_static_" << most << "\":" << JsonNumber(statics.cpu_per_sim_s())
       << ",\"video_decode_cpu_share\":{\"view_none\":" << JsonNumber(decode_none)
       << ",\"view\":" << JsonNumber(decode_view) << "}"
       << ",\"vehicle_camera\":{\"width\":" << shipped.width << ",\"height\":" << shipped.height
@@ -421,7 +431,7 @@ int BenchSkipMain(int argc, const char* const* argv) {
       << ",\"render_ms\":" << JsonNumber(shipped.per_frame_ms(shipped.render_cpu_s))
       << ",\"encode_ms\":" << JsonNumber(shipped.per_frame_ms(shipped.encode_cpu_s))
       << ",\"cpu_share\":" << JsonNumber(shipped.cpu_share()) << "}}";
-    std::printf("%s\n", o.str().c_str());
+    std::printf("%s\n", JsonLine(o.str(), smoke).c_str());
   }
   return 0;
 }

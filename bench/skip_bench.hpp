@@ -34,9 +34,13 @@
 /// Prints a table; writes build/bench/skip.csv; with --json the last stdout
 /// line is {"cpu_per_sim_s":{"gesture":0,"cockpit":…,…},"cpu_per_sim_s_static_1000":…,
 /// "video_decode_cpu_share":{…},"vehicle_camera":{"width":640,…,"cpu_share":…}}.
+///
+/// --smoke (smoke.hpp): every world, decode and camera for 0.2 s (after the
+/// same warm-up: the boxes must fall asleep), with 10 and 100 floor boxes
+/// instead of 100 and 1000 (cockpit_sleeping_10, _100, cockpit_static_100).
 namespace haptel::bench {
 
-/// `haptel bench skip [--physics FILE] [--seconds S] [--json]`; argv[0] is the
+/// `haptel bench skip [--physics FILE] [--seconds S] [--smoke] [--json]`; argv[0] is the
 /// sub-command's name. Returns 0, or 2 for bad usage or configuration.
 int BenchSkipMain(int argc, const char* const* argv);
 

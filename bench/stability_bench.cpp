@@ -20,6 +20,7 @@
 #include "haptel/testing/box_grip.hpp"
 #include "haptel/physics/world.hpp"
 #include "plot.hpp"
+#include "smoke.hpp"
 
 namespace haptel::bench {
 
@@ -187,10 +188,14 @@ std::string Regime(const PhysicsConfig& c, double h, double k) {
   return "bullet-spring";
 }
 
-std::vector<StiffRow> StiffnessSweep(const PhysicsConfig& config) {
+/// The step sizes the stiffness sweep visits: all, or a smoke run's two.
+const std::vector<double> kStiffSteps{0.25e-3, 0.5e-3, 1e-3, 2e-3, 4e-3};
+const std::vector<double> kStiffStepsSmoke{1e-3, 4e-3};
+
+std::vector<StiffRow> StiffnessSweep(const PhysicsConfig& config, const std::vector<double>& steps) {
   std::vector<StiffRow> rows;
   const double m = config.hand.palm_mass, b = config.hand.coupling_linear_damping;
-  for (const double h : {0.25e-3, 0.5e-3, 1e-3, 2e-3, 4e-3}) {
+  for (const double h : steps) {
     StiffRow row;
     row.step_s = h;
     row.k_passive = 2.0 * b / h;
@@ -431,12 +436,14 @@ GraspResult RunGrasp(const PhysicsConfig& base, double step_s, double seconds) {
 }  // namespace
 
 int BenchStabilityMain(int argc, const char* const* argv) {
-  bool json = false;
+  bool json = false, smoke = false;
   double minutes = 10.0;
   PhysicsConfig config;
   try {
-    const Args args(argc, argv, {"physics", "minutes"}, {"json"});
+    const Args args(argc, argv, {"physics", "minutes"}, {"json", kSmokeFlag});
     json = args.Flag("json");
+    smoke = args.Flag(kSmokeFlag);
+    if (smoke) minutes = 2.0 * kCycleS / 60.0;  // two whole grasp/release cycles
     if (auto v = args.Number("minutes", 0.1, 60)) minutes = *v;
     config = LoadPhysics(args.Value("physics").value_or(ShippedFile("config/physics.yaml").string()));
   } catch (const std::exception& e) {
@@ -444,14 +451,17 @@ int BenchStabilityMain(int argc, const char* const* argv) {
     return 2;
   }
   config.realtime_priority = 0;  // stepped on this thread, never started
-  const auto dir = BenchDir();
+  const std::vector<double>& stiff_steps = smoke ? kStiffStepsSmoke : kStiffSteps;
+  PrintSmokeNote("stability", smoke, "stiffness at %zu step sizes, grasp_release %.2g simulated min", stiff_steps.size(),
+                 minutes);
+  const auto dir = OutputDir(smoke);
   const auto& hc = config.hand;
   std::printf("haptel bench stability: %s, configured step %.4g s, %d solver iterations\n\n",
               config.file.empty() ? "defaults" : config.file.c_str(), config.step_s, config.solver_iterations);
 
   // ---- stiffness
   const double t_stiff = NsToS(MonotonicNs());
-  const std::vector<StiffRow> stiff = StiffnessSweep(config);
+  const std::vector<StiffRow> stiff = StiffnessSweep(config, stiff_steps);
   bool stiff_passed = true;  // the configured stiffness must be stable at the configured step
   std::printf("[stiffness] palm (%.3g kg) coupled to a tracked wrist, damping b = %.3g N*s/m, K doubling from 1e2\n"
               "  to %.3g; diverged = NaN reset, error > 10 cm or energy growing while held (%.1f s wall)\n",
@@ -614,7 +624,7 @@ int BenchStabilityMain(int argc, const char* const* argv) {
       << ",\"cycles\":" << gr.cycles << ",\"lifted\":" << gr.lifted << ",\"energy_first_j\":"
       << JsonNumber(gr.energy.empty() ? 0.0 : gr.energy.front()) << ",\"energy_drift_j\":" << JsonNumber(gr.drift)
       << ",\"energy_max_excursion_j\":" << JsonNumber(gr.max_excursion) << ",\"resets\":" << gr.resets << "}}}";
-    std::printf("%s\n", o.str().c_str());
+    std::printf("%s\n", JsonLine(o.str(), smoke).c_str());
   }
   return passed ? 0 : 1;
 }

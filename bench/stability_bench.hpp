@@ -28,9 +28,12 @@
 /// Prints a table per test; writes build/bench/stability_*.csv and
 /// stability_stiffness.png; with --json the last stdout line is
 /// {"passed":…,"tests":{"stiffness":{…},"mass_ratio":{…},"squash":{…},"grasp_release":{…}}}.
+///
+/// --smoke (smoke.hpp): the stiffness sweep at T = 1 and 4 ms only, and two
+/// grasp_release cycles (8 s); mass_ratio and squash as in the full run.
 namespace haptel::bench {
 
-/// `haptel bench stability [--physics FILE] [--minutes M] [--json]`; argv[0]
+/// `haptel bench stability [--physics FILE] [--minutes M] [--smoke] [--json]`; argv[0]
 /// is the sub-command's name. Returns 0 when every test passed, 1 when one
 /// failed, 2 for bad usage or configuration.
 int BenchStabilityMain(int argc, const char* const* argv);

@@ -31,6 +31,7 @@
 #include "haptel/mediator/video_receiver.hpp"
 #include "bare_loop.hpp"
 #include "plot.hpp"
+#include "smoke.hpp"
 
 namespace haptel::bench {
 namespace {
@@ -110,7 +111,7 @@ Phase Bare(const Parts& parts, double seconds) {
 }
 
 /// The world (servo, physics, vehicle), with the view when `view_options`.
-Phase World(const std::string& name, const Parts& parts, double seconds,
+Phase World(const std::string& name, const Parts& parts, double seconds, double warm_up_s,
             const std::optional<view::ViewOptions>& view_options) {
   Phase p;
   p.name = name;
@@ -156,7 +157,7 @@ Phase World(const std::string& name, const Parts& parts, double seconds,
   // As the session loop does: commands at 50 Hz, an overlay with a running
   // clock and a HUD (so the overlay texture is redrawn as in a real run).
   const int64_t t0 = MonotonicNs();
-  const int64_t measure_from = t0 + SToNs(1.0);
+  const int64_t measure_from = t0 + SToNs(warm_up_s);
   const int64_t end = measure_from + SToNs(seconds);
   const uint64_t frames0 = link.video().Stats().frames;
   double cpu0 = 0.0;
@@ -201,25 +202,33 @@ Phase World(const std::string& name, const Parts& parts, double seconds,
 
 int BenchViewMain(int argc, const char* const* argv) {
   double seconds = 5.0;
-  bool json = false;
+  double warm_up_s = 1.0;
+  bool json = false, smoke = false;
   Parts parts;
-  const auto dir = BenchDir();
+  std::filesystem::path dir;
   try {
-    const Args args(argc, argv, {"seconds"}, {"json"});
+    const Args args(argc, argv, {"seconds", "domain"}, {"json", kSmokeFlag});
     json = args.Flag("json");
+    smoke = args.Flag(kSmokeFlag);
+    if (smoke) {  // every phase, each shorter than --seconds may ask
+      seconds = 0.5;
+      warm_up_s = 0.25;
+    }
     if (auto v = args.Number("seconds", 1, 120)) seconds = *v;
+    dir = OutputDir(smoke);
     parts.run = LoadRun(ShippedFile("config/haptel.yaml"));
     parts.device = LoadDevice(ShippedFile("config/devices/sim.yaml"));
     parts.physics = LoadPhysics(ShippedFile("config/physics.yaml"));
     parts.cockpit = LoadCockpit(ShippedFile("config/interfaces/cockpit-hud.yaml"));
     parts.vehicle = LoadVehicle(VehicleFile(dir));
     parts.track = ShippedFile("config/tracks/test-short.yaml");
-    parts.domain = 150 + static_cast<int>(getpid() % 80);
+    parts.domain = args.Int("domain", 0, 232).value_or(150 + static_cast<int>(getpid() % 80));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "haptel bench view: %s\n", e.what());
     return 2;
   }
 
+  PrintSmokeNote("view", smoke, "%.2g s per phase after %.2g s of warm-up", seconds, warm_up_s);
   view::ViewOptions options;
   options.mode =
       view::View::DisplayAvailable() ? view::ViewMode::kWindow : view::ViewMode::kOffscreen;
@@ -227,14 +236,14 @@ int BenchViewMain(int argc, const char* const* argv) {
   std::vector<Phase> phases;
   try {
     std::fprintf(
-        stderr, "haptel bench view: %.0f s per phase, view %s %dx%d, video %dx%d at %.0f fps\n",
+        stderr, "haptel bench view: %.2g s per phase, view %s %dx%d, video %dx%d at %.0f fps\n",
         seconds, mode, options.width, options.height, kVideoWidth, kVideoHeight, kVideoFps);
     phases.push_back(Bare(parts, seconds));
-    phases.push_back(World("world", parts, seconds, std::nullopt));
-    phases.push_back(World("view", parts, seconds, options));
+    phases.push_back(World("world", parts, seconds, warm_up_s, std::nullopt));
+    phases.push_back(World("view", parts, seconds, warm_up_s, options));
     view::ViewOptions recording = options;
     recording.record = dir / "view-bench.mp4";
-    phases.push_back(World("view+mp4", parts, seconds, recording));
+    phases.push_back(World("view+mp4", parts, seconds, warm_up_s, recording));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "haptel bench view: %s\n", e.what());
     return 1;
@@ -336,7 +345,7 @@ int BenchViewMain(int argc, const char* const* argv) {
       << ",\"recorded_frames\":" << mp4.view_stats.recorded_frames
       << ",\"record_dropped\":" << mp4.view_stats.record_dropped
       << ",\"servo_p99_ratio_to_bare\":" << JsonNumber(ratio(mp4)) << "}}";
-    std::printf("%s\n", o.str().c_str());
+    std::printf("%s\n", JsonLine(o.str(), smoke).c_str());
   }
   return 0;
 }

@@ -24,10 +24,13 @@
 ///
 /// Prints a table; writes build/bench/view.csv and view.png (servo period
 /// distributions); with --json the last stdout line holds the figures.
+///
+/// --domain D puts the vehicle on DDS domain D (default 150 + pid % 80).
+/// --smoke (smoke.hpp): every phase for 0.5 s after a 0.25 s warm-up.
 namespace haptel::bench {
 
-/// `haptel bench view [--seconds S] [--json]`; argv[0] is the sub-command's
-/// name. Returns 0, 1 when a part fails, 2 for bad usage.
+/// `haptel bench view [--seconds S] [--domain D] [--smoke] [--json]`; argv[0]
+/// is the sub-command's name. Returns 0, 1 when a part fails, 2 for bad usage.
 int BenchViewMain(int argc, const char* const* argv);
 
 }  // namespace haptel::bench

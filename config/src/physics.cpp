@@ -51,7 +51,9 @@ void ProxyHandConfig::ValidateOrThrow() const {
 }
 
 void PhysicsConfig::ValidateOrThrow() const {
-  check::Number("step_s", step_s, 1e-4, 0.01);
+  // A thread's step from a user's file; a reference run (stepped by its
+  // caller, never a thread) may go finer to serve as the ground truth.
+  check::Number("step_s", step_s, reference ? kMinReferenceStepS : kMinStepS, kMaxStepS);
   check::Whole("solver_iterations", solver_iterations, 1, 1000);
   check::Vec3("gravity", gravity, -100.0, 100.0);
   check::Whole("realtime_priority", realtime_priority, 0, 99);

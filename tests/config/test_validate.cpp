@@ -135,6 +135,32 @@ TEST_CASE("PhysicsConfig, ProxyHandConfig, PhysicsMaterial", "[config][validate]
   CHECK(KeyOf(m) == "friction");
 }
 
+TEST_CASE("PhysicsConfig: a reference run may step finer than a thread, nothing else may",
+          "[config][validate]") {
+  // The work-precision benchmark's ground truth steps at 0.025 ms.
+  haptel::PhysicsConfig c;
+  c.step_s = 2.5e-5;
+  const ConfigFieldError thread = ErrorOf(c);
+  CHECK(thread.key == "step_s");
+  CHECK(thread.expected == "a number in [0.0001, 0.01]");
+  c.reference = true;
+  CHECK_NOTHROW(c.ValidateOrThrow());
+  // Still bounded, and still bound by every other rule.
+  c.step_s = 0.0;
+  CHECK(KeyOf(c) == "step_s");
+  c.step_s = 0.02;
+  CHECK(KeyOf(c) == "step_s");
+  c.step_s = 2.5e-5;
+  c.solver_iterations = 0;
+  CHECK(KeyOf(c) == "solver_iterations");
+
+  // A file cannot ask for it: `reference` is no key of physics.yaml.
+  const fs::path file = Write("reference.yaml", "step_s: 0.001\nreference: true\n");
+  CHECK_THAT(LoadErrorOf([&] { haptel::LoadPhysics(file); }), Contains("reference"));
+  const fs::path fine = Write("fine.yaml", "step_s: 0.000025\n");
+  CHECK_THAT(LoadErrorOf([&] { haptel::LoadPhysics(fine); }), Contains("step_s"));
+}
+
 TEST_CASE("CockpitConfig", "[config][validate]") {
   CHECK_NOTHROW(haptel::CockpitConfig{}.ValidateOrThrow());
   haptel::CockpitConfig c;

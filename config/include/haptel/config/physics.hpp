@@ -81,8 +81,23 @@ struct PhysicsConfig {
   std::array<double, 3> gravity{0.0, 0.0, -9.81};  ///< m/s², device frame
   int realtime_priority = 0;  ///< SCHED_FIFO priority for the thread (0: do not ask)
   ProxyHandConfig hand;
+  /// An offline reference run: a world its caller steps by hand to compute a
+  /// ground truth (the work-precision benchmark's 0.025 ms reference run),
+  /// never a physics thread. Set by code only; physics files have no such
+  /// key. It lets step_s go below what a thread may ask (kMinStepS) down to
+  /// kMinReferenceStepS; every other rule stays.
+  bool reference = false;
 
-  /// Throws ConfigFieldError unless the step, solver, gravity and priority
+  /// The step a physics thread, and so a physics file, may ask for: 0.1 ms
+  /// (10 kHz, ten times the servo rate) to 10 ms.
+  static constexpr double kMinStepS = 1e-4;
+  static constexpr double kMaxStepS = 0.01;
+  /// The finest step of a reference run (1 µs): finer than any ground truth
+  /// needs, coarse enough that a step of 0 or a typo in the exponent is caught.
+  static constexpr double kMinReferenceStepS = 1e-6;
+
+  /// Throws ConfigFieldError unless the step (in [kMinStepS, kMaxStepS], or
+  /// from kMinReferenceStepS for a reference), solver, gravity and priority
   /// are in range and the hand is valid (keys "hand.*").
   void ValidateOrThrow() const;
 };

@@ -1,0 +1,328 @@
+// Every benchmark's smoke run (`haptel-bench NAME --smoke --json`), as a
+// program of its own: it exits 0, ends with one JSON line that says it is a
+// smoke run, writes its table and files, and its figures are the kind the full
+// run reports (finite numbers, the lists it promises, the checks it makes).
+// So a benchmark can no longer rot unnoticed. Behaviour only: no figure is
+// held to a time.
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "child.hpp"
+#include "json_value.hpp"
+#include "test_env.hpp"
+
+namespace fs = std::filesystem;
+using haptel::test::Child;
+using haptel::test::JsonValue;
+
+namespace {
+
+/// How long one benchmark may take before the test gives up on it: a bound
+/// on a hang, far above any smoke run (seconds each); not a timing check.
+constexpr double kHangBound_s = 300.0;
+
+fs::path Bin(const std::string& name) {
+  static const fs::path dir = fs::absolute(haptel::test::BinDir());
+  return dir / name;
+}
+
+/// The benchmarks run in a scratch folder of their own, so their files
+/// (build/bench/smoke/ under the working directory) land there, not in a
+/// build tree. Shipped configs still resolve (ShippedFile falls back to
+/// the source tree).
+const fs::path& WorkDir() {
+  static const fs::path dir = [] {
+    Bin("");  // resolved before the working directory changes
+    const fs::path d = haptel::test::ScratchDir("bench-smoke");
+    if (::chdir(d.c_str()) != 0) throw std::runtime_error("cannot enter " + d.string());
+    return d;
+  }();
+  return dir;
+}
+
+fs::path SmokeDir() { return WorkDir() / "build" / "bench" / "smoke"; }
+
+struct SmokeRun {
+  std::string out;
+  JsonValue json;
+};
+
+/// Runs `argv` (a program and its arguments) to its end; requires exit code
+/// 0 and a last stdout line that is a JSON object with "smoke":true.
+SmokeRun RunToEnd(const std::vector<std::string>& argv) {
+  WorkDir();
+  Child child(argv);
+  int code = child.Wait(kHangBound_s);
+  if (code == Child::kRunning) {
+    child.Terminate();
+    FAIL_CHECK(argv[0] << " " << argv[1] << " still ran after " << kHangBound_s
+                       << " s (a hang): terminated");
+  }
+  INFO("stdout:\n" << child.out() << "\nstderr:\n" << child.err());
+  REQUIRE(code == 0);
+  const std::string last = child.LastLine();
+  INFO("last line: " << last);
+  JsonValue json;
+  REQUIRE_NOTHROW(json = JsonValue::Parse(last));
+  REQUIRE(json.is_object());
+  REQUIRE(json.has("smoke"));
+  CHECK(json["smoke"].boolean());
+  // The table says so too, first.
+  CHECK_THAT(child.out(), Catch::Contains("SMOKE run (--smoke)"));
+  return {child.out(), json};
+}
+
+/// `haptel-bench NAME --smoke --json` plus `extra`.
+SmokeRun Smoke(const std::string& name, std::vector<std::string> extra = {}) {
+  std::vector<std::string> argv{Bin("haptel-bench").string(), name, "--smoke", "--json"};
+  argv.insert(argv.end(), extra.begin(), extra.end());
+  return RunToEnd(argv);
+}
+
+/// A number that is finite (JsonNumber writes null for NaN and infinities,
+/// which number() refuses).
+double Finite(const JsonValue& v) {
+  const double x = v.number();
+  CHECK(std::isfinite(x));
+  return x;
+}
+
+void RequireFiles(const std::vector<std::string>& names) {
+  for (const std::string& name : names) {
+    INFO("file " << (SmokeDir() / name));
+    CHECK(fs::is_regular_file(SmokeDir() / name));
+    CHECK(fs::file_size(SmokeDir() / name) > 0);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("JsonValue reads what the benchmarks write and refuses what is not JSON",
+          "[bench][smoke]") {
+  const JsonValue v = JsonValue::Parse(R"({"a":[1,-2.5e-3,{"b":null}],"c":"x\"y","d":true} )");
+  CHECK(v["a"].array().size() == 3);
+  CHECK(v["a"][1].number() == Approx(-0.0025));
+  CHECK(v["a"][2]["b"].kind() == JsonValue::Kind::kNull);
+  CHECK(v["c"].string() == "x\"y");
+  CHECK(v["d"].boolean());
+  CHECK_THROWS(v["e"]);
+  CHECK_THROWS(v["c"].number());
+  for (const char* bad :
+       {R"({"a":nan})", R"({"a":1,})", R"({"a":1 "b":2})", R"({"a":1}x)", R"({a:1})", R"({"a":01})",
+        R"({"a":1.})", R"([1,2)", R"({"a":inf})", ""}) {
+    INFO(bad);
+    CHECK_THROWS(JsonValue::Parse(bad));
+  }
+}
+
+TEST_CASE("bench servo --smoke", "[bench][smoke]") {
+  const JsonValue j = Smoke("servo").json;
+  CHECK(j["seconds_per_mode"].number() == 0.5);
+  const std::set<std::string> expected{"bare_clock_nanosleep", "local_one_arm", "local_two_arms",
+                                       "udp_two_arms_decimated", "udp_two_arms_every_cycle"};
+  std::set<std::string> modes;
+  for (const auto& [name, mode] : j["modes"].object()) {
+    INFO(name);
+    modes.insert(name);
+    CHECK(Finite(mode["rate_hz"]) > 0.0);
+    const double p50 = Finite(mode["period_p50_us"]);
+    CHECK(p50 > 0.0);
+    CHECK(Finite(mode["period_p99_us"]) >= p50);
+    CHECK(Finite(mode["p99_ratio_to_bare"]) > 0.0);
+  }
+  CHECK(modes == expected);
+  CHECK(Finite(j["rate_hz_udp_two_arms"]) > 0.0);
+  RequireFiles({"servo.csv", "servo_periods.csv", "servo_periods.png"});
+}
+
+TEST_CASE("bench gravity --smoke", "[bench][smoke]") {
+  const JsonValue j = Smoke("gravity").json;
+  CHECK(j["vertices"].number() == 8);  // 2 x 2 x 2
+  CHECK(j["points"].number() == 3);
+  CHECK(Finite(j["sampling_sim_s"]) > 0.0);
+  // Off, the arm falls; on, it drifts less.
+  const double off = Finite(j["drift_mean_off_mm_s"]);
+  const double on = Finite(j["drift_mean_on_mm_s"]);
+  CHECK(off > 0.0);
+  CHECK(on >= 0.0);
+  CHECK(on < off);
+  CHECK(Finite(j["drift_ratio"]) > 1.0);
+  CHECK(Finite(j["force_error_max_n"]) >= 0.0);
+  RequireFiles({"gravity.csv", "gravity_vertices.csv", "gravity.png", "gravity_grid.yaml"});
+}
+
+TEST_CASE("bench skip --smoke", "[bench][smoke]") {
+  const JsonValue j = Smoke("skip").json;
+  const JsonValue& cpu = j["cpu_per_sim_s"];
+  CHECK(cpu["gesture"].number() == 0.0);  // no world at all
+  // A smoke run's floor has 10 and 100 boxes (the full run's 100 and 1000).
+  for (const char* world :
+       {"cockpit", "cockpit_sleeping_0", "cockpit_sleeping_10", "cockpit_sleeping_100"}) {
+    INFO(world);
+    CHECK(Finite(cpu[world]) > 0.0);
+  }
+  CHECK(cpu.object().size() == 5);
+  CHECK(Finite(j["cpu_per_sim_s_static_100"]) > 0.0);
+  CHECK(j["video_decode_cpu_share"]["view_none"].number() == 0.0);  // not decoded
+  CHECK(Finite(j["video_decode_cpu_share"]["view"]) > 0.0);
+  const JsonValue& camera = j["vehicle_camera"];
+  CHECK(camera["width"].number() > 0);
+  CHECK(camera["height"].number() > 0);
+  CHECK(Finite(camera["cpu_share"]) > 0.0);
+  RequireFiles({"skip.csv", "skip_camera.csv"});
+}
+
+TEST_CASE("bench physics --smoke: the fine reference, both precisions", "[bench][smoke]") {
+  // The reference run steps at 0.025 ms, finer than a physics file may ask:
+  // this run failed on that check before the reference had a path of its own.
+  const JsonValue j = Smoke("physics").json;
+  int doubles = 0, floats = 0;
+  for (const JsonValue& p : j["points"].array()) {
+    const std::string precision = p["precision"].string();
+    INFO(precision << " " << p["step_ms"].number() << " ms, " << p["iterations"].number()
+                   << " iterations");
+    (precision == "float" ? floats : doubles) += 1;
+    CHECK((precision == "double" || precision == "float"));
+    CHECK(Finite(p["cpu_per_sim_s"]) > 0.0);
+    CHECK(Finite(p["tracking_err_mm"]) >= 0.0);
+    CHECK(Finite(p["penetration_mm"]) >= 0.0);
+    CHECK(Finite(p["slip_mm"]) >= 0.0);
+  }
+  // 2 steps x 2 iteration counts each; the float ones from haptel-physics-bench-float.
+  CHECK(doubles == 4);
+  CHECK(floats == 4);
+  const JsonValue& def = j["default"];
+  CHECK(def["step_ms"].number() == 1.0);
+  CHECK(def["iterations"].number() == 20);
+  CHECK(def["precision"].string() == "double");
+  CHECK(Finite(def["tracking_err_mm"]) > 0.0);  // a 1 ms step is not the 0.025 ms reference
+  CHECK_FALSE(j["pareto"].array().empty());
+  CHECK(Finite(j["default_error_ratio"]) > 0.0);
+  CHECK(Finite(j["default_cpu_ratio"]) > 0.0);
+  RequireFiles({"physics.csv", "physics_pareto.png", "trajectory.csv", "physics_reference.csv"});
+}
+
+TEST_CASE("bench stability --smoke", "[bench][smoke]") {
+  const JsonValue j = Smoke("stability").json;
+  CHECK(j["passed"].boolean());
+  const JsonValue& t = j["tests"];
+  const auto& steps = t["stiffness"]["steps"].array();
+  CHECK(steps.size() == 2);
+  for (const JsonValue& s : steps) CHECK(Finite(s["k_max"]) > 0.0);
+  const auto& ratios = t["mass_ratio"]["ratios"].array();
+  CHECK(ratios.size() == 4);
+  for (const JsonValue& r : ratios) {
+    CHECK(r["resets"].number() == 0);
+    CHECK(r["on_box"].boolean());
+  }
+  CHECK(t["squash"]["passed"].boolean());
+  CHECK(Finite(t["squash"]["contact_force_mean_n"]) > 0.0);
+  const JsonValue& grasp = t["grasp_release"];
+  CHECK(grasp["cycles"].number() == 2);
+  CHECK(grasp["lifted"].number() == 2);
+  CHECK(grasp["resets"].number() == 0);
+  RequireFiles({"stability_stiffness.csv", "stability_mass_ratio.csv", "stability_squash.csv",
+                "stability_grasp_release.csv", "stability_stiffness.png"});
+}
+
+TEST_CASE("bench view --smoke", "[bench][smoke]") {
+  // Offscreen, whatever display the suite has; the vehicle on a domain of its own.
+  unsetenv("DISPLAY");
+  unsetenv("WAYLAND_DISPLAY");
+  const JsonValue j =
+      Smoke("view", {"--domain", std::to_string(haptel::test::UniqueDomain(81))}).json;
+  CHECK(j["mode"].string() == "offscreen");
+  CHECK(Finite(j["view_fps"]) > 0.0);
+  CHECK(Finite(j["view_frame_ms_p50"]) > 0.0);
+  CHECK(Finite(j["video_to_screen_ms_p50"]) > 0.0);  // the vehicle's video reached the screen
+  for (const char* phase : {"servo_p99_us_bare", "servo_p99_us_world", "servo_p99_us_view"}) {
+    INFO(phase);
+    CHECK(Finite(j[phase]) > 0.0);
+  }
+  CHECK(j["record"]["recorded_frames"].number() > 0);
+  RequireFiles({"view.csv", "view.png", "view-bench.mp4"});
+}
+
+TEST_CASE("bench blimp --smoke", "[bench][smoke]") {
+  const JsonValue j = Smoke("blimp").json;
+  CHECK(j["passed"].boolean());
+  CHECK_FALSE(j["default"]["integrator"].string().empty());
+  const auto& sweep = j["sweep"].array();
+  CHECK(sweep.size() == 21);  // 3 integrators x 7 steps
+  for (const JsonValue& row : sweep) {
+    CHECK(row["finite"].boolean());
+    CHECK(Finite(row["error_m"]) >= 0.0);
+    CHECK(Finite(row["cpu_ms_per_sim_s"]) > 0.0);
+  }
+  const JsonValue& checks = j["checks"];
+  CHECK(checks["no_nan"].boolean());
+  CHECK(Finite(checks["top_speed_kmh"]) > 0.0);
+  CHECK(Finite(checks["hover_drift_m"]) >= 0.0);
+  RequireFiles({"blimp_precision.csv", "blimp_checks.csv", "blimp_precision.png"});
+}
+
+TEST_CASE("bench link --smoke", "[bench][smoke]") {
+  const JsonValue j =
+      Smoke("link", {"--domain", std::to_string(haptel::test::UniqueDomain(82)), "--lap-domain",
+                     std::to_string(haptel::test::UniqueDomain(83))})
+          .json;
+  const JsonValue& rtt = j["rtt"];
+  for (const char* key : {"raw_p50_ms", "haptel_p50_ms", "secured_p50_ms"}) {
+    INFO(key);
+    CHECK(Finite(rtt[key]) > 0.0);
+  }
+  CHECK(Finite(rtt["video_p50_ms"]) > 0.0);
+  CHECK(Finite(rtt["secured_video_p50_ms"]) > 0.0);
+  const auto& laps = j["laps"].array();
+  REQUIRE(laps.size() == 1);  // no delay, no loss, on the short track
+  CHECK(laps[0]["completed"].boolean());
+  CHECK(laps[0]["outcome"].string() == "completed");
+  CHECK(Finite(laps[0]["lap_time_s"]) > 0.0);
+  RequireFiles({"link_rtt.csv", "link_laps.csv", "link_laps.png"});
+}
+
+TEST_CASE("bench fuzz --smoke", "[bench][smoke]") {
+  const JsonValue j = Smoke("fuzz").json;
+  CHECK(j["crashes"].number() == 0);
+  CHECK(j["hangs"].number() == 0);
+  std::vector<std::string> targets;
+  for (const JsonValue& t : j["targets"].array()) {
+    targets.push_back(t["target"].string());
+    INFO(targets.back());
+    const double inputs = t["inputs"].number();
+    CHECK(inputs == 300);
+    CHECK(t["accepted"].number() + t["rejected"].number() == inputs);
+    CHECK(t["accepted"].number() > 0);  // every 64th input is a valid seed
+  }
+  CHECK(targets == std::vector<std::string>{"config", "scene", "udp", "servo", "can", "dds"});
+  RequireFiles({"fuzz.csv"});
+}
+
+TEST_CASE("haptel bench NAME --smoke through the haptel program; every usage line offers --smoke",
+          "[bench][smoke]") {
+  const JsonValue j =
+      RunToEnd({Bin("haptel").string(), "bench", "fuzz", "--target", "udp", "--smoke", "--json"})
+          .json;
+  REQUIRE(j["targets"].array().size() == 1);
+  CHECK(j["targets"][0]["inputs"].number() == 300);
+
+  Child help({Bin("haptel").string(), "bench", "--help"});
+  REQUIRE(help.Wait(60.0) == 0);
+  std::istringstream lines(help.out());
+  int benches = 0;
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("  haptel bench ", 0) != 0) continue;
+    INFO(line);
+    ++benches;
+    CHECK_THAT(line, Catch::Contains("[--smoke]"));
+  }
+  CHECK(benches == 9);
+}
