@@ -496,8 +496,9 @@ void PhysicsWorld::WakeParked() {
         body.getLinearVelocity().length() + body.getAngularVelocity().length() * half.length();
     const double grow = speed * reach_s + kWakeMargin;
     // A NaN speed (CheckFinite resets the body after the step) reaches everywhere.
-    const btVector3 g = std::isfinite(grow) ? btVector3(grow, grow, grow)
-                                            : btVector3(BT_LARGE_FLOAT, BT_LARGE_FLOAT, BT_LARGE_FLOAT);
+    const btVector3 g = std::isfinite(grow)
+                            ? btVector3(grow, grow, grow)
+                            : btVector3(BT_LARGE_FLOAT, BT_LARGE_FLOAT, BT_LARGE_FLOAT);
     bt.movers.push_back({proxy->m_aabbMin - g, proxy->m_aabbMax + g, proxy->m_collisionFilterGroup,
                          proxy->m_collisionFilterMask, &body});
   }
@@ -578,7 +579,8 @@ void PhysicsWorld::ParkSleeping() {
     bool near = false;
     for (const Reach& m : bt.movers) {
       if (m.object->isActive() && (m.group & proxy->m_collisionFilterMask) != 0 &&
-          (proxy->m_collisionFilterGroup & m.mask) != 0 && TestAabbAgainstAabb2(lo, hi, m.min, m.max)) {
+          (proxy->m_collisionFilterGroup & m.mask) != 0 &&
+          TestAabbAgainstAabb2(lo, hi, m.min, m.max)) {
         near = true;
         break;
       }

@@ -159,9 +159,9 @@ TEST_CASE("parking: a palm moving into a parked box wakes it and pushes it as wi
   CHECK(with.asleep.position == without.asleep.position);
   REQUIRE(with.woken_at >= 0);
   INFO("woken after step " << with.woken_at << " (without parking " << without.woken_at << ")");
-  INFO("box at " << with.end.position[0] << ", " << with.end.position[1] << ", " << with.end.position[2]
-                 << " (without parking " << without.end.position[0] << ", " << without.end.position[1]
-                 << ", " << without.end.position[2] << ")");
+  INFO("box at " << with.end.position[0] << ", " << with.end.position[1] << ", "
+                 << with.end.position[2] << " (without parking " << without.end.position[0] << ", "
+                 << without.end.position[1] << ", " << without.end.position[2] << ")");
   INFO("turned " << AngleBetween(with.end.orientation, without.end.orientation) << " rad apart");
   CHECK(with.end.position[0] > 0.1);
   CHECK(with.end.position[2] == Approx(kHalf).margin(0.002));
@@ -169,8 +169,10 @@ TEST_CASE("parking: a palm moving into a parked box wakes it and pushes it as wi
   CHECK(AngleBetween(with.end.orientation, without.end.orientation) < 0.02);
 }
 
-TEST_CASE("parking: a body pushed into a parked stack wakes both boxes at once; they move as without parking",
-          "[physics][parking]") {
+TEST_CASE(
+    "parking: a body pushed into a parked stack wakes both boxes at once; they move as without "
+    "parking",
+    "[physics][parking]") {
   // A 5 kg box that never sleeps (as a hand), driven along x at 0.2 m/s
   // (its velocity set before each step) into a stack of two boxes 3 cm off
   // its centre line, pushing and turning it. A slow push: an impact (a ball
@@ -217,8 +219,9 @@ TEST_CASE("parking: a body pushed into a parked stack wakes both boxes at once; 
   CHECK(with.parked_before);
   CHECK_FALSE(without.parked_before);
   REQUIRE(with.woken_at[0] >= 0);
-  INFO("woken after step " << with.woken_at[0] << " " << with.gap_at_wake << " m away (without parking "
-                           << without.woken_at[0] << ", " << without.gap_at_wake << " m)");
+  INFO("woken after step " << with.woken_at[0] << " " << with.gap_at_wake
+                           << " m away (without parking " << without.woken_at[0] << ", "
+                           << without.gap_at_wake << " m)");
   // Woken before the pusher touched it, the box on top in the same step (in
   // contact: one island).
   CHECK(with.gap_at_wake > 0.01);
@@ -227,8 +230,8 @@ TEST_CASE("parking: a body pushed into a parked stack wakes both boxes at once; 
   CHECK(without.counters.wakings == 0);
   for (int k = 0; k < 2; ++k) {
     INFO("box " << k << " at " << with.end[k].position[0] << ", " << with.end[k].position[1] << ", "
-                << with.end[k].position[2] << " (without parking " << without.end[k].position[0] << ", "
-                << without.end[k].position[1] << ", " << without.end[k].position[2] << ")");
+                << with.end[k].position[2] << " (without parking " << without.end[k].position[0]
+                << ", " << without.end[k].position[1] << ", " << without.end[k].position[2] << ")");
     CHECK(with.end[k].position[0] > 0.15);  // pushed, the top box riding on the bottom one
     CHECK(with.end[k].position[2] == Approx(without.end[k].position[2]).margin(0.002));
     // Where it ends varies in Bullet itself, parking or not: for push speeds
@@ -273,8 +276,10 @@ TEST_CASE("parking: a parked body keeps its pose, and its scene node the object'
   CHECK(synced[0].orientation == object.orientation);
 }
 
-TEST_CASE("parking: body() brings a parked body back asleep; parking off keeps sleeping bodies in the world",
-          "[physics][parking]") {
+TEST_CASE(
+    "parking: body() brings a parked body back asleep; parking off keeps sleeping bodies in the "
+    "world",
+    "[physics][parking]") {
   PhysicsWorld world{PhysicsConfig{}};
   world.AddStaticPlane({0, 0, 1}, 0.0);
   const ph::BodyId a = world.AddDynamicBox({0, 0, kHalf}, {kHalf, kHalf, kHalf}, 0.5);
@@ -311,7 +316,8 @@ void* CountingAlloc(size_t size) {
 }
 }  // namespace
 
-TEST_CASE("parking: steps with parked bodies and a moving hand allocate nothing", "[physics][parking]") {
+TEST_CASE("parking: steps with parked bodies and a moving hand allocate nothing",
+          "[physics][parking]") {
   // Bullet allocates through its own hook (malloc), not operator new: count both.
   btAlignedAllocSetCustom(&CountingAlloc, &std::free);
   {
@@ -320,14 +326,16 @@ TEST_CASE("parking: steps with parked bodies and a moving hand allocate nothing"
     std::vector<ph::BodyId> boxes;
     for (int i = 0; i < 10; ++i) {
       for (int j = 0; j < 10; ++j) {
-        boxes.push_back(world.AddDynamicBox({0.3 * i, 0.3 * j + 0.6, kHalf}, {kHalf, kHalf, kHalf}, 0.5));
+        boxes.push_back(
+            world.AddDynamicBox({0.3 * i, 0.3 * j + 0.6, kHalf}, {kHalf, kHalf, kHalf}, 0.5));
       }
     }
     world.AddHand(Side::kRight);
     // The palm circles 10 cm above the floor at x = y = 0, never near a box.
     auto step = [&](int i) {
       const double a = 2.0 * M_PI * i * 1e-3;
-      world.hand(Side::kRight)->SetTracked(TrackedHand({0.1 * std::cos(a), 0.1 * std::sin(a), 0.1}));
+      world.hand(Side::kRight)
+          ->SetTracked(TrackedHand({0.1 * std::cos(a), 0.1 * std::sin(a), 0.1}));
       world.Step();
     };
     int i = 0;
