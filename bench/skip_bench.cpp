@@ -52,6 +52,7 @@ struct Result {
   bool world = false;
   int boxes = 0;
   int boxes_asleep = 0;
+  int boxes_parked = 0;  ///< of those asleep, out of the Bullet world (PhysicsWorld::BodyParked)
   long steps = 0;
   double sim_s = 0.0;
   double cpu_s = 0.0;
@@ -189,6 +190,7 @@ Result MeasureCockpit(const PhysicsConfig& config, const CockpitConfig& cockpit,
     if (scene.objects[node.object].name.rfind("floor_box_", 0) != 0) continue;
     ++r.boxes;
     if (node.dynamic && world->BodySleeping(node.body)) ++r.boxes_asleep;
+    if (node.dynamic && world->BodyParked(node.body)) ++r.boxes_parked;
   }
   return r;
 }
@@ -339,22 +341,25 @@ int BenchSkipMain(int argc, const char* const* argv) {
   std::printf("  cockpit = both proxy hands + the wheel and throttle of %s; the right palm rests on\n"
               "  the rim turning it +-0.2 rad, the left hand hovers over the knob; floor %.2f m below the hub\n\n",
               cockpit.file.filename().c_str(), -kFloorZ);
-  std::printf("%-22s %-38s %6s %9s %10s %12s %9s %13s\n", "world", "what", "world", "asleep", "us/step",
-              "cpu s/sim s", "x slp_0", "rim contacts");
+  std::printf("%-22s %-38s %6s %9s %7s %10s %12s %9s %13s\n", "world", "what", "world", "asleep", "parked",
+              "us/step", "cpu s/sim s", "x slp_0", "rim contacts");
   for (const Result& r : rows) {
     const bool dynamic = r.name.rfind("cockpit_sleeping_", 0) == 0;
     const std::string asleep = dynamic && r.boxes > 0 ? std::to_string(r.boxes_asleep) + "/" + std::to_string(r.boxes)
                                                       : "-";
+    const std::string parked = dynamic && r.boxes > 0 ? std::to_string(r.boxes_parked) : "-";
     const std::string contacts = r.world ? std::to_string(r.max_wheel_contacts) : "-";
     const double us_per_step = r.steps > 0 ? 1e6 * r.cpu_s / static_cast<double>(r.steps) : 0.0;
-    std::printf("%-22s %-38s %6s %9s %10.1f %12.4f %9.2f %13s\n", r.name.c_str(), r.description.c_str(),
-                r.world ? "yes" : "no", asleep.c_str(), us_per_step, r.cpu_per_sim_s(),
+    std::printf("%-22s %-38s %6s %9s %7s %10.1f %12.4f %9.2f %13s\n", r.name.c_str(), r.description.c_str(),
+                r.world ? "yes" : "no", asleep.c_str(), parked.c_str(), us_per_step, r.cpu_per_sim_s(),
                 base > 0.0 ? r.cpu_per_sim_s() / base : 0.0, contacts.c_str());
   }
   std::printf("\n  cpu s/sim s: thread CPU time spent stepping per simulated second (the share of\n"
               "  one core the physics thread needs); x slp_0: ratio to cockpit_sleeping_0 in this run;\n"
-              "  asleep: floor boxes Bullet had put to sleep at the end; rim contacts: most hand bodies\n"
-              "  touching the rim at once (the wheel turned %.2f..%.2f rad in the cockpit run).\n",
+              "  asleep: floor boxes Bullet had put to sleep at the end; parked: of those, how many the\n"
+              "  world had taken out of Bullet's (put back when something comes near); rim contacts:\n"
+              "  most hand bodies touching the rim at once (the wheel turned %.2f..%.2f rad in the\n"
+              "  cockpit run).\n",
               results[1].wheel_min, results[1].wheel_max);
 
   const double decode_none = VideoDecodeShare(mediator::ViewKind::kNone, seconds);
@@ -406,12 +411,12 @@ int BenchSkipMain(int argc, const char* const* argv) {
   {
     std::ofstream csv(dir / "skip.csv");
     csv << "world,has_world,boxes,boxes_asleep,steps,sim_s,cpu_s,cpu_per_sim_s,ratio_to_sleeping_0,"
-           "max_rim_contacts,wheel_min_rad,wheel_max_rad\n";
+           "max_rim_contacts,wheel_min_rad,wheel_max_rad,boxes_parked\n";
     for (const Result& r : rows) {
       csv << r.name << "," << (r.world ? 1 : 0) << "," << r.boxes << "," << r.boxes_asleep << "," << r.steps << ","
           << r.sim_s << "," << r.cpu_s << "," << r.cpu_per_sim_s() << ","
           << (base > 0.0 ? r.cpu_per_sim_s() / base : 0.0) << "," << r.max_wheel_contacts << "," << r.wheel_min
-          << "," << r.wheel_max << "\n";
+          << "," << r.wheel_max << "," << r.boxes_parked << "\n";
     }
   }
   std::printf("\n  wrote %s and %s\n", (dir / "skip.csv").c_str(),

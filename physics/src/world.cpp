@@ -35,6 +35,13 @@ btScalar SumSpinningFriction(const btCollisionObject* a, const btCollisionObject
   return a->getSpinningFriction() + b->getSpinningFriction();
 }
 
+/// m: an awake body reaches this much farther than two steps of its motion
+/// for parked bodies (both boxes already hold Bullet's contact threshold).
+constexpr double kWakeMargin = 0.01;
+/// m: a sleeping body is parked only when it is this much farther still from
+/// every awake body's reach, lest it be parked and woken by turns.
+constexpr double kParkMargin = 0.02;
+
 void CheckPositive(double value, const char* what) {
   if (!(value > 0.0) || !std::isfinite(value)) {
     throw std::invalid_argument(std::string("PhysicsWorld: ") + what + " must be finite and > 0");
@@ -182,6 +189,27 @@ class CancellableSolver final : public btSequentialImpulseConstraintSolver {
 
 }  // namespace
 
+struct PhysicsWorld::Body {
+  std::vector<std::unique_ptr<btCollisionShape>> parts;  ///< a compound's children: outlive it
+  std::unique_ptr<btCollisionShape> shape;
+  std::unique_ptr<btRigidBody> body;
+  btTransform spawn;
+  // Parking (see world.hpp). While parked the body is out of the Bullet
+  // world; what Bullet would lose with it is kept here.
+  btDbvtNode* leaf = nullptr;  ///< its box in the parked tree: non-null while parked
+  int group = 0, mask = 0;     ///< its collision filter
+  btVector3 gravity{0, 0, 0};  ///< m/s² (adding a body sets the world's)
+  bool queued = false;         ///< on this pass's list to park or to wake
+};
+
+/// What an awake body can reach before the next step's contacts: its
+/// broadphase box grown by its motion, and its collision filter.
+struct PhysicsWorld::Reach {
+  btVector3 min, max;
+  int group = 0, mask = 0;
+  const btCollisionObject* object = nullptr;
+};
+
 /// The Bullet machinery, in construction order (destroyed in reverse). A
 /// step gives up once `cancel` is set (PhysicsWorld::RequestStop).
 struct PhysicsWorld::Bullet {
@@ -198,13 +226,12 @@ struct PhysicsWorld::Bullet {
   btDbvtBroadphase broadphase;
   CancellableSolver solver;
   SleepAwareWorld world;
-};
-
-struct PhysicsWorld::Body {
-  std::vector<std::unique_ptr<btCollisionShape>> parts;  ///< a compound's children: outlive it
-  std::unique_ptr<btCollisionShape> shape;
-  std::unique_ptr<btRigidBody> body;
-  btTransform spawn;
+  // Parking: the parked bodies' boxes (leaf data: Body*), and each pass's
+  // lists, reserved ahead (AddBody; movers when the world grows).
+  btDbvt parked;
+  std::vector<Reach> movers;
+  std::vector<Body*> to_wake;
+  std::vector<Body*> to_park;
 };
 
 PhysicsWorld::PhysicsWorld(const PhysicsConfig& config)
@@ -233,7 +260,9 @@ PhysicsWorld::~PhysicsWorld() {
   Stop();
   ForgetAllPairs();
   for (auto& h : hands_) h.reset();  // removes its bodies and joints from the world
-  for (auto& b : bodies_) bullet_->world.removeRigidBody(b->body.get());
+  for (auto& b : bodies_) {
+    if (b->leaf == nullptr) bullet_->world.removeRigidBody(b->body.get());  // parked: not in it
+  }
   bodies_.clear();
 }
 
@@ -261,8 +290,13 @@ uint64_t PhysicsWorld::worlds_created() { return g_worlds_created.load(); }
 btDiscreteDynamicsWorld& PhysicsWorld::bullet() { return bullet_->world; }
 
 BodyId PhysicsWorld::AddBody(std::unique_ptr<Body> body) {
+  const auto id = static_cast<BodyId>(bodies_.size());
+  body->body->setUserIndex(id);  // from Bullet's objects back to ours (parking)
   bodies_.push_back(std::move(body));
-  return static_cast<BodyId>(bodies_.size() - 1);
+  // The parking passes' lists, here rather than in the loop.
+  bullet_->to_wake.reserve(bodies_.size());
+  bullet_->to_park.reserve(bodies_.size());
+  return id;
 }
 
 namespace {
@@ -362,7 +396,17 @@ ProxyHand& PhysicsWorld::AddHand(Side side) {
   return *slot;
 }
 
-btRigidBody& PhysicsWorld::body(BodyId id) { return *bodies_.at(static_cast<size_t>(id))->body; }
+btRigidBody& PhysicsWorld::body(BodyId id) {
+  Body& b = *bodies_.at(static_cast<size_t>(id));
+  if (b.leaf != nullptr) Unpark(b);
+  return *b.body;
+}
+const btRigidBody& PhysicsWorld::body(BodyId id) const {
+  return *bodies_.at(static_cast<size_t>(id))->body;
+}
+bool PhysicsWorld::BodyParked(BodyId id) const {
+  return bodies_.at(static_cast<size_t>(id))->leaf != nullptr;
+}
 Pose PhysicsWorld::BodyPose(BodyId id) const {
   return ToPose(bodies_.at(static_cast<size_t>(id))->body->getWorldTransform());
 }
@@ -379,9 +423,12 @@ void PhysicsWorld::Step() {
     if (h) h->PrepareStep();
   }
   for (StepHook* hook : hooks_) hook->BeforeStep();
+  WakeParked();
   // maxSubSteps = 0: exactly one step of step_s (the thread keeps the rate).
   bullet_->world.stepSimulation(config_.step_s, 0);
   CheckFinite();
+  // A step cut short leaves the world mid-step: to be stopped, not tidied.
+  if (!stop_requested_.load(std::memory_order_relaxed)) ParkSleeping();
   for (StepHook* hook : hooks_) hook->AfterStep();
   ++counters_.steps;
   counters_.last_step_us = static_cast<double>(MonotonicNs() - t0) * 1e-3;
@@ -399,10 +446,16 @@ void PhysicsWorld::CheckFinite() {
       ++counters_.hand_resets;
     }
   }
-  for (auto& b : bodies_) {
-    btRigidBody& body = *b->body;
-    // A sleeping body did not move this step: it is as finite as when it fell asleep.
-    if (body.isStaticOrKinematicObject() || !body.isActive() || IsFinite(body)) continue;
+  // The scene's bodies in the world (parked ones are not: asleep, they did
+  // not move); a sleeping body did not move this step either: it is as
+  // finite as when it fell asleep.
+  const btAlignedObjectArray<btRigidBody*>& in_world = bullet_->world.getNonStaticRigidBodies();
+  for (int i = 0; i < in_world.size(); ++i) {
+    btRigidBody& body = *in_world[i];
+    Body* b = SceneBody(body);
+    if (b == nullptr || body.isStaticOrKinematicObject() || !body.isActive() || IsFinite(body)) {
+      continue;
+    }
     body.setWorldTransform(b->spawn);
     body.setInterpolationWorldTransform(b->spawn);
     body.setLinearVelocity(btVector3(0, 0, 0));
@@ -414,6 +467,172 @@ void PhysicsWorld::CheckFinite() {
     ForgetContacts(bullet_->world, body);
     ++counters_.body_resets;
   }
+}
+
+PhysicsWorld::Body* PhysicsWorld::SceneBody(const btCollisionObject& object) {
+  const int id = object.getUserIndex();
+  if (id < 0 || static_cast<size_t>(id) >= bodies_.size()) return nullptr;
+  Body* b = bodies_[static_cast<size_t>(id)].get();
+  return b->body.get() == &object ? b : nullptr;
+}
+
+void PhysicsWorld::WakeParked() {
+  Bullet& bt = *bullet_;
+  // Every awake body that collides with anything reaches as far as its
+  // broadphase box (which holds Bullet's contact threshold), grown by two
+  // steps of its motion (the box is a step old; the next step's contacts
+  // are found where it is now) and a margin.
+  const btAlignedObjectArray<btRigidBody*>& in_world = bt.world.getNonStaticRigidBodies();
+  bt.movers.clear();
+  const auto n = static_cast<size_t>(in_world.size());
+  if (bt.movers.capacity() < n) bt.movers.reserve(2 * n);  // only when the world grew
+  const double reach_s = 2.0 * config_.step_s;
+  for (int i = 0; i < in_world.size(); ++i) {
+    const btRigidBody& body = *in_world[i];
+    const btBroadphaseProxy* proxy = body.getBroadphaseHandle();
+    if (!body.isActive() || proxy == nullptr || proxy->m_collisionFilterMask == 0) continue;
+    const btVector3 half = 0.5 * (proxy->m_aabbMax - proxy->m_aabbMin);
+    const double speed =
+        body.getLinearVelocity().length() + body.getAngularVelocity().length() * half.length();
+    const double grow = speed * reach_s + kWakeMargin;
+    // A NaN speed (CheckFinite resets the body after the step) reaches everywhere.
+    const btVector3 g = std::isfinite(grow)
+                            ? btVector3(grow, grow, grow)
+                            : btVector3(BT_LARGE_FLOAT, BT_LARGE_FLOAT, BT_LARGE_FLOAT);
+    bt.movers.push_back({proxy->m_aabbMin - g, proxy->m_aabbMax + g, proxy->m_collisionFilterGroup,
+                         proxy->m_collisionFilterMask, &body});
+  }
+  if (parked_count_ == 0) return;
+
+  /// Parked bodies whose box meets a volume and whose filter meets the
+  /// asker's, each once, onto to_wake.
+  struct Hits final : btDbvt::ICollide {
+    using btDbvt::ICollide::Process;
+    Hits(int g, int m, std::vector<Body*>& o) : group(g), mask(m), out(o) {}
+    void Process(const btDbvtNode* leaf) override {
+      Body& b = *static_cast<Body*>(leaf->data);
+      if (b.queued || (group & b.mask) == 0 || (b.group & mask) == 0) return;
+      b.queued = true;
+      out.push_back(&b);
+    }
+    int group, mask;
+    std::vector<Body*>& out;
+  };
+  bt.to_wake.clear();
+  for (const Reach& m : bt.movers) {
+    Hits hits(m.group, m.mask, bt.to_wake);
+    bt.parked.collideTV(bt.parked.m_root, btDbvtVolume::FromMM(m.min, m.max), hits);
+  }
+  // And what touches a body woken (their boxes meet: within Bullet's contact
+  // threshold), and so on: its sleeping island, woken together as Bullet would.
+  for (size_t i = 0; i < bt.to_wake.size(); ++i) {
+    const Body& b = *bt.to_wake[i];
+    Hits hits(b.group, b.mask, bt.to_wake);
+    bt.parked.collideTV(bt.parked.m_root, b.leaf->volume, hits);
+  }
+  for (Body* b : bt.to_wake) {
+    b->queued = false;
+    Unpark(*b);
+    b->body->activate(true);
+  }
+}
+
+void PhysicsWorld::Unpark(Body& b) {
+  Bullet& bt = *bullet_;
+  bt.parked.remove(b.leaf);
+  b.leaf = nullptr;
+  --parked_count_;
+  ++counters_.wakings;
+  // Back as it left: asleep (ISLAND_SLEEPING kept), at rest, its filter,
+  // gravity and broadphase box (adding one leaves out the contact threshold,
+  // and a sleeping body's box is not refreshed). Its pairs are found by the
+  // next step's broadphase pass.
+  bt.world.addRigidBody(b.body.get(), b.group, b.mask);
+  b.body->setGravity(b.gravity);
+  bt.world.updateSingleAabb(b.body.get());
+}
+
+void PhysicsWorld::ParkSleeping() {
+  Bullet& bt = *bullet_;
+  const btAlignedObjectArray<btRigidBody*>& in_world = bt.world.getNonStaticRigidBodies();
+  uint64_t awake = 0;
+  bt.to_park.clear();
+  const btVector3 park_margin(kParkMargin, kParkMargin, kParkMargin);
+  for (int i = 0; i < in_world.size(); ++i) {
+    btRigidBody& body = *in_world[i];
+    Body* b = SceneBody(body);
+    if (b == nullptr || body.isStaticOrKinematicObject()) continue;
+    if (body.isActive()) {
+      ++awake;
+      continue;
+    }
+    // Bullet keeps a sleeping body's joints in its islands: one with joints stays.
+    const btBroadphaseProxy* proxy = body.getBroadphaseHandle();
+    if (!parking_ || body.getActivationState() != ISLAND_SLEEPING ||
+        body.getNumConstraintRefs() > 0 || proxy == nullptr) {
+      continue;
+    }
+    // Asleep within the reach of a body still awake (and then some: it
+    // would be woken at once): it stays, asleep, until the mover leaves or
+    // wakes it. (Bodies that fell asleep in this step were movers before it.)
+    const btVector3 lo = proxy->m_aabbMin - park_margin, hi = proxy->m_aabbMax + park_margin;
+    bool near = false;
+    for (const Reach& m : bt.movers) {
+      if (m.object->isActive() && (m.group & proxy->m_collisionFilterMask) != 0 &&
+          (proxy->m_collisionFilterGroup & m.mask) != 0 &&
+          TestAabbAgainstAabb2(lo, hi, m.min, m.max)) {
+        near = true;
+        break;
+      }
+    }
+    if (near) continue;
+    b->queued = true;
+    bt.to_park.push_back(b);
+  }
+  if (!bt.to_park.empty()) {
+    // Their pairs first, in one pass over the pair table: removing a body
+    // makes Bullet walk every pair twice (see ForgetAllPairs), here only the
+    // pairs that are left. From the end: a removed pair's slot takes the
+    // last pair, already looked at.
+    btOverlappingPairCache* cache = bt.broadphase.getOverlappingPairCache();
+    btBroadphasePairArray& pairs = cache->getOverlappingPairArray();
+    const auto parking = [&](const btBroadphaseProxy* p) {
+      const Body* b = SceneBody(*static_cast<const btCollisionObject*>(p->m_clientObject));
+      return b != nullptr && b->queued;
+    };
+    for (int i = pairs.size() - 1; i >= 0; --i) {
+      btBroadphasePair& pair = pairs[i];
+      if (parking(pair.m_pProxy0) || parking(pair.m_pProxy1)) {
+        cache->removeOverlappingPair(pair.m_pProxy0, pair.m_pProxy1, &bt.dispatcher);
+      }
+    }
+    for (Body* b : bt.to_park) {
+      btRigidBody& body = *b->body;
+      const btBroadphaseProxy* proxy = body.getBroadphaseHandle();
+      b->group = proxy->m_collisionFilterGroup;
+      b->mask = proxy->m_collisionFilterMask;
+      b->gravity = body.getGravity();
+      const btDbvtVolume box = btDbvtVolume::FromMM(proxy->m_aabbMin, proxy->m_aabbMax);
+      // Asleep, Bullet zeroed its velocities; its forces are cleared each step.
+      bt.world.removeRigidBody(&body);
+      b->leaf = bt.parked.insert(box, b);
+      b->queued = false;
+      ++parked_count_;
+      ++counters_.parkings;
+    }
+  }
+  counters_.parked_bodies = parked_count_;
+  counters_.awake_bodies = awake;
+}
+
+void PhysicsWorld::SetParking(bool on) {
+  parking_ = on;
+  if (on) return;
+  for (auto& b : bodies_) {
+    if (b->leaf != nullptr) Unpark(*b);
+  }
+  counters_.parked_bodies = 0;
+  published_counters_.Store(counters_);
 }
 
 bool PhysicsWorld::EnterHal() {

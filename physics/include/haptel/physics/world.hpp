@@ -18,6 +18,18 @@
 /// from other threads. Without Start, Step and Tick drive the world
 /// deterministically.
 ///
+/// Sleeping bodies cost nothing (DESIGN.md): a scene body that Bullet has put
+/// to sleep is *parked* — taken out of the Bullet world, so that none of its
+/// per-step loops (islands, activation, integration, pairs) visits it — and
+/// kept in a bounding-box tree of its own. Before every step, each awake body
+/// of the world (hands, controls, awake scene bodies) asks that tree with its
+/// bounding box, grown by how far it can move in two steps: a parked body it
+/// could touch is put back into the world, awake, with everything parked
+/// that touches it, before the step that could bring them into contact. A
+/// parked body keeps its pose (BodyPose, ObjectPose), its zero velocity, its
+/// material, its gravity and its collision filter. Counters tell how many
+/// are parked and awake.
+///
 /// Stopping never waits for a step: RequestStop takes the world's forces out
 /// of the HAL at once and cuts the step in progress short (between contact
 /// pairs, manifolds and solver iterations); Stop(timeout) bounds the wait
@@ -34,6 +46,7 @@
 #include "haptel/haptics/hal.hpp"
 #include "haptel/physics/proxy_hand.hpp"
 
+class btCollisionObject;
 class btCollisionShape;
 class btDiscreteDynamicsWorld;
 class btRigidBody;
@@ -65,6 +78,13 @@ struct PhysicsCounters {
   uint64_t setpoints = 0;        ///< set-points written to the HAL
   double last_step_us = 0.0;     ///< compute time of the latest step
   double max_step_us = 0.0;
+  /// Dynamic scene bodies after the latest step: asleep and out of the Bullet
+  /// world (parked), and awake in it. The rest are asleep in the world (near
+  /// an awake body, about to be parked) or static.
+  uint64_t parked_bodies = 0;
+  uint64_t awake_bodies = 0;
+  uint64_t parkings = 0;  ///< bodies parked so far
+  uint64_t wakings = 0;   ///< parked bodies put back into the world so far
 };
 
 /// Index of a scene body in its world.
@@ -122,8 +142,22 @@ class PhysicsWorld {
 
   Pose BodyPose(BodyId id) const;
   Vec3d BodyVelocity(BodyId id) const;
+  /// True while the body is asleep, parked or not.
   bool BodySleeping(BodyId id) const;
+  /// True while the body is asleep and out of the Bullet world (see the top).
+  bool BodyParked(BodyId id) const;
+  /// The Bullet body, to read or change. A parked body is first put back
+  /// into the world as it was (asleep), so that whatever the caller does to
+  /// it acts as it would have; a step parks it again if it is still asleep.
+  /// A reference kept from earlier does not do this: call body() again.
   btRigidBody& body(BodyId id);
+  /// Reading only: a parked body stays parked.
+  const btRigidBody& body(BodyId id) const;
+  /// Parking is on from the start; off puts every parked body back into the
+  /// world (asleep) and keeps sleeping bodies there, as plain Bullet does.
+  /// Before Start.
+  void SetParking(bool on);
+  bool parking() const { return parking_; }
 
   /// One fixed step of config().step_s, then the NaN/Inf check.
   void Step();
@@ -159,10 +193,21 @@ class PhysicsWorld {
   btDiscreteDynamicsWorld& bullet();
 
  private:
-  struct Bullet;
   struct Body;
+  struct Reach;
+  struct Bullet;
   BodyId AddBody(std::unique_ptr<Body> body);
   void CheckFinite();
+  /// Before a step: each awake body's reach (Bullet::movers), and the parked
+  /// bodies inside one, with the parked bodies touching those, put back awake.
+  void WakeParked();
+  /// After a step: sleeping scene bodies out of every mover's reach leave
+  /// the world; counts parked and awake bodies.
+  void ParkSleeping();
+  /// Puts a parked body back into the world, as it was (asleep).
+  void Unpark(Body& body);
+  /// Ours when `object` is one of the scene's bodies, else nullptr.
+  Body* SceneBody(const btCollisionObject& object);
   /// Drops every overlapping pair in one pass (see the destructor).
   void ForgetAllPairs();
   /// The stepping thread's use of the HAL: EnterHal is false once a stop is
@@ -179,6 +224,8 @@ class PhysicsWorld {
   std::vector<std::unique_ptr<Body>> bodies_;
   std::array<std::unique_ptr<ProxyHand>, haptics::kSides> hands_;
   std::vector<StepHook*> hooks_;
+  bool parking_ = true;
+  uint64_t parked_count_ = 0;
   std::array<bool, haptics::kSides> tracked_ok_{};  ///< this tick's sample was usable
   PhysicsCounters counters_;                        ///< the stepping thread's own copy
   Seqlock<PhysicsCounters> published_counters_;
