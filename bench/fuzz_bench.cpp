@@ -39,6 +39,7 @@
 #include "haptel/core/blimp_command.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/core/json.hpp"
+#include "haptel/link/families.hpp"
 #include "haptel/link/topic.hpp"
 #include "haptel/servo/servo_output.hpp"
 #include "haptel/servo/sim_servo_controller.hpp"
@@ -436,16 +437,15 @@ Target DdsTarget() {
       case 0: {
         msg::DriveCommand c;
         if (!Deserialize<msg::DriveCommandPubSubType>(input, c)) return false;
-        // The robot's check (VehicleNode::OnCommand).
-        return std::isfinite(c.left()) && std::isfinite(c.right()) && std::abs(c.left()) <= 1.001f &&
-               std::abs(c.right()) <= 1.001f;
+        // The vehicle node's check of the robot family's command.
+        link::RobotMessages::Command command;
+        return link::RobotMessages::Decode(c, command);
       }
       case 1: {
         msg::BlimpCommand c;
         if (!Deserialize<msg::BlimpCommandPubSubType>(input, c)) return false;
-        const BlimpCommand command{c.elevator(), c.rudder(), c.power(), c.helix(), c.tail_rotor(), c.camera_pan(),
-                                   c.camera_tilt()};
-        return InRange(command, 1e-3);
+        link::BlimpMessages::Command command;
+        return link::BlimpMessages::Decode(c, command);
       }
       case 2: {
         msg::VehicleState s;

@@ -41,7 +41,7 @@ constexpr const char* kRunUsage =
     "  --config FILE        run configuration (default config/haptel.yaml)\n"
     "  --track FILE         track file (overrides the configuration's 'track')\n"
     "  --interface NAME     mediator interface to start with (a file interfaces/NAME.yaml);\n"
-    "                       F1-F6 switch between the run configuration's 'interfaces';\n"
+    "                       F1-F6 switch between the run configuration's 'switchable_interfaces';\n"
     "                       a blimp: blimp-gesture (a haptic device's two arms), blimp-keys\n"
     "                       (the default for a person at the simulated device) or blimp-gamepad\n"
     "  --operator KIND      auto (the simulated driver; default without a display) or person\n"
