@@ -23,18 +23,56 @@ double InterfaceSpec::command_rate_hz() const {
 
 namespace {
 
-/// Each robot interface's config loader, beside its row in the interface table.
-using Loader = InterfaceSpec::Config (*)(const std::filesystem::path&);
-const std::map<std::string, Loader>& Loaders() {
-  static const std::map<std::string, Loader> loaders{
-      {"gesture", [](const std::filesystem::path& f) -> InterfaceSpec::Config { return LoadGesture(f); }},
-      {"cockpit", [](const std::filesystem::path& f) -> InterfaceSpec::Config { return LoadCockpit(f); }},
-      {"cockpit-hud", [](const std::filesystem::path& f) -> InterfaceSpec::Config { return LoadCockpit(f); }},
-      {"cockpit-assisted", [](const std::filesystem::path& f) -> InterfaceSpec::Config { return LoadCockpit(f); }},
-      {"keyboard", [](const std::filesystem::path& f) -> InterfaceSpec::Config { return LoadKeyboard(f); }},
-      {"gamepad", [](const std::filesystem::path& f) -> InterfaceSpec::Config { return LoadGamepad(f); }},
+/// A robot interface's loader and factory, beside its row in the interface table.
+struct CatalogEntry {
+  InterfaceSpec::Config (*load)(const std::filesystem::path& file);
+  std::unique_ptr<interfaces::MediatorInterface> (*make)(const InterfaceSpec& spec, const InterfaceParts& parts);
+};
+
+const interfaces::InputBox& PersonsInput(const InterfaceSpec& spec, const InterfaceParts& parts) {
+  if (parts.input == nullptr) throw std::invalid_argument("interface '" + spec.name + "' needs a person's input");
+  return *parts.input;
+}
+
+const CatalogEntry kGesture{
+    [](const std::filesystem::path& f) -> InterfaceSpec::Config { return LoadGesture(f); },
+    [](const InterfaceSpec& spec, const InterfaceParts&) -> std::unique_ptr<interfaces::MediatorInterface> {
+      return std::make_unique<interfaces::GestureInterface>(std::get<GestureConfig>(spec.config));
+    }};
+const CatalogEntry kCockpit{
+    [](const std::filesystem::path& f) -> InterfaceSpec::Config { return LoadCockpit(f); },
+    [](const InterfaceSpec& spec, const InterfaceParts& parts) -> std::unique_ptr<interfaces::MediatorInterface> {
+      if (parts.controls == nullptr) throw std::invalid_argument("interface '" + spec.name + "' needs its controls");
+      return std::make_unique<interfaces::CockpitInterface>(std::get<CockpitConfig>(spec.config), *parts.controls);
+    }};
+const CatalogEntry kKeyboard{
+    [](const std::filesystem::path& f) -> InterfaceSpec::Config { return LoadKeyboard(f); },
+    [](const InterfaceSpec& spec, const InterfaceParts& parts) -> std::unique_ptr<interfaces::MediatorInterface> {
+      return std::make_unique<interfaces::KeyboardInterface>(std::get<KeyboardConfig>(spec.config),
+                                                             PersonsInput(spec, parts), parts.speed_levels);
+    }};
+const CatalogEntry kGamepad{
+    [](const std::filesystem::path& f) -> InterfaceSpec::Config { return LoadGamepad(f); },
+    [](const InterfaceSpec& spec, const InterfaceParts& parts) -> std::unique_ptr<interfaces::MediatorInterface> {
+      return std::make_unique<interfaces::GamepadInterface>(std::get<GamepadConfig>(spec.config),
+                                                            PersonsInput(spec, parts));
+    }};
+
+/// The robot family's interfaces by name (the blimp's are its session's).
+const std::map<std::string, const CatalogEntry*>& Catalog() {
+  static const std::map<std::string, const CatalogEntry*> catalog{
+      {"gesture", &kGesture},   {"cockpit", &kCockpit},   {"cockpit-hud", &kCockpit},
+      {"cockpit-assisted", &kCockpit}, {"keyboard", &kKeyboard}, {"gamepad", &kGamepad},
   };
-  return loaders;
+  return catalog;
+}
+
+const CatalogEntry& EntryFor(const std::string& name) {
+  const auto entry = Catalog().find(name);
+  if (entry == Catalog().end()) {
+    throw std::logic_error("interface '" + name + "' has no loader and factory in the interface catalog");
+  }
+  return *entry->second;
 }
 
 }  // namespace
@@ -51,13 +89,9 @@ InterfaceSpec LoadInterfaceSpec(const RunConfig& run, const std::string& name) {
     throw ConfigError(file.string() + ": interface '" + declared + "' flies a " + ToString(kind->family) +
                       "; the robot is driven with " + InterfaceKindNames(VehicleFamily::kRobot));
   }
-  const auto loader = Loaders().find(declared);
-  if (loader == Loaders().end()) {
-    throw std::logic_error("interface '" + declared + "' has no loader in the interface catalog");
-  }
   InterfaceSpec spec;
   spec.name = declared;
-  spec.config = loader->second(file);
+  spec.config = EntryFor(declared).load(file);
   return spec;
 }
 
@@ -79,19 +113,7 @@ void CheckHands(const std::vector<InterfaceSpec>& specs, const DeviceConfig& dev
 }
 
 std::unique_ptr<interfaces::MediatorInterface> MakeInterface(const InterfaceSpec& spec, const InterfaceParts& parts) {
-  if (const auto* cockpit = std::get_if<CockpitConfig>(&spec.config)) {
-    if (parts.controls == nullptr) throw std::invalid_argument("interface '" + spec.name + "' needs its controls");
-    return std::make_unique<interfaces::CockpitInterface>(*cockpit, *parts.controls);
-  }
-  if (const auto* keyboard = std::get_if<KeyboardConfig>(&spec.config)) {
-    if (parts.input == nullptr) throw std::invalid_argument("interface '" + spec.name + "' needs a person's input");
-    return std::make_unique<interfaces::KeyboardInterface>(*keyboard, *parts.input, parts.speed_levels);
-  }
-  if (const auto* gamepad = std::get_if<GamepadConfig>(&spec.config)) {
-    if (parts.input == nullptr) throw std::invalid_argument("interface '" + spec.name + "' needs a person's input");
-    return std::make_unique<interfaces::GamepadInterface>(*gamepad, *parts.input);
-  }
-  return std::make_unique<interfaces::GestureInterface>(std::get<GestureConfig>(spec.config));
+  return EntryFor(spec.name).make(spec, parts);
 }
 
 }  // namespace haptel::mediator

@@ -11,7 +11,10 @@
 #include "haptel/haptics/trace.hpp"
 #include "haptel/interfaces/gesture.hpp"
 #include "haptel/mediator/haptic_side.hpp"
+#include "haptel/mediator/interface_catalog.hpp"
 #include "haptel/mediator/interface_set.hpp"
+#include "haptel/config/paths.hpp"
+#include "haptel/config/run.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;
@@ -200,4 +203,53 @@ TEST_CASE("a paused trace writer lets records go without counting them as droppe
     CHECK(writer.dropped() == 0);
   }
   CHECK(haptics::ReadTrace(file).size() == 3);
+}
+
+TEST_CASE("an interface built when first asked for fills its empty place and can then be switched to") {
+  haptics::Hal hal(test::Metres());
+  test::PutHand(hal, {0.03, 0.0, 0.0});
+  std::vector<std::unique_ptr<interfaces::MediatorInterface>> list;
+  list.push_back(std::make_unique<interfaces::GestureInterface>(Gesture("near", 0.0)));
+  list.push_back(nullptr);  // waits for its parts (a physics world)
+  InterfaceSet set(std::move(list), 0, 0.1);
+  CHECK_FALSE(set.Request(1, 0.0));
+  set.Provide(1, std::make_unique<interfaces::GestureInterface>(Gesture("far", 0.06)));
+  REQUIRE(set.Request(1, 0.0));
+  const interfaces::VehicleFeedback feedback;
+  for (double t = 0.0; t < 0.5; t += 0.01) set.Update(t, feedback, hal);
+  CHECK(set.current_index() == 1);
+  CHECK(set.current().name() == "far");
+  // Only an empty place takes one, and only a place the run lists.
+  CHECK_THROWS_AS(set.Provide(1, std::make_unique<interfaces::GestureInterface>(Gesture("again", 0.0))),
+                  std::invalid_argument);
+  CHECK_THROWS_AS(set.Provide(2, std::make_unique<interfaces::GestureInterface>(Gesture("beyond", 0.0))),
+                  std::invalid_argument);
+}
+
+TEST_CASE("every robot interface of the table loads from its shipped file with the table's hands and physics") {
+  const RunConfig run = LoadRun(ShippedFile("config/haptel.yaml"));
+  interfaces::InputBox input;
+  mediator::InterfaceParts parts;
+  parts.input = &input;
+  int robot = 0;
+  for (const InterfaceKindInfo& kind : InterfaceKinds()) {
+    if (kind.family != VehicleFamily::kRobot) continue;
+    INFO(kind.name);
+    ++robot;
+    const mediator::InterfaceSpec spec = mediator::LoadInterfaceSpec(run, kind.name);
+    CHECK(spec.name == kind.name);
+    CHECK(spec.hands() == kind.hands);
+    CHECK(spec.needs_physics() == kind.physics);
+    CHECK(spec.manual() == kind.manual());
+    if (kind.physics) {
+      // Its controls are bodies: without a world it cannot be built.
+      CHECK_THROWS_AS(mediator::MakeInterface(spec, parts), std::invalid_argument);
+    } else {
+      CHECK(mediator::MakeInterface(spec, parts)->name() == kind.name);
+    }
+  }
+  CHECK(robot == 6);
+  // A blimp's interface is refused for the robot, naming the robot's.
+  CHECK_THROWS_WITH(mediator::LoadInterfaceSpec(run, "blimp-gesture"),
+                    Catch::Contains("flies a blimp") && Catch::Contains("gesture, cockpit"));
 }
