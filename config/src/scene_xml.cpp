@@ -22,6 +22,7 @@
 #include "haptel/geometry/mass_properties.hpp"
 #include "haptel/config/scene.hpp"
 #include "scene_detail.hpp"
+#include "yaml_map.hpp"
 
 namespace haptel {
 
@@ -509,6 +510,7 @@ SceneObject ReadObject(const Reader& r, const XMLElement& e, std::set<std::strin
 
 // The file's bytes, with room for the sentinel.
 std::string ReadFile(const std::filesystem::path& file) {
+  config_detail::CheckRegularFile(file, "an XML scene file");
   std::ifstream in(file, std::ios::binary);
   std::error_code ec;
   const auto size = std::filesystem::file_size(file, ec);

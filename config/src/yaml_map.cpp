@@ -21,11 +21,20 @@ std::string Megabytes(std::uintmax_t bytes) {
 }
 }  // namespace
 
-YamlMap YamlMap::Load(const std::filesystem::path& file, std::uintmax_t max_bytes) {
+void CheckRegularFile(const std::filesystem::path& file, const std::string& expected) {
   std::error_code ec;
-  if (std::filesystem::is_directory(file, ec)) {
-    throw ConfigError(file.string() + ": is a folder; expected a YAML file");
+  const std::filesystem::file_status status = std::filesystem::status(file, ec);
+  if (ec || !std::filesystem::exists(status)) return;  // opening it says what is wrong
+  if (std::filesystem::is_directory(status)) throw ConfigError(file.string() + ": is a folder; expected " + expected);
+  // A FIFO, a device or a socket: opening one may wait forever for a writer.
+  if (!std::filesystem::is_regular_file(status)) {
+    throw ConfigError(file.string() + ": is not a regular file (a FIFO, a device or a socket); expected " + expected);
   }
+}
+
+YamlMap YamlMap::Load(const std::filesystem::path& file, std::uintmax_t max_bytes) {
+  CheckRegularFile(file, "a YAML file");
+  std::error_code ec;
   // Before parsing: yaml-cpp takes seconds and many times the file's size in
   // memory for a file of tens of megabytes, long before any check could speak.
   if (const std::uintmax_t size = std::filesystem::file_size(file, ec); !ec && size > max_bytes) {

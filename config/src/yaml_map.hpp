@@ -16,6 +16,12 @@
 
 namespace haptel::config_detail {
 
+/// Throws ConfigError naming `file` when it is a folder or not a regular
+/// file (a FIFO, a device, a socket: opening one may block for ever), before
+/// anything opens it; `expected` says what it should be ("a YAML file").
+/// Nothing for a missing file: opening it says so.
+void CheckRegularFile(const std::filesystem::path& file, const std::string& expected);
+
 /// The largest YAML file a loader parses (tracks, scenes, configurations):
 /// anything bigger is not a hand-written file, and parsing it would take
 /// seconds and gigabytes before any check could speak.

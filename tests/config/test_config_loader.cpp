@@ -1,6 +1,7 @@
 // The strict config loader: every shipped file loads with the values it says;
 // every kind of bad file is a ConfigError naming the file, the line and the key.
 // Runs from the repository root (ctest sets the working directory).
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
@@ -14,6 +15,7 @@
 #include "haptel/config/error.hpp"
 #include "haptel/config/gesture.hpp"
 #include "haptel/config/run.hpp"
+#include "haptel/config/scene.hpp"
 #include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"
 #include "test_env.hpp"
@@ -902,4 +904,21 @@ TEST_CASE("Bad file: values the loaders check beyond their type", "[config][bad]
     CHECK_THAT(msg, Contains(file.string()));
     CHECK_THAT(msg, Contains("'operator.min_forward'"));
   }
+}
+
+TEST_CASE("a FIFO (or any file that is not a regular file) is refused before it is opened, never waited on") {
+  // Opening a FIFO for reading waits for a writer: without the check this
+  // test would hang until ctest's time-out, and so fail.
+  const auto dir = haptel::test::ScratchDir("config-fifo");
+  for (const std::string name : {"run.yaml", "scene.xml"}) {
+    const auto fifo = dir / name;
+    REQUIRE(mkfifo(fifo.c_str(), 0600) == 0);
+  }
+  const std::string run = haptel::test::WhatOf<ConfigError>([&] { haptel::LoadRun(dir / "run.yaml"); });
+  CHECK_THAT(run, Contains("run.yaml: is not a regular file") && Contains("expected a YAML file"));
+  CHECK_THAT(haptel::test::WhatOf<ConfigError>([&] { haptel::LoadVehicle(dir / "run.yaml"); }),
+             Contains("is not a regular file"));
+  CHECK_THAT(haptel::test::WhatOf<ConfigError>([&] { haptel::LoadSceneFile(dir / "scene.xml"); }),
+             Contains("scene.xml: is not a regular file") && Contains("expected an XML scene file"));
+  CHECK_THAT(haptel::test::WhatOf<ConfigError>([&] { haptel::LoadRun(dir); }), Contains("is a folder"));
 }
