@@ -22,6 +22,10 @@ const std::atomic<bool>& InstallStopSignals() {
   sigemptyset(&action.sa_mask);
   action.sa_flags = SA_RESTART;  // reads and writes in progress go on; the loops poll the flag
   for (const int signal : {SIGINT, SIGTERM, SIGHUP}) sigaction(signal, &action, nullptr);
+  struct sigaction ignore {};
+  ignore.sa_handler = SIG_IGN;
+  sigemptyset(&ignore.sa_mask);
+  for (const int signal : {SIGUSR1, SIGUSR2, SIGPIPE}) sigaction(signal, &ignore, nullptr);
   return g_stop;
 }
 

@@ -1,5 +1,8 @@
 // End to end: the real `haptel` and `haptel-vehicle` programs, linked by DDS.
 #include <catch2/catch.hpp>
+#include <chrono>
+#include <csignal>
+#include <thread>
 #include <cstdlib>
 #include <signal.h>
 #include <unistd.h>
@@ -30,6 +33,10 @@ TEST_CASE("haptel run completes the short track over DDS with a separate vehicle
   Child haptel({Bin("haptel"), "run", "--track", "config/tracks/test-short.yaml", "--json", "--quiet",
                 "--domain", std::to_string(test::UniqueDomain(11)), "--database", db.string(),
                 "--vehicle-timeout", "5"});
+  // Signals it does not document leave it running: SIGUSR1 cuts the link
+  // only with --link-fault (it used to end the run unrecorded, exit 138).
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  for (const int signal : {SIGUSR1, SIGUSR2, SIGPIPE}) REQUIRE(kill(haptel.pid(), signal) == 0);
   const int code = haptel.Wait(120.0);
   INFO("stdout:\n" << haptel.out() << "\nstderr:\n" << haptel.err());
   REQUIRE(code == 0);

@@ -9,6 +9,10 @@ namespace haptel {
 
 /// Installs the handlers (idempotent) and returns the flag they set. The
 /// flag is lock-free and may be read from any thread, the servo loop included.
+/// SIGUSR1, SIGUSR2 and SIGPIPE are ignored: a program documents what SIGUSR1
+/// does where it does something (the link fault's cut, which installs its
+/// own handler after this), and no other signal of theirs ends a run
+/// unrecorded; a peer gone from a socket is an error the writer sees.
 const std::atomic<bool>& InstallStopSignals();
 
 /// The signal that set the flag (0 while none has).
