@@ -106,6 +106,30 @@ Args ParseRunArgs(int argc, const char* const* argv) {
               {"json", "quiet", "attach"});
 }
 
+namespace {
+
+/// A gate whose opening (between the posts' surfaces) is narrower than the
+/// robot can never be passed: the lap would run to its cap. Refused before
+/// anything runs, naming the gate and both widths.
+void CheckGatesFit(const TrackConfig& track, const VehicleConfig& vehicle) {
+  const double across = 2.0 * vehicle.body.radius;
+  for (size_t i = 0; i < track.gates.size(); ++i) {
+    const GateSpec& gate = track.gates[i];
+    const double opening = gate.width - 2.0 * track.post_radius;
+    if (opening >= across) continue;
+    char text[400];
+    std::snprintf(text, sizeof text,
+                  ": key 'gates[%zu]': the gate at %.2f m is %.3f m between its posts' surfaces (width %.3f m "
+                  "less two posts of radius %.3f m), narrower than vehicle '%s' (%.3f m across, body.radius "
+                  "in %s); expected a width of at least %.3f m",
+                  i, gate.along, opening, gate.width, track.post_radius, vehicle.name.c_str(), across,
+                  vehicle.file.string().c_str(), across + 2.0 * track.post_radius);
+    throw ConfigError(track.file.string() + text);
+  }
+}
+
+}  // namespace
+
 SessionSetup RunSetupFromArgs(const Args& args) {
   SessionSetup setup;
   setup.progress = !args.Flag("quiet");
@@ -159,6 +183,7 @@ SessionSetup RunSetupFromArgs(const Args& args) {
     setup.course = LoadBlimpCourse(setup.run.track);
   } else {
     setup.track = LoadTrack(setup.run.track);
+    CheckGatesFit(setup.track, setup.vehicle);
   }
   if (auto name = args.Value("vehicle-name")) {
     if (const std::string problem = VehicleNameProblem(*name); !problem.empty()) {

@@ -218,6 +218,24 @@ TEST_CASE("bad options and bad config files exit 2 with a one-line error naming 
     CHECK(std::count(c.err().begin(), c.err().end(), '\n') == 1);
   }
   {
+    // A gate narrower than the robot: refused, naming the gate and both widths (it ran to its cap).
+    const auto narrow = dir / "narrow-gate.yaml";
+    std::FILE* f = std::fopen(narrow.c_str(), "w");
+    std::fputs("name: narrow\ncorridor_width: 0.6\npost_radius: 0.03\n"
+               "centerline: [[0,0],[0.45,0],[0.7,0.25],[0.7,0.55],[0.45,0.8],[0,0.8],[-0.25,0.55],[-0.25,0.25]]\n"
+               "gates: [{along: 0.2, width: 0.4}, {along: 1.68, width: 0.16}]\n",
+               f);
+    std::fclose(f);
+    Child c({Bin("haptel"), "run", "--track", narrow.string()});
+    CHECK(c.Wait(30.0) == 2);
+    INFO("stderr:\n" << c.err());
+    CHECK(c.err().find("narrow-gate.yaml: key 'gates[1]'") != std::string::npos);
+    CHECK(c.err().find("0.100 m between its posts") != std::string::npos);
+    CHECK(c.err().find("0.220 m across") != std::string::npos);
+    CHECK(c.err().find("started, pid") == std::string::npos);  // nothing spawned
+    CHECK(std::count(c.err().begin(), c.err().end(), '\n') == 1);
+  }
+  {
     Child c({Bin("haptel"), "run", "--interface", "telepathy"});
     CHECK(c.Wait(30.0) == 2);
     CHECK(c.err().find("telepathy") != std::string::npos);
