@@ -57,6 +57,10 @@ void RecordThesis(const std::filesystem::path& dir, const std::filesystem::path&
   }
   store.SaveAnswers("A", "gesture", "thesis", {{"easy_to_learn", "3"}, {"remarks", "<script>alert(1)</script>, \"odd\""}});
   store.SaveAnswers("A", "gesture", "rating", {{"rating", "2"}, {"score", "2"}});
+  // Remarks a spreadsheet would run as formulas, and a negative number it must not touch.
+  store.SaveAnswers("B", "gesture", "thesis",
+                    {{"remarks", "=HYPERLINK(\"http://x.example\",\"see\")"}, {"efficient", "@SUM(1)"},
+                     {"easy_to_learn", "-2"}});
 }
 
 }  // namespace
@@ -103,6 +107,12 @@ TEST_CASE("The report on the thesis's data gives its tables, ranks and statistic
   CHECK(std::count(trials.begin(), trials.end(), '\n') == 21);
   const std::string answers = Read(files.answers_csv);
   CHECK(answers.find("thesis,A,gesture,thesis,remarks,\"<script>alert(1)</script>, \"\"odd\"\"\"") != std::string::npos);
+  // Formulas are written as text (after a single quote); numbers as they are.
+  CHECK(answers.find("thesis,B,gesture,thesis,remarks,\"'=HYPERLINK(\"\"http://x.example\"\",\"\"see\"\")\"") !=
+        std::string::npos);
+  CHECK(answers.find("thesis,B,gesture,thesis,efficient,\"'@SUM(1)\"") != std::string::npos);
+  CHECK(answers.find("thesis,B,gesture,thesis,easy_to_learn,-2\n") != std::string::npos);
+  CHECK(answers.find(",=") == std::string::npos);
   for (const auto& png : {files.lap_times_png, files.ranks_png, files.ratings_png}) {
     INFO(png);
     const cv::Mat image = cv::imread(png.string());

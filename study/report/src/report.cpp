@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <fstream>
 #include <limits>
@@ -34,8 +35,28 @@ std::string Fixed(double value, int decimals) {
   return buffer;
 }
 
-/// A CSV field: quoted when it holds a comma, a quote or a line break.
+/// Whether `text` is a number as a whole ("-3", "+2.5", "1e3"): a cell a
+/// spreadsheet reads as a value, never as a formula.
+bool IsNumber(const std::string& text) {
+  if (text.empty()) return false;
+  char* end = nullptr;
+  const double value = std::strtod(text.c_str(), &end);
+  return end == text.c_str() + text.size() && std::isfinite(value);
+}
+
+/// A CSV field: quoted when it holds a comma, a quote or a line break. Free
+/// text a spreadsheet would run as a formula (it begins with =, +, -, @, a
+/// tab or a carriage return, and is not a number) is written after a single
+/// quote, as OWASP advises against CSV injection: a participant's remark
+/// "=HYPERLINK(...)" stays text on the experimenter's machine.
 std::string Csv(const std::string& text) {
+  const bool formula = !text.empty() && std::string("=+-@\t\r").find(text.front()) != std::string::npos &&
+                       !IsNumber(text);
+  if (formula) {
+    std::string out = "\"'";
+    for (const char c : text) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+    return out + "\"";
+  }
   if (text.find_first_of(",\"\n\r") == std::string::npos) return text;
   std::string out = "\"";
   for (const char c : text) out += c == '"' ? std::string("\"\"") : std::string(1, c);
