@@ -43,9 +43,9 @@ int SecurityCommand(int argc, const char* const* argv) {
       if (auto list = args.Value("vehicles")) {
         vehicles.clear();
         for (const std::string& name : SplitList(*list)) {
-          if (const std::string problem = VehicleNameProblem(name); !problem.empty()) {
-            throw UsageError("option --vehicles: '" + name + "': expected " + problem);
-          }
+          std::string problem = VehicleNameProblem(name);
+          if (problem.empty()) problem = link::VehicleIdentityProblem(name);
+          if (!problem.empty()) throw UsageError("option --vehicles: '" + name + "': expected " + problem);
           vehicles.push_back(name);
         }
       }

@@ -1,5 +1,7 @@
 #include "haptel/link/security.hpp"
 
+#include <unistd.h>
+
 #include <openssl/pem.h>
 #include <openssl/x509.h>
 
@@ -215,11 +217,19 @@ std::vector<std::pair<std::string, std::string>> SecurityProperties(const fs::pa
   };
 }
 
-void InitSecurity(const fs::path& dir, const std::vector<std::string>& vehicles, int days) {
-  if (fs::exists(dir / "ca.pem")) {
-    throw std::runtime_error(dir.string() + " already holds a CA (ca.pem); remove the folder or choose another");
-  }
-  fs::create_directories(dir);
+std::string VehicleIdentityProblem(const std::string& name) {
+  constexpr size_t kMaxCommonName = 64;  // X.520 ub-common-name
+  const size_t most = kMaxCommonName - Subject(VehicleIdentity("")).size() + std::string("CN=").size();
+  if (name.size() <= most) return "";
+  return "a name of at most " + std::to_string(most) + " characters for a certificate (its common name 'haptel-" +
+         VehicleIdentity("NAME") + "' holds at most " + std::to_string(kMaxCommonName) + "); '" + name + "' has " +
+         std::to_string(name.size());
+}
+
+namespace {
+
+/// Makes every file of a security folder in `dir` (which exists, empty).
+void MakeSecurityFiles(const fs::path& dir, const std::vector<std::string>& vehicles, int days) {
   OpenSsl(dir, {"req", "-x509", "-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1", "-nodes", "-keyout",
                 (dir / "ca.key").string(), "-out", (dir / "ca.pem").string(), "-days", std::to_string(days),
                 "-sha256", "-subj", "/CN=haptel-ca"});
@@ -238,6 +248,39 @@ void InitSecurity(const fs::path& dir, const std::vector<std::string>& vehicles,
           Permissions(id, {"haptel/" + name + "/state", "haptel/" + name + "/video"}, {"haptel/" + name + "/command"},
                       days));
     Sign(dir, id + "-permissions");
+  }
+}
+
+}  // namespace
+
+void InitSecurity(const fs::path& dir, const std::vector<std::string>& vehicles, int days) {
+  if (fs::exists(dir / "ca.pem")) {
+    throw std::runtime_error(dir.string() + " already holds a CA (ca.pem); remove the folder or choose another");
+  }
+  if (fs::exists(dir) && (!fs::is_directory(dir) || !fs::is_empty(dir))) {
+    throw std::runtime_error(dir.string() + " already holds other files; expected a new or empty folder");
+  }
+  for (const std::string& name : vehicles) {
+    if (const std::string problem = VehicleIdentityProblem(name); !problem.empty()) {
+      throw std::invalid_argument("vehicle '" + name + "': expected " + problem);
+    }
+  }
+  // Built beside, renamed into place when complete (rename(2) replaces an empty folder).
+  const fs::path absolute = fs::absolute(dir).lexically_normal();
+  const fs::path parent = absolute.parent_path();
+  fs::create_directories(parent);
+  std::string hidden = ".partial-" + std::to_string(getpid()) + "-";
+  hidden += absolute.filename().string();
+  const fs::path partial = parent / hidden;
+  fs::remove_all(partial);
+  fs::create_directory(partial);
+  try {
+    MakeSecurityFiles(partial, vehicles, days);
+    fs::rename(partial, absolute);
+  } catch (...) {
+    std::error_code ignored;
+    fs::remove_all(partial, ignored);
+    throw;
   }
 }
 

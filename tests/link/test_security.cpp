@@ -137,6 +137,23 @@ TEST_CASE("security init: a CA, the identities and signed documents; the check n
   // Nothing is overwritten.
   CHECK_THROWS_WITH(link::InitSecurity(dir, {"robot1"}, 30), Catch::Contains("already holds a CA"));
 
+  // A name no certificate can hold is refused before anything is made, and
+  // nothing is left to block the retry with names that fit.
+  const fs::path fresh = test::ScratchDir("security-names") / "deployment";
+  const std::string long_name(50, 'v');
+  CHECK(link::VehicleIdentityProblem(std::string(49, 'v')).empty());
+  CHECK_THAT(link::VehicleIdentityProblem(long_name), Catch::Contains("at most 49") && Catch::Contains("64"));
+  CHECK_THROWS_WITH(link::InitSecurity(fresh, {"robot1", long_name}, 30), Catch::Contains("at most 49"));
+  CHECK_FALSE(fs::exists(fresh));
+  CHECK(fs::is_empty(fresh.parent_path()));  // no half-made folder beside it either
+  link::InitSecurity(fresh, {"robot1", std::string(49, 'v')}, 30);
+  CHECK(CheckMessage(fresh, link::VehicleIdentity(std::string(49, 'v'))) == "valid");
+  // A folder holding other files is not written into.
+  const fs::path busy = test::ScratchDir("security-busy");
+  test::WriteFile(busy / "notes.txt", "mine");
+  CHECK_THROWS_WITH(link::InitSecurity(busy, {"robot1"}, 30), Catch::Contains("already holds other files"));
+  CHECK_FALSE(fs::exists(busy / "ca.pem"));
+
   // An expired certificate is named with the day it expired.
   const fs::path expired = test::ScratchDir("security-expired");
   for (const char* file : {"ca.pem", "governance.p7s", "operator.key", "operator-permissions.p7s"}) {

@@ -43,11 +43,21 @@ void CheckSecurity(const std::filesystem::path& dir, const std::string& identity
 std::vector<std::pair<std::string, std::string>> SecurityProperties(const std::filesystem::path& dir,
                                                                      const std::string& identity);
 
+/// What a vehicle name lacks for a certificate, as the "expected …" part of
+/// an error ("" when it fits): its identity's common name
+/// "haptel-vehicle-NAME" holds at most 64 characters (X.520), so the name at
+/// most 49.
+std::string VehicleIdentityProblem(const std::string& name);
+
 /// `haptel security init DIR`: creates the CA, the operator's identity and
 /// one for each of `vehicles`, the governance and each identity's
 /// permissions, all signed, with the `openssl` program; valid for `days`.
-/// Refuses a folder that already holds a CA (nothing is overwritten).
-/// Throws std::runtime_error with openssl's message when a step fails.
+/// Refuses a folder that already holds a CA (nothing is overwritten), one
+/// that holds other files, and names a certificate cannot hold
+/// (std::invalid_argument), before anything is made. The folder is built
+/// beside `dir` and renamed into place when complete: a step that fails
+/// leaves nothing behind to block a retry. Throws std::runtime_error with
+/// openssl's message when a step fails.
 void InitSecurity(const std::filesystem::path& dir, const std::vector<std::string>& vehicles, int days);
 
 }  // namespace haptel::link
