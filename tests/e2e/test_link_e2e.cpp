@@ -166,7 +166,7 @@ TEST_CASE("link down: the vehicle stops within its watchdog and the run reports 
   CHECK(JsonField(json, "outcome") == "vehicle lost");
   CHECK(std::stod(JsonField(json, "lost_detect_s")) < 1.0);
   // After the cut, the vehicle's watchdog stopped its motors.
-  CHECK(run.err().find("watchdog: no command for 0.25", before) != std::string::npos);
+  CHECK(run.err().find("watchdog: no command for 0.2", before) != std::string::npos);
 }
 
 TEST_CASE("haptel security init, then a secured lap: the spawned vehicle is secured too; a missing identity is one line") {

@@ -130,7 +130,7 @@ struct VehicleConfig {
   std::filesystem::path world;  ///< track the simulator drives on
   double sim_rate_hz = 200.0;
   double state_rate_hz = 50.0;
-  double watchdog_timeout_s = 0.25;
+  double watchdog_timeout_s = 0.2;   ///< no command for this long: made safe (0.2 s, as the blimp's)
   DriveConfig drive;
   BodyConfig body;
   CameraConfig camera;
