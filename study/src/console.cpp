@@ -147,6 +147,7 @@ std::string Form(const Questionnaire& q, const std::string& participant, const s
 
 struct StudyConsole::Impl {
   StudyConfig config;
+  std::vector<PlannedTrial> plan;  ///< written into the study's tables once the port is ours
   std::map<std::string, Questionnaire> questionnaires;
   ConsoleOptions options;
   record::Recorder recorder;
@@ -170,10 +171,9 @@ struct StudyConsole::Impl {
   std::thread thread;
   int port = 0;
 
-  Impl(const StudyConfig& c, const std::vector<PlannedTrial>& plan, const std::filesystem::path& database,
+  Impl(const StudyConfig& c, const std::vector<PlannedTrial>& p, const std::filesystem::path& database,
        const std::map<std::string, Questionnaire>& q, const ConsoleOptions& o)
-      : config(c), questionnaires(q), options(o), recorder(database) {
-    store = std::make_unique<StudyStore>(recorder, config, plan);
+      : config(c), plan(p), questionnaires(q), options(o), recorder(database) {
     if (options.thumbnail) thumbnail = std::make_unique<Thumbnail>();
   }
 
@@ -431,6 +431,9 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
     throw ConsoleError("the console cannot listen on " + options.host + ":" + std::to_string(options.port) +
                        " (the port is in use, or the address is not this machine's); choose another with --port N");
   }
+  // The study's tables only once the port is ours: a console that cannot
+  // listen writes nothing.
+  s.store = std::make_unique<StudyStore>(s.recorder, s.config, s.plan);
   s.thread = std::thread([&s] { s.server.listen_after_bind(); });
   // Serving before the constructor returns: a stop() before the listening
   // loop has started would be lost, and the destructor would wait forever.

@@ -206,8 +206,8 @@ int StudyRunCommand(int argc, const char* const* argv) {
     });
     // The database before anything runs, as for `haptel run`.
     auto recorder = cli::ReadInput([&] { return std::make_unique<record::Recorder>(database); });
-    StudyStore store = cli::ReadInput([&] { return StudyStore(*recorder, config, plan); });
-    // People are started, aborted and asked from the console.
+    // People are started, aborted and asked from the console: its port first,
+    // so a port in use stops the study before its plan is written.
     const bool person = config.operators == "person";
     std::unique_ptr<StudyConsole> console;
     if (want_console || person) {
@@ -216,6 +216,7 @@ int StudyRunCommand(int argc, const char* const* argv) {
       });
       std::fprintf(stderr, "[study] console: %s\n", console->url().c_str());
     }
+    StudyStore store = cli::ReadInput([&] { return StudyStore(*recorder, config, plan); });
     // People hold the haptic conditions' controls with a real device: the
     // simulated one has no arms a person can move (its trials end at the cap).
     if (person && !simulated_device.empty()) {

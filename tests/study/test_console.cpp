@@ -123,6 +123,12 @@ TEST_CASE("The console serves the schedule and forms, and takes each questionnai
   taken.port = console.port();
   CHECK_THROWS_WITH(StudyConsole(config, plan, db, questionnaires, taken),
                     Catch::Contains("127.0.0.1:" + std::to_string(console.port())) && Catch::Contains("in use"));
+  // ... refused before it wrote anything: a study whose console cannot
+  // listen has no plan in its database (it was written first, and then refused).
+  const auto untouched = dir / "untouched.db";
+  CHECK_THROWS_AS(StudyConsole(config, plan, untouched, questionnaires, taken), ConsoleError);
+  record::Recorder fresh(untouched);
+  CHECK(StudyStore(fresh, config, {}).Plan().empty());
 }
 
 TEST_CASE("The console adds participants to an open study, each once, and finishes it on request") {
