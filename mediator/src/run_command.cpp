@@ -166,7 +166,17 @@ SessionSetup RunSetupFromArgs(const Args& args) {
     throw UsageError("option --view: expected window or none, got '" + view + "'");
   }
   if (auto record = args.Value("record")) {
-  setup.record = *record;
+    // Before anything is spawned: a recording that cannot be written is an error now, not after the lap.
+    const std::filesystem::path file = *record;
+    const std::filesystem::path folder = file.parent_path().empty() ? "." : file.parent_path();
+    if (std::filesystem::is_directory(file)) {
+      throw UsageError("option --record: '" + file.string() + "' is a folder; expected a file name such as run.mp4");
+    }
+    if (!std::filesystem::is_directory(folder)) {
+      throw UsageError("option --record: the folder '" + folder.string() + "' does not exist; expected a file in a "
+                       "folder that does");
+    }
+    setup.record = *record;
     if (setup.view == ViewKind::kNone) setup.view = ViewKind::kOffscreen;
   }
   if (auto s = args.Number("time-limit", 1.0, 86400.0)) {

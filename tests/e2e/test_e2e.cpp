@@ -236,6 +236,16 @@ TEST_CASE("bad options and bad config files exit 2 with a one-line error naming 
     CHECK(std::count(c.err().begin(), c.err().end(), '\n') == 1);
   }
   {
+    // A recording that could not be written is refused before anything is spawned.
+    Child folder({Bin("haptel"), "run", "--record", dir.string()});
+    CHECK(folder.Wait(30.0) == 2);
+    CHECK(folder.err().find("option --record: '" + dir.string() + "' is a folder") != std::string::npos);
+    CHECK(folder.err().find("started, pid") == std::string::npos);
+    Child nowhere({Bin("haptel"), "run", "--record", (dir / "gone" / "run.mp4").string()});
+    CHECK(nowhere.Wait(30.0) == 2);
+    CHECK(nowhere.err().find("does not exist") != std::string::npos);
+  }
+  {
     Child c({Bin("haptel"), "run", "--interface", "telepathy"});
     CHECK(c.Wait(30.0) == 2);
     CHECK(c.err().find("telepathy") != std::string::npos);
