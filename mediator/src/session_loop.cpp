@@ -91,9 +91,17 @@ std::optional<LoopEnd> VehicleHealth::CheckStates(const VehicleLink& vehicle, in
                      silent_s};
     }
   } else if (t_s > startup_timeout_s_) {
-    return LoopEnd{Outcome::kVehicleDidNotStart, "vehicle '" + name_ + "' did not answer within " +
-                                                     std::to_string(static_cast<int>(startup_timeout_s_)) +
-                                                     " s on domain " + std::to_string(domain_id_)};
+    std::string message = "vehicle '" + name_ + "' did not answer within " +
+                          std::to_string(static_cast<int>(startup_timeout_s_)) + " s on domain " +
+                          std::to_string(domain_id_);
+    // Its camera speaks but its state never matched: a vehicle of the other
+    // family (a blimp under a robot's name) publishes another state type.
+    if (const uint64_t frames = vehicle.video().Stats().frames; frames > 0) {
+      message += ": " + std::to_string(frames) + " camera frames arrived under that name but no " +
+                 ToString(vehicle.family()) +
+                 "'s state: is it another kind of vehicle (its file here says kind " + vehicle.kind() + ")?";
+    }
+    return LoopEnd{Outcome::kVehicleDidNotStart, message};
   }
   return std::nullopt;
 }

@@ -132,6 +132,22 @@ TEST_CASE("a second vehicle under the same name is a conflict: exit 2, nothing d
   CHECK(JsonField(json, "gates_passed") == "0");
 }
 
+TEST_CASE("a blimp answering under the robot's name: the run says it is another kind of vehicle, not only silence") {
+  const auto dir = test::ScratchDir("e2e-wrong-kind");
+  const int domain = test::UniqueDomain(48);
+  HandStartedVehicle blimp({Bin("haptel-vehicle"), "--config", "config/vehicles/sim-blimp.yaml", "--track",
+                            "config/tracks/blimp-hop.yaml", "--name", "robot1", "--domain", std::to_string(domain)});
+  Child run(AttachArgs(domain, dir / "runs.db"));
+  const int code = run.Wait(90.0);
+  INFO(run.out() << run.err());
+  CHECK(code == 3);
+  const std::string json = run.LastLine();
+  CHECK(JsonField(json, "outcome") == "vehicle did not start");
+  CHECK(JsonField(json, "message").find("camera frames arrived under that name but no robot's state") !=
+        std::string::npos);
+  CHECK(JsonField(json, "message").find("another kind of vehicle") != std::string::npos);
+}
+
 TEST_CASE("with 100 ms delay, 20 ms jitter and 5 % loss both ways the automatic operator still completes the short track") {
   const auto dir = test::ScratchDir("e2e-link-fault");
   Child run({Bin("haptel"), "run", "--link-fault", "delay=100ms,jitter=20ms,loss=5%", "--track",

@@ -179,6 +179,8 @@ class VehicleLink {
   int pid() const;
   std::string ExitDescription() const;
   const std::string& name() const { return options_.vehicle.name; }
+  /// The kind its vehicle file says.
+  const std::string& kind() const { return options_.vehicle.kind; }
   int domain() const { return options_.link.domain_id; }
 
   /// This run's operator session (random, never 0): every command carries
