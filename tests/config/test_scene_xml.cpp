@@ -467,6 +467,12 @@ TEST_CASE("malformed scenes: one line, file:line: <element>: what was expected",
     encoding.replace(encoding.find("ISO-8859-1"), 10, "UTF-16");
     REQUIRE_THAT(ErrorOf("encoding.xml", encoding),
                  Contains("encoding.xml:1: <?xml>: expected encoding UTF-8 or ISO-8859-1"));
+    // The same document saved as UTF-16, with its byte order mark or without.
+    std::string utf16 = "\xFF\xFE";
+    for (const char c : Ball(Sphere())) utf16 += std::string{c, '\0'};
+    REQUIRE_THAT(ErrorOf("utf16.xml", utf16), Contains("utf16.xml:1: <?xml>: expected a text file in UTF-8") &&
+                                                  Contains("got UTF-16") && Contains("save it as UTF-8"));
+    REQUIRE_THAT(ErrorOf("utf16-nobom.xml", utf16.substr(2)), Contains("got NUL bytes"));
     REQUIRE_THAT(ErrorOf("twice.xml", Document(Object("Static", "a", Sphere()) +
                                                Object("Dynamic", "a", Sphere()))),
                  Contains("<MHAPTIC:name>: expected a name no other object has, got 'a' again"));
