@@ -196,6 +196,7 @@ class BlimpSession final : public FamilySession {
     if (lap_.completed()) return LoopEnd{Outcome::kCompleted, "landed: lap completed"};
     return std::nullopt;
   }
+  const std::filesystem::path& world_file() const override { return course_.file; }
   double lap_cap_s() const override { return course_.lap_cap_s; }
 
   view::Overlay Overlay(double t, bool vehicle_up, bool) override {

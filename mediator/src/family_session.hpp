@@ -7,6 +7,7 @@
 // mediator library.
 #include <atomic>
 #include <cstdint>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
@@ -52,6 +53,8 @@ class FamilySession {
                                        bool vehicle_up, HapticSide& haptic, VehicleLink& link) = 0;
   /// The lap's own end: completed (or crashed).
   virtual std::optional<LoopEnd> LapEnd() const = 0;
+  /// The file of the track or course the spawned vehicle lives in.
+  virtual const std::filesystem::path& world_file() const = 0;
   /// The lap cap of the track or course, s.
   virtual double lap_cap_s() const = 0;
   /// The view's overlay now; `touching`: the run's trace is in a contact.

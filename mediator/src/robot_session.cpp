@@ -159,6 +159,7 @@ class RobotSession final : public FamilySession {
     if (lap_.completed()) return LoopEnd{Outcome::kCompleted, "lap completed"};
     return std::nullopt;
   }
+  const std::filesystem::path& world_file() const override { return setup_.track.file; }
   double lap_cap_s() const override { return setup_.track.lap_cap_s; }
 
   view::Overlay Overlay(double t, bool vehicle_up, bool touching) override {

@@ -97,7 +97,7 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   VehicleLinkOptions link_options;
   link_options.vehicle = setup.vehicle;
   link_options.link = run.link;
-  link_options.track_file = setup.vehicle.family() == VehicleFamily::kBlimp ? setup.course->file : setup.track.file;
+  link_options.track_file = family->world_file();
   link_options.program = setup.vehicle_program;
   link_options.decode_video = run.video_decode && DecodesVideo(setup.view);
   VehicleLink vehicle(link_options);

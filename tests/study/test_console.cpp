@@ -20,6 +20,17 @@ using namespace haptel::study;
 
 namespace {
 
+/// A study file of the test's own in `dir`, named `name`-study.
+StudyConfig SmallStudy(const std::filesystem::path& dir, const std::string& name, const std::string& operators,
+                       std::vector<StudyCondition> conditions) {
+  StudyConfig config;
+  config.file = dir / (name + ".yaml");
+  test::WriteFile(config.file, "name: " + name + "\n");
+  config.name = name + "-study";
+  config.operators = operators;
+  config.conditions = std::move(conditions);
+  return config;
+}
 
 }  // namespace
 
@@ -133,12 +144,7 @@ TEST_CASE("The console serves the schedule and forms, and takes each questionnai
 
 TEST_CASE("The console adds participants to an open study, each once, and finishes it on request") {
   const auto dir = test::ScratchDir("study-console-open");
-  StudyConfig config;
-  config.file = dir / "open.yaml";
-  test::WriteFile(config.file, "name: open\n");
-  config.name = "open-study";
-  config.operators = "person";
-  config.conditions = {{"cockpit", "cockpit"}, {"gesture", "gesture"}};
+  StudyConfig config = SmallStudy(dir, "open", "person", {{"cockpit", "cockpit"}, {"gesture", "gesture"}});
   const auto db = dir / "open.db";
   ConsoleOptions options;
   options.port = 0;
@@ -199,12 +205,7 @@ TEST_CASE("The console adds participants to an open study, each once, and finish
 
 TEST_CASE("the thumbnail is the picture the trial's session hands over, as it came") {
   const auto dir = test::ScratchDir("study-console-thumbnail");
-  StudyConfig config;
-  config.file = dir / "thumb.yaml";
-  test::WriteFile(config.file, "name: thumb\n");
-  config.name = "thumb-study";
-  config.operators = "person";
-  config.conditions = {{"cockpit", "cockpit"}};
+  StudyConfig config = SmallStudy(dir, "thumb", "person", {{"cockpit", "cockpit"}});
   ConsoleOptions options;
   options.port = 0;
   options.thumbnail = true;
@@ -227,12 +228,7 @@ TEST_CASE("the thumbnail is the picture the trial's session hands over, as it ca
 
 TEST_CASE("Simulated drivers come from the study file, not the console") {
   const auto dir = test::ScratchDir("study-console-synthetic");
-  StudyConfig config;
-  config.file = dir / "syn.yaml";
-  test::WriteFile(config.file, "name: syn\n");
-  config.name = "syn-study";
-  config.operators = "synthetic";
-  config.conditions = {{"gesture", "gesture"}};
+  StudyConfig config = SmallStudy(dir, "syn", "synthetic", {{"gesture", "gesture"}});
   config.participants = {{"A", "p"}};
   const std::vector<PlannedTrial> plan = {{"A", 1, "gesture", 1}};
   ConsoleOptions options;
