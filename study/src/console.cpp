@@ -1,6 +1,9 @@
 #include "haptel/study/console.hpp"
 
 #include <httplib.h>
+#include <openssl/pem.h>
+#include <openssl/x509v3.h>
+#include <arpa/inet.h>
 #include <sys/socket.h>
 
 #include <chrono>
@@ -11,9 +14,11 @@
 #include <sstream>
 #include <thread>
 
+#include "console_server.hpp"
 #include "haptel/core/html.hpp"
 #include "haptel/core/json.hpp"
 #include "haptel/record/recorder.hpp"
+#include "haptel/study/console_access.hpp"
 #include "haptel/study/plan.hpp"
 #include "haptel/study/submission.hpp"
 
@@ -44,6 +49,35 @@ std::string FormatSeconds(double s) {
 
 std::string ErrorPage(const std::string& title, const std::string& why) {
   return Page(title, "<p id=\"result\" class=\"error\">" + Html(why) + "</p><p><a href=\"/\">schedule</a></p>");
+}
+
+/// The hidden field every form carries (CheckFormToken).
+std::string TokenField(const std::string& token) {
+  return "<input type=\"hidden\" name=\"csrf\" value=\"" + Html(token) + "\">";
+}
+
+std::string LoginPage(const std::string& token, const std::string& why) {
+  return Page("Console: access token",
+              "<h1>The study's console</h1>\n<p>" + Html(why) +
+                  "</p>\n<form method=\"post\" action=\"/login\">" + TokenField(token) +
+                  "<label>Access token <input name=\"token\" id=\"token\" size=\"34\" autocomplete=\"off\">"
+                  "</label> <button id=\"login\">Open</button></form>");
+}
+
+/// The largest url-encoded answers form of the study's questionnaires.
+size_t LargestAnswers(const std::map<std::string, Questionnaire>& questionnaires) {
+  size_t largest = 0;
+  for (const auto& [name, q] : questionnaires) {
+    size_t characters = 0;
+    size_t fields = 4;  // participant, condition, questionnaire, csrf
+    for (const Item& item : q.items) {
+      if (item.type == ItemType::kText) characters += static_cast<size_t>(item.max_length);
+      fields += 1 + item.tree.nodes.size();
+    }
+    largest = std::max(largest, FormBytesFor(characters, fields));
+  }
+  // Room for what a browser adds (field order, + for spaces), and a floor.
+  return std::max<size_t>(largest + 4096, 16384);
 }
 
 /// The vehicle's latest camera picture, as it came (JPEG), handed over by
@@ -87,12 +121,14 @@ void TreePath(const Item& item, std::map<std::string, std::string>& fields) {
   if (!path.empty()) fields[PathKey(item.id)] = path;
 }
 
-std::string Form(const Questionnaire& q, const std::string& participant, const std::string& condition) {
+std::string Form(const Questionnaire& q, const std::string& participant, const std::string& condition,
+                 const std::string& token) {
   std::ostringstream h;
   h << "<h1>" << Html(q.title) << "</h1>\n<p>Participant <b>" << Html(participant) << "</b>, after <b>"
     << Html(condition) << "</b></p>\n";
   if (!q.instructions.empty()) h << "<p>" << Html(q.instructions) << "</p>\n";
-  h << "<form method=\"post\" action=\"/answers\" id=\"questionnaire\">\n"
+  h << "<form method=\"post\" action=\"/answers\" id=\"questionnaire\" accept-charset=\"utf-8\">"
+    << TokenField(token) << "\n"
     << "<input type=\"hidden\" name=\"participant\" value=\"" << Html(participant) << "\">\n"
     << "<input type=\"hidden\" name=\"condition\" value=\"" << Html(condition) << "\">\n"
     << "<input type=\"hidden\" name=\"questionnaire\" value=\"" << Html(q.name) << "\">\n";
@@ -145,6 +181,42 @@ std::string Form(const Questionnaire& q, const std::string& participant, const s
 
 }  // namespace
 
+ConsoleCertificate FindConsoleCertificate(const std::filesystem::path& dir) {
+  ConsoleCertificate found{dir / "console.pem", dir / "console.key", {}};
+  const std::string make = "; make it with `haptel security init " + dir.string() + " --console NAME,...` (NAME: "
+                           "the address or host name the experimenter's browser uses)";
+  for (const std::filesystem::path& file : {found.certificate, found.key}) {
+    if (!std::filesystem::is_regular_file(file)) throw ConsoleError("the console's HTTPS: no " + file.string() + make);
+  }
+  std::FILE* f = std::fopen(found.certificate.c_str(), "r");
+  X509* cert = f != nullptr ? PEM_read_X509(f, nullptr, nullptr, nullptr) : nullptr;
+  if (f != nullptr) std::fclose(f);
+  if (cert == nullptr) throw ConsoleError("the console's HTTPS: " + found.certificate.string() + " is not a PEM certificate" + make);
+  const bool expired = X509_cmp_current_time(X509_get0_notAfter(cert)) < 0;
+  const bool early = X509_cmp_current_time(X509_get0_notBefore(cert)) > 0;
+  auto* names = static_cast<GENERAL_NAMES*>(X509_get_ext_d2i(cert, NID_subject_alt_name, nullptr, nullptr));
+  for (int i = 0; names != nullptr && i < sk_GENERAL_NAME_num(names); ++i) {
+    const GENERAL_NAME* name = sk_GENERAL_NAME_value(names, i);
+    if (name->type == GEN_DNS) {
+      const ASN1_STRING* dns = name->d.dNSName;
+      found.names.emplace_back(reinterpret_cast<const char*>(ASN1_STRING_get0_data(dns)),
+                               static_cast<size_t>(ASN1_STRING_length(dns)));
+    } else if (name->type == GEN_IPADD) {
+      const ASN1_OCTET_STRING* ip = name->d.iPAddress;
+      char text[64] = {};
+      const int family = ASN1_STRING_length(ip) == 4 ? AF_INET : AF_INET6;
+      if (inet_ntop(family, ASN1_STRING_get0_data(ip), text, sizeof text) != nullptr) found.names.emplace_back(text);
+    }
+  }
+  GENERAL_NAMES_free(names);
+  X509_free(cert);
+  if (expired || early) {
+    throw ConsoleError("the console's HTTPS: " + found.certificate.string() +
+                       (expired ? " has expired" : " is not valid yet") + make);
+  }
+  return found;
+}
+
 struct StudyConsole::Impl {
   StudyConfig config;
   std::vector<PlannedTrial> plan;  ///< written into the study's tables once the port is ours
@@ -167,7 +239,9 @@ struct StudyConsole::Impl {
   std::string waiting;
   std::condition_variable started;
   std::atomic<bool> abort_requested{false};
-  httplib::Server server;
+  ConsoleAccess access;  ///< hosts filled in once the port is known
+  std::unique_ptr<ConsoleServer> server;
+  std::atomic<uint64_t> refused_requests{0};
   std::thread thread;
   int port = 0;
 
@@ -175,6 +249,23 @@ struct StudyConsole::Impl {
        const std::map<std::string, Questionnaire>& q, const ConsoleOptions& o)
       : config(c), plan(p), questionnaires(q), options(o), recorder(database) {
     if (options.thumbnail) thumbnail = std::make_unique<Thumbnail>();
+  }
+
+  /// The page that says why a request was refused, and counts it.
+  void Refuse(httplib::Response& res, const Refusal& refusal) {
+    ++refused_requests;
+    res.status = refusal.status;
+    res.set_content(refusal.status == 401 ? LoginPage(access.form_token, refusal.reason)
+                                          : ErrorPage("Refused", refusal.reason),
+                    "text/html; charset=utf-8");
+  }
+
+  /// A state-changing route: its form must carry the console's token.
+  void Post(const std::string& path, httplib::Server::Handler handler) {
+    server->Post(path, [this, handler](const httplib::Request& req, httplib::Response& res) {
+      if (const Refusal refusal = CheckFormToken(access, req.get_param_value("csrf"))) return Refuse(res, refusal);
+      handler(req, res);
+    });
   }
 
   /// The participants' count, and how many more complete a balanced block.
@@ -207,12 +298,13 @@ struct StudyConsole::Impl {
         h << "<p><img id=\"thumbnail\" src=\"/video.jpg?n=" << thumbnail->frames()
           << "\" width=\"320\" alt=\"the vehicle's camera (no picture yet)\"></p>\n";
       }
-      h << "<form method=\"post\" action=\"/abort\"><button id=\"abort\">Abort this trial</button> (it is "
+      h << "<form method=\"post\" action=\"/abort\">" << TokenField(access.form_token) << "<button id=\"abort\">Abort this trial</button> (it is "
            "run again)</form>\n";
     }
     if (!waiting.empty()) h << "<p id=\"waiting\">Waiting for " << Html(waiting) << "</p>\n";
     if (!next.empty()) {
-      h << "<form method=\"post\" action=\"/start\"><p id=\"next\">Next: " << Html(next)
+      h << "<form method=\"post\" action=\"/start\">" << TokenField(access.form_token)
+        << "<p id=\"next\">Next: " << Html(next)
         << " <button id=\"start\">Start</button></p></form>\n";
     }
     h << "<table id=\"schedule\"><tr><th>participant</th><th>position</th><th>condition</th><th>lap</th>"
@@ -226,7 +318,8 @@ struct StudyConsole::Impl {
         << t.position << "</td><td>" << Html(t.condition) << "</td><td>"
         << (row == nullptr ? "" : FormatSeconds(row->lap_time_s) + (row->completed ? "" : " (cap)"));
       if (row != nullptr) {
-        h << " <form method=\"post\" action=\"/redo\" style=\"display:inline\"><input type=\"hidden\" "
+        h << " <form method=\"post\" action=\"/redo\" style=\"display:inline\">" << TokenField(access.form_token)
+          << "<input type=\"hidden\" "
              "name=\"participant\" value=\""
           << Html(t.participant) << "\"><input type=\"hidden\" name=\"position\" value=\"" << t.position
           << "\"><button>redo</button></form>";
@@ -246,11 +339,13 @@ struct StudyConsole::Impl {
     h << "</table>\n";
     if (config.operators == "person") {
       h << "<p id=\"participants\">" << Html(Blocks(store->Participants().size())) << "</p>\n"
-        << "<form method=\"post\" action=\"/participants\"><label>New participant <input name=\"id\" "
+        << "<form method=\"post\" action=\"/participants\">" << TokenField(access.form_token)
+        << "<label>New participant <input name=\"id\" "
            "id=\"new-participant\" size=\"12\"></label> <button id=\"add\">Add</button></form>\n";
     }
     if (waiting_for_more) {
-      h << "<form method=\"post\" action=\"/finish\"><p id=\"more\">Every trial is done: add a participant, or "
+      h << "<form method=\"post\" action=\"/finish\">" << TokenField(access.form_token)
+        << "<p id=\"more\">Every trial is done: add a participant, or "
            "<button id=\"finish\">Finish the study</button></p></form>\n";
     }
     // Refreshed while something changes by itself (a trial under way, answers
@@ -265,10 +360,76 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
                            const std::map<std::string, Questionnaire>& questionnaires, const ConsoleOptions& options)
     : impl_(std::make_unique<Impl>(config, plan, database, questionnaires, options)) {
   Impl& s = *impl_;
-  s.server.Get("/", [&s](const httplib::Request&, httplib::Response& res) {
+  const bool tls = !options.tls_certificate.empty();
+  const bool beyond_loopback = !IsLoopbackAddress(options.host);
+  if (beyond_loopback && !tls && !options.plain_http) {
+    throw ConsoleError("the console would listen on " + options.host +
+                       ", beyond this machine, without HTTPS: its access token would cross the network in clear. "
+                       "Make a certificate with `haptel security init DIR --console NAME` and give --tls DIR, or "
+                       "accept plain HTTP on a network you trust with --plain-http");
+  }
+  TlsContext context;
+  if (tls) {
+    try {
+      context = MakeTlsContext(options.tls_certificate, options.tls_key);
+    } catch (const std::runtime_error& e) {
+      throw ConsoleError(std::string("the console's HTTPS: ") + e.what());
+    }
+  }
+  try {
+    s.server = std::make_unique<ConsoleServer>(options.connections, std::move(context));
+  } catch (const std::invalid_argument& e) {
+    throw ConsoleError(e.what());
+  }
+  s.access.tls = tls;
+  s.access.form_token = RandomToken();
+  s.access.access_token = beyond_loopback ? (options.access_token.empty() ? RandomToken() : options.access_token) : "";
+  s.access.max_answers_bytes = LargestAnswers(questionnaires);
+  // Chunked bodies (no Content-Length) stop here as they are read.
+  s.server->set_payload_max_length(s.access.max_answers_bytes);
+  // Not to be framed by another page (a hidden Abort button under a click),
+  // sniffed as another type, cached, or named in a link's Referer.
+  s.server->set_default_headers({{"X-Frame-Options", "DENY"},
+                                 {"Content-Security-Policy", "frame-ancestors 'none'"},
+                                 {"X-Content-Type-Options", "nosniff"},
+                                 {"Referrer-Policy", "no-referrer"},
+                                 {"Cache-Control", "no-store"}});
+  // Every request's head, before its body is read or a route runs.
+  s.server->set_pre_routing_handler([&s](const httplib::Request& req, httplib::Response& res) {
+    if (const Refusal refusal = CheckRequest(s.access, req)) {
+      s.Refuse(res, refusal);
+      return httplib::Server::HandlerResponse::Handled;
+    }
+    return httplib::Server::HandlerResponse::Unhandled;
+  });
+  // What the library refuses by itself (a malformed request, a chunked body
+  // past the limit, a path that is not a route) says so on a page too.
+  s.server->set_error_handler([](const httplib::Request&, httplib::Response& res) {
+    if (!res.body.empty()) return;  // a route's own page, which says why
+    const std::string why = res.status == 404   ? "no such page on the study's console"
+                            : res.status == 413 ? "the form is larger than this console takes"
+                            : res.status == 400 ? "the request could not be read"
+                                                : "the request was refused (HTTP " + std::to_string(res.status) + ")";
+    res.set_content(ErrorPage("Refused", why), "text/html; charset=utf-8");
+  });
+  s.server->Get("/login", [&s](const httplib::Request&, httplib::Response& res) {
+    res.set_content(LoginPage(s.access.form_token, "The console asks for its access token, once."),
+                    "text/html; charset=utf-8");
+  });
+  s.Post("/login", [&s](const httplib::Request& req, httplib::Response& res) {
+    if (s.access.access_token.empty()) return res.set_redirect("/", 303);
+    if (!IsAccessToken(s.access, req.get_param_value("token"))) {
+      return s.Refuse(res, {401, "that is not the console's access token"});
+    }
+    res.set_header("Set-Cookie", std::string(kAccessCookie) + "=" + s.access.access_token +
+                                     "; Path=/; HttpOnly; SameSite=Strict" + (s.access.tls ? "; Secure" : ""));
+    res.set_redirect("/", 303);
+  });
+  s.server->Get("/", [&s](const httplib::Request&, httplib::Response& res) {
     res.set_content(s.Schedule(), "text/html; charset=utf-8");
   });
-  s.server.Get("/status.json", [&s](const httplib::Request&, httplib::Response& res) {
+  s.server->Get("/status.json", [&s](const httplib::Request&, httplib::Response& res) {
+    const ConnectionCounters c = s.server->counters();
     const std::lock_guard<std::mutex> lock(s.mutex);
     res.set_content("{\"study\":" + JsonString(s.config.name) +
                         ",\"trials_done\":" + std::to_string(s.store->Trials().size()) +
@@ -279,24 +440,27 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
                         ",\"obstacles\":" + std::to_string(s.progress.obstacles) +
                         ",\"video_frames\":" + std::to_string(s.thumbnail ? s.thumbnail->frames() : 0) +
                         ",\"next\":" + JsonString(s.next) + ",\"waiting\":" + JsonString(s.waiting) +
-                        ",\"waiting_for_participants\":" + (s.waiting_for_more ? "true" : "false") + "}",
+                        ",\"waiting_for_participants\":" + (s.waiting_for_more ? "true" : "false") +
+                        ",\"connections\":{\"served\":" + std::to_string(c.served) +
+                        ",\"refused_busy\":" + std::to_string(c.refused_busy) +
+                        ",\"cut_deadline\":" + std::to_string(c.cut_deadline) +
+                        ",\"tls_failed\":" + std::to_string(c.tls_failed) +
+                        ",\"refused_requests\":" + std::to_string(s.refused_requests.load()) + "}}",
                     "application/json");
   });
-  s.server.Post("/start", [&s](const httplib::Request&, httplib::Response& res) {
+  s.Post("/start", [&s](const httplib::Request&, httplib::Response& res) {
     std::unique_lock<std::mutex> lock(s.mutex);
     if (s.next.empty()) {
       res.status = 409;
       const std::string why = s.waiting.empty() ? "no trial is waiting to start" : "waiting for " + s.waiting;
-      res.set_content(Page("Not started", "<p id=\"result\" class=\"error\">" + Html(why) +
-                                              "</p><p><a href=\"/\">schedule</a></p>"),
-                      "text/html; charset=utf-8");
+      res.set_content(ErrorPage("Not started", why), "text/html; charset=utf-8");
       return;
     }
     s.start_requested = true;
     s.started.notify_all();
     res.set_redirect("/", 303);
   });
-  s.server.Post("/redo", [&s](const httplib::Request& req, httplib::Response& res) {
+  s.Post("/redo", [&s](const httplib::Request& req, httplib::Response& res) {
     const std::string participant = req.get_param_value("participant");
     int position = 0;
     try {
@@ -311,15 +475,14 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
     }
     if (!taken) {
       res.status = 409;
-      res.set_content(Page("Not redone", "<p id=\"result\" class=\"error\">participant " + Html(participant) +
-                                             " has no finished trial at position " + Html(req.get_param_value("position")) +
-                                             "</p><p><a href=\"/\">schedule</a></p>"),
+      res.set_content(ErrorPage("Not redone", "participant " + participant + " has no finished trial at position " +
+                                                  req.get_param_value("position")),
                       "text/html; charset=utf-8");
       return;
     }
     res.set_redirect("/", 303);
   });
-  s.server.Post("/participants", [&s](const httplib::Request& req, httplib::Response& res) {
+  s.Post("/participants", [&s](const httplib::Request& req, httplib::Response& res) {
     const std::string id = req.get_param_value("id");
     if (s.config.operators != "person") {
       res.status = 409;
@@ -346,7 +509,7 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
     s.started.notify_all();
     res.set_redirect("/", 303);
   });
-  s.server.Post("/finish", [&s](const httplib::Request&, httplib::Response& res) {
+  s.Post("/finish", [&s](const httplib::Request&, httplib::Response& res) {
     {
       const std::lock_guard<std::mutex> lock(s.mutex);
       if (!s.waiting_for_more) {
@@ -359,21 +522,28 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
     s.started.notify_all();
     res.set_redirect("/", 303);
   });
-  s.server.Get("/video.jpg", [&s](const httplib::Request&, httplib::Response& res) {
+  s.server->Get("/video.jpg", [&s](const httplib::Request&, httplib::Response& res) {
     const std::vector<uint8_t> jpeg = s.thumbnail ? s.thumbnail->Latest() : std::vector<uint8_t>();
     if (jpeg.empty()) {
       res.status = 404;
       res.set_content("no picture from the vehicle's camera yet", "text/plain");
       return;
     }
-    res.set_header("Cache-Control", "no-store");
     res.set_content(std::string(jpeg.begin(), jpeg.end()), "image/jpeg");
   });
-  s.server.Post("/abort", [&s](const httplib::Request&, httplib::Response& res) {
+  s.Post("/abort", [&s](const httplib::Request&, httplib::Response& res) {
+    {
+      const std::lock_guard<std::mutex> lock(s.mutex);
+      if (s.live.empty()) {
+        res.status = 409;
+        res.set_content(ErrorPage("Not aborted", "no trial is under way"), "text/html; charset=utf-8");
+        return;
+      }
+    }
     s.abort_requested.store(true);
     res.set_redirect("/", 303);
   });
-  s.server.Get("/questionnaire", [&s](const httplib::Request& req, httplib::Response& res) {
+  s.server->Get("/questionnaire", [&s](const httplib::Request& req, httplib::Response& res) {
     const auto q = s.questionnaires.find(req.get_param_value("name"));
     if (q == s.questionnaires.end()) {
       res.status = 404;
@@ -382,18 +552,40 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
       return;
     }
     res.set_content(Page(q->second.title, Form(q->second, req.get_param_value("participant"),
-                                                 req.get_param_value("condition"))),
+                                                 req.get_param_value("condition"), s.access.form_token)),
                     "text/html; charset=utf-8");
   });
-  s.server.Post("/answers", [&s](const httplib::Request& req, httplib::Response& res) {
+  // Read here, not by the library: it buffers a url-encoded body whole and
+  // refuses one past 8 kB, shorter than the answers a text item allows.
+  s.server->Post("/answers", [&s](const httplib::Request& req, httplib::Response& res,
+                                  const httplib::ContentReader& read) {
+    if (req.is_multipart_form_data() ||
+        req.get_header_value("Content-Type").rfind("application/x-www-form-urlencoded", 0) != 0) {
+      return s.Refuse(res, {415, "refused: the answers come as an url-encoded form"});
+    }
+    std::string body;
+    bool too_large = false;
+    read([&](const char* data, size_t length) {
+      too_large = body.size() + length > s.access.max_answers_bytes;
+      if (!too_large) body.append(data, length);
+      return !too_large;
+    });
+    if (too_large) {
+      return s.Refuse(res, {413, "refused: the form is larger than " + std::to_string(s.access.max_answers_bytes) +
+                                     " bytes, more than this study's questionnaires allow"});
+    }
+    httplib::Params params;
+    httplib::detail::parse_query_text(body, params);
+    const auto token = params.find("csrf");
+    if (const Refusal refusal = CheckFormToken(s.access, token == params.end() ? "" : token->second)) {
+      return s.Refuse(res, refusal);
+    }
     std::map<std::string, std::string> fields;
-    for (const auto& [key, value] : req.params) fields[key] = value;
+    for (const auto& [key, value] : params) fields[key] = value;
     const std::string participant = fields["participant"];
     const std::string condition = fields["condition"];
     const std::string name = fields["questionnaire"];
-    fields.erase("participant");
-    fields.erase("condition");
-    fields.erase("questionnaire");
+    for (const char* hidden : {"participant", "condition", "questionnaire", "csrf"}) fields.erase(hidden);
     const auto q = s.questionnaires.find(name);
     if (q != s.questionnaires.end()) {
       for (const Item& item : q->second.items) {
@@ -406,52 +598,66 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
       result = SubmitAnswers(*s.store, s.questionnaires, participant, condition, name, fields);
     }
     res.status = result.status;
-    std::string body = std::string("<p id=\"result\" class=\"") + (result.accepted ? "ok" : "error") + "\">" +
+    std::string page = std::string("<p id=\"result\" class=\"") + (result.accepted ? "ok" : "error") + "\">" +
                        Html(result.message) + "</p>\n";
     if (!result.errors.empty()) {
-      body += "<ul id=\"errors\">\n";
-      for (const AnswerError& e : result.errors) body += "<li>" + Html(e.message) + "</li>\n";
-      body += "</ul>\n<p><a href=\"" + Html(Query(participant, condition, name)) + "\">back to the form</a></p>\n";
+      page += "<ul id=\"errors\">\n";
+      for (const AnswerError& e : result.errors) page += "<li>" + Html(e.message) + "</li>\n";
+      page += "</ul>\n<p><a href=\"" + Html(Query(participant, condition, name)) + "\">back to the form</a></p>\n";
     }
-    body += "<p><a href=\"/\">schedule</a></p>";
-    res.set_content(Page(result.accepted ? "Recorded" : "Not recorded", body), "text/html; charset=utf-8");
+    page += "<p><a href=\"/\">schedule</a></p>";
+    res.set_content(Page(result.accepted ? "Recorded" : "Not recorded", page), "text/html; charset=utf-8");
   });
   // SO_REUSEADDR only: httplib's default adds SO_REUSEPORT, with which a
   // second console would share the port silently instead of being refused.
-  s.server.set_socket_options([](socket_t sock) {
+  s.server->set_socket_options([](socket_t sock) {
     int yes = 1;
     setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
   });
   if (options.port == 0) {
-    s.port = s.server.bind_to_any_port(options.host);
-  } else if (s.server.bind_to_port(options.host, options.port)) {
+    s.port = s.server->bind_to_any_port(options.host);
+  } else if (s.server->bind_to_port(options.host, options.port)) {
     s.port = options.port;
   }
   if (s.port <= 0) {
     throw ConsoleError("the console cannot listen on " + options.host + ":" + std::to_string(options.port) +
                        " (the port is in use, or the address is not this machine's); choose another with --port N");
   }
+  s.access.hosts = ConsoleHosts(options.host, s.port, tls, options.names);
   // The study's tables only once the port is ours: a console that cannot
   // listen writes nothing.
   s.store = std::make_unique<StudyStore>(s.recorder, s.config, s.plan);
-  s.thread = std::thread([&s] { s.server.listen_after_bind(); });
+  s.thread = std::thread([&s] { s.server->listen_after_bind(); });
   // Serving before the constructor returns: a stop() before the listening
   // loop has started would be lost, and the destructor would wait forever.
-  for (int i = 0; i < 500 && !s.server.is_running(); ++i) {
+  for (int i = 0; i < 500 && !s.server->is_running(); ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
 }
 
 StudyConsole::~StudyConsole() {
-  impl_->server.stop();
+  impl_->server->StopAll();
   if (impl_->thread.joinable()) impl_->thread.join();
 }
 
 int StudyConsole::port() const { return impl_->port; }
 
 std::string StudyConsole::url() const {
-  return "http://" + impl_->options.host + ":" + std::to_string(impl_->port) + "/";
+  const std::string& host = impl_->options.host;
+  const bool v6 = host.find(':') != std::string::npos;
+  return std::string(impl_->access.tls ? "https://" : "http://") + (v6 ? "[" + host + "]" : host) + ":" +
+         std::to_string(impl_->port) + "/";
 }
+
+const std::string& StudyConsole::access_token() const { return impl_->access.access_token; }
+
+ConnectionCounters StudyConsole::connection_counters() const {
+  ConnectionCounters c = impl_->server->counters();
+  c.refused_requests = impl_->refused_requests.load();
+  return c;
+}
+
+bool StudyConsole::TakeAbort() { return impl_->abort_requested.exchange(false); }
 
 void StudyConsole::SetLive(const std::string& text) {
   const std::lock_guard<std::mutex> lock(impl_->mutex);

@@ -40,6 +40,13 @@ constexpr const char* kRunUsage =
     "                    a person study always does: its trials start from it, its\n"
     "                    questionnaires are filled in there after each condition\n"
     "  --port N          the console's port (default 8470)\n"
+    "  --bind ADDR       the console's address (default 127.0.0.1); beyond this machine\n"
+    "                    (e.g. 0.0.0.0 for every interface) the page asks once for an access\n"
+    "                    token, printed here, and HTTPS is required:\n"
+    "  --tls DIR         serve HTTPS with DIR/console.pem and DIR/console.key (made by\n"
+    "                    `haptel security init DIR --console NAME,...`)\n"
+    "  --plain-http      beyond this machine without HTTPS (the token crosses the network in\n"
+    "                    clear; only on a network you trust)\n"
     "  --verbose         the sessions' own progress lines\n";
 
 const StudyCondition& ConditionNamed(const StudyConfig& config, const std::string& name) {
@@ -169,9 +176,19 @@ int StudyRunCommand(int argc, const char* const* argv) {
     std::map<std::string, Questionnaire> questionnaires;
     std::string simulated_device;  ///< the run's haptic device, when it is the simulated one
     cli::ReadInput([&] {
-      const Args args(argc, argv, {"database", "domain", "port"}, {"json", "verbose", "console"});
+      const Args args(argc, argv, {"database", "domain", "port", "bind", "tls"},
+                      {"json", "verbose", "console", "plain-http"});
       console_options.port = args.Int("port", 1, 65535).value_or(console_options.port);
-      want_console = args.Flag("console") || args.Value("port").has_value();
+      console_options.host = args.Value("bind").value_or(console_options.host);
+      console_options.plain_http = args.Flag("plain-http");
+      if (const auto tls = args.Value("tls")) {
+        const ConsoleCertificate certificate = FindConsoleCertificate(*tls);
+        console_options.tls_certificate = certificate.certificate;
+        console_options.tls_key = certificate.key;
+        console_options.names = certificate.names;
+      }
+      want_console = args.Flag("console") || args.Value("port").has_value() || args.Value("bind").has_value() ||
+                     args.Value("tls").has_value();
       if (const auto d = args.Int("domain", 0, 232)) domain = std::to_string(*d);
       if (args.positional().size() != 2 || args.positional()[0] != "run") {
         throw UsageError(args.positional().size() < 2 ? "missing the study file"
@@ -215,6 +232,10 @@ int StudyRunCommand(int argc, const char* const* argv) {
         return std::make_unique<StudyConsole>(config, plan, database, questionnaires, console_options);
       });
       std::fprintf(stderr, "[study] console: %s\n", console->url().c_str());
+      if (!console->access_token().empty()) {
+        std::fprintf(stderr, "[study] console access token (the page asks for it once): %s\n",
+                     console->access_token().c_str());
+      }
     }
     StudyStore store = cli::ReadInput([&] { return StudyStore(*recorder, config, plan); });
     // People hold the haptic conditions' controls with a real device: the
@@ -322,7 +343,8 @@ int StudyRunCommand(int argc, const char* const* argv) {
                    trial->participant.c_str(), trial->position, trial->condition.c_str());
       const mediator::RecordedRun run = run_watched(setup, store.TrialWriter(*trial, config.trial_cap_s));
       const record::RunRecord& r = run.result.record;
-      if (console && console->abort_requested().load() && !interrupted.load()) {
+      // Taken, not only read: the trial run again is not aborted by the same press.
+      if (console && console->TakeAbort() && !interrupted.load()) {
         store.Event("aborted", trial->participant, trial->position, "from the console; the trial is run again");
         std::fprintf(stderr, "[study]   aborted from the console: the trial is run again\n");
         continue;

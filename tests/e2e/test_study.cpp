@@ -15,6 +15,7 @@
 #include <string>
 #include <tuple>
 
+#include "../study/console_client.hpp"
 #include "child.hpp"
 #include "xserver.hpp"
 #include "haptel/record/recorder.hpp"
@@ -122,6 +123,50 @@ TEST_CASE("a study killed mid-trial resumes and records each planned trial once"
   CHECK(record::Recorder(db).LoadAll().size() == 4);
 }
 
+TEST_CASE("Abort in a synthetic study ends the trial under way once; the study then runs to its end") {
+  const auto dir = test::ScratchDir("e2e-study-abort");
+  const auto source = std::filesystem::current_path();
+  const auto file = dir / "abort-study.yaml";
+  std::ofstream(file) << "name: abort-e2e\n"
+                         "run: " << (source / "config/haptel.yaml").string() << "\n"
+                         "track: " << (source / "config/tracks/test-short.yaml").string() << "\n"
+                         "operators: synthetic\n"
+                         "conditions:\n"
+                         "  - {name: first, interface: gesture}\n"
+                         "  - {name: second, interface: gesture}\n"
+                         "design: {order: fixed}\n"
+                         "trial_cap_s: 6\n"
+                         "profiles:\n"
+                         "  plain: {steering_noise: 0.02, seed: 3}\n"
+                         "participants:\n"
+                         "  - {id: P1, profile: plain}\n";
+  const auto db = dir / "abort.db";
+  const int port = 20000 + static_cast<int>((getpid() + 7919) % 20000);
+  Child study({Bin("haptel"), "study", "run", file.string(), "--database", db.string(), "--domain",
+               std::to_string(test::UniqueDomain(43)), "--console", "--port", std::to_string(port), "--json"});
+  test::ConsoleClient console("127.0.0.1", port);
+  auto status = [&](const std::string& key) {
+    const auto r = console.Get("/status.json");
+    return r ? test::JsonField(r->body, key) : std::string();
+  };
+  INFO(study.err());
+  REQUIRE(test::WaitFor([&] { study.Pump(); return !status("live").empty() || !study.Alive(); }, 120.0));
+  const auto abort = console.Post("/abort");
+  REQUIRE(abort);
+  CHECK(abort->status == 303);
+  REQUIRE(study.Wait(300.0) == 0);
+  CHECK(test::JsonField(study.LastLine(), "trials_done") == "2");
+  // One abort, one run more than the trials (the aborted one, kept), not a loop.
+  record::Recorder recorder(db);
+  CHECK(recorder.LoadAll().size() == 3);
+  sqlite3_stmt* select = nullptr;
+  REQUIRE(sqlite3_prepare_v2(recorder.handle(), "SELECT count(*) FROM study_events WHERE kind = 'aborted'", -1,
+                             &select, nullptr) == SQLITE_OK);
+  REQUIRE(sqlite3_step(select) == SQLITE_ROW);
+  CHECK(sqlite3_column_int(select, 0) == 1);
+  sqlite3_finalize(select);
+}
+
 TEST_CASE("a study that cannot work is refused before anything runs") {
   const auto dir = test::ScratchDir("e2e-study-bad");
   const auto study = SmallStudy(dir);
@@ -200,8 +245,7 @@ TEST_CASE("a person study from the console: a participant added, a practice lap,
   const int port = 20000 + static_cast<int>(getpid() % 20000);
   Child study({Bin("haptel"), "study", "run", file.string(), "--database", db.string(), "--domain",
                std::to_string(test::UniqueDomain(47)), "--port", std::to_string(port), "--json"});
-  httplib::Client console("127.0.0.1", port);
-  console.set_read_timeout(10, 0);
+  test::ConsoleClient console("127.0.0.1", port);
   auto status = [&](const std::string& key) {
     const auto r = console.Get("/status.json");
     return r ? test::JsonField(r->body, key) : std::string();  // not serving yet

@@ -12,6 +12,7 @@
 #include "haptel/config/paths.hpp"
 #include "haptel/record/recorder.hpp"
 #include "haptel/study/console.hpp"
+#include "console_client.hpp"
 #include "study_test_run.hpp"
 #include "test_env.hpp"
 
@@ -57,8 +58,7 @@ TEST_CASE("The console serves the schedule and forms, and takes each questionnai
   options.port = 0;  // any free port
   StudyConsole console(config, plan, db, questionnaires, options);
   console.SetLive("participant A, cockpit: lap 3.2 s");
-  httplib::Client client("127.0.0.1", console.port());
-  client.set_read_timeout(10, 0);
+  test::ConsoleClient client("127.0.0.1", console.port());
 
   const auto schedule = client.Get("/");
   REQUIRE(schedule);
@@ -149,8 +149,7 @@ TEST_CASE("The console adds participants to an open study, each once, and finish
   ConsoleOptions options;
   options.port = 0;
   StudyConsole console(config, {}, db, {}, options);
-  httplib::Client client("127.0.0.1", console.port());
-  client.set_read_timeout(10, 0);
+  test::ConsoleClient client("127.0.0.1", console.port());
 
   const auto added = client.Post("/participants", httplib::Params{{"id", "P1"}});
   REQUIRE(added);
@@ -210,8 +209,7 @@ TEST_CASE("the thumbnail is the picture the trial's session hands over, as it ca
   options.port = 0;
   options.thumbnail = true;
   StudyConsole console(config, {}, dir / "thumb.db", {}, options);
-  httplib::Client client("127.0.0.1", console.port());
-  client.set_read_timeout(10, 0);
+  test::ConsoleClient client("127.0.0.1", console.port());
   // Before any picture: nothing to show yet.
   const auto none = client.Get("/video.jpg");
   REQUIRE(none);
@@ -234,7 +232,7 @@ TEST_CASE("Simulated drivers come from the study file, not the console") {
   ConsoleOptions options;
   options.port = 0;
   StudyConsole console(config, plan, dir / "syn.db", {}, options);
-  httplib::Client client("127.0.0.1", console.port());
+  test::ConsoleClient client("127.0.0.1", console.port());
   const auto added = client.Post("/participants", httplib::Params{{"id", "B"}});
   REQUIRE(added);
   CHECK(added->status == 409);

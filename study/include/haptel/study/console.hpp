@@ -1,10 +1,19 @@
 #pragma once
 /// @file The experimenter's console: a web page served by `haptel study run`
-/// on 127.0.0.1 (cpp-httplib; plain HTML, no JavaScript needed). It shows the
-/// schedule (each participant's conditions in their order, with the trials'
+/// (cpp-httplib; plain HTML, no JavaScript needed). It shows the schedule
+/// (each participant's conditions in their order, with the trials'
 /// results), the live trial, and the questionnaire forms a participant fills
 /// in after each condition; submissions go through SubmitAnswers (checked,
 /// in order, never twice).
+///
+/// It listens on 127.0.0.1 unless told otherwise, and defends itself as a
+/// web application (console_access.hpp): requests addressed to another Host
+/// are refused, so are state-changing requests from another site (Origin,
+/// Sec-Fetch-Site, a per-console token in every form); bodies are bounded
+/// before they are read; every connection has one deadline and one address
+/// holds a bounded number of them. Beyond loopback it serves HTTPS with a
+/// certificate `haptel security init DIR --console NAME` makes, and the page
+/// asks once for an access token.
 ///
 /// Routes: `GET /` the schedule; `GET /questionnaire?participant=P&condition=C&name=Q`
 /// a form; `POST /answers` a filled-in form; `POST /start` starts the trial
@@ -14,8 +23,11 @@
 /// `POST /participants` (id) adds a participant, planned by the design;
 /// `POST /finish` ends an open study (one whose file lists no participants);
 /// `GET /video.jpg` the vehicle's latest camera picture (the thumbnail);
-/// `GET /status.json` the counts, the live trial, the next, what is awaited.
+/// `GET /status.json` the counts, the live trial, the next, what is awaited;
+/// `GET|POST /login` the access token's form (beyond loopback).
 #include <atomic>
+#include <chrono>
+#include <cstdint>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -35,12 +47,66 @@ class ConsoleError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// How long and how many connections: the defaults hold a browser's page,
+/// its thumbnail and a form, from any link that carries video, with room to
+/// spare.
+struct ConnectionPolicy {
+  /// Connections one address may hold at once; more are answered 503 and
+  /// closed. A browser opens at most 6 to one host.
+  int max_per_client = 6;
+  /// From accept to the last byte of the answer, for the whole exchange: a
+  /// client sending a header line every few seconds is cut off here.
+  std::chrono::milliseconds deadline{10000};
+  /// Silence from the client that ends the connection, within the deadline.
+  std::chrono::milliseconds idle{5000};
+  /// Worker threads; one address holds at most `max_per_client` of them.
+  size_t threads = 16;
+
+  /// Throws std::invalid_argument naming the field that is out of range.
+  void ValidateOrThrow() const;
+};
+
+/// What the connection policy did (in `GET /status.json` as `connections`).
+struct ConnectionCounters {
+  uint64_t served = 0;        ///< connections that reached the request parser
+  uint64_t refused_busy = 0;  ///< over `max_per_client`: 503 and closed
+  uint64_t cut_deadline = 0;  ///< ended at the deadline or after `idle`
+  uint64_t tls_failed = 0;    ///< TLS handshakes that did not complete
+  uint64_t refused_requests = 0;  ///< refused by the access checks (403, 401, 413)
+};
+
 struct ConsoleOptions {
-  std::string host = "127.0.0.1";  ///< only this machine: the page takes answers
+  /// The address to listen on. Beyond loopback the page asks for an access
+  /// token, and HTTPS is required unless `plain_http` says otherwise.
+  std::string host = "127.0.0.1";
   int port = 8470;                 ///< 0: any free port (tests)
   /// Show the vehicle's camera (SetPicture, from the trial's session).
   bool thumbnail = false;
+  /// HTTPS: a PEM certificate (chain) and its key. Empty: plain HTTP.
+  std::filesystem::path tls_certificate;
+  std::filesystem::path tls_key;
+  /// Beyond loopback without HTTPS: the access token crosses the network in
+  /// clear. Only for a network the experimenter trusts.
+  bool plain_http = false;
+  /// Further names the page is reached by (the certificate's names).
+  std::vector<std::string> names;
+  /// Given: the access token (tests); empty: a random one beyond loopback.
+  std::string access_token;
+  ConnectionPolicy connections;
 };
+
+/// The console's HTTPS certificate in a security folder.
+struct ConsoleCertificate {
+  std::filesystem::path certificate;  ///< DIR/console.pem
+  std::filesystem::path key;          ///< DIR/console.key
+  std::vector<std::string> names;     ///< its subject alternative names (DNS names, addresses)
+};
+
+/// DIR/console.pem and DIR/console.key, with the names the certificate is
+/// for. Throws ConsoleError naming the file and how to make it (`haptel
+/// security init DIR --console NAME`) when one is missing, unreadable, or
+/// the certificate is not valid now.
+ConsoleCertificate FindConsoleCertificate(const std::filesystem::path& dir);
 
 /// The live trial as the page shows it, beside its title line.
 struct LiveProgress {
@@ -64,8 +130,11 @@ class StudyConsole {
   StudyConsole& operator=(const StudyConsole&) = delete;
 
   int port() const;
-  /// e.g. "http://127.0.0.1:8470/"
+  /// e.g. "http://127.0.0.1:8470/" or "https://0.0.0.0:8470/"
   std::string url() const;
+  /// What the page asks for beyond loopback (empty on loopback).
+  const std::string& access_token() const;
+  ConnectionCounters connection_counters() const;
   /// The line the page shows for the trial under way (empty: none); clears
   /// the progress.
   void SetLive(const std::string& text);
@@ -79,6 +148,9 @@ class StudyConsole {
   bool WaitForStart(const std::string& next, const std::atomic<bool>& stop);
   /// Set by the page's Abort button during a trial.
   const std::atomic<bool>& abort_requested() const;
+  /// Whether Abort was pressed, and clears it: the trial is ended once, and
+  /// the trial run again is not aborted by the same press.
+  bool TakeAbort();
   /// Blocks while nothing is left to run in an open study, until the
   /// experimenter adds a participant (true) or presses Finish, or `stop` is
   /// set (false).
