@@ -1,7 +1,10 @@
 #include "fuzz_bench.hpp"
 
+#include <arpa/inet.h>
 #include <fcntl.h>
+#include <netinet/in.h>
 #include <signal.h>
+#include <sys/socket.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -40,9 +43,12 @@
 #include "haptel/core/clock.hpp"
 #include "haptel/core/json.hpp"
 #include "haptel/link/families.hpp"
+#include "haptel/record/recorder.hpp"
 #include "haptel/link/topic.hpp"
 #include "haptel/servo/servo_output.hpp"
 #include "haptel/servo/sim_servo_controller.hpp"
+#include "haptel/study/console.hpp"
+#include "haptel/study/questionnaire.hpp"
 #include "haptel/udp/udp_protocol.hpp"
 #include "haptel/vehicles/candump_log.hpp"
 #include "haptel/vehicles/odrive_can.hpp"
@@ -462,7 +468,113 @@ Target DdsTarget() {
 
 }  // namespace
 
-std::vector<std::string> FuzzTargets() { return {"config", "scene", "udp", "servo", "can", "dds"}; }
+/// One HTTP exchange with the console: `request` sent as is, the sending
+/// side shut (a request cut short ends at once, not at the console's
+/// deadline); the answer's status, or 0 when it closed without one.
+int HttpExchange(int port, const Bytes& request) {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  if (fd < 0) throw std::runtime_error("bench fuzz console: no socket");
+  sockaddr_in to{};
+  to.sin_family = AF_INET;
+  to.sin_port = htons(static_cast<uint16_t>(port));
+  inet_pton(AF_INET, "127.0.0.1", &to.sin_addr);
+  if (connect(fd, reinterpret_cast<sockaddr*>(&to), sizeof to) != 0) {
+    close(fd);
+    throw std::runtime_error("bench fuzz console: the console stopped accepting connections");
+  }
+  size_t sent = 0;
+  while (sent < request.size()) {
+    const ssize_t n = send(fd, request.data() + sent, request.size() - sent, MSG_NOSIGNAL);
+    if (n <= 0) break;  // the console has refused and closed: its answer is still read
+    sent += static_cast<size_t>(n);
+  }
+  shutdown(fd, SHUT_WR);
+  std::string answer;
+  char buffer[4096];
+  for (ssize_t n; (n = recv(fd, buffer, sizeof buffer, 0)) > 0;) {
+    if (answer.size() < 64) answer.append(buffer, static_cast<size_t>(n));
+  }
+  close(fd);
+  int status = 0;
+  return std::sscanf(answer.c_str(), "HTTP/1.%*d %d", &status) == 1 ? status : 0;
+}
+
+/// The experimenter's console, served for real on a free loopback port over a
+/// study of its own (one trial driven, the thesis questionnaire), fed
+/// mutated requests: every route, forms with their token, a chunked body.
+/// Accepted: answered 2xx or 3xx; rejected: a 4xx/5xx or closed unanswered.
+Target ConsoleTarget(const fs::path& dir) {
+  Target t;
+  StudyConfig config;
+  config.file = dir / "fuzz.yaml";
+  std::ofstream(config.file) << "name: fuzz\n";
+  config.name = "fuzz";
+  config.operators = "person";
+  config.conditions = {{"cockpit", "cockpit"}, {"gesture", "gesture"}};
+  config.participants = {{"A", ""}};
+  config.questionnaires = {"thesis"};
+  const std::vector<study::PlannedTrial> plan = {{"A", 1, "gesture", 1}, {"A", 2, "cockpit", 1}};
+  const std::map<std::string, study::Questionnaire> questionnaires = {
+      {"thesis", study::FindQuestionnaire(ShippedFile("config/questionnaires"), "thesis")}};
+  study::ConsoleOptions options;
+  options.port = 0;
+  options.thumbnail = true;
+  auto console = std::make_shared<study::StudyConsole>(config, plan, dir / "fuzz.db", questionnaires, options);
+  console->SetPicture({0xFF, 0xD8, 0xFF, 0xD9}, 1);
+  console->SetLive("fuzzing");
+  const int port = console->port();
+  // The form token, as a browser has it from a page.
+  std::string token;
+  {
+    const int fd = socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in to{};
+    to.sin_family = AF_INET;
+    to.sin_port = htons(static_cast<uint16_t>(port));
+    inet_pton(AF_INET, "127.0.0.1", &to.sin_addr);
+    std::string page;
+    if (connect(fd, reinterpret_cast<sockaddr*>(&to), sizeof to) == 0) {
+      const std::string r = "GET /login HTTP/1.1\r\nHost: 127.0.0.1:" + std::to_string(port) + "\r\n\r\n";
+      (void)!send(fd, r.data(), r.size(), MSG_NOSIGNAL);
+      char buffer[4096];
+      for (ssize_t n; (n = recv(fd, buffer, sizeof buffer, 0)) > 0;) page.append(buffer, static_cast<size_t>(n));
+    }
+    close(fd);
+    const size_t at = page.find("name=\"csrf\" value=\"");
+    if (at != std::string::npos) token = page.substr(at + 19, 32);
+  }
+  if (token.size() != 32) throw std::runtime_error("bench fuzz console: the console's page has no form token");
+  const std::string host = "Host: 127.0.0.1:" + std::to_string(port) + "\r\n";
+  auto post = [&](const std::string& path, const std::string& body, const std::string& extra = "") {
+    return "POST " + path + " HTTP/1.1\r\n" + host + extra +
+           "Content-Type: application/x-www-form-urlencoded\r\nContent-Length: " + std::to_string(body.size()) +
+           "\r\n\r\n" + body;
+  };
+  const std::vector<std::string> requests = {
+      "GET / HTTP/1.1\r\n" + host + "\r\n",
+      "GET /questionnaire?participant=A&condition=gesture&name=thesis HTTP/1.1\r\n" + host +
+          "Accept: text/html\r\nCookie: haptel_console=x; other=1\r\n\r\n",
+      "GET /status.json HTTP/1.1\r\n" + host + "\r\n",
+      "GET /video.jpg?n=1 HTTP/1.1\r\n" + host + "Range: bytes=0-1\r\n\r\n",
+      post("/answers", "participant=A&condition=gesture&questionnaire=thesis&easy_to_learn=4&efficient=5&remarks=" +
+                           std::string("%E6%BC%A2%20ok&csrf=") + token),
+      post("/redo", "participant=A&position=1&csrf=" + token,
+           "Origin: http://127.0.0.1:" + std::to_string(port) + "\r\nSec-Fetch-Site: same-origin\r\n"),
+      post("/participants", "id=P2&csrf=" + token),
+      post("/abort", "csrf=" + token),
+      post("/login", "token=abc&csrf=" + token),
+      "POST /answers HTTP/1.1\r\n" + host +
+          "Content-Type: application/x-www-form-urlencoded\r\nTransfer-Encoding: chunked\r\n\r\n"
+          "10\r\nparticipant=A&co\r\n0\r\n\r\n",
+  };
+  for (const std::string& r : requests) t.seeds.emplace_back(r.begin(), r.end());
+  t.parse = [console, port](size_t, const Bytes& input) {
+    const int status = HttpExchange(port, input);
+    return status >= 200 && status < 400;
+  };
+  return t;
+}
+
+std::vector<std::string> FuzzTargets() { return {"config", "scene", "udp", "servo", "can", "dds", "console"}; }
 
 FuzzResult Fuzz(const std::string& name, uint64_t inputs, uint64_t seed) {
   std::optional<fs::path> copy;
@@ -478,6 +590,11 @@ FuzzResult Fuzz(const std::string& name, uint64_t inputs, uint64_t seed) {
     target = CanTarget();
   } else if (name == "dds") {
     target = DdsTarget();
+  } else if (name == "console") {
+    copy = fs::temp_directory_path() / ("haptel-fuzz-" + std::to_string(getpid())) / "console";
+    fs::remove_all(copy->parent_path());
+    fs::create_directories(*copy);
+    target = ConsoleTarget(*copy);
   } else {
     throw std::invalid_argument("unknown fuzz target '" + name + "'");
   }
@@ -509,6 +626,7 @@ FuzzResult Fuzz(const std::string& name, uint64_t inputs, uint64_t seed) {
   }
   r.seconds = NsToS(MonotonicNs() - start);
   for (int sig : {SIGSEGV, SIGABRT, SIGBUS, SIGFPE, SIGILL}) signal(sig, SIG_DFL);
+  target = {};  // the console, if it is one, stops before its folder goes
   if (copy) fs::remove_all(copy->parent_path());
   return r;
 }
@@ -528,7 +646,7 @@ int BenchFuzzMain(int argc, const char* const* argv) {
     if (auto t = args.Value("target")) {
       const auto all = FuzzTargets();
       if (std::find(all.begin(), all.end(), *t) == all.end()) {
-        throw UsageError("option --target: expected one of config, scene, udp, servo, can, dds");
+        throw UsageError("option --target: expected one of config, scene, udp, servo, can, dds, console");
       }
       targets = {*t};
     }

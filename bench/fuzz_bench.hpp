@@ -15,7 +15,9 @@
 /// - can: CAN frames into the ODrive decoders, and candump text lines;
 /// - dds: serialized DriveCommand, BlimpCommand, VehicleState and
 ///   BlimpState payloads, mutated, through Fast DDS's CDR deserializer and
-///   then the vehicle's range checks (NaN, infinities, out of range).
+///   then the vehicle's range checks (NaN, infinities, out of range);
+/// - console: HTTP requests (every route, forms with their token, chunked
+///   bodies) to the experimenter's console served for real on loopback.
 ///
 /// Mutations (seeded, repeatable): bit flips, byte insertions, deletions
 /// and duplications of chunks, interesting values ("nan", "-1e308", "[{",

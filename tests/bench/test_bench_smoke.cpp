@@ -302,7 +302,7 @@ TEST_CASE("bench fuzz --smoke", "[bench][smoke]") {
     CHECK(t["accepted"].number() + t["rejected"].number() == inputs);
     CHECK(t["accepted"].number() > 0);  // every 64th input is a valid seed
   }
-  CHECK(targets == std::vector<std::string>{"config", "scene", "udp", "servo", "can", "dds"});
+  CHECK(targets == std::vector<std::string>{"config", "scene", "udp", "servo", "can", "dds", "console"});
   RequireFiles({"fuzz.csv"});
 }
 
