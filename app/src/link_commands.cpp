@@ -20,12 +20,22 @@ namespace haptel::app {
 namespace {
 
 constexpr const char* kUsage =
-    "usage: haptel security init DIR [--vehicles NAME,...] [--days N]\n"
+    "usage: haptel security init DIR [--vehicles NAME,...] [--console NAME,...] [--days N]\n"
+    "       haptel security console DIR --console NAME,... [--days N]\n"
     "  makes DIR for DDS Security: a CA (ca.pem, ca.key: keep it safe), the operator's identity\n"
     "  and one per vehicle (default robot1,blimp1), the signed governance (everything\n"
     "  authenticated and encrypted) and each identity's signed permissions (the operator\n"
     "  commands, a vehicle publishes only its own state and video), valid for N days\n"
-    "  (default 365). Then: haptel run --security DIR, haptel-vehicle --security DIR.\n";
+    "  (default 365). Then: haptel run --security DIR, haptel-vehicle --security DIR.\n"
+    "  --console NAME,...: also the study console's HTTPS certificate (console.pem, console.key)\n"
+    "  for those host names or addresses, signed by the CA: haptel study run --bind ADDR --tls DIR.\n"
+    "  `security console` adds that certificate to a folder made before.\n";
+
+std::string JoinList(const std::vector<std::string>& names) {
+  std::string text;
+  for (const std::string& n : names) text += (text.empty() ? "" : ",") + n;
+  return text;
+}
 
 }  // namespace
 
@@ -33,13 +43,31 @@ int SecurityCommand(int argc, const char* const* argv) {
   return cli::Main({"haptel security", kUsage}, argc, argv, [&]() -> int {
     std::filesystem::path dir;
     std::vector<std::string> vehicles{"robot1", "blimp1"};
+    std::vector<std::string> console_names;
     int days = 365;
+    bool console_only = false;
     cli::ReadInput([&] {
-      const Args args(argc, argv, {"vehicles", "days"}, {});
+      const Args args(argc, argv, {"vehicles", "days", "console"}, {});
       const auto& words = args.positional();
-      if (words.empty() || words[0] != "init") throw UsageError("expected `haptel security init DIR`");
-      if (words.size() != 2) throw UsageError("expected one folder: `haptel security init DIR`");
+      if (words.empty() || (words[0] != "init" && words[0] != "console")) {
+        throw UsageError("expected `haptel security init DIR` or `haptel security console DIR --console NAME,...`");
+      }
+      if (words.size() != 2) throw UsageError("expected one folder: `haptel security " + words[0] + " DIR`");
+      console_only = words[0] == "console";
       dir = words[1];
+      if (auto list = args.Value("console")) {
+        for (const std::string& name : SplitList(*list)) {
+          if (const std::string problem = link::ConsoleNameProblem(name); !problem.empty()) {
+            throw UsageError("option --console: '" + name + "': expected " + problem);
+          }
+          console_names.push_back(name);
+        }
+      }
+      days = args.Int("days", 1, 3650).value_or(days);
+      if (console_only) {
+        if (console_names.empty()) throw UsageError("option --console: expected the console's names (NAME,...)");
+        return 0;
+      }
       if (auto list = args.Value("vehicles")) {
         vehicles.clear();
         for (const std::string& name : SplitList(*list)) {
@@ -49,16 +77,22 @@ int SecurityCommand(int argc, const char* const* argv) {
           vehicles.push_back(name);
         }
       }
-      days = args.Int("days", 1, 3650).value_or(days);
       if (std::filesystem::exists(dir / "ca.pem")) {
         throw UsageError(dir.string() + " already holds a CA (ca.pem): nothing was changed; remove the folder or "
                          "choose another");
       }
       return 0;
     });
-    link::InitSecurity(dir, vehicles, days);
+    if (console_only) {
+      link::AddConsoleCertificate(dir, console_names, days);
+      std::printf("wrote %s/console.pem and console.key for %s (valid %d days)\n", dir.c_str(),
+                  JoinList(console_names).c_str(), days);
+      return 0;
+    }
+    link::InitSecurity(dir, vehicles, days, console_names);
     std::string names = link::OperatorIdentity();
     for (const auto& v : vehicles) names += ", " + link::VehicleIdentity(v);
+    if (!console_names.empty()) names += "; the console's certificate for " + JoinList(console_names);
     std::printf("wrote %s: CA, governance, identities %s (valid %d days)\n", dir.c_str(), names.c_str(), days);
     return 0;
   });

@@ -1,5 +1,7 @@
 #include "haptel/link/security.hpp"
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
 #include <unistd.h>
 
 #include <openssl/pem.h>
@@ -226,10 +228,73 @@ std::string VehicleIdentityProblem(const std::string& name) {
          std::to_string(name.size());
 }
 
+std::string ConsoleNameProblem(const std::string& name) {
+  in6_addr address{};
+  if (inet_pton(AF_INET, name.c_str(), &address) == 1 || inet_pton(AF_INET6, name.c_str(), &address) == 1) return "";
+  const bool fits = !name.empty() && name.size() <= 253 && name.front() != '-' && name.front() != '.' &&
+                    name.find("..") == std::string::npos &&
+                    name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789.-") ==
+                        std::string::npos;
+  return fits ? "" : "a host name (letters, digits, '-' and '.') or an IPv4 or IPv6 address";
+}
+
+namespace {
+
+/// The console's HTTPS key and certificate (console.key, console.pem),
+/// signed by the CA in `dir`, for `names` (subject alternative names).
+void MakeConsoleFiles(const fs::path& dir, const std::vector<std::string>& names, int days) {
+  std::string alternative = "subjectAltName=";
+  for (size_t i = 0; i < names.size(); ++i) {
+    in6_addr address{};
+    const bool ip = inet_pton(AF_INET, names[i].c_str(), &address) == 1 ||
+                    inet_pton(AF_INET6, names[i].c_str(), &address) == 1;
+    if (i > 0) alternative += ',';
+    alternative += ip ? "IP:" : "DNS:";
+    alternative += names[i];
+  }
+  const fs::path extensions = dir / "console.ext";
+  Write(extensions, alternative + "\nextendedKeyUsage=serverAuth\nbasicConstraints=CA:FALSE\n");
+  const std::string csr = (dir / "console.csr").string();
+  std::string subject = "/CN=haptel-console";
+  OpenSsl(dir, {"req", "-new", "-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1", "-nodes", "-keyout",
+                (dir / "console.key").string(), "-out", csr, "-subj", subject});
+  fs::permissions(dir / "console.key", fs::perms::owner_read | fs::perms::owner_write);
+  OpenSsl(dir, {"x509", "-req", "-in", csr, "-CA", (dir / "ca.pem").string(), "-CAkey", (dir / "ca.key").string(),
+                "-CAcreateserial", "-days", std::to_string(days), "-sha256", "-extfile", extensions.string(), "-out",
+                (dir / "console.pem").string()});
+  fs::remove(csr);
+  fs::remove(extensions);
+}
+
+void CheckConsoleNames(const std::vector<std::string>& names) {
+  for (const std::string& name : names) {
+    if (const std::string problem = ConsoleNameProblem(name); !problem.empty()) {
+      throw std::invalid_argument("console name '" + name + "': expected " + problem);
+    }
+  }
+}
+
+}  // namespace
+
+void AddConsoleCertificate(const fs::path& dir, const std::vector<std::string>& names, int days) {
+  if (!fs::exists(dir / "ca.pem") || !fs::exists(dir / "ca.key")) {
+    throw std::runtime_error(dir.string() + " holds no CA (ca.pem, ca.key); make the folder with `haptel security "
+                             "init " + dir.string() + " --console NAME,...`");
+  }
+  if (fs::exists(dir / "console.pem")) {
+    throw std::runtime_error(dir.string() + " already holds the console's certificate (console.pem); nothing was "
+                             "changed");
+  }
+  if (names.empty()) throw std::invalid_argument("the console's certificate needs at least one name");
+  CheckConsoleNames(names);
+  MakeConsoleFiles(dir, names, days);
+}
+
 namespace {
 
 /// Makes every file of a security folder in `dir` (which exists, empty).
-void MakeSecurityFiles(const fs::path& dir, const std::vector<std::string>& vehicles, int days) {
+void MakeSecurityFiles(const fs::path& dir, const std::vector<std::string>& vehicles,
+                       const std::vector<std::string>& console_names, int days) {
   OpenSsl(dir, {"req", "-x509", "-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1", "-nodes", "-keyout",
                 (dir / "ca.key").string(), "-out", (dir / "ca.pem").string(), "-days", std::to_string(days),
                 "-sha256", "-subj", "/CN=haptel-ca"});
@@ -249,11 +314,13 @@ void MakeSecurityFiles(const fs::path& dir, const std::vector<std::string>& vehi
                       days));
     Sign(dir, id + "-permissions");
   }
+  if (!console_names.empty()) MakeConsoleFiles(dir, console_names, days);
 }
 
 }  // namespace
 
-void InitSecurity(const fs::path& dir, const std::vector<std::string>& vehicles, int days) {
+void InitSecurity(const fs::path& dir, const std::vector<std::string>& vehicles, int days,
+                  const std::vector<std::string>& console_names) {
   if (fs::exists(dir / "ca.pem")) {
     throw std::runtime_error(dir.string() + " already holds a CA (ca.pem); remove the folder or choose another");
   }
@@ -265,6 +332,7 @@ void InitSecurity(const fs::path& dir, const std::vector<std::string>& vehicles,
       throw std::invalid_argument("vehicle '" + name + "': expected " + problem);
     }
   }
+  CheckConsoleNames(console_names);
   // Built beside, renamed into place when complete (rename(2) replaces an empty folder).
   const fs::path absolute = fs::absolute(dir).lexically_normal();
   const fs::path parent = absolute.parent_path();
@@ -275,7 +343,7 @@ void InitSecurity(const fs::path& dir, const std::vector<std::string>& vehicles,
   fs::remove_all(partial);
   fs::create_directory(partial);
   try {
-    MakeSecurityFiles(partial, vehicles, days);
+    MakeSecurityFiles(partial, vehicles, console_names, days);
     fs::rename(partial, absolute);
   } catch (...) {
     std::error_code ignored;

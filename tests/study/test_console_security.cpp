@@ -19,6 +19,7 @@
 
 #include "console_client.hpp"
 #include "haptel/config/paths.hpp"
+#include "haptel/link/security.hpp"
 #include "haptel/record/recorder.hpp"
 #include "haptel/study/console.hpp"
 #include "haptel/study/console_access.hpp"
@@ -334,13 +335,14 @@ TEST_CASE("Beyond loopback the console asks once for its access token") {
   }
 }
 
-TEST_CASE("The console serves HTTPS with a certificate, and its names are the hosts it answers to") {
-  const auto dir = test::ScratchDir("console-https");
-  const std::string make = "openssl req -x509 -newkey ec -pkeyopt ec_paramgen_curve:prime256v1 -nodes -keyout " +
-                           (dir / "console.key").string() + " -out " + (dir / "console.pem").string() +
-                           " -days 2 -subj /CN=haptel-console -addext "
-                           "subjectAltName=DNS:console.test,IP:127.0.0.1 2>/dev/null";
-  REQUIRE(std::system(make.c_str()) == 0);
+TEST_CASE("The console serves HTTPS with the certificate security init makes; its names are the hosts it answers to") {
+  const auto dir = test::ScratchDir("console-https") / "sec";
+  link::InitSecurity(dir, {}, 2, {"console.test", "127.0.0.1"});
+  // Another certificate for the same folder is refused, as are names a certificate cannot hold.
+  CHECK_THROWS_WITH(link::AddConsoleCertificate(dir, {"other.test"}, 2), Catch::Contains("already holds"));
+  CHECK_THROWS_WITH(link::InitSecurity(dir.parent_path() / "bad", {}, 2, {"two words"}),
+                    Catch::Contains("console name 'two words'"));
+  CHECK_FALSE(std::filesystem::exists(dir.parent_path() / "bad"));
   const ConsoleCertificate certificate = FindConsoleCertificate(dir);
   CHECK(certificate.names == std::vector<std::string>{"console.test", "127.0.0.1"});
   CHECK_THROWS_WITH(FindConsoleCertificate(dir / "missing"),
@@ -358,10 +360,10 @@ TEST_CASE("The console serves HTTPS with a certificate, and its names are the ho
   CHECK(console.url().rfind("https://", 0) == 0);
 
   httplib::SSLClient tls("127.0.0.1", console.port());
-  tls.set_ca_cert_path(certificate.certificate.c_str());
+  tls.set_ca_cert_path((dir / "ca.pem").c_str());
   tls.enable_server_certificate_verification(true);
   tls.set_read_timeout(20, 0);
-  const auto login = tls.Get("/login");
+  const auto login = tls.Get("/login");  // verified against the folder's CA: ca.pem
   REQUIRE(login);
   CHECK(login->status == 200);
   const std::string token = test::FormToken(login->body);

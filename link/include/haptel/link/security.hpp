@@ -58,6 +58,23 @@ std::string VehicleIdentityProblem(const std::string& name);
 /// beside `dir` and renamed into place when complete: a step that fails
 /// leaves nothing behind to block a retry. Throws std::runtime_error with
 /// openssl's message when a step fails.
-void InitSecurity(const std::filesystem::path& dir, const std::vector<std::string>& vehicles, int days);
+///
+/// With `console_names`, also the experimenter's console's HTTPS key and
+/// certificate (console.key, console.pem), signed by the same CA, for those
+/// host names and addresses (AddConsoleCertificate).
+void InitSecurity(const std::filesystem::path& dir, const std::vector<std::string>& vehicles, int days,
+                  const std::vector<std::string>& console_names = {});
+
+/// `haptel security console DIR --names NAME,...`: the console's HTTPS key
+/// and certificate (console.key, console.pem) in an existing folder, signed
+/// by its CA, for `names` (the host names and addresses the experimenter's
+/// browser uses; they become the certificate's subject alternative names).
+/// Throws std::runtime_error when DIR holds no CA or already a console
+/// certificate (nothing is changed), std::invalid_argument for a name that
+/// is neither a host name nor an address.
+void AddConsoleCertificate(const std::filesystem::path& dir, const std::vector<std::string>& names, int days);
+
+/// What a console name lacks ("" when it is a host name or an IP address).
+std::string ConsoleNameProblem(const std::string& name);
 
 }  // namespace haptel::link
