@@ -24,20 +24,17 @@ std::string OpenSslReason() {
   return text;
 }
 
-/// The client's address as text; an IPv4 client of an IPv6 socket as IPv4,
-/// so that it is counted once whichever way it came.
-std::string PeerAddress(int fd, int& port) {
-  sockaddr_storage peer{};
-  socklen_t length = sizeof peer;
-  port = 0;
-  if (getpeername(fd, reinterpret_cast<sockaddr*>(&peer), &length) != 0) return "?";
+/// An address as text, and its port; an IPv4 address reached through an
+/// IPv6 socket as IPv4, so that a client is counted once whichever way it came.
+std::string AddressText(const sockaddr_storage& address, int& port) {
   char text[INET6_ADDRSTRLEN] = "?";
-  if (peer.ss_family == AF_INET) {
-    const auto& v4 = reinterpret_cast<const sockaddr_in&>(peer);
+  port = 0;
+  if (address.ss_family == AF_INET) {
+    const auto& v4 = reinterpret_cast<const sockaddr_in&>(address);
     inet_ntop(AF_INET, &v4.sin_addr, text, sizeof text);
     port = ntohs(v4.sin_port);
-  } else if (peer.ss_family == AF_INET6) {
-    const auto& v6 = reinterpret_cast<const sockaddr_in6&>(peer);
+  } else if (address.ss_family == AF_INET6) {
+    const auto& v6 = reinterpret_cast<const sockaddr_in6&>(address);
     if (IN6_IS_ADDR_V4MAPPED(&v6.sin6_addr)) {
       inet_ntop(AF_INET, &v6.sin6_addr.s6_addr[12], text, sizeof text);
     } else {
@@ -48,22 +45,14 @@ std::string PeerAddress(int fd, int& port) {
   return text;
 }
 
-std::string LocalAddress(int fd, int& port) {
-  sockaddr_storage local{};
-  socklen_t length = sizeof local;
+/// The client's address (`peer`) or ours, as text.
+std::string SocketAddress(int fd, bool peer, int& port) {
+  sockaddr_storage address{};
+  socklen_t length = sizeof address;
   port = 0;
-  if (getsockname(fd, reinterpret_cast<sockaddr*>(&local), &length) != 0) return "?";
-  char text[INET6_ADDRSTRLEN] = "?";
-  if (local.ss_family == AF_INET) {
-    const auto& v4 = reinterpret_cast<const sockaddr_in&>(local);
-    inet_ntop(AF_INET, &v4.sin_addr, text, sizeof text);
-    port = ntohs(v4.sin_port);
-  } else if (local.ss_family == AF_INET6) {
-    const auto& v6 = reinterpret_cast<const sockaddr_in6&>(local);
-    inet_ntop(AF_INET6, &v6.sin6_addr, text, sizeof text);
-    port = ntohs(v6.sin6_port);
-  }
-  return text;
+  const int got = peer ? getpeername(fd, reinterpret_cast<sockaddr*>(&address), &length)
+                       : getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length);
+  return got == 0 ? AddressText(address, port) : "?";
 }
 
 /// One connection's bytes, plain or through TLS, on a non-blocking socket:
@@ -125,8 +114,8 @@ class DeadlineStream final : public httplib::Stream {
     }
   }
 
-  void get_remote_ip_and_port(std::string& ip, int& port) const override { ip = PeerAddress(fd_, port); }
-  void get_local_ip_and_port(std::string& ip, int& port) const override { ip = LocalAddress(fd_, port); }
+  void get_remote_ip_and_port(std::string& ip, int& port) const override { ip = SocketAddress(fd_, true, port); }
+  void get_local_ip_and_port(std::string& ip, int& port) const override { ip = SocketAddress(fd_, false, port); }
   socket_t socket() const override { return fd_; }
 
   /// Whether a wait ended at the deadline or for silence.
@@ -251,7 +240,7 @@ ConnectionCounters ConsoleServer::counters() const {
 bool ConsoleServer::process_and_close_socket(socket_t sock) {
   const Clock::time_point deadline = Clock::now() + policy_.deadline;
   int port = 0;
-  const std::string address = PeerAddress(sock, port);
+  const std::string address = SocketAddress(sock, true, port);
   fcntl(sock, F_SETFL, fcntl(sock, F_GETFL) | O_NONBLOCK);
   if (!Admit(address, sock)) {
     ++refused_busy_;

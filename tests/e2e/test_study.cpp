@@ -28,10 +28,11 @@ namespace {
 
 std::string Bin(const std::string& name) { return (test::BinDir() / name).string(); }
 
-/// Two participants × two conditions (both the gesture interface), fixed
-/// order, simulated drivers; each trial ends at a 6 s cap (an unfinished lap
-/// is a finished trial, scored at the cap), which keeps the test short.
-std::filesystem::path SmallStudy(const std::filesystem::path& dir) {
+/// `participants` (P1, P2) × two conditions (both the gesture interface),
+/// fixed order, simulated drivers; each trial ends at a 6 s cap (an
+/// unfinished lap is a finished trial, scored at the cap), which keeps the
+/// test short.
+std::filesystem::path SmallStudy(const std::filesystem::path& dir, int participants = 2) {
   const auto source = std::filesystem::current_path();
   const auto file = dir / "small-study.yaml";
   std::ofstream out(file);
@@ -46,9 +47,8 @@ std::filesystem::path SmallStudy(const std::filesystem::path& dir) {
          "trial_cap_s: 6\n"
          "profiles:\n"
          "  plain: {steering_noise: 0.02, seed: 3}\n"
-         "participants:\n"
-         "  - {id: P1, profile: plain}\n"
-         "  - {id: P2, profile: plain}\n";
+         "participants:\n";
+  for (int p = 1; p <= participants; ++p) out << "  - {id: P" << p << ", profile: plain}\n";
   return file;
 }
 
@@ -125,21 +125,7 @@ TEST_CASE("a study killed mid-trial resumes and records each planned trial once"
 
 TEST_CASE("Abort in a synthetic study ends the trial under way once; the study then runs to its end") {
   const auto dir = test::ScratchDir("e2e-study-abort");
-  const auto source = std::filesystem::current_path();
-  const auto file = dir / "abort-study.yaml";
-  std::ofstream(file) << "name: abort-e2e\n"
-                         "run: " << (source / "config/haptel.yaml").string() << "\n"
-                         "track: " << (source / "config/tracks/test-short.yaml").string() << "\n"
-                         "operators: synthetic\n"
-                         "conditions:\n"
-                         "  - {name: first, interface: gesture}\n"
-                         "  - {name: second, interface: gesture}\n"
-                         "design: {order: fixed}\n"
-                         "trial_cap_s: 6\n"
-                         "profiles:\n"
-                         "  plain: {steering_noise: 0.02, seed: 3}\n"
-                         "participants:\n"
-                         "  - {id: P1, profile: plain}\n";
+  const auto file = SmallStudy(dir, 1);
   const auto db = dir / "abort.db";
   const int port = 20000 + static_cast<int>((getpid() + 7919) % 20000);
   Child study({Bin("haptel"), "study", "run", file.string(), "--database", db.string(), "--domain",
