@@ -46,28 +46,16 @@ void SimRobot::SetTreadTargets(double left, double right) {
 
 void SimRobot::Update(double dt) {
   if (!(dt > 0.0)) return;
-  const double per_level = drive_.max_speed / drive_.speed_levels;
-  const double target_left = (use_treads_ ? tread_left_ : levels_.left * per_level) * drive_.left_gain;
-  const double target_right = (use_treads_ ? tread_right_ : levels_.right * per_level) * drive_.right_gain;
-  const double alpha =
-      drive_.motor_time_constant > 0 ? 1.0 - std::exp(-dt / drive_.motor_time_constant) : 1.0;
-  v_left_ += (target_left - v_left_) * alpha;
-  v_right_ += (target_right - v_right_) * alpha;
-
-  const double v = 0.5 * (v_left_ + v_right_);
-  const double omega = (v_right_ - v_left_) / drive_.track_width;
+  const double target_left = use_treads_ ? tread_left_ : LevelSpeed(drive_, levels_.left);
+  const double target_right = use_treads_ ? tread_right_ : LevelSpeed(drive_, levels_.right);
   const Vec2 before(state_.x, state_.y);
-  // Exact integration of a constant-curvature arc over dt.
-  const double h0 = state_.heading;
-  const double h1 = h0 + omega * dt;
-  if (std::abs(omega) > 1e-9) {
-    state_.x += v / omega * (std::sin(h1) - std::sin(h0));
-    state_.y -= v / omega * (std::cos(h1) - std::cos(h0));
-  } else {
-    state_.x += v * dt * std::cos(h0);
-    state_.y += v * dt * std::sin(h0);
-  }
-  state_.heading = WrapAngle(h1);
+  TreadState treads{state_.x, state_.y, state_.heading, v_left_, v_right_};
+  const double omega = StepTreads(drive_, target_left, target_right, dt, treads);
+  state_.x = treads.x;
+  state_.y = treads.y;
+  state_.heading = treads.heading;
+  v_left_ = treads.v_left;
+  v_right_ = treads.v_right;
   ResolveContacts();
   const Vec2 after(state_.x, state_.y);
   const Vec2 forward(std::cos(state_.heading), std::sin(state_.heading));

@@ -9,6 +9,7 @@
 #include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"
 #include "haptel/vehicles/adapter.hpp"
+#include "haptel/vehicles/tread_drive.hpp"
 
 namespace haptel::vehicles {
 

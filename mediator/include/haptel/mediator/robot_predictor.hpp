@@ -1,0 +1,132 @@
+#pragma once
+/// @file The predictive display's model of the tank robot: where the robot
+/// is now, and where the command being given takes it, from states that are
+/// a link's delay old and the commands sent since.
+///
+/// A state says where the robot was when it was sampled, its treads' speeds
+/// (from its speed and yaw rate) and the speed levels it had applied. The
+/// predictor starts from it and replays every command sent after, each from
+/// the moment it reaches the robot (sent + the one-way delay), through the
+/// robot's own drive model (tread_drive.hpp, the numbers of its vehicle
+/// file), including the robot's watchdog stopping it when commands stop.
+/// Walls are not modelled: a robot pressed against one is predicted to move
+/// on, and the next state corrects it.
+///
+/// The one-way delay is half the command round trip (the vehicle echoes each
+/// command's send time and how long it held it: no shared clock), the median
+/// of the last 15 round trips, so that it follows a change of the link
+/// within a fraction of a second and ignores single late packets.
+///
+/// Each state that arrives is compared with what the predictor said, at the
+/// moment the state was sampled, of that moment (from the states it had
+/// then: a delay's extrapolation): errors_m(), a fitted model's figure of
+/// merit.
+#include <array>
+#include <cstddef>
+#include <deque>
+#include <vector>
+
+#include "haptel/config/vehicle.hpp"
+#include "haptel/vehicles/tread_drive.hpp"
+
+namespace haptel::mediator {
+
+/// The one-way delay from round trips: half their running median.
+class DelayEstimate {
+ public:
+  static constexpr size_t kWindow = 15;
+  /// A measured round trip (s); ignored unless finite and non-negative.
+  void AddRoundTrip(double rtt_s);
+  /// Half the median of the last kWindow round trips (0 before any).
+  double one_way_s() const;
+  size_t samples() const { return count_; }
+
+ private:
+  std::array<double, kWindow> rtt_s_{};
+  size_t count_ = 0;
+  size_t next_ = 0;
+};
+
+/// A pose at a time on the operator's clock (s).
+struct PredictedPose {
+  double t_s = 0.0;
+  double x = 0.0;
+  double y = 0.0;
+  double heading = 0.0;
+};
+
+/// A vehicle state as the predictor needs it.
+struct RobotStateSample {
+  double received_s = 0.0;  ///< when it arrived, operator's clock
+  double x = 0.0;
+  double y = 0.0;
+  double heading = 0.0;
+  double speed = 0.0;     ///< m/s, forward
+  double yaw_rate = 0.0;  ///< rad/s
+  int applied_left = 0;   ///< speed levels in effect when it was sampled
+  int applied_right = 0;
+};
+
+class RobotPredictor {
+ public:
+  /// `watchdog_s`: the robot stops this long after the last command reached
+  /// it. `step_s`: the model's integration step.
+  explicit RobotPredictor(const DriveConfig& drive, double watchdog_s = 0.2, double step_s = 0.005);
+
+  /// A command as sent at `t_s` (normalised tread commands in [-1, 1], as
+  /// the link carries them; the robot quantises them to its levels).
+  void OnCommand(double t_s, double left, double right);
+  /// A command round trip (s).
+  void OnRoundTrip(double rtt_s) { delay_.AddRoundTrip(rtt_s); }
+  /// A state arrived. Returns the distance (m) between its pose and the pose
+  /// the predictor gave for that moment at that moment (negative when no
+  /// state had arrived by then: nothing was predicted), and records it in
+  /// errors_m().
+  double OnState(const RobotStateSample& state);
+
+  bool ready() const { return !bases_.empty(); }
+  /// The one-way delay in use (s).
+  double one_way_delay_s() const { return delay_.one_way_s(); }
+  /// The robot's pose at `t_s` (the present, or any time after the newest
+  /// state's sample), with the commands sent so far.
+  PredictedPose PoseAt(double t_s) const;
+  /// The path from `now_s` over `horizon_s`: the commands still on their
+  /// way, then `left`/`right` held from now on; a pose every `spacing_s`,
+  /// the first at now (appended to `path`, which is cleared first).
+  void PathAhead(double now_s, double horizon_s, double left, double right, std::vector<PredictedPose>& path,
+                 double spacing_s = 0.05) const;
+  /// Every state's prediction error so far (m).
+  const std::vector<double>& errors_m() const { return errors_m_; }
+
+ private:
+  struct Command {
+    double sent_s;
+    int left;  ///< levels, as the robot quantises them
+    int right;
+  };
+  /// A state as the model starts from it.
+  struct Base {
+    double received_s;
+    double sample_s;  ///< when it was sampled (operator's clock)
+    vehicles::TreadState treads;
+    int left;
+    int right;
+  };
+  /// Runs the model from `base` through the commands sent, and `extra` (if
+  /// given) after them, held on; appends the pose at each time of `at`
+  /// (ascending) to `out`.
+  void Run(const Base& base, const Command* extra, const std::vector<double>& at,
+           std::vector<PredictedPose>& out) const;
+
+  DriveConfig drive_;
+  double watchdog_s_;
+  double step_s_;
+  DelayEstimate delay_;
+  std::deque<Command> commands_;
+  /// The states since the one the operator had when the newest was
+  /// sampled (that one's prediction is the newest's error), newest last.
+  std::deque<Base> bases_;
+  std::vector<double> errors_m_;
+};
+
+}  // namespace haptel::mediator

@@ -1,0 +1,123 @@
+#include "haptel/mediator/robot_predictor.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace haptel::mediator {
+
+void DelayEstimate::AddRoundTrip(double rtt_s) {
+  if (!std::isfinite(rtt_s) || rtt_s < 0.0) return;
+  rtt_s_[next_] = rtt_s;
+  next_ = (next_ + 1) % kWindow;
+  count_ = std::min(count_ + 1, kWindow);
+}
+
+double DelayEstimate::one_way_s() const {
+  if (count_ == 0) return 0.0;
+  std::array<double, kWindow> sorted = rtt_s_;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(count_ / 2), sorted.begin() + static_cast<long>(count_));
+  return 0.5 * sorted[count_ / 2];
+}
+
+RobotPredictor::RobotPredictor(const DriveConfig& drive, double watchdog_s, double step_s)
+    : drive_(drive), watchdog_s_(watchdog_s), step_s_(step_s) {}
+
+void RobotPredictor::OnCommand(double t_s, double left, double right) {
+  commands_.push_back({t_s, vehicles::QuantiseCommand(left, drive_.speed_levels),
+                       vehicles::QuantiseCommand(right, drive_.speed_levels)});
+}
+
+double RobotPredictor::OnState(const RobotStateSample& state) {
+  const double d = delay_.one_way_s();
+  const double sample_s = state.received_s - d;
+  // What the operator was shown of this moment at this moment: the
+  // prediction from the newest state it had then.
+  double error_m = -1.0;
+  const Base* known = nullptr;
+  for (const Base& b : bases_) {
+    if (b.received_s <= sample_s && b.sample_s <= sample_s) known = &b;
+  }
+  if (known != nullptr) {
+    std::vector<PredictedPose> predicted;
+    Run(*known, nullptr, {sample_s}, predicted);
+    error_m = std::hypot(predicted.front().x - state.x, predicted.front().y - state.y);
+    errors_m_.push_back(error_m);
+  }
+  Base base{state.received_s, sample_s, {state.x, state.y, state.heading, 0.0, 0.0}, state.applied_left,
+            state.applied_right};
+  vehicles::TreadsFromMotion(drive_, state.speed, state.yaw_rate, base.treads);
+  bases_.push_back(base);
+  // A state is needed while no later one had arrived by the newest's sample.
+  while (bases_.size() > 1 && bases_[1].received_s <= sample_s) bases_.pop_front();
+  // Commands that took effect before the oldest state kept are in its
+  // applied levels; a second's margin for a late state.
+  while (!commands_.empty() && commands_.front().sent_s + d < bases_.front().sample_s - 1.0) commands_.pop_front();
+  return error_m;
+}
+
+void RobotPredictor::Run(const Base& base, const Command* extra, const std::vector<double>& at,
+                         std::vector<PredictedPose>& out) const {
+  const double d = delay_.one_way_s();
+  vehicles::TreadState s = base.treads;
+  double t = base.sample_s;
+  int left = base.left;
+  int right = base.right;
+  // The robot stops `watchdog_s_` after the last command reached it; the
+  // command being given (`extra`) is taken as given on and on.
+  double last_arrival = base.sample_s;
+  bool held = false;
+  auto advance = [&](double to) {
+    while (t < to - 1e-12) {
+      const double stop_s = held ? std::numeric_limits<double>::infinity() : last_arrival + watchdog_s_;
+      double end = std::min(to, t + step_s_);
+      const bool stopped = t >= stop_s;
+      if (!stopped && end > stop_s) end = stop_s;
+      vehicles::StepTreads(drive_, stopped ? 0.0 : vehicles::LevelSpeed(drive_, left),
+                           stopped ? 0.0 : vehicles::LevelSpeed(drive_, right), end - t, s);
+      t = end;
+    }
+  };
+  size_t next_time = 0;
+  auto emit_until = [&](double limit) {
+    while (next_time < at.size() && at[next_time] <= limit) {
+      advance(std::max(at[next_time], base.sample_s));
+      out.push_back({at[next_time], s.x, s.y, s.heading});
+      ++next_time;
+    }
+  };
+  auto apply = [&](const Command& c, bool is_extra) {
+    const double arrival = c.sent_s + d;
+    if (arrival <= base.sample_s) return;  // in the state's applied levels already
+    if (next_time == at.size()) return;  // every pose wanted is out
+    emit_until(arrival);
+    advance(arrival);
+    left = c.left;
+    right = c.right;
+    last_arrival = arrival;
+    held = is_extra;
+  };
+  for (const Command& c : commands_) apply(c, false);
+  if (extra != nullptr) apply(*extra, true);
+  emit_until(std::numeric_limits<double>::infinity());
+}
+
+PredictedPose RobotPredictor::PoseAt(double t_s) const {
+  if (bases_.empty()) return {t_s, 0.0, 0.0, 0.0};
+  std::vector<PredictedPose> out;
+  Run(bases_.back(), nullptr, {t_s}, out);
+  return out.front();
+}
+
+void RobotPredictor::PathAhead(double now_s, double horizon_s, double left, double right,
+                               std::vector<PredictedPose>& path, double spacing_s) const {
+  path.clear();
+  if (bases_.empty() || !(spacing_s > 0.0)) return;
+  std::vector<double> at;
+  for (double t = now_s; t <= now_s + horizon_s + 1e-9; t += spacing_s) at.push_back(t);
+  const Command given{now_s, vehicles::QuantiseCommand(left, drive_.speed_levels),
+                      vehicles::QuantiseCommand(right, drive_.speed_levels)};
+  Run(bases_.back(), &given, at, path);
+}
+
+}  // namespace haptel::mediator
