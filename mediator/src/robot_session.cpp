@@ -3,6 +3,7 @@
 // controls (or the scene) need, the automatic driver or a person.
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <vector>
@@ -17,10 +18,18 @@
 #include "haptel/mediator/interface_set.hpp"
 #include "haptel/mediator/lap_timer.hpp"
 #include "haptel/mediator/operator.hpp"
+#include "haptel/mediator/robot_predictor.hpp"
 
 namespace haptel::mediator {
 
 namespace {
+
+/// The `p` quantile of `values` by nearest rank (sorts them).
+double NearestRank(std::vector<double>& values, double p) {
+  std::sort(values.begin(), values.end());
+  const size_t rank = static_cast<size_t>(std::ceil(p * static_cast<double>(values.size())));
+  return values[std::clamp<size_t>(rank, 1, values.size()) - 1];
+}
 
 /// How long the end of a run waits for a physics step in progress.
 constexpr double kPhysicsStopWait_s = 0.1;
@@ -37,8 +46,14 @@ class RobotSession final : public FamilySession {
  public:
   RobotSession(const SessionSetup& setup, HapticSide& haptic, interfaces::InputBox& input,
                const std::atomic<bool>& interrupted, RunRecord& rec)
-      : setup_(setup), track_(setup.track), lap_(track_), overlay_feed_(setup, track_), input_(&input) {
+      : setup_(setup),
+        track_(setup.track),
+        lap_(track_),
+        overlay_feed_(setup, track_),
+        input_(&input),
+        predictor_(setup.vehicle.drive, setup.vehicle.watchdog_timeout_s) {
     rec.track = setup.track.name;
+    rec.predict = setup.predict;
     rec.gates_total = static_cast<int>(track_.gates().size());
     rec.interface = start_spec().name;
     if (setup.operator_kind == "auto") {
@@ -114,8 +129,15 @@ class RobotSession final : public FamilySession {
       const double ts = NsToS(e.received_ns - t0);
       if (health.OnState(s, e.received_ns)) haptic.OnVehicleUp();
       const bool touching = s.bumper_left() || s.bumper_right();
+      if (s.last_command_sent_ns() > 0) {
+        predictor_.OnRoundTrip(NsToS(e.received_ns - s.last_command_sent_ns() - s.last_command_age_ns()));
+      }
+      bumpers_ = {s.bumper_left(), s.bumper_right()};
       if (s.pose_valid()) {
-        op_->Observe({ts, s.x(), s.y(), s.heading(), s.bumper_left(), s.bumper_right()});
+        predictor_.OnState({ts, s.x(), s.y(), s.heading(), s.speed(), s.yaw_rate(), s.motor_left_level(),
+                            s.motor_right_level()});
+        // With prediction the operator sees the vehicle where it is now (Drive).
+        if (!setup_.predict) op_->Observe({ts, s.x(), s.y(), s.heading(), s.bumper_left(), s.bumper_right()});
         lap_.Update(ts, Vec2(s.x(), s.y()));
         trace.Add(ts, s.x(), s.y(), 0.0, s.speed(), touching);
       }
@@ -141,6 +163,10 @@ class RobotSession final : public FamilySession {
       if (interfaces_->current().name() == "gamepad") return LoopEnd{Outcome::kAborted, "the game controller was disconnected"};
     }
     // The operator acts on the device; the interface reads the device.
+    if (setup_.predict && predictor_.ready()) {
+      const PredictedPose now_pose = predictor_.PoseAt(t);
+      op_->Observe({t, now_pose.x, now_pose.y, now_pose.heading, bumpers_[0], bumpers_[1]});
+    }
     if (vehicle_up) {
       op_->Act(t, interfaces_->current());
       if (grasp_s_ == 0.0 && op_->grasped(t) && start_spec().is_cockpit()) grasp_s_ = t;
@@ -150,7 +176,9 @@ class RobotSession final : public FamilySession {
         1e9 / setup_.interfaces[static_cast<size_t>(interfaces_->current_index())].command_rate_hz());
     if (next_command_ns_ == 0) next_command_ns_ = now;
     if (CommandDue(next_command_ns_, now, command_period_ns)) {
-      link.Send(vehicle_up ? motors_ : interfaces::MotorCommand{});
+      const interfaces::MotorCommand sent = vehicle_up ? motors_ : interfaces::MotorCommand{};
+      link.Send(sent);
+      predictor_.OnCommand(t, sent.left, sent.right);
     }
     return std::nullopt;
   }
@@ -227,6 +255,11 @@ class RobotSession final : public FamilySession {
     rec.obstacles_touched = lap_.obstacles_touched();
     rec.splits = lap_.splits();
     rec.switches = interfaces_->switches();
+    std::vector<double> errors = predictor_.errors_m();
+    if (!errors.empty()) {
+      rec.prediction_error_m_p50 = NearestRank(errors, 0.50);
+      rec.prediction_error_m_p95 = NearestRank(errors, 0.95);
+    }
   }
 
  private:
@@ -291,6 +324,8 @@ class RobotSession final : public FamilySession {
   uint32_t disconnects_seen_ = 0;
   int64_t next_command_ns_ = 0;
   double grasp_s_ = 0.0;
+  RobotPredictor predictor_;
+  std::array<bool, 2> bumpers_{false, false};  ///< the newest state's, left and right
 };
 
 }  // namespace

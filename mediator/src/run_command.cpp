@@ -48,6 +48,9 @@ constexpr const char* kRunUsage =
     "  --device FILE        haptic device file: sim, udp (haptel-device-server arms) or replay\n"
     "  --trace-in FILE      the trace a replay device plays (overrides its 'replay.trace')\n"
     "  --time-limit S       end the run after S seconds, outcome 'time limit' (person: 600)\n"
+    "  --predict on|off     the predictive display (default off): the operator sees the robot\n"
+    "                       where its model says it is now, from the delayed states and the\n"
+    "                       commands sent since; the model's error is reported either way\n"
     "  --view KIND          window (default with a display) or none\n"
     "  --record FILE.mp4    record the operator's view as H.264 MP4 (offscreen without a window)\n"
     "  --scene FILE         haptic scene for the hands (YAML, or the thesis's MHaptic .xml),\n"
@@ -101,7 +104,7 @@ std::string CountersJson(const std::vector<haptel::record::RunCounter>& counters
 Args ParseRunArgs(int argc, const char* const* argv) {
   return Args(argc, argv,
               {"config", "track", "interface", "scene", "vehicle-name", "domain", "database", "vehicle-timeout",
-               "trace", "operator", "device", "trace-in", "time-limit", "view", "record", "vehicle",
+               "trace", "operator", "device", "trace-in", "time-limit", "view", "record", "vehicle", "predict",
                "link-fault", "security", "dds-interfaces", "dds-peers", "discovery-server"},
               {"json", "quiet", "attach"});
 }
@@ -139,6 +142,10 @@ SessionSetup RunSetupFromArgs(const Args& args) {
   if (auto name = args.Value("interface")) setup.run.interface = *name;
   if (auto domain = args.Int("domain", 0, 232)) setup.run.link.domain_id = *domain;
   if (auto fault = args.Value("link-fault")) setup.run.link.fault = ParseLinkFaultOption(*fault);
+  if (auto predict = args.Value("predict")) {
+    if (*predict != "on" && *predict != "off") throw UsageError("option --predict: expected on or off, got '" + *predict + "'");
+    setup.predict = *predict == "on";
+  }
   if (auto security = args.Value("security")) setup.run.link.security = *security;
   if (auto list = args.Value("dds-interfaces")) setup.run.link.interfaces = ParseAddressOption("dds-interfaces", *list);
   if (auto list = args.Value("dds-peers")) setup.run.link.peers = ParseAddressOption("dds-peers", *list);
@@ -361,6 +368,11 @@ void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRu
   const std::string counters = NonZeroCounters(r.counters);
   std::fprintf(out, "  counters: %s\n", counters.empty() ? "all zero" : counters.c_str());
   std::fprintf(out, "  command round trip p50 %.2f ms, p99 %.2f ms\n", r.command_rtt_ms_p50, r.command_rtt_ms_p99);
+  if (r.prediction_error_m_p95 >= 0.0) {
+    std::fprintf(out, "  predicted pose against each state: error p50 %.1f mm, p95 %.1f mm%s\n",
+                 r.prediction_error_m_p50 * 1e3, r.prediction_error_m_p95 * 1e3,
+                 r.predict ? " (shown to the operator: --predict on)" : "");
+  }
   std::fprintf(out, "  video %lld frames, %.1f fps, latency p50 %.1f ms\n", static_cast<long long>(r.video_frames),
               r.video_fps, r.video_latency_ms_p50);
   if (setup.view != ViewKind::kNone) {
@@ -397,6 +409,10 @@ std::string RunJson(const SessionSetup& setup, const RecordedRun& run) {
     << ",\"command_rtt_ms_p50\":" << JsonNumber(r.command_rtt_ms_p50)
     << ",\"command_rtt_ms_p99\":" << JsonNumber(r.command_rtt_ms_p99) << ",\"video_frames\":" << r.video_frames
     << ",\"video_fps\":" << JsonNumber(r.video_fps) << ",\"video_latency_ms_p50\":" << JsonNumber(r.video_latency_ms_p50)
+    << ",\"predict\":" << (r.predict ? "true" : "false") << ",\"prediction_error_m_p50\":"
+    << (r.prediction_error_m_p50 >= 0.0 ? JsonNumber(r.prediction_error_m_p50) : std::string("null"))
+    << ",\"prediction_error_m_p95\":"
+    << (r.prediction_error_m_p95 >= 0.0 ? JsonNumber(r.prediction_error_m_p95) : std::string("null"))
     << ",\"lost_detect_s\":" << JsonNumber(run.result.lost_detect_s)
     << ",\"physics_rate_hz\":" << JsonNumber(run.result.physics_rate_hz)
     << ",\"physics_period_p99_us\":" << JsonNumber(run.result.physics_period_p99_us)

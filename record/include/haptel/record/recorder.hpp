@@ -81,6 +81,12 @@ struct RunRecord {
   int64_t video_frames = 0;
   double video_fps = 0.0;
   double video_latency_ms_p50 = 0.0;
+  /// The predictive display: whether the operator saw the prediction, and
+  /// the model's error against each state at the moment it was sampled
+  /// (m; -1: no state to compare).
+  bool predict = false;
+  double prediction_error_m_p50 = -1.0;
+  double prediction_error_m_p95 = -1.0;
   std::string operator_kind;  ///< "auto" or "person"
   std::string device;         ///< the haptic device's name
   double distance_m = 0.0;    ///< driven, summed over the vehicle's positions
