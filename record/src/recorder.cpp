@@ -37,7 +37,7 @@ namespace {
 using namespace haptel::sql;
 
 /// Schema version stored in PRAGMA user_version.
-constexpr int kSchemaVersion = 5;
+constexpr int kSchemaVersion = 6;
 
 /// Schema steps: kMigrations[v - 1] takes a database from version v - 1 to v.
 /// A new database runs them all, so the upgrade path of an old file is the
@@ -213,7 +213,15 @@ constexpr const char* kSchemaV5 = R"sql(
 ALTER TABLE runs ADD COLUMN vehicle_kind TEXT NOT NULL DEFAULT '';
 )sql";
 
-constexpr const char* kMigrations[] = {kSchemaV1, kSchemaV2, kSchemaV3, kSchemaV4, kSchemaV5};
+// v6: what defines each study, in canonical form (study/definition.hpp), so
+// that a study resumed from a changed file is refused naming what changed.
+// A study planned before v6 gets '' (it had none); the store keeps its form
+// on the first resume.
+constexpr const char* kSchemaV6 = R"sql(
+ALTER TABLE studies ADD COLUMN definition_form TEXT NOT NULL DEFAULT '';
+)sql";
+
+constexpr const char* kMigrations[] = {kSchemaV1, kSchemaV2, kSchemaV3, kSchemaV4, kSchemaV5, kSchemaV6};
 static_assert(std::size(kMigrations) == kSchemaVersion, "one migration per schema version");
 
 constexpr const char* kInsertRun = R"sql(
