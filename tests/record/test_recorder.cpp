@@ -1,10 +1,10 @@
 // Tests for haptel::record::Recorder: round trip (with switches, path,
 // contacts and counters), folder creation, errors naming the file (a folder,
-// a path under a file, garbage, a lock, a newer or foreign schema), migration
-// of v1 and v2 databases, rollback of a failing save, a file deleted under an
-// open Recorder, the fallback file of a run the database did not take, and
-// that a process killed in the middle of a write leaves no half-written run
-// behind.
+// a path under a file, garbage, damaged inner pages, a lock, a newer or
+// foreign schema), migration of v1 and v2 databases, rollback of a failing
+// save, a file deleted under an open Recorder, the fallback file of a run the
+// database did not take, and that a process killed in the middle of a write
+// leaves no half-written run behind.
 #include <poll.h>
 #include <signal.h>
 #include <sqlite3.h>
@@ -427,6 +427,32 @@ TEST_CASE("Recorder set-up errors name the database file", "[recorder]") {
     Recorder after(file);  // the lock gone, the file works
     CHECK(after.LoadAll().empty());
   }
+}
+
+TEST_CASE("A database whose inner pages are garbage is refused at opening, before any run",
+          "[recorder]") {
+  TempDir tmp;
+  const fs::path file = tmp.path() / "damaged.db";
+  {
+    // Ten runs of 100 s paths: a file of some 250 pages, the schema on page 1.
+    Recorder recorder(file);
+    for (int n = 0; n < 10; ++n) {
+      RunRecord run = MakeRun(n, 5);
+      run.path.clear();
+      for (int i = 0; i < 2000; ++i) run.path.push_back({0.05 * i, 0.001 * i, -0.002 * i, 0.5});
+      recorder.Save(run);
+    }
+  }
+  {
+    Recorder intact(file);
+    CHECK(intact.LoadAll().size() == 10);
+  }
+  haptel::test::DamageMiddlePage(file);
+  // Opening reads only page 1: without the check the file would open, and
+  // the run's save would meet the garbage at its end.
+  RequireThrowsMentioning([&] { Recorder recorder(file); }, "database " + file.string() + ": is damaged");
+  RequireThrowsMentioning([&] { Recorder recorder(file); }, "SQLite's quick_check");
+  RequireThrowsMentioning([&] { Recorder recorder(file); }, "another --database");
 }
 
 TEST_CASE("A database deleted or replaced under an open Recorder is not written blind",
