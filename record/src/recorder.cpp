@@ -14,6 +14,7 @@
 
 #include "haptel/record/sqlite_util.hpp"
 
+#include <fcntl.h>
 #include <sqlite3.h>
 #include <unistd.h>
 
@@ -30,6 +31,7 @@
 #include <string_view>
 #include <system_error>
 #include <unordered_map>
+#include <vector>
 
 namespace haptel::record {
 namespace {
@@ -37,7 +39,7 @@ namespace {
 using namespace haptel::sql;
 
 /// Schema version stored in PRAGMA user_version.
-constexpr int kSchemaVersion = 5;
+constexpr int kSchemaVersion = 6;
 
 /// Schema steps: kMigrations[v - 1] takes a database from version v - 1 to v.
 /// A new database runs them all, so the upgrade path of an old file is the
@@ -213,7 +215,15 @@ constexpr const char* kSchemaV5 = R"sql(
 ALTER TABLE runs ADD COLUMN vehicle_kind TEXT NOT NULL DEFAULT '';
 )sql";
 
-constexpr const char* kMigrations[] = {kSchemaV1, kSchemaV2, kSchemaV3, kSchemaV4, kSchemaV5};
+// v6: what defines each study, in canonical form (study/definition.hpp), so
+// that a study resumed from a changed file is refused naming what changed.
+// A study planned before v6 gets '' (it had none); the store keeps its form
+// on the first resume.
+constexpr const char* kSchemaV6 = R"sql(
+ALTER TABLE studies ADD COLUMN definition_form TEXT NOT NULL DEFAULT '';
+)sql";
+
+constexpr const char* kMigrations[] = {kSchemaV1, kSchemaV2, kSchemaV3, kSchemaV4, kSchemaV5, kSchemaV6};
 static_assert(std::size(kMigrations) == kSchemaVersion, "one migration per schema version");
 
 constexpr const char* kInsertRun = R"sql(
@@ -265,6 +275,79 @@ constexpr const char* kSelectContacts =
 constexpr const char* kSelectCounters =
     "SELECT run_id, name, value FROM run_counters ORDER BY run_id, rowid";
 
+/// What to do with a damaged database file.
+constexpr const char* kDamagedAdvice =
+    ": no run is recorded in it (restore it from a copy, or record to another --database)";
+
+/// Refuses a file whose pages are damaged before anything runs: SQLite reads
+/// only the pages a statement needs, so garbage in the middle of the file
+/// would otherwise pass the opening and fail the save at the end of the run.
+/// `quick_check` reads every page once (O(N) in pages; docs/results.md has
+/// its cost on 10 000 runs) and checks the b-trees' structure, the records'
+/// formats and NOT NULL, but not that each index matches its table (what
+/// integrity_check adds, at O(N log N)). `quick_check(1)` costs the same on an
+/// intact file, which it must read whole anyway; on a damaged one it stops
+/// at the first fault, which is all the message names.
+/// Reads `file` once from start to end, so that the integrity check that
+/// follows finds its pages in the page cache. The check visits pages in the
+/// b-trees' order, scattered over the file: from a cold cache that is random
+/// reads (12 s for a 250 MB file on the machine of docs/results.md), where one
+/// sequential pass takes 0.5 s. A file larger than half the free memory would
+/// not stay cached: it is left to the check's own reads. Best effort: a
+/// failure here leaves the check to find whatever is wrong.
+void ReadIntoPageCache(const std::filesystem::path& file) {
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(file, ec);
+  const long page = ::sysconf(_SC_PAGESIZE);
+  const long free_pages = ::sysconf(_SC_AVPHYS_PAGES);
+  if (ec || page <= 0 || free_pages <= 0 || size > static_cast<uintmax_t>(page) * free_pages / 2) return;
+  const int fd = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return;
+  ::posix_fadvise(fd, 0, 0, POSIX_FADV_SEQUENTIAL);
+  std::vector<char> buffer(size_t{1} << 20);
+  while (::read(fd, buffer.data(), buffer.size()) > 0) {
+  }
+  ::close(fd);
+}
+
+/// quick_check's report on one line, without its "*** in database main ***"
+/// heading: "Page 128: btreeInitPage() returns error code 11".
+std::string OneLine(const std::string& report) {
+  constexpr std::string_view kHeading = "*** in database main ***";
+  std::string line;
+  size_t start = 0;
+  while (start <= report.size()) {
+    size_t end = report.find('\n', start);
+    if (end == std::string::npos) end = report.size();
+    const std::string part = report.substr(start, end - start);
+    if (!part.empty() && part != kHeading) line += (line.empty() ? "" : "; ") + part;
+    start = end + 1;
+  }
+  return line;
+}
+
+void CheckIntegrity(const std::filesystem::path& file, sqlite3* db) {
+  auto damaged = [&](const std::string& what) {
+    FailWith(file, "is damaged (SQLite's quick_check: " + what + ")" + kDamagedAdvice);
+  };
+  ReadIntoPageCache(file);
+  sqlite3_stmt* raw = nullptr;
+  if (sqlite3_prepare_v2(db, "PRAGMA quick_check(1)", -1, &raw, nullptr) != SQLITE_OK) {
+    sqlite3_finalize(raw);
+    // The schema's own pages unreadable: as damaged as any other.
+    if ((sqlite3_extended_errcode(db) & 0xff) == SQLITE_CORRUPT) damaged(sqlite3_errmsg(db));
+    Fail(file, db, "cannot check the file's integrity");
+  }
+  Stmt check(raw);
+  const int rc = sqlite3_step(check.get());
+  if (rc == SQLITE_ROW) {
+    const std::string verdict = Reader(check.get()).Text();
+    if (verdict != "ok") damaged(OneLine(verdict));
+    return;
+  }
+  if ((sqlite3_extended_errcode(db) & 0xff) == SQLITE_CORRUPT) damaged(sqlite3_errmsg(db));
+  Fail(file, db, "cannot check the file's integrity");
+}
 
 }  // namespace
 
@@ -318,6 +401,7 @@ Recorder::Recorder(const std::filesystem::path& database) : path_(database) {
   Exec(path_, db.get(), "PRAGMA journal_mode=WAL", "cannot set journal mode");
   Exec(path_, db.get(), "PRAGMA synchronous=FULL", "cannot set synchronous mode");
   Exec(path_, db.get(), "PRAGMA foreign_keys=ON", "cannot enable foreign keys");
+  CheckIntegrity(path_, db.get());
 
   {
     Transaction txn(path_, db.get(), "BEGIN IMMEDIATE");

@@ -8,6 +8,7 @@
 #include "haptel/core/clock.hpp"
 #include "haptel/mediator/session.hpp"
 #include "haptel/record/sqlite_util.hpp"
+#include "haptel/study/definition.hpp"
 
 namespace haptel::study {
 namespace {
@@ -34,19 +35,26 @@ StudyStore::StudyStore(record::Recorder& recorder, const StudyConfig& config,
     : recorder_(recorder) {
   sqlite3* db = recorder_.handle();
   const std::filesystem::path& file = recorder_.path();
+  // Before any write: a track that cannot be loaded stops the study here.
+  const std::vector<DefiningValue> definition = StudyDefinition(config);
+  const std::string form = DefinitionText(definition);
+  std::string recorded_form;
   Transaction txn(file, db, "BEGIN IMMEDIATE");
   {
-    Stmt find = Prepare(file, db, "SELECT id FROM studies WHERE name = ?", "cannot look up the study");
+    Stmt find = Prepare(file, db, "SELECT id, definition_form FROM studies WHERE name = ?",
+                        "cannot look up the study");
     Binder(file, db, find.get()).Text(config.name);
     if (sqlite3_step(find.get()) == SQLITE_ROW) {
-      id_ = sqlite3_column_int64(find.get(), 0);
+      Reader r(find.get());
+      id_ = r.Int();
+      recorded_form = r.Text();
       resumed_ = true;
     }
   }
   if (!resumed_) {
     Stmt insert = Prepare(file, db,
                           "INSERT INTO studies (name, file, definition, operators, design, trial_cap_s, "
-                          "created_utc) VALUES (?, ?, ?, ?, ?, ?, ?)",
+                          "created_utc, definition_form) VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
                           "cannot insert the study");
     Binder(file, db, insert.get())
         .Text(config.name)
@@ -55,7 +63,8 @@ StudyStore::StudyStore(record::Recorder& recorder, const StudyConfig& config,
         .Text(config.operators)
         .Text(ToString(config.order))
         .Real(config.trial_cap_s)
-        .Text(NowUtc());
+        .Text(NowUtc())
+        .Text(form);
     StepDone(file, db, insert.get(), "cannot insert the study");
     id_ = sqlite3_last_insert_rowid(db);
     Stmt condition = Prepare(file, db,
@@ -102,11 +111,34 @@ StudyStore::StudyStore(record::Recorder& recorder, const StudyConfig& config,
     return;
   }
   txn.Commit();
-  // Resuming: the plan on record is the plan.
+  const std::string refusal = "; a changed study is a new one: give it another name (or put the file back as it was)";
+  // Resuming: the study on record is the study. Everything that defines it
+  // first, each changed key named with both values.
+  if (!recorded_form.empty()) {
+    const std::vector<std::string> changes = DefinitionChanges(ParseDefinition(recorded_form), definition);
+    if (!changes.empty()) {
+      constexpr size_t kNamed = 8;  // a track file rewritten changes every point: the first few say enough
+      std::string named;
+      bool participants = false;
+      for (size_t i = 0; i < changes.size(); ++i) {
+        participants = participants || changes[i].rfind("participants: ", 0) == 0;
+        if (i < kNamed) named += (i == 0 ? "" : "; ") + changes[i];
+      }
+      if (changes.size() > kNamed) named += "; and " + std::to_string(changes.size() - kNamed) + " more";
+      // The file's participants are its rows of the design; more people join
+      // an open person study in the console, after them.
+      const std::string hint = participants && config.operators == "person"
+                                   ? " (participants who join later are added in the console)"
+                                   : "";
+      throw std::runtime_error("study '" + config.name + "' in " + file.string() + " was planned with " + named +
+                               hint + refusal);
+    }
+  }
+  // Then the plan (for a study planned before its definition was kept, the
+  // only check there is). Participants added in the console come after the
+  // file's: the file's plan is the record's beginning.
   const std::vector<PlannedTrial> recorded = Plan();
   std::string difference;
-  // Participants added in the console come after the file's: the file's
-  // plan is the record's beginning.
   if (recorded.size() < plan.size()) {
     difference = std::to_string(recorded.size()) + " trials on record, " + std::to_string(plan.size()) +
                  " in the file";
@@ -121,9 +153,22 @@ StudyStore::StudyStore(record::Recorder& recorder, const StudyConfig& config,
     }
   }
   if (!difference.empty()) {
-    throw std::runtime_error("study '" + config.name + "' in " + file.string() +
-                             " was planned differently (" + difference +
-                             "); a changed study is a new one: give it another name");
+    throw std::runtime_error("study '" + config.name + "' in " + file.string() + " was planned differently (" +
+                             difference + ")" + refusal);
+  }
+  if (recorded_form.empty()) {
+    // A study planned before the database kept definitions (schema v5 and
+    // earlier): its plan matches, which is all that can be checked; from now
+    // on it is held to the file as it is at this resume.
+    Transaction keep(file, db, "BEGIN IMMEDIATE");
+    {
+      Stmt update = Prepare(file, db, "UPDATE studies SET definition_form = ? WHERE id = ?",
+                            "cannot keep the study's definition");
+      Binder(file, db, update.get()).Text(form).Int(id_);
+      StepDone(file, db, update.get(), "cannot keep the study's definition");
+    }
+    Event("definition kept", "", 0, "planned before its definition was kept; the file's as of this resume");
+    keep.Commit();
   }
 }
 

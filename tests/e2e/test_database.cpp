@@ -124,6 +124,18 @@ TEST_CASE("a database that cannot work stops haptel run before the vehicle start
     std::ofstream(db, std::ios::binary) << std::string(16384, '\x5a');
     RequireRefusedBeforeStart(db, "is not a SQLite database", 33);
   }
+  SECTION("a real database whose inner pages are garbage") {
+    const auto db = dir / "damaged.db";
+    {
+      record::Recorder recorder(db);
+      record::RunRecord run;
+      run.config_name = "a lap";
+      for (int i = 0; i < 2000; ++i) run.path.push_back({0.05 * i, 0.001 * i, 0.0, 0.5});
+      for (int n = 0; n < 10; ++n) recorder.Save(run);
+    }
+    test::DamageMiddlePage(db);
+    RequireRefusedBeforeStart(db, "is damaged", 39);
+  }
   SECTION("a file another connection holds locked") {
     const auto db = dir / "locked.db";
     { record::Recorder first(db); }

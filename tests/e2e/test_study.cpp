@@ -170,7 +170,16 @@ TEST_CASE("a study that cannot work is refused before anything runs") {
     std::ofstream(changed) << text + "  - {id: P3, profile: plain}\n";
     Child again({Bin("haptel"), "study", "run", changed.string(), "--database", db.string()});
     CHECK(again.Wait(60.0) == 2);
-    CHECK(again.err().find("planned differently") != std::string::npos);
+    CHECK(again.err().find("participants: P1, P2, the file now says P1, P2, P3") != std::string::npos);
+    // The plan the same, what a trial is not: refused too, naming the key and both values.
+    const auto capped = dir / "capped.yaml";
+    const size_t cap = text.find("trial_cap_s: 6");
+    REQUIRE(cap != std::string::npos);
+    std::ofstream(capped) << std::string(text).replace(cap, 14, "trial_cap_s: 3600");
+    Child longer({Bin("haptel"), "study", "run", capped.string(), "--database", db.string()});
+    CHECK(longer.Wait(60.0) == 2);
+    CHECK(longer.err().find("trial_cap_s: 6, the file now says 3600") != std::string::npos);
+    CHECK(longer.err().find("give it another name") != std::string::npos);
   }
   {  // A duplicate participant: exit 2 naming the file, no database touched.
     const auto bad = dir / "dup.yaml";

@@ -1,10 +1,10 @@
 // Tests for haptel::record::Recorder: round trip (with switches, path,
 // contacts and counters), folder creation, errors naming the file (a folder,
-// a path under a file, garbage, a lock, a newer or foreign schema), migration
-// of v1 and v2 databases, rollback of a failing save, a file deleted under an
-// open Recorder, the fallback file of a run the database did not take, and
-// that a process killed in the middle of a write leaves no half-written run
-// behind.
+// a path under a file, garbage, damaged inner pages, a lock, a newer or
+// foreign schema), migration of v1 and v2 databases, rollback of a failing
+// save, a file deleted under an open Recorder, the fallback file of a run the
+// database did not take, and that a process killed in the middle of a write
+// leaves no half-written run behind.
 #include <poll.h>
 #include <signal.h>
 #include <sqlite3.h>
@@ -338,7 +338,7 @@ TEST_CASE("Recorder stores the start time as ISO-8601 UTC and a schema version",
   }
   RawDb raw(file);
   CHECK(raw.Text("SELECT started_utc FROM runs") == "2024-05-01T12:34:56.789Z");
-  CHECK(raw.Integer("PRAGMA user_version") == 5);
+  CHECK(raw.Integer("PRAGMA user_version") == 6);
 }
 
 TEST_CASE("Recorder creates missing parent folders", "[recorder]") {
@@ -427,6 +427,32 @@ TEST_CASE("Recorder set-up errors name the database file", "[recorder]") {
     Recorder after(file);  // the lock gone, the file works
     CHECK(after.LoadAll().empty());
   }
+}
+
+TEST_CASE("A database whose inner pages are garbage is refused at opening, before any run",
+          "[recorder]") {
+  TempDir tmp;
+  const fs::path file = tmp.path() / "damaged.db";
+  {
+    // Ten runs of 100 s paths: a file of some 250 pages, the schema on page 1.
+    Recorder recorder(file);
+    for (int n = 0; n < 10; ++n) {
+      RunRecord run = MakeRun(n, 5);
+      run.path.clear();
+      for (int i = 0; i < 2000; ++i) run.path.push_back({0.05 * i, 0.001 * i, -0.002 * i, 0.5});
+      recorder.Save(run);
+    }
+  }
+  {
+    Recorder intact(file);
+    CHECK(intact.LoadAll().size() == 10);
+  }
+  haptel::test::DamageMiddlePage(file);
+  // Opening reads only page 1: without the check the file would open, and
+  // the run's save would meet the garbage at its end.
+  RequireThrowsMentioning([&] { Recorder recorder(file); }, "database " + file.string() + ": is damaged");
+  RequireThrowsMentioning([&] { Recorder recorder(file); }, "SQLite's quick_check");
+  RequireThrowsMentioning([&] { Recorder recorder(file); }, "another --database");
 }
 
 TEST_CASE("A database deleted or replaced under an open Recorder is not written blind",
@@ -664,7 +690,7 @@ TEST_CASE("A v1 database is migrated to the current schema in place and keeps it
   }
 
   RawDb raw(file);
-  CHECK(raw.Integer("PRAGMA user_version") == 5);
+  CHECK(raw.Integer("PRAGMA user_version") == 6);
   CHECK(raw.Text("PRAGMA integrity_check") == "ok");
   CHECK(raw.Integer("SELECT COUNT(*) FROM pragma_foreign_key_check") == 0);
   for (const char* table : {"interface_switches", "run_path", "run_contacts", "run_counters"}) {
@@ -682,7 +708,7 @@ TEST_CASE("A v1 database is migrated to the current schema in place and keeps it
     Recorder again(file);
     CHECK(again.LoadAll().size() == 2);
   }
-  CHECK(raw.Integer("PRAGMA user_version") == 5);
+  CHECK(raw.Integer("PRAGMA user_version") == 6);
 }
 
 namespace {
@@ -771,7 +797,7 @@ TEST_CASE("A v2 database is migrated to v3: its runs keep everything, new runs k
   CheckSame(runs[0], V2Run());
   CheckSame(runs[1], fresh);
   RawDb raw(file);
-  CHECK(raw.Integer("PRAGMA user_version") == 5);
+  CHECK(raw.Integer("PRAGMA user_version") == 6);
   CHECK(raw.Text("PRAGMA integrity_check") == "ok");
   CHECK(raw.Integer(
             "SELECT value FROM run_counters WHERE run_id = 2 AND name = 'servo_overruns'") == 9);

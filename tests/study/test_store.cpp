@@ -1,11 +1,19 @@
 // The study's tables (StudyStore) on a real SQLite file, and the plan of a
 // participant added later (PlanParticipant): what a kill between any two
-// transactions leaves, a changed study refused, trials and answers never
-// twice, participants added in the console after the file's.
+// transactions leaves, a changed study refused naming each changed key and
+// both values (a study planned before definitions were kept: once its plan
+// matches, held to its file from then on), trials and answers never twice,
+// participants added in the console after the file's.
+#include <sqlite3.h>
+
 #include <catch2/catch.hpp>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 
 #include "haptel/record/recorder.hpp"
 #include "haptel/mediator/session.hpp"
+#include "haptel/study/definition.hpp"
 #include "haptel/study/plan.hpp"
 #include "haptel/study/store.hpp"
 #include "study_test_run.hpp"
@@ -154,8 +162,242 @@ TEST_CASE("The store keeps a study's plan, trials and answers across restarts, e
     StudyConfig changed = config;
     changed.order = StudyOrder::kFixed;
     CHECK_THROWS_WITH(StudyStore(recorder, changed, PlanTrials(changed)),
-                      Catch::Contains("planned differently") && Catch::Contains("another name"));
+                      Catch::Contains("design.order: balanced-latin-square, the file now says fixed") &&
+                          Catch::Contains("another name"));
     StudyConfig more = FourConditions(dir, 8);
-    CHECK_THROWS_WITH(StudyStore(recorder, more, PlanTrials(more)), Catch::Contains("16 trials on record, 32"));
+    CHECK_THROWS_WITH(StudyStore(recorder, more, PlanTrials(more)),
+                      Catch::Contains("participants: P1, P2, P3, P4, the file now says P1, P2, P3, P4, P5"));
   }
+}
+
+namespace {
+
+std::string FileText(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+/// `text` with its one `from` replaced by `to`.
+std::string Replaced(std::string text, const std::string& from, const std::string& to) {
+  const size_t at = text.find(from);
+  REQUIRE(at != std::string::npos);
+  REQUIRE(text.find(from, at + 1) == std::string::npos);
+  return text.replace(at, from.size(), to);
+}
+
+/// A small person study on a copy of the short test track beside it.
+std::string ResumedStudy() {
+  const auto source = std::filesystem::current_path();
+  return "# a study resumed from a file that may have changed\n"
+         "name: resumed\n"
+         "description: first words\n"
+         "run: " + (source / "config/haptel.yaml").string() + "\n"
+         "track: track.yaml\n"
+         "operators: person\n"
+         "conditions:\n"
+         "  - {name: a, interface: cockpit}\n"
+         "  - {name: b, interface: gesture}\n"
+         "design:\n"
+         "  order: balanced-latin-square\n"
+         "practice: false\n"
+         "trial_cap_s: 5\n"
+         "questionnaires: [thesis]\n"
+         "participants:\n"
+         "  - {id: P1}\n"
+         "  - {id: P2}\n";
+}
+
+}  // namespace
+
+TEST_CASE("A study resumed from a changed file is refused, naming each changed key and both values") {
+  const auto dir = test::ScratchDir("study-store-changed");
+  std::filesystem::remove(dir / "s.db");
+  const auto track = dir / "track.yaml";
+  std::filesystem::copy_file("config/tracks/test-short.yaml", track, std::filesystem::copy_options::overwrite_existing);
+  const auto file = test::WriteFile(dir / "study.yaml", ResumedStudy());
+  const auto db = dir / "s.db";
+  record::Recorder recorder(db);
+  {
+    const StudyConfig planned = LoadStudy(file);
+    StudyStore store(recorder, planned, PlanTrials(planned));
+    CHECK_FALSE(store.resumed());
+    recorder.Save(test::TrialRun(4.0), store.TrialWriter(store.Plan()[0], planned.trial_cap_s));
+  }
+  // The file rewritten as `text`, loaded and planned as `haptel study run` does.
+  auto resume = [&](const std::string& text) {
+    test::WriteFile(file, text);
+    const StudyConfig config = LoadStudy(file);
+    return StudyStore(recorder, config, PlanTrials(config));
+  };
+  auto refusal = [&](const std::string& text) {
+    return test::WhatOf<std::runtime_error>([&] { resume(text); });
+  };
+  const std::string study = ResumedStudy();
+
+  SECTION("the same study resumes, whatever its comments, spacing, key order and description") {
+    std::string same = Replaced(study, "trial_cap_s: 5\n", "");
+    same = Replaced(same, "description: first words", "description: other words  # and a comment");
+    same += "trial_cap_s: 5.0   # moved to the end\n";
+    StudyStore store = resume(same);
+    CHECK(store.resumed());
+    CHECK(store.Trials().size() == 1);
+    CHECK(store.NextTrial()->position == 2);
+  }
+  SECTION("an open study with participants added in the console resumes, keeping them") {
+    {
+      StudyStore store = resume(study);
+      store.AddParticipant("P3", PlanParticipant(LoadStudy(file), "P3", 2));
+      store.AddParticipant("P4", PlanParticipant(LoadStudy(file), "P4", 3));
+    }
+    StudyStore store = resume(study);
+    CHECK(store.Participants() == std::vector<std::string>{"P1", "P2", "P3", "P4"});
+    CHECK(store.Plan().size() == 8);
+  }
+  SECTION("another track") {
+    const std::string what = refusal(Replaced(study, "track: track.yaml", "track: " +
+        (std::filesystem::current_path() / "config/tracks/grand-prix.yaml").string()));
+    CHECK_THAT(what, Catch::Contains("study 'resumed' in " + db.string() + " was planned with track: track.yaml, "
+                                     "the file now says ") &&
+                         Catch::Contains("config/tracks/grand-prix.yaml") &&
+                         !Catch::Contains("track.name") &&
+                         Catch::Contains("a changed study is a new one: give it another name"));
+  }
+  SECTION("the track file edited under the same name") {
+    const std::string planned_track = FileText(track);
+    test::WriteFile(track, Replaced(planned_track, "  - {along: 0.2}", "  - {along: 0.25}"));
+    CHECK_THAT(refusal(study),
+               Catch::Contains("track.gates[1]: along 0.2 m, width 0.4 m, the file now says along 0.25 m, width 0.4 m"));
+    test::WriteFile(track, planned_track);
+  }
+  SECTION("another cap") {
+    CHECK_THAT(refusal(Replaced(study, "trial_cap_s: 5", "trial_cap_s: 3600")),
+               Catch::Contains("was planned with trial_cap_s: 5, the file now says 3600;"));
+  }
+  SECTION("a condition given another interface under its name") {
+    CHECK_THAT(refusal(Replaced(study, "{name: b, interface: gesture}", "{name: b, interface: cockpit-hud}")),
+               Catch::Contains("conditions.b.interface: gesture, the file now says cockpit-hud"));
+  }
+  SECTION("a condition renamed") {
+    CHECK_THAT(refusal(Replaced(study, "{name: b, interface: gesture}", "{name: g, interface: gesture}")),
+               Catch::Contains("conditions: a, b, the file now says a, g") &&
+                   Catch::Contains("conditions.b.interface: gesture, the file now says (absent)"));
+  }
+  SECTION("other questionnaires") {
+    CHECK_THAT(refusal(Replaced(study, "questionnaires: [thesis]", "questionnaires: [tlx, sus]")),
+               Catch::Contains("questionnaires: thesis, the file now says tlx, sus"));
+  }
+  SECTION("another order") {
+    CHECK_THAT(refusal(Replaced(study, "order: balanced-latin-square", "order: fixed")),
+               Catch::Contains("design.order: balanced-latin-square, the file now says fixed"));
+  }
+  SECTION("a practice lap") {
+    CHECK_THAT(refusal(Replaced(study, "practice: false", "practice: true")),
+               Catch::Contains("practice: false, the file now says true"));
+  }
+  SECTION("participants added to the file's list: the console adds them to an open study") {
+    CHECK_THAT(refusal(study + "  - {id: P3}\n  - {id: P4}\n"),
+               Catch::Contains("participants: P1, P2, the file now says P1, P2, P3, P4") &&
+                   Catch::Contains("added in the console"));
+  }
+  SECTION("several changes at once: each is named") {
+    std::string both = Replaced(study, "trial_cap_s: 5", "trial_cap_s: 3600");
+    both = Replaced(both, "questionnaires: [thesis]", "questionnaires: []");
+    const std::string what = refusal(both);
+    CHECK_THAT(what, Catch::Contains("trial_cap_s: 5, the file now says 3600") &&
+                         Catch::Contains("questionnaires: thesis, the file now says (none)"));
+  }
+  // A refused resume writes nothing, and the study resumes once the file is put back.
+  StudyStore store = resume(study);
+  CHECK(store.resumed());
+  CHECK(store.Plan().size() >= 4);
+  CHECK(store.Trials().size() == 1);
+}
+
+TEST_CASE("A simulated driver's profile is part of the study") {
+  const auto dir = test::ScratchDir("study-store-profiles");
+  std::filesystem::remove(dir / "s.db");
+  const auto source = std::filesystem::current_path();
+  const std::string study = "name: drivers\nrun: " + (source / "config/haptel.yaml").string() +
+                            "\noperators: synthetic\nconditions:\n  - {name: a, interface: cockpit}\n"
+                            "  - {name: b, interface: gesture}\nprofiles:\n"
+                            "  p: {steering_noise: 0.02, seed: 7}\n  unused: {hud_use: 0.5}\n"
+                            "participants:\n  - {id: A, profile: p}\n  - {id: B, profile: p}\n";
+  const auto file = dir / "study.yaml";
+  record::Recorder recorder(dir / "s.db");
+  auto resume = [&](const std::string& text) {
+    test::WriteFile(file, text);
+    const StudyConfig config = LoadStudy(file);
+    return StudyStore(recorder, config, PlanTrials(config));
+  };
+  CHECK_FALSE(resume(study).resumed());
+  // A profile nobody drives with changes no trial.
+  CHECK(resume(Replaced(study, "unused: {hud_use: 0.5}", "unused: {hud_use: 0.9}")).resumed());
+  CHECK_THAT(test::WhatOf<std::runtime_error>(
+                 [&] { resume(Replaced(study, "p: {steering_noise: 0.02, seed: 7}", "p: {steering_noise: 0.03, seed: 7}")); }),
+             Catch::Contains("profiles.p.steering_noise: 0.02, the file now says 0.03"));
+  CHECK_THAT(test::WhatOf<std::runtime_error>(
+                 [&] { resume(Replaced(study, "p: {steering_noise: 0.02, seed: 7}", "p: {steering_noise: 0.02, seed: 8}")); }),
+             Catch::Contains("profiles.p.seed: 7, the file now says 8"));
+  CHECK_THAT(test::WhatOf<std::runtime_error>([&] {
+               resume(Replaced(study, "{id: B, profile: p}", "{id: B, profile: unused}"));
+             }),
+             Catch::Contains("participants.B.profile: p, the file now says unused"));
+  // No console adds a simulated driver, and none is added to the file's list of an open study either.
+  CHECK_THAT(test::WhatOf<std::runtime_error>([&] { resume(study + "  - {id: C, profile: p}\n  - {id: D, profile: p}\n"); }),
+             Catch::Contains("participants: A, B, the file now says A, B, C, D") &&
+                 !Catch::Contains("console"));
+}
+
+TEST_CASE("A study planned before the database kept definitions resumes once, then is held to its file") {
+  const auto dir = test::ScratchDir("study-store-v5");
+  const auto db = dir / "v5.db";
+  std::filesystem::remove(db);
+  const auto track = dir / "track.yaml";
+  std::filesystem::copy_file("config/tracks/test-short.yaml", track, std::filesystem::copy_options::overwrite_existing);
+  const auto file = test::WriteFile(dir / "study.yaml", ResumedStudy());
+  {
+    record::Recorder recorder(db);
+    const StudyConfig config = LoadStudy(file);
+    StudyStore store(recorder, config, PlanTrials(config));
+  }
+  // What a v5 database holds: the same tables without the definition.
+  {
+    sqlite3* raw = nullptr;
+    REQUIRE(sqlite3_open(db.c_str(), &raw) == SQLITE_OK);
+    REQUIRE(sqlite3_exec(raw, "ALTER TABLE studies DROP COLUMN definition_form; PRAGMA user_version = 5", nullptr,
+                         nullptr, nullptr) == SQLITE_OK);
+    sqlite3_close(raw);
+  }
+  record::Recorder recorder(db);  // migrated to v6: the study has no definition on record
+  auto resume = [&](const std::string& text) {
+    test::WriteFile(file, text);
+    const StudyConfig config = LoadStudy(file);
+    return StudyStore(recorder, config, PlanTrials(config));
+  };
+  const std::string changed_cap = Replaced(ResumedStudy(), "trial_cap_s: 5", "trial_cap_s: 60");
+  {
+    // Its plan is all there is to check, and it matches: it resumes, and keeps the file's definition from now on.
+    StudyStore store = resume(changed_cap);
+    CHECK(store.resumed());
+  }
+  CHECK_THAT(test::WhatOf<std::runtime_error>([&] { resume(ResumedStudy()); }),
+             Catch::Contains("trial_cap_s: 60, the file now says 5"));
+  CHECK(resume(changed_cap).resumed());
+  // A plan that differs is refused as before.
+  CHECK_THAT(test::WhatOf<std::runtime_error>([&] { resume(ResumedStudy() + "  - {id: P3}\n  - {id: P4}\n"); }),
+             Catch::Contains("participants: P1, P2, the file now says P1, P2, P3, P4"));
+}
+
+TEST_CASE("A study's definition reads back as written, escapes and all") {
+  const std::vector<DefiningValue> values = {{"form", "1"}, {"odd: key", "a\nb\\c: d"}, {"empty", ""}};
+  const std::vector<DefiningValue> back = ParseDefinition(DefinitionText(values));
+  REQUIRE(back.size() == values.size());
+  for (size_t i = 0; i < values.size(); ++i) {
+    CHECK(back[i].key == values[i].key);
+    CHECK(back[i].value == values[i].value);
+  }
+  CHECK(DefinitionChanges(values, back).empty());
+  // Another version's form is compared only on the keys both know.
+  const std::vector<DefiningValue> newer = {{"form", "2"}, {"odd: key", "a\nb\\c: d"}, {"new", "x"}};
+  CHECK(DefinitionChanges(values, newer).empty());
 }

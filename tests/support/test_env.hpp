@@ -38,6 +38,20 @@ inline std::filesystem::path ScratchDir(const std::string& name) {
   return dir;
 }
 
+/// Overwrites the whole page in the middle of an SQLite file (of at least 8
+/// pages of `page_size` bytes, SQLite's default) with garbage, as a failing
+/// disk or a stray write would: the header and the schema on page 1 stay
+/// intact, so the file opens as before and only reading that page finds it.
+inline void DamageMiddlePage(const std::filesystem::path& file, size_t page_size = 4096) {
+  const auto size = static_cast<size_t>(std::filesystem::file_size(file));
+  if (size < 8 * page_size) throw std::runtime_error("test file " + file.string() + " is too small to damage");
+  std::fstream io(file, std::ios::binary | std::ios::in | std::ios::out);
+  io.seekp(static_cast<std::streamoff>(size / page_size / 2 * page_size));
+  io << std::string(page_size, '\x5a');
+  io.flush();
+  if (!io.good()) throw std::runtime_error("cannot damage test file " + file.string());
+}
+
 /// Writes `text` to `file` (its folder must exist) and returns the path.
 inline std::filesystem::path WriteFile(const std::filesystem::path& file, const std::string& text) {
   std::ofstream out(file);

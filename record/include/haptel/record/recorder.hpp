@@ -115,13 +115,16 @@ struct RunRecord {
 class Recorder {
  public:
   /// Opens (creating it and its parent folders if needed) the database and its
-  /// schema; an older schema (v1, v2) is migrated in place, in one
+  /// schema; an older schema (v1 to v5) is migrated in place, in one
   /// transaction. The schema is read inside a write transaction, so a file
-  /// that opens here can be written. Fails within a second — a file
+  /// that opens here can be written; every page is checked first (SQLite's
+  /// quick_check), so a file damaged inside is refused here, not at the save.
+  /// The check reads the whole file (about 2.5 s of CPU per GB, see
+  /// docs/results.md); every other failure comes within a second — a file
   /// another connection holds locked is waited for at most kOpenBusyTimeoutMs
   /// — throwing std::runtime_error with a one-line message "database FILE:
-  /// what is wrong" (a folder, a path under a regular file, not a database, a
-  /// newer or foreign schema, read-only, locked).
+  /// what is wrong" (a folder, a path under a regular file, not a database,
+  /// damaged, a newer or foreign schema, read-only, locked).
   explicit Recorder(const std::filesystem::path& database);
   ~Recorder();
   Recorder(const Recorder&) = delete;

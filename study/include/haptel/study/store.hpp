@@ -1,6 +1,7 @@
 #pragma once
-/// @file A study's tables in the run database (schema v4, recorder.cpp): the
-/// study and its plan, written once when it is first run; one trial row per
+/// @file A study's tables in the run database (schema v4, and v6's
+/// definition_form; recorder.cpp): the study, what defines it
+/// (definition.hpp) and its plan, written once when it is first run; one trial row per
 /// planned trial, written in its run's own transaction; the questionnaire
 /// answers, one transaction per questionnaire; and an event log.
 ///
@@ -65,10 +66,15 @@ class AlreadyAnswered : public std::runtime_error {
 class StudyStore {
  public:
   /// Opens the study `config.name` in `recorder`'s database, creating it with
-  /// `plan` the first time. A study already there must have been planned the
-  /// same way (conditions, participants, order): otherwise throws
-  /// std::runtime_error saying what differs — a changed study is a new one,
-  /// under a new name. Keeps a reference to `recorder`.
+  /// `plan` and its definition (StudyDefinition) the first time. A study
+  /// already there must be defined the same way now — every key of its
+  /// definition, and the file's plan the beginning of the record's (the
+  /// console's participants come after) — otherwise throws
+  /// std::runtime_error naming each changed key with both values: a changed
+  /// study is a new one, under a new name. A study planned before the
+  /// database kept definitions (schema v5) is checked by its plan alone, and
+  /// keeps the file's definition from this resume on. Throws ConfigError when
+  /// the track cannot be loaded. Keeps a reference to `recorder`.
   StudyStore(record::Recorder& recorder, const StudyConfig& config, const std::vector<PlannedTrial>& plan);
 
   int64_t id() const { return id_; }
