@@ -163,9 +163,13 @@ class RobotSession final : public FamilySession {
       if (interfaces_->current().name() == "gamepad") return LoopEnd{Outcome::kAborted, "the game controller was disconnected"};
     }
     // The operator acts on the device; the interface reads the device.
+    // With prediction the operator steers the vehicle as it will be when the
+    // command given now reaches it: the commands on their way are known, so
+    // this is the end of the ghost's first stretch of path, where a driver
+    // watching the path ahead looks.
     if (setup_.predict && predictor_.ready()) {
-      const PredictedPose now_pose = predictor_.PoseAt(t);
-      op_->Observe({t, now_pose.x, now_pose.y, now_pose.heading, bumpers_[0], bumpers_[1]});
+      const PredictedPose ahead = predictor_.PoseAt(t + predictor_.one_way_delay_s());
+      op_->Observe({t, ahead.x, ahead.y, ahead.heading, bumpers_[0], bumpers_[1]});
     }
     if (vehicle_up) {
       op_->Act(t, interfaces_->current());

@@ -39,7 +39,7 @@ namespace {
 using namespace haptel::sql;
 
 /// Schema version stored in PRAGMA user_version.
-constexpr int kSchemaVersion = 6;
+constexpr int kSchemaVersion = 7;
 
 /// Schema steps: kMigrations[v - 1] takes a database from version v - 1 to v.
 /// A new database runs them all, so the upgrade path of an old file is the
@@ -223,7 +223,16 @@ constexpr const char* kSchemaV6 = R"sql(
 ALTER TABLE studies ADD COLUMN definition_form TEXT NOT NULL DEFAULT '';
 )sql";
 
-constexpr const char* kMigrations[] = {kSchemaV1, kSchemaV2, kSchemaV3, kSchemaV4, kSchemaV5, kSchemaV6};
+// v7: the predictive display: whether the operator saw the prediction, and
+// the model's error against each state (NULL: no state to compare).
+constexpr const char* kSchemaV7 = R"sql(
+ALTER TABLE runs ADD COLUMN predict INTEGER NOT NULL DEFAULT 0;
+ALTER TABLE runs ADD COLUMN prediction_error_m_p50 REAL DEFAULT NULL;
+ALTER TABLE runs ADD COLUMN prediction_error_m_p95 REAL DEFAULT NULL;
+)sql";
+
+constexpr const char* kMigrations[] = {kSchemaV1, kSchemaV2, kSchemaV3, kSchemaV4,
+                                       kSchemaV5, kSchemaV6, kSchemaV7};
 static_assert(std::size(kMigrations) == kSchemaVersion, "one migration per schema version");
 
 constexpr const char* kInsertRun = R"sql(
@@ -234,9 +243,10 @@ INSERT INTO runs (started_utc, started_wall_ns, config_name, track, interface, v
                   video_latency_ms_p50, operator_kind, device, distance_m, view_fps,
                   view_frame_p99_ms, video_to_screen_ms_p50, video_to_screen_ms_p99, picture,
                   servo_target_hz, servo_rate_short, physics_rate_hz, physics_target_hz,
-                  physics_rate_short, vehicle_kind)
+                  physics_rate_short, vehicle_kind, predict, prediction_error_m_p50,
+                  prediction_error_m_p95)
 VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?,
-        ?, ?, ?, ?, ?, ?)
+        ?, ?, ?, ?, ?, ?, ?, ?, ?)
 )sql";
 
 constexpr const char* kInsertSplit =
@@ -259,7 +269,7 @@ SELECT id, started_wall_ns, config_name, track, interface, vehicle, completed, o
        video_frames, video_fps, video_latency_ms_p50, operator_kind, device, distance_m,
        view_fps, view_frame_p99_ms, video_to_screen_ms_p50, video_to_screen_ms_p99, picture,
        servo_target_hz, servo_rate_short, physics_rate_hz, physics_target_hz, physics_rate_short,
-       vehicle_kind
+       vehicle_kind, predict, prediction_error_m_p50, prediction_error_m_p95
 FROM runs ORDER BY id
 )sql";
 
@@ -501,7 +511,10 @@ int64_t Recorder::Save(const RunRecord& run, const AlsoSave& also) {
       .Real(run.physics_rate_hz)
       .Real(run.physics_target_hz)
       .Int(run.physics_rate_short ? 1 : 0)
-      .Text(run.vehicle_kind);
+      .Text(run.vehicle_kind)
+      .Int(run.predict ? 1 : 0)
+      .RealOrNull(run.prediction_error_m_p50, run.prediction_error_m_p50 >= 0.0)
+      .RealOrNull(run.prediction_error_m_p95, run.prediction_error_m_p95 >= 0.0);
   StepDone(path_, db_, insert_run.get(), "cannot insert run");
   const int64_t run_id = sqlite3_last_insert_rowid(db_);
 
@@ -631,6 +644,11 @@ std::vector<RunRecord> Recorder::LoadAll() const {
       run.physics_target_hz = r.Real();
       run.physics_rate_short = r.Bool();
       run.vehicle_kind = r.Text();
+      run.predict = r.Bool();
+      const double p50 = r.Real();
+      const double p95 = r.Real();
+      run.prediction_error_m_p50 = std::isnan(p50) ? -1.0 : p50;
+      run.prediction_error_m_p95 = std::isnan(p95) ? -1.0 : p95;
       index_of.emplace(run.id, runs.size());
       runs.push_back(std::move(run));
     }

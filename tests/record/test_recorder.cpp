@@ -116,6 +116,9 @@ RunRecord MakeRun(int n, int split_count) {
   run.interface = (n % 2 == 0) ? "gesture" : "cockpit+hud";
   run.vehicle = "tank-sim Zürich";
   run.vehicle_kind = (n % 2 == 0) ? "can-robot-sim" : "sim-robot";
+  run.predict = n % 2 == 1;
+  run.prediction_error_m_p50 = n % 3 == 0 ? -1.0 : 0.004 * n;  // -1: none (stored as NULL)
+  run.prediction_error_m_p95 = n % 3 == 0 ? -1.0 : 0.011 * n;
   run.completed = (n % 2 == 0);
   run.outcome = run.completed ? "completed" : "lap cap";
   run.lap_time_s = 110.25 + n;
@@ -172,6 +175,9 @@ void CheckSame(const RunRecord& got, const RunRecord& want) {
   CHECK(got.interface == want.interface);
   CHECK(got.vehicle == want.vehicle);
   CHECK(got.vehicle_kind == want.vehicle_kind);
+  CHECK(got.predict == want.predict);
+  CHECK(got.prediction_error_m_p50 == want.prediction_error_m_p50);
+  CHECK(got.prediction_error_m_p95 == want.prediction_error_m_p95);
   CHECK(got.completed == want.completed);
   CHECK(got.outcome == want.outcome);
   CHECK(SameReal(got.lap_time_s, want.lap_time_s));
@@ -338,7 +344,7 @@ TEST_CASE("Recorder stores the start time as ISO-8601 UTC and a schema version",
   }
   RawDb raw(file);
   CHECK(raw.Text("SELECT started_utc FROM runs") == "2024-05-01T12:34:56.789Z");
-  CHECK(raw.Integer("PRAGMA user_version") == 6);
+  CHECK(raw.Integer("PRAGMA user_version") == 7);
 }
 
 TEST_CASE("Recorder creates missing parent folders", "[recorder]") {
@@ -375,10 +381,10 @@ TEST_CASE("Recorder set-up errors name the database file", "[recorder]") {
     const fs::path file = tmp.path() / "future.db";
     {
       RawDb raw(file);
-      raw.Exec("PRAGMA user_version = 7");
+      raw.Exec("PRAGMA user_version = 8");
     }
     RequireThrowsMentioning([&] { Recorder recorder(file); }, file.string());
-    RequireThrowsMentioning([&] { Recorder recorder(file); }, "schema version 7");
+    RequireThrowsMentioning([&] { Recorder recorder(file); }, "schema version 8");
   }
 
   SECTION("the path is a folder") {
@@ -690,7 +696,7 @@ TEST_CASE("A v1 database is migrated to the current schema in place and keeps it
   }
 
   RawDb raw(file);
-  CHECK(raw.Integer("PRAGMA user_version") == 6);
+  CHECK(raw.Integer("PRAGMA user_version") == 7);
   CHECK(raw.Text("PRAGMA integrity_check") == "ok");
   CHECK(raw.Integer("SELECT COUNT(*) FROM pragma_foreign_key_check") == 0);
   for (const char* table : {"interface_switches", "run_path", "run_contacts", "run_counters"}) {
@@ -708,7 +714,7 @@ TEST_CASE("A v1 database is migrated to the current schema in place and keeps it
     Recorder again(file);
     CHECK(again.LoadAll().size() == 2);
   }
-  CHECK(raw.Integer("PRAGMA user_version") == 6);
+  CHECK(raw.Integer("PRAGMA user_version") == 7);
 }
 
 namespace {
@@ -797,7 +803,7 @@ TEST_CASE("A v2 database is migrated to v3: its runs keep everything, new runs k
   CheckSame(runs[0], V2Run());
   CheckSame(runs[1], fresh);
   RawDb raw(file);
-  CHECK(raw.Integer("PRAGMA user_version") == 6);
+  CHECK(raw.Integer("PRAGMA user_version") == 7);
   CHECK(raw.Text("PRAGMA integrity_check") == "ok");
   CHECK(raw.Integer(
             "SELECT value FROM run_counters WHERE run_id = 2 AND name = 'servo_overruns'") == 9);

@@ -95,6 +95,10 @@ class Binder {
 
   Binder& Int(int64_t value) { return Check(sqlite3_bind_int64(stmt_, ++index_, value)); }
   Binder& Real(double value) { return Check(sqlite3_bind_double(stmt_, ++index_, value)); }
+  /// `value`, or NULL when there is none to store (`present` false).
+  Binder& RealOrNull(double value, bool present) {
+    return present ? Real(value) : Check(sqlite3_bind_null(stmt_, ++index_));
+  }
   Binder& Text(const std::string& value) {
     return Check(sqlite3_bind_text64(stmt_, ++index_, value.data(), value.size(), SQLITE_TRANSIENT,
                                      SQLITE_UTF8));
