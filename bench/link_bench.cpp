@@ -35,7 +35,7 @@ constexpr double kRateHz = 100.0;
 
 double Number(const std::string& json, const std::string& key) {
   const std::string v = JsonFieldOf(json, key);
-  return v.empty() ? std::nan("") : std::stod(v);
+  return v.empty() || v == "null" ? std::nan("") : std::stod(v);
 }
 
 std::vector<double> ParseList(const std::string& option, const std::string& text) {
@@ -174,6 +174,8 @@ RttFigures HaptelRoundTrip(int domain, double seconds, const std::filesystem::pa
 struct LapRow {
   double delay_ms = 0.0;
   double loss_percent = 0.0;
+  bool predict = false;
+  double prediction_error_m_p95 = std::nan("");
   bool ran = false;
   bool completed = false;
   std::string outcome;
@@ -186,17 +188,19 @@ struct LapRow {
 };
 
 LapRow Lap(const std::filesystem::path& dir, const std::string& track, int domain, double delay_ms,
-           double loss_percent) {
+           double loss_percent, bool predict) {
   LapRow row;
   row.delay_ms = delay_ms;
   row.loss_percent = loss_percent;
+  row.predict = predict;
   char fault[96];
   std::snprintf(fault, sizeof fault, "delay=%gms,loss=%g%%", delay_ms, loss_percent);
   const std::string db = (dir / "link.db").string();
   const int64_t start = MonotonicNs();
   ChildProcess run((ProgramDirectory() / "haptel").string(),
                    {"run", "--operator", "auto", "--view", "none", "--link-fault", fault, "--track", track, "--json",
-                    "--quiet", "--domain", std::to_string(domain), "--database", db, "--vehicle-timeout", "5"},
+                    "--quiet", "--domain", std::to_string(domain), "--database", db, "--vehicle-timeout", "5",
+                    "--predict", predict ? "on" : "off"},
                    ChildProcess::Options{true});
   run.Wait(1800.0);
   row.wall_s = NsToS(MonotonicNs() - start);
@@ -213,6 +217,7 @@ LapRow Lap(const std::filesystem::path& dir, const std::string& track, int domai
   row.gates_passed = static_cast<int>(Number(json, "gates_passed"));
   row.gates_total = static_cast<int>(Number(json, "gates_total"));
   row.rtt_p50_ms = Number(json, "command_rtt_ms_p50");
+  row.prediction_error_m_p95 = Number(json, "prediction_error_m_p95");
   return row;
 }
 
@@ -222,13 +227,14 @@ int BenchLinkMain(int argc, const char* const* argv) {
   bool json = false, smoke = false;
   double seconds = 10.0;
   std::string track = ShippedFile("config/tracks/grand-prix.yaml").string();
-  std::vector<double> delays{0, 50, 100, 200, 400};
+  std::vector<double> delays{0, 50, 100, 200, 400, 800};
   std::vector<double> losses{0, 5};
+  std::vector<bool> predicts{false, true};
   // Domains of the bench's own, away from a default installation's 0.
   int domain = 200 + static_cast<int>(getpid() % 30);
   std::optional<int> lap_domain;
   try {
-    const Args args(argc, argv, {"seconds", "track", "delays", "losses", "domain", "lap-domain"},
+    const Args args(argc, argv, {"seconds", "track", "delays", "losses", "domain", "lap-domain", "predict"},
                     {"json", "echo", kSmokeFlag});
     if (args.Flag("echo")) return Echo(args.Int("domain", 0, 232).value_or(0));
     json = args.Flag("json");
@@ -238,6 +244,7 @@ int BenchLinkMain(int argc, const char* const* argv) {
       track = ShippedFile("config/tracks/test-short.yaml").string();
       delays = {0};
       losses = {0};
+      predicts = {true};  // the predictor's path, the one a change is likelier to break
     }
     seconds = args.Number("seconds", 2.0, 600.0).value_or(seconds);
     track = args.Value("track").value_or(track);
@@ -245,6 +252,17 @@ int BenchLinkMain(int argc, const char* const* argv) {
     lap_domain = args.Int("lap-domain", 0, 232);
     if (auto d = args.Value("delays")) delays = ParseList("delays", *d);
     if (auto l = args.Value("losses")) losses = ParseList("losses", *l);
+    if (auto p = args.Value("predict")) {
+      if (*p == "off") {
+        predicts = {false};
+      } else if (*p == "on") {
+        predicts = {true};
+      } else if (*p == "both") {
+        predicts = {false, true};
+      } else {
+        throw UsageError("option --predict: expected off, on or both, got '" + *p + "'");
+      }
+    }
     for (const double l : losses) {
       if (l > 99.0) throw UsageError("option --losses: expected percentages below 100");
     }
@@ -253,7 +271,8 @@ int BenchLinkMain(int argc, const char* const* argv) {
     return 2;
   }
   const auto dir = OutputDir(smoke);
-  PrintSmokeNote("link", smoke, "%.0f s per round trip, %zu lap(s) on %s", seconds, delays.size() * losses.size(),
+  PrintSmokeNote("link", smoke, "%.0f s per round trip, %zu lap(s) on %s", seconds,
+                 delays.size() * losses.size() * predicts.size(),
                  std::filesystem::path(track).filename().c_str());
   std::printf("haptel bench link: round trip at %.0f Hz for %.0f s, then laps on %s\n\n", kRateHz, seconds,
               track.c_str());
@@ -293,38 +312,47 @@ int BenchLinkMain(int argc, const char* const* argv) {
   }
 
   std::vector<LapRow> rows;
-  std::printf("  delay ms  loss %%  outcome         lap s   gates  obstacles  rtt p50 ms  wall s\n");
+  std::printf("  delay ms  loss %%  predict  outcome         lap s   x 0 ms  gates  obstacles  rtt p50 ms  "
+              "pred. err p95 mm  wall s\n");
   for (const double loss : losses) {
-    for (const double delay : delays) {
-      const LapRow row = Lap(dir, track, lap_domain.value_or(domain + 1), delay, loss);
-      rows.push_back(row);
-      std::printf("  %8.0f  %6.1f  %-14s %6.2f   %d/%d   %9d  %10.2f  %6.1f\n", delay, loss,
-                  row.ran ? row.outcome.c_str() : "no result", row.lap_time_s, row.gates_passed, row.gates_total,
-                  row.obstacles, row.rtt_p50_ms, row.wall_s);
-      std::fflush(stdout);
+    for (const bool predict : predicts) {
+      double lap_at_zero = std::nan("");
+      for (const double delay : delays) {
+        const LapRow row = Lap(dir, track, lap_domain.value_or(domain + 1), delay, loss, predict);
+        rows.push_back(row);
+        if (delay == 0.0 && row.completed) lap_at_zero = row.lap_time_s;
+        std::printf("  %8.0f  %6.1f  %-7s  %-14s %6.2f  %6.2f   %d/%d   %9d  %10.2f  %16.1f  %6.1f\n", delay, loss,
+                    predict ? "on" : "off", row.ran ? row.outcome.c_str() : "no result", row.lap_time_s,
+                    row.completed ? row.lap_time_s / lap_at_zero : std::nan(""), row.gates_passed, row.gates_total,
+                    row.obstacles, row.rtt_p50_ms, row.prediction_error_m_p95 * 1e3, row.wall_s);
+        std::fflush(stdout);
+      }
     }
   }
   {
     std::ofstream csv(dir / "link_laps.csv");
-    csv << "delay_ms,loss_percent,outcome,completed,lap_time_s,gates_passed,gates_total,obstacles,rtt_p50_ms\n";
+    csv << "delay_ms,loss_percent,predict,outcome,completed,lap_time_s,gates_passed,gates_total,obstacles,"
+           "rtt_p50_ms,prediction_error_m_p95\n";
     for (const LapRow& r : rows) {
-      csv << r.delay_ms << "," << r.loss_percent << "," << r.outcome << "," << (r.completed ? 1 : 0) << ","
-          << r.lap_time_s << "," << r.gates_passed << "," << r.gates_total << "," << r.obstacles << ","
-          << r.rtt_p50_ms << "\n";
+      csv << r.delay_ms << "," << r.loss_percent << "," << (r.predict ? 1 : 0) << "," << r.outcome << ","
+          << (r.completed ? 1 : 0) << "," << r.lap_time_s << "," << r.gates_passed << "," << r.gates_total << ","
+          << r.obstacles << "," << r.rtt_p50_ms << "," << r.prediction_error_m_p95 << "\n";
     }
   }
   std::vector<Series> series;
   for (const double loss : losses) {
-    Series s;
-    char name[48];
-    std::snprintf(name, sizeof name, "lap time, %g%% loss", loss);
-    s.name = name;
-    for (const LapRow& r : rows) {
-      if (r.loss_percent != loss || !r.completed) continue;
-      s.x.push_back(r.delay_ms);
-      s.y.push_back(r.lap_time_s);
+    for (const bool predict : predicts) {
+      Series s;
+      char name[64];
+      std::snprintf(name, sizeof name, "%g%% loss, prediction %s", loss, predict ? "on" : "off");
+      s.name = name;
+      for (const LapRow& r : rows) {
+        if (r.loss_percent != loss || r.predict != predict || !r.completed) continue;
+        s.x.push_back(r.delay_ms);
+        s.y.push_back(r.lap_time_s);
+      }
+      if (!s.x.empty()) series.push_back(s);
     }
-    if (!s.x.empty()) series.push_back(s);
   }
   if (!series.empty()) {
     PlotLines(dir / "link_laps.png", series,
@@ -345,6 +373,9 @@ int BenchLinkMain(int argc, const char* const* argv) {
       const LapRow& r = rows[i];
       o << (i ? "," : "") << "{\"delay_ms\":" << JsonNumber(r.delay_ms) << ",\"loss_percent\":"
         << JsonNumber(r.loss_percent) << ",\"outcome\":" << JsonString(r.outcome)
+        << ",\"predict\":" << (r.predict ? "true" : "false")
+        << ",\"prediction_error_m_p95\":"
+        << (std::isfinite(r.prediction_error_m_p95) ? JsonNumber(r.prediction_error_m_p95) : std::string("null"))
         << ",\"completed\":" << (r.completed ? "true" : "false") << ",\"lap_time_s\":"
         << JsonNumber(std::isfinite(r.lap_time_s) ? r.lap_time_s : -1.0) << ",\"obstacles\":" << r.obstacles
         << ",\"rtt_p50_ms\":" << JsonNumber(std::isfinite(r.rtt_p50_ms) ? r.rtt_p50_ms : -1.0) << "}";

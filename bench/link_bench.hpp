@@ -13,9 +13,11 @@
 ///   by `haptel security init` the first time).
 /// - The lap against the network: `haptel run --link-fault delay=D,loss=L`
 ///   with the automatic operator on --track (default the grand prix) for each
-///   delay (--delays, ms, default 0,50,100,200,400) and loss (--losses, %,
-///   default 0,5): lap time, obstacles touched, completion, measured round
-///   trip. Each end delays what it receives by D, so the round trip is 2D.
+///   delay (--delays, ms, default 0,50,100,200,400,800) and loss (--losses,
+///   %, default 0,5), without and with the predictive display (--predict
+///   off|on|both, default both): lap time and its ratio to the 0 ms lap,
+///   obstacles touched, completion, measured round trip, the predictor's
+///   error p95. Each end delays what it receives by D, so the round trip is 2D.
 ///
 /// Prints both tables; writes build/bench/link_rtt.csv, link_laps.csv and
 /// link_laps.png; with --json the last stdout line is
@@ -24,11 +26,11 @@
 /// DDS domains: the round trips on --domain D (default 200 + pid % 30), the
 /// laps on --lap-domain (default D + 1).
 /// --smoke (smoke.hpp): 2 s per round trip (1 s of it warm-up), one lap of
-/// config/tracks/test-short.yaml without delay or loss.
+/// config/tracks/test-short.yaml without delay or loss, with prediction.
 namespace haptel::bench {
 
 /// `haptel bench link [--seconds S] [--track FILE] [--delays LIST] [--losses LIST]
-/// [--domain D] [--lap-domain D] [--smoke] [--json]`.
+/// [--predict off|on|both] [--domain D] [--lap-domain D] [--smoke] [--json]`.
 /// Returns 0 when every lap ran and the round trip was measured, 1 when one
 /// could not be, 2 for bad usage.
 int BenchLinkMain(int argc, const char* const* argv);

@@ -285,6 +285,8 @@ TEST_CASE("bench link --smoke", "[bench][smoke]") {
   REQUIRE(laps.size() == 1);  // no delay, no loss, on the short track
   CHECK(laps[0]["completed"].boolean());
   CHECK(laps[0]["outcome"].string() == "completed");
+  CHECK(laps[0]["predict"].boolean());
+  CHECK(Finite(laps[0]["prediction_error_m_p95"]) < 0.05);
   CHECK(Finite(laps[0]["lap_time_s"]) > 0.0);
   RequireFiles({"link_rtt.csv", "link_laps.csv", "link_laps.png"});
 }
