@@ -4,6 +4,7 @@
 
 #include "haptel/config/error.hpp"
 #include "haptel/config/interface_kinds.hpp"
+#include "haptel/config/link.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/run.hpp"
 #include "haptel/config/check.hpp"
@@ -107,6 +108,14 @@ StudyConfig LoadStudy(const std::filesystem::path& file) {
   const std::string track = root.String("track", "");
   s.track = track.empty() ? run_config.track : dir / track;
   if (const std::string db = root.String("database", ""); !db.empty()) s.database = db;
+  s.link_fault = root.String("link_fault", "");
+  if (!s.link_fault.empty()) {
+    try {
+      ParseLinkFault(s.link_fault);
+    } catch (const std::invalid_argument& e) {
+      root.Fail("link_fault", e.what());
+    }
+  }
   s.operators = root.String("operators", s.operators);
   if (s.operators != "synthetic" && s.operators != "person") root.Fail("operators", "synthetic or person");
   const bool synthetic = s.operators == "synthetic";
@@ -114,13 +123,14 @@ StudyConfig LoadStudy(const std::filesystem::path& file) {
   // Conditions: each names an interface file of the run configuration.
   std::vector<YamlMap> conditions = root.MapList("conditions");
   if (conditions.size() < 2 || conditions.size() > 10) {
-    root.Fail("conditions", "a list of 2 to 10 conditions, each {name, interface}");
+    root.Fail("conditions", "a list of 2 to 10 conditions, each {name, interface, predict}");
   }
   std::set<std::string> condition_names;
   for (YamlMap& c : conditions) {
     StudyCondition condition;
     condition.interface = c.RequireString("interface");
     condition.name = c.String("name", condition.interface);
+    condition.predict = c.Bool("predict", false);
     if (!PlainName(condition.name)) c.Fail("name", kPlainName);
     if (!condition_names.insert(condition.name).second) {
       c.Fail("name", "a name no other condition has ('" + condition.name + "' is taken)");

@@ -409,7 +409,8 @@ std::string RunJson(const SessionSetup& setup, const RecordedRun& run) {
     << ",\"command_rtt_ms_p50\":" << JsonNumber(r.command_rtt_ms_p50)
     << ",\"command_rtt_ms_p99\":" << JsonNumber(r.command_rtt_ms_p99) << ",\"video_frames\":" << r.video_frames
     << ",\"video_fps\":" << JsonNumber(r.video_fps) << ",\"video_latency_ms_p50\":" << JsonNumber(r.video_latency_ms_p50)
-    << ",\"predict\":" << (r.predict ? "true" : "false") << ",\"prediction_error_m_p50\":"
+    << ",\"predict\":" << (r.predict ? "true" : "false") << ",\"link_fault\":" << JsonString(r.link_fault)
+    << ",\"prediction_error_m_p50\":"
     << (r.prediction_error_m_p50 >= 0.0 ? JsonNumber(r.prediction_error_m_p50) : std::string("null"))
     << ",\"prediction_error_m_p95\":"
     << (r.prediction_error_m_p95 >= 0.0 ? JsonNumber(r.prediction_error_m_p95) : std::string("null"))

@@ -1,5 +1,7 @@
 #include "haptel/mediator/session.hpp"
 
+#include "haptel/config/link.hpp"
+
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -65,6 +67,7 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   rec.config_name = run.name;
   rec.vehicle = setup.vehicle.name;
   rec.vehicle_kind = setup.vehicle.kind;
+  rec.link_fault = setup.run.link.fault.enabled ? LinkFaultText(setup.run.link.fault) : "";
   rec.operator_kind = setup.operator_kind;
   rec.device = setup.device.name;
 

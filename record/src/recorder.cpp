@@ -224,9 +224,11 @@ ALTER TABLE studies ADD COLUMN definition_form TEXT NOT NULL DEFAULT '';
 )sql";
 
 // v7: the predictive display: whether the operator saw the prediction, and
-// the model's error against each state (NULL: no state to compare).
+// the model's error against each state (NULL: no state to compare); the
+// link's injected fault ('' none), which a study's trials share.
 constexpr const char* kSchemaV7 = R"sql(
 ALTER TABLE runs ADD COLUMN predict INTEGER NOT NULL DEFAULT 0;
+ALTER TABLE runs ADD COLUMN link_fault TEXT NOT NULL DEFAULT '';
 ALTER TABLE runs ADD COLUMN prediction_error_m_p50 REAL DEFAULT NULL;
 ALTER TABLE runs ADD COLUMN prediction_error_m_p95 REAL DEFAULT NULL;
 )sql";
@@ -243,10 +245,10 @@ INSERT INTO runs (started_utc, started_wall_ns, config_name, track, interface, v
                   video_latency_ms_p50, operator_kind, device, distance_m, view_fps,
                   view_frame_p99_ms, video_to_screen_ms_p50, video_to_screen_ms_p99, picture,
                   servo_target_hz, servo_rate_short, physics_rate_hz, physics_target_hz,
-                  physics_rate_short, vehicle_kind, predict, prediction_error_m_p50,
+                  physics_rate_short, vehicle_kind, predict, link_fault, prediction_error_m_p50,
                   prediction_error_m_p95)
 VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?,
-        ?, ?, ?, ?, ?, ?, ?, ?, ?)
+        ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)
 )sql";
 
 constexpr const char* kInsertSplit =
@@ -269,7 +271,7 @@ SELECT id, started_wall_ns, config_name, track, interface, vehicle, completed, o
        video_frames, video_fps, video_latency_ms_p50, operator_kind, device, distance_m,
        view_fps, view_frame_p99_ms, video_to_screen_ms_p50, video_to_screen_ms_p99, picture,
        servo_target_hz, servo_rate_short, physics_rate_hz, physics_target_hz, physics_rate_short,
-       vehicle_kind, predict, prediction_error_m_p50, prediction_error_m_p95
+       vehicle_kind, predict, link_fault, prediction_error_m_p50, prediction_error_m_p95
 FROM runs ORDER BY id
 )sql";
 
@@ -513,6 +515,7 @@ int64_t Recorder::Save(const RunRecord& run, const AlsoSave& also) {
       .Int(run.physics_rate_short ? 1 : 0)
       .Text(run.vehicle_kind)
       .Int(run.predict ? 1 : 0)
+      .Text(run.link_fault)
       .RealOrNull(run.prediction_error_m_p50, run.prediction_error_m_p50 >= 0.0)
       .RealOrNull(run.prediction_error_m_p95, run.prediction_error_m_p95 >= 0.0);
   StepDone(path_, db_, insert_run.get(), "cannot insert run");
@@ -645,6 +648,7 @@ std::vector<RunRecord> Recorder::LoadAll() const {
       run.physics_rate_short = r.Bool();
       run.vehicle_kind = r.Text();
       run.predict = r.Bool();
+      run.link_fault = r.Text();
       const double p50 = r.Real();
       const double p95 = r.Real();
       run.prediction_error_m_p50 = std::isnan(p50) ? -1.0 : p50;

@@ -98,6 +98,7 @@ std::string RunRecordJson(const RunRecord& r) {
       .Num("video_fps", r.video_fps)
       .Num("video_latency_ms_p50", r.video_latency_ms_p50)
       .Bool("predict", r.predict)
+      .Str("link_fault", r.link_fault)
       .Num("prediction_error_m_p50", r.prediction_error_m_p50)
       .Num("prediction_error_m_p95", r.prediction_error_m_p95)
       .Str("operator", r.operator_kind)

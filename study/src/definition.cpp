@@ -1,5 +1,7 @@
 #include "haptel/study/definition.hpp"
 
+#include "haptel/config/link.hpp"
+
 #include <charconv>
 #include <cstdlib>
 #include <map>
@@ -144,6 +146,8 @@ std::vector<DefiningValue> StudyDefinition(const StudyConfig& config) {
   out.push_back({"conditions", Joined(conditions)});
   for (const StudyCondition& c : config.conditions) {
     out.push_back({"conditions." + c.name + ".interface", c.interface});
+    // Keys written only when set: forms stored before they existed still match.
+    if (c.predict) out.push_back({"conditions." + c.name + ".predict", "true"});
   }
 
   out.push_back({"design.order", ToString(config.order)});
@@ -151,6 +155,7 @@ std::vector<DefiningValue> StudyDefinition(const StudyConfig& config) {
   out.push_back({"design.repetitions", std::to_string(config.repetitions)});
   out.push_back({"practice", config.practice ? "true" : "false"});
   out.push_back({"trial_cap_s", Number(config.trial_cap_s)});
+  if (!config.link_fault.empty()) out.push_back({"link_fault", LinkFaultText(ParseLinkFault(config.link_fault))});
   out.push_back({"questionnaires", Joined(config.questionnaires)});
   out.push_back({"questionnaires_dir", FromStudyFolder(config, config.questionnaires_dir)});
 

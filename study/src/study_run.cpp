@@ -85,6 +85,8 @@ mediator::SessionSetup TrialSetup(const StudyConfig& config, const PlannedTrial&
                                     database.string()};
   if (synthetic) words.insert(words.end(), {"--view", "none"});
   if (!domain.empty()) words.insert(words.end(), {"--domain", domain});
+  if (condition.predict) words.insert(words.end(), {"--predict", "on"});
+  if (!config.link_fault.empty()) words.insert(words.end(), {"--link-fault", config.link_fault});
   if (!verbose) words.push_back("--quiet");
   std::vector<const char*> argv;
   for (const std::string& w : words) argv.push_back(w.c_str());

@@ -32,7 +32,9 @@ std::string Bin(const std::string& name) { return (test::BinDir() / name).string
 /// fixed order, simulated drivers; each trial ends at a 6 s cap (an
 /// unfinished lap is a finished trial, scored at the cap), which keeps the
 /// test short.
-std::filesystem::path SmallStudy(const std::filesystem::path& dir, int participants = 2) {
+std::filesystem::path SmallStudy(const std::filesystem::path& dir, int participants = 2,
+                                 const std::string& second_condition_options = "",
+                                 const std::string& extra_lines = "") {
   const auto source = std::filesystem::current_path();
   const auto file = dir / "small-study.yaml";
   std::ofstream out(file);
@@ -42,9 +44,9 @@ std::filesystem::path SmallStudy(const std::filesystem::path& dir, int participa
          "operators: synthetic\n"
          "conditions:\n"
          "  - {name: first, interface: gesture}\n"
-         "  - {name: second, interface: gesture}\n"
+         "  - {name: second, interface: gesture" << second_condition_options << "}\n"
          "design: {order: fixed}\n"
-         "trial_cap_s: 6\n"
+         "trial_cap_s: 6\n" << extra_lines <<
          "profiles:\n"
          "  plain: {steering_noise: 0.02, seed: 3}\n"
          "participants:\n";
@@ -151,6 +153,27 @@ TEST_CASE("Abort in a synthetic study ends the trial under way once; the study t
   REQUIRE(sqlite3_step(select) == SQLITE_ROW);
   CHECK(sqlite3_column_int(select, 0) == 1);
   sqlite3_finalize(select);
+}
+
+TEST_CASE("conditions that differ only in prediction, over the study's faulted link, are recorded per trial") {
+  const auto dir = test::ScratchDir("e2e-study-predict");
+  const auto file = SmallStudy(dir, 1, ", predict: true", "link_fault: delay=100ms\n");
+  const auto db = dir / "predict.db";
+  Child study({Bin("haptel"), "study", "run", file.string(), "--database", db.string(), "--domain",
+               std::to_string(test::UniqueDomain(44)), "--json"});
+  INFO(study.err());
+  REQUIRE(study.Wait(300.0) == 0);
+  CHECK(test::JsonField(study.LastLine(), "trials_done") == "2");
+  record::Recorder recorder(db);
+  const std::vector<record::RunRecord> runs = recorder.LoadAll();
+  REQUIRE(runs.size() == 2);  // fixed order: first, then second
+  CHECK_FALSE(runs[0].predict);
+  CHECK(runs[1].predict);
+  for (const record::RunRecord& r : runs) {
+    CHECK(r.link_fault == "delay=0.1s,jitter=0s,loss=0");
+    CHECK(r.command_rtt_ms_p50 > 150.0);  // the fault was on: 2 x 100 ms
+    CHECK(r.prediction_error_m_p95 >= 0.0);  // the model ran in both
+  }
 }
 
 TEST_CASE("a study that cannot work is refused before anything runs") {

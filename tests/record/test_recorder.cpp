@@ -117,6 +117,7 @@ RunRecord MakeRun(int n, int split_count) {
   run.vehicle = "tank-sim Zürich";
   run.vehicle_kind = (n % 2 == 0) ? "can-robot-sim" : "sim-robot";
   run.predict = n % 2 == 1;
+  run.link_fault = n % 2 == 1 ? "delay=0.2s,jitter=0s,loss=0" : "";
   run.prediction_error_m_p50 = n % 3 == 0 ? -1.0 : 0.004 * n;  // -1: none (stored as NULL)
   run.prediction_error_m_p95 = n % 3 == 0 ? -1.0 : 0.011 * n;
   run.completed = (n % 2 == 0);
@@ -176,6 +177,7 @@ void CheckSame(const RunRecord& got, const RunRecord& want) {
   CHECK(got.vehicle == want.vehicle);
   CHECK(got.vehicle_kind == want.vehicle_kind);
   CHECK(got.predict == want.predict);
+  CHECK(got.link_fault == want.link_fault);
   CHECK(got.prediction_error_m_p50 == want.prediction_error_m_p50);
   CHECK(got.prediction_error_m_p95 == want.prediction_error_m_p95);
   CHECK(got.completed == want.completed);

@@ -360,15 +360,19 @@ TEST_CASE("A study planned before the database kept definitions resumes once, th
     const StudyConfig config = LoadStudy(file);
     StudyStore store(recorder, config, PlanTrials(config));
   }
-  // What a v5 database holds: the same tables without the definition.
+  // What a v5 database holds: the same tables without the definition (v6)
+  // and the runs' prediction and link fault (v7).
   {
     sqlite3* raw = nullptr;
     REQUIRE(sqlite3_open(db.c_str(), &raw) == SQLITE_OK);
-    REQUIRE(sqlite3_exec(raw, "ALTER TABLE studies DROP COLUMN definition_form; PRAGMA user_version = 5", nullptr,
-                         nullptr, nullptr) == SQLITE_OK);
+    REQUIRE(sqlite3_exec(raw,
+                         "ALTER TABLE studies DROP COLUMN definition_form; ALTER TABLE runs DROP COLUMN predict; "
+                         "ALTER TABLE runs DROP COLUMN link_fault; ALTER TABLE runs DROP COLUMN prediction_error_m_p50; "
+                         "ALTER TABLE runs DROP COLUMN prediction_error_m_p95; PRAGMA user_version = 5",
+                         nullptr, nullptr, nullptr) == SQLITE_OK);
     sqlite3_close(raw);
   }
-  record::Recorder recorder(db);  // migrated to v6: the study has no definition on record
+  record::Recorder recorder(db);  // migrated to v7: the study has no definition on record
   auto resume = [&](const std::string& text) {
     test::WriteFile(file, text);
     const StudyConfig config = LoadStudy(file);

@@ -75,6 +75,27 @@ TEST_CASE("The shipped people's study loads and plans the thesis's study: four p
   CHECK(PlanTrials(s).size() == 16);
 }
 
+TEST_CASE("Conditions may differ only in the predictive display; the link's fault is the study's") {
+  const auto dir = test::ScratchDir("study-file-predict");
+  const auto file = test::WriteFile(
+      dir / "predict.yaml", Study("  - {name: plain, interface: gesture}\n"
+                                  "  - {name: predicted, interface: gesture, predict: true}\n",
+                                  People(2), "link_fault: delay=200ms,jitter=10ms\n"));
+  const StudyConfig config = LoadStudy(file);
+  REQUIRE(config.conditions.size() == 2);
+  CHECK(config.conditions[0].interface == config.conditions[1].interface);
+  CHECK_FALSE(config.conditions[0].predict);
+  CHECK(config.conditions[1].predict);
+  CHECK(config.link_fault == "delay=200ms,jitter=10ms");
+
+  const std::string bad_fault = ErrorOf(Study(kFour, People(4), "link_fault: delay=fast\n"));
+  CHECK_THAT(bad_fault, Catch::Contains("bad.yaml") && Catch::Contains("link_fault"));
+  const std::string bad_predict =
+      ErrorOf(Study("  - {name: a, interface: gesture, predict: maybe}\n  - {name: b, interface: gesture}\n",
+                    People(2)));
+  CHECK_THAT(bad_predict, Catch::Contains("conditions[0].predict"));
+}
+
 TEST_CASE("A study file that cannot work is refused naming the file, the key and what was expected") {
   SECTION("an unknown interface") {
     const std::string e = ErrorOf(Study("  - {name: a, interface: gesture}\n  - {name: b, interface: wheelchair}\n", People(2)));

@@ -73,6 +73,9 @@ struct DriverProfile {
 struct StudyCondition {
   std::string name;       ///< as the report shows it
   std::string interface;  ///< interfaces/<interface>.yaml
+  /// The predictive display on (haptel run --predict on): two conditions
+  /// may differ in this alone, to A/B-test it with the same interface.
+  bool predict = false;
 };
 
 struct StudyParticipant {
@@ -95,6 +98,9 @@ struct StudyConfig {
   std::filesystem::path run;
   std::filesystem::path track;     ///< the trials' track
   std::filesystem::path database;  ///< empty: the run configuration's
+  /// The link's fault for every trial, as `--link-fault` writes it
+  /// ("delay=200ms,jitter=20ms,loss=2%"; empty: the run configuration's).
+  std::string link_fault;
   /// "synthetic" (simulated drivers, unattended) or "person".
   std::string operators = "person";
   std::vector<StudyCondition> conditions;

@@ -85,6 +85,8 @@ struct RunRecord {
   /// the model's error against each state at the moment it was sampled
   /// (m; -1: no state to compare).
   bool predict = false;
+  /// The link's injected fault, as LinkFaultText writes it (v7; "": none).
+  std::string link_fault;
   double prediction_error_m_p50 = -1.0;
   double prediction_error_m_p95 = -1.0;
   std::string operator_kind;  ///< "auto" or "person"
