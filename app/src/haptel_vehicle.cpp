@@ -59,10 +59,19 @@ int RunNode(haptel::vehicles::Node& node, const haptel::VehicleConfig& config, c
   using namespace haptel;
   uint64_t trips = 0;
   std::string failure;
+  bool fault_said = false;
   while (!stop.load()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
     failure = node.AdapterFailure();
     if (!failure.empty()) break;
+    if (!fault_said) {
+      // The vehicle stopped itself: it stays safe until restarted; its states
+      // carry the fault, which ends the operator's run as vehicle lost.
+      if (const std::string fault = node.Fault(); !fault.empty()) {
+        fault_said = true;
+        log::Error("the vehicle stopped itself: " + fault + "; " + node.MadeSafe() + " until it is restarted");
+      }
+    }
     const auto c = node.Counters();
     if (c.watchdog_trips > trips) {
       trips = c.watchdog_trips;

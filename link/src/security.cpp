@@ -4,13 +4,19 @@
 #include <netinet/in.h>
 #include <unistd.h>
 
+#include <openssl/bio.h>
 #include <openssl/pem.h>
+#include <openssl/pkcs7.h>
 #include <openssl/x509.h>
+#include <tinyxml2.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <ctime>
 #include <fstream>
+#include <iomanip>
 #include <memory>
+#include <sstream>
 #include <stdexcept>
 
 #include "haptel/config/error.hpp"
@@ -175,6 +181,134 @@ void CheckValidNow(const fs::path& dir, const fs::path& file) {
   }
 }
 
+/// What to do about a folder whose files no longer serve: init refuses to
+/// overwrite it.
+std::string RemakeAdvice() {
+  return "run `haptel security init` again (into a new folder: it does not overwrite this one)";
+}
+
+struct BioFree {
+  void operator()(BIO* b) const { BIO_free(b); }
+};
+struct Pkcs7Free {
+  void operator()(PKCS7* p) const { PKCS7_free(p); }
+};
+struct StoreFree {
+  void operator()(X509_STORE* s) const { X509_STORE_free(s); }
+};
+
+/// The content of `file`, an S/MIME document the CA `ca` signed, verified
+/// as Fast DDS's Access-Permissions plugin verifies it (PKCS7_verify with the
+/// CA as the only trusted certificate, text mode). Throws ConfigError naming
+/// the file (`what`: "permissions file", "governance").
+std::string SignedContent(const fs::path& file, const fs::path& ca, const std::string& what) {
+  const std::unique_ptr<BIO, BioFree> in(BIO_new_file(file.c_str(), "r"));
+  if (!in) throw ConfigError(what + " " + file.string() + ": cannot be read");
+  BIO* content = nullptr;
+  const std::unique_ptr<PKCS7, Pkcs7Free> p7(SMIME_read_PKCS7(in.get(), &content));
+  const std::unique_ptr<BIO, BioFree> content_owner(content);
+  if (!p7) throw ConfigError(what + " " + file.string() + " is not an S/MIME signed document; " + RemakeAdvice());
+  const std::unique_ptr<X509_STORE, StoreFree> store(X509_STORE_new());
+  {
+    const std::unique_ptr<BIO, BioFree> ca_in(BIO_new_file(ca.c_str(), "r"));
+    X509* cert = ca_in ? PEM_read_bio_X509(ca_in.get(), nullptr, nullptr, nullptr) : nullptr;
+    if (cert == nullptr) throw ConfigError("security: " + ca.string() + " is not a PEM certificate");
+    X509_STORE_add_cert(store.get(), cert);
+    X509_free(cert);  // the store holds its own reference
+  }
+  const std::unique_ptr<BIO, BioFree> out(BIO_new(BIO_s_mem()));
+  if (PKCS7_verify(p7.get(), nullptr, store.get(), content, out.get(), PKCS7_TEXT) != 1) {
+    throw ConfigError(what + " " + file.string() + " is not signed by this folder's CA (" + ca.string() +
+                      "): made by another `haptel security init`, or changed since; " + RemakeAdvice());
+  }
+  char* data = nullptr;
+  const long size = BIO_get_mem_data(out.get(), &data);
+  return std::string(data, static_cast<size_t>(std::max(0L, size)));
+}
+
+/// "2026-01-01T00:00:00Z"
+std::string IsoUtc(std::time_t t) { return Iso(t) + "Z"; }
+
+std::string Trimmed(const char* text) {
+  std::string s = text != nullptr ? text : "";
+  const auto space = [](char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r'; };
+  while (!s.empty() && space(s.back())) s.pop_back();
+  size_t at = 0;
+  while (at < s.size() && space(s[at])) ++at;
+  return s.substr(at);
+}
+
+/// One end of a grant's validity as Haptel writes it (UTC, no zone) and as
+/// Fast DDS reads it (the same digits in this host's local time, std::mktime
+/// without daylight saving): the file means the first, DDS enforces the
+/// second, and the check refuses when either says no, so DDS never refuses
+/// for a date left unnamed.
+struct ValidityEnd {
+  std::string text;        ///< as written
+  std::time_t as_written;  ///< read as UTC
+  std::time_t as_dds;      ///< read as Fast DDS reads it
+};
+
+ValidityEnd ReadValidityEnd(const fs::path& file, const tinyxml2::XMLElement* element, const char* tag) {
+  const tinyxml2::XMLElement* e = element != nullptr ? element->FirstChildElement(tag) : nullptr;
+  const std::string text = Trimmed(e != nullptr ? e->GetText() : nullptr);
+  std::tm tm{};
+  std::istringstream in(text);
+  in >> std::get_time(&tm, "%Y-%m-%dT%H:%M:%S");
+  if (text.empty() || in.fail()) {
+    throw ConfigError("permissions file " + file.string() + ": its validity's <" + tag + "> '" + text +
+                      "' is not a date; expected YYYY-MM-DDThh:mm:ss (UTC); " + RemakeAdvice());
+  }
+  std::tm local = tm;
+  local.tm_isdst = 0;
+  return {text, timegm(&tm), std::mktime(&local)};
+}
+
+/// Wording for the instant `t` at which one end takes effect, and how the
+/// file wrote it when DDS reads it otherwise.
+std::string When(std::time_t t, const ValidityEnd& end, const char* tag) {
+  if (end.as_written == end.as_dds) return IsoUtc(t);
+  return IsoUtc(t) + " (its <" + std::string(tag) + "> " + end.text +
+         ", which DDS reads in this host's local time)";
+}
+
+/// The permissions of `identity` in `file`: signed by the CA, holding a grant
+/// for the identity's subject, and valid now.
+void CheckPermissions(const fs::path& file, const fs::path& ca, const std::string& identity, std::time_t now) {
+  const std::string xml = SignedContent(file, ca, "permissions file");
+  tinyxml2::XMLDocument doc;
+  if (doc.Parse(xml.c_str(), xml.size()) != tinyxml2::XML_SUCCESS) {
+    throw ConfigError("permissions file " + file.string() + ": its signed XML does not parse (" +
+                      std::string(doc.ErrorStr()) + "); " + RemakeAdvice());
+  }
+  const tinyxml2::XMLElement* permissions =
+      doc.FirstChildElement("dds") != nullptr ? doc.FirstChildElement("dds")->FirstChildElement("permissions") : nullptr;
+  const std::string subject = Subject(identity);
+  const tinyxml2::XMLElement* grant = nullptr;
+  for (const tinyxml2::XMLElement* g = permissions != nullptr ? permissions->FirstChildElement("grant") : nullptr;
+       g != nullptr && grant == nullptr; g = g->NextSiblingElement("grant")) {
+    const tinyxml2::XMLElement* name = g->FirstChildElement("subject_name");
+    if (name != nullptr && Trimmed(name->GetText()) == subject) grant = g;
+  }
+  if (grant == nullptr) {
+    throw ConfigError("permissions file " + file.string() + " grants nothing to identity '" + identity +
+                      "' (no <grant> with <subject_name>" + subject + "</subject_name>); " + RemakeAdvice());
+  }
+  const tinyxml2::XMLElement* validity = grant->FirstChildElement("validity");
+  const ValidityEnd not_before = ReadValidityEnd(file, validity, "not_before");
+  const ValidityEnd not_after = ReadValidityEnd(file, validity, "not_after");
+  const std::time_t begins = std::max(not_before.as_written, not_before.as_dds);
+  const std::time_t ends = std::min(not_after.as_written, not_after.as_dds);
+  if (now < begins) {
+    throw ConfigError("permissions file " + file.string() + " is not valid before " +
+                      When(begins, not_before, "not_before") + " (is this host's clock right?); " + RemakeAdvice());
+  }
+  if (now > ends) {
+    throw ConfigError("permissions file " + file.string() + " expired on " + When(ends, not_after, "not_after") +
+                      "; " + RemakeAdvice());
+  }
+}
+
 }  // namespace
 
 std::string OperatorIdentity() { return "operator"; }
@@ -200,6 +334,11 @@ void CheckSecurity(const fs::path& dir, const std::string& identity) {
   }
   CheckValidNow(dir, f.ca);
   CheckValidNow(dir, f.certificate);
+  // What DDS would otherwise refuse with no reason given ("DDS refused to
+  // create participant"): documents another CA signed, and permissions
+  // outside their validity.
+  SignedContent(f.governance, f.ca, "governance");
+  CheckPermissions(f.permissions, f.ca, identity, std::time(nullptr));
 }
 
 std::vector<std::pair<std::string, std::string>> SecurityProperties(const fs::path& dir,

@@ -17,6 +17,7 @@
 #include "haptel/interfaces/blimp_manual.hpp"
 #include "haptel/mediator/blimp/blimp_lap_timer.hpp"
 #include "haptel/mediator/blimp/blimp_pilot.hpp"
+#include "haptel/mediator/controller_errors.hpp"
 #include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/run_counters.hpp"
 #include "haptel/mediator/operator.hpp"
@@ -40,8 +41,10 @@ BlimpObservation Observe(double t_s, const msg::BlimpState& s) {
   return o;
 }
 
+/// The progress line; `controller`: the servo controller's errors since the
+/// last line ("" when none, or no controller).
 void LogBlimpProgress(double t, const BlimpLapTimer& lap, const VehicleLink& link, const msg::BlimpState& s,
-                 const BlimpCommand& command) {
+                      const BlimpCommand& command, const std::string& controller) {
   char line[300];
   std::snprintf(line, sizeof line,
                 "%6.1f s  blimp  lap %5.1f s  gates %d/%d  obstacles %d  at %.0f %.0f m  height %.1f m  airspeed %.1f m/s  "
@@ -50,7 +53,7 @@ void LogBlimpProgress(double t, const BlimpLapTimer& lap, const VehicleLink& lin
                 t, lap.lap_time_s(), lap.next_gate(), lap.gates_total(), lap.obstacles_touched(), s.x(),
                 s.y(), s.z(), s.airspeed(), command.power, command.helix, command.rudder, command.elevator, command.tail_rotor,
                 s.outputs()[5], s.outputs()[6], link.Rtt().Percentile(0.5) * 1e-3, link.video().Stats().fps);
-  log::Info(line);
+  log::Info(line + controller);
 }
 
 /// What the blimp's view shows over the picture: the lap, the gates, the
@@ -157,6 +160,7 @@ class BlimpSession final : public FamilySession {
       const msg::BlimpState& s = e.state;
       const double ts = NsToS(e.received_ns - t0);
       if (health.OnState(s, e.received_ns)) haptic.OnVehicleUp();
+      controller_errors_.ObserveState(s);
       last_ = s;
       if (!s.pose_valid()) continue;
       const BlimpObservation o = Observe(ts, s);
@@ -207,12 +211,13 @@ class BlimpSession final : public FamilySession {
     return view::Gaze{true, head_.pan, head_.tilt, last_.outputs()[5], last_.outputs()[6]};
   }
   void LogProgress(double t, const VehicleLink& link, double) const override {
-    LogBlimpProgress(t, lap_, link, last_, command_);
+    LogBlimpProgress(t, lap_, link, last_, command_, controller_errors_.TakeProgressText());
   }
   const char* MadeSafe() const override { return "forces zeroed, blimp to neutral"; }
 
   void Finish(SessionResult& result, bool) override {
     RunRecord& rec = result.record;
+    result.controller_errors = controller_errors_.seen();
     rec.lap_time_s = lap_.lap_time_s();
     rec.gates_passed = lap_.gates_passed();
     rec.gates_missed = lap_.gates_missed();
@@ -230,6 +235,8 @@ class BlimpSession final : public FamilySession {
   double command_rate_hz_ = 20.0;
   std::unique_ptr<BlimpAutoPilot> pilot_;
   msg::BlimpState last_;
+  /// Taken from by the progress line (LogProgress is const to the session loop).
+  mutable ControllerErrorWatch controller_errors_;
   BlimpCommand command_;
   interfaces::HeadDirection head_;
   int64_t next_command_ns_ = 0;

@@ -25,6 +25,7 @@
 #include "haptel/link/fault_transport.hpp"
 #include "haptel/link/security.hpp"
 #include "haptel/calibration/calibration_procedure.hpp"
+#include "haptel/mediator/controller_errors.hpp"
 #include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/run_counters.hpp"
 #include "haptel/record/run_picture.hpp"
@@ -97,6 +98,23 @@ std::string CountersJson(const std::vector<haptel::record::RunCounter>& counters
     out += haptel::JsonString(c.name) + ":" + std::to_string(c.value);
   }
   return out + "}";
+}
+
+/// ["name",...]
+std::string NamesJson(const std::vector<std::string>& names) {
+  std::string out = "[";
+  for (const std::string& name : names) {
+    if (out.size() > 1) out += ",";
+    out += haptel::JsonString(name);
+  }
+  return out + "]";
+}
+
+/// Whether the run's vehicle has a servo controller that reports errors (a Maestro).
+bool ReportsControllerErrors(const haptel::mediator::SessionSetup& setup) {
+  const haptel::VehicleKindInfo* kind = haptel::FindVehicleKind(setup.vehicle.kind);
+  return kind != nullptr && kind->Uses(haptel::kServoSection) &&
+         setup.vehicle.servo.protocol == haptel::ServoProtocol::kMaestro;
 }
 
 }  // namespace
@@ -367,6 +385,9 @@ void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRu
   }
   const std::string counters = NonZeroCounters(r.counters);
   std::fprintf(out, "  counters: %s\n", counters.empty() ? "all zero" : counters.c_str());
+  if (ReportsControllerErrors(setup)) {
+    std::fprintf(out, "  %s\n", ControllerErrorsLine(run.result.controller_errors).c_str());
+  }
   std::fprintf(out, "  command round trip p50 %.2f ms, p99 %.2f ms\n", r.command_rtt_ms_p50, r.command_rtt_ms_p99);
   if (r.prediction_error_m_p95 >= 0.0) {
     std::fprintf(out, "  predicted pose against each state: error p50 %.1f mm, p95 %.1f mm%s\n",
@@ -415,6 +436,8 @@ std::string RunJson(const SessionSetup& setup, const RecordedRun& run) {
     << ",\"prediction_error_m_p95\":"
     << (r.prediction_error_m_p95 >= 0.0 ? JsonNumber(r.prediction_error_m_p95) : std::string("null"))
     << ",\"lost_detect_s\":" << JsonNumber(run.result.lost_detect_s)
+    << ",\"controller_errors\":" << run.result.controller_errors
+    << ",\"controller_error_names\":" << NamesJson(ControllerErrorNames(run.result.controller_errors))
     << ",\"physics_rate_hz\":" << JsonNumber(run.result.physics_rate_hz)
     << ",\"physics_period_p99_us\":" << JsonNumber(run.result.physics_period_p99_us)
     << ",\"physics_step_max_us\":" << JsonNumber(run.result.physics_step_max_us)

@@ -2,7 +2,9 @@
 // the real servo adapter talking Maestro through a pty to the simulated
 // controller; and `haptel-vehicle` for the real blimp, on a pty we read as
 // the controller would, sends the commanded pulses on all seven channels
-// and goes to neutral on its own once the commands stop.
+// and goes to neutral on its own once the commands stop; and a Maestro that
+// starts answering every error poll with a CRC error mid-flight ends the
+// run as vehicle lost, naming the error.
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <cmath>
@@ -11,6 +13,7 @@
 #include <thread>
 
 #include "child.hpp"
+#include "fake_maestro.hpp"
 #include "haptel/config/vehicle.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/link/participant.hpp"
@@ -178,4 +181,60 @@ TEST_CASE("haptel-vehicle on a pty: the commanded pulses on all seven channels, 
 
   const std::string ended = vehicle.Terminate(5.0);
   CHECK(ended == "exited with code 0");
+}
+
+TEST_CASE("a Maestro that starts reporting a CRC error at every poll mid-flight ends the run as vehicle lost, "
+          "naming the error; the vehicle holds neutral") {
+  const VehicleConfig config = LoadVehicle("config/vehicles/blimp-maestro.yaml");
+  REQUIRE(config.servo.crc);
+  servo::PtyPair pty;
+  test::FakeMaestro maestro(pty.TakeMaster(), config.servo.crc, test::FakeMaestro::Manner::kHealthy);
+  const int domain = test::UniqueDomain(75);
+  const std::string name = "blimp-crc";
+  const auto dir = test::ScratchDir("e2e-blimp-crc");
+  Child vehicle({Bin("haptel-vehicle"), "--config", "config/vehicles/blimp-maestro.yaml", "--serial-port",
+                 pty.slave_path(), "--domain", std::to_string(domain), "--name", name});
+  const auto pump_until = [&](double timeout_s, const auto& done) {
+    return test::WaitFor(
+        [&] {
+          maestro.Update();
+          vehicle.Pump();
+          return done();
+        },
+        timeout_s);
+  };
+  REQUIRE(pump_until(30.0, [&] { return vehicle.err().find(" up on domain") != std::string::npos; }));
+
+  Child run({Bin("haptel"), "run", "--config", "config/blimp.yaml", "--attach", "--vehicle",
+             "config/vehicles/blimp-maestro.yaml", "--vehicle-name", name, "--track", "config/tracks/blimp-hop.yaml",
+             "--operator", "auto", "--view", "none", "--json", "--domain", std::to_string(domain), "--database",
+             (dir / "runs.db").string(), "--vehicle-timeout", "5"});
+  // The flight is under way (its first progress line), and the controller healthy until now.
+  REQUIRE(pump_until(60.0, [&] {
+    run.Pump();
+    return run.err().find(" blimp  lap ") != std::string::npos;
+  }));
+  REQUIRE(vehicle.err().find("stopped itself") == std::string::npos);
+  maestro.set_manner(test::FakeMaestro::Manner::kCrcErrorEveryPoll);
+  REQUIRE(pump_until(60.0, [&] { return !run.Alive(); }));
+  run.Wait(5.0);
+  vehicle.Pump();
+  INFO("run stdout:\n" << run.out() << "\nrun stderr:\n" << run.err() << "\nvehicle stderr:\n" << vehicle.err());
+  CHECK(run.ExitDescription() == "exited with code 3");
+  const std::string json = run.LastLine();
+  REQUIRE(json.front() == '{');
+  CHECK(JsonField(json, "outcome") == "vehicle lost");
+  CHECK_THAT(JsonField(json, "message"),
+             Catch::Contains("vehicle '" + name + "' stopped itself: servo controller on " + pty.slave_path() +
+                             " cannot be trusted") &&
+                 Catch::Contains("CRC error (register 0x0008)"));
+  CHECK(JsonField(json, "controller_errors") == "8");
+  CHECK_THAT(run.out(), Catch::Contains("servo controller errors: CRC error (register 0x0008)"));
+  // The vehicle says so too, and holds every channel at neutral whatever came.
+  REQUIRE(pump_until(10.0, [&] { return vehicle.err().find("the vehicle stopped itself") != std::string::npos; }));
+  const std::array<double, kBlimpChannels> neutral = servo::NeutralPulses(config.servo);
+  std::array<double, kBlimpChannels> wire{};
+  for (int i = 0; i < kBlimpChannels; ++i) wire[i] = maestro.output_us(config.servo.channels[i].channel);
+  CHECK(PulsesAre(wire, neutral));
+  CHECK(vehicle.Terminate(5.0) == "exited with code 0");
 }

@@ -10,6 +10,8 @@
 
 #include <catch2/catch.hpp>
 #include <atomic>
+#include <cstdlib>
+#include <ctime>
 #include <cstdio>
 #include <fstream>
 #include <functional>
@@ -112,6 +114,41 @@ void WriteExpiredCertificate(const fs::path& file) {
   EVP_PKEY_free(key);
 }
 
+/// A copy of the deployment's operator files in a folder of its own, its
+/// permissions re-signed by the CA after `edit` (the text's `of` replaced
+/// by `with`), as init signs them.
+fs::path OperatorWithPermissions(const std::string& name, const std::string& of, const std::string& with) {
+  const fs::path dir = test::ScratchDir(name);
+  for (const char* file : {"ca.pem", "governance.p7s", "operator.pem", "operator.key"}) {
+    fs::copy_file(Folder() / file, dir / file, fs::copy_options::overwrite_existing);
+  }
+  std::ifstream in(Folder() / "operator-permissions.xml");
+  std::string xml((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const size_t at = xml.find(of);
+  REQUIRE(at != std::string::npos);
+  const size_t end = xml.find('<', at + of.size());  // the element's text ends at the next tag
+  xml.replace(at, end - at, with);
+  std::ofstream(dir / "operator-permissions.xml") << xml;
+  SignWithCa(dir / "operator-permissions.xml", dir / "operator-permissions.p7s");
+  return dir;
+}
+
+/// Runs `body` with TZ set to `zone` (a POSIX zone string), then restores it.
+template <typename Body>
+void InZone(const char* zone, Body body) {
+  const char* old = std::getenv("TZ");
+  const std::string saved = old != nullptr ? old : "";
+  ::setenv("TZ", zone, 1);
+  ::tzset();
+  body();
+  if (old != nullptr) {
+    ::setenv("TZ", saved.c_str(), 1);
+  } else {
+    ::unsetenv("TZ");
+  }
+  ::tzset();
+}
+
 std::string CheckMessage(const fs::path& dir, const std::string& identity) {
   try {
     link::CheckSecurity(dir, identity);
@@ -163,6 +200,75 @@ TEST_CASE("security init: a CA, the identities and signed documents; the check n
   const std::string message = CheckMessage(expired, "operator");
   CHECK(message.find("certificate operator.pem expired on") != std::string::npos);
   CHECK(message.find("haptel security init") != std::string::npos);
+}
+
+TEST_CASE("permissions out of their validity, or signed by another CA, are named before any participant exists") {
+  SECTION("expired: the file and the day, not DDS's unexplained refusal") {
+    const fs::path dir = OperatorWithPermissions("security-expired-permissions", "<not_after>",
+                                                 "<not_after>2020-01-01T00:00:00");
+    const std::string file = (dir / "operator-permissions.p7s").string();
+    InZone("UTC0", [&] {
+      CHECK(CheckMessage(dir, "operator") == "permissions file " + file +
+                                                 " expired on 2020-01-01T00:00:00Z; run `haptel security init` "
+                                                 "again (into a new folder: it does not overwrite this one)");
+      // The participant is refused with the same line, before DDS is asked.
+      CHECK_THROWS_WITH(link::Participant(Link(test::UniqueDomain(63), dir, link::OperatorIdentity()), "operator"),
+                        Catch::Contains("permissions file " + file + " expired on 2020-01-01T00:00:00Z"));
+    });
+    // Fast DDS reads the date in local time: an hour east of UTC it ends an hour sooner, and the check says so.
+    InZone("XYZ-1", [&] {
+      CHECK_THAT(CheckMessage(dir, "operator"),
+                 Catch::Contains("expired on 2019-12-31T23:00:00Z (its <not_after> 2020-01-01T00:00:00, which DDS "
+                                 "reads in this host's local time)"));
+    });
+  }
+  SECTION("not yet valid") {
+    const fs::path dir = OperatorWithPermissions("security-future-permissions", "<not_before>",
+                                                 "<not_before>2090-06-01T12:00:00");
+    InZone("UTC0", [&] {
+      CHECK_THAT(CheckMessage(dir, "operator"),
+                 Catch::StartsWith("permissions file " + (dir / "operator-permissions.p7s").string() +
+                                   " is not valid before 2090-06-01T12:00:00Z (is this host's clock right?)"));
+    });
+  }
+  SECTION("a date that is not one") {
+    const fs::path dir = OperatorWithPermissions("security-bad-date", "<not_after>", "<not_after>next year");
+    CHECK_THAT(CheckMessage(dir, "operator"),
+               Catch::Contains("<not_after> 'next year' is not a date; expected YYYY-MM-DDThh:mm:ss"));
+  }
+  SECTION("a grant for another identity") {
+    const fs::path dir =
+        OperatorWithPermissions("security-other-subject", "<subject_name>", "<subject_name>CN=haptel-someone");
+    CHECK_THAT(CheckMessage(dir, "operator"),
+               Catch::Contains("grants nothing to identity 'operator'") && Catch::Contains("CN=haptel-operator"));
+  }
+  SECTION("permissions another CA signed, or changed since they were signed") {
+    const fs::path dir = OperatorWithPermissions("security-foreign-permissions", "<not_after>", "<not_after>2090-01-01T00:00:00");
+    const auto openssl = [](const std::vector<std::string>& arguments) {
+      ChildProcess p("/usr/bin/openssl", arguments, ChildProcess::Options{true});
+      REQUIRE(p.Wait(60.0) == 0);
+    };
+    SECTION("another CA") {
+      openssl({"req", "-x509", "-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1", "-nodes", "-keyout",
+               (dir / "other-ca.key").string(), "-out", (dir / "other-ca.pem").string(), "-days", "30", "-subj",
+               "/CN=haptel-ca"});
+      openssl({"smime", "-sign", "-text", "-in", (dir / "operator-permissions.xml").string(), "-out",
+               (dir / "operator-permissions.p7s").string(), "-signer", (dir / "other-ca.pem").string(), "-inkey",
+               (dir / "other-ca.key").string()});
+    }
+    SECTION("changed since signing") {
+      std::ifstream in(dir / "operator-permissions.p7s");
+      std::string p7s((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      in.close();
+      const size_t at = p7s.find("2090-01-01");
+      REQUIRE(at != std::string::npos);
+      p7s.replace(at, 4, "2099");
+      std::ofstream(dir / "operator-permissions.p7s") << p7s;
+    }
+    CHECK_THAT(CheckMessage(dir, "operator"),
+               Catch::Contains("permissions file " + (dir / "operator-permissions.p7s").string() +
+                               " is not signed by this folder's CA (" + (dir / "ca.pem").string() + ")"));
+  }
 }
 
 TEST_CASE("secured: only the operator's commands reach the vehicle; no certificates, another CA or no permission: none") {

@@ -59,7 +59,7 @@ ServoBlimpAdapter::ServoBlimpAdapter(const ServoControllerConfig& config, std::u
 }
 
 void ServoBlimpAdapter::Apply(const BlimpCommand& command) {
-  applied_ = Clamped(command);
+  applied_ = output_.untrusted() ? BlimpCommand{} : Clamped(command);
   const std::array<double, kBlimpChannels> pulses = servo::PulsesFromCommands(config_, ChannelValues(applied_));
   // A change (a new command, the failsafe's neutral) goes out at the next
   // update, not at the next refresh: the watchdog's neutral is not held back.
@@ -73,7 +73,14 @@ void ServoBlimpAdapter::Update(double dt) {
     next_send_s_ = std::max(next_send_s_ + kSendPeriod_s, time_s_ - kSendPeriod_s);
     output_.Send(pulse_us_);
   }
+  const bool trusted = !output_.untrusted();
   output_.Update(time_s_);
+  // Judged untrustworthy just now: neutral at once, not at the next command.
+  if (trusted && output_.untrusted()) {
+    Apply(BlimpCommand{});
+    next_send_s_ = time_s_ + kSendPeriod_s;
+    output_.Send(pulse_us_);
+  }
 }
 
 BlimpAdapterState ServoBlimpAdapter::State() const {
@@ -81,6 +88,10 @@ BlimpAdapterState ServoBlimpAdapter::State() const {
   s.applied = applied_;
   for (int i = 0; i < kBlimpChannels; ++i) s.pulse_us[i] = pulse_us_[i];
   s.controller_errors = output_.last_errors();
+  if (output_.untrusted()) {
+    s.fault = true;
+    s.fault_message = output_.untrusted_reason();
+  }
   return s;
 }
 

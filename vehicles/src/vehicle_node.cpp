@@ -107,6 +107,10 @@ void VehicleNodeOf<Family>::PublishState(int64_t now_ns) {
   m.owner_session(owner.session);
   m.owner(owner.name);
   m.commands_refused(commands_.refused());
+  if (s.fault && !faulted_.load()) {
+    fault_ = s.fault_message;
+    faulted_.store(true);
+  }
   const bool failed = failed_.load();
   m.fault(s.fault || failed);
   m.fault_message(failed ? failure_ : s.fault_message);
@@ -122,6 +126,11 @@ NodeCounters VehicleNodeOf<Family>::Counters() const {
 template <class Family>
 std::string VehicleNodeOf<Family>::AdapterFailure() const {
   return failed_.load() ? failure_ : std::string();
+}
+
+template <class Family>
+std::string VehicleNodeOf<Family>::Fault() const {
+  return faulted_.load() ? fault_ : std::string();
 }
 
 template class VehicleNodeOf<RobotFamily>;

@@ -777,6 +777,48 @@ TEST_CASE("The output resynchronises on stray reply bytes and a port that takes 
   }
 }
 
+TEST_CASE("Only error polls going wrong three in a row make the Maestro untrusted; a good one in between resets") {
+  const ServoControllerConfig config = Configured(ServoProtocol::kMaestro);  // polled every 0.5 s
+  auto stream = std::make_unique<MemoryStream>();
+  MemoryStream& line = *stream;
+  ServoOutput out(config, std::move(stream));
+  double t = 0.0;
+  // One poll window: the reply to the poll that opened it (none: nothing
+  // answers), then the next poll, which judges it.
+  const auto window = [&](const Bytes& reply) {
+    line.Put(reply);
+    t += config.error_poll_s;
+    out.Update(t);
+  };
+  out.Update(t);  // the first poll opens the first window
+  window({0x08, 0x00});  // a CRC error
+  window({});            // no answer
+  CHECK(out.polls_wrong_in_a_row() == 2);
+  window({0x00, 0x00});  // clean: the run is broken
+  CHECK(out.polls_wrong_in_a_row() == 0);
+  window({0x20, 0x00});        // a serial timeout
+  window({0x00, 0x00, 0x55});  // a clean reply, then a stray byte
+  CHECK(out.polls_wrong_in_a_row() == 2);
+  CHECK_FALSE(out.untrusted());
+  CHECK(out.untrusted_reason().empty());
+  window({0x10, 0x00});  // a protocol error: the third in a row
+  CHECK(out.untrusted());
+  CHECK(out.counters().polls_wrong == 5);
+  // The reason names the run that decided, not the CRC error and the
+  // missing reply before the good poll.
+  CHECK_THAT(out.untrusted_reason(),
+             Catch::Contains("servo controller on memory cannot be trusted: 3 error polls in a row went wrong "
+                             "(over 1.5 s)") &&
+                 Catch::Contains("1 bytes that answer no request") &&
+                 Catch::Contains("replies carried serial timeout, protocol error (register 0x0030)") &&
+                 !Catch::Contains("no reply") && !Catch::Contains("CRC"));
+  CHECK(out.errors_seen() == (maestro::kSerialCrcError | maestro::kSerialTimeout | maestro::kSerialProtocolError));
+  // Untrusted for good: good polls after it change nothing.
+  window({0x00, 0x00});
+  window({0x00, 0x00});
+  CHECK(out.untrusted());
+}
+
 TEST_CASE("Send and both Updates allocate nothing") {
   const bool maestro_protocol = GENERATE(true, false);
   const ServoControllerConfig config = Configured(

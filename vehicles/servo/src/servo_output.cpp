@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <utility>
 
@@ -113,6 +114,7 @@ void ServoOutput::ReadReplies() {
       }
       last_errors_ = maestro::ReplyValue(reply_[0], reply_[1]);
       errors_seen_ = static_cast<uint16_t>(errors_seen_ | last_errors_);
+      window_errors_ = static_cast<uint16_t>(window_errors_ | last_errors_);
       ++counters_.error_replies;
       --outstanding_;
       reply_size_ = 0;
@@ -120,10 +122,50 @@ void ServoOutput::ReadReplies() {
   }
 }
 
+void ServoOutput::JudgeWindow(double now_s) {
+  const bool unanswered = outstanding_ > 0 || poll_unsent_;
+  const uint64_t unexpected = counters_.unexpected_bytes - window_unexpected_from_;
+  if (!unanswered && window_errors_ == 0 && unexpected == 0) {
+    wrong_in_a_row_ = 0;
+    return;
+  }
+  ++counters_.polls_wrong;
+  if (wrong_in_a_row_ == 0) {
+    wrong_since_s_ = window_opened_s_;
+    wrong_errors_ = 0;
+    wrong_unanswered_ = 0;
+    wrong_unexpected_ = 0;
+  }
+  ++wrong_in_a_row_;
+  wrong_errors_ = static_cast<uint16_t>(wrong_errors_ | window_errors_);
+  wrong_unanswered_ += unanswered ? 1 : 0;
+  wrong_unexpected_ += unexpected;
+  if (untrusted_ || wrong_in_a_row_ < kUntrustedAfterPolls) return;
+  untrusted_ = true;
+  // Once: the one allocation after construction.
+  char span[96];
+  std::snprintf(span, sizeof span, "%d error polls in a row went wrong (over %.1f s): ", wrong_in_a_row_,
+                now_s - wrong_since_s_);
+  std::string why;
+  const auto add = [&why](const std::string& part) { why += (why.empty() ? "" : "; ") + part; };
+  if (wrong_unexpected_ > 0) {
+    add(std::to_string(wrong_unexpected_) +
+        " bytes that answer no request (a Maestro speaks only when asked: another device on the port, a wrong "
+        "baud rate, or noise on the line)");
+  }
+  if (wrong_unanswered_ > 0) {
+    add(std::to_string(wrong_unanswered_) +
+        " of them got no reply (does the controller answer on this port: powered, its serial mode, its baud rate?)");
+  }
+  if (wrong_errors_ != 0) add("replies carried " + maestro_errors::ErrorsText(wrong_errors_));
+  untrusted_reason_ = "servo controller on " + port_->name() + " cannot be trusted: " + span + why;
+}
+
 void ServoOutput::Update(double now_s) {
   ReadReplies();
   if (config_.protocol != ServoProtocol::kMaestro) return;
   if (polled_ && now_s < next_poll_s_) return;
+  if (polled_) JudgeWindow(now_s);
   polled_ = true;
   next_poll_s_ = now_s + config_.error_poll_s;
   if (outstanding_ > 0) {
@@ -134,8 +176,13 @@ void ServoOutput::Update(double now_s) {
     outstanding_ = 0;
     reply_size_ = 0;
   }
+  // The next window opens.
+  window_opened_s_ = now_s;
+  window_errors_ = 0;
+  window_unexpected_from_ = counters_.unexpected_bytes;
   const maestro::Packet p = maestro::GetErrors(config_.crc);
-  if (WriteFrame(p.data(), p.size)) ++outstanding_;
+  poll_unsent_ = !WriteFrame(p.data(), p.size);
+  if (!poll_unsent_) ++outstanding_;
 }
 
 }  // namespace haptel::servo

@@ -33,10 +33,18 @@ struct SecurityFiles {
 };
 SecurityFiles SecurityFilesFor(const std::filesystem::path& dir, const std::string& identity);
 
-/// At start: every file of `identity` is there, and the CA's and the
-/// identity's certificates are valid now. Throws ConfigError naming the
-/// folder, the file and what to do (a missing identity: `haptel security
-/// init` with it; an expired certificate: when it expired).
+/// At start, before any participant exists: every file of `identity` is
+/// there; the CA's and the identity's certificates are valid now; the
+/// governance and the identity's permissions are signed by the folder's CA
+/// (verified as Fast DDS verifies them); the permissions hold a grant for
+/// the identity, valid now (its <validity> read both as written, UTC, and
+/// as Fast DDS reads it, local time: either saying no refuses). Throws
+/// ConfigError naming the folder or the file, the date, and what to do (a
+/// missing identity: `haptel security init` with it; an expired or not yet
+/// valid certificate or permissions file: when, e.g. "permissions file
+/// DIR/operator-permissions.p7s expired on 2026-01-01T00:00:00Z; run
+/// `haptel security init` again (into a new folder ...)") — instead of DDS's
+/// unexplained "refused to create participant".
 void CheckSecurity(const std::filesystem::path& dir, const std::string& identity);
 
 /// The Fast DDS participant properties for `identity` in `dir`.

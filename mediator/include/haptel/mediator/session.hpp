@@ -157,6 +157,10 @@ struct SessionResult {
   uint64_t view_record_dropped = 0;  ///< MP4 frames the encoder could not take in time
   /// The simulated driver: times a control slipped out of its hand.
   int operator_slips = 0;
+  /// Every error bit the vehicle's servo controller reported over the run
+  /// (the Maestro's register, controller_errors.hpp; 0: none, or no such
+  /// controller).
+  uint16_t controller_errors = 0;
 };
 
 /// Runs one lap (or until the cap, the time limit, a lost vehicle or device,

@@ -43,16 +43,27 @@ class SimBlimpAdapter final : public BlimpAdapter {
 /// Fills the pose part of `state` from the simulator.
 void PoseFromSim(const SimBlimp& sim, BlimpAdapterState& state);
 
+/// The real blimp's channels through its servo controller. A Maestro judged
+/// untrustworthy (ServoOutput::untrusted(): its errors, its silence or stray
+/// bytes, poll after poll) is a fault for good: from then on every channel
+/// is held at neutral whatever is commanded, and the state carries the fault
+/// with the reason naming the errors (the operator's run ends as vehicle
+/// lost); the controller's own timeout takes over if even that is not heard.
 class ServoBlimpAdapter final : public BlimpAdapter {
  public:
   /// `config` validated; `port` opened (SerialPort). Sends the neutral
   /// pulses first.
   ServoBlimpAdapter(const ServoControllerConfig& config, std::unique_ptr<servo::ByteStream> port);
+  /// Sets the channels; neutral whatever `command` says once the controller
+  /// is untrusted.
   void Apply(const BlimpCommand& command) override;
   /// Sends the pulses every kSendPeriod_s and polls the controller's
-  /// errors. Throws servo::SerialLost when the port has vanished.
+  /// errors; the poll that finds the controller untrusted puts every
+  /// channel to neutral at once. Throws servo::SerialLost when the port has
+  /// vanished.
   void Update(double dt) override;
   BlimpAdapterState State() const override;
+  const servo::ServoOutput& output() const { return output_; }
 
   /// How often the pulses go out: every channel's target at 50 Hz, the
   /// servos' own frame rate (an SC-8000 at 9600 baud takes 53 frames/s).

@@ -73,6 +73,10 @@ class Node {
   /// port or CAN bus that vanished): its message, once; the node has stopped
   /// driving it. Empty: none.
   virtual std::string AdapterFailure() const = 0;
+  /// The first fault the adapter reported in its state (a motor
+  /// controller's error, a servo controller that cannot be trusted): the
+  /// vehicle stopped itself and says so in its states. Empty: none.
+  virtual std::string Fault() const = 0;
   /// How the watchdog and the end leave the vehicle: "motors stopped", ….
   virtual const char* MadeSafe() const = 0;
   virtual const char* AtRest() const = 0;
@@ -95,6 +99,7 @@ class VehicleNodeOf : public Node {
   void Stop() override;
   NodeCounters Counters() const override;
   std::string AdapterFailure() const override;
+  std::string Fault() const override;
   const char* MadeSafe() const override { return Family::kMadeSafe; }
   const char* AtRest() const override { return Family::kAtRest; }
 
@@ -114,6 +119,8 @@ class VehicleNodeOf : public Node {
   std::atomic<bool> stopped_{false};
   std::atomic<bool> failed_{false};
   std::string failure_;  ///< written once before failed_ is set
+  std::atomic<bool> faulted_{false};
+  std::string fault_;  ///< written once before faulted_ is set
   typename Family::StateMsg state_msg_;
 
   // Declared last: destroyed first, so no DDS callback outlives the rest.

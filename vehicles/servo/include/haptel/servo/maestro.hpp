@@ -12,6 +12,8 @@
 #include <cstdint>
 #include <string>
 
+#include "haptel/core/maestro_errors.hpp"
+
 namespace haptel::servo::maestro {
 
 constexpr uint8_t kSetTarget = 0x84;           ///< channel, target low 7 bits, target high 7 bits
@@ -24,18 +26,9 @@ constexpr int kChannels = 24;            ///< outputs 0..23 (Mini Maestro 24)
 constexpr uint16_t kMaxTarget = 0x3FFF;  ///< 14 bits of quarter-µs
 constexpr size_t kReplyBytes = 2;
 
-/// The error register's bits (Get Errors).
-enum ErrorBit : uint16_t {
-  kSerialSignalError = 1U << 0,
-  kSerialOverrunError = 1U << 1,
-  kSerialRxBufferFull = 1U << 2,
-  kSerialCrcError = 1U << 3,
-  kSerialProtocolError = 1U << 4,
-  kSerialTimeout = 1U << 5,
-  kScriptStackError = 1U << 6,
-  kScriptCallStackError = 1U << 7,
-  kScriptProgramCounterError = 1U << 8,
-};
+/// The error register's bits (Get Errors) and their names: shared with the
+/// link and the operator's side (haptel/core/maestro_errors.hpp).
+using namespace ::haptel::maestro_errors;
 
 /// The longest command: Set Multiple Targets for all 24 outputs, and its CRC.
 constexpr size_t kMaxPacketBytes = 3 + 2 * kChannels + 1;
@@ -71,11 +64,5 @@ Packet GetPosition(int channel, bool crc);
 constexpr uint16_t ReplyValue(uint8_t low, uint8_t high) {
   return static_cast<uint16_t>(low | (high << 8));
 }
-
-/// "serial timeout", "CRC error", ... for bit 0..8; "bit N" beyond.
-const char* ErrorBitName(int bit);
-/// The set bits' names, highest bit first, comma-separated:
-/// "serial timeout, CRC error"; "none" for 0.
-std::string ErrorNames(uint16_t errors);
 
 }  // namespace haptel::servo::maestro
