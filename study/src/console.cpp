@@ -651,6 +651,8 @@ std::string StudyConsole::url() const {
 
 const std::string& StudyConsole::access_token() const { return impl_->access.access_token; }
 
+bool StudyConsole::resumed() const { return impl_->store->resumed(); }
+
 ConnectionCounters StudyConsole::connection_counters() const {
   ConnectionCounters c = impl_->server->counters();
   c.refused_requests = impl_->refused_requests.load();

@@ -250,10 +250,12 @@ int StudyRunCommand(int argc, const char* const* argv) {
                    simulated_device.c_str());
     }
     const size_t done_before = store.Trials().size();
-    store.Event(store.resumed() ? "resumed" : "started", "", 0,
+    // The console plans a new study before this store opens it: ask the one that planned.
+    const bool resumed = console ? console->resumed() : store.resumed();
+    store.Event(resumed ? "resumed" : "started", "", 0,
                 std::to_string(done_before) + " of " + std::to_string(plan.size()) + " trials done");
     std::fprintf(stderr, "[study] %s: %s, %zu trials (%zu done), %s order, database %s\n", config.name.c_str(),
-                 store.resumed() ? "resuming" : "starting", plan.size(), done_before, ToString(config.order).c_str(),
+                 resumed ? "resuming" : "starting", plan.size(), done_before, ToString(config.order).c_str(),
                  database.c_str());
 
     int exit_code = cli::kExitOk;

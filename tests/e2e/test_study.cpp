@@ -144,6 +144,8 @@ TEST_CASE("Abort in a synthetic study ends the trial under way once; the study t
   CHECK(abort->status == 303);
   REQUIRE(study.Wait(300.0) == 0);
   CHECK(test::JsonField(study.LastLine(), "trials_done") == "2");
+  // A new study says so, though its console planned it before the run opened it.
+  CHECK(study.err().find("small-e2e: starting") != std::string::npos);
   // One abort, one run more than the trials (the aborted one, kept), not a loop.
   record::Recorder recorder(db);
   CHECK(recorder.LoadAll().size() == 3);

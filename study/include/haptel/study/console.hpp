@@ -132,6 +132,9 @@ class StudyConsole {
   int port() const;
   /// e.g. "http://127.0.0.1:8470/" or "https://0.0.0.0:8470/"
   std::string url() const;
+  /// Whether the study was planned in the database before this console
+  /// opened it (false: the console planned it).
+  bool resumed() const;
   /// What the page asks for beyond loopback (empty on loopback).
   const std::string& access_token() const;
   ConnectionCounters connection_counters() const;
