@@ -332,7 +332,9 @@ RecordedRun RunAndRecord(const SessionSetup& setup, Recorder& recorder,
 }
 
 int ExitCode(const RecordedRun& run) {
-  return run.run_id != 0 ? ExitCode(run.result.outcome) : kExitNotRecorded;
+  if (run.run_id == 0) return kExitNotRecorded;
+  if (!run.result.view_record_error.empty()) return kExitOutputFailed;
+  return ExitCode(run.result.outcome);
 }
 
 void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRun& run) {
@@ -367,7 +369,9 @@ void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRu
     std::fprintf(out, "  view %.1f fps (frame p99 %.1f ms), video to screen p50 %.1f ms, p99 %.1f ms\n", r.view_fps,
                 r.view_frame_p99_ms, r.video_to_screen_ms_p50, r.video_to_screen_ms_p99);
   }
-  if (!setup.record.empty()) {
+  if (!setup.record.empty() && !run.result.view_record_error.empty()) {
+    std::fprintf(out, "  operator's view NOT recorded whole: %s\n", run.result.view_record_error.c_str());
+  } else if (!setup.record.empty()) {
     std::fprintf(out, "  operator's view recorded to %s (%llu frames dropped)\n", setup.record.c_str(),
                 static_cast<unsigned long long>(run.result.view_record_dropped));
   }
@@ -416,7 +420,8 @@ std::string RunJson(const SessionSetup& setup, const RecordedRun& run) {
     << ",\"recorded\":" << (run.run_id != 0 ? "true" : "false") << ",\"run_id\":" << run.run_id
     << ",\"database\":" << JsonString(setup.run.database.string())
     << ",\"unsaved_file\":" << JsonString(run.unsaved.string())
-    << ",\"picture\":" << JsonString(r.picture) << "}";
+    << ",\"picture\":" << JsonString(r.picture)
+    << ",\"record_error\":" << JsonString(run.result.view_record_error) << "}";
   return o.str();
 }
 

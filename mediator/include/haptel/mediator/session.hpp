@@ -134,6 +134,9 @@ int ExitCode(Outcome outcome);
 /// The exit code, whatever the outcome, of a run the database did not take
 /// at the end (its results went to a fallback file; the JSON line says which).
 constexpr int kExitNotRecorded = cli::kExitNotRecorded;
+/// The exit code of a run recorded in the database whose --record MP4 failed
+/// (kExitNotRecorded wins over it; it wins over the outcome's code).
+constexpr int kExitOutputFailed = cli::kExitOutputFailed;
 
 struct SessionResult {
   Outcome outcome = Outcome::kInterrupted;
@@ -151,6 +154,9 @@ struct SessionResult {
   /// (0 when there was nothing to grasp; negative if they never did).
   double grasp_s = 0.0;
   uint64_t view_record_dropped = 0;  ///< MP4 frames the encoder could not take in time
+  /// "" when the --record MP4 was written whole (or none was asked for);
+  /// else why not: a failed write ended it (file, OS reason, frames kept).
+  std::string view_record_error;
   /// The simulated driver: times a control slipped out of its hand.
   int operator_slips = 0;
 };
