@@ -121,6 +121,7 @@ class RobotSession final : public FamilySession {
       }
       lap_.UpdateContact(ts, touching);
       feedback_ = {s.bumper_left(), s.bumper_right(), s.speed()};
+      OnCanLog(s);
     }
   }
 
@@ -227,10 +228,24 @@ class RobotSession final : public FamilySession {
     rec.obstacles_touched = lap_.obstacles_touched();
     rec.splits = lap_.splits();
     rec.switches = interfaces_->switches();
+    result.can_log = can_log_;
   }
 
  private:
   const InterfaceSpec& start_spec() const { return setup_.interfaces.at(static_cast<size_t>(setup_.start_interface)); }
+
+  /// The vehicle's CAN bus log: kept as reported; its end said once, as
+  /// the state first carries it (the robot drives on).
+  void OnCanLog(const msg::VehicleState& s) {
+    if (s.can_log().empty()) return;
+    can_log_.path = s.can_log();
+    can_log_.frames = s.can_log_frames();
+    can_log_.frames_lost = s.can_log_frames_lost();
+    if (can_log_.error.empty() && !s.can_log_error().empty()) {
+      can_log_.error = s.can_log_error();
+      log::Error("vehicle '" + setup_.vehicle.name + "': its CAN bus log is not recorded whole: " + can_log_.error);
+    }
+  }
 
   /// What the interfaces are built on.
   InterfaceParts Parts() const {
@@ -291,6 +306,7 @@ class RobotSession final : public FamilySession {
   uint32_t disconnects_seen_ = 0;
   int64_t next_command_ns_ = 0;
   double grasp_s_ = 0.0;
+  CanLogReport can_log_;
 };
 
 }  // namespace

@@ -20,7 +20,8 @@ inline constexpr int kExitBadInput = 2;  ///< bad arguments or configuration: no
 inline constexpr int kExitLost = 3;      ///< the vehicle or the haptic device was lost
 inline constexpr int kExitNotRecorded = 4;  ///< results went to a fallback file, not the database
 /// The run is in the database, but an output it was asked to keep (the
-/// --record MP4) failed to be written; the message says which and why.
+/// --record MP4, the vehicle's CAN bus log) failed to be written; the
+/// message says which and why.
 inline constexpr int kExitOutputFailed = 5;
 
 /// The user's input is wrong (exit 2): arguments, files, their combination.
