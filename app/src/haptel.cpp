@@ -32,7 +32,8 @@ constexpr const char* kUsage =
     "\n"
     "Exit codes: 0 done, 1 failed while running, 2 bad arguments or configuration (nothing ran),\n"
     "3 the vehicle or the haptic device was lost, 4 results not recorded in the database\n"
-    "(they are in the fallback file the message names).\n";
+    "(they are in the fallback file the message names), 5 results recorded but an output\n"
+    "asked for failed to be written (the --record MP4, the vehicle's CAN bus log).\n";
 
 /// The benchmarks are a program of their own (haptel-bench, beside this one).
 int ExecBench(char** argv) {

@@ -25,7 +25,7 @@ const std::atomic<bool>& InstallStopSignals() {
   struct sigaction ignore {};
   ignore.sa_handler = SIG_IGN;
   sigemptyset(&ignore.sa_mask);
-  for (const int signal : {SIGUSR1, SIGUSR2, SIGPIPE}) sigaction(signal, &ignore, nullptr);
+  for (const int signal : {SIGUSR1, SIGUSR2, SIGPIPE, SIGXFSZ}) sigaction(signal, &ignore, nullptr);
   return g_stop;
 }
 

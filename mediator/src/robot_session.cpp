@@ -143,6 +143,7 @@ class RobotSession final : public FamilySession {
       }
       lap_.UpdateContact(ts, touching);
       feedback_ = {s.bumper_left(), s.bumper_right(), s.speed()};
+      OnCanLog(s);
     }
   }
 
@@ -264,10 +265,24 @@ class RobotSession final : public FamilySession {
       rec.prediction_error_m_p50 = NearestRank(errors, 0.50);
       rec.prediction_error_m_p95 = NearestRank(errors, 0.95);
     }
+    result.can_log = can_log_;
   }
 
  private:
   const InterfaceSpec& start_spec() const { return setup_.interfaces.at(static_cast<size_t>(setup_.start_interface)); }
+
+  /// The vehicle's CAN bus log: kept as reported; its end said once, as
+  /// the state first carries it (the robot drives on).
+  void OnCanLog(const msg::VehicleState& s) {
+    if (s.can_log().empty()) return;
+    can_log_.path = s.can_log();
+    can_log_.frames = s.can_log_frames();
+    can_log_.frames_lost = s.can_log_frames_lost();
+    if (can_log_.error.empty() && !s.can_log_error().empty()) {
+      can_log_.error = s.can_log_error();
+      log::Error("vehicle '" + setup_.vehicle.name + "': its CAN bus log is not recorded whole: " + can_log_.error);
+    }
+  }
 
   /// What the interfaces are built on.
   InterfaceParts Parts() const {
@@ -330,6 +345,7 @@ class RobotSession final : public FamilySession {
   double grasp_s_ = 0.0;
   RobotPredictor predictor_;
   std::array<bool, 2> bumpers_{false, false};  ///< the newest state's, left and right
+  CanLogReport can_log_;
 };
 
 }  // namespace

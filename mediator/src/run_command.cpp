@@ -90,6 +90,15 @@ std::string SwitchesJson(const std::vector<haptel::record::SwitchRecord>& switch
   return out + "]";
 }
 
+/// {"path":…,"frames":…,"frames_lost":…[,"error":…]}, or null without a log.
+std::string CanLogJson(const haptel::mediator::CanLogReport& log) {
+  if (log.path.empty()) return "null";
+  std::string out = "{\"path\":" + haptel::JsonString(log.path) + ",\"frames\":" + std::to_string(log.frames) +
+                    ",\"frames_lost\":" + std::to_string(log.frames_lost);
+  if (!log.error.empty()) out += ",\"error\":" + haptel::JsonString(log.error);
+  return out + "}";
+}
+
 /// {"name":n,...}
 std::string CountersJson(const std::vector<haptel::record::RunCounter>& counters) {
   std::string out = "{";
@@ -357,7 +366,9 @@ RecordedRun RunAndRecord(const SessionSetup& setup, Recorder& recorder,
 }
 
 int ExitCode(const RecordedRun& run) {
-  return run.run_id != 0 ? ExitCode(run.result.outcome) : kExitNotRecorded;
+  if (run.run_id == 0) return kExitNotRecorded;
+  if (!run.result.view_record_error.empty() || !run.result.can_log.error.empty()) return kExitOutputFailed;
+  return ExitCode(run.result.outcome);
 }
 
 void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRun& run) {
@@ -400,9 +411,18 @@ void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRu
     std::fprintf(out, "  view %.1f fps (frame p99 %.1f ms), video to screen p50 %.1f ms, p99 %.1f ms\n", r.view_fps,
                 r.view_frame_p99_ms, r.video_to_screen_ms_p50, r.video_to_screen_ms_p99);
   }
-  if (!setup.record.empty()) {
+  if (!setup.record.empty() && !run.result.view_record_error.empty()) {
+    std::fprintf(out, "  operator's view NOT recorded whole: %s\n", run.result.view_record_error.c_str());
+  } else if (!setup.record.empty()) {
     std::fprintf(out, "  operator's view recorded to %s (%llu frames dropped)\n", setup.record.c_str(),
                 static_cast<unsigned long long>(run.result.view_record_dropped));
+  }
+  if (const CanLogReport& log = run.result.can_log; !log.error.empty()) {
+    std::fprintf(out, "  vehicle's CAN bus log NOT recorded whole: %s; %llu frames lost\n", log.error.c_str(),
+                 static_cast<unsigned long long>(log.frames_lost));
+  } else if (!log.path.empty()) {
+    std::fprintf(out, "  vehicle's CAN bus log %s (on its host): %llu frames\n", log.path.c_str(),
+                 static_cast<unsigned long long>(log.frames));
   }
   if (run.run_id != 0) {
     std::fprintf(out, "  recorded as run %lld in %s\n", static_cast<long long>(run.run_id),
@@ -456,7 +476,9 @@ std::string RunJson(const SessionSetup& setup, const RecordedRun& run) {
     << ",\"recorded\":" << (run.run_id != 0 ? "true" : "false") << ",\"run_id\":" << run.run_id
     << ",\"database\":" << JsonString(setup.run.database.string())
     << ",\"unsaved_file\":" << JsonString(run.unsaved.string())
-    << ",\"picture\":" << JsonString(r.picture) << "}";
+    << ",\"picture\":" << JsonString(r.picture)
+    << ",\"record_error\":" << JsonString(run.result.view_record_error)
+    << ",\"can_log\":" << CanLogJson(run.result.can_log) << "}";
   return o.str();
 }
 

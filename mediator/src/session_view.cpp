@@ -78,6 +78,7 @@ void StopAndRecord(SessionView& view, SessionResult& result) {
   rec.video_to_screen_ms_p50 = vs.video_to_screen_ms_p50;
   rec.video_to_screen_ms_p99 = vs.video_to_screen_ms_p99;
   result.view_record_dropped = vs.record_dropped;
+  result.view_record_error = vs.record_error;
 }
 
 view::Overlay LapOverlay(const SessionSetup& setup, const char* interface_name, double t, double lap_time_s,

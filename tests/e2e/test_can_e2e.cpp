@@ -1,13 +1,15 @@
 // End to end through the CAN code path: `haptel run` drives the simulated CAN
 // robot (the real adapter, a socket pair, emulated ODrives and I/O node) and
-// the run's candump log shows the velocity commands and both heartbeats; the
-// real robot's adapter on a kernel without CAN support is a one-line set-up
-// error.
+// the run's candump log shows the velocity commands and both heartbeats, and
+// the JSON line names it; a log on a full disk is said and fails the run
+// (exit 5); the real robot's adapter on a kernel without CAN support is a
+// one-line set-up error.
 #include <sys/socket.h>
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
 #include <algorithm>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -26,11 +28,9 @@ using haptel::test::JsonField;
 
 namespace {
 std::string CanBin(const std::string& name) { return (test::BinDir() / name).string(); }
-}  // namespace
 
-TEST_CASE("a lap through the CAN adapter: the JSON and the database name the kind, the candump log shows the bus") {
-  const auto dir = test::ScratchDir("e2e-can");
-  // The shipped file, with its log in the test's folder.
+/// The shipped can-robot-sim.yaml in `dir`, its log in `dir`/can.
+std::filesystem::path CanVehicleFile(const std::filesystem::path& dir) {
   std::string text;
   {
     std::ifstream in("config/vehicles/can-robot-sim.yaml");
@@ -43,6 +43,29 @@ TEST_CASE("a lap through the CAN adapter: the JSON and the database name the kin
                "world: " + (std::filesystem::current_path() / "config/tracks/").string());
   const auto vehicle = dir / "can-robot-sim.yaml";
   std::ofstream(vehicle) << text;
+  return vehicle;
+}
+
+/// The JSON line's "can_log" value: {…} or null.
+std::string CanLogOf(const std::string& json) {
+  const std::string key = "\"can_log\":";
+  const size_t at = json.find(key);
+  if (at == std::string::npos) return "(no can_log)";
+  const size_t start = at + key.size();
+  return json.substr(start, json[start] == '{' ? json.find('}', start) + 1 - start : 4);
+}
+
+/// A number field inside `object`, or -1.
+long long NumberIn(const std::string& object, const std::string& key) {
+  const std::string field = JsonField(object, key);
+  return field.empty() ? -1 : std::stoll(field);
+}
+
+}  // namespace
+
+TEST_CASE("a lap through the CAN adapter: the JSON and the database name the kind, the candump log shows the bus") {
+  const auto dir = test::ScratchDir("e2e-can");
+  const auto vehicle = CanVehicleFile(dir);
   const auto db = dir / "runs.db";
   Child haptel({CanBin("haptel"), "run", "--vehicle", vehicle.string(), "--track", "config/tracks/test-short.yaml",
                 "--json", "--quiet", "--domain", std::to_string(test::UniqueDomain(61)), "--database", db.string(),
@@ -83,20 +106,65 @@ TEST_CASE("a lap through the CAN adapter: the JSON and the database name the kin
   CHECK(by_id[0x061] > 10);
   CHECK(by_id[0x027] >= 1);  // closed loop requested
   CHECK(moved);
+  // The JSON line and the summary name the log, whole: its path, and the
+  // frames in it as of the vehicle's last state.
+  const std::string can_log = CanLogOf(json);
+  INFO(can_log);
+  CHECK(JsonField(can_log, "path") == logs[0].string());
+  CHECK(NumberIn(can_log, "frames") > 0);
+  CHECK(NumberIn(can_log, "frames") <= static_cast<long long>(frames.size()));
+  CHECK(NumberIn(can_log, "frames_lost") == 0);
+  CHECK(can_log.find("\"error\"") == std::string::npos);
+  CHECK(haptel.out().find("vehicle's CAN bus log " + logs[0].string()) != std::string::npos);
 }
 
-TEST_CASE("the real CAN robot on a kernel without CAN support: exit 2, one line naming errno 97") {
-  const int probe = socket(PF_CAN, SOCK_RAW, CAN_RAW);
-  if (probe >= 0) {
-    close(probe);
-    WARN("this kernel has CAN support: the errno 97 refusal cannot be seen here");
-    return;
+TEST_CASE("the CAN log on a full disk: both programs say so once, the summary and the JSON name it, exit 5") {
+  const auto dir = test::ScratchDir("e2e-can-full");
+  const auto vehicle_file = CanVehicleFile(dir);
+  const std::string name = "canfull";
+  // A full disk without root: the log is <log_dir>/<name>-<UTC second>.log,
+  // so each name the vehicle may take in the next minutes is made a link to
+  // /dev/full, where every write fails with ENOSPC.
+  const auto can_dir = dir / "can";
+  std::filesystem::create_directories(can_dir);
+  const time_t now = time(nullptr);
+  for (time_t t = now - 5; t < now + 300; ++t) {
+    tm utc{};
+    gmtime_r(&t, &utc);
+    char stamp[32];
+    std::strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%SZ", &utc);
+    std::filesystem::create_symlink("/dev/full", can_dir / (name + "-" + stamp + ".log"));
   }
-  Child vehicle({CanBin("haptel-vehicle"), "--config", "config/vehicles/can-robot.yaml", "--can", "can0"});
-  CHECK(vehicle.Wait(30.0) == 2);
-  INFO(vehicle.err());
-  CHECK(vehicle.err().find("can0") != std::string::npos);
-  CHECK(vehicle.err().find("no CAN support") != std::string::npos);
-  CHECK(vehicle.err().find("errno 97") != std::string::npos);
-  CHECK(std::count(vehicle.err().begin(), vehicle.err().end(), '\n') == 1);
+  Child haptel({CanBin("haptel"), "run", "--vehicle", vehicle_file.string(), "--vehicle-name", name, "--track",
+                "config/tracks/test-short.yaml", "--json", "--quiet", "--domain",
+                std::to_string(test::UniqueDomain(62)), "--database", (dir / "runs.db").string(),
+                "--vehicle-timeout", "5"});
+  const int code = haptel.Wait(120.0);
+  INFO("stdout:\n" << haptel.out() << "\nstderr:\n" << haptel.err());
+  CHECK(code == 5);
+  const std::string json = haptel.LastLine();
+  CHECK(JsonField(json, "outcome") == "completed");  // the robot drove on
+  CHECK(JsonField(json, "recorded") == "true");
+  const std::string can_log = CanLogOf(json);
+  INFO(can_log);
+  const std::filesystem::path log = JsonField(can_log, "path");
+  CHECK(log.parent_path() == can_dir);
+  CHECK(std::filesystem::is_symlink(log));
+  CHECK(JsonField(can_log, "error") ==
+        "cannot write " + log.string() + ": No space left on device (after 0 frames)");
+  CHECK(NumberIn(can_log, "frames") == 0);
+  CHECK(NumberIn(can_log, "frames_lost") > 100);
+  // Said once by each program (the spawned vehicle's stderr is the run's),
+  // and in the summary instead of the log's figures.
+  auto count = [](const std::string& text, const std::string& what) {
+    size_t n = 0;
+    for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+    return n;
+  };
+  CHECK(count(haptel.err(), "haptel-vehicle: error: the CAN bus log is not recorded whole: cannot write " +
+                                log.string()) == 1);
+  CHECK(count(haptel.err(), "haptel: error: vehicle '" + name +
+                                "': its CAN bus log is not recorded whole: cannot write " + log.string()) == 1);
+  CHECK(haptel.out().find("vehicle's CAN bus log NOT recorded whole: cannot write " + log.string()) !=
+        std::string::npos);
 }

@@ -36,7 +36,7 @@ TEST_CASE("haptel run completes the short track over DDS with a separate vehicle
   // Signals it does not document leave it running: SIGUSR1 cuts the link
   // only with --link-fault (it used to end the run unrecorded, exit 138).
   std::this_thread::sleep_for(std::chrono::seconds(2));
-  for (const int signal : {SIGUSR1, SIGUSR2, SIGPIPE}) REQUIRE(kill(haptel.pid(), signal) == 0);
+  for (const int signal : {SIGUSR1, SIGUSR2, SIGPIPE, SIGXFSZ}) REQUIRE(kill(haptel.pid(), signal) == 0);
   const int code = haptel.Wait(120.0);
   INFO("stdout:\n" << haptel.out() << "\nstderr:\n" << haptel.err());
   REQUIRE(code == 0);

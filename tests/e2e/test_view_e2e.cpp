@@ -111,3 +111,33 @@ TEST_CASE("Escape in the window aborts the run, stops the vehicle and keeps what
   CHECK(run.err().find("physics world built") == std::string::npos);
   CHECK(json.find("\"servo_forces_clamped\":0") != std::string::npos);
 }
+
+TEST_CASE("a recording that cannot grow (as on a full disk) ends, is said on stderr, in the summary and the JSON, "
+          "and the run exits 5") {
+  const auto dir = test::ScratchDir("e2e-view-full");
+  const auto mp4 = dir / "lap.mp4";
+  // prlimit: no file this run writes may grow past the limit (a write past
+  // it fails with EFBIG; haptel ignores SIGXFSZ). The database and the
+  // picture stay below it; the MP4 of the lap does not.
+  constexpr int kLimit = 192 * 1024;
+  Child run({"/usr/bin/prlimit", "--fsize=" + std::to_string(kLimit) + ":", "--", Bin("haptel"), "run",
+             "--operator", "auto", "--view", "none", "--record", mp4.string(), "--track",
+             "config/tracks/test-short.yaml", "--json", "--quiet", "--domain", std::to_string(test::UniqueDomain(34)),
+             "--database", (dir / "runs.db").string(), "--vehicle-timeout", "5"});
+  const int code = run.Wait(180.0);
+  INFO(run.out() << run.err());
+  CHECK(code == 5);
+  const std::string json = run.LastLine();
+  CHECK(JsonField(json, "outcome") == "completed");  // the lap itself went on
+  CHECK(JsonField(json, "recorded") == "true");
+  const std::string error = JsonField(json, "record_error");
+  CHECK(error.find("cannot write " + mp4.string() + ": File too large") != std::string::npos);
+  // Said once on stderr as it happened, and in the summary instead of "recorded to".
+  const std::string said = "the operator's view is not recorded whole: cannot write " + mp4.string();
+  const size_t first = run.err().find(said);
+  CHECK(first != std::string::npos);
+  CHECK(run.err().find(said, first + 1) == std::string::npos);
+  CHECK(run.out().find("operator's view NOT recorded whole: cannot write " + mp4.string()) != std::string::npos);
+  CHECK(run.out().find("operator's view recorded to") == std::string::npos);
+  CHECK(std::filesystem::file_size(mp4) <= static_cast<uintmax_t>(kLimit));
+}

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -340,4 +341,20 @@ TEST_CASE("the simulated CAN robot drives through the bus, and stops itself on a
   CHECK(sim.State().fault_message.find("CONTROLLER_FAILED") != std::string::npos);
   for (int i = 0; i < 100; ++i) sim.Update(0.005);
   CHECK(std::abs(sim.robot().State().speed) < 0.02);  // stopped within a further 0.5 s
+}
+
+TEST_CASE("the CAN robot's log on a full disk (/dev/full): the state reports it and the robot drives on") {
+  const Track track(LoadTrack("config/tracks/test-short.yaml"));
+  SimulatedCanRobot sim(track, CanConfigured(), std::make_unique<CandumpWriter>("/dev/full", "can0"));
+  CHECK(sim.State().can_log.path == "/dev/full");
+  CHECK(sim.State().can_log.error.empty());
+  sim.SetMotors({8, 8});
+  for (int i = 0; i < 200; ++i) sim.Update(0.005);  // a second of bus traffic: several hundred frames
+  const CanLogStatus log = sim.State().can_log;
+  INFO(log.error);
+  CHECK(log.error.find("cannot write /dev/full: " + std::string(std::strerror(ENOSPC))) != std::string::npos);
+  CHECK(log.frames == 0);
+  CHECK(log.frames_lost > CandumpWriter::kFlushEvery);
+  CHECK_FALSE(sim.State().fault);  // the log's end does not stop the robot
+  CHECK(sim.State().speed > 0.1);
 }

@@ -1,6 +1,7 @@
 #include "haptel/vehicles/can_robot.hpp"
 
 #include <cmath>
+#include <filesystem>
 #include <stdexcept>
 
 #include "haptel/config/error.hpp"
@@ -30,6 +31,15 @@ CanRobot::CanRobot(std::unique_ptr<CanBus> bus, const VehicleConfig& config, std
     : bus_(std::move(bus)), can_(ValidatedCan(config)), track_width_(config.drive.track_width), log_(std::move(log)) {
   if (bus_ == nullptr) throw std::invalid_argument("CanRobot: no bus");
   state_.pose_valid = false;  // a real robot knows no pose; a tracker would give it
+  if (log_) state_.can_log.path = std::filesystem::absolute(log_->path()).string();
+}
+
+void CanRobot::UpdateLogStatus() {
+  if (!log_) return;
+  CanLogStatus& s = state_.can_log;
+  s.frames = log_->frames_written();
+  s.frames_lost = log_->frames_lost();
+  if (s.error.empty() && !log_->error().empty()) s.error = log_->error();
 }
 
 double CanRobot::LevelTurns(int level) const {
@@ -210,6 +220,7 @@ void CanRobot::Update(double dt) {
       Send(odrive::SetInputVel(can_.right_node, static_cast<float>(wheel_cmd_[kRight])));
     }
   }
+  UpdateLogStatus();
 }
 
 }  // namespace haptel::vehicles

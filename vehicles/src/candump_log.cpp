@@ -1,9 +1,12 @@
 #include "haptel/vehicles/candump_log.hpp"
 
+#include <cerrno>
 #include <cinttypes>
 #include <cstring>
 #include <fstream>
 #include <stdexcept>
+
+#include "haptel/core/log.hpp"
 
 namespace haptel::vehicles {
 namespace {
@@ -106,19 +109,64 @@ CandumpWriter::CandumpWriter(const std::filesystem::path& file, std::string inte
   std::error_code ignored;
   if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path(), ignored);
   file_ = std::fopen(file.c_str(), "w");
-  if (file_ == nullptr) throw std::runtime_error("cannot write the CAN log " + file.string());
+  if (file_ == nullptr) {
+    throw std::runtime_error("cannot write the CAN log " + file.string() + ": " + std::strerror(errno));
+  }
 }
 
-CandumpWriter::~CandumpWriter() {
-  if (file_ != nullptr) std::fclose(file_);
+CandumpWriter::~CandumpWriter() { Close(); }
+
+void CandumpWriter::Fail(int errno_value) {
+  // The lines since the last good flush may be partly in the file (a short
+  // write); they count as lost, so frames_written() stays what is certain.
+  error_ = "cannot write " + path_.string() + ": " + std::strerror(errno_value) + " (after " +
+           std::to_string(flushed_) + " frames)";
+  if (file_ != nullptr) std::fclose(file_);  // its own error, if any, is the same disk's
+  file_ = nullptr;
+  log::Error("the CAN bus log is not recorded whole: " + error_);
+}
+
+void CandumpWriter::Flush() {
+  if (file_ == nullptr) return;
+  errno = 0;
+  if (std::fflush(file_) != 0 || std::ferror(file_) != 0) {
+    Fail(errno != 0 ? errno : EIO);
+    return;
+  }
+  flushed_ = lines_;
 }
 
 void CandumpWriter::Write(const can_frame& frame, int64_t wall_ns) {
+  ++lines_;
+  if (file_ == nullptr) return;  // ended by a failed write (or closed): lost
   const int64_t sec = wall_ns / 1'000'000'000;
   const int64_t usec = (wall_ns % 1'000'000'000) / 1000;
-  std::fprintf(file_, "(%" PRId64 ".%06" PRId64 ") %s %s\n", sec, usec, interface_.c_str(),
-               FormatCandumpFrame(frame).c_str());
-  if (++lines_ % 256 == 0) std::fflush(file_);
+  errno = 0;
+  // stdio writes when its buffer fills: a failure can show here too.
+  if (std::fprintf(file_, "(%" PRId64 ".%06" PRId64 ") %s %s\n", sec, usec, interface_.c_str(),
+                   FormatCandumpFrame(frame).c_str()) < 0) {
+    Fail(errno != 0 ? errno : EIO);
+    return;
+  }
+  if (flushed_wall_ns_ == 0) flushed_wall_ns_ = wall_ns;
+  if (lines_ % kFlushEvery == 0 || wall_ns - flushed_wall_ns_ >= kFlushPeriod_ns) {
+    flushed_wall_ns_ = wall_ns;
+    Flush();
+  }
+}
+
+bool CandumpWriter::Close() {
+  if (file_ == nullptr) return error_.empty();
+  Flush();
+  if (file_ == nullptr) return false;
+  std::FILE* file = file_;
+  file_ = nullptr;
+  errno = 0;
+  if (std::fclose(file) != 0) {  // a network file system reports a full disk here
+    Fail(errno != 0 ? errno : EIO);
+    return false;
+  }
+  return true;
 }
 
 }  // namespace haptel::vehicles

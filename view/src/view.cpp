@@ -10,13 +10,14 @@
 #include <future>
 #include <mutex>
 #include <opencv2/imgproc.hpp>
-#include <opencv2/videoio.hpp>
 #include <thread>
 
 #define GL_GLEXT_PROTOTYPES 1
 #include <GL/glcorearb.h>
 
 #include "haptel/core/histogram.hpp"
+#include "haptel/core/log.hpp"
+#include "haptel/view/mp4_writer.hpp"
 #include "haptel/view/renderer.hpp"
 
 namespace haptel::view {
@@ -38,23 +39,13 @@ void SleepUntil(int64_t t_ns) {
 
 /// The MP4: frames read back on the view thread go through a short queue to
 /// an encoder thread (H.264 is far slower than a readback); when the queue is
-/// full the frame is dropped and counted rather than stalling the view.
+/// full the frame is dropped and counted rather than stalling the view. A
+/// write that fails (a full disk) ends the recording: the encoder thread
+/// says so once on stderr, and the view goes on without it.
 class Mp4Recorder {
  public:
-  Mp4Recorder(const std::filesystem::path& file, int width, int height, double fps) {
-    if (file.has_parent_path()) {
-      std::error_code ec;
-      std::filesystem::create_directories(file.parent_path(), ec);
-    }
-    // A fast x264 preset: the recording must keep up on a small machine
-    // beside the servo loop and the physics (the user's own options win).
-    setenv("OPENCV_FFMPEG_WRITER_OPTIONS", "preset;veryfast", 0);
-    writer_.open(file.string(), cv::CAP_FFMPEG, cv::VideoWriter::fourcc('a', 'v', 'c', '1'), fps,
-                 cv::Size(width, height));
-    if (!writer_.isOpened()) {
-      throw ViewError("view: cannot write " + file.string() +
-                      " (H.264 MP4 through OpenCV's FFmpeg backend; is the folder writable?)");
-    }
+  Mp4Recorder(const std::filesystem::path& file, int width, int height, double fps)
+      : writer_(WithItsFolder(file), width, height, fps) {
     encoder_ = std::thread([this] { Encode(); });
   }
   ~Mp4Recorder() { Finish(); }
@@ -63,6 +54,7 @@ class Mp4Recorder {
   /// a slow frame is shown for as long as it was on the screen).
   void Push(const cv::Mat& rgba, int copies) {
     std::lock_guard<std::mutex> lock(mutex_);
+    if (ended_) return;  // the file failed: nothing more goes to it
     for (int i = 0; i < copies; ++i) {
       if (queue_.size() >= kCapacity) {
         ++dropped_;
@@ -80,16 +72,38 @@ class Mp4Recorder {
     }
     wake_.notify_one();
     if (encoder_.joinable()) encoder_.join();
-    writer_.release();
+    if (!writer_.Close()) Report();
   }
   uint64_t written() const { return written_.load(); }
   uint64_t dropped() const {
     std::lock_guard<std::mutex> lock(mutex_);
     return dropped_;
   }
+  /// "" while the file is whole; once Finish() returned, final.
+  std::string error() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return error_;
+  }
 
  private:
   static constexpr size_t kCapacity = 12;
+
+  /// `file`, its folder made if it can be (the writer says if it cannot).
+  static const std::filesystem::path& WithItsFolder(const std::filesystem::path& file) {
+    if (file.has_parent_path()) {
+      std::error_code ec;
+      std::filesystem::create_directories(file.parent_path(), ec);
+    }
+    return file;
+  }
+
+  /// Once, from whichever thread saw the failure first.
+  void Report() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!error_.empty()) return;
+    error_ = writer_.error();
+    log::Error("the operator's view is not recorded whole: " + error_);
+  }
 
   void Encode() {
     cv::Mat flipped;
@@ -105,18 +119,26 @@ class Mp4Recorder {
       }
       cv::flip(rgba, flipped, 0);
       cv::cvtColor(flipped, bgr, cv::COLOR_RGBA2BGR);
-      writer_.write(bgr);
+      if (!writer_.Write(bgr)) {
+        Report();
+        std::lock_guard<std::mutex> lock(mutex_);
+        ended_ = true;
+        queue_.clear();
+        return;
+      }
       written_.fetch_add(1);
     }
   }
 
-  cv::VideoWriter writer_;
+  Mp4Writer writer_;  // used by the encoder thread only, then by Finish() after the join
   std::thread encoder_;
   mutable std::mutex mutex_;
   std::condition_variable wake_;
   std::deque<cv::Mat> queue_;
   bool done_ = false;
+  bool ended_ = false;  ///< the file failed: the recording is over
   uint64_t dropped_ = 0;
+  std::string error_;
   std::atomic<uint64_t> written_{0};
 };
 
@@ -308,6 +330,7 @@ ViewStats View::Stats() const {
   if (i.recorder) {
     s.recorded_frames = i.recorder->written();
     s.record_dropped = i.recorder->dropped();
+    s.record_error = i.recorder->error();
   }
   return s;
 }

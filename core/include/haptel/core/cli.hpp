@@ -19,6 +19,10 @@ inline constexpr int kExitFailed = 1;    ///< something failed while running
 inline constexpr int kExitBadInput = 2;  ///< bad arguments or configuration: nothing ran
 inline constexpr int kExitLost = 3;      ///< the vehicle or the haptic device was lost
 inline constexpr int kExitNotRecorded = 4;  ///< results went to a fallback file, not the database
+/// The run is in the database, but an output it was asked to keep (the
+/// --record MP4, the vehicle's CAN bus log) failed to be written; the
+/// message says which and why.
+inline constexpr int kExitOutputFailed = 5;
 
 /// The user's input is wrong (exit 2): arguments, files, their combination.
 class InputError : public std::runtime_error {

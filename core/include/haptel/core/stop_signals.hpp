@@ -13,6 +13,9 @@ namespace haptel {
 /// does where it does something (the link fault's cut, which installs its
 /// own handler after this), and no other signal of theirs ends a run
 /// unrecorded; a peer gone from a socket is an error the writer sees.
+/// SIGXFSZ is ignored too: a file grown past the size limit (ulimit -f)
+/// fails its write with EFBIG, which the writer reports like a full disk,
+/// instead of the signal killing the program and the run with it.
 const std::atomic<bool>& InstallStopSignals();
 
 /// The signal that set the flag (0 while none has).

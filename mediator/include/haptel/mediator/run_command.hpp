@@ -36,7 +36,9 @@ SessionSetup RunSetupFromArgs(const Args& args);
 RecordedRun RunAndRecord(const SessionSetup& setup, Recorder& recorder,
                          const std::atomic<bool>& interrupted, const Recorder::AlsoSave& also = {});
 
-/// The process exit code: the outcome's, or kExitNotRecorded.
+/// The process exit code: kExitNotRecorded when the database did not take the
+/// run, else kExitOutputFailed when the --record MP4 or the vehicle's CAN
+/// bus log failed, else the outcome's.
 int ExitCode(const RecordedRun& run);
 
 /// The lines `haptel run` prints after a lap.

@@ -138,6 +138,19 @@ int ExitCode(Outcome outcome);
 /// The exit code, whatever the outcome, of a run the database did not take
 /// at the end (its results went to a fallback file; the JSON line says which).
 constexpr int kExitNotRecorded = cli::kExitNotRecorded;
+/// The exit code of a run recorded in the database whose --record MP4 or
+/// whose vehicle's CAN bus log failed (kExitNotRecorded wins over it; it
+/// wins over the outcome's code).
+constexpr int kExitOutputFailed = cli::kExitOutputFailed;
+
+/// The vehicle's CAN bus log as its last state received reported it (a CAN
+/// robot keeping one in can.log_dir; the file is on the vehicle's host).
+struct CanLogReport {
+  std::string path;          ///< "": the vehicle keeps no log
+  uint64_t frames = 0;       ///< frames certainly in the file
+  uint64_t frames_lost = 0;  ///< frames not in it because a write failed
+  std::string error;         ///< why the log ended ("" while whole)
+};
 
 struct SessionResult {
   Outcome outcome = Outcome::kInterrupted;
@@ -155,6 +168,10 @@ struct SessionResult {
   /// (0 when there was nothing to grasp; negative if they never did).
   double grasp_s = 0.0;
   uint64_t view_record_dropped = 0;  ///< MP4 frames the encoder could not take in time
+  /// "" when the --record MP4 was written whole (or none was asked for);
+  /// else why not: a failed write ended it (file, OS reason, frames kept).
+  std::string view_record_error;
+  CanLogReport can_log;
   /// The simulated driver: times a control slipped out of its hand.
   int operator_slips = 0;
   /// Every error bit the vehicle's servo controller reported over the run

@@ -1,11 +1,21 @@
 #pragma once
 /// @file The seam between a vehicle node and what it drives: a simulator or
 /// a hardware adapter (SocketCAN robot, servo-controller blimp).
+#include <cstdint>
 #include <string>
 
 #include "haptel/vehicles/drive.hpp"
 
 namespace haptel::vehicles {
+
+/// The adapter's log of its bus traffic, when it keeps one (the CAN robot's
+/// candump -L file in can.log_dir).
+struct CanLogStatus {
+  std::string path;          ///< on the vehicle's host; "": no log kept
+  uint64_t frames = 0;       ///< frames certainly in the file (its last flush)
+  uint64_t frames_lost = 0;  ///< frames not in it because a write failed
+  std::string error;         ///< why the log ended; "" while it is whole
+};
 
 /// What an adapter knows about its vehicle.
 struct AdapterState {
@@ -22,6 +32,7 @@ struct AdapterState {
   /// bus-off) and will not move until its faults are cleared.
   bool fault = false;
   std::string fault_message;  ///< one line: what, where (empty: no fault)
+  CanLogStatus can_log;
 };
 
 class VehicleAdapter {

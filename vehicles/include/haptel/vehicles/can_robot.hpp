@@ -42,7 +42,8 @@ struct CanCounters {
 class CanRobot final : public VehicleAdapter {
  public:
   /// Takes the bus. `log` (may be null) receives every frame sent and
-  /// received. Validates config.can (ConfigFieldError).
+  /// received; the state's can_log says how it fares (a failed write ends
+  /// the log, not the driving). Validates config.can (ConfigFieldError).
   CanRobot(std::unique_ptr<CanBus> bus, const VehicleConfig& config, std::unique_ptr<CandumpWriter> log = nullptr);
 
   void SetMotors(const MotorLevels& levels) override;
@@ -73,6 +74,8 @@ class CanRobot final : public VehicleAdapter {
   void Send(const can_frame& frame);
   void StartAxes();
   void Fault(const std::string& message);
+  /// The log's figures and failure into the state.
+  void UpdateLogStatus();
   double LevelTurns(int level) const;
 
   std::unique_ptr<CanBus> bus_;

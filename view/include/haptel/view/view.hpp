@@ -1,7 +1,7 @@
 #pragma once
 /// @file The operator's view: the mediator world drawn in 3-D with SDL2 and
 /// OpenGL 3.3 core on a thread of its own, at display rate, into a window or
-/// offscreen, optionally recorded to H.264 MP4.
+/// offscreen, optionally recorded to H.264 MP4 (mp4_writer.hpp).
 ///
 /// The view thread owns SDL (video and game controllers) and the GL context.
 /// Each frame it asks its ViewSource for the latest ViewModel (the source
@@ -73,6 +73,9 @@ struct ViewStats {
   double video_to_screen_ms_p99 = 0.0;
   uint64_t recorded_frames = 0;
   uint64_t record_dropped = 0;      ///< frames the encoder could not take in time
+  /// "" while the MP4 is whole; else why it is not (a failed write ended
+  /// the recording: the file, the OS's reason, the frames it holds).
+  std::string record_error;
 };
 
 class View {
