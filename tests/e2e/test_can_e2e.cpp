@@ -136,14 +136,15 @@ TEST_CASE("the CAN log on a full disk: both programs say so once, the summary an
     std::filesystem::create_symlink("/dev/full", can_dir / (name + "-" + stamp + ".log"));
   }
   Child haptel({CanBin("haptel"), "run", "--vehicle", vehicle_file.string(), "--vehicle-name", name, "--track",
-                "config/tracks/test-short.yaml", "--json", "--quiet", "--domain",
+                "config/tracks/test-short.yaml", "--time-limit", "5", "--json", "--quiet", "--domain",
                 std::to_string(test::UniqueDomain(62)), "--database", (dir / "runs.db").string(),
                 "--vehicle-timeout", "5"});
   const int code = haptel.Wait(120.0);
   INFO("stdout:\n" << haptel.out() << "\nstderr:\n" << haptel.err());
-  CHECK(code == 5);
+  CHECK(code == 5);  // wins over the time limit's 1
   const std::string json = haptel.LastLine();
-  CHECK(JsonField(json, "outcome") == "completed");  // the robot drove on
+  CHECK(JsonField(json, "outcome") == "time limit");
+  CHECK(std::stod(JsonField(json, "distance_m")) > 0.1);  // the robot drove on
   CHECK(JsonField(json, "recorded") == "true");
   const std::string can_log = CanLogOf(json);
   INFO(can_log);
