@@ -1,8 +1,8 @@
 // End to end with the operator's view: a real X server (Xvfb), the real
 // `haptel` window, keys sent to it with xdotool, and the MP4 it records.
-#include <catch2/catch.hpp>
 #include <signal.h>
 
+#include <catch2/catch.hpp>
 #include <cstdlib>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -12,8 +12,8 @@
 #include "../view/offscreen_gl.hpp"
 #include "child.hpp"
 #include "haptel/view/renderer.hpp"
-#include "xserver.hpp"
 #include "test_env.hpp"
+#include "xserver.hpp"
 
 using namespace haptel;
 using haptel::test::Child;
@@ -62,7 +62,8 @@ ViewAreas AreasOfDefaultView() {
   test::OffscreenGl gl(kWidth, kHeight);
   view::Renderer renderer(kWidth, kHeight);
   view::ViewModel model;
-  model.video.image = std::make_shared<const cv::Mat>(480, 640, CV_8UC3, cv::Scalar(0, 0, 0));  // a 4:3 picture
+  model.video.image =
+      std::make_shared<const cv::Mat>(480, 640, CV_8UC3, cv::Scalar(0, 0, 0));  // a 4:3 picture
   model.video.id = 1;
   renderer.Draw(model, 0.0);
   // The screen is seen in perspective: the box around the lower half's
@@ -157,18 +158,40 @@ TEST_CASE("Escape in the window aborts the run, stops the vehicle and keeps what
   CHECK(json.find("\"servo_forces_clamped\":0") != std::string::npos);
 }
 
-TEST_CASE("--predict on: the window shows the ghost on the picture's floor and the predicted pose on the map; "
-          "--predict off: neither") {
+TEST_CASE(
+    "--predict on: the window shows the ghost on the picture's floor and the predicted pose on the "
+    "map; "
+    "--predict off: neither") {
   const ViewAreas areas = AreasOfDefaultView();
   XServer x;
   for (const bool predict : {true, false}) {
     const auto dir = test::ScratchDir(predict ? "e2e-view-predict-on" : "e2e-view-predict-off");
     const auto mp4 = dir / "view.mp4";
     // 200 ms each way: the ghost leads its picture by a few centimetres at speed.
-    Child run({Bin("haptel"), "run", "--operator", "auto", "--view", "window", "--record", mp4.string(), "--track",
-               "config/tracks/test-short.yaml", "--link-fault", "delay=200ms", "--predict", predict ? "on" : "off",
-               "--time-limit", "8", "--json", "--quiet", "--domain", std::to_string(test::UniqueDomain(predict ? 76 : 77)),
-               "--database", (dir / "runs.db").string(), "--vehicle-timeout", "5"});
+    Child run({Bin("haptel"),
+               "run",
+               "--operator",
+               "auto",
+               "--view",
+               "window",
+               "--record",
+               mp4.string(),
+               "--track",
+               "config/tracks/test-short.yaml",
+               "--link-fault",
+               "delay=200ms",
+               "--predict",
+               predict ? "on" : "off",
+               "--time-limit",
+               "8",
+               "--json",
+               "--quiet",
+               "--domain",
+               std::to_string(test::UniqueDomain(predict ? 76 : 77)),
+               "--database",
+               (dir / "runs.db").string(),
+               "--vehicle-timeout",
+               "5"});
     const int code = run.Wait(180.0);
     INFO("--predict " << (predict ? "on" : "off") << "\n" << run.out() << run.err());
     REQUIRE((code == 0 || code == 1));  // a lap, or the time limit

@@ -3,8 +3,8 @@
 // the real renderer offscreen over the synthetic camera's picture — the
 // ghost's colour where the projection puts it, the predicted pose on the
 // map, and nothing of either with prediction off.
-#include <catch2/catch.hpp>
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <numbers>
 #include <opencv2/imgcodecs.hpp>
@@ -75,7 +75,9 @@ int CountMagenta(const cv::Mat& bgr) {
 
 }  // namespace
 
-TEST_CASE("the ghost straight ahead stands on the centre column, from the floor it stands on up to its top") {
+TEST_CASE(
+    "the ghost straight ahead stands on the centre column, from the floor it stands on up to its "
+    "top") {
   const VehicleConfig vehicle = SimRobot();
   const CameraConfig& cam = vehicle.camera;
   PredictiveDisplay display(cam, vehicle.body.radius);
@@ -124,7 +126,9 @@ TEST_CASE("the ghost straight ahead stands on the centre column, from the floor 
   CHECK(p.one_way_delay_s == Approx(0.2));
 }
 
-TEST_CASE("a ghost to the left is drawn left of the centre; one behind the camera, and its path, not at all") {
+TEST_CASE(
+    "a ghost to the left is drawn left of the centre; one behind the camera, and its path, not at "
+    "all") {
   const VehicleConfig vehicle = SimRobot();
   PredictiveDisplay display(vehicle.camera, vehicle.body.radius);
   const PredictedPose camera{0.0, 0.0, 0.0, 0.0};  // looking east: left is +y
@@ -134,14 +138,16 @@ TEST_CASE("a ghost to the left is drawn left of the centre; one behind the camer
   for (int i = 0; i < p.outline_count; ++i) CHECK(p.outline[static_cast<size_t>(i)].u < 0.5);
   for (int i = 0; i < p.path_count; ++i) CHECK(p.path[static_cast<size_t>(i)].a.u < 0.5);
 
-  display.Make(camera, Straight({0.0, -0.8, 0.0, std::numbers::pi}, 21, 0.02), 0.1, p);  // behind, driving away
-  CHECK(p.shown);  // on the map it is still shown
+  display.Make(camera, Straight({0.0, -0.8, 0.0, std::numbers::pi}, 21, 0.02), 0.1,
+               p);  // behind, driving away
+  CHECK(p.shown);   // on the map it is still shown
   CHECK(p.outline_count == 0);
   CHECK(p.path_count == 0);
   CHECK(p.map_path_count == 21);
 }
 
-TEST_CASE("a ghost where the camera is (no lead) stays below the picture, as the robot's own body does") {
+TEST_CASE(
+    "a ghost where the camera is (no lead) stays below the picture, as the robot's own body does") {
   for (const char* file : {"config/vehicles/sim-robot.yaml", "config/vehicles/ros2-robot.yaml"}) {
     const VehicleConfig vehicle = LoadVehicle(file);
     PredictiveDisplay display(vehicle.camera, vehicle.body.radius);
@@ -151,16 +157,21 @@ TEST_CASE("a ghost where the camera is (no lead) stays below the picture, as the
     INFO(file);
     for (int i = 0; i < p.outline_count; ++i) CHECK(p.outline[static_cast<size_t>(i)].v > 1.0f);
     // 3 cm ahead of its picture (0.1 s at full speed): it shows at the bottom.
-    display.Make(camera, Straight({0.0, 0.3 + 0.03 * std::cos(1.0), -0.2 + 0.03 * std::sin(1.0), 1.0}, 1, 0.0), 0.0, p);
+    display.Make(
+        camera,
+        Straight({0.0, 0.3 + 0.03 * std::cos(1.0), -0.2 + 0.03 * std::sin(1.0), 1.0}, 1, 0.0), 0.0,
+        p);
     REQUIRE(p.outline_count >= 3);
     float highest = 2.0f;
-    for (int i = 0; i < p.outline_count; ++i) highest = std::min(highest, p.outline[static_cast<size_t>(i)].v);
+    for (int i = 0; i < p.outline_count; ++i)
+      highest = std::min(highest, p.outline[static_cast<size_t>(i)].v);
     CHECK(highest < 0.99f);
     CHECK(highest > 0.5f);  // below the horizon: it is lower than the camera
   }
 }
 
-TEST_CASE("the map of a track: its walls, the start line across the corridor, each gate post to post") {
+TEST_CASE(
+    "the map of a track: its walls, the start line across the corridor, each gate post to post") {
   const Track track(LoadTrack("config/tracks/test-short.yaml"));
   const view::TrackMap map = TrackMapOf(track);
   CHECK(map.walls.size() == track.walls().size());
@@ -178,8 +189,10 @@ TEST_CASE("the map of a track: its walls, the start line across the corridor, ea
   CHECK(right == 2);
 }
 
-TEST_CASE("drawn over the camera's picture: the ghost's colour where the projection puts it, the predicted pose "
-          "on the map; with prediction off neither") {
+TEST_CASE(
+    "drawn over the camera's picture: the ghost's colour where the projection puts it, the "
+    "predicted pose "
+    "on the map; with prediction off neither") {
   constexpr int kWidth = 1024, kHeight = 576;  // the view's default size
   const VehicleConfig vehicle = SimRobot();
   const auto track = std::make_shared<const Track>(LoadTrack("config/tracks/test-short.yaml"));
@@ -188,10 +201,12 @@ TEST_CASE("drawn over the camera's picture: the ghost's colour where the project
   RobotPredictor predictor(vehicle.drive, vehicle.watchdog_timeout_s);
   for (int i = 0; i < 15; ++i) predictor.OnRoundTrip(0.8);
   for (int i = 0; i <= 100; ++i) predictor.OnCommand(0.01 * i, 1.0, 1.0);
-  const double speed = (vehicle.drive.left_gain + vehicle.drive.right_gain) / 2 * vehicle.drive.max_speed;
-  const double yaw = (vehicle.drive.right_gain - vehicle.drive.left_gain) * vehicle.drive.max_speed /
-                     vehicle.drive.track_width;
-  const PredictedPose reported{1.0, track->StartPosition().x(), track->StartPosition().y(), track->StartHeading()};
+  const double speed =
+      (vehicle.drive.left_gain + vehicle.drive.right_gain) / 2 * vehicle.drive.max_speed;
+  const double yaw = (vehicle.drive.right_gain - vehicle.drive.left_gain) *
+                     vehicle.drive.max_speed / vehicle.drive.track_width;
+  const PredictedPose reported{1.0, track->StartPosition().x(), track->StartPosition().y(),
+                               track->StartHeading()};
   RobotStateSample state{1.0, reported.x, reported.y, reported.heading, speed, yaw, 8, 8};
   predictor.OnState(state);
   REQUIRE(predictor.ready());
@@ -223,7 +238,8 @@ TEST_CASE("drawn over the camera's picture: the ghost's colour where the project
   REQUIRE(renderer.MapPoint(beside_x, beside_y, map_x, map_y));
   double reported_x = 0, reported_y = 0;
   REQUIRE(renderer.MapPoint(reported.x - vehicle.body.radius * std::cos(reported.heading),
-                            reported.y - vehicle.body.radius * std::sin(reported.heading), reported_x, reported_y));
+                            reported.y - vehicle.body.radius * std::sin(reported.heading),
+                            reported_x, reported_y));
   view::ViewModel plain = model;
   plain.prediction.shown = false;  // prediction off: what the session publishes then
   renderer.Draw(plain, 0.0);
@@ -237,10 +253,12 @@ TEST_CASE("drawn over the camera's picture: the ghost's colour where the project
 
   // Where the projection puts the ghost: a point inside its body near its
   // top front edge, and a point of the path ahead past it.
-  const LevelCamera lens = LevelCamera::At(vehicle.camera, reported.x, reported.y, reported.heading);
+  const LevelCamera lens =
+      LevelCamera::At(vehicle.camera, reported.x, reported.y, reported.heading);
   const double r = vehicle.body.radius;
-  const cv::Point2d body = PicturePixel(lens, now.x + 0.8 * r * std::cos(now.heading),
-                                        now.y + 0.8 * r * std::sin(now.heading), 0.8 * display.ghost_height_m());
+  const cv::Point2d body =
+      PicturePixel(lens, now.x + 0.8 * r * std::cos(now.heading),
+                   now.y + 0.8 * r * std::sin(now.heading), 0.8 * display.ghost_height_m());
   const PredictedPose& far = path.back();  // 0.3 m further: past the ghost, on the floor it hides
   const cv::Point2d floor = PicturePixel(lens, far.x, far.y, 0.0);
   const double w = vehicle.camera.width, h = vehicle.camera.height;

@@ -302,7 +302,6 @@ Eigen::Matrix4f Model(const std::array<double, 3>& position, const std::array<do
 
 cv::Scalar Bgra(double b, double g, double r, double a = 255) { return cv::Scalar(b, g, r, a); }
 
-
 // The predictive display's colours (BGRA): the ghost and its path in
 // magenta, which nothing in the synthetic camera's world is (sky blue,
 // brown floor, pale walls, red and green posts, orange obstacles); the
@@ -314,7 +313,9 @@ constexpr int kShift = 4;  // sub-pixel bits for OpenCV's drawing
 constexpr double kOne = 1 << kShift;
 
 cv::Point Fixed(double x, double y) {
-  const auto fix = [](double c) { return static_cast<int>(std::lround(std::clamp(c, -1e5, 1e5) * kOne)); };
+  const auto fix = [](double c) {
+    return static_cast<int>(std::lround(std::clamp(c, -1e5, 1e5) * kOne));
+  };
   return {fix(x), fix(y)};
 }
 
@@ -350,8 +351,9 @@ cv::Rect DrawGhost(cv::Mat& ghost, const Prediction& p) {
   }
   if (x1 < x0 || y1 < y0) return {};
   const int pad = thickness + 2;
-  const cv::Rect drawn(cv::Point(static_cast<int>(std::floor(x0)) - pad, static_cast<int>(std::floor(y0)) - pad),
-                       cv::Point(static_cast<int>(std::ceil(x1)) + pad, static_cast<int>(std::ceil(y1)) + pad));
+  const cv::Rect drawn(
+      cv::Point(static_cast<int>(std::floor(x0)) - pad, static_cast<int>(std::floor(y0)) - pad),
+      cv::Point(static_cast<int>(std::ceil(x1)) + pad, static_cast<int>(std::ceil(y1)) + pad));
   return drawn & cv::Rect(0, 0, ghost.cols, ghost.rows);
 }
 
@@ -449,11 +451,11 @@ struct Renderer::Gl {
   cv::Rect ghost_rect;
   /// The map: the track drawn once (map_base), the poses over it each frame.
   GLuint map_texture = 0;
-  cv::Mat map_base, map;  ///< BGRA, the panel's size
-  const TrackMap* map_of = nullptr;  ///< the track map_base shows
-  cv::Rect map_panel;                ///< where the panel is, window pixels
+  cv::Mat map_base, map;                         ///< BGRA, the panel's size
+  const TrackMap* map_of = nullptr;              ///< the track map_base shows
+  cv::Rect map_panel;                            ///< where the panel is, window pixels
   double map_scale = 0, map_ox = 0, map_oy = 0;  ///< track metres to panel pixels
-  bool map_drawn = false;                         ///< in the last frame
+  bool map_drawn = false;                        ///< in the last frame
 };
 
 Renderer::Renderer(int width, int height, const ScreenPlacement& screen)
@@ -727,8 +729,8 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
       g.ghost_rect = {};
       glBindTexture(GL_TEXTURE_2D, g.ghost_texture);
       glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
-      glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, g.ghost.cols, g.ghost.rows, 0, GL_BGRA, GL_UNSIGNED_BYTE,
-                   g.ghost.data);
+      glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, g.ghost.cols, g.ghost.rows, 0, GL_BGRA,
+                   GL_UNSIGNED_BYTE, g.ghost.data);
     }
     g.ghost(g.ghost_rect).setTo(cv::Scalar(0, 0, 0, 0));
     g.ghost_rect = DrawGhost(g.ghost, pr);
@@ -745,18 +747,23 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
       // to its right and bottom, -1), pulled a hair towards the eye so that
       // it wins the depth test against the picture and still loses it to a
       // hand in front of the screen.
-      const double u0 = static_cast<double>(r.x) / g.ghost.cols, u1 = static_cast<double>(r.x + r.width) / g.ghost.cols;
-      const double v0 = static_cast<double>(r.y) / g.ghost.rows, v1 = static_cast<double>(r.y + r.height) / g.ghost.rows;
+      const double u0 = static_cast<double>(r.x) / g.ghost.cols,
+                   u1 = static_cast<double>(r.x + r.width) / g.ghost.cols;
+      const double v0 = static_cast<double>(r.y) / g.ghost.rows,
+                   v1 = static_cast<double>(r.y + r.height) / g.ghost.rows;
       const double hw = screen_.width / 2.0;
       Eigen::Affine3f part = Eigen::Affine3f::Identity();
-      part.translate(Eigen::Vector3f(0.0f, static_cast<float>(1.0 - (u0 + u1)), static_cast<float>(1.0 - (v0 + v1))));
+      part.translate(Eigen::Vector3f(0.0f, static_cast<float>(1.0 - (u0 + u1)),
+                                     static_cast<float>(1.0 - (v0 + v1))));
       part.scale(Eigen::Vector3f(1.0f, static_cast<float>(u1 - u0), static_cast<float>(v1 - v0)));
       const Eigen::Matrix4f m =
-          Model(sc, screen_q, {1.0f, static_cast<float>(hw), static_cast<float>(hw * screen_aspect_)}) * part.matrix();
+          Model(sc, screen_q,
+                {1.0f, static_cast<float>(hw), static_cast<float>(hw * screen_aspect_)}) *
+          part.matrix();
       const Eigen::Matrix4f mvp = g.view_projection * m;
       glUniformMatrix4fv(g.tex_mvp, 1, GL_FALSE, mvp.data());
-      glUniform4f(g.tex_uv_rect, static_cast<float>(u0), static_cast<float>(v0), static_cast<float>(u1 - u0),
-                  static_cast<float>(v1 - v0));
+      glUniform4f(g.tex_uv_rect, static_cast<float>(u0), static_cast<float>(v0),
+                  static_cast<float>(u1 - u0), static_cast<float>(v1 - v0));
       glEnable(GL_BLEND);
       glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
       glEnable(GL_POLYGON_OFFSET_FILL);
@@ -881,38 +888,50 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
       g.map_of = model.map.get();
       g.map_base = cv::Mat(panel.height, panel.width, CV_8UC4, Bgra(0, 0, 0, 170));
       FitMap(*model.map, side, g.map_scale, g.map_ox, g.map_oy);
-      const auto px = [&](double x, double y) { return Fixed(g.map_ox + g.map_scale * x - 0.5, g.map_oy - g.map_scale * y - 0.5); };
+      const auto px = [&](double x, double y) {
+        return Fixed(g.map_ox + g.map_scale * x - 0.5, g.map_oy - g.map_scale * y - 0.5);
+      };
       for (const TrackMap::Line& l : model.map->walls) {
-        cv::line(g.map_base, px(l.ax, l.ay), px(l.bx, l.by), Bgra(200, 200, 200), 1, cv::LINE_AA, kShift);
+        cv::line(g.map_base, px(l.ax, l.ay), px(l.bx, l.by), Bgra(200, 200, 200), 1, cv::LINE_AA,
+                 kShift);
       }
       const TrackMap::Line& st = model.map->start;
-      cv::line(g.map_base, px(st.ax, st.ay), px(st.bx, st.by), Bgra(120, 120, 120), 1, cv::LINE_AA, kShift);
+      cv::line(g.map_base, px(st.ax, st.ay), px(st.bx, st.by), Bgra(120, 120, 120), 1, cv::LINE_AA,
+               kShift);
       for (const TrackMap::Line& l : model.map->gates) {
-        cv::line(g.map_base, px(l.ax, l.ay), px(l.bx, l.by), Bgra(0, 200, 230), 1, cv::LINE_AA, kShift);
+        cv::line(g.map_base, px(l.ax, l.ay), px(l.bx, l.by), Bgra(0, 200, 230), 1, cv::LINE_AA,
+                 kShift);
       }
       for (const TrackMap::Post& p : model.map->posts) {
         const cv::Scalar c = p.kind == TrackMap::PostKind::kLeft    ? Bgra(40, 40, 225)
                              : p.kind == TrackMap::PostKind::kRight ? Bgra(50, 200, 40)
                                                                     : Bgra(0, 140, 255);
-        cv::circle(g.map_base, px(p.x, p.y), static_cast<int>(std::max(2.0, p.radius * g.map_scale) * kOne), c,
-                   cv::FILLED, cv::LINE_AA, kShift);
+        cv::circle(g.map_base, px(p.x, p.y),
+                   static_cast<int>(std::max(2.0, p.radius * g.map_scale) * kOne), c, cv::FILLED,
+                   cv::LINE_AA, kShift);
       }
       const double text = 0.42 * height_ / 576.0;
       cv::circle(g.map_base, cv::Point(10, side + line_h - 4), 4, kReported, 2, cv::LINE_AA);
-      cv::putText(g.map_base, "as last reported", cv::Point(20, side + line_h), cv::FONT_HERSHEY_SIMPLEX, text,
-                  kReported, 1, cv::LINE_AA);
-      cv::circle(g.map_base, cv::Point(10, side + 2 * line_h - 4), 5, kGhostLine, cv::FILLED, cv::LINE_AA);
+      cv::putText(g.map_base, "as last reported", cv::Point(20, side + line_h),
+                  cv::FONT_HERSHEY_SIMPLEX, text, kReported, 1, cv::LINE_AA);
+      cv::circle(g.map_base, cv::Point(10, side + 2 * line_h - 4), 5, kGhostLine, cv::FILLED,
+                 cv::LINE_AA);
     }
     g.map_base.copyTo(g.map);
-    const auto px = [&](double x, double y) { return Fixed(g.map_ox + g.map_scale * x - 0.5, g.map_oy - g.map_scale * y - 0.5); };
+    const auto px = [&](double x, double y) {
+      return Fixed(g.map_ox + g.map_scale * x - 0.5, g.map_oy - g.map_scale * y - 0.5);
+    };
     const double body = std::max(4.0, pr.body_radius * g.map_scale);
     // A pose: its body to scale (at least a few pixels), a tick to the rim
     // for its heading; the path ahead runs on beyond the predicted one.
-    const auto pose = [&](const MapPose& p, const cv::Scalar& c, const cv::Scalar& tick, bool filled) {
+    const auto pose = [&](const MapPose& p, const cv::Scalar& c, const cv::Scalar& tick,
+                          bool filled) {
       const cv::Point centre = px(p.x, p.y);
       const double reach = body / g.map_scale;
-      const cv::Point nose = px(p.x + reach * std::cos(p.heading), p.y + reach * std::sin(p.heading));
-      cv::circle(g.map, centre, static_cast<int>(body * kOne), c, filled ? cv::FILLED : 2, cv::LINE_AA, kShift);
+      const cv::Point nose =
+          px(p.x + reach * std::cos(p.heading), p.y + reach * std::sin(p.heading));
+      cv::circle(g.map, centre, static_cast<int>(body * kOne), c, filled ? cv::FILLED : 2,
+                 cv::LINE_AA, kShift);
       cv::line(g.map, centre, nose, tick, 2, cv::LINE_AA, kShift);
     };
     const int n = std::clamp(pr.map_path_count, 0, Prediction::kPathMax);
@@ -925,11 +944,12 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
     pose(pr.predicted, kGhostLine, Bgra(40, 0, 40), true);
     char label[48];
     std::snprintf(label, sizeof label, "now, +%.0f ms; path: 1 s", pr.one_way_delay_s * 1e3);
-    cv::putText(g.map, label, cv::Point(20, side + 2 * line_h), cv::FONT_HERSHEY_SIMPLEX, 0.42 * height_ / 576.0,
-                kGhostLine, 1, cv::LINE_AA);
+    cv::putText(g.map, label, cv::Point(20, side + 2 * line_h), cv::FONT_HERSHEY_SIMPLEX,
+                0.42 * height_ / 576.0, kGhostLine, 1, cv::LINE_AA);
     glBindTexture(GL_TEXTURE_2D, g.map_texture);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, g.map.cols, g.map.rows, 0, GL_BGRA, GL_UNSIGNED_BYTE, g.map.data);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, g.map.cols, g.map.rows, 0, GL_BGRA, GL_UNSIGNED_BYTE,
+                 g.map.data);
     const float w = static_cast<float>(width_), h = static_cast<float>(height_);
     Eigen::Matrix4f m = Eigen::Matrix4f::Identity();
     m(0, 0) = static_cast<float>(panel.width) / w;

@@ -23,14 +23,13 @@
 /// camera's): then the smallest lead shows, rising into the bottom of the
 /// picture as far as the vehicle is ahead of its video (the shipped camera:
 /// a 6.9 cm ghost, in sight from a lead of 2 cm).
+#include <opencv2/core.hpp>
 #include <vector>
 
 #include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"
 #include "haptel/mediator/robot_predictor.hpp"
 #include "haptel/view/view_model.hpp"
-
-#include <opencv2/core.hpp>
 
 namespace haptel::mediator {
 
@@ -49,8 +48,8 @@ class PredictiveDisplay {
   /// rest, seen from `camera_pose` (the newest state's pose: the picture's);
   /// on the map, `camera_pose` as last reported. Allocates nothing once its
   /// buffers have grown.
-  void Make(const PredictedPose& camera_pose, const std::vector<PredictedPose>& path, double one_way_delay_s,
-            view::Prediction& out);
+  void Make(const PredictedPose& camera_pose, const std::vector<PredictedPose>& path,
+            double one_way_delay_s, view::Prediction& out);
 
   double ghost_height_m() const { return ghost_height_m_; }
 
