@@ -62,6 +62,9 @@ class FamilySession {
   virtual view::Overlay Overlay(double t_s, bool vehicle_up, bool touching) = 0;
   /// Where the head and the vehicle's camera look (a tracked screen), or none.
   virtual std::optional<view::Gaze> Gaze() const { return std::nullopt; }
+  /// The predictive display's ghost and map poses now (with prediction on;
+  /// none without it). Made each tick the view is fed.
+  virtual std::optional<view::Prediction> Prediction(double /*t_s*/) { return std::nullopt; }
   /// The progress line(s) on stderr.
   virtual void LogProgress(double t_s, const VehicleLink& link, double distance_m) const = 0;
   /// How the end leaves the vehicle, for a lost vehicle's or device's line.

@@ -18,6 +18,7 @@
 #include "haptel/mediator/interface_set.hpp"
 #include "haptel/mediator/lap_timer.hpp"
 #include "haptel/mediator/operator.hpp"
+#include "haptel/mediator/predictive_display.hpp"
 #include "haptel/mediator/robot_predictor.hpp"
 
 namespace haptel::mediator {
@@ -30,6 +31,10 @@ double NearestRank(std::vector<double>& values, double p) {
   const size_t rank = static_cast<size_t>(std::ceil(p * static_cast<double>(values.size())));
   return values[std::clamp<size_t>(rank, 1, values.size()) - 1];
 }
+
+/// The predictive display's path ahead: how far, and a pose how often.
+constexpr double kPathAhead_s = 1.0;
+constexpr double kPathSpacing_s = 0.05;
 
 /// How long the end of a run waits for a physics step in progress.
 constexpr double kPhysicsStopWait_s = 0.1;
@@ -51,7 +56,9 @@ class RobotSession final : public FamilySession {
         lap_(track_),
         overlay_feed_(setup, track_),
         input_(&input),
-        predictor_(setup.vehicle.drive, setup.vehicle.watchdog_timeout_s) {
+        predictor_(setup.vehicle.drive, setup.vehicle.watchdog_timeout_s),
+        display_(setup.vehicle.camera, setup.vehicle.body.radius) {
+    path_ahead_.reserve(static_cast<size_t>(kPathAhead_s / kPathSpacing_s) + 2);
     rec.track = setup.track.name;
     rec.predict = setup.predict;
     rec.gates_total = static_cast<int>(track_.gates().size());
@@ -119,6 +126,7 @@ class RobotSession final : public FamilySession {
     parts.physics = physics_.get();
     parts.cockpit = cockpit_config_;
     parts.hands = start_spec().hands();
+    if (setup_.predict) parts.map = std::make_shared<const view::TrackMap>(TrackMapOf(track_));
   }
   bool UsesGamepad() const override { return gamepad_; }
   const SessionPhysics* physics() const override { return physics_.get(); }
@@ -136,6 +144,7 @@ class RobotSession final : public FamilySession {
       if (s.pose_valid()) {
         predictor_.OnState({ts, s.x(), s.y(), s.heading(), s.speed(), s.yaw_rate(), s.motor_left_level(),
                             s.motor_right_level()});
+        reported_ = {ts, s.x(), s.y(), s.heading()};
         // With prediction the operator sees the vehicle where it is now (Drive).
         if (!setup_.predict) op_->Observe({ts, s.x(), s.y(), s.heading(), s.bumper_left(), s.bumper_right()});
         lap_.Update(ts, Vec2(s.x(), s.y()));
@@ -197,6 +206,18 @@ class RobotSession final : public FamilySession {
 
   view::Overlay Overlay(double t, bool vehicle_up, bool touching) override {
     return overlay_feed_.Make(t, lap_, *interfaces_, feedback_, motors_, vehicle_up, touching);
+  }
+
+  /// With prediction on: the ghost now and its path ahead with the command
+  /// being given, seen from the newest state's pose (the picture's; see
+  /// predictive_display.hpp). Nothing is shown before the first pose.
+  std::optional<view::Prediction> Prediction(double t) override {
+    if (!setup_.predict) return std::nullopt;
+    view::Prediction shown;
+    if (!predictor_.ready() || !reported_) return shown;  // shown == false: nothing drawn yet
+    predictor_.PathAhead(t, kPathAhead_s, motors_.left, motors_.right, path_ahead_, kPathSpacing_s);
+    display_.Make(*reported_, path_ahead_, predictor_.one_way_delay_s(), shown);
+    return shown;
   }
 
   /// Progress lines every 2 s on stderr: the lap, the vehicle and the link,
@@ -344,6 +365,9 @@ class RobotSession final : public FamilySession {
   int64_t next_command_ns_ = 0;
   double grasp_s_ = 0.0;
   RobotPredictor predictor_;
+  PredictiveDisplay display_;
+  std::optional<PredictedPose> reported_;  ///< the newest state's pose, when one had a pose
+  std::vector<PredictedPose> path_ahead_;
   std::array<bool, 2> bumpers_{false, false};  ///< the newest state's, left and right
   CanLogReport can_log_;
 };

@@ -184,6 +184,8 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
       if (view_part) {
         view_part->Publish(overlay);
         if (const std::optional<view::Gaze> gaze = family->Gaze()) view_part->Publish(*gaze);
+        if (const std::optional<view::Prediction> prediction = family->Prediction(t))
+          view_part->Publish(*prediction);
       }
       if (setup.on_live && live_due) setup.on_live(overlay);
     }

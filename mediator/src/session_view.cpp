@@ -28,6 +28,8 @@ void SessionView::Fill(view::ViewModel& model) {
   model.shapes.clear();
   model.overlay = overlay_.Load();
   model.gaze = gaze_.Load();
+  model.prediction = prediction_.Load();
+  model.map = parts_.map;
   // The hands: the proxies where a world moves them, the tracked hands otherwise.
   const SessionPhysics* physics = physics_.load(std::memory_order_acquire);
   for (int i = 0; i < haptics::kSides; ++i) {

@@ -1,15 +1,19 @@
 // End to end with the operator's view: a real X server (Xvfb), the real
 // `haptel` window, keys sent to it with xdotool, and the MP4 it records.
-#include <catch2/catch.hpp>
 #include <signal.h>
 
+#include <catch2/catch.hpp>
 #include <cstdlib>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 #include <regex>
 
+#include "../view/offscreen_gl.hpp"
 #include "child.hpp"
-#include "xserver.hpp"
+#include "haptel/view/renderer.hpp"
 #include "test_env.hpp"
+#include "xserver.hpp"
 
 using namespace haptel;
 using haptel::test::Child;
@@ -29,6 +33,48 @@ double LastSpeed(const std::string& err) {
     last = std::stod((*it)[1]);
   }
   return last;
+}
+
+/// The predictive display's magenta (the ghost, its path, the predicted
+/// pose on the map), as it comes out of H.264: red and blue high, green low.
+/// Nothing else in the view is.
+bool Magenta(cv::Vec3b c) { return c[2] > 170 && c[0] > 170 && c[1] < 110; }
+
+int MagentaIn(const cv::Mat& frame, const cv::Rect& area) {
+  int n = 0;
+  const cv::Mat part = frame(area & cv::Rect(0, 0, frame.cols, frame.rows));
+  for (int r = 0; r < part.rows; ++r) {
+    for (int c = 0; c < part.cols; ++c) n += Magenta(part.at<cv::Vec3b>(r, c)) ? 1 : 0;
+  }
+  return n;
+}
+
+/// Where the view draws, at its default size: the lower half of the camera
+/// picture on the screen (the floor, where a ghost below the camera's
+/// height must be), from the renderer's own projection; and the map's
+/// corner, the top-right quarter.
+struct ViewAreas {
+  cv::Rect floor;
+  cv::Rect map;
+};
+ViewAreas AreasOfDefaultView() {
+  constexpr int kWidth = 1024, kHeight = 576;
+  test::OffscreenGl gl(kWidth, kHeight);
+  view::Renderer renderer(kWidth, kHeight);
+  view::ViewModel model;
+  model.video.image =
+      std::make_shared<const cv::Mat>(480, 640, CV_8UC3, cv::Scalar(0, 0, 0));  // a 4:3 picture
+  model.video.id = 1;
+  renderer.Draw(model, 0.0);
+  // The screen is seen in perspective: the box around the lower half's
+  // corners, and a few pixels for H.264's bleed over its edge.
+  std::vector<cv::Point> corners;
+  for (const double u : {0.0, 1.0}) {
+    for (const double v : {0.5, 1.0}) corners.push_back(test::ScreenPoint(renderer, u, v));
+  }
+  const cv::Rect floor = cv::boundingRect(corners);
+  return {cv::Rect(floor.x - 4, floor.y - 4, floor.width + 8, floor.height + 8),
+          cv::Rect(kWidth * 3 / 4, 0, kWidth / 4, kHeight / 2)};
 }
 
 }  // namespace
@@ -140,4 +186,78 @@ TEST_CASE("a recording that cannot grow (as on a full disk) ends, is said on std
   CHECK(run.out().find("operator's view NOT recorded whole: cannot write " + mp4.string()) != std::string::npos);
   CHECK(run.out().find("operator's view recorded to") == std::string::npos);
   CHECK(std::filesystem::file_size(mp4) <= static_cast<uintmax_t>(kLimit));
+}
+
+TEST_CASE(
+    "--predict on: the window shows the ghost on the picture's floor and the predicted pose on the "
+    "map; "
+    "--predict off: neither") {
+  const ViewAreas areas = AreasOfDefaultView();
+  XServer x;
+  for (const bool predict : {true, false}) {
+    const auto dir = test::ScratchDir(predict ? "e2e-view-predict-on" : "e2e-view-predict-off");
+    const auto mp4 = dir / "view.mp4";
+    // 200 ms each way: the ghost leads its picture by a few centimetres at speed.
+    Child run({Bin("haptel"),
+               "run",
+               "--operator",
+               "auto",
+               "--view",
+               "window",
+               "--record",
+               mp4.string(),
+               "--track",
+               "config/tracks/test-short.yaml",
+               "--link-fault",
+               "delay=200ms",
+               "--predict",
+               predict ? "on" : "off",
+               "--time-limit",
+               "8",
+               "--json",
+               "--quiet",
+               "--domain",
+               std::to_string(test::UniqueDomain(predict ? 76 : 77)),
+               "--database",
+               (dir / "runs.db").string(),
+               "--vehicle-timeout",
+               "5"});
+    const int code = run.Wait(180.0);
+    INFO("--predict " << (predict ? "on" : "off") << "\n" << run.out() << run.err());
+    REQUIRE((code == 0 || code == 1));  // a lap, or the time limit
+    CHECK(JsonField(run.LastLine(), "predict") == (predict ? "true" : "false"));
+    cv::VideoCapture video(mp4.string(), cv::CAP_FFMPEG);
+    REQUIRE(video.isOpened());
+    int frames = 0, with_ghost = 0, with_map = 0, magenta_elsewhere = 0, magenta_anywhere = 0;
+    cv::Mat worst;  // the frame with the most magenta outside the two areas, to look at
+    int worst_elsewhere = 0;
+    cv::Mat frame;
+    while (video.read(frame)) {
+      ++frames;
+      const int on_floor = MagentaIn(frame, areas.floor);
+      const int on_map = MagentaIn(frame, areas.map);
+      const int all = MagentaIn(frame, cv::Rect(0, 0, frame.cols, frame.rows));
+      with_ghost += on_floor >= 20 ? 1 : 0;
+      with_map += on_map >= 20 ? 1 : 0;
+      magenta_elsewhere += all - on_floor - on_map;
+      if (all - on_floor - on_map > worst_elsewhere) {
+        worst_elsewhere = all - on_floor - on_map;
+        worst = frame.clone();
+      }
+      magenta_anywhere += all;
+    }
+    INFO(frames << " frames: the ghost in " << with_ghost << ", the map in " << with_map);
+    if (!worst.empty()) cv::imwrite((dir / "most-magenta-elsewhere.png").string(), worst);
+    REQUIRE(frames > 30);
+    if (predict) {
+      // The map from the first state on (a second of frames at least, however
+      // long the start took); the ghost in most of those: the vehicle is
+      // moving, so it leads its picture (here 167 of 187 frames).
+      CHECK(with_map >= 30);
+      CHECK(with_ghost >= with_map / 2);
+      CHECK(magenta_elsewhere < frames);  // at most a stray pixel a frame outside the two
+    } else {
+      CHECK(magenta_anywhere == 0);
+    }
+  }
 }

@@ -1,8 +1,6 @@
 // The operator's view, rendered offscreen (SDL's offscreen driver, Mesa):
 // the video on the screen quad, shapes, the overlay's contact border and
 // flashing indicators, the MP4 the View records, and its set-up errors.
-#include <SDL2/SDL.h>
-
 #include <catch2/catch.hpp>
 #include <cstdlib>
 #include <opencv2/imgproc.hpp>
@@ -11,6 +9,7 @@
 
 #include "haptel/view/renderer.hpp"
 #include "haptel/view/view.hpp"
+#include "offscreen_gl.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;
@@ -21,33 +20,9 @@ namespace {
 constexpr int kWidth = 640;
 constexpr int kHeight = 360;
 
-/// A hidden window with a GL 3.3 core context current on this thread.
-class OffscreenGl {
- public:
-  OffscreenGl() {
-    setenv("SDL_VIDEODRIVER", "offscreen", 1);
-    REQUIRE(SDL_Init(SDL_INIT_VIDEO) == 0);
-    SDL_GL_SetAttribute(SDL_GL_CONTEXT_PROFILE_MASK, SDL_GL_CONTEXT_PROFILE_CORE);
-    SDL_GL_SetAttribute(SDL_GL_CONTEXT_MAJOR_VERSION, 3);
-    SDL_GL_SetAttribute(SDL_GL_CONTEXT_MINOR_VERSION, 3);
-    SDL_GL_SetAttribute(SDL_GL_DEPTH_SIZE, 24);
-    window_ =
-        SDL_CreateWindow("test", 0, 0, kWidth, kHeight, SDL_WINDOW_OPENGL | SDL_WINDOW_HIDDEN);
-    REQUIRE(window_ != nullptr);
-    context_ = SDL_GL_CreateContext(window_);
-    INFO(SDL_GetError());
-    REQUIRE(context_ != nullptr);
-  }
-  ~OffscreenGl() {
-    SDL_GL_DeleteContext(context_);
-    SDL_DestroyWindow(window_);
-    SDL_Quit();
-    unsetenv("SDL_VIDEODRIVER");
-  }
-
- private:
-  SDL_Window* window_ = nullptr;
-  SDL_GLContext context_ = nullptr;
+/// A GL context of the tests' window size.
+struct OffscreenGl : test::OffscreenGl {
+  OffscreenGl() : test::OffscreenGl(kWidth, kHeight) {}
 };
 
 /// A 640×480 camera frame in four solid quadrants: red, green (top), blue,
@@ -61,28 +36,8 @@ std::shared_ptr<const cv::Mat> QuadrantFrame() {
   return frame;
 }
 
-/// The image point of (u, v) ∈ [0,1]² on the screen (u right, v down, as the
-/// operator sees it), from the renderer's own screen corners and projection.
-cv::Point ScreenPoint(const Renderer& r, double u, double v) {
-  const auto c = r.ScreenCorners();  // top-left, top-right, bottom-right, bottom-left
-  std::array<double, 3> p{};
-  for (int k = 0; k < 3; ++k) {
-    const double top = c[0][k] + u * (c[1][k] - c[0][k]);
-    const double bottom = c[3][k] + u * (c[2][k] - c[3][k]);
-    p[k] = top + v * (bottom - top);
-  }
-  double px = 0, py = 0;
-  REQUIRE(r.Project(p, px, py));
-  return {static_cast<int>(px), static_cast<int>(py)};
-}
-
-cv::Vec3b At(const cv::Mat& bgr, cv::Point p) {
-  REQUIRE(p.x >= 0);
-  REQUIRE(p.y >= 0);
-  REQUIRE(p.x < bgr.cols);
-  REQUIRE(p.y < bgr.rows);
-  return bgr.at<cv::Vec3b>(p);
-}
+using test::At;
+using test::ScreenPoint;
 
 /// Colour classes that survive lighting and H.264.
 bool Red(cv::Vec3b c) { return c[2] > 150 && c[1] < 90 && c[0] < 90; }

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "haptel/config/error.hpp"
+#include "haptel/video/camera_projection.hpp"
 
 // How the view is drawn, back to front:
 //  1. sky (rows above the horizon): a vertical blue gradient;
@@ -19,16 +20,15 @@
 //     walls are 0.25 m panels cut into short pieces (so that sorting by piece
 //     distance works and shading varies along a wall), posts and obstacles are
 //     0.3 m bars as wide as the cylinder's silhouette.
-// The camera is level, so the horizon is the middle row. Camera coordinates:
-// depth d along the heading, lateral l to the left, height z above the floor;
-// a point projects to column u = cx - f*l/d and row v = cy + f*(h - z)/d
-// (continuous coordinates: pixel i covers [i, i+1)).
+// The camera is level, so the horizon is the middle row; its projection
+// (camera coordinates, the clipping to what it sees) is LevelCamera's, in
+// camera_projection.hpp, which the operator's predictive display shares.
 
 namespace haptel::video {
 
 namespace {
 
-constexpr double kNear = 0.02;            // near plane, m
+constexpr double kNear = LevelCamera::kNear;  // near plane, m
 constexpr double kWallHeight = 0.25;      // m
 constexpr double kPostHeight = 0.3;       // m, gate posts and round obstacles
 constexpr double kWallPiece = 0.15;       // m, wall pieces for sorting and shading
@@ -59,60 +59,6 @@ cv::Vec3b ToPixel(const cv::Vec3d& c) {
 /// Darkening with distance for walls, posts and floor markings.
 double DistanceShade(double dist) { return 0.45 + 0.55 * std::exp(-dist / 5.0); }
 
-/// One frame's projection.
-struct View {
-  double x, y, cos_h, sin_h;  // camera position and heading
-  double f, cx, cy, h;        // focal length (px), principal point, mount height
-  double tan_half;            // tangent of half the horizontal FOV, a little widened
-
-  void ToCamera(const Vec2& p, double& d, double& l) const {
-    const double dx = p.x() - x;
-    const double dy = p.y() - y;
-    d = dx * cos_h + dy * sin_h;
-    l = -dx * sin_h + dy * cos_h;
-  }
-  double U(double d, double l) const { return cx - f * l / d; }
-  double V(double d, double z) const { return cy + f * (h - z) / d; }
-};
-
-/// Clips the floor segment p0-p1 (camera coordinates) to the part in front of
-/// the near plane and inside the horizontal field of view. False if nothing is left.
-bool ClipToFrustum(const View& view, cv::Vec2d& p0, cv::Vec2d& p1) {
-  const auto clip = [&](double g0, double g1) {  // keeps g >= 0
-    if (g0 < 0 && g1 < 0) return false;
-    if (g0 < 0) {
-      p0 = p0 + (p1 - p0) * (g0 / (g0 - g1));
-    } else if (g1 < 0) {
-      p1 = p1 + (p0 - p1) * (g1 / (g1 - g0));
-    }
-    return true;
-  };
-  const double t = view.tan_half;
-  return clip(p0[0] - kNear, p1[0] - kNear) && clip(t * p0[0] - p0[1], t * p1[0] - p1[1]) &&
-         clip(t * p0[0] + p0[1], t * p1[0] + p1[1]);
-}
-
-/// Clips a convex floor polygon (camera coordinates) the same way (Sutherland-Hodgman).
-std::vector<cv::Vec2d> ClipPolygonToFrustum(const View& view, std::vector<cv::Vec2d> poly) {
-  const double t = view.tan_half;
-  const auto planes = {cv::Vec3d(1, 0, -kNear), cv::Vec3d(t, -1, 0), cv::Vec3d(t, 1, 0)};
-  for (const cv::Vec3d& pl : planes) {
-    std::vector<cv::Vec2d> out;
-    const auto g = [&](const cv::Vec2d& p) { return pl[0] * p[0] + pl[1] * p[1] + pl[2]; };
-    for (size_t i = 0; i < poly.size(); ++i) {
-      const cv::Vec2d& a = poly[i];
-      const cv::Vec2d& b = poly[(i + 1) % poly.size()];
-      const double ga = g(a);
-      const double gb = g(b);
-      if (ga >= 0) out.push_back(a);
-      if ((ga >= 0) != (gb >= 0)) out.push_back(a + (b - a) * (ga / (ga - gb)));
-    }
-    poly = std::move(out);
-    if (poly.empty()) break;
-  }
-  return poly;
-}
-
 /// Pixel-centre coordinates for OpenCV drawing with kShift fractional bits.
 cv::Point ToDrawPoint(double u, double v) {
   const auto fix = [](double c) {
@@ -142,7 +88,7 @@ void DrawSky(cv::Mat& image, double cy) {
   }
 }
 
-void DrawFloor(cv::Mat& image, const View& view) {
+void DrawFloor(cv::Mat& image, const LevelCamera& view) {
   // Tile parity is counted from the tile holding the camera, so that the
   // per-pixel arithmetic stays small whatever the pose.
   const double tx = std::floor(view.x / kTile);
@@ -180,7 +126,7 @@ void DrawFloor(cv::Mat& image, const View& view) {
   }
 }
 
-void DrawStartLine(cv::Mat& image, const View& view, const Segment2& line, double corridor) {
+void DrawStartLine(cv::Mat& image, const LevelCamera& view, const Segment2& line, double corridor) {
   // The start line reaches a little past the walls; trim it to the corridor.
   const Vec2 mid = (line.a + line.b) / 2;
   const Vec2 along = line.b - line.a;
@@ -198,7 +144,8 @@ void DrawStartLine(cv::Mat& image, const View& view, const Segment2& line, doubl
     view.ToCamera(p, d, l);
     poly.emplace_back(d, l);
   }
-  poly = ClipPolygonToFrustum(view, std::move(poly));
+  std::vector<cv::Vec2d> scratch;
+  view.ClipPolygon(poly, scratch);
   if (poly.size() < 3) return;
   std::vector<cv::Point> pts;
   for (const cv::Vec2d& p : poly) pts.push_back(ToDrawPoint(view.U(p[0], p[1]), view.V(p[0], 0.0)));
@@ -207,11 +154,11 @@ void DrawStartLine(cv::Mat& image, const View& view, const Segment2& line, doubl
   cv::fillConvexPoly(image, pts, cv::Scalar(c[0], c[1], c[2]), cv::LINE_8, kShift);
 }
 
-void AddWall(std::vector<Item>& items, const View& view, const Segment2& wall) {
+void AddWall(std::vector<Item>& items, const LevelCamera& view, const Segment2& wall) {
   cv::Vec2d p0, p1;
   view.ToCamera(wall.a, p0[0], p0[1]);
   view.ToCamera(wall.b, p1[0], p1[1]);
-  if (!ClipToFrustum(view, p0, p1)) return;
+  if (!view.ClipSegment(p0, p1)) return;
   // Fixed light from the north-east: walls facing it are brighter, so corners show.
   const Vec2 dir = wall.b - wall.a;
   const double len = dir.norm();
@@ -238,7 +185,7 @@ void AddWall(std::vector<Item>& items, const View& view, const Segment2& wall) {
   }
 }
 
-void AddBar(std::vector<Item>& items, const View& view, const CircleObstacle& c,
+void AddBar(std::vector<Item>& items, const LevelCamera& view, const CircleObstacle& c,
             const cv::Vec3d& colour) {
   double d = 0, l = 0;
   view.ToCamera(c.center, d, l);
@@ -301,18 +248,7 @@ void SyntheticCamera::Render(const CameraPose& pose, cv::Mat& image) const {
     return;
   }
 
-  View view{};
-  view.x = pose.x;
-  view.y = pose.y;
-  view.cos_h = std::cos(pose.heading);
-  view.sin_h = std::sin(pose.heading);
-  const double half_fov = config_.fov_deg * std::numbers::pi / 360.0;
-  view.f = (config_.width / 2.0) / std::tan(half_fov);
-  view.cx = config_.width / 2.0;
-  view.cy = config_.height / 2.0;
-  view.h = config_.mount_height;
-  // Widened by a pixel so that clipped geometry reaches the image border.
-  view.tan_half = (config_.width / 2.0 + 1.0) / view.f;
+  const LevelCamera view = LevelCamera::At(config_, pose.x, pose.y, pose.heading);
 
   DrawSky(image, view.cy);
   DrawFloor(image, view);

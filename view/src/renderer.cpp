@@ -302,6 +302,86 @@ Eigen::Matrix4f Model(const std::array<double, 3>& position, const std::array<do
 
 cv::Scalar Bgra(double b, double g, double r, double a = 255) { return cv::Scalar(b, g, r, a); }
 
+// The predictive display's colours (BGRA): the ghost and its path in
+// magenta, which nothing in the synthetic camera's world is (sky blue,
+// brown floor, pale walls, red and green posts, orange obstacles); the
+// vehicle as last reported in white.
+const cv::Scalar kGhostLine(255, 0, 255, 255);
+const cv::Scalar kGhostFill(255, 0, 255, 110);  // see-through: the floor shows
+const cv::Scalar kReported(255, 255, 255, 255);
+constexpr int kShift = 4;  // sub-pixel bits for OpenCV's drawing
+constexpr double kOne = 1 << kShift;
+
+cv::Point Fixed(double x, double y) {
+  const auto fix = [](double c) {
+    return static_cast<int>(std::lround(std::clamp(c, -1e5, 1e5) * kOne));
+  };
+  return {fix(x), fix(y)};
+}
+
+/// Draws the prediction's ghost and path into `ghost` (BGRA, the picture's
+/// size; transparent where nothing is). Returns the rectangle it drew in
+/// (empty: nothing in sight).
+cv::Rect DrawGhost(cv::Mat& ghost, const Prediction& p) {
+  const double w = ghost.cols, h = ghost.rows;
+  const int thickness = std::max(3, ghost.cols / 160);  // 4 px in a 640-pixel picture
+  double x0 = w, y0 = h, x1 = 0, y1 = 0;
+  const auto at = [&](const PicturePoint& q) {
+    const double x = q.u * w, y = q.v * h;
+    x0 = std::min(x0, x);
+    y0 = std::min(y0, y);
+    x1 = std::max(x1, x);
+    y1 = std::max(y1, y);
+    return Fixed(x - 0.5, y - 0.5);  // OpenCV's coordinates are pixel centres
+  };
+  // The ghost's body see-through, the path over it (it runs on under the
+  // ghost, on the floor the body hides), the ghost's outline last.
+  const int n = std::clamp(p.outline_count, 0, Prediction::kOutlineMax);
+  std::array<cv::Point, Prediction::kOutlineMax> pts;
+  for (int i = 0; i < n; ++i) pts[static_cast<size_t>(i)] = at(p.outline[static_cast<size_t>(i)]);
+  if (n >= 3) cv::fillConvexPoly(ghost, pts.data(), n, kGhostFill, cv::LINE_AA, kShift);
+  for (int i = 0; i < std::clamp(p.path_count, 0, Prediction::kPathMax); ++i) {
+    const cv::Point a = at(p.path[static_cast<size_t>(i)].a);
+    const cv::Point b = at(p.path[static_cast<size_t>(i)].b);
+    cv::line(ghost, a, b, kGhostLine, thickness, cv::LINE_AA, kShift);
+  }
+  if (n >= 3) {
+    const cv::Point* poly = pts.data();
+    cv::polylines(ghost, &poly, &n, 1, true, kGhostLine, thickness, cv::LINE_AA, kShift);
+  }
+  if (x1 < x0 || y1 < y0) return {};
+  const int pad = thickness + 2;
+  const cv::Rect drawn(
+      cv::Point(static_cast<int>(std::floor(x0)) - pad, static_cast<int>(std::floor(y0)) - pad),
+      cv::Point(static_cast<int>(std::ceil(x1)) + pad, static_cast<int>(std::ceil(y1)) + pad));
+  return drawn & cv::Rect(0, 0, ghost.cols, ghost.rows);
+}
+
+/// The map's scale and offset for `map` in a `side`-pixel square: the
+/// track's walls and posts fit, to scale, north up.
+void FitMap(const TrackMap& map, int side, double& scale, double& ox, double& oy) {
+  double x0 = 1e18, y0 = 1e18, x1 = -1e18, y1 = -1e18;
+  const auto grow = [&](double x, double y, double r) {
+    x0 = std::min(x0, x - r);
+    y0 = std::min(y0, y - r);
+    x1 = std::max(x1, x + r);
+    y1 = std::max(y1, y + r);
+  };
+  for (const TrackMap::Line& l : map.walls) {
+    grow(l.ax, l.ay, 0);
+    grow(l.bx, l.by, 0);
+  }
+  for (const TrackMap::Post& p : map.posts) grow(p.x, p.y, p.radius);
+  if (x1 < x0) {  // nothing to fit: a metre around the origin
+    x0 = y0 = -0.5;
+    x1 = y1 = 0.5;
+  }
+  const double margin = 0.06 * side;
+  scale = (side - 2 * margin) / std::max({x1 - x0, y1 - y0, 1e-3});
+  ox = side / 2.0 - scale * (x0 + x1) / 2;
+  oy = side / 2.0 + scale * (y0 + y1) / 2;
+}
+
 }  // namespace
 
 std::vector<std::string> OverlayLines(const Overlay& o) {
@@ -363,6 +443,19 @@ struct Renderer::Gl {
   std::vector<cv::Rect> overlay_rects;
   Eigen::Matrix4f projection;
   Eigen::Matrix4f view_projection;
+  /// The predictive display's ghost, drawn on the CPU in the picture's own
+  /// pixels each frame; only the rectangle holding it is cleared, uploaded
+  /// and blended over the screen.
+  GLuint ghost_texture = 0;
+  cv::Mat ghost;  ///< BGRA, the video picture's size
+  cv::Rect ghost_rect;
+  /// The map: the track drawn once (map_base), the poses over it each frame.
+  GLuint map_texture = 0;
+  cv::Mat map_base, map;                         ///< BGRA, the panel's size
+  const TrackMap* map_of = nullptr;              ///< the track map_base shows
+  cv::Rect map_panel;                            ///< where the panel is, window pixels
+  double map_scale = 0, map_ox = 0, map_oy = 0;  ///< track metres to panel pixels
+  bool map_drawn = false;                        ///< in the last frame
 };
 
 Renderer::Renderer(int width, int height, const ScreenPlacement& screen)
@@ -417,6 +510,8 @@ Renderer::Renderer(int width, int height, const ScreenPlacement& screen)
   const uint8_t grey[3] = {40, 40, 40};  // no video yet: a dark screen
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
   glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, 1, 1, 0, GL_BGR, GL_UNSIGNED_BYTE, grey);
+  make_texture(g.ghost_texture);
+  make_texture(g.map_texture);
   make_texture(g.overlay_texture);
   g.overlay = cv::Mat(height, width, CV_8UC4, cv::Scalar(0, 0, 0, 0));
   glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, width, height, 0, GL_BGRA, GL_UNSIGNED_BYTE,
@@ -435,6 +530,8 @@ Renderer::~Renderer() {
   glDeleteVertexArrays(1, &g.batch_vao);
   glDeleteTextures(1, &g.video_texture);
   glDeleteTextures(1, &g.overlay_texture);
+  glDeleteTextures(1, &g.ghost_texture);
+  glDeleteTextures(1, &g.map_texture);
   glDeleteProgram(g.lit);
   glDeleteProgram(g.tex);
 }
@@ -624,6 +721,58 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
     g.screen.Draw();
   }
 
+  // --- The predictive display's ghost, in the picture on the screen. ---
+  const Prediction& pr = model.prediction;
+  if (pr.shown && g.video_cols > 0) {
+    if (g.ghost.cols != g.video_cols || g.ghost.rows != g.video_rows) {
+      g.ghost = cv::Mat(g.video_rows, g.video_cols, CV_8UC4, cv::Scalar(0, 0, 0, 0));
+      g.ghost_rect = {};
+      glBindTexture(GL_TEXTURE_2D, g.ghost_texture);
+      glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+      glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, g.ghost.cols, g.ghost.rows, 0, GL_BGRA,
+                   GL_UNSIGNED_BYTE, g.ghost.data);
+    }
+    g.ghost(g.ghost_rect).setTo(cv::Scalar(0, 0, 0, 0));
+    g.ghost_rect = DrawGhost(g.ghost, pr);
+    const cv::Rect& r = g.ghost_rect;
+    if (!r.empty()) {
+      glBindTexture(GL_TEXTURE_2D, g.ghost_texture);
+      glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+      glPixelStorei(GL_UNPACK_ROW_LENGTH, g.ghost.cols);
+      glTexSubImage2D(GL_TEXTURE_2D, 0, r.x, r.y, r.width, r.height, GL_BGRA, GL_UNSIGNED_BYTE,
+                      g.ghost.ptr(r.y, r.x));
+      glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
+      // Only the rectangle holding the ghost, on the screen's own plane (the
+      // unit quad's y and z run from the picture's left and top edges, +1,
+      // to its right and bottom, -1), pulled a hair towards the eye so that
+      // it wins the depth test against the picture and still loses it to a
+      // hand in front of the screen.
+      const double u0 = static_cast<double>(r.x) / g.ghost.cols,
+                   u1 = static_cast<double>(r.x + r.width) / g.ghost.cols;
+      const double v0 = static_cast<double>(r.y) / g.ghost.rows,
+                   v1 = static_cast<double>(r.y + r.height) / g.ghost.rows;
+      const double hw = screen_.width / 2.0;
+      Eigen::Affine3f part = Eigen::Affine3f::Identity();
+      part.translate(Eigen::Vector3f(0.0f, static_cast<float>(1.0 - (u0 + u1)),
+                                     static_cast<float>(1.0 - (v0 + v1))));
+      part.scale(Eigen::Vector3f(1.0f, static_cast<float>(u1 - u0), static_cast<float>(v1 - v0)));
+      const Eigen::Matrix4f m =
+          Model(sc, screen_q,
+                {1.0f, static_cast<float>(hw), static_cast<float>(hw * screen_aspect_)}) *
+          part.matrix();
+      const Eigen::Matrix4f mvp = g.view_projection * m;
+      glUniformMatrix4fv(g.tex_mvp, 1, GL_FALSE, mvp.data());
+      glUniform4f(g.tex_uv_rect, static_cast<float>(u0), static_cast<float>(v0),
+                  static_cast<float>(u1 - u0), static_cast<float>(v1 - v0));
+      glEnable(GL_BLEND);
+      glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+      glEnable(GL_POLYGON_OFFSET_FILL);
+      glPolygonOffset(-1.0f, -1.0f);
+      g.screen.Draw();
+      glDisable(GL_POLYGON_OFFSET_FILL);
+    }
+  }
+
   // --- The overlay: redrawn on the CPU only when what it says changes. ---
   const Overlay& o = model.overlay;
   const bool lit = IndicatorLit(t_s);
@@ -727,8 +876,102 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
                 static_cast<float>(r.width) / w, static_cast<float>(r.height) / h);
     g.fullscreen.Draw();
   }
+
+  // --- The predictive display's map, top right: the track drawn once, the
+  // poses over it each frame. ---
+  g.map_drawn = false;
+  if (pr.shown && model.map) {
+    const int side = static_cast<int>(0.36 * height_);
+    const int line_h = static_cast<int>(18 * height_ / 576.0);
+    const cv::Rect panel(width_ - side - 8, 8, side, side + 2 * line_h + 6);
+    if (g.map_of != model.map.get() || g.map_base.size() != panel.size()) {
+      g.map_of = model.map.get();
+      g.map_base = cv::Mat(panel.height, panel.width, CV_8UC4, Bgra(0, 0, 0, 170));
+      FitMap(*model.map, side, g.map_scale, g.map_ox, g.map_oy);
+      const auto px = [&](double x, double y) {
+        return Fixed(g.map_ox + g.map_scale * x - 0.5, g.map_oy - g.map_scale * y - 0.5);
+      };
+      for (const TrackMap::Line& l : model.map->walls) {
+        cv::line(g.map_base, px(l.ax, l.ay), px(l.bx, l.by), Bgra(200, 200, 200), 1, cv::LINE_AA,
+                 kShift);
+      }
+      const TrackMap::Line& st = model.map->start;
+      cv::line(g.map_base, px(st.ax, st.ay), px(st.bx, st.by), Bgra(120, 120, 120), 1, cv::LINE_AA,
+               kShift);
+      for (const TrackMap::Line& l : model.map->gates) {
+        cv::line(g.map_base, px(l.ax, l.ay), px(l.bx, l.by), Bgra(0, 200, 230), 1, cv::LINE_AA,
+                 kShift);
+      }
+      for (const TrackMap::Post& p : model.map->posts) {
+        const cv::Scalar c = p.kind == TrackMap::PostKind::kLeft    ? Bgra(40, 40, 225)
+                             : p.kind == TrackMap::PostKind::kRight ? Bgra(50, 200, 40)
+                                                                    : Bgra(0, 140, 255);
+        cv::circle(g.map_base, px(p.x, p.y),
+                   static_cast<int>(std::max(2.0, p.radius * g.map_scale) * kOne), c, cv::FILLED,
+                   cv::LINE_AA, kShift);
+      }
+      const double text = 0.42 * height_ / 576.0;
+      cv::circle(g.map_base, cv::Point(10, side + line_h - 4), 4, kReported, 2, cv::LINE_AA);
+      cv::putText(g.map_base, "as last reported", cv::Point(20, side + line_h),
+                  cv::FONT_HERSHEY_SIMPLEX, text, kReported, 1, cv::LINE_AA);
+      cv::circle(g.map_base, cv::Point(10, side + 2 * line_h - 4), 5, kGhostLine, cv::FILLED,
+                 cv::LINE_AA);
+    }
+    g.map_base.copyTo(g.map);
+    const auto px = [&](double x, double y) {
+      return Fixed(g.map_ox + g.map_scale * x - 0.5, g.map_oy - g.map_scale * y - 0.5);
+    };
+    const double body = std::max(4.0, pr.body_radius * g.map_scale);
+    // A pose: its body to scale (at least a few pixels), a tick to the rim
+    // for its heading; the path ahead runs on beyond the predicted one.
+    const auto pose = [&](const MapPose& p, const cv::Scalar& c, const cv::Scalar& tick,
+                          bool filled) {
+      const cv::Point centre = px(p.x, p.y);
+      const double reach = body / g.map_scale;
+      const cv::Point nose =
+          px(p.x + reach * std::cos(p.heading), p.y + reach * std::sin(p.heading));
+      cv::circle(g.map, centre, static_cast<int>(body * kOne), c, filled ? cv::FILLED : 2,
+                 cv::LINE_AA, kShift);
+      cv::line(g.map, centre, nose, tick, 2, cv::LINE_AA, kShift);
+    };
+    const int n = std::clamp(pr.map_path_count, 0, Prediction::kPathMax);
+    for (int i = 1; i < n; ++i) {
+      const MapPose& a = pr.map_path[static_cast<size_t>(i - 1)];
+      const MapPose& b = pr.map_path[static_cast<size_t>(i)];
+      cv::line(g.map, px(a.x, a.y), px(b.x, b.y), kGhostLine, 2, cv::LINE_AA, kShift);
+    }
+    pose(pr.reported, kReported, kReported, false);
+    pose(pr.predicted, kGhostLine, Bgra(40, 0, 40), true);
+    char label[48];
+    std::snprintf(label, sizeof label, "now, +%.0f ms; path: 1 s", pr.one_way_delay_s * 1e3);
+    cv::putText(g.map, label, cv::Point(20, side + 2 * line_h), cv::FONT_HERSHEY_SIMPLEX,
+                0.42 * height_ / 576.0, kGhostLine, 1, cv::LINE_AA);
+    glBindTexture(GL_TEXTURE_2D, g.map_texture);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, g.map.cols, g.map.rows, 0, GL_BGRA, GL_UNSIGNED_BYTE,
+                 g.map.data);
+    const float w = static_cast<float>(width_), h = static_cast<float>(height_);
+    Eigen::Matrix4f m = Eigen::Matrix4f::Identity();
+    m(0, 0) = static_cast<float>(panel.width) / w;
+    m(1, 1) = static_cast<float>(panel.height) / h;
+    m(0, 3) = (2.0f * static_cast<float>(panel.x) + static_cast<float>(panel.width)) / w - 1.0f;
+    m(1, 3) = 1.0f - (2.0f * static_cast<float>(panel.y) + static_cast<float>(panel.height)) / h;
+    glUniformMatrix4fv(g.tex_mvp, 1, GL_FALSE, m.data());
+    glUniform4f(g.tex_uv_rect, 0.0f, 0.0f, 1.0f, 1.0f);
+    g.fullscreen.Draw();
+    g.map_panel = panel;
+    g.map_drawn = true;
+  }
   glDisable(GL_BLEND);
   glBindVertexArray(0);
+}
+
+bool Renderer::MapPoint(double x, double y, double& px, double& py) const {
+  const Gl& g = *gl_;
+  if (!g.map_drawn) return false;
+  px = g.map_panel.x + g.map_ox + g.map_scale * x;
+  py = g.map_panel.y + g.map_oy - g.map_scale * y;
+  return true;
 }
 
 void Renderer::ReadPixelsRaw(cv::Mat& rgba) const {

@@ -6,8 +6,9 @@
 /// The view thread calls Fill at display rate: it reads the HAL and the
 /// physics poses (seqlocks), the controls (the controls link's seqlock), the
 /// decoded frame (a shared pointer taken under the receiver's short lock)
-/// and the overlay the session loop publishes (a seqlock). Nothing here
-/// waits on the servo loop, the physics thread or the link.
+/// and the overlay and the predictive display's ghost the session loop
+/// publishes (seqlocks). Nothing here waits on the servo loop, the physics
+/// thread or the link.
 #include <array>
 #include <atomic>
 #include <memory>
@@ -40,6 +41,8 @@ class SessionView final : public view::ViewSource {
     physics::ControlsBodyConfig controls_bodies;  ///< as the world built them
     const VideoReceiver* video = nullptr;
     std::array<bool, 2> hands{false, true};  ///< tracked hands to draw without a world
+    /// The track's map for the predictive display (null: prediction off, no map).
+    std::shared_ptr<const view::TrackMap> map;
   };
 
   /// Opens the view (throws view::ViewError when it cannot) and reads the
@@ -52,6 +55,9 @@ class SessionView final : public view::ViewSource {
   /// Session thread: where the head and the vehicle camera look (a tracked
   /// gaze turns the view and the screen; the robot's view never sets one).
   void Publish(const view::Gaze& gaze) { gaze_.Store(gaze); }
+  /// Session thread: the predictive display's ghost, path and map poses
+  /// (a seqlock store: never waits).
+  void Publish(const view::Prediction& prediction) { prediction_.Store(prediction); }
   /// Session thread: a physics world built during the run (its proxy hands
   /// and controls are drawn from the next frame on). It must outlive the view.
   void SetPhysics(const SessionPhysics* physics) { physics_.store(physics, std::memory_order_release); }
@@ -66,6 +72,7 @@ class SessionView final : public view::ViewSource {
   std::atomic<const SessionPhysics*> physics_;
   Seqlock<view::Overlay> overlay_;
   Seqlock<view::Gaze> gaze_;
+  Seqlock<view::Prediction> prediction_;
   view::SdlInput input_;
   std::unique_ptr<view::View> view_;  // last: its thread uses the rest
 };

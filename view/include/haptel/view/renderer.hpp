@@ -73,6 +73,9 @@ class Renderer {
   /// bottom-left as the operator sees them), device frame: turned about the
   /// eye by the last drawn model's gaze when it is tracked.
   std::array<std::array<double, 3>, 4> ScreenCorners() const;
+  /// Where a track point (m) lands on the prediction's map as last drawn:
+  /// pixels from the top-left corner. False when the last frame drew no map.
+  bool MapPoint(double x, double y, double& px, double& py) const;
 
   int width() const { return width_; }
   int height() const { return height_; }

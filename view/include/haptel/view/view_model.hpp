@@ -1,8 +1,9 @@
 #pragma once
 /// @file What the operator's view draws in one frame, as flat data: shapes in
 /// the device frame (x forward, y left, z up; metres), the vehicle's latest
-/// video image for the virtual screen, and the overlay (lap clock, gates,
-/// contacts, HUD). Filled by a ViewSource on the view thread each frame.
+/// video image for the virtual screen, the overlay (lap clock, gates,
+/// contacts, HUD) and, with the predictive display, the ghost and the map.
+/// Filled by a ViewSource on the view thread each frame.
 #include <array>
 #include <cstdint>
 #include <memory>
@@ -73,6 +74,69 @@ struct Gaze {
   double screen_tilt = 0.0;
 };
 
+/// A point in the camera's picture as fractions of its width and height from
+/// its top-left corner: drawn on whatever size the decoded picture has.
+struct PicturePoint {
+  float u = 0.0f;
+  float v = 0.0f;
+};
+
+/// A line on the floor as seen in the picture.
+struct PictureSegment {
+  PicturePoint a;
+  PicturePoint b;
+};
+
+/// A pose on the track's map (track frame: x east, y north; m, rad).
+struct MapPose {
+  float x = 0.0f;
+  float y = 0.0f;
+  float heading = 0.0f;
+};
+
+/// The predictive display (haptel run --predict on): where the vehicle is
+/// now by its model, and where the command being given takes it over the
+/// next second, in the camera picture being shown and on the track's map.
+/// Flat and fixed-size (published through a seqlock); `shown` false draws
+/// nothing.
+struct Prediction {
+  static constexpr int kOutlineMax = 64;
+  static constexpr int kPathMax = 48;
+  bool shown = false;
+  /// In the picture: the ghost's silhouette, a convex polygon (empty when it
+  /// is out of the camera's sight), and its path ahead on the floor, each
+  /// clipped to what lies in front of the camera.
+  int outline_count = 0;
+  std::array<PicturePoint, kOutlineMax> outline{};
+  int path_count = 0;
+  std::array<PictureSegment, kPathMax> path{};
+  /// On the map: the vehicle as last reported, as predicted now, the path
+  /// ahead (its first point is the predicted pose), and its body's radius.
+  MapPose reported;
+  MapPose predicted;
+  int map_path_count = 0;
+  std::array<MapPose, kPathMax> map_path{};
+  float body_radius = 0.1f;
+  float one_way_delay_s = 0.0f;  ///< how far ahead of its video the ghost is
+};
+
+/// The track as the predictive display's map draws it, to scale (track
+/// frame, m). Built once per run.
+struct TrackMap {
+  struct Line {
+    double ax = 0, ay = 0, bx = 0, by = 0;
+  };
+  enum class PostKind : uint8_t { kLeft, kRight, kObstacle };
+  struct Post {
+    double x = 0, y = 0, radius = 0;
+    PostKind kind = PostKind::kObstacle;
+  };
+  std::vector<Line> walls;
+  std::vector<Line> gates;  ///< from post to post
+  Line start;               ///< the start and finish line
+  std::vector<Post> posts;  ///< gate posts and round obstacles
+};
+
 struct ViewModel {
   /// Everything in the world: proxy or tracked hands, controls, scene bodies,
   /// the gesture wall. Reserved once; Fill clears and refills it.
@@ -80,6 +144,9 @@ struct ViewModel {
   VideoImage video;
   Overlay overlay;
   Gaze gaze;
+  Prediction prediction;
+  /// The map the prediction is drawn on (null: no map).
+  std::shared_ptr<const TrackMap> map;
 };
 
 }  // namespace haptel::view

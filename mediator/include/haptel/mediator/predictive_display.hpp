@@ -1,0 +1,68 @@
+#pragma once
+/// @file What the predictive display shows (haptel run --predict on), as
+/// the view's flat data (view::Prediction, view::TrackMap): the robot's
+/// ghost where its model says it is now and its path ahead with the command
+/// being given, projected into the camera picture being shown, and the same
+/// on a map of the track beside the vehicle as last reported.
+///
+/// The camera pose the ghost is projected from is the newest state's: the
+/// vehicle samples its pose and grabs its picture at the same rate and
+/// sends both over the same link, so the picture being shown and the newest
+/// state are about equally old (within a frame period, 33 ms at 30 Hz). The
+/// projection is the vehicle camera's own (video::LevelCamera, with the
+/// field of view, picture size and mount height of the vehicle's file), so
+/// the ghost stands on the floor the picture shows.
+///
+/// The ghost is the robot's body: an upright cylinder of `body.radius`. Its
+/// silhouette is drawn, not just its footprint, because the camera does not
+/// see the floor near itself (the shipped 55° camera 0.12 m up sees it from
+/// 0.31 m on), where a ghost a few hundred milliseconds ahead stands. The
+/// vehicle file gives no height, so the ghost is as tall as it can be while
+/// a ghost with no lead (where the camera is) stays below the picture, as
+/// the robot's own body does (kHeightMargin of that height, at most the
+/// camera's): then the smallest lead shows, rising into the bottom of the
+/// picture as far as the vehicle is ahead of its video (the shipped camera:
+/// a 6.9 cm ghost, in sight from a lead of 2 cm).
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "haptel/config/track.hpp"
+#include "haptel/config/vehicle.hpp"
+#include "haptel/mediator/robot_predictor.hpp"
+#include "haptel/view/view_model.hpp"
+
+namespace haptel::mediator {
+
+class PredictiveDisplay {
+ public:
+  /// Footprint corners of the ghost's cylinder.
+  static constexpr int kSides = 24;
+  /// The ghost's height as a share of the tallest that a ghost with no
+  /// lead keeps out of the picture.
+  static constexpr double kHeightMargin = 0.9;
+
+  PredictiveDisplay(const CameraConfig& camera, double body_radius);
+
+  /// What the view draws, into `out`: the ghost at `path`'s first pose (the
+  /// vehicle now, RobotPredictor::PathAhead), the path ahead through the
+  /// rest, seen from `camera_pose` (the newest state's pose: the picture's);
+  /// on the map, `camera_pose` as last reported. Allocates nothing once its
+  /// buffers have grown.
+  void Make(const PredictedPose& camera_pose, const std::vector<PredictedPose>& path,
+            double one_way_delay_s, view::Prediction& out);
+
+  double ghost_height_m() const { return ghost_height_m_; }
+
+ private:
+  CameraConfig camera_;
+  double radius_m_;
+  double ghost_height_m_;
+  std::vector<cv::Vec2d> footprint_, scratch_;
+  std::vector<cv::Point2f> corners_, hull_;
+};
+
+/// The map's geometry of `track`: walls, the start line across the
+/// corridor, each gate from post to post, the posts and round obstacles.
+view::TrackMap TrackMapOf(const Track& track);
+
+}  // namespace haptel::mediator
