@@ -39,7 +39,7 @@ void BlimpPredictor::OnCommand(double t_s, const BlimpCommand& command) {
 
 double BlimpPredictor::OnState(const BlimpStateSample& state) {
   const double d = delay_.one_way_s();
-  const double sample_s = state.received_s - d;
+  const double sample_s = SampleTime(state, d);
   // What the operator was shown of this moment at this moment: the
   // prediction from the newest state it had then.
   double error_m = -1.0;
@@ -103,6 +103,16 @@ double BlimpPredictor::OnState(const BlimpStateSample& state) {
   // applied channels; a second's margin for a late state.
   while (!commands_.empty() && commands_.front().sent_s + d < bases_.front().sample_s - 1.0) commands_.pop_front();
   return error_m;
+}
+
+double BlimpPredictor::SampleTime(const BlimpStateSample& state, double d) {
+  if (state.stamp_ns == 0) return state.received_s - d;
+  const double stamp_s = 1e-9 * static_cast<double>(state.stamp_ns);
+  latency_s_[latency_next_] = state.received_s - stamp_s;
+  latency_next_ = (latency_next_ + 1) % kLatencyWindow;
+  latency_count_ = std::min(latency_count_ + 1, kLatencyWindow);
+  const double least = *std::min_element(latency_s_.begin(), latency_s_.begin() + static_cast<long>(latency_count_));
+  return stamp_s + least - d;
 }
 
 void BlimpPredictor::Run(const Base& base, const Command* extra, const std::vector<double>& at,

@@ -29,11 +29,17 @@
 /// model runs without them) and show in the error.
 ///
 /// The one-way delay is half the command round trip's running median
-/// (DelayEstimate). Each state that arrives is compared with what the
+/// (DelayEstimate). When a state was sampled, on the operator's clock, is
+/// its arrival less that delay, de-jittered: the vehicle's stamp plus the
+/// clocks' offset, taken from the least delayed of the last states (a busy
+/// receiver only ever adds to a state's latency; at 6 m/s each 10 ms of it
+/// would be 6 cm of error). Each state that arrives is compared with what the
 /// predictor said, at the moment the state was sampled, of that moment
 /// (from the states it had then: a delay's extrapolation): errors_m(), the
 /// 3-D distance between the two centres of gravity (horizontal and height
 /// error together: both matter to a blimp among buildings).
+#include <array>
+#include <cstddef>
 #include <cstdint>
 #include <deque>
 #include <functional>
@@ -53,7 +59,9 @@ namespace haptel::mediator {
 /// A blimp state as the predictor needs it (what BlimpState carries).
 struct BlimpStateSample {
   double received_s = 0.0;  ///< when it arrived, operator's clock
-  int64_t stamp_ns = 0;     ///< when it was sampled, the vehicle's clock (rates from two states)
+  /// When it was sampled, the vehicle's clock (its sample time on the
+  /// operator's, and rates from two states); 0: unknown (arrival less the delay).
+  int64_t stamp_ns = 0;
   Eigen::Vector3d position = Eigen::Vector3d::Zero();  ///< centre of gravity, course frame, m
   double yaw = 0.0;    ///< rad, counter-clockwise from +x
   double pitch = 0.0;  ///< rad, nose up positive
@@ -134,6 +142,9 @@ class BlimpPredictor {
   void Run(const Base& base, const Command* extra, const std::vector<double>& at,
            const std::function<void(double, const vehicles::SimBlimp&)>& emit) const;
   static BlimpPredictedPose PoseOf(double t_s, const vehicles::SimBlimp& model);
+  /// When `state` was sampled, operator's clock (s), with the delay `d`;
+  /// notes its latency for those after.
+  double SampleTime(const BlimpStateSample& state, double d);
 
   AirshipConfig airship_;
   double watchdog_s_;
@@ -141,6 +152,13 @@ class BlimpPredictor {
   /// hence mutable; a predictor is used from one thread.
   mutable vehicles::SimBlimp model_;
   DelayEstimate delay_;
+  /// Arrival less stamp (s) of the last kLatencyWindow states: a second at
+  /// 50 Hz, long enough for one state to have come through unhurried, short
+  /// enough that a step up in the link's delay is followed within it.
+  static constexpr size_t kLatencyWindow = 50;
+  std::array<double, kLatencyWindow> latency_s_{};
+  size_t latency_count_ = 0;
+  size_t latency_next_ = 0;
   std::deque<Command> commands_;
   /// The states since the one the operator had when the newest was
   /// sampled (that one's prediction is the newest's error), newest last.
