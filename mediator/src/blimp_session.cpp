@@ -17,6 +17,7 @@
 #include "haptel/interfaces/blimp_manual.hpp"
 #include "haptel/mediator/blimp/blimp_lap_timer.hpp"
 #include "haptel/mediator/blimp/blimp_pilot.hpp"
+#include "haptel/mediator/blimp_predictor.hpp"
 #include "haptel/mediator/controller_errors.hpp"
 #include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/run_counters.hpp"
@@ -38,6 +39,42 @@ BlimpObservation Observe(double t_s, const msg::BlimpState& s) {
   o.contact = s.contact();
   o.contacts = s.contacts();
   o.impact_speed = s.impact_speed();
+  return o;
+}
+
+/// What the predictor takes of a state that arrived at `received_s`
+/// (operator's clock, from `t0_ns`).
+BlimpStateSample Sample(double received_s, const msg::BlimpState& s, int64_t t0_ns) {
+  BlimpStateSample out;
+  out.received_s = received_s;
+  out.stamp_ns = s.stamp_ns();
+  out.position = Eigen::Vector3d(s.x(), s.y(), s.z());
+  out.yaw = s.yaw();
+  out.pitch = s.pitch();
+  out.roll = s.roll();
+  out.velocity = Eigen::Vector3d(s.vx(), s.vy(), s.vz());
+  const auto& o = s.outputs();  // in BlimpCommand's order
+  out.applied = BlimpCommand{o[0], o[1], o[2], o[3], o[4], o[5], o[6]};
+  if (s.last_command_sent_ns() > 0) {
+    out.command_sent_s = NsToS(s.last_command_sent_ns() - t0_ns);
+    out.command_age_s = NsToS(s.last_command_age_ns());
+  }
+  return out;
+}
+
+/// What the pilot sees with the predictive display: the blimp as predicted
+/// (`p`), seen at `t_s`; the contact count as last reported.
+BlimpObservation Observe(double t_s, const BlimpPredictedPose& p, const msg::BlimpState& last) {
+  BlimpObservation o;
+  o.t_s = t_s;
+  o.position = p.position;
+  o.yaw = p.yaw;
+  o.pitch = p.pitch;
+  o.velocity = p.velocity;
+  o.airspeed = p.airspeed;
+  o.contact = p.contact;
+  o.contacts = last.contacts();
+  o.impact_speed = last.impact_speed();
   return o;
 }
 
@@ -117,8 +154,10 @@ class BlimpSession final : public FamilySession {
         course_(*setup.course),
         lap_(course_),
         overlay_feed_(setup, setup.blimp_manual ? setup.blimp_manual->name : setup.blimp_interface->name,
-                      static_cast<int>(course_.gates.size())) {
+                      static_cast<int>(course_.gates.size())),
+        predictor_(setup.vehicle.airship, course_, setup.vehicle.watchdog_timeout_s) {
     rec.track = course_.name;
+    rec.predict = setup.predict;
     rec.gates_total = static_cast<int>(course_.gates.size());
     // The gesture cockpit, or a person's keys or game controller.
     if (setup.blimp_manual) {
@@ -162,9 +201,14 @@ class BlimpSession final : public FamilySession {
       if (health.OnState(s, e.received_ns)) haptic.OnVehicleUp();
       controller_errors_.ObserveState(s);
       last_ = s;
+      if (s.last_command_sent_ns() > 0) {
+        predictor_.OnRoundTrip(NsToS(e.received_ns - s.last_command_sent_ns() - s.last_command_age_ns()));
+      }
       if (!s.pose_valid()) continue;
+      predictor_.OnState(Sample(ts, s, t0));
       const BlimpObservation o = Observe(ts, s);
-      if (pilot_) pilot_->Observe(o);
+      // With prediction the pilot sees the blimp as it will be (Drive).
+      if (pilot_ && !setup_.predict) pilot_->Observe(o);
       lap_.Update(o);
       trace.Add(ts, s.x(), s.y(), s.z(), o.velocity.norm(), s.contact());
     }
@@ -174,6 +218,12 @@ class BlimpSession final : public FamilySession {
                                HapticSide& haptic, VehicleLink& link) override {
     // The pilot's hands and gaze; a person's head turns with mouse-look.
     head_ = {person.head_pan, person.head_tilt};
+    // With prediction the pilot flies the blimp as it will be when the
+    // command given now reaches it (the commands on their way are known),
+    // as the robot's driver does.
+    if (pilot_ && setup_.predict && predictor_.ready()) {
+      pilot_->Observe(Observe(t, predictor_.PoseAt(t + predictor_.one_way_delay_s()), last_));
+    }
     if (pilot_) {
       head_ = {};
       if (vehicle_up) {
@@ -186,7 +236,9 @@ class BlimpSession final : public FamilySession {
     if (manual_ && manual_->lost()) return LoopEnd{Outcome::kAborted, "the game controller was disconnected"};
     if (next_command_ns_ == 0) next_command_ns_ = now;
     if (CommandDue(next_command_ns_, now, static_cast<int64_t>(1e9 / command_rate_hz_))) {
-      link.Send(vehicle_up ? command_ : BlimpCommand{});
+      const BlimpCommand sent = vehicle_up ? command_ : BlimpCommand{};
+      link.Send(sent);
+      predictor_.OnCommand(t, sent);
     }
     return std::nullopt;
   }
@@ -223,6 +275,7 @@ class BlimpSession final : public FamilySession {
     rec.gates_missed = lap_.gates_missed();
     rec.obstacles_touched = lap_.obstacles_touched();
     for (const BlimpGateSplit& split : lap_.splits()) rec.splits.push_back({split.gate, split.passed, split.split_s});
+    RecordPredictionErrors(predictor_.errors_m(), rec);
   }
 
  private:
@@ -240,6 +293,8 @@ class BlimpSession final : public FamilySession {
   BlimpCommand command_;
   interfaces::HeadDirection head_;
   int64_t next_command_ns_ = 0;
+  /// Runs with prediction on or off: its error goes into the record either way.
+  BlimpPredictor predictor_;
 };
 
 }  // namespace

@@ -5,7 +5,9 @@
 // session loop (RunSession) is written over it; the robot's part is in
 // robot_session.cpp, the blimp's in blimp_session.cpp. Internal to the
 // mediator library.
+#include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -22,6 +24,20 @@
 #include "session_loop.hpp"
 
 namespace haptel::mediator {
+
+/// A predictor's per-state errors (m) into the record's
+/// prediction_error_m_p50 and _p95 (nearest rank); left as they are
+/// (unknown) without any.
+inline void RecordPredictionErrors(std::vector<double> errors_m, RunRecord& rec) {
+  if (errors_m.empty()) return;
+  std::sort(errors_m.begin(), errors_m.end());
+  auto nearest_rank = [&](double p) {
+    const size_t rank = static_cast<size_t>(std::ceil(p * static_cast<double>(errors_m.size())));
+    return errors_m[std::clamp<size_t>(rank, 1, errors_m.size()) - 1];
+  };
+  rec.prediction_error_m_p50 = nearest_rank(0.50);
+  rec.prediction_error_m_p95 = nearest_rank(0.95);
+}
 
 class FamilySession {
  public:

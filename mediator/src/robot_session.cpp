@@ -25,13 +25,6 @@ namespace haptel::mediator {
 
 namespace {
 
-/// The `p` quantile of `values` by nearest rank (sorts them).
-double NearestRank(std::vector<double>& values, double p) {
-  std::sort(values.begin(), values.end());
-  const size_t rank = static_cast<size_t>(std::ceil(p * static_cast<double>(values.size())));
-  return values[std::clamp<size_t>(rank, 1, values.size()) - 1];
-}
-
 /// The predictive display's path ahead: how far, and a pose how often.
 constexpr double kPathAhead_s = 1.0;
 constexpr double kPathSpacing_s = 0.05;
@@ -281,11 +274,7 @@ class RobotSession final : public FamilySession {
     rec.obstacles_touched = lap_.obstacles_touched();
     rec.splits = lap_.splits();
     rec.switches = interfaces_->switches();
-    std::vector<double> errors = predictor_.errors_m();
-    if (!errors.empty()) {
-      rec.prediction_error_m_p50 = NearestRank(errors, 0.50);
-      rec.prediction_error_m_p95 = NearestRank(errors, 0.95);
-    }
+    RecordPredictionErrors(predictor_.errors_m(), rec);
     result.can_log = can_log_;
   }
 

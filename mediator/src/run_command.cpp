@@ -49,7 +49,7 @@ constexpr const char* kRunUsage =
     "  --device FILE        haptic device file: sim, udp (haptel-device-server arms) or replay\n"
     "  --trace-in FILE      the trace a replay device plays (overrides its 'replay.trace')\n"
     "  --time-limit S       end the run after S seconds, outcome 'time limit' (person: 600)\n"
-    "  --predict on|off     the predictive display (default off): the operator sees the robot\n"
+    "  --predict on|off     the predictive display (default off): the operator sees the vehicle\n"
     "                       where its model says it is now, from the delayed states and the\n"
     "                       commands sent since; the model's error is reported either way\n"
     "  --view KIND          window (default with a display) or none\n"

@@ -157,6 +157,28 @@ TEST_CASE("the wind's gusts have the configured rms, the same on every run") {
   CHECK(Airship(c).Wind(3.0) != a.Wind(3.0));
 }
 
+TEST_CASE("an attitude from yaw, pitch and roll gives them back (what a predictor rebuilds from a state)") {
+  Airship ship(Neutral());
+  for (const double yaw : {-3.0, -0.5, 0.0, 1.2, 3.1}) {
+    for (const double pitch : {-0.4, 0.0, 0.25}) {
+      for (const double roll : {-0.3, 0.0, 0.1}) {
+        AirshipState s;
+        s.attitude = AttitudeFromYawPitchRoll(yaw, pitch, roll);
+        ship.set_state(s);
+        const Eigen::Vector3d back = ship.YawPitchRoll();
+        CHECK(back.x() == Approx(yaw).margin(1e-12));
+        CHECK(back.y() == Approx(pitch).margin(1e-12));
+        CHECK(back.z() == Approx(roll).margin(1e-12));
+      }
+    }
+  }
+  // Nose up points the body's x above the horizon; right side down puts its y (left) up.
+  const Eigen::Quaterniond up = AttitudeFromYawPitchRoll(0.0, 0.2, 0.0);
+  CHECK((up * Eigen::Vector3d::UnitX()).z() > 0.0);
+  const Eigen::Quaterniond right_down = AttitudeFromYawPitchRoll(0.0, 0.0, 0.2);
+  CHECK((right_down * Eigen::Vector3d::UnitY()).z() > 0.0);
+}
+
 TEST_CASE("bad airship parameters are refused by name") {
   AirshipConfig c;
   c.diameter = 7.0;

@@ -33,6 +33,13 @@ void LambFactors(double fineness, double* k1, double* k2, double* k_rot) {
   *k_rot = e2 * e2 * (beta0 - alpha0) / ((2.0 - e2) * (2.0 * e2 - (2.0 - e2) * (beta0 - alpha0)));
 }
 
+Eigen::Quaterniond AttitudeFromYawPitchRoll(double yaw, double pitch, double roll) {
+  // Body y points left: a nose-up pitch is a negative turn about it.
+  return Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
+                            Eigen::AngleAxisd(-pitch, Eigen::Vector3d::UnitY()) *
+                            Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()));
+}
+
 Airship::Airship(const AirshipConfig& config) : config_(config) {
   config.ValidateOrThrow();
   const double a = config.length / 2.0, b = config.diameter / 2.0;

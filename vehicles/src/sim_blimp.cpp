@@ -156,6 +156,15 @@ void SimBlimp::RestOnGround(double x, double y, double heading) {
   touching_[0] = 1;  // resting: in contact, but no onset
 }
 
+void SimBlimp::Place(const AirshipState& state, const BlimpCommand& applied) {
+  airship_.set_state(state);
+  applied_ = Clamped(applied);
+  std::fill(touching_.begin(), touching_.end(), 0);
+  contact_->ForEach(state, 0.0, [&](const BlimpWorldContact::Touch& t) {
+    if (t.depth > 0.0) touching_[static_cast<size_t>(t.obstacle)] = 1;
+  });
+}
+
 bool SimBlimp::in_contact() const {
   return std::any_of(touching_.begin(), touching_.end(), [](char c) { return c != 0; });
 }

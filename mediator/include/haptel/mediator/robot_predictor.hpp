@@ -12,40 +12,21 @@
 /// Walls are not modelled: a robot pressed against one is predicted to move
 /// on, and the next state corrects it.
 ///
-/// The one-way delay is half the command round trip (the vehicle echoes each
-/// command's send time and how long it held it: no shared clock), the median
-/// of the last 15 round trips, so that it follows a change of the link
-/// within a fraction of a second and ignores single late packets.
+/// The one-way delay is half the command round trip's running median
+/// (DelayEstimate, delay_estimate.hpp).
 ///
 /// Each state that arrives is compared with what the predictor said, at the
 /// moment the state was sampled, of that moment (from the states it had
 /// then: a delay's extrapolation): errors_m(), a fitted model's figure of
 /// merit.
-#include <array>
-#include <cstddef>
 #include <deque>
 #include <vector>
 
 #include "haptel/config/vehicle.hpp"
+#include "haptel/mediator/delay_estimate.hpp"
 #include "haptel/vehicles/tread_drive.hpp"
 
 namespace haptel::mediator {
-
-/// The one-way delay from round trips: half their running median.
-class DelayEstimate {
- public:
-  static constexpr size_t kWindow = 15;
-  /// A measured round trip (s); ignored unless finite and non-negative.
-  void AddRoundTrip(double rtt_s);
-  /// Half the median of the last kWindow round trips (0 before any).
-  double one_way_s() const;
-  size_t samples() const { return count_; }
-
- private:
-  std::array<double, kWindow> rtt_s_{};
-  size_t count_ = 0;
-  size_t next_ = 0;
-};
 
 /// A pose at a time on the operator's clock (s).
 struct PredictedPose {

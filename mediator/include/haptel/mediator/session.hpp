@@ -78,9 +78,10 @@ struct SessionSetup {
   /// but this run's hold on it.
   bool attach = false;
   bool progress = true;  ///< progress lines on stderr
-  /// The predictive display (robot_predictor.hpp): the operator sees the
-  /// vehicle where the model says it is now, not where its delayed state
-  /// says it was. The model runs either way, for its error in the record.
+  /// The predictive display (robot_predictor.hpp, blimp_predictor.hpp):
+  /// the operator sees the vehicle where the model says it is now, not
+  /// where its delayed state says it was. The model runs either way, for
+  /// its error in the record.
   bool predict = false;
   /// Record the device's readings here for the `replay` driver (empty: none).
   std::filesystem::path trace;

@@ -74,6 +74,11 @@ class AirshipContact {
 /// ratio (> 1): k1 axial, k2 transverse, k' rotational (about a transverse axis).
 void LambFactors(double fineness, double* k1, double* k2, double* k_rot);
 
+/// The attitude (body → world) of these yaw, pitch and roll (rad), as
+/// Airship::YawPitchRoll gives them: yaw about the world's z, then pitch
+/// nose up, then roll right side down.
+Eigen::Quaterniond AttitudeFromYawPitchRoll(double yaw, double pitch, double roll);
+
 class Airship {
  public:
   /// Validates `config` (ConfigFieldError). Starts at rest at the origin.

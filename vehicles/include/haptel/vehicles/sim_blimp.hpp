@@ -123,6 +123,11 @@ class SimBlimp {
   /// Puts the blimp at rest on the ground at (x, y), facing `heading` (rad),
   /// motors off; the contact state says "resting", not a new contact.
   void RestOnGround(double x, double y, double heading);
+  /// Puts the blimp in `state` with `applied` in effect (as the operator's
+  /// predictor starts from a reported state): a feature touching an
+  /// obstacle there is in an ongoing contact, not a new one. The count of
+  /// contact onsets carries on.
+  void Place(const AirshipState& state, const BlimpCommand& applied);
 
   double time_s() const { return airship_.time_s(); }
   /// Of the centre of gravity, world (x east, y north, z up), m.

@@ -1,0 +1,169 @@
+#pragma once
+/// @file The predictive display's model of the blimp: where the blimp is
+/// now (position, height, heading), and where the command being given takes
+/// it, from states that are a link's delay old and the commands sent since.
+/// The blimp's counterpart of RobotPredictor (robot_predictor.hpp), built
+/// the same way.
+///
+/// A state says where the blimp was when it was sampled: its position,
+/// attitude (yaw, pitch, roll), ground velocity and the channels it had
+/// applied. The predictor starts the simulated blimp (sim_blimp.hpp: the
+/// airship model and its contacts with the course's ground and buildings,
+/// the vehicle file's numbers — what the simulated vehicle flies) from it
+/// and replays every command sent after the one it had applied (the state
+/// echoes that one's send time), each from the moment it reaches the blimp
+/// (sent + the one-way delay, and not before the state), including the
+/// blimp's watchdog
+/// putting every channel to neutral when commands stop. What a state does
+/// not carry is taken from the model:
+///
+/// - the body's angular rates: from the turn between the state and the one
+///   before (on the vehicle's clock, its stamps), the rate over the last
+///   state period;
+/// - the actuators' own state (the motors' thrust as spun up, the helix
+///   plane as slewed, the tail rotor's thrust): from the model run on from
+///   the state before (the commands' history drives them alone); at the
+///   first state, settled at the applied channels.
+///
+/// The wind is the vehicle file's mean wind: gusts cannot be foreseen (the
+/// model runs without them) and show in the error.
+///
+/// The one-way delay is half the command round trip's running median
+/// (DelayEstimate). When a state was sampled, on the operator's clock, is
+/// its arrival less that delay, de-jittered: the vehicle's stamp plus the
+/// clocks' offset, taken from the least delayed of the last states (a busy
+/// receiver only ever adds to a state's latency; at 6 m/s each 10 ms of it
+/// would be 6 cm of error). Each state that arrives is compared with what the
+/// predictor said, at the moment the state was sampled, of that moment
+/// (from the states it had then: a delay's extrapolation): errors_m(), the
+/// 3-D distance between the two centres of gravity (horizontal and height
+/// error together: both matter to a blimp among buildings).
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "haptel/config/airship.hpp"
+#include "haptel/config/blimp_course.hpp"
+#include "haptel/core/blimp_command.hpp"
+#include "haptel/mediator/delay_estimate.hpp"
+#include "haptel/vehicles/sim_blimp.hpp"
+
+namespace haptel::mediator {
+
+/// A blimp state as the predictor needs it (what BlimpState carries).
+struct BlimpStateSample {
+  double received_s = 0.0;  ///< when it arrived, operator's clock
+  /// When it was sampled, the vehicle's clock (its sample time on the
+  /// operator's, and rates from two states); 0: unknown (arrival less the delay).
+  int64_t stamp_ns = 0;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  ///< centre of gravity, course frame, m
+  double yaw = 0.0;    ///< rad, counter-clockwise from +x
+  double pitch = 0.0;  ///< rad, nose up positive
+  double roll = 0.0;   ///< rad, right side down positive
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  ///< ground velocity, course frame, m/s
+  BlimpCommand applied;  ///< the channels in effect when it was sampled (the failsafe's neutral included)
+  /// When the command in effect was sent (operator's clock, as the state
+  /// echoes it): the commands sent after it are the ones to replay.
+  /// Negative: no echo (those whose arrival, sent + the delay, is after the
+  /// sample are replayed).
+  double command_sent_s = -1.0;
+  /// How long the command in effect had been held when the state was
+  /// sampled (s; the watchdog counts from its arrival); negative: unknown
+  /// (taken as just arrived).
+  double command_age_s = -1.0;
+};
+
+/// The blimp at a time on the operator's clock (s).
+struct BlimpPredictedPose {
+  double t_s = 0.0;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  ///< centre of gravity, m (z: height)
+  double yaw = 0.0;                                    ///< heading, rad
+  double pitch = 0.0;                                  ///< rad
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  ///< ground velocity, course frame, m/s
+  double airspeed = 0.0;                               ///< m/s
+  bool contact = false;                                ///< touching the ground or a building
+};
+
+class BlimpPredictor {
+ public:
+  /// `airship`, `course`: the vehicle file's model and the course flown
+  /// (validated: ConfigFieldError). `watchdog_s`: every channel goes to
+  /// neutral this long after the last command reached the blimp.
+  BlimpPredictor(const AirshipConfig& airship, const BlimpCourseConfig& course, double watchdog_s = 0.2);
+
+  /// A command as sent at `t_s` (the blimp clamps it as it applies it).
+  void OnCommand(double t_s, const BlimpCommand& command);
+  /// A command round trip (s).
+  void OnRoundTrip(double rtt_s) { delay_.AddRoundTrip(rtt_s); }
+  /// A state arrived. Returns the distance (m) between its centre of gravity
+  /// and where the predictor put it for that moment at that moment
+  /// (negative when no state had arrived by then: nothing was predicted),
+  /// and records it in errors_m().
+  double OnState(const BlimpStateSample& state);
+
+  bool ready() const { return !bases_.empty(); }
+  /// The one-way delay in use (s).
+  double one_way_delay_s() const { return delay_.one_way_s(); }
+  /// The blimp at `t_s` (the present, or any time after the newest state's
+  /// sample), with the commands sent so far.
+  BlimpPredictedPose PoseAt(double t_s) const;
+  /// The path from `now_s` over `horizon_s`: the commands still on their
+  /// way, then `given` held from now on; a pose every `spacing_s`, the
+  /// first at now (into `path`, which is cleared first).
+  void PathAhead(double now_s, double horizon_s, const BlimpCommand& given, std::vector<BlimpPredictedPose>& path,
+                 double spacing_s = 0.1) const;
+  /// Every state's prediction error so far (m, 3-D).
+  const std::vector<double>& errors_m() const { return errors_m_; }
+
+ private:
+  struct Command {
+    double sent_s;
+    BlimpCommand command;
+  };
+  /// A state as the model starts from it.
+  struct Base {
+    double received_s;
+    double sample_s;  ///< when it was sampled (operator's clock)
+    int64_t stamp_ns;
+    vehicles::AirshipState state;
+    BlimpCommand applied;
+    double applied_sent_s;   ///< when the applied command was sent; negative: no echo
+    double applied_since_s;  ///< when the applied command reached the blimp (operator's clock)
+  };
+  /// Runs the model from `base` through the commands sent, and `extra` (if
+  /// given) after them, held on; calls `emit` with the model at each time of
+  /// `at` (ascending).
+  void Run(const Base& base, const Command* extra, const std::vector<double>& at,
+           const std::function<void(double, const vehicles::SimBlimp&)>& emit) const;
+  static BlimpPredictedPose PoseOf(double t_s, const vehicles::SimBlimp& model);
+  /// When `state` was sampled, operator's clock (s), with the delay `d`;
+  /// notes its latency for those after.
+  double SampleTime(const BlimpStateSample& state, double d);
+
+  AirshipConfig airship_;
+  double watchdog_s_;
+  /// The model the replays run on (set to each replay's start): scratch,
+  /// hence mutable; a predictor is used from one thread.
+  mutable vehicles::SimBlimp model_;
+  DelayEstimate delay_;
+  /// Arrival less stamp (s) of the last kLatencyWindow states: a second at
+  /// 50 Hz, long enough for one state to have come through unhurried, short
+  /// enough that a step up in the link's delay is followed within it.
+  static constexpr size_t kLatencyWindow = 50;
+  std::array<double, kLatencyWindow> latency_s_{};
+  size_t latency_count_ = 0;
+  size_t latency_next_ = 0;
+  std::deque<Command> commands_;
+  /// The states since the one the operator had when the newest was
+  /// sampled (that one's prediction is the newest's error), newest last.
+  std::deque<Base> bases_;
+  std::vector<double> errors_m_;
+};
+
+}  // namespace haptel::mediator

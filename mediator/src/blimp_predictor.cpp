@@ -1,0 +1,196 @@
+#include "haptel/mediator/blimp_predictor.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "haptel/vehicles/airship.hpp"
+
+namespace haptel::mediator {
+
+namespace {
+
+/// s: two states further apart than this (on the vehicle's clock) say
+/// little of the rates now (states lost); the model's own rates are kept.
+constexpr double kMaxRateGap_s = 0.25;
+
+/// The model the predictor runs: the vehicle file's, without the gusts
+/// (their phases are the vehicle's own: foreseeing them would be a guess).
+AirshipConfig WithoutGusts(AirshipConfig airship) {
+  airship.wind.gust_rms = 0.0;
+  return airship;
+}
+
+/// The actuators settled at the channels `applied`.
+void SettleActuators(const AirshipConfig& k, const BlimpCommand& applied, vehicles::AirshipState& s) {
+  s.thrust = std::clamp(applied.power, 0.0, 1.0) * k.max_thrust;
+  s.helix_rad = std::clamp(applied.helix, -1.0, 1.0) * k.max_helix_deg * M_PI / 180.0;
+  s.tail = std::clamp(applied.tail_rotor, -1.0, 1.0) * k.tail_thrust;
+}
+
+}  // namespace
+
+BlimpPredictor::BlimpPredictor(const AirshipConfig& airship, const BlimpCourseConfig& course, double watchdog_s)
+    : airship_(WithoutGusts(airship)), watchdog_s_(watchdog_s), model_(airship_, course) {}
+
+void BlimpPredictor::OnCommand(double t_s, const BlimpCommand& command) {
+  commands_.push_back({t_s, Clamped(command)});
+}
+
+double BlimpPredictor::OnState(const BlimpStateSample& state) {
+  const double d = delay_.one_way_s();
+  const double sample_s = SampleTime(state, d);
+  // What the operator was shown of this moment at this moment: the
+  // prediction from the newest state it had then.
+  double error_m = -1.0;
+  const Base* known = nullptr;
+  for (const Base& b : bases_) {
+    if (b.received_s <= sample_s && b.sample_s <= sample_s) known = &b;
+  }
+  if (known != nullptr) {
+    Run(*known, nullptr, {sample_s},
+        [&](double, const vehicles::SimBlimp& m) { error_m = (m.position() - state.position).norm(); });
+    errors_m_.push_back(error_m);
+  }
+
+  Base base;
+  base.received_s = state.received_s;
+  base.sample_s = sample_s;
+  base.stamp_ns = state.stamp_ns;
+  base.applied = Clamped(state.applied);
+  base.applied_sent_s = state.command_sent_s;
+  base.applied_since_s = state.command_age_s >= 0.0 ? sample_s - state.command_age_s : sample_s;
+  vehicles::AirshipState& s = base.state;
+  s.position = state.position;
+  s.attitude = vehicles::AttitudeFromYawPitchRoll(state.yaw, state.pitch, state.roll);
+  s.velocity = s.attitude.conjugate() * state.velocity;
+  if (bases_.empty()) {
+    SettleActuators(airship_, base.applied, s);
+  } else {
+    // What the state does not carry, from the model run on from the state
+    // before: the actuators (driven by the commands alone) and, unless the
+    // two states' turn gives them, the rates.
+    const Base& before = bases_.back();
+    Eigen::Quaterniond model_attitude = before.state.attitude;
+    Run(before, nullptr, {sample_s}, [&](double, const vehicles::SimBlimp& m) {
+      const vehicles::AirshipState& run = m.airship().state();
+      s.thrust = run.thrust;
+      s.helix_rad = run.helix_rad;
+      s.tail = run.tail;
+      s.rates = run.rates;
+      model_attitude = run.attitude;
+    });
+    const double gap_s = 1e-9 * static_cast<double>(state.stamp_ns - before.stamp_ns);
+    const double run_s = sample_s - before.sample_s;
+    if (gap_s > 0.0 && gap_s <= kMaxRateGap_s) {
+      // The two states' turn is the mean rate between them, half a state
+      // period behind; the model's rates now, corrected by how far its own
+      // mean rate over the same stretch missed the measured one, are not.
+      const Eigen::AngleAxisd measured(before.state.attitude.conjugate() * s.attitude);
+      const Eigen::Vector3d measured_rates = measured.angle() / gap_s * measured.axis();
+      if (run_s > 1e-6) {
+        const Eigen::AngleAxisd modelled(before.state.attitude.conjugate() * model_attitude);
+        s.rates += measured_rates - modelled.angle() / run_s * modelled.axis();
+      } else {
+        s.rates = measured_rates;
+      }
+    }
+  }
+  bases_.push_back(base);
+  // A state is needed while no later one had arrived by the newest's sample.
+  while (bases_.size() > 1 && bases_[1].received_s <= sample_s) bases_.pop_front();
+  // Commands that took effect before the oldest state kept are in its
+  // applied channels; a second's margin for a late state.
+  while (!commands_.empty() && commands_.front().sent_s + d < bases_.front().sample_s - 1.0) commands_.pop_front();
+  return error_m;
+}
+
+double BlimpPredictor::SampleTime(const BlimpStateSample& state, double d) {
+  if (state.stamp_ns == 0) return state.received_s - d;
+  const double stamp_s = 1e-9 * static_cast<double>(state.stamp_ns);
+  latency_s_[latency_next_] = state.received_s - stamp_s;
+  latency_next_ = (latency_next_ + 1) % kLatencyWindow;
+  latency_count_ = std::min(latency_count_ + 1, kLatencyWindow);
+  const double least = *std::min_element(latency_s_.begin(), latency_s_.begin() + static_cast<long>(latency_count_));
+  return stamp_s + least - d;
+}
+
+void BlimpPredictor::Run(const Base& base, const Command* extra, const std::vector<double>& at,
+                         const std::function<void(double, const vehicles::SimBlimp&)>& emit) const {
+  const double d = delay_.one_way_s();
+  model_.Place(base.state, base.applied);
+  double t = base.sample_s;
+  BlimpCommand command = base.applied;
+  // Every channel goes to neutral `watchdog_s_` after the last command
+  // reached the blimp; the command being given (`extra`) is taken as given
+  // on and on.
+  double last_arrival = base.applied_since_s;
+  bool held = false;
+  const double step_s = airship_.step_s;
+  auto advance = [&](double to) {
+    while (t < to - 1e-12) {
+      const double neutral_s = held ? std::numeric_limits<double>::infinity() : last_arrival + watchdog_s_;
+      double end = std::min(to, t + step_s);
+      const bool neutral = t >= neutral_s;
+      if (!neutral && end > neutral_s) end = neutral_s;
+      model_.Step(end - t, neutral ? BlimpCommand{} : command);
+      t = end;
+    }
+  };
+  size_t next_time = 0;
+  auto emit_until = [&](double limit) {
+    while (next_time < at.size() && at[next_time] <= limit) {
+      advance(std::max(at[next_time], base.sample_s));
+      emit(at[next_time], model_);
+      ++next_time;
+    }
+  };
+  auto apply = [&](const Command& c, bool is_extra) {
+    // In the state's applied channels already: the one it echoes and those
+    // before (without an echo: those that had arrived by its sample).
+    if (base.applied_sent_s >= 0.0 ? c.sent_s <= base.applied_sent_s : c.sent_s + d <= base.sample_s) return;
+    // Not there yet when the state was sampled, whatever the delay says.
+    const double arrival = std::max(c.sent_s + d, base.sample_s);
+    if (next_time == at.size()) return;    // every pose wanted is out
+    emit_until(arrival);
+    advance(arrival);
+    command = c.command;
+    last_arrival = arrival;
+    held = is_extra;
+  };
+  for (const Command& c : commands_) apply(c, false);
+  if (extra != nullptr) apply(*extra, true);
+  emit_until(std::numeric_limits<double>::infinity());
+}
+
+BlimpPredictedPose BlimpPredictor::PoseOf(double t_s, const vehicles::SimBlimp& model) {
+  BlimpPredictedPose p;
+  p.t_s = t_s;
+  p.position = model.position();
+  p.yaw = model.yaw();
+  p.pitch = model.pitch();
+  p.velocity = model.ground_velocity();
+  p.airspeed = model.airspeed();
+  p.contact = model.in_contact();
+  return p;
+}
+
+BlimpPredictedPose BlimpPredictor::PoseAt(double t_s) const {
+  BlimpPredictedPose pose;
+  pose.t_s = t_s;
+  if (bases_.empty()) return pose;
+  Run(bases_.back(), nullptr, {t_s}, [&](double t, const vehicles::SimBlimp& m) { pose = PoseOf(t, m); });
+  return pose;
+}
+
+void BlimpPredictor::PathAhead(double now_s, double horizon_s, const BlimpCommand& given,
+                               std::vector<BlimpPredictedPose>& path, double spacing_s) const {
+  path.clear();
+  if (bases_.empty() || !(spacing_s > 0.0)) return;
+  std::vector<double> at;
+  for (double t = now_s; t <= now_s + horizon_s + 1e-9; t += spacing_s) at.push_back(t);
+  const Command held{now_s, Clamped(given)};
+  Run(bases_.back(), &held, at, [&](double t, const vehicles::SimBlimp& m) { path.push_back(PoseOf(t, m)); });
+}
+
+}  // namespace haptel::mediator
