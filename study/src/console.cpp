@@ -388,11 +388,13 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
   // Chunked bodies (no Content-Length) stop here as they are read.
   s.server->set_payload_max_length(s.access.max_answers_bytes);
   // Not to be framed by another page (a hidden Abort button under a click),
-  // sniffed as another type, cached, or named in a link's Referer.
+  // sniffed as another type, cached, or named in a Referer to another site.
+  // Not "no-referrer": under it Chromium sends the console's own form posts
+  // with "Origin: null", which the Origin check must refuse.
   s.server->set_default_headers({{"X-Frame-Options", "DENY"},
                                  {"Content-Security-Policy", "frame-ancestors 'none'"},
                                  {"X-Content-Type-Options", "nosniff"},
-                                 {"Referrer-Policy", "no-referrer"},
+                                 {"Referrer-Policy", "same-origin"},
                                  {"Cache-Control", "no-store"}});
   // Every request's head, before its body is read or a route runs.
   s.server->set_pre_routing_handler([&s](const httplib::Request& req, httplib::Response& res) {
