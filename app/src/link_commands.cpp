@@ -31,12 +31,6 @@ constexpr const char* kUsage =
     "  for those host names or addresses, signed by the CA: haptel study run --bind ADDR --tls DIR.\n"
     "  `security console` adds that certificate to a folder made before.\n";
 
-std::string JoinList(const std::vector<std::string>& names) {
-  std::string text;
-  for (const std::string& n : names) text += (text.empty() ? "" : ",") + n;
-  return text;
-}
-
 }  // namespace
 
 int SecurityCommand(int argc, const char* const* argv) {

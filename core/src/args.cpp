@@ -72,6 +72,15 @@ std::optional<double> Args::Number(const std::string& name, double min, double m
                    *text + "'");
 }
 
+std::string JoinList(const std::vector<std::string>& parts, const std::string& separator) {
+  std::string text;
+  for (size_t i = 0; i < parts.size(); ++i) {
+    if (i > 0) text += separator;
+    text += parts[i];
+  }
+  return text;
+}
+
 std::vector<std::string> SplitList(const std::string& text, char separator) {
   std::vector<std::string> parts;
   size_t start = 0;

@@ -1,6 +1,7 @@
 #include "haptel/study/definition.hpp"
 
 #include "haptel/config/link.hpp"
+#include "haptel/core/args.hpp"
 
 #include <charconv>
 #include <cstdlib>
@@ -24,10 +25,7 @@ std::string Number(double value) {
 }
 
 std::string Joined(const std::vector<std::string>& items) {
-  if (items.empty()) return kNone;
-  std::string text;
-  for (const std::string& item : items) text += (text.empty() ? "" : ", ") + item;
-  return text;
+  return items.empty() ? kNone : JoinList(items, ", ");
 }
 
 /// Relative to the study file's folder, as the file would say it: the same

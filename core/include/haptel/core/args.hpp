@@ -21,6 +21,8 @@ class UsageError : public cli::InputError {
 /// "a,b,,c" -> {"a", "b", "", "c"}: an option's comma-separated list, empty
 /// parts kept (so a parser can name them); "" -> {""}.
 std::vector<std::string> SplitList(const std::string& text, char separator = ',');
+/// {"a", "b"} -> "a,b" (with `separator` between): SplitList's inverse.
+std::string JoinList(const std::vector<std::string>& parts, const std::string& separator = ",");
 
 class Args {
  public:
