@@ -22,6 +22,7 @@
 #include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/run_counters.hpp"
 #include "haptel/mediator/operator.hpp"
+#include "haptel/mediator/predictive_display.hpp"
 #include "family_session.hpp"
 
 namespace haptel::mediator {
@@ -156,6 +157,7 @@ class BlimpSession final : public FamilySession {
         overlay_feed_(setup, setup.blimp_manual ? setup.blimp_manual->name : setup.blimp_interface->name,
                       static_cast<int>(course_.gates.size())),
         predictor_(setup.vehicle.airship, course_, setup.vehicle.watchdog_timeout_s) {
+    hull_length_ = setup.vehicle.airship.length;
     rec.track = course_.name;
     rec.predict = setup.predict;
     rec.gates_total = static_cast<int>(course_.gates.size());
@@ -191,6 +193,7 @@ class BlimpSession final : public FamilySession {
   void ConfigureView(SessionView::Parts& parts, view::ViewOptions& options) const override {
     parts.hands = {gesture_.has_value(), gesture_.has_value()};
     options.screen = view::HeadTrackedScreen();
+    if (setup_.predict) parts.map = std::make_shared<const view::TrackMap>(CourseMapOf(course_));
   }
   bool UsesGamepad() const override { return manual_ && manual_->input_kind() == BlimpManualInput::kGamepad; }
 
@@ -201,6 +204,7 @@ class BlimpSession final : public FamilySession {
       if (health.OnState(s, e.received_ns)) haptic.OnVehicleUp();
       controller_errors_.ObserveState(s);
       last_ = s;
+      have_state_ = true;
       if (s.last_command_sent_ns() > 0) {
         predictor_.OnRoundTrip(NsToS(e.received_ns - s.last_command_sent_ns() - s.last_command_age_ns()));
       }
@@ -258,6 +262,24 @@ class BlimpSession final : public FamilySession {
   view::Overlay Overlay(double t, bool vehicle_up, bool) override {
     return overlay_feed_.Make(t, lap_, last_, command_, vehicle_up);
   }
+  /// With prediction on: on the course map, the blimp as last reported, as
+  /// it is now by its model, and its path over the next second with the
+  /// command being given, each with its height (predictive_display.hpp).
+  /// Remade at most every kPredictionPeriod_s: each is a run of the airship
+  /// model through the delay and the second ahead.
+  std::optional<view::Prediction> Prediction(double t) override {
+    if (!setup_.predict) return std::nullopt;
+    if (!predictor_.ready() || !have_state_) return view::Prediction{};  // nothing to draw yet
+    if (t < next_prediction_s_) return prediction_;
+    next_prediction_s_ = t + kPredictionPeriod_s;
+    predictor_.PathAhead(t, 1.0, command_, path_ahead_, 0.05);
+    BlimpPredictedPose reported;
+    reported.position = Eigen::Vector3d(last_.x(), last_.y(), last_.z());
+    reported.yaw = last_.yaw();
+    MakeBlimpPrediction(reported, path_ahead_, hull_length_, predictor_.one_way_delay_s(), prediction_);
+    return prediction_;
+  }
+
   /// The screen hangs where the camera points as the vehicle applied it.
   std::optional<view::Gaze> Gaze() const override {
     return view::Gaze{true, head_.pan, head_.tilt, last_.outputs()[5], last_.outputs()[6]};
@@ -295,6 +317,12 @@ class BlimpSession final : public FamilySession {
   int64_t next_command_ns_ = 0;
   /// Runs with prediction on or off: its error goes into the record either way.
   BlimpPredictor predictor_;
+  static constexpr double kPredictionPeriod_s = 0.05;
+  bool have_state_ = false;
+  double hull_length_ = 0.0;
+  double next_prediction_s_ = 0.0;
+  std::vector<BlimpPredictedPose> path_ahead_;
+  view::Prediction prediction_;
 };
 
 }  // namespace

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <opencv2/imgproc.hpp>
 
@@ -127,6 +128,66 @@ view::TrackMap TrackMapOf(const Track& track) {
     }
     map.posts.push_back(post);
   }
+  return map;
+}
+
+void MakeBlimpPrediction(const BlimpPredictedPose& reported, const std::vector<BlimpPredictedPose>& path,
+                         double hull_length, double one_way_delay_s, view::Prediction& out) {
+  out.outline_count = 0;
+  out.path_count = 0;
+  out.map_path_count = 0;
+  out.heights = true;
+  out.shown = !path.empty();
+  if (!out.shown) return;
+  const auto map_pose = [](const BlimpPredictedPose& p) {
+    return view::MapPose{static_cast<float>(p.position.x()), static_cast<float>(p.position.y()),
+                         static_cast<float>(p.yaw), static_cast<float>(p.position.z())};
+  };
+  out.reported = map_pose(reported);
+  out.predicted = map_pose(path.front());
+  out.map_path_count = static_cast<int>(std::min(path.size(), static_cast<size_t>(view::Prediction::kPathMax)));
+  for (int i = 0; i < out.map_path_count; ++i)
+    out.map_path[static_cast<size_t>(i)] = map_pose(path[static_cast<size_t>(i)]);
+  out.body_radius = static_cast<float>(hull_length / 2);
+  out.one_way_delay_s = static_cast<float>(one_way_delay_s);
+}
+
+view::TrackMap CourseMapOf(const BlimpCourseConfig& course) {
+  view::TrackMap map;
+  constexpr double kDeg = std::numbers::pi / 180.0;
+  for (const BlimpGateSpec& gate : course.gates) {
+    // Across the direction of travel: left of it is +90°.
+    const double a = gate.heading_deg * kDeg;
+    const double half = gate.width / 2;
+    const double lx = gate.centre[0] - half * std::sin(a), ly = gate.centre[1] + half * std::cos(a);
+    const double rx = gate.centre[0] + half * std::sin(a), ry = gate.centre[1] - half * std::cos(a);
+    map.gates.push_back({lx, ly, rx, ry});
+    map.posts.push_back({lx, ly, 0.1, view::TrackMap::PostKind::kLeft});
+    map.posts.push_back({rx, ry, 0.1, view::TrackMap::PostKind::kRight});
+    char text[48];
+    std::snprintf(text, sizeof text, "%.1f-%.1f m", gate.centre[2] - gate.height / 2,
+                  gate.centre[2] + gate.height / 2);
+    map.labels.push_back({gate.centre[0], gate.centre[1], text});
+  }
+  for (const BlimpBuildingSpec& b : course.buildings) {
+    const double a = b.yaw_deg * kDeg, c = std::cos(a), s = std::sin(a);
+    const double hx = b.size[0] / 2, hy = b.size[1] / 2;
+    const auto corner = [&](double u, double v) {
+      return Vec2(b.centre[0] + c * u - s * v, b.centre[1] + s * u + c * v);
+    };
+    const Vec2 k[4] = {corner(-hx, -hy), corner(hx, -hy), corner(hx, hy), corner(-hx, hy)};
+    for (int i = 0; i < 4; ++i) {
+      const Vec2& p = k[i];
+      const Vec2& q = k[(i + 1) % 4];
+      map.walls.push_back({p.x(), p.y(), q.x(), q.y()});
+    }
+  }
+  // The start: a short line across the blimp's heading where it rests.
+  const double h = course.start.heading_deg * kDeg;
+  const double sx = course.start.position[0], sy = course.start.position[1];
+  map.start = {sx - 0.5 * std::sin(h), sy + 0.5 * std::cos(h), sx + 0.5 * std::sin(h), sy - 0.5 * std::cos(h)};
+  map.posts.push_back({course.landing.centre[0], course.landing.centre[1], course.landing.radius,
+                       view::TrackMap::PostKind::kLanding});
   return map;
 }
 

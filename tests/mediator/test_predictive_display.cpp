@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "../view/offscreen_gl.hpp"
+#include "haptel/config/blimp_course.hpp"
 #include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"
 #include "haptel/mediator/predictive_display.hpp"
@@ -287,4 +288,98 @@ TEST_CASE(
   CHECK(CountMagenta(off) == 0);
   CHECK(CountMagenta(on) > 100);
   cv::imwrite((test::ScratchDir("predictive-display") / "view.png").string(), on);  // to look at
+}
+
+TEST_CASE("the blimp's course map: gates across their openings labelled with their heights, buildings, the landing") {
+  const BlimpCourseConfig course = LoadBlimpCourse("config/tracks/blimp-course.yaml");
+  const view::TrackMap map = CourseMapOf(course);
+  REQUIRE(map.gates.size() == course.gates.size());
+  REQUIRE(map.labels.size() == course.gates.size());
+  CHECK(map.walls.size() == 4 * course.buildings.size());
+  for (size_t i = 0; i < course.gates.size(); ++i) {
+    const BlimpGateSpec& g = course.gates[i];
+    const view::TrackMap::Line& l = map.gates[i];
+    // From post to post: the opening's width, centred on the gate, across its heading.
+    CHECK(std::hypot(l.bx - l.ax, l.by - l.ay) == Approx(g.width));
+    CHECK((l.ax + l.bx) / 2 == Approx(g.centre[0]).margin(1e-9));
+    CHECK((l.ay + l.by) / 2 == Approx(g.centre[1]).margin(1e-9));
+    const double along = (l.bx - l.ax) * std::cos(g.heading_deg * std::numbers::pi / 180) +
+                         (l.by - l.ay) * std::sin(g.heading_deg * std::numbers::pi / 180);
+    CHECK(along == Approx(0.0).margin(1e-9));
+    char heights[48];
+    std::snprintf(heights, sizeof heights, "%.1f-%.1f m", g.centre[2] - g.height / 2, g.centre[2] + g.height / 2);
+    CHECK(map.labels[i].text == heights);
+  }
+  const auto landing = std::find_if(map.posts.begin(), map.posts.end(), [](const view::TrackMap::Post& p) {
+    return p.kind == view::TrackMap::PostKind::kLanding;
+  });
+  REQUIRE(landing != map.posts.end());
+  CHECK(landing->radius == course.landing.radius);
+}
+
+TEST_CASE("the blimp's prediction is drawn on the course map with its heights, and not in the picture") {
+  constexpr int kWidth = 1024, kHeight = 576;
+  const BlimpCourseConfig course = LoadBlimpCourse("config/tracks/blimp-course.yaml");
+  const auto map = std::make_shared<const view::TrackMap>(CourseMapOf(course));
+  // Reported at the first gate's height, the ghost 2 m ahead and 0.5 m higher, climbing on.
+  BlimpPredictedPose reported;
+  reported.position = Eigen::Vector3d(course.start.position[0], course.start.position[1], 1.2);
+  reported.yaw = course.start.heading_deg * std::numbers::pi / 180;
+  std::vector<BlimpPredictedPose> path;
+  for (int i = 0; i < 21; ++i) {
+    BlimpPredictedPose p = reported;
+    p.t_s = 0.05 * i;
+    p.position += Eigen::Vector3d(std::cos(reported.yaw), std::sin(reported.yaw), 0.0) * (2.0 + 0.1 * i);
+    p.position.z() = 1.7 + 0.02 * i;
+    path.push_back(p);
+  }
+  view::ViewModel model;
+  MakeBlimpPrediction(reported, path, 6.75, 0.4, model.prediction);
+  CHECK(model.prediction.shown);
+  CHECK(model.prediction.heights);
+  CHECK(model.prediction.outline_count == 0);  // nothing in the picture
+  CHECK(model.prediction.path_count == 0);
+  CHECK(model.prediction.map_path_count == 21);
+  CHECK(model.prediction.reported.z == Approx(1.2));
+  CHECK(model.prediction.predicted.z == Approx(1.7));
+  CHECK(model.prediction.map_path[20].z == Approx(2.1));
+  CHECK(model.prediction.body_radius == Approx(6.75 / 2));
+  model.map = map;
+
+  test::OffscreenGl gl(kWidth, kHeight);
+  view::Renderer renderer(kWidth, kHeight);
+  cv::Mat on, higher, off;
+  renderer.Draw(model, 0.0);
+  renderer.ReadPixels(on);
+  const BlimpPredictedPose& now = path.front();
+  // The ghost: a magenta disc around where the map puts the blimp now
+  // (a large course on a small map: the hull is a few pixels across).
+  double map_x = 0, map_y = 0;
+  REQUIRE(renderer.MapPoint(now.position.x(), now.position.y(), map_x, map_y));
+  const cv::Rect around(static_cast<int>(map_x) - 8, static_cast<int>(map_y) - 8, 17, 17);
+  INFO("the ghost around " << map_x << ", " << map_y);
+  CHECK(CountMagenta(on(around)) >= 10);
+  // The heights line says the heights: another height, another line; the
+  // map above it unchanged.
+  view::ViewModel climbing = model;
+  climbing.prediction.predicted.z = 3.4f;
+  renderer.Draw(climbing, 0.0);
+  renderer.ReadPixels(higher);
+  cv::Mat diff;
+  cv::absdiff(on, higher, diff);
+  cv::Mat changed;
+  cv::cvtColor(diff, changed, cv::COLOR_BGR2GRAY);
+  const cv::Rect where = cv::boundingRect(changed > 0);
+  INFO("changed " << where);
+  CHECK(where.area() > 0);
+  CHECK(where.y > map_y);  // below the map: the heights line
+  // Without a prediction nothing of it is drawn.
+  view::ViewModel plain = model;
+  plain.prediction.shown = false;
+  renderer.Draw(plain, 0.0);
+  renderer.ReadPixels(off);
+  CHECK(CountMagenta(off) == 0);
+  CHECK(CountMagenta(on) > 100);
+  CHECK(CountMagenta(off(around)) == 0);
+  cv::imwrite((test::ScratchDir("predictive-display") / "blimp-map.png").string(), on);  // to look at
 }

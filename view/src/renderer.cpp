@@ -372,6 +372,14 @@ void FitMap(const TrackMap& map, int side, double& scale, double& ox, double& oy
     grow(l.bx, l.by, 0);
   }
   for (const TrackMap::Post& p : map.posts) grow(p.x, p.y, p.radius);
+  for (const TrackMap::Line& l : map.gates) {
+    grow(l.ax, l.ay, 0);
+    grow(l.bx, l.by, 0);
+  }
+  if (!map.walls.empty() || !map.posts.empty()) {  // a map with nothing but a start line is no map
+    grow(map.start.ax, map.start.ay, 0);
+    grow(map.start.bx, map.start.by, 0);
+  }
   if (x1 < x0) {  // nothing to fit: a metre around the origin
     x0 = y0 = -0.5;
     x1 = y1 = 0.5;
@@ -883,7 +891,9 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
   if (pr.shown && model.map) {
     const int side = static_cast<int>(0.36 * height_);
     const int line_h = static_cast<int>(18 * height_ / 576.0);
-    const cv::Rect panel(width_ - side - 8, 8, side, side + 2 * line_h + 6);
+    // A flying vehicle's heights take a third line under the legend.
+    const int lines = pr.heights ? 3 : 2;
+    const cv::Rect panel(width_ - side - 8, 8, side, side + lines * line_h + 6);
     if (g.map_of != model.map.get() || g.map_base.size() != panel.size()) {
       g.map_of = model.map.get();
       g.map_base = cv::Mat(panel.height, panel.width, CV_8UC4, Bgra(0, 0, 0, 170));
@@ -903,14 +913,27 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
                  kShift);
       }
       for (const TrackMap::Post& p : model.map->posts) {
+        const bool landing = p.kind == TrackMap::PostKind::kLanding;
         const cv::Scalar c = p.kind == TrackMap::PostKind::kLeft    ? Bgra(40, 40, 225)
                              : p.kind == TrackMap::PostKind::kRight ? Bgra(50, 200, 40)
+                             : landing                              ? Bgra(120, 220, 120)
                                                                     : Bgra(0, 140, 255);
         cv::circle(g.map_base, px(p.x, p.y),
-                   static_cast<int>(std::max(2.0, p.radius * g.map_scale) * kOne), c, cv::FILLED,
-                   cv::LINE_AA, kShift);
+                   static_cast<int>(std::max(2.0, p.radius * g.map_scale) * kOne), c,
+                   landing ? 1 : cv::FILLED, cv::LINE_AA, kShift);
       }
       const double text = 0.42 * height_ / 576.0;
+      for (const TrackMap::Label& l : model.map->labels) {
+        // Right of the place, or left of it where the panel ends.
+        int baseline = 0;
+        const cv::Size size =
+            cv::getTextSize(l.text, cv::FONT_HERSHEY_SIMPLEX, 0.85 * text, 1, &baseline);
+        const int x = static_cast<int>(g.map_ox + g.map_scale * l.x);
+        const cv::Point at(x + 4 + size.width < side ? x + 4 : std::max(0, x - 4 - size.width),
+                           static_cast<int>(g.map_oy - g.map_scale * l.y) - 4);
+        cv::putText(g.map_base, l.text, at, cv::FONT_HERSHEY_SIMPLEX, 0.85 * text,
+                    Bgra(0, 200, 230), 1, cv::LINE_AA);
+      }
       cv::circle(g.map_base, cv::Point(10, side + line_h - 4), 4, kReported, 2, cv::LINE_AA);
       cv::putText(g.map_base, "as last reported", cv::Point(20, side + line_h),
                   cv::FONT_HERSHEY_SIMPLEX, text, kReported, 1, cv::LINE_AA);
@@ -942,10 +965,24 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
     }
     pose(pr.reported, kReported, kReported, false);
     pose(pr.predicted, kGhostLine, Bgra(40, 0, 40), true);
-    char label[48];
+    char label[64];
     std::snprintf(label, sizeof label, "now, +%.0f ms; path: 1 s", pr.one_way_delay_s * 1e3);
     cv::putText(g.map, label, cv::Point(20, side + 2 * line_h), cv::FONT_HERSHEY_SIMPLEX,
                 0.42 * height_ / 576.0, kGhostLine, 1, cv::LINE_AA);
+    if (pr.heights && n > 0) {
+      // A flying vehicle: where it was, is and will be, in height (the map
+      // is seen from above).
+      std::snprintf(label, sizeof label, "height: was %.2f, now %.2f, in 1 s %.2f m",
+                    static_cast<double>(pr.reported.z), static_cast<double>(pr.predicted.z),
+                    static_cast<double>(pr.map_path[static_cast<size_t>(n - 1)].z));
+      // Smaller where the panel is too narrow for it.
+      double scale = 0.42 * height_ / 576.0;
+      int baseline = 0;
+      const int wide = cv::getTextSize(label, cv::FONT_HERSHEY_SIMPLEX, scale, 1, &baseline).width;
+      if (wide > side - 24) scale *= static_cast<double>(side - 24) / wide;
+      cv::putText(g.map, label, cv::Point(20, side + 3 * line_h), cv::FONT_HERSHEY_SIMPLEX, scale,
+                  kGhostLine, 1, cv::LINE_AA);
+    }
     glBindTexture(GL_TEXTURE_2D, g.map_texture);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
     glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, g.map.cols, g.map.rows, 0, GL_BGRA, GL_UNSIGNED_BYTE,

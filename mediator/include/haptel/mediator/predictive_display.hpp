@@ -26,8 +26,10 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
+#include "haptel/config/blimp_course.hpp"
 #include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"
+#include "haptel/mediator/blimp_predictor.hpp"
 #include "haptel/mediator/robot_predictor.hpp"
 #include "haptel/view/view_model.hpp"
 
@@ -64,5 +66,21 @@ class PredictiveDisplay {
 /// The map's geometry of `track`: walls, the start line across the
 /// corridor, each gate from post to post, the posts and round obstacles.
 view::TrackMap TrackMapOf(const Track& track);
+
+/// The blimp's predictive display, on the course map only: the blimp as
+/// last reported (`reported`), the ghost at `path`'s first pose (the blimp
+/// now, BlimpPredictor::PathAhead) and its path ahead, each with its height,
+/// which the map says in words (it is seen from above). Nothing goes into the
+/// picture: the pilot camera hangs under the hull, so a ghost a few hundred
+/// milliseconds ahead (at 2 m/s, under a metre) would surround the camera
+/// rather than stand in front of it. `hull_length`: the map draws the hull
+/// as a disc of half that. Allocates nothing.
+void MakeBlimpPrediction(const BlimpPredictedPose& reported, const std::vector<BlimpPredictedPose>& path,
+                         double hull_length, double one_way_delay_s, view::Prediction& out);
+
+/// The blimp course's map: each gate across its opening from post to post,
+/// labelled with the opening's heights above the ground; each building's
+/// footprint (as walls); the start; the landing circle.
+view::TrackMap CourseMapOf(const BlimpCourseConfig& course);
 
 }  // namespace haptel::mediator

@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -92,6 +93,7 @@ struct MapPose {
   float x = 0.0f;
   float y = 0.0f;
   float heading = 0.0f;
+  float z = 0.0f;  ///< height above the ground, m (the blimp's; 0 on the ground)
 };
 
 /// The predictive display (haptel run --predict on): where the vehicle is
@@ -118,6 +120,9 @@ struct Prediction {
   std::array<MapPose, kPathMax> map_path{};
   float body_radius = 0.1f;
   float one_way_delay_s = 0.0f;  ///< how far ahead of its video the ghost is
+  /// The map says the heights (z) of the reported pose, the ghost and the
+  /// path's end: a flying vehicle (the blimp), whose picture has no ghost.
+  bool heights = false;
 };
 
 /// The track as the predictive display's map draws it, to scale (track
@@ -126,7 +131,8 @@ struct TrackMap {
   struct Line {
     double ax = 0, ay = 0, bx = 0, by = 0;
   };
-  enum class PostKind : uint8_t { kLeft, kRight, kObstacle };
+  /// kLanding: the blimp's landing circle (drawn as a ring).
+  enum class PostKind : uint8_t { kLeft, kRight, kObstacle, kLanding };
   struct Post {
     double x = 0, y = 0, radius = 0;
     PostKind kind = PostKind::kObstacle;
@@ -135,6 +141,12 @@ struct TrackMap {
   std::vector<Line> gates;  ///< from post to post
   Line start;               ///< the start and finish line
   std::vector<Post> posts;  ///< gate posts and round obstacles
+  /// Text at a place: a blimp gate's opening ("1.0-3.0 m" above ground).
+  struct Label {
+    double x = 0, y = 0;
+    std::string text;
+  };
+  std::vector<Label> labels;
 };
 
 struct ViewModel {
