@@ -1,0 +1,135 @@
+#pragma once
+/// @file The rate the link can carry, estimated on the operator's side from
+/// each video frame's arrival, after Google Congestion Control
+/// (draft-ietf-rmcat-gcc-02) as WebRTC builds it today: a delay-based
+/// estimate (the trend of one-way delay variation, an adaptive threshold, an
+/// AIMD rate controller) and a loss-based one, the smaller of the two being
+/// the target bitrate the vehicle's encoder is asked to follow.
+///
+/// Why from delay: a link's queue fills before it drops. When the video
+/// sends faster than the link carries, each frame arrives a little later
+/// relative to its capture than the one before; the trend of that growth
+/// (ms of delay per ms of time) crosses a threshold well before packets are
+/// lost, and the rate is cut to 85 % of what is arriving. The threshold
+/// adapts to the delay's own noise (jitter), so a jittery but uncongested
+/// link is not mistaken for a congested one, and it grows quickly with
+/// large variations so a competing flow does not starve the video.
+///
+/// Only differences of capture stamps and of arrival times are used: the
+/// vehicle's and the operator's clocks need not agree. Each frame is one
+/// group (it is sent as one burst). Losses are gaps in the frame numbers.
+///
+/// Not thread-safe; the operator's video thread owns it. Allocation-free
+/// after construction.
+#include <array>
+#include <cstddef>
+#include <cstdint>
+
+namespace haptel::video {
+
+struct RateEstimatorConfig {
+  double min_kbps = 100.0;    ///< never asks for less
+  double max_kbps = 6000.0;   ///< nor more (what the encoder can use)
+  double start_kbps = 1000.0; ///< before anything is known
+  /// At most one target sent to the vehicle per this period (s): 10 Hz.
+  double feedback_period_s = 0.1;
+
+  /// Throws std::invalid_argument naming the field unless
+  /// 0 < min_kbps <= start_kbps <= max_kbps and 0 < feedback_period_s.
+  void ValidateOrThrow() const;
+};
+
+/// What the delay trend says about the link's queue.
+enum class LinkUsage { kNormal, kOveruse, kUnderuse };
+
+class RateEstimator {
+ public:
+  explicit RateEstimator(const RateEstimatorConfig& config = {});
+
+  /// One frame received whole: `frame_number` the sender's count (a gap is
+  /// a loss), `capture_s` its capture time on the sender's clock, `arrival_s`
+  /// when it arrived on this side's clock, `bytes` its encoded size. Frames
+  /// arriving out of order (a number below the newest) are counted as
+  /// received but not used for the delay trend.
+  void OnFrame(uint64_t frame_number, double capture_s, double arrival_s, size_t bytes);
+
+  /// The bitrate to ask of the encoder now (kbps): the smaller of the
+  /// delay-based and the loss-based estimates, within [min, max].
+  double target_kbps() const;
+  LinkUsage usage() const { return usage_; }
+  /// What arrived over the last kRateWindow_s (kbps); 0 before any frame.
+  double received_kbps() const { return received_kbps_; }
+  /// The share of frames lost over the last loss window (0..1).
+  double loss_share() const { return loss_share_; }
+  /// The delay trend as compared with the threshold, and the threshold (ms).
+  double trend_ms() const { return modified_trend_; }
+  double threshold_ms() const { return threshold_ms_; }
+  /// How many times the delay-based estimate was cut (overuse).
+  uint64_t decreases() const { return decreases_; }
+
+  /// Whether a target is due to be sent at `now_s` (at most once per
+  /// feedback period, and at once after a cut); marks it sent.
+  bool FeedbackDue(double now_s);
+
+  /// The window the received rate is measured over (s).
+  static constexpr double kRateWindow_s = 0.5;
+
+ private:
+  void UpdateTrend(double arrival_delta_ms, double capture_delta_ms, double arrival_ms);
+  void Detect(double capture_delta_ms, double arrival_ms);
+  void UpdateThreshold(double arrival_ms);
+  void UpdateRate(double now_s);
+  void UpdateLoss(uint64_t frame_number, double now_s);
+
+  RateEstimatorConfig config_;
+
+  // The previous frame (the previous group).
+  bool have_previous_ = false;
+  uint64_t newest_frame_ = 0;
+  double previous_capture_s_ = 0, previous_arrival_s_ = 0;
+
+  // The trendline: accumulated and smoothed delay variation against arrival
+  // time, over the last kWindow groups (a ring).
+  static constexpr int kWindow = 20;
+  double first_arrival_ms_ = -1;
+  double accumulated_ms_ = 0, smoothed_ms_ = 0;
+  std::array<double, kWindow> times_ms_{}, delays_ms_{};
+  int window_count_ = 0, window_next_ = 0;
+  int deltas_ = 0;
+  double modified_trend_ = 0, previous_trend_ = 0;
+  double threshold_ms_ = 12.5;
+  double last_threshold_update_ms_ = -1;
+  double time_over_using_ms_ = -1;
+  int overuse_count_ = 0;
+  LinkUsage usage_ = LinkUsage::kNormal;
+
+  // What arrived: a ring of (arrival, bytes) over the rate window.
+  static constexpr int kArrivals = 512;
+  std::array<double, kArrivals> arrival_s_{};
+  std::array<size_t, kArrivals> arrival_bytes_{};
+  int arrivals_head_ = 0, arrivals_count_ = 0;
+  size_t window_bytes_ = 0;
+  double first_frame_s_ = -1;
+  double received_kbps_ = 0;
+
+  // The AIMD rate controller.
+  enum class RateState { kHold, kIncrease, kDecrease };
+  RateState state_ = RateState::kIncrease;
+  double delay_kbps_;
+  double last_rate_update_s_ = -1;
+  double link_capacity_kbps_ = -1;  ///< the received rate at the last cut (-1: unknown)
+  uint64_t decreases_ = 0;
+  double last_cut_s_ = -1e300;
+
+  // Loss: frames expected and received since the window began.
+  double loss_kbps_;
+  double loss_window_start_s_ = -1;
+  uint64_t loss_window_first_ = 0;
+  uint64_t loss_window_received_ = 0;
+  double loss_share_ = 0;
+
+  double next_feedback_s_ = 0;
+  bool cut_pending_ = false;
+};
+
+}  // namespace haptel::video
