@@ -27,8 +27,9 @@ std::string Signed(double value, int decimals) {
   return text;
 }
 
-/// A p-value as a paper prints it: 4 decimals, or "< 0.0001".
+/// A p-value as a paper prints it: "= 0.0062", or "< 0.0001".
 std::string PText(double p) { return p < 1e-4 ? "< 0.0001" : Fixed(p, 4); }
+std::string PClause(double p) { return p < 1e-4 ? "p < 0.0001" : "p = " + Fixed(p, 4); }
 
 std::string Padded(const std::string& text, size_t width) {
   return text.size() >= width ? text + " " : text + std::string(width - text.size(), ' ');
@@ -110,11 +111,11 @@ std::string FormatLapTimeModel(const StudyResults& results, const StudyReport& r
     << "    scale: log, so an estimate is a log ratio against " << results.conditions[static_cast<size_t>(m.reference_condition)]
     << " and exp(estimate) its ratio, \"x lap time\"\n"
     << "    method: " << m.method << "\n";
-  o << "    " << Padded("condition", 20) << Padded("estimate", 10) << Padded("SE", 8) << Padded("df", 7)
+  o << "    " << Padded("condition", 22) << Padded("estimate", 10) << Padded("SE", 8) << Padded("df", 7)
     << Padded("95 % CI", 20) << Padded("p", 10) << "x lap time (95 % CI)\n";
   for (size_t c = 0; c < m.conditions.size(); ++c) {
     const MixedModelCondition& condition = m.conditions[c];
-    o << "    " << Padded(results.conditions[c], 20);
+    o << "    " << Padded(results.conditions[c], 22);
     if (condition.reference) {
       o << "reference\n";
     } else if (!condition.effect) {
@@ -130,7 +131,7 @@ std::string FormatLapTimeModel(const StudyResults& results, const StudyReport& r
   }
   if (m.position) {
     const MixedModelContrast& e = *m.position;
-    o << "    " << Padded("position (per trial)", 20) << Padded(Signed(e.estimate, 3), 10)
+    o << "    " << Padded("position (per trial)", 22) << Padded(Signed(e.estimate, 3), 10)
       << Padded(Fixed(e.standard_error, 3), 8) << Padded(Fixed(e.degrees_of_freedom, 1), 7)
       << Padded("[" + Signed(e.ci_low, 3) + ", " + Signed(e.ci_high, 3) + "]", 20) << Padded(PText(e.p_value), 10)
       << Fixed(std::exp(e.estimate), 3) << " (" << Fixed(std::exp(e.ci_low), 3) << "-"
@@ -138,7 +139,7 @@ std::string FormatLapTimeModel(const StudyResults& results, const StudyReport& r
   }
   const MixedModelConditionTest& test = m.condition_test;
   o << "    the condition as a whole: likelihood-ratio chi2 = " << Fixed(test.chi_square, 3)
-    << ", df = " << test.degrees_of_freedom << ", p = " << PText(test.p_value) << " (ML refits)\n";
+    << ", df = " << test.degrees_of_freedom << ", " << PClause(test.p_value) << " (ML refits)\n";
   o << "    variance: participants " << Fixed(m.participant_variance, 4) << " (SD " << Fixed(std::sqrt(m.participant_variance), 3)
     << "), residual " << Fixed(m.residual_variance, 4) << " (SD " << Fixed(std::sqrt(m.residual_variance), 3)
     << ") on the log scale" << (m.boundary ? "; boundary fit" : "") << "\n";
@@ -147,7 +148,7 @@ std::string FormatLapTimeModel(const StudyResults& results, const StudyReport& r
   for (size_t c = 0; c < m.conditions.size(); ++c) {
     if (!m.conditions[c].mean) continue;
     const MixedModelContrast& mean = *m.conditions[c].mean;
-    o << "      " << Padded(results.conditions[c], 20) << Fixed(std::exp(mean.estimate), 2) << " ("
+    o << "      " << Padded(results.conditions[c], 22) << Fixed(std::exp(mean.estimate), 2) << " ("
       << Fixed(std::exp(mean.ci_low), 2) << "-" << Fixed(std::exp(mean.ci_high), 2) << ")\n";
   }
   for (const std::string& note : m.notes) o << "    note: " << note << "\n";

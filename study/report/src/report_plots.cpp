@@ -218,15 +218,14 @@ bool DrawModelMeans(const StudyResults& results, const StudyReport& report, cons
   }
   cv::Mat image(kHeight, kWidth, CV_8UC3, cv::Scalar(255, 255, 255));
   const Frame f = Axes(image,
-                       "Estimated mean lap time per condition (mixed model on log lap time, at position " +
-                           Text(m.mean_position, 1) + "; bars: 95 % CI)",
+                       "Mixed model: estimated mean lap time, 95 % CI (at position " + Text(m.mean_position, 1) + ")",
                        "lap time (s)", 0.0, top * 1.15, results.conditions);
   const size_t k = results.conditions.size();
   if (results.reference_lap_s) {
     // The baseline, dashed across the plot.
     const int y = f.Y(*results.reference_lap_s);
     for (int x = kLeft; x < kWidth - kRight; x += 16) cv::line(image, {x, y}, {std::min(x + 9, kWidth - kRight), y}, kInk, 1);
-    Label(image, "reference lap " + Text(*results.reference_lap_s, 0) + " s", {kWidth - kRight - 190, y - 6}, 0.45);
+    Label(image, "reference lap " + Text(*results.reference_lap_s, 0) + " s", {kLeft + 6, y - 6}, 0.45);
   }
   for (size_t c = 0; c < k && c < m.conditions.size(); ++c) {
     const int x = f.X(c, k);
