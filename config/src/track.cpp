@@ -164,6 +164,10 @@ void TrackConfig::ValidateOrThrow() const {
   check::Number("post_radius", post_radius, 0.005, 1.0);
   check::Number("start_behind", start_behind, 0.0, 10.0);
   check::Number("lap_cap_s", lap_cap_s, 1.0, 24 * 3600.0);
+  if (reference_lap_s && !(*reference_lap_s >= 1.0 && *reference_lap_s <= lap_cap_s)) {
+    // A baseline slower than the cap would make every capped lap look fast.
+    check::Fail("reference_lap_s", "a lap time in s from 1 to the lap cap (lap_cap_s = " + NumberText(lap_cap_s) + ")");
+  }
   for (size_t i = 0; i < gates.size(); ++i) {
     const std::string key = "gates[" + std::to_string(i) + "]";
     check::Number(key + ".along", gates[i].along, 0.0, 1e6);
@@ -233,6 +237,7 @@ TrackConfig LoadTrack(const std::filesystem::path& file) {
   t.post_radius = root.Number("post_radius", t.post_radius);
   t.start_behind = root.Number("start_behind", t.start_behind);
   t.lap_cap_s = root.Number("lap_cap_s", t.lap_cap_s);
+  if (root.Has("reference_lap_s")) t.reference_lap_s = root.RequireNumber("reference_lap_s");
   // The width of every gate that gives none.
   const double default_gate_width = root.Number("gate_width", 0.6 * t.corridor_width);
   for (YamlMap& g : root.MapList("gates")) {

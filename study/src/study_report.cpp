@@ -14,16 +14,20 @@ constexpr const char* kReportUsage =
     "usage: haptel study report DATABASE --study NAME [options]\n"
     "\n"
     "Prints each condition's table (lap time as scored, per-participant rank, obstacles), the\n"
-    "Friedman test, Kendall's W and a post-hoc test, and writes trials.csv, answers.csv,\n"
-    "summary.csv, lap_times.png, ranks.png, ratings.png (with scored questionnaires) and\n"
-    "index.html.\n"
+    "Friedman test, Kendall's W and a post-hoc test, the mixed model\n"
+    "log(lap time) ~ condition + position + (1 | participant) (REML; Satterthwaite t tests\n"
+    "against the first condition, a likelihood-ratio test of the condition), each lap's\n"
+    "percentage over the track's reference lap, and writes trials.csv, answers.csv,\n"
+    "summary.csv, lap_times.png, ranks.png, ratings.png (with scored questionnaires),\n"
+    "model_means.png and index.html.\n"
     "options:\n"
     "  --study NAME          the study (its file's 'name')\n"
     "  --out DIR             where the files go (default <database dir>/report-<study>/)\n"
     "  --post-hoc METHOD     nemenyi (default; critical difference of mean ranks, alpha 0.05)\n"
     "                        or wilcoxon-holm (pairwise signed-rank tests, Holm-adjusted)\n"
     "  --json                end with one JSON line: per-condition totals and mean ranks,\n"
-    "                        friedman_chi2, friedman_p, kendall_w, the post-hoc pairs\n";
+    "                        friedman_chi2, friedman_p, kendall_w, the post-hoc pairs,\n"
+    "                        lmm (per condition estimate, ci_low, ci_high, p), baseline\n";
 
 }  // namespace
 

@@ -282,6 +282,12 @@ TEST_CASE("Shipped tracks load with the values their files give", "[config][ship
   CHECK(t.post_radius == NumberIn(text, "post_radius"));
   CHECK(t.start_behind == NumberIn(text, "start_behind"));
   CHECK(t.lap_cap_s == NumberIn(text, "lap_cap_s"));
+  // Optional: a track without a known expert lap has no baseline.
+  if (text.find("reference_lap_s:") != std::string::npos) {
+    CHECK(t.reference_lap_s == NumberIn(text, "reference_lap_s"));
+  } else {
+    CHECK_FALSE(t.reference_lap_s.has_value());
+  }
 
   const std::vector<haptel::Vec2> points = CentrelineIn(text);
   REQUIRE(points.size() >= 3);
@@ -312,6 +318,9 @@ TEST_CASE("Shipped grand prix has the thesis's five gates", "[config][shipped]")
   const haptel::TrackConfig t = haptel::LoadTrack("config/tracks/grand-prix.yaml");
   CHECK(t.gates.size() == 5);
   CHECK(t.lap_cap_s == 600.0);  // the 10-minute cap
+  // The thesis's optimum, 1 min 30 s by keyboard in direct view (section 8.1).
+  REQUIRE(t.reference_lap_s.has_value());
+  CHECK(*t.reference_lap_s == 90.0);
   CHECK_FALSE(t.obstacles.empty());
 }
 
@@ -587,6 +596,22 @@ TEST_CASE("Bad file: value out of range", "[config][bad]") {
     CHECK_THAT(msg, Contains(file.string()));
     CHECK_THAT(msg, Contains("'neutral'"));
     CHECK_THAT(msg, Contains(LineTag(LineOf(text, "neutral"))));
+  }
+  SECTION("track reference lap beyond the lap cap") {
+    const std::string text =
+        "name: fixture\n"
+        "corridor_width: 1.0\n"
+        "lap_cap_s: 60\n"
+        "reference_lap_s: 90\n"
+        "centerline: [[0, 0], [4, 0], [4, 3], [0, 3]]\n"
+        "gates: [{along: 1.0}]\n";
+    const fs::path file = tmp.Write("range-reference-lap.yaml", text);
+    REQUIRE_THROWS_AS(haptel::LoadTrack(file), ConfigError);
+    const std::string msg = ErrorOf([&] { haptel::LoadTrack(file); });
+    CHECK_THAT(msg, Contains(file.string()));
+    CHECK_THAT(msg, Contains("'reference_lap_s'"));
+    CHECK_THAT(msg, Contains("60"));  // the range it must be in ends at the cap
+    CHECK_THAT(msg, Contains(LineTag(LineOf(text, "reference_lap_s"))));
   }
   SECTION("track corridor width") {
     const std::string text =

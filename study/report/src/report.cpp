@@ -127,6 +127,17 @@ StudyResults LoadStudyResults(const std::filesystem::path& database, const std::
     throw std::runtime_error("database " + database.string() + ": no study '" + name + "' (" +
                              (names.empty() ? "it holds none" : "it holds: " + names) + ")");
   }
+  {
+    // The baseline is the track's, read now: the reference lap changes no trial.
+    Stmt form = Prepare(database, raw, "SELECT file, definition_form FROM studies WHERE id = ?",
+                        "cannot read the study's definition");
+    Binder(database, raw, form.get()).Int(id);
+    if (sqlite3_step(form.get()) == SQLITE_ROW) {
+      Reader row(form.get());
+      const std::string file = row.Text();
+      ReadBaseline(file, row.Text(), r);
+    }
+  }
   Stmt conditions = Prepare(database, raw, "SELECT name FROM study_conditions WHERE study_id = ? ORDER BY position",
                             "cannot read the conditions");
   Binder(database, raw, conditions.get()).Int(id);
@@ -255,6 +266,7 @@ StudyReport ComputeReport(const StudyResults& results, PostHocMethod post_hoc, d
       report.why_no_statistics = std::string("no statistics: ") + e.what();
     }
   }
+  FitLapTimeModel(results, report);
   // Numeric questionnaire answers, per questionnaire × item × condition.
   std::map<std::tuple<std::string, std::string, std::string>, std::vector<double>> numeric;
   for (const StudyResults::Answer& a : results.answers) {
@@ -318,6 +330,7 @@ std::string FormatReport(const StudyResults& results, const StudyReport& report)
       o << (pair.significant ? "  significant" : "") << "\n";
     }
   }
+  o << "\n" << FormatLapTimeModel(results, report) << "\n" << FormatBaseline(results, report);
   if (!report.items.empty()) {
     o << "\n  questionnaires (mean, median, n):\n";
     for (const ItemSummary& s : report.items) {
@@ -364,6 +377,7 @@ ReportFiles WriteReport(const StudyResults& results, const StudyReport& report, 
   DrawLapTimes(results, report, files.lap_times_png);
   DrawRanks(report, files.ranks_png);
   if (DrawRatings(results, dir / "ratings.png")) files.ratings_png = dir / "ratings.png";
+  if (DrawModelMeans(results, report, dir / "model_means.png")) files.model_means_png = dir / "model_means.png";
 
   // The page: the thesis's tables, the statistics, the questionnaires, the plots.
   std::ostringstream h;
@@ -388,7 +402,10 @@ ReportFiles WriteReport(const StudyResults& results, const StudyReport& report, 
   h << "<h2>Statistics</h2>\n<pre>";
   const std::string text = FormatReport(results, report);
   const size_t at = text.find("  Friedman");
-  h << Html(at != std::string::npos ? text.substr(at) : report.why_no_statistics) << "</pre>\n";
+  h << Html(at != std::string::npos ? text.substr(at)
+                                    : report.why_no_statistics + "\n\n" + FormatLapTimeModel(results, report) +
+                                          "\n" + FormatBaseline(results, report))
+    << "</pre>\n";
   bool remarks = false;
   for (const StudyResults::Answer& a : results.answers) {
     double value = 0.0;
@@ -402,6 +419,9 @@ ReportFiles WriteReport(const StudyResults& results, const StudyReport& report, 
   h << "<h2>Plots</h2>\n<p><img src=\"lap_times.png\" alt=\"lap times per condition\"></p>\n"
     << "<p><img src=\"ranks.png\" alt=\"mean ranks per condition\"></p>\n";
   if (!files.ratings_png.empty()) h << "<p><img src=\"ratings.png\" alt=\"questionnaire scores\"></p>\n";
+  if (!files.model_means_png.empty()) {
+    h << "<p><img src=\"model_means.png\" alt=\"the mixed model's estimated mean lap time per condition\"></p>\n";
+  }
   h << "<p>Data: <a href=\"trials.csv\">trials.csv</a>, <a href=\"answers.csv\">answers.csv</a>, "
        "<a href=\"summary.csv\">summary.csv</a>.</p>\n</body></html>\n";
   WriteFile(files.html, h.str());
@@ -444,11 +464,13 @@ std::string ReportJson(const StudyResults& results, const StudyReport& report, c
     out += ",\"friedman_chi2\":null,\"friedman_df\":null,\"friedman_p\":null,\"kendall_w\":null,\"post_hoc\":null";
   }
   out += ",\"why_no_statistics\":" + JsonString(report.why_no_statistics);
+  out += "," + LapTimeModelJson(results, report) + "," + BaselineJson(results, report);
   out += ",\"files\":{\"html\":" + JsonString(files.html.string()) + ",\"trials_csv\":" +
          JsonString(files.trials_csv.string()) + ",\"answers_csv\":" + JsonString(files.answers_csv.string()) +
          ",\"summary_csv\":" + JsonString(files.summary_csv.string()) + ",\"lap_times_png\":" +
          JsonString(files.lap_times_png.string()) + ",\"ranks_png\":" + JsonString(files.ranks_png.string()) +
-         ",\"ratings_png\":" + JsonString(files.ratings_png.string()) + "}}";
+         ",\"ratings_png\":" + JsonString(files.ratings_png.string()) +
+         ",\"model_means_png\":" + JsonString(files.model_means_png.string()) + "}}";
   return out;
 }
 

@@ -207,4 +207,44 @@ bool DrawRatings(const StudyResults& results, const std::filesystem::path& png) 
   return true;
 }
 
+bool DrawModelMeans(const StudyResults& results, const StudyReport& report, const std::filesystem::path& png) {
+  if (!report.mixed_model) return false;
+  const MixedModelResult& m = *report.mixed_model;
+  // Back-transformed from the log scale: geometric-mean lap times in s; the
+  // interval is asymmetric around the point, as it should be.
+  double top = results.reference_lap_s.value_or(1.0);
+  for (const MixedModelCondition& c : m.conditions) {
+    if (c.mean) top = std::max(top, std::exp(c.mean->ci_high));
+  }
+  cv::Mat image(kHeight, kWidth, CV_8UC3, cv::Scalar(255, 255, 255));
+  const Frame f = Axes(image,
+                       "Mixed model: estimated mean lap time, 95 % CI (at position " + Text(m.mean_position, 1) + ")",
+                       "lap time (s)", 0.0, top * 1.15, results.conditions);
+  const size_t k = results.conditions.size();
+  if (results.reference_lap_s) {
+    // The baseline, dashed across the plot.
+    const int y = f.Y(*results.reference_lap_s);
+    for (int x = kLeft; x < kWidth - kRight; x += 16) cv::line(image, {x, y}, {std::min(x + 9, kWidth - kRight), y}, kInk, 1);
+    Label(image, "reference lap " + Text(*results.reference_lap_s, 0) + " s", {kLeft + 6, y - 6}, 0.45);
+  }
+  for (size_t c = 0; c < k && c < m.conditions.size(); ++c) {
+    const int x = f.X(c, k);
+    if (!m.conditions[c].mean) {
+      Label(image, "no trials", {x, f.Y(0.0) - 8}, 0.45, true);
+      continue;
+    }
+    const MixedModelContrast& mean = *m.conditions[c].mean;
+    const int low = f.Y(std::exp(mean.ci_low));
+    const int high = f.Y(std::exp(mean.ci_high));
+    cv::line(image, {x, low}, {x, high}, Colour(c), 2, cv::LINE_AA);
+    cv::line(image, {x - 10, low}, {x + 10, low}, Colour(c), 2);
+    cv::line(image, {x - 10, high}, {x + 10, high}, Colour(c), 2);
+    cv::circle(image, {x, f.Y(std::exp(mean.estimate))}, 6, Colour(c), cv::FILLED, cv::LINE_AA);
+    const std::string label = Text(std::exp(mean.estimate), 1) + " s" + (m.conditions[c].reference ? " (reference)" : "");
+    Label(image, label, {x + 14, f.Y(std::exp(mean.estimate)) + 5}, 0.45);
+  }
+  Save(image, png);
+  return true;
+}
+
 }  // namespace haptel::study

@@ -226,6 +226,97 @@ double ChiSquareSurvival(double chi_square, int degrees_of_freedom) {
   return RegularizedUpperGamma(0.5 * degrees_of_freedom, 0.5 * chi_square);
 }
 
+namespace {
+
+/// The continued fraction of I_x(a, b) (Numerical Recipes' betacf), by the
+/// modified Lentz method.
+double BetaContinuedFraction(double a, double b, double x) {
+  constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
+  constexpr double kTiny = std::numeric_limits<double>::min() / kEpsilon;
+  constexpr int kMaxIterations = 100000;
+  const double qab = a + b;
+  const double qap = a + 1.0;
+  const double qam = a - 1.0;
+  double c = 1.0;
+  double d = 1.0 - qab * x / qap;
+  if (std::abs(d) < kTiny) d = kTiny;
+  d = 1.0 / d;
+  double h = d;
+  for (int m = 1; m <= kMaxIterations; ++m) {
+    const double m2 = 2.0 * m;
+    // The even step, then the odd step of the fraction.
+    double aa = m * (b - m) * x / ((qam + m2) * (a + m2));
+    d = 1.0 + aa * d;
+    if (std::abs(d) < kTiny) d = kTiny;
+    c = 1.0 + aa / c;
+    if (std::abs(c) < kTiny) c = kTiny;
+    d = 1.0 / d;
+    h *= d * c;
+    aa = -(a + m) * (qab + m) * x / ((a + m2) * (qap + m2));
+    d = 1.0 + aa * d;
+    if (std::abs(d) < kTiny) d = kTiny;
+    c = 1.0 + aa / c;
+    if (std::abs(c) < kTiny) c = kTiny;
+    d = 1.0 / d;
+    const double step = d * c;
+    h *= step;
+    if (std::abs(step - 1.0) < kEpsilon) return h;
+  }
+  throw std::runtime_error("RegularizedIncompleteBeta: no convergence for a = " + Number(a) +
+                           ", b = " + Number(b) + ", x = " + Number(x));
+}
+
+}  // namespace
+
+double RegularizedIncompleteBeta(double a, double b, double x) {
+  if (!(a > 0.0) || !std::isfinite(a) || !(b > 0.0) || !std::isfinite(b) || !(x >= 0.0 && x <= 1.0)) {
+    throw std::invalid_argument(
+        "RegularizedIncompleteBeta: expected finite a > 0, b > 0 and x in [0, 1], got a = " + Number(a) +
+        ", b = " + Number(b) + ", x = " + Number(x));
+  }
+  if (x == 0.0) return 0.0;
+  if (x == 1.0) return 1.0;
+  // x^a (1 − x)^b / (a B(a, b)), the fraction's prefactor, through logs.
+  const double log_front = std::lgamma(a + b) - std::lgamma(a) - std::lgamma(b) + a * std::log(x) +
+                           b * std::log1p(-x);
+  if (x < (a + 1.0) / (a + b + 2.0)) return std::exp(log_front) * BetaContinuedFraction(a, b, x) / a;
+  return 1.0 - std::exp(log_front) * BetaContinuedFraction(b, a, 1.0 - x) / b;
+}
+
+double StudentTTwoSidedP(double t, double degrees_of_freedom) {
+  if (!(degrees_of_freedom > 0.0) || !std::isfinite(degrees_of_freedom) || std::isnan(t)) {
+    throw std::invalid_argument("StudentTTwoSidedP: expected t not NaN and finite df > 0, got t = " + Number(t) +
+                                ", df = " + Number(degrees_of_freedom));
+  }
+  if (std::isinf(t)) return 0.0;
+  return RegularizedIncompleteBeta(0.5 * degrees_of_freedom, 0.5,
+                                   degrees_of_freedom / (degrees_of_freedom + t * t));
+}
+
+double StudentTQuantile(double probability, double degrees_of_freedom) {
+  if (!(probability > 0.0 && probability < 1.0) || !(degrees_of_freedom > 0.0) ||
+      !std::isfinite(degrees_of_freedom)) {
+    throw std::invalid_argument("StudentTQuantile: expected a probability in (0, 1) and finite df > 0, got " +
+                                Number(probability) + " and df = " + Number(degrees_of_freedom));
+  }
+  if (probability == 0.5) return 0.0;
+  // The upper tail's two-sided p: P(|T| ≥ t) = 2 min(probability, 1 − probability).
+  const double tail = 2.0 * std::min(probability, 1.0 - probability);
+  double low = 0.0;
+  double high = 1.0;
+  while (StudentTTwoSidedP(high, degrees_of_freedom) > tail) {
+    low = high;
+    high *= 2.0;
+    if (high > 1e300) break;
+  }
+  for (int i = 0; i < 2000 && high - low > 1e-13 * high; ++i) {
+    const double middle = 0.5 * (low + high);
+    (StudentTTwoSidedP(middle, degrees_of_freedom) > tail ? low : high) = middle;
+  }
+  const double t = 0.5 * (low + high);
+  return probability > 0.5 ? t : -t;
+}
+
 FriedmanResult FriedmanTest(const BlockMatrix& values) {
   const RankSummary s = SummarizeRanks(values);
   FriedmanResult result;

@@ -6,6 +6,7 @@
 /// centre line at given distances along it; the start/finish line crosses the
 /// corridor at distance 0. Vehicles start `start_behind` metres before it.
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,11 @@ struct TrackConfig {
   double post_radius = 0.04;     ///< m
   double start_behind = 0.3;     ///< m before the start line where vehicles start
   double lap_cap_s = 600.0;
+  /// The track's baseline, when known: the lap an expert drives at best (the
+  /// thesis's grand prix: 1 min 30 s, driven by keyboard in direct view). The
+  /// study report gives each lap's percentage over it. Not a trial's
+  /// setting: it changes no trial and no score. Between 1 s and lap_cap_s.
+  std::optional<double> reference_lap_s;
   std::vector<GateSpec> gates;
   std::vector<CircleObstacle> obstacles;
 

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "haptel/study/mixed_model.hpp"
 #include "haptel/study/statistics.hpp"
 
 namespace haptel::study {
@@ -42,6 +43,12 @@ struct StudyResults {
     std::string value;
   };
   std::vector<Answer> answers;
+  /// The baseline: the study's track's reference_lap_s (read from the track
+  /// file the study's definition names, when the report is made: it changes
+  /// no trial), or nullopt with `baseline_note` saying why.
+  std::optional<double> reference_lap_s;
+  std::filesystem::path track_file;
+  std::string baseline_note;
 };
 
 /// Reads study `name`. Throws std::runtime_error with one line: no such
@@ -86,6 +93,11 @@ struct StudyReport {
   std::optional<WithinSubjectAnalysis> analysis;
   std::string why_no_statistics;
   std::vector<ItemSummary> items;
+  /// log(lap time) ~ condition + position + (1 | participant) over every
+  /// trial as scored (report_model.cpp); reference: the study file's first
+  /// condition. nullopt when it cannot be fitted, `why_no_mixed_model` says why.
+  std::optional<MixedModelResult> mixed_model;
+  std::string why_no_mixed_model;
 };
 
 /// Tables, ranks and statistics from the results.
@@ -93,7 +105,8 @@ StudyReport ComputeReport(const StudyResults& results, PostHocMethod post_hoc, d
 
 /// Files written into a folder.
 struct ReportFiles {
-  std::filesystem::path html, trials_csv, answers_csv, summary_csv, lap_times_png, ranks_png, ratings_png;
+  std::filesystem::path html, trials_csv, answers_csv, summary_csv, lap_times_png, ranks_png, ratings_png,
+      model_means_png;
 };
 
 /// Writes trials.csv, answers.csv, summary.csv, lap_times.png, ranks.png,
@@ -112,5 +125,25 @@ void DrawLapTimes(const StudyResults& results, const StudyReport& report, const 
 void DrawRanks(const StudyReport& report, const std::filesystem::path& png);
 /// Returns false (and writes nothing) when no answer is a questionnaire's score.
 bool DrawRatings(const StudyResults& results, const std::filesystem::path& png);
+/// The mixed model's estimated mean lap time per condition (back-transformed
+/// to s) with its 95 % interval, and the reference lap when there is one.
+/// Returns false (and writes nothing) without a fitted model.
+bool DrawModelMeans(const StudyResults& results, const StudyReport& report, const std::filesystem::path& png);
+
+/// The mixed model and the baseline in the report (report_model.cpp).
+/// Fits report.mixed_model from the results' trials, or says why not.
+void FitLapTimeModel(const StudyResults& results, StudyReport& report);
+/// Sets results.reference_lap_s from the track named in the study's
+/// definition form ("track: PATH", relative to the study file's folder).
+void ReadBaseline(const std::filesystem::path& study_file, const std::string& definition_form,
+                  StudyResults& results);
+/// The text report's blocks: the model's table; each lap against the baseline.
+std::string FormatLapTimeModel(const StudyResults& results, const StudyReport& report);
+std::string FormatBaseline(const StudyResults& results, const StudyReport& report);
+/// The JSON fields `"lmm":...,"why_no_lmm":...,"baseline":...`, to follow a comma.
+std::string LapTimeModelJson(const StudyResults& results, const StudyReport& report);
+std::string BaselineJson(const StudyResults& results, const StudyReport& report);
+/// A lap's percentage over the reference lap: 100 (lap − reference)/reference.
+double PercentOverReference(double lap_time_s, double reference_lap_s);
 
 }  // namespace haptel::study

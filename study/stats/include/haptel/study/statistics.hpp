@@ -42,6 +42,23 @@ double RegularizedUpperGamma(double a, double x);
 /// (≥ 1): Q(df/2, chi_square/2), SciPy's `chi2.sf`.
 double ChiSquareSurvival(double chi_square, int degrees_of_freedom);
 
+/// The regularized incomplete beta function I_x(a, b), a, b > 0,
+/// 0 ≤ x ≤ 1 (SciPy's `special.betainc`, R's `pbeta`): the continued
+/// fraction of Numerical Recipes (betacf, modified Lentz), taken directly for
+/// x < (a + 1)/(a + b + 2) and through I_x(a, b) = 1 − I_{1−x}(b, a) above,
+/// where it converges fast.
+double RegularizedIncompleteBeta(double a, double b, double x);
+
+/// P(|T| ≥ |t|) for T Student-t distributed with `degrees_of_freedom` > 0
+/// (not necessarily an integer: Satterthwaite's df are not), R's
+/// `2 * pt(-abs(t), df)`: I_{df/(df + t²)}(df/2, 1/2).
+double StudentTTwoSidedP(double t, double degrees_of_freedom);
+
+/// The t with P(T ≤ t) = `probability` (in (0, 1)) for `degrees_of_freedom`
+/// > 0, R's `qt(probability, df)`, found by bisection on StudentTTwoSidedP
+/// to about 1e-12 relative.
+double StudentTQuantile(double probability, double degrees_of_freedom);
+
 /// Where one condition stands over all participants.
 struct ConditionRank {
   double rank_sum = 0.0;   ///< R_j: sum over participants of the condition's rank in their row
