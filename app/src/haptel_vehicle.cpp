@@ -52,7 +52,11 @@ std::string Summary(const haptel::vehicles::NodeCounters& c) {
          std::to_string(c.frames_published) + " frames, " +
          std::to_string(c.grabs_failed) + " camera grabs failed" +
          (c.camera_stalls > 0 ? " (" + std::to_string(c.camera_stalls) + " stalls)" : "") +
-         (c.camera_ended ? ", camera file ended" : "");
+         (c.camera_ended ? ", camera file ended" : "") +
+         (c.link_queue_dropped > 0 ? ", " + std::to_string(c.link_queue_dropped) + " packets (" +
+                                         std::to_string(c.link_queue_dropped_bytes) +
+                                         " bytes) dropped by the link's rate queue"
+                                   : "");
 }
 
 /// Runs a started node until a signal or until it loses its hardware
