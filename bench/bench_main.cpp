@@ -43,8 +43,8 @@ constexpr Usage kUsage[] = {
     {"blimp", "[--vehicle FILE] [--smoke] [--json]",
      "airship model: integrators x steps, error against CPU; physics checks"},
     {"link",
-     "[--seconds S] [--track FILE] [--delays MS,...] [--losses PERCENT,...] [--predict off|on|both] [--domain D] "
-     "[--lap-domain D] [--smoke] [--json]",
+     "[--seconds S] [--track FILE] [--delays MS,...] [--losses PERCENT,...] [--predict off|on|both] "
+     "[--link-profile NAME] [--domain D] [--lap-domain D] [--smoke] [--json]",
      "DDS round trip against raw Fast DDS; the lap against the link's delay and loss, with and without prediction"},
     {"fuzz", "[--inputs N] [--target NAME] [--seed S] [--smoke] [--json]",
      "every parser fed 10^6 mutated inputs: configs, scenes, UDP, servo bytes, CAN, DDS samples, console HTTP"},

@@ -13,6 +13,7 @@
 #include <thread>
 #include <vector>
 
+#include "haptel/config/link.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/vehicle.hpp"
 #include "haptel/core/args.hpp"
@@ -188,7 +189,7 @@ struct LapRow {
 };
 
 LapRow Lap(const std::filesystem::path& dir, const std::string& track, int domain, double delay_ms,
-           double loss_percent, bool predict) {
+           double loss_percent, bool predict, const std::string& profile) {
   LapRow row;
   row.delay_ms = delay_ms;
   row.loss_percent = loss_percent;
@@ -196,12 +197,13 @@ LapRow Lap(const std::filesystem::path& dir, const std::string& track, int domai
   char fault[96];
   std::snprintf(fault, sizeof fault, "delay=%gms,loss=%g%%", delay_ms, loss_percent);
   const std::string db = (dir / "link.db").string();
+  std::vector<std::string> words{"run", "--operator", "auto", "--view", "none", "--link-fault", fault, "--track", track,
+                                 "--json", "--quiet", "--domain", std::to_string(domain), "--database", db,
+                                 "--vehicle-timeout", "5", "--predict", predict ? "on" : "off"};
+  // The profile's rate, queue and jitter; the sweep's delay and loss replace its own.
+  if (!profile.empty()) words.insert(words.end(), {"--link-profile", profile});
   const int64_t start = MonotonicNs();
-  ChildProcess run((ProgramDirectory() / "haptel").string(),
-                   {"run", "--operator", "auto", "--view", "none", "--link-fault", fault, "--track", track, "--json",
-                    "--quiet", "--domain", std::to_string(domain), "--database", db, "--vehicle-timeout", "5",
-                    "--predict", predict ? "on" : "off"},
-                   ChildProcess::Options{true});
+  ChildProcess run((ProgramDirectory() / "haptel").string(), words, ChildProcess::Options{true});
   run.Wait(1800.0);
   row.wall_s = NsToS(MonotonicNs() - start);
   const std::string json = run.LastLine();
@@ -233,8 +235,9 @@ int BenchLinkMain(int argc, const char* const* argv) {
   // Domains of the bench's own, away from a default installation's 0.
   int domain = 200 + static_cast<int>(getpid() % 30);
   std::optional<int> lap_domain;
+  std::string profile;  // --link-profile: every lap on that link
   try {
-    const Args args(argc, argv, {"seconds", "track", "delays", "losses", "domain", "lap-domain", "predict"},
+    const Args args(argc, argv, {"seconds", "track", "delays", "losses", "domain", "lap-domain", "predict", "link-profile"},
                     {"json", "echo", kSmokeFlag});
     if (args.Flag("echo")) return Echo(args.Int("domain", 0, 232).value_or(0));
     json = args.Flag("json");
@@ -265,6 +268,10 @@ int BenchLinkMain(int argc, const char* const* argv) {
     }
     for (const double l : losses) {
       if (l > 99.0) throw UsageError("option --losses: expected percentages below 100");
+    }
+    if (auto p = args.Value("link-profile")) {
+      LinkFaultFromOptions(*p, std::nullopt, {});  // an unknown profile is refused now, not by every lap
+      profile = *p;
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "haptel bench link: %s\n", e.what());
@@ -318,7 +325,7 @@ int BenchLinkMain(int argc, const char* const* argv) {
     for (const bool predict : predicts) {
       double lap_at_zero = std::nan("");
       for (const double delay : delays) {
-        const LapRow row = Lap(dir, track, lap_domain.value_or(domain + 1), delay, loss, predict);
+        const LapRow row = Lap(dir, track, lap_domain.value_or(domain + 1), delay, loss, predict, profile);
         rows.push_back(row);
         if (delay == 0.0 && row.completed) lap_at_zero = row.lap_time_s;
         std::printf("  %8.0f  %6.1f  %-7s  %-14s %6.2f  %6.2f   %d/%d   %9d  %10.2f  %16.1f  %6.1f\n", delay, loss,

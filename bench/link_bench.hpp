@@ -18,6 +18,9 @@
 ///   off|on|both, default both): lap time and its ratio to the 0 ms lap,
 ///   obstacles touched, completion, measured round trip, the predictor's
 ///   error p95. Each end delays what it receives by D, so the round trip is 2D.
+///   With --link-profile NAME every lap runs on that link (config/links/),
+///   its delay and loss replaced by the sweep's (its rate, queue and jitter
+///   kept).
 ///
 /// Prints both tables; writes build/bench/link_rtt.csv, link_laps.csv and
 /// link_laps.png; with --json the last stdout line is
@@ -30,7 +33,7 @@
 namespace haptel::bench {
 
 /// `haptel bench link [--seconds S] [--track FILE] [--delays LIST] [--losses LIST]
-/// [--predict off|on|both] [--domain D] [--lap-domain D] [--smoke] [--json]`.
+/// [--predict off|on|both] [--link-profile NAME] [--domain D] [--lap-domain D] [--smoke] [--json]`.
 /// Returns 0 when every lap ran and the round trip was measured, 1 when one
 /// could not be, 2 for bad usage.
 int BenchLinkMain(int argc, const char* const* argv);

@@ -21,7 +21,7 @@
 namespace {
 constexpr const char* kUsage =
     "usage: haptel-vehicle [--config FILE] [--track FILE] [--name NAME] [--domain N] [--can IFACE]\n"
-    "                      [--serial-port PATH] [--link-fault SPEC] [--security DIR]\n"
+    "                      [--serial-port PATH] [--link-fault SPEC] [--link-profile NAME] [--security DIR]\n"
     "                      [--dds-interfaces ADDR,...] [--dds-peers ADDR,...] [--discovery-server ADDR:PORT]\n"
     "  --config FILE  vehicle configuration (default config/vehicles/sim-robot.yaml)\n"
     "  --can IFACE    SocketCAN interface of a can-robot (overrides can.interface)\n"
@@ -30,8 +30,11 @@ constexpr const char* kUsage =
     "  --name NAME    vehicle name, part of its DDS topic names\n"
     "  --domain N     DDS domain id (overrides link.domain_id)\n"
     "  --link-fault SPEC  inject faults into what this process receives, e.g.\n"
-    "                 delay=100ms,jitter=20ms,loss=5% (overrides link.fault); with it,\n"
-    "                 SIGUSR1 cuts the link both ways and restores it\n"
+    "                 rate=1Mbit,delay=100ms,jitter=20ms,loss=5% (rate in kbit or Mbit, with\n"
+    "                 queue=TIME its drop-tail queue's depth, default 100ms; overrides\n"
+    "                 link.fault); with it, SIGUSR1 cuts the link both ways and restores it\n"
+    "  --link-profile NAME  a named link (config/links/NAME.yaml: lan, wifi-busy, lte-uplink,\n"
+    "                 satellite) or a profile file; --link-fault's keys override the profile's\n"
     "  --security DIR DDS Security with the folder `haptel security init` made (overrides\n"
     "                 link.security); this vehicle is identity vehicle-NAME\n"
     "  --dds-interfaces LIST  the network interfaces (IPv4) DDS may use (overrides link.interfaces)\n"
@@ -49,7 +52,11 @@ std::string Summary(const haptel::vehicles::NodeCounters& c) {
          std::to_string(c.frames_published) + " frames, " +
          std::to_string(c.grabs_failed) + " camera grabs failed" +
          (c.camera_stalls > 0 ? " (" + std::to_string(c.camera_stalls) + " stalls)" : "") +
-         (c.camera_ended ? ", camera file ended" : "");
+         (c.camera_ended ? ", camera file ended" : "") +
+         (c.link_queue_dropped > 0 ? ", " + std::to_string(c.link_queue_dropped) + " packets (" +
+                                         std::to_string(c.link_queue_dropped_bytes) +
+                                         " bytes) dropped by the link's rate queue"
+                                   : "");
 }
 
 /// Runs a started node until a signal or until it loses its hardware
@@ -99,7 +106,7 @@ int main(int argc, char** argv) {
     VehicleConfig config;
     vehicles::OpenedVehicle vehicle;
     cli::ReadInput([&] {
-      const Args args(argc, argv, {"config", "track", "name", "domain", "can", "serial-port", "link-fault", "security",
+      const Args args(argc, argv, {"config", "track", "name", "domain", "can", "serial-port", "link-fault", "link-profile", "security",
                                        "dds-interfaces", "dds-peers", "discovery-server"},
                       {});
       if (!args.positional().empty()) throw UsageError("unexpected argument '" + args.positional()[0] + "'");
@@ -113,7 +120,7 @@ int main(int argc, char** argv) {
         config.name = *name;
       }
       if (auto domain = args.Int("domain", 0, 232)) config.link.domain_id = *domain;
-      if (auto fault = args.Value("link-fault")) config.link.fault = ParseLinkFaultOption(*fault);
+      config.link.fault = LinkFaultFromOptions(args.Value("link-profile"), args.Value("link-fault"), config.link.fault);
       if (auto security = args.Value("security")) config.link.security = *security;
       if (auto list = args.Value("dds-interfaces")) config.link.interfaces = ParseAddressOption("dds-interfaces", *list);
       if (auto list = args.Value("dds-peers")) config.link.peers = ParseAddressOption("dds-peers", *list);

@@ -2,16 +2,28 @@
 
 #include <arpa/inet.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
 
 #include "haptel/config/check.hpp"
+#include "haptel/config/error.hpp"
+#include "haptel/config/paths.hpp"
 #include "haptel/core/args.hpp"
+#include "yaml_map.hpp"
 
 namespace haptel {
 
 namespace check = config_check;
+
+namespace {
+// A rate below 1 kbit/s passes one command a second at best: a typo, not a link.
+constexpr double kMinRateBps = 1e3;
+constexpr double kMaxRateBps = 10e9;
+// A queue shorter than a millisecond holds no video frame at any rate here.
+constexpr double kMinQueueS = 1e-3;
+}  // namespace
 
 namespace {
 /// Every element of `addresses` (the list under `key`) is a dotted IPv4
@@ -66,6 +78,8 @@ void LinkFault::ValidateOrThrow() const {
   check::Number("delay_s", delay_s, 0.0, 10.0);
   check::Number("jitter_s", jitter_s, 0.0, 10.0);
   check::Number("loss", loss, 0.0, 0.99);
+  if (rate_bps != 0.0) check::Number("rate_bps", rate_bps, kMinRateBps, kMaxRateBps);
+  check::Number("queue_s", queue_s, kMinQueueS, 10.0);
 }
 
 namespace {
@@ -107,12 +121,36 @@ double ParseFraction(const std::string& part, const std::string& value) {
   return number;
 }
 
+/// "1Mbit", "500kbit", "0.5Mbit" -> bit/s; throws naming `part`. tc's
+/// lower-case "mbit" and "gbit" are taken too (nobody means millibits).
+double ParseRate(const std::string& part, const std::string& value) {
+  size_t used = 0;
+  double number = 0.0;
+  try {
+    number = std::stod(value, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  const std::string unit = value.substr(used);
+  double scale = 0.0;
+  if (unit == "kbit") scale = 1e3;
+  if (unit == "Mbit" || unit == "mbit") scale = 1e6;
+  if (unit == "Gbit" || unit == "gbit") scale = 1e9;
+  const double rate = number * scale;
+  if (used == 0 || scale == 0.0 || !std::isfinite(number) || !(rate >= kMinRateBps && rate <= kMaxRateBps)) {
+    throw std::invalid_argument("a rate from 1kbit to 10Gbit with its unit, such as 1Mbit or 500kbit (not '" +
+                                part + "')");
+  }
+  return rate;
+}
+
 }  // namespace
 
-LinkFault ParseLinkFault(const std::string& text) {
-  LinkFault fault;
+LinkFault ParseLinkFault(const std::string& text, const LinkFault& base) {
+  LinkFault fault = base;
   fault.enabled = true;
   if (text == "on") return fault;
+  bool queue_given = false;
   for (const std::string& part : SplitList(text)) {
     const size_t eq = part.find('=');
     const std::string key = part.substr(0, eq);
@@ -123,10 +161,27 @@ LinkFault ParseLinkFault(const std::string& text) {
       fault.jitter_s = ParseDuration(part, value);
     } else if (key == "loss" && eq != std::string::npos) {
       fault.loss = ParseFraction(part, value);
+    } else if (key == "rate" && eq != std::string::npos) {
+      fault.rate_bps = ParseRate(part, value);
+    } else if (key == "queue" && eq != std::string::npos) {
+      double queue_s = 0.0;
+      try {
+        queue_s = ParseDuration(part, value);
+      } catch (const std::invalid_argument&) {
+        queue_s = 0.0;
+      }
+      if (!(queue_s >= kMinQueueS && queue_s <= 10.0)) {
+        throw std::invalid_argument("a queue depth from 1ms to 10s with its unit, such as 100ms (not '" + part + "')");
+      }
+      fault.queue_s = queue_s;
+      queue_given = true;
     } else {
-      throw std::invalid_argument("delay=TIME, jitter=TIME or loss=PERCENT, comma-separated (e.g. "
-                                  "delay=100ms,jitter=20ms,loss=5%), or 'on' (not '" + part + "')");
+      throw std::invalid_argument("rate=RATE, queue=TIME, delay=TIME, jitter=TIME or loss=PERCENT, comma-separated "
+                                  "(e.g. rate=1Mbit,delay=100ms,jitter=20ms,loss=5%), or 'on' (not '" + part + "')");
     }
+  }
+  if (queue_given && fault.rate_bps == 0.0) {
+    throw std::invalid_argument("queue=TIME only with a rate=RATE it is the depth at (not '" + text + "')");
   }
   if (fault.delay_s > 10.0 || fault.jitter_s > 10.0) {
     throw std::invalid_argument("a delay and jitter of at most 10 s (not '" + text + "')");
@@ -134,12 +189,62 @@ LinkFault ParseLinkFault(const std::string& text) {
   return fault;
 }
 
-LinkFault ParseLinkFaultOption(const std::string& text) {
+LinkFault ParseLinkFaultOption(const std::string& text, const LinkFault& base) {
   try {
-    return ParseLinkFault(text);
+    return ParseLinkFault(text, base);
   } catch (const std::invalid_argument& e) {
     throw UsageError(std::string("option --link-fault: expected ") + e.what());
   }
+}
+
+std::vector<std::string> LinkProfileNames() {
+  std::vector<std::string> names;
+  std::error_code error;
+  for (const auto& entry : std::filesystem::directory_iterator(ShippedFile("config/links"), error)) {
+    if (entry.path().extension() == ".yaml") names.push_back(entry.path().stem().string());
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+LinkFault LoadLinkProfile(const std::string& name_or_file) {
+  const bool is_file = name_or_file.find('/') != std::string::npos ||
+                       std::filesystem::path(name_or_file).extension() == ".yaml";
+  const std::filesystem::path file =
+      is_file ? std::filesystem::path(name_or_file) : ShippedFile("config/links/" + name_or_file + ".yaml");
+  if (!is_file && !std::filesystem::exists(file)) {
+    throw ConfigError("unknown link profile '" + name_or_file + "': expected one of " +
+                      JoinList(LinkProfileNames(), ", ") + " (config/links/), or a profile file's path");
+  }
+  config_detail::YamlMap root = config_detail::YamlMap::Load(file);
+  // Each key through ParseLinkFault, so a file and --link-fault take the same words.
+  LinkFault fault;
+  fault.enabled = true;
+  for (const char* key : {"rate", "queue", "delay", "jitter", "loss"}) {
+    if (!root.Has(key)) continue;
+    const std::string value = root.RequireString(key);
+    try {
+      fault = ParseLinkFault(std::string(key) + "=" + value, fault);
+    } catch (const std::invalid_argument& e) {
+      root.Fail(key, e.what());
+    }
+  }
+  root.Finish();
+  return fault;
+}
+
+LinkFault LinkFaultFromOptions(const std::optional<std::string>& profile, const std::optional<std::string>& fault,
+                               const LinkFault& otherwise) {
+  if (!profile && !fault) return otherwise;
+  LinkFault base;
+  if (profile) {
+    try {
+      base = LoadLinkProfile(*profile);
+    } catch (const ConfigError& e) {
+      throw UsageError(std::string("option --link-profile: ") + e.what());
+    }
+  }
+  return fault ? ParseLinkFaultOption(*fault, base) : base;
 }
 
 std::vector<std::string> ParseAddressOption(const std::string& option, const std::string& text) {
@@ -164,8 +269,14 @@ std::string ServerOption(const std::string& text) {
 }
 
 std::string LinkFaultText(const LinkFault& fault) {
-  char text[128];
-  std::snprintf(text, sizeof text, "delay=%.9gs,jitter=%.9gs,loss=%.9g", fault.delay_s, fault.jitter_s, fault.loss);
+  char text[200];
+  int used =
+      std::snprintf(text, sizeof text, "delay=%.9gs,jitter=%.9gs,loss=%.9g", fault.delay_s, fault.jitter_s, fault.loss);
+  // Without a rate, the text is what it was before rates existed (recorded runs compare equal).
+  if (fault.rate_bps > 0.0) {
+    std::snprintf(text + used, sizeof text - static_cast<size_t>(used), ",rate=%.9gkbit,queue=%.9gs",
+                  fault.rate_bps / 1e3, fault.queue_s);
+  }
   return text;
 }
 

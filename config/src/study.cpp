@@ -116,6 +116,19 @@ StudyConfig LoadStudy(const std::filesystem::path& file) {
       root.Fail("link_fault", e.what());
     }
   }
+  s.link_profile = root.String("link_profile", "");
+  // A profile file is relative to the study file, as `run` and `track` are; a name is shipped.
+  if (s.link_profile.find('/') != std::string::npos ||
+      std::filesystem::path(s.link_profile).extension() == ".yaml") {
+    s.link_profile = (dir / s.link_profile).string();
+  }
+  if (!s.link_profile.empty()) {
+    try {
+      LoadLinkProfile(s.link_profile);
+    } catch (const ConfigError& e) {
+      root.Fail("link_profile", e.what());
+    }
+  }
   s.operators = root.String("operators", s.operators);
   if (s.operators != "synthetic" && s.operators != "person") root.Fail("operators", "synthetic or person");
   const bool synthetic = s.operators == "synthetic";

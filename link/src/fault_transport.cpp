@@ -2,6 +2,9 @@
 
 #include <signal.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include <fastdds/rtps/transport/ChainingTransport.h>
 #include <fastdds/rtps/transport/ChainingTransportDescriptor.h>
 
@@ -74,7 +77,18 @@ void InstallLinkDownSignal() {
   sigaction(SIGUSR1, &action, nullptr);
 }
 
+RateQueue::RateQueue(double rate_bps, double queue_s)
+    : ns_per_byte_(8e9 / rate_bps), max_wait_ns_(SToNs(queue_s)) {}
+
+std::optional<int64_t> RateQueue::Admit(int64_t now_ns, size_t bytes) {
+  const int64_t start = std::max(now_ns, free_at_ns_);
+  if (start - now_ns > max_wait_ns_) return std::nullopt;
+  free_at_ns_ = start + static_cast<int64_t>(std::llround(static_cast<double>(bytes) * ns_per_byte_));
+  return free_at_ns_;
+}
+
 FaultLine::FaultLine(const LinkFault& fault, uint64_t seed) : fault_(fault), random_(seed) {
+  if (fault.rate_bps > 0.0) rate_.emplace(fault.rate_bps, fault.queue_s);
   thread_ = std::thread([this] { Deliver(); });
 }
 
@@ -92,7 +106,8 @@ void FaultLine::Shutdown() {
 }
 
 FaultCounts FaultLine::Counts() const {
-  return {received_.load(), lost_.load(), delayed_.load(), dropped_down_.load()};
+  return {received_.load(),      lost_.load(),          delayed_.load(),
+          dropped_down_.load(),  queue_dropped_.load(), queue_dropped_bytes_.load()};
 }
 
 bool FaultLine::DropSend() {
@@ -133,12 +148,23 @@ void FaultLine::Receive(rtps::TransportReceiverInterface* next, const uint8_t* d
       lost_.fetch_add(1, std::memory_order_relaxed);
       return;
     }
+    const int64_t now = MonotonicNs();
+    int64_t passed_ns = now;  // when the rate stage lets it go
+    if (rate_) {
+      const std::optional<int64_t> passed = rate_->Admit(now, size);
+      if (!passed) {
+        queue_dropped_.fetch_add(1, std::memory_order_relaxed);
+        queue_dropped_bytes_.fetch_add(size, std::memory_order_relaxed);
+        return;
+      }
+      passed_ns = *passed;
+    }
     if (fault_.jitter_s > 0.0) {
       delay_s += std::uniform_real_distribution<double>(-fault_.jitter_s, fault_.jitter_s)(random_);
     }
-    if (delay_s > 0.0) {
+    if (delay_s > 0.0 || passed_ns > now) {
       Packet p;
-      p.due_ns = MonotonicNs() + SToNs(delay_s);
+      p.due_ns = passed_ns + SToNs(std::max(delay_s, 0.0));
       p.order = order_++;
       p.data.assign(data, data + size);
       p.local = local;

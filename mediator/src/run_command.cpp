@@ -64,8 +64,13 @@ constexpr const char* kRunUsage =
     "                       another host); --vehicle still says what kind it is\n"
     "  --domain N           DDS domain id\n"
     "  --link-fault SPEC    inject faults into what both processes receive, e.g.\n"
-    "                       delay=100ms,jitter=20ms,loss=5% (overrides link.fault; the spawned\n"
-    "                       vehicle gets it too); with it, SIGUSR1 cuts the link both ways\n"
+    "                       rate=1Mbit,delay=100ms,jitter=20ms,loss=5% (rate in kbit or Mbit,\n"
+    "                       with queue=TIME its drop-tail queue's depth, default 100ms;\n"
+    "                       overrides link.fault; the spawned vehicle gets it too); with it,\n"
+    "                       SIGUSR1 cuts the link both ways\n"
+    "  --link-profile NAME  a named link (config/links/NAME.yaml: lan, wifi-busy, lte-uplink,\n"
+    "                       satellite) or a profile file; the keys --link-fault names override\n"
+    "                       the profile's (--link-profile lte-uplink --link-fault loss=5%)\n"
     "  --security DIR       DDS Security with the folder `haptel security init DIR` made\n"
     "                       (overrides link.security; the spawned vehicle gets it too)\n"
     "  --dds-interfaces LIST  network interfaces (IPv4, comma-separated) DDS may use\n"
@@ -132,7 +137,7 @@ Args ParseRunArgs(int argc, const char* const* argv) {
   return Args(argc, argv,
               {"config", "track", "interface", "scene", "vehicle-name", "domain", "database", "vehicle-timeout",
                "trace", "operator", "device", "trace-in", "time-limit", "view", "record", "vehicle", "predict",
-               "link-fault", "security", "dds-interfaces", "dds-peers", "discovery-server"},
+               "link-fault", "link-profile", "security", "dds-interfaces", "dds-peers", "discovery-server"},
               {"json", "quiet", "attach"});
 }
 
@@ -168,7 +173,7 @@ SessionSetup RunSetupFromArgs(const Args& args) {
   if (auto track = args.Value("track")) setup.run.track = *track;
   if (auto name = args.Value("interface")) setup.run.interface = *name;
   if (auto domain = args.Int("domain", 0, 232)) setup.run.link.domain_id = *domain;
-  if (auto fault = args.Value("link-fault")) setup.run.link.fault = ParseLinkFaultOption(*fault);
+  setup.run.link.fault = LinkFaultFromOptions(args.Value("link-profile"), args.Value("link-fault"), setup.run.link.fault);
   if (auto predict = args.Value("predict")) {
     if (*predict != "on" && *predict != "off") throw UsageError("option --predict: expected on or off, got '" + *predict + "'");
     setup.predict = *predict == "on";

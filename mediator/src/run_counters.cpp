@@ -20,6 +20,7 @@ std::vector<RunCounter> CollectCounters(const HapticSide& haptic, const SessionP
     physics_overruns = physics->world->Stats().overruns;
   }
   const LinkCounts link = vehicle.Counts();
+  const auto fault = vehicle.FaultCounts();
   const VideoStats video = vehicle.video().Stats();
   const uint64_t record_dropped = view != nullptr ? view->Stats().record_dropped : 0;
   return {
@@ -38,6 +39,8 @@ std::vector<RunCounter> CollectCounters(const HapticSide& haptic, const SessionP
       {"vehicle_watchdog_trips", link.watchdog_trips},
       {"vehicle_commands_dropped", link.commands_dropped},
       {"link_states_missed", link.states_missed},
+      {"link_queue_dropped", fault.queue_dropped},
+      {"link_queue_dropped_bytes", fault.queue_dropped_bytes},
       {"video_frames_dropped", video.dropped},
       {"video_decode_failures", video.decode_failures},
       {"view_record_dropped", record_dropped},

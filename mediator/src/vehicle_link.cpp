@@ -183,6 +183,11 @@ void VehicleLink::Stop() {
   if (process_) process_->Terminate();
 }
 
+link::FaultCounts VehicleLink::FaultCounts() const {
+  const link::FaultLine* line = participant_ ? participant_->fault_line() : nullptr;
+  return line != nullptr ? line->Counts() : link::FaultCounts{};
+}
+
 bool VehicleLink::ProcessAlive() { return !process_ || process_->Alive(); }
 
 int VehicleLink::pid() const { return process_ ? process_->pid() : 0; }

@@ -154,6 +154,11 @@ std::vector<DefiningValue> StudyDefinition(const StudyConfig& config) {
   out.push_back({"practice", config.practice ? "true" : "false"});
   out.push_back({"trial_cap_s", Number(config.trial_cap_s)});
   if (!config.link_fault.empty()) out.push_back({"link_fault", LinkFaultText(ParseLinkFault(config.link_fault))});
+  // The profile's name, and its figures (a shipped profile may be edited later).
+  if (!config.link_profile.empty()) {
+    out.push_back({"link_profile", config.link_profile});
+    out.push_back({"link_profile_fault", LinkFaultText(LoadLinkProfile(config.link_profile))});
+  }
   out.push_back({"questionnaires", Joined(config.questionnaires)});
   out.push_back({"questionnaires_dir", FromStudyFolder(config, config.questionnaires_dir)});
 

@@ -86,6 +86,7 @@ mediator::SessionSetup TrialSetup(const StudyConfig& config, const PlannedTrial&
   if (synthetic) words.insert(words.end(), {"--view", "none"});
   if (!domain.empty()) words.insert(words.end(), {"--domain", domain});
   if (condition.predict) words.insert(words.end(), {"--predict", "on"});
+  if (!config.link_profile.empty()) words.insert(words.end(), {"--link-profile", config.link_profile});
   if (!config.link_fault.empty()) words.insert(words.end(), {"--link-fault", config.link_fault});
   if (!verbose) words.push_back("--quiet");
   std::vector<const char*> argv;

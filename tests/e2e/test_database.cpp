@@ -52,6 +52,8 @@ const std::vector<std::string> kCounters{"servo_overruns",
                                          "vehicle_watchdog_trips",
                                          "vehicle_commands_dropped",
                                          "link_states_missed",
+                                         "link_queue_dropped",
+                                         "link_queue_dropped_bytes",
                                          "video_frames_dropped",
                                          "video_decode_failures",
                                          "view_record_dropped"};

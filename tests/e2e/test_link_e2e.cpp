@@ -7,7 +7,9 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <fstream>
+#include <utility>
 #include <regex>
 #include <string>
 #include <vector>
@@ -163,6 +165,50 @@ TEST_CASE("with 100 ms delay, 20 ms jitter and 5 % loss both ways the automatic 
   CHECK(run.err().find("haptel-vehicle: info: link faults on what this vehicle receives: delay=0.1s") !=
         std::string::npos);
   CHECK(std::stod(JsonField(json, "command_rtt_ms_p50")) > 160.0);
+}
+
+TEST_CASE("a link with a rate: the spawned vehicle gets the same fault, the video beyond the rate is dropped and counted") {
+  // 1 Mbit/s cannot carry the JPEG stream (about 6 Mbit/s): the queue drops
+  // most frames, while the commands and states still get through.
+  const auto dir = test::ScratchDir("e2e-link-rate");
+  Child run({Bin("haptel"), "run", "--link-profile", "lte-uplink", "--link-fault", "rate=1Mbit,loss=0", "--track",
+             "config/tracks/test-short.yaml", "--json", "--domain", std::to_string(test::UniqueDomain(47)),
+             "--database", (dir / "runs.db").string(), "--vehicle-timeout", "5"});
+  const int code = run.Wait(180.0);
+  INFO(run.out() << run.err());
+  CHECK(code == 0);
+  const std::string json = run.LastLine();
+  CHECK(JsonField(json, "outcome") == "completed");
+  // The profile's delay and jitter, --link-fault's rate and loss, on both ends.
+  CHECK(JsonField(json, "link_fault") == "delay=0.03s,jitter=0.008s,loss=0,rate=1000kbit,queue=0.1s");
+  CHECK(run.err().find("haptel-vehicle: info: link faults on what this vehicle receives: "
+                       "delay=0.03s,jitter=0.008s,loss=0,rate=1000kbit,queue=0.1s") != std::string::npos);
+  CHECK(std::stoull(JsonField(json, "link_queue_dropped")) > 0);
+  CHECK(std::stoull(JsonField(json, "link_queue_dropped_bytes")) > 1000 * std::stoull(JsonField(json, "link_queue_dropped")));
+}
+
+TEST_CASE("bad link rates, queues and profiles exit 2 with a one-line error saying what was expected") {
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases{
+      {{"--link-fault", "rate=0"}, "option --link-fault: expected a rate from 1kbit to 10Gbit"},
+      {{"--link-fault", "rate=-1Mbit"}, "(not 'rate=-1Mbit')"},
+      {{"--link-fault", "rate=fast"}, "(not 'rate=fast')"},
+      {{"--link-fault", "rate=1Mbit,queue=abc"}, "expected a queue depth from 1ms to 10s"},
+      {{"--link-fault", "rate=1Mbit,queue=0"}, "(not 'queue=0')"},
+      {{"--link-profile", "dialup"}, "unknown link profile 'dialup': expected one of lan, lte-uplink, satellite, "
+                                     "wifi-busy"},
+  };
+  for (const std::string program : {"haptel", "haptel-vehicle"}) {
+    for (const auto& [options, expected] : cases) {
+      std::vector<std::string> argv{Bin(program)};
+      if (program == "haptel") argv.push_back("run");
+      argv.insert(argv.end(), options.begin(), options.end());
+      Child c(argv);
+      INFO(program << " " << options[0] << " " << options[1] << ": " << c.err());
+      CHECK(c.Wait(30.0) == 2);
+      CHECK(c.err().find(expected) != std::string::npos);
+      CHECK(std::count(c.err().begin(), c.err().end(), '\n') == 1);
+    }
+  }
 }
 
 TEST_CASE("link down: the vehicle stops within its watchdog and the run reports the loss within a second") {

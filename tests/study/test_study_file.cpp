@@ -90,6 +90,12 @@ TEST_CASE("Conditions may differ only in the predictive display; the link's faul
 
   const std::string bad_fault = ErrorOf(Study(kFour, People(4), "link_fault: delay=fast\n"));
   CHECK_THAT(bad_fault, Catch::Contains("bad.yaml") && Catch::Contains("link_fault"));
+  const StudyConfig on_lte = LoadStudy(test::WriteFile(
+      dir / "lte.yaml", Study(kFour, People(4), "link_profile: lte-uplink\nlink_fault: loss=2%\n")));
+  CHECK(on_lte.link_profile == "lte-uplink");
+  const std::string bad_profile = ErrorOf(Study(kFour, People(4), "link_profile: dialup\n"));
+  CHECK_THAT(bad_profile, Catch::Contains("bad.yaml") && Catch::Contains("link_profile") &&
+                              Catch::Contains("expected one of lan, lte-uplink, satellite, wifi-busy"));
   const std::string bad_predict =
       ErrorOf(Study("  - {name: a, interface: gesture, predict: maybe}\n  - {name: b, interface: gesture}\n",
                     People(2)));

@@ -1,5 +1,7 @@
 #include "haptel/vehicles/vehicle_node.hpp"
 
+#include "haptel/link/fault_transport.hpp"
+
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -120,7 +122,13 @@ void VehicleNodeOf<Family>::PublishState(int64_t now_ns) {
 
 template <class Family>
 NodeCounters VehicleNodeOf<Family>::Counters() const {
-  return MakeNodeCounters(commands_, camera_->Counters(), states_.load());
+  NodeCounters c = MakeNodeCounters(commands_, camera_->Counters(), states_.load());
+  if (const link::FaultLine* line = participant_->fault_line()) {
+    const link::FaultCounts fault = line->Counts();
+    c.link_queue_dropped = fault.queue_dropped;
+    c.link_queue_dropped_bytes = fault.queue_dropped_bytes;
+  }
+  return c;
 }
 
 template <class Family>

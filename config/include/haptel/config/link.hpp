@@ -1,6 +1,7 @@
 #pragma once
 /// @file How a process joins the DDS link.
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -12,27 +13,57 @@ namespace haptel {
 /// intra-process delivery are off while it is in, since they bypass any
 /// transport). Each process delays and drops what it receives, so with the
 /// same fault on both ends each direction gets it once. Written
-/// "delay=100ms,jitter=20ms,loss=5%" (link.fault, --link-fault).
+/// "rate=1Mbit,delay=100ms,jitter=20ms,loss=5%" (link.fault, --link-fault).
+///
+/// The stages compose as netem behind tbf does: a packet first waits its
+/// turn at the rate (a drop-tail FIFO served at `rate_bps`), then is
+/// delayed by delay ± jitter; loss is drawn before either.
 struct LinkFault {
   bool enabled = false;  ///< the fault transport is in (also for the link-down switch, SIGUSR1)
   double delay_s = 0.0;  ///< added to every packet received
   double jitter_s = 0.0; ///< each packet's delay varies uniformly by ± this (packets may reorder)
   double loss = 0.0;     ///< fraction of packets received that are dropped, in [0, 1)
+  /// The rate the received packets are served at, bit/s (0: no limit): each
+  /// takes its size × 8 / rate to pass, after those ahead of it.
+  double rate_bps = 0.0;
+  /// The drop-tail queue's depth in time at `rate_bps`: a packet that would
+  /// wait longer than this before its turn is dropped (a tc tbf's latency).
+  double queue_s = 0.1;
 
-  /// Throws ConfigFieldError ("delay_s", "loss") unless delay and jitter are
-  /// in [0, 10] s and loss in [0, 0.99].
+  /// Throws ConfigFieldError ("delay_s", "loss", "rate_bps", "queue_s")
+  /// unless delay and jitter are in [0, 10] s, loss in [0, 0.99], the rate 0
+  /// or in [1 kbit/s, 10 Gbit/s] and the queue in [1 ms, 10 s].
   void ValidateOrThrow() const;
 };
 
-/// Parses "delay=100ms,jitter=20ms,loss=5%" (any of the three, in any order;
-/// times in s, ms or us; loss in % or as a fraction; "on" alone enables the
-/// transport with no fault). Throws std::invalid_argument whose what() is
+/// Parses "rate=1Mbit,queue=100ms,delay=100ms,jitter=20ms,loss=5%" (any of
+/// them, in any order; times in s, ms or us; rates in kbit, Mbit or Gbit
+/// per second; loss in % or as a fraction; "on" alone enables the transport
+/// with no fault). The keys given override `base`'s (a link profile's);
+/// the rest keep its values. Throws std::invalid_argument whose what() is
 /// what was expected, naming the part that is not ("a loss from 0 to 99%,
 /// such as 5% or 0.05 (not 'loss=200%')").
-LinkFault ParseLinkFault(const std::string& text);
+LinkFault ParseLinkFault(const std::string& text, const LinkFault& base = {});
 /// ParseLinkFault for the --link-fault option of haptel run and
 /// haptel-vehicle: a UsageError ("option --link-fault: expected ...").
-LinkFault ParseLinkFaultOption(const std::string& text);
+LinkFault ParseLinkFaultOption(const std::string& text, const LinkFault& base = {});
+
+/// The link profiles shipped in config/links/ ("lan", "lte-uplink", ...),
+/// sorted by name.
+std::vector<std::string> LinkProfileNames();
+/// A link profile: a shipped one by name ("lte-uplink" is
+/// config/links/lte-uplink.yaml), or a file (a name with a '/' or ending in
+/// .yaml). The file holds rate, queue, delay, jitter and loss, written as in
+/// ParseLinkFault ("rate: 2Mbit", "loss: 1%"); every key is optional.
+/// Throws ConfigError naming the file and key, or, for a name that is not
+/// shipped, the names that are.
+LinkFault LoadLinkProfile(const std::string& name_or_file);
+/// --link-profile and --link-fault together (either may be absent): the
+/// profile, then the keys --link-fault names over it; `otherwise` when
+/// neither is given. A bad profile or fault is a UsageError naming its
+/// option and what was expected.
+LinkFault LinkFaultFromOptions(const std::optional<std::string>& profile, const std::optional<std::string>& fault,
+                               const LinkFault& otherwise);
 /// A comma-separated list of IPv4 addresses for option `--option` (the
 /// --dds-interfaces and --dds-peers of haptel run and haptel-vehicle):
 /// a UsageError naming the option and the address that is not one.

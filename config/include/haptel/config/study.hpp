@@ -101,6 +101,9 @@ struct StudyConfig {
   /// The link's fault for every trial, as `--link-fault` writes it
   /// ("delay=200ms,jitter=20ms,loss=2%"; empty: the run configuration's).
   std::string link_fault;
+  /// A link profile for every trial (config/links/NAME.yaml, or a file), as
+  /// `--link-profile` takes it; `link_fault`'s keys override it. Empty: none.
+  std::string link_profile;
   /// "synthetic" (simulated drivers, unattended) or "person".
   std::string operators = "person";
   std::vector<StudyCondition> conditions;

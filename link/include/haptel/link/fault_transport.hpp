@@ -6,7 +6,9 @@
 /// The kernel here has no netem, so the link's faults live in the process:
 /// each participant's transport delays (delay ± jitter, uniformly; packets
 /// may overtake each other, as on a real network) and drops (loss) the
-/// packets it receives, discovery included. Both ends faulted alike give
+/// packets it receives, discovery included. With a rate, a packet first
+/// waits its turn in a drop-tail FIFO served at that rate (RateQueue), then
+/// the delay line holds it (netem behind tbf). Both ends faulted alike give
 /// each direction the fault once. A FaultLine's thread delivers the delayed
 /// packets when due; it is shut down before its participant is deleted, so
 /// no packet reaches a receiver being torn down.
@@ -15,6 +17,7 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <queue>
 #include <random>
 #include <thread>
@@ -42,6 +45,31 @@ struct FaultCounts {
   uint64_t lost = 0;          ///< dropped by `loss`
   uint64_t delayed = 0;       ///< delivered late by the delay line
   uint64_t dropped_down = 0;  ///< dropped, in or out, while the link was down
+  uint64_t queue_dropped = 0;        ///< dropped by the rate's full queue (drop-tail)
+  uint64_t queue_dropped_bytes = 0;  ///< their bytes
+};
+
+/// The rate stage of a link fault: a first-in first-out queue served at
+/// `rate_bps`, whose packets each take size × 8 / rate to pass, and which
+/// drops an arriving packet that would wait longer than `queue_s` for its
+/// turn (drop-tail, with the depth in time as tc's tbf `latency`). Kept in
+/// virtual time: a packet's departure is known when it arrives, so no
+/// thread serves the queue (the delay line delivers it then). Not
+/// thread-safe; times are any monotonic clock's, in ns.
+class RateQueue {
+ public:
+  RateQueue(double rate_bps, double queue_s);
+  /// A packet of `bytes` arriving at `now_ns`: when its last bit has passed,
+  /// or nothing when it is dropped (the queue ahead of it is deeper than
+  /// `queue_s`).
+  std::optional<int64_t> Admit(int64_t now_ns, size_t bytes);
+  /// How long a packet arriving at `now_ns` would wait for its turn.
+  int64_t WaitNs(int64_t now_ns) const { return free_at_ns_ > now_ns ? free_at_ns_ - now_ns : 0; }
+
+ private:
+  double ns_per_byte_;
+  int64_t max_wait_ns_;
+  int64_t free_at_ns_ = 0;  ///< when the last packet admitted has passed
 };
 
 /// A participant's delay line and dice, shared by its transports.
@@ -93,7 +121,9 @@ class FaultLine {
   bool stopped_ = false;
   std::atomic<size_t> capture_max_{0};
   std::vector<std::vector<uint8_t>> captured_;
-  std::atomic<uint64_t> received_{0}, lost_{0}, delayed_{0}, dropped_down_{0};
+  std::optional<RateQueue> rate_;  ///< with LinkFault::rate_bps
+  std::atomic<uint64_t> received_{0}, lost_{0}, delayed_{0}, dropped_down_{0}, queue_dropped_{0},
+      queue_dropped_bytes_{0};
   std::thread thread_;  // last: it uses the rest
 };
 

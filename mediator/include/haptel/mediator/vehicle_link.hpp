@@ -21,6 +21,7 @@
 #include "haptel/core/child_process.hpp"
 #include "haptel/core/histogram.hpp"
 #include "haptel/link/families.hpp"
+#include "haptel/link/fault_transport.hpp"
 #include "haptel/link/topic.hpp"
 #include "haptel/mediator/video_receiver.hpp"
 
@@ -171,6 +172,9 @@ class VehicleLink {
   void ResetRtt() { channel_->ResetRtt(); }
   int64_t last_received_ns() const { return channel_->last_received_ns(); }
   LinkCounts Counts() const { return channel_->Counts(); }
+  /// What this side's fault transport did to what it received (all zero
+  /// without a link fault); the vehicle reports its own side on its stderr.
+  link::FaultCounts FaultCounts() const;
   const VideoReceiver& video() const { return *video_; }
   /// False once a spawned vehicle process has exited (always true for a
   /// vehicle that runs elsewhere).

@@ -38,6 +38,8 @@ struct NodeCounters {
   uint64_t grabs_failed = 0;   ///< the camera source delivered no frame
   uint64_t camera_stalls = 0;  ///< stretches of failed grabs long enough to count (GrabMonitor)
   bool camera_ended = false;   ///< a file source that does not loop has ended
+  uint64_t link_queue_dropped = 0;        ///< received packets the link fault's rate queue dropped
+  uint64_t link_queue_dropped_bytes = 0;  ///< their bytes
   bool watchdog_expired = true;
 };
 
