@@ -240,7 +240,7 @@ std::vector<TrialRow> StudyStore::Trials() const {
   const std::filesystem::path& file = recorder_.path();
   Stmt select = Prepare(file, db,
                         "SELECT t.participant, t.position, t.condition, t.run_id, t.lap_time_s, t.completed, "
-                        "t.obstacles, t.outcome, t.attempt FROM study_trials t JOIN study_participants s ON "
+                        "t.obstacles, t.outcome, t.attempt, t.approach_s FROM study_trials t JOIN study_participants s ON "
                         "s.study_id = t.study_id AND s.participant = t.participant WHERE t.study_id = ? "
                         "ORDER BY s.row_index, t.position",
                         "cannot read the trials");
@@ -258,6 +258,7 @@ std::vector<TrialRow> StudyStore::Trials() const {
     t.obstacles = static_cast<int>(r.Int());
     t.outcome = r.Text();
     t.attempt = static_cast<int>(r.Int());
+    t.approach_s = r.Real();
     rows.push_back(t);
   }
   return rows;
@@ -295,9 +296,9 @@ record::Recorder::AlsoSave StudyStore::TrialWriter(const PlannedTrial& trial, do
     const double scored = completed ? std::min(run.lap_time_s, cap_s) : cap_s;
     Stmt insert = Prepare(file, db,
                           "INSERT INTO study_trials (study_id, participant, position, condition, run_id, "
-                          "lap_time_s, completed, obstacles, outcome, attempt, finished_utc) VALUES "
+                          "lap_time_s, completed, obstacles, outcome, attempt, finished_utc, approach_s) VALUES "
                           "(?, ?, ?, ?, ?, ?, ?, ?, ?, 1 + (SELECT COUNT(*) FROM study_events WHERE study_id = ? "
-                          "AND kind = 'redo' AND participant = ? AND position = ?), ?)",
+                          "AND kind = 'redo' AND participant = ? AND position = ?), ?, ?)",
                           "cannot prepare the trial row");
     Binder(file, db, insert.get())
         .Int(study)
@@ -312,7 +313,8 @@ record::Recorder::AlsoSave StudyStore::TrialWriter(const PlannedTrial& trial, do
         .Int(study)
         .Text(trial.participant)
         .Int(trial.position)
-        .Text(NowUtc());
+        .Text(NowUtc())
+        .RealOrNull(run.approach_s, std::isfinite(run.approach_s));
     StepDone(file, db, insert.get(), "cannot record trial " + Describe(trial) + " (already recorded?)");
   };
 }

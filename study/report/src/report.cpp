@@ -141,7 +141,7 @@ StudyResults LoadStudyResults(const std::filesystem::path& database, const std::
   if (sqlite3_step(planned.get()) == SQLITE_ROW) r.trials_planned = static_cast<int>(Reader(planned.get()).Int());
   Stmt trials = Prepare(database, raw,
                         "SELECT t.participant, t.position, t.condition, t.lap_time_s, t.completed, t.obstacles, "
-                        "t.run_id, t.outcome, t.attempt FROM study_trials t JOIN study_participants s ON "
+                        "t.run_id, t.outcome, t.attempt, t.approach_s FROM study_trials t JOIN study_participants s ON "
                         "s.study_id = t.study_id AND s.participant = t.participant WHERE t.study_id = ? "
                         "ORDER BY s.row_index, t.position",
                         "cannot read the trials");
@@ -158,6 +158,7 @@ StudyResults LoadStudyResults(const std::filesystem::path& database, const std::
     t.run_id = row.Int();
     t.outcome = row.Text();
     t.attempt = static_cast<int>(row.Int());
+    t.approach_s = row.Real();
     r.trials.push_back(t);
   }
   Stmt answers = Prepare(database, raw,
@@ -280,8 +281,10 @@ std::string FormatReport(const StudyResults& results, const StudyReport& report)
   std::ostringstream o;
   o << "study " << results.name << ": " << results.trials.size() << " of " << results.trials_planned
     << " trials, " << results.participants.size() << " participants, " << results.conditions.size()
-    << " conditions (lap times in s as scored; unfinished laps count as the " << Fixed(results.trial_cap_s, 0)
-    << " s cap)\n";
+    << " conditions (lap times in s as scored, on the lap's clock from the start line; unfinished laps count "
+       "as the "
+    << Fixed(results.trial_cap_s, 0)
+    << " s cap, on the same clock; the approach before the line is trials.csv's approach_s, not scored)\n";
   for (const ConditionSummary& c : report.conditions) {
     o << "\n  " << c.name << "\n    " << std::string(10, ' ');
     for (const std::string& p : results.participants) o << " " << std::string(std::max<int>(0, 8 - static_cast<int>(p.size())), ' ') << p;
@@ -338,10 +341,13 @@ ReportFiles WriteReport(const StudyResults& results, const StudyReport& report, 
   files.ranks_png = dir / "ranks.png";
   files.html = dir / "index.html";
 
-  std::string trials = "study,participant,condition,position,lap_time_s,completed,obstacles,run_id,outcome,attempt\n";
+  std::string trials =
+      "study,participant,condition,position,lap_time_s,approach_s,completed,obstacles,run_id,outcome,attempt\n";
   for (const StudyResults::Trial& t : results.trials) {
     trials += Csv(results.name) + "," + Csv(t.participant) + "," + Csv(t.condition) + "," +
-              std::to_string(t.position) + "," + Fixed(t.lap_time_s, 3) + "," + (t.completed ? "true" : "false") +
+              std::to_string(t.position) + "," + Fixed(t.lap_time_s, 3) + "," +
+              (std::isfinite(t.approach_s) ? Fixed(t.approach_s, 3) : std::string()) + "," +
+              (t.completed ? "true" : "false") +
               "," + std::to_string(t.obstacles) + "," + std::to_string(t.run_id) + "," + Csv(t.outcome) + "," +
               std::to_string(t.attempt) + "\n";
   }
@@ -372,8 +378,12 @@ ReportFiles WriteReport(const StudyResults& results, const StudyReport& report, 
        "margin:0.5em 0 1.5em}td,th{border:1px solid #999;padding:0.2em 0.6em;text-align:right}"
        "th{background:#eee}caption{text-align:left;font-weight:bold}</style></head><body>\n";
   h << "<h1>Study " << Html(results.name) << "</h1>\n<p>" << results.trials.size() << " of " << results.trials_planned
-    << " trials; lap times in seconds as scored (an unfinished lap counts as the " << Fixed(results.trial_cap_s, 0)
-    << " s cap).</p>\n";
+    << " trials; lap times in seconds as scored, on the lap's clock: from the start line to the finish (an "
+       "unfinished lap counts as the "
+    << Fixed(results.trial_cap_s, 0)
+    << " s cap, on the same clock, whatever the interface). The time before the line (the approach, a "
+       "cockpit's grasp of its controls) is kept apart as <code>approach_s</code> in trials.csv and not "
+       "scored.</p>\n";
   for (const ConditionSummary& c : report.conditions) {
     h << "<table><caption>" << Html(c.name) << "</caption><tr><th>People</th>";
     for (const std::string& p : results.participants) h << "<th>" << Html(p) << "</th>";

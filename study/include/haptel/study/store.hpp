@@ -10,6 +10,7 @@
 /// first planned trial without a row, and nothing is recorded twice (the
 /// tables' keys forbid it).
 #include <cstdint>
+#include <limits>
 #include <map>
 #include <optional>
 #include <string>
@@ -41,7 +42,10 @@ struct TrialRow {
   int position = 0;
   std::string condition;
   int64_t run_id = 0;
-  double lap_time_s = 0.0;  ///< as scored: the cap for an unfinished lap
+  double lap_time_s = 0.0;  ///< as scored, on the lap's clock: the cap for an unfinished lap
+  /// Before the lap's clock started (the approach to the start line, a
+  /// cockpit's grasp), s; not part of the score. NaN: recorded before v8.
+  double approach_s = std::numeric_limits<double>::quiet_NaN();
   bool completed = false;
   int obstacles = 0;
   std::string outcome;
@@ -96,7 +100,8 @@ class StudyStore {
   int TrialsDone(const std::string& participant) const;
 
   /// For Recorder::Save: writes the trial's row in the run's transaction,
-  /// scored from the run (an unfinished lap at the cap) — only when the
+  /// scored from the run on the lap's clock (an unfinished lap at the cap),
+  /// with the run's approach_s beside it — only when the
   /// run's outcome finishes a trial (FinishesTrial): a run that ended in a
   /// fault (vehicle or device lost, interrupted) is recorded, the trial is
   /// not, and a resumed study runs it again. Throws if the trial already
