@@ -3,7 +3,9 @@
 // the ranks, the statistics, the CSV, the plots and the page.
 #include <catch2/catch.hpp>
 #include <fstream>
+#include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
 
 #include "haptel/config/study.hpp"
@@ -131,6 +133,30 @@ TEST_CASE("The report on the thesis's data gives its tables, ranks and statistic
   CHECK(json.find("\"participants_used\":5") != std::string::npos);
   CHECK(json.find("\"method\":\"Nemenyi (Demšar 2006), alpha 0.05\"") != std::string::npos);
   CHECK(std::count(json.begin(), json.end(), '\n') == 0);
+}
+
+TEST_CASE("lap_times.png marks capped laps apart, with a legend entry") {
+  const auto dir = test::ScratchDir("study-report-capped");
+  const auto db = dir / "thesis.db";
+  RecordThesis(dir, db);
+  const StudyResults results = LoadStudyResults(db, "thesis");
+  const StudyReport report = ComputeReport(results, PostHocMethod::kNemenyi);
+  // The same times, as if B had finished both cockpits at the cap: only the marking differs.
+  StudyResults finished = results;
+  for (StudyResults::Trial& t : finished.trials) t.completed = true;
+  DrawLapTimes(results, report, dir / "capped.png");
+  DrawLapTimes(finished, report, dir / "finished.png");
+  const cv::Mat capped = cv::imread((dir / "capped.png").string());
+  const cv::Mat plain = cv::imread((dir / "finished.png").string());
+  REQUIRE_FALSE(capped.empty());
+  REQUIRE(capped.size() == plain.size());
+  cv::Mat difference;
+  cv::absdiff(capped, plain, difference);
+  cv::cvtColor(difference, difference, cv::COLOR_BGR2GRAY);
+  // B's two capped points (a marker, not a dot) and the legend's entry (bottom right).
+  CHECK(cv::countNonZero(difference) > 200);
+  const cv::Mat legend = difference(cv::Rect(capped.cols - 260, capped.rows - 40, 260, 40));
+  CHECK(cv::countNonZero(legend) > 50);
 }
 
 TEST_CASE("The report says what it lacks instead of failing") {
