@@ -235,10 +235,12 @@ ALTER TABLE runs ADD COLUMN prediction_error_m_p95 REAL DEFAULT NULL;
 
 // v8: one clock for a study's cap: the lap's, from the start line; the time
 // before the line (the approach, a cockpit's grasp) recorded apart, on the
-// run and on its trial's row (NULL: recorded before v8).
+// run and on its trial's row (NULL: recorded before v8). And what could have
+// spoiled each trial (study/store.hpp TrialFlags; '': nothing seen).
 constexpr const char* kSchemaV8 = R"sql(
 ALTER TABLE runs ADD COLUMN approach_s REAL DEFAULT NULL;
 ALTER TABLE study_trials ADD COLUMN approach_s REAL DEFAULT NULL;
+ALTER TABLE study_trials ADD COLUMN flags TEXT NOT NULL DEFAULT '';
 )sql";
 
 constexpr const char* kMigrations[] = {kSchemaV1, kSchemaV2, kSchemaV3, kSchemaV4,

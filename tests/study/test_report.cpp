@@ -159,6 +159,30 @@ TEST_CASE("lap_times.png marks capped laps apart, with a legend entry") {
   CHECK(cv::countNonZero(legend) > 50);
 }
 
+TEST_CASE("The report marks capped and flagged trials in its tables and lists what flagged them") {
+  const auto dir = test::ScratchDir("study-report-flagged");
+  const auto db = dir / "thesis.db";
+  RecordThesis(dir, db);
+  StudyResults results = LoadStudyResults(db, "thesis");
+  for (StudyResults::Trial& t : results.trials) {
+    if (t.participant == "A" && t.condition == "cockpit") t.flags = "physics rate short";
+  }
+  const StudyReport report = ComputeReport(results, PostHocMethod::kNemenyi);
+  const std::string text = FormatReport(results, report);
+  CHECK(text.find(" 210.00!") != std::string::npos);  // A's cockpit: flagged
+  CHECK(text.find(" 600.00*") != std::string::npos);  // B's cockpit: capped
+  CHECK(text.find("A, cockpit (position 1, run ") != std::string::npos);
+  CHECK(text.find("): physics rate short") != std::string::npos);
+  const ReportFiles files = WriteReport(results, report, dir / "out");
+  const std::string html = Read(files.html);
+  CHECK(html.find("<td>210.00!</td>") != std::string::npos);
+  CHECK(html.find("<td>600.00*</td>") != std::string::npos);
+  CHECK(html.find("<h2>Flagged trials</h2>") != std::string::npos);
+  const std::string trials = Read(files.trials_csv);
+  CHECK(trials.find(",attempt,flags\n") != std::string::npos);
+  CHECK(trials.find(",physics rate short\n") != std::string::npos);
+}
+
 TEST_CASE("The report says what it lacks instead of failing") {
   const auto dir = test::ScratchDir("study-report-lacks");
   const auto db = dir / "one.db";

@@ -100,6 +100,9 @@ TEST_CASE("The store keeps a study's plan, trials and answers across restarts, e
     // A finished trial and an unfinished one, scored at the cap.
     record::RunRecord first = test::TrialRun(42.0, true, 2);
     first.approach_s = 3.25;  // before the start line: kept apart, not scored
+    // What could have spoiled it, kept with the trial; clamped forces are the safety at work, not a flag.
+    first.servo_rate_short = true;
+    first.counters = {{"servo_forces_clamped", 5}, {"vehicle_watchdog_trips", 2}, {"link_states_missed", 0}};
     recorder.Save(first, store.TrialWriter(plan[0], 600.0));
     recorder.Save(test::TrialRun(700.0, false), store.TrialWriter(plan[1], 600.0));
     // A run that ended in a fault: recorded, but the trial is not done.
@@ -124,6 +127,8 @@ TEST_CASE("The store keeps a study's plan, trials and answers across restarts, e
   REQUIRE(trials.size() == 2);
   CHECK(trials[0].lap_time_s == 42.0);
   CHECK(trials[0].approach_s == 3.25);
+  CHECK(trials[0].flags == "servo rate short; vehicle watchdog trips 2");
+  CHECK(trials[1].flags.empty());
   CHECK(std::isnan(trials[1].approach_s));  // a run that did not measure it: NULL, not 0
   CHECK(recorder.LoadAll()[0].approach_s == 3.25);
   CHECK(trials[0].obstacles == 2);
@@ -375,7 +380,8 @@ TEST_CASE("A study planned before the database kept definitions resumes once, th
                          "ALTER TABLE studies DROP COLUMN definition_form; ALTER TABLE runs DROP COLUMN predict; "
                          "ALTER TABLE runs DROP COLUMN link_fault; ALTER TABLE runs DROP COLUMN prediction_error_m_p50; "
                          "ALTER TABLE runs DROP COLUMN prediction_error_m_p95; ALTER TABLE runs DROP COLUMN approach_s; "
-                         "ALTER TABLE study_trials DROP COLUMN approach_s; PRAGMA user_version = 5",
+                         "ALTER TABLE study_trials DROP COLUMN approach_s; ALTER TABLE study_trials DROP COLUMN flags; "
+                         "PRAGMA user_version = 5",
                          nullptr, nullptr, nullptr) == SQLITE_OK);
     sqlite3_close(raw);
   }

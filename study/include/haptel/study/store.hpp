@@ -50,7 +50,16 @@ struct TrialRow {
   int obstacles = 0;
   std::string outcome;
   int attempt = 1;
+  /// What could have spoiled the trial, from its run (TrialFlags); "": nothing.
+  std::string flags;
 };
+
+/// What in a trial's run could have spoiled it, "; "-separated ("" when
+/// nothing): a loop short of its rate (servo, physics), the link's faults
+/// (states missed, commands dropped), the vehicle's watchdog trips, the
+/// device lost, video that could not be decoded. A trial with flags is
+/// scored like any other; the report marks it and the experimenter may redo it.
+std::string TrialFlags(const record::RunRecord& run);
 
 struct AnswerRow {
   std::string participant;

@@ -36,6 +36,8 @@ struct StudyResults {
     int64_t run_id = 0;
     std::string outcome;
     int attempt = 1;
+    /// What could have spoiled the trial (store.hpp TrialFlags); "": nothing.
+    std::string flags;
   };
   std::vector<Trial> trials;
   struct Answer {
