@@ -258,6 +258,9 @@ class BlimpSession final : public FamilySession {
   }
   const std::filesystem::path& world_file() const override { return course_.file; }
   double lap_cap_s() const override { return course_.lap_cap_s; }
+  std::optional<double> lap_start_s() const override {
+    return lap_.started() ? std::optional<double>(lap_.start_t_s()) : std::nullopt;
+  }
 
   view::Overlay Overlay(double t, bool vehicle_up, bool) override {
     return overlay_feed_.Make(t, lap_, last_, command_, vehicle_up);

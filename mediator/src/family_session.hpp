@@ -73,6 +73,10 @@ class FamilySession {
   virtual const std::filesystem::path& world_file() const = 0;
   /// The lap cap of the track or course, s.
   virtual double lap_cap_s() const = 0;
+  /// When the lap began (the start line crossed, the blimp lifted off), s
+  /// since the session started; nullopt before. The lap clock counts from
+  /// here; the time before it is the run's approach (RunRecord::approach_s).
+  virtual std::optional<double> lap_start_s() const = 0;
   /// The view's overlay now; `touching`: the run's trace is in a contact.
   /// Builds it without allocating.
   virtual view::Overlay Overlay(double t_s, bool vehicle_up, bool touching) = 0;

@@ -196,6 +196,9 @@ class RobotSession final : public FamilySession {
   }
   const std::filesystem::path& world_file() const override { return setup_.track.file; }
   double lap_cap_s() const override { return setup_.track.lap_cap_s; }
+  std::optional<double> lap_start_s() const override {
+    return lap_.started() ? std::optional<double>(lap_.start_t_s()) : std::nullopt;
+  }
 
   view::Overlay Overlay(double t, bool vehicle_up, bool touching) override {
     return overlay_feed_.Make(t, lap_, *interfaces_, feedback_, motors_, vehicle_up, touching);

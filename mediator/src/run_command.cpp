@@ -2,6 +2,7 @@
 #include "haptel/mediator/run_command.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -49,6 +50,9 @@ constexpr const char* kRunUsage =
     "  --device FILE        haptic device file: sim, udp (haptel-device-server arms) or replay\n"
     "  --trace-in FILE      the trace a replay device plays (overrides its 'replay.trace')\n"
     "  --time-limit S       end the run after S seconds, outcome 'time limit' (person: 600)\n"
+    "  --lap-limit S        end the run when the lap's clock (from the start line) passes S,\n"
+    "                       outcome 'time limit'; before the line the approach counts (a\n"
+    "                       study's trial cap: every interface gets the same lap time)\n"
     "  --predict on|off     the predictive display (default off): the operator sees the vehicle\n"
     "                       where its model says it is now, from the delayed states and the\n"
     "                       commands sent since; the model's error is reported either way\n"
@@ -136,8 +140,8 @@ bool ReportsControllerErrors(const haptel::mediator::SessionSetup& setup) {
 Args ParseRunArgs(int argc, const char* const* argv) {
   return Args(argc, argv,
               {"config", "track", "interface", "scene", "vehicle-name", "domain", "database", "vehicle-timeout",
-               "trace", "operator", "device", "trace-in", "time-limit", "view", "record", "vehicle", "predict",
-               "link-fault", "link-profile", "security", "dds-interfaces", "dds-peers", "discovery-server"},
+               "trace", "operator", "device", "trace-in", "time-limit", "lap-limit", "view", "record", "vehicle",
+               "predict", "link-fault", "link-profile", "security", "dds-interfaces", "dds-peers", "discovery-server"},
               {"json", "quiet", "attach"});
 }
 
@@ -223,6 +227,7 @@ SessionSetup RunSetupFromArgs(const Args& args) {
   } else if (person) {
   setup.time_limit_s = setup.run.person_time_limit_s;
   }
+  if (auto s = args.Number("lap-limit", 1.0, 86400.0)) setup.lap_limit_s = *s;
   if (auto device = args.Value("device")) setup.run.device = *device;
   if (auto vehicle = args.Value("vehicle")) setup.run.vehicle = *vehicle;
   setup.vehicle = LoadVehicle(setup.run.vehicle);
@@ -382,8 +387,10 @@ void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRu
   std::fprintf(out, "  track %s, interface %s, vehicle %s (pid %d), operator %s, device %s\n", r.track.c_str(),
               r.interface.c_str(), r.vehicle.c_str(), r.vehicle_pid, r.operator_kind.c_str(), r.device.c_str());
   std::fprintf(out, "  distance driven %.2f m, %zu interface switches\n", r.distance_m, r.switches.size());
-  std::fprintf(out, "  lap time %.2f s, gates passed %d/%d, missed %d, obstacles touched %d\n", r.lap_time_s,
-              r.gates_passed, r.gates_total, r.gates_missed, r.obstacles_touched);
+  std::fprintf(out,
+               "  lap time %.2f s (from the start line; %.2f s before it), gates passed %d/%d, missed %d, "
+               "obstacles touched %d\n",
+               r.lap_time_s, r.approach_s, r.gates_passed, r.gates_total, r.gates_missed, r.obstacles_touched);
   for (const GateSplit& s : r.splits) {
     if (s.split_s >= 0) std::fprintf(out, "    gate %d  %7.2f s  %s\n", s.gate + 1, s.split_s, s.passed ? "passed" : "MISSED");
   }
@@ -444,6 +451,7 @@ std::string RunJson(const SessionSetup& setup, const RecordedRun& run) {
   std::ostringstream o;
   o << "{\"completed\":" << (r.completed ? "true" : "false") << ",\"outcome\":" << JsonString(r.outcome)
     << ",\"message\":" << JsonString(run.result.message) << ",\"lap_time_s\":" << JsonNumber(r.lap_time_s)
+    << ",\"approach_s\":" << (std::isfinite(r.approach_s) ? JsonNumber(r.approach_s) : std::string("null"))
     << ",\"gates_passed\":" << r.gates_passed << ",\"gates_total\":" << r.gates_total
     << ",\"gates_missed\":" << r.gates_missed << ",\"obstacles_touched\":" << r.obstacles_touched
     << ",\"vehicle\":" << JsonString(r.vehicle) << ",\"vehicle_kind\":" << JsonString(r.vehicle_kind)

@@ -2,6 +2,7 @@
 
 #include "haptel/config/link.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -200,7 +201,8 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
       finish(std::move(*end));
       break;
     }
-    if (auto end = CheckLimits(t, setup.time_limit_s, family->lap_cap_s())) {
+    if (auto end = CheckLimits(t, family->lap_start_s(), setup.time_limit_s, setup.lap_limit_s,
+                               family->lap_cap_s())) {
       finish(std::move(*end));
       break;
     }
@@ -215,9 +217,15 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
       }
     }
   }
-  for (const std::string& loop : watch.EndInterval(MonotonicNs())) {
+  const int64_t end_ns = MonotonicNs();
+  for (const std::string& loop : watch.EndInterval(end_ns)) {
     if (setup.progress) log::Warn(loop);
   }
+  // The lap's clock and the approach's are kept apart: a run that never
+  // reached the line was all approach.
+  const double end_s = NsToS(end_ns - t0);
+  const std::optional<double> lap_start = family->lap_start_s();
+  rec.approach_s = lap_start.value_or(end_s);
 
   // Make safe: forces to zero (a physics world's leave the HAL at once too,
   // whatever its step is doing), the vehicle stopped or at neutral.
@@ -226,6 +234,12 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   vehicle.SendSafe();
   if (view_part) StopAndRecord(*view_part, result);
   family->Finish(result, setup.progress);
+  // A lap stopped by a limit ran until the run ended, on the same clock as the
+  // limits (the last state may be a few ms older): a lap stopped by its cap
+  // shows the whole cap.
+  if (lap_start && (result.outcome == Outcome::kTimeLimit || result.outcome == Outcome::kLapCap)) {
+    rec.lap_time_s = std::max(rec.lap_time_s, end_s - *lap_start);
+  }
   haptic.Stop();
   if (pump) pump->Stop();
   vehicle.Stop();

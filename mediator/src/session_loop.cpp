@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "haptel/core/clock.hpp"
+#include "haptel/core/json.hpp"
 #include "haptel/core/log.hpp"
 
 namespace haptel::mediator {
@@ -131,13 +132,20 @@ bool CommandDue(int64_t& next_ns, int64_t now_ns, int64_t period_ns) {
   return true;
 }
 
-std::optional<LoopEnd> CheckLimits(double t_s, double time_limit_s, double lap_cap_s) {
+std::optional<LoopEnd> CheckLimits(double t_s, std::optional<double> lap_start_s, double time_limit_s,
+                                   double lap_limit_s, double lap_cap_s) {
   if (time_limit_s > 0 && t_s > time_limit_s) {
     return LoopEnd{Outcome::kTimeLimit,
                    "time limit of " + std::to_string(static_cast<int>(time_limit_s)) + " s reached"};
   }
-  if (t_s > lap_cap_s) {
-    return LoopEnd{Outcome::kLapCap, "lap cap of " + std::to_string(static_cast<int>(lap_cap_s)) + " s reached"};
+  const double lap_clock_s = lap_start_s ? t_s - *lap_start_s : t_s;
+  const std::string clock = lap_start_s ? " on the lap clock" : " before the start line";
+  if (lap_limit_s > 0 && lap_clock_s > lap_limit_s) {
+    return LoopEnd{Outcome::kTimeLimit, "lap limit of " + JsonNumber(lap_limit_s) + " s reached" + clock};
+  }
+  if (lap_clock_s > lap_cap_s) {
+    return LoopEnd{Outcome::kLapCap,
+                   "lap cap of " + std::to_string(static_cast<int>(lap_cap_s)) + " s reached" + clock};
   }
   return std::nullopt;
 }

@@ -98,8 +98,15 @@ class RunTrace {
 /// late loop sends one, it does not catch up.
 bool CommandDue(int64_t& next_ns, int64_t now_ns, int64_t period_ns);
 
-/// The session's own limits at `t_s`: the time limit (0: none), then the lap cap.
-std::optional<LoopEnd> CheckLimits(double t_s, double time_limit_s, double lap_cap_s);
+/// The session's own limits at `t_s` (s since the session started): the time
+/// limit on the session's clock (0: none); then the lap limit (a study's cap;
+/// 0: none) and the track's lap cap, both on the lap's clock — from
+/// `lap_start_s`, when the start line was crossed — so that every interface
+/// gets the same lap time whatever its approach and grasp took. Before the
+/// line (nullopt) the approach counts against them instead, so a vehicle
+/// that never reaches the line still ends.
+std::optional<LoopEnd> CheckLimits(double t_s, std::optional<double> lap_start_s, double time_limit_s,
+                                   double lap_limit_s, double lap_cap_s);
 
 /// The figures of the servo loop and the link into the record (after both stopped).
 void RecordLinkFigures(const HapticSide& haptic, const VehicleLink& vehicle, SessionResult& result);

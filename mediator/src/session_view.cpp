@@ -91,6 +91,11 @@ view::Overlay LapOverlay(const SessionSetup& setup, const char* interface_name, 
   o.t_s = t;
   o.lap_time_s = lap_time_s;
   o.time_left_s = setup.time_limit_s > 0 ? std::max(0.0, setup.time_limit_s - t) : -1.0;
+  if (setup.lap_limit_s > 0) {
+    // The lap limit counts the lap's clock, and the approach before the line.
+    const double lap_left = std::max(0.0, setup.lap_limit_s - (lap_time_s > 0 ? lap_time_s : t));
+    o.time_left_s = o.time_left_s < 0 ? lap_left : std::min(o.time_left_s, lap_left);
+  }
   o.gates_passed = gates_passed;
   o.gates_total = gates_total;
   o.obstacles_touched = obstacles_touched;

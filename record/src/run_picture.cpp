@@ -487,7 +487,10 @@ void WriteRunPicture(const RunPicture& picture, const std::filesystem::path& png
 }
 
 std::filesystem::path RunPicturePath(const std::filesystem::path& database, int64_t run_id) {
-  return database.parent_path() / "pictures" / ("run-" + std::to_string(run_id) + ".png");
+  // Named by the database too: two databases in one folder share its
+  // pictures/ folder, and run 1 of one is not run 1 of the other.
+  return database.parent_path() / "pictures" /
+         (database.stem().string() + "-run-" + std::to_string(run_id) + ".png");
 }
 
 }  // namespace haptel::record

@@ -85,6 +85,7 @@ std::string RunRecordJson(const RunRecord& r) {
       .Bool("completed", r.completed)
       .Str("outcome", r.outcome)
       .Num("lap_time_s", r.lap_time_s)
+      .Num("approach_s", r.approach_s)
       .Int("gates_passed", r.gates_passed)
       .Int("gates_total", r.gates_total)
       .Int("gates_missed", r.gates_missed)

@@ -240,7 +240,7 @@ std::vector<TrialRow> StudyStore::Trials() const {
   const std::filesystem::path& file = recorder_.path();
   Stmt select = Prepare(file, db,
                         "SELECT t.participant, t.position, t.condition, t.run_id, t.lap_time_s, t.completed, "
-                        "t.obstacles, t.outcome, t.attempt FROM study_trials t JOIN study_participants s ON "
+                        "t.obstacles, t.outcome, t.attempt, t.approach_s, t.flags FROM study_trials t JOIN study_participants s ON "
                         "s.study_id = t.study_id AND s.participant = t.participant WHERE t.study_id = ? "
                         "ORDER BY s.row_index, t.position",
                         "cannot read the trials");
@@ -258,6 +258,8 @@ std::vector<TrialRow> StudyStore::Trials() const {
     t.obstacles = static_cast<int>(r.Int());
     t.outcome = r.Text();
     t.attempt = static_cast<int>(r.Int());
+    t.approach_s = r.Real();
+    t.flags = r.Text();
     rows.push_back(t);
   }
   return rows;
@@ -279,6 +281,29 @@ int StudyStore::TrialsDone(const std::string& participant) const {
   return count;
 }
 
+std::string TrialFlags(const record::RunRecord& run) {
+  std::string flags;
+  const auto add = [&flags](const std::string& what) { flags += (flags.empty() ? "" : "; ") + what; };
+  if (run.servo_rate_short) add("servo rate short");
+  if (run.physics_rate_short) add("physics rate short");
+  // The counters that say the operator's loop, the link or the vehicle
+  // misbehaved (README's list); the others (forces clamped...) are the
+  // safety doing its job.
+  static const std::pair<const char*, const char*> kSpoilers[] = {
+      {"link_states_missed", "link states missed"},
+      {"vehicle_commands_dropped", "vehicle commands dropped"},
+      {"vehicle_watchdog_trips", "vehicle watchdog trips"},
+      {"servo_device_lost_ticks", "device lost ticks"},
+      {"video_decode_failures", "video decode failures"},
+  };
+  for (const auto& [name, text] : kSpoilers) {
+    for (const record::RunCounter& c : run.counters) {
+      if (c.name == name && c.value > 0) add(std::string(text) + " " + std::to_string(c.value));
+    }
+  }
+  return flags;
+}
+
 bool FinishesTrial(const std::string& outcome) {
   using mediator::Outcome;
   return outcome == ToString(Outcome::kCompleted) || outcome == ToString(Outcome::kLapCap) ||
@@ -295,9 +320,9 @@ record::Recorder::AlsoSave StudyStore::TrialWriter(const PlannedTrial& trial, do
     const double scored = completed ? std::min(run.lap_time_s, cap_s) : cap_s;
     Stmt insert = Prepare(file, db,
                           "INSERT INTO study_trials (study_id, participant, position, condition, run_id, "
-                          "lap_time_s, completed, obstacles, outcome, attempt, finished_utc) VALUES "
+                          "lap_time_s, completed, obstacles, outcome, attempt, finished_utc, approach_s, flags) VALUES "
                           "(?, ?, ?, ?, ?, ?, ?, ?, ?, 1 + (SELECT COUNT(*) FROM study_events WHERE study_id = ? "
-                          "AND kind = 'redo' AND participant = ? AND position = ?), ?)",
+                          "AND kind = 'redo' AND participant = ? AND position = ?), ?, ?, ?)",
                           "cannot prepare the trial row");
     Binder(file, db, insert.get())
         .Int(study)
@@ -312,7 +337,9 @@ record::Recorder::AlsoSave StudyStore::TrialWriter(const PlannedTrial& trial, do
         .Int(study)
         .Text(trial.participant)
         .Int(trial.position)
-        .Text(NowUtc());
+        .Text(NowUtc())
+        .RealOrNull(run.approach_s, std::isfinite(run.approach_s))
+        .Text(TrialFlags(run));
     StepDone(file, db, insert.get(), "cannot record trial " + Describe(trial) + " (already recorded?)");
   };
 }

@@ -79,7 +79,7 @@ mediator::SessionSetup TrialSetup(const StudyConfig& config, const PlannedTrial&
                                     condition.interface,
                                     "--operator",
                                     synthetic ? "auto" : "person",
-                                    "--time-limit",
+                                    "--lap-limit",
                                     cap,
                                     "--database",
                                     database.string()};
@@ -116,7 +116,7 @@ mediator::SessionSetup PracticeSetup(const StudyConfig& config, const std::files
   const std::string cap = std::to_string(config.trial_cap_s);
   std::vector<std::string> words = {"run",         "--config",   config.run.string(), "--track",  config.track.string(),
                                     "--interface", "keyboard",   "--operator",        "person",   "--view",
-                                    "window",      "--time-limit", cap,               "--database", database.string()};
+                                    "window",      "--lap-limit", cap,                "--database", database.string()};
   if (!domain.empty()) words.insert(words.end(), {"--domain", domain});
   if (!verbose) words.push_back("--quiet");
   std::vector<const char*> argv;
@@ -407,7 +407,8 @@ int StudyRunCommand(int argc, const char* const* argv) {
     }
     std::printf("  %-12s", "total");
     for (const StudyCondition& c : config.conditions) std::printf(" %16s", Seconds(totals[c.name]).c_str());
-    std::printf("\n  (lap time s as scored, position in brackets; * unfinished, scored at the %s s cap)\n",
+    std::printf("\n  (lap time s as scored, on the lap's clock from the start line, position in brackets; "
+                "* unfinished, scored at the %s s cap, also on the lap's clock)\n",
                 Seconds(config.trial_cap_s).c_str());
     std::printf("  report: haptel study report %s --study %s\n", database.c_str(), config.name.c_str());
     if (json) {
@@ -429,6 +430,7 @@ int StudyRunCommand(int argc, const char* const* argv) {
         if (i > 0) out += ",";
         out += "{\"participant\":" + JsonString(t.participant) + ",\"position\":" + std::to_string(t.position) +
                ",\"condition\":" + JsonString(t.condition) + ",\"lap_time_s\":" + JsonNumber(t.lap_time_s) +
+               ",\"approach_s\":" + (std::isfinite(t.approach_s) ? JsonNumber(t.approach_s) : std::string("null")) +
                ",\"completed\":" + (t.completed ? "true" : "false") +
                ",\"obstacles\":" + std::to_string(t.obstacles) + ",\"run_id\":" + std::to_string(t.run_id) + "}";
       }

@@ -74,7 +74,7 @@ TEST_CASE("haptel run completes the short track over DDS with a separate vehicle
   CHECK(runs[0].distance_m == Approx(std::stod(JsonField(json, "distance_m"))).epsilon(1e-4));
   CHECK(runs[0].path.size() > 100);
   CHECK(runs[0].picture == JsonField(json, "picture"));
-  CHECK(runs[0].picture == std::filesystem::absolute(dir / "pictures" / "run-1.png").string());
+  CHECK(runs[0].picture == std::filesystem::absolute(dir / "pictures" / "runs-run-1.png").string());
   CHECK(std::filesystem::file_size(runs[0].picture) > 0);
 }
 

@@ -178,6 +178,67 @@ TEST_CASE("conditions that differ only in prediction, over the study's faulted l
   }
 }
 
+TEST_CASE("capped trials are scored at exactly the cap on the lap's clock, a cockpit's as a gesture's") {
+  // The cap counts the lap from the start line: a cockpit's grasp of its
+  // controls and the approach before the line are recorded apart
+  // (approach_s), not taken off its lap time. 10 s: past both interfaces'
+  // approach, short of the simulated driver's lap on test-short (about 14 s).
+  const auto dir = test::ScratchDir("e2e-study-cap");
+  const auto source = std::filesystem::current_path();
+  const auto file = dir / "cap-study.yaml";
+  {
+    std::ofstream out(file);
+    out << "name: cap-e2e\n"
+           "run: " << (source / "config/haptel.yaml").string() << "\n"
+           "track: " << (source / "config/tracks/test-short.yaml").string() << "\n"
+           "operators: synthetic\n"
+           "conditions:\n"
+           "  - {name: wheel, interface: cockpit}\n"
+           "  - {name: hand, interface: gesture}\n"
+           "design: {order: fixed}\n"
+           "trial_cap_s: 10\n"
+           "profiles:\n"
+           "  plain: {steering_noise: 0.02, seed: 3}\n"
+           "participants:\n"
+           "  - {id: P1, profile: plain}\n";
+  }
+  const auto db = dir / "cap.db";
+  Child study({Bin("haptel"), "study", "run", file.string(), "--database", db.string(), "--domain",
+               std::to_string(test::UniqueDomain(45)), "--json"});
+  INFO(study.err());
+  REQUIRE(study.Wait(300.0) == 0);
+  CHECK(test::JsonField(study.LastLine(), "trials_done") == "2");
+  record::Recorder recorder(db);
+  const std::vector<record::RunRecord> runs = recorder.LoadAll();
+  REQUIRE(runs.size() == 2);
+  CHECK(runs[0].interface == "cockpit");
+  CHECK(runs[1].interface == "gesture");
+  for (const record::RunRecord& r : runs) {
+    INFO(r.interface << ": lap clock " << r.lap_time_s << " s, approach " << r.approach_s << " s");
+    CHECK(r.outcome == "time limit");
+    CHECK_FALSE(r.completed);
+    // The run ended on the lap's clock: its lap ran the whole cap.
+    CHECK(r.lap_time_s >= 10.0);
+    CHECK(r.approach_s > 0.0);
+  }
+  sqlite3_stmt* select = nullptr;
+  REQUIRE(sqlite3_prepare_v2(recorder.handle(),
+                             "SELECT condition, lap_time_s, completed, approach_s FROM study_trials ORDER BY position",
+                             -1, &select, nullptr) == SQLITE_OK);
+  std::vector<std::string> conditions;
+  while (sqlite3_step(select) == SQLITE_ROW) {
+    conditions.emplace_back(reinterpret_cast<const char*>(sqlite3_column_text(select, 0)));
+    CHECK(sqlite3_column_double(select, 1) == 10.0);  // exactly the cap, whatever the interface
+    CHECK(sqlite3_column_int(select, 2) == 0);
+    CHECK(sqlite3_column_type(select, 3) == SQLITE_FLOAT);
+    CHECK(sqlite3_column_double(select, 3) > 0.0);
+  }
+  sqlite3_finalize(select);
+  CHECK(conditions == std::vector<std::string>{"wheel", "hand"});
+  // The JSON says the approach per trial too.
+  CHECK(study.LastLine().find("\"approach_s\":") != std::string::npos);
+}
+
 TEST_CASE("a study that cannot work is refused before anything runs") {
   const auto dir = test::ScratchDir("e2e-study-bad");
   const auto study = SmallStudy(dir);

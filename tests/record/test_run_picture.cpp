@@ -189,7 +189,7 @@ TEST_CASE("DrawRunPicture writes a PNG and names the file it cannot write", "[ru
   const TrackConfig config = LoadTrack(ShippedFile("config/tracks/test-short.yaml"));
   const RunRecord run = LapOn(Track(config));
 
-  CHECK(RunPicturePath("/data/study/runs.db", 12) == fs::path("/data/study/pictures/run-12.png"));
+  CHECK(RunPicturePath("/data/study/runs.db", 12) == fs::path("/data/study/pictures/runs-run-12.png"));
   const fs::path png = RunPicturePath(dir / "runs.db", 7);
   DrawRunPicture(run, config, png);  // creates pictures/
   const cv::Mat read = cv::imread(png.string());
@@ -208,6 +208,24 @@ TEST_CASE("DrawRunPicture writes a PNG and names the file it cannot write", "[ru
     INFO("message: " << e.what());
     CHECK(std::string(e.what()).find(bad.string()) != std::string::npos);
   }
+  fs::remove_all(dir);
+}
+
+TEST_CASE("Two databases in one folder never share a picture's name", "[run_picture]") {
+  const fs::path dir = ScratchDir("haptel-run-picture-two");
+  const TrackConfig config = LoadTrack(ShippedFile("config/tracks/test-short.yaml"));
+  const RunRecord run = LapOn(Track(config));
+  // Run 1 of each: a picture each, neither overwriting the other.
+  const fs::path first = RunPicturePath(dir / "pilot.db", 1);
+  const fs::path second = RunPicturePath(dir / "study.db", 1);
+  CHECK(first != second);
+  CHECK(first.parent_path() == second.parent_path());
+  DrawRunPicture(run, config, first);
+  DrawRunPicture(run, config, second);
+  CHECK(fs::exists(first));
+  CHECK(fs::exists(second));
+  CHECK(first.filename() == "pilot-run-1.png");
+  CHECK(second.filename() == "study-run-1.png");
   fs::remove_all(dir);
 }
 

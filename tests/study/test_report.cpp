@@ -3,7 +3,9 @@
 // the ranks, the statistics, the CSV, the plots and the page.
 #include <catch2/catch.hpp>
 #include <fstream>
+#include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
 
 #include "haptel/config/study.hpp"
@@ -101,9 +103,9 @@ TEST_CASE("The report on the thesis's data gives its tables, ranks and statistic
   // The files.
   const ReportFiles files = WriteReport(results, report, dir / "out");
   const std::string trials = Read(files.trials_csv);
-  CHECK(trials.rfind("study,participant,condition,position,lap_time_s,completed,obstacles", 0) == 0);
-  CHECK(trials.find("\nthesis,B,cockpit,1,600.000,false,5,") != std::string::npos);
-  CHECK(trials.find("\nthesis,E,gesture,4,200.000,true,0,") != std::string::npos);
+  CHECK(trials.rfind("study,participant,condition,position,lap_time_s,approach_s,completed,obstacles", 0) == 0);
+  CHECK(trials.find("\nthesis,B,cockpit,1,600.000,,false,5,") != std::string::npos);
+  CHECK(trials.find("\nthesis,E,gesture,4,200.000,,true,0,") != std::string::npos);
   CHECK(std::count(trials.begin(), trials.end(), '\n') == 21);
   const std::string answers = Read(files.answers_csv);
   CHECK(answers.find("thesis,A,gesture,thesis,remarks,\"<script>alert(1)</script>, \"\"odd\"\"\"") != std::string::npos);
@@ -131,6 +133,54 @@ TEST_CASE("The report on the thesis's data gives its tables, ranks and statistic
   CHECK(json.find("\"participants_used\":5") != std::string::npos);
   CHECK(json.find("\"method\":\"Nemenyi (Demšar 2006), alpha 0.05\"") != std::string::npos);
   CHECK(std::count(json.begin(), json.end(), '\n') == 0);
+}
+
+TEST_CASE("lap_times.png marks capped laps apart, with a legend entry") {
+  const auto dir = test::ScratchDir("study-report-capped");
+  const auto db = dir / "thesis.db";
+  RecordThesis(dir, db);
+  const StudyResults results = LoadStudyResults(db, "thesis");
+  const StudyReport report = ComputeReport(results, PostHocMethod::kNemenyi);
+  // The same times, as if B had finished both cockpits at the cap: only the marking differs.
+  StudyResults finished = results;
+  for (StudyResults::Trial& t : finished.trials) t.completed = true;
+  DrawLapTimes(results, report, dir / "capped.png");
+  DrawLapTimes(finished, report, dir / "finished.png");
+  const cv::Mat capped = cv::imread((dir / "capped.png").string());
+  const cv::Mat plain = cv::imread((dir / "finished.png").string());
+  REQUIRE_FALSE(capped.empty());
+  REQUIRE(capped.size() == plain.size());
+  cv::Mat difference;
+  cv::absdiff(capped, plain, difference);
+  cv::cvtColor(difference, difference, cv::COLOR_BGR2GRAY);
+  // B's two capped points (a marker, not a dot) and the legend's entry (bottom right).
+  CHECK(cv::countNonZero(difference) > 200);
+  const cv::Mat legend = difference(cv::Rect(capped.cols - 260, capped.rows - 40, 260, 40));
+  CHECK(cv::countNonZero(legend) > 50);
+}
+
+TEST_CASE("The report marks capped and flagged trials in its tables and lists what flagged them") {
+  const auto dir = test::ScratchDir("study-report-flagged");
+  const auto db = dir / "thesis.db";
+  RecordThesis(dir, db);
+  StudyResults results = LoadStudyResults(db, "thesis");
+  for (StudyResults::Trial& t : results.trials) {
+    if (t.participant == "A" && t.condition == "cockpit") t.flags = "physics rate short";
+  }
+  const StudyReport report = ComputeReport(results, PostHocMethod::kNemenyi);
+  const std::string text = FormatReport(results, report);
+  CHECK(text.find(" 210.00!") != std::string::npos);  // A's cockpit: flagged
+  CHECK(text.find(" 600.00*") != std::string::npos);  // B's cockpit: capped
+  CHECK(text.find("A, cockpit (position 1, run ") != std::string::npos);
+  CHECK(text.find("): physics rate short") != std::string::npos);
+  const ReportFiles files = WriteReport(results, report, dir / "out");
+  const std::string html = Read(files.html);
+  CHECK(html.find("<td>210.00!</td>") != std::string::npos);
+  CHECK(html.find("<td>600.00*</td>") != std::string::npos);
+  CHECK(html.find("<h2>Flagged trials</h2>") != std::string::npos);
+  const std::string trials = Read(files.trials_csv);
+  CHECK(trials.find(",attempt,flags\n") != std::string::npos);
+  CHECK(trials.find(",physics rate short\n") != std::string::npos);
 }
 
 TEST_CASE("The report says what it lacks instead of failing") {

@@ -7,6 +7,7 @@
 #include <sqlite3.h>
 
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -97,7 +98,12 @@ TEST_CASE("The store keeps a study's plan, trials and answers across restarts, e
     CHECK(store.NextTrial()->participant == "P1");
     CHECK(store.NextTrial()->position == 1);
     // A finished trial and an unfinished one, scored at the cap.
-    recorder.Save(test::TrialRun(42.0, true, 2), store.TrialWriter(plan[0], 600.0));
+    record::RunRecord first = test::TrialRun(42.0, true, 2);
+    first.approach_s = 3.25;  // before the start line: kept apart, not scored
+    // What could have spoiled it, kept with the trial; clamped forces are the safety at work, not a flag.
+    first.servo_rate_short = true;
+    first.counters = {{"servo_forces_clamped", 5}, {"vehicle_watchdog_trips", 2}, {"link_states_missed", 0}};
+    recorder.Save(first, store.TrialWriter(plan[0], 600.0));
     recorder.Save(test::TrialRun(700.0, false), store.TrialWriter(plan[1], 600.0));
     // A run that ended in a fault: recorded, but the trial is not done.
     record::RunRecord lost = test::TrialRun(5.1, false, 1);
@@ -120,6 +126,11 @@ TEST_CASE("The store keeps a study's plan, trials and answers across restarts, e
   const std::vector<TrialRow> trials = store.Trials();
   REQUIRE(trials.size() == 2);
   CHECK(trials[0].lap_time_s == 42.0);
+  CHECK(trials[0].approach_s == 3.25);
+  CHECK(trials[0].flags == "servo rate short; vehicle watchdog trips 2");
+  CHECK(trials[1].flags.empty());
+  CHECK(std::isnan(trials[1].approach_s));  // a run that did not measure it: NULL, not 0
+  CHECK(recorder.LoadAll()[0].approach_s == 3.25);
   CHECK(trials[0].obstacles == 2);
   CHECK(trials[0].completed);
   CHECK(trials[1].lap_time_s == 600.0);  // the cap, as the thesis scored driver B
@@ -361,18 +372,20 @@ TEST_CASE("A study planned before the database kept definitions resumes once, th
     StudyStore store(recorder, config, PlanTrials(config));
   }
   // What a v5 database holds: the same tables without the definition (v6)
-  // and the runs' prediction and link fault (v7).
+  // and the runs' prediction and link fault (v7), and the approach (v8).
   {
     sqlite3* raw = nullptr;
     REQUIRE(sqlite3_open(db.c_str(), &raw) == SQLITE_OK);
     REQUIRE(sqlite3_exec(raw,
                          "ALTER TABLE studies DROP COLUMN definition_form; ALTER TABLE runs DROP COLUMN predict; "
                          "ALTER TABLE runs DROP COLUMN link_fault; ALTER TABLE runs DROP COLUMN prediction_error_m_p50; "
-                         "ALTER TABLE runs DROP COLUMN prediction_error_m_p95; PRAGMA user_version = 5",
+                         "ALTER TABLE runs DROP COLUMN prediction_error_m_p95; ALTER TABLE runs DROP COLUMN approach_s; "
+                         "ALTER TABLE study_trials DROP COLUMN approach_s; ALTER TABLE study_trials DROP COLUMN flags; "
+                         "PRAGMA user_version = 5",
                          nullptr, nullptr, nullptr) == SQLITE_OK);
     sqlite3_close(raw);
   }
-  record::Recorder recorder(db);  // migrated to v7: the study has no definition on record
+  record::Recorder recorder(db);  // migrated to v8: the study has no definition on record
   auto resume = [&](const std::string& text) {
     test::WriteFile(file, text);
     const StudyConfig config = LoadStudy(file);

@@ -86,6 +86,31 @@ bool IsNumber(const std::string& text, double& value) {
   return end == text.c_str() + text.size() && std::isfinite(value);
 }
 
+/// A table cell's marks for `participant`'s trials of `condition`: "*" when
+/// one stopped at the cap (scored at it), "!" when one has flags (something
+/// could have spoiled it: trials.csv's flags column says what).
+std::string Marks(const StudyResults& results, const std::string& participant, const std::string& condition) {
+  bool capped = false;
+  bool flagged = false;
+  for (const StudyResults::Trial& t : results.trials) {
+    if (t.participant != participant || t.condition != condition) continue;
+    capped = capped || !t.completed;
+    flagged = flagged || !t.flags.empty();
+  }
+  return std::string(capped ? "*" : "") + (flagged ? "!" : "");
+}
+
+/// The flagged trials, one line each: who, what, and what could have spoiled it.
+std::vector<std::string> FlaggedTrials(const StudyResults& results) {
+  std::vector<std::string> lines;
+  for (const StudyResults::Trial& t : results.trials) {
+    if (t.flags.empty()) continue;
+    lines.push_back(t.participant + ", " + t.condition + " (position " + std::to_string(t.position) + ", run " +
+                    std::to_string(t.run_id) + "): " + t.flags);
+  }
+  return lines;
+}
+
 }  // namespace
 
 StudyResults LoadStudyResults(const std::filesystem::path& database, const std::string& name) {
@@ -150,12 +175,19 @@ StudyResults LoadStudyResults(const std::filesystem::path& database, const std::
   Stmt planned = Prepare(database, raw, "SELECT COUNT(*) FROM study_plan WHERE study_id = ?", "cannot read the plan");
   Binder(database, raw, planned.get()).Int(id);
   if (sqlite3_step(planned.get()) == SQLITE_ROW) r.trials_planned = static_cast<int>(Reader(planned.get()).Int());
-  Stmt trials = Prepare(database, raw,
-                        "SELECT t.participant, t.position, t.condition, t.lap_time_s, t.completed, t.obstacles, "
-                        "t.run_id, t.outcome, t.attempt FROM study_trials t JOIN study_participants s ON "
-                        "s.study_id = t.study_id AND s.participant = t.participant WHERE t.study_id = ? "
-                        "ORDER BY s.row_index, t.position",
-                        "cannot read the trials");
+  // Read-only, so not migrated: a database from before v8 has neither the
+  // approach nor the flags (read as unknown and none).
+  int version = 0;
+  {
+    Stmt pragma = Prepare(database, raw, "PRAGMA user_version", "cannot read the schema version");
+    if (sqlite3_step(pragma.get()) == SQLITE_ROW) version = static_cast<int>(Reader(pragma.get()).Int());
+  }
+  const std::string v8 = version >= 8 ? "t.approach_s, t.flags" : "NULL, ''";
+  const std::string select_trials =
+      "SELECT t.participant, t.position, t.condition, t.lap_time_s, t.completed, t.obstacles, t.run_id, t.outcome, "
+      "t.attempt, " + v8 + " FROM study_trials t JOIN study_participants s ON s.study_id = t.study_id AND "
+      "s.participant = t.participant WHERE t.study_id = ? ORDER BY s.row_index, t.position";
+  Stmt trials = Prepare(database, raw, select_trials.c_str(), "cannot read the trials");
   Binder(database, raw, trials.get()).Int(id);
   while (sqlite3_step(trials.get()) == SQLITE_ROW) {
     Reader row(trials.get());
@@ -169,6 +201,8 @@ StudyResults LoadStudyResults(const std::filesystem::path& database, const std::
     t.run_id = row.Int();
     t.outcome = row.Text();
     t.attempt = static_cast<int>(row.Int());
+    t.approach_s = row.Real();
+    t.flags = row.Text();
     r.trials.push_back(t);
   }
   Stmt answers = Prepare(database, raw,
@@ -292,13 +326,18 @@ std::string FormatReport(const StudyResults& results, const StudyReport& report)
   std::ostringstream o;
   o << "study " << results.name << ": " << results.trials.size() << " of " << results.trials_planned
     << " trials, " << results.participants.size() << " participants, " << results.conditions.size()
-    << " conditions (lap times in s as scored; unfinished laps count as the " << Fixed(results.trial_cap_s, 0)
-    << " s cap)\n";
+    << " conditions (lap times in s as scored, on the lap's clock from the start line; unfinished laps count "
+       "as the "
+    << Fixed(results.trial_cap_s, 0)
+    << " s cap, on the same clock; the approach before the line is trials.csv's approach_s, not scored)\n";
   for (const ConditionSummary& c : report.conditions) {
     o << "\n  " << c.name << "\n    " << std::string(10, ' ');
     for (const std::string& p : results.participants) o << " " << std::string(std::max<int>(0, 8 - static_cast<int>(p.size())), ' ') << p;
     o << "\n    Time      ";
-    for (const double v : c.lap_time_s) o << " " << std::string(std::max(0, 8 - static_cast<int>(Fixed(v, 2).size())), ' ') << Fixed(v, 2);
+    for (size_t p = 0; p < c.lap_time_s.size(); ++p) {
+      const std::string text = Fixed(c.lap_time_s[p], 2) + Marks(results, results.participants[p], c.name);
+      o << " " << std::string(std::max(0, 8 - static_cast<int>(text.size())), ' ') << text;
+    }
     o << "\n    Rank      ";
     for (const double r : c.rank) {
       const std::string text = std::isfinite(r) ? Ordinal(r) : "-";
@@ -309,6 +348,12 @@ std::string FormatReport(const StudyResults& results, const StudyReport& report)
     o << "\n    total " << Fixed(c.total_lap_time_s, 2) << " s, mean " << Fixed(c.mean_lap_time_s, 2) << " s, median "
       << Fixed(c.median_lap_time_s, 2) << " s, mean rank " << Fixed(c.mean_rank, 2) << ", obstacles "
       << c.total_obstacles << (c.unfinished > 0 ? ", unfinished " + std::to_string(c.unfinished) : "") << "\n";
+  }
+  o << "\n  (* capped: scored at the cap; ! flagged: something could have spoiled the trial)\n";
+  const std::vector<std::string> flagged = FlaggedTrials(results);
+  if (!flagged.empty()) {
+    o << "  flagged trials (scored like the others; a redo runs one again):\n";
+    for (const std::string& line : flagged) o << "    " << line << "\n";
   }
   o << "\n";
   if (!report.analysis) {
@@ -351,12 +396,16 @@ ReportFiles WriteReport(const StudyResults& results, const StudyReport& report, 
   files.ranks_png = dir / "ranks.png";
   files.html = dir / "index.html";
 
-  std::string trials = "study,participant,condition,position,lap_time_s,completed,obstacles,run_id,outcome,attempt\n";
+  std::string trials =
+      "study,participant,condition,position,lap_time_s,approach_s,completed,obstacles,run_id,outcome,attempt,"
+      "flags\n";
   for (const StudyResults::Trial& t : results.trials) {
     trials += Csv(results.name) + "," + Csv(t.participant) + "," + Csv(t.condition) + "," +
-              std::to_string(t.position) + "," + Fixed(t.lap_time_s, 3) + "," + (t.completed ? "true" : "false") +
+              std::to_string(t.position) + "," + Fixed(t.lap_time_s, 3) + "," +
+              (std::isfinite(t.approach_s) ? Fixed(t.approach_s, 3) : std::string()) + "," +
+              (t.completed ? "true" : "false") +
               "," + std::to_string(t.obstacles) + "," + std::to_string(t.run_id) + "," + Csv(t.outcome) + "," +
-              std::to_string(t.attempt) + "\n";
+              std::to_string(t.attempt) + "," + Csv(t.flags) + "\n";
   }
   WriteFile(files.trials_csv, trials);
   std::string answers = "study,participant,condition,questionnaire,item,value\n";
@@ -386,18 +435,30 @@ ReportFiles WriteReport(const StudyResults& results, const StudyReport& report, 
        "margin:0.5em 0 1.5em}td,th{border:1px solid #999;padding:0.2em 0.6em;text-align:right}"
        "th{background:#eee}caption{text-align:left;font-weight:bold}</style></head><body>\n";
   h << "<h1>Study " << Html(results.name) << "</h1>\n<p>" << results.trials.size() << " of " << results.trials_planned
-    << " trials; lap times in seconds as scored (an unfinished lap counts as the " << Fixed(results.trial_cap_s, 0)
-    << " s cap).</p>\n";
+    << " trials; lap times in seconds as scored, on the lap's clock: from the start line to the finish (an "
+       "unfinished lap counts as the "
+    << Fixed(results.trial_cap_s, 0)
+    << " s cap, on the same clock, whatever the interface). The time before the line (the approach, a "
+       "cockpit's grasp of its controls) is kept apart as <code>approach_s</code> in trials.csv and not "
+       "scored.</p>\n";
   for (const ConditionSummary& c : report.conditions) {
     h << "<table><caption>" << Html(c.name) << "</caption><tr><th>People</th>";
     for (const std::string& p : results.participants) h << "<th>" << Html(p) << "</th>";
     h << "<th>total</th></tr>\n<tr><th>Time</th>";
-    for (const double v : c.lap_time_s) h << "<td>" << Fixed(v, 2) << "</td>";
+    for (size_t p = 0; p < c.lap_time_s.size(); ++p) {
+      h << "<td>" << Fixed(c.lap_time_s[p], 2) << Html(Marks(results, results.participants[p], c.name)) << "</td>";
+    }
     h << "<td>" << Fixed(c.total_lap_time_s, 2) << "</td></tr>\n<tr><th>Rank</th>";
     for (const double r : c.rank) h << "<td>" << (std::isfinite(r) ? Ordinal(r) : "-") << "</td>";
     h << "<td>mean " << Fixed(c.mean_rank, 2) << "</td></tr>\n<tr><th>Obstacles</th>";
     for (const int v : c.obstacles) h << "<td>" << v << "</td>";
     h << "<td>" << c.total_obstacles << "</td></tr></table>\n";
+  }
+  h << "<p>* capped: scored at the cap. ! flagged: something could have spoiled the trial.</p>\n";
+  if (const std::vector<std::string> flagged = FlaggedTrials(results); !flagged.empty()) {
+    h << "<h2>Flagged trials</h2>\n<p>Scored like the others; the console's redo runs one again.</p>\n<ul>\n";
+    for (const std::string& line : flagged) h << "<li>" << Html(line) << "</li>\n";
+    h << "</ul>\n";
   }
   h << "<h2>Statistics</h2>\n<pre>";
   const std::string text = FormatReport(results, report);

@@ -85,6 +85,25 @@ double Quantile(std::vector<double> v, double q) {
   return v[lo] + (v[hi] - v[lo]) * (at - static_cast<double>(lo));
 }
 
+/// Whether any of `participant`'s trials of `condition` stopped at the cap
+/// (an unfinished lap, scored at the cap): its point is not a lap time.
+bool Capped(const StudyResults& results, const std::string& participant, const std::string& condition) {
+  for (const StudyResults::Trial& t : results.trials) {
+    if (t.participant == participant && t.condition == condition && !t.completed) return true;
+  }
+  return false;
+}
+
+/// A capped point: a hollow square crossed, in the participant's colour, so
+/// that it reads apart from a finished lap's dot even in grey print.
+void CappedMarker(cv::Mat& image, cv::Point at, const cv::Scalar& colour) {
+  constexpr int r = 7;
+  cv::rectangle(image, {at.x - r, at.y - r}, {at.x + r, at.y + r}, cv::Scalar(255, 255, 255), cv::FILLED);
+  cv::rectangle(image, {at.x - r, at.y - r}, {at.x + r, at.y + r}, colour, 2, cv::LINE_AA);
+  cv::line(image, {at.x - r, at.y - r}, {at.x + r, at.y + r}, colour, 1, cv::LINE_AA);
+  cv::line(image, {at.x - r, at.y + r}, {at.x + r, at.y - r}, colour, 1, cv::LINE_AA);
+}
+
 }  // namespace
 
 void DrawLapTimes(const StudyResults& results, const StudyReport& report, const std::filesystem::path& png) {
@@ -114,6 +133,7 @@ void DrawLapTimes(const StudyResults& results, const StudyReport& report, const 
     cv::rectangle(image, {x - half, f.Y(Quantile(values, 0.75))}, {x + half, f.Y(Quantile(values, 0.25))}, kInk, 1);
     cv::line(image, {x - half, f.Y(Quantile(values, 0.5))}, {x + half, f.Y(Quantile(values, 0.5))}, kInk, 2);
   }
+  bool any_capped = false;
   for (size_t p = 0; p < results.participants.size(); ++p) {
     cv::Point previous(-1, -1);
     for (size_t c = 0; c < k; ++c) {
@@ -124,13 +144,25 @@ void DrawLapTimes(const StudyResults& results, const StudyReport& report, const 
       }
       const cv::Point at(f.X(c, k), f.Y(v));
       if (previous.x >= 0) cv::line(image, previous, at, Colour(p), 2, cv::LINE_AA);
-      cv::circle(image, at, 4, Colour(p), cv::FILLED, cv::LINE_AA);
+      if (Capped(results, results.participants[p], report.conditions[c].name)) {
+        CappedMarker(image, at, Colour(p));
+        any_capped = true;
+      } else {
+        cv::circle(image, at, 4, Colour(p), cv::FILLED, cv::LINE_AA);
+      }
       previous = at;
     }
     const int y = kHeight - 25;
     const int x = kLeft + static_cast<int>(p) * 90;
     cv::line(image, {x, y - 4}, {x + 20, y - 4}, Colour(p), 2);
     Label(image, results.participants[p], {x + 25, y}, 0.45);
+  }
+  if (any_capped) {
+    // The legend's own entry, at the right of the participants'.
+    const int x = kWidth - kRight - 230;
+    const int y = kHeight - 25;
+    CappedMarker(image, {x + 8, y - 4}, kInk);
+    Label(image, "capped: scored at the " + Text(results.trial_cap_s, 0) + " s cap", {x + 22, y}, 0.45);
   }
   Save(image, png);
 }

@@ -26,6 +26,9 @@ class LapTimer {
 
   bool started() const { return started_; }
   bool completed() const { return completed_; }
+  /// When the vehicle crossed the start line (the lap clock's zero), in the
+  /// times given to Update; meaningful once started().
+  double start_t_s() const { return start_t_; }
   /// Lap time when completed, else time since the start so far (at the last update).
   double lap_time_s() const;
   int gates_total() const { return static_cast<int>(splits_.size()); }

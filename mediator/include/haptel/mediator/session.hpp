@@ -93,6 +93,12 @@ struct SessionSetup {
   int driver_experience = 0;
   /// End the run after this long, outcome "time limit" (0: no limit).
   double time_limit_s = 0.0;
+  /// End the run when the lap's clock (from the start line) passes this,
+  /// outcome "time limit" (0: no limit): a study's trial cap, the same lap
+  /// time for every interface whatever its approach and grasp took. Before
+  /// the line the approach counts against it, so a run that never reaches
+  /// the line ends too.
+  double lap_limit_s = 0.0;
   ViewKind view = ViewKind::kNone;
   /// The operator's view as H.264 MP4 (empty: none; needs a view).
   std::filesystem::path record;

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -68,7 +69,11 @@ struct RunRecord {
   std::string vehicle_kind;  ///< sim-robot, can-robot, can-robot-sim (v5; "" before)
   bool completed = false;
   std::string outcome;  ///< "completed", "lap cap", "vehicle lost", "interrupted", ...
-  double lap_time_s = 0.0;
+  double lap_time_s = 0.0;  ///< the lap's clock: from the start line
+  /// From the session's start to the start line (the approach and, in a
+  /// cockpit, the grasp of its controls), s: the whole run when the line
+  /// was never reached (v8; NaN before).
+  double approach_s = std::numeric_limits<double>::quiet_NaN();
   int gates_passed = 0;
   int gates_total = 0;
   int gates_missed = 0;

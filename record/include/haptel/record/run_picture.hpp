@@ -61,7 +61,9 @@ void WriteRunPicture(const RunPicture& picture, const std::filesystem::path& png
 void DrawRunPicture(const RunRecord& run, const TrackConfig& track,
                     const std::filesystem::path& png);
 
-/// Where a run's picture goes: <the database's folder>/pictures/run-<id>.png.
+/// Where a run's picture goes: <the database's folder>/pictures/<the
+/// database's stem>-run-<id>.png (runs.db's run 7: pictures/runs-run-7.png),
+/// so that two databases in one folder never share a picture's name.
 std::filesystem::path RunPicturePath(const std::filesystem::path& database, int64_t run_id);
 
 }  // namespace haptel::record

@@ -10,6 +10,7 @@
 /// first planned trial without a row, and nothing is recorded twice (the
 /// tables' keys forbid it).
 #include <cstdint>
+#include <limits>
 #include <map>
 #include <optional>
 #include <string>
@@ -41,12 +42,24 @@ struct TrialRow {
   int position = 0;
   std::string condition;
   int64_t run_id = 0;
-  double lap_time_s = 0.0;  ///< as scored: the cap for an unfinished lap
+  double lap_time_s = 0.0;  ///< as scored, on the lap's clock: the cap for an unfinished lap
+  /// Before the lap's clock started (the approach to the start line, a
+  /// cockpit's grasp), s; not part of the score. NaN: recorded before v8.
+  double approach_s = std::numeric_limits<double>::quiet_NaN();
   bool completed = false;
   int obstacles = 0;
   std::string outcome;
   int attempt = 1;
+  /// What could have spoiled the trial, from its run (TrialFlags); "": nothing.
+  std::string flags;
 };
+
+/// What in a trial's run could have spoiled it, "; "-separated ("" when
+/// nothing): a loop short of its rate (servo, physics), the link's faults
+/// (states missed, commands dropped), the vehicle's watchdog trips, the
+/// device lost, video that could not be decoded. A trial with flags is
+/// scored like any other; the report marks it and the experimenter may redo it.
+std::string TrialFlags(const record::RunRecord& run);
 
 struct AnswerRow {
   std::string participant;
@@ -96,7 +109,8 @@ class StudyStore {
   int TrialsDone(const std::string& participant) const;
 
   /// For Recorder::Save: writes the trial's row in the run's transaction,
-  /// scored from the run (an unfinished lap at the cap) — only when the
+  /// scored from the run on the lap's clock (an unfinished lap at the cap),
+  /// with the run's approach_s beside it — only when the
   /// run's outcome finishes a trial (FinishesTrial): a run that ended in a
   /// fault (vehicle or device lost, interrupted) is recorded, the trial is
   /// not, and a resumed study runs it again. Throws if the trial already

@@ -5,6 +5,7 @@
 /// questionnaires' summaries; written as CSV (long format, for R or pandas),
 /// PNG plots and one HTML page, and printed.
 #include <filesystem>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -27,12 +28,17 @@ struct StudyResults {
     std::string participant;
     int position = 0;
     std::string condition;
-    double lap_time_s = 0.0;  ///< as scored (an unfinished lap: the cap)
+    double lap_time_s = 0.0;  ///< as scored on the lap's clock (an unfinished lap: the cap)
+    /// Before the lap's clock started (approach, a cockpit's grasp); not
+    /// scored. NaN: recorded before the database kept it.
+    double approach_s = std::numeric_limits<double>::quiet_NaN();
     bool completed = false;
     int obstacles = 0;
     int64_t run_id = 0;
     std::string outcome;
     int attempt = 1;
+    /// What could have spoiled the trial (store.hpp TrialFlags); "": nothing.
+    std::string flags;
   };
   std::vector<Trial> trials;
   struct Answer {

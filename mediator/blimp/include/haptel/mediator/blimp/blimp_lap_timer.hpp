@@ -35,6 +35,9 @@ class BlimpLapTimer {
   void Update(const BlimpObservation& o);
 
   bool started() const { return started_; }
+  /// When the lap began (the lap clock's zero), in the states' times;
+  /// meaningful once started().
+  double start_t_s() const { return start_t_; }
   bool completed() const { return completed_; }
   bool crashed() const { return crashed_; }
   /// The lap cap passed before completion.
