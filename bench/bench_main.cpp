@@ -12,6 +12,7 @@
 #include "physics_bench.hpp"
 #include "servo_bench.hpp"
 #include "skip_bench.hpp"
+#include "passivity_bench.hpp"
 #include "stability_bench.hpp"
 #include "blimp_bench.hpp"
 #include "fuzz_bench.hpp"
@@ -38,6 +39,8 @@ constexpr Usage kUsage[] = {
     {"physics", "[--physics FILE] [--no-float] [--smoke] [--json]",
      "work-precision: step x iterations x float/double"},
     {"stability", "[--physics FILE] [--minutes M] [--smoke] [--json]", "physics stress tests"},
+    {"passivity", "[--device FILE] [--smoke] [--json]",
+     "the servo loop's passivity controller: largest stable wall stiffness against device delay, off and on"},
     {"view", "[--seconds S] [--domain D] [--smoke] [--json]",
      "the operator's view: frame rate, CPU, video-to-screen, servo beside it"},
     {"blimp", "[--vehicle FILE] [--smoke] [--json]",
@@ -59,7 +62,7 @@ constexpr Bench kBenches[] = {
     {"servo", BenchServoMain},         {"gravity", BenchGravityMain}, {"skip", BenchSkipMain},
     {"physics", BenchPhysicsMain},     {"stability", BenchStabilityMain}, {"view", BenchViewMain},
     {"blimp", BenchBlimpMain},         {"link", BenchLinkMain},
-    {"fuzz", BenchFuzzMain},
+    {"fuzz", BenchFuzzMain},           {"passivity", BenchPassivityMain},
 };
 
 std::string UsageText(const std::string& only) {

@@ -17,6 +17,8 @@ void ServoLoopConfig::ValidateOrThrow() const {
   check::Number("rate_hz", rate_hz, 100.0, 10000.0);
   check::Whole("slow_channel_divider", slow_channel_divider, 1, 1000);
   check::Whole("realtime_priority", realtime_priority, 0, 99);
+  check::Number("passivity_max_damping", passivity_max_damping, 0.0, 1e4);
+  check::Number("passivity_min_speed", passivity_min_speed, 1e-6, 1.0);
 }
 
 void SafetyConfig::ValidateOrThrow() const {
@@ -121,6 +123,13 @@ DeviceConfig LoadDevice(const std::filesystem::path& file) {
       servo.Integer("slow_channel_divider", d.servo.slow_channel_divider);
   d.servo.realtime_priority = servo.Integer("realtime_priority", d.servo.realtime_priority);
   d.servo.lock_memory = servo.Bool("lock_memory", d.servo.lock_memory);
+  if (servo.Has("passivity")) {
+    const std::string passivity = servo.String("passivity", "");
+    if (passivity != "on" && passivity != "off") servo.Fail("passivity", "on or off");
+    d.servo.passivity = passivity == "on";
+  }
+  d.servo.passivity_max_damping = servo.Number("passivity_max_damping", d.servo.passivity_max_damping);
+  d.servo.passivity_min_speed = servo.Number("passivity_min_speed", d.servo.passivity_min_speed);
   servo.Finish();
 
   YamlMap safety = root.Map("safety");

@@ -50,10 +50,22 @@ void Hal::SetForceScale(double scale) {
 }
 
 ForceSetpoint Hal::Setpoint(Side side) const {
-  ForceSetpoint sp = contacts_[Index(side)].Load();
   const StampedField f = fields_[Index(side)].Load();
-  sp.field = f.field;
-  if (sp.stamp_ns == 0 || (f.stamp_ns != 0 && f.stamp_ns < sp.stamp_ns)) sp.stamp_ns = f.stamp_ns;
+  return Combine(contacts_[Index(side)].Load(), f.field, f.stamp_ns);
+}
+
+bool Hal::TrySetpoint(Side side, ForceSetpoint& out) const {
+  ForceSetpoint contacts;
+  StampedField f;
+  if (!contacts_[Index(side)].TryLoad(contacts, kSetpointReadAttempts)) return false;
+  if (!fields_[Index(side)].TryLoad(f, kSetpointReadAttempts)) return false;
+  out = Combine(contacts, f.field, f.stamp_ns);
+  return true;
+}
+
+ForceSetpoint Hal::Combine(ForceSetpoint sp, const ForceField& latest_field, int64_t field_stamp_ns) const {
+  sp.field = latest_field;
+  if (sp.stamp_ns == 0 || (field_stamp_ns != 0 && field_stamp_ns < sp.stamp_ns)) sp.stamp_ns = field_stamp_ns;
   const double k = force_scale_.load(std::memory_order_relaxed);
   if (k != 1.0) {
     // Every force is linear in these gains, so scaling them scales the force.

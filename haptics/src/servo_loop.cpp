@@ -3,6 +3,7 @@
 #include <pthread.h>
 #include <sys/mman.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -32,6 +33,9 @@ ServoLoop::ServoLoop(Device& device, Hal& hal, const DeviceConfig& config,
   const DeviceDescription& d = device.description();
   for (int i = 0; i < kSides; ++i) {
     arms_[i] = std::make_unique<Arm>(ForceSafety(config.safety, d.wrist_force_limit, d.finger_force_limit));
+    const PassivityLimits limits{config.servo.passivity_max_damping, config.servo.passivity_min_speed};
+    arms_[i]->field_port = PassivityController(limits);
+    arms_[i]->coupling_port = PassivityController(limits);
   }
 }
 
@@ -65,6 +69,9 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
     device_.WriteWristForce(side, Vec3d{});
     device_.WriteFingerForces(side, {});
     arm.have_previous = false;
+    arm.last_tick_ns = 0;
+    arm.field_port.Reset();
+    arm.coupling_port.Reset();
     arm.published.Store(c);
     return;
   }
@@ -77,6 +84,7 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
     hal_.PublishWrist(side, arm.wrist);
     if (trace_ != nullptr) trace_->Push(TraceRecord::FromWrist(side, arm.wrist));
     const Vec3d p = TrackerToMetres(cal, arm.wrist.position);
+    for (int i = 0; i < 3; ++i) arm.displacement[i] = arm.have_previous ? p[i] - arm.previous_position[i] : 0.0;
     if (arm.have_previous && now_ns > arm.previous_ns) {
       const double dt = static_cast<double>(now_ns - arm.previous_ns) * 1e-9;
       const double alpha = dt / (kVelocityFilter_s + dt);
@@ -89,6 +97,7 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
     arm.have_previous = true;
   } else {
     ++c.no_data_ticks;
+    arm.displacement = Vec3d{};
   }
   if (!arm.have_previous) {
     arm.published.Store(c);
@@ -96,15 +105,36 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
   }
 
   // Forces from the latest set-point, at full rate whatever the feeders' rates.
-  const ForceSetpoint sp = hal_.Setpoint(side);
+  if (!hal_.TrySetpoint(side, arm.setpoint)) ++c.setpoint_read_fallbacks;
+  const ForceSetpoint& sp = arm.setpoint;
   const Vec3d& p = arm.previous_position;
   const Vec3d& v = arm.velocity;
-  Vec3d from_setpoint = EvaluateForceField(sp.field, p, v);
+  const Vec3d field = EvaluateForceField(sp.field, p, v);
+  Vec3d coupling{};
   for (int i = 0; i < 3; ++i) {
     if (sp.coupling_enabled) {
-      from_setpoint[i] += sp.coupling_stiffness * (sp.coupling_target[i] - p[i]) - sp.coupling_damping * v[i];
+      coupling[i] = sp.coupling_stiffness * (sp.coupling_target[i] - p[i]) - sp.coupling_damping * v[i];
     }
-    from_setpoint[i] += sp.wrist_force[i];
+    coupling[i] += sp.wrist_force[i];
+  }
+  Vec3d from_setpoint{};
+  for (int i = 0; i < 3; ++i) from_setpoint[i] = field[i] + coupling[i];
+  const double period_s = arm.last_tick_ns != 0 ? static_cast<double>(now_ns - arm.last_tick_ns) * 1e-9 : 0.0;
+  arm.last_tick_ns = now_ns;
+  if (config_.servo.passivity) {
+    bool acted = false;
+    for (PassivityController* port : {&arm.field_port, &arm.coupling_port}) {
+      const PassivityAction a =
+          port->Update(port == &arm.field_port ? field : coupling, arm.displacement, v, period_s);
+      if (!a.acted) continue;
+      acted = true;
+      c.passivity_dissipated_j += a.dissipated;
+      for (int i = 0; i < 3; ++i) {
+        from_setpoint[i] += a.damping_force[i];
+        c.passivity_max_alpha = std::max(c.passivity_max_alpha, a.alpha[i]);
+      }
+    }
+    if (acted) ++c.passivity_ticks;
   }
   Vec3d local{};
   if (gravity_ != nullptr) local[2] = gravity_->Evaluate(p);

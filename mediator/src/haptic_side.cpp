@@ -144,6 +144,11 @@ double HapticSide::silent_s() const {
 
 LoopStats HapticSide::Stats() const { return servo_->Stats(); }
 
+haptics::ServoCounters HapticSide::Counters(haptics::Side side) const {
+  if (!config_.sides[haptics::Index(side)]) return {};
+  return servo_->Counters(side);
+}
+
 haptics::ServoCounters HapticSide::Counters() const {
   haptics::ServoCounters sum;
   for (int i = 0; i < haptics::kSides; ++i) {
@@ -154,6 +159,10 @@ haptics::ServoCounters HapticSide::Counters() const {
     sum.device_lost_ticks += c.device_lost_ticks;
     sum.no_data_ticks += c.no_data_ticks;
     sum.write_failures += c.write_failures;
+    sum.setpoint_read_fallbacks += c.setpoint_read_fallbacks;
+    sum.passivity_ticks += c.passivity_ticks;
+    sum.passivity_dissipated_j += c.passivity_dissipated_j;
+    sum.passivity_max_alpha = std::max(sum.passivity_max_alpha, c.passivity_max_alpha);  // the largest, not a sum
     sum.safety.non_finite += c.safety.non_finite;
     sum.safety.clamped += c.safety.clamped;
     sum.safety.rate_limited += c.safety.rate_limited;

@@ -1,5 +1,6 @@
 #include "haptel/mediator/run_counters.hpp"
 
+#include <cmath>
 #include <cstdio>
 
 #include "haptel/core/clock.hpp"
@@ -9,6 +10,11 @@
 #include "haptel/mediator/vehicle_link.hpp"
 
 namespace haptel::mediator {
+
+namespace {
+/// A counter of a figure kept in SI units: `value` in thousandths, rounded.
+uint64_t Milli(double value) { return value > 0.0 ? static_cast<uint64_t>(std::llround(value * 1e3)) : 0; }
+}  // namespace
 
 std::vector<RunCounter> CollectCounters(const HapticSide& haptic, const SessionPhysics* physics,
                                         const VehicleLink& vehicle, const SessionView* view) {
@@ -32,6 +38,11 @@ std::vector<RunCounter> CollectCounters(const HapticSide& haptic, const SessionP
       {"servo_forces_clamped", servo.safety.clamped},
       {"servo_forces_rate_limited", servo.safety.rate_limited},
       {"servo_setpoint_stale_ticks", servo.safety.stale_ticks},
+      {"servo_setpoint_read_fallbacks", servo.setpoint_read_fallbacks},
+      {"servo_passivity_ticks", servo.passivity_ticks},
+      {"servo_passivity_left_mj", Milli(haptic.Counters(haptics::Side::kLeft).passivity_dissipated_j)},
+      {"servo_passivity_right_mj", Milli(haptic.Counters(haptics::Side::kRight).passivity_dissipated_j)},
+      {"servo_passivity_alpha_max_mns_m", Milli(servo.passivity_max_alpha)},
       {"physics_overruns", physics_overruns},
       {"physics_hand_resets", world.hand_resets},
       {"physics_body_resets", world.body_resets},

@@ -233,6 +233,21 @@ TEST_CASE("bench stability --smoke", "[bench][smoke]") {
                 "stability_grasp_release.csv", "stability_stiffness.png"});
 }
 
+TEST_CASE("bench passivity --smoke", "[bench][smoke]") {
+  const JsonValue j = Smoke("passivity").json;
+  CHECK(Finite(j["passivity_bound"]) > 0.0);
+  CHECK(Finite(j["stable_stiffness_off"]) >= 0.0);
+  CHECK(Finite(j["stable_stiffness_on"]) >= 0.0);
+  CHECK(Finite(j["cost_us_p99"]) >= 0.0);
+  const auto& points = j["points"].array();
+  CHECK(points.size() == 12);  // 2 delays x 2 modes x 3 stiffnesses
+  for (const JsonValue& p : points) {
+    CHECK(Finite(p["force_rms_err_n"]) >= 0.0);
+    CHECK(Finite(p["energy_j"]) >= 0.0);
+  }
+  RequireFiles({"passivity.csv", "passivity.png"});
+}
+
 TEST_CASE("bench view --smoke", "[bench][smoke]") {
   // Offscreen, whatever display the suite has; the vehicle on a domain of its own.
   unsetenv("DISPLAY");

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "haptel/core/seqlock.hpp"
+#include "seqlock_access.hpp"
 #include "test_env.hpp"
 
 namespace {
@@ -157,4 +158,22 @@ TEST_CASE("Seqlock: concurrent readers never see a torn or older value", "[seqlo
   }
   CHECK(Consistent(lock.Load()));
   CHECK(lock.Load().ints[0] == kStores);
+}
+
+TEST_CASE("Seqlock: TryLoad gives up on a store held in progress and keeps the caller's value", "[seqlock]") {
+  haptel::Seqlock<Sample> lock(MakeSample(3));
+  Sample out = MakeSample(9);
+  REQUIRE(lock.TryLoad(out, 1));
+  CHECK(out.ints[0] == 3);
+
+  // A writer pre-empted between its two sequence bumps.
+  haptel::SeqlockTestAccess::BeginStore(lock);
+  out = MakeSample(9);
+  CHECK_FALSE(lock.TryLoad(out, 4));
+  CHECK(out.ints[0] == 9);  // untouched: the caller's last good value
+  CHECK(Consistent(out));
+
+  haptel::SeqlockTestAccess::EndStore(lock);
+  REQUIRE(lock.TryLoad(out, 1));
+  CHECK(out.ints[0] == 3);
 }

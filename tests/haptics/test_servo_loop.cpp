@@ -1,3 +1,4 @@
+#include <atomic>
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <cmath>
@@ -8,11 +9,20 @@
 #include "haptel/haptics/servo_loop.hpp"
 #include "haptel/haptics/sim_device.hpp"
 #include "scripted_device.hpp"
+#include "seqlock_access.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;
 using namespace haptel::haptics;
 using haptel::test::ScriptedDevice;
+
+namespace haptel::haptics {
+/// Holds the interface's field store for a side half done (Hal's friend).
+struct HalTestAccess {
+  static void BeginFieldStore(Hal& hal, Side side) { SeqlockTestAccess::BeginStore(hal.fields_[Index(side)]); }
+  static void EndFieldStore(Hal& hal, Side side) { SeqlockTestAccess::EndStore(hal.fields_[Index(side)]); }
+};
+}  // namespace haptel::haptics
 
 namespace {
 constexpr int64_t kMs = 1'000'000;
@@ -157,24 +167,66 @@ TEST_CASE("non-finite and oversized forces are made safe and counted") {
   CHECK(loop.Counters(Side::kRight).safety.non_finite == 1);
 }
 
-TEST_CASE("a servo tick allocates nothing") {
-  ScriptedDevice dev(true, true);
+TEST_CASE("a servo tick allocates nothing, with the passivity controller off and on") {
+  for (const bool passivity : {false, true}) {
+    INFO("passivity " << (passivity ? "on" : "off"));
+    ScriptedDevice dev(true, true);
+    Hal hal(Identity());
+    DeviceConfig config = Immediate();
+    config.servo.passivity = passivity;
+    ServoLoop loop(dev, hal, config, Identity());
+    ForceField f = Spring(40);
+    f.wall_active = true;
+    f.wall_stiffness = 1000;
+    ForceSetpoint coupling;
+    coupling.coupling_enabled = true;
+    coupling.coupling_stiffness = 3000;
+    for (int i = 1; i <= 10; ++i) {  // warm up
+      loop.Tick(Side::kLeft, i * kMs);
+      loop.Tick(Side::kRight, i * kMs);
+    }
+    SetField(hal, Side::kRight, f, 10 * kMs);
+    const uint64_t before = test::ThreadAllocations();
+    for (int i = 11; i < 2000; ++i) {
+      // The hand oscillates, so the sampled springs leak and the controller acts.
+      dev.position[1] = {0.01 * std::sin(i * 0.05), 0, 0};
+      hal.SetSetpoint(Side::kRight, coupling, i * kMs);
+      loop.Tick(Side::kLeft, i * kMs);
+      loop.Tick(Side::kRight, i * kMs);
+    }
+    CHECK(test::ThreadAllocations() == before);
+    CHECK((loop.Counters(Side::kRight).passivity_ticks > 0) == passivity);
+  }
+}
+
+TEST_CASE("a set-point store held in progress: the tick uses the last good set-point and counts it") {
+  ScriptedDevice dev;
   Hal hal(Identity());
   ServoLoop loop(dev, hal, Immediate(), Identity());
-  ForceField f = Spring(40);
-  f.wall_active = true;
-  f.wall_stiffness = 1000;
-  for (int i = 1; i <= 10; ++i) {  // warm up
-    loop.Tick(Side::kLeft, i * kMs);
-    loop.Tick(Side::kRight, i * kMs);
-  }
-  SetField(hal, Side::kRight, f, 10 * kMs);
-  const uint64_t before = test::ThreadAllocations();
-  for (int i = 11; i < 2000; ++i) {
-    loop.Tick(Side::kLeft, i * kMs);
-    loop.Tick(Side::kRight, i * kMs);
-  }
-  CHECK(test::ThreadAllocations() == before);
+  dev.position[1] = {0.02, 0, 0};
+  SetField(hal, Side::kRight, Spring(100), 1 * kMs);
+  loop.Tick(Side::kRight, 1 * kMs);
+  REQUIRE(dev.wrist_command[1][0] == Approx(-2.0));
+
+  // The interface thread is pre-empted half-way through its next store.
+  HalTestAccess::BeginFieldStore(hal, Side::kRight);
+  std::atomic<bool> ticked{false};
+  std::thread servo([&] {
+    loop.Tick(Side::kRight, 2 * kMs);
+    ticked = true;
+  });
+  // Unbounded retries would spin until the writer resumes: it resumes only
+  // after this wait, so a loop that retries without bound fails it.
+  const bool finished = test::WaitFor([&] { return ticked.load(); }, 10.0);
+  HalTestAccess::EndFieldStore(hal, Side::kRight);
+  servo.join();
+  CHECK(finished);
+  CHECK(dev.wrist_command[1][0] == Approx(-2.0));  // the last good field's force
+  CHECK(loop.Counters(Side::kRight).setpoint_read_fallbacks == 1);
+
+  loop.Tick(Side::kRight, 3 * kMs);  // the store is done: read again, nothing counted
+  CHECK(loop.Counters(Side::kRight).setpoint_read_fallbacks == 1);
+  CHECK(dev.wrist_command[1][0] == Approx(-2.0));
 }
 
 TEST_CASE("two-sided mode: both arms run on their own threads and meet every cycle, allocating nothing") {

@@ -19,8 +19,17 @@ struct ServoLoopConfig {
   int slow_channel_divider = 6;
   int realtime_priority = 80;  ///< SCHED_FIFO priority when the process may (0: do not ask)
   bool lock_memory = true;     ///< mlockall when the process may
+  /// The time-domain passivity observer and controller on the wrist ports
+  /// (haptel/haptics/passivity.hpp); `passivity: on|off` in the file.
+  bool passivity = false;
+  /// N·s/m: the most damping the controller may add, the device's largest
+  /// stable damping (a figure of the device, like its force limit).
+  double passivity_max_damping = 20.0;
+  /// m/s: the controller's floor on |v|, so α = −E/(T·v²) stays finite near rest.
+  double passivity_min_speed = 0.002;
 
-  /// Throws ConfigFieldError unless the rate, divider and priority are in range.
+  /// Throws ConfigFieldError unless the rate, divider, priority and the
+  /// passivity limits are in range.
   void ValidateOrThrow() const;
 };
 

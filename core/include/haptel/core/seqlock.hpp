@@ -13,6 +13,12 @@
 /// store's odd sequence number and retries. On x86-64 both are plain moves,
 /// as the fences were; unlike fences, ThreadSanitizer understands them
 /// (GCC warns, -Wtsan, that it does not model atomic_thread_fence).
+///
+/// Load() retries for as long as a store is in progress: right for slower
+/// threads. A real-time reader uses TryLoad(), which gives up after a few
+/// attempts — a writer pre-empted mid-store on a shared core under SCHED_FIFO
+/// would otherwise stall it until the writer runs again — and keeps its last
+/// good value instead.
 #include <array>
 #include <atomic>
 #include <cstdint>
@@ -40,20 +46,29 @@ class Seqlock {
     seq_.store(seq + 2, std::memory_order_release);
   }
 
-  /// Returns the latest complete value. Any number of readers; lock-free.
+  /// Returns the latest complete value. Any number of readers; lock-free
+  /// but not wait-free: it retries while a store is in progress.
   T Load() const {
     Words words{};
-    uint64_t before = 0;
-    uint64_t after = 0;
-    do {
-      before = seq_.load(std::memory_order_acquire);
-      // Acquire: the check below cannot move before these loads.
-      for (size_t i = 0; i < kWords; ++i) words[i] = data_[i].load(std::memory_order_acquire);
-      after = seq_.load(std::memory_order_relaxed);
-    } while ((before & 1U) != 0 || before != after);
-    T value;
-    std::memcpy(static_cast<void*>(&value), words.data(), sizeof(T));
-    return value;
+    while (!TryCopy(words)) {
+    }
+    return FromWords(words);
+  }
+
+  /// Attempts a complete read at most `max_attempts` (>= 1) times. On success
+  /// writes the value into `out` and returns true; when every attempt met a
+  /// store in progress (or overtaken by one) leaves `out` untouched and
+  /// returns false, so a caller that keeps its last good value in `out`
+  /// simply goes on with it. Wait-free: bounded by `max_attempts`.
+  bool TryLoad(T& out, int max_attempts) const {
+    Words words{};
+    for (int attempt = 0; attempt < max_attempts; ++attempt) {
+      if (TryCopy(words)) {
+        out = FromWords(words);
+        return true;
+      }
+    }
+    return false;
   }
 
   /// Number of completed stores; lets a reader tell whether a value is new.
@@ -62,6 +77,23 @@ class Seqlock {
  private:
   static constexpr size_t kWords = (sizeof(T) + sizeof(uint64_t) - 1) / sizeof(uint64_t);
   using Words = std::array<uint64_t, kWords>;
+  /// Tests hold a store half done through this (it may set seq_ odd).
+  friend struct SeqlockTestAccess;
+
+  /// One read attempt: true when `words` holds a complete value.
+  bool TryCopy(Words& words) const {
+    const uint64_t before = seq_.load(std::memory_order_acquire);
+    if ((before & 1U) != 0) return false;  // a store is in progress
+    // Acquire: the check below cannot move before these loads.
+    for (size_t i = 0; i < kWords; ++i) words[i] = data_[i].load(std::memory_order_acquire);
+    return seq_.load(std::memory_order_relaxed) == before;
+  }
+
+  static T FromWords(const Words& words) {
+    T value;
+    std::memcpy(static_cast<void*>(&value), words.data(), sizeof(T));
+    return value;
+  }
   std::atomic<uint64_t> seq_{0};
   std::array<std::atomic<uint64_t>, kWords> data_{};
 };

@@ -51,6 +51,15 @@ class Hal {
   /// feeders' stamps (a feeder that never wrote is ignored), so either one
   /// stalling fades the forces.
   ForceSetpoint Setpoint(Side side) const;
+  /// Servo threads: Setpoint() with every seqlock read bounded to
+  /// kSetpointReadAttempts attempts. True with `out` the set-point; false when
+  /// a feeder's store stayed in progress through every attempt (its thread
+  /// pre-empted mid-store), `out` then untouched: the caller keeps its last
+  /// good set-point, whose stamp ages so that forces fade if the stall lasts.
+  bool TrySetpoint(Side side, ForceSetpoint& out) const;
+  /// A few attempts: a store takes tens of nanoseconds, so a store that
+  /// outlasts them is a writer pre-empted mid-store, not one about to finish.
+  static constexpr int kSetpointReadAttempts = 4;
 
   // --- Slower threads. Each slot has one writer: the interface (session)
   // thread writes fields, the physics thread writes the rest. ---
@@ -84,7 +93,11 @@ class Hal {
   uint64_t glove_samples(Side side) const { return glove_count_[Index(side)].load(); }
 
  private:
+  /// Tests hold a feeder's store half done through this.
+  friend struct HalTestAccess;
   Vec3d ToMetres(Side side, const Vec3d& raw) const;
+  /// Combines the two feeders' parts and applies the force scale.
+  ForceSetpoint Combine(ForceSetpoint contacts, const ForceField& latest_field, int64_t field_stamp_ns) const;
 
   DeviceCalibration calibration_;
   std::array<Seqlock<WristRaw>, kSides> wrist_;

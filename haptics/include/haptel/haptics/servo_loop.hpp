@@ -11,6 +11,18 @@
 /// coupling, direct force, finger forces) plus gravity compensation, through
 /// ForceSafety; the commands to the device. A cycle allocates nothing, takes
 /// no lock a slower thread can hold, and logs nothing: it counts.
+///
+/// The set-point is read with a bounded number of seqlock attempts
+/// (Hal::TrySetpoint); when a feeder's store stays in progress through them
+/// the tick uses the last good set-point and counts it.
+///
+/// With `servo.passivity` on, each wrist port — the interface's force field,
+/// and the physics thread's proxy coupling with its direct force — has a
+/// passivity observer and controller per axis (passivity.hpp) that adds just
+/// the damping that keeps the port from generating energy. The fingers have
+/// none: the loop has no finger velocity (the glove is read every N-th cycle
+/// and the grasp strings report force), and their unilateral pulls come from
+/// the physics thread's proxy fingers.
 #include <array>
 #include <atomic>
 #include <barrier>
@@ -24,6 +36,7 @@
 #include "haptel/core/seqlock.hpp"
 #include "haptel/haptics/device.hpp"
 #include "haptel/haptics/hal.hpp"
+#include "haptel/haptics/passivity.hpp"
 #include "haptel/haptics/safety.hpp"
 
 namespace haptel::haptics {
@@ -38,6 +51,12 @@ struct ServoCounters {
   uint64_t device_lost_ticks = 0;  ///< cycles the arm reported kLost (forces zeroed)
   uint64_t no_data_ticks = 0;      ///< cycles without a fresh wrist reading
   uint64_t write_failures = 0;     ///< force commands the device did not take
+  /// Ticks whose set-point read met a feeder's store in progress through every
+  /// bounded attempt: the tick used the last good set-point.
+  uint64_t setpoint_read_fallbacks = 0;
+  uint64_t passivity_ticks = 0;        ///< ticks the passivity controller added damping
+  double passivity_dissipated_j = 0.0; ///< J it dissipated (predicted T·α·v², summed)
+  double passivity_max_alpha = 0.0;    ///< N·s/m, the largest damping it added
   SafetyCounters safety;
 };
 
@@ -81,6 +100,11 @@ class ServoLoop {
     Vec3d previous_position{};
     int64_t previous_ns = 0;
     Vec3d velocity{};  ///< low-pass filtered, m/s
+    Vec3d displacement{};  ///< m, since the previous tick (0 without a fresh reading)
+    int64_t last_tick_ns = 0;  ///< 0: no previous tick to take a period from
+    ForceSetpoint setpoint;    ///< the last good set-point read
+    PassivityController field_port;
+    PassivityController coupling_port;
     uint64_t cycle = 0;
     WristRaw wrist{};
     GloveRaw glove{};

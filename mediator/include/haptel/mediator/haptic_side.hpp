@@ -78,6 +78,8 @@ class HapticSide {
   LoopStats Stats() const;
   /// The servo loop's counters, summed over the arms the device has. Any thread.
   haptics::ServoCounters Counters() const;
+  /// One arm's counters (all zero for an arm the device does not have). Any thread.
+  haptics::ServoCounters Counters(haptics::Side side) const;
   /// The servo loop's target rate (the device file's servo.rate_hz).
   double target_hz() const { return config_.servo.rate_hz; }
   /// The servo loop's period distribution (the right arm's when it has one).
