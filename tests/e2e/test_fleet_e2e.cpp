@@ -112,6 +112,24 @@ TEST_CASE("the automatic operator completes every robot of three-robots.yaml, ha
   CHECK(runs[0].config_name.rfind("fleet three-robots ", 0) == 0);
 }
 
+TEST_CASE("a fleet of a robot and a blimp: the robot drives its lap, the blimp flies its hop and lands") {
+  const auto dir = test::ScratchDir("e2e-fleet-mixed");
+  auto argv = FleetArgs("config/fleets/robot-and-blimp.yaml", test::UniqueDomain(55), dir / "runs.db");
+  argv.push_back("--quiet");
+  Child run(argv);
+  const int code = run.Wait(400.0);
+  INFO("stdout:\n" << run.out() << "\nstderr:\n" << run.err());
+  REQUIRE(code == 0);
+  const std::string json = run.LastLine();
+  CHECK(JsonField(json, "vehicles_completed") == "2");
+  CHECK(JsonField(VehicleEntry(json, "robot-a"), "kind") == "sim-robot");
+  CHECK(JsonField(VehicleEntry(json, "blimp-a"), "kind") == "sim-blimp");
+  CHECK(JsonField(VehicleEntry(json, "blimp-a"), "completed") == "true");
+  // The blimp waited at neutral while the robot drove. (Whether its
+  // watchdog ever tripped depends on the machine's load: not asserted.)
+  CHECK(std::stod(JsonField(VehicleEntry(json, "blimp-a"), "neglected_s")) > 0.0);
+}
+
 TEST_CASE("a robot killed mid-run is reported lost by name; the other completes its lap") {
   const auto dir = test::ScratchDir("e2e-fleet-lost");
   const fs::path fleet = RobotFleet(dir, {"robot-a", "robot-b"}, 0.0);
