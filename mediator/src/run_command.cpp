@@ -27,6 +27,7 @@
 #include "haptel/link/security.hpp"
 #include "haptel/calibration/calibration_procedure.hpp"
 #include "haptel/mediator/controller_errors.hpp"
+#include "haptel/mediator/fleet.hpp"
 #include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/run_counters.hpp"
 #include "haptel/record/run_picture.hpp"
@@ -85,6 +86,9 @@ constexpr const char* kRunUsage =
     "  --database FILE      SQLite file for the results (overrides 'database')\n"
     "  --vehicle-timeout S  no vehicle state for S seconds: vehicle lost\n"
     "  --trace FILE         record the haptic device's readings (for the replay driver)\n"
+    "  --fleet FILE         one operator, several vehicles (config/fleets/*.yaml): each vehicle\n"
+    "                       spawned or attached as the file says, driven one at a time, the\n"
+    "                       others held safe; one row per vehicle in the database\n"
     "  --json               end with one JSON line of results on stdout\n"
     "  --quiet              no progress lines\n";
 
@@ -141,7 +145,8 @@ Args ParseRunArgs(int argc, const char* const* argv) {
   return Args(argc, argv,
               {"config", "track", "interface", "scene", "vehicle-name", "domain", "database", "vehicle-timeout",
                "trace", "operator", "device", "trace-in", "time-limit", "lap-limit", "view", "record", "vehicle",
-               "predict", "link-fault", "link-profile", "security", "dds-interfaces", "dds-peers", "discovery-server"},
+               "predict", "link-fault", "link-profile", "security", "dds-interfaces", "dds-peers", "discovery-server",
+               "fleet"},
               {"json", "quiet", "attach"});
 }
 
@@ -499,6 +504,11 @@ int RunCommand(int argc, const char* const* argv) {
   // First: a signal while the files are read ends the run as soon as it starts.
   const std::atomic<bool>& interrupted = InstallStopSignals();
   return cli::Main({"haptel run", kRunUsage}, argc, argv, [&] {
+    // One operator, several vehicles: its own command over the same options (fleet.hpp).
+    for (int i = 1; i < argc; ++i) {
+      const std::string word = argv[i];
+      if (word == "--fleet" || word.rfind("--fleet=", 0) == 0) return RunFleetCommand(argc, argv, interrupted);
+    }
     bool json = false;
     const SessionSetup setup = cli::ReadInput([&] {
       const Args args = ParseRunArgs(argc, argv);

@@ -54,8 +54,25 @@ void StateInboxOf<State>::Push(const State& s) {
           std::max(counts_.commands_dropped, dropped_before_ + echoed - accepted);
     }
   }
+  if (echo_watch_ns_ != 0 && echo_received_ns_ == 0 && s.last_command_seq() != 0 &&
+      s.last_command_sent_ns() >= echo_watch_ns_) {
+    echo_received_ns_ = now;
+  }
   entries_.push_back({s, now});
   last_received_ns_ = now;
+}
+
+template <typename State>
+void StateInboxOf<State>::WatchEcho(int64_t sent_ns) {
+  std::lock_guard lock(mutex_);
+  echo_watch_ns_ = sent_ns;
+  echo_received_ns_ = 0;
+}
+
+template <typename State>
+int64_t StateInboxOf<State>::EchoReceivedNs() const {
+  std::lock_guard lock(mutex_);
+  return echo_received_ns_;
 }
 
 template <typename State>

@@ -62,9 +62,17 @@ class StateInboxOf {
   /// Forgets the round trips so far (a benchmark's warm-up).
   void ResetRtt() { rtt_.Reset(); }
   LinkCounts Counts() const;
+  /// Watches for the first state that echoes a command sent at or after
+  /// `sent_ns` (MonotonicNs; 0: stop watching): the vehicle obeying a
+  /// command given from then on (a fleet's handover).
+  void WatchEcho(int64_t sent_ns);
+  /// When that state arrived (MonotonicNs); 0: none yet.
+  int64_t EchoReceivedNs() const;
 
  private:
   mutable std::mutex mutex_;
+  int64_t echo_watch_ns_ = 0;
+  int64_t echo_received_ns_ = 0;
   std::deque<Entry> entries_;
   int64_t last_received_ns_ = 0;
   uint64_t last_echo_seq_ = 0;
@@ -96,6 +104,9 @@ class LinkChannel {
   /// Sends the family's safe command (every value zero: motors stopped,
   /// every channel neutral); `release` frees the vehicle for another operator.
   virtual void SendSafe(bool release) = 0;
+  /// StateInboxOf::WatchEcho and EchoReceivedNs.
+  virtual void WatchEcho(int64_t sent_ns) = 0;
+  virtual int64_t EchoReceivedNs() const = 0;
 };
 
 /// One family's command writer and state reader (Messages: link's
@@ -119,6 +130,8 @@ class CommandChannel final : public LinkChannel {
   LinkCounts Counts() const override { return inbox_.Counts(); }
   int VehiclesOnTopic() const override;
   void SendSafe(bool release) override;
+  void WatchEcho(int64_t sent_ns) override { inbox_.WatchEcho(sent_ns); }
+  int64_t EchoReceivedNs() const override { return inbox_.EchoReceivedNs(); }
 
  private:
   Inbox inbox_;
@@ -175,6 +188,10 @@ class VehicleLink {
   /// What this side's fault transport did to what it received (all zero
   /// without a link fault); the vehicle reports its own side on its stderr.
   link::FaultCounts FaultCounts() const;
+  /// The first state echoing a command sent at or after `sent_ns`: when it
+  /// arrived (0: none yet). See StateInboxOf::WatchEcho.
+  void WatchEcho(int64_t sent_ns) { channel_->WatchEcho(sent_ns); }
+  int64_t EchoReceivedNs() const { return channel_->EchoReceivedNs(); }
   const VideoReceiver& video() const { return *video_; }
   /// False once a spawned vehicle process has exited (always true for a
   /// vehicle that runs elsewhere).

@@ -1,0 +1,88 @@
+#pragma once
+/// @file One operator, several vehicles (`haptel run --fleet FILE`, issue 30).
+///
+/// One session holds every vehicle of a fleet file: each vehicle's link
+/// (its own process, or one already running), its family's part (track or
+/// course, lap timer, interface, the operator's view of it) and its health,
+/// over one haptic device. One vehicle is driven at a time; every other is
+/// held safe at every tick (the family's safe command: the robot stopped,
+/// the blimp at neutral with its helix level and its engines off), never
+/// left to its own watchdog.
+///
+/// Who commands each vehicle is its CommandMux (command_mux.hpp): the
+/// input "operator" while it is the driven one, and the lock "handover"
+/// while the operator turns to it or away from it (zero at once when the
+/// lock takes it). A handover runs from the switch request until the newly
+/// driven vehicle's first state that echoes a command sent after its lock
+/// was released — the lock is released once a state newer than the request
+/// came in, so the operator sees where it is before commanding it.
+///
+/// The automatic operator drives each vehicle until its lap is done or the
+/// fleet's time slice ends, then turns to the next whose course is not
+/// done. A vehicle lost mid-run is reported by name and the others go on;
+/// another operator holding any of them, or a second vehicle answering
+/// under one of the names, ends the whole run (nothing of it is ours).
+#include <atomic>
+#include <string>
+#include <vector>
+
+#include "haptel/config/fleet.hpp"
+#include "haptel/mediator/session.hpp"
+
+namespace haptel::mediator {
+
+struct FleetSetup {
+  FleetConfig fleet;
+  /// One per vehicle of the fleet, in its order: each as `haptel run` sets
+  /// up that vehicle alone. The haptic device, the operator, the view and
+  /// the time limit are the first one's (the same in all).
+  std::vector<SessionSetup> vehicles;
+};
+
+/// The operator's watch name for the mux's input and lock.
+inline constexpr const char* kOperatorInput = "operator";
+inline constexpr const char* kHandoverLock = "handover";
+
+struct FleetVehicleResult {
+  /// Its own outcome and record (one row in the runs database).
+  SessionResult result;
+  /// Olsen & Goodrich: the time the operator drove it (interaction), and
+  /// the time it waited for the operator while its course was not done
+  /// (neglect), s.
+  double driven_s = 0.0;
+  double neglected_s = 0.0;
+  /// The mux's selection on the last tick it was in the run: "operator",
+  /// "lock:handover" or "none".
+  std::string selected = "none";
+  int handovers = 0;  ///< times the operator turned to it (the first not counted)
+};
+
+struct FleetResult {
+  Outcome outcome = Outcome::kInterrupted;
+  std::string message;  ///< one line: each vehicle's end
+  std::vector<FleetVehicleResult> vehicles;
+  /// Each handover's time, switch request to the new vehicle obeying, ms.
+  std::vector<double> handover_ms;
+  double handover_ms_p50 = -1.0;  ///< nearest rank; negative: no handover
+  double handover_ms_p95 = -1.0;
+  std::vector<std::string> lost;  ///< the vehicles lost mid-run, by name
+  std::string fleet_run;          ///< "fleet <name> <started, UTC>": shared by its rows
+};
+
+/// Runs the fleet until every vehicle's course is done (completed, lost,
+/// crashed or capped: a vehicle's lap cap counts the time it was driven),
+/// the time limit, the device lost, a refusal or conflict, or
+/// `interrupted`. Throws ConfigError / std::runtime_error for parts that
+/// cannot be set up (before anything moves).
+FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupted);
+
+/// `haptel run --fleet FILE ...` (argv[0] is "run"): sets up each vehicle
+/// as `haptel run` would with the fleet file's vehicle, world, name and
+/// interface, runs the fleet, records one row per vehicle, prints a table
+/// on stderr and, with --json, one line on stdout. Returns the exit code.
+int RunFleetCommand(int argc, const char* const* argv, const std::atomic<bool>& interrupted);
+
+/// The nearest-rank percentile `p` in (0, 1] of `values`; -1 when empty.
+double NearestRank(std::vector<double> values, double p);
+
+}  // namespace haptel::mediator
