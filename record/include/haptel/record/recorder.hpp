@@ -81,6 +81,10 @@ struct RunRecord {
   int64_t video_frames = 0;
   double video_fps = 0.0;
   double video_latency_ms_p50 = 0.0;
+  double video_kbps = 0.0;     ///< the video's bitrate as received (v8)
+  /// Time the screen showed an old picture marked stale, waiting for an
+  /// H.264 key frame after a lost or corrupt frame (v8; 0 for JPEG).
+  double video_stale_s = 0.0;
   /// The predictive display: whether the operator saw the prediction, and
   /// the model's error against each state at the moment it was sampled
   /// (m; -1: no state to compare).

@@ -38,6 +38,8 @@ struct NodeCounters {
   uint64_t grabs_failed = 0;   ///< the camera source delivered no frame
   uint64_t camera_stalls = 0;  ///< stretches of failed grabs long enough to count (GrabMonitor)
   bool camera_ended = false;   ///< a file source that does not loop has ended
+  uint64_t key_frame_requests = 0;  ///< the operator's, received (a video frame lost)
+  uint64_t key_frames_sent = 0;     ///< frames published that decode alone
   bool watchdog_expired = true;
 };
 
@@ -58,6 +60,8 @@ NodeCounters MakeNodeCounters(const CommandIntake<Command>& commands, const Came
   c.grabs_failed = camera.grabs_failed;
   c.camera_stalls = camera.camera_stalls;
   c.camera_ended = camera.camera_ended;
+  c.key_frame_requests = camera.key_frame_requests;
+  c.key_frames_sent = camera.key_frames_sent;
   return c;
 }
 
