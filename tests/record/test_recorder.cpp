@@ -390,7 +390,7 @@ TEST_CASE("Recorder set-up errors name the database file", "[recorder]") {
       raw.Exec("PRAGMA user_version = 9");
     }
     RequireThrowsMentioning([&] { Recorder recorder(file); }, file.string());
-    RequireThrowsMentioning([&] { Recorder recorder(file); }, "schema version 8");
+    RequireThrowsMentioning([&] { Recorder recorder(file); }, "schema version 9");
   }
 
   SECTION("the path is a folder") {
