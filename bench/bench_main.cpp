@@ -13,6 +13,7 @@
 #include "servo_bench.hpp"
 #include "skip_bench.hpp"
 #include "passivity_bench.hpp"
+#include "video_bench.hpp"
 #include "stability_bench.hpp"
 #include "blimp_bench.hpp"
 #include "fuzz_bench.hpp"
@@ -49,6 +50,8 @@ constexpr Usage kUsage[] = {
      "[--seconds S] [--track FILE] [--delays MS,...] [--losses PERCENT,...] [--predict off|on|both] "
      "[--link-profile NAME] [--domain D] [--lap-domain D] [--smoke] [--json]",
      "DDS round trip against raw Fast DDS; the lap against the link's delay and loss, with and without prediction"},
+    {"video", "[--vehicle FILE] [--track FILE] [--smoke] [--json]",
+     "the link's video codecs: JPEG qualities and H.264 bitrates against SSIM, PSNR and CPU; the Pareto front"},
     {"fuzz", "[--inputs N] [--target NAME] [--seed S] [--smoke] [--json]",
      "every parser fed 10^6 mutated inputs: configs, scenes, UDP, servo bytes, CAN, DDS samples, console HTTP"},
 };
@@ -63,6 +66,7 @@ constexpr Bench kBenches[] = {
     {"physics", BenchPhysicsMain},     {"stability", BenchStabilityMain}, {"view", BenchViewMain},
     {"blimp", BenchBlimpMain},         {"link", BenchLinkMain},
     {"fuzz", BenchFuzzMain},           {"passivity", BenchPassivityMain},
+    {"video", BenchVideoMain},
 };
 
 std::string UsageText(const std::string& only) {

@@ -49,7 +49,8 @@ std::string Summary(const haptel::vehicles::NodeCounters& c) {
   return std::to_string(c.commands_accepted) + " commands, " + std::to_string(c.commands_malformed) + " malformed, " +
          std::to_string(c.commands_stale) + " stale, " +
          (c.commands_refused > 0 ? std::to_string(c.commands_refused) + " refused (another operator's), " : "") +
-         std::to_string(c.frames_published) + " frames, " +
+         std::to_string(c.frames_published) + " frames (" + std::to_string(c.key_frames_sent) + " key, " +
+         std::to_string(c.key_frame_requests) + " key frame requests), " +
          std::to_string(c.grabs_failed) + " camera grabs failed" +
          (c.camera_stalls > 0 ? " (" + std::to_string(c.camera_stalls) + " stalls)" : "") +
          (c.camera_ended ? ", camera file ended" : "") +

@@ -14,6 +14,16 @@ namespace haptel {
 using config_detail::YamlMap;
 namespace check = config_check;
 
+const char* CameraCodecName(CameraCodec codec) {
+  switch (codec) {
+    case CameraCodec::kJpeg:
+      return "jpeg";
+    case CameraCodec::kH264:
+      return "h264";
+  }
+  return "?";
+}
+
 const char* CameraSourceName(CameraSourceKind kind) {
   switch (kind) {
     case CameraSourceKind::kSynthetic:
@@ -79,7 +89,9 @@ void CameraConfig::ValidateOrThrow() const {
   check::Whole("width", width, 16, 4096);
   check::Whole("height", height, 16, 4096);
   check::Number("fov_deg", fov_deg, 10.0, 170.0);
+  if (codec != CameraCodec::kJpeg && codec != CameraCodec::kH264) check::Fail("codec", "one of: jpeg, h264");
   check::Whole("jpeg_quality", jpeg_quality, 1, 100);
+  check::Whole("bitrate_kbps", bitrate_kbps, 50, 50000);
   check::Number("mount_height", mount_height, 0.01, 5.0);
 }
 
@@ -217,7 +229,16 @@ VehicleConfig LoadVehicle(const std::filesystem::path& file) {
   v.camera.width = camera.Integer("width", v.camera.width);
   v.camera.height = camera.Integer("height", v.camera.height);
   v.camera.fov_deg = camera.Number("fov_deg", v.camera.fov_deg);
+  const std::string codec = camera.String("codec", CameraCodecName(v.camera.codec));
+  if (codec == "jpeg") {
+    v.camera.codec = CameraCodec::kJpeg;
+  } else if (codec == "h264") {
+    v.camera.codec = CameraCodec::kH264;
+  } else {
+    camera.Fail("codec", "one of: jpeg, h264");
+  }
   v.camera.jpeg_quality = camera.Integer("jpeg_quality", v.camera.jpeg_quality);
+  v.camera.bitrate_kbps = camera.Integer("bitrate_kbps", v.camera.bitrate_kbps);
   v.camera.mount_height = camera.Number("mount_height", v.camera.mount_height);
   camera.Finish();
 

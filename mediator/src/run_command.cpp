@@ -422,8 +422,9 @@ void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRu
                  r.prediction_error_m_p50 * 1e3, r.prediction_error_m_p95 * 1e3,
                  r.predict ? " (shown to the operator: --predict on)" : "");
   }
-  std::fprintf(out, "  video %lld frames, %.1f fps, latency p50 %.1f ms\n", static_cast<long long>(r.video_frames),
-              r.video_fps, r.video_latency_ms_p50);
+  std::fprintf(out, "  video %lld frames, %.1f fps, %.0f kbit/s, latency p50 %.1f ms, stale %.2f s\n",
+               static_cast<long long>(r.video_frames), r.video_fps, r.video_kbps, r.video_latency_ms_p50,
+               r.video_stale_s);
   if (setup.view != ViewKind::kNone) {
     std::fprintf(out, "  view %.1f fps (frame p99 %.1f ms), video to screen p50 %.1f ms, p99 %.1f ms\n", r.view_fps,
                 r.view_frame_p99_ms, r.video_to_screen_ms_p50, r.video_to_screen_ms_p99);
@@ -468,6 +469,7 @@ std::string RunJson(const SessionSetup& setup, const RecordedRun& run) {
     << ",\"command_rtt_ms_p50\":" << JsonNumber(r.command_rtt_ms_p50)
     << ",\"command_rtt_ms_p99\":" << JsonNumber(r.command_rtt_ms_p99) << ",\"video_frames\":" << r.video_frames
     << ",\"video_fps\":" << JsonNumber(r.video_fps) << ",\"video_latency_ms_p50\":" << JsonNumber(r.video_latency_ms_p50)
+    << ",\"video_kbps\":" << JsonNumber(r.video_kbps) << ",\"video_stale_s\":" << JsonNumber(r.video_stale_s)
     << ",\"predict\":" << (r.predict ? "true" : "false") << ",\"link_fault\":" << JsonString(r.link_fault)
     << ",\"prediction_error_m_p50\":"
     << (r.prediction_error_m_p50 >= 0.0 ? JsonNumber(r.prediction_error_m_p50) : std::string("null"))

@@ -54,6 +54,9 @@ std::vector<RunCounter> CollectCounters(const HapticSide& haptic, const SessionP
       {"link_queue_dropped_bytes", fault.queue_dropped_bytes},
       {"video_frames_dropped", video.dropped},
       {"video_decode_failures", video.decode_failures},
+      {"video_frames_lost", video.frames_lost},
+      {"video_frames_skipped", video.frames_skipped},
+      {"video_key_frame_requests", video.key_frame_requests},
       {"view_record_dropped", record_dropped},
   };
 }

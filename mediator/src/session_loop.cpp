@@ -164,6 +164,8 @@ void RecordLinkFigures(const HapticSide& haptic, const VehicleLink& vehicle, Ses
   rec.video_frames = static_cast<int64_t>(v.frames);
   rec.video_fps = v.fps;
   rec.video_latency_ms_p50 = v.latency_ms_p50;
+  rec.video_kbps = v.kbps;
+  rec.video_stale_s = v.stale_s;
   result.servo_overruns = servo.overruns;
 }
 

@@ -59,6 +59,7 @@ void SessionView::Fill(view::ViewModel& model) {
     model.video.image = frame.image;
     model.video.id = frame.id;
     model.video.capture_wall_ns = frame.capture_wall_ns;
+    model.video.stale = frame.stale;
   }
 }
 

@@ -185,7 +185,7 @@ VehicleLink::VehicleLink(const VehicleLinkOptions& options) : options_(options),
       channel_ = std::make_unique<BlimpChannel>(*participant_, name(), session_, who);
       break;
   }
-  video_ = std::make_unique<VideoReceiver>(*participant_, link::TopicName(name(), "video"), options_.decode_video);
+  video_ = std::make_unique<VideoReceiver>(*participant_, name(), options_.decode_video);
 }
 
 VehicleLink::~VehicleLink() { Stop(); }

@@ -1,13 +1,39 @@
 #include "haptel/mediator/video_receiver.hpp"
 
+#include <chrono>
+#include <cstring>
+
+#include <opencv2/imgproc.hpp>
+
 #include "haptel/core/clock.hpp"
+#include "haptel/video/h264_codec.hpp"
 
 namespace haptel::mediator {
+namespace {
 
-VideoReceiver::VideoReceiver(link::Participant& participant, const std::string& topic, bool decode)
-    : decode_(decode) {
+/// H.264 frames waiting for the decoder beyond this are dropped, all of them
+/// (the decoder is that far behind: better a key frame than old pictures).
+constexpr size_t kMaxQueuedH264 = 15;
+
+}  // namespace
+
+cv::Mat MarkStale(const cv::Mat& picture) {
+  cv::Mat marked = picture.clone();
+  const int border = std::max(2, marked.cols / 80);
+  const cv::Scalar red(0, 0, 255);
+  cv::rectangle(marked, cv::Rect(0, 0, marked.cols, marked.rows), red, 2 * border);
+  const double scale = std::max(0.5, marked.cols / 640.0);
+  cv::putText(marked, "STALE", cv::Point(3 * border, 3 * border + static_cast<int>(24 * scale)),
+              cv::FONT_HERSHEY_SIMPLEX, scale, red, std::max(1, static_cast<int>(2 * scale)), cv::LINE_AA);
+  return marked;
+}
+
+VideoReceiver::VideoReceiver(link::Participant& participant, const std::string& vehicle, bool decode)
+    : decode_(decode),
+      feedback_(participant, link::TopicName(vehicle, "video_feedback"), link::Profile::kState) {
   decoder_thread_ = std::thread([this] { DecodeLoop(); });
-  reader_ = std::make_unique<link::VideoReader>(participant, topic, link::Profile::kVideo,
+  reader_ = std::make_unique<link::VideoReader>(participant, link::TopicName(vehicle, "video"),
+                                                link::Profile::kVideo,
                                                 [this](const msg::VideoFrame& f) { OnFrame(f); });
 }
 
@@ -22,58 +48,154 @@ VideoReceiver::~VideoReceiver() {
 }
 
 void VideoReceiver::OnFrame(const msg::VideoFrame& frame) {
+  const int64_t now = MonotonicNs();
+  const bool h264 = frame.encoding() == CameraCodecName(CameraCodec::kH264);
   {
     std::lock_guard lock(mutex_);
-    if (has_pending_) ++dropped_;
-    pending_.assign(frame.data().begin(), frame.data().end());
-    pending_capture_ns_ = frame.capture_wall_ns();
-    has_pending_ = true;
+    if (first_arrival_ns_ == 0) {
+      first_arrival_ns_ = now;
+    } else {
+      bytes_ += frame.data().size();
+    }
+    last_arrival_ns_ = now;
+    if (last_seq_ != 0 && frame.seq() > last_seq_ + 1) frames_lost_ += frame.seq() - last_seq_ - 1;
+    if (frame.seq() > last_seq_) last_seq_ = frame.seq();
+    if (frame.key_frame()) ++key_frames_;
+    // JPEG: the latest wins. H.264: every frame, in order (a bounded queue).
+    if (!pending_.empty() && (!h264 || !pending_.back().h264 || pending_.size() >= kMaxQueuedH264)) {
+      dropped_ += pending_.size();
+      for (Pending& p : pending_) spare_.push_back(std::move(p.bytes));
+      pending_.clear();
+    }
+    Pending p;
+    if (!spare_.empty()) {
+      p.bytes = std::move(spare_.back());
+      spare_.pop_back();
+    }
+    p.bytes.assign(frame.data().begin(), frame.data().end());
+    p.capture_ns = frame.capture_wall_ns();
+    p.seq = frame.seq();
+    p.key_frame = frame.key_frame();
+    p.h264 = h264;
+    pending_.push_back(std::move(p));
   }
   ready_.notify_one();
 }
 
+void VideoReceiver::RequestKeyFrameIfDue(int64_t now_ns) {
+  if (last_request_ns_ != 0 && now_ns - last_request_ns_ < kKeyFrameRequestPeriodNs) return;
+  last_request_ns_ = now_ns;
+  msg::VideoFeedback request;
+  request.seq(++feedback_seq_);
+  request.sent_ns(now_ns);
+  request.key_frame_request(true);
+  {
+    std::lock_guard lock(mutex_);
+    request.last_frame_seq(last_seq_);
+    ++key_frame_requests_;
+  }
+  feedback_.Write(request);
+}
+
+bool VideoReceiver::DecodeOne(Pending& frame, cv::Mat& image) {
+  const CameraCodec codec = frame.h264 ? CameraCodec::kH264 : CameraCodec::kJpeg;
+  if (decoder_ == nullptr || decoder_->codec() != codec) decoder_ = video::MakeVideoDecoder(codec);
+  const video::DecodeResult result =
+      decoder_->DecodeFrame({frame.bytes.data(), frame.bytes.size(), frame.seq, frame.key_frame}, image);
+  if (result == video::DecodeResult::kPicture) return true;
+  std::lock_guard lock(mutex_);
+  if (result == video::DecodeResult::kCorrupt) ++decode_failures_;
+  // A frame after a gap is as undecodable as one while a key frame is awaited.
+  if (result == video::DecodeResult::kAwaitingKeyFrame || result == video::DecodeResult::kLost) ++frames_skipped_;
+  return false;
+}
+
 void VideoReceiver::DecodeLoop() {
-  std::vector<uint8_t> bytes;
+  std::deque<Pending> batch;
   cv::Mat image;
   for (;;) {
-    int64_t capture_ns = 0;
     {
       std::unique_lock lock(mutex_);
-      ready_.wait(lock, [this] { return stop_ || has_pending_; });
+      // While a key frame is awaited, wake at the request period even when
+      // no frame comes: the request is repeated until one does.
+      const auto waiting = [this] { return stop_ || !pending_.empty(); };
+      if (decoder_ != nullptr && decoder_->awaiting_key_frame() && decode_) {
+        ready_.wait_for(lock, std::chrono::nanoseconds(kKeyFrameRequestPeriodNs), waiting);
+      } else {
+        ready_.wait(lock, waiting);
+      }
       if (stop_) return;
-      bytes.swap(pending_);
-      capture_ns = pending_capture_ns_;
-      has_pending_ = false;
+      for (Pending& b : batch) spare_.push_back(std::move(b.bytes));
+      batch.clear();
+      batch.swap(pending_);
     }
-    if (decode_ && !decoder_.Decode(bytes.data(), bytes.size(), image)) {
+    bool shown_any = false;
+    int64_t capture_ns = 0;
+    for (Pending& frame : batch) {
+      if (decode_ && !DecodeOne(frame, image)) continue;
+      shown_any = true;
+      capture_ns = frame.capture_ns;
+      const int64_t now_wall = WallNs();
       std::lock_guard lock(mutex_);
-      ++decode_failures_;
-      continue;
+      latency_.Record(static_cast<double>(now_wall - frame.capture_ns) * 1e-3);
+      const int64_t now = MonotonicNs();
+      if (frames_++ == 0) first_frame_ns_ = now;
+      last_frame_ns_ = now;
+      // Kept as it came (a swap: the buffers go round, nothing is copied here):
+      // a JPEG frame, or without a screen an H.264 key frame (a thumbnail
+      // decodes it when asked; delta frames cannot be decoded alone).
+      if (!frame.h264) {
+        last_bytes_.swap(frame.bytes);
+        last_key_bytes_.clear();
+      } else {
+        last_bytes_.clear();
+        if (!decode_ && frame.key_frame) last_key_bytes_.swap(frame.bytes);
+      }
     }
-    const int64_t now_wall = WallNs();
     const int64_t now = MonotonicNs();
-    // A fresh image per frame: whoever holds the previous one keeps it intact.
-    std::shared_ptr<const cv::Mat> shown = decode_ ? std::make_shared<const cv::Mat>(image.clone()) : nullptr;
-    std::lock_guard lock(mutex_);
-    if (decode_) latest_ = {std::move(shown), latest_.id + 1, capture_ns};
-    // Kept as it came (a swap: the buffers go round, nothing is copied here).
-    last_bytes_.swap(bytes);
-    latency_.Record(static_cast<double>(now_wall - capture_ns) * 1e-3);
-    if (frames_++ == 0) first_frame_ns_ = now;
-    last_frame_ns_ = now;
+    if (!decode_) continue;
+    if (shown_any) {
+      // A fresh image per picture: whoever holds the previous one keeps it intact.
+      auto shown = std::make_shared<const cv::Mat>(image.clone());
+      std::lock_guard lock(mutex_);
+      if (stale_since_ns_ != 0) stale_ns_ += now - stale_since_ns_;
+      stale_since_ns_ = 0;
+      latest_good_ = shown;
+      latest_ = {std::move(shown), latest_.id + 1, capture_ns, false};
+    }
+    if (decoder_ != nullptr && decoder_->awaiting_key_frame()) {
+      {
+        std::lock_guard lock(mutex_);
+        // Stale only once a picture was shown: before the first there is none to mark.
+        if (stale_since_ns_ == 0 && latest_good_) {
+          stale_since_ns_ = now;
+          latest_ = {std::make_shared<const cv::Mat>(MarkStale(*latest_good_)), latest_.id + 1,
+                     latest_.capture_wall_ns, true};
+        }
+      }
+      RequestKeyFrameIfDue(now);
+    }
   }
 }
 
 VideoStats VideoReceiver::Stats() const {
+  const int64_t now = MonotonicNs();
   std::lock_guard lock(mutex_);
   VideoStats s;
   s.frames = frames_;
   s.dropped = dropped_;
   s.decode_failures = decode_failures_;
+  s.frames_lost = frames_lost_;
+  s.frames_skipped = frames_skipped_;
+  s.key_frame_requests = key_frame_requests_;
+  s.key_frames = key_frames_;
   const double span = NsToS(last_frame_ns_ - first_frame_ns_);
   s.fps = frames_ > 1 && span > 0 ? static_cast<double>(frames_ - 1) / span : 0.0;
   s.latency_ms_p50 = latency_.Percentile(0.5) * 1e-3;
   s.latency_ms_p99 = latency_.Percentile(0.99) * 1e-3;
+  const double arrivals = NsToS(last_arrival_ns_ - first_arrival_ns_);
+  s.kbps = arrivals > 0 ? static_cast<double>(bytes_) * 8.0 / arrivals / 1000.0 : 0.0;
+  s.stale_s = NsToS(stale_ns_ + (stale_since_ns_ != 0 ? now - stale_since_ns_ : 0));
   return s;
 }
 
@@ -83,8 +205,25 @@ cv::Mat VideoReceiver::Screen() const {
 }
 
 std::vector<uint8_t> VideoReceiver::LatestPicture() const {
-  std::lock_guard lock(mutex_);
-  return last_bytes_;
+  std::shared_ptr<const cv::Mat> picture;
+  std::vector<uint8_t> key_frame;
+  {
+    std::lock_guard lock(mutex_);
+    if (!last_bytes_.empty()) return last_bytes_;
+    picture = latest_good_;
+    if (!picture) key_frame = last_key_bytes_;
+  }
+  std::vector<uint8_t> jpeg;
+  if (!picture && !key_frame.empty()) {
+    // No screen, so no decoder running: the last key frame decodes alone.
+    video::H264Decoder decoder;
+    cv::Mat image;
+    if (decoder.DecodeFrame({key_frame.data(), key_frame.size(), 1, true}, image) == video::DecodeResult::kPicture) {
+      picture = std::make_shared<const cv::Mat>(std::move(image));
+    }
+  }
+  if (picture) video::JpegEncoder(80).Encode(*picture, jpeg);
+  return jpeg;
 }
 
 LatestFrame VideoReceiver::Latest() const {

@@ -39,7 +39,7 @@ namespace {
 using namespace haptel::sql;
 
 /// Schema version stored in PRAGMA user_version.
-constexpr int kSchemaVersion = 8;
+constexpr int kSchemaVersion = 9;
 
 /// Schema steps: kMigrations[v - 1] takes a database from version v - 1 to v.
 /// A new database runs them all, so the upgrade path of an old file is the
@@ -243,8 +243,15 @@ ALTER TABLE study_trials ADD COLUMN approach_s REAL DEFAULT NULL;
 ALTER TABLE study_trials ADD COLUMN flags TEXT NOT NULL DEFAULT '';
 )sql";
 
+// v9: the video as received: its bitrate (kbit/s) and the time the screen
+// showed an old picture marked stale while a key frame was awaited.
+constexpr const char* kSchemaV9 = R"sql(
+ALTER TABLE runs ADD COLUMN video_kbps REAL NOT NULL DEFAULT 0;
+ALTER TABLE runs ADD COLUMN video_stale_s REAL NOT NULL DEFAULT 0;
+)sql";
+
 constexpr const char* kMigrations[] = {kSchemaV1, kSchemaV2, kSchemaV3, kSchemaV4,
-                                       kSchemaV5, kSchemaV6, kSchemaV7, kSchemaV8};
+                                       kSchemaV5, kSchemaV6, kSchemaV7, kSchemaV8, kSchemaV9};
 static_assert(std::size(kMigrations) == kSchemaVersion, "one migration per schema version");
 
 constexpr const char* kInsertRun = R"sql(
@@ -256,9 +263,9 @@ INSERT INTO runs (started_utc, started_wall_ns, config_name, track, interface, v
                   view_frame_p99_ms, video_to_screen_ms_p50, video_to_screen_ms_p99, picture,
                   servo_target_hz, servo_rate_short, physics_rate_hz, physics_target_hz,
                   physics_rate_short, vehicle_kind, predict, link_fault, prediction_error_m_p50,
-                  prediction_error_m_p95, approach_s)
+                  prediction_error_m_p95, approach_s, video_kbps, video_stale_s)
 VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?,
-        ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)
+        ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)
 )sql";
 
 constexpr const char* kInsertSplit =
@@ -281,7 +288,8 @@ SELECT id, started_wall_ns, config_name, track, interface, vehicle, completed, o
        video_frames, video_fps, video_latency_ms_p50, operator_kind, device, distance_m,
        view_fps, view_frame_p99_ms, video_to_screen_ms_p50, video_to_screen_ms_p99, picture,
        servo_target_hz, servo_rate_short, physics_rate_hz, physics_target_hz, physics_rate_short,
-       vehicle_kind, predict, link_fault, prediction_error_m_p50, prediction_error_m_p95, approach_s
+       vehicle_kind, predict, link_fault, prediction_error_m_p50, prediction_error_m_p95, approach_s,
+       video_kbps, video_stale_s
 FROM runs ORDER BY id
 )sql";
 
@@ -528,7 +536,9 @@ int64_t Recorder::Save(const RunRecord& run, const AlsoSave& also) {
       .Text(run.link_fault)
       .RealOrNull(run.prediction_error_m_p50, run.prediction_error_m_p50 >= 0.0)
       .RealOrNull(run.prediction_error_m_p95, run.prediction_error_m_p95 >= 0.0)
-      .RealOrNull(run.approach_s, std::isfinite(run.approach_s));
+      .RealOrNull(run.approach_s, std::isfinite(run.approach_s))
+      .Real(run.video_kbps)
+      .Real(run.video_stale_s);
   StepDone(path_, db_, insert_run.get(), "cannot insert run");
   const int64_t run_id = sqlite3_last_insert_rowid(db_);
 
@@ -665,6 +675,8 @@ std::vector<RunRecord> Recorder::LoadAll() const {
       run.prediction_error_m_p50 = std::isnan(p50) ? -1.0 : p50;
       run.prediction_error_m_p95 = std::isnan(p95) ? -1.0 : p95;
       run.approach_s = r.Real();  // NaN for NULL: recorded before v8
+      run.video_kbps = r.Real();
+      run.video_stale_s = r.Real();
       index_of.emplace(run.id, runs.size());
       runs.push_back(std::move(run));
     }

@@ -98,6 +98,8 @@ std::string RunRecordJson(const RunRecord& r) {
       .Int("video_frames", r.video_frames)
       .Num("video_fps", r.video_fps)
       .Num("video_latency_ms_p50", r.video_latency_ms_p50)
+      .Num("video_kbps", r.video_kbps)
+      .Num("video_stale_s", r.video_stale_s)
       .Bool("predict", r.predict)
       .Str("link_fault", r.link_fault)
       .Num("prediction_error_m_p50", r.prediction_error_m_p50)

@@ -323,6 +323,33 @@ TEST_CASE("bench fuzz --smoke", "[bench][smoke]") {
   RequireFiles({"fuzz.csv"});
 }
 
+TEST_CASE("bench video --smoke", "[bench][smoke]") {
+  const JsonValue j = Smoke("video").json;
+  const auto& codecs = j["codecs"].array();
+  REQUIRE(codecs.size() >= 4);  // JPEG at 20 and 80, H.264 at 250 and 2000 kbit/s (and the default)
+  bool any_jpeg = false, any_h264 = false, any_front = false;
+  for (const JsonValue& c : codecs) {
+    const std::string codec = c["codec"].string();
+    any_jpeg = any_jpeg || codec == "jpeg";
+    any_h264 = any_h264 || codec == "h264";
+    any_front = any_front || c["pareto"].boolean();
+    CHECK(Finite(c["setting"]) > 0.0);
+    CHECK(Finite(c["bitrate_kbps"]) > 0.0);
+    CHECK(Finite(c["ssim"]) > 0.5);
+    CHECK(Finite(c["ssim"]) <= 1.0);
+    CHECK(Finite(c["psnr_db"]) > 10.0);
+    CHECK(Finite(c["encode_ms"]) >= 0.0);
+    CHECK(Finite(c["decode_ms"]) >= 0.0);
+  }
+  CHECK(any_jpeg);
+  CHECK(any_h264);
+  CHECK(any_front);
+  CHECK_FALSE(j["default"]["codec"].string().empty());
+  CHECK(Finite(j["default"]["setting"]) > 0.0);
+  CHECK_NOTHROW(j["default"]["on_pareto_front"].boolean());
+  RequireFiles({"video_codecs.csv", "video_codecs.png"});
+}
+
 TEST_CASE("haptel bench NAME --smoke through the haptel program; every usage line offers --smoke",
           "[bench][smoke]") {
   const JsonValue j =

@@ -426,6 +426,13 @@ TEST_CASE("Camera sources: synthetic, device or file", "[config]") {
         tmp.Write("index.yaml", "name: robot1\ncamera: {source: device, device: 0}\n"));
     CHECK(index.camera.device == "0");
   }
+  SECTION("codec h264 with its bitrate") {
+    const haptel::VehicleConfig v = haptel::LoadVehicle(
+        tmp.Write("h264.yaml", "name: robot1\ncamera: {codec: h264, bitrate_kbps: 750}\n"));
+    CHECK(v.camera.codec == haptel::CameraCodec::kH264);
+    CHECK(v.camera.bitrate_kbps == 750);
+    CHECK(std::string(haptel::CameraCodecName(v.camera.codec)) == "h264");
+  }
   SECTION("device and file may stay in the file while the camera is synthetic") {
     const haptel::VehicleConfig v = haptel::LoadVehicle(tmp.Write(
         "kept.yaml", "name: robot1\ncamera: {source: synthetic, device: 1, file: lap.avi}\n"));
@@ -468,6 +475,34 @@ TEST_CASE("Bad file: camera source", "[config][bad]") {
     CHECK_THAT(msg, Contains("'camera.device'"));
     CHECK_THAT(msg, Contains(LineTag(LineOf(text, "video0"))));
     CHECK_THAT(msg, Contains("/dev/video0"));
+  }
+  SECTION("unknown codec") {
+    const std::string text = "name: robot1\ncamera:\n  width: 640\n  codec: vp9\n";
+    const fs::path file = tmp.Write("bad-codec.yaml", text);
+    const std::string msg = ErrorOf([&] { haptel::LoadVehicle(file); });
+    CHECK_THAT(msg, Contains(file.string()));
+    CHECK_THAT(msg, Contains(LineTag(LineOf(text, "vp9"))));
+    CHECK_THAT(msg, Contains("'camera.codec'"));
+    CHECK_THAT(msg, Contains("jpeg, h264"));
+    CHECK_THAT(msg, Contains("got 'vp9'"));
+  }
+  SECTION("codec that is not a name") {
+    const fs::path file = tmp.Write("list-codec.yaml", "name: robot1\ncamera:\n  codec: [h264]\n");
+    const std::string msg = ErrorOf([&] { haptel::LoadVehicle(file); });
+    CHECK_THAT(msg, Contains(file.string()));
+    CHECK_THAT(msg, Contains("'camera.codec'"));
+  }
+  SECTION("bitrate out of range or not a number") {
+    const fs::path zero = tmp.Write("zero-rate.yaml", "name: robot1\ncamera:\n  codec: h264\n  bitrate_kbps: 0\n");
+    const std::string msg = ErrorOf([&] { haptel::LoadVehicle(zero); });
+    CHECK_THAT(msg, Contains(zero.string()));
+    CHECK_THAT(msg, Contains("'camera.bitrate_kbps'"));
+    CHECK_THAT(msg, Contains("50"));
+    const fs::path word =
+        tmp.Write("word-rate.yaml", "name: robot1\ncamera:\n  codec: h264\n  bitrate_kbps: 1Mbit\n");
+    const std::string word_msg = ErrorOf([&] { haptel::LoadVehicle(word); });
+    CHECK_THAT(word_msg, Contains(word.string()));
+    CHECK_THAT(word_msg, Contains("'camera.bitrate_kbps'"));
   }
   SECTION("loop that is not true or false") {
     const std::string text =

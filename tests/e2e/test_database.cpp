@@ -61,6 +61,9 @@ const std::vector<std::string> kCounters{"servo_overruns",
                                          "link_queue_dropped_bytes",
                                          "video_frames_dropped",
                                          "video_decode_failures",
+                                         "video_frames_lost",
+                                         "video_frames_skipped",
+                                         "video_key_frame_requests",
                                          "view_record_dropped"};
 
 /// A raw SQLite connection the test holds (for a lock, or a foreign schema).

@@ -209,6 +209,44 @@ TEST_CASE("rate queue: a burst deeper than the queue is cut at its depth (drop-t
   CHECK(queue.Admit(SToNs(0.2), 1000));
 }
 
+TEST_CASE("rate queue: commands and states go ahead of a saturated video queue, and take their share of the rate") {
+  link::RateQueue queue(1e6, 0.1);  // 1 Mbit/s: 1000 bytes take 8 ms
+  // Video: 12 kilobyte packets at once, 96 ms of backlog.
+  for (int i = 0; i < 12; ++i) REQUIRE(queue.Admit(0, 1000));
+  const int64_t video_done = queue.WaitNs(0);
+  CHECK(video_done == 96'000'000);
+  // A 200-byte command arriving now waits for at most one MTU (12 ms) of
+  // the video on the wire, then its own 1.6 ms: not for the whole backlog.
+  const std::optional<int64_t> command = queue.Admit(0, 200);
+  REQUIRE(command);
+  CHECK(*command == 12'000'000 + 1'600'000);
+  // A state right behind it queues behind the command, not the video.
+  const std::optional<int64_t> state = queue.Admit(0, 300);
+  REQUIRE(state);
+  CHECK(*state == *command + 2'400'000);
+  // What they took, the video behind them loses: the next video packet
+  // starts after the backlog plus their 4 ms.
+  CHECK(queue.WaitNs(0) == 96'000'000 + 4'000'000);
+  const std::optional<int64_t> next_video = queue.Admit(0, 1000);
+  REQUIRE(next_video);  // exactly at the queue's 100 ms depth: still taken
+  CHECK(*next_video == 96'000'000 + 4'000'000 + 8'000'000);
+  CHECK_FALSE(queue.Admit(0, 1000));  // past it: dropped
+  // Over a saturated second both classes together pass the rate, no more.
+  link::RateQueue busy(1e6, 0.1);
+  uint64_t passed = 0;
+  int64_t last = 0;
+  for (int64_t now = 0; now < SToNs(1.0); now += 1'000'000) {
+    for (const size_t bytes : {size_t{1000}, size_t{1000}, size_t{100}}) {  // 16.8 Mbit/s offered
+      if (const std::optional<int64_t> t = busy.Admit(now, bytes)) {
+        passed += bytes;
+        last = std::max(last, *t);
+      }
+    }
+  }
+  CHECK(passed * 8.0 / NsToS(last) <= 1e6 * 1.02);
+  CHECK(passed * 8.0 / NsToS(last) >= 1e6 * 0.95);
+}
+
 TEST_CASE("fault line: loss drops its share of the packets, the rest arrive at once and in order") {
   link::FaultLine line(ParseLinkFault("loss=25%"), 7);
   Recorder to;

@@ -119,6 +119,8 @@ RunRecord MakeRun(int n, int split_count) {
   run.predict = n % 2 == 1;
   run.link_fault = n % 2 == 1 ? "delay=0.2s,jitter=0s,loss=0" : "";
   run.prediction_error_m_p50 = n % 3 == 0 ? -1.0 : 0.004 * n;  // -1: none (stored as NULL)
+  run.video_kbps = 850.5 + n;
+  run.video_stale_s = 0.25 * n;
   run.prediction_error_m_p95 = n % 3 == 0 ? -1.0 : 0.011 * n;
   run.completed = (n % 2 == 0);
   run.outcome = run.completed ? "completed" : "lap cap";
@@ -179,6 +181,8 @@ void CheckSame(const RunRecord& got, const RunRecord& want) {
   CHECK(got.predict == want.predict);
   CHECK(got.link_fault == want.link_fault);
   CHECK(got.prediction_error_m_p50 == want.prediction_error_m_p50);
+  CHECK(got.video_kbps == want.video_kbps);
+  CHECK(got.video_stale_s == want.video_stale_s);
   CHECK(got.prediction_error_m_p95 == want.prediction_error_m_p95);
   CHECK(got.completed == want.completed);
   CHECK(got.outcome == want.outcome);
@@ -346,7 +350,7 @@ TEST_CASE("Recorder stores the start time as ISO-8601 UTC and a schema version",
   }
   RawDb raw(file);
   CHECK(raw.Text("SELECT started_utc FROM runs") == "2024-05-01T12:34:56.789Z");
-  CHECK(raw.Integer("PRAGMA user_version") == 8);
+  CHECK(raw.Integer("PRAGMA user_version") == 9);
 }
 
 TEST_CASE("Recorder creates missing parent folders", "[recorder]") {
@@ -383,10 +387,10 @@ TEST_CASE("Recorder set-up errors name the database file", "[recorder]") {
     const fs::path file = tmp.path() / "future.db";
     {
       RawDb raw(file);
-      raw.Exec("PRAGMA user_version = 9");
+      raw.Exec("PRAGMA user_version = 10");
     }
     RequireThrowsMentioning([&] { Recorder recorder(file); }, file.string());
-    RequireThrowsMentioning([&] { Recorder recorder(file); }, "schema version 9");
+    RequireThrowsMentioning([&] { Recorder recorder(file); }, "schema version 10");
   }
 
   SECTION("the path is a folder") {
@@ -698,7 +702,7 @@ TEST_CASE("A v1 database is migrated to the current schema in place and keeps it
   }
 
   RawDb raw(file);
-  CHECK(raw.Integer("PRAGMA user_version") == 8);
+  CHECK(raw.Integer("PRAGMA user_version") == 9);
   CHECK(raw.Text("PRAGMA integrity_check") == "ok");
   CHECK(raw.Integer("SELECT COUNT(*) FROM pragma_foreign_key_check") == 0);
   for (const char* table : {"interface_switches", "run_path", "run_contacts", "run_counters"}) {
@@ -716,7 +720,7 @@ TEST_CASE("A v1 database is migrated to the current schema in place and keeps it
     Recorder again(file);
     CHECK(again.LoadAll().size() == 2);
   }
-  CHECK(raw.Integer("PRAGMA user_version") == 8);
+  CHECK(raw.Integer("PRAGMA user_version") == 9);
 }
 
 namespace {
@@ -805,7 +809,7 @@ TEST_CASE("A v2 database is migrated to v3: its runs keep everything, new runs k
   CheckSame(runs[0], V2Run());
   CheckSame(runs[1], fresh);
   RawDb raw(file);
-  CHECK(raw.Integer("PRAGMA user_version") == 8);
+  CHECK(raw.Integer("PRAGMA user_version") == 9);
   CHECK(raw.Text("PRAGMA integrity_check") == "ok");
   CHECK(raw.Integer(
             "SELECT value FROM run_counters WHERE run_id = 2 AND name = 'servo_overruns'") == 9);

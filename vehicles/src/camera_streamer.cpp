@@ -10,12 +10,24 @@ namespace haptel::vehicles {
 CameraStreamer::CameraStreamer(const CameraConfig& config, std::unique_ptr<video::CameraSource> camera,
                                link::Participant& participant, const std::string& vehicle_name)
     : camera_(std::move(camera)),
-      encoder_(config.jpeg_quality),
+      encoder_(video::MakeVideoEncoder(config)),
+      codec_name_(CameraCodecName(config.codec)),
       writer_(participant, link::TopicName(vehicle_name, "video"), link::Profile::kVideo) {
   if (camera_ == nullptr) throw std::invalid_argument("CameraStreamer: no camera source");
   loop_ = std::make_unique<PeriodicThread>(
       PeriodicThread::Options{.name = "vehicle-camera", .rate_hz = config.rate_hz},
       [this](int64_t now) { Tick(now); });
+  // Reliable: a request is small and rare (at most ten a second, while the
+  // operator waits), and one lost would leave the picture stale longer.
+  feedback_ = std::make_unique<link::VideoFeedbackReader>(
+      participant, link::TopicName(vehicle_name, "video_feedback"), link::Profile::kState,
+      [this](const msg::VideoFeedback& f) { OnFeedback(f); });
+}
+
+void CameraStreamer::OnFeedback(const msg::VideoFeedback& feedback) {
+  if (!feedback.key_frame_request()) return;
+  key_frame_requests_.fetch_add(1, std::memory_order_relaxed);
+  key_frame_wanted_.store(true, std::memory_order_release);
 }
 
 CameraStreamer::~CameraStreamer() { Stop(); }
@@ -50,7 +62,8 @@ void CameraStreamer::Tick(int64_t now_ns) {
   grabs_failed_.store(grab_monitor_.failures(), std::memory_order_relaxed);
   camera_stalls_.store(grab_monitor_.stalls(), std::memory_order_relaxed);
   if (!grabbed) return;
-  if (!encoder_.Encode(image_, jpeg_)) {
+  if (key_frame_wanted_.exchange(false, std::memory_order_acq_rel)) encoder_->RequestKeyFrame();
+  if (!encoder_->Encode(image_, encoded_)) {
     frames_failed_.fetch_add(1, std::memory_order_relaxed);
     return;
   }
@@ -59,10 +72,12 @@ void CameraStreamer::Tick(int64_t now_ns) {
   f.capture_wall_ns(capture_wall_ns);
   f.width(static_cast<uint16_t>(image_.cols));
   f.height(static_cast<uint16_t>(image_.rows));
-  f.encoding("jpeg");
-  f.data().assign(jpeg_.begin(), jpeg_.end());
+  f.encoding(codec_name_);
+  f.key_frame(encoder_->last_was_key_frame());
+  f.data().assign(encoded_.begin(), encoded_.end());
   writer_.Write(f);
   frames_.fetch_add(1, std::memory_order_relaxed);
+  if (f.key_frame()) key_frames_sent_.fetch_add(1, std::memory_order_relaxed);
 }
 
 CameraCounters CameraStreamer::Counters() const {
@@ -72,6 +87,8 @@ CameraCounters CameraStreamer::Counters() const {
   c.grabs_failed = grabs_failed_.load();
   c.camera_stalls = camera_stalls_.load();
   c.camera_ended = camera_ended_.load();
+  c.key_frame_requests = key_frame_requests_.load();
+  c.key_frames_sent = key_frames_sent_.load();
   return c;
 }
 

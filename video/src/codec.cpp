@@ -4,6 +4,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "haptel/video/h264_codec.hpp"
+
 #include <opencv2/imgcodecs.hpp>
 
 namespace haptel::video {
@@ -14,6 +16,14 @@ JpegEncoder::JpegEncoder(int quality) : quality_(quality) {
                                 ", expected 1..100");
   }
   params_ = {cv::IMWRITE_JPEG_QUALITY, quality_};
+}
+
+void JpegEncoder::SetQuality(int quality) {
+  if (quality < 1 || quality > 100) {
+    throw std::invalid_argument("JpegEncoder: quality " + std::to_string(quality) + ", expected 1..100");
+  }
+  quality_ = quality;
+  params_[1] = quality;
 }
 
 bool JpegEncoder::Encode(const cv::Mat& bgr, std::vector<uint8_t>& out) {
@@ -69,6 +79,33 @@ bool JpegDecoder::Decode(const uint8_t* data, size_t size, cv::Mat& image) {
   }
   image = decoded;
   return true;
+}
+
+DecodeResult JpegDecoder::DecodeFrame(const EncodedFrameView& frame, cv::Mat& image) {
+  return Decode(frame.data, frame.size, image) ? DecodeResult::kPicture : DecodeResult::kCorrupt;
+}
+
+std::unique_ptr<VideoEncoder> MakeVideoEncoder(const CameraConfig& camera) {
+  switch (camera.codec) {
+    case CameraCodec::kJpeg:
+      return std::make_unique<JpegEncoder>(camera.jpeg_quality);
+    case CameraCodec::kH264:
+      return std::make_unique<H264Encoder>(H264Encoder::Options{.width = camera.width,
+                                                                .height = camera.height,
+                                                                .rate_hz = camera.rate_hz,
+                                                                .bitrate_kbps = camera.bitrate_kbps});
+  }
+  throw std::invalid_argument("MakeVideoEncoder: unknown codec");
+}
+
+std::unique_ptr<VideoDecoder> MakeVideoDecoder(CameraCodec codec) {
+  switch (codec) {
+    case CameraCodec::kJpeg:
+      return std::make_unique<JpegDecoder>();
+    case CameraCodec::kH264:
+      return std::make_unique<H264Decoder>();
+  }
+  throw std::invalid_argument("MakeVideoDecoder: unknown codec");
 }
 
 }  // namespace haptel::video

@@ -272,7 +272,7 @@ struct View::Impl {
       if (model.video.image && model.video.id != last_video_id) {
         last_video_id = model.video.id;
         video_frames_shown.fetch_add(1);
-        if (model.video.capture_wall_ns > 0) {
+        if (model.video.capture_wall_ns > 0 && !model.video.stale) {
           video_to_screen_us.Record(static_cast<double>(shown_wall - model.video.capture_wall_ns) *
                                     1e-3);
         }

@@ -47,6 +47,15 @@ enum class CameraSourceKind {
 /// "synthetic", "device" or "file", as written in the config file.
 const char* CameraSourceName(CameraSourceKind kind);
 
+/// How a vehicle's camera frames are compressed on the link.
+enum class CameraCodec {
+  kJpeg,  ///< every frame a JPEG (OpenCV): any frame decodes alone
+  kH264,  ///< H.264 (libavcodec + libx264) tuned for latency; far fewer bits per frame
+};
+
+/// "jpeg" or "h264", as written in the config file and in each video sample.
+const char* CameraCodecName(CameraCodec codec);
+
 struct CameraConfig {
   CameraSourceKind source = CameraSourceKind::kSynthetic;
   /// V4L2 device for source: device, a path ("/dev/video0") or an index ("0").
@@ -61,7 +70,11 @@ struct CameraConfig {
   int width = 640;
   int height = 480;
   double fov_deg = 55.0;    ///< horizontal, webcam-like
-  int jpeg_quality = 80;
+  CameraCodec codec = CameraCodec::kJpeg;
+  int jpeg_quality = 80;  ///< codec: jpeg, 1..100
+  /// codec: h264, the encoder's target bitrate (kbit/s) until the operator
+  /// asks for another; its VBV buffer holds about one frame at this rate.
+  int bitrate_kbps = 1000;
   double mount_height = 0.12;  ///< m above the floor
 
   /// Throws ConfigFieldError unless every value is in range, `device` (when

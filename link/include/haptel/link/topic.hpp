@@ -141,6 +141,8 @@ using StateWriter = Writer<msg::VehicleState, msg::VehicleStatePubSubType>;
 using StateReader = Reader<msg::VehicleState, msg::VehicleStatePubSubType>;
 using VideoWriter = Writer<msg::VideoFrame, msg::VideoFramePubSubType>;
 using VideoReader = Reader<msg::VideoFrame, msg::VideoFramePubSubType>;
+using VideoFeedbackWriter = Writer<msg::VideoFeedback, msg::VideoFeedbackPubSubType>;
+using VideoFeedbackReader = Reader<msg::VideoFeedback, msg::VideoFeedbackPubSubType>;
 // The blimp's, on the same topic names (haptel/<vehicle>/command, .../state).
 using BlimpCommandWriter = Writer<msg::BlimpCommand, msg::BlimpCommandPubSubType>;
 using BlimpCommandReader = Reader<msg::BlimpCommand, msg::BlimpCommandPubSubType>;

@@ -1,14 +1,25 @@
 #pragma once
 /// @file Receives the vehicle's video frames and decodes them off the DDS thread.
 ///
-/// The DDS callback only swaps the bytes into a slot (latest frame wins); a
-/// decoder thread turns them into the screen image and measures latency from
-/// the capture stamp (CLOCK_REALTIME of the vehicle's host: meaningful when
-/// both run on one host or on hosts whose clocks are synchronised).
+/// The DDS callback only moves the bytes into a queue; a decoder thread turns
+/// them into the screen image and measures latency from the capture stamp
+/// (CLOCK_REALTIME of the vehicle's host: meaningful when both run on one
+/// host or on hosts whose clocks are synchronised). JPEG frames each decode
+/// alone, so the latest wins and older ones waiting are dropped; H.264 delta
+/// frames need every frame before them, so all are decoded in order.
+///
+/// When an H.264 frame is lost (a gap in the frame numbers) or corrupt, no
+/// good picture can come before a key frame: the last picture stays on the
+/// screen marked stale (a red frame and "STALE"), the time spent so is
+/// measured, and the vehicle is asked for a key frame on
+/// haptel/<vehicle>/video_feedback at most every kKeyFrameRequestPeriodNs,
+/// again and again until one decodes.
 #include <condition_variable>
 #include <cstdint>
+#include <deque>
 #include <memory>
 #include <mutex>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -24,9 +35,15 @@ struct VideoStats {
   uint64_t frames = 0;          ///< frames received and (when decoding) decoded
   uint64_t dropped = 0;         ///< replaced in the slot before the decoder got to them
   uint64_t decode_failures = 0; ///< corrupt frames, counted and dropped
+  uint64_t frames_lost = 0;     ///< gaps in the vehicle's frame numbers (never received)
+  uint64_t frames_skipped = 0;  ///< H.264 delta frames not decoded (after a gap, or while a key frame is awaited)
+  uint64_t key_frame_requests = 0;  ///< asked of the vehicle (a frame lost or corrupt)
+  uint64_t key_frames = 0;      ///< received frames that decode alone
   double fps = 0.0;
   double latency_ms_p50 = 0.0;  ///< capture -> decoded
   double latency_ms_p99 = 0.0;
+  double kbps = 0.0;            ///< the video's bitrate as received, kbit/s
+  double stale_s = 0.0;         ///< time the screen showed an old picture marked stale
 };
 
 /// The latest decoded image, shared (never copied) with whoever shows it.
@@ -34,13 +51,18 @@ struct LatestFrame {
   std::shared_ptr<const cv::Mat> image;  ///< BGR; null before the first frame
   uint64_t id = 0;                       ///< grows with each decoded frame
   int64_t capture_wall_ns = 0;           ///< the vehicle's capture stamp
+  bool stale = false;  ///< an old picture (marked so) while a key frame is awaited
 };
 
 class VideoReceiver {
  public:
-  /// Subscribes to `topic` on `participant`. With `decode` false frames are
-  /// only counted (no screen to show them on).
-  VideoReceiver(link::Participant& participant, const std::string& topic, bool decode);
+  /// Key frame requests while one is awaited: at most one per this period.
+  static constexpr int64_t kKeyFrameRequestPeriodNs = 100'000'000;
+
+  /// Subscribes to haptel/<vehicle>/video on `participant` and publishes
+  /// key frame requests on haptel/<vehicle>/video_feedback. With `decode`
+  /// false frames are only counted (no screen to show them on; no requests).
+  VideoReceiver(link::Participant& participant, const std::string& vehicle, bool decode);
   ~VideoReceiver();
 
   VideoStats Stats() const;
@@ -48,32 +70,62 @@ class VideoReceiver {
   cv::Mat Screen() const;
   /// The latest decoded image without copying it: a short lock, any thread.
   LatestFrame Latest() const;
-  /// The latest good frame as it came (JPEG), copied; empty before the
-  /// first. Any thread, now and then (a console's thumbnail), decoding or not.
+  /// The latest good picture as JPEG; empty before the first. JPEG frames
+  /// are kept as they came; an H.264 picture is encoded when asked (without
+  /// a screen: the latest key frame, decoded then). Any thread, now and then
+  /// (a console's thumbnail).
   std::vector<uint8_t> LatestPicture() const;
 
  private:
+  struct Pending {
+    std::vector<uint8_t> bytes;
+    int64_t capture_ns = 0;
+    uint64_t seq = 0;
+    bool key_frame = false;
+    bool h264 = false;
+  };
+
   void OnFrame(const msg::VideoFrame& frame);
   void DecodeLoop();
+  /// Decodes one frame in order; returns whether it gave a picture.
+  bool DecodeOne(Pending& frame, cv::Mat& image);
+  void RequestKeyFrameIfDue(int64_t now_ns);
 
   bool decode_;
   mutable std::mutex mutex_;
   std::condition_variable ready_;
-  std::vector<uint8_t> pending_;
-  int64_t pending_capture_ns_ = 0;
-  bool has_pending_ = false;
+  std::deque<Pending> pending_;
+  std::vector<std::vector<uint8_t>> spare_;  ///< byte buffers going round: no allocation per frame
   bool stop_ = false;
   LatestFrame latest_;
-  std::vector<uint8_t> last_bytes_;  ///< the latest good frame's bytes
-  video::JpegDecoder decoder_;
+  std::shared_ptr<const cv::Mat> latest_good_;  ///< the last good picture, unmarked
+  std::vector<uint8_t> last_bytes_;  ///< the latest good JPEG frame's bytes
+  std::vector<uint8_t> last_key_bytes_;  ///< without a screen: the latest H.264 key frame
+  std::unique_ptr<video::VideoDecoder> decoder_;  ///< made for the codec the frames carry
   Histogram latency_{100.0, 5000};  // µs bins up to 500 ms
   uint64_t frames_ = 0;
   uint64_t dropped_ = 0;
   uint64_t decode_failures_ = 0;
+  uint64_t frames_lost_ = 0;
+  uint64_t frames_skipped_ = 0;
+  uint64_t key_frame_requests_ = 0;
+  uint64_t key_frames_ = 0;
+  uint64_t last_seq_ = 0;  ///< the last frame number received (0: none yet)
+  uint64_t bytes_ = 0;     ///< received after the first frame (the bitrate's numerator)
+  int64_t first_arrival_ns_ = 0;
+  int64_t last_arrival_ns_ = 0;
+  int64_t stale_since_ns_ = 0;  ///< 0: not stale
+  int64_t stale_ns_ = 0;        ///< stretches of staleness that ended
+  int64_t last_request_ns_ = 0;
+  uint64_t feedback_seq_ = 0;
   int64_t first_frame_ns_ = 0;
   int64_t last_frame_ns_ = 0;
   std::thread decoder_thread_;
+  link::VideoFeedbackWriter feedback_;
   std::unique_ptr<link::VideoReader> reader_;  // last: destroyed first
 };
+
+/// `picture` with a visible stale mark: a red frame round it and "STALE".
+cv::Mat MarkStale(const cv::Mat& picture);
 
 }  // namespace haptel::mediator

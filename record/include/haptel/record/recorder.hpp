@@ -86,6 +86,10 @@ struct RunRecord {
   int64_t video_frames = 0;
   double video_fps = 0.0;
   double video_latency_ms_p50 = 0.0;
+  double video_kbps = 0.0;     ///< the video's bitrate as received (v9)
+  /// Time the screen showed an old picture marked stale, waiting for an
+  /// H.264 key frame after a lost or corrupt frame (v8; 0 for JPEG).
+  double video_stale_s = 0.0;
   /// The predictive display: whether the operator saw the prediction, and
   /// the model's error against each state at the moment it was sampled
   /// (m; -1: no state to compare).
@@ -122,7 +126,7 @@ struct RunRecord {
 class Recorder {
  public:
   /// Opens (creating it and its parent folders if needed) the database and its
-  /// schema; an older schema (v1 to v5) is migrated in place, in one
+  /// schema; an older schema (v1 to v8) is migrated in place, in one
   /// transaction. The schema is read inside a write transaction, so a file
   /// that opens here can be written; every page is checked first (SQLite's
   /// quick_check), so a file damaged inside is refused here, not at the save.

@@ -1,8 +1,10 @@
 #pragma once
 /// @file A vehicle's camera on the link: grabs frames from its source at
-/// `camera.rate_hz` on a thread of its own, JPEG-encodes them and publishes
-/// them on haptel/<vehicle>/video — so a slow or stalled camera never delays
-/// a control loop or its watchdog. Any vehicle node has one.
+/// `camera.rate_hz` on a thread of its own, encodes them (`camera.codec`:
+/// JPEG or H.264) and publishes them on haptel/<vehicle>/video — so a slow or
+/// stalled camera never delays a control loop or its watchdog. It listens on
+/// haptel/<vehicle>/video_feedback for the operator's key frame requests (an
+/// H.264 frame was lost: the next frame is an IDR). Any vehicle node has one.
 #include <atomic>
 #include <cstdint>
 #include <memory>
@@ -24,6 +26,8 @@ struct CameraCounters {
   uint64_t grabs_failed = 0;   ///< the camera source delivered no frame
   uint64_t camera_stalls = 0;  ///< stretches of failed grabs long enough to count (GrabMonitor)
   bool camera_ended = false;   ///< a file source that does not loop has ended
+  uint64_t key_frame_requests = 0;  ///< the operator's requests received
+  uint64_t key_frames_sent = 0;     ///< frames published that decode alone (every JPEG)
 };
 
 class CameraStreamer {
@@ -43,20 +47,26 @@ class CameraStreamer {
 
  private:
   void Tick(int64_t now_ns);
+  void OnFeedback(const msg::VideoFeedback& feedback);
 
   std::unique_ptr<video::CameraSource> camera_;
   Seqlock<video::CameraPose> pose_;
   video::GrabMonitor grab_monitor_;
   bool end_reported_ = false;
-  video::JpegEncoder encoder_;
+  std::unique_ptr<video::VideoEncoder> encoder_;
+  const char* codec_name_;
   cv::Mat image_;
   msg::VideoFrame frame_msg_;
-  std::vector<uint8_t> jpeg_;
+  std::vector<uint8_t> encoded_;
   uint64_t frame_seq_ = 0;
   std::atomic<uint64_t> frames_{0}, frames_failed_{0}, grabs_failed_{0}, camera_stalls_{0};
+  std::atomic<uint64_t> key_frame_requests_{0}, key_frames_sent_{0};
+  /// Set by the feedback's DDS thread, taken by the camera's thread.
+  std::atomic<bool> key_frame_wanted_{false};
   std::atomic<bool> camera_ended_{false};
   link::VideoWriter writer_;
   std::unique_ptr<PeriodicThread> loop_;
+  std::unique_ptr<link::VideoFeedbackReader> feedback_;  // last: destroyed first
 };
 
 }  // namespace haptel::vehicles

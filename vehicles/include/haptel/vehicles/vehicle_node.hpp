@@ -40,6 +40,8 @@ struct NodeCounters {
   bool camera_ended = false;   ///< a file source that does not loop has ended
   uint64_t link_queue_dropped = 0;        ///< received packets the link fault's rate queue dropped
   uint64_t link_queue_dropped_bytes = 0;  ///< their bytes
+  uint64_t key_frame_requests = 0;  ///< the operator's, received (a video frame lost)
+  uint64_t key_frames_sent = 0;     ///< frames published that decode alone
   bool watchdog_expired = true;
 };
 
@@ -60,6 +62,8 @@ NodeCounters MakeNodeCounters(const CommandIntake<Command>& commands, const Came
   c.grabs_failed = camera.grabs_failed;
   c.camera_stalls = camera.camera_stalls;
   c.camera_ended = camera.camera_ended;
+  c.key_frame_requests = camera.key_frame_requests;
+  c.key_frames_sent = camera.key_frames_sent;
   return c;
 }
 

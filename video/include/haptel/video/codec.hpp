@@ -1,19 +1,77 @@
 #pragma once
-/// @file JPEG encoding and decoding of video frames (OpenCV imgcodecs).
+/// @file Video frame codecs: the seam between a camera's frames and the
+/// link's bytes. JPEG (OpenCV imgcodecs: every frame decodes alone) and
+/// H.264 (FFmpeg's libavcodec with libx264, tuned for latency: see
+/// H264Encoder), chosen by `camera.codec` in the vehicle's file.
+#include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include <opencv2/core.hpp>
 
+#include "haptel/config/vehicle.hpp"
+
 namespace haptel::video {
 
-class JpegEncoder {
+/// Turns BGR frames into a codec's bytes, one frame in, one frame out (no
+/// frame is held back: no B-frames, no look-ahead).
+class VideoEncoder {
+ public:
+  virtual ~VideoEncoder() = default;
+  virtual CameraCodec codec() const = 0;
+  /// Encodes a BGR image into `out` (replacing its contents, reusing its
+  /// capacity). Returns false (and leaves `out` empty) when it cannot.
+  virtual bool Encode(const cv::Mat& bgr, std::vector<uint8_t>& out) = 0;
+  /// Whether the frame last encoded decodes alone (JPEG: always; H.264: an IDR).
+  virtual bool last_was_key_frame() const = 0;
+  /// Makes the next frame a key frame (an operator lost a frame and waits
+  /// for one). JPEG's frames all are.
+  virtual void RequestKeyFrame() {}
+};
+
+/// What became of one encoded frame handed to a VideoDecoder.
+enum class DecodeResult {
+  kPicture,           ///< decoded: `image` holds the new picture
+  kCorrupt,           ///< the bytes did not decode (or decoded with errors)
+  kLost,              ///< frames before this one never came: its references are gone
+  kAwaitingKeyFrame,  ///< a frame that needs lost references, refused until a key frame
+};
+
+/// One encoded frame as it came off the link.
+struct EncodedFrameView {
+  const uint8_t* data = nullptr;
+  size_t size = 0;
+  uint64_t seq = 0;        ///< the sender's frame number: one more per frame sent
+  bool key_frame = false;  ///< decodes alone (the sample says so)
+};
+
+/// Turns a codec's bytes back into BGR pictures and says when a frame was
+/// lost or corrupt, so that the receiver can ask for a key frame.
+class VideoDecoder {
+ public:
+  virtual ~VideoDecoder() = default;
+  virtual CameraCodec codec() const = 0;
+  /// Decodes `frame` into `image` (BGR); `image` is left unchanged unless
+  /// the result is kPicture.
+  virtual DecodeResult DecodeFrame(const EncodedFrameView& frame, cv::Mat& image) = 0;
+  /// True while no picture can come before a key frame does (after a loss or
+  /// a corrupt frame of a codec whose frames depend on earlier ones).
+  virtual bool awaiting_key_frame() const { return false; }
+};
+
+class JpegEncoder final : public VideoEncoder {
  public:
   /// @param quality JPEG quality 1..100; throws std::invalid_argument otherwise.
   explicit JpegEncoder(int quality);
+  CameraCodec codec() const override { return CameraCodec::kJpeg; }
   /// Encodes a BGR image into `out` (replacing its contents, reusing capacity).
   /// Returns false (and leaves `out` empty) when OpenCV cannot encode it.
-  bool Encode(const cv::Mat& bgr, std::vector<uint8_t>& out);
+  bool Encode(const cv::Mat& bgr, std::vector<uint8_t>& out) override;
+  bool last_was_key_frame() const override { return true; }
+  /// The quality of the frames encoded from now on (a rate controller's
+  /// knob); throws std::invalid_argument outside 1..100.
+  void SetQuality(int quality);
   int quality() const { return quality_; }
 
  private:
@@ -21,15 +79,25 @@ class JpegEncoder {
   std::vector<int> params_;
 };
 
-class JpegDecoder {
+class JpegDecoder final : public VideoDecoder {
  public:
+  CameraCodec codec() const override { return CameraCodec::kJpeg; }
   /// Decodes JPEG bytes into `image` (BGR). Returns false for empty or corrupt
   /// data, counting it in failures(); `image` is then left unchanged.
   bool Decode(const uint8_t* data, size_t size, cv::Mat& image);
+  /// Every JPEG decodes alone: a gap before a frame costs nothing.
+  DecodeResult DecodeFrame(const EncodedFrameView& frame, cv::Mat& image) override;
   uint64_t failures() const { return failures_; }
 
  private:
   uint64_t failures_ = 0;
 };
+
+/// The encoder `camera` asks for (codec, quality or bitrate, size, rate).
+/// Throws std::runtime_error when the codec cannot be opened (an FFmpeg
+/// without libx264), naming the codec.
+std::unique_ptr<VideoEncoder> MakeVideoEncoder(const CameraConfig& camera);
+/// The decoder for frames of `codec`.
+std::unique_ptr<VideoDecoder> MakeVideoDecoder(CameraCodec codec);
 
 }  // namespace haptel::video

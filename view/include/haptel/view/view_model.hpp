@@ -38,6 +38,9 @@ struct VideoImage {
   std::shared_ptr<const cv::Mat> image;  ///< BGR 8-bit; null before the first frame
   uint64_t id = 0;                       ///< changes with each new frame
   int64_t capture_wall_ns = 0;           ///< vehicle's CLOCK_REALTIME at capture
+  /// An old picture, marked so, shown while the video waits for a key frame
+  /// (not a new frame: it takes no part in the video-to-screen latency).
+  bool stale = false;
 };
 
 /// Text and indicators drawn over the world.

@@ -1,0 +1,200 @@
+#include "video_bench.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "haptel/config/paths.hpp"
+#include "haptel/config/track.hpp"
+#include "haptel/config/vehicle.hpp"
+#include "haptel/core/args.hpp"
+#include "haptel/core/clock.hpp"
+#include "haptel/core/json.hpp"
+#include "haptel/testing/lap_frames.hpp"
+#include "haptel/video/codec.hpp"
+#include "haptel/video/h264_codec.hpp"
+#include "haptel/video/image_quality.hpp"
+#include "plot.hpp"
+#include "smoke.hpp"
+
+namespace haptel::bench {
+namespace {
+
+struct CodecPoint {
+  CameraCodec codec = CameraCodec::kJpeg;
+  int setting = 0;  ///< JPEG quality, or H.264 kbit/s
+  double bitrate_kbps = 0.0;
+  double ssim = 0.0;
+  double psnr_db = 0.0;
+  double encode_ms = 0.0;
+  double decode_ms = 0.0;
+  bool pareto = false;
+  bool is_default = false;
+  bool ok = true;  ///< every frame encoded and decoded
+};
+
+/// Encodes and decodes every frame at one setting; the quality figures are
+/// means over the frames, the CPU figures per frame.
+CodecPoint Measure(CameraCodec codec, int setting, const CameraConfig& camera, const std::vector<cv::Mat>& frames) {
+  CodecPoint p;
+  p.codec = codec;
+  p.setting = setting;
+  CameraConfig c = camera;
+  c.codec = codec;
+  if (codec == CameraCodec::kJpeg) {
+    c.jpeg_quality = setting;
+  } else {
+    c.bitrate_kbps = setting;
+  }
+  const std::unique_ptr<video::VideoEncoder> encoder = video::MakeVideoEncoder(c);
+  const std::unique_ptr<video::VideoDecoder> decoder = video::MakeVideoDecoder(codec);
+  std::vector<uint8_t> bytes;
+  cv::Mat picture;
+  double encode_s = 0.0, decode_s = 0.0, ssim = 0.0, psnr = 0.0;
+  size_t total_bytes = 0;
+  uint64_t seq = 0;
+  for (const cv::Mat& frame : frames) {
+    const double e0 = ThreadCpuSeconds();
+    const bool encoded = encoder->Encode(frame, bytes);
+    encode_s += ThreadCpuSeconds() - e0;
+    if (!encoded) {
+      p.ok = false;
+      continue;
+    }
+    total_bytes += bytes.size();
+    const double d0 = ThreadCpuSeconds();
+    const video::DecodeResult result =
+        decoder->DecodeFrame({bytes.data(), bytes.size(), ++seq, encoder->last_was_key_frame()}, picture);
+    decode_s += ThreadCpuSeconds() - d0;
+    if (result != video::DecodeResult::kPicture) {
+      p.ok = false;
+      continue;
+    }
+    ssim += video::Ssim(frame, picture);
+    psnr += std::min(100.0, video::PsnrDb(frame, picture));  // identical pictures: capped, not infinite
+  }
+  const double n = static_cast<double>(frames.size());
+  p.bitrate_kbps = static_cast<double>(total_bytes) * 8.0 / (n / camera.rate_hz) / 1000.0;
+  p.ssim = ssim / n;
+  p.psnr_db = psnr / n;
+  p.encode_ms = encode_s / n * 1e3;
+  p.decode_ms = decode_s / n * 1e3;
+  return p;
+}
+
+std::string SettingText(const CodecPoint& p) {
+  return p.codec == CameraCodec::kJpeg ? "quality " + std::to_string(p.setting) : std::to_string(p.setting) + " kbit/s";
+}
+
+}  // namespace
+
+int BenchVideoMain(int argc, const char* const* argv) {
+  bool json = false, smoke = false;
+  VehicleConfig vehicle;
+  std::unique_ptr<Track> track;
+  try {
+    const Args args(argc, argv, {"vehicle", "track"}, {"json", kSmokeFlag});
+    json = args.Flag("json");
+    smoke = args.Flag(kSmokeFlag);
+    vehicle = LoadVehicle(args.Value("vehicle").value_or(ShippedFile("config/vehicles/sim-robot.yaml").string()));
+    track = std::make_unique<Track>(
+        LoadTrack(args.Value("track").value_or(ShippedFile("config/tracks/grand-prix.yaml").string())));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "haptel bench video: %s\n", e.what());
+    return 2;
+  }
+  const CameraConfig& camera = vehicle.camera;
+  const int clips = smoke ? 1 : 4;
+  const int frames_per_clip = smoke ? 15 : static_cast<int>(std::lround(2.5 * camera.rate_hz));
+  PrintSmokeNote("video", smoke, "%d frames, 2 JPEG and 2 H.264 settings and the default",
+                 clips * frames_per_clip);
+  const auto dir = OutputDir(smoke);
+  const std::vector<cv::Mat> frames = testing::LapFrames(*track, camera, clips, frames_per_clip);
+  std::printf("haptel bench video: %zu frames of %dx%d at %.0f fps (%d clips along %s), vehicle %s\n\n",
+              frames.size(), camera.width, camera.height, camera.rate_hz, clips, track->config().name.c_str(),
+              vehicle.file.c_str());
+
+  const std::vector<int> qualities = smoke ? std::vector<int>{20, 80} : std::vector<int>{20, 30, 40, 50, 60, 70, 80, 90, 95};
+  const std::vector<int> rates =
+      smoke ? std::vector<int>{250, 2000} : std::vector<int>{250, 375, 500, 750, 1000, 1500, 2000, 3000, 4000, 6000, 8000};
+  std::vector<CodecPoint> points;
+  for (int q : qualities) points.push_back(Measure(CameraCodec::kJpeg, q, camera, frames));
+  for (int r : rates) points.push_back(Measure(CameraCodec::kH264, r, camera, frames));
+  const int default_setting = camera.codec == CameraCodec::kJpeg ? camera.jpeg_quality : camera.bitrate_kbps;
+  bool default_found = false;
+  for (CodecPoint& p : points) {
+    if (p.codec == camera.codec && p.setting == default_setting) p.is_default = default_found = true;
+  }
+  if (!default_found) {
+    points.push_back(Measure(camera.codec, default_setting, camera, frames));
+    points.back().is_default = true;
+  }
+  for (CodecPoint& p : points) {
+    p.pareto = p.ok;
+    for (const CodecPoint& o : points) {
+      const bool better = o.ok && o.bitrate_kbps <= p.bitrate_kbps && o.ssim >= p.ssim &&
+                          (o.bitrate_kbps < p.bitrate_kbps || o.ssim > p.ssim);
+      if (better) p.pareto = false;
+    }
+  }
+
+  std::printf("  %-6s %-14s %12s %8s %9s %10s %10s %6s\n", "codec", "setting", "kbit/s", "SSIM", "PSNR dB",
+              "encode ms", "decode ms", "front");
+  std::ofstream csv(dir / "video_codecs.csv");
+  csv << "codec,setting,bitrate_kbps,ssim,psnr_db,encode_ms,decode_ms,pareto,default,ok\n";
+  Series jpeg{"JPEG (quality 20..95)", {}, {}}, h264{"H.264 (0.25..8 Mbit/s)", {}, {}}, front{"Pareto front", {}, {}};
+  const CodecPoint* shipped = nullptr;
+  for (const CodecPoint& p : points) {
+    std::printf("  %-6s %-14s %12.0f %8.4f %9.2f %10.2f %10.2f %6s%s%s\n", CameraCodecName(p.codec),
+                SettingText(p).c_str(), p.bitrate_kbps, p.ssim, p.psnr_db, p.encode_ms, p.decode_ms,
+                p.pareto ? "yes" : "", p.is_default ? "  <- shipped default" : "", p.ok ? "" : "  (frames failed)");
+    csv << CameraCodecName(p.codec) << ',' << p.setting << ',' << p.bitrate_kbps << ',' << p.ssim << ',' << p.psnr_db
+        << ',' << p.encode_ms << ',' << p.decode_ms << ',' << p.pareto << ',' << p.is_default << ',' << p.ok << '\n';
+    Series& s = p.codec == CameraCodec::kJpeg ? jpeg : h264;
+    s.x.push_back(std::log10(p.bitrate_kbps));
+    s.y.push_back(p.ssim);
+    if (p.is_default) shipped = &p;
+  }
+  std::vector<const CodecPoint*> on_front;
+  for (const CodecPoint& p : points) {
+    if (p.pareto) on_front.push_back(&p);
+  }
+  std::sort(on_front.begin(), on_front.end(),
+            [](const CodecPoint* a, const CodecPoint* b) { return a->bitrate_kbps < b->bitrate_kbps; });
+  for (const CodecPoint* p : on_front) {
+    front.x.push_back(std::log10(p->bitrate_kbps));
+    front.y.push_back(p->ssim);
+  }
+  // The series are sorted by bitrate for the lines (JPEG's by quality already is).
+  PlotLines(dir / "video_codecs.png", {jpeg, h264, front},
+            {"video codecs: bitrate against SSIM (synthetic camera, grand prix)", "log10 bitrate, kbit/s",
+             "mean SSIM", false});
+  const bool all_ok = std::all_of(points.begin(), points.end(), [](const CodecPoint& p) { return p.ok; });
+  std::printf("\n  shipped default: %s at %s: %s the Pareto front; every frame coded: %s\n  wrote %s/video_codecs.csv, "
+              "video_codecs.png\n",
+              CameraCodecName(camera.codec), SettingText(*shipped).c_str(), shipped->pareto ? "on" : "NOT on",
+              all_ok ? "yes" : "NO", dir.c_str());
+
+  if (json) {
+    std::ostringstream o;
+    o << "{\"codecs\":[";
+    for (size_t i = 0; i < points.size(); ++i) {
+      const CodecPoint& p = points[i];
+      o << (i ? "," : "") << "{\"codec\":\"" << CameraCodecName(p.codec) << "\",\"setting\":" << p.setting
+        << ",\"bitrate_kbps\":" << JsonNumber(p.bitrate_kbps) << ",\"ssim\":" << JsonNumber(p.ssim)
+        << ",\"psnr_db\":" << JsonNumber(p.psnr_db) << ",\"encode_ms\":" << JsonNumber(p.encode_ms)
+        << ",\"decode_ms\":" << JsonNumber(p.decode_ms) << ",\"pareto\":" << (p.pareto ? "true" : "false") << "}";
+    }
+    o << "],\"default\":{\"codec\":\"" << CameraCodecName(camera.codec) << "\",\"setting\":" << default_setting
+      << ",\"on_pareto_front\":" << (shipped->pareto ? "true" : "false") << "}}";
+    std::printf("%s\n", JsonLine(o.str(), smoke).c_str());
+  }
+  return all_ok ? 0 : 1;
+}
+
+}  // namespace haptel::bench

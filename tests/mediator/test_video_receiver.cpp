@@ -1,0 +1,117 @@
+// The operator's video receiver over a real DDS link, against a stand-in
+// vehicle that encodes the synthetic camera's frames with H.264: a frame
+// lost on the way is noticed, the picture goes stale (marked), a key frame
+// is asked for again and again until one comes, and then the picture is
+// back and the time spent stale is counted.
+#include <atomic>
+#include <vector>
+
+#include <catch2/catch.hpp>
+#include <opencv2/core.hpp>
+
+#include "haptel/config/track.hpp"
+#include "haptel/config/vehicle.hpp"
+#include "haptel/core/clock.hpp"
+#include "haptel/link/topic.hpp"
+#include "haptel/mediator/video_receiver.hpp"
+#include "haptel/testing/lap_frames.hpp"
+#include "haptel/video/h264_codec.hpp"
+#include "haptel/video/image_quality.hpp"
+#include "test_env.hpp"
+
+using namespace haptel;
+
+namespace {
+
+const std::vector<cv::Mat>& Frames() {
+  static const Track track(LoadTrack("config/tracks/grand-prix.yaml"));
+  static const std::vector<cv::Mat> frames = testing::LapFrames(track, CameraConfig{}, 1, 40);
+  return frames;
+}
+
+/// Every received frame ends as a picture, a skipped frame or a failure.
+uint64_t Handled(const mediator::VideoStats& s) { return s.frames + s.frames_skipped + s.decode_failures; }
+
+}  // namespace
+
+TEST_CASE("H.264 frame lost on the link: stale picture marked, key frame requested until it comes, picture back",
+          "[mediator][video]") {
+  LinkConfig config;
+  config.domain_id = test::UniqueDomain(67);
+  link::Participant vehicle(config, "test-vehicle");
+  link::Participant op(config, "test-operator");
+  mediator::VideoReceiver receiver(op, "robot1", /*decode=*/true);
+  std::atomic<uint64_t> requests{0};
+  link::VideoFeedbackReader feedback(vehicle, link::TopicName("robot1", "video_feedback"), link::Profile::kState,
+                                     [&](const msg::VideoFeedback& f) {
+                                       if (f.key_frame_request()) requests.fetch_add(1);
+                                     });
+  link::VideoWriter writer(vehicle, link::TopicName("robot1", "video"), link::Profile::kVideo);
+  REQUIRE(test::WaitFor([&] { return writer.matched() > 0; }, 20.0));
+
+  video::H264Encoder encoder({.width = 640, .height = 480, .rate_hz = 30.0, .bitrate_kbps = 1000,
+                              .key_frame_interval_s = 1000.0});  // only requested IDRs
+  uint64_t seq = 0;
+  uint64_t requests_seen = 0;
+  size_t next = 0;
+  // Encodes the next frame (an IDR when the receiver asked since the last),
+  // and unless `drop`, sends it and waits until the receiver has handled it.
+  auto send = [&](bool drop) {
+    if (requests.load() != requests_seen) {
+      requests_seen = requests.load();
+      encoder.RequestKeyFrame();
+    }
+    msg::VideoFrame f;
+    std::vector<uint8_t> bytes;
+    REQUIRE(encoder.Encode(Frames()[next++], bytes));
+    f.seq(++seq);
+    f.capture_wall_ns(WallNs());
+    f.width(640);
+    f.height(480);
+    f.encoding("h264");
+    f.key_frame(encoder.last_was_key_frame());
+    f.data() = bytes;
+    if (drop) return;
+    const uint64_t before = Handled(receiver.Stats());
+    writer.Write(f);
+    REQUIRE(test::WaitFor([&] { return Handled(receiver.Stats()) > before; }, 10.0));
+  };
+
+  // Pictures flowing (the first frame is an IDR; had it been lost, the
+  // receiver's request would have brought another).
+  while (receiver.Stats().frames < 5) send(false);
+  REQUIRE_FALSE(receiver.Latest().stale);
+  const cv::Mat good = *receiver.Latest().image;
+  CHECK(receiver.Stats().stale_s == 0.0);
+
+  send(true);   // lost on the link
+  send(false);  // a delta frame whose reference never came
+  CHECK(receiver.Stats().frames_lost == 1);
+  CHECK(test::WaitFor([&] { return receiver.Latest().stale; }, 5.0));
+  const mediator::LatestFrame stale = receiver.Latest();
+  REQUIRE(stale.image);
+  // The old picture, visibly marked: a red frame round it.
+  const cv::Vec3b corner = stale.image->at<cv::Vec3b>(1, 1);
+  CHECK(corner == cv::Vec3b(0, 0, 255));
+  CHECK(video::Ssim(good, *stale.image) > 0.5);
+  // Asked for, and asked again while no key frame comes (at most every 100 ms).
+  REQUIRE(test::WaitFor([&] { return requests.load() >= 2; }, 10.0));
+  CHECK(receiver.Stats().key_frame_requests >= 2);
+  CHECK(receiver.Latest().stale);
+
+  const uint64_t pictures = receiver.Stats().frames;
+  send(false);  // the requested IDR
+  CHECK(receiver.Stats().frames == pictures + 1);
+  // The picture is published just after the frame is counted.
+  CHECK(test::WaitFor([&] { return !receiver.Latest().stale; }, 5.0));
+  CHECK(video::Ssim(Frames()[next - 1], *receiver.Latest().image) > 0.85);
+  const mediator::VideoStats s = receiver.Stats();
+  CHECK(s.stale_s > 0.1);  // at least the two requests' spacing
+  CHECK(s.frames_skipped >= 1);
+  CHECK(s.kbps > 0.0);
+  // No more requests once the picture is back.
+  const uint64_t after = requests.load();
+  send(false);
+  CHECK(receiver.Stats().key_frame_requests == s.key_frame_requests);
+  CHECK(requests.load() <= after + 1);  // one may have been in flight
+}
