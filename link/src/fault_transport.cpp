@@ -81,10 +81,24 @@ RateQueue::RateQueue(double rate_bps, double queue_s)
     : ns_per_byte_(8e9 / rate_bps), max_wait_ns_(SToNs(queue_s)) {}
 
 std::optional<int64_t> RateQueue::Admit(int64_t now_ns, size_t bytes) {
-  const int64_t start = std::max(now_ns, free_at_ns_);
+  const auto take = [&](size_t n) { return static_cast<int64_t>(std::llround(static_cast<double>(n) * ns_per_byte_)); };
+  const int64_t cost = take(bytes);
+  if (bytes > kUrgentMaxBytes) {
+    const int64_t start = std::max({now_ns, free_at_ns_, urgent_free_at_ns_});
+    if (start - now_ns > max_wait_ns_) return std::nullopt;
+    free_at_ns_ = start + cost;
+    return free_at_ns_;
+  }
+  // Urgent: behind the urgent queue and what is left of one bulk MTU on
+  // the wire, not behind the whole bulk queue.
+  const int64_t on_wire = std::min(std::max<int64_t>(free_at_ns_ - now_ns, 0), take(kMtuBytes));
+  const int64_t start = std::max(now_ns + on_wire, urgent_free_at_ns_);
   if (start - now_ns > max_wait_ns_) return std::nullopt;
-  free_at_ns_ = start + static_cast<int64_t>(std::llround(static_cast<double>(bytes) * ns_per_byte_));
-  return free_at_ns_;
+  urgent_free_at_ns_ = start + cost;
+  // The rate it took is the bulk queue's loss: what waits there (and
+  // whatever comes next) passes that much later.
+  free_at_ns_ = free_at_ns_ > now_ns ? free_at_ns_ + cost : urgent_free_at_ns_;
+  return urgent_free_at_ns_;
 }
 
 FaultLine::FaultLine(const LinkFault& fault, uint64_t seed) : fault_(fault), random_(seed) {

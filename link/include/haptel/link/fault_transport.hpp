@@ -12,6 +12,7 @@
 /// each direction the fault once. A FaultLine's thread delivers the delayed
 /// packets when due; it is shut down before its participant is deleted, so
 /// no packet reaches a receiver being torn down.
+#include <algorithm>
 #include <atomic>
 #include <condition_variable>
 #include <cstdint>
@@ -49,27 +50,50 @@ struct FaultCounts {
   uint64_t queue_dropped_bytes = 0;  ///< their bytes
 };
 
-/// The rate stage of a link fault: a first-in first-out queue served at
-/// `rate_bps`, whose packets each take size × 8 / rate to pass, and which
-/// drops an arriving packet that would wait longer than `queue_s` for its
-/// turn (drop-tail, with the depth in time as tc's tbf `latency`). Kept in
-/// virtual time: a packet's departure is known when it arrives, so no
-/// thread serves the queue (the delay line delivers it then). Not
-/// thread-safe; times are any monotonic clock's, in ns.
+/// The rate stage of a link fault: a queue served at `rate_bps`, whose
+/// packets each take size × 8 / rate to pass, and which drops an arriving
+/// packet that would wait longer than `queue_s` for its turn (drop-tail,
+/// with the depth in time as tc's tbf `latency`).
+///
+/// Two classes, strictly prioritised, as a link with DiffServ's expedited
+/// forwarding for control traffic would: small packets (at most
+/// kUrgentMaxBytes: commands, states, acknowledgements, heartbeats and
+/// discovery are all under it; video frames are kilobytes) go ahead of the
+/// bulk queue, waiting only for each other and for at most one MTU of bulk
+/// already on the wire. So a saturated video stream does not queue a
+/// command behind it (issue 24: "commands and states come first"); what
+/// the urgent class sends still takes its share of the rate from the bulk
+/// class behind it. A video frame small enough to pass as urgent (below
+/// ~100 kbit/s) is then served with the commands, in their order.
+///
+/// Kept in virtual time: a packet's departure is known when it arrives, so
+/// no thread serves the queue (the delay line delivers it then); a bulk
+/// packet already admitted keeps its departure when an urgent one passes it
+/// (the bulk queue behind it is pushed back instead). Not thread-safe;
+/// times are any monotonic clock's, in ns.
 class RateQueue {
  public:
+  /// Packets of at most this size are urgent.
+  static constexpr size_t kUrgentMaxBytes = 600;
+  /// What of a bulk packet on the wire an urgent one may wait for.
+  static constexpr size_t kMtuBytes = 1500;
+
   RateQueue(double rate_bps, double queue_s);
   /// A packet of `bytes` arriving at `now_ns`: when its last bit has passed,
   /// or nothing when it is dropped (the queue ahead of it is deeper than
   /// `queue_s`).
   std::optional<int64_t> Admit(int64_t now_ns, size_t bytes);
-  /// How long a packet arriving at `now_ns` would wait for its turn.
-  int64_t WaitNs(int64_t now_ns) const { return free_at_ns_ > now_ns ? free_at_ns_ - now_ns : 0; }
+  /// How long a bulk packet arriving at `now_ns` would wait for its turn.
+  int64_t WaitNs(int64_t now_ns) const {
+    const int64_t free_at = std::max(free_at_ns_, urgent_free_at_ns_);
+    return free_at > now_ns ? free_at - now_ns : 0;
+  }
 
  private:
   double ns_per_byte_;
   int64_t max_wait_ns_;
-  int64_t free_at_ns_ = 0;  ///< when the last packet admitted has passed
+  int64_t free_at_ns_ = 0;         ///< when the bulk queue has passed
+  int64_t urgent_free_at_ns_ = 0;  ///< when the urgent queue has passed
 };
 
 /// A participant's delay line and dice, shared by its transports.
