@@ -287,7 +287,7 @@ TEST_CASE("The experimenter's notes: on a trial or the one under way, stored, ex
   const auto nowhere = client.Post("/notes", {{"participant", "A"}, {"position", "7"}, {"text", "x"}});
   REQUIRE(nowhere);
   CHECK(nowhere->status == 400);
-  CHECK(nowhere->body.find("no trial at position '7'") != std::string::npos);
+  CHECK(nowhere->body.find("no trial at position &#39;7&#39;") != std::string::npos);
   CHECK(client.Post("/notes", {{"participant", "Z"}, {"position", "1"}, {"text", "x"}})->status == 400);
   // Another site's form, or one without the console's token: refused, nothing stored.
   const httplib::Params forged = {{"participant", "A"}, {"position", "1"}, {"text", "forged"}, {"csrf", client.token()}};

@@ -408,7 +408,8 @@ TEST_CASE("A study planned before the database kept definitions resumes once, th
     StudyStore store(recorder, config, PlanTrials(config));
   }
   // What a v5 database holds: the same tables without the definition (v6)
-  // and the runs' prediction and link fault (v7), and the approach (v8).
+  // and the runs' prediction and link fault (v7), the approach (v8), the
+  // notes and the superseded trials (v9).
   {
     sqlite3* raw = nullptr;
     REQUIRE(sqlite3_open(db.c_str(), &raw) == SQLITE_OK);
@@ -417,7 +418,7 @@ TEST_CASE("A study planned before the database kept definitions resumes once, th
                          "ALTER TABLE runs DROP COLUMN link_fault; ALTER TABLE runs DROP COLUMN prediction_error_m_p50; "
                          "ALTER TABLE runs DROP COLUMN prediction_error_m_p95; ALTER TABLE runs DROP COLUMN approach_s; "
                          "ALTER TABLE study_trials DROP COLUMN approach_s; ALTER TABLE study_trials DROP COLUMN flags; "
-                         "PRAGMA user_version = 5",
+                         "DROP TABLE study_notes; DROP TABLE study_superseded_trials; PRAGMA user_version = 5",
                          nullptr, nullptr, nullptr) == SQLITE_OK);
     sqlite3_close(raw);
   }

@@ -534,7 +534,10 @@ ReportFiles WriteReport(const StudyResults& results, const StudyReport& report, 
     by_participant[a.participant][a.item] = a.value;
   }
   std::string demographics = "study,participant";
-  for (const std::string& c : columns) demographics += "," + Csv(c);
+  for (const std::string& c : columns) {
+    demographics += ',';
+    demographics += Csv(c);
+  }
   demographics += "\n";
   for (const std::string& p : results.participants) {
     const auto row = by_participant.find(p);
@@ -542,7 +545,8 @@ ReportFiles WriteReport(const StudyResults& results, const StudyReport& report, 
     demographics += Csv(results.name) + "," + Csv(p);
     for (const std::string& c : columns) {
       const auto value = row->second.find(c);
-      demographics += "," + (value == row->second.end() ? std::string() : Csv(value->second));
+      demographics += ',';  // appended apart: GCC 12 warns falsely (-Wrestrict) on "," + string
+      if (value != row->second.end()) demographics += Csv(value->second);
     }
     demographics += "\n";
   }
