@@ -143,7 +143,8 @@ TEST_CASE("A study file that cannot work is refused naming the file, the key and
                Catch::Contains("'demographics'") && Catch::Contains("simulated drivers"));
     std::string person = Study(kFour, "  - {id: A}\n", "demographics: demographics\n");
     person.replace(person.find("operators: synthetic"), 20, "operators: person");
-    person.replace(person.find("profiles:\n  p: {steering_noise: 0.02}\n"), 36, "");
+    const std::string profiles = "profiles:\n  p: {steering_noise: 0.02}\n";
+    person.replace(person.find(profiles), profiles.size(), "");
     const auto dir = test::ScratchDir("study-file-demographics");
     CHECK(LoadStudy(test::WriteFile(dir / "good.yaml", person)).demographics == "demographics");
     std::string twice = person + "questionnaires: [demographics]\n";
