@@ -219,6 +219,18 @@ StudyConfig LoadStudy(const std::filesystem::path& file) {
   for (const std::string& q : s.questionnaires) {
     if (!seen.insert(q).second) root.Fail("questionnaires", "each questionnaire once ('" + q + "' twice)");
   }
+  // The participants' background, asked once before a participant's first
+  // trial: a questionnaire of the same folder, not one of those asked after
+  // each condition.
+  s.demographics = root.String("demographics", "");
+  if (root.Has("demographics")) {
+    if (!PlainName(s.demographics)) root.Fail("demographics", std::string(kPlainName) + ": a questionnaire's name");
+    if (seen.count(s.demographics) > 0) {
+      root.Fail("demographics", "a questionnaire not also asked after each condition ('" + s.demographics +
+                                    "' is in 'questionnaires')");
+    }
+    if (synthetic) root.Fail("demographics", "no demographics for simulated drivers (they have no background)");
+  }
   const std::string qdir = root.String("questionnaires_dir", "");
   s.questionnaires_dir = qdir.empty() ? ShippedFile("config/questionnaires") : dir / qdir;
   root.Finish();

@@ -39,7 +39,7 @@ namespace {
 using namespace haptel::sql;
 
 /// Schema version stored in PRAGMA user_version.
-constexpr int kSchemaVersion = 9;
+constexpr int kSchemaVersion = 10;
 
 /// Schema steps: kMigrations[v - 1] takes a database from version v - 1 to v.
 /// A new database runs them all, so the upgrade path of an old file is the
@@ -250,8 +250,45 @@ ALTER TABLE runs ADD COLUMN video_kbps REAL NOT NULL DEFAULT 0;
 ALTER TABLE runs ADD COLUMN video_stale_s REAL NOT NULL DEFAULT 0;
 )sql";
 
-constexpr const char* kMigrations[] = {kSchemaV1, kSchemaV2, kSchemaV3, kSchemaV4,
-                                       kSchemaV5, kSchemaV6, kSchemaV7, kSchemaV8, kSchemaV9};
+// v10: the experimenter's notes (study/store.hpp SaveNote): what they saw
+// during a trial, the thesis's "direct observations", one row per note, kept
+// in the order written (position 0: about the participant, not one trial).
+// And the trials taken back to be run again (a redo; a synthetic study's
+// flagged trial run again once): the row as it was, moved here with why,
+// so the report counts only the latest attempt and lists the others.
+constexpr const char* kSchemaV10 = R"sql(
+CREATE TABLE study_notes (
+  id INTEGER PRIMARY KEY,
+  study_id INTEGER NOT NULL REFERENCES studies(id) ON DELETE CASCADE,
+  participant TEXT NOT NULL,
+  position INTEGER NOT NULL,
+  text TEXT NOT NULL,
+  noted_utc TEXT NOT NULL
+);
+CREATE INDEX study_notes_study_id ON study_notes(study_id);
+CREATE TABLE study_superseded_trials (
+  id INTEGER PRIMARY KEY,
+  study_id INTEGER NOT NULL REFERENCES studies(id) ON DELETE CASCADE,
+  participant TEXT NOT NULL,
+  position INTEGER NOT NULL,
+  condition TEXT NOT NULL,
+  run_id INTEGER NOT NULL REFERENCES runs(id),
+  lap_time_s REAL NOT NULL,
+  completed INTEGER NOT NULL,
+  obstacles INTEGER NOT NULL,
+  outcome TEXT NOT NULL,
+  attempt INTEGER NOT NULL,
+  finished_utc TEXT NOT NULL,
+  approach_s REAL,
+  flags TEXT NOT NULL,
+  superseded_utc TEXT NOT NULL,
+  why TEXT NOT NULL
+);
+CREATE INDEX study_superseded_trials_study_id ON study_superseded_trials(study_id);
+)sql";
+
+constexpr const char* kMigrations[] = {kSchemaV1, kSchemaV2, kSchemaV3, kSchemaV4, kSchemaV5,
+                                       kSchemaV6, kSchemaV7, kSchemaV8, kSchemaV9, kSchemaV10};
 static_assert(std::size(kMigrations) == kSchemaVersion, "one migration per schema version");
 
 constexpr const char* kInsertRun = R"sql(

@@ -30,7 +30,8 @@ std::string Html(const std::string& text) { return HtmlEscape(text); }
 std::string Page(const std::string& title, const std::string& body, const std::string& head_extra = "") {
   return "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>" + Html(title) + "</title>" + head_extra +
          "<style>body{font-family:sans-serif;margin:2em;max-width:60em}table{border-collapse:collapse}"
-         "td,th{border:1px solid #999;padding:0.2em 0.6em}.done{background:#e6f4e6}.error{color:#b00}"
+         "td,th{border:1px solid #999;padding:0.2em 0.6em}.done{background:#e6f4e6}.flagged{background:#fdf1d6}"
+         ".flags{color:#a60}.error{color:#b00}"
          "fieldset{margin:0.8em 0}</style></head><body>\n" +
          body + "\n</body></html>\n";
 }
@@ -54,6 +55,17 @@ std::string ErrorPage(const std::string& title, const std::string& why) {
 /// The hidden field every form carries (CheckFormToken).
 std::string TokenField(const std::string& token) {
   return "<input type=\"hidden\" name=\"csrf\" value=\"" + Html(token) + "\">";
+}
+
+/// The small form that adds one of the experimenter's notes on a trial
+/// (position 0: on the participant as a whole).
+std::string NoteForm(const std::string& token, const std::string& participant, int position, const std::string& id) {
+  return "<form method=\"post\" action=\"/notes\" class=\"note\" accept-charset=\"utf-8\"" +
+         (id.empty() ? std::string() : " id=\"" + Html(id) + "\"") + ">" + TokenField(token) +
+         "<input type=\"hidden\" name=\"participant\" value=\"" + Html(participant) +
+         "\"><input type=\"hidden\" name=\"position\" value=\"" + std::to_string(position) +
+         "\"><input name=\"text\" size=\"24\" maxlength=\"" + std::to_string(kMaxNoteCharacters) +
+         "\" placeholder=\"what you saw\" aria-label=\"note\"> <button>note</button></form>";
 }
 
 std::string LoginPage(const std::string& token, const std::string& why) {
@@ -124,8 +136,9 @@ void TreePath(const Item& item, std::map<std::string, std::string>& fields) {
 std::string Form(const Questionnaire& q, const std::string& participant, const std::string& condition,
                  const std::string& token) {
   std::ostringstream h;
-  h << "<h1>" << Html(q.title) << "</h1>\n<p>Participant <b>" << Html(participant) << "</b>, after <b>"
-    << Html(condition) << "</b></p>\n";
+  h << "<h1>" << Html(q.title) << "</h1>\n<p>Participant <b>" << Html(participant) << "</b>, "
+    << (condition.empty() ? std::string("before their first trial") : "after <b>" + Html(condition) + "</b>")
+    << "</p>\n";
   if (!q.instructions.empty()) h << "<p>" << Html(q.instructions) << "</p>\n";
   h << "<form method=\"post\" action=\"/answers\" id=\"questionnaire\" accept-charset=\"utf-8\">"
     << TokenField(token) << "\n"
@@ -226,6 +239,9 @@ struct StudyConsole::Impl {
   std::unique_ptr<StudyStore> store;
   std::mutex mutex;  ///< the store and `live`: the server answers from several threads
   std::string live;
+  /// The trial (or practice lap: position 0) under way, for its note form.
+  std::string live_participant;
+  int live_position = 0;
   LiveProgress progress;
   bool have_progress = false;
   /// An open study with nothing left to run waits for a participant or Finish.
@@ -268,6 +284,37 @@ struct StudyConsole::Impl {
     });
   }
 
+  /// A url-encoded form read here, not by the library (which buffers one
+  /// whole and refuses it past 8 kB, shorter than a long answer or note):
+  /// refused as it is read past `limit`, then its form token checked. False
+  /// (the refusal in `res`) when it is not to be handled.
+  bool ReadForm(const httplib::Request& req, httplib::Response& res, const httplib::ContentReader& read,
+                size_t limit, const std::string& allows, httplib::Params& params) {
+    if (req.is_multipart_form_data() ||
+        req.get_header_value("Content-Type").rfind("application/x-www-form-urlencoded", 0) != 0) {
+      Refuse(res, {415, "refused: the form comes url-encoded"});
+      return false;
+    }
+    std::string body;
+    bool too_large = false;
+    read([&](const char* data, size_t length) {
+      too_large = body.size() + length > limit;
+      if (!too_large) body.append(data, length);
+      return !too_large;
+    });
+    if (too_large) {
+      Refuse(res, {413, "refused: the form is larger than " + std::to_string(limit) + " bytes, more than " + allows});
+      return false;
+    }
+    httplib::detail::parse_query_text(body, params);
+    const auto token = params.find("csrf");
+    if (const Refusal refusal = CheckFormToken(access, token == params.end() ? "" : token->second)) {
+      Refuse(res, refusal);
+      return false;
+    }
+    return true;
+  }
+
   /// The participants' count, and how many more complete a balanced block.
   std::string Blocks(size_t participants) const {
     const size_t block = static_cast<size_t>(BlockSize(config));
@@ -284,6 +331,7 @@ struct StudyConsole::Impl {
     const std::lock_guard<std::mutex> lock(mutex);
     const std::vector<PlannedTrial> plan = store->Plan();
     const std::vector<TrialRow> trials = store->Trials();
+    const std::vector<NoteRow> notes = store->Notes();
     std::ostringstream h;
     h << "<h1>Study " << Html(config.name) << "</h1>\n<p id=\"progress\">" << trials.size() << " of " << plan.size()
       << " trials done</p>\n<p id=\"live\">" << (live.empty() ? "No trial under way." : Html(live)) << "</p>\n";
@@ -300,6 +348,10 @@ struct StudyConsole::Impl {
       }
       h << "<form method=\"post\" action=\"/abort\">" << TokenField(access.form_token) << "<button id=\"abort\">Abort this trial</button> (it is "
            "run again)</form>\n";
+      if (!live_participant.empty()) {
+        h << "<p>Note on this " << (live_position == 0 ? "practice lap" : "trial") << ": "
+          << NoteForm(access.form_token, live_participant, live_position, "live-note") << "</p>\n";
+      }
     }
     if (!waiting.empty()) h << "<p id=\"waiting\">Waiting for " << Html(waiting) << "</p>\n";
     if (!next.empty()) {
@@ -308,15 +360,19 @@ struct StudyConsole::Impl {
         << " <button id=\"start\">Start</button></p></form>\n";
     }
     h << "<table id=\"schedule\"><tr><th>participant</th><th>position</th><th>condition</th><th>lap</th>"
-         "<th>questionnaires</th></tr>\n";
+         "<th>questionnaires</th><th>notes</th></tr>\n";
     for (const PlannedTrial& t : plan) {
       const TrialRow* row = nullptr;
       for (const TrialRow& r : trials) {
         if (r.participant == t.participant && r.position == t.position) row = &r;
       }
-      h << "<tr" << (row != nullptr ? " class=\"done\"" : "") << "><td>" << Html(t.participant) << "</td><td>"
-        << t.position << "</td><td>" << Html(t.condition) << "</td><td>"
+      const bool flagged = row != nullptr && !row->flags.empty();
+      h << "<tr" << (row == nullptr ? "" : flagged ? " class=\"done flagged\"" : " class=\"done\"") << "><td>"
+        << Html(t.participant) << "</td><td>" << t.position << "</td><td>" << Html(t.condition) << "</td><td>"
         << (row == nullptr ? "" : FormatSeconds(row->lap_time_s) + (row->completed ? "" : " (cap)"));
+      // What could have spoiled it: the experimenter decides whether to redo it.
+      if (flagged) h << " <span class=\"flags\">! " << Html(row->flags) << "</span>";
+      if (row != nullptr && row->attempt > 1) h << " (attempt " << row->attempt << ")";
       if (row != nullptr) {
         h << " <form method=\"post\" action=\"/redo\" style=\"display:inline\">" << TokenField(access.form_token)
           << "<input type=\"hidden\" "
@@ -325,6 +381,15 @@ struct StudyConsole::Impl {
           << "\"><button>redo</button></form>";
       }
       h << "</td><td>";
+      // The participant's background, asked once before their first trial.
+      if (!config.demographics.empty() && t.position == 1) {
+        if (store->Answered(t.participant, "", config.demographics)) {
+          h << Html(config.demographics) << " &#10003; ";
+        } else {
+          h << "<a class=\"demographics\" href=\"" << Html(Query(t.participant, "", config.demographics)) << "\">"
+            << Html(config.demographics) << "</a> (before the first trial) ";
+        }
+      }
       if (row != nullptr) {
         for (const std::string& name : config.questionnaires) {
           if (store->Answered(t.participant, t.condition, name)) {
@@ -334,9 +399,24 @@ struct StudyConsole::Impl {
           }
         }
       }
-      h << "</td></tr>\n";
+      h << "</td><td>";
+      for (const NoteRow& n : notes) {
+        if (n.participant == t.participant && n.position == t.position) {
+          h << "<div class=\"note-text\">" << Html(n.text) << "</div>";
+        }
+      }
+      h << NoteForm(access.form_token, t.participant, t.position, "") << "</td></tr>\n";
     }
     h << "</table>\n";
+    // Notes on a participant as a whole (their practice lap, their manner).
+    bool general = false;
+    for (const NoteRow& n : notes) {
+      if (n.position != 0) continue;
+      if (!general) h << "<h2>Notes on participants</h2>\n<ul id=\"participant-notes\">\n";
+      general = true;
+      h << "<li>" << Html(n.participant) << ": " << Html(n.text) << "</li>\n";
+    }
+    if (general) h << "</ul>\n";
     if (config.operators == "person") {
       h << "<p id=\"participants\">" << Html(Blocks(store->Participants().size())) << "</p>\n"
         << "<form method=\"post\" action=\"/participants\">" << TokenField(access.form_token)
@@ -385,8 +465,11 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
   s.access.form_token = RandomToken();
   s.access.access_token = beyond_loopback ? (options.access_token.empty() ? RandomToken() : options.access_token) : "";
   s.access.max_answers_bytes = LargestAnswers(questionnaires);
+  // A note's characters as 4 bytes of UTF-8 each, url-encoded, and room for
+  // its hidden fields and what a browser adds.
+  s.access.max_note_bytes = FormBytesFor(kMaxNoteCharacters, 4) + 4096;
   // Chunked bodies (no Content-Length) stop here as they are read.
-  s.server->set_payload_max_length(s.access.max_answers_bytes);
+  s.server->set_payload_max_length(std::max(s.access.max_answers_bytes, s.access.max_note_bytes));
   // Not to be framed by another page (a hidden Abort button under a click),
   // sniffed as another type, cached, or named in a Referer to another site.
   // Not "no-referrer": under it Chromium sends the console's own form posts
@@ -561,27 +644,8 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
   // refuses one past 8 kB, shorter than the answers a text item allows.
   s.server->Post("/answers", [&s](const httplib::Request& req, httplib::Response& res,
                                   const httplib::ContentReader& read) {
-    if (req.is_multipart_form_data() ||
-        req.get_header_value("Content-Type").rfind("application/x-www-form-urlencoded", 0) != 0) {
-      return s.Refuse(res, {415, "refused: the answers come as an url-encoded form"});
-    }
-    std::string body;
-    bool too_large = false;
-    read([&](const char* data, size_t length) {
-      too_large = body.size() + length > s.access.max_answers_bytes;
-      if (!too_large) body.append(data, length);
-      return !too_large;
-    });
-    if (too_large) {
-      return s.Refuse(res, {413, "refused: the form is larger than " + std::to_string(s.access.max_answers_bytes) +
-                                     " bytes, more than this study's questionnaires allow"});
-    }
     httplib::Params params;
-    httplib::detail::parse_query_text(body, params);
-    const auto token = params.find("csrf");
-    if (const Refusal refusal = CheckFormToken(s.access, token == params.end() ? "" : token->second)) {
-      return s.Refuse(res, refusal);
-    }
+    if (!s.ReadForm(req, res, read, s.access.max_answers_bytes, "this study's questionnaires allow", params)) return;
     std::map<std::string, std::string> fields;
     for (const auto& [key, value] : params) fields[key] = value;
     const std::string participant = fields["participant"];
@@ -597,7 +661,7 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
     SubmissionResult result;
     {
       const std::lock_guard<std::mutex> lock(s.mutex);
-      result = SubmitAnswers(*s.store, s.questionnaires, participant, condition, name, fields);
+      result = SubmitAnswers(*s.store, s.questionnaires, participant, condition, name, fields, s.config.demographics);
     }
     res.status = result.status;
     std::string page = std::string("<p id=\"result\" class=\"") + (result.accepted ? "ok" : "error") + "\">" +
@@ -609,6 +673,28 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
     }
     page += "<p><a href=\"/\">schedule</a></p>";
     res.set_content(Page(result.accepted ? "Recorded" : "Not recorded", page), "text/html; charset=utf-8");
+  });
+  // One of the experimenter's notes on a trial; a long note (in any
+  // script) is larger than the library's own form limit, so read here.
+  s.server->Post("/notes", [&s](const httplib::Request& req, httplib::Response& res,
+                                const httplib::ContentReader& read) {
+    httplib::Params params;
+    if (!s.ReadForm(req, res, read, s.access.max_note_bytes,
+                    "a note of " + std::to_string(kMaxNoteCharacters) + " characters takes", params)) {
+      return;
+    }
+    const auto field = [&params](const char* key) {
+      const auto it = params.find(key);
+      return it == params.end() ? std::string() : it->second;
+    };
+    SubmissionResult result;
+    {
+      const std::lock_guard<std::mutex> lock(s.mutex);
+      result = SubmitNote(*s.store, field("participant"), field("position"), field("text"));
+    }
+    if (result.accepted) return res.set_redirect("/", 303);
+    res.status = result.status;
+    res.set_content(ErrorPage("Not noted", result.message), "text/html; charset=utf-8");
   });
   // SO_REUSEADDR only: httplib's default adds SO_REUSEPORT, with which a
   // second console would share the port silently instead of being refused.
@@ -663,9 +749,11 @@ ConnectionCounters StudyConsole::connection_counters() const {
 
 bool StudyConsole::TakeAbort() { return impl_->abort_requested.exchange(false); }
 
-void StudyConsole::SetLive(const std::string& text) {
+void StudyConsole::SetLive(const std::string& text, const std::string& participant, int position) {
   const std::lock_guard<std::mutex> lock(impl_->mutex);
   impl_->live = text;
+  impl_->live_participant = text.empty() ? "" : participant;
+  impl_->live_position = position;
   impl_->progress = {};
   impl_->have_progress = false;
 }

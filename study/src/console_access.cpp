@@ -10,6 +10,8 @@
 #include <cctype>
 #include <stdexcept>
 
+#include "haptel/study/submission.hpp"
+
 namespace haptel::study {
 namespace {
 
@@ -164,14 +166,17 @@ Refusal CheckRequest(const ConsoleAccess& access, const httplib::Request& reques
     }
   }
   if (request.has_header("Content-Length")) {
-    const size_t limit = request.path == "/answers" ? access.max_answers_bytes : access.max_other_bytes;
+    const size_t limit = request.path == "/answers" ? access.max_answers_bytes
+                         : request.path == "/notes" ? access.max_note_bytes
+                                                    : access.max_other_bytes;
     const std::string text = request.get_header_value("Content-Length");
     const bool number = !text.empty() && text.size() <= 18 && text.find_first_not_of("0123456789") == std::string::npos;
     if (!number) return {400, "refused: Content-Length '" + text.substr(0, 40) + "' is not a length"};
     const size_t length = std::stoull(text);
     if (length > limit) {
       return {413, "refused: the form is " + std::to_string(length) + " bytes; this console takes at most " +
-                       std::to_string(limit) + " here (the longest answers this study's questionnaires allow)"};
+                       std::to_string(limit) + " here (the longest answers this study's questionnaires allow, or a note of " +
+                       std::to_string(kMaxNoteCharacters) + " characters)"};
     }
   }
   return {};

@@ -161,6 +161,8 @@ std::vector<DefiningValue> StudyDefinition(const StudyConfig& config) {
   }
   out.push_back({"questionnaires", Joined(config.questionnaires)});
   out.push_back({"questionnaires_dir", FromStudyFolder(config, config.questionnaires_dir)});
+  // Written only when asked: studies planned before it existed still match.
+  if (!config.demographics.empty()) out.push_back({"demographics", config.demographics});
 
   // The file's participants, in order: their rows of the design. Those added
   // in the console later are not the file's and are not here.

@@ -348,6 +348,18 @@ bool StudyStore::Redo(const std::string& participant, int position, const std::s
   sqlite3* db = recorder_.handle();
   const std::filesystem::path& file = recorder_.path();
   Transaction txn(file, db, "BEGIN IMMEDIATE");
+  {
+    // Kept as it was: the report lists what was run again, and why.
+    Stmt keep = Prepare(file, db,
+                        "INSERT INTO study_superseded_trials (study_id, participant, position, condition, run_id, "
+                        "lap_time_s, completed, obstacles, outcome, attempt, finished_utc, approach_s, flags, "
+                        "superseded_utc, why) SELECT study_id, participant, position, condition, run_id, lap_time_s, "
+                        "completed, obstacles, outcome, attempt, finished_utc, approach_s, flags, ?, ? FROM "
+                        "study_trials WHERE study_id = ? AND participant = ? AND position = ?",
+                        "cannot keep the trial taken back");
+    Binder(file, db, keep.get()).Text(NowUtc()).Text(why).Int(id_).Text(participant).Int(position);
+    StepDone(file, db, keep.get(), "cannot keep the trial taken back");
+  }
   Stmt remove = Prepare(file, db, "DELETE FROM study_trials WHERE study_id = ? AND participant = ? AND position = ?",
                         "cannot take the trial back");
   Binder(file, db, remove.get()).Int(id_).Text(participant).Int(position);
@@ -357,6 +369,47 @@ bool StudyStore::Redo(const std::string& participant, int position, const std::s
   Event("redo", participant, position, why);
   txn.Commit();
   return true;
+}
+
+bool StudyStore::RedoFlaggedOnce(const PlannedTrial& trial) {
+  for (const TrialRow& row : Trials()) {
+    if (row.participant != trial.participant || row.position != trial.position) continue;
+    if (row.flags.empty() || row.attempt > 1) return false;
+    return Redo(trial.participant, trial.position, "flagged (" + row.flags + "): run again once by itself");
+  }
+  return false;
+}
+
+std::vector<SupersededTrial> StudyStore::Superseded() const {
+  sqlite3* db = recorder_.handle();
+  const std::filesystem::path& file = recorder_.path();
+  Stmt select = Prepare(file, db,
+                        "SELECT participant, position, condition, run_id, lap_time_s, completed, obstacles, outcome, "
+                        "attempt, approach_s, flags, why, superseded_utc FROM study_superseded_trials WHERE "
+                        "study_id = ? ORDER BY id",
+                        "cannot read the superseded trials");
+  Binder(file, db, select.get()).Int(id_);
+  std::vector<SupersededTrial> rows;
+  while (sqlite3_step(select.get()) == SQLITE_ROW) {
+    Reader r(select.get());
+    SupersededTrial s;
+    TrialRow& t = s.trial;
+    t.participant = r.Text();
+    t.position = static_cast<int>(r.Int());
+    t.condition = r.Text();
+    t.run_id = r.Int();
+    t.lap_time_s = r.Real();
+    t.completed = r.Bool();
+    t.obstacles = static_cast<int>(r.Int());
+    t.outcome = r.Text();
+    t.attempt = static_cast<int>(r.Int());
+    t.approach_s = r.Real();
+    t.flags = r.Text();
+    s.why = r.Text();
+    s.superseded_utc = r.Text();
+    rows.push_back(s);
+  }
+  return rows;
 }
 
 bool StudyStore::Answered(const std::string& participant, const std::string& condition,
@@ -413,6 +466,42 @@ std::vector<AnswerRow> StudyStore::Answers() const {
     a.item = r.Text();
     a.value = r.Text();
     rows.push_back(a);
+  }
+  return rows;
+}
+
+void StudyStore::SaveNote(const std::string& participant, int position, const std::string& text) {
+  sqlite3* db = recorder_.handle();
+  const std::filesystem::path& file = recorder_.path();
+  Transaction txn(file, db, "BEGIN IMMEDIATE");
+  {
+    Stmt insert = Prepare(file, db,
+                          "INSERT INTO study_notes (study_id, participant, position, text, noted_utc) VALUES "
+                          "(?, ?, ?, ?, ?)",
+                          "cannot prepare the note");
+    Binder(file, db, insert.get()).Int(id_).Text(participant).Int(position).Text(text).Text(NowUtc());
+    StepDone(file, db, insert.get(), "cannot record the note on participant " + participant);
+  }
+  txn.Commit();
+}
+
+std::vector<NoteRow> StudyStore::Notes() const {
+  sqlite3* db = recorder_.handle();
+  const std::filesystem::path& file = recorder_.path();
+  Stmt select = Prepare(file, db,
+                        "SELECT participant, position, text, noted_utc FROM study_notes WHERE study_id = ? "
+                        "ORDER BY id",
+                        "cannot read the notes");
+  Binder(file, db, select.get()).Int(id_);
+  std::vector<NoteRow> rows;
+  while (sqlite3_step(select.get()) == SQLITE_ROW) {
+    Reader r(select.get());
+    NoteRow n;
+    n.participant = r.Text();
+    n.position = static_cast<int>(r.Int());
+    n.text = r.Text();
+    n.noted_utc = r.Text();
+    rows.push_back(n);
   }
   return rows;
 }

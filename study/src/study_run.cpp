@@ -128,12 +128,19 @@ mediator::SessionSetup PracticeSetup(const StudyConfig& config, const std::files
 }
 
 /// Waits until every participant has answered every questionnaire of each
-/// condition they have finished (all its planned trials), showing what is
-/// awaited on the console. False if `stop` came first.
+/// condition they have finished (all its planned trials), and
+/// `next_participant` (when given) their background before their first
+/// trial, showing what is awaited on the console. False if `stop` came first.
 bool AwaitQuestionnaires(const StudyStore& store, const StudyConfig& config, StudyConsole& console,
-                         const std::atomic<bool>& stop) {
+                         const std::atomic<bool>& stop, const std::string& next_participant = "") {
   while (!stop.load()) {
     std::string pending;
+    // The next participant's background, before their first trial (and
+    // their practice lap).
+    if (!next_participant.empty() && !config.demographics.empty() && store.TrialsDone(next_participant) == 0 &&
+        !store.Answered(next_participant, "", config.demographics)) {
+      pending = next_participant + ": " + config.demographics + " before their first trial";
+    }
     const std::vector<PlannedTrial> plan = store.Plan();
     const std::vector<TrialRow> trials = store.Trials();
     for (const PlannedTrial& t : plan) {
@@ -214,6 +221,9 @@ int StudyRunCommand(int argc, const char* const* argv) {
       }
       for (const std::string& name : config.questionnaires) {
         questionnaires[name] = FindQuestionnaire(config.questionnaires_dir, name);
+      }
+      if (!config.demographics.empty()) {
+        questionnaires[config.demographics] = FindQuestionnaire(config.questionnaires_dir, config.demographics);
       }
       plan = PlanTrials(config);
       const RunConfig run_config = LoadRun(config.run);
@@ -302,7 +312,7 @@ int StudyRunCommand(int argc, const char* const* argv) {
       if (person) {
         // The questionnaires of the conditions already driven come first;
         // then the experimenter starts the trial.
-        if (!AwaitQuestionnaires(store, config, *console, interrupted)) continue;
+        if (!AwaitQuestionnaires(store, config, *console, interrupted, trial->participant)) continue;
         if (config.practice && store.TrialsDone(trial->participant) == 0 && !store.Practised(trial->participant)) {
           const std::string who = "participant " + trial->participant;
           if (!console->WaitForStart("practice lap for " + who + ": the keyboard, the camera's view", interrupted)) {
@@ -311,11 +321,20 @@ int StudyRunCommand(int argc, const char* const* argv) {
           mediator::SessionSetup practice =
               cli::ReadInput([&] { return PracticeSetup(config, database, domain, verbose); });
           ShowPictures(practice, *console);
-          console->SetLive("practice lap: " + who + " (keyboard; Abort ends it)");
+          console->SetLive("practice lap: " + who + " (keyboard; Abort ends it)", trial->participant, 0);
           std::fprintf(stderr, "[study] practice lap: %s ...\n", who.c_str());
           const mediator::RecordedRun run = run_watched(practice, {});
           if (interrupted.load()) continue;
           const record::RunRecord& r = run.result.record;
+          // Aborted: not practised. Recorded as such, and offered again (the
+          // experimenter may start it once more, or let it run to its end).
+          if (console->TakeAbort()) {
+            store.Event("practice interrupted", trial->participant, 0,
+                        "run " + std::to_string(run.run_id) + ": aborted from the console; offered again");
+            std::fprintf(stderr, "[study]   practice aborted from the console: offered again (run %lld)\n",
+                         static_cast<long long>(run.run_id));
+            continue;
+          }
           store.Event("practice", trial->participant, 0,
                       "run " + std::to_string(run.run_id) + ": " + mediator::ToString(run.result.outcome) +
                           (r.completed ? ", lap " + Seconds(r.lap_time_s) + " s" : ""));
@@ -337,7 +356,8 @@ int StudyRunCommand(int argc, const char* const* argv) {
       if (console) {
         console->SetLive("trial " + std::to_string(number) + " of " + std::to_string(planned) +
                          ": participant " + trial->participant + ", " + trial->condition + " (position " +
-                         std::to_string(trial->position) + ")");
+                         std::to_string(trial->position) + ")",
+                         trial->participant, trial->position);
         StudyConsole* page = console.get();
         setup.on_live = [page](const view::Overlay& o) {
           page->SetLiveProgress({o.lap_time_s, o.gates_passed, o.gates_total, o.obstacles_touched, o.last_contact});
@@ -359,6 +379,13 @@ int StudyRunCommand(int argc, const char* const* argv) {
                      mediator::ToString(run.result.outcome).c_str(), Seconds(r.lap_time_s).c_str(),
                      r.completed ? "" : (" (scored " + Seconds(config.trial_cap_s) + " s)").c_str(),
                      r.obstacles_touched, run.result.operator_slips, static_cast<long long>(run.run_id));
+        // Nobody watches a synthetic study to redo a spoiled trial: a flagged
+        // one runs again once, now, by itself; both are kept (the first as
+        // superseded), the report counts the second. People's flagged trials
+        // are the experimenter's to redo, from the console.
+        if (!person && store.RedoFlaggedOnce(*trial)) {
+          std::fprintf(stderr, "[study]   flagged (%s): run again once\n", TrialFlags(r).c_str());
+        }
         continue;
       }
       // Not a finished trial: the run is recorded (or kept in a file), the trial is not.

@@ -358,6 +358,11 @@ TEST_CASE("a person study from the console: a participant added, a practice lap,
   CHECK(static_cast<unsigned char>(picture->body[0]) == 0xFF);  // a JPEG's start of image
   CHECK(static_cast<unsigned char>(picture->body[1]) == 0xD8);
   REQUIRE(console.Post("/abort"));
+  // Aborted, the practice lap is not skipped: it is offered again. This time
+  // it runs to its end (nobody presses a key: the cap).
+  REQUIRE(test::WaitFor([&] { study.Pump(); return !status("next").empty() || !study.Alive(); }, 60.0));
+  CHECK(status("next").find("practice lap for participant P1") != std::string::npos);
+  REQUIRE(console.Post("/start"));
 
   const httplib::Params answers = {{"participant", "P1"}, {"questionnaire", "thesis"}, {"easy_to_learn", "3"},
                                    {"efficient", "4"}};
@@ -408,7 +413,8 @@ TEST_CASE("a person study from the console: a participant added, a practice lap,
   };
   CHECK(count("SELECT COUNT(*) FROM study_answers") == 4);  // two answers after each condition
   CHECK(count("SELECT COUNT(*) FROM study_participants WHERE participant = 'P1'") == 1);
+  CHECK(count("SELECT COUNT(*) FROM study_events WHERE kind = 'practice interrupted' AND participant = 'P1'") == 1);
   CHECK(count("SELECT COUNT(*) FROM study_events WHERE kind = 'practice' AND participant = 'P1'") == 1);
   CHECK(count("SELECT COUNT(*) FROM study_trials") == 2);
-  CHECK(count("SELECT COUNT(*) FROM runs WHERE interface = 'keyboard'") == 1);  // the practice lap's run
+  CHECK(count("SELECT COUNT(*) FROM runs WHERE interface = 'keyboard'") == 2);  // the practice laps' runs
 }

@@ -1,8 +1,10 @@
 #!/usr/bin/env python3
 """The experimenter's console in a real browser (headless Chromium through
-Selenium): a participant fills in both questionnaires after the condition
-they drove; the same form sent twice and an incomplete one are refused on
-the page; the database holds exactly one row per answer.
+Selenium): a participant fills in their background (the demographics, once
+before their first trial) and both questionnaires after the condition they
+drove; the same form sent twice and an incomplete one are refused on the
+page; the experimenter writes a note on a trial from the schedule; the
+database holds exactly one row per answer and the note as written.
 
 usage: console_browser.py FIXTURE SCRATCH_DIR   (run by ctest)
 """
@@ -42,12 +44,25 @@ def main():
             ("A", "gesture", "rating", "rating", "5"),
             ("A", "gesture", "rating", "rating.path", "controllable=yes,adequate=yes,satisfactory=no"),
             ("A", "gesture", "rating", "score", "5"),
+            ("A", "", "demographics", "age_band", "25-34"),
+            ("A", "", "demographics", "gender", "self-described"),
+            ("A", "", "demographics", "gender_description", "in my own words"),
+            ("A", "", "demographics", "handedness", "left"),
+            ("A", "", "demographics", "video_games", "weekly"),
+            ("A", "", "demographics", "driving", "no-licence"),
+            ("A", "", "demographics", "haptic_devices", "never"),
         ])
         assert rows == expected, f"rows in the database:\n{rows}\nexpected:\n{expected}"
-        print("console_browser: ok,", len(rows), "answer rows")
+        notes = sqlite3.connect(db).execute("SELECT participant, position, text FROM study_notes").fetchall()
+        assert notes == [("A", 1, NOTE)], f"notes in the database: {notes}"
+        print("console_browser: ok,", len(rows), "answer rows,", len(notes), "note")
     finally:
         server.stdin.close()
         server.wait(timeout=30)
+
+
+# A note in two scripts and markup, kept as written and shown as text.
+NOTE = "looked at the hands <b>not</b> the screen, 手を見ていた"
 
 
 def form_url(browser, url, name):
@@ -66,6 +81,27 @@ def result(browser):
 
 
 def run(browser, url):
+    # The background first: the schedule links it from A's first trial.
+    browser.get(url)
+    browser.find_element(By.CSS_SELECTOR, "a.demographics").click()
+    WebDriverWait(browser, 30).until(expected_conditions.presence_of_element_located((By.ID, "questionnaire")))
+    for item, value in (("age_band", "25-34"), ("gender", "self-described"), ("handedness", "left"),
+                        ("video_games", "weekly"), ("driving", "no-licence"), ("haptic_devices", "never")):
+        browser.find_element(By.CSS_SELECTOR, f'input[name="{item}"][value="{value}"]').click()
+    browser.find_element(By.NAME, "gender_description").send_keys("in my own words")
+    browser.find_element(By.ID, "submit").click()
+    message = result(browser)
+    assert "recorded demographics" in message, message
+    browser.get(url)  # answered: the schedule says so and links it no more
+    assert not browser.find_elements(By.CSS_SELECTOR, "a.demographics")
+
+    # A note on A's first trial, from its row of the schedule.
+    row = browser.find_elements(By.CSS_SELECTOR, "#schedule tr")[1]
+    row.find_element(By.NAME, "text").send_keys(NOTE)
+    row.find_element(By.CSS_SELECTOR, "form.note button").click()
+    WebDriverWait(browser, 30).until(
+        expected_conditions.text_to_be_present_in_element((By.ID, "schedule"), NOTE))
+
     thesis = form_url(browser, url, "thesis")
     rating = form_url(browser, url, "rating")
     # The cockpit has not been driven: the schedule offers no form for it.

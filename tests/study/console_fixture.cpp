@@ -27,6 +27,7 @@ int main(int argc, char** argv) {
   config.conditions = {{"cockpit", "cockpit"}, {"gesture", "gesture"}};
   config.participants = {{"A", ""}};
   config.questionnaires = {"thesis", "rating"};
+  config.demographics = "demographics";
   const std::vector<PlannedTrial> plan = {{"A", 1, "gesture", 1}, {"A", 2, "cockpit", 1}};
   const std::filesystem::path db = dir / "browser.db";
   std::filesystem::remove(db);
@@ -37,7 +38,9 @@ int main(int argc, char** argv) {
   }
   const std::filesystem::path shipped = ShippedFile("config/questionnaires");
   const std::map<std::string, Questionnaire> questionnaires = {
-      {"thesis", FindQuestionnaire(shipped, "thesis")}, {"rating", FindQuestionnaire(shipped, "rating")}};
+      {"thesis", FindQuestionnaire(shipped, "thesis")},
+      {"rating", FindQuestionnaire(shipped, "rating")},
+      {"demographics", FindQuestionnaire(shipped, "demographics")}};
   ConsoleOptions options;
   options.port = 0;
   StudyConsole console(config, plan, db, questionnaires, options);

@@ -5,6 +5,8 @@
 
 #include <atomic>
 #include <chrono>
+#include <fstream>
+#include <iterator>
 #include <thread>
 
 #include <catch2/catch.hpp>
@@ -12,6 +14,8 @@
 #include "haptel/config/paths.hpp"
 #include "haptel/record/recorder.hpp"
 #include "haptel/study/console.hpp"
+#include "haptel/study/report.hpp"
+#include "haptel/study/submission.hpp"
 #include "console_client.hpp"
 #include "study_test_run.hpp"
 #include "test_env.hpp"
@@ -31,6 +35,11 @@ StudyConfig SmallStudy(const std::filesystem::path& dir, const std::string& name
   config.operators = operators;
   config.conditions = std::move(conditions);
   return config;
+}
+
+std::string ReadText(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
 }  // namespace
@@ -237,4 +246,222 @@ TEST_CASE("Simulated drivers come from the study file, not the console") {
   REQUIRE(added);
   CHECK(added->status == 409);
   CHECK(added->body.find("study file") != std::string::npos);
+}
+
+TEST_CASE("The experimenter's notes: on a trial or the one under way, stored, exported escaped, refused with a reason") {
+  const auto dir = test::ScratchDir("study-console-notes");
+  StudyConfig config = SmallStudy(dir, "notes", "person", {{"cockpit", "cockpit"}, {"gesture", "gesture"}});
+  config.participants = {{"A", ""}};
+  const std::vector<PlannedTrial> plan = {{"A", 1, "gesture", 1}, {"A", 2, "cockpit", 1}};
+  const auto db = dir / "notes.db";
+  ConsoleOptions options;
+  options.port = 0;
+  StudyConsole console(config, plan, db, {}, options);
+  test::ConsoleClient client("127.0.0.1", console.port());
+
+  // Every row of the schedule has a note form; the trial under way has its own.
+  console.SetLive("trial 1 of 2: participant A, gesture (position 1)", "A", 1);
+  const auto page = client.Get("/");
+  REQUIRE(page);
+  CHECK(page->body.find("action=\"/notes\"") != std::string::npos);
+  CHECK(page->body.find("id=\"live-note\"") != std::string::npos);
+
+  const auto noted = client.Post("/notes", {{"participant", "A"}, {"position", "1"},
+                                            {"text", "  looked at the hands, not the screen  "}});
+  REQUIRE(noted);
+  CHECK(noted->status == 303);
+  // A remark a spreadsheet would run as a formula, on the participant as a whole.
+  CHECK(client.Post("/notes", {{"participant", "A"}, {"position", "0"}, {"text", "=HYPERLINK(\"x\")"}})->status == 303);
+  // Characters, not bytes: 2000 CJK characters (6000 bytes, 18000 url-encoded) fit; 2001 do not.
+  std::string cjk;
+  for (int i = 0; i < kMaxNoteCharacters; ++i) cjk += "\xE6\xBC\xA2";
+  CHECK(client.Post("/notes", {{"participant", "A"}, {"position", "2"}, {"text", cjk}})->status == 303);
+  const auto long_note = client.Post("/notes", {{"participant", "A"}, {"position", "2"}, {"text", cjk + "x"}});
+  REQUIRE(long_note);
+  CHECK(long_note->status == 422);
+  CHECK(long_note->body.find("at most 2000 characters, this one has 2001") != std::string::npos);
+  const auto empty = client.Post("/notes", {{"participant", "A"}, {"position", "1"}, {"text", "  "}});
+  REQUIRE(empty);
+  CHECK(empty->status == 422);
+  CHECK(empty->body.find("the note is empty") != std::string::npos);
+  const auto nowhere = client.Post("/notes", {{"participant", "A"}, {"position", "7"}, {"text", "x"}});
+  REQUIRE(nowhere);
+  CHECK(nowhere->status == 400);
+  CHECK(nowhere->body.find("no trial at position &#39;7&#39;") != std::string::npos);
+  CHECK(client.Post("/notes", {{"participant", "Z"}, {"position", "1"}, {"text", "x"}})->status == 400);
+  // Another site's form, or one without the console's token: refused, nothing stored.
+  const httplib::Params forged = {{"participant", "A"}, {"position", "1"}, {"text", "forged"}, {"csrf", client.token()}};
+  const auto cross = client.raw().Post("/notes", {{"Origin", "http://evil.example"}}, forged);
+  REQUIRE(cross);
+  CHECK(cross->status == 403);
+  const auto tokenless =
+      client.raw().Post("/notes", httplib::Params{{"participant", "A"}, {"position", "1"}, {"text", "forged"}});
+  REQUIRE(tokenless);
+  CHECK(tokenless->status == 403);
+
+  // Shown on the schedule, escaped.
+  const auto shown = client.Get("/");
+  REQUIRE(shown);
+  CHECK(shown->body.find("looked at the hands, not the screen") != std::string::npos);
+  CHECK(shown->body.find("=HYPERLINK(&quot;x&quot;)") != std::string::npos);
+
+  // Stored as written (trimmed), in order.
+  {
+    record::Recorder recorder(db);
+    StudyStore store(recorder, config, plan);
+    const std::vector<NoteRow> notes = store.Notes();
+    REQUIRE(notes.size() == 3);
+    CHECK(notes[0].participant == "A");
+    CHECK(notes[0].position == 1);
+    CHECK(notes[0].text == "looked at the hands, not the screen");
+    CHECK(notes[1].position == 0);
+    CHECK(notes[2].text == cjk);
+    CHECK_FALSE(notes[0].noted_utc.empty());
+  }
+  // In the report: its text, its page and notes.csv, the formula kept as text.
+  const StudyResults results = LoadStudyResults(db, config.name);
+  REQUIRE(results.notes.size() == 3);
+  CHECK(results.notes[0].condition == "gesture");
+  const StudyReport report = ComputeReport(results, PostHocMethod::kNemenyi);
+  CHECK(FormatReport(results, report).find("A, gesture (position 1): looked at the hands") != std::string::npos);
+  const ReportFiles files = WriteReport(results, report, dir / "report");
+  const std::string csv = ReadText(files.notes_csv);
+  CHECK(csv.rfind("study,participant,position,condition,noted_utc,text\n", 0) == 0);
+  CHECK(csv.find(",gesture,") != std::string::npos);
+  CHECK(csv.find("\"'=HYPERLINK(\"\"x\"\")\"") != std::string::npos);
+  CHECK(csv.find(",=HYPERLINK") == std::string::npos);
+  CHECK(ReadText(files.html).find("looked at the hands, not the screen") != std::string::npos);
+}
+
+TEST_CASE("The participants' background: asked once before the first trial, stored with no condition, exported") {
+  const auto dir = test::ScratchDir("study-console-demographics");
+  StudyConfig config = SmallStudy(dir, "background", "person", {{"cockpit", "cockpit"}, {"gesture", "gesture"}});
+  config.participants = {{"A", ""}, {"B", ""}};
+  config.questionnaires = {"thesis"};
+  config.demographics = "demographics";
+  const std::vector<PlannedTrial> plan = {
+      {"A", 1, "gesture", 1}, {"A", 2, "cockpit", 1}, {"B", 1, "cockpit", 1}, {"B", 2, "gesture", 1}};
+  const auto db = dir / "background.db";
+  const std::filesystem::path shipped = ShippedFile("config/questionnaires");
+  const std::map<std::string, Questionnaire> questionnaires = {
+      {"thesis", FindQuestionnaire(shipped, "thesis")}, {"demographics", FindQuestionnaire(shipped, "demographics")}};
+  ConsoleOptions options;
+  options.port = 0;
+  StudyConsole console(config, plan, db, questionnaires, options);
+  test::ConsoleClient client("127.0.0.1", console.port());
+
+  // Before any trial: each participant's first row links to the form.
+  const auto schedule = client.Get("/");
+  REQUIRE(schedule);
+  CHECK(schedule->body.find("/questionnaire?participant=A&amp;condition=&amp;name=demographics") != std::string::npos);
+  CHECK(schedule->body.find("/questionnaire?participant=B&amp;condition=&amp;name=demographics") != std::string::npos);
+  const auto form = client.Get("/questionnaire?participant=A&condition=&name=demographics");
+  REQUIRE(form);
+  CHECK(form->body.find("before their first trial") != std::string::npos);
+  CHECK(form->body.find("value=\"prefer-not-to-say\"") != std::string::npos);
+
+  httplib::Params answers = {{"participant", "A"},       {"condition", ""},           {"questionnaire", "demographics"},
+                             {"age_band", "25-34"},      {"gender", "self-described"}, {"gender_description", "=agender"},
+                             {"handedness", "left"},     {"video_games", "weekly"},   {"driving", "no-licence"},
+                             {"haptic_devices", "never"}};
+  const auto first = client.Post("/answers", answers);
+  REQUIRE(first);
+  CHECK(first->status == 200);
+  const auto twice = client.Post("/answers", answers);
+  REQUIRE(twice);
+  CHECK(twice->status == 409);
+  CHECK(twice->body.find("already answered") != std::string::npos);
+  // About no condition: not after one, and no other questionnaire without one.
+  answers.erase("condition");
+  answers.emplace("condition", "gesture");
+  const auto after = client.Post("/answers", answers);
+  REQUIRE(after);
+  CHECK(after->status == 400);
+  CHECK(after->body.find("before their first trial") != std::string::npos);
+  const auto thesis = client.Post("/answers", {{"participant", "B"}, {"condition", ""}, {"questionnaire", "thesis"},
+                                               {"easy_to_learn", "4"}, {"efficient", "4"}});
+  REQUIRE(thesis);
+  CHECK(thesis->status == 400);
+  // A missing choice is refused like any questionnaire's.
+  const auto incomplete = client.Post("/answers", {{"participant", "B"}, {"condition", ""},
+                                                   {"questionnaire", "demographics"}, {"age_band", "18-24"}});
+  REQUIRE(incomplete);
+  CHECK(incomplete->status == 422);
+  CHECK(client.Post("/answers", {{"participant", "B"}, {"condition", ""}, {"questionnaire", "demographics"},
+                                 {"age_band", "18-24"}, {"gender", "prefer-not-to-say"}, {"handedness", "right"},
+                                 {"video_games", "never"}, {"driving", "daily"}, {"haptic_devices", "regularly"}})
+            ->status == 200);
+  const auto done = client.Get("/");
+  REQUIRE(done);
+  CHECK(done->body.find("name=demographics") == std::string::npos);  // answered: no link left
+
+  // Stored with the answers, condition empty; exported one row per participant.
+  const StudyResults results = LoadStudyResults(db, config.name);
+  int background = 0;
+  for (const StudyResults::Answer& a : results.answers) {
+    CHECK(a.condition.empty());
+    background += a.questionnaire == "demographics" ? 1 : 0;
+  }
+  CHECK(background == 13);  // A: 7 items; B: 6 (no description)
+  const StudyReport report = ComputeReport(results, PostHocMethod::kNemenyi);
+  CHECK(FormatReport(results, report).find("demographics.age_band: 25-34 1, 18-24 1") != std::string::npos);
+  const ReportFiles files = WriteReport(results, report, dir / "report");
+  const std::string csv = ReadText(files.demographics_csv);
+  CHECK(csv.rfind("study,participant,age_band,gender,gender_description,handedness,video_games,driving,"
+                  "haptic_devices\n",
+                  0) == 0);
+  CHECK(csv.find("background-study,A,25-34,self-described,\"'=agender\",left,weekly,no-licence,never\n") !=
+        std::string::npos);
+  CHECK(csv.find("background-study,B,18-24,prefer-not-to-say,,right,never,daily,regularly\n") != std::string::npos);
+  CHECK(ReadText(files.answers_csv).find("background-study,A,,demographics,age_band,25-34") != std::string::npos);
+  // Not a remark about an interface.
+  CHECK(ReadText(files.html).find("<h2>Remarks</h2>") == std::string::npos);
+}
+
+TEST_CASE("A flagged trial is marked on the schedule with its flags; its redo keeps it as superseded") {
+  const auto dir = test::ScratchDir("study-console-flagged");
+  StudyConfig config = SmallStudy(dir, "flagged", "person", {{"cockpit", "cockpit"}, {"gesture", "gesture"}});
+  config.participants = {{"A", ""}};
+  const std::vector<PlannedTrial> plan = {{"A", 1, "gesture", 1}, {"A", 2, "cockpit", 1}};
+  const auto db = dir / "flagged.db";
+  {
+    record::Recorder recorder(db);
+    StudyStore store(recorder, config, plan);
+    record::RunRecord spoiled = test::TrialRun(25.0);
+    spoiled.physics_rate_short = true;
+    recorder.Save(spoiled, store.TrialWriter(plan[0], 600.0));
+    recorder.Save(test::TrialRun(30.0), store.TrialWriter(plan[1], 600.0));
+  }
+  ConsoleOptions options;
+  options.port = 0;
+  StudyConsole console(config, plan, db, {}, options);
+  test::ConsoleClient client("127.0.0.1", console.port());
+  const auto page = client.Get("/");
+  REQUIRE(page);
+  CHECK(page->body.find("class=\"done flagged\"") != std::string::npos);
+  CHECK(page->body.find("! physics rate short") != std::string::npos);
+  CHECK(page->body.find("action=\"/redo\"") != std::string::npos);
+
+  CHECK(client.Post("/redo", {{"participant", "A"}, {"position", "1"}})->status == 303);
+  {
+    record::Recorder recorder(db);
+    StudyStore store(recorder, config, plan);
+    REQUIRE(store.Superseded().size() == 1);
+    CHECK(store.Superseded()[0].trial.flags == "physics rate short");
+    recorder.Save(test::TrialRun(22.0), store.TrialWriter(plan[0], 600.0));  // run again, clean
+  }
+  const auto again = client.Get("/");
+  REQUIRE(again);
+  CHECK(again->body.find("class=\"done flagged\"") == std::string::npos);
+  CHECK(again->body.find("(attempt 2)") != std::string::npos);
+  // The report counts the latest attempt only, and lists the superseded one.
+  const StudyResults results = LoadStudyResults(db, config.name);
+  REQUIRE(results.trials.size() == 2);
+  REQUIRE(results.superseded.size() == 1);
+  CHECK(results.superseded[0].trial.lap_time_s == 25.0);
+  const StudyReport report = ComputeReport(results, PostHocMethod::kNemenyi);
+  CHECK(report.conditions[1].total_lap_time_s == 22.0);  // gesture: the second attempt
+  const std::string text = FormatReport(results, report);
+  CHECK(text.find("superseded trials (run again; only the latest attempt is counted)") != std::string::npos);
+  CHECK(text.find("A, gesture (position 1, attempt 1, run 1): 25.00 s; from the console") != std::string::npos);
 }

@@ -146,14 +146,50 @@ TEST_CASE("The store keeps a study's plan, trials and answers across restarts, e
     CHECK_THROWS_AS(store.SaveAnswers("P1", plan[0].condition, "thesis", {{"easy_to_learn", "5"}}), AlreadyAnswered);
     CHECK(store.Answers().size() == 2);
   }
-  SECTION("redo takes a trial back once; the next row is attempt 2") {
+  SECTION("redo takes a trial back once, keeping it as superseded; the next row is attempt 2") {
     CHECK(store.Redo("P1", 1, "test"));
     CHECK_FALSE(store.Redo("P1", 1, "test"));
     CHECK(store.NextTrial()->position == 1);
     recorder.Save(test::TrialRun(39.0), store.TrialWriter(plan[0], 600.0));
     CHECK(store.Trials()[0].attempt == 2);
+    const std::vector<SupersededTrial> superseded = store.Superseded();
+    REQUIRE(superseded.size() == 1);
+    CHECK(superseded[0].trial.lap_time_s == 42.0);  // the row as it was
+    CHECK(superseded[0].trial.attempt == 1);
+    CHECK(superseded[0].trial.flags == "servo rate short; vehicle watchdog trips 2");
+    CHECK(superseded[0].trial.approach_s == 3.25);
+    CHECK(superseded[0].why == "test");
+  }
+  SECTION("a synthetic study's flagged trial is run again once: the first attempt only") {
+    CHECK_FALSE(store.RedoFlaggedOnce(plan[1]));  // not flagged: kept
+    CHECK(store.RedoFlaggedOnce(plan[0]));
+    CHECK(store.NextTrial()->position == 1);
+    REQUIRE(store.Superseded().size() == 1);
+    CHECK(store.Superseded()[0].why.find("flagged (servo rate short") == 0);
+    record::RunRecord again = test::TrialRun(41.0);
+    again.physics_rate_short = true;  // flagged again: kept this time
+    recorder.Save(again, store.TrialWriter(plan[0], 600.0));
+    CHECK_FALSE(store.RedoFlaggedOnce(plan[0]));
+    CHECK(store.Trials()[0].attempt == 2);
+    CHECK(store.Trials()[0].flags == "physics rate short");
+    CHECK(store.Superseded().size() == 1);
+  }
+  SECTION("the experimenter's notes: several per trial, in the order written, across a restart") {
+    store.SaveNote("P1", 1, "drove with the left hand only");
+    store.SaveNote("P1", 1, "said the wheel felt heavy");
+    store.SaveNote("P2", 0, "wears glasses");
+    StudyStore again(recorder, config, plan);
+    const std::vector<NoteRow> notes = again.Notes();
+    REQUIRE(notes.size() == 3);
+    CHECK(notes[0].text == "drove with the left hand only");
+    CHECK(notes[1].position == 1);
+    CHECK(notes[1].text == "said the wheel felt heavy");
+    CHECK(notes[2].participant == "P2");
+    CHECK(notes[2].position == 0);
   }
   SECTION("the practice lap is remembered per participant") {
+    CHECK_FALSE(store.Practised("P2"));
+    store.Event("practice interrupted", "P2", 0, "run 8: aborted from the console");  // offered again
     CHECK_FALSE(store.Practised("P2"));
     store.Event("practice", "P2", 0, "run 9");
     CHECK(store.Practised("P2"));
@@ -372,7 +408,8 @@ TEST_CASE("A study planned before the database kept definitions resumes once, th
     StudyStore store(recorder, config, PlanTrials(config));
   }
   // What a v5 database holds: the same tables without the definition (v6)
-  // and the runs' prediction and link fault (v7), and the approach (v8).
+  // and the runs' prediction and link fault (v7), the approach (v8), the
+  // notes and the superseded trials (v10).
   {
     sqlite3* raw = nullptr;
     REQUIRE(sqlite3_open(db.c_str(), &raw) == SQLITE_OK);
@@ -381,7 +418,7 @@ TEST_CASE("A study planned before the database kept definitions resumes once, th
                          "ALTER TABLE runs DROP COLUMN link_fault; ALTER TABLE runs DROP COLUMN prediction_error_m_p50; "
                          "ALTER TABLE runs DROP COLUMN prediction_error_m_p95; ALTER TABLE runs DROP COLUMN approach_s; "
                          "ALTER TABLE study_trials DROP COLUMN approach_s; ALTER TABLE study_trials DROP COLUMN flags; "
-                         "PRAGMA user_version = 5",
+                         "DROP TABLE study_notes; DROP TABLE study_superseded_trials; PRAGMA user_version = 5",
                          nullptr, nullptr, nullptr) == SQLITE_OK);
     sqlite3_close(raw);
   }

@@ -72,6 +72,7 @@ TEST_CASE("The shipped people's study loads and plans the thesis's study: four p
   CHECK(s.repetitions == 1);
   CHECK(s.track.filename() == "grand-prix.yaml");
   CHECK(s.questionnaires.size() == 2);
+  CHECK(s.demographics == "demographics");  // the participants' background, asked once
   CHECK(PlanTrials(s).size() == 16);
 }
 
@@ -136,5 +137,20 @@ TEST_CASE("A study file that cannot work is refused naming the file, the key and
     CHECK_THAT(ErrorOf(Study(kFour, People(4), "design: {order: fixed, seed: 3}\n")),
                Catch::Contains("design.seed") && Catch::Contains("order: random"));
     CHECK_THAT(ErrorOf(Study(kFour, People(4), "lap_count: 3\n")), Catch::Contains("lap_count") && Catch::Contains("unknown key"));
+  }
+  SECTION("demographics: people only, a questionnaire's name, not also asked after each condition") {
+    CHECK_THAT(ErrorOf(Study(kFour, People(4), "demographics: demographics\n")),
+               Catch::Contains("'demographics'") && Catch::Contains("simulated drivers"));
+    std::string person = Study(kFour, "  - {id: A}\n", "demographics: demographics\n");
+    person.replace(person.find("operators: synthetic"), 20, "operators: person");
+    const std::string profiles = "profiles:\n  p: {steering_noise: 0.02}\n";
+    person.replace(person.find(profiles), profiles.size(), "");
+    const auto dir = test::ScratchDir("study-file-demographics");
+    CHECK(LoadStudy(test::WriteFile(dir / "good.yaml", person)).demographics == "demographics");
+    std::string twice = person + "questionnaires: [demographics]\n";
+    CHECK_THAT(ErrorOf(twice), Catch::Contains("'demographics'") && Catch::Contains("in 'questionnaires'"));
+    std::string spaced = person;
+    spaced.replace(spaced.find("demographics: demographics"), 26, "demographics: about you");
+    CHECK_THAT(ErrorOf(spaced), Catch::Contains("'demographics'") && Catch::Contains("1 to 40"));
   }
 }

@@ -111,6 +111,51 @@ std::vector<std::string> FlaggedTrials(const StudyResults& results) {
   return lines;
 }
 
+/// The participants' background (the answers given about no condition: the
+/// study's demographics questionnaire): per item, in the order first
+/// answered, each value with how many participants gave it.
+std::vector<std::pair<std::string, std::vector<std::pair<std::string, int>>>> Background(const StudyResults& results) {
+  std::vector<std::pair<std::string, std::vector<std::pair<std::string, int>>>> items;
+  for (const StudyResults::Answer& a : results.answers) {
+    if (!a.condition.empty()) continue;
+    const std::string key = a.questionnaire + "." + a.item;
+    auto item = std::find_if(items.begin(), items.end(), [&](const auto& i) { return i.first == key; });
+    if (item == items.end()) item = items.insert(items.end(), {key, {}});
+    auto value = std::find_if(item->second.begin(), item->second.end(), [&](const auto& v) { return v.first == a.value; });
+    if (value == item->second.end()) {
+      item->second.push_back({a.value, 1});
+    } else {
+      ++value->second;
+    }
+  }
+  return items;
+}
+
+/// One item's counts: "18-24 2, 25-34 1".
+std::string Counts(const std::vector<std::pair<std::string, int>>& values) {
+  std::string text;
+  for (const auto& [value, n] : values) text += (text.empty() ? "" : ", ") + value + " " + std::to_string(n);
+  return text;
+}
+
+/// The superseded trials, one line each: who, what, the lap as it was, why.
+std::vector<std::string> SupersededTrials(const StudyResults& results) {
+  std::vector<std::string> lines;
+  for (const StudyResults::Superseded& s : results.superseded) {
+    const StudyResults::Trial& t = s.trial;
+    lines.push_back(t.participant + ", " + t.condition + " (position " + std::to_string(t.position) + ", attempt " +
+                    std::to_string(t.attempt) + ", run " + std::to_string(t.run_id) + "): " +
+                    Fixed(t.lap_time_s, 2) + " s" + (t.completed ? "" : " (cap)") + "; " + s.why);
+  }
+  return lines;
+}
+
+/// Where a note belongs: "A, gesture (position 2)" or "A" for the participant.
+std::string NotePlace(const StudyResults::Note& n) {
+  if (n.position == 0) return n.participant;
+  return n.participant + ", " + n.condition + " (position " + std::to_string(n.position) + ")";
+}
+
 }  // namespace
 
 StudyResults LoadStudyResults(const std::filesystem::path& database, const std::string& name) {
@@ -220,6 +265,48 @@ StudyResults LoadStudyResults(const std::filesystem::path& database, const std::
     a.value = row.Text();
     r.answers.push_back(a);
   }
+  if (version >= 10) {  // notes and superseded trials: v10
+    Stmt superseded = Prepare(database, raw,
+                              "SELECT participant, position, condition, lap_time_s, completed, obstacles, run_id, "
+                              "outcome, attempt, approach_s, flags, why FROM study_superseded_trials WHERE "
+                              "study_id = ? ORDER BY id",
+                              "cannot read the superseded trials");
+    Binder(database, raw, superseded.get()).Int(id);
+    while (sqlite3_step(superseded.get()) == SQLITE_ROW) {
+      Reader row(superseded.get());
+      StudyResults::Superseded s;
+      StudyResults::Trial& t = s.trial;
+      t.participant = row.Text();
+      t.position = static_cast<int>(row.Int());
+      t.condition = row.Text();
+      t.lap_time_s = row.Real();
+      t.completed = row.Bool();
+      t.obstacles = static_cast<int>(row.Int());
+      t.run_id = row.Int();
+      t.outcome = row.Text();
+      t.attempt = static_cast<int>(row.Int());
+      t.approach_s = row.Real();
+      t.flags = row.Text();
+      s.why = row.Text();
+      r.superseded.push_back(s);
+    }
+    Stmt notes = Prepare(database, raw,
+                         "SELECT n.participant, n.position, COALESCE(p.condition, ''), n.text, n.noted_utc FROM "
+                         "study_notes n LEFT JOIN study_plan p ON p.study_id = n.study_id AND p.participant = "
+                         "n.participant AND p.position = n.position WHERE n.study_id = ? ORDER BY n.id",
+                         "cannot read the notes");
+    Binder(database, raw, notes.get()).Int(id);
+    while (sqlite3_step(notes.get()) == SQLITE_ROW) {
+      Reader row(notes.get());
+      StudyResults::Note n;
+      n.participant = row.Text();
+      n.position = static_cast<int>(row.Int());
+      n.condition = row.Text();
+      n.text = row.Text();
+      n.noted_utc = row.Text();
+      r.notes.push_back(n);
+    }
+  }
   return r;
 }
 
@@ -305,7 +392,10 @@ StudyReport ComputeReport(const StudyResults& results, PostHocMethod post_hoc, d
   std::map<std::tuple<std::string, std::string, std::string>, std::vector<double>> numeric;
   for (const StudyResults::Answer& a : results.answers) {
     double value = 0.0;
-    if (IsNumber(a.value, value)) numeric[{a.questionnaire, a.item, a.condition}].push_back(value);
+    // The participants' background (no condition) is counted apart (Background).
+    if (!a.condition.empty() && IsNumber(a.value, value)) {
+      numeric[{a.questionnaire, a.item, a.condition}].push_back(value);
+    }
   }
   for (const auto& [key, values] : numeric) {
     ItemSummary s;
@@ -355,6 +445,10 @@ std::string FormatReport(const StudyResults& results, const StudyReport& report)
     o << "  flagged trials (scored like the others; a redo runs one again):\n";
     for (const std::string& line : flagged) o << "    " << line << "\n";
   }
+  if (const std::vector<std::string> superseded = SupersededTrials(results); !superseded.empty()) {
+    o << "  superseded trials (run again; only the latest attempt is counted):\n";
+    for (const std::string& line : superseded) o << "    " << line << "\n";
+  }
   o << "\n";
   if (!report.analysis) {
     o << "  " << report.why_no_statistics << "\n";
@@ -383,6 +477,14 @@ std::string FormatReport(const StudyResults& results, const StudyReport& report)
         << Fixed(s.median, 2) << ", " << s.n << "\n";
     }
   }
+  if (const auto background = Background(results); !background.empty()) {
+    o << "\n  participants' background (demographics.csv; answers and how many gave each):\n";
+    for (const auto& [item, values] : background) o << "    " << item << ": " << Counts(values) << "\n";
+  }
+  if (!results.notes.empty()) {
+    o << "\n  the experimenter's notes (notes.csv):\n";
+    for (const StudyResults::Note& n : results.notes) o << "    " << NotePlace(n) << ": " << n.text << "\n";
+  }
   return o.str();
 }
 
@@ -392,6 +494,7 @@ ReportFiles WriteReport(const StudyResults& results, const StudyReport& report, 
   files.trials_csv = dir / "trials.csv";
   files.answers_csv = dir / "answers.csv";
   files.summary_csv = dir / "summary.csv";
+  files.notes_csv = dir / "notes.csv";
   files.lap_times_png = dir / "lap_times.png";
   files.ranks_png = dir / "ranks.png";
   files.html = dir / "index.html";
@@ -414,6 +517,40 @@ ReportFiles WriteReport(const StudyResults& results, const StudyReport& report, 
                "," + Csv(a.item) + "," + Csv(a.value) + "\n";
   }
   WriteFile(files.answers_csv, answers);
+  std::string notes = "study,participant,position,condition,noted_utc,text\n";
+  for (const StudyResults::Note& n : results.notes) {
+    notes += Csv(results.name) + "," + Csv(n.participant) + "," + std::to_string(n.position) + "," +
+             Csv(n.condition) + "," + Csv(n.noted_utc) + "," + Csv(n.text) + "\n";
+  }
+  WriteFile(files.notes_csv, notes);
+  // The background one row per participant (a paper's participants table),
+  // one column per item in the order first answered.
+  files.demographics_csv = dir / "demographics.csv";
+  std::vector<std::string> columns;
+  std::map<std::string, std::map<std::string, std::string>> by_participant;
+  for (const StudyResults::Answer& a : results.answers) {
+    if (!a.condition.empty()) continue;
+    if (std::find(columns.begin(), columns.end(), a.item) == columns.end()) columns.push_back(a.item);
+    by_participant[a.participant][a.item] = a.value;
+  }
+  std::string demographics = "study,participant";
+  for (const std::string& c : columns) {
+    demographics += ',';
+    demographics += Csv(c);
+  }
+  demographics += "\n";
+  for (const std::string& p : results.participants) {
+    const auto row = by_participant.find(p);
+    if (row == by_participant.end()) continue;
+    demographics += Csv(results.name) + "," + Csv(p);
+    for (const std::string& c : columns) {
+      const auto value = row->second.find(c);
+      demographics += ',';  // appended apart: GCC 12 warns falsely (-Wrestrict) on "," + string
+      if (value != row->second.end()) demographics += Csv(value->second);
+    }
+    demographics += "\n";
+  }
+  WriteFile(files.demographics_csv, demographics);
   std::string summary = "study,condition,trials,unfinished,total_lap_time_s,mean_lap_time_s,median_lap_time_s,mean_rank,obstacles\n";
   for (const ConditionSummary& c : report.conditions) {
     summary += Csv(results.name) + "," + Csv(c.name) + "," + std::to_string(c.trials) + "," +
@@ -460,8 +597,18 @@ ReportFiles WriteReport(const StudyResults& results, const StudyReport& report, 
     for (const std::string& line : flagged) h << "<li>" << Html(line) << "</li>\n";
     h << "</ul>\n";
   }
+  if (const std::vector<std::string> superseded = SupersededTrials(results); !superseded.empty()) {
+    h << "<h2>Superseded trials</h2>\n<p>Run again; only the latest attempt is counted above.</p>\n"
+         "<ul id=\"superseded\">\n";
+    for (const std::string& line : superseded) h << "<li>" << Html(line) << "</li>\n";
+    h << "</ul>\n";
+  }
   h << "<h2>Statistics</h2>\n<pre>";
-  const std::string text = FormatReport(results, report);
+  std::string text = FormatReport(results, report);
+  // The background and the notes have their own lists below.
+  for (const char* own : {"\n  participants' background", "\n  the experimenter's notes"}) {
+    if (const size_t at = text.find(own); at != std::string::npos) text.resize(at + 1);
+  }
   const size_t at = text.find("  Friedman");
   h << Html(at != std::string::npos ? text.substr(at)
                                     : report.why_no_statistics + "\n\n" + FormatLapTimeModel(results, report) +
@@ -470,13 +617,25 @@ ReportFiles WriteReport(const StudyResults& results, const StudyReport& report, 
   bool remarks = false;
   for (const StudyResults::Answer& a : results.answers) {
     double value = 0.0;
-    if (IsNumber(a.value, value) || a.item.find(".path") != std::string::npos) continue;
+    if (a.condition.empty() || IsNumber(a.value, value) || a.item.find(".path") != std::string::npos) continue;
     if (!remarks) h << "<h2>Remarks</h2>\n<ul>\n";
     remarks = true;
     h << "<li>" << Html(a.participant) << ", " << Html(a.condition) << " (" << Html(a.questionnaire) << "."
       << Html(a.item) << "): " << Html(a.value) << "</li>\n";
   }
   if (remarks) h << "</ul>\n";
+  if (const auto background = Background(results); !background.empty()) {
+    h << "<h2>Participants' background</h2>\n<ul id=\"background\">\n";
+    for (const auto& [item, values] : background) h << "<li>" << Html(item) << ": " << Html(Counts(values)) << "</li>\n";
+    h << "</ul>\n";
+  }
+  if (!results.notes.empty()) {
+    h << "<h2>The experimenter's notes</h2>\n<ul id=\"notes\">\n";
+    for (const StudyResults::Note& n : results.notes) {
+      h << "<li>" << Html(NotePlace(n)) << ": " << Html(n.text) << "</li>\n";
+    }
+    h << "</ul>\n";
+  }
   h << "<h2>Plots</h2>\n<p><img src=\"lap_times.png\" alt=\"lap times per condition\"></p>\n"
     << "<p><img src=\"ranks.png\" alt=\"mean ranks per condition\"></p>\n";
   if (!files.ratings_png.empty()) h << "<p><img src=\"ratings.png\" alt=\"questionnaire scores\"></p>\n";
@@ -484,7 +643,7 @@ ReportFiles WriteReport(const StudyResults& results, const StudyReport& report, 
     h << "<p><img src=\"model_means.png\" alt=\"the mixed model's estimated mean lap time per condition\"></p>\n";
   }
   h << "<p>Data: <a href=\"trials.csv\">trials.csv</a>, <a href=\"answers.csv\">answers.csv</a>, "
-       "<a href=\"summary.csv\">summary.csv</a>.</p>\n</body></html>\n";
+       "<a href=\"summary.csv\">summary.csv</a>, <a href=\"notes.csv\">notes.csv</a>, <a href=\"demographics.csv\">demographics.csv</a>.</p>\n</body></html>\n";
   WriteFile(files.html, h.str());
   return files;
 }
@@ -525,10 +684,14 @@ std::string ReportJson(const StudyResults& results, const StudyReport& report, c
     out += ",\"friedman_chi2\":null,\"friedman_df\":null,\"friedman_p\":null,\"kendall_w\":null,\"post_hoc\":null";
   }
   out += ",\"why_no_statistics\":" + JsonString(report.why_no_statistics);
+  out += ",\"experimenter_notes\":" + std::to_string(results.notes.size());
+  out += ",\"superseded_trials\":" + std::to_string(results.superseded.size());
   out += "," + LapTimeModelJson(results, report) + "," + BaselineJson(results, report);
   out += ",\"files\":{\"html\":" + JsonString(files.html.string()) + ",\"trials_csv\":" +
          JsonString(files.trials_csv.string()) + ",\"answers_csv\":" + JsonString(files.answers_csv.string()) +
-         ",\"summary_csv\":" + JsonString(files.summary_csv.string()) + ",\"lap_times_png\":" +
+         ",\"summary_csv\":" + JsonString(files.summary_csv.string()) +
+         ",\"notes_csv\":" + JsonString(files.notes_csv.string()) +
+         ",\"demographics_csv\":" + JsonString(files.demographics_csv.string()) + ",\"lap_times_png\":" +
          JsonString(files.lap_times_png.string()) + ",\"ranks_png\":" + JsonString(files.ranks_png.string()) +
          ",\"ratings_png\":" + JsonString(files.ratings_png.string()) +
          ",\"model_means_png\":" + JsonString(files.model_means_png.string()) + "}}";

@@ -122,6 +122,11 @@ struct StudyConfig {
   /// Filled in after each condition (names of config/questionnaires/*.yaml).
   std::vector<std::string> questionnaires;
   std::filesystem::path questionnaires_dir;
+  /// The participants' background (a questionnaire of questionnaires_dir,
+  /// e.g. the shipped `demographics`), asked once per participant before
+  /// their first trial; its answers are stored with an empty condition.
+  /// Empty: not asked. People only.
+  std::string demographics;
 
   /// Throws ConfigFieldError naming the first field that cannot work (the
   /// checks against files — interfaces, profiles named — are the loader's).

@@ -19,7 +19,9 @@
 /// a form; `POST /answers` a filled-in form; `POST /start` starts the trial
 /// offered; `POST /abort` aborts the trial under way (it is run again);
 /// `POST /redo` (participant, position) takes a finished trial back, to be
-/// run again;
+/// run again; `POST /notes` (participant, position, text) one of the
+/// experimenter's notes on a trial (SubmitNote; position 0: on the
+/// participant as a whole), from the schedule's rows or the trial under way;
 /// `POST /participants` (id) adds a participant, planned by the design;
 /// `POST /finish` ends an open study (one whose file lists no participants);
 /// `GET /video.jpg` the vehicle's latest camera picture (the thumbnail);
@@ -139,8 +141,9 @@ class StudyConsole {
   const std::string& access_token() const;
   ConnectionCounters connection_counters() const;
   /// The line the page shows for the trial under way (empty: none); clears
-  /// the progress.
-  void SetLive(const std::string& text);
+  /// the progress. `participant` and `position` name it for the page's note
+  /// form (position 0: their practice lap; no participant: no form).
+  void SetLive(const std::string& text, const std::string& participant = "", int position = 0);
   /// The lap clock, gates and contacts of the trial under way.
   void SetLiveProgress(const LiveProgress& progress);
   /// What the study waits for before the next trial (empty: nothing), e.g.

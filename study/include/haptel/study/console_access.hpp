@@ -25,6 +25,9 @@ struct ConsoleAccess {
   /// The largest body of `POST /answers` (the longest form the study's
   /// questionnaires allow, url-encoded) and of any other request.
   size_t max_answers_bytes = 65536;
+  /// The largest body of `POST /notes`: a note of kMaxNoteCharacters
+  /// (submission.hpp), url-encoded, with its hidden fields.
+  size_t max_note_bytes = 32768;
   size_t max_other_bytes = 8192;
 };
 

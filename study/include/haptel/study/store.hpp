@@ -1,9 +1,10 @@
 #pragma once
-/// @file A study's tables in the run database (schema v4, and v6's
-/// definition_form; recorder.cpp): the study, what defines it
+/// @file A study's tables in the run database (schema v4, v6's
+/// definition_form, v10's notes; recorder.cpp): the study, what defines it
 /// (definition.hpp) and its plan, written once when it is first run; one trial row per
 /// planned trial, written in its run's own transaction; the questionnaire
-/// answers, one transaction per questionnaire; and an event log.
+/// answers, one transaction per questionnaire; the experimenter's notes; and
+/// an event log.
 ///
 /// A study killed at any point (kill -9, power cut) finds on the next start
 /// exactly the trials and answers that were committed: it resumes at the
@@ -54,6 +55,14 @@ struct TrialRow {
   std::string flags;
 };
 
+/// A trial row taken back to be run again (a redo), kept: the report counts
+/// only the latest attempt and lists these.
+struct SupersededTrial {
+  TrialRow trial;
+  std::string why;
+  std::string superseded_utc;
+};
+
 /// What in a trial's run could have spoiled it, "; "-separated ("" when
 /// nothing): a loop short of its rate (servo, physics), the link's faults
 /// (states missed, commands dropped), the vehicle's watchdog trips, the
@@ -67,6 +76,16 @@ struct AnswerRow {
   std::string questionnaire;
   std::string item;
   std::string value;
+};
+
+/// One of the experimenter's notes: what they saw during a trial (the
+/// thesis's "direct observations"). Position 0: about the participant as a
+/// whole (their practice lap, their manner), not one trial.
+struct NoteRow {
+  std::string participant;
+  int position = 0;
+  std::string text;
+  std::string noted_utc;  ///< when it was written, ISO 8601 UTC
 };
 
 /// A questionnaire answered a second time (a form submitted twice), or a
@@ -118,10 +137,17 @@ class StudyStore {
   record::Recorder::AlsoSave TrialWriter(const PlannedTrial& trial, double cap_s) const;
 
   /// Takes a finished trial back, to be run again (the experimenter's Redo):
-  /// its row goes, its run stays, and a 'redo' event records it — in one
-  /// transaction; the next row's `attempt` counts it. False if the trial has
-  /// no row.
+  /// its row moves to the superseded trials with `why`, its run stays, and a
+  /// 'redo' event records it — in one transaction; the next row's `attempt`
+  /// counts it. False if the trial has no row.
   bool Redo(const std::string& participant, int position, const std::string& why);
+  /// A synthetic study's rule for a flagged trial (TrialFlags): its first
+  /// attempt is taken back (Redo, kept as superseded) to be run again once
+  /// by itself; a second attempt is kept whatever its flags. True if it was
+  /// taken back.
+  bool RedoFlaggedOnce(const PlannedTrial& trial);
+  /// The trials taken back, oldest first: the row as it was, and why.
+  std::vector<SupersededTrial> Superseded() const;
 
   /// Whether `participant` answered `questionnaire` after `condition`.
   bool Answered(const std::string& participant, const std::string& condition,
@@ -132,7 +158,15 @@ class StudyStore {
                    const std::vector<std::pair<std::string, std::string>>& item_values);
   std::vector<AnswerRow> Answers() const;
 
-  /// Whether `participant` has driven their practice lap (a 'practice' event).
+  /// Appends one of the experimenter's notes (a row of its own; a trial may
+  /// have several), in its own transaction. The caller checks what it says
+  /// (SubmitNote); this only writes.
+  void SaveNote(const std::string& participant, int position, const std::string& text);
+  /// The notes in the order they were written.
+  std::vector<NoteRow> Notes() const;
+
+  /// Whether `participant` has driven their practice lap (a 'practice'
+  /// event; one aborted is a 'practice interrupted' event, and does not count).
   bool Practised(const std::string& participant) const;
 
   /// Appends to the study's event log (start, resume, trial failed, redo...).

@@ -28,10 +28,28 @@ struct SubmissionResult {
 };
 
 /// Checks and stores one questionnaire's answers from `participant` after
-/// `condition`. `questionnaires`: the study's, by name. Throws only if the
+/// `condition`. `questionnaires`: the study's, by name. `demographics`: the
+/// study's background questionnaire (StudyConfig::demographics; "" none),
+/// answered once per participant with an empty `condition`, at any time
+/// (the study asks for it before their first trial). Throws only if the
 /// database fails.
 SubmissionResult SubmitAnswers(StudyStore& store, const std::map<std::string, Questionnaire>& questionnaires,
                                const std::string& participant, const std::string& condition,
-                               const std::string& questionnaire, const std::map<std::string, std::string>& fields);
+                               const std::string& questionnaire, const std::map<std::string, std::string>& fields,
+                               const std::string& demographics = "");
+
+/// The longest note the console takes, in characters (UTF-8 code points,
+/// not bytes: a note in Japanese fits as well as one in English).
+inline constexpr int kMaxNoteCharacters = 2000;
+
+/// Checks and stores one of the experimenter's notes on `participant`'s
+/// trial at `position` (as the form sends it, text; "0": on the participant
+/// as a whole). Refused with a status and a message that says why: 400 an
+/// unknown participant or a position not in their plan, 422 an empty note,
+/// one that is not UTF-8 or longer than kMaxNoteCharacters (naming both
+/// counts). The text is kept as written, surrounding white space removed.
+/// Throws only if the database fails.
+SubmissionResult SubmitNote(StudyStore& store, const std::string& participant, const std::string& position,
+                            const std::string& text);
 
 }  // namespace haptel::study

@@ -25,6 +25,12 @@ struct Answer {
   std::string value;
 };
 
+/// Whether `s` is well-formed UTF-8 (no overlong forms, no surrogates).
+bool IsUtf8(const std::string& s);
+/// Characters (code points) of well-formed UTF-8: what a text's length
+/// limit counts (2 000 CJK characters or emoji fit a 2 000-character remark).
+size_t Utf8Characters(const std::string& s);
+
 /// The key of a tree item's path: "<id>.path" (item ids have no dot).
 std::string PathKey(const std::string& tree_item_id);
 

@@ -40,7 +40,14 @@ struct StudyResults {
     /// What could have spoiled the trial (store.hpp TrialFlags); "": nothing.
     std::string flags;
   };
-  std::vector<Trial> trials;
+  std::vector<Trial> trials;  ///< the latest attempt of each trial: what is counted
+  /// Trials taken back to be run again (a redo; a synthetic study's flagged
+  /// trial run again once), as they were, with why: listed, not counted.
+  struct Superseded {
+    Trial trial;
+    std::string why;
+  };
+  std::vector<Superseded> superseded;
   struct Answer {
     std::string participant;
     std::string condition;
@@ -49,6 +56,15 @@ struct StudyResults {
     std::string value;
   };
   std::vector<Answer> answers;
+  /// The experimenter's notes (schema v10; none before), in the order written.
+  struct Note {
+    std::string participant;
+    int position = 0;       ///< 0: on the participant as a whole
+    std::string condition;  ///< the planned trial's ("" for position 0)
+    std::string text;
+    std::string noted_utc;
+  };
+  std::vector<Note> notes;
   /// The baseline: the study's track's reference_lap_s (read from the track
   /// file the study's definition names, when the report is made: it changes
   /// no trial), or nullopt with `baseline_note` saying why.
@@ -111,11 +127,14 @@ StudyReport ComputeReport(const StudyResults& results, PostHocMethod post_hoc, d
 
 /// Files written into a folder.
 struct ReportFiles {
-  std::filesystem::path html, trials_csv, answers_csv, summary_csv, lap_times_png, ranks_png, ratings_png,
-      model_means_png;
+  std::filesystem::path html, trials_csv, answers_csv, summary_csv, notes_csv, demographics_csv, lap_times_png,
+      ranks_png, ratings_png, model_means_png;
 };
 
-/// Writes trials.csv, answers.csv, summary.csv, lap_times.png, ranks.png,
+/// Writes trials.csv, answers.csv, summary.csv, notes.csv (the
+/// experimenter's notes; free text escaped as answers.csv's),
+/// demographics.csv (the participants' background, the answers given about
+/// no condition: one row per participant), lap_times.png, ranks.png,
 /// ratings.png (when there are scored questionnaires) and index.html into
 /// `dir` (created). Throws std::runtime_error naming a file it cannot write.
 ReportFiles WriteReport(const StudyResults& results, const StudyReport& report, const std::filesystem::path& dir);
