@@ -50,8 +50,10 @@
 /// delivers more than the other end's input since the credit was last
 /// spent; infinity is the plain two-port.
 ///
-/// Allocation-free, lock-free, no logging: one of these per arm lives in the
-/// servo loop's device I/O and one in the device's server.
+/// Allocation-free, lock-free, no logging: made to run at each end of the
+/// device's link, one per arm in the loop's device driver and one in the
+/// device's server (today only `haptel bench passivity` runs it, on both
+/// ends of its delay line).
 #include <limits>
 
 #include "haptel/haptics/types.hpp"
