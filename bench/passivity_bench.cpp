@@ -1,6 +1,7 @@
 #include "passivity_bench.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -17,6 +18,7 @@
 #include "haptel/haptics/hal.hpp"
 #include "haptel/haptics/servo_loop.hpp"
 #include "haptel/haptics/sim_device.hpp"
+#include "haptel/haptics/twoport.hpp"
 #include "plot.hpp"
 #include "smoke.hpp"
 
@@ -38,31 +40,104 @@ constexpr double kContactFromS = 0.5;     // s: after the soft start, for the fo
 constexpr double kTargetDelayMs = 3.0;    // the delay the gain is judged at
 constexpr int kMaxDelayTicks = 16;
 
+/// The modes compared: no controller, the servo loop's one-port controller
+/// (passivity.hpp), the two-port across the delay line (twoport.hpp) with
+/// its credit unbounded, and with the credit bounded at zero.
+enum class Mode { kOff, kOnePort, kTwoPort, kTwoPortRef };
+constexpr std::array<Mode, 4> kModes{Mode::kOff, Mode::kOnePort, Mode::kTwoPort, Mode::kTwoPortRef};
+
+const char* ModeName(Mode m) {
+  switch (m) {
+    case Mode::kOff: return "off";
+    case Mode::kOnePort: return "one-port";
+    case Mode::kTwoPort: return "two-port";
+    case Mode::kTwoPortRef: return "two-port-ref";
+  }
+  return "?";
+}
+
 /// The sim arm behind a delay line of `delay_ticks` servo ticks each way:
 /// the loop reads what the arm measured that many ticks ago, and the arm
 /// gets the command the loop sent that many ticks ago (zero before).
+///
+/// With `two_port` set, each end of the line observes the energy crossing it
+/// (twoport.hpp) and its E_in travels with the samples through the same
+/// delay: the loop's end pairs the commands the loop wrote with the readings
+/// it was handed (as the UDP driver would), the arm's end pairs the force
+/// the arm held with its encoder's motion and damps the arm, undelayed, when
+/// the channel delivers more than the loop's end put in.
 class DelayedDevice final : public haptics::Device {
  public:
-  DelayedDevice(haptics::SimDevice& inner, int delay_ticks) : inner_(inner), delay_(delay_ticks) {}
+  DelayedDevice(haptics::SimDevice& inner, int delay_ticks, const haptics::SimArmTruth& truth, double period_s,
+                const haptics::TwoPortLimits* two_port)
+      : inner_(inner),
+        delay_(delay_ticks),
+        truth_(truth),
+        period_s_(period_s),
+        two_port_(two_port != nullptr),
+        arm_end_(haptics::ChannelEnd::kDevice, two_port != nullptr ? *two_port : haptics::TwoPortLimits{}),
+        loop_end_(haptics::ChannelEnd::kLoop) {}
   const haptics::DeviceDescription& description() const override { return inner_.description(); }
   haptics::DeviceStatus ReadWrist(Side side, int64_t now_ns, haptics::WristRaw& out) override {
     haptics::WristRaw now;
     const haptics::DeviceStatus s = inner_.ReadWrist(side, now_ns, now);
     if (s != haptics::DeviceStatus::kOk) return s;
-    readings_[reads_ % kRing] = now;
+    if (two_port_) {
+      // The arm's end: its encoder, as the device's server has it.
+      const Vec3d p = Metres(now.position);
+      Vec3d dx{};
+      for (int i = 0; i < 3; ++i) {
+        dx[i] = reads_ > 0 ? p[i] - arm_position_[i] : 0.0;
+        constexpr double kFilter_s = 0.005;  // as the servo loop's velocity
+        if (reads_ > 0) arm_velocity_[i] += period_s_ / (kFilter_s + period_s_) * (dx[i] / period_s_ - arm_velocity_[i]);
+      }
+      arm_position_ = p;
+      arm_end_.Observe(dx);
+    }
+    readings_[reads_ % kRing] = {now, arm_end_.energy_in()};
     ++reads_;
     if (reads_ <= static_cast<uint64_t>(delay_)) return haptics::DeviceStatus::kNoData;
-    out = readings_[(reads_ - 1 - static_cast<uint64_t>(delay_)) % kRing];
+    const Reading& r = readings_[(reads_ - 1 - static_cast<uint64_t>(delay_)) % kRing];
+    out = r.raw;
+    if (two_port_) {
+      // The loop's end: the reading it is handed against the previous one.
+      const Vec3d p = Metres(out.position);
+      Vec3d dx{};
+      for (int i = 0; i < 3; ++i) dx[i] = loop_has_position_ ? p[i] - loop_position_[i] : 0.0;
+      loop_position_ = p;
+      loop_has_position_ = true;
+      loop_end_.Observe(dx);
+      loop_remote_in_ = r.energy_in;
+      const haptics::Vec3d w = loop_end_.Margin(r.energy_in);
+      for (int i = 0; i < 3; ++i) loop_margin_min_ = std::min(loop_margin_min_, w[i]);
+    }
     return haptics::DeviceStatus::kOk;
   }
   haptics::DeviceStatus ReadGlove(Side side, int64_t now_ns, haptics::GloveRaw& out) override {
     return inner_.ReadGlove(side, now_ns, out);
   }
   haptics::DeviceStatus WriteWristForce(Side side, const Vec3d& command) override {
-    commands_[writes_ % kRing] = command;
+    if (two_port_) loop_end_.Hold(Newtons(command));
+    commands_[writes_ % kRing] = {command, loop_end_.EnergyToSend(loop_remote_in_)};
     ++writes_;
-    applied_ = writes_ <= static_cast<uint64_t>(delay_) ? Vec3d{}
-                                                        : commands_[(writes_ - 1 - static_cast<uint64_t>(delay_)) % kRing];
+    const Command arrived = writes_ <= static_cast<uint64_t>(delay_)
+                                ? Command{}
+                                : commands_[(writes_ - 1 - static_cast<uint64_t>(delay_)) % kRing];
+    applied_ = arrived.command;
+    if (two_port_) {
+      const Vec3d rendered = Newtons(arrived.command);
+      const haptics::TwoPortAction a = arm_end_.Control(rendered, arrived.energy_in, arm_velocity_, period_s_);
+      for (int i = 0; i < 3; ++i) applied_[i] += a.damping_force[i] / truth_.force_slope[i];
+      // The arm saturates: hold what it will really apply.
+      const Vec3d total = Newtons(applied_);
+      Vec3d damping{};
+      for (int i = 0; i < 3; ++i) damping[i] = total[i] - rendered[i];
+      arm_end_.Hold(rendered, damping);
+      if (a.acted) {
+        ++acting_ticks_;
+        for (int i = 0; i < 3; ++i) max_alpha_ = std::max(max_alpha_, a.alpha[i]);
+      }
+    }
     return inner_.WriteWristForce(side, applied_);
   }
   haptics::DeviceStatus WriteFingerForces(Side side, const std::array<double, haptics::kFingers>& c) override {
@@ -70,21 +145,53 @@ class DelayedDevice final : public haptics::Device {
   }
   /// The command the arm holds now (device units).
   const Vec3d& applied() const { return applied_; }
+  /// The arm's end's controller: J dissipated (all axes), ticks it acted, largest α.
+  double dissipated() const { return arm_end_.dissipated()[0] + arm_end_.dissipated()[1] + arm_end_.dissipated()[2]; }
+  uint64_t acting_ticks() const { return acting_ticks_; }
+  double max_alpha() const { return max_alpha_; }
+  /// J: the loop's end's smallest margin (< 0: the loop's side drew energy
+  /// the arm's side never put in; no controller acts there).
+  double loop_margin_min() const { return loop_margin_min_; }
 
  private:
   static constexpr uint64_t kRing = kMaxDelayTicks + 1;
+  struct Reading {
+    haptics::WristRaw raw{};
+    Vec3d energy_in{};  ///< the arm's end's E_in when it was read
+  };
+  struct Command {
+    Vec3d command{};
+    Vec3d energy_in{};  ///< the loop's end's E_in when it was written
+  };
+  Vec3d Metres(const Vec3d& raw) const {
+    Vec3d m{};
+    for (int i = 0; i < 3; ++i) m[i] = truth_.tracker_scale[i] * raw[i] + truth_.tracker_offset[i];
+    return m;
+  }
+  Vec3d Newtons(const Vec3d& command) const { return inner_.MeasureForce(kSide, command); }
+
   haptics::SimDevice& inner_;
   int delay_;
-  std::array<haptics::WristRaw, kRing> readings_{};
-  std::array<Vec3d, kRing> commands_{};
+  haptics::SimArmTruth truth_;
+  double period_s_;
+  bool two_port_;
+  haptics::TwoPortPassivity arm_end_;
+  haptics::TwoPortPassivity loop_end_;
+  std::array<Reading, kRing> readings_{};
+  std::array<Command, kRing> commands_{};
   uint64_t reads_ = 0, writes_ = 0;
   Vec3d applied_{};
+  Vec3d arm_position_{}, arm_velocity_{}, loop_position_{}, loop_remote_in_{};
+  bool loop_has_position_ = false;
+  uint64_t acting_ticks_ = 0;
+  double max_alpha_ = 0.0;
+  double loop_margin_min_ = 0.0;
 };
 
 struct Point {
   double k = 0.0;
   double delay_ms = 0.0;
-  bool passivity = false;
+  Mode mode = Mode::kOff;
   bool stable = false;
   double spread = 0.0;          ///< m, peak to peak of x over the last 0.5 s
   double early_spread = 0.0;    ///< m, the same over the 0.5 s a second earlier
@@ -93,6 +200,7 @@ struct Point {
   uint64_t acting_ticks = 0;
   double force_rms_err = 0.0;   ///< N against the ideal wall
   double penetration = 0.0;     ///< m, mean over the last 0.5 s
+  double loop_margin_min = 0.0; ///< J, two-port: the loop's end's smallest margin
 };
 
 /// The perfect calibration of a sim arm: its hidden truth.
@@ -110,14 +218,17 @@ DeviceCalibration Truth(const haptics::SimDevice& device) {
   return c;
 }
 
-Point Run(const DeviceConfig& device_config, const OperatorConfig& grip, double k, int delay_ticks, bool passivity,
+Point Run(const DeviceConfig& device_config, const OperatorConfig& grip, double k, int delay_ticks, Mode mode,
           double seconds, std::vector<double>& tick_us) {
   DeviceConfig config = device_config;
-  config.servo.passivity = passivity;
+  config.servo.passivity = mode == Mode::kOnePort;
   haptics::SimDevice arm(config, grip);
   arm.Place(kSide, {kStartX, 0.0, 0.0});
   arm.SetOperatorTarget(kSide, {kWallX + kPushDepth, 0.0, 0.0});
-  DelayedDevice device(arm, delay_ticks);
+  haptics::TwoPortLimits limits{config.servo.passivity_max_damping, config.servo.passivity_min_speed};
+  if (mode == Mode::kTwoPortRef) limits.max_credit_j = 0.0;
+  const bool two_port = mode == Mode::kTwoPort || mode == Mode::kTwoPortRef;
+  DelayedDevice device(arm, delay_ticks, arm.truth(kSide), 1.0 / config.servo.rate_hz, two_port ? &limits : nullptr);
   const DeviceCalibration calibration = Truth(arm);
   haptics::Hal hal(calibration);
   haptics::ServoLoop loop(device, hal, config, calibration);
@@ -125,7 +236,7 @@ Point Run(const DeviceConfig& device_config, const OperatorConfig& grip, double 
   Point r;
   r.k = k;
   r.delay_ms = delay_ticks * kPeriodNs * 1e-6;
-  r.passivity = passivity;
+  r.mode = mode;
   const long n = std::lround(seconds / (kPeriodNs * 1e-9));
   const long tail = 500;  // the last 0.5 s, against the 0.5 s a second before it
   double x_min = 1e9, x_max = -1e9, early_min = 1e9, early_max = -1e9, err2 = 0.0, pen_sum = 0.0;
@@ -171,9 +282,10 @@ Point Run(const DeviceConfig& device_config, const OperatorConfig& grip, double 
   // Settled, or an oscillation that dies away (the light grip's own,
   // passive one decays slowly); one that keeps up or grows is not stable.
   r.stable = r.spread < kSettledSpread || r.spread < kDecayRatio * r.early_spread;
-  r.energy_j = c.passivity_dissipated_j;
-  r.max_alpha = c.passivity_max_alpha;
-  r.acting_ticks = c.passivity_ticks;
+  r.energy_j = two_port ? device.dissipated() : c.passivity_dissipated_j;
+  r.max_alpha = two_port ? device.max_alpha() : c.passivity_max_alpha;
+  r.acting_ticks = two_port ? device.acting_ticks() : c.passivity_ticks;
+  r.loop_margin_min = device.loop_margin_min();
   r.force_rms_err = err_n > 0 ? std::sqrt(err2 / static_cast<double>(err_n)) : 0.0;
   r.penetration = pen_sum / static_cast<double>(tail);
   return r;
@@ -187,19 +299,19 @@ double Percentile(std::vector<double> v, double q) {
 }
 
 /// The largest K stable before the first unstable one (0: none).
-double LargestStable(const std::vector<Point>& points, double delay_ms, bool passivity) {
+double LargestStable(const std::vector<Point>& points, double delay_ms, Mode mode) {
   double best = 0.0;
   for (const Point& p : points) {
-    if (p.delay_ms != delay_ms || p.passivity != passivity) continue;
+    if (p.delay_ms != delay_ms || p.mode != mode) continue;
     if (!p.stable) break;
     best = p.k;
   }
   return best;
 }
 
-const Point* Find(const std::vector<Point>& points, double k, double delay_ms, bool passivity) {
+const Point* Find(const std::vector<Point>& points, double k, double delay_ms, Mode mode) {
   for (const Point& p : points) {
-    if (p.k == k && p.delay_ms == delay_ms && p.passivity == passivity) return &p;
+    if (p.k == k && p.delay_ms == delay_ms && p.mode == mode) return &p;
   }
   return nullptr;
 }
@@ -246,111 +358,147 @@ int BenchPassivityMain(int argc, const char* const* argv) {
               kPushDepth * 1e3, device.servo.passivity_max_damping, device.servo.passivity_min_speed, bound);
 
   std::vector<Point> points;
-  std::vector<double> ticks_off, ticks_on;
+  std::array<std::vector<double>, kModes.size()> ticks;
   const double t_start = NsToS(MonotonicNs());
   for (const double delay : delays_ms) {
     const int delay_ticks = static_cast<int>(std::lround(delay * 1e-3 / period_s));
-    for (const bool on : {false, true}) {
+    for (size_t m = 0; m < kModes.size(); ++m) {
       for (double k = 250.0; k <= k_max; k *= 2.0) {
-        points.push_back(Run(device, grip, k, delay_ticks, on, seconds, on ? ticks_on : ticks_off));
+        points.push_back(Run(device, grip, k, delay_ticks, kModes[m], seconds, ticks[m]));
       }
     }
   }
   const double wall_s = NsToS(MonotonicNs()) - t_start;
 
-  std::printf("  %8s %9s | %6s %9s %10s | %6s %9s %10s %10s %9s %8s\n", "delay ms", "K N/m", "off", "spread mm",
-              "F err N", "on", "spread mm", "F err N", "dissip. J", "alpha max", "acted");
+  std::printf("  %8s %9s |", "delay ms", "K N/m");
+  for (const Mode m : kModes) std::printf(" %12s %7s |", ModeName(m), "F err N");
+  std::printf(" %10s %7s %10s\n", "2-port J", "acted", "loop W mJ");
   for (const double delay : delays_ms) {
     for (double k = 250.0; k <= k_max; k *= 2.0) {
-      const Point* off = Find(points, k, delay, false);
-      const Point* on = Find(points, k, delay, true);
-      std::printf("  %8.0f %9.0f | %6s %9.3f %10.3f | %6s %9.3f %10.3f %10.4g %9.3g %8llu\n", delay, k,
-                  off->stable ? "stable" : "OSC", off->spread * 1e3, off->force_rms_err, on->stable ? "stable" : "OSC",
-                  on->spread * 1e3, on->force_rms_err, on->energy_j, on->max_alpha,
-                  static_cast<unsigned long long>(on->acting_ticks));
+      std::printf("  %8.0f %9.0f |", delay, k);
+      for (const Mode m : kModes) {
+        const Point* p = Find(points, k, delay, m);
+        std::printf(" %12s %7.3f |", p->stable ? "stable" : "OSC", p->force_rms_err);
+      }
+      const Point* tp = Find(points, k, delay, Mode::kTwoPort);
+      std::printf(" %10.4g %7llu %10.3g\n", tp->energy_j, static_cast<unsigned long long>(tp->acting_ticks),
+                  tp->loop_margin_min * 1e3);
     }
   }
-  std::printf("\n  %8s %14s %14s %8s   (largest K stable before the first unstable one)\n", "delay ms", "K_stable off",
-              "K_stable on", "gain");
-  std::vector<double> stable_off, stable_on;
+  std::printf("\n  %8s", "delay ms");
+  for (const Mode m : kModes) std::printf(" %14s", ModeName(m));
+  std::printf("   largest K stable (N/m) before the first unstable one\n");
+  // stable[m][d]: the largest stable K of mode m at delay d.
+  std::array<std::vector<double>, kModes.size()> stable;
   for (const double delay : delays_ms) {
-    stable_off.push_back(LargestStable(points, delay, false));
-    stable_on.push_back(LargestStable(points, delay, true));
-    std::printf("  %8.0f %14.0f %14.0f %8.3g\n", delay, stable_off.back(), stable_on.back(),
-                stable_off.back() > 0 ? stable_on.back() / stable_off.back() : 0.0);
+    std::printf("  %8.0f", delay);
+    for (size_t m = 0; m < kModes.size(); ++m) {
+      stable[m].push_back(LargestStable(points, delay, kModes[m]));
+      std::printf(" %14.0f", stable[m].back());
+    }
+    std::printf("\n");
   }
   // The figures at the target's delay (the largest delay run in a smoke run).
   size_t at = delays_ms.size() - 1;
   for (size_t i = 0; i < delays_ms.size(); ++i) {
     if (delays_ms[i] == kTargetDelayMs) at = i;
   }
-  const double k_off = stable_off[at], k_on = stable_on[at];
-  const double gain = k_off > 0 ? k_on / k_off : 0.0;
-  const double p99_off = Percentile(ticks_off, 0.99), p99_on = Percentile(ticks_on, 0.99);
-  const double cost = std::max(0.0, p99_on - p99_off);
-  // Transparency at the stiffnesses stable both ways, at the target's delay.
-  double err_off = 0.0, err_on = 0.0;
-  int err_n = 0;
-  for (double k = 250.0; k <= std::min(k_off, k_on); k *= 2.0) {
-    err_off += Find(points, k, delays_ms[at], false)->force_rms_err;
-    err_on += Find(points, k, delays_ms[at], true)->force_rms_err;
-    ++err_n;
+  const double k_off = stable[0][at];
+  std::array<double, kModes.size()> gain{}, p99{}, err_common{}, err_own{};
+  size_t best = 1;
+  for (size_t m = 0; m < kModes.size(); ++m) {
+    gain[m] = k_off > 0 ? stable[m][at] / k_off : 0.0;
+    if (m > 0 && gain[m] > gain[best]) best = m;
+    p99[m] = Percentile(ticks[m], 0.99);
+    // Transparency: the force error at the stiffnesses stable both off and in
+    // this mode (comparable across modes), and at this mode's own largest.
+    int n = 0;
+    for (double k = 250.0; k <= std::min(k_off, stable[m][at]); k *= 2.0) {
+      err_common[m] += Find(points, k, delays_ms[at], kModes[m])->force_rms_err;
+      ++n;
+    }
+    if (n > 0) err_common[m] /= n;
+    const Point* own = Find(points, stable[m][at], delays_ms[at], kModes[m]);
+    err_own[m] = own != nullptr ? own->force_rms_err : 0.0;
   }
-  if (err_n > 0) err_off /= err_n, err_on /= err_n;
-  std::printf("\n  at %.0f ms each way: K stable %.0f N/m off, %.0f N/m on: gain %.3g (target >= 3) %s\n"
-              "  force error against the ideal wall, mean RMS over the K stable both ways: %.3f N off, %.3f N on\n"
-              "  servo tick p99 %.3g us off, %.3g us on: the controller costs %.3g us (target <= 2) %s\n"
+  const double cost = std::max(0.0, p99[best] - p99[0]);
+  std::printf("\n  at %.0f ms each way, against K stable %.0f N/m off:\n", delays_ms[at], k_off);
+  for (size_t m = 1; m < kModes.size(); ++m) {
+    std::printf("    %-12s K stable %6.0f N/m, gain %.3g; force RMS error %.3f N (off %.3f N) over K <= %.0f N/m,"
+                " %.3f N at its largest; tick p99 %.3g us\n",
+                ModeName(kModes[m]), stable[m][at], gain[m], err_common[m], err_common[0],
+                std::min(k_off, stable[m][at]), err_own[m], p99[m]);
+  }
+  std::printf("  best: %s, gain %.3g (target >= 3) %s; it costs %.3g us of tick p99 (off %.3g us; target <= 2) %s\n"
               "  %zu runs in %.1f s wall; wrote %s/passivity.csv, passivity.png\n",
-              delays_ms[at], k_off, k_on, gain, gain >= 3.0 ? "met" : "MISSED", err_off, err_on, p99_off, p99_on,
-              cost, cost <= 2.0 ? "met" : "MISSED", points.size(), wall_s, dir.c_str());
+              ModeName(kModes[best]), gain[best], gain[best] >= 3.0 ? "met" : "MISSED", cost, p99[0],
+              cost <= 2.0 ? "met" : "MISSED", points.size(), wall_s, dir.c_str());
 
   {
     std::ofstream csv(dir / "passivity.csv");
-    csv << "stiffness,delay_ms,mode,stable,spread_m,energy_j,max_alpha,acting_ticks,force_rms_err_n,penetration_m\n";
+    csv << "stiffness,delay_ms,mode,stable,spread_m,energy_j,max_alpha,acting_ticks,force_rms_err_n,penetration_m,"
+           "loop_margin_min_j\n";
     for (const Point& p : points) {
-      csv << p.k << "," << p.delay_ms << "," << (p.passivity ? "on" : "off") << "," << (p.stable ? 1 : 0) << ","
-          << p.spread << "," << p.energy_j << "," << p.max_alpha << "," << p.acting_ticks << "," << p.force_rms_err
-          << "," << p.penetration << "\n";
+      csv << p.k << "," << p.delay_ms << "," << ModeName(p.mode) << "," << (p.stable ? 1 : 0) << "," << p.spread
+          << "," << p.energy_j << "," << p.max_alpha << "," << p.acting_ticks << "," << p.force_rms_err << ","
+          << p.penetration << "," << p.loop_margin_min << "\n";
     }
   }
   {
-    Series off{"largest stable K, controller off", {}, {}};
-    Series on{"largest stable K, controller on", {}, {}};
-    Series pb{"passivity bound 2b/T", {}, {}};
-    for (size_t i = 0; i < delays_ms.size(); ++i) {
-      off.x.push_back(delays_ms[i]), off.y.push_back(std::max(stable_off[i], 1.0));
-      on.x.push_back(delays_ms[i]), on.y.push_back(std::max(stable_on[i], 1.0));
-      pb.x.push_back(delays_ms[i]), pb.y.push_back(bound);
+    std::vector<Series> series;
+    for (size_t m = 0; m < kModes.size(); ++m) {
+      Series line{std::string("largest stable K, ") + ModeName(kModes[m]), {}, {}};
+      for (size_t i = 0; i < delays_ms.size(); ++i) line.x.push_back(delays_ms[i]), line.y.push_back(std::max(stable[m][i], 1.0));
+      series.push_back(line);
     }
+    Series pb{"passivity bound 2b/T", {}, {}};
+    for (const double d : delays_ms) pb.x.push_back(d), pb.y.push_back(bound);
+    series.push_back(pb);
     PlotOptions o;
     o.title = "Virtual wall: largest stable coupling stiffness vs device delay";
     o.x_label = "device delay each way (ms)";
     o.y_label = "K (N/m)";
     o.log_y = true;
     try {
-      PlotLines(dir / "passivity.png", {off, on, pb}, o);
+      PlotLines(dir / "passivity.png", series, o);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "haptel bench passivity: %s\n", e.what());
     }
   }
 
   if (json) {
+    // JSON keys: "on" is the one-port controller (as before the two-port).
+    const auto key = [](Mode m) -> std::string {
+      switch (m) {
+        case Mode::kOff: return "off";
+        case Mode::kOnePort: return "on";
+        case Mode::kTwoPort: return "two_port";
+        case Mode::kTwoPortRef: return "two_port_ref";
+      }
+      return "?";
+    };
     std::ostringstream o;
-    o << "{\"delay_ms\":" << JsonNumber(delays_ms[at]) << ",\"stable_stiffness_off\":" << JsonNumber(k_off)
-      << ",\"stable_stiffness_on\":" << JsonNumber(k_on) << ",\"gain\":" << JsonNumber(gain)
-      << ",\"passivity_bound\":" << JsonNumber(bound) << ",\"cost_us_p99\":" << JsonNumber(cost)
-      << ",\"tick_us_p99_off\":" << JsonNumber(p99_off) << ",\"tick_us_p99_on\":" << JsonNumber(p99_on)
-      << ",\"force_rms_err_n_off\":" << JsonNumber(err_off) << ",\"force_rms_err_n_on\":" << JsonNumber(err_on)
-      << ",\"delays\":[";
+    o << "{\"delay_ms\":" << JsonNumber(delays_ms[at]);
+    for (size_t m = 0; m < kModes.size(); ++m) o << ",\"stable_stiffness_" << key(kModes[m]) << "\":" << JsonNumber(stable[m][at]);
+    o << ",\"gain\":" << JsonNumber(gain[best]) << ",\"gain_mode\":\"" << ModeName(kModes[best]) << "\"";
+    for (size_t m = 1; m < kModes.size(); ++m) o << ",\"gain_" << key(kModes[m]) << "\":" << JsonNumber(gain[m]);
+    o << ",\"passivity_bound\":" << JsonNumber(bound) << ",\"cost_us_p99\":" << JsonNumber(cost);
+    for (size_t m = 0; m < kModes.size(); ++m) {
+      o << ",\"tick_us_p99_" << key(kModes[m]) << "\":" << JsonNumber(p99[m]) << ",\"force_rms_err_n_"
+        << key(kModes[m]) << "\":" << JsonNumber(err_common[m]) << ",\"force_rms_err_n_at_stable_"
+        << key(kModes[m]) << "\":" << JsonNumber(err_own[m]);
+    }
+    o << ",\"delays\":[";
     for (size_t i = 0; i < delays_ms.size(); ++i) {
-      o << (i ? "," : "") << "{\"delay_ms\":" << JsonNumber(delays_ms[i]) << ",\"stable_stiffness_off\":"
-        << JsonNumber(stable_off[i]) << ",\"stable_stiffness_on\":" << JsonNumber(stable_on[i]) << "}";
+      o << (i ? "," : "") << "{\"delay_ms\":" << JsonNumber(delays_ms[i]);
+      for (size_t m = 0; m < kModes.size(); ++m) o << ",\"stable_stiffness_" << key(kModes[m]) << "\":" << JsonNumber(stable[m][i]);
+      o << "}";
     }
     o << "],\"points\":[";
     for (size_t i = 0; i < points.size(); ++i) {
       const Point& p = points[i];
       o << (i ? "," : "") << "{\"stiffness\":" << JsonNumber(p.k) << ",\"delay_ms\":" << JsonNumber(p.delay_ms)
-        << ",\"mode\":\"" << (p.passivity ? "on" : "off") << "\",\"stable\":" << (p.stable ? "true" : "false")
+        << ",\"mode\":\"" << ModeName(p.mode) << "\",\"stable\":" << (p.stable ? "true" : "false")
         << ",\"energy_j\":" << JsonNumber(p.energy_j) << ",\"force_rms_err_n\":" << JsonNumber(p.force_rms_err) << "}";
     }
     o << "]}";

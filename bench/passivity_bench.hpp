@@ -1,6 +1,11 @@
 #pragma once
-/// @file `haptel bench passivity`: the servo loop's time-domain passivity
-/// controller (haptel/haptics/passivity.hpp) against delay and stiffness.
+/// @file `haptel bench passivity`: time-domain passivity control against
+/// device delay and stiffness, in four modes: off; `one-port`, the servo
+/// loop's controller (haptel/haptics/passivity.hpp); `two-port`, an observer
+/// at each end of the delay line exchanging energies with the samples and a
+/// controller damping the arm on its side of the line
+/// (haptel/haptics/twoport.hpp; the loop's end charges its own deficit to
+/// the arm's); `two-port-ref`, the same with the credit bounded at zero.
 ///
 /// The sim device's right arm (haptics/sim_device), behind a delay line of
 /// 0, 1, 3 and 5 ms each way (readings reach the loop, and commands the arm,
@@ -17,7 +22,8 @@
 /// arm's true position moves less than 0.5 mm peak to peak (a growing or
 /// sustained oscillation, held bounded only by the 7 N force limit, does
 /// not). The largest stable K is the largest before the first unstable one,
-/// per delay, with the controller off and on; `gain` is on/off at 3 ms, beside
+/// per delay and mode; `gain` is the best mode's over off's at 3 ms (its
+/// name in `gain_mode`; `gain_on`, `gain_two_port`… each mode's), beside
 /// the passivity bound 2b/T (b the arm's own damping). Also per point: the
 /// energy the controller dissipated (J), and the transparency: the RMS error
 /// (N) of the force the arm felt against the ideal wall K·penetration of its
@@ -27,9 +33,12 @@
 ///
 /// Prints a table; writes build/bench/passivity.csv and passivity.png; with
 /// --json the last stdout line is {"stable_stiffness_off":…,
-/// "stable_stiffness_on":…,"gain":…,"passivity_bound":…,"cost_us_p99":…,
-/// "delays":[…],"points":[{stiffness,delay_ms,mode,stable,energy_j,
-/// force_rms_err_n},…]}.
+/// "stable_stiffness_on":… (one-port),"stable_stiffness_two_port":…,
+/// "stable_stiffness_two_port_ref":…,"gain":…,"gain_mode":…,
+/// "passivity_bound":…,"cost_us_p99":… (the best mode's),
+/// "force_rms_err_n_<mode>":… (mean over the K stable off and in the mode),
+/// "force_rms_err_n_at_stable_<mode>":…,"delays":[…],"points":[{stiffness,
+/// delay_ms,mode,stable,energy_j,force_rms_err_n},…]}.
 ///
 /// --smoke (smoke.hpp): delays 0 and 3 ms, K up to 1000 N/m, 1.5 s runs.
 namespace haptel::bench {

@@ -238,9 +238,11 @@ TEST_CASE("bench passivity --smoke", "[bench][smoke]") {
   CHECK(Finite(j["passivity_bound"]) > 0.0);
   CHECK(Finite(j["stable_stiffness_off"]) >= 0.0);
   CHECK(Finite(j["stable_stiffness_on"]) >= 0.0);
+  CHECK(Finite(j["stable_stiffness_two_port"]) >= 0.0);
   CHECK(Finite(j["cost_us_p99"]) >= 0.0);
+  CHECK(!j["gain_mode"].string().empty());
   const auto& points = j["points"].array();
-  CHECK(points.size() == 12);  // 2 delays x 2 modes x 3 stiffnesses
+  CHECK(points.size() == 24);  // 2 delays x 4 modes (off, one-port, two-port, two-port-ref) x 3 stiffnesses
   for (const JsonValue& p : points) {
     CHECK(Finite(p["force_rms_err_n"]) >= 0.0);
     CHECK(Finite(p["energy_j"]) >= 0.0);
