@@ -318,7 +318,7 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
       }
     }
     if (fleet_end) break;
-    if (auto end = CheckLimits(t, first.time_limit_s, 1e300)) {
+    if (auto end = CheckLimits(t, std::nullopt, first.time_limit_s, 0.0, 1e300)) {
       fleet_end = std::move(end);
       break;
     }
