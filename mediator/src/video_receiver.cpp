@@ -50,8 +50,22 @@ VideoReceiver::~VideoReceiver() {
 void VideoReceiver::OnFrame(const msg::VideoFrame& frame) {
   const int64_t now = MonotonicNs();
   const bool h264 = frame.encoding() == CameraCodecName(CameraCodec::kH264);
+  msg::VideoFeedback rate;  // sent below when the estimate is due
+  bool rate_due = false;
   {
     std::lock_guard lock(mutex_);
+    // The link's rate from this frame's arrival against its capture (only
+    // differences of each: the clocks need not agree).
+    estimator_.OnFrame(frame.seq(), NsToS(frame.capture_wall_ns()), NsToS(now), frame.data().size());
+    if (estimator_.FeedbackDue(NsToS(now))) {
+      rate_due = true;
+      target_kbps_sent_ = estimator_.target_kbps();
+      rate.seq(++feedback_seq_);
+      rate.sent_ns(now);
+      rate.key_frame_request(false);
+      rate.last_frame_seq(frame.seq());
+      rate.target_kbps(static_cast<uint32_t>(target_kbps_sent_));
+    }
     if (first_arrival_ns_ == 0) {
       first_arrival_ns_ = now;
     } else {
@@ -80,18 +94,20 @@ void VideoReceiver::OnFrame(const msg::VideoFrame& frame) {
     pending_.push_back(std::move(p));
   }
   ready_.notify_one();
+  if (rate_due) feedback_.Write(rate);
 }
 
 void VideoReceiver::RequestKeyFrameIfDue(int64_t now_ns) {
   if (last_request_ns_ != 0 && now_ns - last_request_ns_ < kKeyFrameRequestPeriodNs) return;
   last_request_ns_ = now_ns;
   msg::VideoFeedback request;
-  request.seq(++feedback_seq_);
   request.sent_ns(now_ns);
   request.key_frame_request(true);
   {
     std::lock_guard lock(mutex_);
+    request.seq(++feedback_seq_);
     request.last_frame_seq(last_seq_);
+    request.target_kbps(static_cast<uint32_t>(target_kbps_sent_));
     ++key_frame_requests_;
   }
   feedback_.Write(request);
@@ -196,6 +212,8 @@ VideoStats VideoReceiver::Stats() const {
   const double arrivals = NsToS(last_arrival_ns_ - first_arrival_ns_);
   s.kbps = arrivals > 0 ? static_cast<double>(bytes_) * 8.0 / arrivals / 1000.0 : 0.0;
   s.stale_s = NsToS(stale_ns_ + (stale_since_ns_ != 0 ? now - stale_since_ns_ : 0));
+  s.target_kbps = target_kbps_sent_;
+  s.rate_cuts = estimator_.decreases();
   return s;
 }
 

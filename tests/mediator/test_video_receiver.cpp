@@ -4,6 +4,7 @@
 // is asked for again and again until one comes, and then the picture is
 // back and the time spent stale is counted.
 #include <atomic>
+#include <mutex>
 #include <vector>
 
 #include <catch2/catch.hpp>
@@ -114,4 +115,45 @@ TEST_CASE("H.264 frame lost on the link: stale picture marked, key frame request
   send(false);
   CHECK(receiver.Stats().key_frame_requests == s.key_frame_requests);
   CHECK(requests.load() <= after + 1);  // one may have been in flight
+}
+
+TEST_CASE("the link's rate estimate reaches the vehicle on the feedback topic, at most ten times a second",
+          "[mediator][video]") {
+  LinkConfig config;
+  config.domain_id = test::UniqueDomain(68);
+  link::Participant vehicle(config, "test-vehicle");
+  link::Participant op(config, "test-operator");
+  mediator::VideoReceiver receiver(op, "robot1", /*decode=*/false);
+  std::mutex mutex;
+  std::vector<uint32_t> targets;
+  link::VideoFeedbackReader feedback(vehicle, link::TopicName("robot1", "video_feedback"), link::Profile::kState,
+                                     [&](const msg::VideoFeedback& f) {
+                                       std::lock_guard lock(mutex);
+                                       if (!f.key_frame_request()) targets.push_back(f.target_kbps());
+                                     });
+  link::VideoWriter writer(vehicle, link::TopicName("robot1", "video"), link::Profile::kVideo);
+  REQUIRE(test::WaitFor([&] { return writer.matched() > 0; }, 20.0));
+  REQUIRE(test::WaitFor([&] { return feedback.matched() > 0; }, 20.0));
+  const int64_t start = MonotonicNs();
+  std::vector<uint8_t> bytes(20000, 0x55);  // a 20 kB frame, 30 a second: 4.8 Mbit/s
+  for (uint64_t seq = 1; seq <= 45; ++seq) {
+    msg::VideoFrame f;
+    f.seq(seq);
+    f.capture_wall_ns(WallNs());
+    f.encoding("jpeg");
+    f.key_frame(true);
+    f.data() = bytes;
+    writer.Write(f);
+    SleepUntilNs(MonotonicNs() + 33'000'000);
+  }
+  REQUIRE(test::WaitFor([&] {
+    std::lock_guard lock(mutex);
+    return !targets.empty();
+  }, 10.0));
+  const double elapsed_s = NsToS(MonotonicNs() - start);
+  std::lock_guard lock(mutex);
+  INFO(targets.size() << " estimates in " << elapsed_s << " s");
+  CHECK(targets.size() <= static_cast<size_t>(elapsed_s * 10.0) + 1);
+  for (const uint32_t t : targets) CHECK(t > 0);
+  CHECK(receiver.Stats().target_kbps > 0.0);
 }

@@ -166,3 +166,48 @@ TEST_CASE("jpeg decoder accepts zero padding after the end marker") {
   CHECK(image.size() == cv::Size(camera.width, camera.height));
   CHECK(decoder.failures() == 0);
 }
+
+TEST_CASE("jpeg's ladder follows the link: quality, then resolution, then frame rate, and back up") {
+  const cv::Mat frame = RenderedFrame();
+  JpegEncoder encoder(80, 30.0);
+  std::vector<uint8_t> bytes;
+  // Sends the next `n` grabbed frames as the camera streamer does; returns
+  // the bitrate they took (kbit/s at 30 grabs a second).
+  const auto send = [&](int n) {
+    size_t total = 0;
+    for (int i = 0; i < n; ++i) {
+      if (encoder.SkipFrame()) continue;
+      REQUIRE(encoder.Encode(frame, bytes));
+      total += bytes.size();
+    }
+    return static_cast<double>(total) * 8.0 * 30.0 / n / 1000.0;
+  };
+  const double full_kbps = send(30);
+  INFO("quality 80, full size: " << full_kbps << " kbit/s");
+  CHECK(encoder.quality() == 80);  // not following anything yet: untouched
+  REQUIRE(full_kbps > 1000.0);
+
+  // A link a fifth of that: quality first, all the way down.
+  encoder.FollowBitrate(full_kbps / 5);
+  send(30);
+  CHECK(encoder.quality() < 80);
+  // Much less: past quality, to half resolution, then to skipped frames.
+  encoder.FollowBitrate(full_kbps / 40);
+  const double low_kbps = send(150);
+  CHECK(encoder.quality() == JpegEncoder::kMinQuality);
+  CHECK(encoder.scale() == 0.5);
+  CHECK(encoder.skip() >= 1);
+  std::vector<uint8_t> small;
+  REQUIRE(encoder.Encode(frame, small));
+  cv::Mat decoded;
+  REQUIRE(JpegDecoder().Decode(small.data(), small.size(), decoded));
+  CHECK(decoded.cols == frame.cols / 2);
+  INFO("after the ladder: " << low_kbps << " kbit/s for a target of " << full_kbps / 40);
+  CHECK(low_kbps < full_kbps / 4);
+  // The link clears: back to the top, a rung at a time.
+  encoder.FollowBitrate(100000.0);
+  send(300);
+  CHECK(encoder.skip() == 0);
+  CHECK(encoder.scale() == 1.0);
+  CHECK(encoder.quality() == 80);  // never above the file's quality
+}

@@ -25,6 +25,7 @@ CameraStreamer::CameraStreamer(const CameraConfig& config, std::unique_ptr<video
 }
 
 void CameraStreamer::OnFeedback(const msg::VideoFeedback& feedback) {
+  if (feedback.target_kbps() > 0) target_kbps_.store(feedback.target_kbps(), std::memory_order_relaxed);
   if (!feedback.key_frame_request()) return;
   key_frame_requests_.fetch_add(1, std::memory_order_relaxed);
   key_frame_wanted_.store(true, std::memory_order_release);
@@ -62,6 +63,15 @@ void CameraStreamer::Tick(int64_t now_ns) {
   grabs_failed_.store(grab_monitor_.failures(), std::memory_order_relaxed);
   camera_stalls_.store(grab_monitor_.stalls(), std::memory_order_relaxed);
   if (!grabbed) return;
+  // The operator's estimate of the link, followed by the encoder.
+  if (const uint32_t target = target_kbps_.load(std::memory_order_relaxed); target != followed_kbps_) {
+    followed_kbps_ = target;
+    encoder_->FollowBitrate(target);
+  }
+  if (encoder_->SkipFrame()) {
+    frames_skipped_.fetch_add(1, std::memory_order_relaxed);
+    return;
+  }
   if (key_frame_wanted_.exchange(false, std::memory_order_acq_rel)) encoder_->RequestKeyFrame();
   if (!encoder_->Encode(image_, encoded_)) {
     frames_failed_.fetch_add(1, std::memory_order_relaxed);
@@ -89,6 +99,8 @@ CameraCounters CameraStreamer::Counters() const {
   c.camera_ended = camera_ended_.load();
   c.key_frame_requests = key_frame_requests_.load();
   c.key_frames_sent = key_frames_sent_.load();
+  c.frames_skipped = frames_skipped_.load();
+  c.target_kbps = target_kbps_.load();
   return c;
 }
 

@@ -7,10 +7,12 @@
 #include "haptel/video/h264_codec.hpp"
 
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 namespace haptel::video {
 
-JpegEncoder::JpegEncoder(int quality) : quality_(quality) {
+JpegEncoder::JpegEncoder(int quality, double frame_rate_hz)
+    : quality_(quality), top_quality_(quality), frame_rate_hz_(frame_rate_hz > 0 ? frame_rate_hz : 30.0) {
   if (quality < 1 || quality > 100) {
     throw std::invalid_argument("JpegEncoder: quality " + std::to_string(quality) +
                                 ", expected 1..100");
@@ -26,11 +28,24 @@ void JpegEncoder::SetQuality(int quality) {
   params_[1] = quality;
 }
 
+bool JpegEncoder::SkipFrame() {
+  if (skip_ == 0) return false;
+  // Keep one frame, skip the next skip_.
+  const bool skip = skip_count_ % (skip_ + 1) != 0;
+  ++skip_count_;
+  return skip;
+}
+
 bool JpegEncoder::Encode(const cv::Mat& bgr, std::vector<uint8_t>& out) {
   out.clear();  // keeps capacity; imencode resizes it
   if (bgr.empty()) return false;
   try {
-    if (!cv::imencode(".jpg", bgr, out, params_)) {
+    const cv::Mat* source = &bgr;
+    if (scale_ < 1.0) {
+      cv::resize(bgr, scaled_, cv::Size(), scale_, scale_, cv::INTER_AREA);
+      source = &scaled_;
+    }
+    if (!cv::imencode(".jpg", *source, out, params_)) {
       out.clear();
       return false;
     }
@@ -38,7 +53,53 @@ bool JpegEncoder::Encode(const cv::Mat& bgr, std::vector<uint8_t>& out) {
     out.clear();
     return false;
   }
+  Climb(out.size());
   return true;
+}
+
+void JpegEncoder::Climb(size_t bytes) {
+  if (target_kbps_ <= 0.0) return;
+  // The rung's bitrate, smoothed over its frames.
+  const double kbps = static_cast<double>(bytes) * 8.0 * frame_rate_hz_ / (skip_ + 1) / 1000.0;
+  rung_kbps_ = frames_at_rung_ == 0 ? kbps : 0.7 * rung_kbps_ + 0.3 * kbps;
+  if (++frames_at_rung_ < kFramesPerRung) return;
+  const auto moved = [&] { frames_at_rung_ = 0; };
+  if (rung_kbps_ > 1.05 * target_kbps_) {
+    // Down: quality, then resolution, then frame rate.
+    if (quality_ > kMinQuality) {
+      SetQuality(std::max(kMinQuality, quality_ - 10));
+    } else if (scale_ == 1.0) {
+      scale_ = 0.5;
+    } else if (skip_ < kMaxSkip) {
+      ++skip_;
+    } else {
+      return;  // the bottom rung: nothing more to give
+    }
+    moved();
+    return;
+  }
+  // Up, a rung at a time, when the rung above is predicted to fit: a frame
+  // rate step by its ratio of frames, full resolution at about 3.5 times the
+  // bytes of half (the shipped camera's pictures), 10 quality about 1.25.
+  double above = 0.0;
+  if (skip_ > 0) {
+    above = rung_kbps_ * (skip_ + 1) / skip_;
+  } else if (scale_ < 1.0) {
+    above = rung_kbps_ * 3.5;
+  } else if (quality_ < top_quality_) {
+    above = rung_kbps_ * 1.25;
+  } else {
+    return;  // the top rung
+  }
+  if (above > 0.9 * target_kbps_) return;
+  if (skip_ > 0) {
+    --skip_;
+  } else if (scale_ < 1.0) {
+    scale_ = 1.0;
+  } else {
+    SetQuality(std::min(top_quality_, quality_ + 10));
+  }
+  moved();
 }
 
 namespace {
@@ -88,7 +149,7 @@ DecodeResult JpegDecoder::DecodeFrame(const EncodedFrameView& frame, cv::Mat& im
 std::unique_ptr<VideoEncoder> MakeVideoEncoder(const CameraConfig& camera) {
   switch (camera.codec) {
     case CameraCodec::kJpeg:
-      return std::make_unique<JpegEncoder>(camera.jpeg_quality);
+      return std::make_unique<JpegEncoder>(camera.jpeg_quality, camera.rate_hz);
     case CameraCodec::kH264:
       return std::make_unique<H264Encoder>(H264Encoder::Options{.width = camera.width,
                                                                 .height = camera.height,

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <mutex>
 #include <stdexcept>
@@ -142,6 +143,13 @@ void H264Encoder::SetTargetBitrate(int kbps) {
   // libavcodec's libx264 wrapper compares these with x264's parameters
   // before each frame and reconfigures x264 when they changed.
   SetRate(av_->codec, kbps, options_.rate_hz);
+}
+
+void H264Encoder::FollowBitrate(double kbps) {
+  if (!(kbps > 0)) return;
+  const int wanted = std::clamp(static_cast<int>(kbps), kMinFollowKbps, options_.bitrate_kbps);
+  if (std::abs(wanted - bitrate_kbps_) <= bitrate_kbps_ / 20) return;
+  SetTargetBitrate(wanted);
 }
 
 bool H264Encoder::Encode(const cv::Mat& bgr, std::vector<uint8_t>& out) {

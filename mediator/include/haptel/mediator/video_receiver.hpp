@@ -14,6 +14,11 @@
 /// measured, and the vehicle is asked for a key frame on
 /// haptel/<vehicle>/video_feedback at most every kKeyFrameRequestPeriodNs,
 /// again and again until one decodes.
+///
+/// Every frame's arrival also feeds the link's rate estimate
+/// (video::RateEstimator, after Google Congestion Control): at most ten
+/// times a second the estimate goes to the vehicle on the same feedback
+/// topic, and its encoder follows it (H.264's bitrate, JPEG's ladder).
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
@@ -28,6 +33,7 @@
 #include "haptel/core/histogram.hpp"
 #include "haptel/link/topic.hpp"
 #include "haptel/video/codec.hpp"
+#include "haptel/video/rate_estimator.hpp"
 
 namespace haptel::mediator {
 
@@ -44,6 +50,8 @@ struct VideoStats {
   double latency_ms_p99 = 0.0;
   double kbps = 0.0;            ///< the video's bitrate as received, kbit/s
   double stale_s = 0.0;         ///< time the screen showed an old picture marked stale
+  double target_kbps = 0.0;     ///< the link's rate as last estimated and sent to the vehicle
+  uint64_t rate_cuts = 0;       ///< times the estimate was cut for a filling queue (overuse)
 };
 
 /// The latest decoded image, shared (never copied) with whoever shows it.
@@ -118,6 +126,18 @@ class VideoReceiver {
   int64_t stale_ns_ = 0;        ///< stretches of staleness that ended
   int64_t last_request_ns_ = 0;
   uint64_t feedback_seq_ = 0;
+  video::RateEstimator estimator_{RateEstimatorFor()};
+  double target_kbps_sent_ = 0.0;
+  static video::RateEstimatorConfig RateEstimatorFor() {
+    video::RateEstimatorConfig c;
+    // Start at the most and cut on the first sign of a filling queue: a
+    // link that carries the vehicle's file's video never changes it (the
+    // vehicle caps the target at its file's bitrate or quality; JPEG at
+    // quality 80 is about 6 Mbit/s), and a slow one is found within a second.
+    c.max_kbps = 20000.0;
+    c.start_kbps = c.max_kbps;
+    return c;
+  }
   int64_t first_frame_ns_ = 0;
   int64_t last_frame_ns_ = 0;
   std::thread decoder_thread_;

@@ -28,6 +28,8 @@ struct CameraCounters {
   bool camera_ended = false;   ///< a file source that does not loop has ended
   uint64_t key_frame_requests = 0;  ///< the operator's requests received
   uint64_t key_frames_sent = 0;     ///< frames published that decode alone (every JPEG)
+  uint64_t frames_skipped = 0;      ///< grabbed but skipped to fit the link (JPEG's lowest rungs)
+  uint32_t target_kbps = 0;         ///< the operator's last estimate of the link (0: none came)
 };
 
 class CameraStreamer {
@@ -60,7 +62,11 @@ class CameraStreamer {
   std::vector<uint8_t> encoded_;
   uint64_t frame_seq_ = 0;
   std::atomic<uint64_t> frames_{0}, frames_failed_{0}, grabs_failed_{0}, camera_stalls_{0};
-  std::atomic<uint64_t> key_frame_requests_{0}, key_frames_sent_{0};
+  std::atomic<uint64_t> key_frame_requests_{0}, key_frames_sent_{0}, frames_skipped_{0};
+  /// The operator's estimate of the link (kbit/s; 0: none yet), set by the
+  /// feedback's DDS thread; the camera's thread hands it to the encoder.
+  std::atomic<uint32_t> target_kbps_{0};
+  uint32_t followed_kbps_ = 0;  ///< camera thread only
   /// Set by the feedback's DDS thread, taken by the camera's thread.
   std::atomic<bool> key_frame_wanted_{false};
   std::atomic<bool> camera_ended_{false};

@@ -28,6 +28,13 @@ class VideoEncoder {
   /// Makes the next frame a key frame (an operator lost a frame and waits
   /// for one). JPEG's frames all are.
   virtual void RequestKeyFrame() {}
+  /// Follows the link: aims at `kbps` (the operator's estimate of what the
+  /// link carries, RateEstimator), never above the bitrate or quality the
+  /// vehicle's file gives. H.264: its bitrate; JPEG: its ladder.
+  virtual void FollowBitrate(double /*kbps*/) {}
+  /// Whether the frame grabbed now is to be skipped (JPEG's last rung: a
+  /// lower frame rate). Called once per grabbed frame, before Encode.
+  virtual bool SkipFrame() { return false; }
 };
 
 /// What became of one encoded frame handed to a VideoDecoder.
@@ -60,10 +67,22 @@ class VideoDecoder {
   virtual bool awaiting_key_frame() const { return false; }
 };
 
+/// JPEG through OpenCV. Following a bitrate (FollowBitrate), it climbs down
+/// a ladder as the issue asks: its quality first (in steps of 10, down to
+/// kMinQuality), then its resolution (half each way), then its frame rate
+/// (one frame in 2, 3, 4 kept); and back up, a rung at a time, when the
+/// rung above is predicted to fit. It judges a rung by the bytes of the
+/// frames it encodes there, after kFramesPerRung of them.
 class JpegEncoder final : public VideoEncoder {
  public:
-  /// @param quality JPEG quality 1..100; throws std::invalid_argument otherwise.
-  explicit JpegEncoder(int quality);
+  static constexpr int kMinQuality = 20;
+  static constexpr int kMaxSkip = 3;  ///< at most 3 frames in 4 skipped
+  static constexpr int kFramesPerRung = 3;
+
+  /// @param quality JPEG quality 1..100 (the ladder's top); throws
+  /// std::invalid_argument otherwise. `frame_rate_hz`: the camera's, for the
+  /// ladder's bitrate.
+  explicit JpegEncoder(int quality, double frame_rate_hz = 30.0);
   CameraCodec codec() const override { return CameraCodec::kJpeg; }
   /// Encodes a BGR image into `out` (replacing its contents, reusing capacity).
   /// Returns false (and leaves `out` empty) when OpenCV cannot encode it.
@@ -74,9 +93,29 @@ class JpegEncoder final : public VideoEncoder {
   void SetQuality(int quality);
   int quality() const { return quality_; }
 
+  void FollowBitrate(double kbps) override { target_kbps_ = kbps; }
+  bool SkipFrame() override;
+  /// Where on the ladder it stands: the scale of the picture sent (1 or
+  /// 0.5) and the frames skipped of each skip() + 1.
+  double scale() const { return scale_; }
+  int skip() const { return skip_; }
+  /// The bitrate of the frames sent at this rung (kbit/s), as last measured.
+  double rung_kbps() const { return rung_kbps_; }
+
  private:
+  void Climb(size_t bytes);
+
   int quality_;
+  int top_quality_;
+  double frame_rate_hz_;
   std::vector<int> params_;
+  double target_kbps_ = 0.0;  ///< 0: not following
+  double scale_ = 1.0;
+  int skip_ = 0;
+  int skip_count_ = 0;
+  int frames_at_rung_ = 0;
+  double rung_kbps_ = 0.0;
+  cv::Mat scaled_;
 };
 
 class JpegDecoder final : public VideoDecoder {

@@ -44,6 +44,11 @@ class H264Encoder final : public VideoEncoder {
   bool Encode(const cv::Mat& bgr, std::vector<uint8_t>& out) override;
   bool last_was_key_frame() const override { return last_key_; }
   void RequestKeyFrame() override { key_frame_requested_ = true; }
+  /// The link's estimate, within [kMinFollowKbps, the bitrate it was opened
+  /// with]; changed only when it moves by more than 5 % (each change
+  /// reconfigures x264).
+  void FollowBitrate(double kbps) override;
+  static constexpr int kMinFollowKbps = 50;
   /// The target bitrate of the frames encoded from now on (kbit/s, > 0; a
   /// rate controller's knob): x264 is reconfigured at the next frame, VBV
   /// buffer included.
