@@ -75,7 +75,7 @@ class RobotSession final : public FamilySession {
     // for an interface a person may switch to later (a cockpit while driving
     // by keys), not before it is first asked for: two proxy hands nobody
     // holds would otherwise run at 1 kHz all along.
-    const std::vector<bool> build = InterfacesToBuild(setup, op_->can_switch());
+    const std::vector<bool> build = InterfacesToBuild(setup, op_->can_switch() && !setup.single_interface);
     const bool defer_world = !start_spec().needs_physics() && !setup.scene;
     deferred_.assign(setup.interfaces.size(), false);
     for (size_t i = 0; i < setup.interfaces.size(); ++i) {
@@ -156,6 +156,8 @@ class RobotSession final : public FamilySession {
       requests_seen_ = person.interface_requests;
       if (!op_->can_switch()) {
         if (setup_.progress) log::Info("the automatic operator does not switch interfaces");
+      } else if (setup_.single_interface) {
+        if (setup_.progress) log::Info("this run keeps its one interface (no switching)");
       } else if (BuildDeferred(person.interface_request, haptic) &&
                  interfaces_->Request(person.interface_request, t) && setup_.progress) {
         log::Info("switching to interface '" + interfaces_->at(person.interface_request)->name() + "'");

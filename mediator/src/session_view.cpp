@@ -67,7 +67,7 @@ view::ViewOptions ViewOptionsFor(const SessionSetup& setup) {
   view::ViewOptions options;
   options.mode = setup.view == ViewKind::kWindow ? view::ViewMode::kWindow : view::ViewMode::kOffscreen;
   options.record = setup.record;
-  options.title = "Haptel - " + setup.run.name;
+  options.title = setup.title.empty() ? "Haptel - " + setup.run.name : setup.title;
   if (setup.direct_view) options.screen = view::DirectViewScreen();
   return options;
 }
@@ -145,8 +145,9 @@ view::Overlay OverlayFeed::Make(double t, const LapTimer& lap, const InterfaceSe
   } else if (interfaces.switching()) {
     std::snprintf(o.message, sizeof o.message, "switching interface: hands off for a moment");
   } else if (current.name() == "keyboard" && t < kHelpS) {
-    std::snprintf(o.message, sizeof o.message,
-                  "arrows or W/A/S/D drive, space stops, F1-F6 switch, Esc ends");
+    std::snprintf(o.message, sizeof o.message, "%s",
+                  setup_.single_interface ? "arrows or W/A/S/D drive, space stops, Esc ends"
+                                          : "arrows or W/A/S/D drive, space stops, F1-F6 switch, Esc ends");
   }
   return o;
 }

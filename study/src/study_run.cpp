@@ -112,7 +112,7 @@ void ShowPictures(mediator::SessionSetup& setup, StudyConsole& console) {
 /// A person's practice lap (the thesis's): the keyboard and the camera's
 /// picture filling the window, recorded as a run but not as a trial.
 mediator::SessionSetup PracticeSetup(const StudyConfig& config, const std::filesystem::path& database,
-                                     const std::string& domain, bool verbose) {
+                                     const std::string& domain, bool verbose, const std::string& participant) {
   const std::string cap = std::to_string(config.trial_cap_s);
   std::vector<std::string> words = {"run",         "--config",   config.run.string(), "--track",  config.track.string(),
                                     "--interface", "keyboard",   "--operator",        "person",   "--view",
@@ -124,6 +124,10 @@ mediator::SessionSetup PracticeSetup(const StudyConfig& config, const std::files
   mediator::SessionSetup setup =
       mediator::RunSetupFromArgs(mediator::ParseRunArgs(static_cast<int>(argv.size()), argv.data()));
   setup.direct_view = true;
+  // The keyboard alone: no other interface's wheel, lever or hands over the
+  // picture, no F1-F6 in the hint; the window says whose practice it is.
+  setup.single_interface = true;
+  setup.title = "Haptel - practice lap - " + participant;
   return setup;
 }
 
@@ -319,7 +323,7 @@ int StudyRunCommand(int argc, const char* const* argv) {
             continue;
           }
           mediator::SessionSetup practice =
-              cli::ReadInput([&] { return PracticeSetup(config, database, domain, verbose); });
+              cli::ReadInput([&] { return PracticeSetup(config, database, domain, verbose, trial->participant); });
           ShowPictures(practice, *console);
           console->SetLive("practice lap: " + who + " (keyboard; Abort ends it)", trial->participant, 0);
           std::fprintf(stderr, "[study] practice lap: %s ...\n", who.c_str());

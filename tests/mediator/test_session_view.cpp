@@ -11,6 +11,7 @@
 #include "haptel/config/track.hpp"
 #include "haptel/interfaces/cockpit.hpp"
 #include "haptel/interfaces/gesture.hpp"
+#include "haptel/interfaces/keyboard.hpp"
 #include "haptel/mediator/session_view.hpp"
 #include "haptel/mediator/world_shapes.hpp"
 #include "haptel/view/renderer.hpp"
@@ -77,6 +78,28 @@ TEST_CASE("the overlay's HUD is the HUD cockpit's own, and only a HUD interface 
       plain_feed.Make(12.0, lap, plain_set, feedback, plain_motors, true, false);
   CHECK_FALSE(p.hud);
   CHECK(view::HudSpeedText(p).empty());
+}
+
+TEST_CASE("a practice lap on the keyboard alone: the hint offers no switching, the title says whose practice") {
+  const Track track(LoadTrack(ShippedFile("config/tracks/test-short.yaml")));
+  SessionSetup setup;
+  setup.operator_kind = "person";
+  setup.run.name = "default";
+  LapTimer lap(track);
+  interfaces::InputBox input;
+  InterfaceSet set = One(std::make_unique<interfaces::KeyboardInterface>(KeyboardConfig{}, input, 8));
+  const interfaces::MotorCommand still{};
+  OverlayFeed switching(setup, track);
+  CHECK(std::string(switching.Make(1.0, lap, set, {}, still, true, false).message).find("F1-F6") !=
+        std::string::npos);
+  CHECK(ViewOptionsFor(setup).title == "Haptel - default");
+  setup.single_interface = true;
+  setup.title = "Haptel - practice lap - P3";
+  OverlayFeed practice(setup, track);
+  const std::string hint = practice.Make(1.0, lap, set, {}, still, true, false).message;
+  CHECK(hint.find("W/A/S/D") != std::string::npos);
+  CHECK(hint.find("F1") == std::string::npos);
+  CHECK(ViewOptionsFor(setup).title == "Haptel - practice lap - P3");
 }
 
 TEST_CASE("the overlay remembers the last contact and says when the vehicle is not up yet") {

@@ -106,6 +106,12 @@ struct SessionSetup {
   /// keyboard and a direct view of the camera) instead of hanging on a
   /// screen before the hands.
   bool direct_view = false;
+  /// Only the start interface: no switching (F1–F6), and no other
+  /// interface's controls or hands built, so none is drawn over the camera's
+  /// picture (a study's practice lap on the keyboard).
+  bool single_interface = false;
+  /// The window's title; empty: "Haptel - <run name>".
+  std::string title;
   /// Called on the session thread twice a second with what the view's
   /// overlay shows (lap clock, gates, contacts), view or not: a study's
   /// console shows the live trial with it. Must return quickly.
