@@ -63,6 +63,8 @@ ForceSetpoint Hal::Setpoint(Side side) const {
     field.damping *= k;
     field.wall_stiffness *= k;
     field.wall_damping *= k;
+    field.guidance_stiffness *= k;
+    field.guidance_max_force *= k;
     sp.coupling_stiffness *= k;
     sp.coupling_damping *= k;
     for (double& w : sp.wrist_force) w *= k;

@@ -362,6 +362,63 @@ TEST_CASE("Shipped gesture interface loads", "[config][shipped]") {
   CHECK(g.command_rate_hz == NumberIn(text, "command_rate_hz"));
 }
 
+TEST_CASE("Shipped gesture-shared interface loads, with its shared control", "[config][shipped]") {
+  const fs::path file = "config/interfaces/gesture-shared.yaml";
+  const std::string text = ReadText(file);
+  const haptel::GestureConfig g = haptel::LoadGesture(file);
+  CHECK(g.name == "gesture-shared");
+  REQUIRE(g.shared_control.enabled);
+  CHECK(g.shared_control.horizon_s == NumberIn(text, "horizon_s"));
+  CHECK(g.shared_control.max_force == NumberIn(text, "max_force"));
+  CHECK(g.shared_control.stiffness == NumberIn(text, "stiffness"));
+  CHECK(g.shared_control.clearance == NumberIn(text, "clearance"));
+  CHECK_FALSE(haptel::LoadGesture("config/interfaces/gesture.yaml").shared_control.enabled);
+}
+
+TEST_CASE("Shared control's section is checked strictly", "[config]") {
+  TempDir tmp;
+  const std::string shared = "name: gesture-shared
+shared_control:
+";
+  SECTION("a key it does not know") {
+    const fs::path file = tmp.Write("s.yaml", shared + "  horizon_s: 1.0
+  strength: 2
+");
+    CHECK_THAT(ErrorOf([&] { haptel::LoadGesture(file); }), Contains(file.string()) && Contains("strength"));
+  }
+  SECTION("a force no one could push through") {
+    const fs::path file = tmp.Write("s.yaml", shared + "  max_force: 50
+");
+    const std::string msg = ErrorOf([&] { haptel::LoadGesture(file); });
+    CHECK_THAT(msg, Contains(file.string()) && Contains("shared_control.max_force") && Contains("[0, 15]"));
+  }
+  SECTION("gesture-shared without it") {
+    const fs::path file = tmp.Write("s.yaml", "name: gesture-shared
+");
+    CHECK_THAT(ErrorOf([&] { haptel::LoadGesture(file); }), Contains("'shared_control'"));
+  }
+  SECTION("plain gesture with it") {
+    const fs::path file = tmp.Write("s.yaml", "name: gesture
+shared_control:
+  horizon_s: 1.0
+");
+    CHECK_THAT(ErrorOf([&] { haptel::LoadGesture(file); }), Contains("'shared_control'"));
+  }
+}
+
+TEST_CASE("Shipped sim robot carries range sensors; the CAN robot none", "[config][shipped]") {
+  const haptel::VehicleConfig sim = haptel::LoadVehicle("config/vehicles/sim-robot.yaml");
+  CHECK(sim.range_sensors.beams == 31);
+  CHECK(sim.range_sensors.fov_deg == 180.0);
+  TempDir tmp;
+  const fs::path file = tmp.Write("v.yaml", "name: robot1
+range_sensors:
+  beams: 64
+");
+  const std::string msg = ErrorOf([&] { haptel::LoadVehicle(file); });
+  CHECK_THAT(msg, Contains(file.string()) && Contains("range_sensors.beams"));
+}
+
 TEST_CASE("Absent optional keys take their defaults", "[config]") {
   TempDir tmp;
   const haptel::VehicleConfig v = haptel::LoadVehicle(tmp.Write("v.yaml", "name: robot2\n"));
