@@ -94,10 +94,10 @@ TEST_CASE("time to collision: the commanded arc against what the beams met") {
   CHECK(std::isinf(TimeToCollision(WallAhead(0.5), {-1.0, -1.0}, kVehicle, 0.03, 2.0)));
   CHECK(std::isinf(TimeToCollision(WallAhead(0.5), {0.0, 0.0}, kVehicle, 0.03, 2.0)));
   CHECK(std::isinf(TimeToCollision(WallAhead(0.2), {-0.5, 0.5}, kVehicle, 0.03, 2.0)));
-  // A post beside the path (0.4 m to the left of it, beam at +45°): passed, not met.
-  CHECK(std::isinf(TimeToCollision(PointAt(23, 0.4 * std::sqrt(2.0)), {1.0, 1.0}, kVehicle, 0.03, 3.0)));
-  // The same post is met when the vehicle turns left towards it.
-  CHECK(TimeToCollision(PointAt(23, 0.4 * std::sqrt(2.0)), {0.2, 0.6}, kVehicle, 0.03, 3.0) < 3.0);
+  // A post beside the path (beam 23, at +48°, 0.566 m: 0.42 m to the left of it): passed, not met.
+  CHECK(std::isinf(TimeToCollision(PointAt(23, 0.566), {1.0, 1.0}, kVehicle, 0.03, 3.0)));
+  // The same post is met on a left arc through it (radius 0.38 m: right tread 1.53 times the left).
+  CHECK(TimeToCollision(PointAt(23, 0.566), {0.6, 0.92}, kVehicle, 0.03, 3.0) < 3.0);
   // Driving along a wall already nearer than the clearance is not a collision.
   CHECK(std::isinf(TimeToCollision(WallAlongRight(0.12), {1.0, 1.0}, kVehicle, 0.03, 3.0)));
   // No range sensors: nothing to see.
@@ -124,7 +124,7 @@ TEST_CASE("an obstacle beyond the horizon or beside the path does not push") {
   CHECK_FALSE(far.active);
   CHECK(far.force == Vec3d{});
   // A post 0.4 m to the side of a straight path.
-  const Guidance beside = GuideAt({0.09, 0.0, 0.0}, PointAt(23, 0.4 * std::sqrt(2.0)));
+  const Guidance beside = GuideAt({0.09, 0.0, 0.0}, PointAt(23, 0.566));
   CHECK_FALSE(beside.active);
   // The hand at neutral stops the vehicle: nothing to push away from, even against a wall.
   CHECK_FALSE(GuideAt({0.0, 0.0, 0.0}, WallAhead(0.2)).active);
@@ -137,10 +137,14 @@ TEST_CASE("an obstacle beyond the horizon or beside the path does not push") {
 }
 
 TEST_CASE("turning towards an obstacle on the left pushes the hand to the right") {
-  // Forward and left, a post ahead-left on that arc.
-  const Guidance g = GuideAt({0.05, 0.05, 0.0}, PointAt(20, 0.45));
+  // Forward and a little left, a post ahead-left (beam 18, at +18°, 0.4 m away).
+  const Guidance g = GuideAt({0.07, 0.02, 0.0}, PointAt(18, 0.4));
   REQUIRE(g.active);
   CHECK(g.force[1] < 0.0);
+  // Mirrored: a post ahead-right while turning right pushes the hand left.
+  const Guidance mirrored = GuideAt({0.07, -0.02, 0.0}, PointAt(12, 0.4));
+  REQUIRE(mirrored.active);
+  CHECK(mirrored.force[1] > 0.0);
 }
 
 TEST_CASE("the guidance is bounded: the operator can always push through") {

@@ -28,6 +28,11 @@ MotorCommand Mix(double forward, double turn);
 
 /// What the vehicle reports that an interface reacts to.
 struct VehicleFeedback {
+  /// The bumpers and speed alone (a vehicle without range sensors), as most
+  /// callers give them; the scan, where there is one, after.
+  VehicleFeedback(bool bumper_left_ = false, bool bumper_right_ = false, double speed_ = 0.0,
+                  const RangeScan& ranges_ = {})
+      : bumper_left(bumper_left_), bumper_right(bumper_right_), speed(speed_), ranges(ranges_) {}
   bool bumper_left = false;
   bool bumper_right = false;
   double speed = 0.0;  ///< m/s
