@@ -57,11 +57,11 @@ TEST_CASE("the simulated robot publishes its scan, laid out as configured") {
   CHECK_FALSE(scan.Hit(15));              // straight ahead: between the posts, nothing near
   // Turned to face the left wall, the beam ahead meets it.
   robot.Place(1.0, 0.0, std::numbers::pi / 2);
-  CHECK(robot.State().ranges[15] == Approx(0.5));
+  CHECK(robot.State().ranges.ranges[15] == Approx(0.5));
   // And the scan follows the robot as it drives: 0.2 m nearer after moving up.
   robot.Place(1.0, 0.2, std::numbers::pi / 2);
   robot.Update(1e-3);
-  CHECK(robot.State().ranges[15] == Approx(0.3).margin(1e-3));
+  CHECK(robot.State().ranges.ranges[15] == Approx(0.3).margin(1e-3));
 }
 
 TEST_CASE("range noise is seeded, spread as configured, and spares beams that meet nothing") {
