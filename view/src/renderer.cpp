@@ -819,8 +819,12 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
                 o.hud ? o.speed_mps / std::max(o.speed_max_mps, 1e-3) : 0.0);
   key += needle;
   if (o.guidance_shown) {
+    // The arrow's tip, formatted like the needle (GCC 12's -Wrestrict misreads
+    // `"G" + std::to_string(...)` here).
     const GuidanceDial dial = GuidanceDialOf(o, width_, height_);
-    key += "G" + std::to_string(dial.tip_x) + "," + std::to_string(dial.tip_y);
+    char tip[32];
+    std::snprintf(tip, sizeof tip, "G%d,%d", dial.tip_x, dial.tip_y);
+    key += tip;
   }
   glBindTexture(GL_TEXTURE_2D, g.overlay_texture);
   if (key != g.overlay_key) {
