@@ -164,6 +164,12 @@ TEST_CASE("a servo tick allocates nothing") {
   ForceField f = Spring(40);
   f.wall_active = true;
   f.wall_stiffness = 1000;
+  // Shared control's guidance too (gesture-shared), with the hand past its plane.
+  f.guidance_active = true;
+  f.guidance_point = {0.01, 0, 0};
+  f.guidance_normal = {-1, 0, 0};
+  f.guidance_stiffness = 150;
+  f.guidance_max_force = 3;
   for (int i = 1; i <= 10; ++i) {  // warm up
     loop.Tick(Side::kLeft, i * kMs);
     loop.Tick(Side::kRight, i * kMs);
