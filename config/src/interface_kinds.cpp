@@ -12,6 +12,8 @@ std::deque<InterfaceKindInfo>& Table() {
   static std::deque<InterfaceKindInfo> kinds{
       {"gesture", F::kRobot, {false, true}, I::kHands, false,
        "no controls: the right hand's offset drives the motors, a field pulls it to neutral"},
+      {"gesture-shared", F::kRobot, {false, true}, I::kHands, false,
+       "gesture with haptic shared control: a bounded push away from commands that lead into an obstacle"},
       {"cockpit", F::kRobot, {true, true}, I::kHands, true, "a steering wheel and a throttle lever to grasp"},
       {"cockpit-hud", F::kRobot, {true, true}, I::kHands, true, "the cockpit with a speedometer and turn indicators"},
       {"cockpit-assisted", F::kRobot, {true, true}, I::kHands, true,

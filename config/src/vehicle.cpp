@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <limits>
 
 #include "haptel/config/check.hpp"
 #include "airship_section.hpp"
@@ -63,6 +64,13 @@ void BodyConfig::ValidateOrThrow() const {
   check::Number("radius", radius, 0.01, 5.0);
   check::Number("bumper_half_angle_deg", bumper_half_angle_deg, 1.0, 90.0);
   check::Number("bumper_both_deg", bumper_both_deg, 0.0, 45.0);
+}
+
+void RangeSensorConfig::ValidateOrThrow() const {
+  check::Whole("beams", beams, 0, kMaxRangeBeams);
+  check::Number("fov_deg", fov_deg, 0.0, 360.0);
+  check::Number("max_range", max_range, 0.05, 50.0);
+  check::Number("noise_sd", noise_sd, 0.0, 1.0);
 }
 
 void CameraConfig::ValidateOrThrow() const {
@@ -161,6 +169,7 @@ void VehicleConfig::ValidateOrThrow() const {
   check::Number("watchdog_timeout_s", watchdog_timeout_s, 0.01, 10.0);
   check::Nested("drive", drive);
   check::Nested("body", body);
+  check::Nested("range_sensors", range_sensors);
   check::Nested("camera", camera);
   check::Nested("link", link);
   if (info->Uses(kCanSection)) {
@@ -210,6 +219,15 @@ VehicleConfig LoadVehicle(const std::filesystem::path& file) {
   v.body.bumper_half_angle_deg = body.Number("bumper_half_angle_deg", v.body.bumper_half_angle_deg);
   v.body.bumper_both_deg = body.Number("bumper_both_deg", v.body.bumper_both_deg);
   body.Finish();
+
+  YamlMap ranges = root.Map("range_sensors");
+  v.range_sensors.beams = ranges.Integer("beams", v.range_sensors.beams);
+  v.range_sensors.fov_deg = ranges.Number("fov_deg", v.range_sensors.fov_deg);
+  v.range_sensors.max_range = ranges.Number("max_range", v.range_sensors.max_range);
+  v.range_sensors.noise_sd = ranges.Number("noise_sd", v.range_sensors.noise_sd);
+  v.range_sensors.seed = static_cast<unsigned>(ranges.Integer("seed", static_cast<int>(v.range_sensors.seed), 0,
+                                                              std::numeric_limits<int>::max()));
+  ranges.Finish();
 
   YamlMap camera = root.Map("camera");
   const std::string source = camera.String("source", CameraSourceName(v.camera.source));

@@ -1,5 +1,6 @@
 #include "haptel/haptics/force_field.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include <Eigen/Core>
@@ -24,6 +25,11 @@ Vec3d EvaluateForceField(const ForceField& field, const Vec3d& position, const V
       const double approach = std::max(0.0, v.dot(n));
       f -= (field.wall_stiffness * penetration + field.wall_damping * approach) * n;
     }
+  }
+  if (field.guidance_active) {
+    const Eigen::Vector3d n = View(field.guidance_normal);
+    const double penetration = (p - View(field.guidance_point)).dot(n);
+    if (penetration > 0.0) f -= std::min(field.guidance_stiffness * penetration, field.guidance_max_force) * n;
   }
   Eigen::Map<Eigen::Vector3d>(out.data()) = f;
   return out;

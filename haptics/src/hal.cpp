@@ -75,6 +75,8 @@ ForceSetpoint Hal::Combine(ForceSetpoint sp, const ForceField& latest_field, int
     field.damping *= k;
     field.wall_stiffness *= k;
     field.wall_damping *= k;
+    field.guidance_stiffness *= k;
+    field.guidance_max_force *= k;
     sp.coupling_stiffness *= k;
     sp.coupling_damping *= k;
     for (double& w : sp.wrist_force) w *= k;

@@ -14,7 +14,9 @@ using haptics::Vec3d;
 using detail::Shape;
 using detail::Unshape;
 
-GestureInterface::GestureInterface(const GestureConfig& config) : config_(Validated(config)) {
+GestureInterface::GestureInterface(const GestureConfig& config, const VehicleGeometry& vehicle)
+    : config_(Validated(config)) {
+  if (config_.shared_control.enabled) shared_.emplace(config_.shared_control, vehicle);
   field_.enabled = true;
   field_.neutral = config_.neutral;
   field_.stiffness = config_.field_stiffness;
@@ -64,6 +66,11 @@ MotorCommand GestureInterface::Update(double t_s, const VehicleFeedback& feedbac
     last_contact_s_ = t_s;
   } else if (field_.wall_active && t_s - last_contact_s_ >= config_.wall_release_s) {
     field_.wall_active = false;
+  }
+  if (shared_) {
+    guidance_ = shared_->Guide(feedback.ranges, hand.position, config_.neutral,
+                               [this](const Vec3d& p) { return Map(p); });
+    shared_->Apply(guidance_, field_);
   }
   hal.SetField(Side::kRight, field_);
   hal.SetField(Side::kLeft, haptics::ForceField{});

@@ -36,8 +36,8 @@ const interfaces::InputBox& PersonsInput(const InterfaceSpec& spec, const Interf
 
 const CatalogEntry kGesture{
     [](const std::filesystem::path& f) -> InterfaceSpec::Config { return LoadGesture(f); },
-    [](const InterfaceSpec& spec, const InterfaceParts&) -> std::unique_ptr<interfaces::MediatorInterface> {
-      return std::make_unique<interfaces::GestureInterface>(std::get<GestureConfig>(spec.config));
+    [](const InterfaceSpec& spec, const InterfaceParts& parts) -> std::unique_ptr<interfaces::MediatorInterface> {
+      return std::make_unique<interfaces::GestureInterface>(std::get<GestureConfig>(spec.config), parts.vehicle);
     }};
 const CatalogEntry kCockpit{
     [](const std::filesystem::path& f) -> InterfaceSpec::Config { return LoadCockpit(f); },
@@ -61,7 +61,7 @@ const CatalogEntry kGamepad{
 /// The robot family's interfaces by name (the blimp's are its session's).
 const std::map<std::string, const CatalogEntry*>& Catalog() {
   static const std::map<std::string, const CatalogEntry*> catalog{
-      {"gesture", &kGesture},   {"cockpit", &kCockpit},   {"cockpit-hud", &kCockpit},
+      {"gesture", &kGesture},   {"gesture-shared", &kGesture},   {"cockpit", &kCockpit},   {"cockpit-hud", &kCockpit},
       {"cockpit-assisted", &kCockpit}, {"keyboard", &kKeyboard}, {"gamepad", &kGamepad},
   };
   return catalog;

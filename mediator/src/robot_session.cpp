@@ -40,6 +40,18 @@ std::vector<bool> InterfacesToBuild(const SessionSetup& setup, bool can_switch) 
   return build;
 }
 
+/// The state's range scan (empty without range sensors; beams past the
+/// scan's capacity are not kept).
+RangeScan RangesOf(const msg::VehicleState& s) {
+  RangeScan scan;
+  scan.count = static_cast<int>(std::min<size_t>(s.ranges().size(), kMaxRangeBeams));
+  scan.angle_min = s.range_angle_min();
+  scan.angle_increment = s.range_angle_increment();
+  scan.range_max = s.range_max();
+  std::copy_n(s.ranges().begin(), scan.count, scan.ranges.begin());
+  return scan;
+}
+
 class RobotSession final : public FamilySession {
  public:
   RobotSession(const SessionSetup& setup, HapticSide& haptic, interfaces::InputBox& input,
@@ -144,7 +156,7 @@ class RobotSession final : public FamilySession {
         trace.Add(ts, s.x(), s.y(), 0.0, s.speed(), touching);
       }
       lap_.UpdateContact(ts, touching);
-      feedback_ = {s.bumper_left(), s.bumper_right(), s.speed()};
+      feedback_ = {s.bumper_left(), s.bumper_right(), s.speed(), RangesOf(s)};
       OnCanLog(s);
     }
   }
@@ -305,6 +317,9 @@ class RobotSession final : public FamilySession {
     parts.controls = physics_ && physics_->port ? physics_->port.get() : nullptr;
     parts.input = input_;
     parts.speed_levels = setup_.vehicle.drive.speed_levels;
+    parts.vehicle = {.max_speed = setup_.vehicle.drive.max_speed,
+                     .track_width = setup_.vehicle.drive.track_width,
+                     .body_radius = setup_.vehicle.body.radius};
     return parts;
   }
 

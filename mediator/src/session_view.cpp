@@ -1,7 +1,9 @@
 #include "haptel/mediator/session_view.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <optional>
 
 #include "haptel/interfaces/cockpit.hpp"
 #include "haptel/mediator/session_physics.hpp"
@@ -132,12 +134,20 @@ view::Overlay OverlayFeed::Make(double t, const LapTimer& lap, const InterfaceSe
     o.turn_left = h.turn_left;
     o.turn_right = h.turn_right;
     o.throttle_locked = h.throttle_locked;
-  } else if (current.name() == "gesture") {
+  } else if (current.name() == "gesture" || current.name() == "gesture-shared") {
     // The thesis kept the speedometer and indicators on the gesture interface.
     o.hud = true;
     o.speed_mps = feedback.speed;
     o.turn_left = motors.right - motors.left > kTurnShown;
     o.turn_right = motors.left - motors.right > kTurnShown;
+  }
+  if (const std::optional<interfaces::Guidance> guidance = current.CurrentGuidance()) {
+    // What pushes the hand: shared control's force where the hand is now.
+    o.guidance_shown = true;
+    o.guidance_forward_n = guidance->force[0];
+    o.guidance_left_n = guidance->force[1];
+    o.guidance_max_n = std::max(guidance->max_force, 1e-6);
+    o.guidance_ttc_s = std::isfinite(guidance->time_to_collision_s) ? guidance->time_to_collision_s : -1.0;
   }
   if (!vehicle_up) {
     std::snprintf(o.message, sizeof o.message, "waiting for vehicle '%s'",

@@ -346,7 +346,12 @@ TEST_CASE("Shipped sim-robot vehicle loads", "[config][shipped]") {
   CHECK(v.camera.width == static_cast<int>(NumberIn(text, "width")));
   CHECK(v.camera.height == static_cast<int>(NumberIn(text, "height")));
   CHECK(v.camera.jpeg_quality == static_cast<int>(NumberIn(text, "jpeg_quality")));
-  CHECK(v.camera.fov_deg == NumberIn(text, "fov_deg"));
+  // fov_deg is both the range scan's and the camera's: each read in its own section.
+  const std::string camera = text.substr(text.find("\ncamera:"));
+  const std::string ranges = text.substr(text.find("\nrange_sensors:"));
+  CHECK(v.camera.fov_deg == NumberIn(camera, "fov_deg"));
+  CHECK(v.range_sensors.fov_deg == NumberIn(ranges, "fov_deg"));
+  CHECK(v.range_sensors.beams == static_cast<int>(NumberIn(ranges, "beams")));
   CHECK(v.camera.source == haptel::CameraSourceKind::kSynthetic);
   CHECK(ValueText(text, "source") == haptel::CameraSourceName(v.camera.source));
   CHECK(v.link.domain_id == static_cast<int>(NumberIn(text, "domain_id")));
@@ -369,6 +374,51 @@ TEST_CASE("Shipped gesture interface loads", "[config][shipped]") {
   CHECK(g.wall_stiffness == NumberIn(text, "wall_stiffness"));
   CHECK(g.wall_release_s == NumberIn(text, "wall_release_s"));
   CHECK(g.command_rate_hz == NumberIn(text, "command_rate_hz"));
+}
+
+TEST_CASE("Shipped gesture-shared interface loads, with its shared control", "[config][shipped]") {
+  const fs::path file = "config/interfaces/gesture-shared.yaml";
+  const std::string text = ReadText(file);
+  const haptel::GestureConfig g = haptel::LoadGesture(file);
+  CHECK(g.name == "gesture-shared");
+  REQUIRE(g.shared_control.enabled);
+  CHECK(g.shared_control.horizon_s == NumberIn(text, "horizon_s"));
+  CHECK(g.shared_control.max_force == NumberIn(text, "max_force"));
+  CHECK(g.shared_control.stiffness == NumberIn(text, "stiffness"));
+  CHECK(g.shared_control.clearance == NumberIn(text, "clearance"));
+  CHECK_FALSE(haptel::LoadGesture("config/interfaces/gesture.yaml").shared_control.enabled);
+}
+
+TEST_CASE("Shared control's section is checked strictly", "[config]") {
+  TempDir tmp;
+  const std::string shared = "name: gesture-shared\nshared_control:\n";
+  SECTION("a key it does not know") {
+    const fs::path file = tmp.Write("s.yaml", shared + "  horizon_s: 1.0\n  strength: 2\n");
+    CHECK_THAT(ErrorOf([&] { haptel::LoadGesture(file); }), Contains(file.string()) && Contains("strength"));
+  }
+  SECTION("a force no one could push through") {
+    const fs::path file = tmp.Write("s.yaml", shared + "  max_force: 50\n");
+    const std::string msg = ErrorOf([&] { haptel::LoadGesture(file); });
+    CHECK_THAT(msg, Contains(file.string()) && Contains("shared_control.max_force") && Contains("[0, 15]"));
+  }
+  SECTION("gesture-shared without it") {
+    const fs::path file = tmp.Write("s.yaml", "name: gesture-shared\n");
+    CHECK_THAT(ErrorOf([&] { haptel::LoadGesture(file); }), Contains("'shared_control'"));
+  }
+  SECTION("plain gesture with it") {
+    const fs::path file = tmp.Write("s.yaml", "name: gesture\nshared_control:\n  horizon_s: 1.0\n");
+    CHECK_THAT(ErrorOf([&] { haptel::LoadGesture(file); }), Contains("'shared_control'"));
+  }
+}
+
+TEST_CASE("Shipped sim robot carries range sensors; the CAN robot none", "[config][shipped]") {
+  const haptel::VehicleConfig sim = haptel::LoadVehicle("config/vehicles/sim-robot.yaml");
+  CHECK(sim.range_sensors.beams == 31);
+  CHECK(sim.range_sensors.fov_deg == 180.0);
+  TempDir tmp;
+  const fs::path file = tmp.Write("v.yaml", "name: robot1\nrange_sensors:\n  beams: 64\n");
+  const std::string msg = ErrorOf([&] { haptel::LoadVehicle(file); });
+  CHECK_THAT(msg, Contains(file.string()) && Contains("range_sensors.beams"));
 }
 
 TEST_CASE("Absent optional keys take their defaults", "[config]") {

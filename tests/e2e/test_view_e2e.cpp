@@ -261,3 +261,51 @@ TEST_CASE(
     }
   }
 }
+
+TEST_CASE("--interface gesture-shared: the window draws shared control's dial, and its arrow when it pushes") {
+  // Where the dial is at the view's default size, from the renderer's own layout.
+  constexpr int kWidth = 1024, kHeight = 576;
+  view::Overlay idle;
+  idle.guidance_shown = true;
+  const view::GuidanceDial dial = view::GuidanceDialOf(idle, kWidth, kHeight);
+  const cv::Rect area(dial.centre_x - dial.radius, dial.centre_y - dial.radius, 2 * dial.radius + 1,
+                      2 * dial.radius + 1);
+  // The arrow's orange as it comes out of H.264 (drawn BGR 0, 140, 255).
+  auto orange = [](cv::Vec3b c) { return c[2] > 190 && c[1] > 80 && c[1] < 190 && c[0] < 90; };
+  XServer x;
+  const auto dir = test::ScratchDir("e2e-view-shared");
+  const auto mp4 = dir / "view.mp4";
+  Child run({Bin("haptel"), "run", "--operator", "auto", "--interface", "gesture-shared", "--view", "window",
+             "--record", mp4.string(), "--track", "config/tracks/test-short.yaml", "--time-limit", "12", "--json",
+             "--quiet", "--domain", std::to_string(test::UniqueDomain(78)), "--database", (dir / "runs.db").string(),
+             "--vehicle-timeout", "5"});
+  const int code = run.Wait(180.0);
+  INFO(run.out() << run.err());
+  REQUIRE((code == 0 || code == 1));  // a lap, or the time limit
+  cv::VideoCapture video(mp4.string(), cv::CAP_FFMPEG);
+  REQUIRE(video.isOpened());
+  int frames = 0, with_dial = 0, with_arrow = 0;
+  cv::Mat frame, pushed;
+  while (video.read(frame)) {
+    ++frames;
+    // The dial: its forward tick (light grey, at the top) on its dark disc.
+    const cv::Vec3b tick = frame.at<cv::Vec3b>(dial.centre_y - dial.radius + 4, dial.centre_x);
+    const cv::Vec3b disc = frame.at<cv::Vec3b>(dial.centre_y - dial.radius / 2, dial.centre_x - dial.radius / 2);
+    with_dial += (tick[1] > 140 && disc[1] < 90) ? 1 : 0;
+    int n = 0;
+    const cv::Mat part = frame(area & cv::Rect(0, 0, frame.cols, frame.rows));
+    for (int r = 0; r < part.rows; ++r) {
+      for (int c = 0; c < part.cols; ++c) n += orange(part.at<cv::Vec3b>(r, c)) ? 1 : 0;
+    }
+    if (n >= 20) {
+      ++with_arrow;
+      if (pushed.empty()) pushed = frame.clone();
+    }
+  }
+  INFO(frames << " frames: the dial in " << with_dial << ", the arrow in " << with_arrow);
+  if (!pushed.empty()) cv::imwrite((dir / "pushed.png").string(), pushed);
+  REQUIRE(frames > 30);
+  CHECK(with_dial >= frames / 2);
+  // The short track's gate posts and corners come within the horizon.
+  CHECK(with_arrow >= 1);
+}

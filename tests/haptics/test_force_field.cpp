@@ -56,6 +56,24 @@ TEST_CASE("a wall resists only penetration along its normal") {
   CHECK(F[1] == Approx(0.0).margin(1e-12));  // sliding along the wall is free
 }
 
+TEST_CASE("shared control's guidance pushes back past its plane, saturating at its bound") {
+  ForceField f = Centring(0, 0, 0);
+  f.guidance_active = true;
+  f.guidance_point = {0.12, 0, 0};
+  f.guidance_normal = {0, -1, 0};  // the dangerous commands lie to the right (-y)
+  f.guidance_stiffness = 150;
+  f.guidance_max_force = 3.0;
+  CHECK(Norm(EvaluateForceField(f, {0.12, 0.01, 0}, {0, 0, 0})) == 0.0);  // on the safe side
+  const Vec3d in = EvaluateForceField(f, {0.13, -0.01, 0}, {0, 0, 0});   // 1 cm past it
+  CHECK(in[1] == Approx(1.5));
+  CHECK(in[0] == Approx(0.0).margin(1e-12));  // along the plane nothing pushes
+  // Far past it, no more than the bound: the operator can always push through.
+  const Vec3d deep = EvaluateForceField(f, {0.12, -0.5, 0}, {0, 0, 0});
+  CHECK(deep[1] == Approx(3.0));
+  f.guidance_active = false;
+  CHECK(Norm(EvaluateForceField(f, {0.12, -0.5, 0}, {0, 0, 0})) == 0.0);
+}
+
 TEST_CASE("LimitForce scales to the limit and zeroes non-finite forces") {
   Vec3d big{30, 40, 0};
   CHECK(LimitForce(big, 7.0));

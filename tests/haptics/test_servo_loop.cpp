@@ -178,6 +178,12 @@ TEST_CASE("a servo tick allocates nothing, with the passivity controller off and
     ForceField f = Spring(40);
     f.wall_active = true;
     f.wall_stiffness = 1000;
+    // Shared control's guidance too (gesture-shared), the hand past its plane.
+    f.guidance_active = true;
+    f.guidance_point = {0.005, 0, 0};
+    f.guidance_normal = {-1, 0, 0};
+    f.guidance_stiffness = 150;
+    f.guidance_max_force = 3;
     ForceSetpoint coupling;
     coupling.coupling_enabled = true;
     coupling.coupling_stiffness = 3000;

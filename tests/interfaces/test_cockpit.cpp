@@ -59,7 +59,7 @@ TEST_CASE("cockpit: Update maps the controls read through the port and actuates 
 
   // A bumper contact: the port is told to shake the wheel and lock the lever
   // at zero, and the motors stop driving forward while it is locked.
-  const VehicleFeedback bump{.bumper_left = true, .bumper_right = false, .speed = 0.1};
+  const VehicleFeedback bump(/*bumper_left=*/true, /*bumper_right=*/false, /*speed=*/0.1);
   m = cockpit.Update(0.2, bump, hal);
   CHECK(port.last.throttle_locked);
   CHECK(port.last.throttle_target == 0.0);
@@ -78,7 +78,7 @@ TEST_CASE("cockpit: only the HUD cockpits show speed and indicators") {
   PlainPort port;
   port.state.wheel_angle = 0.6;
   haptics::Hal hal(Metres());
-  const VehicleFeedback moving{.speed = 0.25};
+  const VehicleFeedback moving(false, false, /*speed=*/0.25);
   CockpitInterface plain(Shipped("cockpit"), port);
   plain.Update(0.0, moving, hal);
   CHECK(plain.hud().speed == 0.0);

@@ -248,8 +248,8 @@ TEST_CASE("every robot interface of the table loads from its shipped file with t
       CHECK(mediator::MakeInterface(spec, parts)->name() == kind.name);
     }
   }
-  CHECK(robot == 6);
+  CHECK(robot == 7);
   // A blimp's interface is refused for the robot, naming the robot's.
   CHECK_THROWS_WITH(mediator::LoadInterfaceSpec(run, "blimp-gesture"),
-                    Catch::Contains("flies a blimp") && Catch::Contains("gesture, cockpit"));
+                    Catch::Contains("flies a blimp") && Catch::Contains("gesture, gesture-shared, cockpit"));
 }

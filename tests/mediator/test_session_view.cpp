@@ -7,6 +7,7 @@
 
 #include "../interfaces/hal_fixture.hpp"
 #include "haptel/config/cockpit.hpp"
+#include "haptel/config/gesture.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/track.hpp"
 #include "haptel/interfaces/cockpit.hpp"
@@ -100,6 +101,39 @@ TEST_CASE("a practice lap on the keyboard alone: the hint offers no switching, t
   CHECK(hint.find("W/A/S/D") != std::string::npos);
   CHECK(hint.find("F1") == std::string::npos);
   CHECK(ViewOptionsFor(setup).title == "Haptel - practice lap - P3");
+}
+
+TEST_CASE("with gesture-shared the overlay carries what pushes the hand; plain gesture shows none") {
+  const Track track(LoadTrack(ShippedFile("config/tracks/test-short.yaml")));
+  SessionSetup setup;
+  LapTimer lap(track);
+  haptics::Hal hal(Metres());
+  test::PutHand(hal, {0.09, 0.0, 0.0});  // full ahead
+  // A wall 0.4 m ahead, seen by the beam straight ahead and its neighbours.
+  interfaces::VehicleFeedback feedback;
+  feedback.ranges.count = 3;
+  feedback.ranges.angle_min = -0.1;
+  feedback.ranges.angle_increment = 0.1;
+  feedback.ranges.range_max = 1.5;
+  feedback.ranges.ranges = {0.402f, 0.4f, 0.402f};
+  const GestureConfig config = LoadGesture(ShippedFile("config/interfaces/gesture-shared.yaml"));
+  auto shared = std::make_unique<interfaces::GestureInterface>(config);
+  const interfaces::GestureInterface& gesture = *shared;
+  InterfaceSet set = One(std::move(shared));
+  const interfaces::MotorCommand motors = set.Update(1.0, feedback, hal);
+  OverlayFeed feed(setup, track);
+  const view::Overlay o = feed.Make(1.0, lap, set, feedback, motors, true, false);
+  REQUIRE(gesture.guidance().active);
+  CHECK(o.guidance_shown);
+  CHECK(o.guidance_forward_n == gesture.guidance().force[0]);
+  CHECK(o.guidance_forward_n < 0.0);  // back, away from the wall
+  CHECK(o.guidance_max_n == config.shared_control.max_force);
+  CHECK(o.guidance_ttc_s == Approx(gesture.guidance().time_to_collision_s));
+  CHECK(o.hud);  // gesture's speedometer stays
+
+  InterfaceSet plain = One(std::make_unique<interfaces::GestureInterface>(GestureConfig{}));
+  const view::Overlay p = feed.Make(1.0, lap, plain, feedback, plain.Update(1.0, feedback, hal), true, false);
+  CHECK_FALSE(p.guidance_shown);
 }
 
 TEST_CASE("the overlay remembers the last contact and says when the vehicle is not up yet") {

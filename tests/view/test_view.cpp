@@ -374,3 +374,66 @@ TEST_CASE("view set-up errors are one clear line") {
   options.width = 641;  // H.264 needs even sizes
   CHECK_THROWS_WITH(View(options, source, nullptr), Catch::Contains("even"));
 }
+
+TEST_CASE("shared control's arrow shows which way and how hard the hand is pushed") {
+  OffscreenGl gl;
+  Renderer renderer(kWidth, kHeight);
+  ViewModel model;
+  auto render = [&] {
+    renderer.Draw(model, 0.0);
+    cv::Mat image;
+    renderer.ReadPixels(image);
+    return image;
+  };
+  const cv::Mat without = render();
+  auto orange = [](cv::Vec3b c) { return c[2] > 200 && c[1] > 90 && c[1] < 190 && c[0] < 80; };
+  /// Orange pixels in the dial, counted by where they lie from its centre.
+  struct Counts {
+    int above = 0, below = 0, left = 0, right = 0;
+  };
+  auto count = [&](const cv::Mat& image, const GuidanceDial& d) {
+    Counts c;
+    for (int y = d.centre_y - d.radius; y <= d.centre_y + d.radius; ++y) {
+      for (int x = d.centre_x - d.radius; x <= d.centre_x + d.radius; ++x) {
+        if (!orange(image.at<cv::Vec3b>(y, x))) continue;
+        c.above += y < d.centre_y - 6;
+        c.below += y > d.centre_y + 6;
+        c.left += x < d.centre_x - 6;
+        c.right += x > d.centre_x + 6;
+      }
+    }
+    return c;
+  };
+  model.overlay.guidance_shown = true;
+  model.overlay.guidance_max_n = 3.0;
+  // Nothing pushes: the dial, no arrow.
+  const cv::Mat clear = render();
+  CHECK(DifferentPixels(clear, without) > 100);
+  const GuidanceDial idle = GuidanceDialOf(model.overlay, kWidth, kHeight);
+  CHECK(idle.tip_x == idle.centre_x);
+  CHECK(idle.tip_y == idle.centre_y);
+  const Counts none = count(clear, idle);
+  CHECK(none.above + none.below + none.left + none.right == 0);
+
+  // Pushed back, hard: an arrow down the screen, most of the dial long.
+  model.overlay.guidance_forward_n = -3.0;
+  model.overlay.guidance_ttc_s = 0.6;
+  const GuidanceDial back = GuidanceDialOf(model.overlay, kWidth, kHeight);
+  CHECK(back.tip_y == back.centre_y + back.radius);
+  const Counts down = count(render(), back);
+  CHECK(down.below > 40);
+  CHECK(down.above == 0);
+  // Pushed right, gently: a shorter arrow to the right.
+  model.overlay.guidance_forward_n = 0.0;
+  model.overlay.guidance_left_n = -1.0;
+  const GuidanceDial right = GuidanceDialOf(model.overlay, kWidth, kHeight);
+  CHECK(right.tip_x == Approx(right.centre_x + right.radius / 3.0).margin(1));
+  const Counts sideways = count(render(), right);
+  CHECK(sideways.right > 10);
+  CHECK(sideways.left == 0);
+  CHECK(sideways.below == 0);
+  // And in words, on the panel's lines.
+  bool said = false;
+  for (const std::string& line : OverlayLines(model.overlay)) said |= line == "shared control: push 1.0 N, obstacle in 0.6 s";
+  CHECK(said);
+}

@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "haptel/config/error.hpp"
+#include "haptel/vehicles/range_sensors.hpp"
 
 namespace haptel::vehicles {
 
@@ -16,7 +17,11 @@ constexpr double kTouchTolerance = 0.002;
 }  // namespace
 
 SimRobot::SimRobot(const Track& track, const VehicleConfig& config)
-    : track_(track), drive_(Validated(config).drive), body_(config.body) {
+    : track_(track),
+      drive_(Validated(config).drive),
+      body_(config.body),
+      range_sensors_(config.range_sensors),
+      range_noise_(config.range_sensors.seed) {
   const Vec2 start = track.StartPosition();
   Place(start.x(), start.y(), track.StartHeading());
 }
@@ -29,6 +34,7 @@ void SimRobot::Place(double x, double y, double heading) {
   state_.heading = heading;
   v_left_ = v_right_ = 0.0;
   levels_ = {};
+  state_.ranges = ScanTrack(track_, x, y, heading, range_sensors_, range_noise_);
 }
 
 void SimRobot::SetMotors(const MotorLevels& levels) {
@@ -61,6 +67,7 @@ void SimRobot::Update(double dt) {
   const Vec2 forward(std::cos(state_.heading), std::sin(state_.heading));
   state_.speed = (after - before).dot(forward) / dt;  // blocked robots report 0
   state_.yaw_rate = omega;
+  state_.ranges = ScanTrack(track_, state_.x, state_.y, state_.heading, range_sensors_, range_noise_);
 }
 
 void SimRobot::Contact(const Vec2& point) {

@@ -414,8 +414,32 @@ std::vector<std::string> OverlayLines(const Overlay& o) {
     lines.push_back("speed " + HudSpeedText(o));
     if (o.throttle_locked) lines.emplace_back("THROTTLE LOCKED");
   }
+  if (o.guidance_shown) {
+    const double push = std::hypot(o.guidance_forward_n, o.guidance_left_n);
+    if (o.guidance_ttc_s >= 0.0) {
+      std::snprintf(line, sizeof line, "shared control: push %.1f N, obstacle in %.1f s", push, o.guidance_ttc_s);
+    } else {
+      std::snprintf(line, sizeof line, "shared control: clear");
+    }
+    lines.emplace_back(line);
+  }
   if (o.message[0] != '\0') lines.emplace_back(o.message);
   return lines;
+}
+
+GuidanceDial GuidanceDialOf(const Overlay& o, int width, int height) {
+  GuidanceDial d;
+  d.radius = static_cast<int>(50 * height / 576.0);
+  d.centre_x = d.radius + 24;
+  d.centre_y = height - d.radius - 24;
+  (void)width;  // the dial keeps to the left edge whatever the width
+  const double push = std::hypot(o.guidance_forward_n, o.guidance_left_n);
+  const double fraction = std::min(1.0, push / std::max(o.guidance_max_n, 1e-6));
+  const double norm = std::max(push, 1e-12);
+  // Forward (x) is up the screen, left (y) is left: a push back points down.
+  d.tip_x = d.centre_x - static_cast<int>(std::lround(d.radius * fraction * o.guidance_left_n / norm));
+  d.tip_y = d.centre_y - static_cast<int>(std::lround(d.radius * fraction * o.guidance_forward_n / norm));
+  return d;
 }
 
 std::string HudSpeedText(const Overlay& o) {
@@ -794,6 +818,14 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
   std::snprintf(needle, sizeof needle, "%.3f",
                 o.hud ? o.speed_mps / std::max(o.speed_max_mps, 1e-3) : 0.0);
   key += needle;
+  if (o.guidance_shown) {
+    // The arrow's tip, formatted like the needle (GCC 12's -Wrestrict misreads
+    // `"G" + std::to_string(...)` here).
+    const GuidanceDial dial = GuidanceDialOf(o, width_, height_);
+    char tip[32];
+    std::snprintf(tip, sizeof tip, "G%d,%d", dial.tip_x, dial.tip_y);
+    key += tip;
+  }
   glBindTexture(GL_TEXTURE_2D, g.overlay_texture);
   if (key != g.overlay_key) {
     g.overlay_key = key;
@@ -846,6 +878,18 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
         g.overlay_rects.emplace_back(at.x - 5, at.y - 25, 190, 35);
         cv::putText(ov, "THROTTLE LOCKED", at, font, scale, Bgra(0, 180, 255), 2, cv::LINE_AA);
       }
+    }
+    if (o.guidance_shown) {
+      // Shared control's dial at the bottom left: the hand's plane seen from
+      // above, the push on the hand as an orange arrow from its centre.
+      const GuidanceDial d = GuidanceDialOf(o, width_, height_);
+      const cv::Point centre(d.centre_x, d.centre_y), tip(d.tip_x, d.tip_y);
+      g.overlay_rects.emplace_back(d.centre_x - d.radius - 8, d.centre_y - d.radius - 8, 2 * d.radius + 16,
+                                   2 * d.radius + 16);
+      cv::circle(ov, centre, d.radius + 6, Bgra(20, 20, 20, 190), cv::FILLED, cv::LINE_AA);
+      cv::circle(ov, centre, d.radius, Bgra(120, 120, 120), 1, cv::LINE_AA);
+      cv::line(ov, centre + cv::Point(0, -d.radius), centre + cv::Point(0, -d.radius + 8), Bgra(200, 200, 200), 2);
+      if (tip != centre) cv::arrowedLine(ov, centre, tip, Bgra(0, 140, 255), 4, cv::LINE_AA, 0, 0.3);
     }
     if (o.message[0] != '\0') {
       int base = 0;

@@ -6,6 +6,23 @@
 
 namespace haptel {
 
+/// Haptic shared control (gesture-shared): a force that pushes the hand away
+/// from commands whose predicted motion meets an obstacle the vehicle's range
+/// sensors see within `horizon_s`, growing as the time to collision shrinks
+/// and never above `max_force`, so the operator can always push through. The
+/// commands stay the hand's: the force and the operator's own push blend at
+/// the hand. No section (`enabled` false): the plain gesture interface.
+struct SharedControlConfig {
+  bool enabled = false;
+  double horizon_s = 1.0;     ///< s of predicted motion looked through
+  double max_force = 3.0;     ///< N: the most the guidance ever pushes
+  double stiffness = 150.0;   ///< N/m of hand travel past the safe commands' boundary
+  double clearance = 0.03;    ///< m kept between the body and an obstacle (beyond its radius)
+
+  /// Throws ConfigFieldError unless every value is in range.
+  void ValidateOrThrow() const;
+};
+
 struct GestureConfig {
   std::filesystem::path file;
   std::string name = "gesture";
@@ -22,6 +39,7 @@ struct GestureConfig {
   double wall_stiffness = 1500.0;           ///< N/m
   double wall_release_s = 0.3;  ///< the wall stays this long after the contact clears
   double command_rate_hz = 50.0;
+  SharedControlConfig shared_control;  ///< gesture-shared's; disabled for gesture
 
   /// Throws ConfigFieldError unless the name is set and every value is in range.
   void ValidateOrThrow() const;

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "haptel/config/airship.hpp"
+#include "haptel/core/range_scan.hpp"
 #include "haptel/config/link.hpp"
 #include "haptel/config/servo.hpp"
 #include "haptel/config/vehicle_kinds.hpp"
@@ -21,6 +22,22 @@ struct DriveConfig {
   double motor_time_constant = 0.08; ///< first-order motor lag, s
   double left_gain = 1.0;            ///< per-motor gain: uneven turning
   double right_gain = 0.95;
+
+  /// Throws ConfigFieldError unless every value is in range.
+  void ValidateOrThrow() const;
+};
+
+/// The simulated robot's range sensors: `beams` fanned evenly over `fov_deg`
+/// about the heading (a ring of sonars or a planar scanner's sectors), each
+/// reading the distance from the robot's centre to the nearest wall or post
+/// along it, with Gaussian noise, capped at `max_range` (nothing seen).
+/// What the shared-control interfaces (gesture-shared) look ahead with.
+struct RangeSensorConfig {
+  int beams = 31;            ///< 0: none; at most kMaxRangeBeams (core/range_scan.hpp)
+  double fov_deg = 180.0;    ///< from the first beam to the last, centred on the heading
+  double max_range = 1.5;    ///< m
+  double noise_sd = 0.005;   ///< m, standard deviation of each reading's noise
+  unsigned seed = 1;         ///< the noise's seed: a run repeats exactly
 
   /// Throws ConfigFieldError unless every value is in range.
   void ValidateOrThrow() const;
@@ -146,6 +163,7 @@ struct VehicleConfig {
   double watchdog_timeout_s = 0.2;   ///< no command for this long: made safe (0.2 s, as the blimp's)
   DriveConfig drive;
   BodyConfig body;
+  RangeSensorConfig range_sensors;  ///< the simulated robot's (other kinds report their own, or none)
   CameraConfig camera;
   LinkConfig link;
   CanConfig can;                ///< kinds that use kCanSection

@@ -46,6 +46,16 @@ struct ForceField {
   Vec3d wall_normal{1, 0, 0};     ///< unit, pointing into the wall
   double wall_stiffness = 0.0;    ///< N/m
   double wall_damping = 0.0;      ///< N·s/m
+  /// Haptic shared control's guidance (interfaces/shared_control.hpp): past
+  /// the plane through `guidance_point` facing `guidance_normal` lie the
+  /// commands that lead into an obstacle; a hand beyond it is pushed back by
+  /// a spring that saturates at `guidance_max_force`, so the operator can
+  /// always push through.
+  bool guidance_active = false;
+  Vec3d guidance_point{};
+  Vec3d guidance_normal{1, 0, 0};    ///< unit, pointing towards the dangerous commands
+  double guidance_stiffness = 0.0;   ///< N/m
+  double guidance_max_force = 0.0;   ///< N, the most it ever pushes
 };
 
 /// A wrist tracker reading as the device reports it: position in device

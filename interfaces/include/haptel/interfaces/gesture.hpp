@@ -7,15 +7,24 @@
 /// go. When a bumper switch closes, a haptic wall resists further hand motion
 /// in the direction that drove the robot into the obstacle; it releases once
 /// the contact has been clear for `wall_release_s`.
+///
+/// gesture-shared (a `shared_control` section) adds haptic shared control
+/// (shared_control.hpp): a bounded push away from commands that would lead
+/// into an obstacle the vehicle's range sensors see within the horizon.
+#include <optional>
+
 #include "haptel/config/gesture.hpp"
 #include "haptel/interfaces/interface.hpp"
+#include "haptel/interfaces/shared_control.hpp"
 
 namespace haptel::interfaces {
 
 class GestureInterface final : public MediatorInterface {
  public:
   /// Validates `config` first (GestureConfig::ValidateOrThrow: ConfigFieldError).
-  explicit GestureInterface(const GestureConfig& config);
+  /// `vehicle`: what shared control predicts the vehicle's motion with (unused
+  /// without it).
+  explicit GestureInterface(const GestureConfig& config, const VehicleGeometry& vehicle = {});
 
   std::string name() const override { return config_.name; }
   MotorCommand Update(double t_s, const VehicleFeedback& feedback, haptics::Hal& hal) override;
@@ -29,11 +38,19 @@ class GestureInterface final : public MediatorInterface {
   /// The force field for the current state (what Update puts in the HAL).
   const haptics::ForceField& field() const { return field_; }
   bool wall_active() const { return field_.wall_active; }
+  /// Shared control's guidance as of the last Update (inactive without it).
+  const Guidance& guidance() const { return guidance_; }
+  bool shared() const { return shared_.has_value(); }
+  std::optional<Guidance> CurrentGuidance() const override {
+    return shared_ ? std::optional<Guidance>(guidance_) : std::nullopt;
+  }
 
  private:
   GestureConfig config_;
   haptics::ForceField field_;
   double last_contact_s_ = -1e9;
+  std::optional<SharedControl> shared_;
+  Guidance guidance_;
 };
 
 }  // namespace haptel::interfaces

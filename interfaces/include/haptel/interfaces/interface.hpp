@@ -2,9 +2,11 @@
 /// @file A mediator interface: turns the operator's hands into vehicle
 /// commands and tells the operator, through forces, what the vehicle meets.
 #include <array>
+#include <limits>
 #include <optional>
 #include <string>
 
+#include "haptel/core/range_scan.hpp"
 #include "haptel/core/tread_command.hpp"
 #include "haptel/haptics/hal.hpp"
 
@@ -26,9 +28,28 @@ MotorCommand Mix(double forward, double turn);
 
 /// What the vehicle reports that an interface reacts to.
 struct VehicleFeedback {
+  /// The bumpers and speed alone (a vehicle without range sensors), as most
+  /// callers give them; the scan, where there is one, after.
+  VehicleFeedback(bool bumper_left_ = false, bool bumper_right_ = false, double speed_ = 0.0,
+                  const RangeScan& ranges_ = {})
+      : bumper_left(bumper_left_), bumper_right(bumper_right_), speed(speed_), ranges(ranges_) {}
   bool bumper_left = false;
   bool bumper_right = false;
   double speed = 0.0;  ///< m/s
+  /// What the vehicle's range sensors see now (count 0: it has none).
+  RangeScan ranges;
+};
+
+/// What haptic shared control's guidance does now (shared_control.hpp): for
+/// the view, the recorder and tests.
+struct Guidance {
+  double time_to_collision_s = std::numeric_limits<double>::infinity();
+  double danger = 0.0;  ///< 0 (beyond the horizon) .. 1 (collision now)
+  bool active = false;  ///< a guidance plane is set
+  haptics::Vec3d point{};   ///< on the boundary of the safe commands, m, device frame
+  haptics::Vec3d normal{1, 0, 0};  ///< unit, towards the dangerous commands
+  haptics::Vec3d force{};   ///< N: what the plane pushes on the hand where it is now
+  double max_force = 0.0;   ///< N: the most it may push (the config's bound)
 };
 
 /// How a driver holds one hand to express an intent.
@@ -67,6 +88,10 @@ class MediatorInterface {
   /// ...and whether its controls stay where the hand leaves them (false:
   /// there are none, or they spring back to zero when released).
   virtual bool ControlsStayPut() const { return false; }
+
+  /// Haptic shared control's guidance as of the last Update, for the view to
+  /// draw what pushes the hand; nullopt for interfaces without it.
+  virtual std::optional<Guidance> CurrentGuidance() const { return std::nullopt; }
 };
 
 }  // namespace haptel::interfaces

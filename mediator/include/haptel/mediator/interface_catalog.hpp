@@ -16,6 +16,7 @@
 #include "haptel/config/run.hpp"
 #include "haptel/interfaces/input.hpp"
 #include "haptel/interfaces/interface.hpp"
+#include "haptel/interfaces/shared_control.hpp"
 
 namespace haptel::interfaces {
 class ControlsPort;
@@ -57,6 +58,8 @@ struct InterfaceParts {
   interfaces::ControlsPort* controls = nullptr;  ///< a cockpit's controls (physics)
   const interfaces::InputBox* input = nullptr;   ///< a person's keys and controller
   int speed_levels = 8;                          ///< the vehicle's levels per direction
+  /// The vehicle's drive and body, for shared control's prediction (gesture-shared).
+  interfaces::VehicleGeometry vehicle;
 };
 
 /// Builds the interface. Throws std::invalid_argument when a part it needs is missing.

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <string>
 
+#include "haptel/core/range_scan.hpp"
 #include "haptel/vehicles/drive.hpp"
 
 namespace haptel::vehicles {
@@ -33,6 +34,8 @@ struct AdapterState {
   bool fault = false;
   std::string fault_message;  ///< one line: what, where (empty: no fault)
   CanLogStatus can_log;
+  /// What the range sensors see now (count 0: the vehicle has none).
+  RangeScan ranges;
 };
 
 class VehicleAdapter {

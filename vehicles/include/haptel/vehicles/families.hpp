@@ -57,6 +57,10 @@ struct RobotFamily : link::RobotMessages {
     m.can_log_frames(s.can_log.frames);
     m.can_log_frames_lost(s.can_log.frames_lost);
     m.can_log_error(s.can_log.error);
+    m.range_angle_min(static_cast<float>(s.ranges.angle_min));
+    m.range_angle_increment(static_cast<float>(s.ranges.angle_increment));
+    m.range_max(static_cast<float>(s.ranges.range_max));
+    m.ranges().assign(s.ranges.ranges.begin(), s.ranges.ranges.begin() + s.ranges.count);
   }
 };
 

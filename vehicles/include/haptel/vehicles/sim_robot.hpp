@@ -5,7 +5,10 @@
 /// a first-order lag and its own gain (uneven turning). The body is a circle
 /// that cannot enter walls, gate posts or obstacles: a move into one is
 /// projected back out (the robot slides along), and a contact ahead of the
-/// robot closes the left, the right or both front bumper switches.
+/// robot closes the left, the right or both front bumper switches. Its range
+/// sensors (config range_sensors) scan the walls and posts after each step.
+#include <random>
+
 #include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"
 #include "haptel/vehicles/adapter.hpp"
@@ -41,6 +44,8 @@ class SimRobot final : public VehicleAdapter {
   const Track& track_;
   DriveConfig drive_;
   BodyConfig body_;
+  RangeSensorConfig range_sensors_;
+  std::mt19937_64 range_noise_;
   MotorLevels levels_;
   bool use_treads_ = false;
   double tread_left_ = 0.0;

@@ -44,6 +44,15 @@ std::string HudSpeedText(const Overlay& overlay);
 /// 1.5 Hz, lit for the first half of each period, as a car's do).
 bool IndicatorLit(double t_s);
 
+/// Where shared control's dial and arrow go on a `width`×`height` overlay
+/// (pixels, y down): the dial's centre and radius, and the arrow's tip (at
+/// the centre when nothing pushes). Forward is up the screen, left is left.
+struct GuidanceDial {
+  int centre_x = 0, centre_y = 0, radius = 0;
+  int tip_x = 0, tip_y = 0;
+};
+GuidanceDial GuidanceDialOf(const Overlay& overlay, int width, int height);
+
 class Renderer {
  public:
   /// Compiles the shaders and builds the meshes and textures for a

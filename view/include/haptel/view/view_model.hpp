@@ -64,6 +64,14 @@ struct Overlay {
   bool throttle_locked = false;
   char message[96] = "";     ///< one line for the person (e.g. "grasp the wheel")
   char status[64] = "";      ///< the vehicle's own line (the blimp: height, power); empty: none
+  /// Haptic shared control (gesture-shared): what pushes the hand, drawn as
+  /// an arrow on a dial of the hand's horizontal plane (forward up, left
+  /// left), as long as the push is strong.
+  bool guidance_shown = false;      ///< the interface has shared control
+  double guidance_forward_n = 0.0;  ///< N along the device's x (forward)
+  double guidance_left_n = 0.0;     ///< N along its y (left)
+  double guidance_max_n = 1.0;      ///< the push's bound: the dial's full length
+  double guidance_ttc_s = -1.0;     ///< time to collision of the hand's command (negative: none in sight)
 };
 
 /// A head-tracked view (the blimp's pilot camera, thesis 8.2.3): the view

@@ -1,0 +1,132 @@
+#pragma once
+/// @file Haptic shared control (Abbink, Mulder & Boer 2012; Flemisch's
+/// "H-metaphor"): the interface looks along the motion the hand's command
+/// would give, against what the vehicle's range sensors see, and pushes the
+/// hand away from commands that would meet an obstacle within a horizon. The
+/// operator keeps the authority: the push is bounded, and the command is
+/// always the hand's own, so pushing through the force drives on.
+///
+/// Each session tick (not in the servo loop), SharedControl::Guide:
+///  1. predicts, for the hand's command, the vehicle's path as an arc at the
+///     commanded speeds (forward v, turn ω from the treads) and finds the time
+///     to collision: the first time its body, grown by a clearance, reaches a
+///     point a beam met — a point it is not already closer to than that, so
+///     that driving along a wall is not a collision;
+///  2. danger = 1 − TTC/horizon (0 beyond the horizon);
+///  3. the direction that makes it worse (the danger's gradient in hand space,
+///     by finite differences; towards the neutral point where that is flat),
+///     and how far back along it the safe commands begin (bisection);
+///  4. a guidance plane there: ForceField's guidance term, a spring past the
+///     plane saturating at max_force, which the servo loop evaluates from the
+///     hand's pose at 1 kHz (allocation-free, see haptics/force_field.hpp).
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "haptel/config/gesture.hpp"
+#include "haptel/core/range_scan.hpp"
+#include "haptel/haptics/types.hpp"
+#include "haptel/interfaces/interface.hpp"
+
+namespace haptel::interfaces {
+
+/// What of the vehicle the prediction needs (the vehicle file's drive and body).
+struct VehicleGeometry {
+  double max_speed = 0.3;     ///< m/s of a tread at command 1
+  double track_width = 0.16;  ///< m between the treads
+  double body_radius = 0.11;  ///< m
+};
+
+/// Seconds until the vehicle, driven by `command` from where it is now, meets
+/// an obstacle `scan` sees (its body grown by `clearance`), looking no
+/// further than `horizon_s`; +infinity when it meets none by then (or the
+/// scan is empty).
+double TimeToCollision(const RangeScan& scan, const MotorCommand& command, const VehicleGeometry& vehicle,
+                       double clearance, double horizon_s);
+
+class SharedControl {
+ public:
+  /// Validates `config` (SharedControlConfig::ValidateOrThrow: ConfigFieldError).
+  SharedControl(const SharedControlConfig& config, const VehicleGeometry& vehicle);
+
+  /// The guidance for a hand at `hand` (m, device frame) whose command is
+  /// map(position), with commands at `neutral` safe (they stop the vehicle).
+  template <typename Map>
+  Guidance Guide(const RangeScan& scan, const haptics::Vec3d& hand, const haptics::Vec3d& neutral,
+                 const Map& map) const;
+
+  /// Sets `field`'s guidance term from `guidance` (off when inactive).
+  void Apply(const Guidance& guidance, haptics::ForceField& field) const;
+
+  const SharedControlConfig& config() const { return config_; }
+  const VehicleGeometry& vehicle() const { return vehicle_; }
+
+ private:
+  /// The danger of the command a hand at `p` gives.
+  template <typename Map>
+  double DangerAt(const RangeScan& scan, const haptics::Vec3d& p, const Map& map) const {
+    const double ttc = TimeToCollision(scan, map(p), vehicle_, config_.clearance, config_.horizon_s);
+    return std::isfinite(ttc) ? std::clamp(1.0 - ttc / config_.horizon_s, 0.0, 1.0) : 0.0;
+  }
+
+  SharedControlConfig config_;
+  VehicleGeometry vehicle_;
+};
+
+template <typename Map>
+Guidance SharedControl::Guide(const RangeScan& scan, const haptics::Vec3d& hand, const haptics::Vec3d& neutral,
+                              const Map& map) const {
+  Guidance g;
+  g.max_force = config_.max_force;
+  if (scan.count == 0) return g;
+  g.time_to_collision_s = TimeToCollision(scan, map(hand), vehicle_, config_.clearance, config_.horizon_s);
+  if (!std::isfinite(g.time_to_collision_s)) return g;
+  g.danger = std::clamp(1.0 - g.time_to_collision_s / config_.horizon_s, 0.0, 1.0);
+
+  // Hand space is the horizontal plane (x forward, y left): the gesture's axes.
+  constexpr double kStep = 0.003;  // m: finite differences, below the command's resolution
+  auto at = [&](double dx, double dy) {
+    haptics::Vec3d p = hand;
+    p[0] += dx;
+    p[1] += dy;
+    return p;
+  };
+  const double gx = (DangerAt(scan, at(kStep, 0), map) - DangerAt(scan, at(-kStep, 0), map)) / (2 * kStep);
+  const double gy = (DangerAt(scan, at(0, kStep), map) - DangerAt(scan, at(0, -kStep), map)) / (2 * kStep);
+  const double to_neutral_x = neutral[0] - hand[0];
+  const double to_neutral_y = neutral[1] - hand[1];
+  const double reach = std::hypot(to_neutral_x, to_neutral_y);
+  if (reach < 1e-6) return g;  // at neutral the vehicle stops: nothing to push away from
+
+  // Where along `-(ux, uy)` from the hand the danger ends, or < 0 if not within `limit`.
+  auto safe_after = [&](double ux, double uy, double limit) {
+    if (DangerAt(scan, at(-ux * limit, -uy * limit), map) > 0.0) return -1.0;
+    double inside = 0.0, outside = limit;
+    for (int i = 0; i < 12; ++i) {
+      const double mid = 0.5 * (inside + outside);
+      (DangerAt(scan, at(-ux * mid, -uy * mid), map) > 0.0 ? inside : outside) = mid;
+    }
+    return outside;
+  };
+  double nx = 0.0, ny = 0.0, depth = -1.0;
+  const double gradient = std::hypot(gx, gy);
+  if (gradient > 1e-9) {
+    nx = gx / gradient;
+    ny = gy / gradient;
+    depth = safe_after(nx, ny, reach);
+  }
+  if (depth < 0.0) {  // flat, or no way out along it: back towards stopping
+    nx = -to_neutral_x / reach;
+    ny = -to_neutral_y / reach;
+    depth = safe_after(nx, ny, reach);
+    if (depth < 0.0) depth = reach;
+  }
+  g.active = true;
+  g.normal = {nx, ny, 0.0};
+  g.point = at(-nx * depth, -ny * depth);
+  const double push = std::min(config_.stiffness * depth, config_.max_force);
+  g.force = {-push * nx, -push * ny, 0.0};
+  return g;
+}
+
+}  // namespace haptel::interfaces
