@@ -318,7 +318,8 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
       }
     }
     if (fleet_end) break;
-    if (auto end = CheckLimits(t, first.time_limit_s, 1e300)) {
+    // The session clock's time limit only: each vehicle's lap cap counts its driven time (above).
+    if (auto end = CheckLimits(t, std::nullopt, first.time_limit_s, 0.0, 1e300)) {
       fleet_end = std::move(end);
       break;
     }
@@ -336,8 +337,9 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
         std::string line = "         fleet:";
         for (const auto& mp : members) {
           char part[120];
-          std::snprintf(part, sizeof part, " %s %s (driven %.1f s)", mp->setup.vehicle.name.c_str(),
-                        mp->lost ? "LOST" : mp->done ? "done" : mp->out.selected.c_str(), mp->out.driven_s);
+          std::snprintf(part, sizeof part, " %s %s (driven %.1f s%s)", mp->setup.vehicle.name.c_str(),
+                        mp->lost ? "LOST" : mp->done ? "done" : mp->out.selected.c_str(), mp->out.driven_s,
+                        mp->lost || mp->health->up() ? "" : ", not answering yet");
           line += part;
         }
         log::Info(line);
