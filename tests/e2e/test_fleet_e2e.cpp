@@ -13,10 +13,12 @@
 #include <signal.h>
 
 #include <filesystem>
+#include <mutex>
 #include <string>
 #include <vector>
 
 #include "child.hpp"
+#include "haptel/link/topic.hpp"
 #include "haptel/record/recorder.hpp"
 #include "test_env.hpp"
 
@@ -78,6 +80,34 @@ int VehiclePid(Child& run, const std::string& name) {
   }, 60.0);
   return pid;
 }
+
+/// A plain DDS reader of haptel/<vehicle>/selected, as anyone on the
+/// domain would read it: every sample kept.
+class SelectedLog {
+ public:
+  SelectedLog(link::Participant& participant, const std::string& vehicle)
+      : reader_(participant, link::TopicName(vehicle, "selected"), link::Profile::kLatched,
+                [this](const msg::SelectedSource& s) {
+                  std::lock_guard lock(mutex_);
+                  samples_.push_back(s);
+                }) {}
+  /// Whether a sample said `source` was selected and `lock` held it.
+  bool Saw(const std::string& source, const std::string& lock, msg::SelectedSource* out = nullptr) {
+    std::lock_guard lock_guard(mutex_);
+    for (const msg::SelectedSource& s : samples_) {
+      if (std::string(s.source().c_str()) == source && std::string(s.lock().c_str()) == lock) {
+        if (out != nullptr) *out = s;
+        return true;
+      }
+    }
+    return false;
+  }
+
+ private:
+  std::mutex mutex_;
+  std::vector<msg::SelectedSource> samples_;
+  link::Reader<msg::SelectedSource, msg::SelectedSourcePubSubType> reader_;
+};
 
 }  // namespace
 
@@ -216,6 +246,15 @@ TEST_CASE("a second operator on a fleet being driven is refused; the first is no
   first_argv.insert(first_argv.end(), {"--time-limit", "120"});  // ended by SIGINT long before
   Child first(first_argv);
   REQUIRE(test::WaitForErr(first, "distance", 90.0));  // a progress line: driving
+
+  // Who commands each robot, read off the domain by a plain DDS reader that
+  // joined late: the operator's input while it is driven, the handover
+  // lock while the operator turns (every 3 s), each stamped with its name.
+  LinkConfig link_config;
+  link_config.domain_id = domain;
+  link::Participant reader_side(link_config, "test-selected-reader");
+  SelectedLog robot_a(reader_side, "robot-a");
+  SelectedLog robot_b(reader_side, "robot-b");
   // The second attaches to the same vehicles (spawning its own would be a conflict).
   auto argv = FleetArgs(fleet.string(), domain, dir / "second.db");
   argv.push_back("--attach");
@@ -227,6 +266,13 @@ TEST_CASE("a second operator on a fleet being driven is refused; the first is no
   CHECK(JsonField(refused, "outcome") == "refused");
   CHECK(JsonField(refused, "message").find("driven by another operator") != std::string::npos);
   CHECK(JsonField(refused, "message").find("pid " + std::to_string(first.pid())) != std::string::npos);
+
+  msg::SelectedSource driven;
+  CHECK(test::WaitFor([&] { return robot_a.Saw("operator", "", &driven) && robot_b.Saw("operator", ""); }, 60.0));
+  CHECK(test::WaitFor([&] { return robot_a.Saw("", "handover") && robot_b.Saw("", "handover"); }, 60.0));
+  CHECK(std::string(driven.vehicle().c_str()) == "robot-a");
+  CHECK(std::string(driven.operator_name().c_str()).find("pid " + std::to_string(first.pid())) != std::string::npos);
+  CHECK(driven.stamp_ns() > 0);
 
   // The first drove on: ended now by its operator, never refused nor in conflict.
   REQUIRE(kill(first.pid(), SIGINT) == 0);
