@@ -63,6 +63,10 @@ bool Hal::TrySetpoint(Side side, ForceSetpoint& out) const {
   return true;
 }
 
+void Hal::SetCue(Side side, const Cue& cue) { cues_[Index(side)].Store(cue); }
+
+bool Hal::TryCue(Side side, Cue& out) const { return cues_[Index(side)].TryLoad(out, kSetpointReadAttempts); }
+
 ForceSetpoint Hal::Combine(ForceSetpoint sp, const ForceField& latest_field, int64_t field_stamp_ns) const {
   sp.field = latest_field;
   if (sp.stamp_ns == 0 || (field_stamp_ns != 0 && field_stamp_ns < sp.stamp_ns)) sp.stamp_ns = field_stamp_ns;

@@ -119,6 +119,11 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
   }
   Vec3d from_setpoint{};
   for (int i = 0; i < 3; ++i) from_setpoint[i] = field[i] + coupling[i];
+  // A cue (a fleet's switch) is felt on top of whatever the interface asks,
+  // outside the passivity ports: it is a short open-loop pulse, not a field.
+  if (Hal::Cue cue; hal_.TryCue(side, cue) && now_ns < cue.until_ns) {
+    for (int i = 0; i < 3; ++i) from_setpoint[i] += cue.force[i];
+  }
   const double period_s = arm.last_tick_ns != 0 ? static_cast<double>(now_ns - arm.last_tick_ns) * 1e-9 : 0.0;
   arm.last_tick_ns = now_ns;
   if (config_.servo.passivity) {

@@ -79,6 +79,11 @@ Qos WithProfile(Qos qos, Profile profile, const LinkConfig& config) {
       qos.reliability().kind = dds::BEST_EFFORT_RELIABILITY_QOS;
       qos.history().depth = 1;
       break;
+    case Profile::kLatched:
+      qos.reliability().kind = dds::RELIABLE_RELIABILITY_QOS;
+      qos.history().depth = 1;
+      qos.durability().kind = dds::TRANSIENT_LOCAL_DURABILITY_QOS;
+      break;
   }
   // Data sharing hands samples over in shared memory, past any transport:
   // off when the transport is to inject faults.

@@ -20,14 +20,13 @@
 #include "haptel/mediator/run_command.hpp"
 #include "haptel/record/run_picture.hpp"
 #include "haptel/record/unsaved_run.hpp"
+#include "haptel/view/view_model.hpp"
 
 namespace haptel::mediator {
 
 namespace {
 
-/// The options the fleet file sets for each vehicle, and those a fleet
-/// does not have yet (the view's tiles and a person's switching keys are
-/// issue 30's next step).
+/// The options the fleet file sets for each vehicle.
 constexpr const char* kPerVehicleOptions[] = {"track", "vehicle", "vehicle-name", "interface"};
 
 /// `argv` without its --fleet option, and with `vehicle`'s own.
@@ -56,21 +55,21 @@ FleetSetup FleetSetupFromArgs(int argc, const char* const* argv, const Args& arg
                        ": with --fleet each vehicle's comes from the fleet file (its 'vehicles' list)");
     }
   }
-  if (args.Value("record") || args.Value("view").value_or("none") != "none") {
-    throw UsageError("option --fleet: a fleet has no view yet (its tiles are issue 30's next step); use --view none");
-  }
   if (args.Value("operator").value_or("auto") != "auto") {
-    throw UsageError("option --fleet: only the automatic operator drives a fleet yet (a person's switching keys are "
-                     "issue 30's next step); use --operator auto");
+    // A person switches vehicles (Tab, 1..9, the controller's Back) and the
+    // automatic operator drives the one switched to; a person driving each
+    // vehicle with its own interface is not built yet.
+    throw UsageError("option --fleet: only the automatic operator drives a fleet's vehicles yet (a person switches "
+                     "between them in the view: Tab, 1..9); use --operator auto");
   }
   FleetSetup setup;
   setup.fleet = LoadFleet(*args.Value("fleet"));
+
   for (const FleetVehicle& vehicle : setup.fleet.vehicles) {
     std::vector<std::string> words = VehicleArgv(argc, argv, vehicle);
     if (std::find(words.begin(), words.end(), "--operator") == words.end()) {
       words.insert(words.end(), {"--operator", "auto"});
     }
-    if (std::find(words.begin(), words.end(), "--view") == words.end()) words.insert(words.end(), {"--view", "none"});
     std::vector<const char*> pointers;
     for (const std::string& w : words) pointers.push_back(w.c_str());
     try {
@@ -81,6 +80,12 @@ FleetSetup FleetSetupFromArgs(int argc, const char* const* argv, const Args& arg
     } catch (const UsageError& e) {
       throw UsageError(setup.fleet.file.string() + ": vehicle '" + vehicle.name + "': " + e.what());
     }
+  }
+  const size_t most = view::Tiles::kMax;
+  if (setup.vehicles.at(0).view != ViewKind::kNone && setup.vehicles.size() > most) {
+    throw UsageError("option --view: a view shows at most " + std::to_string(view::Tiles::kMax) +
+                     " vehicles (keys 1..9); " + setup.fleet.file.string() + " has " +
+                     std::to_string(setup.vehicles.size()) + " (use --view none)");
   }
   return setup;
 }
@@ -129,7 +134,8 @@ std::string FleetJson(const FleetSetup& setup, const FleetResult& fleet, const s
     << ",\"outcome\":" << JsonString(ToString(fleet.outcome)) << ",\"message\":" << JsonString(fleet.message)
     << ",\"vehicles_total\":" << fleet.vehicles.size() << ",\"vehicles_completed\":" << completed
     << ",\"handovers\":" << fleet.handover_ms.size() << ",\"handover_ms_p50\":" << Ms(fleet.handover_ms_p50)
-    << ",\"handover_ms_p95\":" << Ms(fleet.handover_ms_p95) << ",\"recorded\":" << (recorded ? "true" : "false")
+    << ",\"handover_ms_p95\":" << Ms(fleet.handover_ms_p95) << ",\"person_switches\":" << fleet.person_switches
+    << ",\"operator_cpu_share\":" << JsonNumber(fleet.operator_cpu_share) << ",\"recorded\":" << (recorded ? "true" : "false")
     << ",\"database\":" << JsonString(setup.vehicles.at(0).run.database.string()) << ",\"lost\":[";
   for (size_t i = 0; i < fleet.lost.size(); ++i) o << (i ? "," : "") << JsonString(fleet.lost[i]);
   o << "],\"vehicles\":[";
@@ -169,6 +175,8 @@ void PrintFleetSummary(std::FILE* out, const FleetSetup& setup, const FleetResul
     std::fprintf(out, "  %zu handovers (switch to the new vehicle obeying): p50 %.0f ms, p95 %.0f ms\n",
                  fleet.handover_ms.size(), fleet.handover_ms_p50, fleet.handover_ms_p95);
   }
+  std::fprintf(out, "  operator process CPU %.2f s per wall second; %d switches asked by the person\n",
+               fleet.operator_cpu_share, fleet.person_switches);
   if (!fleet.lost.empty()) {
     std::string names;
     for (const std::string& n : fleet.lost) names += (names.empty() ? "" : ", ") + n;

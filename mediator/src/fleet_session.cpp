@@ -1,6 +1,8 @@
 // One operator, several vehicles: the fleet's session loop (fleet.hpp).
 // Written over FamilySession and VehicleLink as RunSession is, one of each
 // per vehicle, and a CommandMux per vehicle for who commands it.
+#include <sys/resource.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -16,6 +18,7 @@
 #include "haptel/mediator/command_mux.hpp"
 #include "haptel/mediator/fleet.hpp"
 #include "haptel/mediator/run_counters.hpp"
+#include "haptel/mediator/session_view.hpp"
 #include "session_loop.hpp"
 
 namespace haptel::mediator {
@@ -59,7 +62,19 @@ struct Member {
   int64_t request_ns = 0;
   int64_t released_ns = 0;
   double lock_until_t = -1.0;     ///< turned away from: the lock holds until then
+  // The selected source as last published, and when it is due again.
+  CommandMux::Selection published_selection;
+  int64_t next_selected_ns = 0;
+  view::Overlay overlay;  ///< its view's overlay, made each tick the view is fed
 };
+
+/// The process's CPU time (every thread), s.
+double ProcessCpuS() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+         static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec) * 1e-6;
+}
 
 std::string FleetRunName(const std::string& fleet, int64_t wall_ns) {
   const std::time_t seconds = static_cast<std::time_t>(wall_ns / 1000000000);
@@ -71,6 +86,23 @@ std::string FleetRunName(const std::string& fleet, int64_t wall_ns) {
 }
 
 }  // namespace
+
+int RequestedVehicle(int request, int driven, const std::vector<bool>& over) {
+  const int n = static_cast<int>(over.size());
+  if (request == interfaces::kNextVehicle) {
+    for (int k = 1; k < n; ++k) {
+      const int i = ((driven < 0 ? -1 : driven) + k + n) % n;
+      if (!over[static_cast<size_t>(i)]) return i;
+    }
+    // Past the driven one, none is waiting: the first not over, if it is not the driven one.
+    for (int i = 0; i < n; ++i) {
+      if (!over[static_cast<size_t>(i)]) return i == driven ? -1 : i;
+    }
+    return -1;
+  }
+  if (request < 0 || request >= n || request == driven || over[static_cast<size_t>(request)]) return -1;
+  return request;
+}
 
 double NearestRank(std::vector<double> values, double p) {
   if (values.empty()) return -1.0;
@@ -138,7 +170,8 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
     options.link = m->setup.run.link;
     options.track_file = m->family->world_file();
     options.program = m->setup.vehicle_program;
-    options.decode_video = false;  // no view shows them yet (issue 30's tiles)
+    options.decode_video = run.video_decode && DecodesVideo(first.view);  // the tiles show them
+    options.publish_selected = true;
     m->link = std::make_unique<VehicleLink>(options);
     m->out.result.record.vehicle_pid = m->link->pid();
     if (first.progress) {
@@ -149,13 +182,42 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
     }
   }
 
+  // --- The view: every vehicle's tile, the driven one's world on the big screen. ---
+  std::unique_ptr<SessionView> view_part;
+  if (first.view != ViewKind::kNone) {
+    view::ViewOptions options = ViewOptionsFor(first);
+    options.title = "Haptel - fleet " + setup.fleet.name;
+    std::vector<SessionView::Parts> parts;
+    for (size_t i = 0; i < members.size(); ++i) {
+      SessionView::Parts p;
+      p.hal = &haptic.hal();
+      p.physics_config = &members[i]->setup.physics;
+      p.video = &members[i]->link->video();
+      view::ViewOptions own = options;  // the window is the first vehicle's: its screen placement
+      members[i]->family->ConfigureView(p, i == 0 ? options : own);
+      parts.push_back(p);
+    }
+    view_part = std::make_unique<SessionView>(options, std::move(parts), input);
+  }
+  // A person's controller without a view: a thread of its own polls it.
+  std::unique_ptr<view::InputPump> pump;
+  if (!view_part &&
+      std::any_of(members.begin(), members.end(), [](const auto& m) { return m->family->UsesGamepad(); })) {
+    pump = std::make_unique<view::InputPump>(input);
+  }
+  uint32_t vehicle_requests_seen = input.Load().vehicle_requests;
+  char switch_note[64] = "";  // the HUD's note of the last switch
+  double switch_note_until_t = -1.0;
+
   const int64_t t0 = MonotonicNs();
+  const double cpu0_s = ProcessCpuS();
   for (auto& m : members) {
     m->health = std::make_unique<VehicleHealth>(m->setup.vehicle.name, run.link.domain_id, m->link->session(),
                                                 run.vehicle_timeout_s);
     m->trace = std::make_unique<RunTrace>(m->out.result.record);
     m->out.result.record.path.reserve(16384);
-    m->watch = std::make_unique<LoopWatch>(haptic, m->family->physics(), *m->link, nullptr, t0);
+    m->watch = std::make_unique<LoopWatch>(haptic, m->family->physics(), *m->link,
+                                           m.get() == members.front().get() ? view_part.get() : nullptr, t0);
   }
   const auto period_ns = static_cast<int64_t>(1e9 / run.session_rate_hz);
   const auto hold_period_ns = static_cast<int64_t>(kHoldPeriod_s * 1e9);
@@ -182,8 +244,9 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
   };
 
   // Turns the operator to vehicle `to` (-1: none left): the handover lock
-  // on both, the one left sent zero at once.
-  const auto switch_to = [&](int to, int64_t now, double t) {
+  // on both, the one left sent zero at once; felt on both hands (a cue)
+  // and shown (the tile, the HUD's line) when there is a vehicle to turn to.
+  const auto switch_to = [&](int to, int64_t now, double t, const char* why) {
     if (target >= 0) {
       Member& from = *members[static_cast<size_t>(target)];
       from.mux.OnLock(from.handover_lock, true, t);
@@ -203,7 +266,50 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
     m.released_ns = 0;
     m.link->WatchEcho(0);
     if (measured) ++m.out.handovers;
-    if (first.progress) log::Info("fleet: driving '" + m.setup.vehicle.name + "'");
+    if (measured) {
+      const haptics::Hal::Cue cue{{0.0, 0.0, kSwitchCueForce_N}, now + SToNs(kSwitchCueDuration_s)};
+      for (int side = 0; side < haptics::kSides; ++side) haptic.hal().SetCue(static_cast<haptics::Side>(side), cue);
+      std::snprintf(switch_note, sizeof switch_note, "switched to %s (%s)", m.setup.vehicle.name.c_str(), why);
+      switch_note_until_t = t + 3.0;
+    }
+    if (view_part) view_part->Show(to);
+    if (first.progress) log::Info("fleet: driving '" + m.setup.vehicle.name + "' (" + why + ")");
+  };
+
+  // The view's next frames: the driven vehicle's overlay, gaze and ghost on
+  // the big screen (a fixed gaze and no ghost when it has none), and every
+  // vehicle's tile. Allocation-free: overlays and tiles are flat.
+  const auto publish_view = [&](double t) {
+    view::Tiles tiles;
+    tiles.count = static_cast<int>(members.size());
+    for (size_t i = 0; i < members.size(); ++i) {
+      Member& m = *members[i];
+      view_part->SetPhysics(static_cast<int>(i), m.family->physics());  // a world built mid-run
+      m.overlay = m.family->Overlay(t, !m.lost && m.health->up(), m.trace->touching());
+      view::Tiles::Tile& tile = tiles.tile[i];
+      std::snprintf(tile.name, sizeof tile.name, "%s", m.setup.vehicle.name.c_str());
+      tile.state = m.lost                            ? view::TileState::kLost
+                   : m.done                          ? view::TileState::kDone
+                   : static_cast<int>(i) == target ? view::TileState::kDriven
+                                                     : view::TileState::kHeld;
+      tile.lap_time_s = m.overlay.lap_time_s;
+      tile.gates_passed = m.overlay.gates_passed;
+      tile.gates_total = m.overlay.gates_total;
+    }
+    if (target >= 0) {
+      Member& m = *members[static_cast<size_t>(target)];
+      view_part->Publish(m.overlay);
+      view_part->Publish(m.family->Gaze().value_or(view::Gaze{}));
+      view_part->Publish(m.family->Prediction(t).value_or(view::Prediction{}));
+      const int n = static_cast<int>(members.size());
+      if (t < switch_note_until_t) {
+        std::snprintf(tiles.line, sizeof tiles.line, "%s  -  Tab: next, 1-%d: pick", switch_note, n);
+      } else {
+        std::snprintf(tiles.line, sizeof tiles.line, "driving %s (%d of %d)  -  Tab: next, 1-%d: pick",
+                      m.setup.vehicle.name.c_str(), target + 1, n, n);
+      }
+    }
+    view_part->Publish(tiles);
   };
 
   // The automatic operator's choice: the next vehicle after `from` whose course is not done.
@@ -259,15 +365,31 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
     }
     if (fleet_end) break;
 
-    // The automatic operator's turn: the driven vehicle's lap is done, or
-    // its slice is over and another is waiting.
+    // A person's turn first (a key, a controller button); then the
+    // automatic operator's: the driven vehicle's lap is done, or its slice
+    // is over and another is waiting.
+    if (person.vehicle_requests != vehicle_requests_seen) {
+      vehicle_requests_seen = person.vehicle_requests;
+      std::vector<bool> over;
+      for (const auto& mp : members) over.push_back(mp->done);
+      const int asked = RequestedVehicle(person.vehicle_request, target, over);
+      if (asked >= 0) {
+        switch_to(asked, now, t, "asked by the person");
+        ++fleet.person_switches;
+      } else if (person.vehicle_request >= 0 && person.vehicle_request < static_cast<int>(members.size()) &&
+                 person.vehicle_request != target) {
+        std::snprintf(switch_note, sizeof switch_note, "%s: its course is over",
+                      members[static_cast<size_t>(person.vehicle_request)]->setup.vehicle.name.c_str());
+        switch_note_until_t = t + 3.0;
+      }
+    }
     if (target < 0 || members[static_cast<size_t>(target)]->done) {
       const int next = next_after(target);
       if (next < 0) break;  // every course is done
-      switch_to(next, now, t);
+      switch_to(next, now, t, target < 0 ? "the first" : "the last one's course is over");
     } else if (setup.fleet.slice_s > 0.0 && t - driven_since_t >= setup.fleet.slice_s) {
       const int next = next_after(target);
-      if (next >= 0 && next != target) switch_to(next, now, t);
+      if (next >= 0 && next != target) switch_to(next, now, t, "its time slice");
     }
 
     for (size_t i = 0; i < members.size(); ++i) {
@@ -296,6 +418,13 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
       bool changed = false;
       const CommandMux::Selection selection = m.mux.Select(t, &changed);
       m.out.selected = m.mux.SelectedName(selection);
+      if (m.health->ours() && (selection != m.published_selection || now >= m.next_selected_ns)) {
+        // Who commands it, for anyone on the domain: on a change at once, and now and then for the record.
+        m.link->PublishSelected(selection.input >= 0 ? m.mux.inputs()[static_cast<size_t>(selection.input)].name : "",
+                                selection.lock >= 0 ? m.mux.locks()[static_cast<size_t>(selection.lock)].name : "");
+        m.published_selection = selection;
+        m.next_selected_ns = now + SToNs(kSelectedPeriod_s);
+      }
       if (driven && selection.input == m.operator_input) {
         m.out.driven_s += dt;
         if (auto end = m.family->Drive(t, now, person, m.health->up(), haptic, *m.link)) {
@@ -318,6 +447,8 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
       }
     }
     if (fleet_end) break;
+    if (view_part) publish_view(t);
+    // The session clock's time limit only: each vehicle's lap cap counts its driven time (above).
     if (auto end = CheckLimits(t, std::nullopt, first.time_limit_s, 0.0, 1e300)) {
       fleet_end = std::move(end);
       break;
@@ -336,15 +467,19 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
         std::string line = "         fleet:";
         for (const auto& mp : members) {
           char part[120];
-          std::snprintf(part, sizeof part, " %s %s (driven %.1f s)", mp->setup.vehicle.name.c_str(),
-                        mp->lost ? "LOST" : mp->done ? "done" : mp->out.selected.c_str(), mp->out.driven_s);
+          std::snprintf(part, sizeof part, " %s %s (driven %.1f s%s)", mp->setup.vehicle.name.c_str(),
+                        mp->lost ? "LOST" : mp->done ? "done" : mp->out.selected.c_str(), mp->out.driven_s,
+                        mp->lost || mp->health->up() ? "" : ", not answering yet");
           line += part;
         }
         log::Info(line);
       }
     }
   }
-  for (auto& m : members) m->watch->EndInterval(MonotonicNs());
+  const int64_t loop_end_ns = MonotonicNs();
+  fleet.operator_cpu_share = (ProcessCpuS() - cpu0_s) / std::max(NsToS(loop_end_ns - t0), 1e-3);
+  for (auto& m : members) m->watch->EndInterval(loop_end_ns);
+  if (pump) pump->Stop();
 
   // --- The end: who was not done ends as the fleet did. ---
   if (fleet_end) {
@@ -382,6 +517,8 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
     if (!m->lost) m->link->SendSafe();
   }
   for (auto& m : members) m->family->Finish(m->out.result, first.progress);
+  // The view's figures are the first vehicle's record's (one window for all).
+  if (view_part) StopAndRecord(*view_part, members.front()->out.result);
   haptic.Stop();
   // Every vehicle released and ended at once: one after the other, each
   // would wait for the others' processes to end, past its watchdog.

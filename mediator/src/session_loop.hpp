@@ -41,6 +41,10 @@ class VehicleHealth {
                 double startup_timeout_s = 15.0);
   /// Whether a state has arrived yet.
   bool up() const { return up_; }
+  /// Up, and its latest state named this session as its owner, or none:
+  /// what this session says of the vehicle is true (a fleet publishes who
+  /// commands it only then, never while another operator holds it).
+  bool ours() const { return up_ && refused_since_ns_ == 0; }
   /// Before the states are drained: the spawned process still runs, and no
   /// second vehicle answers under the same name (for kConflictAfter_s).
   std::optional<LoopEnd> CheckProcess(VehicleLink& vehicle, int64_t now_ns);

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 #include <optional>
+#include <stdexcept>
+#include <string>
 
 #include "haptel/interfaces/cockpit.hpp"
 #include "haptel/mediator/session_physics.hpp"
@@ -14,7 +16,15 @@ namespace haptel::mediator {
 
 SessionView::SessionView(const view::ViewOptions& options, const Parts& parts,
                          interfaces::InputBox& input)
-    : parts_(parts), physics_(parts.physics), input_(input) {
+    : SessionView(options, std::vector<Parts>{parts}, input) {}
+
+SessionView::SessionView(const view::ViewOptions& options, std::vector<Parts> fleet, interfaces::InputBox& input)
+    : parts_(std::move(fleet)), input_(input) {
+  if (parts_.empty() || parts_.size() > physics_.size()) {
+    throw std::invalid_argument("session view: 1 to " + std::to_string(physics_.size()) + " vehicles, not " +
+                                std::to_string(parts_.size()));
+  }
+  for (size_t i = 0; i < parts_.size(); ++i) physics_[i].store(parts_[i].physics, std::memory_order_relaxed);
   view_ = std::make_unique<view::View>(options, *this, &input_);
 }
 
@@ -27,37 +37,53 @@ void SessionView::Stop() {
 view::ViewStats SessionView::Stats() const { return view_->Stats(); }
 
 void SessionView::Fill(view::ViewModel& model) {
+  const size_t shown =
+      std::min(static_cast<size_t>(std::max(0, shown_.load(std::memory_order_acquire))), parts_.size() - 1);
+  const Parts& part = parts_[shown];  // the big screen's: the driven vehicle's
   model.shapes.clear();
   model.overlay = overlay_.Load();
   model.gaze = gaze_.Load();
   model.prediction = prediction_.Load();
-  model.map = parts_.map;
+  model.map = part.map;
+  model.tiles = tiles_.Load();
+  for (int i = 0; i < model.tiles.count && i < static_cast<int>(parts_.size()); ++i) {
+    const VideoReceiver* video = parts_[static_cast<size_t>(i)].video;
+    view::VideoImage& tile = model.tile_video[static_cast<size_t>(i)];
+    if (video == nullptr) {
+      tile = {};
+      continue;
+    }
+    const LatestFrame frame = video->Latest();
+    tile.image = frame.image;
+    tile.id = frame.id;
+    tile.capture_wall_ns = frame.capture_wall_ns;
+  }
   // The hands: the proxies where a world moves them, the tracked hands otherwise.
-  const SessionPhysics* physics = physics_.load(std::memory_order_acquire);
+  const SessionPhysics* physics = physics_[shown].load(std::memory_order_acquire);
   for (int i = 0; i < haptics::kSides; ++i) {
     const auto side = static_cast<haptics::Side>(i);
     if (physics != nullptr) {
       const physics::HandPoses poses = physics->world->Poses(side);
       if (poses.valid) {
-        AppendProxyHand(model.shapes, poses, parts_.physics_config->hand, side);
+        AppendProxyHand(model.shapes, poses, part.physics_config->hand, side);
         continue;
       }
     }
-    if (parts_.hands[i]) {
-      const haptics::HandSample sample = parts_.hal->LatestSample(side);
-      if (sample.valid) AppendTrackedHand(model.shapes, sample, parts_.physics_config->hand);
+    if (part.hands[i]) {
+      const haptics::HandSample sample = part.hal->LatestSample(side);
+      if (sample.valid) AppendTrackedHand(model.shapes, sample, part.physics_config->hand);
     }
   }
-  if (physics != nullptr && physics->port && parts_.cockpit != nullptr) {
-    AppendCockpit(model.shapes, *parts_.cockpit, parts_.controls_bodies, physics->port->Controls(),
+  if (physics != nullptr && physics->port && part.cockpit != nullptr) {
+    AppendCockpit(model.shapes, *part.cockpit, part.controls_bodies, physics->port->Controls(),
                   model.overlay.contact_now);
   }
   for (int i = 0; i < haptics::kSides; ++i) {
-    const haptics::ForceField field = parts_.hal->Setpoint(static_cast<haptics::Side>(i)).field;
+    const haptics::ForceField field = part.hal->Setpoint(static_cast<haptics::Side>(i)).field;
     if (field.wall_active) AppendWall(model.shapes, field);
   }
-  if (parts_.video != nullptr) {
-    const LatestFrame frame = parts_.video->Latest();
+  if (part.video != nullptr) {
+    const LatestFrame frame = part.video->Latest();
     model.video.image = frame.image;
     model.video.id = frame.id;
     model.video.capture_wall_ns = frame.capture_wall_ns;

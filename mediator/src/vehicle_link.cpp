@@ -12,6 +12,11 @@
 
 namespace haptel::mediator {
 
+class SelectedWriter : public link::Writer<msg::SelectedSource, msg::SelectedSourcePubSubType> {
+  using Writer::Writer;
+};
+
+
 namespace {
 /// The vehicle's command watchdog holds it stopped (robot) or in its failsafe (blimp).
 bool WatchdogTripped(const msg::VehicleState& s) { return link::RobotMessages::WatchdogTripped(s); }
@@ -186,7 +191,25 @@ VehicleLink::VehicleLink(const VehicleLinkOptions& options) : options_(options),
       break;
   }
   video_ = std::make_unique<VideoReceiver>(*participant_, name(), options_.decode_video);
+  operator_name_ = who;
+  if (options_.publish_selected) {
+    selected_ = std::make_unique<SelectedWriter>(*participant_, link::TopicName(name(), "selected"),
+                                                 link::Profile::kLatched);
+  }
 }
+
+bool VehicleLink::PublishSelected(const std::string& source, const std::string& lock) {
+  if (!selected_) return false;
+  msg::SelectedSource m;
+  m.vehicle(name());
+  m.source(source);
+  m.lock(lock);
+  m.stamp_ns(WallNs());
+  m.operator_name(operator_name_);
+  return selected_->Write(m);
+}
+
+int VehicleLink::selected_readers() const { return selected_ ? selected_->matched() : 0; }
 
 VehicleLink::~VehicleLink() { Stop(); }
 

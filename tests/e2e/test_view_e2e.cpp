@@ -4,6 +4,7 @@
 
 #include <catch2/catch.hpp>
 #include <cstdlib>
+#include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
@@ -308,4 +309,60 @@ TEST_CASE("--interface gesture-shared: the window draws shared control's dial, a
   CHECK(with_dial >= frames / 2);
   // The short track's gate posts and corners come within the horizon.
   CHECK(with_arrow >= 1);
+}
+
+TEST_CASE("a fleet in a window: every robot a tile, Tab turns to the next, and the frame moves with it") {
+  XServer x;
+  const auto dir = test::ScratchDir("e2e-view-fleet");
+  const auto mp4 = dir / "fleet.mp4";
+  // Two robots, each driven until its lap is done (no time slice): only
+  // the person's Tab turns the operator to robot-b before robot-a is done.
+  std::string fleet = "name: two\nslice_s: 0\nvehicles:\n";
+  for (const char* name : {"robot-a", "robot-b"}) {
+    fleet += std::string("  - {name: ") + name + ", vehicle: " +
+             std::filesystem::absolute("config/vehicles/sim-robot.yaml").string() +
+             ", world: " + std::filesystem::absolute("config/tracks/test-short.yaml").string() + "}\n";
+  }
+  const auto fleet_file = test::WriteFile(dir / "fleet.yaml", fleet);
+  Child run({Bin("haptel"), "run", "--fleet", fleet_file.string(), "--view", "window", "--record", mp4.string(),
+             "--time-limit", "60", "--json", "--domain", std::to_string(test::UniqueDomain(35)), "--database",
+             (dir / "runs.db").string(), "--vehicle-timeout", "5"});
+  REQUIRE(test::WaitForErr(run, "driving 'robot-a'", 60.0));
+  REQUIRE(test::WaitForErr(run, "distance", 60.0));  // robot-a answers and drives
+  REQUIRE(XDoTool({"search", "--sync", "--name", "Haptel", "windowfocus", "--sync", "key", "Tab"}) == 0);
+  REQUIRE(test::WaitForErr(run, "driving 'robot-b' (asked by the person)", 30.0));
+  // A progress line with robot-b obeying the operator (one every 2 s).
+  REQUIRE(test::WaitForErr(run, "robot-b operator", 30.0));
+  const std::string json = test::EndWithEscape(run);
+  CHECK(JsonField(json, "person_switches") == "1");
+  const auto entry = [&](const std::string& name) {
+    const auto at = json.find("{\"name\":\"" + name + "\"");
+    return at == std::string::npos ? std::string() : json.substr(at, json.find('}', at) - at + 1);
+  };
+  CHECK(std::stod(JsonField(entry("robot-a"), "driven_s")) > 0.0);
+  CHECK(std::stod(JsonField(entry("robot-b"), "driven_s")) > 0.0);
+  CHECK(std::stod(JsonField(json, "operator_cpu_share")) > 0.0);
+
+  // The recording: two tiles, robot-a's framed first, robot-b's at the end.
+  const auto yellow = [](cv::Vec3b c) { return c[0] < 100 && c[1] > 150 && c[2] > 180; };
+  const auto framed = [&](const cv::Mat& frame, int tile) {
+    const view::TileBox b = view::TileRect(tile, 2, frame.cols, frame.rows);
+    int n = 0;
+    for (int y = b.y; y < b.y + b.height; ++y) {
+      for (int xx = b.x; xx < b.x + b.width; ++xx) n += yellow(frame.at<cv::Vec3b>(y, xx)) ? 1 : 0;
+    }
+    return n > b.width;  // a frame of 4 px round it has far more
+  };
+  cv::VideoCapture video(mp4.string(), cv::CAP_FFMPEG);
+  REQUIRE(video.isOpened());
+  bool a_framed_alone = false;
+  cv::Mat frame, last;
+  while (video.read(frame)) {
+    if (framed(frame, 0) && !framed(frame, 1)) a_framed_alone = true;
+    frame.copyTo(last);
+  }
+  REQUIRE(!last.empty());
+  CHECK(a_framed_alone);
+  CHECK(framed(last, 1));
+  CHECK_FALSE(framed(last, 0));
 }

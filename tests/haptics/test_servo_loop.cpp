@@ -286,3 +286,33 @@ TEST_CASE("the servo loop refuses a device config or calibration ValidateOrThrow
   CHECK_THROWS_WITH(ServoLoop(dev, hal, Immediate(), cal),
                     Catch::Contains("arms.left.force_slope[1]: expected a non-zero number"));
 }
+
+TEST_CASE("a cue is added to the set-point's force until it ends, on each side, allocating nothing") {
+  ScriptedDevice dev(true, true);
+  Hal hal(Identity());
+  ServoLoop loop(dev, hal, Immediate(), Identity());
+  dev.position[0] = {0.02, 0, 0};
+  dev.position[1] = {0.02, 0, 0};
+  // The interface's spring keeps the set-point fresh and pulls back in x;
+  // the cue pushes up in z on top of it.
+  const Hal::Cue cue{{0.0, 0.0, 2.0}, 50 * kMs};
+  const uint64_t before = test::ThreadAllocations();
+  for (int side = 0; side < kSides; ++side) hal.SetCue(static_cast<Side>(side), cue);
+  for (const int64_t t : {10 * kMs, 49 * kMs}) {
+    for (int side = 0; side < kSides; ++side) {
+      SetField(hal, static_cast<Side>(side), Spring(100), t);
+      loop.Tick(static_cast<Side>(side), t);
+      INFO("side " << side << " at " << t / kMs << " ms");
+      CHECK(dev.wrist_command[side][0] == Approx(-2.0));
+      CHECK(dev.wrist_command[side][2] == Approx(2.0));
+    }
+  }
+  CHECK(test::ThreadAllocations() == before);
+  // Over: the spring alone.
+  for (int side = 0; side < kSides; ++side) {
+    SetField(hal, static_cast<Side>(side), Spring(100), 50 * kMs);
+    loop.Tick(static_cast<Side>(side), 50 * kMs);
+    CHECK(dev.wrist_command[side][0] == Approx(-2.0));
+    CHECK(dev.wrist_command[side][2] == Approx(0.0));
+  }
+}

@@ -1,6 +1,7 @@
 #include <atomic>
 #include <catch2/catch.hpp>
 #include <mutex>
+#include <vector>
 
 #include "haptel/config/error.hpp"
 #include "haptel/link/topic.hpp"
@@ -36,6 +37,17 @@ TEST_CASE("QoS profiles: command best effort with a deadline, state reliable, vi
   CHECK(DataWriterQosFor(Profile::kVideo, c).history().depth == 1);
 }
 
+TEST_CASE("QoS profile latched: reliable, keep last 1, transient local, so a late reader gets the last sample") {
+  LinkConfig c;
+  namespace dds = eprosima::fastdds::dds;
+  for (const auto& qos : {DataWriterQosFor(Profile::kLatched, c).durability().kind,
+                          DataReaderQosFor(Profile::kLatched, c).durability().kind}) {
+    CHECK(qos == dds::TRANSIENT_LOCAL_DURABILITY_QOS);
+  }
+  CHECK(DataWriterQosFor(Profile::kLatched, c).reliability().kind == dds::RELIABLE_RELIABILITY_QOS);
+  CHECK(DataWriterQosFor(Profile::kLatched, c).history().depth == 1);
+}
+
 TEST_CASE("a command crosses between two participants intact") {
   const LinkConfig config = Config(1);
   Participant a(config, "test-a");
@@ -62,6 +74,38 @@ TEST_CASE("a command crosses between two participants intact") {
   CHECK(got.sent_ns() == 123456789);
   CHECK(got.left() == 0.25F);
   CHECK(got.right() == -0.75F);
+}
+
+TEST_CASE("a latched topic: a reader that joins after the last write still gets it, once") {
+  const LinkConfig config = Config(7);
+  Participant a(config, "test-a");
+  Participant b(config, "test-b");
+  using SelectedWriter = Writer<msg::SelectedSource, msg::SelectedSourcePubSubType>;
+  using SelectedReader = Reader<msg::SelectedSource, msg::SelectedSourcePubSubType>;
+  SelectedWriter writer(a, TopicName("robot-a", "selected"), Profile::kLatched);
+  msg::SelectedSource first, last;
+  first.vehicle("robot-a");
+  first.lock("handover");
+  last.vehicle("robot-a");
+  last.source("operator");
+  last.stamp_ns(42);
+  REQUIRE(writer.Write(first));
+  REQUIRE(writer.Write(last));  // written before anyone reads
+  std::mutex m;
+  std::vector<msg::SelectedSource> got;
+  SelectedReader reader(b, TopicName("robot-a", "selected"), Profile::kLatched, [&](const msg::SelectedSource& s) {
+    std::lock_guard lock(m);
+    got.push_back(s);
+  });
+  REQUIRE(test::WaitFor([&] {
+    std::lock_guard lock(m);
+    return !got.empty();
+  }, 20.0));
+  std::lock_guard lock(m);
+  REQUIRE(got.size() == 1);  // keep last 1: the current one, not the history
+  CHECK(std::string(got[0].source().c_str()) == "operator");
+  CHECK(std::string(got[0].lock().c_str()).empty());
+  CHECK(got[0].stamp_ns() == 42);
 }
 
 TEST_CASE("topics of different vehicles do not mix") {

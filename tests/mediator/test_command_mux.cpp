@@ -3,8 +3,11 @@
 #include <catch2/catch.hpp>
 
 #include <stdexcept>
+#include <vector>
 
+#include "haptel/interfaces/input.hpp"
 #include "haptel/mediator/command_mux.hpp"
+#include "haptel/mediator/fleet.hpp"
 
 using haptel::mediator::CommandMux;
 using haptel::mediator::MuxInputSpec;
@@ -130,4 +133,27 @@ TEST_CASE("the mux's entries are checked, naming the bad one") {
   CHECK(mux.input_index("keys") == 0);
   CHECK(mux.lock_index("stop") == 0);
   CHECK(mux.input_index("stop") == -1);
+}
+
+// --- A fleet's person asking for a vehicle (fleet.hpp: RequestedVehicle). ---
+
+TEST_CASE("a person's request picks the next vehicle whose course is not over, or the one named") {
+  using haptel::interfaces::kNextVehicle;
+  using haptel::mediator::RequestedVehicle;
+  const std::vector<bool> none_over{false, false, false};
+  // Tab: the next one, round the end.
+  CHECK(RequestedVehicle(kNextVehicle, 0, none_over) == 1);
+  CHECK(RequestedVehicle(kNextVehicle, 2, none_over) == 0);
+  CHECK(RequestedVehicle(kNextVehicle, -1, none_over) == 0);
+  // Past the ones whose course is over.
+  CHECK(RequestedVehicle(kNextVehicle, 0, {false, true, false}) == 2);
+  CHECK(RequestedVehicle(kNextVehicle, 2, {true, false, false}) == 1);
+  // Nobody else waits: no switch.
+  CHECK(RequestedVehicle(kNextVehicle, 1, {true, false, true}) == -1);
+  CHECK(RequestedVehicle(kNextVehicle, 0, {true, true, true}) == -1);
+  // 1..9: that one, unless it is driven already, over, or not in the fleet.
+  CHECK(RequestedVehicle(2, 0, none_over) == 2);
+  CHECK(RequestedVehicle(0, 0, none_over) == -1);
+  CHECK(RequestedVehicle(1, 0, {false, true, false}) == -1);
+  CHECK(RequestedVehicle(3, 0, none_over) == -1);
 }

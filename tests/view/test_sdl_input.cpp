@@ -119,6 +119,27 @@ TEST_CASE("sdl input: F1..F6 request interfaces 0..5, one request per press", "[
   CHECK(box.Load().interface_requests == 3);
 }
 
+TEST_CASE("sdl input: Tab asks a fleet for the next vehicle, 1..9 for that one, one request per press",
+          "[sdl_input]") {
+  InputBox box;
+  SdlInput input(box);
+  CHECK(box.Load().vehicle_requests == 0);
+  input.OnEvent(Down(SDL_SCANCODE_TAB));
+  CHECK(box.Load().vehicle_request == interfaces::kNextVehicle);
+  CHECK(box.Load().vehicle_requests == 1);
+  input.OnEvent(Down(SDL_SCANCODE_TAB, 1));  // held: no new request
+  CHECK(box.Load().vehicle_requests == 1);
+  input.OnEvent(Up(SDL_SCANCODE_TAB));
+  input.OnEvent(Down(SDL_SCANCODE_3));
+  CHECK(box.Load().vehicle_request == 2);
+  input.OnEvent(Down(SDL_SCANCODE_9));
+  CHECK(box.Load().vehicle_request == 8);
+  CHECK(box.Load().vehicle_requests == 3);
+  input.OnEvent(Down(SDL_SCANCODE_0));  // not a vehicle key
+  CHECK(box.Load().vehicle_requests == 3);
+  CHECK(box.Load().interface_requests == 0);  // nor an interface's
+}
+
 TEST_CASE("sdl input: closing the window, SDL_QUIT or Escape asks to quit", "[sdl_input]") {
   InputBox box;
   SdlInput input(box);

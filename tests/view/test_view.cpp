@@ -2,6 +2,7 @@
 // the video on the screen quad, shapes, the overlay's contact border and
 // flashing indicators, the MP4 the View records, and its set-up errors.
 #include <catch2/catch.hpp>
+#include <cstdio>
 #include <cstdlib>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
@@ -436,4 +437,56 @@ TEST_CASE("shared control's arrow shows which way and how hard the hand is pushe
   bool said = false;
   for (const std::string& line : OverlayLines(model.overlay)) said |= line == "shared control: push 1.0 N, obstacle in 0.6 s";
   CHECK(said);
+}
+
+TEST_CASE("a fleet's tiles: each vehicle's picture and text down the right edge, the driven one framed in yellow") {
+  OffscreenGl gl;
+  Renderer renderer(kWidth, kHeight);
+  ViewModel model;
+  model.tiles.count = 3;
+  const char* names[] = {"robot-a", "robot-b", "blimp-a"};
+  for (int i = 0; i < 3; ++i) {
+    std::snprintf(model.tiles.tile[i].name, sizeof model.tiles.tile[i].name, "%s", names[i]);
+    model.tile_video[i].image = QuadrantFrame();
+    model.tile_video[i].id = 1;
+  }
+  model.tiles.tile[1].state = TileState::kDriven;
+  model.tiles.tile[1].lap_time_s = 4.25;
+  model.tiles.tile[1].gates_passed = 1;
+  model.tiles.tile[1].gates_total = 2;
+  model.tiles.tile[2].state = TileState::kLost;
+  CHECK(TileText(model.tiles.tile[1]) == "robot-b DRIVEN  lap 4.2 s  1/2");
+  CHECK(TileText(model.tiles.tile[2]).find("blimp-a LOST") == 0);
+
+  const auto yellow = [](cv::Vec3b c) { return c[0] < 60 && c[1] > 180 && c[2] > 200; };
+  const auto yellow_in = [&](const cv::Mat& image, const TileBox& b) {
+    int n = 0;
+    for (int y = b.y; y < b.y + b.height; ++y) {
+      for (int x = b.x; x < b.x + b.width; ++x) n += yellow(image.at<cv::Vec3b>(y, x)) ? 1 : 0;
+    }
+    return n;
+  };
+  cv::Mat image;
+  renderer.Draw(model, 0.0);
+  renderer.ReadPixels(image);
+  for (int i = 0; i < 3; ++i) {
+    const TileBox b = TileRect(i, 3, kWidth, kHeight);
+    INFO("tile " << i);
+    REQUIRE(b.x + b.width <= kWidth);
+    REQUIRE(b.y + b.height <= kHeight);
+    // The picture, scaled into the tile: its red top-left quadrant.
+    CHECK(Red(At(image, cv::Point(b.x + b.width / 4, b.y + b.width * 3 / 16))));
+    CHECK((yellow_in(image, b) > b.width) == (i == 1));
+  }
+  // The switch: the frame moves with the driven vehicle.
+  model.tiles.tile[1].state = TileState::kHeld;
+  model.tiles.tile[0].state = TileState::kDriven;
+  renderer.Draw(model, 0.0);
+  renderer.ReadPixels(image);
+  CHECK(yellow_in(image, TileRect(0, 3, kWidth, kHeight)) > 0);
+  CHECK(yellow_in(image, TileRect(1, 3, kWidth, kHeight)) == 0);
+  // Nine fit in the column.
+  const TileBox ninth = TileRect(8, 9, kWidth, kHeight);
+  CHECK(ninth.y + ninth.height <= kHeight);
+  CHECK(ninth.width > 0);
 }

@@ -11,6 +11,7 @@
 #include "haptel/config/blimp_course.hpp"
 #include "haptel/interfaces/blimp_manual.hpp"
 #include "haptel/interfaces/gamepad.hpp"
+#include "haptel/mediator/fleet.hpp"
 #include "haptel/vehicles/drive.hpp"
 #include "haptel/vehicles/sim_blimp.hpp"
 #include "haptel/vehicles/sim_robot.hpp"
@@ -241,4 +242,25 @@ TEST_CASE("a virtual game controller flies the simulated blimp: climb away, tail
   CHECK(pad.lost());
   CHECK(blimp.applied().tail_rotor == 0.0);
   CHECK(blimp.applied().power == 0.0);
+}
+
+TEST_CASE("a virtual game controller's Back button asks a fleet for its next vehicle, once per press",
+          "[view_input][virtual_pad]") {
+  InputBox box;
+  InputPump pump(box);
+  VirtualPad stick(pump);
+  REQUIRE(stick.attached());
+  REQUIRE(WaitFor([&] { return box.Load().pad_connected; }, 10.0));
+  const uint32_t before = box.Load().vehicle_requests;
+  stick.Button(SDL_CONTROLLER_BUTTON_BACK, true);
+  REQUIRE(WaitFor([&] { return box.Load().vehicle_requests == before + 1; }, 10.0));
+  CHECK(box.Load().vehicle_request == kNextVehicle);
+  // Held, it asks nothing more; released and pressed again, once more.
+  stick.Button(SDL_CONTROLLER_BUTTON_BACK, false);
+  REQUIRE(WaitFor([&] { return !ButtonOf(box.Load(), PadButton::kBack); }, 10.0));
+  CHECK(box.Load().vehicle_requests == before + 1);
+  stick.Button(SDL_CONTROLLER_BUTTON_BACK, true);
+  REQUIRE(WaitFor([&] { return box.Load().vehicle_requests == before + 2; }, 10.0));
+  // The fleet turns from the driven vehicle to the next whose course is not over.
+  CHECK(mediator::RequestedVehicle(box.Load().vehicle_request, 0, {false, true, false}) == 2);
 }

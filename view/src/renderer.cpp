@@ -392,6 +392,29 @@ void FitMap(const TrackMap& map, int side, double& scale, double& ox, double& oy
 
 }  // namespace
 
+std::string TileText(const Tiles::Tile& tile) {
+  const char* state = tile.state == TileState::kDriven ? "DRIVEN"
+                      : tile.state == TileState::kHeld ? "held"
+                      : tile.state == TileState::kDone ? "done"
+                                                       : "LOST";
+  char text[96];
+  std::snprintf(text, sizeof text, "%s %s  lap %.1f s  %d/%d", tile.name, state, tile.lap_time_s, tile.gates_passed,
+                tile.gates_total);
+  return text;
+}
+
+TileBox TileRect(int index, int count, int width, int height) {
+  // Up to four at 18% of the width; more shrink so the column still fits.
+  const int gap = 6;
+  const int line_h = static_cast<int>(20 * height / 576.0);
+  int tile_w = static_cast<int>(0.18 * width);
+  const int n = std::max(count, 1);
+  const int room = height - 16 - (n - 1) * gap;
+  if (n * (tile_w * 3 / 4 + line_h) > room) tile_w = (room / n - line_h) * 4 / 3;
+  const int tile_h = tile_w * 3 / 4 + line_h;
+  return {width - tile_w - 8, 8 + index * (tile_h + gap), tile_w, tile_h};
+}
+
 std::vector<std::string> OverlayLines(const Overlay& o) {
   std::vector<std::string> lines;
   char line[160];
@@ -488,6 +511,12 @@ struct Renderer::Gl {
   cv::Rect map_panel;                            ///< where the panel is, window pixels
   double map_scale = 0, map_ox = 0, map_oy = 0;  ///< track metres to panel pixels
   bool map_drawn = false;                        ///< in the last frame
+  /// A fleet's tiles: the column drawn on the CPU when a tile's picture or
+  /// text changes, uploaded whole (it is small).
+  GLuint tiles_texture = 0;
+  cv::Mat tiles;  ///< BGRA, the column's size
+  std::string tiles_key;
+  cv::Mat tile_picture;  ///< a picture scaled to its tile, reused
 };
 
 Renderer::Renderer(int width, int height, const ScreenPlacement& screen)
@@ -548,6 +577,7 @@ Renderer::Renderer(int width, int height, const ScreenPlacement& screen)
   g.overlay = cv::Mat(height, width, CV_8UC4, cv::Scalar(0, 0, 0, 0));
   glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, width, height, 0, GL_BGRA, GL_UNSIGNED_BYTE,
                g.overlay.data);
+  make_texture(g.tiles_texture);  // its storage comes with the first tiles
 
   g.projection = Perspective(kFovYDeg, static_cast<float>(width) / static_cast<float>(height), kNear, kFar);
   g.view_projection = g.projection * LookAt(kEye, kTarget, Eigen::Vector3f::UnitZ());
@@ -564,6 +594,7 @@ Renderer::~Renderer() {
   glDeleteTextures(1, &g.overlay_texture);
   glDeleteTextures(1, &g.ghost_texture);
   glDeleteTextures(1, &g.map_texture);
+  glDeleteTextures(1, &g.tiles_texture);
   glDeleteProgram(g.lit);
   glDeleteProgram(g.tex);
 }
@@ -826,6 +857,7 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
     std::snprintf(tip, sizeof tip, "G%d,%d", dial.tip_x, dial.tip_y);
     key += tip;
   }
+  key += model.tiles.line;
   glBindTexture(GL_TEXTURE_2D, g.overlay_texture);
   if (key != g.overlay_key) {
     g.overlay_key = key;
@@ -900,6 +932,17 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
       g.overlay_rects.push_back(box);
       cv::putText(ov, o.message, at, font, scale * 1.2, Bgra(255, 255, 255), 2, cv::LINE_AA);
     }
+    if (model.tiles.count > 0 && model.tiles.line[0] != '\0') {
+      // The fleet's line: bottom left, above the person's message.
+      int base = 0;
+      const cv::Size ts = cv::getTextSize(model.tiles.line, font, scale, 1, &base);
+      const cv::Point at(16, height_ - 24 - 2 * line_h);
+      const cv::Rect box(at.x - 8, at.y - ts.height - 8, ts.width + 16, ts.height + 16);
+      cv::rectangle(ov, box, Bgra(0, 0, 0, 160), cv::FILLED);
+      g.overlay_rects.push_back(box);
+      cv::putText(ov, model.tiles.line, at, font, scale, Bgra(kTileFrameBgr[0], kTileFrameBgr[1], kTileFrameBgr[2]), 1,
+                  cv::LINE_AA);
+    }
     if (o.contact_now) {
       cv::rectangle(ov, cv::Rect(0, 0, width_, height_), Bgra(0, 0, 255, 220), 10);
       const int b = 8;
@@ -926,6 +969,67 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
     glUniformMatrix4fv(g.tex_mvp, 1, GL_FALSE, m.data());
     glUniform4f(g.tex_uv_rect, static_cast<float>(r.x) / w, static_cast<float>(r.y) / h,
                 static_cast<float>(r.width) / w, static_cast<float>(r.height) / h);
+    g.fullscreen.Draw();
+  }
+
+  // --- A fleet's tiles, down the right edge: each vehicle's picture, its
+  // name, state and lap; the driven one framed. ---
+  const Tiles& tiles = model.tiles;
+  const int tile_count = std::clamp(tiles.count, 0, Tiles::kMax);
+  if (tile_count > 0) {
+    const TileBox first = TileRect(0, tile_count, width_, height_);
+    const TileBox last = TileRect(tile_count - 1, tile_count, width_, height_);
+    const cv::Rect column(first.x, first.y, first.width, last.y + last.height - first.y);
+    std::string tiles_key;
+    for (int i = 0; i < tile_count; ++i) {
+      tiles_key += TileText(tiles.tile[static_cast<size_t>(i)]);
+      tiles_key += '#' + std::to_string(model.tile_video[static_cast<size_t>(i)].id) + '\n';
+    }
+    if (tiles_key != g.tiles_key || g.tiles.size() != column.size()) {
+      g.tiles_key = tiles_key;
+      if (g.tiles.size() != column.size()) g.tiles = cv::Mat(column.height, column.width, CV_8UC4);
+      g.tiles.setTo(cv::Scalar(0, 0, 0, 0));
+      const double text = 0.40 * height_ / 576.0;
+      for (int i = 0; i < tile_count; ++i) {
+        const Tiles::Tile& tile = tiles.tile[static_cast<size_t>(i)];
+        const TileBox box = TileRect(i, tile_count, width_, height_);
+        const cv::Rect at(box.x - column.x, box.y - column.y, box.width, box.height);
+        const int picture_h = box.width * 3 / 4;
+        const cv::Rect picture(at.x, at.y, at.width, picture_h);
+        cv::rectangle(g.tiles, at, Bgra(0, 0, 0, 190), cv::FILLED);
+        const cv::Mat* image = model.tile_video[static_cast<size_t>(i)].image.get();
+        if (image != nullptr && !image->empty() && image->type() == CV_8UC3) {
+          cv::resize(*image, g.tile_picture, picture.size(), 0, 0, cv::INTER_AREA);
+          cv::cvtColor(g.tile_picture, g.tiles(picture), cv::COLOR_BGR2BGRA);
+        } else {
+          cv::rectangle(g.tiles, picture, Bgra(40, 40, 40), cv::FILLED);
+        }
+        if (tile.state == TileState::kLost) {
+          // Its last picture is stale: crossed out.
+          cv::line(g.tiles, picture.tl(), picture.br(), Bgra(0, 0, 255), 3, cv::LINE_AA);
+          cv::line(g.tiles, cv::Point(picture.x + picture.width, picture.y),
+                   cv::Point(picture.x, picture.y + picture.height), Bgra(0, 0, 255), 3, cv::LINE_AA);
+        }
+        cv::putText(g.tiles, TileText(tile), cv::Point(at.x + 4, at.y + at.height - 6), cv::FONT_HERSHEY_SIMPLEX,
+                    text, Bgra(255, 255, 255), 1, cv::LINE_AA);
+        if (tile.state == TileState::kDriven) {
+          cv::rectangle(g.tiles, at, Bgra(kTileFrameBgr[0], kTileFrameBgr[1], kTileFrameBgr[2]), 4);
+        }
+      }
+      glBindTexture(GL_TEXTURE_2D, g.tiles_texture);
+      glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+      glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, g.tiles.cols, g.tiles.rows, 0, GL_BGRA, GL_UNSIGNED_BYTE,
+                   g.tiles.data);
+    }
+    glBindTexture(GL_TEXTURE_2D, g.tiles_texture);
+    const float w = static_cast<float>(width_), h = static_cast<float>(height_);
+    Eigen::Matrix4f m = Eigen::Matrix4f::Identity();
+    m(0, 0) = static_cast<float>(column.width) / w;
+    m(1, 1) = static_cast<float>(column.height) / h;
+    m(0, 3) = (2.0f * static_cast<float>(column.x) + static_cast<float>(column.width)) / w - 1.0f;
+    m(1, 3) = 1.0f - (2.0f * static_cast<float>(column.y) + static_cast<float>(column.height)) / h;
+    glUniformMatrix4fv(g.tex_mvp, 1, GL_FALSE, m.data());
+    glUniform4f(g.tex_uv_rect, 0.0f, 0.0f, 1.0f, 1.0f);
     g.fullscreen.Draw();
   }
 

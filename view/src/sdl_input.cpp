@@ -109,6 +109,15 @@ void SdlInput::OnKey(const SDL_KeyboardEvent& key, bool down) {
     state_.interface_request = key.keysym.scancode - SDL_SCANCODE_F1;
     ++state_.interface_requests;
   }
+  // A fleet's vehicles: Tab the next, 1..9 that one of the fleet file.
+  if (down && key.repeat == 0 && key.keysym.scancode == SDL_SCANCODE_TAB) {
+    state_.vehicle_request = interfaces::kNextVehicle;
+    ++state_.vehicle_requests;
+  }
+  if (down && key.repeat == 0 && key.keysym.scancode >= SDL_SCANCODE_1 && key.keysym.scancode <= SDL_SCANCODE_9) {
+    state_.vehicle_request = key.keysym.scancode - SDL_SCANCODE_1;
+    ++state_.vehicle_requests;
+  }
   if (down && key.keysym.scancode == SDL_SCANCODE_HOME) {
     state_.head_pan = 0.0;
     state_.head_tilt = 0.0;
@@ -170,6 +179,13 @@ void SdlInput::OnEvent(const SDL_Event& event) {
     case SDL_CONTROLLERBUTTONUP:
       if (pad_ == nullptr || event.cbutton.which != pad_id_) return;
       if (event.cbutton.button >= static_cast<int>(PadButton::kCount)) return;
+      // Back (the "view" button) asks for the fleet's next vehicle: no
+      // interface drives with it, so a switch never doubles as a command.
+      if (event.cbutton.button == SDL_CONTROLLER_BUTTON_BACK && event.cbutton.state == SDL_PRESSED &&
+          !state_.pad_buttons[event.cbutton.button]) {
+        state_.vehicle_request = interfaces::kNextVehicle;
+        ++state_.vehicle_requests;
+      }
       state_.pad_buttons[event.cbutton.button] = event.cbutton.state == SDL_PRESSED;
       break;
     case SDL_QUIT:

@@ -75,6 +75,22 @@ class Hal {
   /// Interface thread: disables the fields: their forces go to zero at the
   /// next servo tick. (The physics thread clears its own part when it stops.)
   void ZeroForces();
+  /// A short force the hands feel whatever the set-point asks (a cue: the
+  /// fleet's switch to another vehicle). The servo loop adds `force` (N) to
+  /// the wrist's set-point force until `until_ns` (CLOCK_MONOTONIC), under
+  /// the same safety limits; stamped apart from the set-point's feeders so
+  /// their stores never overwrite it.
+  struct Cue {
+    Vec3d force{};
+    int64_t until_ns = 0;
+  };
+  /// Session thread: the cue on `side` (a later one replaces it).
+  void SetCue(Side side, const Cue& cue);
+  /// Servo threads: the cue on `side`, read with at most
+  /// kSetpointReadAttempts attempts; false (no cue this tick) when its
+  /// store stayed in progress through them.
+  bool TryCue(Side side, Cue& out) const;
+
   /// Session thread: scales every force the set-points ask for (fields,
   /// coupling, direct and finger forces) by `scale` in [0, 1] — ramped by the
   /// session when it switches interfaces, so the hands feel no jolt.
@@ -109,6 +125,7 @@ class Hal {
   };
   std::array<Seqlock<StampedField>, kSides> fields_;
   std::array<Seqlock<ForceSetpoint>, kSides> contacts_;
+  std::array<Seqlock<Cue>, kSides> cues_;
   std::array<std::atomic<bool>, kSides> lost_{};
   std::atomic<double> force_scale_{1.0};
   std::array<std::atomic<uint64_t>, kSides> wrist_count_{};

@@ -25,6 +25,9 @@ enum class Key : int {
   kArrowUp = 0, kArrowDown, kArrowLeft, kArrowRight, kW, kS, kA, kD, kSpace, kPageUp, kPageDown, kCount
 };
 
+/// InputState::vehicle_request asking for the vehicle after the driven one.
+inline constexpr int kNextVehicle = -1;
+
 struct InputState {
   // --- Keyboard: held now (arrows or W/A/S/D; space). ---
   bool key_up = false;
@@ -65,6 +68,11 @@ struct InputState {
   /// each press is one request.
   int interface_request = -1;
   uint32_t interface_requests = 0;
+  /// A fleet's vehicle asked for (haptel run --fleet): Tab or the
+  /// controller's Back button ask for the next one (kNextVehicle), 1..9 for
+  /// vehicle 0..8 of the fleet file; counted so each press is one request.
+  int vehicle_request = -1;
+  uint32_t vehicle_requests = 0;
 };
 
 /// Latest InputState: one writer (the input thread), any readers. Wait-free.

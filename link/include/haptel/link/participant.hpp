@@ -24,6 +24,10 @@ enum class Profile {
   kCommand,  ///< best effort, keep last 1, deadline = LinkConfig::command_deadline_s
   kState,    ///< reliable, keep last 8
   kVideo,    ///< best effort, keep last 1
+  /// Reliable, keep last 1, transient local: a reader that joins late gets
+  /// the last sample at once (a state that changes seldom: the fleet's
+  /// selected source).
+  kLatched,
 };
 
 eprosima::fastdds::dds::DataWriterQos DataWriterQosFor(Profile profile, const LinkConfig& config);

@@ -19,7 +19,15 @@
 ///
 /// The automatic operator drives each vehicle until its lap is done or the
 /// fleet's time slice ends, then turns to the next whose course is not
-/// done. A vehicle lost mid-run is reported by name and the others go on;
+/// done. A person turns it at any time (Tab or the controller's Back: the
+/// next; 1..9: that one), in the view's window: the switch is felt (a cue
+/// on both hands) and shown (the driven tile framed, a line on the HUD),
+/// and the slice starts again from it.
+///
+/// With a view, every vehicle's video is a tile (its name, state and lap)
+/// and the driven one's is on the big screen with its world, as a single
+/// run shows it. Each vehicle's selected source is published on
+/// haptel/<vehicle>/selected. A vehicle lost mid-run is reported by name and the others go on;
 /// another operator holding any of them, or a second vehicle answering
 /// under one of the names, ends the whole run (nothing of it is ours).
 #include <atomic>
@@ -42,6 +50,24 @@ struct FleetSetup {
 /// The operator's watch name for the mux's input and lock.
 inline constexpr const char* kOperatorInput = "operator";
 inline constexpr const char* kHandoverLock = "handover";
+
+/// The haptic cue of a switch: a short push up on both hands, felt over
+/// whatever the interface renders (Hal::SetCue; the safety limits still
+/// apply). Up, because no interface pushes that way: it cannot be taken for
+/// a command's feedback.
+inline constexpr double kSwitchCueForce_N = 2.0;
+inline constexpr double kSwitchCueDuration_s = 0.08;
+/// The selected source is published on every change and this often
+/// besides (haptel/<vehicle>/selected).
+inline constexpr double kSelectedPeriod_s = 1.0;
+
+/// The vehicle a person's request (InputState::vehicle_request) asks for,
+/// while vehicle `driven` is (-1: none): interfaces::kNextVehicle the next
+/// after it whose course is not over, else that index. -1 when there is
+/// none to switch to: the index is past the fleet, that vehicle's course is
+/// over (`over[i]`: completed, lost, crashed or capped), or it is the
+/// driven one already.
+int RequestedVehicle(int request, int driven, const std::vector<bool>& over);
 
 struct FleetVehicleResult {
   /// Its own outcome and record (one row in the runs database).
@@ -66,6 +92,12 @@ struct FleetResult {
   double handover_ms_p50 = -1.0;  ///< nearest rank; negative: no handover
   double handover_ms_p95 = -1.0;
   std::vector<std::string> lost;  ///< the vehicles lost mid-run, by name
+  /// Switches a person asked for (a key, a controller button) and made;
+  /// the automatic operator's own turns are not counted.
+  int person_switches = 0;
+  /// The operator process's CPU time (all its threads, getrusage) per wall
+  /// second over the run's loop: what the fleet costs the station.
+  double operator_cpu_share = 0.0;
   std::string fleet_run;          ///< "fleet <name> <started, UTC>": shared by its rows
 };
 

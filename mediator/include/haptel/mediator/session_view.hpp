@@ -12,6 +12,7 @@
 #include <array>
 #include <atomic>
 #include <memory>
+#include <vector>
 
 #include "haptel/config/cockpit.hpp"
 #include "haptel/config/physics.hpp"
@@ -48,6 +49,10 @@ class SessionView final : public view::ViewSource {
   /// Opens the view (throws view::ViewError when it cannot) and reads the
   /// person's keys and controller into `input`.
   SessionView(const view::ViewOptions& options, const Parts& parts, interfaces::InputBox& input);
+  /// A fleet's view (haptel run --fleet): one Parts per vehicle (at most
+  /// view::Tiles::kMax), each vehicle's video on its tile, and the shown
+  /// one's (Show) world, hands and video on the big screen.
+  SessionView(const view::ViewOptions& options, std::vector<Parts> fleet, interfaces::InputBox& input);
   ~SessionView() override;
 
   /// Session thread: the overlay for the next frames (a seqlock store: never waits).
@@ -60,7 +65,17 @@ class SessionView final : public view::ViewSource {
   void Publish(const view::Prediction& prediction) { prediction_.Store(prediction); }
   /// Session thread: a physics world built during the run (its proxy hands
   /// and controls are drawn from the next frame on). It must outlive the view.
-  void SetPhysics(const SessionPhysics* physics) { physics_.store(physics, std::memory_order_release); }
+  void SetPhysics(const SessionPhysics* physics) { SetPhysics(0, physics); }
+  /// Session thread: the same for the fleet's vehicle `index`.
+  void SetPhysics(int index, const SessionPhysics* physics) {
+    physics_[static_cast<size_t>(index)].store(physics, std::memory_order_release);
+  }
+  /// Session thread: the fleet's vehicle whose parts are on the big screen
+  /// from the next frame on (the driven one).
+  void Show(int index) { shown_.store(index, std::memory_order_release); }
+  /// Session thread: the fleet's tiles for the next frames (a seqlock
+  /// store: never waits).
+  void Publish(const view::Tiles& tiles) { tiles_.Store(tiles); }
   /// View thread.
   void Fill(view::ViewModel& model) override;
   view::ViewStats Stats() const;
@@ -68,8 +83,10 @@ class SessionView final : public view::ViewSource {
   void Stop();
 
  private:
-  Parts parts_;
-  std::atomic<const SessionPhysics*> physics_;
+  std::vector<Parts> parts_;  ///< one; or a fleet's, one per vehicle
+  std::array<std::atomic<const SessionPhysics*>, view::Tiles::kMax> physics_{};
+  std::atomic<int> shown_{0};
+  Seqlock<view::Tiles> tiles_;
   Seqlock<view::Overlay> overlay_;
   Seqlock<view::Gaze> gaze_;
   Seqlock<view::Prediction> prediction_;

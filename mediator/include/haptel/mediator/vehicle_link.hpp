@@ -153,7 +153,13 @@ struct VehicleLinkOptions {
   std::filesystem::path program;
   /// Decode the video (only when something shows or records it).
   bool decode_video = true;
+  /// Publish who commands the vehicle on haptel/<vehicle>/selected
+  /// (PublishSelected): a fleet's command mux does.
+  bool publish_selected = false;
 };
+
+/// The writer of haptel/<vehicle>/selected (the IDL's SelectedSource).
+class SelectedWriter;
 
 class VehicleLink {
  public:
@@ -214,6 +220,17 @@ class VehicleLink {
   /// conflict: two vehicles named alike on one domain.
   int VehiclesOnTopic() const { return channel_->VehiclesOnTopic(); }
 
+  /// Publishes who commands the vehicle now on haptel/<vehicle>/selected
+  /// (reliable, transient local: a reader that joins later gets the last):
+  /// `source` the selected input ("" when none is), `lock` the lock that
+  /// holds it ("" when none does). Only with
+  /// VehicleLinkOptions::publish_selected (else nothing). Session thread;
+  /// it allocates (the strings): call it on a change and now and then,
+  /// never from a real-time loop. False when DDS refused the sample.
+  bool PublishSelected(const std::string& source, const std::string& lock);
+  /// Readers of the selected topic matched now (0 without the writer).
+  int selected_readers() const;
+
  private:
   VehicleLinkOptions options_;
   uint64_t session_ = 0;
@@ -221,6 +238,8 @@ class VehicleLink {
   std::unique_ptr<link::Participant> participant_;
   std::unique_ptr<LinkChannel> channel_;
   std::unique_ptr<VideoReceiver> video_;
+  std::unique_ptr<SelectedWriter> selected_;
+  std::string operator_name_;
   bool stopped_ = false;
 };
 

@@ -40,6 +40,17 @@ inline ScreenPlacement HeadTrackedScreen() { return {{0.55, 0.0, 0.30}, 0.90}; }
 std::vector<std::string> OverlayLines(const Overlay& overlay);
 /// The HUD's speedometer text ("0.42 m/s"), empty without a HUD.
 std::string HudSpeedText(const Overlay& overlay);
+/// Where a fleet's tile `index` of `count` is drawn in a `width`×`height`
+/// view, pixels from the top-left corner: a column down the right edge, the
+/// picture over one line of text (TileText). The driven one has a yellow
+/// frame (kTileFrameBgr) around it, the others none.
+struct TileBox {
+  int x = 0, y = 0, width = 0, height = 0;
+};
+TileBox TileRect(int index, int count, int width, int height);
+/// The driven tile's frame, BGR: nothing else in the view is this yellow.
+inline constexpr std::array<int, 3> kTileFrameBgr{0, 220, 255};
+
 /// Whether a turn indicator that is on is lit at time `t_s` (they flash at
 /// 1.5 Hz, lit for the first half of each period, as a car's do).
 bool IndicatorLit(double t_s);

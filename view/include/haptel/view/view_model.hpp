@@ -160,6 +160,38 @@ struct TrackMap {
   std::vector<Label> labels;
 };
 
+/// A fleet's vehicle as its tile shows it (haptel run --fleet): who
+/// commands it now.
+enum class TileState : uint8_t {
+  kDriven,  ///< the operator drives it: its video is on the big screen
+  kHeld,    ///< held safe while another is driven (stopped, at neutral)
+  kDone,    ///< its course is over (completed, crashed, capped); held safe
+  kLost,    ///< it stopped answering
+};
+
+/// The fleet's tiles: every vehicle's name, state and lap, one tile each,
+/// with the driven one highlighted, and a line on the HUD saying who is
+/// driven and how to switch. Flat and fixed-size (published through a
+/// seqlock); the tiles' video images travel apart (ViewModel::tile_video).
+struct Tiles {
+  static constexpr int kMax = 9;  ///< the keys 1..9
+  struct Tile {
+    char name[24] = "";
+    TileState state = TileState::kHeld;
+    double lap_time_s = 0.0;  ///< the lap clock (0 before the start)
+    int gates_passed = 0;
+    int gates_total = 0;
+  };
+  int count = 0;  ///< 0: no tiles (a single vehicle's view)
+  std::array<Tile, kMax> tile{};
+  /// The HUD line: the driven vehicle, the last switch and the keys.
+  char line[96] = "";
+};
+
+/// A tile's text under its picture, e.g. "robot-b DRIVEN lap 4.2 s 1/2":
+/// what the person reads (the renderer draws exactly this).
+std::string TileText(const Tiles::Tile& tile);
+
 struct ViewModel {
   /// Everything in the world: proxy or tracked hands, controls, scene bodies,
   /// the gesture wall. Reserved once; Fill clears and refills it.
@@ -170,6 +202,9 @@ struct ViewModel {
   Prediction prediction;
   /// The map the prediction is drawn on (null: no map).
   std::shared_ptr<const TrackMap> map;
+  /// A fleet's tiles and each tile's latest picture (same order).
+  Tiles tiles;
+  std::array<VideoImage, Tiles::kMax> tile_video;
 };
 
 }  // namespace haptel::view
