@@ -443,14 +443,17 @@ void MakeSecurityFiles(const fs::path& dir, const std::vector<std::string>& vehi
   const std::string op = OperatorIdentity();
   MakeIdentity(dir, op, days);
   Write(dir / (op + "-permissions.xml"),
-        Permissions(op, {"haptel/*/command"}, {"haptel/*/state", "haptel/*/video"}, days));
+        // The operator commands, asks for key frames and bitrates
+        // (video_feedback) and says who drives (selected, a fleet's).
+        Permissions(op, {"haptel/*/command", "haptel/*/video_feedback", "haptel/*/selected"},
+                    {"haptel/*/state", "haptel/*/video", "haptel/*/selected"}, days));
   Sign(dir, op + "-permissions");
   for (const std::string& name : vehicles) {
     const std::string id = VehicleIdentity(name);
     MakeIdentity(dir, id, days);
     Write(dir / (id + "-permissions.xml"),
-          Permissions(id, {"haptel/" + name + "/state", "haptel/" + name + "/video"}, {"haptel/" + name + "/command"},
-                      days));
+          Permissions(id, {"haptel/" + name + "/state", "haptel/" + name + "/video"},
+                      {"haptel/" + name + "/command", "haptel/" + name + "/video_feedback"}, days));
     Sign(dir, id + "-permissions");
   }
   if (!console_names.empty()) MakeConsoleFiles(dir, console_names, days);

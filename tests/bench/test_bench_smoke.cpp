@@ -370,5 +370,5 @@ TEST_CASE("haptel bench NAME --smoke through the haptel program; every usage lin
     ++benches;
     CHECK_THAT(line, Catch::Contains("[--smoke]"));
   }
-  CHECK(benches == 9);
+  CHECK(benches == 11);
 }

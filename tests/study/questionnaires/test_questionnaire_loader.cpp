@@ -220,10 +220,10 @@ TEST_CASE("FindQuestionnaire: an unknown name lists the available ones",
       haptel::test::WhatOf<ConfigError>([] { FindQuestionnaire(kShipped, "nasa"); });
   CHECK_THAT(msg, StartsWith(kShipped.string()));
   CHECK_THAT(msg, Contains("'nasa'"));
-  CHECK_THAT(msg, Contains("expected one of: rating, sus, thesis, tlx"));
+  CHECK_THAT(msg, Contains("expected one of: demographics, rating, sus, thesis, tlx"));
   // Not a path either.
   CHECK_THAT(haptel::test::WhatOf<ConfigError>([] { FindQuestionnaire(kShipped, "../tlx"); }),
-             Contains("expected one of: rating, sus, thesis, tlx"));
+             Contains("expected one of: demographics, rating, sus, thesis, tlx"));
 }
 
 TEST_CASE("FindQuestionnaire: a file whose name is not its file's",
