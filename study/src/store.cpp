@@ -235,6 +235,27 @@ std::vector<PlannedTrial> StudyStore::Plan() const {
   return plan;
 }
 
+namespace {
+
+/// A trial's row in the column order both Trials() and Superseded() select:
+/// participant, position, condition, run_id, lap_time_s, completed,
+/// obstacles, outcome, attempt, approach_s, flags.
+void ReadTrialRow(Reader& r, TrialRow& t) {
+  t.participant = r.Text();
+  t.position = static_cast<int>(r.Int());
+  t.condition = r.Text();
+  t.run_id = r.Int();
+  t.lap_time_s = r.Real();
+  t.completed = r.Bool();
+  t.obstacles = static_cast<int>(r.Int());
+  t.outcome = r.Text();
+  t.attempt = static_cast<int>(r.Int());
+  t.approach_s = r.Real();
+  t.flags = r.Text();
+}
+
+}  // namespace
+
 std::vector<TrialRow> StudyStore::Trials() const {
   sqlite3* db = recorder_.handle();
   const std::filesystem::path& file = recorder_.path();
@@ -249,17 +270,7 @@ std::vector<TrialRow> StudyStore::Trials() const {
   while (sqlite3_step(select.get()) == SQLITE_ROW) {
     Reader r(select.get());
     TrialRow t;
-    t.participant = r.Text();
-    t.position = static_cast<int>(r.Int());
-    t.condition = r.Text();
-    t.run_id = r.Int();
-    t.lap_time_s = r.Real();
-    t.completed = r.Bool();
-    t.obstacles = static_cast<int>(r.Int());
-    t.outcome = r.Text();
-    t.attempt = static_cast<int>(r.Int());
-    t.approach_s = r.Real();
-    t.flags = r.Text();
+    ReadTrialRow(r, t);
     rows.push_back(t);
   }
   return rows;
@@ -393,18 +404,7 @@ std::vector<SupersededTrial> StudyStore::Superseded() const {
   while (sqlite3_step(select.get()) == SQLITE_ROW) {
     Reader r(select.get());
     SupersededTrial s;
-    TrialRow& t = s.trial;
-    t.participant = r.Text();
-    t.position = static_cast<int>(r.Int());
-    t.condition = r.Text();
-    t.run_id = r.Int();
-    t.lap_time_s = r.Real();
-    t.completed = r.Bool();
-    t.obstacles = static_cast<int>(r.Int());
-    t.outcome = r.Text();
-    t.attempt = static_cast<int>(r.Int());
-    t.approach_s = r.Real();
-    t.flags = r.Text();
+    ReadTrialRow(r, s.trial);
     s.why = r.Text();
     s.superseded_utc = r.Text();
     rows.push_back(s);
