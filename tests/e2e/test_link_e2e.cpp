@@ -88,7 +88,7 @@ TEST_CASE("a second operator is refused, naming the one driving; the first drive
   const auto dir = test::ScratchDir("e2e-owner");
   HandStartedVehicle vehicle({Bin("haptel-vehicle"), "--track", "config/tracks/grand-prix.yaml", "--domain",
                               std::to_string(domain)});
-  // The first drives for 40 s (the grand prix is longer): the second must
+  // The first drives for 25 s (the grand prix is longer): the second must
   // meet it driving however slowly a loaded machine starts the second (the
   // short track's 14 s lap was once over before the second came up, and the
   // second then rightly drove the free vehicle).
@@ -100,7 +100,7 @@ TEST_CASE("a second operator is refused, naming the one driving; the first drive
     return args;
   };
   auto first_args = on_grand_prix(dir / "first.db");
-  first_args.insert(first_args.end(), {"--time-limit", "40"});
+  first_args.insert(first_args.end(), {"--time-limit", "25"});
   Child first(first_args);
   REQUIRE(test::WaitForErr(first, "distance", 60.0));  // a progress line: driving
   Child second(on_grand_prix(dir / "second.db"));
