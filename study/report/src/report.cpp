@@ -156,6 +156,22 @@ std::string NotePlace(const StudyResults::Note& n) {
   return n.participant + ", " + n.condition + " (position " + std::to_string(n.position) + ")";
 }
 
+/// A trial's columns in the order both the trials' and the superseded
+/// trials' queries select them.
+void ReadTrial(Reader& row, StudyResults::Trial& t) {
+  t.participant = row.Text();
+  t.position = static_cast<int>(row.Int());
+  t.condition = row.Text();
+  t.lap_time_s = row.Real();
+  t.completed = row.Bool();
+  t.obstacles = static_cast<int>(row.Int());
+  t.run_id = row.Int();
+  t.outcome = row.Text();
+  t.attempt = static_cast<int>(row.Int());
+  t.approach_s = row.Real();
+  t.flags = row.Text();
+}
+
 }  // namespace
 
 StudyResults LoadStudyResults(const std::filesystem::path& database, const std::string& name) {
@@ -237,17 +253,7 @@ StudyResults LoadStudyResults(const std::filesystem::path& database, const std::
   while (sqlite3_step(trials.get()) == SQLITE_ROW) {
     Reader row(trials.get());
     StudyResults::Trial t;
-    t.participant = row.Text();
-    t.position = static_cast<int>(row.Int());
-    t.condition = row.Text();
-    t.lap_time_s = row.Real();
-    t.completed = row.Bool();
-    t.obstacles = static_cast<int>(row.Int());
-    t.run_id = row.Int();
-    t.outcome = row.Text();
-    t.attempt = static_cast<int>(row.Int());
-    t.approach_s = row.Real();
-    t.flags = row.Text();
+    ReadTrial(row, t);
     r.trials.push_back(t);
   }
   Stmt answers = Prepare(database, raw,
@@ -275,18 +281,7 @@ StudyResults LoadStudyResults(const std::filesystem::path& database, const std::
     while (sqlite3_step(superseded.get()) == SQLITE_ROW) {
       Reader row(superseded.get());
       StudyResults::Superseded s;
-      StudyResults::Trial& t = s.trial;
-      t.participant = row.Text();
-      t.position = static_cast<int>(row.Int());
-      t.condition = row.Text();
-      t.lap_time_s = row.Real();
-      t.completed = row.Bool();
-      t.obstacles = static_cast<int>(row.Int());
-      t.run_id = row.Int();
-      t.outcome = row.Text();
-      t.attempt = static_cast<int>(row.Int());
-      t.approach_s = row.Real();
-      t.flags = row.Text();
+      ReadTrial(row, s.trial);
       s.why = row.Text();
       r.superseded.push_back(s);
     }
