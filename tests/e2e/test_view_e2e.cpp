@@ -328,7 +328,10 @@ TEST_CASE("a fleet in a window: every robot a tile, Tab turns to the next, and t
              "--time-limit", "60", "--json", "--domain", std::to_string(test::UniqueDomain(35)), "--database",
              (dir / "runs.db").string(), "--vehicle-timeout", "5"});
   REQUIRE(test::WaitForErr(run, "driving 'robot-a'", 60.0));
-  REQUIRE(test::WaitForErr(run, "distance", 60.0));  // robot-a answers and drives
+  // A progress line with robot-a obeying the operator: robot-a has been
+  // driven before the Tab (a "distance" line alone may come while the
+  // handover still waits for robot-a's first state on a loaded machine).
+  REQUIRE(test::WaitForErr(run, "robot-a operator", 60.0));
   REQUIRE(XDoTool({"search", "--sync", "--name", "Haptel", "windowfocus", "--sync", "key", "Tab"}) == 0);
   REQUIRE(test::WaitForErr(run, "driving 'robot-b' (asked by the person)", 30.0));
   // A progress line with robot-b obeying the operator (one every 2 s).
