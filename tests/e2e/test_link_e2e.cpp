@@ -266,13 +266,17 @@ TEST_CASE("haptel security init, then a secured lap: the spawned vehicle is secu
     CHECK(again.err().find("already holds a CA") != std::string::npos);
   }
   const int domain = test::UniqueDomain(46);
+  // Ten seconds (its vehicle spawned within them) show the secured link both ways (commands
+  // obeyed, states and video back); a whole lap would only add time.
   Child run({Bin("haptel"), "run", "--security", security.string(), "--track", "config/tracks/test-short.yaml",
              "--json", "--domain", std::to_string(domain), "--database", (dir / "runs.db").string(),
-             "--vehicle-timeout", "5"});
+             "--vehicle-timeout", "5", "--time-limit", "10"});
   const int code = run.Wait(180.0);
   INFO(run.out() << run.err());
-  CHECK(code == 0);
-  CHECK(JsonField(run.LastLine(), "outcome") == "completed");
+  CHECK(code == 1);
+  CHECK(JsonField(run.LastLine(), "outcome") == "time limit");
+  CHECK(std::stod(JsonField(run.LastLine(), "distance_m")) > 0.2);
+  CHECK(std::stoull(JsonField(run.LastLine(), "video_frames")) > 0);
 
   // A vehicle the folder has no identity for stops at once, saying so.
   Child stray({Bin("haptel-vehicle"), "--name", "blimp9", "--track", "config/tracks/test-short.yaml", "--security",
@@ -356,12 +360,13 @@ TEST_CASE("haptel run --attach drives a vehicle in another network namespace, ov
   const uint64_t before = host.received_bytes();
   Child run({Bin("haptel"), "run", "--attach", "--track", "config/tracks/test-short.yaml", "--json", "--domain",
              std::to_string(domain), "--dds-interfaces", host.address_here(), "--dds-peers", host.address_there(),
-             "--database", (dir / "runs.db").string(), "--vehicle-timeout", "5"});
+             "--database", (dir / "runs.db").string(), "--vehicle-timeout", "5", "--time-limit", "8"});
   const int code = run.Wait(120.0);
   INFO(run.out() << run.err());
-  CHECK(code == 0);
-  CHECK(JsonField(run.LastLine(), "outcome") == "completed");
-  // The state and the video crossed the veth pair (a lap's video is megabytes).
+  CHECK(code == 1);
+  CHECK(JsonField(run.LastLine(), "outcome") == "time limit");
+  CHECK(std::stod(JsonField(run.LastLine(), "distance_m")) > 0.2);
+  // The state and the video crossed the veth pair (eight seconds of video are megabytes).
   const uint64_t crossed = host.received_bytes() - before;
   INFO("bytes received over the veth pair: " << crossed);
   CHECK(crossed > 1000000);
@@ -382,11 +387,12 @@ TEST_CASE("through a discovery server: a vehicle and an operator that only know 
                               std::to_string(domain), "--discovery-server", server_address});
   Child run({Bin("haptel"), "run", "--attach", "--discovery-server", server_address, "--track",
              "config/tracks/test-short.yaml", "--json", "--domain", std::to_string(domain), "--database",
-             (dir / "runs.db").string(), "--vehicle-timeout", "5"});
+             (dir / "runs.db").string(), "--vehicle-timeout", "5", "--time-limit", "8"});
   const int code = run.Wait(120.0);
   INFO(run.out() << run.err());
-  CHECK(code == 0);
-  CHECK(JsonField(run.LastLine(), "outcome") == "completed");
+  CHECK(code == 1);
+  CHECK(JsonField(run.LastLine(), "outcome") == "time limit");
+  CHECK(std::stod(JsonField(run.LastLine(), "distance_m")) > 0.2);
   // A bad address is one line, before anything starts.
   Child bad({Bin("haptel"), "run", "--discovery-server", "localhost:99999"});
   CHECK(bad.Wait(30.0) == 2);
