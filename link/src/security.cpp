@@ -272,8 +272,41 @@ std::string When(std::time_t t, const ValidityEnd& end, const char* tag) {
          ", which DDS reads in this host's local time)";
 }
 
+/// The topics an identity publishes and subscribes to: what `haptel security
+/// init` grants, and what the check asks of a folder made by an older
+/// version (whose grants may lack a topic added since).
+struct GrantedTopics {
+  std::vector<std::string> publish;
+  std::vector<std::string> subscribe;
+};
+GrantedTopics TopicsOf(const std::string& identity) {
+  if (identity == OperatorIdentity()) {
+    // The operator commands, asks for key frames and bitrates
+    // (video_feedback) and says who drives (selected, a fleet's).
+    return {{"haptel/*/command", "haptel/*/video_feedback", "haptel/*/selected"},
+            {"haptel/*/state", "haptel/*/video", "haptel/*/selected"}};
+  }
+  const std::string name = identity.substr(VehicleIdentity("").size());
+  return {{"haptel/" + name + "/state", "haptel/" + name + "/video"},
+          {"haptel/" + name + "/command", "haptel/" + name + "/video_feedback"}};
+}
+
+/// The topic names listed under `rule`'s <`direction`><topics>.
+std::vector<std::string> ListedTopics(const tinyxml2::XMLElement* rule, const char* direction) {
+  std::vector<std::string> out;
+  const tinyxml2::XMLElement* list = rule != nullptr ? rule->FirstChildElement(direction) : nullptr;
+  list = list != nullptr ? list->FirstChildElement("topics") : nullptr;
+  for (const tinyxml2::XMLElement* t = list != nullptr ? list->FirstChildElement("topic") : nullptr; t != nullptr;
+       t = t->NextSiblingElement("topic")) {
+    out.push_back(Trimmed(t->GetText()));
+  }
+  return out;
+}
+
 /// The permissions of `identity` in `file`: signed by the CA, holding a grant
-/// for the identity's subject, and valid now.
+/// for the identity's subject, valid now, and allowing every topic this
+/// version uses (a folder made before a topic was added would otherwise be
+/// refused by DDS when the topic is created, with no reason given).
 void CheckPermissions(const fs::path& file, const fs::path& ca, const std::string& identity, std::time_t now) {
   const std::string xml = SignedContent(file, ca, "permissions file");
   tinyxml2::XMLDocument doc;
@@ -306,6 +339,19 @@ void CheckPermissions(const fs::path& file, const fs::path& ca, const std::strin
   if (now > ends) {
     throw ConfigError("permissions file " + file.string() + " expired on " + When(ends, not_after, "not_after") +
                       "; " + RemakeAdvice());
+  }
+  const tinyxml2::XMLElement* rule = grant->FirstChildElement("allow_rule");
+  const GrantedTopics needed = TopicsOf(identity);
+  for (const auto& [direction, topics] : {std::pair<const char*, const std::vector<std::string>*>{"publish", &needed.publish},
+                                          {"subscribe", &needed.subscribe}}) {
+    const std::vector<std::string> listed = ListedTopics(rule, direction);
+    for (const std::string& topic : *topics) {
+      if (std::find(listed.begin(), listed.end(), topic) == listed.end()) {
+        throw ConfigError("permissions file " + file.string() + " does not let identity '" + identity + "' " +
+                          direction + " topic '" + topic + "', which this version of Haptel uses (the folder was " +
+                          "made by an older one); " + RemakeAdvice());
+      }
+    }
   }
 }
 
@@ -442,18 +488,12 @@ void MakeSecurityFiles(const fs::path& dir, const std::vector<std::string>& vehi
   Sign(dir, "governance");
   const std::string op = OperatorIdentity();
   MakeIdentity(dir, op, days);
-  Write(dir / (op + "-permissions.xml"),
-        // The operator commands, asks for key frames and bitrates
-        // (video_feedback) and says who drives (selected, a fleet's).
-        Permissions(op, {"haptel/*/command", "haptel/*/video_feedback", "haptel/*/selected"},
-                    {"haptel/*/state", "haptel/*/video", "haptel/*/selected"}, days));
+  Write(dir / (op + "-permissions.xml"), Permissions(op, TopicsOf(op).publish, TopicsOf(op).subscribe, days));
   Sign(dir, op + "-permissions");
   for (const std::string& name : vehicles) {
     const std::string id = VehicleIdentity(name);
     MakeIdentity(dir, id, days);
-    Write(dir / (id + "-permissions.xml"),
-          Permissions(id, {"haptel/" + name + "/state", "haptel/" + name + "/video"},
-                      {"haptel/" + name + "/command", "haptel/" + name + "/video_feedback"}, days));
+    Write(dir / (id + "-permissions.xml"), Permissions(id, TopicsOf(id).publish, TopicsOf(id).subscribe, days));
     Sign(dir, id + "-permissions");
   }
   if (!console_names.empty()) MakeConsoleFiles(dir, console_names, days);
