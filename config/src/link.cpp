@@ -84,38 +84,44 @@ void LinkFault::ValidateOrThrow() const {
 
 namespace {
 
-/// "100ms", "0.1s", "250us" -> seconds; throws naming `part`.
-double ParseDuration(const std::string& part, const std::string& value) {
-  size_t used = 0;
+/// A number and the unit written right after it ("100ms" -> 100, "ms").
+/// `parsed` is false when `value` does not start with a number.
+struct NumberWithUnit {
   double number = 0.0;
+  std::string unit;
+  bool parsed = false;
+};
+NumberWithUnit SplitNumber(const std::string& value) {
+  NumberWithUnit out;
+  size_t used = 0;
   try {
-    number = std::stod(value, &used);
+    out.number = std::stod(value, &used);
   } catch (const std::exception&) {
     used = 0;
   }
-  const std::string unit = value.substr(used);
+  out.parsed = used > 0;
+  out.unit = value.substr(used);
+  return out;
+}
+
+/// "100ms", "0.1s", "250us" -> seconds; throws naming `part`.
+double ParseDuration(const std::string& part, const std::string& value) {
+  const NumberWithUnit v = SplitNumber(value);
   double scale = 0.0;
-  if (unit == "s") scale = 1.0;
-  if (unit == "ms") scale = 1e-3;
-  if (unit == "us") scale = 1e-6;
-  if (used == 0 || scale == 0.0 || !std::isfinite(number) || number < 0.0) {
+  if (v.unit == "s") scale = 1.0;
+  if (v.unit == "ms") scale = 1e-3;
+  if (v.unit == "us") scale = 1e-6;
+  if (!v.parsed || scale == 0.0 || !std::isfinite(v.number) || v.number < 0.0) {
     throw std::invalid_argument("a time >= 0 with its unit, such as 100ms, 0.1s or 250us (not '" + part + "')");
   }
-  return number * scale;
+  return v.number * scale;
 }
 
 /// "5%" or "0.05" -> fraction; throws naming `part`.
 double ParseFraction(const std::string& part, const std::string& value) {
-  size_t used = 0;
-  double number = -1.0;
-  try {
-    number = std::stod(value, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  const std::string rest = value.substr(used);
-  if (rest == "%") number /= 100.0;
-  if (used == 0 || (!rest.empty() && rest != "%") || !(number >= 0.0 && number <= 0.99)) {
+  const NumberWithUnit v = SplitNumber(value);
+  const double number = v.unit == "%" ? v.number / 100.0 : v.number;
+  if (!v.parsed || (!v.unit.empty() && v.unit != "%") || !(number >= 0.0 && number <= 0.99)) {
     throw std::invalid_argument("a loss from 0 to 99%, such as 5% or 0.05 (not '" + part + "')");
   }
   return number;
@@ -124,20 +130,13 @@ double ParseFraction(const std::string& part, const std::string& value) {
 /// "1Mbit", "500kbit", "0.5Mbit" -> bit/s; throws naming `part`. tc's
 /// lower-case "mbit" and "gbit" are taken too (nobody means millibits).
 double ParseRate(const std::string& part, const std::string& value) {
-  size_t used = 0;
-  double number = 0.0;
-  try {
-    number = std::stod(value, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  const std::string unit = value.substr(used);
+  const NumberWithUnit v = SplitNumber(value);
   double scale = 0.0;
-  if (unit == "kbit") scale = 1e3;
-  if (unit == "Mbit" || unit == "mbit") scale = 1e6;
-  if (unit == "Gbit" || unit == "gbit") scale = 1e9;
-  const double rate = number * scale;
-  if (used == 0 || scale == 0.0 || !std::isfinite(number) || !(rate >= kMinRateBps && rate <= kMaxRateBps)) {
+  if (v.unit == "kbit") scale = 1e3;
+  if (v.unit == "Mbit" || v.unit == "mbit") scale = 1e6;
+  if (v.unit == "Gbit" || v.unit == "gbit") scale = 1e9;
+  const double rate = v.number * scale;
+  if (!v.parsed || scale == 0.0 || !std::isfinite(v.number) || !(rate >= kMinRateBps && rate <= kMaxRateBps)) {
     throw std::invalid_argument("a rate from 1kbit to 10Gbit with its unit, such as 1Mbit or 500kbit (not '" +
                                 part + "')");
   }
