@@ -52,6 +52,9 @@ std::string Summary(const haptel::vehicles::NodeCounters& c) {
          std::to_string(c.frames_published) + " frames (" + std::to_string(c.key_frames_sent) + " key, " +
          std::to_string(c.key_frame_requests) + " key frame requests" +
          (c.frames_skipped > 0 ? ", " + std::to_string(c.frames_skipped) + " skipped to fit the link" : "") +
+         (c.frames_passed_through > 0
+              ? ", " + std::to_string(c.frames_passed_through) + " passed through as the camera made them"
+              : "") +
          (c.target_kbps > 0 ? ", last asked for " + std::to_string(c.target_kbps) + " kbit/s" : "") + "), " +
          std::to_string(c.grabs_failed) + " camera grabs failed" +
          (c.camera_stalls > 0 ? " (" + std::to_string(c.camera_stalls) + " stalls)" : "") +

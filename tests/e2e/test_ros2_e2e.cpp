@@ -68,6 +68,9 @@ TEST_CASE("the ROS 2 adapter drives a Cyclone DDS robot round the short track, i
   CHECK(JsonField(json, "vehicle_kind") == "ros2");
   // The stand-in's camera (CompressedImage) came through to the mediator.
   CHECK(std::stoi(JsonField(json, "video_frames")) > 10);
+  // Its JPEGs are the vehicle file's size (320x240) and fit the link: they
+  // went to the operator as the robot made them, neither decoded nor encoded.
+  CHECK(run.err().find("passed through as the camera made them") != std::string::npos);
   // The vehicle names the robot's graph it joined.
   CHECK(run.err().find("ROS 2 robot on domain " + std::to_string(ros_domain)) != std::string::npos);
 

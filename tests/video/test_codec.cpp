@@ -5,6 +5,8 @@
 
 #include <catch2/catch.hpp>
 #include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"
@@ -210,4 +212,55 @@ TEST_CASE("jpeg's ladder follows the link: quality, then resolution, then frame 
   CHECK(encoder.skip() == 0);
   CHECK(encoder.scale() == 1.0);
   CHECK(encoder.quality() == 80);  // never above the file's quality
+}
+
+TEST_CASE("a camera's JPEG: its size read from the frame header without decoding, baseline and progressive") {
+  const cv::Mat frame = RenderedFrame();
+  int width = 0;
+  int height = 0;
+  const std::vector<uint8_t> baseline = Encoded(frame, 80);
+  REQUIRE(haptel::video::JpegFrameSize(baseline.data(), baseline.size(), width, height));
+  CHECK(width == 640);
+  CHECK(height == 480);
+  cv::Mat small;
+  cv::resize(frame, small, cv::Size(320, 240));
+  std::vector<uint8_t> progressive;
+  REQUIRE(cv::imencode(".jpg", small, progressive, {cv::IMWRITE_JPEG_PROGRESSIVE, 1}));
+  REQUIRE(haptel::video::JpegFrameSize(progressive.data(), progressive.size(), width, height));
+  CHECK(width == 320);
+  CHECK(height == 240);
+  // Not a JPEG, or cut before its frame header: no size.
+  const std::vector<uint8_t> garbage{0x89, 'P', 'N', 'G', 0, 0, 0, 0};
+  CHECK_FALSE(haptel::video::JpegFrameSize(garbage.data(), garbage.size(), width, height));
+  CHECK_FALSE(haptel::video::JpegFrameSize(baseline.data(), 20, width, height));
+  CHECK_FALSE(haptel::video::JpegFrameSize(nullptr, 0, width, height));
+}
+
+TEST_CASE("a camera's JPEG passes through undecoded only at the configured size, as JPEG, within the asked bitrate") {
+  const std::vector<uint8_t> jpeg = Encoded(RenderedFrame(), 80);  // 640x480
+  haptel::CameraConfig camera;  // 640x480 JPEG at 30 Hz
+  const double kbps = static_cast<double>(jpeg.size()) * 8.0 * camera.rate_hz / 1000.0;
+  INFO(jpeg.size() << " bytes a frame: " << kbps << " kbit/s at 30 Hz");
+  // No bitrate asked for yet, or one it fits: as it is.
+  CHECK(haptel::video::JpegPassesThrough(jpeg.data(), jpeg.size(), camera, 0));
+  CHECK(haptel::video::JpegPassesThrough(jpeg.data(), jpeg.size(), camera, static_cast<uint32_t>(kbps) + 1));
+  // Over the bitrate the link carries: encoded again (down the ladder).
+  CHECK_FALSE(haptel::video::JpegPassesThrough(jpeg.data(), jpeg.size(), camera, static_cast<uint32_t>(kbps * 0.8)));
+  // Another size than the vehicle file's, or a vehicle that sends H.264: encoded again.
+  haptel::CameraConfig smaller = camera;
+  smaller.width = 320;
+  smaller.height = 240;
+  CHECK_FALSE(haptel::video::JpegPassesThrough(jpeg.data(), jpeg.size(), smaller, 0));
+  haptel::CameraConfig h264 = camera;
+  h264.codec = haptel::CameraCodec::kH264;
+  CHECK_FALSE(haptel::video::JpegPassesThrough(jpeg.data(), jpeg.size(), h264, 0));
+  // Decoded when it cannot pass: at the configured size.
+  cv::Mat scratch;
+  cv::Mat picture;
+  REQUIRE(haptel::video::DecodeCameraJpeg(jpeg, smaller, scratch, picture));
+  CHECK(picture.cols == 320);
+  CHECK(picture.rows == 240);
+  CHECK_FALSE(haptel::video::DecodeCameraJpeg(std::vector<uint8_t>(jpeg.begin(), jpeg.begin() + 10), smaller, scratch,
+                                              picture));
+  CHECK(picture.cols == 320);  // left as it was
 }

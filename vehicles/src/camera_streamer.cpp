@@ -9,7 +9,9 @@ namespace haptel::vehicles {
 
 CameraStreamer::CameraStreamer(const CameraConfig& config, std::unique_ptr<video::CameraSource> camera,
                                link::Participant& participant, const std::string& vehicle_name)
-    : camera_(std::move(camera)),
+    : config_(config),
+      passthrough_possible_(config.codec == CameraCodec::kJpeg),
+      camera_(std::move(camera)),
       encoder_(video::MakeVideoEncoder(config)),
       codec_name_(CameraCodecName(config.codec)),
       writer_(participant, link::TopicName(vehicle_name, "video"), link::Profile::kVideo) {
@@ -49,7 +51,10 @@ void CameraStreamer::Tick(int64_t now_ns) {
   }
   const video::CameraPose pose = pose_.Load();
   const int64_t before_grab_wall_ns = WallNs();
-  const bool grabbed = camera_->Grab(pose, image_);
+  // A camera whose frames come as JPEG, on a vehicle that sends JPEG: its
+  // frame is taken undecoded, and decoded only when it does not fit as it is.
+  const bool jpeg_source = passthrough_possible_ && camera_->DeliversJpeg();
+  const bool grabbed = jpeg_source ? camera_->GrabJpeg(camera_jpeg_) : camera_->Grab(pose, image_);
   // A device's Grab may wait up to a frame period for the frame: it exists
   // when Grab returns. A rendered frame shows the pose read before Grab.
   const int64_t capture_wall_ns = camera_->RendersAtGrab() ? before_grab_wall_ns : WallNs();
@@ -64,27 +69,38 @@ void CameraStreamer::Tick(int64_t now_ns) {
   camera_stalls_.store(grab_monitor_.stalls(), std::memory_order_relaxed);
   if (!grabbed) return;
   // The operator's estimate of the link, followed by the encoder.
-  if (const uint32_t target = target_kbps_.load(std::memory_order_relaxed); target != followed_kbps_) {
+  const uint32_t target = target_kbps_.load(std::memory_order_relaxed);
+  if (target != followed_kbps_) {
     followed_kbps_ = target;
     encoder_->FollowBitrate(target);
   }
-  if (encoder_->SkipFrame()) {
-    frames_skipped_.fetch_add(1, std::memory_order_relaxed);
-    return;
-  }
-  if (key_frame_wanted_.exchange(false, std::memory_order_acq_rel)) encoder_->RequestKeyFrame();
-  if (!encoder_->Encode(image_, encoded_)) {
+  const bool pass_through =
+      jpeg_source && video::JpegPassesThrough(camera_jpeg_.data(), camera_jpeg_.size(), config_, target);
+  if (jpeg_source && !pass_through && !video::DecodeCameraJpeg(camera_jpeg_, config_, camera_decoded_, image_)) {
     frames_failed_.fetch_add(1, std::memory_order_relaxed);
     return;
   }
+  if (!pass_through) {
+    if (encoder_->SkipFrame()) {
+      frames_skipped_.fetch_add(1, std::memory_order_relaxed);
+      return;
+    }
+    if (key_frame_wanted_.exchange(false, std::memory_order_acq_rel)) encoder_->RequestKeyFrame();
+    if (!encoder_->Encode(image_, encoded_)) {
+      frames_failed_.fetch_add(1, std::memory_order_relaxed);
+      return;
+    }
+  }
+  const std::vector<uint8_t>& bytes = pass_through ? camera_jpeg_ : encoded_;
   msg::VideoFrame& f = frame_msg_;
   f.seq(++frame_seq_);
   f.capture_wall_ns(capture_wall_ns);
-  f.width(static_cast<uint16_t>(image_.cols));
-  f.height(static_cast<uint16_t>(image_.rows));
+  f.width(static_cast<uint16_t>(config_.width));
+  f.height(static_cast<uint16_t>(config_.height));
   f.encoding(codec_name_);
-  f.key_frame(encoder_->last_was_key_frame());
-  f.data().assign(encoded_.begin(), encoded_.end());
+  f.key_frame(pass_through || encoder_->last_was_key_frame());
+  f.data().assign(bytes.begin(), bytes.end());
+  if (pass_through) frames_passed_through_.fetch_add(1, std::memory_order_relaxed);
   writer_.Write(f);
   frames_.fetch_add(1, std::memory_order_relaxed);
   if (f.key_frame()) key_frames_sent_.fetch_add(1, std::memory_order_relaxed);
@@ -100,6 +116,7 @@ CameraCounters CameraStreamer::Counters() const {
   c.key_frame_requests = key_frame_requests_.load();
   c.key_frames_sent = key_frames_sent_.load();
   c.frames_skipped = frames_skipped_.load();
+  c.frames_passed_through = frames_passed_through_.load();
   c.target_kbps = target_kbps_.load();
   return c;
 }

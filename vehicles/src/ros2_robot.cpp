@@ -20,6 +20,7 @@
 #include "haptel/link/topic.hpp"
 #include "haptel/ros2/ros2.h"
 #include "haptel/ros2/ros2PubSubTypes.h"
+#include "haptel/video/codec.hpp"
 
 namespace haptel::vehicles {
 
@@ -123,13 +124,24 @@ struct Ros2Robot::Graph {
 namespace {
 
 /// The robot's CompressedImage topic as a camera: waits up to two frame
-/// periods for an image, decodes the newest, resizes it to the configured size.
+/// periods for an image and takes the newest. Grab decodes it to the
+/// configured size; GrabJpeg hands its bytes on undecoded, so that a JPEG
+/// that already fits goes to the operator as the robot made it.
 class Ros2Camera final : public video::CameraSource {
  public:
   Ros2Camera(std::shared_ptr<Ros2Robot::Graph> graph, const CameraConfig& config, std::string topic)
       : graph_(std::move(graph)), config_(config), topic_(std::move(topic)) {}
 
   bool Grab(const video::CameraPose& /*pose*/, cv::Mat& bgr_out) override {
+    if (!GrabJpeg(jpeg_)) return false;
+    if (!video::DecodeCameraJpeg(jpeg_, config_, decoded_, bgr_out)) {
+      graph_->images_dropped.fetch_add(1, std::memory_order_relaxed);
+      return false;
+    }
+    return true;
+  }
+  bool DeliversJpeg() const override { return true; }
+  bool GrabJpeg(std::vector<uint8_t>& jpeg_out) override {
     dds::DataReader* reader = graph_->image_reader;
     const double wait_s = 2.0 / config_.rate_hz;
     if (!reader->wait_for_unread_message(eprosima::fastrtps::Duration_t(wait_s))) return false;
@@ -141,18 +153,7 @@ class Ros2Camera final : public video::CameraSource {
       got = true;
     }
     if (!got) return false;
-    const cv::Mat bytes(1, static_cast<int>(image_.data().size()), CV_8UC1, image_.data().data());
-    decoded_ = cv::imdecode(bytes, cv::IMREAD_COLOR);
-    if (decoded_.empty()) {
-      graph_->images_dropped.fetch_add(1, std::memory_order_relaxed);
-      return false;
-    }
-    const cv::Size size(config_.width, config_.height);
-    if (decoded_.size() == size) {
-      decoded_.copyTo(bgr_out);
-    } else {
-      cv::resize(decoded_, bgr_out, size, 0, 0, cv::INTER_AREA);
-    }
+    jpeg_out.assign(image_.data().begin(), image_.data().end());
     return true;
   }
   std::string Describe() const override { return "ros2 " + topic_; }
@@ -162,6 +163,7 @@ class Ros2Camera final : public video::CameraSource {
   CameraConfig config_;
   std::string topic_;
   CompressedImage_ image_;
+  std::vector<uint8_t> jpeg_;
   cv::Mat decoded_;
 };
 

@@ -146,6 +146,60 @@ DecodeResult JpegDecoder::DecodeFrame(const EncodedFrameView& frame, cv::Mat& im
   return Decode(frame.data, frame.size, image) ? DecodeResult::kPicture : DecodeResult::kCorrupt;
 }
 
+bool JpegFrameSize(const uint8_t* data, size_t size, int& width, int& height) {
+  if (data == nullptr || size < 4 || data[0] != 0xFF || data[1] != 0xD8) return false;
+  size_t at = 2;
+  while (at + 4 <= size) {
+    if (data[at] != 0xFF) return false;
+    const uint8_t marker = data[at + 1];
+    if (marker == 0xFF) {  // fill byte before a marker
+      ++at;
+      continue;
+    }
+    if (marker == 0xD8 || (marker >= 0xD0 && marker <= 0xD7) || marker == 0x01) {  // no length
+      at += 2;
+      continue;
+    }
+    if (marker == 0xD9 || marker == 0xDA) return false;  // end, or scan data before any frame header
+    const size_t length = (static_cast<size_t>(data[at + 2]) << 8) | data[at + 3];
+    if (length < 2 || at + 2 + length > size) return false;
+    // SOF0..SOF15 but DHT (C4), JPG (C8) and DAC (CC): precision, height, width.
+    if (marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC) {
+      if (length < 7) return false;
+      height = (data[at + 5] << 8) | data[at + 6];
+      width = (data[at + 7] << 8) | data[at + 8];
+      return width > 0 && height > 0;
+    }
+    at += 2 + length;
+  }
+  return false;
+}
+
+bool JpegPassesThrough(const uint8_t* data, size_t size, const CameraConfig& camera, uint32_t target_kbps) {
+  if (camera.codec != CameraCodec::kJpeg) return false;
+  int width = 0;
+  int height = 0;
+  if (!JpegFrameSize(data, size, width, height) || width != camera.width || height != camera.height) return false;
+  if (target_kbps == 0) return true;
+  const double kbps = static_cast<double>(size) * 8.0 * camera.rate_hz / 1000.0;
+  return kbps <= target_kbps;
+}
+
+bool DecodeCameraJpeg(const std::vector<uint8_t>& jpeg, const CameraConfig& camera, cv::Mat& scratch,
+                      cv::Mat& bgr_out) {
+  if (jpeg.empty()) return false;
+  const cv::Mat bytes(1, static_cast<int>(jpeg.size()), CV_8UC1, const_cast<uint8_t*>(jpeg.data()));
+  scratch = cv::imdecode(bytes, cv::IMREAD_COLOR);
+  if (scratch.empty()) return false;
+  const cv::Size size(camera.width, camera.height);
+  if (scratch.size() == size) {
+    scratch.copyTo(bgr_out);
+  } else {
+    cv::resize(scratch, bgr_out, size, 0, 0, cv::INTER_AREA);
+  }
+  return true;
+}
+
 std::unique_ptr<VideoEncoder> MakeVideoEncoder(const CameraConfig& camera) {
   switch (camera.codec) {
     case CameraCodec::kJpeg:

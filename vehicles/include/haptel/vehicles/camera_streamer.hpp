@@ -30,6 +30,9 @@ struct CameraCounters {
   uint64_t key_frames_sent = 0;     ///< frames published that decode alone (every JPEG)
   uint64_t frames_skipped = 0;      ///< grabbed but skipped to fit the link (JPEG's lowest rungs)
   uint32_t target_kbps = 0;         ///< the operator's last estimate of the link (0: none came)
+  /// A camera's own JPEGs sent as they came, neither decoded nor encoded
+  /// again (a ROS 2 robot's, at the configured size, within the bitrate).
+  uint64_t frames_passed_through = 0;
 };
 
 class CameraStreamer {
@@ -51,6 +54,8 @@ class CameraStreamer {
   void Tick(int64_t now_ns);
   void OnFeedback(const msg::VideoFeedback& feedback);
 
+  const CameraConfig config_;
+  const bool passthrough_possible_;  ///< the vehicle sends JPEG: a camera's own JPEG may go as it is
   std::unique_ptr<video::CameraSource> camera_;
   Seqlock<video::CameraPose> pose_;
   video::GrabMonitor grab_monitor_;
@@ -60,9 +65,11 @@ class CameraStreamer {
   cv::Mat image_;
   msg::VideoFrame frame_msg_;
   std::vector<uint8_t> encoded_;
+  std::vector<uint8_t> camera_jpeg_;  ///< a JPEG source's frame, undecoded
+  cv::Mat camera_decoded_;            ///< its picture when it must be encoded again
   uint64_t frame_seq_ = 0;
   std::atomic<uint64_t> frames_{0}, frames_failed_{0}, grabs_failed_{0}, camera_stalls_{0};
-  std::atomic<uint64_t> key_frame_requests_{0}, key_frames_sent_{0}, frames_skipped_{0};
+  std::atomic<uint64_t> key_frame_requests_{0}, key_frames_sent_{0}, frames_skipped_{0}, frames_passed_through_{0};
   /// The operator's estimate of the link (kbit/s; 0: none yet), set by the
   /// feedback's DDS thread; the camera's thread hands it to the encoder.
   std::atomic<uint32_t> target_kbps_{0};

@@ -43,6 +43,7 @@ struct NodeCounters {
   uint64_t key_frame_requests = 0;  ///< the operator's, received (a video frame lost)
   uint64_t key_frames_sent = 0;     ///< frames published that decode alone
   uint64_t frames_skipped = 0;      ///< grabbed but skipped to fit the link
+  uint64_t frames_passed_through = 0;  ///< a camera's own JPEGs sent undecoded
   uint32_t target_kbps = 0;         ///< the operator's last estimate of the link (0: none came)
   bool watchdog_expired = true;
 };
@@ -67,6 +68,7 @@ NodeCounters MakeNodeCounters(const CommandIntake<Command>& commands, const Came
   c.key_frame_requests = camera.key_frame_requests;
   c.key_frames_sent = camera.key_frames_sent;
   c.frames_skipped = camera.frames_skipped;
+  c.frames_passed_through = camera.frames_passed_through;
   c.target_kbps = camera.target_kbps;
   return c;
 }

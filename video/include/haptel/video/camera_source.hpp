@@ -12,6 +12,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/videoio.hpp>
 #include <string>
+#include <vector>
 
 #include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"
@@ -38,6 +39,14 @@ class CameraSource {
   /// shows the moment Grab starts; false when Grab waits for a frame that
   /// exists only when it returns (a device, a file).
   virtual bool RendersAtGrab() const { return false; }
+  /// True for a source whose frames arrive as JPEG (a ROS 2 robot's
+  /// CompressedImage): GrabJpeg then gives them undecoded, so that a frame
+  /// that already fits the link is sent as it is (JpegPassesThrough).
+  virtual bool DeliversJpeg() const { return false; }
+  /// The next frame's JPEG bytes into `jpeg_out` (its capacity reused),
+  /// undecoded; false as Grab is when there is none. Only for sources
+  /// that DeliversJpeg().
+  virtual bool GrabJpeg(std::vector<uint8_t>& /*jpeg_out*/) { return false; }
 };
 
 /// The synthetic first-person view of a Track (SyntheticCamera).

@@ -132,6 +132,24 @@ class JpegDecoder final : public VideoDecoder {
   uint64_t failures_ = 0;
 };
 
+/// Width and height from a JPEG's frame header (its SOFn segment), read
+/// without decoding. False when `data` is not a JPEG with one.
+bool JpegFrameSize(const uint8_t* data, size_t size, int& width, int& height);
+
+/// Whether a frame a camera delivered as JPEG (a ROS 2 robot's
+/// CompressedImage) can go on the link as it is, neither decoded nor
+/// encoded again: the vehicle sends JPEG, the frame has the configured size,
+/// and sent at the configured frame rate it fits the bitrate the operator
+/// last asked for (`target_kbps`; 0, none asked yet: it fits). Otherwise
+/// the frame is decoded and goes through the encoder's ladder like any other.
+bool JpegPassesThrough(const uint8_t* data, size_t size, const CameraConfig& camera, uint32_t target_kbps);
+
+/// Decodes a camera's JPEG into `bgr_out` at `camera`'s size (resized when
+/// it differs), using `scratch` for the decoded picture. False, with
+/// `bgr_out` unchanged, when the bytes do not decode.
+bool DecodeCameraJpeg(const std::vector<uint8_t>& jpeg, const CameraConfig& camera, cv::Mat& scratch,
+                      cv::Mat& bgr_out);
+
 /// The encoder `camera` asks for (codec, quality or bitrate, size, rate).
 /// Throws std::runtime_error when the codec cannot be opened (an FFmpeg
 /// without libx264), naming the codec.
