@@ -27,7 +27,7 @@
 /// line is {"counts":[…],"handover_ms_p95_at_4":…,"servo_p99_us_bare":…,
 /// "servo_p99_us_fleet":…,…}.
 ///
-/// --smoke (smoke.hpp): the counts 1 and N only, each cut at 12 s
+/// --smoke (smoke.hpp): the counts 1 and N only, each cut at 6 s
 /// (--time-limit) with a 1 s slice, the bare loop for 0.5 s.
 namespace haptel::bench {
 

@@ -325,7 +325,7 @@ TEST_CASE("bench fleet --smoke: the fewest and the most vehicles, each count's f
   CHECK(counts[0]["handovers"].number() == 0);  // one vehicle: nothing to switch to
   CHECK_NOTHROW(Finite(counts[1]["cpu_added_per_vehicle"]));
   // The handover and the cue's ticks at 4 depend on how soon the vehicles
-  // answer within the smoke's 12 s: present, not held to a count.
+  // answer within the smoke's 6 s: present, not held to a count.
   CHECK(counts[1]["servo_cue_ticks"].number() >= 0);
   CHECK(Finite(j["servo_p99_us_bare"]) > 0.0);
   CHECK(Finite(j["servo_p99_us_fleet"]) > 0.0);
