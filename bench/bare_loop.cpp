@@ -6,13 +6,18 @@
 namespace haptel::bench {
 
 BareLoop MeasureBareLoop(double rate_hz, int realtime_priority, double seconds) {
+  return MeasureBareLoopWhile(rate_hz, realtime_priority,
+                              [seconds] { SleepUntilNs(MonotonicNs() + SToNs(seconds + 0.2)); });
+}
+
+BareLoop MeasureBareLoopWhile(double rate_hz, int realtime_priority, const std::function<void()>& work) {
   PeriodicThread::Options o;
   o.name = "bare";
   o.rate_hz = rate_hz;
   o.realtime_priority = realtime_priority;
   PeriodicThread loop(o, [](int64_t) {});
   loop.Start();
-  SleepUntilNs(MonotonicNs() + SToNs(seconds + 0.2));
+  work();
   loop.Stop();
   BareLoop r;
   r.stats = loop.Stats();

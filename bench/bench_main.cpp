@@ -19,6 +19,7 @@
 #include "fuzz_bench.hpp"
 #include "link_bench.hpp"
 #include "view_bench.hpp"
+#include "fleet_bench.hpp"
 
 using namespace haptel::bench;
 
@@ -54,6 +55,8 @@ constexpr Usage kUsage[] = {
      "the link's video codecs: JPEG qualities and H.264 bitrates against SSIM, PSNR and CPU; the Pareto front"},
     {"fuzz", "[--inputs N] [--target NAME] [--seed S] [--smoke] [--json]",
      "every parser fed 10^6 mutated inputs: configs, scenes, UDP, servo bytes, CAN, DDS samples, console HTTP"},
+    {"fleet", "[--fleet FILE] [--counts LIST] [--slice S] [--time-limit S] [--device FILE] [--domain D] [--smoke] [--json]",
+     "one operator, 1..N vehicles: handover p50/p95, operator CPU per vehicle, the servo loop against the bare loop"},
 };
 
 using BenchMain = int (*)(int argc, const char* const* argv);
@@ -66,7 +69,7 @@ constexpr Bench kBenches[] = {
     {"physics", BenchPhysicsMain},     {"stability", BenchStabilityMain}, {"view", BenchViewMain},
     {"blimp", BenchBlimpMain},         {"link", BenchLinkMain},
     {"fuzz", BenchFuzzMain},           {"passivity", BenchPassivityMain},
-    {"video", BenchVideoMain},
+    {"video", BenchVideoMain},         {"fleet", BenchFleetMain},
 };
 
 std::string UsageText(const std::string& only) {

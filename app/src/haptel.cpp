@@ -27,7 +27,7 @@ constexpr const char* kUsage =
     "       haptel security init DIR     DDS Security: a CA and signed identities for the link\n"
     "       haptel discovery-server [--listen ADDR:PORT]  a Fast DDS discovery server for the link\n"
     "       haptel bench NAME [options]  benchmarks: servo, gravity, skip, physics, stability, view,\n"
-    "                                    blimp, link, fuzz; --smoke for a short run of any\n"
+    "                                    blimp, link, fuzz, fleet; --smoke for a short run of any\n"
     "                                    (haptel bench --help lists them)\n"
     "\n"
     "Exit codes: 0 done, 1 failed while running, 2 bad arguments or configuration (nothing ran),\n"

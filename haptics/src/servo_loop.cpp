@@ -46,6 +46,7 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
   ServoCounters& c = arm.counters;
   const ArmCalibration& cal = calibration_.arms[Index(side)];
   ++c.cycles;
+  arm.cue_felt = false;
 
   const DeviceDescription& d = device_.description();
   if ((d.has_glove || d.has_grasp) && arm.cycle % static_cast<uint64_t>(config_.servo.slow_channel_divider) == 0) {
@@ -123,6 +124,7 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
   // outside the passivity ports: it is a short open-loop pulse, not a field.
   if (Hal::Cue cue; hal_.TryCue(side, cue) && now_ns < cue.until_ns) {
     for (int i = 0; i < 3; ++i) from_setpoint[i] += cue.force[i];
+    arm.cue_felt = true;
   }
   const double period_s = arm.last_tick_ns != 0 ? static_cast<double>(now_ns - arm.last_tick_ns) * 1e-9 : 0.0;
   arm.last_tick_ns = now_ns;
@@ -203,19 +205,31 @@ void ServoLoop::RunThread(int thread_index) {
   meter.SetRealtime(TryRealtime(config_.servo.realtime_priority));
   // The right arm runs half a period after the left: staggered device I/O.
   const int64_t phase = thread_index == 1 ? period_ns_ / 2 : 0;
+  int64_t previous_start = 0;
   for (;;) {
     const int64_t next = anchor_ns_ + static_cast<int64_t>(cycle_) * period_ns_ + phase;
     SleepUntilNs(next);
     const int64_t start = MonotonicNs();
     meter.RecordStart(start, next, period_ns_);
+    bool cue_felt = false;
     if (two_threads_) {
       Tick(static_cast<Side>(thread_index), start);
+      cue_felt = arms_[thread_index]->cue_felt;
     } else {
       for (int i = 0; i < kSides; ++i) {
         const auto side = static_cast<Side>(i);
-        if (device_.HasSide(side)) Tick(side, i == 0 ? start : MonotonicNs());
+        if (!device_.HasSide(side)) continue;
+        Tick(side, i == 0 ? start : MonotonicNs());
+        cue_felt = cue_felt || arms_[i]->cue_felt;
       }
     }
+    // The period that ended at this tick's start, counted as the cue's when
+    // this tick rendered it (its first tick included: the cue was set while
+    // the loop slept towards it).
+    if (cue_felt && previous_start != 0) {
+      cue_periods_[thread_index].Record(static_cast<double>(start - previous_start) * 1e-3);
+    }
+    previous_start = start;
     rendezvous_->arrive_and_wait();  // both arms finish the cycle together
     if (stop_latched_) break;
   }
@@ -232,6 +246,10 @@ LoopStats ServoLoop::Stats() const {
 
 const Histogram& ServoLoop::period_histogram(Side side) const {
   return meters_[two_threads_ ? Index(side) : 0].period_histogram();
+}
+
+const Histogram& ServoLoop::cue_period_histogram(Side side) const {
+  return cue_periods_[two_threads_ ? Index(side) : 0];
 }
 
 ServoCounters ServoLoop::Counters(Side side) const { return arms_[Index(side)]->published.Load(); }

@@ -133,9 +133,12 @@ std::string FleetJson(const FleetSetup& setup, const FleetResult& fleet, const s
     << ",\"completed\":" << (fleet.outcome == Outcome::kCompleted ? "true" : "false")
     << ",\"outcome\":" << JsonString(ToString(fleet.outcome)) << ",\"message\":" << JsonString(fleet.message)
     << ",\"vehicles_total\":" << fleet.vehicles.size() << ",\"vehicles_completed\":" << completed
-    << ",\"handovers\":" << fleet.handover_ms.size() << ",\"handover_ms_p50\":" << Ms(fleet.handover_ms_p50)
+    << ",\"handovers\":" << fleet.handover_ms.size() << ",\"handovers_untimed\":" << fleet.handovers_untimed << ",\"handover_ms_p50\":" << Ms(fleet.handover_ms_p50)
     << ",\"handover_ms_p95\":" << Ms(fleet.handover_ms_p95) << ",\"person_switches\":" << fleet.person_switches
-    << ",\"operator_cpu_share\":" << JsonNumber(fleet.operator_cpu_share) << ",\"recorded\":" << (recorded ? "true" : "false")
+    << ",\"operator_cpu_share\":" << JsonNumber(fleet.operator_cpu_share)
+    << ",\"servo_period_p99_us\":" << JsonNumber(fleet.servo_period_p99_us)
+    << ",\"servo_cue_period_p99_us\":" << Ms(fleet.servo_cue_period_p99_us)
+    << ",\"servo_cue_ticks\":" << fleet.servo_cue_ticks << ",\"recorded\":" << (recorded ? "true" : "false")
     << ",\"database\":" << JsonString(setup.vehicles.at(0).run.database.string()) << ",\"lost\":[";
   for (size_t i = 0; i < fleet.lost.size(); ++i) o << (i ? "," : "") << JsonString(fleet.lost[i]);
   o << "],\"vehicles\":[";
@@ -175,8 +178,16 @@ void PrintFleetSummary(std::FILE* out, const FleetSetup& setup, const FleetResul
     std::fprintf(out, "  %zu handovers (switch to the new vehicle obeying): p50 %.0f ms, p95 %.0f ms\n",
                  fleet.handover_ms.size(), fleet.handover_ms_p50, fleet.handover_ms_p95);
   }
+  if (fleet.handovers_untimed > 0) {
+    std::fprintf(out, "  %d turns to a vehicle still starting (not timed)\n", fleet.handovers_untimed);
+  }
   std::fprintf(out, "  operator process CPU %.2f s per wall second; %d switches asked by the person\n",
                fleet.operator_cpu_share, fleet.person_switches);
+  if (fleet.servo_cue_ticks > 0) {
+    std::fprintf(out, "  servo period p99 %.0f us over the run, %.0f us over the %llu ticks that played the switch cue\n",
+                 fleet.servo_period_p99_us, fleet.servo_cue_period_p99_us,
+                 static_cast<unsigned long long>(fleet.servo_cue_ticks));
+  }
   if (!fleet.lost.empty()) {
     std::string names;
     for (const std::string& n : fleet.lost) names += (names.empty() ? "" : ", ") + n;

@@ -14,6 +14,7 @@
 #include "family_session.hpp"
 #include "haptel/config/link.hpp"
 #include "haptel/core/clock.hpp"
+#include "haptel/core/histogram.hpp"
 #include "haptel/core/log.hpp"
 #include "haptel/mediator/command_mux.hpp"
 #include "haptel/mediator/fleet.hpp"
@@ -261,7 +262,10 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
     m.mux.OnLock(m.handover_lock, true, t);
     m.lock_until_t = -1.0;
     m.handover_pending = true;
-    m.measure_handover = measured;
+    // Timed only when it had answered before: turning to a vehicle still
+    // starting would time its start-up (its process, discovery), not the handover.
+    m.measure_handover = measured && m.health->up();
+    if (measured && !m.health->up()) ++fleet.handovers_untimed;
     m.request_ns = now;
     m.released_ns = 0;
     m.link->WatchEcho(0);
@@ -520,6 +524,10 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
   // The view's figures are the first vehicle's record's (one window for all).
   if (view_part) StopAndRecord(*view_part, members.front()->out.result);
   haptic.Stop();
+  fleet.servo_period_p99_us = haptic.Stats().period_p99_us;
+  const Histogram& cue_periods = haptic.ServoCuePeriods();
+  fleet.servo_cue_ticks = cue_periods.Count();
+  fleet.servo_cue_period_p99_us = fleet.servo_cue_ticks > 0 ? cue_periods.Percentile(0.99) : -1.0;
   // Every vehicle released and ended at once: one after the other, each
   // would wait for the others' processes to end, past its watchdog.
   {

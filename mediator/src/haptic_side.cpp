@@ -180,4 +180,9 @@ const Histogram& HapticSide::ServoPeriods() const {
   return servo_->period_histogram(right ? haptics::Side::kRight : haptics::Side::kLeft);
 }
 
+const Histogram& HapticSide::ServoCuePeriods() const {
+  const bool right = device_->HasSide(haptics::Side::kRight);
+  return servo_->cue_period_histogram(right ? haptics::Side::kRight : haptics::Side::kLeft);
+}
+
 }  // namespace haptel::mediator

@@ -308,6 +308,32 @@ TEST_CASE("bench link --smoke", "[bench][smoke]") {
   RequireFiles({"link_rtt.csv", "link_laps.csv", "link_laps.png"});
 }
 
+TEST_CASE("bench fleet --smoke: the fewest and the most vehicles, each count's figures", "[bench][smoke]") {
+  const JsonValue j = Smoke("fleet", {"--domain", std::to_string(haptel::test::UniqueDomain(84))}).json;
+  const auto& counts = j["counts"].array();
+  REQUIRE(counts.size() == 2);  // 1 and 4 of config/fleets/four.yaml
+  CHECK(counts[0]["vehicles"].number() == 1);
+  CHECK(counts[1]["vehicles"].number() == 4);
+  for (const JsonValue& c : counts) {
+    INFO("vehicles " << c["vehicles"].number());
+    CHECK(c["ran"].boolean());
+    CHECK(Finite(c["operator_cpu_share"]) > 0.0);
+    CHECK(Finite(c["servo_p99_us"]) > 0.0);
+    CHECK(Finite(c["bare_alone_p99_us"]) > 0.0);
+    CHECK(Finite(c["bare_beside_p99_us"]) > 0.0);
+  }
+  CHECK(counts[0]["handovers"].number() == 0);  // one vehicle: nothing to switch to
+  CHECK_NOTHROW(Finite(counts[1]["cpu_added_per_vehicle"]));
+  // The handover and the cue's ticks at 4 depend on how soon the vehicles
+  // answer within the smoke's 6 s: present, not held to a count.
+  CHECK(counts[1]["servo_cue_ticks"].number() >= 0);
+  CHECK(Finite(j["servo_p99_us_bare"]) > 0.0);
+  CHECK(Finite(j["servo_p99_us_fleet"]) > 0.0);
+  CHECK_NOTHROW(j["handover_ms_p95_at_4"]);
+  CHECK_NOTHROW(j["servo_unchanged"].boolean());
+  RequireFiles({"fleet.csv", "fleet.png"});
+}
+
 TEST_CASE("bench fuzz --smoke", "[bench][smoke]") {
   const JsonValue j = Smoke("fuzz").json;
   CHECK(j["crashes"].number() == 0);
@@ -370,5 +396,5 @@ TEST_CASE("haptel bench NAME --smoke through the haptel program; every usage lin
     ++benches;
     CHECK_THAT(line, Catch::Contains("[--smoke]"));
   }
-  CHECK(benches == 11);
+  CHECK(benches == 12);
 }

@@ -55,6 +55,15 @@ TEST_CASE("the shipped fleet files load: names, files beside them, the time slic
   const haptel::FleetConfig mixed = haptel::LoadFleet("config/fleets/robot-and-blimp.yaml");
   REQUIRE(mixed.vehicles.size() == 2);
   CHECK(mixed.vehicles[1].interface == "blimp-gesture");
+
+  // Issue 30's target: three robots, then the blimp (`haptel bench fleet` takes the first 1..4).
+  const haptel::FleetConfig four = haptel::LoadFleet("config/fleets/four.yaml");
+  REQUIRE(four.vehicles.size() == 4);
+  for (int i = 0; i < 3; ++i) CHECK(four.vehicles[static_cast<size_t>(i)].vehicle.filename() == "sim-robot.yaml");
+  CHECK(four.vehicles[3].vehicle.filename() == "sim-blimp.yaml");
+  CHECK(four.vehicles[3].world.filename() == "blimp-hop.yaml");
+  CHECK(four.vehicles[3].interface == "blimp-gesture");
+  CHECK(four.slice_s > 0.0);
 }
 
 TEST_CASE("a fleet file's mistakes are refused naming the key and what was expected") {

@@ -191,6 +191,41 @@ TEST_CASE("a fleet of a robot and a blimp: each is driven in turn, and held whil
   CHECK(std::stoi(JsonField(json, "handovers")) >= 1);
 }
 
+TEST_CASE("a turn to a vehicle still starting is not timed as a handover: its start-up is counted apart") {
+  const auto dir = test::ScratchDir("e2e-fleet-late");
+  const int domain = test::UniqueDomain(56);
+  // robot-b is attached: its process is started by the test only once the
+  // operator has turned to it, so that turn finds it still starting.
+  std::string text = "name: late\nslice_s: 6\nvehicles:\n";
+  for (const char* name : {"robot-a", "robot-b"}) {
+    text += std::string("  - {name: ") + name + ", vehicle: " + fs::absolute("config/vehicles/sim-robot.yaml").string() +
+            ", world: " + fs::absolute("config/tracks/test-short.yaml").string() +
+            (std::string(name) == "robot-b" ? ", attach: true}\n" : "}\n");
+  }
+  const fs::path fleet = test::WriteFile(dir / "fleet.yaml", text);
+  auto argv = FleetArgs(fleet.string(), domain, dir / "runs.db");
+  argv.insert(argv.end(), {"--time-limit", "16"});
+  Child run(argv);
+  REQUIRE(test::WaitFor([&] {
+    run.Pump();
+    return run.err().find("driving 'robot-b'") != std::string::npos;
+  }, 60.0));
+  Child late({Bin("haptel-vehicle"), "--track", "config/tracks/test-short.yaml", "--name", "robot-b", "--domain",
+              std::to_string(domain)});
+  run.Wait(120.0);
+  late.Terminate();
+  INFO("stdout:\n" << run.out() << "\nstderr:\n" << run.err());
+  const std::string json = run.LastLine();
+  REQUIRE(json.front() == '{');
+  // The turn to robot-b found it not answering yet: counted, not timed.
+  CHECK(std::stoi(JsonField(json, "handovers_untimed")) >= 1);
+  // A turn is timed, counted apart, or (turned away from before it was
+  // obeyed) neither: never both.
+  const int turns = std::stoi(JsonField(VehicleEntry(json, "robot-a"), "handovers")) +
+                    std::stoi(JsonField(VehicleEntry(json, "robot-b"), "handovers"));
+  CHECK(std::stoi(JsonField(json, "handovers")) + std::stoi(JsonField(json, "handovers_untimed")) <= turns);
+}
+
 TEST_CASE("a robot killed mid-run is reported lost by name; the other drives on") {
   const auto dir = test::ScratchDir("e2e-fleet-lost");
   const fs::path fleet = RobotFleet(dir, {"robot-a", "robot-b"}, 0.0);

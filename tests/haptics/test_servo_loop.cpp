@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "alloc_counter.hpp"
+#include "haptel/core/clock.hpp"
 #include "haptel/haptics/servo_loop.hpp"
 #include "haptel/haptics/sim_device.hpp"
 #include "scripted_device.hpp"
@@ -315,4 +316,38 @@ TEST_CASE("a cue is added to the set-point's force until it ends, on each side, 
     CHECK(dev.wrist_command[side][0] == Approx(-2.0));
     CHECK(dev.wrist_command[side][2] == Approx(0.0));
   }
+}
+
+TEST_CASE("the running loop keeps apart the periods of the ticks that played a cue") {
+  DeviceConfig c = DeviceConfig{};
+  c.servo.realtime_priority = 0;
+  c.servo.lock_memory = false;
+  c.servo.two_sided = true;
+  SimDevice dev(c, OperatorConfig{});
+  dev.Place(Side::kLeft, {0, 0.1, 0});
+  dev.Place(Side::kRight, {0, -0.1, 0});
+  Hal hal;
+  ServoLoop loop(dev, hal, c, DeviceCalibration{});
+  loop.Start();
+  // No cue: no tick is the cue's.
+  REQUIRE(test::WaitFor([&] { return loop.Stats(Side::kRight).ticks >= 50; }, 30.0));
+  CHECK(loop.cue_period_histogram(Side::kLeft).Count() == 0);
+  CHECK(loop.cue_period_histogram(Side::kRight).Count() == 0);
+  // A cue that plays until it is replaced: its ticks are counted on each arm's thread.
+  for (int side = 0; side < kSides; ++side) {
+    hal.SetCue(static_cast<Side>(side), {{0.0, 0.0, 1.0}, MonotonicNs() + SToNs(600.0)});
+  }
+  REQUIRE(test::WaitFor([&] { return loop.cue_period_histogram(Side::kRight).Count() >= 20; }, 30.0));
+  CHECK(test::WaitFor([&] { return loop.cue_period_histogram(Side::kLeft).Count() >= 20; }, 30.0));
+  // Over: the count stops while the loop goes on.
+  for (int side = 0; side < kSides; ++side) hal.SetCue(static_cast<Side>(side), {{0.0, 0.0, 1.0}, 0});
+  const uint64_t ticks_at_end = loop.Stats(Side::kRight).ticks;
+  REQUIRE(test::WaitFor([&] { return loop.Stats(Side::kRight).ticks >= ticks_at_end + 3; }, 30.0));
+  const uint64_t cue_ticks = loop.cue_period_histogram(Side::kRight).Count();
+  REQUIRE(test::WaitFor([&] { return loop.Stats(Side::kRight).ticks >= ticks_at_end + 50; }, 30.0));
+  loop.Stop();
+  CHECK(loop.cue_period_histogram(Side::kRight).Count() == cue_ticks);
+  CHECK(cue_ticks < loop.Stats(Side::kRight).ticks);
+  // Periods of a 1 kHz loop, not times since an earlier cue.
+  CHECK(loop.cue_period_histogram(Side::kRight).Percentile(0.5) < 100000.0);
 }

@@ -86,6 +86,10 @@ class ServoLoop {
   /// Stats of the loop as a whole: the slower of the arms.
   LoopStats Stats() const;
   const Histogram& period_histogram(Side side) const;
+  /// The periods of the ticks that rendered a cue (Hal::SetCue: a fleet's
+  /// switch), start-to-start, of the same thread as period_histogram: the
+  /// loop's timing while the cue plays, apart from the rest of the run.
+  const Histogram& cue_period_histogram(Side side) const;
   /// Counters of one arm. Safe to read while the loop runs.
   ServoCounters Counters(Side side) const;
   bool memory_locked() const { return memory_locked_; }
@@ -108,6 +112,7 @@ class ServoLoop {
     uint64_t cycle = 0;
     WristRaw wrist{};
     GloveRaw glove{};
+    bool cue_felt = false;  ///< the last tick added a cue's force
     ServoCounters counters;             ///< the arm's thread only
     Seqlock<ServoCounters> published;   ///< copy for readers, every cycle
   };
@@ -128,6 +133,8 @@ class ServoLoop {
   TraceWriter* trace_ = nullptr;
   std::array<std::unique_ptr<Arm>, kSides> arms_;
   std::array<LoopMeter, kSides> meters_;
+  /// Per thread, as meters_: the periods of the ticks that felt a cue.
+  std::array<Histogram, kSides> cue_periods_{{{10.0, 2000}, {10.0, 2000}}};
   std::unique_ptr<std::barrier<Completion>> rendezvous_;
   std::array<std::thread, kSides> threads_;
   std::atomic<bool> running_{false};

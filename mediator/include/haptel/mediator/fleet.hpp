@@ -15,7 +15,9 @@
 /// lock takes it). A handover runs from the switch request until the newly
 /// driven vehicle's first state that echoes a command sent after its lock
 /// was released — the lock is released once a state newer than the request
-/// came in, so the operator sees where it is before commanding it.
+/// came in, so the operator sees where it is before commanding it. A turn
+/// to a vehicle that has not answered yet is not timed (its start-up is no
+/// handover); it is counted apart.
 ///
 /// The automatic operator drives each vehicle until its lap is done or the
 /// fleet's time slice ends, then turns to the next whose course is not
@@ -87,8 +89,12 @@ struct FleetResult {
   Outcome outcome = Outcome::kInterrupted;
   std::string message;  ///< one line: each vehicle's end
   std::vector<FleetVehicleResult> vehicles;
-  /// Each handover's time, switch request to the new vehicle obeying, ms.
+  /// Each handover's time, switch request to the new vehicle obeying, ms:
+  /// of the turns to a vehicle that had answered before the request.
   std::vector<double> handover_ms;
+  /// Turns to a vehicle that had not answered yet (still starting): not
+  /// timed, since their time would be the vehicle's start-up.
+  int handovers_untimed = 0;
   double handover_ms_p50 = -1.0;  ///< nearest rank; negative: no handover
   double handover_ms_p95 = -1.0;
   std::vector<std::string> lost;  ///< the vehicles lost mid-run, by name
@@ -98,6 +104,12 @@ struct FleetResult {
   /// The operator process's CPU time (all its threads, getrusage) per wall
   /// second over the run's loop: what the fleet costs the station.
   double operator_cpu_share = 0.0;
+  /// The servo loop over the run: its start-to-start period p99, µs; and
+  /// the same over the ticks that rendered a switch's cue alone (negative:
+  /// no cue was felt), with their count.
+  double servo_period_p99_us = 0.0;
+  double servo_cue_period_p99_us = -1.0;
+  uint64_t servo_cue_ticks = 0;
   std::string fleet_run;          ///< "fleet <name> <started, UTC>": shared by its rows
 };
 

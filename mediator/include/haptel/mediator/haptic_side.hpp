@@ -84,6 +84,8 @@ class HapticSide {
   double target_hz() const { return config_.servo.rate_hz; }
   /// The servo loop's period distribution (the right arm's when it has one).
   const Histogram& ServoPeriods() const;
+  /// Of the same arm: the periods of the ticks that rendered a cue (a fleet's switch).
+  const Histogram& ServoCuePeriods() const;
   const DeviceConfig& config() const { return config_; }
 
  private:
