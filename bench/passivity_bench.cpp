@@ -19,7 +19,9 @@
 #include "haptel/haptics/servo_loop.hpp"
 #include "haptel/haptics/sim_device.hpp"
 #include "haptel/haptics/twoport.hpp"
+#include "bare_loop.hpp"
 #include "plot.hpp"
+#include "servo_bench.hpp"
 #include "smoke.hpp"
 
 namespace haptel::bench {
@@ -316,6 +318,59 @@ const Point* Find(const std::vector<Point>& points, double k, double delay_ms, M
   return nullptr;
 }
 
+/// The servo loop's own period, threaded at the device file's rate and
+/// scheduling, with the controller off and on, beside the bare loop
+/// (bare_loop.hpp): `rounds` rounds of the three, each `seconds` long, the
+/// order rotated every round so the machine's drift falls on all three alike.
+struct LoopTiming {
+  static constexpr int kBare = 0, kOff = 1, kOn = 2;
+  std::array<std::vector<double>, 3> p99_us;  ///< per kind, one per round
+  std::array<double, 3> median_us{};          ///< per kind, over the rounds
+  double bare_spread_us = 0.0;                ///< the bare loop's p99, largest minus smallest round
+  double bin_us = 10.0;                       ///< the period histogram's bin: percentiles come in whole bins
+  double tolerance_us = 0.0;                  ///< what "unchanged" allows: max(spread, one bin)
+  bool unchanged = false;                     ///< |on − off| within the tolerance
+  uint64_t allocations_on = 0;                ///< in the process while the loop ran with the controller
+  bool realtime = false;
+};
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+LoopTiming MeasureLoopTiming(const DeviceConfig& shipped, int rounds, double seconds) {
+  LoopTiming t;
+  DeviceConfig config = shipped;
+  config.driver = "sim";
+  for (int round = 0; round < rounds; ++round) {
+    for (int j = 0; j < 3; ++j) {
+      const int kind = (round + j) % 3;
+      if (kind == LoopTiming::kBare) {
+        const BareLoop bare = MeasureBareLoop(config.servo.rate_hz, config.servo.realtime_priority, seconds);
+        t.p99_us[kind].push_back(bare.stats.period_p99_us);
+        t.bin_us = bare.bin_us;
+        t.realtime = bare.stats.realtime;
+        continue;
+      }
+      config.servo.passivity = kind == LoopTiming::kOn;
+      haptics::SimDevice arms(config, OperatorConfig{});
+      const ServoLoopRun run = MeasureServoLoop(arms, config, seconds);
+      t.p99_us[kind].push_back(run.stats.period_p99_us);
+      if (kind == LoopTiming::kOn) t.allocations_on += run.allocations;
+    }
+  }
+  for (int kind = 0; kind < 3; ++kind) t.median_us[kind] = Median(t.p99_us[kind]);
+  const auto [lo, hi] = std::minmax_element(t.p99_us[LoopTiming::kBare].begin(), t.p99_us[LoopTiming::kBare].end());
+  t.bare_spread_us = *hi - *lo;
+  // The percentiles come in whole bins: a spread of zero still allows one.
+  t.tolerance_us = std::max(t.bare_spread_us, t.bin_us);
+  t.unchanged = std::abs(t.median_us[LoopTiming::kOn] - t.median_us[LoopTiming::kOff]) <= t.tolerance_us;
+  return t;
+}
+
 }  // namespace
 
 int BenchPassivityMain(int argc, const char* const* argv) {
@@ -330,6 +385,9 @@ int BenchPassivityMain(int argc, const char* const* argv) {
     std::fprintf(stderr, "haptel bench passivity: %s\n", e.what());
     return 2;
   }
+  // The loop's timing runs on the device file as shipped (its arms, rate and
+  // scheduling); the wall's runs below in simulated time on one arm.
+  const DeviceConfig shipped = device;
   // One arm, no glove or strings, no gravity: the wall's axis alone.
   device.driver = "sim";
   device.sides = {false, true};
@@ -369,6 +427,9 @@ int BenchPassivityMain(int argc, const char* const* argv) {
     }
   }
   const double wall_s = NsToS(MonotonicNs()) - t_start;
+  const int timing_rounds = smoke ? 2 : 3;
+  const double timing_seconds = smoke ? 0.3 : 3.0;
+  const LoopTiming timing = MeasureLoopTiming(shipped, timing_rounds, timing_seconds);
 
   std::printf("  %8s %9s |", "delay ms", "K N/m");
   for (const Mode m : kModes) std::printf(" %12s %7s |", ModeName(m), "F err N");
@@ -434,6 +495,26 @@ int BenchPassivityMain(int argc, const char* const* argv) {
               ModeName(kModes[best]), gain[best], gain[best] >= 3.0 ? "met" : "MISSED", cost, p99[0],
               cost <= 2.0 ? "met" : "MISSED", points.size(), wall_s, dir.c_str());
 
+  std::printf("\n  the servo loop itself (threaded, %s, %.0f Hz, %s): period p99 over %d rounds of %.1f s each,\n"
+              "  the three kinds in a rotated order; \"unchanged\": on within off's p99 +- the bare loop's own\n"
+              "  spread over the rounds (or one %.0f us bin, whichever is larger)\n",
+              shipped.file.empty() ? "defaults" : shipped.file.filename().c_str(), shipped.servo.rate_hz,
+              timing.realtime ? "SCHED_FIFO" : "not real-time: SCHED_FIFO refused", timing_rounds, timing_seconds,
+              timing.bin_us);
+  std::printf("    %-22s %10s %8s   %s\n", "loop", "p99 us", "x bare", "p99 per round (us)");
+  const char* kind_names[3] = {"bare clock_nanosleep", "servo, controller off", "servo, controller on"};
+  for (int kind = 0; kind < 3; ++kind) {
+    std::printf("    %-22s %10.0f %8.2f  ", kind_names[kind], timing.median_us[kind],
+                timing.median_us[0] > 0 ? timing.median_us[kind] / timing.median_us[0] : 0.0);
+    for (const double v : timing.p99_us[kind]) std::printf(" %.0f", v);
+    std::printf("\n");
+  }
+  std::printf("    on - off = %+.0f us against a tolerance of %.0f us (bare spread %.0f us): %s; allocations with the\n"
+              "    controller on: %llu\n",
+              timing.median_us[2] - timing.median_us[1], timing.tolerance_us, timing.bare_spread_us,
+              timing.unchanged ? "unchanged (met)" : "CHANGED (missed)",
+              static_cast<unsigned long long>(timing.allocations_on));
+
   {
     std::ofstream csv(dir / "passivity.csv");
     csv << "stiffness,delay_ms,mode,stable,spread_m,energy_j,max_alpha,acting_ticks,force_rms_err_n,penetration_m,"
@@ -483,6 +564,14 @@ int BenchPassivityMain(int argc, const char* const* argv) {
     o << ",\"gain\":" << JsonNumber(gain[best]) << ",\"gain_mode\":\"" << ModeName(kModes[best]) << "\"";
     for (size_t m = 1; m < kModes.size(); ++m) o << ",\"gain_" << key(kModes[m]) << "\":" << JsonNumber(gain[m]);
     o << ",\"passivity_bound\":" << JsonNumber(bound) << ",\"cost_us_p99\":" << JsonNumber(cost);
+    o << ",\"servo_p99_us_bare\":" << JsonNumber(timing.median_us[LoopTiming::kBare])
+      << ",\"servo_p99_us_off\":" << JsonNumber(timing.median_us[LoopTiming::kOff])
+      << ",\"servo_p99_us_on\":" << JsonNumber(timing.median_us[LoopTiming::kOn])
+      << ",\"servo_p99_spread_us_bare\":" << JsonNumber(timing.bare_spread_us)
+      << ",\"servo_p99_tolerance_us\":" << JsonNumber(timing.tolerance_us)
+      << ",\"servo_p99_unchanged\":" << (timing.unchanged ? "true" : "false")
+      << ",\"servo_allocations_on\":" << timing.allocations_on
+      << ",\"servo_realtime\":" << (timing.realtime ? "true" : "false");
     for (size_t m = 0; m < kModes.size(); ++m) {
       o << ",\"tick_us_p99_" << key(kModes[m]) << "\":" << JsonNumber(p99[m]) << ",\"force_rms_err_n_"
         << key(kModes[m]) << "\":" << JsonNumber(err_common[m]) << ",\"force_rms_err_n_at_stable_"

@@ -44,13 +44,35 @@ struct ModeResult {
   std::vector<double> histogram;  ///< counts per 10 µs bin
 };
 
-/// Runs `device` under a servo loop for `seconds`, feeding a fresh spring
-/// field every 10 ms as an interface would, so forces are computed each tick.
 ModeResult Measure(const std::string& name, const std::string& description, haptics::Device& device,
                    const DeviceConfig& config, double seconds) {
+  const ServoLoopRun run = MeasureServoLoop(device, config, seconds);
   ModeResult r;
   r.name = name;
   r.description = description;
+  r.stats = run.stats;
+  r.allocations = run.allocations;
+  r.memory_locked = run.memory_locked;
+  r.histogram = run.histogram;
+  return r;
+}
+
+std::string Json(const ModeResult& r, double bare_p99_us) {
+  std::ostringstream o;
+  o << "{\"rate_hz\":" << r.stats.rate_hz << ",\"p99_ratio_to_bare\":"
+    << (bare_p99_us > 0 ? r.stats.period_p99_us / bare_p99_us : 0.0) << ",\"period_p50_us\":" << r.stats.period_p50_us
+    << ",\"period_p99_us\":" << r.stats.period_p99_us << ",\"period_max_us\":" << r.stats.period_max_us
+    << ",\"overruns\":" << r.stats.overruns << ",\"allocations_in_loop\":" << r.allocations
+    << ",\"realtime\":" << (r.stats.realtime ? "true" : "false")
+    << ",\"memory_locked\":" << (r.memory_locked ? "true" : "false") << ",\"udp_unanswered\":" << r.udp_unanswered
+    << ",\"udp_malformed\":" << r.udp_malformed << "}";
+  return o.str();
+}
+
+}  // namespace
+
+ServoLoopRun MeasureServoLoop(haptics::Device& device, const DeviceConfig& config, double seconds) {
+  ServoLoopRun r;
   haptics::Hal hal;
   haptics::ServoLoop loop(device, hal, config, DeviceCalibration{});
   haptics::ForceField field;
@@ -76,20 +98,6 @@ ModeResult Measure(const std::string& name, const std::string& description, hapt
   for (int i = 0; i <= h.bins(); ++i) r.histogram.push_back(static_cast<double>(h.BinCount(i)));
   return r;
 }
-
-std::string Json(const ModeResult& r, double bare_p99_us) {
-  std::ostringstream o;
-  o << "{\"rate_hz\":" << r.stats.rate_hz << ",\"p99_ratio_to_bare\":"
-    << (bare_p99_us > 0 ? r.stats.period_p99_us / bare_p99_us : 0.0) << ",\"period_p50_us\":" << r.stats.period_p50_us
-    << ",\"period_p99_us\":" << r.stats.period_p99_us << ",\"period_max_us\":" << r.stats.period_max_us
-    << ",\"overruns\":" << r.stats.overruns << ",\"allocations_in_loop\":" << r.allocations
-    << ",\"realtime\":" << (r.stats.realtime ? "true" : "false")
-    << ",\"memory_locked\":" << (r.memory_locked ? "true" : "false") << ",\"udp_unanswered\":" << r.udp_unanswered
-    << ",\"udp_malformed\":" << r.udp_malformed << "}";
-  return o.str();
-}
-
-}  // namespace
 
 int BenchServoMain(int argc, const char* const* argv) {
   double seconds = 3.0;

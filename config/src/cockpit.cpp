@@ -1,6 +1,7 @@
 #include "haptel/config/cockpit.hpp"
 
 #include "haptel/config/check.hpp"
+#include "shared_control_section.hpp"
 #include "yaml_map.hpp"
 
 namespace haptel {
@@ -34,6 +35,7 @@ void CockpitConfig::ValidateOrThrow() const {
   check::Number("contact.shake_torque", shake_torque, 0.0, 10.0);
   check::Number("contact.shake_hz", shake_hz, 0.5, 100.0);
   check::Number("contact.throttle_lock_s", throttle_lock_s, 0.0, 30.0);
+  if (shared_control.enabled) check::Nested("shared_control", shared_control);
 }
 
 CockpitConfig LoadCockpit(const std::filesystem::path& file) {
@@ -42,8 +44,8 @@ CockpitConfig LoadCockpit(const std::filesystem::path& file) {
   c.file = file;
   c.name = root.RequireString("name");
   // The name says which loader reads a file (InterfaceName); in code it is a label.
-  if (c.name != "cockpit" && c.name != "cockpit-hud" && c.name != "cockpit-assisted") {
-    root.Fail("name", "one of: cockpit, cockpit-hud, cockpit-assisted");
+  if (c.name != "cockpit" && c.name != "cockpit-hud" && c.name != "cockpit-assisted" && c.name != "cockpit-shared") {
+    root.Fail("name", "one of: cockpit, cockpit-hud, cockpit-assisted, cockpit-shared");
   }
   c.hud = root.Bool("hud", c.hud);
   c.return_to_zero = root.Bool("return_to_zero", c.return_to_zero);
@@ -70,6 +72,7 @@ CockpitConfig LoadCockpit(const std::filesystem::path& file) {
   c.shake_hz = contact.Number("shake_hz", c.shake_hz);
   c.throttle_lock_s = contact.Number("throttle_lock_s", c.throttle_lock_s);
   contact.Finish();
+  config_detail::ReadSharedControl(root, c.name, "cockpit-shared", c.shared_control);
   root.Finish();
   config_detail::ValidateIn(root, c);
   return c;

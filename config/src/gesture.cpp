@@ -1,20 +1,14 @@
 #include "haptel/config/gesture.hpp"
 
 #include "haptel/config/check.hpp"
+#include "shared_control_section.hpp"
 #include "yaml_map.hpp"
 
 namespace haptel {
 
+using config_detail::ReadSharedControl;
 using config_detail::YamlMap;
 namespace check = config_check;
-
-void SharedControlConfig::ValidateOrThrow() const {
-  check::Number("horizon_s", horizon_s, 0.1, 10.0);
-  // The sim operator's muscle tops out at 8 N: above 15 N a person may not push through.
-  check::Number("max_force", max_force, 0.0, 15.0);
-  check::Number("stiffness", stiffness, 0.0, 2000.0);
-  check::Number("clearance", clearance, 0.0, 1.0);
-}
 
 void GestureConfig::ValidateOrThrow() const {
   check::NonEmpty("name", name);
@@ -50,23 +44,7 @@ GestureConfig LoadGesture(const std::filesystem::path& file) {
   g.wall_stiffness = root.Number("wall_stiffness", g.wall_stiffness);
   g.wall_release_s = root.Number("wall_release_s", g.wall_release_s);
   g.command_rate_hz = root.Number("command_rate_hz", g.command_rate_hz);
-  // gesture-shared is the gesture interface with shared control: the section
-  // is what makes it so, and it has no meaning on plain gesture.
-  const bool shared = g.name == "gesture-shared";
-  if (shared != root.Has("shared_control")) {
-    root.Fail("shared_control", shared ? "a 'shared_control' section (horizon_s, max_force, stiffness, clearance)"
-                                       : "no 'shared_control' section on 'gesture' (name the file 'gesture-shared')");
-  }
-  if (shared) {
-    YamlMap section = root.Map("shared_control");
-    SharedControlConfig& c = g.shared_control;
-    c.enabled = true;
-    c.horizon_s = section.Number("horizon_s", c.horizon_s);
-    c.max_force = section.Number("max_force", c.max_force);
-    c.stiffness = section.Number("stiffness", c.stiffness);
-    c.clearance = section.Number("clearance", c.clearance);
-    section.Finish();
-  }
+  ReadSharedControl(root, g.name, "gesture-shared", g.shared_control);
   root.Finish();
   config_detail::ValidateIn(root, g);
   return g;

@@ -18,6 +18,8 @@ std::deque<InterfaceKindInfo>& Table() {
       {"cockpit-hud", F::kRobot, {true, true}, I::kHands, true, "the cockpit with a speedometer and turn indicators"},
       {"cockpit-assisted", F::kRobot, {true, true}, I::kHands, true,
        "the cockpit whose controls return to zero when released"},
+      {"cockpit-shared", F::kRobot, {true, true}, I::kHands, true,
+       "the cockpit with haptic shared control: the wheel and lever pushed away from a steer into an obstacle"},
       {"keyboard", F::kRobot, {false, false}, I::kKeys, false, "a person's arrow keys (or W/A/S/D)"},
       {"gamepad", F::kRobot, {false, false}, I::kGamepad, false, "a person's game controller"},
       {"blimp-gesture", F::kBlimp, {true, true}, I::kHands, false,

@@ -8,9 +8,11 @@ namespace haptel::interfaces {
 using haptics::Side;
 using haptics::Vec3d;
 
-CockpitInterface::CockpitInterface(const CockpitConfig& config, ControlsPort& port,
-                                   const GripGeometry& grip)
-    : logic_(config), port_(port), grip_(grip) {}
+CockpitInterface::CockpitInterface(const CockpitConfig& config, ControlsPort& port, const GripGeometry& grip,
+                                   const VehicleGeometry& vehicle)
+    : logic_(config), port_(port), grip_(grip) {
+  if (logic_.config().shared_control.enabled) shared_.emplace(logic_.config().shared_control, vehicle);
+}
 
 MotorCommand CockpitInterface::Update(double t_s, const VehicleFeedback& feedback, haptics::Hal& hal) {
   controls_ = port_.Controls();
@@ -36,7 +38,29 @@ MotorCommand CockpitInterface::Update(double t_s, const VehicleFeedback& feedbac
   } else {
     wheel_slip_ = 0.0;
   }
-  port_.Actuate(logic_.Update(t_s, feedback, controls_));
+  actuation_ = logic_.Update(t_s, feedback, controls_);
+  if (shared_) {
+    // The controls' space: the lever's travel forward, the rim's arc to the
+    // left, both in metres, so one stiffness and one bound serve both and the
+    // hand feels the same push on either.
+    const double r = c.wheel_radius;
+    const Vec3d here{controls_.throttle, controls_.wheel_angle * r, 0.0};
+    guidance_ = shared_->Guide(feedback.ranges, here, Vec3d{}, [&](const Vec3d& q) {
+      CockpitControls at = controls_;
+      at.throttle = q[0];
+      at.wheel_angle = q[1] / r;
+      return logic_.Map(at, t_s);
+    });
+    const SharedControlConfig& sc = shared_->config();
+    actuation_.guidance_active = guidance_.active;
+    actuation_.guidance_throttle = guidance_.point[0];
+    actuation_.guidance_wheel_angle = guidance_.point[1] / r;
+    actuation_.guidance_normal_throttle = guidance_.normal[0];
+    actuation_.guidance_normal_rim = guidance_.normal[1];
+    actuation_.guidance_stiffness = sc.stiffness;
+    actuation_.guidance_max_force = sc.max_force;
+  }
+  port_.Actuate(actuation_);
   hud_ = logic_.Hud(feedback, controls_, t_s);
   return logic_.Map(controls_, t_s);
 }

@@ -43,7 +43,8 @@ const CatalogEntry kCockpit{
     [](const std::filesystem::path& f) -> InterfaceSpec::Config { return LoadCockpit(f); },
     [](const InterfaceSpec& spec, const InterfaceParts& parts) -> std::unique_ptr<interfaces::MediatorInterface> {
       if (parts.controls == nullptr) throw std::invalid_argument("interface '" + spec.name + "' needs its controls");
-      return std::make_unique<interfaces::CockpitInterface>(std::get<CockpitConfig>(spec.config), *parts.controls);
+      return std::make_unique<interfaces::CockpitInterface>(std::get<CockpitConfig>(spec.config), *parts.controls,
+                                                            interfaces::GripGeometry{}, parts.vehicle);
     }};
 const CatalogEntry kKeyboard{
     [](const std::filesystem::path& f) -> InterfaceSpec::Config { return LoadKeyboard(f); },
@@ -62,7 +63,7 @@ const CatalogEntry kGamepad{
 const std::map<std::string, const CatalogEntry*>& Catalog() {
   static const std::map<std::string, const CatalogEntry*> catalog{
       {"gesture", &kGesture},   {"gesture-shared", &kGesture},   {"cockpit", &kCockpit},   {"cockpit-hud", &kCockpit},
-      {"cockpit-assisted", &kCockpit}, {"keyboard", &kKeyboard}, {"gamepad", &kGamepad},
+      {"cockpit-assisted", &kCockpit}, {"cockpit-shared", &kCockpit}, {"keyboard", &kKeyboard}, {"gamepad", &kGamepad},
   };
   return catalog;
 }

@@ -35,6 +35,13 @@
 // (Bullet clears them after each step, and PhysicsWorld has no pre-step hook
 // for bodies other than the hands).
 //
+// Shared control's guidance (cockpit-shared) is the one force that depends
+// on where the controls are, a one-sided saturating spring in the controls'
+// joint space (lever, rim arc), so no axis setting expresses it: a
+// btActionInterface, which Bullet calls at the end of every step, evaluates
+// it from the controls' positions and applies it as an impulse (force × step)
+// on the knob and the wheel, acting in the following step's solve.
+//
 // Bullet reports the 6-DoF angle about X as the rotation of the body about
 // −X (proxy_hand.cpp, SetTargets): with the frame's X along world +x that is
 // exactly the wheel angle about −x (+ = left), so the limits, the spring's
@@ -80,6 +87,14 @@ struct CockpitControlsBody::Impl {
     btTransform spawn;
   };
 
+  /// Bullet calls it after every step: shared control's guidance.
+  struct GuidanceAction final : btActionInterface {
+    explicit GuidanceAction(Impl& impl) : impl_(impl) {}
+    void updateAction(btCollisionWorld*, btScalar step_s) override { impl_.PushGuidance(step_s); }
+    void debugDraw(btIDebugDraw*) override {}
+    Impl& impl_;
+  };
+
   PhysicsWorld& world;
   CockpitConfig cockpit;
   ControlsBodyConfig config;
@@ -88,6 +103,9 @@ struct CockpitControlsBody::Impl {
   Control knob;
   bool locked = false;
   int resets = 0;
+  ControlsActuation guidance;  ///< the latest actuation's guidance fields (validated)
+  double guidance_force = 0.0; ///< N, at the latest step
+  GuidanceAction guidance_action{*this};
   /// The proxy hands' bodies, gathered once: Read runs every physics step.
   std::vector<const btRigidBody*> hand;
   std::array<std::vector<bool>, 2> touching;  ///< per control (wheel, knob): which hand bodies touch it
@@ -99,10 +117,12 @@ struct CockpitControlsBody::Impl {
         max_angle(c.wheel_max_angle_deg * M_PI / 180.0) {
     BuildWheel();
     BuildKnob();
+    world.bullet().addAction(&guidance_action);
   }
 
   ~Impl() {
     btDiscreteDynamicsWorld& bw = world.bullet();
+    bw.removeAction(&guidance_action);
     for (Control* c : {&wheel, &knob}) {
       bw.removeConstraint(c->joint.get());
       bw.removeRigidBody(c->body.get());
@@ -288,6 +308,46 @@ struct CockpitControlsBody::Impl {
       t.setLimit(0, -travel, travel);
     }
     locked = a.throttle_locked;
+
+    // A guidance with anything not finite, or not a unit normal, pushes nothing.
+    const double n = std::hypot(a.guidance_normal_throttle, a.guidance_normal_rim);
+    const bool usable = a.guidance_active && std::isfinite(a.guidance_throttle) &&
+                        std::isfinite(a.guidance_wheel_angle) && std::abs(n - 1.0) < 1e-3 &&
+                        std::isfinite(a.guidance_stiffness) && a.guidance_stiffness > 0.0 &&
+                        std::isfinite(a.guidance_max_force) && a.guidance_max_force > 0.0;
+    guidance = a;
+    guidance.guidance_active = usable;
+  }
+
+  /// The guidance spring at the controls' positions, as impulses over `step_s`.
+  /// Critically damped along its normal for the controls' own mass: a
+  /// released lever or wheel comes back to the plane without being thrown
+  /// past it (undamped, a lever let go at full forward against a 3 N push
+  /// crossed its plane at speed and ended at full reverse). The sum stays
+  /// within ±max: the spring only pushes back, and the damping only brakes
+  /// (it holds a control back that springs out of the danger, as a hand would).
+  void PushGuidance(double step_s) {
+    guidance_force = 0.0;
+    if (!guidance.guidance_active) return;
+    const double r = cockpit.wheel_radius;
+    const double nt = guidance.guidance_normal_throttle, nr = guidance.guidance_normal_rim;
+    const double depth =
+        (Throttle() - guidance.guidance_throttle) * nt + (WheelAngle() - guidance.guidance_wheel_angle) * r * nr;
+    if (!(depth > 0.0)) return;
+    // Along the normal: the lever's speed, and the rim's towards the left
+    // (the wheel angle grows with rotation about −x).
+    const double speed = knob.body->getLinearVelocity().x() * nt - wheel.body->getAngularVelocity().x() * r * nr;
+    const double mass = nt * nt * config.knob_mass + nr * nr * config.wheel_mass;  // the rim's: I / r² = m
+    const double damping = 2.0 * std::sqrt(guidance.guidance_stiffness * mass);
+    guidance_force =
+        std::clamp(guidance.guidance_stiffness * depth + damping * speed, -guidance.guidance_max_force,
+                   guidance.guidance_max_force);
+    // Back along the normal: the lever along x; on the rim, a force f towards
+    // the left is a torque f·r about −x (the wheel angle's axis).
+    const double lever = -guidance_force * nt;
+    const double rim_left = -guidance_force * nr;
+    knob.body->applyCentralImpulse(btVector3(lever * step_s, 0, 0));
+    wheel.body->applyTorqueImpulse(btVector3(-rim_left * r * step_s, 0, 0));
   }
 };
 
@@ -299,6 +359,7 @@ CockpitControlsBody::~CockpitControlsBody() = default;
 ControlsState CockpitControlsBody::Read() { return impl_->Read(); }
 void CockpitControlsBody::Apply(const ControlsActuation& actuation) { impl_->Apply(actuation); }
 int CockpitControlsBody::resets() const { return impl_->resets; }
+double CockpitControlsBody::guidance_force() const { return impl_->guidance_force; }
 btRigidBody& CockpitControlsBody::wheel_body() { return *impl_->wheel.body; }
 btRigidBody& CockpitControlsBody::throttle_body() { return *impl_->knob.body; }
 

@@ -241,6 +241,17 @@ TEST_CASE("bench passivity --smoke", "[bench][smoke]") {
   CHECK(Finite(j["stable_stiffness_two_port"]) >= 0.0);
   CHECK(Finite(j["cost_us_p99"]) >= 0.0);
   CHECK(!j["gain_mode"].string().empty());
+  // The servo loop's own period p99, off and on, beside the bare loop's.
+  for (const char* key : {"servo_p99_us_bare", "servo_p99_us_off", "servo_p99_us_on", "servo_p99_tolerance_us"}) {
+    INFO(key);
+    CHECK(Finite(j[key]) > 0.0);
+  }
+  CHECK(Finite(j["servo_p99_spread_us_bare"]) >= 0.0);
+  CHECK(j["servo_p99_tolerance_us"].number() >= j["servo_p99_spread_us_bare"].number());
+  CHECK(j["servo_p99_unchanged"].boolean() ==
+        (std::abs(j["servo_p99_us_on"].number() - j["servo_p99_us_off"].number()) <=
+         j["servo_p99_tolerance_us"].number()));
+  CHECK(j["servo_allocations_on"].number() == 0);  // the controller allocates nothing in the loop
   const auto& points = j["points"].array();
   CHECK(points.size() == 24);  // 2 delays x 4 modes (off, one-port, two-port, two-port-ref) x 3 stiffnesses
   for (const JsonValue& p : points) {

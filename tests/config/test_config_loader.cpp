@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "haptel/config/cockpit.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/config/gesture.hpp"
 #include "haptel/config/run.hpp"
@@ -408,6 +409,44 @@ TEST_CASE("Shared control's section is checked strictly", "[config]") {
   SECTION("plain gesture with it") {
     const fs::path file = tmp.Write("s.yaml", "name: gesture\nshared_control:\n  horizon_s: 1.0\n");
     CHECK_THAT(ErrorOf([&] { haptel::LoadGesture(file); }), Contains("'shared_control'"));
+  }
+}
+
+TEST_CASE("Shipped cockpit-shared interface loads: the cockpit with shared control", "[config][shipped]") {
+  const fs::path file = "config/interfaces/cockpit-shared.yaml";
+  const std::string text = ReadText(file);
+  const haptel::CockpitConfig c = haptel::LoadCockpit(file);
+  CHECK(c.name == "cockpit-shared");
+  REQUIRE(c.shared_control.enabled);
+  CHECK(c.shared_control.horizon_s == NumberIn(text, "horizon_s"));
+  CHECK(c.shared_control.max_force == NumberIn(text, "max_force"));
+  CHECK(c.shared_control.stiffness == NumberIn(text, "stiffness"));
+  CHECK(c.shared_control.clearance == NumberIn(text, "clearance"));
+  for (const char* plain : {"cockpit", "cockpit-hud", "cockpit-assisted"}) {
+    INFO(plain);
+    CHECK_FALSE(haptel::LoadCockpit(fs::path("config/interfaces") / (std::string(plain) + ".yaml")).shared_control.enabled);
+  }
+}
+
+TEST_CASE("A cockpit's shared control section: only on cockpit-shared, checked strictly", "[config]") {
+  TempDir tmp;
+  const std::string base = ReadText("config/interfaces/cockpit-shared.yaml");
+  const std::string without = base.substr(0, base.find("shared_control:"));
+  SECTION("cockpit-shared without it") {
+    const fs::path file = tmp.Write("c.yaml", without);
+    CHECK_THAT(ErrorOf([&] { haptel::LoadCockpit(file); }),
+               Contains(file.string()) && Contains("'shared_control'"));
+  }
+  SECTION("plain cockpit with it") {
+    std::string text = base;
+    text.replace(text.find("name: cockpit-shared"), 20, "name: cockpit");
+    const fs::path file = tmp.Write("c.yaml", text);
+    CHECK_THAT(ErrorOf([&] { haptel::LoadCockpit(file); }), Contains("'shared_control'") && Contains("cockpit-shared"));
+  }
+  SECTION("a force no one could push through") {
+    const fs::path file = tmp.Write("c.yaml", without + "shared_control:\n  max_force: 50\n");
+    CHECK_THAT(ErrorOf([&] { haptel::LoadCockpit(file); }),
+               Contains(file.string()) && Contains("shared_control.max_force") && Contains("[0, 15]"));
   }
 }
 

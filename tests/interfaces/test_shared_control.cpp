@@ -8,6 +8,7 @@
 #include "hal_fixture.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/haptics/force_field.hpp"
+#include "haptel/interfaces/cockpit.hpp"
 #include "haptel/interfaces/gesture.hpp"
 #include "haptel/interfaces/shared_control.hpp"
 
@@ -181,4 +182,100 @@ TEST_CASE("shared control's settings are validated") {
   c = SharedConfig();
   c.shared_control.horizon_s = 0.0;
   CHECK_THROWS_WITH(GestureInterface(c, kVehicle), Catch::Contains("shared_control.horizon_s"));
+}
+
+// cockpit-shared: the same prediction and guidance in the controls' space (the
+// lever's travel forward, the rim's arc to the left), handed to the physics
+// world as the actuation's guidance spring.
+namespace {
+
+/// Controls whose state the test sets, recording what the interface asks.
+struct ControlsAt final : ControlsPort {
+  CockpitControls state;
+  ControlActuation last;
+  CockpitControls Controls() const override { return state; }
+  void Actuate(const ControlActuation& a) override { last = a; }
+};
+
+CockpitConfig SharedCockpit(double horizon_s = 1.5, double max_force = 3.0) {
+  CockpitConfig c;  // the shipped geometry: radius 0.12 m, travel 0.06 m, full turn 90°
+  c.name = "cockpit-shared";
+  c.shared_control = {.enabled = true, .horizon_s = horizon_s, .max_force = max_force, .stiffness = 150.0,
+                      .clearance = 0.03};
+  return c;
+}
+
+struct CockpitAt {
+  ControlsAt port;
+  CockpitInterface cockpit;
+  MotorCommand command;
+  CockpitAt(double throttle, double wheel_angle, const RangeScan& scan, const CockpitConfig& config = SharedCockpit())
+      : cockpit(config, port, GripGeometry{}, kVehicle) {
+    port.state = {.wheel_angle = wheel_angle, .throttle = throttle, .wheel_held = true, .throttle_held = true};
+    haptics::Hal hal(Metres());
+    VehicleFeedback feedback;
+    feedback.ranges = scan;
+    command = cockpit.Update(0.0, feedback, hal);
+  }
+};
+
+}  // namespace
+
+TEST_CASE("cockpit-shared: an obstacle ahead pushes the lever towards slower, in physics, bounded") {
+  // Full forward on the lever (0.06 m): TTC (0.45 − 0.14) / 0.3 ≈ 1.03 s, inside 1.5 s.
+  const CockpitAt c(0.06, 0.0, WallAhead(0.45));
+  const Guidance& g = c.cockpit.guidance();
+  REQUIRE(g.active);
+  CHECK(g.time_to_collision_s == Approx(1.033).margin(0.01));
+  CHECK(g.force[0] < -0.1);                                   // back, towards slower
+  CHECK(std::abs(g.force[1]) < 0.05 * std::abs(g.force[0]));  // the wheel is left alone: the wall is square
+  // What the physics world is asked to render: the plane between the lever
+  // and neutral, facing forward, with the file's stiffness and bound.
+  const ControlActuation& a = c.port.last;
+  REQUIRE(a.guidance_active);
+  CHECK(a.guidance_normal_throttle > 0.99);
+  CHECK(a.guidance_throttle < 0.06);
+  CHECK(a.guidance_throttle > 0.005);
+  CHECK(a.guidance_stiffness == 150.0);
+  CHECK(a.guidance_max_force == 3.0);
+  CHECK(std::hypot(g.force[0], g.force[1]) <= 3.0 + 1e-9);
+  // Never locking: the lever is not held, and the command stays the controls' own.
+  CHECK_FALSE(a.throttle_locked);
+  CHECK(c.command.left == Approx(1.0));
+  CHECK(c.command.right == Approx(1.0));
+  // The view sees it as it sees gesture-shared's.
+  REQUIRE(c.cockpit.CurrentGuidance().has_value());
+  CHECK(c.cockpit.CurrentGuidance()->force[0] == g.force[0]);
+}
+
+TEST_CASE("cockpit-shared: steering towards a post on the left turns the wheel back to the right") {
+  // Lever at 0.75 of full, wheel 0.196 rad left (turn 0.0875): the gesture
+  // case's command, with the post ahead-left (beam 18, +18°, 0.4 m).
+  const CockpitAt left(0.045, 0.196, PointAt(18, 0.4));
+  REQUIRE(left.cockpit.guidance().active);
+  CHECK(left.cockpit.guidance().force[1] < 0.0);   // along the rim, to the right
+  CHECK(left.port.last.guidance_normal_rim > 0.0);  // the danger lies further left
+  // Mirrored.
+  const CockpitAt right(0.045, -0.196, PointAt(12, 0.4));
+  REQUIRE(right.cockpit.guidance().active);
+  CHECK(right.cockpit.guidance().force[1] > 0.0);
+  CHECK(right.port.last.guidance_normal_rim < 0.0);
+}
+
+TEST_CASE("cockpit-shared: nothing pushes beyond the horizon or at rest; plain cockpit has no shared control") {
+  const CockpitAt far(0.06, 0.0, WallAhead(1.4));
+  CHECK_FALSE(far.cockpit.guidance().active);
+  CHECK_FALSE(far.port.last.guidance_active);
+  const CockpitAt rest(0.0, 0.0, WallAhead(0.2));  // lever at zero stops the vehicle
+  CHECK_FALSE(rest.cockpit.guidance().active);
+  CockpitConfig plain = SharedCockpit();
+  plain.name = "cockpit";
+  plain.shared_control.enabled = false;
+  const CockpitAt none(0.06, 0.0, WallAhead(0.45), plain);
+  CHECK_FALSE(none.cockpit.CurrentGuidance().has_value());
+  CHECK_FALSE(none.port.last.guidance_active);
+  // Validated as gesture-shared's.
+  ControlsAt port;
+  CHECK_THROWS_WITH(CockpitInterface(SharedCockpit(1.5, 40.0), port, GripGeometry{}, kVehicle),
+                    Catch::Contains("shared_control.max_force"));
 }

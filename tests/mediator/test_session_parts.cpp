@@ -248,7 +248,7 @@ TEST_CASE("every robot interface of the table loads from its shipped file with t
       CHECK(mediator::MakeInterface(spec, parts)->name() == kind.name);
     }
   }
-  CHECK(robot == 7);
+  CHECK(robot == 8);  // gesture, gesture-shared, the four cockpits (cockpit-shared among them), keyboard, gamepad
   // A blimp's interface is refused for the robot, naming the robot's.
   CHECK_THROWS_WITH(mediator::LoadInterfaceSpec(run, "blimp-gesture"),
                     Catch::Contains("flies a blimp") && Catch::Contains("gesture, gesture-shared, cockpit"));

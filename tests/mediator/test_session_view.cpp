@@ -136,6 +136,40 @@ TEST_CASE("with gesture-shared the overlay carries what pushes the hand; plain g
   CHECK_FALSE(p.guidance_shown);
 }
 
+TEST_CASE("with cockpit-shared the overlay carries what pushes the lever and the wheel, as gesture-shared's") {
+  const Track track(LoadTrack(ShippedFile("config/tracks/test-short.yaml")));
+  SessionSetup setup;
+  LapTimer lap(track);
+  haptics::Hal hal(Metres());
+  PlainPort port;
+  port.state = {.wheel_angle = 0.0, .throttle = 0.06, .wheel_held = true, .throttle_held = true};  // full ahead
+  interfaces::VehicleFeedback feedback;  // the wall 0.4 m ahead of the gesture-shared case
+  feedback.ranges.count = 3;
+  feedback.ranges.angle_min = -0.1;
+  feedback.ranges.angle_increment = 0.1;
+  feedback.ranges.range_max = 1.5;
+  feedback.ranges.ranges = {0.402f, 0.4f, 0.402f};
+  const CockpitConfig config = Shipped("cockpit-shared");
+  auto shared = std::make_unique<interfaces::CockpitInterface>(config, port);
+  const interfaces::CockpitInterface& cockpit = *shared;
+  InterfaceSet set = One(std::move(shared));
+  const interfaces::MotorCommand motors = set.Update(1.0, feedback, hal);
+  OverlayFeed feed(setup, track);
+  const view::Overlay o = feed.Make(1.0, lap, set, feedback, motors, true, false);
+  REQUIRE(cockpit.guidance().active);
+  CHECK(o.guidance_shown);
+  CHECK(o.guidance_forward_n == cockpit.guidance().force[0]);
+  CHECK(o.guidance_forward_n < 0.0);  // the lever back, towards slower
+  CHECK(o.guidance_max_n == config.shared_control.max_force);
+  CHECK(o.guidance_ttc_s == Approx(cockpit.guidance().time_to_collision_s));
+  CHECK_FALSE(o.hud);  // the plain cockpit's view: no speedometer
+
+  PlainPort plain_port = port;
+  InterfaceSet plain = One(std::make_unique<interfaces::CockpitInterface>(Shipped("cockpit"), plain_port));
+  const view::Overlay p = feed.Make(1.0, lap, plain, feedback, plain.Update(1.0, feedback, hal), true, false);
+  CHECK_FALSE(p.guidance_shown);
+}
+
 TEST_CASE("the overlay remembers the last contact and says when the vehicle is not up yet") {
   const Track track(LoadTrack(ShippedFile("config/tracks/test-short.yaml")));
   SessionSetup setup;

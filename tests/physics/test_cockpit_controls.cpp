@@ -153,6 +153,75 @@ TEST_CASE("cockpit controls: a locked lever holds at the target against a push; 
   CHECK(s.throttle == Approx(0.0).margin(0.001));
 }
 
+/// Shared control's guidance (cockpit-shared): a plane at `throttle` (m) and
+/// `wheel_angle` (rad), normal (lever, rim), 150 N/m, at most 3 N.
+ControlsActuation Guiding(double throttle, double wheel_angle, double normal_throttle, double normal_rim) {
+  ControlsActuation a;
+  a.guidance_active = true;
+  a.guidance_throttle = throttle;
+  a.guidance_wheel_angle = wheel_angle;
+  a.guidance_normal_throttle = normal_throttle;
+  a.guidance_normal_rim = normal_rim;
+  a.guidance_stiffness = 150.0;
+  a.guidance_max_force = 3.0;
+  return a;
+}
+
+TEST_CASE("cockpit controls: shared control's guidance pushes the lever back to its plane, and a hand pushes through",
+          "[physics][cockpit]") {
+  Rig rig;
+  const ControlsActuation a = Guiding(0.02, 0.0, 1.0, 0.0);  // commands beyond 2 cm forward lead into danger
+  // Pushed forward by 1 N, the lever rests where the spring answers it: 1/150 m past the plane.
+  ControlsState s = rig.Run(a, 3000, 1.0);
+  CHECK(s.throttle == Approx(0.02 + 1.0 / 150.0).margin(0.001));
+  CHECK(rig.controls.guidance_force() == Approx(1.0).margin(0.05));
+  // Pushed by more than the bound, it goes through to its end stop: the guidance never locks.
+  s = rig.Run(a, 3000, 5.0);
+  CHECK(s.throttle == Approx(rig.cockpit.throttle_travel).margin(0.002));
+  CHECK(rig.controls.guidance_force() == Approx(3.0));  // saturated, however deep
+  // Let go, it comes back to the plane and no further: a one-sided spring.
+  s = rig.Run(a, 4000);
+  CHECK(s.throttle == Approx(0.02).margin(0.002));
+  CHECK(s.throttle > 0.017);
+  // Off: nothing pushes.
+  s = rig.Run({}, 1000, 1.0);
+  CHECK(s.throttle == Approx(rig.cockpit.throttle_travel).margin(0.002));
+  CHECK(rig.controls.guidance_force() == 0.0);
+}
+
+TEST_CASE("cockpit controls: shared control's guidance turns the wheel back from a steer to the left",
+          "[physics][cockpit]") {
+  Rig rig;
+  const double r = rig.cockpit.wheel_radius;
+  const ControlsActuation push_left = [] {
+    ControlsActuation a = Guiding(0.0, 0.1, 0.0, 1.0);  // steering left of 0.1 rad leads into danger
+    return a;
+  }();
+  // A steady 0.2 N·m to the left: it rests where the rim's spring answers it,
+  // (0.2 / r) N = 150 N/m × the rim's arc past the plane.
+  ControlsActuation a = push_left;
+  a.wheel_torque = 0.2;
+  ControlsState s = rig.Run(a, 4000);
+  CHECK(s.wheel_angle == Approx(0.1 + (0.2 / r) / 150.0 / r).margin(0.01));
+  // 0.5 N·m is more than the bound's 3 N × r = 0.36 N·m: through, to the end stop.
+  a.wheel_torque = 0.5;
+  s = rig.Run(a, 4000);
+  CHECK(s.wheel_angle == Approx(rig.max_angle).margin(0.02));
+  CHECK(rig.controls.guidance_force() == Approx(3.0));
+  // A steer to the right is safe: left alone.
+  a.wheel_torque = -0.2;
+  s = rig.Run(a, 6000);
+  CHECK(s.wheel_angle == Approx(-rig.max_angle).margin(0.02));
+  CHECK(rig.controls.guidance_force() == 0.0);
+  // A guidance that is not finite pushes nothing (and breaks nothing).
+  a = push_left;
+  a.guidance_throttle = std::nan("");
+  a.wheel_torque = 0.2;
+  s = rig.Run(a, 6000);
+  CHECK(s.wheel_angle == Approx(rig.max_angle).margin(0.02));
+  CHECK(rig.controls.guidance_force() == 0.0);
+}
+
 TEST_CASE("cockpit controls: a proxy hand closed on the rim holds it and turns the wheel",
           "[physics][cockpit]") {
   Rig rig;

@@ -4,10 +4,13 @@
 ///
 /// `cockpit` is the plain wheel and throttle; `cockpit-hud` adds a speedometer
 /// and turn indicators; `cockpit-assisted` adds return-to-zero springs that
-/// act while a control is released.
+/// act while a control is released; `cockpit-shared` adds haptic shared
+/// control (shared_control.hpp) acting on the wheel and the lever.
 #include <array>
 #include <filesystem>
 #include <string>
+
+#include "haptel/config/shared_control.hpp"
 
 namespace haptel {
 
@@ -41,8 +44,14 @@ struct CockpitConfig {
 
   double command_rate_hz = 50.0;
 
+  /// cockpit-shared's: a torque on the wheel away from a steer that leads
+  /// into an obstacle and a force on the lever towards slower, in physics;
+  /// disabled for the others.
+  SharedControlConfig shared_control;
+
   /// Throws ConfigFieldError (keys as in the file: "wheel.radius") unless the
-  /// name is set, every value is in range and full_turn_deg <= max_angle_deg < 180.
+  /// name is set, every value is in range and full_turn_deg <= max_angle_deg < 180
+  /// (and, for cockpit-shared, its shared_control section's).
   void ValidateOrThrow() const;
 };
 

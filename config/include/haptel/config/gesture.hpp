@@ -4,24 +4,9 @@
 #include <filesystem>
 #include <string>
 
+#include "haptel/config/shared_control.hpp"
+
 namespace haptel {
-
-/// Haptic shared control (gesture-shared): a force that pushes the hand away
-/// from commands whose predicted motion meets an obstacle the vehicle's range
-/// sensors see within `horizon_s`, growing as the time to collision shrinks
-/// and never above `max_force`, so the operator can always push through. The
-/// commands stay the hand's: the force and the operator's own push blend at
-/// the hand. No section (`enabled` false): the plain gesture interface.
-struct SharedControlConfig {
-  bool enabled = false;
-  double horizon_s = 1.0;     ///< s of predicted motion looked through
-  double max_force = 3.0;     ///< N: the most the guidance ever pushes
-  double stiffness = 150.0;   ///< N/m of hand travel past the safe commands' boundary
-  double clearance = 0.03;    ///< m kept between the body and an obstacle (beyond its radius)
-
-  /// Throws ConfigFieldError unless every value is in range.
-  void ValidateOrThrow() const;
-};
 
 struct GestureConfig {
   std::filesystem::path file;

@@ -11,8 +11,20 @@
 /// Hands: the left hand holds the wheel at the top of its rim and turns with
 /// it; the right hand holds the throttle lever's bar. Both grasp from above,
 /// palm down, fingers forward over the rim or bar and closed around it.
+///
+/// cockpit-shared (a `shared_control` section) adds haptic shared control
+/// (shared_control.hpp) on the controls themselves: the prediction and the
+/// guidance plane are gesture-shared's, in the controls' space (the lever's
+/// travel, m, as "forward"; the rim's arc, wheel angle × radius, m, as
+/// "left"), and the physics world renders the plane's spring on the lever
+/// and the wheel at its own rate (ControlActuation's guidance). The hands
+/// holding them feel it through the proxy hands' coupling, bounded at
+/// max_force, and can push through: the command stays the controls' own.
+#include <optional>
+
 #include "haptel/interfaces/cockpit_logic.hpp"
 #include "haptel/interfaces/interface.hpp"
+#include "haptel/interfaces/shared_control.hpp"
 
 namespace haptel::interfaces {
 
@@ -52,7 +64,10 @@ class CockpitInterface final : public MediatorInterface {
  public:
   /// Keeps a reference to `port`, which must outlive the interface. Validates
   /// `config` first (CockpitConfig::ValidateOrThrow: ConfigFieldError).
-  CockpitInterface(const CockpitConfig& config, ControlsPort& port, const GripGeometry& grip = {});
+  /// `vehicle`: what shared control predicts the vehicle's motion with
+  /// (unused without it).
+  CockpitInterface(const CockpitConfig& config, ControlsPort& port, const GripGeometry& grip = {},
+                   const VehicleGeometry& vehicle = {});
 
   std::string name() const override { return logic_.config().name; }
   /// Controls → motors; bumper → shake and lock; assisted → return springs.
@@ -74,6 +89,16 @@ class CockpitInterface final : public MediatorInterface {
   /// hold them, filtered; 0 while not held.
   double lever_slip() const { return lever_slip_; }
   double wheel_slip() const { return wheel_slip_; }
+  /// Shared control's guidance as of the last Update, in the controls' space
+  /// (point and normal: lever m, rim arc m; force: N on the lever forward and
+  /// along the rim towards the left); inactive without shared control.
+  const Guidance& guidance() const { return guidance_; }
+  bool shared() const { return shared_.has_value(); }
+  std::optional<Guidance> CurrentGuidance() const override {
+    return shared_ ? std::optional<Guidance>(guidance_) : std::nullopt;
+  }
+  /// What the latest Update asked the controls to feel.
+  const ControlActuation& actuation() const { return actuation_; }
 
  private:
   CockpitLogic logic_;
@@ -84,6 +109,9 @@ class CockpitInterface final : public MediatorInterface {
   double lever_slip_ = 0.0;
   double wheel_slip_ = 0.0;
   double last_update_s_ = -1.0;
+  std::optional<SharedControl> shared_;
+  Guidance guidance_;
+  ControlActuation actuation_;
 };
 
 }  // namespace haptel::interfaces

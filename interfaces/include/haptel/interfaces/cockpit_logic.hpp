@@ -26,6 +26,22 @@ struct ControlActuation {
   double throttle_spring = 0.0;        ///< N/m toward `throttle_target`
   double throttle_target = 0.0;        ///< m
   bool throttle_locked = false;        ///< hold the lever at throttle_target rigidly
+
+  /// Haptic shared control (cockpit-shared; shared_control.hpp): a spring
+  /// past a plane in the controls' space — the lever's travel (m) and the
+  /// rim's arc, wheel angle × wheel radius (m) — pushing the controls back
+  /// from the commands that lead into an obstacle, up to
+  /// guidance_max_force: a force on the lever, a torque (force × radius)
+  /// on the wheel. Evaluated in physics at every step from the controls'
+  /// positions, so it acts at the physics rate however often this is set
+  /// (physics/cockpit_controls.hpp; damped there for the controls' mass).
+  bool guidance_active = false;
+  double guidance_throttle = 0.0;         ///< m: the plane's point, lever
+  double guidance_wheel_angle = 0.0;      ///< rad: the plane's point, wheel
+  double guidance_normal_throttle = 1.0;  ///< the plane's unit normal, towards danger: lever part
+  double guidance_normal_rim = 0.0;       ///< ...and rim part (+ = turned left)
+  double guidance_stiffness = 0.0;        ///< N/m past the plane
+  double guidance_max_force = 0.0;        ///< N: the most it pushes
 };
 
 /// View elements of the HUD cockpits.

@@ -41,14 +41,17 @@ struct VehicleFeedback {
 };
 
 /// What haptic shared control's guidance does now (shared_control.hpp): for
-/// the view, the recorder and tests.
+/// the view, the recorder and tests. In the space of what the operator moves:
+/// gesture-shared's is the right hand's position (m, device frame);
+/// cockpit-shared's the controls' (x: the lever's travel, y: the rim's arc,
+/// wheel angle × radius, + left; m).
 struct Guidance {
   double time_to_collision_s = std::numeric_limits<double>::infinity();
   double danger = 0.0;  ///< 0 (beyond the horizon) .. 1 (collision now)
   bool active = false;  ///< a guidance plane is set
-  haptics::Vec3d point{};   ///< on the boundary of the safe commands, m, device frame
+  haptics::Vec3d point{};   ///< on the boundary of the safe commands, m
   haptics::Vec3d normal{1, 0, 0};  ///< unit, towards the dangerous commands
-  haptics::Vec3d force{};   ///< N: what the plane pushes on the hand where it is now
+  haptics::Vec3d force{};   ///< N: what the plane pushes (forward, left) where the hand or controls are now
   double max_force = 0.0;   ///< N: the most it may push (the config's bound)
 };
 

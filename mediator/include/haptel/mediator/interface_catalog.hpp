@@ -58,7 +58,7 @@ struct InterfaceParts {
   interfaces::ControlsPort* controls = nullptr;  ///< a cockpit's controls (physics)
   const interfaces::InputBox* input = nullptr;   ///< a person's keys and controller
   int speed_levels = 8;                          ///< the vehicle's levels per direction
-  /// The vehicle's drive and body, for shared control's prediction (gesture-shared).
+  /// The vehicle's drive and body, for shared control's prediction (gesture-shared, cockpit-shared).
   interfaces::VehicleGeometry vehicle;
 };
 

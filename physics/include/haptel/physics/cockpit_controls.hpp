@@ -46,6 +46,19 @@ struct ControlsActuation {
   double throttle_spring = 0.0;  ///< N/m toward throttle_target
   double throttle_target = 0.0;  ///< m
   bool throttle_locked = false;  ///< hold the lever at throttle_target rigidly
+  /// Shared control's guidance (cockpit-shared): a spring past a plane in the
+  /// controls' space (lever m, rim arc = angle × wheel radius m), saturating
+  /// at guidance_max_force, pushing the lever along x and turning the wheel,
+  /// evaluated at every step from the controls' positions, and critically
+  /// damped along its normal for the controls' own mass (a released control
+  /// comes back to the plane, not past it).
+  bool guidance_active = false;
+  double guidance_throttle = 0.0;         ///< m: the plane's point, lever
+  double guidance_wheel_angle = 0.0;      ///< rad: the plane's point, wheel
+  double guidance_normal_throttle = 1.0;  ///< unit normal towards the danger: lever part
+  double guidance_normal_rim = 0.0;       ///< ...rim part (+ = turned left)
+  double guidance_stiffness = 0.0;        ///< N/m
+  double guidance_max_force = 0.0;        ///< N
 };
 
 /// Bodies of the controls (beyond the positions in CockpitConfig).
@@ -86,6 +99,9 @@ class CockpitControlsBody {
 
   /// Controls put back after a NaN/Inf.
   int resets() const;
+  /// N: the guidance's push back along its normal at the latest step (< 0
+  /// while its damping brakes a control leaving the danger; |·| <= its bound).
+  double guidance_force() const;
   btRigidBody& wheel_body();
   btRigidBody& throttle_body();
 

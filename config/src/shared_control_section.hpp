@@ -1,0 +1,19 @@
+#pragma once
+/// @file Reading the `shared_control:` section the shared interfaces' files
+/// share (gesture.cpp, cockpit.cpp).
+#include <string>
+
+#include "haptel/config/shared_control.hpp"
+#include "yaml_map.hpp"
+
+namespace haptel::config_detail {
+
+/// An interface named `shared_name` (gesture-shared, cockpit-shared) is its
+/// base interface with shared control: the section is what makes it so, and
+/// it has no meaning on the others. Fails naming the key unless the section
+/// is there exactly when `name == shared_name`; reads it into `out` (enabled)
+/// when it is.
+void ReadSharedControl(YamlMap& root, const std::string& name, const std::string& shared_name,
+                       SharedControlConfig& out);
+
+}  // namespace haptel::config_detail
