@@ -22,6 +22,7 @@
 #include "haptel/study/plan.hpp"
 #include "haptel/study/store.hpp"
 #include "haptel/study/study_command.hpp"
+#include "trial_setup.hpp"
 
 namespace haptel::study {
 namespace {
@@ -63,10 +64,11 @@ const StudyParticipant* ParticipantNamed(const StudyConfig& config, const std::s
   return nullptr;
 }
 
-/// The session of one trial: what `haptel run` would drive with these options.
+}  // namespace
+
 mediator::SessionSetup TrialSetup(const StudyConfig& config, const PlannedTrial& trial,
                                   const std::filesystem::path& database, const std::string& domain,
-                                  bool verbose, int experience) {
+                                  bool verbose, int experience, const std::vector<std::string>& more_words) {
   const StudyCondition& condition = ConditionNamed(config, trial.condition);
   const bool synthetic = config.operators == "synthetic";
   const std::string cap = std::to_string(config.trial_cap_s);
@@ -89,6 +91,7 @@ mediator::SessionSetup TrialSetup(const StudyConfig& config, const PlannedTrial&
   if (!config.link_profile.empty()) words.insert(words.end(), {"--link-profile", config.link_profile});
   if (!config.link_fault.empty()) words.insert(words.end(), {"--link-fault", config.link_fault});
   if (!verbose) words.push_back("--quiet");
+  words.insert(words.end(), more_words.begin(), more_words.end());
   std::vector<const char*> argv;
   for (const std::string& w : words) argv.push_back(w.c_str());
   mediator::SessionSetup setup =
@@ -101,6 +104,8 @@ mediator::SessionSetup TrialSetup(const StudyConfig& config, const PlannedTrial&
   }
   return setup;
 }
+
+namespace {
 
 /// The console's thumbnail shows the session's camera pictures.
 void ShowPictures(mediator::SessionSetup& setup, StudyConsole& console) {

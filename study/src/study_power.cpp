@@ -1,0 +1,458 @@
+// `haptel study power STUDY.yaml`: how many participants the study needs.
+// A pool of simulated participants (the file's driver profiles, varied) runs
+// the study's trials, in simulated time; the Monte Carlo of power.hpp then
+// draws balanced samples of each participant count from the pool and
+// analyses them as the report does.
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <random>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "haptel/config/error.hpp"
+#include "haptel/config/run.hpp"
+#include "haptel/core/args.hpp"
+#include "haptel/core/cli.hpp"
+#include "haptel/core/json.hpp"
+#include "haptel/core/stop_signals.hpp"
+#include "haptel/mediator/run_command.hpp"
+#include "haptel/study/plan.hpp"
+#include "haptel/study/power.hpp"
+#include "haptel/study/report.hpp"
+#include "haptel/study/store.hpp"
+#include "haptel/study/study_command.hpp"
+#include "trial_setup.hpp"
+
+namespace haptel::study {
+namespace {
+
+constexpr const char* kPowerUsage =
+    "usage: haptel study power FILE [options]   how many participants a synthetic study needs\n"
+    "\n"
+    "Simulates the study (config/studies/*.yaml, simulated drivers) with a pool of simulated\n"
+    "participants and estimates, per participant count, the probability that the planned\n"
+    "analysis finds the condition effect at alpha 0.05: Friedman's test, and the mixed model\n"
+    "log(lap time) ~ condition + position + (1 | participant) by the likelihood-ratio test of\n"
+    "condition (as `haptel study report` computes them). Recommends the smallest count whose\n"
+    "mixed-model power reaches 80 %.\n"
+    "\n"
+    "The pool: participant i drives order row i mod rows of the study's design (the balanced\n"
+    "Latin square's rows; one row for a random or fixed order) with one of the file's\n"
+    "participants' profiles (taken in turn, each row getting each profile alike), every trait\n"
+    "multiplied by exp(N(0, 0.1^2)) and clamped to its valid range, and a seed of its own.\n"
+    "It runs every condition once per repetition in its row's order, as the study's trials run\n"
+    "(practice, cap, link), each in simulated time, two at a time. The trials are recorded as\n"
+    "a study of their own in OUT/pool-<M>-seed<S>.db (`haptel study report` reads it); run the\n"
+    "same command again after a stop to resume. Each simulation then draws n/rows participants\n"
+    "from each row of the pool, with replacement.\n"
+    "options:\n"
+    "  --participants LIST  participant counts, each a multiple of the design's rows\n"
+    "                       (default 4,8,12,16)\n"
+    "  --simulations N      Monte Carlo simulations per count (default 100)\n"
+    "  --pool M             simulated participants in the pool, a multiple of the rows\n"
+    "                       (default 8 per row)\n"
+    "  --seed S             the pool's profiles and the draws (default 1)\n"
+    "  --jobs J             trials run at the same time (default 2)\n"
+    "  --out DIR            where the files go (default <database dir>/power-<study>/):\n"
+    "                       power.csv, power.png, pool.csv and the pool's database\n"
+    "  --domain N           DDS domain id of the trials' vehicles (real time only)\n"
+    "  --real-time          run the pool's trials in real time, each with its vehicle process\n"
+    "                       (slow: for checking against the simulated-time trials)\n"
+    "  --json               end with one JSON line: power (participants, friedman_power,\n"
+    "                       lmm_power and their intervals), recommended_participants,\n"
+    "                       pool_participants, simulations, wall_s\n"
+    "  --verbose            the sessions' own progress lines\n";
+
+/// How much a pool participant's traits vary around their profile's: the
+/// standard deviation of the log of the factor (0.1: about ±10 %).
+constexpr double kTraitLogSpread = 0.1;
+
+std::string Fixed(double value, int decimals) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.*f", decimals, value);
+  return buffer;
+}
+
+/// A standard normal draw by Box–Muller from the engine's 53-bit uniforms
+/// (std::normal_distribution's algorithm is the library's choice; this is
+/// the same on every platform).
+double StandardNormal(std::mt19937_64& random) {
+  const double u1 = (static_cast<double>(random() >> 11) + 1.0) * 0x1.0p-53;  // (0, 1]
+  const double u2 = static_cast<double>(random() >> 11) * 0x1.0p-53;          // [0, 1)
+  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * 3.14159265358979323846 * u2);
+}
+
+/// `profile` with every trait × exp(N(0, spread²)) within its valid range,
+/// and a seed of its own.
+DriverProfile VariedProfile(const DriverProfile& profile, std::mt19937_64& random) {
+  DriverProfile varied = profile;
+  for (const DriverProfileTrait& t : DriverProfileTraits()) {
+    const double value = profile.*t.member * std::exp(kTraitLogSpread * StandardNormal(random));
+    varied.*t.member = std::clamp(value, t.min, t.max);
+  }
+  varied.seed = 1 + random() % (1u << 30);  // the study file's range for a seed
+  return varied;
+}
+
+/// The pool as a study of its own: `pool` participants S01, S02, ... in the
+/// study's design, participant i with a varied copy of the profile of the
+/// file's participant (i / rows + i mod rows) mod (file's participants).
+/// Participant i's profile depends on (seed, i) alone.
+StudyConfig PoolStudy(const StudyConfig& study, int pool, int rows, std::uint64_t seed) {
+  StudyConfig config = study;
+  // A plain name of at most 40 characters, as the study file's.
+  config.name = study.name.substr(0, 34) + "-power";
+  config.description = "the simulated participants of `haptel study power` for study " + study.name;
+  config.participants.clear();
+  config.profiles.clear();
+  const int width = pool >= 100 ? 3 : 2;
+  for (int i = 0; i < pool; ++i) {
+    const StudyParticipant& model = study.participants.at(
+        static_cast<size_t>((i / rows + i % rows) % static_cast<int>(study.participants.size())));
+    std::seed_seq seeds{static_cast<std::uint32_t>(seed & 0xffffffffu), static_cast<std::uint32_t>(seed >> 32),
+                        static_cast<std::uint32_t>(i)};
+    std::mt19937_64 random(seeds);
+    char id[16];
+    std::snprintf(id, sizeof id, "S%0*d", width, i + 1);
+    const std::string profile = std::string(id) + "-" + model.profile;
+    config.profiles[profile] = VariedProfile(study.profiles.at(model.profile), random);
+    config.participants.push_back({id, profile});
+  }
+  return config;
+}
+
+std::vector<int> ParseCounts(const std::string& text) {
+  std::vector<int> counts;
+  for (const std::string& word : SplitList(text)) {
+    size_t used = 0;
+    int n = 0;
+    try {
+      n = std::stoi(word, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != word.size() || n < 1 || n > 1000) {
+      throw UsageError("option --participants: expected a comma-separated list of counts from 1 to 1000, got '" +
+                       text + "'");
+    }
+    counts.push_back(n);
+  }
+  std::sort(counts.begin(), counts.end());
+  counts.erase(std::unique(counts.begin(), counts.end()), counts.end());
+  return counts;
+}
+
+/// One pool trial's outcome line, for the progress and for failures.
+struct PoolProgress {
+  std::mutex mutex;
+  size_t done = 0;
+  size_t total = 0;
+  std::string failure;  ///< the first trial that could not be finished
+};
+
+}  // namespace
+
+int StudyPowerCommand(int argc, const char* const* argv) {
+  const std::atomic<bool>& interrupted = InstallStopSignals();
+  return cli::Main({"haptel study power", kPowerUsage}, argc, argv, [&] {
+    const auto started = std::chrono::steady_clock::now();
+    StudyConfig study;
+    StudyConfig pool_config;
+    std::vector<PlannedTrial> plan;
+    PowerOptions options;
+    int rows = 1;
+    int pool = 0;
+    int jobs = 2;
+    bool json = false;
+    bool verbose = false;
+    bool real_time = false;
+    std::string domain;
+    std::filesystem::path out;
+    std::filesystem::path pool_database;
+    cli::ReadInput([&] {
+      const Args args(argc, argv, {"participants", "simulations", "pool", "seed", "jobs", "out", "domain"},
+                      {"json", "verbose", "real-time"});
+      if (args.positional().size() != 2 || args.positional()[0] != "power") {
+        throw UsageError(args.positional().size() < 2 ? "missing the study file"
+                                                       : "unexpected argument '" + args.positional()[2] + "'");
+      }
+      json = args.Flag("json");
+      verbose = args.Flag("verbose");
+      real_time = args.Flag("real-time");
+      options.simulations = args.Int("simulations", 1, 1000000).value_or(100);
+      options.seed = static_cast<std::uint64_t>(args.Int("seed", 0, 1 << 30).value_or(1));
+      jobs = args.Int("jobs", 1, 64).value_or(2);
+      if (const auto d = args.Int("domain", 0, 232)) domain = std::to_string(*d);
+      if (const auto counts = args.Value("participants")) options.participant_counts = ParseCounts(*counts);
+      const std::optional<int> pool_option = args.Int("pool", 1, 10000);
+      study = LoadStudy(args.positional()[1]);
+      if (study.operators != "synthetic") {
+        throw ConfigError(study.file.string() +
+                          ": key 'operators': expected synthetic for `haptel study power` (it simulates the "
+                          "participants with the file's driver profiles), got " + study.operators);
+      }
+      if (study.participants.empty()) {
+        throw ConfigError(study.file.string() +
+                          ": key 'participants': expected at least one simulated participant (their profiles "
+                          "are the pool's)");
+      }
+      rows = BlockSize(study);
+      for (const int n : options.participant_counts) {
+        if (n % rows != 0) {
+          throw UsageError("option --participants: expected multiples of " + std::to_string(rows) +
+                           " (the rows of the study's " + ToString(study.order) +
+                           " design: a balanced draw takes as many from each), got " + std::to_string(n));
+        }
+      }
+      pool = pool_option.value_or(8 * rows);
+      if (pool % rows != 0) {
+        throw UsageError("option --pool: expected a multiple of " + std::to_string(rows) +
+                         " (the rows of the study's design), got " + std::to_string(pool));
+      }
+      pool_config = PoolStudy(study, pool, rows, options.seed);
+      plan = PlanTrials(pool_config);
+      const RunConfig run_config = LoadRun(study.run);
+      const std::filesystem::path database = !study.database.empty() ? study.database : run_config.database;
+      out = args.Value("out").value_or((database.parent_path() / ("power-" + study.name)).string());
+      pool_database = out / ("pool-" + std::to_string(pool) + "-seed" + std::to_string(options.seed) + ".db");
+      // The first trial set up now: a word `haptel run` refuses is bad input, before anything runs.
+      std::vector<std::string> words = {real_time ? "--vehicle-name" : "--simulated-time"};
+      if (real_time) words.push_back("powerpool0");
+      try {
+        TrialSetup(pool_config, plan.front(), pool_database, domain, verbose, 0, words);
+      } catch (const UsageError& e) {
+        if (real_time || std::string(e.what()).find("--simulated-time") == std::string::npos) throw;
+        throw UsageError("the trials run in simulated time (haptel run --simulated-time), which this build's "
+                         "`haptel run` does not have (" + std::string(e.what()) + "); --real-time runs them in "
+                         "real time");
+      }
+    });
+    std::error_code made;
+    std::filesystem::create_directories(out, made);
+    if (made) throw std::runtime_error("cannot create the folder " + out.string() + ": " + made.message());
+    // The pool's study is planned here, once; each worker then opens it again
+    // with a database connection of its own.
+    PoolProgress progress;
+    progress.total = plan.size();
+    {
+      auto recorder = cli::ReadInput([&] { return std::make_unique<record::Recorder>(pool_database); });
+      StudyStore store = cli::ReadInput([&] { return StudyStore(*recorder, pool_config, plan); });
+      std::fprintf(stderr, "[power] %s: a pool of %d simulated participants (%d per order row, %d rows), %zu trials "
+                   "(%zu done), %s, %d at a time; database %s\n",
+                   study.name.c_str(), pool, pool / rows, rows, plan.size(), store.Trials().size(),
+                   real_time ? "in real time" : "in simulated time", jobs, pool_database.c_str());
+      progress.done = store.Trials().size();
+    }
+
+    // Whole participants to the workers, in turn: a participant's trials run
+    // in order, as in the study (their experience counts the trials before).
+    std::vector<std::string> participants;
+    for (const StudyParticipant& p : pool_config.participants) participants.push_back(p.id);
+    std::atomic<size_t> next_participant{0};
+    const auto pool_started = std::chrono::steady_clock::now();
+    auto work = [&](int worker) {
+      try {
+        record::Recorder recorder(pool_database);
+        StudyStore store(recorder, pool_config, plan);
+        std::vector<std::string> words;
+        if (real_time) {
+          words = {"--vehicle-name", "powerpool" + std::to_string(worker)};  // two vehicles, two names
+        } else {
+          words = {"--simulated-time"};
+        }
+        for (size_t i = next_participant++; i < participants.size() && !interrupted.load(); i = next_participant++) {
+          int faults = 0;
+          for (;;) {
+            std::optional<PlannedTrial> trial;
+            const std::vector<TrialRow> done = store.Trials();
+            for (const PlannedTrial& t : plan) {
+              if (t.participant != participants[i]) continue;
+              const bool has_row = std::any_of(done.begin(), done.end(), [&](const TrialRow& r) {
+                return r.participant == t.participant && r.position == t.position;
+              });
+              if (!has_row) {
+                trial = t;
+                break;
+              }
+            }
+            if (!trial || interrupted.load()) break;
+            const int experience = store.TrialsDone(trial->participant) + (pool_config.practice ? 1 : 0);
+            const mediator::SessionSetup setup = TrialSetup(pool_config, *trial, pool_database, domain, verbose,
+                                                            experience, words);
+            const mediator::RecordedRun run =
+                mediator::RunAndRecord(setup, recorder, interrupted, store.TrialWriter(*trial, pool_config.trial_cap_s));
+            const std::string outcome = mediator::ToString(run.result.outcome);
+            std::lock_guard<std::mutex> lock(progress.mutex);
+            if (run.run_id != 0 && FinishesTrial(outcome)) {
+              ++progress.done;
+              const double elapsed =
+                  std::chrono::duration<double>(std::chrono::steady_clock::now() - pool_started).count();
+              std::fprintf(stderr, "[power] %zu/%zu %s position %d %s: %s, lap %s s (run %lld, %.0f s)\n",
+                           progress.done, progress.total, trial->participant.c_str(), trial->position,
+                           trial->condition.c_str(), outcome.c_str(),
+                           Fixed(run.result.record.completed ? run.result.record.lap_time_s : pool_config.trial_cap_s,
+                                 2).c_str(),
+                           static_cast<long long>(run.run_id), elapsed);
+              if (store.RedoFlaggedOnce(*trial)) {
+                --progress.done;
+                std::fprintf(stderr, "[power]   flagged (%s): run again once\n",
+                             TrialFlags(run.result.record).c_str());
+              }
+              continue;
+            }
+            if (interrupted.load()) break;
+            // A fault (the vehicle lost, a run not recorded): once more, then
+            // the participant is left out of the pool.
+            std::fprintf(stderr, "[power] %s position %d %s: %s: %s%s\n", trial->participant.c_str(),
+                         trial->position, trial->condition.c_str(), outcome.c_str(), run.result.message.c_str(),
+                         faults == 0 ? "; once more" : "; the participant is left out");
+            if (++faults > 1) {
+              if (progress.failure.empty()) {
+                progress.failure = trial->participant + " position " + std::to_string(trial->position) + ": " +
+                                   outcome + ": " + run.result.message;
+              }
+              break;
+            }
+          }
+        }
+      } catch (const std::exception& e) {
+        std::lock_guard<std::mutex> lock(progress.mutex);
+        if (progress.failure.empty()) progress.failure = e.what();
+        std::fprintf(stderr, "[power] worker %d stopped: %s\n", worker, e.what());
+      }
+    };
+    std::vector<std::thread> workers;
+    for (int w = 0; w < jobs; ++w) workers.emplace_back(work, w);
+    for (std::thread& w : workers) w.join();
+    const double pool_wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - pool_started).count();
+    if (interrupted.load()) {
+      std::fprintf(stderr, "[power] interrupted: %zu of %zu pool trials recorded in %s; run the same command again "
+                   "to resume\n", progress.done, progress.total, pool_database.c_str());
+      return cli::kExitFailed;
+    }
+
+    // The pool as data: each participant with every planned trial recorded.
+    record::Recorder recorder(pool_database);
+    const StudyStore store(recorder, pool_config, plan);
+    const std::vector<TrialRow> rows_recorded = store.Trials();
+    std::vector<PowerParticipant> pool_data;
+    std::vector<std::string> left_out;
+    const std::filesystem::path pool_csv = out / "pool.csv";
+    std::ofstream csv(pool_csv);
+    csv << "participant,row,profile,position,condition,lap_time_s,completed,obstacles,run_id\n";
+    for (size_t i = 0; i < pool_config.participants.size(); ++i) {
+      const StudyParticipant& p = pool_config.participants[i];
+      PowerParticipant data;
+      data.id = p.id;
+      data.row = static_cast<int>(i) % rows;
+      size_t planned = 0;
+      for (const PlannedTrial& t : plan) planned += t.participant == p.id;
+      for (const TrialRow& t : rows_recorded) {
+        if (t.participant != p.id) continue;
+        const auto c = std::find_if(study.conditions.begin(), study.conditions.end(),
+                                    [&](const StudyCondition& s) { return s.name == t.condition; });
+        data.trials.push_back({static_cast<int>(c - study.conditions.begin()), t.position, t.lap_time_s});
+        csv << p.id << ',' << data.row << ',' << p.profile << ',' << t.position << ',' << t.condition << ','
+            << Fixed(t.lap_time_s, 3) << ',' << (t.completed ? 1 : 0) << ',' << t.obstacles << ',' << t.run_id
+            << '\n';
+      }
+      if (data.trials.size() == planned) {
+        pool_data.push_back(std::move(data));
+      } else {
+        left_out.push_back(p.id);
+      }
+    }
+    csv.close();
+    if (!csv) throw std::runtime_error("cannot write " + pool_csv.string());
+    if (!left_out.empty()) {
+      std::string who;
+      for (const std::string& id : left_out) who += (who.empty() ? "" : ", ") + id;
+      std::fprintf(stderr, "[power] left out of the pool (trials not finished: %s): %s\n",
+                   progress.failure.c_str(), who.c_str());
+    }
+
+    const auto analysis_started = std::chrono::steady_clock::now();
+    PowerResult power;
+    try {
+      power = EstimatePower(pool_data, static_cast<int>(study.conditions.size()), rows, options);
+    } catch (const std::invalid_argument& e) {
+      throw std::runtime_error(std::string("cannot estimate the power from the pool in ") + pool_database.string() +
+                               ": " + e.what());
+    }
+    const double analysis_wall_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - analysis_started).count();
+
+    // The table, the CSV and the curve.
+    const std::filesystem::path power_csv = out / "power.csv";
+    std::ofstream table(power_csv);
+    table << "participants,simulations,friedman_power,friedman_ci_low,friedman_ci_high,lmm_power,lmm_ci_low,"
+             "lmm_ci_high,friedman_not_analysed,lmm_not_analysed\n";
+    for (const PowerPoint& p : power.points) {
+      table << p.participants << ',' << p.simulations << ',' << Fixed(p.friedman_power, 4) << ','
+            << Fixed(p.friedman_interval.low, 4) << ',' << Fixed(p.friedman_interval.high, 4) << ','
+            << Fixed(p.lmm_power, 4) << ',' << Fixed(p.lmm_interval.low, 4) << ',' << Fixed(p.lmm_interval.high, 4)
+            << ',' << p.friedman_not_analysed << ',' << p.lmm_not_analysed << '\n';
+    }
+    table.close();
+    if (!table) throw std::runtime_error("cannot write " + power_csv.string());
+    const std::filesystem::path png = out / "power.png";
+    DrawPowerCurve(power, "Power of " + study.name + " (alpha 0.05, 95 % CI; pool of " +
+                              std::to_string(power.pool_participants) + ")", png);
+
+    std::printf("power of study %s: %d simulated participants in the pool (%d order rows), %d simulations per "
+                "count, alpha %s\n",
+                study.name.c_str(), power.pool_participants, rows, options.simulations,
+                Fixed(options.alpha, 2).c_str());
+    std::printf("  %12s  %-24s  %-24s\n", "participants", "Friedman power (95% CI)", "mixed-model power (95% CI)");
+    for (const PowerPoint& p : power.points) {
+      const std::string f = Fixed(p.friedman_power, 2) + " (" + Fixed(p.friedman_interval.low, 2) + "-" +
+                            Fixed(p.friedman_interval.high, 2) + ")";
+      const std::string m = Fixed(p.lmm_power, 2) + " (" + Fixed(p.lmm_interval.low, 2) + "-" +
+                            Fixed(p.lmm_interval.high, 2) + ")";
+      std::printf("  %12d  %-24s  %-24s\n", p.participants, f.c_str(), m.c_str());
+    }
+    std::printf("  (mixed model: log(lap time) ~ condition + position + (1 | participant), likelihood-ratio test of "
+                "condition; intervals Clopper-Pearson)\n");
+    if (power.recommended_participants) {
+      std::printf("  recommended participants: %d (the smallest count whose mixed-model power reaches 80 %%)\n",
+                  *power.recommended_participants);
+    } else {
+      std::printf("  recommended participants: none of these counts reaches 80 %% mixed-model power\n");
+    }
+    std::printf("  pool: %s s of trials, analysis %s s; files: %s, %s, %s\n", Fixed(pool_wall_s, 1).c_str(),
+                Fixed(analysis_wall_s, 1).c_str(), power_csv.c_str(), png.c_str(), pool_csv.c_str());
+    if (json) {
+      const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+      std::string line = "{\"study\":" + JsonString(study.name) + ",\"power\":[";
+      for (size_t i = 0; i < power.points.size(); ++i) {
+        const PowerPoint& p = power.points[i];
+        line += std::string(i > 0 ? "," : "") + "{\"participants\":" + std::to_string(p.participants) +
+                ",\"friedman_power\":" + JsonNumber(p.friedman_power) +
+                ",\"friedman_ci\":[" + JsonNumber(p.friedman_interval.low) + "," +
+                JsonNumber(p.friedman_interval.high) + "],\"lmm_power\":" + JsonNumber(p.lmm_power) +
+                ",\"lmm_ci\":[" + JsonNumber(p.lmm_interval.low) + "," + JsonNumber(p.lmm_interval.high) + "]}";
+      }
+      line += "],\"recommended_participants\":" +
+              (power.recommended_participants ? std::to_string(*power.recommended_participants) : "null") +
+              ",\"recommended_by\":\"lmm\",\"alpha\":" + JsonNumber(options.alpha) +
+              ",\"pool_participants\":" + std::to_string(power.pool_participants) +
+              ",\"pool_left_out\":" + std::to_string(left_out.size()) + ",\"rows\":" + std::to_string(rows) +
+              ",\"simulations\":" + std::to_string(options.simulations) +
+              ",\"simulated_time\":" + (real_time ? "false" : "true") + ",\"pool_wall_s\":" + JsonNumber(pool_wall_s) +
+              ",\"wall_s\":" + JsonNumber(wall_s) + ",\"pool_database\":" + JsonString(pool_database.string()) +
+              ",\"csv\":" + JsonString(power_csv.string()) + ",\"png\":" + JsonString(png.string()) + "}";
+      std::printf("%s\n", line.c_str());
+    }
+    std::fflush(stdout);
+    return left_out.empty() ? cli::kExitOk : cli::kExitFailed;
+  });
+}
+
+}  // namespace haptel::study
