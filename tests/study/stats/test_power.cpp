@@ -78,12 +78,12 @@ TEST_CASE("power: with no effect the tests find one in about alpha of the simula
   const PowerPoint& p = result.points[0];
   INFO("friedman " << p.friedman_power << ", lmm " << p.lmm_power);
   // Binomial(600, 0.05): mean 30, sd 5.3; ±3.5 sd is 0.019..0.081. The
-  // likelihood-ratio test's χ² is a little liberal with 16 participants, so
-  // its upper bound allows 0.10.
+  // likelihood-ratio test's χ² is a little liberal with 16 participants
+  // (0.045 measured here), so its upper bound allows 0.085.
   CHECK(p.friedman_power >= 0.019);
   CHECK(p.friedman_power <= 0.081);
   CHECK(p.lmm_power >= 0.019);
-  CHECK(p.lmm_power <= 0.10);
+  CHECK(p.lmm_power <= 0.085);
   CHECK_FALSE(result.recommended_participants.has_value());
 }
 
