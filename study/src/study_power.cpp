@@ -24,6 +24,7 @@
 #include "haptel/core/stop_signals.hpp"
 #include "haptel/mediator/run_command.hpp"
 #include "haptel/study/plan.hpp"
+#include "haptel/study/power_pool.hpp"
 #include "haptel/study/power.hpp"
 #include "haptel/study/report.hpp"
 #include "haptel/study/store.hpp"
@@ -70,62 +71,10 @@ constexpr const char* kPowerUsage =
     "                       pool_participants, simulations, wall_s\n"
     "  --verbose            the sessions' own progress lines\n";
 
-/// How much a pool participant's traits vary around their profile's: the
-/// standard deviation of the log of the factor (0.1: about ±10 %).
-constexpr double kTraitLogSpread = 0.1;
-
 std::string Fixed(double value, int decimals) {
   char buffer[32];
   std::snprintf(buffer, sizeof buffer, "%.*f", decimals, value);
   return buffer;
-}
-
-/// A standard normal draw by Box–Muller from the engine's 53-bit uniforms
-/// (std::normal_distribution's algorithm is the library's choice; this is
-/// the same on every platform).
-double StandardNormal(std::mt19937_64& random) {
-  const double u1 = (static_cast<double>(random() >> 11) + 1.0) * 0x1.0p-53;  // (0, 1]
-  const double u2 = static_cast<double>(random() >> 11) * 0x1.0p-53;          // [0, 1)
-  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * 3.14159265358979323846 * u2);
-}
-
-/// `profile` with every trait × exp(N(0, spread²)) within its valid range,
-/// and a seed of its own.
-DriverProfile VariedProfile(const DriverProfile& profile, std::mt19937_64& random) {
-  DriverProfile varied = profile;
-  for (const DriverProfileTrait& t : DriverProfileTraits()) {
-    const double value = profile.*t.member * std::exp(kTraitLogSpread * StandardNormal(random));
-    varied.*t.member = std::clamp(value, t.min, t.max);
-  }
-  varied.seed = 1 + random() % (1u << 30);  // the study file's range for a seed
-  return varied;
-}
-
-/// The pool as a study of its own: `pool` participants S01, S02, ... in the
-/// study's design, participant i with a varied copy of the profile of the
-/// file's participant (i / rows + i mod rows) mod (file's participants).
-/// Participant i's profile depends on (seed, i) alone.
-StudyConfig PoolStudy(const StudyConfig& study, int pool, int rows, std::uint64_t seed) {
-  StudyConfig config = study;
-  // A plain name of at most 40 characters, as the study file's.
-  config.name = study.name.substr(0, 34) + "-power";
-  config.description = "the simulated participants of `haptel study power` for study " + study.name;
-  config.participants.clear();
-  config.profiles.clear();
-  const int width = pool >= 100 ? 3 : 2;
-  for (int i = 0; i < pool; ++i) {
-    const StudyParticipant& model = study.participants.at(
-        static_cast<size_t>((i / rows + i % rows) % static_cast<int>(study.participants.size())));
-    std::seed_seq seeds{static_cast<std::uint32_t>(seed & 0xffffffffu), static_cast<std::uint32_t>(seed >> 32),
-                        static_cast<std::uint32_t>(i)};
-    std::mt19937_64 random(seeds);
-    char id[16];
-    std::snprintf(id, sizeof id, "S%0*d", width, i + 1);
-    const std::string profile = std::string(id) + "-" + model.profile;
-    config.profiles[profile] = VariedProfile(study.profiles.at(model.profile), random);
-    config.participants.push_back({id, profile});
-  }
-  return config;
 }
 
 std::vector<int> ParseCounts(const std::string& text) {
@@ -216,7 +165,7 @@ int StudyPowerCommand(int argc, const char* const* argv) {
         throw UsageError("option --pool: expected a multiple of " + std::to_string(rows) +
                          " (the rows of the study's design), got " + std::to_string(pool));
       }
-      pool_config = PoolStudy(study, pool, rows, options.seed);
+      pool_config = PowerPoolStudy(study, pool, rows, options.seed);
       plan = PlanTrials(pool_config);
       const RunConfig run_config = LoadRun(study.run);
       const std::filesystem::path database = !study.database.empty() ? study.database : run_config.database;
