@@ -321,7 +321,8 @@ void DrawPowerCurve(const PowerResult& power, const std::string& title, const st
       cv::circle(image, at, 5, colour, cv::FILLED, cv::LINE_AA);
       previous = at;
     }
-    const int legend_y = kTop + 18 + 20 * static_cast<int>(t);
+    // Lower right: power curves rise to the right, so that corner is free.
+    const int legend_y = kHeight - kBottom - 50 + 20 * static_cast<int>(t);
     cv::line(image, {kWidth - kRight - 290, legend_y - 5}, {kWidth - kRight - 260, legend_y - 5}, colour, 2);
     Label(image, tests[t].name, {kWidth - kRight - 252, legend_y}, 0.45);
   }
