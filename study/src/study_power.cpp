@@ -3,6 +3,8 @@
 // the study's trials, in simulated time; the Monte Carlo of power.hpp then
 // draws balanced samples of each participant count from the pool and
 // analyses them as the report does.
+#include <signal.h>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -10,15 +12,16 @@
 #include <cstdio>
 #include <fstream>
 #include <map>
-#include <mutex>
+#include <memory>
+#include <optional>
 #include <random>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "haptel/config/error.hpp"
 #include "haptel/config/run.hpp"
 #include "haptel/core/args.hpp"
+#include "haptel/core/child_process.hpp"
 #include "haptel/core/cli.hpp"
 #include "haptel/core/json.hpp"
 #include "haptel/core/stop_signals.hpp"
@@ -49,7 +52,8 @@ constexpr const char* kPowerUsage =
     "participants' profiles (taken in turn, each row getting each profile alike), every trait\n"
     "multiplied by exp(N(0, 0.1^2)) and clamped to its valid range, and a seed of its own.\n"
     "It runs every condition once per repetition in its row's order, as the study's trials run\n"
-    "(practice, cap, link), each in simulated time, two at a time. The trials are recorded as\n"
+    "(practice, cap, link), each in simulated time, two at a time (each worker a process of its\n"
+    "own: a simulated-time trial puts its process on its clock). The trials are recorded as\n"
     "a study of their own in OUT/pool-<M>-seed<S>.db (`haptel study report` reads it); run the\n"
     "same command again after a stop to resume. Each simulation then draws n/rows participants\n"
     "from each row of the pool, with replacement.\n"
@@ -60,10 +64,11 @@ constexpr const char* kPowerUsage =
     "  --pool M             simulated participants in the pool, a multiple of the rows\n"
     "                       (default 8 per row)\n"
     "  --seed S             the pool's profiles and the draws (default 1)\n"
-    "  --jobs J             trials run at the same time (default 2)\n"
+    "  --jobs J             trials run at the same time, one per worker process (default 2)\n"
     "  --out DIR            where the files go (default <database dir>/power-<study>/):\n"
     "                       power.csv, power.png, pool.csv and the pool's database\n"
-    "  --domain N           DDS domain id of the trials' vehicles (real time only)\n"
+    "  --domain N           DDS domain id of the trials' vehicles (real time: worker w takes N + w;\n"
+    "                       default the run configuration's)\n"
     "  --real-time          run the pool's trials in real time, each with its vehicle process\n"
     "                       (slow: for checking against the simulated-time trials)\n"
     "  --json               end with one JSON line: power (participants, friedman_power,\n"
@@ -98,13 +103,70 @@ std::vector<int> ParseCounts(const std::string& text) {
   return counts;
 }
 
-/// One pool trial's outcome line, for the progress and for failures.
-struct PoolProgress {
-  std::mutex mutex;
-  size_t done = 0;
-  size_t total = 0;
-  std::string failure;  ///< the first trial that could not be finished
-};
+/// Worker `worker` of `jobs`: runs the pool participants i with
+/// i mod jobs = worker, each one's trials in order as `haptel study run` runs
+/// a synthetic participant's (experience counts the trials before and the
+/// practice; a flagged trial runs again once). A trial that cannot be
+/// finished (a fault) runs once more; after a second fault the participant
+/// is left, the others go on. Returns 0 when all its participants are done,
+/// 1 otherwise.
+int RunPoolShare(const StudyConfig& pool_config, const std::vector<PlannedTrial>& plan,
+                 const std::filesystem::path& pool_database, const std::string& domain, bool verbose,
+                 bool simulated_time, int worker, int jobs, const std::atomic<bool>& interrupted) {
+  record::Recorder recorder(pool_database);
+  StudyStore store(recorder, pool_config, plan);
+  const auto started = std::chrono::steady_clock::now();
+  int exit_code = cli::kExitOk;
+  for (size_t i = static_cast<size_t>(worker); i < pool_config.participants.size() && !interrupted.load();
+       i += static_cast<size_t>(jobs)) {
+    const std::string& participant = pool_config.participants[i].id;
+    int faults = 0;
+    for (;;) {
+      std::optional<PlannedTrial> trial;
+      const std::vector<TrialRow> done = store.Trials();
+      for (const PlannedTrial& t : plan) {
+        if (t.participant != participant) continue;
+        const bool has_row = std::any_of(done.begin(), done.end(), [&](const TrialRow& r) {
+          return r.participant == t.participant && r.position == t.position;
+        });
+        if (!has_row) {
+          trial = t;
+          break;
+        }
+      }
+      if (!trial || interrupted.load()) break;
+      const int experience = store.TrialsDone(participant) + (pool_config.practice ? 1 : 0);
+      const mediator::SessionSetup setup =
+          TrialSetup(pool_config, *trial, pool_database, domain, verbose, experience, simulated_time);
+      const mediator::RecordedRun run =
+          mediator::RunAndRecord(setup, recorder, interrupted, store.TrialWriter(*trial, pool_config.trial_cap_s));
+      const std::string outcome = mediator::ToString(run.result.outcome);
+      if (run.run_id != 0 && FinishesTrial(outcome)) {
+        const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+        std::fprintf(stderr, "[power] %zu/%zu %s position %d %s: %s, lap %s s (run %lld, worker %d, %.0f s)\n",
+                     store.Trials().size(), plan.size(), participant.c_str(), trial->position,
+                     trial->condition.c_str(), outcome.c_str(),
+                     Fixed(run.result.record.completed ? run.result.record.lap_time_s : pool_config.trial_cap_s, 2)
+                         .c_str(),
+                     static_cast<long long>(run.run_id), worker, elapsed);
+        if (store.RedoFlaggedOnce(*trial)) {
+          std::fprintf(stderr, "[power]   flagged (%s): run again once\n", TrialFlags(run.result.record).c_str());
+        }
+        continue;
+      }
+      if (interrupted.load()) break;
+      std::fprintf(stderr, "[power] %s position %d %s: %s: %s%s\n", participant.c_str(), trial->position,
+                   trial->condition.c_str(), outcome.c_str(), run.result.message.c_str(),
+                   faults == 0 ? "; once more" : "; the participant is left out");
+      if (++faults > 1) {
+        exit_code = cli::kExitFailed;
+        break;
+      }
+    }
+  }
+  std::fflush(stderr);
+  return interrupted.load() ? cli::kExitFailed : exit_code;
+}
 
 }  // namespace
 
@@ -119,6 +181,7 @@ int StudyPowerCommand(int argc, const char* const* argv) {
     int rows = 1;
     int pool = 0;
     int jobs = 2;
+    std::optional<int> worker;  ///< set: this process is worker N of the pool (spawned by the command itself)
     bool json = false;
     bool verbose = false;
     bool real_time = false;
@@ -126,7 +189,7 @@ int StudyPowerCommand(int argc, const char* const* argv) {
     std::filesystem::path out;
     std::filesystem::path pool_database;
     cli::ReadInput([&] {
-      const Args args(argc, argv, {"participants", "simulations", "pool", "seed", "jobs", "out", "domain"},
+      const Args args(argc, argv, {"participants", "simulations", "pool", "seed", "jobs", "out", "domain", "worker"},
                       {"json", "verbose", "real-time"});
       if (args.positional().size() != 2 || args.positional()[0] != "power") {
         throw UsageError(args.positional().size() < 2 ? "missing the study file"
@@ -138,7 +201,7 @@ int StudyPowerCommand(int argc, const char* const* argv) {
       options.simulations = args.Int("simulations", 1, 1000000).value_or(100);
       options.seed = static_cast<std::uint64_t>(args.Int("seed", 0, 1 << 30).value_or(1));
       jobs = args.Int("jobs", 1, 64).value_or(2);
-      if (const auto d = args.Int("domain", 0, 232)) domain = std::to_string(*d);
+      worker = args.Int("worker", 0, jobs - 1);
       if (const auto counts = args.Value("participants")) options.participant_counts = ParseCounts(*counts);
       const std::optional<int> pool_option = args.Int("pool", 1, 10000);
       study = LoadStudy(args.positional()[1]);
@@ -168,14 +231,25 @@ int StudyPowerCommand(int argc, const char* const* argv) {
       pool_config = PowerPoolStudy(study, pool, rows, options.seed);
       plan = PlanTrials(pool_config);
       const RunConfig run_config = LoadRun(study.run);
+      // In real time each worker's vehicles get a DDS domain of their own:
+      // two vehicles of one name on one domain would answer each other's operator.
+      const int base_domain = args.Int("domain", 0, 232).value_or(run_config.link.domain_id);
+      if (real_time && base_domain + jobs - 1 > 232) {
+        throw UsageError("option --domain: the " + std::to_string(jobs) + " workers take domains " +
+                         std::to_string(base_domain) + ".." + std::to_string(base_domain + jobs - 1) +
+                         ", past 232; expected a lower --domain");
+      }
+      if (real_time) {
+        domain = std::to_string(base_domain + worker.value_or(0));
+      } else if (args.Value("domain")) {
+        domain = std::to_string(base_domain);
+      }
       const std::filesystem::path database = !study.database.empty() ? study.database : run_config.database;
       out = args.Value("out").value_or((database.parent_path() / ("power-" + study.name)).string());
       pool_database = out / ("pool-" + std::to_string(pool) + "-seed" + std::to_string(options.seed) + ".db");
       // The first trial set up now: a word `haptel run` refuses is bad input, before anything runs.
-      std::vector<std::string> words = {real_time ? "--vehicle-name" : "--simulated-time"};
-      if (real_time) words.push_back("powerpool0");
       try {
-        TrialSetup(pool_config, plan.front(), pool_database, domain, verbose, 0, words);
+        TrialSetup(pool_config, plan.front(), pool_database, domain, verbose, 0, !real_time);
       } catch (const UsageError& e) {
         if (real_time || std::string(e.what()).find("--simulated-time") == std::string::npos) throw;
         throw UsageError("the trials run in simulated time (haptel run --simulated-time), which this build's "
@@ -186,104 +260,55 @@ int StudyPowerCommand(int argc, const char* const* argv) {
     std::error_code made;
     std::filesystem::create_directories(out, made);
     if (made) throw std::runtime_error("cannot create the folder " + out.string() + ": " + made.message());
-    // The pool's study is planned here, once; each worker then opens it again
-    // with a database connection of its own.
-    PoolProgress progress;
-    progress.total = plan.size();
+    // A worker runs every `jobs`-th participant of the pool, in order.
+    if (worker) return RunPoolShare(pool_config, plan, pool_database, domain, verbose, !real_time, *worker, jobs,
+                                    interrupted);
+
+    // The pool's study is planned here, once; each worker process then opens
+    // it again. Processes, not threads: a simulated-time trial puts its whole
+    // process on its simulated clock.
+    size_t done_before = 0;
     {
       auto recorder = cli::ReadInput([&] { return std::make_unique<record::Recorder>(pool_database); });
       StudyStore store = cli::ReadInput([&] { return StudyStore(*recorder, pool_config, plan); });
-      std::fprintf(stderr, "[power] %s: a pool of %d simulated participants (%d per order row, %d rows), %zu trials "
-                   "(%zu done), %s, %d at a time; database %s\n",
-                   study.name.c_str(), pool, pool / rows, rows, plan.size(), store.Trials().size(),
-                   real_time ? "in real time" : "in simulated time", jobs, pool_database.c_str());
-      progress.done = store.Trials().size();
+      done_before = store.Trials().size();
     }
-
-    // Whole participants to the workers, in turn: a participant's trials run
-    // in order, as in the study (their experience counts the trials before).
-    std::vector<std::string> participants;
-    for (const StudyParticipant& p : pool_config.participants) participants.push_back(p.id);
-    std::atomic<size_t> next_participant{0};
+    std::fprintf(stderr, "[power] %s: a pool of %d simulated participants (%d per order row, %d rows), %zu trials "
+                 "(%zu done), %s, %d at a time; database %s\n",
+                 study.name.c_str(), pool, pool / rows, rows, plan.size(), done_before,
+                 real_time ? "in real time" : "in simulated time", jobs, pool_database.c_str());
     const auto pool_started = std::chrono::steady_clock::now();
-    auto work = [&](int worker) {
-      try {
-        record::Recorder recorder(pool_database);
-        StudyStore store(recorder, pool_config, plan);
-        std::vector<std::string> words;
-        if (real_time) {
-          words = {"--vehicle-name", "powerpool" + std::to_string(worker)};  // two vehicles, two names
-        } else {
-          words = {"--simulated-time"};
-        }
-        for (size_t i = next_participant++; i < participants.size() && !interrupted.load(); i = next_participant++) {
-          int faults = 0;
-          for (;;) {
-            std::optional<PlannedTrial> trial;
-            const std::vector<TrialRow> done = store.Trials();
-            for (const PlannedTrial& t : plan) {
-              if (t.participant != participants[i]) continue;
-              const bool has_row = std::any_of(done.begin(), done.end(), [&](const TrialRow& r) {
-                return r.participant == t.participant && r.position == t.position;
-              });
-              if (!has_row) {
-                trial = t;
-                break;
-              }
-            }
-            if (!trial || interrupted.load()) break;
-            const int experience = store.TrialsDone(trial->participant) + (pool_config.practice ? 1 : 0);
-            const mediator::SessionSetup setup = TrialSetup(pool_config, *trial, pool_database, domain, verbose,
-                                                            experience, words);
-            const mediator::RecordedRun run =
-                mediator::RunAndRecord(setup, recorder, interrupted, store.TrialWriter(*trial, pool_config.trial_cap_s));
-            const std::string outcome = mediator::ToString(run.result.outcome);
-            std::lock_guard<std::mutex> lock(progress.mutex);
-            if (run.run_id != 0 && FinishesTrial(outcome)) {
-              ++progress.done;
-              const double elapsed =
-                  std::chrono::duration<double>(std::chrono::steady_clock::now() - pool_started).count();
-              std::fprintf(stderr, "[power] %zu/%zu %s position %d %s: %s, lap %s s (run %lld, %.0f s)\n",
-                           progress.done, progress.total, trial->participant.c_str(), trial->position,
-                           trial->condition.c_str(), outcome.c_str(),
-                           Fixed(run.result.record.completed ? run.result.record.lap_time_s : pool_config.trial_cap_s,
-                                 2).c_str(),
-                           static_cast<long long>(run.run_id), elapsed);
-              if (store.RedoFlaggedOnce(*trial)) {
-                --progress.done;
-                std::fprintf(stderr, "[power]   flagged (%s): run again once\n",
-                             TrialFlags(run.result.record).c_str());
-              }
-              continue;
-            }
-            if (interrupted.load()) break;
-            // A fault (the vehicle lost, a run not recorded): once more, then
-            // the participant is left out of the pool.
-            std::fprintf(stderr, "[power] %s position %d %s: %s: %s%s\n", trial->participant.c_str(),
-                         trial->position, trial->condition.c_str(), outcome.c_str(), run.result.message.c_str(),
-                         faults == 0 ? "; once more" : "; the participant is left out");
-            if (++faults > 1) {
-              if (progress.failure.empty()) {
-                progress.failure = trial->participant + " position " + std::to_string(trial->position) + ": " +
-                                   outcome + ": " + run.result.message;
-              }
-              break;
-            }
+    std::vector<std::string> worker_words;
+    for (int i = 0; i < argc; ++i) worker_words.push_back(argv[i]);  // "study", "power", FILE, options
+    std::vector<std::unique_ptr<ChildProcess>> workers;
+    for (int w = 0; w < jobs && static_cast<size_t>(w) < pool_config.participants.size(); ++w) {
+      std::vector<std::string> words = worker_words;
+      words.insert(words.end(), {"--worker", std::to_string(w)});
+      workers.push_back(std::make_unique<ChildProcess>((ProgramDirectory() / "haptel").string(), words));
+    }
+    std::string worker_failures;
+    bool stopping = false;
+    for (size_t w = 0; w < workers.size(); ++w) {
+      int code = ChildProcess::kStillRunning;
+      while ((code = workers[w]->Wait(0.2)) == ChildProcess::kStillRunning) {
+        // A signal to this process alone is passed on (a terminal's reaches
+        // the workers too); each ends its trial, recorded as interrupted.
+        if (interrupted.load() && !stopping) {
+          stopping = true;
+          for (auto& other : workers) {
+            if (other->Alive()) kill(other->pid(), SIGTERM);
           }
         }
-      } catch (const std::exception& e) {
-        std::lock_guard<std::mutex> lock(progress.mutex);
-        if (progress.failure.empty()) progress.failure = e.what();
-        std::fprintf(stderr, "[power] worker %d stopped: %s\n", worker, e.what());
       }
-    };
-    std::vector<std::thread> workers;
-    for (int w = 0; w < jobs; ++w) workers.emplace_back(work, w);
-    for (std::thread& w : workers) w.join();
+      if (code != 0) {
+        worker_failures += (worker_failures.empty() ? "" : "; ") + ("worker " + std::to_string(w) + " " +
+                                                                      workers[w]->ExitDescription());
+      }
+    }
     const double pool_wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - pool_started).count();
     if (interrupted.load()) {
-      std::fprintf(stderr, "[power] interrupted: %zu of %zu pool trials recorded in %s; run the same command again "
-                   "to resume\n", progress.done, progress.total, pool_database.c_str());
+      std::fprintf(stderr, "[power] interrupted: the pool's trials so far are in %s; run the same command again "
+                   "to resume\n", pool_database.c_str());
       return cli::kExitFailed;
     }
 
@@ -323,8 +348,8 @@ int StudyPowerCommand(int argc, const char* const* argv) {
     if (!left_out.empty()) {
       std::string who;
       for (const std::string& id : left_out) who += (who.empty() ? "" : ", ") + id;
-      std::fprintf(stderr, "[power] left out of the pool (trials not finished: %s): %s\n",
-                   progress.failure.c_str(), who.c_str());
+      std::fprintf(stderr, "[power] left out of the pool (trials not finished; %s): %s\n",
+                   worker_failures.c_str(), who.c_str());
     }
 
     const auto analysis_started = std::chrono::steady_clock::now();

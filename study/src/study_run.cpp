@@ -68,7 +68,7 @@ const StudyParticipant* ParticipantNamed(const StudyConfig& config, const std::s
 
 mediator::SessionSetup TrialSetup(const StudyConfig& config, const PlannedTrial& trial,
                                   const std::filesystem::path& database, const std::string& domain,
-                                  bool verbose, int experience, const std::vector<std::string>& more_words) {
+                                  bool verbose, int experience, bool simulated_time) {
   const StudyCondition& condition = ConditionNamed(config, trial.condition);
   const bool synthetic = config.operators == "synthetic";
   const std::string cap = std::to_string(config.trial_cap_s);
@@ -86,12 +86,12 @@ mediator::SessionSetup TrialSetup(const StudyConfig& config, const PlannedTrial&
                                     "--database",
                                     database.string()};
   if (synthetic) words.insert(words.end(), {"--view", "none"});
+  if (simulated_time) words.push_back("--simulated-time");
   if (!domain.empty()) words.insert(words.end(), {"--domain", domain});
   if (condition.predict) words.insert(words.end(), {"--predict", "on"});
   if (!config.link_profile.empty()) words.insert(words.end(), {"--link-profile", config.link_profile});
   if (!config.link_fault.empty()) words.insert(words.end(), {"--link-fault", config.link_fault});
   if (!verbose) words.push_back("--quiet");
-  words.insert(words.end(), more_words.begin(), more_words.end());
   std::vector<const char*> argv;
   for (const std::string& w : words) argv.push_back(w.c_str());
   mediator::SessionSetup setup =
@@ -359,7 +359,7 @@ int StudyRunCommand(int argc, const char* const* argv) {
       }
       const int experience = store.TrialsDone(trial->participant) + (config.practice ? 1 : 0);
       mediator::SessionSetup setup =
-          cli::ReadInput([&] { return TrialSetup(config, *trial, database, domain, verbose, experience); });
+          cli::ReadInput([&] { return TrialSetup(config, *trial, database, domain, verbose, experience, false); });
       const size_t planned = store.Plan().size();
       const size_t number = store.Trials().size() + 1;
       if (console) {

@@ -14,10 +14,11 @@ namespace haptel::study {
 /// What `haptel run` would drive for `trial` of `config`: its track,
 /// interface, operator (a synthetic participant drives with its profile from
 /// config.profiles and `experience` trials done before), the cap on the
-/// lap's clock, the study's link; `more_words` are added to the run's words
-/// (e.g. `--simulated-time`). Throws ConfigError/UsageError as `haptel run`.
+/// lap's clock, the study's link; in simulated time (`haptel run
+/// --simulated-time`: one simulated clock for the whole process, so one such
+/// trial at a time per process). Throws ConfigError/UsageError as `haptel run`.
 mediator::SessionSetup TrialSetup(const StudyConfig& config, const PlannedTrial& trial,
                                   const std::filesystem::path& database, const std::string& domain, bool verbose,
-                                  int experience, const std::vector<std::string>& more_words = {});
+                                  int experience, bool simulated_time);
 
 }  // namespace haptel::study
