@@ -55,20 +55,27 @@ bool IsPlainName(const std::string& name) {
   return true;
 }
 
+const std::vector<DriverProfileTrait>& DriverProfileTraits() {
+  static const std::vector<DriverProfileTrait> kTraits = {
+      {"steering_noise", &DriverProfile::steering_noise, 0.0, 1.0},
+      {"noise_time_s", &DriverProfile::noise_time_s, 0.01, 10.0},
+      {"slip_rate_hz", &DriverProfile::slip_rate_hz, 0.0, 5.0},
+      {"regrasp_s", &DriverProfile::regrasp_s, 0.1, 10.0},
+      {"holding_reaction_s", &DriverProfile::holding_reaction_s, 0.0, 2.0},
+      {"holding_cruise", &DriverProfile::holding_cruise, 0.1, 1.0},
+      {"stay_put_cruise", &DriverProfile::stay_put_cruise, 0.1, 1.0},
+      {"recentre_s", &DriverProfile::recentre_s, 0.0, 10.0},
+      {"recentre_error", &DriverProfile::recentre_error, 0.0, 0.5},
+      {"hud_use", &DriverProfile::hud_use, 0.0, 1.0},
+      {"unsure_cruise", &DriverProfile::unsure_cruise, 0.1, 1.0},
+      {"learning_gain", &DriverProfile::learning_gain, 0.0, 10.0},
+      {"learning_trials", &DriverProfile::learning_trials, 0.1, 100.0},
+  };
+  return kTraits;
+}
+
 void DriverProfile::ValidateOrThrow() const {
-  check::Number("steering_noise", steering_noise, 0.0, 1.0);
-  check::Number("noise_time_s", noise_time_s, 0.01, 10.0);
-  check::Number("slip_rate_hz", slip_rate_hz, 0.0, 5.0);
-  check::Number("regrasp_s", regrasp_s, 0.1, 10.0);
-  check::Number("holding_reaction_s", holding_reaction_s, 0.0, 2.0);
-  check::Number("holding_cruise", holding_cruise, 0.1, 1.0);
-  check::Number("stay_put_cruise", stay_put_cruise, 0.1, 1.0);
-  check::Number("recentre_s", recentre_s, 0.0, 10.0);
-  check::Number("recentre_error", recentre_error, 0.0, 0.5);
-  check::Number("hud_use", hud_use, 0.0, 1.0);
-  check::Number("unsure_cruise", unsure_cruise, 0.1, 1.0);
-  check::Number("learning_gain", learning_gain, 0.0, 10.0);
-  check::Number("learning_trials", learning_trials, 0.1, 100.0);
+  for (const DriverProfileTrait& t : DriverProfileTraits()) check::Number(t.key, this->*t.member, t.min, t.max);
 }
 
 void StudyConfig::ValidateOrThrow() const {

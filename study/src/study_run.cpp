@@ -22,6 +22,7 @@
 #include "haptel/study/plan.hpp"
 #include "haptel/study/store.hpp"
 #include "haptel/study/study_command.hpp"
+#include "trial_setup.hpp"
 
 namespace haptel::study {
 namespace {
@@ -63,10 +64,11 @@ const StudyParticipant* ParticipantNamed(const StudyConfig& config, const std::s
   return nullptr;
 }
 
-/// The session of one trial: what `haptel run` would drive with these options.
+}  // namespace
+
 mediator::SessionSetup TrialSetup(const StudyConfig& config, const PlannedTrial& trial,
                                   const std::filesystem::path& database, const std::string& domain,
-                                  bool verbose, int experience) {
+                                  bool verbose, int experience, bool simulated_time) {
   const StudyCondition& condition = ConditionNamed(config, trial.condition);
   const bool synthetic = config.operators == "synthetic";
   const std::string cap = std::to_string(config.trial_cap_s);
@@ -84,6 +86,7 @@ mediator::SessionSetup TrialSetup(const StudyConfig& config, const PlannedTrial&
                                     "--database",
                                     database.string()};
   if (synthetic) words.insert(words.end(), {"--view", "none"});
+  if (simulated_time) words.push_back("--simulated-time");
   if (!domain.empty()) words.insert(words.end(), {"--domain", domain});
   if (condition.predict) words.insert(words.end(), {"--predict", "on"});
   if (!config.link_profile.empty()) words.insert(words.end(), {"--link-profile", config.link_profile});
@@ -101,6 +104,8 @@ mediator::SessionSetup TrialSetup(const StudyConfig& config, const PlannedTrial&
   }
   return setup;
 }
+
+namespace {
 
 /// The console's thumbnail shows the session's camera pictures.
 void ShowPictures(mediator::SessionSetup& setup, StudyConsole& console) {
@@ -354,7 +359,7 @@ int StudyRunCommand(int argc, const char* const* argv) {
       }
       const int experience = store.TrialsDone(trial->participant) + (config.practice ? 1 : 0);
       mediator::SessionSetup setup =
-          cli::ReadInput([&] { return TrialSetup(config, *trial, database, domain, verbose, experience); });
+          cli::ReadInput([&] { return TrialSetup(config, *trial, database, domain, verbose, experience, false); });
       const size_t planned = store.Plan().size();
       const size_t number = store.Trials().size() + 1;
       if (console) {

@@ -280,3 +280,53 @@ bool DrawModelMeans(const StudyResults& results, const StudyReport& report, cons
 }
 
 }  // namespace haptel::study
+
+namespace haptel::study {
+
+void DrawPowerCurve(const PowerResult& power, const std::string& title, const std::filesystem::path& png) {
+  cv::Mat image(kHeight, kWidth, CV_8UC3, cv::Scalar(255, 255, 255));
+  std::vector<std::string> counts;
+  for (const PowerPoint& p : power.points) counts.push_back(std::to_string(p.participants));
+  const Frame f = Axes(image, title, "power", 0.0, 1.05, counts);
+  Label(image, "participants", {kWidth / 2, kHeight - 18}, 0.5, true);
+  // The target, dashed across the plot.
+  const int target_y = f.Y(power.target_power);
+  for (int x = kLeft; x < kWidth - kRight; x += 16) {
+    cv::line(image, {x, target_y}, {std::min(x + 9, kWidth - kRight), target_y}, kInk, 1);
+  }
+  Label(image, "target " + Text(100.0 * power.target_power, 0) + " %", {kLeft + 6, target_y - 6}, 0.45);
+  const size_t n = power.points.size();
+  // Each test a line with its 95 % interval as whiskers, the two a few
+  // pixels apart so the whiskers do not hide each other.
+  struct Test {
+    const char* name;
+    double PowerPoint::*value;
+    BinomialInterval PowerPoint::*interval;
+    int shift;
+  };
+  const Test tests[] = {{"Friedman", &PowerPoint::friedman_power, &PowerPoint::friedman_interval, -5},
+                        {"mixed model (LRT of condition)", &PowerPoint::lmm_power, &PowerPoint::lmm_interval, 5}};
+  for (size_t t = 0; t < std::size(tests); ++t) {
+    const cv::Scalar colour = Colour(t);
+    cv::Point previous;
+    for (size_t i = 0; i < n; ++i) {
+      const PowerPoint& p = power.points[i];
+      const int x = f.X(i, n) + tests[t].shift;
+      const cv::Point at(x, f.Y(p.*tests[t].value));
+      const BinomialInterval& ci = p.*tests[t].interval;
+      cv::line(image, {x, f.Y(ci.low)}, {x, f.Y(ci.high)}, colour, 1, cv::LINE_AA);
+      cv::line(image, {x - 5, f.Y(ci.low)}, {x + 5, f.Y(ci.low)}, colour, 1);
+      cv::line(image, {x - 5, f.Y(ci.high)}, {x + 5, f.Y(ci.high)}, colour, 1);
+      if (i > 0) cv::line(image, previous, at, colour, 2, cv::LINE_AA);
+      cv::circle(image, at, 5, colour, cv::FILLED, cv::LINE_AA);
+      previous = at;
+    }
+    // Lower right: power curves rise to the right, so that corner is free.
+    const int legend_y = kHeight - kBottom - 50 + 20 * static_cast<int>(t);
+    cv::line(image, {kWidth - kRight - 290, legend_y - 5}, {kWidth - kRight - 260, legend_y - 5}, colour, 2);
+    Label(image, tests[t].name, {kWidth - kRight - 252, legend_y}, 0.45);
+  }
+  Save(image, png);
+}
+
+}  // namespace haptel::study

@@ -68,6 +68,20 @@ struct DriverProfile {
   void ValidateOrThrow() const;
 };
 
+/// One numeric trait of DriverProfile: its key in the study file, its
+/// member, and the range ValidateOrThrow accepts (so a tool that varies a
+/// profile, `haptel study power`, keeps it valid without its own copy).
+struct DriverProfileTrait {
+  const char* key;
+  double DriverProfile::*member;
+  double min;
+  double max;
+};
+
+/// Every numeric trait of DriverProfile (the seed is not one), in the
+/// order ValidateOrThrow checks them.
+const std::vector<DriverProfileTrait>& DriverProfileTraits();
+
 /// One compared variant: a mediator interface (a file interfaces/NAME.yaml of
 /// the run configuration).
 struct StudyCondition {

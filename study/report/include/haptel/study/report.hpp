@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "haptel/study/mixed_model.hpp"
+#include "haptel/study/power.hpp"
 #include "haptel/study/statistics.hpp"
 
 namespace haptel::study {
@@ -148,6 +149,10 @@ std::string ReportJson(const StudyResults& results, const StudyReport& report, c
 /// Draws the plots (report_plots.cpp).
 void DrawLapTimes(const StudyResults& results, const StudyReport& report, const std::filesystem::path& png);
 void DrawRanks(const StudyReport& report, const std::filesystem::path& png);
+/// `haptel study power`'s curve: each test's power per participant count
+/// with its 95 % interval, and the target as a dashed line. Throws
+/// std::runtime_error naming the file when it cannot be written.
+void DrawPowerCurve(const PowerResult& power, const std::string& title, const std::filesystem::path& png);
 /// Returns false (and writes nothing) when no answer is a questionnaire's score.
 bool DrawRatings(const StudyResults& results, const std::filesystem::path& png);
 /// The mixed model's estimated mean lap time per condition (back-transformed
