@@ -9,15 +9,15 @@ namespace {
 
 std::deque<VehicleKindInfo>& Table() {
   static std::deque<VehicleKindInfo> kinds{
-      {"sim-robot", VehicleFamily::kRobot, kNoSection, "the simulated Lego-style tank"},
+      {"sim-robot", VehicleFamily::kRobot, kNoSection, "the simulated Lego-style tank", true},
       {"can-robot", VehicleFamily::kRobot, kCanSection, "the tank's ODrive motors and bumper node on SocketCAN"},
       {"can-robot-sim", VehicleFamily::kRobot, kCanSection,
-       "the simulated tank behind emulated CAN nodes, through the real CAN adapter"},
+       "the simulated tank behind emulated CAN nodes, through the real CAN adapter", true},
       {"ros2", VehicleFamily::kRobot, kRos2Section, "any ROS 2 differential-drive robot, through its topics"},
-      {"sim-blimp", VehicleFamily::kBlimp, kAirshipSection, "the simulated airship"},
+      {"sim-blimp", VehicleFamily::kBlimp, kAirshipSection, "the simulated airship", true},
       {"servo-blimp", VehicleFamily::kBlimp, kServoSection, "the real blimp's servo controller on a serial port"},
       {"servo-blimp-sim", VehicleFamily::kBlimp, kServoSection | kAirshipSection,
-       "the simulated airship behind a simulated servo controller on a pseudo-terminal"},
+       "the simulated airship behind a simulated servo controller on a pseudo-terminal", true},
   };
   return kinds;
 }

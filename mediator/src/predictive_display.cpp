@@ -23,13 +23,42 @@ double GhostHeight(const CameraConfig& camera, double radius) {
 
 }  // namespace
 
-PredictiveDisplay::PredictiveDisplay(const CameraConfig& camera, double body_radius)
-    : camera_(camera), radius_m_(body_radius), ghost_height_m_(GhostHeight(camera, body_radius)) {
+BodySilhouette::BodySilhouette() {
   footprint_.reserve(2 * kSides);
   scratch_.reserve(2 * kSides);
   corners_.reserve(4 * kSides);
   hull_.reserve(4 * kSides);
 }
+
+int BodySilhouette::Make(const video::LevelCamera& camera, double width, double height_px, double x, double y,
+                         double radius, double height,
+                         std::array<view::PicturePoint, view::Prediction::kOutlineMax>& out) {
+  footprint_.clear();
+  for (int k = 0; k < kSides; ++k) {
+    const double a = 2.0 * std::numbers::pi * k / kSides;
+    double d = 0, l = 0;
+    camera.ToCamera(Vec2(x + radius * std::cos(a), y + radius * std::sin(a)), d, l);
+    footprint_.emplace_back(d, l);
+  }
+  camera.ClipPolygon(footprint_, scratch_);
+  if (footprint_.size() < 3) return 0;
+  corners_.clear();
+  for (const cv::Vec2d& p : footprint_) {
+    for (const double z : {0.0, height}) {
+      corners_.emplace_back(static_cast<float>(camera.U(p[0], p[1]) / width),
+                            static_cast<float>(camera.V(p[0], z) / height_px));
+    }
+  }
+  cv::convexHull(corners_, hull_);
+  const int count = std::min(static_cast<int>(hull_.size()), view::Prediction::kOutlineMax);
+  for (int i = 0; i < count; ++i) {
+    out[static_cast<size_t>(i)] = {hull_[static_cast<size_t>(i)].x, hull_[static_cast<size_t>(i)].y};
+  }
+  return count;
+}
+
+PredictiveDisplay::PredictiveDisplay(const CameraConfig& camera, double body_radius)
+    : camera_(camera), radius_m_(body_radius), ghost_height_m_(GhostHeight(camera, body_radius)) {}
 
 void PredictiveDisplay::Make(const PredictedPose& camera_pose,
                              const std::vector<PredictedPose>& path, double one_way_delay_s,
@@ -47,34 +76,9 @@ void PredictiveDisplay::Make(const PredictedPose& camera_pose,
                               static_cast<float>(cam.V(d, z) / h)};
   };
 
-  // The ghost: its footprint clipped to what lies in front of the camera
-  // (the clipping planes are upright, so the clipped footprint is the
-  // clipped cylinder's section at every height), its silhouette the convex
-  // hull of that section's corners at the floor and at its top.
+  // The ghost: the body's silhouette where the model says it is now.
   const PredictedPose& now = path.front();
-  footprint_.clear();
-  for (int k = 0; k < kSides; ++k) {
-    const double a = 2.0 * std::numbers::pi * k / kSides;
-    double d = 0, l = 0;
-    cam.ToCamera(Vec2(now.x + radius_m_ * std::cos(a), now.y + radius_m_ * std::sin(a)), d, l);
-    footprint_.emplace_back(d, l);
-  }
-  cam.ClipPolygon(footprint_, scratch_);
-  if (footprint_.size() >= 3) {
-    corners_.clear();
-    for (const cv::Vec2d& p : footprint_) {
-      for (const double z : {0.0, ghost_height_m_}) {
-        const view::PicturePoint q = picture(p[0], p[1], z);
-        corners_.emplace_back(q.u, q.v);
-      }
-    }
-    cv::convexHull(corners_, hull_);
-    out.outline_count = std::min(static_cast<int>(hull_.size()), view::Prediction::kOutlineMax);
-    for (int i = 0; i < out.outline_count; ++i) {
-      out.outline[static_cast<size_t>(i)] = {hull_[static_cast<size_t>(i)].x,
-                                             hull_[static_cast<size_t>(i)].y};
-    }
-  }
+  out.outline_count = silhouette_.Make(cam, w, h, now.x, now.y, radius_m_, ghost_height_m_, out.outline);
 
   // The path ahead on the floor, each stretch clipped the same way.
   for (size_t i = 1; i < path.size() && out.path_count < view::Prediction::kPathMax; ++i) {

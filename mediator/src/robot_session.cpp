@@ -20,6 +20,7 @@
 #include "haptel/mediator/operator.hpp"
 #include "haptel/mediator/predictive_display.hpp"
 #include "haptel/mediator/robot_predictor.hpp"
+#include "haptel/mediator/third_person_view.hpp"
 
 namespace haptel::mediator {
 
@@ -115,6 +116,10 @@ class RobotSession final : public FamilySession {
     }
     interfaces_ = std::make_unique<InterfaceSet>(std::move(built), setup.start_interface, setup.run.switch_ramp_s);
     op_->Prepare(interfaces_->current());
+    // The third-person view, drawn only where there is a view to show it.
+    if (setup.third_person && setup.view != ViewKind::kNone) {
+      third_person_ = std::make_unique<ThirdPersonView>(track_, setup.vehicle);
+    }
   }
 
   void Start(HapticSide& haptic) override {
@@ -132,6 +137,7 @@ class RobotSession final : public FamilySession {
     parts.cockpit = cockpit_config_;
     parts.hands = start_spec().hands();
     if (setup_.predict) parts.map = std::make_shared<const view::TrackMap>(TrackMapOf(track_));
+    parts.third_person = third_person_.get();
   }
   bool UsesGamepad() const override { return gamepad_; }
   const SessionPhysics* physics() const override { return physics_.get(); }
@@ -158,6 +164,16 @@ class RobotSession final : public FamilySession {
       lap_.UpdateContact(ts, touching);
       feedback_ = {s.bumper_left(), s.bumper_right(), s.speed(), RangesOf(s)};
       OnCanLog(s);
+      third_person_pose_new_ = third_person_pose_new_ || s.pose_valid();
+    }
+    // The third-person view follows the newest pose, at most at its rate.
+    if (third_person_ && third_person_pose_new_ && reported_) {
+      const int64_t now = MonotonicNs();
+      if (now >= next_third_person_ns_) {
+        next_third_person_ns_ = now + static_cast<int64_t>(1e9 / ThirdPersonView::kRate_hz);
+        third_person_pose_new_ = false;
+        third_person_->Update(*reported_);
+      }
     }
   }
 
@@ -376,6 +392,11 @@ class RobotSession final : public FamilySession {
   RobotPredictor predictor_;
   PredictiveDisplay display_;
   std::optional<PredictedPose> reported_;  ///< the newest state's pose, when one had a pose
+  /// The third-person view (setup.third_person with a view; null otherwise),
+  /// whether a pose came since it last drew, and when it may draw next.
+  std::unique_ptr<ThirdPersonView> third_person_;
+  bool third_person_pose_new_ = false;
+  int64_t next_third_person_ns_ = 0;
   std::vector<PredictedPose> path_ahead_;
   std::array<bool, 2> bumpers_{false, false};  ///< the newest state's, left and right
   CanLogReport can_log_;

@@ -30,6 +30,7 @@
 #include "haptel/mediator/fleet.hpp"
 #include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/run_counters.hpp"
+#include "haptel/mediator/third_person_view.hpp"
 #include "haptel/record/run_picture.hpp"
 #include "haptel/record/unsaved_run.hpp"
 #include "haptel/view/view.hpp"
@@ -58,6 +59,8 @@ constexpr const char* kRunUsage =
     "                       where its model says it is now, from the delayed states and the\n"
     "                       commands sent since; the model's error is reported either way\n"
     "  --view KIND          window (default with a display) or none\n"
+    "  --third-person       beside the camera's picture, a chase camera's view of the robot on\n"
+    "                       its track (a simulated robot only: its track is known here)\n"
     "  --record FILE.mp4    record the operator's view as H.264 MP4 (offscreen without a window)\n"
     "  --scene FILE         haptic scene for the hands (YAML, or the thesis's MHaptic .xml),\n"
     "                       moved by the configuration's scene_placement\n"
@@ -147,7 +150,7 @@ Args ParseRunArgs(int argc, const char* const* argv) {
                "trace", "operator", "device", "trace-in", "time-limit", "lap-limit", "view", "record", "vehicle",
                "predict", "link-fault", "link-profile", "security", "dds-interfaces", "dds-peers", "discovery-server",
                "fleet"},
-              {"json", "quiet", "attach"});
+              {"json", "quiet", "attach", "third-person"});
 }
 
 namespace {
@@ -236,6 +239,18 @@ SessionSetup RunSetupFromArgs(const Args& args) {
   if (auto device = args.Value("device")) setup.run.device = *device;
   if (auto vehicle = args.Value("vehicle")) setup.run.vehicle = *vehicle;
   setup.vehicle = LoadVehicle(setup.run.vehicle);
+  if (args.Flag("third-person")) {
+    // The chase camera draws the track the operator side hands the vehicle:
+    // for any other vehicle it would draw a guess.
+    if (const std::string problem = ThirdPersonProblem(setup.vehicle); !problem.empty()) {
+      throw UsageError("option --third-person: " + problem);
+    }
+    if (setup.view == ViewKind::kNone) {
+      throw UsageError("option --third-person: it is drawn in the operator's view, and there is none (--view "
+                       "none); use --view window, or --record FILE.mp4");
+    }
+    setup.third_person = true;
+  }
   const bool blimp = setup.vehicle.family() == VehicleFamily::kBlimp;
   // A blimp flies a blimp course; the robot drives a track.
   if (blimp) {

@@ -9,6 +9,7 @@
 
 #include "haptel/interfaces/cockpit.hpp"
 #include "haptel/mediator/session_physics.hpp"
+#include "haptel/mediator/third_person_view.hpp"
 #include "haptel/mediator/video_receiver.hpp"
 #include "haptel/mediator/world_shapes.hpp"
 
@@ -82,6 +83,7 @@ void SessionView::Fill(view::ViewModel& model) {
     const haptics::ForceField field = part.hal->Setpoint(static_cast<haptics::Side>(i)).field;
     if (field.wall_active) AppendWall(model.shapes, field);
   }
+  model.third_person = part.third_person != nullptr ? part.third_person->Latest() : view::VideoImage{};
   if (part.video != nullptr) {
     const LatestFrame frame = part.video->Latest();
     model.video.image = frame.image;

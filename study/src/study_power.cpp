@@ -32,7 +32,7 @@
 #include "haptel/study/report.hpp"
 #include "haptel/study/store.hpp"
 #include "haptel/study/study_command.hpp"
-#include "trial_setup.hpp"
+#include "haptel/study/study_sessions.hpp"
 
 namespace haptel::study {
 namespace {

@@ -18,11 +18,12 @@
 #include "haptel/core/stop_signals.hpp"
 #include "haptel/view/view.hpp"
 #include "haptel/mediator/run_command.hpp"
+#include "haptel/mediator/third_person_view.hpp"
 #include "haptel/study/console.hpp"
 #include "haptel/study/plan.hpp"
 #include "haptel/study/store.hpp"
 #include "haptel/study/study_command.hpp"
-#include "trial_setup.hpp"
+#include "haptel/study/study_sessions.hpp"
 
 namespace haptel::study {
 namespace {
@@ -114,8 +115,20 @@ void ShowPictures(mediator::SessionSetup& setup, StudyConsole& console) {
   };
 }
 
-/// A person's practice lap (the thesis's): the keyboard and the camera's
-/// picture filling the window, recorded as a run but not as a trial.
+}  // namespace
+
+void MakePracticeLap(mediator::SessionSetup& setup, const std::string& participant) {
+  setup.direct_view = true;
+  // The keyboard alone: no other interface's wheel, lever or hands over the
+  // picture, no F1-F6 in the hint; the window says whose practice it is.
+  setup.single_interface = true;
+  setup.title = "Haptel - practice lap - " + participant;
+  // The thesis's practice gave a direct view of the robot as well as its
+  // camera: a simulated robot's chase camera here (a real robot is in the
+  // room to be seen).
+  setup.third_person = mediator::ThirdPersonProblem(setup.vehicle).empty();
+}
+
 mediator::SessionSetup PracticeSetup(const StudyConfig& config, const std::filesystem::path& database,
                                      const std::string& domain, bool verbose, const std::string& participant) {
   const std::string cap = std::to_string(config.trial_cap_s);
@@ -128,13 +141,11 @@ mediator::SessionSetup PracticeSetup(const StudyConfig& config, const std::files
   for (const std::string& w : words) argv.push_back(w.c_str());
   mediator::SessionSetup setup =
       mediator::RunSetupFromArgs(mediator::ParseRunArgs(static_cast<int>(argv.size()), argv.data()));
-  setup.direct_view = true;
-  // The keyboard alone: no other interface's wheel, lever or hands over the
-  // picture, no F1-F6 in the hint; the window says whose practice it is.
-  setup.single_interface = true;
-  setup.title = "Haptel - practice lap - " + participant;
+  MakePracticeLap(setup, participant);
   return setup;
 }
+
+namespace {
 
 /// Waits until every participant has answered every questionnaire of each
 /// condition they have finished (all its planned trials), and
@@ -330,7 +341,10 @@ int StudyRunCommand(int argc, const char* const* argv) {
           mediator::SessionSetup practice =
               cli::ReadInput([&] { return PracticeSetup(config, database, domain, verbose, trial->participant); });
           ShowPictures(practice, *console);
-          console->SetLive("practice lap: " + who + " (keyboard; Abort ends it)", trial->participant, 0);
+          // The console says what the participant sees, the chase camera too.
+          console->SetLive("practice lap: " + who + " (keyboard" +
+                               (practice.third_person ? ", camera and third-person view" : "") + "; Abort ends it)",
+                           trial->participant, 0);
           std::fprintf(stderr, "[study] practice lap: %s ...\n", who.c_str());
           const mediator::RecordedRun run = run_watched(practice, {});
           if (interrupted.load()) continue;

@@ -285,6 +285,19 @@ TEST_CASE("bad options and bad config files exit 2 with a one-line error naming 
     CHECK(nowhere.err().find("does not exist") != std::string::npos);
   }
   {
+    // The third-person view draws the track the operator side hands a
+    // simulated robot: a real robot's or a blimp's is refused, in one line.
+    for (const char* vehicle : {"config/vehicles/can-robot.yaml", "config/vehicles/sim-blimp.yaml"}) {
+      Child c({Bin("haptel"), "run", "--third-person", "--vehicle", vehicle, "--view", "none"});
+      CHECK(c.Wait(30.0) == 2);
+      INFO("stderr:\n" << c.err());
+      CHECK(c.err().find("option --third-person: vehicle '") != std::string::npos);
+      CHECK(c.err().find("expected a simulated robot (kind sim-robot or can-robot-sim)") != std::string::npos);
+      CHECK(c.err().find("started, pid") == std::string::npos);  // nothing spawned
+      CHECK(std::count(c.err().begin(), c.err().end(), '\n') == 1);
+    }
+  }
+  {
     Child c({Bin("haptel"), "run", "--interface", "telepathy"});
     CHECK(c.Wait(30.0) == 2);
     CHECK(c.err().find("telepathy") != std::string::npos);

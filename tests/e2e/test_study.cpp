@@ -353,6 +353,8 @@ TEST_CASE("a person study from the console: a participant added, a practice lap,
     return (!frames.empty() && std::stoi(frames) > 0) || !study.Alive();
   }, 60.0));
   CHECK(status("live").find("practice lap") != std::string::npos);
+  // The simulated robot is shown in the third person too, and the console says so.
+  CHECK(status("live").find("camera and third-person view") != std::string::npos);
   const auto picture = console.Get("/video.jpg");
   REQUIRE(picture);
   CHECK(picture->status == 200);

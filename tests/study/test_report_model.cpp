@@ -119,6 +119,13 @@ TEST_CASE("The report fits the mixed model to log lap times and measures laps ag
   CHECK(text.find("+278%") != std::string::npos);
 
   const ReportFiles files = WriteReport(results, report, dir / "out");
+  // trials.csv says each lap's percentage over the reference lap, as the
+  // table does: P1's cockpit lap, 113.51 s against 30 s.
+  const std::string trials = Read(files.trials_csv);
+  CHECK(trials.rfind("study,participant,condition,position,lap_time_s,", 0) == 0);
+  CHECK(trials.find(",flags,over_reference_percent\n") != std::string::npos);
+  CHECK(trials.find(",113.510,") != std::string::npos);
+  CHECK(trials.find(",278.37\n") != std::string::npos);
   const cv::Mat plot = cv::imread(files.model_means_png.string());
   REQUIRE_FALSE(plot.empty());
   CHECK(plot.cols >= 600);
@@ -163,6 +170,16 @@ TEST_CASE("The report's mixed model with one participant, and without a referenc
   CHECK(report.why_no_mixed_model.find("at least 2 participants, got 1") != std::string::npos);
   const ReportFiles files = WriteReport(results, report, dir / "out");
   CHECK(files.model_means_png.empty());
+  // No reference lap: trials.csv's percentage is empty, every row.
+  const std::string trials = Read(files.trials_csv);
+  CHECK(trials.find(",flags,over_reference_percent\n") != std::string::npos);
+  size_t rows = 0, empty = 0;
+  for (size_t at = trials.find('\n'); at != std::string::npos && at + 1 < trials.size(); at = trials.find('\n', at + 1)) {
+    ++rows;
+    if (trials[trials.find('\n', at + 1) - 1] == ',') ++empty;
+  }
+  CHECK(rows == one.size());
+  CHECK(empty == rows);
   const std::string json = ReportJson(results, report, files);
   CHECK(json.find("\"lmm\":null,\"why_no_lmm\":\"no mixed model: ") != std::string::npos);
   CHECK(json.find("\"baseline\":{\"reference_lap_s\":null,\"why\":") != std::string::npos);

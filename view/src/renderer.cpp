@@ -450,6 +450,22 @@ std::vector<std::string> OverlayLines(const Overlay& o) {
   return lines;
 }
 
+TileBox ThirdPersonLabelRect(int width, int height) {
+  const double k = height / 576.0;
+  // Under the overlay's text panel (five lines at most), above the message
+  // line at the bottom.
+  const int top = static_cast<int>(158 * k);
+  const int line_h = static_cast<int>(22 * k);
+  const int room = height - top - line_h - static_cast<int>(60 * k);
+  const int picture_w = std::max(4, std::min(static_cast<int>(0.30 * width), room * 4 / 3));
+  return {8, top, picture_w, line_h};
+}
+
+TileBox ThirdPersonRect(int width, int height) {
+  const TileBox label = ThirdPersonLabelRect(width, height);
+  return {label.x, label.y + label.height, label.width, label.width * 3 / 4};
+}
+
 GuidanceDial GuidanceDialOf(const Overlay& o, int width, int height) {
   GuidanceDial d;
   d.radius = static_cast<int>(50 * height / 576.0);
@@ -517,6 +533,10 @@ struct Renderer::Gl {
   cv::Mat tiles;  ///< BGRA, the column's size
   std::string tiles_key;
   cv::Mat tile_picture;  ///< a picture scaled to its tile, reused
+  /// The third-person view's picture, uploaded when it changes.
+  GLuint third_texture = 0;
+  int third_cols = 0, third_rows = 0;
+  uint64_t third_id = 0;
 };
 
 Renderer::Renderer(int width, int height, const ScreenPlacement& screen)
@@ -578,6 +598,7 @@ Renderer::Renderer(int width, int height, const ScreenPlacement& screen)
   glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, width, height, 0, GL_BGRA, GL_UNSIGNED_BYTE,
                g.overlay.data);
   make_texture(g.tiles_texture);  // its storage comes with the first tiles
+  make_texture(g.third_texture);  // its storage comes with the first picture
 
   g.projection = Perspective(kFovYDeg, static_cast<float>(width) / static_cast<float>(height), kNear, kFar);
   g.view_projection = g.projection * LookAt(kEye, kTarget, Eigen::Vector3f::UnitZ());
@@ -595,6 +616,7 @@ Renderer::~Renderer() {
   glDeleteTextures(1, &g.ghost_texture);
   glDeleteTextures(1, &g.map_texture);
   glDeleteTextures(1, &g.tiles_texture);
+  glDeleteTextures(1, &g.third_texture);
   glDeleteProgram(g.lit);
   glDeleteProgram(g.tex);
 }
@@ -858,6 +880,9 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
     key += tip;
   }
   key += model.tiles.line;
+  const cv::Mat* third = model.third_person.image.get();
+  const bool third_shown = third != nullptr && !third->empty() && third->type() == CV_8UC3;
+  key += third_shown ? 'T' : '-';
   glBindTexture(GL_TEXTURE_2D, g.overlay_texture);
   if (key != g.overlay_key) {
     g.overlay_key = key;
@@ -943,6 +968,16 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
       cv::putText(ov, model.tiles.line, at, font, scale, Bgra(kTileFrameBgr[0], kTileFrameBgr[1], kTileFrameBgr[2]), 1,
                   cv::LINE_AA);
     }
+    if (third_shown) {
+      // The third-person view's frame and label; its picture goes over the frame.
+      const TileBox label = ThirdPersonLabelRect(width_, height_);
+      const TileBox picture = ThirdPersonRect(width_, height_);
+      const cv::Rect frame(label.x - 3, label.y, label.width + 6, label.height + picture.height + 3);
+      cv::rectangle(ov, frame, Bgra(0, 0, 0, 200), cv::FILLED);
+      g.overlay_rects.push_back(frame);
+      cv::putText(ov, kThirdPersonLabel, cv::Point(label.x + 4, label.y + label.height - 6), font,
+                  0.5 * height_ / 576.0, Bgra(255, 255, 255), 1, cv::LINE_AA);
+    }
     if (o.contact_now) {
       cv::rectangle(ov, cv::Rect(0, 0, width_, height_), Bgra(0, 0, 255, 220), 10);
       const int b = 8;
@@ -969,6 +1004,35 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
     glUniformMatrix4fv(g.tex_mvp, 1, GL_FALSE, m.data());
     glUniform4f(g.tex_uv_rect, static_cast<float>(r.x) / w, static_cast<float>(r.y) / h,
                 static_cast<float>(r.width) / w, static_cast<float>(r.height) / h);
+    g.fullscreen.Draw();
+  }
+
+  // --- The third-person view's picture, in its frame under the overlay's
+  // panel: uploaded only when a new one came. ---
+  if (third_shown) {
+    glBindTexture(GL_TEXTURE_2D, g.third_texture);
+    if (model.third_person.id != g.third_id || third->cols != g.third_cols || third->rows != g.third_rows) {
+      glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+      glPixelStorei(GL_UNPACK_ROW_LENGTH, static_cast<GLint>(third->step / 3));
+      if (third->cols != g.third_cols || third->rows != g.third_rows) {
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, third->cols, third->rows, 0, GL_BGR, GL_UNSIGNED_BYTE, third->data);
+        g.third_cols = third->cols;
+        g.third_rows = third->rows;
+      } else {
+        glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, third->cols, third->rows, GL_BGR, GL_UNSIGNED_BYTE, third->data);
+      }
+      glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
+      g.third_id = model.third_person.id;
+    }
+    const TileBox r = ThirdPersonRect(width_, height_);
+    const float w = static_cast<float>(width_), h = static_cast<float>(height_);
+    Eigen::Matrix4f m = Eigen::Matrix4f::Identity();
+    m(0, 0) = static_cast<float>(r.width) / w;
+    m(1, 1) = static_cast<float>(r.height) / h;
+    m(0, 3) = (2.0f * static_cast<float>(r.x) + static_cast<float>(r.width)) / w - 1.0f;
+    m(1, 3) = 1.0f - (2.0f * static_cast<float>(r.y) + static_cast<float>(r.height)) / h;
+    glUniformMatrix4fv(g.tex_mvp, 1, GL_FALSE, m.data());
+    glUniform4f(g.tex_uv_rect, 0.0f, 0.0f, 1.0f, 1.0f);
     g.fullscreen.Draw();
   }
 

@@ -496,14 +496,18 @@ ReportFiles WriteReport(const StudyResults& results, const StudyReport& report, 
 
   std::string trials =
       "study,participant,condition,position,lap_time_s,approach_s,completed,obstacles,run_id,outcome,attempt,"
-      "flags\n";
+      "flags,over_reference_percent\n";
   for (const StudyResults::Trial& t : results.trials) {
+    // The lap against the track's reference lap, as the report's baseline
+    // table shows it (empty when the track gives none).
+    const std::string over_reference =
+        results.reference_lap_s ? Fixed(PercentOverReference(t.lap_time_s, *results.reference_lap_s), 2) : "";
     trials += Csv(results.name) + "," + Csv(t.participant) + "," + Csv(t.condition) + "," +
               std::to_string(t.position) + "," + Fixed(t.lap_time_s, 3) + "," +
               (std::isfinite(t.approach_s) ? Fixed(t.approach_s, 3) : std::string()) + "," +
               (t.completed ? "true" : "false") +
               "," + std::to_string(t.obstacles) + "," + std::to_string(t.run_id) + "," + Csv(t.outcome) + "," +
-              std::to_string(t.attempt) + "," + Csv(t.flags) + "\n";
+              std::to_string(t.attempt) + "," + Csv(t.flags) + "," + over_reference + "\n";
   }
   WriteFile(files.trials_csv, trials);
   std::string answers = "study,participant,condition,questionnaire,item,value\n";

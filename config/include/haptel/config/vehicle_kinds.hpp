@@ -36,6 +36,10 @@ struct VehicleKindInfo {
   VehicleFamily family = VehicleFamily::kRobot;
   unsigned sections = kNoSection;  ///< VehicleSection bits
   std::string summary;             ///< one line, for errors and docs
+  /// The vehicle lives in the simulated world the operator side hands it
+  /// (its track or course): the operator side knows where everything is,
+  /// and can draw the vehicle in it (haptel run --third-person).
+  bool simulated = false;
   bool Uses(VehicleSection section) const { return (sections & section) != 0; }
 };
 

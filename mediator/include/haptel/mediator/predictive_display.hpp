@@ -23,6 +23,7 @@
 /// camera's): then the smallest lead shows, rising into the bottom of the
 /// picture as far as the vehicle is ahead of its video (the shipped camera:
 /// a 6.9 cm ghost, in sight from a lead of 2 cm).
+#include <array>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -31,14 +32,46 @@
 #include "haptel/config/vehicle.hpp"
 #include "haptel/mediator/blimp_predictor.hpp"
 #include "haptel/mediator/robot_predictor.hpp"
+#include "haptel/video/camera_projection.hpp"
 #include "haptel/view/view_model.hpp"
 
 namespace haptel::mediator {
 
+/// The robot's body, an upright cylinder standing on the floor, as a level
+/// camera sees it: its footprint clipped to what lies in front of the camera
+/// (the clipping planes are upright, so the clipped footprint is the clipped
+/// cylinder's section at every height), and its silhouette, the convex hull
+/// of that section's corners at the floor and at its top. The predictive
+/// display draws its ghost with it, the practice lap's third-person view
+/// the robot (third_person_view.hpp). Allocates nothing once its buffers
+/// have grown.
+class BodySilhouette {
+ public:
+  /// Footprint corners of the cylinder.
+  static constexpr int kSides = 24;
+
+  BodySilhouette();
+
+  /// The silhouette of a body of `radius` and `height` (m) standing at
+  /// (x, y), seen by `camera` (whose picture is `width`×`height_px`
+  /// pixels), into `out` as picture fractions; returns how many corners (0:
+  /// out of the camera's sight, or behind it).
+  int Make(const video::LevelCamera& camera, double width, double height_px, double x, double y, double radius,
+           double height, std::array<view::PicturePoint, view::Prediction::kOutlineMax>& out);
+
+  /// The footprint as Make last clipped it, camera coordinates (depth,
+  /// lateral): its top face is this at the body's height.
+  const std::vector<cv::Vec2d>& footprint() const { return footprint_; }
+
+ private:
+  std::vector<cv::Vec2d> footprint_, scratch_;
+  std::vector<cv::Point2f> corners_, hull_;
+};
+
 class PredictiveDisplay {
  public:
   /// Footprint corners of the ghost's cylinder.
-  static constexpr int kSides = 24;
+  static constexpr int kSides = BodySilhouette::kSides;
   /// The ghost's height as a share of the tallest that a ghost with no
   /// lead keeps out of the picture.
   static constexpr double kHeightMargin = 0.9;
@@ -59,8 +92,7 @@ class PredictiveDisplay {
   CameraConfig camera_;
   double radius_m_;
   double ghost_height_m_;
-  std::vector<cv::Vec2d> footprint_, scratch_;
-  std::vector<cv::Point2f> corners_, hull_;
+  BodySilhouette silhouette_;
 };
 
 /// The map's geometry of `track`: walls, the start line across the

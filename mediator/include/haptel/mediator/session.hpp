@@ -110,6 +110,12 @@ struct SessionSetup {
   /// interface's controls or hands built, so none is drawn over the camera's
   /// picture (a study's practice lap on the keyboard).
   bool single_interface = false;
+  /// The third-person view beside the camera's picture (third_person_view.hpp):
+  /// a chase camera's picture of the robot on its track, labelled so. A
+  /// study's practice lap (the thesis's gave a direct view of the robot),
+  /// or haptel run --third-person; only for a simulated robot (the track is
+  /// the operator side's), and only with a view. Never in a trial.
+  bool third_person = false;
   /// The window's title; empty: "Haptel - <run name>".
   std::string title;
   /// Called on the session thread twice a second with what the view's

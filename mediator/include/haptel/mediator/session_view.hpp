@@ -29,6 +29,7 @@
 namespace haptel::mediator {
 
 struct SessionPhysics;
+class ThirdPersonView;
 class VideoReceiver;
 
 class SessionView final : public view::ViewSource {
@@ -44,6 +45,9 @@ class SessionView final : public view::ViewSource {
     std::array<bool, 2> hands{false, true};  ///< tracked hands to draw without a world
     /// The track's map for the predictive display (null: prediction off, no map).
     std::shared_ptr<const view::TrackMap> map;
+    /// The third-person view's pictures (null: none; a practice lap's, or
+    /// haptel run --third-person).
+    const ThirdPersonView* third_person = nullptr;
   };
 
   /// Opens the view (throws view::ViewError when it cannot) and reads the

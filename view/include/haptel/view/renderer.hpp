@@ -51,6 +51,17 @@ TileBox TileRect(int index, int count, int width, int height);
 /// The driven tile's frame, BGR: nothing else in the view is this yellow.
 inline constexpr std::array<int, 3> kTileFrameBgr{0, 220, 255};
 
+/// Where the third-person view's picture (ViewModel::third_person) is
+/// drawn in a `width`×`height` view, pixels from the top-left corner: on the
+/// left, under the overlay's text panel, 4:3, with its label on a line just
+/// above it (ThirdPersonLabelRect). Clear of the map (top right), the HUD
+/// (bottom right), shared control's dial (bottom left) and the message line.
+TileBox ThirdPersonRect(int width, int height);
+/// The label's line above the picture.
+TileBox ThirdPersonLabelRect(int width, int height);
+/// What the label says, so nobody takes the picture for the robot's camera.
+inline constexpr const char* kThirdPersonLabel = "third-person (practice)";
+
 /// Whether a turn indicator that is on is lit at time `t_s` (they flash at
 /// 1.5 Hz, lit for the first half of each period, as a car's do).
 bool IndicatorLit(double t_s);

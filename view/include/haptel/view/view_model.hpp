@@ -205,6 +205,10 @@ struct ViewModel {
   /// A fleet's tiles and each tile's latest picture (same order).
   Tiles tiles;
   std::array<VideoImage, Tiles::kMax> tile_video;
+  /// The third-person view (a practice lap; haptel run --third-person): a
+  /// chase camera's picture of the robot on its track, drawn as an inset
+  /// labelled kThirdPersonLabel (renderer.hpp). No image: no inset.
+  VideoImage third_person;
 };
 
 }  // namespace haptel::view
