@@ -51,8 +51,9 @@ constexpr Usage kUsage[] = {
      "[--seconds S] [--track FILE] [--delays MS,...] [--losses PERCENT,...] [--predict off|on|both] "
      "[--link-profile NAME] [--domain D] [--lap-domain D] [--smoke] [--json]",
      "DDS round trip against raw Fast DDS; the lap against the link's delay and loss, with and without prediction"},
-    {"video", "[--vehicle FILE] [--track FILE] [--smoke] [--json]",
-     "the link's video codecs: JPEG qualities and H.264 bitrates against SSIM, PSNR and CPU; the Pareto front"},
+    {"video", "[--vehicle FILE] [--track FILE] [--schedule default|both|jpeg|h264|off] [--phase-s S] [--domain D] [--smoke] [--json]",
+     "the link's video codecs: JPEG qualities and H.264 bitrates against SSIM, PSNR and CPU; the Pareto front; "
+     "then a capacity schedule through a real vehicle (bitrate, SSIM, latency, adapt_s)"},
     {"fuzz", "[--inputs N] [--target NAME] [--seed S] [--smoke] [--json]",
      "every parser fed 10^6 mutated inputs: configs, scenes, UDP, servo bytes, CAN, DDS samples, console HTTP"},
     {"fleet", "[--fleet FILE] [--counts LIST] [--slice S] [--time-limit S] [--device FILE] [--domain D] [--smoke] [--json]",

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <unistd.h>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -21,6 +22,7 @@
 #include "haptel/video/image_quality.hpp"
 #include "plot.hpp"
 #include "smoke.hpp"
+#include "video_schedule.hpp"
 
 namespace haptel::bench {
 namespace {
@@ -97,13 +99,33 @@ int BenchVideoMain(int argc, const char* const* argv) {
   bool json = false, smoke = false;
   VehicleConfig vehicle;
   std::unique_ptr<Track> track;
+  std::string track_file;
+  ScheduleOptions schedule;
+  std::vector<CameraCodec> schedule_codecs;
   try {
-    const Args args(argc, argv, {"vehicle", "track"}, {"json", kSmokeFlag});
+    const Args args(argc, argv, {"vehicle", "track", "phase-s", "schedule", "domain"}, {"json", kSmokeFlag});
     json = args.Flag("json");
     smoke = args.Flag(kSmokeFlag);
     vehicle = LoadVehicle(args.Value("vehicle").value_or(ShippedFile("config/vehicles/sim-robot.yaml").string()));
-    track = std::make_unique<Track>(
-        LoadTrack(args.Value("track").value_or(ShippedFile("config/tracks/grand-prix.yaml").string())));
+    track_file = args.Value("track").value_or(ShippedFile("config/tracks/grand-prix.yaml").string());
+    track = std::make_unique<Track>(LoadTrack(track_file));
+    schedule.phase_s = args.Number("phase-s", 1.0, 600.0).value_or(smoke ? 3.0 : 25.0);
+    // A domain of the bench's own, away from a default installation's 0 and the link bench's.
+    schedule.domain = args.Int("domain", 0, 232).value_or(150 + static_cast<int>(getpid() % 30));
+    // The schedule for the vehicle file's codec, then (full run) the other beside it.
+    const std::string which = args.Value("schedule").value_or(smoke ? "default" : "both");
+    const CameraCodec other = vehicle.camera.codec == CameraCodec::kJpeg ? CameraCodec::kH264 : CameraCodec::kJpeg;
+    if (which == "default") {
+      schedule_codecs = {vehicle.camera.codec};
+    } else if (which == "both") {
+      schedule_codecs = {vehicle.camera.codec, other};
+    } else if (which == "jpeg" || which == "h264") {
+      schedule_codecs = {which == "jpeg" ? CameraCodec::kJpeg : CameraCodec::kH264};
+    } else if (which == "off") {
+      schedule_codecs = {};
+    } else {
+      throw UsageError("option --schedule: expected default, both, jpeg, h264 or off, got '" + which + "'");
+    }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "haptel bench video: %s\n", e.what());
     return 2;
@@ -180,6 +202,38 @@ int BenchVideoMain(int argc, const char* const* argv) {
               CameraCodecName(camera.codec), SettingText(*shipped).c_str(), shipped->pareto ? "on" : "NOT on",
               all_ok ? "yes" : "NO", dir.c_str());
 
+  // Part 2: the capacity schedule through a real vehicle process.
+  schedule.out_dir = dir;
+  schedule.track_file = track_file;
+  std::vector<ScheduleResult> schedules;
+  bool schedules_ok = true;
+  for (const CameraCodec codec : schedule_codecs) {
+    std::printf("\n  capacity schedule, %s: the link's rate steps", CameraCodecName(codec));
+    for (const double c : schedule.capacities_kbps) std::printf(" %.2f", c / 1000.0);
+    std::printf(" Mbit/s, %.0f s each (haptel-vehicle playing the frames above, looped)\n", schedule.phase_s);
+    std::fflush(stdout);
+    schedules.push_back(RunCapacitySchedule(vehicle, codec, frames, schedule));
+    const ScheduleResult& r = schedules.back();
+    if (!r.ok) {
+      std::fprintf(stderr, "haptel bench video: capacity schedule (%s): %s\n", CameraCodecName(codec),
+                   r.error.c_str());
+      schedules_ok = false;
+      continue;
+    }
+    std::printf("  %9s %9s %9s %7s %6s %9s %9s %6s %7s %10s %8s\n", "capacity", "video", "target", "SSIM", "fps",
+                "lat p50", "lat p95", "lost", "stale s", "cmd p99 ms", "adapt s");
+    for (const SchedulePhase& p : r.phases) {
+      std::printf("  %9.0f %9.0f %9.0f %7.4f %6.1f %9.1f %9.1f %6llu %7.2f %10.2f %8s\n", p.capacity_kbps,
+                  p.video_kbps, p.target_kbps, p.ssim, p.fps, p.latency_ms_p50, p.latency_ms_p95,
+                  static_cast<unsigned long long>(p.frames_lost), p.stale_s, p.command_rtt_ms_p99,
+                  p.step_down ? std::to_string(p.adapt_s).substr(0, 5).c_str() : "");
+    }
+    std::printf("  (kbit/s; latency capture to decoded, ms) adapt_s %.2f (target <= 2); wrote %s/video_schedule_%s.csv, "
+                "_trace.csv, .png\n",
+                r.adapt_s, dir.c_str(), CameraCodecName(codec));
+    std::fflush(stdout);
+  }
+
   if (json) {
     std::ostringstream o;
     o << "{\"codecs\":[";
@@ -191,10 +245,40 @@ int BenchVideoMain(int argc, const char* const* argv) {
         << ",\"decode_ms\":" << JsonNumber(p.decode_ms) << ",\"pareto\":" << (p.pareto ? "true" : "false") << "}";
     }
     o << "],\"default\":{\"codec\":\"" << CameraCodecName(camera.codec) << "\",\"setting\":" << default_setting
-      << ",\"on_pareto_front\":" << (shipped->pareto ? "true" : "false") << "}}";
+      << ",\"on_pareto_front\":" << (shipped->pareto ? "true" : "false") << "},\"schedule\":[";
+    // The rows of every codec run, each naming its codec; adapt_s is the
+    // shipped default's (the first run), adapt_s_by_codec each one's.
+    bool first = true;
+    for (const ScheduleResult& r : schedules) {
+      for (const SchedulePhase& p : r.phases) {
+        o << (first ? "" : ",") << "{\"codec\":\"" << CameraCodecName(r.codec)
+          << "\",\"capacity_kbps\":" << JsonNumber(p.capacity_kbps) << ",\"video_kbps\":" << JsonNumber(p.video_kbps)
+          << ",\"target_kbps\":" << JsonNumber(p.target_kbps)
+          << ",\"ssim\":" << (std::isfinite(p.ssim) ? JsonNumber(p.ssim) : std::string("null"))
+          << ",\"fps\":" << JsonNumber(p.fps) << ",\"latency_ms_p50\":" << JsonNumber(p.latency_ms_p50)
+          << ",\"latency_ms_p95\":" << JsonNumber(p.latency_ms_p95) << ",\"frames_lost\":" << p.frames_lost
+          << ",\"stale_s\":" << JsonNumber(p.stale_s) << ",\"command_rtt_ms_p99\":" << JsonNumber(p.command_rtt_ms_p99)
+          << "}";
+        first = false;
+      }
+    }
+    o << "],\"adapt_s\":";
+    if (!schedules.empty() && schedules.front().ok) {
+      o << JsonNumber(schedules.front().adapt_s);
+    } else {
+      o << "null";
+    }
+    o << ",\"adapt_s_by_codec\":{";
+    first = true;
+    for (const ScheduleResult& r : schedules) {
+      if (!r.ok) continue;
+      o << (first ? "" : ",") << "\"" << CameraCodecName(r.codec) << "\":" << JsonNumber(r.adapt_s);
+      first = false;
+    }
+    o << "}}";
     std::printf("%s\n", JsonLine(o.str(), smoke).c_str());
   }
-  return all_ok ? 0 : 1;
+  return all_ok && schedules_ok ? 0 : 1;
 }
 
 }  // namespace haptel::bench

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include <fastdds/rtps/transport/ChainingTransport.h>
 #include <fastdds/rtps/transport/ChainingTransportDescriptor.h>
@@ -117,6 +119,26 @@ void FaultLine::Shutdown() {
   }
   wake_.notify_all();
   if (thread_.joinable()) thread_.join();
+}
+
+void FaultLine::SetRate(double rate_bps) {
+  if (!(rate_bps >= 0.0) || !std::isfinite(rate_bps)) {
+    throw std::invalid_argument("link fault: rate " + std::to_string(rate_bps) + " bit/s, expected 0 (no limit) or more");
+  }
+  std::lock_guard lock(mutex_);
+  fault_.rate_bps = rate_bps;
+  if (rate_bps == 0.0) {
+    rate_.reset();
+  } else if (rate_) {
+    rate_->SetRate(rate_bps);
+  } else {
+    rate_.emplace(rate_bps, fault_.queue_s);
+  }
+}
+
+double FaultLine::rate_bps() const {
+  std::lock_guard lock(mutex_);
+  return rate_ ? rate_->rate_bps() : 0.0;
 }
 
 FaultCounts FaultLine::Counts() const {

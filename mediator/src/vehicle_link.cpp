@@ -228,6 +228,8 @@ link::FaultCounts VehicleLink::FaultCounts() const {
   return line != nullptr ? line->Counts() : link::FaultCounts{};
 }
 
+link::FaultLine* VehicleLink::fault_line() const { return participant_ ? participant_->fault_line() : nullptr; }
+
 bool VehicleLink::ProcessAlive() { return !process_ || process_->Alive(); }
 
 int VehicleLink::pid() const { return process_ ? process_->pid() : 0; }

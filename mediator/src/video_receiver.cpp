@@ -14,6 +14,8 @@ namespace {
 /// H.264 frames waiting for the decoder beyond this are dropped, all of them
 /// (the decoder is that far behind: better a key frame than old pictures).
 constexpr size_t kMaxQueuedH264 = 15;
+/// The decoder thread wakes at least this often to check for a silent link.
+constexpr auto kSilenceCheck = std::chrono::milliseconds(100);
 
 }  // namespace
 
@@ -35,9 +37,15 @@ VideoReceiver::VideoReceiver(link::Participant& participant, const std::string& 
   reader_ = std::make_unique<link::VideoReader>(participant, link::TopicName(vehicle, "video"),
                                                 link::Profile::kVideo,
                                                 [this](const msg::VideoFrame& f) { OnFrame(f); });
+  std::lock_guard lock(mutex_);
+  reader_ready_ = true;
 }
 
 VideoReceiver::~VideoReceiver() {
+  {
+    std::lock_guard lock(mutex_);
+    reader_ready_ = false;  // the decoder thread no longer asks it
+  }
   reader_.reset();
   {
     std::lock_guard lock(mutex_);
@@ -59,13 +67,9 @@ void VideoReceiver::OnFrame(const msg::VideoFrame& frame) {
     estimator_.OnFrame(frame.seq(), NsToS(frame.capture_wall_ns()), NsToS(now), frame.data().size());
     if (estimator_.FeedbackDue(NsToS(now))) {
       rate_due = true;
-      target_kbps_sent_ = estimator_.target_kbps();
-      rate.seq(++feedback_seq_);
-      rate.sent_ns(now);
-      rate.key_frame_request(false);
-      rate.last_frame_seq(frame.seq());
-      rate.target_kbps(static_cast<uint32_t>(target_kbps_sent_));
+      rate = RateFeedback(now, frame.seq());
     }
+    total_bytes_ += frame.data().size();
     if (first_arrival_ns_ == 0) {
       first_arrival_ns_ = now;
     } else {
@@ -95,6 +99,29 @@ void VideoReceiver::OnFrame(const msg::VideoFrame& frame) {
   }
   ready_.notify_one();
   if (rate_due) feedback_.Write(rate);
+}
+
+msg::VideoFeedback VideoReceiver::RateFeedback(int64_t now_ns, uint64_t last_frame_seq) {
+  msg::VideoFeedback rate;
+  target_kbps_sent_ = estimator_.target_kbps();
+  rate.seq(++feedback_seq_);
+  rate.sent_ns(now_ns);
+  rate.key_frame_request(false);
+  rate.last_frame_seq(last_frame_seq);
+  rate.target_kbps(static_cast<uint32_t>(target_kbps_sent_));
+  return rate;
+}
+
+void VideoReceiver::CheckSilence(int64_t now_ns) {
+  msg::VideoFeedback rate;
+  {
+    std::lock_guard lock(mutex_);
+    // Only while a vehicle publishes video: without one, silence says nothing of the link.
+    if (!reader_ready_ || reader_->matched() == 0) return;
+    if (!estimator_.OnSilence(NsToS(now_ns)) || !estimator_.FeedbackDue(NsToS(now_ns))) return;
+    rate = RateFeedback(now_ns, last_seq_);
+  }
+  feedback_.Write(rate);
 }
 
 void VideoReceiver::RequestKeyFrameIfDue(int64_t now_ns) {
@@ -138,20 +165,28 @@ void VideoReceiver::DecodeLoop() {
       if (decoder_ != nullptr && decoder_->awaiting_key_frame() && decode_) {
         ready_.wait_for(lock, std::chrono::nanoseconds(kKeyFrameRequestPeriodNs), waiting);
       } else {
-        ready_.wait(lock, waiting);
+        ready_.wait_for(lock, kSilenceCheck, waiting);
       }
       if (stop_) return;
+      if (pending_.empty()) {
+        // Woken by the period, not by a frame: is the link silent?
+        lock.unlock();
+        CheckSilence(MonotonicNs());
+        lock.lock();
+        if (stop_) return;
+      }
       for (Pending& b : batch) spare_.push_back(std::move(b.bytes));
       batch.clear();
       batch.swap(pending_);
     }
     bool shown_any = false;
-    int64_t capture_ns = 0;
+    int64_t capture_ns = 0, decoded_wall_ns = 0;
     for (Pending& frame : batch) {
       if (decode_ && !DecodeOne(frame, image)) continue;
       shown_any = true;
       capture_ns = frame.capture_ns;
       const int64_t now_wall = WallNs();
+      decoded_wall_ns = now_wall;
       std::lock_guard lock(mutex_);
       latency_.Record(static_cast<double>(now_wall - frame.capture_ns) * 1e-3);
       const int64_t now = MonotonicNs();
@@ -177,7 +212,7 @@ void VideoReceiver::DecodeLoop() {
       if (stale_since_ns_ != 0) stale_ns_ += now - stale_since_ns_;
       stale_since_ns_ = 0;
       latest_good_ = shown;
-      latest_ = {std::move(shown), latest_.id + 1, capture_ns, false};
+      latest_ = {std::move(shown), latest_.id + 1, capture_ns, false, decoded_wall_ns};
     }
     if (decoder_ != nullptr && decoder_->awaiting_key_frame()) {
       {
@@ -186,7 +221,7 @@ void VideoReceiver::DecodeLoop() {
         if (stale_since_ns_ == 0 && latest_good_) {
           stale_since_ns_ = now;
           latest_ = {std::make_shared<const cv::Mat>(MarkStale(*latest_good_)), latest_.id + 1,
-                     latest_.capture_wall_ns, true};
+                     latest_.capture_wall_ns, true, latest_.decoded_wall_ns};
         }
       }
       RequestKeyFrameIfDue(now);
@@ -210,6 +245,7 @@ VideoStats VideoReceiver::Stats() const {
   s.latency_ms_p50 = latency_.Percentile(0.5) * 1e-3;
   s.latency_ms_p99 = latency_.Percentile(0.99) * 1e-3;
   const double arrivals = NsToS(last_arrival_ns_ - first_arrival_ns_);
+  s.bytes = total_bytes_;
   s.kbps = arrivals > 0 ? static_cast<double>(bytes_) * 8.0 / arrivals / 1000.0 : 0.0;
   s.stale_s = NsToS(stale_ns_ + (stale_since_ns_ != 0 ? now - stale_since_ns_ : 0));
   s.target_kbps = target_kbps_sent_;

@@ -386,7 +386,24 @@ TEST_CASE("bench video --smoke", "[bench][smoke]") {
   CHECK_FALSE(j["default"]["codec"].string().empty());
   CHECK(Finite(j["default"]["setting"]) > 0.0);
   CHECK_NOTHROW(j["default"]["on_pareto_front"].boolean());
-  RequireFiles({"video_codecs.csv", "video_codecs.png"});
+  // Part 2: the capacity schedule, five short phases of the default codec through a real vehicle.
+  const auto& schedule = j["schedule"].array();
+  REQUIRE(schedule.size() == 5);
+  const std::vector<double> capacities{2000, 1000, 1750, 500, 1000};
+  for (size_t i = 0; i < schedule.size(); ++i) {
+    const JsonValue& p = schedule[i];
+    CHECK(p["codec"].string() == j["default"]["codec"].string());
+    CHECK(p["capacity_kbps"].number() == capacities[i]);
+    CHECK(Finite(p["video_kbps"]) > 0.0);  // video came through in every phase
+    CHECK(Finite(p["latency_ms_p50"]) > 0.0);
+    CHECK(Finite(p["latency_ms_p95"]) >= p["latency_ms_p50"].number());
+    CHECK(Finite(p["stale_s"]) >= 0.0);
+    CHECK(Finite(p["command_rtt_ms_p99"]) > 0.0);
+    CHECK(p["frames_lost"].number() >= 0.0);
+  }
+  CHECK(Finite(j["adapt_s"]) >= 0.0);
+  RequireFiles({"video_codecs.csv", "video_codecs.png", "video_schedule_" + j["default"]["codec"].string() + ".csv",
+                "video_schedule_" + j["default"]["codec"].string() + ".png"});
 }
 
 TEST_CASE("haptel bench NAME --smoke through the haptel program; every usage line offers --smoke",

@@ -312,6 +312,38 @@ TEST_CASE("fault line: a rate delivers a burst at that rate, in order, and count
   CHECK(to.bytes() == passing * 1250);
 }
 
+TEST_CASE("rate queue: a rate changed at run time serves what comes next at the new rate, the queued at the old") {
+  link::RateQueue queue(1e6, 0.1);  // 1000 bytes take 8 ms
+  const int64_t first = *queue.Admit(0, 1000);
+  CHECK(first == 8'000'000);
+  queue.SetRate(0.5e6);  // now 16 ms
+  CHECK(queue.rate_bps() == Approx(0.5e6));
+  CHECK(*queue.Admit(0, 1000) == 8'000'000 + 16'000'000);  // behind the first, at the new rate
+  CHECK(*queue.Admit(100'000'000, 1000) == 116'000'000);    // an idle link: its own 16 ms
+}
+
+TEST_CASE("fault line: its rate changes at run time, is added to a line without one, and is lifted by 0") {
+  link::FaultLine line(ParseLinkFault("on"), 6);  // no rate: everything at once
+  CHECK(line.rate_bps() == 0.0);
+  Recorder to;
+  for (int i = 0; i < 20; ++i) Send(line, to, i, 1250);
+  CHECK(to.count() == 20);
+  // 1 Mbit/s: 1250-byte packets take 10 ms each, the 100 ms queue holds about 10.
+  line.SetRate(1e6);
+  CHECK(line.rate_bps() == Approx(1e6));
+  for (int i = 0; i < 60; ++i) Send(line, to, 100 + i, 1250);
+  CHECK(line.Counts().queue_dropped >= 40);
+  REQUIRE(test::WaitFor([&] { return to.count() == 20 + 60 - line.Counts().queue_dropped; }, 10.0));
+  line.SetRate(0.0);
+  CHECK(line.rate_bps() == 0.0);
+  const uint64_t dropped = line.Counts().queue_dropped;
+  const size_t before = to.count();
+  for (int i = 0; i < 60; ++i) Send(line, to, 200 + i, 1250);
+  CHECK(to.count() == before + 60);  // no queue any more: delivered at once
+  CHECK(line.Counts().queue_dropped == dropped);
+  CHECK_THROWS_WITH(line.SetRate(-1.0), Catch::Contains("expected 0 (no limit) or more"));
+}
+
 TEST_CASE("fault line: the link-down switch drops everything both ways until it is restored") {
   link::FaultLine line(ParseLinkFault("on"), 3);
   Recorder to;

@@ -27,6 +27,7 @@ constexpr double kMinCutInterval_s = 0.3;      ///< one cut per queue drain
 // Loss (§6): cut above 10 %, grow below 2 %, over windows of a second.
 constexpr double kLossWindow_s = 1.0;
 constexpr double kLossHigh = 0.10, kLossLow = 0.02;
+constexpr double kSilenceRepeat_s = 1.0;  ///< halvings for silence at most this often
 
 }  // namespace
 
@@ -56,7 +57,28 @@ bool RateEstimator::FeedbackDue(double now_s) {
   return true;
 }
 
+bool RateEstimator::OnSilence(double now_s) {
+  if (last_frame_s_ < 0) last_frame_s_ = now_s;
+  if (now_s - last_frame_s_ < kSilence_s) return false;
+  // Again only once the sender had time to follow the last cut (its
+  // encoder steps down over several frames).
+  if (last_silence_cut_s_ >= 0 && now_s - last_silence_cut_s_ < kSilenceRepeat_s) return false;
+  last_silence_cut_s_ = now_s;
+  loss_kbps_ = std::clamp(0.5 * target_kbps(), config_.min_kbps, config_.max_kbps);
+  received_kbps_ = 0;  // nothing arrives
+  cut_pending_ = true;
+  next_feedback_s_ = std::min(next_feedback_s_, now_s);
+  return true;
+}
+
 void RateEstimator::OnFrame(uint64_t frame_number, double capture_s, double arrival_s, size_t bytes) {
+  last_frame_s_ = std::max(last_frame_s_, arrival_s);
+  if (last_silence_cut_s_ >= 0) {
+    // The frames lost in the silence were answered by its cuts: the loss
+    // window starts again here, not counting them twice.
+    last_silence_cut_s_ = -1;
+    loss_window_start_s_ = -1;
+  }
   // What arrived over the rate window.
   const int slot = (arrivals_head_ + arrivals_count_) % kArrivals;
   if (arrivals_count_ == kArrivals) {  // full: the oldest goes
@@ -231,11 +253,16 @@ void RateEstimator::UpdateLoss(uint64_t frame_number, double now_s) {
   loss_share_ = std::clamp(1.0 - static_cast<double>(loss_window_received_) / expected, 0.0, 1.0);
   const double window_s = now_s - loss_window_start_s_;
   if (loss_share_ > kLossHigh) {
-    loss_kbps_ = std::min(loss_kbps_, target_kbps()) * (1.0 - 0.5 * loss_share_);
+    // No higher than what arrived while the link dropped the rest: its
+    // capacity, as far as this side can tell (GCC's acknowledged bitrate).
+    loss_kbps_ = std::min(std::min(loss_kbps_, target_kbps()) * (1.0 - 0.5 * loss_share_), received_kbps_);
     cut_pending_ = true;
     next_feedback_s_ = std::min(next_feedback_s_, now_s);
   } else if (loss_share_ < kLossLow) {
-    loss_kbps_ = std::min(config_.max_kbps, loss_kbps_ * std::pow(kMultiplicativeGain, window_s));
+    // Up while nothing is lost, but never far above what arrives (as the
+    // delay-based estimate): an unused rate is no evidence of capacity.
+    const double grown = loss_kbps_ * std::pow(kMultiplicativeGain, window_s);
+    loss_kbps_ = std::min({config_.max_kbps, grown, std::max(loss_kbps_, 1.5 * received_kbps_ + 10.0)});
   }
   loss_kbps_ = std::clamp(loss_kbps_, config_.min_kbps, config_.max_kbps);
   loss_window_start_s_ = now_s;

@@ -83,6 +83,11 @@ class RateQueue {
   /// or nothing when it is dropped (the queue ahead of it is deeper than
   /// `queue_s`).
   std::optional<int64_t> Admit(int64_t now_ns, size_t bytes);
+  /// From now on, packets pass at `rate_bps` (> 0); those already admitted
+  /// keep their departures, as a link whose rate changes under its queue
+  /// (tc's `tbf change`). The queue's depth in time stays.
+  void SetRate(double rate_bps) { ns_per_byte_ = 8e9 / rate_bps; }
+  double rate_bps() const { return 8e9 / ns_per_byte_; }
   /// How long a bulk packet arriving at `now_ns` would wait for its turn.
   int64_t WaitNs(int64_t now_ns) const {
     const int64_t free_at = std::max(free_at_ns_, urgent_free_at_ns_);
@@ -109,6 +114,17 @@ class FaultLine {
   /// every packet is dropped. Idempotent.
   void Shutdown();
   FaultCounts Counts() const;
+
+  /// Changes the rate stage at run time, from any thread: packets arriving
+  /// from now on pass at `rate_bps` (0: no limit), behind those already
+  /// queued. A line made without a rate gains one (the queue's depth is the
+  /// LinkFault's `queue_s`). For a capacity schedule (`haptel bench video`):
+  /// the fault is on what this process receives, so the operator's own line
+  /// sets the rate its video arrives at, and nothing crosses processes.
+  /// Throws std::invalid_argument for a negative or non-finite rate.
+  void SetRate(double rate_bps);
+  /// The rate now, bit/s (0: no limit).
+  double rate_bps() const;
 
   /// A packet the transport received: dropped, delivered now, or queued.
   void Receive(eprosima::fastdds::rtps::TransportReceiverInterface* next, const uint8_t* data, uint32_t size,

@@ -194,6 +194,10 @@ class VehicleLink {
   /// What this side's fault transport did to what it received (all zero
   /// without a link fault); the vehicle reports its own side on its stderr.
   link::FaultCounts FaultCounts() const;
+  /// This side's fault line (null without a link fault): what the operator
+  /// receives (states, video) passes it, so its FaultLine::SetRate is the
+  /// rate the video arrives at (a capacity schedule).
+  link::FaultLine* fault_line() const;
   /// The first state echoing a command sent at or after `sent_ns`: when it
   /// arrived (0: none yet). See StateInboxOf::WatchEcho.
   void WatchEcho(int64_t sent_ns) { channel_->WatchEcho(sent_ns); }

@@ -49,6 +49,7 @@ struct VideoStats {
   double latency_ms_p50 = 0.0;  ///< capture -> decoded
   double latency_ms_p99 = 0.0;
   double kbps = 0.0;            ///< the video's bitrate as received, kbit/s
+  uint64_t bytes = 0;           ///< the video's bytes received (every frame's)
   double stale_s = 0.0;         ///< time the screen showed an old picture marked stale
   double target_kbps = 0.0;     ///< the link's rate as last estimated and sent to the vehicle
   uint64_t rate_cuts = 0;       ///< times the estimate was cut for a filling queue (overuse)
@@ -60,6 +61,9 @@ struct LatestFrame {
   uint64_t id = 0;                       ///< grows with each decoded frame
   int64_t capture_wall_ns = 0;           ///< the vehicle's capture stamp
   bool stale = false;  ///< an old picture (marked so) while a key frame is awaited
+  /// When it was decoded (CLOCK_REALTIME, as the capture stamp): minus
+  /// capture_wall_ns, the frame's latency as the view gets it.
+  int64_t decoded_wall_ns = 0;
 };
 
 class VideoReceiver {
@@ -98,6 +102,11 @@ class VideoReceiver {
   /// Decodes one frame in order; returns whether it gave a picture.
   bool DecodeOne(Pending& frame, cv::Mat& image);
   void RequestKeyFrameIfDue(int64_t now_ns);
+  /// The estimator's silence check (RateEstimator::OnSilence) while the
+  /// vehicle publishes video; sends the cut target.
+  void CheckSilence(int64_t now_ns);
+  /// The target as a feedback sample, stamped `now_ns` (under mutex_).
+  msg::VideoFeedback RateFeedback(int64_t now_ns, uint64_t last_frame_seq);
 
   bool decode_;
   mutable std::mutex mutex_;
@@ -120,6 +129,7 @@ class VideoReceiver {
   uint64_t key_frames_ = 0;
   uint64_t last_seq_ = 0;  ///< the last frame number received (0: none yet)
   uint64_t bytes_ = 0;     ///< received after the first frame (the bitrate's numerator)
+  uint64_t total_bytes_ = 0;  ///< every frame's
   int64_t first_arrival_ns_ = 0;
   int64_t last_arrival_ns_ = 0;
   int64_t stale_since_ns_ = 0;  ///< 0: not stale
@@ -142,6 +152,7 @@ class VideoReceiver {
   int64_t last_frame_ns_ = 0;
   std::thread decoder_thread_;
   link::VideoFeedbackWriter feedback_;
+  bool reader_ready_ = false;  ///< reader_ made and not yet being destroyed (under mutex_)
   std::unique_ptr<link::VideoReader> reader_;  // last: destroyed first
 };
 

@@ -17,7 +17,20 @@
 ///
 /// Only differences of capture stamps and of arrival times are used: the
 /// vehicle's and the operator's clocks need not agree. Each frame is one
-/// group (it is sent as one burst). Losses are gaps in the frame numbers.
+/// group (it is sent as one burst, and arrives when its last packet does).
+/// Losses are gaps in the frame numbers.
+///
+/// What arrives bounds the estimate, as GCC's acknowledged bitrate does
+/// (WebRTC's loss-based estimator cuts to a share of it): a link whose
+/// drop-tail queue is short fills and drops before the delay trend can
+/// rise (a 25 kB JPEG frame is one burst of 200 ms at 1 Mbit/s), so the
+/// trend stays flat while frames are lost; the cut for loss then goes no
+/// higher than the rate received, and neither estimate grows past 1.5
+/// times it (a sender that does not use its rate — the JPEG ladder on a
+/// rung below the target — earns no unbounded one, which would later let
+/// it climb a rung the link cannot carry). And a link that carries no
+/// whole frame at all (every burst cut) says so only by its silence:
+/// OnSilence halves the target while frames are expected and none come.
 ///
 /// Not thread-safe; the operator's video thread owns it. Allocation-free
 /// after construction.
@@ -53,6 +66,14 @@ class RateEstimator {
   /// received but not used for the delay trend.
   void OnFrame(uint64_t frame_number, double capture_s, double arrival_s, size_t bytes);
 
+  /// Called now and then (a few times a second or more) while a sender is
+  /// known to publish frames: when none has arrived for kSilence_s (since
+  /// the last frame, or since the first call), the loss-based estimate
+  /// halves, once per kSilence_s, and a target is due at once. Frames that
+  /// never arrive whole (a burst longer than the link's queue) are losses
+  /// no gap can show. Returns whether it cut now (send the target).
+  bool OnSilence(double now_s);
+
   /// The bitrate to ask of the encoder now (kbps): the smaller of the
   /// delay-based and the loss-based estimates, within [min, max].
   double target_kbps() const;
@@ -73,6 +94,8 @@ class RateEstimator {
 
   /// The window the received rate is measured over (s).
   static constexpr double kRateWindow_s = 0.5;
+  /// No frame for this long while frames are expected: the link carries none.
+  static constexpr double kSilence_s = 0.5;
 
  private:
   void UpdateTrend(double arrival_delta_ms, double capture_delta_ms, double arrival_ms);
@@ -128,6 +151,8 @@ class RateEstimator {
   uint64_t loss_window_received_ = 0;
   double loss_share_ = 0;
 
+  double last_frame_s_ = -1;    ///< the newest arrival, or the first OnSilence
+  double last_silence_cut_s_ = -1;
   double next_feedback_s_ = 0;
   bool cut_pending_ = false;
 };
