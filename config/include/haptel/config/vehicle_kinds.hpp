@@ -36,6 +36,10 @@ struct VehicleKindInfo {
   VehicleFamily family = VehicleFamily::kRobot;
   unsigned sections = kNoSection;  ///< VehicleSection bits
   std::string summary;             ///< one line, for errors and docs
+  /// A simulation alone, with no hardware, bus, port or thread of its own:
+  /// `haptel run --simulated-time` steps it in the operator's process on
+  /// the run's simulated clock.
+  bool steps_in_process = false;
   bool Uses(VehicleSection section) const { return (sections & section) != 0; }
 };
 

@@ -110,6 +110,14 @@ struct SessionSetup {
   /// interface's controls or hands built, so none is drawn over the camera's
   /// picture (a study's practice lap on the keyboard).
   bool single_interface = false;
+  /// Every part on one simulated clock in this one thread, as fast as the
+  /// CPU allows (`haptel run --simulated-time`; simulated_time.hpp): the
+  /// servo ticks, the physics steps and the simulated robot's control loop
+  /// (stepped in this process, its commands and states delayed by the
+  /// link fault's delay), the automatic operator and the session loop. The
+  /// same seed gives the same lap to the tick. Only for the automatic
+  /// operator and a robot whose kind steps in process, without a view.
+  bool simulated_time = false;
   /// The window's title; empty: "Haptel - <run name>".
   std::string title;
   /// Called on the session thread twice a second with what the view's
@@ -187,6 +195,15 @@ struct SessionResult {
   CanLogReport can_log;
   /// The simulated driver: times a control slipped out of its hand.
   int operator_slips = 0;
+  /// A simulated-time run: its session's simulated seconds, and the wall
+  /// seconds the whole run took (set-up included); 0 in real time.
+  double simulated_s = 0.0;
+  double wall_s = 0.0;
+  /// A simulated-time run's ticks, on its clock: the servo loop's (each
+  /// of every arm), the physics world's and the vehicle's control loop's.
+  uint64_t servo_ticks = 0;
+  uint64_t physics_ticks = 0;
+  uint64_t vehicle_ticks = 0;
   /// Every error bit the vehicle's servo controller reported over the run
   /// (the Maestro's register, controller_errors.hpp; 0: none, or no such
   /// controller).
