@@ -436,8 +436,11 @@ void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRu
   }
   std::fprintf(out, "  command round trip p50 %.2f ms, p99 %.2f ms\n", r.command_rtt_ms_p50, r.command_rtt_ms_p99);
   if (r.speedup > 0.0) {
-    std::fprintf(out, "  simulated time: %.2f s simulated in %.2f s wall-clock, %.1fx real time\n",
-                 run.result.simulated_s, run.result.wall_s, r.speedup);
+    std::fprintf(out,
+                 "  simulated time: %.2f s simulated in %.2f s wall-clock, %.1fx real time (%.2f s of CPU: "
+                 "%.1fx per CPU second)\n",
+                 run.result.simulated_s, run.result.wall_s, r.speedup, run.result.cpu_s,
+                 run.result.cpu_s > 0.0 ? run.result.simulated_s / run.result.cpu_s : 0.0);
   }
   if (r.prediction_error_m_p95 >= 0.0) {
     std::fprintf(out, "  predicted pose against each state: error p50 %.1f mm, p95 %.1f mm%s\n",
@@ -498,6 +501,7 @@ std::string RunJson(const SessionSetup& setup, const RecordedRun& run) {
     << ",\"prediction_error_m_p95\":"
     << (r.prediction_error_m_p95 >= 0.0 ? JsonNumber(r.prediction_error_m_p95) : std::string("null"))
     << ",\"speedup\":" << (r.speedup > 0.0 ? JsonNumber(r.speedup) : std::string("null"))
+    << ",\"simulated_s\":" << JsonNumber(run.result.simulated_s) << ",\"cpu_s\":" << JsonNumber(run.result.cpu_s)
     << ",\"lost_detect_s\":" << JsonNumber(run.result.lost_detect_s)
     << ",\"controller_errors\":" << run.result.controller_errors
     << ",\"controller_error_names\":" << NamesJson(ControllerErrorNames(run.result.controller_errors))

@@ -88,6 +88,7 @@ void RecordSimulatedFigures(const SimulatedTime& simulated, int64_t session_ns, 
 
 SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& interrupted) {
   const int64_t wall_start_ns = RealMonotonicNs();
+  const double cpu_start_s = ThreadCpuSeconds();
   // In simulated time the clock comes first: every stamp the set-up takes is
   // on it. Destroyed last, back to the real clock.
   std::unique_ptr<SimulatedTime> simulated;
@@ -296,7 +297,10 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
 
   RecordLinkFigures(haptic, vehicle, result);
   watch.Finish(rec);
-  if (simulated) RecordSimulatedFigures(*simulated, end_ns - t0, RealMonotonicNs() - wall_start_ns, result);
+  if (simulated) {
+    RecordSimulatedFigures(*simulated, end_ns - t0, RealMonotonicNs() - wall_start_ns, result);
+    result.cpu_s = ThreadCpuSeconds() - cpu_start_s;
+  }
   return result;
 }
 

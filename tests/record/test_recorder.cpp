@@ -389,10 +389,10 @@ TEST_CASE("Recorder set-up errors name the database file", "[recorder]") {
     const fs::path file = tmp.path() / "future.db";
     {
       RawDb raw(file);
-      raw.Exec("PRAGMA user_version = 11");
+      raw.Exec("PRAGMA user_version = 12");
     }
     RequireThrowsMentioning([&] { Recorder recorder(file); }, file.string());
-    RequireThrowsMentioning([&] { Recorder recorder(file); }, "schema version 11");
+    RequireThrowsMentioning([&] { Recorder recorder(file); }, "schema version 12");
   }
 
   SECTION("the path is a folder") {

@@ -199,6 +199,9 @@ struct SessionResult {
   /// seconds the whole run took (set-up included); 0 in real time.
   double simulated_s = 0.0;
   double wall_s = 0.0;
+  /// The CPU time the run's thread used meanwhile (s): on a loaded machine
+  /// the speed-up it allows (simulated_s / cpu_s) is what the CPU could do.
+  double cpu_s = 0.0;
   /// A simulated-time run's ticks, on its clock: the servo loop's (each
   /// of every arm), the physics world's and the vehicle's control loop's.
   uint64_t servo_ticks = 0;
