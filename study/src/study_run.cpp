@@ -219,6 +219,12 @@ int StudyRunCommand(int argc, const char* const* argv) {
       verbose = args.Flag("verbose");
       config = LoadStudy(args.positional()[1]);
       simulated_time = args.Flag("simulated-time");
+      if (simulated_time && want_console) {
+        // The console's threads keep their deadlines on the process's clock,
+        // which a simulated-time trial takes over.
+        throw UsageError("option --simulated-time: the console runs in real time beside the trials; run a "
+                         "simulated-time study without --console, --port, --bind and --tls");
+      }
       if (simulated_time && config.operators != "synthetic") {
         throw UsageError("option --simulated-time: study '" + config.file.string() + "' is driven by people (key "
                          "'operators: " + config.operators + "'), in real time; expected a study with "
