@@ -13,6 +13,7 @@
 #include "haptel/core/cli.hpp"
 #include "haptel/core/log.hpp"
 #include "haptel/mediator/run_command.hpp"
+#include "haptel/app/in_process_robot.hpp"
 #include "haptel/app/scene_command.hpp"
 #include "haptel/app/link_commands.hpp"
 #include "haptel/study/study_command.hpp"
@@ -49,6 +50,7 @@ int ExecBench(char** argv) {
 int main(int argc, char** argv) {
   using namespace haptel;
   log::SetProgram("haptel");
+  app::RegisterInProcessRobot();  // haptel run --simulated-time (and each trial of a study's)
   // Each command parses argv from its own name on.
   const std::string command = argc > 1 ? argv[1] : "";
   if (command == "run") return mediator::RunCommand(argc - 1, argv + 1);

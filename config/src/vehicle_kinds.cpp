@@ -9,7 +9,7 @@ namespace {
 
 std::deque<VehicleKindInfo>& Table() {
   static std::deque<VehicleKindInfo> kinds{
-      {"sim-robot", VehicleFamily::kRobot, kNoSection, "the simulated Lego-style tank", true},
+      {"sim-robot", VehicleFamily::kRobot, kNoSection, "the simulated Lego-style tank", true, true},
       {"can-robot", VehicleFamily::kRobot, kCanSection, "the tank's ODrive motors and bumper node on SocketCAN"},
       {"can-robot-sim", VehicleFamily::kRobot, kCanSection,
        "the simulated tank behind emulated CAN nodes, through the real CAN adapter", true},

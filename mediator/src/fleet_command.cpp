@@ -205,6 +205,10 @@ int RunFleetCommand(int argc, const char* const* argv, const std::atomic<bool>& 
     if (!args.positional().empty()) {
       throw UsageError("unexpected argument '" + args.positional()[0] + "' (options start with --)");
     }
+    if (args.Flag("simulated-time")) {
+      throw UsageError("option --simulated-time: a fleet's vehicles run in processes of their own, in real time; "
+                       "simulated time steps one simulated robot in this process (drop --fleet)");
+    }
     json = args.Flag("json");
     return FleetSetupFromArgs(argc, argv, args);
   });

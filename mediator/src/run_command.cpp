@@ -34,6 +34,7 @@
 #include "haptel/record/run_picture.hpp"
 #include "haptel/record/unsaved_run.hpp"
 #include "haptel/view/view.hpp"
+#include "simulated_time.hpp"
 
 namespace haptel::mediator {
 namespace {
@@ -92,6 +93,13 @@ constexpr const char* kRunUsage =
     "  --fleet FILE         one operator, several vehicles (config/fleets/*.yaml): each vehicle\n"
     "                       spawned or attached as the file says, driven one at a time, the\n"
     "                       others held safe; one row per vehicle in the database\n"
+    "  --simulated-time     every part on one simulated clock in this one process, as fast as\n"
+    "                       the CPU allows: the servo ticks, the physics, the simulated robot\n"
+    "                       (stepped here, no DDS; commands and states delayed by the link\n"
+    "                       fault's delay), the automatic operator; the same seed gives the\n"
+    "                       same lap to the tick. Needs --operator auto, a vehicle whose kind\n"
+    "                       steps in process (sim-robot) and no view; the JSON's speedup is\n"
+    "                       simulated seconds per wall-clock second\n"
     "  --json               end with one JSON line of results on stdout\n"
     "  --quiet              no progress lines\n";
 
@@ -150,7 +158,7 @@ Args ParseRunArgs(int argc, const char* const* argv) {
                "trace", "operator", "device", "trace-in", "time-limit", "lap-limit", "view", "record", "vehicle",
                "predict", "link-fault", "link-profile", "security", "dds-interfaces", "dds-peers", "discovery-server",
                "fleet"},
-              {"json", "quiet", "attach", "third-person"});
+              {"json", "quiet", "attach", "third-person", "simulated-time"});
 }
 
 namespace {
@@ -200,12 +208,14 @@ SessionSetup RunSetupFromArgs(const Args& args) {
   if (auto trace = args.Value("trace")) setup.trace = *trace;
   if (auto s = args.Number("vehicle-timeout", 0.05, 60.0)) setup.run.vehicle_timeout_s = *s;
   const bool display = view::View::DisplayAvailable();
-  setup.operator_kind = args.Value("operator").value_or(display ? "person" : "auto");
+  // A simulated-time run is the automatic operator's, without a view, unless told otherwise (then refused).
+  const bool simulated_time = args.Flag("simulated-time");
+  setup.operator_kind = args.Value("operator").value_or(display && !simulated_time ? "person" : "auto");
   if (setup.operator_kind != "auto" && setup.operator_kind != "person") {
     throw UsageError("option --operator: expected auto or person, got '" + setup.operator_kind + "'");
   }
   const bool person = setup.operator_kind == "person";
-  const std::string view = args.Value("view").value_or(display ? "window" : "none");
+  const std::string view = args.Value("view").value_or(display && !simulated_time ? "window" : "none");
   if (view == "window") {
     if (!display) {
       throw UsageError("option --view window: there is no display (DISPLAY is not set or its X server is not "
@@ -250,6 +260,13 @@ SessionSetup RunSetupFromArgs(const Args& args) {
                        "none); use --view window, or --record FILE.mp4");
     }
     setup.third_person = true;
+  }
+  if (simulated_time) {
+    // Before the rest is checked: what a simulated-time run needs, named first.
+    if (const std::string problem = SimulatedTimeProblem(setup); !problem.empty()) {
+      throw UsageError("option --simulated-time: " + problem);
+    }
+    setup.simulated_time = true;
   }
   const bool blimp = setup.vehicle.family() == VehicleFamily::kBlimp;
   // A blimp flies a blimp course; the robot drives a track.
@@ -350,6 +367,7 @@ SessionSetup RunSetupFromArgs(const Args& args) {
   setup.calibration = DeviceCalibrationFor(setup.device);
   if (!setup.device.gravity.empty()) setup.gravity = LoadGravityGrid(setup.device.gravity);
   if (!setup.attach) setup.vehicle_program = ProgramDirectory() / "haptel-vehicle";
+  if (setup.simulated_time) setup.vehicle_program.clear();  // stepped in this process
   return setup;
 }
 
@@ -432,6 +450,13 @@ void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRu
     std::fprintf(out, "  %s\n", ControllerErrorsLine(run.result.controller_errors).c_str());
   }
   std::fprintf(out, "  command round trip p50 %.2f ms, p99 %.2f ms\n", r.command_rtt_ms_p50, r.command_rtt_ms_p99);
+  if (r.speedup > 0.0) {
+    std::fprintf(out,
+                 "  simulated time: %.2f s simulated in %.2f s wall-clock, %.1fx real time (%.2f s of CPU: "
+                 "%.1fx per CPU second)\n",
+                 run.result.simulated_s, run.result.wall_s, r.speedup, run.result.cpu_s,
+                 run.result.cpu_s > 0.0 ? run.result.simulated_s / run.result.cpu_s : 0.0);
+  }
   if (r.prediction_error_m_p95 >= 0.0) {
     std::fprintf(out, "  predicted pose against each state: error p50 %.1f mm, p95 %.1f mm%s\n",
                  r.prediction_error_m_p50 * 1e3, r.prediction_error_m_p95 * 1e3,
@@ -490,6 +515,8 @@ std::string RunJson(const SessionSetup& setup, const RecordedRun& run) {
     << (r.prediction_error_m_p50 >= 0.0 ? JsonNumber(r.prediction_error_m_p50) : std::string("null"))
     << ",\"prediction_error_m_p95\":"
     << (r.prediction_error_m_p95 >= 0.0 ? JsonNumber(r.prediction_error_m_p95) : std::string("null"))
+    << ",\"speedup\":" << (r.speedup > 0.0 ? JsonNumber(r.speedup) : std::string("null"))
+    << ",\"simulated_s\":" << JsonNumber(run.result.simulated_s) << ",\"cpu_s\":" << JsonNumber(run.result.cpu_s)
     << ",\"lost_detect_s\":" << JsonNumber(run.result.lost_detect_s)
     << ",\"controller_errors\":" << run.result.controller_errors
     << ",\"controller_error_names\":" << NamesJson(ControllerErrorNames(run.result.controller_errors))

@@ -13,6 +13,7 @@
 #include "family_session.hpp"
 #include "haptel/mediator/run_counters.hpp"
 #include "haptel/view/sdl_input.hpp"
+#include "simulated_time.hpp"
 
 namespace haptel::mediator {
 
@@ -60,7 +61,38 @@ int ExitCode(Outcome outcome) {
   }
 }
 
+namespace {
+
+/// A simulated-time run's loops, counted on its clock (no thread measured
+/// them: each kept its rate exactly), and its speed-up over real time.
+void RecordSimulatedFigures(const SimulatedTime& simulated, int64_t session_ns, int64_t wall_ns,
+                            SessionResult& result) {
+  RunRecord& rec = result.record;
+  const double session_s = NsToS(session_ns);
+  result.simulated_s = session_s;
+  result.wall_s = NsToS(wall_ns);
+  result.servo_ticks = simulated.servo_ticks();
+  result.physics_ticks = simulated.physics_ticks();
+  result.vehicle_ticks = simulated.vehicle_ticks();
+  rec.speedup = result.wall_s > 0.0 ? session_s / result.wall_s : 0.0;
+  if (session_s > 0.0) rec.servo_rate_hz = static_cast<double>(simulated.servo_ticks()) / session_s;
+  rec.servo_period_p99_us = simulated.servo_period_s() * 1e6;
+  if (simulated.physics_ticks() > 0 && session_s > 0.0) {
+    result.physics_rate_hz = static_cast<double>(simulated.physics_ticks()) / session_s;
+    result.physics_period_p99_us = simulated.physics_period_s() * 1e6;
+    rec.physics_rate_hz = result.physics_rate_hz;
+  }
+}
+
+}  // namespace
+
 SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& interrupted) {
+  const int64_t wall_start_ns = RealMonotonicNs();
+  const double cpu_start_s = ThreadCpuSeconds();
+  // In simulated time the clock comes first: every stamp the set-up takes is
+  // on it. Destroyed last, back to the real clock.
+  std::unique_ptr<SimulatedTime> simulated;
+  if (setup.simulated_time) simulated = std::make_unique<SimulatedTime>(setup);
   const RunConfig& run = setup.run;
   SessionResult result;
   RunRecord& rec = result.record;
@@ -94,8 +126,11 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
     family->AbandonSetup(result);
     return result;
   }
-  haptic.Start(setup.progress);
-  family->Start(haptic);
+  if (!simulated) {
+    // In simulated time these are stepped by the session's own thread (AdvanceTo).
+    haptic.Start(setup.progress);
+    family->Start(haptic);
+  }
 
   // --- The vehicle. ---
   VehicleLinkOptions link_options;
@@ -104,11 +139,19 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   link_options.track_file = family->world_file();
   link_options.program = setup.vehicle_program;
   link_options.decode_video = run.video_decode && DecodesVideo(setup.view);
+  if (simulated) {
+    link_options.program.clear();
+    link_options.in_process_robot = [&simulated](const msg::DriveCommand& command) { simulated->OnCommand(command); };
+  }
   VehicleLink vehicle(link_options);
   rec.vehicle_pid = vehicle.pid();
   if (setup.progress && setup.attach) {
     log::Info("attached to vehicle '" + setup.vehicle.name + "' on domain " + std::to_string(run.link.domain_id) +
               " (session " + std::to_string(vehicle.session()) + "): spawning none");
+  }
+  if (setup.progress && simulated) {
+    log::Info("vehicle '" + setup.vehicle.name + "' (" + setup.vehicle.kind +
+              ") stepped in this process, on the simulated clock");
   }
   if (setup.progress && vehicle.pid() != 0) {
     log::Info("vehicle '" + setup.vehicle.name + "' (" + setup.vehicle.kind + ") started, pid " +
@@ -143,7 +186,11 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   const auto finish = [&](LoopEnd end) { Finish(result, std::move(end), family->MadeSafe()); };
 
   for (;;) {
-    SleepUntilNs(next_tick);
+    if (simulated) {
+      simulated->AdvanceTo(next_tick, haptic, family->physics(), vehicle);
+    } else {
+      SleepUntilNs(next_tick);
+    }
     next_tick += period_ns;
     const int64_t now = MonotonicNs();
     const double t = NsToS(now - t0);
@@ -208,7 +255,8 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
     }
     if (now >= next_progress_ns) {
       next_progress_ns += SToNs(2.0);
-      const std::vector<std::string> short_loops = watch.EndInterval(now);
+      // In simulated time every loop keeps its rate by construction (no thread measures it).
+      const std::vector<std::string> short_loops = simulated ? std::vector<std::string>{} : watch.EndInterval(now);
       if (setup.progress) {
         family->LogProgress(t, vehicle, rec.distance_m);
         for (const std::string& loop : short_loops) log::Warn(loop);
@@ -218,8 +266,10 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
     }
   }
   const int64_t end_ns = MonotonicNs();
-  for (const std::string& loop : watch.EndInterval(end_ns)) {
-    if (setup.progress) log::Warn(loop);
+  if (!simulated) {
+    for (const std::string& loop : watch.EndInterval(end_ns)) {
+      if (setup.progress) log::Warn(loop);
+    }
   }
   // The lap's clock and the approach's are kept apart: a run that never
   // reached the line was all approach.
@@ -232,6 +282,7 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   haptic.hal().ZeroForces();
   family->RequestStop();
   vehicle.SendSafe();
+  if (simulated) simulated->Stop();
   if (view_part) StopAndRecord(*view_part, result);
   family->Finish(result, setup.progress);
   // A lap stopped by a limit ran until the run ended, on the same clock as the
@@ -246,6 +297,10 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
 
   RecordLinkFigures(haptic, vehicle, result);
   watch.Finish(rec);
+  if (simulated) {
+    RecordSimulatedFigures(*simulated, end_ns - t0, RealMonotonicNs() - wall_start_ns, result);
+    result.cpu_s = ThreadCpuSeconds() - cpu_start_s;
+  }
   return result;
 }
 

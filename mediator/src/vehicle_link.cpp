@@ -144,11 +144,23 @@ CommandChannel<Messages>::CommandChannel(link::Participant& participant, const s
 }
 
 template <class Messages>
+CommandChannel<Messages>::CommandChannel(std::function<void(const typename Messages::CommandMsg&)> sink,
+                                         uint64_t session, const std::string& operator_name)
+    : sink_(std::move(sink)) {
+  message_.session(session);
+  message_.operator_name(operator_name);
+}
+
+template <class Messages>
 void CommandChannel<Messages>::Send(const Command& command) {
   message_.seq(++seq_);
   Messages::Encode(command, message_);
   message_.sent_ns(MonotonicNs());
-  writer_->Write(message_);
+  if (sink_) {
+    sink_(message_);
+  } else {
+    writer_->Write(message_);
+  }
 }
 
 template <class Messages>
@@ -159,6 +171,7 @@ void CommandChannel<Messages>::SendSafe(bool release) {
 
 template <class Messages>
 int CommandChannel<Messages>::VehiclesOnTopic() const {
+  if (sink_) return 1;
   return std::max(reader_->matched(), writer_->matched());
 }
 
@@ -166,6 +179,16 @@ template class CommandChannel<link::RobotMessages>;
 template class CommandChannel<link::BlimpMessages>;
 
 VehicleLink::VehicleLink(const VehicleLinkOptions& options) : options_(options), session_(NewSession()) {
+  operator_name_ = OperatorName();
+  if (options_.in_process_robot) {
+    if (family() != VehicleFamily::kRobot) {
+      throw std::logic_error("vehicle link: '" + name() + "' is a " + ToString(family()) +
+                             "; only a robot steps in this process");
+    }
+    channel_ = std::make_unique<RobotChannel>(options_.in_process_robot, session_, operator_name_);
+    video_ = std::make_unique<VideoReceiver>();
+    return;
+  }
   if (!options_.program.empty()) {
     std::vector<std::string> arguments{"--config", options_.vehicle.file.string(), "--track",
                                        options_.track_file.string(), "--name", options_.vehicle.name, "--domain",

@@ -30,9 +30,12 @@ cv::Mat MarkStale(const cv::Mat& picture) {
   return marked;
 }
 
+VideoReceiver::VideoReceiver() : decode_(false) {}
+
 VideoReceiver::VideoReceiver(link::Participant& participant, const std::string& vehicle, bool decode)
     : decode_(decode),
-      feedback_(participant, link::TopicName(vehicle, "video_feedback"), link::Profile::kState) {
+      feedback_(std::make_unique<link::VideoFeedbackWriter>(participant, link::TopicName(vehicle, "video_feedback"),
+                                                            link::Profile::kState)) {
   decoder_thread_ = std::thread([this] { DecodeLoop(); });
   reader_ = std::make_unique<link::VideoReader>(participant, link::TopicName(vehicle, "video"),
                                                 link::Profile::kVideo,
@@ -52,7 +55,7 @@ VideoReceiver::~VideoReceiver() {
     stop_ = true;
   }
   ready_.notify_all();
-  decoder_thread_.join();
+  if (decoder_thread_.joinable()) decoder_thread_.join();
 }
 
 void VideoReceiver::OnFrame(const msg::VideoFrame& frame) {
@@ -98,7 +101,7 @@ void VideoReceiver::OnFrame(const msg::VideoFrame& frame) {
     pending_.push_back(std::move(p));
   }
   ready_.notify_one();
-  if (rate_due) feedback_.Write(rate);
+  if (rate_due) feedback_->Write(rate);
 }
 
 msg::VideoFeedback VideoReceiver::RateFeedback(int64_t now_ns, uint64_t last_frame_seq) {
@@ -121,7 +124,7 @@ void VideoReceiver::CheckSilence(int64_t now_ns) {
     if (!estimator_.OnSilence(NsToS(now_ns)) || !estimator_.FeedbackDue(NsToS(now_ns))) return;
     rate = RateFeedback(now_ns, last_seq_);
   }
-  feedback_.Write(rate);
+  if (feedback_) feedback_->Write(rate);
 }
 
 void VideoReceiver::RequestKeyFrameIfDue(int64_t now_ns) {
@@ -137,7 +140,7 @@ void VideoReceiver::RequestKeyFrameIfDue(int64_t now_ns) {
     request.target_kbps(static_cast<uint32_t>(target_kbps_sent_));
     ++key_frame_requests_;
   }
-  feedback_.Write(request);
+  feedback_->Write(request);
 }
 
 bool VideoReceiver::DecodeOne(Pending& frame, cv::Mat& image) {

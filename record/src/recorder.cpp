@@ -39,7 +39,7 @@ namespace {
 using namespace haptel::sql;
 
 /// Schema version stored in PRAGMA user_version.
-constexpr int kSchemaVersion = 10;
+constexpr int kSchemaVersion = 11;
 
 /// Schema steps: kMigrations[v - 1] takes a database from version v - 1 to v.
 /// A new database runs them all, so the upgrade path of an old file is the
@@ -287,8 +287,14 @@ CREATE TABLE study_superseded_trials (
 CREATE INDEX study_superseded_trials_study_id ON study_superseded_trials(study_id);
 )sql";
 
-constexpr const char* kMigrations[] = {kSchemaV1, kSchemaV2, kSchemaV3, kSchemaV4, kSchemaV5,
-                                       kSchemaV6, kSchemaV7, kSchemaV8, kSchemaV9, kSchemaV10};
+// v11: a run in simulated time (`haptel run --simulated-time`): its
+// speed-up, simulated seconds per wall-clock second (NULL: a real-time run).
+constexpr const char* kSchemaV11 = R"sql(
+ALTER TABLE runs ADD COLUMN speedup REAL DEFAULT NULL;
+)sql";
+
+constexpr const char* kMigrations[] = {kSchemaV1, kSchemaV2, kSchemaV3, kSchemaV4, kSchemaV5,  kSchemaV6,
+                                       kSchemaV7, kSchemaV8, kSchemaV9, kSchemaV10, kSchemaV11};
 static_assert(std::size(kMigrations) == kSchemaVersion, "one migration per schema version");
 
 constexpr const char* kInsertRun = R"sql(
@@ -300,9 +306,9 @@ INSERT INTO runs (started_utc, started_wall_ns, config_name, track, interface, v
                   view_frame_p99_ms, video_to_screen_ms_p50, video_to_screen_ms_p99, picture,
                   servo_target_hz, servo_rate_short, physics_rate_hz, physics_target_hz,
                   physics_rate_short, vehicle_kind, predict, link_fault, prediction_error_m_p50,
-                  prediction_error_m_p95, approach_s, video_kbps, video_stale_s)
+                  prediction_error_m_p95, approach_s, video_kbps, video_stale_s, speedup)
 VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?,
-        ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)
+        ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)
 )sql";
 
 constexpr const char* kInsertSplit =
@@ -326,7 +332,7 @@ SELECT id, started_wall_ns, config_name, track, interface, vehicle, completed, o
        view_fps, view_frame_p99_ms, video_to_screen_ms_p50, video_to_screen_ms_p99, picture,
        servo_target_hz, servo_rate_short, physics_rate_hz, physics_target_hz, physics_rate_short,
        vehicle_kind, predict, link_fault, prediction_error_m_p50, prediction_error_m_p95, approach_s,
-       video_kbps, video_stale_s
+       video_kbps, video_stale_s, speedup
 FROM runs ORDER BY id
 )sql";
 
@@ -575,7 +581,8 @@ int64_t Recorder::Save(const RunRecord& run, const AlsoSave& also) {
       .RealOrNull(run.prediction_error_m_p95, run.prediction_error_m_p95 >= 0.0)
       .RealOrNull(run.approach_s, std::isfinite(run.approach_s))
       .Real(run.video_kbps)
-      .Real(run.video_stale_s);
+      .Real(run.video_stale_s)
+      .RealOrNull(run.speedup, run.speedup > 0.0);
   StepDone(path_, db_, insert_run.get(), "cannot insert run");
   const int64_t run_id = sqlite3_last_insert_rowid(db_);
 
@@ -714,6 +721,8 @@ std::vector<RunRecord> Recorder::LoadAll() const {
       run.approach_s = r.Real();  // NaN for NULL: recorded before v8
       run.video_kbps = r.Real();
       run.video_stale_s = r.Real();
+      const double speedup = r.Real();  // NaN for NULL: a real-time run, or recorded before v11
+      run.speedup = std::isnan(speedup) ? -1.0 : speedup;
       index_of.emplace(run.id, runs.size());
       runs.push_back(std::move(run));
     }

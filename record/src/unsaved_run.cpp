@@ -104,6 +104,7 @@ std::string RunRecordJson(const RunRecord& r) {
       .Str("link_fault", r.link_fault)
       .Num("prediction_error_m_p50", r.prediction_error_m_p50)
       .Num("prediction_error_m_p95", r.prediction_error_m_p95)
+      .Num("speedup", r.speedup)
       .Str("operator", r.operator_kind)
       .Str("device", r.device)
       .Num("distance_m", r.distance_m)

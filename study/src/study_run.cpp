@@ -14,6 +14,7 @@
 #include "haptel/config/error.hpp"
 #include "haptel/core/args.hpp"
 #include "haptel/core/cli.hpp"
+#include "haptel/core/clock.hpp"
 #include "haptel/core/json.hpp"
 #include "haptel/core/stop_signals.hpp"
 #include "haptel/view/view.hpp"
@@ -38,6 +39,10 @@ constexpr const char* kRunUsage =
     "  --database FILE   SQLite file (overrides the study's and the run configuration's)\n"
     "  --domain N        DDS domain id of the trials' vehicles (overrides the run configuration's)\n"
     "  --json            end with one JSON line: the trials and per-condition totals\n"
+    "  --simulated-time  each trial in simulated time (`haptel run --simulated-time`): every\n"
+    "                    part on one clock in this process, as fast as the CPU allows, the same\n"
+    "                    lap for the same seed; synthetic studies only. The summary and the\n"
+    "                    JSON's speedup say how much faster than real time the trials ran\n"
     "  --console         serve the experimenter's console (schedule, live trial) on 127.0.0.1;\n"
     "                    a person study always does: its trials start from it, its\n"
     "                    questionnaires are filled in there after each condition\n"
@@ -197,6 +202,7 @@ int StudyRunCommand(int argc, const char* const* argv) {
   return cli::Main({"haptel study run", kRunUsage}, argc, argv, [&] {
     bool json = false;
     bool verbose = false;
+    bool simulated_time = false;
     StudyConfig config;
     std::vector<PlannedTrial> plan;
     std::filesystem::path database;
@@ -207,7 +213,7 @@ int StudyRunCommand(int argc, const char* const* argv) {
     std::string simulated_device;  ///< the run's haptic device, when it is the simulated one
     cli::ReadInput([&] {
       const Args args(argc, argv, {"database", "domain", "port", "bind", "tls"},
-                      {"json", "verbose", "console", "plain-http"});
+                      {"json", "verbose", "console", "plain-http", "simulated-time"});
       console_options.port = args.Int("port", 1, 65535).value_or(console_options.port);
       console_options.host = args.Value("bind").value_or(console_options.host);
       console_options.plain_http = args.Flag("plain-http");
@@ -227,6 +233,18 @@ int StudyRunCommand(int argc, const char* const* argv) {
       json = args.Flag("json");
       verbose = args.Flag("verbose");
       config = LoadStudy(args.positional()[1]);
+      simulated_time = args.Flag("simulated-time");
+      if (simulated_time && want_console) {
+        // The console's threads keep their deadlines on the process's clock,
+        // which a simulated-time trial takes over.
+        throw UsageError("option --simulated-time: the console runs in real time beside the trials; run a "
+                         "simulated-time study without --console, --port, --bind and --tls");
+      }
+      if (simulated_time && config.operators != "synthetic") {
+        throw UsageError("option --simulated-time: study '" + config.file.string() + "' is driven by people (key "
+                         "'operators: " + config.operators + "'), in real time; expected a study with "
+                         "'operators: synthetic'");
+      }
       // The practice lap is driven with the keys, read in the view's window.
       if (config.operators == "person" && config.practice && !view::View::DisplayAvailable()) {
         throw ConfigError(config.file.string() +
@@ -291,6 +309,8 @@ int StudyRunCommand(int argc, const char* const* argv) {
 
     int exit_code = cli::kExitOk;
     std::string stopped;
+    double simulated_s = 0.0;  ///< --simulated-time: the trials run now, simulated seconds
+    double wall_s = 0.0;       ///< and their wall-clock seconds
     // A session that stops on a signal, or on the console's Abort.
     auto run_watched = [&](const mediator::SessionSetup& setup, const record::Recorder::AlsoSave& also) {
       std::atomic<bool> trial_stop{false};
@@ -373,7 +393,7 @@ int StudyRunCommand(int argc, const char* const* argv) {
       }
       const int experience = store.TrialsDone(trial->participant) + (config.practice ? 1 : 0);
       mediator::SessionSetup setup =
-          cli::ReadInput([&] { return TrialSetup(config, *trial, database, domain, verbose, experience, false); });
+          cli::ReadInput([&] { return TrialSetup(config, *trial, database, domain, verbose, experience, simulated_time); });
       const size_t planned = store.Plan().size();
       const size_t number = store.Trials().size() + 1;
       if (console) {
@@ -389,8 +409,13 @@ int StudyRunCommand(int argc, const char* const* argv) {
       }
       std::fprintf(stderr, "[study] trial %zu/%zu: participant %s, position %d, %s ...\n", number, planned,
                    trial->participant.c_str(), trial->position, trial->condition.c_str());
+      const int64_t trial_start_ns = RealMonotonicNs();
       const mediator::RecordedRun run = run_watched(setup, store.TrialWriter(*trial, config.trial_cap_s));
       const record::RunRecord& r = run.result.record;
+      // The speed-up over real time: simulated seconds against the trial's
+      // whole wall-clock time (set-up, lap, recording and picture).
+      simulated_s += run.result.simulated_s;
+      wall_s += NsToS(RealMonotonicNs() - trial_start_ns);
       // Taken, not only read: the trial run again is not aborted by the same press.
       if (console && console->TakeAbort() && !interrupted.load()) {
         store.Event("aborted", trial->participant, trial->position, "from the console; the trial is run again");
@@ -460,6 +485,12 @@ int StudyRunCommand(int argc, const char* const* argv) {
     std::printf("\n  (lap time s as scored, on the lap's clock from the start line, position in brackets; "
                 "* unfinished, scored at the %s s cap, also on the lap's clock)\n",
                 Seconds(config.trial_cap_s).c_str());
+    const double speedup = simulated_time && wall_s > 0.0 ? simulated_s / wall_s : 0.0;
+    if (speedup > 0.0) {
+      std::printf("  simulated time: %.1f s simulated in %.1f s wall-clock over the trials run now, %.1fx real "
+                  "time\n",
+                  simulated_s, wall_s, speedup);
+    }
     std::printf("  report: haptel study report %s --study %s\n", database.c_str(), config.name.c_str());
     if (json) {
       std::string out = "{\"study\":" + JsonString(config.name) + ",\"database\":" + JsonString(database.string()) +
@@ -467,7 +498,9 @@ int StudyRunCommand(int argc, const char* const* argv) {
                         ",\"trials_planned\":" + std::to_string(plan.size()) +
                         ",\"trials_done\":" + std::to_string(trials.size()) +
                         ",\"trials_done_before\":" + std::to_string(done_before) +
-                        ",\"stopped\":" + JsonString(stopped) + ",\"conditions\":[";
+                        ",\"stopped\":" + JsonString(stopped) +
+                        ",\"speedup\":" + (speedup > 0.0 ? JsonNumber(speedup) : std::string("null")) +
+                        ",\"conditions\":[";
       for (size_t i = 0; i < config.conditions.size(); ++i) {
         const std::string& name = config.conditions[i].name;
         if (i > 0) out += ",";

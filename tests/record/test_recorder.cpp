@@ -119,6 +119,7 @@ RunRecord MakeRun(int n, int split_count) {
   run.predict = n % 2 == 1;
   run.link_fault = n % 2 == 1 ? "delay=0.2s,jitter=0s,loss=0" : "";
   run.prediction_error_m_p50 = n % 3 == 0 ? -1.0 : 0.004 * n;  // -1: none (stored as NULL)
+  run.speedup = n % 2 == 0 ? -1.0 : 12.5 * n;  // -1: a real-time run (stored as NULL)
   run.video_kbps = 850.5 + n;
   run.video_stale_s = 0.25 * n;
   run.prediction_error_m_p95 = n % 3 == 0 ? -1.0 : 0.011 * n;
@@ -184,6 +185,7 @@ void CheckSame(const RunRecord& got, const RunRecord& want) {
   CHECK(got.video_kbps == want.video_kbps);
   CHECK(got.video_stale_s == want.video_stale_s);
   CHECK(got.prediction_error_m_p95 == want.prediction_error_m_p95);
+  CHECK(got.speedup == want.speedup);
   CHECK(got.completed == want.completed);
   CHECK(got.outcome == want.outcome);
   CHECK(SameReal(got.lap_time_s, want.lap_time_s));
@@ -350,7 +352,7 @@ TEST_CASE("Recorder stores the start time as ISO-8601 UTC and a schema version",
   }
   RawDb raw(file);
   CHECK(raw.Text("SELECT started_utc FROM runs") == "2024-05-01T12:34:56.789Z");
-  CHECK(raw.Integer("PRAGMA user_version") == 10);
+  CHECK(raw.Integer("PRAGMA user_version") == 11);
 }
 
 TEST_CASE("Recorder creates missing parent folders", "[recorder]") {
@@ -387,10 +389,10 @@ TEST_CASE("Recorder set-up errors name the database file", "[recorder]") {
     const fs::path file = tmp.path() / "future.db";
     {
       RawDb raw(file);
-      raw.Exec("PRAGMA user_version = 11");
+      raw.Exec("PRAGMA user_version = 12");
     }
     RequireThrowsMentioning([&] { Recorder recorder(file); }, file.string());
-    RequireThrowsMentioning([&] { Recorder recorder(file); }, "schema version 11");
+    RequireThrowsMentioning([&] { Recorder recorder(file); }, "schema version 12");
   }
 
   SECTION("the path is a folder") {
@@ -702,7 +704,7 @@ TEST_CASE("A v1 database is migrated to the current schema in place and keeps it
   }
 
   RawDb raw(file);
-  CHECK(raw.Integer("PRAGMA user_version") == 10);
+  CHECK(raw.Integer("PRAGMA user_version") == 11);
   CHECK(raw.Text("PRAGMA integrity_check") == "ok");
   CHECK(raw.Integer("SELECT COUNT(*) FROM pragma_foreign_key_check") == 0);
   for (const char* table : {"interface_switches", "run_path", "run_contacts", "run_counters"}) {
@@ -720,7 +722,7 @@ TEST_CASE("A v1 database is migrated to the current schema in place and keeps it
     Recorder again(file);
     CHECK(again.LoadAll().size() == 2);
   }
-  CHECK(raw.Integer("PRAGMA user_version") == 10);
+  CHECK(raw.Integer("PRAGMA user_version") == 11);
 }
 
 namespace {
@@ -809,7 +811,7 @@ TEST_CASE("A v2 database is migrated to v3: its runs keep everything, new runs k
   CheckSame(runs[0], V2Run());
   CheckSame(runs[1], fresh);
   RawDb raw(file);
-  CHECK(raw.Integer("PRAGMA user_version") == 10);
+  CHECK(raw.Integer("PRAGMA user_version") == 11);
   CHECK(raw.Text("PRAGMA integrity_check") == "ok");
   CHECK(raw.Integer(
             "SELECT value FROM run_counters WHERE run_id = 2 AND name = 'servo_overruns'") == 9);

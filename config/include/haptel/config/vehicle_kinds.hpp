@@ -40,6 +40,10 @@ struct VehicleKindInfo {
   /// (its track or course): the operator side knows where everything is,
   /// and can draw the vehicle in it (haptel run --third-person).
   bool simulated = false;
+  /// A simulation alone, with no hardware, bus, port or thread of its own:
+  /// `haptel run --simulated-time` steps it in the operator's process on
+  /// the run's simulated clock.
+  bool steps_in_process = false;
   bool Uses(VehicleSection section) const { return (sections & section) != 0; }
 };
 

@@ -9,8 +9,24 @@
 namespace haptel {
 
 /// Monotonic time (CLOCK_MONOTONIC) in ns: for periods, timeouts, latencies
-/// measured on one host.
+/// measured on one host. While the process runs on a simulated clock
+/// (SetSimulatedNs), its time instead.
 int64_t MonotonicNs();
+
+/// Puts the process on a simulated clock at `now_ns` (> 0), or moves it
+/// there: from now on MonotonicNs() returns what this last set, and nothing
+/// else moves it. For a run whose every part steps in one thread on one
+/// simulated clock (`haptel run --simulated-time`): the stamps the parts
+/// take themselves (a force field's, a state's arrival) are then simulated
+/// time too. No thread may run that expects real time meanwhile.
+void SetSimulatedNs(int64_t now_ns);
+/// Back to the real clock (the simulated clock's end).
+void StopSimulatedClock();
+/// Whether MonotonicNs() reads a simulated clock.
+bool SimulatedClockOn();
+/// CLOCK_MONOTONIC whatever the simulated clock says: a simulated run's own
+/// wall time (its speed-up over real time).
+int64_t RealMonotonicNs();
 
 /// Wall-clock time (CLOCK_REALTIME) in ns since the Unix epoch: only for
 /// stamps compared across processes on one host (video capture time).

@@ -116,6 +116,14 @@ struct SessionSetup {
   /// or haptel run --third-person; only for a simulated robot (the track is
   /// the operator side's), and only with a view. Never in a trial.
   bool third_person = false;
+  /// Every part on one simulated clock in this one thread, as fast as the
+  /// CPU allows (`haptel run --simulated-time`; simulated_time.hpp): the
+  /// servo ticks, the physics steps and the simulated robot's control loop
+  /// (stepped in this process, its commands and states delayed by the
+  /// link fault's delay), the automatic operator and the session loop. The
+  /// same seed gives the same lap to the tick. Only for the automatic
+  /// operator and a robot whose kind steps in process, without a view.
+  bool simulated_time = false;
   /// The window's title; empty: "Haptel - <run name>".
   std::string title;
   /// Called on the session thread twice a second with what the view's
@@ -193,6 +201,18 @@ struct SessionResult {
   CanLogReport can_log;
   /// The simulated driver: times a control slipped out of its hand.
   int operator_slips = 0;
+  /// A simulated-time run: its session's simulated seconds, and the wall
+  /// seconds the whole run took (set-up included); 0 in real time.
+  double simulated_s = 0.0;
+  double wall_s = 0.0;
+  /// The CPU time the run's thread used meanwhile (s): on a loaded machine
+  /// the speed-up it allows (simulated_s / cpu_s) is what the CPU could do.
+  double cpu_s = 0.0;
+  /// A simulated-time run's ticks, on its clock: the servo loop's (each
+  /// of every arm), the physics world's and the vehicle's control loop's.
+  uint64_t servo_ticks = 0;
+  uint64_t physics_ticks = 0;
+  uint64_t vehicle_ticks = 0;
   /// Every error bit the vehicle's servo controller reported over the run
   /// (the Maestro's register, controller_errors.hpp; 0: none, or no such
   /// controller).

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <deque>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <stdexcept>
@@ -119,6 +120,11 @@ class CommandChannel final : public LinkChannel {
   using Inbox = StateInboxOf<typename Messages::StateMsg>;
   CommandChannel(link::Participant& participant, const std::string& vehicle, uint64_t session,
                  const std::string& operator_name);
+  /// A channel on no DDS: each command message goes to `sink` as it is
+  /// sent, and states come only as the caller pushes them into the inbox
+  /// (a vehicle stepped in this process; one vehicle answers).
+  CommandChannel(std::function<void(const typename Messages::CommandMsg&)> sink, uint64_t session,
+                 const std::string& operator_name);
   /// Sends `command` stamped now.
   void Send(const Command& command);
   Inbox& inbox() { return inbox_; }
@@ -137,6 +143,7 @@ class CommandChannel final : public LinkChannel {
   Inbox inbox_;
   typename Messages::CommandMsg message_;
   uint64_t seq_ = 0;
+  std::function<void(const typename Messages::CommandMsg&)> sink_;  ///< set: no DDS
   // Last: destroyed first, so no DDS callback outlives the inbox.
   std::unique_ptr<typename Messages::CommandWriter> writer_;
   std::unique_ptr<typename Messages::StateReader> reader_;
@@ -156,6 +163,11 @@ struct VehicleLinkOptions {
   /// Publish who commands the vehicle on haptel/<vehicle>/selected
   /// (PublishSelected): a fleet's command mux does.
   bool publish_selected = false;
+  /// A robot stepped in this process (a simulated-time run): set, nothing
+  /// is spawned and nothing joins DDS; each command message goes here as
+  /// it is sent, the states are pushed into the robot channel's inbox by
+  /// the caller, and no video comes.
+  std::function<void(const msg::DriveCommand&)> in_process_robot;
 };
 
 /// The writer of haptel/<vehicle>/selected (the IDL's SelectedSource).

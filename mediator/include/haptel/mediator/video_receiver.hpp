@@ -75,6 +75,9 @@ class VideoReceiver {
   /// key frame requests on haptel/<vehicle>/video_feedback. With `decode`
   /// false frames are only counted (no screen to show them on; no requests).
   VideoReceiver(link::Participant& participant, const std::string& vehicle, bool decode);
+  /// A receiver on no link: it receives nothing (zero frames), and runs
+  /// no thread (a simulated-time run, whose driver reads the state).
+  VideoReceiver();
   ~VideoReceiver();
 
   VideoStats Stats() const;
@@ -151,7 +154,7 @@ class VideoReceiver {
   int64_t first_frame_ns_ = 0;
   int64_t last_frame_ns_ = 0;
   std::thread decoder_thread_;
-  link::VideoFeedbackWriter feedback_;
+  std::unique_ptr<link::VideoFeedbackWriter> feedback_;  ///< null on no link
   bool reader_ready_ = false;  ///< reader_ made and not yet being destroyed (under mutex_)
   std::unique_ptr<link::VideoReader> reader_;  // last: destroyed first
 };

@@ -98,6 +98,9 @@ struct RunRecord {
   std::string link_fault;
   double prediction_error_m_p50 = -1.0;
   double prediction_error_m_p95 = -1.0;
+  /// A run in simulated time (`haptel run --simulated-time`): simulated
+  /// seconds per wall-clock second over the run (v11; -1: a real-time run).
+  double speedup = -1.0;
   std::string operator_kind;  ///< "auto" or "person"
   std::string device;         ///< the haptic device's name
   double distance_m = 0.0;    ///< driven, summed over the vehicle's positions

@@ -22,6 +22,7 @@
 #include "haptel/vehicles/camera_streamer.hpp"
 #include "haptel/vehicles/command_intake.hpp"
 #include "haptel/vehicles/families.hpp"
+#include "haptel/vehicles/vehicle_core.hpp"
 #include "haptel/video/camera_source.hpp"
 
 namespace haptel::vehicles {
@@ -116,24 +117,14 @@ class VehicleNodeOf : public Node {
   const char* AtRest() const override { return Family::kAtRest; }
 
  private:
-  void OnCommand(const typename Family::CommandMsg& cmd);
   void ControlTick(int64_t now_ns);
   void PublishState(int64_t now_ns);
 
-  VehicleConfig config_;
-  std::unique_ptr<Adapter> adapter_;
-  CommandIntake<typename Family::Command> commands_;
-  int64_t last_tick_ns_ = 0;
-  uint64_t tick_count_ = 0;
-  uint64_t state_seq_ = 0;
-  int ticks_per_state_ = 1;
+  /// The control step (commands, watchdog, adapter, state): the same one a
+  /// simulated-time run steps in the operator's process.
+  VehicleCoreOf<Family> core_;
   std::atomic<uint64_t> states_{0};
   std::atomic<bool> stopped_{false};
-  std::atomic<bool> failed_{false};
-  std::string failure_;  ///< written once before failed_ is set
-  std::atomic<bool> faulted_{false};
-  std::string fault_;  ///< written once before faulted_ is set
-  typename Family::StateMsg state_msg_;
 
   // Declared last: destroyed first, so no DDS callback outlives the rest.
   std::unique_ptr<link::Participant> participant_;

@@ -1,0 +1,102 @@
+#include "haptel/vehicles/vehicle_core.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "haptel/config/error.hpp"
+#include "haptel/core/cli.hpp"
+
+namespace haptel::vehicles {
+
+template <class Family>
+VehicleCoreOf<Family>::VehicleCoreOf(const VehicleConfig& config, std::unique_ptr<Adapter> adapter)
+    : config_(Validated(config)), adapter_(std::move(adapter)), commands_(config.watchdog_timeout_s) {
+  if (adapter_ == nullptr) throw std::invalid_argument("vehicle node: no adapter");
+  ticks_per_state_ = std::max(1, static_cast<int>(std::lround(config.sim_rate_hz / config.state_rate_hz)));
+  Family::Prepare(*adapter_);
+}
+
+template <class Family>
+void VehicleCoreOf<Family>::OnCommand(const typename Family::CommandMsg& cmd, int64_t now_ns) {
+  Command command;
+  const bool valid = Family::Decode(cmd, command);
+  commands_.Offer(valid, {cmd.session(), cmd.operator_name().c_str(), cmd.release()}, cmd.seq(), cmd.sent_ns(),
+                  command, now_ns);
+}
+
+template <class Family>
+bool VehicleCoreOf<Family>::ControlTick(int64_t now_ns) {
+  state_due_ = false;
+  if (failed_.load(std::memory_order_relaxed)) return false;
+  const bool expired = commands_.Poll(now_ns);
+  const double dt = ControlStep(last_tick_ns_, now_ns, config_.sim_rate_hz);
+  try {
+    if (expired) {
+      Family::MakeSafe(*adapter_);
+    } else {
+      Family::Apply(*adapter_, commands_.applied().command, config_);
+    }
+    adapter_->Update(dt);
+  } catch (const cli::HardwareLost& e) {
+    // A port or bus that vanished: stop driving it and say so once; the
+    // node's owner ends the process (exit 3).
+    failure_ = e.what();
+    failed_.store(true);
+    return false;
+  }
+  state_due_ = tick_count_++ % static_cast<uint64_t>(ticks_per_state_) == 0;
+  return true;
+}
+
+template <class Family>
+typename Family::StateMsg& VehicleCoreOf<Family>::MakeState(int64_t now_ns) {
+  const typename Family::AdapterState s = adapter_->State();
+  typename Family::StateMsg& m = state_msg_;
+  m.seq(++state_seq_);
+  m.stamp_ns(now_ns);
+  Family::FillState(s, commands_.watchdog_expired(), m);
+  m.last_command_seq(commands_.applied().seq);
+  m.last_command_sent_ns(commands_.applied().sent_ns);
+  m.last_command_age_ns(commands_.AppliedAgeNs(now_ns));
+  m.commands_received(commands_.accepted());
+  const CommandOwnerInfo owner = commands_.owner();
+  m.owner_session(owner.session);
+  m.owner(owner.name);
+  m.commands_refused(commands_.refused());
+  if (s.fault && !faulted_.load()) {
+    fault_ = s.fault_message;
+    faulted_.store(true);
+  }
+  const bool failed = failed_.load();
+  m.fault(s.fault || failed);
+  m.fault_message(failed ? failure_ : s.fault_message);
+  return m;
+}
+
+template <class Family>
+void VehicleCoreOf<Family>::MakeSafe() {
+  if (failed_.load()) return;
+  try {
+    Family::MakeSafe(*adapter_);
+    adapter_->Update(1e-3);
+  } catch (const cli::HardwareLost&) {
+    // The bus or port is gone: nothing more can be sent; the hardware's own
+    // time-out (a servo controller's serial timeout, an ODrive's watchdog)
+    // makes it safe.
+  }
+}
+
+template <class Family>
+std::string VehicleCoreOf<Family>::AdapterFailure() const {
+  return failed_.load() ? failure_ : std::string();
+}
+
+template <class Family>
+std::string VehicleCoreOf<Family>::Fault() const {
+  return faulted_.load() ? fault_ : std::string();
+}
+
+template class VehicleCoreOf<RobotFamily>;
+template class VehicleCoreOf<BlimpFamily>;
+
+}  // namespace haptel::vehicles
