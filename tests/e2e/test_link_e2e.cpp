@@ -141,12 +141,10 @@ TEST_CASE("a second vehicle under the same name is a conflict: exit 2, nothing d
   CHECK(JsonField(json, "completed") == "false");
   CHECK(JsonField(json, "message").find("2 vehicles answer as 'robot1' on domain " + std::to_string(domain)) !=
         std::string::npos);
-  // Reported as soon as both answer: the run never got into its lap (its
-  // start line is 0.3 m ahead). The distance is no measure of that: until
-  // the conflict is seen, the two vehicles' states interleave, and each jump
-  // between their poses counts as distance.
-  CHECK(std::stod(JsonField(json, "lap_time_s")) == 0.0);
-  CHECK(JsonField(json, "gates_passed") == "0");
+  // Not a lap: the run ends on the conflict, never completed (above). How
+  // far it drove first is a race, not a promise: the stray answers at once,
+  // so the automatic operator drives it until the spawned vehicle is up (the
+  // suite once saw 3.8 s of it, a gate passed, while the spawned one started).
 }
 
 TEST_CASE("a blimp answering under the robot's name: the run says it is another kind of vehicle, not only silence") {
@@ -183,12 +181,25 @@ TEST_CASE("with 100 ms delay, 20 ms jitter and 5 % loss both ways the automatic 
 }
 
 TEST_CASE("a link with a rate: the spawned vehicle gets the same fault, the video beyond the rate is dropped and counted") {
-  // 1 Mbit/s cannot carry the JPEG stream (about 6 Mbit/s): the queue drops
-  // most frames, while the commands and states still get through.
+  // 1 Mbit/s cannot carry a JPEG frame of about 25 kB every 33 ms (about 6
+  // Mbit/s): the queue drops frames until the ladder fits, while the
+  // commands and states still get through. The shipped robot sends H.264,
+  // which fits: this lap is also the end-to-end lap of a JPEG camera.
   const auto dir = test::ScratchDir("e2e-link-rate");
+  std::string text;
+  {
+    std::ifstream in("config/vehicles/sim-robot.yaml");
+    text.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  const size_t codec = text.find("  codec: ");
+  REQUIRE(codec != std::string::npos);
+  text.replace(codec, text.find('\n', codec) - codec, "  codec: jpeg");
+  text.replace(text.find("world: ../tracks/"), 17,
+               "world: " + (std::filesystem::current_path() / "config/tracks/").string());
+  const auto vehicle = test::WriteFile(dir / "sim-robot-jpeg.yaml", text);
   Child run({Bin("haptel"), "run", "--link-profile", "lte-uplink", "--link-fault", "rate=1Mbit,loss=0", "--track",
              "config/tracks/test-short.yaml", "--json", "--domain", std::to_string(test::UniqueDomain(47)),
-             "--database", (dir / "runs.db").string(), "--vehicle-timeout", "5"});
+             "--database", (dir / "runs.db").string(), "--vehicle-timeout", "5", "--vehicle", vehicle.string()});
   const int code = run.Wait(180.0);
   INFO(run.out() << run.err());
   CHECK(code == 0);
@@ -200,6 +211,7 @@ TEST_CASE("a link with a rate: the spawned vehicle gets the same fault, the vide
                        "delay=0.03s,jitter=0.008s,loss=0,rate=1000kbit,queue=0.1s") != std::string::npos);
   CHECK(std::stoull(JsonField(json, "link_queue_dropped")) > 0);
   CHECK(std::stoull(JsonField(json, "link_queue_dropped_bytes")) > 1000 * std::stoull(JsonField(json, "link_queue_dropped")));
+  CHECK(std::stoi(JsonField(json, "video_frames")) > 30);  // JPEG frames decoded on the way
 }
 
 TEST_CASE("bad link rates, queues and profiles exit 2 with a one-line error saying what was expected") {
