@@ -274,6 +274,18 @@ Eigen::Matrix4f Perspective(float fovy_deg, float aspect, float near, float far)
 
 /// A turn about the eye: pan about +z (positive left), then tilt (positive
 /// up, i.e. about -y in the device frame).
+/// The transform that puts the full-screen quad (-1..1) on the pixel
+/// rectangle x, y, width, height (y down) of a view_width x view_height view.
+Eigen::Matrix4f PixelRect(int x, int y, int width, int height, int view_width, int view_height) {
+  const float w = static_cast<float>(view_width), h = static_cast<float>(view_height);
+  Eigen::Matrix4f m = Eigen::Matrix4f::Identity();
+  m(0, 0) = static_cast<float>(width) / w;
+  m(1, 1) = static_cast<float>(height) / h;
+  m(0, 3) = (2.0f * static_cast<float>(x) + static_cast<float>(width)) / w - 1.0f;
+  m(1, 3) = 1.0f - (2.0f * static_cast<float>(y) + static_cast<float>(height)) / h;
+  return m;
+}
+
 Eigen::Quaternionf Turn(double pan, double tilt) {
   return Eigen::Quaternionf(Eigen::AngleAxisf(static_cast<float>(pan), Eigen::Vector3f::UnitZ()) *
                             Eigen::AngleAxisf(static_cast<float>(-tilt), Eigen::Vector3f::UnitY()));
@@ -996,11 +1008,7 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
   glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
   for (const cv::Rect& r : g.overlay_rects) {
     const float w = static_cast<float>(width_), h = static_cast<float>(height_);
-    Eigen::Matrix4f m = Eigen::Matrix4f::Identity();
-    m(0, 0) = static_cast<float>(r.width) / w;
-    m(1, 1) = static_cast<float>(r.height) / h;
-    m(0, 3) = (2.0f * static_cast<float>(r.x) + static_cast<float>(r.width)) / w - 1.0f;
-    m(1, 3) = 1.0f - (2.0f * static_cast<float>(r.y) + static_cast<float>(r.height)) / h;
+    const Eigen::Matrix4f m = PixelRect(r.x, r.y, r.width, r.height, width_, height_);
     glUniformMatrix4fv(g.tex_mvp, 1, GL_FALSE, m.data());
     glUniform4f(g.tex_uv_rect, static_cast<float>(r.x) / w, static_cast<float>(r.y) / h,
                 static_cast<float>(r.width) / w, static_cast<float>(r.height) / h);
@@ -1025,12 +1033,7 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
       g.third_id = model.third_person.id;
     }
     const TileBox r = ThirdPersonRect(width_, height_);
-    const float w = static_cast<float>(width_), h = static_cast<float>(height_);
-    Eigen::Matrix4f m = Eigen::Matrix4f::Identity();
-    m(0, 0) = static_cast<float>(r.width) / w;
-    m(1, 1) = static_cast<float>(r.height) / h;
-    m(0, 3) = (2.0f * static_cast<float>(r.x) + static_cast<float>(r.width)) / w - 1.0f;
-    m(1, 3) = 1.0f - (2.0f * static_cast<float>(r.y) + static_cast<float>(r.height)) / h;
+    const Eigen::Matrix4f m = PixelRect(r.x, r.y, r.width, r.height, width_, height_);
     glUniformMatrix4fv(g.tex_mvp, 1, GL_FALSE, m.data());
     glUniform4f(g.tex_uv_rect, 0.0f, 0.0f, 1.0f, 1.0f);
     g.fullscreen.Draw();
@@ -1086,12 +1089,7 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
                    g.tiles.data);
     }
     glBindTexture(GL_TEXTURE_2D, g.tiles_texture);
-    const float w = static_cast<float>(width_), h = static_cast<float>(height_);
-    Eigen::Matrix4f m = Eigen::Matrix4f::Identity();
-    m(0, 0) = static_cast<float>(column.width) / w;
-    m(1, 1) = static_cast<float>(column.height) / h;
-    m(0, 3) = (2.0f * static_cast<float>(column.x) + static_cast<float>(column.width)) / w - 1.0f;
-    m(1, 3) = 1.0f - (2.0f * static_cast<float>(column.y) + static_cast<float>(column.height)) / h;
+    const Eigen::Matrix4f m = PixelRect(column.x, column.y, column.width, column.height, width_, height_);
     glUniformMatrix4fv(g.tex_mvp, 1, GL_FALSE, m.data());
     glUniform4f(g.tex_uv_rect, 0.0f, 0.0f, 1.0f, 1.0f);
     g.fullscreen.Draw();
@@ -1199,12 +1197,7 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
     glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
     glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, g.map.cols, g.map.rows, 0, GL_BGRA, GL_UNSIGNED_BYTE,
                  g.map.data);
-    const float w = static_cast<float>(width_), h = static_cast<float>(height_);
-    Eigen::Matrix4f m = Eigen::Matrix4f::Identity();
-    m(0, 0) = static_cast<float>(panel.width) / w;
-    m(1, 1) = static_cast<float>(panel.height) / h;
-    m(0, 3) = (2.0f * static_cast<float>(panel.x) + static_cast<float>(panel.width)) / w - 1.0f;
-    m(1, 3) = 1.0f - (2.0f * static_cast<float>(panel.y) + static_cast<float>(panel.height)) / h;
+    const Eigen::Matrix4f m = PixelRect(panel.x, panel.y, panel.width, panel.height, width_, height_);
     glUniformMatrix4fv(g.tex_mvp, 1, GL_FALSE, m.data());
     glUniform4f(g.tex_uv_rect, 0.0f, 0.0f, 1.0f, 1.0f);
     g.fullscreen.Draw();
