@@ -1,6 +1,7 @@
 #pragma once
 // The program under an end-to-end test: the product's own ChildProcess with
 // its stdout and stderr captured (one way to start processes in Haptel).
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -26,6 +27,16 @@ inline bool WaitForErr(Child& child, const std::string& text, double timeout_s) 
     child.Pump();
     return child.err().find(text) != std::string::npos;
   }, timeout_s);
+}
+
+/// Starts every program at once, each argv[0] its program. Each start costs
+/// about half a second of CPU loading shared libraries, so cases that only
+/// check a one-line error start side by side instead of one after another.
+inline std::vector<std::unique_ptr<Child>> StartAll(const std::vector<std::vector<std::string>>& argvs) {
+  std::vector<std::unique_ptr<Child>> children;
+  children.reserve(argvs.size());
+  for (const auto& argv : argvs) children.push_back(std::make_unique<Child>(argv));
+  return children;
 }
 
 /// Value of a top-level key in a flat JSON object line (numbers, bools, strings).
