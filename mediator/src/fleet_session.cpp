@@ -214,7 +214,8 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
   const double cpu0_s = ProcessCpuS();
   for (auto& m : members) {
     m->health = std::make_unique<VehicleHealth>(m->setup.vehicle.name, run.link.domain_id, m->link->session(),
-                                                run.vehicle_timeout_s);
+                                                run.vehicle_timeout_s, VehicleHealth::kStartupTimeout_s,
+                                                m->link->pid());
     m->trace = std::make_unique<RunTrace>(m->out.result.record);
     m->out.result.record.path.reserve(16384);
     m->watch = std::make_unique<LoopWatch>(haptic, m->family->physics(), *m->link,

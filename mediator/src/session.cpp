@@ -180,7 +180,8 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   int64_t next_live_ns = t0;
   uint64_t pictures_seen = 0;
   int64_t next_tick = t0;
-  VehicleHealth health(setup.vehicle.name, run.link.domain_id, vehicle.session(), run.vehicle_timeout_s);
+  VehicleHealth health(setup.vehicle.name, run.link.domain_id, vehicle.session(), run.vehicle_timeout_s,
+                       VehicleHealth::kStartupTimeout_s, vehicle.pid());
   RunTrace trace(rec);
   rec.path.reserve(16384);
   const auto finish = [&](LoopEnd end) { Finish(result, std::move(end), family->MadeSafe()); };

@@ -5,6 +5,7 @@
 #include "haptel/core/clock.hpp"
 #include "haptel/core/json.hpp"
 #include "haptel/core/log.hpp"
+#include "haptel/core/process_identity.hpp"
 
 namespace haptel::mediator {
 
@@ -29,14 +30,26 @@ std::optional<LoopEnd> CheckOperatorSide(const std::atomic<bool>& interrupted, c
 }
 
 VehicleHealth::VehicleHealth(const std::string& vehicle_name, int domain_id, uint64_t session,
-                             double vehicle_timeout_s, double startup_timeout_s)
+                             double vehicle_timeout_s, double startup_timeout_s, int64_t spawned_pid)
     : name_(vehicle_name),
       domain_id_(domain_id),
       session_(session),
       timeout_s_(vehicle_timeout_s),
-      startup_timeout_s_(startup_timeout_s) {}
+      startup_timeout_s_(startup_timeout_s),
+      spawned_pid_(spawned_pid),
+      host_(HostName()) {}
+
+std::optional<LoopEnd> VehicleHealth::StrangerConflict() const {
+  if (stranger_.empty()) return std::nullopt;
+  return LoopEnd{Outcome::kConflict,
+                 "another vehicle answers as '" + name_ + "' on domain " + std::to_string(domain_id_) + " (" +
+                     stranger_ + ", not the vehicle this run started, pid " + std::to_string(spawned_pid_) +
+                     "): its states were not used; give each vehicle its own name (haptel-vehicle --name, "
+                     "haptel run --vehicle-name) or domain, or --attach to drive the one already running"};
+}
 
 std::optional<LoopEnd> VehicleHealth::CheckProcess(VehicleLink& vehicle, int64_t now_ns) {
+  if (auto end = StrangerConflict()) return end;
   if (vehicle.VehiclesOnTopic() > 1) {
     if (conflict_since_ns_ == 0) conflict_since_ns_ = now_ns;
     if (NsToS(now_ns - conflict_since_ns_) >= kConflictAfter_s) {
@@ -74,6 +87,7 @@ bool VehicleHealth::OnState(bool fault, const std::string& fault_message, uint64
 }
 
 std::optional<LoopEnd> VehicleHealth::CheckStates(const VehicleLink& vehicle, int64_t now_ns, double t_s) {
+  if (auto end = StrangerConflict()) return end;
   if (!fault_.empty()) {
     std::string fault;
     fault.swap(fault_);

@@ -37,8 +37,10 @@ std::optional<LoopEnd> CheckOperatorSide(const std::atomic<bool>& interrupted, c
 class VehicleHealth {
  public:
   /// `session`: this run's (VehicleLink::session()).
+  /// `spawned_pid`: the vehicle process this run started (VehicleLink::pid();
+  /// 0: attached to one it did not start, whose states any process may send).
   VehicleHealth(const std::string& vehicle_name, int domain_id, uint64_t session, double vehicle_timeout_s,
-                double startup_timeout_s = 15.0);
+                double startup_timeout_s = kStartupTimeout_s, int64_t spawned_pid = 0);
   /// Whether a state has arrived yet.
   bool up() const { return up_; }
   /// Up, and its latest state named this session as its owner, or none:
@@ -50,6 +52,25 @@ class VehicleHealth {
   std::optional<LoopEnd> CheckProcess(VehicleLink& vehicle, int64_t now_ns);
   /// For each state drained (received at `now_ns`); true for the first one
   /// (the vehicle just came up).
+  /// Whether `s` comes from another process than the vehicle this run
+  /// started (`spawned_pid`, on this host): another vehicle answering under
+  /// the name. Such a state must not be used; the first one makes the next
+  /// check a conflict, before the stranger has been driven as the run's
+  /// vehicle. Never true for an attached vehicle (no process of the run's).
+  template <typename State>
+  bool FromAnotherProcess(const State& s) {
+    if (spawned_pid_ == 0) return false;
+    if (s.vehicle_pid() == spawned_pid_ && s.vehicle_host() == host_) return false;
+    if (stranger_.empty()) {
+      stranger_ = s.vehicle_pid() == 0 ? std::string("a process that does not say which")
+                                        : "pid " + std::to_string(s.vehicle_pid()) + " on host '" +
+                                              std::string(s.vehicle_host().c_str()) + "'";
+    }
+    return true;
+  }
+  /// The conflict a stranger's state made, once one came (CheckProcess and
+  /// CheckStates return it before anything else).
+  std::optional<LoopEnd> StrangerConflict() const;
   template <typename State>
   bool OnState(const State& s, int64_t now_ns) {
     return OnState(s.fault(), s.fault_message(), s.owner_session(), s.owner().c_str(), now_ns);
@@ -66,6 +87,8 @@ class VehicleHealth {
   /// long before this run is refused (a previous run's release may still be
   /// on its way). Both well within a second.
   static constexpr double kConflictAfter_s = 0.3;
+  /// A vehicle must answer this long after the start, unless told otherwise.
+  static constexpr double kStartupTimeout_s = 15.0;
   static constexpr double kRefusedAfter_s = 0.5;
 
  private:
@@ -79,6 +102,9 @@ class VehicleHealth {
   int64_t conflict_since_ns_ = 0;  ///< 0: one vehicle (or none) answers
   int64_t refused_since_ns_ = 0;   ///< 0: the vehicle is ours or free
   std::string owner_;              ///< who holds it, while refused_since_ns_ is set
+  int64_t spawned_pid_;            ///< 0: attached
+  std::string host_;               ///< this host's name (HostName)
+  std::string stranger_;           ///< another process's state came: which ("": none)
 };
 
 /// The run's trace in the record: distance flown or driven, the path every

@@ -8,6 +8,7 @@
 #include <random>
 
 #include "haptel/core/clock.hpp"
+#include "haptel/core/process_identity.hpp"
 #include "haptel/link/security.hpp"
 
 namespace haptel::mediator {
@@ -116,8 +117,7 @@ uint64_t NewSession() {
 
 /// "haptel run, user@host pid N": what another operator is told of this one.
 std::string OperatorName() {
-  char host[64] = "?";
-  gethostname(host, sizeof host - 1);
+  const std::string host = HostName();
   const char* user = std::getenv("USER");
   if (user == nullptr) {
     const passwd* entry = getpwuid(getuid());

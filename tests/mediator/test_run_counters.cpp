@@ -7,6 +7,8 @@
 #include "haptel/core/clock.hpp"
 #include "haptel/mediator/run_counters.hpp"
 #include "haptel/mediator/vehicle_link.hpp"
+#include "haptel/core/process_identity.hpp"
+#include "../../mediator/src/session_loop.hpp"
 
 using namespace haptel;
 using haptel::mediator::LinkCounts;
@@ -95,4 +97,34 @@ TEST_CASE("the progress line lists the counters that are not zero") {
   CHECK(
       mediator::NonZeroCounters({{"servo_overruns", 3}, {"b", 0}, {"video_frames_dropped", 12}}) ==
       "servo_overruns 3, video_frames_dropped 12");
+}
+
+TEST_CASE("a run that started its vehicle takes states from that process only; a stranger's first state is a conflict") {
+  const int64_t spawned = 4242;
+  mediator::VehicleHealth health("robot1", 7, /*session=*/99, /*vehicle_timeout_s=*/1.0,
+                                 mediator::VehicleHealth::kStartupTimeout_s, spawned);
+  msg::VehicleState ours;
+  ours.vehicle_pid(spawned);
+  ours.vehicle_host(HostName());
+  CHECK_FALSE(health.FromAnotherProcess(ours));
+  CHECK_FALSE(health.StrangerConflict());
+
+  msg::VehicleState elsewhere = ours;  // the same pid on another host is another process
+  elsewhere.vehicle_host("other-host");
+  CHECK(health.FromAnotherProcess(elsewhere));
+  msg::VehicleState stray = ours;
+  stray.vehicle_pid(5151);
+  CHECK(health.FromAnotherProcess(stray));
+  const auto end = health.StrangerConflict();
+  REQUIRE(end);
+  CHECK(end->outcome == mediator::Outcome::kConflict);
+  // Named by the first stranger seen, against the run's own vehicle.
+  CHECK(end->message.find("another vehicle answers as 'robot1' on domain 7 (pid 4242 on host 'other-host', "
+                          "not the vehicle this run started, pid 4242)") != std::string::npos);
+  CHECK_FALSE(health.FromAnotherProcess(ours));  // its own states are still its own
+
+  // Attached (no process of the run's): any process may send the states.
+  mediator::VehicleHealth attached("robot1", 7, 99, 1.0);
+  CHECK_FALSE(attached.FromAnotherProcess(stray));
+  CHECK_FALSE(attached.StrangerConflict());
 }

@@ -1,10 +1,13 @@
 #include "haptel/vehicles/vehicle_core.hpp"
 
+#include <unistd.h>
+
 #include <cmath>
 #include <stdexcept>
 
 #include "haptel/config/error.hpp"
 #include "haptel/core/cli.hpp"
+#include "haptel/core/process_identity.hpp"
 
 namespace haptel::vehicles {
 
@@ -13,6 +16,9 @@ VehicleCoreOf<Family>::VehicleCoreOf(const VehicleConfig& config, std::unique_pt
     : config_(Validated(config)), adapter_(std::move(adapter)), commands_(config.watchdog_timeout_s) {
   if (adapter_ == nullptr) throw std::invalid_argument("vehicle node: no adapter");
   ticks_per_state_ = std::max(1, static_cast<int>(std::lround(config.sim_rate_hz / config.state_rate_hz)));
+  // Who publishes: set once, every state carries it (the message is reused).
+  state_msg_.vehicle_pid(static_cast<int64_t>(getpid()));
+  state_msg_.vehicle_host(HostName());
   Family::Prepare(*adapter_);
 }
 
