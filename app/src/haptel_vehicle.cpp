@@ -55,7 +55,11 @@ std::string Summary(const haptel::vehicles::NodeCounters& c) {
          (c.frames_passed_through > 0
               ? ", " + std::to_string(c.frames_passed_through) + " passed through as the camera made them"
               : "") +
-         (c.target_kbps > 0 ? ", last asked for " + std::to_string(c.target_kbps) + " kbit/s" : "") + "), " +
+         (c.target_kbps > 0 ? ", last asked for " + std::to_string(c.target_kbps) + " kbit/s" : "") +
+         (c.video_feedback_refused > 0
+              ? ", " + std::to_string(c.video_feedback_refused) + " feedback refused (another operator's)"
+              : "") +
+         "), " +
          std::to_string(c.grabs_failed) + " camera grabs failed" +
          (c.camera_stalls > 0 ? " (" + std::to_string(c.camera_stalls) + " stalls)" : "") +
          (c.camera_ended ? ", camera file ended" : "") +

@@ -49,6 +49,7 @@ std::vector<RunCounter> CollectCounters(const HapticSide& haptic, const SessionP
       {"physics_invalid_samples", world.invalid_samples},
       {"vehicle_watchdog_trips", link.watchdog_trips},
       {"vehicle_commands_dropped", link.commands_dropped},
+      {"vehicle_video_feedback_refused", link.video_feedback_refused},
       {"link_states_missed", link.states_missed},
       {"link_queue_dropped", fault.queue_dropped},
       {"link_queue_dropped_bytes", fault.queue_dropped_bytes},

@@ -34,10 +34,19 @@ void StateInboxOf<State>::Push(const State& s) {
     last_echo_seq_ = s.last_command_seq();
     rtt_.Record(static_cast<double>(now - s.last_command_sent_ns() - s.last_command_age_ns()) * 1e-3);
   }
+  const uint64_t feedback_refused = s.video_feedback_refused();
   if (have_state_ && s.seq() > last_state_seq_) {
     counts_.states_missed += s.seq() - last_state_seq_ - 1;
   } else if (have_state_) {
     have_baseline_ = false;  // a vehicle that started again: its counts start again
+    feedback_refused_before_ = counts_.video_feedback_refused;
+    feedback_refused_base_ = 0;
+  } else {
+    feedback_refused_base_ = feedback_refused;  // an attached vehicle's earlier ones are not this run's
+  }
+  if (feedback_refused >= feedback_refused_base_) {
+    counts_.video_feedback_refused = std::max(counts_.video_feedback_refused,
+                                              feedback_refused_before_ + feedback_refused - feedback_refused_base_);
   }
   have_state_ = true;
   last_state_seq_ = s.seq();
@@ -213,7 +222,7 @@ VehicleLink::VehicleLink(const VehicleLinkOptions& options) : options_(options),
       channel_ = std::make_unique<BlimpChannel>(*participant_, name(), session_, who);
       break;
   }
-  video_ = std::make_unique<VideoReceiver>(*participant_, name(), options_.decode_video);
+  video_ = std::make_unique<VideoReceiver>(*participant_, name(), session_, options_.decode_video);
   operator_name_ = who;
   if (options_.publish_selected) {
     selected_ = std::make_unique<SelectedWriter>(*participant_, link::TopicName(name(), "selected"),

@@ -32,8 +32,10 @@ cv::Mat MarkStale(const cv::Mat& picture) {
 
 VideoReceiver::VideoReceiver() : decode_(false) {}
 
-VideoReceiver::VideoReceiver(link::Participant& participant, const std::string& vehicle, bool decode)
+VideoReceiver::VideoReceiver(link::Participant& participant, const std::string& vehicle, uint64_t session,
+                             bool decode)
     : decode_(decode),
+      session_(session),
       feedback_(std::make_unique<link::VideoFeedbackWriter>(participant, link::TopicName(vehicle, "video_feedback"),
                                                             link::Profile::kState)) {
   decoder_thread_ = std::thread([this] { DecodeLoop(); });
@@ -108,6 +110,7 @@ msg::VideoFeedback VideoReceiver::RateFeedback(int64_t now_ns, uint64_t last_fra
   msg::VideoFeedback rate;
   target_kbps_sent_ = estimator_.target_kbps();
   rate.seq(++feedback_seq_);
+  rate.session(session_);
   rate.sent_ns(now_ns);
   rate.key_frame_request(false);
   rate.last_frame_seq(last_frame_seq);
@@ -132,6 +135,7 @@ void VideoReceiver::RequestKeyFrameIfDue(int64_t now_ns) {
   last_request_ns_ = now_ns;
   msg::VideoFeedback request;
   request.sent_ns(now_ns);
+  request.session(session_);
   request.key_frame_request(true);
   {
     std::lock_guard lock(mutex_);

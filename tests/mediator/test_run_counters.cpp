@@ -62,6 +62,23 @@ TEST_CASE("the states tell missed states, watchdog trips and commands the vehicl
   CHECK(inbox.Drain().size() == 11);
 }
 
+TEST_CASE("the states tell the video feedback the vehicle refused, from the first state this run received") {
+  StateInbox inbox;
+  const auto state = [](uint64_t seq, uint64_t refused) {
+    msg::VehicleState s = State(seq, false, 0, 0);
+    s.video_feedback_refused(refused);
+    return s;
+  };
+  // An attached vehicle had refused 4 before this run: not this run's.
+  inbox.Push(state(1, 4));
+  CHECK(inbox.Counts().video_feedback_refused == 0);
+  inbox.Push(state(2, 10));  // a stranger's feedback, refused
+  CHECK(inbox.Counts().video_feedback_refused == 6);
+  // The vehicle started again: it counts from 0, what was counted is kept.
+  inbox.Push(state(1, 3));
+  CHECK(inbox.Counts().video_feedback_refused == 9);
+}
+
 TEST_CASE("a loop below 90 % of its target says so, interval by interval and for the run") {
   const int64_t t0 = SToNs(100.0);
   RateCheck servo("servo", 1000.0, 50, t0);

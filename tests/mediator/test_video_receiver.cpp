@@ -41,7 +41,7 @@ TEST_CASE("H.264 frame lost on the link: stale picture marked, key frame request
   config.domain_id = test::UniqueDomain(67);
   link::Participant vehicle(config, "test-vehicle");
   link::Participant op(config, "test-operator");
-  mediator::VideoReceiver receiver(op, "robot1", /*decode=*/true);
+  mediator::VideoReceiver receiver(op, "robot1", /*session=*/7, /*decode=*/true);
   std::atomic<uint64_t> requests{0};
   link::VideoFeedbackReader feedback(vehicle, link::TopicName("robot1", "video_feedback"), link::Profile::kState,
                                      [&](const msg::VideoFeedback& f) {
@@ -123,7 +123,7 @@ TEST_CASE("the link's rate estimate reaches the vehicle on the feedback topic, a
   config.domain_id = test::UniqueDomain(68);
   link::Participant vehicle(config, "test-vehicle");
   link::Participant op(config, "test-operator");
-  mediator::VideoReceiver receiver(op, "robot1", /*decode=*/false);
+  mediator::VideoReceiver receiver(op, "robot1", /*session=*/7, /*decode=*/false);
   std::mutex mutex;
   std::vector<uint32_t> targets;
   link::VideoFeedbackReader feedback(vehicle, link::TopicName("robot1", "video_feedback"), link::Profile::kState,

@@ -1,6 +1,7 @@
 #include "haptel/vehicles/camera_streamer.hpp"
 
 #include <stdexcept>
+#include <utility>
 
 #include "haptel/core/clock.hpp"
 #include "haptel/core/log.hpp"
@@ -8,14 +9,17 @@
 namespace haptel::vehicles {
 
 CameraStreamer::CameraStreamer(const CameraConfig& config, std::unique_ptr<video::CameraSource> camera,
-                               link::Participant& participant, const std::string& vehicle_name)
+                               link::Participant& participant, const std::string& vehicle_name,
+                               OwnerSession owner_session)
     : config_(config),
+      owner_session_(std::move(owner_session)),
       passthrough_possible_(config.codec == CameraCodec::kJpeg),
       camera_(std::move(camera)),
       encoder_(video::MakeVideoEncoder(config)),
       codec_name_(CameraCodecName(config.codec)),
       writer_(participant, link::TopicName(vehicle_name, "video"), link::Profile::kVideo) {
   if (camera_ == nullptr) throw std::invalid_argument("CameraStreamer: no camera source");
+  if (!owner_session_) throw std::invalid_argument("CameraStreamer: no owner session");
   loop_ = std::make_unique<PeriodicThread>(
       PeriodicThread::Options{.name = "vehicle-camera", .rate_hz = config.rate_hz},
       [this](int64_t now) { Tick(now); });
@@ -27,6 +31,13 @@ CameraStreamer::CameraStreamer(const CameraConfig& config, std::unique_ptr<video
 }
 
 void CameraStreamer::OnFeedback(const msg::VideoFeedback& feedback) {
+  // Only the owner's: another session's target or key frame request would
+  // hold the owner's video at a rung it did not ask for.
+  const uint64_t owner = owner_session_();
+  if (owner != 0 && feedback.session() != owner) {
+    feedback_refused_.fetch_add(1, std::memory_order_relaxed);
+    return;
+  }
   if (feedback.target_kbps() > 0) target_kbps_.store(feedback.target_kbps(), std::memory_order_relaxed);
   if (!feedback.key_frame_request()) return;
   key_frame_requests_.fetch_add(1, std::memory_order_relaxed);
@@ -118,6 +129,7 @@ CameraCounters CameraStreamer::Counters() const {
   c.frames_skipped = frames_skipped_.load();
   c.frames_passed_through = frames_passed_through_.load();
   c.target_kbps = target_kbps_.load();
+  c.feedback_refused = feedback_refused_.load();
   return c;
 }
 

@@ -21,7 +21,8 @@ VehicleNodeOf<Family>::VehicleNodeOf(const VehicleConfig& config, std::unique_pt
   participant_ = std::make_unique<link::Participant>(c.link, "haptel-vehicle-" + c.name);
   state_writer_ = std::make_unique<typename Family::StateWriter>(
       *participant_, link::TopicName(c.name, "state"), link::Profile::kState);
-  camera_ = std::make_unique<CameraStreamer>(c.camera, std::move(camera), *participant_, c.name);
+  camera_ = std::make_unique<CameraStreamer>(c.camera, std::move(camera), *participant_, c.name,
+                                             [this] { return core_.commands().owner().session; });
   camera_->SetPose(Family::CameraPoseOf(core_.adapter().State()));
   command_reader_ = std::make_unique<typename Family::CommandReader>(
       *participant_, link::TopicName(c.name, "command"), link::Profile::kCommand,
@@ -60,7 +61,9 @@ void VehicleNodeOf<Family>::ControlTick(int64_t now_ns) {
 
 template <class Family>
 void VehicleNodeOf<Family>::PublishState(int64_t now_ns) {
-  state_writer_->Write(core_.MakeState(now_ns));
+  typename Family::StateMsg& state = core_.MakeState(now_ns);
+  state.video_feedback_refused(camera_->feedback_refused());
+  state_writer_->Write(state);
   states_.fetch_add(1, std::memory_order_relaxed);
 }
 

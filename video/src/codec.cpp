@@ -1,8 +1,12 @@
 #include "haptel/video/codec.hpp"
 
+#include <algorithm>
+#include <array>
+#include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "haptel/video/h264_codec.hpp"
 
@@ -11,13 +15,77 @@
 
 namespace haptel::video {
 
+namespace {
+
+/// A JPEG's bytes at `quality` as a share of its bytes at quality 80, on
+/// the synthetic camera's 640x480 frames (measured with the ladder's test;
+/// between the points, linear).
+double QualityBytes(int quality) {
+  static constexpr std::array<std::pair<int, double>, 15> kPoints{{{1, 0.40},
+                                                                   {20, 0.558},
+                                                                   {30, 0.61},
+                                                                   {40, 0.652},
+                                                                   {50, 0.691},
+                                                                   {60, 0.758},
+                                                                   {70, 0.879},
+                                                                   {80, 1.00},
+                                                                   {85, 1.14},
+                                                                   {90, 1.35},
+                                                                   {92, 1.46},
+                                                                   {94, 1.74},
+                                                                   {96, 2.03},
+                                                                   {98, 2.52},
+                                                                   {100, 3.62}}};
+  for (size_t i = 1; i < kPoints.size(); ++i) {
+    if (quality <= kPoints[i].first) {
+      const auto [q0, b0] = kPoints[i - 1];
+      const auto [q1, b1] = kPoints[i];
+      return b0 + (b1 - b0) * (quality - q0) / (q1 - q0);
+    }
+  }
+  return kPoints.back().second;
+}
+
+/// A JPEG's bytes at `scale` of its width and height, as a share of full
+/// size's: less than the area's share (edges and headers stay).
+double ScaleBytes(double scale) { return std::pow(scale, 1.6); }
+
+}  // namespace
+
+std::vector<JpegRung> JpegLadder(int top_quality) {
+  if (top_quality < 1 || top_quality > 100) {
+    throw std::invalid_argument("JpegLadder: quality " + std::to_string(top_quality) + ", expected 1..100");
+  }
+  // Steps of 1 or 2 near 100, where the bytes grow fastest; of 10 below 80,
+  // where they change little (quality 20 is still more than half the bytes
+  // of 80 on the synthetic camera: resolution is where the bytes are).
+  static constexpr std::array<int, 15> kQualities{100, 99, 98, 96, 94, 92, 90, 85, 80, 70, 60, 50, 40, 30, 20};
+  static constexpr std::array<double, 5> kScales{0.875, 0.75, 0.625, 0.5625, 0.5};
+  static constexpr std::array<double, 6> kFrameShares{4.0 / 5, 2.0 / 3, 1.0 / 2, 2.0 / 5, 1.0 / 3, 1.0 / 4};
+  const double top_bytes = QualityBytes(top_quality);
+  std::vector<JpegRung> ladder;
+  const auto add = [&](int quality, double scale, double share) {
+    ladder.push_back({quality, scale, share, QualityBytes(quality) / top_bytes * ScaleBytes(scale) * share});
+  };
+  add(top_quality, 1.0, 1.0);
+  for (const int q : kQualities) {
+    if (q < top_quality && q >= JpegEncoder::kMinQuality) add(q, 1.0, 1.0);
+  }
+  const int bottom_quality = ladder.back().quality;
+  for (const double scale : kScales) add(bottom_quality, scale, 1.0);
+  for (const double share : kFrameShares) add(bottom_quality, kScales.back(), share);
+  return ladder;
+}
+
 JpegEncoder::JpegEncoder(int quality, double frame_rate_hz)
-    : quality_(quality), top_quality_(quality), frame_rate_hz_(frame_rate_hz > 0 ? frame_rate_hz : 30.0) {
+    : quality_(quality), frame_rate_hz_(frame_rate_hz > 0 ? frame_rate_hz : 30.0) {
   if (quality < 1 || quality > 100) {
     throw std::invalid_argument("JpegEncoder: quality " + std::to_string(quality) +
                                 ", expected 1..100");
   }
   params_ = {cv::IMWRITE_JPEG_QUALITY, quality_};
+  ladder_ = JpegLadder(quality);
+  measured_kbps_.assign(ladder_.size(), 0.0);
 }
 
 void JpegEncoder::SetQuality(int quality) {
@@ -28,12 +96,29 @@ void JpegEncoder::SetQuality(int quality) {
   params_[1] = quality;
 }
 
+void JpegEncoder::SetRung(size_t rung) {
+  if (rung >= ladder_.size()) {
+    throw std::out_of_range("JpegEncoder::SetRung: rung " + std::to_string(rung) + " of " +
+                            std::to_string(ladder_.size()));
+  }
+  if (frames_at_rung_ > 0) measured_kbps_[rung_] = rung_kbps_;
+  rung_ = rung;
+  SetQuality(ladder_[rung].quality);
+  frames_at_rung_ = 0;
+  // The first frame grabbed at a rung is sent; the share counts from it.
+  frame_credit_ = 1.0 - ladder_[rung].frame_share;
+}
+
 bool JpegEncoder::SkipFrame() {
-  if (skip_ == 0) return false;
-  // Keep one frame, skip the next skip_.
-  const bool skip = skip_count_ % (skip_ + 1) != 0;
-  ++skip_count_;
-  return skip;
+  const double share = ladder_[rung_].frame_share;
+  if (share >= 1.0) return false;
+  // Sends `share` of the frames, spread evenly (2/3: two of every three).
+  frame_credit_ += share;
+  if (frame_credit_ >= 1.0 - 1e-9) {
+    frame_credit_ -= 1.0;
+    return false;
+  }
+  return true;
 }
 
 bool JpegEncoder::Encode(const cv::Mat& bgr, std::vector<uint8_t>& out) {
@@ -41,8 +126,12 @@ bool JpegEncoder::Encode(const cv::Mat& bgr, std::vector<uint8_t>& out) {
   if (bgr.empty()) return false;
   try {
     const cv::Mat* source = &bgr;
-    if (scale_ < 1.0) {
-      cv::resize(bgr, scaled_, cv::Size(), scale_, scale_, cv::INTER_AREA);
+    const double scale = ladder_[rung_].scale;
+    if (scale < 1.0) {
+      // Whole pixels, even (chroma subsampling works on 2x2 blocks).
+      const int width = std::max(2, static_cast<int>(std::lround(bgr.cols * scale / 2)) * 2);
+      const int height = std::max(2, static_cast<int>(std::lround(bgr.rows * scale / 2)) * 2);
+      cv::resize(bgr, scaled_, cv::Size(width, height), 0, 0, cv::INTER_AREA);
       source = &scaled_;
     }
     if (!cv::imencode(".jpg", *source, out, params_)) {
@@ -57,49 +146,38 @@ bool JpegEncoder::Encode(const cv::Mat& bgr, std::vector<uint8_t>& out) {
   return true;
 }
 
+double JpegEncoder::Predicted(size_t to) const {
+  // Rung by rung from here: each step by the ratio last measured between
+  // the two rungs when both were, else by the ladder's guess.
+  double kbps = rung_kbps_;
+  const auto ratio = [&](size_t upper, size_t lower) {
+    if (measured_kbps_[upper] > 0 && measured_kbps_[lower] > 0) {
+      return measured_kbps_[upper] / measured_kbps_[lower];
+    }
+    return ladder_[upper].relative_kbps / ladder_[lower].relative_kbps;
+  };
+  for (size_t r = rung_; r > to; --r) kbps *= ratio(r - 1, r);
+  for (size_t r = rung_; r < to; ++r) kbps /= ratio(r, r + 1);
+  return kbps;
+}
+
 void JpegEncoder::Climb(size_t bytes) {
   if (target_kbps_ <= 0.0) return;
   // The rung's bitrate, smoothed over its frames.
-  const double kbps = static_cast<double>(bytes) * 8.0 * frame_rate_hz_ / (skip_ + 1) / 1000.0;
+  const double kbps = static_cast<double>(bytes) * 8.0 * frame_rate_hz_ * ladder_[rung_].frame_share / 1000.0;
   rung_kbps_ = frames_at_rung_ == 0 ? kbps : 0.7 * rung_kbps_ + 0.3 * kbps;
   if (++frames_at_rung_ < kFramesPerRung) return;
-  const auto moved = [&] { frames_at_rung_ = 0; };
-  if (rung_kbps_ > 1.05 * target_kbps_) {
-    // Down: quality, then resolution, then frame rate.
-    if (quality_ > kMinQuality) {
-      SetQuality(std::max(kMinQuality, quality_ - 10));
-    } else if (scale_ == 1.0) {
-      scale_ = 0.5;
-    } else if (skip_ < kMaxSkip) {
-      ++skip_;
-    } else {
-      return;  // the bottom rung: nothing more to give
-    }
-    moved();
+  measured_kbps_[rung_] = rung_kbps_;
+  if (rung_kbps_ > kDownMargin * target_kbps_) {
+    // Down: to the highest rung predicted to fit, so a deep cut is not
+    // followed a rung per kFramesPerRung frames.
+    size_t next = rung_ + 1;
+    while (next + 1 < ladder_.size() && Predicted(next) > target_kbps_) ++next;
+    if (next < ladder_.size()) SetRung(next);
     return;
   }
-  // Up, a rung at a time, when the rung above is predicted to fit: a frame
-  // rate step by its ratio of frames, full resolution at about 3.5 times the
-  // bytes of half (the shipped camera's pictures), 10 quality about 1.25.
-  double above = 0.0;
-  if (skip_ > 0) {
-    above = rung_kbps_ * (skip_ + 1) / skip_;
-  } else if (scale_ < 1.0) {
-    above = rung_kbps_ * 3.5;
-  } else if (quality_ < top_quality_) {
-    above = rung_kbps_ * 1.25;
-  } else {
-    return;  // the top rung
-  }
-  if (above > 0.9 * target_kbps_) return;
-  if (skip_ > 0) {
-    --skip_;
-  } else if (scale_ < 1.0) {
-    scale_ = 1.0;
-  } else {
-    SetQuality(std::min(top_quality_, quality_ + 10));
-  }
-  moved();
+  // Up, a rung at a time, when the rung above is predicted to fit.
+  if (rung_ > 0 && Predicted(rung_ - 1) <= kUpMargin * target_kbps_) SetRung(rung_ - 1);
 }
 
 namespace {

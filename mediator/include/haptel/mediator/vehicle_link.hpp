@@ -41,6 +41,10 @@ struct LinkCounts {
   /// minus the commands it counted as accepted, from the first state that
   /// echoes one (commands sent before it listened are not counted).
   uint64_t commands_dropped = 0;
+  /// Video feedback the vehicle refused because another session than its
+  /// owner sent it (a stranger on the domain), from the first state this
+  /// run received.
+  uint64_t video_feedback_refused = 0;
 };
 
 /// Vehicle states as they arrive (DDS thread), drained by the session loop.
@@ -86,6 +90,9 @@ class StateInboxOf {
   uint64_t first_echo_seq_ = 0;
   uint64_t first_accepted_ = 0;
   uint64_t dropped_before_ = 0;  ///< counted against earlier baselines
+  // The baseline of video_feedback_refused: the first state (of this vehicle process).
+  uint64_t feedback_refused_base_ = 0;
+  uint64_t feedback_refused_before_ = 0;  ///< counted against earlier baselines
   Histogram rtt_{10.0, 200000};  // 10 µs bins up to 2 s (a faulted link: 400 ms each way and more)
 };
 using StateInbox = StateInboxOf<msg::VehicleState>;

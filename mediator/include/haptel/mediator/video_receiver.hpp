@@ -72,9 +72,11 @@ class VideoReceiver {
   static constexpr int64_t kKeyFrameRequestPeriodNs = 100'000'000;
 
   /// Subscribes to haptel/<vehicle>/video on `participant` and publishes
-  /// key frame requests on haptel/<vehicle>/video_feedback. With `decode`
-  /// false frames are only counted (no screen to show them on; no requests).
-  VideoReceiver(link::Participant& participant, const std::string& vehicle, bool decode);
+  /// key frame requests on haptel/<vehicle>/video_feedback, as `session`
+  /// (the run's, as its commands: the vehicle takes its owner's feedback
+  /// only). With `decode` false frames are only counted (no screen to show
+  /// them on; no requests).
+  VideoReceiver(link::Participant& participant, const std::string& vehicle, uint64_t session, bool decode);
   /// A receiver on no link: it receives nothing (zero frames), and runs
   /// no thread (a simulated-time run, whose driver reads the state).
   VideoReceiver();
@@ -112,6 +114,7 @@ class VideoReceiver {
   msg::VideoFeedback RateFeedback(int64_t now_ns, uint64_t last_frame_seq);
 
   bool decode_;
+  uint64_t session_ = 0;  ///< carried by every feedback sample
   mutable std::mutex mutex_;
   std::condition_variable ready_;
   std::deque<Pending> pending_;

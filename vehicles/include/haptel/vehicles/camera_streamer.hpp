@@ -4,9 +4,13 @@
 /// JPEG or H.264) and publishes them on haptel/<vehicle>/video — so a slow or
 /// stalled camera never delays a control loop or its watchdog. It listens on
 /// haptel/<vehicle>/video_feedback for the operator's key frame requests (an
-/// H.264 frame was lost: the next frame is an IDR). Any vehicle node has one.
+/// H.264 frame was lost: the next frame is an IDR) and the target bitrate,
+/// from the session that owns the vehicle only (CommandOwner): anybody else
+/// on the domain could otherwise hold its video at the lowest rung or make
+/// it send key frames without end. Any vehicle node has one.
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -30,6 +34,9 @@ struct CameraCounters {
   uint64_t key_frames_sent = 0;     ///< frames published that decode alone (every JPEG)
   uint64_t frames_skipped = 0;      ///< grabbed but skipped to fit the link (JPEG's lowest rungs)
   uint32_t target_kbps = 0;         ///< the operator's last estimate of the link (0: none came)
+  /// Feedback (key frame requests, targets) from a session other than the
+  /// vehicle's owner: ignored.
+  uint64_t feedback_refused = 0;
   /// A camera's own JPEGs sent as they came, neither decoded nor encoded
   /// again (a ROS 2 robot's, at the configured size, within the bitrate).
   uint64_t frames_passed_through = 0;
@@ -37,9 +44,16 @@ struct CameraCounters {
 
 class CameraStreamer {
  public:
+  /// The session the vehicle obeys now (0: none), from any thread.
+  using OwnerSession = std::function<uint64_t()>;
+
   /// `camera` must not be null; `participant` must outlive the streamer.
+  /// `owner_session` says whose feedback is taken: while it gives a session,
+  /// that session's only; while it gives 0 (nobody drives the vehicle:
+  /// nothing to protect, and a vehicle only watched still follows its
+  /// link), anybody's. It must not be null.
   CameraStreamer(const CameraConfig& config, std::unique_ptr<video::CameraSource> camera,
-                 link::Participant& participant, const std::string& vehicle_name);
+                 link::Participant& participant, const std::string& vehicle_name, OwnerSession owner_session);
   ~CameraStreamer();
   CameraStreamer(const CameraStreamer&) = delete;
   CameraStreamer& operator=(const CameraStreamer&) = delete;
@@ -49,12 +63,15 @@ class CameraStreamer {
   /// Where the camera is now (any thread; a synthetic source renders from it).
   void SetPose(const video::CameraPose& pose) { pose_.Store(pose); }
   CameraCounters Counters() const;
+  /// Feedback refused (CameraCounters::feedback_refused), cheaper than Counters().
+  uint64_t feedback_refused() const { return feedback_refused_.load(std::memory_order_relaxed); }
 
  private:
   void Tick(int64_t now_ns);
   void OnFeedback(const msg::VideoFeedback& feedback);
 
   const CameraConfig config_;
+  const OwnerSession owner_session_;
   const bool passthrough_possible_;  ///< the vehicle sends JPEG: a camera's own JPEG may go as it is
   std::unique_ptr<video::CameraSource> camera_;
   Seqlock<video::CameraPose> pose_;
@@ -76,6 +93,7 @@ class CameraStreamer {
   uint32_t followed_kbps_ = 0;  ///< camera thread only
   /// Set by the feedback's DDS thread, taken by the camera's thread.
   std::atomic<bool> key_frame_wanted_{false};
+  std::atomic<uint64_t> feedback_refused_{0};
   std::atomic<bool> camera_ended_{false};
   link::VideoWriter writer_;
   std::unique_ptr<PeriodicThread> loop_;

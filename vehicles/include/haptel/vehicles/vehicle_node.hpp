@@ -46,6 +46,7 @@ struct NodeCounters {
   uint64_t frames_skipped = 0;      ///< grabbed but skipped to fit the link
   uint64_t frames_passed_through = 0;  ///< a camera's own JPEGs sent undecoded
   uint32_t target_kbps = 0;         ///< the operator's last estimate of the link (0: none came)
+  uint64_t video_feedback_refused = 0;  ///< video feedback from another session than the owner: ignored
   bool watchdog_expired = true;
 };
 
@@ -71,6 +72,7 @@ NodeCounters MakeNodeCounters(const CommandIntake<Command>& commands, const Came
   c.frames_skipped = camera.frames_skipped;
   c.frames_passed_through = camera.frames_passed_through;
   c.target_kbps = camera.target_kbps;
+  c.video_feedback_refused = camera.feedback_refused;
   return c;
 }
 

@@ -67,17 +67,46 @@ class VideoDecoder {
   virtual bool awaiting_key_frame() const { return false; }
 };
 
+/// One rung of JpegEncoder's ladder: what a frame is encoded with, and the
+/// share of the grabbed frames that are sent.
+struct JpegRung {
+  int quality = 80;          ///< JPEG quality 1..100
+  double scale = 1.0;        ///< of the picture's width and height (0 < scale <= 1)
+  double frame_share = 1.0;  ///< of the grabbed frames sent (0 < share <= 1)
+  /// Its bitrate as a share of the ladder's top rung's, on the synthetic
+  /// camera's pictures (measured; the ladder learns the real ratios as it
+  /// goes, this is only its first guess).
+  double relative_kbps = 1.0;
+};
+
 /// JPEG through OpenCV. Following a bitrate (FollowBitrate), it climbs down
-/// a ladder as the issue asks: its quality first (in steps of 10, down to
-/// kMinQuality), then its resolution (half each way), then its frame rate
-/// (one frame in 2, 3, 4 kept); and back up, a rung at a time, when the
-/// rung above is predicted to fit. It judges a rung by the bytes of the
-/// frames it encodes there, after kFramesPerRung of them.
+/// a ladder as the issue asks: its quality first, then its resolution, then
+/// its frame rate; and back up, a rung at a time, when the rung above is
+/// predicted to fit. It judges a rung by the bytes of the frames it encodes
+/// there, after kFramesPerRung of them.
+///
+/// Why the rungs are fine (JpegLadder): the operator's estimate of the link
+/// grows to no more than 1.5 times the rate it receives (RateEstimator), so
+/// a rung more than about 1.4 times the bytes of the one below can never be
+/// climbed back to once left: a cut to half resolution (a third of the
+/// bytes) or to every other frame (half) held the video there for good,
+/// on a link that could carry twice as much. Adjacent rungs here differ by
+/// at most kMaxRungRatio in bitrate: quality in steps of 1 to 2 near 100
+/// and of 10 below 80, resolution in steps (7/8, 3/4, 5/8, 9/16, 1/2 of
+/// each side), frame rate in fractions (4/5, 2/3, 1/2, 2/5, 1/3, 1/4 of
+/// the frames). Going down it jumps to the highest rung predicted to fit.
 class JpegEncoder final : public VideoEncoder {
  public:
   static constexpr int kMinQuality = 20;
-  static constexpr int kMaxSkip = 3;  ///< at most 3 frames in 4 skipped
   static constexpr int kFramesPerRung = 3;
+  /// The largest bitrate ratio between adjacent rungs the ladder is built
+  /// for (checked on real frames by the tests).
+  static constexpr double kMaxRungRatio = 1.35;
+  /// The rung above is climbed when predicted at no more than kUpMargin of
+  /// the target (kMaxRungRatio / kUpMargin stays under the estimator's 1.5:
+  /// every rung can be climbed back to); the rung is left when over
+  /// kDownMargin times it.
+  static constexpr double kUpMargin = 0.95, kDownMargin = 1.05;
 
   /// @param quality JPEG quality 1..100 (the ladder's top); throws
   /// std::invalid_argument otherwise. `frame_rate_hz`: the camera's, for the
@@ -95,28 +124,46 @@ class JpegEncoder final : public VideoEncoder {
 
   void FollowBitrate(double kbps) override { target_kbps_ = kbps; }
   bool SkipFrame() override;
-  /// Where on the ladder it stands: the scale of the picture sent (1 or
-  /// 0.5) and the frames skipped of each skip() + 1.
-  double scale() const { return scale_; }
-  int skip() const { return skip_; }
+  /// The ladder, from its top (the file's quality, full size, every frame)
+  /// down; and the rung it stands on (0: the top).
+  const std::vector<JpegRung>& ladder() const { return ladder_; }
+  size_t rung() const { return rung_; }
+  /// Stands on `rung` from now on (a benchmark's or a test's fixed rung;
+  /// FollowBitrate moves it again). Throws std::out_of_range past the bottom.
+  void SetRung(size_t rung);
+  /// Where on the ladder it stands: the scale of the picture sent and the
+  /// share of the grabbed frames sent.
+  double scale() const { return ladder_[rung_].scale; }
+  double frame_share() const { return ladder_[rung_].frame_share; }
   /// The bitrate of the frames sent at this rung (kbit/s), as last measured.
   double rung_kbps() const { return rung_kbps_; }
 
  private:
   void Climb(size_t bytes);
+  /// The bitrate rung `to` is predicted at, from this rung's measured one:
+  /// by the ratio last measured between them when there is one, else by the
+  /// ladder's first guess.
+  double Predicted(size_t to) const;
 
   int quality_;
-  int top_quality_;
   double frame_rate_hz_;
   std::vector<int> params_;
+  std::vector<JpegRung> ladder_;
+  /// Each rung's bitrate when it was last left (kbit/s; 0: never measured).
+  std::vector<double> measured_kbps_;
+  size_t rung_ = 0;
   double target_kbps_ = 0.0;  ///< 0: not following
-  double scale_ = 1.0;
-  int skip_ = 0;
-  int skip_count_ = 0;
+  double frame_credit_ = 0.0;  ///< frames owed at a rung that sends a share of them
   int frames_at_rung_ = 0;
   double rung_kbps_ = 0.0;
   cv::Mat scaled_;
 };
+
+/// The rungs of a JpegEncoder whose top quality is `top_quality` (1..100):
+/// quality down to JpegEncoder::kMinQuality (or the top's, when lower), then
+/// resolution, then frame rate, each adjacent pair at most
+/// JpegEncoder::kMaxRungRatio apart in bitrate on the synthetic camera.
+std::vector<JpegRung> JpegLadder(int top_quality);
 
 class JpegDecoder final : public VideoDecoder {
  public:
