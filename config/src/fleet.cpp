@@ -61,8 +61,7 @@ FleetConfig LoadFleet(const std::filesystem::path& file) {
       if (kind == nullptr || kind->family != family) {
         v.Fail("interface", "one of " + InterfaceKindNames(family) + " (the interfaces that drive a " +
                                 (family == VehicleFamily::kBlimp ? "blimp" : "robot") + " such as '" +
-                                vehicle.vehicle.filename().string() + "'), or no key for its kind's usual one; got '" +
-                                vehicle.interface + "'");
+                                vehicle.vehicle.filename().string() + "'), or no key for its kind's usual one");
       }
     }
     vehicle.attach = v.Bool("attach", false);
