@@ -446,7 +446,7 @@ TEST_CASE("a person drives a fleet by keys: robot-a forward, Tab, the same keys 
     return at == std::string::npos ? std::string() : json.substr(at, json.find('}', at) - at + 1);
   };
   CHECK(std::stod(JsonField(entry("robot-a"), "distance_m")) == Approx(a_later).margin(0.01));
-  CHECK(std::stod(JsonField(entry("robot-b"), "distance_m")) >= b_then);
+  CHECK(std::stod(JsonField(entry("robot-b"), "distance_m")) >= b_then - 0.01);  // the line rounds to cm
   CHECK(std::stod(JsonField(entry("robot-b"), "driven_s")) > 0.0);
   // Each robot was driven with the keys (a person at the simulated device).
   CHECK(run.err().find("  keyboard  ") != std::string::npos);
