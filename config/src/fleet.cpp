@@ -2,6 +2,7 @@
 
 #include <set>
 
+#include "haptel/config/interface_kinds.hpp"
 #include "haptel/config/vehicle.hpp"
 #include "yaml_map.hpp"
 
@@ -52,6 +53,17 @@ FleetConfig LoadFleet(const std::filesystem::path& file) {
     vehicle.vehicle = ExistingFile(v, dir, "vehicle", "a vehicle file such as ../vehicles/sim-robot.yaml");
     vehicle.world = ExistingFile(v, dir, "world", "the track (robot) or course (blimp) file it drives or flies");
     vehicle.interface = v.String("interface", "");
+    if (!vehicle.interface.empty()) {
+      // Checked here, against the vehicle's kind, so the mistake is named at
+      // its key: a robot's interface on a blimp, or a name that is none.
+      const VehicleFamily family = LoadVehicle(vehicle.vehicle).family();
+      const InterfaceKindInfo* kind = FindInterfaceKind(vehicle.interface);
+      if (kind == nullptr || kind->family != family) {
+        v.Fail("interface", "one of " + InterfaceKindNames(family) + " (the interfaces that drive a " +
+                                (family == VehicleFamily::kBlimp ? "blimp" : "robot") + " such as '" +
+                                vehicle.vehicle.filename().string() + "'), or no key for its kind's usual one");
+      }
+    }
     vehicle.attach = v.Bool("attach", false);
     v.Finish();
     fleet.vehicles.push_back(std::move(vehicle));

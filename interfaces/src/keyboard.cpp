@@ -23,6 +23,14 @@ KeyboardInterface::KeyboardInterface(const KeyboardConfig& config, const InputBo
   seen_stop_ = s.presses_stop;
 }
 
+void KeyboardInterface::Rebase(const InputState& now) {
+  throttle_.Skip(now.presses_up, now.presses_down);
+  steering_.Skip(now.presses_left, now.presses_right);
+  seen_stop_ = now.presses_stop;
+  throttle_.set_level(0);
+  steering_.set_level(0);
+}
+
 MotorCommand KeyboardInterface::Step(double t_s, const InputState& s) {
   throttle_.Step(t_s, s.key_up, s.key_down, s.presses_up, s.presses_down);
   steering_.Step(t_s, s.key_left, s.key_right, s.presses_left, s.presses_right);

@@ -248,6 +248,24 @@ class BlimpSession final : public FamilySession {
     return std::nullopt;
   }
 
+  // --- A fleet's interface handover (interface_handover.hpp). ---
+  void RenderForces(double, haptics::Hal& hal) override {
+    // Its command goes nowhere: the blimp is held at neutral meanwhile.
+    if (gesture_) {
+      gesture_->Update(head_, hal);
+    } else {
+      hal.SetField(haptics::Side::kLeft, haptics::ForceField{});  // keys and controllers render none
+      hal.SetField(haptics::Side::kRight, haptics::ForceField{});
+    }
+  }
+  void PauseForces(haptics::Hal&) override {}  // no physics world: its fields went with the fade
+  void ResumeForces(haptics::Hal&, const interfaces::InputState& now) override {
+    // Keys pressed while another vehicle was driven were that one's, and the
+    // blimp was held at neutral: its levels start from rest again.
+    if (manual_) manual_.emplace(*setup_.blimp_manual, now);
+    command_ = {};
+  }
+
   std::optional<LoopEnd> LapEnd() const override {
     if (lap_.crashed()) {
       return LoopEnd{Outcome::kCrashed, "the blimp crashed: a contact at " + std::to_string(lap_.crash_speed()).substr(0, 4) +

@@ -17,6 +17,7 @@
 
 #include "haptel/interfaces/input.hpp"
 #include "haptel/mediator/haptic_side.hpp"
+#include "haptel/mediator/interface_handover.hpp"
 #include "haptel/mediator/session.hpp"
 #include "haptel/mediator/session_physics.hpp"
 #include "haptel/mediator/session_view.hpp"
@@ -39,9 +40,12 @@ inline void RecordPredictionErrors(std::vector<double> errors_m, RunRecord& rec)
   rec.prediction_error_m_p95 = nearest_rank(0.95);
 }
 
-class FamilySession {
+/// In a fleet it is also one side of the person's interface handover
+/// (interface_handover.hpp): its interface rendered while it fades out,
+/// paused while another vehicle is driven, resumed when turned back to.
+class FamilySession : public HandoverSide {
  public:
-  virtual ~FamilySession() = default;
+  ~FamilySession() override = default;
 
   /// The haptic side has started: start what runs on it (a physics world).
   virtual void Start(HapticSide& haptic) = 0;
@@ -67,6 +71,8 @@ class FamilySession {
   /// the run when the person's controller went away.
   virtual std::optional<LoopEnd> Drive(double t_s, int64_t now_ns, const interfaces::InputState& person,
                                        bool vehicle_up, HapticSide& haptic, VehicleLink& link) = 0;
+  /// The interfaces are switching (F1–F6) and ramp the force scale themselves.
+  virtual bool SwitchingInterface() const { return false; }
   /// The lap's own end: completed (or crashed).
   virtual std::optional<LoopEnd> LapEnd() const = 0;
   /// The file of the track or course the spawned vehicle lives in.

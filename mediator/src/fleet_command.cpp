@@ -55,18 +55,15 @@ FleetSetup FleetSetupFromArgs(int argc, const char* const* argv, const Args& arg
                        ": with --fleet each vehicle's comes from the fleet file (its 'vehicles' list)");
     }
   }
-  if (args.Value("operator").value_or("auto") != "auto") {
-    // A person switches vehicles (Tab, 1..9, the controller's Back) and the
-    // automatic operator drives the one switched to; a person driving each
-    // vehicle with its own interface is not built yet.
-    throw UsageError("option --fleet: only the automatic operator drives a fleet's vehicles yet (a person switches "
-                     "between them in the view: Tab, 1..9); use --operator auto");
-  }
   FleetSetup setup;
   setup.fleet = LoadFleet(*args.Value("fleet"));
 
   for (const FleetVehicle& vehicle : setup.fleet.vehicles) {
     std::vector<std::string> words = VehicleArgv(argc, argv, vehicle);
+    // The automatic operator unless told: a fleet runs unattended by
+    // default. With --operator person each vehicle gets the interface a
+    // person drives its kind with (the fleet file's, else the keys at the
+    // simulated device), and the person's input goes to the driven one.
     if (std::find(words.begin(), words.end(), "--operator") == words.end()) {
       words.insert(words.end(), {"--operator", "auto"});
     }

@@ -18,6 +18,7 @@
 #include "haptel/core/log.hpp"
 #include "haptel/mediator/command_mux.hpp"
 #include "haptel/mediator/fleet.hpp"
+#include "haptel/mediator/interface_handover.hpp"
 #include "haptel/mediator/run_counters.hpp"
 #include "haptel/mediator/session_view.hpp"
 #include "session_loop.hpp"
@@ -163,6 +164,14 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
   }
   haptic.Start(first.progress);
   for (auto& m : members) m->family->Start(haptic);
+  // One interface live at a time (interface_handover.hpp): a person's
+  // forces fade over the run's switch ramp at each turn; the automatic
+  // operator's interfaces swap at once (nobody holds the arms).
+  const bool person_drives = first.operator_kind == "person";
+  std::vector<HandoverSide*> sides;
+  for (auto& m : members) sides.push_back(m->family.get());
+  InterfaceHandover interfaces(std::move(sides), person_drives ? run.switch_ramp_s : 0.0);
+  interfaces.PauseAll(haptic.hal());
 
   // --- The vehicles: each spawned (or attached) and linked on the one domain. ---
   for (auto& m : members) {
@@ -258,6 +267,7 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
     const bool measured = target >= 0;
     target = to;
     driven_since_t = t;
+    interfaces.TurnTo(to, t, haptic.hal());
     if (to < 0) return;
     Member& m = *members[static_cast<size_t>(to)];
     m.mux.OnLock(m.handover_lock, true, t);
@@ -392,22 +402,28 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
       const int next = next_after(target);
       if (next < 0) break;  // every course is done
       switch_to(next, now, t, target < 0 ? "the first" : "the last one's course is over");
-    } else if (setup.fleet.slice_s > 0.0 && t - driven_since_t >= setup.fleet.slice_s) {
+    } else if (!person_drives && setup.fleet.slice_s > 0.0 && t - driven_since_t >= setup.fleet.slice_s) {
+      // The automatic operator's time slice; a person turns when they choose.
       const int next = next_after(target);
       if (next >= 0 && next != target) switch_to(next, now, t, "its time slice");
     }
 
+    // The person's input and the forces go to one interface only: the
+    // driven vehicle's, once the one left has faded out.
+    const int live = interfaces.Tick(t, haptic.hal(), person);
     for (size_t i = 0; i < members.size(); ++i) {
       Member& m = *members[i];
       if (m.lost) continue;
       const bool driven = static_cast<int>(i) == target;
+      const bool interface_live = static_cast<int>(i) == live;
       if (m.lock_until_t >= 0.0 && t >= m.lock_until_t) {
         m.mux.OnLock(m.handover_lock, false, t);  // turned away from long enough: nothing of ours is live
         m.lock_until_t = -1.0;
       }
       if (driven && m.handover_pending) {
-        if (m.released_ns == 0 && m.health->up() && m.link->last_received_ns() > m.request_ns) {
-          // It has been seen since the request: the operator may command it.
+        if (m.released_ns == 0 && interface_live && m.health->up() && m.link->last_received_ns() > m.request_ns) {
+          // It has been seen since the request, and its interface is the
+          // live one: the operator may command it.
           m.mux.OnLock(m.handover_lock, false, t);
           m.released_ns = now;
           m.link->WatchEcho(now);
@@ -430,7 +446,7 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
         m.published_selection = selection;
         m.next_selected_ns = now + SToNs(kSelectedPeriod_s);
       }
-      if (driven && selection.input == m.operator_input) {
+      if (driven && interface_live && selection.input == m.operator_input) {
         m.out.driven_s += dt;
         if (auto end = m.family->Drive(t, now, person, m.health->up(), haptic, *m.link)) {
           fleet_end = std::move(end);
@@ -452,6 +468,9 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
       }
     }
     if (fleet_end) break;
+    interfaces.Settle(t, haptic.hal(),
+                      live >= 0 && !members[static_cast<size_t>(live)]->lost &&
+                          members[static_cast<size_t>(live)]->family->SwitchingInterface());
     if (view_part) publish_view(t);
     // The session clock's time limit only: each vehicle's lap cap counts its driven time (above).
     if (auto end = CheckLimits(t, std::nullopt, first.time_limit_s, 0.0, 1e300)) {
@@ -471,10 +490,10 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
         m.family->LogProgress(t, *m.link, m.out.result.record.distance_m);
         std::string line = "         fleet:";
         for (const auto& mp : members) {
-          char part[120];
-          std::snprintf(part, sizeof part, " %s %s (driven %.1f s%s)", mp->setup.vehicle.name.c_str(),
+          char part[140];
+          std::snprintf(part, sizeof part, " %s %s (driven %.1f s, %.2f m%s)", mp->setup.vehicle.name.c_str(),
                         mp->lost ? "LOST" : mp->done ? "done" : mp->out.selected.c_str(), mp->out.driven_s,
-                        mp->lost || mp->health->up() ? "" : ", not answering yet");
+                        mp->out.result.record.distance_m, mp->lost || mp->health->up() ? "" : ", not answering yet");
           line += part;
         }
         log::Info(line);

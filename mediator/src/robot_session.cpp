@@ -222,6 +222,29 @@ class RobotSession final : public FamilySession {
     return std::nullopt;
   }
 
+  bool SwitchingInterface() const override { return interfaces_->switching(); }
+
+  // --- A fleet's interface handover (interface_handover.hpp). ---
+  void RenderForces(double t, haptics::Hal& hal) override {
+    // Its command goes nowhere: the vehicle is held safe meanwhile.
+    interfaces_->current().Update(t, feedback_, hal);
+  }
+  void PauseForces(haptics::Hal&) override {
+    // Stopped, not torn down: its bodies and hands wait for the return.
+    // The stop takes the coupling out of the HAL (PhysicsWorld::RequestStop),
+    // so no other vehicle's world ever shares the set-point slot with it.
+    if (physics_ && physics_->world->running()) physics_->world->Stop();
+  }
+  void ResumeForces(haptics::Hal& hal, const interfaces::InputState& now) override {
+    if (physics_ && !physics_->world->running()) physics_->world->Start(hal);
+    // Keys pressed and interfaces asked for while another vehicle was
+    // driven were that one's: none of them reaches this vehicle.
+    interfaces_->current().Rebase(now);
+    requests_seen_ = now.interface_requests;
+    disconnects_seen_ = now.pad_disconnects;
+    motors_ = {};
+  }
+
   std::optional<LoopEnd> LapEnd() const override {
     if (lap_.completed()) return LoopEnd{Outcome::kCompleted, "lap completed"};
     return std::nullopt;

@@ -99,6 +99,12 @@ TEST_CASE("a fleet file's mistakes are refused naming the key and what was expec
     for (const char* name : {"r0", "r1", "r2", "r3", "r4", "r5", "r6", "r7", "r8", "r9"}) text += Vehicle(name);
     CHECK_THAT(FleetError(text), Contains("'vehicles'") && Contains("1 to 9"));
   }
+  SECTION("an interface that does not drive the vehicle's kind, or is none") {
+    CHECK_THAT(FleetError("name: f\nvehicles:\n" + Vehicle("a", ", interface: blimp-keys")),
+               Contains("'vehicles[0].interface'") && Contains("keyboard") && Contains("blimp-keys"));
+    CHECK_THAT(FleetError("name: f\nvehicles:\n" + Vehicle("a") + Vehicle("b", ", interface: wheel")),
+               Contains("'vehicles[1].interface'") && Contains("cockpit") && Contains("'wheel'"));
+  }
   SECTION("attach is a yes or no") {
     CHECK_THAT(FleetError("name: f\nvehicles:\n" + Vehicle("a", ", attach: maybe")), Contains("'vehicles[0].attach'"));
   }

@@ -369,3 +369,85 @@ TEST_CASE("a fleet in a window: every robot a tile, Tab turns to the next, and t
   CHECK(framed(last, 1));
   CHECK_FALSE(framed(last, 0));
 }
+
+namespace {
+
+/// The distances (m) vehicle `name` had in each fleet progress line of
+/// `err` from `from` on ("robot-a operator (driven 3.2 s, 0.45 m)").
+std::vector<double> FleetDistances(const std::string& err, const std::string& name, size_t from = 0) {
+  const std::regex part(name + R"( \S+ \(driven [0-9.]+ s, ([0-9.]+) m)");
+  std::vector<double> out;
+  const std::string rest = err.substr(std::min(from, err.size()));
+  for (auto it = std::sregex_iterator(rest.begin(), rest.end(), part); it != std::sregex_iterator(); ++it) {
+    out.push_back(std::stod((*it)[1]));
+  }
+  return out;
+}
+
+/// Waits (on printed lines, never on a clock) for a fleet progress line
+/// after `from` in which `name` has gone further than `beyond_m`.
+bool WaitForDistance(Child& run, const std::string& name, double beyond_m, size_t from, double timeout_s) {
+  return test::WaitFor([&] {
+    run.Pump();
+    const std::vector<double> d = FleetDistances(run.err(), name, from);
+    return !d.empty() && d.back() > beyond_m;
+  }, timeout_s);
+}
+
+}  // namespace
+
+TEST_CASE("a person drives a fleet by keys: robot-a forward, Tab, the same keys drive robot-b while robot-a is held") {
+  XServer x;
+  const auto dir = test::ScratchDir("e2e-view-fleet-person");
+  std::string fleet = "name: two\nvehicles:\n";
+  for (const char* name : {"robot-a", "robot-b"}) {
+    fleet += std::string("  - {name: ") + name + ", vehicle: " +
+             std::filesystem::absolute("config/vehicles/sim-robot.yaml").string() +
+             ", world: " + std::filesystem::absolute("config/tracks/test-short.yaml").string() + "}\n";
+  }
+  const auto fleet_file = test::WriteFile(dir / "fleet.yaml", fleet);
+  Child run({Bin("haptel"), "run", "--fleet", fleet_file.string(), "--operator", "person", "--view", "window",
+             "--time-limit", "120", "--json", "--domain", std::to_string(test::UniqueDomain(36)), "--database",
+             (dir / "runs.db").string(), "--vehicle-timeout", "5"});
+  // robot-a obeys the person's interface (its handover is done).
+  REQUIRE(test::WaitForErr(run, "robot-a operator", 60.0));
+  INFO(run.err());
+  CHECK(run.err().find("robot-a operator (driven") != std::string::npos);
+  REQUIRE(XDoTool({"search", "--sync", "--name", "Haptel", "windowfocus", "--sync", "keydown", "Up"}) == 0);
+  // The held key drives robot-a forward; robot-b stands.
+  REQUIRE(WaitForDistance(run, "robot-a", 0.15, 0, 60.0));
+  const std::vector<double> b_before = FleetDistances(run.err(), "robot-b");
+  REQUIRE_FALSE(b_before.empty());
+  CHECK(b_before.back() < 0.01);
+
+  // Tab with the key still held: robot-a is left, robot-b taken up.
+  REQUIRE(XDoTool({"key", "Tab"}) == 0);
+  REQUIRE(test::WaitForErr(run, "driving 'robot-b' (asked by the person)", 30.0));
+  const size_t turned = run.err().find("driving 'robot-b' (asked by the person)");
+  // The same keys now drive robot-b (the short track's first straight is
+  // half a metre: a little way is enough). From then on, over the next
+  // progress lines, robot-a does not move: it is held stopped.
+  REQUIRE(WaitForDistance(run, "robot-b", 0.05, turned, 60.0));
+  const std::vector<double> a_then = FleetDistances(run.err(), "robot-a", turned);
+  REQUIRE(test::WaitFor([&] {
+    run.Pump();
+    return FleetDistances(run.err(), "robot-a", turned).size() >= a_then.size() + 2;
+  }, 60.0));
+  const double a_later = FleetDistances(run.err(), "robot-a", turned).back();
+  CHECK(a_later == Approx(a_then.back()).margin(0.01));
+  const double b_then = FleetDistances(run.err(), "robot-b", turned).back();
+  CHECK(b_then > 0.05);
+  REQUIRE(XDoTool({"keyup", "Up"}) == 0);
+
+  const std::string json = test::EndWithEscape(run);
+  CHECK(JsonField(json, "person_switches") == "1");
+  const auto entry = [&](const std::string& name) {
+    const auto at = json.find("{\"name\":\"" + name + "\"");
+    return at == std::string::npos ? std::string() : json.substr(at, json.find('}', at) - at + 1);
+  };
+  CHECK(std::stod(JsonField(entry("robot-a"), "distance_m")) == Approx(a_later).margin(0.01));
+  CHECK(std::stod(JsonField(entry("robot-b"), "distance_m")) >= b_then - 0.01);  // the line rounds to cm
+  CHECK(std::stod(JsonField(entry("robot-b"), "driven_s")) > 0.0);
+  // Each robot was driven with the keys (a person at the simulated device).
+  CHECK(run.err().find("  keyboard  ") != std::string::npos);
+}

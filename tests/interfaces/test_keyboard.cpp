@@ -182,6 +182,31 @@ TEST_CASE("keyboard: presses made before the interface existed are not replayed"
   CHECK(kb.throttle_level() == 0);
 }
 
+TEST_CASE("keyboard: taken up again (a fleet's other vehicle was driven meanwhile), it starts from rest and replays "
+          "none of the presses made meanwhile", "[keyboard]") {
+  Keys k;
+  haptics::Hal hal;
+  KeyboardConfig c = Config();
+  c.release_to_zero = false;
+  KeyboardInterface kb(c, k.box, 8);
+  for (int i = 0; i < 2; ++i) k.Tap(&InputState::key_up, &InputState::presses_up);
+  kb.Update(0.0, {}, hal);
+  REQUIRE(kb.throttle_level() == 2);  // left at level 2 when the person turned away
+  // Meanwhile the same keys drove another vehicle.
+  for (int i = 0; i < 3; ++i) k.Tap(&InputState::key_up, &InputState::presses_up);
+  k.Tap(&InputState::key_left, &InputState::presses_left);
+  kb.Rebase(k.box.Load());
+  const MotorCommand m = kb.Update(1.0, {}, hal);
+  CHECK(kb.throttle_level() == 0);
+  CHECK(kb.steering_level() == 0);
+  CHECK(m.left == 0.0);
+  CHECK(m.right == 0.0);
+  // A press from now on is its own again.
+  k.Tap(&InputState::key_up, &InputState::presses_up);
+  kb.Update(1.0 + kTick, {}, hal);
+  CHECK(kb.throttle_level() == 1);
+}
+
 TEST_CASE("keyboard: no hands, no physics, no forces", "[keyboard]") {
   Keys k;
   haptics::Hal hal;

@@ -9,6 +9,7 @@
 #include "haptel/core/range_scan.hpp"
 #include "haptel/core/tread_command.hpp"
 #include "haptel/haptics/hal.hpp"
+#include "haptel/interfaces/input.hpp"
 
 namespace haptel::interfaces {
 
@@ -95,6 +96,12 @@ class MediatorInterface {
   /// Haptic shared control's guidance as of the last Update, for the view to
   /// draw what pushes the hand; nullopt for interfaces without it.
   virtual std::optional<Guidance> CurrentGuidance() const { return std::nullopt; }
+
+  /// The interface is taken up again (a fleet's operator turned back to its
+  /// vehicle): the person's input up to `now` was given to other vehicles,
+  /// so an interface that counts key presses marks them as seen and starts
+  /// from rest, not from the levels it was left at. Session thread.
+  virtual void Rebase(const InputState& /*now*/) {}
 };
 
 }  // namespace haptel::interfaces

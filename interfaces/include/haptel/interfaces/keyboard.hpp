@@ -32,6 +32,8 @@ class KeyboardInterface final : public MediatorInterface {
 
   std::string name() const override { return config_.name; }
   MotorCommand Update(double t_s, const VehicleFeedback& feedback, haptics::Hal& hal) override;
+  /// Presses so far are seen; throttle and steering back to level 0.
+  void Rebase(const InputState& now) override;
   HandTargets HandTargetsFor(const DriveIntent& intent) const override;
   bool NeedsPhysics() const override { return false; }
 

@@ -26,6 +26,14 @@
 /// on both hands) and shown (the driven tile framed, a line on the HUD),
 /// and the slice starts again from it.
 ///
+/// With a person as the operator (`--operator person`) the person drives
+/// the vehicle turned to, with the interface that fits its kind (the fleet
+/// file's, else what a person at that device drives it with: the keys at
+/// the simulated device), and turns only when they choose (no slice). One
+/// interface is live at a time: at a turn the forces fade out and in over
+/// the run's switch ramp and the interface left is paused at zero
+/// (interface_handover.hpp); the person's input reaches only the live one.
+///
 /// With a view, every vehicle's video is a tile (its name, state and lap)
 /// and the driven one's is on the big screen with its world, as a single
 /// run shows it. Each vehicle's selected source is published on
