@@ -49,7 +49,7 @@ constexpr Usage kUsage[] = {
      "airship model: integrators x steps, error against CPU; physics checks"},
     {"link",
      "[--seconds S] [--track FILE] [--delays MS,...] [--losses PERCENT,...] [--predict off|on|both] "
-     "[--link-profile NAME] [--domain D] [--lap-domain D] [--smoke] [--json]",
+     "[--link-profile NAME] [--domain D] [--lap-domain D] [--rtt-only] [--smoke] [--json]",
      "DDS round trip against raw Fast DDS; the lap against the link's delay and loss, with and without prediction"},
     {"video", "[--vehicle FILE] [--track FILE] [--schedule default|both|jpeg|h264|off] [--phase-s S] [--domain D] [--smoke] [--json]",
      "the link's video codecs: JPEG qualities and H.264 bitrates against SSIM, PSNR and CPU; the Pareto front; "

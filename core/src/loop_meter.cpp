@@ -2,6 +2,12 @@
 
 #include <pthread.h>
 #include <sched.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
 
 #include "haptel/core/clock.hpp"
 
@@ -37,6 +43,20 @@ LoopStats LoopMeter::Stats() const {
   s.max_lateness_us = static_cast<double>(max_lateness_ns_.load(std::memory_order_relaxed)) * 1e-3;
   s.realtime = realtime_.load();
   return s;
+}
+
+bool LowerThreadPriority(int steps) {
+  if (steps <= 0) return true;
+  const auto tid = static_cast<id_t>(syscall(SYS_gettid));
+  const int now = ThreadNice();
+  return setpriority(PRIO_PROCESS, tid, std::min(19, now + steps)) == 0;
+}
+
+int ThreadNice() {
+  // getpriority may return -1 as a value: errno tells it from an error.
+  errno = 0;
+  const int nice = getpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)));
+  return errno == 0 ? nice : 0;
 }
 
 bool TryRealtime(int priority) {

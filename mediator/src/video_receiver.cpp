@@ -1,11 +1,14 @@
 #include "haptel/mediator/video_receiver.hpp"
 
+#include <pthread.h>
+
 #include <chrono>
 #include <cstring>
 
 #include <opencv2/imgproc.hpp>
 
 #include "haptel/core/clock.hpp"
+#include "haptel/core/loop_meter.hpp"
 #include "haptel/video/h264_codec.hpp"
 
 namespace haptel::mediator {
@@ -161,6 +164,10 @@ bool VideoReceiver::DecodeOne(Pending& frame, cv::Mat& image) {
 }
 
 void VideoReceiver::DecodeLoop() {
+  // Decoding takes milliseconds of CPU a frame: behind the link's receive
+  // threads, which carry the states, and the session's loop on a busy host.
+  LowerThreadPriority(kBackgroundNiceSteps);
+  pthread_setname_np(pthread_self(), "video-decode");  // named once lowered: what a test may wait for
   std::deque<Pending> batch;
   cv::Mat image;
   for (;;) {
@@ -222,14 +229,20 @@ void VideoReceiver::DecodeLoop() {
       latest_ = {std::move(shown), latest_.id + 1, capture_ns, false, decoded_wall_ns};
     }
     if (decoder_ != nullptr && decoder_->awaiting_key_frame()) {
+      // Stale only once a picture was shown: before the first there is none
+      // to mark. Marked outside the lock: this thread runs at a low priority,
+      // and the link's receive thread (the states') must never wait on it
+      // for longer than a copy of a few fields.
+      std::shared_ptr<const cv::Mat> good;
       {
         std::lock_guard lock(mutex_);
-        // Stale only once a picture was shown: before the first there is none to mark.
-        if (stale_since_ns_ == 0 && latest_good_) {
-          stale_since_ns_ = now;
-          latest_ = {std::make_shared<const cv::Mat>(MarkStale(*latest_good_)), latest_.id + 1,
-                     latest_.capture_wall_ns, true, latest_.decoded_wall_ns};
-        }
+        if (stale_since_ns_ == 0) good = latest_good_;
+      }
+      if (good) {
+        auto marked = std::make_shared<const cv::Mat>(MarkStale(*good));
+        std::lock_guard lock(mutex_);
+        stale_since_ns_ = now;
+        latest_ = {std::move(marked), latest_.id + 1, latest_.capture_wall_ns, true, latest_.decoded_wall_ns};
       }
       RequestKeyFrameIfDue(now);
     }

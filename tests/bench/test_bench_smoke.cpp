@@ -309,6 +309,14 @@ TEST_CASE("bench link --smoke", "[bench][smoke]") {
   }
   CHECK(Finite(rtt["video_p50_ms"]) > 0.0);
   CHECK(Finite(rtt["secured_video_p50_ms"]) > 0.0);
+  // The tail beside the median, and where the round trip goes: out and back.
+  for (const char* key : {"raw_p99_ms", "haptel_p99_ms", "p99_ratio", "out_p50_ms", "out_p99_ms", "back_p50_ms",
+                          "back_p99_ms"}) {
+    INFO(key);
+    CHECK(Finite(rtt[key]) > 0.0);
+  }
+  CHECK(Finite(rtt["out_p50_ms"]) <= Finite(rtt["out_p99_ms"]));
+  CHECK(Finite(rtt["back_p50_ms"]) <= Finite(rtt["back_p99_ms"]));
   const auto& laps = j["laps"].array();
   REQUIRE(laps.size() == 1);  // no delay, no loss, on the short track
   CHECK(laps[0]["completed"].boolean());
@@ -317,6 +325,14 @@ TEST_CASE("bench link --smoke", "[bench][smoke]") {
   CHECK(Finite(laps[0]["prediction_error_m_p95"]) < 0.05);
   CHECK(Finite(laps[0]["lap_time_s"]) > 0.0);
   RequireFiles({"link_rtt.csv", "link_laps.csv", "link_laps.png"});
+}
+
+TEST_CASE("bench link --smoke --rtt-only: the round trips alone, no lap", "[bench][smoke]") {
+  const JsonValue j =
+      Smoke("link", {"--rtt-only", "--domain", std::to_string(haptel::test::UniqueDomain(85))}).json;
+  CHECK(Finite(j["rtt"]["haptel_p99_ms"]) > 0.0);
+  CHECK(Finite(j["rtt"]["raw_p99_ms"]) > 0.0);
+  CHECK(j["laps"].array().empty());
 }
 
 TEST_CASE("bench fleet --smoke: the fewest and the most vehicles, each count's figures", "[bench][smoke]") {

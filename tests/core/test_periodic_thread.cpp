@@ -4,6 +4,7 @@
 
 #include <pthread.h>
 
+#include <algorithm>
 #include <atomic>
 #include <catch2/catch.hpp>
 #include <chrono>
@@ -13,6 +14,8 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+
+#include "haptel/core/loop_meter.hpp"
 
 using haptel::PeriodicThread;
 
@@ -194,4 +197,28 @@ TEST_CASE(
   CHECK(loop.StopWithin(60.0));
   CHECK_FALSE(loop.running());
   CHECK(loop.StopWithin(0.0));  // already stopped
+}
+
+TEST_CASE("PeriodicThread: nice_steps lowers the loop's own thread, not the thread that made it", "[periodic]") {
+  // A background loop (the video's) yields the CPU to the link and control
+  // threads; the creator, the control loop's owner, keeps its priority.
+  const int creator_nice = haptel::ThreadNice();
+  std::atomic<int> seen{-100};
+  PeriodicThread::Options background = Rate(500.0, "test-background");
+  background.nice_steps = haptel::kBackgroundNiceSteps;
+  PeriodicThread loop(background, [&](int64_t) { seen.store(haptel::ThreadNice()); });
+  loop.Start();
+  REQUIRE(WaitFor([&] { return seen.load() != -100; }));
+  loop.Stop();
+  CHECK(seen.load() == std::min(19, creator_nice + haptel::kBackgroundNiceSteps));
+  CHECK(haptel::ThreadNice() == creator_nice);
+}
+
+TEST_CASE("PeriodicThread: by default the loop runs at its creator's priority", "[periodic]") {
+  std::atomic<int> seen{-100};
+  PeriodicThread loop(Rate(500.0), [&](int64_t) { seen.store(haptel::ThreadNice()); });
+  loop.Start();
+  REQUIRE(WaitFor([&] { return seen.load() != -100; }));
+  loop.Stop();
+  CHECK(seen.load() == haptel::ThreadNice());
 }

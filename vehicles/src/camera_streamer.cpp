@@ -21,7 +21,11 @@ CameraStreamer::CameraStreamer(const CameraConfig& config, std::unique_ptr<video
   if (camera_ == nullptr) throw std::invalid_argument("CameraStreamer: no camera source");
   if (!owner_session_) throw std::invalid_argument("CameraStreamer: no owner session");
   loop_ = std::make_unique<PeriodicThread>(
-      PeriodicThread::Options{.name = "vehicle-camera", .rate_hz = config.rate_hz},
+      // Rendering and encoding a frame takes milliseconds of CPU: behind the
+      // control loop and the link's threads, so commands and states never
+      // wait for it on a busy host.
+      PeriodicThread::Options{.name = "vehicle-camera", .rate_hz = config.rate_hz,
+                              .nice_steps = kBackgroundNiceSteps},
       [this](int64_t now) { Tick(now); });
   // Reliable: a request is small and rare (at most ten a second, while the
   // operator waits), and one lost would leave the picture stale longer.

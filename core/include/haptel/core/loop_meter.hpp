@@ -48,4 +48,20 @@ class LoopMeter {
 /// Asks for SCHED_FIFO at `priority` for the calling thread; true if granted.
 bool TryRealtime(int priority);
 
+/// How many nice steps background threads (the video's encoder and decoder)
+/// lower their own priority by. On a loaded host the scheduler then gives
+/// the CPU first to the threads a command and a state pass through (the
+/// link's receive threads, the control loop): without it a frame's encode
+/// held them off for milliseconds, the command round trip's tail.
+inline constexpr int kBackgroundNiceSteps = 10;
+
+/// Lowers the calling thread's priority by `steps` nice steps (Linux's nice
+/// is per thread; threads it starts afterwards inherit it, as a codec's
+/// worker threads do). Never raises it (that needs privileges); false if the
+/// kernel refused.
+bool LowerThreadPriority(int steps);
+
+/// The calling thread's nice value (-20 .. 19).
+int ThreadNice();
+
 }  // namespace haptel

@@ -25,6 +25,10 @@ class PeriodicThread {
     double rate_hz = 1000.0;
     /// Ask for SCHED_FIFO at this priority (0 = do not ask).
     int realtime_priority = 0;
+    /// Lower the thread's priority by this many nice steps (0 = as its
+    /// creator): background work such as the video's
+    /// (kBackgroundNiceSteps), which must yield to the link and control.
+    int nice_steps = 0;
     int max_catch_up_periods = 10;
   };
   /// Called once per period with the tick's start time (CLOCK_MONOTONIC ns).
