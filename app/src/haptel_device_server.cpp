@@ -197,7 +197,7 @@ int main(int argc, char** argv) {
     server_options.passivity = config.servo.passivity;
     server_options.limits.max_damping = config.servo.passivity_max_damping;
     server_options.limits.min_speed = config.servo.passivity_min_speed;
-    udp::ArmServer server(sim, options.side, socket.get(), server_options);
+    udp::ArmServer server(sim, options.side, socket.get(), server_options, udp::UnitsOf(sim, options.side));
     std::printf("%s: serving %s arm of '%s' on %s\n", kProgram,
                 options.side == Side::kLeft ? "left" : "right", config.name.c_str(), bound.c_str());
     std::fflush(stdout);

@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "haptel/core/clock.hpp"
+#include "haptel/haptics/force_field.hpp"
 
 namespace haptel::haptics::udp {
 
@@ -15,8 +16,20 @@ namespace {
 constexpr double kVelocityFilter_s = 0.005;
 }  // namespace
 
-ArmServer::ArmServer(SimDevice& sim, Side side, int fd, const ArmServerOptions& options, Clock& clock)
-    : sim_(sim),
+ArmUnits UnitsOf(const SimDevice& sim, Side side) {
+  const SimArmTruth& t = sim.truth(side);
+  ArmUnits u;
+  u.tracker_scale = t.tracker_scale;
+  u.tracker_offset = t.tracker_offset;
+  u.force_slope = t.force_slope;
+  u.force_limit_n = sim.config().force_limit;
+  return u;
+}
+
+ArmServer::ArmServer(Device& arm, Side side, int fd, const ArmServerOptions& options, const ArmUnits& units,
+                     Clock& clock)
+    : sim_(arm),
+      units_(units),
       side_(side),
       fd_(fd),
       options_(options),
@@ -85,6 +98,7 @@ void ArmServer::Handle(std::size_t size) {
       period_s_ = static_cast<double>(now - last_request_ns_) * 1e-9;
     }
     last_request_ns_ = now;
+    acted_this_tick_ = false;
     const WristRequest commands = *p;  // msg_ is reused by Reply
     QueueWrist(commands.wrist_force, msg_.version >= 2 ? &commands.energy : nullptr, now);
     ApplyFingers(commands.finger_forces);
@@ -116,29 +130,32 @@ void ArmServer::Handle(std::size_t size) {
     Reply(GloveReply{clock_.NowNs(), raw.sensors, raw.grasp});
   } else if (const auto* w = std::get_if<WristForce>(&msg_.payload)) {
     const WristForce force = *w;
-    QueueWrist(force.command, msg_.version >= 2 ? &force.energy : nullptr, now);
-    if (!Service(now)) ++c_.device_lost;
+    // A stale one changes nothing: the arm is serviced with the next datagram.
+    if (QueueWrist(force.command, msg_.version >= 2 ? &force.energy : nullptr, now) && !Service(now)) {
+      ++c_.device_lost;
+    }
   } else if (const auto* f = std::get_if<FingerForce>(&msg_.payload)) {
     ApplyFingers(f->command);
   }
 }
 
-void ArmServer::QueueWrist(const Vec3d& command, const EnergyReport* report, int64_t now) {
+bool ArmServer::QueueWrist(const Vec3d& command, const EnergyReport* report, int64_t now) {
   if (has_wrist_seq_ && !SequenceAfter(msg_.sequence, wrist_seq_) && msg_.sequence != wrist_seq_) {
     ++c_.stale_commands;
-    return;
+    return false;
   }
   has_wrist_seq_ = true;
   wrist_seq_ = msg_.sequence;
   if (queued_ - applied_ >= kRing) {
     ++c_.delay_overflows;
-    return;
+    return false;
   }
   Command& q = queue_[queued_ % kRing];
   q.due_ns = now + delay_ns_;
   q.command = command;
   q.report = report != nullptr ? *report : EnergyReport{};
   ++queued_;
+  return true;
 }
 
 void ArmServer::ApplyFingers(const std::array<double, kFingers>& command) {
@@ -153,10 +170,16 @@ void ArmServer::ApplyFingers(const std::array<double, kFingers>& command) {
 }
 
 Vec3d ArmServer::Metres(const Vec3d& raw) const {
-  const SimArmTruth& t = sim_.truth(side_);
   Vec3d m{};
-  for (int i = 0; i < 3; ++i) m[i] = t.tracker_scale[i] * raw[i] + t.tracker_offset[i];
+  for (int i = 0; i < 3; ++i) m[i] = units_.tracker_scale[i] * raw[i] + units_.tracker_offset[i];
   return m;
+}
+
+Vec3d ArmServer::Newtons(const Vec3d& command) const {
+  Vec3d f{};
+  for (int i = 0; i < 3; ++i) f[i] = units_.force_slope[i] * command[i];
+  LimitForce(f, units_.force_limit_n);  // the arm saturates, whatever it is told
+  return f;
 }
 
 bool ArmServer::Service(int64_t now) {
@@ -195,24 +218,26 @@ bool ArmServer::Service(int64_t now) {
 
   Vec3d applied = command_;
   const bool active = options_.passivity && remote_seen_ && remote_.active;
-  const Vec3d rendered = sim_.MeasureForce(side_, command_);
+  const Vec3d rendered = Newtons(command_);
   if (active) {
     Vec3d remote_in{};
     for (int i = 0; i < 3; ++i) remote_in[i] = remote_.energy_in[i] - remote_.charged[i];
     const TwoPortAction a = arm_end_.Control(rendered, remote_in, velocity_, period_s_);
-    const SimArmTruth& t = sim_.truth(side_);
-    for (int i = 0; i < 3; ++i) applied[i] += a.damping_force[i] / t.force_slope[i];
+    for (int i = 0; i < 3; ++i) applied[i] += a.damping_force[i] / units_.force_slope[i];
     if (a.acted) {
-      ++acted_ticks_;
+      // Counted once per client tick (its request and its one-way force both service the arm).
+      if (!acted_this_tick_) ++acted_ticks_;
+      acted_this_tick_ = true;
       for (int i = 0; i < 3; ++i) max_alpha_ = std::max(max_alpha_, a.alpha[i]);
     }
   }
   // The arm saturates: hold what it will really apply.
-  const Vec3d total = sim_.MeasureForce(side_, applied);
+  const Vec3d total = Newtons(applied);
   Vec3d damping{};
   for (int i = 0; i < 3; ++i) damping[i] = total[i] - rendered[i];
   arm_end_.Hold(rendered, damping);
   sim_.WriteWristForce(side_, applied);
+  written_ = applied;
 
   Reading& r = readings_[reads_ % kRing];
   r.t_ns = now;
@@ -271,7 +296,7 @@ void ArmServer::StartSession() {
 }
 
 void ArmServer::ZeroForces() {
-  command_ = Vec3d{};
+  command_ = written_ = Vec3d{};
   queued_ = applied_;
   sim_.WriteWristForce(side_, Vec3d{});
   sim_.WriteFingerForces(side_, std::array<double, kFingers>{});

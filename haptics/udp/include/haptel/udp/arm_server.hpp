@@ -36,6 +36,17 @@
 
 namespace haptel::haptics::udp {
 
+/// What the server knows of its arm, to observe its port in SI: a sim arm's
+/// hidden truth, a real arm's calibration.
+struct ArmUnits {
+  Vec3d tracker_scale{1.0, 1.0, 1.0};  ///< metres = scale · raw + offset
+  Vec3d tracker_offset{};
+  Vec3d force_slope{1.0, 1.0, 1.0};    ///< newtons = slope · command
+  double force_limit_n = 1e9;          ///< the arm saturates here (vector norm), N
+};
+/// A sim arm's truth as ArmUnits.
+ArmUnits UnitsOf(const SimDevice& sim, Side side);
+
 struct ArmServerOptions {
   double lost_after_s = 0.1;  ///< the client watchdog (udp.lost_after_s)
   double delay_s = 0.0;       ///< added each way; at most kMaxDelay_s
@@ -70,8 +81,10 @@ inline constexpr double kMaxDelay_s = 0.05;
 
 class ArmServer {
  public:
-  /// `sim` and `clock` must outlive the server; `fd` is a bound UDP socket.
-  ArmServer(SimDevice& sim, Side side, int fd, const ArmServerOptions& options, Clock& clock = SystemClock());
+  /// `arm` and `clock` must outlive the server; `fd` is a bound UDP socket;
+  /// `units` turn the arm's raw readings and commands into metres and newtons.
+  ArmServer(Device& arm, Side side, int fd, const ArmServerOptions& options, const ArmUnits& units,
+            Clock& clock = SystemClock());
 
   /// Waits up to `wait_ns` for a datagram, then handles every one queued.
   void Poll(int64_t wait_ns);
@@ -81,6 +94,8 @@ class ArmServer {
   const ServerCounters& counters() const { return c_; }
   /// The arm's end (for tests and the bench).
   const TwoPortPassivity& arm_end() const { return arm_end_; }
+  /// The command the arm holds now, the controller's damping included (device units).
+  const Vec3d& applied() const { return written_; }
 
  private:
   struct Reading {
@@ -97,7 +112,8 @@ class ArmServer {
 
   void Handle(std::size_t size);
   /// Queues a wrist command (unless older than one applied) to act delay_s from now.
-  void QueueWrist(const Vec3d& command, const EnergyReport* report, int64_t now);
+  /// False when it was stale or the queue full (counted).
+  bool QueueWrist(const Vec3d& command, const EnergyReport* report, int64_t now);
   void ApplyFingers(const std::array<double, kFingers>& command);
   /// Steps the arm to `now`, observes its port, applies what is due (with
   /// the controller's damping). False when the arm did not answer.
@@ -107,8 +123,10 @@ class ArmServer {
   void StartSession();
   EnergyReport OwnReport() const;
   Vec3d Metres(const Vec3d& raw) const;
+  Vec3d Newtons(const Vec3d& command) const;
 
-  SimDevice& sim_;
+  Device& sim_;
+  ArmUnits units_;
   Side side_;
   int fd_;
   ArmServerOptions options_;
@@ -136,6 +154,7 @@ class ArmServer {
   std::array<Command, kRing> queue_{};
   uint64_t queued_ = 0, applied_ = 0;  ///< queue_ is a ring: [applied_, queued_)
   Vec3d command_{};                    ///< the client's command in force (device units)
+  Vec3d written_{};                    ///< what the arm holds: command_ plus the damping
   // The arm's end of the two-port.
   TwoPortPassivity arm_end_;
   EnergyReport remote_;  ///< the client's, merged as its commands took effect
@@ -146,6 +165,7 @@ class ArmServer {
   int64_t last_request_ns_ = 0;
   double period_s_ = 0.001;  ///< the client's tick, from its requests
   uint64_t acted_ticks_ = 0;
+  bool acted_this_tick_ = false;
   double max_alpha_ = 0.0;
   double dissipated_before_ = 0.0;  ///< J, earlier epochs
 };

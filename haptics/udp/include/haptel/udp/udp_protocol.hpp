@@ -96,13 +96,13 @@ EnergyReport Merge(const EnergyReport& held, const EnergyReport& arrived);
 struct WristRequest {
   Vec3d wrist_force{};                           ///< command in force now
   std::array<double, kFingers> finger_forces{};  ///< commands in force now, each ≥ 0
-  EnergyReport energy;                           ///< version 2 only: the loop's end
+  EnergyReport energy{};                         ///< version 2 only: the loop's end
 };
 struct WristReply {
   int64_t device_ns = 0;  ///< the server's clock (not comparable with the client's)
   Vec3d position{};
   std::array<double, 4> orientation{1, 0, 0, 0};  ///< unit quaternion (w, x, y, z)
-  EnergyReport energy;    ///< version 2 only: the device's end
+  EnergyReport energy{};  ///< version 2 only: the device's end
 };
 struct GloveRequest {};
 struct GloveReply {
@@ -112,7 +112,7 @@ struct GloveReply {
 };
 struct WristForce {
   Vec3d command{};
-  EnergyReport energy;  ///< version 2 only: the loop's end
+  EnergyReport energy{};  ///< version 2 only: the loop's end
 };
 struct FingerForce {
   std::array<double, kFingers> command{};  ///< each ≥ 0
