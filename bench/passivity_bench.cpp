@@ -60,9 +60,12 @@ constexpr int kMaxDelayTicks = 16;
 /// sockets, protocol version 2, udp::ArmServer adding the delay — without
 /// and with the two-port across the wire (the loop's end in the servo loop,
 /// the arm's in the server, their energies in the datagrams).
-enum class Mode { kOff, kOnePort, kTwoPort, kTwoPortRef, kUdpOff, kUdpTwoPort };
-constexpr std::array<Mode, 6> kModes{Mode::kOff,        Mode::kOnePort, Mode::kTwoPort,
-                                     Mode::kTwoPortRef, Mode::kUdpOff,  Mode::kUdpTwoPort};
+/// `udp-two-port`: the loop's end charges its deficit to the arm's end
+/// (servo.passivity_link: charge, the default); `udp-2p-admit`: it
+/// dissipates it on the environment's port (passivity_link: admittance).
+enum class Mode { kOff, kOnePort, kTwoPort, kTwoPortRef, kUdpOff, kUdpTwoPort, kUdpTwoPortAdmittance };
+constexpr std::array<Mode, 7> kModes{Mode::kOff,    Mode::kOnePort,    Mode::kTwoPort,          Mode::kTwoPortRef,
+                                     Mode::kUdpOff, Mode::kUdpTwoPort, Mode::kUdpTwoPortAdmittance};
 
 const char* ModeName(Mode m) {
   switch (m) {
@@ -72,11 +75,12 @@ const char* ModeName(Mode m) {
     case Mode::kTwoPortRef: return "two-port-ref";
     case Mode::kUdpOff: return "udp-off";
     case Mode::kUdpTwoPort: return "udp-two-port";
+    case Mode::kUdpTwoPortAdmittance: return "udp-2p-admit";
   }
   return "?";
 }
 
-bool IsUdp(Mode m) { return m == Mode::kUdpOff || m == Mode::kUdpTwoPort; }
+bool IsUdp(Mode m) { return m == Mode::kUdpOff || m == Mode::kUdpTwoPort || m == Mode::kUdpTwoPortAdmittance; }
 /// The mode a mode's gain is measured against: the same path without a controller.
 Mode Baseline(Mode m) { return IsUdp(m) ? Mode::kUdpOff : Mode::kOff; }
 
@@ -335,7 +339,9 @@ DeviceCalibration Truth(const haptics::SimDevice& device) {
 Point Run(const DeviceConfig& device_config, const OperatorConfig& grip, double k, int delay_ticks, Mode mode,
           double seconds, std::vector<double>& tick_us) {
   DeviceConfig config = device_config;
-  config.servo.passivity = mode == Mode::kOnePort || mode == Mode::kUdpTwoPort;
+  config.servo.passivity =
+      mode == Mode::kOnePort || mode == Mode::kUdpTwoPort || mode == Mode::kUdpTwoPortAdmittance;
+  config.servo.passivity_link_admittance = mode == Mode::kUdpTwoPortAdmittance;
   haptics::SimDevice arm(config, grip);
   arm.Place(kSide, {kStartX, 0.0, 0.0});
   arm.SetOperatorTarget(kSide, {kWallX + kPushDepth, 0.0, 0.0});
@@ -346,7 +352,7 @@ Point Run(const DeviceConfig& device_config, const OperatorConfig& grip, double 
   DelayedDevice delayed(arm, udp ? 0 : delay_ticks, arm.truth(kSide), 1.0 / config.servo.rate_hz,
                         two_port ? &limits : nullptr);
   std::unique_ptr<UdpPath> path;
-  if (udp) path = std::make_unique<UdpPath>(arm, config, delay_ticks * kPeriodNs * 1e-9, mode == Mode::kUdpTwoPort);
+  if (udp) path = std::make_unique<UdpPath>(arm, config, delay_ticks * kPeriodNs * 1e-9, mode != Mode::kUdpOff);
   haptics::Device& device = udp ? static_cast<haptics::Device&>(*path) : delayed;
   const auto applied = [&]() -> const Vec3d& { return udp ? path->server().applied() : delayed.applied(); };
   const DeviceCalibration calibration = Truth(arm);
@@ -617,7 +623,7 @@ int BenchPassivityMain(int argc, const char* const* argv) {
     err_own[m] = own != nullptr ? own->force_rms_err : 0.0;
   }
   const double cost = std::max(0.0, p99[best] - p99[0]);
-  const size_t udp_on = index(Mode::kUdpTwoPort), udp_off = index(Mode::kUdpOff);
+  const size_t udp_on = index(Mode::kUdpTwoPort), udp_off = index(Mode::kUdpOff);  // the default: charge
   std::printf("\n  at %.0f ms each way, against K stable %.0f N/m off (the UDP rows: %.0f N/m udp-off):\n",
               delays_ms[at], k_off, stable[udp_off][at]);
   for (size_t m = 1; m < kModes.size(); ++m) {
@@ -628,9 +634,12 @@ int BenchPassivityMain(int argc, const char* const* argv) {
                 ModeName(kModes[m]), stable[m][at], gain[m], err_common[m], ModeName(kModes[base]), err_common[base],
                 std::min(stable[base][at], stable[m][at]), err_own[m], p99[m]);
   }
-  std::printf("  across the real UDP path (protocol v2, the two-port's ends in the servo loop and the server):"
-              " gain %.3g (target >= 3) %s\n",
-              gain[udp_on], gain[udp_on] >= 3.0 ? "met" : "MISSED");
+  const size_t udp_admit = index(Mode::kUdpTwoPortAdmittance);
+  std::printf("  across the real UDP path (protocol v2, the two-port's ends in the servo loop and the server):\n"
+              "    gain %.3g with the loop's end charging its deficit to the arm's (the default; target >= 3) %s;\n"
+              "    %.3g with the loop's end's admittance, at %.3g N of force error against %.3g N udp-off\n",
+              gain[udp_on], gain[udp_on] >= 3.0 ? "met" : "MISSED", gain[udp_admit], err_common[udp_admit],
+              err_common[udp_off]);
   std::printf("  best: %s, gain %.3g (target >= 3) %s; it costs %.3g us of tick p99 (off %.3g us; target <= 2) %s\n"
               "  %zu runs in %.1f s wall; wrote %s/passivity.csv, passivity.png\n",
               ModeName(kModes[best]), gain[best], gain[best] >= 3.0 ? "met" : "MISSED", cost, p99[0],
@@ -698,6 +707,7 @@ int BenchPassivityMain(int argc, const char* const* argv) {
         case Mode::kTwoPortRef: return "two_port_ref";
         case Mode::kUdpOff: return "udp_off";
         case Mode::kUdpTwoPort: return "udp_two_port";
+        case Mode::kUdpTwoPortAdmittance: return "udp_two_port_admittance";
       }
       return "?";
     };
@@ -705,8 +715,9 @@ int BenchPassivityMain(int argc, const char* const* argv) {
     o << "{\"delay_ms\":" << JsonNumber(delays_ms[at]);
     for (size_t m = 0; m < kModes.size(); ++m) o << ",\"stable_stiffness_" << key(kModes[m]) << "\":" << JsonNumber(stable[m][at]);
     o << ",\"gain\":" << JsonNumber(gain[best]) << ",\"gain_mode\":\"" << ModeName(kModes[best]) << "\"";
-    // The UDP rows' own: udp_two_port's largest stable K over udp_off's.
-    o << ",\"gain_udp\":" << JsonNumber(gain[udp_on]);
+    // The UDP rows' own, each over udp_off's: the default (charge), and the admittance.
+    o << ",\"gain_udp\":" << JsonNumber(gain[udp_on])
+      << ",\"gain_udp_admittance\":" << JsonNumber(gain[index(Mode::kUdpTwoPortAdmittance)]);
     for (size_t m = 1; m < kModes.size(); ++m) {
       if (kModes[m] != Mode::kUdpOff) o << ",\"gain_" << key(kModes[m]) << "\":" << JsonNumber(gain[m]);
     }

@@ -132,8 +132,12 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
       const Vec3d& before = arm.link_end.dissipated();
       const double was = before[0] + before[1] + before[2];
       bool acted = false;
-      const Vec3d& offset = arm.link_end.ControlPosition(remote_in, period_s, &acted);
-      for (int i = 0; i < 3; ++i) p[i] += offset[i];
+      if (config_.servo.passivity_link_admittance) {
+        const Vec3d& offset = arm.link_end.ControlPosition(remote_in, period_s, &acted);
+        for (int i = 0; i < 3; ++i) p[i] += offset[i];
+      } else {
+        arm.link_end.ChargeDeficit(remote_in);
+      }
       const Vec3d& after = arm.link_end.dissipated();
       c.passivity_dissipated_j += after[0] + after[1] + after[2] - was;
       if (acted) ++c.passivity_ticks;

@@ -81,6 +81,11 @@ const Vec3d& TwoPortPassivity::ControlPosition(const Vec3d& remote_energy_in, do
   return offset_;
 }
 
+void TwoPortPassivity::ChargeDeficit(const Vec3d& remote_energy_in) {
+  const Vec3d margin = Margin(remote_energy_in);
+  for (int i = 0; i < 3; ++i) charged_[i] = std::max(charged_[i], -margin[i]);
+}
+
 void TwoPortPassivity::Hold(const Vec3d& rendered, const Vec3d& damping) {
   held_rendered_ = rendered;
   held_damping_ = damping;

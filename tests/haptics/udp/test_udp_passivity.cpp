@@ -449,6 +449,10 @@ TEST_CASE("a servo tick on the UDP device's v2 path with the two-port allocates 
   config.has_glove = false;
   config.has_grasp = false;
   config.udp.lost_after_s = 10.0;
+  SECTION("the loop's end charging its deficit to the arm's (the default)") {
+    config.servo.passivity_link_admittance = false;
+  }
+  SECTION("the loop's end's admittance") { config.servo.passivity_link_admittance = true; }
   ScriptedDevice arm(false, true);
   int port = 0;
   udp::UniqueFd fd = BoundLoopback(port);

@@ -28,10 +28,11 @@
 /// version 2, a server whose own servo.passivity is on) gets the two-port
 /// instead (twoport.hpp): the loop observes its end of the channel (the
 /// wrist force it commands against the arm's motion it is handed), sends
-/// its report with the commands, and dissipates on the virtual
-/// environment's port — the position the force field and the coupling
-/// read is the arm's plus the admittance controller's offset — while the
-/// server damps the arm on its side. With `servo.passivity` on the loop
+/// its report with the commands, while the server damps the arm on its
+/// side. Its own deficit it charges to the arm's end (`servo.passivity_link:
+/// charge`, the default) or dissipates on the virtual environment's port
+/// (`admittance`: the position the force field and the coupling read is the
+/// arm's plus the admittance controller's offset). With `servo.passivity` on the loop
 /// always sends its report, so a server knows to run its end; until the
 /// server reports back (a v1 server, or its passivity off) the one-port
 /// ports act as for a local device.

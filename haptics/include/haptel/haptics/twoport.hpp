@@ -124,6 +124,11 @@ class TwoPortPassivity {
   /// return a deficit.
   const Vec3d& ControlPosition(const Vec3d& remote_energy_in, double period_s, bool* acted = nullptr);
 
+  /// The loop's end without a controller: its deficit (−W where W < 0) is
+  /// charged to the arm's end instead — `charged` keeps the largest so far
+  /// (monotone, as the link carries it). Call once per tick after Observe.
+  void ChargeDeficit(const Vec3d& remote_energy_in);
+
   /// The offset ControlPosition keeps (m per axis).
   const Vec3d& offset() const { return offset_; }
   /// J per axis: the loop's end's largest deficit left uncovered by its
