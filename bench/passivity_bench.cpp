@@ -1,6 +1,15 @@
 #include "passivity_bench.hpp"
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <memory>
+#include <stdexcept>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -19,6 +28,8 @@
 #include "haptel/haptics/servo_loop.hpp"
 #include "haptel/haptics/sim_device.hpp"
 #include "haptel/haptics/twoport.hpp"
+#include "haptel/udp/arm_server.hpp"
+#include "haptel/udp/udp_device.hpp"
 #include "bare_loop.hpp"
 #include "plot.hpp"
 #include "servo_bench.hpp"
@@ -45,8 +56,16 @@ constexpr int kMaxDelayTicks = 16;
 /// The modes compared: no controller, the servo loop's one-port controller
 /// (passivity.hpp), the two-port across the delay line (twoport.hpp) with
 /// its credit unbounded, and with the credit bounded at zero.
-enum class Mode { kOff, kOnePort, kTwoPort, kTwoPortRef };
-constexpr std::array<Mode, 4> kModes{Mode::kOff, Mode::kOnePort, Mode::kTwoPort, Mode::kTwoPortRef};
+/// The UDP rows: the same arm behind the real UDP path — UdpDevice, loopback
+/// sockets, protocol version 2, udp::ArmServer adding the delay — without
+/// and with the two-port across the wire (the loop's end in the servo loop,
+/// the arm's in the server, their energies in the datagrams).
+/// `udp-two-port`: the loop's end charges its deficit to the arm's end
+/// (servo.passivity_link: charge, the default); `udp-2p-admit`: it
+/// dissipates it on the environment's port (passivity_link: admittance).
+enum class Mode { kOff, kOnePort, kTwoPort, kTwoPortRef, kUdpOff, kUdpTwoPort, kUdpTwoPortAdmittance };
+constexpr std::array<Mode, 7> kModes{Mode::kOff,    Mode::kOnePort,    Mode::kTwoPort,          Mode::kTwoPortRef,
+                                     Mode::kUdpOff, Mode::kUdpTwoPort, Mode::kUdpTwoPortAdmittance};
 
 const char* ModeName(Mode m) {
   switch (m) {
@@ -54,9 +73,16 @@ const char* ModeName(Mode m) {
     case Mode::kOnePort: return "one-port";
     case Mode::kTwoPort: return "two-port";
     case Mode::kTwoPortRef: return "two-port-ref";
+    case Mode::kUdpOff: return "udp-off";
+    case Mode::kUdpTwoPort: return "udp-two-port";
+    case Mode::kUdpTwoPortAdmittance: return "udp-2p-admit";
   }
   return "?";
 }
+
+bool IsUdp(Mode m) { return m == Mode::kUdpOff || m == Mode::kUdpTwoPort || m == Mode::kUdpTwoPortAdmittance; }
+/// The mode a mode's gain is measured against: the same path without a controller.
+Mode Baseline(Mode m) { return IsUdp(m) ? Mode::kUdpOff : Mode::kOff; }
 
 /// The sim arm behind a delay line of `delay_ticks` servo ticks each way:
 /// the loop reads what the arm measured that many ticks ago, and the arm
@@ -190,6 +216,94 @@ class DelayedDevice final : public haptics::Device {
   double loop_margin_min_ = 0.0;
 };
 
+/// Simulated time for both ends of the UDP path: the server's arm steps to
+/// it, and a wait for a reply first lets the in-process server handle what
+/// the client sent (loopback delivers at once), so the run is one thread,
+/// deterministic, and as fast as the sockets.
+class SimClock final : public haptics::udp::Clock {
+ public:
+  int64_t now_ns = 0;
+  haptics::udp::ArmServer* server = nullptr;
+  int64_t NowNs() override { return now_ns; }
+  WaitResult WaitReadable(int fd, int64_t deadline_ns) override {
+    if (server != nullptr) server->Poll(0);
+    pollfd p{fd, POLLIN, 0};
+    if (::poll(&p, 1, 0) > 0) return WaitResult::kReadable;
+    now_ns = std::max(now_ns, deadline_ns);  // nothing came: the wait ran out
+    return WaitResult::kNotYet;
+  }
+};
+
+/// The UDP path in one process: an ArmServer on a loopback socket serving
+/// `arm`, and the UdpDevice the servo loop drives; a one-way command is
+/// handled by the server at once, as a real-time server would.
+class UdpPath final : public haptics::Device {
+ public:
+  UdpPath(haptics::SimDevice& arm, const DeviceConfig& config, double delay_s, bool two_port)
+      : socket_(Bind(port_)), server_(arm, kSide, socket_.get(), Options(config, delay_s, two_port), haptics::udp::UnitsOf(arm, kSide),
+                clock_),
+        client_(ClientConfig(config, port_), clock_) {
+    clock_.server = &server_;
+  }
+  SimClock& clock() { return clock_; }
+  const haptics::udp::ArmServer& server() const { return server_; }
+  const haptics::UdpDevice& client() const { return client_; }
+
+  const haptics::DeviceDescription& description() const override { return client_.description(); }
+  haptics::DeviceStatus ReadWrist(Side side, int64_t now_ns, haptics::WristRaw& out) override {
+    return client_.ReadWrist(side, now_ns, out);
+  }
+  haptics::DeviceStatus ReadGlove(Side side, int64_t now_ns, haptics::GloveRaw& out) override {
+    return client_.ReadGlove(side, now_ns, out);
+  }
+  haptics::DeviceStatus WriteWristForce(Side side, const Vec3d& command) override {
+    const haptics::DeviceStatus s = client_.WriteWristForce(side, command);
+    server_.Poll(0);
+    return s;
+  }
+  haptics::DeviceStatus WriteFingerForces(Side side, const std::array<double, haptics::kFingers>& c) override {
+    return client_.WriteFingerForces(side, c);
+  }
+  bool LinkPassivity(Side side, haptics::LinkEnergy& remote) override { return client_.LinkPassivity(side, remote); }
+  void SetLinkEnergy(Side side, const haptics::LinkEnergy& local) override { client_.SetLinkEnergy(side, local); }
+  void RestartLinkEnergy(Side side) override { client_.RestartLinkEnergy(side); }
+
+ private:
+  static UniqueFd Bind(int& port) {
+    UniqueFd fd(::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0));
+    sockaddr_in addr{};
+    addr.sin_family = AF_INET;
+    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    socklen_t len = sizeof addr;
+    if (fd.get() < 0 || ::bind(fd.get(), reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0 ||
+        ::getsockname(fd.get(), reinterpret_cast<sockaddr*>(&addr), &len) != 0) {
+      throw std::runtime_error(std::string("cannot bind a loopback UDP socket: ") + std::strerror(errno));
+    }
+    port = ntohs(addr.sin_port);
+    return fd;
+  }
+  static haptics::udp::ArmServerOptions Options(const DeviceConfig& config, double delay_s, bool two_port) {
+    haptics::udp::ArmServerOptions o;
+    o.lost_after_s = config.udp.lost_after_s;
+    o.delay_s = delay_s;
+    o.passivity = two_port;
+    o.limits.max_damping = config.servo.passivity_max_damping;
+    o.limits.min_speed = config.servo.passivity_min_speed;
+    return o;
+  }
+  static DeviceConfig ClientConfig(DeviceConfig config, int port) {
+    config.driver = "udp";
+    config.udp.arms[Index(kSide)] = {"127.0.0.1", port};
+    return config;
+  }
+
+  int port_ = 0;
+  SimClock clock_;
+  UniqueFd socket_;
+  haptics::udp::ArmServer server_;
+  haptics::UdpDevice client_;
+};
+
 struct Point {
   double k = 0.0;
   double delay_ms = 0.0;
@@ -203,6 +317,8 @@ struct Point {
   double force_rms_err = 0.0;   ///< N against the ideal wall
   double penetration = 0.0;     ///< m, mean over the last 0.5 s
   double loop_margin_min = 0.0; ///< J, two-port: the loop's end's smallest margin
+  double loop_energy_j = 0.0;   ///< J, UDP two-port: what the loop's end returned (its offset)
+  uint64_t loop_acting_ticks = 0;
 };
 
 /// The perfect calibration of a sim arm: its hidden truth.
@@ -223,14 +339,22 @@ DeviceCalibration Truth(const haptics::SimDevice& device) {
 Point Run(const DeviceConfig& device_config, const OperatorConfig& grip, double k, int delay_ticks, Mode mode,
           double seconds, std::vector<double>& tick_us) {
   DeviceConfig config = device_config;
-  config.servo.passivity = mode == Mode::kOnePort;
+  config.servo.passivity =
+      mode == Mode::kOnePort || mode == Mode::kUdpTwoPort || mode == Mode::kUdpTwoPortAdmittance;
+  config.servo.passivity_link_admittance = mode == Mode::kUdpTwoPortAdmittance;
   haptics::SimDevice arm(config, grip);
   arm.Place(kSide, {kStartX, 0.0, 0.0});
   arm.SetOperatorTarget(kSide, {kWallX + kPushDepth, 0.0, 0.0});
   haptics::TwoPortLimits limits{config.servo.passivity_max_damping, config.servo.passivity_min_speed};
   if (mode == Mode::kTwoPortRef) limits.max_credit_j = 0.0;
   const bool two_port = mode == Mode::kTwoPort || mode == Mode::kTwoPortRef;
-  DelayedDevice device(arm, delay_ticks, arm.truth(kSide), 1.0 / config.servo.rate_hz, two_port ? &limits : nullptr);
+  const bool udp = IsUdp(mode);
+  DelayedDevice delayed(arm, udp ? 0 : delay_ticks, arm.truth(kSide), 1.0 / config.servo.rate_hz,
+                        two_port ? &limits : nullptr);
+  std::unique_ptr<UdpPath> path;
+  if (udp) path = std::make_unique<UdpPath>(arm, config, delay_ticks * kPeriodNs * 1e-9, mode != Mode::kUdpOff);
+  haptics::Device& device = udp ? static_cast<haptics::Device&>(*path) : delayed;
+  const auto applied = [&]() -> const Vec3d& { return udp ? path->server().applied() : delayed.applied(); };
   const DeviceCalibration calibration = Truth(arm);
   haptics::Hal hal(calibration);
   haptics::ServoLoop loop(device, hal, config, calibration);
@@ -254,6 +378,7 @@ Point Run(const DeviceConfig& device_config, const OperatorConfig& grip, double 
     sp.coupling_target = s.valid ? s.position : Vec3d{kStartX, 0.0, 0.0};
     sp.coupling_target[0] = std::min(sp.coupling_target[0], kWallX);
     hal.SetSetpoint(kSide, sp, now);
+    if (udp) path->clock().now_ns = now;
     const int64_t t0 = MonotonicNs();
     loop.Tick(kSide, now);
     tick_us.push_back(static_cast<double>(MonotonicNs() - t0) * 1e-3);
@@ -263,7 +388,7 @@ Point Run(const DeviceConfig& device_config, const OperatorConfig& grip, double 
     const double t = static_cast<double>(i) * kPeriodNs * 1e-9;
     const double pen = std::max(0.0, x[0] - kWallX);
     if (t >= kContactFromS) {
-      const double felt = arm.MeasureForce(kSide, device.applied())[0];
+      const double felt = arm.MeasureForce(kSide, applied())[0];
       const double ideal = -k * pen;
       err2 += (felt - ideal) * (felt - ideal);
       ++err_n;
@@ -284,10 +409,20 @@ Point Run(const DeviceConfig& device_config, const OperatorConfig& grip, double 
   // Settled, or an oscillation that dies away (the light grip's own,
   // passive one decays slowly); one that keeps up or grows is not stable.
   r.stable = r.spread < kSettledSpread || r.spread < kDecayRatio * r.early_spread;
-  r.energy_j = two_port ? device.dissipated() : c.passivity_dissipated_j;
-  r.max_alpha = two_port ? device.max_alpha() : c.passivity_max_alpha;
-  r.acting_ticks = two_port ? device.acting_ticks() : c.passivity_ticks;
-  r.loop_margin_min = device.loop_margin_min();
+  if (udp) {
+    // The arm's end as the server counts it; the loop's end in the loop's counters.
+    const haptics::udp::ServerCounters& sc = path->server().counters();
+    r.energy_j = sc.passivity_dissipated_j;
+    r.max_alpha = sc.passivity_max_alpha;
+    r.acting_ticks = sc.passivity_ticks;
+    r.loop_energy_j = c.passivity_dissipated_j;
+    r.loop_acting_ticks = c.passivity_ticks;
+  } else {
+    r.energy_j = two_port ? delayed.dissipated() : c.passivity_dissipated_j;
+    r.max_alpha = two_port ? delayed.max_alpha() : c.passivity_max_alpha;
+    r.acting_ticks = two_port ? delayed.acting_ticks() : c.passivity_ticks;
+    r.loop_margin_min = delayed.loop_margin_min();
+  }
   r.force_rms_err = err_n > 0 ? std::sqrt(err2 / static_cast<double>(err_n)) : 0.0;
   r.penetration = pen_sum / static_cast<double>(tail);
   return r;
@@ -464,17 +599,22 @@ int BenchPassivityMain(int argc, const char* const* argv) {
   for (size_t i = 0; i < delays_ms.size(); ++i) {
     if (delays_ms[i] == kTargetDelayMs) at = i;
   }
+  const auto index = [](Mode mode) {
+    return static_cast<size_t>(std::find(kModes.begin(), kModes.end(), mode) - kModes.begin());
+  };
   const double k_off = stable[0][at];
   std::array<double, kModes.size()> gain{}, p99{}, err_common{}, err_own{};
   size_t best = 1;
   for (size_t m = 0; m < kModes.size(); ++m) {
-    gain[m] = k_off > 0 ? stable[m][at] / k_off : 0.0;
-    if (m > 0 && gain[m] > gain[best]) best = m;
+    // Each path against itself without a controller: the UDP rows against udp-off.
+    const double k_base = stable[index(Baseline(kModes[m]))][at];
+    gain[m] = k_base > 0 ? stable[m][at] / k_base : 0.0;
+    if (m > 0 && !IsUdp(kModes[m]) && gain[m] > gain[best]) best = m;
     p99[m] = Percentile(ticks[m], 0.99);
     // Transparency: the force error at the stiffnesses stable both off and in
     // this mode (comparable across modes), and at this mode's own largest.
     int n = 0;
-    for (double k = 250.0; k <= std::min(k_off, stable[m][at]); k *= 2.0) {
+    for (double k = 250.0; k <= std::min(stable[index(Baseline(kModes[m]))][at], stable[m][at]); k *= 2.0) {
       err_common[m] += Find(points, k, delays_ms[at], kModes[m])->force_rms_err;
       ++n;
     }
@@ -483,13 +623,23 @@ int BenchPassivityMain(int argc, const char* const* argv) {
     err_own[m] = own != nullptr ? own->force_rms_err : 0.0;
   }
   const double cost = std::max(0.0, p99[best] - p99[0]);
-  std::printf("\n  at %.0f ms each way, against K stable %.0f N/m off:\n", delays_ms[at], k_off);
+  const size_t udp_on = index(Mode::kUdpTwoPort), udp_off = index(Mode::kUdpOff);  // the default: charge
+  std::printf("\n  at %.0f ms each way, against K stable %.0f N/m off (the UDP rows: %.0f N/m udp-off):\n",
+              delays_ms[at], k_off, stable[udp_off][at]);
   for (size_t m = 1; m < kModes.size(); ++m) {
-    std::printf("    %-12s K stable %6.0f N/m, gain %.3g; force RMS error %.3f N (off %.3f N) over K <= %.0f N/m,"
+    const size_t base = index(Baseline(kModes[m]));
+    if (m == base) continue;
+    std::printf("    %-12s K stable %6.0f N/m, gain %.3g; force RMS error %.3f N (%s %.3f N) over K <= %.0f N/m,"
                 " %.3f N at its largest; tick p99 %.3g us\n",
-                ModeName(kModes[m]), stable[m][at], gain[m], err_common[m], err_common[0],
-                std::min(k_off, stable[m][at]), err_own[m], p99[m]);
+                ModeName(kModes[m]), stable[m][at], gain[m], err_common[m], ModeName(kModes[base]), err_common[base],
+                std::min(stable[base][at], stable[m][at]), err_own[m], p99[m]);
   }
+  const size_t udp_admit = index(Mode::kUdpTwoPortAdmittance);
+  std::printf("  across the real UDP path (protocol v2, the two-port's ends in the servo loop and the server):\n"
+              "    gain %.3g with the loop's end charging its deficit to the arm's (the default; target >= 3) %s;\n"
+              "    %.3g with the loop's end's admittance, at %.3g N of force error against %.3g N udp-off\n",
+              gain[udp_on], gain[udp_on] >= 3.0 ? "met" : "MISSED", gain[udp_admit], err_common[udp_admit],
+              err_common[udp_off]);
   std::printf("  best: %s, gain %.3g (target >= 3) %s; it costs %.3g us of tick p99 (off %.3g us; target <= 2) %s\n"
               "  %zu runs in %.1f s wall; wrote %s/passivity.csv, passivity.png\n",
               ModeName(kModes[best]), gain[best], gain[best] >= 3.0 ? "met" : "MISSED", cost, p99[0],
@@ -518,11 +668,11 @@ int BenchPassivityMain(int argc, const char* const* argv) {
   {
     std::ofstream csv(dir / "passivity.csv");
     csv << "stiffness,delay_ms,mode,stable,spread_m,energy_j,max_alpha,acting_ticks,force_rms_err_n,penetration_m,"
-           "loop_margin_min_j\n";
+           "loop_margin_min_j,loop_energy_j,loop_acting_ticks\n";
     for (const Point& p : points) {
       csv << p.k << "," << p.delay_ms << "," << ModeName(p.mode) << "," << (p.stable ? 1 : 0) << "," << p.spread
           << "," << p.energy_j << "," << p.max_alpha << "," << p.acting_ticks << "," << p.force_rms_err << ","
-          << p.penetration << "," << p.loop_margin_min << "\n";
+          << p.penetration << "," << p.loop_margin_min << "," << p.loop_energy_j << "," << p.loop_acting_ticks << "\n";
     }
   }
   {
@@ -555,6 +705,9 @@ int BenchPassivityMain(int argc, const char* const* argv) {
         case Mode::kOnePort: return "on";
         case Mode::kTwoPort: return "two_port";
         case Mode::kTwoPortRef: return "two_port_ref";
+        case Mode::kUdpOff: return "udp_off";
+        case Mode::kUdpTwoPort: return "udp_two_port";
+        case Mode::kUdpTwoPortAdmittance: return "udp_two_port_admittance";
       }
       return "?";
     };
@@ -562,7 +715,12 @@ int BenchPassivityMain(int argc, const char* const* argv) {
     o << "{\"delay_ms\":" << JsonNumber(delays_ms[at]);
     for (size_t m = 0; m < kModes.size(); ++m) o << ",\"stable_stiffness_" << key(kModes[m]) << "\":" << JsonNumber(stable[m][at]);
     o << ",\"gain\":" << JsonNumber(gain[best]) << ",\"gain_mode\":\"" << ModeName(kModes[best]) << "\"";
-    for (size_t m = 1; m < kModes.size(); ++m) o << ",\"gain_" << key(kModes[m]) << "\":" << JsonNumber(gain[m]);
+    // The UDP rows' own, each over udp_off's: the default (charge), and the admittance.
+    o << ",\"gain_udp\":" << JsonNumber(gain[udp_on])
+      << ",\"gain_udp_admittance\":" << JsonNumber(gain[index(Mode::kUdpTwoPortAdmittance)]);
+    for (size_t m = 1; m < kModes.size(); ++m) {
+      if (kModes[m] != Mode::kUdpOff) o << ",\"gain_" << key(kModes[m]) << "\":" << JsonNumber(gain[m]);
+    }
     o << ",\"passivity_bound\":" << JsonNumber(bound) << ",\"cost_us_p99\":" << JsonNumber(cost);
     o << ",\"servo_p99_us_bare\":" << JsonNumber(timing.median_us[LoopTiming::kBare])
       << ",\"servo_p99_us_off\":" << JsonNumber(timing.median_us[LoopTiming::kOff])
@@ -588,7 +746,8 @@ int BenchPassivityMain(int argc, const char* const* argv) {
       const Point& p = points[i];
       o << (i ? "," : "") << "{\"stiffness\":" << JsonNumber(p.k) << ",\"delay_ms\":" << JsonNumber(p.delay_ms)
         << ",\"mode\":\"" << ModeName(p.mode) << "\",\"stable\":" << (p.stable ? "true" : "false")
-        << ",\"energy_j\":" << JsonNumber(p.energy_j) << ",\"force_rms_err_n\":" << JsonNumber(p.force_rms_err) << "}";
+        << ",\"energy_j\":" << JsonNumber(p.energy_j) << ",\"loop_energy_j\":" << JsonNumber(p.loop_energy_j)
+        << ",\"force_rms_err_n\":" << JsonNumber(p.force_rms_err) << "}";
     }
     o << "]}";
     std::printf("%s\n", JsonLine(o.str(), smoke).c_str());

@@ -9,7 +9,6 @@
 // One client at a time holds the arm; its forces are zeroed and the arm freed
 // for another client when it has been silent for udp.lost_after_s.
 #include <netdb.h>
-#include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -17,6 +16,7 @@
 #include <cerrno>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <memory>
@@ -32,6 +32,7 @@
 #include "haptel/core/clock.hpp"
 #include "haptel/core/log.hpp"
 #include "haptel/haptics/sim_device.hpp"
+#include "haptel/udp/arm_server.hpp"
 #include "haptel/udp/udp_device.hpp"
 #include "haptel/udp/udp_protocol.hpp"
 
@@ -46,11 +47,16 @@ void OnSignal(int) { g_stop = 1; }
 constexpr const char* kProgram = "haptel-device-server";
 constexpr const char* kUsage =
     "usage: haptel-device-server --side left|right --port N [--device FILE] [--bind ADDR]\n"
+    "                            [--delay-ms D]\n"
     "  --side left|right  the arm this server serves\n"
     "  --port N           UDP port to serve on (0: any free port; the ready line names it)\n"
     "  --device FILE      device configuration (default config/devices/sim.yaml); its sim\n"
     "                     section shapes the arm, udp.lost_after_s is the client watchdog\n"
     "  --bind ADDR        address to bind (default 127.0.0.1)\n"
+    "  --delay-ms D       added delay each way, 0-50 ms (default 0): commands act D ms after\n"
+    "                     they arrive, replies carry the arm as it was D ms before\n"
+    "Speaks protocol versions 1 and 2; with the device file's servo.passivity on, a version-2\n"
+    "client that observes its end gets the arm's end of the two-port passivity controller.\n"
     "Prints 'haptel-device-server: serving <side> arm of '<name>' on <addr>:<port>' when ready;\n"
     "exits 0 on SIGTERM/SIGINT, 2 on bad arguments or configuration, 1 if it cannot bind.\n";
 
@@ -59,193 +65,11 @@ struct Options {
   Side side = Side::kLeft;
   int port = 0;
   std::string bind = "127.0.0.1";
-};
-
-struct Peer {
-  sockaddr_storage addr{};
-  socklen_t len = 0;
-  bool Same(const sockaddr_storage& a, socklen_t l) const {
-    return l == len && std::memcmp(&a, &addr, len) == 0;
-  }
-};
-
-struct ServerCounters {
-  uint64_t datagrams = 0;
-  uint64_t wrist_requests = 0;
-  uint64_t glove_requests = 0;
-  uint64_t forces_applied = 0;
-  uint64_t stale_commands = 0;  ///< force commands older than one already applied (not applied)
-  uint64_t unexpected = 0;      ///< replies sent to the server
-  uint64_t busy = 0;            ///< datagrams from a second client while one holds the arm
-  uint64_t wrong_side = 0;
-  uint64_t device_lost = 0;
-  uint64_t watchdog_trips = 0;  ///< client silent: forces zeroed, arm freed
-  uint64_t send_errors = 0;
-  std::array<uint64_t, udp::kDecodeStatuses> malformed{};
-};
-
-/// Serves one arm of `sim` on a bound socket. Single-threaded; allocates nothing per datagram.
-class ArmServer {
- public:
-  ArmServer(SimDevice& sim, Side side, int fd, double session_timeout_s)
-      : sim_(sim), side_(side), fd_(fd), session_timeout_ns_(SToNs(session_timeout_s)) {}
-
-  void Serve() {
-    while (g_stop == 0) {
-      CheckWatchdog();
-      pollfd p{fd_, POLLIN, 0};
-      const int ready =
-          ::poll(&p, 1, 20);  // short: the watchdog and the stop flag are checked between
-      if (ready <= 0) continue;
-      for (;;) {
-        from_len_ = sizeof from_;
-        const ssize_t n = ::recvfrom(fd_, rx_.data(), rx_.size(), MSG_DONTWAIT,
-                                     reinterpret_cast<sockaddr*>(&from_), &from_len_);
-        if (n < 0) break;
-        Handle(static_cast<std::size_t>(n));
-      }
-    }
-    ZeroForces();
-  }
-
-  const ServerCounters& counters() const { return c_; }
-
- private:
-  void Handle(std::size_t size) {
-    ++c_.datagrams;
-    const udp::DecodeStatus status = udp::Decode(std::span<const uint8_t>(rx_.data(), size), msg_);
-    if (status != udp::DecodeStatus::kOk) {
-      ++c_.malformed[static_cast<std::size_t>(status)];
-      // A sound header with a type we do not know: say so, so a newer client sees why.
-      if (status == udp::DecodeStatus::kUnknownType)
-        Reply(udp::ErrorReply{udp::ErrorCode::kUnsupported});
-      return;  // anything else is not trusted enough to answer
-    }
-    const udp::MessageType type = msg_.type();
-    const bool request =
-        type == udp::MessageType::kWristRequest || type == udp::MessageType::kGloveRequest;
-    const bool command =
-        type == udp::MessageType::kWristForce || type == udp::MessageType::kFingerForce;
-    if (!request && !command) {
-      ++c_.unexpected;
-      return;
-    }
-    if (msg_.side != side_) {
-      ++c_.wrong_side;
-      if (request) Reply(udp::ErrorReply{udp::ErrorCode::kWrongSide});
-      return;
-    }
-    CheckWatchdog();  // a client quiet for too long loses the arm (forces zeroed) before anyone
-                      // takes over
-    if (session_ && !peer_.Same(from_, from_len_)) {
-      ++c_.busy;
-      if (request) Reply(udp::ErrorReply{udp::ErrorCode::kBusy});
-      return;
-    }
-    const int64_t now = MonotonicNs();
-    if (!session_) {
-      session_ = true;
-      peer_.addr = from_;
-      peer_.len = from_len_;
-      has_wrist_seq_ = has_finger_seq_ = false;
-    }
-    last_heard_ns_ = now;
-    if (const auto* p = std::get_if<udp::WristRequest>(&msg_.payload)) {
-      ++c_.wrist_requests;
-      const udp::WristRequest commands = *p;  // msg_ is reused by Reply
-      ApplyWrist(commands.wrist_force);
-      ApplyFingers(commands.finger_forces);
-      WristRaw raw;
-      if (sim_.ReadWrist(side_, now, raw) != DeviceStatus::kOk) {
-        ++c_.device_lost;
-        Reply(udp::ErrorReply{udp::ErrorCode::kDeviceLost});
-        return;
-      }
-      Reply(udp::WristReply{MonotonicNs(), raw.position, raw.orientation});
-    } else if (std::holds_alternative<udp::GloveRequest>(msg_.payload)) {
-      ++c_.glove_requests;
-      GloveRaw raw;
-      if (sim_.ReadGlove(side_, now, raw) != DeviceStatus::kOk) {
-        ++c_.device_lost;
-        Reply(udp::ErrorReply{udp::ErrorCode::kDeviceLost});
-        return;
-      }
-      Reply(udp::GloveReply{MonotonicNs(), raw.sensors, raw.grasp});
-    } else if (const auto* w = std::get_if<udp::WristForce>(&msg_.payload)) {
-      ApplyWrist(w->command);
-    } else if (const auto* f = std::get_if<udp::FingerForce>(&msg_.payload)) {
-      ApplyFingers(f->command);
-    }
-  }
-
-  /// Applies a wrist command unless a newer one (by sequence) was applied already.
-  void ApplyWrist(const Vec3d& command) {
-    if (has_wrist_seq_ && !udp::SequenceAfter(msg_.sequence, wrist_seq_) &&
-        msg_.sequence != wrist_seq_) {
-      ++c_.stale_commands;
-      return;
-    }
-    has_wrist_seq_ = true;
-    wrist_seq_ = msg_.sequence;
-    sim_.WriteWristForce(side_, command);
-    ++c_.forces_applied;
-  }
-  void ApplyFingers(const std::array<double, kFingers>& command) {
-    if (has_finger_seq_ && !udp::SequenceAfter(msg_.sequence, finger_seq_) &&
-        msg_.sequence != finger_seq_) {
-      ++c_.stale_commands;
-      return;
-    }
-    has_finger_seq_ = true;
-    finger_seq_ = msg_.sequence;
-    sim_.WriteFingerForces(side_, command);
-    ++c_.forces_applied;
-  }
-
-  /// Answers the datagram in msg_/from_ with `payload`, echoing its sequence and side.
-  void Reply(const udp::Payload& payload) {
-    const udp::Message reply{msg_.sequence, msg_.side, payload};
-    const std::size_t size = udp::Encode(reply, tx_);
-    if (size == 0 || ::sendto(fd_, tx_.data(), size, 0, reinterpret_cast<const sockaddr*>(&from_),
-                              from_len_) < 0) {
-      ++c_.send_errors;
-    }
-  }
-
-  void CheckWatchdog() {
-    if (session_ && MonotonicNs() - last_heard_ns_ >= session_timeout_ns_) {
-      ZeroForces();
-      session_ = false;
-      ++c_.watchdog_trips;
-    }
-  }
-
-  void ZeroForces() {
-    sim_.WriteWristForce(side_, Vec3d{});
-    sim_.WriteFingerForces(side_, std::array<double, kFingers>{});
-  }
-
-  SimDevice& sim_;
-  Side side_;
-  int fd_;
-  int64_t session_timeout_ns_;
-  bool session_ = false;
-  Peer peer_;
-  int64_t last_heard_ns_ = 0;
-  bool has_wrist_seq_ = false;
-  bool has_finger_seq_ = false;
-  uint32_t wrist_seq_ = 0;
-  uint32_t finger_seq_ = 0;
-  sockaddr_storage from_{};
-  socklen_t from_len_ = 0;
-  std::array<uint8_t, udp::kMaxMessageSize + 1> rx_{};
-  udp::Buffer tx_{};
-  udp::Message msg_;
-  ServerCounters c_;
+  double delay_ms = 0.0;
 };
 
 Options ParseOptions(int argc, char** argv) {
-  const Args args(argc, argv, {"device", "side", "port", "bind"}, {});
+  const Args args(argc, argv, {"device", "side", "port", "bind", "delay-ms"}, {});
   Options o;
   if (!args.positional().empty())
     throw UsageError("unexpected argument '" + args.positional()[0] + "'");
@@ -262,6 +86,14 @@ Options ParseOptions(int argc, char** argv) {
   if (!port) throw UsageError("--port N is required (0: any free port)");
   o.port = *port;
   o.bind = args.Value("bind").value_or(o.bind);
+  if (const auto delay = args.Value("delay-ms")) {
+    char* end = nullptr;
+    o.delay_ms = std::strtod(delay->c_str(), &end);
+    if (end == delay->c_str() || *end != '\0' || !(o.delay_ms >= 0.0 && o.delay_ms <= udp::kMaxDelay_s * 1e3)) {
+      throw UsageError("--delay-ms: expected a number of milliseconds from 0 to " +
+                       std::to_string(static_cast<int>(udp::kMaxDelay_s * 1e3)) + ", got '" + *delay + "'");
+    }
+  }
   o.device = args.Value("device").value_or(ShippedFile("config/devices/sim.yaml").string());
   return o;
 }
@@ -305,7 +137,7 @@ udp::UniqueFd Bind(const Options& o, std::string& bound) {
   throw std::runtime_error("cannot bind " + o.bind + ":" + service + ": " + error);
 }
 
-std::string Summary(const ServerCounters& c) {
+std::string Summary(const udp::ServerCounters& c) {
   std::string s =
       "stopped: " + std::to_string(c.datagrams) + " datagrams, " +
       std::to_string(c.wrist_requests) + " wrist and " + std::to_string(c.glove_requests) +
@@ -321,6 +153,15 @@ std::string Summary(const ServerCounters& c) {
     s.append(std::to_string(c.malformed[i]));
   }
   if (total == 0) s += " none";
+  if (c.malformed[static_cast<std::size_t>(udp::DecodeStatus::kBadVersion)] != 0) {
+    s += " (bad_version: a peer speaking a protocol version other than " + std::to_string(udp::kMinVersion) +
+         "-" + std::to_string(udp::kVersion) + ")";
+  }
+  s += "; requests by version: v1 " + std::to_string(c.requests_by_version[1]) + ", v2 " +
+       std::to_string(c.requests_by_version[2]);
+  s += "; passivity (arm's end): " + std::to_string(c.passivity_ticks) + " ticks damped, " +
+       std::to_string(c.passivity_dissipated_j * 1e3) + " mJ, largest alpha " +
+       std::to_string(c.passivity_max_alpha) + " N*s/m";
   return s;
 }
 
@@ -350,11 +191,19 @@ int main(int argc, char** argv) {
     sigaction(SIGTERM, &action, nullptr);
     sigaction(SIGINT, &action, nullptr);
     SimDevice sim(config, OperatorConfig{});
-    ArmServer server(sim, options.side, socket.get(), config.udp.lost_after_s);
+    udp::ArmServerOptions server_options;
+    server_options.lost_after_s = config.udp.lost_after_s;
+    server_options.delay_s = options.delay_ms * 1e-3;
+    server_options.passivity = config.servo.passivity;
+    server_options.limits.max_damping = config.servo.passivity_max_damping;
+    server_options.limits.min_speed = config.servo.passivity_min_speed;
+    udp::ArmServer server(sim, options.side, socket.get(), server_options, udp::UnitsOf(sim, options.side));
     std::printf("%s: serving %s arm of '%s' on %s\n", kProgram,
                 options.side == Side::kLeft ? "left" : "right", config.name.c_str(), bound.c_str());
     std::fflush(stdout);
-    server.Serve();
+    // Short waits: the watchdog and the stop flag are checked between.
+    while (g_stop == 0) server.Poll(20'000'000);
+    server.ZeroForces();
     log::Info(Summary(server.counters()));
     return cli::kExitOk;
   });

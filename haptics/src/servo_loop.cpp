@@ -36,6 +36,10 @@ ServoLoop::ServoLoop(Device& device, Hal& hal, const DeviceConfig& config,
     const PassivityLimits limits{config.servo.passivity_max_damping, config.servo.passivity_min_speed};
     arms_[i]->field_port = PassivityController(limits);
     arms_[i]->coupling_port = PassivityController(limits);
+    TwoPortLimits link_limits;
+    link_limits.max_damping = limits.max_damping;
+    link_limits.min_speed = limits.min_speed;
+    arms_[i]->link_end = TwoPortPassivity(ChannelEnd::kLoop, link_limits);
   }
 }
 
@@ -73,6 +77,14 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
     arm.last_tick_ns = 0;
     arm.field_port.Reset();
     arm.coupling_port.Reset();
+    if (arm.link_end.energy_in() != Vec3d{} || arm.link_remote.acted_ticks != 0) {
+      // Both ends of the link count afresh once the arm is back.
+      arm.link_base_ticks += arm.link_remote.acted_ticks;
+      arm.link_base_dissipated_j += arm.link_remote.dissipated_j;
+      arm.link_remote = LinkEnergy{};
+      arm.link_end.Reset();
+      device_.RestartLinkEnergy(side);
+    }
     arm.published.Store(c);
     return;
   }
@@ -105,10 +117,39 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
     return;  // nothing to compute forces from yet
   }
 
+  const double period_s = arm.last_tick_ns != 0 ? static_cast<double>(now_ns - arm.last_tick_ns) * 1e-9 : 0.0;
+  arm.last_tick_ns = now_ns;
+  // The two-port's loop end: what crossed the channel here over the period
+  // just ended, and the offset that returns a deficit to the environment.
+  const bool link = config_.servo.passivity && device_.LinkPassivity(side, arm.link_remote);
+  Vec3d p = arm.previous_position;
+  if (config_.servo.passivity) {
+    arm.link_end.Observe(arm.displacement);
+    if (link) {
+      ++c.passivity_link_ticks;
+      Vec3d remote_in{};
+      for (int i = 0; i < 3; ++i) remote_in[i] = arm.link_remote.energy_in[i] - arm.link_remote.charged[i];
+      const Vec3d& before = arm.link_end.dissipated();
+      const double was = before[0] + before[1] + before[2];
+      bool acted = false;
+      if (config_.servo.passivity_link_admittance) {
+        const Vec3d& offset = arm.link_end.ControlPosition(remote_in, period_s, &acted);
+        for (int i = 0; i < 3; ++i) p[i] += offset[i];
+      } else {
+        arm.link_end.ChargeDeficit(remote_in);
+      }
+      const Vec3d& after = arm.link_end.dissipated();
+      c.passivity_dissipated_j += after[0] + after[1] + after[2] - was;
+      if (acted) ++c.passivity_ticks;
+      c.passivity_device_ticks = arm.link_base_ticks + arm.link_remote.acted_ticks;
+      c.passivity_device_dissipated_j = arm.link_base_dissipated_j + arm.link_remote.dissipated_j;
+      c.passivity_device_max_alpha = std::max(c.passivity_device_max_alpha, arm.link_remote.max_alpha);
+    }
+  }
+
   // Forces from the latest set-point, at full rate whatever the feeders' rates.
   if (!hal_.TrySetpoint(side, arm.setpoint)) ++c.setpoint_read_fallbacks;
   const ForceSetpoint& sp = arm.setpoint;
-  const Vec3d& p = arm.previous_position;
   const Vec3d& v = arm.velocity;
   const Vec3d field = EvaluateForceField(sp.field, p, v);
   Vec3d coupling{};
@@ -126,9 +167,7 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
     for (int i = 0; i < 3; ++i) from_setpoint[i] += cue.force[i];
     arm.cue_felt = true;
   }
-  const double period_s = arm.last_tick_ns != 0 ? static_cast<double>(now_ns - arm.last_tick_ns) * 1e-9 : 0.0;
-  arm.last_tick_ns = now_ns;
-  if (config_.servo.passivity) {
+  if (config_.servo.passivity && !link) {
     bool acted = false;
     for (PassivityController* port : {&arm.field_port, &arm.coupling_port}) {
       const PassivityAction a =
@@ -144,11 +183,18 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
     if (acted) ++c.passivity_ticks;
   }
   Vec3d local{};
-  if (gravity_ != nullptr) local[2] = gravity_->Evaluate(p);
+  if (gravity_ != nullptr) local[2] = gravity_->Evaluate(arm.previous_position);  // the arm's own weight
   Vec3d wrist{};
   std::array<double, kFingers> fingers = sp.finger_forces;
   arm.safety.Apply(now_ns, sp.stamp_ns, from_setpoint, local, wrist, fingers);
 
+  if (config_.servo.passivity) {
+    // The force held over the next period, and the report the commands carry.
+    arm.link_end.Hold(wrist);
+    const Vec3d& spent = arm.link_end.dissipated();
+    device_.SetLinkEnergy(side, LinkEnergy{arm.link_end.energy_in(), arm.link_end.charged(),
+                                           spent[0] + spent[1] + spent[2], c.passivity_ticks, 0.0});
+  }
   if (device_.WriteWristForce(side, NewtonsToCommand(cal, wrist)) != DeviceStatus::kOk) ++c.write_failures;
   if (d.has_grasp) {
     std::array<double, kFingers> finger_commands{};

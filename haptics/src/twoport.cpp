@@ -1,6 +1,7 @@
 #include "haptel/haptics/twoport.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 namespace haptel::haptics {
 
@@ -43,6 +44,48 @@ TwoPortAction TwoPortPassivity::Control(const Vec3d& rendered, const Vec3d& remo
   return action;
 }
 
+const Vec3d& TwoPortPassivity::ControlPosition(const Vec3d& remote_energy_in, double period_s, bool* acted) {
+  const double floor_f = limits_.max_damping * limits_.min_speed;
+  const Vec3d margin = Margin(remote_energy_in);
+  for (int i = 0; i < 3; ++i) {
+    const double f = held_rendered_[i];
+    if (period_s <= 0.0) continue;
+    if (margin[i] < 0.0) {
+      double left = margin[i];
+      if (std::abs(f) >= floor_f) {
+        const double cap = std::min(period_s * std::abs(f) / limits_.max_damping,
+                                    std::max(0.0, limits_.max_offset_m - std::abs(offset_[i])));
+        // f·step = −W: moved against the environment's force, it returns the deficit.
+        const double step = std::clamp(-margin[i] / f, -cap, cap);
+        if (step != 0.0) {
+          offset_[i] += step;
+          dissipated_[i] += f * step;
+          left += f * step;
+          if (acted != nullptr) *acted = true;
+        }
+      }
+      charged_[i] = std::max(charged_[i], -left);
+    } else if (offset_[i] != 0.0) {
+      // Drift back, paid from the margin: a step along −f costs f·r of it.
+      double r = std::clamp(-offset_[i], -limits_.min_speed * period_s, limits_.min_speed * period_s);
+      const double cost = -f * r;
+      if (cost > margin[i]) r *= margin[i] / cost;
+      offset_[i] += r;
+      if (f * r < 0.0) {
+        energy_out_[i] -= f * r;
+      } else {
+        dissipated_[i] += f * r;  // the environment lets go of it: lost, not credit
+      }
+    }
+  }
+  return offset_;
+}
+
+void TwoPortPassivity::ChargeDeficit(const Vec3d& remote_energy_in) {
+  const Vec3d margin = Margin(remote_energy_in);
+  for (int i = 0; i < 3; ++i) charged_[i] = std::max(charged_[i], -margin[i]);
+}
+
 void TwoPortPassivity::Hold(const Vec3d& rendered, const Vec3d& damping) {
   held_rendered_ = rendered;
   held_damping_ = damping;
@@ -65,6 +108,7 @@ Vec3d TwoPortPassivity::EnergyToSend(const Vec3d& remote_energy_in) const {
 
 void TwoPortPassivity::Reset() {
   energy_in_ = energy_out_ = dissipated_ = forgotten_ = held_rendered_ = held_damping_ = Vec3d{};
+  offset_ = charged_ = Vec3d{};
 }
 
 }  // namespace haptel::haptics

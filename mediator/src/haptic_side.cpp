@@ -163,6 +163,10 @@ haptics::ServoCounters HapticSide::Counters() const {
     sum.passivity_ticks += c.passivity_ticks;
     sum.passivity_dissipated_j += c.passivity_dissipated_j;
     sum.passivity_max_alpha = std::max(sum.passivity_max_alpha, c.passivity_max_alpha);  // the largest, not a sum
+    sum.passivity_link_ticks += c.passivity_link_ticks;
+    sum.passivity_device_ticks += c.passivity_device_ticks;
+    sum.passivity_device_dissipated_j += c.passivity_device_dissipated_j;
+    sum.passivity_device_max_alpha = std::max(sum.passivity_device_max_alpha, c.passivity_device_max_alpha);
     sum.safety.non_finite += c.safety.non_finite;
     sum.safety.clamped += c.safety.clamped;
     sum.safety.rate_limited += c.safety.rate_limited;

@@ -43,6 +43,11 @@ std::vector<RunCounter> CollectCounters(const HapticSide& haptic, const SessionP
       {"servo_passivity_left_mj", Milli(haptic.Counters(haptics::Side::kLeft).passivity_dissipated_j)},
       {"servo_passivity_right_mj", Milli(haptic.Counters(haptics::Side::kRight).passivity_dissipated_j)},
       {"servo_passivity_alpha_max_mns_m", Milli(servo.passivity_max_alpha)},
+      // The two-port across a device's link (udp, protocol v2): the device's end, as its server reports it.
+      {"servo_passivity_link_ticks", servo.passivity_link_ticks},
+      {"servo_passivity_device_ticks", servo.passivity_device_ticks},
+      {"servo_passivity_device_mj", Milli(servo.passivity_device_dissipated_j)},
+      {"servo_passivity_device_alpha_max_mns_m", Milli(servo.passivity_device_max_alpha)},
       {"physics_overruns", physics_overruns},
       {"physics_hand_resets", world.hand_resets},
       {"physics_body_resets", world.body_resets},

@@ -253,7 +253,14 @@ TEST_CASE("bench passivity --smoke", "[bench][smoke]") {
          j["servo_p99_tolerance_us"].number()));
   CHECK(j["servo_allocations_on"].number() == 0);  // the controller allocates nothing in the loop
   const auto& points = j["points"].array();
-  CHECK(points.size() == 24);  // 2 delays x 4 modes (off, one-port, two-port, two-port-ref) x 3 stiffnesses
+  // 2 delays x 7 modes (off, one-port, two-port, two-port-ref; over the UDP device:
+  // udp-off, udp-two-port, udp-2p-admit) x 3 stiffnesses
+  CHECK(points.size() == 42);
+  for (const char* key : {"stable_stiffness_udp_off", "stable_stiffness_udp_two_port", "gain_udp",
+                          "gain_udp_admittance"}) {
+    INFO(key);
+    CHECK(Finite(j[key]) >= 0.0);
+  }
   for (const JsonValue& p : points) {
     CHECK(Finite(p["force_rms_err_n"]) >= 0.0);
     CHECK(Finite(p["energy_j"]) >= 0.0);

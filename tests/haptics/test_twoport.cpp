@@ -198,3 +198,41 @@ TEST_CASE("two-port: a delayed spring that gains energy is held to what the spri
   CHECK(DelayedSpring(0, true, idle_margin, final_energy) < 0.11);
   CHECK(idle_margin >= -1e-12);
 }
+
+TEST_CASE("two-port: the loop's end returns its deficit on the environment's port by an offset, capped") {
+  // The environment (a wall) holds -2 N on the hand while the channel hands it
+  // 1 mm of motion into the wall: 2 mJ out of the channel at the loop's end,
+  // against 1.5 mJ the arm's end reports in. W = -0.5 mJ.
+  TwoPortLimits roomy;
+  roomy.max_damping = 2.0;  // series admittance 0.5 m/(N*s): cap T*|f|/b = 1 mm
+  TwoPortPassivity loop(ChannelEnd::kLoop, roomy);
+  loop.Hold(X(-2.0));
+  loop.Observe(X(0.001));
+  REQUIRE(loop.Margin(X(0.0015))[0] == Approx(-0.0005));
+  bool acted = false;
+  // Offset = -W/f = 0.0005 / -2 = -0.25 mm: the environment is handed the
+  // hand 0.25 mm less deep, and f*offset = +0.5 mJ returns the deficit.
+  const Vec3d offset = loop.ControlPosition(X(0.0015), kT, &acted);
+  CHECK(acted);
+  CHECK(offset[0] == Approx(-0.00025));
+  CHECK(loop.dissipated()[0] == Approx(0.0005));
+  CHECK(loop.Margin(X(0.0015))[0] == Approx(0.0).margin(1e-12));
+  CHECK(loop.charged()[0] == 0.0);
+
+  // Capped (b = 20 N*s/m: 0.1 mm per tick), it returns 0.2 mJ and charges the
+  // 0.3 mJ left to the arm's end.
+  TwoPortPassivity capped(ChannelEnd::kLoop);
+  capped.Hold(X(-2.0));
+  capped.Observe(X(0.001));
+  CHECK(capped.ControlPosition(X(0.0015), kT)[0] == Approx(-0.0001));
+  CHECK(capped.dissipated()[0] == Approx(0.0002));
+  CHECK(capped.charged()[0] == Approx(0.0003));
+
+  // A passive end (the arm put in more than the environment took) is left alone.
+  TwoPortPassivity passive(ChannelEnd::kLoop, roomy);
+  passive.Hold(X(-2.0));
+  passive.Observe(X(0.001));
+  acted = false;
+  CHECK(passive.ControlPosition(X(0.003), kT, &acted)[0] == 0.0);
+  CHECK_FALSE(acted);
+}

@@ -145,7 +145,9 @@ DeviceStatus UdpDevice::ReadWrist(Side side, int64_t now_ns, WristRaw& out) {
   if (s.socket.get() < 0) return DeviceStatus::kLost;
   Drain(side, s);
   const uint32_t sequence = NextSequence(s);
-  const udp::Message request{sequence, side, udp::WristRequest{s.wrist_command, s.finger_command}};
+  const uint16_t version = s.version.load(std::memory_order_relaxed);
+  const udp::Message request{sequence, side, udp::WristRequest{s.wrist_command, s.finger_command, s.local},
+                             version};
   const std::size_t size = udp::Encode(request, s.tx);  // commands were sanitised when stored
   Bump(s.counters.requests);
   const Wait wait = Transact(side, s, size, sequence, udp::MessageType::kWristReply);
@@ -154,6 +156,10 @@ DeviceStatus UdpDevice::ReadWrist(Side side, int64_t now_ns, WristRaw& out) {
       out.t_ns = now_ns;
       out.position = reply->position;
       out.orientation = reply->orientation;
+      // A report of an earlier epoch predates our restart: its counts are not ours.
+      if (s.reply.version >= 2 && reply->energy.epoch == s.local.epoch) {
+        s.remote = udp::Merge(s.remote, reply->energy);
+      }
     }
   }
   return Outcome(s, wait);
@@ -164,7 +170,7 @@ DeviceStatus UdpDevice::ReadGlove(Side side, int64_t now_ns, GloveRaw& out) {
   if (s.socket.get() < 0) return DeviceStatus::kLost;
   Drain(side, s);
   const uint32_t sequence = NextSequence(s);
-  const udp::Message request{sequence, side, udp::GloveRequest{}};
+  const udp::Message request{sequence, side, udp::GloveRequest{}, s.version.load(std::memory_order_relaxed)};
   const std::size_t size = udp::Encode(request, s.tx);
   Bump(s.counters.requests);
   const Wait wait = Transact(side, s, size, sequence, udp::MessageType::kGloveReply);
@@ -187,7 +193,8 @@ DeviceStatus UdpDevice::WriteWristForce(Side side, const Vec3d& command) {
     s.wrist_command = Vec3d{};  // never send what the server must reject: zero is safe
     Bump(s.counters.invalid_commands);
   }
-  SendOneWay(s, udp::Message{NextSequence(s), side, udp::WristForce{s.wrist_command}});
+  SendOneWay(s, udp::Message{NextSequence(s), side, udp::WristForce{s.wrist_command, s.local},
+                             s.version.load(std::memory_order_relaxed)});
   return s.lost.load(std::memory_order_relaxed) ? DeviceStatus::kLost : DeviceStatus::kOk;
 }
 
@@ -201,7 +208,8 @@ DeviceStatus UdpDevice::WriteFingerForces(Side side, const std::array<double, kF
     invalid = invalid || !ok;
   }
   if (invalid) Bump(s.counters.invalid_commands);
-  SendOneWay(s, udp::Message{NextSequence(s), side, udp::FingerForce{s.finger_command}});
+  SendOneWay(s, udp::Message{NextSequence(s), side, udp::FingerForce{s.finger_command},
+                             s.version.load(std::memory_order_relaxed)});
   return s.lost.load(std::memory_order_relaxed) ? DeviceStatus::kLost : DeviceStatus::kOk;
 }
 
@@ -297,6 +305,16 @@ bool UdpDevice::Accept(Side side, SideState& s, std::size_t size, uint32_t seque
 
 DeviceStatus UdpDevice::Outcome(SideState& s, Wait wait) {
   const int64_t now = clock_.NowNs();
+  if (wait == Wait::kReply || wait == Wait::kError) {
+    // Any valid answer (an ERROR too) shows the server speaks this version.
+    if (!s.negotiated) s.version.store(s.reply.version, std::memory_order_relaxed);
+    s.negotiated = true;
+  } else if (!s.negotiated) {
+    // Unanswered before any answer: perhaps a server of the other version,
+    // which drops ours unread. Try the other for the next request.
+    const uint16_t v = s.version.load(std::memory_order_relaxed);
+    s.version.store(v == udp::kVersion ? udp::kMinVersion : udp::kVersion, std::memory_order_relaxed);
+  }
   if (wait == Wait::kReply) {
     s.last_valid_ns = now;
     if (s.lost.exchange(false, std::memory_order_relaxed)) Bump(s.counters.recoveries);
@@ -339,6 +357,41 @@ UdpCounters UdpDevice::Counters() const {
   UdpCounters total = Counters(Side::kLeft);
   total += Counters(Side::kRight);
   return total;
+}
+
+bool UdpDevice::LinkPassivity(Side side, LinkEnergy& remote) {
+  const SideState& s = sides_[Index(side)];
+  if (s.version.load(std::memory_order_relaxed) < 2 || !s.remote.active || s.remote.epoch != s.local.epoch) {
+    return false;
+  }
+  remote.energy_in = s.remote.energy_in;
+  remote.charged = s.remote.charged;
+  remote.dissipated_j = s.remote.dissipated_j;
+  remote.acted_ticks = s.remote.acted_ticks;
+  remote.max_alpha = s.remote.max_alpha;
+  return true;
+}
+
+void UdpDevice::SetLinkEnergy(Side side, const LinkEnergy& local) {
+  udp::EnergyReport& e = sides_[Index(side)].local;
+  e.active = true;
+  e.energy_in = local.energy_in;
+  e.charged = local.charged;
+  e.dissipated_j = local.dissipated_j;
+  e.acted_ticks = local.acted_ticks;
+  e.max_alpha = local.max_alpha;
+}
+
+void UdpDevice::RestartLinkEnergy(Side side) {
+  SideState& s = sides_[Index(side)];
+  const uint32_t epoch = s.local.epoch + 1 != 0 ? s.local.epoch + 1 : 1;
+  s.local = udp::EnergyReport{};
+  s.local.epoch = epoch;
+  s.remote = udp::EnergyReport{};
+}
+
+uint16_t UdpDevice::ProtocolVersion(Side side) const {
+  return sides_[Index(side)].version.load(std::memory_order_relaxed);
 }
 
 bool UdpDevice::Lost(Side side) const {

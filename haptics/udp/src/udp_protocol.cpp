@@ -1,5 +1,6 @@
 #include "haptel/udp/udp_protocol.hpp"
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 
@@ -122,40 +123,89 @@ bool KnownErrorCode(ErrorCode code) {
   return c >= 1 && c < kErrorCodes;
 }
 
-/// Whether a payload would be accepted by Decode (finite, in its domain).
-bool Valid(const Payload& payload) {
+/// The energy report's doubles, in wire order.
+std::array<double, 8> ReportDoubles(const EnergyReport& e) {
+  return {e.energy_in[0], e.energy_in[1], e.energy_in[2], e.charged[0],
+          e.charged[1],   e.charged[2],   e.dissipated_j, e.max_alpha};
+}
+
+/// An energy report Decode would accept: finite, none negative (they are
+/// counters of energy and damping). Only checked where the version carries it.
+bool ValidReport(const EnergyReport& e) {
+  const std::array<double, 8> v = ReportDoubles(e);
+  return AllFinite(v) && AllNonNegative(v);
+}
+
+/// Whether a payload would be accepted by Decode (finite, in its domain) in `version`.
+bool Valid(const Payload& payload, uint16_t version) {
+  const bool v2 = version >= 2;
   struct {
+    bool v2;
     bool operator()(const WristRequest& p) const {
       return AllFinite(p.wrist_force) && AllFinite(p.finger_forces) &&
-             AllNonNegative(p.finger_forces);
+             AllNonNegative(p.finger_forces) && (!v2 || ValidReport(p.energy));
     }
     bool operator()(const WristReply& p) const {
-      return AllFinite(p.position) && AllFinite(p.orientation) && UnitQuaternion(p.orientation);
+      return AllFinite(p.position) && AllFinite(p.orientation) && UnitQuaternion(p.orientation) &&
+             (!v2 || ValidReport(p.energy));
     }
     bool operator()(const GloveRequest&) const { return true; }
     bool operator()(const GloveReply& p) const {
       return AllFinite(p.sensors) && AllFinite(p.grasp);
     }
-    bool operator()(const WristForce& p) const { return AllFinite(p.command); }
+    bool operator()(const WristForce& p) const {
+      return AllFinite(p.command) && (!v2 || ValidReport(p.energy));
+    }
     bool operator()(const FingerForce& p) const {
       return AllFinite(p.command) && AllNonNegative(p.command);
     }
     bool operator()(const ErrorReply& p) const { return KnownErrorCode(p.code); }
-  } check;
+  } check{v2};
   return std::visit(check, payload);
 }
 
-void WritePayload(Writer& w, const Payload& payload) {
+constexpr uint32_t kReportActive = 1U;  ///< flags bit 0; the other bits are reserved, zero
+
+void WriteReport(Writer& w, const EnergyReport& e) {
+  w.U32(e.active ? kReportActive : 0U);
+  w.U32(e.epoch);
+  w.F64s(e.energy_in);
+  w.F64s(e.charged);
+  w.F64(e.dissipated_j);
+  w.U64(e.acted_ticks);
+  w.F64(e.max_alpha);
+}
+
+/// Reads an energy report; kOk, kNonFinite or kBadValue (reserved flags, a negative value).
+DecodeStatus ReadReport(Reader& r, EnergyReport& e) {
+  bool finite = true;
+  const uint32_t flags = r.U32();
+  e.epoch = r.U32();
+  r.F64s(e.energy_in, finite);
+  r.F64s(e.charged, finite);
+  e.dissipated_j = r.F64(finite);
+  e.acted_ticks = r.U64();
+  e.max_alpha = r.F64(finite);
+  e.active = (flags & kReportActive) != 0;
+  if (!finite) return DecodeStatus::kNonFinite;
+  if ((flags & ~kReportActive) != 0 || !AllNonNegative(ReportDoubles(e))) return DecodeStatus::kBadValue;
+  return DecodeStatus::kOk;
+}
+
+void WritePayload(Writer& w, const Payload& payload, uint16_t version) {
   struct {
     Writer& w;
+    bool v2;
     void operator()(const WristRequest& p) const {
       w.F64s(p.wrist_force);
       w.F64s(p.finger_forces);
+      if (v2) WriteReport(w, p.energy);
     }
     void operator()(const WristReply& p) const {
       w.I64(p.device_ns);
       w.F64s(p.position);
       w.F64s(p.orientation);
+      if (v2) WriteReport(w, p.energy);
     }
     void operator()(const GloveRequest&) const {}
     void operator()(const GloveReply& p) const {
@@ -163,26 +213,31 @@ void WritePayload(Writer& w, const Payload& payload) {
       w.F64s(p.sensors);
       w.F64s(p.grasp);
     }
-    void operator()(const WristForce& p) const { w.F64s(p.command); }
+    void operator()(const WristForce& p) const {
+      w.F64s(p.command);
+      if (v2) WriteReport(w, p.energy);
+    }
     void operator()(const FingerForce& p) const { w.F64s(p.command); }
     void operator()(const ErrorReply& p) const {
       w.U16(static_cast<uint16_t>(p.code));
       w.U16(0);  // reserved
     }
-  } write{w};
+  } write{w, version >= 2};
   std::visit(write, payload);
 }
 
 /// Reads the payload of a known type whose size has been checked.
-DecodeStatus ReadPayload(MessageType type, Reader& r, Payload& out) {
+DecodeStatus ReadPayload(MessageType type, uint16_t version, Reader& r, Payload& out) {
   bool finite = true;
+  const bool v2 = version >= 2;
   switch (type) {
     case MessageType::kWristRequest: {
       WristRequest p;
       r.F64s(p.wrist_force, finite);
       r.F64s(p.finger_forces, finite);
-      if (!finite) return DecodeStatus::kNonFinite;
-      if (!AllNonNegative(p.finger_forces)) return DecodeStatus::kBadValue;
+      const DecodeStatus report = v2 ? ReadReport(r, p.energy) : DecodeStatus::kOk;
+      if (!finite || report == DecodeStatus::kNonFinite) return DecodeStatus::kNonFinite;
+      if (!AllNonNegative(p.finger_forces) || report != DecodeStatus::kOk) return DecodeStatus::kBadValue;
       out = p;
       return DecodeStatus::kOk;
     }
@@ -191,8 +246,9 @@ DecodeStatus ReadPayload(MessageType type, Reader& r, Payload& out) {
       p.device_ns = r.I64();
       r.F64s(p.position, finite);
       r.F64s(p.orientation, finite);
-      if (!finite) return DecodeStatus::kNonFinite;
-      if (!UnitQuaternion(p.orientation)) return DecodeStatus::kBadValue;
+      const DecodeStatus report = v2 ? ReadReport(r, p.energy) : DecodeStatus::kOk;
+      if (!finite || report == DecodeStatus::kNonFinite) return DecodeStatus::kNonFinite;
+      if (!UnitQuaternion(p.orientation) || report != DecodeStatus::kOk) return DecodeStatus::kBadValue;
       out = p;
       return DecodeStatus::kOk;
     }
@@ -211,7 +267,9 @@ DecodeStatus ReadPayload(MessageType type, Reader& r, Payload& out) {
     case MessageType::kWristForce: {
       WristForce p;
       r.F64s(p.command, finite);
-      if (!finite) return DecodeStatus::kNonFinite;
+      const DecodeStatus report = v2 ? ReadReport(r, p.energy) : DecodeStatus::kOk;
+      if (!finite || report == DecodeStatus::kNonFinite) return DecodeStatus::kNonFinite;
+      if (report != DecodeStatus::kOk) return DecodeStatus::kBadValue;
       out = p;
       return DecodeStatus::kOk;
     }
@@ -305,18 +363,33 @@ std::string_view ToString(ErrorCode code) {
   return "?";
 }
 
-std::size_t PayloadSize(MessageType type) {
+EnergyReport Merge(const EnergyReport& held, const EnergyReport& arrived) {
+  if (arrived.epoch != held.epoch) return arrived;
+  EnergyReport m = arrived;
+  for (int i = 0; i < 3; ++i) {
+    m.energy_in[i] = std::max(held.energy_in[i], arrived.energy_in[i]);
+    m.charged[i] = std::max(held.charged[i], arrived.charged[i]);
+  }
+  m.dissipated_j = std::max(held.dissipated_j, arrived.dissipated_j);
+  m.acted_ticks = std::max(held.acted_ticks, arrived.acted_ticks);
+  m.max_alpha = std::max(held.max_alpha, arrived.max_alpha);
+  return m;
+}
+
+std::size_t PayloadSize(MessageType type, uint16_t version) {
+  if (version < kMinVersion || version > kVersion) return 0;
+  const std::size_t report = version >= 2 ? kEnergyReportSize : 0;
   switch (type) {
     case MessageType::kWristRequest:
-      return kWristRequestSize;
+      return kWristRequestSize + report;
     case MessageType::kWristReply:
-      return kWristReplySize;
+      return kWristReplySize + report;
     case MessageType::kGloveRequest:
       return kGloveRequestSize;
     case MessageType::kGloveReply:
       return kGloveReplySize;
     case MessageType::kWristForce:
-      return kWristForceSize;
+      return kWristForceSize + report;
     case MessageType::kFingerForce:
       return kFingerForceSize;
     case MessageType::kError:
@@ -333,20 +406,21 @@ uint32_t Crc32(std::span<const uint8_t> bytes, uint32_t crc) {
 
 std::size_t Encode(const Message& message, std::span<uint8_t> out) {
   const MessageType type = message.type();
-  const std::size_t payload_size = PayloadSize(type);
+  if (message.version < kMinVersion || message.version > kVersion) return 0;
+  const std::size_t payload_size = PayloadSize(type, message.version);
   const std::size_t total = kHeaderSize + payload_size;
-  if (out.size() < total || !Valid(message.payload)) return 0;
+  if (out.size() < total || !Valid(message.payload, message.version)) return 0;
   if (message.side != Side::kLeft && message.side != Side::kRight) return 0;
   Writer w(out);
   for (uint8_t b : kMagic) w.U8(b);
-  w.U16(kVersion);
+  w.U16(message.version);
   w.U16(static_cast<uint16_t>(type));
   w.U32(message.sequence);
   w.U32(static_cast<uint32_t>(payload_size));
   w.U8(static_cast<uint8_t>(Index(message.side)));
   for (int i = 0; i < 3; ++i) w.U8(0);  // reserved
   w.U32(0);                             // checksum, filled in below
-  WritePayload(w, message.payload);
+  WritePayload(w, message.payload, message.version);
   const std::span<uint8_t> datagram = out.first(total);
   const uint32_t crc = DatagramCrc(datagram);
   for (int i = 0; i < 4; ++i) datagram[kOffChecksum + i] = static_cast<uint8_t>(crc >> (8 * i));
@@ -366,7 +440,7 @@ DecodeStatus Decode(std::span<const uint8_t> datagram, Message& out) {
   const uint8_t side = h.U8();
   const uint8_t reserved[3] = {h.U8(), h.U8(), h.U8()};
   const uint32_t checksum = h.U32();
-  if (version != kVersion) return DecodeStatus::kBadVersion;
+  if (version < kMinVersion || version > kVersion) return DecodeStatus::kBadVersion;
   if (length > kMaxPayloadSize) return DecodeStatus::kBadLength;
   if (datagram.size() < kHeaderSize + length) return DecodeStatus::kShort;
   if (datagram.size() > kHeaderSize + length) return DecodeStatus::kBadLength;
@@ -379,11 +453,12 @@ DecodeStatus Decode(std::span<const uint8_t> datagram, Message& out) {
     out.side = static_cast<Side>(side);
     return DecodeStatus::kUnknownType;
   }
-  if (length != PayloadSize(type)) return DecodeStatus::kBadLength;
+  if (length != PayloadSize(type, version)) return DecodeStatus::kBadLength;
   Reader p(datagram.subspan(kHeaderSize));
   Payload payload;
-  const DecodeStatus status = ReadPayload(type, p, payload);
+  const DecodeStatus status = ReadPayload(type, version, p, payload);
   if (status != DecodeStatus::kOk) return status;
+  out.version = version;
   out.sequence = sequence;
   out.side = static_cast<Side>(side);
   out.payload = payload;

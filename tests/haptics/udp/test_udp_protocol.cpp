@@ -16,7 +16,8 @@ using namespace haptel::haptics::udp;
 
 namespace {
 
-/// One valid message of every type, with distinctive values.
+/// One valid message of every type, with distinctive values, in version 1
+/// (its layout; version 2's energy reports: test_udp_passivity.cpp).
 std::vector<Message> Samples() {
   WristRequest wrist_request{{1.5, -2.25, 3.0}, {0.0, 0.5, 1.0, 1.5, 2.0}};
   WristReply wrist_reply{123456789012345, {12.5, -7.25, 0.125}, {0.5, 0.5, -0.5, 0.5}};
@@ -25,13 +26,13 @@ std::vector<Message> Samples() {
   for (int j = 0; j < kGloveJoints; ++j) glove_reply.sensors[j] = 100.0 + j;
   for (int f = 0; f < kFingers; ++f) glove_reply.grasp[f] = -0.5 * f;
   return {
-      Message{1, Side::kLeft, wrist_request},
-      Message{0xFFFFFFFFU, Side::kRight, wrist_reply},
-      Message{7, Side::kRight, GloveRequest{}},
-      Message{8, Side::kLeft, glove_reply},
-      Message{9, Side::kLeft, WristForce{{-1e-300, 0.0, 6.5}}},
-      Message{10, Side::kRight, FingerForce{{0.0, 1.0, 2.0, 3.0, 4.0}}},
-      Message{0x01020304U, Side::kLeft, ErrorReply{ErrorCode::kBusy}},
+      Message{1, Side::kLeft, wrist_request, 1},
+      Message{0xFFFFFFFFU, Side::kRight, wrist_reply, 1},
+      Message{7, Side::kRight, GloveRequest{}, 1},
+      Message{8, Side::kLeft, glove_reply, 1},
+      Message{9, Side::kLeft, WristForce{{-1e-300, 0.0, 6.5}}, 1},
+      Message{10, Side::kRight, FingerForce{{0.0, 1.0, 2.0, 3.0, 4.0}}, 1},
+      Message{0x01020304U, Side::kLeft, ErrorReply{ErrorCode::kBusy}, 1},
   };
 }
 
@@ -81,7 +82,7 @@ TEST_CASE("crc32 is the IEEE/zlib CRC-32", "[udp][protocol]") {
 }
 
 TEST_CASE("header layout is fixed little-endian", "[udp][protocol]") {
-  const Message m{0x01020304U, Side::kRight, WristForce{{1.0, -2.0, 0.0}}};
+  const Message m{0x01020304U, Side::kRight, WristForce{{1.0, -2.0, 0.0}}, 1};
   const std::vector<uint8_t> d = Encoded(m);
   REQUIRE(d.size() == kHeaderSize + kWristForceSize);
   CHECK(d[0] == 'H');
@@ -121,7 +122,7 @@ TEST_CASE("every message type round-trips", "[udp][protocol]") {
   for (const Message& m : Samples()) {
     INFO(ToString(m.type()));
     const std::vector<uint8_t> d = Encoded(m);
-    CHECK(d.size() == kHeaderSize + PayloadSize(m.type()));
+    CHECK(d.size() == kHeaderSize + PayloadSize(m.type(), 1));
     Message out;
     out.sequence = 999;
     REQUIRE(Decode(d, out) == DecodeStatus::kOk);
@@ -145,9 +146,9 @@ TEST_CASE("every message type round-trips", "[udp][protocol]") {
 
 TEST_CASE("encode refuses small buffers and values the peer would reject", "[udp][protocol]") {
   std::array<uint8_t, kHeaderSize + kWristForceSize - 1> small{};
-  CHECK(Encode(Message{1, Side::kLeft, WristForce{{1, 2, 3}}}, small) == 0);
+  CHECK(Encode(Message{1, Side::kLeft, WristForce{{1, 2, 3}}, 1}, small) == 0);
   std::array<uint8_t, kHeaderSize + kWristForceSize> exact{};
-  CHECK(Encode(Message{1, Side::kLeft, WristForce{{1, 2, 3}}}, exact) == exact.size());
+  CHECK(Encode(Message{1, Side::kLeft, WristForce{{1, 2, 3}}, 1}, exact) == exact.size());
   Buffer b{};
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const double inf = std::numeric_limits<double>::infinity();
@@ -178,7 +179,7 @@ TEST_CASE("decode rejects each kind of bad datagram with its status", "[udp][pro
   }
   SECTION("bad version") {
     std::vector<uint8_t> d = good;
-    d[4] = 2;
+    d[4] = 3;  // versions 1 and 2 are spoken
     Reseal(d);
     CHECK(DecodeBytes(d) == DecodeStatus::kBadVersion);
   }

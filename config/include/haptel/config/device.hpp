@@ -27,6 +27,17 @@ struct ServoLoopConfig {
   double passivity_max_damping = 20.0;
   /// m/s: the controller's floor on |v|, so α = −E/(T·v²) stays finite near rest.
   double passivity_min_speed = 0.002;
+  /// Across a device's link (the udp driver, protocol v2), what the servo
+  /// loop's end of the two-port does with a deficit (haptel/haptics/twoport.hpp):
+  /// false, `passivity_link: charge` (the default), it charges it to the
+  /// arm's end, whose damping covers it; true, `passivity_link: admittance`,
+  /// it dissipates it itself on the virtual environment's port (an offset on
+  /// the position the environment reads). The arm's end damps the arm in
+  /// both. Charge is the default because `haptel bench passivity` finds the
+  /// admittance's stability bought by a wall that yields (its offset drifts
+  /// to the cap under a sustained press): 8× the stiffness at 3 ms, but 3.3 N
+  /// of force error where charge keeps 0.37 N (docs/benchmarks.md).
+  bool passivity_link_admittance = false;
 
   /// Throws ConfigFieldError unless the rate, divider, priority and the
   /// passivity limits are in range.

@@ -29,6 +29,18 @@ struct DeviceDescription {
   bool has_grasp = true;
 };
 
+/// One end's two-port passivity report across a device's link (twoport.hpp),
+/// SI: what crossed the channel at that end and what its controller did.
+/// Every field is a monotone counter (max_alpha a running maximum) until the
+/// link's observers restart.
+struct LinkEnergy {
+  Vec3d energy_in{};          ///< J per axis: what entered the channel at that end
+  Vec3d charged{};            ///< J per axis: deficit that end could not dissipate itself
+  double dissipated_j = 0.0;  ///< J, that end's controller, all axes
+  uint64_t acted_ticks = 0;   ///< ticks that end's controller acted
+  double max_alpha = 0.0;     ///< the largest damping that end's controller added, N·s/m
+};
+
 /// Every call except description() comes from the servo thread that owns
 /// `side`; in two-sided mode the two sides run on two threads at once, so an
 /// implementation must keep per-side state apart. Calls must not allocate and
@@ -47,6 +59,27 @@ class Device {
   virtual DeviceStatus WriteWristForce(Side side, const Vec3d& command) = 0;
   /// Finger force commands, device units, each ≥ 0.
   virtual DeviceStatus WriteFingerForces(Side side, const std::array<double, kFingers>& command) = 0;
+
+  // Two-port passivity across the device's link (a device whose arms sit
+  // behind a network: the udp driver's protocol version 2). A local device
+  // keeps the defaults: no link, nothing to exchange.
+
+  /// True when the far end of `side`'s link observes its port and runs its
+  /// controller (and reports it); `remote` is then its newest report.
+  virtual bool LinkPassivity(Side side, LinkEnergy& remote) {
+    (void)side;
+    (void)remote;
+    return false;
+  }
+  /// The loop's end's report, sent with the next commands (and every later
+  /// one until replaced); tells the far end the loop observes its port.
+  virtual void SetLinkEnergy(Side side, const LinkEnergy& local) {
+    (void)side;
+    (void)local;
+  }
+  /// Both ends start counting from zero again (the loop's end was reset:
+  /// the arm was lost, or the observers start afresh).
+  virtual void RestartLinkEnergy(Side side) { (void)side; }
 };
 
 }  // namespace haptel::haptics

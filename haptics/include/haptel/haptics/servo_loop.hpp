@@ -23,6 +23,19 @@
 /// none: the loop has no finger velocity (the glove is read every N-th cycle
 /// and the grasp strings report force), and their unilateral pulls come from
 /// the physics thread's proxy fingers.
+///
+/// A device behind a link (Device::LinkPassivity: the udp driver's protocol
+/// version 2, a server whose own servo.passivity is on) gets the two-port
+/// instead (twoport.hpp): the loop observes its end of the channel (the
+/// wrist force it commands against the arm's motion it is handed), sends
+/// its report with the commands, while the server damps the arm on its
+/// side. Its own deficit it charges to the arm's end (`servo.passivity_link:
+/// charge`, the default) or dissipates on the virtual environment's port
+/// (`admittance`: the position the force field and the coupling read is the
+/// arm's plus the admittance controller's offset). With `servo.passivity` on the loop
+/// always sends its report, so a server knows to run its end; until the
+/// server reports back (a v1 server, or its passivity off) the one-port
+/// ports act as for a local device.
 #include <array>
 #include <atomic>
 #include <barrier>
@@ -38,6 +51,7 @@
 #include "haptel/haptics/hal.hpp"
 #include "haptel/haptics/passivity.hpp"
 #include "haptel/haptics/safety.hpp"
+#include "haptel/haptics/twoport.hpp"
 
 namespace haptel::haptics {
 
@@ -57,6 +71,13 @@ struct ServoCounters {
   uint64_t passivity_ticks = 0;        ///< ticks the passivity controller added damping
   double passivity_dissipated_j = 0.0; ///< J it dissipated (predicted T·α·v², summed)
   double passivity_max_alpha = 0.0;    ///< N·s/m, the largest damping it added
+  /// Two-port across a link (the loop's end counts in the three above: its
+  /// ticks, and the energy its offset returned): the device end's, as its
+  /// server reports them, summed over the link's restarts.
+  uint64_t passivity_device_ticks = 0;        ///< ticks the device end's controller damped the arm
+  double passivity_device_dissipated_j = 0.0; ///< J it dissipated
+  double passivity_device_max_alpha = 0.0;    ///< N·s/m, the largest damping it added
+  uint64_t passivity_link_ticks = 0;          ///< ticks the two-port ran (the far end reporting)
   SafetyCounters safety;
 };
 
@@ -109,6 +130,10 @@ class ServoLoop {
     ForceSetpoint setpoint;    ///< the last good set-point read
     PassivityController field_port;
     PassivityController coupling_port;
+    TwoPortPassivity link_end{ChannelEnd::kLoop};  ///< the loop's end across a device's link
+    LinkEnergy link_remote;                        ///< the far end's newest report
+    uint64_t link_base_ticks = 0;       ///< the device end's counts before the link's last restart
+    double link_base_dissipated_j = 0.0;
     uint64_t cycle = 0;
     WristRaw wrist{};
     GloveRaw glove{};

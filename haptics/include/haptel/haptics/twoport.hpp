@@ -50,10 +50,27 @@
 /// delivers more than the other end's input since the credit was last
 /// spent; infinity is the plain two-port.
 ///
-/// Allocation-free, lock-free, no logging: made to run at each end of the
-/// device's link, one per arm in the loop's device driver and one in the
-/// device's server (today only `haptel bench passivity` runs it, on both
-/// ends of its delay line).
+/// The loop's end's controller (admittance type, Artigas et al. 2010: at
+/// the end whose output is a position). The servo loop hands the virtual
+/// environment the arm's position plus an offset δ; when the loop's margin
+/// W_l = E_in,remote − E_out,l + D_l is negative (the environment has taken
+/// in more than the arm put in: a spring would give it back as credit) the
+/// offset moves against the held force f by Δδ = −W_l/f, which returns
+/// exactly the deficit (f·Δδ = −W_l, booked as D_l: energy taken from the
+/// environment, never sent as E_in). Capped as a series damper would: |Δδ| ≤
+/// T·|f|/max_damping, |δ| ≤ max_offset_m; with |f| below
+/// max_damping·min_speed nothing can be returned. What the cap leaves is
+/// the loop's `charged` (its largest uncovered deficit so far), which the
+/// arm's end subtracts from E_in,loop: its controller covers the rest. While
+/// W_l ≥ 0, δ drifts back to zero at min_speed at most, paid from W_l.
+///
+/// Over a link both ends send monotone counters (energy_in, charged): a lost
+/// or reordered report is superseded by any newer one.
+///
+/// Allocation-free, lock-free, no logging: one per arm in the servo loop
+/// (the loop's end, for a device behind a link: the udp driver, protocol
+/// version 2) and one in the device's server (`haptel-device-server`, the
+/// arm's end); `haptel bench passivity` runs both on its delay line too.
 #include <limits>
 
 #include "haptel/haptics/types.hpp"
@@ -72,6 +89,8 @@ struct TwoPortLimits {
   double min_speed = 0.002;   ///< m/s: v² is floored at min_speed² in α = −W/(T·v²)
   /// J per axis: the largest margin W kept (credit beyond it is forgotten).
   double max_credit_j = std::numeric_limits<double>::infinity();
+  /// m per axis: the loop's end's largest position offset (ControlPosition).
+  double max_offset_m = 0.01;
 };
 
 /// What the controller did on one tick.
@@ -97,6 +116,24 @@ class TwoPortPassivity {
   /// Returns the damping to add and holds both forces for the next Observe.
   TwoPortAction Control(const Vec3d& rendered, const Vec3d& remote_energy_in, const Vec3d& velocity,
                         double period_s);
+
+  /// The loop's end's controller (admittance type, above): call once per tick
+  /// after Observe, before Hold of the new force. Returns the offset δ (m per
+  /// axis) to add to the arm's position wherever the virtual environment
+  /// reads it this tick. `acted` (optional) is set when it moved δ to
+  /// return a deficit.
+  const Vec3d& ControlPosition(const Vec3d& remote_energy_in, double period_s, bool* acted = nullptr);
+
+  /// The loop's end without a controller: its deficit (−W where W < 0) is
+  /// charged to the arm's end instead — `charged` keeps the largest so far
+  /// (monotone, as the link carries it). Call once per tick after Observe.
+  void ChargeDeficit(const Vec3d& remote_energy_in);
+
+  /// The offset ControlPosition keeps (m per axis).
+  const Vec3d& offset() const { return offset_; }
+  /// J per axis: the loop's end's largest deficit left uncovered by its
+  /// capped controller (monotone): sent beside E_in, charged to the arm's end.
+  const Vec3d& charged() const { return charged_; }
 
   /// Holds the forces that will act over the next period when the caller
   /// changed them (a saturated actuator) or has no controller (the loop
@@ -136,6 +173,8 @@ class TwoPortPassivity {
   Vec3d energy_out_{};
   Vec3d dissipated_{};
   Vec3d forgotten_{};      ///< credit beyond max_credit_j, J
+  Vec3d offset_{};         ///< m, the loop's end's position offset
+  Vec3d charged_{};        ///< J, the loop's end's largest uncovered deficit
   Vec3d held_rendered_{};  ///< N, the channel's force over the coming period
   Vec3d held_damping_{};   ///< N, the controller's force over the coming period
 };

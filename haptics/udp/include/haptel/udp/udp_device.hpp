@@ -119,6 +119,18 @@ class UdpDevice final : public Device {
   DeviceStatus WriteWristForce(Side side, const Vec3d& command) override;
   DeviceStatus WriteFingerForces(Side side, const std::array<double, kFingers>& command) override;
 
+  /// Version 2 only: the server's end's report of the current epoch, once its
+  /// controller runs (its device file's servo.passivity).
+  bool LinkPassivity(Side side, LinkEnergy& remote) override;
+  void SetLinkEnergy(Side side, const LinkEnergy& local) override;
+  void RestartLinkEnergy(Side side) override;
+
+  /// The version `side` speaks: udp::kVersion until a server answers, then
+  /// the version it answered in. Until the first valid reply every request
+  /// that went unanswered switches the next one between versions 2 and 1,
+  /// so an older server (which drops a version it does not know) is found.
+  uint16_t ProtocolVersion(Side side) const;
+
   UdpCounters Counters(Side side) const;
   UdpCounters Counters() const;  ///< both sides summed
   bool Lost(Side side) const;
@@ -143,6 +155,11 @@ class UdpDevice final : public Device {
     std::array<uint8_t, udp::kMaxMessageSize + 1>
         rx{};  ///< one spare byte: oversize datagrams show
     udp::Message reply;
+    /// The version requests go out in; fixed by the first valid reply.
+    std::atomic<uint16_t> version{udp::kVersion};
+    bool negotiated = false;
+    udp::EnergyReport local;   ///< the loop's end, sent in version 2 (epoch: ours)
+    udp::EnergyReport remote;  ///< the server's end, merged from its replies of our epoch
     AtomicCounters counters;
   };
   enum class Wait { kReply, kTimeout, kError };

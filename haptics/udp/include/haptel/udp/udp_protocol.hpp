@@ -21,8 +21,13 @@ namespace haptel::haptics::udp {
 
 /// "HPTL" in the first four bytes of every datagram.
 inline constexpr std::array<uint8_t, 4> kMagic{'H', 'P', 'T', 'L'};
-/// The protocol version this code speaks; peers of another version are dropped.
-inline constexpr uint16_t kVersion = 1;
+/// The newest protocol version this code speaks (and sends unless told
+/// otherwise). Version 2 adds each end's two-port energy report (EnergyReport)
+/// to WRIST_REQUEST, WRIST_FORCE and WRIST_REPLY; everything else is as in 1.
+inline constexpr uint16_t kVersion = 2;
+/// The oldest version this code still speaks: a v1 peer still works (without
+/// the energy reports). Datagrams of any other version are kBadVersion.
+inline constexpr uint16_t kMinVersion = 1;
 inline constexpr std::size_t kHeaderSize = 24;
 
 enum class MessageType : uint16_t {
@@ -65,14 +70,39 @@ std::string_view ToString(ErrorCode code);
 
 // --- Payloads (device units, as the Device interface carries them). ---
 
+/// Version 2: one end's two-port passivity report (haptel/haptics/twoport.hpp),
+/// in SI (J, N·s/m), per axis of the arm. Every quantity is a monotone counter
+/// within an epoch, so the newest report supersedes every older one and a
+/// lost or reordered datagram costs nothing: a receiver keeps the per-field
+/// maximum (Merge). The client owns the epoch: it starts a new one when its
+/// end restarts (device lost, controller reset); the server, seeing a new
+/// epoch, restarts its end too and echoes it, so both ends count from zero
+/// together. 80 bytes on the wire (PROTOCOL.md).
+struct EnergyReport {
+  bool active = false;   ///< this end runs its observer; when false the rest means nothing
+  uint32_t epoch = 0;    ///< set by the client; the server echoes the client's
+  Vec3d energy_in{};     ///< J per axis: what entered the channel at this end (E_in), ≥ 0
+  Vec3d charged{};       ///< J per axis: deficit this end could not dissipate itself, ≥ 0
+  double dissipated_j = 0.0;  ///< J, this end's controller over all axes, ≥ 0
+  uint64_t acted_ticks = 0;   ///< ticks this end's controller acted
+  double max_alpha = 0.0;     ///< the largest damping (N·s/m) this end's controller added, ≥ 0
+};
+
+/// `held` brought up to date by `arrived` of the same epoch (per-field
+/// maximum: the counters are monotone); an arrived report of another epoch
+/// replaces it whole.
+EnergyReport Merge(const EnergyReport& held, const EnergyReport& arrived);
+
 struct WristRequest {
   Vec3d wrist_force{};                           ///< command in force now
   std::array<double, kFingers> finger_forces{};  ///< commands in force now, each ≥ 0
+  EnergyReport energy{};                         ///< version 2 only: the loop's end
 };
 struct WristReply {
   int64_t device_ns = 0;  ///< the server's clock (not comparable with the client's)
   Vec3d position{};
   std::array<double, 4> orientation{1, 0, 0, 0};  ///< unit quaternion (w, x, y, z)
+  EnergyReport energy{};  ///< version 2 only: the device's end
 };
 struct GloveRequest {};
 struct GloveReply {
@@ -82,6 +112,7 @@ struct GloveReply {
 };
 struct WristForce {
   Vec3d command{};
+  EnergyReport energy{};  ///< version 2 only: the loop's end
 };
 struct FingerForce {
   std::array<double, kFingers> command{};  ///< each ≥ 0
@@ -98,10 +129,15 @@ struct Message {
   uint32_t sequence = 0;
   Side side = Side::kLeft;
   Payload payload;
+  /// kMinVersion…kVersion. Encode writes it (a version-1 message leaves the
+  /// energy reports out); Decode sets it from the header.
+  uint16_t version = kVersion;
   MessageType type() const { return static_cast<MessageType>(payload.index() + 1); }
 };
 
-/// Payload sizes in bytes, fixed per type.
+/// Payload sizes in bytes, fixed per type and version (version 1's; version
+/// 2 adds kEnergyReportSize to WRIST_REQUEST, WRIST_REPLY and WRIST_FORCE).
+inline constexpr std::size_t kEnergyReportSize = 4 + 4 + 6 * 8 + 8 + 8 + 8;
 inline constexpr std::size_t kWristRequestSize = 8 * 8;
 inline constexpr std::size_t kWristReplySize = 8 + 7 * 8;
 inline constexpr std::size_t kGloveRequestSize = 0;
@@ -115,8 +151,9 @@ inline constexpr std::size_t kMaxMessageSize = kHeaderSize + kMaxPayloadSize;
 /// A buffer any message fits in.
 using Buffer = std::array<uint8_t, kMaxMessageSize>;
 
-/// Payload size of a type; 0 for an unknown one (and for kGloveRequest).
-std::size_t PayloadSize(MessageType type);
+/// Payload size of a type in `version`; 0 for an unknown type or version
+/// (and for kGloveRequest).
+std::size_t PayloadSize(MessageType type, uint16_t version = kVersion);
 
 /// A quaternion is accepted when | |q| − 1 | ≤ this.
 inline constexpr double kQuaternionNormTolerance = 1e-3;
