@@ -43,7 +43,7 @@ constexpr const char* kPowerUsage =
     "Simulates the study (config/studies/*.yaml, simulated drivers) with a pool of simulated\n"
     "participants and estimates, per participant count, the probability that the planned\n"
     "analysis finds the condition effect at alpha 0.05: Friedman's test, and the mixed model\n"
-    "log(lap time) ~ condition + position + (1 | participant) by the likelihood-ratio test of\n"
+    "log(lap time) ~ condition + position + (1 | participant) by Satterthwaite's F test of\n"
     "condition (as `haptel study report` computes them). Recommends the smallest count whose\n"
     "mixed-model power reaches 80 %.\n"
     "\n"
@@ -392,7 +392,7 @@ int StudyPowerCommand(int argc, const char* const* argv) {
                             Fixed(p.lmm_interval.high, 2) + ")";
       std::printf("  %12d  %-24s  %-24s\n", p.participants, f.c_str(), m.c_str());
     }
-    std::printf("  (mixed model: log(lap time) ~ condition + position + (1 | participant), likelihood-ratio test of "
+    std::printf("  (mixed model: log(lap time) ~ condition + position + (1 | participant), Satterthwaite's F test of "
                 "condition; intervals Clopper-Pearson)\n");
     if (power.recommended_participants) {
       std::printf("  recommended participants: %d (the smallest count whose mixed-model power reaches 80 %%)\n",

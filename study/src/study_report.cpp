@@ -16,7 +16,7 @@ constexpr const char* kReportUsage =
     "Prints each condition's table (lap time as scored, per-participant rank, obstacles), the\n"
     "Friedman test, Kendall's W and a post-hoc test, the mixed model\n"
     "log(lap time) ~ condition + position + (1 | participant) (REML; Satterthwaite t tests\n"
-    "against the first condition, a likelihood-ratio test of the condition), each lap's\n"
+    "against the first condition, Satterthwaite's F test of the condition), each lap's\n"
     "percentage over the track's reference lap, and writes trials.csv, answers.csv,\n"
     "summary.csv, lap_times.png, ranks.png, ratings.png (with scored questionnaires),\n"
     "model_means.png and index.html.\n"

@@ -111,6 +111,7 @@ TEST_CASE("The report fits the mixed model to log lap times and measures laps ag
         std::string::npos);
   CHECK(text.find("clock: the lap clock") != std::string::npos);
   CHECK(text.find("Satterthwaite") != std::string::npos);
+  CHECK(text.find("Satterthwaite's F = 34.494 on 3 and 20.0 df") != std::string::npos);
   CHECK(text.find("likelihood-ratio chi2 = 43.689, df = 3") != std::string::npos);
   // gesture: exp(-0.4387) = 0.64 x the cockpit's lap time.
   CHECK(text.find("0.64 (") != std::string::npos);
@@ -144,7 +145,10 @@ TEST_CASE("The report fits the mixed model to log lap times and measures laps ag
   CHECK(NumberAfter(gesture_json, "\"ci_high\":") == Approx(-0.3044027516).margin(1e-5));
   CHECK(NumberAfter(gesture_json, "\"p\":") == Approx(1.262338317e-06).epsilon(1e-3));
   CHECK(NumberAfter(json, "\"position\":{\"estimate\":") == Approx(-0.04898715447).margin(1e-6));
-  CHECK(json.find("\"method\":\"likelihood ratio, ML refits\"") != std::string::npos);
+  CHECK(json.find("\"method\":\"Satterthwaite F\"") != std::string::npos);
+  // lmerTest's anova(fit) on these data: F 34.494 on 3 and 20 df, p 4.24e-08.
+  CHECK(NumberAfter(json, "\"den_df\":") == Approx(20.0).epsilon(1e-3));
+  CHECK(NumberAfter(json, "\"lrt_p\":") == Approx(1.757197026e-09).epsilon(1e-3));
   CHECK(json.find("\"boundary\":false") != std::string::npos);
   CHECK(NumberAfter(json, "\"baseline\":{\"reference_lap_s\":") == 30.0);
   CHECK(NumberAfter(json, "\"lap_time_s\":113.51,\"over_reference_percent\":") ==

@@ -138,8 +138,10 @@ std::string FormatLapTimeModel(const StudyResults& results, const StudyReport& r
       << Fixed(std::exp(e.ci_high), 3) << ")  learning, linear in the trial's order\n";
   }
   const MixedModelConditionTest& test = m.condition_test;
-  o << "    the condition as a whole: likelihood-ratio chi2 = " << Fixed(test.chi_square, 3)
-    << ", df = " << test.degrees_of_freedom << ", " << PClause(test.p_value) << " (ML refits)\n";
+  o << "    the condition as a whole: Satterthwaite's F = " << Fixed(test.f, 3) << " on " << test.degrees_of_freedom
+    << " and " << Fixed(test.denominator_df, 1) << " df, " << PClause(test.p_value)
+    << "; beside it the likelihood-ratio chi2 = " << Fixed(test.chi_square, 3) << ", df = " << test.degrees_of_freedom
+    << ", " << PClause(test.likelihood_ratio_p_value) << " (ML refits; liberal with few participants)\n";
   o << "    variance: participants " << Fixed(m.participant_variance, 4) << " (SD " << Fixed(std::sqrt(m.participant_variance), 3)
     << "), residual " << Fixed(m.residual_variance, 4) << " (SD " << Fixed(std::sqrt(m.residual_variance), 3)
     << ") on the log scale" << (m.boundary ? "; boundary fit" : "") << "\n";
@@ -219,9 +221,11 @@ std::string LapTimeModelJson(const StudyResults& results, const StudyReport& rep
   } else {
     out += "null";
   }
-  out += ",\"condition_test\":{\"method\":\"likelihood ratio, ML refits\",\"chi2\":" +
-         Number(m.condition_test.chi_square) + ",\"df\":" + std::to_string(m.condition_test.degrees_of_freedom) +
-         ",\"p\":" + Number(m.condition_test.p_value) + "}";
+  out += ",\"condition_test\":{\"method\":\"Satterthwaite F\",\"f\":" + Number(m.condition_test.f) +
+         ",\"df\":" + std::to_string(m.condition_test.degrees_of_freedom) +
+         ",\"den_df\":" + Number(m.condition_test.denominator_df) + ",\"p\":" + Number(m.condition_test.p_value) +
+         ",\"chi2\":" + Number(m.condition_test.chi_square) +
+         ",\"lrt_p\":" + Number(m.condition_test.likelihood_ratio_p_value) + "}";
   out += ",\"variance\":{\"participant\":" + Number(m.participant_variance) + ",\"residual\":" +
          Number(m.residual_variance) + ",\"participant_sd\":" + Number(std::sqrt(m.participant_variance)) +
          ",\"residual_sd\":" + Number(std::sqrt(m.residual_variance)) + ",\"boundary\":" +

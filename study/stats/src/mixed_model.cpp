@@ -163,9 +163,11 @@ double BrentMinimum(const std::function<double(double)>& f, double a, double b, 
 
 /// The θ = σ_b/σ minimising the criterion: a log-spaced scan over
 /// [1e-4, 1e4] and θ = 0 brackets it, Brent's method refines it; θ = 0 when
-/// the boundary is as good to within rounding.
-Profile Fit(const Design& d, bool reml) {
+/// the boundary is as good to within rounding. Not `separable` (no
+/// variation within participants to tell σ from σ_b): θ = 0, unsearched.
+Profile Fit(const Design& d, bool reml, bool separable) {
   const GroupSums s = Sums(d);
+  if (!separable) return Solve(d, s, 0.0);
   const double n = static_cast<double>(d.y.size());
   const double fixed = static_cast<double>(d.x.cols());
   const auto criterion = [&](double theta) { return Criterion(Solve(d, s, theta), n, fixed, reml); };
@@ -378,8 +380,30 @@ MixedModelResult FitMixedModel(const std::vector<MixedModelObservation>& observa
     }
   }
 
+  // The residual variance is told from the participants' by the variation
+  // within participants that the fixed effects leave: n − rank([X Z]) df of
+  // it. With none (e.g. 2 participants × 2 trials with condition and
+  // position fitted) every θ = σ_b/σ explains the data equally (REML's
+  // criterion is flat in θ, and ML's grows without bound as σ² → 0), so a
+  // fit would put the residual variance at whatever rounding picks, often
+  // ~0, and find any difference "significant". There the participants'
+  // variance is set to 0: ordinary least squares, whose residual holds the
+  // participants' differences too, so its tests are conservative, not
+  // liberal.
+  MatrixXd with_participants(n, columns + full.groups);
+  with_participants << full.x, MatrixXd::Zero(n, full.groups);
+  for (Eigen::Index r = 0; r < n; ++r) with_participants(r, columns + full.group[static_cast<size_t>(r)]) = 1.0;
+  const bool separable = Rank(with_participants) < n;
+  if (!separable) {
+    result.notes.push_back(
+        "no variation within participants is left once the fixed effects are fitted (" + std::to_string(n) +
+        " trials, " + std::to_string(full.groups) + " participants, " + std::to_string(columns) +
+        " fixed effects), so the participants' variance cannot be told from the residual's: it is set to 0 "
+        "(ordinary least squares; the tests are conservative)");
+  }
+
   const double fixed = static_cast<double>(columns);
-  const Profile reml = Fit(full, true);
+  const Profile reml = Fit(full, true, separable);
   result.reml_criterion = Criterion(reml, static_cast<double>(n), fixed, true);
   result.residual_variance = reml.q / (static_cast<double>(n) - fixed);
   result.participant_variance = reml.theta * reml.theta * result.residual_variance;
@@ -414,25 +438,61 @@ MixedModelResult FitMixedModel(const std::vector<MixedModelObservation>& observa
     result.position = Contrast(slope, reml.beta, inference, result.notes);
   }
 
-  // The condition as a whole: ML refits with and without its columns.
+  // The condition as a whole, first by Satterthwaite's F test of its
+  // contrasts (lmerTest's contestMD): rotated to the eigenvectors of L C L'
+  // the contrasts are independent, each a t test with its own df.
+  MixedModelConditionTest& test = result.condition_test;
+  test.degrees_of_freedom = condition_columns;
+  {
+    MatrixXd l = MatrixXd::Zero(condition_columns, columns);
+    for (int row = 0; row < condition_columns; ++row) l(row, row + 1) = 1.0;  // the columns after the intercept
+    const Eigen::SelfAdjointEigenSolver<MatrixXd> eigen(l * inference.covariance * l.transpose());
+    double t_squares = 0.0;
+    std::vector<double> dfs;
+    for (int i = 0; i < condition_columns; ++i) {
+      const MixedModelContrast rotated =
+          Contrast(l.transpose() * eigen.eigenvectors().col(i), reml.beta, inference, result.notes);
+      t_squares += rotated.t * rotated.t;
+      dfs.push_back(rotated.degrees_of_freedom);
+    }
+    test.f = t_squares / condition_columns;
+    test.denominator_df = dfs.front();
+    const bool all_equal = std::all_of(dfs.begin(), dfs.end(), [&](double df) {
+      return std::abs(df - dfs.front()) < 1e-8;
+    });
+    if (!all_equal) {
+      // lmerTest's get_Fstat_ddf: 2 when any ν_i ≤ 2 (the F's mean is not finite).
+      double e = 0.0;
+      bool small = false;
+      for (const double df : dfs) {
+        if (df <= 2.0) small = true;
+        e += df / (df - 2.0);
+      }
+      test.denominator_df = small ? 2.0 : 2.0 * e / (e - condition_columns);
+    }
+    const double q = condition_columns;
+    const double d = test.denominator_df;
+    // P(F > f) = I_{d/(d + q f)}(d/2, q/2).
+    test.p_value = test.f > 0.0 ? RegularizedIncompleteBeta(d / 2.0, q / 2.0, d / (d + q * test.f)) : 1.0;
+  }
+
+  // Then for comparison the likelihood ratio: ML refits with and without its columns.
   Design reduced = full;
   reduced.x = MatrixXd(n, columns - condition_columns);
   reduced.x.col(0) = full.x.col(0);
   if (position_column >= 0) reduced.x.col(1) = full.x.col(position_column);
-  const Profile ml_full = Fit(full, false);
-  const Profile ml_reduced = Fit(reduced, false);
-  MixedModelConditionTest& test = result.condition_test;
+  const Profile ml_full = Fit(full, false, separable);
+  const Profile ml_reduced = Fit(reduced, false, separable);
   test.ml_deviance_full = Criterion(ml_full, static_cast<double>(n), fixed, false);
   test.ml_deviance_reduced = Criterion(ml_reduced, static_cast<double>(n), static_cast<double>(reduced.x.cols()), false);
   test.chi_square = std::max(0.0, test.ml_deviance_reduced - test.ml_deviance_full);
-  test.degrees_of_freedom = condition_columns;
-  test.p_value = ChiSquareSurvival(test.chi_square, test.degrees_of_freedom);
+  test.likelihood_ratio_p_value = ChiSquareSurvival(test.chi_square, test.degrees_of_freedom);
 
   std::sort(result.notes.begin(), result.notes.end());
   result.notes.erase(std::unique(result.notes.begin(), result.notes.end()), result.notes.end());
   result.method =
       "REML fit with a random intercept per participant (lme4's criterion); per-condition t tests with Satterthwaite's degrees of freedom (as lmerTest); the condition as a whole by "
-      "a likelihood-ratio test of ML refits";
+      "Satterthwaite's F test (as lmerTest's anova), a likelihood-ratio test of ML refits beside it";
   return result;
 }
 

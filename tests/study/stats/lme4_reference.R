@@ -73,6 +73,10 @@ report <- function(name, d) {
   cat("  .lrt_chi_square = ", g(lrt$Chisq[2]), ",\n", sep = "")
   cat("  .lrt_degrees_of_freedom = ", g(lrt$Df[2]), ",\n", sep = "")
   cat("  .lrt_p_value = ", g(lrt[["Pr(>Chisq)"]][2]), ",\n", sep = "")
+  ft <- anova(fit)  # lmerTest: type III, Satterthwaite's F
+  cat("  .f = ", g(ft["condition", "F value"]), ",\n", sep = "")
+  cat("  .f_denominator_df = ", g(ft["condition", "DenDF"]), ",\n", sep = "")
+  cat("  .f_p_value = ", g(ft["condition", "Pr(>F)"]), ",\n", sep = "")
 }
 report("balanced", balanced)
 report("missing", missing)

@@ -9,6 +9,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
+#include <random>
 #include <stdexcept>
 #include <vector>
 
@@ -77,6 +79,9 @@ struct Reference {
   double ml_deviance_full, ml_deviance_reduced, lrt_chi_square;
   int lrt_degrees_of_freedom;
   double lrt_p_value;
+  double f;  ///< lmerTest's anova(fit): type III, Satterthwaite's F
+  double f_denominator_df;
+  double f_p_value;
 };
 
 // clang-format off
@@ -98,6 +103,9 @@ const Reference kBalancedReference{
   .lrt_chi_square = 43.68890417,
   .lrt_degrees_of_freedom = 3,
   .lrt_p_value = 1.757197026e-09,
+  .f = 34.49432473,
+  .f_denominator_df = 20.00000006,
+  .f_p_value = 4.244697639e-08,
 };
 const Reference kMissingReference{
   .estimate = {4.17188868, 0.1968394182, -0.02077749327, -0.4411647575, -0.04873756619},
@@ -117,6 +125,9 @@ const Reference kMissingReference{
   .lrt_chi_square = 39.44416339,
   .lrt_degrees_of_freedom = 3,
   .lrt_p_value = 1.397524543e-08,
+  .f = 29.58658543,
+  .f_denominator_df = 19.03329692,
+  .f_p_value = 2.257590159e-07,
 };
 const Reference kSingularReference{
   .estimate = {4.067209377, 0.2726540344, 0.1147872671, -0.3456672976, -0.0353352423},
@@ -136,6 +147,9 @@ const Reference kSingularReference{
   .lrt_chi_square = 50.75399094,
   .lrt_degrees_of_freedom = 3,
   .lrt_p_value = 5.519544844e-11,
+  .f = 34.96029298,
+  .f_denominator_df = 27,
+  .f_p_value = 1.924936596e-09,
 };
 // clang-format on
 
@@ -180,7 +194,10 @@ void CheckAgainstLme4(const MixedModelResult& fit, const Reference& r, int obser
   CHECK(fit.condition_test.ml_deviance_reduced == Approx(r.ml_deviance_reduced).margin(1e-5));
   CHECK(fit.condition_test.chi_square == Approx(r.lrt_chi_square).margin(1e-5));
   CHECK(fit.condition_test.degrees_of_freedom == r.lrt_degrees_of_freedom);
-  CHECK(fit.condition_test.p_value == Approx(r.lrt_p_value).epsilon(1e-4));
+  CHECK(fit.condition_test.likelihood_ratio_p_value == Approx(r.lrt_p_value).epsilon(1e-4));
+  CHECK(fit.condition_test.f == Approx(r.f).epsilon(1e-4));
+  CHECK(fit.condition_test.denominator_df == Approx(r.f_denominator_df).epsilon(1e-3));
+  CHECK(fit.condition_test.p_value == Approx(r.f_p_value).epsilon(1e-3));
 }
 
 }  // namespace
@@ -303,6 +320,59 @@ TEST_CASE("FitMixedModel: refuses what it cannot fit, saying what it expected", 
   CHECK_THROWS_WITH(FitMixedModel(bad, 4), Contains("observation 5"));
   CHECK_THROWS_WITH(FitMixedModel(LogLaps(kBalanced), 3), Contains("expected 0..2"));
   CHECK_THROWS_WITH(FitMixedModel({{1, 0, 1, 1.0}, {2, 1, 1, 2.0}}, 2), Contains("more than one trial"));
+}
+
+namespace {
+
+/// `datasets` seeded two-condition crossovers of `participants` (half in
+/// order A, B, half in B, A: the balanced Latin square's two rows, the
+/// pilot's design) with no condition effect: log lap = participant's speed
+/// (SD 0.15) − 0.05 per trial of learning + trial noise (SD 0.05). Returns
+/// the share whose condition test has p < 0.05, and `effect` added to
+/// condition 1 turns it into a power.
+double RejectionRate(int participants, int datasets, double effect, std::uint64_t seed) {
+  std::mt19937_64 random(seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  int rejected = 0;
+  for (int d = 0; d < datasets; ++d) {
+    std::vector<MixedModelObservation> observations;
+    for (int p = 0; p < participants; ++p) {
+      const double speed = 4.4 + 0.15 * normal(random);
+      for (int position = 1; position <= 2; ++position) {
+        const int condition = (p % 2 == 0) == (position == 1) ? 0 : 1;
+        observations.push_back({p, condition, static_cast<double>(position),
+                                speed - 0.05 * (position - 1) + (condition == 1 ? effect : 0.0) +
+                                    0.05 * normal(random)});
+      }
+    }
+    if (FitMixedModel(observations, 2).condition_test.p_value < 0.05) ++rejected;
+  }
+  return static_cast<double>(rejected) / datasets;
+}
+
+}  // namespace
+
+TEST_CASE("FitMixedModel: with no condition effect the condition test rejects in about alpha of the data sets",
+          "[study][stats]") {
+  // Binomial(400, 0.05): mean 20, SD 4.4; 0.10 is 40 rejections, 4.6 SD
+  // above. Two participants leave no within-participant residual once
+  // condition and position are fitted: the test must not find an effect in
+  // noise there (it found one in every data set).
+  for (const int participants : {2, 4, 8}) {
+    INFO(participants << " participants");
+    const double rate = RejectionRate(participants, 400, 0.0, 1000 + static_cast<std::uint64_t>(participants));
+    INFO("rejection rate " << rate);
+    CHECK(rate <= 0.10);
+  }
+}
+
+TEST_CASE("FitMixedModel: a real condition effect is still found", "[study][stats]") {
+  // 10 % longer laps in condition 1 against 5 % trial noise: the
+  // within-participant difference has SD 0.07, so 8 participants find it
+  // nearly always.
+  const double rate = RejectionRate(8, 200, 0.10, 77);
+  INFO("power " << rate);
+  CHECK(rate >= 0.9);
 }
 
 }  // namespace haptel::study

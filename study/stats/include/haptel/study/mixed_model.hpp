@@ -31,17 +31,33 @@
 ///   the REML criterion's observed information (computed in closed form, not
 ///   by finite differences as lmerTest does). At the boundary σ_b² = 0 the
 ///   participant variance is fixed there and df = n − p, as lmerTest gives;
-/// - the condition effect as a whole by a likelihood-ratio test of the
-///   model against the one without condition, both refitted by maximum
-///   likelihood (ML), χ² with (conditions − 1) df — R's
-///   `anova(reduced, full)`.
+/// - the condition effect as a whole by Satterthwaite's F test of its
+///   (conditions − 1) contrasts against the reference, as lmerTest's
+///   `anova(model)` computes it: L'β̂ rotated to the eigenvectors of L'CL,
+///   F = the mean of the rotated contrasts' t², its denominator df from their
+///   Satterthwaite df ν_i as 2E/(E − q), E = Σ ν_i/(ν_i − 2) (ν_1 for one
+///   contrast, where F = t²). This is the test's p. With few participants
+///   it, and not a χ², is what holds the level: the residual variance is
+///   estimated from few within-participant df, which the F distribution
+///   carries and the χ² ignores;
+/// - beside it, the likelihood-ratio test of the model against the one
+///   without condition, both refitted by maximum likelihood (ML), χ² with
+///   (conditions − 1) df — R's `anova(reduced, full)` — for comparison
+///   only: it is liberal with few participants (0.2 at α = 0.05 with 4 in
+///   a two-condition crossover), and with 2 participants × 2 trials no
+///   within-participant residual is left, the full model's ML likelihood
+///   grows without bound as σ² → 0, and χ² is huge whatever the data.
 ///
 /// Edge cases give results or a clear refusal, never NaN: a condition with
 /// no observation is left out of the design (its effect is not estimable);
 /// when the reference has none, the first condition with data becomes the
 /// reference; a position that is a function of the condition (every
 /// participant ran the conditions in the same order) is left out and said
-/// so. Too little data throws std::invalid_argument saying what was needed.
+/// so. When no variation within participants is left once the fixed effects
+/// are fitted (n = rank of [X Z]: e.g. 2 participants × 2 trials with
+/// condition and position) the two variances cannot be told apart; the
+/// participants' is set to 0 (ordinary least squares, conservative tests),
+/// with a note. Too little data throws std::invalid_argument saying what was needed.
 #include <optional>
 #include <string>
 #include <vector>
@@ -79,13 +95,19 @@ struct MixedModelCondition {
   std::optional<MixedModelContrast> mean;
 };
 
-/// The likelihood-ratio test of the condition effect as a whole.
+/// The test of the condition effect as a whole: Satterthwaite's F test
+/// (its p is the test's), and the likelihood-ratio test for comparison.
 struct MixedModelConditionTest {
+  int degrees_of_freedom = 0;        ///< conditions with data − 1: F's numerator df, χ²'s df
+  double f = 0.0;                    ///< Satterthwaite's F (t² for two conditions)
+  double denominator_df = 0.0;       ///< F's denominator df, Satterthwaite's (the t test's for two conditions)
+  double p_value = 1.0;              ///< of the F test: the condition test's p
   double ml_deviance_full = 0.0;     ///< −2 log L of the ML refit with condition
   double ml_deviance_reduced = 0.0;  ///< −2 log L of the ML refit without it
   double chi_square = 0.0;           ///< reduced − full (≥ 0)
-  int degrees_of_freedom = 0;        ///< conditions with data − 1
-  double p_value = 1.0;
+  /// The χ² likelihood-ratio test's p: liberal with few participants (see
+  /// the file's comment), so not the test's.
+  double likelihood_ratio_p_value = 1.0;
 };
 
 struct MixedModelResult {

@@ -19,7 +19,9 @@
 ///   Friedman's test on each participant's mean scored lap time per condition
 ///   (statistics.hpp), and the mixed model
 ///   log(lap time) ~ condition + position + (1 | participant) with the
-///   likelihood-ratio test of the condition (mixed_model.hpp);
+///   Satterthwaite F test of the condition (mixed_model.hpp; not the χ²
+///   likelihood-ratio test, which with few participants finds effects that
+///   are not there);
 /// - each test finds the effect when its p < α. An analysis that cannot be
 ///   done (every participant's laps tied, a fit refused) finds nothing and is
 ///   counted apart.
@@ -84,7 +86,7 @@ struct PowerPoint {
   int participants = 0;
   int simulations = 0;
   int friedman_significant = 0;  ///< simulations whose Friedman p < α
-  int lmm_significant = 0;       ///< simulations whose likelihood-ratio p < α
+  int lmm_significant = 0;       ///< simulations whose condition test (F) has p < α
   int friedman_not_analysed = 0;  ///< Friedman could not be computed (counted as not finding)
   int lmm_not_analysed = 0;       ///< the mixed model could not be fitted (likewise)
   double friedman_power = 0.0;   ///< friedman_significant / simulations
