@@ -132,6 +132,7 @@ void Ros2Config::ValidateOrThrow() const {
   if (!IsRosTopicName(cmd_vel)) check::Fail("cmd_vel", expected);
   if (!IsRosTopicName(odom)) check::Fail("odom", expected);
   if (!image.empty() && !IsRosTopicName(image)) check::Fail("image", std::string(expected) + ", or empty for none");
+  if (!scan.empty() && !IsRosTopicName(scan)) check::Fail("scan", std::string(expected) + ", or empty for none");
   check::Number("cmd_rate_hz", cmd_rate_hz, 1.0, 1000.0);
   check::Number("odom_timeout_s", odom_timeout_s, 0.05, 60.0);
 }
@@ -300,6 +301,7 @@ VehicleConfig LoadVehicle(const std::filesystem::path& file) {
     v.ros2.cmd_vel = ros2.String("cmd_vel", v.ros2.cmd_vel);
     v.ros2.odom = ros2.String("odom", v.ros2.odom);
     v.ros2.image = ros2.String("image", v.ros2.image);
+    v.ros2.scan = ros2.String("scan", v.ros2.scan);
     v.ros2.cmd_rate_hz = ros2.Number("cmd_rate_hz", v.ros2.cmd_rate_hz);
     v.ros2.odom_timeout_s = ros2.Number("odom_timeout_s", v.ros2.odom_timeout_s);
     ros2.Finish();

@@ -163,6 +163,7 @@ class RobotSession final : public FamilySession {
       }
       lap_.UpdateContact(ts, touching);
       feedback_ = {s.bumper_left(), s.bumper_right(), s.speed(), RangesOf(s)};
+      if (feedback_.ranges.count != range_beams_said_) SayRanges(feedback_.ranges);
       OnCanLog(s);
       third_person_pose_new_ = third_person_pose_new_ || s.pose_valid();
     }
@@ -312,6 +313,23 @@ class RobotSession final : public FamilySession {
   }
 
  private:
+  /// Says what the vehicle's range sensors give shared control to look with,
+  /// when it first comes and whenever it changes: a laser that came late or
+  /// a scan that stopped (a ROS 2 robot's goes when its scans stop).
+  void SayRanges(const RangeScan& scan) {
+    range_beams_said_ = scan.count;
+    if (!setup_.progress) return;
+    if (scan.count == 0) {
+      log::Info("range sensors: none now (the vehicle's scan is empty)");
+      return;
+    }
+    constexpr double kDeg = 180.0 / 3.14159265358979323846;
+    char line[160];
+    std::snprintf(line, sizeof line, "range sensors: %d beams from %+.0f deg to %+.0f deg, up to %.2f m", scan.count,
+                  scan.Angle(0) * kDeg, scan.Angle(scan.count - 1) * kDeg, scan.range_max);
+    log::Info(line);
+  }
+
   const InterfaceSpec& start_spec() const { return setup_.interfaces.at(static_cast<size_t>(setup_.start_interface)); }
 
   /// The vehicle's CAN bus log: kept as reported; its end said once, as
@@ -384,6 +402,8 @@ class RobotSession final : public FamilySession {
   std::unique_ptr<SessionPhysics> physics_;
   std::unique_ptr<InterfaceSet> interfaces_;
   interfaces::VehicleFeedback feedback_;
+  /// The beams the range scan had when last said (SayRanges).
+  int range_beams_said_ = 0;
   interfaces::MotorCommand motors_;
   uint32_t requests_seen_ = 0;
   uint32_t disconnects_seen_ = 0;

@@ -1,8 +1,8 @@
 // End to end, the ROS 2 adapter (kind ros2) against an independent DDS: a
 // ROS 2 differential-drive robot stood in for by haptel-ros2-standin, on
 // Cyclone DDS. `haptel run` spawns haptel-vehicle with the adapter, which
-// speaks Twist, Odometry and CompressedImage with the stand-in on a ROS
-// domain of their own; the automatic operator drives the short track.
+// speaks Twist, Odometry, CompressedImage and LaserScan with the stand-in on
+// a ROS domain of their own; the automatic operator drives the short track.
 #include <signal.h>
 
 #include <catch2/catch.hpp>
@@ -52,7 +52,8 @@ std::vector<std::string> Lap(const std::filesystem::path& dir, const std::filesy
 
 }  // namespace
 
-TEST_CASE("the ROS 2 adapter drives a Cyclone DDS robot round the short track, its camera on the operator's screen") {
+TEST_CASE("the ROS 2 adapter drives a Cyclone DDS robot round the short track, its camera on the operator's screen, "
+          "its laser in the operator's state") {
   const auto dir = test::ScratchDir("e2e-ros2");
   const int ros_domain = test::UniqueDomain(41);
   const auto vehicle = VehicleFile(dir, ros_domain);
@@ -71,6 +72,12 @@ TEST_CASE("the ROS 2 adapter drives a Cyclone DDS robot round the short track, i
   // Its JPEGs are the vehicle file's size (320x240) and fit the link: they
   // went to the operator as the robot made them, neither decoded nor encoded.
   CHECK(run.err().find("passed through as the camera made them") != std::string::npos);
+  // The stand-in's 360-beam LaserScan reached the operator's state as the
+  // range field: 30 sectors of 12 degrees all round (each at its middle),
+  // up to the laser's 8 m.
+  const size_t said = run.err().find("range sensors: 30 beams from -17");
+  CHECK(said != std::string::npos);
+  CHECK(run.err().find("up to 8.00 m", said) != std::string::npos);
   // The vehicle names the robot's graph it joined.
   CHECK(run.err().find("ROS 2 robot on domain " + std::to_string(ros_domain)) != std::string::npos);
 
@@ -81,6 +88,7 @@ TEST_CASE("the ROS 2 adapter drives a Cyclone DDS robot round the short track, i
   INFO(robot.err());
   CHECK(std::stoi(JsonField(done, "twists")) > 50);
   CHECK(JsonField(done, "twists_dropped") == "0");
+  CHECK(std::stoi(JsonField(done, "scans_published")) > 10);
   CHECK(std::stod(JsonField(done, "distance_m")) > 2.5);
 }
 

@@ -1,7 +1,7 @@
 // The ROS 2 adapter in-process, against Fast DDS endpoints of the test's own
 // on a domain of its own: what it sends on cmd_vel, how odometry becomes the
-// track-frame pose, the silent robot, bad odometry, the camera topic, and the
-// configuration's checks.
+// track-frame pose, the silent robot, bad odometry, the camera topic, the
+// laser scan as the state's range field, and the configuration's checks.
 #include <catch2/catch.hpp>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
@@ -11,6 +11,7 @@
 #include <fastdds/dds/topic/TypeSupport.hpp>
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <opencv2/imgcodecs.hpp>
 #include <thread>
@@ -53,17 +54,20 @@ struct FakeRobot {
     cmd = MakeTopic<geometry_msgs::msg::dds_::Twist_PubSubType>(participant, "rt/cmd_vel");
     odom = MakeTopic<nav_msgs::msg::dds_::Odometry_PubSubType>(participant, "rt/odom");
     image = MakeTopic<sensor_msgs::msg::dds_::CompressedImage_PubSubType>(participant, "rt/camera/image_raw/compressed");
+    scan = MakeTopic<sensor_msgs::msg::dds_::LaserScan_PubSubType>(participant, "rt/scan");
     fdds::DataReaderQos rq = fdds::DATAREADER_QOS_DEFAULT;
     rq.reliability().kind = fdds::RELIABLE_RELIABILITY_QOS;  // as a ROS 2 subscriber: the adapter must match it
     twist_reader = participant.subscriber()->create_datareader(cmd, rq);
     odom_writer = participant.publisher()->create_datawriter(odom, fdds::DATAWRITER_QOS_DEFAULT);
     image_writer = participant.publisher()->create_datawriter(image, fdds::DATAWRITER_QOS_DEFAULT);
+    scan_writer = participant.publisher()->create_datawriter(scan, fdds::DATAWRITER_QOS_DEFAULT);
   }
   ~FakeRobot() {
     participant.subscriber()->delete_datareader(twist_reader);
     participant.publisher()->delete_datawriter(odom_writer);
     participant.publisher()->delete_datawriter(image_writer);
-    for (fdds::Topic* t : {cmd, odom, image}) participant.get()->delete_topic(t);
+    participant.publisher()->delete_datawriter(scan_writer);
+    for (fdds::Topic* t : {cmd, odom, image, scan}) participant.get()->delete_topic(t);
   }
   static LinkConfig Link(int domain) {
     LinkConfig l;
@@ -98,10 +102,15 @@ struct FakeRobot {
   fdds::Topic* cmd = nullptr;
   fdds::Topic* odom = nullptr;
   fdds::Topic* image = nullptr;
+  fdds::Topic* scan = nullptr;
   fdds::DataReader* twist_reader = nullptr;
   fdds::DataWriter* odom_writer = nullptr;
   fdds::DataWriter* image_writer = nullptr;
+  fdds::DataWriter* scan_writer = nullptr;
 };
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
 }  // namespace
 
@@ -225,6 +234,105 @@ TEST_CASE("ros2: the image topic is the camera; an image that does not decode is
   }, 30.0));
 }
 
+TEST_CASE("ros2: a LaserScan is the state's range field, beam for beam; inf meets nothing, out of range is dropped") {
+  // Five beams from -90 degrees to +90 degrees, a laser seeing 0.1 to 4 m.
+  const double quarter = std::numbers::pi / 2;
+  const std::vector<float> ranges = {1.5f, kInf, 0.05f, kNaN, -kInf};
+  const RangeScan s = Ros2Robot::RangeScanFor(-quarter, quarter / 2, 0.1, 4.0, ranges);
+  REQUIRE(s.count == 5);
+  CHECK(s.angle_min == Approx(-quarter));
+  CHECK(s.angle_increment == Approx(quarter / 2));
+  CHECK(s.range_max == Approx(4.0));
+  CHECK(s.Hit(0));
+  CHECK(s.ranges[0] == Approx(1.5f));
+  CHECK_FALSE(s.Hit(1));                   // +inf: nothing within range
+  CHECK(s.ranges[1] == Approx(4.0f));
+  CHECK_FALSE(s.Hit(2));                   // 5 cm under range_min: invalid, dropped
+  CHECK_FALSE(s.Hit(3));                   // NaN: no reading
+  CHECK(s.Hit(4));                         // -inf: nearer than the laser can tell
+  CHECK(s.ranges[4] == Approx(0.1f));
+  CHECK(s.Angle(4) == Approx(quarter));
+
+  // A reading past range_max is invalid too, and so is a scan without sense.
+  CHECK_FALSE(Ros2Robot::RangeScanFor(0.0, 0.1, 0.1, 4.0, std::vector<float>{4.5f}).Hit(0));
+  CHECK(Ros2Robot::RangeScanFor(0.0, 0.1, 0.1, 4.0, std::vector<float>{}).count == 0);
+  CHECK(Ros2Robot::RangeScanFor(0.0, 0.0, 0.1, 4.0, std::vector<float>{1.0f, 1.0f}).count == 0);
+  CHECK(Ros2Robot::RangeScanFor(0.0, 0.1, 0.1, kInf, std::vector<float>{1.0f}).count == 0);
+  CHECK(Ros2Robot::RangeScanFor(0.0, 0.1, 5.0, 4.0, std::vector<float>{1.0f}).count == 0);
+  CHECK(Ros2Robot::RangeScanFor(kNaN, 0.1, 0.1, 4.0, std::vector<float>{1.0f}).count == 0);
+}
+
+TEST_CASE("ros2: a scan of more beams than the field holds is read in sectors, each its nearest valid range") {
+  // A 360-beam laser, one beam a degree from -180 degrees, nothing in range
+  // but a post 0.8 m away seen by beams 100 and 101, a wall at 2 m by beams
+  // 300..359 and a reading under range_min in beam 5.
+  const double degree = std::numbers::pi / 180;
+  std::vector<float> ranges(360, kInf);
+  ranges[100] = 0.9f;
+  ranges[101] = 0.8f;
+  for (int i = 300; i < 360; ++i) ranges[static_cast<size_t>(i)] = 2.0f;
+  ranges[5] = 0.01f;
+  const RangeScan s = Ros2Robot::RangeScanFor(-180 * degree, degree, 0.05, 10.0, ranges);
+  // ceil(360 / 32) = 12 beams a sector: 30 sectors, 12 degrees apart, each at its middle.
+  REQUIRE(s.count == 30);
+  CHECK(s.angle_increment == Approx(12 * degree));
+  CHECK(s.angle_min == Approx(-180 * degree + 5.5 * degree));
+  for (int sector = 0; sector < s.count; ++sector) {
+    INFO("sector " << sector);
+    if (sector == 8) {  // beams 96..107
+      CHECK(s.ranges[8] == Approx(0.8f));
+      CHECK(s.Angle(8) == Approx((-180 + 96 + 5.5) * degree));
+    } else if (sector >= 25) {  // beams 300..359
+      CHECK(s.ranges[static_cast<size_t>(sector)] == Approx(2.0f));
+    } else {
+      CHECK_FALSE(s.Hit(sector));  // including sector 0: beam 5's 1 cm is invalid
+    }
+  }
+}
+
+TEST_CASE("ros2: the robot's LaserScan topic reaches the state's range field, and a stale scan is withdrawn") {
+  const int domain = test::UniqueDomain(63);
+  const Track track(NorthTrack());
+  Ros2Robot adapter(Ros2Vehicle(domain), track);  // odom_timeout_s 0.3
+  FakeRobot robot(domain);
+  CHECK(adapter.State().ranges.count == 0);
+
+  sensor_msgs::msg::dds_::LaserScan_ laser;
+  laser.angle_min(-0.5f);
+  laser.angle_max(0.5f);
+  laser.angle_increment(0.5f);
+  laser.range_min(0.05f);
+  laser.range_max(3.0f);
+  laser.ranges({kInf, 0.7f, 3.5f});
+  REQUIRE(test::WaitFor([&] {
+    robot.scan_writer->write(&laser);
+    adapter.Update(0.01);
+    return adapter.State().ranges.count > 0;
+  }, 30.0));
+  const RangeScan s = adapter.State().ranges;
+  REQUIRE(s.count == 3);
+  CHECK(s.angle_min == Approx(-0.5));
+  CHECK_FALSE(s.Hit(0));
+  CHECK(s.ranges[1] == Approx(0.7f));
+  CHECK_FALSE(s.Hit(2));  // past range_max: dropped
+  CHECK(adapter.Counters().scans_received >= 1);
+
+  // A scan without beams is counted and dropped; the last good one stays.
+  sensor_msgs::msg::dds_::LaserScan_ empty = laser;
+  empty.ranges({});
+  REQUIRE(test::WaitFor([&] {
+    robot.scan_writer->write(&empty);
+    adapter.Update(0.01);
+    return adapter.Counters().scans_dropped > 0;
+  }, 30.0));
+  CHECK(adapter.State().ranges.count == 3);
+
+  // No scan for longer than odom_timeout_s: what it saw is withdrawn.
+  std::this_thread::sleep_for(std::chrono::milliseconds(400));
+  adapter.Update(0.01);
+  CHECK(adapter.State().ranges.count == 0);
+}
+
 TEST_CASE("ros2: the configuration names a bad topic or domain") {
   const VehicleConfig shipped = LoadVehicle("config/vehicles/ros2-robot.yaml");
   CHECK(shipped.kind == "ros2");
@@ -240,6 +348,11 @@ TEST_CASE("ros2: the configuration names a bad topic or domain") {
   CHECK_THROWS_WITH(bad.ValidateOrThrow(), Catch::Contains("ros2.image"));
   bad = shipped;
   bad.ros2.image.clear();  // no camera topic: allowed
+  CHECK_NOTHROW(bad.ValidateOrThrow());
+  CHECK(shipped.ros2.scan == "/scan");
+  bad.ros2.scan = "scan";
+  CHECK_THROWS_WITH(bad.ValidateOrThrow(), Catch::Contains("ros2.scan"));
+  bad.ros2.scan.clear();  // no laser: allowed
   CHECK_NOTHROW(bad.ValidateOrThrow());
   bad.ros2.domain_id = 300;
   CHECK_THROWS_WITH(bad.ValidateOrThrow(), Catch::Contains("ros2.domain_id"));

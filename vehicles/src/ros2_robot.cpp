@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
@@ -28,6 +29,7 @@ namespace dds = eprosima::fastdds::dds;
 using geometry_msgs::msg::dds_::Twist_;
 using nav_msgs::msg::dds_::Odometry_;
 using sensor_msgs::msg::dds_::CompressedImage_;
+using sensor_msgs::msg::dds_::LaserScan_;
 
 namespace {
 
@@ -83,24 +85,34 @@ struct Ros2Robot::Graph {
     wq.history().depth = 10;
     twist_writer = participant.publisher()->create_datawriter(cmd_topic, wq);
     odom_reader = participant.subscriber()->create_datareader(odom_topic, ReaderQos(10));
+    if (!config.ros2.scan.empty()) {
+      scan_topic = MakeTopic<sensor_msgs::msg::dds_::LaserScan_PubSubType>(participant, Ros2DdsTopic(config.ros2.scan));
+      // A laser's driver publishes with the sensor-data profile (BEST_EFFORT);
+      // only the newest scan is read.
+      scan_reader = participant.subscriber()->create_datareader(scan_topic, ReaderQos(1));
+    }
     if (!config.ros2.image.empty()) {
       image_topic = MakeTopic<sensor_msgs::msg::dds_::CompressedImage_PubSubType>(
           participant, Ros2DdsTopic(config.ros2.image));
       image_reader = participant.subscriber()->create_datareader(image_topic, ReaderQos(1));
     }
-    if (twist_writer == nullptr || odom_reader == nullptr || (image_topic != nullptr && image_reader == nullptr)) {
+    if (twist_writer == nullptr || odom_reader == nullptr || (image_topic != nullptr && image_reader == nullptr) ||
+        (scan_topic != nullptr && scan_reader == nullptr)) {
       Delete();
       throw std::runtime_error("ros2: DDS refused an endpoint on the robot's topics");
     }
   }
   ~Graph() { Delete(); }
   void Delete() {
+    if (scan_reader != nullptr) participant.subscriber()->delete_datareader(scan_reader);
     if (image_reader != nullptr) participant.subscriber()->delete_datareader(image_reader);
     if (odom_reader != nullptr) participant.subscriber()->delete_datareader(odom_reader);
     if (twist_writer != nullptr) participant.publisher()->delete_datawriter(twist_writer);
-    for (dds::Topic* t : {image_topic, odom_topic, cmd_topic}) {
+    for (dds::Topic* t : {scan_topic, image_topic, odom_topic, cmd_topic}) {
       if (t != nullptr) participant.get()->delete_topic(t);
     }
+    scan_reader = nullptr;
+    scan_topic = nullptr;
     image_reader = nullptr;
     odom_reader = nullptr;
     twist_writer = nullptr;
@@ -111,14 +123,18 @@ struct Ros2Robot::Graph {
   dds::Topic* cmd_topic = nullptr;
   dds::Topic* odom_topic = nullptr;
   dds::Topic* image_topic = nullptr;
+  dds::Topic* scan_topic = nullptr;
   dds::DataWriter* twist_writer = nullptr;
   dds::DataReader* odom_reader = nullptr;
   dds::DataReader* image_reader = nullptr;
+  dds::DataReader* scan_reader = nullptr;
   std::atomic<uint64_t> twists_sent{0};
   std::atomic<uint64_t> odom_received{0};
   std::atomic<uint64_t> odom_dropped{0};
   std::atomic<uint64_t> images_received{0};
   std::atomic<uint64_t> images_dropped{0};
+  std::atomic<uint64_t> scans_received{0};
+  std::atomic<uint64_t> scans_dropped{0};
 };
 
 namespace {
@@ -192,6 +208,38 @@ std::array<double, 2> Ros2Robot::TwistFor(const MotorLevels& levels, const Drive
   return {0.5 * (left + right), (right - left) / drive.track_width};
 }
 
+RangeScan Ros2Robot::RangeScanFor(double angle_min, double angle_increment, double range_min, double range_max,
+                                  std::span<const float> ranges) {
+  RangeScan scan;
+  const size_t n = ranges.size();
+  const bool sane = n > 0 && std::isfinite(angle_min) && std::isfinite(angle_increment) &&
+                    (angle_increment != 0.0 || n == 1) && std::isfinite(range_max) && range_max > 0.0 &&
+                    std::isfinite(range_min) && range_min >= 0.0 && range_min < range_max;
+  if (!sane) return scan;
+  const size_t per_sector = (n + kMaxRangeBeams - 1) / kMaxRangeBeams;
+  scan.count = static_cast<int>((n + per_sector - 1) / per_sector);
+  // Each sector's angle is its middle beam's (a half-beam between two for
+  // an even width).
+  scan.angle_min = angle_min + angle_increment * 0.5 * static_cast<double>(per_sector - 1);
+  scan.angle_increment = angle_increment * static_cast<double>(per_sector);
+  scan.range_max = range_max;
+  for (int sector = 0; sector < scan.count; ++sector) {
+    double nearest = range_max;
+    const size_t first = static_cast<size_t>(sector) * per_sector;
+    for (size_t i = first; i < std::min(n, first + per_sector); ++i) {
+      const double r = ranges[i];
+      if (std::isnan(r) || r == std::numeric_limits<double>::infinity()) continue;  // no reading; nothing in range
+      if (r == -std::numeric_limits<double>::infinity()) {
+        nearest = std::min(nearest, range_min);  // nearer than the sensor can tell
+      } else if (r >= range_min && r <= range_max) {
+        nearest = std::min(nearest, r);
+      }  // else: invalid (REP 117), dropped
+    }
+    scan.ranges[static_cast<size_t>(sector)] = static_cast<float>(nearest);
+  }
+  return scan;
+}
+
 void Ros2Robot::SendTwist(double v, double w) {
   Twist_ t;
   t.linear().x(v);
@@ -237,6 +285,23 @@ void Ros2Robot::Update(double dt) {
     state_.yaw_rate = odom.twist().twist().angular().z();
     state_.pose_valid = true;
   }
+  if (graph_->scan_reader != nullptr) {
+    LaserScan_ laser;
+    while (graph_->scan_reader->take_next_sample(&laser, &info) == ReturnCode_t::RETCODE_OK) {
+      if (!info.valid_data) continue;
+      const RangeScan scan = RangeScanFor(laser.angle_min(), laser.angle_increment(), laser.range_min(),
+                                          laser.range_max(), laser.ranges());
+      if (scan.count == 0) {
+        graph_->scans_dropped.fetch_add(1, std::memory_order_relaxed);
+        continue;
+      }
+      graph_->scans_received.fetch_add(1, std::memory_order_relaxed);
+      state_.ranges = scan;
+      last_scan_ns_ = now;
+    }
+    // What the robot saw a while ago is not what is ahead of it now.
+    if (last_scan_ns_ != 0 && NsToS(now - last_scan_ns_) > config_.ros2.odom_timeout_s) state_.ranges = RangeScan{};
+  }
   const bool silent = last_odom_ns_ != 0 && NsToS(now - last_odom_ns_) > config_.ros2.odom_timeout_s;
   if (silent && !state_.fault) {
     state_.fault = true;
@@ -271,6 +336,8 @@ Ros2Counters Ros2Robot::Counters() const {
   c.odom_dropped = graph_->odom_dropped.load();
   c.images_received = graph_->images_received.load();
   c.images_dropped = graph_->images_dropped.load();
+  c.scans_received = graph_->scans_received.load();
+  c.scans_dropped = graph_->scans_dropped.load();
   return c;
 }
 

@@ -139,6 +139,9 @@ struct Ros2Config {
   std::string odom = "/odom";
   /// Empty: no camera topic, the `camera` section's source is used instead.
   std::string image = "/camera/image_raw/compressed";
+  /// sensor_msgs/LaserScan in, the robot's range sensors (the state's range
+  /// field, what shared control looks ahead with). Empty: none.
+  std::string scan = "/scan";
   /// Twist messages per second while driving (ROS bases stop without them).
   double cmd_rate_hz = 20.0;
   /// No odometry for this long, once it came: the robot is reported silent

@@ -12,6 +12,11 @@
 /// - nav_msgs/Odometry is the pose, its frame's origin placed at the track's
 ///   start (where the robot was put down); the twist is the speed and yaw rate.
 /// - sensor_msgs/CompressedImage (JPEG or PNG) is the camera (MakeCamera).
+/// - sensor_msgs/LaserScan is the range field of the state (RangeScanFor),
+///   what shared control looks ahead with, as the simulated robot's range
+///   sensors are. The newest scan counts; one older than ros2.odom_timeout_s
+///   is withdrawn (count 0: nothing may be concluded), so the operator is
+///   never steered by what the robot saw a while ago.
 ///
 /// Readers are BEST_EFFORT, so they match publishers of either reliability.
 /// Odometry that stops for ros2.odom_timeout_s after it came is a fault (the
@@ -20,10 +25,12 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
 
 #include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"
+#include "haptel/core/range_scan.hpp"
 #include "haptel/vehicles/adapter.hpp"
 #include "haptel/video/camera_source.hpp"
 
@@ -36,6 +43,8 @@ struct Ros2Counters {
   uint64_t odom_dropped = 0;   ///< non-finite pose or twist
   uint64_t images_received = 0;
   uint64_t images_dropped = 0; ///< not decodable
+  uint64_t scans_received = 0;
+  uint64_t scans_dropped = 0;  ///< a scan whose geometry makes no sense (RangeScanFor gave no beams)
 };
 
 class Ros2Robot final : public VehicleAdapter {
@@ -65,6 +74,28 @@ class Ros2Robot final : public VehicleAdapter {
   /// The twist a differential drive's levels mean: {v m/s, ω rad/s}.
   static std::array<double, 2> TwistFor(const MotorLevels& levels, const DriveConfig& drive);
 
+  /// A sensor_msgs/LaserScan as the state's range field (range_scan.hpp),
+  /// the laser taken to be at the robot's centre facing forward (a frame_id
+  /// with an offset is not resolved: there is no tf here).
+  ///
+  /// A scan of up to kMaxRangeBeams beams is copied beam for beam. A longer
+  /// one is cut into sectors of k = ceil(n / kMaxRangeBeams) neighbouring
+  /// beams, each read as its nearest valid range at the angle of its middle
+  /// (the last sector may hold fewer beams; it is given the same width), so
+  /// an obstacle any beam of a sector saw is kept.
+  ///
+  /// Readings follow REP 117: NaN (no reading) and +inf (nothing within
+  /// range) meet nothing; -inf (something nearer than the sensor can tell)
+  /// is a hit at range_min; a finite reading outside [range_min, range_max]
+  /// is invalid and dropped. A beam or sector that met nothing reads
+  /// range_max, which is the scan's range_max.
+  ///
+  /// A scan whose geometry makes no sense (no beams, non-finite angles or
+  /// limits, a zero increment over several beams, range_max not positive or
+  /// range_min not in [0, range_max)) gives count 0.
+  static RangeScan RangeScanFor(double angle_min, double angle_increment, double range_min, double range_max,
+                                std::span<const float> ranges);
+
   /// The participant and endpoints on the robot's domain (shared with the camera).
   struct Graph;
 
@@ -82,6 +113,7 @@ class Ros2Robot final : public VehicleAdapter {
   double since_twist_s_ = 0.0;
   bool twist_due_ = true;
   int64_t last_odom_ns_ = 0;  ///< 0: none yet
+  int64_t last_scan_ns_ = 0;  ///< 0: none yet
 };
 
 }  // namespace haptel::vehicles
