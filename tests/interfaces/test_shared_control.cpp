@@ -153,8 +153,9 @@ TEST_CASE("curving into a wall beside the path steers the hand away rather than 
   // 0.22 m/s on an arc of radius about 0.35 m to the right), a wall along
   // the right 0.25 m off: the arc reaches 0.14 m from it within the horizon.
   // Slowing down on the same arc meets the same wall later, so it is not a
-  // way out; turning less to the right is. The push is sideways, to the left
-  // (the earlier law, judging commands by time alone, pushed mostly back).
+  // way out; turning less to the right is. The push is sideways, to the left,
+  // and its boundary is where the path clears the wall (the earlier law,
+  // judging commands by time alone, put it where the path still meets it).
   const Vec3d hand{0.07, -0.03, 0.0};
   const Guidance g = GuideAt(hand, WallAlongRight(0.25));
   REQUIRE(g.active);
