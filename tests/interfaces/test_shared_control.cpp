@@ -148,6 +148,35 @@ TEST_CASE("turning towards an obstacle on the left pushes the hand to the right"
   CHECK(mirrored.force[1] > 0.0);
 }
 
+TEST_CASE("curving into a wall beside the path steers the hand away rather than slowing it") {
+  // Three quarters forward and a right turn (treads about 0.93 and 0.58:
+  // 0.22 m/s on an arc of radius about 0.35 m to the right), a wall along
+  // the right 0.25 m off: the arc reaches 0.14 m from it within the horizon.
+  // Slowing down on the same arc meets the same wall later, so it is not a
+  // way out; turning less to the right is. The push is sideways, to the left,
+  // and its boundary is where the path clears the wall (the earlier law,
+  // judging commands by time alone, put it where the path still meets it).
+  const Vec3d hand{0.07, -0.03, 0.0};
+  const Guidance g = GuideAt(hand, WallAlongRight(0.25));
+  REQUIRE(g.active);
+  CHECK(g.force[1] > 0.0);
+  CHECK(std::abs(g.force[1]) > 2.0 * std::abs(g.force[0]));
+  // The boundary lies to the left of the hand, and the spring past it is the
+  // file's stiffness times the hand's depth, within the bound.
+  CHECK(g.point[1] > hand[1]);
+  const double depth = (hand[0] - g.point[0]) * g.normal[0] + (hand[1] - g.point[1]) * g.normal[1];
+  CHECK(std::hypot(g.force[0], g.force[1]) == Approx(std::min(150.0 * depth, 3.0)).margin(1e-9));
+  // At the boundary the path clears the wall within the horizon, driven at
+  // the hand's speed (the look-ahead is horizon x the hand's speed).
+  GestureInterface gesture(SharedConfig(), kVehicle);
+  const MotorCommand own = gesture.Map(hand);
+  const MotorCommand boundary = gesture.Map(g.point);
+  const double scale = (own.left + own.right) / (boundary.left + boundary.right);
+  const MotorCommand same_speed{boundary.left * scale, boundary.right * scale};
+  CHECK(std::isinf(TimeToCollision(WallAlongRight(0.25), same_speed, kVehicle, 0.03, 1.5)));
+  CHECK(std::isfinite(TimeToCollision(WallAlongRight(0.25), own, kVehicle, 0.03, 1.5)));
+}
+
 TEST_CASE("the guidance is bounded: the operator can always push through") {
   const GestureConfig config = SharedConfig(1.5, 2.5);
   // A wall 0.16 m ahead: any forward command meets it at once.

@@ -12,12 +12,20 @@
 ///     to collision: the first time its body, grown by a clearance, reaches a
 ///     point a beam met — a point it is not already closer to than that, so
 ///     that driving along a wall is not a collision;
-///  2. danger = 1 − TTC/horizon (0 beyond the horizon);
-///  3. the direction that makes it worse (the danger's gradient in hand space,
-///     by finite differences; towards the neutral point where that is flat),
-///     and how far back along it the safe commands begin (bisection);
-///  4. a guidance plane there: ForceField's guidance term, a spring past the
-///     plane saturating at max_force, which the servo loop evaluates from the
+///  2. steers first: the danger of a command is judged on its path, not its
+///     speed — every command is looked along at the hand's own speed, so the
+///     look-ahead is horizon_s·v (it grows with speed) and slowing down does
+///     not count as avoiding what the path still meets (a time horizon alone
+///     makes "slower" look safe: the earlier law pushed mostly towards slower
+///     and the vehicle drifted on into the wall). The danger's gradient in
+///     hand space is then the steer away, and the safe commands' boundary is
+///     found along it by bisection;
+///  3. where no steer within reach clears it (a wall square ahead), slows
+///     down: the time-to-collision danger, back towards the neutral point;
+///  4. a guidance plane at that boundary: ForceField's guidance term, a spring
+///     of `stiffness` N/m past the plane (a stiffness the hand must feel
+///     against its own: the level of haptic authority, Abbink et al. 2012),
+///     saturating at max_force, which the servo loop evaluates from the
 ///     hand's pose at 1 kHz (allocation-free, see haptics/force_field.hpp).
 #include <algorithm>
 #include <cmath>
@@ -62,11 +70,21 @@ class SharedControl {
   const VehicleGeometry& vehicle() const { return vehicle_; }
 
  private:
-  /// The danger of the command a hand at `p` gives.
-  template <typename Map>
-  double DangerAt(const RangeScan& scan, const haptics::Vec3d& p, const Map& map) const {
-    const double ttc = TimeToCollision(scan, map(p), vehicle_, config_.clearance, config_.horizon_s);
+  /// The danger of `command`: 0 beyond the horizon, 1 at collision now.
+  double Danger(const RangeScan& scan, const MotorCommand& command) const {
+    const double ttc = TimeToCollision(scan, command, vehicle_, config_.clearance, config_.horizon_s);
     return std::isfinite(ttc) ? std::clamp(1.0 - ttc / config_.horizon_s, 0.0, 1.0) : 0.0;
+  }
+  /// The danger of the path of the command a hand at `p` gives, driven at
+  /// forward command `forward` (the hand's own): the same arc (the treads'
+  /// ratio kept), so that only where it leads counts, not how fast.
+  template <typename Map>
+  double PathDangerAt(const RangeScan& scan, const haptics::Vec3d& p, double forward, const Map& map) const {
+    const MotorCommand c = map(p);
+    const double own = 0.5 * (c.left + c.right);
+    if (std::abs(own) < 1e-6 || (own > 0.0) != (forward > 0.0)) return Danger(scan, c);
+    const double scale = forward / own;
+    return Danger(scan, MotorCommand{c.left * scale, c.right * scale});
   }
 
   SharedControlConfig config_;
@@ -91,20 +109,25 @@ Guidance SharedControl::Guide(const RangeScan& scan, const haptics::Vec3d& hand,
     p[1] += dy;
     return p;
   };
-  const double gx = (DangerAt(scan, at(kStep, 0), map) - DangerAt(scan, at(-kStep, 0), map)) / (2 * kStep);
-  const double gy = (DangerAt(scan, at(0, kStep), map) - DangerAt(scan, at(0, -kStep), map)) / (2 * kStep);
+  // Steering first: the path's danger at the hand's own speed.
+  const MotorCommand own = map(hand);
+  const double forward = 0.5 * (own.left + own.right);
+  auto path_danger = [&](const haptics::Vec3d& p) { return PathDangerAt(scan, p, forward, map); };
+  auto time_danger = [&](const haptics::Vec3d& p) { return Danger(scan, map(p)); };
+  const double gx = (path_danger(at(kStep, 0)) - path_danger(at(-kStep, 0))) / (2 * kStep);
+  const double gy = (path_danger(at(0, kStep)) - path_danger(at(0, -kStep))) / (2 * kStep);
   const double to_neutral_x = neutral[0] - hand[0];
   const double to_neutral_y = neutral[1] - hand[1];
   const double reach = std::hypot(to_neutral_x, to_neutral_y);
   if (reach < 1e-6) return g;  // at neutral the vehicle stops: nothing to push away from
 
-  // Where along `-(ux, uy)` from the hand the danger ends, or < 0 if not within `limit`.
-  auto safe_after = [&](double ux, double uy, double limit) {
-    if (DangerAt(scan, at(-ux * limit, -uy * limit), map) > 0.0) return -1.0;
+  // Where along `-(ux, uy)` from the hand `danger` ends, or < 0 if not within `limit`.
+  auto safe_after = [&](const auto& danger, double ux, double uy, double limit) {
+    if (danger(at(-ux * limit, -uy * limit)) > 0.0) return -1.0;
     double inside = 0.0, outside = limit;
     for (int i = 0; i < 12; ++i) {
       const double mid = 0.5 * (inside + outside);
-      (DangerAt(scan, at(-ux * mid, -uy * mid), map) > 0.0 ? inside : outside) = mid;
+      (danger(at(-ux * mid, -uy * mid)) > 0.0 ? inside : outside) = mid;
     }
     return outside;
   };
@@ -113,12 +136,12 @@ Guidance SharedControl::Guide(const RangeScan& scan, const haptics::Vec3d& hand,
   if (gradient > 1e-9) {
     nx = gx / gradient;
     ny = gy / gradient;
-    depth = safe_after(nx, ny, reach);
+    depth = safe_after(path_danger, nx, ny, reach);
   }
-  if (depth < 0.0) {  // flat, or no way out along it: back towards stopping
+  if (depth < 0.0) {  // no steer clears it: slow down, back towards stopping
     nx = -to_neutral_x / reach;
     ny = -to_neutral_y / reach;
-    depth = safe_after(nx, ny, reach);
+    depth = safe_after(time_danger, nx, ny, reach);
     if (depth < 0.0) depth = reach;
   }
   g.active = true;
