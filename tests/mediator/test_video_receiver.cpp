@@ -69,7 +69,7 @@ TEST_CASE("The decoder runs below the priority of the link's threads, which carr
   config.domain_id = test::UniqueDomain(68);
   link::Participant op(config, "test-operator");
   const int session_nice = ThreadNice();
-  mediator::VideoReceiver receiver(op, "robot1", /*decode=*/true);
+  mediator::VideoReceiver receiver(op, "robot1", /*session=*/7, /*decode=*/true);
   int decoder_nice = -100;
   REQUIRE(test::WaitFor([&] { return (decoder_nice = NiceOfThreadNamed("video-decode")) != -100; }, 20.0));
   CHECK(decoder_nice == std::min(19, session_nice + kBackgroundNiceSteps));
