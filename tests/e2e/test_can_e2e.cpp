@@ -136,7 +136,7 @@ TEST_CASE("the CAN log on a full disk: both programs say so once, the summary an
     std::filesystem::create_symlink("/dev/full", can_dir / (name + "-" + stamp + ".log"));
   }
   Child haptel({CanBin("haptel"), "run", "--vehicle", vehicle_file.string(), "--vehicle-name", name, "--track",
-                "config/tracks/test-short.yaml", "--time-limit", "5", "--json", "--quiet", "--domain",
+                "config/tracks/test-short.yaml", "--time-limit", "8", "--json", "--quiet", "--domain",
                 std::to_string(test::UniqueDomain(62)), "--database", (dir / "runs.db").string(),
                 "--vehicle-timeout", "5"});
   const int code = haptel.Wait(120.0);
