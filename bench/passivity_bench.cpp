@@ -264,6 +264,7 @@ class UdpPath final : public haptics::Device {
   haptics::DeviceStatus WriteFingerForces(Side side, const std::array<double, haptics::kFingers>& c) override {
     return client_.WriteFingerForces(side, c);
   }
+  bool HasLink() const override { return client_.HasLink(); }
   bool LinkPassivity(Side side, haptics::LinkEnergy& remote) override { return client_.LinkPassivity(side, remote); }
   void SetLinkEnergy(Side side, const haptics::LinkEnergy& local) override { client_.SetLinkEnergy(side, local); }
   void RestartLinkEnergy(Side side) override { client_.RestartLinkEnergy(side); }

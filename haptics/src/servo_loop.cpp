@@ -29,7 +29,8 @@ ServoLoop::ServoLoop(Device& device, Hal& hal, const DeviceConfig& config,
       hal_(hal),
       config_(Validated(config)),
       calibration_(Validated(calibration)),
-      gravity_(gravity) {
+      gravity_(gravity),
+      observe_link_(config_.servo.passivity && device.HasLink()) {
   const DeviceDescription& d = device.description();
   for (int i = 0; i < kSides; ++i) {
     arms_[i] = std::make_unique<Arm>(ForceSafety(config.safety, d.wrist_force_limit, d.finger_force_limit));
@@ -121,9 +122,9 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
   arm.last_tick_ns = now_ns;
   // The two-port's loop end: what crossed the channel here over the period
   // just ended, and the offset that returns a deficit to the environment.
-  const bool link = config_.servo.passivity && device_.LinkPassivity(side, arm.link_remote);
+  const bool link = observe_link_ && device_.LinkPassivity(side, arm.link_remote);
   Vec3d p = arm.previous_position;
-  if (config_.servo.passivity) {
+  if (observe_link_) {
     arm.link_end.Observe(arm.displacement);
     if (link) {
       ++c.passivity_link_ticks;
@@ -188,7 +189,7 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
   std::array<double, kFingers> fingers = sp.finger_forces;
   arm.safety.Apply(now_ns, sp.stamp_ns, from_setpoint, local, wrist, fingers);
 
-  if (config_.servo.passivity) {
+  if (observe_link_) {
     // The force held over the next period, and the report the commands carry.
     arm.link_end.Hold(wrist);
     const Vec3d& spent = arm.link_end.dissipated();

@@ -64,6 +64,10 @@ class Device {
   // behind a network: the udp driver's protocol version 2). A local device
   // keeps the defaults: no link, nothing to exchange.
 
+  /// Whether the arms sit behind a link that can carry passivity reports.
+  /// Constant for a device's life: the servo loop observes the link's port
+  /// only when it is true (a local device pays nothing for it).
+  virtual bool HasLink() const { return false; }
   /// True when the far end of `side`'s link observes its port and runs its
   /// controller (and reports it); `remote` is then its newest report.
   virtual bool LinkPassivity(Side side, LinkEnergy& remote) {

@@ -155,6 +155,9 @@ class ServoLoop {
   DeviceConfig config_;
   DeviceCalibration calibration_;
   const GravityGrid* gravity_;
+  /// Passivity on and a device behind a link (Device::HasLink): only then
+  /// does each tick observe the link's port and report it.
+  bool observe_link_;
   TraceWriter* trace_ = nullptr;
   std::array<std::unique_ptr<Arm>, kSides> arms_;
   std::array<LoopMeter, kSides> meters_;

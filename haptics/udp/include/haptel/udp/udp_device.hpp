@@ -121,6 +121,7 @@ class UdpDevice final : public Device {
 
   /// Version 2 only: the server's end's report of the current epoch, once its
   /// controller runs (its device file's servo.passivity).
+  bool HasLink() const override { return true; }
   bool LinkPassivity(Side side, LinkEnergy& remote) override;
   void SetLinkEnergy(Side side, const LinkEnergy& local) override;
   void RestartLinkEnergy(Side side) override;
