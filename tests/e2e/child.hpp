@@ -2,6 +2,7 @@
 // The program under an end-to-end test: the product's own ChildProcess with
 // its stdout and stderr captured (one way to start processes in Haptel).
 #include <memory>
+#include <regex>
 #include <string>
 #include <vector>
 
@@ -26,6 +27,22 @@ inline bool WaitForErr(Child& child, const std::string& text, double timeout_s) 
   return WaitFor([&] {
     child.Pump();
     return child.err().find(text) != std::string::npos;
+  }, timeout_s);
+}
+
+/// True once a progress line of `err` shows a command round trip: the vehicle
+/// has answered. The first progress line alone does not say so: on a loaded
+/// machine it can come (rtt p50 0.00 ms) before the vehicle is discovered.
+inline bool VehicleAnswered(const std::string& err) {
+  static const std::regex answered(R"(rtt p50 (?!0\.00 )[0-9]+\.[0-9]+ ms)");
+  return std::regex_search(err, answered);
+}
+
+/// Pumps `child` until VehicleAnswered (at most `timeout_s`).
+inline bool WaitForVehicle(Child& child, double timeout_s) {
+  return WaitFor([&] {
+    child.Pump();
+    return VehicleAnswered(child.err());
   }, timeout_s);
 }
 

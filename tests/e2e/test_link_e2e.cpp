@@ -284,7 +284,8 @@ TEST_CASE("link down: the vehicle stops within its watchdog and the run reports 
   std::smatch m;
   REQUIRE(test::WaitFor([&] {
     run.Pump();
-    return std::regex_search(run.err(), m, started) && run.err().find("distance") != std::string::npos;
+    // Cut only once the vehicle has answered: a cut before would be a vehicle that never started.
+    return std::regex_search(run.err(), m, started) && test::VehicleAnswered(run.err());
   }, 60.0));
   const pid_t vehicle = std::stoi(m[1]);
   const size_t before = run.err().size();

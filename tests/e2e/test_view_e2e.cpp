@@ -114,11 +114,8 @@ TEST_CASE("a person's keys drive the robot in the view's window, and releasing t
              "--time-limit", "10", "--track", "config/tracks/test-short.yaml", "--json", "--domain",
              std::to_string(test::UniqueDomain(32)), "--database", (dir / "runs.db").string(), "--vehicle-timeout",
              "5"});
-  // The window is up and the vehicle answers once the first progress line shows.
-  REQUIRE(test::WaitFor([&] {
-    run.Pump();
-    return run.err().find("distance") != std::string::npos;
-  }, 60.0));
+  // The window is up once the first progress line shows; keys are pressed once the vehicle answers.
+  REQUIRE(test::WaitForVehicle(run, 60.0));
   REQUIRE(XDoTool({"search", "--sync", "--name", "Haptel", "windowfocus", "--sync"}) == 0);
   REQUIRE(XDoTool({"keydown", "Up"}) == 0);
   std::this_thread::sleep_for(std::chrono::seconds(3));
@@ -146,10 +143,7 @@ TEST_CASE("Escape in the window aborts the run, stops the vehicle and keeps what
   Child run({Bin("haptel"), "run", "--operator", "person", "--interface", "keyboard", "--view", "window", "--track",
              "config/tracks/test-short.yaml", "--json", "--domain", std::to_string(test::UniqueDomain(33)),
              "--database", (dir / "runs.db").string(), "--vehicle-timeout", "5"});
-  REQUIRE(test::WaitFor([&] {
-    run.Pump();
-    return run.err().find("distance") != std::string::npos;
-  }, 60.0));
+  REQUIRE(test::WaitForVehicle(run, 60.0));
   const std::string json = test::EndWithEscape(run);
   CHECK(std::stoi(JsonField(json, "run_id")) >= 1);
   // Keys only, no cockpit asked for: no physics world, so no proxy hands
