@@ -302,7 +302,15 @@ TEST_CASE("a second operator on a fleet being driven is refused; the first is no
   auto first_argv = FleetArgs(fleet.string(), domain, dir / "first.db");
   first_argv.insert(first_argv.end(), {"--time-limit", "120"});  // ended by SIGINT long before
   Child first(first_argv);
-  REQUIRE(test::WaitForErr(first, "distance", 90.0));  // a progress line: driving
+  // A fleet line in which both robots answer and robot-a has moved: the
+  // first drives them (a progress line alone can come before either answers).
+  REQUIRE(test::WaitFor([&] {
+    first.Pump();
+    const std::string& err = first.err();
+    const size_t line = err.rfind("fleet:");
+    return line != std::string::npos && err.find("not answering yet", line) == std::string::npos &&
+           FleetDistance(err, "robot-a") > 0.0;
+  }, 90.0));
 
   // Who commands each robot, read off the domain by a plain DDS reader that
   // joined late: the operator's input while it is driven, the handover

@@ -118,7 +118,7 @@ TEST_CASE("a second operator is refused, naming the one driving; the first drive
   auto first_args = on_grand_prix(dir / "first.db");
   first_args.insert(first_args.end(), {"--time-limit", "120"});  // ended by SIGINT long before
   Child first(first_args);
-  REQUIRE(test::WaitForErr(first, "distance", 60.0));  // a progress line: driving
+  REQUIRE(test::WaitForVehicle(first, 60.0));  // commands round-trip: the first drives the vehicle
   Child second(on_grand_prix(dir / "second.db"));
   const int second_code = second.Wait(60.0);
   INFO(second.out() << second.err());
