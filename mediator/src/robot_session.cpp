@@ -4,7 +4,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <chrono>
 #include <cstdio>
+#include <future>
 #include <memory>
 #include <vector>
 
@@ -188,11 +190,14 @@ class RobotSession final : public FamilySession {
         if (setup_.progress) log::Info("the automatic operator does not switch interfaces");
       } else if (setup_.single_interface) {
         if (setup_.progress) log::Info("this run keeps its one interface (no switching)");
-      } else if (BuildDeferred(person.interface_request, haptic) &&
-                 interfaces_->Request(person.interface_request, t) && setup_.progress) {
-        log::Info("switching to interface '" + interfaces_->at(person.interface_request)->name() + "'");
+      } else if (BuildDeferred(person.interface_request)) {
+        pending_switch_ = -1;  // a later request replaces one waiting for the world
+        if (interfaces_->Request(person.interface_request, t) && setup_.progress) {
+          log::Info("switching to interface '" + interfaces_->at(person.interface_request)->name() + "'");
+        }
       }
     }
+    FinishDeferred(t, haptic);
     if (person.pad_disconnects != disconnects_seen_) {
       disconnects_seen_ = person.pad_disconnects;
       if (interfaces_->current().name() == "gamepad") return LoopEnd{Outcome::kAborted, "the game controller was disconnected"};
@@ -381,16 +386,42 @@ class RobotSession final : public FamilySession {
     return parts;
   }
 
-  /// Before a switch to `index`: when its interface waits for the physics
-  /// world, builds the world (started on the HAL) and every interface that
-  /// waited for it. False when it cannot be built (said once).
-  bool BuildDeferred(int index, HapticSide& haptic) {
+  /// Before a switch to `index`: true when it can be switched to now. When
+  /// its interface waits for the physics world, starts building the world on
+  /// a thread of its own and returns false; FinishDeferred switches once it
+  /// is built. A cockpit's world takes 0.1-0.7 s to build, and the session
+  /// loop must keep commanding the vehicle meanwhile (its watchdog would stop
+  /// it): the current interface drives on until then.
+  bool BuildDeferred(int index) {
     if (index < 0 || index >= static_cast<int>(deferred_.size()) || !deferred_[static_cast<size_t>(index)]) {
       return true;
     }
-    const int64_t start_ns = MonotonicNs();
+    pending_switch_ = index;
+    if (!building_.valid()) {
+      build_start_ns_ = MonotonicNs();
+      // Reads only what the constructor settled (the physics configuration,
+      // the hands, the cockpit's controls).
+      building_ = std::async(std::launch::async, [this] {
+        return SessionPhysics::CreateIfNeeded(setup_.physics, hands_, cockpit_config_, nullptr);
+      });
+      if (setup_.progress) {
+        log::Info("building the physics world for '" + setup_.interfaces[static_cast<size_t>(index)].name +
+                  "'; the current interface drives on meanwhile");
+      }
+    }
+    return false;
+  }
+
+  /// Once the world BuildDeferred started is built: starts it on the HAL,
+  /// gives every interface that waited for it its parts, and switches to the
+  /// one last asked for (if the person has not asked for another since).
+  void FinishDeferred(double t, HapticSide& haptic) {
+    if (!building_.valid() || building_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
+    const int index = pending_switch_;
+    pending_switch_ = -1;
+    const std::string name = index >= 0 ? setup_.interfaces[static_cast<size_t>(index)].name : "a later interface";
     try {
-      physics_ = SessionPhysics::CreateIfNeeded(setup_.physics, hands_, cockpit_config_, nullptr);
+      physics_ = building_.get();
       if (physics_) physics_->world->Start(haptic.hal());
       for (size_t i = 0; i < deferred_.size(); ++i) {
         if (!deferred_[i]) continue;
@@ -398,16 +429,17 @@ class RobotSession final : public FamilySession {
         deferred_[i] = false;
       }
     } catch (const std::exception& e) {
-      log::Error("interface '" + setup_.interfaces[static_cast<size_t>(index)].name +
-                 "' cannot be built: " + e.what());
+      log::Error("interface '" + name + "' cannot be built: " + e.what());
       std::fill(deferred_.begin(), deferred_.end(), false);
-      return false;
+      return;
     }
     if (setup_.progress) {
-      log::Info("physics world built for '" + setup_.interfaces[static_cast<size_t>(index)].name + "' in " +
-                std::to_string(static_cast<int>(NsToS(MonotonicNs() - start_ns) * 1e3)) + " ms");
+      log::Info("physics world built for '" + name + "' in " +
+                std::to_string(static_cast<int>(NsToS(MonotonicNs() - build_start_ns_) * 1e3)) + " ms");
     }
-    return true;
+    if (index >= 0 && interfaces_->Request(index, t) && setup_.progress) {
+      log::Info("switching to interface '" + interfaces_->at(index)->name() + "'");
+    }
   }
 
   const SessionSetup& setup_;
@@ -444,6 +476,11 @@ class RobotSession final : public FamilySession {
   std::vector<PredictedPose> path_ahead_;
   std::array<bool, 2> bumpers_{false, false};  ///< the newest state's, left and right
   CanLogReport can_log_;
+  /// The deferred physics world while it is built (BuildDeferred); last, so
+  /// that it is waited for before the members its thread reads go.
+  std::future<std::unique_ptr<SessionPhysics>> building_;
+  int64_t build_start_ns_ = 0;
+  int pending_switch_ = -1;  ///< the interface to switch to once it is built (-1: none)
 };
 
 }  // namespace

@@ -130,8 +130,17 @@ TEST_CASE("a person's keys drive the robot in the view's window, and releasing t
   CHECK(JsonField(json, "operator") == "person");
   CHECK(std::stod(JsonField(json, "distance_m")) > 0.5);
   CHECK(json.find("\"to\":\"cockpit\"") != std::string::npos);
-  // The cockpit's physics world was built when it was asked for, and ran from then on.
-  CHECK(run.err().find("physics world built for 'cockpit'") != std::string::npos);
+  // The cockpit's physics world was built when it was asked for, beside the
+  // session loop (the keyboard drove on meanwhile), then the switch; and it
+  // ran from then on.
+  const size_t building = run.err().find("building the physics world for 'cockpit'");
+  const size_t built = run.err().find("physics world built for 'cockpit'");
+  const size_t switched = run.err().find("switching to interface 'cockpit'");
+  CHECK(building != std::string::npos);
+  CHECK(built != std::string::npos);
+  CHECK(switched != std::string::npos);
+  CHECK(building < built);
+  CHECK(built < switched);
   CHECK(std::stod(JsonField(json, "physics_rate_hz")) > 0.0);
   // The last progress line, seconds after the key came up: standing.
   CHECK(LastSpeed(run.err()) == Approx(0.0).margin(0.02));
