@@ -32,6 +32,7 @@
 #include "haptel/config/error.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/udp/udp_device.hpp"
+#include "loopback.hpp"
 #include "haptel/udp/udp_protocol.hpp"
 #include "test_env.hpp"
 
@@ -40,6 +41,8 @@ using namespace haptel::haptics;
 
 namespace {
 
+using test::BoundLoopback;
+
 constexpr int64_t kMs = 1'000'000;
 /// How long a fake waits for something that must happen (a datagram handled
 /// or delivered on loopback): only a fault takes this long.
@@ -47,21 +50,6 @@ constexpr double kFaultAfter_s = 10.0;
 
 std::size_t Idx(udp::DecodeStatus s) { return static_cast<std::size_t>(s); }
 std::size_t Idx(udp::ErrorCode c) { return static_cast<std::size_t>(c); }
-
-/// A UDP socket bound to 127.0.0.1 on an ephemeral port.
-udp::UniqueFd BoundLoopback(int& port) {
-  udp::UniqueFd fd(::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0));
-  REQUIRE(fd.get() >= 0);
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  addr.sin_port = 0;
-  REQUIRE(::bind(fd.get(), reinterpret_cast<sockaddr*>(&addr), sizeof addr) == 0);
-  socklen_t len = sizeof addr;
-  REQUIRE(::getsockname(fd.get(), reinterpret_cast<sockaddr*>(&addr), &len) == 0);
-  port = ntohs(addr.sin_port);
-  return fd;
-}
 
 /// Datagrams the device has read and classified: each lands in one counter.
 uint64_t Received(const UdpCounters& c) {

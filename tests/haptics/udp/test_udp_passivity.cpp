@@ -27,6 +27,7 @@
 #include "haptel/haptics/twoport.hpp"
 #include "haptel/udp/arm_server.hpp"
 #include "haptel/udp/udp_device.hpp"
+#include "loopback.hpp"
 #include "haptel/udp/udp_protocol.hpp"
 
 using namespace haptel;
@@ -35,25 +36,14 @@ using haptel::test::ScriptedDevice;
 
 namespace {
 
+using test::BoundLoopback;
+
 constexpr int64_t kMs = 1'000'000;
 constexpr Side kArm = Side::kRight;
 
 std::size_t Idx(udp::DecodeStatus s) { return static_cast<std::size_t>(s); }
 
 /// A UDP socket bound to 127.0.0.1 on an ephemeral port.
-udp::UniqueFd BoundLoopback(int& port) {
-  udp::UniqueFd fd(::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0));
-  REQUIRE(fd.get() >= 0);
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  REQUIRE(::bind(fd.get(), reinterpret_cast<sockaddr*>(&addr), sizeof addr) == 0);
-  socklen_t len = sizeof addr;
-  REQUIRE(::getsockname(fd.get(), reinterpret_cast<sockaddr*>(&addr), &len) == 0);
-  port = ntohs(addr.sin_port);
-  return fd;
-}
-
 /// A socket connected to 127.0.0.1:port (the test's own client).
 udp::UniqueFd ConnectedLoopback(int port) {
   int unused = 0;
