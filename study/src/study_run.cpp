@@ -194,6 +194,18 @@ std::string Seconds(double s) {
   return buffer;
 }
 
+/// What of a recorded run's other outputs failed ("" when none did), as
+/// `haptel run` exits kExitOutputFailed for: its --record MP4 (a study
+/// passes none today) and its vehicle's CAN bus log.
+std::string OutputFailure(const mediator::SessionResult& result) {
+  std::string what;
+  if (!result.view_record_error.empty()) what = "the operator's view recording: " + result.view_record_error;
+  if (!result.can_log.error.empty()) {
+    what += (what.empty() ? "" : "; ") + std::string("the vehicle's CAN bus log: ") + result.can_log.error;
+  }
+  return what;
+}
+
 }  // namespace
 
 int StudyRunCommand(int argc, const char* const* argv) {
@@ -311,6 +323,7 @@ int StudyRunCommand(int argc, const char* const* argv) {
     std::string stopped;
     double simulated_s = 0.0;  ///< --simulated-time: the trials run now, simulated seconds
     double wall_s = 0.0;       ///< and their wall-clock seconds
+    int outputs_failed = 0;    ///< trials run now whose CAN log or recording failed (kept)
     // A session that stops on a signal, or on the console's Abort.
     auto run_watched = [&](const mediator::SessionSetup& setup, const record::Recorder::AlsoSave& also) {
       std::atomic<bool> trial_stop{false};
@@ -427,6 +440,15 @@ int StudyRunCommand(int argc, const char* const* argv) {
                      mediator::ToString(run.result.outcome).c_str(), Seconds(r.lap_time_s).c_str(),
                      r.completed ? "" : (" (scored " + Seconds(config.trial_cap_s) + " s)").c_str(),
                      r.obstacles_touched, run.result.operator_slips, static_cast<long long>(run.run_id));
+        // The lap is recorded, so the trial stands; what else it should
+        // have written is lost, which the experimenter must hear of.
+        if (const std::string failure = OutputFailure(run.result); !failure.empty()) {
+          ++outputs_failed;
+          std::fprintf(stderr, "[study]   output failed: participant %s, position %d, %s: %s\n",
+                       trial->participant.c_str(), trial->position, trial->condition.c_str(), failure.c_str());
+          store.Event("output failed", trial->participant, trial->position,
+                      "run " + std::to_string(run.run_id) + ": " + failure);
+        }
         // Nobody watches a synthetic study to redo a spoiled trial: a flagged
         // one runs again once, now, by itself; both are kept (the first as
         // superseded), the report counts the second. People's flagged trials
@@ -448,6 +470,9 @@ int StudyRunCommand(int argc, const char* const* argv) {
     if (person && !open_study && exit_code == cli::kExitOk && !store.NextTrial()) {
       AwaitQuestionnaires(store, config, *console, interrupted);  // the last condition's
     }
+    // A lost output is the exit code only of a study that otherwise ended
+    // well: a trial not recorded, an interruption or a failure says more.
+    if (exit_code == cli::kExitOk && outputs_failed > 0) exit_code = cli::kExitOutputFailed;
     plan = store.Plan();  // with the participants added in the console
     const std::vector<TrialRow> trials = store.Trials();
     const bool finished = trials.size() == plan.size() && !interrupted.load();
@@ -491,6 +516,11 @@ int StudyRunCommand(int argc, const char* const* argv) {
                   "time\n",
                   simulated_s, wall_s, speedup);
     }
+    if (outputs_failed > 0) {
+      std::printf("  outputs failed: %d trial%s run now lost %s CAN bus log or view recording (the laps are "
+                  "recorded; the [study] lines above say which and why)\n",
+                  outputs_failed, outputs_failed == 1 ? "" : "s", outputs_failed == 1 ? "its" : "their");
+    }
     std::printf("  report: haptel study report %s --study %s\n", database.c_str(), config.name.c_str());
     if (json) {
       std::string out = "{\"study\":" + JsonString(config.name) + ",\"database\":" + JsonString(database.string()) +
@@ -500,6 +530,7 @@ int StudyRunCommand(int argc, const char* const* argv) {
                         ",\"trials_done_before\":" + std::to_string(done_before) +
                         ",\"stopped\":" + JsonString(stopped) +
                         ",\"speedup\":" + (speedup > 0.0 ? JsonNumber(speedup) : std::string("null")) +
+                        ",\"outputs_failed\":" + std::to_string(outputs_failed) +
                         ",\"conditions\":[";
       for (size_t i = 0; i < config.conditions.size(); ++i) {
         const std::string& name = config.conditions[i].name;

@@ -9,12 +9,15 @@
 
 #include <catch2/catch.hpp>
 #include <cstdlib>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <set>
 #include <regex>
 #include <string>
 #include <tuple>
+#include <utility>
+#include <vector>
 
 #include "../study/console_client.hpp"
 #include "child.hpp"
@@ -35,12 +38,13 @@ std::string Bin(const std::string& name) { return (test::BinDir() / name).string
 /// test short.
 std::filesystem::path SmallStudy(const std::filesystem::path& dir, int participants = 2,
                                  const std::string& second_condition_options = "",
-                                 const std::string& extra_lines = "") {
+                                 const std::string& extra_lines = "",
+                                 const std::filesystem::path& run = "config/haptel.yaml") {
   const auto source = std::filesystem::current_path();
   const auto file = dir / "small-study.yaml";
   std::ofstream out(file);
   out << "name: small-e2e\n"
-         "run: " << (source / "config/haptel.yaml").string() << "\n"
+         "run: " << (source / run).string() << "\n"
          "track: " << (source / "config/tracks/test-short.yaml").string() << "\n"
          "operators: synthetic\n"
          "conditions:\n"
@@ -53,6 +57,38 @@ std::filesystem::path SmallStudy(const std::filesystem::path& dir, int participa
          "participants:\n";
   for (int p = 1; p <= participants; ++p) out << "  - {id: P" << p << ", profile: plain}\n";
   return file;
+}
+
+/// The file at `from` with each of `replacements` made once (each must be there).
+std::string Rewritten(const std::filesystem::path& from,
+                      const std::vector<std::pair<std::string, std::string>>& replacements) {
+  std::ifstream in(from);
+  std::string text((std::istreambuf_iterator<char>(in)), {});
+  for (const auto& [old_text, new_text] : replacements) {
+    const size_t at = text.find(old_text);
+    REQUIRE(at != std::string::npos);
+    text.replace(at, old_text.size(), new_text);
+  }
+  return text;
+}
+
+/// The shipped run configuration in `dir`, its vehicle the simulated CAN
+/// robot named `name`, which logs its bus to `dir`/can.
+std::filesystem::path CanRunFile(const std::filesystem::path& dir, const std::string& name) {
+  const auto config = std::filesystem::current_path() / "config";
+  const auto vehicle = dir / "can-robot-sim.yaml";
+  std::ofstream(vehicle) << Rewritten(config / "vehicles/can-robot-sim.yaml",
+                                      {{"name: robot1", "name: " + name},
+                                       {"world: ../tracks/", "world: " + (config / "tracks").string() + "/"},
+                                       {"log_dir: ../../runs/can", "log_dir: " + (dir / "can").string()}});
+  const auto run = dir / "can-run.yaml";
+  std::ofstream(run) << Rewritten(config / "haptel.yaml",
+                                  {{"track: tracks/", "track: " + (config / "tracks").string() + "/"},
+                                   {"vehicle: vehicles/sim-robot.yaml", "vehicle: " + vehicle.string()},
+                                   {"device: devices/", "device: " + (config / "devices").string() + "/"},
+                                   {"physics: physics.yaml", "physics: " + (config / "physics.yaml").string()}})
+                     << "interfaces_dir: " << (config / "interfaces").string() << "\n";
+  return run;
 }
 
 /// Runs a `haptel study run` says it saved, one "(run N)" per finished trial.
@@ -261,6 +297,62 @@ TEST_CASE("capped trials are scored at exactly the cap on the lap's clock, a coc
   CHECK(conditions == std::vector<std::string>{"wheel", "hand"});
   // The JSON says the approach per trial too.
   CHECK(study.LastLine().find("\"approach_s\":") != std::string::npos);
+}
+
+TEST_CASE("a trial whose CAN bus log fails is kept, said, and makes the study exit 5") {
+  // The simulated CAN robot (real time: it does not step in this process)
+  // on a full disk without root, as in test_can_e2e: each name its log may
+  // take in the next minutes (<log_dir>/<name>-<UTC second>.log) is a link
+  // to /dev/full, where every write fails with ENOSPC.
+  const auto dir = test::ScratchDir("e2e-study-output");
+  const std::string name = "canstudy";
+  const auto run = CanRunFile(dir, name);
+  const auto can_dir = dir / "can";
+  std::filesystem::create_directories(can_dir);
+  const time_t now = time(nullptr);
+  for (time_t t = now - 5; t < now + 300; ++t) {
+    tm utc{};
+    gmtime_r(&t, &utc);
+    char stamp[32];
+    std::strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%SZ", &utc);
+    std::filesystem::create_symlink("/dev/full", can_dir / (name + "-" + stamp + ".log"));
+  }
+  const auto file = SmallStudy(dir, 1, "", "", run);  // two trials of a 6 s cap
+  const auto db = dir / "output.db";
+  Child study({Bin("haptel"), "study", "run", file.string(), "--database", db.string(), "--domain",
+               std::to_string(test::UniqueDomain(49)), "--json"});
+  const int code = study.Wait(300.0);
+  INFO("stdout:\n" << study.out() << "\nstderr:\n" << study.err());
+  CHECK(code == 5);
+  // Every trial run now lost its log (two, or three when a loaded machine
+  // flagged one and it was run again): each is said, naming the trial and why.
+  const size_t runs = SavedRuns(study.err());
+  CHECK(runs >= 2);
+  const std::string json = study.LastLine();
+  CHECK(test::JsonField(json, "finished") == "true");
+  CHECK(test::JsonField(json, "trials_done") == "2");
+  CHECK(test::JsonField(json, "outputs_failed") == std::to_string(runs));
+  CHECK(study.out().find("outputs failed: " + std::to_string(runs) + " trial") != std::string::npos);
+  for (const std::string trial : {"participant P1, position 1, first", "participant P1, position 2, second"}) {
+    const std::string said = "[study]   output failed: " + trial + ": the vehicle's CAN bus log: cannot write " +
+                             (can_dir / name).string() + "-";
+    CHECK(study.err().find(said) != std::string::npos);
+  }
+  CHECK(study.err().find("No space left on device") != std::string::npos);
+  // The laps themselves are recorded: both trials, and an event per failed output.
+  record::Recorder recorder(db);
+  CHECK(recorder.LoadAll().size() == runs);
+  auto count = [&](const char* sql) {
+    sqlite3_stmt* select = nullptr;
+    REQUIRE(sqlite3_prepare_v2(recorder.handle(), sql, -1, &select, nullptr) == SQLITE_OK);
+    REQUIRE(sqlite3_step(select) == SQLITE_ROW);
+    const int n = sqlite3_column_int(select, 0);
+    sqlite3_finalize(select);
+    return n;
+  };
+  CHECK(count("SELECT COUNT(*) FROM study_trials") == 2);
+  CHECK(count("SELECT COUNT(*) FROM study_events WHERE kind = 'output failed' AND participant = 'P1' AND "
+              "detail LIKE '%No space left on device%'") == static_cast<int>(runs));
 }
 
 TEST_CASE("a study that cannot work is refused before anything runs") {
