@@ -122,19 +122,9 @@ TEST_CASE("the CAN log on a full disk: both programs say so once, the summary an
   const auto dir = test::ScratchDir("e2e-can-full");
   const auto vehicle_file = CanVehicleFile(dir);
   const std::string name = "canfull";
-  // A full disk without root: the log is <log_dir>/<name>-<UTC second>.log,
-  // so each name the vehicle may take in the next minutes is made a link to
-  // /dev/full, where every write fails with ENOSPC.
+  // A full disk without root (the log names the vehicle may take link to /dev/full).
   const auto can_dir = dir / "can";
-  std::filesystem::create_directories(can_dir);
-  const time_t now = time(nullptr);
-  for (time_t t = now - 5; t < now + 300; ++t) {
-    tm utc{};
-    gmtime_r(&t, &utc);
-    char stamp[32];
-    std::strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%SZ", &utc);
-    std::filesystem::create_symlink("/dev/full", can_dir / (name + "-" + stamp + ".log"));
-  }
+  test::CanLogsOnFullDisk(can_dir, name);
   Child haptel({CanBin("haptel"), "run", "--vehicle", vehicle_file.string(), "--vehicle-name", name, "--track",
                 "config/tracks/test-short.yaml", "--time-limit", "8", "--json", "--quiet", "--domain",
                 std::to_string(test::UniqueDomain(62)), "--database", (dir / "runs.db").string(),

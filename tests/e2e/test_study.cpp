@@ -301,22 +301,12 @@ TEST_CASE("capped trials are scored at exactly the cap on the lap's clock, a coc
 
 TEST_CASE("a trial whose CAN bus log fails is kept, said, and makes the study exit 5") {
   // The simulated CAN robot (real time: it does not step in this process)
-  // on a full disk without root, as in test_can_e2e: each name its log may
-  // take in the next minutes (<log_dir>/<name>-<UTC second>.log) is a link
-  // to /dev/full, where every write fails with ENOSPC.
+  // on a full disk without root (test::CanLogsOnFullDisk).
   const auto dir = test::ScratchDir("e2e-study-output");
   const std::string name = "canstudy";
   const auto run = CanRunFile(dir, name);
   const auto can_dir = dir / "can";
-  std::filesystem::create_directories(can_dir);
-  const time_t now = time(nullptr);
-  for (time_t t = now - 5; t < now + 300; ++t) {
-    tm utc{};
-    gmtime_r(&t, &utc);
-    char stamp[32];
-    std::strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%SZ", &utc);
-    std::filesystem::create_symlink("/dev/full", can_dir / (name + "-" + stamp + ".log"));
-  }
+  test::CanLogsOnFullDisk(can_dir, name);
   const auto file = SmallStudy(dir, 1, "", "", run);  // two trials of a 6 s cap
   const auto db = dir / "output.db";
   Child study({Bin("haptel"), "study", "run", file.string(), "--database", db.string(), "--domain",

@@ -10,6 +10,7 @@
 #include <condition_variable>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <exception>
 #include <filesystem>
 #include <fstream>
@@ -53,6 +54,22 @@ inline void DamageMiddlePage(const std::filesystem::path& file, size_t page_size
 }
 
 /// Writes `text` to `file` (its folder must exist) and returns the path.
+/// A full disk without root, for a CAN bus log: the vehicle writes
+/// `<can_dir>/<name>-<UTC second>.log`, so each name it may take from 5 s
+/// ago to 5 min from now is made a link to /dev/full, where every write
+/// fails with ENOSPC.
+inline void CanLogsOnFullDisk(const std::filesystem::path& can_dir, const std::string& name) {
+  std::filesystem::create_directories(can_dir);
+  const time_t now = time(nullptr);
+  for (time_t t = now - 5; t < now + 300; ++t) {
+    tm utc{};
+    gmtime_r(&t, &utc);
+    char stamp[32];
+    std::strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%SZ", &utc);
+    std::filesystem::create_symlink("/dev/full", can_dir / (name + "-" + stamp + ".log"));
+  }
+}
+
 inline std::filesystem::path WriteFile(const std::filesystem::path& file, const std::string& text) {
   std::ofstream out(file);
   out << text;
