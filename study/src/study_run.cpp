@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -281,6 +282,16 @@ int StudyRunCommand(int argc, const char* const* argv) {
       if (device.driver == "sim") simulated_device = run_config.device.lexically_normal().string();
       database = args.Value("database").value_or(
           !config.database.empty() ? config.database.string() : run_config.database.string());
+      // Each condition's session as its trials will ask for it, checked now:
+      // one a trial cannot start (e.g. --simulated-time with a vehicle that
+      // does not step in this process) is refused before the study is
+      // started and its plan written.
+      std::set<std::string> conditions_checked;
+      for (const PlannedTrial& t : plan) {
+        if (conditions_checked.insert(t.condition).second) {
+          TrialSetup(config, t, database, domain, verbose, 0, simulated_time);
+        }
+      }
       // The console's thumbnail: the trial's camera, through its session.
       console_options.thumbnail = true;
     });

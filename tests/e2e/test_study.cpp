@@ -406,6 +406,19 @@ TEST_CASE("a study that cannot work is refused before anything runs") {
     CHECK(run.err().find("no display") != std::string::npos);
     CHECK_FALSE(std::filesystem::exists(fresh));
   }
+  {  // A trial's session that cannot run as asked (the simulated CAN robot does
+     // not step in this process, so not in simulated time): exit 2 on one
+     // line, before the study is started or its plan written.
+    const auto can_study = SmallStudy(dir, 1, "", "", CanRunFile(dir, "canrefused"));
+    const auto fresh = dir / "simulated-can.db";
+    Child run({Bin("haptel"), "study", "run", can_study.string(), "--database", fresh.string(), "--simulated-time"});
+    CHECK(run.Wait(60.0) == 2);
+    INFO(run.err());
+    CHECK(run.err().find("--simulated-time") != std::string::npos);
+    CHECK(std::count(run.err().begin(), run.err().end(), '\n') == 1);
+    CHECK(run.err().find("[study]") == std::string::npos);
+    CHECK_FALSE(std::filesystem::exists(fresh));
+  }
 }
 
 TEST_CASE("a person study from the console: a participant added, a practice lap, trials, questionnaires") {
