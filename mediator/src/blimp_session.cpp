@@ -314,6 +314,7 @@ class BlimpSession final : public FamilySession {
   void Finish(SessionResult& result, bool) override {
     RunRecord& rec = result.record;
     result.controller_errors = controller_errors_.seen();
+    rec.controller_errors = controller_errors_.seen();
     rec.lap_time_s = lap_.lap_time_s();
     rec.gates_passed = lap_.gates_passed();
     rec.gates_missed = lap_.gates_missed();

@@ -39,7 +39,7 @@ namespace {
 using namespace haptel::sql;
 
 /// Schema version stored in PRAGMA user_version.
-constexpr int kSchemaVersion = 11;
+constexpr int kSchemaVersion = 12;
 
 /// Schema steps: kMigrations[v - 1] takes a database from version v - 1 to v.
 /// A new database runs them all, so the upgrade path of an old file is the
@@ -293,8 +293,14 @@ constexpr const char* kSchemaV11 = R"sql(
 ALTER TABLE runs ADD COLUMN speedup REAL DEFAULT NULL;
 )sql";
 
-constexpr const char* kMigrations[] = {kSchemaV1, kSchemaV2, kSchemaV3, kSchemaV4, kSchemaV5,  kSchemaV6,
-                                       kSchemaV7, kSchemaV8, kSchemaV9, kSchemaV10, kSchemaV11};
+// v12: the servo controller's error bits over a run (a blimp's Maestro;
+// NULL: a vehicle without one). They were in the JSON line only.
+constexpr const char* kSchemaV12 = R"sql(
+ALTER TABLE runs ADD COLUMN controller_errors INTEGER DEFAULT NULL;
+)sql";
+
+constexpr const char* kMigrations[] = {kSchemaV1, kSchemaV2, kSchemaV3,  kSchemaV4,  kSchemaV5,  kSchemaV6,
+                                       kSchemaV7, kSchemaV8, kSchemaV9, kSchemaV10, kSchemaV11, kSchemaV12};
 static_assert(std::size(kMigrations) == kSchemaVersion, "one migration per schema version");
 
 constexpr const char* kInsertRun = R"sql(
@@ -306,9 +312,10 @@ INSERT INTO runs (started_utc, started_wall_ns, config_name, track, interface, v
                   view_frame_p99_ms, video_to_screen_ms_p50, video_to_screen_ms_p99, picture,
                   servo_target_hz, servo_rate_short, physics_rate_hz, physics_target_hz,
                   physics_rate_short, vehicle_kind, predict, link_fault, prediction_error_m_p50,
-                  prediction_error_m_p95, approach_s, video_kbps, video_stale_s, speedup)
+                  prediction_error_m_p95, approach_s, video_kbps, video_stale_s, speedup,
+                  controller_errors)
 VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?,
-        ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)
+        ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)
 )sql";
 
 constexpr const char* kInsertSplit =
@@ -332,7 +339,7 @@ SELECT id, started_wall_ns, config_name, track, interface, vehicle, completed, o
        view_fps, view_frame_p99_ms, video_to_screen_ms_p50, video_to_screen_ms_p99, picture,
        servo_target_hz, servo_rate_short, physics_rate_hz, physics_target_hz, physics_rate_short,
        vehicle_kind, predict, link_fault, prediction_error_m_p50, prediction_error_m_p95, approach_s,
-       video_kbps, video_stale_s, speedup
+       video_kbps, video_stale_s, speedup, controller_errors
 FROM runs ORDER BY id
 )sql";
 
@@ -582,7 +589,8 @@ int64_t Recorder::Save(const RunRecord& run, const AlsoSave& also) {
       .RealOrNull(run.approach_s, std::isfinite(run.approach_s))
       .Real(run.video_kbps)
       .Real(run.video_stale_s)
-      .RealOrNull(run.speedup, run.speedup > 0.0);
+      .RealOrNull(run.speedup, run.speedup > 0.0)
+      .IntOrNull(run.controller_errors, run.controller_errors >= 0);
   StepDone(path_, db_, insert_run.get(), "cannot insert run");
   const int64_t run_id = sqlite3_last_insert_rowid(db_);
 
@@ -723,6 +731,7 @@ std::vector<RunRecord> Recorder::LoadAll() const {
       run.video_stale_s = r.Real();
       const double speedup = r.Real();  // NaN for NULL: a real-time run, or recorded before v11
       run.speedup = std::isnan(speedup) ? -1.0 : speedup;
+      run.controller_errors = static_cast<int>(r.IntOr(-1));  // NULL: no servo controller, or before v12
       index_of.emplace(run.id, runs.size());
       runs.push_back(std::move(run));
     }

@@ -105,6 +105,7 @@ std::string RunRecordJson(const RunRecord& r) {
       .Num("prediction_error_m_p50", r.prediction_error_m_p50)
       .Num("prediction_error_m_p95", r.prediction_error_m_p95)
       .Num("speedup", r.speedup)
+      .Int("controller_errors", r.controller_errors)
       .Str("operator", r.operator_kind)
       .Str("device", r.device)
       .Num("distance_m", r.distance_m)

@@ -80,6 +80,7 @@ TEST_CASE("a blimp hop over DDS through the Maestro adapter and a pty: completed
   CHECK(runs[0].vehicle_kind == "servo-blimp-sim");
   CHECK(runs[0].interface == "blimp-gesture");
   CHECK(runs[0].track == "blimp-hop");
+  CHECK(runs[0].controller_errors == 0);  // a servo controller, and no error from it
   CHECK(runs[0].prediction_error_m_p95 >= 0.0);
   REQUIRE(runs[0].splits.size() == 1);
   CHECK(runs[0].splits[0].passed);
@@ -265,6 +266,12 @@ TEST_CASE("a Maestro that starts reporting a CRC error at every poll mid-flight 
                              " cannot be trusted") &&
                  Catch::Contains("CRC error (register 0x0008)"));
   CHECK(JsonField(json, "controller_errors") == "8");
+  {  // and the database keeps them beside the run
+    record::Recorder recorder(dir / "runs.db");
+    const auto runs = recorder.LoadAll();
+    REQUIRE(runs.size() == 1);
+    CHECK(runs[0].controller_errors == 8);
+  }
   CHECK_THAT(run.out(), Catch::Contains("servo controller errors: CRC error (register 0x0008)"));
   // The vehicle says so too, and holds every channel at neutral whatever came.
   REQUIRE(pump_until(10.0, [&] { return vehicle.err().find("the vehicle stopped itself") != std::string::npos; }));

@@ -72,6 +72,7 @@ TEST_CASE("haptel run completes the short track over DDS with a separate vehicle
   CHECK(runs[0].completed);
   CHECK(runs[0].interface == "gesture");
   CHECK(runs[0].track == "test-short");
+  CHECK(runs[0].controller_errors == -1);  // a robot: no servo controller (NULL)
   CHECK(runs[0].vehicle_pid == vehicle_pid);
   CHECK(runs[0].video_kbps == Approx(kbps).epsilon(1e-4));
   REQUIRE(runs[0].splits.size() == 2);

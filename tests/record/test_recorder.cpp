@@ -120,6 +120,7 @@ RunRecord MakeRun(int n, int split_count) {
   run.link_fault = n % 2 == 1 ? "delay=0.2s,jitter=0s,loss=0" : "";
   run.prediction_error_m_p50 = n % 3 == 0 ? -1.0 : 0.004 * n;  // -1: none (stored as NULL)
   run.speedup = n % 2 == 0 ? -1.0 : 12.5 * n;  // -1: a real-time run (stored as NULL)
+  run.controller_errors = n % 2 == 0 ? -1 : (n % 4 == 1 ? 0 : 0x0008);  // -1: no servo controller (NULL)
   run.video_kbps = 850.5 + n;
   run.video_stale_s = 0.25 * n;
   run.prediction_error_m_p95 = n % 3 == 0 ? -1.0 : 0.011 * n;
@@ -186,6 +187,7 @@ void CheckSame(const RunRecord& got, const RunRecord& want) {
   CHECK(got.video_stale_s == want.video_stale_s);
   CHECK(got.prediction_error_m_p95 == want.prediction_error_m_p95);
   CHECK(got.speedup == want.speedup);
+  CHECK(got.controller_errors == want.controller_errors);
   CHECK(got.completed == want.completed);
   CHECK(got.outcome == want.outcome);
   CHECK(SameReal(got.lap_time_s, want.lap_time_s));
@@ -352,7 +354,7 @@ TEST_CASE("Recorder stores the start time as ISO-8601 UTC and a schema version",
   }
   RawDb raw(file);
   CHECK(raw.Text("SELECT started_utc FROM runs") == "2024-05-01T12:34:56.789Z");
-  CHECK(raw.Integer("PRAGMA user_version") == 11);
+  CHECK(raw.Integer("PRAGMA user_version") == 12);
 }
 
 TEST_CASE("Recorder creates missing parent folders", "[recorder]") {
@@ -389,10 +391,10 @@ TEST_CASE("Recorder set-up errors name the database file", "[recorder]") {
     const fs::path file = tmp.path() / "future.db";
     {
       RawDb raw(file);
-      raw.Exec("PRAGMA user_version = 12");
+      raw.Exec("PRAGMA user_version = 13");
     }
     RequireThrowsMentioning([&] { Recorder recorder(file); }, file.string());
-    RequireThrowsMentioning([&] { Recorder recorder(file); }, "schema version 12");
+    RequireThrowsMentioning([&] { Recorder recorder(file); }, "schema version 13");
   }
 
   SECTION("the path is a folder") {
@@ -704,7 +706,7 @@ TEST_CASE("A v1 database is migrated to the current schema in place and keeps it
   }
 
   RawDb raw(file);
-  CHECK(raw.Integer("PRAGMA user_version") == 11);
+  CHECK(raw.Integer("PRAGMA user_version") == 12);
   CHECK(raw.Text("PRAGMA integrity_check") == "ok");
   CHECK(raw.Integer("SELECT COUNT(*) FROM pragma_foreign_key_check") == 0);
   for (const char* table : {"interface_switches", "run_path", "run_contacts", "run_counters"}) {
@@ -722,7 +724,7 @@ TEST_CASE("A v1 database is migrated to the current schema in place and keeps it
     Recorder again(file);
     CHECK(again.LoadAll().size() == 2);
   }
-  CHECK(raw.Integer("PRAGMA user_version") == 11);
+  CHECK(raw.Integer("PRAGMA user_version") == 12);
 }
 
 namespace {
@@ -811,7 +813,7 @@ TEST_CASE("A v2 database is migrated to v3: its runs keep everything, new runs k
   CheckSame(runs[0], V2Run());
   CheckSame(runs[1], fresh);
   RawDb raw(file);
-  CHECK(raw.Integer("PRAGMA user_version") == 11);
+  CHECK(raw.Integer("PRAGMA user_version") == 12);
   CHECK(raw.Text("PRAGMA integrity_check") == "ok");
   CHECK(raw.Integer(
             "SELECT value FROM run_counters WHERE run_id = 2 AND name = 'servo_overruns'") == 9);

@@ -410,7 +410,8 @@ TEST_CASE("A study planned before the database kept definitions resumes once, th
   // What a v5 database holds: the same tables without the definition (v6)
   // and the runs' prediction and link fault (v7), the approach (v8), the
   // video's bitrate and stale time (v9), the notes and the superseded
-  // trials (v10), the simulated-time speed-up (v11).
+  // trials (v10), the simulated-time speed-up (v11), the servo controller's
+  // errors (v12).
   {
     sqlite3* raw = nullptr;
     REQUIRE(sqlite3_open(db.c_str(), &raw) == SQLITE_OK);
@@ -420,11 +421,11 @@ TEST_CASE("A study planned before the database kept definitions resumes once, th
                          "ALTER TABLE runs DROP COLUMN prediction_error_m_p95; ALTER TABLE runs DROP COLUMN approach_s; "
                          "ALTER TABLE study_trials DROP COLUMN approach_s; ALTER TABLE study_trials DROP COLUMN flags; "
                          "ALTER TABLE runs DROP COLUMN video_kbps; ALTER TABLE runs DROP COLUMN video_stale_s; "
-                         "ALTER TABLE runs DROP COLUMN speedup; DROP TABLE study_notes; DROP TABLE study_superseded_trials; PRAGMA user_version = 5",
+                         "ALTER TABLE runs DROP COLUMN speedup; ALTER TABLE runs DROP COLUMN controller_errors; DROP TABLE study_notes; DROP TABLE study_superseded_trials; PRAGMA user_version = 5",
                          nullptr, nullptr, nullptr) == SQLITE_OK);
     sqlite3_close(raw);
   }
-  record::Recorder recorder(db);  // migrated to v11: the study has no definition on record
+  record::Recorder recorder(db);  // migrated to v12: the study has no definition on record
   auto resume = [&](const std::string& text) {
     test::WriteFile(file, text);
     const StudyConfig config = LoadStudy(file);

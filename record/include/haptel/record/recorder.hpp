@@ -101,6 +101,11 @@ struct RunRecord {
   /// A run in simulated time (`haptel run --simulated-time`): simulated
   /// seconds per wall-clock second over the run (v11; -1: a real-time run).
   double speedup = -1.0;
+  /// The error bits the vehicle's servo controller reported over the run,
+  /// ORed (a Pololu Maestro's error register: ControllerErrorNames in
+  /// mediator/controller_errors.hpp names them; v12; -1: the vehicle has no
+  /// servo controller, or the run was recorded before v12).
+  int controller_errors = -1;
   std::string operator_kind;  ///< "auto" or "person"
   std::string device;         ///< the haptic device's name
   double distance_m = 0.0;    ///< driven, summed over the vehicle's positions

@@ -99,6 +99,10 @@ class Binder {
   Binder& RealOrNull(double value, bool present) {
     return present ? Real(value) : Check(sqlite3_bind_null(stmt_, ++index_));
   }
+  /// `value`, or NULL when there is none to store (`present` false).
+  Binder& IntOrNull(int64_t value, bool present) {
+    return present ? Int(value) : Check(sqlite3_bind_null(stmt_, ++index_));
+  }
   Binder& Text(const std::string& value) {
     return Check(sqlite3_bind_text64(stmt_, ++index_, value.data(), value.size(), SQLITE_TRANSIENT,
                                      SQLITE_UTF8));
@@ -123,6 +127,11 @@ class Reader {
 
   int64_t Int() { return sqlite3_column_int64(stmt_, index_++); }
   bool Bool() { return Int() != 0; }
+  /// The column's integer, or `null_value` for NULL.
+  int64_t IntOr(int64_t null_value) {
+    const int i = index_++;
+    return sqlite3_column_type(stmt_, i) == SQLITE_NULL ? null_value : sqlite3_column_int64(stmt_, i);
+  }
   double Real() {
     const int i = index_++;
     if (sqlite3_column_type(stmt_, i) == SQLITE_NULL) {
