@@ -385,6 +385,27 @@ TEST_CASE("FriedmanTest: exact p as the published tables, k = 4, N = 2", "[study
   CHECK(r.p_value == Close(BruteForceFriedmanP(concordant)));
 }
 
+TEST_CASE("FriedmanTest: exact p as the published tables, k = 4, N = 4 (docs/studies.md)",
+          "[study][stats]") {
+  // The synthetic study's two reports in docs/studies.md, by their rank sums
+  // (gesture, assisted, cockpit-hud, cockpit; no ties). Mean ranks 1, 2, 3.5,
+  // 3.5: sums 4, 8, 14, 14, S = 36 + 4 + 16 + 16 = 72, χ²_F = 12·72/80 = 10.8.
+  const BlockMatrix full = {{1, 2, 3, 4}, {1, 2, 3, 4}, {1, 2, 4, 3}, {1, 2, 4, 3}};
+  const auto r = haptel::study::FriedmanTest(full);
+  CHECK(r.chi_square == Close(10.8));
+  CHECK(r.p_exact);
+  CHECK(r.p_value == Approx(0.0016).margin(0.00005));  // table: .0016
+  CHECK(r.p_value == Close(BruteForceFriedmanP(full)));
+  // Mean ranks 1, 2.5, 3.25, 3.25: sums 4, 10, 13, 13, S = 54, χ²_F = 8.1.
+  const BlockMatrix simulated = {{1, 2, 3, 4}, {1, 3, 2, 4}, {1, 3, 4, 2}, {1, 2, 4, 3}};
+  const auto s = haptel::study::FriedmanTest(simulated);
+  CHECK(s.chi_square == Close(8.1));
+  CHECK(s.p_exact);
+  CHECK(s.p_value == Approx(0.033).margin(0.0005));  // table: .033
+  CHECK(s.p_value == Close(BruteForceFriedmanP(simulated)));
+  CHECK(s.p_value_asymptotic == Approx(0.044).margin(0.0005));
+}
+
 TEST_CASE("FriedmanTest: 2 conditions, 4 participants all one way: the sign test's p", "[study][stats]") {
   // χ²_F = 4 gives the χ² p 0.0455, below 0.05; the exact test is the
   // two-sided sign test: 2 of the 16 sign patterns are as extreme, p = 0.125.
