@@ -431,6 +431,11 @@ TEST_CASE("FriedmanTest: exact p with ties permutes each row's own midranks", "[
   CHECK(thesis.p_exact);
   CHECK(thesis.p_value == Close(BruteForceFriedmanP(kThesis)));
   CHECK(thesis.p_value == Close(9168.0 / 7962624.0));  // 0.00115
+  // The participants' order changes nothing, to the bit (the null
+  // distribution is computed over the rows sorted, and remembered).
+  const BlockMatrix reversed(tied.rbegin(), tied.rend());
+  CHECK(haptel::study::FriedmanTest(reversed).p_value == r.p_value);
+  CHECK(haptel::study::FriedmanExactP(reversed, 1000000) == r.p_value);
 }
 
 TEST_CASE("FriedmanTest: past the exact p's limits the chi-square p is kept", "[study][stats]") {
