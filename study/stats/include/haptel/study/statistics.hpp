@@ -8,8 +8,8 @@
 /// or with Wilcoxon signed-rank tests under Holm's step-down correction.
 /// Every number here is the one SciPy 1.10 gives for the same data
 /// (`scipy.stats.rankdata`, `friedmanchisquare`, `chi2.sf`, `wilcoxon`), up to
-/// rounding; where SciPy has no function (Kendall's W, Nemenyi, Holm) the doc
-/// comment gives the formula.
+/// rounding; where SciPy has no function (Kendall's W, Nemenyi, Holm,
+/// Friedman's exact p) the doc comment gives the formula.
 ///
 /// Errors in the input (too few rows or columns, ragged rows, NaN or infinite
 /// values) throw std::invalid_argument with a message that says what was
