@@ -96,7 +96,8 @@ struct FriedmanResult {
   std::vector<ConditionRank> ranks;  ///< per condition, in column order
   double chi_square = 0.0;           ///< χ²_F, tie-corrected
   int degrees_of_freedom = 0;        ///< k − 1
-  /// p_value_exact when p_exact, else p_value_asymptotic: the one to report.
+  /// The exact p (FriedmanExactP) when p_exact, else p_value_asymptotic:
+  /// the one to report.
   double p_value = 1.0;
   /// ChiSquareSurvival(chi_square, k − 1), SciPy's `friedmanchisquare` p;
   /// always computed, for comparison.
@@ -114,9 +115,10 @@ inline constexpr int kFriedmanExactMaxConditions = 6;
 /// row, summed over the rows) the exact p's dynamic programme may take; past
 /// it FriedmanTest keeps the χ² p. It bounds the time of one call, which
 /// EstimatePower makes thousands of times, and the memory (the vectors held
-/// never outnumber the steps). The programme knows before each row whether
-/// the rest would exceed it, so giving up costs at most this many steps
-/// (about 5 ms measured). The distribution depends only on how each row ties
+/// never outnumber the steps). Before each row the programme bounds the
+/// steps still to come from below and gives up as soon as that bound passes
+/// the limit, so giving up costs at most this many steps (about 5 ms
+/// measured). The distribution depends only on how each row ties
 /// (every untied N × k study shares one), so the last few dozen distributions
 /// and refusals are remembered between calls: EstimatePower's draws of one
 /// participant count cost one programme, not hundreds.
