@@ -14,7 +14,8 @@ constexpr const char* kReportUsage =
     "usage: haptel study report DATABASE --study NAME [options]\n"
     "\n"
     "Prints each condition's table (lap time as scored, per-participant rank, obstacles), the\n"
-    "Friedman test, Kendall's W and a post-hoc test, the mixed model\n"
+    "Friedman test (its exact permutation p for small studies, the chi2 approximation past\n"
+    "that; the output says which), Kendall's W and a post-hoc test, the mixed model\n"
     "log(lap time) ~ condition + position + (1 | participant) (REML; Satterthwaite t tests\n"
     "against the first condition, Satterthwaite's F test of the condition), each lap's\n"
     "percentage over the track's reference lap, and writes trials.csv, answers.csv,\n"
@@ -26,7 +27,9 @@ constexpr const char* kReportUsage =
     "  --post-hoc METHOD     nemenyi (default; critical difference of mean ranks, alpha 0.05)\n"
     "                        or wilcoxon-holm (pairwise signed-rank tests, Holm-adjusted)\n"
     "  --json                end with one JSON line: per-condition totals and mean ranks,\n"
-    "                        friedman_chi2, friedman_p, kendall_w, the post-hoc pairs,\n"
+    "                        friedman_chi2, friedman_p (exact when cheap, else the chi2\n"
+    "                        approximation), friedman_p_exact, friedman_p_asymptotic,\n"
+    "                        kendall_w, the post-hoc pairs,\n"
     "                        lmm (per condition estimate, ci_low, ci_high, p), baseline\n";
 
 }  // namespace

@@ -96,7 +96,10 @@ TEST_CASE("The report on the thesis's data gives its tables, ranks and statistic
   // The statistics equal SciPy's for this data (tests/study/stats: friedmanchisquare).
   REQUIRE(report.analysis);
   CHECK(report.analysis->friedman.chi_square == Approx(12.183673469387752).epsilon(1e-12));
-  CHECK(report.analysis->friedman.p_value == Approx(0.0067797401305199397).epsilon(1e-9));
+  CHECK(report.analysis->friedman.p_value_asymptotic == Approx(0.0067797401305199397).epsilon(1e-9));
+  // 5 participants, 4 conditions: the exact p (9168 of 24^5 orderings; tests/study/stats).
+  CHECK(report.analysis->friedman.p_exact);
+  CHECK(report.analysis->friedman.p_value == Approx(9168.0 / 7962624.0).epsilon(1e-9));
   CHECK(report.analysis->friedman.kendall_w == Approx(0.812244897959184).epsilon(1e-12));
   CHECK(report.participants_used.size() == 5);
 
@@ -130,6 +133,12 @@ TEST_CASE("The report on the thesis's data gives its tables, ranks and statistic
 
   const std::string json = ReportJson(results, report, files);
   CHECK(json.find("\"friedman_chi2\":12.18") != std::string::npos);
+  // Which p it is, and the χ² one beside it.
+  CHECK(json.find("\"friedman_p\":0.00115") != std::string::npos);
+  CHECK(json.find("\"friedman_p_exact\":true") != std::string::npos);
+  CHECK(json.find("\"friedman_p_asymptotic\":0.00677") != std::string::npos);
+  const std::string text = FormatReport(results, report);
+  CHECK(text.find("p = 0.0012 (exact; chi2 approximation 0.0068)") != std::string::npos);
   CHECK(json.find("\"participants_used\":5") != std::string::npos);
   CHECK(json.find("\"method\":\"Nemenyi (Demšar 2006), alpha 0.05\"") != std::string::npos);
   CHECK(std::count(json.begin(), json.end(), '\n') == 0);
@@ -195,6 +204,7 @@ TEST_CASE("The report says what it lacks instead of failing") {
   const ReportFiles files = WriteReport(results, report, dir / "out");
   CHECK(std::filesystem::exists(files.lap_times_png));
   CHECK(ReportJson(results, report, files).find("\"friedman_chi2\":null") != std::string::npos);
+  CHECK(ReportJson(results, report, files).find("\"friedman_p_exact\":null") != std::string::npos);
 
   CHECK_THROWS_WITH(LoadStudyResults(db, "other"), Catch::Contains("no study 'other'") && Catch::Contains("thesis"));
   CHECK_THROWS_WITH(LoadStudyResults(dir / "none.db", "thesis"), Catch::Contains("no such file"));

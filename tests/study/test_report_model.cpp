@@ -4,6 +4,7 @@
 // meets on its way (one participant, a fixed order).
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
@@ -79,6 +80,13 @@ void Record(const std::filesystem::path& dir, const std::filesystem::path& db, c
   for (size_t i = 0; i < laps.size(); ++i) {
     recorder.Save(test::TrialRun(laps[i].lap_time_s), store.TrialWriter(plan[i], config.trial_cap_s));
   }
+}
+
+/// `value` as the report prints a p: 4 decimals.
+std::string Fixed4(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.4f", value);
+  return text;
 }
 
 double NumberAfter(const std::string& json, const std::string& key) {
@@ -206,3 +214,28 @@ TEST_CASE("The report's mixed model leaves out a position that the order confoun
   CHECK(json.find("\"position\":null") != std::string::npos);
   CHECK(json.find("position is left out") != std::string::npos);
 }
+
+TEST_CASE("The report says when Friedman's p is the chi-square approximation") {
+  // 16 participants (the balanced set twice) and 4 conditions: past the exact
+  // p's step limit (haptel/study/statistics.hpp), so the χ² p is the one used.
+  const auto dir = test::ScratchDir("study-report-friedman-chi2");
+  const auto db = dir / "lmm.db";
+  std::vector<Lap> laps = kBalanced;
+  for (Lap lap : kBalanced) {
+    lap.participant += 8;
+    laps.push_back(lap);
+  }
+  Record(dir, db, laps, "");
+  const StudyResults results = LoadStudyResults(db, "lmm");
+  const StudyReport report = ComputeReport(results, PostHocMethod::kNemenyi);
+  REQUIRE(report.analysis.has_value());
+  CHECK(report.analysis->friedman.participants == 16);
+  CHECK_FALSE(report.analysis->friedman.p_exact);
+  const std::string text = FormatReport(results, report);
+  INFO(text.substr(text.find("  Friedman"), 160));
+  CHECK(text.find(Fixed4(report.analysis->friedman.p_value_asymptotic) + " (chi2 approximation);") != std::string::npos);
+  const std::string json = ReportJson(results, report, WriteReport(results, report, dir / "out"));
+  CHECK(json.find("\"friedman_p_exact\":false") != std::string::npos);
+  CHECK(NumberAfter(json, "\"friedman_p\":") == NumberAfter(json, "\"friedman_p_asymptotic\":"));
+}
+

@@ -449,9 +449,15 @@ std::string FormatReport(const StudyResults& results, const StudyReport& report)
     o << "  " << report.why_no_statistics << "\n";
   } else {
     const WithinSubjectAnalysis& a = *report.analysis;
+    // Which p it is: with few participants the χ² approximation can be far
+    // off (k = 2, N = 4 all one way: 0.046 against the exact 0.125).
+    const std::string p_kind = a.friedman.p_exact
+                                   ? "exact; chi2 approximation " + Fixed(a.friedman.p_value_asymptotic, 4)
+                                   : "chi2 approximation";
     o << "  Friedman: chi2 = " << Fixed(a.friedman.chi_square, 3) << ", df = " << a.friedman.degrees_of_freedom
-      << ", p = " << Fixed(a.friedman.p_value, 4) << "; Kendall's W = " << Fixed(a.friedman.kendall_w, 3)
-      << " (N = " << a.friedman.participants << ", k = " << a.friedman.conditions << ")\n";
+      << ", p = " << Fixed(a.friedman.p_value, 4) << " (" << p_kind
+      << "); Kendall's W = " << Fixed(a.friedman.kendall_w, 3) << " (N = " << a.friedman.participants
+      << ", k = " << a.friedman.conditions << ")\n";
     o << "  post-hoc: " << a.post_hoc.method;
     if (!a.post_hoc.pairs.empty() && a.post_hoc.pairs[0].critical_difference) {
       o << ", critical difference " << Fixed(*a.post_hoc.pairs[0].critical_difference, 3) << " (mean ranks)";
@@ -665,7 +671,10 @@ std::string ReportJson(const StudyResults& results, const StudyReport& report, c
     const WithinSubjectAnalysis& a = *report.analysis;
     out += ",\"friedman_chi2\":" + number(a.friedman.chi_square) +
            ",\"friedman_df\":" + std::to_string(a.friedman.degrees_of_freedom) +
-           ",\"friedman_p\":" + number(a.friedman.p_value) + ",\"kendall_w\":" + number(a.friedman.kendall_w) +
+           ",\"friedman_p\":" + number(a.friedman.p_value) +
+           ",\"friedman_p_exact\":" + (a.friedman.p_exact ? "true" : "false") +
+           ",\"friedman_p_asymptotic\":" + number(a.friedman.p_value_asymptotic) +
+           ",\"kendall_w\":" + number(a.friedman.kendall_w) +
            ",\"post_hoc\":{\"method\":" + JsonString(a.post_hoc.method) + ",\"alpha\":" + number(a.post_hoc.alpha) +
            ",\"pairs\":[";
     for (size_t i = 0; i < a.post_hoc.pairs.size(); ++i) {
@@ -680,7 +689,7 @@ std::string ReportJson(const StudyResults& results, const StudyReport& report, c
     }
     out += "]}";
   } else {
-    out += ",\"friedman_chi2\":null,\"friedman_df\":null,\"friedman_p\":null,\"kendall_w\":null,\"post_hoc\":null";
+    out += ",\"friedman_chi2\":null,\"friedman_df\":null,\"friedman_p\":null,\"friedman_p_exact\":null,\"friedman_p_asymptotic\":null,\"kendall_w\":null,\"post_hoc\":null";
   }
   out += ",\"why_no_statistics\":" + JsonString(report.why_no_statistics);
   out += ",\"experimenter_notes\":" + std::to_string(results.notes.size());

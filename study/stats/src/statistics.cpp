@@ -1,13 +1,19 @@
 #include "haptel/study/statistics.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
+#include <map>
+#include <memory>
+#include <mutex>
 #include <numeric>
 #include <stdexcept>
+#include <tuple>
 
 namespace haptel::study {
 namespace {
@@ -146,6 +152,199 @@ double ExactSignedRankP(const std::vector<double>& ranks, double rank_sum_positi
 }
 
 constexpr int kMaxExactPairs = 25;
+
+/// A row's ranks doubled, so that midranks (multiples of ½) are integers.
+std::vector<std::int64_t> DoubledRanks(const std::vector<double>& row) {
+  std::vector<std::int64_t> doubled;
+  for (double r : Ranks(row)) doubled.push_back(std::llround(2.0 * r));
+  return doubled;
+}
+
+/// 4 S = Σ_j (2 R_j − N(k + 1))² from the doubled rank sums: an integer, so
+/// the exact p compares statistics without rounding.
+std::int64_t QuadrupledSpread(const std::vector<std::int64_t>& doubled_sums, std::int64_t rows) {
+  const std::int64_t doubled_expected = rows * static_cast<std::int64_t>(doubled_sums.size() + 1);
+  std::int64_t spread = 0;
+  for (std::int64_t sum : doubled_sums) spread += (sum - doubled_expected) * (sum - doubled_expected);
+  return spread;
+}
+
+/// The null distribution of Friedman's S for one set of rows: the values 4S
+/// takes, ascending, and P(4S ≥ each).
+struct FriedmanNullDistribution {
+  std::vector<std::int64_t> quadrupled_spread;
+  std::vector<double> at_least;
+};
+
+/// What a null distribution depends on: each row's doubled ranks sorted (the
+/// multiset the row permutes), the rows sorted too (their order does not
+/// matter), and the step limit. Every untied study of N participants and k
+/// conditions has the same key, so EstimatePower computes it once per N.
+struct FriedmanNullKey {
+  std::vector<std::vector<std::int64_t>> sorted_rows;
+  long max_steps = 0;
+  bool operator<(const FriedmanNullKey& other) const {
+    return std::tie(max_steps, sorted_rows) < std::tie(other.max_steps, other.sorted_rows);
+  }
+};
+
+/// Friedman's null distribution by dynamic programming, or nothing past
+/// `key.max_steps` steps (see kFriedmanExactMaxSteps).
+std::optional<FriedmanNullDistribution> ComputeFriedmanNull(const FriedmanNullKey& key) {
+  const auto& sorted_rows = key.sorted_rows;
+  const int k = static_cast<int>(sorted_rows.front().size());
+  const std::int64_t n = static_cast<std::int64_t>(sorted_rows.size());
+
+  // Every distinct ordering of a row's ranks once: with ties each stands for
+  // the same number (Π t!) of the k! orderings, so all are equally likely.
+  // Rows with the same ranks share one list.
+  std::map<std::vector<std::int64_t>, std::vector<std::vector<std::int64_t>>> orderings_of;
+  std::vector<const std::vector<std::vector<std::int64_t>>*> row_orderings;
+  long remaining_orderings = 0;
+  for (const auto& sorted : sorted_rows) {
+    auto [it, inserted] = orderings_of.try_emplace(sorted);
+    if (inserted) {
+      std::vector<std::int64_t> ordering = sorted;
+      do {
+        it->second.push_back(ordering);
+      } while (std::next_permutation(ordering.begin(), ordering.end()));
+    }
+    row_orderings.push_back(&it->second);
+    remaining_orderings += static_cast<long>(it->second.size());
+  }
+
+  // H0 treats the conditions alike, so the distribution of the partial rank
+  // sums is the same under every order of the conditions: the programme keeps
+  // one sorted vector per set of reorderings, with their total probability
+  // (up to k! times fewer states), and S does not depend on the order. A
+  // state's key packs its k − 1 smallest sums (the largest follows from their
+  // fixed total) in base 2kN + 1, the largest doubled rank sum being 2kN.
+  const std::uint64_t base = static_cast<std::uint64_t>(2 * k * n + 1);
+  double key_range = 1.0;
+  for (int j = 0; j + 1 < k; ++j) key_range *= static_cast<double>(base);
+  if (key_range > 9.0e18) return std::nullopt;  // would not fit the packed key
+  const auto pack = [&](const std::int64_t* ascending) {
+    std::uint64_t packed = 0;
+    for (int j = k - 2; j >= 0; --j) packed = packed * base + static_cast<std::uint64_t>(ascending[j]);
+    return packed;
+  };
+
+  using Sums = std::array<std::int64_t, kFriedmanExactMaxConditions>;
+  struct State {
+    Sums sums;  // doubled partial rank sums, ascending; unused entries 0
+    double probability;
+  };
+  std::vector<State> states{{Sums{}, 1.0}};
+  std::vector<State> next;
+  // Open addressing from a packed state to its index in `next`:
+  // std::unordered_map's node per entry made a call several times slower.
+  constexpr std::uint64_t kEmpty = ~std::uint64_t{0};
+  std::vector<std::uint64_t> slot_keys;
+  std::vector<std::size_t> slot_index;
+  int slot_bits = 0;
+  const auto slot_of = [&](std::uint64_t packed) {
+    return static_cast<std::size_t>((packed * 0x9E3779B97F4A7C15ull) >> (64 - slot_bits));
+  };
+  const auto clear_slots = [&](int bits) {
+    slot_bits = bits;
+    slot_keys.assign(std::size_t{1} << bits, kEmpty);
+    slot_index.assign(std::size_t{1} << bits, 0);
+  };
+
+  long steps = 0;
+  for (const auto* orderings : row_orderings) {
+    // The states never become fewer (sort(c + o) for the ascending ordering o
+    // is c + o, one new state per old one), so this row and the rest take at
+    // least states × their orderings steps: give up now rather than later.
+    if (steps + static_cast<long>(states.size()) * remaining_orderings > key.max_steps) return std::nullopt;
+    remaining_orderings -= static_cast<long>(orderings->size());
+    steps += static_cast<long>(states.size() * orderings->size());
+
+    const double weight = 1.0 / static_cast<double>(orderings->size());
+    next.clear();
+    int bits = 10;
+    while ((std::size_t{1} << bits) < 2 * states.size()) ++bits;
+    clear_slots(bits);
+    for (const State& state : states) {
+      for (const auto& ordering : *orderings) {
+        State candidate{Sums{}, state.probability * weight};
+        for (int j = 0; j < k; ++j) {
+          const auto at = static_cast<std::size_t>(j);
+          candidate.sums[at] = state.sums[at] + ordering[at];
+        }
+        // Insertion sort: k ≤ 6 values, nearly in order already.
+        for (int j = 1; j < k; ++j) {
+          const std::int64_t value = candidate.sums[static_cast<std::size_t>(j)];
+          int i = j - 1;
+          for (; i >= 0 && candidate.sums[static_cast<std::size_t>(i)] > value; --i) {
+            candidate.sums[static_cast<std::size_t>(i + 1)] = candidate.sums[static_cast<std::size_t>(i)];
+          }
+          candidate.sums[static_cast<std::size_t>(i + 1)] = value;
+        }
+        const std::uint64_t packed = pack(candidate.sums.data());
+        std::size_t slot = slot_of(packed);
+        while (slot_keys[slot] != kEmpty && slot_keys[slot] != packed) slot = (slot + 1) & (slot_keys.size() - 1);
+        if (slot_keys[slot] == packed) {
+          next[slot_index[slot]].probability += candidate.probability;
+          continue;
+        }
+        slot_keys[slot] = packed;
+        slot_index[slot] = next.size();
+        next.push_back(candidate);
+        if (2 * next.size() > slot_keys.size()) {  // keep the table at most half full
+          clear_slots(slot_bits + 1);
+          for (std::size_t i = 0; i < next.size(); ++i) {
+            const std::uint64_t moved = pack(next[i].sums.data());
+            std::size_t free_slot = slot_of(moved);
+            while (slot_keys[free_slot] != kEmpty) free_slot = (free_slot + 1) & (slot_keys.size() - 1);
+            slot_keys[free_slot] = moved;
+            slot_index[free_slot] = i;
+          }
+        }
+      }
+    }
+    states.swap(next);
+  }
+
+  // P(4S = s) per value, then the upper tail from the largest value down.
+  std::map<std::int64_t, double> by_spread;
+  std::vector<std::int64_t> sums(static_cast<std::size_t>(k));
+  for (const State& state : states) {
+    std::copy(state.sums.begin(), state.sums.begin() + k, sums.begin());
+    by_spread[QuadrupledSpread(sums, n)] += state.probability;
+  }
+  FriedmanNullDistribution null;
+  null.quadrupled_spread.resize(by_spread.size());
+  null.at_least.resize(by_spread.size());
+  double tail = 0.0;
+  std::size_t i = by_spread.size();
+  for (auto it = by_spread.rbegin(); it != by_spread.rend(); ++it) {
+    --i;
+    tail += it->second;
+    null.quadrupled_spread[i] = it->first;
+    null.at_least[i] = std::min(1.0, tail);
+  }
+  return null;
+}
+
+/// ComputeFriedmanNull, remembered: EstimatePower asks for the same
+/// distribution (and the same refusal) hundreds of times per participant
+/// count. At most kMaxCached keys, emptied when full; each distribution holds
+/// one entry per value of S. Guarded, as callers may run in threads.
+std::shared_ptr<const std::optional<FriedmanNullDistribution>> CachedFriedmanNull(const FriedmanNullKey& key) {
+  constexpr std::size_t kMaxCached = 32;
+  static std::mutex mutex;
+  static std::map<FriedmanNullKey, std::shared_ptr<const std::optional<FriedmanNullDistribution>>> cache;
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    if (const auto it = cache.find(key); it != cache.end()) return it->second;
+  }
+  auto computed = std::make_shared<const std::optional<FriedmanNullDistribution>>(ComputeFriedmanNull(key));
+  const std::lock_guard<std::mutex> lock(mutex);
+  if (cache.size() >= kMaxCached) cache.clear();
+  cache.emplace(key, computed);
+  return computed;
+}
 
 }  // namespace
 
@@ -317,6 +516,34 @@ double StudentTQuantile(double probability, double degrees_of_freedom) {
   return probability > 0.5 ? t : -t;
 }
 
+std::optional<double> FriedmanExactP(const BlockMatrix& values, long max_steps) {
+  CheckShape(values);
+  const int k = static_cast<int>(values.front().size());
+  if (k > kFriedmanExactMaxConditions) return std::nullopt;
+  FriedmanNullKey key;
+  key.max_steps = max_steps;
+  std::vector<std::int64_t> observed_sums(static_cast<std::size_t>(k), 0);
+  for (const auto& row : values) {
+    std::vector<std::int64_t> doubled = DoubledRanks(row);
+    for (int j = 0; j < k; ++j) {
+      observed_sums[static_cast<std::size_t>(j)] += doubled[static_cast<std::size_t>(j)];
+    }
+    std::sort(doubled.begin(), doubled.end());
+    key.sorted_rows.push_back(std::move(doubled));
+  }
+  std::sort(key.sorted_rows.begin(), key.sorted_rows.end());
+  const std::int64_t observed = QuadrupledSpread(observed_sums, static_cast<std::int64_t>(values.size()));
+
+  const auto null = CachedFriedmanNull(key);
+  if (!null->has_value()) return std::nullopt;
+  const FriedmanNullDistribution& distribution = **null;
+  // The observed 4S is one of the values the distribution holds.
+  const auto at = std::lower_bound(distribution.quadrupled_spread.begin(),
+                                   distribution.quadrupled_spread.end(), observed);
+  if (at == distribution.quadrupled_spread.end()) return 0.0;  // above every value; S_obs never is
+  return distribution.at_least[static_cast<std::size_t>(at - distribution.quadrupled_spread.begin())];
+}
+
 FriedmanResult FriedmanTest(const BlockMatrix& values) {
   const RankSummary s = SummarizeRanks(values);
   FriedmanResult result;
@@ -325,7 +552,10 @@ FriedmanResult FriedmanTest(const BlockMatrix& values) {
   for (double r : s.rank_sums) result.ranks.push_back({r, r / s.rows});
   result.degrees_of_freedom = s.columns - 1;
   result.chi_square = 12.0 * s.spread * (s.columns - 1) / s.tie_corrected_total;
-  result.p_value = ChiSquareSurvival(result.chi_square, result.degrees_of_freedom);
+  result.p_value_asymptotic = ChiSquareSurvival(result.chi_square, result.degrees_of_freedom);
+  const std::optional<double> exact = FriedmanExactP(values);
+  result.p_exact = exact.has_value();
+  result.p_value = exact.value_or(result.p_value_asymptotic);
   result.kendall_w = KendallWOf(s);
   return result;
 }

@@ -101,10 +101,12 @@ TEST_CASE("power: two identical conditions are not told apart with 2 or 4 partic
   for (const PowerPoint& p : result.points) {
     INFO(p.participants << " participants: lmm " << p.lmm_power << " (" << p.lmm_not_analysed
                         << " not analysed), friedman " << p.friedman_power);
-    // Binomial(400, 0.05): 0.10 is 4.6 SD above alpha. (Friedman's
-    // asymptotic χ² is not held to it: with 2 conditions and 4 participants
-    // it rejects when all 4 agree, 2/16 = 0.125 of the draws.)
+    // Binomial(400, 0.05): 0.10 is 4.6 SD above alpha.
     CHECK(p.lmm_power <= 0.10);
+    // Friedman's exact p is the sign test's here, never below 2/2^N: 0.5 with
+    // 2 participants, 0.125 with 4, so it cannot reject at 0.05. (The χ²
+    // p rejected whenever all 4 agreed, 2/16 = 0.125 of the draws.)
+    CHECK(p.friedman_power == 0.0);
   }
   CHECK_FALSE(result.recommended_participants.has_value());
 }

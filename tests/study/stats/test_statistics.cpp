@@ -125,8 +125,11 @@
 //   holm ['1', '0.3125', '0.25300918258293575', '0.3125', '0.3125', '0.3125']
 // clang-format on
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
+#include <numeric>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -234,7 +237,7 @@ TEST_CASE("FriedmanTest: 5 participants x 4 conditions without ties", "[study][s
   CHECK(r.degrees_of_freedom == 3);
   CheckRanks(r, {8, 15, 8, 19});
   CHECK(r.chi_square == Close(10.679999999999993));
-  CHECK(r.p_value == Close(0.0135882729582177));
+  CHECK(r.p_value_asymptotic == Close(0.0135882729582177));
   // By hand: S = (8-12.5)^2 + (15-12.5)^2 + (8-12.5)^2 + (19-12.5)^2
   //            = 20.25 + 6.25 + 20.25 + 42.25 = 89; no ties, so
   // W = 12 S / (N^2 (k^3 - k)) = 1068 / (25 * 60) = 0.712.
@@ -248,7 +251,7 @@ TEST_CASE("FriedmanTest: ties within rows take SciPy's tie correction", "[study]
   CHECK(r.conditions == 4);
   CheckRanks(r, {10.5, 14.5, 12.5, 22.5});
   CHECK(r.chi_square == Close(10.163265306122463));
-  CHECK(r.p_value == Close(0.017228104492999986));
+  CHECK(r.p_value_asymptotic == Close(0.017228104492999986));
   CHECK(r.kendall_w == Close(0.56462585034013602));
   CHECK(r.kendall_w == Close(r.chi_square / (r.participants * (r.conditions - 1))));
 }
@@ -260,7 +263,7 @@ TEST_CASE("FriedmanTest: 10 participants x 3 conditions, many ties", "[study][st
   CheckRanks(r, {23.5, 19.0, 17.5});
   CHECK(r.degrees_of_freedom == 2);
   CHECK(r.chi_square == Close(2.0526315789473717));
-  CHECK(r.p_value == Close(0.35832467524990291));
+  CHECK(r.p_value_asymptotic == Close(0.35832467524990291));
   CHECK(r.kendall_w == Close(0.10263157894736842));
 }
 
@@ -277,7 +280,7 @@ TEST_CASE("FriedmanTest: the thesis's lap times", "[study][stats]") {
   // Rank sums 16.5 17.5 11 5 (total 50 = N k (k+1) / 2), mean ranks 3.3 3.5 2.2 1.0.
   CheckRanks(r, {16.5, 17.5, 11.0, 5.0});
   CHECK(r.chi_square == Close(12.183673469387752));
-  CHECK(r.p_value == Close(0.0067797401305199397));
+  CHECK(r.p_value_asymptotic == Close(0.0067797401305199397));
   // Kendall's W by hand: N (k+1) / 2 = 12.5;
   //   S = 4^2 + 5^2 + (-1.5)^2 + (-7.5)^2 = 16 + 25 + 2.25 + 56.25 = 99.5;
   //   T = 2^3 - 2 = 6 (participant B's one pair of ties);
@@ -295,8 +298,167 @@ TEST_CASE("FriedmanTest: 2 conditions, where it is the sign test's chi-square", 
   const auto r = haptel::study::FriedmanTest({{1, 2}, {1, 2}, {2, 1}});
   CHECK(r.degrees_of_freedom == 1);
   CHECK(r.chi_square == Close(1.0 / 3.0));
-  CHECK(r.p_value == Close(0.563702861650773));
+  CHECK(r.p_value_asymptotic == Close(0.563702861650773));
   CHECK(r.kendall_w == Close(1.0 / 9.0));  // chi2 / (N (k - 1)) = (1/3) / 3
+  // Exact: a 2-1 split is the least extreme there is with 3 participants.
+  CHECK(r.p_exact);
+  CHECK(r.p_value == Close(1.0));
+}
+
+namespace {
+
+/// The exact p of Friedman's test by brute force, independently of the
+/// dynamic programme: every one of the k! orderings of every row's ranks
+/// (tied ranks permuted as if distinct, so each of the (k!)^N combinations
+/// is equally likely), counting those whose S is at least the observed one.
+/// S is compared in doubled ranks, where it is an integer.
+double BruteForceFriedmanP(const BlockMatrix& values) {
+  const std::size_t k = values.front().size();
+  std::vector<std::vector<long>> rows;
+  std::vector<long> observed_sums(k, 0);
+  for (const auto& row : values) {
+    std::vector<long> doubled;
+    for (double r : haptel::study::Ranks(row)) doubled.push_back(std::lround(2 * r));
+    for (std::size_t j = 0; j < k; ++j) observed_sums[j] += doubled[j];
+    rows.push_back(doubled);
+  }
+  const long doubled_mean = static_cast<long>(values.size() * (k + 1));
+  const auto spread = [&](const std::vector<long>& sums) {
+    long s = 0;
+    for (long v : sums) s += (v - doubled_mean) * (v - doubled_mean);
+    return s;
+  };
+  const long observed = spread(observed_sums);
+  double total = 0;
+  double at_least = 0;
+  std::vector<long> sums(k, 0);
+  std::function<void(std::size_t)> visit = [&](std::size_t row) {
+    if (row == rows.size()) {
+      total += 1;
+      if (spread(sums) >= observed) at_least += 1;
+      return;
+    }
+    std::vector<std::size_t> order(k);
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    do {
+      for (std::size_t j = 0; j < k; ++j) sums[j] += rows[row][order[j]];
+      visit(row + 1);
+      for (std::size_t j = 0; j < k; ++j) sums[j] -= rows[row][order[j]];
+    } while (std::next_permutation(order.begin(), order.end()));
+  };
+  visit(0);
+  return at_least / total;
+}
+
+}  // namespace
+
+// Published tables of Friedman's exact distribution (e.g. Hollander & Wolfe,
+// Nonparametric Statistical Methods; Siegel & Castellan, Table M) give
+// P(χ²_F ≥ x) to 3 decimals; the brute force above gives the fraction.
+TEST_CASE("FriedmanTest: exact p as the published tables, k = 3, N = 3", "[study][stats]") {
+  // Perfect concordance: rank sums 3, 6, 9, S = 18, χ²_F = 12·18/36 = 6.0.
+  // Only the 6 of 216 combinations where all three rows agree reach it: 1/36.
+  const BlockMatrix concordant = {{1, 2, 3}, {1, 2, 3}, {1, 2, 3}};
+  const auto r = haptel::study::FriedmanTest(concordant);
+  CHECK(r.chi_square == Close(6.0));
+  CHECK(r.p_exact);
+  CHECK(r.p_value == Close(1.0 / 36.0));  // table: .028
+  CHECK(r.p_value == Close(BruteForceFriedmanP(concordant)));
+  CHECK(r.p_value_asymptotic == Close(std::exp(-3.0)));  // χ² with 2 df: e^(−x/2) = 0.0498
+  // Rank sums 4, 5, 9: S = 4 + 1 + 9 = 14, χ²_F = 12·14/36 = 4.667; 42 of 216.
+  const BlockMatrix one_swap = {{1, 2, 3}, {1, 2, 3}, {2, 1, 3}};
+  const auto s = haptel::study::FriedmanTest(one_swap);
+  CHECK(s.chi_square == Close(14.0 / 3.0));
+  CHECK(s.p_exact);
+  CHECK(s.p_value == Close(7.0 / 36.0));  // table: .194
+  CHECK(s.p_value == Close(BruteForceFriedmanP(one_swap)));
+}
+
+TEST_CASE("FriedmanTest: exact p as the published tables, k = 4, N = 2", "[study][stats]") {
+  // Rank sums 2, 4, 6, 8: S = 9 + 1 + 1 + 9 = 20, χ²_F = 12·20/40 = 6.0, the
+  // largest there is: the second row equals the first, 24 of 576.
+  const BlockMatrix concordant = {{1, 2, 3, 4}, {10, 20, 30, 40}};
+  const auto r = haptel::study::FriedmanTest(concordant);
+  CHECK(r.chi_square == Close(6.0));
+  CHECK(r.p_exact);
+  CHECK(r.p_value == Close(1.0 / 24.0));  // table: .042
+  CHECK(r.p_value == Close(BruteForceFriedmanP(concordant)));
+}
+
+TEST_CASE("FriedmanTest: exact p as the published tables, k = 4, N = 4 (docs/studies.md)",
+          "[study][stats]") {
+  // The synthetic study's two reports in docs/studies.md, by their rank sums
+  // (gesture, assisted, cockpit-hud, cockpit; no ties). Mean ranks 1, 2, 3.5,
+  // 3.5: sums 4, 8, 14, 14, S = 36 + 4 + 16 + 16 = 72, χ²_F = 12·72/80 = 10.8.
+  const BlockMatrix full = {{1, 2, 3, 4}, {1, 2, 3, 4}, {1, 2, 4, 3}, {1, 2, 4, 3}};
+  const auto r = haptel::study::FriedmanTest(full);
+  CHECK(r.chi_square == Close(10.8));
+  CHECK(r.p_exact);
+  CHECK(r.p_value == Approx(0.0016).margin(0.00005));  // table: .0016
+  CHECK(r.p_value == Close(BruteForceFriedmanP(full)));
+  // Mean ranks 1, 2.5, 3.25, 3.25: sums 4, 10, 13, 13, S = 54, χ²_F = 8.1.
+  const BlockMatrix simulated = {{1, 2, 3, 4}, {1, 3, 2, 4}, {1, 3, 4, 2}, {1, 2, 4, 3}};
+  const auto s = haptel::study::FriedmanTest(simulated);
+  CHECK(s.chi_square == Close(8.1));
+  CHECK(s.p_exact);
+  CHECK(s.p_value == Approx(0.033).margin(0.0005));  // table: .033
+  CHECK(s.p_value == Close(BruteForceFriedmanP(simulated)));
+  CHECK(s.p_value_asymptotic == Approx(0.044).margin(0.0005));
+}
+
+TEST_CASE("FriedmanTest: 2 conditions, 4 participants all one way: the sign test's p", "[study][stats]") {
+  // χ²_F = 4 gives the χ² p 0.0455, below 0.05; the exact test is the
+  // two-sided sign test: 2 of the 16 sign patterns are as extreme, p = 0.125.
+  const BlockMatrix all_prefer_a = {{10, 12}, {9, 15}, {20, 21}, {11, 30}};
+  const auto r = haptel::study::FriedmanTest(all_prefer_a);
+  CHECK(r.chi_square == Close(4.0));
+  CHECK(r.p_value_asymptotic == Close(std::erfc(std::sqrt(2.0))));  // 0.0455
+  CHECK(r.p_exact);
+  CHECK(r.p_value == Close(0.125));
+  CHECK(r.p_value == Close(BruteForceFriedmanP(all_prefer_a)));
+}
+
+TEST_CASE("FriedmanTest: exact p with ties permutes each row's own midranks", "[study][stats]") {
+  // Rows with a tied pair, a triple tie (no information), and untied rows.
+  const BlockMatrix tied = {{5, 5, 7}, {1, 2, 3}, {4, 4, 4}, {3, 1, 1}, {2, 9, 6}};
+  const auto r = haptel::study::FriedmanTest(tied);
+  CHECK(r.p_exact);
+  const double brute = BruteForceFriedmanP(tied);
+  CHECK(r.p_value == Close(brute));
+  CHECK(r.p_value != Close(r.p_value_asymptotic));
+  // The thesis has one tied pair (participant B) and 4 conditions: 24^5 combinations.
+  const auto thesis = haptel::study::FriedmanTest(kThesis);
+  CHECK(thesis.p_exact);
+  CHECK(thesis.p_value == Close(BruteForceFriedmanP(kThesis)));
+  CHECK(thesis.p_value == Close(9168.0 / 7962624.0));  // 0.00115
+  // The participants' order changes nothing, to the bit (the null
+  // distribution is computed over the rows sorted, and remembered).
+  const BlockMatrix reversed(tied.rbegin(), tied.rend());
+  CHECK(haptel::study::FriedmanTest(reversed).p_value == r.p_value);
+  CHECK(haptel::study::FriedmanExactP(reversed, 1000000) == r.p_value);
+}
+
+TEST_CASE("FriedmanTest: past the exact p's limits the chi-square p is kept", "[study][stats]") {
+  using haptel::study::FriedmanExactP;
+  // 7 conditions: more than kFriedmanExactMaxConditions.
+  const BlockMatrix seven = {{1, 2, 3, 4, 5, 6, 7}, {2, 1, 3, 5, 4, 7, 6}, {7, 6, 5, 4, 3, 2, 1}};
+  const auto r = haptel::study::FriedmanTest(seven);
+  CHECK_FALSE(r.p_exact);
+  CHECK(r.p_value == r.p_value_asymptotic);
+  CHECK_FALSE(FriedmanExactP(seven).has_value());
+  // 4 conditions, 40 participants: thousands of rank-sum vectors times 24
+  // orderings a row, past kFriedmanExactMaxSteps.
+  BlockMatrix many;
+  for (int i = 0; i < 40; ++i) many.push_back({double(i % 4), double((i + 1) % 4), double((i * 3 + 2) % 4), 3.5});
+  const auto m = haptel::study::FriedmanTest(many);
+  CHECK_FALSE(m.p_exact);
+  CHECK(m.p_value == m.p_value_asymptotic);
+  // The step limit itself: the k = 3, N = 3 table case takes at most
+  // 6 + 6 + 6·6 steps (states × a row's 6 orderings); 5 gives up, 1000 does not.
+  const BlockMatrix concordant = {{1, 2, 3}, {1, 2, 3}, {1, 2, 3}};
+  CHECK_FALSE(FriedmanExactP(concordant, 5).has_value());
+  REQUIRE(FriedmanExactP(concordant, 1000).has_value());
+  CHECK(*FriedmanExactP(concordant, 1000) == Close(1.0 / 36.0));
 }
 
 TEST_CASE("FriedmanTest: refuses what it cannot test, saying what it expected", "[study][stats]") {
@@ -577,7 +739,11 @@ TEST_CASE("AnalyzeWithinSubject: everything the report prints", "[study][stats]"
   CHECK(nemenyi.post_hoc.pairs.size() == 6);
   const auto wilcoxon =
       haptel::study::AnalyzeWithinSubject(kThesis, PostHocMethod::kWilcoxonHolm, 0.05);
-  CHECK(wilcoxon.friedman.p_value == Close(0.0067797401305199397));
+  CHECK(wilcoxon.friedman.p_value_asymptotic == Close(0.0067797401305199397));
+  // Exact, as the brute force of "exact p with ties" finds: 9168 of the 24^5
+  // orderings are as extreme. The χ² overstates it almost sixfold here.
+  CHECK(wilcoxon.friedman.p_exact);
+  CHECK(wilcoxon.friedman.p_value == Close(9168.0 / 7962624.0));
   CHECK(wilcoxon.post_hoc.method == "Wilcoxon signed-rank, Holm-adjusted, alpha 0.05");
   CHECK_THAT(InvalidArgument([] {
                haptel::study::AnalyzeWithinSubject(kThesis, PostHocMethod::kNemenyi, 0.01);

@@ -17,7 +17,8 @@
 ///   pool per row, the more a large n overstates the power);
 /// - the sample is analysed as `haptel study report` analyses a study:
 ///   Friedman's test on each participant's mean scored lap time per condition
-///   (statistics.hpp), and the mixed model
+///   (statistics.hpp; its exact p where that is cheap, the χ² one past it),
+///   and the mixed model
 ///   log(lap time) ~ condition + position + (1 | participant) with the
 ///   Satterthwaite F test of the condition (mixed_model.hpp; not the χ²
 ///   likelihood-ratio test, which with few participants finds effects that

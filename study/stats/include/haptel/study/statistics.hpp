@@ -8,8 +8,8 @@
 /// or with Wilcoxon signed-rank tests under Holm's step-down correction.
 /// Every number here is the one SciPy 1.10 gives for the same data
 /// (`scipy.stats.rankdata`, `friedmanchisquare`, `chi2.sf`, `wilcoxon`), up to
-/// rounding; where SciPy has no function (Kendall's W, Nemenyi, Holm) the doc
-/// comment gives the formula.
+/// rounding; where SciPy has no function (Kendall's W, Nemenyi, Holm,
+/// Friedman's exact p) the doc comment gives the formula.
 ///
 /// Errors in the input (too few rows or columns, ragged rows, NaN or infinite
 /// values) throw std::invalid_argument with a message that says what was
@@ -75,21 +75,66 @@ struct ConditionRank {
 /// χ²_F is algebraically SciPy's `friedmanchisquare`: its uncorrected
 /// 12/(Nk(k+1)) Σ R_j² − 3N(k+1) divided by c = 1 − T/(Nk(k² − 1)); the form
 /// through S cannot come out negative by cancellation.
+///
+/// The p-value is exact when that is cheap, the χ² approximation otherwise.
+/// The χ² (df k − 1) is a large-sample result and liberal with few
+/// participants: with k = 2 and N = 4 all preferring one condition it gives
+/// p = 0.046 where the exact test (then the two-sided sign test) gives 0.125.
+/// Exact: under H0 every ordering of a participant's own ranks (midranks
+/// included, so ties stay ties) is equally likely, independently per row, and
+/// p = P(S ≥ S_obs) over that permutation distribution — the one tabulated
+/// for Friedman's test (e.g. Hollander & Wolfe; k = 3, N = 3, χ²_F = 6 gives
+/// 1/36). Given the rows' ties, χ²_F grows with S, so the same p holds for
+/// χ²_F and W. It is computed by convolving the rows' distributions of rank
+/// sums (a dynamic programme over the vector of partial rank sums, kept up to
+/// the order of the conditions, which H0 leaves symmetric), and is given up
+/// for the χ² when k > kFriedmanExactMaxConditions or the programme would take
+/// more than kFriedmanExactMaxSteps steps.
 struct FriedmanResult {
   int participants = 0;              ///< N, rows of the matrix
   int conditions = 0;                ///< k, columns of the matrix
   std::vector<ConditionRank> ranks;  ///< per condition, in column order
   double chi_square = 0.0;           ///< χ²_F, tie-corrected
   int degrees_of_freedom = 0;        ///< k − 1
-  double p_value = 1.0;              ///< ChiSquareSurvival(chi_square, k − 1)
+  /// The exact p (FriedmanExactP) when p_exact, else p_value_asymptotic:
+  /// the one to report.
+  double p_value = 1.0;
+  /// ChiSquareSurvival(chi_square, k − 1), SciPy's `friedmanchisquare` p;
+  /// always computed, for comparison.
+  double p_value_asymptotic = 1.0;
+  /// Whether p_value is the exact permutation p (true) or the χ² one (false).
+  bool p_exact = false;
   double kendall_w = 0.0;            ///< coefficient of concordance, 0..1, tie-corrected
 };
+
+/// Largest k for which FriedmanTest tries the exact p: each row has up to k!
+/// orderings to convolve (720 at k = 6).
+inline constexpr int kFriedmanExactMaxConditions = 6;
+
+/// Most steps (one per reachable rank-sum vector and ordering of the next
+/// row, summed over the rows) the exact p's dynamic programme may take; past
+/// it FriedmanTest keeps the χ² p. It bounds the time of one call, which
+/// EstimatePower makes thousands of times, and the memory (the vectors held
+/// never outnumber the steps). Before each row the programme bounds the
+/// steps still to come from below and gives up as soon as that bound passes
+/// the limit, so giving up costs at most this many steps (about 5 ms
+/// measured). The distribution depends only on how each row ties
+/// (every untied N × k study shares one), so the last few dozen distributions
+/// and refusals are remembered between calls: EstimatePower's draws of one
+/// participant count cost one programme, not hundreds.
+inline constexpr long kFriedmanExactMaxSteps = 200000;
 
 /// Friedman's test on `values` (N ≥ 2 rows of k ≥ 2 finite values each).
 /// SciPy refuses k = 2; the formula holds there too (it is then the
 /// two-sided sign test's χ²). Throws std::invalid_argument when every row is
 /// entirely tied: there is no ranking to test (SciPy returns NaN).
 FriedmanResult FriedmanTest(const BlockMatrix& values);
+
+/// The exact p of Friedman's test (see FriedmanResult), or nothing when
+/// k > kFriedmanExactMaxConditions or the dynamic programme would take more
+/// than `max_steps` steps. Same checks and throws as FriedmanTest.
+std::optional<double> FriedmanExactP(const BlockMatrix& values,
+                                     long max_steps = kFriedmanExactMaxSteps);
 
 /// Kendall's W of `values`, as in FriedmanResult (same checks, same throws).
 double KendallW(const BlockMatrix& values);
