@@ -52,6 +52,11 @@ constexpr double kDecayRatio = 0.5;       // an oscillation must at least halve 
 constexpr double kContactFromS = 0.5;     // s: after the soft start, for the force error
 constexpr double kTargetDelayMs = 3.0;    // the delay the gain is judged at
 constexpr int kMaxDelayTicks = 16;
+// The grasped box: a free body the hand holds through the coupling (the
+// proxy is the box; the box feels the coupling's reaction on the hand as
+// the loop saw it), grasped 1 cm from where the hand is and held still.
+constexpr double kBoxMass = 0.5;     // kg
+constexpr double kBoxOffset = 0.01;  // m: where the box is when the grip closes
 
 /// The modes compared: no controller, the servo loop's one-port controller
 /// (passivity.hpp), the two-port across the delay line (twoport.hpp) with
@@ -315,7 +320,7 @@ struct Point {
   double energy_j = 0.0;        ///< dissipated by the controller
   double max_alpha = 0.0;       ///< N·s/m
   uint64_t acting_ticks = 0;
-  double force_rms_err = 0.0;   ///< N against the ideal wall
+  double force_rms_err = 0.0;   ///< N against the ideal wall (the box: a rigid box's inertia, -m a)
   double penetration = 0.0;     ///< m, mean over the last 0.5 s
   double loop_margin_min = 0.0; ///< J, two-port: the loop's end's smallest margin
   double loop_energy_j = 0.0;   ///< J, UDP two-port: what the loop's end returned (its offset)
@@ -337,15 +342,18 @@ DeviceCalibration Truth(const haptics::SimDevice& device) {
   return c;
 }
 
+/// One run: the arm pressing into the wall, or (`box`) holding the grasped box.
 Point Run(const DeviceConfig& device_config, const OperatorConfig& grip, double k, int delay_ticks, Mode mode,
-          double seconds, std::vector<double>& tick_us) {
+          double seconds, std::vector<double>& tick_us, bool box = false) {
   DeviceConfig config = device_config;
   config.servo.passivity =
       mode == Mode::kOnePort || mode == Mode::kUdpTwoPort || mode == Mode::kUdpTwoPortAdmittance;
   config.servo.passivity_link_admittance = mode == Mode::kUdpTwoPortAdmittance;
   haptics::SimDevice arm(config, grip);
   arm.Place(kSide, {kStartX, 0.0, 0.0});
-  arm.SetOperatorTarget(kSide, {kWallX + kPushDepth, 0.0, 0.0});
+  arm.SetOperatorTarget(kSide, box ? Vec3d{kStartX, 0.0, 0.0} : Vec3d{kWallX + kPushDepth, 0.0, 0.0});
+  double box_x = kStartX + kBoxOffset, box_v = 0.0;
+  double x_prev = kStartX, x_prev2 = kStartX;
   haptics::TwoPortLimits limits{config.servo.passivity_max_damping, config.servo.passivity_min_speed};
   if (mode == Mode::kTwoPortRef) limits.max_credit_j = 0.0;
   const bool two_port = mode == Mode::kTwoPort || mode == Mode::kTwoPortRef;
@@ -376,24 +384,39 @@ Point Run(const DeviceConfig& device_config, const OperatorConfig& grip, double 
     const int64_t now = i * kPeriodNs;
     // The proxy: the tracked wrist (as the HAL has it) kept out of the wall.
     const haptics::HandSample s = hal.LatestSample(kSide);
-    sp.coupling_target = s.valid ? s.position : Vec3d{kStartX, 0.0, 0.0};
-    sp.coupling_target[0] = std::min(sp.coupling_target[0], kWallX);
+    if (box) {
+      sp.coupling_target = {box_x, 0.0, 0.0};
+    } else {
+      sp.coupling_target = s.valid ? s.position : Vec3d{kStartX, 0.0, 0.0};
+      sp.coupling_target[0] = std::min(sp.coupling_target[0], kWallX);
+    }
     hal.SetSetpoint(kSide, sp, now);
     if (udp) path->clock().now_ns = now;
     const int64_t t0 = MonotonicNs();
     loop.Tick(kSide, now);
     tick_us.push_back(static_cast<double>(MonotonicNs() - t0) * 1e-3);
 
+    const double period_s = kPeriodNs * 1e-9;
+    if (box) {
+      // The box: the coupling's reaction on the hand the loop saw (its
+      // sample, as delayed as the loop's), semi-implicit Euler.
+      const double hand = s.valid ? s.position[0] : kStartX;
+      box_v += k * (hand - box_x) / kBoxMass * period_s;
+      box_x += box_v * period_s;
+    }
     const Vec3d x = arm.TruePosition(kSide);
-    if (!std::isfinite(x[0])) return r;  // unstable
-    const double t = static_cast<double>(i) * kPeriodNs * 1e-9;
-    const double pen = std::max(0.0, x[0] - kWallX);
+    if (!std::isfinite(x[0]) || !std::isfinite(box_x)) return r;  // unstable
+    const double t = static_cast<double>(i) * period_s;
+    const double pen = box ? 0.0 : std::max(0.0, x[0] - kWallX);
     if (t >= kContactFromS) {
       const double felt = arm.MeasureForce(kSide, applied())[0];
-      const double ideal = -k * pen;
+      // A rigid box in the hand pushes back with its inertia alone.
+      const double ideal = box ? -kBoxMass * (x[0] - 2.0 * x_prev + x_prev2) / (period_s * period_s) : -k * pen;
       err2 += (felt - ideal) * (felt - ideal);
       ++err_n;
     }
+    x_prev2 = x_prev;
+    x_prev = x[0];
     if (i > n - 3 * tail && i <= n - 2 * tail) {
       early_min = std::min(early_min, x[0]);
       early_max = std::max(early_max, x[0]);
@@ -562,6 +585,18 @@ int BenchPassivityMain(int argc, const char* const* argv) {
       }
     }
   }
+  // The grasped box, the same sweep (its ticks are not timed: the wall's are).
+  std::vector<Point> box_points;
+  std::vector<double> untimed;
+  for (const double delay : delays_ms) {
+    const int delay_ticks = static_cast<int>(std::lround(delay * 1e-3 / period_s));
+    for (const Mode mode : kModes) {
+      for (double k = 250.0; k <= k_max; k *= 2.0) {
+        box_points.push_back(Run(device, grip, k, delay_ticks, mode, seconds, untimed, true));
+        untimed.clear();
+      }
+    }
+  }
   const double wall_s = NsToS(MonotonicNs()) - t_start;
   const int timing_rounds = smoke ? 2 : 3;
   const double timing_seconds = smoke ? 0.3 : 3.0;
@@ -646,6 +681,36 @@ int BenchPassivityMain(int argc, const char* const* argv) {
               ModeName(kModes[best]), gain[best], gain[best] >= 3.0 ? "met" : "MISSED", cost, p99[0],
               cost <= 2.0 ? "met" : "MISSED", points.size(), wall_s, dir.c_str());
 
+  // The grasped box: largest stable K per mode and delay, and the gains at the target's delay.
+  std::printf("\n  the grasped box (%.2g kg, grasped %.0f mm from the hand and held still), largest K stable (N/m):\n"
+              "  %8s", kBoxMass, kBoxOffset * 1e3, "delay ms");
+  for (const Mode m : kModes) std::printf(" %14s", ModeName(m));
+  std::printf("\n");
+  std::array<std::vector<double>, kModes.size()> box_stable;
+  for (const double delay : delays_ms) {
+    std::printf("  %8.0f", delay);
+    for (size_t m = 0; m < kModes.size(); ++m) {
+      box_stable[m].push_back(LargestStable(box_points, delay, kModes[m]));
+      std::printf(" %14.0f", box_stable[m].back());
+    }
+    std::printf("\n");
+  }
+  std::array<double, kModes.size()> box_gain{}, box_err{};
+  for (size_t m = 0; m < kModes.size(); ++m) {
+    const double k_base = box_stable[index(Baseline(kModes[m]))][at];
+    box_gain[m] = k_base > 0 ? box_stable[m][at] / k_base : 0.0;
+    int n = 0;
+    for (double k = 250.0; k <= std::min(k_base, box_stable[m][at]); k *= 2.0) {
+      box_err[m] += Find(box_points, k, delays_ms[at], kModes[m])->force_rms_err;
+      ++n;
+    }
+    if (n > 0) box_err[m] /= n;
+  }
+  std::printf("  at %.0f ms: gain %.3g %s, %.3g udp-two-port; force RMS error against a rigid box's inertia %.3f N\n"
+              "  %s, %.3f N off, over the K stable both ways; wrote %s/passivity_box.csv\n",
+              delays_ms[at], box_gain[best], ModeName(kModes[best]), box_gain[udp_on], box_err[best],
+              ModeName(kModes[best]), box_err[0], dir.c_str());
+
   std::printf("\n  the servo loop itself (threaded, %s, %.0f Hz, %s): period p99 over %d rounds of %.1f s each,\n"
               "  the three kinds in a rotated order; \"unchanged\": on within off's p99 +- the bare loop's own\n"
               "  spread over the rounds (or one %.0f us bin, whichever is larger)\n",
@@ -674,6 +739,14 @@ int BenchPassivityMain(int argc, const char* const* argv) {
       csv << p.k << "," << p.delay_ms << "," << ModeName(p.mode) << "," << (p.stable ? 1 : 0) << "," << p.spread
           << "," << p.energy_j << "," << p.max_alpha << "," << p.acting_ticks << "," << p.force_rms_err << ","
           << p.penetration << "," << p.loop_margin_min << "," << p.loop_energy_j << "," << p.loop_acting_ticks << "\n";
+    }
+  }
+  {
+    std::ofstream csv(dir / "passivity_box.csv");
+    csv << "stiffness,delay_ms,mode,stable,spread_m,energy_j,max_alpha,acting_ticks,force_rms_err_n\n";
+    for (const Point& p : box_points) {
+      csv << p.k << "," << p.delay_ms << "," << ModeName(p.mode) << "," << (p.stable ? 1 : 0) << "," << p.spread
+          << "," << p.energy_j << "," << p.max_alpha << "," << p.acting_ticks << "," << p.force_rms_err << "\n";
     }
   }
   {
@@ -742,7 +815,21 @@ int BenchPassivityMain(int argc, const char* const* argv) {
       for (size_t m = 0; m < kModes.size(); ++m) o << ",\"stable_stiffness_" << key(kModes[m]) << "\":" << JsonNumber(stable[m][i]);
       o << "}";
     }
-    o << "],\"points\":[";
+    o << "],\"box\":{\"mass_kg\":" << JsonNumber(kBoxMass);
+    for (size_t m = 0; m < kModes.size(); ++m) {
+      o << ",\"stable_stiffness_" << key(kModes[m]) << "\":" << JsonNumber(box_stable[m][at]);
+    }
+    o << ",\"gain\":" << JsonNumber(box_gain[best]) << ",\"gain_udp\":" << JsonNumber(box_gain[udp_on])
+      << ",\"force_rms_err_n_" << key(kModes[best]) << "\":" << JsonNumber(box_err[best])
+      << ",\"force_rms_err_n_off\":" << JsonNumber(box_err[0]) << ",\"points\":[";
+    for (size_t i = 0; i < box_points.size(); ++i) {
+      const Point& p = box_points[i];
+      o << (i ? "," : "") << "{\"stiffness\":" << JsonNumber(p.k) << ",\"delay_ms\":" << JsonNumber(p.delay_ms)
+        << ",\"mode\":\"" << ModeName(p.mode) << "\",\"stable\":" << (p.stable ? "true" : "false")
+        << ",\"energy_j\":" << JsonNumber(p.energy_j) << ",\"force_rms_err_n\":" << JsonNumber(p.force_rms_err)
+        << "}";
+    }
+    o << "]},\"points\":[";
     for (size_t i = 0; i < points.size(); ++i) {
       const Point& p = points[i];
       o << (i ? "," : "") << "{\"stiffness\":" << JsonNumber(p.k) << ",\"delay_ms\":" << JsonNumber(p.delay_ms)

@@ -265,7 +265,17 @@ TEST_CASE("bench passivity --smoke", "[bench][smoke]") {
     CHECK(Finite(p["force_rms_err_n"]) >= 0.0);
     CHECK(Finite(p["energy_j"]) >= 0.0);
   }
-  RequireFiles({"passivity.csv", "passivity.png"});
+  // The grasped box: the same sweep, its own figures.
+  const JsonValue& box = j["box"];
+  CHECK(Finite(box["mass_kg"]) > 0.0);
+  for (const char* key : {"stable_stiffness_off", "stable_stiffness_two_port", "stable_stiffness_udp_two_port", "gain",
+                          "gain_udp", "force_rms_err_n_off"}) {
+    INFO("box " << key);
+    CHECK(Finite(box[key]) >= 0.0);
+  }
+  CHECK(box["points"].array().size() == points.size());
+  for (const JsonValue& p : box["points"].array()) CHECK(Finite(p["force_rms_err_n"]) >= 0.0);
+  RequireFiles({"passivity.csv", "passivity.png", "passivity_box.csv"});
 }
 
 TEST_CASE("bench view --smoke", "[bench][smoke]") {
