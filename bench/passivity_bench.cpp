@@ -677,9 +677,9 @@ int BenchPassivityMain(int argc, const char* const* argv) {
               gain[udp_on], gain[udp_on] >= 3.0 ? "met" : "MISSED", gain[udp_admit], err_common[udp_admit],
               err_common[udp_off]);
   std::printf("  best: %s, gain %.3g (target >= 3) %s; it costs %.3g us of tick p99 (off %.3g us; target <= 2) %s\n"
-              "  %zu runs in %.1f s wall; wrote %s/passivity.csv, passivity.png\n",
+              "  %zu runs (the wall's and the box's) in %.1f s wall; wrote %s/passivity.csv, passivity.png\n",
               ModeName(kModes[best]), gain[best], gain[best] >= 3.0 ? "met" : "MISSED", cost, p99[0],
-              cost <= 2.0 ? "met" : "MISSED", points.size(), wall_s, dir.c_str());
+              cost <= 2.0 ? "met" : "MISSED", points.size() + box_points.size(), wall_s, dir.c_str());
 
   // The grasped box: largest stable K per mode and delay, and the gains at the target's delay.
   std::printf("\n  the grasped box (%.2g kg, grasped %.0f mm from the hand and held still), largest K stable (N/m):\n"
