@@ -470,6 +470,23 @@ double LargestStable(const std::vector<Point>& points, double delay_ms, Mode mod
   return best;
 }
 
+/// Per mode, per delay: the largest K stable (LargestStable).
+using StableTable = std::array<std::vector<double>, kModes.size()>;
+
+/// The table's rows, a delay each, printed as they are found.
+StableTable PrintStableTable(const std::vector<Point>& points, const std::vector<double>& delays_ms) {
+  StableTable stable;
+  for (const double delay : delays_ms) {
+    std::printf("  %8.0f", delay);
+    for (size_t m = 0; m < kModes.size(); ++m) {
+      stable[m].push_back(LargestStable(points, delay, kModes[m]));
+      std::printf(" %14.0f", stable[m].back());
+    }
+    std::printf("\n");
+  }
+  return stable;
+}
+
 const Point* Find(const std::vector<Point>& points, double k, double delay_ms, Mode mode) {
   for (const Point& p : points) {
     if (p.k == k && p.delay_ms == delay_ms && p.mode == mode) return &p;
@@ -621,15 +638,7 @@ int BenchPassivityMain(int argc, const char* const* argv) {
   for (const Mode m : kModes) std::printf(" %14s", ModeName(m));
   std::printf("   largest K stable (N/m) before the first unstable one\n");
   // stable[m][d]: the largest stable K of mode m at delay d.
-  std::array<std::vector<double>, kModes.size()> stable;
-  for (const double delay : delays_ms) {
-    std::printf("  %8.0f", delay);
-    for (size_t m = 0; m < kModes.size(); ++m) {
-      stable[m].push_back(LargestStable(points, delay, kModes[m]));
-      std::printf(" %14.0f", stable[m].back());
-    }
-    std::printf("\n");
-  }
+  const StableTable stable = PrintStableTable(points, delays_ms);
   // The figures at the target's delay (the largest delay run in a smoke run).
   size_t at = delays_ms.size() - 1;
   for (size_t i = 0; i < delays_ms.size(); ++i) {
@@ -686,15 +695,7 @@ int BenchPassivityMain(int argc, const char* const* argv) {
               "  %8s", kBoxMass, kBoxOffset * 1e3, "delay ms");
   for (const Mode m : kModes) std::printf(" %14s", ModeName(m));
   std::printf("\n");
-  std::array<std::vector<double>, kModes.size()> box_stable;
-  for (const double delay : delays_ms) {
-    std::printf("  %8.0f", delay);
-    for (size_t m = 0; m < kModes.size(); ++m) {
-      box_stable[m].push_back(LargestStable(box_points, delay, kModes[m]));
-      std::printf(" %14.0f", box_stable[m].back());
-    }
-    std::printf("\n");
-  }
+  const StableTable box_stable = PrintStableTable(box_points, delays_ms);
   std::array<double, kModes.size()> box_gain{}, box_err{};
   for (size_t m = 0; m < kModes.size(); ++m) {
     const double k_base = box_stable[index(Baseline(kModes[m]))][at];
