@@ -314,7 +314,7 @@ TEST_CASE("bench blimp --smoke", "[bench][smoke]") {
   RequireFiles({"blimp_precision.csv", "blimp_checks.csv", "blimp_precision.png"});
 }
 
-TEST_CASE("bench link --smoke", "[bench][smoke]") {
+TEST_CASE("bench link --smoke", "[bench][smoke][network]") {
   const JsonValue j =
       Smoke("link", {"--domain", std::to_string(haptel::test::UniqueDomain(82)), "--lap-domain",
                      std::to_string(haptel::test::UniqueDomain(83))})
@@ -344,7 +344,7 @@ TEST_CASE("bench link --smoke", "[bench][smoke]") {
   RequireFiles({"link_rtt.csv", "link_laps.csv", "link_laps.png"});
 }
 
-TEST_CASE("bench link --smoke --rtt-only: the round trips alone, no lap", "[bench][smoke]") {
+TEST_CASE("bench link --smoke --rtt-only: the round trips alone, no lap", "[bench][smoke][network]") {
   const JsonValue j =
       Smoke("link", {"--rtt-only", "--domain", std::to_string(haptel::test::UniqueDomain(85))}).json;
   CHECK(Finite(j["rtt"]["haptel_p99_ms"]) > 0.0);
@@ -352,7 +352,7 @@ TEST_CASE("bench link --smoke --rtt-only: the round trips alone, no lap", "[benc
   CHECK(j["laps"].array().empty());
 }
 
-TEST_CASE("bench fleet --smoke: the fewest and the most vehicles, each count's figures", "[bench][smoke]") {
+TEST_CASE("bench fleet --smoke: the fewest and the most vehicles, each count's figures", "[bench][smoke][network]") {
   const JsonValue j = Smoke("fleet", {"--domain", std::to_string(haptel::test::UniqueDomain(84))}).json;
   const auto& counts = j["counts"].array();
   REQUIRE(counts.size() == 2);  // 1 and 4 of config/fleets/four.yaml
@@ -395,7 +395,7 @@ TEST_CASE("bench fuzz --smoke", "[bench][smoke]") {
   RequireFiles({"fuzz.csv"});
 }
 
-TEST_CASE("bench video --smoke", "[bench][smoke]") {
+TEST_CASE("bench video --smoke", "[bench][smoke][network]") {
   const JsonValue j = Smoke("video").json;
   const auto& codecs = j["codecs"].array();
   REQUIRE(codecs.size() >= 4);  // JPEG at 20 and 80, H.264 at 250 and 2000 kbit/s (and the default)

@@ -192,7 +192,7 @@ TEST_CASE("a blimp answering under the robot's name: the run says it is another 
   CHECK(JsonField(json, "message").find("another kind of vehicle") != std::string::npos);
 }
 
-TEST_CASE("with 100 ms delay, 20 ms jitter and 5 % loss both ways the automatic operator still completes the short track") {
+TEST_CASE("with 100 ms delay, 20 ms jitter and 5 % loss both ways the automatic operator still completes the short track", "[faults]") {
   const auto dir = test::ScratchDir("e2e-link-fault");
   Child run({Bin("haptel"), "run", "--link-fault", "delay=100ms,jitter=20ms,loss=5%", "--track",
              "config/tracks/test-short.yaml", "--json", "--domain", std::to_string(test::UniqueDomain(44)),
@@ -209,7 +209,7 @@ TEST_CASE("with 100 ms delay, 20 ms jitter and 5 % loss both ways the automatic 
   CHECK(std::stod(JsonField(json, "command_rtt_ms_p50")) > 160.0);
 }
 
-TEST_CASE("a link with a rate: the spawned vehicle gets the same fault, the video beyond the rate is dropped and counted") {
+TEST_CASE("a link with a rate: the spawned vehicle gets the same fault, the video beyond the rate is dropped and counted", "[faults]") {
   // 1 Mbit/s cannot carry a JPEG frame of about 25 kB every 33 ms (about 6
   // Mbit/s): the queue drops frames until the ladder fits, while the
   // commands and states still get through. The shipped robot sends H.264,
@@ -243,7 +243,7 @@ TEST_CASE("a link with a rate: the spawned vehicle gets the same fault, the vide
   CHECK(std::stoi(JsonField(json, "video_frames")) > 30);  // JPEG frames decoded on the way
 }
 
-TEST_CASE("bad link rates, queues and profiles exit 2 with a one-line error saying what was expected") {
+TEST_CASE("bad link rates, queues and profiles exit 2 with a one-line error saying what was expected", "[faults]") {
   const std::vector<std::pair<std::vector<std::string>, std::string>> cases{
       {{"--link-fault", "rate=0"}, "option --link-fault: expected a rate from 1kbit to 10Gbit"},
       {{"--link-fault", "rate=-1Mbit"}, "(not 'rate=-1Mbit')"},
@@ -275,7 +275,7 @@ TEST_CASE("bad link rates, queues and profiles exit 2 with a one-line error sayi
   }
 }
 
-TEST_CASE("link down: the vehicle stops within its watchdog and the run reports the loss within a second") {
+TEST_CASE("link down: the vehicle stops within its watchdog and the run reports the loss within a second", "[faults]") {
   const auto dir = test::ScratchDir("e2e-link-down");
   Child run({Bin("haptel"), "run", "--link-fault", "on", "--track", "config/tracks/test-short.yaml", "--json",
              "--domain", std::to_string(test::UniqueDomain(45)), "--database", (dir / "runs.db").string(),
@@ -300,7 +300,7 @@ TEST_CASE("link down: the vehicle stops within its watchdog and the run reports 
   CHECK(run.err().find("watchdog: no command for 0.2", before) != std::string::npos);
 }
 
-TEST_CASE("haptel security init, then a secured lap: the spawned vehicle is secured too; a missing identity is one line") {
+TEST_CASE("haptel security init, then a secured lap: the spawned vehicle is secured too; a missing identity is one line", "[faults]") {
   const auto dir = test::ScratchDir("e2e-security");
   const auto security = dir / "deployment";
   {
