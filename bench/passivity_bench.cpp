@@ -179,7 +179,7 @@ class DelayedDevice final : public haptics::Device {
   /// The command the arm holds now (device units).
   const Vec3d& applied() const { return applied_; }
   /// The arm's end's controller: J dissipated (all axes), ticks it acted, largest α.
-  double dissipated() const { return arm_end_.dissipated()[0] + arm_end_.dissipated()[1] + arm_end_.dissipated()[2]; }
+  double dissipated() const { return arm_end_.dissipated_total_j(); }
   uint64_t acting_ticks() const { return acting_ticks_; }
   double max_alpha() const { return max_alpha_; }
   /// J: the loop's end's smallest margin (< 0: the loop's side drew energy

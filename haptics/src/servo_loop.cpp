@@ -130,8 +130,7 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
       ++c.passivity_link_ticks;
       Vec3d remote_in{};
       for (int i = 0; i < 3; ++i) remote_in[i] = arm.link_remote.energy_in[i] - arm.link_remote.charged[i];
-      const Vec3d& before = arm.link_end.dissipated();
-      const double was = before[0] + before[1] + before[2];
+      const double was = arm.link_end.dissipated_total_j();
       bool acted = false;
       if (config_.servo.passivity_link_admittance) {
         const Vec3d& offset = arm.link_end.ControlPosition(remote_in, period_s, &acted);
@@ -139,8 +138,7 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
       } else {
         arm.link_end.ChargeDeficit(remote_in);
       }
-      const Vec3d& after = arm.link_end.dissipated();
-      c.passivity_dissipated_j += after[0] + after[1] + after[2] - was;
+      c.passivity_dissipated_j += arm.link_end.dissipated_total_j() - was;
       if (acted) ++c.passivity_ticks;
       c.passivity_device_ticks = arm.link_base_ticks + arm.link_remote.acted_ticks;
       c.passivity_device_dissipated_j = arm.link_base_dissipated_j + arm.link_remote.dissipated_j;
@@ -192,9 +190,8 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
   if (observe_link_) {
     // The force held over the next period, and the report the commands carry.
     arm.link_end.Hold(wrist);
-    const Vec3d& spent = arm.link_end.dissipated();
     device_.SetLinkEnergy(side, LinkEnergy{arm.link_end.energy_in(), arm.link_end.charged(),
-                                           spent[0] + spent[1] + spent[2], c.passivity_ticks, 0.0});
+                                           arm.link_end.dissipated_total_j(), c.passivity_ticks, 0.0});
   }
   if (device_.WriteWristForce(side, NewtonsToCommand(cal, wrist)) != DeviceStatus::kOk) ++c.write_failures;
   if (d.has_grasp) {

@@ -55,6 +55,7 @@ TEST_CASE("two-port: a channel that delivers more than the other end put in is d
   // damping (6 - 1 mJ) does not exceed what entered it (5 mJ).
   arm.Observe(X(-0.001));
   CHECK(arm.dissipated()[0] == Approx(0.001));
+  CHECK(arm.dissipated_total_j() == Approx(0.001));  // y and z dissipated nothing
   CHECK(arm.energy_out()[0] - arm.dissipated()[0] == Approx(0.005));
   CHECK(arm.Margin(X(0.005))[0] == Approx(0.0).margin(1e-15));
   CHECK_FALSE(arm.Control(X(-3.0), X(0.005), X(-1.0), kT).acted);

@@ -205,7 +205,7 @@ bool ArmServer::Service(int64_t now) {
     command_ = q.command;
     if (q.report.epoch != remote_.epoch && remote_seen_) {
       // The client restarted its end: both count from zero again.
-      dissipated_before_ += arm_end_.dissipated()[0] + arm_end_.dissipated()[1] + arm_end_.dissipated()[2];
+      dissipated_before_ += arm_end_.dissipated_total_j();
       arm_end_.Reset();
       ++c_.epochs;
     }
@@ -246,8 +246,7 @@ bool ArmServer::Service(int64_t now) {
   ++reads_;
   c_.passivity_ticks = acted_ticks_;
   c_.passivity_max_alpha = max_alpha_;
-  const Vec3d& d = arm_end_.dissipated();
-  c_.passivity_dissipated_j = dissipated_before_ + d[0] + d[1] + d[2];
+  c_.passivity_dissipated_j = dissipated_before_ + arm_end_.dissipated_total_j();
   return true;
 }
 
@@ -256,10 +255,9 @@ EnergyReport ArmServer::OwnReport() const {
   e.active = options_.passivity && remote_seen_ && remote_.active;
   e.epoch = remote_.epoch;
   e.energy_in = arm_end_.energy_in();
-  const Vec3d& d = arm_end_.dissipated();
   // The damping's work can be negative for a moment (it acts on the filtered
   // velocity); the report carries counters, never below zero.
-  e.dissipated_j = std::max(0.0, d[0] + d[1] + d[2]);
+  e.dissipated_j = std::max(0.0, arm_end_.dissipated_total_j());
   e.acted_ticks = acted_ticks_;
   e.max_alpha = max_alpha_;
   return e;

@@ -164,6 +164,8 @@ class TwoPortPassivity {
   const Vec3d& energy_in() const { return energy_in_; }
   const Vec3d& energy_out() const { return energy_out_; }
   const Vec3d& dissipated() const { return dissipated_; }
+  /// J: dissipated() over all three axes.
+  double dissipated_total_j() const { return dissipated_[0] + dissipated_[1] + dissipated_[2]; }
   const TwoPortLimits& limits() const { return limits_; }
 
  private:
