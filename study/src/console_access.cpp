@@ -110,6 +110,47 @@ std::vector<std::string> ConsoleHosts(const std::string& address, int port, bool
   return hosts;
 }
 
+std::vector<std::string> ConsoleUrls(const std::string& address, int port, bool tls,
+                                     const std::vector<std::string>& names) {
+  std::vector<std::string> urls;
+  auto add = [&](const std::string& host) {
+    in6_addr v6{};
+    const std::string shown = inet_pton(AF_INET6, host.c_str(), &v6) == 1 ? "[" + host + "]" : host;
+    const std::string url = std::string(tls ? "https://" : "http://") + shown + ":" + std::to_string(port) + "/";
+    if (!host.empty() && std::find(urls.begin(), urls.end(), url) == urls.end()) urls.push_back(url);
+  };
+  const bool wildcard = address == "0.0.0.0" || address == "::" || address == "[::]";
+  if (!wildcard) {
+    add(address.size() > 2 && address.front() == '[' ? address.substr(1, address.size() - 2) : address);
+    return urls;
+  }
+  if (tls && !names.empty()) {
+    // The only names the browser takes the certificate for.
+    for (const std::string& name : names) add(name);
+    return urls;
+  }
+  char name[256] = {};
+  if (gethostname(name, sizeof name - 1) == 0 && !IsLoopbackAddress(name)) add(name);
+  ifaddrs* list = nullptr;
+  if (getifaddrs(&list) == 0) {
+    for (const ifaddrs* i = list; i != nullptr; i = i->ifa_next) {
+      if (i->ifa_addr == nullptr) continue;
+      char text[INET6_ADDRSTRLEN] = {};
+      if (i->ifa_addr->sa_family == AF_INET) {
+        inet_ntop(AF_INET, &reinterpret_cast<const sockaddr_in*>(i->ifa_addr)->sin_addr, text, sizeof text);
+      } else if (i->ifa_addr->sa_family == AF_INET6 && address != "0.0.0.0") {
+        const auto* v6 = reinterpret_cast<const sockaddr_in6*>(i->ifa_addr);
+        if (IN6_IS_ADDR_LINKLOCAL(&v6->sin6_addr) || IN6_IS_ADDR_LOOPBACK(&v6->sin6_addr)) continue;
+        inet_ntop(AF_INET6, &v6->sin6_addr, text, sizeof text);
+      }
+      if (text[0] != 0 && !IsLoopbackAddress(text)) add(text);
+    }
+    freeifaddrs(list);
+  }
+  add("127.0.0.1");
+  return urls;
+}
+
 size_t FormBytesFor(size_t text_characters, size_t fields) {
   // Each field: its name and the separators (bounded by 96 bytes encoded),
   // a short value (a rating, a choice: 64); text: 4 bytes a character, %XX.
@@ -164,6 +205,15 @@ Refusal CheckRequest(const ConsoleAccess& access, const httplib::Request& reques
     if (!IsAccessToken(access, CookieValue(cookies, kAccessCookie))) {
       return {401, "the console asks for its access token (printed where `haptel study run` started)"};
     }
+  }
+  // A body the library would read whole (a chunked one, or one with no
+  // length, read until the client closes: cpp-httplib 0.11 bounds neither)
+  // is taken only where the route reads its form itself, up to its limit.
+  const bool reads_its_form = request.method == "POST" && (request.path == "/answers" || request.path == "/notes");
+  if (!reads_its_form && ChangesState(request.method) &&
+      (request.has_header("Transfer-Encoding") || !request.has_header("Content-Length"))) {
+    return {411, "refused: a form here comes with a Content-Length (as a browser sends it), not chunked or "
+                 "unbounded"};
   }
   if (request.has_header("Content-Length")) {
     const size_t limit = request.path == "/answers" ? access.max_answers_bytes

@@ -305,7 +305,9 @@ int StudyRunCommand(int argc, const char* const* argv) {
       console = cli::ReadInput([&] {
         return std::make_unique<StudyConsole>(config, plan, database, questionnaires, console_options);
       });
-      std::fprintf(stderr, "[study] console: %s\n", console->url().c_str());
+      std::string urls;
+      for (const std::string& url : console->urls()) urls += (urls.empty() ? "" : " or ") + url;
+      std::fprintf(stderr, "[study] console: %s\n", urls.c_str());
       if (!console->access_token().empty()) {
         std::fprintf(stderr, "[study] console access token (the page asks for it once): %s\n",
                      console->access_token().c_str());

@@ -390,6 +390,9 @@ TEST_CASE("bench fuzz --smoke", "[bench][smoke]") {
     CHECK(inputs == 300);
     CHECK(t["accepted"].number() + t["rejected"].number() == inputs);
     CHECK(t["accepted"].number() > 0);  // every 64th input is a valid seed
+    // The console's page under 100 slow connections: answered (200), not
+    // counted as its 10-s limit; how fast is the bench's figure, not a check.
+    if (targets.back() == "console") CHECK(t["page_under_slow_clients_ms"].number() < 10000.0);
   }
   CHECK(targets == std::vector<std::string>{"config", "scene", "udp", "servo", "can", "dds", "console"});
   RequireFiles({"fuzz.csv"});
