@@ -12,6 +12,7 @@
 #include <climits>
 #include <functional>
 #include <stdexcept>
+#include <string_view>
 
 namespace haptel::study {
 namespace {
@@ -206,6 +207,18 @@ void LingeringClose(int fd, Clock::time_point deadline) {
   close(fd);
 }
 
+/// Whether the end of a request's head (a blank line) waits unread on a
+/// plain socket: a peek, nothing taken from the connection's worker.
+bool HeadWaiting(int fd) {
+  char peek[8192];
+  const ssize_t got = recv(fd, peek, sizeof peek, MSG_PEEK | MSG_DONTWAIT);
+  if (got <= 0) return false;
+  const std::string_view bytes(peek, static_cast<size_t>(got));
+  // Its worker reads the head a byte at a time, so the rest may start at the blank line.
+  return bytes.find("\n\r\n") != std::string_view::npos || bytes.find("\n\n") != std::string_view::npos ||
+         bytes.rfind("\r\n", 0) == 0 || bytes.rfind("\n", 0) == 0;
+}
+
 }  // namespace
 
 void ConnectionPolicy::ValidateOrThrow() const {
@@ -268,6 +281,9 @@ bool ConsoleServer::CutOldest(const std::string& address) {
   for (auto it = open_.begin(); it != open_.end(); ++it) {
     const Connection& c = it->second;
     if (c.head_done || c.cut || (!address.empty() && c.address != address)) continue;
+    // Its whole head has come, its worker has not read it yet (a loaded
+    // machine): a prompt client, not one to cut.
+    if (!tls_ && HeadWaiting(it->first)) continue;
     if (oldest == open_.end() || c.accepted < oldest->second.accepted) oldest = it;
   }
   if (oldest == open_.end()) return false;
