@@ -56,6 +56,28 @@ bool ChangesState(const std::string& method) { return method != "GET" && method 
 
 std::string WithPort(const std::string& host, int port) { return host + ":" + std::to_string(port); }
 
+/// This machine's interfaces' IPv4 addresses, and with `v6` its IPv6 ones
+/// but link-local (which need a zone in a URL).
+std::vector<std::string> InterfaceAddresses(bool v6) {
+  std::vector<std::string> addresses;
+  ifaddrs* list = nullptr;
+  if (getifaddrs(&list) != 0) return addresses;
+  for (const ifaddrs* i = list; i != nullptr; i = i->ifa_next) {
+    if (i->ifa_addr == nullptr) continue;
+    char text[INET6_ADDRSTRLEN] = {};
+    if (i->ifa_addr->sa_family == AF_INET) {
+      inet_ntop(AF_INET, &reinterpret_cast<const sockaddr_in*>(i->ifa_addr)->sin_addr, text, sizeof text);
+    } else if (i->ifa_addr->sa_family == AF_INET6 && v6) {
+      const auto* a = reinterpret_cast<const sockaddr_in6*>(i->ifa_addr);
+      if (IN6_IS_ADDR_LINKLOCAL(&a->sin6_addr)) continue;
+      inet_ntop(AF_INET6, &a->sin6_addr, text, sizeof text);
+    }
+    if (text[0] != 0) addresses.emplace_back(text);
+  }
+  freeifaddrs(list);
+  return addresses;
+}
+
 }  // namespace
 
 bool IsLoopbackAddress(const std::string& address) {
@@ -89,22 +111,7 @@ std::vector<std::string> ConsoleHosts(const std::string& address, int port, bool
     if (gethostname(name, sizeof name - 1) == 0) add(name);
   }
   if (wildcard) {
-    ifaddrs* list = nullptr;
-    if (getifaddrs(&list) == 0) {
-      for (const ifaddrs* i = list; i != nullptr; i = i->ifa_next) {
-        if (i->ifa_addr == nullptr) continue;
-        char text[INET6_ADDRSTRLEN] = {};
-        if (i->ifa_addr->sa_family == AF_INET) {
-          inet_ntop(AF_INET, &reinterpret_cast<const sockaddr_in*>(i->ifa_addr)->sin_addr, text, sizeof text);
-        } else if (i->ifa_addr->sa_family == AF_INET6) {
-          const auto* v6 = reinterpret_cast<const sockaddr_in6*>(i->ifa_addr);
-          if (IN6_IS_ADDR_LINKLOCAL(&v6->sin6_addr)) continue;  // needs a zone in the URL; not offered
-          inet_ntop(AF_INET6, &v6->sin6_addr, text, sizeof text);
-        }
-        add(text);
-      }
-      freeifaddrs(list);
-    }
+    for (const std::string& a : InterfaceAddresses(true)) add(a);
   }
   for (const std::string& name : names) add(name);
   return hosts;
@@ -131,21 +138,9 @@ std::vector<std::string> ConsoleUrls(const std::string& address, int port, bool 
   }
   char name[256] = {};
   if (gethostname(name, sizeof name - 1) == 0 && !IsLoopbackAddress(name)) add(name);
-  ifaddrs* list = nullptr;
-  if (getifaddrs(&list) == 0) {
-    for (const ifaddrs* i = list; i != nullptr; i = i->ifa_next) {
-      if (i->ifa_addr == nullptr) continue;
-      char text[INET6_ADDRSTRLEN] = {};
-      if (i->ifa_addr->sa_family == AF_INET) {
-        inet_ntop(AF_INET, &reinterpret_cast<const sockaddr_in*>(i->ifa_addr)->sin_addr, text, sizeof text);
-      } else if (i->ifa_addr->sa_family == AF_INET6 && address != "0.0.0.0") {
-        const auto* v6 = reinterpret_cast<const sockaddr_in6*>(i->ifa_addr);
-        if (IN6_IS_ADDR_LINKLOCAL(&v6->sin6_addr) || IN6_IS_ADDR_LOOPBACK(&v6->sin6_addr)) continue;
-        inet_ntop(AF_INET6, &v6->sin6_addr, text, sizeof text);
-      }
-      if (text[0] != 0 && !IsLoopbackAddress(text)) add(text);
-    }
-    freeifaddrs(list);
+  // IPv6 ones only when the console listens on IPv6 (::).
+  for (const std::string& a : InterfaceAddresses(address != "0.0.0.0")) {
+    if (!IsLoopbackAddress(a)) add(a);
   }
   add("127.0.0.1");
   return urls;
