@@ -165,3 +165,75 @@ TEST_CASE(
         std::vector<std::string>{test::JsonField(first_run, "run_id"),
                                  test::JsonField(second_run, "run_id")});
 }
+TEST_CASE("a trial the database cannot take ends the study as not saved; its file says whose trial it was") {
+  const auto dir = test::ScratchDir("e2e-study-full-disk");
+  const auto source = fs::current_path();
+  const auto file = dir / "full.yaml";
+  std::ofstream(file) << "name: full-disk-e2e\n"
+                         "run: " << (source / "config/haptel.yaml").string() << "\n"
+                         "track: " << (source / "config/tracks/test-short.yaml").string() << "\n"
+                         "operators: synthetic\n"
+                         "conditions:\n"
+                         "  - {name: first, interface: gesture}\n"
+                         "  - {name: second, interface: gesture}\n"
+                         "design: {order: fixed}\n"
+                         "trial_cap_s: 10\n"
+                         "profiles:\n"
+                         "  plain: {steering_noise: 0.02, seed: 3}\n"
+                         "participants:\n"
+                         "  - {id: P7, profile: plain}\n";
+  const auto db = dir / "study.db";
+  const fs::path wal = db.string() + "-wal";
+  // SIGXFSZ ignored here, and so in the study (a child keeps an ignored
+  // signal ignored): its writes past the limit set below fail with EFBIG,
+  // as on a full disk, instead of killing it. The limit itself stays.
+  rlimit now{};
+  REQUIRE(getrlimit(RLIMIT_FSIZE, &now) == 0);
+  const test::FileSizeLimit inherited_by_the_study(now.rlim_cur);
+  Child study({Bin("haptel"), "study", "run", file.string(), "--database", db.string(), "--domain",
+               std::to_string(test::UniqueDomain(63)), "--verbose", "--json"});
+  // Into the first trial's lap (the vehicle up and driving: every file of
+  // the session's set-up written), then the disk is full: no file of the
+  // study's may grow past the log's present end.
+  REQUIRE(test::WaitFor(
+      [&] {
+        study.Pump();
+        const auto at = study.err().find("trial 1/2");
+        return (at != std::string::npos && study.err().find("haptel-vehicle: info: vehicle", at) != std::string::npos) ||
+               !study.Alive();
+      },
+      120.0));
+  REQUIRE(study.Alive());
+  const auto full_at = fs::file_size(wal);
+  const rlimit full{full_at, now.rlim_max};
+  REQUIRE(prlimit(study.pid(), RLIMIT_FSIZE, &full, nullptr) == 0);
+
+  const int code = study.Wait(180.0);
+  INFO("stdout:\n" << study.out() << "\nstderr:\n" << study.err());
+  CHECK(code == 4);  // not recorded
+  // The summary's stop line says what happened to the lap and to its save.
+  const std::string out = study.out();
+  CHECK(out.find("stopped: trial not saved") != std::string::npos);
+  CHECK(out.find("participant P7, position 1, first") != std::string::npos);
+  CHECK(out.find("the database failed") != std::string::npos);
+  const std::string json = study.LastLine();
+  CHECK(test::JsonField(json, "stopped").find("trial not saved") != std::string::npos);
+  const fs::path unsaved = test::JsonField(json, "unsaved_file");
+  CHECK(unsaved.parent_path() == dir);
+  CHECK(out.find(unsaved.string()) != std::string::npos);
+
+  // The kept run says whose trial it was.
+  std::ifstream in(unsaved);
+  const std::string kept((std::istreambuf_iterator<char>(in)), {});
+  INFO("kept: " << kept.substr(0, 400));
+  CHECK(kept.rfind("{\"trial\":{\"study\":\"full-disk-e2e\",\"participant\":\"P7\",\"position\":1,\"condition\":"
+                   "\"first\",\"repetition\":1",
+                   0) == 0);
+  CHECK(kept.find("\"path\":[{\"t_s\":") != std::string::npos);  // and the run itself, whole
+  CHECK(kept.size() < full_at);  // written under the same limit
+
+  // The file itself is intact, without the trial: resuming runs it again.
+  Db check(db);
+  CHECK(check.Column("PRAGMA integrity_check") == std::vector<std::string>{"ok"});
+  CHECK(check.Column("SELECT COUNT(*) FROM study_trials") == std::vector<std::string>{"0"});
+}
