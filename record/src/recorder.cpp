@@ -551,14 +551,16 @@ Recorder::Recorder(const std::filesystem::path& database) : path_(database) {
 
 Recorder::~Recorder() { sqlite3_close_v2(db_); }
 
-int64_t Recorder::Save(const RunRecord& run, const AlsoSave& also) {
-  // A file deleted or replaced since it was opened: SQLite in WAL mode would
-  // write the run into the unlinked file, and it would be gone.
+void Recorder::RequireInPlace(const std::string& what) const {
   int moved = 0;
   if (sqlite3_file_control(db_, "main", SQLITE_FCNTL_HAS_MOVED, &moved) == SQLITE_OK &&
       moved != 0) {
-    FailWith(path_, "cannot save the run: the file was deleted or replaced since it was opened");
+    FailWith(path_, "cannot " + what + ": the file was deleted or replaced since it was opened");
   }
+}
+
+int64_t Recorder::Save(const RunRecord& run, const AlsoSave& also) {
+  RequireInPlace("save the run");
   Transaction txn(path_, db_, "BEGIN IMMEDIATE");
 
   Stmt insert_run = Prepare(path_, db_, kInsertRun, "cannot prepare run insert");
