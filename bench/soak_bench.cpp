@@ -1,8 +1,11 @@
 #include "soak_bench.hpp"
 
+#include <arpa/inet.h>
 #include <httplib.h>
+#include <netinet/in.h>
 #include <signal.h>
 #include <sqlite3.h>
+#include <sys/socket.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -50,6 +53,21 @@ constexpr int kStudyFailuresAllowed = 3;
 enum class Kind { kStudy, kRun, kReader };
 constexpr const char* kKindNames[] = {"study", "run", "reader"};
 const char* Name(Kind k) { return kKindNames[static_cast<int>(k)]; }
+
+/// A loopback TCP port nothing listens on now (the kernel's choice): the
+/// console's, kept across the study's restarts.
+int FreePort() {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in at{};
+  at.sin_family = AF_INET;
+  at.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t size = sizeof at;
+  const bool ok = fd >= 0 && bind(fd, reinterpret_cast<sockaddr*>(&at), sizeof at) == 0 &&
+                  getsockname(fd, reinterpret_cast<sockaddr*>(&at), &size) == 0;
+  if (fd >= 0) close(fd);
+  if (!ok) throw std::runtime_error("no free loopback port for the console");
+  return ntohs(at.sin_port);
+}
 
 std::unique_ptr<ChildProcess> Start(const std::string& program,
                                     const std::vector<std::string>& words) {
@@ -267,7 +285,7 @@ int BenchSoakMain(int argc, const char* const* argv) {
   bool json = false, smoke = false;
   double duration_s = 600.0, kill_min_s = 5.0, kill_max_s = 15.0;
   uint32_t seed = 1;
-  int port = 18000 + static_cast<int>(getpid() % 2000);
+  int port = 0;
   int domain = 150 + static_cast<int>(getpid() % 30);
   try {
     const Args args(argc, argv, {"duration", "kill-every", "seed", "port", "domain"},
@@ -294,7 +312,7 @@ int BenchSoakMain(int argc, const char* const* argv) {
       }
     }
     seed = static_cast<uint32_t>(args.Int("seed", 0, 1 << 30).value_or(1));
-    port = args.Int("port", 1024, 65535).value_or(port);
+    port = args.Int("port", 1024, 65535).value_or(FreePort());
     domain = args.Int("domain", 0, 232).value_or(domain);
     if (!fs::exists(kSqliteTool)) {
       throw UsageError(std::string("the sqlite3 tool is not at ") + kSqliteTool +

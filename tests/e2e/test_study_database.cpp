@@ -12,9 +12,13 @@
 //
 // Behaviour only: the waits are generous bounds so a fault fails the test
 // instead of hanging it.
+#include <arpa/inet.h>
+#include <netinet/in.h>
 #include <signal.h>
 #include <sqlite3.h>
 #include <sys/resource.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include <catch2/catch.hpp>
 #include <filesystem>
@@ -35,6 +39,20 @@ namespace fs = std::filesystem;
 namespace {
 
 std::string Bin(const std::string& name) { return (test::BinDir() / name).string(); }
+
+/// A loopback TCP port nothing listens on now (the kernel's choice).
+int FreePort() {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in at{};
+  at.sin_family = AF_INET;
+  at.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t size = sizeof at;
+  const bool ok = fd >= 0 && bind(fd, reinterpret_cast<sockaddr*>(&at), sizeof at) == 0 &&
+                  getsockname(fd, reinterpret_cast<sockaddr*>(&at), &size) == 0;
+  if (fd >= 0) close(fd);
+  if (!ok) throw std::runtime_error("no free loopback port");
+  return ntohs(at.sin_port);
+}
 
 /// A read-only connection of the test's own, closed when it goes.
 class Db {
@@ -107,7 +125,7 @@ TEST_CASE(
                          "practice: false\n"
                          "trial_cap_s: 12\n";
   const auto db = dir / "shared.db";
-  const int port = 20000 + static_cast<int>((getpid() + 7) % 20000);
+  const int port = FreePort();
   Child study({Bin("haptel"), "study", "run", file.string(), "--database", db.string(), "--domain",
                std::to_string(test::UniqueDomain(61)), "--port", std::to_string(port)});
   test::ConsoleClient console("127.0.0.1", port);
