@@ -379,7 +379,8 @@ SessionSetup RunSetupFromArgs(const Args& args) {
 }
 
 RecordedRun RunAndRecord(const SessionSetup& setup, Recorder& recorder,
-                         const std::atomic<bool>& interrupted, const Recorder::AlsoSave& also) {
+                         const std::atomic<bool>& interrupted, const Recorder::AlsoSave& also,
+                         const std::optional<record::TrialOfRun>& trial) {
   RecordedRun run;
   run.result = RunSession(setup, interrupted);
   // Saved, or — when the database fails at the end — kept in a file beside it.
@@ -387,8 +388,9 @@ RecordedRun RunAndRecord(const SessionSetup& setup, Recorder& recorder,
     run.run_id = recorder.Save(run.result.record, also);
     run.result.record.id = run.run_id;
   } catch (const std::exception& e) {
+    run.save_error = e.what();
     try {
-      run.unsaved = record::WriteUnsavedRun(run.result.record, setup.run.database, WallNs());
+      run.unsaved = record::WriteUnsavedRun(run.result.record, setup.run.database, WallNs(), trial);
       std::fprintf(stderr, "haptel: run not recorded: %s; its results are in %s\n", e.what(),
                    run.unsaved.c_str());
     } catch (const std::exception& e2) {

@@ -398,6 +398,26 @@ TEST_CASE("bench fuzz --smoke", "[bench][smoke]") {
   RequireFiles({"fuzz.csv"});
 }
 
+TEST_CASE("bench soak --smoke: one kill of each kind, each followed by its checks; nothing lost", "[bench][smoke]") {
+  const JsonValue j = Smoke("soak", {"--domain", std::to_string(haptel::test::UniqueDomain(85))}).json;
+  for (const char* kind : {"study", "run", "reader"}) {
+    INFO(kind);
+    CHECK(j["kills"][kind].number() >= 1);
+  }
+  // A check after every kill, and one at the end; every one passed.
+  CHECK(j["integrity_checks"].number() == j["kills_total"].number() + 1);
+  CHECK(j["integrity_passed"].number() == j["integrity_checks"].number());
+  CHECK(j["study_resumes"].number() >= 1);
+  // Rows of each kind acknowledged, and every one found.
+  CHECK(j["rows_acknowledged_by_kind"]["participants"].number() > 0);
+  CHECK(j["rows_acknowledged_by_kind"]["runs"].number() > 0);
+  CHECK(j["rows_found"].number() == j["rows_acknowledged"].number());
+  CHECK(j["rows_lost"].number() == 0);
+  CHECK(j["checks_missing_rows"].number() == 0);
+  CHECK(j["ok"].boolean());
+  RequireFiles({"soak.csv"});
+}
+
 TEST_CASE("bench video --smoke", "[bench][smoke][network]") {
   const JsonValue j = Smoke("video").json;
   const auto& codecs = j["codecs"].array();
@@ -460,5 +480,5 @@ TEST_CASE("haptel bench NAME --smoke through the haptel program; every usage lin
     ++benches;
     CHECK_THAT(line, Catch::Contains("[--smoke]"));
   }
-  CHECK(benches == 12);
+  CHECK(benches == 13);
 }
