@@ -83,7 +83,7 @@ TEST_CASE("a real-time run attached to a robot in this process drives it and is 
 
 TEST_CASE("a fleet of two robots in this process: both driven in turn, each recorded",
           "[threads]") {
-  const int domain = test::UniqueDomain();
+  const int domain = test::UniqueDomain(1);  // not the run's above
   const fs::path dir = test::ScratchDir("session-threads-fleet");
   // Turned every 2 s: a few handovers in the run.
   const fs::path fleet = test::WriteFile(
