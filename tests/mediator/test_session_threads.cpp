@@ -85,22 +85,21 @@ TEST_CASE("a fleet of two robots in this process: both driven in turn, each reco
           "[threads]") {
   const int domain = test::UniqueDomain(1);  // not the run's above
   const fs::path dir = test::ScratchDir("session-threads-fleet");
-  // Turned every 2 s: a few handovers in the run.
-  const fs::path fleet = test::WriteFile(
-      dir / "fleet.yaml",
-      "name: two-robots\nslice_s: 2\nvehicles:\n"
-      "  - {name: robot-a, vehicle: " +
-          fs::absolute("config/vehicles/sim-robot.yaml").string() +
-          ", world: " + fs::absolute("config/tracks/test-short.yaml").string() +
-          "}\n"
-          "  - {name: robot-b, vehicle: " +
-          fs::absolute("config/vehicles/sim-robot.yaml").string() +
-          ", world: " + fs::absolute("config/tracks/test-short.yaml").string() + "}\n");
+  // Turned every 2 s: a few handovers in the run. robot-b is driven through
+  // the cockpit, so each turn to it and away from it also starts and stops
+  // its physics thread while the servo loop runs.
+  const std::string robot = fs::absolute("config/vehicles/sim-robot.yaml").string();
+  const std::string track = fs::absolute("config/tracks/test-short.yaml").string();
+  const fs::path fleet = test::WriteFile(dir / "fleet.yaml",
+                                         "name: two-robots\nslice_s: 2\nvehicles:\n"
+                                         "  - {name: robot-a, vehicle: " + robot + ", world: " + track + "}\n"
+                                         "  - {name: robot-b, vehicle: " + robot + ", world: " + track +
+                                             ", interface: cockpit}\n");
   const std::unique_ptr<vehicles::Node> a = StartRobot("robot-a", domain);
   const std::unique_ptr<vehicles::Node> b = StartRobot("robot-b", domain);
   const fs::path database = dir / "runs.db";
   const std::vector<std::string> words =
-      AttachedRun(domain, database, {"--fleet", fleet.string(), "--time-limit", "15"});
+      AttachedRun(domain, database, {"--fleet", fleet.string(), "--time-limit", "20"});
   const std::vector<const char*> argv = Argv(words);
   const std::atomic<bool> interrupted{false};
   mediator::RunFleetCommand(static_cast<int>(argv.size()), argv.data(), interrupted);
@@ -113,6 +112,7 @@ TEST_CASE("a fleet of two robots in this process: both driven in turn, each reco
   for (const record::RunRecord& row : rows) {
     INFO(row.vehicle << ": " << row.outcome);
     CHECK(row.distance_m > 0.0);
+    if (row.vehicle == "robot-b") CHECK(row.physics_rate_hz > 0.0);  // its cockpit's physics ran
     CHECK(row.outcome != "refused");
     CHECK(row.outcome != "vehicle lost");
   }
