@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "haptel/config/check.hpp"
+#include "haptel/config/paths.hpp"
 
 namespace haptel::config_detail {
 namespace {
@@ -22,13 +23,8 @@ std::string Megabytes(std::uintmax_t bytes) {
 }  // namespace
 
 void CheckRegularFile(const std::filesystem::path& file, const std::string& expected) {
-  std::error_code ec;
-  const std::filesystem::file_status status = std::filesystem::status(file, ec);
-  if (ec || !std::filesystem::exists(status)) return;  // opening it says what is wrong
-  if (std::filesystem::is_directory(status)) throw ConfigError(file.string() + ": is a folder; expected " + expected);
-  // A FIFO, a device or a socket: opening one may wait forever for a writer.
-  if (!std::filesystem::is_regular_file(status)) {
-    throw ConfigError(file.string() + ": is not a regular file (a FIFO, a device or a socket); expected " + expected);
+  if (const std::string what = NotRegularFile(file); !what.empty()) {
+    throw ConfigError(file.string() + ": is " + what + "; expected " + expected);
   }
 }
 

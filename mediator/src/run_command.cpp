@@ -208,8 +208,15 @@ SessionSetup RunSetupFromArgs(const Args& args) {
   if (auto server = args.Value("discovery-server")) setup.run.link.discovery_server = ServerOption(*server);
   // Before anything is spawned: a missing identity or an expired certificate is one line.
   if (!setup.run.link.security.empty()) link::CheckSecurity(setup.run.link.security, link::OperatorIdentity());
-  if (auto db = args.Value("database")) setup.run.database = *db;
-  if (auto trace = args.Value("trace")) setup.trace = *trace;
+  // Each file option before anything opens it: a FIFO would be waited on for ever, deaf to signals.
+  if (auto db = args.Value("database")) {
+    CheckFileOption("database", *db, "an SQLite file (new or a Haptel database)");
+    setup.run.database = *db;
+  }
+  if (auto trace = args.Value("trace")) {
+    CheckFileOption("trace", *trace, "a file name for the device's trace, such as arms.trace");
+    setup.trace = *trace;
+  }
   if (auto s = args.Number("vehicle-timeout", 0.05, 60.0)) setup.run.vehicle_timeout_s = *s;
   const bool display = view::View::DisplayAvailable();
   // A simulated-time run is the automatic operator's, without a view, unless told otherwise (then refused).
@@ -234,9 +241,7 @@ SessionSetup RunSetupFromArgs(const Args& args) {
     // Before anything is spawned: a recording that cannot be written is an error now, not after the lap.
     const std::filesystem::path file = *record;
     const std::filesystem::path folder = file.parent_path().empty() ? "." : file.parent_path();
-    if (std::filesystem::is_directory(file)) {
-      throw UsageError("option --record: '" + file.string() + "' is a folder; expected a file name such as run.mp4");
-    }
+    CheckFileOption("record", file, "a file name such as run.mp4");
     if (!std::filesystem::is_directory(folder)) {
       throw UsageError("option --record: the folder '" + folder.string() + "' does not exist; expected a file in a "
                        "folder that does");
@@ -291,11 +296,17 @@ SessionSetup RunSetupFromArgs(const Args& args) {
     if (setup.device.driver != "replay") {
       throw UsageError("option --trace-in: the device '" + setup.run.device.string() + "' is not a replay device");
     }
-  setup.device.replay.trace = *trace_in;
+    CheckFileOption("trace-in", *trace_in, "a trace `haptel run --trace FILE` recorded");
+    setup.device.replay.trace = *trace_in;
   }
   if (setup.device.driver == "replay" && !std::filesystem::exists(setup.device.replay.trace)) {
     throw ConfigError(setup.run.device.string() + ": key 'replay.trace': no trace '" +
                     setup.device.replay.trace.string() + "'; record one with `haptel run --trace FILE`");
+  }
+  if (const std::string what = NotRegularFile(setup.device.replay.trace);
+      setup.device.driver == "replay" && !what.empty()) {
+    throw ConfigError(setup.run.device.string() + ": key 'replay.trace': '" + setup.device.replay.trace.string() +
+                      "' is " + what + "; expected a trace `haptel run --trace FILE` recorded");
   }
   if (!person && setup.device.driver != "sim") {
     throw UsageError("option --operator auto: the automatic operator moves the simulated arms, and device '" +

@@ -5,6 +5,7 @@
 #include <thread>
 #include <cstdlib>
 #include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -207,6 +208,34 @@ TEST_CASE("when commands stop, the vehicle's watchdog stops its motors") {
   // SIGTERM: a clean exit.
   kill(vehicle.pid(), SIGTERM);
   CHECK(vehicle.Wait(20.0) == 0);
+}
+
+TEST_CASE("a FIFO named by a file option is refused at once, exit 2, nothing spawned (it hung, deaf to signals)") {
+  const auto dir = test::ScratchDir("e2e-fifo");
+  const auto fifo = dir / "pipe";
+  REQUIRE(mkfifo(fifo.c_str(), 0600) == 0);
+  // Each waits at most a minute: one that hangs is still running then (the
+  // child is killed when it goes out of scope), and fails the case.
+  const std::vector<std::pair<std::string, std::vector<std::string>>> cases = {
+      {"record", {Bin("haptel"), "run", "--view", "none", "--record", fifo.string()}},
+      {"trace", {Bin("haptel"), "run", "--view", "none", "--trace", fifo.string()}},
+      {"trace-in", {Bin("haptel"), "run", "--view", "none", "--operator", "person", "--device",
+                    "config/devices/replay.yaml", "--trace-in", fifo.string()}},
+      {"database", {Bin("haptel"), "run", "--view", "none", "--database", fifo.string()}},
+  };
+  std::vector<std::vector<std::string>> argvs;
+  for (const auto& c : cases) argvs.push_back(c.second);
+  auto children = test::StartAll(argvs);
+  for (size_t i = 0; i < cases.size(); ++i) {
+    Child& c = *children[i];
+    const int code = c.Wait(60.0);
+    INFO("--" << cases[i].first << ": " << c.ExitDescription() << "; stderr:\n" << c.err());
+    CHECK(code == 2);
+    CHECK(c.err().find("option --" + cases[i].first + ": '" + fifo.string() +
+                       "' is not a regular file (a FIFO, a device or a socket)") != std::string::npos);
+    CHECK(c.err().find("started, pid") == std::string::npos);  // nothing spawned
+    CHECK(std::count(c.err().begin(), c.err().end(), '\n') == 1);
+  }
 }
 
 TEST_CASE("bad options and bad config files exit 2 with a one-line error naming the problem") {
