@@ -93,11 +93,12 @@ struct NumberWithUnit {
 };
 NumberWithUnit SplitNumber(const std::string& value) {
   NumberWithUnit out;
-  size_t used = 0;
+  // Plain decimals only: strtod would read "0x10ms" as 16 ms and "infms" as ever.
+  size_t used = DecimalPrefix(value);
   try {
-    out.number = std::stod(value, &used);
+    if (used > 0) out.number = std::stod(value.substr(0, used));
   } catch (const std::exception&) {
-    used = 0;
+    used = 0;  // out of a double's range
   }
   out.parsed = used > 0;
   out.unit = value.substr(used);
@@ -150,10 +151,16 @@ LinkFault ParseLinkFault(const std::string& text, const LinkFault& base) {
   fault.enabled = true;
   if (text == "on") return fault;
   bool queue_given = false;
+  std::vector<std::string> seen;
   for (const std::string& part : SplitList(text)) {
     const size_t eq = part.find('=');
     const std::string key = part.substr(0, eq);
     const std::string value = eq == std::string::npos ? "" : part.substr(eq + 1);
+    // Twice is a typo or a paste, never a wish for the last one.
+    if (std::find(seen.begin(), seen.end(), key) != seen.end()) {
+      throw std::invalid_argument("each key once ('" + key + "' given twice in '" + text + "')");
+    }
+    seen.push_back(key);
     if (key == "delay" && eq != std::string::npos) {
       fault.delay_s = ParseDuration(part, value);
     } else if (key == "jitter" && eq != std::string::npos) {
@@ -220,6 +227,7 @@ LinkFault LoadLinkProfile(const std::string& name_or_file) {
   LinkFault fault;
   fault.enabled = true;
   for (const char* key : {"rate", "queue", "delay", "jitter", "loss"}) {
+    root.Allow(key);  // an unknown key's error lists them all
     if (!root.Has(key)) continue;
     const std::string value = root.RequireString(key);
     try {

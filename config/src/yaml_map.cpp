@@ -4,6 +4,7 @@
 #include <cmath>
 #include <iomanip>
 #include <limits>
+#include <map>
 #include <sstream>
 
 #include "haptel/config/check.hpp"
@@ -27,6 +28,37 @@ void CheckRegularFile(const std::filesystem::path& file, const std::string& expe
     throw ConfigError(file.string() + ": is " + what + "; expected " + expected);
   }
 }
+
+namespace {
+
+/// yaml-cpp keeps a key given twice and a lookup finds the first: the second,
+/// the one edited last, would be ignored without a word. Refused anywhere in
+/// the file, at the second, naming the first's line.
+void CheckNoDuplicateKeys(const YAML::Node& node, const std::string& file, const std::string& path) {
+  if (node.IsSequence()) {
+    for (size_t i = 0; i < node.size(); ++i) {
+      CheckNoDuplicateKeys(node[i], file, path + "[" + std::to_string(i) + "]");
+    }
+    return;
+  }
+  if (!node.IsMap()) return;
+  std::map<std::string, YAML::Mark> seen;
+  for (const auto& entry : node) {
+    if (!entry.first.IsScalar()) continue;  // Finish names a key that is not plain
+    const std::string& key = entry.first.Scalar();
+    const std::string at = path.empty() ? key : path + "." + key;
+    if (const auto first = seen.find(key); first != seen.end()) {
+      const YAML::Mark m = entry.first.Mark();
+      throw ConfigError(file + ":" + std::to_string(m.line + 1) + ":" + std::to_string(m.column + 1) + ": key '" +
+                        at + "': given twice (first at line " + std::to_string(first->second.line + 1) +
+                        "); expected each key once");
+    }
+    seen.emplace(key, entry.first.Mark());
+    CheckNoDuplicateKeys(entry.second, file, at);
+  }
+}
+
+}  // namespace
 
 YamlMap YamlMap::Load(const std::filesystem::path& file, std::uintmax_t max_bytes) {
   CheckRegularFile(file, "a YAML file");
@@ -53,6 +85,7 @@ YamlMap YamlMap::Load(const std::filesystem::path& file, std::uintmax_t max_byte
   if (!root.IsMap()) {
     throw ConfigError(file.string() + ": expected a mapping of keys at the top level");
   }
+  CheckNoDuplicateKeys(root, file.string(), "");
   return YamlMap(root, file.string(), "");
 }
 
