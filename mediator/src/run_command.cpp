@@ -172,9 +172,29 @@ namespace {
 /// anything runs, naming the gate and both widths.
 void CheckGatesFit(const TrackConfig& track, const VehicleConfig& vehicle) {
   const double across = 2.0 * vehicle.body.radius;
+  const Track placed(track);
   for (size_t i = 0; i < track.gates.size(); ++i) {
     const GateSpec& gate = track.gates[i];
     const double opening = gate.width - 2.0 * track.post_radius;
+    // An obstacle in the opening (a post in the gate) leaves what is beside it.
+    std::vector<size_t> blocking;
+    if (const double free = GateFreeWidth(placed, i, &blocking); opening >= across && !blocking.empty() && free <= across) {
+      std::string names;
+      for (size_t k : blocking) {
+        char one[160];
+        std::snprintf(one, sizeof one, "%sobstacles[%zu] (radius %.3f m at [%.2f, %.2f])", names.empty() ? "" : ", ",
+                      k, track.obstacles[k].radius, track.obstacles[k].center.x(), track.obstacles[k].center.y());
+        names += one;
+      }
+      char text[600];
+      std::snprintf(text, sizeof text,
+                    ": key 'gates[%zu]': the gate at %.2f m is blocked by %s: its widest free gap is %.3f m, not "
+                    "wider than vehicle '%s' (%.3f m across, body.radius in %s); expected the obstacle out of the "
+                    "gate's opening, or a gap wider than %.3f m",
+                    i, gate.along, names.c_str(), free, vehicle.name.c_str(), across, vehicle.file.string().c_str(),
+                    across);
+      throw ConfigError(track.file.string() + text);
+    }
     if (opening >= across) continue;
     char text[400];
     std::snprintf(text, sizeof text,

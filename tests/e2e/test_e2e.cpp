@@ -277,6 +277,26 @@ TEST_CASE("bad options and bad config files exit 2 with a one-line error naming 
     CHECK(std::count(c.err().begin(), c.err().end(), '\n') == 1);
   }
   {
+    // A post inside a gate's opening: 0.12 m across in a 0.34 m gate leaves
+    // two gaps of 0.08 m, and the lap ran to its cap (issue 41).
+    const auto blocked = dir / "blocked-gate.yaml";
+    test::WriteFile(blocked, "name: blocked\ncorridor_width: 0.6\npost_radius: 0.03\n"
+                             "centerline: [[0,0],[0.45,0],[0.7,0.25],[0.7,0.55],[0.45,0.8],[0,0.8],[-0.25,0.55],"
+                             "[-0.25,0.25]]\n"
+                             "gates: [{along: 0.2, width: 0.34}]\n"
+                             "obstacles: [{center: [0.5, 0.7], radius: 0.05}, {center: [0.2, 0.0], radius: 0.06}]\n");
+    Child c({Bin("haptel"), "run", "--track", blocked.string()});
+    CHECK(c.Wait(30.0) == 2);
+    INFO("stderr:\n" << c.err());
+    CHECK(c.err().find("blocked-gate.yaml: key 'gates[0]'") != std::string::npos);
+    CHECK(c.err().find("obstacles[1] (radius 0.060 m at [0.20, 0.00])") != std::string::npos);
+    CHECK(c.err().find("obstacles[0]") == std::string::npos);  // not in the gate
+    CHECK(c.err().find("widest free gap is 0.080 m") != std::string::npos);
+    CHECK(c.err().find("0.220 m across") != std::string::npos);
+    CHECK(c.err().find("started, pid") == std::string::npos);  // nothing spawned
+    CHECK(std::count(c.err().begin(), c.err().end(), '\n') == 1);
+  }
+  {
     // A recording that could not be written is refused before anything is spawned.
     Child folder({Bin("haptel"), "run", "--record", dir.string()});
     CHECK(folder.Wait(30.0) == 2);
