@@ -346,3 +346,19 @@ TEST_CASE("bad options and bad config files exit 2 with a one-line error naming 
     CHECK(std::count(c.err().begin(), c.err().end(), '\n') == 1);
   }
 }
+
+TEST_CASE("security init: a folder holding identities is refused with one line, exit 2, nothing changed (issue 41)") {
+  const auto dir = test::ScratchDir("e2e-security-init");
+  test::WriteFile(dir / "ca.pem", "mine");
+  test::WriteFile(dir / "notes.txt", "mine");
+  Child held({Bin("haptel"), "security", "init", (dir / "").string()});
+  CHECK(held.Wait(60.0) == 2);
+  INFO("stderr:\n" << held.err());
+  CHECK(held.err().find("already holds a CA (ca.pem): nothing was changed") != std::string::npos);
+  CHECK(std::count(held.err().begin(), held.err().end(), '\n') == 1);
+  std::filesystem::remove(dir / "ca.pem");
+  Child other({Bin("haptel"), "security", "init", dir.string()});
+  CHECK(other.Wait(60.0) == 2);
+  CHECK(other.err().find("already holds other files: nothing was changed") != std::string::npos);
+  CHECK(std::filesystem::file_size(dir / "notes.txt") == 4);
+}
