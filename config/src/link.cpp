@@ -254,6 +254,33 @@ LinkFault LinkFaultFromOptions(const std::optional<std::string>& profile, const 
   return fault ? ParseLinkFaultOption(*fault, base) : base;
 }
 
+std::string LinkFaultProblem(const LinkFault& fault, double state_rate_hz, double vehicle_timeout_s) {
+  if (!fault.enabled) return "";
+  char text[400];
+  // States in one time-out window, each dropped with probability `loss`: the
+  // window passes empty with loss^n, and there are 60 / timeout a minute.
+  const double per_window = std::max(1.0, std::floor(state_rate_hz * vehicle_timeout_s));
+  const double empty_per_minute = std::pow(fault.loss, per_window) * 60.0 / vehicle_timeout_s;
+  if (fault.loss > 0.0 && empty_per_minute >= 1.0) {
+    const double max_loss = std::pow(vehicle_timeout_s / 60.0, 1.0 / per_window);
+    std::snprintf(text, sizeof text,
+                  "a loss of %.0f%% drops all %.0f states of a %.2f-s vehicle time-out (%.0f Hz) about %.0f times a "
+                  "minute: the vehicle would be declared lost though it runs; expected a loss under %.0f%% (or a "
+                  "longer --vehicle-timeout)",
+                  fault.loss * 100.0, per_window, vehicle_timeout_s, state_rate_hz, empty_per_minute,
+                  std::floor(max_loss * 100.0));
+    return text;
+  }
+  if (fault.jitter_s >= vehicle_timeout_s) {
+    std::snprintf(text, sizeof text,
+                  "a jitter of %.3g s holds a state back as long as the %.2f-s vehicle time-out: the vehicle would be "
+                  "declared lost though it runs; expected a jitter under %.2f s (or a longer --vehicle-timeout)",
+                  fault.jitter_s, vehicle_timeout_s, vehicle_timeout_s);
+    return text;
+  }
+  return "";
+}
+
 std::vector<std::string> ParseAddressOption(const std::string& option, const std::string& text) {
   const std::vector<std::string> out = SplitList(text);
   for (const std::string& address : out) {

@@ -278,6 +278,12 @@ SessionSetup RunSetupFromArgs(const Args& args) {
   if (auto device = args.Value("device")) setup.run.device = *device;
   if (auto vehicle = args.Value("vehicle")) setup.run.vehicle = *vehicle;
   setup.vehicle = LoadVehicle(setup.run.vehicle);
+  // A fault nothing can be driven through is said now, not as "did not start" or "lost" once the vehicle runs.
+  if (const std::string problem =
+          LinkFaultProblem(setup.run.link.fault, setup.vehicle.state_rate_hz, setup.run.vehicle_timeout_s);
+      !problem.empty()) {
+    throw UsageError("link faults " + LinkFaultText(setup.run.link.fault) + ": " + problem);
+  }
   if (args.Flag("third-person")) {
     // The chase camera draws the track the operator side hands the vehicle:
     // for any other vehicle it would draw a guess.

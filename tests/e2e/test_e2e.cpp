@@ -297,6 +297,21 @@ TEST_CASE("bad options and bad config files exit 2 with a one-line error naming 
     CHECK(std::count(c.err().begin(), c.err().end(), '\n') == 1);
   }
   {
+    // A fault nothing crosses said "vehicle did not start" though it had (issue 41): said at once instead.
+    auto children = test::StartAll({{Bin("haptel"), "run", "--view", "none", "--link-fault", "loss=95%"},
+                                    {Bin("haptel"), "run", "--view", "none", "--link-fault", "jitter=1s"}});
+    for (auto& c : children) {
+      CHECK(c->Wait(60.0) == 2);
+      INFO("stderr:\n" << c->err());
+      CHECK(c->err().find("link faults ") != std::string::npos);
+      CHECK(c->err().find("the vehicle would be declared lost though it runs") != std::string::npos);
+      CHECK(c->err().find("did not start") == std::string::npos);
+      CHECK(c->err().find("started, pid") == std::string::npos);  // nothing spawned
+    }
+    CHECK(children[0]->err().find("a loss of 95%") != std::string::npos);
+    CHECK(children[1]->err().find("a jitter of 1 s") != std::string::npos);
+  }
+  {
     // A recording that could not be written is refused before anything is spawned.
     Child folder({Bin("haptel"), "run", "--record", dir.string()});
     CHECK(folder.Wait(30.0) == 2);
