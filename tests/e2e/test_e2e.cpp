@@ -222,6 +222,7 @@ TEST_CASE("a FIFO named by a file option is refused at once, exit 2, nothing spa
       {"trace-in", {Bin("haptel"), "run", "--view", "none", "--operator", "person", "--device",
                     "config/devices/replay.yaml", "--trace-in", fifo.string()}},
       {"database", {Bin("haptel"), "run", "--view", "none", "--database", fifo.string()}},
+      {"grid-out", {Bin("haptel"), "bench", "gravity", "--smoke", "--grid-out", fifo.string()}},
   };
   std::vector<std::vector<std::string>> argvs;
   for (const auto& c : cases) argvs.push_back(c.second);
