@@ -20,6 +20,7 @@
 #include "link_bench.hpp"
 #include "view_bench.hpp"
 #include "fleet_bench.hpp"
+#include "soak_bench.hpp"
 
 using namespace haptel::bench;
 
@@ -58,6 +59,9 @@ constexpr Usage kUsage[] = {
      "every parser fed 10^6 mutated inputs: configs, scenes, UDP, servo bytes, CAN, DDS samples, console HTTP"},
     {"fleet", "[--fleet FILE] [--counts LIST] [--slice S] [--time-limit S] [--device FILE] [--domain D] [--smoke] [--json]",
      "one operator, 1..N vehicles: handover p50/p95, operator CPU per vehicle, the servo loop against the bare loop"},
+    {"soak", "[--duration S] [--kill-every MIN,MAX] [--seed N] [--port N] [--domain D] [--smoke] [--json]",
+     "the study database under concurrency: a study with its console, two runs, the sqlite3 tool, random kill -9s; "
+     "integrity after every kill, every acknowledged row found"},
 };
 
 using BenchMain = int (*)(int argc, const char* const* argv);
@@ -71,6 +75,7 @@ constexpr Bench kBenches[] = {
     {"blimp", BenchBlimpMain},         {"link", BenchLinkMain},
     {"fuzz", BenchFuzzMain},           {"passivity", BenchPassivityMain},
     {"video", BenchVideoMain},         {"fleet", BenchFleetMain},
+    {"soak", BenchSoakMain},
 };
 
 std::string UsageText(const std::string& only) {

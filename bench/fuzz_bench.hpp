@@ -38,6 +38,10 @@ struct FuzzResult {
   uint64_t rejected = 0;   ///< a clear error (an exception, a status, a dropped frame)
   double seconds = 0.0;
   double slowest_ms = 0.0;  ///< the slowest single input
+  /// The console only: the slowest of a few page requests (GET /) made while
+  /// 100 slow connections (40 from the same address, 60 from 20 others)
+  /// dribble partial requests or send nothing; negative for other targets.
+  double page_under_slow_clients_ms = -1.0;
 };
 
 /// The target names, in order.

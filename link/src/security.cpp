@@ -587,4 +587,34 @@ void InitSecurity(const fs::path& given, const std::vector<std::string>& vehicle
   }
 }
 
+namespace {
+/// A dotted IPv4 address in 127.0.0.0/8.
+bool IsLoopback(const std::string& address) {
+  in_addr a{};
+  return inet_pton(AF_INET, address.c_str(), &a) == 1 && (ntohl(a.s_addr) >> 24) == 127;
+}
+}  // namespace
+
+std::string LinkBeyondHost(const LinkConfig& config) {
+  for (const std::string& a : config.interfaces) {
+    if (!IsLoopback(a)) return "interface " + a;
+  }
+  for (const std::string& a : config.peers) {
+    if (!IsLoopback(a)) return "peer " + a;
+  }
+  const std::string& server = config.discovery_server;
+  if (!server.empty() && !IsLoopback(server.substr(0, server.find(':')))) return "discovery server " + server;
+  return "";
+}
+
+std::string InsecureLinkWarning(const LinkConfig& config, bool insecure) {
+  if (insecure || !config.security.empty()) return "";
+  const std::string beyond = LinkBeyondHost(config);
+  if (beyond.empty()) return "";
+  return "the link reaches beyond this host (" + beyond +
+         ") without DDS Security: a vehicle obeys one run's DDS writer at a time, which guards against "
+         "mistakes, not attackers (anyone on the network can join the domain and forge a writer); "
+         "--security DIR (haptel security init) keeps them off, --insecure silences this";
+}
+
 }  // namespace haptel::link

@@ -16,6 +16,7 @@
 #include "haptel/core/json.hpp"
 #include "haptel/core/log.hpp"
 #include "haptel/core/stop_signals.hpp"
+#include "haptel/link/security.hpp"
 #include "haptel/mediator/fleet.hpp"
 #include "haptel/mediator/run_command.hpp"
 #include "haptel/record/run_picture.hpp"
@@ -208,6 +209,7 @@ void PrintFleetSummary(std::FILE* out, const FleetSetup& setup, const FleetResul
 
 int RunFleetCommand(int argc, const char* const* argv, const std::atomic<bool>& interrupted) {
   bool json = false;
+  bool insecure = false;
   const FleetSetup setup = cli::ReadInput([&] {
     const Args args = ParseRunArgs(argc, argv);
     if (!args.positional().empty()) {
@@ -218,8 +220,16 @@ int RunFleetCommand(int argc, const char* const* argv, const std::atomic<bool>& 
                        "simulated time steps one simulated robot in this process (drop --fleet)");
     }
     json = args.Flag("json");
+    insecure = args.Flag("insecure");
     return FleetSetupFromArgs(argc, argv, args);
   });
+  // Once for the fleet, for the first vehicle whose link reaches beyond the host.
+  for (const SessionSetup& vehicle : setup.vehicles) {
+    if (const std::string warning = link::InsecureLinkWarning(vehicle.run.link, insecure); !warning.empty()) {
+      log::Warn(warning);
+      break;
+    }
+  }
   auto recorder = cli::ReadInput([&] { return std::make_unique<Recorder>(setup.vehicles.at(0).run.database); });
   FleetResult fleet = RunFleet(setup, interrupted);
   std::vector<int64_t> ids;

@@ -224,8 +224,8 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
   const double cpu0_s = ProcessCpuS();
   for (auto& m : members) {
     m->health = std::make_unique<VehicleHealth>(m->setup.vehicle.name, run.link.domain_id, m->link->session(),
-                                                run.vehicle_timeout_s, VehicleHealth::kStartupTimeout_s,
-                                                m->link->pid());
+                                                m->link->command_writer(), run.vehicle_timeout_s,
+                                                VehicleHealth::kStartupTimeout_s, m->link->pid());
     m->trace = std::make_unique<RunTrace>(m->out.result.record);
     m->out.result.record.path.reserve(16384);
     m->watch = std::make_unique<LoopWatch>(haptic, m->family->physics(), *m->link,
@@ -369,7 +369,8 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
         end = m.health->CheckStates(*m.link, now, t);
       }
       if (!end) continue;
-      if (end->outcome == Outcome::kConflict || end->outcome == Outcome::kRefused) {
+      if (end->outcome == Outcome::kConflict || end->outcome == Outcome::kRefused ||
+          end->outcome == Outcome::kLostControl) {
         // Not ours to drive: the whole fleet ends, as a single run would.
         end->message = "vehicle '" + m.setup.vehicle.name + "': " + end->message;
         fleet_end = std::move(end);

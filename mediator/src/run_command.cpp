@@ -87,6 +87,9 @@ constexpr const char* kRunUsage =
     "  --dds-peers LIST     the vehicles' hosts, for unicast discovery (overrides link.peers)\n"
     "  --discovery-server ADDR:PORT  meet the vehicle through a Fast DDS discovery server\n"
     "                       (haptel discovery-server; the spawned vehicle uses it too)\n"
+    "  --insecure           say nothing of a link beyond this host without --security (a\n"
+    "                       vehicle's owner is then bound to DDS's writer identity: proof\n"
+    "                       against mistakes, not attackers)\n"
     "  --database FILE      SQLite file for the results (overrides 'database')\n"
     "  --vehicle-timeout S  no vehicle state for S seconds: vehicle lost\n"
     "  --trace FILE         record the haptic device's readings (for the replay driver)\n"
@@ -162,7 +165,7 @@ Args ParseRunArgs(int argc, const char* const* argv) {
                "trace", "operator", "device", "trace-in", "time-limit", "lap-limit", "view", "record", "vehicle",
                "predict", "link-fault", "link-profile", "security", "dds-interfaces", "dds-peers", "discovery-server",
                "fleet"},
-              {"json", "quiet", "attach", "third-person", "simulated-time"});
+              {"json", "quiet", "attach", "third-person", "simulated-time", "insecure"});
 }
 
 namespace {
@@ -413,7 +416,8 @@ SessionSetup RunSetupFromArgs(const Args& args) {
 }
 
 RecordedRun RunAndRecord(const SessionSetup& setup, Recorder& recorder,
-                         const std::atomic<bool>& interrupted, const Recorder::AlsoSave& also) {
+                         const std::atomic<bool>& interrupted, const Recorder::AlsoSave& also,
+                         const std::optional<record::TrialOfRun>& trial) {
   RecordedRun run;
   run.result = RunSession(setup, interrupted);
   // Saved, or — when the database fails at the end — kept in a file beside it.
@@ -421,8 +425,9 @@ RecordedRun RunAndRecord(const SessionSetup& setup, Recorder& recorder,
     run.run_id = recorder.Save(run.result.record, also);
     run.result.record.id = run.run_id;
   } catch (const std::exception& e) {
+    run.save_error = e.what();
     try {
-      run.unsaved = record::WriteUnsavedRun(run.result.record, setup.run.database, WallNs());
+      run.unsaved = record::WriteUnsavedRun(run.result.record, setup.run.database, WallNs(), trial);
       std::fprintf(stderr, "haptel: run not recorded: %s; its results are in %s\n", e.what(),
                    run.unsaved.c_str());
     } catch (const std::exception& e2) {
@@ -595,14 +600,19 @@ int RunCommand(int argc, const char* const* argv) {
       if (word == "--fleet" || word.rfind("--fleet=", 0) == 0) return RunFleetCommand(argc, argv, interrupted);
     }
     bool json = false;
+    bool insecure = false;
     const SessionSetup setup = cli::ReadInput([&] {
       const Args args = ParseRunArgs(argc, argv);
       if (!args.positional().empty()) {
         throw UsageError("unexpected argument '" + args.positional()[0] + "' (options start with --)");
       }
       json = args.Flag("json");
+      insecure = args.Flag("insecure");
       return RunSetupFromArgs(args);
     });
+    if (const std::string warning = link::InsecureLinkWarning(setup.run.link, insecure); !warning.empty()) {
+      log::Warn(warning);
+    }
     // The database before anything starts: a run it cannot take is not driven.
     // Kept open for the run, and saved into at its end.
     auto recorder = cli::ReadInput([&] { return std::make_unique<Recorder>(setup.run.database); });

@@ -41,6 +41,8 @@ std::string ToString(Outcome outcome) {
       return "conflict";
     case Outcome::kRefused:
       return "refused";
+    case Outcome::kLostControl:
+      return "lost control";
   }
   return "unknown";
 }
@@ -55,6 +57,7 @@ int ExitCode(Outcome outcome) {
       return 3;
     case Outcome::kConflict:
     case Outcome::kRefused:
+    case Outcome::kLostControl:
       return 2;
     default:
       return 1;
@@ -180,8 +183,8 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   int64_t next_live_ns = t0;
   uint64_t pictures_seen = 0;
   int64_t next_tick = t0;
-  VehicleHealth health(setup.vehicle.name, run.link.domain_id, vehicle.session(), run.vehicle_timeout_s,
-                       VehicleHealth::kStartupTimeout_s, vehicle.pid());
+  VehicleHealth health(setup.vehicle.name, run.link.domain_id, vehicle.session(), vehicle.command_writer(),
+                       run.vehicle_timeout_s, VehicleHealth::kStartupTimeout_s, vehicle.pid());
   RunTrace trace(rec);
   rec.path.reserve(16384);
   const auto finish = [&](LoopEnd end) { Finish(result, std::move(end), family->MadeSafe()); };

@@ -16,6 +16,8 @@ void Finish(SessionResult& result, LoopEnd end, const char* made_safe) {
   if (end.outcome == Outcome::kVehicleLost || end.outcome == Outcome::kVehicleDidNotStart ||
       end.outcome == Outcome::kDeviceLost) {
     log::Error(result.message + "; " + made_safe);
+  } else if (end.outcome == Outcome::kLostControl) {
+    log::Error(result.message);  // nothing this run sends makes it safe now
   }
 }
 
@@ -30,10 +32,12 @@ std::optional<LoopEnd> CheckOperatorSide(const std::atomic<bool>& interrupted, c
 }
 
 VehicleHealth::VehicleHealth(const std::string& vehicle_name, int domain_id, uint64_t session,
-                             double vehicle_timeout_s, double startup_timeout_s, int64_t spawned_pid)
+                             const link::WriterId& writer, double vehicle_timeout_s, double startup_timeout_s,
+                             int64_t spawned_pid)
     : name_(vehicle_name),
       domain_id_(domain_id),
       session_(session),
+      writer_(writer),
       timeout_s_(vehicle_timeout_s),
       startup_timeout_s_(startup_timeout_s),
       spawned_pid_(spawned_pid),
@@ -70,24 +74,45 @@ std::optional<LoopEnd> VehicleHealth::CheckProcess(VehicleLink& vehicle, int64_t
                  up_ ? NsToS(now_ns - vehicle.last_received_ns()) : 0.0};
 }
 
-bool VehicleHealth::OnState(bool fault, const std::string& fault_message, uint64_t owner_session, const char* owner,
-                            int64_t now_ns) {
+bool VehicleHealth::OnState(bool fault, const std::string& fault_message, uint64_t owner_session,
+                            const link::WriterId& owner_writer, const char* owner, int64_t now_ns) {
   if (fault && fault_.empty()) fault_ = fault_message;
-  if (owner_session != 0 && owner_session != session_) {
-    if (refused_since_ns_ == 0) {
-      refused_since_ns_ = now_ns;
-      owner_ = owner;
+  if (owner_writer == writer_) {
+    had_control_ = true;
+    refused_since_ns_ = 0;
+  } else if (owner_writer.empty()) {
+    refused_since_ns_ = 0;  // free: our next command takes it
+  } else if (had_control_ || owner_session == session_) {
+    // Another writer is obeyed after this run's was, or under this run's
+    // session: this run's commands are not the ones obeyed. No grace: the
+    // vehicle hands itself over only after its owner's release or silence.
+    if (lost_control_.empty()) {
+      lost_control_ = "vehicle '" + name_ + "' on domain " + std::to_string(domain_id_) +
+                      " obeys another writer's commands now, not this run's: " +
+                      (owner_session == session_ ? "a participant that names this run's session (copied off the "
+                                                   "link by someone on the domain), "
+                                                 : std::string()) +
+                      "'" + owner + "', writer " + owner_writer.ToString() +
+                      "; this run lost control of the vehicle (DDS Security, --security, keeps participants "
+                      "the deployment's CA does not vouch for off the link)";
     }
-  } else {
-    refused_since_ns_ = 0;  // ours, or free (our next command takes it)
+  } else if (refused_since_ns_ == 0) {
+    refused_since_ns_ = now_ns;
+    owner_ = owner;
   }
   const bool first = !up_;
   up_ = true;
   return first;
 }
 
+std::optional<LoopEnd> VehicleHealth::LostControl() const {
+  if (lost_control_.empty()) return std::nullopt;
+  return LoopEnd{Outcome::kLostControl, lost_control_};
+}
+
 std::optional<LoopEnd> VehicleHealth::CheckStates(const VehicleLink& vehicle, int64_t now_ns, double t_s) {
   if (auto end = StrangerConflict()) return end;
+  if (auto end = LostControl()) return end;
   if (!fault_.empty()) {
     std::string fault;
     fault.swap(fault_);

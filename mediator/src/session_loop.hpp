@@ -33,17 +33,18 @@ std::optional<LoopEnd> CheckOperatorSide(const std::atomic<bool>& interrupted, c
 /// The vehicle's health as the loop sees it: its process, the faults its
 /// states report, their silence, and, until it first answers, the start-up
 /// timeout; and whether it is ours to drive: one vehicle under its name on
-/// the domain, obeying this run's session.
+/// the domain, obeying this run's command writer.
 class VehicleHealth {
  public:
-  /// `session`: this run's (VehicleLink::session()).
-  /// `spawned_pid`: the vehicle process this run started (VehicleLink::pid();
-  /// 0: attached to one it did not start, whose states any process may send).
-  VehicleHealth(const std::string& vehicle_name, int domain_id, uint64_t session, double vehicle_timeout_s,
-                double startup_timeout_s = kStartupTimeout_s, int64_t spawned_pid = 0);
+  /// `session` and `writer`: this run's (VehicleLink::session() and
+  /// command_writer()). `spawned_pid`: the vehicle process this run started
+  /// (VehicleLink::pid(); 0: attached to one it did not start, whose states
+  /// any process may send).
+  VehicleHealth(const std::string& vehicle_name, int domain_id, uint64_t session, const link::WriterId& writer,
+                double vehicle_timeout_s, double startup_timeout_s = kStartupTimeout_s, int64_t spawned_pid = 0);
   /// Whether a state has arrived yet.
   bool up() const { return up_; }
-  /// Up, and its latest state named this session as its owner, or none:
+  /// Up, and its latest state named this run's writer as its owner, or none:
   /// what this session says of the vehicle is true (a fleet publishes who
   /// commands it only then, never while another operator holds it).
   bool ours() const { return up_ && refused_since_ns_ == 0; }
@@ -71,15 +72,22 @@ class VehicleHealth {
   /// The conflict a stranger's state made, once one came (CheckProcess and
   /// CheckStates return it before anything else).
   std::optional<LoopEnd> StrangerConflict() const;
+  /// Control lost, once a state showed it (CheckStates returns it first
+  /// after a conflict): the vehicle obeys another writer after this run's,
+  /// or one naming this run's session.
+  std::optional<LoopEnd> LostControl() const;
   template <typename State>
   bool OnState(const State& s, int64_t now_ns) {
-    return OnState(s.fault(), s.fault_message(), s.owner_session(), s.owner().c_str(), now_ns);
+    return OnState(s.fault(), s.fault_message(), s.owner_session(), link::WriterId{s.owner_writer()},
+                   s.owner().c_str(), now_ns);
   }
-  bool OnState(bool fault, const std::string& fault_message, uint64_t owner_session, const char* owner,
-               int64_t now_ns);
-  /// After the states are drained: a fault one of them reported, another
-  /// session owning the vehicle (for kRefusedAfter_s), their silence, or no
-  /// answer yet `t_s` after the start.
+  bool OnState(bool fault, const std::string& fault_message, uint64_t owner_session,
+               const link::WriterId& owner_writer, const char* owner, int64_t now_ns);
+  /// After the states are drained: control lost (a state named another
+  /// writer as the owner after one named this run's, or one naming this
+  /// run's session: at once), a fault one of them reported, another writer
+  /// owning the vehicle (for kRefusedAfter_s), their silence, or no answer
+  /// yet `t_s` after the start.
   std::optional<LoopEnd> CheckStates(const VehicleLink& vehicle, int64_t now_ns, double t_s);
 
   /// A second vehicle must answer this long before it is a conflict
@@ -95,6 +103,7 @@ class VehicleHealth {
   std::string name_;
   int domain_id_;
   uint64_t session_;
+  link::WriterId writer_;
   double timeout_s_;
   double startup_timeout_s_;
   bool up_ = false;
@@ -102,6 +111,8 @@ class VehicleHealth {
   int64_t conflict_since_ns_ = 0;  ///< 0: one vehicle (or none) answers
   int64_t refused_since_ns_ = 0;   ///< 0: the vehicle is ours or free
   std::string owner_;              ///< who holds it, while refused_since_ns_ is set
+  bool had_control_ = false;       ///< a state named this run's writer as the owner
+  std::string lost_control_;       ///< why this run lost control ("": it did not)
   int64_t spawned_pid_;            ///< 0: attached
   std::string host_;               ///< this host's name (HostName)
   std::string stranger_;           ///< another process's state came: which ("": none)

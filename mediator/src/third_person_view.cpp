@@ -46,7 +46,10 @@ ThirdPersonView::ThirdPersonView(const Track& track, const VehicleConfig& vehicl
       body_height_m_(std::max(vehicle.camera.mount_height, 0.5 * vehicle.body.radius)),
       renderer_(track, chase_) {
   pixels_.reserve(2 * BodySilhouette::kSides);
-  for (auto& buffer : buffers_) buffer = std::make_shared<cv::Mat>(kHeight, kWidth, CV_8UC3);
+  for (auto& buffer : buffers_) {
+    buffer = std::make_shared<Picture>();
+    buffer->image.create(kHeight, kWidth, CV_8UC3);
+  }
 }
 
 video::CameraPose ThirdPersonView::ChasePose(const PredictedPose& robot) const {
@@ -98,20 +101,19 @@ void ThirdPersonView::Render(const PredictedPose& robot, cv::Mat& image) {
 }
 
 bool ThirdPersonView::Update(const PredictedPose& robot) {
-  std::shared_ptr<const cv::Mat> shown;
-  {
+  for (const std::shared_ptr<Picture>& picture : buffers_) {
+    // Acquire: pairs with the release in the handle's deleter, so whoever
+    // read this picture last (the view) has finished before it is redrawn.
+    // The latest is never free (latest_ holds a handle to it).
+    if (!picture->free.load(std::memory_order_acquire)) continue;
+    picture->free.store(false, std::memory_order_relaxed);
+    Render(robot, picture->image);
+    // The handle keeps its Picture alive, should the view outlive this.
+    std::shared_ptr<const cv::Mat> handle(&picture->image, [picture](const cv::Mat*) {
+      picture->free.store(true, std::memory_order_release);
+    });
     std::lock_guard<std::mutex> lock(mutex_);
-    shown = latest_;
-  }
-  // A picture nobody else holds: not the latest, and let go of by the view
-  // (only Latest hands pictures out, and only the latest).
-  for (std::shared_ptr<cv::Mat>& buffer : buffers_) {
-    if (buffer.get() == shown.get() || buffer.use_count() != 1) continue;
-    // The view's last read of it happened before its release of it.
-    std::atomic_thread_fence(std::memory_order_acquire);
-    Render(robot, *buffer);
-    std::lock_guard<std::mutex> lock(mutex_);
-    latest_ = buffer;
+    latest_ = std::move(handle);
     ++id_;
     return true;
   }

@@ -28,9 +28,13 @@ template <typename State>
 void StateInboxOf<State>::Push(const State& s) {
   const int64_t now = MonotonicNs();
   std::lock_guard lock(mutex_);
+  // The command this state echoes is this run's only while the vehicle
+  // obeys this run's writer; another's (a stranger's, with its own clock and
+  // sequence) says nothing of this run's commands.
+  const bool ours = own_writer_.empty() || link::WriterId{s.owner_writer()} == own_writer_;
   // Round trip of the command this state echoes, minus the time it waited
   // at the vehicle: no shared clock needed.
-  if (s.last_command_seq() != 0 && s.last_command_seq() != last_echo_seq_) {
+  if (ours && s.last_command_seq() != 0 && s.last_command_seq() != last_echo_seq_) {
     last_echo_seq_ = s.last_command_seq();
     rtt_.Record(static_cast<double>(now - s.last_command_sent_ns() - s.last_command_age_ns()) * 1e-3);
   }
@@ -53,14 +57,18 @@ void StateInboxOf<State>::Push(const State& s) {
   if (WatchdogTripped(s) && !watchdog_was_tripped_) ++counts_.watchdog_trips;
   watchdog_was_tripped_ = WatchdogTripped(s);
   // Commands sent before the vehicle listened are not its to drop: count from
-  // the first state that echoes an applied command.
-  if (!have_baseline_ && s.last_command_seq() != 0) {
+  // the first state that echoes an applied command of this run's (again
+  // after a state that did not: the vehicle's count of accepted commands
+  // then holds another writer's).
+  if (!ours) {
+    have_baseline_ = false;
+  } else if (!have_baseline_ && s.last_command_seq() != 0) {
     have_baseline_ = true;
     dropped_before_ = counts_.commands_dropped;
     first_echo_seq_ = s.last_command_seq();
     first_accepted_ = s.commands_received();
   }
-  if (have_baseline_ && s.last_command_seq() >= first_echo_seq_ &&
+  if (ours && have_baseline_ && s.last_command_seq() >= first_echo_seq_ &&
       s.commands_received() >= first_accepted_) {
     const uint64_t echoed = s.last_command_seq() - first_echo_seq_;
     const uint64_t accepted = s.commands_received() - first_accepted_;
@@ -69,7 +77,7 @@ void StateInboxOf<State>::Push(const State& s) {
           std::max(counts_.commands_dropped, dropped_before_ + echoed - accepted);
     }
   }
-  if (echo_watch_ns_ != 0 && echo_received_ns_ == 0 && s.last_command_seq() != 0 &&
+  if (ours && echo_watch_ns_ != 0 && echo_received_ns_ == 0 && s.last_command_seq() != 0 &&
       s.last_command_sent_ns() >= echo_watch_ns_) {
     echo_received_ns_ = now;
   }
@@ -147,6 +155,8 @@ CommandChannel<Messages>::CommandChannel(link::Participant& participant, const s
   message_.operator_name(operator_name);
   writer_ = std::make_unique<typename Messages::CommandWriter>(participant, link::TopicName(vehicle, "command"),
                                                                link::Profile::kCommand);
+  writer_id_ = writer_->id();
+  inbox_.SetOwnWriter(writer_id_);
   reader_ = std::make_unique<typename Messages::StateReader>(
       participant, link::TopicName(vehicle, "state"), link::Profile::kState,
       [this](const typename Messages::StateMsg& s) { inbox_.Push(s); });
@@ -156,6 +166,7 @@ template <class Messages>
 CommandChannel<Messages>::CommandChannel(std::function<void(const typename Messages::CommandMsg&)> sink,
                                          uint64_t session, const std::string& operator_name)
     : sink_(std::move(sink)) {
+  inbox_.SetOwnWriter(writer_id_);
   message_.session(session);
   message_.operator_name(operator_name);
 }

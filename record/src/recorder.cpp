@@ -14,10 +14,10 @@
 
 #include "haptel/record/sqlite_util.hpp"
 
-#include <fcntl.h>
 #include <sqlite3.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -368,26 +368,42 @@ constexpr const char* kDamagedAdvice =
 /// integrity_check adds, at O(N log N)). `quick_check(1)` costs the same on an
 /// intact file, which it must read whole anyway; on a damaged one it stops
 /// at the first fault, which is all the message names.
-/// Reads `file` once from start to end, so that the integrity check that
-/// follows finds its pages in the page cache. The check visits pages in the
-/// b-trees' order, scattered over the file: from a cold cache that is random
-/// reads (12 s for a 250 MB file on the machine of docs/results.md), where one
-/// sequential pass takes 0.5 s. A file larger than half the free memory would
-/// not stay cached: it is left to the check's own reads. Best effort: a
-/// failure here leaves the check to find whatever is wrong.
-void ReadIntoPageCache(const std::filesystem::path& file) {
-  std::error_code ec;
-  const auto size = std::filesystem::file_size(file, ec);
+/// Reads the database once from start to end, so that the integrity check
+/// that follows finds its pages in the page cache. The check visits pages in
+/// the b-trees' order, scattered over the file: from a cold cache that is
+/// random reads (12 s for a 250 MB file on the machine of docs/results.md),
+/// where one sequential pass takes 0.5 s. A file larger than half the free
+/// memory would not stay cached: it is left to the check's own reads. Best
+/// effort: a failure here leaves the check to find whatever is wrong.
+///
+/// Read through SQLite's own file handle, never a descriptor of our own:
+/// closing any descriptor of the file drops every POSIX lock this process
+/// holds on it (SQLite's "How To Corrupt An SQLite Database File", 2.2),
+/// among them the shared lock that tells another process closing the file
+/// that the WAL is in use. That process then checkpoints and deletes the
+/// WAL and shared memory under this one's open connections, whose later
+/// commits go into the deleted file: lost, or a malformed database.
+void ReadIntoPageCache(sqlite3* db) {
+  sqlite3_file* file = nullptr;
+  if (sqlite3_file_control(db, "main", SQLITE_FCNTL_FILE_POINTER, &file) != SQLITE_OK ||
+      file == nullptr || file->pMethods == nullptr) {
+    return;
+  }
+  sqlite3_int64 size = 0;
+  if (file->pMethods->xFileSize(file, &size) != SQLITE_OK || size <= 0) return;
   const long page = ::sysconf(_SC_PAGESIZE);
   const long free_pages = ::sysconf(_SC_AVPHYS_PAGES);
-  if (ec || page <= 0 || free_pages <= 0 || size > static_cast<uintmax_t>(page) * free_pages / 2) return;
-  const int fd = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return;
-  ::posix_fadvise(fd, 0, 0, POSIX_FADV_SEQUENTIAL);
-  std::vector<char> buffer(size_t{1} << 20);
-  while (::read(fd, buffer.data(), buffer.size()) > 0) {
+  if (page <= 0 || free_pages <= 0 ||
+      static_cast<uintmax_t>(size) > static_cast<uintmax_t>(page) * free_pages / 2) {
+    return;
   }
-  ::close(fd);
+  // In order, 1 MiB at a time: the kernel's read-ahead sees a sequential reader.
+  constexpr int kChunk = 1 << 20;
+  std::vector<char> buffer(kChunk);
+  for (sqlite3_int64 at = 0; at < size; at += kChunk) {
+    const int n = static_cast<int>(std::min<sqlite3_int64>(kChunk, size - at));
+    if (file->pMethods->xRead(file, buffer.data(), n, at) != SQLITE_OK) return;
+  }
 }
 
 /// quick_check's report on one line, without its "*** in database main ***"
@@ -410,7 +426,7 @@ void CheckIntegrity(const std::filesystem::path& file, sqlite3* db) {
   auto damaged = [&](const std::string& what) {
     FailWith(file, "is damaged (SQLite's quick_check: " + what + ")" + kDamagedAdvice);
   };
-  ReadIntoPageCache(file);
+  ReadIntoPageCache(db);
   sqlite3_stmt* raw = nullptr;
   if (sqlite3_prepare_v2(db, "PRAGMA quick_check(1)", -1, &raw, nullptr) != SQLITE_OK) {
     sqlite3_finalize(raw);
@@ -535,14 +551,16 @@ Recorder::Recorder(const std::filesystem::path& database) : path_(database) {
 
 Recorder::~Recorder() { sqlite3_close_v2(db_); }
 
-int64_t Recorder::Save(const RunRecord& run, const AlsoSave& also) {
-  // A file deleted or replaced since it was opened: SQLite in WAL mode would
-  // write the run into the unlinked file, and it would be gone.
+void Recorder::RequireInPlace(const std::string& what) const {
   int moved = 0;
   if (sqlite3_file_control(db_, "main", SQLITE_FCNTL_HAS_MOVED, &moved) == SQLITE_OK &&
       moved != 0) {
-    FailWith(path_, "cannot save the run: the file was deleted or replaced since it was opened");
+    FailWith(path_, "cannot " + what + ": the file was deleted or replaced since it was opened");
   }
+}
+
+int64_t Recorder::Save(const RunRecord& run, const AlsoSave& also) {
+  RequireInPlace("save the run");
   Transaction txn(path_, db_, "BEGIN IMMEDIATE");
 
   Stmt insert_run = Prepare(path_, db_, kInsertRun, "cannot prepare run insert");

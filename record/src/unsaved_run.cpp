@@ -163,8 +163,19 @@ std::filesystem::path UnsavedRunPath(const std::filesystem::path& database, int6
 }
 
 std::filesystem::path WriteUnsavedRun(const RunRecord& run, const std::filesystem::path& database,
-                                      int64_t wall_ns) {
-  const std::string text = RunRecordJson(run) + "\n";
+                                      int64_t wall_ns, const std::optional<TrialOfRun>& trial) {
+  std::string text = RunRecordJson(run);
+  if (trial) {
+    const std::string owner = Object()
+                                  .Str("study", trial->study)
+                                  .Str("participant", trial->participant)
+                                  .Int("position", trial->position)
+                                  .Str("condition", trial->condition)
+                                  .Int("repetition", trial->repetition)
+                                  .Close();
+    text = "{\"trial\":" + owner + "," + text.substr(1);
+  }
+  text += "\n";
   std::filesystem::path beside = UnsavedRunPath(database, wall_ns);
   const std::string beside_error = WriteNew(beside, text);
   if (beside_error.empty()) return beside;

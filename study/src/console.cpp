@@ -529,6 +529,7 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
                         ",\"connections\":{\"served\":" + std::to_string(c.served) +
                         ",\"refused_busy\":" + std::to_string(c.refused_busy) +
                         ",\"cut_deadline\":" + std::to_string(c.cut_deadline) +
+                        ",\"cut_for_room\":" + std::to_string(c.cut_for_room) +
                         ",\"tls_failed\":" + std::to_string(c.tls_failed) +
                         ",\"refused_requests\":" + std::to_string(s.refused_requests.load()) + "}}",
                     "application/json");
@@ -730,11 +731,13 @@ StudyConsole::~StudyConsole() {
 
 int StudyConsole::port() const { return impl_->port; }
 
+std::vector<std::string> StudyConsole::urls() const {
+  return ConsoleUrls(impl_->options.host, impl_->port, impl_->access.tls, impl_->options.names);
+}
+
 std::string StudyConsole::url() const {
-  const std::string& host = impl_->options.host;
-  const bool v6 = host.find(':') != std::string::npos;
-  return std::string(impl_->access.tls ? "https://" : "http://") + (v6 ? "[" + host + "]" : host) + ":" +
-         std::to_string(impl_->port) + "/";
+  const std::vector<std::string> all = urls();
+  return all.empty() ? std::string() : all.front();
 }
 
 const std::string& StudyConsole::access_token() const { return impl_->access.access_token; }

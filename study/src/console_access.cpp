@@ -56,6 +56,28 @@ bool ChangesState(const std::string& method) { return method != "GET" && method 
 
 std::string WithPort(const std::string& host, int port) { return host + ":" + std::to_string(port); }
 
+/// This machine's interfaces' IPv4 addresses, and with `v6` its IPv6 ones
+/// but link-local (which need a zone in a URL).
+std::vector<std::string> InterfaceAddresses(bool v6) {
+  std::vector<std::string> addresses;
+  ifaddrs* list = nullptr;
+  if (getifaddrs(&list) != 0) return addresses;
+  for (const ifaddrs* i = list; i != nullptr; i = i->ifa_next) {
+    if (i->ifa_addr == nullptr) continue;
+    char text[INET6_ADDRSTRLEN] = {};
+    if (i->ifa_addr->sa_family == AF_INET) {
+      inet_ntop(AF_INET, &reinterpret_cast<const sockaddr_in*>(i->ifa_addr)->sin_addr, text, sizeof text);
+    } else if (i->ifa_addr->sa_family == AF_INET6 && v6) {
+      const auto* a = reinterpret_cast<const sockaddr_in6*>(i->ifa_addr);
+      if (IN6_IS_ADDR_LINKLOCAL(&a->sin6_addr)) continue;
+      inet_ntop(AF_INET6, &a->sin6_addr, text, sizeof text);
+    }
+    if (text[0] != 0) addresses.emplace_back(text);
+  }
+  freeifaddrs(list);
+  return addresses;
+}
+
 }  // namespace
 
 bool IsLoopbackAddress(const std::string& address) {
@@ -89,25 +111,39 @@ std::vector<std::string> ConsoleHosts(const std::string& address, int port, bool
     if (gethostname(name, sizeof name - 1) == 0) add(name);
   }
   if (wildcard) {
-    ifaddrs* list = nullptr;
-    if (getifaddrs(&list) == 0) {
-      for (const ifaddrs* i = list; i != nullptr; i = i->ifa_next) {
-        if (i->ifa_addr == nullptr) continue;
-        char text[INET6_ADDRSTRLEN] = {};
-        if (i->ifa_addr->sa_family == AF_INET) {
-          inet_ntop(AF_INET, &reinterpret_cast<const sockaddr_in*>(i->ifa_addr)->sin_addr, text, sizeof text);
-        } else if (i->ifa_addr->sa_family == AF_INET6) {
-          const auto* v6 = reinterpret_cast<const sockaddr_in6*>(i->ifa_addr);
-          if (IN6_IS_ADDR_LINKLOCAL(&v6->sin6_addr)) continue;  // needs a zone in the URL; not offered
-          inet_ntop(AF_INET6, &v6->sin6_addr, text, sizeof text);
-        }
-        add(text);
-      }
-      freeifaddrs(list);
-    }
+    for (const std::string& a : InterfaceAddresses(true)) add(a);
   }
   for (const std::string& name : names) add(name);
   return hosts;
+}
+
+std::vector<std::string> ConsoleUrls(const std::string& address, int port, bool tls,
+                                     const std::vector<std::string>& names) {
+  std::vector<std::string> urls;
+  auto add = [&](const std::string& host) {
+    in6_addr v6{};
+    const std::string shown = inet_pton(AF_INET6, host.c_str(), &v6) == 1 ? "[" + host + "]" : host;
+    const std::string url = std::string(tls ? "https://" : "http://") + shown + ":" + std::to_string(port) + "/";
+    if (!host.empty() && std::find(urls.begin(), urls.end(), url) == urls.end()) urls.push_back(url);
+  };
+  const bool wildcard = address == "0.0.0.0" || address == "::" || address == "[::]";
+  if (!wildcard) {
+    add(address.size() > 2 && address.front() == '[' ? address.substr(1, address.size() - 2) : address);
+    return urls;
+  }
+  if (tls && !names.empty()) {
+    // The only names the browser takes the certificate for.
+    for (const std::string& name : names) add(name);
+    return urls;
+  }
+  char name[256] = {};
+  if (gethostname(name, sizeof name - 1) == 0 && !IsLoopbackAddress(name)) add(name);
+  // IPv6 ones only when the console listens on IPv6 (::).
+  for (const std::string& a : InterfaceAddresses(address != "0.0.0.0")) {
+    if (!IsLoopbackAddress(a)) add(a);
+  }
+  add("127.0.0.1");
+  return urls;
 }
 
 size_t FormBytesFor(size_t text_characters, size_t fields) {
@@ -164,6 +200,15 @@ Refusal CheckRequest(const ConsoleAccess& access, const httplib::Request& reques
     if (!IsAccessToken(access, CookieValue(cookies, kAccessCookie))) {
       return {401, "the console asks for its access token (printed where `haptel study run` started)"};
     }
+  }
+  // A body the library would read whole (a chunked one, or one with no
+  // length, read until the client closes: cpp-httplib 0.11 bounds neither)
+  // is taken only where the route reads its form itself, up to its limit.
+  const bool reads_its_form = request.method == "POST" && (request.path == "/answers" || request.path == "/notes");
+  if (!reads_its_form && ChangesState(request.method) &&
+      (request.has_header("Transfer-Encoding") || !request.has_header("Content-Length"))) {
+    return {411, "refused: a form here comes with a Content-Length (as a browser sends it), not chunked or "
+                 "unbounded"};
   }
   if (request.has_header("Content-Length")) {
     const size_t limit = request.path == "/answers" ? access.max_answers_bytes

@@ -10,7 +10,9 @@
 
 #include <cerrno>
 #include <climits>
+#include <functional>
 #include <stdexcept>
+#include <string_view>
 
 namespace haptel::study {
 namespace {
@@ -56,24 +58,38 @@ std::string SocketAddress(int fd, bool peer, int& port) {
 }
 
 /// One connection's bytes, plain or through TLS, on a non-blocking socket:
-/// every wait ends at the connection's deadline, or after `idle` without
-/// progress, whichever comes first (then it reports an error and the
-/// exchange ends).
+/// every wait ends at the head's deadline (until the request's head has
+/// come), the connection's deadline, or after `idle` without progress,
+/// whichever comes first (then it reports an error and the exchange ends).
+/// It reads at most `budget` bytes in all: past them, an error, whatever the
+/// request claims (cpp-httplib 0.11 buffers a header line, or a chunk's size
+/// line, whole before it checks its length).
 class DeadlineStream final : public httplib::Stream {
  public:
-  DeadlineStream(int fd, SSL* ssl, Clock::time_point deadline, std::chrono::milliseconds idle)
-      : fd_(fd), ssl_(ssl), deadline_(deadline), idle_(idle) {}
+  struct Limits {
+    Clock::time_point head_deadline;
+    Clock::time_point deadline;
+    std::chrono::milliseconds idle;
+    size_t budget;
+  };
+  /// `on_head`: called once, when the request's head has been read.
+  DeadlineStream(int fd, SSL* ssl, const Limits& limits, std::function<void()> on_head = {})
+      : fd_(fd), ssl_(ssl), limits_(limits), on_head_(std::move(on_head)) {}
 
   bool is_readable() const override { return (ssl_ != nullptr && SSL_pending(ssl_) > 0) || Wait(POLLIN); }
   bool is_writable() const override { return Wait(POLLOUT); }
 
   ssize_t read(char* ptr, size_t size) override {
-    const int n = static_cast<int>(std::min<size_t>(size, INT_MAX));
+    if (read_ >= limits_.budget) {
+      over_budget_ = true;
+      return -1;
+    }
+    const int n = static_cast<int>(std::min<size_t>({size, limits_.budget - read_, INT_MAX}));
     for (;;) {
       short want = POLLIN;
       if (ssl_ != nullptr) {
         const int got = SSL_read(ssl_, ptr, n);
-        if (got > 0) return got;
+        if (got > 0) return Took(ptr, got);
         const int error = SSL_get_error(ssl_, got);
         if (error == SSL_ERROR_ZERO_RETURN) return 0;
         if (error == SSL_ERROR_WANT_WRITE) {
@@ -83,7 +99,8 @@ class DeadlineStream final : public httplib::Stream {
         }
       } else {
         const ssize_t got = recv(fd_, ptr, static_cast<size_t>(n), MSG_DONTWAIT);
-        if (got >= 0) return got;
+        if (got > 0) return Took(ptr, got);
+        if (got == 0) return 0;
         if (errno == EINTR) continue;
         if (errno != EAGAIN && errno != EWOULDBLOCK) return -1;
       }
@@ -118,13 +135,15 @@ class DeadlineStream final : public httplib::Stream {
   void get_local_ip_and_port(std::string& ip, int& port) const override { ip = SocketAddress(fd_, false, port); }
   socket_t socket() const override { return fd_; }
 
-  /// Whether a wait ended at the deadline or for silence.
+  /// Whether a wait ended at a deadline or for silence.
   bool timed_out() const { return timed_out_; }
+  bool over_budget() const { return over_budget_; }
 
-  /// Waits for `events` on the socket until the deadline or `idle`.
+  /// Waits for `events` on the socket until the deadline that applies, or `idle`.
   bool Wait(short events) const {
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline_ - Clock::now());
-    const auto wait = std::min(left, idle_);
+    const Clock::time_point until = head_done_ ? limits_.deadline : std::min(limits_.head_deadline, limits_.deadline);
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(until - Clock::now());
+    const auto wait = std::min(left, limits_.idle);
     if (wait.count() <= 0) {
       timed_out_ = true;
       return false;
@@ -139,10 +158,31 @@ class DeadlineStream final : public httplib::Stream {
   }
 
  private:
+  /// Counts `got` bytes read, and watches for the head's end: a line feed,
+  /// an optional carriage return, a line feed (the blank line).
+  ssize_t Took(const char* ptr, ssize_t got) {
+    read_ += static_cast<size_t>(got);
+    for (ssize_t i = 0; i < got && !head_done_; ++i) {
+      const char c = ptr[i];
+      if (c == '\n' && (last_ == '\n' || (last_ == '\r' && before_last_ == '\n'))) {
+        head_done_ = true;
+        if (on_head_) on_head_();
+      }
+      before_last_ = last_;
+      last_ = c;
+    }
+    return got;
+  }
+
   int fd_;
   SSL* ssl_;
-  Clock::time_point deadline_;
-  std::chrono::milliseconds idle_;
+  Limits limits_;
+  std::function<void()> on_head_;
+  size_t read_ = 0;
+  bool head_done_ = false;
+  char last_ = 0;
+  char before_last_ = 0;
+  bool over_budget_ = false;
   mutable bool timed_out_ = false;
 };
 
@@ -167,11 +207,26 @@ void LingeringClose(int fd, Clock::time_point deadline) {
   close(fd);
 }
 
+/// Whether the end of a request's head (a blank line) waits unread on a
+/// plain socket: a peek, nothing taken from the connection's worker.
+bool HeadWaiting(int fd) {
+  char peek[8192];
+  const ssize_t got = recv(fd, peek, sizeof peek, MSG_PEEK | MSG_DONTWAIT);
+  if (got <= 0) return false;
+  const std::string_view bytes(peek, static_cast<size_t>(got));
+  // Its worker reads the head a byte at a time, so the rest may start at the blank line.
+  return bytes.find("\n\r\n") != std::string_view::npos || bytes.find("\n\n") != std::string_view::npos ||
+         bytes.rfind("\r\n", 0) == 0 || bytes.rfind("\n", 0) == 0;
+}
+
 }  // namespace
 
 void ConnectionPolicy::ValidateOrThrow() const {
   if (max_per_client < 1) throw std::invalid_argument("ConnectionPolicy::max_per_client: expected at least 1");
   if (deadline.count() <= 0) throw std::invalid_argument("ConnectionPolicy::deadline: expected more than 0");
+  if (head_deadline.count() <= 0 || head_deadline > deadline) {
+    throw std::invalid_argument("ConnectionPolicy::head_deadline: expected more than 0 and at most the deadline");
+  }
   if (idle.count() <= 0 || idle > deadline) {
     throw std::invalid_argument("ConnectionPolicy::idle: expected more than 0 and at most the deadline");
   }
@@ -198,47 +253,106 @@ TlsContext MakeTlsContext(const std::filesystem::path& certificate, const std::f
   return ctx;
 }
 
+/// The workers' queue: before a connection waits for a worker, the server
+/// makes room for it (ConsoleServer::MakeRoom).
+class ConsoleServer::Queue final : public httplib::TaskQueue {
+ public:
+  Queue(ConsoleServer& server, size_t threads) : server_(server), pool_(threads) {}
+  void enqueue(std::function<void()> fn) override {
+    server_.MakeRoom();
+    pool_.enqueue(std::move(fn));
+  }
+  void shutdown() override { pool_.shutdown(); }
+
+ private:
+  ConsoleServer& server_;
+  httplib::ThreadPool pool_;
+};
+
 ConsoleServer::ConsoleServer(const ConnectionPolicy& policy, TlsContext tls) : policy_(policy), tls_(std::move(tls)) {
   policy_.ValidateOrThrow();
-  const size_t threads = policy_.threads;
-  new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
+  new_task_queue = [this] { return new Queue(*this, policy_.threads); };
 }
 
 ConsoleServer::~ConsoleServer() = default;
 
-bool ConsoleServer::Admit(const std::string& address, int fd) {
-  const std::lock_guard<std::mutex> lock(mutex_);
-  int& open = open_by_address_[address];
-  if (stopping_ || open >= policy_.max_per_client) {
-    if (open == 0) open_by_address_.erase(address);
-    return false;
+bool ConsoleServer::CutOldest(const std::string& address) {
+  auto oldest = open_.end();
+  for (auto it = open_.begin(); it != open_.end(); ++it) {
+    const Connection& c = it->second;
+    if (c.head_done || c.cut || (!address.empty() && c.address != address)) continue;
+    // Its whole head has come, its worker has not read it yet (a loaded
+    // machine): a prompt client, not one to cut.
+    if (!tls_ && HeadWaiting(it->first)) continue;
+    if (oldest == open_.end() || c.accepted < oldest->second.accepted) oldest = it;
   }
-  ++open;
-  open_sockets_.insert(fd);
+  if (oldest == open_.end()) return false;
+  // Its worker sees the socket end and releases it; the descriptor stays
+  // open (and ours) until then, so this cannot reach another connection.
+  shutdown(oldest->first, SHUT_RDWR);
+  oldest->second.cut = true;
+  ++cut_for_room_;
   return true;
 }
 
-void ConsoleServer::Release(const std::string& address, int fd) {
+void ConsoleServer::MakeRoom() {
   const std::lock_guard<std::mutex> lock(mutex_);
-  if (--open_by_address_[address] <= 0) open_by_address_.erase(address);
-  open_sockets_.erase(fd);
+  size_t busy = waiting_;
+  for (const auto& [fd, c] : open_) busy += c.cut ? 0 : 1;
+  if (busy >= policy_.threads) CutOldest("");
+  ++waiting_;
+}
+
+bool ConsoleServer::Admit(const std::string& address, int fd) {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  if (stopping_) return false;
+  int held = 0;
+  for (const auto& [other, c] : open_) held += c.address == address && !c.cut ? 1 : 0;
+  if (held >= policy_.max_per_client && !CutOldest(address)) return false;
+  open_[fd] = Connection{address, Clock::now(), false, false};
+  return true;
+}
+
+void ConsoleServer::Release(int fd) {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  open_.erase(fd);
+}
+
+void ConsoleServer::HeadDone(int fd) {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  if (const auto it = open_.find(fd); it != open_.end()) it->second.head_done = true;
 }
 
 void ConsoleServer::StopAll() {
   {
     const std::lock_guard<std::mutex> lock(mutex_);
     stopping_ = true;
-    for (const int fd : open_sockets_) shutdown(fd, SHUT_RDWR);
+    for (const auto& [fd, c] : open_) shutdown(fd, SHUT_RDWR);
   }
   stop();
 }
 
 ConnectionCounters ConsoleServer::counters() const {
-  return {served_.load(), refused_busy_.load(), cut_deadline_.load(), tls_failed_.load()};
+  ConnectionCounters c;
+  c.served = served_.load();
+  c.refused_busy = refused_busy_.load();
+  c.cut_deadline = cut_deadline_.load();
+  c.cut_for_room = cut_for_room_.load();
+  c.tls_failed = tls_failed_.load();
+  return c;
 }
 
 bool ConsoleServer::process_and_close_socket(socket_t sock) {
-  const Clock::time_point deadline = Clock::now() + policy_.deadline;
+  {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    if (waiting_ > 0) --waiting_;
+  }
+  const Clock::time_point now = Clock::now();
+  // The head, the largest body taken (a chunked one with its chunks' sizes),
+  // and room: no request the console takes is larger.
+  const size_t payload = std::min<size_t>(payload_max_length_, size_t{1} << 40);
+  const DeadlineStream::Limits limits{now + policy_.head_deadline, now + policy_.deadline, policy_.idle,
+                                      2 * payload + (64u << 10)};
   int port = 0;
   const std::string address = SocketAddress(sock, true, port);
   fcntl(sock, F_SETFL, fcntl(sock, F_GETFL) | O_NONBLOCK);
@@ -257,7 +371,7 @@ bool ConsoleServer::process_and_close_socket(socket_t sock) {
   bool handshake = true;
   if (tls_) {
     ssl = SSL_new(tls_.get());
-    DeadlineStream waits(sock, nullptr, deadline, policy_.idle);
+    DeadlineStream waits(sock, nullptr, limits);
     handshake = ssl != nullptr && SSL_set_fd(ssl, sock) == 1;
     while (handshake) {
       const int r = SSL_accept(ssl);
@@ -280,7 +394,7 @@ bool ConsoleServer::process_and_close_socket(socket_t sock) {
   bool ok = false;
   if (handshake) {
     ++served_;
-    DeadlineStream stream(sock, ssl, deadline, policy_.idle);
+    DeadlineStream stream(sock, ssl, limits, [this, sock] { HeadDone(sock); });
     bool closed = false;
     // One request per connection: a kept-alive connection would hold a
     // worker for as long as the browser likes.
@@ -292,8 +406,8 @@ bool ConsoleServer::process_and_close_socket(socket_t sock) {
     SSL_free(ssl);
     ERR_clear_error();
   }
-  Release(address, sock);
-  LingeringClose(sock, deadline);
+  Release(sock);
+  LingeringClose(sock, limits.deadline);
   return ok;
 }
 

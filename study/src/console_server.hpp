@@ -1,12 +1,15 @@
 #pragma once
 /// @file The console's HTTP server with a connection policy of its own:
 /// cpp-httplib parses the requests and routes them; this class owns each
-/// connection from accept to close. It bounds the connections one client
-/// address may hold at once, gives every connection one deadline for its
-/// request and response (a client that sends a header line every few
-/// seconds, or reads the answer byte by byte, is cut off, not waited for),
-/// serves one request per connection, and speaks TLS when given a
-/// certificate. Internal to the study library.
+/// connection from accept to close. A connection must send its request's
+/// head within a short deadline, and its whole exchange within a longer one
+/// (a client that sends a header line every few seconds, or reads the
+/// answer byte by byte, is cut off, not waited for); it reads no more bytes
+/// than the largest request the console takes; when an address holds its
+/// share of connections, or every worker is taken, the oldest connection
+/// still without its head is cut to make room for the new one (slow and
+/// silent clients cannot keep a prompt one out); one request per
+/// connection; TLS when given a certificate. Internal to the study library.
 #include <httplib.h>
 #include <openssl/ssl.h>
 
@@ -15,7 +18,6 @@
 #include <filesystem>
 #include <map>
 #include <mutex>
-#include <set>
 #include <string>
 
 #include "haptel/study/console.hpp"
@@ -42,21 +44,41 @@ class ConsoleServer : public httplib::Server {
   ConnectionCounters counters() const;
   bool tls() const { return tls_ != nullptr; }
 
+  /// The connection on `fd` has sent its request's head: it is no longer
+  /// one to cut for room. (Called by the connection's stream.)
+  void HeadDone(int fd);
+
  private:
+  class Queue;
+  struct Connection {
+    std::string address;
+    std::chrono::steady_clock::time_point accepted;
+    bool head_done = false;
+    bool cut = false;  ///< shut down to make room; its worker ends it
+  };
+
   bool process_and_close_socket(socket_t sock) override;
-  /// Counts `address` in; false when it holds `max_per_client` already.
+  /// Counts `fd` in; false when `address` holds `max_per_client` that all
+  /// have their heads (then nothing is cut).
   bool Admit(const std::string& address, int fd);
-  void Release(const std::string& address, int fd);
+  void Release(int fd);
+  /// A connection is about to wait for a worker: when every worker is
+  /// taken, the oldest connection without its head is cut.
+  void MakeRoom();
+  /// Cuts the oldest connection without its head, of `address` (or of any
+  /// address when empty). Under `mutex_`. False when there is none.
+  bool CutOldest(const std::string& address);
 
   const ConnectionPolicy policy_;
   const TlsContext tls_;
   mutable std::mutex mutex_;
-  std::map<std::string, int> open_by_address_;
-  std::set<int> open_sockets_;
+  std::map<int, Connection> open_;  ///< by socket, from Admit to Release
+  size_t waiting_ = 0;              ///< accepted, not yet taken by a worker
   bool stopping_ = false;
   std::atomic<uint64_t> served_{0};
   std::atomic<uint64_t> refused_busy_{0};
   std::atomic<uint64_t> cut_deadline_{0};
+  std::atomic<uint64_t> cut_for_room_{0};
   std::atomic<uint64_t> tls_failed_{0};
 };
 

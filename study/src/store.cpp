@@ -184,6 +184,7 @@ std::vector<std::string> StudyStore::Participants() const {
 }
 
 void StudyStore::AddParticipant(const std::string& participant, const std::vector<PlannedTrial>& trials) {
+  recorder_.RequireInPlace("add participant " + participant);
   sqlite3* db = recorder_.handle();
   const std::filesystem::path& file = recorder_.path();
   Transaction txn(file, db, "BEGIN IMMEDIATE");
@@ -356,6 +357,7 @@ record::Recorder::AlsoSave StudyStore::TrialWriter(const PlannedTrial& trial, do
 }
 
 bool StudyStore::Redo(const std::string& participant, int position, const std::string& why) {
+  recorder_.RequireInPlace("take back the trial of participant " + participant);
   sqlite3* db = recorder_.handle();
   const std::filesystem::path& file = recorder_.path();
   Transaction txn(file, db, "BEGIN IMMEDIATE");
@@ -427,6 +429,7 @@ bool StudyStore::Answered(const std::string& participant, const std::string& con
 void StudyStore::SaveAnswers(const std::string& participant, const std::string& condition,
                              const std::string& questionnaire,
                              const std::vector<std::pair<std::string, std::string>>& item_values) {
+  recorder_.RequireInPlace("record the answers of participant " + participant);
   sqlite3* db = recorder_.handle();
   const std::filesystem::path& file = recorder_.path();
   Transaction txn(file, db, "BEGIN IMMEDIATE");
@@ -471,6 +474,7 @@ std::vector<AnswerRow> StudyStore::Answers() const {
 }
 
 void StudyStore::SaveNote(const std::string& participant, int position, const std::string& text) {
+  recorder_.RequireInPlace("record the note on participant " + participant);
   sqlite3* db = recorder_.handle();
   const std::filesystem::path& file = recorder_.path();
   Transaction txn(file, db, "BEGIN IMMEDIATE");
@@ -518,6 +522,7 @@ bool StudyStore::Practised(const std::string& participant) const {
 
 void StudyStore::Event(const std::string& kind, const std::string& participant, int position,
                        const std::string& detail) {
+  recorder_.RequireInPlace("record the event '" + kind + "'");
   sqlite3* db = recorder_.handle();
   const std::filesystem::path& file = recorder_.path();
   Stmt insert = Prepare(file, db,

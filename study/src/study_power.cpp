@@ -4,6 +4,7 @@
 // draws balanced samples of each participant count from the pool and
 // analyses them as the report does.
 #include <signal.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
@@ -15,7 +16,9 @@
 #include <memory>
 #include <optional>
 #include <random>
+#include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "haptel/config/error.hpp"
@@ -102,6 +105,49 @@ std::vector<int> ParseCounts(const std::string& text) {
   std::sort(counts.begin(), counts.end());
   counts.erase(std::unique(counts.begin(), counts.end()), counts.end());
   return counts;
+}
+
+unsigned HardwareThreads() { return std::max(1u, std::thread::hardware_concurrency()); }
+
+/// The most trial processes at once: each runs a simulated-time trial as
+/// fast as a processor allows.
+int MaxJobs() { return static_cast<int>(2 * HardwareThreads()); }
+
+/// The output folder, made if missing, and a file written and removed in
+/// it: an output that cannot be written is bad input (exit 2), found before
+/// any trial runs.
+void CheckWritableFolder(const std::filesystem::path& out) {
+  std::error_code error;
+  std::filesystem::create_directories(out, error);
+  if (!error && !std::filesystem::is_directory(out, error)) error = std::make_error_code(std::errc::not_a_directory);
+  const std::filesystem::path probe = out / (".write-check-" + std::to_string(getpid()));
+  if (!error) {
+    std::ofstream file(probe);
+    file << "x";
+    file.close();
+    if (!file) error = std::error_code(errno != 0 ? errno : EACCES, std::generic_category());
+    std::error_code ignored;
+    std::filesystem::remove(probe, ignored);
+  }
+  if (error) {
+    throw UsageError("option --out: cannot write into the folder " + out.string() + " (" + error.message() +
+                     "); expected a folder this user can write (default <database dir>/power-<study>)");
+  }
+}
+
+/// Writes `text` to `file` through a temporary file renamed over it: a
+/// file is there whole or not at all.
+void WriteWhole(const std::filesystem::path& file, const std::string& text) {
+  const std::filesystem::path part = file.string() + ".part";
+  std::ofstream out(part, std::ios::binary);
+  out << text;
+  out.close();
+  std::error_code renamed;
+  if (out) std::filesystem::rename(part, file, renamed);
+  if (!out || renamed) {
+    std::filesystem::remove(part, renamed);
+    throw std::runtime_error("cannot write " + file.string());
+  }
 }
 
 /// Worker `worker` of `jobs`: runs the pool participants i with
@@ -201,7 +247,12 @@ int StudyPowerCommand(int argc, const char* const* argv) {
       real_time = args.Flag("real-time");
       options.simulations = args.Int("simulations", 1, 1000000).value_or(100);
       options.seed = static_cast<std::uint64_t>(args.Int("seed", 0, 1 << 30).value_or(1));
-      jobs = args.Int("jobs", 1, 64).value_or(2);
+      jobs = args.Int("jobs", 1, 1 << 20).value_or(2);
+      if (jobs > MaxJobs()) {
+        throw UsageError("option --jobs: expected at most " + std::to_string(MaxJobs()) + " (twice this machine's " +
+                         std::to_string(HardwareThreads()) + " hardware threads: each job is a trial process that "
+                         "runs flat out; more only share the same processors), got " + std::to_string(jobs));
+      }
       worker = args.Int("worker", 0, jobs - 1);
       if (const auto counts = args.Value("participants")) options.participant_counts = ParseCounts(*counts);
       const std::optional<int> pool_option = args.Int("pool", 1, 10000);
@@ -248,6 +299,7 @@ int StudyPowerCommand(int argc, const char* const* argv) {
       const std::filesystem::path database = !study.database.empty() ? study.database : run_config.database;
       out = args.Value("out").value_or((database.parent_path() / ("power-" + study.name)).string());
       pool_database = out / ("pool-" + std::to_string(pool) + "-seed" + std::to_string(options.seed) + ".db");
+      CheckWritableFolder(out);
       // The first trial set up now: a word `haptel run` refuses is bad input, before anything runs.
       try {
         TrialSetup(pool_config, plan.front(), pool_database, domain, verbose, 0, !real_time);
@@ -258,9 +310,6 @@ int StudyPowerCommand(int argc, const char* const* argv) {
                          "real time");
       }
     });
-    std::error_code made;
-    std::filesystem::create_directories(out, made);
-    if (made) throw std::runtime_error("cannot create the folder " + out.string() + ": " + made.message());
     // A worker runs every `jobs`-th participant of the pool, in order.
     if (worker) return RunPoolShare(pool_config, plan, pool_database, domain, verbose, !real_time, *worker, jobs,
                                     interrupted);
@@ -300,6 +349,8 @@ int StudyPowerCommand(int argc, const char* const* argv) {
             if (other->Alive()) kill(other->pid(), SIGTERM);
           }
         }
+        // A worker that has not ended its trial in a while is ended.
+        if (stopping && workers[w]->Alive()) workers[w]->Terminate(10.0);
       }
       if (code != 0) {
         worker_failures += (worker_failures.empty() ? "" : "; ") + ("worker " + std::to_string(w) + " " +
@@ -320,7 +371,7 @@ int StudyPowerCommand(int argc, const char* const* argv) {
     std::vector<PowerParticipant> pool_data;
     std::vector<std::string> left_out;
     const std::filesystem::path pool_csv = out / "pool.csv";
-    std::ofstream csv(pool_csv);
+    std::ostringstream csv;
     csv << "participant,row,profile,position,condition,lap_time_s,completed,obstacles,run_id\n";
     for (size_t i = 0; i < pool_config.participants.size(); ++i) {
       const StudyParticipant& p = pool_config.participants[i];
@@ -344,8 +395,6 @@ int StudyPowerCommand(int argc, const char* const* argv) {
         left_out.push_back(p.id);
       }
     }
-    csv.close();
-    if (!csv) throw std::runtime_error("cannot write " + pool_csv.string());
     if (!left_out.empty()) {
       std::string who;
       for (const std::string& id : left_out) who += (who.empty() ? "" : ", ") + id;
@@ -354,7 +403,10 @@ int StudyPowerCommand(int argc, const char* const* argv) {
     }
 
     const auto analysis_started = std::chrono::steady_clock::now();
+    std::fprintf(stderr, "[power] the pool is done: %d simulations for each of %zu participant counts\n",
+                 options.simulations, options.participant_counts.size());
     PowerResult power;
+    options.stop = &interrupted;
     try {
       power = EstimatePower(pool_data, static_cast<int>(study.conditions.size()), rows, options);
     } catch (const std::invalid_argument& e) {
@@ -363,10 +415,15 @@ int StudyPowerCommand(int argc, const char* const* argv) {
     }
     const double analysis_wall_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - analysis_started).count();
+    if (power.stopped || interrupted.load()) {
+      std::fprintf(stderr, "[power] interrupted during the analysis: no file written; the pool's trials are in %s, "
+                   "and the same command runs the analysis again\n", pool_database.c_str());
+      return cli::kExitFailed;
+    }
 
-    // The table, the CSV and the curve.
+    // The table, the CSV and the curve, each whole or not at all.
     const std::filesystem::path power_csv = out / "power.csv";
-    std::ofstream table(power_csv);
+    std::ostringstream table;
     table << "participants,simulations,friedman_power,friedman_ci_low,friedman_ci_high,lmm_power,lmm_ci_low,"
              "lmm_ci_high,friedman_not_analysed,lmm_not_analysed\n";
     for (const PowerPoint& p : power.points) {
@@ -375,11 +432,15 @@ int StudyPowerCommand(int argc, const char* const* argv) {
             << Fixed(p.lmm_power, 4) << ',' << Fixed(p.lmm_interval.low, 4) << ',' << Fixed(p.lmm_interval.high, 4)
             << ',' << p.friedman_not_analysed << ',' << p.lmm_not_analysed << '\n';
     }
-    table.close();
-    if (!table) throw std::runtime_error("cannot write " + power_csv.string());
     const std::filesystem::path png = out / "power.png";
+    const std::filesystem::path png_part = out / "power.part.png";  // the encoder goes by the extension
     DrawPowerCurve(power, "Power of " + study.name + " (alpha 0.05, 95 % CI; pool of " +
-                              std::to_string(power.pool_participants) + ")", png);
+                              std::to_string(power.pool_participants) + ")", png_part);
+    WriteWhole(pool_csv, csv.str());
+    WriteWhole(power_csv, table.str());
+    std::error_code renamed;
+    std::filesystem::rename(png_part, png, renamed);
+    if (renamed) throw std::runtime_error("cannot write " + png.string() + ": " + renamed.message());
 
     std::printf("power of study %s: %d simulated participants in the pool (%d order rows), %d simulations per "
                 "count, alpha %s\n",

@@ -305,7 +305,9 @@ int StudyRunCommand(int argc, const char* const* argv) {
       console = cli::ReadInput([&] {
         return std::make_unique<StudyConsole>(config, plan, database, questionnaires, console_options);
       });
-      std::fprintf(stderr, "[study] console: %s\n", console->url().c_str());
+      std::string urls;
+      for (const std::string& url : console->urls()) urls += (urls.empty() ? "" : " or ") + url;
+      std::fprintf(stderr, "[study] console: %s\n", urls.c_str());
       if (!console->access_token().empty()) {
         std::fprintf(stderr, "[study] console access token (the page asks for it once): %s\n",
                      console->access_token().c_str());
@@ -335,10 +337,32 @@ int StudyRunCommand(int argc, const char* const* argv) {
     double simulated_s = 0.0;  ///< --simulated-time: the trials run now, simulated seconds
     double wall_s = 0.0;       ///< and their wall-clock seconds
     int outputs_failed = 0;    ///< trials run now whose CAN log or recording failed (kept)
+    std::filesystem::path unsaved_file;  ///< the run the database did not take, kept in this file
+    // A run the database did not take (a full disk...) ends the study: the
+    // next would fail the same way. Said whole: what the lap did, why it was
+    // not saved, and where its results are; the event is best effort, the
+    // database having just failed.
+    auto not_saved = [&](const mediator::RecordedRun& run, const std::string& what, const std::string& participant,
+                         int position, const std::string& condition) {
+      unsaved_file = run.unsaved;
+      stopped = what + " not saved (participant " + participant +
+                (position > 0 ? ", position " + std::to_string(position) + ", " + condition : std::string()) +
+                "): outcome " + mediator::ToString(run.result.outcome) + " (" + run.result.message +
+                "), but the database failed: " + run.save_error + "; " +
+                (run.unsaved.empty() ? std::string("and no file could take its results (see above)")
+                                     : "its results are in " + run.unsaved.string());
+      std::fprintf(stderr, "[study]   NOT SAVED: %s\n", stopped.c_str());
+      try {
+        store.Event("not saved", participant, position, stopped);
+      } catch (const std::exception&) {
+      }
+      exit_code = cli::kExitNotRecorded;
+    };
     /// Trials (participant, position) run again once after their vehicle was lost.
     std::set<std::pair<std::string, int>> lost_reruns;
     // A session that stops on a signal, or on the console's Abort.
-    auto run_watched = [&](const mediator::SessionSetup& setup, const record::Recorder::AlsoSave& also) {
+    auto run_watched = [&](const mediator::SessionSetup& setup, const record::Recorder::AlsoSave& also,
+                           const record::TrialOfRun& trial) {
       std::atomic<bool> trial_stop{false};
       std::atomic<bool> trial_over{false};
       std::thread watch([&] {
@@ -349,7 +373,7 @@ int StudyRunCommand(int argc, const char* const* argv) {
       });
       mediator::RecordedRun run;
       try {
-        run = mediator::RunAndRecord(setup, *recorder, trial_stop, also);
+        run = mediator::RunAndRecord(setup, *recorder, trial_stop, also, trial);
       } catch (...) {
         trial_over.store(true);
         watch.join();
@@ -392,7 +416,12 @@ int StudyRunCommand(int argc, const char* const* argv) {
                                (practice.third_person ? ", camera and third-person view" : "") + "; Abort ends it)",
                            trial->participant, 0);
           std::fprintf(stderr, "[study] practice lap: %s ...\n", who.c_str());
-          const mediator::RecordedRun run = run_watched(practice, {});
+          const mediator::RecordedRun run =
+              run_watched(practice, {}, {config.name, trial->participant, 0, "practice lap", 1});
+          if (run.run_id == 0) {
+            not_saved(run, "practice lap", trial->participant, 0, "");
+            break;
+          }
           if (interrupted.load()) continue;
           const record::RunRecord& r = run.result.record;
           // Aborted: not practised. Recorded as such, and offered again (the
@@ -436,12 +465,18 @@ int StudyRunCommand(int argc, const char* const* argv) {
       std::fprintf(stderr, "[study] trial %zu/%zu: participant %s, position %d, %s ...\n", number, planned,
                    trial->participant.c_str(), trial->position, trial->condition.c_str());
       const int64_t trial_start_ns = RealMonotonicNs();
-      const mediator::RecordedRun run = run_watched(setup, store.TrialWriter(*trial, config.trial_cap_s));
+      const mediator::RecordedRun run =
+          run_watched(setup, store.TrialWriter(*trial, config.trial_cap_s),
+                      {config.name, trial->participant, trial->position, trial->condition, trial->repetition});
       const record::RunRecord& r = run.result.record;
       // The speed-up over real time: simulated seconds against the trial's
       // whole wall-clock time (set-up, lap, recording and picture).
       simulated_s += run.result.simulated_s;
       wall_s += NsToS(RealMonotonicNs() - trial_start_ns);
+      if (run.run_id == 0) {
+        not_saved(run, "trial", trial->participant, trial->position, trial->condition);
+        break;
+      }
       // Taken, not only read: the trial run again is not aborted by the same press.
       if (console && console->TakeAbort() && !interrupted.load()) {
         store.Event("aborted", trial->participant, trial->position, "from the console; the trial is run again");
@@ -476,7 +511,7 @@ int StudyRunCommand(int argc, const char* const* argv) {
       // synthetic trial is run again once, with a vehicle of its own, as a
       // flagged one is ('redo': the next row is its attempt 2). Lost again,
       // the vehicle stays lost, and the study stops as before.
-      if (!person && run.run_id != 0 && run.result.outcome == mediator::Outcome::kVehicleLost &&
+      if (!person && run.result.outcome == mediator::Outcome::kVehicleLost &&
           lost_reruns.insert({trial->participant, trial->position}).second) {
         store.Event("redo", trial->participant, trial->position,
                     "run " + std::to_string(run.run_id) + ": " + run.result.message + ": run again once by itself");
@@ -484,11 +519,11 @@ int StudyRunCommand(int argc, const char* const* argv) {
                      static_cast<long long>(run.run_id));
         continue;
       }
-      // Not a finished trial: the run is recorded (or kept in a file), the trial is not.
+      // Not a finished trial: the run is recorded, the trial is not.
       store.Event("trial not finished", trial->participant, trial->position,
                   mediator::ToString(run.result.outcome) + ": " + run.result.message);
       stopped = mediator::ToString(run.result.outcome) + ": " + run.result.message;
-      exit_code = run.run_id == 0 ? cli::kExitNotRecorded : mediator::ExitCode(run.result.outcome);
+      exit_code = mediator::ExitCode(run.result.outcome);
       if (exit_code == cli::kExitOk) exit_code = cli::kExitFailed;
       break;
     }
@@ -555,6 +590,7 @@ int StudyRunCommand(int argc, const char* const* argv) {
                         ",\"trials_done\":" + std::to_string(trials.size()) +
                         ",\"trials_done_before\":" + std::to_string(done_before) +
                         ",\"stopped\":" + JsonString(stopped) +
+                        ",\"unsaved_file\":" + JsonString(unsaved_file.string()) +
                         ",\"speedup\":" + (speedup > 0.0 ? JsonNumber(speedup) : std::string("null")) +
                         ",\"outputs_failed\":" + std::to_string(outputs_failed) +
                         ",\"conditions\":[";

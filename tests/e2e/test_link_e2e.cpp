@@ -1,20 +1,27 @@
 // End to end, whose vehicle it is: `haptel run --attach` driving a
 // `haptel-vehicle` started by hand, a second operator refused while the
-// first drives, and a second vehicle under the same name reported as a
-// conflict, never mixed into a run.
+// first drives, a stranger on the domain that copies the run's session off
+// the wire obeyed in nothing, and a second vehicle under the same name
+// reported as a conflict, never mixed into a run.
 #include <catch2/catch.hpp>
 #include <signal.h>
 
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <fstream>
+#include <mutex>
+#include <optional>
 #include <utility>
 #include <regex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "child.hpp"
+#include "haptel/link/participant.hpp"
+#include "haptel/link/topic.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;
@@ -149,6 +156,214 @@ TEST_CASE("a second operator is refused, naming the one driving; the first drive
   std::smatch m;
   REQUIRE(std::regex_search(vehicle.child().err(), m, refused_count));
   CHECK(std::stoi(m[1]) > 0);
+}
+
+namespace {
+
+/// A stranger on the domain, on the product's own link library: it reads
+/// robot1's states, copies the session they name as the owner's, and sends
+/// commands (newer sequence numbers than the owner's, spinning the robot)
+/// and key frame requests under it. Its commands carry negative `sent_ns`,
+/// so a state that echoes one shows it was obeyed.
+class Stranger {
+ public:
+  explicit Stranger(int domain)
+      : participant_(Config(domain), "test-stranger"),
+        commands_(participant_, link::TopicName("robot1", "command"), link::Profile::kCommand),
+        feedback_(participant_, link::TopicName("robot1", "video_feedback"), link::Profile::kState),
+        states_(participant_, link::TopicName("robot1", "state"), link::Profile::kState,
+                [this](const msg::VehicleState& s) {
+                  std::lock_guard lock(mutex_);
+                  if (s.owner_session() != 0) session_ = s.owner_session();
+                  // Obeyed while the vehicle names another as its owner:
+                  // taken for the owner. (Once the run released it at its
+                  // end, the vehicle is anybody's: the stranger may take it
+                  // in its own name.)
+                  if (s.last_command_sent_ns() < 0 && std::string(s.owner()) != kName) ++states_obeying_;
+                  if (link::WriterId{s.owner_writer()} == commands_.id()) ++states_owned_;
+                  refused_ = std::max(refused_, s.commands_refused());
+                  feedback_refused_ = std::max(feedback_refused_, s.video_feedback_refused());
+                }) {}
+
+  /// The states that named the stranger's command writer as the owner.
+  uint64_t states_owned() {
+    std::lock_guard lock(mutex_);
+    return states_owned_;
+  }
+
+  /// One command and one key frame request under the owner's session, once
+  /// a state has named it; false before.
+  bool Send() {
+    std::optional<uint64_t> session;
+    {
+      std::lock_guard lock(mutex_);
+      session = session_;
+    }
+    if (!session) return false;
+    ++sent_;
+    msg::DriveCommand c;
+    c.seq(1'000'000'000 + sent_);
+    c.sent_ns(-static_cast<int64_t>(sent_));
+    c.left(-1.0f);
+    c.right(1.0f);
+    c.session(*session);
+    c.operator_name(kName);
+    commands_.Write(c);
+    msg::VideoFeedback f;
+    f.seq(sent_);
+    f.session(*session);
+    f.key_frame_request(true);
+    feedback_.Write(f);
+    return true;
+  }
+  uint64_t sent() const { return sent_; }
+  /// States that echoed one of the stranger's commands while naming
+  /// another owner.
+  uint64_t states_obeying() {
+    std::lock_guard lock(mutex_);
+    return states_obeying_;
+  }
+  /// The vehicle's counts of refused commands and feedback, as its states said.
+  uint64_t refused() {
+    std::lock_guard lock(mutex_);
+    return refused_;
+  }
+  uint64_t feedback_refused() {
+    std::lock_guard lock(mutex_);
+    return feedback_refused_;
+  }
+
+ private:
+  static constexpr const char* kName = "a stranger";
+  static LinkConfig Config(int domain) {
+    LinkConfig c;
+    c.domain_id = domain;
+    return c;
+  }
+  link::Participant participant_;
+  link::CommandWriter commands_;
+  link::VideoFeedbackWriter feedback_;
+  std::mutex mutex_;
+  std::optional<uint64_t> session_;
+  uint64_t states_obeying_ = 0, states_owned_ = 0, refused_ = 0, feedback_refused_ = 0;
+  uint64_t sent_ = 0;  ///< test thread only
+  link::StateReader states_;  // last: destroyed first
+};
+
+/// The numbers of the vehicle's stop line ("... N frames (K key, Q key
+/// frame requests ...") in `err`; false when there is none.
+bool VehicleFrames(const std::string& err, uint64_t& frames, uint64_t& key, uint64_t& requests) {
+  static const std::regex line(
+      R"(haptel-vehicle: info: stopped: .* ([0-9]+) frames \(([0-9]+) key, ([0-9]+) key frame requests)");
+  std::smatch m;
+  if (!std::regex_search(err, m, line)) return false;
+  frames = std::stoull(m[1]);
+  key = std::stoull(m[2]);
+  requests = std::stoull(m[3]);
+  return true;
+}
+
+}  // namespace
+
+TEST_CASE("a stranger that copies the run's session off the wire is obeyed in nothing: no command, no key frame") {
+  const int domain = test::UniqueDomain(141);
+  const auto dir = test::ScratchDir("e2e-stranger");
+  Child run({Bin("haptel"), "run", "--track", "config/tracks/test-short.yaml", "--json", "--domain",
+             std::to_string(domain), "--database", (dir / "runs.db").string(), "--vehicle-timeout", "5",
+             "--time-limit", "90"});
+  REQUIRE(test::WaitForVehicle(run, 60.0));
+  Stranger stranger(domain);
+  // Its commands and requests, 50 a second, until the run ends.
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(150);
+  while (run.Alive() && std::chrono::steady_clock::now() < give_up) {
+    run.Pump();
+    stranger.Send();
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  const int code = run.Wait(60.0);
+  run.Pump();
+  INFO(run.out() << run.err());
+  INFO("stranger sent " << stranger.sent() << ", states obeying it " << stranger.states_obeying()
+                        << ", refused " << stranger.refused() << ", feedback refused "
+                        << stranger.feedback_refused());
+  REQUIRE(stranger.sent() > 50);  // it was there long enough to matter
+  // Not one of its commands was obeyed; the vehicle refused them and its feedback.
+  CHECK(stranger.states_obeying() == 0);
+  CHECK(stranger.refused() > 0);
+  CHECK(stranger.feedback_refused() > 0);
+  // The owner drove its lap, and its count of dropped commands is its own.
+  CHECK(code == 0);
+  const std::string json = run.LastLine();
+  CHECK(JsonField(json, "outcome") == "completed");
+  CHECK(std::stoull(JsonField(json, "vehicle_commands_dropped")) < 1000);
+  // Key frames were not forced: the vehicle honoured the owner's requests
+  // only (the stranger asked for one with every command).
+  uint64_t frames = 0, key = 0, requests = 0;
+  REQUIRE(VehicleFrames(run.err(), frames, key, requests));
+  CHECK(requests * 4 < stranger.sent());
+  CHECK(key * 4 < frames);
+}
+
+TEST_CASE("a run whose vehicle is taken over while it is silent says so at once: lost control, exit 2") {
+  // The run is stopped (SIGSTOP) past the vehicle's 2-s free time while a
+  // stranger commands: the vehicle is the stranger's. Resumed, the run
+  // sees a state naming another writer as the owner.
+  const int domain = test::UniqueDomain(142);
+  const auto dir = test::ScratchDir("e2e-lost-control");
+  Child run({Bin("haptel"), "run", "--track", "config/tracks/grand-prix.yaml", "--json", "--domain",
+             std::to_string(domain), "--database", (dir / "runs.db").string(), "--vehicle-timeout", "30",
+             "--time-limit", "120"});
+  REQUIRE(test::WaitForVehicle(run, 60.0));
+  Stranger stranger(domain);
+  REQUIRE(test::WaitFor([&] { run.Pump(); return stranger.Send(); }, 30.0));  // a state named the owner
+  REQUIRE(kill(run.pid(), SIGSTOP) == 0);
+  const bool taken = test::WaitFor([&] {
+    stranger.Send();
+    return stranger.states_owned() > 0;
+  }, 60.0);
+  REQUIRE(kill(run.pid(), SIGCONT) == 0);
+  REQUIRE(taken);
+  // The stranger keeps sending: the vehicle stays its own.
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (run.Alive() && std::chrono::steady_clock::now() < give_up) {
+    run.Pump();
+    stranger.Send();
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  const int code = run.Wait(60.0);
+  INFO(run.out() << run.err());
+  CHECK(code == 2);
+  const std::string json = run.LastLine();
+  CHECK(JsonField(json, "outcome") == "lost control");
+  CHECK(JsonField(json, "completed") == "false");
+  CHECK(JsonField(json, "message").find("obeys another writer's commands now, not this run's") !=
+        std::string::npos);
+  CHECK(JsonField(json, "message").find("names this run's session") != std::string::npos);
+  CHECK(run.err().find("error: vehicle 'robot1' on domain " + std::to_string(domain) +
+                       " obeys another writer's commands now") != std::string::npos);
+}
+
+TEST_CASE("a run whose link reaches beyond the host without --security says so in one line; --insecure silences it") {
+  const auto dir = test::ScratchDir("e2e-insecure");
+  // A folder for a database: refused (exit 2) right after the link's line,
+  // before anything is spawned: the line is what is checked.
+  const std::vector<std::string> base{Bin("haptel"), "run", "--track", "config/tracks/test-short.yaml",
+                                      "--dds-peers", "127.0.0.1,10.0.0.7", "--database", dir.string()};
+  std::vector<std::string> insecure = base;
+  insecure.push_back("--insecure");
+  std::vector<std::string> loopback = base;
+  loopback.erase(loopback.begin() + 4, loopback.begin() + 6);
+  auto runs = test::StartAll({base, insecure, loopback});
+  const std::string line = "warning: the link reaches beyond this host (peer 10.0.0.7) without DDS Security";
+  for (auto& run : runs) {
+    const int code = run->Wait(60.0);
+    INFO(run->err());
+    CHECK(code == 2);
+  }
+  CHECK(runs[0]->err().find(line) != std::string::npos);
+  CHECK(runs[0]->err().find("--insecure silences this") != std::string::npos);
+  CHECK(runs[1]->err().find("reaches beyond this host") == std::string::npos);
+  CHECK(runs[2]->err().find("reaches beyond this host") == std::string::npos);
 }
 
 TEST_CASE("a second vehicle under the same name is a conflict: exit 2, nothing driven as a lap") {

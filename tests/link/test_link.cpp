@@ -1,9 +1,11 @@
+#include <algorithm>
 #include <atomic>
 #include <catch2/catch.hpp>
 #include <mutex>
 #include <vector>
 
 #include "haptel/config/error.hpp"
+#include "haptel/link/security.hpp"
 #include "haptel/link/topic.hpp"
 #include "test_env.hpp"
 
@@ -74,6 +76,66 @@ TEST_CASE("a command crosses between two participants intact") {
   CHECK(got.sent_ns() == 123456789);
   CHECK(got.left() == 0.25F);
   CHECK(got.right() == -0.75F);
+}
+
+TEST_CASE("a reader is told each sample's writer: its GUID, which another participant's writer does not have") {
+  const LinkConfig config = Config(9);
+  Participant vehicle(config, "test-vehicle");
+  Participant owner(config, "test-owner");
+  Participant stranger(config, "test-stranger");
+  std::mutex m;
+  std::vector<WriterId> from;
+  CommandReader reader(vehicle, TopicName("t", "command"), Profile::kCommand,
+                       [&](const msg::DriveCommand&, const WriterId& writer) {
+                         std::lock_guard lock(m);
+                         from.push_back(writer);
+                       });
+  CommandWriter mine(owner, TopicName("t", "command"), Profile::kCommand);
+  VideoFeedbackWriter my_feedback(owner, TopicName("t", "video_feedback"), Profile::kState);
+  CommandWriter theirs(stranger, TopicName("t", "command"), Profile::kCommand);
+  CHECK_FALSE(mine.id().empty());
+  CHECK_FALSE(mine.id() == theirs.id());
+  // One participant's writers share its GUID prefix; another's do not.
+  CHECK(mine.id().SameParticipant(my_feedback.id()));
+  CHECK_FALSE(mine.id() == my_feedback.id());
+  CHECK_FALSE(mine.id().SameParticipant(theirs.id()));
+  msg::DriveCommand c;
+  const auto heard = [&](const WriterId& id) {
+    std::lock_guard lock(m);
+    return std::find(from.begin(), from.end(), id) != from.end();
+  };
+  REQUIRE(test::WaitFor([&] { mine.Write(c); theirs.Write(c); return heard(mine.id()) && heard(theirs.id()); }, 20.0));
+  std::lock_guard lock(m);
+  for (const WriterId& id : from) CHECK((id == mine.id() || id == theirs.id()));
+  CHECK(mine.id().ToString().size() == 33);  // 12 bytes, '|', 4 bytes in hex
+}
+
+TEST_CASE("a link beyond the host without DDS Security is said; loopback, --security or --insecure: not") {
+  LinkConfig c;  // the default: loopback only
+  CHECK(LinkBeyondHost(c).empty());
+  CHECK(InsecureLinkWarning(c, false).empty());
+  c.interfaces = {"127.0.0.1", "127.0.1.1"};
+  c.discovery_server = "127.0.0.1:11811";
+  CHECK(InsecureLinkWarning(c, false).empty());  // a server on this host: still nothing leaves it
+
+  LinkConfig lan = c;
+  lan.interfaces = {"127.0.0.1", "192.168.1.20"};
+  CHECK(LinkBeyondHost(lan) == "interface 192.168.1.20");
+  const std::string warning = InsecureLinkWarning(lan, false);
+  CHECK(warning.find("the link reaches beyond this host (interface 192.168.1.20) without DDS Security") == 0);
+  CHECK(warning.find("guards against mistakes, not attackers") != std::string::npos);
+  CHECK(warning.find("--insecure silences this") != std::string::npos);
+  CHECK(InsecureLinkWarning(lan, true).empty());
+  lan.security = "deployment";
+  CHECK(InsecureLinkWarning(lan, false).empty());
+
+  LinkConfig peers;
+  peers.peers = {"127.0.0.1", "10.0.0.7"};
+  CHECK(LinkBeyondHost(peers) == "peer 10.0.0.7");
+  LinkConfig server;
+  server.discovery_server = "10.0.0.9:11811";
+  CHECK(LinkBeyondHost(server) == "discovery server 10.0.0.9:11811");
+  CHECK_FALSE(InsecureLinkWarning(server, false).empty());
 }
 
 TEST_CASE("a latched topic: a reader that joins after the last write still gets it, once") {

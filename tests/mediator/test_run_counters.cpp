@@ -118,7 +118,7 @@ TEST_CASE("the progress line lists the counters that are not zero") {
 
 TEST_CASE("a run that started its vehicle takes states from that process only; a stranger's first state is a conflict") {
   const int64_t spawned = 4242;
-  mediator::VehicleHealth health("robot1", 7, /*session=*/99, /*vehicle_timeout_s=*/1.0,
+  mediator::VehicleHealth health("robot1", 7, /*session=*/99, link::WriterId{}, /*vehicle_timeout_s=*/1.0,
                                  mediator::VehicleHealth::kStartupTimeout_s, spawned);
   msg::VehicleState ours;
   ours.vehicle_pid(spawned);
@@ -141,7 +141,98 @@ TEST_CASE("a run that started its vehicle takes states from that process only; a
   CHECK_FALSE(health.FromAnotherProcess(ours));  // its own states are still its own
 
   // Attached (no process of the run's): any process may send the states.
-  mediator::VehicleHealth attached("robot1", 7, 99, 1.0);
+  mediator::VehicleHealth attached("robot1", 7, 99, link::WriterId{}, 1.0);
   CHECK_FALSE(attached.FromAnotherProcess(stray));
   CHECK_FALSE(attached.StrangerConflict());
+}
+
+namespace {
+
+/// A DDS writer's identity: participant `p` (its GUID prefix), writer 3.
+link::WriterId WriterOf(uint8_t p) {
+  link::WriterId id;
+  id.guid[0] = 0x01;
+  id.guid[1] = 0x0f;
+  id.guid[11] = p;
+  id.guid[15] = 3;
+  return id;
+}
+
+msg::VehicleState OwnedBy(const link::WriterId& writer, uint64_t session, const char* name) {
+  msg::VehicleState s;
+  s.owner_writer(writer.guid);
+  s.owner_session(session);
+  s.owner(name);
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("a run that drove its vehicle says at once when another writer's commands are obeyed: lost control") {
+  const link::WriterId mine = WriterOf(1);
+  const int64_t ms = 1'000'000;
+  {
+    // This run's writer owned it, then another run's does (this run fell
+    // silent past the vehicle's free time, and a waiting operator took it).
+    mediator::VehicleHealth health("robot1", 7, /*session=*/99, mine, 1.0);
+    health.OnState(OwnedBy(mine, 99, "this run"), 10 * ms);
+    CHECK_FALSE(health.LostControl());
+    CHECK(health.ours());
+    health.OnState(OwnedBy(WriterOf(2), 55, "haptel run, bo@lab pid 7"), 20 * ms);
+    const auto end = health.LostControl();
+    REQUIRE(end);  // at once: no grace for a vehicle that was this run's
+    CHECK(end->outcome == mediator::Outcome::kLostControl);
+    CHECK(mediator::ToString(end->outcome) == "lost control");
+    CHECK(mediator::ExitCode(end->outcome) == 2);
+    CHECK(end->message.find("vehicle 'robot1' on domain 7 obeys another writer's commands now, not this run's: "
+                            "'haptel run, bo@lab pid 7', writer ") != std::string::npos);
+    CHECK(end->message.find("this run lost control") != std::string::npos);
+  }
+  {
+    // A stranger naming this run's session (copied off the wire) is obeyed:
+    // lost control, said so, even before this run's writer was seen owning it.
+    mediator::VehicleHealth health("robot1", 7, 99, mine, 1.0);
+    health.OnState(OwnedBy(WriterOf(9), 99, "haptel run, ana@lab pid 4"), 10 * ms);
+    const auto end = health.LostControl();
+    REQUIRE(end);
+    CHECK(end->message.find("a participant that names this run's session (copied off the link") !=
+          std::string::npos);
+  }
+  {
+    // Never this run's, another run's: refused after its grace, not lost control.
+    mediator::VehicleHealth health("robot1", 7, 99, mine, 1.0);
+    health.OnState(OwnedBy(WriterOf(2), 55, "bo"), 10 * ms);
+    CHECK_FALSE(health.LostControl());
+    CHECK_FALSE(health.ours());
+    // Free again (a vehicle restarted, an owner released it) is not a loss either.
+    mediator::VehicleHealth freed("robot1", 7, 99, mine, 1.0);
+    freed.OnState(OwnedBy(mine, 99, "this run"), 10 * ms);
+    freed.OnState(OwnedBy({}, 0, ""), 20 * ms);
+    CHECK_FALSE(freed.LostControl());
+  }
+}
+
+TEST_CASE("commands dropped count this run's echoes only: a stranger's sequence is not this run's") {
+  // The issue's figure: a stranger obeyed with sequence numbers from 10^9
+  // made the owner's run report 999999724 commands dropped.
+  const link::WriterId mine = WriterOf(1);
+  StateInbox inbox;
+  inbox.SetOwnWriter(mine);
+  const auto state = [](uint64_t seq, const link::WriterId& owner, uint64_t echoed, uint64_t accepted) {
+    msg::VehicleState s = State(seq, false, echoed, accepted);
+    s.owner_writer(owner.guid);
+    return s;
+  };
+  inbox.Push(state(1, mine, 100, 1));
+  inbox.Push(state(2, mine, 110, 9));  // 2 of 10 not taken
+  CHECK(inbox.Counts().commands_dropped == 2);
+  inbox.Push(state(3, WriterOf(9), 1'000'000'050, 60));  // a stranger's command obeyed
+  inbox.Push(state(4, WriterOf(9), 1'000'000'090, 100));
+  CHECK(inbox.Counts().commands_dropped == 2);
+  // This run's again (the stranger fell silent): counted from there, what was counted kept.
+  inbox.Push(state(5, mine, 300, 101));
+  inbox.Push(state(6, mine, 310, 111));
+  CHECK(inbox.Counts().commands_dropped == 2);
+  inbox.Push(state(7, mine, 320, 116));  // 5 of 10 not taken
+  CHECK(inbox.Counts().commands_dropped == 2 + 5);
 }

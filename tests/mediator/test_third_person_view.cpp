@@ -5,7 +5,9 @@
 // the labelled inset with the robot in its lower middle, and nothing of it
 // when the model has no third-person picture.
 #include <catch2/catch.hpp>
+#include <atomic>
 #include <cmath>
+#include <thread>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -133,6 +135,55 @@ TEST_CASE("the third-person pictures are reused, never one the view still holds"
   REQUIRE(chase.Update(robot));
   CHECK(chase.Latest().image.get() == first);
   CHECK(chase.Latest().id == 5);
+}
+
+TEST_CASE("the view reads each third-person picture whole while the session draws the next ones",
+          "[threads]") {
+  const VehicleConfig vehicle = LoadVehicle("config/vehicles/sim-robot.yaml");
+  const Track track(LoadTrack("config/tracks/test-short.yaml"));
+  ThirdPersonView chase(track, vehicle);
+  const PredictedPose robot{0.0, track.StartPosition().x(), track.StartPosition().y(),
+                            track.StartHeading()};
+  // Every picture is of the same pose: any picture read while it was being
+  // redrawn (a buffer reused too soon) differs from this one.
+  cv::Mat expected;
+  chase.Render(robot, expected);
+  // Read here, byte by byte, not by OpenCV (not built with ThreadSanitizer),
+  // so that TSan sees the view's reads against the session's drawing.
+  const auto bytes_sum = [](const cv::Mat& m) {
+    uint64_t sum = 0;
+    for (size_t i = 0; i < m.total() * m.elemSize(); ++i) sum += m.data[i];
+    return sum;
+  };
+  const uint64_t expected_sum = bytes_sum(expected);
+
+  // The view thread takes the latest picture and reads it whole, lets go
+  // of it, then waits for the session to draw two more without taking the
+  // view's lock meanwhile: only the picture's hand-back orders these reads
+  // before the session draws into its buffer again.
+  std::atomic<bool> done{false};
+  std::atomic<int> drawn{0}, read{0}, torn{0};
+  test::Thread view("view", [&] {
+    while (!done.load()) {
+      {
+        const view::VideoImage image = chase.Latest();
+        if (image.image != nullptr) {
+          if (bytes_sum(*image.image) != expected_sum) ++torn;
+          ++read;
+        }
+      }
+      const int seen = drawn.load();
+      while (!done.load() && drawn.load() < seen + 2) std::this_thread::yield();
+    }
+  });
+  test::Deadline deadline(120.0);
+  while ((drawn.load() < 200 || read.load() < 20) && !deadline.passed()) {
+    if (chase.Update(robot)) ++drawn;
+  }
+  done = true;
+  view.Join();
+  CHECK(read.load() >= 20);
+  CHECK(torn.load() == 0);
 }
 
 TEST_CASE("the view draws the third-person picture as a labelled inset with the robot in its lower middle; "

@@ -533,6 +533,21 @@ TEST_CASE("A run the database did not take is written whole beside it", "[record
   fs::remove(elsewhere);
 }
 
+TEST_CASE("A study's run kept in a file says whose trial it was, first", "[recorder]") {
+  TempDir tmp;
+  const RunRecord run = MakeRun(2, 3);
+  const fs::path file = haptel::record::WriteUnsavedRun(
+      run, tmp.path() / "study.db", 1'714'566'896'789'000'000,
+      haptel::record::TrialOfRun{"lab \"A\"", "P7", 3, "gesture", 2});
+  std::ifstream in(file);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // The trial, then the run whole, as without it.
+  CHECK(text ==
+        "{\"trial\":{\"study\":\"lab \\\"A\\\"\",\"participant\":\"P7\",\"position\":3,"
+        "\"condition\":\"gesture\",\"repetition\":2}," +
+            haptel::record::RunRecordJson(run).substr(1) + "\n");
+}
+
 TEST_CASE("A failing Save rolls back and leaves the Recorder usable", "[recorder]") {
   TempDir tmp;
   const fs::path file = tmp.path() / "runs.db";

@@ -458,3 +458,31 @@ TEST_CASE("A study's definition reads back as written, escapes and all") {
   const std::vector<DefiningValue> newer = {{"form", "2"}, {"odd: key", "a\nb\\c: d"}, {"new", "x"}};
   CHECK(DefinitionChanges(values, newer).empty());
 }
+
+TEST_CASE("A study's file deleted or replaced while it runs: its writes are refused, not acknowledged into the void") {
+  // SQLite in WAL mode would write on into the unlinked file, and the console
+  // would answer 303 for a participant or a note that no file keeps.
+  const auto dir = test::ScratchDir("study-store-moved");
+  const StudyConfig config = FourConditions(dir, 4);
+  const std::vector<PlannedTrial> plan = PlanTrials(config);
+  const auto db = dir / "s.db";
+  record::Recorder recorder(db);
+  StudyStore store(recorder, config, plan);
+  SECTION("deleted") {
+    for (const char* suffix : {"", "-wal", "-shm"}) std::filesystem::remove(db.string() + suffix);
+  }
+  SECTION("replaced") {
+    std::filesystem::rename(db, dir / "moved.db");
+    record::Recorder other(db);  // a new, empty file in its place
+  }
+  const std::string participant = test::WhatOf<std::runtime_error>(
+      [&] { store.AddParticipant("P9", PlanParticipant(config, "P9", 4)); });
+  CHECK_THAT(participant, Catch::Contains("deleted or replaced"));
+  CHECK_THAT(participant, Catch::Contains(db.string()));
+  CHECK_THAT(test::WhatOf<std::runtime_error>([&] { store.SaveNote("P1", 0, "kept?"); }),
+             Catch::Contains("deleted or replaced"));
+  CHECK_THAT(test::WhatOf<std::runtime_error>([&] { store.SaveAnswers("P1", "a", "q", {{"item", "1"}}); }),
+             Catch::Contains("deleted or replaced"));
+  CHECK_THAT(test::WhatOf<std::runtime_error>([&] { store.Event("note", "P1", 0, "x"); }),
+             Catch::Contains("deleted or replaced"));
+}

@@ -50,7 +50,7 @@ TEST_CASE("CameraStreamer: frames are grabbed and encoded below the priority of 
   config.height = 48;
   config.rate_hz = 50.0;
   const int node_nice = ThreadNice();
-  vehicles::CameraStreamer streamer(config, std::move(camera), participant, "robot1", [] { return uint64_t{0}; });
+  vehicles::CameraStreamer streamer(config, std::move(camera), participant, "robot1", [] { return link::WriterId{}; });
   streamer.Start();
   REQUIRE(test::WaitFor([&] { return seen.grabs.load() >= 2 && streamer.Counters().frames_published >= 1; }, 30.0));
   streamer.Stop();

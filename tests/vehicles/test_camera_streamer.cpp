@@ -1,10 +1,12 @@
 // The camera streamer takes video feedback (key frame requests, the target
-// bitrate) from the session that owns the vehicle only: another participant
-// on the domain cannot hold its video at the lowest rung.
+// bitrate) from the participant that owns the vehicle only: another
+// participant on the domain cannot hold its video at the lowest rung, even
+// naming the owner's session.
 #include <catch2/catch.hpp>
 
 #include <atomic>
 #include <memory>
+#include <mutex>
 
 #include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"
@@ -40,31 +42,39 @@ struct FeedbackSender {
 
 }  // namespace
 
-TEST_CASE("video feedback from a session that does not own the vehicle is refused and counted; the owner's works") {
+TEST_CASE("video feedback from a participant that does not own the vehicle is refused and counted; the owner's works") {
   const Track track(LoadTrack("config/tracks/test-short.yaml"));
   LinkConfig link;
   link.domain_id = test::UniqueDomain(81);
   CameraConfig camera;
   camera.codec = CameraCodec::kH264;
-  std::atomic<uint64_t> owner{1111};  // the session the vehicle obeys (CommandOwner)
   link::Participant vehicle(link, "test-vehicle");
-  vehicles::CameraStreamer streamer(camera, std::make_unique<video::SyntheticSource>(track, camera), vehicle,
-                                    "robot1", [&owner] { return owner.load(); });
   FeedbackSender stranger(link, "test-stranger");
   FeedbackSender op(link, "test-operator");
+  // The command writer the vehicle obeys (CommandOwner): one of the
+  // operator's participant (its feedback writer shares the GUID prefix).
+  std::mutex mutex;
+  link::WriterId owner = op.writer.id();
+  owner.guid[15] ^= 0x40;  // another entity of the same participant
+  vehicles::CameraStreamer streamer(camera, std::make_unique<video::SyntheticSource>(track, camera), vehicle,
+                                    "robot1", [&] {
+                                      std::lock_guard lock(mutex);
+                                      return owner;
+                                    });
 
-  // A stranger asks for the lowest bitrate and a key frame, until the
-  // vehicle has heard it (a sample sent before discovery is not received).
+  // A stranger asks for the lowest bitrate and a key frame, naming the
+  // owner's session (read off the wire), until the vehicle has heard it (a
+  // sample sent before discovery is not received).
   REQUIRE(test::WaitFor(
       [&] {
-        stranger.Send(2222, 100, true);
+        stranger.Send(1111, 100, true);
         return streamer.Counters().feedback_refused >= 3;
       },
       30.0));
   vehicles::CameraCounters c = streamer.Counters();
   CHECK(c.target_kbps == 0);          // the target is not the stranger's
   CHECK(c.key_frame_requests == 0);   // nor is a key frame forced
-  // A sender without a session (0) is a stranger too while the vehicle is owned.
+  // Nor with any other session.
   const uint64_t refused = c.feedback_refused;
   REQUIRE(test::WaitFor(
       [&] {
@@ -86,7 +96,10 @@ TEST_CASE("video feedback from a session that does not own the vehicle is refuse
   CHECK(c.key_frame_requests > 0);
 
   // Another owner (the first released the vehicle): the old one's feedback is refused now.
-  owner.store(3333);
+  {
+    std::lock_guard lock(mutex);
+    owner = stranger.writer.id();
+  }
   const uint64_t before = streamer.Counters().feedback_refused;
   REQUIRE(test::WaitFor(
       [&] {
@@ -97,7 +110,7 @@ TEST_CASE("video feedback from a session that does not own the vehicle is refuse
   CHECK(streamer.Counters().target_kbps == 700);
 }
 
-TEST_CASE("video feedback while nobody owns the vehicle is taken from any session") {
+TEST_CASE("video feedback while nobody owns the vehicle is taken from any participant") {
   // Nothing to protect yet (no operator drives it), and a vehicle only
   // watched, never commanded, still follows the link.
   const Track track(LoadTrack("config/tracks/test-short.yaml"));
@@ -107,7 +120,7 @@ TEST_CASE("video feedback while nobody owns the vehicle is taken from any sessio
   camera.codec = CameraCodec::kJpeg;
   link::Participant vehicle(link, "test-vehicle");
   vehicles::CameraStreamer streamer(camera, std::make_unique<video::SyntheticSource>(track, camera), vehicle,
-                                    "robot1", [] { return uint64_t{0}; });
+                                    "robot1", [] { return link::WriterId{}; });
   FeedbackSender op(link, "test-operator");
   REQUIRE(test::WaitFor(
       [&] {

@@ -3,6 +3,7 @@
 #include <limits>
 
 #include "alloc_counter.hpp"
+#include "haptel/vehicles/camera_streamer.hpp"
 #include "haptel/vehicles/command_intake.hpp"
 #include "haptel/vehicles/drive.hpp"
 
@@ -91,17 +92,31 @@ TEST_CASE("command intake: malformed and stale commands are counted and dropped,
   CHECK(in.applied().command == 5);
 }
 
-TEST_CASE("command intake: one operator session at a time; a release or the owner's silence frees the vehicle") {
+namespace {
+/// A DDS writer's identity: participant `p`, writer `w`.
+haptel::link::WriterId Writer(uint8_t p, uint8_t w) {
+  haptel::link::WriterId id;
+  id.guid[0] = 0x01;
+  id.guid[1] = 0x0f;
+  id.guid[11] = p;
+  id.guid[15] = w;
+  return id;
+}
+}  // namespace
+
+TEST_CASE("command intake: one operator's writer at a time; a release or the owner's silence frees the vehicle") {
   CommandIntake<int> in(0.25);
   const int64_t ms = 1'000'000;
-  const CommandSender ana{11, "ana's run", false};
-  const CommandSender bo{22, "bo's run", false};
+  const CommandSender ana{Writer(1, 3), 11, "ana's run", false};
+  const CommandSender bo{Writer(2, 3), 22, "bo's run", false};
   CHECK(in.owner().session == 0);
-  // The first session takes the vehicle; the state can name it.
+  CHECK(in.owner().writer.empty());
+  // The first writer takes the vehicle; the state can name it.
   CHECK(in.Offer(true, ana, 1, 0, 1, 10 * ms));
   CHECK(in.owner().session == 11);
+  CHECK(in.owner().writer == Writer(1, 3));
   CHECK(std::string(in.owner().name) == "ana's run");
-  // Another session's commands are refused and counted, newer or not.
+  // Another writer's commands are refused and counted, newer or not.
   CHECK_FALSE(in.Offer(true, bo, 50, 0, 2, 20 * ms));
   CHECK(in.Offer(true, ana, 2, 0, 3, 30 * ms));
   CHECK_FALSE(in.Offer(true, bo, 51, 0, 4, 40 * ms));
@@ -114,10 +129,11 @@ TEST_CASE("command intake: one operator session at a time; a release or the owne
   CHECK(in.malformed() == 1);
   CHECK(in.owner().session == 11);
 
-  // The owner's last command releases it: the next session takes it at
+  // The owner's last command releases it: the next writer takes it at
   // once, its sequence from 1 (not stale against the last owner's).
-  CHECK(in.Offer(true, {11, "ana's run", true}, 3, 0, 0, 60 * ms));
+  CHECK(in.Offer(true, {Writer(1, 3), 11, "ana's run", true}, 3, 0, 0, 60 * ms));
   CHECK(in.owner().session == 0);
+  CHECK(in.owner().writer.empty());
   CHECK(in.Offer(true, bo, 1, 0, 6, 61 * ms));
   CHECK(in.owner().session == 22);
   CHECK(std::string(in.owner().name) == "bo's run");
@@ -132,16 +148,49 @@ TEST_CASE("command intake: one operator session at a time; a release or the owne
   CHECK(in.refused() == 3);
 }
 
+TEST_CASE("command intake: a stranger naming the owner's session is refused, its commands and its release") {
+  // The session is in every state the vehicle publishes: anyone on the
+  // domain can copy it. The owner is its writer, which nobody else has.
+  CommandIntake<int> in(0.25);
+  const int64_t ms = 1'000'000;
+  const CommandSender ana{Writer(1, 3), 11, "ana's run", false};
+  const CommandSender stranger{Writer(9, 3), 11, "ana's run", false};
+  CHECK(in.Offer(true, ana, 1, 0, 1, 10 * ms));
+  // Newer sequence numbers than the owner's, the owner's session and name: refused.
+  CHECK_FALSE(in.Offer(true, stranger, 1'000'000'000, 0, -1, 20 * ms));
+  CHECK_FALSE(in.Offer(true, {Writer(9, 3), 11, "ana's run", true}, 1'000'000'001, 0, 0, 30 * ms));
+  CHECK(in.refused() == 2);
+  CHECK(in.owner().writer == Writer(1, 3));
+  // The owner drives on, its sequence unbroken (nothing of the stranger's is stale against it).
+  CHECK(in.Offer(true, ana, 2, 0, 2, 40 * ms));
+  CHECK(in.stale() == 0);
+  CHECK_FALSE(in.Poll(45 * ms));
+  CHECK(in.applied().command == 2);
+  // Another writer of the owner's own participant is not the owner either.
+  CHECK_FALSE(in.Offer(true, {Writer(1, 4), 11, "ana's run", false}, 3, 0, 3, 50 * ms));
+  CHECK(in.refused() == 3);
+}
+
+TEST_CASE("video feedback is followed from the owner's participant only, anybody's while nobody owns the vehicle") {
+  const haptel::link::WriterId owner = Writer(1, 3);
+  CHECK(FeedbackFromOwner(owner, Writer(1, 7)));  // the owner's run: its feedback writer
+  CHECK_FALSE(FeedbackFromOwner(owner, Writer(9, 7)));
+  CHECK_FALSE(FeedbackFromOwner(owner, Writer(9, 3)));
+  CHECK(FeedbackFromOwner({}, Writer(9, 7)));
+}
+
 TEST_CASE("command intake: ownership allocates nothing on the DDS thread", "[alloc]") {
   CommandIntake<int> in(0.25);
-  const CommandSender ana{11, "ana's run", false};
-  const CommandSender bo{22, "bo's run", false};
+  const CommandSender ana{Writer(1, 3), 11, "ana's run", false};
+  const CommandSender bo{Writer(2, 3), 22, "bo's run", false};
   in.Offer(true, ana, 1, 0, 1, 1);
   const uint64_t before = haptel::test::ThreadAllocations();
   for (uint64_t i = 2; i < 1000; ++i) {
     in.Offer(true, ana, i, 0, 1, static_cast<int64_t>(i) * 1000);
     in.Offer(true, bo, i, 0, 1, static_cast<int64_t>(i) * 1000);
-    if (i % 100 == 0) in.Offer(true, {11, "ana's run", true}, i, 0, 0, static_cast<int64_t>(i) * 1000 + 1);
+    if (i % 100 == 0) {
+      in.Offer(true, {Writer(1, 3), 11, "ana's run", true}, i, 0, 0, static_cast<int64_t>(i) * 1000 + 1);
+    }
   }
   CHECK(haptel::test::ThreadAllocations() == before);
 }

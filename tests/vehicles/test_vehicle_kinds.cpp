@@ -176,6 +176,7 @@ TEST_CASE("a toy kind registered as the docs show is loaded, opened and driven t
   CHECK(s->motor_right_level() == config.drive.speed_levels);
   CHECK(std::abs(s->y()) < 1e-3f);  // straight ahead: the toy's treads are even
   CHECK(s->owner_session() == 42);
+  CHECK(link::WriterId{s->owner_writer()} == op.commands.id());  // the owner is the writer DDS named
 
   // No more commands: the watchdog stops it, the toy stands still.
   REQUIRE(test::WaitFor(

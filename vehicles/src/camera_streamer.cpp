@@ -10,16 +10,16 @@ namespace haptel::vehicles {
 
 CameraStreamer::CameraStreamer(const CameraConfig& config, std::unique_ptr<video::CameraSource> camera,
                                link::Participant& participant, const std::string& vehicle_name,
-                               OwnerSession owner_session)
+                               OwnerWriter owner_writer)
     : config_(config),
-      owner_session_(std::move(owner_session)),
+      owner_writer_(std::move(owner_writer)),
       passthrough_possible_(config.codec == CameraCodec::kJpeg),
       camera_(std::move(camera)),
       encoder_(video::MakeVideoEncoder(config)),
       codec_name_(CameraCodecName(config.codec)),
       writer_(participant, link::TopicName(vehicle_name, "video"), link::Profile::kVideo) {
   if (camera_ == nullptr) throw std::invalid_argument("CameraStreamer: no camera source");
-  if (!owner_session_) throw std::invalid_argument("CameraStreamer: no owner session");
+  if (!owner_writer_) throw std::invalid_argument("CameraStreamer: no owner writer");
   loop_ = std::make_unique<PeriodicThread>(
       // Rendering and encoding a frame takes milliseconds of CPU: behind the
       // control loop and the link's threads, so commands and states never
@@ -31,14 +31,13 @@ CameraStreamer::CameraStreamer(const CameraConfig& config, std::unique_ptr<video
   // operator waits), and one lost would leave the picture stale longer.
   feedback_ = std::make_unique<link::VideoFeedbackReader>(
       participant, link::TopicName(vehicle_name, "video_feedback"), link::Profile::kState,
-      [this](const msg::VideoFeedback& f) { OnFeedback(f); });
+      [this](const msg::VideoFeedback& f, const link::WriterId& sender) { OnFeedback(f, sender); });
 }
 
-void CameraStreamer::OnFeedback(const msg::VideoFeedback& feedback) {
-  // Only the owner's: another session's target or key frame request would
-  // hold the owner's video at a rung it did not ask for.
-  const uint64_t owner = owner_session_();
-  if (owner != 0 && feedback.session() != owner) {
+void CameraStreamer::OnFeedback(const msg::VideoFeedback& feedback, const link::WriterId& sender) {
+  // Only the owner's: another participant's target or key frame request
+  // would hold the owner's video at a rung it did not ask for.
+  if (!FeedbackFromOwner(owner_writer_(), sender)) {
     feedback_refused_.fetch_add(1, std::memory_order_relaxed);
     return;
   }

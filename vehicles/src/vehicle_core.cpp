@@ -23,11 +23,12 @@ VehicleCoreOf<Family>::VehicleCoreOf(const VehicleConfig& config, std::unique_pt
 }
 
 template <class Family>
-void VehicleCoreOf<Family>::OnCommand(const typename Family::CommandMsg& cmd, int64_t now_ns) {
+void VehicleCoreOf<Family>::OnCommand(const typename Family::CommandMsg& cmd, const link::WriterId& writer,
+                                      int64_t now_ns) {
   Command command;
   const bool valid = Family::Decode(cmd, command);
-  commands_.Offer(valid, {cmd.session(), cmd.operator_name().c_str(), cmd.release()}, cmd.seq(), cmd.sent_ns(),
-                  command, now_ns);
+  commands_.Offer(valid, {writer, cmd.session(), cmd.operator_name().c_str(), cmd.release()}, cmd.seq(),
+                  cmd.sent_ns(), command, now_ns);
 }
 
 template <class Family>
@@ -68,6 +69,7 @@ typename Family::StateMsg& VehicleCoreOf<Family>::MakeState(int64_t now_ns) {
   const CommandOwnerInfo owner = commands_.owner();
   m.owner_session(owner.session);
   m.owner(owner.name);
+  m.owner_writer(owner.writer.guid);
   m.commands_refused(commands_.refused());
   if (s.fault && !faulted_.load()) {
     fault_ = s.fault_message;

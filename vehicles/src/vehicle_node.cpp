@@ -22,11 +22,13 @@ VehicleNodeOf<Family>::VehicleNodeOf(const VehicleConfig& config, std::unique_pt
   state_writer_ = std::make_unique<typename Family::StateWriter>(
       *participant_, link::TopicName(c.name, "state"), link::Profile::kState);
   camera_ = std::make_unique<CameraStreamer>(c.camera, std::move(camera), *participant_, c.name,
-                                             [this] { return core_.commands().owner().session; });
+                                             [this] { return core_.commands().owner().writer; });
   camera_->SetPose(Family::CameraPoseOf(core_.adapter().State()));
   command_reader_ = std::make_unique<typename Family::CommandReader>(
       *participant_, link::TopicName(c.name, "command"), link::Profile::kCommand,
-      [this](const typename Family::CommandMsg& cmd) { core_.OnCommand(cmd, MonotonicNs()); });
+      [this](const typename Family::CommandMsg& cmd, const link::WriterId& writer) {
+        core_.OnCommand(cmd, writer, MonotonicNs());
+      });
   control_ = std::make_unique<PeriodicThread>(
       PeriodicThread::Options{.name = "vehicle-control", .rate_hz = c.sim_rate_hz},
       [this](int64_t now) { ControlTick(now); });

@@ -154,6 +154,10 @@ PowerResult EstimatePower(const std::vector<PowerParticipant>& pool, int conditi
     point.participants = n;
     point.simulations = options.simulations;
     for (int s = 0; s < options.simulations; ++s) {
+      if (options.stop != nullptr && options.stop->load()) {
+        result.stopped = true;
+        return result;
+      }
       std::seed_seq seeds{static_cast<std::uint32_t>(options.seed & 0xffffffffu),
                           static_cast<std::uint32_t>(options.seed >> 32), static_cast<std::uint32_t>(n),
                           static_cast<std::uint32_t>(s)};

@@ -16,6 +16,8 @@
 #include <utility>
 #include <vector>
 
+#include "haptel/config/link.hpp"
+
 namespace haptel::link {
 
 /// The identity of the operator's side (every `haptel run`).
@@ -93,5 +95,20 @@ void AddConsoleCertificate(const std::filesystem::path& dir, const std::vector<s
 
 /// What a console name lacks ("" when it is a host name or an IP address).
 std::string ConsoleNameProblem(const std::string& name);
+
+/// Where `config`'s link reaches beyond this host: the first of its
+/// interfaces, peers and discovery server whose address is not loopback
+/// (127.0.0.0/8), named ("interface 10.0.0.2", "discovery server
+/// 10.0.0.9:11811"); "" when every one is loopback: DDS then sends nothing
+/// beyond the host (its UDP is held to the interfaces; shared memory never
+/// leaves it).
+std::string LinkBeyondHost(const LinkConfig& config);
+
+/// The one line a run starting on `config` says when its link reaches
+/// beyond the host without DDS Security: who drives a vehicle is then
+/// bound to DDS's writer identity, which nobody claims by mistake but an
+/// attacker on the network can forge. "" when the link stays on the host,
+/// is secured (`config.security`), or `insecure` (--insecure) silences it.
+std::string InsecureLinkWarning(const LinkConfig& config, bool insecure);
 
 }  // namespace haptel::link

@@ -2,7 +2,9 @@
 /// @file Typed DDS writers and readers over a Participant.
 ///
 /// Reader callbacks run on a DDS thread: keep them short (copy into a
-/// seqlock or queue) and never call them from a real-time loop.
+/// seqlock or queue) and never call them from a real-time loop. A callback
+/// may take the sample's writer (WriterId, from DDS's SampleInfo) beside
+/// the sample: who sent it, as no field of the sample can say.
 #include <fastdds/dds/core/status/DeadlineMissedStatus.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/publisher/DataWriterListener.hpp>
@@ -18,6 +20,7 @@
 #include <string>
 
 #include "haptel/link/participant.hpp"
+#include "haptel/link/writer_id.hpp"
 #include "haptel/msg/haptel.h"
 #include "haptel/msg/haptelPubSubTypes.h"
 
@@ -35,6 +38,14 @@ eprosima::fastdds::dds::Topic* MakeTopic(Participant& p, const std::string& name
   return topic;
 }
 }  // namespace detail
+
+/// The WriterId of a DDS GUID.
+inline WriterId ToWriterId(const eprosima::fastrtps::rtps::GUID_t& guid) {
+  WriterId id;
+  std::copy(guid.guidPrefix.value, guid.guidPrefix.value + WriterId::kPrefixSize, id.guid.begin());
+  std::copy(guid.entityId.value, guid.entityId.value + 4, id.guid.begin() + WriterId::kPrefixSize);
+  return id;
+}
 
 template <typename Msg, typename PubSubType>
 class Writer : private eprosima::fastdds::dds::DataWriterListener {
@@ -60,6 +71,8 @@ class Writer : private eprosima::fastdds::dds::DataWriterListener {
     return ok;
   }
   int matched() const { return matched_.load(); }
+  /// This writer's GUID, as readers are told it with each of its samples.
+  WriterId id() const { return ToWriterId(writer_->guid()); }
   uint64_t failed_writes() const { return failed_writes_.load(); }
   uint64_t deadlines_missed() const { return deadlines_missed_.load(); }
 
@@ -85,8 +98,13 @@ template <typename Msg, typename PubSubType>
 class Reader : private eprosima::fastdds::dds::DataReaderListener {
  public:
   using Callback = std::function<void(const Msg&)>;
+  /// The sample and its writer.
+  using OriginCallback = std::function<void(const Msg&, const WriterId&)>;
 
   Reader(Participant& participant, const std::string& topic, Profile profile, Callback on_sample)
+      : Reader(participant, topic, profile,
+               OriginCallback([f = std::move(on_sample)](const Msg& m, const WriterId&) { f(m); })) {}
+  Reader(Participant& participant, const std::string& topic, Profile profile, OriginCallback on_sample)
       : participant_(participant), on_sample_(std::move(on_sample)) {
     topic_ = detail::MakeTopic<PubSubType>(participant, topic);
     reader_ = participant.subscriber()->create_datareader(
@@ -112,7 +130,7 @@ class Reader : private eprosima::fastdds::dds::DataReaderListener {
     while (reader->take_next_sample(&sample_, &info) == ReturnCode_t::RETCODE_OK) {
       if (!info.valid_data) continue;
       received_.fetch_add(1, std::memory_order_relaxed);
-      on_sample_(sample_);
+      on_sample_(sample_, ToWriterId(info.sample_identity.writer_guid()));
     }
   }
   void on_subscription_matched(eprosima::fastdds::dds::DataReader*,
@@ -126,7 +144,7 @@ class Reader : private eprosima::fastdds::dds::DataReaderListener {
   }
 
   Participant& participant_;
-  Callback on_sample_;
+  OriginCallback on_sample_;
   Msg sample_;  ///< reused for every take: no allocation per sample for fixed-size types
   eprosima::fastdds::dds::Topic* topic_ = nullptr;
   eprosima::fastdds::dds::DataReader* reader_ = nullptr;

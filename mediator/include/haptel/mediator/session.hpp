@@ -155,12 +155,16 @@ enum class Outcome {
   kInterrupted,  ///< SIGINT / SIGTERM / SIGHUP
   kCrashed,      ///< the blimp hit a building or the ground too fast
   kConflict,     ///< a second vehicle publishes under the same name on the domain
-  kRefused,      ///< the vehicle obeys another operator session
+  kRefused,      ///< the vehicle obeys another operator's writer
+  /// The vehicle obeyed this run's writer, then another's (or one naming
+  /// this run's session): this run's commands are not the ones obeyed.
+  kLostControl,
 };
 std::string ToString(Outcome outcome);
 /// The process exit code for an outcome: 0 completed, 3 lost vehicle or
-/// device, 2 a link conflict or refusal (nothing of the vehicle was ours to
-/// drive), 1 otherwise.
+/// device, 2 a link conflict, refusal or control lost (another operator or
+/// vehicle on the link: what the run drove was not, or no longer, its
+/// own), 1 otherwise.
 int ExitCode(Outcome outcome);
 /// The exit code, whatever the outcome, of a run the database did not take
 /// at the end (its results went to a fallback file; the JSON line says which).

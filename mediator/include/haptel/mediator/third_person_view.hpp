@@ -25,9 +25,14 @@
 /// Threads: the session thread renders (Update) when a new pose has
 /// arrived, at most kRate_hz; the view thread takes the latest picture
 /// (Latest) under a short lock, as it takes the camera's. The pictures are
-/// a few buffers reused once the view has let go of them: nothing is
-/// allocated per frame.
+/// a few buffers reused once the view has let go of them: no picture is
+/// allocated per frame, only its handle (a shared_ptr's control block whose
+/// deleter marks the buffer free, with release, when the last copy goes, so
+/// Update's acquire load of that mark orders the view's last read of the
+/// buffer before the next drawing into it: ThreadSanitizer sees this order,
+/// which a fence after use_count() it could not).
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -83,6 +88,12 @@ class ThirdPersonView {
 
  private:
   static constexpr int kBuffers = 4;  ///< the latest, the view's, one being drawn, one spare
+  /// One buffer; `free` once no handle to it is left (set by the handle's
+  /// deleter, wherever the last copy is dropped).
+  struct Picture {
+    cv::Mat image;
+    std::atomic<bool> free{true};
+  };
   CameraConfig chase_;
   double radius_m_;
   double body_height_m_;
@@ -90,7 +101,7 @@ class ThirdPersonView {
   BodySilhouette silhouette_;
   std::array<view::PicturePoint, view::Prediction::kOutlineMax> outline_{};
   std::vector<cv::Point> pixels_;
-  std::array<std::shared_ptr<cv::Mat>, kBuffers> buffers_;
+  std::array<std::shared_ptr<Picture>, kBuffers> buffers_;
   mutable std::mutex mutex_;  ///< guards latest_ and id_
   std::shared_ptr<const cv::Mat> latest_;
   uint64_t id_ = 0;

@@ -39,7 +39,9 @@ struct LinkCounts {
   /// Commands the vehicle did not accept — lost on the way, malformed or
   /// stale — up to the last one it applied: the sequence numbers it echoed
   /// minus the commands it counted as accepted, from the first state that
-  /// echoes one (commands sent before it listened are not counted).
+  /// echoes one (commands sent before it listened are not counted). Only
+  /// states naming this run's writer as the owner count: another writer's
+  /// echo is of its own sequence, not this run's.
   uint64_t commands_dropped = 0;
   /// Video feedback the vehicle refused because another session than its
   /// owner sent it (a stranger on the domain), from the first state this
@@ -58,6 +60,10 @@ class StateInboxOf {
     State state;
     int64_t received_ns;
   };
+  /// This run's command writer (set before any state is pushed): only
+  /// states that name it as the owner echo this run's commands. Unset (a
+  /// test's inbox without a channel): every state does.
+  void SetOwnWriter(const link::WriterId& writer) { own_writer_ = writer; }
   void Push(const State& s);
   std::deque<Entry> Drain();
   int64_t last_received_ns() const;
@@ -76,6 +82,7 @@ class StateInboxOf {
 
  private:
   mutable std::mutex mutex_;
+  link::WriterId own_writer_;  ///< set before the DDS thread pushes
   int64_t echo_watch_ns_ = 0;
   int64_t echo_received_ns_ = 0;
   std::deque<Entry> entries_;
@@ -115,6 +122,9 @@ class LinkChannel {
   /// StateInboxOf::WatchEcho and EchoReceivedNs.
   virtual void WatchEcho(int64_t sent_ns) = 0;
   virtual int64_t EchoReceivedNs() const = 0;
+  /// The command writer's identity (its DDS GUID; link::kInProcessWriter
+  /// on no DDS): what the vehicle binds its ownership to.
+  virtual link::WriterId writer() const = 0;
 };
 
 /// One family's command writer and state reader (Messages: link's
@@ -145,9 +155,11 @@ class CommandChannel final : public LinkChannel {
   void SendSafe(bool release) override;
   void WatchEcho(int64_t sent_ns) override { inbox_.WatchEcho(sent_ns); }
   int64_t EchoReceivedNs() const override { return inbox_.EchoReceivedNs(); }
+  link::WriterId writer() const override { return writer_id_; }
 
  private:
   Inbox inbox_;
+  link::WriterId writer_id_ = link::kInProcessWriter;
   typename Messages::CommandMsg message_;
   uint64_t seq_ = 0;
   std::function<void(const typename Messages::CommandMsg&)> sink_;  ///< set: no DDS
@@ -238,6 +250,10 @@ class VehicleLink {
   /// vehicle obeys one session at a time (its state names the owner). The
   /// last command, in Stop, releases the vehicle.
   uint64_t session() const { return session_; }
+  /// This run's command writer (LinkChannel::writer): the vehicle obeys it
+  /// and names it in its states (owner_writer) while this run drives. The
+  /// session is a label anyone can copy; this is not.
+  link::WriterId command_writer() const { return channel_->writer(); }
   /// How many vehicles answer under this name: the participants writing its
   /// state or reading its commands (DDS discovery). More than one is a
   /// conflict: two vehicles named alike on one domain.

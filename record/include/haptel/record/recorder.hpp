@@ -168,6 +168,13 @@ class Recorder {
   /// and contacts (in the order saved).
   std::vector<RunRecord> LoadAll() const;
 
+  /// Throws std::runtime_error ("database FILE: cannot WHAT: the file was
+  /// deleted or replaced since it was opened") when the file this recorder
+  /// opened is no longer at its path: SQLite in WAL mode would go on writing
+  /// into the unlinked file, and whatever it wrote would be gone. Every write
+  /// to the file (a run, a study's rows) asks first.
+  void RequireInPlace(const std::string& what) const;
+
   const std::filesystem::path& path() const { return path_; }
   /// The open connection, for the tables other parts keep in the same file
   /// (the study store); the schema is this recorder's (PRAGMA user_version).

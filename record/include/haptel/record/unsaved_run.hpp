@@ -7,6 +7,7 @@
 /// so nothing measured is lost.
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 
 #include "haptel/record/recorder.hpp"
@@ -22,12 +23,25 @@ std::string RunRecordJson(const RunRecord& run);
 /// `<database>.unsaved-<UTC, e.g. 20240501T123456.789Z>.json`.
 std::filesystem::path UnsavedRunPath(const std::filesystem::path& database, int64_t wall_ns);
 
+/// The study trial a run was driven for: without it, a run kept in a file
+/// could not be told from the others, nor put back where it belongs.
+struct TrialOfRun {
+  std::string study;  ///< the study's name
+  std::string participant;
+  int position = 0;  ///< in the participant's order (0: a practice lap)
+  std::string condition;
+  int repetition = 1;
+};
+
 /// Writes RunRecordJson(run) to UnsavedRunPath(database, wall_ns) — or, when
 /// that folder cannot take it, to a file of the same name in the system's
 /// temporary folder — and returns the file written. Never overwrites a file:
-/// a name taken gets "-2", "-3", ... before ".json".
+/// a name taken gets "-2", "-3", ... before ".json". With `trial`, the object
+/// begins with "trial":{"study","participant","position","condition",
+/// "repetition"}.
 /// Throws std::runtime_error naming both places when neither can be written.
 std::filesystem::path WriteUnsavedRun(const RunRecord& run, const std::filesystem::path& database,
-                                      int64_t wall_ns);
+                                      int64_t wall_ns,
+                                      const std::optional<TrialOfRun>& trial = std::nullopt);
 
 }  // namespace haptel::record

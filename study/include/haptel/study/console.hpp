@@ -51,18 +51,31 @@ class ConsoleError : public std::runtime_error {
 
 /// How long and how many connections: the defaults hold a browser's page,
 /// its thumbnail and a form, from any link that carries video, with room to
-/// spare.
+/// spare, while a hundred slow or silent connections wait (slowloris): a
+/// connection must send its request's head soon after it opens, and the
+/// slowest are cut to make room for new ones, so that a client that sends
+/// its request at once (the experimenter's browser) is always served.
 struct ConnectionPolicy {
-  /// Connections one address may hold at once; more are answered 503 and
-  /// closed. A browser opens at most 6 to one host.
-  int max_per_client = 6;
+  /// Connections one address may hold at once. A new one past it is still
+  /// taken: the address's oldest connection that has not yet sent its
+  /// request's head is cut instead (one that has is being answered: then
+  /// the new one is answered 503 and closed). A browser opens at most 6 to
+  /// one host.
+  int max_per_client = 16;
+  /// From accept to the end of the request's head (its blank line; the TLS
+  /// handshake included): a client that sends nothing, or its head a byte
+  /// at a time, is cut here.
+  std::chrono::milliseconds head_deadline{3000};
   /// From accept to the last byte of the answer, for the whole exchange: a
-  /// client sending a header line every few seconds is cut off here.
+  /// client sending its body, or reading the answer, a byte every few
+  /// seconds is cut off here.
   std::chrono::milliseconds deadline{10000};
-  /// Silence from the client that ends the connection, within the deadline.
-  std::chrono::milliseconds idle{5000};
-  /// Worker threads; one address holds at most `max_per_client` of them.
-  size_t threads = 16;
+  /// Silence from the client that ends the connection, within the deadlines.
+  std::chrono::milliseconds idle{2000};
+  /// Worker threads, one per connection being read or answered. When every
+  /// one is taken, the oldest connection still without its head is cut for
+  /// the new one.
+  size_t threads = 128;
 
   /// Throws std::invalid_argument naming the field that is out of range.
   void ValidateOrThrow() const;
@@ -71,8 +84,9 @@ struct ConnectionPolicy {
 /// What the connection policy did (in `GET /status.json` as `connections`).
 struct ConnectionCounters {
   uint64_t served = 0;        ///< connections that reached the request parser
-  uint64_t refused_busy = 0;  ///< over `max_per_client`: 503 and closed
-  uint64_t cut_deadline = 0;  ///< ended at the deadline or after `idle`
+  uint64_t refused_busy = 0;  ///< over `max_per_client`, none to cut: 503 and closed
+  uint64_t cut_deadline = 0;  ///< ended at a deadline or after `idle`
+  uint64_t cut_for_room = 0;  ///< cut before its head to make room (`max_per_client`, `threads`)
   uint64_t tls_failed = 0;    ///< TLS handshakes that did not complete
   uint64_t refused_requests = 0;  ///< refused by the access checks (403, 401, 413)
 };
@@ -132,7 +146,11 @@ class StudyConsole {
   StudyConsole& operator=(const StudyConsole&) = delete;
 
   int port() const;
-  /// e.g. "http://127.0.0.1:8470/" or "https://0.0.0.0:8470/"
+  /// The addresses the experimenter's browser can open (ConsoleUrls): e.g.
+  /// "http://127.0.0.1:8470/"; bound to every interface (0.0.0.0), the
+  /// host's name and addresses, and 127.0.0.1, never "0.0.0.0".
+  std::vector<std::string> urls() const;
+  /// The first of urls().
   std::string url() const;
   /// Whether the study was planned in the database before this console
   /// opened it (false: the console planned it).

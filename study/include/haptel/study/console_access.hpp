@@ -44,7 +44,9 @@ inline constexpr const char* kAccessCookie = "haptel_console";
 /// Checks a request's head (everything but its body): the Host, a
 /// state-changing request's Origin and Sec-Fetch-Site, the access cookie
 /// (except for the login page), the body's announced length. 403 for a
-/// request from elsewhere, 401 without the access token, 413 for a body too
+/// request from elsewhere, 401 without the access token, 411 for a body with
+/// no length or a chunked one (but where the route reads its form itself:
+/// answers, notes), 413 for a body too
 /// large (the reason names both sizes).
 Refusal CheckRequest(const ConsoleAccess& access, const httplib::Request& request);
 
@@ -65,6 +67,14 @@ std::string RandomToken();
 /// well for the scheme's default port.
 std::vector<std::string> ConsoleHosts(const std::string& address, int port, bool tls,
                                       const std::vector<std::string>& names);
+
+/// The addresses a browser can open for a console bound to
+/// `address`:`port` ("http://NAME:PORT/"). A wildcard address (0.0.0.0, ::)
+/// is none: over HTTPS with `names` (the certificate's), those names; else
+/// this machine's host name, its interfaces' non-loopback addresses, and
+/// 127.0.0.1. Any other address is itself.
+std::vector<std::string> ConsoleUrls(const std::string& address, int port, bool tls,
+                                     const std::vector<std::string>& names);
 
 /// Whether `address` is a loopback address or `localhost`.
 bool IsLoopbackAddress(const std::string& address);

@@ -5,9 +5,10 @@
 /// stalled camera never delays a control loop or its watchdog. It listens on
 /// haptel/<vehicle>/video_feedback for the operator's key frame requests (an
 /// H.264 frame was lost: the next frame is an IDR) and the target bitrate,
-/// from the session that owns the vehicle only (CommandOwner): anybody else
-/// on the domain could otherwise hold its video at the lowest rung or make
-/// it send key frames without end. Any vehicle node has one.
+/// from the participant whose command writer owns the vehicle only
+/// (CommandOwner; FeedbackFromOwner): anybody else on the domain could
+/// otherwise hold its video at the lowest rung or make it send key frames
+/// without end. Any vehicle node has one.
 #include <atomic>
 #include <cstdint>
 #include <functional>
@@ -34,26 +35,34 @@ struct CameraCounters {
   uint64_t key_frames_sent = 0;     ///< frames published that decode alone (every JPEG)
   uint64_t frames_skipped = 0;      ///< grabbed but skipped to fit the link (JPEG's lowest rungs)
   uint32_t target_kbps = 0;         ///< the operator's last estimate of the link (0: none came)
-  /// Feedback (key frame requests, targets) from a session other than the
-  /// vehicle's owner: ignored.
+  /// Feedback (key frame requests, targets) from another participant than
+  /// the vehicle's owner's: ignored.
   uint64_t feedback_refused = 0;
   /// A camera's own JPEGs sent as they came, neither decoded nor encoded
   /// again (a ROS 2 robot's, at the configured size, within the bitrate).
   uint64_t frames_passed_through = 0;
 };
 
+/// Whether video feedback written by `sender` is to be followed while the
+/// vehicle obeys the command writer `owner`: while one owns it, only
+/// feedback from the owner's participant (the same GUID prefix: a run's
+/// command and feedback writers share one participant), whatever session
+/// the feedback names; while nobody does (empty: nothing to protect, and a
+/// vehicle only watched still follows its link), anybody's.
+inline bool FeedbackFromOwner(const link::WriterId& owner, const link::WriterId& sender) {
+  return owner.empty() || owner.SameParticipant(sender);
+}
+
 class CameraStreamer {
  public:
-  /// The session the vehicle obeys now (0: none), from any thread.
-  using OwnerSession = std::function<uint64_t()>;
+  /// The command writer the vehicle obeys now (empty: none), from any thread.
+  using OwnerWriter = std::function<link::WriterId()>;
 
   /// `camera` must not be null; `participant` must outlive the streamer.
-  /// `owner_session` says whose feedback is taken: while it gives a session,
-  /// that session's only; while it gives 0 (nobody drives the vehicle:
-  /// nothing to protect, and a vehicle only watched still follows its
-  /// link), anybody's. It must not be null.
+  /// `owner_writer` says whose feedback is taken (FeedbackFromOwner). It
+  /// must not be null.
   CameraStreamer(const CameraConfig& config, std::unique_ptr<video::CameraSource> camera,
-                 link::Participant& participant, const std::string& vehicle_name, OwnerSession owner_session);
+                 link::Participant& participant, const std::string& vehicle_name, OwnerWriter owner_writer);
   ~CameraStreamer();
   CameraStreamer(const CameraStreamer&) = delete;
   CameraStreamer& operator=(const CameraStreamer&) = delete;
@@ -68,10 +77,10 @@ class CameraStreamer {
 
  private:
   void Tick(int64_t now_ns);
-  void OnFeedback(const msg::VideoFeedback& feedback);
+  void OnFeedback(const msg::VideoFeedback& feedback, const link::WriterId& sender);
 
   const CameraConfig config_;
-  const OwnerSession owner_session_;
+  const OwnerWriter owner_writer_;
   const bool passthrough_possible_;  ///< the vehicle sends JPEG: a camera's own JPEG may go as it is
   std::unique_ptr<video::CameraSource> camera_;
   Seqlock<video::CameraPose> pose_;

@@ -1,8 +1,8 @@
 #pragma once
 /// @file How commands reach a vehicle node's control loop — the same for
 /// every vehicle, whatever its command type: the DDS thread drops a
-/// malformed command (counted), one from an operator session other than the
-/// vehicle's owner (counted, CommandOwner) and a stale one (counted,
+/// malformed command (counted), one from another writer than the
+/// vehicle's owner's (counted, CommandOwner) and a stale one (counted,
 /// CommandSequence) and hands the rest over through a seqlock; the control thread takes the
 /// newest, feeds the watchdog with its arrival time and asks it whether the
 /// vehicle is to be made safe. Allocation-free on both threads.
@@ -13,6 +13,7 @@
 
 #include "haptel/core/clock.hpp"
 #include "haptel/core/seqlock.hpp"
+#include "haptel/link/writer_id.hpp"
 #include "haptel/vehicles/drive.hpp"
 
 namespace haptel::vehicles {
@@ -45,28 +46,36 @@ class CommandSequence {
   int64_t last_ns_ = 0;
 };
 
-/// Who sent a command: the operator session (a random id, one per run) and
-/// its operator's name; `release` on a session's last command frees the
+/// Who sent a command: the writer DDS says it came from (what ownership is
+/// bound to: nobody else's writer has its GUID), the operator session it
+/// names (a random id, one per run: a label, read off the wire by anyone)
+/// and its operator's name; `release` on an owner's last command frees the
 /// vehicle at once.
 struct CommandSender {
+  link::WriterId writer;
   uint64_t session = 0;
   const char* name = "";
   bool release = false;
 };
 
-/// The session a vehicle obeys, as its state reports it.
+/// The writer a vehicle obeys, as its state reports it.
 struct CommandOwnerInfo {
-  uint64_t session = 0;  ///< 0: nobody owns the vehicle
+  link::WriterId writer;  ///< empty: nobody owns the vehicle
+  uint64_t session = 0;   ///< the session its commands name (0: nobody owns the vehicle)
   char name[64] = "";
 };
 
-/// One operator session at a time drives a vehicle. The first session to
-/// send takes it and keeps it while its commands keep coming; it is free
-/// again when that session releases it (its last command says so) or falls
-/// silent for `free_after_s` — longer than any watchdog, so a link's hiccup
-/// does not hand the vehicle to somebody else. Other sessions' commands are
-/// refused (counted); the state names the owner so their operator can say
-/// who has it. Called from the DDS thread only; owner() from any thread.
+/// One operator at a time drives a vehicle: one command writer (its DDS
+/// GUID, CommandSender::writer), whatever session its commands name — a
+/// stranger that copies the owner's session off the wire is refused like
+/// anybody else. The first writer to send takes the vehicle and keeps it
+/// while its commands keep coming; it is free again when that writer
+/// releases it (its last command says so) or falls silent for
+/// `free_after_s` — longer than any watchdog, so a link's hiccup does not
+/// hand the vehicle to somebody else. Other writers' commands (and their
+/// releases) are refused (counted); the state names the owner so their
+/// operator can say who has it, and the owner's operator can tell it lost
+/// control. Called from the DDS thread only; owner() from any thread.
 class CommandOwner {
  public:
   static constexpr double kFreeAfter_s = 2.0;
@@ -75,22 +84,23 @@ class CommandOwner {
   enum class Verdict {
     kOwner,     ///< the owner's command (it kept or just took the vehicle)
     kNewOwner,  ///< the owner's command, and the owner changed with it
-    kRefused,   ///< another session owns the vehicle
+    kRefused,   ///< another writer owns the vehicle
   };
   Verdict Admit(const CommandSender& from, int64_t now_ns) {
     const bool free = !owned_ || now_ns - last_ns_ > free_after_ns_;
-    if (!free && from.session != session_) {
+    if (!free && from.writer != writer_) {
       refused_.fetch_add(1, std::memory_order_relaxed);
       return Verdict::kRefused;
     }
-    const bool changed = !owned_ || from.session != session_;
-    session_ = from.session;
+    const bool changed = !owned_ || from.writer != writer_;
+    writer_ = from.writer;
     last_ns_ = now_ns;
     owned_ = !from.release;
     if (changed || from.release) {
       CommandOwnerInfo info;
       if (owned_) {
-        info.session = session_;
+        info.writer = writer_;
+        info.session = from.session;
         std::snprintf(info.name, sizeof info.name, "%s", from.name != nullptr ? from.name : "");
       }
       info_.Store(info);
@@ -103,7 +113,7 @@ class CommandOwner {
  private:
   int64_t free_after_ns_;
   bool owned_ = false;
-  uint64_t session_ = 0;
+  link::WriterId writer_;
   int64_t last_ns_ = 0;
   Seqlock<CommandOwnerInfo> info_;
   std::atomic<uint64_t> refused_{0};
@@ -173,9 +183,9 @@ class CommandIntake {
   uint64_t accepted() const { return accepted_.load(); }
   uint64_t malformed() const { return malformed_.load(); }
   uint64_t stale() const { return stale_.load(); }
-  /// Commands from a session that did not own the vehicle: dropped.
+  /// Commands from a writer that did not own the vehicle: dropped.
   uint64_t refused() const { return owner_.refused(); }
-  /// The session the vehicle obeys now.
+  /// The writer (and session) the vehicle obeys now.
   CommandOwnerInfo owner() const { return owner_.owner(); }
   uint64_t watchdog_trips() const { return trips_.load(); }
   bool watchdog_expired() const { return expired_.load(); }

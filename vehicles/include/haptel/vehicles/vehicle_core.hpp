@@ -33,9 +33,15 @@ class VehicleCoreOf {
   /// `adapter` must not be null. The adapter starts at rest (Family::Prepare).
   VehicleCoreOf(const VehicleConfig& config, std::unique_ptr<Adapter> adapter);
 
-  /// A command message received at `now_ns`: decoded, range-checked and
-  /// offered to the intake (owner, sequence, watchdog).
-  void OnCommand(const typename Family::CommandMsg& cmd, int64_t now_ns);
+  /// A command message from `writer` (as DDS gave it with the sample)
+  /// received at `now_ns`: decoded, range-checked and offered to the intake
+  /// (owner, sequence, watchdog).
+  void OnCommand(const typename Family::CommandMsg& cmd, const link::WriterId& writer, int64_t now_ns);
+  /// The same from the one session that steps this vehicle in its own
+  /// process (link::kInProcessWriter).
+  void OnCommand(const typename Family::CommandMsg& cmd, int64_t now_ns) {
+    OnCommand(cmd, link::kInProcessWriter, now_ns);
+  }
   /// One control tick at `now_ns`: the watchdog (expired: made safe), else
   /// the newest command applied, then the adapter stepped. False when the
   /// adapter has lost its hardware (cli::HardwareLost; nothing more is

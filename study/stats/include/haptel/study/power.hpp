@@ -34,6 +34,7 @@
 /// they are computed in. The generator is std::mt19937_64 and the draws below
 /// a bound are the unbiased rejection of design.hpp's RandomOrders, so they
 /// are the same on every platform.
+#include <atomic>
 #include <cstdint>
 #include <optional>
 #include <random>
@@ -67,6 +68,9 @@ struct PowerOptions {
   /// reaches this.
   double target_power = 0.8;
   std::uint64_t seed = 1;
+  /// Read before each simulation; once set, EstimatePower returns at once
+  /// with `stopped` (a signal ends a long estimate promptly). May be null.
+  const std::atomic<bool>* stop = nullptr;
 };
 
 /// A binomial proportion's confidence interval.
@@ -105,6 +109,8 @@ struct PowerResult {
   int rows = 0;
   double alpha = 0.05;
   double target_power = 0.8;
+  /// PowerOptions::stop was set: the points are incomplete, not a result.
+  bool stopped = false;
 };
 
 /// Indices into `pool` of a balanced sample of `participants`: for each row

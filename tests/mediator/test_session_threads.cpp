@@ -1,0 +1,119 @@
+// A real-time run with its vehicles in this process: the session loop, the
+// servo and physics threads, the link's DDS callbacks, the fleet's handover
+// and the vehicle nodes' control loops and cameras, all in one program, so
+// that ThreadSanitizer (scripts/test --tsan) watches them together. The
+// end-to-end tests drive the same runs with each vehicle in a process of its
+// own, where TSan could watch neither side's threads against the other's.
+#include <algorithm>
+#include <atomic>
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "haptel/config/vehicle.hpp"
+#include "haptel/mediator/fleet.hpp"
+#include "haptel/mediator/run_command.hpp"
+#include "haptel/record/recorder.hpp"
+#include "haptel/vehicles/vehicle_kinds.hpp"
+#include "test_env.hpp"
+
+namespace fs = std::filesystem;
+using namespace haptel;
+
+namespace {
+
+/// The shipped simulated robot as `name` on test-short, started in this
+/// process on `domain`, as haptel-vehicle would start it.
+std::unique_ptr<vehicles::Node> StartRobot(const std::string& name, int domain) {
+  const std::string file = "config/vehicles/sim-robot.yaml";
+  VehicleConfig config = LoadVehicle(file);
+  config.name = name;
+  config.link.domain_id = domain;
+  config.world = "config/tracks/test-short.yaml";
+  std::unique_ptr<vehicles::Node> node = vehicles::OpenVehicle(config, file).make_node();
+  node->Start();
+  return node;
+}
+
+/// `haptel run` with these words, attached to vehicles already on `domain`,
+/// the automatic operator, no view, into `database`. A vehicle under
+/// ThreadSanitizer on a loaded machine is slow to answer: 10 s before lost.
+std::vector<std::string> AttachedRun(int domain, const fs::path& database,
+                                     std::vector<std::string> more) {
+  std::vector<std::string> words = {
+      "run",        "--attach",   "--domain",        std::to_string(domain),
+      "--operator", "auto",       "--view",          "none",
+      "--quiet",    "--database", database.string(), "--vehicle-timeout",
+      "10"};
+  words.insert(words.end(), more.begin(), more.end());
+  return words;
+}
+
+std::vector<const char*> Argv(const std::vector<std::string>& words) {
+  std::vector<const char*> argv;
+  for (const std::string& w : words) argv.push_back(w.c_str());
+  return argv;
+}
+
+}  // namespace
+
+TEST_CASE("a real-time run attached to a robot in this process drives it and is recorded",
+          "[threads]") {
+  const int domain = test::UniqueDomain();
+  const fs::path dir = test::ScratchDir("session-threads-run");
+  const std::unique_ptr<vehicles::Node> robot = StartRobot("robot1", domain);
+  const std::vector<std::string> words = AttachedRun(
+      domain, dir / "runs.db", {"--track", "config/tracks/test-short.yaml", "--time-limit", "6"});
+  const std::vector<const char*> argv = Argv(words);
+  const mediator::SessionSetup setup = mediator::RunSetupFromArgs(
+      mediator::ParseRunArgs(static_cast<int>(argv.size()), argv.data()));
+  mediator::Recorder recorder(setup.run.database);
+  const std::atomic<bool> interrupted{false};
+  const mediator::RecordedRun run = mediator::RunAndRecord(setup, recorder, interrupted);
+  robot->Stop();
+
+  const record::RunRecord& record = run.result.record;
+  INFO("outcome " << record.outcome << ": " << run.result.message);
+  CHECK((record.outcome == "time limit" || record.outcome == "completed"));
+  CHECK(record.distance_m > 0.0);  // the robot obeyed the session's commands
+  CHECK(run.run_id != 0);
+}
+
+TEST_CASE("a fleet of two robots in this process: both driven in turn, each recorded",
+          "[threads]") {
+  const int domain = test::UniqueDomain(1);  // not the run's above
+  const fs::path dir = test::ScratchDir("session-threads-fleet");
+  // Turned every 2 s: a few handovers in the run. robot-b is driven through
+  // the cockpit, so each turn to it and away from it also starts and stops
+  // its physics thread while the servo loop runs.
+  const std::string robot = fs::absolute("config/vehicles/sim-robot.yaml").string();
+  const std::string track = fs::absolute("config/tracks/test-short.yaml").string();
+  const fs::path fleet = test::WriteFile(dir / "fleet.yaml",
+                                         "name: two-robots\nslice_s: 2\nvehicles:\n"
+                                         "  - {name: robot-a, vehicle: " + robot + ", world: " + track + "}\n"
+                                         "  - {name: robot-b, vehicle: " + robot + ", world: " + track +
+                                             ", interface: cockpit}\n");
+  const std::unique_ptr<vehicles::Node> a = StartRobot("robot-a", domain);
+  const std::unique_ptr<vehicles::Node> b = StartRobot("robot-b", domain);
+  const fs::path database = dir / "runs.db";
+  const std::vector<std::string> words =
+      AttachedRun(domain, database, {"--fleet", fleet.string(), "--time-limit", "20"});
+  const std::vector<const char*> argv = Argv(words);
+  const std::atomic<bool> interrupted{false};
+  mediator::RunFleetCommand(static_cast<int>(argv.size()), argv.data(), interrupted);
+  a->Stop();
+  b->Stop();
+
+  // One row per robot; each moved, so the operator turned to each.
+  const std::vector<record::RunRecord> rows = mediator::Recorder(database).LoadAll();
+  REQUIRE(rows.size() == 2);
+  for (const record::RunRecord& row : rows) {
+    INFO(row.vehicle << ": " << row.outcome);
+    CHECK(row.distance_m > 0.0);
+    if (row.vehicle == "robot-b") CHECK(row.physics_rate_hz > 0.0);  // its cockpit's physics ran
+    CHECK(row.outcome != "refused");
+    CHECK(row.outcome != "vehicle lost");
+  }
+}
