@@ -134,6 +134,8 @@ int BenchGravityMain(int argc, const char* const* argv) {
                         config.driver + "'");
     }
     grid_out = args.Value("grid-out").value_or("");
+    // Now, not after the sampling: a FIFO would be waited on for ever.
+    CheckFileOption("grid-out", grid_out, "a file name for the grid, such as grid.yaml");
   } catch (const UsageError& e) {
     std::fprintf(stderr, "haptel bench gravity: %s (see --help)\n", e.what());
     return 2;

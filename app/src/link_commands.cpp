@@ -71,10 +71,8 @@ int SecurityCommand(int argc, const char* const* argv) {
           vehicles.push_back(name);
         }
       }
-      if (std::filesystem::exists(dir / "ca.pem")) {
-        throw UsageError(dir.string() + " already holds a CA (ca.pem): nothing was changed; remove the folder or "
-                         "choose another");
-      }
+      // A folder with identities, or anything else in it: refused before anything is made (exit 2).
+      if (const std::string problem = link::InitFolderProblem(dir); !problem.empty()) throw UsageError(problem);
       return 0;
     });
     if (console_only) {

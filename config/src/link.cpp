@@ -93,11 +93,12 @@ struct NumberWithUnit {
 };
 NumberWithUnit SplitNumber(const std::string& value) {
   NumberWithUnit out;
-  size_t used = 0;
+  // Plain decimals only: strtod would read "0x10ms" as 16 ms and "infms" as ever.
+  size_t used = DecimalPrefix(value);
   try {
-    out.number = std::stod(value, &used);
+    if (used > 0) out.number = std::stod(value.substr(0, used));
   } catch (const std::exception&) {
-    used = 0;
+    used = 0;  // out of a double's range
   }
   out.parsed = used > 0;
   out.unit = value.substr(used);
@@ -150,10 +151,16 @@ LinkFault ParseLinkFault(const std::string& text, const LinkFault& base) {
   fault.enabled = true;
   if (text == "on") return fault;
   bool queue_given = false;
+  std::vector<std::string> seen;
   for (const std::string& part : SplitList(text)) {
     const size_t eq = part.find('=');
     const std::string key = part.substr(0, eq);
     const std::string value = eq == std::string::npos ? "" : part.substr(eq + 1);
+    // Twice is a typo or a paste, never a wish for the last one.
+    if (std::find(seen.begin(), seen.end(), key) != seen.end()) {
+      throw std::invalid_argument("each key once ('" + key + "' given twice in '" + text + "')");
+    }
+    seen.push_back(key);
     if (key == "delay" && eq != std::string::npos) {
       fault.delay_s = ParseDuration(part, value);
     } else if (key == "jitter" && eq != std::string::npos) {
@@ -220,6 +227,7 @@ LinkFault LoadLinkProfile(const std::string& name_or_file) {
   LinkFault fault;
   fault.enabled = true;
   for (const char* key : {"rate", "queue", "delay", "jitter", "loss"}) {
+    root.Allow(key);  // an unknown key's error lists them all
     if (!root.Has(key)) continue;
     const std::string value = root.RequireString(key);
     try {
@@ -244,6 +252,33 @@ LinkFault LinkFaultFromOptions(const std::optional<std::string>& profile, const 
     }
   }
   return fault ? ParseLinkFaultOption(*fault, base) : base;
+}
+
+std::string LinkFaultProblem(const LinkFault& fault, double state_rate_hz, double vehicle_timeout_s) {
+  if (!fault.enabled) return "";
+  char text[400];
+  // States in one time-out window, each dropped with probability `loss`: the
+  // window passes empty with loss^n, and there are 60 / timeout a minute.
+  const double per_window = std::max(1.0, std::floor(state_rate_hz * vehicle_timeout_s));
+  const double empty_per_minute = std::pow(fault.loss, per_window) * 60.0 / vehicle_timeout_s;
+  if (fault.loss > 0.0 && empty_per_minute >= 1.0) {
+    const double max_loss = std::pow(vehicle_timeout_s / 60.0, 1.0 / per_window);
+    std::snprintf(text, sizeof text,
+                  "a loss of %.0f%% drops all %.0f states of a %.2f-s vehicle time-out (%.0f Hz) about %.0f times a "
+                  "minute: the vehicle would be declared lost though it runs; expected a loss under %.0f%% (or a "
+                  "longer --vehicle-timeout)",
+                  fault.loss * 100.0, per_window, vehicle_timeout_s, state_rate_hz, empty_per_minute,
+                  std::floor(max_loss * 100.0));
+    return text;
+  }
+  if (fault.jitter_s >= vehicle_timeout_s) {
+    std::snprintf(text, sizeof text,
+                  "a jitter of %.3g s holds a state back as long as the %.2f-s vehicle time-out: the vehicle would be "
+                  "declared lost though it runs; expected a jitter under %.2f s (or a longer --vehicle-timeout)",
+                  fault.jitter_s, vehicle_timeout_s, vehicle_timeout_s);
+    return text;
+  }
+  return "";
 }
 
 std::vector<std::string> ParseAddressOption(const std::string& option, const std::string& text) {

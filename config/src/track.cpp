@@ -369,4 +369,34 @@ double Track::StartHeading() const {
   return std::atan2(t.y(), t.x());
 }
 
+double GateFreeWidth(const Track& track, size_t index, std::vector<size_t>* blocking) {
+  const Gate& gate = track.gates().at(index);
+  const double post = track.config().post_radius;
+  const Vec2 across = gate.right_post - gate.left_post;
+  const double length = across.norm();
+  const Vec2 u = across / length;
+  // Stretches of the line [0, length] taken: the posts, and each obstacle's chord.
+  std::vector<std::pair<double, double>> taken = {{-post, post}, {length - post, length + post}};
+  const std::vector<CircleObstacle>& obstacles = track.config().obstacles;
+  for (size_t i = 0; i < obstacles.size(); ++i) {
+    const Vec2 v = obstacles[i].center - gate.left_post;
+    const double t = v.dot(u);
+    const double d = (v - t * u).norm();
+    const double r = obstacles[i].radius;
+    if (d >= r) continue;
+    const double half = std::sqrt(r * r - d * d);
+    if (t + half <= post || t - half >= length - post) continue;  // beyond the posts
+    taken.push_back({t - half, t + half});
+    if (blocking != nullptr) blocking->push_back(i);
+  }
+  std::sort(taken.begin(), taken.end());
+  double widest = 0.0;
+  double reach = taken.front().second;
+  for (const auto& [from, to] : taken) {
+    widest = std::max(widest, std::min(from, length - post) - reach);
+    reach = std::max(reach, to);
+  }
+  return widest;
+}
+
 }  // namespace haptel

@@ -4,9 +4,11 @@
 #include <cmath>
 #include <iomanip>
 #include <limits>
+#include <map>
 #include <sstream>
 
 #include "haptel/config/check.hpp"
+#include "haptel/config/paths.hpp"
 
 namespace haptel::config_detail {
 namespace {
@@ -22,15 +24,41 @@ std::string Megabytes(std::uintmax_t bytes) {
 }  // namespace
 
 void CheckRegularFile(const std::filesystem::path& file, const std::string& expected) {
-  std::error_code ec;
-  const std::filesystem::file_status status = std::filesystem::status(file, ec);
-  if (ec || !std::filesystem::exists(status)) return;  // opening it says what is wrong
-  if (std::filesystem::is_directory(status)) throw ConfigError(file.string() + ": is a folder; expected " + expected);
-  // A FIFO, a device or a socket: opening one may wait forever for a writer.
-  if (!std::filesystem::is_regular_file(status)) {
-    throw ConfigError(file.string() + ": is not a regular file (a FIFO, a device or a socket); expected " + expected);
+  if (const std::string what = NotRegularFile(file); !what.empty()) {
+    throw ConfigError(file.string() + ": is " + what + "; expected " + expected);
   }
 }
+
+namespace {
+
+/// yaml-cpp keeps a key given twice and a lookup finds the first: the second,
+/// the one edited last, would be ignored without a word. Refused anywhere in
+/// the file, at the second, naming the first's line.
+void CheckNoDuplicateKeys(const YAML::Node& node, const std::string& file, const std::string& path) {
+  if (node.IsSequence()) {
+    for (size_t i = 0; i < node.size(); ++i) {
+      CheckNoDuplicateKeys(node[i], file, path + "[" + std::to_string(i) + "]");
+    }
+    return;
+  }
+  if (!node.IsMap()) return;
+  std::map<std::string, YAML::Mark> seen;
+  for (const auto& entry : node) {
+    if (!entry.first.IsScalar()) continue;  // Finish names a key that is not plain
+    const std::string& key = entry.first.Scalar();
+    const std::string at = path.empty() ? key : path + "." + key;
+    if (const auto first = seen.find(key); first != seen.end()) {
+      const YAML::Mark m = entry.first.Mark();
+      throw ConfigError(file + ":" + std::to_string(m.line + 1) + ":" + std::to_string(m.column + 1) + ": key '" +
+                        at + "': given twice (first at line " + std::to_string(first->second.line + 1) +
+                        "); expected each key once");
+    }
+    seen.emplace(key, entry.first.Mark());
+    CheckNoDuplicateKeys(entry.second, file, at);
+  }
+}
+
+}  // namespace
 
 YamlMap YamlMap::Load(const std::filesystem::path& file, std::uintmax_t max_bytes) {
   CheckRegularFile(file, "a YAML file");
@@ -57,6 +85,7 @@ YamlMap YamlMap::Load(const std::filesystem::path& file, std::uintmax_t max_byte
   if (!root.IsMap()) {
     throw ConfigError(file.string() + ": expected a mapping of keys at the top level");
   }
+  CheckNoDuplicateKeys(root, file.string(), "");
   return YamlMap(root, file.string(), "");
 }
 

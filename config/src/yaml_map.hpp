@@ -78,6 +78,9 @@ class YamlMap {
   /// A list of mappings; an absent key yields an empty list.
   std::vector<YamlMap> MapList(const std::string& key);
 
+  /// A key this mapping may hold, though it was not read (it is absent):
+  /// Finish's error for an unknown key lists it among the expected ones.
+  void Allow(const std::string& key) { read_.insert(key); }
   /// Throws for every key present in the file that was never read.
   void Finish() const;
 

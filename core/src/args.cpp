@@ -58,13 +58,35 @@ std::optional<int> Args::Int(const std::string& name, int min, int max) const {
                    ", " + std::to_string(max) + "], got '" + *text + "'");
 }
 
+size_t DecimalPrefix(const std::string& text) {
+  const auto digit = [&](size_t i) { return i < text.size() && text[i] >= '0' && text[i] <= '9'; };
+  size_t i = 0;
+  if (i < text.size() && (text[i] == '+' || text[i] == '-')) ++i;
+  size_t digits = 0;
+  for (; digit(i); ++i) ++digits;
+  if (i < text.size() && text[i] == '.') {
+    ++i;
+    for (; digit(i); ++i) ++digits;
+  }
+  if (digits == 0) return 0;
+  // An exponent only when digits follow it: "5e" is 5 and a unit "e".
+  if (i < text.size() && (text[i] == 'e' || text[i] == 'E')) {
+    size_t j = i + 1;
+    if (j < text.size() && (text[j] == '+' || text[j] == '-')) ++j;
+    if (digit(j)) {
+      for (i = j; digit(i); ++i) {
+      }
+    }
+  }
+  return i;
+}
+
 std::optional<double> Args::Number(const std::string& name, double min, double max) const {
   const auto text = Value(name);
   if (!text) return std::nullopt;
   char* end = nullptr;
   const double value = std::strtod(text->c_str(), &end);
-  const bool whole = !text->empty() && !std::isspace(static_cast<unsigned char>(text->front())) &&
-                     end != text->c_str() && *end == '\0';
+  const bool whole = !text->empty() && DecimalPrefix(*text) == text->size() && *end == '\0';
   if (whole && value >= min && value <= max) return value;
   std::ostringstream range;
   range << "[" << min << ", " << max << "]";

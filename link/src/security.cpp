@@ -2,6 +2,7 @@
 
 #include <arpa/inet.h>
 #include <netinet/in.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <openssl/bio.h>
@@ -11,6 +12,7 @@
 #include <tinyxml2.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
 #include <ctime>
 #include <fstream>
@@ -21,6 +23,7 @@
 
 #include "haptel/config/error.hpp"
 #include "haptel/core/child_process.hpp"
+#include "haptel/core/log.hpp"
 
 namespace haptel::link {
 
@@ -499,34 +502,84 @@ void MakeSecurityFiles(const fs::path& dir, const std::vector<std::string>& vehi
   if (!console_names.empty()) MakeConsoleFiles(dir, console_names, days);
 }
 
+constexpr const char* kPartialPrefix = ".partial-";
+
+/// Removes the folders ".partial-PID-NAME" in `parent` whose process is gone
+/// (a `security init` killed mid-way: they hold a CA's private key), saying
+/// each; those of a process still running are left to it.
+void RemoveStalePartials(const fs::path& parent) {
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(parent, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind(kPartialPrefix, 0) != 0 || !entry.is_directory()) continue;
+    const std::string rest = name.substr(std::char_traits<char>::length(kPartialPrefix));
+    const size_t dash = rest.find('-');
+    if (dash == 0 || dash == std::string::npos || rest.find_first_not_of("0123456789") != dash) continue;
+    const long pid = std::stol(rest.substr(0, dash));
+    if (pid <= 0 || pid == getpid() || kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH) continue;
+    std::error_code removed;
+    fs::remove_all(entry.path(), removed);
+    if (removed) {
+      log::Warn("security init: " + entry.path().string() + " is left by process " + std::to_string(pid) +
+                " (gone) and holds a CA's private key; it could not be removed: " + removed.message());
+    } else {
+      log::Info("security init: removed " + entry.path().string() + ", left by process " + std::to_string(pid) +
+                " (killed while it made a CA)");
+    }
+  }
+}
+
 }  // namespace
 
-void InitSecurity(const fs::path& dir, const std::vector<std::string>& vehicles, int days,
+std::string InitFolderProblem(const fs::path& dir) {
+  std::error_code ec;
+  if (!fs::exists(dir, ec)) return "";
+  if (!fs::is_directory(dir, ec)) return dir.string() + " is a file; expected a new or empty folder";
+  if (fs::exists(dir / "ca.pem", ec)) {
+    return dir.string() + " already holds a CA (ca.pem): nothing was changed; remove the folder or choose another";
+  }
+  if (!fs::is_empty(dir, ec)) {
+    return dir.string() + " already holds other files: nothing was changed; expected a new or empty folder";
+  }
+  return "";
+}
+
+void InitSecurity(const fs::path& given, const std::vector<std::string>& vehicles, int days,
                   const std::vector<std::string>& console_names) {
+  // "DIR/" and "." name the folder itself: without a trailing separator its
+  // name is the last part (the partial folder is built beside it, not in it).
+  fs::path dir = fs::absolute(given).lexically_normal();
+  if (dir.filename().empty() && dir.has_parent_path() && dir != dir.root_path()) dir = dir.parent_path();
   if (fs::exists(dir / "ca.pem")) {
-    throw std::runtime_error(dir.string() + " already holds a CA (ca.pem); remove the folder or choose another");
+    throw std::runtime_error(given.string() + " already holds a CA (ca.pem); remove the folder or choose another");
   }
-  if (fs::exists(dir) && (!fs::is_directory(dir) || !fs::is_empty(dir))) {
-    throw std::runtime_error(dir.string() + " already holds other files; expected a new or empty folder");
-  }
+  if (const std::string problem = InitFolderProblem(given); !problem.empty()) throw std::runtime_error(problem);
   for (const std::string& name : vehicles) {
     if (const std::string problem = VehicleIdentityProblem(name); !problem.empty()) {
       throw std::invalid_argument("vehicle '" + name + "': expected " + problem);
     }
   }
   CheckConsoleNames(console_names);
-  // Built beside, renamed into place when complete (rename(2) replaces an empty folder).
-  const fs::path absolute = fs::absolute(dir).lexically_normal();
-  const fs::path parent = absolute.parent_path();
+  const fs::path parent = dir.parent_path();
   fs::create_directories(parent);
-  std::string hidden = ".partial-" + std::to_string(getpid()) + "-";
-  hidden += absolute.filename().string();
-  const fs::path partial = parent / hidden;
+  RemoveStalePartials(parent);
+  const fs::path partial = parent / (kPartialPrefix + std::to_string(getpid()) + "-" + dir.filename().string());
   fs::remove_all(partial);
   fs::create_directory(partial);
   try {
     MakeSecurityFiles(partial, vehicles, console_names, days);
-    fs::rename(partial, absolute);
+    if (!fs::exists(dir)) {
+      fs::rename(partial, dir);  // whole or not at all
+    } else {
+      // An empty folder that exists (perhaps the working directory, which
+      // must stay the folder it is): filled file by file, ca.pem last, since
+      // a folder with ca.pem is one that holds a CA.
+      for (const auto& entry : fs::directory_iterator(partial)) {
+        if (entry.path().filename() != "ca.pem") fs::rename(entry.path(), dir / entry.path().filename());
+      }
+      fs::rename(partial / "ca.pem", dir / "ca.pem");
+      fs::remove(partial);
+    }
   } catch (...) {
     std::error_code ignored;
     fs::remove_all(partial, ignored);

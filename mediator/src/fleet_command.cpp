@@ -186,11 +186,22 @@ void PrintFleetSummary(std::FILE* out, const FleetSetup& setup, const FleetResul
                  fleet.servo_period_p99_us, fleet.servo_cue_period_p99_us,
                  static_cast<unsigned long long>(fleet.servo_cue_ticks));
   }
-  if (!fleet.lost.empty()) {
-    std::string names;
-    for (const std::string& n : fleet.lost) names += (names.empty() ? "" : ", ") + n;
-    std::fprintf(out, "  LOST mid-run: %s (the others went on)\n", names.c_str());
+  // Lost is a vehicle that answered and went silent; one never heard from is said apart.
+  std::string lost;
+  std::string silent;
+  for (const std::string& n : fleet.lost) {
+    const bool never = std::find(fleet.never_answered.begin(), fleet.never_answered.end(), n) !=
+                       fleet.never_answered.end();
+    std::string& list = never ? silent : lost;
+    list += (list.empty() ? "" : ", ") + n;
   }
+  const bool others = fleet.lost.size() < fleet.vehicles.size();
+  if (!silent.empty()) {
+    std::fprintf(out, "  no vehicle answered: %s (never heard from on domain %d: attached, is it running there? "
+                 "started, see its lines above)%s\n",
+                 silent.c_str(), setup.vehicles.at(0).run.link.domain_id, others ? "; the others went on" : "");
+  }
+  if (!lost.empty()) std::fprintf(out, "  LOST mid-run: %s%s\n", lost.c_str(), others ? " (the others went on)" : "");
   std::fprintf(out, "  recorded in %s as '%s'\n", setup.vehicles.at(0).run.database.c_str(), fleet.fleet_run.c_str());
 }
 

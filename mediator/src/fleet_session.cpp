@@ -188,7 +188,8 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
       log::Info("fleet '" + setup.fleet.name + "': vehicle '" + m->setup.vehicle.name + "' (" +
                 m->setup.vehicle.kind + ") " +
                 (m->link->pid() != 0 ? "started, pid " + std::to_string(m->link->pid())
-                                     : std::string("attached on domain ") + std::to_string(run.link.domain_id)));
+                                     : std::string("attaching on domain ") + std::to_string(run.link.domain_id) +
+                                           " (a vehicle already running there)"));
     }
   }
 
@@ -242,12 +243,14 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
   // Ends one vehicle's course: said at once, held safe from now on.
   const auto end_member = [&](Member& m, LoopEnd end) {
     const bool lost = end.outcome == Outcome::kVehicleLost || end.outcome == Outcome::kVehicleDidNotStart;
+    const Outcome end_outcome = end.outcome;
     end.message = "vehicle '" + m.setup.vehicle.name + "': " + end.message;
     Finish(m.out.result, std::move(end), m.family->MadeSafe());
     m.done = true;
     m.lost = lost;
     if (lost) {
       fleet.lost.push_back(m.setup.vehicle.name);
+      if (end_outcome == Outcome::kVehicleDidNotStart) fleet.never_answered.push_back(m.setup.vehicle.name);
     } else {
       m.link->SendSafe();
     }
@@ -531,7 +534,11 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
     }
     for (const auto& m : members) {
       if (!fleet.message.empty()) fleet.message += "; ";
-      fleet.message += m->setup.vehicle.name + " " + ToString(m->out.result.outcome);
+      // A vehicle never heard from was not lost: it never answered (an
+      // attached one that is not running, or a spawned one that never came up).
+      fleet.message += m->setup.vehicle.name + " " +
+                       (m->out.result.outcome == Outcome::kVehicleDidNotStart ? std::string("never answered")
+                                                                              : ToString(m->out.result.outcome));
     }
   }
 

@@ -175,9 +175,29 @@ namespace {
 /// anything runs, naming the gate and both widths.
 void CheckGatesFit(const TrackConfig& track, const VehicleConfig& vehicle) {
   const double across = 2.0 * vehicle.body.radius;
+  const Track placed(track);
   for (size_t i = 0; i < track.gates.size(); ++i) {
     const GateSpec& gate = track.gates[i];
     const double opening = gate.width - 2.0 * track.post_radius;
+    // An obstacle in the opening (a post in the gate) leaves what is beside it.
+    std::vector<size_t> blocking;
+    if (const double free = GateFreeWidth(placed, i, &blocking); opening >= across && !blocking.empty() && free <= across) {
+      std::string names;
+      for (size_t k : blocking) {
+        char one[160];
+        std::snprintf(one, sizeof one, "%sobstacles[%zu] (radius %.3f m at [%.2f, %.2f])", names.empty() ? "" : ", ",
+                      k, track.obstacles[k].radius, track.obstacles[k].center.x(), track.obstacles[k].center.y());
+        names += one;
+      }
+      char text[600];
+      std::snprintf(text, sizeof text,
+                    ": key 'gates[%zu]': the gate at %.2f m is blocked by %s: its widest free gap is %.3f m, not "
+                    "wider than vehicle '%s' (%.3f m across, body.radius in %s); expected the obstacle out of the "
+                    "gate's opening, or a gap wider than %.3f m",
+                    i, gate.along, names.c_str(), free, vehicle.name.c_str(), across, vehicle.file.string().c_str(),
+                    across);
+      throw ConfigError(track.file.string() + text);
+    }
     if (opening >= across) continue;
     char text[400];
     std::snprintf(text, sizeof text,
@@ -211,8 +231,15 @@ SessionSetup RunSetupFromArgs(const Args& args) {
   if (auto server = args.Value("discovery-server")) setup.run.link.discovery_server = ServerOption(*server);
   // Before anything is spawned: a missing identity or an expired certificate is one line.
   if (!setup.run.link.security.empty()) link::CheckSecurity(setup.run.link.security, link::OperatorIdentity());
-  if (auto db = args.Value("database")) setup.run.database = *db;
-  if (auto trace = args.Value("trace")) setup.trace = *trace;
+  // Each file option before anything opens it: a FIFO would be waited on for ever, deaf to signals.
+  if (auto db = args.Value("database")) {
+    CheckFileOption("database", *db, "an SQLite file (new or a Haptel database)");
+    setup.run.database = *db;
+  }
+  if (auto trace = args.Value("trace")) {
+    CheckFileOption("trace", *trace, "a file name for the device's trace, such as arms.trace");
+    setup.trace = *trace;
+  }
   if (auto s = args.Number("vehicle-timeout", 0.05, 60.0)) setup.run.vehicle_timeout_s = *s;
   const bool display = view::View::DisplayAvailable();
   // A simulated-time run is the automatic operator's, without a view, unless told otherwise (then refused).
@@ -237,9 +264,7 @@ SessionSetup RunSetupFromArgs(const Args& args) {
     // Before anything is spawned: a recording that cannot be written is an error now, not after the lap.
     const std::filesystem::path file = *record;
     const std::filesystem::path folder = file.parent_path().empty() ? "." : file.parent_path();
-    if (std::filesystem::is_directory(file)) {
-      throw UsageError("option --record: '" + file.string() + "' is a folder; expected a file name such as run.mp4");
-    }
+    CheckFileOption("record", file, "a file name such as run.mp4");
     if (!std::filesystem::is_directory(folder)) {
       throw UsageError("option --record: the folder '" + folder.string() + "' does not exist; expected a file in a "
                        "folder that does");
@@ -256,6 +281,12 @@ SessionSetup RunSetupFromArgs(const Args& args) {
   if (auto device = args.Value("device")) setup.run.device = *device;
   if (auto vehicle = args.Value("vehicle")) setup.run.vehicle = *vehicle;
   setup.vehicle = LoadVehicle(setup.run.vehicle);
+  // A fault nothing can be driven through is said now, not as "did not start" or "lost" once the vehicle runs.
+  if (const std::string problem =
+          LinkFaultProblem(setup.run.link.fault, setup.vehicle.state_rate_hz, setup.run.vehicle_timeout_s);
+      !problem.empty()) {
+    throw UsageError("link faults " + LinkFaultText(setup.run.link.fault) + ": " + problem);
+  }
   if (args.Flag("third-person")) {
     // The chase camera draws the track the operator side hands the vehicle:
     // for any other vehicle it would draw a guess.
@@ -294,11 +325,17 @@ SessionSetup RunSetupFromArgs(const Args& args) {
     if (setup.device.driver != "replay") {
       throw UsageError("option --trace-in: the device '" + setup.run.device.string() + "' is not a replay device");
     }
-  setup.device.replay.trace = *trace_in;
+    CheckFileOption("trace-in", *trace_in, "a trace `haptel run --trace FILE` recorded");
+    setup.device.replay.trace = *trace_in;
   }
   if (setup.device.driver == "replay" && !std::filesystem::exists(setup.device.replay.trace)) {
     throw ConfigError(setup.run.device.string() + ": key 'replay.trace': no trace '" +
                     setup.device.replay.trace.string() + "'; record one with `haptel run --trace FILE`");
+  }
+  if (const std::string what = NotRegularFile(setup.device.replay.trace);
+      setup.device.driver == "replay" && !what.empty()) {
+    throw ConfigError(setup.run.device.string() + ": key 'replay.trace': '" + setup.device.replay.trace.string() +
+                      "' is " + what + "; expected a trace `haptel run --trace FILE` recorded");
   }
   if (!person && setup.device.driver != "sim") {
     throw UsageError("option --operator auto: the automatic operator moves the simulated arms, and device '" +

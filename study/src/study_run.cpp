@@ -358,6 +358,8 @@ int StudyRunCommand(int argc, const char* const* argv) {
       }
       exit_code = cli::kExitNotRecorded;
     };
+    /// Trials (participant, position) run again once after their vehicle was lost.
+    std::set<std::pair<std::string, int>> lost_reruns;
     // A session that stops on a signal, or on the console's Abort.
     auto run_watched = [&](const mediator::SessionSetup& setup, const record::Recorder::AlsoSave& also,
                            const record::TrialOfRun& trial) {
@@ -502,6 +504,19 @@ int StudyRunCommand(int argc, const char* const* argv) {
         if (!person && store.RedoFlaggedOnce(*trial)) {
           std::fprintf(stderr, "[study]   flagged (%s): run again once\n", TrialFlags(r).c_str());
         }
+        continue;
+      }
+      // A vehicle that answered, then went silent for the vehicle time-out
+      // (one pause on a loaded host), spoils the trial, not the study: a
+      // synthetic trial is run again once, with a vehicle of its own, as a
+      // flagged one is ('redo': the next row is its attempt 2). Lost again,
+      // the vehicle stays lost, and the study stops as before.
+      if (!person && run.result.outcome == mediator::Outcome::kVehicleLost &&
+          lost_reruns.insert({trial->participant, trial->position}).second) {
+        store.Event("redo", trial->participant, trial->position,
+                    "run " + std::to_string(run.run_id) + ": " + run.result.message + ": run again once by itself");
+        std::fprintf(stderr, "[study]   flagged (%s): run again once (run %lld)\n", run.result.message.c_str(),
+                     static_cast<long long>(run.run_id));
         continue;
       }
       // Not a finished trial: the run is recorded, the trial is not.

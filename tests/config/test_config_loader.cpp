@@ -1071,3 +1071,24 @@ TEST_CASE("a FIFO (or any file that is not a regular file) is refused before it 
              Contains("scene.xml: is not a regular file") && Contains("expected an XML scene file"));
   CHECK_THAT(haptel::test::WhatOf<ConfigError>([&] { haptel::LoadRun(dir); }), Contains("is a folder"));
 }
+
+TEST_CASE("a key given twice in any config file is refused, naming both lines (loaded strictly; issue 41)") {
+  // yaml-cpp keeps both and a lookup finds the first: the second, the one a
+  // user edited last, was silently ignored.
+  const auto dir = haptel::test::ScratchDir("config-duplicates");
+  const auto track = haptel::test::WriteFile(
+      dir / "track.yaml", "name: t\ncorridor_width: 1.0\ncenterline: [[0,0],[4,0],[4,4],[0,4]]\n"
+                          "corridor_width: 2.0\n");
+  CHECK_THAT(haptel::test::WhatOf<ConfigError>([&] { haptel::LoadTrack(track); }),
+             Contains("track.yaml:4:1: key 'corridor_width': given twice (first at line 2)"));
+  // Nested, in a list's mapping too.
+  const auto gates = haptel::test::WriteFile(
+      dir / "gates.yaml", "name: t\ncorridor_width: 1.0\ncenterline: [[0,0],[4,0],[4,4],[0,4]]\n"
+                          "gates:\n  - {along: 1.0, width: 0.8, along: 2.0}\n");
+  CHECK_THAT(haptel::test::WhatOf<ConfigError>([&] { haptel::LoadTrack(gates); }),
+             Contains("gates.yaml:5:") && Contains("key 'gates[0].along': given twice"));
+  const auto vehicle = haptel::test::WriteFile(dir / "vehicle.yaml",
+                                               "name: v\ndrive:\n  max_speed: 0.3\n  max_speed: 3.0\n");
+  CHECK_THAT(haptel::test::WhatOf<ConfigError>([&] { haptel::LoadVehicle(vehicle); }),
+             Contains("vehicle.yaml:4:3: key 'drive.max_speed': given twice (first at line 3)"));
+}

@@ -69,3 +69,33 @@ TEST_CASE("link profiles: an unknown name names the known ones; a bad file names
   CHECK(own.queue_s == Approx(1.0));
   CHECK(own.delay_s == 0.0);
 }
+
+TEST_CASE("link faults: a key given twice and a number that is not plain decimal are refused (issue 41)") {
+  // Both were taken silently: the last rate won, and strtod read 0x10 as 16.
+  CHECK_THROWS_WITH(ParseLinkFaultOption("rate=1Mbit,rate=2Mbit"),
+                    Contains("option --link-fault: expected") && Contains("'rate' given twice"));
+  CHECK_THROWS_WITH(ParseLinkFaultOption("delay=10ms,loss=1%,delay=20ms"), Contains("'delay' given twice"));
+  for (const char* text : {"delay=0x10ms", "rate=0x1p4Mbit", "loss=infinity%", "jitter=nanms", "delay= 10ms",
+                           "loss=0x5%", "queue=0x10ms"}) {
+    INFO(text);
+    CHECK_THROWS_AS(ParseLinkFaultOption(std::string("rate=1Mbit,") + text), UsageError);
+  }
+  // Plain decimals, with an exponent, still read.
+  CHECK(ParseLinkFault("delay=1e2ms,rate=.5Mbit,loss=5%").delay_s == Approx(0.1));
+  CHECK(ParseLinkFault("delay=1e2ms,rate=.5Mbit,loss=5%").rate_bps == Approx(5e5));
+}
+
+TEST_CASE("link profiles: a duplicate key is refused, and an unknown key lists the allowed ones (issue 41)") {
+  const auto dir = test::ScratchDir("link-profiles-strict");
+  const auto twice = test::WriteFile(dir / "twice.yaml", "rate: 1Mbit\ndelay: 10ms\nrate: 2Mbit\n");
+  CHECK_THROWS_WITH(LoadLinkProfile(twice.string()),
+                    Contains("twice.yaml:3:1") && Contains("'rate'") && Contains("given twice") &&
+                        Contains("line 1"));
+  // Not the keys already read ("rate"): every key a profile may hold.
+  const auto unknown_key = test::WriteFile(dir / "typo.yaml", "rate: 1Mbit\nlatency: 10ms\n");
+  CHECK_THROWS_WITH(LoadLinkProfile(unknown_key.string()),
+                    Contains("typo.yaml:2:1") && Contains("'latency': unknown key") &&
+                        Contains("expected one of: delay, jitter, loss, queue, rate"));
+  const auto hex = test::WriteFile(dir / "hex.yaml", "delay: 0x10ms\n");
+  CHECK_THROWS_WITH(LoadLinkProfile(hex.string()), Contains("hex.yaml") && Contains("delay"));
+}

@@ -257,3 +257,36 @@ TEST_CASE("Track: a start behind the start line wraps onto the last segment", "[
   CHECK(at_out == 2);
   CHECK(at_in == 2);
 }
+
+TEST_CASE("a gate's free width: the opening less the obstacles across it (issue 41)") {
+  haptel::TrackConfig t;
+  t.name = "gate";
+  t.centerline = {{0, 0}, {4, 0}, {4, 4}, {0, 4}};
+  t.corridor_width = 1.0;
+  t.post_radius = 0.03;
+  t.gates = {{1.0, 0.34}};
+  {
+    const haptel::Track track(t);
+    CHECK(haptel::GateFreeWidth(track, 0) == Approx(0.28));
+  }
+  // A 0.12-m post in the middle: two gaps of 0.08 m.
+  t.obstacles = {{{1.0, 0.0}, 0.06}, {{2.0, 0.0}, 0.06}};
+  {
+    const haptel::Track track(t);
+    std::vector<size_t> blocking;
+    CHECK(haptel::GateFreeWidth(track, 0, &blocking) == Approx(0.08));
+    CHECK(blocking == std::vector<size_t>{0});
+  }
+  // Off the line by 0.05 m, a 0.06-m circle takes a chord of 2*sqrt(0.06^2 - 0.05^2) beside a post.
+  t.obstacles = {{{1.05, 0.12}, 0.06}};
+  {
+    const haptel::Track track(t);
+    const double chord_half = std::sqrt(0.06 * 0.06 - 0.05 * 0.05);
+    // 0.05 m from the left post's centre along the line: the gap left runs
+    // from the chord's far end to the right post's surface (0.31 m along).
+    CHECK(haptel::GateFreeWidth(track, 0) == Approx(0.31 - (0.05 + chord_half)).margin(1e-9));
+  }
+  // Touching nothing of the opening: the whole opening.
+  t.obstacles = {{{1.0, 0.5}, 0.1}};
+  CHECK(haptel::GateFreeWidth(haptel::Track(t), 0) == Approx(0.28));
+}

@@ -5,6 +5,7 @@
 #include <thread>
 #include <cstdlib>
 #include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -209,6 +210,35 @@ TEST_CASE("when commands stop, the vehicle's watchdog stops its motors") {
   CHECK(vehicle.Wait(20.0) == 0);
 }
 
+TEST_CASE("a FIFO named by a file option is refused at once, exit 2, nothing spawned (it hung, deaf to signals)") {
+  const auto dir = test::ScratchDir("e2e-fifo");
+  const auto fifo = dir / "pipe";
+  REQUIRE(mkfifo(fifo.c_str(), 0600) == 0);
+  // Each waits at most a minute: one that hangs is still running then (the
+  // child is killed when it goes out of scope), and fails the case.
+  const std::vector<std::pair<std::string, std::vector<std::string>>> cases = {
+      {"record", {Bin("haptel"), "run", "--view", "none", "--record", fifo.string()}},
+      {"trace", {Bin("haptel"), "run", "--view", "none", "--trace", fifo.string()}},
+      {"trace-in", {Bin("haptel"), "run", "--view", "none", "--operator", "person", "--device",
+                    "config/devices/replay.yaml", "--trace-in", fifo.string()}},
+      {"database", {Bin("haptel"), "run", "--view", "none", "--database", fifo.string()}},
+      {"grid-out", {Bin("haptel"), "bench", "gravity", "--smoke", "--grid-out", fifo.string()}},
+  };
+  std::vector<std::vector<std::string>> argvs;
+  for (const auto& c : cases) argvs.push_back(c.second);
+  auto children = test::StartAll(argvs);
+  for (size_t i = 0; i < cases.size(); ++i) {
+    Child& c = *children[i];
+    const int code = c.Wait(60.0);
+    INFO("--" << cases[i].first << ": " << c.ExitDescription() << "; stderr:\n" << c.err());
+    CHECK(code == 2);
+    CHECK(c.err().find("option --" + cases[i].first + ": '" + fifo.string() +
+                       "' is not a regular file (a FIFO, a device or a socket)") != std::string::npos);
+    CHECK(c.err().find("started, pid") == std::string::npos);  // nothing spawned
+    CHECK(std::count(c.err().begin(), c.err().end(), '\n') == 1);
+  }
+}
+
 TEST_CASE("bad options and bad config files exit 2 with a one-line error naming the problem") {
   const auto dir = test::ScratchDir("e2e-bad");
   {
@@ -246,6 +276,41 @@ TEST_CASE("bad options and bad config files exit 2 with a one-line error naming 
     CHECK(c.err().find("0.220 m across") != std::string::npos);
     CHECK(c.err().find("started, pid") == std::string::npos);  // nothing spawned
     CHECK(std::count(c.err().begin(), c.err().end(), '\n') == 1);
+  }
+  {
+    // A post inside a gate's opening: 0.12 m across in a 0.34 m gate leaves
+    // two gaps of 0.08 m, and the lap ran to its cap (issue 41).
+    const auto blocked = dir / "blocked-gate.yaml";
+    test::WriteFile(blocked, "name: blocked\ncorridor_width: 0.6\npost_radius: 0.03\n"
+                             "centerline: [[0,0],[0.45,0],[0.7,0.25],[0.7,0.55],[0.45,0.8],[0,0.8],[-0.25,0.55],"
+                             "[-0.25,0.25]]\n"
+                             "gates: [{along: 0.2, width: 0.34}]\n"
+                             "obstacles: [{center: [0.5, 0.7], radius: 0.05}, {center: [0.2, 0.0], radius: 0.06}]\n");
+    Child c({Bin("haptel"), "run", "--track", blocked.string()});
+    CHECK(c.Wait(30.0) == 2);
+    INFO("stderr:\n" << c.err());
+    CHECK(c.err().find("blocked-gate.yaml: key 'gates[0]'") != std::string::npos);
+    CHECK(c.err().find("obstacles[1] (radius 0.060 m at [0.20, 0.00])") != std::string::npos);
+    CHECK(c.err().find("obstacles[0]") == std::string::npos);  // not in the gate
+    CHECK(c.err().find("widest free gap is 0.080 m") != std::string::npos);
+    CHECK(c.err().find("0.220 m across") != std::string::npos);
+    CHECK(c.err().find("started, pid") == std::string::npos);  // nothing spawned
+    CHECK(std::count(c.err().begin(), c.err().end(), '\n') == 1);
+  }
+  {
+    // A fault nothing crosses said "vehicle did not start" though it had (issue 41): said at once instead.
+    auto children = test::StartAll({{Bin("haptel"), "run", "--view", "none", "--link-fault", "loss=95%"},
+                                    {Bin("haptel"), "run", "--view", "none", "--link-fault", "jitter=1s"}});
+    for (auto& c : children) {
+      CHECK(c->Wait(60.0) == 2);
+      INFO("stderr:\n" << c->err());
+      CHECK(c->err().find("link faults ") != std::string::npos);
+      CHECK(c->err().find("the vehicle would be declared lost though it runs") != std::string::npos);
+      CHECK(c->err().find("did not start") == std::string::npos);
+      CHECK(c->err().find("started, pid") == std::string::npos);  // nothing spawned
+    }
+    CHECK(children[0]->err().find("a loss of 95%") != std::string::npos);
+    CHECK(children[1]->err().find("a jitter of 1 s") != std::string::npos);
   }
   {
     // A recording that could not be written is refused before anything is spawned.
@@ -296,4 +361,20 @@ TEST_CASE("bad options and bad config files exit 2 with a one-line error naming 
     CHECK(c.err().find(" up on domain") == std::string::npos);  // the node never started
     CHECK(std::count(c.err().begin(), c.err().end(), '\n') == 1);
   }
+}
+
+TEST_CASE("security init: a folder holding identities is refused with one line, exit 2, nothing changed (issue 41)") {
+  const auto dir = test::ScratchDir("e2e-security-init");
+  test::WriteFile(dir / "ca.pem", "mine");
+  test::WriteFile(dir / "notes.txt", "mine");
+  Child held({Bin("haptel"), "security", "init", (dir / "").string()});
+  CHECK(held.Wait(60.0) == 2);
+  INFO("stderr:\n" << held.err());
+  CHECK(held.err().find("already holds a CA (ca.pem): nothing was changed") != std::string::npos);
+  CHECK(std::count(held.err().begin(), held.err().end(), '\n') == 1);
+  std::filesystem::remove(dir / "ca.pem");
+  Child other({Bin("haptel"), "security", "init", dir.string()});
+  CHECK(other.Wait(60.0) == 2);
+  CHECK(other.err().find("already holds other files: nothing was changed") != std::string::npos);
+  CHECK(std::filesystem::file_size(dir / "notes.txt") == 4);
 }

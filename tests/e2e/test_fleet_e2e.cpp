@@ -372,3 +372,21 @@ TEST_CASE("bad fleet options and files exit 2 naming the problem, before anythin
     CHECK(run.err().find("vehicles[0].vehicle") != std::string::npos);
   }
 }
+
+TEST_CASE("a fleet attaching where no vehicle runs says none answered, never 'lost' (issue 41)") {
+  const auto dir = test::ScratchDir("e2e-fleet-no-answer");
+  const fs::path fleet = RobotFleet(dir, {"robot-a", "robot-b"}, 0.0);
+  auto argv = FleetArgs(fleet.string(), test::UniqueDomain(55), dir / "runs.db");
+  argv.push_back("--attach");
+  Child run(argv);
+  const int code = run.Wait(180.0);  // each waits its start-up time-out, then the run ends
+  INFO("stdout:\n" << run.out() << "\nstderr:\n" << run.err());
+  CHECK(code == 3);
+  const std::string all = run.out() + run.err();
+  // It said "attached on domain N", then "LOST mid-run" for vehicles never seen.
+  CHECK(all.find("LOST") == std::string::npos);
+  CHECK(all.find("attached on domain") == std::string::npos);
+  CHECK(all.find("attaching on domain") != std::string::npos);
+  CHECK(all.find("no vehicle answered: robot-a, robot-b") != std::string::npos);
+  CHECK(all.find("robot-a never answered") != std::string::npos);
+}

@@ -5,6 +5,8 @@
 // payload crosses the wire in plain text (the fault transport's own capture
 // of every packet received).
 #include <openssl/evp.h>
+#include <sys/wait.h>
+#include <unistd.h>
 #include <openssl/pem.h>
 #include <openssl/x509.h>
 
@@ -329,4 +331,43 @@ TEST_CASE("secured: no command payload crosses the wire in plain text (without s
   };
   CHECK(payload_seen(false) > 0);
   CHECK(payload_seen(true) == 0);
+}
+
+TEST_CASE("security init: DIR/, '.' and an empty folder are filled; a dead run's partial folder is cleaned (issue 41)") {
+  const fs::path root = test::ScratchDir("security-init-paths");
+  // "DIR/": it said "filesystem error ... Directory not empty" and left DIR empty.
+  const fs::path slash = root / "slash";
+  link::InitSecurity(slash.string() + "/", {"robot1"}, 30);
+  CHECK(fs::exists(slash / "ca.pem"));
+  CHECK(fs::exists(slash / "vehicle-robot1.pem"));
+  // An empty folder that exists, named as ".".
+  const fs::path here = root / "here";
+  fs::create_directory(here);
+  const fs::path before = fs::current_path();
+  fs::current_path(here);
+  std::string error;
+  try {
+    link::InitSecurity(".", {"robot1"}, 30);
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  fs::current_path(before);
+  CHECK(error.empty());
+  CHECK(fs::exists(here / "ca.pem"));
+  CHECK(fs::exists(here / "operator.pem"));
+  for (const auto& entry : fs::directory_iterator(root)) {
+    CHECK(entry.path().filename().string().rfind(".partial-", 0) != 0);  // nothing left beside
+  }
+  // A kill -9 mid-way left ".partial-PID-NAME" holding ca.key for good: the
+  // next run removes those of processes that are gone.
+  const pid_t dead = fork();
+  if (dead == 0) _exit(0);
+  REQUIRE(dead > 0);
+  waitpid(dead, nullptr, 0);
+  const fs::path stale = root / (".partial-" + std::to_string(dead) + "-other");
+  fs::create_directory(stale);
+  test::WriteFile(stale / "ca.key", "secret");
+  link::InitSecurity(root / "next", {"robot1"}, 30);
+  CHECK_FALSE(fs::exists(stale));
+  CHECK(fs::exists(root / "next" / "ca.pem"));
 }

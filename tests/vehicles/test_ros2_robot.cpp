@@ -15,6 +15,7 @@
 #include <numbers>
 #include <opencv2/imgcodecs.hpp>
 #include <thread>
+#include <zlib.h>
 
 #include "haptel/config/error.hpp"
 #include "haptel/link/participant.hpp"
@@ -22,6 +23,7 @@
 #include "haptel/ros2/ros2.h"
 #include "haptel/ros2/ros2PubSubTypes.h"
 #include "haptel/vehicles/ros2_robot.hpp"
+#include "haptel/video/codec.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;
@@ -111,6 +113,48 @@ struct FakeRobot {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+/// A valid grey PNG of width × height black pixels, made row by row, so
+/// that a 10 000 × 10 000 image (100 MB to decode) is 100 kB of bytes and
+/// never held whole here: what a robot sent to the adapter in issue 41.
+std::vector<uint8_t> BlackPng(uint32_t width, uint32_t height) {
+  std::vector<uint8_t> png = {0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A};
+  const auto be32 = [](std::vector<uint8_t>& out, uint32_t v) {
+    for (int shift : {24, 16, 8, 0}) out.push_back(static_cast<uint8_t>(v >> shift));
+  };
+  const auto chunk = [&](const char* type, const std::vector<uint8_t>& data) {
+    be32(png, static_cast<uint32_t>(data.size()));
+    std::vector<uint8_t> body(type, type + 4);
+    body.insert(body.end(), data.begin(), data.end());
+    png.insert(png.end(), body.begin(), body.end());
+    be32(png, static_cast<uint32_t>(crc32(0, body.data(), static_cast<uInt>(body.size()))));
+  };
+  std::vector<uint8_t> ihdr;
+  be32(ihdr, width);
+  be32(ihdr, height);
+  for (uint8_t b : {8, 0, 0, 0, 0}) ihdr.push_back(b);  // 8-bit grey, deflate, no filter, no interlace
+  chunk("IHDR", ihdr);
+  z_stream z{};
+  REQUIRE(deflateInit(&z, Z_BEST_COMPRESSION) == Z_OK);
+  std::vector<uint8_t> row(width + 1, 0);  // filter byte 0, then the pixels
+  std::vector<uint8_t> idat;
+  std::vector<uint8_t> buffer(1 << 16);
+  for (uint32_t y = 0; y <= height; ++y) {
+    const bool last = y == height;
+    z.next_in = last ? nullptr : row.data();
+    z.avail_in = last ? 0 : static_cast<uInt>(row.size());
+    do {
+      z.next_out = buffer.data();
+      z.avail_out = static_cast<uInt>(buffer.size());
+      deflate(&z, last ? Z_FINISH : Z_NO_FLUSH);
+      idat.insert(idat.end(), buffer.data(), buffer.data() + (buffer.size() - z.avail_out));
+    } while (z.avail_out == 0);
+  }
+  deflateEnd(&z);
+  chunk("IDAT", idat);
+  chunk("IEND", {});
+  return png;
+}
 
 }  // namespace
 
@@ -224,9 +268,13 @@ TEST_CASE("ros2: the image topic is the camera; an image that does not decode is
   CHECK(centre[2] > 200);
   CHECK(centre[0] < 50);
 
+  // A PNG whose header is sound and whose pixels are not: decoding fails.
+  std::vector<uint8_t> broken;
+  REQUIRE(cv::imencode(".png", red, broken));
+  for (size_t i = 40; i < broken.size() - 12; ++i) broken[i] = static_cast<uint8_t>(i * 37);
   sensor_msgs::msg::dds_::CompressedImage_ junk;
-  junk.format("jpeg");
-  junk.data({1, 2, 3, 4});
+  junk.format("png");
+  junk.data(broken);
   REQUIRE(test::WaitFor([&] {
     robot.image_writer->write(&junk);
     camera->Grab({}, frame);
@@ -356,4 +404,101 @@ TEST_CASE("ros2: the configuration names a bad topic or domain") {
   CHECK_NOTHROW(bad.ValidateOrThrow());
   bad.ros2.domain_id = 300;
   CHECK_THROWS_WITH(bad.ValidateOrThrow(), Catch::Contains("ros2.domain_id"));
+}
+
+TEST_CASE("ros2: a scan of impossible geometry is refused, saying what is impossible (issue 41)") {
+  // It was taken: "31 beams from -5.7e31 deg to +1.7e33 deg".
+  const std::vector<float> ranges(31, 1.0f);
+  CHECK(Ros2Robot::RangeScanFor(-1e30, 1e30, 0.1, 4.0, ranges).count == 0);
+  CHECK_THAT(Ros2Robot::ScanProblem(-1e30, 2e31, 1e30, 0.1, 4.0, ranges.size()),
+             Catch::Matchers::Contains("angle_min"));
+  // A sweep of more than a full turn (31 beams a radian apart).
+  CHECK(Ros2Robot::RangeScanFor(-3.0, 1.0, 0.1, 4.0, ranges).count == 0);
+  CHECK_THAT(Ros2Robot::ScanProblem(-3.0, 27.0, 1.0, 0.1, 4.0, ranges.size()),
+             Catch::Matchers::Contains("more than a full turn"));
+  // An increment of the wrong sign for angle_min to angle_max.
+  CHECK_THAT(Ros2Robot::ScanProblem(-1.0, 1.0, -0.05, 0.1, 4.0, 41),
+             Catch::Matchers::Contains("angle_increment") && Catch::Matchers::Contains("sign"));
+  CHECK_THAT(Ros2Robot::ScanProblem(0.0, 0.0, 0.0, 0.1, 4.0, 2), Catch::Matchers::Contains("zero"));
+  CHECK_THAT(Ros2Robot::ScanProblem(0.0, 0.1, 0.1, 0.1, 1e30, 2), Catch::Matchers::Contains("range_max"));
+  CHECK_THAT(Ros2Robot::ScanProblem(0.0, kInf, 0.1, 0.1, 4.0, 2), Catch::Matchers::Contains("angle_max"));
+  // A real laser's full turn, counter-clockwise or clockwise, is fine.
+  const double degree = std::numbers::pi / 180;
+  CHECK(Ros2Robot::ScanProblem(-180 * degree, 179 * degree, degree, 0.05, 12.0, 360).empty());
+  CHECK(Ros2Robot::ScanProblem(180 * degree, -179 * degree, -degree, 0.05, 12.0, 360).empty());
+  CHECK(Ros2Robot::ScanProblem(-180 * degree, 180 * degree, degree, 0.05, 12.0, 361).empty());
+  CHECK(Ros2Robot::ScanProblem(0.3, 0.3, 0.0, 0.05, 12.0, 1).empty());
+}
+
+TEST_CASE("ros2: an image too large to decode is refused from its header, before decoding, and counted (issue 41)") {
+  // A 10 000 x 10 000 PNG of 100 kB took the vehicle from 78 to 654 MiB and its video to 1 fps.
+  const std::vector<uint8_t> huge_png = BlackPng(10000, 10000);
+  CHECK(huge_png.size() < 1000000);
+  int width = 0;
+  int height = 0;
+  REQUIRE(video::PngFrameSize(huge_png.data(), huge_png.size(), width, height));
+  CHECK(width == 10000);
+  CHECK(height == 10000);
+  CHECK_FALSE(video::PngFrameSize(huge_png.data(), 20, width, height));  // cut before IHDR's end
+
+  const int domain = test::UniqueDomain(64);
+  const Track track(NorthTrack());
+  Ros2Robot adapter(Ros2Vehicle(domain), track);
+  auto camera = adapter.MakeCamera();
+  REQUIRE(camera != nullptr);
+  FakeRobot robot(domain);
+  const auto send = [&](const std::vector<uint8_t>& bytes, const char* format) {
+    sensor_msgs::msg::dds_::CompressedImage_ image;
+    image.format(format);
+    image.data(bytes);
+    robot.image_writer->write(&image);
+  };
+  cv::Mat frame;
+  REQUIRE(test::WaitFor([&] {
+    send(huge_png, "png");
+    CHECK_FALSE(camera->Grab({}, frame));
+    return adapter.Counters().images_refused > 0;
+  }, 30.0));
+  CHECK(adapter.Counters().images_dropped == 0);  // refused, not decoded and failed
+
+  // A JPEG whose frame header says 10 000 x 10 000 (its SOF patched): refused too.
+  cv::Mat red(120, 160, CV_8UC3, cv::Scalar(0, 0, 255));
+  std::vector<uint8_t> jpeg;
+  REQUIRE(cv::imencode(".jpg", red, jpeg));
+  std::vector<uint8_t> huge_jpeg = jpeg;
+  for (size_t i = 2; i + 9 < huge_jpeg.size(); ++i) {
+    if (huge_jpeg[i] == 0xFF && huge_jpeg[i + 1] == 0xC0) {  // SOF0: precision, height, width
+      huge_jpeg[i + 5] = huge_jpeg[i + 7] = 10000 >> 8;
+      huge_jpeg[i + 6] = huge_jpeg[i + 8] = 10000 & 0xFF;
+      break;
+    }
+  }
+  REQUIRE(video::JpegFrameSize(huge_jpeg.data(), huge_jpeg.size(), width, height));
+  REQUIRE(width == 10000);
+  const uint64_t before = adapter.Counters().images_refused;
+  REQUIRE(test::WaitFor([&] {
+    send(huge_jpeg, "jpeg");
+    std::vector<uint8_t> bytes;
+    CHECK_FALSE(camera->GrabJpeg(bytes));  // not handed on to be passed through or decoded either
+    return adapter.Counters().images_refused > before;
+  }, 30.0));
+
+  // Another format than JPEG and PNG (a BMP) is refused: its size is not read.
+  std::vector<uint8_t> bmp;
+  REQUIRE(cv::imencode(".bmp", red, bmp));
+  const uint64_t before_bmp = adapter.Counters().images_refused;
+  REQUIRE(test::WaitFor([&] {
+    send(bmp, "bmp");
+    CHECK_FALSE(camera->Grab({}, frame));
+    return adapter.Counters().images_refused > before_bmp;
+  }, 30.0));
+
+  // A PNG of a sensible size still decodes.
+  std::vector<uint8_t> small_png;
+  REQUIRE(cv::imencode(".png", red, small_png));
+  REQUIRE(test::WaitFor([&] {
+    send(small_png, "png");
+    return camera->Grab({}, frame);
+  }, 30.0));
+  CHECK(frame.at<cv::Vec3b>(frame.rows / 2, frame.cols / 2)[2] > 200);
 }

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -17,6 +18,7 @@
 
 #include "haptel/config/error.hpp"
 #include "haptel/core/clock.hpp"
+#include "haptel/core/log.hpp"
 #include "haptel/link/participant.hpp"
 #include "haptel/link/topic.hpp"
 #include "haptel/ros2/ros2.h"
@@ -133,6 +135,7 @@ struct Ros2Robot::Graph {
   std::atomic<uint64_t> odom_dropped{0};
   std::atomic<uint64_t> images_received{0};
   std::atomic<uint64_t> images_dropped{0};
+  std::atomic<uint64_t> images_refused{0};
   std::atomic<uint64_t> scans_received{0};
   std::atomic<uint64_t> scans_dropped{0};
 };
@@ -169,6 +172,17 @@ class Ros2Camera final : public video::CameraSource {
       got = true;
     }
     if (!got) return false;
+    // Its size from its header before anything decodes it: a 100-kB PNG can
+    // say 10 000 x 10 000 pixels, 300 MB to decode.
+    if (const std::string problem = Ros2Robot::ImageProblem(image_.data()); !problem.empty()) {
+      graph_->images_refused.fetch_add(1, std::memory_order_relaxed);
+      if (!refusal_said_) {
+        refusal_said_ = true;
+        log::Warn("ros2: an image on " + topic_ + " refused: " + problem +
+                  "; such images are dropped undecoded and counted (said once)");
+      }
+      return false;
+    }
     jpeg_out.assign(image_.data().begin(), image_.data().end());
     return true;
   }
@@ -181,6 +195,7 @@ class Ros2Camera final : public video::CameraSource {
   CompressedImage_ image_;
   std::vector<uint8_t> jpeg_;
   cv::Mat decoded_;
+  bool refusal_said_ = false;
 };
 
 }  // namespace
@@ -208,14 +223,63 @@ std::array<double, 2> Ros2Robot::TwistFor(const MotorLevels& levels, const Drive
   return {0.5 * (left + right), (right - left) / drive.track_width};
 }
 
+std::string Ros2Robot::ImageProblem(std::span<const uint8_t> data) {
+  int width = 0;
+  int height = 0;
+  const char* format = "JPEG";
+  if (!video::JpegFrameSize(data.data(), data.size(), width, height)) {
+    format = "PNG";
+    if (!video::PngFrameSize(data.data(), data.size(), width, height)) {
+      return "neither a JPEG nor a PNG with its size in its header (" + std::to_string(data.size()) + " bytes)";
+    }
+  }
+  if (width > kMaxImageSide || height > kMaxImageSide) {
+    return std::string("a ") + format + " of " + std::to_string(width) + " x " + std::to_string(height) +
+           " pixels; expected at most " + std::to_string(kMaxImageSide) + " a side";
+  }
+  return "";
+}
+
+std::string Ros2Robot::ScanProblem(double angle_min, double angle_max, double angle_increment, double range_min,
+                                   double range_max, size_t beams) {
+  constexpr double kTurn = 2.0 * M_PI;
+  constexpr double kSlack = 1e-3;  // rad: float32 angles of a full turn round to a little over it
+  constexpr double kMaxRange = 1e4;  // m: no range sensor sees 10 km
+  const auto text = [](const char* what, double value) {
+    char line[160];
+    std::snprintf(line, sizeof line, "%s %.6g", what, value);
+    return std::string(line);
+  };
+  if (beams == 0) return "no beams";
+  if (!std::isfinite(angle_min)) return text("a non-finite angle_min:", angle_min);
+  if (!std::isfinite(angle_max)) return text("a non-finite angle_max:", angle_max);
+  if (!std::isfinite(angle_increment)) return text("a non-finite angle_increment:", angle_increment);
+  if (std::abs(angle_min) > kTurn + kSlack) return text("angle_min more than a full turn from the heading: rad", angle_min);
+  if (std::abs(angle_max) > kTurn + kSlack) return text("angle_max more than a full turn from the heading: rad", angle_max);
+  if (beams > 1 && angle_increment == 0.0) return "an angle_increment of zero over " + std::to_string(beams) + " beams";
+  if (beams > 1 && angle_max != angle_min && (angle_max - angle_min) * angle_increment < 0.0) {
+    return text("an angle_increment of the wrong sign: rad", angle_increment) + text(" from angle_min", angle_min) +
+           text(" to angle_max", angle_max);
+  }
+  const double sweep = std::abs(angle_increment) * static_cast<double>(beams - 1);
+  if (sweep > kTurn + std::abs(angle_increment) + kSlack) {
+    return std::to_string(beams) + text(" beams spanning more than a full turn: rad", sweep);
+  }
+  if (!std::isfinite(range_max) || !(range_max > 0.0 && range_max <= kMaxRange)) {
+    return text("range_max not in (0, 10000] m:", range_max);
+  }
+  if (!std::isfinite(range_min) || !(range_min >= 0.0 && range_min < range_max)) {
+    return text("range_min not in [0, range_max) m:", range_min);
+  }
+  return "";
+}
+
 RangeScan Ros2Robot::RangeScanFor(double angle_min, double angle_increment, double range_min, double range_max,
                                   std::span<const float> ranges) {
   RangeScan scan;
   const size_t n = ranges.size();
-  const bool sane = n > 0 && std::isfinite(angle_min) && std::isfinite(angle_increment) &&
-                    (angle_increment != 0.0 || n == 1) && std::isfinite(range_max) && range_max > 0.0 &&
-                    std::isfinite(range_min) && range_min >= 0.0 && range_min < range_max;
-  if (!sane) return scan;
+  const double last = angle_min + angle_increment * static_cast<double>(n > 0 ? n - 1 : 0);
+  if (!ScanProblem(angle_min, last, angle_increment, range_min, range_max, n).empty()) return scan;
   const size_t per_sector = (n + kMaxRangeBeams - 1) / kMaxRangeBeams;
   scan.count = static_cast<int>((n + per_sector - 1) / per_sector);
   // Each sector's angle is its middle beam's (a half-beam between two for
@@ -289,10 +353,18 @@ void Ros2Robot::Update(double dt) {
     LaserScan_ laser;
     while (graph_->scan_reader->take_next_sample(&laser, &info) == ReturnCode_t::RETCODE_OK) {
       if (!info.valid_data) continue;
-      const RangeScan scan = RangeScanFor(laser.angle_min(), laser.angle_increment(), laser.range_min(),
-                                          laser.range_max(), laser.ranges());
+      const std::string problem = ScanProblem(laser.angle_min(), laser.angle_max(), laser.angle_increment(),
+                                              laser.range_min(), laser.range_max(), laser.ranges().size());
+      const RangeScan scan = problem.empty() ? RangeScanFor(laser.angle_min(), laser.angle_increment(),
+                                                            laser.range_min(), laser.range_max(), laser.ranges())
+                                             : RangeScan{};
       if (scan.count == 0) {
         graph_->scans_dropped.fetch_add(1, std::memory_order_relaxed);
+        if (!scan_problem_said_) {
+          scan_problem_said_ = true;
+          log::Warn("ros2: a scan on " + Ros2DdsTopic(config_.ros2.scan) + " refused: " + problem +
+                    "; impossible scans are dropped and counted (said once)");
+        }
         continue;
       }
       graph_->scans_received.fetch_add(1, std::memory_order_relaxed);
@@ -336,6 +408,7 @@ Ros2Counters Ros2Robot::Counters() const {
   c.odom_dropped = graph_->odom_dropped.load();
   c.images_received = graph_->images_received.load();
   c.images_dropped = graph_->images_dropped.load();
+  c.images_refused = graph_->images_refused.load();
   c.scans_received = graph_->scans_received.load();
   c.scans_dropped = graph_->scans_dropped.load();
   return c;

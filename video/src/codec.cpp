@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -251,6 +252,24 @@ bool JpegFrameSize(const uint8_t* data, size_t size, int& width, int& height) {
     at += 2 + length;
   }
   return false;
+}
+
+bool PngFrameSize(const uint8_t* data, size_t size, int& width, int& height) {
+  static constexpr uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A};
+  // Signature, then the IHDR chunk: length 13, "IHDR", width, height (big-endian).
+  if (data == nullptr || size < 24 || std::memcmp(data, kSignature, 8) != 0 || std::memcmp(data + 12, "IHDR", 4) != 0) {
+    return false;
+  }
+  const auto be32 = [&](size_t at) {
+    return (uint32_t{data[at]} << 24) | (uint32_t{data[at + 1]} << 16) | (uint32_t{data[at + 2]} << 8) | data[at + 3];
+  };
+  const uint32_t w = be32(16);
+  const uint32_t h = be32(20);
+  // PNG allows up to 2^31 - 1 each way.
+  if (be32(8) != 13 || w == 0 || h == 0 || w > 0x7FFFFFFFu || h > 0x7FFFFFFFu) return false;
+  width = static_cast<int>(w);
+  height = static_cast<int>(h);
+  return true;
 }
 
 bool JpegPassesThrough(const uint8_t* data, size_t size, const CameraConfig& camera, uint32_t target_kbps) {

@@ -58,6 +58,14 @@ std::vector<std::string> LinkProfileNames();
 /// Throws ConfigError naming the file and key, or, for a name that is not
 /// shipped, the names that are.
 LinkFault LoadLinkProfile(const std::string& name_or_file);
+/// What makes `fault` impossible to drive through, "" when nothing does:
+/// states sent at `state_rate_hz`, a vehicle silent for `vehicle_timeout_s`
+/// is lost. A loss so high that a whole time-out's states are all dropped
+/// more than once a minute (on average), or a jitter that holds a state back
+/// longer than the time-out, would end the run as a vehicle lost (or one that
+/// never answered) though the vehicle runs: said instead, before it starts.
+std::string LinkFaultProblem(const LinkFault& fault, double state_rate_hz, double vehicle_timeout_s);
+
 /// --link-profile and --link-fault together (either may be absent): the
 /// profile, then the keys --link-fault names over it; `otherwise` when
 /// neither is given. A bad profile or fault is a UsageError naming its

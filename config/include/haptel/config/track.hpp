@@ -97,4 +97,11 @@ class Track {
   Segment2 start_line_;
 };
 
+/// The widest free stretch of gate `index`'s opening, m: along the line
+/// between its posts, from one post's surface to the other's, less what the
+/// track's obstacles lying across that line take of it (a post in the gate
+/// leaves two gaps, the wider one counts). `blocking` receives the indices,
+/// in config().obstacles, of the obstacles across it.
+double GateFreeWidth(const Track& track, size_t index, std::vector<size_t>* blocking = nullptr);
+
 }  // namespace haptel

@@ -24,6 +24,12 @@ std::vector<std::string> SplitList(const std::string& text, char separator = ','
 /// {"a", "b"} -> "a,b" (with `separator` between): SplitList's inverse.
 std::string JoinList(const std::vector<std::string>& parts, const std::string& separator = ",");
 
+/// The length of the plain decimal number `text` starts with: an optional
+/// sign, digits with at most one point, an optional exponent ("-1.5e3");
+/// 0 when it starts with none. Unlike strtod, hexadecimal ("0x10"), "inf",
+/// "nan" and leading spaces are not numbers a person types.
+size_t DecimalPrefix(const std::string& text);
+
 class Args {
  public:
   /// @param value_options options that take a value (without "--").
@@ -34,7 +40,8 @@ class Args {
   std::optional<std::string> Value(const std::string& name) const;
   /// An integer option in [min, max]; UsageError names the option otherwise.
   std::optional<int> Int(const std::string& name, int min, int max) const;
-  /// A number option in [min, max], the whole word a number ("5x" is not);
+  /// A number option in [min, max], the whole word a plain decimal ("5x",
+  /// "0x10" are not: DecimalPrefix);
   /// UsageError names the option, the range and what was given otherwise.
   std::optional<double> Number(const std::string& name, double min, double max) const;
   bool Flag(const std::string& name) const { return flags_set_.count(name) != 0; }

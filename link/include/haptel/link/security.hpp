@@ -59,6 +59,10 @@ std::vector<std::pair<std::string, std::string>> SecurityProperties(const std::f
 /// most 49.
 std::string VehicleIdentityProblem(const std::string& name);
 
+/// Why `dir` cannot be made by InitSecurity, "" when it can: a file, a
+/// folder holding a CA (ca.pem) or any other file. Nothing is changed.
+std::string InitFolderProblem(const std::filesystem::path& dir);
+
 /// `haptel security init DIR`: creates the CA, the operator's identity and
 /// one for each of `vehicles`, the governance and each identity's
 /// permissions, all signed, with the `openssl` program; valid for `days`.
@@ -68,6 +72,11 @@ std::string VehicleIdentityProblem(const std::string& name);
 /// beside `dir` and renamed into place when complete: a step that fails
 /// leaves nothing behind to block a retry. Throws std::runtime_error with
 /// openssl's message when a step fails.
+///
+/// `dir` may end in a separator, or be "." or any existing empty folder,
+/// which is filled (ca.pem last). Folders ".partial-PID-NAME" beside it left
+/// by a `security init` that was killed (its process gone) are removed, and
+/// said: they hold a CA's private key.
 ///
 /// With `console_names`, also the experimenter's console's HTTPS key and
 /// certificate (console.key, console.pem), signed by the same CA, for those

@@ -105,7 +105,10 @@ struct FleetResult {
   int handovers_untimed = 0;
   double handover_ms_p50 = -1.0;  ///< nearest rank; negative: no handover
   double handover_ms_p95 = -1.0;
-  std::vector<std::string> lost;  ///< the vehicles lost mid-run, by name
+  std::vector<std::string> lost;  ///< the vehicles lost mid-run, by name (those that never answered too)
+  /// Of `lost`, those never heard from (outcome vehicle did not start): an
+  /// attached vehicle that is not running, or a spawned one that never came up.
+  std::vector<std::string> never_answered;
   /// Switches a person asked for (a key, a controller button) and made;
   /// the automatic operator's own turns are not counted.
   int person_switches = 0;

@@ -12,6 +12,9 @@
 /// - nav_msgs/Odometry is the pose, its frame's origin placed at the track's
 ///   start (where the robot was put down); the twist is the speed and yaw rate.
 /// - sensor_msgs/CompressedImage (JPEG or PNG) is the camera (MakeCamera).
+///   An image's size is read from its header first (ImageProblem): one
+///   larger than kMaxImageSide a side, or of another format, is counted and
+///   dropped undecoded, said once.
 /// - sensor_msgs/LaserScan is the range field of the state (RangeScanFor),
 ///   what shared control looks ahead with, as the simulated robot's range
 ///   sensors are. The newest scan counts; one older than ros2.odom_timeout_s
@@ -43,8 +46,9 @@ struct Ros2Counters {
   uint64_t odom_dropped = 0;   ///< non-finite pose or twist
   uint64_t images_received = 0;
   uint64_t images_dropped = 0; ///< not decodable
+  uint64_t images_refused = 0; ///< too large, or neither JPEG nor PNG, by its header: never decoded (ImageProblem)
   uint64_t scans_received = 0;
-  uint64_t scans_dropped = 0;  ///< a scan whose geometry makes no sense (RangeScanFor gave no beams)
+  uint64_t scans_dropped = 0;  ///< a scan whose geometry makes no sense (ScanProblem); the first is said
 };
 
 class Ros2Robot final : public VehicleAdapter {
@@ -90,11 +94,27 @@ class Ros2Robot final : public VehicleAdapter {
   /// is invalid and dropped. A beam or sector that met nothing reads
   /// range_max, which is the scan's range_max.
   ///
-  /// A scan whose geometry makes no sense (no beams, non-finite angles or
-  /// limits, a zero increment over several beams, range_max not positive or
-  /// range_min not in [0, range_max)) gives count 0.
+  /// A scan whose geometry makes no sense (ScanProblem, its angle_max
+  /// taken as its last beam's) gives count 0.
   static RangeScan RangeScanFor(double angle_min, double angle_increment, double range_min, double range_max,
                                 std::span<const float> ranges);
+
+  /// The largest image side decoded, px: 4K UHD's 3840 fits; 4096 x 4096
+  /// decodes to 50 MB, where a 10 000-pixel square would take 300 MB.
+  static constexpr int kMaxImageSide = 4096;
+  /// Why a CompressedImage's bytes are not decoded, "" when they may be:
+  /// neither JPEG nor PNG (its size unknown until decoded), or a size read
+  /// from its header (JpegFrameSize, PngFrameSize) over kMaxImageSide.
+  static std::string ImageProblem(std::span<const uint8_t> data);
+
+  /// What makes a scan's geometry impossible, "" when nothing does: no
+  /// beams; an angle or limit not finite; angle_min or angle_max more than a
+  /// full turn from the heading; an increment of zero over several beams, or
+  /// of the sign opposite to angle_max − angle_min; beams spanning more than
+  /// a full turn (and one beam); range_max not in (0, 10 km], range_min not
+  /// in [0, range_max).
+  static std::string ScanProblem(double angle_min, double angle_max, double angle_increment, double range_min,
+                                 double range_max, size_t beams);
 
   /// The participant and endpoints on the robot's domain (shared with the camera).
   struct Graph;
@@ -114,6 +134,7 @@ class Ros2Robot final : public VehicleAdapter {
   bool twist_due_ = true;
   int64_t last_odom_ns_ = 0;  ///< 0: none yet
   int64_t last_scan_ns_ = 0;  ///< 0: none yet
+  bool scan_problem_said_ = false;  ///< the first impossible scan is said, the rest counted
 };
 
 }  // namespace haptel::vehicles

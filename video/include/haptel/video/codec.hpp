@@ -182,6 +182,9 @@ class JpegDecoder final : public VideoDecoder {
 /// Width and height from a JPEG's frame header (its SOFn segment), read
 /// without decoding. False when `data` is not a JPEG with one.
 bool JpegFrameSize(const uint8_t* data, size_t size, int& width, int& height);
+/// Width and height from a PNG's header (its IHDR chunk, which must come
+/// first), read without decoding. False when `data` is not a PNG with one.
+bool PngFrameSize(const uint8_t* data, size_t size, int& width, int& height);
 
 /// Whether a frame a camera delivered as JPEG (a ROS 2 robot's
 /// CompressedImage) can go on the link as it is, neither decoded nor
