@@ -10,7 +10,8 @@ BareLoop MeasureBareLoop(double rate_hz, int realtime_priority, double seconds) 
                               [seconds] { SleepUntilNs(MonotonicNs() + SToNs(seconds + 0.2)); });
 }
 
-BareLoop MeasureBareLoopWhile(double rate_hz, int realtime_priority, const std::function<void()>& work) {
+BareLoop MeasureBareLoopWhile(double rate_hz, int realtime_priority,
+                              const std::function<void()>& work) {
   PeriodicThread::Options o;
   o.name = "bare";
   o.rate_hz = rate_hz;

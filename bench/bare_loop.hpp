@@ -23,6 +23,7 @@ BareLoop MeasureBareLoop(double rate_hz, int realtime_priority, double seconds);
 /// Runs the empty loop while `work` runs on the calling thread (another
 /// process's run, say) and returns its figures: the machine's timing floor
 /// under the same load.
-BareLoop MeasureBareLoopWhile(double rate_hz, int realtime_priority, const std::function<void()>& work);
+BareLoop MeasureBareLoopWhile(double rate_hz, int realtime_priority,
+                              const std::function<void()>& work);
 
 }  // namespace haptel::bench

@@ -5,22 +5,21 @@
 #include <cstdio>
 #include <string>
 
+#include "blimp_bench.hpp"
+#include "fleet_bench.hpp"
+#include "fuzz_bench.hpp"
+#include "gravity_bench.hpp"
 #include "haptel/core/args.hpp"
 #include "haptel/core/cli.hpp"
-
-#include "gravity_bench.hpp"
+#include "link_bench.hpp"
+#include "passivity_bench.hpp"
 #include "physics_bench.hpp"
 #include "servo_bench.hpp"
 #include "skip_bench.hpp"
-#include "passivity_bench.hpp"
-#include "video_bench.hpp"
-#include "stability_bench.hpp"
-#include "blimp_bench.hpp"
-#include "fuzz_bench.hpp"
-#include "link_bench.hpp"
-#include "view_bench.hpp"
-#include "fleet_bench.hpp"
 #include "soak_bench.hpp"
+#include "stability_bench.hpp"
+#include "video_bench.hpp"
+#include "view_bench.hpp"
 
 using namespace haptel::bench;
 
@@ -35,7 +34,8 @@ struct Usage {
 constexpr Usage kUsage[] = {
     {"servo", "[--seconds S] [--device FILE] [--smoke] [--json]",
      "servo loop modes against an empty clock_nanosleep loop"},
-    {"gravity", "[--device FILE] [--points N] [--counts N] [--seed S] [--grid-out FILE] [--smoke] [--json]",
+    {"gravity",
+     "[--device FILE] [--points N] [--counts N] [--seed S] [--grid-out FILE] [--smoke] [--json]",
      "gravity compensation: drift with it off and on"},
     {"skip", "[--physics FILE] [--seconds S] [--smoke] [--json]",
      "physics CPU per simulated second; what a scene skips"},
@@ -43,24 +43,36 @@ constexpr Usage kUsage[] = {
      "work-precision: step x iterations x float/double"},
     {"stability", "[--physics FILE] [--minutes M] [--smoke] [--json]", "physics stress tests"},
     {"passivity", "[--device FILE] [--smoke] [--json]",
-     "the servo loop's passivity controller: largest stable wall stiffness against device delay, off and on"},
+     "the servo loop's passivity controller: largest stable wall stiffness against device delay, "
+     "off and on"},
     {"view", "[--seconds S] [--domain D] [--smoke] [--json]",
      "the operator's view: frame rate, CPU, video-to-screen, servo beside it"},
     {"blimp", "[--vehicle FILE] [--smoke] [--json]",
      "airship model: integrators x steps, error against CPU; physics checks"},
     {"link",
-     "[--seconds S] [--track FILE] [--delays MS,...] [--losses PERCENT,...] [--predict off|on|both] "
+     "[--seconds S] [--track FILE] [--delays MS,...] [--losses PERCENT,...] [--predict "
+     "off|on|both] "
      "[--link-profile NAME] [--domain D] [--lap-domain D] [--rtt-only] [--smoke] [--json]",
-     "DDS round trip against raw Fast DDS; the lap against the link's delay and loss, with and without prediction"},
-    {"video", "[--vehicle FILE] [--track FILE] [--schedule default|both|jpeg|h264|off] [--phase-s S] [--domain D] [--smoke] [--json]",
-     "the link's video codecs: JPEG qualities and H.264 bitrates against SSIM, PSNR and CPU; the Pareto front; "
+     "DDS round trip against raw Fast DDS; the lap against the link's delay and loss, with and "
+     "without prediction"},
+    {"video",
+     "[--vehicle FILE] [--track FILE] [--schedule default|both|jpeg|h264|off] [--phase-s S] "
+     "[--domain D] [--smoke] [--json]",
+     "the link's video codecs: JPEG qualities and H.264 bitrates against SSIM, PSNR and CPU; the "
+     "Pareto front; "
      "then a capacity schedule through a real vehicle (bitrate, SSIM, latency, adapt_s)"},
     {"fuzz", "[--inputs N] [--target NAME] [--seed S] [--smoke] [--json]",
-     "every parser fed 10^6 mutated inputs: configs, scenes, UDP, servo bytes, CAN, DDS samples, console HTTP"},
-    {"fleet", "[--fleet FILE] [--counts LIST] [--slice S] [--time-limit S] [--device FILE] [--domain D] [--smoke] [--json]",
-     "one operator, 1..N vehicles: handover p50/p95, operator CPU per vehicle, the servo loop against the bare loop"},
-    {"soak", "[--duration S] [--kill-every MIN,MAX] [--seed N] [--port N] [--domain D] [--smoke] [--json]",
-     "the study database under concurrency: a study with its console, two runs, the sqlite3 tool, random kill -9s; "
+     "every parser fed 10^6 mutated inputs: configs, scenes, UDP, servo bytes, CAN, DDS samples, "
+     "console HTTP"},
+    {"fleet",
+     "[--fleet FILE] [--counts LIST] [--slice S] [--time-limit S] [--device FILE] [--domain D] "
+     "[--smoke] [--json]",
+     "one operator, 1..N vehicles: handover p50/p95, operator CPU per vehicle, the servo loop "
+     "against the bare loop"},
+    {"soak",
+     "[--duration S] [--kill-every MIN,MAX] [--seed N] [--port N] [--domain D] [--smoke] [--json]",
+     "the study database under concurrency: a study with its console, two runs, the sqlite3 tool, "
+     "random kill -9s; "
      "integrity after every kill, every acknowledged row found"},
 };
 
@@ -70,18 +82,19 @@ struct Bench {
   BenchMain main;
 };
 constexpr Bench kBenches[] = {
-    {"servo", BenchServoMain},         {"gravity", BenchGravityMain}, {"skip", BenchSkipMain},
+    {"servo", BenchServoMain},         {"gravity", BenchGravityMain},     {"skip", BenchSkipMain},
     {"physics", BenchPhysicsMain},     {"stability", BenchStabilityMain}, {"view", BenchViewMain},
-    {"blimp", BenchBlimpMain},         {"link", BenchLinkMain},
-    {"fuzz", BenchFuzzMain},           {"passivity", BenchPassivityMain},
-    {"video", BenchVideoMain},         {"fleet", BenchFleetMain},
+    {"blimp", BenchBlimpMain},         {"link", BenchLinkMain},           {"fuzz", BenchFuzzMain},
+    {"passivity", BenchPassivityMain}, {"video", BenchVideoMain},         {"fleet", BenchFleetMain},
     {"soak", BenchSoakMain},
 };
 
 std::string UsageText(const std::string& only) {
   std::string text =
-      "usage: haptel bench NAME [options]; each writes build/bench/NAME.csv, --json ends with one line;\n"
-      "  --smoke: the same run shortened to seconds, for the tests (outputs in build/bench/smoke/,\n"
+      "usage: haptel bench NAME [options]; each writes build/bench/NAME.csv, --json ends with one "
+      "line;\n"
+      "  --smoke: the same run shortened to seconds, for the tests (outputs in "
+      "build/bench/smoke/,\n"
       "  \"smoke\":true in the JSON line: its figures are no measurements)\n";
   for (const Usage& u : kUsage) {
     if (!only.empty() && only != u.name) continue;

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "bare_loop.hpp"
 #include "haptel/config/device.hpp"
 #include "haptel/config/fleet.hpp"
 #include "haptel/config/paths.hpp"
@@ -18,7 +19,6 @@
 #include "haptel/core/child_process.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/core/json.hpp"
-#include "bare_loop.hpp"
 #include "plot.hpp"
 #include "smoke.hpp"
 
@@ -47,16 +47,16 @@ struct CountRow {
   int vehicles = 0;
   bool ran = false;
   std::string outcome;
-  int completed = 0;          ///< vehicles whose course was completed
+  int completed = 0;  ///< vehicles whose course was completed
   int handovers = 0;
   int handovers_untimed = 0;  ///< turns to a vehicle still starting
   std::string message;        ///< the run's one line: each vehicle's end
   double handover_p50_ms = std::nan("");
   double handover_p95_ms = std::nan("");
-  double cpu_share = std::nan("");        ///< operator process CPU s per wall s
-  double cpu_added = std::nan("");        ///< per vehicle added over the count before
-  double servo_p99_us = std::nan("");     ///< over the run
-  double servo_cue_p99_us = std::nan(""); ///< over the ticks that played the cue
+  double cpu_share = std::nan("");         ///< operator process CPU s per wall s
+  double cpu_added = std::nan("");         ///< per vehicle added over the count before
+  double servo_p99_us = std::nan("");      ///< over the run
+  double servo_cue_p99_us = std::nan("");  ///< over the ticks that played the cue
   int cue_ticks = 0;
   double bare_alone_p99_us = std::nan("");
   double bare_beside_p99_us = std::nan("");
@@ -65,11 +65,12 @@ struct CountRow {
 
 /// The fleet file of `fleet`'s first `count` vehicles, in `dir`, with
 /// absolute paths (the file no longer sits beside the configs).
-std::filesystem::path WriteFleet(const std::filesystem::path& dir, const FleetConfig& fleet, int count,
-                                 double slice_s) {
+std::filesystem::path WriteFleet(const std::filesystem::path& dir, const FleetConfig& fleet,
+                                 int count, double slice_s) {
   const std::filesystem::path file = dir / ("fleet-" + std::to_string(count) + ".yaml");
   std::ofstream out(file);
-  out << "# written by haptel bench fleet: the first " << count << " of " << fleet.file.string() << "\n"
+  out << "# written by haptel bench fleet: the first " << count << " of " << fleet.file.string()
+      << "\n"
       << "name: " << fleet.name << "-" << count << "\nslice_s: " << slice_s << "\nvehicles:\n";
   for (int i = 0; i < count; ++i) {
     const FleetVehicle& v = fleet.vehicles[static_cast<size_t>(i)];
@@ -85,32 +86,47 @@ std::filesystem::path WriteFleet(const std::filesystem::path& dir, const FleetCo
 }
 
 /// One count: the bare loop alone, then `haptel run --fleet` with the bare loop beside it.
-CountRow RunCount(const std::filesystem::path& dir, const FleetConfig& fleet, int count, double slice_s,
-                  double time_limit_s, const DeviceConfig& device, int domain, double bare_s) {
+CountRow RunCount(const std::filesystem::path& dir, const FleetConfig& fleet, int count,
+                  double slice_s, double time_limit_s, const DeviceConfig& device, int domain,
+                  double bare_s) {
   CountRow row;
   row.vehicles = count;
   row.bare_alone_p99_us =
-      MeasureBareLoop(device.servo.rate_hz, device.servo.realtime_priority, bare_s).stats.period_p99_us;
+      MeasureBareLoop(device.servo.rate_hz, device.servo.realtime_priority, bare_s)
+          .stats.period_p99_us;
   const std::filesystem::path file = WriteFleet(dir, fleet, count, slice_s);
-  std::vector<std::string> words{"run",      "--fleet", file.string(), "--json",          "--quiet",
-                                 "--view",   "none",    "--domain",    std::to_string(domain), "--database",
-                                 (dir / "fleet.db").string(), "--device", device.file.string()};
+  std::vector<std::string> words{"run",
+                                 "--fleet",
+                                 file.string(),
+                                 "--json",
+                                 "--quiet",
+                                 "--view",
+                                 "none",
+                                 "--domain",
+                                 std::to_string(domain),
+                                 "--database",
+                                 (dir / "fleet.db").string(),
+                                 "--device",
+                                 device.file.string()};
   if (time_limit_s > 0.0) words.insert(words.end(), {"--time-limit", JsonNumber(time_limit_s)});
   const int64_t start = MonotonicNs();
   std::string json, err;
-  const BareLoop beside = MeasureBareLoopWhile(device.servo.rate_hz, device.servo.realtime_priority, [&] {
-    ChildProcess run((ProgramDirectory() / "haptel").string(), words, ChildProcess::Options{true});
-    run.Wait(kRunBound_s);
-    json = run.LastLine();
-    err = run.err();
-  });
+  const BareLoop beside =
+      MeasureBareLoopWhile(device.servo.rate_hz, device.servo.realtime_priority, [&] {
+        ChildProcess run((ProgramDirectory() / "haptel").string(), words,
+                         ChildProcess::Options{true});
+        run.Wait(kRunBound_s);
+        json = run.LastLine();
+        err = run.err();
+      });
   // The run's own account (its table, why a vehicle was lost), kept beside the CSV.
   const std::filesystem::path log = dir / ("fleet-" + std::to_string(count) + ".log");
   std::ofstream(log) << err;
   row.wall_s = NsToS(MonotonicNs() - start);
   row.bare_beside_p99_us = beside.stats.period_p99_us;
   if (json.empty() || json.front() != '{') {
-    std::fprintf(stderr, "haptel bench fleet: the run of %d vehicle(s) gave no result: %s\n", count, err.c_str());
+    std::fprintf(stderr, "haptel bench fleet: the run of %d vehicle(s) gave no result: %s\n", count,
+                 err.c_str());
     return row;
   }
   row.ran = true;
@@ -120,8 +136,8 @@ CountRow RunCount(const std::filesystem::path& dir, const FleetConfig& fleet, in
   row.handovers_untimed = static_cast<int>(Number(json, "handovers_untimed"));
   row.message = JsonFieldOf(json, "message");
   if (row.outcome != "completed" && row.outcome != "time limit") {
-    std::fprintf(stderr, "haptel bench fleet: %d vehicle(s): %s: %s (the run's output: %s)\n", count,
-                 row.outcome.c_str(), row.message.c_str(), log.c_str());
+    std::fprintf(stderr, "haptel bench fleet: %d vehicle(s): %s: %s (the run's output: %s)\n",
+                 count, row.outcome.c_str(), row.message.c_str(), log.c_str());
   }
   row.handover_p50_ms = Number(json, "handover_ms_p50");
   row.handover_p95_ms = Number(json, "handover_ms_p95");
@@ -141,12 +157,15 @@ std::vector<int> ParseCounts(const std::string& text, int most) {
       n = std::stoi(item, &used);
       if (used != item.size()) throw std::invalid_argument(item);
     } catch (const std::exception&) {
-      throw UsageError("option --counts: expected comma-separated vehicle counts, got '" + text + "'");
+      throw UsageError("option --counts: expected comma-separated vehicle counts, got '" + text +
+                       "'");
     }
     if (n < 1 || n > most) {
-      throw UsageError("option --counts: " + item + " vehicles: the fleet file has " + std::to_string(most));
+      throw UsageError("option --counts: " + item + " vehicles: the fleet file has " +
+                       std::to_string(most));
     }
-    if (!out.empty() && n <= out.back()) throw UsageError("option --counts: expected rising counts, got '" + text + "'");
+    if (!out.empty() && n <= out.back())
+      throw UsageError("option --counts: expected rising counts, got '" + text + "'");
     out.push_back(n);
   }
   if (out.empty()) throw UsageError("option --counts: expected at least one count");
@@ -165,18 +184,22 @@ int BenchFleetMain(int argc, const char* const* argv) {
   double slice_s = 0.0, time_limit_s = 0.0, bare_s = 2.0;
   int domain = 120 + static_cast<int>(getpid() % 30);
   try {
-    const Args args(argc, argv, {"fleet", "counts", "slice", "time-limit", "device", "domain"}, {"json", kSmokeFlag});
+    const Args args(argc, argv, {"fleet", "counts", "slice", "time-limit", "device", "domain"},
+                    {"json", kSmokeFlag});
     json = args.Flag("json");
     smoke = args.Flag(kSmokeFlag);
-    fleet = LoadFleet(args.Value("fleet").value_or(ShippedFile("config/fleets/four.yaml").string()));
-    device = LoadDevice(args.Value("device").value_or(ShippedFile("config/devices/sim.yaml").string()));
+    fleet =
+        LoadFleet(args.Value("fleet").value_or(ShippedFile("config/fleets/four.yaml").string()));
+    device =
+        LoadDevice(args.Value("device").value_or(ShippedFile("config/devices/sim.yaml").string()));
     const int most = static_cast<int>(fleet.vehicles.size());
     for (int n = 1; n <= most; ++n) counts.push_back(n);
     slice_s = fleet.slice_s;
     if (smoke) {  // the fewest and the most, each cut short, switching every second
       counts = most > 1 ? std::vector<int>{1, most} : std::vector<int>{1};
       slice_s = 1.0;
-      time_limit_s = 6.0;  // past the vehicles' start-up on a quiet machine (seconds on a loaded one)
+      time_limit_s =
+          6.0;  // past the vehicles' start-up on a quiet machine (seconds on a loaded one)
       bare_s = 0.5;
     }
     if (auto c = args.Value("counts")) counts = ParseCounts(*c, most);
@@ -188,12 +211,15 @@ int BenchFleetMain(int argc, const char* const* argv) {
     return 2;
   }
   const auto dir = OutputDir(smoke);
-  PrintSmokeNote("fleet", smoke, "counts 1 and %d, each cut at %.0f s, a %.0f s slice", counts.back(), time_limit_s,
-                 slice_s);
-  std::printf("haptel bench fleet: %s (%zu vehicles), slice %.1f s, the automatic operator, no view\n\n",
-              fleet.file.c_str(), fleet.vehicles.size(), slice_s);
-  std::printf("  vehicles  outcome       done  handovers  p50 ms  p95 ms   CPU share  +CPU/vehicle  servo p99 us"
-              "  cue p99 us (ticks)  bare alone  bare beside  wall s\n");
+  PrintSmokeNote("fleet", smoke, "counts 1 and %d, each cut at %.0f s, a %.0f s slice",
+                 counts.back(), time_limit_s, slice_s);
+  std::printf(
+      "haptel bench fleet: %s (%zu vehicles), slice %.1f s, the automatic operator, no view\n\n",
+      fleet.file.c_str(), fleet.vehicles.size(), slice_s);
+  std::printf(
+      "  vehicles  outcome       done  handovers  p50 ms  p95 ms   CPU share  +CPU/vehicle  servo "
+      "p99 us"
+      "  cue p99 us (ticks)  bare alone  bare beside  wall s\n");
   std::vector<CountRow> rows;
   for (const int count : counts) {
     CountRow row = RunCount(dir, fleet, count, slice_s, time_limit_s, device, domain, bare_s);
@@ -201,10 +227,13 @@ int BenchFleetMain(int argc, const char* const* argv) {
       row.cpu_added = (row.cpu_share - rows.back().cpu_share) / (count - rows.back().vehicles);
     }
     rows.push_back(row);
-    std::printf("  %8d  %-12s  %d/%d  %9d  %6.0f  %6.0f   %9.3f  %12.3f  %12.0f  %10.0f (%5d)  %10.0f  %11.0f  %6.1f\n",
-                row.vehicles, row.ran ? row.outcome.c_str() : "no result", row.completed, row.vehicles, row.handovers,
-                row.handover_p50_ms, row.handover_p95_ms, row.cpu_share, row.cpu_added, row.servo_p99_us,
-                row.servo_cue_p99_us, row.cue_ticks, row.bare_alone_p99_us, row.bare_beside_p99_us, row.wall_s);
+    std::printf(
+        "  %8d  %-12s  %d/%d  %9d  %6.0f  %6.0f   %9.3f  %12.3f  %12.0f  %10.0f (%5d)  %10.0f  "
+        "%11.0f  %6.1f\n",
+        row.vehicles, row.ran ? row.outcome.c_str() : "no result", row.completed, row.vehicles,
+        row.handovers, row.handover_p50_ms, row.handover_p95_ms, row.cpu_share, row.cpu_added,
+        row.servo_p99_us, row.servo_cue_p99_us, row.cue_ticks, row.bare_alone_p99_us,
+        row.bare_beside_p99_us, row.wall_s);
     std::fflush(stdout);
   }
 
@@ -224,7 +253,8 @@ int BenchFleetMain(int argc, const char* const* argv) {
   for (const CountRow& r : rows) {
     if (!r.ran) continue;
     servo_unchanged = servo_unchanged && r.servo_p99_us <= bare_max + kBin_us;
-    if (r.cue_ticks > 0) servo_unchanged = servo_unchanged && r.servo_cue_p99_us <= bare_max + kBin_us;
+    if (r.cue_ticks > 0)
+      servo_unchanged = servo_unchanged && r.servo_cue_p99_us <= bare_max + kBin_us;
   }
   const CountRow* at4 = nullptr;
   for (const CountRow& r : rows) {
@@ -232,30 +262,39 @@ int BenchFleetMain(int argc, const char* const* argv) {
   }
   const bool handover_met = at4 != nullptr && at4->ran && at4->handovers >= kHandoversWanted &&
                             at4->handover_p95_ms <= kHandoverP95Target_ms;
-  std::printf("\n  handover: switch request to the new vehicle obeying a command sent after its lock was released;\n"
-              "  CPU share: the operator process's CPU seconds per wall second (all threads); +CPU/vehicle: over\n"
-              "  the count before, per vehicle added; servo p99: start-to-start period over the run, and over the\n"
-              "  ticks that played the switch cue; bare: an empty loop at the same rate, alone before the run and\n"
-              "  beside it.\n\n");
-  std::printf("  target: 4 vehicles, >= %d handovers, p95 <= %.0f ms: %s\n", kHandoversWanted, kHandoverP95Target_ms,
+  std::printf(
+      "\n  handover: switch request to the new vehicle obeying a command sent after its lock was "
+      "released;\n"
+      "  CPU share: the operator process's CPU seconds per wall second (all threads); "
+      "+CPU/vehicle: over\n"
+      "  the count before, per vehicle added; servo p99: start-to-start period over the run, and "
+      "over the\n"
+      "  ticks that played the switch cue; bare: an empty loop at the same rate, alone before the "
+      "run and\n"
+      "  beside it.\n\n");
+  std::printf("  target: 4 vehicles, >= %d handovers, p95 <= %.0f ms: %s\n", kHandoversWanted,
+              kHandoverP95Target_ms,
               at4 == nullptr ? "not measured (no count of 4)"
               : handover_met ? "met"
                              : "MISSED");
-  std::printf("  target: servo p99 unchanged (<= the bare loop's largest p99 in this run, %.0f us, + one %.0f us bin;\n"
-              "          the bare loop's p99 spread %.0f..%.0f us): %s\n",
-              bare_max, kBin_us, bare_min, bare_max, servo_unchanged ? "met" : "MISSED");
+  std::printf(
+      "  target: servo p99 unchanged (<= the bare loop's largest p99 in this run, %.0f us, + one "
+      "%.0f us bin;\n"
+      "          the bare loop's p99 spread %.0f..%.0f us): %s\n",
+      bare_max, kBin_us, bare_min, bare_max, servo_unchanged ? "met" : "MISSED");
 
   {
     std::ofstream csv(dir / "fleet.csv");
-    csv << "vehicles,outcome,vehicles_completed,handovers,handovers_untimed,handover_ms_p50,handover_ms_p95,operator_cpu_share,"
+    csv << "vehicles,outcome,vehicles_completed,handovers,handovers_untimed,handover_ms_p50,"
+           "handover_ms_p95,operator_cpu_share,"
            "cpu_added_per_vehicle,servo_p99_us,servo_cue_p99_us,servo_cue_ticks,bare_alone_p99_us,"
            "bare_beside_p99_us,wall_s\n";
     for (const CountRow& r : rows) {
-      csv << r.vehicles << "," << r.outcome << "," << r.completed << "," << r.handovers << "," << r.handovers_untimed
-          << "," << r.handover_p50_ms
-          << "," << r.handover_p95_ms << "," << r.cpu_share << "," << r.cpu_added << "," << r.servo_p99_us << ","
-          << r.servo_cue_p99_us << "," << r.cue_ticks << "," << r.bare_alone_p99_us << "," << r.bare_beside_p99_us
-          << "," << r.wall_s << "\n";
+      csv << r.vehicles << "," << r.outcome << "," << r.completed << "," << r.handovers << ","
+          << r.handovers_untimed << "," << r.handover_p50_ms << "," << r.handover_p95_ms << ","
+          << r.cpu_share << "," << r.cpu_added << "," << r.servo_p99_us << "," << r.servo_cue_p99_us
+          << "," << r.cue_ticks << "," << r.bare_alone_p99_us << "," << r.bare_beside_p99_us << ","
+          << r.wall_s << "\n";
     }
   }
   Series cpu{"operator CPU, % of a core", {}, {}};
@@ -272,30 +311,41 @@ int BenchFleetMain(int argc, const char* const* argv) {
   std::vector<Series> series{cpu};
   if (!handover.x.empty()) series.push_back(handover);
   PlotLines(dir / "fleet.png", series,
-            {"One operator, N vehicles: the operator's CPU and the handover", "vehicles", "% of a core; ms"});
+            {"One operator, N vehicles: the operator's CPU and the handover", "vehicles",
+             "% of a core; ms"});
   std::printf("\n  wrote %s, %s\n", (dir / "fleet.csv").c_str(), (dir / "fleet.png").c_str());
 
-  const bool all_ran = std::all_of(rows.begin(), rows.end(), [](const CountRow& r) { return r.ran; });
+  const bool all_ran =
+      std::all_of(rows.begin(), rows.end(), [](const CountRow& r) { return r.ran; });
   if (json) {
     std::ostringstream o;
-    o << "{\"fleet\":" << JsonString(fleet.name) << ",\"slice_s\":" << JsonNumber(slice_s) << ",\"counts\":[";
+    o << "{\"fleet\":" << JsonString(fleet.name) << ",\"slice_s\":" << JsonNumber(slice_s)
+      << ",\"counts\":[";
     for (size_t i = 0; i < rows.size(); ++i) {
       const CountRow& r = rows[i];
-      o << (i ? "," : "") << "{\"vehicles\":" << r.vehicles << ",\"ran\":" << (r.ran ? "true" : "false")
-        << ",\"outcome\":" << JsonString(r.outcome) << ",\"vehicles_completed\":" << r.completed
-        << ",\"handovers\":" << r.handovers << ",\"handovers_untimed\":" << r.handovers_untimed
-        << ",\"message\":" << JsonString(r.message) << ",\"handover_ms_p50\":" << Num(r.handover_p50_ms)
-        << ",\"handover_ms_p95\":" << Num(r.handover_p95_ms) << ",\"operator_cpu_share\":" << Num(r.cpu_share)
-        << ",\"cpu_added_per_vehicle\":" << Num(r.cpu_added) << ",\"servo_p99_us\":" << Num(r.servo_p99_us)
-        << ",\"servo_cue_p99_us\":" << Num(r.servo_cue_p99_us) << ",\"servo_cue_ticks\":" << r.cue_ticks
+      o << (i ? "," : "") << "{\"vehicles\":" << r.vehicles
+        << ",\"ran\":" << (r.ran ? "true" : "false") << ",\"outcome\":" << JsonString(r.outcome)
+        << ",\"vehicles_completed\":" << r.completed << ",\"handovers\":" << r.handovers
+        << ",\"handovers_untimed\":" << r.handovers_untimed
+        << ",\"message\":" << JsonString(r.message)
+        << ",\"handover_ms_p50\":" << Num(r.handover_p50_ms)
+        << ",\"handover_ms_p95\":" << Num(r.handover_p95_ms)
+        << ",\"operator_cpu_share\":" << Num(r.cpu_share)
+        << ",\"cpu_added_per_vehicle\":" << Num(r.cpu_added)
+        << ",\"servo_p99_us\":" << Num(r.servo_p99_us)
+        << ",\"servo_cue_p99_us\":" << Num(r.servo_cue_p99_us)
+        << ",\"servo_cue_ticks\":" << r.cue_ticks
         << ",\"bare_alone_p99_us\":" << Num(r.bare_alone_p99_us)
-        << ",\"bare_beside_p99_us\":" << Num(r.bare_beside_p99_us) << ",\"wall_s\":" << Num(r.wall_s) << "}";
+        << ",\"bare_beside_p99_us\":" << Num(r.bare_beside_p99_us)
+        << ",\"wall_s\":" << Num(r.wall_s) << "}";
     }
     o << "],\"handover_ms_p95_at_4\":" << Num(at4 != nullptr ? at4->handover_p95_ms : std::nan(""))
       << ",\"handovers_at_4\":" << (at4 != nullptr ? at4->handovers : 0)
       << ",\"handover_target_met\":" << (handover_met ? "true" : "false")
-      << ",\"servo_p99_us_bare\":" << Num(bare_median) << ",\"servo_p99_us_bare_min\":" << Num(bare_min)
-      << ",\"servo_p99_us_bare_max\":" << Num(bare_max) << ",\"servo_p99_us_fleet\":" << Num(last.servo_p99_us)
+      << ",\"servo_p99_us_bare\":" << Num(bare_median)
+      << ",\"servo_p99_us_bare_min\":" << Num(bare_min)
+      << ",\"servo_p99_us_bare_max\":" << Num(bare_max)
+      << ",\"servo_p99_us_fleet\":" << Num(last.servo_p99_us)
       << ",\"servo_p99_us_cue\":" << Num(last.servo_cue_p99_us)
       << ",\"servo_unchanged\":" << (servo_unchanged ? "true" : "false") << "}";
     std::printf("%s\n", JsonLine(o.str(), smoke).c_str());

@@ -1,6 +1,7 @@
 #include "fuzz_bench.hpp"
 
 #include <arpa/inet.h>
+#include <fastdds/rtps/common/SerializedPayload.h>
 #include <fcntl.h>
 #include <netinet/in.h>
 #include <poll.h>
@@ -22,8 +23,6 @@
 #include <stdexcept>
 #include <thread>
 
-#include <fastdds/rtps/common/SerializedPayload.h>
-
 #include "haptel/config/blimp_course.hpp"
 #include "haptel/config/blimp_gesture.hpp"
 #include "haptel/config/calibration.hpp"
@@ -44,8 +43,8 @@
 #include "haptel/core/clock.hpp"
 #include "haptel/core/json.hpp"
 #include "haptel/link/families.hpp"
-#include "haptel/record/recorder.hpp"
 #include "haptel/link/topic.hpp"
+#include "haptel/record/recorder.hpp"
 #include "haptel/servo/servo_output.hpp"
 #include "haptel/servo/sim_servo_controller.hpp"
 #include "haptel/study/console.hpp"
@@ -83,7 +82,8 @@ void WriteInput(const char* file) {
 
 void OnCrash(int sig) {
   WriteInput(g_crash_file);
-  const char message[] = "haptel bench fuzz: CRASH: the input is in the file named fuzz-<target>-crash.bin\n";
+  const char message[] =
+      "haptel bench fuzz: CRASH: the input is in the file named fuzz-<target>-crash.bin\n";
   const ssize_t ignored = ::write(2, message, sizeof message - 1);
   (void)ignored;
   signal(sig, SIG_DFL);
@@ -100,8 +100,9 @@ class HangWatch {
         const int64_t started = g_started_ns.load();
         if (started != 0 && NsToS(MonotonicNs() - started) > kHang_s) {
           WriteInput(file_.c_str());
-          std::fprintf(stderr, "haptel bench fuzz: HANG: one input took more than %.0f s; it is in %s\n", kHang_s,
-                       file_.c_str());
+          std::fprintf(stderr,
+                       "haptel bench fuzz: HANG: one input took more than %.0f s; it is in %s\n",
+                       kHang_s, file_.c_str());
           std::_Exit(1);
         }
       }
@@ -125,7 +126,8 @@ Bytes ReadBytes(const fs::path& file) {
 
 void WriteBytes(const fs::path& file, const Bytes& bytes) {
   std::ofstream out(file, std::ios::binary | std::ios::trunc);
-  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  out.write(reinterpret_cast<const char*>(bytes.data()),
+            static_cast<std::streamsize>(bytes.size()));
 }
 
 /// Seeded mutations of seed inputs.
@@ -145,10 +147,13 @@ class Mutator {
 
  private:
   void Once(Bytes& b, const std::vector<Bytes>& seeds) {
-    static const char* const kText[] = {"nan", "-nan", "inf", "-1e308", "1e400", "-0", "0x7fffffff", "-2147483649",
-                                        "[", "]", "{", "}", ":", ": ", "- ", "\n", "  ", "\t", "&a ", "*a", "!!binary ",
-                                        "''", "\"", "~", "null", "<", ">", "</", "/>", "&amp;", "<![CDATA[", "\xff\xfe",
-                                        "#", ",", "999999999999999999999", "1.5", "true", "yes", "?"};
+    static const char* const kText[] = {
+        "nan",         "-nan",  "inf",       "-1e308",   "1e400", "-0", "0x7fffffff",
+        "-2147483649", "[",     "]",         "{",        "}",     ":",  ": ",
+        "- ",          "\n",    "  ",        "\t",       "&a ",   "*a", "!!binary ",
+        "''",          "\"",    "~",         "null",     "<",     ">",  "</",
+        "/>",          "&amp;", "<![CDATA[", "\xff\xfe", "#",     ",",  "999999999999999999999",
+        "1.5",         "true",  "yes",       "?"};
     static const uint8_t kBinary[] = {0x00, 0xff, 0x7f, 0x80, 0x01, 0xfe};
     const uint64_t op = Below(b.empty() ? 3 : 8);
     switch (op) {
@@ -173,7 +178,8 @@ class Mutator {
       case 2: {  // a few random bytes
         const size_t at = Below(b.size() + 1);
         const size_t n = 1 + Below(8);
-        for (size_t i = 0; i < n; ++i) b.insert(b.begin() + static_cast<long>(at), static_cast<uint8_t>(random_()));
+        for (size_t i = 0; i < n; ++i)
+          b.insert(b.begin() + static_cast<long>(at), static_cast<uint8_t>(random_()));
         break;
       }
       case 3:  // flip a bit
@@ -218,7 +224,8 @@ struct Target {
 /// A byte stream in memory: reads what it is given, takes what is written.
 class MemoryStream final : public servo::ByteStream {
  public:
-  explicit MemoryStream(Bytes in, Bytes* written = nullptr) : in_(std::move(in)), written_(written) {}
+  explicit MemoryStream(Bytes in, Bytes* written = nullptr)
+      : in_(std::move(in)), written_(written) {}
   size_t Write(const uint8_t* data, size_t size) override {
     if (written_ != nullptr) written_->insert(written_->end(), data, data + size);
     return size;
@@ -274,18 +281,19 @@ Target FileTarget(std::vector<std::pair<fs::path, Loader>> loaded) {
 
 Target ConfigTarget(const fs::path& copy) {
   const std::vector<Loader> loaders = {
-      [](const fs::path& f) { LoadRun(f); },           [](const fs::path& f) { LoadTrack(f); },
-      [](const fs::path& f) { LoadBlimpCourse(f); },   [](const fs::path& f) { LoadVehicle(f); },
-      [](const fs::path& f) { LoadDevice(f); },        [](const fs::path& f) { LoadPhysics(f); },
-      [](const fs::path& f) { LoadStudy(f); },         [](const fs::path& f) { LoadCockpit(f); },
-      [](const fs::path& f) { LoadGesture(f); },       [](const fs::path& f) { LoadKeyboard(f); },
-      [](const fs::path& f) { LoadGamepad(f); },       [](const fs::path& f) { LoadBlimpGesture(f); },
+      [](const fs::path& f) { LoadRun(f); },         [](const fs::path& f) { LoadTrack(f); },
+      [](const fs::path& f) { LoadBlimpCourse(f); }, [](const fs::path& f) { LoadVehicle(f); },
+      [](const fs::path& f) { LoadDevice(f); },      [](const fs::path& f) { LoadPhysics(f); },
+      [](const fs::path& f) { LoadStudy(f); },       [](const fs::path& f) { LoadCockpit(f); },
+      [](const fs::path& f) { LoadGesture(f); },     [](const fs::path& f) { LoadKeyboard(f); },
+      [](const fs::path& f) { LoadGamepad(f); },     [](const fs::path& f) { LoadBlimpGesture(f); },
       [](const fs::path& f) { LoadCalibration(f); },
   };
   // Each file's loader is the first that takes it unmutated.
   std::vector<std::pair<fs::path, Loader>> loaded;
   for (const auto& entry : fs::recursive_directory_iterator(copy)) {
-    if (entry.path().extension() != ".yaml" || entry.path().parent_path().filename() == "scenes") continue;
+    if (entry.path().extension() != ".yaml" || entry.path().parent_path().filename() == "scenes")
+      continue;
     for (const Loader& load : loaders) {
       try {
         load(entry.path());
@@ -332,7 +340,8 @@ Target ServoTarget() {
   Target t;
   t.text = false;
   auto configs = std::make_shared<std::vector<ServoControllerConfig>>();
-  for (const char* file : {"config/vehicles/sim-blimp-maestro.yaml", "config/vehicles/sim-blimp-sc8000.yaml"}) {
+  for (const char* file :
+       {"config/vehicles/sim-blimp-maestro.yaml", "config/vehicles/sim-blimp-sc8000.yaml"}) {
     ServoControllerConfig c = LoadVehicle(ShippedFile(file)).servo;
     configs->push_back(c);
     // The adapter's own frames: valid commands of each protocol.
@@ -371,8 +380,8 @@ Target CanTarget() {
   Target t;
   t.text = true;
   // Candump lines; the raw frames come from the same bytes.
-  for (const char* line : {"02D#0000C03F00000000", "021#0100000008000000", "03E#0300", "001#0100", "7FF#",
-                           "12345678#DEADBEEF"}) {
+  for (const char* line : {"02D#0000C03F00000000", "021#0100000008000000", "03E#0300", "001#0100",
+                           "7FF#", "12345678#DEADBEEF"}) {
     t.seeds.emplace_back(line, line + std::strlen(line));
   }
   t.parse = [](size_t, const Bytes& input) {
@@ -382,7 +391,8 @@ Target CanTarget() {
     can_frame f{};
     if (!input.empty()) {
       f.can_id = (input[0] | (input.size() > 1 ? input[1] << 8 : 0)) & 0x7ff;
-      f.can_dlc = static_cast<uint8_t>(input.size() > 2 ? input[2] % 16 : 0);  // past 8 is malformed
+      f.can_dlc =
+          static_cast<uint8_t>(input.size() > 2 ? input[2] % 16 : 0);  // past 8 is malformed
       for (size_t i = 0; i < 8 && 3 + i < input.size(); ++i) f.data[i] = input[3 + i];
     }
     namespace od = vehicles::odrive;
@@ -409,7 +419,8 @@ Bytes Serialized(Msg m) {
 template <typename PubSub, typename Msg>
 bool Deserialize(const Bytes& input, Msg& out) {
   PubSub type;
-  eprosima::fastrtps::rtps::SerializedPayload_t payload(static_cast<uint32_t>(std::max<size_t>(input.size(), 1)));
+  eprosima::fastrtps::rtps::SerializedPayload_t payload(
+      static_cast<uint32_t>(std::max<size_t>(input.size(), 1)));
   std::memcpy(payload.data, input.data(), input.size());
   payload.length = static_cast<uint32_t>(input.size());
   try {
@@ -530,10 +541,13 @@ int ConnectFrom(const std::string& source, int port) {
 /// request a byte every 50 ms, half silent, each opened again when the
 /// console closes it. A request not answered 200 within 10 s counts 10 s.
 double PageUnderSlowClientsMs(int port) {
-  const std::string partial = "GET / HTTP/1.1\r\nHost: 127.0.0.1:" + std::to_string(port) + "\r\nX-Slow: ";
+  const std::string partial =
+      "GET / HTTP/1.1\r\nHost: 127.0.0.1:" + std::to_string(port) + "\r\nX-Slow: ";
   std::vector<int> fds(100, -1);
   std::vector<size_t> sent(100, 0);
-  auto from = [](size_t i) { return i < 40 ? std::string("127.0.0.1") : "127.0.0." + std::to_string(2 + (i - 40) / 3); };
+  auto from = [](size_t i) {
+    return i < 40 ? std::string("127.0.0.1") : "127.0.0." + std::to_string(2 + (i - 40) / 3);
+  };
   std::atomic<bool> stop{false};
   std::atomic<int> opened{0};
   std::thread slow([&] {
@@ -560,7 +574,8 @@ double PageUnderSlowClientsMs(int port) {
       if (fd >= 0) close(fd);
     }
   });
-  for (int i = 0; i < 600 && opened.load() < 100; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  for (int i = 0; i < 600 && opened.load() < 100; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   double slowest_ms = 0.0;
   for (int i = 0; i < 5; ++i) {
@@ -568,10 +583,12 @@ double PageUnderSlowClientsMs(int port) {
     const int fd = ConnectFrom("127.0.0.1", port);
     std::string answer;
     if (fd >= 0) {
-      const std::string r = "GET / HTTP/1.1\r\nHost: 127.0.0.1:" + std::to_string(port) + "\r\nConnection: close\r\n\r\n";
+      const std::string r = "GET / HTTP/1.1\r\nHost: 127.0.0.1:" + std::to_string(port) +
+                            "\r\nConnection: close\r\n\r\n";
       (void)!send(fd, r.data(), r.size(), MSG_NOSIGNAL);
       char buffer[4096];
-      for (ssize_t n; (n = recv(fd, buffer, sizeof buffer, 0)) > 0;) answer.append(buffer, static_cast<size_t>(n));
+      for (ssize_t n; (n = recv(fd, buffer, sizeof buffer, 0)) > 0;)
+        answer.append(buffer, static_cast<size_t>(n));
       close(fd);
     }
     const bool ok = answer.rfind("HTTP/1.1 200", 0) == 0;
@@ -603,7 +620,8 @@ Target ConsoleTarget(const fs::path& dir) {
   study::ConsoleOptions options;
   options.port = 0;
   options.thumbnail = true;
-  auto console = std::make_shared<study::StudyConsole>(config, plan, dir / "fuzz.db", questionnaires, options);
+  auto console =
+      std::make_shared<study::StudyConsole>(config, plan, dir / "fuzz.db", questionnaires, options);
   console->SetPicture({0xFF, 0xD8, 0xFF, 0xD9}, 1);
   console->SetLive("fuzzing");
   const int port = console->port();
@@ -617,21 +635,24 @@ Target ConsoleTarget(const fs::path& dir) {
     inet_pton(AF_INET, "127.0.0.1", &to.sin_addr);
     std::string page;
     if (connect(fd, reinterpret_cast<sockaddr*>(&to), sizeof to) == 0) {
-      const std::string r = "GET /login HTTP/1.1\r\nHost: 127.0.0.1:" + std::to_string(port) + "\r\n\r\n";
+      const std::string r =
+          "GET /login HTTP/1.1\r\nHost: 127.0.0.1:" + std::to_string(port) + "\r\n\r\n";
       (void)!send(fd, r.data(), r.size(), MSG_NOSIGNAL);
       char buffer[4096];
-      for (ssize_t n; (n = recv(fd, buffer, sizeof buffer, 0)) > 0;) page.append(buffer, static_cast<size_t>(n));
+      for (ssize_t n; (n = recv(fd, buffer, sizeof buffer, 0)) > 0;)
+        page.append(buffer, static_cast<size_t>(n));
     }
     close(fd);
     const size_t at = page.find("name=\"csrf\" value=\"");
     if (at != std::string::npos) token = page.substr(at + 19, 32);
   }
-  if (token.size() != 32) throw std::runtime_error("bench fuzz console: the console's page has no form token");
+  if (token.size() != 32)
+    throw std::runtime_error("bench fuzz console: the console's page has no form token");
   const std::string host = "Host: 127.0.0.1:" + std::to_string(port) + "\r\n";
   auto post = [&](const std::string& path, const std::string& body, const std::string& extra = "") {
     return "POST " + path + " HTTP/1.1\r\n" + host + extra +
-           "Content-Type: application/x-www-form-urlencoded\r\nContent-Length: " + std::to_string(body.size()) +
-           "\r\n\r\n" + body;
+           "Content-Type: application/x-www-form-urlencoded\r\nContent-Length: " +
+           std::to_string(body.size()) + "\r\n\r\n" + body;
   };
   static const std::string kChunkedHead =
       "Content-Type: application/x-www-form-urlencoded\r\nTransfer-Encoding: chunked\r\n\r\n";
@@ -650,10 +671,13 @@ Target ConsoleTarget(const fs::path& dir) {
           "Accept: text/html\r\nCookie: haptel_console=x; other=1\r\n\r\n",
       "GET /status.json HTTP/1.1\r\n" + host + "\r\n",
       "GET /video.jpg?n=1 HTTP/1.1\r\n" + host + "Range: bytes=0-1\r\n\r\n",
-      post("/answers", "participant=A&condition=gesture&questionnaire=thesis&easy_to_learn=4&efficient=5&remarks=" +
-                           std::string("%E6%BC%A2%20ok&csrf=") + token),
+      post("/answers",
+           "participant=A&condition=gesture&questionnaire=thesis&easy_to_learn=4&efficient=5&"
+           "remarks=" +
+               std::string("%E6%BC%A2%20ok&csrf=") + token),
       post("/redo", "participant=A&position=1&csrf=" + token,
-           "Origin: http://127.0.0.1:" + std::to_string(port) + "\r\nSec-Fetch-Site: same-origin\r\n"),
+           "Origin: http://127.0.0.1:" + std::to_string(port) +
+               "\r\nSec-Fetch-Site: same-origin\r\n"),
       post("/participants", "id=P2&csrf=" + token),
       post("/abort", "csrf=" + token),
       post("/login", "token=abc&csrf=" + token),
@@ -666,10 +690,12 @@ Target ConsoleTarget(const fs::path& dir) {
       chunked("/answers", std::vector<std::string>(40, std::string(4000, 'x'))),
       chunked("/participants", {"id=P3&csrf=" + token}),
       "POST /notes HTTP/1.1\r\n" + host + kChunkedHead + "zz\r\nparticipant=A\r\n0\r\n\r\n",
-      "POST /notes HTTP/1.1\r\n" + host + kChunkedHead + "ffffffffffffffffffff\r\nparticipant=A\r\n0\r\n\r\n",
+      "POST /notes HTTP/1.1\r\n" + host + kChunkedHead +
+          "ffffffffffffffffffff\r\nparticipant=A\r\n0\r\n\r\n",
       "POST /notes HTTP/1.1\r\n" + host + kChunkedHead + "-1\r\nx\r\n0\r\n\r\n",
       "POST /answers HTTP/1.1\r\n" + host + kChunkedHead + "100\r\nparticipant=A\r\n0\r\n\r\n",
-      "POST /answers HTTP/1.1\r\n" + host + kChunkedHead + "5;ext=1\r\nabcde\r\n0\r\nTrailer: x\r\n\r\n",
+      "POST /answers HTTP/1.1\r\n" + host + kChunkedHead +
+          "5;ext=1\r\nabcde\r\n0\r\nTrailer: x\r\n\r\n",
       "POST /notes HTTP/1.1\r\n" + host + kChunkedHead + std::string(20000, '1'),
   };
   for (const std::string& r : requests) t.seeds.emplace_back(r.begin(), r.end());
@@ -681,7 +707,9 @@ Target ConsoleTarget(const fs::path& dir) {
   return t;
 }
 
-std::vector<std::string> FuzzTargets() { return {"config", "scene", "udp", "servo", "can", "dds", "console"}; }
+std::vector<std::string> FuzzTargets() {
+  return {"config", "scene", "udp", "servo", "can", "dds", "console"};
+}
 
 FuzzResult Fuzz(const std::string& name, uint64_t inputs, uint64_t seed) {
   std::optional<fs::path> copy;
@@ -708,7 +736,8 @@ FuzzResult Fuzz(const std::string& name, uint64_t inputs, uint64_t seed) {
   if (target.seeds.empty()) throw std::runtime_error("fuzz target '" + name + "' has no seeds");
   const fs::path dir = BenchDir();
   fs::create_directories(dir);
-  std::snprintf(g_crash_file, sizeof g_crash_file, "%s/fuzz-%s-crash.bin", dir.c_str(), name.c_str());
+  std::snprintf(g_crash_file, sizeof g_crash_file, "%s/fuzz-%s-crash.bin", dir.c_str(),
+                name.c_str());
   for (int sig : {SIGSEGV, SIGABRT, SIGBUS, SIGFPE, SIGILL}) signal(sig, OnCrash);
   HangWatch watch((dir / ("fuzz-" + name + "-hang.bin")).string());
 
@@ -754,7 +783,8 @@ int BenchFuzzMain(int argc, const char* const* argv) {
     if (auto t = args.Value("target")) {
       const auto all = FuzzTargets();
       if (std::find(all.begin(), all.end(), *t) == all.end()) {
-        throw UsageError("option --target: expected one of config, scene, udp, servo, can, dds, console");
+        throw UsageError(
+            "option --target: expected one of config, scene, udp, servo, can, dds, console");
       }
       targets = {*t};
     }
@@ -764,20 +794,23 @@ int BenchFuzzMain(int argc, const char* const* argv) {
   }
   PrintSmokeNote("fuzz", smoke, "%llu inputs per target", static_cast<unsigned long long>(inputs));
   const auto dir = OutputDir(smoke);
-  std::printf("haptel bench fuzz: %llu inputs per target, seed %llu\n\n", static_cast<unsigned long long>(inputs),
-              static_cast<unsigned long long>(seed));
+  std::printf("haptel bench fuzz: %llu inputs per target, seed %llu\n\n",
+              static_cast<unsigned long long>(inputs), static_cast<unsigned long long>(seed));
   std::printf("  target   inputs      accepted   rejected   time s   inputs/s   slowest ms\n");
   std::vector<FuzzResult> results;
   for (const std::string& t : targets) {
     const FuzzResult r = Fuzz(t, inputs, seed);
     results.push_back(r);
     std::printf("  %-7s  %-10llu  %-9llu  %-9llu  %7.1f  %9.0f  %10.2f\n", t.c_str(),
-                static_cast<unsigned long long>(r.inputs), static_cast<unsigned long long>(r.accepted),
-                static_cast<unsigned long long>(r.rejected), r.seconds, r.inputs / std::max(r.seconds, 1e-9),
-                r.slowest_ms);
+                static_cast<unsigned long long>(r.inputs),
+                static_cast<unsigned long long>(r.accepted),
+                static_cast<unsigned long long>(r.rejected), r.seconds,
+                r.inputs / std::max(r.seconds, 1e-9), r.slowest_ms);
     if (r.page_under_slow_clients_ms >= 0.0) {
-      std::printf("           its page under 100 slow connections (40 from the same address): slowest of 5 "
-                  "answered in %.1f ms\n", r.page_under_slow_clients_ms);
+      std::printf(
+          "           its page under 100 slow connections (40 from the same address): slowest of 5 "
+          "answered in %.1f ms\n",
+          r.page_under_slow_clients_ms);
     }
     std::fflush(stdout);
   }
@@ -785,8 +818,8 @@ int BenchFuzzMain(int argc, const char* const* argv) {
     std::ofstream csv(dir / "fuzz.csv");
     csv << "target,inputs,accepted,rejected,seconds,slowest_ms\n";
     for (const auto& r : results) {
-      csv << r.target << "," << r.inputs << "," << r.accepted << "," << r.rejected << "," << r.seconds << ","
-          << r.slowest_ms << "\n";
+      csv << r.target << "," << r.inputs << "," << r.accepted << "," << r.rejected << ","
+          << r.seconds << "," << r.slowest_ms << "\n";
     }
   }
   std::printf("\n  no crash, no hang; wrote %s/fuzz.csv\n", dir.c_str());
@@ -796,7 +829,8 @@ int BenchFuzzMain(int argc, const char* const* argv) {
     for (size_t i = 0; i < results.size(); ++i) {
       const auto& r = results[i];
       o << (i ? "," : "") << "{\"target\":" << JsonString(r.target) << ",\"inputs\":" << r.inputs
-        << ",\"accepted\":" << r.accepted << ",\"rejected\":" << r.rejected << ",\"seconds\":" << JsonNumber(r.seconds)
+        << ",\"accepted\":" << r.accepted << ",\"rejected\":" << r.rejected
+        << ",\"seconds\":" << JsonNumber(r.seconds)
         << ",\"slowest_ms\":" << JsonNumber(r.slowest_ms);
       if (r.page_under_slow_clients_ms >= 0.0) {
         o << ",\"page_under_slow_clients_ms\":" << JsonNumber(r.page_under_slow_clients_ms);

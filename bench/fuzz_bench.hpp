@@ -34,8 +34,8 @@ namespace haptel::bench {
 struct FuzzResult {
   std::string target;
   uint64_t inputs = 0;
-  uint64_t accepted = 0;   ///< parsed into a value
-  uint64_t rejected = 0;   ///< a clear error (an exception, a status, a dropped frame)
+  uint64_t accepted = 0;  ///< parsed into a value
+  uint64_t rejected = 0;  ///< a clear error (an exception, a status, a dropped frame)
   double seconds = 0.0;
   double slowest_ms = 0.0;  ///< the slowest single input
   /// The console only: the slowest of a few page requests (GET /) made while

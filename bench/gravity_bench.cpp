@@ -1,4 +1,3 @@
-#include "haptel/core/json.hpp"
 #include "gravity_bench.hpp"
 
 #include <algorithm>
@@ -11,15 +10,16 @@
 #include <string>
 #include <vector>
 
-#include "haptel/testing/vec_math.hpp"
-#include "haptel/config/paths.hpp"
 #include "haptel/calibration/calibration.hpp"
+#include "haptel/calibration/calibration_procedure.hpp"
 #include "haptel/config/device.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/config/gravity_grid.hpp"
+#include "haptel/config/paths.hpp"
 #include "haptel/config/run.hpp"
 #include "haptel/core/args.hpp"
-#include "haptel/calibration/calibration_procedure.hpp"
+#include "haptel/core/json.hpp"
+#include "haptel/testing/vec_math.hpp"
 #include "plot.hpp"
 #include "smoke.hpp"
 
@@ -27,9 +27,9 @@ namespace haptel::bench {
 
 namespace {
 
+using haptics::Distance;
 using haptics::GravityGrid;
 using haptics::Side;
-using haptics::Distance;
 using haptics::SimDevice;
 using haptics::Vec3d;
 
@@ -44,7 +44,8 @@ constexpr const char* kUsage =
     "  --seed S         seed of the release points (default 1)\n"
     "  --counts N       grid vertices per axis (default 5)\n"
     "  --grid-out FILE  where to save the sampled grid (default build/bench/gravity_grid.yaml)\n"
-    "  --smoke          a short run for the tests: 3 points, a 2x2x2 grid (outputs in build/bench/smoke/)\n"
+    "  --smoke          a short run for the tests: 3 points, a 2x2x2 grid (outputs in "
+    "build/bench/smoke/)\n"
     "  --json           end with one JSON line of results\n";
 
 /// The compensation command for a tracker reading, as the servo loop does it.
@@ -144,15 +145,16 @@ int BenchGravityMain(int argc, const char* const* argv) {
     return 2;
   }
 
-  PrintSmokeNote("gravity", smoke, "%d release points, a %dx%dx%d grid", points, counts, counts, counts);
+  PrintSmokeNote("gravity", smoke, "%d release points, a %dx%dx%d grid", points, counts, counts,
+                 counts);
   SimDevice device(config, OperatorConfig{});
   const Side side = config.sides[1] ? Side::kRight : Side::kLeft;
   // The bench sees the device as a user would: through a measured calibration.
   std::ostringstream calibration_log;
   haptics::CalibrationOptions calibrate;
   calibrate.auto_mode = true;
-  const ArmCalibration calibration =
-      haptics::RunCalibration(device, calibrate, calibration_log).arms[static_cast<size_t>(haptics::Index(side))];
+  const ArmCalibration calibration = haptics::RunCalibration(device, calibrate, calibration_log)
+                                         .arms[static_cast<size_t>(haptics::Index(side))];
   const SimArmConfig& sim = config.sim;
 
   haptics::GravitySamplerConfig sampler;
@@ -175,8 +177,9 @@ int BenchGravityMain(int argc, const char* const* argv) {
   if (!report.ok) {
     std::fprintf(stderr, "haptel bench gravity: %s\n", report.error.c_str());
     if (json) {
-      const std::string line = "{\"ok\":false,\"vertices_done\":" + std::to_string(report.vertices.size()) +
-                               ",\"sampling_sim_s\":" + JsonNumber(report.sim_time_s) + "}";
+      const std::string line =
+          "{\"ok\":false,\"vertices_done\":" + std::to_string(report.vertices.size()) +
+          ",\"sampling_sim_s\":" + JsonNumber(report.sim_time_s) + "}";
       std::printf("%s\n", JsonLine(line, smoke).c_str());
     }
     return 1;
@@ -296,9 +299,11 @@ int BenchGravityMain(int argc, const char* const* argv) {
   if (json) {
     std::ostringstream o;
     o << "{\"drift_mean_off_mm_s\":" << JsonNumber(mean_off * 1e3)
-      << ",\"drift_mean_on_mm_s\":" << JsonNumber(mean_on * 1e3) << ",\"drift_ratio\":" << JsonNumber(ratio)
+      << ",\"drift_mean_on_mm_s\":" << JsonNumber(mean_on * 1e3)
+      << ",\"drift_ratio\":" << JsonNumber(ratio)
       << ",\"drift_ratio_floored\":" << (floored ? "true" : "false")
-      << ",\"drift_floor_mm_s\":" << JsonNumber(floor_m_s * 1e3) << ",\"drift_on_zero_points\":" << on_zero
+      << ",\"drift_floor_mm_s\":" << JsonNumber(floor_m_s * 1e3)
+      << ",\"drift_on_zero_points\":" << on_zero
       << ",\"sampling_sim_s\":" << JsonNumber(report.sim_time_s)
       << ",\"sampling_wall_s\":" << JsonNumber(report.wall_time_s)
       << ",\"sampling_vertex_mean_s\":" << JsonNumber(vertex_mean_s)

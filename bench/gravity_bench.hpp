@@ -27,8 +27,8 @@
 
 #include "haptel/config/calibration.hpp"
 #include "haptel/gravity/gravity_sampler.hpp"
-#include "haptel/testing/gravity_on_sim.hpp"
 #include "haptel/haptics/sim_device.hpp"
+#include "haptel/testing/gravity_on_sim.hpp"
 
 namespace haptel::bench {
 

@@ -45,7 +45,8 @@ std::vector<double> ParseList(const std::string& option, const std::string& text
     try {
       out.push_back(std::stod(item));
     } catch (const std::exception&) {
-      throw UsageError("option --" + option + ": expected comma-separated numbers, got '" + text + "'");
+      throw UsageError("option --" + option + ": expected comma-separated numbers, got '" + text +
+                       "'");
     }
     if (!(out.back() >= 0.0)) throw UsageError("option --" + option + ": expected numbers >= 0");
   }
@@ -61,10 +62,11 @@ int Echo(int domain) {
   link::Participant participant(config, "haptel-bench-echo");
   link::CommandWriter pong(participant, "bench/pong", link::Profile::kCommand);
   msg::DriveCommand copy;
-  link::CommandReader ping(participant, "bench/ping", link::Profile::kCommand, [&](const msg::DriveCommand& c) {
-    copy = c;
-    pong.Write(copy);
-  });
+  link::CommandReader ping(participant, "bench/ping", link::Profile::kCommand,
+                           [&](const msg::DriveCommand& c) {
+                             copy = c;
+                             pong.Write(copy);
+                           });
   std::printf("echo up\n");
   std::fflush(stdout);
   while (!stop.load()) std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -102,7 +104,8 @@ bool WaitFor(Ready ready, double timeout_s) {
 /// Calls `send` (with the time) at kRateHz for `seconds`; after the first
 /// second, which warms both ends up, calls `warmed_up` once (to forget what
 /// was measured so far).
-void Paced(double seconds, const std::function<void()>& warmed_up, const std::function<void(int64_t)>& send) {
+void Paced(double seconds, const std::function<void()>& warmed_up,
+           const std::function<void(int64_t)>& send) {
   const auto period = static_cast<int64_t>(1e9 / kRateHz);
   int64_t next = MonotonicNs();
   const int64_t end = next + SToNs(seconds);
@@ -128,20 +131,24 @@ RttFigures RawPingPong(int domain, double seconds) {
   config.domain_id = domain;
   link::Participant participant(config, "haptel-bench-ping");
   Histogram rtt(10.0, 200000);
-  link::CommandReader pongs(participant, "bench/pong", link::Profile::kCommand, [&](const msg::DriveCommand& c) {
-    if (c.sent_ns() != 0) rtt.Record(static_cast<double>(MonotonicNs() - c.sent_ns()) * 1e-3);
-  });
+  link::CommandReader pongs(participant, "bench/pong", link::Profile::kCommand,
+                            [&](const msg::DriveCommand& c) {
+                              if (c.sent_ns() != 0)
+                                rtt.Record(static_cast<double>(MonotonicNs() - c.sent_ns()) * 1e-3);
+                            });
   link::CommandWriter pings(participant, "bench/ping", link::Profile::kCommand);
   if (!WaitFor([&] { return pings.matched() > 0 && pongs.matched() > 0; }, 15.0)) {
     throw std::runtime_error("the echo process did not answer");
   }
   msg::DriveCommand m;
   uint64_t seq = 0;
-  Paced(seconds, [&] { rtt.Reset(); }, [&](int64_t now) {
-    m.seq(++seq);
-    m.sent_ns(now);
-    pings.Write(m);
-  });
+  Paced(
+      seconds, [&] { rtt.Reset(); },
+      [&](int64_t now) {
+        m.seq(++seq);
+        m.sent_ns(now);
+        pings.Write(m);
+      });
   std::this_thread::sleep_for(std::chrono::milliseconds(100));
   return Figures(rtt);
 }
@@ -174,12 +181,19 @@ RttFigures HaptelRoundTrip(int domain, double seconds, const std::filesystem::pa
       back.Record(static_cast<double>(e.received_ns - s.stamp_ns()) * 1e-3);
     }
   };
-  Paced(seconds, [&] { vehicle.ResetRtt(); out.Reset(); back.Reset(); }, [&](int64_t) {
-    // A gentle back-and-forth, so the robot stays near where it started.
-    const double v = 0.2 * std::sin(++tick * 0.02);
-    vehicle.Send(TreadCommand{v, v});
-    hops();
-  });
+  Paced(
+      seconds,
+      [&] {
+        vehicle.ResetRtt();
+        out.Reset();
+        back.Reset();
+      },
+      [&](int64_t) {
+        // A gentle back-and-forth, so the robot stays near where it started.
+        const double v = 0.2 * std::sin(++tick * 0.02);
+        vehicle.Send(TreadCommand{v, v});
+        hops();
+      });
   std::this_thread::sleep_for(std::chrono::milliseconds(100));
   hops();
   RttFigures figures = Figures(vehicle.Rtt());
@@ -219,9 +233,25 @@ LapRow Lap(const std::filesystem::path& dir, const std::string& track, int domai
   char fault[96];
   std::snprintf(fault, sizeof fault, "delay=%gms,loss=%g%%", delay_ms, loss_percent);
   const std::string db = (dir / "link.db").string();
-  std::vector<std::string> words{"run", "--operator", "auto", "--view", "none", "--link-fault", fault, "--track", track,
-                                 "--json", "--quiet", "--domain", std::to_string(domain), "--database", db,
-                                 "--vehicle-timeout", "5", "--predict", predict ? "on" : "off"};
+  std::vector<std::string> words{"run",
+                                 "--operator",
+                                 "auto",
+                                 "--view",
+                                 "none",
+                                 "--link-fault",
+                                 fault,
+                                 "--track",
+                                 track,
+                                 "--json",
+                                 "--quiet",
+                                 "--domain",
+                                 std::to_string(domain),
+                                 "--database",
+                                 db,
+                                 "--vehicle-timeout",
+                                 "5",
+                                 "--predict",
+                                 predict ? "on" : "off"};
   // The profile's rate, queue and jitter; the sweep's delay and loss replace its own.
   if (!profile.empty()) words.insert(words.end(), {"--link-profile", profile});
   const int64_t start = MonotonicNs();
@@ -230,7 +260,8 @@ LapRow Lap(const std::filesystem::path& dir, const std::string& track, int domai
   row.wall_s = NsToS(MonotonicNs() - start);
   const std::string json = run.LastLine();
   if (json.empty() || json.front() != '{') {
-    std::fprintf(stderr, "haptel bench link: the lap at %s gave no result: %s\n", fault, run.err().c_str());
+    std::fprintf(stderr, "haptel bench link: the lap at %s gave no result: %s\n", fault,
+                 run.err().c_str());
     return row;
   }
   row.ran = true;
@@ -259,8 +290,10 @@ int BenchLinkMain(int argc, const char* const* argv) {
   std::optional<int> lap_domain;
   std::string profile;  // --link-profile: every lap on that link
   try {
-    const Args args(argc, argv, {"seconds", "track", "delays", "losses", "domain", "lap-domain", "predict", "link-profile"},
-                    {"json", "echo", "rtt-only", kSmokeFlag});
+    const Args args(
+        argc, argv,
+        {"seconds", "track", "delays", "losses", "domain", "lap-domain", "predict", "link-profile"},
+        {"json", "echo", "rtt-only", kSmokeFlag});
     if (args.Flag("echo")) return Echo(args.Int("domain", 0, 232).value_or(0));
     json = args.Flag("json");
     smoke = args.Flag(kSmokeFlag);
@@ -294,7 +327,8 @@ int BenchLinkMain(int argc, const char* const* argv) {
       if (l > 99.0) throw UsageError("option --losses: expected percentages below 100");
     }
     if (auto p = args.Value("link-profile")) {
-      LinkFaultFromOptions(*p, std::nullopt, {});  // an unknown profile is refused now, not by every lap
+      LinkFaultFromOptions(*p, std::nullopt,
+                           {});  // an unknown profile is refused now, not by every lap
       profile = *p;
     }
   } catch (const std::exception& e) {
@@ -305,8 +339,8 @@ int BenchLinkMain(int argc, const char* const* argv) {
   PrintSmokeNote("link", smoke, "%.0f s per round trip, %zu lap(s) on %s", seconds,
                  delays.size() * losses.size() * predicts.size(),
                  std::filesystem::path(track).filename().c_str());
-  std::printf("haptel bench link: round trip at %.0f Hz for %.0f s, then laps on %s\n\n", kRateHz, seconds,
-              track.c_str());
+  std::printf("haptel bench link: round trip at %.0f Hz for %.0f s, then laps on %s\n\n", kRateHz,
+              seconds, track.c_str());
 
   RttFigures raw, haptel, secured;
   bool rtt_ok = true;
@@ -315,7 +349,8 @@ int BenchLinkMain(int argc, const char* const* argv) {
     haptel = HaptelRoundTrip(domain, seconds, {});
     // The cost of DDS Security: the same, authenticated and encrypted.
     const std::filesystem::path security = dir / "security";
-    if (!std::filesystem::exists(security / "ca.pem")) link::InitSecurity(security, {"robot1"}, 365);
+    if (!std::filesystem::exists(security / "ca.pem"))
+      link::InitSecurity(security, {"robot1"}, 365);
     secured = HaptelRoundTrip(domain, seconds, security);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "haptel bench link: round trip: %s\n", e.what());
@@ -331,48 +366,60 @@ int BenchLinkMain(int argc, const char* const* argv) {
   print("raw Fast DDS ping-pong", raw);
   print("haptel command -> state", haptel);
   print("haptel, DDS Security", secured);
-  std::printf("  ratio haptel to raw: p50 %.2f, p99 %.2f (target <= 2 each); security costs %+.3f ms of round "
-              "trip, %+.2f ms of video latency (p50)\n",
-              ratio, p99_ratio, secured.p50_ms - haptel.p50_ms, secured.video_p50_ms - haptel.video_p50_ms);
-  std::printf("  haptel's round trip in hops, p50 / p99 ms: command out %.3f / %.3f, state back (from its stamp) "
-              "%.3f / %.3f\n\n",
-              haptel.out_p50_ms, haptel.out_p99_ms, haptel.back_p50_ms, haptel.back_p99_ms);
+  std::printf(
+      "  ratio haptel to raw: p50 %.2f, p99 %.2f (target <= 2 each); security costs %+.3f ms of "
+      "round "
+      "trip, %+.2f ms of video latency (p50)\n",
+      ratio, p99_ratio, secured.p50_ms - haptel.p50_ms, secured.video_p50_ms - haptel.video_p50_ms);
+  std::printf(
+      "  haptel's round trip in hops, p50 / p99 ms: command out %.3f / %.3f, state back (from its "
+      "stamp) "
+      "%.3f / %.3f\n\n",
+      haptel.out_p50_ms, haptel.out_p99_ms, haptel.back_p50_ms, haptel.back_p99_ms);
   {
     std::ofstream csv(dir / "link_rtt.csv");
-    csv << "path,p50_ms,p99_ms,samples,video_p50_ms,video_p99_ms,out_p50_ms,out_p99_ms,back_p50_ms,back_p99_ms\n";
-    for (const auto& [name, f] : {std::pair{"raw", raw}, std::pair{"haptel", haptel}, std::pair{"secured", secured}}) {
-      csv << name << "," << f.p50_ms << "," << f.p99_ms << "," << f.samples << "," << f.video_p50_ms << ","
-          << f.video_p99_ms << "," << f.out_p50_ms << "," << f.out_p99_ms << "," << f.back_p50_ms << ","
-          << f.back_p99_ms << "\n";
+    csv << "path,p50_ms,p99_ms,samples,video_p50_ms,video_p99_ms,out_p50_ms,out_p99_ms,back_p50_ms,"
+           "back_p99_ms\n";
+    for (const auto& [name, f] :
+         {std::pair{"raw", raw}, std::pair{"haptel", haptel}, std::pair{"secured", secured}}) {
+      csv << name << "," << f.p50_ms << "," << f.p99_ms << "," << f.samples << "," << f.video_p50_ms
+          << "," << f.video_p99_ms << "," << f.out_p50_ms << "," << f.out_p99_ms << ","
+          << f.back_p50_ms << "," << f.back_p99_ms << "\n";
     }
   }
 
   std::vector<LapRow> rows;
-  std::printf("  delay ms  loss %%  predict  outcome         lap s   x 0 ms  gates  obstacles  rtt p50 ms  "
-              "pred. err p95 mm  wall s\n");
+  std::printf(
+      "  delay ms  loss %%  predict  outcome         lap s   x 0 ms  gates  obstacles  rtt p50 ms  "
+      "pred. err p95 mm  wall s\n");
   for (const double loss : losses) {
     for (const bool predict : predicts) {
       double lap_at_zero = std::nan("");
       for (const double delay : delays) {
-        const LapRow row = Lap(dir, track, lap_domain.value_or(domain + 1), delay, loss, predict, profile);
+        const LapRow row =
+            Lap(dir, track, lap_domain.value_or(domain + 1), delay, loss, predict, profile);
         rows.push_back(row);
         if (delay == 0.0 && row.completed) lap_at_zero = row.lap_time_s;
-        std::printf("  %8.0f  %6.1f  %-7s  %-14s %6.2f  %6.2f   %d/%d   %9d  %10.2f  %16.1f  %6.1f\n", delay, loss,
-                    predict ? "on" : "off", row.ran ? row.outcome.c_str() : "no result", row.lap_time_s,
-                    row.completed ? row.lap_time_s / lap_at_zero : std::nan(""), row.gates_passed, row.gates_total,
-                    row.obstacles, row.rtt_p50_ms, row.prediction_error_m_p95 * 1e3, row.wall_s);
+        std::printf(
+            "  %8.0f  %6.1f  %-7s  %-14s %6.2f  %6.2f   %d/%d   %9d  %10.2f  %16.1f  %6.1f\n",
+            delay, loss, predict ? "on" : "off", row.ran ? row.outcome.c_str() : "no result",
+            row.lap_time_s, row.completed ? row.lap_time_s / lap_at_zero : std::nan(""),
+            row.gates_passed, row.gates_total, row.obstacles, row.rtt_p50_ms,
+            row.prediction_error_m_p95 * 1e3, row.wall_s);
         std::fflush(stdout);
       }
     }
   }
   {
     std::ofstream csv(dir / "link_laps.csv");
-    csv << "delay_ms,loss_percent,predict,outcome,completed,lap_time_s,gates_passed,gates_total,obstacles,"
+    csv << "delay_ms,loss_percent,predict,outcome,completed,lap_time_s,gates_passed,gates_total,"
+           "obstacles,"
            "rtt_p50_ms,prediction_error_m_p95\n";
     for (const LapRow& r : rows) {
-      csv << r.delay_ms << "," << r.loss_percent << "," << (r.predict ? 1 : 0) << "," << r.outcome << ","
-          << (r.completed ? 1 : 0) << "," << r.lap_time_s << "," << r.gates_passed << "," << r.gates_total << ","
-          << r.obstacles << "," << r.rtt_p50_ms << "," << r.prediction_error_m_p95 << "\n";
+      csv << r.delay_ms << "," << r.loss_percent << "," << (r.predict ? 1 : 0) << "," << r.outcome
+          << "," << (r.completed ? 1 : 0) << "," << r.lap_time_s << "," << r.gates_passed << ","
+          << r.gates_total << "," << r.obstacles << "," << r.rtt_p50_ms << ","
+          << r.prediction_error_m_p95 << "\n";
     }
   }
   std::vector<Series> series;
@@ -392,32 +439,42 @@ int BenchLinkMain(int argc, const char* const* argv) {
   }
   if (!series.empty()) {
     PlotLines(dir / "link_laps.png", series,
-              {"The automatic operator's lap against the link's delay (each way)", "delay each way, ms",
-               "lap time, s (completed laps)"});
+              {"The automatic operator's lap against the link's delay (each way)",
+               "delay each way, ms", "lap time, s (completed laps)"});
   }
   const bool all_ran = std::all_of(rows.begin(), rows.end(), [](const LapRow& r) { return r.ran; });
   std::printf("\n  wrote %s/link_{rtt,laps}.csv, link_laps.png\n", dir.c_str());
   if (json) {
     std::ostringstream o;
-    o << "{\"rtt\":{\"raw_p50_ms\":" << JsonNumber(raw.p50_ms) << ",\"raw_p99_ms\":" << JsonNumber(raw.p99_ms)
-      << ",\"haptel_p50_ms\":" << JsonNumber(haptel.p50_ms) << ",\"haptel_p99_ms\":" << JsonNumber(haptel.p99_ms)
-      << ",\"p50_ratio\":" << JsonNumber(ratio) << ",\"within_2x\":" << (ratio <= 2.0 ? "true" : "false")
-      << ",\"p99_ratio\":" << JsonNumber(p99_ratio) << ",\"p99_within_2x\":" << (p99_ratio <= 2.0 ? "true" : "false")
-      << ",\"out_p50_ms\":" << JsonNumber(haptel.out_p50_ms) << ",\"out_p99_ms\":" << JsonNumber(haptel.out_p99_ms)
-      << ",\"back_p50_ms\":" << JsonNumber(haptel.back_p50_ms) << ",\"back_p99_ms\":" << JsonNumber(haptel.back_p99_ms)
-      << ",\"secured_p50_ms\":" << JsonNumber(secured.p50_ms) << ",\"secured_p99_ms\":" << JsonNumber(secured.p99_ms)
+    o << "{\"rtt\":{\"raw_p50_ms\":" << JsonNumber(raw.p50_ms)
+      << ",\"raw_p99_ms\":" << JsonNumber(raw.p99_ms)
+      << ",\"haptel_p50_ms\":" << JsonNumber(haptel.p50_ms)
+      << ",\"haptel_p99_ms\":" << JsonNumber(haptel.p99_ms)
+      << ",\"p50_ratio\":" << JsonNumber(ratio)
+      << ",\"within_2x\":" << (ratio <= 2.0 ? "true" : "false")
+      << ",\"p99_ratio\":" << JsonNumber(p99_ratio)
+      << ",\"p99_within_2x\":" << (p99_ratio <= 2.0 ? "true" : "false")
+      << ",\"out_p50_ms\":" << JsonNumber(haptel.out_p50_ms)
+      << ",\"out_p99_ms\":" << JsonNumber(haptel.out_p99_ms)
+      << ",\"back_p50_ms\":" << JsonNumber(haptel.back_p50_ms)
+      << ",\"back_p99_ms\":" << JsonNumber(haptel.back_p99_ms)
+      << ",\"secured_p50_ms\":" << JsonNumber(secured.p50_ms)
+      << ",\"secured_p99_ms\":" << JsonNumber(secured.p99_ms)
       << ",\"video_p50_ms\":" << JsonNumber(haptel.video_p50_ms)
       << ",\"secured_video_p50_ms\":" << JsonNumber(secured.video_p50_ms) << "},\"laps\":[";
     for (size_t i = 0; i < rows.size(); ++i) {
       const LapRow& r = rows[i];
-      o << (i ? "," : "") << "{\"delay_ms\":" << JsonNumber(r.delay_ms) << ",\"loss_percent\":"
-        << JsonNumber(r.loss_percent) << ",\"outcome\":" << JsonString(r.outcome)
-        << ",\"predict\":" << (r.predict ? "true" : "false")
-        << ",\"prediction_error_m_p95\":"
-        << (std::isfinite(r.prediction_error_m_p95) ? JsonNumber(r.prediction_error_m_p95) : std::string("null"))
-        << ",\"completed\":" << (r.completed ? "true" : "false") << ",\"lap_time_s\":"
-        << JsonNumber(std::isfinite(r.lap_time_s) ? r.lap_time_s : -1.0) << ",\"obstacles\":" << r.obstacles
-        << ",\"rtt_p50_ms\":" << JsonNumber(std::isfinite(r.rtt_p50_ms) ? r.rtt_p50_ms : -1.0) << "}";
+      o << (i ? "," : "") << "{\"delay_ms\":" << JsonNumber(r.delay_ms)
+        << ",\"loss_percent\":" << JsonNumber(r.loss_percent)
+        << ",\"outcome\":" << JsonString(r.outcome)
+        << ",\"predict\":" << (r.predict ? "true" : "false") << ",\"prediction_error_m_p95\":"
+        << (std::isfinite(r.prediction_error_m_p95) ? JsonNumber(r.prediction_error_m_p95)
+                                                    : std::string("null"))
+        << ",\"completed\":" << (r.completed ? "true" : "false")
+        << ",\"lap_time_s\":" << JsonNumber(std::isfinite(r.lap_time_s) ? r.lap_time_s : -1.0)
+        << ",\"obstacles\":" << r.obstacles
+        << ",\"rtt_p50_ms\":" << JsonNumber(std::isfinite(r.rtt_p50_ms) ? r.rtt_p50_ms : -1.0)
+        << "}";
     }
     o << "]}";
     std::printf("%s\n", JsonLine(o.str(), smoke).c_str());

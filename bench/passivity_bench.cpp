@@ -6,18 +6,19 @@
 #include <sys/socket.h>
 
 #include <algorithm>
-#include <cerrno>
-#include <cstring>
-#include <memory>
-#include <stdexcept>
 #include <array>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
+#include <memory>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "bare_loop.hpp"
 #include "haptel/config/device.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/run.hpp"
@@ -30,7 +31,6 @@
 #include "haptel/haptics/twoport.hpp"
 #include "haptel/udp/arm_server.hpp"
 #include "haptel/udp/udp_device.hpp"
-#include "bare_loop.hpp"
 #include "plot.hpp"
 #include "servo_bench.hpp"
 #include "smoke.hpp"
@@ -43,14 +43,14 @@ using haptics::Side;
 using haptics::Vec3d;
 
 constexpr Side kSide = Side::kRight;
-constexpr int64_t kPeriodNs = 1'000'000;  // 1 kHz
-constexpr double kWallX = 0.05;           // m: the wall's surface, normal +x
-constexpr double kStartX = 0.0;           // m: 5 cm out
-constexpr double kPushDepth = 0.01;       // m: the grip aims 1 cm beyond the wall
-constexpr double kSettledSpread = 0.0005; // m: peak to peak over the last 0.5 s
-constexpr double kDecayRatio = 0.5;       // an oscillation must at least halve in 1 s
-constexpr double kContactFromS = 0.5;     // s: after the soft start, for the force error
-constexpr double kTargetDelayMs = 3.0;    // the delay the gain is judged at
+constexpr int64_t kPeriodNs = 1'000'000;   // 1 kHz
+constexpr double kWallX = 0.05;            // m: the wall's surface, normal +x
+constexpr double kStartX = 0.0;            // m: 5 cm out
+constexpr double kPushDepth = 0.01;        // m: the grip aims 1 cm beyond the wall
+constexpr double kSettledSpread = 0.0005;  // m: peak to peak over the last 0.5 s
+constexpr double kDecayRatio = 0.5;        // an oscillation must at least halve in 1 s
+constexpr double kContactFromS = 0.5;      // s: after the soft start, for the force error
+constexpr double kTargetDelayMs = 3.0;     // the delay the gain is judged at
 constexpr int kMaxDelayTicks = 16;
 // The grasped box: a free body the hand holds through the coupling (the
 // proxy is the box; the box feels the coupling's reaction on the hand as
@@ -68,24 +68,46 @@ constexpr double kBoxOffset = 0.01;  // m: where the box is when the grip closes
 /// `udp-two-port`: the loop's end charges its deficit to the arm's end
 /// (servo.passivity_link: charge, the default); `udp-2p-admit`: it
 /// dissipates it on the environment's port (passivity_link: admittance).
-enum class Mode { kOff, kOnePort, kTwoPort, kTwoPortRef, kUdpOff, kUdpTwoPort, kUdpTwoPortAdmittance };
-constexpr std::array<Mode, 7> kModes{Mode::kOff,    Mode::kOnePort,    Mode::kTwoPort,          Mode::kTwoPortRef,
-                                     Mode::kUdpOff, Mode::kUdpTwoPort, Mode::kUdpTwoPortAdmittance};
+enum class Mode {
+  kOff,
+  kOnePort,
+  kTwoPort,
+  kTwoPortRef,
+  kUdpOff,
+  kUdpTwoPort,
+  kUdpTwoPortAdmittance
+};
+constexpr std::array<Mode, 7> kModes{Mode::kOff,
+                                     Mode::kOnePort,
+                                     Mode::kTwoPort,
+                                     Mode::kTwoPortRef,
+                                     Mode::kUdpOff,
+                                     Mode::kUdpTwoPort,
+                                     Mode::kUdpTwoPortAdmittance};
 
 const char* ModeName(Mode m) {
   switch (m) {
-    case Mode::kOff: return "off";
-    case Mode::kOnePort: return "one-port";
-    case Mode::kTwoPort: return "two-port";
-    case Mode::kTwoPortRef: return "two-port-ref";
-    case Mode::kUdpOff: return "udp-off";
-    case Mode::kUdpTwoPort: return "udp-two-port";
-    case Mode::kUdpTwoPortAdmittance: return "udp-2p-admit";
+    case Mode::kOff:
+      return "off";
+    case Mode::kOnePort:
+      return "one-port";
+    case Mode::kTwoPort:
+      return "two-port";
+    case Mode::kTwoPortRef:
+      return "two-port-ref";
+    case Mode::kUdpOff:
+      return "udp-off";
+    case Mode::kUdpTwoPort:
+      return "udp-two-port";
+    case Mode::kUdpTwoPortAdmittance:
+      return "udp-2p-admit";
   }
   return "?";
 }
 
-bool IsUdp(Mode m) { return m == Mode::kUdpOff || m == Mode::kUdpTwoPort || m == Mode::kUdpTwoPortAdmittance; }
+bool IsUdp(Mode m) {
+  return m == Mode::kUdpOff || m == Mode::kUdpTwoPort || m == Mode::kUdpTwoPortAdmittance;
+}
 /// The mode a mode's gain is measured against: the same path without a controller.
 Mode Baseline(Mode m) { return IsUdp(m) ? Mode::kUdpOff : Mode::kOff; }
 
@@ -101,14 +123,15 @@ Mode Baseline(Mode m) { return IsUdp(m) ? Mode::kUdpOff : Mode::kOff; }
 /// the channel delivers more than the loop's end put in.
 class DelayedDevice final : public haptics::Device {
  public:
-  DelayedDevice(haptics::SimDevice& inner, int delay_ticks, const haptics::SimArmTruth& truth, double period_s,
-                const haptics::TwoPortLimits* two_port)
+  DelayedDevice(haptics::SimDevice& inner, int delay_ticks, const haptics::SimArmTruth& truth,
+                double period_s, const haptics::TwoPortLimits* two_port)
       : inner_(inner),
         delay_(delay_ticks),
         truth_(truth),
         period_s_(period_s),
         two_port_(two_port != nullptr),
-        arm_end_(haptics::ChannelEnd::kDevice, two_port != nullptr ? *two_port : haptics::TwoPortLimits{}),
+        arm_end_(haptics::ChannelEnd::kDevice,
+                 two_port != nullptr ? *two_port : haptics::TwoPortLimits{}),
         loop_end_(haptics::ChannelEnd::kLoop) {}
   const haptics::DeviceDescription& description() const override { return inner_.description(); }
   haptics::DeviceStatus ReadWrist(Side side, int64_t now_ns, haptics::WristRaw& out) override {
@@ -122,7 +145,9 @@ class DelayedDevice final : public haptics::Device {
       for (int i = 0; i < 3; ++i) {
         dx[i] = reads_ > 0 ? p[i] - arm_position_[i] : 0.0;
         constexpr double kFilter_s = 0.005;  // as the servo loop's velocity
-        if (reads_ > 0) arm_velocity_[i] += period_s_ / (kFilter_s + period_s_) * (dx[i] / period_s_ - arm_velocity_[i]);
+        if (reads_ > 0)
+          arm_velocity_[i] +=
+              period_s_ / (kFilter_s + period_s_) * (dx[i] / period_s_ - arm_velocity_[i]);
       }
       arm_position_ = p;
       arm_end_.Observe(dx);
@@ -159,7 +184,8 @@ class DelayedDevice final : public haptics::Device {
     applied_ = arrived.command;
     if (two_port_) {
       const Vec3d rendered = Newtons(arrived.command);
-      const haptics::TwoPortAction a = arm_end_.Control(rendered, arrived.energy_in, arm_velocity_, period_s_);
+      const haptics::TwoPortAction a =
+          arm_end_.Control(rendered, arrived.energy_in, arm_velocity_, period_s_);
       for (int i = 0; i < 3; ++i) applied_[i] += a.damping_force[i] / truth_.force_slope[i];
       // The arm saturates: hold what it will really apply.
       const Vec3d total = Newtons(applied_);
@@ -173,7 +199,8 @@ class DelayedDevice final : public haptics::Device {
     }
     return inner_.WriteWristForce(side, applied_);
   }
-  haptics::DeviceStatus WriteFingerForces(Side side, const std::array<double, haptics::kFingers>& c) override {
+  haptics::DeviceStatus WriteFingerForces(Side side,
+                                          const std::array<double, haptics::kFingers>& c) override {
     return inner_.WriteFingerForces(side, c);
   }
   /// The command the arm holds now (device units).
@@ -245,8 +272,9 @@ class SimClock final : public haptics::udp::Clock {
 class UdpPath final : public haptics::Device {
  public:
   UdpPath(haptics::SimDevice& arm, const DeviceConfig& config, double delay_s, bool two_port)
-      : socket_(Bind(port_)), server_(arm, kSide, socket_.get(), Options(config, delay_s, two_port), haptics::udp::UnitsOf(arm, kSide),
-                clock_),
+      : socket_(Bind(port_)),
+        server_(arm, kSide, socket_.get(), Options(config, delay_s, two_port),
+                haptics::udp::UnitsOf(arm, kSide), clock_),
         client_(ClientConfig(config, port_), clock_) {
     clock_.server = &server_;
   }
@@ -266,12 +294,17 @@ class UdpPath final : public haptics::Device {
     server_.Poll(0);
     return s;
   }
-  haptics::DeviceStatus WriteFingerForces(Side side, const std::array<double, haptics::kFingers>& c) override {
+  haptics::DeviceStatus WriteFingerForces(Side side,
+                                          const std::array<double, haptics::kFingers>& c) override {
     return client_.WriteFingerForces(side, c);
   }
   bool HasLink() const override { return client_.HasLink(); }
-  bool LinkPassivity(Side side, haptics::LinkEnergy& remote) override { return client_.LinkPassivity(side, remote); }
-  void SetLinkEnergy(Side side, const haptics::LinkEnergy& local) override { client_.SetLinkEnergy(side, local); }
+  bool LinkPassivity(Side side, haptics::LinkEnergy& remote) override {
+    return client_.LinkPassivity(side, remote);
+  }
+  void SetLinkEnergy(Side side, const haptics::LinkEnergy& local) override {
+    client_.SetLinkEnergy(side, local);
+  }
   void RestartLinkEnergy(Side side) override { client_.RestartLinkEnergy(side); }
 
  private:
@@ -283,12 +316,14 @@ class UdpPath final : public haptics::Device {
     socklen_t len = sizeof addr;
     if (fd.get() < 0 || ::bind(fd.get(), reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0 ||
         ::getsockname(fd.get(), reinterpret_cast<sockaddr*>(&addr), &len) != 0) {
-      throw std::runtime_error(std::string("cannot bind a loopback UDP socket: ") + std::strerror(errno));
+      throw std::runtime_error(std::string("cannot bind a loopback UDP socket: ") +
+                               std::strerror(errno));
     }
     port = ntohs(addr.sin_port);
     return fd;
   }
-  static haptics::udp::ArmServerOptions Options(const DeviceConfig& config, double delay_s, bool two_port) {
+  static haptics::udp::ArmServerOptions Options(const DeviceConfig& config, double delay_s,
+                                                bool two_port) {
     haptics::udp::ArmServerOptions o;
     o.lost_after_s = config.udp.lost_after_s;
     o.delay_s = delay_s;
@@ -315,15 +350,15 @@ struct Point {
   double delay_ms = 0.0;
   Mode mode = Mode::kOff;
   bool stable = false;
-  double spread = 0.0;          ///< m, peak to peak of x over the last 0.5 s
-  double early_spread = 0.0;    ///< m, the same over the 0.5 s a second earlier
-  double energy_j = 0.0;        ///< dissipated by the controller
-  double max_alpha = 0.0;       ///< N·s/m
+  double spread = 0.0;        ///< m, peak to peak of x over the last 0.5 s
+  double early_spread = 0.0;  ///< m, the same over the 0.5 s a second earlier
+  double energy_j = 0.0;      ///< dissipated by the controller
+  double max_alpha = 0.0;     ///< N·s/m
   uint64_t acting_ticks = 0;
-  double force_rms_err = 0.0;   ///< N against the ideal wall (the box: a rigid box's inertia, -m a)
-  double penetration = 0.0;     ///< m, mean over the last 0.5 s
-  double loop_margin_min = 0.0; ///< J, two-port: the loop's end's smallest margin
-  double loop_energy_j = 0.0;   ///< J, UDP two-port: what the loop's end returned (its offset)
+  double force_rms_err = 0.0;  ///< N against the ideal wall (the box: a rigid box's inertia, -m a)
+  double penetration = 0.0;    ///< m, mean over the last 0.5 s
+  double loop_margin_min = 0.0;  ///< J, two-port: the loop's end's smallest margin
+  double loop_energy_j = 0.0;    ///< J, UDP two-port: what the loop's end returned (its offset)
   uint64_t loop_acting_ticks = 0;
 };
 
@@ -343,27 +378,33 @@ DeviceCalibration Truth(const haptics::SimDevice& device) {
 }
 
 /// One run: the arm pressing into the wall, or (`box`) holding the grasped box.
-Point Run(const DeviceConfig& device_config, const OperatorConfig& grip, double k, int delay_ticks, Mode mode,
-          double seconds, std::vector<double>& tick_us, bool box = false) {
+Point Run(const DeviceConfig& device_config, const OperatorConfig& grip, double k, int delay_ticks,
+          Mode mode, double seconds, std::vector<double>& tick_us, bool box = false) {
   DeviceConfig config = device_config;
   config.servo.passivity =
       mode == Mode::kOnePort || mode == Mode::kUdpTwoPort || mode == Mode::kUdpTwoPortAdmittance;
   config.servo.passivity_link_admittance = mode == Mode::kUdpTwoPortAdmittance;
   haptics::SimDevice arm(config, grip);
   arm.Place(kSide, {kStartX, 0.0, 0.0});
-  arm.SetOperatorTarget(kSide, box ? Vec3d{kStartX, 0.0, 0.0} : Vec3d{kWallX + kPushDepth, 0.0, 0.0});
+  arm.SetOperatorTarget(kSide,
+                        box ? Vec3d{kStartX, 0.0, 0.0} : Vec3d{kWallX + kPushDepth, 0.0, 0.0});
   double box_x = kStartX + kBoxOffset, box_v = 0.0;
   double x_prev = kStartX, x_prev2 = kStartX;
-  haptics::TwoPortLimits limits{config.servo.passivity_max_damping, config.servo.passivity_min_speed};
+  haptics::TwoPortLimits limits{config.servo.passivity_max_damping,
+                                config.servo.passivity_min_speed};
   if (mode == Mode::kTwoPortRef) limits.max_credit_j = 0.0;
   const bool two_port = mode == Mode::kTwoPort || mode == Mode::kTwoPortRef;
   const bool udp = IsUdp(mode);
   DelayedDevice delayed(arm, udp ? 0 : delay_ticks, arm.truth(kSide), 1.0 / config.servo.rate_hz,
                         two_port ? &limits : nullptr);
   std::unique_ptr<UdpPath> path;
-  if (udp) path = std::make_unique<UdpPath>(arm, config, delay_ticks * kPeriodNs * 1e-9, mode != Mode::kUdpOff);
+  if (udp)
+    path = std::make_unique<UdpPath>(arm, config, delay_ticks * kPeriodNs * 1e-9,
+                                     mode != Mode::kUdpOff);
   haptics::Device& device = udp ? static_cast<haptics::Device&>(*path) : delayed;
-  const auto applied = [&]() -> const Vec3d& { return udp ? path->server().applied() : delayed.applied(); };
+  const auto applied = [&]() -> const Vec3d& {
+    return udp ? path->server().applied() : delayed.applied();
+  };
   const DeviceCalibration calibration = Truth(arm);
   haptics::Hal hal(calibration);
   haptics::ServoLoop loop(device, hal, config, calibration);
@@ -411,7 +452,8 @@ Point Run(const DeviceConfig& device_config, const OperatorConfig& grip, double 
     if (t >= kContactFromS) {
       const double felt = arm.MeasureForce(kSide, applied())[0];
       // A rigid box in the hand pushes back with its inertia alone.
-      const double ideal = box ? -kBoxMass * (x[0] - 2.0 * x_prev + x_prev2) / (period_s * period_s) : -k * pen;
+      const double ideal =
+          box ? -kBoxMass * (x[0] - 2.0 * x_prev + x_prev2) / (period_s * period_s) : -k * pen;
       err2 += (felt - ideal) * (felt - ideal);
       ++err_n;
     }
@@ -474,7 +516,8 @@ double LargestStable(const std::vector<Point>& points, double delay_ms, Mode mod
 using StableTable = std::array<std::vector<double>, kModes.size()>;
 
 /// The table's rows, a delay each, printed as they are found.
-StableTable PrintStableTable(const std::vector<Point>& points, const std::vector<double>& delays_ms) {
+StableTable PrintStableTable(const std::vector<Point>& points,
+                             const std::vector<double>& delays_ms) {
   StableTable stable;
   for (const double delay : delays_ms) {
     std::printf("  %8.0f", delay);
@@ -503,10 +546,10 @@ struct LoopTiming {
   std::array<std::vector<double>, 3> p99_us;  ///< per kind, one per round
   std::array<double, 3> median_us{};          ///< per kind, over the rounds
   double bare_spread_us = 0.0;                ///< the bare loop's p99, largest minus smallest round
-  double bin_us = 10.0;                       ///< the period histogram's bin: percentiles come in whole bins
-  double tolerance_us = 0.0;                  ///< what "unchanged" allows: max(spread, one bin)
-  bool unchanged = false;                     ///< |on − off| within the tolerance
-  uint64_t allocations_on = 0;                ///< in the process while the loop ran with the controller
+  double bin_us = 10.0;         ///< the period histogram's bin: percentiles come in whole bins
+  double tolerance_us = 0.0;    ///< what "unchanged" allows: max(spread, one bin)
+  bool unchanged = false;       ///< |on − off| within the tolerance
+  uint64_t allocations_on = 0;  ///< in the process while the loop ran with the controller
   bool realtime = false;
 };
 
@@ -525,7 +568,8 @@ LoopTiming MeasureLoopTiming(const DeviceConfig& shipped, int rounds, double sec
     for (int j = 0; j < 3; ++j) {
       const int kind = (round + j) % 3;
       if (kind == LoopTiming::kBare) {
-        const BareLoop bare = MeasureBareLoop(config.servo.rate_hz, config.servo.realtime_priority, seconds);
+        const BareLoop bare =
+            MeasureBareLoop(config.servo.rate_hz, config.servo.realtime_priority, seconds);
         t.p99_us[kind].push_back(bare.stats.period_p99_us);
         t.bin_us = bare.bin_us;
         t.realtime = bare.stats.realtime;
@@ -539,11 +583,13 @@ LoopTiming MeasureLoopTiming(const DeviceConfig& shipped, int rounds, double sec
     }
   }
   for (int kind = 0; kind < 3; ++kind) t.median_us[kind] = Median(t.p99_us[kind]);
-  const auto [lo, hi] = std::minmax_element(t.p99_us[LoopTiming::kBare].begin(), t.p99_us[LoopTiming::kBare].end());
+  const auto [lo, hi] =
+      std::minmax_element(t.p99_us[LoopTiming::kBare].begin(), t.p99_us[LoopTiming::kBare].end());
   t.bare_spread_us = *hi - *lo;
   // The percentiles come in whole bins: a spread of zero still allows one.
   t.tolerance_us = std::max(t.bare_spread_us, t.bin_us);
-  t.unchanged = std::abs(t.median_us[LoopTiming::kOn] - t.median_us[LoopTiming::kOff]) <= t.tolerance_us;
+  t.unchanged =
+      std::abs(t.median_us[LoopTiming::kOn] - t.median_us[LoopTiming::kOff]) <= t.tolerance_us;
   return t;
 }
 
@@ -556,7 +602,8 @@ int BenchPassivityMain(int argc, const char* const* argv) {
     const Args args(argc, argv, {"device"}, {"json", kSmokeFlag});
     json = args.Flag("json");
     smoke = args.Flag(kSmokeFlag);
-    device = LoadDevice(args.Value("device").value_or(ShippedFile("config/devices/sim.yaml").string()));
+    device =
+        LoadDevice(args.Value("device").value_or(ShippedFile("config/devices/sim.yaml").string()));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "haptel bench passivity: %s\n", e.what());
     return 2;
@@ -577,19 +624,25 @@ int BenchPassivityMain(int argc, const char* const* argv) {
   grip.muscle_damping = 2.0;
   grip.muscle_integral_gain = 0.0;
 
-  const std::vector<double> delays_ms = smoke ? std::vector<double>{0, 3} : std::vector<double>{0, 1, 3, 5};
+  const std::vector<double> delays_ms =
+      smoke ? std::vector<double>{0, 3} : std::vector<double>{0, 1, 3, 5};
   const double k_max = smoke ? 1000.0 : 64000.0;
   const double seconds = smoke ? 1.5 : 4.0;
-  PrintSmokeNote("passivity", smoke, "delays 0 and 3 ms, K up to %.0f N/m, %.1f s runs", k_max, seconds);
+  PrintSmokeNote("passivity", smoke, "delays 0 and 3 ms, K up to %.0f N/m, %.1f s runs", k_max,
+                 seconds);
   const auto dir = OutputDir(smoke);
   const double period_s = 1.0 / device.servo.rate_hz;
   const double bound = 2.0 * device.sim.damping / period_s;
-  std::printf("haptel bench passivity: %s; sim arm %.3g kg, damping b = %.3g N*s/m, Coulomb %.3g N, force limit\n"
-              "  %.3g N; light grip %.0f N/m, %.1f N*s/m aiming %.0f mm into the wall; controller cap %.3g N*s/m,\n"
-              "  speed floor %.3g m/s; passivity bound 2b/T = %.4g N/m\n\n",
-              device.file.empty() ? "defaults" : device.file.c_str(), device.sim.arm_mass, device.sim.damping,
-              device.sim.coulomb_friction, device.sim.force_limit, grip.muscle_stiffness, grip.muscle_damping,
-              kPushDepth * 1e3, device.servo.passivity_max_damping, device.servo.passivity_min_speed, bound);
+  std::printf(
+      "haptel bench passivity: %s; sim arm %.3g kg, damping b = %.3g N*s/m, Coulomb %.3g N, force "
+      "limit\n"
+      "  %.3g N; light grip %.0f N/m, %.1f N*s/m aiming %.0f mm into the wall; controller cap %.3g "
+      "N*s/m,\n"
+      "  speed floor %.3g m/s; passivity bound 2b/T = %.4g N/m\n\n",
+      device.file.empty() ? "defaults" : device.file.c_str(), device.sim.arm_mass,
+      device.sim.damping, device.sim.coulomb_friction, device.sim.force_limit,
+      grip.muscle_stiffness, grip.muscle_damping, kPushDepth * 1e3,
+      device.servo.passivity_max_damping, device.servo.passivity_min_speed, bound);
 
   std::vector<Point> points;
   std::array<std::vector<double>, kModes.size()> ticks;
@@ -630,8 +683,8 @@ int BenchPassivityMain(int argc, const char* const* argv) {
         std::printf(" %12s %7.3f |", p->stable ? "stable" : "OSC", p->force_rms_err);
       }
       const Point* tp = Find(points, k, delay, Mode::kTwoPort);
-      std::printf(" %10.4g %7llu %10.3g\n", tp->energy_j, static_cast<unsigned long long>(tp->acting_ticks),
-                  tp->loop_margin_min * 1e3);
+      std::printf(" %10.4g %7llu %10.3g\n", tp->energy_j,
+                  static_cast<unsigned long long>(tp->acting_ticks), tp->loop_margin_min * 1e3);
     }
   }
   std::printf("\n  %8s", "delay ms");
@@ -659,7 +712,8 @@ int BenchPassivityMain(int argc, const char* const* argv) {
     // Transparency: the force error at the stiffnesses stable both off and in
     // this mode (comparable across modes), and at this mode's own largest.
     int n = 0;
-    for (double k = 250.0; k <= std::min(stable[index(Baseline(kModes[m]))][at], stable[m][at]); k *= 2.0) {
+    for (double k = 250.0; k <= std::min(stable[index(Baseline(kModes[m]))][at], stable[m][at]);
+         k *= 2.0) {
       err_common[m] += Find(points, k, delays_ms[at], kModes[m])->force_rms_err;
       ++n;
     }
@@ -668,31 +722,45 @@ int BenchPassivityMain(int argc, const char* const* argv) {
     err_own[m] = own != nullptr ? own->force_rms_err : 0.0;
   }
   const double cost = std::max(0.0, p99[best] - p99[0]);
-  const size_t udp_on = index(Mode::kUdpTwoPort), udp_off = index(Mode::kUdpOff);  // the default: charge
-  std::printf("\n  at %.0f ms each way, against K stable %.0f N/m off (the UDP rows: %.0f N/m udp-off):\n",
-              delays_ms[at], k_off, stable[udp_off][at]);
+  const size_t udp_on = index(Mode::kUdpTwoPort),
+               udp_off = index(Mode::kUdpOff);  // the default: charge
+  std::printf(
+      "\n  at %.0f ms each way, against K stable %.0f N/m off (the UDP rows: %.0f N/m udp-off):\n",
+      delays_ms[at], k_off, stable[udp_off][at]);
   for (size_t m = 1; m < kModes.size(); ++m) {
     const size_t base = index(Baseline(kModes[m]));
     if (m == base) continue;
-    std::printf("    %-12s K stable %6.0f N/m, gain %.3g; force RMS error %.3f N (%s %.3f N) over K <= %.0f N/m,"
-                " %.3f N at its largest; tick p99 %.3g us\n",
-                ModeName(kModes[m]), stable[m][at], gain[m], err_common[m], ModeName(kModes[base]), err_common[base],
-                std::min(stable[base][at], stable[m][at]), err_own[m], p99[m]);
+    std::printf(
+        "    %-12s K stable %6.0f N/m, gain %.3g; force RMS error %.3f N (%s %.3f N) over K <= "
+        "%.0f N/m,"
+        " %.3f N at its largest; tick p99 %.3g us\n",
+        ModeName(kModes[m]), stable[m][at], gain[m], err_common[m], ModeName(kModes[base]),
+        err_common[base], std::min(stable[base][at], stable[m][at]), err_own[m], p99[m]);
   }
   const size_t udp_admit = index(Mode::kUdpTwoPortAdmittance);
-  std::printf("  across the real UDP path (protocol v2, the two-port's ends in the servo loop and the server):\n"
-              "    gain %.3g with the loop's end charging its deficit to the arm's (the default; target >= 3) %s;\n"
-              "    %.3g with the loop's end's admittance, at %.3g N of force error against %.3g N udp-off\n",
-              gain[udp_on], gain[udp_on] >= 3.0 ? "met" : "MISSED", gain[udp_admit], err_common[udp_admit],
-              err_common[udp_off]);
-  std::printf("  best: %s, gain %.3g (target >= 3) %s; it costs %.3g us of tick p99 (off %.3g us; target <= 2) %s\n"
-              "  %zu runs (the wall's and the box's) in %.1f s wall; wrote %s/passivity.csv, passivity.png\n",
-              ModeName(kModes[best]), gain[best], gain[best] >= 3.0 ? "met" : "MISSED", cost, p99[0],
-              cost <= 2.0 ? "met" : "MISSED", points.size() + box_points.size(), wall_s, dir.c_str());
+  std::printf(
+      "  across the real UDP path (protocol v2, the two-port's ends in the servo loop and the "
+      "server):\n"
+      "    gain %.3g with the loop's end charging its deficit to the arm's (the default; target >= "
+      "3) %s;\n"
+      "    %.3g with the loop's end's admittance, at %.3g N of force error against %.3g N "
+      "udp-off\n",
+      gain[udp_on], gain[udp_on] >= 3.0 ? "met" : "MISSED", gain[udp_admit], err_common[udp_admit],
+      err_common[udp_off]);
+  std::printf(
+      "  best: %s, gain %.3g (target >= 3) %s; it costs %.3g us of tick p99 (off %.3g us; target "
+      "<= 2) %s\n"
+      "  %zu runs (the wall's and the box's) in %.1f s wall; wrote %s/passivity.csv, "
+      "passivity.png\n",
+      ModeName(kModes[best]), gain[best], gain[best] >= 3.0 ? "met" : "MISSED", cost, p99[0],
+      cost <= 2.0 ? "met" : "MISSED", points.size() + box_points.size(), wall_s, dir.c_str());
 
   // The grasped box: largest stable K per mode and delay, and the gains at the target's delay.
-  std::printf("\n  the grasped box (%.2g kg, grasped %.0f mm from the hand and held still), largest K stable (N/m):\n"
-              "  %8s", kBoxMass, kBoxOffset * 1e3, "delay ms");
+  std::printf(
+      "\n  the grasped box (%.2g kg, grasped %.0f mm from the hand and held still), largest K "
+      "stable (N/m):\n"
+      "  %8s",
+      kBoxMass, kBoxOffset * 1e3, "delay ms");
   for (const Mode m : kModes) std::printf(" %14s", ModeName(m));
   std::printf("\n");
   const StableTable box_stable = PrintStableTable(box_points, delays_ms);
@@ -707,54 +775,67 @@ int BenchPassivityMain(int argc, const char* const* argv) {
     }
     if (n > 0) box_err[m] /= n;
   }
-  std::printf("  at %.0f ms: gain %.3g %s, %.3g udp-two-port; force RMS error against a rigid box's inertia %.3f N\n"
-              "  %s, %.3f N off, over the K stable both ways; wrote %s/passivity_box.csv\n",
-              delays_ms[at], box_gain[best], ModeName(kModes[best]), box_gain[udp_on], box_err[best],
-              ModeName(kModes[best]), box_err[0], dir.c_str());
+  std::printf(
+      "  at %.0f ms: gain %.3g %s, %.3g udp-two-port; force RMS error against a rigid box's "
+      "inertia %.3f N\n"
+      "  %s, %.3f N off, over the K stable both ways; wrote %s/passivity_box.csv\n",
+      delays_ms[at], box_gain[best], ModeName(kModes[best]), box_gain[udp_on], box_err[best],
+      ModeName(kModes[best]), box_err[0], dir.c_str());
 
-  std::printf("\n  the servo loop itself (threaded, %s, %.0f Hz, %s): period p99 over %d rounds of %.1f s each,\n"
-              "  the three kinds in a rotated order; \"unchanged\": on within off's p99 +- the bare loop's own\n"
-              "  spread over the rounds (or one %.0f us bin, whichever is larger)\n",
-              shipped.file.empty() ? "defaults" : shipped.file.filename().c_str(), shipped.servo.rate_hz,
-              timing.realtime ? "SCHED_FIFO" : "not real-time: SCHED_FIFO refused", timing_rounds, timing_seconds,
-              timing.bin_us);
+  std::printf(
+      "\n  the servo loop itself (threaded, %s, %.0f Hz, %s): period p99 over %d rounds of %.1f s "
+      "each,\n"
+      "  the three kinds in a rotated order; \"unchanged\": on within off's p99 +- the bare loop's "
+      "own\n"
+      "  spread over the rounds (or one %.0f us bin, whichever is larger)\n",
+      shipped.file.empty() ? "defaults" : shipped.file.filename().c_str(), shipped.servo.rate_hz,
+      timing.realtime ? "SCHED_FIFO" : "not real-time: SCHED_FIFO refused", timing_rounds,
+      timing_seconds, timing.bin_us);
   std::printf("    %-22s %10s %8s   %s\n", "loop", "p99 us", "x bare", "p99 per round (us)");
-  const char* kind_names[3] = {"bare clock_nanosleep", "servo, controller off", "servo, controller on"};
+  const char* kind_names[3] = {"bare clock_nanosleep", "servo, controller off",
+                               "servo, controller on"};
   for (int kind = 0; kind < 3; ++kind) {
     std::printf("    %-22s %10.0f %8.2f  ", kind_names[kind], timing.median_us[kind],
                 timing.median_us[0] > 0 ? timing.median_us[kind] / timing.median_us[0] : 0.0);
     for (const double v : timing.p99_us[kind]) std::printf(" %.0f", v);
     std::printf("\n");
   }
-  std::printf("    on - off = %+.0f us against a tolerance of %.0f us (bare spread %.0f us): %s; allocations with the\n"
-              "    controller on: %llu\n",
-              timing.median_us[2] - timing.median_us[1], timing.tolerance_us, timing.bare_spread_us,
-              timing.unchanged ? "unchanged (met)" : "CHANGED (missed)",
-              static_cast<unsigned long long>(timing.allocations_on));
+  std::printf(
+      "    on - off = %+.0f us against a tolerance of %.0f us (bare spread %.0f us): %s; "
+      "allocations with the\n"
+      "    controller on: %llu\n",
+      timing.median_us[2] - timing.median_us[1], timing.tolerance_us, timing.bare_spread_us,
+      timing.unchanged ? "unchanged (met)" : "CHANGED (missed)",
+      static_cast<unsigned long long>(timing.allocations_on));
 
   {
     std::ofstream csv(dir / "passivity.csv");
-    csv << "stiffness,delay_ms,mode,stable,spread_m,energy_j,max_alpha,acting_ticks,force_rms_err_n,penetration_m,"
+    csv << "stiffness,delay_ms,mode,stable,spread_m,energy_j,max_alpha,acting_ticks,force_rms_err_"
+           "n,penetration_m,"
            "loop_margin_min_j,loop_energy_j,loop_acting_ticks\n";
     for (const Point& p : points) {
-      csv << p.k << "," << p.delay_ms << "," << ModeName(p.mode) << "," << (p.stable ? 1 : 0) << "," << p.spread
-          << "," << p.energy_j << "," << p.max_alpha << "," << p.acting_ticks << "," << p.force_rms_err << ","
-          << p.penetration << "," << p.loop_margin_min << "," << p.loop_energy_j << "," << p.loop_acting_ticks << "\n";
+      csv << p.k << "," << p.delay_ms << "," << ModeName(p.mode) << "," << (p.stable ? 1 : 0) << ","
+          << p.spread << "," << p.energy_j << "," << p.max_alpha << "," << p.acting_ticks << ","
+          << p.force_rms_err << "," << p.penetration << "," << p.loop_margin_min << ","
+          << p.loop_energy_j << "," << p.loop_acting_ticks << "\n";
     }
   }
   {
     std::ofstream csv(dir / "passivity_box.csv");
-    csv << "stiffness,delay_ms,mode,stable,spread_m,energy_j,max_alpha,acting_ticks,force_rms_err_n\n";
+    csv << "stiffness,delay_ms,mode,stable,spread_m,energy_j,max_alpha,acting_ticks,force_rms_err_"
+           "n\n";
     for (const Point& p : box_points) {
-      csv << p.k << "," << p.delay_ms << "," << ModeName(p.mode) << "," << (p.stable ? 1 : 0) << "," << p.spread
-          << "," << p.energy_j << "," << p.max_alpha << "," << p.acting_ticks << "," << p.force_rms_err << "\n";
+      csv << p.k << "," << p.delay_ms << "," << ModeName(p.mode) << "," << (p.stable ? 1 : 0) << ","
+          << p.spread << "," << p.energy_j << "," << p.max_alpha << "," << p.acting_ticks << ","
+          << p.force_rms_err << "\n";
     }
   }
   {
     std::vector<Series> series;
     for (size_t m = 0; m < kModes.size(); ++m) {
       Series line{std::string("largest stable K, ") + ModeName(kModes[m]), {}, {}};
-      for (size_t i = 0; i < delays_ms.size(); ++i) line.x.push_back(delays_ms[i]), line.y.push_back(std::max(stable[m][i], 1.0));
+      for (size_t i = 0; i < delays_ms.size(); ++i)
+        line.x.push_back(delays_ms[i]), line.y.push_back(std::max(stable[m][i], 1.0));
       series.push_back(line);
     }
     Series pb{"passivity bound 2b/T", {}, {}};
@@ -776,25 +857,35 @@ int BenchPassivityMain(int argc, const char* const* argv) {
     // JSON keys: "on" is the one-port controller (as before the two-port).
     const auto key = [](Mode m) -> std::string {
       switch (m) {
-        case Mode::kOff: return "off";
-        case Mode::kOnePort: return "on";
-        case Mode::kTwoPort: return "two_port";
-        case Mode::kTwoPortRef: return "two_port_ref";
-        case Mode::kUdpOff: return "udp_off";
-        case Mode::kUdpTwoPort: return "udp_two_port";
-        case Mode::kUdpTwoPortAdmittance: return "udp_two_port_admittance";
+        case Mode::kOff:
+          return "off";
+        case Mode::kOnePort:
+          return "on";
+        case Mode::kTwoPort:
+          return "two_port";
+        case Mode::kTwoPortRef:
+          return "two_port_ref";
+        case Mode::kUdpOff:
+          return "udp_off";
+        case Mode::kUdpTwoPort:
+          return "udp_two_port";
+        case Mode::kUdpTwoPortAdmittance:
+          return "udp_two_port_admittance";
       }
       return "?";
     };
     std::ostringstream o;
     o << "{\"delay_ms\":" << JsonNumber(delays_ms[at]);
-    for (size_t m = 0; m < kModes.size(); ++m) o << ",\"stable_stiffness_" << key(kModes[m]) << "\":" << JsonNumber(stable[m][at]);
-    o << ",\"gain\":" << JsonNumber(gain[best]) << ",\"gain_mode\":\"" << ModeName(kModes[best]) << "\"";
+    for (size_t m = 0; m < kModes.size(); ++m)
+      o << ",\"stable_stiffness_" << key(kModes[m]) << "\":" << JsonNumber(stable[m][at]);
+    o << ",\"gain\":" << JsonNumber(gain[best]) << ",\"gain_mode\":\"" << ModeName(kModes[best])
+      << "\"";
     // The UDP rows' own, each over udp_off's: the default (charge), and the admittance.
     o << ",\"gain_udp\":" << JsonNumber(gain[udp_on])
       << ",\"gain_udp_admittance\":" << JsonNumber(gain[index(Mode::kUdpTwoPortAdmittance)]);
     for (size_t m = 1; m < kModes.size(); ++m) {
-      if (kModes[m] != Mode::kUdpOff) o << ",\"gain_" << key(kModes[m]) << "\":" << JsonNumber(gain[m]);
+      if (kModes[m] != Mode::kUdpOff)
+        o << ",\"gain_" << key(kModes[m]) << "\":" << JsonNumber(gain[m]);
     }
     o << ",\"passivity_bound\":" << JsonNumber(bound) << ",\"cost_us_p99\":" << JsonNumber(cost);
     o << ",\"servo_p99_us_bare\":" << JsonNumber(timing.median_us[LoopTiming::kBare])
@@ -806,36 +897,41 @@ int BenchPassivityMain(int argc, const char* const* argv) {
       << ",\"servo_allocations_on\":" << timing.allocations_on
       << ",\"servo_realtime\":" << (timing.realtime ? "true" : "false");
     for (size_t m = 0; m < kModes.size(); ++m) {
-      o << ",\"tick_us_p99_" << key(kModes[m]) << "\":" << JsonNumber(p99[m]) << ",\"force_rms_err_n_"
-        << key(kModes[m]) << "\":" << JsonNumber(err_common[m]) << ",\"force_rms_err_n_at_stable_"
-        << key(kModes[m]) << "\":" << JsonNumber(err_own[m]);
+      o << ",\"tick_us_p99_" << key(kModes[m]) << "\":" << JsonNumber(p99[m])
+        << ",\"force_rms_err_n_" << key(kModes[m]) << "\":" << JsonNumber(err_common[m])
+        << ",\"force_rms_err_n_at_stable_" << key(kModes[m]) << "\":" << JsonNumber(err_own[m]);
     }
     o << ",\"delays\":[";
     for (size_t i = 0; i < delays_ms.size(); ++i) {
       o << (i ? "," : "") << "{\"delay_ms\":" << JsonNumber(delays_ms[i]);
-      for (size_t m = 0; m < kModes.size(); ++m) o << ",\"stable_stiffness_" << key(kModes[m]) << "\":" << JsonNumber(stable[m][i]);
+      for (size_t m = 0; m < kModes.size(); ++m)
+        o << ",\"stable_stiffness_" << key(kModes[m]) << "\":" << JsonNumber(stable[m][i]);
       o << "}";
     }
     o << "],\"box\":{\"mass_kg\":" << JsonNumber(kBoxMass);
     for (size_t m = 0; m < kModes.size(); ++m) {
       o << ",\"stable_stiffness_" << key(kModes[m]) << "\":" << JsonNumber(box_stable[m][at]);
     }
-    o << ",\"gain\":" << JsonNumber(box_gain[best]) << ",\"gain_udp\":" << JsonNumber(box_gain[udp_on])
-      << ",\"force_rms_err_n_" << key(kModes[best]) << "\":" << JsonNumber(box_err[best])
+    o << ",\"gain\":" << JsonNumber(box_gain[best])
+      << ",\"gain_udp\":" << JsonNumber(box_gain[udp_on]) << ",\"force_rms_err_n_"
+      << key(kModes[best]) << "\":" << JsonNumber(box_err[best])
       << ",\"force_rms_err_n_off\":" << JsonNumber(box_err[0]) << ",\"points\":[";
     for (size_t i = 0; i < box_points.size(); ++i) {
       const Point& p = box_points[i];
-      o << (i ? "," : "") << "{\"stiffness\":" << JsonNumber(p.k) << ",\"delay_ms\":" << JsonNumber(p.delay_ms)
-        << ",\"mode\":\"" << ModeName(p.mode) << "\",\"stable\":" << (p.stable ? "true" : "false")
-        << ",\"energy_j\":" << JsonNumber(p.energy_j) << ",\"force_rms_err_n\":" << JsonNumber(p.force_rms_err)
-        << "}";
+      o << (i ? "," : "") << "{\"stiffness\":" << JsonNumber(p.k)
+        << ",\"delay_ms\":" << JsonNumber(p.delay_ms) << ",\"mode\":\"" << ModeName(p.mode)
+        << "\",\"stable\":" << (p.stable ? "true" : "false")
+        << ",\"energy_j\":" << JsonNumber(p.energy_j)
+        << ",\"force_rms_err_n\":" << JsonNumber(p.force_rms_err) << "}";
     }
     o << "]},\"points\":[";
     for (size_t i = 0; i < points.size(); ++i) {
       const Point& p = points[i];
-      o << (i ? "," : "") << "{\"stiffness\":" << JsonNumber(p.k) << ",\"delay_ms\":" << JsonNumber(p.delay_ms)
-        << ",\"mode\":\"" << ModeName(p.mode) << "\",\"stable\":" << (p.stable ? "true" : "false")
-        << ",\"energy_j\":" << JsonNumber(p.energy_j) << ",\"loop_energy_j\":" << JsonNumber(p.loop_energy_j)
+      o << (i ? "," : "") << "{\"stiffness\":" << JsonNumber(p.k)
+        << ",\"delay_ms\":" << JsonNumber(p.delay_ms) << ",\"mode\":\"" << ModeName(p.mode)
+        << "\",\"stable\":" << (p.stable ? "true" : "false")
+        << ",\"energy_j\":" << JsonNumber(p.energy_j)
+        << ",\"loop_energy_j\":" << JsonNumber(p.loop_energy_j)
         << ",\"force_rms_err_n\":" << JsonNumber(p.force_rms_err) << "}";
     }
     o << "]}";

@@ -2,10 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <memory>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -13,8 +13,8 @@
 #include "haptel/config/paths.hpp"
 #include "haptel/config/physics.hpp"
 #include "haptel/core/args.hpp"
-#include "physics_measure.hpp"
 #include "haptel/core/child_process.hpp"
+#include "physics_measure.hpp"
 #include "plot.hpp"
 #include "smoke.hpp"
 
@@ -68,8 +68,10 @@ int BenchPhysicsMain(int argc, const char* const* argv) {
   const double default_step_ms = 1e3 * config.step_s;
   const int default_iterations = config.solver_iterations;
   const wp::Plan plan = smoke ? wp::SmokePlan() : wp::FullPlan();
-  PrintSmokeNote("physics", smoke, "%zu steps x %zu iteration counts, %.1f s trajectory, %.1f s push, %.1f s hold",
-                 plan.steps_ms.size(), plan.iterations.size(), plan.trajectory_s, plan.push_s, plan.grasp_hold_s);
+  PrintSmokeNote("physics", smoke,
+                 "%zu steps x %zu iteration counts, %.1f s trajectory, %.1f s push, %.1f s hold",
+                 plan.steps_ms.size(), plan.iterations.size(), plan.trajectory_s, plan.push_s,
+                 plan.grasp_hold_s);
 
   const auto dir = OutputDir(smoke);
   const auto traj_file = dir / "trajectory.csv";
@@ -85,8 +87,9 @@ int BenchPhysicsMain(int argc, const char* const* argv) {
       wp::SaveTrajectory(traj_file, *loaded);
     }
     const wp::Trajectory& tr = *loaded;
-    std::printf("haptel bench physics: trajectory %s (%s, %.1f s, %zu samples at %.2f ms)\n", traj_file.c_str(),
-                made ? "written" : "read back", tr.duration(), tr.position.size(), 1e3 * tr.dt);
+    std::printf("haptel bench physics: trajectory %s (%s, %.1f s, %zu samples at %.2f ms)\n",
+                traj_file.c_str(), made ? "written" : "read back", tr.duration(),
+                tr.position.size(), 1e3 * tr.dt);
     const std::vector<wp::Vec3d> reference = wp::ReferenceRun(config, tr);
     wp::SaveReference(ref_file, reference);
 
@@ -95,13 +98,15 @@ int BenchPhysicsMain(int argc, const char* const* argv) {
     if (with_float) {
       const auto exe = ProgramDirectory() / "haptel-physics-bench-float";
       if (!std::filesystem::exists(exe)) {
-        float_note = "float: " + exe.string() + " not found (build it: target haptel-physics-bench-float)";
+        float_note =
+            "float: " + exe.string() + " not found (build it: target haptel-physics-bench-float)";
       } else {
         try {
-          std::vector<std::string> child_args{"--trajectory", traj_file.string(), "--reference", ref_file.string(),
-                                              "--physics", physics_file};
+          std::vector<std::string> child_args{"--trajectory",    traj_file.string(), "--reference",
+                                              ref_file.string(), "--physics",        physics_file};
           if (smoke) child_args.push_back("--smoke");
-          child = std::make_unique<ChildProcess>(exe.string(), child_args, ChildProcess::Options{true});
+          child =
+              std::make_unique<ChildProcess>(exe.string(), child_args, ChildProcess::Options{true});
         } catch (const std::exception& e) {
           float_note = std::string("float: ") + e.what();
         }
@@ -139,7 +144,8 @@ int BenchPhysicsMain(int argc, const char* const* argv) {
                      "): double points only";
       } else {
         points.insert(points.end(), floats.begin(), floats.end());
-        float_note = "float: " + std::to_string(floats.size()) + " points from haptel-physics-bench-float " +
+        float_note = "float: " + std::to_string(floats.size()) +
+                     " points from haptel-physics-bench-float " +
                      "(same sources, float Bullet, compared with the same double reference)";
       }
     }
@@ -157,47 +163,67 @@ int BenchPhysicsMain(int argc, const char* const* argv) {
   for (size_t i = 0; i < points.size(); ++i) {
     if (Same(points[i], def)) def_on_front = front[i];
     if (!front[i]) continue;
-    if (points[i].cpu_per_sim_s <= def.cpu_per_sim_s) best_err_at_cpu = std::min(best_err_at_cpu, points[i].tracking_err_mm);
-    if (points[i].tracking_err_mm <= def.tracking_err_mm) best_cpu_at_err = std::min(best_cpu_at_err, points[i].cpu_per_sim_s);
+    if (points[i].cpu_per_sim_s <= def.cpu_per_sim_s)
+      best_err_at_cpu = std::min(best_err_at_cpu, points[i].tracking_err_mm);
+    if (points[i].tracking_err_mm <= def.tracking_err_mm)
+      best_cpu_at_err = std::min(best_cpu_at_err, points[i].cpu_per_sim_s);
   }
-  const double err_ratio = std::isfinite(best_err_at_cpu) && best_err_at_cpu > 0 ? def.tracking_err_mm / best_err_at_cpu : 1.0;
-  const double cpu_ratio = std::isfinite(best_cpu_at_err) && best_cpu_at_err > 0 ? def.cpu_per_sim_s / best_cpu_at_err : 1.0;
+  const double err_ratio = std::isfinite(best_err_at_cpu) && best_err_at_cpu > 0
+                               ? def.tracking_err_mm / best_err_at_cpu
+                               : 1.0;
+  const double cpu_ratio = std::isfinite(best_cpu_at_err) && best_cpu_at_err > 0
+                               ? def.cpu_per_sim_s / best_cpu_at_err
+                               : 1.0;
 
-  std::printf("  reference: double, %.3g ms step, %d iterations; tracking error = RMS |proxy - reference proxy| over %.1f s\n\n",
-              wp::kReferenceStepMs, wp::kReferenceIterations, plan.trajectory_s);
-  std::printf("%8s %5s %-6s %11s %11s %9s %9s %9s %9s %6s %6s\n", "step ms", "iter", "prec", "cpu s/sim s",
-              "track mm", "lag mm", "pen mm", "pen rest", "slip mm", "reset", "front");
+  std::printf(
+      "  reference: double, %.3g ms step, %d iterations; tracking error = RMS |proxy - reference "
+      "proxy| over %.1f s\n\n",
+      wp::kReferenceStepMs, wp::kReferenceIterations, plan.trajectory_s);
+  std::printf("%8s %5s %-6s %11s %11s %9s %9s %9s %9s %6s %6s\n", "step ms", "iter", "prec",
+              "cpu s/sim s", "track mm", "lag mm", "pen mm", "pen rest", "slip mm", "reset",
+              "front");
   for (size_t i = 0; i < points.size(); ++i) {
     const Point& p = points[i];
-    std::printf("%8.3g %5d %-6s %11.4f %11.4g %9.3f %9.3f %9.3f %9.3f %6ld %6s%s\n", p.step_ms, p.iterations,
-                p.precision.c_str(), p.cpu_per_sim_s, p.tracking_err_mm, p.lag_mm, p.penetration_mm,
-                p.penetration_rest_mm, p.slip_mm, p.resets, front[i] ? "*" : "", Same(p, def) ? "  <- default" : "");
+    std::printf("%8.3g %5d %-6s %11.4f %11.4g %9.3f %9.3f %9.3f %9.3f %6ld %6s%s\n", p.step_ms,
+                p.iterations, p.precision.c_str(), p.cpu_per_sim_s, p.tracking_err_mm, p.lag_mm,
+                p.penetration_mm, p.penetration_rest_mm, p.slip_mm, p.resets, front[i] ? "*" : "",
+                Same(p, def) ? "  <- default" : "");
   }
-  std::printf("\n  sorted by cpu s/sim s: thread CPU per simulated second over the three scenarios (%g s tracking,\n"
-              "  %g s push, %g s two-hand grasp); track: RMS vs the reference; lag: RMS |proxy - tracked wrist|;\n"
-              "  pen: deepest penetration of a 10 N push, touch-down at 0.1 m/s included; pen rest: mean over its last\n"
-              "  0.2 s (negative: resting above the surface);\n"
-              "  slip: box motion relative to the palms over a %g s hold; reset: NaN/Inf resets (such points are\n"
-              "  left off the front); front: Pareto front over (cpu, track), both precisions.\n",
-              plan.trajectory_s, plan.push_s, plan.grasp_s(), plan.grasp_hold_s);
+  std::printf(
+      "\n  sorted by cpu s/sim s: thread CPU per simulated second over the three scenarios (%g s "
+      "tracking,\n"
+      "  %g s push, %g s two-hand grasp); track: RMS vs the reference; lag: RMS |proxy - tracked "
+      "wrist|;\n"
+      "  pen: deepest penetration of a 10 N push, touch-down at 0.1 m/s included; pen rest: mean "
+      "over its last\n"
+      "  0.2 s (negative: resting above the surface);\n"
+      "  slip: box motion relative to the palms over a %g s hold; reset: NaN/Inf resets (such "
+      "points are\n"
+      "  left off the front); front: Pareto front over (cpu, track), both precisions.\n",
+      plan.trajectory_s, plan.push_s, plan.grasp_s(), plan.grasp_hold_s);
   std::printf("  %s\n", float_note.c_str());
   if (def_on_front) {
-    std::printf("  default (%g ms, %d iterations, double): on the Pareto front\n", default_step_ms, default_iterations);
+    std::printf("  default (%g ms, %d iterations, double): on the Pareto front\n", default_step_ms,
+                default_iterations);
   } else {
-    std::printf("  default (%g ms, %d iterations, double): off the front; at no more CPU the front has %.3gx less\n"
-                "  tracking error, at no more error it needs %.3gx less CPU\n",
-                default_step_ms, default_iterations, err_ratio, cpu_ratio);
+    std::printf(
+        "  default (%g ms, %d iterations, double): off the front; at no more CPU the front has "
+        "%.3gx less\n"
+        "  tracking error, at no more error it needs %.3gx less CPU\n",
+        default_step_ms, default_iterations, err_ratio, cpu_ratio);
   }
 
   {
     std::ofstream csv(dir / "physics.csv");
-    csv << "step_ms,iterations,precision,cpu_per_sim_s,tracking_err_mm,lag_mm,penetration_mm,penetration_rest_mm,"
+    csv << "step_ms,iterations,precision,cpu_per_sim_s,tracking_err_mm,lag_mm,penetration_mm,"
+           "penetration_rest_mm,"
            "slip_mm,resets,pareto,default\n";
     for (size_t i = 0; i < points.size(); ++i) {
       const Point& p = points[i];
       csv << p.step_ms << "," << p.iterations << "," << p.precision << "," << p.cpu_per_sim_s << ","
-          << p.tracking_err_mm << "," << p.lag_mm << "," << p.penetration_mm << "," << p.penetration_rest_mm << ","
-          << p.slip_mm << "," << p.resets << "," << (front[i] ? 1 : 0) << "," << (Same(p, def) ? 1 : 0) << "\n";
+          << p.tracking_err_mm << "," << p.lag_mm << "," << p.penetration_mm << ","
+          << p.penetration_rest_mm << "," << p.slip_mm << "," << p.resets << ","
+          << (front[i] ? 1 : 0) << "," << (Same(p, def) ? 1 : 0) << "\n";
     }
   }
   std::printf("\n  wrote %s\n", (dir / "physics.csv").c_str());
@@ -209,7 +235,8 @@ int BenchPhysicsMain(int argc, const char* const* argv) {
     std::vector<Series> series;
     for (const char* precision : {"double", "float"}) {
       for (const int iterations : plan.iterations) {
-        Series s{std::string(precision) + ", " + std::to_string(iterations) + " iterations", {}, {}};
+        Series s{
+            std::string(precision) + ", " + std::to_string(iterations) + " iterations", {}, {}};
         for (const Point& p : points) {  // already sorted by cpu
           if (p.precision != precision || p.iterations != iterations) continue;
           if (!std::isfinite(p.tracking_err_mm) || p.cpu_per_sim_s <= 0) continue;
@@ -221,8 +248,9 @@ int BenchPhysicsMain(int argc, const char* const* argv) {
     }
     PlotOptions o;
     char title[160];
-    std::snprintf(title, sizeof title, "physics work-precision: default %g ms / %d it. %s", default_step_ms,
-                  default_iterations, def_on_front ? "on the front" : "off the front");
+    std::snprintf(title, sizeof title, "physics work-precision: default %g ms / %d it. %s",
+                  default_step_ms, default_iterations,
+                  def_on_front ? "on the front" : "off the front");
     o.title = title;
     o.x_label = "log10(cpu s per simulated s)";
     o.y_label = "tracking error vs reference, mm";
@@ -239,8 +267,10 @@ int BenchPhysicsMain(int argc, const char* const* argv) {
     std::ostringstream o;
     o << "{\"points\":[";
     for (size_t i = 0; i < points.size(); ++i) o << (i ? "," : "") << wp::ToJson(points[i], false);
-    o << "],\"default\":" << wp::ToJson(def, false) << ",\"default_on_front\":" << (def_on_front ? "true" : "false")
-      << ",\"default_error_ratio\":" << err_ratio << ",\"default_cpu_ratio\":" << cpu_ratio << ",\"pareto\":[";
+    o << "],\"default\":" << wp::ToJson(def, false)
+      << ",\"default_on_front\":" << (def_on_front ? "true" : "false")
+      << ",\"default_error_ratio\":" << err_ratio << ",\"default_cpu_ratio\":" << cpu_ratio
+      << ",\"pareto\":[";
     bool first = true;
     for (size_t i = 0; i < points.size(); ++i) {
       if (!front[i]) continue;

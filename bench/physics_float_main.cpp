@@ -16,7 +16,8 @@ int main(int argc, char** argv) {
   using namespace haptel;
   using namespace haptel::bench;
   constexpr const char* kUsage =
-      "usage: haptel-physics-bench-float --trajectory FILE --reference FILE [--physics FILE] [--smoke]\n"
+      "usage: haptel-physics-bench-float --trajectory FILE --reference FILE [--physics FILE] "
+      "[--smoke]\n"
       "  the float half of `haptel bench physics`, which runs it; prints one JSON line;\n"
       "  --smoke: the smoke run's grid and scenarios (`haptel bench physics --smoke`)\n";
   return cli::Main({"haptel-physics-bench-float", kUsage}, argc, argv, [&] {
@@ -24,7 +25,8 @@ int main(int argc, char** argv) {
     const wp::Plan plan = args.Flag("smoke") ? wp::SmokePlan() : wp::FullPlan();
     const auto traj_file = args.Value("trajectory");
     const auto ref_file = args.Value("reference");
-    if (!traj_file || !ref_file) throw UsageError("--trajectory FILE and --reference FILE are required");
+    if (!traj_file || !ref_file)
+      throw UsageError("--trajectory FILE and --reference FILE are required");
     const auto tr = wp::LoadTrajectory(*traj_file, plan.trajectory_s);
     const auto ref = wp::LoadReference(*ref_file);
     if (!tr || !ref) throw cli::InputError("cannot read the trajectory or the reference");

@@ -1,4 +1,3 @@
-#include "haptel/core/json.hpp"
 #include "physics_measure.hpp"
 
 #include <time.h>
@@ -12,18 +11,19 @@
 #include <stdexcept>
 
 #include "haptel/core/clock.hpp"
-#include "haptel/testing/vec_math.hpp"
-#include "haptel/testing/box_grip.hpp"
+#include "haptel/core/json.hpp"
 #include "haptel/physics/world.hpp"
+#include "haptel/testing/box_grip.hpp"
+#include "haptel/testing/vec_math.hpp"
 
 namespace haptel::bench::wp {
 
 namespace {
 
-using haptics::HandSample;
-using haptics::Side;
 using haptics::AxisAngle;
 using haptics::Distance;
+using haptics::HandSample;
+using haptics::Side;
 using physics::PhysicsWorld;
 
 PhysicsConfig WithSolver(const PhysicsConfig& base, double step_s, int iterations) {
@@ -99,7 +99,8 @@ Scenario Grasp(const PhysicsConfig& config, double hold_s, double* slip_mm) {
     const Vec3d b = world.BodyPose(box).position;
     const Vec3d l = world.hand(Side::kLeft)->ProxyWrist().position;
     const Vec3d r = world.hand(Side::kRight)->ProxyWrist().position;
-    return Vec3d{b[0] - 0.5 * (l[0] + r[0]), b[1] - 0.5 * (l[1] + r[1]), b[2] - 0.5 * (l[2] + r[2])};
+    return Vec3d{b[0] - 0.5 * (l[0] + r[0]), b[1] - 0.5 * (l[1] + r[1]),
+                 b[2] - 0.5 * (l[2] + r[2])};
   };
   double sim = run(kGraspSettleS, [&](double) { return z0; });
   sim += run(kGraspLiftS, [&](double t) { return z0 + 0.1 / kGraspLiftS * t; });
@@ -157,7 +158,8 @@ Trajectory MakeTrajectory(double seconds) {
     const double ease = t < 0.5 ? 0.5 * (1.0 - std::cos(M_PI * t / 0.5)) : 1.0;
     for (int k = 0; k < 3; ++k) {
       double v = 0.0;
-      for (const Term& term : terms[k]) v += term.a * (std::sin(2 * M_PI * term.f * t + term.phi) - std::sin(term.phi));
+      for (const Term& term : terms[k])
+        v += term.a * (std::sin(2 * M_PI * term.f * t + term.phi) - std::sin(term.phi));
       raw[i][k] = ease * v;
     }
   }
@@ -167,7 +169,8 @@ Trajectory MakeTrajectory(double seconds) {
   const Vec3d centre{0.10, 0.0, 0.20};
   for (size_t i = 0; i < n; ++i) {
     const double t = static_cast<double>(i) * tr.dt;
-    tr.position.push_back({centre[0] + scale * raw[i][0], centre[1] + scale * raw[i][1], centre[2] + scale * raw[i][2]});
+    tr.position.push_back({centre[0] + scale * raw[i][0], centre[1] + scale * raw[i][1],
+                           centre[2] + scale * raw[i][2]});
     tr.orientation.push_back(AxisAngle({0, 0, 1}, 0.3 * std::sin(2 * M_PI * 0.7 * t)));
   }
   return tr;
@@ -180,8 +183,8 @@ void SaveTrajectory(const std::filesystem::path& file, const Trajectory& tr) {
   for (size_t i = 0; i < tr.position.size(); ++i) {
     const auto& p = tr.position[i];
     const auto& q = tr.orientation[i];
-    std::snprintf(buf, sizeof buf, "%.5f,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", static_cast<double>(i) * tr.dt,
-                  p[0], p[1], p[2], q[0], q[1], q[2], q[3]);
+    std::snprintf(buf, sizeof buf, "%.5f,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n",
+                  static_cast<double>(i) * tr.dt, p[0], p[1], p[2], q[0], q[1], q[2], q[3]);
     out << buf;
   }
   if (!out) throw std::runtime_error("cannot write " + file.string());
@@ -194,7 +197,8 @@ std::optional<Trajectory> LoadTrajectory(const std::filesystem::path& file, doub
   Trajectory tr;
   while (std::getline(in, line)) {
     double t, x, y, z, qw, qx, qy, qz;
-    if (std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf", &t, &x, &y, &z, &qw, &qx, &qy, &qz) != 8)
+    if (std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf", &t, &x, &y, &z, &qw, &qx, &qy,
+                    &qz) != 8)
       return std::nullopt;
     if (std::abs(t - static_cast<double>(tr.position.size()) * tr.dt) > 1e-6) return std::nullopt;
     tr.position.push_back({x, y, z});
@@ -204,8 +208,8 @@ std::optional<Trajectory> LoadTrajectory(const std::filesystem::path& file, doub
   return tr;
 }
 
-std::vector<Vec3d> TrackRun(const PhysicsConfig& base, const Trajectory& tr, double step_s, int iterations,
-                            double* cpu_s, long* resets) {
+std::vector<Vec3d> TrackRun(const PhysicsConfig& base, const Trajectory& tr, double step_s,
+                            int iterations, double* cpu_s, long* resets) {
   // Finer than the samples: record every `stride` steps; else each step spans `per_sample` samples.
   const bool finer = step_s < tr.dt * (1.0 - 1e-9);
   const long stride = finer ? std::lround(tr.dt / step_s) : 0;
@@ -229,7 +233,8 @@ std::vector<Vec3d> TrackRun(const PhysicsConfig& base, const Trajectory& tr, dou
     cpu += ThreadCpuSeconds() - c0;
     // After step k the proxy is at t = (k + 1)·step.
     if (finer) {
-      if ((k + 1) % stride == 0) out[static_cast<size_t>((k + 1) / stride)] = hand.ProxyWrist().position;
+      if ((k + 1) % stride == 0)
+        out[static_cast<size_t>((k + 1) / stride)] = hand.ProxyWrist().position;
     } else {
       out[static_cast<size_t>((k + 1) * per_sample)] = hand.ProxyWrist().position;
     }
@@ -269,8 +274,8 @@ std::optional<std::vector<Vec3d>> LoadReference(const std::filesystem::path& fil
   return ref;
 }
 
-Point Measure(const PhysicsConfig& base, const Trajectory& tr, const std::vector<Vec3d>& reference, double step_ms,
-              int iterations, const std::string& precision, const Plan& plan) {
+Point Measure(const PhysicsConfig& base, const Trajectory& tr, const std::vector<Vec3d>& reference,
+              double step_ms, int iterations, const std::string& precision, const Plan& plan) {
   Point p;
   p.step_ms = step_ms;
   p.iterations = iterations;
@@ -308,12 +313,15 @@ Point Measure(const PhysicsConfig& base, const Trajectory& tr, const std::vector
 }
 
 std::string ToJson(const Point& p, bool extra) {
-  std::string s = "{\"step_ms\":" + JsonNumber(p.step_ms) + ",\"iterations\":" + std::to_string(p.iterations) +
-                  ",\"precision\":\"" + p.precision + "\",\"cpu_per_sim_s\":" + JsonNumber(p.cpu_per_sim_s) +
-                  ",\"tracking_err_mm\":" + JsonNumber(p.tracking_err_mm) + ",\"penetration_mm\":" + JsonNumber(p.penetration_mm) +
+  std::string s = "{\"step_ms\":" + JsonNumber(p.step_ms) +
+                  ",\"iterations\":" + std::to_string(p.iterations) + ",\"precision\":\"" +
+                  p.precision + "\",\"cpu_per_sim_s\":" + JsonNumber(p.cpu_per_sim_s) +
+                  ",\"tracking_err_mm\":" + JsonNumber(p.tracking_err_mm) +
+                  ",\"penetration_mm\":" + JsonNumber(p.penetration_mm) +
                   ",\"slip_mm\":" + JsonNumber(p.slip_mm);
   if (extra) {
-    s += ",\"lag_mm\":" + JsonNumber(p.lag_mm) + ",\"penetration_rest_mm\":" + JsonNumber(p.penetration_rest_mm) +
+    s += ",\"lag_mm\":" + JsonNumber(p.lag_mm) +
+         ",\"penetration_rest_mm\":" + JsonNumber(p.penetration_rest_mm) +
          ",\"resets\":" + std::to_string(p.resets);
   }
   return s + "}";
@@ -326,11 +334,13 @@ std::vector<Point> ParsePoints(const std::string& text) {
     Point p;
     char precision[16] = {};
     if (std::sscanf(text.c_str() + at,
-                    "{\"step_ms\":%lf,\"iterations\":%d,\"precision\":\"%15[a-z0-9]\",\"cpu_per_sim_s\":%lf,"
+                    "{\"step_ms\":%lf,\"iterations\":%d,\"precision\":\"%15[a-z0-9]\",\"cpu_per_"
+                    "sim_s\":%lf,"
                     "\"tracking_err_mm\":%lf,\"penetration_mm\":%lf,\"slip_mm\":%lf,\"lag_mm\":%lf,"
                     "\"penetration_rest_mm\":%lf,\"resets\":%ld}",
-                    &p.step_ms, &p.iterations, precision, &p.cpu_per_sim_s, &p.tracking_err_mm, &p.penetration_mm,
-                    &p.slip_mm, &p.lag_mm, &p.penetration_rest_mm, &p.resets) == 10) {
+                    &p.step_ms, &p.iterations, precision, &p.cpu_per_sim_s, &p.tracking_err_mm,
+                    &p.penetration_mm, &p.slip_mm, &p.lag_mm, &p.penetration_rest_mm,
+                    &p.resets) == 10) {
       p.precision = precision;
       points.push_back(p);
     }

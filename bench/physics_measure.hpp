@@ -25,8 +25,8 @@ constexpr double kReferenceStepMs = 0.025;
 constexpr int kReferenceIterations = 40;
 constexpr double kTrajectoryDtS = 0.00025;  ///< recorded at 4 kHz
 constexpr double kTrajectoryS = 2.0;
-constexpr double kPeakSpeed = 0.3;  ///< m/s
-constexpr double kPushS = 1.0;       ///< the push into the table, touch-down included
+constexpr double kPeakSpeed = 0.3;     ///< m/s
+constexpr double kPushS = 1.0;         ///< the push into the table, touch-down included
 constexpr double kGraspSettleS = 0.3;  ///< the grasp: the palms close on the box,
 constexpr double kGraspLiftS = 1.0;    ///< lift it 10 cm,
 constexpr double kGraspHoldS = 5.0;    ///< and hold it
@@ -62,7 +62,8 @@ struct Trajectory {
 Trajectory MakeTrajectory(double seconds = kTrajectoryS);
 void SaveTrajectory(const std::filesystem::path& file, const Trajectory& trajectory);
 /// nullopt when the file is missing or not a trajectory of this bench `seconds` long.
-std::optional<Trajectory> LoadTrajectory(const std::filesystem::path& file, double seconds = kTrajectoryS);
+std::optional<Trajectory> LoadTrajectory(const std::filesystem::path& file,
+                                         double seconds = kTrajectoryS);
 
 /// Proxy wrist positions along `trajectory` at every sample time (index i ↔
 /// t = i·dt; index 0 is the placement), simulated at `step_s`, `iterations`.
@@ -84,14 +85,16 @@ struct Point {
   double penetration_mm = 0.0;   ///< deepest over a 10 N push, touch-down at 0.1 m/s included
   double slip_mm = 0.0;          ///< box displacement relative to the palms over a 5 s hold
   // CSV only:
-  double lag_mm = 0.0;              ///< RMS |proxy − tracked wrist|
-  double penetration_rest_mm = 0.0;  ///< mean over the push's last 0.2 s (negative: above the surface)
-  long resets = 0;                  ///< NaN/Inf resets of hands and bodies
+  double lag_mm = 0.0;  ///< RMS |proxy − tracked wrist|
+  double penetration_rest_mm =
+      0.0;          ///< mean over the push's last 0.2 s (negative: above the surface)
+  long resets = 0;  ///< NaN/Inf resets of hands and bodies
 };
 
 /// One point of the grid; the push and the grasp's hold last as long as `plan` says.
-Point Measure(const PhysicsConfig& base, const Trajectory& trajectory, const std::vector<Vec3d>& reference,
-              double step_ms, int iterations, const std::string& precision, const Plan& plan = {});
+Point Measure(const PhysicsConfig& base, const Trajectory& trajectory,
+              const std::vector<Vec3d>& reference, double step_ms, int iterations,
+              const std::string& precision, const Plan& plan = {});
 
 /// {"step_ms":…,"iterations":…,"precision":"…",…} with the JSON fields, plus
 /// the CSV-only ones when `extra`.

@@ -4,11 +4,10 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
-#include <stdexcept>
-
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <stdexcept>
 
 namespace haptel::bench {
 
@@ -18,7 +17,8 @@ std::filesystem::path BenchDir() {
   return dir;
 }
 
-void PlotLines(const std::filesystem::path& file, const std::vector<Series>& series, const PlotOptions& o) {
+void PlotLines(const std::filesystem::path& file, const std::vector<Series>& series,
+               const PlotOptions& o) {
   cv::Mat img(o.height, o.width, CV_8UC3, cv::Scalar(255, 255, 255));
   const int left = 80, right = 20, top = 40, bottom = 60;
   const int w = o.width - left - right, h = o.height - top - bottom;
@@ -46,7 +46,8 @@ void PlotLines(const std::filesystem::path& file, const std::vector<Series>& ser
     const int xp = left + w * k / 5;
     cv::line(img, {xp, top}, {xp, top + h}, grey, 1);
     std::snprintf(buf, sizeof buf, "%.4g", xv);
-    cv::putText(img, buf, {xp - 20, top + h + 20}, cv::FONT_HERSHEY_SIMPLEX, 0.45, black, 1, cv::LINE_AA);
+    cv::putText(img, buf, {xp - 20, top + h + 20}, cv::FONT_HERSHEY_SIMPLEX, 0.45, black, 1,
+                cv::LINE_AA);
     const double yv = y0 + (y1 - y0) * k / 5;
     const int yp = top + h - h * k / 5;
     cv::line(img, {left, yp}, {left + w, yp}, grey, 1);
@@ -54,10 +55,12 @@ void PlotLines(const std::filesystem::path& file, const std::vector<Series>& ser
     cv::putText(img, buf, {5, yp + 5}, cv::FONT_HERSHEY_SIMPLEX, 0.45, black, 1, cv::LINE_AA);
   }
   cv::putText(img, o.title, {left, 25}, cv::FONT_HERSHEY_SIMPLEX, 0.6, black, 1, cv::LINE_AA);
-  cv::putText(img, o.x_label, {left + w / 2 - 60, o.height - 15}, cv::FONT_HERSHEY_SIMPLEX, 0.5, black, 1, cv::LINE_AA);
-  cv::putText(img, o.y_label + (o.log_y ? " (log)" : ""), {5, top - 8}, cv::FONT_HERSHEY_SIMPLEX, 0.45, black, 1,
-              cv::LINE_AA);
-  static const cv::Scalar kColours[] = {{200, 80, 30}, {30, 30, 200}, {40, 160, 40}, {160, 40, 160}, {0, 140, 220}, {90, 90, 90}};
+  cv::putText(img, o.x_label, {left + w / 2 - 60, o.height - 15}, cv::FONT_HERSHEY_SIMPLEX, 0.5,
+              black, 1, cv::LINE_AA);
+  cv::putText(img, o.y_label + (o.log_y ? " (log)" : ""), {5, top - 8}, cv::FONT_HERSHEY_SIMPLEX,
+              0.45, black, 1, cv::LINE_AA);
+  static const cv::Scalar kColours[] = {{200, 80, 30},  {30, 30, 200}, {40, 160, 40},
+                                        {160, 40, 160}, {0, 140, 220}, {90, 90, 90}};
   for (size_t k = 0; k < series.size(); ++k) {
     const cv::Scalar c = kColours[k % 6];
     std::vector<cv::Point> pts;
@@ -69,10 +72,12 @@ void PlotLines(const std::filesystem::path& file, const std::vector<Series>& ser
     for (const cv::Point& p : pts) cv::circle(img, p, 2, c, cv::FILLED);
     const int ly = top + 20 + 20 * static_cast<int>(k);
     cv::line(img, {left + w - 250, ly - 4}, {left + w - 225, ly - 4}, c, 2);
-    cv::putText(img, series[k].name, {left + w - 220, ly}, cv::FONT_HERSHEY_SIMPLEX, 0.45, black, 1, cv::LINE_AA);
+    cv::putText(img, series[k].name, {left + w - 220, ly}, cv::FONT_HERSHEY_SIMPLEX, 0.45, black, 1,
+                cv::LINE_AA);
   }
   if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path());
-  if (!cv::imwrite(file.string(), img)) throw std::runtime_error("cannot write plot '" + file.string() + "'");
+  if (!cv::imwrite(file.string(), img))
+    throw std::runtime_error("cannot write plot '" + file.string() + "'");
 }
 
 }  // namespace haptel::bench

@@ -23,7 +23,8 @@ struct PlotOptions {
 
 /// Draws the series as lines with a legend and writes a PNG (creating the
 /// folder). Throws std::runtime_error when the file cannot be written.
-void PlotLines(const std::filesystem::path& file, const std::vector<Series>& series, const PlotOptions& options);
+void PlotLines(const std::filesystem::path& file, const std::vector<Series>& series,
+               const PlotOptions& options);
 
 /// Where benchmark outputs go: build/bench/ under the working directory.
 std::filesystem::path BenchDir();

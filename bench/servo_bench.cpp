@@ -12,9 +12,10 @@
 #include <thread>
 #include <vector>
 
-#include "haptel/config/paths.hpp"
+#include "bare_loop.hpp"
 #include "haptel/config/device.hpp"
 #include "haptel/config/error.hpp"
+#include "haptel/config/paths.hpp"
 #include "haptel/config/run.hpp"
 #include "haptel/core/alloc_counter.hpp"
 #include "haptel/core/args.hpp"
@@ -23,7 +24,6 @@
 #include "haptel/haptics/servo_loop.hpp"
 #include "haptel/haptics/sim_device.hpp"
 #include "haptel/udp/udp_device.hpp"
-#include "bare_loop.hpp"
 #include "plot.hpp"
 #include "smoke.hpp"
 
@@ -59,13 +59,16 @@ ModeResult Measure(const std::string& name, const std::string& description, hapt
 
 std::string Json(const ModeResult& r, double bare_p99_us) {
   std::ostringstream o;
-  o << "{\"rate_hz\":" << r.stats.rate_hz << ",\"p99_ratio_to_bare\":"
-    << (bare_p99_us > 0 ? r.stats.period_p99_us / bare_p99_us : 0.0) << ",\"period_p50_us\":" << r.stats.period_p50_us
-    << ",\"period_p99_us\":" << r.stats.period_p99_us << ",\"period_max_us\":" << r.stats.period_max_us
-    << ",\"overruns\":" << r.stats.overruns << ",\"allocations_in_loop\":" << r.allocations
+  o << "{\"rate_hz\":" << r.stats.rate_hz
+    << ",\"p99_ratio_to_bare\":" << (bare_p99_us > 0 ? r.stats.period_p99_us / bare_p99_us : 0.0)
+    << ",\"period_p50_us\":" << r.stats.period_p50_us
+    << ",\"period_p99_us\":" << r.stats.period_p99_us
+    << ",\"period_max_us\":" << r.stats.period_max_us << ",\"overruns\":" << r.stats.overruns
+    << ",\"allocations_in_loop\":" << r.allocations
     << ",\"realtime\":" << (r.stats.realtime ? "true" : "false")
-    << ",\"memory_locked\":" << (r.memory_locked ? "true" : "false") << ",\"udp_unanswered\":" << r.udp_unanswered
-    << ",\"udp_malformed\":" << r.udp_malformed << "}";
+    << ",\"memory_locked\":" << (r.memory_locked ? "true" : "false")
+    << ",\"udp_unanswered\":" << r.udp_unanswered << ",\"udp_malformed\":" << r.udp_malformed
+    << "}";
   return o.str();
 }
 
@@ -94,7 +97,8 @@ ServoLoopRun MeasureServoLoop(haptics::Device& device, const DeviceConfig& confi
   r.memory_locked = loop.memory_locked();
   loop.Stop();
   r.stats = loop.Stats();
-  const Histogram& h = loop.period_histogram(device.HasSide(Side::kLeft) ? Side::kLeft : Side::kRight);
+  const Histogram& h =
+      loop.period_histogram(device.HasSide(Side::kLeft) ? Side::kLeft : Side::kRight);
   for (int i = 0; i <= h.bins(); ++i) r.histogram.push_back(static_cast<double>(h.BinCount(i)));
   return r;
 }
@@ -109,7 +113,8 @@ int BenchServoMain(int argc, const char* const* argv) {
     smoke = args.Flag(kSmokeFlag);
     if (smoke) seconds = 0.5;  // every mode still runs, each for the shortest --seconds allowed
     if (auto v = args.Number("seconds", 0.5, 600)) seconds = *v;
-    base = LoadDevice(args.Value("device").value_or(ShippedFile("config/devices/sim.yaml").string()));
+    base =
+        LoadDevice(args.Value("device").value_or(ShippedFile("config/devices/sim.yaml").string()));
   } catch (const UsageError& e) {
     std::fprintf(stderr, "haptel bench servo: %s\n", e.what());
     return 2;
@@ -125,7 +130,8 @@ int BenchServoMain(int argc, const char* const* argv) {
   std::vector<ModeResult> results;
 
   {  // The reference: an empty clock_nanosleep loop with the same rate and scheduling.
-    const BareLoop bare = MeasureBareLoop(base.servo.rate_hz, base.servo.realtime_priority, seconds);
+    const BareLoop bare =
+        MeasureBareLoop(base.servo.rate_hz, base.servo.realtime_priority, seconds);
     ModeResult r;
     r.name = "bare_clock_nanosleep";
     r.description = "an empty loop: the machine's timing floor";
@@ -156,8 +162,9 @@ int BenchServoMain(int argc, const char* const* argv) {
     const char* names[2] = {"left", "right"};
     for (int i = 0; i < 2; ++i) {
       servers.push_back(std::make_unique<ChildProcess>(
-          server, std::vector<std::string>{"--side", names[i], "--port", std::to_string(port_base + i), "--device",
-                                           base.file.string()}));
+          server,
+          std::vector<std::string>{"--side", names[i], "--port", std::to_string(port_base + i),
+                                   "--device", base.file.string()}));
     }
     DeviceConfig c = base;
     c.driver = "udp";
@@ -177,15 +184,17 @@ int BenchServoMain(int argc, const char* const* argv) {
       if (!up) std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
     if (!up) {
-      std::fprintf(stderr, "haptel bench servo: the device servers on ports %d and %d did not answer\n", port_base,
-                   port_base + 1);
+      std::fprintf(stderr,
+                   "haptel bench servo: the device servers on ports %d and %d did not answer\n",
+                   port_base, port_base + 1);
       return 1;
     }
     const auto before = dev.Counters();
-    ModeResult r = Measure(divider == 1 ? "udp_two_arms_every_cycle" : "udp_two_arms_decimated",
-                           divider == 1 ? "two UDP arms, glove every cycle"
-                                        : "two UDP arms, glove every " + std::to_string(divider) + "th",
-                           dev, c, seconds);
+    ModeResult r =
+        Measure(divider == 1 ? "udp_two_arms_every_cycle" : "udp_two_arms_decimated",
+                divider == 1 ? "two UDP arms, glove every cycle"
+                             : "two UDP arms, glove every " + std::to_string(divider) + "th",
+                dev, c, seconds);
     const auto after = dev.Counters();
     r.udp_unanswered = after.unanswered - before.unanswered;
     r.udp_malformed = after.malformed_total() - before.malformed_total();
@@ -193,34 +202,41 @@ int BenchServoMain(int argc, const char* const* argv) {
   }
 
   // Table.
-  std::printf("haptel bench servo: %.1f s per mode, target rate %.0f Hz\n\n", seconds, base.servo.rate_hz);
+  std::printf("haptel bench servo: %.1f s per mode, target rate %.0f Hz\n\n", seconds,
+              base.servo.rate_hz);
   const double bare_p99 = results[0].stats.period_p99_us;
-  auto ratio = [&](const ModeResult& r) { return bare_p99 > 0 ? r.stats.period_p99_us / bare_p99 : 0.0; };
-  std::printf("%-26s %9s %8s %8s %7s %9s %9s %7s %9s %-8s %s\n", "mode", "rate Hz", "p50 us", "p99 us", "x bare",
-              "max us", "overruns", "allocs", "udp lost", "realtime", "mlock");
+  auto ratio = [&](const ModeResult& r) {
+    return bare_p99 > 0 ? r.stats.period_p99_us / bare_p99 : 0.0;
+  };
+  std::printf("%-26s %9s %8s %8s %7s %9s %9s %7s %9s %-8s %s\n", "mode", "rate Hz", "p50 us",
+              "p99 us", "x bare", "max us", "overruns", "allocs", "udp lost", "realtime", "mlock");
   for (const ModeResult& r : results) {
-    std::printf("%-26s %9.1f %8.0f %8.0f %7.2f %9.0f %9llu %7llu %9llu %-8s %s\n", r.name.c_str(), r.stats.rate_hz,
-                r.stats.period_p50_us, r.stats.period_p99_us, ratio(r), r.stats.period_max_us,
-                static_cast<unsigned long long>(r.stats.overruns), static_cast<unsigned long long>(r.allocations),
+    std::printf("%-26s %9.1f %8.0f %8.0f %7.2f %9.0f %9llu %7llu %9llu %-8s %s\n", r.name.c_str(),
+                r.stats.rate_hz, r.stats.period_p50_us, r.stats.period_p99_us, ratio(r),
+                r.stats.period_max_us, static_cast<unsigned long long>(r.stats.overruns),
+                static_cast<unsigned long long>(r.allocations),
                 static_cast<unsigned long long>(r.udp_unanswered), r.stats.realtime ? "yes" : "no",
                 r.memory_locked ? "yes" : "no");
   }
-  std::printf("\n  rate: cycles per second over the run; p50/p99/max: start-to-start period;\n"
-              "  x bare: p99 over the empty loop's p99 in this run (the machine's floor);\n"
-              "  overruns: cycles started over one period late (or skipped); allocs: heap\n"
-              "  allocations anywhere in the process while the loop ran (must be 0);\n"
-              "  udp lost: requests that got no valid reply after their retries.\n");
+  std::printf(
+      "\n  rate: cycles per second over the run; p50/p99/max: start-to-start period;\n"
+      "  x bare: p99 over the empty loop's p99 in this run (the machine's floor);\n"
+      "  overruns: cycles started over one period late (or skipped); allocs: heap\n"
+      "  allocations anywhere in the process while the loop ran (must be 0);\n"
+      "  udp lost: requests that got no valid reply after their retries.\n");
 
   // CSV and plot.
   const auto dir = OutputDir(smoke);
   {
     std::ofstream csv(dir / "servo.csv");
-    csv << "mode,rate_hz,period_p50_us,period_p99_us,p99_ratio_to_bare,period_max_us,overruns,allocations_in_loop,"
+    csv << "mode,rate_hz,period_p50_us,period_p99_us,p99_ratio_to_bare,period_max_us,overruns,"
+           "allocations_in_loop,"
            "udp_unanswered,realtime\n";
     for (const ModeResult& r : results) {
-      csv << r.name << "," << r.stats.rate_hz << "," << r.stats.period_p50_us << "," << r.stats.period_p99_us << ","
-          << ratio(r) << "," << r.stats.period_max_us << "," << r.stats.overruns << "," << r.allocations << "," << r.udp_unanswered
-          << "," << (r.stats.realtime ? 1 : 0) << "\n";
+      csv << r.name << "," << r.stats.rate_hz << "," << r.stats.period_p50_us << ","
+          << r.stats.period_p99_us << "," << ratio(r) << "," << r.stats.period_max_us << ","
+          << r.stats.overruns << "," << r.allocations << "," << r.udp_unanswered << ","
+          << (r.stats.realtime ? 1 : 0) << "\n";
     }
     std::ofstream hist(dir / "servo_periods.csv");
     hist << "period_us";
@@ -246,8 +262,8 @@ int BenchServoMain(int argc, const char* const* argv) {
   }
   PlotLines(dir / "servo_periods.png", series,
             {"servo period histogram (10 us bins, 800-1200 us)", "period, us", "cycles", true});
-  std::printf("\n  wrote %s, %s, %s\n", (dir / "servo.csv").c_str(), (dir / "servo_periods.csv").c_str(),
-              (dir / "servo_periods.png").c_str());
+  std::printf("\n  wrote %s, %s, %s\n", (dir / "servo.csv").c_str(),
+              (dir / "servo_periods.csv").c_str(), (dir / "servo_periods.png").c_str());
 
   if (json) {
     std::ostringstream o;
@@ -257,7 +273,8 @@ int BenchServoMain(int argc, const char* const* argv) {
       o << (i ? "," : "") << "\"" << results[i].name << "\":" << Json(results[i], bare_p99);
       if (results[i].name == "udp_two_arms_decimated") udp_two_arms_hz = results[i].stats.rate_hz;
     }
-    o << "},\"rate_hz_udp_two_arms\":" << udp_two_arms_hz << ",\"seconds_per_mode\":" << seconds << "}";
+    o << "},\"rate_hz_udp_two_arms\":" << udp_two_arms_hz << ",\"seconds_per_mode\":" << seconds
+      << "}";
     std::printf("%s\n", JsonLine(o.str(), smoke).c_str());
   }
   return 0;

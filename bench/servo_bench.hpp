@@ -19,7 +19,7 @@ namespace haptel::bench {
 /// What one servo loop measured about itself over a run.
 struct ServoLoopRun {
   LoopStats stats;
-  uint64_t allocations = 0;       ///< heap allocations anywhere in the process while it ran
+  uint64_t allocations = 0;  ///< heap allocations anywhere in the process while it ran
   bool memory_locked = false;
   std::vector<double> histogram;  ///< period counts per bin (LoopMeter's 10 µs bins)
 };

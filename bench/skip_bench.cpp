@@ -1,4 +1,3 @@
-#include "haptel/core/json.hpp"
 #include "skip_bench.hpp"
 
 #include <time.h>
@@ -9,13 +8,12 @@
 #include <cstdio>
 #include <fstream>
 #include <memory>
+#include <opencv2/imgproc.hpp>
 #include <random>
 #include <sstream>
 #include <string>
 #include <vector>
 
-#include "haptel/core/clock.hpp"
-#include "haptel/testing/vec_math.hpp"
 #include "haptel/config/cockpit.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/config/paths.hpp"
@@ -24,15 +22,17 @@
 #include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"
 #include "haptel/core/args.hpp"
+#include "haptel/core/clock.hpp"
+#include "haptel/core/json.hpp"
+#include "haptel/mediator/session.hpp"
 #include "haptel/physics/cockpit_controls.hpp"
 #include "haptel/physics/scene_builder.hpp"
 #include "haptel/physics/world.hpp"
-#include "haptel/mediator/session.hpp"
+#include "haptel/testing/vec_math.hpp"
 #include "haptel/video/camera_source.hpp"
 #include "haptel/video/codec.hpp"
 #include "plot.hpp"
 #include "smoke.hpp"
-#include <opencv2/imgproc.hpp>
 
 namespace haptel::bench {
 
@@ -56,7 +56,7 @@ struct Result {
   long steps = 0;
   double sim_s = 0.0;
   double cpu_s = 0.0;
-  int max_wheel_contacts = 0;  ///< hand bodies on the rim, at most, while timed
+  int max_wheel_contacts = 0;               ///< hand bodies on the rim, at most, while timed
   double wheel_min = 0.0, wheel_max = 0.0;  ///< rad, wheel angle range while timed
   double cpu_per_sim_s() const { return sim_s > 0.0 ? cpu_s / sim_s : 0.0; }
 };
@@ -136,16 +136,17 @@ struct Operator {
     const double gap = 0.03;
     const double z = knob[2] + body.knob_half_extents[2] + physics.hand.palm_half_extents[2] + gap;
     const double w = M_PI;  // 0.5 Hz
-    return haptics::TrackedHand({knob[0] - physics.hand.palm_half_extents[0] + 0.02 * std::sin(w * t),
-                                 knob[1] + 0.02 * std::cos(w * t), z});
+    return haptics::TrackedHand(
+        {knob[0] - physics.hand.palm_half_extents[0] + 0.02 * std::sin(w * t),
+         knob[1] + 0.02 * std::cos(w * t), z});
   }
 };
 
 /// Steps for `seconds`; with `timed`, adds the thread CPU time of the stepping
 /// (blocks of 10 steps) to it and samples the controls between blocks, untimed
 /// (Read walks every contact manifold, the floor boxes' too).
-void Run(physics::PhysicsWorld& world, physics::CockpitControlsBody& controls, const Operator& op, double& t,
-         double seconds, Result* timed) {
+void Run(physics::PhysicsWorld& world, physics::CockpitControlsBody& controls, const Operator& op,
+         double& t, double seconds, Result* timed) {
   const double h = world.config().step_s;
   const long steps = std::lround(seconds / h);
   constexpr long kBlock = 10;
@@ -207,12 +208,14 @@ double VideoDecodeShare(mediator::ViewKind view, double seconds) {
   cv::Mat image(480, 640, CV_8UC3);
   for (int y = 0; y < image.rows; ++y) {
     for (int x = 0; x < image.cols; ++x) {
-      image.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<uint8_t>(x * 255 / 640), static_cast<uint8_t>(y * 255 / 480),
-                                            static_cast<uint8_t>((x ^ y) & 0xff));
+      image.at<cv::Vec3b>(y, x) =
+          cv::Vec3b(static_cast<uint8_t>(x * 255 / 640), static_cast<uint8_t>(y * 255 / 480),
+                    static_cast<uint8_t>((x ^ y) & 0xff));
     }
   }
   cv::rectangle(image, {100, 120}, {300, 360}, {40, 200, 40}, cv::FILLED);
-  cv::putText(image, "haptel 640x480", {320, 240}, cv::FONT_HERSHEY_SIMPLEX, 1.2, {255, 255, 255}, 2);
+  cv::putText(image, "haptel 640x480", {320, 240}, cv::FONT_HERSHEY_SIMPLEX, 1.2, {255, 255, 255},
+              2);
   std::vector<uint8_t> jpeg;
   video::JpegEncoder(80).Encode(image, jpeg);
   video::JpegDecoder decoder;
@@ -289,9 +292,11 @@ int BenchSkipMain(int argc, const char* const* argv) {
     const Args args(argc, argv, {"physics", "seconds"}, {"json", kSmokeFlag});
     json = args.Flag("json");
     smoke = args.Flag(kSmokeFlag);
-    if (smoke) seconds = 0.2;  // every kind of world, after the same warm-up (the boxes must fall asleep)
+    if (smoke)
+      seconds = 0.2;  // every kind of world, after the same warm-up (the boxes must fall asleep)
     if (auto v = args.Number("seconds", 0.1, 60)) seconds = *v;
-    config = LoadPhysics(args.Value("physics").value_or(ShippedFile("config/physics.yaml").string()));
+    config =
+        LoadPhysics(args.Value("physics").value_or(ShippedFile("config/physics.yaml").string()));
     cockpit = LoadCockpit(ShippedFile("config/interfaces/cockpit.yaml"));
     vehicle = LoadVehicle(ShippedFile("config/vehicles/sim-robot.yaml"));
     track = std::make_unique<Track>(LoadTrack(vehicle.world));
@@ -300,15 +305,18 @@ int BenchSkipMain(int argc, const char* const* argv) {
     return 2;
   }
   config.realtime_priority = 0;  // stepped on this thread, never started
-  PrintSmokeNote("skip", smoke, "%.2g simulated s per world, video and camera; 10 and 100 floor boxes for 100 and 1000",
-                 seconds);
+  PrintSmokeNote(
+      "skip", smoke,
+      "%.2g simulated s per world, video and camera; 10 and 100 floor boxes for 100 and 1000",
+      seconds);
 
   std::vector<Result> results;  // the JSON's entries, in its order
-  {  // gesture: no physical controls, no scene bodies.
+  {                             // gesture: no physical controls, no scene bodies.
     Result r;
     r.name = "gesture";
     r.description = "no controls, no bodies: no world";
-    const auto world = physics::PhysicsWorld::CreateIfNeeded(config, physics::NeedsOf(Scene{}, false));
+    const auto world =
+        physics::PhysicsWorld::CreateIfNeeded(config, physics::NeedsOf(Scene{}, false));
     r.world = world != nullptr;
     if (r.world) {
       std::fprintf(stderr, "haptel bench skip: the gesture interface got a physics world\n");
@@ -316,10 +324,12 @@ int BenchSkipMain(int argc, const char* const* argv) {
     }
     results.push_back(r);
   }
-  results.push_back(MeasureCockpit(config, cockpit, Scene{}, seconds, "cockpit", "hands + wheel + throttle"));
+  results.push_back(
+      MeasureCockpit(config, cockpit, Scene{}, seconds, "cockpit", "hands + wheel + throttle"));
   // Floor boxes: a smoke run has a tenth of them (the warm-up, while they
   // are awake, is most of its time).
-  const std::vector<int> box_counts = smoke ? std::vector<int>{0, 10, 100} : std::vector<int>{0, 100, 1000};
+  const std::vector<int> box_counts =
+      smoke ? std::vector<int>{0, 10, 100} : std::vector<int>{0, 100, 1000};
   const int most = box_counts.back();
   for (const int n : box_counts) {
     results.push_back(MeasureCockpit(config, cockpit, FloorScene(n, true), seconds,
@@ -329,44 +339,52 @@ int BenchSkipMain(int argc, const char* const* argv) {
   // For comparison (table and CSV, and outside cpu_per_sim_s in the JSON):
   // the same `most` boxes made static, which Bullet neither integrates nor
   // pairs with the (static) floor nor puts in its simulation islands.
-  const Result statics =
-      MeasureCockpit(config, cockpit, FloorScene(most, false), seconds, "cockpit_static_" + std::to_string(most),
-                     "cockpit + floor + " + std::to_string(most) + " static boxes");
+  const Result statics = MeasureCockpit(
+      config, cockpit, FloorScene(most, false), seconds, "cockpit_static_" + std::to_string(most),
+      "cockpit + floor + " + std::to_string(most) + " static boxes");
   std::vector<Result> rows = results;
   rows.push_back(statics);
   const double base = results[2].cpu_per_sim_s();
 
-  std::printf("haptel bench skip: %.1f simulated s per world after %.1f s of warm-up, step %.4g s\n", seconds,
-              kWarmupS, config.step_s);
-  std::printf("  cockpit = both proxy hands + the wheel and throttle of %s; the right palm rests on\n"
-              "  the rim turning it +-0.2 rad, the left hand hovers over the knob; floor %.2f m below the hub\n\n",
-              cockpit.file.filename().c_str(), -kFloorZ);
-  std::printf("%-22s %-38s %6s %9s %7s %10s %12s %9s %13s\n", "world", "what", "world", "asleep", "parked",
-              "us/step", "cpu s/sim s", "x slp_0", "rim contacts");
+  std::printf(
+      "haptel bench skip: %.1f simulated s per world after %.1f s of warm-up, step %.4g s\n",
+      seconds, kWarmupS, config.step_s);
+  std::printf(
+      "  cockpit = both proxy hands + the wheel and throttle of %s; the right palm rests on\n"
+      "  the rim turning it +-0.2 rad, the left hand hovers over the knob; floor %.2f m below the "
+      "hub\n\n",
+      cockpit.file.filename().c_str(), -kFloorZ);
+  std::printf("%-22s %-38s %6s %9s %7s %10s %12s %9s %13s\n", "world", "what", "world", "asleep",
+              "parked", "us/step", "cpu s/sim s", "x slp_0", "rim contacts");
   for (const Result& r : rows) {
     const bool dynamic = r.name.rfind("cockpit_sleeping_", 0) == 0;
-    const std::string asleep = dynamic && r.boxes > 0 ? std::to_string(r.boxes_asleep) + "/" + std::to_string(r.boxes)
-                                                      : "-";
+    const std::string asleep = dynamic && r.boxes > 0
+                                   ? std::to_string(r.boxes_asleep) + "/" + std::to_string(r.boxes)
+                                   : "-";
     const std::string parked = dynamic && r.boxes > 0 ? std::to_string(r.boxes_parked) : "-";
     const std::string contacts = r.world ? std::to_string(r.max_wheel_contacts) : "-";
     const double us_per_step = r.steps > 0 ? 1e6 * r.cpu_s / static_cast<double>(r.steps) : 0.0;
-    std::printf("%-22s %-38s %6s %9s %7s %10.1f %12.4f %9.2f %13s\n", r.name.c_str(), r.description.c_str(),
-                r.world ? "yes" : "no", asleep.c_str(), parked.c_str(), us_per_step, r.cpu_per_sim_s(),
-                base > 0.0 ? r.cpu_per_sim_s() / base : 0.0, contacts.c_str());
+    std::printf("%-22s %-38s %6s %9s %7s %10.1f %12.4f %9.2f %13s\n", r.name.c_str(),
+                r.description.c_str(), r.world ? "yes" : "no", asleep.c_str(), parked.c_str(),
+                us_per_step, r.cpu_per_sim_s(), base > 0.0 ? r.cpu_per_sim_s() / base : 0.0,
+                contacts.c_str());
   }
-  std::printf("\n  cpu s/sim s: thread CPU time spent stepping per simulated second (the share of\n"
-              "  one core the physics thread needs); x slp_0: ratio to cockpit_sleeping_0 in this run;\n"
-              "  asleep: floor boxes Bullet had put to sleep at the end; parked: of those, how many the\n"
-              "  world had taken out of Bullet's (put back when something comes near); rim contacts:\n"
-              "  most hand bodies touching the rim at once (the wheel turned %.2f..%.2f rad in the\n"
-              "  cockpit run).\n",
-              results[1].wheel_min, results[1].wheel_max);
+  std::printf(
+      "\n  cpu s/sim s: thread CPU time spent stepping per simulated second (the share of\n"
+      "  one core the physics thread needs); x slp_0: ratio to cockpit_sleeping_0 in this run;\n"
+      "  asleep: floor boxes Bullet had put to sleep at the end; parked: of those, how many the\n"
+      "  world had taken out of Bullet's (put back when something comes near); rim contacts:\n"
+      "  most hand bodies touching the rim at once (the wheel turned %.2f..%.2f rad in the\n"
+      "  cockpit run).\n",
+      results[1].wheel_min, results[1].wheel_max);
 
   const double decode_none = VideoDecodeShare(mediator::ViewKind::kNone, seconds);
   const double decode_view = VideoDecodeShare(mediator::ViewKind::kWindow, seconds);
-  std::printf("\n  video decode (640x480 JPEG at 30 fps), share of one core: --view none without --record %.4f "
-              "(not decoded), with a view or --record %.4f\n",
-              decode_none, decode_view);
+  std::printf(
+      "\n  video decode (640x480 JPEG at 30 fps), share of one core: --view none without --record "
+      "%.4f "
+      "(not decoded), with a view or --record %.4f\n",
+      decode_none, decode_view);
 
   // The vehicle side's camera loop: the shipped camera (synthetic, its size
   // and rate), and the same at 320x240 (the default before 640x480) for scale.
@@ -413,10 +431,10 @@ int BenchSkipMain(int argc, const char* const* argv) {
     csv << "world,has_world,boxes,boxes_asleep,steps,sim_s,cpu_s,cpu_per_sim_s,ratio_to_sleeping_0,"
            "max_rim_contacts,wheel_min_rad,wheel_max_rad,boxes_parked\n";
     for (const Result& r : rows) {
-      csv << r.name << "," << (r.world ? 1 : 0) << "," << r.boxes << "," << r.boxes_asleep << "," << r.steps << ","
-          << r.sim_s << "," << r.cpu_s << "," << r.cpu_per_sim_s() << ","
-          << (base > 0.0 ? r.cpu_per_sim_s() / base : 0.0) << "," << r.max_wheel_contacts << "," << r.wheel_min
-          << "," << r.wheel_max << "," << r.boxes_parked << "\n";
+      csv << r.name << "," << (r.world ? 1 : 0) << "," << r.boxes << "," << r.boxes_asleep << ","
+          << r.steps << "," << r.sim_s << "," << r.cpu_s << "," << r.cpu_per_sim_s() << ","
+          << (base > 0.0 ? r.cpu_per_sim_s() / base : 0.0) << "," << r.max_wheel_contacts << ","
+          << r.wheel_min << "," << r.wheel_max << "," << r.boxes_parked << "\n";
     }
   }
   std::printf("\n  wrote %s and %s\n", (dir / "skip.csv").c_str(),
@@ -426,7 +444,8 @@ int BenchSkipMain(int argc, const char* const* argv) {
     std::ostringstream o;
     o << "{\"cpu_per_sim_s\":{";
     for (size_t i = 0; i < results.size(); ++i) {
-      o << (i ? "," : "") << "\"" << results[i].name << "\":" << JsonNumber(results[i].cpu_per_sim_s());
+      o << (i ? "," : "") << "\"" << results[i].name
+        << "\":" << JsonNumber(results[i].cpu_per_sim_s());
     }
     o << "},\"cpu_per_sim_s_static_" << most << "\":" << JsonNumber(statics.cpu_per_sim_s())
       << ",\"video_decode_cpu_share\":{\"view_none\":" << JsonNumber(decode_none)

@@ -1,5 +1,3 @@
-#include "haptel/core/clock.hpp"
-#include "haptel/core/json.hpp"
 #include "stability_bench.hpp"
 
 #include <btBulletDynamicsCommon.h>
@@ -13,12 +11,14 @@
 #include <string>
 #include <vector>
 
-#include "haptel/testing/vec_math.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/physics.hpp"
 #include "haptel/core/args.hpp"
-#include "haptel/testing/box_grip.hpp"
+#include "haptel/core/clock.hpp"
+#include "haptel/core/json.hpp"
 #include "haptel/physics/world.hpp"
+#include "haptel/testing/box_grip.hpp"
+#include "haptel/testing/vec_math.hpp"
 #include "plot.hpp"
 #include "smoke.hpp"
 
@@ -26,10 +26,10 @@ namespace haptel::bench {
 
 namespace {
 
-using haptics::HandSample;
-using haptics::Side;
 using haptics::AxisAngle;
 using haptics::Distance;
+using haptics::HandSample;
+using haptics::Side;
 using physics::PhysicsWorld;
 using physics::Vec3d;
 
@@ -51,14 +51,16 @@ double Penetration(PhysicsWorld& world, const btCollisionObject* a, const btColl
     const btCollisionObject* y = m.getBody1();
     const bool match = (x == a && (b == nullptr || y == b)) || (y == a && (b == nullptr || x == b));
     if (!match) continue;
-    for (int k = 0; k < m.getNumContacts(); ++k) worst = std::max(worst, -m.getContactPoint(k).getDistance());
+    for (int k = 0; k < m.getNumContacts(); ++k)
+      worst = std::max(worst, -m.getContactPoint(k).getDistance());
   }
   return worst;
 }
 
 /// Force (N) that the bodies of `hand` exert on `target` in the latest step:
 /// the contact points' normal and friction impulses over the step.
-btVector3 ContactForce(PhysicsWorld& world, physics::ProxyHand& hand, const btCollisionObject* target) {
+btVector3 ContactForce(PhysicsWorld& world, physics::ProxyHand& hand,
+                       const btCollisionObject* target) {
   std::vector<const btCollisionObject*> bodies{&hand.palm_body()};
   for (int f = 0; f < physics::kFingers; ++f) {
     for (int p = 0; p < physics::kPhalanges; ++p) bodies.push_back(&hand.phalanx_body(f, p));
@@ -95,7 +97,8 @@ double MechanicalEnergy(PhysicsWorld& world) {
     const btVector3 v = body->getLinearVelocity();
     const btVector3 w = body->getAngularVelocity();
     const btVector3 iw = body->getInvInertiaTensorWorld().inverse() * w;
-    e += 0.5 * m * v.length2() + 0.5 * w.dot(iw) - m * body->getGravity().dot(body->getWorldTransform().getOrigin());
+    e += 0.5 * m * v.length2() + 0.5 * w.dot(iw) -
+         m * body->getGravity().dot(body->getWorldTransform().getOrigin());
   }
   return e;
 }
@@ -104,15 +107,15 @@ double MechanicalEnergy(PhysicsWorld& world) {
 struct StiffRun {
   double k = 0.0;
   bool stable = false;
-  std::string why;        ///< the failed criterion, empty when stable
-  double k_eff = 0.0;     ///< N/m measured under a 1 N push
-  double max_error = 0.0; ///< m
+  std::string why;         ///< the failed criterion, empty when stable
+  double k_eff = 0.0;      ///< N/m measured under a 1 N push
+  double max_error = 0.0;  ///< m
 };
 
 struct StiffRow {
   double step_s = 0.0;
-  double k_max = 0.0;  ///< largest stable K (0: none)
-  bool capped = false; ///< no divergence up to the sweep's cap
+  double k_max = 0.0;   ///< largest stable K (0: none)
+  bool capped = false;  ///< no divergence up to the sweep's cap
   double k_eff_at_max = 0.0;
   double k_passive = 0.0;
   double k_clamp = 0.0;     ///< Bullet: k ≤ m/(16h²)
@@ -192,7 +195,8 @@ std::string Regime(const PhysicsConfig& c, double h, double k) {
 const std::vector<double> kStiffSteps{0.25e-3, 0.5e-3, 1e-3, 2e-3, 4e-3};
 const std::vector<double> kStiffStepsSmoke{1e-3, 4e-3};
 
-std::vector<StiffRow> StiffnessSweep(const PhysicsConfig& config, const std::vector<double>& steps) {
+std::vector<StiffRow> StiffnessSweep(const PhysicsConfig& config,
+                                     const std::vector<double>& steps) {
   std::vector<StiffRow> rows;
   const double m = config.hand.palm_mass, b = config.hand.coupling_linear_damping;
   for (const double h : steps) {
@@ -251,8 +255,9 @@ MassRow RunMassRatio(const PhysicsConfig& config, double heavy) {
   physics::Pose pose;
   pose.position = {0.0, 0.0, 2.0 * half + radius};
   // A distal phalanx: its shape, mass and the hand's material (rolling friction included).
-  const physics::BodyId cap = world.AddRigidBody(std::move(shape), {}, r.light,
-                                                 {inertia.x(), inertia.y(), inertia.z()}, pose, config.hand.material);
+  const physics::BodyId cap =
+      world.AddRigidBody(std::move(shape), {}, r.light, {inertia.x(), inertia.y(), inertia.z()},
+                         pose, config.hand.material);
   btRigidBody& c = world.body(cap);
   btRigidBody& bx = world.body(box);
   c.setActivationState(DISABLE_DEACTIVATION);
@@ -268,18 +273,22 @@ MassRow RunMassRatio(const PhysicsConfig& config, double heavy) {
     (pressed ? r.pen_pressed : r.pen_rest) = std::max(pressed ? r.pen_pressed : r.pen_rest, pen);
     r.max_speed = std::max(r.max_speed, Norm(c.getLinearVelocity()));
     // Roll about the capsule's own axis, after the 0.5 s the first contact takes to settle.
-    const double spin = std::abs(c.getAngularVelocity().dot(c.getWorldTransform().getBasis().getColumn(0)));
-    if (t >= 0.5) (pressed ? r.spin_pressed : r.spin_rest) = std::max(pressed ? r.spin_pressed : r.spin_rest, spin);
+    const double spin =
+        std::abs(c.getAngularVelocity().dot(c.getWorldTransform().getBasis().getColumn(0)));
+    if (t >= 0.5)
+      (pressed ? r.spin_pressed : r.spin_rest) =
+          std::max(pressed ? r.spin_pressed : r.spin_rest, spin);
     const Vec3d p = world.BodyPose(cap).position;
     const Vec3d q = world.BodyPose(box).position;
-    if (!(std::abs(p[0] - q[0]) < half && std::abs(p[1] - q[1]) < half && p[2] > q[2] + half - 0.01 &&
-          p[2] < q[2] + half + 0.05)) {
+    if (!(std::abs(p[0] - q[0]) < half && std::abs(p[1] - q[1]) < half &&
+          p[2] > q[2] + half - 0.01 && p[2] < q[2] + half + 0.05)) {
       r.on_box = false;
     }
   }
   r.resets = Resets(world);
-  r.passed = r.resets == 0 && r.on_box && r.pen_rest < kMassPenLimit && r.pen_pressed < kMassPenLimit &&
-             r.spin_rest < kMassSpinLimit && r.spin_pressed < kMassSpinLimit;
+  r.passed = r.resets == 0 && r.on_box && r.pen_rest < kMassPenLimit &&
+             r.pen_pressed < kMassPenLimit && r.spin_rest < kMassSpinLimit &&
+             r.spin_pressed < kMassSpinLimit;
   return r;
 }
 
@@ -330,7 +339,8 @@ SquashResult RunSquash(const PhysicsConfig& config) {
     world.Step();
     if (t >= 4.0) {
       // Left hand pushes the box towards +y, right hand towards −y.
-      const double squeeze = std::min(ContactForce(world, left, bx).y(), -ContactForce(world, right, bx).y());
+      const double squeeze =
+          std::min(ContactForce(world, left, bx).y(), -ContactForce(world, right, bx).y());
       const double coupling = 0.5 * r.k *
                               ((left.TrackedWrist().position[1] - left.ProxyWrist().position[1]) +
                                (right.ProxyWrist().position[1] - right.TrackedWrist().position[1]));
@@ -350,14 +360,17 @@ SquashResult RunSquash(const PhysicsConfig& config) {
     const Vec3d p = world.BodyPose(box).position;
     const double yl = world.hand(Side::kLeft)->ProxyWrist().position[1];
     const double yr = world.hand(Side::kRight)->ProxyWrist().position[1];
-    r.box_drift = std::max(r.box_drift, std::sqrt(p[0] * p[0] + p[1] * p[1] + (p[2] - half) * (p[2] - half)));
-    if (!(p[1] > yl && p[1] < yr && std::abs(p[0]) < half && p[2] > 0.0 && p[2] < 0.3)) r.between = false;
+    r.box_drift =
+        std::max(r.box_drift, std::sqrt(p[0] * p[0] + p[1] * p[1] + (p[2] - half) * (p[2] - half)));
+    if (!(p[1] > yl && p[1] < yr && std::abs(p[0]) < half && p[2] > 0.0 && p[2] < 0.3))
+      r.between = false;
   }
   r.contact_mean /= static_cast<double>(std::max(held, 1L));
   r.coupling_mean /= static_cast<double>(std::max(held, 1L));
   r.resets = Resets(world);
-  const bool pressed = std::abs(r.contact_mean - r.force_asked) <= kSquashForceTolerance * r.force_asked &&
-                       r.contact_min >= (1.0 - kSquashForceTolerance) * r.force_asked;
+  const bool pressed =
+      std::abs(r.contact_mean - r.force_asked) <= kSquashForceTolerance * r.force_asked &&
+      r.contact_min >= (1.0 - kSquashForceTolerance) * r.force_asked;
   r.passed = r.resets == 0 && r.between && pressed && r.speed_to_50n < kSquashSpeedLimit &&
              r.pen_to_50n < kSquashPenLimit;
   return r;
@@ -370,7 +383,7 @@ struct GraspResult {
   double probe_wall_s = 0.0;  ///< wall time of the 5 s probe at 1 ms
   double wall_s = 0.0;
   int cycles = 0;
-  int lifted = 0;  ///< cycles where the box rose ≥ 5 cm
+  int lifted = 0;              ///< cycles where the box rose ≥ 5 cm
   std::vector<double> energy;  ///< J, at the start of each cycle
   double drift = 0.0, max_excursion = 0.0;
   double max_box_offset = 0.0;  ///< m, horizontal, from the start
@@ -419,14 +432,16 @@ GraspResult RunGrasp(const PhysicsConfig& base, double step_s, double seconds) {
     const Vec3d p = world.BodyPose(box).position;
     top = std::max(top, p[2]);
     r.max_box_offset = std::max(r.max_box_offset, std::hypot(p[0], p[1]));
-    if (!(std::isfinite(p[2]) && std::hypot(p[0], p[1]) < 0.5 && p[2] > 0.0 && p[2] < 0.5)) r.bounded = false;
+    if (!(std::isfinite(p[2]) && std::hypot(p[0], p[1]) < 0.5 && p[2] > 0.0 && p[2] < 0.5))
+      r.bounded = false;
   }
   if (top > half + 0.05) ++r.lifted;
   r.wall_s = NsToS(MonotonicNs()) - t0;
   r.resets = Resets(world);
   if (!r.energy.empty()) {
     r.drift = r.energy.back() - r.energy.front();
-    for (double e : r.energy) r.max_excursion = std::max(r.max_excursion, std::abs(e - r.energy.front()));
+    for (double e : r.energy)
+      r.max_excursion = std::max(r.max_excursion, std::abs(e - r.energy.front()));
   }
   // Bounded energy: the box's potential energy over 10 cm is 0.49 J.
   r.passed = r.resets == 0 && r.bounded && r.max_excursion < 0.1 && r.lifted == r.cycles;
@@ -445,46 +460,57 @@ int BenchStabilityMain(int argc, const char* const* argv) {
     smoke = args.Flag(kSmokeFlag);
     if (smoke) minutes = 2.0 * kCycleS / 60.0;  // two whole grasp/release cycles
     if (auto v = args.Number("minutes", 0.1, 60)) minutes = *v;
-    config = LoadPhysics(args.Value("physics").value_or(ShippedFile("config/physics.yaml").string()));
+    config =
+        LoadPhysics(args.Value("physics").value_or(ShippedFile("config/physics.yaml").string()));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "haptel bench stability: %s\n", e.what());
     return 2;
   }
   config.realtime_priority = 0;  // stepped on this thread, never started
   const std::vector<double>& stiff_steps = smoke ? kStiffStepsSmoke : kStiffSteps;
-  PrintSmokeNote("stability", smoke, "stiffness at %zu step sizes, grasp_release %.2g simulated min", stiff_steps.size(),
-                 minutes);
+  PrintSmokeNote("stability", smoke,
+                 "stiffness at %zu step sizes, grasp_release %.2g simulated min",
+                 stiff_steps.size(), minutes);
   const auto dir = OutputDir(smoke);
   const auto& hc = config.hand;
   std::printf("haptel bench stability: %s, configured step %.4g s, %d solver iterations\n\n",
-              config.file.empty() ? "defaults" : config.file.c_str(), config.step_s, config.solver_iterations);
+              config.file.empty() ? "defaults" : config.file.c_str(), config.step_s,
+              config.solver_iterations);
 
   // ---- stiffness
   const double t_stiff = NsToS(MonotonicNs());
   const std::vector<StiffRow> stiff = StiffnessSweep(config, stiff_steps);
   bool stiff_passed = true;  // the configured stiffness must be stable at the configured step
-  std::printf("[stiffness] palm (%.3g kg) coupled to a tracked wrist, damping b = %.3g N*s/m, K doubling from 1e2\n"
-              "  to %.3g; diverged = NaN reset, error > 10 cm or energy growing while held (%.1f s wall)\n",
-              hc.palm_mass, hc.coupling_linear_damping, kStiffCap, NsToS(MonotonicNs()) - t_stiff);
-  std::printf("  %8s %12s %12s %12s %12s %12s %-16s %s\n", "T ms", "K_max", "K_eff@max", "2b/T", "m/(16T^2)",
-              "K_implicit", "regime@K_max", "stopped by");
+  std::printf(
+      "[stiffness] palm (%.3g kg) coupled to a tracked wrist, damping b = %.3g N*s/m, K doubling "
+      "from 1e2\n"
+      "  to %.3g; diverged = NaN reset, error > 10 cm or energy growing while held (%.1f s wall)\n",
+      hc.palm_mass, hc.coupling_linear_damping, kStiffCap, NsToS(MonotonicNs()) - t_stiff);
+  std::printf("  %8s %12s %12s %12s %12s %12s %-16s %s\n", "T ms", "K_max", "K_eff@max", "2b/T",
+              "m/(16T^2)", "K_implicit", "regime@K_max", "stopped by");
   for (const StiffRow& row : stiff) {
-    std::printf("  %8.3g %12.4g %12.4g %12.4g %12.4g %12.4g %-16s %s\n", row.step_s * 1e3, row.k_max,
-                row.k_eff_at_max, row.k_passive, row.k_clamp, row.k_implicit, row.regime_at_max.c_str(),
+    std::printf("  %8.3g %12.4g %12.4g %12.4g %12.4g %12.4g %-16s %s\n", row.step_s * 1e3,
+                row.k_max, row.k_eff_at_max, row.k_passive, row.k_clamp, row.k_implicit,
+                row.regime_at_max.c_str(),
                 row.capped ? "(nothing: sweep cap reached)" : row.first_failure.c_str());
-    if (std::abs(row.step_s - config.step_s) < 1e-12 && row.k_max < hc.coupling_linear_stiffness) stiff_passed = false;
+    if (std::abs(row.step_s - config.step_s) < 1e-12 && row.k_max < hc.coupling_linear_stiffness)
+      stiff_passed = false;
   }
-  std::printf("  K_eff@max: 1 N / static offset under a 1 N push. Bullet's spring (explicit) is clamped to\n"
-              "  m/(16T^2) and the proxy hand switches to its implicit soft lock at K_implicit: between the\n"
-              "  two the asked K is NOT what acts (compare K_eff), and the divergence the passivity bound\n"
-              "  2b/T warns about is never reached by the Bullet formulation itself.\n");
+  std::printf(
+      "  K_eff@max: 1 N / static offset under a 1 N push. Bullet's spring (explicit) is clamped "
+      "to\n"
+      "  m/(16T^2) and the proxy hand switches to its implicit soft lock at K_implicit: between "
+      "the\n"
+      "  two the asked K is NOT what acts (compare K_eff), and the divergence the passivity bound\n"
+      "  2b/T warns about is never reached by the Bullet formulation itself.\n");
   {
     std::ofstream csv(dir / "stability_stiffness.csv");
     csv << "step_ms,k,stable,why,k_eff,max_error_m,regime\n";
     for (const StiffRow& row : stiff) {
       for (const StiffRun& run : row.runs) {
-        csv << row.step_s * 1e3 << "," << run.k << "," << (run.stable ? 1 : 0) << "," << run.why << ","
-            << run.k_eff << "," << run.max_error << "," << Regime(config, row.step_s, run.k) << "\n";
+        csv << row.step_s * 1e3 << "," << run.k << "," << (run.stable ? 1 : 0) << "," << run.why
+            << "," << run.k_eff << "," << run.max_error << "," << Regime(config, row.step_s, run.k)
+            << "\n";
       }
     }
   }
@@ -516,49 +542,64 @@ int BenchStabilityMain(int argc, const char* const* argv) {
   std::vector<MassRow> mass;
   for (const double heavy : {0.09, 0.9, 9.0, 10.0}) mass.push_back(RunMassRatio(config, heavy));
   bool mass_passed = true;
-  std::printf("\n[mass_ratio] 9 g capsule (a distal phalanx, the hand's material: rolling friction %.3g m) on a\n"
-              "  20 cm box: 2.5 s resting, 2.5 s pressed with 5 N (limits: penetration %.0f mm, spin %.1f rad/s: max |w|\n"
-              "  about its axis after 0.5 s)\n",
-              hc.material.rolling_friction, kMassPenLimit * 1e3, kMassSpinLimit);
-  std::printf("  %8s %10s %14s %14s %12s %13s %13s %7s %7s %s\n", "ratio", "heavy kg", "pen rest mm",
-              "pen pressed mm", "max v m/s", "spin rest", "spin pressed", "on box", "resets", "ok");
+  std::printf(
+      "\n[mass_ratio] 9 g capsule (a distal phalanx, the hand's material: rolling friction %.3g m) "
+      "on a\n"
+      "  20 cm box: 2.5 s resting, 2.5 s pressed with 5 N (limits: penetration %.0f mm, spin %.1f "
+      "rad/s: max |w|\n"
+      "  about its axis after 0.5 s)\n",
+      hc.material.rolling_friction, kMassPenLimit * 1e3, kMassSpinLimit);
+  std::printf("  %8s %10s %14s %14s %12s %13s %13s %7s %7s %s\n", "ratio", "heavy kg",
+              "pen rest mm", "pen pressed mm", "max v m/s", "spin rest", "spin pressed", "on box",
+              "resets", "ok");
   for (const MassRow& r : mass) {
-    std::printf("  1:%-6.0f %10.3g %14.3f %14.3f %12.3g %9.3g r/s %9.3g r/s %7s %7llu %s\n", r.heavy / r.light,
-                r.heavy, r.pen_rest * 1e3, r.pen_pressed * 1e3, r.max_speed, r.spin_rest, r.spin_pressed,
-                r.on_box ? "yes" : "no", static_cast<unsigned long long>(r.resets), r.passed ? "ok" : "FAIL");
+    std::printf("  1:%-6.0f %10.3g %14.3f %14.3f %12.3g %9.3g r/s %9.3g r/s %7s %7llu %s\n",
+                r.heavy / r.light, r.heavy, r.pen_rest * 1e3, r.pen_pressed * 1e3, r.max_speed,
+                r.spin_rest, r.spin_pressed, r.on_box ? "yes" : "no",
+                static_cast<unsigned long long>(r.resets), r.passed ? "ok" : "FAIL");
     mass_passed = mass_passed && r.passed;
   }
   {
     std::ofstream csv(dir / "stability_mass_ratio.csv");
-    csv << "light_kg,heavy_kg,ratio,pen_rest_m,pen_pressed_m,max_speed,spin_rest_rad_s,spin_pressed_rad_s,on_box,"
+    csv << "light_kg,heavy_kg,ratio,pen_rest_m,pen_pressed_m,max_speed,spin_rest_rad_s,spin_"
+           "pressed_rad_s,on_box,"
            "resets,passed\n";
     for (const MassRow& r : mass) {
-      csv << r.light << "," << r.heavy << "," << r.heavy / r.light << "," << r.pen_rest << "," << r.pen_pressed << ","
-          << r.max_speed << "," << r.spin_rest << "," << r.spin_pressed << "," << r.on_box << "," << r.resets << ","
-          << r.passed << "\n";
+      csv << r.light << "," << r.heavy << "," << r.heavy / r.light << "," << r.pen_rest << ","
+          << r.pen_pressed << "," << r.max_speed << "," << r.spin_rest << "," << r.spin_pressed
+          << "," << r.on_box << "," << r.resets << "," << r.passed << "\n";
     }
   }
 
   // ---- squash
   const SquashResult sq = RunSquash(config);
-  std::printf("\n[squash] two palms on a 0.5 kg box, coupling force K*depth (K = %.4g N/m) from -3 N to 50 N\n"
-              "  in 4 s, held 1 s (limits: speed < %.1f m/s, penetration < %.0f mm, box between the palms)\n",
-              sq.k, kSquashSpeedLimit, kSquashPenLimit * 1e3);
+  std::printf(
+      "\n[squash] two palms on a 0.5 kg box, coupling force K*depth (K = %.4g N/m) from -3 N to 50 "
+      "N\n"
+      "  in 4 s, held 1 s (limits: speed < %.1f m/s, penetration < %.0f mm, box between the "
+      "palms)\n",
+      sq.k, kSquashSpeedLimit, kSquashPenLimit * 1e3);
   std::printf("  %-12s %14s %16s\n", "force range", "max box m/s", "max pen mm");
   std::printf("  %-12s %14.4g %16.3f\n", "<= 7 N", sq.speed_to_7n, sq.pen_to_7n * 1e3);
   std::printf("  %-12s %14.4g %16.3f\n", "<= 50 N", sq.speed_to_50n, sq.pen_to_50n * 1e3);
-  std::printf("  squeeze reached over the last 1 s (asked %.0f N, tolerance %.0f%%): contact force per hand\n"
-              "  mean %.2f N, min %.2f N; coupling K*(tracked - proxy) mean %.2f N\n",
-              sq.force_asked, kSquashForceTolerance * 100.0, sq.contact_mean, sq.contact_min, sq.coupling_mean);
-  std::printf("  box moved at most %.2f mm, between the palms: %s, resets: %llu -> %s\n", sq.box_drift * 1e3,
-              sq.between ? "yes" : "no", static_cast<unsigned long long>(sq.resets), sq.passed ? "ok" : "FAIL");
+  std::printf(
+      "  squeeze reached over the last 1 s (asked %.0f N, tolerance %.0f%%): contact force per "
+      "hand\n"
+      "  mean %.2f N, min %.2f N; coupling K*(tracked - proxy) mean %.2f N\n",
+      sq.force_asked, kSquashForceTolerance * 100.0, sq.contact_mean, sq.contact_min,
+      sq.coupling_mean);
+  std::printf("  box moved at most %.2f mm, between the palms: %s, resets: %llu -> %s\n",
+              sq.box_drift * 1e3, sq.between ? "yes" : "no",
+              static_cast<unsigned long long>(sq.resets), sq.passed ? "ok" : "FAIL");
   {
     std::ofstream csv(dir / "stability_squash.csv");
-    csv << "k,speed_to_7n,pen_to_7n_m,speed_to_50n,pen_to_50n_m,box_drift_m,force_asked_n,contact_force_mean_n,"
+    csv << "k,speed_to_7n,pen_to_7n_m,speed_to_50n,pen_to_50n_m,box_drift_m,force_asked_n,contact_"
+           "force_mean_n,"
            "contact_force_min_n,coupling_force_mean_n,between,resets,passed\n";
-    csv << sq.k << "," << sq.speed_to_7n << "," << sq.pen_to_7n << "," << sq.speed_to_50n << "," << sq.pen_to_50n
-        << "," << sq.box_drift << "," << sq.force_asked << "," << sq.contact_mean << "," << sq.contact_min << ","
-        << sq.coupling_mean << "," << sq.between << "," << sq.resets << "," << sq.passed << "\n";
+    csv << sq.k << "," << sq.speed_to_7n << "," << sq.pen_to_7n << "," << sq.speed_to_50n << ","
+        << sq.pen_to_50n << "," << sq.box_drift << "," << sq.force_asked << "," << sq.contact_mean
+        << "," << sq.contact_min << "," << sq.coupling_mean << "," << sq.between << "," << sq.resets
+        << "," << sq.passed << "\n";
   }
 
   // ---- grasp and release
@@ -569,15 +610,20 @@ int BenchStabilityMain(int argc, const char* const* argv) {
   const double grasp_step = probe * seconds / 5.0 > 60.0 ? 2e-3 : 1e-3;
   GraspResult gr = RunGrasp(config, grasp_step, seconds);
   gr.probe_wall_s = probe;
-  std::printf("\n[grasp_release] %.1f simulated min, %.0f s cycles (close, lift 10 cm, open, drop, settle),\n"
-              "  step %.4g ms (5 s probe at 1 ms took %.2f s wall: %.0f s projected%s), %.1f s wall\n",
-              gr.minutes, kCycleS, gr.step_s * 1e3, probe, probe * seconds / 5.0,
-              grasp_step > 1e-3 ? " > 60 s, so 2 ms" : "", gr.wall_s);
-  std::printf("  cycles %d, lifted %d, energy at cycle start: first %.6f J, last %.6f J, drift %.3g J,\n"
-              "  max excursion %.3g J (limit 0.1 J), box wandered %.1f mm, bounded: %s, resets: %llu -> %s\n",
-              gr.cycles, gr.lifted, gr.energy.empty() ? 0.0 : gr.energy.front(),
-              gr.energy.empty() ? 0.0 : gr.energy.back(), gr.drift, gr.max_excursion, gr.max_box_offset * 1e3,
-              gr.bounded ? "yes" : "no", static_cast<unsigned long long>(gr.resets), gr.passed ? "ok" : "FAIL");
+  std::printf(
+      "\n[grasp_release] %.1f simulated min, %.0f s cycles (close, lift 10 cm, open, drop, "
+      "settle),\n"
+      "  step %.4g ms (5 s probe at 1 ms took %.2f s wall: %.0f s projected%s), %.1f s wall\n",
+      gr.minutes, kCycleS, gr.step_s * 1e3, probe, probe * seconds / 5.0,
+      grasp_step > 1e-3 ? " > 60 s, so 2 ms" : "", gr.wall_s);
+  std::printf(
+      "  cycles %d, lifted %d, energy at cycle start: first %.6f J, last %.6f J, drift %.3g J,\n"
+      "  max excursion %.3g J (limit 0.1 J), box wandered %.1f mm, bounded: %s, resets: %llu -> "
+      "%s\n",
+      gr.cycles, gr.lifted, gr.energy.empty() ? 0.0 : gr.energy.front(),
+      gr.energy.empty() ? 0.0 : gr.energy.back(), gr.drift, gr.max_excursion,
+      gr.max_box_offset * 1e3, gr.bounded ? "yes" : "no",
+      static_cast<unsigned long long>(gr.resets), gr.passed ? "ok" : "FAIL");
   {
     std::ofstream csv(dir / "stability_grasp_release.csv");
     csv << "cycle,energy_j\n";
@@ -585,45 +631,65 @@ int BenchStabilityMain(int argc, const char* const* argv) {
   }
 
   const bool passed = stiff_passed && mass_passed && sq.passed && gr.passed;
-  std::printf("\n  stiffness %s (configured K = %.4g N/m stable at the configured step), mass_ratio %s, squash %s,\n"
-              "  grasp_release %s -> %s\n  wrote %s/stability_{stiffness,mass_ratio,squash,grasp_release}.csv, "
-              "stability_stiffness.png\n",
-              stiff_passed ? "ok" : "FAIL", hc.coupling_linear_stiffness, mass_passed ? "ok" : "FAIL",
-              sq.passed ? "ok" : "FAIL", gr.passed ? "ok" : "FAIL", passed ? "PASSED" : "FAILED", dir.c_str());
+  std::printf(
+      "\n  stiffness %s (configured K = %.4g N/m stable at the configured step), mass_ratio %s, "
+      "squash %s,\n"
+      "  grasp_release %s -> %s\n  wrote "
+      "%s/stability_{stiffness,mass_ratio,squash,grasp_release}.csv, "
+      "stability_stiffness.png\n",
+      stiff_passed ? "ok" : "FAIL", hc.coupling_linear_stiffness, mass_passed ? "ok" : "FAIL",
+      sq.passed ? "ok" : "FAIL", gr.passed ? "ok" : "FAIL", passed ? "PASSED" : "FAILED",
+      dir.c_str());
 
   if (json) {
     std::ostringstream o;
     o << "{\"passed\":" << (passed ? "true" : "false") << ",\"tests\":{";
-    o << "\"stiffness\":{\"passed\":" << (stiff_passed ? "true" : "false") << ",\"damping\":"
-      << JsonNumber(hc.coupling_linear_damping) << ",\"sweep_cap\":" << JsonNumber(kStiffCap) << ",\"steps\":[";
+    o << "\"stiffness\":{\"passed\":" << (stiff_passed ? "true" : "false")
+      << ",\"damping\":" << JsonNumber(hc.coupling_linear_damping)
+      << ",\"sweep_cap\":" << JsonNumber(kStiffCap) << ",\"steps\":[";
     for (size_t i = 0; i < stiff.size(); ++i) {
       const StiffRow& row = stiff[i];
-      o << (i ? "," : "") << "{\"step_ms\":" << JsonNumber(row.step_s * 1e3) << ",\"k_max\":" << JsonNumber(row.k_max)
-        << ",\"capped\":" << (row.capped ? "true" : "false") << ",\"k_eff_at_max\":" << JsonNumber(row.k_eff_at_max)
-        << ",\"k_passive\":" << JsonNumber(row.k_passive) << ",\"k_bullet_clamp\":" << JsonNumber(row.k_clamp)
-        << ",\"k_implicit\":" << JsonNumber(row.k_implicit) << ",\"regime_at_max\":\"" << row.regime_at_max << "\"}";
+      o << (i ? "," : "") << "{\"step_ms\":" << JsonNumber(row.step_s * 1e3)
+        << ",\"k_max\":" << JsonNumber(row.k_max)
+        << ",\"capped\":" << (row.capped ? "true" : "false")
+        << ",\"k_eff_at_max\":" << JsonNumber(row.k_eff_at_max)
+        << ",\"k_passive\":" << JsonNumber(row.k_passive)
+        << ",\"k_bullet_clamp\":" << JsonNumber(row.k_clamp)
+        << ",\"k_implicit\":" << JsonNumber(row.k_implicit) << ",\"regime_at_max\":\""
+        << row.regime_at_max << "\"}";
     }
     o << "]},\"mass_ratio\":{\"passed\":" << (mass_passed ? "true" : "false") << ",\"ratios\":[";
     for (size_t i = 0; i < mass.size(); ++i) {
       const MassRow& r = mass[i];
-      o << (i ? "," : "") << "{\"heavy_kg\":" << JsonNumber(r.heavy) << ",\"ratio\":" << JsonNumber(r.heavy / r.light)
-        << ",\"pen_rest_mm\":" << JsonNumber(r.pen_rest * 1e3) << ",\"pen_pressed_mm\":" << JsonNumber(r.pen_pressed * 1e3)
-        << ",\"max_speed\":" << JsonNumber(r.max_speed) << ",\"spin_rest_rad_s\":" << JsonNumber(r.spin_rest)
-        << ",\"spin_pressed_rad_s\":" << JsonNumber(r.spin_pressed) << ",\"on_box\":" << (r.on_box ? "true" : "false")
-        << ",\"resets\":" << r.resets << ",\"passed\":" << (r.passed ? "true" : "false") << "}";
+      o << (i ? "," : "") << "{\"heavy_kg\":" << JsonNumber(r.heavy)
+        << ",\"ratio\":" << JsonNumber(r.heavy / r.light)
+        << ",\"pen_rest_mm\":" << JsonNumber(r.pen_rest * 1e3)
+        << ",\"pen_pressed_mm\":" << JsonNumber(r.pen_pressed * 1e3)
+        << ",\"max_speed\":" << JsonNumber(r.max_speed)
+        << ",\"spin_rest_rad_s\":" << JsonNumber(r.spin_rest)
+        << ",\"spin_pressed_rad_s\":" << JsonNumber(r.spin_pressed)
+        << ",\"on_box\":" << (r.on_box ? "true" : "false") << ",\"resets\":" << r.resets
+        << ",\"passed\":" << (r.passed ? "true" : "false") << "}";
     }
     o << "]},\"squash\":{\"passed\":" << (sq.passed ? "true" : "false")
-      << ",\"max_speed_7n\":" << JsonNumber(sq.speed_to_7n) << ",\"max_speed_50n\":" << JsonNumber(sq.speed_to_50n)
-      << ",\"pen_7n_mm\":" << JsonNumber(sq.pen_to_7n * 1e3) << ",\"pen_50n_mm\":" << JsonNumber(sq.pen_to_50n * 1e3)
-      << ",\"force_asked_n\":" << JsonNumber(sq.force_asked) << ",\"contact_force_mean_n\":" << JsonNumber(sq.contact_mean)
-      << ",\"contact_force_min_n\":" << JsonNumber(sq.contact_min) << ",\"coupling_force_mean_n\":"
-      << JsonNumber(sq.coupling_mean) << ",\"box_drift_mm\":" << JsonNumber(sq.box_drift * 1e3)
+      << ",\"max_speed_7n\":" << JsonNumber(sq.speed_to_7n)
+      << ",\"max_speed_50n\":" << JsonNumber(sq.speed_to_50n)
+      << ",\"pen_7n_mm\":" << JsonNumber(sq.pen_to_7n * 1e3)
+      << ",\"pen_50n_mm\":" << JsonNumber(sq.pen_to_50n * 1e3)
+      << ",\"force_asked_n\":" << JsonNumber(sq.force_asked)
+      << ",\"contact_force_mean_n\":" << JsonNumber(sq.contact_mean)
+      << ",\"contact_force_min_n\":" << JsonNumber(sq.contact_min)
+      << ",\"coupling_force_mean_n\":" << JsonNumber(sq.coupling_mean)
+      << ",\"box_drift_mm\":" << JsonNumber(sq.box_drift * 1e3)
       << ",\"between\":" << (sq.between ? "true" : "false") << ",\"resets\":" << sq.resets << "}";
-    o << ",\"grasp_release\":{\"passed\":" << (gr.passed ? "true" : "false") << ",\"minutes\":" << JsonNumber(gr.minutes)
-      << ",\"step_ms\":" << JsonNumber(gr.step_s * 1e3) << ",\"wall_s\":" << JsonNumber(gr.wall_s)
-      << ",\"cycles\":" << gr.cycles << ",\"lifted\":" << gr.lifted << ",\"energy_first_j\":"
-      << JsonNumber(gr.energy.empty() ? 0.0 : gr.energy.front()) << ",\"energy_drift_j\":" << JsonNumber(gr.drift)
-      << ",\"energy_max_excursion_j\":" << JsonNumber(gr.max_excursion) << ",\"resets\":" << gr.resets << "}}}";
+    o << ",\"grasp_release\":{\"passed\":" << (gr.passed ? "true" : "false")
+      << ",\"minutes\":" << JsonNumber(gr.minutes) << ",\"step_ms\":" << JsonNumber(gr.step_s * 1e3)
+      << ",\"wall_s\":" << JsonNumber(gr.wall_s) << ",\"cycles\":" << gr.cycles
+      << ",\"lifted\":" << gr.lifted
+      << ",\"energy_first_j\":" << JsonNumber(gr.energy.empty() ? 0.0 : gr.energy.front())
+      << ",\"energy_drift_j\":" << JsonNumber(gr.drift)
+      << ",\"energy_max_excursion_j\":" << JsonNumber(gr.max_excursion)
+      << ",\"resets\":" << gr.resets << "}}}";
     std::printf("%s\n", JsonLine(o.str(), smoke).c_str());
   }
   return passed ? 0 : 1;

@@ -1,10 +1,11 @@
 #include "video_bench.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <unistd.h>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -42,7 +43,8 @@ struct CodecPoint {
 
 /// Encodes and decodes every frame at one setting; the quality figures are
 /// means over the frames, the CPU figures per frame.
-CodecPoint Measure(CameraCodec codec, int setting, const CameraConfig& camera, const std::vector<cv::Mat>& frames) {
+CodecPoint Measure(CameraCodec codec, int setting, const CameraConfig& camera,
+                   const std::vector<cv::Mat>& frames) {
   CodecPoint p;
   p.codec = codec;
   p.setting = setting;
@@ -70,15 +72,16 @@ CodecPoint Measure(CameraCodec codec, int setting, const CameraConfig& camera, c
     }
     total_bytes += bytes.size();
     const double d0 = ThreadCpuSeconds();
-    const video::DecodeResult result =
-        decoder->DecodeFrame({bytes.data(), bytes.size(), ++seq, encoder->last_was_key_frame()}, picture);
+    const video::DecodeResult result = decoder->DecodeFrame(
+        {bytes.data(), bytes.size(), ++seq, encoder->last_was_key_frame()}, picture);
     decode_s += ThreadCpuSeconds() - d0;
     if (result != video::DecodeResult::kPicture) {
       p.ok = false;
       continue;
     }
     ssim += video::Ssim(frame, picture);
-    psnr += std::min(100.0, video::PsnrDb(frame, picture));  // identical pictures: capped, not infinite
+    psnr +=
+        std::min(100.0, video::PsnrDb(frame, picture));  // identical pictures: capped, not infinite
   }
   const double n = static_cast<double>(frames.size());
   p.bitrate_kbps = static_cast<double>(total_bytes) * 8.0 / (n / camera.rate_hz) / 1000.0;
@@ -90,7 +93,8 @@ CodecPoint Measure(CameraCodec codec, int setting, const CameraConfig& camera, c
 }
 
 std::string SettingText(const CodecPoint& p) {
-  return p.codec == CameraCodec::kJpeg ? "quality " + std::to_string(p.setting) : std::to_string(p.setting) + " kbit/s";
+  return p.codec == CameraCodec::kJpeg ? "quality " + std::to_string(p.setting)
+                                       : std::to_string(p.setting) + " kbit/s";
 }
 
 }  // namespace
@@ -103,18 +107,22 @@ int BenchVideoMain(int argc, const char* const* argv) {
   ScheduleOptions schedule;
   std::vector<CameraCodec> schedule_codecs;
   try {
-    const Args args(argc, argv, {"vehicle", "track", "phase-s", "schedule", "domain"}, {"json", kSmokeFlag});
+    const Args args(argc, argv, {"vehicle", "track", "phase-s", "schedule", "domain"},
+                    {"json", kSmokeFlag});
     json = args.Flag("json");
     smoke = args.Flag(kSmokeFlag);
-    vehicle = LoadVehicle(args.Value("vehicle").value_or(ShippedFile("config/vehicles/sim-robot.yaml").string()));
-    track_file = args.Value("track").value_or(ShippedFile("config/tracks/grand-prix.yaml").string());
+    vehicle = LoadVehicle(
+        args.Value("vehicle").value_or(ShippedFile("config/vehicles/sim-robot.yaml").string()));
+    track_file =
+        args.Value("track").value_or(ShippedFile("config/tracks/grand-prix.yaml").string());
     track = std::make_unique<Track>(LoadTrack(track_file));
     schedule.phase_s = args.Number("phase-s", 1.0, 600.0).value_or(smoke ? 3.0 : 25.0);
     // A domain of the bench's own, away from a default installation's 0 and the link bench's.
     schedule.domain = args.Int("domain", 0, 232).value_or(150 + static_cast<int>(getpid() % 30));
     // The schedule for the vehicle file's codec, then (full run) the other beside it.
     const std::string which = args.Value("schedule").value_or(smoke ? "default" : "both");
-    const CameraCodec other = vehicle.camera.codec == CameraCodec::kJpeg ? CameraCodec::kH264 : CameraCodec::kJpeg;
+    const CameraCodec other =
+        vehicle.camera.codec == CameraCodec::kJpeg ? CameraCodec::kH264 : CameraCodec::kJpeg;
     if (which == "default") {
       schedule_codecs = {vehicle.camera.codec};
     } else if (which == "both") {
@@ -124,7 +132,8 @@ int BenchVideoMain(int argc, const char* const* argv) {
     } else if (which == "off") {
       schedule_codecs = {};
     } else {
-      throw UsageError("option --schedule: expected default, both, jpeg, h264 or off, got '" + which + "'");
+      throw UsageError("option --schedule: expected default, both, jpeg, h264 or off, got '" +
+                       which + "'");
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "haptel bench video: %s\n", e.what());
@@ -137,20 +146,25 @@ int BenchVideoMain(int argc, const char* const* argv) {
                  clips * frames_per_clip);
   const auto dir = OutputDir(smoke);
   const std::vector<cv::Mat> frames = testing::LapFrames(*track, camera, clips, frames_per_clip);
-  std::printf("haptel bench video: %zu frames of %dx%d at %.0f fps (%d clips along %s), vehicle %s\n\n",
-              frames.size(), camera.width, camera.height, camera.rate_hz, clips, track->config().name.c_str(),
-              vehicle.file.c_str());
+  std::printf(
+      "haptel bench video: %zu frames of %dx%d at %.0f fps (%d clips along %s), vehicle %s\n\n",
+      frames.size(), camera.width, camera.height, camera.rate_hz, clips,
+      track->config().name.c_str(), vehicle.file.c_str());
 
-  const std::vector<int> qualities = smoke ? std::vector<int>{20, 80} : std::vector<int>{20, 30, 40, 50, 60, 70, 80, 90, 95};
+  const std::vector<int> qualities =
+      smoke ? std::vector<int>{20, 80} : std::vector<int>{20, 30, 40, 50, 60, 70, 80, 90, 95};
   const std::vector<int> rates =
-      smoke ? std::vector<int>{250, 2000} : std::vector<int>{250, 375, 500, 750, 1000, 1500, 2000, 3000, 4000, 6000, 8000};
+      smoke ? std::vector<int>{250, 2000}
+            : std::vector<int>{250, 375, 500, 750, 1000, 1500, 2000, 3000, 4000, 6000, 8000};
   std::vector<CodecPoint> points;
   for (int q : qualities) points.push_back(Measure(CameraCodec::kJpeg, q, camera, frames));
   for (int r : rates) points.push_back(Measure(CameraCodec::kH264, r, camera, frames));
-  const int default_setting = camera.codec == CameraCodec::kJpeg ? camera.jpeg_quality : camera.bitrate_kbps;
+  const int default_setting =
+      camera.codec == CameraCodec::kJpeg ? camera.jpeg_quality : camera.bitrate_kbps;
   bool default_found = false;
   for (CodecPoint& p : points) {
-    if (p.codec == camera.codec && p.setting == default_setting) p.is_default = default_found = true;
+    if (p.codec == camera.codec && p.setting == default_setting)
+      p.is_default = default_found = true;
   }
   if (!default_found) {
     points.push_back(Measure(camera.codec, default_setting, camera, frames));
@@ -165,18 +179,21 @@ int BenchVideoMain(int argc, const char* const* argv) {
     }
   }
 
-  std::printf("  %-6s %-14s %12s %8s %9s %10s %10s %6s\n", "codec", "setting", "kbit/s", "SSIM", "PSNR dB",
-              "encode ms", "decode ms", "front");
+  std::printf("  %-6s %-14s %12s %8s %9s %10s %10s %6s\n", "codec", "setting", "kbit/s", "SSIM",
+              "PSNR dB", "encode ms", "decode ms", "front");
   std::ofstream csv(dir / "video_codecs.csv");
   csv << "codec,setting,bitrate_kbps,ssim,psnr_db,encode_ms,decode_ms,pareto,default,ok\n";
-  Series jpeg{"JPEG (quality 20..95)", {}, {}}, h264{"H.264 (0.25..8 Mbit/s)", {}, {}}, front{"Pareto front", {}, {}};
+  Series jpeg{"JPEG (quality 20..95)", {}, {}}, h264{"H.264 (0.25..8 Mbit/s)", {}, {}},
+      front{"Pareto front", {}, {}};
   const CodecPoint* shipped = nullptr;
   for (const CodecPoint& p : points) {
     std::printf("  %-6s %-14s %12.0f %8.4f %9.2f %10.2f %10.2f %6s%s%s\n", CameraCodecName(p.codec),
                 SettingText(p).c_str(), p.bitrate_kbps, p.ssim, p.psnr_db, p.encode_ms, p.decode_ms,
-                p.pareto ? "yes" : "", p.is_default ? "  <- shipped default" : "", p.ok ? "" : "  (frames failed)");
-    csv << CameraCodecName(p.codec) << ',' << p.setting << ',' << p.bitrate_kbps << ',' << p.ssim << ',' << p.psnr_db
-        << ',' << p.encode_ms << ',' << p.decode_ms << ',' << p.pareto << ',' << p.is_default << ',' << p.ok << '\n';
+                p.pareto ? "yes" : "", p.is_default ? "  <- shipped default" : "",
+                p.ok ? "" : "  (frames failed)");
+    csv << CameraCodecName(p.codec) << ',' << p.setting << ',' << p.bitrate_kbps << ',' << p.ssim
+        << ',' << p.psnr_db << ',' << p.encode_ms << ',' << p.decode_ms << ',' << p.pareto << ','
+        << p.is_default << ',' << p.ok << '\n';
     Series& s = p.codec == CameraCodec::kJpeg ? jpeg : h264;
     s.x.push_back(std::log10(p.bitrate_kbps));
     s.y.push_back(p.ssim);
@@ -186,21 +203,25 @@ int BenchVideoMain(int argc, const char* const* argv) {
   for (const CodecPoint& p : points) {
     if (p.pareto) on_front.push_back(&p);
   }
-  std::sort(on_front.begin(), on_front.end(),
-            [](const CodecPoint* a, const CodecPoint* b) { return a->bitrate_kbps < b->bitrate_kbps; });
+  std::sort(on_front.begin(), on_front.end(), [](const CodecPoint* a, const CodecPoint* b) {
+    return a->bitrate_kbps < b->bitrate_kbps;
+  });
   for (const CodecPoint* p : on_front) {
     front.x.push_back(std::log10(p->bitrate_kbps));
     front.y.push_back(p->ssim);
   }
   // The series are sorted by bitrate for the lines (JPEG's by quality already is).
   PlotLines(dir / "video_codecs.png", {jpeg, h264, front},
-            {"video codecs: bitrate against SSIM (synthetic camera, grand prix)", "log10 bitrate, kbit/s",
-             "mean SSIM", false});
-  const bool all_ok = std::all_of(points.begin(), points.end(), [](const CodecPoint& p) { return p.ok; });
-  std::printf("\n  shipped default: %s at %s: %s the Pareto front; every frame coded: %s\n  wrote %s/video_codecs.csv, "
-              "video_codecs.png\n",
-              CameraCodecName(camera.codec), SettingText(*shipped).c_str(), shipped->pareto ? "on" : "NOT on",
-              all_ok ? "yes" : "NO", dir.c_str());
+            {"video codecs: bitrate against SSIM (synthetic camera, grand prix)",
+             "log10 bitrate, kbit/s", "mean SSIM", false});
+  const bool all_ok =
+      std::all_of(points.begin(), points.end(), [](const CodecPoint& p) { return p.ok; });
+  std::printf(
+      "\n  shipped default: %s at %s: %s the Pareto front; every frame coded: %s\n  wrote "
+      "%s/video_codecs.csv, "
+      "video_codecs.png\n",
+      CameraCodecName(camera.codec), SettingText(*shipped).c_str(),
+      shipped->pareto ? "on" : "NOT on", all_ok ? "yes" : "NO", dir.c_str());
 
   // Part 2: the capacity schedule through a real vehicle process.
   schedule.out_dir = dir;
@@ -210,27 +231,31 @@ int BenchVideoMain(int argc, const char* const* argv) {
   for (const CameraCodec codec : schedule_codecs) {
     std::printf("\n  capacity schedule, %s: the link's rate steps", CameraCodecName(codec));
     for (const double c : schedule.capacities_kbps) std::printf(" %.2f", c / 1000.0);
-    std::printf(" Mbit/s, %.0f s each (haptel-vehicle playing the frames above, looped)\n", schedule.phase_s);
+    std::printf(" Mbit/s, %.0f s each (haptel-vehicle playing the frames above, looped)\n",
+                schedule.phase_s);
     std::fflush(stdout);
     schedules.push_back(RunCapacitySchedule(vehicle, codec, frames, schedule));
     const ScheduleResult& r = schedules.back();
     if (!r.ok) {
-      std::fprintf(stderr, "haptel bench video: capacity schedule (%s): %s\n", CameraCodecName(codec),
-                   r.error.c_str());
+      std::fprintf(stderr, "haptel bench video: capacity schedule (%s): %s\n",
+                   CameraCodecName(codec), r.error.c_str());
       schedules_ok = false;
       continue;
     }
-    std::printf("  %9s %9s %9s %7s %6s %9s %9s %6s %7s %10s %8s\n", "capacity", "video", "target", "SSIM", "fps",
-                "lat p50", "lat p95", "lost", "stale s", "cmd p99 ms", "adapt s");
+    std::printf("  %9s %9s %9s %7s %6s %9s %9s %6s %7s %10s %8s\n", "capacity", "video", "target",
+                "SSIM", "fps", "lat p50", "lat p95", "lost", "stale s", "cmd p99 ms", "adapt s");
     for (const SchedulePhase& p : r.phases) {
-      std::printf("  %9.0f %9.0f %9.0f %7.4f %6.1f %9.1f %9.1f %6llu %7.2f %10.2f %8s\n", p.capacity_kbps,
-                  p.video_kbps, p.target_kbps, p.ssim, p.fps, p.latency_ms_p50, p.latency_ms_p95,
-                  static_cast<unsigned long long>(p.frames_lost), p.stale_s, p.command_rtt_ms_p99,
+      std::printf("  %9.0f %9.0f %9.0f %7.4f %6.1f %9.1f %9.1f %6llu %7.2f %10.2f %8s\n",
+                  p.capacity_kbps, p.video_kbps, p.target_kbps, p.ssim, p.fps, p.latency_ms_p50,
+                  p.latency_ms_p95, static_cast<unsigned long long>(p.frames_lost), p.stale_s,
+                  p.command_rtt_ms_p99,
                   p.step_down ? std::to_string(p.adapt_s).substr(0, 5).c_str() : "");
     }
-    std::printf("  (kbit/s; latency capture to decoded, ms) adapt_s %.2f (target <= 2); wrote %s/video_schedule_%s.csv, "
-                "_trace.csv, .png\n",
-                r.adapt_s, dir.c_str(), CameraCodecName(codec));
+    std::printf(
+        "  (kbit/s; latency capture to decoded, ms) adapt_s %.2f (target <= 2); wrote "
+        "%s/video_schedule_%s.csv, "
+        "_trace.csv, .png\n",
+        r.adapt_s, dir.c_str(), CameraCodecName(codec));
     std::fflush(stdout);
   }
 
@@ -239,12 +264,15 @@ int BenchVideoMain(int argc, const char* const* argv) {
     o << "{\"codecs\":[";
     for (size_t i = 0; i < points.size(); ++i) {
       const CodecPoint& p = points[i];
-      o << (i ? "," : "") << "{\"codec\":\"" << CameraCodecName(p.codec) << "\",\"setting\":" << p.setting
-        << ",\"bitrate_kbps\":" << JsonNumber(p.bitrate_kbps) << ",\"ssim\":" << JsonNumber(p.ssim)
-        << ",\"psnr_db\":" << JsonNumber(p.psnr_db) << ",\"encode_ms\":" << JsonNumber(p.encode_ms)
-        << ",\"decode_ms\":" << JsonNumber(p.decode_ms) << ",\"pareto\":" << (p.pareto ? "true" : "false") << "}";
+      o << (i ? "," : "") << "{\"codec\":\"" << CameraCodecName(p.codec)
+        << "\",\"setting\":" << p.setting << ",\"bitrate_kbps\":" << JsonNumber(p.bitrate_kbps)
+        << ",\"ssim\":" << JsonNumber(p.ssim) << ",\"psnr_db\":" << JsonNumber(p.psnr_db)
+        << ",\"encode_ms\":" << JsonNumber(p.encode_ms)
+        << ",\"decode_ms\":" << JsonNumber(p.decode_ms)
+        << ",\"pareto\":" << (p.pareto ? "true" : "false") << "}";
     }
-    o << "],\"default\":{\"codec\":\"" << CameraCodecName(camera.codec) << "\",\"setting\":" << default_setting
+    o << "],\"default\":{\"codec\":\"" << CameraCodecName(camera.codec)
+      << "\",\"setting\":" << default_setting
       << ",\"on_pareto_front\":" << (shipped->pareto ? "true" : "false") << "},\"schedule\":[";
     // The rows of every codec run, each naming its codec; adapt_s is the
     // shipped default's (the first run), adapt_s_by_codec each one's.
@@ -252,13 +280,15 @@ int BenchVideoMain(int argc, const char* const* argv) {
     for (const ScheduleResult& r : schedules) {
       for (const SchedulePhase& p : r.phases) {
         o << (first ? "" : ",") << "{\"codec\":\"" << CameraCodecName(r.codec)
-          << "\",\"capacity_kbps\":" << JsonNumber(p.capacity_kbps) << ",\"video_kbps\":" << JsonNumber(p.video_kbps)
+          << "\",\"capacity_kbps\":" << JsonNumber(p.capacity_kbps)
+          << ",\"video_kbps\":" << JsonNumber(p.video_kbps)
           << ",\"target_kbps\":" << JsonNumber(p.target_kbps)
           << ",\"ssim\":" << (std::isfinite(p.ssim) ? JsonNumber(p.ssim) : std::string("null"))
-          << ",\"fps\":" << JsonNumber(p.fps) << ",\"latency_ms_p50\":" << JsonNumber(p.latency_ms_p50)
-          << ",\"latency_ms_p95\":" << JsonNumber(p.latency_ms_p95) << ",\"frames_lost\":" << p.frames_lost
-          << ",\"stale_s\":" << JsonNumber(p.stale_s) << ",\"command_rtt_ms_p99\":" << JsonNumber(p.command_rtt_ms_p99)
-          << "}";
+          << ",\"fps\":" << JsonNumber(p.fps)
+          << ",\"latency_ms_p50\":" << JsonNumber(p.latency_ms_p50)
+          << ",\"latency_ms_p95\":" << JsonNumber(p.latency_ms_p95)
+          << ",\"frames_lost\":" << p.frames_lost << ",\"stale_s\":" << JsonNumber(p.stale_s)
+          << ",\"command_rtt_ms_p99\":" << JsonNumber(p.command_rtt_ms_p99) << "}";
         first = false;
       }
     }

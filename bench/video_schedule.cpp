@@ -8,13 +8,12 @@
 #include <fstream>
 #include <memory>
 #include <mutex>
-#include <sstream>
-#include <stdexcept>
-#include <thread>
-
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
 
 #include "haptel/config/link.hpp"
 #include "haptel/core/child_process.hpp"
@@ -33,17 +32,19 @@ constexpr double kSsimPerSecond = 3.0;      ///< pictures compared with their so
 
 /// Writes `frames` losslessly (FFV1) for the vehicle's file camera; throws
 /// std::runtime_error naming the file when it cannot.
-void WriteSource(const std::filesystem::path& file, const std::vector<cv::Mat>& frames, double rate_hz) {
-  cv::VideoWriter writer(file.string(), cv::CAP_FFMPEG, cv::VideoWriter::fourcc('F', 'F', 'V', '1'), rate_hz,
-                         frames.front().size());
-  if (!writer.isOpened()) throw std::runtime_error("cannot write the source video " + file.string() + " (FFV1)");
+void WriteSource(const std::filesystem::path& file, const std::vector<cv::Mat>& frames,
+                 double rate_hz) {
+  cv::VideoWriter writer(file.string(), cv::CAP_FFMPEG, cv::VideoWriter::fourcc('F', 'F', 'V', '1'),
+                         rate_hz, frames.front().size());
+  if (!writer.isOpened())
+    throw std::runtime_error("cannot write the source video " + file.string() + " (FFV1)");
   for (const cv::Mat& f : frames) writer.write(f);
 }
 
 /// `vehicle`'s file with the camera playing `source` (looping) through
 /// `codec`, and the world as an absolute path: the copy lives elsewhere.
-void WriteVehicleFile(const VehicleConfig& vehicle, CameraCodec codec, const std::filesystem::path& source,
-                      const std::filesystem::path& out) {
+void WriteVehicleFile(const VehicleConfig& vehicle, CameraCodec codec,
+                      const std::filesystem::path& source, const std::filesystem::path& out) {
   std::ifstream in(vehicle.file);
   if (!in) throw std::runtime_error("cannot read the vehicle file " + vehicle.file.string());
   std::ostringstream o;
@@ -57,7 +58,8 @@ void WriteVehicleFile(const VehicleConfig& vehicle, CameraCodec codec, const std
     if (top_level && line.rfind("world:", 0) == 0 && !vehicle.world.empty()) {
       o << "world: " << std::filesystem::absolute(vehicle.world).string() << "\n";
     } else if (in_camera && key != std::string::npos && line.compare(key, 7, "source:") == 0) {
-      o << indent << "source: file\n" << indent << "file: " << std::filesystem::absolute(source).string() << "\n"
+      o << indent << "source: file\n"
+        << indent << "file: " << std::filesystem::absolute(source).string() << "\n"
         << indent << "loop: true\n";
       source_done = true;
     } else if (in_camera && key != std::string::npos &&
@@ -71,7 +73,8 @@ void WriteVehicleFile(const VehicleConfig& vehicle, CameraCodec codec, const std
     }
   }
   if (!source_done || !codec_done) {
-    throw std::runtime_error(vehicle.file.string() + ": expected camera.source and camera.codec lines to replace");
+    throw std::runtime_error(vehicle.file.string() +
+                             ": expected camera.source and camera.codec lines to replace");
   }
   std::ofstream file(out);
   file << o.str();
@@ -80,7 +83,8 @@ void WriteVehicleFile(const VehicleConfig& vehicle, CameraCodec codec, const std
 
 double Percentile(std::vector<double> v, double q) {
   if (v.empty()) return std::nan("");
-  const size_t k = std::min(v.size() - 1, static_cast<size_t>(std::floor(q * static_cast<double>(v.size()))));
+  const size_t k =
+      std::min(v.size() - 1, static_cast<size_t>(std::floor(q * static_cast<double>(v.size()))));
   std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
   return v[k];
 }
@@ -149,7 +153,8 @@ class SsimWorker {
     const auto n = static_cast<int64_t>(sources_.size());
     int64_t from = 0, to = n - 1;
     if (anchor_ns_ != 0) {
-      const auto expected = anchor_index_ + std::llround(NsToS(capture_wall_ns - anchor_ns_) * rate_hz_);
+      const auto expected =
+          anchor_index_ + std::llround(NsToS(capture_wall_ns - anchor_ns_) * rate_hz_);
       from = expected - 3;
       to = expected + 3;
     }
@@ -176,7 +181,8 @@ class SsimWorker {
       cv::Mat picture = *job.picture;
       const cv::Mat& source = sources_[0];
       // A half-resolution rung (JPEG's ladder) is shown scaled up, as the view does.
-      if (picture.size() != source.size()) cv::resize(picture, picture, source.size(), 0, 0, cv::INTER_LINEAR);
+      if (picture.size() != source.size())
+        cv::resize(picture, picture, source.size(), 0, 0, cv::INTER_LINEAR);
       const double ssim = video::Ssim(sources_[Match(picture, job.capture_wall_ns)], picture);
       lock.lock();
       sum_[static_cast<size_t>(job.phase)] += ssim;
@@ -231,7 +237,8 @@ double AdaptSeconds(const std::vector<Shown>& shown, double step_s, double phase
 
 }  // namespace
 
-ScheduleResult RunCapacitySchedule(const VehicleConfig& vehicle, CameraCodec codec, const std::vector<cv::Mat>& frames,
+ScheduleResult RunCapacitySchedule(const VehicleConfig& vehicle, CameraCodec codec,
+                                   const std::vector<cv::Mat>& frames,
                                    const ScheduleOptions& options) {
   ScheduleResult result;
   result.codec = codec;
@@ -263,11 +270,14 @@ ScheduleResult RunCapacitySchedule(const VehicleConfig& vehicle, CameraCodec cod
     if (line == nullptr) throw std::logic_error("the operator's side has no fault line");
     // Up: a state and a first picture.
     const int64_t up_until = MonotonicNs() + SToNs(30.0);
-    while (MonotonicNs() < up_until && (link.last_received_ns() == 0 || link.video().Latest().id == 0)) {
+    while (MonotonicNs() < up_until &&
+           (link.last_received_ns() == 0 || link.video().Latest().id == 0)) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
-      if (!link.ProcessAlive()) throw std::runtime_error("haptel-vehicle ended: " + link.ExitDescription());
+      if (!link.ProcessAlive())
+        throw std::runtime_error("haptel-vehicle ended: " + link.ExitDescription());
     }
-    if (link.video().Latest().id == 0) throw std::runtime_error("no video from the vehicle within 30 s");
+    if (link.video().Latest().id == 0)
+      throw std::runtime_error("no video from the vehicle within 30 s");
 
     SsimWorker ssim(frames, rate_hz, n_phases);
     const int64_t start_ns = MonotonicNs();
@@ -292,7 +302,7 @@ ScheduleResult RunCapacitySchedule(const VehicleConfig& vehicle, CameraCodec cod
         const int64_t now = MonotonicNs();
         if (now >= next_command) {
           next_command += static_cast<int64_t>(1e9 / kCommandRateHz);
-          if (next_command < now) next_command = now;  // behind: no burst to catch up
+          if (next_command < now) next_command = now;      // behind: no burst to catch up
           const double v = 0.2 * std::sin(++tick * 0.02);  // a gentle back-and-forth near the start
           link.Send(TreadCommand{v, v});
           link.channel<link::RobotMessages>().inbox().Drain();
@@ -301,10 +311,12 @@ ScheduleResult RunCapacitySchedule(const VehicleConfig& vehicle, CameraCodec cod
         if (latest.id != last_id && !latest.stale && latest.decoded_wall_ns != 0) {
           last_id = latest.id;
           ++pictures;
-          const double latency_ms = static_cast<double>(latest.decoded_wall_ns - latest.capture_wall_ns) * 1e-6;
+          const double latency_ms =
+              static_cast<double>(latest.decoded_wall_ns - latest.capture_wall_ns) * 1e-6;
           latencies.push_back(latency_ms);
           shown.push_back({NsToS(now - start_ns), latency_ms, static_cast<int>(p)});
-          if (now >= next_ssim && ssim.Offer(latest.image, latest.capture_wall_ns, static_cast<int>(p))) {
+          if (now >= next_ssim &&
+              ssim.Offer(latest.image, latest.capture_wall_ns, static_cast<int>(p))) {
             next_ssim = now + static_cast<int64_t>(1e9 / kSsimPerSecond);
           }
         }
@@ -317,7 +329,9 @@ ScheduleResult RunCapacitySchedule(const VehicleConfig& vehicle, CameraCodec cod
           }
           const double span = NsToS(now - byte_samples.front().first);
           const double kbps =
-              span > 0 ? static_cast<double>(s.bytes - byte_samples.front().second) * 8.0 / span / 1000.0 : 0.0;
+              span > 0
+                  ? static_cast<double>(s.bytes - byte_samples.front().second) * 8.0 / span / 1000.0
+                  : 0.0;
           trace.push_back({NsToS(now - start_ns), phase.capacity_kbps, kbps, s.target_kbps,
                            WindowP95(shown, NsToS(now - start_ns))});
         }
@@ -333,19 +347,22 @@ ScheduleResult RunCapacitySchedule(const VehicleConfig& vehicle, CameraCodec cod
       phase.stale_s = after.stale_s - before.stale_s;
       phase.command_rtt_ms_p99 = link.Rtt().Percentile(0.99) * 1e-3;
       result.phases.push_back(phase);
-      if (!link.ProcessAlive()) throw std::runtime_error("haptel-vehicle ended: " + link.ExitDescription());
+      if (!link.ProcessAlive())
+        throw std::runtime_error("haptel-vehicle ended: " + link.ExitDescription());
     }
     for (size_t p = 0; p < n_phases; ++p) {
       const auto [mean, count] = ssim.Phase(static_cast<int>(p));
       result.phases[p].ssim = mean;
       result.phases[p].ssim_samples = count;
       if (result.phases[p].step_down) {
-        result.phases[p].adapt_s = AdaptSeconds(shown, options.phase_s * static_cast<double>(p), options.phase_s);
+        result.phases[p].adapt_s =
+            AdaptSeconds(shown, options.phase_s * static_cast<double>(p), options.phase_s);
         result.adapt_s = std::max(result.adapt_s, result.phases[p].adapt_s);
       }
     }
     link.Stop();
-    result.ok = std::all_of(result.phases.begin(), result.phases.end(), [](const SchedulePhase& p) { return p.fps > 0; });
+    result.ok = std::all_of(result.phases.begin(), result.phases.end(),
+                            [](const SchedulePhase& p) { return p.fps > 0; });
     if (!result.ok) result.error = "a phase without video";
   } catch (const std::exception& e) {
     result.error = e.what();
@@ -353,12 +370,14 @@ ScheduleResult RunCapacitySchedule(const VehicleConfig& vehicle, CameraCodec cod
   }
 
   std::ofstream csv(options.out_dir / (name + ".csv"));
-  csv << "codec,capacity_kbps,video_kbps,target_kbps,ssim,ssim_samples,fps,latency_ms_p50,latency_ms_p95,"
+  csv << "codec,capacity_kbps,video_kbps,target_kbps,ssim,ssim_samples,fps,latency_ms_p50,latency_"
+         "ms_p95,"
          "frames_lost,stale_s,command_rtt_ms_p99,adapt_s\n";
   for (const SchedulePhase& p : result.phases) {
-    csv << CameraCodecName(codec) << ',' << p.capacity_kbps << ',' << p.video_kbps << ',' << p.target_kbps << ','
-        << p.ssim << ',' << p.ssim_samples << ',' << p.fps << ',' << p.latency_ms_p50 << ',' << p.latency_ms_p95
-        << ',' << p.frames_lost << ',' << p.stale_s << ',' << p.command_rtt_ms_p99 << ',' << p.adapt_s << '\n';
+    csv << CameraCodecName(codec) << ',' << p.capacity_kbps << ',' << p.video_kbps << ','
+        << p.target_kbps << ',' << p.ssim << ',' << p.ssim_samples << ',' << p.fps << ','
+        << p.latency_ms_p50 << ',' << p.latency_ms_p95 << ',' << p.frames_lost << ',' << p.stale_s
+        << ',' << p.command_rtt_ms_p99 << ',' << p.adapt_s << '\n';
   }
   std::ofstream trace_csv(options.out_dir / (name + "_trace.csv"));
   trace_csv << "t_s,capacity_kbps,video_kbps,target_kbps,latency_ms_p95_1s\n";
@@ -366,12 +385,13 @@ ScheduleResult RunCapacitySchedule(const VehicleConfig& vehicle, CameraCodec cod
       target{"estimator's target", {}, {}}, latency{"video latency p95 (1 s window)", {}, {}},
       limit{"150 ms", {}, {}};
   for (const TracePoint& t : trace) {
-    trace_csv << t.t_s << ',' << t.capacity_kbps << ',' << t.video_kbps << ',' << t.target_kbps << ','
-              << t.latency_p95_ms << '\n';
+    trace_csv << t.t_s << ',' << t.capacity_kbps << ',' << t.video_kbps << ',' << t.target_kbps
+              << ',' << t.latency_p95_ms << '\n';
     capacity.x.push_back(t.t_s), capacity.y.push_back(t.capacity_kbps);
     bitrate.x.push_back(t.t_s), bitrate.y.push_back(t.video_kbps);
     target.x.push_back(t.t_s), target.y.push_back(std::min(t.target_kbps, 3000.0));
-    if (std::isfinite(t.latency_p95_ms)) latency.x.push_back(t.t_s), latency.y.push_back(t.latency_p95_ms);
+    if (std::isfinite(t.latency_p95_ms))
+      latency.x.push_back(t.t_s), latency.y.push_back(t.latency_p95_ms);
     limit.x.push_back(t.t_s), limit.y.push_back(kLatencyLimit_ms);
   }
   // Two plots, one above the other, in one picture.
@@ -381,7 +401,8 @@ ScheduleResult RunCapacitySchedule(const VehicleConfig& vehicle, CameraCodec cod
   PlotLines(top, {capacity, target, bitrate},
             {"capacity schedule (" + codec_name + "): link rate and video bitrate", "time, s",
              "kbit/s (target shown up to 3000)", false, 900, 360});
-  PlotLines(bottom, {latency, limit}, {"capture to decoded latency", "time, s", "ms", false, 900, 300});
+  PlotLines(bottom, {latency, limit},
+            {"capture to decoded latency", "time, s", "ms", false, 900, 300});
   cv::Mat stacked;
   cv::vconcat(cv::imread(top.string()), cv::imread(bottom.string()), stacked);
   cv::imwrite((options.out_dir / (name + ".png")).string(), stacked);

@@ -24,10 +24,9 @@
 /// 150 ms (0 when it never went over; the phase's length when it never came
 /// back).
 #include <filesystem>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "haptel/config/vehicle.hpp"
 
@@ -71,6 +70,7 @@ struct ScheduleOptions {
 /// video_schedule_<codec>.png (capacity, target and bitrate against time;
 /// latency under it) into options.out_dir.
 ScheduleResult RunCapacitySchedule(const VehicleConfig& vehicle, CameraCodec codec,
-                                   const std::vector<cv::Mat>& frames, const ScheduleOptions& options);
+                                   const std::vector<cv::Mat>& frames,
+                                   const ScheduleOptions& options);
 
 }  // namespace haptel::bench

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "bare_loop.hpp"
 #include "haptel/config/cockpit.hpp"
 #include "haptel/config/device.hpp"
 #include "haptel/config/error.hpp"
@@ -29,7 +30,6 @@
 #include "haptel/mediator/session_view.hpp"
 #include "haptel/mediator/vehicle_link.hpp"
 #include "haptel/mediator/video_receiver.hpp"
-#include "bare_loop.hpp"
 #include "plot.hpp"
 #include "smoke.hpp"
 
@@ -103,7 +103,8 @@ void CopyServo(Phase& p, const LoopStats& stats, const Histogram& h) {
 Phase Bare(const Parts& parts, double seconds) {
   Phase p;
   p.name = "bare";
-  const BareLoop bare = MeasureBareLoop(parts.device.servo.rate_hz, parts.device.servo.realtime_priority, seconds);
+  const BareLoop bare =
+      MeasureBareLoop(parts.device.servo.rate_hz, parts.device.servo.realtime_priority, seconds);
   p.servo = bare.stats;
   p.servo_histogram = bare.histogram;
   p.servo_bin_us = bare.bin_us;

@@ -8,14 +8,14 @@
 #include <iostream>
 #include <string>
 
+#include "haptel/app/in_process_robot.hpp"
+#include "haptel/app/link_commands.hpp"
+#include "haptel/app/scene_command.hpp"
 #include "haptel/calibration/calibration_procedure.hpp"
 #include "haptel/core/child_process.hpp"
 #include "haptel/core/cli.hpp"
 #include "haptel/core/log.hpp"
 #include "haptel/mediator/run_command.hpp"
-#include "haptel/app/in_process_robot.hpp"
-#include "haptel/app/scene_command.hpp"
-#include "haptel/app/link_commands.hpp"
 #include "haptel/study/study_command.hpp"
 
 namespace {
@@ -26,8 +26,10 @@ constexpr const char* kUsage =
     "       haptel scene FILE [--json]   load a haptic scene, print its objects, mass and bounds\n"
     "       haptel study run FILE        run an A/B study; `haptel study report` reports on it\n"
     "       haptel security init DIR     DDS Security: a CA and signed identities for the link\n"
-    "       haptel discovery-server [--listen ADDR:PORT]  a Fast DDS discovery server for the link\n"
-    "       haptel bench NAME [options]  benchmarks: servo, gravity, skip, physics, stability, view,\n"
+    "       haptel discovery-server [--listen ADDR:PORT]  a Fast DDS discovery server for the "
+    "link\n"
+    "       haptel bench NAME [options]  benchmarks: servo, gravity, skip, physics, stability, "
+    "view,\n"
     "                                    blimp, link, fuzz, fleet; --smoke for a short run of any\n"
     "                                    (haptel bench --help lists them)\n"
     "\n"
@@ -61,7 +63,9 @@ int main(int argc, char** argv) {
   if (command == "security") return app::SecurityCommand(argc - 1, argv + 1);
   if (command == "discovery-server") return app::DiscoveryServerCommand(argc - 1, argv + 1);
   return cli::Main({"haptel", kUsage}, argc, argv, [&]() -> int {
-    if (command.empty()) throw UsageError("missing command (run, calibrate, scene, study, security, discovery-server, bench)");
+    if (command.empty())
+      throw UsageError(
+          "missing command (run, calibrate, scene, study, security, discovery-server, bench)");
     throw UsageError("unknown command '" + command +
                      "' (run, calibrate, scene, study, security, discovery-server, bench)");
   });

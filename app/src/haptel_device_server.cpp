@@ -23,9 +23,9 @@
 #include <optional>
 #include <string>
 
-#include "haptel/config/paths.hpp"
 #include "haptel/config/device.hpp"
 #include "haptel/config/error.hpp"
+#include "haptel/config/paths.hpp"
 #include "haptel/config/run.hpp"
 #include "haptel/core/args.hpp"
 #include "haptel/core/cli.hpp"
@@ -89,9 +89,11 @@ Options ParseOptions(int argc, char** argv) {
   if (const auto delay = args.Value("delay-ms")) {
     char* end = nullptr;
     o.delay_ms = std::strtod(delay->c_str(), &end);
-    if (end == delay->c_str() || *end != '\0' || !(o.delay_ms >= 0.0 && o.delay_ms <= udp::kMaxDelay_s * 1e3)) {
+    if (end == delay->c_str() || *end != '\0' ||
+        !(o.delay_ms >= 0.0 && o.delay_ms <= udp::kMaxDelay_s * 1e3)) {
       throw UsageError("--delay-ms: expected a number of milliseconds from 0 to " +
-                       std::to_string(static_cast<int>(udp::kMaxDelay_s * 1e3)) + ", got '" + *delay + "'");
+                       std::to_string(static_cast<int>(udp::kMaxDelay_s * 1e3)) + ", got '" +
+                       *delay + "'");
     }
   }
   o.device = args.Value("device").value_or(ShippedFile("config/devices/sim.yaml").string());
@@ -154,8 +156,8 @@ std::string Summary(const udp::ServerCounters& c) {
   }
   if (total == 0) s += " none";
   if (c.malformed[static_cast<std::size_t>(udp::DecodeStatus::kBadVersion)] != 0) {
-    s += " (bad_version: a peer speaking a protocol version other than " + std::to_string(udp::kMinVersion) +
-         "-" + std::to_string(udp::kVersion) + ")";
+    s += " (bad_version: a peer speaking a protocol version other than " +
+         std::to_string(udp::kMinVersion) + "-" + std::to_string(udp::kVersion) + ")";
   }
   s += "; requests by version: v1 " + std::to_string(c.requests_by_version[1]) + ", v2 " +
        std::to_string(c.requests_by_version[2]);
@@ -197,7 +199,8 @@ int main(int argc, char** argv) {
     server_options.passivity = config.servo.passivity;
     server_options.limits.max_damping = config.servo.passivity_max_damping;
     server_options.limits.min_speed = config.servo.passivity_min_speed;
-    udp::ArmServer server(sim, options.side, socket.get(), server_options, udp::UnitsOf(sim, options.side));
+    udp::ArmServer server(sim, options.side, socket.get(), server_options,
+                          udp::UnitsOf(sim, options.side));
     std::printf("%s: serving %s arm of '%s' on %s\n", kProgram,
                 options.side == Side::kLeft ? "left" : "right", config.name.c_str(), bound.c_str());
     std::fflush(stdout);

@@ -1,8 +1,8 @@
 // haptel-vehicle: one vehicle node. Subscribes to its command topic, drives
 // its adapter, publishes state and camera video; stops the motors when
 // commands stop coming (watchdog) and on SIGTERM/SIGINT.
-#include <cmath>
 #include <atomic>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -12,21 +12,25 @@
 #include "haptel/config/paths.hpp"
 #include "haptel/core/args.hpp"
 #include "haptel/core/cli.hpp"
-#include "haptel/core/stop_signals.hpp"
 #include "haptel/core/log.hpp"
+#include "haptel/core/stop_signals.hpp"
 #include "haptel/link/fault_transport.hpp"
 #include "haptel/link/security.hpp"
 #include "haptel/vehicles/vehicle_kinds.hpp"
 
 namespace {
 constexpr const char* kUsage =
-    "usage: haptel-vehicle [--config FILE] [--track FILE] [--name NAME] [--domain N] [--can IFACE]\n"
-    "                      [--serial-port PATH] [--link-fault SPEC] [--link-profile NAME] [--security DIR]\n"
-    "                      [--dds-interfaces ADDR,...] [--dds-peers ADDR,...] [--discovery-server ADDR:PORT]\n"
+    "usage: haptel-vehicle [--config FILE] [--track FILE] [--name NAME] [--domain N] [--can "
+    "IFACE]\n"
+    "                      [--serial-port PATH] [--link-fault SPEC] [--link-profile NAME] "
+    "[--security DIR]\n"
+    "                      [--dds-interfaces ADDR,...] [--dds-peers ADDR,...] [--discovery-server "
+    "ADDR:PORT]\n"
     "  --config FILE  vehicle configuration (default config/vehicles/sim-robot.yaml)\n"
     "  --can IFACE    SocketCAN interface of a can-robot (overrides can.interface)\n"
     "  --serial-port PATH  the servo controller of a servo-blimp (overrides servo.port)\n"
-    "  --track FILE   track the simulator drives on, or a blimp's course (overrides the file's 'world')\n"
+    "  --track FILE   track the simulator drives on, or a blimp's course (overrides the file's "
+    "'world')\n"
     "  --name NAME    vehicle name, part of its DDS topic names\n"
     "  --domain N     DDS domain id (overrides link.domain_id)\n"
     "  --link-fault SPEC  inject faults into what this process receives, e.g.\n"
@@ -37,30 +41,38 @@ constexpr const char* kUsage =
     "                 satellite) or a profile file; --link-fault's keys override the profile's\n"
     "  --security DIR DDS Security with the folder `haptel security init` made (overrides\n"
     "                 link.security); this vehicle is identity vehicle-NAME\n"
-    "  --dds-interfaces LIST  the network interfaces (IPv4) DDS may use (overrides link.interfaces)\n"
-    "  --dds-peers LIST       where the operator's host is: unicast discovery (overrides link.peers)\n"
-    "  --discovery-server ADDR:PORT  meet through a Fast DDS discovery server (haptel discovery-server)\n";
+    "  --dds-interfaces LIST  the network interfaces (IPv4) DDS may use (overrides "
+    "link.interfaces)\n"
+    "  --dds-peers LIST       where the operator's host is: unicast discovery (overrides "
+    "link.peers)\n"
+    "  --discovery-server ADDR:PORT  meet through a Fast DDS discovery server (haptel "
+    "discovery-server)\n";
 }  // namespace
 
 namespace {
 
 /// What a node counted, for its last line.
 std::string Summary(const haptel::vehicles::NodeCounters& c) {
-  return std::to_string(c.commands_accepted) + " commands, " + std::to_string(c.commands_malformed) + " malformed, " +
-         std::to_string(c.commands_stale) + " stale, " +
-         (c.commands_refused > 0 ? std::to_string(c.commands_refused) + " refused (another operator's), " : "") +
-         std::to_string(c.frames_published) + " frames (" + std::to_string(c.key_frames_sent) + " key, " +
-         std::to_string(c.key_frame_requests) + " key frame requests" +
-         (c.frames_skipped > 0 ? ", " + std::to_string(c.frames_skipped) + " skipped to fit the link" : "") +
-         (c.frames_passed_through > 0
-              ? ", " + std::to_string(c.frames_passed_through) + " passed through as the camera made them"
+  return std::to_string(c.commands_accepted) + " commands, " +
+         std::to_string(c.commands_malformed) + " malformed, " + std::to_string(c.commands_stale) +
+         " stale, " +
+         (c.commands_refused > 0
+              ? std::to_string(c.commands_refused) + " refused (another operator's), "
               : "") +
-         (c.target_kbps > 0 ? ", last asked for " + std::to_string(c.target_kbps) + " kbit/s" : "") +
-         (c.video_feedback_refused > 0
-              ? ", " + std::to_string(c.video_feedback_refused) + " feedback refused (another operator's)"
+         std::to_string(c.frames_published) + " frames (" + std::to_string(c.key_frames_sent) +
+         " key, " + std::to_string(c.key_frame_requests) + " key frame requests" +
+         (c.frames_skipped > 0
+              ? ", " + std::to_string(c.frames_skipped) + " skipped to fit the link"
               : "") +
-         "), " +
-         std::to_string(c.grabs_failed) + " camera grabs failed" +
+         (c.frames_passed_through > 0 ? ", " + std::to_string(c.frames_passed_through) +
+                                            " passed through as the camera made them"
+                                      : "") +
+         (c.target_kbps > 0 ? ", last asked for " + std::to_string(c.target_kbps) + " kbit/s"
+                            : "") +
+         (c.video_feedback_refused > 0 ? ", " + std::to_string(c.video_feedback_refused) +
+                                             " feedback refused (another operator's)"
+                                       : "") +
+         "), " + std::to_string(c.grabs_failed) + " camera grabs failed" +
          (c.camera_stalls > 0 ? " (" + std::to_string(c.camera_stalls) + " stalls)" : "") +
          (c.camera_ended ? ", camera file ended" : "") +
          (c.link_queue_dropped > 0 ? ", " + std::to_string(c.link_queue_dropped) + " packets (" +
@@ -72,7 +84,8 @@ std::string Summary(const haptel::vehicles::NodeCounters& c) {
 /// Runs a started node until a signal or until it loses its hardware
 /// (AdapterFailure), saying each watchdog trip; then stops it. Returns the
 /// exit code: 0, or 3 with the loss said.
-int RunNode(haptel::vehicles::Node& node, const haptel::VehicleConfig& config, const std::atomic<bool>& stop) {
+int RunNode(haptel::vehicles::Node& node, const haptel::VehicleConfig& config,
+            const std::atomic<bool>& stop) {
   using namespace haptel;
   uint64_t trips = 0;
   std::string failure;
@@ -86,18 +99,21 @@ int RunNode(haptel::vehicles::Node& node, const haptel::VehicleConfig& config, c
       // carry the fault, which ends the operator's run as vehicle lost.
       if (const std::string fault = node.Fault(); !fault.empty()) {
         fault_said = true;
-        log::Error("the vehicle stopped itself: " + fault + "; " + node.MadeSafe() + " until it is restarted");
+        log::Error("the vehicle stopped itself: " + fault + "; " + node.MadeSafe() +
+                   " until it is restarted");
       }
     }
     const auto c = node.Counters();
     if (c.watchdog_trips > trips) {
       trips = c.watchdog_trips;
-      log::Warn("watchdog: no command for " + std::to_string(config.watchdog_timeout_s) + " s, " + node.MadeSafe());
+      log::Warn("watchdog: no command for " + std::to_string(config.watchdog_timeout_s) + " s, " +
+                node.MadeSafe());
     }
   }
   node.Stop();
   if (!failure.empty()) {
-    log::Error("the vehicle's hardware is lost: " + failure + "; stopped (the hardware's own time-out makes it "
+    log::Error("the vehicle's hardware is lost: " + failure +
+               "; stopped (the hardware's own time-out makes it "
                "safe: a servo controller's serial timeout, a motor controller's watchdog)");
     return cli::kExitLost;
   }
@@ -116,10 +132,13 @@ int main(int argc, char** argv) {
     VehicleConfig config;
     vehicles::OpenedVehicle vehicle;
     cli::ReadInput([&] {
-      const Args args(argc, argv, {"config", "track", "name", "domain", "can", "serial-port", "link-fault", "link-profile", "security",
-                                       "dds-interfaces", "dds-peers", "discovery-server"},
-                      {});
-      if (!args.positional().empty()) throw UsageError("unexpected argument '" + args.positional()[0] + "'");
+      const Args args(
+          argc, argv,
+          {"config", "track", "name", "domain", "can", "serial-port", "link-fault", "link-profile",
+           "security", "dds-interfaces", "dds-peers", "discovery-server"},
+          {});
+      if (!args.positional().empty())
+        throw UsageError("unexpected argument '" + args.positional()[0] + "'");
       const std::filesystem::path file =
           args.Value("config").value_or(ShippedFile("config/vehicles/sim-robot.yaml").string());
       config = LoadVehicle(file);
@@ -130,11 +149,15 @@ int main(int argc, char** argv) {
         config.name = *name;
       }
       if (auto domain = args.Int("domain", 0, 232)) config.link.domain_id = *domain;
-      config.link.fault = LinkFaultFromOptions(args.Value("link-profile"), args.Value("link-fault"), config.link.fault);
+      config.link.fault = LinkFaultFromOptions(args.Value("link-profile"), args.Value("link-fault"),
+                                               config.link.fault);
       if (auto security = args.Value("security")) config.link.security = *security;
-      if (auto list = args.Value("dds-interfaces")) config.link.interfaces = ParseAddressOption("dds-interfaces", *list);
-      if (auto list = args.Value("dds-peers")) config.link.peers = ParseAddressOption("dds-peers", *list);
-      if (auto server = args.Value("discovery-server")) config.link.discovery_server = ServerOption(*server);
+      if (auto list = args.Value("dds-interfaces"))
+        config.link.interfaces = ParseAddressOption("dds-interfaces", *list);
+      if (auto list = args.Value("dds-peers"))
+        config.link.peers = ParseAddressOption("dds-peers", *list);
+      if (auto server = args.Value("discovery-server"))
+        config.link.discovery_server = ServerOption(*server);
       if (!config.link.security.empty()) {
         config.link.security_identity = link::VehicleIdentity(config.name);
         link::CheckSecurity(config.link.security, config.link.security_identity);
@@ -142,16 +165,16 @@ int main(int argc, char** argv) {
       if (auto world = args.Value("track")) config.world = *world;
       if (auto can = args.Value("can")) {
         if (!config.Kind().Uses(kCanSection)) {
-          throw UsageError("option --can: the vehicle '" + file.string() + "' is of kind " + config.kind +
-                           ", not on a CAN bus");
+          throw UsageError("option --can: the vehicle '" + file.string() + "' is of kind " +
+                           config.kind + ", not on a CAN bus");
         }
         config.can.interface = *can;
         config.ValidateOrThrow();
       }
       if (auto port = args.Value("serial-port")) {
         if (!config.Kind().Uses(kServoSection)) {
-          throw UsageError("option --serial-port: the vehicle '" + file.string() + "' is of kind " + config.kind +
-                           ", not behind a servo controller");
+          throw UsageError("option --serial-port: the vehicle '" + file.string() + "' is of kind " +
+                           config.kind + ", not behind a servo controller");
         }
         config.servo.port = *port;
         config.ValidateOrThrow();

@@ -3,9 +3,9 @@
 #include <atomic>
 #include <chrono>
 #include <cstdio>
-#include <thread>
 #include <filesystem>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "haptel/config/vehicle.hpp"
@@ -28,7 +28,8 @@ constexpr const char* kUsage =
     "  commands, a vehicle publishes only its own state and video), valid for N days\n"
     "  (default 365). Then: haptel run --security DIR, haptel-vehicle --security DIR.\n"
     "  --console NAME,...: also the study console's HTTPS certificate (console.pem, console.key)\n"
-    "  for those host names or addresses, signed by the CA: haptel study run --bind ADDR --tls DIR.\n"
+    "  for those host names or addresses, signed by the CA: haptel study run --bind ADDR --tls "
+    "DIR.\n"
     "  `security console` adds that certificate to a folder made before.\n";
 
 }  // namespace
@@ -44,9 +45,12 @@ int SecurityCommand(int argc, const char* const* argv) {
       const Args args(argc, argv, {"vehicles", "days", "console"}, {});
       const auto& words = args.positional();
       if (words.empty() || (words[0] != "init" && words[0] != "console")) {
-        throw UsageError("expected `haptel security init DIR` or `haptel security console DIR --console NAME,...`");
+        throw UsageError(
+            "expected `haptel security init DIR` or `haptel security console DIR --console "
+            "NAME,...`");
       }
-      if (words.size() != 2) throw UsageError("expected one folder: `haptel security " + words[0] + " DIR`");
+      if (words.size() != 2)
+        throw UsageError("expected one folder: `haptel security " + words[0] + " DIR`");
       console_only = words[0] == "console";
       dir = words[1];
       if (auto list = args.Value("console")) {
@@ -59,7 +63,8 @@ int SecurityCommand(int argc, const char* const* argv) {
       }
       days = args.Int("days", 1, 3650).value_or(days);
       if (console_only) {
-        if (console_names.empty()) throw UsageError("option --console: expected the console's names (NAME,...)");
+        if (console_names.empty())
+          throw UsageError("option --console: expected the console's names (NAME,...)");
         return 0;
       }
       if (auto list = args.Value("vehicles")) {
@@ -67,12 +72,14 @@ int SecurityCommand(int argc, const char* const* argv) {
         for (const std::string& name : SplitList(*list)) {
           std::string problem = VehicleNameProblem(name);
           if (problem.empty()) problem = link::VehicleIdentityProblem(name);
-          if (!problem.empty()) throw UsageError("option --vehicles: '" + name + "': expected " + problem);
+          if (!problem.empty())
+            throw UsageError("option --vehicles: '" + name + "': expected " + problem);
           vehicles.push_back(name);
         }
       }
       // A folder with identities, or anything else in it: refused before anything is made (exit 2).
-      if (const std::string problem = link::InitFolderProblem(dir); !problem.empty()) throw UsageError(problem);
+      if (const std::string problem = link::InitFolderProblem(dir); !problem.empty())
+        throw UsageError(problem);
       return 0;
     });
     if (console_only) {
@@ -84,39 +91,42 @@ int SecurityCommand(int argc, const char* const* argv) {
     link::InitSecurity(dir, vehicles, days, console_names);
     std::string names = link::OperatorIdentity();
     for (const auto& v : vehicles) names += ", " + link::VehicleIdentity(v);
-    if (!console_names.empty()) names += "; the console's certificate for " + JoinList(console_names);
-    std::printf("wrote %s: CA, governance, identities %s (valid %d days)\n", dir.c_str(), names.c_str(), days);
+    if (!console_names.empty())
+      names += "; the console's certificate for " + JoinList(console_names);
+    std::printf("wrote %s: CA, governance, identities %s (valid %d days)\n", dir.c_str(),
+                names.c_str(), days);
     return 0;
   });
 }
 
 int DiscoveryServerCommand(int argc, const char* const* argv) {
   const std::atomic<bool>& stop = InstallStopSignals();
-  return cli::Main({"haptel discovery-server",
-                    "usage: haptel discovery-server [--listen ADDR:PORT]   (default 127.0.0.1:11811)\n"
-                    "  serves Fast DDS discovery; then --discovery-server ADDR:PORT on haptel run and\n"
-                    "  haptel-vehicle. Ends on SIGINT or SIGTERM.\n"},
-                   argc, argv, [&]() -> int {
-                     std::string listen = "127.0.0.1:11811";
-                     cli::ReadInput([&] {
-                       const Args args(argc, argv, {"listen"}, {});
-                       if (auto l = args.Value("listen")) {
-                         try {
-                           ParseServerAddress(*l);
-                         } catch (const std::invalid_argument& e) {
-                           throw UsageError(std::string("option --listen: expected ") + e.what());
-                         }
-                         listen = *l;
-                       }
-                       return 0;
-                     });
-                     const auto [address, port] = ParseServerAddress(listen);
-                     link::DiscoveryServer server(address, port);
-                     std::printf("haptel discovery-server: serving on %s\n", listen.c_str());
-                     std::fflush(stdout);
-                     while (!stop.load()) std::this_thread::sleep_for(std::chrono::milliseconds(50));
-                     return 0;
-                   });
+  return cli::Main(
+      {"haptel discovery-server",
+       "usage: haptel discovery-server [--listen ADDR:PORT]   (default 127.0.0.1:11811)\n"
+       "  serves Fast DDS discovery; then --discovery-server ADDR:PORT on haptel run and\n"
+       "  haptel-vehicle. Ends on SIGINT or SIGTERM.\n"},
+      argc, argv, [&]() -> int {
+        std::string listen = "127.0.0.1:11811";
+        cli::ReadInput([&] {
+          const Args args(argc, argv, {"listen"}, {});
+          if (auto l = args.Value("listen")) {
+            try {
+              ParseServerAddress(*l);
+            } catch (const std::invalid_argument& e) {
+              throw UsageError(std::string("option --listen: expected ") + e.what());
+            }
+            listen = *l;
+          }
+          return 0;
+        });
+        const auto [address, port] = ParseServerAddress(listen);
+        link::DiscoveryServer server(address, port);
+        std::printf("haptel discovery-server: serving on %s\n", listen.c_str());
+        std::fflush(stdout);
+        while (!stop.load()) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+        return 0;
+      });
 }
 
 }  // namespace haptel::app

@@ -9,11 +9,11 @@
 #include <vector>
 
 #include "haptel/config/error.hpp"
-#include "haptel/geometry/mass_properties.hpp"
 #include "haptel/config/run.hpp"
 #include "haptel/config/scene.hpp"
 #include "haptel/core/args.hpp"
 #include "haptel/core/json.hpp"
+#include "haptel/geometry/mass_properties.hpp"
 
 namespace haptel::app {
 namespace {

@@ -22,7 +22,8 @@ const char* AirshipIntegratorName(AirshipIntegrator integrator) {
 }
 
 bool ParseAirshipIntegrator(const std::string& name, AirshipIntegrator* integrator) {
-  for (AirshipIntegrator i : {AirshipIntegrator::kSemiImplicitEuler, AirshipIntegrator::kMidpoint, AirshipIntegrator::kRk4}) {
+  for (AirshipIntegrator i : {AirshipIntegrator::kSemiImplicitEuler, AirshipIntegrator::kMidpoint,
+                              AirshipIntegrator::kRk4}) {
     if (name == AirshipIntegratorName(i)) {
       *integrator = i;
       return true;
@@ -44,7 +45,8 @@ void AirshipConfig::ValidateOrThrow() const {
   check::Number("volume", volume, 1e-3, 1e6);
   check::Number("air_density", air_density, 0.1, 2.0);
   check::Number("helium_density", helium_density, 0.0, 1.0);
-  if (helium_density >= air_density) check::Fail("helium_density", "less than air_density (a lifting gas)", {"air_density"});
+  if (helium_density >= air_density)
+    check::Fail("helium_density", "less than air_density (a lifting gas)", {"air_density"});
   check::Number("structure_mass", structure_mass, 0.01, 1e5);
   check::Number("payload_mass", payload_mass, 0.0, 1e5);
   check::Number("cg_below_cb", cg_below_cb, 0.0, 50.0);
@@ -83,7 +85,8 @@ AirshipConfig ReadAirship(YamlMap& section) {
   c.payload_mass = section.Number("payload_mass", c.payload_mass);
   c.cg_below_cb = section.Number("cg_below_cb", c.cg_below_cb);
   c.axial_drag_coefficient = section.Number("axial_drag_coefficient", c.axial_drag_coefficient);
-  c.crossflow_drag_coefficient = section.Number("crossflow_drag_coefficient", c.crossflow_drag_coefficient);
+  c.crossflow_drag_coefficient =
+      section.Number("crossflow_drag_coefficient", c.crossflow_drag_coefficient);
   c.fin_area = section.Number("fin_area", c.fin_area);
   c.fin_lift_slope = section.Number("fin_lift_slope", c.fin_lift_slope);
   c.fin_arm = section.Number("fin_arm", c.fin_arm);
@@ -104,7 +107,8 @@ AirshipConfig ReadAirship(YamlMap& section) {
   c.wind.mean = wind.Vec3("mean", c.wind.mean);
   c.wind.gust_rms = wind.Number("gust_rms", c.wind.gust_rms);
   c.wind.gust_time_s = wind.Number("gust_time_s", c.wind.gust_time_s);
-  c.wind.seed = static_cast<uint64_t>(wind.Integer("seed", static_cast<int>(c.wind.seed), 0, 1 << 30));
+  c.wind.seed =
+      static_cast<uint64_t>(wind.Integer("seed", static_cast<int>(c.wind.seed), 0, 1 << 30));
   wind.Finish();
   const std::string integrator = section.String("integrator", AirshipIntegratorName(c.integrator));
   if (!ParseAirshipIntegrator(integrator, &c.integrator)) {
@@ -117,7 +121,8 @@ AirshipConfig ReadAirship(YamlMap& section) {
 
 }  // namespace config_detail
 double AirshipConfig::StillAirTopSpeed() const {
-  return std::sqrt(2.0 * max_thrust / (air_density * axial_drag_coefficient * std::pow(volume, 2.0 / 3.0)));
+  return std::sqrt(2.0 * max_thrust /
+                   (air_density * axial_drag_coefficient * std::pow(volume, 2.0 / 3.0)));
 }
 
 }  // namespace haptel

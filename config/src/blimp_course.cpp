@@ -101,7 +101,8 @@ void BlimpCourseConfig::ValidateOrThrow() const {
     for (size_t i = 0; i < gates.size(); ++i) {
       const BlimpGateSpec& g = gates[i];
       const BlimpGateFrame frame = MakeGateFrame(g);
-      const Eigen::Vector2d centre = frame.centre.head<2>(), half_span = frame.left.head<2>() * frame.half_width;
+      const Eigen::Vector2d centre = frame.centre.head<2>(),
+                            half_span = frame.left.head<2>() * frame.half_width;
       const bool below_roof = g.centre[2] - g.height / 2 < buildings[j].height;
       if (below_roof && f.Meets(centre - half_span, centre + half_span)) {
         throw ConfigFieldError("gates[" + std::to_string(i) + "].centre",
@@ -119,8 +120,8 @@ void BlimpCourseConfig::ValidateOrThrow() const {
       throw ConfigFieldError(
           "start.position",
           "a start at least " + Text(kBlimpStartClearance) + " m from every building", {},
-          "a start " + Text(f.Distance(Eigen::Vector2d(start.position[0], start.position[1]))) + " m from " +
-              BuildingName(buildings, j));
+          "a start " + Text(f.Distance(Eigen::Vector2d(start.position[0], start.position[1]))) +
+              " m from " + BuildingName(buildings, j));
     }
   }
 }

@@ -25,11 +25,14 @@ std::vector<BlimpGateFrame> MakeGateFrames(const BlimpCourseConfig& course) {
   return frames;
 }
 
-BlimpGateCrossing ClassifyCrossing(const BlimpGateFrame& gate, const Eigen::Vector3d& p, double near_widths) {
+BlimpGateCrossing ClassifyCrossing(const BlimpGateFrame& gate, const Eigen::Vector3d& p,
+                                   double near_widths) {
   const Eigen::Vector3d d = p - gate.centre;
   const double across = d.dot(gate.left), up = d.z();
-  if (std::abs(across) <= gate.half_width && std::abs(up) <= gate.half_height) return BlimpGateCrossing::kPassed;
-  if (std::hypot(across, up) <= near_widths * 2.0 * gate.half_width) return BlimpGateCrossing::kMissed;
+  if (std::abs(across) <= gate.half_width && std::abs(up) <= gate.half_height)
+    return BlimpGateCrossing::kPassed;
+  if (std::hypot(across, up) <= near_widths * 2.0 * gate.half_width)
+    return BlimpGateCrossing::kMissed;
   return BlimpGateCrossing::kIgnored;
 }
 
@@ -82,7 +85,9 @@ bool BlimpFootprint::Meets(const Eigen::Vector2d& a, const Eigen::Vector2d& b) c
 double BlimpFootprint::Distance(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const {
   const Eigen::Vector2d la = Local(a), lb = Local(b);
   if (MeetsLocal(la, lb)) return 0.0;
-  const auto box_distance = [&](const Eigen::Vector2d& p) { return (p.cwiseAbs() - half_).cwiseMax(0.0).norm(); };
+  const auto box_distance = [&](const Eigen::Vector2d& p) {
+    return (p.cwiseAbs() - half_).cwiseMax(0.0).norm();
+  };
   double best = std::min(box_distance(la), box_distance(lb));
   for (int sx = -1; sx <= 1; sx += 2) {
     for (int sy = -1; sy <= 1; sy += 2) {

@@ -100,7 +100,8 @@ DeviceCalibration LoadCalibration(const std::filesystem::path& file) {
   YamlMap arms = root.Map("arms");
   for (int i = 0; i < 2; ++i) {
     if (!arms.Has(kArmNames[i])) {
-      arms.Fail(kArmNames[i], std::string("the ") + kArmNames[i] + " arm's calibration (a mapping of keys)");
+      arms.Fail(kArmNames[i],
+                std::string("the ") + kArmNames[i] + " arm's calibration (a mapping of keys)");
     }
     YamlMap arm = arms.Map(kArmNames[i]);
     d.arms[i] = ReadArm(arm);
@@ -118,7 +119,8 @@ void SaveCalibration(const std::filesystem::path& file, const DeviceCalibration&
     throw ConfigError(file.string() + ": refusing to write an invalid calibration: " + e.what());
   }
   if (calibration.device.empty() || calibration.user.empty()) {
-    throw ConfigError(file.string() + ": refusing to write a calibration without a device and user name");
+    throw ConfigError(file.string() +
+                      ": refusing to write a calibration without a device and user name");
   }
 
   YAML::Emitter out;
@@ -127,7 +129,8 @@ void SaveCalibration(const std::filesystem::path& file, const DeviceCalibration&
              "Haptel calibration, written by `haptel calibrate`; read by the device driver.\n"
              "tracker: metres = tracker_scale * raw + tracker_offset, per axis (x, y, z)\n"
              "glove: radians = glove_gain * counts + glove_offset, per sensor (22)\n"
-             "force: newtons = force_slope * command, per axis; force_residual = RMS of that fit, N\n"
+             "force: newtons = force_slope * command, per axis; force_residual = RMS of that fit, "
+             "N\n"
              "fingers: newtons = finger_force_slope * command")
       << YAML::Newline;
   out << YAML::BeginMap;
@@ -142,20 +145,22 @@ void SaveCalibration(const std::filesystem::path& file, const DeviceCalibration&
     EmitList(out, "glove_gain", c.glove_gain, "rad per count");
     EmitList(out, "glove_offset", c.glove_offset, "rad");
     EmitList(out, "force_slope", c.force_slope, "N per device unit");
-    out << YAML::Key << "force_residual" << YAML::Value << c.force_residual << YAML::Comment("N (RMS)");
+    out << YAML::Key << "force_residual" << YAML::Value << c.force_residual
+        << YAML::Comment("N (RMS)");
     out << YAML::Key << "finger_force_slope" << YAML::Value << c.finger_force_slope
         << YAML::Comment("N per device unit");
     out << YAML::EndMap;
   }
   out << YAML::EndMap << YAML::EndMap;
-  if (!out.good()) throw ConfigError(file.string() + ": cannot format the calibration: " + out.GetLastError());
+  if (!out.good())
+    throw ConfigError(file.string() + ": cannot format the calibration: " + out.GetLastError());
 
   std::error_code ec;
   if (file.has_parent_path()) {
     std::filesystem::create_directories(file.parent_path(), ec);
     if (ec) {
-      throw ConfigError(file.string() + ": cannot create folder " + file.parent_path().string() + ": " +
-                        ec.message());
+      throw ConfigError(file.string() + ": cannot create folder " + file.parent_path().string() +
+                        ": " + ec.message());
     }
   }
   // Write beside the target and rename: a reader never sees half a file.

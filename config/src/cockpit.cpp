@@ -44,7 +44,8 @@ CockpitConfig LoadCockpit(const std::filesystem::path& file) {
   c.file = file;
   c.name = root.RequireString("name");
   // The name says which loader reads a file (InterfaceName); in code it is a label.
-  if (c.name != "cockpit" && c.name != "cockpit-hud" && c.name != "cockpit-assisted" && c.name != "cockpit-shared") {
+  if (c.name != "cockpit" && c.name != "cockpit-hud" && c.name != "cockpit-assisted" &&
+      c.name != "cockpit-shared") {
     root.Fail("name", "one of: cockpit, cockpit-hud, cockpit-assisted, cockpit-shared");
   }
   c.hud = root.Bool("hud", c.hud);

@@ -130,10 +130,12 @@ DeviceConfig LoadDevice(const std::filesystem::path& file) {
   }
   if (servo.Has("passivity_link")) {
     const std::string link = servo.String("passivity_link", "");
-    if (link != "admittance" && link != "charge") servo.Fail("passivity_link", "admittance or charge");
+    if (link != "admittance" && link != "charge")
+      servo.Fail("passivity_link", "admittance or charge");
     d.servo.passivity_link_admittance = link == "admittance";
   }
-  d.servo.passivity_max_damping = servo.Number("passivity_max_damping", d.servo.passivity_max_damping);
+  d.servo.passivity_max_damping =
+      servo.Number("passivity_max_damping", d.servo.passivity_max_damping);
   d.servo.passivity_min_speed = servo.Number("passivity_min_speed", d.servo.passivity_min_speed);
   servo.Finish();
 

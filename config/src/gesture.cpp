@@ -32,7 +32,8 @@ GestureConfig LoadGesture(const std::filesystem::path& file) {
   g.file = file;
   g.name = root.String("name", g.name);
   // The name says which loader reads a file (InterfaceName); in code it is a label.
-  if (g.name != "gesture" && g.name != "gesture-shared") root.Fail("name", "'gesture' or 'gesture-shared'");
+  if (g.name != "gesture" && g.name != "gesture-shared")
+    root.Fail("name", "'gesture' or 'gesture-shared'");
   g.neutral = root.Vec3("neutral", g.neutral);
   g.dead_zone = root.Number("dead_zone", g.dead_zone);
   g.full_forward = root.Number("full_forward", g.full_forward);

@@ -68,8 +68,10 @@ std::pair<std::string, int> ParseServerAddress(const std::string& text) {
       port = 0;
     }
   }
-  if (colon == std::string::npos || inet_pton(AF_INET, address.c_str(), &parsed) != 1 || port < 1 || port > 65535) {
-    throw std::invalid_argument("an IPv4 address and a port, such as 192.168.1.10:11811 (not '" + text + "')");
+  if (colon == std::string::npos || inet_pton(AF_INET, address.c_str(), &parsed) != 1 || port < 1 ||
+      port > 65535) {
+    throw std::invalid_argument("an IPv4 address and a port, such as 192.168.1.10:11811 (not '" +
+                                text + "')");
   }
   return {address, port};
 }
@@ -113,7 +115,8 @@ double ParseDuration(const std::string& part, const std::string& value) {
   if (v.unit == "ms") scale = 1e-3;
   if (v.unit == "us") scale = 1e-6;
   if (!v.parsed || scale == 0.0 || !std::isfinite(v.number) || v.number < 0.0) {
-    throw std::invalid_argument("a time >= 0 with its unit, such as 100ms, 0.1s or 250us (not '" + part + "')");
+    throw std::invalid_argument("a time >= 0 with its unit, such as 100ms, 0.1s or 250us (not '" +
+                                part + "')");
   }
   return v.number * scale;
 }
@@ -137,9 +140,10 @@ double ParseRate(const std::string& part, const std::string& value) {
   if (v.unit == "Mbit" || v.unit == "mbit") scale = 1e6;
   if (v.unit == "Gbit" || v.unit == "gbit") scale = 1e9;
   const double rate = v.number * scale;
-  if (!v.parsed || scale == 0.0 || !std::isfinite(v.number) || !(rate >= kMinRateBps && rate <= kMaxRateBps)) {
-    throw std::invalid_argument("a rate from 1kbit to 10Gbit with its unit, such as 1Mbit or 500kbit (not '" +
-                                part + "')");
+  if (!v.parsed || scale == 0.0 || !std::isfinite(v.number) ||
+      !(rate >= kMinRateBps && rate <= kMaxRateBps)) {
+    throw std::invalid_argument(
+        "a rate from 1kbit to 10Gbit with its unit, such as 1Mbit or 500kbit (not '" + part + "')");
   }
   return rate;
 }
@@ -177,17 +181,21 @@ LinkFault ParseLinkFault(const std::string& text, const LinkFault& base) {
         queue_s = 0.0;
       }
       if (!(queue_s >= kMinQueueS && queue_s <= 10.0)) {
-        throw std::invalid_argument("a queue depth from 1ms to 10s with its unit, such as 100ms (not '" + part + "')");
+        throw std::invalid_argument(
+            "a queue depth from 1ms to 10s with its unit, such as 100ms (not '" + part + "')");
       }
       fault.queue_s = queue_s;
       queue_given = true;
     } else {
-      throw std::invalid_argument("rate=RATE, queue=TIME, delay=TIME, jitter=TIME or loss=PERCENT, comma-separated "
-                                  "(e.g. rate=1Mbit,delay=100ms,jitter=20ms,loss=5%), or 'on' (not '" + part + "')");
+      throw std::invalid_argument(
+          "rate=RATE, queue=TIME, delay=TIME, jitter=TIME or loss=PERCENT, comma-separated "
+          "(e.g. rate=1Mbit,delay=100ms,jitter=20ms,loss=5%), or 'on' (not '" +
+          part + "')");
     }
   }
   if (queue_given && fault.rate_bps == 0.0) {
-    throw std::invalid_argument("queue=TIME only with a rate=RATE it is the depth at (not '" + text + "')");
+    throw std::invalid_argument("queue=TIME only with a rate=RATE it is the depth at (not '" +
+                                text + "')");
   }
   if (fault.delay_s > 10.0 || fault.jitter_s > 10.0) {
     throw std::invalid_argument("a delay and jitter of at most 10 s (not '" + text + "')");
@@ -206,7 +214,8 @@ LinkFault ParseLinkFaultOption(const std::string& text, const LinkFault& base) {
 std::vector<std::string> LinkProfileNames() {
   std::vector<std::string> names;
   std::error_code error;
-  for (const auto& entry : std::filesystem::directory_iterator(ShippedFile("config/links"), error)) {
+  for (const auto& entry :
+       std::filesystem::directory_iterator(ShippedFile("config/links"), error)) {
     if (entry.path().extension() == ".yaml") names.push_back(entry.path().stem().string());
   }
   std::sort(names.begin(), names.end());
@@ -216,11 +225,13 @@ std::vector<std::string> LinkProfileNames() {
 LinkFault LoadLinkProfile(const std::string& name_or_file) {
   const bool is_file = name_or_file.find('/') != std::string::npos ||
                        std::filesystem::path(name_or_file).extension() == ".yaml";
-  const std::filesystem::path file =
-      is_file ? std::filesystem::path(name_or_file) : ShippedFile("config/links/" + name_or_file + ".yaml");
+  const std::filesystem::path file = is_file
+                                         ? std::filesystem::path(name_or_file)
+                                         : ShippedFile("config/links/" + name_or_file + ".yaml");
   if (!is_file && !std::filesystem::exists(file)) {
     throw ConfigError("unknown link profile '" + name_or_file + "': expected one of " +
-                      JoinList(LinkProfileNames(), ", ") + " (config/links/), or a profile file's path");
+                      JoinList(LinkProfileNames(), ", ") +
+                      " (config/links/), or a profile file's path");
   }
   config_detail::YamlMap root = config_detail::YamlMap::Load(file);
   // Each key through ParseLinkFault, so a file and --link-fault take the same words.
@@ -240,7 +251,8 @@ LinkFault LoadLinkProfile(const std::string& name_or_file) {
   return fault;
 }
 
-LinkFault LinkFaultFromOptions(const std::optional<std::string>& profile, const std::optional<std::string>& fault,
+LinkFault LinkFaultFromOptions(const std::optional<std::string>& profile,
+                               const std::optional<std::string>& fault,
                                const LinkFault& otherwise) {
   if (!profile && !fault) return otherwise;
   LinkFault base;
@@ -254,7 +266,8 @@ LinkFault LinkFaultFromOptions(const std::optional<std::string>& profile, const 
   return fault ? ParseLinkFaultOption(*fault, base) : base;
 }
 
-std::string LinkFaultProblem(const LinkFault& fault, double state_rate_hz, double vehicle_timeout_s) {
+std::string LinkFaultProblem(const LinkFault& fault, double state_rate_hz,
+                             double vehicle_timeout_s) {
   if (!fault.enabled) return "";
   char text[400];
   // States in one time-out window, each dropped with probability `loss`: the
@@ -264,17 +277,21 @@ std::string LinkFaultProblem(const LinkFault& fault, double state_rate_hz, doubl
   if (fault.loss > 0.0 && empty_per_minute >= 1.0) {
     const double max_loss = std::pow(vehicle_timeout_s / 60.0, 1.0 / per_window);
     std::snprintf(text, sizeof text,
-                  "a loss of %.0f%% drops all %.0f states of a %.2f-s vehicle time-out (%.0f Hz) about %.0f times a "
-                  "minute: the vehicle would be declared lost though it runs; expected a loss under %.0f%% (or a "
+                  "a loss of %.0f%% drops all %.0f states of a %.2f-s vehicle time-out (%.0f Hz) "
+                  "about %.0f times a "
+                  "minute: the vehicle would be declared lost though it runs; expected a loss "
+                  "under %.0f%% (or a "
                   "longer --vehicle-timeout)",
-                  fault.loss * 100.0, per_window, vehicle_timeout_s, state_rate_hz, empty_per_minute,
-                  std::floor(max_loss * 100.0));
+                  fault.loss * 100.0, per_window, vehicle_timeout_s, state_rate_hz,
+                  empty_per_minute, std::floor(max_loss * 100.0));
     return text;
   }
   if (fault.jitter_s >= vehicle_timeout_s) {
     std::snprintf(text, sizeof text,
-                  "a jitter of %.3g s holds a state back as long as the %.2f-s vehicle time-out: the vehicle would be "
-                  "declared lost though it runs; expected a jitter under %.2f s (or a longer --vehicle-timeout)",
+                  "a jitter of %.3g s holds a state back as long as the %.2f-s vehicle time-out: "
+                  "the vehicle would be "
+                  "declared lost though it runs; expected a jitter under %.2f s (or a longer "
+                  "--vehicle-timeout)",
                   fault.jitter_s, vehicle_timeout_s, vehicle_timeout_s);
     return text;
   }
@@ -286,7 +303,8 @@ std::vector<std::string> ParseAddressOption(const std::string& option, const std
   for (const std::string& address : out) {
     in_addr parsed{};
     if (inet_pton(AF_INET, address.c_str(), &parsed) != 1) {
-      throw UsageError("option --" + option + ": expected IPv4 addresses such as 192.168.1.20, comma-separated (not '" +
+      throw UsageError("option --" + option +
+                       ": expected IPv4 addresses such as 192.168.1.20, comma-separated (not '" +
                        address + "')");
     }
   }
@@ -304,12 +322,12 @@ std::string ServerOption(const std::string& text) {
 
 std::string LinkFaultText(const LinkFault& fault) {
   char text[200];
-  int used =
-      std::snprintf(text, sizeof text, "delay=%.9gs,jitter=%.9gs,loss=%.9g", fault.delay_s, fault.jitter_s, fault.loss);
+  int used = std::snprintf(text, sizeof text, "delay=%.9gs,jitter=%.9gs,loss=%.9g", fault.delay_s,
+                           fault.jitter_s, fault.loss);
   // Without a rate, the text is what it was before rates existed (recorded runs compare equal).
   if (fault.rate_bps > 0.0) {
-    std::snprintf(text + used, sizeof text - static_cast<size_t>(used), ",rate=%.9gkbit,queue=%.9gs",
-                  fault.rate_bps / 1e3, fault.queue_s);
+    std::snprintf(text + used, sizeof text - static_cast<size_t>(used),
+                  ",rate=%.9gkbit,queue=%.9gs", fault.rate_bps / 1e3, fault.queue_s);
   }
   return text;
 }

@@ -14,13 +14,16 @@ std::string NotRegularFile(const std::filesystem::path& file) {
   const std::filesystem::file_status status = std::filesystem::status(file, ec);
   if (ec || !std::filesystem::exists(status)) return "";
   if (std::filesystem::is_directory(status)) return "a folder";
-  if (!std::filesystem::is_regular_file(status)) return "not a regular file (a FIFO, a device or a socket)";
+  if (!std::filesystem::is_regular_file(status))
+    return "not a regular file (a FIFO, a device or a socket)";
   return "";
 }
 
-void CheckFileOption(const std::string& option, const std::filesystem::path& file, const std::string& expected) {
+void CheckFileOption(const std::string& option, const std::filesystem::path& file,
+                     const std::string& expected) {
   if (const std::string what = NotRegularFile(file); !what.empty()) {
-    throw UsageError("option --" + option + ": '" + file.string() + "' is " + what + "; expected " + expected);
+    throw UsageError("option --" + option + ": '" + file.string() + "' is " + what + "; expected " +
+                     expected);
   }
 }
 

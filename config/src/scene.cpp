@@ -173,7 +173,8 @@ Vector3d ToVector(const std::vector<double>& a) { return {a[0], a[1], a[2]}; }
 // `points` of a convex shape, which must span a volume.
 std::vector<Vector3d> ReadConvexPoints(YamlMap& shape) {
   std::vector<Vector3d> points;
-  for (const auto& p : shape.Points3("points", 4, kMaxConvexPoints, kMaxSize)) points.emplace_back(p[0], p[1], p[2]);
+  for (const auto& p : shape.Points3("points", 4, kMaxConvexPoints, kMaxSize))
+    points.emplace_back(p[0], p[1], p[2]);
   try {
     ComputeConvexHull(points);
   } catch (const std::invalid_argument& e) {

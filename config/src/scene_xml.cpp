@@ -19,8 +19,8 @@
 #include <vector>
 
 #include "haptel/config/error.hpp"
-#include "haptel/geometry/mass_properties.hpp"
 #include "haptel/config/scene.hpp"
+#include "haptel/geometry/mass_properties.hpp"
 #include "scene_detail.hpp"
 #include "yaml_map.hpp"
 
@@ -715,11 +715,13 @@ Scene ImportMhapticXml(const std::filesystem::path& file) {
   // UTF-16 (or UTF-32) text: every other byte is NUL, and the parser's own
   // message would be one stray character ("file:1: <").
   const bool bom16 = text.size() >= 2 && ((text[0] == '\xFF' && text[1] == '\xFE') ||
-                                           (text[0] == '\xFE' && text[1] == '\xFF'));
+                                          (text[0] == '\xFE' && text[1] == '\xFF'));
   if (bom16 || text.find('\0') != std::string::npos) {
-    r.Fail(1, "?xml", std::string("expected a text file in UTF-8 or ISO-8859-1, got ") +
-                          (bom16 ? "UTF-16 (its byte order mark)" : "NUL bytes (UTF-16 or UTF-32, or not text)") +
-                          "; save it as UTF-8");
+    r.Fail(
+        1, "?xml",
+        std::string("expected a text file in UTF-8 or ISO-8859-1, got ") +
+            (bom16 ? "UTF-16 (its byte order mark)" : "NUL bytes (UTF-16 or UTF-32, or not text)") +
+            "; save it as UTF-8");
   }
   const std::string encoding = Lower(DeclaredEncoding(text));
   const bool latin1 = encoding == "iso-8859-1" || encoding == "latin1" ||

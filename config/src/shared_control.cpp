@@ -21,9 +21,10 @@ void ReadSharedControl(YamlMap& root, const std::string& name, const std::string
                        SharedControlConfig& out) {
   const bool shared = name == shared_name;
   if (shared != root.Has("shared_control")) {
-    root.Fail("shared_control", shared ? "a 'shared_control' section (horizon_s, max_force, stiffness, clearance)"
-                                       : "no 'shared_control' section on '" + name + "' (name the file '" +
-                                             shared_name + "')");
+    root.Fail("shared_control",
+              shared ? "a 'shared_control' section (horizon_s, max_force, stiffness, clearance)"
+                     : "no 'shared_control' section on '" + name + "' (name the file '" +
+                           shared_name + "')");
   }
   if (!shared) return;
   YamlMap section = root.Map("shared_control");

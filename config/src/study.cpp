@@ -2,12 +2,12 @@
 
 #include <set>
 
+#include "haptel/config/check.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/config/interface_kinds.hpp"
 #include "haptel/config/link.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/run.hpp"
-#include "haptel/config/check.hpp"
 #include "yaml_map.hpp"
 
 namespace haptel {
@@ -48,8 +48,8 @@ constexpr const char* kPlainName = "a name of 1 to 40 letters, digits, '-', '_' 
 bool IsPlainName(const std::string& name) {
   if (name.empty() || name.size() > 40) return false;
   for (const char c : name) {
-    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' ||
-                    c == '_' || c == '.';
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+                    c == '-' || c == '_' || c == '.';
     if (!ok) return false;
   }
   return true;
@@ -75,12 +75,14 @@ const std::vector<DriverProfileTrait>& DriverProfileTraits() {
 }
 
 void DriverProfile::ValidateOrThrow() const {
-  for (const DriverProfileTrait& t : DriverProfileTraits()) check::Number(t.key, this->*t.member, t.min, t.max);
+  for (const DriverProfileTrait& t : DriverProfileTraits())
+    check::Number(t.key, this->*t.member, t.min, t.max);
 }
 
 void StudyConfig::ValidateOrThrow() const {
   check::NonEmpty("name", name);
-  if (operators != "synthetic" && operators != "person") check::Fail("operators", "synthetic or person");
+  if (operators != "synthetic" && operators != "person")
+    check::Fail("operators", "synthetic or person");
   check::Number("trial_cap_s", trial_cap_s, 5.0, 3600.0);
   check::Whole("design.repetitions", repetitions, 1, 10);
   if (conditions.size() < 2 || conditions.size() > 10) {
@@ -137,7 +139,8 @@ StudyConfig LoadStudy(const std::filesystem::path& file) {
     }
   }
   s.operators = root.String("operators", s.operators);
-  if (s.operators != "synthetic" && s.operators != "person") root.Fail("operators", "synthetic or person");
+  if (s.operators != "synthetic" && s.operators != "person")
+    root.Fail("operators", "synthetic or person");
   const bool synthetic = s.operators == "synthetic";
 
   // Conditions: each names an interface file of the run configuration.
@@ -189,18 +192,22 @@ StudyConfig LoadStudy(const std::filesystem::path& file) {
     }
     participant.profile = p.String("profile", "");
     if (synthetic) {
-      if (participant.profile.empty()) p.Fail("profile", "the profile of this simulated driver (a key of 'profiles')");
+      if (participant.profile.empty())
+        p.Fail("profile", "the profile of this simulated driver (a key of 'profiles')");
       if (s.profiles.count(participant.profile) == 0) {
         p.Fail("profile", "a key of 'profiles', got '" + participant.profile + "'");
       }
     } else if (!participant.profile.empty()) {
-      p.Fail("profile", "no profile: participants of a person study are people (operators: person)");
+      p.Fail("profile",
+             "no profile: participants of a person study are people (operators: person)");
     }
     p.Finish();
     s.participants.push_back(participant);
   }
   if (synthetic && s.participants.empty()) {
-    root.Fail("participants", "the simulated drivers, each {id, profile} (a synthetic study has no console to add them)");
+    root.Fail(
+        "participants",
+        "the simulated drivers, each {id, profile} (a synthetic study has no console to add them)");
   }
 
   YamlMap design = root.Map("design");
@@ -215,7 +222,8 @@ StudyConfig LoadStudy(const std::filesystem::path& file) {
     design.Fail("order", "balanced-latin-square, random or fixed");
   }
   s.seed = static_cast<uint64_t>(design.Integer("seed", static_cast<int>(s.seed), 0, 1 << 30));
-  if (s.order != StudyOrder::kRandom && design.Has("seed")) design.Fail("seed", "no seed unless order: random");
+  if (s.order != StudyOrder::kRandom && design.Has("seed"))
+    design.Fail("seed", "no seed unless order: random");
   s.repetitions = design.Integer("repetitions", s.repetitions, 1, 10);
   design.Finish();
 
@@ -224,19 +232,22 @@ StudyConfig LoadStudy(const std::filesystem::path& file) {
   s.questionnaires = root.Strings("questionnaires", {});
   std::set<std::string> seen;
   for (const std::string& q : s.questionnaires) {
-    if (!seen.insert(q).second) root.Fail("questionnaires", "each questionnaire once ('" + q + "' twice)");
+    if (!seen.insert(q).second)
+      root.Fail("questionnaires", "each questionnaire once ('" + q + "' twice)");
   }
   // The participants' background, asked once before a participant's first
   // trial: a questionnaire of the same folder, not one of those asked after
   // each condition.
   s.demographics = root.String("demographics", "");
   if (root.Has("demographics")) {
-    if (!PlainName(s.demographics)) root.Fail("demographics", std::string(kPlainName) + ": a questionnaire's name");
+    if (!PlainName(s.demographics))
+      root.Fail("demographics", std::string(kPlainName) + ": a questionnaire's name");
     if (seen.count(s.demographics) > 0) {
-      root.Fail("demographics", "a questionnaire not also asked after each condition ('" + s.demographics +
-                                    "' is in 'questionnaires')");
+      root.Fail("demographics", "a questionnaire not also asked after each condition ('" +
+                                    s.demographics + "' is in 'questionnaires')");
     }
-    if (synthetic) root.Fail("demographics", "no demographics for simulated drivers (they have no background)");
+    if (synthetic)
+      root.Fail("demographics", "no demographics for simulated drivers (they have no background)");
   }
   const std::string qdir = root.String("questionnaires_dir", "");
   s.questionnaires_dir = qdir.empty() ? ShippedFile("config/questionnaires") : dir / qdir;

@@ -166,7 +166,8 @@ void TrackConfig::ValidateOrThrow() const {
   check::Number("lap_cap_s", lap_cap_s, 1.0, 24 * 3600.0);
   if (reference_lap_s && !(*reference_lap_s >= 1.0 && *reference_lap_s <= lap_cap_s)) {
     // A baseline slower than the cap would make every capped lap look fast.
-    check::Fail("reference_lap_s", "a lap time in s from 1 to the lap cap (lap_cap_s = " + NumberText(lap_cap_s) + ")");
+    check::Fail("reference_lap_s", "a lap time in s from 1 to the lap cap (lap_cap_s = " +
+                                       NumberText(lap_cap_s) + ")");
   }
   for (size_t i = 0; i < gates.size(); ++i) {
     const std::string key = "gates[" + std::to_string(i) + "]";
@@ -271,7 +272,8 @@ Track::Track(TrackConfig config) : config_(std::move(config)) {
   const auto& c = config_.centerline;
   const size_t n = c.size();
   cumulative_.resize(n + 1, 0.0);
-  for (size_t i = 0; i < n; ++i) cumulative_[i + 1] = cumulative_[i] + (c[(i + 1) % n] - c[i]).norm();
+  for (size_t i = 0; i < n; ++i)
+    cumulative_[i + 1] = cumulative_[i] + (c[(i + 1) % n] - c[i]).norm();
   length_ = cumulative_[n];
 
   // Walls: the centre line offset by half the corridor width, mitred joins.

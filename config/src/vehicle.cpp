@@ -4,8 +4,8 @@
 #include <cctype>
 #include <limits>
 
-#include "haptel/config/check.hpp"
 #include "airship_section.hpp"
+#include "haptel/config/check.hpp"
 #include "link_section.hpp"
 #include "servo_section.hpp"
 #include "yaml_map.hpp"
@@ -97,7 +97,8 @@ void CameraConfig::ValidateOrThrow() const {
   check::Whole("width", width, 16, 4096);
   check::Whole("height", height, 16, 4096);
   check::Number("fov_deg", fov_deg, 10.0, 170.0);
-  if (codec != CameraCodec::kJpeg && codec != CameraCodec::kH264) check::Fail("codec", "one of: jpeg, h264");
+  if (codec != CameraCodec::kJpeg && codec != CameraCodec::kH264)
+    check::Fail("codec", "one of: jpeg, h264");
   check::Whole("jpeg_quality", jpeg_quality, 1, 100);
   check::Whole("bitrate_kbps", bitrate_kbps, 50, 50000);
   check::Number("mount_height", mount_height, 0.01, 5.0);
@@ -131,21 +132,26 @@ void Ros2Config::ValidateOrThrow() const {
   const char* expected = "a ROS 2 topic name such as /cmd_vel (absolute; letters, digits, _ and /)";
   if (!IsRosTopicName(cmd_vel)) check::Fail("cmd_vel", expected);
   if (!IsRosTopicName(odom)) check::Fail("odom", expected);
-  if (!image.empty() && !IsRosTopicName(image)) check::Fail("image", std::string(expected) + ", or empty for none");
-  if (!scan.empty() && !IsRosTopicName(scan)) check::Fail("scan", std::string(expected) + ", or empty for none");
+  if (!image.empty() && !IsRosTopicName(image))
+    check::Fail("image", std::string(expected) + ", or empty for none");
+  if (!scan.empty() && !IsRosTopicName(scan))
+    check::Fail("scan", std::string(expected) + ", or empty for none");
   check::Number("cmd_rate_hz", cmd_rate_hz, 1.0, 1000.0);
   check::Number("odom_timeout_s", odom_timeout_s, 0.05, 60.0);
 }
 
 void CanConfig::ValidateOrThrow(int levels) const {
-  if (interface.empty() || interface.size() >= 16) check::Fail("interface", "a network interface name such as can0");
+  if (interface.empty() || interface.size() >= 16)
+    check::Fail("interface", "a network interface name such as can0");
   check::Whole("left_node", left_node, 0, 63);
   check::Whole("right_node", right_node, 0, 63);
   check::Whole("io_node", io_node, 0, 63);
   if (right_node == left_node) check::Fail("right_node", "a node id other than left_node's");
-  if (io_node == left_node || io_node == right_node) check::Fail("io_node", "a node id other than the wheels'");
+  if (io_node == left_node || io_node == right_node)
+    check::Fail("io_node", "a node id other than the wheels'");
   if (static_cast<int>(level_turns_per_s.size()) != levels) {
-    check::Fail("level_turns_per_s", "one velocity per speed level: " + std::to_string(levels) + " numbers");
+    check::Fail("level_turns_per_s",
+                "one velocity per speed level: " + std::to_string(levels) + " numbers");
   }
   for (size_t i = 0; i < level_turns_per_s.size(); ++i) {
     const double previous = i == 0 ? 0.0 : level_turns_per_s[i - 1];
@@ -226,8 +232,8 @@ VehicleConfig LoadVehicle(const std::filesystem::path& file) {
   v.range_sensors.fov_deg = ranges.Number("fov_deg", v.range_sensors.fov_deg);
   v.range_sensors.max_range = ranges.Number("max_range", v.range_sensors.max_range);
   v.range_sensors.noise_sd = ranges.Number("noise_sd", v.range_sensors.noise_sd);
-  v.range_sensors.seed = static_cast<unsigned>(ranges.Integer("seed", static_cast<int>(v.range_sensors.seed), 0,
-                                                              std::numeric_limits<int>::max()));
+  v.range_sensors.seed = static_cast<unsigned>(ranges.Integer(
+      "seed", static_cast<int>(v.range_sensors.seed), 0, std::numeric_limits<int>::max()));
   ranges.Finish();
 
   YamlMap camera = root.Map("camera");
@@ -272,7 +278,8 @@ VehicleConfig LoadVehicle(const std::filesystem::path& file) {
     v.can.right_reversed = can.Bool("right_reversed", v.can.right_reversed);
     if (can.Has("level_turns_per_s")) {
       v.can.level_turns_per_s =
-          can.Numbers("level_turns_per_s", static_cast<size_t>(std::max(1, v.drive.speed_levels)), "wheel velocities");
+          can.Numbers("level_turns_per_s", static_cast<size_t>(std::max(1, v.drive.speed_levels)),
+                      "wheel velocities");
     }
     v.can.wheel_circumference = can.Number("wheel_circumference", v.can.wheel_circumference);
     v.can.command_rate_hz = can.Number("command_rate_hz", v.can.command_rate_hz);
@@ -287,13 +294,15 @@ VehicleConfig LoadVehicle(const std::filesystem::path& file) {
     YamlMap airship = root.Map("airship");
     v.airship = config_detail::ReadAirship(airship);
   } else if (UsesSection(v.kind, kAirshipSection)) {
-    root.Fail("airship", "an 'airship' section for kind " + v.kind + " (its hull, fins and motors)");
+    root.Fail("airship",
+              "an 'airship' section for kind " + v.kind + " (its hull, fins and motors)");
   }
   if (root.Has("servo")) {
     YamlMap servo = root.Map("servo");
     v.servo = config_detail::ReadServoController(servo);
   } else if (UsesSection(v.kind, kServoSection)) {
-    root.Fail("servo", "a 'servo' section for kind " + v.kind + " (its controller's protocol and channels)");
+    root.Fail("servo",
+              "a 'servo' section for kind " + v.kind + " (its controller's protocol and channels)");
   }
   if (root.Has("ros2")) {
     YamlMap ros2 = root.Map("ros2");

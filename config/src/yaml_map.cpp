@@ -34,7 +34,8 @@ namespace {
 /// yaml-cpp keeps a key given twice and a lookup finds the first: the second,
 /// the one edited last, would be ignored without a word. Refused anywhere in
 /// the file, at the second, naming the first's line.
-void CheckNoDuplicateKeys(const YAML::Node& node, const std::string& file, const std::string& path) {
+void CheckNoDuplicateKeys(const YAML::Node& node, const std::string& file,
+                          const std::string& path) {
   if (node.IsSequence()) {
     for (size_t i = 0; i < node.size(); ++i) {
       CheckNoDuplicateKeys(node[i], file, path + "[" + std::to_string(i) + "]");
@@ -49,8 +50,9 @@ void CheckNoDuplicateKeys(const YAML::Node& node, const std::string& file, const
     const std::string at = path.empty() ? key : path + "." + key;
     if (const auto first = seen.find(key); first != seen.end()) {
       const YAML::Mark m = entry.first.Mark();
-      throw ConfigError(file + ":" + std::to_string(m.line + 1) + ":" + std::to_string(m.column + 1) + ": key '" +
-                        at + "': given twice (first at line " + std::to_string(first->second.line + 1) +
+      throw ConfigError(file + ":" + std::to_string(m.line + 1) + ":" +
+                        std::to_string(m.column + 1) + ": key '" + at +
+                        "': given twice (first at line " + std::to_string(first->second.line + 1) +
                         "); expected each key once");
     }
     seen.emplace(key, entry.first.Mark());
@@ -334,7 +336,8 @@ std::vector<double> YamlMap::Numbers(const std::string& key, size_t count, doubl
     const YAML::Node item = child[i];
     double value = 0.0;
     const bool ok = item.IsScalar() && YAML::convert<double>::decode(item, value) &&
-                    std::isfinite(value) && value >= min && value <= max && !(nonzero && value == 0.0);
+                    std::isfinite(value) && value >= min && value <= max &&
+                    !(nonzero && value == 0.0);
     if (!ok) {
       throw ConfigError(Where(item) + ": key '" + Path(key) + "[" + std::to_string(i) +
                         "]': expected a" + (nonzero ? " non-zero" : "") + " number in " +
@@ -389,12 +392,13 @@ std::vector<Vec2> YamlMap::Points(const std::string& key, size_t min_count) {
   return out;
 }
 
-std::vector<std::array<double, 3>> YamlMap::Points3(const std::string& key, size_t min_count, size_t max_count,
-                                                    double max_abs) {
+std::vector<std::array<double, 3>> YamlMap::Points3(const std::string& key, size_t min_count,
+                                                    size_t max_count, double max_abs) {
   const YAML::Node child = Child(key);
-  const std::string expected = "a list of " + std::to_string(min_count) + " to " + std::to_string(max_count) +
-                               " points [x, y, z] in metres";
-  if (!child.IsSequence() || child.size() < min_count || child.size() > max_count) Fail(key, expected);
+  const std::string expected = "a list of " + std::to_string(min_count) + " to " +
+                               std::to_string(max_count) + " points [x, y, z] in metres";
+  if (!child.IsSequence() || child.size() < min_count || child.size() > max_count)
+    Fail(key, expected);
   std::vector<std::array<double, 3>> out;
   for (size_t i = 0; i < child.size(); ++i) {
     const YAML::Node p = child[i];
@@ -408,7 +412,8 @@ std::vector<std::array<double, 3>> YamlMap::Points3(const std::string& key, size
       std::ostringstream limit;
       limit << max_abs;
       throw ConfigError(Where(p) + ": key '" + Path(key) + "[" + std::to_string(i) +
-                        "]': expected a point [x, y, z] in metres (|x| <= " + limit.str() + "), got " + Got(p));
+                        "]': expected a point [x, y, z] in metres (|x| <= " + limit.str() +
+                        "), got " + Got(p));
     }
     out.push_back(v);
   }
@@ -430,7 +435,8 @@ std::vector<std::string> YamlMap::Strings(const std::string& key,
 
 YamlMap YamlMap::Map(const std::string& key) {
   const YAML::Node child = Child(key);
-  if (!child.IsDefined() || child.IsNull()) return YamlMap(YAML::Node(YAML::NodeType::Map), file_, Path(key));
+  if (!child.IsDefined() || child.IsNull())
+    return YamlMap(YAML::Node(YAML::NodeType::Map), file_, Path(key));
   if (!child.IsMap()) Fail(key, "a mapping of keys");
   return YamlMap(child, file_, Path(key));
 }

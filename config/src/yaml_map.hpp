@@ -67,9 +67,10 @@ class YamlMap {
   Vec2 Point(const std::string& key);
   std::vector<Vec2> Points(const std::string& key, size_t min_count);
   /// A list of [x, y, z] points, each coordinate within ±max_abs.
-  std::vector<std::array<double, 3>> Points3(const std::string& key, size_t min_count, size_t max_count,
-                                             double max_abs);
-  std::vector<std::string> Strings(const std::string& key, const std::vector<std::string>& fallback);
+  std::vector<std::array<double, 3>> Points3(const std::string& key, size_t min_count,
+                                             size_t max_count, double max_abs);
+  std::vector<std::string> Strings(const std::string& key,
+                                   const std::vector<std::string>& fallback);
   /// A nested mapping; an absent key yields an empty mapping (all defaults).
   YamlMap Map(const std::string& key);
   /// The keys this mapping holds, in file order (for mappings whose keys are
@@ -116,7 +117,8 @@ class YamlMap {
   std::string Got(const YAML::Node& node) const;
   /// Got, but a short list of plain values as written ("[0.0, 5.0, 0.0]").
   std::string FlowText(const YAML::Node& node) const;
-  double ToNumber(const YAML::Node& node, const std::string& key, const std::string& expected) const;
+  double ToNumber(const YAML::Node& node, const std::string& key,
+                  const std::string& expected) const;
   double ReadNumber(const std::string& key, double fallback, const std::string& expected,
                     double min, double max);
   int ReadInteger(const std::string& key, int fallback, const std::string& expected, int min,

@@ -27,8 +27,9 @@ void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
 void* operator new(std::size_t size, std::align_val_t align) {
   ++t_allocations;
   g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::aligned_alloc(static_cast<std::size_t>(align),
-                                   (size + static_cast<std::size_t>(align) - 1) & ~(static_cast<std::size_t>(align) - 1))) {
+  if (void* p = std::aligned_alloc(
+          static_cast<std::size_t>(align),
+          (size + static_cast<std::size_t>(align) - 1) & ~(static_cast<std::size_t>(align) - 1))) {
     return p;
   }
   throw std::bad_alloc();

@@ -15,7 +15,8 @@ bool HelpRequested(int argc, const char* const* argv) {
   return false;
 }
 
-int Main(const Program& program, int argc, const char* const* argv, const std::function<int()>& body) {
+int Main(const Program& program, int argc, const char* const* argv,
+         const std::function<int()>& body) {
   if (HelpRequested(argc, argv)) {
     std::fputs(program.usage.c_str(), stdout);
     return kExitOk;
@@ -23,7 +24,8 @@ int Main(const Program& program, int argc, const char* const* argv, const std::f
   try {
     return body();
   } catch (const UsageError& e) {
-    std::fprintf(stderr, "%s: %s (see %s --help)\n", program.name.c_str(), e.what(), program.name.c_str());
+    std::fprintf(stderr, "%s: %s (see %s --help)\n", program.name.c_str(), e.what(),
+                 program.name.c_str());
     return kExitBadInput;
   } catch (const InputError& e) {
     std::fprintf(stderr, "%s: %s\n", program.name.c_str(), e.what());

@@ -20,7 +20,9 @@ int64_t MonotonicNs() {
   return simulated != 0 ? simulated : Read(CLOCK_MONOTONIC);
 }
 int64_t RealMonotonicNs() { return Read(CLOCK_MONOTONIC); }
-void SetSimulatedNs(int64_t now_ns) { simulated_ns.store(now_ns > 0 ? now_ns : 1, std::memory_order_relaxed); }
+void SetSimulatedNs(int64_t now_ns) {
+  simulated_ns.store(now_ns > 0 ? now_ns : 1, std::memory_order_relaxed);
+}
 void StopSimulatedClock() { simulated_ns.store(0, std::memory_order_relaxed); }
 bool SimulatedClockOn() { return simulated_ns.load(std::memory_order_relaxed) != 0; }
 int64_t WallNs() { return Read(CLOCK_REALTIME); }

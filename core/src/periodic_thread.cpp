@@ -56,7 +56,8 @@ bool PeriodicThread::StopWithin(double timeout_s) {
 void PeriodicThread::Run() {
   pthread_setname_np(pthread_self(), options_.name.substr(0, 15).c_str());
   meter_.SetRealtime(TryRealtime(options_.realtime_priority));
-  LowerThreadPriority(options_.nice_steps);  // refused: the loop still runs, at its creator's priority
+  LowerThreadPriority(
+      options_.nice_steps);  // refused: the loop still runs, at its creator's priority
   const auto period_ns = static_cast<int64_t>(std::llround(1e9 / options_.rate_hz));
   int64_t next = MonotonicNs() + period_ns;
   while (!stop_.load(std::memory_order_relaxed)) {

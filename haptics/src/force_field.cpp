@@ -1,14 +1,15 @@
 #include "haptel/haptics/force_field.hpp"
 
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
-
-#include <Eigen/Core>
 
 namespace haptel::haptics {
 
 namespace {
-Eigen::Map<const Eigen::Vector3d> View(const Vec3d& v) { return Eigen::Map<const Eigen::Vector3d>(v.data()); }
+Eigen::Map<const Eigen::Vector3d> View(const Vec3d& v) {
+  return Eigen::Map<const Eigen::Vector3d>(v.data());
+}
 }  // namespace
 
 Vec3d EvaluateForceField(const ForceField& field, const Vec3d& position, const Vec3d& velocity) {
@@ -17,7 +18,8 @@ Vec3d EvaluateForceField(const ForceField& field, const Vec3d& position, const V
   const Eigen::Vector3d p = View(position);
   const Eigen::Vector3d v = View(velocity);
   const Eigen::Vector3d d = p - View(field.neutral);
-  Eigen::Vector3d f = -(field.stiffness + field.stiffness_growth * d.norm()) * d - field.damping * v;
+  Eigen::Vector3d f =
+      -(field.stiffness + field.stiffness_growth * d.norm()) * d - field.damping * v;
   if (field.wall_active) {
     const Eigen::Vector3d n = View(field.wall_normal);
     const double penetration = (p - View(field.wall_point)).dot(n);
@@ -29,7 +31,8 @@ Vec3d EvaluateForceField(const ForceField& field, const Vec3d& position, const V
   if (field.guidance_active) {
     const Eigen::Vector3d n = View(field.guidance_normal);
     const double penetration = (p - View(field.guidance_point)).dot(n);
-    if (penetration > 0.0) f -= std::min(field.guidance_stiffness * penetration, field.guidance_max_force) * n;
+    if (penetration > 0.0)
+      f -= std::min(field.guidance_stiffness * penetration, field.guidance_max_force) * n;
   }
   Eigen::Map<Eigen::Vector3d>(out.data()) = f;
   return out;

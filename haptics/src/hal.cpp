@@ -11,7 +11,9 @@ namespace haptel::haptics {
 
 Hal::Hal(const DeviceCalibration& calibration) : calibration_(Validated(calibration)) {}
 
-Vec3d Hal::ToMetres(Side side, const Vec3d& raw) const { return TrackerToMetres(calibration(side), raw); }
+Vec3d Hal::ToMetres(Side side, const Vec3d& raw) const {
+  return TrackerToMetres(calibration(side), raw);
+}
 
 void Hal::PublishWrist(Side side, const WristRaw& raw) {
   const int s = Index(side);
@@ -27,9 +29,13 @@ void Hal::PublishGlove(Side side, const GloveRaw& raw) {
   glove_count_[s].fetch_add(1, std::memory_order_release);
 }
 
-void Hal::PublishForces(Side side, const AppliedForces& forces) { forces_[Index(side)].Store(forces); }
+void Hal::PublishForces(Side side, const AppliedForces& forces) {
+  forces_[Index(side)].Store(forces);
+}
 
-void Hal::PublishLost(Side side, bool lost) { lost_[Index(side)].store(lost, std::memory_order_release); }
+void Hal::PublishLost(Side side, bool lost) {
+  lost_[Index(side)].store(lost, std::memory_order_release);
+}
 
 void Hal::SetSetpoint(Side side, ForceSetpoint setpoint, int64_t now_ns) {
   setpoint.stamp_ns = now_ns;
@@ -39,7 +45,9 @@ void Hal::SetSetpoint(Side side, ForceSetpoint setpoint, int64_t now_ns) {
 
 void Hal::SetField(Side side, const ForceField& field) { SetField(side, field, MonotonicNs()); }
 
-void Hal::SetField(Side side, const ForceField& field, int64_t now_ns) { fields_[Index(side)].Store({now_ns, field}); }
+void Hal::SetField(Side side, const ForceField& field, int64_t now_ns) {
+  fields_[Index(side)].Store({now_ns, field});
+}
 
 void Hal::ZeroForces() {
   for (auto& f : fields_) f.Store(StampedField{});
@@ -65,11 +73,15 @@ bool Hal::TrySetpoint(Side side, ForceSetpoint& out) const {
 
 void Hal::SetCue(Side side, const Cue& cue) { cues_[Index(side)].Store(cue); }
 
-bool Hal::TryCue(Side side, Cue& out) const { return cues_[Index(side)].TryLoad(out, kSetpointReadAttempts); }
+bool Hal::TryCue(Side side, Cue& out) const {
+  return cues_[Index(side)].TryLoad(out, kSetpointReadAttempts);
+}
 
-ForceSetpoint Hal::Combine(ForceSetpoint sp, const ForceField& latest_field, int64_t field_stamp_ns) const {
+ForceSetpoint Hal::Combine(ForceSetpoint sp, const ForceField& latest_field,
+                           int64_t field_stamp_ns) const {
   sp.field = latest_field;
-  if (sp.stamp_ns == 0 || (field_stamp_ns != 0 && field_stamp_ns < sp.stamp_ns)) sp.stamp_ns = field_stamp_ns;
+  if (sp.stamp_ns == 0 || (field_stamp_ns != 0 && field_stamp_ns < sp.stamp_ns))
+    sp.stamp_ns = field_stamp_ns;
   const double k = force_scale_.load(std::memory_order_relaxed);
   if (k != 1.0) {
     // Every force is linear in these gains, so scaling them scales the force.
@@ -92,7 +104,8 @@ ForceSetpoint Hal::Combine(ForceSetpoint sp, const ForceField& latest_field, int
 size_t Hal::TrackerHistory(Side side, std::span<TrackerSample> out) const {
   const int s = Index(side);
   const uint64_t end = wrist_count_[s].load(std::memory_order_acquire);
-  const uint64_t want = std::min<uint64_t>({out.size(), end, static_cast<uint64_t>(kTrackerHistory)});
+  const uint64_t want =
+      std::min<uint64_t>({out.size(), end, static_cast<uint64_t>(kTrackerHistory)});
   size_t n = 0;
   int64_t previous_t = 0;
   for (uint64_t i = end - want; i < end; ++i) {
@@ -130,7 +143,8 @@ std::optional<Vec3d> Hal::MeanAcceleration(Side side, double window_s) const {
   // The samples covering the window: the newest back to t_end − window.
   const int64_t t_end = samples[n - 1].t_ns;
   size_t first = n - 1;
-  while (first > 0 && static_cast<double>(t_end - samples[first - 1].t_ns) * 1e-9 <= window_s) --first;
+  while (first > 0 && static_cast<double>(t_end - samples[first - 1].t_ns) * 1e-9 <= window_s)
+    --first;
   if (n - first < 6) return std::nullopt;
   // Mean acceleration = (velocity at the end − velocity at the start) / span,
   // with each velocity a least-squares slope over three samples at each end.
@@ -155,7 +169,8 @@ std::optional<Vec3d> Hal::MeanAcceleration(Side side, double window_s) const {
 HandSample Hal::LatestSample(Side side) const {
   const int s = Index(side);
   HandSample out;
-  if (wrist_count_[s].load(std::memory_order_acquire) == 0 || lost_[s].load(std::memory_order_acquire)) {
+  if (wrist_count_[s].load(std::memory_order_acquire) == 0 ||
+      lost_[s].load(std::memory_order_acquire)) {
     return out;  // valid = false
   }
   const WristRaw raw = wrist_[s].Load();

@@ -16,7 +16,8 @@ PassivityAction PassivityController::Update(const Vec3d& rendered, const Vec3d& 
     held_force_[i] = -rendered[i];
     if (energy_[i] >= 0.0 || period_s <= 0.0) continue;
     const double v = velocity[i];
-    const double alpha = std::min(-energy_[i] / (period_s * std::max(v * v, floor_v2)), limits_.max_damping);
+    const double alpha =
+        std::min(-energy_[i] / (period_s * std::max(v * v, floor_v2)), limits_.max_damping);
     const double dissipated = period_s * alpha * v * v;
     energy_[i] += dissipated;
     action.alpha[i] = alpha;

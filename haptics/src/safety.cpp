@@ -39,11 +39,13 @@ double ForceSafety::FadeGain(int64_t now_ns, int64_t setpoint_stamp_ns) const {
 double ForceSafety::SoftStartGain(int64_t now_ns) const {
   if (!connected_) return 0.0;
   if (config_.soft_start_s <= 0.0) return 1.0;
-  return std::clamp(static_cast<double>(now_ns - connect_ns_) * 1e-9 / config_.soft_start_s, 0.0, 1.0);
+  return std::clamp(static_cast<double>(now_ns - connect_ns_) * 1e-9 / config_.soft_start_s, 0.0,
+                    1.0);
 }
 
 void ForceSafety::Apply(int64_t now_ns, int64_t setpoint_stamp_ns, const Vec3d& setpoint_wrist,
-                        const Vec3d& local_wrist, Vec3d& wrist, std::array<double, kFingers>& fingers) {
+                        const Vec3d& local_wrist, Vec3d& wrist,
+                        std::array<double, kFingers>& fingers) {
   if (!connected_) {
     wrist = Vec3d{};
     fingers = {};

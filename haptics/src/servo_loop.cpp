@@ -33,8 +33,10 @@ ServoLoop::ServoLoop(Device& device, Hal& hal, const DeviceConfig& config,
       observe_link_(config_.servo.passivity && device.HasLink()) {
   const DeviceDescription& d = device.description();
   for (int i = 0; i < kSides; ++i) {
-    arms_[i] = std::make_unique<Arm>(ForceSafety(config.safety, d.wrist_force_limit, d.finger_force_limit));
-    const PassivityLimits limits{config.servo.passivity_max_damping, config.servo.passivity_min_speed};
+    arms_[i] = std::make_unique<Arm>(
+        ForceSafety(config.safety, d.wrist_force_limit, d.finger_force_limit));
+    const PassivityLimits limits{config.servo.passivity_max_damping,
+                                 config.servo.passivity_min_speed};
     arms_[i]->field_port = PassivityController(limits);
     arms_[i]->coupling_port = PassivityController(limits);
     TwoPortLimits link_limits;
@@ -54,7 +56,8 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
   arm.cue_felt = false;
 
   const DeviceDescription& d = device_.description();
-  if ((d.has_glove || d.has_grasp) && arm.cycle % static_cast<uint64_t>(config_.servo.slow_channel_divider) == 0) {
+  if ((d.has_glove || d.has_grasp) &&
+      arm.cycle % static_cast<uint64_t>(config_.servo.slow_channel_divider) == 0) {
     if (device_.ReadGlove(side, now_ns, arm.glove) == DeviceStatus::kOk) {
       hal_.PublishGlove(side, arm.glove);
       if (trace_ != nullptr) trace_->Push(TraceRecord::FromGlove(side, arm.glove));
@@ -98,7 +101,8 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
     hal_.PublishWrist(side, arm.wrist);
     if (trace_ != nullptr) trace_->Push(TraceRecord::FromWrist(side, arm.wrist));
     const Vec3d p = TrackerToMetres(cal, arm.wrist.position);
-    for (int i = 0; i < 3; ++i) arm.displacement[i] = arm.have_previous ? p[i] - arm.previous_position[i] : 0.0;
+    for (int i = 0; i < 3; ++i)
+      arm.displacement[i] = arm.have_previous ? p[i] - arm.previous_position[i] : 0.0;
     if (arm.have_previous && now_ns > arm.previous_ns) {
       const double dt = static_cast<double>(now_ns - arm.previous_ns) * 1e-9;
       const double alpha = dt / (kVelocityFilter_s + dt);
@@ -118,7 +122,8 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
     return;  // nothing to compute forces from yet
   }
 
-  const double period_s = arm.last_tick_ns != 0 ? static_cast<double>(now_ns - arm.last_tick_ns) * 1e-9 : 0.0;
+  const double period_s =
+      arm.last_tick_ns != 0 ? static_cast<double>(now_ns - arm.last_tick_ns) * 1e-9 : 0.0;
   arm.last_tick_ns = now_ns;
   // The two-port's loop end: what crossed the channel here over the period
   // just ended, and the offset that returns a deficit to the environment.
@@ -129,7 +134,8 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
     if (link) {
       ++c.passivity_link_ticks;
       Vec3d remote_in{};
-      for (int i = 0; i < 3; ++i) remote_in[i] = arm.link_remote.energy_in[i] - arm.link_remote.charged[i];
+      for (int i = 0; i < 3; ++i)
+        remote_in[i] = arm.link_remote.energy_in[i] - arm.link_remote.charged[i];
       const double was = arm.link_end.dissipated_total_j();
       bool acted = false;
       if (config_.servo.passivity_link_admittance) {
@@ -142,7 +148,8 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
       if (acted) ++c.passivity_ticks;
       c.passivity_device_ticks = arm.link_base_ticks + arm.link_remote.acted_ticks;
       c.passivity_device_dissipated_j = arm.link_base_dissipated_j + arm.link_remote.dissipated_j;
-      c.passivity_device_max_alpha = std::max(c.passivity_device_max_alpha, arm.link_remote.max_alpha);
+      c.passivity_device_max_alpha =
+          std::max(c.passivity_device_max_alpha, arm.link_remote.max_alpha);
     }
   }
 
@@ -154,7 +161,8 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
   Vec3d coupling{};
   for (int i = 0; i < 3; ++i) {
     if (sp.coupling_enabled) {
-      coupling[i] = sp.coupling_stiffness * (sp.coupling_target[i] - p[i]) - sp.coupling_damping * v[i];
+      coupling[i] =
+          sp.coupling_stiffness * (sp.coupling_target[i] - p[i]) - sp.coupling_damping * v[i];
     }
     coupling[i] += sp.wrist_force[i];
   }
@@ -182,7 +190,8 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
     if (acted) ++c.passivity_ticks;
   }
   Vec3d local{};
-  if (gravity_ != nullptr) local[2] = gravity_->Evaluate(arm.previous_position);  // the arm's own weight
+  if (gravity_ != nullptr)
+    local[2] = gravity_->Evaluate(arm.previous_position);  // the arm's own weight
   Vec3d wrist{};
   std::array<double, kFingers> fingers = sp.finger_forces;
   arm.safety.Apply(now_ns, sp.stamp_ns, from_setpoint, local, wrist, fingers);
@@ -190,10 +199,12 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
   if (observe_link_) {
     // The force held over the next period, and the report the commands carry.
     arm.link_end.Hold(wrist);
-    device_.SetLinkEnergy(side, LinkEnergy{arm.link_end.energy_in(), arm.link_end.charged(),
-                                           arm.link_end.dissipated_total_j(), c.passivity_ticks, 0.0});
+    device_.SetLinkEnergy(side,
+                          LinkEnergy{arm.link_end.energy_in(), arm.link_end.charged(),
+                                     arm.link_end.dissipated_total_j(), c.passivity_ticks, 0.0});
   }
-  if (device_.WriteWristForce(side, NewtonsToCommand(cal, wrist)) != DeviceStatus::kOk) ++c.write_failures;
+  if (device_.WriteWristForce(side, NewtonsToCommand(cal, wrist)) != DeviceStatus::kOk)
+    ++c.write_failures;
   if (d.has_grasp) {
     std::array<double, kFingers> finger_commands{};
     for (int k = 0; k < kFingers; ++k) finger_commands[k] = FingerNewtonsToCommand(cal, fingers[k]);
@@ -209,7 +220,8 @@ void ServoLoop::Start() {
   stop_requested_.store(false);
   stop_latched_ = false;
   if (config_.servo.lock_memory) memory_locked_ = mlockall(MCL_CURRENT | MCL_FUTURE) == 0;
-  two_threads_ = config_.servo.two_sided && device_.HasSide(Side::kLeft) && device_.HasSide(Side::kRight);
+  two_threads_ =
+      config_.servo.two_sided && device_.HasSide(Side::kLeft) && device_.HasSide(Side::kRight);
   rendezvous_ = std::make_unique<std::barrier<Completion>>(two_threads_ ? 2 : 1, Completion{this});
   period_ns_ = static_cast<int64_t>(std::llround(1e9 / config_.servo.rate_hz));
   anchor_ns_ = MonotonicNs() + 2 * period_ns_;
@@ -279,7 +291,9 @@ void ServoLoop::RunThread(int thread_index) {
   }
 }
 
-LoopStats ServoLoop::Stats(Side side) const { return meters_[two_threads_ ? Index(side) : 0].Stats(); }
+LoopStats ServoLoop::Stats(Side side) const {
+  return meters_[two_threads_ ? Index(side) : 0].Stats();
+}
 
 LoopStats ServoLoop::Stats() const {
   const LoopStats a = meters_[0].Stats();

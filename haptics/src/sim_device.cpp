@@ -37,22 +37,23 @@ SimDevice::SimDevice(const DeviceConfig& config, const OperatorConfig& muscle)
   std::mt19937 rng(static_cast<uint32_t>(config.sim.seed));
   std::uniform_real_distribution<double> percent(-0.05, 0.05);
   std::uniform_real_distribution<double> centimetres(-0.03, 0.03);
-  std::uniform_real_distribution<double> gain(0.004, 0.008);   // rad per sensor count
-  std::uniform_real_distribution<double> offset(-0.3, 0.1);    // rad
+  std::uniform_real_distribution<double> gain(0.004, 0.008);  // rad per sensor count
+  std::uniform_real_distribution<double> offset(-0.3, 0.1);   // rad
   for (int s = 0; s < kSides; ++s) {
     orientation_[s].Store({1.0, 0.0, 0.0, 0.0});
     SimArmTruth& t = truth_[s];
     for (int i = 0; i < 3; ++i) {
       t.tracker_scale[i] = 0.01 * (1.0 + percent(rng));  // device reports ~cm
       t.tracker_offset[i] = centimetres(rng);
-      t.force_slope[i] = 1.0 + 4.0 * percent(rng);        // ±20 %
+      t.force_slope[i] = 1.0 + 4.0 * percent(rng);  // ±20 %
     }
     t.finger_force_slope = 1.0 + 2.0 * percent(rng);
     for (int j = 0; j < kGloveJoints; ++j) {
       t.glove_gain[j] = gain(rng);
       t.glove_offset[j] = offset(rng);
     }
-    glove_noise_state_[s] = 0x9E3779B97F4A7C15ULL + static_cast<uint64_t>(s) + static_cast<uint64_t>(config.sim.seed);
+    glove_noise_state_[s] =
+        0x9E3779B97F4A7C15ULL + static_cast<uint64_t>(s) + static_cast<uint64_t>(config.sim.seed);
     lost_[s].store(false);
   }
 }
@@ -62,13 +63,18 @@ double SimDevice::UnbalancedMass(const Vec3d& p) const {
   // far forward and high up, with a sideways bump so the field is not linear.
   std::array<double, 3> u{};
   for (int i = 0; i < 3; ++i) {
-    u[i] = std::clamp((p[i] - config_.workspace_min[i]) / (config_.workspace_max[i] - config_.workspace_min[i]), 0.0, 1.0);
+    u[i] = std::clamp(
+        (p[i] - config_.workspace_min[i]) / (config_.workspace_max[i] - config_.workspace_min[i]),
+        0.0, 1.0);
   }
-  const double shape = 0.25 + 0.45 * u[0] * u[0] + 0.2 * u[2] + 0.1 * std::sin(std::numbers::pi * u[1]);
+  const double shape =
+      0.25 + 0.45 * u[0] * u[0] + 0.2 * u[2] + 0.1 * std::sin(std::numbers::pi * u[1]);
   return config_.exo_unbalanced_mass * shape;
 }
 
-void SimDevice::SetOperatorTarget(Side side, const Vec3d& target) { operator_[Index(side)].Store({target, true}); }
+void SimDevice::SetOperatorTarget(Side side, const Vec3d& target) {
+  operator_[Index(side)].Store({target, true});
+}
 
 void SimDevice::Release(Side side) {
   OperatorInput in = operator_[Index(side)].Load();
@@ -103,8 +109,10 @@ void SimDevice::Step(Arm& arm, const OperatorInput& input, double dt) {
     double muscle = 0.0;
     if (input.holding) {
       const double error = input.target[i] - arm.position[i];
-      arm.integral[i] = std::clamp(arm.integral[i] + muscle_.muscle_integral_gain * error * dt, -max_integral, max_integral);
-      muscle = std::clamp(muscle_.muscle_stiffness * error + arm.integral[i] - muscle_.muscle_damping * arm.velocity[i],
+      arm.integral[i] = std::clamp(arm.integral[i] + muscle_.muscle_integral_gain * error * dt,
+                                   -max_integral, max_integral);
+      muscle = std::clamp(muscle_.muscle_stiffness * error + arm.integral[i] -
+                              muscle_.muscle_damping * arm.velocity[i],
                           -muscle_.muscle_max_force, muscle_.muscle_max_force);
     }
     const double gravity = i == 2 ? -weight : 0.0;
@@ -117,7 +125,8 @@ void SimDevice::Step(Arm& arm, const OperatorInput& input, double dt) {
     const double friction = -config_.coulomb_friction * Sign(std::abs(v) < kStickSpeed ? drive : v);
     const double before = v;
     v += (drive + friction) / config_.arm_mass * dt;
-    if (before != 0.0 && Sign(before) != Sign(v) && std::abs(drive) <= config_.coulomb_friction) v = 0.0;
+    if (before != 0.0 && Sign(before) != Sign(v) && std::abs(drive) <= config_.coulomb_friction)
+      v = 0.0;
     double& x = arm.position[i];
     x += v * dt;
     if (x < config_.workspace_min[i]) {
@@ -163,8 +172,10 @@ DeviceStatus SimDevice::ReadGlove(Side side, int64_t now_ns, GloveRaw& out) {
   const std::array<double, kGloveJoints> angles = posture_[s].Load();
   out.t_ns = now_ns;
   for (int j = 0; j < kGloveJoints; ++j) {
-    const double noise = config_.glove_noise > 0 ? config_.glove_noise * Noise(glove_noise_state_[s]) : 0.0;
-    out.sensors[j] = std::round((angles[j] - t.glove_offset[j]) / t.glove_gain[j] + noise);  // integer counts
+    const double noise =
+        config_.glove_noise > 0 ? config_.glove_noise * Noise(glove_noise_state_[s]) : 0.0;
+    out.sensors[j] =
+        std::round((angles[j] - t.glove_offset[j]) / t.glove_gain[j] + noise);  // integer counts
   }
   for (int f = 0; f < kFingers; ++f) out.grasp[f] = arms_[s].finger_force[f] / t.finger_force_slope;
   return DeviceStatus::kOk;
@@ -172,7 +183,8 @@ DeviceStatus SimDevice::ReadGlove(Side side, int64_t now_ns, GloveRaw& out) {
 
 Vec3d SimDevice::MeasureForce(Side side, const Vec3d& command) const {
   const SimArmTruth& t = truth_[Index(side)];
-  Vec3d f{t.force_slope[0] * command[0], t.force_slope[1] * command[1], t.force_slope[2] * command[2]};
+  Vec3d f{t.force_slope[0] * command[0], t.force_slope[1] * command[1],
+          t.force_slope[2] * command[2]};
   LimitForce(f, config_.force_limit);  // the hardware saturates, whatever it is told
   return f;
 }

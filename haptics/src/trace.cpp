@@ -11,7 +11,8 @@ namespace haptel::haptics {
 
 namespace {
 constexpr char kMagic[8] = {'H', 'A', 'P', 'T', 'R', 'C', '0', '1'};
-static_assert(sizeof(TraceRecord) == 16 + 8 * (kGloveJoints + kFingers), "trace records are packed");
+static_assert(sizeof(TraceRecord) == 16 + 8 * (kGloveJoints + kFingers),
+              "trace records are packed");
 }  // namespace
 
 TraceRecord TraceRecord::FromWrist(Side side, const WristRaw& raw) {
@@ -55,7 +56,8 @@ TraceWriter::TraceWriter(const std::filesystem::path& file, size_t ring_capacity
   out_ = std::fopen(file.c_str(), "wb");
   if (out_ == nullptr || std::fwrite(kMagic, 1, sizeof kMagic, out_) != sizeof kMagic) {
     if (out_ != nullptr) std::fclose(out_);
-    throw std::runtime_error("trace: cannot write '" + file.string() + "': " + std::strerror(errno));
+    throw std::runtime_error("trace: cannot write '" + file.string() +
+                             "': " + std::strerror(errno));
   }
   for (auto& ring : rings_) ring = std::make_unique<SpscRing<TraceRecord>>(ring_capacity);
   thread_ = std::thread([this] { Drain(); });
@@ -98,7 +100,8 @@ std::vector<TraceRecord> ReadTrace(const std::filesystem::path& file) {
   std::FILE* in = std::fopen(file.c_str(), "rb");
   if (in == nullptr) throw std::runtime_error("trace: cannot open '" + file.string() + "'");
   char magic[8] = {};
-  if (std::fread(magic, 1, sizeof magic, in) != sizeof magic || std::memcmp(magic, kMagic, sizeof magic) != 0) {
+  if (std::fread(magic, 1, sizeof magic, in) != sizeof magic ||
+      std::memcmp(magic, kMagic, sizeof magic) != 0) {
     std::fclose(in);
     throw std::runtime_error("trace: '" + file.string() + "' is not a Haptel trace (bad header)");
   }
@@ -107,9 +110,11 @@ std::vector<TraceRecord> ReadTrace(const std::filesystem::path& file) {
   for (;;) {
     const size_t got = std::fread(&r, 1, sizeof r, in);
     if (got == 0) break;
-    if (got != sizeof r || (r.kind != TraceRecord::kWrist && r.kind != TraceRecord::kGlove) || r.side >= kSides) {
+    if (got != sizeof r || (r.kind != TraceRecord::kWrist && r.kind != TraceRecord::kGlove) ||
+        r.side >= kSides) {
       std::fclose(in);
-      throw std::runtime_error("trace: '" + file.string() + "': record " + std::to_string(records.size()) +
+      throw std::runtime_error("trace: '" + file.string() + "': record " +
+                               std::to_string(records.size()) +
                                (got != sizeof r ? " is truncated" : " is malformed"));
     }
     records.push_back(r);
@@ -121,7 +126,8 @@ std::vector<TraceRecord> ReadTrace(const std::filesystem::path& file) {
   return records;
 }
 
-ReplayDevice::ReplayDevice(std::vector<TraceRecord> records, const DeviceDescription& description, bool loop)
+ReplayDevice::ReplayDevice(std::vector<TraceRecord> records, const DeviceDescription& description,
+                           bool loop)
     : records_(std::move(records)), description_(description), loop_(loop) {
   if (records_.empty()) throw std::runtime_error("replay: the trace has no records");
   trace_start_ns_ = records_.front().t_ns;
@@ -134,7 +140,8 @@ bool ReplayDevice::finished(int64_t now_ns) const {
   return !loop_ && !holding_.load() && start != 0 && now_ns - start >= trace_span_ns_;
 }
 
-long ReplayDevice::Due(Side side, TraceRecord::Kind kind, int64_t now_ns, size_t& cursor, int64_t& round) {
+long ReplayDevice::Due(Side side, TraceRecord::Kind kind, int64_t now_ns, size_t& cursor,
+                       int64_t& round) {
   if (holding_.load(std::memory_order_acquire)) {
     // The first reading of this kind and side, without starting the clock.
     for (size_t i = 0; i < records_.size(); ++i) {
@@ -163,7 +170,8 @@ long ReplayDevice::Due(Side side, TraceRecord::Kind kind, int64_t now_ns, size_t
 }
 
 DeviceStatus ReplayDevice::ReadWrist(Side side, int64_t now_ns, WristRaw& out) {
-  const long i = Due(side, TraceRecord::kWrist, now_ns, wrist_cursor_[Index(side)], wrist_round_[Index(side)]);
+  const long i =
+      Due(side, TraceRecord::kWrist, now_ns, wrist_cursor_[Index(side)], wrist_round_[Index(side)]);
   if (i < 0) return DeviceStatus::kNoData;
   out = records_[static_cast<size_t>(i)].ToWrist();
   out.t_ns = now_ns;
@@ -171,7 +179,8 @@ DeviceStatus ReplayDevice::ReadWrist(Side side, int64_t now_ns, WristRaw& out) {
 }
 
 DeviceStatus ReplayDevice::ReadGlove(Side side, int64_t now_ns, GloveRaw& out) {
-  const long i = Due(side, TraceRecord::kGlove, now_ns, glove_cursor_[Index(side)], glove_round_[Index(side)]);
+  const long i =
+      Due(side, TraceRecord::kGlove, now_ns, glove_cursor_[Index(side)], glove_round_[Index(side)]);
   if (i < 0) return DeviceStatus::kNoData;
   out = records_[static_cast<size_t>(i)].ToGlove();
   out.t_ns = now_ns;

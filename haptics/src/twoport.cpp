@@ -34,7 +34,8 @@ TwoPortAction TwoPortPassivity::Control(const Vec3d& rendered, const Vec3d& remo
     }
     if (margin >= 0.0 || period_s <= 0.0) continue;
     const double v = velocity[i];
-    const double alpha = std::min(-margin / (period_s * std::max(v * v, floor_v2)), limits_.max_damping);
+    const double alpha =
+        std::min(-margin / (period_s * std::max(v * v, floor_v2)), limits_.max_damping);
     action.alpha[i] = alpha;
     damping[i] = -alpha * v;
     action.acted = true;
@@ -44,7 +45,8 @@ TwoPortAction TwoPortPassivity::Control(const Vec3d& rendered, const Vec3d& remo
   return action;
 }
 
-const Vec3d& TwoPortPassivity::ControlPosition(const Vec3d& remote_energy_in, double period_s, bool* acted) {
+const Vec3d& TwoPortPassivity::ControlPosition(const Vec3d& remote_energy_in, double period_s,
+                                               bool* acted) {
   const double floor_f = limits_.max_damping * limits_.min_speed;
   const Vec3d margin = Margin(remote_energy_in);
   for (int i = 0; i < 3; ++i) {
@@ -67,7 +69,8 @@ const Vec3d& TwoPortPassivity::ControlPosition(const Vec3d& remote_energy_in, do
       charged_[i] = std::max(charged_[i], -left);
     } else if (offset_[i] != 0.0) {
       // Drift back, paid from the margin: a step along −f costs f·r of it.
-      double r = std::clamp(-offset_[i], -limits_.min_speed * period_s, limits_.min_speed * period_s);
+      double r =
+          std::clamp(-offset_[i], -limits_.min_speed * period_s, limits_.min_speed * period_s);
       const double cost = -f * r;
       if (cost > margin[i]) r *= margin[i] / cost;
       offset_[i] += r;
@@ -94,7 +97,8 @@ void TwoPortPassivity::Hold(const Vec3d& rendered, const Vec3d& damping) {
 Vec3d TwoPortPassivity::Margin(const Vec3d& remote_energy_in) const {
   Vec3d w{};
   for (int i = 0; i < 3; ++i) {
-    w[i] = std::min(remote_energy_in[i] - energy_out_[i] + dissipated_[i] - forgotten_[i], limits_.max_credit_j);
+    w[i] = std::min(remote_energy_in[i] - energy_out_[i] + dissipated_[i] - forgotten_[i],
+                    limits_.max_credit_j);
   }
   return w;
 }

@@ -11,7 +11,8 @@ using detail::Unshape;
 using haptics::Side;
 using haptics::Vec3d;
 
-BlimpGestureInterface::BlimpGestureInterface(const BlimpGestureConfig& config) : config_(Validated(config)) {
+BlimpGestureInterface::BlimpGestureInterface(const BlimpGestureConfig& config)
+    : config_(Validated(config)) {
   for (Side side : {Side::kLeft, Side::kRight}) {
     haptics::ForceField& f = fields_[haptics::Index(side)];
     f.enabled = true;
@@ -22,7 +23,8 @@ BlimpGestureInterface::BlimpGestureInterface(const BlimpGestureConfig& config) :
   }
 }
 
-BlimpCommand BlimpGestureInterface::Map(const Vec3d& left, const Vec3d& right, const HeadDirection& head) const {
+BlimpCommand BlimpGestureInterface::Map(const Vec3d& left, const Vec3d& right,
+                                        const HeadDirection& head) const {
   const BlimpGestureConfig& c = config_;
   BlimpCommand out;
   // Right hand: a stick. Forward pushes the nose down.
@@ -32,7 +34,8 @@ BlimpCommand BlimpGestureInterface::Map(const Vec3d& left, const Vec3d& right, c
   out.power = std::max(0.0, Shape(left[0] - c.left_neutral[0], c.dead_zone, c.full_power));
   out.helix = Shape(left[2] - c.left_neutral[2], c.dead_zone, c.full_helix);
   // With no power, sideways is the tail rotor (the quick turnabout).
-  if (out.power == 0.0) out.tail_rotor = Shape(left[1] - c.left_neutral[1], c.dead_zone, c.full_tail);
+  if (out.power == 0.0)
+    out.tail_rotor = Shape(left[1] - c.left_neutral[1], c.dead_zone, c.full_tail);
   out.camera_pan = head.pan;
   out.camera_tilt = head.tilt;
   return Clamped(out);
@@ -58,7 +61,8 @@ BlimpCommand BlimpGestureInterface::Update(const HeadDirection& head, haptics::H
   return Update(head, hal, MonotonicNs());
 }
 
-BlimpCommand BlimpGestureInterface::Update(const HeadDirection& head, haptics::Hal& hal, int64_t now_ns) {
+BlimpCommand BlimpGestureInterface::Update(const HeadDirection& head, haptics::Hal& hal,
+                                           int64_t now_ns) {
   const haptics::HandSample left = hal.LatestSample(Side::kLeft);
   const haptics::HandSample right = hal.LatestSample(Side::kRight);
   if (!left.valid || !right.valid) {

@@ -16,7 +16,8 @@ double Axis(const InputState& s, PadAxis a) { return s.pad_axes[static_cast<size
 
 }  // namespace
 
-BlimpManualInterface::BlimpManualInterface(const BlimpManualConfig& config, const InputState& at_start)
+BlimpManualInterface::BlimpManualInterface(const BlimpManualConfig& config,
+                                           const InputState& at_start)
     : config_(Validated(config)),
       power_(0, config_.power_steps, config_.repeat_s, false),
       helix_(-config_.helix_steps, config_.helix_steps, config_.repeat_s, false),
@@ -68,8 +69,10 @@ BlimpCommand BlimpManualInterface::Keys(double t_s, const InputState& s) {
 BlimpCommand BlimpManualInterface::Pad(const InputState& s) {
   if (s.pad_disconnects != disconnects_at_start_) lost_ = true;
   if (lost_ || !s.pad_connected) return {};
-  const auto left = RadialDeadZone(Axis(s, PadAxis::kLeftX), Axis(s, PadAxis::kLeftY), config_.dead_zone);
-  const auto right = RadialDeadZone(Axis(s, PadAxis::kRightX), Axis(s, PadAxis::kRightY), config_.dead_zone);
+  const auto left =
+      RadialDeadZone(Axis(s, PadAxis::kLeftX), Axis(s, PadAxis::kLeftY), config_.dead_zone);
+  const auto right =
+      RadialDeadZone(Axis(s, PadAxis::kRightX), Axis(s, PadAxis::kRightY), config_.dead_zone);
   BlimpCommand c;
   // SDL's sticks: x + right, y + down (pulled back).
   c.power = std::max(0.0, -left[1]);

@@ -8,33 +8,39 @@ namespace haptel::interfaces {
 using haptics::Side;
 using haptics::Vec3d;
 
-CockpitInterface::CockpitInterface(const CockpitConfig& config, ControlsPort& port, const GripGeometry& grip,
-                                   const VehicleGeometry& vehicle)
+CockpitInterface::CockpitInterface(const CockpitConfig& config, ControlsPort& port,
+                                   const GripGeometry& grip, const VehicleGeometry& vehicle)
     : logic_(config), port_(port), grip_(grip) {
-  if (logic_.config().shared_control.enabled) shared_.emplace(logic_.config().shared_control, vehicle);
+  if (logic_.config().shared_control.enabled)
+    shared_.emplace(logic_.config().shared_control, vehicle);
 }
 
-MotorCommand CockpitInterface::Update(double t_s, const VehicleFeedback& feedback, haptics::Hal& hal) {
+MotorCommand CockpitInterface::Update(double t_s, const VehicleFeedback& feedback,
+                                      haptics::Hal& hal) {
   controls_ = port_.Controls();
   // Slip: where each hand is against where its grip on the control would put
   // it. Made up for in HandTargetsFor; forgotten while the control is not held.
   const CockpitConfig& c = logic_.config();
   const double dt = last_update_s_ < 0 ? 0.0 : std::max(0.0, t_s - last_update_s_);
   last_update_s_ = t_s;
-  const double a = grip_.slip_time_constant > 0 ? 1.0 - std::exp(-dt / grip_.slip_time_constant) : 1.0;
+  const double a =
+      grip_.slip_time_constant > 0 ? 1.0 - std::exp(-dt / grip_.slip_time_constant) : 1.0;
   const haptics::HandSample right = hal.LatestSample(Side::kRight);
   // A locked lever holds against the hand: that is not a slip.
   if (controls_.throttle_held && right.valid && !logic_.throttle_locked(t_s)) {
     const double slip = right.position[0] - (c.throttle_centre[0] + controls_.throttle);
-    lever_slip_ += (std::clamp(slip, -grip_.max_lever_slip, grip_.max_lever_slip) - lever_slip_) * a;
+    lever_slip_ +=
+        (std::clamp(slip, -grip_.max_lever_slip, grip_.max_lever_slip) - lever_slip_) * a;
   } else if (!controls_.throttle_held) {
     lever_slip_ = 0.0;
   }
   const haptics::HandSample left = hal.LatestSample(Side::kLeft);
   if (controls_.wheel_held && left.valid) {
-    const double hand_angle = std::atan2(left.position[1] - c.wheel_hub[1], left.position[2] - c.wheel_hub[2]);
+    const double hand_angle =
+        std::atan2(left.position[1] - c.wheel_hub[1], left.position[2] - c.wheel_hub[2]);
     const double slip = std::remainder(hand_angle - controls_.wheel_angle, 2.0 * M_PI);
-    wheel_slip_ += (std::clamp(slip, -grip_.max_wheel_slip, grip_.max_wheel_slip) - wheel_slip_) * a;
+    wheel_slip_ +=
+        (std::clamp(slip, -grip_.max_wheel_slip, grip_.max_wheel_slip) - wheel_slip_) * a;
   } else {
     wheel_slip_ = 0.0;
   }

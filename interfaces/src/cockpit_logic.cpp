@@ -27,13 +27,15 @@ MotorCommand CockpitLogic::Map(const CockpitControls& c, double t_s) const {
 CockpitControls CockpitLogic::ControlsFor(const DriveIntent& intent) const {
   CockpitControls c;
   const double full = config_.wheel_full_turn_deg * kDegToRad;
-  c.wheel_angle = config_.turn_share > 0 ? std::clamp(intent.turn / config_.turn_share, -1.0, 1.0) * full : 0.0;
+  c.wheel_angle =
+      config_.turn_share > 0 ? std::clamp(intent.turn / config_.turn_share, -1.0, 1.0) * full : 0.0;
   c.throttle = std::clamp(intent.forward, -1.0, 1.0) * config_.throttle_travel;
   c.wheel_held = c.throttle_held = true;
   return c;
 }
 
-ControlActuation CockpitLogic::Update(double t_s, const VehicleFeedback& feedback, const CockpitControls& controls) {
+ControlActuation CockpitLogic::Update(double t_s, const VehicleFeedback& feedback,
+                                      const CockpitControls& controls) {
   const bool touching = feedback.bumper_left || feedback.bumper_right;
   if (touching && !was_touching_) {
     shake_start_s_ = t_s;
@@ -44,7 +46,8 @@ ControlActuation CockpitLogic::Update(double t_s, const VehicleFeedback& feedbac
 
   ControlActuation a;
   if (shaking(t_s)) {
-    a.wheel_torque = config_.shake_torque * std::sin(2.0 * std::numbers::pi * config_.shake_hz * (t_s - shake_start_s_));
+    a.wheel_torque = config_.shake_torque *
+                     std::sin(2.0 * std::numbers::pi * config_.shake_hz * (t_s - shake_start_s_));
   }
   if (throttle_locked(t_s)) {
     a.throttle_locked = true;
@@ -52,11 +55,13 @@ ControlActuation CockpitLogic::Update(double t_s, const VehicleFeedback& feedbac
   } else if (config_.return_to_zero && !controls.throttle_held) {
     a.throttle_spring = config_.throttle_return_stiffness;
   }
-  if (config_.return_to_zero && !controls.wheel_held) a.wheel_spring = config_.wheel_return_stiffness;
+  if (config_.return_to_zero && !controls.wheel_held)
+    a.wheel_spring = config_.wheel_return_stiffness;
   return a;
 }
 
-HudState CockpitLogic::Hud(const VehicleFeedback& feedback, const CockpitControls& controls, double t_s) const {
+HudState CockpitLogic::Hud(const VehicleFeedback& feedback, const CockpitControls& controls,
+                           double t_s) const {
   HudState h;
   if (!config_.hud) return h;
   h.speed = feedback.speed;

@@ -28,9 +28,10 @@ GestureInterface::GestureInterface(const GestureConfig& config, const VehicleGeo
 }
 
 MotorCommand GestureInterface::Map(const Vec3d& hand) const {
-  const double forward = Shape(hand[0] - config_.neutral[0], config_.dead_zone, config_.full_forward);
-  const double turn =
-      config_.turn_share * Shape(hand[1] - config_.neutral[1], config_.dead_zone, config_.full_turn);
+  const double forward =
+      Shape(hand[0] - config_.neutral[0], config_.dead_zone, config_.full_forward);
+  const double turn = config_.turn_share *
+                      Shape(hand[1] - config_.neutral[1], config_.dead_zone, config_.full_turn);
   return Mix(forward, turn);
 }
 
@@ -44,7 +45,8 @@ HandTargets GestureInterface::HandTargetsFor(const DriveIntent& intent) const {
   return targets;
 }
 
-MotorCommand GestureInterface::Update(double t_s, const VehicleFeedback& feedback, haptics::Hal& hal) {
+MotorCommand GestureInterface::Update(double t_s, const VehicleFeedback& feedback,
+                                      haptics::Hal& hal) {
   const haptics::HandSample hand = hal.LatestSample(Side::kRight);
   if (!hand.valid) {
     hal.ZeroForces();

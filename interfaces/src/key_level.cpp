@@ -18,11 +18,14 @@ void KeyLevel::Skip(uint32_t plus_presses, uint32_t minus_presses) {
   seen_minus_ = minus_presses;
 }
 
-int KeyLevel::Clamp(long level) const { return static_cast<int>(std::clamp<long>(level, min_, max_)); }
+int KeyLevel::Clamp(long level) const {
+  return static_cast<int>(std::clamp<long>(level, min_, max_));
+}
 
 void KeyLevel::set_level(int level) { level_ = Clamp(level); }
 
-void KeyLevel::Step(double t_s, bool plus_held, bool minus_held, uint32_t plus_presses, uint32_t minus_presses) {
+void KeyLevel::Step(double t_s, bool plus_held, bool minus_held, uint32_t plus_presses,
+                    uint32_t minus_presses) {
   // Unsigned differences: correct across counter wrap-around.
   const uint32_t new_plus = plus_presses - seen_plus_;
   const uint32_t new_minus = minus_presses - seen_minus_;

@@ -12,8 +12,10 @@ KeyboardInterface::KeyboardInterface(const KeyboardConfig& config, const InputBo
     : config_(Validated(config)),
       input_(input),
       levels_(speed_levels),
-      throttle_(-std::max(speed_levels, 1), std::max(speed_levels, 1), config_.repeat_s, config_.release_to_zero),
-      steering_(-std::max(speed_levels, 1), std::max(speed_levels, 1), config_.repeat_s, config_.release_to_zero) {
+      throttle_(-std::max(speed_levels, 1), std::max(speed_levels, 1), config_.repeat_s,
+                config_.release_to_zero),
+      steering_(-std::max(speed_levels, 1), std::max(speed_levels, 1), config_.repeat_s,
+                config_.release_to_zero) {
   if (speed_levels < 1) throw std::invalid_argument("KeyboardInterface: speed_levels must be >= 1");
   // Presses made before this interface existed (e.g. under the previous
   // interface of the run) belong to that one.

@@ -22,8 +22,8 @@ void ArcPosition(double v, double omega, double t, double& x, double& y) {
 
 }  // namespace
 
-double TimeToCollision(const RangeScan& scan, const MotorCommand& command, const VehicleGeometry& vehicle,
-                       double clearance, double horizon_s) {
+double TimeToCollision(const RangeScan& scan, const MotorCommand& command,
+                       const VehicleGeometry& vehicle, double clearance, double horizon_s) {
   constexpr double kNever = std::numeric_limits<double>::infinity();
   const int count = std::clamp(scan.count, 0, kMaxRangeBeams);
   const double v = 0.5 * (command.left + command.right) * vehicle.max_speed;

@@ -1,14 +1,13 @@
 #include "haptel/link/fault_transport.hpp"
 
+#include <fastdds/rtps/transport/ChainingTransport.h>
+#include <fastdds/rtps/transport/ChainingTransportDescriptor.h>
 #include <signal.h>
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
-
-#include <fastdds/rtps/transport/ChainingTransport.h>
-#include <fastdds/rtps/transport/ChainingTransportDescriptor.h>
 
 #include "haptel/core/clock.hpp"
 
@@ -34,7 +33,8 @@ class FaultTransport : public rtps::ChainingTransport {
   rtps::TransportDescriptorInterface* get_configuration() override;
 
   bool send(eprosima::fastrtps::rtps::SenderResource* low_sender_resource, const octet* send_buffer,
-            uint32_t send_buffer_size, eprosima::fastrtps::rtps::LocatorsIterator* destination_locators_begin,
+            uint32_t send_buffer_size,
+            eprosima::fastrtps::rtps::LocatorsIterator* destination_locators_begin,
             eprosima::fastrtps::rtps::LocatorsIterator* destination_locators_end,
             const std::chrono::steady_clock::time_point& timeout) override {
     if (line_->DropSend()) return true;  // cut: as good as sent, and lost
@@ -43,8 +43,10 @@ class FaultTransport : public rtps::ChainingTransport {
   }
 
   void receive(rtps::TransportReceiverInterface* next_receiver, const octet* receive_buffer,
-               uint32_t receive_buffer_size, const Locator_t& local_locator, const Locator_t& remote_locator) override {
-    line_->Receive(next_receiver, receive_buffer, receive_buffer_size, local_locator, remote_locator);
+               uint32_t receive_buffer_size, const Locator_t& local_locator,
+               const Locator_t& remote_locator) override {
+    line_->Receive(next_receiver, receive_buffer, receive_buffer_size, local_locator,
+                   remote_locator);
   }
 
  private:
@@ -53,7 +55,8 @@ class FaultTransport : public rtps::ChainingTransport {
 };
 
 struct FaultDescriptor : public rtps::ChainingTransportDescriptor {
-  FaultDescriptor(std::shared_ptr<rtps::TransportDescriptorInterface> low, std::shared_ptr<FaultLine> fault_line)
+  FaultDescriptor(std::shared_ptr<rtps::TransportDescriptorInterface> low,
+                  std::shared_ptr<FaultLine> fault_line)
       : ChainingTransportDescriptor(std::move(low)), line(std::move(fault_line)) {}
   rtps::TransportInterface* create_transport() const override { return new FaultTransport(*this); }
   std::shared_ptr<FaultLine> line;
@@ -64,7 +67,9 @@ FaultTransport::FaultTransport(const FaultDescriptor& descriptor)
       descriptor_(std::make_unique<FaultDescriptor>(descriptor)),
       line_(descriptor.line) {}
 
-rtps::TransportDescriptorInterface* FaultTransport::get_configuration() { return descriptor_.get(); }
+rtps::TransportDescriptorInterface* FaultTransport::get_configuration() {
+  return descriptor_.get();
+}
 
 }  // namespace
 
@@ -72,7 +77,7 @@ void SetLinkDown(bool down) { g_link_down.store(down); }
 bool LinkDown() { return g_link_down.load(); }
 
 void InstallLinkDownSignal() {
-  struct sigaction action{};
+  struct sigaction action {};
   action.sa_handler = ToggleLinkDown;
   sigemptyset(&action.sa_mask);
   action.sa_flags = SA_RESTART;
@@ -83,7 +88,9 @@ RateQueue::RateQueue(double rate_bps, double queue_s)
     : ns_per_byte_(8e9 / rate_bps), max_wait_ns_(SToNs(queue_s)) {}
 
 std::optional<int64_t> RateQueue::Admit(int64_t now_ns, size_t bytes) {
-  const auto take = [&](size_t n) { return static_cast<int64_t>(std::llround(static_cast<double>(n) * ns_per_byte_)); };
+  const auto take = [&](size_t n) {
+    return static_cast<int64_t>(std::llround(static_cast<double>(n) * ns_per_byte_));
+  };
   const int64_t cost = take(bytes);
   if (bytes > kUrgentMaxBytes) {
     const int64_t start = std::max({now_ns, free_at_ns_, urgent_free_at_ns_});
@@ -123,7 +130,8 @@ void FaultLine::Shutdown() {
 
 void FaultLine::SetRate(double rate_bps) {
   if (!(rate_bps >= 0.0) || !std::isfinite(rate_bps)) {
-    throw std::invalid_argument("link fault: rate " + std::to_string(rate_bps) + " bit/s, expected 0 (no limit) or more");
+    throw std::invalid_argument("link fault: rate " + std::to_string(rate_bps) +
+                                " bit/s, expected 0 (no limit) or more");
   }
   std::lock_guard lock(mutex_);
   fault_.rate_bps = rate_bps;
@@ -142,8 +150,8 @@ double FaultLine::rate_bps() const {
 }
 
 FaultCounts FaultLine::Counts() const {
-  return {received_.load(),      lost_.load(),          delayed_.load(),
-          dropped_down_.load(),  queue_dropped_.load(), queue_dropped_bytes_.load()};
+  return {received_.load(),     lost_.load(),          delayed_.load(),
+          dropped_down_.load(), queue_dropped_.load(), queue_dropped_bytes_.load()};
 }
 
 bool FaultLine::DropSend() {
@@ -180,7 +188,8 @@ void FaultLine::Receive(rtps::TransportReceiverInterface* next, const uint8_t* d
   {
     std::lock_guard lock(mutex_);
     if (stopped_) return;
-    if (fault_.loss > 0.0 && std::uniform_real_distribution<double>(0.0, 1.0)(random_) < fault_.loss) {
+    if (fault_.loss > 0.0 &&
+        std::uniform_real_distribution<double>(0.0, 1.0)(random_) < fault_.loss) {
       lost_.fetch_add(1, std::memory_order_relaxed);
       return;
     }
@@ -235,7 +244,8 @@ void FaultLine::Deliver() {
       dropped_down_.fetch_add(1, std::memory_order_relaxed);
     } else {
       delayed_.fetch_add(1, std::memory_order_relaxed);
-      p.next->OnDataReceived(p.data.data(), static_cast<uint32_t>(p.data.size()), p.local, p.remote);
+      p.next->OnDataReceived(p.data.data(), static_cast<uint32_t>(p.data.size()), p.local,
+                             p.remote);
     }
     lock.lock();
   }

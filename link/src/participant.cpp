@@ -1,9 +1,9 @@
 #include "haptel/link/participant.hpp"
 
+#include <fastdds/rtps/attributes/ServerAttributes.h>
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
 #include <fastrtps/utils/IPLocator.h>
-#include <fastdds/rtps/attributes/ServerAttributes.h>
 #include <fastrtps/xmlparser/XMLProfileManager.h>
 
 #include <cmath>
@@ -145,7 +145,8 @@ Participant::Participant(const LinkConfig& config, const std::string& name)
   }
   if (!config.security.empty()) {
     if (config.security_identity.empty()) {
-      throw std::logic_error("link: security on without an identity (LinkConfig::security_identity)");
+      throw std::logic_error(
+          "link: security on without an identity (LinkConfig::security_identity)");
     }
     // Missing files or an expired certificate: a clear line now, not a
     // silent participant that never authenticates.
@@ -160,7 +161,8 @@ Participant::Participant(const LinkConfig& config, const std::string& name)
     eprosima::fastdds::rtps::RemoteServerAttributes server;
     server.ReadguidPrefix(kServerPrefix);
     server.metatrafficUnicastLocatorList.push_back(UdpLocator(address, port));
-    builtin.discovery_config.discoveryProtocol = eprosima::fastrtps::rtps::DiscoveryProtocol_t::CLIENT;
+    builtin.discovery_config.discoveryProtocol =
+        eprosima::fastrtps::rtps::DiscoveryProtocol_t::CLIENT;
     builtin.discovery_config.m_DiscoveryServers.push_back(server);
     builtin.initialPeersList.clear();
   }
@@ -194,18 +196,21 @@ DiscoveryServer::DiscoveryServer(const std::string& address, int port) {
   dds::DomainParticipantQos qos = dds::PARTICIPANT_QOS_DEFAULT;
   qos.name("haptel-discovery-server");
   auto& builtin = qos.wire_protocol().builtin;
-  builtin.discovery_config.discoveryProtocol = eprosima::fastrtps::rtps::DiscoveryProtocol_t::SERVER;
+  builtin.discovery_config.discoveryProtocol =
+      eprosima::fastrtps::rtps::DiscoveryProtocol_t::SERVER;
   std::istringstream(kServerPrefix) >> qos.wire_protocol().prefix;
   builtin.metatrafficUnicastLocatorList.push_back(UdpLocator(address, port));
   participant_ = dds::DomainParticipantFactory::get_instance()->create_participant(0, qos);
   if (participant_ == nullptr) {
-    throw std::runtime_error("link: cannot serve discovery on " + address + ":" + std::to_string(port) +
+    throw std::runtime_error("link: cannot serve discovery on " + address + ":" +
+                             std::to_string(port) +
                              " (is the port taken, or the address not this host's?)");
   }
 }
 
 DiscoveryServer::~DiscoveryServer() {
-  if (participant_ != nullptr) dds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
+  if (participant_ != nullptr)
+    dds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
 }
 
 }  // namespace haptel::link

@@ -2,14 +2,13 @@
 
 #include <arpa/inet.h>
 #include <netinet/in.h>
-#include <signal.h>
-#include <unistd.h>
-
 #include <openssl/bio.h>
 #include <openssl/pem.h>
 #include <openssl/pkcs7.h>
 #include <openssl/x509.h>
+#include <signal.h>
 #include <tinyxml2.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -44,7 +43,8 @@ void OpenSsl(const fs::path& dir, std::vector<std::string> arguments) {
   if (code != 0) {
     std::string line;
     for (const auto& a : arguments) line += " " + a;
-    throw std::runtime_error("openssl" + line + " (in " + dir.string() + ") failed: " + openssl.err());
+    throw std::runtime_error("openssl" + line + " (in " + dir.string() +
+                             ") failed: " + openssl.err());
   }
 }
 
@@ -104,18 +104,25 @@ std::string Permissions(const std::string& identity, const std::vector<std::stri
                         const std::vector<std::string>& subscribe, int days) {
   const std::time_t now = std::time(nullptr);
   return R"(<?xml version="1.0" encoding="UTF-8"?>
-<!-- What ')" + identity + R"(' may do on Haptel's link. Written by `haptel security init`. -->
+<!-- What ')" +
+         identity + R"(' may do on Haptel's link. Written by `haptel security init`. -->
 <dds xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance"
      xsi:noNamespaceSchemaLocation="http://www.omg.org/spec/DDS-SECURITY/20170901/omg_shared_ca_permissions.xsd">
   <permissions>
-    <grant name=")" + identity + R"(">
-      <subject_name>)" + Subject(identity) + R"(</subject_name>
-      <validity><not_before>)" + Iso(now - 3600) + "</not_before><not_after>" + Iso(now + 86400L * days) +
+    <grant name=")" +
+         identity + R"(">
+      <subject_name>)" +
+         Subject(identity) + R"(</subject_name>
+      <validity><not_before>)" +
+         Iso(now - 3600) + "</not_before><not_after>" + Iso(now + 86400L * days) +
          R"(</not_after></validity>
       <allow_rule>
-        <domains><id_range><min>0</min><max>)" + std::to_string(kMaxDomain) + R"(</max></id_range></domains>
-        <publish><topics>)" + Topics(publish) + R"(</topics></publish>
-        <subscribe><topics>)" + Topics(subscribe) + R"(</topics></subscribe>
+        <domains><id_range><min>0</min><max>)" +
+         std::to_string(kMaxDomain) + R"(</max></id_range></domains>
+        <publish><topics>)" +
+         Topics(publish) + R"(</topics></publish>
+        <subscribe><topics>)" +
+         Topics(subscribe) + R"(</topics></subscribe>
       </allow_rule>
       <default>DENY</default>
     </grant>
@@ -131,19 +138,19 @@ void MakeIdentity(const fs::path& dir, const std::string& identity, int days) {
   // Appended, not `"/" + ...`: GCC 12 -O2 flags that form with a false -Werror=restrict.
   std::string subject = "/";
   subject.append(Subject(identity));
-  OpenSsl(dir, {"req", "-new", "-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1", "-nodes", "-keyout",
-                (dir / key).string(), "-out", csr, "-subj", subject});
-  OpenSsl(dir, {"x509", "-req", "-in", csr, "-CA", (dir / "ca.pem").string(), "-CAkey", (dir / "ca.key").string(),
-                "-CAcreateserial", "-days", std::to_string(days), "-sha256", "-out",
-                (dir / (identity + ".pem")).string()});
+  OpenSsl(dir, {"req", "-new", "-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1",
+                "-nodes", "-keyout", (dir / key).string(), "-out", csr, "-subj", subject});
+  OpenSsl(dir, {"x509", "-req", "-in", csr, "-CA", (dir / "ca.pem").string(), "-CAkey",
+                (dir / "ca.key").string(), "-CAcreateserial", "-days", std::to_string(days),
+                "-sha256", "-out", (dir / (identity + ".pem")).string()});
   fs::remove(csr);
 }
 
 /// `document`.xml signed by the CA into `document`.p7s (S/MIME, clear text).
 void Sign(const fs::path& dir, const std::string& document) {
   OpenSsl(dir, {"smime", "-sign", "-text", "-in", (dir / (document + ".xml")).string(), "-out",
-                (dir / (document + ".p7s")).string(), "-signer", (dir / "ca.pem").string(), "-inkey",
-                (dir / "ca.key").string()});
+                (dir / (document + ".p7s")).string(), "-signer", (dir / "ca.pem").string(),
+                "-inkey", (dir / "ca.key").string()});
 }
 
 struct X509Free {
@@ -159,7 +166,9 @@ std::unique_ptr<X509, X509Free> LoadCertificate(const fs::path& dir, const fs::p
   }
   std::unique_ptr<X509, X509Free> cert(PEM_read_X509(f, nullptr, nullptr, nullptr));
   std::fclose(f);
-  if (!cert) throw ConfigError("security " + dir.string() + ": " + file.filename().string() + " is not a PEM certificate");
+  if (!cert)
+    throw ConfigError("security " + dir.string() + ": " + file.filename().string() +
+                      " is not a PEM certificate");
   return cert;
 }
 
@@ -179,8 +188,9 @@ void CheckValidNow(const fs::path& dir, const fs::path& file) {
                       " (is this host's clock right?)");
   }
   if (X509_cmp_current_time(X509_get0_notAfter(cert.get())) < 0) {
-    throw ConfigError("security " + dir.string() + ": certificate " + file.filename().string() + " expired on " +
-                      TimeText(X509_get0_notAfter(cert.get())) + "; make new ones with `haptel security init`");
+    throw ConfigError("security " + dir.string() + ": certificate " + file.filename().string() +
+                      " expired on " + TimeText(X509_get0_notAfter(cert.get())) +
+                      "; make new ones with `haptel security init`");
   }
 }
 
@@ -210,19 +220,23 @@ std::string SignedContent(const fs::path& file, const fs::path& ca, const std::s
   BIO* content = nullptr;
   const std::unique_ptr<PKCS7, Pkcs7Free> p7(SMIME_read_PKCS7(in.get(), &content));
   const std::unique_ptr<BIO, BioFree> content_owner(content);
-  if (!p7) throw ConfigError(what + " " + file.string() + " is not an S/MIME signed document; " + RemakeAdvice());
+  if (!p7)
+    throw ConfigError(what + " " + file.string() + " is not an S/MIME signed document; " +
+                      RemakeAdvice());
   const std::unique_ptr<X509_STORE, StoreFree> store(X509_STORE_new());
   {
     const std::unique_ptr<BIO, BioFree> ca_in(BIO_new_file(ca.c_str(), "r"));
     X509* cert = ca_in ? PEM_read_bio_X509(ca_in.get(), nullptr, nullptr, nullptr) : nullptr;
-    if (cert == nullptr) throw ConfigError("security: " + ca.string() + " is not a PEM certificate");
+    if (cert == nullptr)
+      throw ConfigError("security: " + ca.string() + " is not a PEM certificate");
     X509_STORE_add_cert(store.get(), cert);
     X509_free(cert);  // the store holds its own reference
   }
   const std::unique_ptr<BIO, BioFree> out(BIO_new(BIO_s_mem()));
   if (PKCS7_verify(p7.get(), nullptr, store.get(), content, out.get(), PKCS7_TEXT) != 1) {
-    throw ConfigError(what + " " + file.string() + " is not signed by this folder's CA (" + ca.string() +
-                      "): made by another `haptel security init`, or changed since; " + RemakeAdvice());
+    throw ConfigError(
+        what + " " + file.string() + " is not signed by this folder's CA (" + ca.string() +
+        "): made by another `haptel security init`, or changed since; " + RemakeAdvice());
   }
   char* data = nullptr;
   const long size = BIO_get_mem_data(out.get(), &data);
@@ -252,15 +266,17 @@ struct ValidityEnd {
   std::time_t as_dds;      ///< read as Fast DDS reads it
 };
 
-ValidityEnd ReadValidityEnd(const fs::path& file, const tinyxml2::XMLElement* element, const char* tag) {
+ValidityEnd ReadValidityEnd(const fs::path& file, const tinyxml2::XMLElement* element,
+                            const char* tag) {
   const tinyxml2::XMLElement* e = element != nullptr ? element->FirstChildElement(tag) : nullptr;
   const std::string text = Trimmed(e != nullptr ? e->GetText() : nullptr);
   std::tm tm{};
   std::istringstream in(text);
   in >> std::get_time(&tm, "%Y-%m-%dT%H:%M:%S");
   if (text.empty() || in.fail()) {
-    throw ConfigError("permissions file " + file.string() + ": its validity's <" + tag + "> '" + text +
-                      "' is not a date; expected YYYY-MM-DDThh:mm:ss (UTC); " + RemakeAdvice());
+    throw ConfigError("permissions file " + file.string() + ": its validity's <" + tag + "> '" +
+                      text + "' is not a date; expected YYYY-MM-DDThh:mm:ss (UTC); " +
+                      RemakeAdvice());
   }
   std::tm local = tm;
   local.tm_isdst = 0;
@@ -299,8 +315,8 @@ std::vector<std::string> ListedTopics(const tinyxml2::XMLElement* rule, const ch
   std::vector<std::string> out;
   const tinyxml2::XMLElement* list = rule != nullptr ? rule->FirstChildElement(direction) : nullptr;
   list = list != nullptr ? list->FirstChildElement("topics") : nullptr;
-  for (const tinyxml2::XMLElement* t = list != nullptr ? list->FirstChildElement("topic") : nullptr; t != nullptr;
-       t = t->NextSiblingElement("topic")) {
+  for (const tinyxml2::XMLElement* t = list != nullptr ? list->FirstChildElement("topic") : nullptr;
+       t != nullptr; t = t->NextSiblingElement("topic")) {
     out.push_back(Trimmed(t->GetText()));
   }
   return out;
@@ -310,7 +326,8 @@ std::vector<std::string> ListedTopics(const tinyxml2::XMLElement* rule, const ch
 /// for the identity's subject, valid now, and allowing every topic this
 /// version uses (a folder made before a topic was added would otherwise be
 /// refused by DDS when the topic is created, with no reason given).
-void CheckPermissions(const fs::path& file, const fs::path& ca, const std::string& identity, std::time_t now) {
+void CheckPermissions(const fs::path& file, const fs::path& ca, const std::string& identity,
+                      std::time_t now) {
   const std::string xml = SignedContent(file, ca, "permissions file");
   tinyxml2::XMLDocument doc;
   if (doc.Parse(xml.c_str(), xml.size()) != tinyxml2::XML_SUCCESS) {
@@ -318,17 +335,21 @@ void CheckPermissions(const fs::path& file, const fs::path& ca, const std::strin
                       std::string(doc.ErrorStr()) + "); " + RemakeAdvice());
   }
   const tinyxml2::XMLElement* permissions =
-      doc.FirstChildElement("dds") != nullptr ? doc.FirstChildElement("dds")->FirstChildElement("permissions") : nullptr;
+      doc.FirstChildElement("dds") != nullptr
+          ? doc.FirstChildElement("dds")->FirstChildElement("permissions")
+          : nullptr;
   const std::string subject = Subject(identity);
   const tinyxml2::XMLElement* grant = nullptr;
-  for (const tinyxml2::XMLElement* g = permissions != nullptr ? permissions->FirstChildElement("grant") : nullptr;
+  for (const tinyxml2::XMLElement* g =
+           permissions != nullptr ? permissions->FirstChildElement("grant") : nullptr;
        g != nullptr && grant == nullptr; g = g->NextSiblingElement("grant")) {
     const tinyxml2::XMLElement* name = g->FirstChildElement("subject_name");
     if (name != nullptr && Trimmed(name->GetText()) == subject) grant = g;
   }
   if (grant == nullptr) {
-    throw ConfigError("permissions file " + file.string() + " grants nothing to identity '" + identity +
-                      "' (no <grant> with <subject_name>" + subject + "</subject_name>); " + RemakeAdvice());
+    throw ConfigError("permissions file " + file.string() + " grants nothing to identity '" +
+                      identity + "' (no <grant> with <subject_name>" + subject +
+                      "</subject_name>); " + RemakeAdvice());
   }
   const tinyxml2::XMLElement* validity = grant->FirstChildElement("validity");
   const ValidityEnd not_before = ReadValidityEnd(file, validity, "not_before");
@@ -337,21 +358,24 @@ void CheckPermissions(const fs::path& file, const fs::path& ca, const std::strin
   const std::time_t ends = std::min(not_after.as_written, not_after.as_dds);
   if (now < begins) {
     throw ConfigError("permissions file " + file.string() + " is not valid before " +
-                      When(begins, not_before, "not_before") + " (is this host's clock right?); " + RemakeAdvice());
+                      When(begins, not_before, "not_before") + " (is this host's clock right?); " +
+                      RemakeAdvice());
   }
   if (now > ends) {
-    throw ConfigError("permissions file " + file.string() + " expired on " + When(ends, not_after, "not_after") +
-                      "; " + RemakeAdvice());
+    throw ConfigError("permissions file " + file.string() + " expired on " +
+                      When(ends, not_after, "not_after") + "; " + RemakeAdvice());
   }
   const tinyxml2::XMLElement* rule = grant->FirstChildElement("allow_rule");
   const GrantedTopics needed = TopicsOf(identity);
-  for (const auto& [direction, topics] : {std::pair<const char*, const std::vector<std::string>*>{"publish", &needed.publish},
-                                          {"subscribe", &needed.subscribe}}) {
+  for (const auto& [direction, topics] :
+       {std::pair<const char*, const std::vector<std::string>*>{"publish", &needed.publish},
+        {"subscribe", &needed.subscribe}}) {
     const std::vector<std::string> listed = ListedTopics(rule, direction);
     for (const std::string& topic : *topics) {
       if (std::find(listed.begin(), listed.end(), topic) == listed.end()) {
-        throw ConfigError("permissions file " + file.string() + " does not let identity '" + identity + "' " +
-                          direction + " topic '" + topic + "', which this version of Haptel uses (the folder was " +
+        throw ConfigError("permissions file " + file.string() + " does not let identity '" +
+                          identity + "' " + direction + " topic '" + topic +
+                          "', which this version of Haptel uses (the folder was " +
                           "made by an older one); " + RemakeAdvice());
       }
     }
@@ -364,21 +388,23 @@ std::string OperatorIdentity() { return "operator"; }
 std::string VehicleIdentity(const std::string& name) { return "vehicle-" + name; }
 
 SecurityFiles SecurityFilesFor(const fs::path& dir, const std::string& identity) {
-  return {dir / "ca.pem", dir / "governance.p7s", dir / (identity + ".pem"), dir / (identity + ".key"),
-          dir / (identity + "-permissions.p7s")};
+  return {dir / "ca.pem", dir / "governance.p7s", dir / (identity + ".pem"),
+          dir / (identity + ".key"), dir / (identity + "-permissions.p7s")};
 }
 
 void CheckSecurity(const fs::path& dir, const std::string& identity) {
   if (!fs::is_directory(dir)) {
-    throw ConfigError("security " + dir.string() + ": no such folder; make it with `haptel security init " +
-                      dir.string() + "`");
+    throw ConfigError("security " + dir.string() +
+                      ": no such folder; make it with `haptel security init " + dir.string() + "`");
   }
   const SecurityFiles f = SecurityFilesFor(dir, identity);
   for (const fs::path& file : {f.governance, f.private_key, f.permissions}) {
     if (!fs::exists(file)) {
-      throw ConfigError("security " + dir.string() + ": no " + file.filename().string() + " for identity '" +
-                        identity + "'; `haptel security init` makes one for the operator and each vehicle it is "
-                        "given (--vehicles)");
+      throw ConfigError(
+          "security " + dir.string() + ": no " + file.filename().string() + " for identity '" +
+          identity +
+          "'; `haptel security init` makes one for the operator and each vehicle it is "
+          "given (--vehicles)");
     }
   }
   CheckValidNow(dir, f.ca);
@@ -391,9 +417,11 @@ void CheckSecurity(const fs::path& dir, const std::string& identity) {
 }
 
 std::vector<std::pair<std::string, std::string>> SecurityProperties(const fs::path& dir,
-                                                                     const std::string& identity) {
+                                                                    const std::string& identity) {
   const SecurityFiles f = SecurityFilesFor(fs::absolute(dir), identity);
-  const auto file = [](const fs::path& p) { return "file://" + p.string(); };  // file:// then an absolute path
+  const auto file = [](const fs::path& p) {
+    return "file://" + p.string();
+  };  // file:// then an absolute path
   return {
       {"dds.sec.auth.plugin", "builtin.PKI-DH"},
       {"dds.sec.auth.builtin.PKI-DH.identity_ca", file(f.ca)},
@@ -409,20 +437,25 @@ std::vector<std::pair<std::string, std::string>> SecurityProperties(const fs::pa
 
 std::string VehicleIdentityProblem(const std::string& name) {
   constexpr size_t kMaxCommonName = 64;  // X.520 ub-common-name
-  const size_t most = kMaxCommonName - Subject(VehicleIdentity("")).size() + std::string("CN=").size();
+  const size_t most =
+      kMaxCommonName - Subject(VehicleIdentity("")).size() + std::string("CN=").size();
   if (name.size() <= most) return "";
-  return "a name of at most " + std::to_string(most) + " characters for a certificate (its common name 'haptel-" +
-         VehicleIdentity("NAME") + "' holds at most " + std::to_string(kMaxCommonName) + "); '" + name + "' has " +
+  return "a name of at most " + std::to_string(most) +
+         " characters for a certificate (its common name 'haptel-" + VehicleIdentity("NAME") +
+         "' holds at most " + std::to_string(kMaxCommonName) + "); '" + name + "' has " +
          std::to_string(name.size());
 }
 
 std::string ConsoleNameProblem(const std::string& name) {
   in6_addr address{};
-  if (inet_pton(AF_INET, name.c_str(), &address) == 1 || inet_pton(AF_INET6, name.c_str(), &address) == 1) return "";
-  const bool fits = !name.empty() && name.size() <= 253 && name.front() != '-' && name.front() != '.' &&
-                    name.find("..") == std::string::npos &&
-                    name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789.-") ==
-                        std::string::npos;
+  if (inet_pton(AF_INET, name.c_str(), &address) == 1 ||
+      inet_pton(AF_INET6, name.c_str(), &address) == 1)
+    return "";
+  const bool fits =
+      !name.empty() && name.size() <= 253 && name.front() != '-' && name.front() != '.' &&
+      name.find("..") == std::string::npos &&
+      name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789.-") ==
+          std::string::npos;
   return fits ? "" : "a host name (letters, digits, '-' and '.') or an IPv4 or IPv6 address";
 }
 
@@ -444,12 +477,14 @@ void MakeConsoleFiles(const fs::path& dir, const std::vector<std::string>& names
   Write(extensions, alternative + "\nextendedKeyUsage=serverAuth\nbasicConstraints=CA:FALSE\n");
   const std::string csr = (dir / "console.csr").string();
   std::string subject = "/CN=haptel-console";
-  OpenSsl(dir, {"req", "-new", "-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1", "-nodes", "-keyout",
-                (dir / "console.key").string(), "-out", csr, "-subj", subject});
+  OpenSsl(dir,
+          {"req", "-new", "-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1", "-nodes",
+           "-keyout", (dir / "console.key").string(), "-out", csr, "-subj", subject});
   fs::permissions(dir / "console.key", fs::perms::owner_read | fs::perms::owner_write);
-  OpenSsl(dir, {"x509", "-req", "-in", csr, "-CA", (dir / "ca.pem").string(), "-CAkey", (dir / "ca.key").string(),
-                "-CAcreateserial", "-days", std::to_string(days), "-sha256", "-extfile", extensions.string(), "-out",
-                (dir / "console.pem").string()});
+  OpenSsl(dir,
+          {"x509", "-req", "-in", csr, "-CA", (dir / "ca.pem").string(), "-CAkey",
+           (dir / "ca.key").string(), "-CAcreateserial", "-days", std::to_string(days), "-sha256",
+           "-extfile", extensions.string(), "-out", (dir / "console.pem").string()});
   fs::remove(csr);
   fs::remove(extensions);
 }
@@ -466,14 +501,18 @@ void CheckConsoleNames(const std::vector<std::string>& names) {
 
 void AddConsoleCertificate(const fs::path& dir, const std::vector<std::string>& names, int days) {
   if (!fs::exists(dir / "ca.pem") || !fs::exists(dir / "ca.key")) {
-    throw std::runtime_error(dir.string() + " holds no CA (ca.pem, ca.key); make the folder with `haptel security "
-                             "init " + dir.string() + " --console NAME,...`");
+    throw std::runtime_error(dir.string() +
+                             " holds no CA (ca.pem, ca.key); make the folder with `haptel security "
+                             "init " +
+                             dir.string() + " --console NAME,...`");
   }
   if (fs::exists(dir / "console.pem")) {
-    throw std::runtime_error(dir.string() + " already holds the console's certificate (console.pem); nothing was "
+    throw std::runtime_error(dir.string() +
+                             " already holds the console's certificate (console.pem); nothing was "
                              "changed");
   }
-  if (names.empty()) throw std::invalid_argument("the console's certificate needs at least one name");
+  if (names.empty())
+    throw std::invalid_argument("the console's certificate needs at least one name");
   CheckConsoleNames(names);
   MakeConsoleFiles(dir, names, days);
 }
@@ -483,20 +522,22 @@ namespace {
 /// Makes every file of a security folder in `dir` (which exists, empty).
 void MakeSecurityFiles(const fs::path& dir, const std::vector<std::string>& vehicles,
                        const std::vector<std::string>& console_names, int days) {
-  OpenSsl(dir, {"req", "-x509", "-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1", "-nodes", "-keyout",
-                (dir / "ca.key").string(), "-out", (dir / "ca.pem").string(), "-days", std::to_string(days),
-                "-sha256", "-subj", "/CN=haptel-ca"});
+  OpenSsl(dir, {"req", "-x509", "-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1",
+                "-nodes", "-keyout", (dir / "ca.key").string(), "-out", (dir / "ca.pem").string(),
+                "-days", std::to_string(days), "-sha256", "-subj", "/CN=haptel-ca"});
   fs::permissions(dir / "ca.key", fs::perms::owner_read | fs::perms::owner_write);
   Write(dir / "governance.xml", Governance());
   Sign(dir, "governance");
   const std::string op = OperatorIdentity();
   MakeIdentity(dir, op, days);
-  Write(dir / (op + "-permissions.xml"), Permissions(op, TopicsOf(op).publish, TopicsOf(op).subscribe, days));
+  Write(dir / (op + "-permissions.xml"),
+        Permissions(op, TopicsOf(op).publish, TopicsOf(op).subscribe, days));
   Sign(dir, op + "-permissions");
   for (const std::string& name : vehicles) {
     const std::string id = VehicleIdentity(name);
     MakeIdentity(dir, id, days);
-    Write(dir / (id + "-permissions.xml"), Permissions(id, TopicsOf(id).publish, TopicsOf(id).subscribe, days));
+    Write(dir / (id + "-permissions.xml"),
+          Permissions(id, TopicsOf(id).publish, TopicsOf(id).subscribe, days));
     Sign(dir, id + "-permissions");
   }
   if (!console_names.empty()) MakeConsoleFiles(dir, console_names, days);
@@ -514,17 +555,20 @@ void RemoveStalePartials(const fs::path& parent) {
     if (name.rfind(kPartialPrefix, 0) != 0 || !entry.is_directory()) continue;
     const std::string rest = name.substr(std::char_traits<char>::length(kPartialPrefix));
     const size_t dash = rest.find('-');
-    if (dash == 0 || dash == std::string::npos || rest.find_first_not_of("0123456789") != dash) continue;
+    if (dash == 0 || dash == std::string::npos || rest.find_first_not_of("0123456789") != dash)
+      continue;
     const long pid = std::stol(rest.substr(0, dash));
-    if (pid <= 0 || pid == getpid() || kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH) continue;
+    if (pid <= 0 || pid == getpid() || kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH)
+      continue;
     std::error_code removed;
     fs::remove_all(entry.path(), removed);
     if (removed) {
-      log::Warn("security init: " + entry.path().string() + " is left by process " + std::to_string(pid) +
-                " (gone) and holds a CA's private key; it could not be removed: " + removed.message());
+      log::Warn(
+          "security init: " + entry.path().string() + " is left by process " + std::to_string(pid) +
+          " (gone) and holds a CA's private key; it could not be removed: " + removed.message());
     } else {
-      log::Info("security init: removed " + entry.path().string() + ", left by process " + std::to_string(pid) +
-                " (killed while it made a CA)");
+      log::Info("security init: removed " + entry.path().string() + ", left by process " +
+                std::to_string(pid) + " (killed while it made a CA)");
     }
   }
 }
@@ -534,12 +578,15 @@ void RemoveStalePartials(const fs::path& parent) {
 std::string InitFolderProblem(const fs::path& dir) {
   std::error_code ec;
   if (!fs::exists(dir, ec)) return "";
-  if (!fs::is_directory(dir, ec)) return dir.string() + " is a file; expected a new or empty folder";
+  if (!fs::is_directory(dir, ec))
+    return dir.string() + " is a file; expected a new or empty folder";
   if (fs::exists(dir / "ca.pem", ec)) {
-    return dir.string() + " already holds a CA (ca.pem): nothing was changed; remove the folder or choose another";
+    return dir.string() +
+           " already holds a CA (ca.pem): nothing was changed; remove the folder or choose another";
   }
   if (!fs::is_empty(dir, ec)) {
-    return dir.string() + " already holds other files: nothing was changed; expected a new or empty folder";
+    return dir.string() +
+           " already holds other files: nothing was changed; expected a new or empty folder";
   }
   return "";
 }
@@ -549,11 +596,14 @@ void InitSecurity(const fs::path& given, const std::vector<std::string>& vehicle
   // "DIR/" and "." name the folder itself: without a trailing separator its
   // name is the last part (the partial folder is built beside it, not in it).
   fs::path dir = fs::absolute(given).lexically_normal();
-  if (dir.filename().empty() && dir.has_parent_path() && dir != dir.root_path()) dir = dir.parent_path();
+  if (dir.filename().empty() && dir.has_parent_path() && dir != dir.root_path())
+    dir = dir.parent_path();
   if (fs::exists(dir / "ca.pem")) {
-    throw std::runtime_error(given.string() + " already holds a CA (ca.pem); remove the folder or choose another");
+    throw std::runtime_error(given.string() +
+                             " already holds a CA (ca.pem); remove the folder or choose another");
   }
-  if (const std::string problem = InitFolderProblem(given); !problem.empty()) throw std::runtime_error(problem);
+  if (const std::string problem = InitFolderProblem(given); !problem.empty())
+    throw std::runtime_error(problem);
   for (const std::string& name : vehicles) {
     if (const std::string problem = VehicleIdentityProblem(name); !problem.empty()) {
       throw std::invalid_argument("vehicle '" + name + "': expected " + problem);
@@ -563,7 +613,8 @@ void InitSecurity(const fs::path& given, const std::vector<std::string>& vehicle
   const fs::path parent = dir.parent_path();
   fs::create_directories(parent);
   RemoveStalePartials(parent);
-  const fs::path partial = parent / (kPartialPrefix + std::to_string(getpid()) + "-" + dir.filename().string());
+  const fs::path partial =
+      parent / (kPartialPrefix + std::to_string(getpid()) + "-" + dir.filename().string());
   fs::remove_all(partial);
   fs::create_directory(partial);
   try {
@@ -575,7 +626,8 @@ void InitSecurity(const fs::path& given, const std::vector<std::string>& vehicle
       // must stay the folder it is): filled file by file, ca.pem last, since
       // a folder with ca.pem is one that holds a CA.
       for (const auto& entry : fs::directory_iterator(partial)) {
-        if (entry.path().filename() != "ca.pem") fs::rename(entry.path(), dir / entry.path().filename());
+        if (entry.path().filename() != "ca.pem")
+          fs::rename(entry.path(), dir / entry.path().filename());
       }
       fs::rename(partial / "ca.pem", dir / "ca.pem");
       fs::remove(partial);
@@ -603,7 +655,8 @@ std::string LinkBeyondHost(const LinkConfig& config) {
     if (!IsLoopback(a)) return "peer " + a;
   }
   const std::string& server = config.discovery_server;
-  if (!server.empty() && !IsLoopback(server.substr(0, server.find(':')))) return "discovery server " + server;
+  if (!server.empty() && !IsLoopback(server.substr(0, server.find(':'))))
+    return "discovery server " + server;
   return "";
 }
 
@@ -612,7 +665,8 @@ std::string InsecureLinkWarning(const LinkConfig& config, bool insecure) {
   const std::string beyond = LinkBeyondHost(config);
   if (beyond.empty()) return "";
   return "the link reaches beyond this host (" + beyond +
-         ") without DDS Security: a vehicle obeys one run's DDS writer at a time, which guards against "
+         ") without DDS Security: a vehicle obeys one run's DDS writer at a time, which guards "
+         "against "
          "mistakes, not attackers (anyone on the network can join the domain and forge a writer); "
          "--security DIR (haptel security init) keeps them off, --insecure silences this";
 }

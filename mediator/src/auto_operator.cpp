@@ -5,14 +5,16 @@
 
 namespace haptel::mediator {
 
-AutoOperator::AutoOperator(const Track& track, const OperatorConfig& config, const DriveConfig& drive,
-                           const DriverProfile& profile, int experience)
+AutoOperator::AutoOperator(const Track& track, const OperatorConfig& config,
+                           const DriveConfig& drive, const DriverProfile& profile, int experience)
     : track_(track),
       config_(config),
       drive_(drive),
       profile_(profile),
-      error_scale_(1.0 + profile.learning_gain * std::exp(-std::max(0, experience) / profile.learning_trials)),
-      random_(profile.seed * 0x9E3779B97F4A7C15ull + static_cast<uint64_t>(std::max(0, experience))),
+      error_scale_(1.0 + profile.learning_gain *
+                             std::exp(-std::max(0, experience) / profile.learning_trials)),
+      random_(profile.seed * 0x9E3779B97F4A7C15ull +
+              static_cast<uint64_t>(std::max(0, experience))),
       reaction_s_(config.reaction_delay_s) {
   config.ValidateOrThrow();
   profile.ValidateOrThrow();
@@ -42,7 +44,9 @@ interfaces::DriveIntent AutoOperator::Decide(double t_s) {
     backoff_until_s_ = t_s + config_.backoff_s * (1 + repeat_contacts_);
     careful_until_s_ = backoff_until_s_ + config_.careful_s;
     // Reverse while turning away from the side that touched.
-    backoff_turn_ = o->bumper_left && !o->bumper_right ? -0.25 : o->bumper_right && !o->bumper_left ? 0.25 : 0.0;
+    backoff_turn_ = o->bumper_left && !o->bumper_right   ? -0.25
+                    : o->bumper_right && !o->bumper_left ? 0.25
+                                                         : 0.0;
   }
   if (backing_off(t_s)) return {-0.5, backoff_turn_};
 
@@ -113,7 +117,8 @@ interfaces::DriveIntent AutoOperator::Express(double t_s, const interfaces::Driv
     out.forward *= cue + (1.0 - cue) * unsure;
     // Holding virtual controls, and aiming one that stays put, the driver holds back.
     if (grasp_s_ > 0.0) out.forward *= Practised(profile_.holding_cruise);
-    if (grasp_s_ > 0.0 && interface.ControlsStayPut()) out.forward *= Practised(profile_.stay_put_cruise);
+    if (grasp_s_ > 0.0 && interface.ControlsStayPut())
+      out.forward *= Practised(profile_.stay_put_cruise);
   }
 
   // A control that stays where it is left must be brought back to its centre
@@ -124,7 +129,8 @@ interfaces::DriveIntent AutoOperator::Express(double t_s, const interfaces::Driv
     for (size_t k = 0; k < 2; ++k) {
       double wanted = *axes[k];
       if (std::abs(wanted) < kCentre && !attentive) {
-        if (!at_centre_[k]) centre_miss_[k] = profile_.recentre_error * error_scale_ * Normal(random_);
+        if (!at_centre_[k])
+          centre_miss_[k] = profile_.recentre_error * error_scale_ * Normal(random_);
         at_centre_[k] = true;
         wanted += centre_miss_[k];
       } else {
@@ -165,7 +171,8 @@ double Smooth(double x) {
 }
 
 /// Normalised linear blend of two unit quaternions (the shorter way round).
-std::array<double, 4> Blend(const std::array<double, 4>& from, const std::array<double, 4>& to, double a) {
+std::array<double, 4> Blend(const std::array<double, 4>& from, const std::array<double, 4>& to,
+                            double a) {
   const double dot = from[0] * to[0] + from[1] * to[1] + from[2] * to[2] + from[3] * to[3];
   const double sign = dot < 0 ? -1.0 : 1.0;
   std::array<double, 4> q{};
@@ -186,7 +193,8 @@ bool HasApproach(const interfaces::HandGoal& g) {
 
 }  // namespace
 
-interfaces::HandTargets AutoOperator::Act(double t_s, const interfaces::MediatorInterface& interface) {
+interfaces::HandTargets AutoOperator::Act(double t_s,
+                                          const interfaces::MediatorInterface& interface) {
   if (start_s_ < 0) {
     const interfaces::HandTargets neutral = interface.HandTargetsFor({});
     start_s_ = t_s;
@@ -199,9 +207,9 @@ interfaces::HandTargets AutoOperator::Act(double t_s, const interfaces::Mediator
   if (!grasped(t_s)) {
     // Reach (open hand from the approach point down onto the control), then close.
     const double reach = config_.grasp_reach_s > 0 ? Smooth(since / config_.grasp_reach_s) : 1.0;
-    const double close =
-        config_.grasp_close_s > 0 ? Smooth((since - config_.grasp_reach_s) / config_.grasp_close_s)
-                                  : (since >= config_.grasp_reach_s ? 1.0 : 0.0);
+    const double close = config_.grasp_close_s > 0
+                             ? Smooth((since - config_.grasp_reach_s) / config_.grasp_close_s)
+                             : (since >= config_.grasp_reach_s ? 1.0 : 0.0);
     last_act_s_ = t_s;
     const interfaces::HandTargets neutral = interface.HandTargetsFor({});
     for (size_t i = 0; i < neutral.size(); ++i) {
@@ -214,7 +222,8 @@ interfaces::HandTargets AutoOperator::Act(double t_s, const interfaces::Mediator
     return arm_;
   }
 
-  const interfaces::HandTargets wanted = interface.HandTargetsFor(Express(t_s, Decide(t_s), interface));
+  const interfaces::HandTargets wanted =
+      interface.HandTargetsFor(Express(t_s, Decide(t_s), interface));
   const double dt = last_act_s_ < 0 ? 0.0 : t_s - last_act_s_;
   last_act_s_ = t_s;
   const double alpha =
@@ -224,7 +233,8 @@ interfaces::HandTargets AutoOperator::Act(double t_s, const interfaces::Mediator
       arm_[i].reset();
       continue;
     }
-    if (!arm_[i]) arm_[i] = interface.HandTargetsFor({})[i];  // a hand new to the task starts at neutral
+    if (!arm_[i])
+      arm_[i] = interface.HandTargetsFor({})[i];  // a hand new to the task starts at neutral
     interfaces::HandGoal& g = *arm_[i];
     for (int k = 0; k < 3; ++k) g.position[k] += (wanted[i]->position[k] - g.position[k]) * alpha;
     g.orientation = Blend(g.orientation, wanted[i]->orientation, alpha);

@@ -22,7 +22,8 @@ AirshipConfig WithoutGusts(AirshipConfig airship) {
 }
 
 /// The actuators settled at the channels `applied`.
-void SettleActuators(const AirshipConfig& k, const BlimpCommand& applied, vehicles::AirshipState& s) {
+void SettleActuators(const AirshipConfig& k, const BlimpCommand& applied,
+                     vehicles::AirshipState& s) {
   s.thrust = std::clamp(applied.power, 0.0, 1.0) * k.max_thrust;
   s.helix_rad = std::clamp(applied.helix, -1.0, 1.0) * k.max_helix_deg * M_PI / 180.0;
   s.tail = std::clamp(applied.tail_rotor, -1.0, 1.0) * k.tail_thrust;
@@ -30,7 +31,8 @@ void SettleActuators(const AirshipConfig& k, const BlimpCommand& applied, vehicl
 
 }  // namespace
 
-BlimpPredictor::BlimpPredictor(const AirshipConfig& airship, const BlimpCourseConfig& course, double watchdog_s)
+BlimpPredictor::BlimpPredictor(const AirshipConfig& airship, const BlimpCourseConfig& course,
+                               double watchdog_s)
     : airship_(WithoutGusts(airship)), watchdog_s_(watchdog_s), model_(airship_, course) {}
 
 void BlimpPredictor::OnCommand(double t_s, const BlimpCommand& command) {
@@ -48,8 +50,9 @@ double BlimpPredictor::OnState(const BlimpStateSample& state) {
     if (b.received_s <= sample_s && b.sample_s <= sample_s) known = &b;
   }
   if (known != nullptr) {
-    Run(*known, nullptr, {sample_s},
-        [&](double, const vehicles::SimBlimp& m) { error_m = (m.position() - state.position).norm(); });
+    Run(*known, nullptr, {sample_s}, [&](double, const vehicles::SimBlimp& m) {
+      error_m = (m.position() - state.position).norm();
+    });
     errors_m_.push_back(error_m);
   }
 
@@ -101,7 +104,8 @@ double BlimpPredictor::OnState(const BlimpStateSample& state) {
   while (bases_.size() > 1 && bases_[1].received_s <= sample_s) bases_.pop_front();
   // Commands that took effect before the oldest state kept are in its
   // applied channels; a second's margin for a late state.
-  while (!commands_.empty() && commands_.front().sent_s + d < bases_.front().sample_s - 1.0) commands_.pop_front();
+  while (!commands_.empty() && commands_.front().sent_s + d < bases_.front().sample_s - 1.0)
+    commands_.pop_front();
   return error_m;
 }
 
@@ -111,7 +115,8 @@ double BlimpPredictor::SampleTime(const BlimpStateSample& state, double d) {
   latency_s_[latency_next_] = state.received_s - stamp_s;
   latency_next_ = (latency_next_ + 1) % kLatencyWindow;
   latency_count_ = std::min(latency_count_ + 1, kLatencyWindow);
-  const double least = *std::min_element(latency_s_.begin(), latency_s_.begin() + static_cast<long>(latency_count_));
+  const double least =
+      *std::min_element(latency_s_.begin(), latency_s_.begin() + static_cast<long>(latency_count_));
   return stamp_s + least - d;
 }
 
@@ -129,7 +134,8 @@ void BlimpPredictor::Run(const Base& base, const Command* extra, const std::vect
   const double step_s = airship_.step_s;
   auto advance = [&](double to) {
     while (t < to - 1e-12) {
-      const double neutral_s = held ? std::numeric_limits<double>::infinity() : last_arrival + watchdog_s_;
+      const double neutral_s =
+          held ? std::numeric_limits<double>::infinity() : last_arrival + watchdog_s_;
       double end = std::min(to, t + step_s);
       const bool neutral = t >= neutral_s;
       if (!neutral && end > neutral_s) end = neutral_s;
@@ -148,10 +154,12 @@ void BlimpPredictor::Run(const Base& base, const Command* extra, const std::vect
   auto apply = [&](const Command& c, bool is_extra) {
     // In the state's applied channels already: the one it echoes and those
     // before (without an echo: those that had arrived by its sample).
-    if (base.applied_sent_s >= 0.0 ? c.sent_s <= base.applied_sent_s : c.sent_s + d <= base.sample_s) return;
+    if (base.applied_sent_s >= 0.0 ? c.sent_s <= base.applied_sent_s
+                                   : c.sent_s + d <= base.sample_s)
+      return;
     // Not there yet when the state was sampled, whatever the delay says.
     const double arrival = std::max(c.sent_s + d, base.sample_s);
-    if (next_time == at.size()) return;    // every pose wanted is out
+    if (next_time == at.size()) return;  // every pose wanted is out
     emit_until(arrival);
     advance(arrival);
     command = c.command;
@@ -179,7 +187,8 @@ BlimpPredictedPose BlimpPredictor::PoseAt(double t_s) const {
   BlimpPredictedPose pose;
   pose.t_s = t_s;
   if (bases_.empty()) return pose;
-  Run(bases_.back(), nullptr, {t_s}, [&](double t, const vehicles::SimBlimp& m) { pose = PoseOf(t, m); });
+  Run(bases_.back(), nullptr, {t_s},
+      [&](double t, const vehicles::SimBlimp& m) { pose = PoseOf(t, m); });
   return pose;
 }
 
@@ -190,7 +199,8 @@ void BlimpPredictor::PathAhead(double now_s, double horizon_s, const BlimpComman
   std::vector<double> at;
   for (double t = now_s; t <= now_s + horizon_s + 1e-9; t += spacing_s) at.push_back(t);
   const Command held{now_s, Clamped(given)};
-  Run(bases_.back(), &held, at, [&](double t, const vehicles::SimBlimp& m) { path.push_back(PoseOf(t, m)); });
+  Run(bases_.back(), &held, at,
+      [&](double t, const vehicles::SimBlimp& m) { path.push_back(PoseOf(t, m)); });
 }
 
 }  // namespace haptel::mediator

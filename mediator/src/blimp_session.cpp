@@ -9,6 +9,7 @@
 #include <string>
 #include <utility>
 
+#include "family_session.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/core/log.hpp"
@@ -20,10 +21,9 @@
 #include "haptel/mediator/blimp_predictor.hpp"
 #include "haptel/mediator/controller_errors.hpp"
 #include "haptel/mediator/haptic_side.hpp"
-#include "haptel/mediator/run_counters.hpp"
 #include "haptel/mediator/operator.hpp"
 #include "haptel/mediator/predictive_display.hpp"
-#include "family_session.hpp"
+#include "haptel/mediator/run_counters.hpp"
 
 namespace haptel::mediator {
 
@@ -81,16 +81,20 @@ BlimpObservation Observe(double t_s, const BlimpPredictedPose& p, const msg::Bli
 
 /// The progress line; `controller`: the servo controller's errors since the
 /// last line ("" when none, or no controller).
-void LogBlimpProgress(double t, const BlimpLapTimer& lap, const VehicleLink& link, const msg::BlimpState& s,
-                      const BlimpCommand& command, const std::string& controller) {
+void LogBlimpProgress(double t, const BlimpLapTimer& lap, const VehicleLink& link,
+                      const msg::BlimpState& s, const BlimpCommand& command,
+                      const std::string& controller) {
   char line[300];
-  std::snprintf(line, sizeof line,
-                "%6.1f s  blimp  lap %5.1f s  gates %d/%d  obstacles %d  at %.0f %.0f m  height %.1f m  airspeed %.1f m/s  "
-                "power %.2f  helix %+.2f  rudder %+.2f  elevator %+.2f  tail %+.2f  camera %+.2f %+.2f rad  "
-                "rtt p50 %.2f ms  video %.1f fps",
-                t, lap.lap_time_s(), lap.next_gate(), lap.gates_total(), lap.obstacles_touched(), s.x(),
-                s.y(), s.z(), s.airspeed(), command.power, command.helix, command.rudder, command.elevator, command.tail_rotor,
-                s.outputs()[5], s.outputs()[6], link.Rtt().Percentile(0.5) * 1e-3, link.video().Stats().fps);
+  std::snprintf(
+      line, sizeof line,
+      "%6.1f s  blimp  lap %5.1f s  gates %d/%d  obstacles %d  at %.0f %.0f m  height %.1f m  "
+      "airspeed %.1f m/s  "
+      "power %.2f  helix %+.2f  rudder %+.2f  elevator %+.2f  tail %+.2f  camera %+.2f %+.2f rad  "
+      "rtt p50 %.2f ms  video %.1f fps",
+      t, lap.lap_time_s(), lap.next_gate(), lap.gates_total(), lap.obstacles_touched(), s.x(),
+      s.y(), s.z(), s.airspeed(), command.power, command.helix, command.rudder, command.elevator,
+      command.tail_rotor, s.outputs()[5], s.outputs()[6], link.Rtt().Percentile(0.5) * 1e-3,
+      link.video().Stats().fps);
   log::Info(line + controller);
 }
 
@@ -102,10 +106,10 @@ class BlimpOverlay {
   BlimpOverlay(const SessionSetup& setup, std::string interface, int gates_total)
       : setup_(setup), interface_(std::move(interface)), gates_total_(gates_total) {}
 
-  view::Overlay Make(double t, const BlimpLapTimer& lap, const msg::BlimpState& s, const BlimpCommand& c,
-                     bool vehicle_up) {
-    view::Overlay o = LapOverlay(setup_, interface_.c_str(), t, lap.lap_time_s(), lap.next_gate(), gates_total_,
-                                 lap.obstacles_touched());
+  view::Overlay Make(double t, const BlimpLapTimer& lap, const msg::BlimpState& s,
+                     const BlimpCommand& c, bool vehicle_up) {
+    view::Overlay o = LapOverlay(setup_, interface_.c_str(), t, lap.lap_time_s(), lap.next_gate(),
+                                 gates_total_, lap.obstacles_touched());
     // A new contact onset, not the blimp resting on its pad at the start.
     if (s.pose_valid() && contacts_seen_ < 0) contacts_seen_ = s.contacts();
     if (contacts_seen_ >= 0 && s.contacts() > static_cast<uint32_t>(contacts_seen_)) {
@@ -119,10 +123,11 @@ class BlimpOverlay {
     o.hud = true;
     o.speed_mps = s.airspeed();
     o.speed_max_mps = setup_.vehicle.airship.StillAirTopSpeed();
-    std::snprintf(o.status, sizeof o.status, "height %.1f m  power %.0f%%  helix %+.0f%%", s.z(), 100.0 * c.power,
-                  100.0 * c.helix);
+    std::snprintf(o.status, sizeof o.status, "height %.1f m  power %.0f%%  helix %+.0f%%", s.z(),
+                  100.0 * c.power, 100.0 * c.helix);
     if (!vehicle_up) {
-      std::snprintf(o.message, sizeof o.message, "waiting for vehicle '%s'", setup_.vehicle.name.c_str());
+      std::snprintf(o.message, sizeof o.message, "waiting for vehicle '%s'",
+                    setup_.vehicle.name.c_str());
     } else if (s.failsafe()) {
       std::snprintf(o.message, sizeof o.message, "failsafe: every channel at neutral");
     } else if (setup_.operator_kind == "person" && t < kHelpS) {
@@ -150,11 +155,13 @@ class BlimpOverlay {
 
 class BlimpSession final : public FamilySession {
  public:
-  BlimpSession(const SessionSetup& setup, HapticSide& haptic, interfaces::InputBox& input, RunRecord& rec)
+  BlimpSession(const SessionSetup& setup, HapticSide& haptic, interfaces::InputBox& input,
+               RunRecord& rec)
       : setup_(setup),
         course_(*setup.course),
         lap_(course_),
-        overlay_feed_(setup, setup.blimp_manual ? setup.blimp_manual->name : setup.blimp_interface->name,
+        overlay_feed_(setup,
+                      setup.blimp_manual ? setup.blimp_manual->name : setup.blimp_interface->name,
                       static_cast<int>(course_.gates.size())),
         predictor_(setup.vehicle.airship, course_, setup.vehicle.watchdog_timeout_s) {
     hull_length_ = setup.vehicle.airship.length;
@@ -173,12 +180,14 @@ class BlimpSession final : public FamilySession {
     }
     if (setup.operator_kind == "auto") {
       if (!gesture_) {
-        throw ConfigError("the automatic pilot flies the blimp gesture cockpit, not '" + rec.interface + "'");
+        throw ConfigError("the automatic pilot flies the blimp gesture cockpit, not '" +
+                          rec.interface + "'");
       }
       if (haptic.sim() == nullptr) {
-        throw ConfigError(setup.device.file.string() +
-                          ": the automatic pilot moves the simulated arms (driver 'sim'); device '" +
-                          setup.device.name + "' is flown by a person: use --operator person");
+        throw ConfigError(
+            setup.device.file.string() +
+            ": the automatic pilot moves the simulated arms (driver 'sim'); device '" +
+            setup.device.name + "' is flown by a person: use --operator person");
       }
       pilot_ = std::make_unique<BlimpAutoPilot>(course_, PilotKnowing(setup.vehicle.airship));
       PlaceHands(*haptic.sim(), gesture_->HandTargetsFor({}));
@@ -195,19 +204,24 @@ class BlimpSession final : public FamilySession {
     options.screen = view::HeadTrackedScreen();
     if (setup_.predict) parts.map = std::make_shared<const view::TrackMap>(CourseMapOf(course_));
   }
-  bool UsesGamepad() const override { return manual_ && manual_->input_kind() == BlimpManualInput::kGamepad; }
+  bool UsesGamepad() const override {
+    return manual_ && manual_->input_kind() == BlimpManualInput::kGamepad;
+  }
 
-  void Drain(VehicleLink& link, VehicleHealth& health, HapticSide& haptic, RunTrace& trace, int64_t t0) override {
+  void Drain(VehicleLink& link, VehicleHealth& health, HapticSide& haptic, RunTrace& trace,
+             int64_t t0) override {
     for (const auto& e : link.channel<link::BlimpMessages>().inbox().Drain()) {
       const msg::BlimpState& s = e.state;
-      if (health.FromAnotherProcess(s)) continue;  // a stranger under the name: the next check ends the run
+      if (health.FromAnotherProcess(s))
+        continue;  // a stranger under the name: the next check ends the run
       const double ts = NsToS(e.received_ns - t0);
       if (health.OnState(s, e.received_ns)) haptic.OnVehicleUp();
       controller_errors_.ObserveState(s);
       last_ = s;
       have_state_ = true;
       if (s.last_command_sent_ns() > 0) {
-        predictor_.OnRoundTrip(NsToS(e.received_ns - s.last_command_sent_ns() - s.last_command_age_ns()));
+        predictor_.OnRoundTrip(
+            NsToS(e.received_ns - s.last_command_sent_ns() - s.last_command_age_ns()));
       }
       if (!s.pose_valid()) continue;
       predictor_.OnState(Sample(ts, s, t0));
@@ -219,8 +233,8 @@ class BlimpSession final : public FamilySession {
     }
   }
 
-  std::optional<LoopEnd> Drive(double t, int64_t now, const interfaces::InputState& person, bool vehicle_up,
-                               HapticSide& haptic, VehicleLink& link) override {
+  std::optional<LoopEnd> Drive(double t, int64_t now, const interfaces::InputState& person,
+                               bool vehicle_up, HapticSide& haptic, VehicleLink& link) override {
     // The pilot's hands and gaze; a person's head turns with mouse-look.
     head_ = {person.head_pan, person.head_tilt};
     // With prediction the pilot flies the blimp as it will be when the
@@ -237,8 +251,10 @@ class BlimpSession final : public FamilySession {
         head_ = {intent.camera_pan, intent.camera_tilt};
       }
     }
-    command_ = manual_ ? manual_->Update(t, person, haptic.hal()) : gesture_->Update(head_, haptic.hal());
-    if (manual_ && manual_->lost()) return LoopEnd{Outcome::kAborted, "the game controller was disconnected"};
+    command_ =
+        manual_ ? manual_->Update(t, person, haptic.hal()) : gesture_->Update(head_, haptic.hal());
+    if (manual_ && manual_->lost())
+      return LoopEnd{Outcome::kAborted, "the game controller was disconnected"};
     if (next_command_ns_ == 0) next_command_ns_ = now;
     if (CommandDue(next_command_ns_, now, static_cast<int64_t>(1e9 / command_rate_hz_))) {
       const BlimpCommand sent = vehicle_up ? command_ : BlimpCommand{};
@@ -254,7 +270,8 @@ class BlimpSession final : public FamilySession {
     if (gesture_) {
       gesture_->Update(head_, hal);
     } else {
-      hal.SetField(haptics::Side::kLeft, haptics::ForceField{});  // keys and controllers render none
+      hal.SetField(haptics::Side::kLeft,
+                   haptics::ForceField{});  // keys and controllers render none
       hal.SetField(haptics::Side::kRight, haptics::ForceField{});
     }
   }
@@ -268,9 +285,10 @@ class BlimpSession final : public FamilySession {
 
   std::optional<LoopEnd> LapEnd() const override {
     if (lap_.crashed()) {
-      return LoopEnd{Outcome::kCrashed, "the blimp crashed: a contact at " + std::to_string(lap_.crash_speed()).substr(0, 4) +
-                                            " m/s (more than " + std::to_string(course_.crash_speed).substr(0, 4) +
-                                            " m/s)"};
+      return LoopEnd{Outcome::kCrashed,
+                     "the blimp crashed: a contact at " +
+                         std::to_string(lap_.crash_speed()).substr(0, 4) + " m/s (more than " +
+                         std::to_string(course_.crash_speed).substr(0, 4) + " m/s)"};
     }
     if (lap_.completed()) return LoopEnd{Outcome::kCompleted, "landed: lap completed"};
     return std::nullopt;
@@ -298,7 +316,8 @@ class BlimpSession final : public FamilySession {
     BlimpPredictedPose reported;
     reported.position = Eigen::Vector3d(last_.x(), last_.y(), last_.z());
     reported.yaw = last_.yaw();
-    MakeBlimpPrediction(reported, path_ahead_, hull_length_, predictor_.one_way_delay_s(), prediction_);
+    MakeBlimpPrediction(reported, path_ahead_, hull_length_, predictor_.one_way_delay_s(),
+                        prediction_);
     return prediction_;
   }
 
@@ -319,7 +338,8 @@ class BlimpSession final : public FamilySession {
     rec.gates_passed = lap_.gates_passed();
     rec.gates_missed = lap_.gates_missed();
     rec.obstacles_touched = lap_.obstacles_touched();
-    for (const BlimpGateSplit& split : lap_.splits()) rec.splits.push_back({split.gate, split.passed, split.split_s});
+    for (const BlimpGateSplit& split : lap_.splits())
+      rec.splits.push_back({split.gate, split.passed, split.split_s});
     RecordPredictionErrors(predictor_.errors_m(), rec);
   }
 

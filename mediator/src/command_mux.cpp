@@ -11,8 +11,8 @@ namespace {
 
 constexpr double kNever = -std::numeric_limits<double>::infinity();
 
-void Check(const std::string& kind, size_t i, const std::string& name, int priority, bool timeout_ok,
-           std::set<std::string>& names) {
+void Check(const std::string& kind, size_t i, const std::string& name, int priority,
+           bool timeout_ok, std::set<std::string>& names) {
   const std::string which = kind + "[" + std::to_string(i) + "]";
   if (name.empty()) throw std::invalid_argument("command mux: " + which + ".name: expected a name");
   if (!names.insert(kind + ":" + name).second)
@@ -21,8 +21,9 @@ void Check(const std::string& kind, size_t i, const std::string& name, int prior
     throw std::invalid_argument("command mux: " + which + ".priority: expected 0..255, got " +
                                 std::to_string(priority));
   if (!timeout_ok)
-    throw std::invalid_argument("command mux: " + which + ".timeout_s: expected " +
-                                (kind == "inputs" ? "a time-out above 0 s" : "0 (none) or a time-out above 0 s"));
+    throw std::invalid_argument(
+        "command mux: " + which + ".timeout_s: expected " +
+        (kind == "inputs" ? "a time-out above 0 s" : "0 (none) or a time-out above 0 s"));
 }
 
 }  // namespace
@@ -32,7 +33,8 @@ CommandMux::CommandMux(std::vector<MuxInputSpec> inputs, std::vector<MuxLockSpec
   std::set<std::string> names;
   for (size_t i = 0; i < inputs_.size(); ++i) {
     const MuxInputSpec& in = inputs_[i];
-    Check("inputs", i, in.name, in.priority, std::isfinite(in.timeout_s) && in.timeout_s > 0, names);
+    Check("inputs", i, in.name, in.priority, std::isfinite(in.timeout_s) && in.timeout_s > 0,
+          names);
   }
   for (size_t i = 0; i < locks_.size(); ++i) {
     const MuxLockSpec& l = locks_[i];
@@ -75,7 +77,8 @@ CommandMux::Selection CommandMux::Select(double t_s, bool* changed) {
   for (size_t i = 0; i < inputs_.size(); ++i) {
     const bool live = t_s - input_seen_s_[i] <= inputs_[i].timeout_s;
     if (!live || inputs_[i].priority <= held_below) continue;
-    if (best < 0 || inputs_[i].priority > inputs_[static_cast<size_t>(best)].priority) best = static_cast<int>(i);
+    if (best < 0 || inputs_[i].priority > inputs_[static_cast<size_t>(best)].priority)
+      best = static_cast<int>(i);
   }
   s.input = best;
   s.zero = best < 0;

@@ -15,7 +15,8 @@ void DelayEstimate::AddRoundTrip(double rtt_s) {
 double DelayEstimate::one_way_s() const {
   if (count_ == 0) return 0.0;
   std::array<double, kWindow> sorted = rtt_s_;
-  std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(count_ / 2), sorted.begin() + static_cast<long>(count_));
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(count_ / 2),
+                   sorted.begin() + static_cast<long>(count_));
   return 0.5 * sorted[count_ / 2];
 }
 

@@ -69,8 +69,9 @@ class FamilySession : public HandoverSide {
   /// Each tick: the person's requests, the operator's act, the interface's
   /// command (sent when due; a safe one while the vehicle is not up). Ends
   /// the run when the person's controller went away.
-  virtual std::optional<LoopEnd> Drive(double t_s, int64_t now_ns, const interfaces::InputState& person,
-                                       bool vehicle_up, HapticSide& haptic, VehicleLink& link) = 0;
+  virtual std::optional<LoopEnd> Drive(double t_s, int64_t now_ns,
+                                       const interfaces::InputState& person, bool vehicle_up,
+                                       HapticSide& haptic, VehicleLink& link) = 0;
   /// The interfaces are switching (F1–F6) and ramp the force scale themselves.
   virtual bool SwitchingInterface() const { return false; }
   /// The lap's own end: completed (or crashed).
@@ -108,7 +109,8 @@ class FamilySession : public HandoverSide {
 /// automatic driver or a person. Throws ConfigError for parts that cannot be
 /// set up. Its record fields (track, gates, interface) are set in `rec`.
 std::unique_ptr<FamilySession> MakeRobotSession(const SessionSetup& setup, HapticSide& haptic,
-                                                interfaces::InputBox& input, const std::atomic<bool>& interrupted,
+                                                interfaces::InputBox& input,
+                                                const std::atomic<bool>& interrupted,
                                                 RunRecord& rec);
 /// The blimp's part: its course, the gesture cockpit (or a person's keys or
 /// game controller), the automatic pilot or a person.

@@ -31,7 +31,8 @@ namespace {
 constexpr const char* kPerVehicleOptions[] = {"track", "vehicle", "vehicle-name", "interface"};
 
 /// `argv` without its --fleet option, and with `vehicle`'s own.
-std::vector<std::string> VehicleArgv(int argc, const char* const* argv, const FleetVehicle& vehicle) {
+std::vector<std::string> VehicleArgv(int argc, const char* const* argv,
+                                     const FleetVehicle& vehicle) {
   std::vector<std::string> out;
   for (int i = 0; i < argc; ++i) {
     const std::string word = argv[i];
@@ -42,8 +43,8 @@ std::vector<std::string> VehicleArgv(int argc, const char* const* argv, const Fl
     if (word.rfind("--fleet=", 0) == 0) continue;
     out.push_back(word);
   }
-  out.insert(out.end(), {"--vehicle", vehicle.vehicle.string(), "--track", vehicle.world.string(), "--vehicle-name",
-                         vehicle.name});
+  out.insert(out.end(), {"--vehicle", vehicle.vehicle.string(), "--track", vehicle.world.string(),
+                         "--vehicle-name", vehicle.name});
   if (!vehicle.interface.empty()) out.insert(out.end(), {"--interface", vehicle.interface});
   if (vehicle.attach) out.push_back("--attach");
   return out;
@@ -52,8 +53,9 @@ std::vector<std::string> VehicleArgv(int argc, const char* const* argv, const Fl
 FleetSetup FleetSetupFromArgs(int argc, const char* const* argv, const Args& args) {
   for (const char* option : kPerVehicleOptions) {
     if (args.Value(option)) {
-      throw UsageError(std::string("option --") + option +
-                       ": with --fleet each vehicle's comes from the fleet file (its 'vehicles' list)");
+      throw UsageError(
+          std::string("option --") + option +
+          ": with --fleet each vehicle's comes from the fleet file (its 'vehicles' list)");
     }
   }
   FleetSetup setup;
@@ -74,7 +76,8 @@ FleetSetup FleetSetupFromArgs(int argc, const char* const* argv, const Args& arg
       const Args vehicle_args = ParseRunArgs(static_cast<int>(pointers.size()), pointers.data());
       setup.vehicles.push_back(RunSetupFromArgs(vehicle_args));
     } catch (const ConfigError& e) {
-      throw ConfigError(setup.fleet.file.string() + ": vehicle '" + vehicle.name + "': " + e.what());
+      throw ConfigError(setup.fleet.file.string() + ": vehicle '" + vehicle.name +
+                        "': " + e.what());
     } catch (const UsageError& e) {
       throw UsageError(setup.fleet.file.string() + ": vehicle '" + vehicle.name + "': " + e.what());
     }
@@ -89,7 +92,8 @@ FleetSetup FleetSetupFromArgs(int argc, const char* const* argv, const Args& arg
 }
 
 /// One vehicle's row (and its picture); or its fallback file. The row's id, 0 when not saved.
-int64_t SaveVehicle(const SessionSetup& setup, Recorder& recorder, RunRecord& rec, std::filesystem::path& unsaved) {
+int64_t SaveVehicle(const SessionSetup& setup, Recorder& recorder, RunRecord& rec,
+                    std::filesystem::path& unsaved) {
   int64_t id = 0;
   try {
     id = recorder.Save(rec);
@@ -97,15 +101,17 @@ int64_t SaveVehicle(const SessionSetup& setup, Recorder& recorder, RunRecord& re
   } catch (const std::exception& e) {
     try {
       unsaved = record::WriteUnsavedRun(rec, setup.run.database, WallNs());
-      std::fprintf(stderr, "haptel: run of '%s' not recorded: %s; its results are in %s\n", rec.vehicle.c_str(),
-                   e.what(), unsaved.c_str());
+      std::fprintf(stderr, "haptel: run of '%s' not recorded: %s; its results are in %s\n",
+                   rec.vehicle.c_str(), e.what(), unsaved.c_str());
     } catch (const std::exception& e2) {
-      std::fprintf(stderr, "haptel: run of '%s' not recorded: %s; and %s\n", rec.vehicle.c_str(), e.what(), e2.what());
+      std::fprintf(stderr, "haptel: run of '%s' not recorded: %s; and %s\n", rec.vehicle.c_str(),
+                   e.what(), e2.what());
     }
     return 0;
   }
   try {
-    const std::filesystem::path png = std::filesystem::absolute(record::RunPicturePath(setup.run.database, id));
+    const std::filesystem::path png =
+        std::filesystem::absolute(record::RunPicturePath(setup.run.database, id));
     if (setup.course) {
       record::WriteRunPicture(record::RenderBlimpRunPicture(rec, *setup.course), png);
     } else {
@@ -114,43 +120,50 @@ int64_t SaveVehicle(const SessionSetup& setup, Recorder& recorder, RunRecord& re
     recorder.SetPicture(id, png);
     rec.picture = png.string();
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "haptel: warning: run %lld is saved without its picture: %s\n", static_cast<long long>(id),
-                 e.what());
+    std::fprintf(stderr, "haptel: warning: run %lld is saved without its picture: %s\n",
+                 static_cast<long long>(id), e.what());
   }
   return id;
 }
 
 std::string Ms(double ms) { return ms >= 0.0 ? JsonNumber(ms) : std::string("null"); }
 
-std::string FleetJson(const FleetSetup& setup, const FleetResult& fleet, const std::vector<int64_t>& ids,
-                      bool recorded) {
+std::string FleetJson(const FleetSetup& setup, const FleetResult& fleet,
+                      const std::vector<int64_t>& ids, bool recorded) {
   std::ostringstream o;
   int completed = 0;
   for (const FleetVehicleResult& v : fleet.vehicles) completed += v.result.record.completed ? 1 : 0;
-  o << "{\"fleet\":" << JsonString(setup.fleet.name) << ",\"fleet_run\":" << JsonString(fleet.fleet_run)
+  o << "{\"fleet\":" << JsonString(setup.fleet.name)
+    << ",\"fleet_run\":" << JsonString(fleet.fleet_run)
     << ",\"completed\":" << (fleet.outcome == Outcome::kCompleted ? "true" : "false")
-    << ",\"outcome\":" << JsonString(ToString(fleet.outcome)) << ",\"message\":" << JsonString(fleet.message)
+    << ",\"outcome\":" << JsonString(ToString(fleet.outcome))
+    << ",\"message\":" << JsonString(fleet.message)
     << ",\"vehicles_total\":" << fleet.vehicles.size() << ",\"vehicles_completed\":" << completed
-    << ",\"handovers\":" << fleet.handover_ms.size() << ",\"handovers_untimed\":" << fleet.handovers_untimed << ",\"handover_ms_p50\":" << Ms(fleet.handover_ms_p50)
-    << ",\"handover_ms_p95\":" << Ms(fleet.handover_ms_p95) << ",\"person_switches\":" << fleet.person_switches
+    << ",\"handovers\":" << fleet.handover_ms.size()
+    << ",\"handovers_untimed\":" << fleet.handovers_untimed
+    << ",\"handover_ms_p50\":" << Ms(fleet.handover_ms_p50)
+    << ",\"handover_ms_p95\":" << Ms(fleet.handover_ms_p95)
+    << ",\"person_switches\":" << fleet.person_switches
     << ",\"operator_cpu_share\":" << JsonNumber(fleet.operator_cpu_share)
     << ",\"servo_period_p99_us\":" << JsonNumber(fleet.servo_period_p99_us)
     << ",\"servo_cue_period_p99_us\":" << Ms(fleet.servo_cue_period_p99_us)
-    << ",\"servo_cue_ticks\":" << fleet.servo_cue_ticks << ",\"recorded\":" << (recorded ? "true" : "false")
+    << ",\"servo_cue_ticks\":" << fleet.servo_cue_ticks
+    << ",\"recorded\":" << (recorded ? "true" : "false")
     << ",\"database\":" << JsonString(setup.vehicles.at(0).run.database.string()) << ",\"lost\":[";
   for (size_t i = 0; i < fleet.lost.size(); ++i) o << (i ? "," : "") << JsonString(fleet.lost[i]);
   o << "],\"vehicles\":[";
   for (size_t i = 0; i < fleet.vehicles.size(); ++i) {
     const FleetVehicleResult& v = fleet.vehicles[i];
     const RunRecord& r = v.result.record;
-    o << (i ? "," : "") << "{\"name\":" << JsonString(r.vehicle) << ",\"kind\":" << JsonString(r.vehicle_kind)
-      << ",\"completed\":" << (r.completed ? "true" : "false") << ",\"outcome\":" << JsonString(r.outcome)
-      << ",\"message\":" << JsonString(v.result.message) << ",\"lap_time_s\":" << JsonNumber(r.lap_time_s)
-      << ",\"gates_passed\":" << r.gates_passed << ",\"gates_total\":" << r.gates_total
-      << ",\"driven_s\":" << JsonNumber(v.driven_s) << ",\"neglected_s\":" << JsonNumber(v.neglected_s)
-      << ",\"handovers\":" << v.handovers << ",\"selected\":" << JsonString(v.selected)
-      << ",\"vehicle_pid\":" << r.vehicle_pid << ",\"distance_m\":" << JsonNumber(r.distance_m)
-      << ",\"run_id\":" << ids[i] << "}";
+    o << (i ? "," : "") << "{\"name\":" << JsonString(r.vehicle)
+      << ",\"kind\":" << JsonString(r.vehicle_kind)
+      << ",\"completed\":" << (r.completed ? "true" : "false")
+      << ",\"outcome\":" << JsonString(r.outcome) << ",\"message\":" << JsonString(v.result.message)
+      << ",\"lap_time_s\":" << JsonNumber(r.lap_time_s) << ",\"gates_passed\":" << r.gates_passed
+      << ",\"gates_total\":" << r.gates_total << ",\"driven_s\":" << JsonNumber(v.driven_s)
+      << ",\"neglected_s\":" << JsonNumber(v.neglected_s) << ",\"handovers\":" << v.handovers
+      << ",\"selected\":" << JsonString(v.selected) << ",\"vehicle_pid\":" << r.vehicle_pid
+      << ",\"distance_m\":" << JsonNumber(r.distance_m) << ",\"run_id\":" << ids[i] << "}";
   }
   o << "]}";
   return o.str();
@@ -158,31 +171,37 @@ std::string FleetJson(const FleetSetup& setup, const FleetResult& fleet, const s
 
 void PrintFleetSummary(std::FILE* out, const FleetSetup& setup, const FleetResult& fleet,
                        const std::vector<int64_t>& ids) {
-  std::fprintf(out, "haptel: fleet '%s' %s — %s\n", setup.fleet.name.c_str(), ToString(fleet.outcome).c_str(),
-               fleet.message.c_str());
-  std::fprintf(out, "  %-12s %-10s %-16s %8s %7s %9s %11s %5s\n", "vehicle", "kind", "outcome", "lap s", "gates",
-               "driven s", "neglected s", "run");
+  std::fprintf(out, "haptel: fleet '%s' %s — %s\n", setup.fleet.name.c_str(),
+               ToString(fleet.outcome).c_str(), fleet.message.c_str());
+  std::fprintf(out, "  %-12s %-10s %-16s %8s %7s %9s %11s %5s\n", "vehicle", "kind", "outcome",
+               "lap s", "gates", "driven s", "neglected s", "run");
   for (size_t i = 0; i < fleet.vehicles.size(); ++i) {
     const FleetVehicleResult& v = fleet.vehicles[i];
     const RunRecord& r = v.result.record;
     char gates[16];
     std::snprintf(gates, sizeof gates, "%d/%d", r.gates_passed, r.gates_total);
-    std::fprintf(out, "  %-12s %-10s %-16s %8.2f %7s %9.1f %11.1f %5lld\n", r.vehicle.c_str(), r.vehicle_kind.c_str(),
-                 r.outcome.c_str(), r.lap_time_s, gates, v.driven_s, v.neglected_s, static_cast<long long>(ids[i]));
+    std::fprintf(out, "  %-12s %-10s %-16s %8.2f %7s %9.1f %11.1f %5lld\n", r.vehicle.c_str(),
+                 r.vehicle_kind.c_str(), r.outcome.c_str(), r.lap_time_s, gates, v.driven_s,
+                 v.neglected_s, static_cast<long long>(ids[i]));
   }
   if (fleet.handover_ms.empty()) {
     std::fprintf(out, "  no handover\n");
   } else {
-    std::fprintf(out, "  %zu handovers (switch to the new vehicle obeying): p50 %.0f ms, p95 %.0f ms\n",
+    std::fprintf(out,
+                 "  %zu handovers (switch to the new vehicle obeying): p50 %.0f ms, p95 %.0f ms\n",
                  fleet.handover_ms.size(), fleet.handover_ms_p50, fleet.handover_ms_p95);
   }
   if (fleet.handovers_untimed > 0) {
-    std::fprintf(out, "  %d turns to a vehicle still starting (not timed)\n", fleet.handovers_untimed);
+    std::fprintf(out, "  %d turns to a vehicle still starting (not timed)\n",
+                 fleet.handovers_untimed);
   }
-  std::fprintf(out, "  operator process CPU %.2f s per wall second; %d switches asked by the person\n",
+  std::fprintf(out,
+               "  operator process CPU %.2f s per wall second; %d switches asked by the person\n",
                fleet.operator_cpu_share, fleet.person_switches);
   if (fleet.servo_cue_ticks > 0) {
-    std::fprintf(out, "  servo period p99 %.0f us over the run, %.0f us over the %llu ticks that played the switch cue\n",
+    std::fprintf(out,
+                 "  servo period p99 %.0f us over the run, %.0f us over the %llu ticks that played "
+                 "the switch cue\n",
                  fleet.servo_period_p99_us, fleet.servo_cue_period_p99_us,
                  static_cast<unsigned long long>(fleet.servo_cue_ticks));
   }
@@ -197,12 +216,18 @@ void PrintFleetSummary(std::FILE* out, const FleetSetup& setup, const FleetResul
   }
   const bool others = fleet.lost.size() < fleet.vehicles.size();
   if (!silent.empty()) {
-    std::fprintf(out, "  no vehicle answered: %s (never heard from on domain %d: attached, is it running there? "
-                 "started, see its lines above)%s\n",
-                 silent.c_str(), setup.vehicles.at(0).run.link.domain_id, others ? "; the others went on" : "");
+    std::fprintf(
+        out,
+        "  no vehicle answered: %s (never heard from on domain %d: attached, is it running there? "
+        "started, see its lines above)%s\n",
+        silent.c_str(), setup.vehicles.at(0).run.link.domain_id,
+        others ? "; the others went on" : "");
   }
-  if (!lost.empty()) std::fprintf(out, "  LOST mid-run: %s%s\n", lost.c_str(), others ? " (the others went on)" : "");
-  std::fprintf(out, "  recorded in %s as '%s'\n", setup.vehicles.at(0).run.database.c_str(), fleet.fleet_run.c_str());
+  if (!lost.empty())
+    std::fprintf(out, "  LOST mid-run: %s%s\n", lost.c_str(),
+                 others ? " (the others went on)" : "");
+  std::fprintf(out, "  recorded in %s as '%s'\n", setup.vehicles.at(0).run.database.c_str(),
+               fleet.fleet_run.c_str());
 }
 
 }  // namespace
@@ -213,11 +238,14 @@ int RunFleetCommand(int argc, const char* const* argv, const std::atomic<bool>& 
   const FleetSetup setup = cli::ReadInput([&] {
     const Args args = ParseRunArgs(argc, argv);
     if (!args.positional().empty()) {
-      throw UsageError("unexpected argument '" + args.positional()[0] + "' (options start with --)");
+      throw UsageError("unexpected argument '" + args.positional()[0] +
+                       "' (options start with --)");
     }
     if (args.Flag("simulated-time")) {
-      throw UsageError("option --simulated-time: a fleet's vehicles run in processes of their own, in real time; "
-                       "simulated time steps one simulated robot in this process (drop --fleet)");
+      throw UsageError(
+          "option --simulated-time: a fleet's vehicles run in processes of their own, in real "
+          "time; "
+          "simulated time steps one simulated robot in this process (drop --fleet)");
     }
     json = args.Flag("json");
     insecure = args.Flag("insecure");
@@ -225,18 +253,21 @@ int RunFleetCommand(int argc, const char* const* argv, const std::atomic<bool>& 
   });
   // Once for the fleet, for the first vehicle whose link reaches beyond the host.
   for (const SessionSetup& vehicle : setup.vehicles) {
-    if (const std::string warning = link::InsecureLinkWarning(vehicle.run.link, insecure); !warning.empty()) {
+    if (const std::string warning = link::InsecureLinkWarning(vehicle.run.link, insecure);
+        !warning.empty()) {
       log::Warn(warning);
       break;
     }
   }
-  auto recorder = cli::ReadInput([&] { return std::make_unique<Recorder>(setup.vehicles.at(0).run.database); });
+  auto recorder =
+      cli::ReadInput([&] { return std::make_unique<Recorder>(setup.vehicles.at(0).run.database); });
   FleetResult fleet = RunFleet(setup, interrupted);
   std::vector<int64_t> ids;
   bool recorded = true;
   for (size_t i = 0; i < fleet.vehicles.size(); ++i) {
     std::filesystem::path unsaved;
-    ids.push_back(SaveVehicle(setup.vehicles[i], *recorder, fleet.vehicles[i].result.record, unsaved));
+    ids.push_back(
+        SaveVehicle(setup.vehicles[i], *recorder, fleet.vehicles[i].result.record, unsaved));
     recorded = recorded && ids.back() != 0;
   }
   PrintFleetSummary(stderr, setup, fleet, ids);

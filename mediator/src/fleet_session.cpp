@@ -54,7 +54,7 @@ struct Member {
   CommandMux mux;
   int operator_input;
   int handover_lock;
-  bool done = false;             ///< its course is over (completed, lost, crashed, capped)
+  bool done = false;  ///< its course is over (completed, lost, crashed, capped)
   bool lost = false;
   int64_t next_hold_ns = 0;
   // A handover to this vehicle under way: requested at request_ns; the lock
@@ -63,7 +63,7 @@ struct Member {
   bool measure_handover = false;  ///< false for the run's first vehicle
   int64_t request_ns = 0;
   int64_t released_ns = 0;
-  double lock_until_t = -1.0;     ///< turned away from: the lock holds until then
+  double lock_until_t = -1.0;  ///< turned away from: the lock holds until then
   // The selected source as last published, and when it is due again.
   CommandMux::Selection published_selection;
   int64_t next_selected_ns = 0;
@@ -102,7 +102,8 @@ int RequestedVehicle(int request, int driven, const std::vector<bool>& over) {
     }
     return -1;
   }
-  if (request < 0 || request >= n || request == driven || over[static_cast<size_t>(request)]) return -1;
+  if (request < 0 || request >= n || request == driven || over[static_cast<size_t>(request)])
+    return -1;
   return request;
 }
 
@@ -187,9 +188,10 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
     if (first.progress) {
       log::Info("fleet '" + setup.fleet.name + "': vehicle '" + m->setup.vehicle.name + "' (" +
                 m->setup.vehicle.kind + ") " +
-                (m->link->pid() != 0 ? "started, pid " + std::to_string(m->link->pid())
-                                     : std::string("attaching on domain ") + std::to_string(run.link.domain_id) +
-                                           " (a vehicle already running there)"));
+                (m->link->pid() != 0
+                     ? "started, pid " + std::to_string(m->link->pid())
+                     : std::string("attaching on domain ") + std::to_string(run.link.domain_id) +
+                           " (a vehicle already running there)"));
     }
   }
 
@@ -212,8 +214,8 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
   }
   // A person's controller without a view: a thread of its own polls it.
   std::unique_ptr<view::InputPump> pump;
-  if (!view_part &&
-      std::any_of(members.begin(), members.end(), [](const auto& m) { return m->family->UsesGamepad(); })) {
+  if (!view_part && std::any_of(members.begin(), members.end(),
+                                [](const auto& m) { return m->family->UsesGamepad(); })) {
     pump = std::make_unique<view::InputPump>(input);
   }
   uint32_t vehicle_requests_seen = input.Load().vehicle_requests;
@@ -223,13 +225,14 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
   const int64_t t0 = MonotonicNs();
   const double cpu0_s = ProcessCpuS();
   for (auto& m : members) {
-    m->health = std::make_unique<VehicleHealth>(m->setup.vehicle.name, run.link.domain_id, m->link->session(),
-                                                m->link->command_writer(), run.vehicle_timeout_s,
-                                                VehicleHealth::kStartupTimeout_s, m->link->pid());
+    m->health = std::make_unique<VehicleHealth>(
+        m->setup.vehicle.name, run.link.domain_id, m->link->session(), m->link->command_writer(),
+        run.vehicle_timeout_s, VehicleHealth::kStartupTimeout_s, m->link->pid());
     m->trace = std::make_unique<RunTrace>(m->out.result.record);
     m->out.result.record.path.reserve(16384);
-    m->watch = std::make_unique<LoopWatch>(haptic, m->family->physics(), *m->link,
-                                           m.get() == members.front().get() ? view_part.get() : nullptr, t0);
+    m->watch = std::make_unique<LoopWatch>(
+        haptic, m->family->physics(), *m->link,
+        m.get() == members.front().get() ? view_part.get() : nullptr, t0);
   }
   const auto period_ns = static_cast<int64_t>(1e9 / run.session_rate_hz);
   const auto hold_period_ns = static_cast<int64_t>(kHoldPeriod_s * 1e9);
@@ -242,7 +245,8 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
 
   // Ends one vehicle's course: said at once, held safe from now on.
   const auto end_member = [&](Member& m, LoopEnd end) {
-    const bool lost = end.outcome == Outcome::kVehicleLost || end.outcome == Outcome::kVehicleDidNotStart;
+    const bool lost =
+        end.outcome == Outcome::kVehicleLost || end.outcome == Outcome::kVehicleDidNotStart;
     const Outcome end_outcome = end.outcome;
     end.message = "vehicle '" + m.setup.vehicle.name + "': " + end.message;
     Finish(m.out.result, std::move(end), m.family->MadeSafe());
@@ -250,7 +254,8 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
     m.lost = lost;
     if (lost) {
       fleet.lost.push_back(m.setup.vehicle.name);
-      if (end_outcome == Outcome::kVehicleDidNotStart) fleet.never_answered.push_back(m.setup.vehicle.name);
+      if (end_outcome == Outcome::kVehicleDidNotStart)
+        fleet.never_answered.push_back(m.setup.vehicle.name);
     } else {
       m.link->SendSafe();
     }
@@ -286,8 +291,10 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
     if (measured) ++m.out.handovers;
     if (measured) {
       const haptics::Hal::Cue cue{{0.0, 0.0, kSwitchCueForce_N}, now + SToNs(kSwitchCueDuration_s)};
-      for (int side = 0; side < haptics::kSides; ++side) haptic.hal().SetCue(static_cast<haptics::Side>(side), cue);
-      std::snprintf(switch_note, sizeof switch_note, "switched to %s (%s)", m.setup.vehicle.name.c_str(), why);
+      for (int side = 0; side < haptics::kSides; ++side)
+        haptic.hal().SetCue(static_cast<haptics::Side>(side), cue);
+      std::snprintf(switch_note, sizeof switch_note, "switched to %s (%s)",
+                    m.setup.vehicle.name.c_str(), why);
       switch_note_until_t = t + 3.0;
     }
     if (view_part) view_part->Show(to);
@@ -306,10 +313,10 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
       m.overlay = m.family->Overlay(t, !m.lost && m.health->up(), m.trace->touching());
       view::Tiles::Tile& tile = tiles.tile[i];
       std::snprintf(tile.name, sizeof tile.name, "%s", m.setup.vehicle.name.c_str());
-      tile.state = m.lost                            ? view::TileState::kLost
-                   : m.done                          ? view::TileState::kDone
+      tile.state = m.lost                          ? view::TileState::kLost
+                   : m.done                        ? view::TileState::kDone
                    : static_cast<int>(i) == target ? view::TileState::kDriven
-                                                     : view::TileState::kHeld;
+                                                   : view::TileState::kHeld;
       tile.lap_time_s = m.overlay.lap_time_s;
       tile.gates_passed = m.overlay.gates_passed;
       tile.gates_total = m.overlay.gates_total;
@@ -321,9 +328,11 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
       view_part->Publish(m.family->Prediction(t).value_or(view::Prediction{}));
       const int n = static_cast<int>(members.size());
       if (t < switch_note_until_t) {
-        std::snprintf(tiles.line, sizeof tiles.line, "%s  -  Tab: next, 1-%d: pick", switch_note, n);
+        std::snprintf(tiles.line, sizeof tiles.line, "%s  -  Tab: next, 1-%d: pick", switch_note,
+                      n);
       } else {
-        std::snprintf(tiles.line, sizeof tiles.line, "driving %s (%d of %d)  -  Tab: next, 1-%d: pick",
+        std::snprintf(tiles.line, sizeof tiles.line,
+                      "driving %s (%d of %d)  -  Tab: next, 1-%d: pick",
                       m.setup.vehicle.name.c_str(), target + 1, n, n);
       }
     }
@@ -395,10 +404,12 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
       if (asked >= 0) {
         switch_to(asked, now, t, "asked by the person");
         ++fleet.person_switches;
-      } else if (person.vehicle_request >= 0 && person.vehicle_request < static_cast<int>(members.size()) &&
+      } else if (person.vehicle_request >= 0 &&
+                 person.vehicle_request < static_cast<int>(members.size()) &&
                  person.vehicle_request != target) {
-        std::snprintf(switch_note, sizeof switch_note, "%s: its course is over",
-                      members[static_cast<size_t>(person.vehicle_request)]->setup.vehicle.name.c_str());
+        std::snprintf(
+            switch_note, sizeof switch_note, "%s: its course is over",
+            members[static_cast<size_t>(person.vehicle_request)]->setup.vehicle.name.c_str());
         switch_note_until_t = t + 3.0;
       }
     }
@@ -406,7 +417,8 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
       const int next = next_after(target);
       if (next < 0) break;  // every course is done
       switch_to(next, now, t, target < 0 ? "the first" : "the last one's course is over");
-    } else if (!person_drives && setup.fleet.slice_s > 0.0 && t - driven_since_t >= setup.fleet.slice_s) {
+    } else if (!person_drives && setup.fleet.slice_s > 0.0 &&
+               t - driven_since_t >= setup.fleet.slice_s) {
       // The automatic operator's time slice; a person turns when they choose.
       const int next = next_after(target);
       if (next >= 0 && next != target) switch_to(next, now, t, "its time slice");
@@ -421,11 +433,13 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
       const bool driven = static_cast<int>(i) == target;
       const bool interface_live = static_cast<int>(i) == live;
       if (m.lock_until_t >= 0.0 && t >= m.lock_until_t) {
-        m.mux.OnLock(m.handover_lock, false, t);  // turned away from long enough: nothing of ours is live
+        m.mux.OnLock(m.handover_lock, false,
+                     t);  // turned away from long enough: nothing of ours is live
         m.lock_until_t = -1.0;
       }
       if (driven && m.handover_pending) {
-        if (m.released_ns == 0 && interface_live && m.health->up() && m.link->last_received_ns() > m.request_ns) {
+        if (m.released_ns == 0 && interface_live && m.health->up() &&
+            m.link->last_received_ns() > m.request_ns) {
           // It has been seen since the request, and its interface is the
           // live one: the operator may command it.
           m.mux.OnLock(m.handover_lock, false, t);
@@ -434,7 +448,8 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
         }
         if (m.released_ns != 0) {
           if (const int64_t echoed = m.link->EchoReceivedNs(); echoed != 0) {
-            if (m.measure_handover) fleet.handover_ms.push_back(static_cast<double>(echoed - m.request_ns) * 1e-6);
+            if (m.measure_handover)
+              fleet.handover_ms.push_back(static_cast<double>(echoed - m.request_ns) * 1e-6);
             m.handover_pending = false;
           }
         }
@@ -444,9 +459,11 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
       const CommandMux::Selection selection = m.mux.Select(t, &changed);
       m.out.selected = m.mux.SelectedName(selection);
       if (m.health->ours() && (selection != m.published_selection || now >= m.next_selected_ns)) {
-        // Who commands it, for anyone on the domain: on a change at once, and now and then for the record.
-        m.link->PublishSelected(selection.input >= 0 ? m.mux.inputs()[static_cast<size_t>(selection.input)].name : "",
-                                selection.lock >= 0 ? m.mux.locks()[static_cast<size_t>(selection.lock)].name : "");
+        // Who commands it, for anyone on the domain: on a change at once, and now and then for the
+        // record.
+        m.link->PublishSelected(
+            selection.input >= 0 ? m.mux.inputs()[static_cast<size_t>(selection.input)].name : "",
+            selection.lock >= 0 ? m.mux.locks()[static_cast<size_t>(selection.lock)].name : "");
         m.published_selection = selection;
         m.next_selected_ns = now + SToNs(kSelectedPeriod_s);
       }
@@ -467,8 +484,10 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
       if (auto end = m.family->LapEnd()) {
         end_member(m, std::move(*end));
       } else if (m.out.driven_s > m.family->lap_cap_s()) {
-        end_member(m, LoopEnd{Outcome::kLapCap, "lap cap of " + std::to_string(static_cast<int>(m.family->lap_cap_s())) +
-                                                    " s of driving reached"});
+        end_member(m,
+                   LoopEnd{Outcome::kLapCap,
+                           "lap cap of " + std::to_string(static_cast<int>(m.family->lap_cap_s())) +
+                               " s of driving reached"});
       }
     }
     if (fleet_end) break;
@@ -495,9 +514,13 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
         std::string line = "         fleet:";
         for (const auto& mp : members) {
           char part[140];
-          std::snprintf(part, sizeof part, " %s %s (driven %.1f s, %.2f m%s)", mp->setup.vehicle.name.c_str(),
-                        mp->lost ? "LOST" : mp->done ? "done" : mp->out.selected.c_str(), mp->out.driven_s,
-                        mp->out.result.record.distance_m, mp->lost || mp->health->up() ? "" : ", not answering yet");
+          std::snprintf(part, sizeof part, " %s %s (driven %.1f s, %.2f m%s)",
+                        mp->setup.vehicle.name.c_str(),
+                        mp->lost   ? "LOST"
+                        : mp->done ? "done"
+                                   : mp->out.selected.c_str(),
+                        mp->out.driven_s, mp->out.result.record.distance_m,
+                        mp->lost || mp->health->up() ? "" : ", not answering yet");
           line += part;
         }
         log::Info(line);
@@ -520,8 +543,9 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
     fleet.outcome = fleet_end->outcome;
     fleet.message = fleet_end->message;
   } else {
-    const bool all = std::all_of(members.begin(), members.end(),
-                                 [](const auto& m) { return m->out.result.outcome == Outcome::kCompleted; });
+    const bool all = std::all_of(members.begin(), members.end(), [](const auto& m) {
+      return m->out.result.outcome == Outcome::kCompleted;
+    });
     fleet.outcome = Outcome::kCompleted;
     if (!all) {
       fleet.outcome = !fleet.lost.empty() ? Outcome::kVehicleLost : Outcome::kLapCap;
@@ -536,9 +560,10 @@ FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupt
       if (!fleet.message.empty()) fleet.message += "; ";
       // A vehicle never heard from was not lost: it never answered (an
       // attached one that is not running, or a spawned one that never came up).
-      fleet.message += m->setup.vehicle.name + " " +
-                       (m->out.result.outcome == Outcome::kVehicleDidNotStart ? std::string("never answered")
-                                                                              : ToString(m->out.result.outcome));
+      fleet.message +=
+          m->setup.vehicle.name + " " +
+          (m->out.result.outcome == Outcome::kVehicleDidNotStart ? std::string("never answered")
+                                                                 : ToString(m->out.result.outcome));
     }
   }
 

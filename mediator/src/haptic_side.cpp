@@ -3,10 +3,10 @@
 #include <algorithm>
 #include <sstream>
 
+#include "haptel/calibration/calibration_procedure.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/core/log.hpp"
-#include "haptel/calibration/calibration_procedure.hpp"
 #include "haptel/haptics/device_factory.hpp"
 #include "haptel/haptics/gravity.hpp"
 #include "haptel/haptics/servo_loop.hpp"
@@ -29,8 +29,9 @@ std::optional<DeviceCalibration> DeviceCalibrationFor(const DeviceConfig& device
     if (!device.calibration.empty()) return LoadCalibration(device.calibration);
     const std::filesystem::path beside = TraceCalibrationFile(device.replay.trace);
     if (!std::filesystem::exists(beside)) {
-      throw ConfigError(file + ": key 'calibration': none given, and the trace '" + device.replay.trace.string() +
-                        "' has no calibration beside it ('" + beside.string() +
+      throw ConfigError(file + ": key 'calibration': none given, and the trace '" +
+                        device.replay.trace.string() + "' has no calibration beside it ('" +
+                        beside.string() +
                         "'); record the trace with `haptel run --trace FILE`, which writes both");
     }
     return LoadCalibration(beside);
@@ -38,24 +39,26 @@ std::optional<DeviceCalibration> DeviceCalibrationFor(const DeviceConfig& device
   // A real device: only a measured calibration will do.
   if (device.calibration.empty()) {
     throw ConfigError(file + ": key 'calibration': device '" + device.name +
-                      "' has no calibration file; make one with `haptel calibrate --device " + file +
-                      " --out calibration/" + device.name + ".yaml` and name it here");
+                      "' has no calibration file; make one with `haptel calibrate --device " +
+                      file + " --out calibration/" + device.name + ".yaml` and name it here");
   }
   if (!std::filesystem::exists(device.calibration)) {
     throw ConfigError(file + ": key 'calibration': '" + device.calibration.string() +
-                      "' does not exist; make it with `haptel calibrate --device " + file + " --out " +
-                      device.calibration.string() + "`");
+                      "' does not exist; make it with `haptel calibrate --device " + file +
+                      " --out " + device.calibration.string() + "`");
   }
   DeviceCalibration calibration = LoadCalibration(device.calibration);
   if (calibration.device != device.name) {
-    throw ConfigError(file + ": key 'calibration': '" + device.calibration.string() + "' was measured on device '" +
-                      calibration.device + "', not '" + device.name + "' (stale); calibrate again with `haptel calibrate --device " +
-                      file + " --out " + device.calibration.string() + "`");
+    throw ConfigError(file + ": key 'calibration': '" + device.calibration.string() +
+                      "' was measured on device '" + calibration.device + "', not '" + device.name +
+                      "' (stale); calibrate again with `haptel calibrate --device " + file +
+                      " --out " + device.calibration.string() + "`");
   }
   return calibration;
 }
 
-HapticSide::HapticSide(const DeviceConfig& device, const std::optional<DeviceCalibration>& calibration,
+HapticSide::HapticSide(const DeviceConfig& device,
+                       const std::optional<DeviceCalibration>& calibration,
                        const std::optional<GravityGridData>& gravity, const OperatorConfig& muscle,
                        const std::filesystem::path& trace)
     : config_(device) {
@@ -82,7 +85,8 @@ HapticSide::HapticSide(const DeviceConfig& device, const std::optional<DeviceCal
     trace_->SetRecording(false);
     SaveCalibration(TraceCalibrationFile(trace), calibration_);
   }
-  servo_ = std::make_unique<haptics::ServoLoop>(*device_, *hal_, device, calibration_, gravity_.get());
+  servo_ =
+      std::make_unique<haptics::ServoLoop>(*device_, *hal_, device, calibration_, gravity_.get());
   servo_->SetTrace(trace_.get());
 }
 
@@ -119,7 +123,9 @@ void HapticSide::OnVehicleUp() {
   if (replay_ != nullptr) replay_->Begin(MonotonicNs());
 }
 
-bool HapticSide::replay_finished() const { return replay_ != nullptr && replay_->finished(MonotonicNs()); }
+bool HapticSide::replay_finished() const {
+  return replay_ != nullptr && replay_->finished(MonotonicNs());
+}
 
 bool HapticSide::lost() const {
   for (int i = 0; i < haptics::kSides; ++i) {
@@ -162,11 +168,13 @@ haptics::ServoCounters HapticSide::Counters() const {
     sum.setpoint_read_fallbacks += c.setpoint_read_fallbacks;
     sum.passivity_ticks += c.passivity_ticks;
     sum.passivity_dissipated_j += c.passivity_dissipated_j;
-    sum.passivity_max_alpha = std::max(sum.passivity_max_alpha, c.passivity_max_alpha);  // the largest, not a sum
+    sum.passivity_max_alpha =
+        std::max(sum.passivity_max_alpha, c.passivity_max_alpha);  // the largest, not a sum
     sum.passivity_link_ticks += c.passivity_link_ticks;
     sum.passivity_device_ticks += c.passivity_device_ticks;
     sum.passivity_device_dissipated_j += c.passivity_device_dissipated_j;
-    sum.passivity_device_max_alpha = std::max(sum.passivity_device_max_alpha, c.passivity_device_max_alpha);
+    sum.passivity_device_max_alpha =
+        std::max(sum.passivity_device_max_alpha, c.passivity_device_max_alpha);
     sum.safety.non_finite += c.safety.non_finite;
     sum.safety.clamped += c.safety.clamped;
     sum.safety.rate_limited += c.safety.rate_limited;

@@ -38,7 +38,8 @@ void InterfaceHandover::Swap(haptics::Hal& hal, const interfaces::InputState& in
   live_ = target_;
 }
 
-int InterfaceHandover::Tick(double t_s, haptics::Hal& hal, const interfaces::InputState& input_now) {
+int InterfaceHandover::Tick(double t_s, haptics::Hal& hal,
+                            const interfaces::InputState& input_now) {
   if (phase_ != Phase::kDown) return live_;
   if (live_ < 0 || ramp_s_ <= 0.0) {
     // Nothing rendered yet (the first turn), or no fade asked for: at once.

@@ -6,8 +6,8 @@
 
 namespace haptel::mediator {
 
-InterfaceSet::InterfaceSet(std::vector<std::unique_ptr<interfaces::MediatorInterface>> interfaces, int current,
-                           double ramp_s)
+InterfaceSet::InterfaceSet(std::vector<std::unique_ptr<interfaces::MediatorInterface>> interfaces,
+                           int current, double ramp_s)
     : interfaces_(std::move(interfaces)), current_(current), ramp_s_(std::max(ramp_s, 1e-3)) {
   if (current_ < 0 || current_ >= size() || !interfaces_[static_cast<size_t>(current_)]) {
     throw std::invalid_argument("InterfaceSet: the current interface must exist");
@@ -20,7 +20,8 @@ interfaces::MediatorInterface* InterfaceSet::at(int index) {
 
 void InterfaceSet::Provide(int index, std::unique_ptr<interfaces::MediatorInterface> interface) {
   if (index < 0 || index >= size() || interfaces_[static_cast<size_t>(index)] || !interface) {
-    throw std::invalid_argument("InterfaceSet::Provide: place " + std::to_string(index) + " is not an empty place");
+    throw std::invalid_argument("InterfaceSet::Provide: place " + std::to_string(index) +
+                                " is not an empty place");
   }
   interfaces_[static_cast<size_t>(index)] = std::move(interface);
 }
@@ -32,7 +33,8 @@ bool InterfaceSet::Request(int index, double t_s) {
   return true;
 }
 
-interfaces::MotorCommand InterfaceSet::Update(double t_s, const interfaces::VehicleFeedback& feedback,
+interfaces::MotorCommand InterfaceSet::Update(double t_s,
+                                              const interfaces::VehicleFeedback& feedback,
                                               haptics::Hal& hal) {
   if (target_ >= 0) {
     // Ramping down: the old interface still renders its forces, fading.

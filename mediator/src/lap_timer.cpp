@@ -19,7 +19,8 @@ std::optional<std::pair<double, Vec2>> ForwardCrossing(const Vec2& p0, double t0
 
 LapTimer::LapTimer(const Track& track, double contact_clear_s)
     : track_(track), contact_clear_s_(contact_clear_s) {
-  for (int i = 0; i < static_cast<int>(track.gates().size()); ++i) splits_.push_back({i, false, -1.0});
+  for (int i = 0; i < static_cast<int>(track.gates().size()); ++i)
+    splits_.push_back({i, false, -1.0});
 }
 
 void LapTimer::Update(double t_s, const Vec2& position) {
@@ -76,7 +77,8 @@ double LapTimer::lap_time_s() const {
 }
 
 int LapTimer::gates_passed() const {
-  return static_cast<int>(std::count_if(splits_.begin(), splits_.end(), [](const GateSplit& s) { return s.passed; }));
+  return static_cast<int>(
+      std::count_if(splits_.begin(), splits_.end(), [](const GateSplit& s) { return s.passed; }));
 }
 
 int LapTimer::gates_missed() const {

@@ -23,8 +23,9 @@ void PlaceHands(haptics::SimDevice& device, const interfaces::HandTargets& targe
   HoldHands(device, targets);
 }
 
-AutomaticOperator::AutomaticOperator(const Track& track, const OperatorConfig& config, const DriveConfig& drive,
-                                     haptics::SimDevice& device, const DriverProfile& profile, int experience)
+AutomaticOperator::AutomaticOperator(const Track& track, const OperatorConfig& config,
+                                     const DriveConfig& drive, haptics::SimDevice& device,
+                                     const DriverProfile& profile, int experience)
     : driver_(track, config, drive, profile, experience), device_(device) {}
 
 void AutomaticOperator::Prepare(const interfaces::MediatorInterface& interface) {

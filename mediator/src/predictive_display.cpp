@@ -30,8 +30,8 @@ BodySilhouette::BodySilhouette() {
   hull_.reserve(4 * kSides);
 }
 
-int BodySilhouette::Make(const video::LevelCamera& camera, double width, double height_px, double x, double y,
-                         double radius, double height,
+int BodySilhouette::Make(const video::LevelCamera& camera, double width, double height_px, double x,
+                         double y, double radius, double height,
                          std::array<view::PicturePoint, view::Prediction::kOutlineMax>& out) {
   footprint_.clear();
   for (int k = 0; k < kSides; ++k) {
@@ -52,7 +52,8 @@ int BodySilhouette::Make(const video::LevelCamera& camera, double width, double 
   cv::convexHull(corners_, hull_);
   const int count = std::min(static_cast<int>(hull_.size()), view::Prediction::kOutlineMax);
   for (int i = 0; i < count; ++i) {
-    out[static_cast<size_t>(i)] = {hull_[static_cast<size_t>(i)].x, hull_[static_cast<size_t>(i)].y};
+    out[static_cast<size_t>(i)] = {hull_[static_cast<size_t>(i)].x,
+                                   hull_[static_cast<size_t>(i)].y};
   }
   return count;
 }
@@ -78,7 +79,8 @@ void PredictiveDisplay::Make(const PredictedPose& camera_pose,
 
   // The ghost: the body's silhouette where the model says it is now.
   const PredictedPose& now = path.front();
-  out.outline_count = silhouette_.Make(cam, w, h, now.x, now.y, radius_m_, ghost_height_m_, out.outline);
+  out.outline_count =
+      silhouette_.Make(cam, w, h, now.x, now.y, radius_m_, ghost_height_m_, out.outline);
 
   // The path ahead on the floor, each stretch clipped the same way.
   for (size_t i = 1; i < path.size() && out.path_count < view::Prediction::kPathMax; ++i) {
@@ -135,8 +137,9 @@ view::TrackMap TrackMapOf(const Track& track) {
   return map;
 }
 
-void MakeBlimpPrediction(const BlimpPredictedPose& reported, const std::vector<BlimpPredictedPose>& path,
-                         double hull_length, double one_way_delay_s, view::Prediction& out) {
+void MakeBlimpPrediction(const BlimpPredictedPose& reported,
+                         const std::vector<BlimpPredictedPose>& path, double hull_length,
+                         double one_way_delay_s, view::Prediction& out) {
   out.outline_count = 0;
   out.path_count = 0;
   out.map_path_count = 0;
@@ -149,7 +152,8 @@ void MakeBlimpPrediction(const BlimpPredictedPose& reported, const std::vector<B
   };
   out.reported = map_pose(reported);
   out.predicted = map_pose(path.front());
-  out.map_path_count = static_cast<int>(std::min(path.size(), static_cast<size_t>(view::Prediction::kPathMax)));
+  out.map_path_count =
+      static_cast<int>(std::min(path.size(), static_cast<size_t>(view::Prediction::kPathMax)));
   for (int i = 0; i < out.map_path_count; ++i)
     out.map_path[static_cast<size_t>(i)] = map_pose(path[static_cast<size_t>(i)]);
   out.body_radius = static_cast<float>(hull_length / 2);
@@ -189,7 +193,8 @@ view::TrackMap CourseMapOf(const BlimpCourseConfig& course) {
   // The start: a short line across the blimp's heading where it rests.
   const double h = course.start.heading_deg * kDeg;
   const double sx = course.start.position[0], sy = course.start.position[1];
-  map.start = {sx - 0.5 * std::sin(h), sy + 0.5 * std::cos(h), sx + 0.5 * std::sin(h), sy - 0.5 * std::cos(h)};
+  map.start = {sx - 0.5 * std::sin(h), sy + 0.5 * std::cos(h), sx + 0.5 * std::sin(h),
+               sy - 0.5 * std::cos(h)};
   map.posts.push_back({course.landing.centre[0], course.landing.centre[1], course.landing.radius,
                        view::TrackMap::PostKind::kLanding});
   return map;

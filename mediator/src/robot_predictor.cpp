@@ -30,7 +30,10 @@ double RobotPredictor::OnState(const RobotStateSample& state) {
     error_m = std::hypot(predicted.front().x - state.x, predicted.front().y - state.y);
     errors_m_.push_back(error_m);
   }
-  Base base{state.received_s, sample_s, {state.x, state.y, state.heading, 0.0, 0.0}, state.applied_left,
+  Base base{state.received_s,
+            sample_s,
+            {state.x, state.y, state.heading, 0.0, 0.0},
+            state.applied_left,
             state.applied_right};
   vehicles::TreadsFromMotion(drive_, state.speed, state.yaw_rate, base.treads);
   bases_.push_back(base);
@@ -38,7 +41,8 @@ double RobotPredictor::OnState(const RobotStateSample& state) {
   while (bases_.size() > 1 && bases_[1].received_s <= sample_s) bases_.pop_front();
   // Commands that took effect before the oldest state kept are in its
   // applied levels; a second's margin for a late state.
-  while (!commands_.empty() && commands_.front().sent_s + d < bases_.front().sample_s - 1.0) commands_.pop_front();
+  while (!commands_.empty() && commands_.front().sent_s + d < bases_.front().sample_s - 1.0)
+    commands_.pop_front();
   return error_m;
 }
 
@@ -55,7 +59,8 @@ void RobotPredictor::Run(const Base& base, const Command* extra, const std::vect
   bool held = false;
   auto advance = [&](double to) {
     while (t < to - 1e-12) {
-      const double stop_s = held ? std::numeric_limits<double>::infinity() : last_arrival + watchdog_s_;
+      const double stop_s =
+          held ? std::numeric_limits<double>::infinity() : last_arrival + watchdog_s_;
       double end = std::min(to, t + step_s_);
       const bool stopped = t >= stop_s;
       if (!stopped && end > stop_s) end = stop_s;
@@ -75,7 +80,7 @@ void RobotPredictor::Run(const Base& base, const Command* extra, const std::vect
   auto apply = [&](const Command& c, bool is_extra) {
     const double arrival = c.sent_s + d;
     if (arrival <= base.sample_s) return;  // in the state's applied levels already
-    if (next_time == at.size()) return;  // every pose wanted is out
+    if (next_time == at.size()) return;    // every pose wanted is out
     emit_until(arrival);
     advance(arrival);
     left = c.left;

@@ -3,8 +3,8 @@
 // controls (or the scene) need, the automatic driver or a person.
 #include <algorithm>
 #include <array>
-#include <cmath>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <future>
 #include <memory>
@@ -78,8 +78,9 @@ class RobotSession final : public FamilySession {
                           "device '" +
                           setup.device.name + "' is driven by a person: use --operator person");
       }
-      automatic_ = std::make_unique<AutomaticOperator>(track_, setup.run.op, setup.vehicle.drive, *haptic.sim(),
-                                                       setup.driver, setup.driver_experience);
+      automatic_ =
+          std::make_unique<AutomaticOperator>(track_, setup.run.op, setup.vehicle.drive,
+                                              *haptic.sim(), setup.driver, setup.driver_experience);
       op_ = automatic_.get();
     } else {
       person_ = std::make_unique<PersonOperator>();
@@ -90,7 +91,8 @@ class RobotSession final : public FamilySession {
     // for an interface a person may switch to later (a cockpit while driving
     // by keys), not before it is first asked for: two proxy hands nobody
     // holds would otherwise run at 1 kHz all along.
-    const std::vector<bool> build = InterfacesToBuild(setup, op_->can_switch() && !setup.single_interface);
+    const std::vector<bool> build =
+        InterfacesToBuild(setup, op_->can_switch() && !setup.single_interface);
     const bool defer_world = !start_spec().needs_physics() && !setup.scene;
     deferred_.assign(setup.interfaces.size(), false);
     for (size_t i = 0; i < setup.interfaces.size(); ++i) {
@@ -99,7 +101,8 @@ class RobotSession final : public FamilySession {
       for (int s = 0; s < haptics::kSides; ++s) hands_[s] = hands_[s] || spec.hands()[s];
       // One set of controls for the cockpits: the one the run starts with, else the first listed.
       if (const auto* c = std::get_if<CockpitConfig>(&spec.config);
-          c != nullptr && (cockpit_config_ == nullptr || i == static_cast<size_t>(setup.start_interface))) {
+          c != nullptr &&
+          (cockpit_config_ == nullptr || i == static_cast<size_t>(setup.start_interface))) {
         cockpit_config_ = c;
       }
       gamepad_ = gamepad_ || spec.is_gamepad();
@@ -107,16 +110,19 @@ class RobotSession final : public FamilySession {
     }
     if (!defer_world) {
       const Scene* scene = setup.scene ? &*setup.scene : nullptr;
-      physics_ = SessionPhysics::CreateIfNeeded(setup.physics, hands_, cockpit_config_, scene, &interrupted);
+      physics_ = SessionPhysics::CreateIfNeeded(setup.physics, hands_, cockpit_config_, scene,
+                                                &interrupted);
       if (interrupted.load()) return;  // the session abandons the set-up
     }
 
     // The interfaces (a deferred one's place stays empty until it is asked for).
     std::vector<std::unique_ptr<interfaces::MediatorInterface>> built;
     for (size_t i = 0; i < setup.interfaces.size(); ++i) {
-      built.push_back(build[i] && !deferred_[i] ? MakeInterface(setup.interfaces[i], Parts()) : nullptr);
+      built.push_back(build[i] && !deferred_[i] ? MakeInterface(setup.interfaces[i], Parts())
+                                                : nullptr);
     }
-    interfaces_ = std::make_unique<InterfaceSet>(std::move(built), setup.start_interface, setup.run.switch_ramp_s);
+    interfaces_ = std::make_unique<InterfaceSet>(std::move(built), setup.start_interface,
+                                                 setup.run.switch_ramp_s);
     op_->Prepare(interfaces_->current());
     // The third-person view, drawn only where there is a view to show it.
     if (setup.third_person && setup.view != ViewKind::kNone) {
@@ -144,23 +150,27 @@ class RobotSession final : public FamilySession {
   bool UsesGamepad() const override { return gamepad_; }
   const SessionPhysics* physics() const override { return physics_.get(); }
 
-  void Drain(VehicleLink& link, VehicleHealth& health, HapticSide& haptic, RunTrace& trace, int64_t t0) override {
+  void Drain(VehicleLink& link, VehicleHealth& health, HapticSide& haptic, RunTrace& trace,
+             int64_t t0) override {
     for (const auto& e : link.channel<link::RobotMessages>().inbox().Drain()) {
       const msg::VehicleState& s = e.state;
-      if (health.FromAnotherProcess(s)) continue;  // a stranger under the name: the next check ends the run
+      if (health.FromAnotherProcess(s))
+        continue;  // a stranger under the name: the next check ends the run
       const double ts = NsToS(e.received_ns - t0);
       if (health.OnState(s, e.received_ns)) haptic.OnVehicleUp();
       const bool touching = s.bumper_left() || s.bumper_right();
       if (s.last_command_sent_ns() > 0) {
-        predictor_.OnRoundTrip(NsToS(e.received_ns - s.last_command_sent_ns() - s.last_command_age_ns()));
+        predictor_.OnRoundTrip(
+            NsToS(e.received_ns - s.last_command_sent_ns() - s.last_command_age_ns()));
       }
       bumpers_ = {s.bumper_left(), s.bumper_right()};
       if (s.pose_valid()) {
-        predictor_.OnState({ts, s.x(), s.y(), s.heading(), s.speed(), s.yaw_rate(), s.motor_left_level(),
-                            s.motor_right_level()});
+        predictor_.OnState({ts, s.x(), s.y(), s.heading(), s.speed(), s.yaw_rate(),
+                            s.motor_left_level(), s.motor_right_level()});
         reported_ = {ts, s.x(), s.y(), s.heading()};
         // With prediction the operator sees the vehicle where it is now (Drive).
-        if (!setup_.predict) op_->Observe({ts, s.x(), s.y(), s.heading(), s.bumper_left(), s.bumper_right()});
+        if (!setup_.predict)
+          op_->Observe({ts, s.x(), s.y(), s.heading(), s.bumper_left(), s.bumper_right()});
         lap_.Update(ts, Vec2(s.x(), s.y()));
         trace.Add(ts, s.x(), s.y(), 0.0, s.speed(), touching);
       }
@@ -181,8 +191,8 @@ class RobotSession final : public FamilySession {
     }
   }
 
-  std::optional<LoopEnd> Drive(double t, int64_t now, const interfaces::InputState& person, bool vehicle_up,
-                               HapticSide& haptic, VehicleLink& link) override {
+  std::optional<LoopEnd> Drive(double t, int64_t now, const interfaces::InputState& person,
+                               bool vehicle_up, HapticSide& haptic, VehicleLink& link) override {
     // A person's requests: another interface (F1–F6); a controller that went away.
     if (person.interface_requests != requests_seen_) {
       requests_seen_ = person.interface_requests;
@@ -193,14 +203,16 @@ class RobotSession final : public FamilySession {
       } else if (BuildDeferred(person.interface_request)) {
         pending_switch_ = -1;  // a later request replaces one waiting for the world
         if (interfaces_->Request(person.interface_request, t) && setup_.progress) {
-          log::Info("switching to interface '" + interfaces_->at(person.interface_request)->name() + "'");
+          log::Info("switching to interface '" + interfaces_->at(person.interface_request)->name() +
+                    "'");
         }
       }
     }
     FinishDeferred(t, haptic);
     if (person.pad_disconnects != disconnects_seen_) {
       disconnects_seen_ = person.pad_disconnects;
-      if (interfaces_->current().name() == "gamepad") return LoopEnd{Outcome::kAborted, "the game controller was disconnected"};
+      if (interfaces_->current().name() == "gamepad")
+        return LoopEnd{Outcome::kAborted, "the game controller was disconnected"};
     }
     // The operator acts on the device; the interface reads the device.
     // With prediction the operator steers the vehicle as it will be when the
@@ -217,7 +229,8 @@ class RobotSession final : public FamilySession {
     }
     motors_ = interfaces_->Update(t, feedback_, haptic.hal());
     const auto command_period_ns = static_cast<int64_t>(
-        1e9 / setup_.interfaces[static_cast<size_t>(interfaces_->current_index())].command_rate_hz());
+        1e9 /
+        setup_.interfaces[static_cast<size_t>(interfaces_->current_index())].command_rate_hz());
     if (next_command_ns_ == 0) next_command_ns_ = now;
     if (CommandDue(next_command_ns_, now, command_period_ns)) {
       const interfaces::MotorCommand sent = vehicle_up ? motors_ : interfaces::MotorCommand{};
@@ -285,9 +298,9 @@ class RobotSession final : public FamilySession {
                   "%6.1f s  %s  lap %5.1f s  gates %d/%d  obstacles %d  speed %.2f m/s  distance "
                   "%.2f m  rtt p50 %.2f ms  "
                   "video %.1f fps",
-                  t, interface.name().c_str(), lap_.lap_time_s(), lap_.next_gate(), lap_.gates_total(),
-                  lap_.obstacles_touched(), feedback_.speed, distance_m, link.Rtt().Percentile(0.5) * 1e-3,
-                  link.video().Stats().fps);
+                  t, interface.name().c_str(), lap_.lap_time_s(), lap_.next_gate(),
+                  lap_.gates_total(), lap_.obstacles_touched(), feedback_.speed, distance_m,
+                  link.Rtt().Percentile(0.5) * 1e-3, link.video().Stats().fps);
     log::Info(line);
     if (const auto* cockpit = dynamic_cast<const interfaces::CockpitInterface*>(&interface)) {
       const interfaces::CockpitControls& c = cockpit->controls();
@@ -297,9 +310,10 @@ class RobotSession final : public FamilySession {
         std::snprintf(hud, sizeof hud, "  HUD %.2f m/s%s%s%s", h.speed, h.turn_left ? " <" : "",
                       h.turn_right ? " >" : "", h.throttle_locked ? " locked" : "");
       }
-      std::snprintf(line, sizeof line, "         wheel %+.2f rad%s  throttle %+.3f m%s  motors %+.2f %+.2f%s",
-                    c.wheel_angle, c.wheel_held ? " (held)" : "", c.throttle, c.throttle_held ? " (held)" : "",
-                    motors_.left, motors_.right, hud);
+      std::snprintf(line, sizeof line,
+                    "         wheel %+.2f rad%s  throttle %+.3f m%s  motors %+.2f %+.2f%s",
+                    c.wheel_angle, c.wheel_held ? " (held)" : "", c.throttle,
+                    c.throttle_held ? " (held)" : "", motors_.left, motors_.right, hud);
       log::Info(line);
     }
   }
@@ -354,12 +368,15 @@ class RobotSession final : public FamilySession {
     }
     constexpr double kDeg = 180.0 / 3.14159265358979323846;
     char line[160];
-    std::snprintf(line, sizeof line, "range sensors: %d beams from %+.0f deg to %+.0f deg, up to %.2f m", scan.count,
+    std::snprintf(line, sizeof line,
+                  "range sensors: %d beams from %+.0f deg to %+.0f deg, up to %.2f m", scan.count,
                   scan.Angle(0) * kDeg, scan.Angle(scan.count - 1) * kDeg, scan.range_max);
     log::Info(line);
   }
 
-  const InterfaceSpec& start_spec() const { return setup_.interfaces.at(static_cast<size_t>(setup_.start_interface)); }
+  const InterfaceSpec& start_spec() const {
+    return setup_.interfaces.at(static_cast<size_t>(setup_.start_interface));
+  }
 
   /// The vehicle's CAN bus log: kept as reported; its end said once, as
   /// the state first carries it (the robot drives on).
@@ -370,7 +387,8 @@ class RobotSession final : public FamilySession {
     can_log_.frames_lost = s.can_log_frames_lost();
     if (can_log_.error.empty() && !s.can_log_error().empty()) {
       can_log_.error = s.can_log_error();
-      log::Error("vehicle '" + setup_.vehicle.name + "': its CAN bus log is not recorded whole: " + can_log_.error);
+      log::Error("vehicle '" + setup_.vehicle.name +
+                 "': its CAN bus log is not recorded whole: " + can_log_.error);
     }
   }
 
@@ -393,7 +411,8 @@ class RobotSession final : public FamilySession {
   /// loop must keep commanding the vehicle meanwhile (its watchdog would stop
   /// it): the current interface drives on until then.
   bool BuildDeferred(int index) {
-    if (index < 0 || index >= static_cast<int>(deferred_.size()) || !deferred_[static_cast<size_t>(index)]) {
+    if (index < 0 || index >= static_cast<int>(deferred_.size()) ||
+        !deferred_[static_cast<size_t>(index)]) {
       return true;
     }
     pending_switch_ = index;
@@ -405,7 +424,8 @@ class RobotSession final : public FamilySession {
         return SessionPhysics::CreateIfNeeded(setup_.physics, hands_, cockpit_config_, nullptr);
       });
       if (setup_.progress) {
-        log::Info("building the physics world for '" + setup_.interfaces[static_cast<size_t>(index)].name +
+        log::Info("building the physics world for '" +
+                  setup_.interfaces[static_cast<size_t>(index)].name +
                   "'; the current interface drives on meanwhile");
       }
     }
@@ -416,10 +436,13 @@ class RobotSession final : public FamilySession {
   /// gives every interface that waited for it its parts, and switches to the
   /// one last asked for (if the person has not asked for another since).
   void FinishDeferred(double t, HapticSide& haptic) {
-    if (!building_.valid() || building_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
+    if (!building_.valid() ||
+        building_.wait_for(std::chrono::seconds(0)) != std::future_status::ready)
+      return;
     const int index = pending_switch_;
     pending_switch_ = -1;
-    const std::string name = index >= 0 ? setup_.interfaces[static_cast<size_t>(index)].name : "a later interface";
+    const std::string name =
+        index >= 0 ? setup_.interfaces[static_cast<size_t>(index)].name : "a later interface";
     try {
       physics_ = building_.get();
       if (physics_) physics_->world->Start(haptic.hal());
@@ -435,7 +458,8 @@ class RobotSession final : public FamilySession {
     }
     if (setup_.progress) {
       log::Info("physics world built for '" + name + "' in " +
-                std::to_string(static_cast<int>(NsToS(MonotonicNs() - build_start_ns_) * 1e3)) + " ms");
+                std::to_string(static_cast<int>(NsToS(MonotonicNs() - build_start_ns_) * 1e3)) +
+                " ms");
     }
     if (index >= 0 && interfaces_->Request(index, t) && setup_.progress) {
       log::Info("switching to interface '" + interfaces_->at(index)->name() + "'");
@@ -450,7 +474,8 @@ class RobotSession final : public FamilySession {
   std::unique_ptr<PersonOperator> person_;
   Operator* op_ = nullptr;
   interfaces::InputBox* input_ = nullptr;
-  std::array<bool, haptics::kSides> hands_{false, false};  ///< proxy hands a world gives the interfaces built
+  std::array<bool, haptics::kSides> hands_{
+      false, false};  ///< proxy hands a world gives the interfaces built
   const CockpitConfig* cockpit_config_ = nullptr;
   /// Interfaces waiting for the physics world (built when first asked for).
   std::vector<bool> deferred_;
@@ -486,7 +511,8 @@ class RobotSession final : public FamilySession {
 }  // namespace
 
 std::unique_ptr<FamilySession> MakeRobotSession(const SessionSetup& setup, HapticSide& haptic,
-                                                interfaces::InputBox& input, const std::atomic<bool>& interrupted,
+                                                interfaces::InputBox& input,
+                                                const std::atomic<bool>& interrupted,
                                                 RunRecord& rec) {
   return std::make_unique<RobotSession>(setup, haptic, input, interrupted, rec);
 }

@@ -9,6 +9,7 @@
 #include <sstream>
 #include <string>
 
+#include "haptel/calibration/calibration_procedure.hpp"
 #include "haptel/config/blimp_manual.hpp"
 #include "haptel/config/cockpit.hpp"
 #include "haptel/config/error.hpp"
@@ -25,7 +26,6 @@
 #include "haptel/core/stop_signals.hpp"
 #include "haptel/link/fault_transport.hpp"
 #include "haptel/link/security.hpp"
-#include "haptel/calibration/calibration_procedure.hpp"
 #include "haptel/mediator/controller_errors.hpp"
 #include "haptel/mediator/fleet.hpp"
 #include "haptel/mediator/haptic_side.hpp"
@@ -124,7 +124,8 @@ std::string SwitchesJson(const std::vector<haptel::record::SwitchRecord>& switch
 /// {"path":…,"frames":…,"frames_lost":…[,"error":…]}, or null without a log.
 std::string CanLogJson(const haptel::mediator::CanLogReport& log) {
   if (log.path.empty()) return "null";
-  std::string out = "{\"path\":" + haptel::JsonString(log.path) + ",\"frames\":" + std::to_string(log.frames) +
+  std::string out = "{\"path\":" + haptel::JsonString(log.path) +
+                    ",\"frames\":" + std::to_string(log.frames) +
                     ",\"frames_lost\":" + std::to_string(log.frames_lost);
   if (!log.error.empty()) out += ",\"error\":" + haptel::JsonString(log.error);
   return out + "}";
@@ -160,11 +161,13 @@ bool ReportsControllerErrors(const haptel::mediator::SessionSetup& setup) {
 }  // namespace
 
 Args ParseRunArgs(int argc, const char* const* argv) {
-  return Args(argc, argv,
-              {"config", "track", "interface", "scene", "vehicle-name", "domain", "database", "vehicle-timeout",
-               "trace", "operator", "device", "trace-in", "time-limit", "lap-limit", "view", "record", "vehicle",
-               "predict", "link-fault", "link-profile", "security", "dds-interfaces", "dds-peers", "discovery-server",
-               "fleet"},
+  return Args(argc, argv, {"config",       "track",          "interface",  "scene",
+                           "vehicle-name", "domain",         "database",   "vehicle-timeout",
+                           "trace",        "operator",       "device",     "trace-in",
+                           "time-limit",   "lap-limit",      "view",       "record",
+                           "vehicle",      "predict",        "link-fault", "link-profile",
+                           "security",     "dds-interfaces", "dds-peers",  "discovery-server",
+                           "fleet"},
               {"json", "quiet", "attach", "third-person", "simulated-time", "insecure"});
 }
 
@@ -181,31 +184,37 @@ void CheckGatesFit(const TrackConfig& track, const VehicleConfig& vehicle) {
     const double opening = gate.width - 2.0 * track.post_radius;
     // An obstacle in the opening (a post in the gate) leaves what is beside it.
     std::vector<size_t> blocking;
-    if (const double free = GateFreeWidth(placed, i, &blocking); opening >= across && !blocking.empty() && free <= across) {
+    if (const double free = GateFreeWidth(placed, i, &blocking);
+        opening >= across && !blocking.empty() && free <= across) {
       std::string names;
       for (size_t k : blocking) {
         char one[160];
-        std::snprintf(one, sizeof one, "%sobstacles[%zu] (radius %.3f m at [%.2f, %.2f])", names.empty() ? "" : ", ",
-                      k, track.obstacles[k].radius, track.obstacles[k].center.x(), track.obstacles[k].center.y());
+        std::snprintf(one, sizeof one, "%sobstacles[%zu] (radius %.3f m at [%.2f, %.2f])",
+                      names.empty() ? "" : ", ", k, track.obstacles[k].radius,
+                      track.obstacles[k].center.x(), track.obstacles[k].center.y());
         names += one;
       }
       char text[600];
       std::snprintf(text, sizeof text,
-                    ": key 'gates[%zu]': the gate at %.2f m is blocked by %s: its widest free gap is %.3f m, not "
-                    "wider than vehicle '%s' (%.3f m across, body.radius in %s); expected the obstacle out of the "
+                    ": key 'gates[%zu]': the gate at %.2f m is blocked by %s: its widest free gap "
+                    "is %.3f m, not "
+                    "wider than vehicle '%s' (%.3f m across, body.radius in %s); expected the "
+                    "obstacle out of the "
                     "gate's opening, or a gap wider than %.3f m",
-                    i, gate.along, names.c_str(), free, vehicle.name.c_str(), across, vehicle.file.string().c_str(),
-                    across);
+                    i, gate.along, names.c_str(), free, vehicle.name.c_str(), across,
+                    vehicle.file.string().c_str(), across);
       throw ConfigError(track.file.string() + text);
     }
     if (opening >= across) continue;
     char text[400];
-    std::snprintf(text, sizeof text,
-                  ": key 'gates[%zu]': the gate at %.2f m is %.3f m between its posts' surfaces (width %.3f m "
-                  "less two posts of radius %.3f m), narrower than vehicle '%s' (%.3f m across, body.radius "
-                  "in %s); expected a width of at least %.3f m",
-                  i, gate.along, opening, gate.width, track.post_radius, vehicle.name.c_str(), across,
-                  vehicle.file.string().c_str(), across + 2.0 * track.post_radius);
+    std::snprintf(
+        text, sizeof text,
+        ": key 'gates[%zu]': the gate at %.2f m is %.3f m between its posts' surfaces (width %.3f "
+        "m "
+        "less two posts of radius %.3f m), narrower than vehicle '%s' (%.3f m across, body.radius "
+        "in %s); expected a width of at least %.3f m",
+        i, gate.along, opening, gate.width, track.post_radius, vehicle.name.c_str(), across,
+        vehicle.file.string().c_str(), across + 2.0 * track.post_radius);
     throw ConfigError(track.file.string() + text);
   }
 }
@@ -220,17 +229,23 @@ SessionSetup RunSetupFromArgs(const Args& args) {
   if (auto track = args.Value("track")) setup.run.track = *track;
   if (auto name = args.Value("interface")) setup.run.interface = *name;
   if (auto domain = args.Int("domain", 0, 232)) setup.run.link.domain_id = *domain;
-  setup.run.link.fault = LinkFaultFromOptions(args.Value("link-profile"), args.Value("link-fault"), setup.run.link.fault);
+  setup.run.link.fault = LinkFaultFromOptions(args.Value("link-profile"), args.Value("link-fault"),
+                                              setup.run.link.fault);
   if (auto predict = args.Value("predict")) {
-    if (*predict != "on" && *predict != "off") throw UsageError("option --predict: expected on or off, got '" + *predict + "'");
+    if (*predict != "on" && *predict != "off")
+      throw UsageError("option --predict: expected on or off, got '" + *predict + "'");
     setup.predict = *predict == "on";
   }
   if (auto security = args.Value("security")) setup.run.link.security = *security;
-  if (auto list = args.Value("dds-interfaces")) setup.run.link.interfaces = ParseAddressOption("dds-interfaces", *list);
-  if (auto list = args.Value("dds-peers")) setup.run.link.peers = ParseAddressOption("dds-peers", *list);
-  if (auto server = args.Value("discovery-server")) setup.run.link.discovery_server = ServerOption(*server);
+  if (auto list = args.Value("dds-interfaces"))
+    setup.run.link.interfaces = ParseAddressOption("dds-interfaces", *list);
+  if (auto list = args.Value("dds-peers"))
+    setup.run.link.peers = ParseAddressOption("dds-peers", *list);
+  if (auto server = args.Value("discovery-server"))
+    setup.run.link.discovery_server = ServerOption(*server);
   // Before anything is spawned: a missing identity or an expired certificate is one line.
-  if (!setup.run.link.security.empty()) link::CheckSecurity(setup.run.link.security, link::OperatorIdentity());
+  if (!setup.run.link.security.empty())
+    link::CheckSecurity(setup.run.link.security, link::OperatorIdentity());
   // Each file option before anything opens it: a FIFO would be waited on for ever, deaf to signals.
   if (auto db = args.Value("database")) {
     CheckFileOption("database", *db, "an SQLite file (new or a Haptel database)");
@@ -242,48 +257,56 @@ SessionSetup RunSetupFromArgs(const Args& args) {
   }
   if (auto s = args.Number("vehicle-timeout", 0.05, 60.0)) setup.run.vehicle_timeout_s = *s;
   const bool display = view::View::DisplayAvailable();
-  // A simulated-time run is the automatic operator's, without a view, unless told otherwise (then refused).
+  // A simulated-time run is the automatic operator's, without a view, unless told otherwise (then
+  // refused).
   const bool simulated_time = args.Flag("simulated-time");
-  setup.operator_kind = args.Value("operator").value_or(display && !simulated_time ? "person" : "auto");
+  setup.operator_kind =
+      args.Value("operator").value_or(display && !simulated_time ? "person" : "auto");
   if (setup.operator_kind != "auto" && setup.operator_kind != "person") {
-    throw UsageError("option --operator: expected auto or person, got '" + setup.operator_kind + "'");
+    throw UsageError("option --operator: expected auto or person, got '" + setup.operator_kind +
+                     "'");
   }
   const bool person = setup.operator_kind == "person";
-  const std::string view = args.Value("view").value_or(display && !simulated_time ? "window" : "none");
+  const std::string view =
+      args.Value("view").value_or(display && !simulated_time ? "window" : "none");
   if (view == "window") {
     if (!display) {
-      throw UsageError("option --view window: there is no display (DISPLAY is not set or its X server is not "
-                       "running); use --view none, "
-                       "and --record FILE.mp4 to record the operator's view headless");
+      throw UsageError(
+          "option --view window: there is no display (DISPLAY is not set or its X server is not "
+          "running); use --view none, "
+          "and --record FILE.mp4 to record the operator's view headless");
     }
-  setup.view = ViewKind::kWindow;
+    setup.view = ViewKind::kWindow;
   } else if (view != "none") {
     throw UsageError("option --view: expected window or none, got '" + view + "'");
   }
   if (auto record = args.Value("record")) {
-    // Before anything is spawned: a recording that cannot be written is an error now, not after the lap.
+    // Before anything is spawned: a recording that cannot be written is an error now, not after the
+    // lap.
     const std::filesystem::path file = *record;
     const std::filesystem::path folder = file.parent_path().empty() ? "." : file.parent_path();
     CheckFileOption("record", file, "a file name such as run.mp4");
     if (!std::filesystem::is_directory(folder)) {
-      throw UsageError("option --record: the folder '" + folder.string() + "' does not exist; expected a file in a "
+      throw UsageError("option --record: the folder '" + folder.string() +
+                       "' does not exist; expected a file in a "
                        "folder that does");
     }
     setup.record = *record;
     if (setup.view == ViewKind::kNone) setup.view = ViewKind::kOffscreen;
   }
   if (auto s = args.Number("time-limit", 1.0, 86400.0)) {
-  setup.time_limit_s = *s;
+    setup.time_limit_s = *s;
   } else if (person) {
-  setup.time_limit_s = setup.run.person_time_limit_s;
+    setup.time_limit_s = setup.run.person_time_limit_s;
   }
   if (auto s = args.Number("lap-limit", 1.0, 86400.0)) setup.lap_limit_s = *s;
   if (auto device = args.Value("device")) setup.run.device = *device;
   if (auto vehicle = args.Value("vehicle")) setup.run.vehicle = *vehicle;
   setup.vehicle = LoadVehicle(setup.run.vehicle);
-  // A fault nothing can be driven through is said now, not as "did not start" or "lost" once the vehicle runs.
-  if (const std::string problem =
-          LinkFaultProblem(setup.run.link.fault, setup.vehicle.state_rate_hz, setup.run.vehicle_timeout_s);
+  // A fault nothing can be driven through is said now, not as "did not start" or "lost" once the
+  // vehicle runs.
+  if (const std::string problem = LinkFaultProblem(
+          setup.run.link.fault, setup.vehicle.state_rate_hz, setup.run.vehicle_timeout_s);
       !problem.empty()) {
     throw UsageError("link faults " + LinkFaultText(setup.run.link.fault) + ": " + problem);
   }
@@ -294,8 +317,9 @@ SessionSetup RunSetupFromArgs(const Args& args) {
       throw UsageError("option --third-person: " + problem);
     }
     if (setup.view == ViewKind::kNone) {
-      throw UsageError("option --third-person: it is drawn in the operator's view, and there is none (--view "
-                       "none); use --view window, or --record FILE.mp4");
+      throw UsageError(
+          "option --third-person: it is drawn in the operator's view, and there is none (--view "
+          "none); use --view window, or --record FILE.mp4");
     }
     setup.third_person = true;
   }
@@ -318,28 +342,33 @@ SessionSetup RunSetupFromArgs(const Args& args) {
     if (const std::string problem = VehicleNameProblem(*name); !problem.empty()) {
       throw UsageError("option --vehicle-name: expected " + problem);
     }
-  setup.vehicle.name = *name;
+    setup.vehicle.name = *name;
   }
   setup.device = LoadDevice(setup.run.device);
   if (auto trace_in = args.Value("trace-in")) {
     if (setup.device.driver != "replay") {
-      throw UsageError("option --trace-in: the device '" + setup.run.device.string() + "' is not a replay device");
+      throw UsageError("option --trace-in: the device '" + setup.run.device.string() +
+                       "' is not a replay device");
     }
     CheckFileOption("trace-in", *trace_in, "a trace `haptel run --trace FILE` recorded");
     setup.device.replay.trace = *trace_in;
   }
   if (setup.device.driver == "replay" && !std::filesystem::exists(setup.device.replay.trace)) {
     throw ConfigError(setup.run.device.string() + ": key 'replay.trace': no trace '" +
-                    setup.device.replay.trace.string() + "'; record one with `haptel run --trace FILE`");
+                      setup.device.replay.trace.string() +
+                      "'; record one with `haptel run --trace FILE`");
   }
   if (const std::string what = NotRegularFile(setup.device.replay.trace);
       setup.device.driver == "replay" && !what.empty()) {
-    throw ConfigError(setup.run.device.string() + ": key 'replay.trace': '" + setup.device.replay.trace.string() +
-                      "' is " + what + "; expected a trace `haptel run --trace FILE` recorded");
+    throw ConfigError(setup.run.device.string() + ": key 'replay.trace': '" +
+                      setup.device.replay.trace.string() + "' is " + what +
+                      "; expected a trace `haptel run --trace FILE` recorded");
   }
   if (!person && setup.device.driver != "sim") {
-    throw UsageError("option --operator auto: the automatic operator moves the simulated arms, and device '" +
-                   setup.device.name + "' (" + setup.device.driver + ") is not simulated; use --operator person");
+    throw UsageError(
+        "option --operator auto: the automatic operator moves the simulated arms, and device '" +
+        setup.device.name + "' (" + setup.device.driver +
+        ") is not simulated; use --operator person");
   }
   if (blimp) {
     // The blimp gesture cockpit (thesis 8.2.2) needs both arms of a haptic
@@ -354,19 +383,26 @@ SessionSetup RunSetupFromArgs(const Args& args) {
     }
     if (IsBlimpManual(name)) {
       if (!person) {
-        throw UsageError("option --interface " + name + ": keys and controllers are a person's; use --operator person");
+        throw UsageError("option --interface " + name +
+                         ": keys and controllers are a person's; use --operator person");
       }
       setup.blimp_manual = LoadBlimpManual(InterfaceFile(setup.run, name));
-      if (setup.blimp_manual->input() == BlimpManualInput::kKeys && setup.view != ViewKind::kWindow) {
-        throw UsageError("option --interface blimp-keys: the keys are read in the view's window, and there is " +
-                         std::string(display ? "none (--view none)" : "no display") +
-                         "; use --view window, or --interface blimp-gamepad");
+      if (setup.blimp_manual->input() == BlimpManualInput::kKeys &&
+          setup.view != ViewKind::kWindow) {
+        throw UsageError(
+            "option --interface blimp-keys: the keys are read in the view's window, and there is " +
+            std::string(display ? "none (--view none)" : "no display") +
+            "; use --view window, or --interface blimp-gamepad");
       }
     } else {
       if (person && setup.device.driver == "sim") {
-        throw UsageError("option --interface blimp-gesture: the gesture cockpit is flown with both hands on a haptic "
-                         "device, and the simulated device has no arms for a person; use --device with a real one, "
-                         "--interface blimp-keys or blimp-gamepad, or --operator auto to watch the automatic pilot");
+        throw UsageError(
+            "option --interface blimp-gesture: the gesture cockpit is flown with both hands on a "
+            "haptic "
+            "device, and the simulated device has no arms for a person; use --device with a real "
+            "one, "
+            "--interface blimp-keys or blimp-gamepad, or --operator auto to watch the automatic "
+            "pilot");
       }
       setup.blimp_interface = LoadBlimpGesture(InterfaceFile(setup.run, name));
     }
@@ -392,19 +428,23 @@ SessionSetup RunSetupFromArgs(const Args& args) {
     found = names.begin();
   }
   setup.start_interface = static_cast<int>(found - names.begin());
-  for (const std::string& name : names) setup.interfaces.push_back(LoadInterfaceSpec(setup.run, name));
+  for (const std::string& name : names)
+    setup.interfaces.push_back(LoadInterfaceSpec(setup.run, name));
   CheckHands(setup.interfaces, setup.device);
   const InterfaceSpec& first = setup.interfaces[static_cast<size_t>(setup.start_interface)];
   if (first.manual() && !person) {
-    throw UsageError("option --interface " + first.name + ": keys and controllers are a person's; use --operator person");
+    throw UsageError("option --interface " + first.name +
+                     ": keys and controllers are a person's; use --operator person");
   }
   if (first.is_keyboard() && setup.view != ViewKind::kWindow) {
-    throw UsageError("option --interface keyboard: the keys are read in the view's window, and there is " +
-                     std::string(display ? "none (--view none)" : "no display") +
-                     "; use --view window, or --interface gamepad");
+    throw UsageError(
+        "option --interface keyboard: the keys are read in the view's window, and there is " +
+        std::string(display ? "none (--view none)" : "no display") +
+        "; use --view window, or --interface gamepad");
   }
   if (auto scene = args.Value("scene")) setup.run.scene = *scene;
-  if (!setup.run.scene.empty()) setup.scene = PlaceScene(LoadSceneFile(setup.run.scene), setup.run.scene_placement);
+  if (!setup.run.scene.empty())
+    setup.scene = PlaceScene(LoadSceneFile(setup.run.scene), setup.run.scene_placement);
   const bool any_physics = std::any_of(setup.interfaces.begin(), setup.interfaces.end(),
                                        [](const InterfaceSpec& s) { return s.needs_physics(); });
   if (any_physics || setup.scene) setup.physics = LoadPhysics(setup.run.physics);
@@ -440,7 +480,8 @@ RecordedRun RunAndRecord(const SessionSetup& setup, Recorder& recorder,
       const std::filesystem::path png =
           std::filesystem::absolute(record::RunPicturePath(setup.run.database, run.run_id));
       if (setup.course) {
-        record::WriteRunPicture(record::RenderBlimpRunPicture(run.result.record, *setup.course), png);
+        record::WriteRunPicture(record::RenderBlimpRunPicture(run.result.record, *setup.course),
+                                png);
       } else {
         record::DrawRunPicture(run.result.record, setup.track, png);
       }
@@ -461,29 +502,38 @@ RecordedRun RunAndRecord(const SessionSetup& setup, Recorder& recorder,
 
 int ExitCode(const RecordedRun& run) {
   if (run.run_id == 0) return kExitNotRecorded;
-  if (!run.result.view_record_error.empty() || !run.result.can_log.error.empty()) return kExitOutputFailed;
+  if (!run.result.view_record_error.empty() || !run.result.can_log.error.empty())
+    return kExitOutputFailed;
   return ExitCode(run.result.outcome);
 }
 
 void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRun& run) {
   const RunRecord& r = run.result.record;
-  std::fprintf(out, "haptel: %s — %s\n", ToString(run.result.outcome).c_str(), run.result.message.c_str());
-  std::fprintf(out, "  track %s, interface %s, vehicle %s (pid %d), operator %s, device %s\n", r.track.c_str(),
-              r.interface.c_str(), r.vehicle.c_str(), r.vehicle_pid, r.operator_kind.c_str(), r.device.c_str());
-  std::fprintf(out, "  distance driven %.2f m, %zu interface switches\n", r.distance_m, r.switches.size());
-  std::fprintf(out,
-               "  lap time %.2f s (from the start line; %.2f s before it), gates passed %d/%d, missed %d, "
-               "obstacles touched %d\n",
-               r.lap_time_s, r.approach_s, r.gates_passed, r.gates_total, r.gates_missed, r.obstacles_touched);
+  std::fprintf(out, "haptel: %s — %s\n", ToString(run.result.outcome).c_str(),
+               run.result.message.c_str());
+  std::fprintf(out, "  track %s, interface %s, vehicle %s (pid %d), operator %s, device %s\n",
+               r.track.c_str(), r.interface.c_str(), r.vehicle.c_str(), r.vehicle_pid,
+               r.operator_kind.c_str(), r.device.c_str());
+  std::fprintf(out, "  distance driven %.2f m, %zu interface switches\n", r.distance_m,
+               r.switches.size());
+  std::fprintf(
+      out,
+      "  lap time %.2f s (from the start line; %.2f s before it), gates passed %d/%d, missed %d, "
+      "obstacles touched %d\n",
+      r.lap_time_s, r.approach_s, r.gates_passed, r.gates_total, r.gates_missed,
+      r.obstacles_touched);
   for (const GateSplit& s : r.splits) {
-    if (s.split_s >= 0) std::fprintf(out, "    gate %d  %7.2f s  %s\n", s.gate + 1, s.split_s, s.passed ? "passed" : "MISSED");
+    if (s.split_s >= 0)
+      std::fprintf(out, "    gate %d  %7.2f s  %s\n", s.gate + 1, s.split_s,
+                   s.passed ? "passed" : "MISSED");
   }
   constexpr const char* kShort = " CANNOT KEEP ITS RATE";
-  std::fprintf(out, "  servo %.1f Hz of %.0f Hz%s (p99 period %.0f us, %llu overruns)\n", r.servo_rate_hz,
-              r.servo_target_hz, r.servo_rate_short ? kShort : "", r.servo_period_p99_us,
-              static_cast<unsigned long long>(run.result.servo_overruns));
+  std::fprintf(out, "  servo %.1f Hz of %.0f Hz%s (p99 period %.0f us, %llu overruns)\n",
+               r.servo_rate_hz, r.servo_target_hz, r.servo_rate_short ? kShort : "",
+               r.servo_period_p99_us, static_cast<unsigned long long>(run.result.servo_overruns));
   if (run.result.physics_rate_hz > 0) {
-    std::fprintf(out, 
+    std::fprintf(
+        out,
         "  physics %.1f Hz of %.0f Hz%s (p99 period %.0f us, longest step %.0f us, %llu hand "
         "resets), controls grasped after %.2f s\n",
         run.result.physics_rate_hz, r.physics_target_hz, r.physics_rate_short ? kShort : "",
@@ -495,45 +545,52 @@ void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRu
   if (ReportsControllerErrors(setup)) {
     std::fprintf(out, "  %s\n", ControllerErrorsLine(run.result.controller_errors).c_str());
   }
-  std::fprintf(out, "  command round trip p50 %.2f ms, p99 %.2f ms\n", r.command_rtt_ms_p50, r.command_rtt_ms_p99);
+  std::fprintf(out, "  command round trip p50 %.2f ms, p99 %.2f ms\n", r.command_rtt_ms_p50,
+               r.command_rtt_ms_p99);
   if (r.speedup > 0.0) {
-    std::fprintf(out,
-                 "  simulated time: %.2f s simulated in %.2f s wall-clock, %.1fx real time (%.2f s of CPU: "
-                 "%.1fx per CPU second)\n",
-                 run.result.simulated_s, run.result.wall_s, r.speedup, run.result.cpu_s,
-                 run.result.cpu_s > 0.0 ? run.result.simulated_s / run.result.cpu_s : 0.0);
+    std::fprintf(
+        out,
+        "  simulated time: %.2f s simulated in %.2f s wall-clock, %.1fx real time (%.2f s of CPU: "
+        "%.1fx per CPU second)\n",
+        run.result.simulated_s, run.result.wall_s, r.speedup, run.result.cpu_s,
+        run.result.cpu_s > 0.0 ? run.result.simulated_s / run.result.cpu_s : 0.0);
   }
   if (r.prediction_error_m_p95 >= 0.0) {
     std::fprintf(out, "  predicted pose against each state: error p50 %.1f mm, p95 %.1f mm%s\n",
                  r.prediction_error_m_p50 * 1e3, r.prediction_error_m_p95 * 1e3,
                  r.predict ? " (shown to the operator: --predict on)" : "");
   }
-  std::fprintf(out, "  video %lld frames, %.1f fps, %.0f kbit/s, latency p50 %.1f ms, stale %.2f s\n",
-               static_cast<long long>(r.video_frames), r.video_fps, r.video_kbps, r.video_latency_ms_p50,
-               r.video_stale_s);
+  std::fprintf(out,
+               "  video %lld frames, %.1f fps, %.0f kbit/s, latency p50 %.1f ms, stale %.2f s\n",
+               static_cast<long long>(r.video_frames), r.video_fps, r.video_kbps,
+               r.video_latency_ms_p50, r.video_stale_s);
   if (setup.view != ViewKind::kNone) {
-    std::fprintf(out, "  view %.1f fps (frame p99 %.1f ms), video to screen p50 %.1f ms, p99 %.1f ms\n", r.view_fps,
-                r.view_frame_p99_ms, r.video_to_screen_ms_p50, r.video_to_screen_ms_p99);
+    std::fprintf(
+        out, "  view %.1f fps (frame p99 %.1f ms), video to screen p50 %.1f ms, p99 %.1f ms\n",
+        r.view_fps, r.view_frame_p99_ms, r.video_to_screen_ms_p50, r.video_to_screen_ms_p99);
   }
   if (!setup.record.empty() && !run.result.view_record_error.empty()) {
-    std::fprintf(out, "  operator's view NOT recorded whole: %s\n", run.result.view_record_error.c_str());
+    std::fprintf(out, "  operator's view NOT recorded whole: %s\n",
+                 run.result.view_record_error.c_str());
   } else if (!setup.record.empty()) {
-    std::fprintf(out, "  operator's view recorded to %s (%llu frames dropped)\n", setup.record.c_str(),
-                static_cast<unsigned long long>(run.result.view_record_dropped));
+    std::fprintf(out, "  operator's view recorded to %s (%llu frames dropped)\n",
+                 setup.record.c_str(),
+                 static_cast<unsigned long long>(run.result.view_record_dropped));
   }
   if (const CanLogReport& log = run.result.can_log; !log.error.empty()) {
-    std::fprintf(out, "  vehicle's CAN bus log NOT recorded whole: %s; %llu frames lost\n", log.error.c_str(),
-                 static_cast<unsigned long long>(log.frames_lost));
+    std::fprintf(out, "  vehicle's CAN bus log NOT recorded whole: %s; %llu frames lost\n",
+                 log.error.c_str(), static_cast<unsigned long long>(log.frames_lost));
   } else if (!log.path.empty()) {
     std::fprintf(out, "  vehicle's CAN bus log %s (on its host): %llu frames\n", log.path.c_str(),
                  static_cast<unsigned long long>(log.frames));
   }
   if (run.run_id != 0) {
     std::fprintf(out, "  recorded as run %lld in %s\n", static_cast<long long>(run.run_id),
-                setup.run.database.c_str());
+                 setup.run.database.c_str());
   } else {
-    std::fprintf(out, "  NOT recorded in %s; results in %s\n", setup.run.database.c_str(),
-                run.unsaved.empty() ? "no file either (see the error above)" : run.unsaved.c_str());
+    std::fprintf(
+        out, "  NOT recorded in %s; results in %s\n", setup.run.database.c_str(),
+        run.unsaved.empty() ? "no file either (see the error above)" : run.unsaved.c_str());
   }
   if (!r.picture.empty()) std::fprintf(out, "  picture %s\n", r.picture.c_str());
 }
@@ -541,45 +598,53 @@ void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRu
 std::string RunJson(const SessionSetup& setup, const RecordedRun& run) {
   const RunRecord& r = run.result.record;
   std::ostringstream o;
-  o << "{\"completed\":" << (r.completed ? "true" : "false") << ",\"outcome\":" << JsonString(r.outcome)
-    << ",\"message\":" << JsonString(run.result.message) << ",\"lap_time_s\":" << JsonNumber(r.lap_time_s)
-    << ",\"approach_s\":" << (std::isfinite(r.approach_s) ? JsonNumber(r.approach_s) : std::string("null"))
+  o << "{\"completed\":" << (r.completed ? "true" : "false")
+    << ",\"outcome\":" << JsonString(r.outcome) << ",\"message\":" << JsonString(run.result.message)
+    << ",\"lap_time_s\":" << JsonNumber(r.lap_time_s) << ",\"approach_s\":"
+    << (std::isfinite(r.approach_s) ? JsonNumber(r.approach_s) : std::string("null"))
     << ",\"gates_passed\":" << r.gates_passed << ",\"gates_total\":" << r.gates_total
     << ",\"gates_missed\":" << r.gates_missed << ",\"obstacles_touched\":" << r.obstacles_touched
-    << ",\"vehicle\":" << JsonString(r.vehicle) << ",\"vehicle_kind\":" << JsonString(r.vehicle_kind)
-    << ",\"vehicle_pid\":" << r.vehicle_pid << ",\"servo_rate_hz\":" << JsonNumber(r.servo_rate_hz)
+    << ",\"vehicle\":" << JsonString(r.vehicle)
+    << ",\"vehicle_kind\":" << JsonString(r.vehicle_kind) << ",\"vehicle_pid\":" << r.vehicle_pid
+    << ",\"servo_rate_hz\":" << JsonNumber(r.servo_rate_hz)
     << ",\"servo_period_p99_us\":" << JsonNumber(r.servo_period_p99_us)
     << ",\"servo_overruns\":" << run.result.servo_overruns
     << ",\"servo_target_hz\":" << JsonNumber(r.servo_target_hz)
     << ",\"servo_rate_short\":" << (r.servo_rate_short ? "true" : "false")
     << ",\"command_rtt_ms_p50\":" << JsonNumber(r.command_rtt_ms_p50)
-    << ",\"command_rtt_ms_p99\":" << JsonNumber(r.command_rtt_ms_p99) << ",\"video_frames\":" << r.video_frames
-    << ",\"video_fps\":" << JsonNumber(r.video_fps) << ",\"video_latency_ms_p50\":" << JsonNumber(r.video_latency_ms_p50)
-    << ",\"video_kbps\":" << JsonNumber(r.video_kbps) << ",\"video_stale_s\":" << JsonNumber(r.video_stale_s)
-    << ",\"predict\":" << (r.predict ? "true" : "false") << ",\"link_fault\":" << JsonString(r.link_fault)
-    << ",\"prediction_error_m_p50\":"
-    << (r.prediction_error_m_p50 >= 0.0 ? JsonNumber(r.prediction_error_m_p50) : std::string("null"))
+    << ",\"command_rtt_ms_p99\":" << JsonNumber(r.command_rtt_ms_p99)
+    << ",\"video_frames\":" << r.video_frames << ",\"video_fps\":" << JsonNumber(r.video_fps)
+    << ",\"video_latency_ms_p50\":" << JsonNumber(r.video_latency_ms_p50)
+    << ",\"video_kbps\":" << JsonNumber(r.video_kbps)
+    << ",\"video_stale_s\":" << JsonNumber(r.video_stale_s)
+    << ",\"predict\":" << (r.predict ? "true" : "false")
+    << ",\"link_fault\":" << JsonString(r.link_fault) << ",\"prediction_error_m_p50\":"
+    << (r.prediction_error_m_p50 >= 0.0 ? JsonNumber(r.prediction_error_m_p50)
+                                        : std::string("null"))
     << ",\"prediction_error_m_p95\":"
-    << (r.prediction_error_m_p95 >= 0.0 ? JsonNumber(r.prediction_error_m_p95) : std::string("null"))
+    << (r.prediction_error_m_p95 >= 0.0 ? JsonNumber(r.prediction_error_m_p95)
+                                        : std::string("null"))
     << ",\"speedup\":" << (r.speedup > 0.0 ? JsonNumber(r.speedup) : std::string("null"))
-    << ",\"simulated_s\":" << JsonNumber(run.result.simulated_s) << ",\"cpu_s\":" << JsonNumber(run.result.cpu_s)
+    << ",\"simulated_s\":" << JsonNumber(run.result.simulated_s)
+    << ",\"cpu_s\":" << JsonNumber(run.result.cpu_s)
     << ",\"lost_detect_s\":" << JsonNumber(run.result.lost_detect_s)
-    << ",\"controller_errors\":" << run.result.controller_errors
-    << ",\"controller_error_names\":" << NamesJson(ControllerErrorNames(run.result.controller_errors))
+    << ",\"controller_errors\":" << run.result.controller_errors << ",\"controller_error_names\":"
+    << NamesJson(ControllerErrorNames(run.result.controller_errors))
     << ",\"physics_rate_hz\":" << JsonNumber(run.result.physics_rate_hz)
     << ",\"physics_period_p99_us\":" << JsonNumber(run.result.physics_period_p99_us)
     << ",\"physics_step_max_us\":" << JsonNumber(run.result.physics_step_max_us)
     << ",\"physics_hand_resets\":" << run.result.physics_hand_resets
     << ",\"physics_target_hz\":" << JsonNumber(r.physics_target_hz)
     << ",\"physics_rate_short\":" << (r.physics_rate_short ? "true" : "false")
-    << ",\"grasp_s\":" << JsonNumber(run.result.grasp_s) << ",\"scene_bodies\":" << run.result.scene_bodies
-    << ",\"view_fps\":" << JsonNumber(r.view_fps) << ",\"view_frame_p99_ms\":" << JsonNumber(r.view_frame_p99_ms)
+    << ",\"grasp_s\":" << JsonNumber(run.result.grasp_s)
+    << ",\"scene_bodies\":" << run.result.scene_bodies << ",\"view_fps\":" << JsonNumber(r.view_fps)
+    << ",\"view_frame_p99_ms\":" << JsonNumber(r.view_frame_p99_ms)
     << ",\"video_to_screen_ms_p50\":" << JsonNumber(r.video_to_screen_ms_p50)
     << ",\"video_to_screen_ms_p99\":" << JsonNumber(r.video_to_screen_ms_p99)
-    << ",\"distance_m\":" << JsonNumber(r.distance_m) << ",\"operator\":" << JsonString(r.operator_kind)
-    << ",\"device\":" << JsonString(r.device) << ",\"interface_switches\":" << SwitchesJson(r.switches)
-    << ",\"interface\":" << JsonString(r.interface)
-    << ",\"track\":" << JsonString(r.track)
+    << ",\"distance_m\":" << JsonNumber(r.distance_m)
+    << ",\"operator\":" << JsonString(r.operator_kind) << ",\"device\":" << JsonString(r.device)
+    << ",\"interface_switches\":" << SwitchesJson(r.switches)
+    << ",\"interface\":" << JsonString(r.interface) << ",\"track\":" << JsonString(r.track)
     << ",\"counters\":" << CountersJson(r.counters)
     << ",\"recorded\":" << (run.run_id != 0 ? "true" : "false") << ",\"run_id\":" << run.run_id
     << ",\"database\":" << JsonString(setup.run.database.string())
@@ -597,20 +662,23 @@ int RunCommand(int argc, const char* const* argv) {
     // One operator, several vehicles: its own command over the same options (fleet.hpp).
     for (int i = 1; i < argc; ++i) {
       const std::string word = argv[i];
-      if (word == "--fleet" || word.rfind("--fleet=", 0) == 0) return RunFleetCommand(argc, argv, interrupted);
+      if (word == "--fleet" || word.rfind("--fleet=", 0) == 0)
+        return RunFleetCommand(argc, argv, interrupted);
     }
     bool json = false;
     bool insecure = false;
     const SessionSetup setup = cli::ReadInput([&] {
       const Args args = ParseRunArgs(argc, argv);
       if (!args.positional().empty()) {
-        throw UsageError("unexpected argument '" + args.positional()[0] + "' (options start with --)");
+        throw UsageError("unexpected argument '" + args.positional()[0] +
+                         "' (options start with --)");
       }
       json = args.Flag("json");
       insecure = args.Flag("insecure");
       return RunSetupFromArgs(args);
     });
-    if (const std::string warning = link::InsecureLinkWarning(setup.run.link, insecure); !warning.empty()) {
+    if (const std::string warning = link::InsecureLinkWarning(setup.run.link, insecure);
+        !warning.empty()) {
       log::Warn(warning);
     }
     // The database before anything starts: a run it cannot take is not driven.

@@ -13,7 +13,9 @@ namespace haptel::mediator {
 
 namespace {
 /// A counter of a figure kept in SI units: `value` in thousandths, rounded.
-uint64_t Milli(double value) { return value > 0.0 ? static_cast<uint64_t>(std::llround(value * 1e3)) : 0; }
+uint64_t Milli(double value) {
+  return value > 0.0 ? static_cast<uint64_t>(std::llround(value * 1e3)) : 0;
+}
 }  // namespace
 
 std::vector<RunCounter> CollectCounters(const HapticSide& haptic, const SessionPhysics* physics,
@@ -40,10 +42,13 @@ std::vector<RunCounter> CollectCounters(const HapticSide& haptic, const SessionP
       {"servo_setpoint_stale_ticks", servo.safety.stale_ticks},
       {"servo_setpoint_read_fallbacks", servo.setpoint_read_fallbacks},
       {"servo_passivity_ticks", servo.passivity_ticks},
-      {"servo_passivity_left_mj", Milli(haptic.Counters(haptics::Side::kLeft).passivity_dissipated_j)},
-      {"servo_passivity_right_mj", Milli(haptic.Counters(haptics::Side::kRight).passivity_dissipated_j)},
+      {"servo_passivity_left_mj",
+       Milli(haptic.Counters(haptics::Side::kLeft).passivity_dissipated_j)},
+      {"servo_passivity_right_mj",
+       Milli(haptic.Counters(haptics::Side::kRight).passivity_dissipated_j)},
       {"servo_passivity_alpha_max_mns_m", Milli(servo.passivity_max_alpha)},
-      // The two-port across a device's link (udp, protocol v2): the device's end, as its server reports it.
+      // The two-port across a device's link (udp, protocol v2): the device's end, as its server
+      // reports it.
       {"servo_passivity_link_ticks", servo.passivity_link_ticks},
       {"servo_passivity_device_ticks", servo.passivity_device_ticks},
       {"servo_passivity_device_mj", Milli(servo.passivity_device_dissipated_j)},

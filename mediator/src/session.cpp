@@ -1,16 +1,15 @@
 #include "haptel/mediator/session.hpp"
 
-#include "haptel/config/link.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
 
+#include "family_session.hpp"
 #include "haptel/config/error.hpp"
+#include "haptel/config/link.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/core/log.hpp"
-#include "family_session.hpp"
 #include "haptel/mediator/run_counters.hpp"
 #include "haptel/view/sdl_input.hpp"
 #include "simulated_time.hpp"
@@ -144,13 +143,16 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   link_options.decode_video = run.video_decode && DecodesVideo(setup.view);
   if (simulated) {
     link_options.program.clear();
-    link_options.in_process_robot = [&simulated](const msg::DriveCommand& command) { simulated->OnCommand(command); };
+    link_options.in_process_robot = [&simulated](const msg::DriveCommand& command) {
+      simulated->OnCommand(command);
+    };
   }
   VehicleLink vehicle(link_options);
   rec.vehicle_pid = vehicle.pid();
   if (setup.progress && setup.attach) {
-    log::Info("attached to vehicle '" + setup.vehicle.name + "' on domain " + std::to_string(run.link.domain_id) +
-              " (session " + std::to_string(vehicle.session()) + "): spawning none");
+    log::Info("attached to vehicle '" + setup.vehicle.name + "' on domain " +
+              std::to_string(run.link.domain_id) + " (session " +
+              std::to_string(vehicle.session()) + "): spawning none");
   }
   if (setup.progress && simulated) {
     log::Info("vehicle '" + setup.vehicle.name + "' (" + setup.vehicle.kind +
@@ -183,8 +185,9 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   int64_t next_live_ns = t0;
   uint64_t pictures_seen = 0;
   int64_t next_tick = t0;
-  VehicleHealth health(setup.vehicle.name, run.link.domain_id, vehicle.session(), vehicle.command_writer(),
-                       run.vehicle_timeout_s, VehicleHealth::kStartupTimeout_s, vehicle.pid());
+  VehicleHealth health(setup.vehicle.name, run.link.domain_id, vehicle.session(),
+                       vehicle.command_writer(), run.vehicle_timeout_s,
+                       VehicleHealth::kStartupTimeout_s, vehicle.pid());
   RunTrace trace(rec);
   rec.path.reserve(16384);
   const auto finish = [&](LoopEnd end) { Finish(result, std::move(end), family->MadeSafe()); };
@@ -260,7 +263,8 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
     if (now >= next_progress_ns) {
       next_progress_ns += SToNs(2.0);
       // In simulated time every loop keeps its rate by construction (no thread measures it).
-      const std::vector<std::string> short_loops = simulated ? std::vector<std::string>{} : watch.EndInterval(now);
+      const std::vector<std::string> short_loops =
+          simulated ? std::vector<std::string>{} : watch.EndInterval(now);
       if (setup.progress) {
         family->LogProgress(t, vehicle, rec.distance_m);
         for (const std::string& loop : short_loops) log::Warn(loop);

@@ -21,19 +21,20 @@ void Finish(SessionResult& result, LoopEnd end, const char* made_safe) {
   }
 }
 
-std::optional<LoopEnd> CheckOperatorSide(const std::atomic<bool>& interrupted, const HapticSide& haptic,
-                                         const std::string& device_name) {
+std::optional<LoopEnd> CheckOperatorSide(const std::atomic<bool>& interrupted,
+                                         const HapticSide& haptic, const std::string& device_name) {
   if (interrupted.load()) return LoopEnd{Outcome::kInterrupted, "interrupted by the operator"};
   if (haptic.lost()) {
-    return LoopEnd{Outcome::kDeviceLost, "haptic device '" + device_name + "' lost: an arm stopped answering",
+    return LoopEnd{Outcome::kDeviceLost,
+                   "haptic device '" + device_name + "' lost: an arm stopped answering",
                    haptic.silent_s()};
   }
   return std::nullopt;
 }
 
 VehicleHealth::VehicleHealth(const std::string& vehicle_name, int domain_id, uint64_t session,
-                             const link::WriterId& writer, double vehicle_timeout_s, double startup_timeout_s,
-                             int64_t spawned_pid)
+                             const link::WriterId& writer, double vehicle_timeout_s,
+                             double startup_timeout_s, int64_t spawned_pid)
     : name_(vehicle_name),
       domain_id_(domain_id),
       session_(session),
@@ -45,11 +46,12 @@ VehicleHealth::VehicleHealth(const std::string& vehicle_name, int domain_id, uin
 
 std::optional<LoopEnd> VehicleHealth::StrangerConflict() const {
   if (stranger_.empty()) return std::nullopt;
-  return LoopEnd{Outcome::kConflict,
-                 "another vehicle answers as '" + name_ + "' on domain " + std::to_string(domain_id_) + " (" +
-                     stranger_ + ", not the vehicle this run started, pid " + std::to_string(spawned_pid_) +
-                     "): its states were not used; give each vehicle its own name (haptel-vehicle --name, "
-                     "haptel run --vehicle-name) or domain, or --attach to drive the one already running"};
+  return LoopEnd{
+      Outcome::kConflict,
+      "another vehicle answers as '" + name_ + "' on domain " + std::to_string(domain_id_) + " (" +
+          stranger_ + ", not the vehicle this run started, pid " + std::to_string(spawned_pid_) +
+          "): its states were not used; give each vehicle its own name (haptel-vehicle --name, "
+          "haptel run --vehicle-name) or domain, or --attach to drive the one already running"};
 }
 
 std::optional<LoopEnd> VehicleHealth::CheckProcess(VehicleLink& vehicle, int64_t now_ns) {
@@ -57,12 +59,13 @@ std::optional<LoopEnd> VehicleHealth::CheckProcess(VehicleLink& vehicle, int64_t
   if (vehicle.VehiclesOnTopic() > 1) {
     if (conflict_since_ns_ == 0) conflict_since_ns_ = now_ns;
     if (NsToS(now_ns - conflict_since_ns_) >= kConflictAfter_s) {
-      return LoopEnd{Outcome::kConflict,
-                     std::to_string(vehicle.VehiclesOnTopic()) + " vehicles answer as '" + name_ + "' on domain " +
-                         std::to_string(domain_id_) +
-                         ": their states would mix and both would obey; give each vehicle its own name "
-                         "(haptel-vehicle --name, haptel run --vehicle-name) or domain (one that has just "
-                         "ended may take a few seconds to leave the domain)"};
+      return LoopEnd{
+          Outcome::kConflict,
+          std::to_string(vehicle.VehiclesOnTopic()) + " vehicles answer as '" + name_ +
+              "' on domain " + std::to_string(domain_id_) +
+              ": their states would mix and both would obey; give each vehicle its own name "
+              "(haptel-vehicle --name, haptel run --vehicle-name) or domain (one that has just "
+              "ended may take a few seconds to leave the domain)"};
     }
   } else {
     conflict_since_ns_ = 0;
@@ -87,14 +90,16 @@ bool VehicleHealth::OnState(bool fault, const std::string& fault_message, uint64
     // session: this run's commands are not the ones obeyed. No grace: the
     // vehicle hands itself over only after its owner's release or silence.
     if (lost_control_.empty()) {
-      lost_control_ = "vehicle '" + name_ + "' on domain " + std::to_string(domain_id_) +
-                      " obeys another writer's commands now, not this run's: " +
-                      (owner_session == session_ ? "a participant that names this run's session (copied off the "
-                                                   "link by someone on the domain), "
-                                                 : std::string()) +
-                      "'" + owner + "', writer " + owner_writer.ToString() +
-                      "; this run lost control of the vehicle (DDS Security, --security, keeps participants "
-                      "the deployment's CA does not vouch for off the link)";
+      lost_control_ =
+          "vehicle '" + name_ + "' on domain " + std::to_string(domain_id_) +
+          " obeys another writer's commands now, not this run's: " +
+          (owner_session == session_
+               ? "a participant that names this run's session (copied off the "
+                 "link by someone on the domain), "
+               : std::string()) +
+          "'" + owner + "', writer " + owner_writer.ToString() +
+          "; this run lost control of the vehicle (DDS Security, --security, keeps participants "
+          "the deployment's CA does not vouch for off the link)";
     }
   } else if (refused_since_ns_ == 0) {
     refused_since_ns_ = now_ns;
@@ -110,7 +115,8 @@ std::optional<LoopEnd> VehicleHealth::LostControl() const {
   return LoopEnd{Outcome::kLostControl, lost_control_};
 }
 
-std::optional<LoopEnd> VehicleHealth::CheckStates(const VehicleLink& vehicle, int64_t now_ns, double t_s) {
+std::optional<LoopEnd> VehicleHealth::CheckStates(const VehicleLink& vehicle, int64_t now_ns,
+                                                  double t_s) {
   if (auto end = StrangerConflict()) return end;
   if (auto end = LostControl()) return end;
   if (!fault_.empty()) {
@@ -119,15 +125,17 @@ std::optional<LoopEnd> VehicleHealth::CheckStates(const VehicleLink& vehicle, in
     return LoopEnd{Outcome::kVehicleLost, "vehicle '" + name_ + "' stopped itself: " + fault};
   }
   if (refused_since_ns_ != 0 && NsToS(now_ns - refused_since_ns_) >= kRefusedAfter_s) {
-    return LoopEnd{Outcome::kRefused, "vehicle '" + name_ + "' on domain " + std::to_string(domain_id_) +
-                                          " is driven by another operator (" + owner_ +
-                                          "): a vehicle obeys one operator at a time; wait until that run ends"};
+    return LoopEnd{Outcome::kRefused,
+                   "vehicle '" + name_ + "' on domain " + std::to_string(domain_id_) +
+                       " is driven by another operator (" + owner_ +
+                       "): a vehicle obeys one operator at a time; wait until that run ends"};
   }
   if (up_) {
     const double silent_s = NsToS(now_ns - vehicle.last_received_ns());
     if (silent_s > timeout_s_) {
       return LoopEnd{Outcome::kVehicleLost,
-                     "vehicle '" + name_ + "' lost: no state for " + std::to_string(silent_s).substr(0, 4) + " s",
+                     "vehicle '" + name_ + "' lost: no state for " +
+                         std::to_string(silent_s).substr(0, 4) + " s",
                      silent_s};
     }
   } else if (t_s > startup_timeout_s_) {
@@ -139,7 +147,8 @@ std::optional<LoopEnd> VehicleHealth::CheckStates(const VehicleLink& vehicle, in
     if (const uint64_t frames = vehicle.video().Stats().frames; frames > 0) {
       message += ": " + std::to_string(frames) + " camera frames arrived under that name but no " +
                  ToString(vehicle.family()) +
-                 "'s state: is it another kind of vehicle (its file here says kind " + vehicle.kind() + ")?";
+                 "'s state: is it another kind of vehicle (its file here says kind " +
+                 vehicle.kind() + ")?";
     }
     return LoopEnd{Outcome::kVehicleDidNotStart, message};
   }
@@ -150,8 +159,9 @@ void RunTrace::Add(double t_s, double x, double y, double z, double speed, bool 
   // A contact the run starts in (the blimp resting on its pad) did not begin
   // during the run: only later onsets are contacts.
   if (!have_position_) touching_ = touching;
-  if (have_position_) record_.distance_m += std::sqrt((x - last_x_) * (x - last_x_) + (y - last_y_) * (y - last_y_) +
-                                                     (z - last_z_) * (z - last_z_));
+  if (have_position_)
+    record_.distance_m += std::sqrt((x - last_x_) * (x - last_x_) + (y - last_y_) * (y - last_y_) +
+                                    (z - last_z_) * (z - last_z_));
   have_position_ = true;
   last_x_ = x;
   last_y_ = y;
@@ -171,25 +181,28 @@ bool CommandDue(int64_t& next_ns, int64_t now_ns, int64_t period_ns) {
   return true;
 }
 
-std::optional<LoopEnd> CheckLimits(double t_s, std::optional<double> lap_start_s, double time_limit_s,
-                                   double lap_limit_s, double lap_cap_s) {
+std::optional<LoopEnd> CheckLimits(double t_s, std::optional<double> lap_start_s,
+                                   double time_limit_s, double lap_limit_s, double lap_cap_s) {
   if (time_limit_s > 0 && t_s > time_limit_s) {
-    return LoopEnd{Outcome::kTimeLimit,
-                   "time limit of " + std::to_string(static_cast<int>(time_limit_s)) + " s reached"};
+    return LoopEnd{
+        Outcome::kTimeLimit,
+        "time limit of " + std::to_string(static_cast<int>(time_limit_s)) + " s reached"};
   }
   const double lap_clock_s = lap_start_s ? t_s - *lap_start_s : t_s;
   const std::string clock = lap_start_s ? " on the lap clock" : " before the start line";
   if (lap_limit_s > 0 && lap_clock_s > lap_limit_s) {
-    return LoopEnd{Outcome::kTimeLimit, "lap limit of " + JsonNumber(lap_limit_s) + " s reached" + clock};
+    return LoopEnd{Outcome::kTimeLimit,
+                   "lap limit of " + JsonNumber(lap_limit_s) + " s reached" + clock};
   }
   if (lap_clock_s > lap_cap_s) {
-    return LoopEnd{Outcome::kLapCap,
-                   "lap cap of " + std::to_string(static_cast<int>(lap_cap_s)) + " s reached" + clock};
+    return LoopEnd{Outcome::kLapCap, "lap cap of " + std::to_string(static_cast<int>(lap_cap_s)) +
+                                         " s reached" + clock};
   }
   return std::nullopt;
 }
 
-void RecordLinkFigures(const HapticSide& haptic, const VehicleLink& vehicle, SessionResult& result) {
+void RecordLinkFigures(const HapticSide& haptic, const VehicleLink& vehicle,
+                       SessionResult& result) {
   RunRecord& rec = result.record;
   const LoopStats servo = haptic.Stats();
   const VideoStats v = vehicle.video().Stats();

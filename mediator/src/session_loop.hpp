@@ -27,8 +27,8 @@ void Finish(SessionResult& result, LoopEnd end, const char* made_safe);
 
 /// The stops every loop checks first, each tick: an interruption, then the
 /// haptic device (a lost arm means no forces, so no driving either).
-std::optional<LoopEnd> CheckOperatorSide(const std::atomic<bool>& interrupted, const HapticSide& haptic,
-                                         const std::string& device_name);
+std::optional<LoopEnd> CheckOperatorSide(const std::atomic<bool>& interrupted,
+                                         const HapticSide& haptic, const std::string& device_name);
 
 /// The vehicle's health as the loop sees it: its process, the faults its
 /// states report, their silence, and, until it first answers, the start-up
@@ -40,8 +40,9 @@ class VehicleHealth {
   /// command_writer()). `spawned_pid`: the vehicle process this run started
   /// (VehicleLink::pid(); 0: attached to one it did not start, whose states
   /// any process may send).
-  VehicleHealth(const std::string& vehicle_name, int domain_id, uint64_t session, const link::WriterId& writer,
-                double vehicle_timeout_s, double startup_timeout_s = kStartupTimeout_s, int64_t spawned_pid = 0);
+  VehicleHealth(const std::string& vehicle_name, int domain_id, uint64_t session,
+                const link::WriterId& writer, double vehicle_timeout_s,
+                double startup_timeout_s = kStartupTimeout_s, int64_t spawned_pid = 0);
   /// Whether a state has arrived yet.
   bool up() const { return up_; }
   /// Up, and its latest state named this run's writer as its owner, or none:
@@ -64,8 +65,8 @@ class VehicleHealth {
     if (s.vehicle_pid() == spawned_pid_ && s.vehicle_host() == host_) return false;
     if (stranger_.empty()) {
       stranger_ = s.vehicle_pid() == 0 ? std::string("a process that does not say which")
-                                        : "pid " + std::to_string(s.vehicle_pid()) + " on host '" +
-                                              std::string(s.vehicle_host().c_str()) + "'";
+                                       : "pid " + std::to_string(s.vehicle_pid()) + " on host '" +
+                                             std::string(s.vehicle_host().c_str()) + "'";
     }
     return true;
   }
@@ -78,8 +79,8 @@ class VehicleHealth {
   std::optional<LoopEnd> LostControl() const;
   template <typename State>
   bool OnState(const State& s, int64_t now_ns) {
-    return OnState(s.fault(), s.fault_message(), s.owner_session(), link::WriterId{s.owner_writer()},
-                   s.owner().c_str(), now_ns);
+    return OnState(s.fault(), s.fault_message(), s.owner_session(),
+                   link::WriterId{s.owner_writer()}, s.owner().c_str(), now_ns);
   }
   bool OnState(bool fault, const std::string& fault_message, uint64_t owner_session,
                const link::WriterId& owner_writer, const char* owner, int64_t now_ns);
@@ -107,7 +108,7 @@ class VehicleHealth {
   double timeout_s_;
   double startup_timeout_s_;
   bool up_ = false;
-  std::string fault_;  ///< the first fault reported since the last check
+  std::string fault_;              ///< the first fault reported since the last check
   int64_t conflict_since_ns_ = 0;  ///< 0: one vehicle (or none) answers
   int64_t refused_since_ns_ = 0;   ///< 0: the vehicle is ours or free
   std::string owner_;              ///< who holds it, while refused_since_ns_ is set
@@ -146,8 +147,8 @@ bool CommandDue(int64_t& next_ns, int64_t now_ns, int64_t period_ns);
 /// gets the same lap time whatever its approach and grasp took. Before the
 /// line (nullopt) the approach counts against them instead, so a vehicle
 /// that never reaches the line still ends.
-std::optional<LoopEnd> CheckLimits(double t_s, std::optional<double> lap_start_s, double time_limit_s,
-                                   double lap_limit_s, double lap_cap_s);
+std::optional<LoopEnd> CheckLimits(double t_s, std::optional<double> lap_start_s,
+                                   double time_limit_s, double lap_limit_s, double lap_cap_s);
 
 /// The figures of the servo loop and the link into the record (after both stopped).
 void RecordLinkFigures(const HapticSide& haptic, const VehicleLink& vehicle, SessionResult& result);

@@ -14,9 +14,10 @@ interfaces::CockpitControls PhysicsControlsPort::Controls() const {
 }
 
 void PhysicsControlsPort::Actuate(const interfaces::ControlActuation& a) {
-  link_.SetActuation({a.wheel_torque, a.wheel_spring, a.throttle_spring, a.throttle_target, a.throttle_locked,
-                      a.guidance_active, a.guidance_throttle, a.guidance_wheel_angle, a.guidance_normal_throttle,
-                      a.guidance_normal_rim, a.guidance_stiffness, a.guidance_max_force});
+  link_.SetActuation({a.wheel_torque, a.wheel_spring, a.throttle_spring, a.throttle_target,
+                      a.throttle_locked, a.guidance_active, a.guidance_throttle,
+                      a.guidance_wheel_angle, a.guidance_normal_throttle, a.guidance_normal_rim,
+                      a.guidance_stiffness, a.guidance_max_force});
 }
 
 std::unique_ptr<SessionPhysics> SessionPhysics::CreateIfNeeded(

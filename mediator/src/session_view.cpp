@@ -19,13 +19,15 @@ SessionView::SessionView(const view::ViewOptions& options, const Parts& parts,
                          interfaces::InputBox& input)
     : SessionView(options, std::vector<Parts>{parts}, input) {}
 
-SessionView::SessionView(const view::ViewOptions& options, std::vector<Parts> fleet, interfaces::InputBox& input)
+SessionView::SessionView(const view::ViewOptions& options, std::vector<Parts> fleet,
+                         interfaces::InputBox& input)
     : parts_(std::move(fleet)), input_(input) {
   if (parts_.empty() || parts_.size() > physics_.size()) {
-    throw std::invalid_argument("session view: 1 to " + std::to_string(physics_.size()) + " vehicles, not " +
-                                std::to_string(parts_.size()));
+    throw std::invalid_argument("session view: 1 to " + std::to_string(physics_.size()) +
+                                " vehicles, not " + std::to_string(parts_.size()));
   }
-  for (size_t i = 0; i < parts_.size(); ++i) physics_[i].store(parts_[i].physics, std::memory_order_relaxed);
+  for (size_t i = 0; i < parts_.size(); ++i)
+    physics_[i].store(parts_[i].physics, std::memory_order_relaxed);
   view_ = std::make_unique<view::View>(options, *this, &input_);
 }
 
@@ -38,8 +40,8 @@ void SessionView::Stop() {
 view::ViewStats SessionView::Stats() const { return view_->Stats(); }
 
 void SessionView::Fill(view::ViewModel& model) {
-  const size_t shown =
-      std::min(static_cast<size_t>(std::max(0, shown_.load(std::memory_order_acquire))), parts_.size() - 1);
+  const size_t shown = std::min(
+      static_cast<size_t>(std::max(0, shown_.load(std::memory_order_acquire))), parts_.size() - 1);
   const Parts& part = parts_[shown];  // the big screen's: the driven vehicle's
   model.shapes.clear();
   model.overlay = overlay_.Load();
@@ -83,7 +85,8 @@ void SessionView::Fill(view::ViewModel& model) {
     const haptics::ForceField field = part.hal->Setpoint(static_cast<haptics::Side>(i)).field;
     if (field.wall_active) AppendWall(model.shapes, field);
   }
-  model.third_person = part.third_person != nullptr ? part.third_person->Latest() : view::VideoImage{};
+  model.third_person =
+      part.third_person != nullptr ? part.third_person->Latest() : view::VideoImage{};
   if (part.video != nullptr) {
     const LatestFrame frame = part.video->Latest();
     model.video.image = frame.image;
@@ -95,7 +98,8 @@ void SessionView::Fill(view::ViewModel& model) {
 
 view::ViewOptions ViewOptionsFor(const SessionSetup& setup) {
   view::ViewOptions options;
-  options.mode = setup.view == ViewKind::kWindow ? view::ViewMode::kWindow : view::ViewMode::kOffscreen;
+  options.mode =
+      setup.view == ViewKind::kWindow ? view::ViewMode::kWindow : view::ViewMode::kOffscreen;
   options.record = setup.record;
   options.title = setup.title.empty() ? "Haptel - " + setup.run.name : setup.title;
   if (setup.direct_view) options.screen = view::DirectViewScreen();
@@ -114,8 +118,9 @@ void StopAndRecord(SessionView& view, SessionResult& result) {
   result.view_record_error = vs.record_error;
 }
 
-view::Overlay LapOverlay(const SessionSetup& setup, const char* interface_name, double t, double lap_time_s,
-                         int gates_passed, int gates_total, int obstacles_touched) {
+view::Overlay LapOverlay(const SessionSetup& setup, const char* interface_name, double t,
+                         double lap_time_s, int gates_passed, int gates_total,
+                         int obstacles_touched) {
   view::Overlay o;
   std::snprintf(o.interface_name, sizeof o.interface_name, "%s", interface_name);
   std::snprintf(o.operator_name, sizeof o.operator_name, "%s", setup.operator_kind.c_str());
@@ -141,8 +146,8 @@ view::Overlay OverlayFeed::Make(double t, const LapTimer& lap, const InterfaceSe
                                 const interfaces::MotorCommand& motors, bool vehicle_up,
                                 bool touching) {
   const interfaces::MediatorInterface& current = interfaces.current();
-  view::Overlay o = LapOverlay(setup_, current.name().c_str(), t, lap.lap_time_s(), lap.gates_passed(), gates_total_,
-                               lap.obstacles_touched());
+  view::Overlay o = LapOverlay(setup_, current.name().c_str(), t, lap.lap_time_s(),
+                               lap.gates_passed(), gates_total_, lap.obstacles_touched());
   if (touching && !was_touching_) {
     std::snprintf(last_contact_, sizeof last_contact_, "%s bumper at %.1f s",
                   feedback.bumper_left && feedback.bumper_right ? "front"
@@ -175,7 +180,8 @@ view::Overlay OverlayFeed::Make(double t, const LapTimer& lap, const InterfaceSe
     o.guidance_forward_n = guidance->force[0];
     o.guidance_left_n = guidance->force[1];
     o.guidance_max_n = std::max(guidance->max_force, 1e-6);
-    o.guidance_ttc_s = std::isfinite(guidance->time_to_collision_s) ? guidance->time_to_collision_s : -1.0;
+    o.guidance_ttc_s =
+        std::isfinite(guidance->time_to_collision_s) ? guidance->time_to_collision_s : -1.0;
   }
   if (!vehicle_up) {
     std::snprintf(o.message, sizeof o.message, "waiting for vehicle '%s'",
@@ -184,8 +190,9 @@ view::Overlay OverlayFeed::Make(double t, const LapTimer& lap, const InterfaceSe
     std::snprintf(o.message, sizeof o.message, "switching interface: hands off for a moment");
   } else if (current.name() == "keyboard" && t < kHelpS) {
     std::snprintf(o.message, sizeof o.message, "%s",
-                  setup_.single_interface ? "arrows or W/A/S/D drive, space stops, Esc ends"
-                                          : "arrows or W/A/S/D drive, space stops, F1-F6 switch, Esc ends");
+                  setup_.single_interface
+                      ? "arrows or W/A/S/D drive, space stops, Esc ends"
+                      : "arrows or W/A/S/D drive, space stops, F1-F6 switch, Esc ends");
   }
   return o;
 }

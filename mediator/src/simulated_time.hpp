@@ -50,7 +50,8 @@ class SimulatedTime {
   /// (at equal times: deliveries, servo, physics, vehicle), the clock set to
   /// each tick's time; leaves the clock at `deadline_ns`. `physics` may be
   /// null (none yet); the robot's states go into `link`'s inbox.
-  void AdvanceTo(int64_t deadline_ns, HapticSide& haptic, const SessionPhysics* physics, VehicleLink& link);
+  void AdvanceTo(int64_t deadline_ns, HapticSide& haptic, const SessionPhysics* physics,
+                 VehicleLink& link);
   /// The end: the robot made safe.
   void Stop();
 

@@ -21,7 +21,9 @@ constexpr int kShift = 4;  // sub-pixel bits for the drawing
 constexpr double kOne = 1 << kShift;
 
 cv::Point Fixed(double u, double v) {
-  const auto fix = [](double c) { return static_cast<int>(std::lround(std::clamp(c - 0.5, -1e5, 1e5) * kOne)); };
+  const auto fix = [](double c) {
+    return static_cast<int>(std::lround(std::clamp(c - 0.5, -1e5, 1e5) * kOne));
+  };
   return {fix(u), fix(v)};
 }
 
@@ -87,7 +89,8 @@ void ThirdPersonView::Render(const PredictedPose& robot, cv::Mat& image) {
     pixels_.push_back(Fixed(lens.U(p[0], p[1]), lens.V(p[0], body_height_m_)));
   }
   if (pixels_.size() >= 3) {
-    cv::fillConvexPoly(image, pixels_.data(), static_cast<int>(pixels_.size()), kTop, cv::LINE_AA, kShift);
+    cv::fillConvexPoly(image, pixels_.data(), static_cast<int>(pixels_.size()), kTop, cv::LINE_AA,
+                       kShift);
   }
   // The nose: a dot on the top face's front edge.
   double d = 0, l = 0;
@@ -96,7 +99,8 @@ void ThirdPersonView::Render(const PredictedPose& robot, cv::Mat& image) {
                 d, l);
   if (d > video::LevelCamera::kNear) {
     const int dot = static_cast<int>(std::max(2.0, 0.15 * radius_m_ * lens.f / d) * kOne);
-    cv::circle(image, Fixed(lens.U(d, l), lens.V(d, body_height_m_)), dot, kEdge, cv::FILLED, cv::LINE_AA, kShift);
+    cv::circle(image, Fixed(lens.U(d, l), lens.V(d, body_height_m_)), dot, kEdge, cv::FILLED,
+               cv::LINE_AA, kShift);
   }
 }
 
@@ -133,9 +137,11 @@ std::string ThirdPersonProblem(const VehicleConfig& vehicle) {
   if (vehicle.family() == VehicleFamily::kRobot && kind != nullptr && kind->simulated) return "";
   std::string expected;
   for (const VehicleKindInfo& k : VehicleKinds()) {
-    if (k.family == VehicleFamily::kRobot && k.simulated) expected += (expected.empty() ? "" : " or ") + k.name;
+    if (k.family == VehicleFamily::kRobot && k.simulated)
+      expected += (expected.empty() ? "" : " or ") + k.name;
   }
-  const std::string which = "vehicle '" + vehicle.name + "' (" + vehicle.file.string() + ", kind " + vehicle.kind + ")";
+  const std::string which =
+      "vehicle '" + vehicle.name + "' (" + vehicle.file.string() + ", kind " + vehicle.kind + ")";
   const std::string why = vehicle.family() != VehicleFamily::kRobot
                               ? " flies a course, not a track"
                               : " is not simulated, so what is around it is not known here";

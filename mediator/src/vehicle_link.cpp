@@ -17,7 +17,6 @@ class SelectedWriter : public link::Writer<msg::SelectedSource, msg::SelectedSou
   using Writer::Writer;
 };
 
-
 namespace {
 /// The vehicle's command watchdog holds it stopped (robot) or in its failsafe (blimp).
 bool WatchdogTripped(const msg::VehicleState& s) { return link::RobotMessages::WatchdogTripped(s); }
@@ -36,7 +35,8 @@ void StateInboxOf<State>::Push(const State& s) {
   // at the vehicle: no shared clock needed.
   if (ours && s.last_command_seq() != 0 && s.last_command_seq() != last_echo_seq_) {
     last_echo_seq_ = s.last_command_seq();
-    rtt_.Record(static_cast<double>(now - s.last_command_sent_ns() - s.last_command_age_ns()) * 1e-3);
+    rtt_.Record(static_cast<double>(now - s.last_command_sent_ns() - s.last_command_age_ns()) *
+                1e-3);
   }
   const uint64_t feedback_refused = s.video_feedback_refused();
   if (have_state_ && s.seq() > last_state_seq_) {
@@ -46,11 +46,13 @@ void StateInboxOf<State>::Push(const State& s) {
     feedback_refused_before_ = counts_.video_feedback_refused;
     feedback_refused_base_ = 0;
   } else {
-    feedback_refused_base_ = feedback_refused;  // an attached vehicle's earlier ones are not this run's
+    feedback_refused_base_ =
+        feedback_refused;  // an attached vehicle's earlier ones are not this run's
   }
   if (feedback_refused >= feedback_refused_base_) {
-    counts_.video_feedback_refused = std::max(counts_.video_feedback_refused,
-                                              feedback_refused_before_ + feedback_refused - feedback_refused_base_);
+    counts_.video_feedback_refused =
+        std::max(counts_.video_feedback_refused,
+                 feedback_refused_before_ + feedback_refused - feedback_refused_base_);
   }
   have_state_ = true;
   last_state_seq_ = s.seq();
@@ -121,7 +123,6 @@ int64_t StateInboxOf<State>::last_received_ns() const {
 template class StateInboxOf<msg::VehicleState>;
 template class StateInboxOf<msg::BlimpState>;
 
-
 namespace {
 
 /// A random session id, never 0.
@@ -140,8 +141,8 @@ std::string OperatorName() {
     const passwd* entry = getpwuid(getuid());
     if (entry != nullptr) user = entry->pw_name;
   }
-  std::string name = "haptel run, " + std::string(user != nullptr ? user : "?") + "@" + host + " pid " +
-                     std::to_string(getpid());
+  std::string name = "haptel run, " + std::string(user != nullptr ? user : "?") + "@" + host +
+                     " pid " + std::to_string(getpid());
   if (name.size() > 63) name.resize(63);
   return name;
 }
@@ -149,12 +150,12 @@ std::string OperatorName() {
 }  // namespace
 
 template <class Messages>
-CommandChannel<Messages>::CommandChannel(link::Participant& participant, const std::string& vehicle, uint64_t session,
-                                         const std::string& operator_name) {
+CommandChannel<Messages>::CommandChannel(link::Participant& participant, const std::string& vehicle,
+                                         uint64_t session, const std::string& operator_name) {
   message_.session(session);
   message_.operator_name(operator_name);
-  writer_ = std::make_unique<typename Messages::CommandWriter>(participant, link::TopicName(vehicle, "command"),
-                                                               link::Profile::kCommand);
+  writer_ = std::make_unique<typename Messages::CommandWriter>(
+      participant, link::TopicName(vehicle, "command"), link::Profile::kCommand);
   writer_id_ = writer_->id();
   inbox_.SetOwnWriter(writer_id_);
   reader_ = std::make_unique<typename Messages::StateReader>(
@@ -163,8 +164,9 @@ CommandChannel<Messages>::CommandChannel(link::Participant& participant, const s
 }
 
 template <class Messages>
-CommandChannel<Messages>::CommandChannel(std::function<void(const typename Messages::CommandMsg&)> sink,
-                                         uint64_t session, const std::string& operator_name)
+CommandChannel<Messages>::CommandChannel(
+    std::function<void(const typename Messages::CommandMsg&)> sink, uint64_t session,
+    const std::string& operator_name)
     : sink_(std::move(sink)) {
   inbox_.SetOwnWriter(writer_id_);
   message_.session(session);
@@ -198,7 +200,8 @@ int CommandChannel<Messages>::VehiclesOnTopic() const {
 template class CommandChannel<link::RobotMessages>;
 template class CommandChannel<link::BlimpMessages>;
 
-VehicleLink::VehicleLink(const VehicleLinkOptions& options) : options_(options), session_(NewSession()) {
+VehicleLink::VehicleLink(const VehicleLinkOptions& options)
+    : options_(options), session_(NewSession()) {
   operator_name_ = OperatorName();
   if (options_.in_process_robot) {
     if (family() != VehicleFamily::kRobot) {
@@ -210,12 +213,15 @@ VehicleLink::VehicleLink(const VehicleLinkOptions& options) : options_(options),
     return;
   }
   if (!options_.program.empty()) {
-    std::vector<std::string> arguments{"--config", options_.vehicle.file.string(), "--track",
-                                       options_.track_file.string(), "--name", options_.vehicle.name, "--domain",
-                                       std::to_string(options_.link.domain_id)};
+    std::vector<std::string> arguments{"--config", options_.vehicle.file.string(),
+                                       "--track",  options_.track_file.string(),
+                                       "--name",   options_.vehicle.name,
+                                       "--domain", std::to_string(options_.link.domain_id)};
     // The run's link faults on both ends: each delays and drops what it receives.
-    if (options_.link.fault.enabled) arguments.insert(arguments.end(), {"--link-fault", LinkFaultText(options_.link.fault)});
-    if (!options_.link.security.empty()) arguments.insert(arguments.end(), {"--security", options_.link.security.string()});
+    if (options_.link.fault.enabled)
+      arguments.insert(arguments.end(), {"--link-fault", LinkFaultText(options_.link.fault)});
+    if (!options_.link.security.empty())
+      arguments.insert(arguments.end(), {"--security", options_.link.security.string()});
     if (!options_.link.discovery_server.empty()) {
       arguments.insert(arguments.end(), {"--discovery-server", options_.link.discovery_server});
     }
@@ -271,12 +277,16 @@ link::FaultCounts VehicleLink::FaultCounts() const {
   return line != nullptr ? line->Counts() : link::FaultCounts{};
 }
 
-link::FaultLine* VehicleLink::fault_line() const { return participant_ ? participant_->fault_line() : nullptr; }
+link::FaultLine* VehicleLink::fault_line() const {
+  return participant_ ? participant_->fault_line() : nullptr;
+}
 
 bool VehicleLink::ProcessAlive() { return !process_ || process_->Alive(); }
 
 int VehicleLink::pid() const { return process_ ? process_->pid() : 0; }
 
-std::string VehicleLink::ExitDescription() const { return process_ ? process_->ExitDescription() : "running elsewhere"; }
+std::string VehicleLink::ExitDescription() const {
+  return process_ ? process_->ExitDescription() : "running elsewhere";
+}
 
 }  // namespace haptel::mediator

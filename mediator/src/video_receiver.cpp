@@ -4,7 +4,6 @@
 
 #include <chrono>
 #include <cstring>
-
 #include <opencv2/imgproc.hpp>
 
 #include "haptel/core/clock.hpp"
@@ -29,18 +28,19 @@ cv::Mat MarkStale(const cv::Mat& picture) {
   cv::rectangle(marked, cv::Rect(0, 0, marked.cols, marked.rows), red, 2 * border);
   const double scale = std::max(0.5, marked.cols / 640.0);
   cv::putText(marked, "STALE", cv::Point(3 * border, 3 * border + static_cast<int>(24 * scale)),
-              cv::FONT_HERSHEY_SIMPLEX, scale, red, std::max(1, static_cast<int>(2 * scale)), cv::LINE_AA);
+              cv::FONT_HERSHEY_SIMPLEX, scale, red, std::max(1, static_cast<int>(2 * scale)),
+              cv::LINE_AA);
   return marked;
 }
 
 VideoReceiver::VideoReceiver() : decode_(false) {}
 
-VideoReceiver::VideoReceiver(link::Participant& participant, const std::string& vehicle, uint64_t session,
-                             bool decode)
+VideoReceiver::VideoReceiver(link::Participant& participant, const std::string& vehicle,
+                             uint64_t session, bool decode)
     : decode_(decode),
       session_(session),
-      feedback_(std::make_unique<link::VideoFeedbackWriter>(participant, link::TopicName(vehicle, "video_feedback"),
-                                                            link::Profile::kState)) {
+      feedback_(std::make_unique<link::VideoFeedbackWriter>(
+          participant, link::TopicName(vehicle, "video_feedback"), link::Profile::kState)) {
   decoder_thread_ = std::thread([this] { DecodeLoop(); });
   reader_ = std::make_unique<link::VideoReader>(participant, link::TopicName(vehicle, "video"),
                                                 link::Profile::kVideo,
@@ -72,7 +72,8 @@ void VideoReceiver::OnFrame(const msg::VideoFrame& frame) {
     std::lock_guard lock(mutex_);
     // The link's rate from this frame's arrival against its capture (only
     // differences of each: the clocks need not agree).
-    estimator_.OnFrame(frame.seq(), NsToS(frame.capture_wall_ns()), NsToS(now), frame.data().size());
+    estimator_.OnFrame(frame.seq(), NsToS(frame.capture_wall_ns()), NsToS(now),
+                       frame.data().size());
     if (estimator_.FeedbackDue(NsToS(now))) {
       rate_due = true;
       rate = RateFeedback(now, frame.seq());
@@ -88,7 +89,8 @@ void VideoReceiver::OnFrame(const msg::VideoFrame& frame) {
     if (frame.seq() > last_seq_) last_seq_ = frame.seq();
     if (frame.key_frame()) ++key_frames_;
     // JPEG: the latest wins. H.264: every frame, in order (a bounded queue).
-    if (!pending_.empty() && (!h264 || !pending_.back().h264 || pending_.size() >= kMaxQueuedH264)) {
+    if (!pending_.empty() &&
+        (!h264 || !pending_.back().h264 || pending_.size() >= kMaxQueuedH264)) {
       dropped_ += pending_.size();
       for (Pending& p : pending_) spare_.push_back(std::move(p.bytes));
       pending_.clear();
@@ -153,13 +155,14 @@ void VideoReceiver::RequestKeyFrameIfDue(int64_t now_ns) {
 bool VideoReceiver::DecodeOne(Pending& frame, cv::Mat& image) {
   const CameraCodec codec = frame.h264 ? CameraCodec::kH264 : CameraCodec::kJpeg;
   if (decoder_ == nullptr || decoder_->codec() != codec) decoder_ = video::MakeVideoDecoder(codec);
-  const video::DecodeResult result =
-      decoder_->DecodeFrame({frame.bytes.data(), frame.bytes.size(), frame.seq, frame.key_frame}, image);
+  const video::DecodeResult result = decoder_->DecodeFrame(
+      {frame.bytes.data(), frame.bytes.size(), frame.seq, frame.key_frame}, image);
   if (result == video::DecodeResult::kPicture) return true;
   std::lock_guard lock(mutex_);
   if (result == video::DecodeResult::kCorrupt) ++decode_failures_;
   // A frame after a gap is as undecodable as one while a key frame is awaited.
-  if (result == video::DecodeResult::kAwaitingKeyFrame || result == video::DecodeResult::kLost) ++frames_skipped_;
+  if (result == video::DecodeResult::kAwaitingKeyFrame || result == video::DecodeResult::kLost)
+    ++frames_skipped_;
   return false;
 }
 
@@ -167,7 +170,8 @@ void VideoReceiver::DecodeLoop() {
   // Decoding takes milliseconds of CPU a frame: behind the link's receive
   // threads, which carry the states, and the session's loop on a busy host.
   LowerThreadPriority(kBackgroundNiceSteps);
-  pthread_setname_np(pthread_self(), "video-decode");  // named once lowered: what a test may wait for
+  pthread_setname_np(pthread_self(),
+                     "video-decode");  // named once lowered: what a test may wait for
   std::deque<Pending> batch;
   cv::Mat image;
   for (;;) {
@@ -242,7 +246,8 @@ void VideoReceiver::DecodeLoop() {
         auto marked = std::make_shared<const cv::Mat>(MarkStale(*good));
         std::lock_guard lock(mutex_);
         stale_since_ns_ = now;
-        latest_ = {std::move(marked), latest_.id + 1, latest_.capture_wall_ns, true, latest_.decoded_wall_ns};
+        latest_ = {std::move(marked), latest_.id + 1, latest_.capture_wall_ns, true,
+                   latest_.decoded_wall_ns};
       }
       RequestKeyFrameIfDue(now);
     }
@@ -292,7 +297,8 @@ std::vector<uint8_t> VideoReceiver::LatestPicture() const {
     // No screen, so no decoder running: the last key frame decodes alone.
     video::H264Decoder decoder;
     cv::Mat image;
-    if (decoder.DecodeFrame({key_frame.data(), key_frame.size(), 1, true}, image) == video::DecodeResult::kPicture) {
+    if (decoder.DecodeFrame({key_frame.data(), key_frame.size(), 1, true}, image) ==
+        video::DecodeResult::kPicture) {
       picture = std::make_shared<const cv::Mat>(std::move(image));
     }
   }

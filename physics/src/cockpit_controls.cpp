@@ -103,12 +103,13 @@ struct CockpitControlsBody::Impl {
   Control knob;
   bool locked = false;
   int resets = 0;
-  ControlsActuation guidance;  ///< the latest actuation's guidance fields (validated)
-  double guidance_force = 0.0; ///< N, at the latest step
+  ControlsActuation guidance;   ///< the latest actuation's guidance fields (validated)
+  double guidance_force = 0.0;  ///< N, at the latest step
   GuidanceAction guidance_action{*this};
   /// The proxy hands' bodies, gathered once: Read runs every physics step.
   std::vector<const btRigidBody*> hand;
-  std::array<std::vector<bool>, 2> touching;  ///< per control (wheel, knob): which hand bodies touch it
+  std::array<std::vector<bool>, 2>
+      touching;  ///< per control (wheel, knob): which hand bodies touch it
 
   Impl(PhysicsWorld& w, const CockpitConfig& c, const ControlsBodyConfig& b)
       : world(w),
@@ -331,17 +332,18 @@ struct CockpitControlsBody::Impl {
     if (!guidance.guidance_active) return;
     const double r = cockpit.wheel_radius;
     const double nt = guidance.guidance_normal_throttle, nr = guidance.guidance_normal_rim;
-    const double depth =
-        (Throttle() - guidance.guidance_throttle) * nt + (WheelAngle() - guidance.guidance_wheel_angle) * r * nr;
+    const double depth = (Throttle() - guidance.guidance_throttle) * nt +
+                         (WheelAngle() - guidance.guidance_wheel_angle) * r * nr;
     if (!(depth > 0.0)) return;
     // Along the normal: the lever's speed, and the rim's towards the left
     // (the wheel angle grows with rotation about −x).
-    const double speed = knob.body->getLinearVelocity().x() * nt - wheel.body->getAngularVelocity().x() * r * nr;
-    const double mass = nt * nt * config.knob_mass + nr * nr * config.wheel_mass;  // the rim's: I / r² = m
+    const double speed =
+        knob.body->getLinearVelocity().x() * nt - wheel.body->getAngularVelocity().x() * r * nr;
+    const double mass =
+        nt * nt * config.knob_mass + nr * nr * config.wheel_mass;  // the rim's: I / r² = m
     const double damping = 2.0 * std::sqrt(guidance.guidance_stiffness * mass);
-    guidance_force =
-        std::clamp(guidance.guidance_stiffness * depth + damping * speed, -guidance.guidance_max_force,
-                   guidance.guidance_max_force);
+    guidance_force = std::clamp(guidance.guidance_stiffness * depth + damping * speed,
+                                -guidance.guidance_max_force, guidance.guidance_max_force);
     // Back along the normal: the lever along x; on the rim, a force f towards
     // the left is a torque f·r about −x (the wheel angle's axis).
     const double lever = -guidance_force * nt;
@@ -363,7 +365,8 @@ double CockpitControlsBody::guidance_force() const { return impl_->guidance_forc
 btRigidBody& CockpitControlsBody::wheel_body() { return *impl_->wheel.body; }
 btRigidBody& CockpitControlsBody::throttle_body() { return *impl_->knob.body; }
 
-ControlsLink::ControlsLink(PhysicsWorld& world, CockpitControlsBody& controls) : controls_(controls) {
+ControlsLink::ControlsLink(PhysicsWorld& world, CockpitControlsBody& controls)
+    : controls_(controls) {
   world.AddStepHook(*this);
 }
 void ControlsLink::BeforeStep() { controls_.Apply(actuation_.Load()); }

@@ -39,7 +39,9 @@ bool IsIdentity(const Matrix3d& r, const Vector3d& p) {
   return p.norm() <= 1e-12 && (r - Matrix3d::Identity()).norm() <= 1e-12;
 }
 
-std::string Where(const SceneObject& object) { return "BuildScene: object '" + object.name + "': "; }
+std::string Where(const SceneObject& object) {
+  return "BuildScene: object '" + object.name + "': ";
+}
 
 /// One primitive in its own shape frame (not a plane).
 std::unique_ptr<btCollisionShape> MakeShape(const SceneObject& object, const SceneShape& shape) {
@@ -191,7 +193,8 @@ BuiltScene BuildScene(PhysicsWorld& world, const Scene& scene, const std::atomic
 Pose ObjectPose(const PhysicsWorld& world, const SceneBody& node) {
   const Pose body = world.BodyPose(node.body);
   const auto& q = body.orientation;
-  const Matrix3d r_body = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
+  const Matrix3d r_body =
+      Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
   const Vector3d p_body(body.position[0], body.position[1], body.position[2]);
   const Matrix3d r = r_body * node.local_rotation.transpose();
   return ToPose(r, p_body - r * node.local_position);

@@ -12,8 +12,6 @@
 /// NOT NULL: a NaN time or position there is an error, and the save rolls back.
 #include "haptel/record/recorder.hpp"
 
-#include "haptel/record/sqlite_util.hpp"
-
 #include <sqlite3.h>
 #include <unistd.h>
 
@@ -32,6 +30,8 @@
 #include <system_error>
 #include <unordered_map>
 #include <vector>
+
+#include "haptel/record/sqlite_util.hpp"
 
 namespace haptel::record {
 namespace {
@@ -299,8 +299,9 @@ constexpr const char* kSchemaV12 = R"sql(
 ALTER TABLE runs ADD COLUMN controller_errors INTEGER DEFAULT NULL;
 )sql";
 
-constexpr const char* kMigrations[] = {kSchemaV1, kSchemaV2, kSchemaV3,  kSchemaV4,  kSchemaV5,  kSchemaV6,
-                                       kSchemaV7, kSchemaV8, kSchemaV9, kSchemaV10, kSchemaV11, kSchemaV12};
+constexpr const char* kMigrations[] = {kSchemaV1, kSchemaV2,  kSchemaV3,  kSchemaV4,
+                                       kSchemaV5, kSchemaV6,  kSchemaV7,  kSchemaV8,
+                                       kSchemaV9, kSchemaV10, kSchemaV11, kSchemaV12};
 static_assert(std::size(kMigrations) == kSchemaVersion, "one migration per schema version");
 
 constexpr const char* kInsertRun = R"sql(
@@ -749,7 +750,8 @@ std::vector<RunRecord> Recorder::LoadAll() const {
       run.video_stale_s = r.Real();
       const double speedup = r.Real();  // NaN for NULL: a real-time run, or recorded before v11
       run.speedup = std::isnan(speedup) ? -1.0 : speedup;
-      run.controller_errors = static_cast<int>(r.IntOr(-1));  // NULL: no servo controller, or before v12
+      run.controller_errors =
+          static_cast<int>(r.IntOr(-1));  // NULL: no servo controller, or before v12
       index_of.emplace(run.id, runs.size());
       runs.push_back(std::move(run));
     }

@@ -166,7 +166,8 @@ cv::Scalar SpeedColour(const cv::Mat& colours, double speed_mps, double max_spee
 
 }  // namespace
 
-RunPicture RenderRunPicture(const RunRecord& run, const TrackConfig& track, const std::vector<Vec2>& also_show) {
+RunPicture RenderRunPicture(const RunRecord& run, const TrackConfig& track,
+                            const std::vector<Vec2>& also_show) {
   // A loaded track has at least 3 centre-line points; anything less is drawn
   // as no track at all (the path and contacts still are).
   std::optional<Track> geometry;
@@ -388,7 +389,8 @@ RunPicture RenderBlimpRunPicture(const RunRecord& run, const BlimpCourseConfig& 
   // buildings' and gates' ends and the landing circle).
   std::vector<Vec2> course_points;
   const auto around = [&](double x, double y, double r) {
-    for (const auto& [dx, dy] : {std::pair{r, r}, std::pair{-r, -r}}) course_points.emplace_back(x + dx, y + dy);
+    for (const auto& [dx, dy] : {std::pair{r, r}, std::pair{-r, -r}})
+      course_points.emplace_back(x + dx, y + dy);
   };
   for (const BlimpBuildingSpec& b : course.buildings) {
     around(b.centre[0], b.centre[1], std::hypot(b.size[0], b.size[1]) / 2);
@@ -410,7 +412,8 @@ RunPicture RenderBlimpRunPicture(const RunRecord& run, const BlimpCourseConfig& 
     const Vec2 ay(-ax.y(), ax.x());
     const Vec2 c(b.centre[0], b.centre[1]);
     std::vector<cv::Point> corners;
-    for (const auto& [sx, sy] : {std::pair{1, 1}, std::pair{-1, 1}, std::pair{-1, -1}, std::pair{1, -1}}) {
+    for (const auto& [sx, sy] :
+         {std::pair{1, 1}, std::pair{-1, 1}, std::pair{-1, -1}, std::pair{1, -1}}) {
       const Vec2 v = c + ax * (sx * b.size[0] / 2) + ay * (sy * b.size[1] / 2);
       corners.push_back(px(v.x(), v.y()));
     }
@@ -419,7 +422,8 @@ RunPicture RenderBlimpRunPicture(const RunRecord& run, const BlimpCourseConfig& 
   }
   {
     const cv::Point centre = px(course.landing.centre[0], course.landing.centre[1]);
-    const int radius = std::max(4, static_cast<int>(std::lround(course.landing.radius * picture.px_per_m)));
+    const int radius =
+        std::max(4, static_cast<int>(std::lround(course.landing.radius * picture.px_per_m)));
     cv::circle(picture.image, centre, radius, kBlack, 2, cv::LINE_AA);
     paint.TextCentred("landing", cv::Point2d(centre) + cv::Point2d(0, radius + 12), 0.45);
     const cv::Point start = px(course.start.position[0], course.start.position[1]);

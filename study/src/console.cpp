@@ -1,14 +1,13 @@
 #include "haptel/study/console.hpp"
 
+#include <arpa/inet.h>
 #include <httplib.h>
 #include <openssl/pem.h>
 #include <openssl/x509v3.h>
-#include <arpa/inet.h>
 #include <sys/socket.h>
 
-#include <chrono>
-
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <mutex>
 #include <sstream>
@@ -27,16 +26,21 @@ namespace {
 
 std::string Html(const std::string& text) { return HtmlEscape(text); }
 
-std::string Page(const std::string& title, const std::string& body, const std::string& head_extra = "") {
-  return "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>" + Html(title) + "</title>" + head_extra +
-         "<style>body{font-family:sans-serif;margin:2em;max-width:60em}table{border-collapse:collapse}"
-         "td,th{border:1px solid #999;padding:0.2em 0.6em}.done{background:#e6f4e6}.flagged{background:#fdf1d6}"
+std::string Page(const std::string& title, const std::string& body,
+                 const std::string& head_extra = "") {
+  return "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>" + Html(title) + "</title>" +
+         head_extra +
+         "<style>body{font-family:sans-serif;margin:2em;max-width:60em}table{border-collapse:"
+         "collapse}"
+         "td,th{border:1px solid #999;padding:0.2em "
+         "0.6em}.done{background:#e6f4e6}.flagged{background:#fdf1d6}"
          ".flags{color:#a60}.error{color:#b00}"
          "fieldset{margin:0.8em 0}</style></head><body>\n" +
          body + "\n</body></html>\n";
 }
 
-std::string Query(const std::string& participant, const std::string& condition, const std::string& name) {
+std::string Query(const std::string& participant, const std::string& condition,
+                  const std::string& name) {
   return "/questionnaire?participant=" + httplib::detail::encode_query_param(participant) +
          "&condition=" + httplib::detail::encode_query_param(condition) +
          "&name=" + httplib::detail::encode_query_param(name);
@@ -49,7 +53,8 @@ std::string FormatSeconds(double s) {
 }
 
 std::string ErrorPage(const std::string& title, const std::string& why) {
-  return Page(title, "<p id=\"result\" class=\"error\">" + Html(why) + "</p><p><a href=\"/\">schedule</a></p>");
+  return Page(title, "<p id=\"result\" class=\"error\">" + Html(why) +
+                         "</p><p><a href=\"/\">schedule</a></p>");
 }
 
 /// The hidden field every form carries (CheckFormToken).
@@ -59,7 +64,8 @@ std::string TokenField(const std::string& token) {
 
 /// The small form that adds one of the experimenter's notes on a trial
 /// (position 0: on the participant as a whole).
-std::string NoteForm(const std::string& token, const std::string& participant, int position, const std::string& id) {
+std::string NoteForm(const std::string& token, const std::string& participant, int position,
+                     const std::string& id) {
   return "<form method=\"post\" action=\"/notes\" class=\"note\" accept-charset=\"utf-8\"" +
          (id.empty() ? std::string() : " id=\"" + Html(id) + "\"") + ">" + TokenField(token) +
          "<input type=\"hidden\" name=\"participant\" value=\"" + Html(participant) +
@@ -69,11 +75,12 @@ std::string NoteForm(const std::string& token, const std::string& participant, i
 }
 
 std::string LoginPage(const std::string& token, const std::string& why) {
-  return Page("Console: access token",
-              "<h1>The study's console</h1>\n<p>" + Html(why) +
-                  "</p>\n<form method=\"post\" action=\"/login\">" + TokenField(token) +
-                  "<label>Access token <input name=\"token\" id=\"token\" size=\"34\" autocomplete=\"off\">"
-                  "</label> <button id=\"login\">Open</button></form>");
+  return Page(
+      "Console: access token",
+      "<h1>The study's console</h1>\n<p>" + Html(why) +
+          "</p>\n<form method=\"post\" action=\"/login\">" + TokenField(token) +
+          "<label>Access token <input name=\"token\" id=\"token\" size=\"34\" autocomplete=\"off\">"
+          "</label> <button id=\"login\">Open</button></form>");
 }
 
 /// The largest url-encoded answers form of the study's questionnaires.
@@ -133,11 +140,12 @@ void TreePath(const Item& item, std::map<std::string, std::string>& fields) {
   if (!path.empty()) fields[PathKey(item.id)] = path;
 }
 
-std::string Form(const Questionnaire& q, const std::string& participant, const std::string& condition,
-                 const std::string& token) {
+std::string Form(const Questionnaire& q, const std::string& participant,
+                 const std::string& condition, const std::string& token) {
   std::ostringstream h;
   h << "<h1>" << Html(q.title) << "</h1>\n<p>Participant <b>" << Html(participant) << "</b>, "
-    << (condition.empty() ? std::string("before their first trial") : "after <b>" + Html(condition) + "</b>")
+    << (condition.empty() ? std::string("before their first trial")
+                          : "after <b>" + Html(condition) + "</b>")
     << "</p>\n";
   if (!q.instructions.empty()) h << "<p>" << Html(q.instructions) << "</p>\n";
   h << "<form method=\"post\" action=\"/answers\" id=\"questionnaire\" accept-charset=\"utf-8\">"
@@ -152,35 +160,36 @@ std::string Form(const Questionnaire& q, const std::string& participant, const s
       case ItemType::kScale:
         if (!item.scale.min_label.empty()) h << Html(item.scale.min_label) << " ";
         for (int v = item.scale.min; v <= item.scale.max; v += item.scale.step) {
-          h << "<label><input type=\"radio\" name=\"" << Html(item.id) << "\" value=\"" << v << "\">" << v
-            << "</label> ";
+          h << "<label><input type=\"radio\" name=\"" << Html(item.id) << "\" value=\"" << v
+            << "\">" << v << "</label> ";
         }
         if (!item.scale.max_label.empty()) h << Html(item.scale.max_label);
         break;
       case ItemType::kChoice:
         for (const ChoiceOption& o : item.options) {
-          h << "<label><input type=\"radio\" name=\"" << Html(item.id) << "\" value=\"" << Html(o.value) << "\">"
-            << Html(o.label) << "</label><br>\n";
+          h << "<label><input type=\"radio\" name=\"" << Html(item.id) << "\" value=\""
+            << Html(o.value) << "\">" << Html(o.label) << "</label><br>\n";
         }
         break;
       case ItemType::kText:
-        h << "<textarea name=\"" << Html(item.id) << "\" rows=\"3\" cols=\"60\" maxlength=\"" << item.max_length
-          << "\"></textarea>";
+        h << "<textarea name=\"" << Html(item.id) << "\" rows=\"3\" cols=\"60\" maxlength=\""
+          << item.max_length << "\"></textarea>";
         break;
       case ItemType::kTree:
         // Every question of the tree, in order; the page follows the answers
         // to the band and the rating within it (later questions off the
         // path are ignored).
         for (const TreeNode& node : item.tree.nodes) {
-          h << "<p>" << Html(node.question) << " <label><input type=\"radio\" name=\"" << Html(item.id) << ".node."
-            << Html(node.id) << "\" value=\"yes\">yes</label> <label><input type=\"radio\" name=\""
-            << Html(item.id) << ".node." << Html(node.id) << "\" value=\"no\">no</label></p>\n";
+          h << "<p>" << Html(node.question) << " <label><input type=\"radio\" name=\""
+            << Html(item.id) << ".node." << Html(node.id)
+            << "\" value=\"yes\">yes</label> <label><input type=\"radio\" name=\"" << Html(item.id)
+            << ".node." << Html(node.id) << "\" value=\"no\">no</label></p>\n";
         }
         for (const TreeBand& band : item.tree.bands) {
           h << "<p><b>" << Html(band.text) << "</b><br>\n";
           for (const BandRating& r : band.ratings) {
-            h << "<label><input type=\"radio\" name=\"" << Html(item.id) << "\" value=\"" << r.rating << "\">"
-              << r.rating << ": " << Html(r.text) << "</label><br>\n";
+            h << "<label><input type=\"radio\" name=\"" << Html(item.id) << "\" value=\""
+              << r.rating << "\">" << r.rating << ": " << Html(r.text) << "</label><br>\n";
           }
           h << "</p>\n";
         }
@@ -188,7 +197,8 @@ std::string Form(const Questionnaire& q, const std::string& participant, const s
     }
     h << "</fieldset>\n";
   }
-  h << "<button type=\"submit\" id=\"submit\">Submit</button>\n</form>\n<p><a href=\"/\">schedule</a></p>";
+  h << "<button type=\"submit\" id=\"submit\">Submit</button>\n</form>\n<p><a "
+       "href=\"/\">schedule</a></p>";
   return h.str();
 }
 
@@ -196,18 +206,23 @@ std::string Form(const Questionnaire& q, const std::string& participant, const s
 
 ConsoleCertificate FindConsoleCertificate(const std::filesystem::path& dir) {
   ConsoleCertificate found{dir / "console.pem", dir / "console.key", {}};
-  const std::string make = "; make it with `haptel security init " + dir.string() + " --console NAME,...` (NAME: "
+  const std::string make = "; make it with `haptel security init " + dir.string() +
+                           " --console NAME,...` (NAME: "
                            "the address or host name the experimenter's browser uses)";
   for (const std::filesystem::path& file : {found.certificate, found.key}) {
-    if (!std::filesystem::is_regular_file(file)) throw ConsoleError("the console's HTTPS: no " + file.string() + make);
+    if (!std::filesystem::is_regular_file(file))
+      throw ConsoleError("the console's HTTPS: no " + file.string() + make);
   }
   std::FILE* f = std::fopen(found.certificate.c_str(), "r");
   X509* cert = f != nullptr ? PEM_read_X509(f, nullptr, nullptr, nullptr) : nullptr;
   if (f != nullptr) std::fclose(f);
-  if (cert == nullptr) throw ConsoleError("the console's HTTPS: " + found.certificate.string() + " is not a PEM certificate" + make);
+  if (cert == nullptr)
+    throw ConsoleError("the console's HTTPS: " + found.certificate.string() +
+                       " is not a PEM certificate" + make);
   const bool expired = X509_cmp_current_time(X509_get0_notAfter(cert)) < 0;
   const bool early = X509_cmp_current_time(X509_get0_notBefore(cert)) > 0;
-  auto* names = static_cast<GENERAL_NAMES*>(X509_get_ext_d2i(cert, NID_subject_alt_name, nullptr, nullptr));
+  auto* names =
+      static_cast<GENERAL_NAMES*>(X509_get_ext_d2i(cert, NID_subject_alt_name, nullptr, nullptr));
   for (int i = 0; names != nullptr && i < sk_GENERAL_NAME_num(names); ++i) {
     const GENERAL_NAME* name = sk_GENERAL_NAME_value(names, i);
     if (name->type == GEN_DNS) {
@@ -218,7 +233,8 @@ ConsoleCertificate FindConsoleCertificate(const std::filesystem::path& dir) {
       const ASN1_OCTET_STRING* ip = name->d.iPAddress;
       char text[64] = {};
       const int family = ASN1_STRING_length(ip) == 4 ? AF_INET : AF_INET6;
-      if (inet_ntop(family, ASN1_STRING_get0_data(ip), text, sizeof text) != nullptr) found.names.emplace_back(text);
+      if (inet_ntop(family, ASN1_STRING_get0_data(ip), text, sizeof text) != nullptr)
+        found.names.emplace_back(text);
     }
   }
   GENERAL_NAMES_free(names);
@@ -261,8 +277,9 @@ struct StudyConsole::Impl {
   std::thread thread;
   int port = 0;
 
-  Impl(const StudyConfig& c, const std::vector<PlannedTrial>& p, const std::filesystem::path& database,
-       const std::map<std::string, Questionnaire>& q, const ConsoleOptions& o)
+  Impl(const StudyConfig& c, const std::vector<PlannedTrial>& p,
+       const std::filesystem::path& database, const std::map<std::string, Questionnaire>& q,
+       const ConsoleOptions& o)
       : config(c), plan(p), questionnaires(q), options(o), recorder(database) {
     if (options.thumbnail) thumbnail = std::make_unique<Thumbnail>();
   }
@@ -279,7 +296,8 @@ struct StudyConsole::Impl {
   /// A state-changing route: its form must carry the console's token.
   void Post(const std::string& path, httplib::Server::Handler handler) {
     server->Post(path, [this, handler](const httplib::Request& req, httplib::Response& res) {
-      if (const Refusal refusal = CheckFormToken(access, req.get_param_value("csrf"))) return Refuse(res, refusal);
+      if (const Refusal refusal = CheckFormToken(access, req.get_param_value("csrf")))
+        return Refuse(res, refusal);
       handler(req, res);
     });
   }
@@ -288,8 +306,9 @@ struct StudyConsole::Impl {
   /// whole and refuses it past 8 kB, shorter than a long answer or note):
   /// refused as it is read past `limit`, then its form token checked. False
   /// (the refusal in `res`) when it is not to be handled.
-  bool ReadForm(const httplib::Request& req, httplib::Response& res, const httplib::ContentReader& read,
-                size_t limit, const std::string& allows, httplib::Params& params) {
+  bool ReadForm(const httplib::Request& req, httplib::Response& res,
+                const httplib::ContentReader& read, size_t limit, const std::string& allows,
+                httplib::Params& params) {
     if (req.is_multipart_form_data() ||
         req.get_header_value("Content-Type").rfind("application/x-www-form-urlencoded", 0) != 0) {
       Refuse(res, {415, "refused: the form comes url-encoded"});
@@ -303,12 +322,14 @@ struct StudyConsole::Impl {
       return !too_large;
     });
     if (too_large) {
-      Refuse(res, {413, "refused: the form is larger than " + std::to_string(limit) + " bytes, more than " + allows});
+      Refuse(res, {413, "refused: the form is larger than " + std::to_string(limit) +
+                            " bytes, more than " + allows});
       return false;
     }
     httplib::detail::parse_query_text(body, params);
     const auto token = params.find("csrf");
-    if (const Refusal refusal = CheckFormToken(access, token == params.end() ? "" : token->second)) {
+    if (const Refusal refusal =
+            CheckFormToken(access, token == params.end() ? "" : token->second)) {
       Refuse(res, refusal);
       return false;
     }
@@ -318,11 +339,12 @@ struct StudyConsole::Impl {
   /// The participants' count, and how many more complete a balanced block.
   std::string Blocks(size_t participants) const {
     const size_t block = static_cast<size_t>(BlockSize(config));
-    std::string text = std::to_string(participants) + " participant" + (participants == 1 ? "" : "s");
+    std::string text =
+        std::to_string(participants) + " participant" + (participants == 1 ? "" : "s");
     if (block > 1 && participants % block != 0) {
       const size_t more = block - participants % block;
-      text += "; the balanced Latin square is balanced over blocks of " + std::to_string(block) + ": add " +
-              std::to_string(more) + " more to complete the block";
+      text += "; the balanced Latin square is balanced over blocks of " + std::to_string(block) +
+              ": add " + std::to_string(more) + " more to complete the block";
     }
     return text;
   }
@@ -333,12 +355,14 @@ struct StudyConsole::Impl {
     const std::vector<TrialRow> trials = store->Trials();
     const std::vector<NoteRow> notes = store->Notes();
     std::ostringstream h;
-    h << "<h1>Study " << Html(config.name) << "</h1>\n<p id=\"progress\">" << trials.size() << " of " << plan.size()
-      << " trials done</p>\n<p id=\"live\">" << (live.empty() ? "No trial under way." : Html(live)) << "</p>\n";
+    h << "<h1>Study " << Html(config.name) << "</h1>\n<p id=\"progress\">" << trials.size()
+      << " of " << plan.size() << " trials done</p>\n<p id=\"live\">"
+      << (live.empty() ? "No trial under way." : Html(live)) << "</p>\n";
     if (!live.empty()) {
       if (have_progress) {
-        h << "<p id=\"progress-live\">lap " << FormatSeconds(progress.lap_time_s) << " &middot; gates "
-          << progress.gates_passed << " of " << progress.gates_total << " &middot; contacts " << progress.obstacles;
+        h << "<p id=\"progress-live\">lap " << FormatSeconds(progress.lap_time_s)
+          << " &middot; gates " << progress.gates_passed << " of " << progress.gates_total
+          << " &middot; contacts " << progress.obstacles;
         if (!progress.last_contact.empty()) h << " (last: " << Html(progress.last_contact) << ")";
         h << "</p>\n";
       }
@@ -346,7 +370,8 @@ struct StudyConsole::Impl {
         h << "<p><img id=\"thumbnail\" src=\"/video.jpg?n=" << thumbnail->frames()
           << "\" width=\"320\" alt=\"the vehicle's camera (no picture yet)\"></p>\n";
       }
-      h << "<form method=\"post\" action=\"/abort\">" << TokenField(access.form_token) << "<button id=\"abort\">Abort this trial</button> (it is "
+      h << "<form method=\"post\" action=\"/abort\">" << TokenField(access.form_token)
+        << "<button id=\"abort\">Abort this trial</button> (it is "
            "run again)</form>\n";
       if (!live_participant.empty()) {
         h << "<p>Note on this " << (live_position == 0 ? "practice lap" : "trial") << ": "
@@ -359,7 +384,8 @@ struct StudyConsole::Impl {
         << "<p id=\"next\">Next: " << Html(next)
         << " <button id=\"start\">Start</button></p></form>\n";
     }
-    h << "<table id=\"schedule\"><tr><th>participant</th><th>position</th><th>condition</th><th>lap</th>"
+    h << "<table "
+         "id=\"schedule\"><tr><th>participant</th><th>position</th><th>condition</th><th>lap</th>"
          "<th>questionnaires</th><th>notes</th></tr>\n";
     for (const PlannedTrial& t : plan) {
       const TrialRow* row = nullptr;
@@ -367,18 +393,24 @@ struct StudyConsole::Impl {
         if (r.participant == t.participant && r.position == t.position) row = &r;
       }
       const bool flagged = row != nullptr && !row->flags.empty();
-      h << "<tr" << (row == nullptr ? "" : flagged ? " class=\"done flagged\"" : " class=\"done\"") << "><td>"
-        << Html(t.participant) << "</td><td>" << t.position << "</td><td>" << Html(t.condition) << "</td><td>"
-        << (row == nullptr ? "" : FormatSeconds(row->lap_time_s) + (row->completed ? "" : " (cap)"));
+      h << "<tr"
+        << (row == nullptr ? ""
+            : flagged      ? " class=\"done flagged\""
+                           : " class=\"done\"")
+        << "><td>" << Html(t.participant) << "</td><td>" << t.position << "</td><td>"
+        << Html(t.condition) << "</td><td>"
+        << (row == nullptr ? ""
+                           : FormatSeconds(row->lap_time_s) + (row->completed ? "" : " (cap)"));
       // What could have spoiled it: the experimenter decides whether to redo it.
       if (flagged) h << " <span class=\"flags\">! " << Html(row->flags) << "</span>";
       if (row != nullptr && row->attempt > 1) h << " (attempt " << row->attempt << ")";
       if (row != nullptr) {
-        h << " <form method=\"post\" action=\"/redo\" style=\"display:inline\">" << TokenField(access.form_token)
+        h << " <form method=\"post\" action=\"/redo\" style=\"display:inline\">"
+          << TokenField(access.form_token)
           << "<input type=\"hidden\" "
              "name=\"participant\" value=\""
-          << Html(t.participant) << "\"><input type=\"hidden\" name=\"position\" value=\"" << t.position
-          << "\"><button>redo</button></form>";
+          << Html(t.participant) << "\"><input type=\"hidden\" name=\"position\" value=\""
+          << t.position << "\"><button>redo</button></form>";
       }
       h << "</td><td>";
       // The participant's background, asked once before their first trial.
@@ -386,7 +418,8 @@ struct StudyConsole::Impl {
         if (store->Answered(t.participant, "", config.demographics)) {
           h << Html(config.demographics) << " &#10003; ";
         } else {
-          h << "<a class=\"demographics\" href=\"" << Html(Query(t.participant, "", config.demographics)) << "\">"
+          h << "<a class=\"demographics\" href=\""
+            << Html(Query(t.participant, "", config.demographics)) << "\">"
             << Html(config.demographics) << "</a> (before the first trial) ";
         }
       }
@@ -395,7 +428,8 @@ struct StudyConsole::Impl {
           if (store->Answered(t.participant, t.condition, name)) {
             h << Html(name) << " &#10003; ";
           } else {
-            h << "<a href=\"" << Html(Query(t.participant, t.condition, name)) << "\">" << Html(name) << "</a> ";
+            h << "<a href=\"" << Html(Query(t.participant, t.condition, name)) << "\">"
+              << Html(name) << "</a> ";
           }
         }
       }
@@ -431,22 +465,25 @@ struct StudyConsole::Impl {
     // Refreshed while something changes by itself (a trial under way, answers
     // awaited from another screen); still otherwise, so that links hold.
     const bool changing = !live.empty() || !waiting.empty();
-    return Page("Study " + config.name, h.str(), changing ? "<meta http-equiv=\"refresh\" content=\"2\">" : "");
+    return Page("Study " + config.name, h.str(),
+                changing ? "<meta http-equiv=\"refresh\" content=\"2\">" : "");
   }
 };
 
 StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedTrial>& plan,
                            const std::filesystem::path& database,
-                           const std::map<std::string, Questionnaire>& questionnaires, const ConsoleOptions& options)
+                           const std::map<std::string, Questionnaire>& questionnaires,
+                           const ConsoleOptions& options)
     : impl_(std::make_unique<Impl>(config, plan, database, questionnaires, options)) {
   Impl& s = *impl_;
   const bool tls = !options.tls_certificate.empty();
   const bool beyond_loopback = !IsLoopbackAddress(options.host);
   if (beyond_loopback && !tls && !options.plain_http) {
-    throw ConsoleError("the console would listen on " + options.host +
-                       ", beyond this machine, without HTTPS: its access token would cross the network in clear. "
-                       "Make a certificate with `haptel security init DIR --console NAME` and give --tls DIR, or "
-                       "accept plain HTTP on a network you trust with --plain-http");
+    throw ConsoleError(
+        "the console would listen on " + options.host +
+        ", beyond this machine, without HTTPS: its access token would cross the network in clear. "
+        "Make a certificate with `haptel security init DIR --console NAME` and give --tls DIR, or "
+        "accept plain HTTP on a network you trust with --plain-http");
   }
   TlsContext context;
   if (tls) {
@@ -463,7 +500,8 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
   }
   s.access.tls = tls;
   s.access.form_token = RandomToken();
-  s.access.access_token = beyond_loopback ? (options.access_token.empty() ? RandomToken() : options.access_token) : "";
+  s.access.access_token =
+      beyond_loopback ? (options.access_token.empty() ? RandomToken() : options.access_token) : "";
   s.access.max_answers_bytes = LargestAnswers(questionnaires);
   // A note's characters as 4 bytes of UTF-8 each, url-encoded, and room for
   // its hidden fields and what a browser adds.
@@ -491,10 +529,11 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
   // past the limit, a path that is not a route) says so on a page too.
   s.server->set_error_handler([](const httplib::Request&, httplib::Response& res) {
     if (!res.body.empty()) return;  // a route's own page, which says why
-    const std::string why = res.status == 404   ? "no such page on the study's console"
-                            : res.status == 413 ? "the form is larger than this console takes"
-                            : res.status == 400 ? "the request could not be read"
-                                                : "the request was refused (HTTP " + std::to_string(res.status) + ")";
+    const std::string why =
+        res.status == 404   ? "no such page on the study's console"
+        : res.status == 413 ? "the form is larger than this console takes"
+        : res.status == 400 ? "the request could not be read"
+                            : "the request was refused (HTTP " + std::to_string(res.status) + ")";
     res.set_content(ErrorPage("Refused", why), "text/html; charset=utf-8");
   });
   s.server->Get("/login", [&s](const httplib::Request&, httplib::Response& res) {
@@ -507,7 +546,8 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
       return s.Refuse(res, {401, "that is not the console's access token"});
     }
     res.set_header("Set-Cookie", std::string(kAccessCookie) + "=" + s.access.access_token +
-                                     "; Path=/; HttpOnly; SameSite=Strict" + (s.access.tls ? "; Secure" : ""));
+                                     "; Path=/; HttpOnly; SameSite=Strict" +
+                                     (s.access.tls ? "; Secure" : ""));
     res.set_redirect("/", 303);
   });
   s.server->Get("/", [&s](const httplib::Request&, httplib::Response& res) {
@@ -516,29 +556,30 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
   s.server->Get("/status.json", [&s](const httplib::Request&, httplib::Response& res) {
     const ConnectionCounters c = s.server->counters();
     const std::lock_guard<std::mutex> lock(s.mutex);
-    res.set_content("{\"study\":" + JsonString(s.config.name) +
-                        ",\"trials_done\":" + std::to_string(s.store->Trials().size()) +
-                        ",\"trials_planned\":" + std::to_string(s.store->Plan().size()) +
-                        ",\"participants\":" + std::to_string(s.store->Participants().size()) +
-                        ",\"live\":" + JsonString(s.live) + ",\"lap_time_s\":" + JsonNumber(s.progress.lap_time_s) +
-                        ",\"gates_passed\":" + std::to_string(s.progress.gates_passed) +
-                        ",\"obstacles\":" + std::to_string(s.progress.obstacles) +
-                        ",\"video_frames\":" + std::to_string(s.thumbnail ? s.thumbnail->frames() : 0) +
-                        ",\"next\":" + JsonString(s.next) + ",\"waiting\":" + JsonString(s.waiting) +
-                        ",\"waiting_for_participants\":" + (s.waiting_for_more ? "true" : "false") +
-                        ",\"connections\":{\"served\":" + std::to_string(c.served) +
-                        ",\"refused_busy\":" + std::to_string(c.refused_busy) +
-                        ",\"cut_deadline\":" + std::to_string(c.cut_deadline) +
-                        ",\"cut_for_room\":" + std::to_string(c.cut_for_room) +
-                        ",\"tls_failed\":" + std::to_string(c.tls_failed) +
-                        ",\"refused_requests\":" + std::to_string(s.refused_requests.load()) + "}}",
-                    "application/json");
+    res.set_content(
+        "{\"study\":" + JsonString(s.config.name) +
+            ",\"trials_done\":" + std::to_string(s.store->Trials().size()) +
+            ",\"trials_planned\":" + std::to_string(s.store->Plan().size()) + ",\"participants\":" +
+            std::to_string(s.store->Participants().size()) + ",\"live\":" + JsonString(s.live) +
+            ",\"lap_time_s\":" + JsonNumber(s.progress.lap_time_s) +
+            ",\"gates_passed\":" + std::to_string(s.progress.gates_passed) +
+            ",\"obstacles\":" + std::to_string(s.progress.obstacles) +
+            ",\"video_frames\":" + std::to_string(s.thumbnail ? s.thumbnail->frames() : 0) +
+            ",\"next\":" + JsonString(s.next) + ",\"waiting\":" + JsonString(s.waiting) +
+            ",\"waiting_for_participants\":" + (s.waiting_for_more ? "true" : "false") +
+            ",\"connections\":{\"served\":" + std::to_string(c.served) + ",\"refused_busy\":" +
+            std::to_string(c.refused_busy) + ",\"cut_deadline\":" + std::to_string(c.cut_deadline) +
+            ",\"cut_for_room\":" + std::to_string(c.cut_for_room) +
+            ",\"tls_failed\":" + std::to_string(c.tls_failed) +
+            ",\"refused_requests\":" + std::to_string(s.refused_requests.load()) + "}}",
+        "application/json");
   });
   s.Post("/start", [&s](const httplib::Request&, httplib::Response& res) {
     std::unique_lock<std::mutex> lock(s.mutex);
     if (s.next.empty()) {
       res.status = 409;
-      const std::string why = s.waiting.empty() ? "no trial is waiting to start" : "waiting for " + s.waiting;
+      const std::string why =
+          s.waiting.empty() ? "no trial is waiting to start" : "waiting for " + s.waiting;
       res.set_content(ErrorPage("Not started", why), "text/html; charset=utf-8");
       return;
     }
@@ -561,7 +602,8 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
     }
     if (!taken) {
       res.status = 409;
-      res.set_content(ErrorPage("Not redone", "participant " + participant + " has no finished trial at position " +
+      res.set_content(ErrorPage("Not redone", "participant " + participant +
+                                                  " has no finished trial at position " +
                                                   req.get_param_value("position")),
                       "text/html; charset=utf-8");
       return;
@@ -572,15 +614,18 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
     const std::string id = req.get_param_value("id");
     if (s.config.operators != "person") {
       res.status = 409;
-      res.set_content(ErrorPage("Not added", "simulated drivers come from the study file, each with a profile"),
-                      "text/html; charset=utf-8");
+      res.set_content(
+          ErrorPage("Not added", "simulated drivers come from the study file, each with a profile"),
+          "text/html; charset=utf-8");
       return;
     }
     if (!IsPlainName(id)) {
       res.status = 422;
-      res.set_content(ErrorPage("Not added", "a participant's id is 1 to 40 letters, digits, '-', '_' or '.', got '" +
-                                                 id + "'"),
-                      "text/html; charset=utf-8");
+      res.set_content(
+          ErrorPage(
+              "Not added",
+              "a participant's id is 1 to 40 letters, digits, '-', '_' or '.', got '" + id + "'"),
+          "text/html; charset=utf-8");
       return;
     }
     try {
@@ -600,7 +645,8 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
       const std::lock_guard<std::mutex> lock(s.mutex);
       if (!s.waiting_for_more) {
         res.status = 409;
-        res.set_content(ErrorPage("Not finished", "the study still has trials to run"), "text/html; charset=utf-8");
+        res.set_content(ErrorPage("Not finished", "the study still has trials to run"),
+                        "text/html; charset=utf-8");
         return;
       }
       s.finish_requested = true;
@@ -622,7 +668,8 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
       const std::lock_guard<std::mutex> lock(s.mutex);
       if (s.live.empty()) {
         res.status = 409;
-        res.set_content(ErrorPage("Not aborted", "no trial is under way"), "text/html; charset=utf-8");
+        res.set_content(ErrorPage("Not aborted", "no trial is under way"),
+                        "text/html; charset=utf-8");
         return;
       }
     }
@@ -633,26 +680,31 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
     const auto q = s.questionnaires.find(req.get_param_value("name"));
     if (q == s.questionnaires.end()) {
       res.status = 404;
-      res.set_content(Page("Not found", "<p class=\"error\">No such questionnaire in this study.</p>"),
-                      "text/html; charset=utf-8");
+      res.set_content(
+          Page("Not found", "<p class=\"error\">No such questionnaire in this study.</p>"),
+          "text/html; charset=utf-8");
       return;
     }
-    res.set_content(Page(q->second.title, Form(q->second, req.get_param_value("participant"),
-                                                 req.get_param_value("condition"), s.access.form_token)),
-                    "text/html; charset=utf-8");
+    res.set_content(
+        Page(q->second.title, Form(q->second, req.get_param_value("participant"),
+                                   req.get_param_value("condition"), s.access.form_token)),
+        "text/html; charset=utf-8");
   });
   // Read here, not by the library: it buffers a url-encoded body whole and
   // refuses one past 8 kB, shorter than the answers a text item allows.
   s.server->Post("/answers", [&s](const httplib::Request& req, httplib::Response& res,
                                   const httplib::ContentReader& read) {
     httplib::Params params;
-    if (!s.ReadForm(req, res, read, s.access.max_answers_bytes, "this study's questionnaires allow", params)) return;
+    if (!s.ReadForm(req, res, read, s.access.max_answers_bytes, "this study's questionnaires allow",
+                    params))
+      return;
     std::map<std::string, std::string> fields;
     for (const auto& [key, value] : params) fields[key] = value;
     const std::string participant = fields["participant"];
     const std::string condition = fields["condition"];
     const std::string name = fields["questionnaire"];
-    for (const char* hidden : {"participant", "condition", "questionnaire", "csrf"}) fields.erase(hidden);
+    for (const char* hidden : {"participant", "condition", "questionnaire", "csrf"})
+      fields.erase(hidden);
     const auto q = s.questionnaires.find(name);
     if (q != s.questionnaires.end()) {
       for (const Item& item : q->second.items) {
@@ -662,18 +714,21 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
     SubmissionResult result;
     {
       const std::lock_guard<std::mutex> lock(s.mutex);
-      result = SubmitAnswers(*s.store, s.questionnaires, participant, condition, name, fields, s.config.demographics);
+      result = SubmitAnswers(*s.store, s.questionnaires, participant, condition, name, fields,
+                             s.config.demographics);
     }
     res.status = result.status;
-    std::string page = std::string("<p id=\"result\" class=\"") + (result.accepted ? "ok" : "error") + "\">" +
-                       Html(result.message) + "</p>\n";
+    std::string page = std::string("<p id=\"result\" class=\"") +
+                       (result.accepted ? "ok" : "error") + "\">" + Html(result.message) + "</p>\n";
     if (!result.errors.empty()) {
       page += "<ul id=\"errors\">\n";
       for (const AnswerError& e : result.errors) page += "<li>" + Html(e.message) + "</li>\n";
-      page += "</ul>\n<p><a href=\"" + Html(Query(participant, condition, name)) + "\">back to the form</a></p>\n";
+      page += "</ul>\n<p><a href=\"" + Html(Query(participant, condition, name)) +
+              "\">back to the form</a></p>\n";
     }
     page += "<p><a href=\"/\">schedule</a></p>";
-    res.set_content(Page(result.accepted ? "Recorded" : "Not recorded", page), "text/html; charset=utf-8");
+    res.set_content(Page(result.accepted ? "Recorded" : "Not recorded", page),
+                    "text/html; charset=utf-8");
   });
   // One of the experimenter's notes on a trial; a long note (in any
   // script) is larger than the library's own form limit, so read here.
@@ -681,7 +736,8 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
                                 const httplib::ContentReader& read) {
     httplib::Params params;
     if (!s.ReadForm(req, res, read, s.access.max_note_bytes,
-                    "a note of " + std::to_string(kMaxNoteCharacters) + " characters takes", params)) {
+                    "a note of " + std::to_string(kMaxNoteCharacters) + " characters takes",
+                    params)) {
       return;
     }
     const auto field = [&params](const char* key) {
@@ -709,8 +765,10 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
     s.port = options.port;
   }
   if (s.port <= 0) {
-    throw ConsoleError("the console cannot listen on " + options.host + ":" + std::to_string(options.port) +
-                       " (the port is in use, or the address is not this machine's); choose another with --port N");
+    throw ConsoleError("the console cannot listen on " + options.host + ":" +
+                       std::to_string(options.port) +
+                       " (the port is in use, or the address is not this machine's); choose "
+                       "another with --port N");
   }
   s.access.hosts = ConsoleHosts(options.host, s.port, tls, options.names);
   // The study's tables only once the port is ours: a console that cannot
@@ -772,7 +830,8 @@ bool StudyConsole::WaitForMore(const std::atomic<bool>& stop) {
   impl_->waiting_for_more = true;
   impl_->finish_requested = false;
   bool more = false;
-  while (!stop.load() && !impl_->finish_requested && !(more = impl_->store->NextTrial().has_value())) {
+  while (!stop.load() && !impl_->finish_requested &&
+         !(more = impl_->store->NextTrial().has_value())) {
     impl_->started.wait_for(lock, std::chrono::milliseconds(100));
   }
   impl_->waiting_for_more = false;
@@ -783,7 +842,9 @@ void StudyConsole::SetPicture(std::vector<uint8_t> jpeg, uint64_t frames) {
   if (impl_->thumbnail) impl_->thumbnail->Set(std::move(jpeg), frames);
 }
 
-uint64_t StudyConsole::video_frames() const { return impl_->thumbnail ? impl_->thumbnail->frames() : 0; }
+uint64_t StudyConsole::video_frames() const {
+  return impl_->thumbnail ? impl_->thumbnail->frames() : 0;
+}
 
 void StudyConsole::SetWaiting(const std::string& text) {
   const std::lock_guard<std::mutex> lock(impl_->mutex);

@@ -16,7 +16,8 @@ namespace haptel::study {
 namespace {
 
 std::string Lower(std::string text) {
-  std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::transform(text.begin(), text.end(), text.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
   return text;
 }
 
@@ -44,7 +45,8 @@ std::string CookieValue(const std::string& header, const std::string& name) {
     const size_t first = pair.find_first_not_of(' ');
     pair = first == std::string::npos ? "" : pair.substr(first);
     const size_t equals = pair.find('=');
-    if (equals != std::string::npos && pair.compare(0, equals, name) == 0 && equals == name.size()) {
+    if (equals != std::string::npos && pair.compare(0, equals, name) == 0 &&
+        equals == name.size()) {
       return pair.substr(equals + 1);
     }
     at = end + 1;
@@ -54,7 +56,9 @@ std::string CookieValue(const std::string& header, const std::string& name) {
 
 bool ChangesState(const std::string& method) { return method != "GET" && method != "HEAD"; }
 
-std::string WithPort(const std::string& host, int port) { return host + ":" + std::to_string(port); }
+std::string WithPort(const std::string& host, int port) {
+  return host + ":" + std::to_string(port);
+}
 
 /// This machine's interfaces' IPv4 addresses, and with `v6` its IPv6 ones
 /// but link-local (which need a zone in a URL).
@@ -66,7 +70,8 @@ std::vector<std::string> InterfaceAddresses(bool v6) {
     if (i->ifa_addr == nullptr) continue;
     char text[INET6_ADDRSTRLEN] = {};
     if (i->ifa_addr->sa_family == AF_INET) {
-      inet_ntop(AF_INET, &reinterpret_cast<const sockaddr_in*>(i->ifa_addr)->sin_addr, text, sizeof text);
+      inet_ntop(AF_INET, &reinterpret_cast<const sockaddr_in*>(i->ifa_addr)->sin_addr, text,
+                sizeof text);
     } else if (i->ifa_addr->sa_family == AF_INET6 && v6) {
       const auto* a = reinterpret_cast<const sockaddr_in6*>(i->ifa_addr);
       if (IN6_IS_ADDR_LINKLOCAL(&a->sin6_addr)) continue;
@@ -95,7 +100,8 @@ std::vector<std::string> ConsoleHosts(const std::string& address, int port, bool
     if (host.empty()) return;
     in6_addr v6{};
     if (inet_pton(AF_INET6, host.c_str(), &v6) == 1) host = "[" + host + "]";
-    for (const std::string& h : {WithPort(host, port), std::string(port == (tls ? 443 : 80) ? host : "")}) {
+    for (const std::string& h :
+         {WithPort(host, port), std::string(port == (tls ? 443 : 80) ? host : "")}) {
       if (!h.empty() && std::find(hosts.begin(), hosts.end(), h) == hosts.end()) hosts.push_back(h);
     }
   };
@@ -123,12 +129,15 @@ std::vector<std::string> ConsoleUrls(const std::string& address, int port, bool 
   auto add = [&](const std::string& host) {
     in6_addr v6{};
     const std::string shown = inet_pton(AF_INET6, host.c_str(), &v6) == 1 ? "[" + host + "]" : host;
-    const std::string url = std::string(tls ? "https://" : "http://") + shown + ":" + std::to_string(port) + "/";
-    if (!host.empty() && std::find(urls.begin(), urls.end(), url) == urls.end()) urls.push_back(url);
+    const std::string url =
+        std::string(tls ? "https://" : "http://") + shown + ":" + std::to_string(port) + "/";
+    if (!host.empty() && std::find(urls.begin(), urls.end(), url) == urls.end())
+      urls.push_back(url);
   };
   const bool wildcard = address == "0.0.0.0" || address == "::" || address == "[::]";
   if (!wildcard) {
-    add(address.size() > 2 && address.front() == '[' ? address.substr(1, address.size() - 2) : address);
+    add(address.size() > 2 && address.front() == '[' ? address.substr(1, address.size() - 2)
+                                                     : address);
     return urls;
   }
   if (tls && !names.empty()) {
@@ -154,7 +163,8 @@ size_t FormBytesFor(size_t text_characters, size_t fields) {
 
 std::string RandomToken() {
   unsigned char bytes[16];
-  if (RAND_bytes(bytes, sizeof bytes) != 1) throw std::runtime_error("no random bytes for the console's token");
+  if (RAND_bytes(bytes, sizeof bytes) != 1)
+    throw std::runtime_error("no random bytes for the console's token");
   static const char kHex[] = "0123456789abcdef";
   std::string token;
   for (const unsigned char b : bytes) {
@@ -180,16 +190,19 @@ Refusal CheckRequest(const ConsoleAccess& access, const httplib::Request& reques
   if (ChangesState(request.method)) {
     std::string origin;
     std::string site;
-    if (!SingleHeader(request, "Origin", origin) || !SingleHeader(request, "Sec-Fetch-Site", site)) {
+    if (!SingleHeader(request, "Origin", origin) ||
+        !SingleHeader(request, "Sec-Fetch-Site", site)) {
       return {403, "refused: more than one Origin or Sec-Fetch-Site"};
     }
     const std::string own = std::string(access.tls ? "https://" : "http://") + Lower(host);
     if (!origin.empty() && Lower(origin) != own) {
-      return {403, "refused: a form of another site (" + origin.substr(0, 80) + ") cannot change the study"};
+      return {403, "refused: a form of another site (" + origin.substr(0, 80) +
+                       ") cannot change the study"};
     }
     if (!site.empty() && site != "same-origin" && site != "none") {
-      return {403, "refused: the browser says this request comes from another site (Sec-Fetch-Site: " +
-                       site.substr(0, 40) + ")"};
+      return {403,
+              "refused: the browser says this request comes from another site (Sec-Fetch-Site: " +
+                  site.substr(0, 40) + ")"};
     }
   }
   if (!access.access_token.empty() && request.path != "/login") {
@@ -198,30 +211,38 @@ Refusal CheckRequest(const ConsoleAccess& access, const httplib::Request& reques
       cookies += (cookies.empty() ? "" : "; ") + request.get_header_value("Cookie", i);
     }
     if (!IsAccessToken(access, CookieValue(cookies, kAccessCookie))) {
-      return {401, "the console asks for its access token (printed where `haptel study run` started)"};
+      return {401,
+              "the console asks for its access token (printed where `haptel study run` started)"};
     }
   }
   // A body the library would read whole (a chunked one, or one with no
   // length, read until the client closes: cpp-httplib 0.11 bounds neither)
   // is taken only where the route reads its form itself, up to its limit.
-  const bool reads_its_form = request.method == "POST" && (request.path == "/answers" || request.path == "/notes");
+  const bool reads_its_form =
+      request.method == "POST" && (request.path == "/answers" || request.path == "/notes");
   if (!reads_its_form && ChangesState(request.method) &&
       (request.has_header("Transfer-Encoding") || !request.has_header("Content-Length"))) {
-    return {411, "refused: a form here comes with a Content-Length (as a browser sends it), not chunked or "
-                 "unbounded"};
+    return {
+        411,
+        "refused: a form here comes with a Content-Length (as a browser sends it), not chunked or "
+        "unbounded"};
   }
   if (request.has_header("Content-Length")) {
     const size_t limit = request.path == "/answers" ? access.max_answers_bytes
                          : request.path == "/notes" ? access.max_note_bytes
                                                     : access.max_other_bytes;
     const std::string text = request.get_header_value("Content-Length");
-    const bool number = !text.empty() && text.size() <= 18 && text.find_first_not_of("0123456789") == std::string::npos;
-    if (!number) return {400, "refused: Content-Length '" + text.substr(0, 40) + "' is not a length"};
+    const bool number = !text.empty() && text.size() <= 18 &&
+                        text.find_first_not_of("0123456789") == std::string::npos;
+    if (!number)
+      return {400, "refused: Content-Length '" + text.substr(0, 40) + "' is not a length"};
     const size_t length = std::stoull(text);
     if (length > limit) {
-      return {413, "refused: the form is " + std::to_string(length) + " bytes; this console takes at most " +
-                       std::to_string(limit) + " here (the longest answers this study's questionnaires allow, or a note of " +
-                       std::to_string(kMaxNoteCharacters) + " characters)"};
+      return {413,
+              "refused: the form is " + std::to_string(length) +
+                  " bytes; this console takes at most " + std::to_string(limit) +
+                  " here (the longest answers this study's questionnaires allow, or a note of " +
+                  std::to_string(kMaxNoteCharacters) + " characters)"};
     }
   }
   return {};
@@ -229,8 +250,10 @@ Refusal CheckRequest(const ConsoleAccess& access, const httplib::Request& reques
 
 Refusal CheckFormToken(const ConsoleAccess& access, const std::string& posted) {
   if (posted.empty() || !SameText(posted, access.form_token)) {
-    return {403, "refused: the form is not one this console served (it came from another page, or the console "
-                 "was restarted since it was loaded): reload the schedule and try again"};
+    return {403,
+            "refused: the form is not one this console served (it came from another page, or the "
+            "console "
+            "was restarted since it was loaded): reload the schedule and try again"};
   }
   return {};
 }

@@ -21,7 +21,8 @@ using Clock = std::chrono::steady_clock;
 
 std::string OpenSslReason() {
   char text[256] = "unknown reason";
-  if (const unsigned long code = ERR_get_error(); code != 0) ERR_error_string_n(code, text, sizeof text);
+  if (const unsigned long code = ERR_get_error(); code != 0)
+    ERR_error_string_n(code, text, sizeof text);
   ERR_clear_error();
   return text;
 }
@@ -76,7 +77,9 @@ class DeadlineStream final : public httplib::Stream {
   DeadlineStream(int fd, SSL* ssl, const Limits& limits, std::function<void()> on_head = {})
       : fd_(fd), ssl_(ssl), limits_(limits), on_head_(std::move(on_head)) {}
 
-  bool is_readable() const override { return (ssl_ != nullptr && SSL_pending(ssl_) > 0) || Wait(POLLIN); }
+  bool is_readable() const override {
+    return (ssl_ != nullptr && SSL_pending(ssl_) > 0) || Wait(POLLIN);
+  }
   bool is_writable() const override { return Wait(POLLOUT); }
 
   ssize_t read(char* ptr, size_t size) override {
@@ -131,8 +134,12 @@ class DeadlineStream final : public httplib::Stream {
     }
   }
 
-  void get_remote_ip_and_port(std::string& ip, int& port) const override { ip = SocketAddress(fd_, true, port); }
-  void get_local_ip_and_port(std::string& ip, int& port) const override { ip = SocketAddress(fd_, false, port); }
+  void get_remote_ip_and_port(std::string& ip, int& port) const override {
+    ip = SocketAddress(fd_, true, port);
+  }
+  void get_local_ip_and_port(std::string& ip, int& port) const override {
+    ip = SocketAddress(fd_, false, port);
+  }
   socket_t socket() const override { return fd_; }
 
   /// Whether a wait ended at a deadline or for silence.
@@ -141,7 +148,8 @@ class DeadlineStream final : public httplib::Stream {
 
   /// Waits for `events` on the socket until the deadline that applies, or `idle`.
   bool Wait(short events) const {
-    const Clock::time_point until = head_done_ ? limits_.deadline : std::min(limits_.head_deadline, limits_.deadline);
+    const Clock::time_point until =
+        head_done_ ? limits_.deadline : std::min(limits_.head_deadline, limits_.deadline);
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(until - Clock::now());
     const auto wait = std::min(left, limits_.idle);
     if (wait.count() <= 0) {
@@ -196,7 +204,8 @@ void LingeringClose(int fd, Clock::time_point deadline) {
   char sink[16384];
   size_t drained = 0;
   while (drained < (1u << 20)) {
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(until - Clock::now()).count();
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(until - Clock::now()).count();
     if (left <= 0) break;
     pollfd p{fd, POLLIN, 0};
     if (poll(&p, 1, static_cast<int>(left)) <= 0) break;
@@ -215,34 +224,42 @@ bool HeadWaiting(int fd) {
   if (got <= 0) return false;
   const std::string_view bytes(peek, static_cast<size_t>(got));
   // Its worker reads the head a byte at a time, so the rest may start at the blank line.
-  return bytes.find("\n\r\n") != std::string_view::npos || bytes.find("\n\n") != std::string_view::npos ||
-         bytes.rfind("\r\n", 0) == 0 || bytes.rfind("\n", 0) == 0;
+  return bytes.find("\n\r\n") != std::string_view::npos ||
+         bytes.find("\n\n") != std::string_view::npos || bytes.rfind("\r\n", 0) == 0 ||
+         bytes.rfind("\n", 0) == 0;
 }
 
 }  // namespace
 
 void ConnectionPolicy::ValidateOrThrow() const {
-  if (max_per_client < 1) throw std::invalid_argument("ConnectionPolicy::max_per_client: expected at least 1");
-  if (deadline.count() <= 0) throw std::invalid_argument("ConnectionPolicy::deadline: expected more than 0");
+  if (max_per_client < 1)
+    throw std::invalid_argument("ConnectionPolicy::max_per_client: expected at least 1");
+  if (deadline.count() <= 0)
+    throw std::invalid_argument("ConnectionPolicy::deadline: expected more than 0");
   if (head_deadline.count() <= 0 || head_deadline > deadline) {
-    throw std::invalid_argument("ConnectionPolicy::head_deadline: expected more than 0 and at most the deadline");
+    throw std::invalid_argument(
+        "ConnectionPolicy::head_deadline: expected more than 0 and at most the deadline");
   }
   if (idle.count() <= 0 || idle > deadline) {
-    throw std::invalid_argument("ConnectionPolicy::idle: expected more than 0 and at most the deadline");
+    throw std::invalid_argument(
+        "ConnectionPolicy::idle: expected more than 0 and at most the deadline");
   }
   if (threads <= static_cast<size_t>(max_per_client)) {
     throw std::invalid_argument(
-        "ConnectionPolicy::threads: expected more than max_per_client, so that one address cannot hold them all");
+        "ConnectionPolicy::threads: expected more than max_per_client, so that one address cannot "
+        "hold them all");
   }
 }
 
-TlsContext MakeTlsContext(const std::filesystem::path& certificate, const std::filesystem::path& key) {
+TlsContext MakeTlsContext(const std::filesystem::path& certificate,
+                          const std::filesystem::path& key) {
   TlsContext ctx(SSL_CTX_new(TLS_server_method()));
   if (!ctx) throw std::runtime_error("cannot make a TLS context: " + OpenSslReason());
   SSL_CTX_set_min_proto_version(ctx.get(), TLS1_2_VERSION);
   SSL_CTX_set_mode(ctx.get(), SSL_MODE_ENABLE_PARTIAL_WRITE | SSL_MODE_ACCEPT_MOVING_WRITE_BUFFER);
   if (SSL_CTX_use_certificate_chain_file(ctx.get(), certificate.c_str()) != 1) {
-    throw std::runtime_error(certificate.string() + ": not a usable PEM certificate: " + OpenSslReason());
+    throw std::runtime_error(certificate.string() +
+                             ": not a usable PEM certificate: " + OpenSslReason());
   }
   if (SSL_CTX_use_PrivateKey_file(ctx.get(), key.c_str(), SSL_FILETYPE_PEM) != 1) {
     throw std::runtime_error(key.string() + ": not a usable PEM private key: " + OpenSslReason());
@@ -269,7 +286,8 @@ class ConsoleServer::Queue final : public httplib::TaskQueue {
   httplib::ThreadPool pool_;
 };
 
-ConsoleServer::ConsoleServer(const ConnectionPolicy& policy, TlsContext tls) : policy_(policy), tls_(std::move(tls)) {
+ConsoleServer::ConsoleServer(const ConnectionPolicy& policy, TlsContext tls)
+    : policy_(policy), tls_(std::move(tls)) {
   policy_.ValidateOrThrow();
   new_task_queue = [this] { return new Queue(*this, policy_.threads); };
 }
@@ -351,8 +369,8 @@ bool ConsoleServer::process_and_close_socket(socket_t sock) {
   // The head, the largest body taken (a chunked one with its chunks' sizes),
   // and room: no request the console takes is larger.
   const size_t payload = std::min<size_t>(payload_max_length_, size_t{1} << 40);
-  const DeadlineStream::Limits limits{now + policy_.head_deadline, now + policy_.deadline, policy_.idle,
-                                      2 * payload + (64u << 10)};
+  const DeadlineStream::Limits limits{now + policy_.head_deadline, now + policy_.deadline,
+                                      policy_.idle, 2 * payload + (64u << 10)};
   int port = 0;
   const std::string address = SocketAddress(sock, true, port);
   fcntl(sock, F_SETFL, fcntl(sock, F_GETFL) | O_NONBLOCK);

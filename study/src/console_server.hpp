@@ -30,7 +30,8 @@ struct SslCtxFree {
   void operator()(SSL_CTX* ctx) const { SSL_CTX_free(ctx); }
 };
 using TlsContext = std::unique_ptr<SSL_CTX, SslCtxFree>;
-TlsContext MakeTlsContext(const std::filesystem::path& certificate, const std::filesystem::path& key);
+TlsContext MakeTlsContext(const std::filesystem::path& certificate,
+                          const std::filesystem::path& key);
 
 class ConsoleServer : public httplib::Server {
  public:

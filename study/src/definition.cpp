@@ -1,14 +1,13 @@
 #include "haptel/study/definition.hpp"
 
-#include "haptel/config/link.hpp"
-#include "haptel/core/args.hpp"
-
 #include <charconv>
 #include <cstdlib>
 #include <map>
 #include <set>
 
+#include "haptel/config/link.hpp"
 #include "haptel/config/track.hpp"
+#include "haptel/core/args.hpp"
 
 namespace haptel::study {
 namespace {
@@ -62,12 +61,13 @@ void AddTrack(const fs::path& file, std::vector<DefiningValue>& out) {
   }
   for (size_t i = 0; i < track.gates.size(); ++i) {
     out.push_back({"track.gates[" + std::to_string(i + 1) + "]",
-                   "along " + Number(track.gates[i].along) + " m, width " + Number(track.gates[i].width) + " m"});
+                   "along " + Number(track.gates[i].along) + " m, width " +
+                       Number(track.gates[i].width) + " m"});
   }
   for (size_t i = 0; i < track.obstacles.size(); ++i) {
     out.push_back({"track.obstacles[" + std::to_string(i + 1) + "]",
-                   "centre " + Point(track.obstacles[i].center) + " m, radius " + Number(track.obstacles[i].radius) +
-                       " m"});
+                   "centre " + Point(track.obstacles[i].center) + " m, radius " +
+                       Number(track.obstacles[i].radius) + " m"});
   }
 }
 
@@ -153,7 +153,8 @@ std::vector<DefiningValue> StudyDefinition(const StudyConfig& config) {
   out.push_back({"design.repetitions", std::to_string(config.repetitions)});
   out.push_back({"practice", config.practice ? "true" : "false"});
   out.push_back({"trial_cap_s", Number(config.trial_cap_s)});
-  if (!config.link_fault.empty()) out.push_back({"link_fault", LinkFaultText(ParseLinkFault(config.link_fault))});
+  if (!config.link_fault.empty())
+    out.push_back({"link_fault", LinkFaultText(ParseLinkFault(config.link_fault))});
   // The profile's name, and its figures (a shipped profile may be edited later).
   if (!config.link_profile.empty()) {
     out.push_back({"link_profile", config.link_profile});
@@ -185,7 +186,8 @@ std::vector<DefiningValue> StudyDefinition(const StudyConfig& config) {
 
 std::string DefinitionText(const std::vector<DefiningValue>& values) {
   std::string text;
-  for (const DefiningValue& v : values) text += Escaped(v.key, ":") + ": " + Escaped(v.value, "") + "\n";
+  for (const DefiningValue& v : values)
+    text += Escaped(v.key, ":") + ": " + Escaped(v.value, "") + "\n";
   return text;
 }
 
@@ -238,7 +240,8 @@ std::vector<std::string> DefinitionChanges(const std::vector<DefiningValue>& rec
   }
   if (same_version) {
     for (const DefiningValue& v : now) {
-      if (recorded_values.count(v.key) == 0 && !follows(v.key)) changes.push_back(v.key + ": (absent), the file now says " + v.value);
+      if (recorded_values.count(v.key) == 0 && !follows(v.key))
+        changes.push_back(v.key + ": (absent), the file now says " + v.value);
     }
   }
   return changes;

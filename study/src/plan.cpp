@@ -9,9 +9,10 @@ namespace haptel::study {
 
 std::vector<PlannedTrial> PlanTrials(const StudyConfig& config) {
   OrderDesign design;
-  design.kind = config.order == StudyOrder::kBalancedLatinSquare ? OrderDesignKind::kBalancedLatinSquare
-                : config.order == StudyOrder::kRandom            ? OrderDesignKind::kRandom
-                                                                 : OrderDesignKind::kFixed;
+  design.kind = config.order == StudyOrder::kBalancedLatinSquare
+                    ? OrderDesignKind::kBalancedLatinSquare
+                : config.order == StudyOrder::kRandom ? OrderDesignKind::kRandom
+                                                      : OrderDesignKind::kFixed;
   design.conditions = static_cast<int>(config.conditions.size());
   design.participants = static_cast<int>(config.participants.size());
   design.repetitions = config.repetitions;
@@ -36,7 +37,8 @@ std::vector<PlannedTrial> PlanTrials(const StudyConfig& config) {
   return plan;
 }
 
-std::vector<PlannedTrial> PlanParticipant(const StudyConfig& config, const std::string& id, int row_index) {
+std::vector<PlannedTrial> PlanParticipant(const StudyConfig& config, const std::string& id,
+                                          int row_index) {
   const int k = static_cast<int>(config.conditions.size());
   std::vector<int> order;
   switch (config.order) {
@@ -56,8 +58,8 @@ std::vector<PlannedTrial> PlanParticipant(const StudyConfig& config, const std::
   std::vector<PlannedTrial> trials;
   for (int r = 0; r < config.repetitions; ++r) {
     for (const int c : order) {
-      trials.push_back({id, static_cast<int>(trials.size()) + 1, config.conditions.at(static_cast<size_t>(c)).name,
-                        r + 1});
+      trials.push_back({id, static_cast<int>(trials.size()) + 1,
+                        config.conditions.at(static_cast<size_t>(c)).name, r + 1});
     }
   }
   return trials;

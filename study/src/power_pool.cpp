@@ -40,8 +40,8 @@ StudyConfig PowerPoolStudy(const StudyConfig& study, int pool, int rows, std::ui
   for (int i = 0; i < pool; ++i) {
     const StudyParticipant& model = study.participants.at(
         static_cast<size_t>((i / rows + i % rows) % static_cast<int>(study.participants.size())));
-    std::seed_seq seeds{static_cast<std::uint32_t>(seed & 0xffffffffu), static_cast<std::uint32_t>(seed >> 32),
-                        static_cast<std::uint32_t>(i)};
+    std::seed_seq seeds{static_cast<std::uint32_t>(seed & 0xffffffffu),
+                        static_cast<std::uint32_t>(seed >> 32), static_cast<std::uint32_t>(i)};
     std::mt19937_64 random(seeds);
     char id[16];
     std::snprintf(id, sizeof id, "S%0*d", width, i + 1);
@@ -51,6 +51,5 @@ StudyConfig PowerPoolStudy(const StudyConfig& study, int pool, int rows, std::ui
   }
   return config;
 }
-
 
 }  // namespace haptel::study

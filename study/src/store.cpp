@@ -52,10 +52,11 @@ StudyStore::StudyStore(record::Recorder& recorder, const StudyConfig& config,
     }
   }
   if (!resumed_) {
-    Stmt insert = Prepare(file, db,
-                          "INSERT INTO studies (name, file, definition, operators, design, trial_cap_s, "
-                          "created_utc, definition_form) VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
-                          "cannot insert the study");
+    Stmt insert =
+        Prepare(file, db,
+                "INSERT INTO studies (name, file, definition, operators, design, trial_cap_s, "
+                "created_utc, definition_form) VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
+                "cannot insert the study");
     Binder(file, db, insert.get())
         .Text(config.name)
         .Text(std::filesystem::absolute(config.file).string())
@@ -67,9 +68,10 @@ StudyStore::StudyStore(record::Recorder& recorder, const StudyConfig& config,
         .Text(form);
     StepDone(file, db, insert.get(), "cannot insert the study");
     id_ = sqlite3_last_insert_rowid(db);
-    Stmt condition = Prepare(file, db,
-                             "INSERT INTO study_conditions (study_id, position, name, interface) VALUES (?, ?, ?, ?)",
-                             "cannot insert a condition");
+    Stmt condition = Prepare(
+        file, db,
+        "INSERT INTO study_conditions (study_id, position, name, interface) VALUES (?, ?, ?, ?)",
+        "cannot insert a condition");
     for (size_t i = 0; i < config.conditions.size(); ++i) {
       sqlite3_reset(condition.get());
       Binder(file, db, condition.get())
@@ -79,10 +81,11 @@ StudyStore::StudyStore(record::Recorder& recorder, const StudyConfig& config,
           .Text(config.conditions[i].interface);
       StepDone(file, db, condition.get(), "cannot insert condition " + config.conditions[i].name);
     }
-    Stmt participant = Prepare(file, db,
-                               "INSERT INTO study_participants (study_id, participant, row_index, profile, "
-                               "added_utc) VALUES (?, ?, ?, ?, ?)",
-                               "cannot insert a participant");
+    Stmt participant =
+        Prepare(file, db,
+                "INSERT INTO study_participants (study_id, participant, row_index, profile, "
+                "added_utc) VALUES (?, ?, ?, ?, ?)",
+                "cannot insert a participant");
     for (size_t i = 0; i < config.participants.size(); ++i) {
       sqlite3_reset(participant.get());
       Binder(file, db, participant.get())
@@ -91,15 +94,22 @@ StudyStore::StudyStore(record::Recorder& recorder, const StudyConfig& config,
           .Int(static_cast<int64_t>(i))
           .Text(config.participants[i].profile)
           .Text(NowUtc());
-      StepDone(file, db, participant.get(), "cannot insert participant " + config.participants[i].id);
+      StepDone(file, db, participant.get(),
+               "cannot insert participant " + config.participants[i].id);
     }
-    Stmt planned = Prepare(file, db,
-                           "INSERT INTO study_plan (study_id, participant, position, condition, repetition) "
-                           "VALUES (?, ?, ?, ?, ?)",
-                           "cannot insert the plan");
+    Stmt planned =
+        Prepare(file, db,
+                "INSERT INTO study_plan (study_id, participant, position, condition, repetition) "
+                "VALUES (?, ?, ?, ?, ?)",
+                "cannot insert the plan");
     for (const PlannedTrial& t : plan) {
       sqlite3_reset(planned.get());
-      Binder(file, db, planned.get()).Int(id_).Text(t.participant).Int(t.position).Text(t.condition).Int(t.repetition);
+      Binder(file, db, planned.get())
+          .Int(id_)
+          .Text(t.participant)
+          .Int(t.position)
+          .Text(t.condition)
+          .Int(t.repetition);
       StepDone(file, db, planned.get(), "cannot insert planned trial " + Describe(t));
     }
     planned.reset();
@@ -111,27 +121,31 @@ StudyStore::StudyStore(record::Recorder& recorder, const StudyConfig& config,
     return;
   }
   txn.Commit();
-  const std::string refusal = "; a changed study is a new one: give it another name (or put the file back as it was)";
+  const std::string refusal =
+      "; a changed study is a new one: give it another name (or put the file back as it was)";
   // Resuming: the study on record is the study. Everything that defines it
   // first, each changed key named with both values.
   if (!recorded_form.empty()) {
-    const std::vector<std::string> changes = DefinitionChanges(ParseDefinition(recorded_form), definition);
+    const std::vector<std::string> changes =
+        DefinitionChanges(ParseDefinition(recorded_form), definition);
     if (!changes.empty()) {
-      constexpr size_t kNamed = 8;  // a track file rewritten changes every point: the first few say enough
+      constexpr size_t kNamed =
+          8;  // a track file rewritten changes every point: the first few say enough
       std::string named;
       bool participants = false;
       for (size_t i = 0; i < changes.size(); ++i) {
         participants = participants || changes[i].rfind("participants: ", 0) == 0;
         if (i < kNamed) named += (i == 0 ? "" : "; ") + changes[i];
       }
-      if (changes.size() > kNamed) named += "; and " + std::to_string(changes.size() - kNamed) + " more";
+      if (changes.size() > kNamed)
+        named += "; and " + std::to_string(changes.size() - kNamed) + " more";
       // The file's participants are its rows of the design; more people join
       // an open person study in the console, after them.
       const std::string hint = participants && config.operators == "person"
                                    ? " (participants who join later are added in the console)"
                                    : "";
-      throw std::runtime_error("study '" + config.name + "' in " + file.string() + " was planned with " + named +
-                               hint + refusal);
+      throw std::runtime_error("study '" + config.name + "' in " + file.string() +
+                               " was planned with " + named + hint + refusal);
     }
   }
   // Then the plan (for a study planned before its definition was kept, the
@@ -140,21 +154,22 @@ StudyStore::StudyStore(record::Recorder& recorder, const StudyConfig& config,
   const std::vector<PlannedTrial> recorded = Plan();
   std::string difference;
   if (recorded.size() < plan.size()) {
-    difference = std::to_string(recorded.size()) + " trials on record, " + std::to_string(plan.size()) +
-                 " in the file";
+    difference = std::to_string(recorded.size()) + " trials on record, " +
+                 std::to_string(plan.size()) + " in the file";
   } else {
     for (size_t i = 0; i < plan.size() && difference.empty(); ++i) {
       const PlannedTrial& a = recorded[i];
       const PlannedTrial& b = plan[i];
-      if (a.participant != b.participant || a.position != b.position || a.condition != b.condition) {
-        difference = "trial " + std::to_string(i + 1) + " is " + Describe(a) + " on record, " + Describe(b) +
-                     " in the file";
+      if (a.participant != b.participant || a.position != b.position ||
+          a.condition != b.condition) {
+        difference = "trial " + std::to_string(i + 1) + " is " + Describe(a) + " on record, " +
+                     Describe(b) + " in the file";
       }
     }
   }
   if (!difference.empty()) {
-    throw std::runtime_error("study '" + config.name + "' in " + file.string() + " was planned differently (" +
-                             difference + ")" + refusal);
+    throw std::runtime_error("study '" + config.name + "' in " + file.string() +
+                             " was planned differently (" + difference + ")" + refusal);
   }
   if (recorded_form.empty()) {
     // A study planned before the database kept definitions (schema v5 and
@@ -167,7 +182,8 @@ StudyStore::StudyStore(record::Recorder& recorder, const StudyConfig& config,
       Binder(file, db, update.get()).Text(form).Int(id_);
       StepDone(file, db, update.get(), "cannot keep the study's definition");
     }
-    Event("definition kept", "", 0, "planned before its definition was kept; the file's as of this resume");
+    Event("definition kept", "", 0,
+          "planned before its definition was kept; the file's as of this resume");
     keep.Commit();
   }
 }
@@ -175,15 +191,17 @@ StudyStore::StudyStore(record::Recorder& recorder, const StudyConfig& config,
 std::vector<std::string> StudyStore::Participants() const {
   sqlite3* db = recorder_.handle();
   const std::filesystem::path& file = recorder_.path();
-  Stmt select = Prepare(file, db, "SELECT participant FROM study_participants WHERE study_id = ? ORDER BY row_index",
-                        "cannot read the participants");
+  Stmt select = Prepare(
+      file, db, "SELECT participant FROM study_participants WHERE study_id = ? ORDER BY row_index",
+      "cannot read the participants");
   Binder(file, db, select.get()).Int(id_);
   std::vector<std::string> ids;
   while (sqlite3_step(select.get()) == SQLITE_ROW) ids.push_back(Reader(select.get()).Text());
   return ids;
 }
 
-void StudyStore::AddParticipant(const std::string& participant, const std::vector<PlannedTrial>& trials) {
+void StudyStore::AddParticipant(const std::string& participant,
+                                const std::vector<PlannedTrial>& trials) {
   recorder_.RequireInPlace("add participant " + participant);
   sqlite3* db = recorder_.handle();
   const std::filesystem::path& file = recorder_.path();
@@ -193,19 +211,30 @@ void StudyStore::AddParticipant(const std::string& participant, const std::vecto
     throw AlreadyAnswered("participant " + participant + " is in the study already");
   }
   {
-    Stmt insert = Prepare(file, db,
-                          "INSERT INTO study_participants (study_id, participant, row_index, profile, added_utc) "
-                          "VALUES (?, ?, ?, '', ?)",
-                          "cannot insert a participant");
-    Binder(file, db, insert.get()).Int(id_).Text(participant).Int(static_cast<int64_t>(ids.size())).Text(NowUtc());
+    Stmt insert = Prepare(
+        file, db,
+        "INSERT INTO study_participants (study_id, participant, row_index, profile, added_utc) "
+        "VALUES (?, ?, ?, '', ?)",
+        "cannot insert a participant");
+    Binder(file, db, insert.get())
+        .Int(id_)
+        .Text(participant)
+        .Int(static_cast<int64_t>(ids.size()))
+        .Text(NowUtc());
     StepDone(file, db, insert.get(), "cannot insert participant " + participant);
-    Stmt planned = Prepare(file, db,
-                           "INSERT INTO study_plan (study_id, participant, position, condition, repetition) "
-                           "VALUES (?, ?, ?, ?, ?)",
-                           "cannot insert the plan");
+    Stmt planned =
+        Prepare(file, db,
+                "INSERT INTO study_plan (study_id, participant, position, condition, repetition) "
+                "VALUES (?, ?, ?, ?, ?)",
+                "cannot insert the plan");
     for (const PlannedTrial& t : trials) {
       sqlite3_reset(planned.get());
-      Binder(file, db, planned.get()).Int(id_).Text(participant).Int(t.position).Text(t.condition).Int(t.repetition);
+      Binder(file, db, planned.get())
+          .Int(id_)
+          .Text(participant)
+          .Int(t.position)
+          .Text(t.condition)
+          .Int(t.repetition);
       StepDone(file, db, planned.get(), "cannot insert planned trial " + Describe(t));
     }
     Event("participant added", participant, 0, std::to_string(trials.size()) + " trials planned");
@@ -217,11 +246,12 @@ std::vector<PlannedTrial> StudyStore::Plan() const {
   sqlite3* db = recorder_.handle();
   const std::filesystem::path& file = recorder_.path();
   // Participants in the order they were added, each by position.
-  Stmt select = Prepare(file, db,
-                        "SELECT p.participant, p.position, p.condition, p.repetition FROM study_plan p "
-                        "JOIN study_participants s ON s.study_id = p.study_id AND s.participant = p.participant "
-                        "WHERE p.study_id = ? ORDER BY s.row_index, p.position",
-                        "cannot read the plan");
+  Stmt select = Prepare(
+      file, db,
+      "SELECT p.participant, p.position, p.condition, p.repetition FROM study_plan p "
+      "JOIN study_participants s ON s.study_id = p.study_id AND s.participant = p.participant "
+      "WHERE p.study_id = ? ORDER BY s.row_index, p.position",
+      "cannot read the plan");
   Binder(file, db, select.get()).Int(id_);
   std::vector<PlannedTrial> plan;
   while (sqlite3_step(select.get()) == SQLITE_ROW) {
@@ -260,12 +290,14 @@ void ReadTrialRow(Reader& r, TrialRow& t) {
 std::vector<TrialRow> StudyStore::Trials() const {
   sqlite3* db = recorder_.handle();
   const std::filesystem::path& file = recorder_.path();
-  Stmt select = Prepare(file, db,
-                        "SELECT t.participant, t.position, t.condition, t.run_id, t.lap_time_s, t.completed, "
-                        "t.obstacles, t.outcome, t.attempt, t.approach_s, t.flags FROM study_trials t JOIN study_participants s ON "
-                        "s.study_id = t.study_id AND s.participant = t.participant WHERE t.study_id = ? "
-                        "ORDER BY s.row_index, t.position",
-                        "cannot read the trials");
+  Stmt select =
+      Prepare(file, db,
+              "SELECT t.participant, t.position, t.condition, t.run_id, t.lap_time_s, t.completed, "
+              "t.obstacles, t.outcome, t.attempt, t.approach_s, t.flags FROM study_trials t JOIN "
+              "study_participants s ON "
+              "s.study_id = t.study_id AND s.participant = t.participant WHERE t.study_id = ? "
+              "ORDER BY s.row_index, t.position",
+              "cannot read the trials");
   Binder(file, db, select.get()).Int(id_);
   std::vector<TrialRow> rows;
   while (sqlite3_step(select.get()) == SQLITE_ROW) {
@@ -281,7 +313,8 @@ std::optional<PlannedTrial> StudyStore::NextTrial() const {
   const std::vector<TrialRow> done = Trials();
   for (const PlannedTrial& t : Plan()) {
     bool found = false;
-    for (const TrialRow& row : done) found = found || (row.participant == t.participant && row.position == t.position);
+    for (const TrialRow& row : done)
+      found = found || (row.participant == t.participant && row.position == t.position);
     if (!found) return t;
   }
   return std::nullopt;
@@ -295,7 +328,9 @@ int StudyStore::TrialsDone(const std::string& participant) const {
 
 std::string TrialFlags(const record::RunRecord& run) {
   std::string flags;
-  const auto add = [&flags](const std::string& what) { flags += (flags.empty() ? "" : "; ") + what; };
+  const auto add = [&flags](const std::string& what) {
+    flags += (flags.empty() ? "" : "; ") + what;
+  };
   if (run.servo_rate_short) add("servo rate short");
   if (run.physics_rate_short) add("physics rate short");
   // The counters that say the operator's loop, the link or the vehicle
@@ -330,12 +365,14 @@ record::Recorder::AlsoSave StudyStore::TrialWriter(const PlannedTrial& trial, do
     const bool completed = run.completed && std::isfinite(run.lap_time_s);
     // The thesis's rule: an unfinished lap counts as the cap.
     const double scored = completed ? std::min(run.lap_time_s, cap_s) : cap_s;
-    Stmt insert = Prepare(file, db,
-                          "INSERT INTO study_trials (study_id, participant, position, condition, run_id, "
-                          "lap_time_s, completed, obstacles, outcome, attempt, finished_utc, approach_s, flags) VALUES "
-                          "(?, ?, ?, ?, ?, ?, ?, ?, ?, 1 + (SELECT COUNT(*) FROM study_events WHERE study_id = ? "
-                          "AND kind = 'redo' AND participant = ? AND position = ?), ?, ?, ?)",
-                          "cannot prepare the trial row");
+    Stmt insert = Prepare(
+        file, db,
+        "INSERT INTO study_trials (study_id, participant, position, condition, run_id, "
+        "lap_time_s, completed, obstacles, outcome, attempt, finished_utc, approach_s, flags) "
+        "VALUES "
+        "(?, ?, ?, ?, ?, ?, ?, ?, ?, 1 + (SELECT COUNT(*) FROM study_events WHERE study_id = ? "
+        "AND kind = 'redo' AND participant = ? AND position = ?), ?, ?, ?)",
+        "cannot prepare the trial row");
     Binder(file, db, insert.get())
         .Int(study)
         .Text(trial.participant)
@@ -352,7 +389,8 @@ record::Recorder::AlsoSave StudyStore::TrialWriter(const PlannedTrial& trial, do
         .Text(NowUtc())
         .RealOrNull(run.approach_s, std::isfinite(run.approach_s))
         .Text(TrialFlags(run));
-    StepDone(file, db, insert.get(), "cannot record trial " + Describe(trial) + " (already recorded?)");
+    StepDone(file, db, insert.get(),
+             "cannot record trial " + Describe(trial) + " (already recorded?)");
   };
 }
 
@@ -363,18 +401,21 @@ bool StudyStore::Redo(const std::string& participant, int position, const std::s
   Transaction txn(file, db, "BEGIN IMMEDIATE");
   {
     // Kept as it was: the report lists what was run again, and why.
-    Stmt keep = Prepare(file, db,
-                        "INSERT INTO study_superseded_trials (study_id, participant, position, condition, run_id, "
-                        "lap_time_s, completed, obstacles, outcome, attempt, finished_utc, approach_s, flags, "
-                        "superseded_utc, why) SELECT study_id, participant, position, condition, run_id, lap_time_s, "
-                        "completed, obstacles, outcome, attempt, finished_utc, approach_s, flags, ?, ? FROM "
-                        "study_trials WHERE study_id = ? AND participant = ? AND position = ?",
-                        "cannot keep the trial taken back");
+    Stmt keep = Prepare(
+        file, db,
+        "INSERT INTO study_superseded_trials (study_id, participant, position, condition, run_id, "
+        "lap_time_s, completed, obstacles, outcome, attempt, finished_utc, approach_s, flags, "
+        "superseded_utc, why) SELECT study_id, participant, position, condition, run_id, "
+        "lap_time_s, "
+        "completed, obstacles, outcome, attempt, finished_utc, approach_s, flags, ?, ? FROM "
+        "study_trials WHERE study_id = ? AND participant = ? AND position = ?",
+        "cannot keep the trial taken back");
     Binder(file, db, keep.get()).Text(NowUtc()).Text(why).Int(id_).Text(participant).Int(position);
     StepDone(file, db, keep.get(), "cannot keep the trial taken back");
   }
-  Stmt remove = Prepare(file, db, "DELETE FROM study_trials WHERE study_id = ? AND participant = ? AND position = ?",
-                        "cannot take the trial back");
+  Stmt remove = Prepare(
+      file, db, "DELETE FROM study_trials WHERE study_id = ? AND participant = ? AND position = ?",
+      "cannot take the trial back");
   Binder(file, db, remove.get()).Int(id_).Text(participant).Int(position);
   StepDone(file, db, remove.get(), "cannot take the trial back");
   if (sqlite3_changes(db) == 0) return false;  // rolled back: nothing to redo
@@ -388,7 +429,8 @@ bool StudyStore::RedoFlaggedOnce(const PlannedTrial& trial) {
   for (const TrialRow& row : Trials()) {
     if (row.participant != trial.participant || row.position != trial.position) continue;
     if (row.flags.empty() || row.attempt > 1) return false;
-    return Redo(trial.participant, trial.position, "flagged (" + row.flags + "): run again once by itself");
+    return Redo(trial.participant, trial.position,
+                "flagged (" + row.flags + "): run again once by itself");
   }
   return false;
 }
@@ -396,11 +438,12 @@ bool StudyStore::RedoFlaggedOnce(const PlannedTrial& trial) {
 std::vector<SupersededTrial> StudyStore::Superseded() const {
   sqlite3* db = recorder_.handle();
   const std::filesystem::path& file = recorder_.path();
-  Stmt select = Prepare(file, db,
-                        "SELECT participant, position, condition, run_id, lap_time_s, completed, obstacles, outcome, "
-                        "attempt, approach_s, flags, why, superseded_utc FROM study_superseded_trials WHERE "
-                        "study_id = ? ORDER BY id",
-                        "cannot read the superseded trials");
+  Stmt select = Prepare(
+      file, db,
+      "SELECT participant, position, condition, run_id, lap_time_s, completed, obstacles, outcome, "
+      "attempt, approach_s, flags, why, superseded_utc FROM study_superseded_trials WHERE "
+      "study_id = ? ORDER BY id",
+      "cannot read the superseded trials");
   Binder(file, db, select.get()).Int(id_);
   std::vector<SupersededTrial> rows;
   while (sqlite3_step(select.get()) == SQLITE_ROW) {
@@ -418,10 +461,11 @@ bool StudyStore::Answered(const std::string& participant, const std::string& con
                           const std::string& questionnaire) const {
   sqlite3* db = recorder_.handle();
   const std::filesystem::path& file = recorder_.path();
-  Stmt select = Prepare(file, db,
-                        "SELECT COUNT(*) FROM study_answers WHERE study_id = ? AND participant = ? AND "
-                        "condition = ? AND questionnaire = ?",
-                        "cannot read the answers");
+  Stmt select =
+      Prepare(file, db,
+              "SELECT COUNT(*) FROM study_answers WHERE study_id = ? AND participant = ? AND "
+              "condition = ? AND questionnaire = ?",
+              "cannot read the answers");
   Binder(file, db, select.get()).Int(id_).Text(participant).Text(condition).Text(questionnaire);
   return sqlite3_step(select.get()) == SQLITE_ROW && sqlite3_column_int64(select.get(), 0) > 0;
 }
@@ -437,14 +481,22 @@ void StudyStore::SaveAnswers(const std::string& participant, const std::string& 
     throw AlreadyAnswered("participant " + participant + " has already answered '" + questionnaire +
                           "' for condition " + condition);
   }
-  Stmt insert = Prepare(file, db,
-                        "INSERT INTO study_answers (study_id, participant, condition, questionnaire, item, value, "
-                        "answered_utc) VALUES (?, ?, ?, ?, ?, ?, ?)",
-                        "cannot prepare the answers");
+  Stmt insert = Prepare(
+      file, db,
+      "INSERT INTO study_answers (study_id, participant, condition, questionnaire, item, value, "
+      "answered_utc) VALUES (?, ?, ?, ?, ?, ?, ?)",
+      "cannot prepare the answers");
   const std::string now = NowUtc();
   for (const auto& [item, value] : item_values) {
     sqlite3_reset(insert.get());
-    Binder(file, db, insert.get()).Int(id_).Text(participant).Text(condition).Text(questionnaire).Text(item).Text(value).Text(now);
+    Binder(file, db, insert.get())
+        .Int(id_)
+        .Text(participant)
+        .Text(condition)
+        .Text(questionnaire)
+        .Text(item)
+        .Text(value)
+        .Text(now);
     StepDone(file, db, insert.get(), "cannot record the answer to '" + item + "'");
   }
   insert.reset();
@@ -454,10 +506,11 @@ void StudyStore::SaveAnswers(const std::string& participant, const std::string& 
 std::vector<AnswerRow> StudyStore::Answers() const {
   sqlite3* db = recorder_.handle();
   const std::filesystem::path& file = recorder_.path();
-  Stmt select = Prepare(file, db,
-                        "SELECT participant, condition, questionnaire, item, value FROM study_answers WHERE "
-                        "study_id = ? ORDER BY rowid",
-                        "cannot read the answers");
+  Stmt select =
+      Prepare(file, db,
+              "SELECT participant, condition, questionnaire, item, value FROM study_answers WHERE "
+              "study_id = ? ORDER BY rowid",
+              "cannot read the answers");
   Binder(file, db, select.get()).Int(id_);
   std::vector<AnswerRow> rows;
   while (sqlite3_step(select.get()) == SQLITE_ROW) {
@@ -479,11 +532,17 @@ void StudyStore::SaveNote(const std::string& participant, int position, const st
   const std::filesystem::path& file = recorder_.path();
   Transaction txn(file, db, "BEGIN IMMEDIATE");
   {
-    Stmt insert = Prepare(file, db,
-                          "INSERT INTO study_notes (study_id, participant, position, text, noted_utc) VALUES "
-                          "(?, ?, ?, ?, ?)",
-                          "cannot prepare the note");
-    Binder(file, db, insert.get()).Int(id_).Text(participant).Int(position).Text(text).Text(NowUtc());
+    Stmt insert =
+        Prepare(file, db,
+                "INSERT INTO study_notes (study_id, participant, position, text, noted_utc) VALUES "
+                "(?, ?, ?, ?, ?)",
+                "cannot prepare the note");
+    Binder(file, db, insert.get())
+        .Int(id_)
+        .Text(participant)
+        .Int(position)
+        .Text(text)
+        .Text(NowUtc());
     StepDone(file, db, insert.get(), "cannot record the note on participant " + participant);
   }
   txn.Commit();
@@ -492,10 +551,11 @@ void StudyStore::SaveNote(const std::string& participant, int position, const st
 std::vector<NoteRow> StudyStore::Notes() const {
   sqlite3* db = recorder_.handle();
   const std::filesystem::path& file = recorder_.path();
-  Stmt select = Prepare(file, db,
-                        "SELECT participant, position, text, noted_utc FROM study_notes WHERE study_id = ? "
-                        "ORDER BY id",
-                        "cannot read the notes");
+  Stmt select =
+      Prepare(file, db,
+              "SELECT participant, position, text, noted_utc FROM study_notes WHERE study_id = ? "
+              "ORDER BY id",
+              "cannot read the notes");
   Binder(file, db, select.get()).Int(id_);
   std::vector<NoteRow> rows;
   while (sqlite3_step(select.get()) == SQLITE_ROW) {
@@ -514,7 +574,8 @@ bool StudyStore::Practised(const std::string& participant) const {
   sqlite3* db = recorder_.handle();
   const std::filesystem::path& file = recorder_.path();
   Stmt select = Prepare(file, db,
-                        "SELECT COUNT(*) FROM study_events WHERE study_id = ? AND kind = 'practice' AND participant = ?",
+                        "SELECT COUNT(*) FROM study_events WHERE study_id = ? AND kind = "
+                        "'practice' AND participant = ?",
                         "cannot read the events");
   Binder(file, db, select.get()).Int(id_).Text(participant);
   return sqlite3_step(select.get()) == SQLITE_ROW && sqlite3_column_int(select.get(), 0) > 0;
@@ -525,11 +586,18 @@ void StudyStore::Event(const std::string& kind, const std::string& participant, 
   recorder_.RequireInPlace("record the event '" + kind + "'");
   sqlite3* db = recorder_.handle();
   const std::filesystem::path& file = recorder_.path();
-  Stmt insert = Prepare(file, db,
-                        "INSERT INTO study_events (study_id, t_utc, kind, participant, position, detail) VALUES "
-                        "(?, ?, ?, ?, ?, ?)",
-                        "cannot record a study event");
-  Binder(file, db, insert.get()).Int(id_).Text(NowUtc()).Text(kind).Text(participant).Int(position).Text(detail);
+  Stmt insert = Prepare(
+      file, db,
+      "INSERT INTO study_events (study_id, t_utc, kind, participant, position, detail) VALUES "
+      "(?, ?, ?, ?, ?, ?)",
+      "cannot record a study event");
+  Binder(file, db, insert.get())
+      .Int(id_)
+      .Text(NowUtc())
+      .Text(kind)
+      .Text(participant)
+      .Int(position)
+      .Text(detail);
   StepDone(file, db, insert.get(), "cannot record the event '" + kind + "'");
 }
 

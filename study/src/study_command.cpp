@@ -14,8 +14,10 @@ int StudyPowerCommand(int argc, const char* const* argv);
 namespace {
 constexpr const char* kUsage =
     "usage: haptel study run FILE [options]          run an A/B study (--help for options)\n"
-    "       haptel study report DATABASE --study NAME  tables, statistics, plots (--help for options)\n"
-    "       haptel study power FILE [options]        participants needed: power by simulation (--help)\n";
+    "       haptel study report DATABASE --study NAME  tables, statistics, plots (--help for "
+    "options)\n"
+    "       haptel study power FILE [options]        participants needed: power by simulation "
+    "(--help)\n";
 }  // namespace
 
 int StudyCommand(int argc, const char* const* argv) {
@@ -24,7 +26,8 @@ int StudyCommand(int argc, const char* const* argv) {
   if (sub == "report") return StudyReportCommand(argc, argv);
   if (sub == "power") return StudyPowerCommand(argc, argv);
   return cli::Main({"haptel study", kUsage}, argc, argv, [&]() -> int {
-    throw UsageError(sub.empty() ? "missing command (run, report, power)" : "unknown command '" + sub + "' (run, report, power)");
+    throw UsageError(sub.empty() ? "missing command (run, report, power)"
+                                 : "unknown command '" + sub + "' (run, report, power)");
   });
 }
 

@@ -30,8 +30,8 @@
 #include "haptel/core/stop_signals.hpp"
 #include "haptel/mediator/run_command.hpp"
 #include "haptel/study/plan.hpp"
-#include "haptel/study/power_pool.hpp"
 #include "haptel/study/power.hpp"
+#include "haptel/study/power_pool.hpp"
 #include "haptel/study/report.hpp"
 #include "haptel/study/store.hpp"
 #include "haptel/study/study_command.hpp"
@@ -71,7 +71,8 @@ constexpr const char* kPowerUsage =
     "  --jobs J             trials run at the same time, one per worker process (default 2)\n"
     "  --out DIR            where the files go (default <database dir>/power-<study>/):\n"
     "                       power.csv, power.png, pool.csv and the pool's database\n"
-    "  --domain N           DDS domain id of the trials' vehicles (real time: worker w takes N + w;\n"
+    "  --domain N           DDS domain id of the trials' vehicles (real time: worker w takes N + "
+    "w;\n"
     "                       default the run configuration's)\n"
     "  --real-time          run the pool's trials in real time, each with its vehicle process\n"
     "                       (slow: for checking against the simulated-time trials)\n"
@@ -97,8 +98,9 @@ std::vector<int> ParseCounts(const std::string& text) {
       used = 0;
     }
     if (used == 0 || used != word.size() || n < 1 || n > 1000) {
-      throw UsageError("option --participants: expected a comma-separated list of counts from 1 to 1000, got '" +
-                       text + "'");
+      throw UsageError(
+          "option --participants: expected a comma-separated list of counts from 1 to 1000, got '" +
+          text + "'");
     }
     counts.push_back(n);
   }
@@ -119,7 +121,8 @@ int MaxJobs() { return static_cast<int>(2 * HardwareThreads()); }
 void CheckWritableFolder(const std::filesystem::path& out) {
   std::error_code error;
   std::filesystem::create_directories(out, error);
-  if (!error && !std::filesystem::is_directory(out, error)) error = std::make_error_code(std::errc::not_a_directory);
+  if (!error && !std::filesystem::is_directory(out, error))
+    error = std::make_error_code(std::errc::not_a_directory);
   const std::filesystem::path probe = out / (".write-check-" + std::to_string(getpid()));
   if (!error) {
     std::ofstream file(probe);
@@ -130,8 +133,9 @@ void CheckWritableFolder(const std::filesystem::path& out) {
     std::filesystem::remove(probe, ignored);
   }
   if (error) {
-    throw UsageError("option --out: cannot write into the folder " + out.string() + " (" + error.message() +
-                     "); expected a folder this user can write (default <database dir>/power-<study>)");
+    throw UsageError(
+        "option --out: cannot write into the folder " + out.string() + " (" + error.message() +
+        "); expected a folder this user can write (default <database dir>/power-<study>)");
   }
 }
 
@@ -158,14 +162,15 @@ void WriteWhole(const std::filesystem::path& file, const std::string& text) {
 /// is left, the others go on. Returns 0 when all its participants are done,
 /// 1 otherwise.
 int RunPoolShare(const StudyConfig& pool_config, const std::vector<PlannedTrial>& plan,
-                 const std::filesystem::path& pool_database, const std::string& domain, bool verbose,
-                 bool simulated_time, int worker, int jobs, const std::atomic<bool>& interrupted) {
+                 const std::filesystem::path& pool_database, const std::string& domain,
+                 bool verbose, bool simulated_time, int worker, int jobs,
+                 const std::atomic<bool>& interrupted) {
   record::Recorder recorder(pool_database);
   StudyStore store(recorder, pool_config, plan);
   const auto started = std::chrono::steady_clock::now();
   int exit_code = cli::kExitOk;
-  for (size_t i = static_cast<size_t>(worker); i < pool_config.participants.size() && !interrupted.load();
-       i += static_cast<size_t>(jobs)) {
+  for (size_t i = static_cast<size_t>(worker);
+       i < pool_config.participants.size() && !interrupted.load(); i += static_cast<size_t>(jobs)) {
     const std::string& participant = pool_config.participants[i].id;
     int faults = 0;
     for (;;) {
@@ -183,27 +188,34 @@ int RunPoolShare(const StudyConfig& pool_config, const std::vector<PlannedTrial>
       }
       if (!trial || interrupted.load()) break;
       const int experience = store.TrialsDone(participant) + (pool_config.practice ? 1 : 0);
-      const mediator::SessionSetup setup =
-          TrialSetup(pool_config, *trial, pool_database, domain, verbose, experience, simulated_time);
-      const mediator::RecordedRun run =
-          mediator::RunAndRecord(setup, recorder, interrupted, store.TrialWriter(*trial, pool_config.trial_cap_s));
+      const mediator::SessionSetup setup = TrialSetup(pool_config, *trial, pool_database, domain,
+                                                      verbose, experience, simulated_time);
+      const mediator::RecordedRun run = mediator::RunAndRecord(
+          setup, recorder, interrupted, store.TrialWriter(*trial, pool_config.trial_cap_s));
       const std::string outcome = mediator::ToString(run.result.outcome);
       if (run.run_id != 0 && FinishesTrial(outcome)) {
-        const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-        std::fprintf(stderr, "[power] %zu/%zu %s position %d %s: %s, lap %s s (run %lld, worker %d, %.0f s)\n",
-                     store.Trials().size(), plan.size(), participant.c_str(), trial->position,
-                     trial->condition.c_str(), outcome.c_str(),
-                     Fixed(run.result.record.completed ? run.result.record.lap_time_s : pool_config.trial_cap_s, 2)
-                         .c_str(),
-                     static_cast<long long>(run.run_id), worker, elapsed);
+        const double elapsed =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+        std::fprintf(
+            stderr,
+            "[power] %zu/%zu %s position %d %s: %s, lap %s s (run %lld, worker %d, %.0f s)\n",
+            store.Trials().size(), plan.size(), participant.c_str(), trial->position,
+            trial->condition.c_str(), outcome.c_str(),
+            Fixed(run.result.record.completed ? run.result.record.lap_time_s
+                                              : pool_config.trial_cap_s,
+                  2)
+                .c_str(),
+            static_cast<long long>(run.run_id), worker, elapsed);
         if (store.RedoFlaggedOnce(*trial)) {
-          std::fprintf(stderr, "[power]   flagged (%s): run again once\n", TrialFlags(run.result.record).c_str());
+          std::fprintf(stderr, "[power]   flagged (%s): run again once\n",
+                       TrialFlags(run.result.record).c_str());
         }
         continue;
       }
       if (interrupted.load()) break;
-      std::fprintf(stderr, "[power] %s position %d %s: %s: %s%s\n", participant.c_str(), trial->position,
-                   trial->condition.c_str(), outcome.c_str(), run.result.message.c_str(),
+      std::fprintf(stderr, "[power] %s position %d %s: %s: %s%s\n", participant.c_str(),
+                   trial->position, trial->condition.c_str(), outcome.c_str(),
+                   run.result.message.c_str(),
                    faults == 0 ? "; once more" : "; the participant is left out");
       if (++faults > 1) {
         exit_code = cli::kExitFailed;
@@ -228,7 +240,8 @@ int StudyPowerCommand(int argc, const char* const* argv) {
     int rows = 1;
     int pool = 0;
     int jobs = 2;
-    std::optional<int> worker;  ///< set: this process is worker N of the pool (spawned by the command itself)
+    std::optional<int>
+        worker;  ///< set: this process is worker N of the pool (spawned by the command itself)
     bool json = false;
     bool verbose = false;
     bool real_time = false;
@@ -236,11 +249,14 @@ int StudyPowerCommand(int argc, const char* const* argv) {
     std::filesystem::path out;
     std::filesystem::path pool_database;
     cli::ReadInput([&] {
-      const Args args(argc, argv, {"participants", "simulations", "pool", "seed", "jobs", "out", "domain", "worker"},
-                      {"json", "verbose", "real-time"});
+      const Args args(
+          argc, argv,
+          {"participants", "simulations", "pool", "seed", "jobs", "out", "domain", "worker"},
+          {"json", "verbose", "real-time"});
       if (args.positional().size() != 2 || args.positional()[0] != "power") {
-        throw UsageError(args.positional().size() < 2 ? "missing the study file"
-                                                       : "unexpected argument '" + args.positional()[2] + "'");
+        throw UsageError(args.positional().size() < 2
+                             ? "missing the study file"
+                             : "unexpected argument '" + args.positional()[2] + "'");
       }
       json = args.Flag("json");
       verbose = args.Flag("verbose");
@@ -249,30 +265,37 @@ int StudyPowerCommand(int argc, const char* const* argv) {
       options.seed = static_cast<std::uint64_t>(args.Int("seed", 0, 1 << 30).value_or(1));
       jobs = args.Int("jobs", 1, 1 << 20).value_or(2);
       if (jobs > MaxJobs()) {
-        throw UsageError("option --jobs: expected at most " + std::to_string(MaxJobs()) + " (twice this machine's " +
-                         std::to_string(HardwareThreads()) + " hardware threads: each job is a trial process that "
-                         "runs flat out; more only share the same processors), got " + std::to_string(jobs));
+        throw UsageError("option --jobs: expected at most " + std::to_string(MaxJobs()) +
+                         " (twice this machine's " + std::to_string(HardwareThreads()) +
+                         " hardware threads: each job is a trial process that "
+                         "runs flat out; more only share the same processors), got " +
+                         std::to_string(jobs));
       }
       worker = args.Int("worker", 0, jobs - 1);
-      if (const auto counts = args.Value("participants")) options.participant_counts = ParseCounts(*counts);
+      if (const auto counts = args.Value("participants"))
+        options.participant_counts = ParseCounts(*counts);
       const std::optional<int> pool_option = args.Int("pool", 1, 10000);
       study = LoadStudy(args.positional()[1]);
       if (study.operators != "synthetic") {
-        throw ConfigError(study.file.string() +
-                          ": key 'operators': expected synthetic for `haptel study power` (it simulates the "
-                          "participants with the file's driver profiles), got " + study.operators);
+        throw ConfigError(
+            study.file.string() +
+            ": key 'operators': expected synthetic for `haptel study power` (it simulates the "
+            "participants with the file's driver profiles), got " +
+            study.operators);
       }
       if (study.participants.empty()) {
-        throw ConfigError(study.file.string() +
-                          ": key 'participants': expected at least one simulated participant (their profiles "
-                          "are the pool's)");
+        throw ConfigError(
+            study.file.string() +
+            ": key 'participants': expected at least one simulated participant (their profiles "
+            "are the pool's)");
       }
       rows = BlockSize(study);
       for (const int n : options.participant_counts) {
         if (n % rows != 0) {
           throw UsageError("option --participants: expected multiples of " + std::to_string(rows) +
                            " (the rows of the study's " + ToString(study.order) +
-                           " design: a balanced draw takes as many from each), got " + std::to_string(n));
+                           " design: a balanced draw takes as many from each), got " +
+                           std::to_string(n));
         }
       }
       pool = pool_option.value_or(8 * rows);
@@ -288,7 +311,8 @@ int StudyPowerCommand(int argc, const char* const* argv) {
       const int base_domain = args.Int("domain", 0, 232).value_or(run_config.link.domain_id);
       if (real_time && base_domain + jobs - 1 > 232) {
         throw UsageError("option --domain: the " + std::to_string(jobs) + " workers take domains " +
-                         std::to_string(base_domain) + ".." + std::to_string(base_domain + jobs - 1) +
+                         std::to_string(base_domain) + ".." +
+                         std::to_string(base_domain + jobs - 1) +
                          ", past 232; expected a lower --domain");
       }
       if (real_time) {
@@ -296,45 +320,56 @@ int StudyPowerCommand(int argc, const char* const* argv) {
       } else if (args.Value("domain")) {
         domain = std::to_string(base_domain);
       }
-      const std::filesystem::path database = !study.database.empty() ? study.database : run_config.database;
+      const std::filesystem::path database =
+          !study.database.empty() ? study.database : run_config.database;
       out = args.Value("out").value_or((database.parent_path() / ("power-" + study.name)).string());
-      pool_database = out / ("pool-" + std::to_string(pool) + "-seed" + std::to_string(options.seed) + ".db");
+      pool_database =
+          out / ("pool-" + std::to_string(pool) + "-seed" + std::to_string(options.seed) + ".db");
       CheckWritableFolder(out);
       // The first trial set up now: a word `haptel run` refuses is bad input, before anything runs.
       try {
         TrialSetup(pool_config, plan.front(), pool_database, domain, verbose, 0, !real_time);
       } catch (const UsageError& e) {
         if (real_time || std::string(e.what()).find("--simulated-time") == std::string::npos) throw;
-        throw UsageError("the trials run in simulated time (haptel run --simulated-time), which this build's "
-                         "`haptel run` does not have (" + std::string(e.what()) + "); --real-time runs them in "
-                         "real time");
+        throw UsageError(
+            "the trials run in simulated time (haptel run --simulated-time), which this build's "
+            "`haptel run` does not have (" +
+            std::string(e.what()) +
+            "); --real-time runs them in "
+            "real time");
       }
     });
     // A worker runs every `jobs`-th participant of the pool, in order.
-    if (worker) return RunPoolShare(pool_config, plan, pool_database, domain, verbose, !real_time, *worker, jobs,
-                                    interrupted);
+    if (worker)
+      return RunPoolShare(pool_config, plan, pool_database, domain, verbose, !real_time, *worker,
+                          jobs, interrupted);
 
     // The pool's study is planned here, once; each worker process then opens
     // it again. Processes, not threads: a simulated-time trial puts its whole
     // process on its simulated clock.
     size_t done_before = 0;
     {
-      auto recorder = cli::ReadInput([&] { return std::make_unique<record::Recorder>(pool_database); });
+      auto recorder =
+          cli::ReadInput([&] { return std::make_unique<record::Recorder>(pool_database); });
       StudyStore store = cli::ReadInput([&] { return StudyStore(*recorder, pool_config, plan); });
       done_before = store.Trials().size();
     }
-    std::fprintf(stderr, "[power] %s: a pool of %d simulated participants (%d per order row, %d rows), %zu trials "
-                 "(%zu done), %s, %d at a time; database %s\n",
-                 study.name.c_str(), pool, pool / rows, rows, plan.size(), done_before,
-                 real_time ? "in real time" : "in simulated time", jobs, pool_database.c_str());
+    std::fprintf(
+        stderr,
+        "[power] %s: a pool of %d simulated participants (%d per order row, %d rows), %zu trials "
+        "(%zu done), %s, %d at a time; database %s\n",
+        study.name.c_str(), pool, pool / rows, rows, plan.size(), done_before,
+        real_time ? "in real time" : "in simulated time", jobs, pool_database.c_str());
     const auto pool_started = std::chrono::steady_clock::now();
     std::vector<std::string> worker_words;
-    for (int i = 0; i < argc; ++i) worker_words.push_back(argv[i]);  // "study", "power", FILE, options
+    for (int i = 0; i < argc; ++i)
+      worker_words.push_back(argv[i]);  // "study", "power", FILE, options
     std::vector<std::unique_ptr<ChildProcess>> workers;
     for (int w = 0; w < jobs && static_cast<size_t>(w) < pool_config.participants.size(); ++w) {
       std::vector<std::string> words = worker_words;
       words.insert(words.end(), {"--worker", std::to_string(w)});
-      workers.push_back(std::make_unique<ChildProcess>((ProgramDirectory() / "haptel").string(), words));
+      workers.push_back(
+          std::make_unique<ChildProcess>((ProgramDirectory() / "haptel").string(), words));
     }
     std::string worker_failures;
     bool stopping = false;
@@ -353,14 +388,18 @@ int StudyPowerCommand(int argc, const char* const* argv) {
         if (stopping && workers[w]->Alive()) workers[w]->Terminate(10.0);
       }
       if (code != 0) {
-        worker_failures += (worker_failures.empty() ? "" : "; ") + ("worker " + std::to_string(w) + " " +
-                                                                      workers[w]->ExitDescription());
+        worker_failures += (worker_failures.empty() ? "" : "; ") +
+                           ("worker " + std::to_string(w) + " " + workers[w]->ExitDescription());
       }
     }
-    const double pool_wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - pool_started).count();
+    const double pool_wall_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - pool_started).count();
     if (interrupted.load()) {
-      std::fprintf(stderr, "[power] interrupted: the pool's trials so far are in %s; run the same command again "
-                   "to resume\n", pool_database.c_str());
+      std::fprintf(
+          stderr,
+          "[power] interrupted: the pool's trials so far are in %s; run the same command again "
+          "to resume\n",
+          pool_database.c_str());
       return cli::kExitFailed;
     }
 
@@ -384,10 +423,11 @@ int StudyPowerCommand(int argc, const char* const* argv) {
         if (t.participant != p.id) continue;
         const auto c = std::find_if(study.conditions.begin(), study.conditions.end(),
                                     [&](const StudyCondition& s) { return s.name == t.condition; });
-        data.trials.push_back({static_cast<int>(c - study.conditions.begin()), t.position, t.lap_time_s});
-        csv << p.id << ',' << data.row << ',' << p.profile << ',' << t.position << ',' << t.condition << ','
-            << Fixed(t.lap_time_s, 3) << ',' << (t.completed ? 1 : 0) << ',' << t.obstacles << ',' << t.run_id
-            << '\n';
+        data.trials.push_back(
+            {static_cast<int>(c - study.conditions.begin()), t.position, t.lap_time_s});
+        csv << p.id << ',' << data.row << ',' << p.profile << ',' << t.position << ','
+            << t.condition << ',' << Fixed(t.lap_time_s, 3) << ',' << (t.completed ? 1 : 0) << ','
+            << t.obstacles << ',' << t.run_id << '\n';
       }
       if (data.trials.size() == planned) {
         pool_data.push_back(std::move(data));
@@ -403,87 +443,112 @@ int StudyPowerCommand(int argc, const char* const* argv) {
     }
 
     const auto analysis_started = std::chrono::steady_clock::now();
-    std::fprintf(stderr, "[power] the pool is done: %d simulations for each of %zu participant counts\n",
+    std::fprintf(stderr,
+                 "[power] the pool is done: %d simulations for each of %zu participant counts\n",
                  options.simulations, options.participant_counts.size());
     PowerResult power;
     options.stop = &interrupted;
     try {
       power = EstimatePower(pool_data, static_cast<int>(study.conditions.size()), rows, options);
     } catch (const std::invalid_argument& e) {
-      throw std::runtime_error(std::string("cannot estimate the power from the pool in ") + pool_database.string() +
-                               ": " + e.what());
+      throw std::runtime_error(std::string("cannot estimate the power from the pool in ") +
+                               pool_database.string() + ": " + e.what());
     }
     const double analysis_wall_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - analysis_started).count();
     if (power.stopped || interrupted.load()) {
-      std::fprintf(stderr, "[power] interrupted during the analysis: no file written; the pool's trials are in %s, "
-                   "and the same command runs the analysis again\n", pool_database.c_str());
+      std::fprintf(
+          stderr,
+          "[power] interrupted during the analysis: no file written; the pool's trials are in %s, "
+          "and the same command runs the analysis again\n",
+          pool_database.c_str());
       return cli::kExitFailed;
     }
 
     // The table, the CSV and the curve, each whole or not at all.
     const std::filesystem::path power_csv = out / "power.csv";
     std::ostringstream table;
-    table << "participants,simulations,friedman_power,friedman_ci_low,friedman_ci_high,lmm_power,lmm_ci_low,"
+    table << "participants,simulations,friedman_power,friedman_ci_low,friedman_ci_high,lmm_power,"
+             "lmm_ci_low,"
              "lmm_ci_high,friedman_not_analysed,lmm_not_analysed\n";
     for (const PowerPoint& p : power.points) {
       table << p.participants << ',' << p.simulations << ',' << Fixed(p.friedman_power, 4) << ','
             << Fixed(p.friedman_interval.low, 4) << ',' << Fixed(p.friedman_interval.high, 4) << ','
-            << Fixed(p.lmm_power, 4) << ',' << Fixed(p.lmm_interval.low, 4) << ',' << Fixed(p.lmm_interval.high, 4)
-            << ',' << p.friedman_not_analysed << ',' << p.lmm_not_analysed << '\n';
+            << Fixed(p.lmm_power, 4) << ',' << Fixed(p.lmm_interval.low, 4) << ','
+            << Fixed(p.lmm_interval.high, 4) << ',' << p.friedman_not_analysed << ','
+            << p.lmm_not_analysed << '\n';
     }
     const std::filesystem::path png = out / "power.png";
-    const std::filesystem::path png_part = out / "power.part.png";  // the encoder goes by the extension
-    DrawPowerCurve(power, "Power of " + study.name + " (alpha 0.05, 95 % CI; pool of " +
-                              std::to_string(power.pool_participants) + ")", png_part);
+    const std::filesystem::path png_part =
+        out / "power.part.png";  // the encoder goes by the extension
+    DrawPowerCurve(power,
+                   "Power of " + study.name + " (alpha 0.05, 95 % CI; pool of " +
+                       std::to_string(power.pool_participants) + ")",
+                   png_part);
     WriteWhole(pool_csv, csv.str());
     WriteWhole(power_csv, table.str());
     std::error_code renamed;
     std::filesystem::rename(png_part, png, renamed);
-    if (renamed) throw std::runtime_error("cannot write " + png.string() + ": " + renamed.message());
+    if (renamed)
+      throw std::runtime_error("cannot write " + png.string() + ": " + renamed.message());
 
-    std::printf("power of study %s: %d simulated participants in the pool (%d order rows), %d simulations per "
-                "count, alpha %s\n",
-                study.name.c_str(), power.pool_participants, rows, options.simulations,
-                Fixed(options.alpha, 2).c_str());
-    std::printf("  %12s  %-24s  %-24s\n", "participants", "Friedman power (95% CI)", "mixed-model power (95% CI)");
+    std::printf(
+        "power of study %s: %d simulated participants in the pool (%d order rows), %d simulations "
+        "per "
+        "count, alpha %s\n",
+        study.name.c_str(), power.pool_participants, rows, options.simulations,
+        Fixed(options.alpha, 2).c_str());
+    std::printf("  %12s  %-24s  %-24s\n", "participants", "Friedman power (95% CI)",
+                "mixed-model power (95% CI)");
     for (const PowerPoint& p : power.points) {
-      const std::string f = Fixed(p.friedman_power, 2) + " (" + Fixed(p.friedman_interval.low, 2) + "-" +
-                            Fixed(p.friedman_interval.high, 2) + ")";
+      const std::string f = Fixed(p.friedman_power, 2) + " (" + Fixed(p.friedman_interval.low, 2) +
+                            "-" + Fixed(p.friedman_interval.high, 2) + ")";
       const std::string m = Fixed(p.lmm_power, 2) + " (" + Fixed(p.lmm_interval.low, 2) + "-" +
                             Fixed(p.lmm_interval.high, 2) + ")";
       std::printf("  %12d  %-24s  %-24s\n", p.participants, f.c_str(), m.c_str());
     }
-    std::printf("  (mixed model: log(lap time) ~ condition + position + (1 | participant), Satterthwaite's F test of "
-                "condition; intervals Clopper-Pearson)\n");
+    std::printf(
+        "  (mixed model: log(lap time) ~ condition + position + (1 | participant), Satterthwaite's "
+        "F test of "
+        "condition; intervals Clopper-Pearson)\n");
     if (power.recommended_participants) {
-      std::printf("  recommended participants: %d (the smallest count whose mixed-model power reaches 80 %%)\n",
-                  *power.recommended_participants);
+      std::printf(
+          "  recommended participants: %d (the smallest count whose mixed-model power reaches 80 "
+          "%%)\n",
+          *power.recommended_participants);
     } else {
-      std::printf("  recommended participants: none of these counts reaches 80 %% mixed-model power\n");
+      std::printf(
+          "  recommended participants: none of these counts reaches 80 %% mixed-model power\n");
     }
-    std::printf("  pool: %s s of trials, analysis %s s; files: %s, %s, %s\n", Fixed(pool_wall_s, 1).c_str(),
-                Fixed(analysis_wall_s, 1).c_str(), power_csv.c_str(), png.c_str(), pool_csv.c_str());
+    std::printf("  pool: %s s of trials, analysis %s s; files: %s, %s, %s\n",
+                Fixed(pool_wall_s, 1).c_str(), Fixed(analysis_wall_s, 1).c_str(), power_csv.c_str(),
+                png.c_str(), pool_csv.c_str());
     if (json) {
-      const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+      const double wall_s =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
       std::string line = "{\"study\":" + JsonString(study.name) + ",\"power\":[";
       for (size_t i = 0; i < power.points.size(); ++i) {
         const PowerPoint& p = power.points[i];
-        line += std::string(i > 0 ? "," : "") + "{\"participants\":" + std::to_string(p.participants) +
-                ",\"friedman_power\":" + JsonNumber(p.friedman_power) +
-                ",\"friedman_ci\":[" + JsonNumber(p.friedman_interval.low) + "," +
-                JsonNumber(p.friedman_interval.high) + "],\"lmm_power\":" + JsonNumber(p.lmm_power) +
-                ",\"lmm_ci\":[" + JsonNumber(p.lmm_interval.low) + "," + JsonNumber(p.lmm_interval.high) + "]}";
+        line += std::string(i > 0 ? "," : "") +
+                "{\"participants\":" + std::to_string(p.participants) +
+                ",\"friedman_power\":" + JsonNumber(p.friedman_power) + ",\"friedman_ci\":[" +
+                JsonNumber(p.friedman_interval.low) + "," + JsonNumber(p.friedman_interval.high) +
+                "],\"lmm_power\":" + JsonNumber(p.lmm_power) + ",\"lmm_ci\":[" +
+                JsonNumber(p.lmm_interval.low) + "," + JsonNumber(p.lmm_interval.high) + "]}";
       }
       line += "],\"recommended_participants\":" +
-              (power.recommended_participants ? std::to_string(*power.recommended_participants) : "null") +
+              (power.recommended_participants ? std::to_string(*power.recommended_participants)
+                                              : "null") +
               ",\"recommended_by\":\"lmm\",\"alpha\":" + JsonNumber(options.alpha) +
               ",\"pool_participants\":" + std::to_string(power.pool_participants) +
-              ",\"pool_left_out\":" + std::to_string(left_out.size()) + ",\"rows\":" + std::to_string(rows) +
+              ",\"pool_left_out\":" + std::to_string(left_out.size()) +
+              ",\"rows\":" + std::to_string(rows) +
               ",\"simulations\":" + std::to_string(options.simulations) +
-              ",\"simulated_time\":" + (real_time ? "false" : "true") + ",\"pool_wall_s\":" + JsonNumber(pool_wall_s) +
-              ",\"wall_s\":" + JsonNumber(wall_s) + ",\"pool_database\":" + JsonString(pool_database.string()) +
-              ",\"csv\":" + JsonString(power_csv.string()) + ",\"png\":" + JsonString(png.string()) + "}";
+              ",\"simulated_time\":" + (real_time ? "false" : "true") +
+              ",\"pool_wall_s\":" + JsonNumber(pool_wall_s) + ",\"wall_s\":" + JsonNumber(wall_s) +
+              ",\"pool_database\":" + JsonString(pool_database.string()) +
+              ",\"csv\":" + JsonString(power_csv.string()) +
+              ",\"png\":" + JsonString(png.string()) + "}";
       std::printf("%s\n", line.c_str());
     }
     std::fflush(stdout);

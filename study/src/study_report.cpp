@@ -44,8 +44,9 @@ int StudyReportCommand(int argc, const char* const* argv) {
     cli::ReadInput([&] {
       const Args args(argc, argv, {"study", "out", "post-hoc"}, {"json"});
       if (args.positional().size() != 2 || args.positional()[0] != "report") {
-        throw UsageError(args.positional().size() < 2 ? "missing the database file"
-                                                       : "unexpected argument '" + args.positional()[2] + "'");
+        throw UsageError(args.positional().size() < 2
+                             ? "missing the database file"
+                             : "unexpected argument '" + args.positional()[2] + "'");
       }
       database = args.positional()[1];
       const auto study = args.Value("study");
@@ -56,7 +57,8 @@ int StudyReportCommand(int argc, const char* const* argv) {
       if (post_hoc == "wilcoxon-holm") {
         method = PostHocMethod::kWilcoxonHolm;
       } else if (post_hoc != "nemenyi") {
-        throw UsageError("option --post-hoc: expected nemenyi or wilcoxon-holm, got '" + post_hoc + "'");
+        throw UsageError("option --post-hoc: expected nemenyi or wilcoxon-holm, got '" + post_hoc +
+                         "'");
       }
       json = args.Flag("json");
     });

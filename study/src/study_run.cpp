@@ -3,12 +3,12 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <thread>
 #include <cmath>
 #include <cstdio>
 #include <map>
 #include <set>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "haptel/config/device.hpp"
@@ -18,7 +18,6 @@
 #include "haptel/core/clock.hpp"
 #include "haptel/core/json.hpp"
 #include "haptel/core/stop_signals.hpp"
-#include "haptel/view/view.hpp"
 #include "haptel/mediator/run_command.hpp"
 #include "haptel/mediator/third_person_view.hpp"
 #include "haptel/study/console.hpp"
@@ -26,6 +25,7 @@
 #include "haptel/study/store.hpp"
 #include "haptel/study/study_command.hpp"
 #include "haptel/study/study_sessions.hpp"
+#include "haptel/view/view.hpp"
 
 namespace haptel::study {
 namespace {
@@ -38,7 +38,8 @@ constexpr const char* kRunUsage =
     "unfinished trial.\n"
     "options:\n"
     "  --database FILE   SQLite file (overrides the study's and the run configuration's)\n"
-    "  --domain N        DDS domain id of the trials' vehicles (overrides the run configuration's)\n"
+    "  --domain N        DDS domain id of the trials' vehicles (overrides the run "
+    "configuration's)\n"
     "  --json            end with one JSON line: the trials and per-condition totals\n"
     "  --simulated-time  each trial in simulated time (`haptel run --simulated-time`): every\n"
     "                    part on one clock in this process, as fast as the CPU allows, the same\n"
@@ -96,16 +97,18 @@ mediator::SessionSetup TrialSetup(const StudyConfig& config, const PlannedTrial&
   if (simulated_time) words.push_back("--simulated-time");
   if (!domain.empty()) words.insert(words.end(), {"--domain", domain});
   if (condition.predict) words.insert(words.end(), {"--predict", "on"});
-  if (!config.link_profile.empty()) words.insert(words.end(), {"--link-profile", config.link_profile});
+  if (!config.link_profile.empty())
+    words.insert(words.end(), {"--link-profile", config.link_profile});
   if (!config.link_fault.empty()) words.insert(words.end(), {"--link-fault", config.link_fault});
   if (!verbose) words.push_back("--quiet");
   std::vector<const char*> argv;
   for (const std::string& w : words) argv.push_back(w.c_str());
-  mediator::SessionSetup setup =
-      mediator::RunSetupFromArgs(mediator::ParseRunArgs(static_cast<int>(argv.size()), argv.data()));
+  mediator::SessionSetup setup = mediator::RunSetupFromArgs(
+      mediator::ParseRunArgs(static_cast<int>(argv.size()), argv.data()));
   if (synthetic) {
     const StudyParticipant* p = ParticipantNamed(config, trial.participant);
-    if (p == nullptr) throw std::runtime_error("participant '" + trial.participant + "' is not in the study file");
+    if (p == nullptr)
+      throw std::runtime_error("participant '" + trial.participant + "' is not in the study file");
     setup.driver = config.profiles.at(p->profile);
     setup.driver_experience = experience;
   }
@@ -135,18 +138,32 @@ void MakePracticeLap(mediator::SessionSetup& setup, const std::string& participa
   setup.third_person = mediator::ThirdPersonProblem(setup.vehicle).empty();
 }
 
-mediator::SessionSetup PracticeSetup(const StudyConfig& config, const std::filesystem::path& database,
-                                     const std::string& domain, bool verbose, const std::string& participant) {
+mediator::SessionSetup PracticeSetup(const StudyConfig& config,
+                                     const std::filesystem::path& database,
+                                     const std::string& domain, bool verbose,
+                                     const std::string& participant) {
   const std::string cap = std::to_string(config.trial_cap_s);
-  std::vector<std::string> words = {"run",         "--config",   config.run.string(), "--track",  config.track.string(),
-                                    "--interface", "keyboard",   "--operator",        "person",   "--view",
-                                    "window",      "--lap-limit", cap,                "--database", database.string()};
+  std::vector<std::string> words = {"run",
+                                    "--config",
+                                    config.run.string(),
+                                    "--track",
+                                    config.track.string(),
+                                    "--interface",
+                                    "keyboard",
+                                    "--operator",
+                                    "person",
+                                    "--view",
+                                    "window",
+                                    "--lap-limit",
+                                    cap,
+                                    "--database",
+                                    database.string()};
   if (!domain.empty()) words.insert(words.end(), {"--domain", domain});
   if (!verbose) words.push_back("--quiet");
   std::vector<const char*> argv;
   for (const std::string& w : words) argv.push_back(w.c_str());
-  mediator::SessionSetup setup =
-      mediator::RunSetupFromArgs(mediator::ParseRunArgs(static_cast<int>(argv.size()), argv.data()));
+  mediator::SessionSetup setup = mediator::RunSetupFromArgs(
+      mediator::ParseRunArgs(static_cast<int>(argv.size()), argv.data()));
   MakePracticeLap(setup, participant);
   return setup;
 }
@@ -163,7 +180,8 @@ bool AwaitQuestionnaires(const StudyStore& store, const StudyConfig& config, Stu
     std::string pending;
     // The next participant's background, before their first trial (and
     // their practice lap).
-    if (!next_participant.empty() && !config.demographics.empty() && store.TrialsDone(next_participant) == 0 &&
+    if (!next_participant.empty() && !config.demographics.empty() &&
+        store.TrialsDone(next_participant) == 0 &&
         !store.Answered(next_participant, "", config.demographics)) {
       pending = next_participant + ": " + config.demographics + " before their first trial";
     }
@@ -172,13 +190,16 @@ bool AwaitQuestionnaires(const StudyStore& store, const StudyConfig& config, Stu
     for (const PlannedTrial& t : plan) {
       int planned = 0;
       int done = 0;
-      for (const PlannedTrial& u : plan) planned += u.participant == t.participant && u.condition == t.condition;
-      for (const TrialRow& u : trials) done += u.participant == t.participant && u.condition == t.condition;
+      for (const PlannedTrial& u : plan)
+        planned += u.participant == t.participant && u.condition == t.condition;
+      for (const TrialRow& u : trials)
+        done += u.participant == t.participant && u.condition == t.condition;
       if (done < planned) continue;
       for (const std::string& q : config.questionnaires) {
         if (!store.Answered(t.participant, t.condition, q) &&
             pending.find(t.participant + ": " + q + " after " + t.condition) == std::string::npos) {
-          pending += (pending.empty() ? "" : "; ") + t.participant + ": " + q + " after " + t.condition;
+          pending +=
+              (pending.empty() ? "" : "; ") + t.participant + ": " + q + " after " + t.condition;
         }
       }
     }
@@ -200,9 +221,11 @@ std::string Seconds(double s) {
 /// passes none today) and its vehicle's CAN bus log.
 std::string OutputFailure(const mediator::SessionResult& result) {
   std::string what;
-  if (!result.view_record_error.empty()) what = "the operator's view recording: " + result.view_record_error;
+  if (!result.view_record_error.empty())
+    what = "the operator's view recording: " + result.view_record_error;
   if (!result.can_log.error.empty()) {
-    what += (what.empty() ? "" : "; ") + std::string("the vehicle's CAN bus log: ") + result.can_log.error;
+    what += (what.empty() ? "" : "; ") + std::string("the vehicle's CAN bus log: ") +
+            result.can_log.error;
   }
   return what;
 }
@@ -236,12 +259,13 @@ int StudyRunCommand(int argc, const char* const* argv) {
         console_options.tls_key = certificate.key;
         console_options.names = certificate.names;
       }
-      want_console = args.Flag("console") || args.Value("port").has_value() || args.Value("bind").has_value() ||
-                     args.Value("tls").has_value();
+      want_console = args.Flag("console") || args.Value("port").has_value() ||
+                     args.Value("bind").has_value() || args.Value("tls").has_value();
       if (const auto d = args.Int("domain", 0, 232)) domain = std::to_string(*d);
       if (args.positional().size() != 2 || args.positional()[0] != "run") {
-        throw UsageError(args.positional().size() < 2 ? "missing the study file"
-                                                       : "unexpected argument '" + args.positional()[2] + "'");
+        throw UsageError(args.positional().size() < 2
+                             ? "missing the study file"
+                             : "unexpected argument '" + args.positional()[2] + "'");
       }
       json = args.Flag("json");
       verbose = args.Flag("verbose");
@@ -250,38 +274,46 @@ int StudyRunCommand(int argc, const char* const* argv) {
       if (simulated_time && want_console) {
         // The console's threads keep their deadlines on the process's clock,
         // which a simulated-time trial takes over.
-        throw UsageError("option --simulated-time: the console runs in real time beside the trials; run a "
-                         "simulated-time study without --console, --port, --bind and --tls");
+        throw UsageError(
+            "option --simulated-time: the console runs in real time beside the trials; run a "
+            "simulated-time study without --console, --port, --bind and --tls");
       }
       if (simulated_time && config.operators != "synthetic") {
-        throw UsageError("option --simulated-time: study '" + config.file.string() + "' is driven by people (key "
-                         "'operators: " + config.operators + "'), in real time; expected a study with "
+        throw UsageError("option --simulated-time: study '" + config.file.string() +
+                         "' is driven by people (key "
+                         "'operators: " +
+                         config.operators +
+                         "'), in real time; expected a study with "
                          "'operators: synthetic'");
       }
       // The practice lap is driven with the keys, read in the view's window.
       if (config.operators == "person" && config.practice && !view::View::DisplayAvailable()) {
-        throw ConfigError(config.file.string() +
-                          ": key 'practice': expected false when there is no display (DISPLAY is not set or "
-                          "its X server is not running): the practice lap is driven with the keyboard in the "
-                          "view's window");
+        throw ConfigError(
+            config.file.string() +
+            ": key 'practice': expected false when there is no display (DISPLAY is not set or "
+            "its X server is not running): the practice lap is driven with the keyboard in the "
+            "view's window");
       }
       if (config.operators == "synthetic" && !config.questionnaires.empty()) {
-        throw ConfigError(config.file.string() +
-                          ": key 'questionnaires': expected [] for simulated drivers (they do not answer "
-                          "questionnaires yet)");
+        throw ConfigError(
+            config.file.string() +
+            ": key 'questionnaires': expected [] for simulated drivers (they do not answer "
+            "questionnaires yet)");
       }
       for (const std::string& name : config.questionnaires) {
         questionnaires[name] = FindQuestionnaire(config.questionnaires_dir, name);
       }
       if (!config.demographics.empty()) {
-        questionnaires[config.demographics] = FindQuestionnaire(config.questionnaires_dir, config.demographics);
+        questionnaires[config.demographics] =
+            FindQuestionnaire(config.questionnaires_dir, config.demographics);
       }
       plan = PlanTrials(config);
       const RunConfig run_config = LoadRun(config.run);
       const DeviceConfig device = LoadDevice(run_config.device);
       if (device.driver == "sim") simulated_device = run_config.device.lexically_normal().string();
-      database = args.Value("database").value_or(
-          !config.database.empty() ? config.database.string() : run_config.database.string());
+      database = args.Value("database")
+                     .value_or(!config.database.empty() ? config.database.string()
+                                                        : run_config.database.string());
       // Each condition's session as its trials will ask for it, checked now:
       // one a trial cannot start (e.g. --simulated-time with a vehicle that
       // does not step in this process) is refused before the study is
@@ -303,7 +335,8 @@ int StudyRunCommand(int argc, const char* const* argv) {
     std::unique_ptr<StudyConsole> console;
     if (want_console || person) {
       console = cli::ReadInput([&] {
-        return std::make_unique<StudyConsole>(config, plan, database, questionnaires, console_options);
+        return std::make_unique<StudyConsole>(config, plan, database, questionnaires,
+                                              console_options);
       });
       std::string urls;
       for (const std::string& url : console->urls()) urls += (urls.empty() ? "" : " or ") + url;
@@ -317,20 +350,22 @@ int StudyRunCommand(int argc, const char* const* argv) {
     // People hold the haptic conditions' controls with a real device: the
     // simulated one has no arms a person can move (its trials end at the cap).
     if (person && !simulated_device.empty()) {
-      std::fprintf(stderr,
-                   "[study] note: the run's device '%s' is simulated: nobody can move its arms, so the "
-                   "haptic conditions' trials end at the cap; for people name a run file whose device is a "
-                   "real one (e.g. devices/udp.yaml, the exoskeleton's arms)\n",
-                   simulated_device.c_str());
+      std::fprintf(
+          stderr,
+          "[study] note: the run's device '%s' is simulated: nobody can move its arms, so the "
+          "haptic conditions' trials end at the cap; for people name a run file whose device is a "
+          "real one (e.g. devices/udp.yaml, the exoskeleton's arms)\n",
+          simulated_device.c_str());
     }
     const size_t done_before = store.Trials().size();
     // The console plans a new study before this store opens it: ask the one that planned.
     const bool resumed = console ? console->resumed() : store.resumed();
-    store.Event(resumed ? "resumed" : "started", "", 0,
-                std::to_string(done_before) + " of " + std::to_string(plan.size()) + " trials done");
-    std::fprintf(stderr, "[study] %s: %s, %zu trials (%zu done), %s order, database %s\n", config.name.c_str(),
-                 resumed ? "resuming" : "starting", plan.size(), done_before, ToString(config.order).c_str(),
-                 database.c_str());
+    store.Event(
+        resumed ? "resumed" : "started", "", 0,
+        std::to_string(done_before) + " of " + std::to_string(plan.size()) + " trials done");
+    std::fprintf(stderr, "[study] %s: %s, %zu trials (%zu done), %s order, database %s\n",
+                 config.name.c_str(), resumed ? "resuming" : "starting", plan.size(), done_before,
+                 ToString(config.order).c_str(), database.c_str());
 
     int exit_code = cli::kExitOk;
     std::string stopped;
@@ -342,11 +377,13 @@ int StudyRunCommand(int argc, const char* const* argv) {
     // next would fail the same way. Said whole: what the lap did, why it was
     // not saved, and where its results are; the event is best effort, the
     // database having just failed.
-    auto not_saved = [&](const mediator::RecordedRun& run, const std::string& what, const std::string& participant,
-                         int position, const std::string& condition) {
+    auto not_saved = [&](const mediator::RecordedRun& run, const std::string& what,
+                         const std::string& participant, int position,
+                         const std::string& condition) {
       unsaved_file = run.unsaved;
       stopped = what + " not saved (participant " + participant +
-                (position > 0 ? ", position " + std::to_string(position) + ", " + condition : std::string()) +
+                (position > 0 ? ", position " + std::to_string(position) + ", " + condition
+                              : std::string()) +
                 "): outcome " + mediator::ToString(run.result.outcome) + " (" + run.result.message +
                 "), but the database failed: " + run.save_error + "; " +
                 (run.unsaved.empty() ? std::string("and no file could take its results (see above)")
@@ -361,13 +398,15 @@ int StudyRunCommand(int argc, const char* const* argv) {
     /// Trials (participant, position) run again once after their vehicle was lost.
     std::set<std::pair<std::string, int>> lost_reruns;
     // A session that stops on a signal, or on the console's Abort.
-    auto run_watched = [&](const mediator::SessionSetup& setup, const record::Recorder::AlsoSave& also,
+    auto run_watched = [&](const mediator::SessionSetup& setup,
+                           const record::Recorder::AlsoSave& also,
                            const record::TrialOfRun& trial) {
       std::atomic<bool> trial_stop{false};
       std::atomic<bool> trial_over{false};
       std::thread watch([&] {
         while (!trial_over.load()) {
-          if (interrupted.load() || (console && console->abort_requested().load())) trial_stop.store(true);
+          if (interrupted.load() || (console && console->abort_requested().load()))
+            trial_stop.store(true);
           std::this_thread::sleep_for(std::chrono::milliseconds(20));
         }
       });
@@ -402,18 +441,22 @@ int StudyRunCommand(int argc, const char* const* argv) {
       if (person) {
         // The questionnaires of the conditions already driven come first;
         // then the experimenter starts the trial.
-        if (!AwaitQuestionnaires(store, config, *console, interrupted, trial->participant)) continue;
-        if (config.practice && store.TrialsDone(trial->participant) == 0 && !store.Practised(trial->participant)) {
+        if (!AwaitQuestionnaires(store, config, *console, interrupted, trial->participant))
+          continue;
+        if (config.practice && store.TrialsDone(trial->participant) == 0 &&
+            !store.Practised(trial->participant)) {
           const std::string who = "participant " + trial->participant;
-          if (!console->WaitForStart("practice lap for " + who + ": the keyboard, the camera's view", interrupted)) {
+          if (!console->WaitForStart(
+                  "practice lap for " + who + ": the keyboard, the camera's view", interrupted)) {
             continue;
           }
-          mediator::SessionSetup practice =
-              cli::ReadInput([&] { return PracticeSetup(config, database, domain, verbose, trial->participant); });
+          mediator::SessionSetup practice = cli::ReadInput(
+              [&] { return PracticeSetup(config, database, domain, verbose, trial->participant); });
           ShowPictures(practice, *console);
           // The console says what the participant sees, the chase camera too.
           console->SetLive("practice lap: " + who + " (keyboard" +
-                               (practice.third_person ? ", camera and third-person view" : "") + "; Abort ends it)",
+                               (practice.third_person ? ", camera and third-person view" : "") +
+                               "; Abort ends it)",
                            trial->participant, 0);
           std::fprintf(stderr, "[study] practice lap: %s ...\n", who.c_str());
           const mediator::RecordedRun run =
@@ -427,16 +470,20 @@ int StudyRunCommand(int argc, const char* const* argv) {
           // Aborted: not practised. Recorded as such, and offered again (the
           // experimenter may start it once more, or let it run to its end).
           if (console->TakeAbort()) {
-            store.Event("practice interrupted", trial->participant, 0,
-                        "run " + std::to_string(run.run_id) + ": aborted from the console; offered again");
-            std::fprintf(stderr, "[study]   practice aborted from the console: offered again (run %lld)\n",
+            store.Event(
+                "practice interrupted", trial->participant, 0,
+                "run " + std::to_string(run.run_id) + ": aborted from the console; offered again");
+            std::fprintf(stderr,
+                         "[study]   practice aborted from the console: offered again (run %lld)\n",
                          static_cast<long long>(run.run_id));
             continue;
           }
           store.Event("practice", trial->participant, 0,
-                      "run " + std::to_string(run.run_id) + ": " + mediator::ToString(run.result.outcome) +
+                      "run " + std::to_string(run.run_id) + ": " +
+                          mediator::ToString(run.result.outcome) +
                           (r.completed ? ", lap " + Seconds(r.lap_time_s) + " s" : ""));
-          std::fprintf(stderr, "[study]   practice: %s (run %lld)\n", mediator::ToString(run.result.outcome).c_str(),
+          std::fprintf(stderr, "[study]   practice: %s (run %lld)\n",
+                       mediator::ToString(run.result.outcome).c_str(),
                        static_cast<long long>(run.run_id));
           continue;  // the trial is offered next
         }
@@ -447,27 +494,29 @@ int StudyRunCommand(int argc, const char* const* argv) {
         }
       }
       const int experience = store.TrialsDone(trial->participant) + (config.practice ? 1 : 0);
-      mediator::SessionSetup setup =
-          cli::ReadInput([&] { return TrialSetup(config, *trial, database, domain, verbose, experience, simulated_time); });
+      mediator::SessionSetup setup = cli::ReadInput([&] {
+        return TrialSetup(config, *trial, database, domain, verbose, experience, simulated_time);
+      });
       const size_t planned = store.Plan().size();
       const size_t number = store.Trials().size() + 1;
       if (console) {
         console->SetLive("trial " + std::to_string(number) + " of " + std::to_string(planned) +
-                         ": participant " + trial->participant + ", " + trial->condition + " (position " +
-                         std::to_string(trial->position) + ")",
+                             ": participant " + trial->participant + ", " + trial->condition +
+                             " (position " + std::to_string(trial->position) + ")",
                          trial->participant, trial->position);
         StudyConsole* page = console.get();
         setup.on_live = [page](const view::Overlay& o) {
-          page->SetLiveProgress({o.lap_time_s, o.gates_passed, o.gates_total, o.obstacles_touched, o.last_contact});
+          page->SetLiveProgress(
+              {o.lap_time_s, o.gates_passed, o.gates_total, o.obstacles_touched, o.last_contact});
         };
         ShowPictures(setup, *page);
       }
-      std::fprintf(stderr, "[study] trial %zu/%zu: participant %s, position %d, %s ...\n", number, planned,
-                   trial->participant.c_str(), trial->position, trial->condition.c_str());
+      std::fprintf(stderr, "[study] trial %zu/%zu: participant %s, position %d, %s ...\n", number,
+                   planned, trial->participant.c_str(), trial->position, trial->condition.c_str());
       const int64_t trial_start_ns = RealMonotonicNs();
-      const mediator::RecordedRun run =
-          run_watched(setup, store.TrialWriter(*trial, config.trial_cap_s),
-                      {config.name, trial->participant, trial->position, trial->condition, trial->repetition});
+      const mediator::RecordedRun run = run_watched(
+          setup, store.TrialWriter(*trial, config.trial_cap_s),
+          {config.name, trial->participant, trial->position, trial->condition, trial->repetition});
       const record::RunRecord& r = run.result.record;
       // The speed-up over real time: simulated seconds against the trial's
       // whole wall-clock time (set-up, lap, recording and picture).
@@ -479,7 +528,8 @@ int StudyRunCommand(int argc, const char* const* argv) {
       }
       // Taken, not only read: the trial run again is not aborted by the same press.
       if (console && console->TakeAbort() && !interrupted.load()) {
-        store.Event("aborted", trial->participant, trial->position, "from the console; the trial is run again");
+        store.Event("aborted", trial->participant, trial->position,
+                    "from the console; the trial is run again");
         std::fprintf(stderr, "[study]   aborted from the console: the trial is run again\n");
         continue;
       }
@@ -487,13 +537,15 @@ int StudyRunCommand(int argc, const char* const* argv) {
         std::fprintf(stderr, "[study]   %s: lap %s s%s, %d obstacles, %d slips (run %lld)\n",
                      mediator::ToString(run.result.outcome).c_str(), Seconds(r.lap_time_s).c_str(),
                      r.completed ? "" : (" (scored " + Seconds(config.trial_cap_s) + " s)").c_str(),
-                     r.obstacles_touched, run.result.operator_slips, static_cast<long long>(run.run_id));
+                     r.obstacles_touched, run.result.operator_slips,
+                     static_cast<long long>(run.run_id));
         // The lap is recorded, so the trial stands; what else it should
         // have written is lost, which the experimenter must hear of.
         if (const std::string failure = OutputFailure(run.result); !failure.empty()) {
           ++outputs_failed;
           std::fprintf(stderr, "[study]   output failed: participant %s, position %d, %s: %s\n",
-                       trial->participant.c_str(), trial->position, trial->condition.c_str(), failure.c_str());
+                       trial->participant.c_str(), trial->position, trial->condition.c_str(),
+                       failure.c_str());
           store.Event("output failed", trial->participant, trial->position,
                       "run " + std::to_string(run.run_id) + ": " + failure);
         }
@@ -514,9 +566,10 @@ int StudyRunCommand(int argc, const char* const* argv) {
       if (!person && run.result.outcome == mediator::Outcome::kVehicleLost &&
           lost_reruns.insert({trial->participant, trial->position}).second) {
         store.Event("redo", trial->participant, trial->position,
-                    "run " + std::to_string(run.run_id) + ": " + run.result.message + ": run again once by itself");
-        std::fprintf(stderr, "[study]   flagged (%s): run again once (run %lld)\n", run.result.message.c_str(),
-                     static_cast<long long>(run.run_id));
+                    "run " + std::to_string(run.run_id) + ": " + run.result.message +
+                        ": run again once by itself");
+        std::fprintf(stderr, "[study]   flagged (%s): run again once (run %lld)\n",
+                     run.result.message.c_str(), static_cast<long long>(run.run_id));
         continue;
       }
       // Not a finished trial: the run is recorded, the trial is not.
@@ -546,7 +599,8 @@ int StudyRunCommand(int argc, const char* const* argv) {
     std::printf("\n");
     std::vector<std::string> participants;
     for (const PlannedTrial& t : plan) {
-      if (std::find(participants.begin(), participants.end(), t.participant) == participants.end()) {
+      if (std::find(participants.begin(), participants.end(), t.participant) ==
+          participants.end()) {
         participants.push_back(t.participant);
       }
     }
@@ -558,7 +612,8 @@ int StudyRunCommand(int argc, const char* const* argv) {
         std::string cell = "-";
         for (const TrialRow& t : trials) {
           if (t.participant != p || t.condition != c.name) continue;
-          cell = Seconds(t.lap_time_s) + (t.completed ? "" : "*") + " (" + std::to_string(t.position) + ")";
+          cell = Seconds(t.lap_time_s) + (t.completed ? "" : "*") + " (" +
+                 std::to_string(t.position) + ")";
           totals[c.name] += t.lap_time_s;
           counts[c.name] += 1;
         }
@@ -567,33 +622,41 @@ int StudyRunCommand(int argc, const char* const* argv) {
       std::printf("\n");
     }
     std::printf("  %-12s", "total");
-    for (const StudyCondition& c : config.conditions) std::printf(" %16s", Seconds(totals[c.name]).c_str());
-    std::printf("\n  (lap time s as scored, on the lap's clock from the start line, position in brackets; "
-                "* unfinished, scored at the %s s cap, also on the lap's clock)\n",
-                Seconds(config.trial_cap_s).c_str());
+    for (const StudyCondition& c : config.conditions)
+      std::printf(" %16s", Seconds(totals[c.name]).c_str());
+    std::printf(
+        "\n  (lap time s as scored, on the lap's clock from the start line, position in brackets; "
+        "* unfinished, scored at the %s s cap, also on the lap's clock)\n",
+        Seconds(config.trial_cap_s).c_str());
     const double speedup = simulated_time && wall_s > 0.0 ? simulated_s / wall_s : 0.0;
     if (speedup > 0.0) {
-      std::printf("  simulated time: %.1f s simulated in %.1f s wall-clock over the trials run now, %.1fx real "
-                  "time\n",
-                  simulated_s, wall_s, speedup);
+      std::printf(
+          "  simulated time: %.1f s simulated in %.1f s wall-clock over the trials run now, %.1fx "
+          "real "
+          "time\n",
+          simulated_s, wall_s, speedup);
     }
     if (outputs_failed > 0) {
-      std::printf("  outputs failed: %d trial%s run now lost %s CAN bus log or view recording (the laps are "
-                  "recorded; the [study] lines above say which and why)\n",
-                  outputs_failed, outputs_failed == 1 ? "" : "s", outputs_failed == 1 ? "its" : "their");
+      std::printf(
+          "  outputs failed: %d trial%s run now lost %s CAN bus log or view recording (the laps "
+          "are "
+          "recorded; the [study] lines above say which and why)\n",
+          outputs_failed, outputs_failed == 1 ? "" : "s", outputs_failed == 1 ? "its" : "their");
     }
-    std::printf("  report: haptel study report %s --study %s\n", database.c_str(), config.name.c_str());
+    std::printf("  report: haptel study report %s --study %s\n", database.c_str(),
+                config.name.c_str());
     if (json) {
-      std::string out = "{\"study\":" + JsonString(config.name) + ",\"database\":" + JsonString(database.string()) +
-                        ",\"finished\":" + (finished ? "true" : "false") +
-                        ",\"trials_planned\":" + std::to_string(plan.size()) +
-                        ",\"trials_done\":" + std::to_string(trials.size()) +
-                        ",\"trials_done_before\":" + std::to_string(done_before) +
-                        ",\"stopped\":" + JsonString(stopped) +
-                        ",\"unsaved_file\":" + JsonString(unsaved_file.string()) +
-                        ",\"speedup\":" + (speedup > 0.0 ? JsonNumber(speedup) : std::string("null")) +
-                        ",\"outputs_failed\":" + std::to_string(outputs_failed) +
-                        ",\"conditions\":[";
+      std::string out =
+          "{\"study\":" + JsonString(config.name) +
+          ",\"database\":" + JsonString(database.string()) +
+          ",\"finished\":" + (finished ? "true" : "false") +
+          ",\"trials_planned\":" + std::to_string(plan.size()) +
+          ",\"trials_done\":" + std::to_string(trials.size()) +
+          ",\"trials_done_before\":" + std::to_string(done_before) +
+          ",\"stopped\":" + JsonString(stopped) +
+          ",\"unsaved_file\":" + JsonString(unsaved_file.string()) +
+          ",\"speedup\":" + (speedup > 0.0 ? JsonNumber(speedup) : std::string("null")) +
+          ",\"outputs_failed\":" + std::to_string(outputs_failed) + ",\"conditions\":[";
       for (size_t i = 0; i < config.conditions.size(); ++i) {
         const std::string& name = config.conditions[i].name;
         if (i > 0) out += ",";
@@ -604,11 +667,14 @@ int StudyRunCommand(int argc, const char* const* argv) {
       for (size_t i = 0; i < trials.size(); ++i) {
         const TrialRow& t = trials[i];
         if (i > 0) out += ",";
-        out += "{\"participant\":" + JsonString(t.participant) + ",\"position\":" + std::to_string(t.position) +
-               ",\"condition\":" + JsonString(t.condition) + ",\"lap_time_s\":" + JsonNumber(t.lap_time_s) +
-               ",\"approach_s\":" + (std::isfinite(t.approach_s) ? JsonNumber(t.approach_s) : std::string("null")) +
+        out += "{\"participant\":" + JsonString(t.participant) +
+               ",\"position\":" + std::to_string(t.position) +
+               ",\"condition\":" + JsonString(t.condition) +
+               ",\"lap_time_s\":" + JsonNumber(t.lap_time_s) + ",\"approach_s\":" +
+               (std::isfinite(t.approach_s) ? JsonNumber(t.approach_s) : std::string("null")) +
                ",\"completed\":" + (t.completed ? "true" : "false") +
-               ",\"obstacles\":" + std::to_string(t.obstacles) + ",\"run_id\":" + std::to_string(t.run_id) + "}";
+               ",\"obstacles\":" + std::to_string(t.obstacles) +
+               ",\"run_id\":" + std::to_string(t.run_id) + "}";
       }
       out += "]}";
       std::printf("%s\n", out.c_str());

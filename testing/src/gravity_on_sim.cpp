@@ -4,7 +4,8 @@
 
 namespace haptel::haptics {
 
-GravitySampleReport SampleGravityOnSim(SimDevice& device, Side side, const ArmCalibration& calibration,
+GravitySampleReport SampleGravityOnSim(SimDevice& device, Side side,
+                                       const ArmCalibration& calibration,
                                        const GravitySamplerConfig& config, int64_t start_ns) {
   constexpr int64_t kTickNs = 1'000'000;
   GravitySampler sampler(device, side, calibration, config, [&device, side](const Vec3d& vertex) {
@@ -15,7 +16,8 @@ GravitySampleReport SampleGravityOnSim(SimDevice& device, Side side, const ArmCa
   int64_t now = start_ns;
   while (sampler.Tick(now)) now += kTickNs;
   GravitySampleReport report = sampler.report();
-  report.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  report.wall_time_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   return report;
 }
 

@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "haptel/config/paths.hpp"
 #include "haptel/app/scene_command.hpp"
+#include "haptel/config/paths.hpp"
 #include "test_env.hpp"
 
 namespace fs = std::filesystem;

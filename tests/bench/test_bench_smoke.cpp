@@ -242,7 +242,8 @@ TEST_CASE("bench passivity --smoke", "[bench][smoke]") {
   CHECK(Finite(j["cost_us_p99"]) >= 0.0);
   CHECK(!j["gain_mode"].string().empty());
   // The servo loop's own period p99, off and on, beside the bare loop's.
-  for (const char* key : {"servo_p99_us_bare", "servo_p99_us_off", "servo_p99_us_on", "servo_p99_tolerance_us"}) {
+  for (const char* key :
+       {"servo_p99_us_bare", "servo_p99_us_off", "servo_p99_us_on", "servo_p99_tolerance_us"}) {
     INFO(key);
     CHECK(Finite(j[key]) > 0.0);
   }
@@ -268,8 +269,9 @@ TEST_CASE("bench passivity --smoke", "[bench][smoke]") {
   // The grasped box: the same sweep, its own figures.
   const JsonValue& box = j["box"];
   CHECK(Finite(box["mass_kg"]) > 0.0);
-  for (const char* key : {"stable_stiffness_off", "stable_stiffness_two_port", "stable_stiffness_udp_two_port", "gain",
-                          "gain_udp", "force_rms_err_n_off"}) {
+  for (const char* key :
+       {"stable_stiffness_off", "stable_stiffness_two_port", "stable_stiffness_udp_two_port",
+        "gain", "gain_udp", "force_rms_err_n_off"}) {
     INFO("box " << key);
     CHECK(Finite(box[key]) >= 0.0);
   }
@@ -327,8 +329,8 @@ TEST_CASE("bench link --smoke", "[bench][smoke][network]") {
   CHECK(Finite(rtt["video_p50_ms"]) > 0.0);
   CHECK(Finite(rtt["secured_video_p50_ms"]) > 0.0);
   // The tail beside the median, and where the round trip goes: out and back.
-  for (const char* key : {"raw_p99_ms", "haptel_p99_ms", "p99_ratio", "out_p50_ms", "out_p99_ms", "back_p50_ms",
-                          "back_p99_ms"}) {
+  for (const char* key : {"raw_p99_ms", "haptel_p99_ms", "p99_ratio", "out_p50_ms", "out_p99_ms",
+                          "back_p50_ms", "back_p99_ms"}) {
     INFO(key);
     CHECK(Finite(rtt[key]) > 0.0);
   }
@@ -344,16 +346,20 @@ TEST_CASE("bench link --smoke", "[bench][smoke][network]") {
   RequireFiles({"link_rtt.csv", "link_laps.csv", "link_laps.png"});
 }
 
-TEST_CASE("bench link --smoke --rtt-only: the round trips alone, no lap", "[bench][smoke][network]") {
+TEST_CASE("bench link --smoke --rtt-only: the round trips alone, no lap",
+          "[bench][smoke][network]") {
   const JsonValue j =
-      Smoke("link", {"--rtt-only", "--domain", std::to_string(haptel::test::UniqueDomain(85))}).json;
+      Smoke("link", {"--rtt-only", "--domain", std::to_string(haptel::test::UniqueDomain(85))})
+          .json;
   CHECK(Finite(j["rtt"]["haptel_p99_ms"]) > 0.0);
   CHECK(Finite(j["rtt"]["raw_p99_ms"]) > 0.0);
   CHECK(j["laps"].array().empty());
 }
 
-TEST_CASE("bench fleet --smoke: the fewest and the most vehicles, each count's figures", "[bench][smoke][network]") {
-  const JsonValue j = Smoke("fleet", {"--domain", std::to_string(haptel::test::UniqueDomain(84))}).json;
+TEST_CASE("bench fleet --smoke: the fewest and the most vehicles, each count's figures",
+          "[bench][smoke][network]") {
+  const JsonValue j =
+      Smoke("fleet", {"--domain", std::to_string(haptel::test::UniqueDomain(84))}).json;
   const auto& counts = j["counts"].array();
   REQUIRE(counts.size() == 2);  // 1 and 4 of config/fleets/four.yaml
   CHECK(counts[0]["vehicles"].number() == 1);
@@ -394,12 +400,15 @@ TEST_CASE("bench fuzz --smoke", "[bench][smoke]") {
     // counted as its 10-s limit; how fast is the bench's figure, not a check.
     if (targets.back() == "console") CHECK(t["page_under_slow_clients_ms"].number() < 10000.0);
   }
-  CHECK(targets == std::vector<std::string>{"config", "scene", "udp", "servo", "can", "dds", "console"});
+  CHECK(targets ==
+        std::vector<std::string>{"config", "scene", "udp", "servo", "can", "dds", "console"});
   RequireFiles({"fuzz.csv"});
 }
 
-TEST_CASE("bench soak --smoke: one kill of each kind, each followed by its checks; nothing lost", "[bench][smoke]") {
-  const JsonValue j = Smoke("soak", {"--domain", std::to_string(haptel::test::UniqueDomain(85))}).json;
+TEST_CASE("bench soak --smoke: one kill of each kind, each followed by its checks; nothing lost",
+          "[bench][smoke]") {
+  const JsonValue j =
+      Smoke("soak", {"--domain", std::to_string(haptel::test::UniqueDomain(85))}).json;
   for (const char* kind : {"study", "run", "reader"}) {
     INFO(kind);
     CHECK(j["kills"][kind].number() >= 1);
@@ -458,7 +467,8 @@ TEST_CASE("bench video --smoke", "[bench][smoke][network]") {
     CHECK(p["frames_lost"].number() >= 0.0);
   }
   CHECK(Finite(j["adapt_s"]) >= 0.0);
-  RequireFiles({"video_codecs.csv", "video_codecs.png", "video_schedule_" + j["default"]["codec"].string() + ".csv",
+  RequireFiles({"video_codecs.csv", "video_codecs.png",
+                "video_schedule_" + j["default"]["codec"].string() + ".csv",
                 "video_schedule_" + j["default"]["codec"].string() + ".png"});
 }
 

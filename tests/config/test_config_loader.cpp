@@ -125,7 +125,8 @@ class TempDir {
  public:
   TempDir() {
     const char* env = std::getenv("HAPTEL_TEST_TMP");
-    const fs::path base = env != nullptr && *env != '\0' ? fs::path(env) : fs::temp_directory_path();
+    const fs::path base =
+        env != nullptr && *env != '\0' ? fs::path(env) : fs::temp_directory_path();
     dir_ = base / ("test_config-" + std::to_string(::getpid()));
     fs::create_directories(dir_);
   }
@@ -164,8 +165,7 @@ std::string LineTag(int line) {
 }
 
 // A valid rectangular track (14 m of centre line) with the given gate lines.
-std::string TrackText(const std::string& gates,
-                      const std::string& extra = "post_radius: 0.04\n") {
+std::string TrackText(const std::string& gates, const std::string& extra = "post_radius: 0.04\n") {
   return "name: fixture\n"
          "corridor_width: 1.0\n" +
          extra +
@@ -395,12 +395,14 @@ TEST_CASE("Shared control's section is checked strictly", "[config]") {
   const std::string shared = "name: gesture-shared\nshared_control:\n";
   SECTION("a key it does not know") {
     const fs::path file = tmp.Write("s.yaml", shared + "  horizon_s: 1.0\n  strength: 2\n");
-    CHECK_THAT(ErrorOf([&] { haptel::LoadGesture(file); }), Contains(file.string()) && Contains("strength"));
+    CHECK_THAT(ErrorOf([&] { haptel::LoadGesture(file); }),
+               Contains(file.string()) && Contains("strength"));
   }
   SECTION("a force no one could push through") {
     const fs::path file = tmp.Write("s.yaml", shared + "  max_force: 50\n");
     const std::string msg = ErrorOf([&] { haptel::LoadGesture(file); });
-    CHECK_THAT(msg, Contains(file.string()) && Contains("shared_control.max_force") && Contains("[0, 15]"));
+    CHECK_THAT(msg, Contains(file.string()) && Contains("shared_control.max_force") &&
+                        Contains("[0, 15]"));
   }
   SECTION("gesture-shared without it") {
     const fs::path file = tmp.Write("s.yaml", "name: gesture-shared\n");
@@ -412,7 +414,8 @@ TEST_CASE("Shared control's section is checked strictly", "[config]") {
   }
 }
 
-TEST_CASE("Shipped cockpit-shared interface loads: the cockpit with shared control", "[config][shipped]") {
+TEST_CASE("Shipped cockpit-shared interface loads: the cockpit with shared control",
+          "[config][shipped]") {
   const fs::path file = "config/interfaces/cockpit-shared.yaml";
   const std::string text = ReadText(file);
   const haptel::CockpitConfig c = haptel::LoadCockpit(file);
@@ -424,11 +427,13 @@ TEST_CASE("Shipped cockpit-shared interface loads: the cockpit with shared contr
   CHECK(c.shared_control.clearance == NumberIn(text, "clearance"));
   for (const char* plain : {"cockpit", "cockpit-hud", "cockpit-assisted"}) {
     INFO(plain);
-    CHECK_FALSE(haptel::LoadCockpit(fs::path("config/interfaces") / (std::string(plain) + ".yaml")).shared_control.enabled);
+    CHECK_FALSE(haptel::LoadCockpit(fs::path("config/interfaces") / (std::string(plain) + ".yaml"))
+                    .shared_control.enabled);
   }
 }
 
-TEST_CASE("A cockpit's shared control section: only on cockpit-shared, checked strictly", "[config]") {
+TEST_CASE("A cockpit's shared control section: only on cockpit-shared, checked strictly",
+          "[config]") {
   TempDir tmp;
   const std::string base = ReadText("config/interfaces/cockpit-shared.yaml");
   const std::string without = base.substr(0, base.find("shared_control:"));
@@ -441,12 +446,14 @@ TEST_CASE("A cockpit's shared control section: only on cockpit-shared, checked s
     std::string text = base;
     text.replace(text.find("name: cockpit-shared"), 20, "name: cockpit");
     const fs::path file = tmp.Write("c.yaml", text);
-    CHECK_THAT(ErrorOf([&] { haptel::LoadCockpit(file); }), Contains("'shared_control'") && Contains("cockpit-shared"));
+    CHECK_THAT(ErrorOf([&] { haptel::LoadCockpit(file); }),
+               Contains("'shared_control'") && Contains("cockpit-shared"));
   }
   SECTION("a force no one could push through") {
     const fs::path file = tmp.Write("c.yaml", without + "shared_control:\n  max_force: 50\n");
-    CHECK_THAT(ErrorOf([&] { haptel::LoadCockpit(file); }),
-               Contains(file.string()) && Contains("shared_control.max_force") && Contains("[0, 15]"));
+    CHECK_THAT(
+        ErrorOf([&] { haptel::LoadCockpit(file); }),
+        Contains(file.string()) && Contains("shared_control.max_force") && Contains("[0, 15]"));
   }
 }
 
@@ -582,13 +589,14 @@ TEST_CASE("Bad file: camera source", "[config][bad]") {
     CHECK_THAT(msg, Contains("'camera.codec'"));
   }
   SECTION("bitrate out of range or not a number") {
-    const fs::path zero = tmp.Write("zero-rate.yaml", "name: robot1\ncamera:\n  codec: h264\n  bitrate_kbps: 0\n");
+    const fs::path zero =
+        tmp.Write("zero-rate.yaml", "name: robot1\ncamera:\n  codec: h264\n  bitrate_kbps: 0\n");
     const std::string msg = ErrorOf([&] { haptel::LoadVehicle(zero); });
     CHECK_THAT(msg, Contains(zero.string()));
     CHECK_THAT(msg, Contains("'camera.bitrate_kbps'"));
     CHECK_THAT(msg, Contains("50"));
-    const fs::path word =
-        tmp.Write("word-rate.yaml", "name: robot1\ncamera:\n  codec: h264\n  bitrate_kbps: 1Mbit\n");
+    const fs::path word = tmp.Write(
+        "word-rate.yaml", "name: robot1\ncamera:\n  codec: h264\n  bitrate_kbps: 1Mbit\n");
     const std::string word_msg = ErrorOf([&] { haptel::LoadVehicle(word); });
     CHECK_THAT(word_msg, Contains(word.string()));
     CHECK_THAT(word_msg, Contains("'camera.bitrate_kbps'"));
@@ -605,8 +613,7 @@ TEST_CASE("Bad file: camera source", "[config][bad]") {
 
 // ---------------------------------------------------------------- InterfaceFile
 
-TEST_CASE("InterfaceFile resolves names and lists the choices when it cannot",
-          "[config]") {
+TEST_CASE("InterfaceFile resolves names and lists the choices when it cannot", "[config]") {
   const haptel::RunConfig r = haptel::LoadRun("config/haptel.yaml");
   const fs::path g = haptel::InterfaceFile(r, "gesture");
   CHECK(fs::is_regular_file(g));
@@ -991,8 +998,7 @@ TEST_CASE("Bad file: gate wider than the corridor", "[config][bad]") {
   }
   SECTION("posts that would touch the wall") {
     // 0.9 m between post centres plus 2 * 0.06 m of post > 1.0 m corridor.
-    const std::string text = TrackText("  - {along: 2.0, width: 0.9}\n",
-                                       "post_radius: 0.06\n");
+    const std::string text = TrackText("  - {along: 2.0, width: 0.9}\n", "post_radius: 0.06\n");
     const fs::path file = tmp.Write("gate-posts.yaml", text);
     REQUIRE_THROWS_AS(haptel::LoadTrack(file), ConfigError);
     CHECK_THAT(ErrorOf([&] { haptel::LoadTrack(file); }), Contains("'gates[0].width'"));
@@ -1055,7 +1061,9 @@ TEST_CASE("Bad file: values the loaders check beyond their type", "[config][bad]
   }
 }
 
-TEST_CASE("a FIFO (or any file that is not a regular file) is refused before it is opened, never waited on") {
+TEST_CASE(
+    "a FIFO (or any file that is not a regular file) is refused before it is opened, never waited "
+    "on") {
   // Opening a FIFO for reading waits for a writer: without the check this
   // test would hang until ctest's time-out, and so fail.
   const auto dir = haptel::test::ScratchDir("config-fifo");
@@ -1063,32 +1071,39 @@ TEST_CASE("a FIFO (or any file that is not a regular file) is refused before it 
     const auto fifo = dir / name;
     REQUIRE(mkfifo(fifo.c_str(), 0600) == 0);
   }
-  const std::string run = haptel::test::WhatOf<ConfigError>([&] { haptel::LoadRun(dir / "run.yaml"); });
+  const std::string run =
+      haptel::test::WhatOf<ConfigError>([&] { haptel::LoadRun(dir / "run.yaml"); });
   CHECK_THAT(run, Contains("run.yaml: is not a regular file") && Contains("expected a YAML file"));
   CHECK_THAT(haptel::test::WhatOf<ConfigError>([&] { haptel::LoadVehicle(dir / "run.yaml"); }),
              Contains("is not a regular file"));
-  CHECK_THAT(haptel::test::WhatOf<ConfigError>([&] { haptel::LoadSceneFile(dir / "scene.xml"); }),
-             Contains("scene.xml: is not a regular file") && Contains("expected an XML scene file"));
-  CHECK_THAT(haptel::test::WhatOf<ConfigError>([&] { haptel::LoadRun(dir); }), Contains("is a folder"));
+  CHECK_THAT(
+      haptel::test::WhatOf<ConfigError>([&] { haptel::LoadSceneFile(dir / "scene.xml"); }),
+      Contains("scene.xml: is not a regular file") && Contains("expected an XML scene file"));
+  CHECK_THAT(haptel::test::WhatOf<ConfigError>([&] { haptel::LoadRun(dir); }),
+             Contains("is a folder"));
 }
 
-TEST_CASE("a key given twice in any config file is refused, naming both lines (loaded strictly; issue 41)") {
+TEST_CASE(
+    "a key given twice in any config file is refused, naming both lines (loaded strictly; issue "
+    "41)") {
   // yaml-cpp keeps both and a lookup finds the first: the second, the one a
   // user edited last, was silently ignored.
   const auto dir = haptel::test::ScratchDir("config-duplicates");
   const auto track = haptel::test::WriteFile(
-      dir / "track.yaml", "name: t\ncorridor_width: 1.0\ncenterline: [[0,0],[4,0],[4,4],[0,4]]\n"
-                          "corridor_width: 2.0\n");
+      dir / "track.yaml",
+      "name: t\ncorridor_width: 1.0\ncenterline: [[0,0],[4,0],[4,4],[0,4]]\n"
+      "corridor_width: 2.0\n");
   CHECK_THAT(haptel::test::WhatOf<ConfigError>([&] { haptel::LoadTrack(track); }),
              Contains("track.yaml:4:1: key 'corridor_width': given twice (first at line 2)"));
   // Nested, in a list's mapping too.
   const auto gates = haptel::test::WriteFile(
-      dir / "gates.yaml", "name: t\ncorridor_width: 1.0\ncenterline: [[0,0],[4,0],[4,4],[0,4]]\n"
-                          "gates:\n  - {along: 1.0, width: 0.8, along: 2.0}\n");
+      dir / "gates.yaml",
+      "name: t\ncorridor_width: 1.0\ncenterline: [[0,0],[4,0],[4,4],[0,4]]\n"
+      "gates:\n  - {along: 1.0, width: 0.8, along: 2.0}\n");
   CHECK_THAT(haptel::test::WhatOf<ConfigError>([&] { haptel::LoadTrack(gates); }),
              Contains("gates.yaml:5:") && Contains("key 'gates[0].along': given twice"));
-  const auto vehicle = haptel::test::WriteFile(dir / "vehicle.yaml",
-                                               "name: v\ndrive:\n  max_speed: 0.3\n  max_speed: 3.0\n");
+  const auto vehicle = haptel::test::WriteFile(
+      dir / "vehicle.yaml", "name: v\ndrive:\n  max_speed: 0.3\n  max_speed: 3.0\n");
   CHECK_THAT(haptel::test::WhatOf<ConfigError>([&] { haptel::LoadVehicle(vehicle); }),
              Contains("vehicle.yaml:4:3: key 'drive.max_speed': given twice (first at line 3)"));
 }

@@ -1,7 +1,6 @@
 // The fleet file (config/fleets/*.yaml): the shipped ones load, and every
 // mistake is refused naming the file, the key and what was expected.
 #include <catch2/catch.hpp>
-
 #include <filesystem>
 #include <string>
 
@@ -59,7 +58,8 @@ TEST_CASE("the shipped fleet files load: names, files beside them, the time slic
   // Issue 30's target: three robots, then the blimp (`haptel bench fleet` takes the first 1..4).
   const haptel::FleetConfig four = haptel::LoadFleet("config/fleets/four.yaml");
   REQUIRE(four.vehicles.size() == 4);
-  for (int i = 0; i < 3; ++i) CHECK(four.vehicles[static_cast<size_t>(i)].vehicle.filename() == "sim-robot.yaml");
+  for (int i = 0; i < 3; ++i)
+    CHECK(four.vehicles[static_cast<size_t>(i)].vehicle.filename() == "sim-robot.yaml");
   CHECK(four.vehicles[3].vehicle.filename() == "sim-blimp.yaml");
   CHECK(four.vehicles[3].world.filename() == "blimp-hop.yaml");
   CHECK(four.vehicles[3].interface == "blimp-gesture");
@@ -76,36 +76,46 @@ TEST_CASE("a fleet file's mistakes are refused naming the key and what was expec
                Contains("'vehicles[1].name'") && Contains("appears twice"));
   }
   SECTION("a name that cannot be part of a topic name") {
-    CHECK_THAT(FleetError("name: f\nvehicles:\n" + Vehicle("robot a")), Contains("'vehicles[0].name'"));
+    CHECK_THAT(FleetError("name: f\nvehicles:\n" + Vehicle("robot a")),
+               Contains("'vehicles[0].name'"));
   }
   SECTION("a vehicle file that is not there") {
-    CHECK_THAT(FleetError("name: f\nvehicles:\n  - {name: a, vehicle: ../vehicles/nope.yaml, world: " + kTrack + "}\n"),
-               Contains("'vehicles[0].vehicle'") && Contains("nope.yaml"));
+    CHECK_THAT(
+        FleetError("name: f\nvehicles:\n  - {name: a, vehicle: ../vehicles/nope.yaml, world: " +
+                   kTrack + "}\n"),
+        Contains("'vehicles[0].vehicle'") && Contains("nope.yaml"));
   }
   SECTION("a missing world") {
     CHECK_THAT(FleetError("name: f\nvehicles:\n  - {name: a, vehicle: " + kRobot + "}\n"),
                Contains("'vehicles[0].world'"));
   }
   SECTION("an unknown key, in a vehicle or at the top") {
-    CHECK_THAT(FleetError("name: f\nvehicles:\n" + Vehicle("a", ", spawn: yes")), Contains("spawn"));
+    CHECK_THAT(FleetError("name: f\nvehicles:\n" + Vehicle("a", ", spawn: yes")),
+               Contains("spawn"));
     CHECK_THAT(FleetError("name: f\nslices: 3\nvehicles:\n" + Vehicle("a")), Contains("slices"));
   }
   SECTION("a time slice too short for a handover, or negative") {
-    CHECK_THAT(FleetError("name: f\nslice_s: 0.2\nvehicles:\n" + Vehicle("a")), Contains("'slice_s'"));
-    CHECK_THAT(FleetError("name: f\nslice_s: -1\nvehicles:\n" + Vehicle("a")), Contains("'slice_s'"));
+    CHECK_THAT(FleetError("name: f\nslice_s: 0.2\nvehicles:\n" + Vehicle("a")),
+               Contains("'slice_s'"));
+    CHECK_THAT(FleetError("name: f\nslice_s: -1\nvehicles:\n" + Vehicle("a")),
+               Contains("'slice_s'"));
   }
   SECTION("more vehicles than keys 1-9") {
     std::string text = "name: f\nvehicles:\n";
-    for (const char* name : {"r0", "r1", "r2", "r3", "r4", "r5", "r6", "r7", "r8", "r9"}) text += Vehicle(name);
+    for (const char* name : {"r0", "r1", "r2", "r3", "r4", "r5", "r6", "r7", "r8", "r9"})
+      text += Vehicle(name);
     CHECK_THAT(FleetError(text), Contains("'vehicles'") && Contains("1 to 9"));
   }
   SECTION("an interface that does not drive the vehicle's kind, or is none") {
-    CHECK_THAT(FleetError("name: f\nvehicles:\n" + Vehicle("a", ", interface: blimp-keys")),
-               Contains("'vehicles[0].interface'") && Contains("keyboard") && Contains("blimp-keys"));
-    CHECK_THAT(FleetError("name: f\nvehicles:\n" + Vehicle("a") + Vehicle("b", ", interface: wheel")),
-               Contains("'vehicles[1].interface'") && Contains("cockpit") && Contains("'wheel'"));
+    CHECK_THAT(
+        FleetError("name: f\nvehicles:\n" + Vehicle("a", ", interface: blimp-keys")),
+        Contains("'vehicles[0].interface'") && Contains("keyboard") && Contains("blimp-keys"));
+    CHECK_THAT(
+        FleetError("name: f\nvehicles:\n" + Vehicle("a") + Vehicle("b", ", interface: wheel")),
+        Contains("'vehicles[1].interface'") && Contains("cockpit") && Contains("'wheel'"));
   }
   SECTION("attach is a yes or no") {
-    CHECK_THAT(FleetError("name: f\nvehicles:\n" + Vehicle("a", ", attach: maybe")), Contains("'vehicles[0].attach'"));
+    CHECK_THAT(FleetError("name: f\nvehicles:\n" + Vehicle("a", ", attach: maybe")),
+               Contains("'vehicles[0].attach'"));
   }
 }

@@ -11,9 +11,9 @@
 #include <vector>
 
 #include "haptel/config/error.hpp"
-#include "haptel/geometry/mass_properties.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/scene.hpp"
+#include "haptel/geometry/mass_properties.hpp"
 #include "test_env.hpp"
 
 namespace fs = std::filesystem;

@@ -14,9 +14,9 @@
 #include <vector>
 
 #include "haptel/config/error.hpp"
-#include "haptel/geometry/mass_properties.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/scene.hpp"
+#include "haptel/geometry/mass_properties.hpp"
 #include "test_env.hpp"
 
 namespace fs = std::filesystem;
@@ -470,8 +470,9 @@ TEST_CASE("malformed scenes: one line, file:line: <element>: what was expected",
     // The same document saved as UTF-16, with its byte order mark or without.
     std::string utf16 = "\xFF\xFE";
     for (const char c : Ball(Sphere())) utf16 += std::string{c, '\0'};
-    REQUIRE_THAT(ErrorOf("utf16.xml", utf16), Contains("utf16.xml:1: <?xml>: expected a text file in UTF-8") &&
-                                                  Contains("got UTF-16") && Contains("save it as UTF-8"));
+    REQUIRE_THAT(ErrorOf("utf16.xml", utf16),
+                 Contains("utf16.xml:1: <?xml>: expected a text file in UTF-8") &&
+                     Contains("got UTF-16") && Contains("save it as UTF-8"));
     REQUIRE_THAT(ErrorOf("utf16-nobom.xml", utf16.substr(2)), Contains("got NUL bytes"));
     REQUIRE_THAT(ErrorOf("twice.xml", Document(Object("Static", "a", Sphere()) +
                                                Object("Dynamic", "a", Sphere()))),

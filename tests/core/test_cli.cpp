@@ -47,8 +47,8 @@ Ran Run(std::vector<const char*> argv, const std::function<int()>& body) {
   const int saved_err = dup(2);
   dup2(fileno(out), 1);
   dup2(fileno(err), 2);
-  ran.code = cli::Main({"prog sub", "usage: prog sub [--x N]\n"}, static_cast<int>(argv.size()), argv.data(),
-                       [&] {
+  ran.code = cli::Main({"prog sub", "usage: prog sub [--x N]\n"}, static_cast<int>(argv.size()),
+                       argv.data(), [&] {
                          ran.body_ran = true;
                          return body();
                        });
@@ -88,12 +88,14 @@ TEST_CASE("cli::Main maps what escapes the program to one line and an exit code"
     CHECK(ran.err == "prog sub: unknown option --y (see prog sub --help)\n");
   }
   SECTION("other bad input: 2") {
-    const Ran ran = Run({"sub"}, []() -> int { throw cli::InputError("a.yaml:3:1: key 'x': expected > 0"); });
+    const Ran ran =
+        Run({"sub"}, []() -> int { throw cli::InputError("a.yaml:3:1: key 'x': expected > 0"); });
     CHECK(ran.code == cli::kExitBadInput);
     CHECK(ran.err == "prog sub: a.yaml:3:1: key 'x': expected > 0\n");
   }
   SECTION("a failure while running: 1") {
-    const Ran ran = Run({"sub"}, []() -> int { throw std::runtime_error("cannot bind 127.0.0.1:80"); });
+    const Ran ran =
+        Run({"sub"}, []() -> int { throw std::runtime_error("cannot bind 127.0.0.1:80"); });
     CHECK(ran.code == cli::kExitFailed);
     CHECK(ran.err == "prog sub: cannot bind 127.0.0.1:80\n");
   }
@@ -106,10 +108,12 @@ TEST_CASE("cli::Main maps what escapes the program to one line and an exit code"
 
 TEST_CASE("cli::ReadInput turns whatever reading throws into bad input") {
   CHECK(cli::ReadInput([] { return 5; }) == 5);
-  CHECK_THROWS_AS(cli::ReadInput([]() -> int { throw std::runtime_error("yaml: bad"); }), cli::InputError);
+  CHECK_THROWS_AS(cli::ReadInput([]() -> int { throw std::runtime_error("yaml: bad"); }),
+                  cli::InputError);
   CHECK_THROWS_WITH(cli::ReadInput([]() -> int { throw std::out_of_range("stod"); }), "stod");
   // Its own kind passes through unchanged (a UsageError keeps its --help pointer).
-  CHECK_THROWS_AS(cli::ReadInput([]() -> int { throw haptel::UsageError("x"); }), haptel::UsageError);
+  CHECK_THROWS_AS(cli::ReadInput([]() -> int { throw haptel::UsageError("x"); }),
+                  haptel::UsageError);
 }
 
 TEST_CASE("The stop signals set the flag instead of ending the process") {

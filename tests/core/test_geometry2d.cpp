@@ -1,9 +1,9 @@
 // Planar geometry: closest point on a segment, segment crossing, angle wrap.
-#include "haptel/core/geometry2d.hpp"
-
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <numbers>
+
+#include "haptel/core/geometry2d.hpp"
 
 using haptel::Segment2;
 using haptel::Vec2;

@@ -1,10 +1,10 @@
 // Histogram: fixed bins, overflow bin, percentiles at bin resolution.
-#include "haptel/core/histogram.hpp"
-
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+
+#include "haptel/core/histogram.hpp"
 
 using haptel::Histogram;
 

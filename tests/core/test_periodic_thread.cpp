@@ -1,7 +1,5 @@
 // PeriodicThread: calls the tick repeatedly, stops cleanly, counts itself.
 // Behaviour only: waits are generous loops, never rate or jitter bounds.
-#include "haptel/core/periodic_thread.hpp"
-
 #include <pthread.h>
 
 #include <algorithm>
@@ -16,6 +14,7 @@
 #include <thread>
 
 #include "haptel/core/loop_meter.hpp"
+#include "haptel/core/periodic_thread.hpp"
 
 using haptel::PeriodicThread;
 
@@ -199,7 +198,8 @@ TEST_CASE(
   CHECK(loop.StopWithin(0.0));  // already stopped
 }
 
-TEST_CASE("PeriodicThread: nice_steps lowers the loop's own thread, not the thread that made it", "[periodic]") {
+TEST_CASE("PeriodicThread: nice_steps lowers the loop's own thread, not the thread that made it",
+          "[periodic]") {
   // A background loop (the video's) yields the CPU to the link and control
   // threads; the creator, the control loop's owner, keeps its priority.
   const int creator_nice = haptel::ThreadNice();

@@ -160,7 +160,8 @@ TEST_CASE("Seqlock: concurrent readers never see a torn or older value", "[seqlo
   CHECK(lock.Load().ints[0] == kStores);
 }
 
-TEST_CASE("Seqlock: TryLoad gives up on a store held in progress and keeps the caller's value", "[seqlock]") {
+TEST_CASE("Seqlock: TryLoad gives up on a store held in progress and keeps the caller's value",
+          "[seqlock]") {
   haptel::Seqlock<Sample> lock(MakeSample(3));
   Sample out = MakeSample(9);
   REQUIRE(lock.TryLoad(out, 1));

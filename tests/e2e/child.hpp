@@ -24,10 +24,12 @@ class Child : public ChildProcess {
 /// Pumps `child` until its stderr contains `text` (at most `timeout_s`;
 /// bounds a wait, asserts no timing). False if it never did.
 inline bool WaitForErr(Child& child, const std::string& text, double timeout_s) {
-  return WaitFor([&] {
-    child.Pump();
-    return child.err().find(text) != std::string::npos;
-  }, timeout_s);
+  return WaitFor(
+      [&] {
+        child.Pump();
+        return child.err().find(text) != std::string::npos;
+      },
+      timeout_s);
 }
 
 /// True once a progress line of `err` shows a command round trip: the vehicle
@@ -40,16 +42,19 @@ inline bool VehicleAnswered(const std::string& err) {
 
 /// Pumps `child` until VehicleAnswered (at most `timeout_s`).
 inline bool WaitForVehicle(Child& child, double timeout_s) {
-  return WaitFor([&] {
-    child.Pump();
-    return VehicleAnswered(child.err());
-  }, timeout_s);
+  return WaitFor(
+      [&] {
+        child.Pump();
+        return VehicleAnswered(child.err());
+      },
+      timeout_s);
 }
 
 /// Starts every program at once, each argv[0] its program. Each start costs
 /// about half a second of CPU loading shared libraries, so cases that only
 /// check a one-line error start side by side instead of one after another.
-inline std::vector<std::unique_ptr<Child>> StartAll(const std::vector<std::vector<std::string>>& argvs) {
+inline std::vector<std::unique_ptr<Child>> StartAll(
+    const std::vector<std::vector<std::string>>& argvs) {
   std::vector<std::unique_ptr<Child>> children;
   children.reserve(argvs.size());
   for (const auto& argv : argvs) children.push_back(std::make_unique<Child>(argv));
@@ -57,6 +62,8 @@ inline std::vector<std::unique_ptr<Child>> StartAll(const std::vector<std::vecto
 }
 
 /// Value of a top-level key in a flat JSON object line (numbers, bools, strings).
-inline std::string JsonField(const std::string& json, const std::string& key) { return JsonFieldOf(json, key); }
+inline std::string JsonField(const std::string& json, const std::string& key) {
+  return JsonFieldOf(json, key);
+}
 
 }  // namespace haptel::test

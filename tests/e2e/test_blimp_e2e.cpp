@@ -34,7 +34,8 @@ namespace {
 std::string Bin(const std::string& name) { return (test::BinDir() / name).string(); }
 
 /// Every channel within a quarter µs (the Maestro's resolution) of `want`.
-bool PulsesAre(const std::array<double, kBlimpChannels>& have, const std::array<double, kBlimpChannels>& want) {
+bool PulsesAre(const std::array<double, kBlimpChannels>& have,
+               const std::array<double, kBlimpChannels>& want) {
   for (size_t i = 0; i < have.size(); ++i) {
     if (std::abs(have[i] - want[i]) > 0.26) return false;
   }
@@ -43,14 +44,16 @@ bool PulsesAre(const std::array<double, kBlimpChannels>& have, const std::array<
 
 }  // namespace
 
-TEST_CASE("a blimp hop over DDS through the Maestro adapter and a pty: completed, the JSON and the database "
-          "name the vehicle and the interface") {
+TEST_CASE(
+    "a blimp hop over DDS through the Maestro adapter and a pty: completed, the JSON and the "
+    "database "
+    "name the vehicle and the interface") {
   const auto dir = test::ScratchDir("e2e-blimp");
   const auto db = dir / "runs.db";
   Child haptel({Bin("haptel"), "run", "--config", "config/blimp.yaml", "--vehicle",
-                "config/vehicles/sim-blimp-maestro.yaml", "--track", "config/tracks/blimp-hop.yaml", "--json",
-                "--quiet", "--domain", std::to_string(test::UniqueDomain(71)), "--database", db.string(),
-                "--vehicle-timeout", "5"});
+                "config/vehicles/sim-blimp-maestro.yaml", "--track", "config/tracks/blimp-hop.yaml",
+                "--json", "--quiet", "--domain", std::to_string(test::UniqueDomain(71)),
+                "--database", db.string(), "--vehicle-timeout", "5"});
   const int code = haptel.Wait(300.0);
   INFO("stdout:\n" << haptel.out() << "\nstderr:\n" << haptel.err());
   REQUIRE(code == 0);
@@ -87,13 +90,16 @@ TEST_CASE("a blimp hop over DDS through the Maestro adapter and a pty: completed
   CHECK_FALSE(runs[0].path.empty());
 }
 
-TEST_CASE("the blimp's hop at 400 ms each way, the pilot flying the predicted blimp: completed, prediction "
-          "and its error recorded") {
+TEST_CASE(
+    "the blimp's hop at 400 ms each way, the pilot flying the predicted blimp: completed, "
+    "prediction "
+    "and its error recorded") {
   const auto dir = test::ScratchDir("e2e-blimp-predict");
   const auto db = dir / "runs.db";
-  Child haptel({Bin("haptel"), "run", "--config", "config/blimp.yaml", "--track", "config/tracks/blimp-hop.yaml",
-                "--link-fault", "delay=400ms", "--predict", "on", "--json", "--quiet", "--domain",
-                std::to_string(test::UniqueDomain(77)), "--database", db.string(), "--vehicle-timeout", "5"});
+  Child haptel({Bin("haptel"), "run", "--config", "config/blimp.yaml", "--track",
+                "config/tracks/blimp-hop.yaml", "--link-fault", "delay=400ms", "--predict", "on",
+                "--json", "--quiet", "--domain", std::to_string(test::UniqueDomain(77)),
+                "--database", db.string(), "--vehicle-timeout", "5"});
   const int code = haptel.Wait(300.0);
   INFO("stdout:\n" << haptel.out() << "\nstderr:\n" << haptel.err());
   REQUIRE(code == 0);
@@ -116,8 +122,10 @@ TEST_CASE("the blimp's hop at 400 ms each way, the pilot flying the predicted bl
   CHECK(runs[0].prediction_error_m_p95 >= 0.0);
 }
 
-TEST_CASE("haptel-vehicle on a pty: the commanded pulses on all seven channels, then neutral from its own "
-          "watchdog once the commands stop") {
+TEST_CASE(
+    "haptel-vehicle on a pty: the commanded pulses on all seven channels, then neutral from its "
+    "own "
+    "watchdog once the commands stop") {
   const VehicleConfig config = LoadVehicle("config/vehicles/blimp-maestro.yaml");
   REQUIRE(config.servo.protocol == ServoProtocol::kMaestro);
   REQUIRE(config.servo.crc);
@@ -131,12 +139,14 @@ TEST_CASE("haptel-vehicle on a pty: the commanded pulses on all seven channels, 
 
   const int domain = test::UniqueDomain(73);
   const std::string name = "blimp-e2e";
-  Child vehicle({Bin("haptel-vehicle"), "--config", "config/vehicles/blimp-maestro.yaml", "--serial-port",
-                 pty.slave_path(), "--domain", std::to_string(domain), "--name", name});
+  Child vehicle({Bin("haptel-vehicle"), "--config", "config/vehicles/blimp-maestro.yaml",
+                 "--serial-port", pty.slave_path(), "--domain", std::to_string(domain), "--name",
+                 name});
   LinkConfig link = config.link;
   link.domain_id = domain;
   link::Participant participant(link, "test-operator");
-  link::BlimpCommandWriter commands(participant, link::TopicName(name, "command"), link::Profile::kCommand);
+  link::BlimpCommandWriter commands(participant, link::TopicName(name, "command"),
+                                    link::Profile::kCommand);
 
   const auto now_s = [] { return NsToS(MonotonicNs()); };
   const auto pump_until = [&](double timeout_s, const auto& done) {
@@ -191,9 +201,10 @@ TEST_CASE("haptel-vehicle on a pty: the commanded pulses on all seven channels, 
     }
     if (reached && now_s() > sent_after_reached_until) break;
   }
-  INFO("pulses: " << controller.pulse_us()[0] << " " << controller.pulse_us()[1] << " " << controller.pulse_us()[2]
-                  << " " << controller.pulse_us()[3] << " " << controller.pulse_us()[4] << " "
-                  << controller.pulse_us()[5] << " " << controller.pulse_us()[6]);
+  INFO("pulses: " << controller.pulse_us()[0] << " " << controller.pulse_us()[1] << " "
+                  << controller.pulse_us()[2] << " " << controller.pulse_us()[3] << " "
+                  << controller.pulse_us()[4] << " " << controller.pulse_us()[5] << " "
+                  << controller.pulse_us()[6]);
   REQUIRE(reached);
   CHECK(PulsesAre(controller.pulse_us(), commanded));  // held while the commands come
   CHECK(controller.pulse_us()[5] < neutral[5]);        // pan is reversed on this blimp
@@ -201,8 +212,9 @@ TEST_CASE("haptel-vehicle on a pty: the commanded pulses on all seven channels, 
   // The commands stop: the node's watchdog sends every channel to neutral.
   REQUIRE(pump_until(5.0, [&] { return PulsesAre(controller.pulse_us(), neutral); }));
   const double neutral_after_s = now_s() - last_sent_s;
-  std::printf("haptel-vehicle on a pty: neutral pulses %.0f ms after the last command (watchdog %.0f ms)\n",
-              neutral_after_s * 1e3, config.watchdog_timeout_s * 1e3);
+  std::printf(
+      "haptel-vehicle on a pty: neutral pulses %.0f ms after the last command (watchdog %.0f ms)\n",
+      neutral_after_s * 1e3, config.watchdog_timeout_s * 1e3);
   // The node's watchdog (0.2 s), not the controller's (60 s here): the
   // time on the wire is measured and printed, not asserted (a loaded
   // machine adds latency).
@@ -220,17 +232,21 @@ TEST_CASE("haptel-vehicle on a pty: the commanded pulses on all seven channels, 
   CHECK(ended == "exited with code 0");
 }
 
-TEST_CASE("a Maestro that starts reporting a CRC error at every poll mid-flight ends the run as vehicle lost, "
-          "naming the error; the vehicle holds neutral") {
+TEST_CASE(
+    "a Maestro that starts reporting a CRC error at every poll mid-flight ends the run as vehicle "
+    "lost, "
+    "naming the error; the vehicle holds neutral") {
   const VehicleConfig config = LoadVehicle("config/vehicles/blimp-maestro.yaml");
   REQUIRE(config.servo.crc);
   servo::PtyPair pty;
-  test::FakeMaestro maestro(pty.TakeMaster(), config.servo.crc, test::FakeMaestro::Manner::kHealthy);
+  test::FakeMaestro maestro(pty.TakeMaster(), config.servo.crc,
+                            test::FakeMaestro::Manner::kHealthy);
   const int domain = test::UniqueDomain(75);
   const std::string name = "blimp-crc";
   const auto dir = test::ScratchDir("e2e-blimp-crc");
-  Child vehicle({Bin("haptel-vehicle"), "--config", "config/vehicles/blimp-maestro.yaml", "--serial-port",
-                 pty.slave_path(), "--domain", std::to_string(domain), "--name", name});
+  Child vehicle({Bin("haptel-vehicle"), "--config", "config/vehicles/blimp-maestro.yaml",
+                 "--serial-port", pty.slave_path(), "--domain", std::to_string(domain), "--name",
+                 name});
   const auto pump_until = [&](double timeout_s, const auto& done) {
     return test::WaitFor(
         [&] {
@@ -240,12 +256,31 @@ TEST_CASE("a Maestro that starts reporting a CRC error at every poll mid-flight 
         },
         timeout_s);
   };
-  REQUIRE(pump_until(30.0, [&] { return vehicle.err().find(" up on domain") != std::string::npos; }));
+  REQUIRE(
+      pump_until(30.0, [&] { return vehicle.err().find(" up on domain") != std::string::npos; }));
 
-  Child run({Bin("haptel"), "run", "--config", "config/blimp.yaml", "--attach", "--vehicle",
-             "config/vehicles/blimp-maestro.yaml", "--vehicle-name", name, "--track", "config/tracks/blimp-hop.yaml",
-             "--operator", "auto", "--view", "none", "--json", "--domain", std::to_string(domain), "--database",
-             (dir / "runs.db").string(), "--vehicle-timeout", "5"});
+  Child run({Bin("haptel"),
+             "run",
+             "--config",
+             "config/blimp.yaml",
+             "--attach",
+             "--vehicle",
+             "config/vehicles/blimp-maestro.yaml",
+             "--vehicle-name",
+             name,
+             "--track",
+             "config/tracks/blimp-hop.yaml",
+             "--operator",
+             "auto",
+             "--view",
+             "none",
+             "--json",
+             "--domain",
+             std::to_string(domain),
+             "--database",
+             (dir / "runs.db").string(),
+             "--vehicle-timeout",
+             "5"});
   // The flight is under way (its first progress line), and the controller healthy until now.
   REQUIRE(pump_until(60.0, [&] {
     run.Pump();
@@ -256,14 +291,17 @@ TEST_CASE("a Maestro that starts reporting a CRC error at every poll mid-flight 
   REQUIRE(pump_until(60.0, [&] { return !run.Alive(); }));
   run.Wait(5.0);
   vehicle.Pump();
-  INFO("run stdout:\n" << run.out() << "\nrun stderr:\n" << run.err() << "\nvehicle stderr:\n" << vehicle.err());
+  INFO("run stdout:\n"
+       << run.out() << "\nrun stderr:\n"
+       << run.err() << "\nvehicle stderr:\n"
+       << vehicle.err());
   CHECK(run.ExitDescription() == "exited with code 3");
   const std::string json = run.LastLine();
   REQUIRE(json.front() == '{');
   CHECK(JsonField(json, "outcome") == "vehicle lost");
   CHECK_THAT(JsonField(json, "message"),
-             Catch::Contains("vehicle '" + name + "' stopped itself: servo controller on " + pty.slave_path() +
-                             " cannot be trusted") &&
+             Catch::Contains("vehicle '" + name + "' stopped itself: servo controller on " +
+                             pty.slave_path() + " cannot be trusted") &&
                  Catch::Contains("CRC error (register 0x0008)"));
   CHECK(JsonField(json, "controller_errors") == "8");
   {  // and the database keeps them beside the run
@@ -274,10 +312,12 @@ TEST_CASE("a Maestro that starts reporting a CRC error at every poll mid-flight 
   }
   CHECK_THAT(run.out(), Catch::Contains("servo controller errors: CRC error (register 0x0008)"));
   // The vehicle says so too, and holds every channel at neutral whatever came.
-  REQUIRE(pump_until(10.0, [&] { return vehicle.err().find("the vehicle stopped itself") != std::string::npos; }));
+  REQUIRE(pump_until(
+      10.0, [&] { return vehicle.err().find("the vehicle stopped itself") != std::string::npos; }));
   const std::array<double, kBlimpChannels> neutral = servo::NeutralPulses(config.servo);
   std::array<double, kBlimpChannels> wire{};
-  for (int i = 0; i < kBlimpChannels; ++i) wire[i] = maestro.output_us(config.servo.channels[i].channel);
+  for (int i = 0; i < kBlimpChannels; ++i)
+    wire[i] = maestro.output_us(config.servo.channels[i].channel);
   CHECK(PulsesAre(wire, neutral));
   CHECK(vehicle.Terminate(5.0) == "exited with code 0");
 }

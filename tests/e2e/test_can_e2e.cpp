@@ -7,8 +7,8 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
-#include <catch2/catch.hpp>
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
@@ -63,12 +63,15 @@ long long NumberIn(const std::string& object, const std::string& key) {
 
 }  // namespace
 
-TEST_CASE("a lap through the CAN adapter: the JSON and the database name the kind, the candump log shows the bus") {
+TEST_CASE(
+    "a lap through the CAN adapter: the JSON and the database name the kind, the candump log shows "
+    "the bus") {
   const auto dir = test::ScratchDir("e2e-can");
   const auto vehicle = CanVehicleFile(dir);
   const auto db = dir / "runs.db";
-  Child haptel({CanBin("haptel"), "run", "--vehicle", vehicle.string(), "--track", "config/tracks/test-short.yaml",
-                "--json", "--quiet", "--domain", std::to_string(test::UniqueDomain(61)), "--database", db.string(),
+  Child haptel({CanBin("haptel"), "run", "--vehicle", vehicle.string(), "--track",
+                "config/tracks/test-short.yaml", "--json", "--quiet", "--domain",
+                std::to_string(test::UniqueDomain(61)), "--database", db.string(),
                 "--vehicle-timeout", "5"});
   const int code = haptel.Wait(120.0);
   INFO("stdout:\n" << haptel.out() << "\nstderr:\n" << haptel.err());
@@ -118,17 +121,19 @@ TEST_CASE("a lap through the CAN adapter: the JSON and the database name the kin
   CHECK(haptel.out().find("vehicle's CAN bus log " + logs[0].string()) != std::string::npos);
 }
 
-TEST_CASE("the CAN log on a full disk: both programs say so once, the summary and the JSON name it, exit 5") {
+TEST_CASE(
+    "the CAN log on a full disk: both programs say so once, the summary and the JSON name it, exit "
+    "5") {
   const auto dir = test::ScratchDir("e2e-can-full");
   const auto vehicle_file = CanVehicleFile(dir);
   const std::string name = "canfull";
   // A full disk without root (the log names the vehicle may take link to /dev/full).
   const auto can_dir = dir / "can";
   test::CanLogsOnFullDisk(can_dir, name);
-  Child haptel({CanBin("haptel"), "run", "--vehicle", vehicle_file.string(), "--vehicle-name", name, "--track",
-                "config/tracks/test-short.yaml", "--time-limit", "8", "--json", "--quiet", "--domain",
-                std::to_string(test::UniqueDomain(62)), "--database", (dir / "runs.db").string(),
-                "--vehicle-timeout", "5"});
+  Child haptel({CanBin("haptel"), "run", "--vehicle", vehicle_file.string(), "--vehicle-name", name,
+                "--track", "config/tracks/test-short.yaml", "--time-limit", "8", "--json",
+                "--quiet", "--domain", std::to_string(test::UniqueDomain(62)), "--database",
+                (dir / "runs.db").string(), "--vehicle-timeout", "5"});
   const int code = haptel.Wait(120.0);
   INFO("stdout:\n" << haptel.out() << "\nstderr:\n" << haptel.err());
   CHECK(code == 5);  // wins over the time limit's 1
@@ -152,10 +157,12 @@ TEST_CASE("the CAN log on a full disk: both programs say so once, the summary an
     for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
     return n;
   };
-  CHECK(count(haptel.err(), "haptel-vehicle: error: the CAN bus log is not recorded whole: cannot write " +
-                                log.string()) == 1);
+  CHECK(count(haptel.err(),
+              "haptel-vehicle: error: the CAN bus log is not recorded whole: cannot write " +
+                  log.string()) == 1);
   CHECK(count(haptel.err(), "haptel: error: vehicle '" + name +
-                                "': its CAN bus log is not recorded whole: cannot write " + log.string()) == 1);
-  CHECK(haptel.out().find("vehicle's CAN bus log NOT recorded whole: cannot write " + log.string()) !=
-        std::string::npos);
+                                "': its CAN bus log is not recorded whole: cannot write " +
+                                log.string()) == 1);
+  CHECK(haptel.out().find("vehicle's CAN bus log NOT recorded whole: cannot write " +
+                          log.string()) != std::string::npos);
 }

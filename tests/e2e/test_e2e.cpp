@@ -1,19 +1,19 @@
 // End to end: the real `haptel` and `haptel-vehicle` programs, linked by DDS.
-#include <catch2/catch.hpp>
-#include <chrono>
-#include <csignal>
-#include <thread>
-#include <cstdlib>
 #include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
+#include <catch2/catch.hpp>
+#include <chrono>
+#include <csignal>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <mutex>
+#include <thread>
 
 #include "child.hpp"
 #include "haptel/link/topic.hpp"
@@ -33,13 +33,14 @@ TEST_CASE("haptel run completes the short track over DDS with a separate vehicle
   const auto db = dir / "runs.db";
   // A generous vehicle timeout: a loaded machine may stall a process for a
   // moment, and losing the vehicle is not what this test is about.
-  Child haptel({Bin("haptel"), "run", "--track", "config/tracks/test-short.yaml", "--json", "--quiet",
-                "--domain", std::to_string(test::UniqueDomain(11)), "--database", db.string(),
-                "--vehicle-timeout", "5"});
+  Child haptel({Bin("haptel"), "run", "--track", "config/tracks/test-short.yaml", "--json",
+                "--quiet", "--domain", std::to_string(test::UniqueDomain(11)), "--database",
+                db.string(), "--vehicle-timeout", "5"});
   // Signals it does not document leave it running: SIGUSR1 cuts the link
   // only with --link-fault (it used to end the run unrecorded, exit 138).
   std::this_thread::sleep_for(std::chrono::seconds(2));
-  for (const int signal : {SIGUSR1, SIGUSR2, SIGPIPE, SIGXFSZ}) REQUIRE(kill(haptel.pid(), signal) == 0);
+  for (const int signal : {SIGUSR1, SIGUSR2, SIGPIPE, SIGXFSZ})
+    REQUIRE(kill(haptel.pid(), signal) == 0);
   const int code = haptel.Wait(120.0);
   INFO("stdout:\n" << haptel.out() << "\nstderr:\n" << haptel.err());
   REQUIRE(code == 0);
@@ -91,11 +92,13 @@ TEST_CASE("haptel run completes the short track over DDS with a separate vehicle
   CHECK(std::filesystem::file_size(runs[0].picture) > 0);
 }
 
-TEST_CASE("haptel run drives the short track through the assisted cockpit: hands grasp wheel and lever") {
+TEST_CASE(
+    "haptel run drives the short track through the assisted cockpit: hands grasp wheel and lever") {
   const auto dir = test::ScratchDir("e2e-cockpit");
   const auto db = dir / "runs.db";
-  Child haptel({Bin("haptel"), "run", "--interface", "cockpit-assisted", "--track", "config/tracks/test-short.yaml",
-                "--json", "--quiet", "--domain", std::to_string(test::UniqueDomain(14)), "--database", db.string(),
+  Child haptel({Bin("haptel"), "run", "--interface", "cockpit-assisted", "--track",
+                "config/tracks/test-short.yaml", "--json", "--quiet", "--domain",
+                std::to_string(test::UniqueDomain(14)), "--database", db.string(),
                 "--vehicle-timeout", "5"});
   const int code = haptel.Wait(150.0);
   INFO("stdout:\n" << haptel.out() << "\nstderr:\n" << haptel.err());
@@ -123,21 +126,25 @@ TEST_CASE("killing the vehicle mid-lap: the mediator reports it lost and exits n
                 "--database", (dir / "runs.db").string()});
   // Wait for the vehicle to start and the lap to be under way.
   pid_t vehicle = 0;
-  REQUIRE(test::WaitFor([&] {
-    haptel.Pump();
-    const auto at = haptel.err().find("started, pid ");
-    if (at == std::string::npos) return false;
-    vehicle = std::stoi(haptel.err().substr(at + 13));
-    return true;
-  }, 60.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        haptel.Pump();
+        const auto at = haptel.err().find("started, pid ");
+        if (at == std::string::npos) return false;
+        vehicle = std::stoi(haptel.err().substr(at + 13));
+        return true;
+      },
+      60.0));
   // Under way means the vehicle has answered and moved (a progress line with
   // a distance): killed before that, it would be "did not start", not "lost".
-  REQUIRE(test::WaitFor([&] {
-    haptel.Pump();
-    const std::string& err = haptel.err();
-    const auto at = err.rfind(" distance ");
-    return at != std::string::npos && std::atof(err.c_str() + at + 10) > 0.0;
-  }, 60.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        haptel.Pump();
+        const std::string& err = haptel.err();
+        const auto at = err.rfind(" distance ");
+        return at != std::string::npos && std::atof(err.c_str() + at + 10) > 0.0;
+      },
+      60.0));
   REQUIRE(kill(vehicle, SIGKILL) == 0);
   const int code = haptel.Wait(30.0);
   INFO("stdout:\n" << haptel.out() << "\nstderr:\n" << haptel.err());
@@ -150,7 +157,8 @@ TEST_CASE("killing the vehicle mid-lap: the mediator reports it lost and exits n
 TEST_CASE("when commands stop, the vehicle's watchdog stops its motors") {
   const int domain = test::UniqueDomain(13);
   Child vehicle({Bin("haptel-vehicle"), "--config", "config/vehicles/sim-robot.yaml", "--track",
-                 "config/tracks/grand-prix.yaml", "--name", "wd", "--domain", std::to_string(domain)});
+                 "config/tracks/grand-prix.yaml", "--name", "wd", "--domain",
+                 std::to_string(domain)});
   LinkConfig config;
   config.domain_id = domain;
   link::Participant participant(config, "test-operator");
@@ -163,7 +171,8 @@ TEST_CASE("when commands stop, the vehicle's watchdog stops its motors") {
                              last = s;
                              ++states;
                            });
-  link::CommandWriter writer(participant, link::TopicName("wd", "command"), link::Profile::kCommand);
+  link::CommandWriter writer(participant, link::TopicName("wd", "command"),
+                             link::Profile::kCommand);
   auto latest = [&] {
     std::lock_guard lock(m);
     return last;
@@ -182,11 +191,14 @@ TEST_CASE("when commands stop, the vehicle's watchdog stops its motors") {
     writer.Write(cmd);
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   };
-  REQUIRE(test::WaitFor([&] {
-    send(0.5F, 0.5F);
-    const auto s = latest();
-    return !s.watchdog_tripped() && s.motor_left_level() == 4 && s.motor_right_level() == 4 && s.speed() > 0.05F;
-  }, 20.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        send(0.5F, 0.5F);
+        const auto s = latest();
+        return !s.watchdog_tripped() && s.motor_left_level() == 4 && s.motor_right_level() == 4 &&
+               s.speed() > 0.05F;
+      },
+      20.0));
 
   // A malformed command is counted and dropped: it does not reach the motors.
   REQUIRE(test::WaitFor([&] { return latest().last_command_seq() == seq; }, 10.0));
@@ -199,10 +211,12 @@ TEST_CASE("when commands stop, the vehicle's watchdog stops its motors") {
   CHECK(latest().motor_left_level() == 4);
 
   // Silence: the watchdog must stop the motors.
-  REQUIRE(test::WaitFor([&] {
-    const auto s = latest();
-    return s.watchdog_tripped() && s.motor_left_level() == 0 && s.motor_right_level() == 0;
-  }, 10.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        const auto s = latest();
+        return s.watchdog_tripped() && s.motor_left_level() == 0 && s.motor_right_level() == 0;
+      },
+      10.0));
   CHECK(test::WaitFor([&] { return std::abs(latest().speed()) < 1e-3F; }, 10.0));
 
   // SIGTERM: a clean exit.
@@ -210,7 +224,9 @@ TEST_CASE("when commands stop, the vehicle's watchdog stops its motors") {
   CHECK(vehicle.Wait(20.0) == 0);
 }
 
-TEST_CASE("a FIFO named by a file option is refused at once, exit 2, nothing spawned (it hung, deaf to signals)") {
+TEST_CASE(
+    "a FIFO named by a file option is refused at once, exit 2, nothing spawned (it hung, deaf to "
+    "signals)") {
   const auto dir = test::ScratchDir("e2e-fifo");
   const auto fifo = dir / "pipe";
   REQUIRE(mkfifo(fifo.c_str(), 0600) == 0);
@@ -219,8 +235,9 @@ TEST_CASE("a FIFO named by a file option is refused at once, exit 2, nothing spa
   const std::vector<std::pair<std::string, std::vector<std::string>>> cases = {
       {"record", {Bin("haptel"), "run", "--view", "none", "--record", fifo.string()}},
       {"trace", {Bin("haptel"), "run", "--view", "none", "--trace", fifo.string()}},
-      {"trace-in", {Bin("haptel"), "run", "--view", "none", "--operator", "person", "--device",
-                    "config/devices/replay.yaml", "--trace-in", fifo.string()}},
+      {"trace-in",
+       {Bin("haptel"), "run", "--view", "none", "--operator", "person", "--device",
+        "config/devices/replay.yaml", "--trace-in", fifo.string()}},
       {"database", {Bin("haptel"), "run", "--view", "none", "--database", fifo.string()}},
       {"grid-out", {Bin("haptel"), "bench", "gravity", "--smoke", "--grid-out", fifo.string()}},
   };
@@ -233,7 +250,8 @@ TEST_CASE("a FIFO named by a file option is refused at once, exit 2, nothing spa
     INFO("--" << cases[i].first << ": " << c.ExitDescription() << "; stderr:\n" << c.err());
     CHECK(code == 2);
     CHECK(c.err().find("option --" + cases[i].first + ": '" + fifo.string() +
-                       "' is not a regular file (a FIFO, a device or a socket)") != std::string::npos);
+                       "' is not a regular file (a FIFO, a device or a socket)") !=
+          std::string::npos);
     CHECK(c.err().find("started, pid") == std::string::npos);  // nothing spawned
     CHECK(std::count(c.err().begin(), c.err().end(), '\n') == 1);
   }
@@ -250,7 +268,8 @@ TEST_CASE("bad options and bad config files exit 2 with a one-line error naming 
   {
     const auto bad = dir / "bad-track.yaml";
     std::FILE* f = std::fopen(bad.c_str(), "w");
-    std::fputs("name: x\ncorridor_width: -1\ncenterline: [[0,0],[1,0],[1,1]]\ngates: [{along: 0.5}]\n", f);
+    std::fputs(
+        "name: x\ncorridor_width: -1\ncenterline: [[0,0],[1,0],[1,1]]\ngates: [{along: 0.5}]\n", f);
     std::fclose(f);
     Child c({Bin("haptel"), "run", "--track", bad.string()});
     CHECK(c.Wait(30.0) == 2);
@@ -263,10 +282,12 @@ TEST_CASE("bad options and bad config files exit 2 with a one-line error naming 
     // A gate narrower than the robot: refused, naming the gate and both widths (it ran to its cap).
     const auto narrow = dir / "narrow-gate.yaml";
     std::FILE* f = std::fopen(narrow.c_str(), "w");
-    std::fputs("name: narrow\ncorridor_width: 0.6\npost_radius: 0.03\n"
-               "centerline: [[0,0],[0.45,0],[0.7,0.25],[0.7,0.55],[0.45,0.8],[0,0.8],[-0.25,0.55],[-0.25,0.25]]\n"
-               "gates: [{along: 0.2, width: 0.4}, {along: 1.68, width: 0.16}]\n",
-               f);
+    std::fputs(
+        "name: narrow\ncorridor_width: 0.6\npost_radius: 0.03\n"
+        "centerline: "
+        "[[0,0],[0.45,0],[0.7,0.25],[0.7,0.55],[0.45,0.8],[0,0.8],[-0.25,0.55],[-0.25,0.25]]\n"
+        "gates: [{along: 0.2, width: 0.4}, {along: 1.68, width: 0.16}]\n",
+        f);
     std::fclose(f);
     Child c({Bin("haptel"), "run", "--track", narrow.string()});
     CHECK(c.Wait(30.0) == 2);
@@ -281,11 +302,13 @@ TEST_CASE("bad options and bad config files exit 2 with a one-line error naming 
     // A post inside a gate's opening: 0.12 m across in a 0.34 m gate leaves
     // two gaps of 0.08 m, and the lap ran to its cap (issue 41).
     const auto blocked = dir / "blocked-gate.yaml";
-    test::WriteFile(blocked, "name: blocked\ncorridor_width: 0.6\npost_radius: 0.03\n"
-                             "centerline: [[0,0],[0.45,0],[0.7,0.25],[0.7,0.55],[0.45,0.8],[0,0.8],[-0.25,0.55],"
-                             "[-0.25,0.25]]\n"
-                             "gates: [{along: 0.2, width: 0.34}]\n"
-                             "obstacles: [{center: [0.5, 0.7], radius: 0.05}, {center: [0.2, 0.0], radius: 0.06}]\n");
+    test::WriteFile(
+        blocked,
+        "name: blocked\ncorridor_width: 0.6\npost_radius: 0.03\n"
+        "centerline: [[0,0],[0.45,0],[0.7,0.25],[0.7,0.55],[0.45,0.8],[0,0.8],[-0.25,0.55],"
+        "[-0.25,0.25]]\n"
+        "gates: [{along: 0.2, width: 0.34}]\n"
+        "obstacles: [{center: [0.5, 0.7], radius: 0.05}, {center: [0.2, 0.0], radius: 0.06}]\n");
     Child c({Bin("haptel"), "run", "--track", blocked.string()});
     CHECK(c.Wait(30.0) == 2);
     INFO("stderr:\n" << c.err());
@@ -298,14 +321,17 @@ TEST_CASE("bad options and bad config files exit 2 with a one-line error naming 
     CHECK(std::count(c.err().begin(), c.err().end(), '\n') == 1);
   }
   {
-    // A fault nothing crosses said "vehicle did not start" though it had (issue 41): said at once instead.
-    auto children = test::StartAll({{Bin("haptel"), "run", "--view", "none", "--link-fault", "loss=95%"},
-                                    {Bin("haptel"), "run", "--view", "none", "--link-fault", "jitter=1s"}});
+    // A fault nothing crosses said "vehicle did not start" though it had (issue 41): said at once
+    // instead.
+    auto children =
+        test::StartAll({{Bin("haptel"), "run", "--view", "none", "--link-fault", "loss=95%"},
+                        {Bin("haptel"), "run", "--view", "none", "--link-fault", "jitter=1s"}});
     for (auto& c : children) {
       CHECK(c->Wait(60.0) == 2);
       INFO("stderr:\n" << c->err());
       CHECK(c->err().find("link faults ") != std::string::npos);
-      CHECK(c->err().find("the vehicle would be declared lost though it runs") != std::string::npos);
+      CHECK(c->err().find("the vehicle would be declared lost though it runs") !=
+            std::string::npos);
       CHECK(c->err().find("did not start") == std::string::npos);
       CHECK(c->err().find("started, pid") == std::string::npos);  // nothing spawned
     }
@@ -316,7 +342,8 @@ TEST_CASE("bad options and bad config files exit 2 with a one-line error naming 
     // A recording that could not be written is refused before anything is spawned.
     Child folder({Bin("haptel"), "run", "--record", dir.string()});
     CHECK(folder.Wait(30.0) == 2);
-    CHECK(folder.err().find("option --record: '" + dir.string() + "' is a folder") != std::string::npos);
+    CHECK(folder.err().find("option --record: '" + dir.string() + "' is a folder") !=
+          std::string::npos);
     CHECK(folder.err().find("started, pid") == std::string::npos);
     Child nowhere({Bin("haptel"), "run", "--record", (dir / "gone" / "run.mp4").string()});
     CHECK(nowhere.Wait(30.0) == 2);
@@ -325,12 +352,14 @@ TEST_CASE("bad options and bad config files exit 2 with a one-line error naming 
   {
     // The third-person view draws the track the operator side hands a
     // simulated robot: a real robot's or a blimp's is refused, in one line.
-    for (const char* vehicle : {"config/vehicles/can-robot.yaml", "config/vehicles/sim-blimp.yaml"}) {
+    for (const char* vehicle :
+         {"config/vehicles/can-robot.yaml", "config/vehicles/sim-blimp.yaml"}) {
       Child c({Bin("haptel"), "run", "--third-person", "--vehicle", vehicle, "--view", "none"});
       CHECK(c.Wait(30.0) == 2);
       INFO("stderr:\n" << c.err());
       CHECK(c.err().find("option --third-person: vehicle '") != std::string::npos);
-      CHECK(c.err().find("expected a simulated robot (kind sim-robot or can-robot-sim)") != std::string::npos);
+      CHECK(c.err().find("expected a simulated robot (kind sim-robot or can-robot-sim)") !=
+            std::string::npos);
       CHECK(c.err().find("started, pid") == std::string::npos);  // nothing spawned
       CHECK(std::count(c.err().begin(), c.err().end(), '\n') == 1);
     }
@@ -363,7 +392,9 @@ TEST_CASE("bad options and bad config files exit 2 with a one-line error naming 
   }
 }
 
-TEST_CASE("security init: a folder holding identities is refused with one line, exit 2, nothing changed (issue 41)") {
+TEST_CASE(
+    "security init: a folder holding identities is refused with one line, exit 2, nothing changed "
+    "(issue 41)") {
   const auto dir = test::ScratchDir("e2e-security-init");
   test::WriteFile(dir / "ca.pem", "mine");
   test::WriteFile(dir / "notes.txt", "mine");

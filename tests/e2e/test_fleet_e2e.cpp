@@ -9,9 +9,9 @@
 // [three-robots], a ctest entry of its own so the two halves run side by
 // side); the other cases use two vehicles and a time limit, proving their
 // outcome rather than every lap.
-#include <catch2/catch.hpp>
 #include <signal.h>
 
+#include <catch2/catch.hpp>
 #include <filesystem>
 #include <mutex>
 #include <regex>
@@ -37,7 +37,8 @@ std::string Bin(const std::string& name) { return (test::BinDir() / name).string
 fs::path RobotFleet(const fs::path& dir, const std::vector<std::string>& names, double slice_s) {
   std::string text = "name: test-fleet\nslice_s: " + std::to_string(slice_s) + "\nvehicles:\n";
   for (const std::string& name : names) {
-    text += "  - {name: " + name + ", vehicle: " + fs::absolute("config/vehicles/sim-robot.yaml").string() +
+    text += "  - {name: " + name +
+            ", vehicle: " + fs::absolute("config/vehicles/sim-robot.yaml").string() +
             ", world: " + fs::absolute("config/tracks/test-short.yaml").string() + "}\n";
   }
   return test::WriteFile(dir / "fleet.yaml", text);
@@ -45,18 +46,33 @@ fs::path RobotFleet(const fs::path& dir, const std::vector<std::string>& names, 
 
 /// robot-and-blimp.yaml's two vehicles, turned every `slice_s`.
 fs::path RobotAndBlimp(const fs::path& dir, double slice_s) {
-  const std::string text =
-      "name: robot-and-blimp\nslice_s: " + std::to_string(slice_s) + "\nvehicles:\n"
-      "  - {name: robot-a, vehicle: " + fs::absolute("config/vehicles/sim-robot.yaml").string() +
-      ", world: " + fs::absolute("config/tracks/test-short.yaml").string() + ", interface: gesture}\n"
-      "  - {name: blimp-a, vehicle: " + fs::absolute("config/vehicles/sim-blimp.yaml").string() +
-      ", world: " + fs::absolute("config/tracks/blimp-hop.yaml").string() + ", interface: blimp-gesture}\n";
+  const std::string text = "name: robot-and-blimp\nslice_s: " + std::to_string(slice_s) +
+                           "\nvehicles:\n"
+                           "  - {name: robot-a, vehicle: " +
+                           fs::absolute("config/vehicles/sim-robot.yaml").string() +
+                           ", world: " + fs::absolute("config/tracks/test-short.yaml").string() +
+                           ", interface: gesture}\n"
+                           "  - {name: blimp-a, vehicle: " +
+                           fs::absolute("config/vehicles/sim-blimp.yaml").string() +
+                           ", world: " + fs::absolute("config/tracks/blimp-hop.yaml").string() +
+                           ", interface: blimp-gesture}\n";
   return test::WriteFile(dir / "fleet.yaml", text);
 }
 
 std::vector<std::string> FleetArgs(const std::string& fleet, int domain, const fs::path& db) {
-  return {Bin("haptel"), "run", "--fleet", fleet, "--json", "--view", "none", "--domain", std::to_string(domain),
-          "--database", db.string(), "--vehicle-timeout", "5"};
+  return {Bin("haptel"),
+          "run",
+          "--fleet",
+          fleet,
+          "--json",
+          "--view",
+          "none",
+          "--domain",
+          std::to_string(domain),
+          "--database",
+          db.string(),
+          "--vehicle-timeout",
+          "5"};
 }
 
 /// The entry of vehicle `name` in the JSON line's `vehicles` list: a flat
@@ -70,15 +86,17 @@ std::string VehicleEntry(const std::string& json, const std::string& name) {
 /// The pid in "vehicle 'NAME' (...) started, pid N" once it is on stderr; 0 if never.
 int VehiclePid(Child& run, const std::string& name) {
   int pid = 0;
-  test::WaitFor([&] {
-    run.Pump();
-    const std::string& err = run.err();
-    const auto at = err.find("vehicle '" + name + "'");
-    const auto pid_at = at == std::string::npos ? at : err.find("started, pid ", at);
-    if (pid_at == std::string::npos) return false;
-    pid = std::stoi(err.substr(pid_at + 13));
-    return true;
-  }, 60.0);
+  test::WaitFor(
+      [&] {
+        run.Pump();
+        const std::string& err = run.err();
+        const auto at = err.find("vehicle '" + name + "'");
+        const auto pid_at = at == std::string::npos ? at : err.find("started, pid ", at);
+        if (pid_at == std::string::npos) return false;
+        pid = std::stoi(err.substr(pid_at + 13));
+        return true;
+      },
+      60.0);
   return pid;
 }
 
@@ -87,7 +105,8 @@ int VehiclePid(Child& run, const std::string& name) {
 double FleetDistance(const std::string& err, const std::string& name) {
   const std::regex entry(" " + name + R"( \S+ \(driven [0-9.]+ s, ([0-9.]+) m)");
   double last = -1.0;
-  for (auto it = std::sregex_iterator(err.begin(), err.end(), entry); it != std::sregex_iterator(); ++it) {
+  for (auto it = std::sregex_iterator(err.begin(), err.end(), entry); it != std::sregex_iterator();
+       ++it) {
     last = std::stod((*it)[1]);
   }
   return last;
@@ -123,8 +142,9 @@ class SelectedLog {
 
 }  // namespace
 
-TEST_CASE("the automatic operator completes every robot of three-robots.yaml, handing over between them",
-          "[three-robots]") {
+TEST_CASE(
+    "the automatic operator completes every robot of three-robots.yaml, handing over between them",
+    "[three-robots]") {
   const auto dir = test::ScratchDir("e2e-fleet");
   const auto db = dir / "runs.db";
   auto argv = FleetArgs("config/fleets/three-robots.yaml", test::UniqueDomain(51), db);
@@ -203,14 +223,17 @@ TEST_CASE("a fleet of a robot and a blimp: each is driven in turn, and held whil
   CHECK(std::stoi(JsonField(json, "handovers")) >= 1);
 }
 
-TEST_CASE("a turn to a vehicle still starting is not timed as a handover: its start-up is counted apart") {
+TEST_CASE(
+    "a turn to a vehicle still starting is not timed as a handover: its start-up is counted "
+    "apart") {
   const auto dir = test::ScratchDir("e2e-fleet-late");
   const int domain = test::UniqueDomain(56);
   // robot-b is attached: its process is started by the test only once the
   // operator has turned to it, so that turn finds it still starting.
   std::string text = "name: late\nslice_s: 6\nvehicles:\n";
   for (const char* name : {"robot-a", "robot-b"}) {
-    text += std::string("  - {name: ") + name + ", vehicle: " + fs::absolute("config/vehicles/sim-robot.yaml").string() +
+    text += std::string("  - {name: ") + name +
+            ", vehicle: " + fs::absolute("config/vehicles/sim-robot.yaml").string() +
             ", world: " + fs::absolute("config/tracks/test-short.yaml").string() +
             (std::string(name) == "robot-b" ? ", attach: true}\n" : "}\n");
   }
@@ -218,12 +241,14 @@ TEST_CASE("a turn to a vehicle still starting is not timed as a handover: its st
   auto argv = FleetArgs(fleet.string(), domain, dir / "runs.db");
   argv.insert(argv.end(), {"--time-limit", "16"});
   Child run(argv);
-  REQUIRE(test::WaitFor([&] {
-    run.Pump();
-    return run.err().find("driving 'robot-b'") != std::string::npos;
-  }, 60.0));
-  Child late({Bin("haptel-vehicle"), "--track", "config/tracks/test-short.yaml", "--name", "robot-b", "--domain",
-              std::to_string(domain)});
+  REQUIRE(test::WaitFor(
+      [&] {
+        run.Pump();
+        return run.err().find("driving 'robot-b'") != std::string::npos;
+      },
+      60.0));
+  Child late({Bin("haptel-vehicle"), "--track", "config/tracks/test-short.yaml", "--name",
+              "robot-b", "--domain", std::to_string(domain)});
   run.Wait(120.0);
   late.Terminate();
   INFO("stdout:\n" << run.out() << "\nstderr:\n" << run.err());
@@ -235,7 +260,8 @@ TEST_CASE("a turn to a vehicle still starting is not timed as a handover: its st
   // obeyed) neither: never both.
   const int turns = std::stoi(JsonField(VehicleEntry(json, "robot-a"), "handovers")) +
                     std::stoi(JsonField(VehicleEntry(json, "robot-b"), "handovers"));
-  CHECK(std::stoi(JsonField(json, "handovers")) + std::stoi(JsonField(json, "handovers_untimed")) <= turns);
+  CHECK(std::stoi(JsonField(json, "handovers")) + std::stoi(JsonField(json, "handovers_untimed")) <=
+        turns);
 }
 
 TEST_CASE("a robot killed mid-run is reported lost by name; the other drives on") {
@@ -253,25 +279,32 @@ TEST_CASE("a robot killed mid-run is reported lost by name; the other drives on"
   // answers and is held (the fleet's line no longer says it is not
   // answering yet: killed before, it would be a vehicle that did not start).
   double distance_at_kill = 0.0;
-  REQUIRE(test::WaitFor([&] {
-    run.Pump();
-    const std::string& err = run.err();
-    const auto at = err.rfind(" distance ");
-    const auto fleet_line = err.rfind("fleet: robot-a");
-    if (at == std::string::npos || fleet_line == std::string::npos || fleet_line < at) return false;
-    const auto line_end = err.find('\n', fleet_line);
-    if (line_end == std::string::npos) return false;  // not all there yet
-    if (err.substr(fleet_line, line_end - fleet_line).find("not answering") != std::string::npos) return false;
-    distance_at_kill = std::atof(err.c_str() + at + 10);
-    return distance_at_kill > 0.0;
-  }, 90.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        run.Pump();
+        const std::string& err = run.err();
+        const auto at = err.rfind(" distance ");
+        const auto fleet_line = err.rfind("fleet: robot-a");
+        if (at == std::string::npos || fleet_line == std::string::npos || fleet_line < at)
+          return false;
+        const auto line_end = err.find('\n', fleet_line);
+        if (line_end == std::string::npos) return false;  // not all there yet
+        if (err.substr(fleet_line, line_end - fleet_line).find("not answering") !=
+            std::string::npos)
+          return false;
+        distance_at_kill = std::atof(err.c_str() + at + 10);
+        return distance_at_kill > 0.0;
+      },
+      90.0));
   REQUIRE(kill(victim, SIGKILL) == 0);
-  CHECK(test::WaitFor([&] {
-    run.Pump();
-    return (run.err().find("LOST mid-run: robot-b") != std::string::npos &&
-            FleetDistance(run.err(), "robot-a") > distance_at_kill + 0.05) ||
-           !run.Alive();
-  }, 90.0));
+  CHECK(test::WaitFor(
+      [&] {
+        run.Pump();
+        return (run.err().find("LOST mid-run: robot-b") != std::string::npos &&
+                FleetDistance(run.err(), "robot-a") > distance_at_kill + 0.05) ||
+               !run.Alive();
+      },
+      90.0));
   if (run.Alive()) REQUIRE(kill(run.pid(), SIGINT) == 0);
   const int code = run.Wait(120.0);
   INFO("stdout:\n" << run.out() << "\nstderr:\n" << run.err());
@@ -304,13 +337,16 @@ TEST_CASE("a second operator on a fleet being driven is refused; the first is no
   Child first(first_argv);
   // A fleet line in which both robots answer and robot-a has moved: the
   // first drives them (a progress line alone can come before either answers).
-  REQUIRE(test::WaitFor([&] {
-    first.Pump();
-    const std::string& err = first.err();
-    const size_t line = err.rfind("fleet:");
-    return line != std::string::npos && err.find("not answering yet", line) == std::string::npos &&
-           FleetDistance(err, "robot-a") > 0.0;
-  }, 90.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        first.Pump();
+        const std::string& err = first.err();
+        const size_t line = err.rfind("fleet:");
+        return line != std::string::npos &&
+               err.find("not answering yet", line) == std::string::npos &&
+               FleetDistance(err, "robot-a") > 0.0;
+      },
+      90.0));
 
   // Who commands each robot, read off the domain by a plain DDS reader that
   // joined late: the operator's input while it is driven, the handover
@@ -330,22 +366,28 @@ TEST_CASE("a second operator on a fleet being driven is refused; the first is no
   const std::string refused = second.LastLine();
   CHECK(JsonField(refused, "outcome") == "refused");
   CHECK(JsonField(refused, "message").find("driven by another operator") != std::string::npos);
-  CHECK(JsonField(refused, "message").find("pid " + std::to_string(first.pid())) != std::string::npos);
+  CHECK(JsonField(refused, "message").find("pid " + std::to_string(first.pid())) !=
+        std::string::npos);
 
   msg::SelectedSource driven;
-  CHECK(test::WaitFor([&] { return robot_a.Saw("operator", "", &driven) && robot_b.Saw("operator", ""); }, 60.0));
-  CHECK(test::WaitFor([&] { return robot_a.Saw("", "handover") && robot_b.Saw("", "handover"); }, 60.0));
+  CHECK(test::WaitFor(
+      [&] { return robot_a.Saw("operator", "", &driven) && robot_b.Saw("operator", ""); }, 60.0));
+  CHECK(test::WaitFor([&] { return robot_a.Saw("", "handover") && robot_b.Saw("", "handover"); },
+                      60.0));
   CHECK(std::string(driven.vehicle().c_str()) == "robot-a");
-  CHECK(std::string(driven.operator_name().c_str()).find("pid " + std::to_string(first.pid())) != std::string::npos);
+  CHECK(std::string(driven.operator_name().c_str()).find("pid " + std::to_string(first.pid())) !=
+        std::string::npos);
   CHECK(driven.stamp_ns() > 0);
 
   // The first drove on: ended by its operator once robot-a has been driven
   // (a loaded machine can bring robot-a up after the first slice, so that
   // robot-b is driven first), never refused nor in conflict.
-  CHECK(test::WaitFor([&] {
-    first.Pump();
-    return FleetDistance(first.err(), "robot-a") > 0.0;
-  }, 90.0));
+  CHECK(test::WaitFor(
+      [&] {
+        first.Pump();
+        return FleetDistance(first.err(), "robot-a") > 0.0;
+      },
+      90.0));
   REQUIRE(kill(first.pid(), SIGINT) == 0);
   first.Wait(120.0);
   INFO("first:\n" << first.out() << first.err());

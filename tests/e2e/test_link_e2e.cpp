@@ -3,20 +3,19 @@
 // first drives, a stranger on the domain that copies the run's session off
 // the wire obeyed in nothing, and a second vehicle under the same name
 // reported as a conflict, never mixed into a run.
-#include <catch2/catch.hpp>
 #include <signal.h>
-
 #include <unistd.h>
 
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <chrono>
 #include <fstream>
 #include <mutex>
 #include <optional>
-#include <utility>
 #include <regex>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "child.hpp"
@@ -40,8 +39,9 @@ class HandStartedVehicle {
     REQUIRE(test::WaitForErr(child_, " up on domain", 30.0));
   }
   explicit HandStartedVehicle(int domain)
-      : HandStartedVehicle(std::vector<std::string>{Bin("haptel-vehicle"), "--track", "config/tracks/test-short.yaml",
-                                                    "--domain", std::to_string(domain)}) {}
+      : HandStartedVehicle(std::vector<std::string>{Bin("haptel-vehicle"), "--track",
+                                                    "config/tracks/test-short.yaml", "--domain",
+                                                    std::to_string(domain)}) {}
   Child& child() { return child_; }
 
  private:
@@ -50,15 +50,26 @@ class HandStartedVehicle {
 
 /// `haptel run --attach` on the short track and `domain`, plus `extra`.
 std::vector<std::string> AttachArgs(int domain, const std::filesystem::path& db) {
-  return {Bin("haptel"), "run", "--attach", "--track", "config/tracks/test-short.yaml", "--json", "--domain",
-          std::to_string(domain), "--database", db.string(), "--vehicle-timeout", "5"};
+  return {Bin("haptel"),
+          "run",
+          "--attach",
+          "--track",
+          "config/tracks/test-short.yaml",
+          "--json",
+          "--domain",
+          std::to_string(domain),
+          "--database",
+          db.string(),
+          "--vehicle-timeout",
+          "5"};
 }
 
 /// The distance in the last progress line of `err` ("... distance 1.23 m ..."), or -1.
 double LastProgressDistance(const std::string& err) {
   static const std::regex distance(R"(distance +([0-9.]+) m)");
   double last = -1.0;
-  for (auto it = std::sregex_iterator(err.begin(), err.end(), distance); it != std::sregex_iterator(); ++it) {
+  for (auto it = std::sregex_iterator(err.begin(), err.end(), distance);
+       it != std::sregex_iterator(); ++it) {
     last = std::stod((*it)[1]);
   }
   return last;
@@ -66,7 +77,9 @@ double LastProgressDistance(const std::string& err) {
 
 }  // namespace
 
-TEST_CASE("haptel run --attach drives a vehicle started by hand, leaves it running, and a second run can attach") {
+TEST_CASE(
+    "haptel run --attach drives a vehicle started by hand, leaves it running, and a second run can "
+    "attach") {
   const int domain = test::UniqueDomain(41);
   const auto dir = test::ScratchDir("e2e-attach");
   HandStartedVehicle vehicle(domain);
@@ -79,7 +92,8 @@ TEST_CASE("haptel run --attach drives a vehicle started by hand, leaves it runni
     CHECK(JsonField(json, "outcome") == "completed");
     CHECK(JsonField(json, "gates_passed") == "2");
     CHECK(JsonField(json, "vehicle_pid") == "0");  // nothing spawned
-    CHECK(run.err().find("attached to vehicle 'robot1' on domain " + std::to_string(domain)) != std::string::npos);
+    CHECK(run.err().find("attached to vehicle 'robot1' on domain " + std::to_string(domain)) !=
+          std::string::npos);
     // The vehicle is not the run's to end.
     CHECK(kill(vehicle.child().pid(), 0) == 0);
   }
@@ -90,10 +104,12 @@ TEST_CASE("haptel run --attach drives a vehicle started by hand, leaves it runni
     auto argv = AttachArgs(domain, dir / "runs.db");
     argv.insert(argv.end(), {"--time-limit", "60"});
     Child run(argv);
-    CHECK(test::WaitFor([&] {
-      run.Pump();
-      return LastProgressDistance(run.err()) > 0.05 || !run.Alive();
-    }, 60.0));
+    CHECK(test::WaitFor(
+        [&] {
+          run.Pump();
+          return LastProgressDistance(run.err()) > 0.05 || !run.Alive();
+        },
+        60.0));
     if (run.Alive()) kill(run.pid(), SIGINT);
     run.Wait(60.0);
     INFO(run.out() << run.err());
@@ -110,8 +126,8 @@ TEST_CASE("haptel run --attach drives a vehicle started by hand, leaves it runni
 TEST_CASE("a second operator is refused, naming the one driving; the first drives on") {
   const int domain = test::UniqueDomain(42);
   const auto dir = test::ScratchDir("e2e-owner");
-  HandStartedVehicle vehicle({Bin("haptel-vehicle"), "--track", "config/tracks/grand-prix.yaml", "--domain",
-                              std::to_string(domain)});
+  HandStartedVehicle vehicle({Bin("haptel-vehicle"), "--track", "config/tracks/grand-prix.yaml",
+                              "--domain", std::to_string(domain)});
   // The first drives the grand prix (longer than the short track's 14-s
   // lap, once over before a loaded machine brought the second up) until it
   // is seen driving on after the refusal, then is ended by its operator.
@@ -133,16 +149,19 @@ TEST_CASE("a second operator is refused, naming the one driving; the first drive
   const std::string refused = second.LastLine();
   CHECK(JsonField(refused, "outcome") == "refused");
   CHECK(JsonField(refused, "message").find("driven by another operator") != std::string::npos);
-  CHECK(JsonField(refused, "message").find("pid " + std::to_string(first.pid())) != std::string::npos);
+  CHECK(JsonField(refused, "message").find("pid " + std::to_string(first.pid())) !=
+        std::string::npos);
 
   // The first drives on: a later progress line shows it farther along.
   first.Pump();
   const double at_refusal_m = LastProgressDistance(first.err());
   REQUIRE(at_refusal_m >= 0.0);
-  CHECK(test::WaitFor([&] {
-    first.Pump();
-    return LastProgressDistance(first.err()) > at_refusal_m + 0.2;
-  }, 60.0));
+  CHECK(test::WaitFor(
+      [&] {
+        first.Pump();
+        return LastProgressDistance(first.err()) > at_refusal_m + 0.2;
+      },
+      60.0));
   REQUIRE(kill(first.pid(), SIGINT) == 0);
   const int first_code = first.Wait(120.0);
   INFO(first.out() << first.err());
@@ -179,7 +198,8 @@ class Stranger {
                   // taken for the owner. (Once the run released it at its
                   // end, the vehicle is anybody's: the stranger may take it
                   // in its own name.)
-                  if (s.last_command_sent_ns() < 0 && std::string(s.owner()) != kName) ++states_obeying_;
+                  if (s.last_command_sent_ns() < 0 && std::string(s.owner()) != kName)
+                    ++states_obeying_;
                   if (link::WriterId{s.owner_writer()} == commands_.id()) ++states_owned_;
                   refused_ = std::max(refused_, s.commands_refused());
                   feedback_refused_ = std::max(feedback_refused_, s.video_feedback_refused());
@@ -246,7 +266,7 @@ class Stranger {
   std::mutex mutex_;
   std::optional<uint64_t> session_;
   uint64_t states_obeying_ = 0, states_owned_ = 0, refused_ = 0, feedback_refused_ = 0;
-  uint64_t sent_ = 0;  ///< test thread only
+  uint64_t sent_ = 0;         ///< test thread only
   link::StateReader states_;  // last: destroyed first
 };
 
@@ -265,12 +285,14 @@ bool VehicleFrames(const std::string& err, uint64_t& frames, uint64_t& key, uint
 
 }  // namespace
 
-TEST_CASE("a stranger that copies the run's session off the wire is obeyed in nothing: no command, no key frame") {
+TEST_CASE(
+    "a stranger that copies the run's session off the wire is obeyed in nothing: no command, no "
+    "key frame") {
   const int domain = test::UniqueDomain(141);
   const auto dir = test::ScratchDir("e2e-stranger");
   Child run({Bin("haptel"), "run", "--track", "config/tracks/test-short.yaml", "--json", "--domain",
-             std::to_string(domain), "--database", (dir / "runs.db").string(), "--vehicle-timeout", "5",
-             "--time-limit", "90"});
+             std::to_string(domain), "--database", (dir / "runs.db").string(), "--vehicle-timeout",
+             "5", "--time-limit", "90"});
   REQUIRE(test::WaitForVehicle(run, 60.0));
   Stranger stranger(domain);
   // Its commands and requests, 50 a second, until the run ends.
@@ -304,23 +326,31 @@ TEST_CASE("a stranger that copies the run's session off the wire is obeyed in no
   CHECK(key * 4 < frames);
 }
 
-TEST_CASE("a run whose vehicle is taken over while it is silent says so at once: lost control, exit 2") {
+TEST_CASE(
+    "a run whose vehicle is taken over while it is silent says so at once: lost control, exit 2") {
   // The run is stopped (SIGSTOP) past the vehicle's 2-s free time while a
   // stranger commands: the vehicle is the stranger's. Resumed, the run
   // sees a state naming another writer as the owner.
   const int domain = test::UniqueDomain(142);
   const auto dir = test::ScratchDir("e2e-lost-control");
   Child run({Bin("haptel"), "run", "--track", "config/tracks/grand-prix.yaml", "--json", "--domain",
-             std::to_string(domain), "--database", (dir / "runs.db").string(), "--vehicle-timeout", "30",
-             "--time-limit", "120"});
+             std::to_string(domain), "--database", (dir / "runs.db").string(), "--vehicle-timeout",
+             "30", "--time-limit", "120"});
   REQUIRE(test::WaitForVehicle(run, 60.0));
   Stranger stranger(domain);
-  REQUIRE(test::WaitFor([&] { run.Pump(); return stranger.Send(); }, 30.0));  // a state named the owner
+  REQUIRE(test::WaitFor(
+      [&] {
+        run.Pump();
+        return stranger.Send();
+      },
+      30.0));  // a state named the owner
   REQUIRE(kill(run.pid(), SIGSTOP) == 0);
-  const bool taken = test::WaitFor([&] {
-    stranger.Send();
-    return stranger.states_owned() > 0;
-  }, 60.0);
+  const bool taken = test::WaitFor(
+      [&] {
+        stranger.Send();
+        return stranger.states_owned() > 0;
+      },
+      60.0);
   REQUIRE(kill(run.pid(), SIGCONT) == 0);
   REQUIRE(taken);
   // The stranger keeps sending: the vehicle stays its own.
@@ -343,18 +373,23 @@ TEST_CASE("a run whose vehicle is taken over while it is silent says so at once:
                        " obeys another writer's commands now") != std::string::npos);
 }
 
-TEST_CASE("a run whose link reaches beyond the host without --security says so in one line; --insecure silences it") {
+TEST_CASE(
+    "a run whose link reaches beyond the host without --security says so in one line; --insecure "
+    "silences it") {
   const auto dir = test::ScratchDir("e2e-insecure");
   // A folder for a database: refused (exit 2) right after the link's line,
   // before anything is spawned: the line is what is checked.
-  const std::vector<std::string> base{Bin("haptel"), "run", "--track", "config/tracks/test-short.yaml",
-                                      "--dds-peers", "127.0.0.1,10.0.0.7", "--database", dir.string()};
+  const std::vector<std::string> base{Bin("haptel"), "run",
+                                      "--track",     "config/tracks/test-short.yaml",
+                                      "--dds-peers", "127.0.0.1,10.0.0.7",
+                                      "--database",  dir.string()};
   std::vector<std::string> insecure = base;
   insecure.push_back("--insecure");
   std::vector<std::string> loopback = base;
   loopback.erase(loopback.begin() + 4, loopback.begin() + 6);
   auto runs = test::StartAll({base, insecure, loopback});
-  const std::string line = "warning: the link reaches beyond this host (peer 10.0.0.7) without DDS Security";
+  const std::string line =
+      "warning: the link reaches beyond this host (peer 10.0.0.7) without DDS Security";
   for (auto& run : runs) {
     const int code = run->Wait(60.0);
     INFO(run->err());
@@ -372,7 +407,8 @@ TEST_CASE("a second vehicle under the same name is a conflict: exit 2, nothing d
   HandStartedVehicle stray(domain);
   // haptel run spawns its own robot1 on the same domain.
   Child run({Bin("haptel"), "run", "--track", "config/tracks/test-short.yaml", "--json", "--domain",
-             std::to_string(domain), "--database", (dir / "runs.db").string(), "--vehicle-timeout", "5"});
+             std::to_string(domain), "--database", (dir / "runs.db").string(), "--vehicle-timeout",
+             "5"});
   const int code = run.Wait(60.0);
   INFO(run.out() << run.err());
   CHECK(code == 2);
@@ -384,34 +420,44 @@ TEST_CASE("a second vehicle under the same name is a conflict: exit 2, nothing d
   // (the suite once saw 3.8 s of the stray driven, a gate passed, while the
   // run waited for DDS to match the second vehicle).
   const std::string message = JsonField(json, "message");
-  CHECK(message.find("another vehicle answers as 'robot1' on domain " + std::to_string(domain) + " (pid " +
-                     std::to_string(stray.child().pid()) + " on host '") != std::string::npos);
-  CHECK(message.find("not the vehicle this run started, pid " + JsonField(json, "vehicle_pid")) != std::string::npos);
+  CHECK(message.find("another vehicle answers as 'robot1' on domain " + std::to_string(domain) +
+                     " (pid " + std::to_string(stray.child().pid()) + " on host '") !=
+        std::string::npos);
+  CHECK(message.find("not the vehicle this run started, pid " + JsonField(json, "vehicle_pid")) !=
+        std::string::npos);
   CHECK(std::stod(JsonField(json, "distance_m")) == 0.0);
   CHECK(JsonField(json, "gates_passed") == "0");
 }
 
-TEST_CASE("a blimp answering under the robot's name: the run says it is another kind of vehicle, not only silence") {
+TEST_CASE(
+    "a blimp answering under the robot's name: the run says it is another kind of vehicle, not "
+    "only silence") {
   const auto dir = test::ScratchDir("e2e-wrong-kind");
   const int domain = test::UniqueDomain(48);
-  HandStartedVehicle blimp({Bin("haptel-vehicle"), "--config", "config/vehicles/sim-blimp.yaml", "--track",
-                            "config/tracks/blimp-hop.yaml", "--name", "robot1", "--domain", std::to_string(domain)});
+  HandStartedVehicle blimp({Bin("haptel-vehicle"), "--config", "config/vehicles/sim-blimp.yaml",
+                            "--track", "config/tracks/blimp-hop.yaml", "--name", "robot1",
+                            "--domain", std::to_string(domain)});
   Child run(AttachArgs(domain, dir / "runs.db"));
   const int code = run.Wait(90.0);
   INFO(run.out() << run.err());
   CHECK(code == 3);
   const std::string json = run.LastLine();
   CHECK(JsonField(json, "outcome") == "vehicle did not start");
-  CHECK(JsonField(json, "message").find("camera frames arrived under that name but no robot's state") !=
+  CHECK(JsonField(json, "message")
+            .find("camera frames arrived under that name but no robot's state") !=
         std::string::npos);
   CHECK(JsonField(json, "message").find("another kind of vehicle") != std::string::npos);
 }
 
-TEST_CASE("with 100 ms delay, 20 ms jitter and 5 % loss both ways the automatic operator still completes the short track", "[faults]") {
+TEST_CASE(
+    "with 100 ms delay, 20 ms jitter and 5 % loss both ways the automatic operator still completes "
+    "the short track",
+    "[faults]") {
   const auto dir = test::ScratchDir("e2e-link-fault");
   Child run({Bin("haptel"), "run", "--link-fault", "delay=100ms,jitter=20ms,loss=5%", "--track",
-             "config/tracks/test-short.yaml", "--json", "--domain", std::to_string(test::UniqueDomain(44)),
-             "--database", (dir / "runs.db").string(), "--vehicle-timeout", "5"});
+             "config/tracks/test-short.yaml", "--json", "--domain",
+             std::to_string(test::UniqueDomain(44)), "--database", (dir / "runs.db").string(),
+             "--vehicle-timeout", "5"});
   const int code = run.Wait(180.0);
   INFO(run.out() << run.err());
   CHECK(code == 0);
@@ -419,12 +465,16 @@ TEST_CASE("with 100 ms delay, 20 ms jitter and 5 % loss both ways the automatic 
   CHECK(JsonField(json, "outcome") == "completed");
   // Both ends were faulted: the vehicle said so, and the round trip carries
   // both delays (each at least 80 ms).
-  CHECK(run.err().find("haptel-vehicle: info: link faults on what this vehicle receives: delay=0.1s") !=
+  CHECK(run.err().find(
+            "haptel-vehicle: info: link faults on what this vehicle receives: delay=0.1s") !=
         std::string::npos);
   CHECK(std::stod(JsonField(json, "command_rtt_ms_p50")) > 160.0);
 }
 
-TEST_CASE("a link with a rate: the spawned vehicle gets the same fault, the video beyond the rate is dropped and counted", "[faults]") {
+TEST_CASE(
+    "a link with a rate: the spawned vehicle gets the same fault, the video beyond the rate is "
+    "dropped and counted",
+    "[faults]") {
   // 1 Mbit/s cannot carry a JPEG frame of about 25 kB every 33 ms (about 6
   // Mbit/s): the queue drops frames until the ladder fits, while the
   // commands and states still get through. The shipped robot sends H.264,
@@ -441,32 +491,39 @@ TEST_CASE("a link with a rate: the spawned vehicle gets the same fault, the vide
   text.replace(text.find("world: ../tracks/"), 17,
                "world: " + (std::filesystem::current_path() / "config/tracks/").string());
   const auto vehicle = test::WriteFile(dir / "sim-robot-jpeg.yaml", text);
-  Child run({Bin("haptel"), "run", "--link-profile", "lte-uplink", "--link-fault", "rate=1Mbit,loss=0", "--track",
-             "config/tracks/test-short.yaml", "--json", "--domain", std::to_string(test::UniqueDomain(47)),
-             "--database", (dir / "runs.db").string(), "--vehicle-timeout", "5", "--vehicle", vehicle.string()});
+  Child run({Bin("haptel"), "run", "--link-profile", "lte-uplink", "--link-fault",
+             "rate=1Mbit,loss=0", "--track", "config/tracks/test-short.yaml", "--json", "--domain",
+             std::to_string(test::UniqueDomain(47)), "--database", (dir / "runs.db").string(),
+             "--vehicle-timeout", "5", "--vehicle", vehicle.string()});
   const int code = run.Wait(180.0);
   INFO(run.out() << run.err());
   CHECK(code == 0);
   const std::string json = run.LastLine();
   CHECK(JsonField(json, "outcome") == "completed");
   // The profile's delay and jitter, --link-fault's rate and loss, on both ends.
-  CHECK(JsonField(json, "link_fault") == "delay=0.03s,jitter=0.008s,loss=0,rate=1000kbit,queue=0.1s");
+  CHECK(JsonField(json, "link_fault") ==
+        "delay=0.03s,jitter=0.008s,loss=0,rate=1000kbit,queue=0.1s");
   CHECK(run.err().find("haptel-vehicle: info: link faults on what this vehicle receives: "
-                       "delay=0.03s,jitter=0.008s,loss=0,rate=1000kbit,queue=0.1s") != std::string::npos);
+                       "delay=0.03s,jitter=0.008s,loss=0,rate=1000kbit,queue=0.1s") !=
+        std::string::npos);
   CHECK(std::stoull(JsonField(json, "link_queue_dropped")) > 0);
-  CHECK(std::stoull(JsonField(json, "link_queue_dropped_bytes")) > 1000 * std::stoull(JsonField(json, "link_queue_dropped")));
+  CHECK(std::stoull(JsonField(json, "link_queue_dropped_bytes")) >
+        1000 * std::stoull(JsonField(json, "link_queue_dropped")));
   CHECK(std::stoi(JsonField(json, "video_frames")) > 30);  // JPEG frames decoded on the way
 }
 
-TEST_CASE("bad link rates, queues and profiles exit 2 with a one-line error saying what was expected", "[faults]") {
+TEST_CASE(
+    "bad link rates, queues and profiles exit 2 with a one-line error saying what was expected",
+    "[faults]") {
   const std::vector<std::pair<std::vector<std::string>, std::string>> cases{
       {{"--link-fault", "rate=0"}, "option --link-fault: expected a rate from 1kbit to 10Gbit"},
       {{"--link-fault", "rate=-1Mbit"}, "(not 'rate=-1Mbit')"},
       {{"--link-fault", "rate=fast"}, "(not 'rate=fast')"},
       {{"--link-fault", "rate=1Mbit,queue=abc"}, "expected a queue depth from 1ms to 10s"},
       {{"--link-fault", "rate=1Mbit,queue=0"}, "(not 'queue=0')"},
-      {{"--link-profile", "dialup"}, "unknown link profile 'dialup': expected one of lan, lte-uplink, satellite, "
-                                     "wifi-busy"},
+      {{"--link-profile", "dialup"},
+       "unknown link profile 'dialup': expected one of lan, lte-uplink, satellite, "
+       "wifi-busy"},
   };
   std::vector<std::vector<std::string>> argvs;
   std::vector<std::string> expectations;
@@ -490,18 +547,24 @@ TEST_CASE("bad link rates, queues and profiles exit 2 with a one-line error sayi
   }
 }
 
-TEST_CASE("link down: the vehicle stops within its watchdog and the run reports the loss once its timeout has passed", "[faults]") {
+TEST_CASE(
+    "link down: the vehicle stops within its watchdog and the run reports the loss once its "
+    "timeout has passed",
+    "[faults]") {
   const auto dir = test::ScratchDir("e2e-link-down");
-  Child run({Bin("haptel"), "run", "--link-fault", "on", "--track", "config/tracks/test-short.yaml", "--json",
-             "--domain", std::to_string(test::UniqueDomain(45)), "--database", (dir / "runs.db").string(),
-             "--vehicle-timeout", "0.5"});
+  Child run({Bin("haptel"), "run", "--link-fault", "on", "--track", "config/tracks/test-short.yaml",
+             "--json", "--domain", std::to_string(test::UniqueDomain(45)), "--database",
+             (dir / "runs.db").string(), "--vehicle-timeout", "0.5"});
   static const std::regex started(R"(vehicle 'robot1' \(sim-robot\) started, pid ([0-9]+))");
   std::smatch m;
-  REQUIRE(test::WaitFor([&] {
-    run.Pump();
-    // Cut only once the vehicle has answered: a cut before would be a vehicle that never started.
-    return std::regex_search(run.err(), m, started) && test::VehicleAnswered(run.err());
-  }, 60.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        run.Pump();
+        // Cut only once the vehicle has answered: a cut before would be a vehicle that never
+        // started.
+        return std::regex_search(run.err(), m, started) && test::VehicleAnswered(run.err());
+      },
+      60.0));
   const pid_t vehicle = std::stoi(m[1]);
   const size_t before = run.err().size();
   REQUIRE(kill(vehicle, SIGUSR1) == 0);  // the vehicle's link is cut both ways
@@ -517,14 +580,19 @@ TEST_CASE("link down: the vehicle stops within its watchdog and the run reports 
   CHECK(run.err().find("watchdog: no command for 0.2", before) != std::string::npos);
 }
 
-TEST_CASE("haptel security init, then a secured lap: the spawned vehicle is secured too; a missing identity is one line", "[faults]") {
+TEST_CASE(
+    "haptel security init, then a secured lap: the spawned vehicle is secured too; a missing "
+    "identity is one line",
+    "[faults]") {
   const auto dir = test::ScratchDir("e2e-security");
   const auto security = dir / "deployment";
   {
-    Child init({Bin("haptel"), "security", "init", security.string(), "--vehicles", "robot1", "--days", "30"});
+    Child init({Bin("haptel"), "security", "init", security.string(), "--vehicles", "robot1",
+                "--days", "30"});
     INFO(init.out() << init.err());
     REQUIRE(init.Wait(120.0) == 0);
-    CHECK(init.out().find("identities operator, vehicle-robot1 (valid 30 days)") != std::string::npos);
+    CHECK(init.out().find("identities operator, vehicle-robot1 (valid 30 days)") !=
+          std::string::npos);
   }
   {
     // Again: refused, nothing overwritten.
@@ -533,11 +601,12 @@ TEST_CASE("haptel security init, then a secured lap: the spawned vehicle is secu
     CHECK(again.err().find("already holds a CA") != std::string::npos);
   }
   const int domain = test::UniqueDomain(46);
-  // Fourteen seconds (its vehicle spawned within them, on a loaded machine) show the secured link both ways (commands
-  // obeyed, states and video back); a whole lap would only add time.
-  Child run({Bin("haptel"), "run", "--security", security.string(), "--track", "config/tracks/test-short.yaml",
-             "--json", "--domain", std::to_string(domain), "--database", (dir / "runs.db").string(),
-             "--vehicle-timeout", "5", "--time-limit", "14"});
+  // Fourteen seconds (its vehicle spawned within them, on a loaded machine) show the secured link
+  // both ways (commands obeyed, states and video back); a whole lap would only add time.
+  Child run({Bin("haptel"), "run", "--security", security.string(), "--track",
+             "config/tracks/test-short.yaml", "--json", "--domain", std::to_string(domain),
+             "--database", (dir / "runs.db").string(), "--vehicle-timeout", "5", "--time-limit",
+             "14"});
   const int code = run.Wait(180.0);
   INFO(run.out() << run.err());
   CHECK(code == 1);
@@ -546,10 +615,12 @@ TEST_CASE("haptel security init, then a secured lap: the spawned vehicle is secu
   CHECK(std::stoull(JsonField(run.LastLine(), "video_frames")) > 0);
 
   // A vehicle the folder has no identity for stops at once, saying so.
-  Child stray({Bin("haptel-vehicle"), "--name", "blimp9", "--track", "config/tracks/test-short.yaml", "--security",
-               security.string(), "--domain", std::to_string(domain)});
+  Child stray({Bin("haptel-vehicle"), "--name", "blimp9", "--track",
+               "config/tracks/test-short.yaml", "--security", security.string(), "--domain",
+               std::to_string(domain)});
   CHECK(stray.Wait(30.0) == 2);
-  CHECK(stray.err().find("no vehicle-blimp9.key for identity 'vehicle-blimp9'") != std::string::npos);
+  CHECK(stray.err().find("no vehicle-blimp9.key for identity 'vehicle-blimp9'") !=
+        std::string::npos);
 }
 
 namespace {
@@ -578,7 +649,8 @@ class OtherHost {
           Run({ip, "link", "set", there_, "netns", name_}) == 0 &&
           Run({ip, "addr", "add", address_here_ + "/24", "dev", here_}) == 0 &&
           Run({ip, "link", "set", here_, "up"}) == 0 &&
-          Run({ip, "netns", "exec", name_, ip, "addr", "add", address_there_ + "/24", "dev", there_}) == 0 &&
+          Run({ip, "netns", "exec", name_, ip, "addr", "add", address_there_ + "/24", "dev",
+               there_}) == 0 &&
           Run({ip, "netns", "exec", name_, ip, "link", "set", there_, "up"}) == 0 &&
           Run({ip, "netns", "exec", name_, ip, "link", "set", "lo", "up"}) == 0;
   }
@@ -611,23 +683,29 @@ class OtherHost {
 
 TEST_CASE("haptel run --attach drives a vehicle in another network namespace, over a veth pair") {
   if (geteuid() != 0) {
-    WARN("SKIPPED: another network namespace needs root (ip netns); the link across hosts was not tested");
+    WARN(
+        "SKIPPED: another network namespace needs root (ip netns); the link across hosts was not "
+        "tested");
     return;
   }
   OtherHost host;
   if (!host.ok()) {
-    WARN("SKIPPED: ip netns or a veth pair could not be made here; the link across hosts was not tested");
+    WARN(
+        "SKIPPED: ip netns or a veth pair could not be made here; the link across hosts was not "
+        "tested");
     return;
   }
   const int domain = test::UniqueDomain(47);
   const auto dir = test::ScratchDir("e2e-netns");
-  HandStartedVehicle vehicle(host.Inside({Bin("haptel-vehicle"), "--track", "config/tracks/test-short.yaml",
-                                          "--domain", std::to_string(domain), "--dds-interfaces",
-                                          host.address_there(), "--dds-peers", host.address_here()}));
+  HandStartedVehicle vehicle(
+      host.Inside({Bin("haptel-vehicle"), "--track", "config/tracks/test-short.yaml", "--domain",
+                   std::to_string(domain), "--dds-interfaces", host.address_there(), "--dds-peers",
+                   host.address_here()}));
   const uint64_t before = host.received_bytes();
-  Child run({Bin("haptel"), "run", "--attach", "--track", "config/tracks/test-short.yaml", "--json", "--domain",
-             std::to_string(domain), "--dds-interfaces", host.address_here(), "--dds-peers", host.address_there(),
-             "--database", (dir / "runs.db").string(), "--vehicle-timeout", "5", "--time-limit", "12"});
+  Child run({Bin("haptel"), "run", "--attach", "--track", "config/tracks/test-short.yaml", "--json",
+             "--domain", std::to_string(domain), "--dds-interfaces", host.address_here(),
+             "--dds-peers", host.address_there(), "--database", (dir / "runs.db").string(),
+             "--vehicle-timeout", "5", "--time-limit", "12"});
   const int code = run.Wait(120.0);
   INFO(run.out() << run.err());
   CHECK(code == 1);
@@ -639,7 +717,8 @@ TEST_CASE("haptel run --attach drives a vehicle in another network namespace, ov
   const uint64_t crossed = host.received_bytes() - before;
   const std::string json = run.LastLine();
   const double video_bytes = std::stod(JsonField(json, "video_kbps")) * 1000.0 / 8.0 *
-                             std::stod(JsonField(json, "video_frames")) / std::stod(JsonField(json, "video_fps"));
+                             std::stod(JsonField(json, "video_frames")) /
+                             std::stod(JsonField(json, "video_fps"));
   INFO("bytes received over the veth pair: " << crossed << ", the run's video: " << video_bytes);
   CHECK(video_bytes > 100000.0);
   CHECK(static_cast<double>(crossed) > video_bytes);
@@ -647,20 +726,26 @@ TEST_CASE("haptel run --attach drives a vehicle in another network namespace, ov
   CHECK(vehicle.child().Wait(30.0) == 0);
 }
 
-TEST_CASE("through a discovery server: a vehicle and an operator that only know the server's address meet and drive") {
+TEST_CASE(
+    "through a discovery server: a vehicle and an operator that only know the server's address "
+    "meet and drive") {
   const int domain = test::UniqueDomain(48);
   const auto dir = test::ScratchDir("e2e-discovery-server");
   const std::string server_address = "127.0.0.1:" + std::to_string(20000 + domain * 10);
   Child server({Bin("haptel"), "discovery-server", "--listen", server_address});
-  REQUIRE(test::WaitFor([&] {
-    server.Pump();
-    return server.out().find("serving on " + server_address) != std::string::npos;
-  }, 30.0));
-  HandStartedVehicle vehicle({Bin("haptel-vehicle"), "--track", "config/tracks/test-short.yaml", "--domain",
-                              std::to_string(domain), "--discovery-server", server_address});
+  REQUIRE(test::WaitFor(
+      [&] {
+        server.Pump();
+        return server.out().find("serving on " + server_address) != std::string::npos;
+      },
+      30.0));
+  HandStartedVehicle vehicle({Bin("haptel-vehicle"), "--track", "config/tracks/test-short.yaml",
+                              "--domain", std::to_string(domain), "--discovery-server",
+                              server_address});
   Child run({Bin("haptel"), "run", "--attach", "--discovery-server", server_address, "--track",
-             "config/tracks/test-short.yaml", "--json", "--domain", std::to_string(domain), "--database",
-             (dir / "runs.db").string(), "--vehicle-timeout", "5", "--time-limit", "12"});
+             "config/tracks/test-short.yaml", "--json", "--domain", std::to_string(domain),
+             "--database", (dir / "runs.db").string(), "--vehicle-timeout", "5", "--time-limit",
+             "12"});
   const int code = run.Wait(120.0);
   INFO(run.out() << run.err());
   CHECK(code == 1);
@@ -669,7 +754,8 @@ TEST_CASE("through a discovery server: a vehicle and an operator that only know 
   // A bad address is one line, before anything starts.
   Child bad({Bin("haptel"), "run", "--discovery-server", "localhost:99999"});
   CHECK(bad.Wait(30.0) == 2);
-  CHECK(bad.err().find("option --discovery-server: expected an IPv4 address and a port") != std::string::npos);
+  CHECK(bad.err().find("option --discovery-server: expected an IPv4 address and a port") !=
+        std::string::npos);
   kill(vehicle.child().pid(), SIGTERM);
   kill(server.pid(), SIGTERM);
   CHECK(server.Wait(30.0) == 0);

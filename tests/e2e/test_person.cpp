@@ -2,13 +2,13 @@
 // through the same interface, a UDP device behind real haptel-device-server
 // processes, a blimp flown in a window with mouse-look and by keys, and the
 // bad input a person can give.
-#include <catch2/catch.hpp>
 #include <signal.h>
 
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdlib>
-#include <opencv2/videoio.hpp>
 #include <fstream>
+#include <opencv2/videoio.hpp>
 #include <regex>
 
 #include "child.hpp"
@@ -26,19 +26,23 @@ namespace {
 
 std::string Bin(const std::string& name) { return (test::BinDir() / name).string(); }
 
-int OneLine(const std::string& text) { return static_cast<int>(std::count(text.begin(), text.end(), '\n')); }
+int OneLine(const std::string& text) {
+  return static_cast<int>(std::count(text.begin(), text.end(), '\n'));
+}
 
 /// A haptel-device-server arm on a free port; returns the port it serves on.
 int StartArm(Child& server) {
   int port = 0;
-  REQUIRE(test::WaitFor([&] {
-    server.Pump();
-    std::smatch m;
-    static const std::regex served(R"(on [^ ]*:(\d+))");
-    if (!std::regex_search(server.out(), m, served)) return false;
-    port = std::stoi(m[1]);
-    return true;
-  }, 30.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        server.Pump();
+        std::smatch m;
+        static const std::regex served(R"(on [^ ]*:(\d+))");
+        if (!std::regex_search(server.out(), m, served)) return false;
+        port = std::stoi(m[1]);
+        return true;
+      },
+      30.0));
   return port;
 }
 
@@ -53,7 +57,8 @@ std::filesystem::path UdpDeviceFile(const std::filesystem::path& dir, int left, 
   out << "name: udp\ndriver: udp\nsides: [left, right]\n";
   if (!calibration.empty()) out << "calibration: " << calibration.string() << "\n";
   out << "servo: {two_sided: true, slow_channel_divider: 6}\n"
-      << "udp:\n  left: {host: 127.0.0.1, port: " << left << "}\n  right: {host: 127.0.0.1, port: " << right
+      << "udp:\n  left: {host: 127.0.0.1, port: " << left
+      << "}\n  right: {host: 127.0.0.1, port: " << right
       << "}\n  timeout_s: 0.002\n  retries: 1\n  lost_after_s: 1.0\n";
   return file;
 }
@@ -73,16 +78,35 @@ TEST_CASE("a recorded device replayed through the same interface reproduces the 
   const auto trace = dir / "lap.trace";
   const std::string domain = std::to_string(test::UniqueDomain(21));
   Child recorded({Bin("haptel"), "run", "--operator", "auto", "--view", "none", "--track",
-                  "config/tracks/test-short.yaml", "--json", "--quiet", "--domain", domain, "--database",
-                  (dir / "runs.db").string(), "--vehicle-timeout", "5", "--trace", trace.string()});
+                  "config/tracks/test-short.yaml", "--json", "--quiet", "--domain", domain,
+                  "--database", (dir / "runs.db").string(), "--vehicle-timeout", "5", "--trace",
+                  trace.string()});
   REQUIRE(recorded.Wait(120.0) == 0);
   const std::string first = recorded.LastLine();
   REQUIRE(std::filesystem::exists(trace.string() + ".calibration.yaml"));
 
-  Child replayed({Bin("haptel"), "run", "--operator", "person", "--view", "none", "--interface", "gesture",
-                  "--device", "config/devices/replay.yaml", "--trace-in", trace.string(), "--track",
-                  "config/tracks/test-short.yaml", "--json", "--quiet", "--domain", domain, "--database",
-                  (dir / "runs.db").string(), "--vehicle-timeout", "5"});
+  Child replayed({Bin("haptel"),
+                  "run",
+                  "--operator",
+                  "person",
+                  "--view",
+                  "none",
+                  "--interface",
+                  "gesture",
+                  "--device",
+                  "config/devices/replay.yaml",
+                  "--trace-in",
+                  trace.string(),
+                  "--track",
+                  "config/tracks/test-short.yaml",
+                  "--json",
+                  "--quiet",
+                  "--domain",
+                  domain,
+                  "--database",
+                  (dir / "runs.db").string(),
+                  "--vehicle-timeout",
+                  "5"});
   const int code = replayed.Wait(120.0);
   INFO("recorded: " << first << "\nreplayed: " << replayed.out() << "\n" << replayed.err());
   REQUIRE(code == 0);
@@ -97,7 +121,9 @@ TEST_CASE("a recorded device replayed through the same interface reproduces the 
   CHECK(std::stod(JsonField(second, "distance_m")) > 1.0);
 }
 
-TEST_CASE("a person's run on a UDP device behind two haptel-device-server processes; a lost arm ends it safely") {
+TEST_CASE(
+    "a person's run on a UDP device behind two haptel-device-server processes; a lost arm ends it "
+    "safely") {
   const auto dir = test::ScratchDir("e2e-udp");
   Child left({Bin("haptel-device-server"), "--side", "left", "--port", "0"});
   Child right({Bin("haptel-device-server"), "--side", "right", "--port", "0"});
@@ -105,10 +131,25 @@ TEST_CASE("a person's run on a UDP device behind two haptel-device-server proces
   const int right_port = StartArm(right);
   const auto device = UdpDeviceFile(dir, left_port, right_port, Calibration(dir, "udp"));
   const std::string domain = std::to_string(test::UniqueDomain(22));
-  const std::vector<std::string> base{Bin("haptel"), "run", "--operator", "person", "--view", "none",
-                                      "--interface", "gesture", "--device", device.string(), "--track",
-                                      "config/tracks/test-short.yaml", "--json", "--domain", domain,
-                                      "--database", (dir / "runs.db").string(), "--vehicle-timeout", "5"};
+  const std::vector<std::string> base{Bin("haptel"),
+                                      "run",
+                                      "--operator",
+                                      "person",
+                                      "--view",
+                                      "none",
+                                      "--interface",
+                                      "gesture",
+                                      "--device",
+                                      device.string(),
+                                      "--track",
+                                      "config/tracks/test-short.yaml",
+                                      "--json",
+                                      "--domain",
+                                      domain,
+                                      "--database",
+                                      (dir / "runs.db").string(),
+                                      "--vehicle-timeout",
+                                      "5"};
   SECTION("the run holds the arms until its time limit") {
     auto argv = base;
     argv.insert(argv.end(), {"--time-limit", "3", "--quiet"});
@@ -123,10 +164,12 @@ TEST_CASE("a person's run on a UDP device behind two haptel-device-server proces
   }
   SECTION("an arm that stops answering: forces zeroed, vehicle stopped, exit 3") {
     Child run(base);
-    REQUIRE(test::WaitFor([&] {
-      run.Pump();
-      return run.err().find("lap") != std::string::npos;  // the first progress line: running
-    }, 60.0));
+    REQUIRE(test::WaitFor(
+        [&] {
+          run.Pump();
+          return run.err().find("lap") != std::string::npos;  // the first progress line: running
+        },
+        60.0));
     kill(right.pid(), SIGKILL);
     const int code = run.Wait(30.0);
     INFO(run.out() << run.err());
@@ -141,37 +184,63 @@ TEST_CASE("a person's run on a UDP device behind two haptel-device-server proces
 double LastCameraPan(const std::string& err) {
   static const std::regex camera(R"(camera ([-+0-9.]+) ([-+0-9.]+) rad)");
   double last = std::nan("");
-  for (auto it = std::sregex_iterator(err.begin(), err.end(), camera); it != std::sregex_iterator(); ++it) {
+  for (auto it = std::sregex_iterator(err.begin(), err.end(), camera); it != std::sregex_iterator();
+       ++it) {
     last = std::stod((*it)[1]);
   }
   return last;
 }
 
-TEST_CASE("a person flies the blimp in a window: dragging the mouse turns the pilot camera through the link") {
+TEST_CASE(
+    "a person flies the blimp in a window: dragging the mouse turns the pilot camera through the "
+    "link") {
   XServer x;
   const auto dir = test::ScratchDir("e2e-blimp-person");
   Child left({Bin("haptel-device-server"), "--side", "left", "--port", "0"});
   Child right({Bin("haptel-device-server"), "--side", "right", "--port", "0"});
   const auto device = UdpDeviceFile(dir, StartArm(left), StartArm(right), Calibration(dir, "udp"));
   const auto mp4 = dir / "flight.mp4";
-  Child run({Bin("haptel"), "run", "--config", "config/blimp.yaml", "--operator", "person", "--device",
-             device.string(), "--view", "window", "--record", mp4.string(), "--json", "--domain",
-             std::to_string(test::UniqueDomain(23)), "--database", (dir / "runs.db").string(), "--vehicle-timeout",
-             "5", "--time-limit", "120"});
+  Child run({Bin("haptel"),
+             "run",
+             "--config",
+             "config/blimp.yaml",
+             "--operator",
+             "person",
+             "--device",
+             device.string(),
+             "--view",
+             "window",
+             "--record",
+             mp4.string(),
+             "--json",
+             "--domain",
+             std::to_string(test::UniqueDomain(23)),
+             "--database",
+             (dir / "runs.db").string(),
+             "--vehicle-timeout",
+             "5",
+             "--time-limit",
+             "120"});
   // Flying: the vehicle's state reports the camera straight ahead.
-  REQUIRE(test::WaitFor([&] {
-    run.Pump();
-    return LastCameraPan(run.err()) == 0.0;
-  }, 90.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        run.Pump();
+        return LastCameraPan(run.err()) == 0.0;
+      },
+      90.0));
   // Drag 150 px to the right: the head turns right by 150 × 5.236 mrad.
-  REQUIRE(XDoTool({"search", "--sync", "--name", "Haptel", "windowfocus", "--sync", "mousemove", "--window", "%1",
-                   "400", "300", "mousedown", "1", "mousemove_relative", "--sync", "--", "150", "0", "mouseup", "1"}) ==
-          0);
+  REQUIRE(
+      XDoTool(
+          {"search",   "--sync", "--name", "Haptel", "windowfocus", "--sync", "mousemove",
+           "--window", "%1",     "400",    "300",    "mousedown",   "1",      "mousemove_relative",
+           "--sync",   "--",     "150",    "0",      "mouseup",     "1"}) == 0);
   // The camera as the vehicle applied it follows (a state seen in the next progress lines).
-  const bool followed = test::WaitFor([&] {
-    run.Pump();
-    return LastCameraPan(run.err()) < -0.7;
-  }, 30.0);
+  const bool followed = test::WaitFor(
+      [&] {
+        run.Pump();
+        return LastCameraPan(run.err()) < -0.7;
+      },
+      30.0);
   INFO(run.err());
   CHECK(followed);
   const std::string json = test::EndWithEscape(run);
@@ -185,26 +254,33 @@ TEST_CASE("a person flies the blimp in a window: dragging the mouse turns the pi
   CHECK(video.get(cv::CAP_PROP_FRAME_COUNT) > 30);
 }
 
-TEST_CASE("a person at a display without a haptic device flies the blimp by keys, through the hop's gate") {
+TEST_CASE(
+    "a person at a display without a haptic device flies the blimp by keys, through the hop's "
+    "gate") {
   XServer x;
   const auto dir = test::ScratchDir("e2e-blimp-keys");
   // No --operator, no --interface: at a display with the simulated device,
   // a person and the blimp's keys.
-  Child run({Bin("haptel"), "run", "--config", "config/blimp.yaml", "--track", "config/tracks/blimp-hop.yaml",
-             "--json", "--domain", std::to_string(test::UniqueDomain(24)), "--database", (dir / "runs.db").string(),
+  Child run({Bin("haptel"), "run", "--config", "config/blimp.yaml", "--track",
+             "config/tracks/blimp-hop.yaml", "--json", "--domain",
+             std::to_string(test::UniqueDomain(24)), "--database", (dir / "runs.db").string(),
              "--vehicle-timeout", "5", "--time-limit", "150"});
   // The blimp is up and resting on its pad, nothing pressed.
-  REQUIRE(test::WaitFor([&] {
-    run.Pump();
-    return run.err().find("power 0.00  helix +0.00") != std::string::npos;
-  }, 90.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        run.Pump();
+        return run.err().find("power 0.00  helix +0.00") != std::string::npos;
+      },
+      90.0));
   // W five times: half power; up once: the helix plane a quarter up (a gentle climb).
-  REQUIRE(XDoTool({"search", "--sync", "--name", "Haptel", "windowfocus", "--sync", "key", "--delay", "60", "w", "w",
-                   "w", "w", "w", "Up"}) == 0);
-  const bool through = test::WaitFor([&] {
-    run.Pump();
-    return run.err().find("gates 1/1") != std::string::npos;
-  }, 90.0);
+  REQUIRE(XDoTool({"search", "--sync", "--name", "Haptel", "windowfocus", "--sync", "key",
+                   "--delay", "60", "w", "w", "w", "w", "w", "Up"}) == 0);
+  const bool through = test::WaitFor(
+      [&] {
+        run.Pump();
+        return run.err().find("gates 1/1") != std::string::npos;
+      },
+      90.0);
   INFO(run.err());
   CHECK(run.err().find("power 0.50  helix +0.25") != std::string::npos);
   CHECK(through);
@@ -215,13 +291,14 @@ TEST_CASE("a person at a display without a haptic device flies the blimp by keys
   CHECK(JsonField(json, "obstacles_touched") == "0");
 
   // The gesture cockpit wants a haptic device's arms: refused, saying why and what else flies.
-  Child gesture({Bin("haptel"), "run", "--config", "config/blimp.yaml", "--operator", "person", "--interface",
-                 "blimp-gesture"});
+  Child gesture({Bin("haptel"), "run", "--config", "config/blimp.yaml", "--operator", "person",
+                 "--interface", "blimp-gesture"});
   CHECK(gesture.Wait(30.0) == 2);
   CHECK(gesture.err().find("no arms for a person") != std::string::npos);
   CHECK(gesture.err().find("blimp-keys") != std::string::npos);
   // Keys without a window cannot be read.
-  Child blind({Bin("haptel"), "run", "--config", "config/blimp.yaml", "--operator", "person", "--view", "none"});
+  Child blind({Bin("haptel"), "run", "--config", "config/blimp.yaml", "--operator", "person",
+               "--view", "none"});
   CHECK(blind.Wait(30.0) == 2);
   CHECK(blind.err().find("--interface blimp-gamepad") != std::string::npos);
 }
@@ -238,7 +315,8 @@ TEST_CASE("a person's bad input exits 2 with one line naming the fix") {
   }
   SECTION("a real device without a calibration names the command that makes one") {
     const auto device = UdpDeviceFile(dir, 47001, 47002, "");
-    Child c({Bin("haptel"), "run", "--operator", "person", "--view", "none", "--device", device.string()});
+    Child c({Bin("haptel"), "run", "--operator", "person", "--view", "none", "--device",
+             device.string()});
     CHECK(c.Wait(30.0) == 2);
     CHECK(c.err().find("haptel calibrate") != std::string::npos);
     CHECK(c.err().find("udp.yaml") != std::string::npos);
@@ -246,14 +324,16 @@ TEST_CASE("a person's bad input exits 2 with one line naming the fix") {
   }
   SECTION("a calibration measured on another device is stale") {
     const auto device = UdpDeviceFile(dir, 47001, 47002, Calibration(dir, "other-arms"));
-    Child c({Bin("haptel"), "run", "--operator", "person", "--view", "none", "--device", device.string()});
+    Child c({Bin("haptel"), "run", "--operator", "person", "--view", "none", "--device",
+             device.string()});
     CHECK(c.Wait(30.0) == 2);
     CHECK(c.err().find("stale") != std::string::npos);
     CHECK(c.err().find("haptel calibrate") != std::string::npos);
   }
   SECTION("the automatic operator cannot move a real device") {
     const auto device = UdpDeviceFile(dir, 47001, 47002, Calibration(dir, "udp"));
-    Child c({Bin("haptel"), "run", "--operator", "auto", "--view", "none", "--device", device.string()});
+    Child c({Bin("haptel"), "run", "--operator", "auto", "--view", "none", "--device",
+             device.string()});
     CHECK(c.Wait(30.0) == 2);
     CHECK(c.err().find("--operator person") != std::string::npos);
   }

@@ -33,27 +33,47 @@ std::filesystem::path VehicleFile(const std::filesystem::path& dir, int ros_doma
   };
   replace("world: ../tracks/test-short.yaml",
           "world: " + std::filesystem::absolute("config/tracks/test-short.yaml").string());
-  replace("  domain_id: 0                     # the robot's", "  domain_id: " + std::to_string(ros_domain) + "  #");
+  replace("  domain_id: 0                     # the robot's",
+          "  domain_id: " + std::to_string(ros_domain) + "  #");
   return test::WriteFile(dir / "ros2-robot.yaml", text);
 }
 
-/// The stand-in robot's command line on `ros_domain` (its top speed the vehicle file's drive.max_speed).
+/// The stand-in robot's command line on `ros_domain` (its top speed the vehicle file's
+/// drive.max_speed).
 std::vector<std::string> StandIn(int ros_domain) {
-  return {Bin("haptel-ros2-standin"), "--domain", std::to_string(ros_domain), "--unicast", "127.0.0.1",
-          "--max-speed", "0.3"};
+  return {Bin("haptel-ros2-standin"),
+          "--domain",
+          std::to_string(ros_domain),
+          "--unicast",
+          "127.0.0.1",
+          "--max-speed",
+          "0.3"};
 }
 
 /// `haptel run` of the short track with the vehicle file in `dir`, on a domain of its own.
-std::vector<std::string> Lap(const std::filesystem::path& dir, const std::filesystem::path& vehicle, int salt) {
-  return {Bin("haptel"), "run", "--vehicle", vehicle.string(), "--track", "config/tracks/test-short.yaml",
-          "--domain", std::to_string(test::UniqueDomain(salt)), "--database", (dir / "runs.db").string(), "--json",
-          "--vehicle-timeout", "5"};
+std::vector<std::string> Lap(const std::filesystem::path& dir, const std::filesystem::path& vehicle,
+                             int salt) {
+  return {Bin("haptel"),
+          "run",
+          "--vehicle",
+          vehicle.string(),
+          "--track",
+          "config/tracks/test-short.yaml",
+          "--domain",
+          std::to_string(test::UniqueDomain(salt)),
+          "--database",
+          (dir / "runs.db").string(),
+          "--json",
+          "--vehicle-timeout",
+          "5"};
 }
 
 }  // namespace
 
-TEST_CASE("the ROS 2 adapter drives a Cyclone DDS robot round the short track, its camera on the operator's screen, "
-          "its laser in the operator's state") {
+TEST_CASE(
+    "the ROS 2 adapter drives a Cyclone DDS robot round the short track, its camera on the "
+    "operator's screen, "
+    "its laser in the operator's state") {
   const auto dir = test::ScratchDir("e2e-ros2");
   const int ros_domain = test::UniqueDomain(41);
   const auto vehicle = VehicleFile(dir, ros_domain);
@@ -92,7 +112,8 @@ TEST_CASE("the ROS 2 adapter drives a Cyclone DDS robot round the short track, i
   CHECK(std::stod(JsonField(done, "distance_m")) > 2.5);
 }
 
-TEST_CASE("a ROS 2 robot that goes silent mid-lap is reported lost and the run made safe (exit 3)") {
+TEST_CASE(
+    "a ROS 2 robot that goes silent mid-lap is reported lost and the run made safe (exit 3)") {
   const auto dir = test::ScratchDir("e2e-ros2-silent");
   const int ros_domain = test::UniqueDomain(43);
   const auto vehicle = VehicleFile(dir, ros_domain);
@@ -100,10 +121,12 @@ TEST_CASE("a ROS 2 robot that goes silent mid-lap is reported lost and the run m
   REQUIRE(test::WaitForErr(robot, "up on domain", 30.0));
   Child run(Lap(dir, vehicle, 42));
   // Driving: the first progress line with a lap clock running.
-  REQUIRE(test::WaitFor([&] {
-    run.Pump();
-    return run.err().find("gates 1/2") != std::string::npos;
-  }, 120.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        run.Pump();
+        return run.err().find("gates 1/2") != std::string::npos;
+      },
+      120.0));
   REQUIRE(kill(robot.pid(), SIGKILL) == 0);
   const int code = run.Wait(60.0);
   INFO(run.out() << run.err());

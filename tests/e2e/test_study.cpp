@@ -12,9 +12,9 @@
 #include <ctime>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
-#include <set>
 #include <regex>
+#include <set>
+#include <sstream>
 #include <string>
 #include <tuple>
 #include <utility>
@@ -22,9 +22,9 @@
 
 #include "../study/console_client.hpp"
 #include "child.hpp"
-#include "xserver.hpp"
 #include "haptel/record/recorder.hpp"
 #include "test_env.hpp"
+#include "xserver.hpp"
 
 using namespace haptel;
 using haptel::test::Child;
@@ -45,15 +45,22 @@ std::filesystem::path SmallStudy(const std::filesystem::path& dir, int participa
   const auto file = dir / "small-study.yaml";
   std::ofstream out(file);
   out << "name: small-e2e\n"
-         "run: " << (source / run).string() << "\n"
-         "track: " << (source / "config/tracks/test-short.yaml").string() << "\n"
+         "run: "
+      << (source / run).string()
+      << "\n"
+         "track: "
+      << (source / "config/tracks/test-short.yaml").string()
+      << "\n"
          "operators: synthetic\n"
          "conditions:\n"
          "  - {name: first, interface: gesture}\n"
-         "  - {name: second, interface: gesture" << second_condition_options << "}\n"
+         "  - {name: second, interface: gesture"
+      << second_condition_options
+      << "}\n"
          "design: {order: fixed}\n"
-         "trial_cap_s: 6\n" << extra_lines <<
-         "profiles:\n"
+         "trial_cap_s: 6\n"
+      << extra_lines
+      << "profiles:\n"
          "  plain: {steering_noise: 0.02, seed: 3}\n"
          "participants:\n";
   for (int p = 1; p <= participants; ++p) out << "  - {id: P" << p << ", profile: plain}\n";
@@ -78,24 +85,27 @@ std::string Rewritten(const std::filesystem::path& from,
 std::filesystem::path CanRunFile(const std::filesystem::path& dir, const std::string& name) {
   const auto config = std::filesystem::current_path() / "config";
   const auto vehicle = dir / "can-robot-sim.yaml";
-  std::ofstream(vehicle) << Rewritten(config / "vehicles/can-robot-sim.yaml",
-                                      {{"name: robot1", "name: " + name},
-                                       {"world: ../tracks/", "world: " + (config / "tracks").string() + "/"},
-                                       {"log_dir: ../../runs/can", "log_dir: " + (dir / "can").string()}});
+  std::ofstream(vehicle) << Rewritten(
+      config / "vehicles/can-robot-sim.yaml",
+      {{"name: robot1", "name: " + name},
+       {"world: ../tracks/", "world: " + (config / "tracks").string() + "/"},
+       {"log_dir: ../../runs/can", "log_dir: " + (dir / "can").string()}});
   const auto run = dir / "can-run.yaml";
-  std::ofstream(run) << Rewritten(config / "haptel.yaml",
-                                  {{"track: tracks/", "track: " + (config / "tracks").string() + "/"},
-                                   {"vehicle: vehicles/sim-robot.yaml", "vehicle: " + vehicle.string()},
-                                   {"device: devices/", "device: " + (config / "devices").string() + "/"},
-                                   {"physics: physics.yaml", "physics: " + (config / "physics.yaml").string()}})
-                     << "interfaces_dir: " << (config / "interfaces").string() << "\n";
+  std::ofstream(run)
+      << Rewritten(config / "haptel.yaml",
+                   {{"track: tracks/", "track: " + (config / "tracks").string() + "/"},
+                    {"vehicle: vehicles/sim-robot.yaml", "vehicle: " + vehicle.string()},
+                    {"device: devices/", "device: " + (config / "devices").string() + "/"},
+                    {"physics: physics.yaml", "physics: " + (config / "physics.yaml").string()}})
+      << "interfaces_dir: " << (config / "interfaces").string() << "\n";
   return run;
 }
 
 /// Runs a `haptel study run` says it saved, one "(run N)" per finished trial.
 size_t SavedRuns(const std::string& err) {
   static const std::regex saved(R"(\(run [0-9]+\))");
-  return static_cast<size_t>(std::distance(std::sregex_iterator(err.begin(), err.end(), saved), std::sregex_iterator()));
+  return static_cast<size_t>(
+      std::distance(std::sregex_iterator(err.begin(), err.end(), saved), std::sregex_iterator()));
 }
 
 }  // namespace
@@ -105,8 +115,9 @@ TEST_CASE("a study killed mid-trial resumes and records each planned trial once"
   const auto study = SmallStudy(dir, 1);  // two trials: the second is killed
   const auto db = dir / "study.db";
   const std::string domain = std::to_string(test::UniqueDomain(41));
-  const std::vector<std::string> command = {Bin("haptel"), "study", "run", study.string(), "--database",
-                                            db.string(), "--domain", domain, "--json"};
+  const std::vector<std::string> command = {Bin("haptel"),  "study",      "run",
+                                            study.string(), "--database", db.string(),
+                                            "--domain",     domain,       "--json"};
 
   std::string first_err;
   {  // First start: kill -9 once the second trial is under way.
@@ -124,7 +135,8 @@ TEST_CASE("a study killed mid-trial resumes and records each planned trial once"
         [&] {
           first.Pump();
           const auto at = first.err().find("trial 2/2");
-          return first.err().find("haptel-vehicle: info: vehicle", at) != std::string::npos || !first.Alive();
+          return first.err().find("haptel-vehicle: info: vehicle", at) != std::string::npos ||
+                 !first.Alive();
         },
         60.0));
     REQUIRE(first.Alive());
@@ -155,12 +167,14 @@ TEST_CASE("a study killed mid-trial resumes and records each planned trial once"
   std::set<std::tuple<std::string, int>> trials;
   std::set<int64_t> runs;
   sqlite3_stmt* select = nullptr;
-  REQUIRE(sqlite3_prepare_v2(recorder.handle(), "SELECT participant, position, run_id FROM study_trials", -1, &select,
+  REQUIRE(sqlite3_prepare_v2(recorder.handle(),
+                             "SELECT participant, position, run_id FROM study_trials", -1, &select,
                              nullptr) == SQLITE_OK);
   int rows = 0;
   while (sqlite3_step(select) == SQLITE_ROW) {
     ++rows;
-    trials.emplace(reinterpret_cast<const char*>(sqlite3_column_text(select, 0)), sqlite3_column_int(select, 1));
+    trials.emplace(reinterpret_cast<const char*>(sqlite3_column_text(select, 0)),
+                   sqlite3_column_int(select, 1));
     runs.insert(sqlite3_column_int64(select, 2));
   }
   sqlite3_finalize(select);
@@ -175,20 +189,27 @@ TEST_CASE("a study killed mid-trial resumes and records each planned trial once"
   CHECK(record::Recorder(db).LoadAll().size() == runs_after_kill + SavedRuns(second.err()));
 }
 
-TEST_CASE("Abort in a synthetic study ends the trial under way once; the study then runs to its end") {
+TEST_CASE(
+    "Abort in a synthetic study ends the trial under way once; the study then runs to its end") {
   const auto dir = test::ScratchDir("e2e-study-abort");
   const auto file = SmallStudy(dir, 1);
   const auto db = dir / "abort.db";
   const int port = 20000 + static_cast<int>((getpid() + 7919) % 20000);
   Child study({Bin("haptel"), "study", "run", file.string(), "--database", db.string(), "--domain",
-               std::to_string(test::UniqueDomain(43)), "--console", "--port", std::to_string(port), "--json"});
+               std::to_string(test::UniqueDomain(43)), "--console", "--port", std::to_string(port),
+               "--json"});
   test::ConsoleClient console("127.0.0.1", port);
   auto status = [&](const std::string& key) {
     const auto r = console.Get("/status.json");
     return r ? test::JsonField(r->body, key) : std::string();
   };
   INFO(study.err());
-  REQUIRE(test::WaitFor([&] { study.Pump(); return !status("live").empty() || !study.Alive(); }, 120.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        study.Pump();
+        return !status("live").empty() || !study.Alive();
+      },
+      120.0));
   const auto abort = console.Post("/abort");
   REQUIRE(abort);
   CHECK(abort->status == 303);
@@ -202,7 +223,8 @@ TEST_CASE("Abort in a synthetic study ends the trial under way once; the study t
   CHECK(SavedRuns(study.err()) >= 2);
   CHECK(recorder.LoadAll().size() == SavedRuns(study.err()) + 1);
   sqlite3_stmt* select = nullptr;
-  REQUIRE(sqlite3_prepare_v2(recorder.handle(), "SELECT count(*) FROM study_events WHERE kind = 'aborted'", -1,
+  REQUIRE(sqlite3_prepare_v2(recorder.handle(),
+                             "SELECT count(*) FROM study_events WHERE kind = 'aborted'", -1,
                              &select, nullptr) == SQLITE_OK);
   REQUIRE(sqlite3_step(select) == SQLITE_ROW);
   CHECK(sqlite3_column_int(select, 0) == 1);
@@ -212,12 +234,14 @@ TEST_CASE("Abort in a synthetic study ends the trial under way once; the study t
 // In simulated time, which carries the link's delay each way and runs the
 // predictor as in real time (the resume and abort cases above run real time
 // over DDS; test_e2e_link drives the predictor over a real delayed link).
-TEST_CASE("conditions that differ only in prediction, over the study's faulted link, are recorded per trial") {
+TEST_CASE(
+    "conditions that differ only in prediction, over the study's faulted link, are recorded per "
+    "trial") {
   const auto dir = test::ScratchDir("e2e-study-predict");
   const auto file = SmallStudy(dir, 1, ", predict: true", "link_fault: delay=100ms\n");
   const auto db = dir / "predict.db";
-  Child study({Bin("haptel"), "study", "run", file.string(), "--database", db.string(), "--simulated-time",
-               "--json"});
+  Child study({Bin("haptel"), "study", "run", file.string(), "--database", db.string(),
+               "--simulated-time", "--json"});
   INFO(study.err());
   REQUIRE(study.Wait(300.0) == 0);
   CHECK(test::JsonField(study.LastLine(), "trials_done") == "2");
@@ -228,13 +252,15 @@ TEST_CASE("conditions that differ only in prediction, over the study's faulted l
   CHECK(runs[1].predict);
   for (const record::RunRecord& r : runs) {
     CHECK(r.link_fault == "delay=0.1s,jitter=0s,loss=0");
-    CHECK(r.command_rtt_ms_p50 > 150.0);  // the fault was on: 2 x 100 ms
+    CHECK(r.command_rtt_ms_p50 > 150.0);     // the fault was on: 2 x 100 ms
     CHECK(r.prediction_error_m_p95 >= 0.0);  // the model ran in both
-    CHECK(r.speedup > 0.0);  // recorded as a simulated-time run (-1: real time)
+    CHECK(r.speedup > 0.0);                  // recorded as a simulated-time run (-1: real time)
   }
 }
 
-TEST_CASE("capped trials are scored at exactly the cap on the lap's clock, a cockpit's as a gesture's (in simulated time)") {
+TEST_CASE(
+    "capped trials are scored at exactly the cap on the lap's clock, a cockpit's as a gesture's "
+    "(in simulated time)") {
   // The cap counts the lap from the start line: a cockpit's grasp of its
   // controls and the approach before the line are recorded apart
   // (approach_s), not taken off its lap time. 10 s: past both interfaces'
@@ -248,8 +274,12 @@ TEST_CASE("capped trials are scored at exactly the cap on the lap's clock, a coc
   {
     std::ofstream out(file);
     out << "name: cap-e2e\n"
-           "run: " << (source / "config/haptel.yaml").string() << "\n"
-           "track: " << (source / "config/tracks/test-short.yaml").string() << "\n"
+           "run: "
+        << (source / "config/haptel.yaml").string()
+        << "\n"
+           "track: "
+        << (source / "config/tracks/test-short.yaml").string()
+        << "\n"
            "operators: synthetic\n"
            "conditions:\n"
            "  - {name: wheel, interface: cockpit}\n"
@@ -283,9 +313,11 @@ TEST_CASE("capped trials are scored at exactly the cap on the lap's clock, a coc
     CHECK(r.speedup > 0.0);  // stepped in simulated time
   }
   sqlite3_stmt* select = nullptr;
-  REQUIRE(sqlite3_prepare_v2(recorder.handle(),
-                             "SELECT condition, lap_time_s, completed, approach_s FROM study_trials ORDER BY position",
-                             -1, &select, nullptr) == SQLITE_OK);
+  REQUIRE(
+      sqlite3_prepare_v2(
+          recorder.handle(),
+          "SELECT condition, lap_time_s, completed, approach_s FROM study_trials ORDER BY position",
+          -1, &select, nullptr) == SQLITE_OK);
   std::vector<std::string> conditions;
   while (sqlite3_step(select) == SQLITE_ROW) {
     conditions.emplace_back(reinterpret_cast<const char*>(sqlite3_column_text(select, 0)));
@@ -323,9 +355,12 @@ TEST_CASE("a trial whose CAN bus log fails is kept, said, and makes the study ex
   CHECK(test::JsonField(json, "finished") == "true");
   CHECK(test::JsonField(json, "trials_done") == "2");
   CHECK(test::JsonField(json, "outputs_failed") == std::to_string(runs));
-  CHECK(study.out().find("outputs failed: " + std::to_string(runs) + " trial") != std::string::npos);
-  for (const std::string trial : {"participant P1, position 1, first", "participant P1, position 2, second"}) {
-    const std::string said = "[study]   output failed: " + trial + ": the vehicle's CAN bus log: cannot write " +
+  CHECK(study.out().find("outputs failed: " + std::to_string(runs) + " trial") !=
+        std::string::npos);
+  for (const std::string trial :
+       {"participant P1, position 1, first", "participant P1, position 2, second"}) {
+    const std::string said = "[study]   output failed: " + trial +
+                             ": the vehicle's CAN bus log: cannot write " +
                              (can_dir / name).string() + "-";
     CHECK(study.err().find(said) != std::string::npos);
   }
@@ -342,7 +377,8 @@ TEST_CASE("a trial whose CAN bus log fails is kept, said, and makes the study ex
     return n;
   };
   CHECK(count("SELECT COUNT(*) FROM study_trials") == 2);
-  CHECK(count("SELECT COUNT(*) FROM study_events WHERE kind = 'output failed' AND participant = 'P1' AND "
+  CHECK(count("SELECT COUNT(*) FROM study_events WHERE kind = 'output failed' AND participant = "
+              "'P1' AND "
               "detail LIKE '%No space left on device%'") == static_cast<int>(runs));
 }
 
@@ -356,14 +392,21 @@ TEST_CASE("a study that cannot work is refused before anything runs") {
       std::ifstream in(study);
       text.assign(std::istreambuf_iterator<char>(in), {});
     }
-    Child first({Bin("haptel"), "study", "run", study.string(), "--database", db.string(), "--domain", std::to_string(test::UniqueDomain(43))});
-    REQUIRE(test::WaitFor([&] { first.Pump(); return first.err().find("trial 1/4") != std::string::npos || !first.Alive(); }, 120.0));
+    Child first({Bin("haptel"), "study", "run", study.string(), "--database", db.string(),
+                 "--domain", std::to_string(test::UniqueDomain(43))});
+    REQUIRE(test::WaitFor(
+        [&] {
+          first.Pump();
+          return first.err().find("trial 1/4") != std::string::npos || !first.Alive();
+        },
+        120.0));
     first.Terminate();
     const auto changed = dir / "changed.yaml";
     std::ofstream(changed) << text + "  - {id: P3, profile: plain}\n";
     Child again({Bin("haptel"), "study", "run", changed.string(), "--database", db.string()});
     CHECK(again.Wait(60.0) == 2);
-    CHECK(again.err().find("participants: P1, P2, the file now says P1, P2, P3") != std::string::npos);
+    CHECK(again.err().find("participants: P1, P2, the file now says P1, P2, P3") !=
+          std::string::npos);
     // The plan the same, what a trial is not: refused too, naming the key and both values.
     const auto capped = dir / "capped.yaml";
     const size_t cap = text.find("trial_cap_s: 6");
@@ -392,12 +435,17 @@ TEST_CASE("a study that cannot work is refused before anything runs") {
     unsetenv("DISPLAY");
     const auto source = std::filesystem::current_path();
     const auto person = dir / "practice.yaml";
-    std::ofstream(person) << "name: practice-e2e\n"
-                             "run: " << (source / "config/haptel.yaml").string() << "\n"
-                             "track: " << (source / "config/tracks/test-short.yaml").string() << "\n"
-                             "operators: person\n"
-                             "conditions: [{name: one, interface: gesture}, {name: two, interface: cockpit}]\n"
-                             "design: {order: fixed}\n";
+    std::ofstream(person)
+        << "name: practice-e2e\n"
+           "run: "
+        << (source / "config/haptel.yaml").string()
+        << "\n"
+           "track: "
+        << (source / "config/tracks/test-short.yaml").string()
+        << "\n"
+           "operators: person\n"
+           "conditions: [{name: one, interface: gesture}, {name: two, interface: cockpit}]\n"
+           "design: {order: fixed}\n";
     const auto fresh = dir / "practice.db";
     Child run({Bin("haptel"), "study", "run", person.string(), "--database", fresh.string()});
     const int code = run.Wait(60.0);
@@ -412,7 +460,8 @@ TEST_CASE("a study that cannot work is refused before anything runs") {
      // line, before the study is started or its plan written.
     const auto can_study = SmallStudy(dir, 1, "", "", CanRunFile(dir, "canrefused"));
     const auto fresh = dir / "simulated-can.db";
-    Child run({Bin("haptel"), "study", "run", can_study.string(), "--database", fresh.string(), "--simulated-time"});
+    Child run({Bin("haptel"), "study", "run", can_study.string(), "--database", fresh.string(),
+               "--simulated-time"});
     CHECK(run.Wait(60.0) == 2);
     INFO(run.err());
     CHECK(run.err().find("--simulated-time") != std::string::npos);
@@ -422,15 +471,21 @@ TEST_CASE("a study that cannot work is refused before anything runs") {
   }
 }
 
-TEST_CASE("a person study from the console: a participant added, a practice lap, trials, questionnaires") {
+TEST_CASE(
+    "a person study from the console: a participant added, a practice lap, trials, "
+    "questionnaires") {
   // A display of the test's own: the practice lap is driven with the keys in a window.
   const test::XServer x;
   const auto dir = test::ScratchDir("e2e-study-person");
   const auto source = std::filesystem::current_path();
   const auto file = dir / "person.yaml";
   std::ofstream(file) << "name: person-e2e\n"
-                         "run: " << (source / "config/haptel.yaml").string() << "\n"
-                         "track: " << (source / "config/tracks/test-short.yaml").string() << "\n"
+                         "run: "
+                      << (source / "config/haptel.yaml").string()
+                      << "\n"
+                         "track: "
+                      << (source / "config/tracks/test-short.yaml").string()
+                      << "\n"
                          "operators: person\n"
                          "conditions:\n"
                          "  - {name: first, interface: gesture}\n"
@@ -453,22 +508,33 @@ TEST_CASE("a person study from the console: a participant added, a practice lap,
   };
   INFO(study.err());
   // An open study waits for its participants.
-  REQUIRE(test::WaitFor([&] { study.Pump(); return status("waiting_for_participants") == "true" || !study.Alive(); },
-                        60.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        study.Pump();
+        return status("waiting_for_participants") == "true" || !study.Alive();
+      },
+      60.0));
   const auto added = console.Post("/participants", httplib::Params{{"id", "P1"}});
   REQUIRE(added);
   CHECK(added->status == 303);
 
   // The practice lap first: the keyboard, the camera's picture; the console
   // shows the camera's thumbnail, and Abort ends the practice.
-  REQUIRE(test::WaitFor([&] { study.Pump(); return !status("next").empty() || !study.Alive(); }, 60.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        study.Pump();
+        return !status("next").empty() || !study.Alive();
+      },
+      60.0));
   CHECK(status("next").find("practice lap for participant P1") != std::string::npos);
   REQUIRE(console.Post("/start"));
-  REQUIRE(test::WaitFor([&] {
-    study.Pump();
-    const std::string frames = status("video_frames");
-    return (!frames.empty() && std::stoi(frames) > 0) || !study.Alive();
-  }, 60.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        study.Pump();
+        const std::string frames = status("video_frames");
+        return (!frames.empty() && std::stoi(frames) > 0) || !study.Alive();
+      },
+      60.0));
   CHECK(status("live").find("practice lap") != std::string::npos);
   // The simulated robot is shown in the third person too, and the console says so.
   CHECK(status("live").find("camera and third-person view") != std::string::npos);
@@ -482,28 +548,46 @@ TEST_CASE("a person study from the console: a participant added, a practice lap,
   REQUIRE(console.Post("/abort"));
   // Aborted, the practice lap is not skipped: it is offered again. This time
   // it runs to its end (nobody presses a key: the cap).
-  REQUIRE(test::WaitFor([&] { study.Pump(); return !status("next").empty() || !study.Alive(); }, 60.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        study.Pump();
+        return !status("next").empty() || !study.Alive();
+      },
+      60.0));
   CHECK(status("next").find("practice lap for participant P1") != std::string::npos);
   REQUIRE(console.Post("/start"));
 
-  const httplib::Params answers = {{"participant", "P1"}, {"questionnaire", "thesis"}, {"easy_to_learn", "3"},
+  const httplib::Params answers = {{"participant", "P1"},
+                                   {"questionnaire", "thesis"},
+                                   {"easy_to_learn", "3"},
                                    {"efficient", "4"}};
   for (const std::string condition : {"first", "second"}) {
     INFO(condition << "\n" << study.err());
-    REQUIRE(test::WaitFor([&] { study.Pump(); return status("next").find(condition) != std::string::npos ||
-                                                     !study.Alive(); }, 60.0));
+    REQUIRE(test::WaitFor(
+        [&] {
+          study.Pump();
+          return status("next").find(condition) != std::string::npos || !study.Alive();
+        },
+        60.0));
     const auto start = console.Post("/start");
     REQUIRE(start);
     CHECK(start->status == 303);
     // The live trial's lap clock reaches the page.
-    REQUIRE(test::WaitFor([&] {
-      study.Pump();
-      const std::string lap = status("lap_time_s");
-      return (!lap.empty() && std::stod(lap) > 0.0) || !study.Alive();
-    }, 60.0));
+    REQUIRE(test::WaitFor(
+        [&] {
+          study.Pump();
+          const std::string lap = status("lap_time_s");
+          return (!lap.empty() && std::stod(lap) > 0.0) || !study.Alive();
+        },
+        60.0));
     CHECK(status("live").find("participant P1, " + condition) != std::string::npos);
     // The trial runs to its cap, then the study waits for the questionnaire.
-    REQUIRE(test::WaitFor([&] { study.Pump(); return !status("waiting").empty() || !study.Alive(); }, 90.0));
+    REQUIRE(test::WaitFor(
+        [&] {
+          study.Pump();
+          return !status("waiting").empty() || !study.Alive();
+        },
+        90.0));
     CHECK(status("waiting").find("thesis after " + condition) != std::string::npos);
     const auto early = console.Post("/start");  // nothing to start while answers are awaited
     REQUIRE(early);
@@ -515,8 +599,12 @@ TEST_CASE("a person study from the console: a participant added, a practice lap,
     CHECK(answered->status == 200);
   }
   // Every trial done: the open study waits for another participant or Finish.
-  REQUIRE(test::WaitFor([&] { study.Pump(); return status("waiting_for_participants") == "true" || !study.Alive(); },
-                        60.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        study.Pump();
+        return status("waiting_for_participants") == "true" || !study.Alive();
+      },
+      60.0));
   const auto finish = console.Post("/finish");
   REQUIRE(finish);
   CHECK(finish->status == 303);
@@ -535,10 +623,13 @@ TEST_CASE("a person study from the console: a participant added, a practice lap,
   };
   CHECK(count("SELECT COUNT(*) FROM study_answers") == 4);  // two answers after each condition
   CHECK(count("SELECT COUNT(*) FROM study_participants WHERE participant = 'P1'") == 1);
-  CHECK(count("SELECT COUNT(*) FROM study_events WHERE kind = 'practice interrupted' AND participant = 'P1'") == 1);
-  CHECK(count("SELECT COUNT(*) FROM study_events WHERE kind = 'practice' AND participant = 'P1'") == 1);
+  CHECK(count("SELECT COUNT(*) FROM study_events WHERE kind = 'practice interrupted' AND "
+              "participant = 'P1'") == 1);
+  CHECK(count("SELECT COUNT(*) FROM study_events WHERE kind = 'practice' AND participant = 'P1'") ==
+        1);
   CHECK(count("SELECT COUNT(*) FROM study_trials") == 2);
-  CHECK(count("SELECT COUNT(*) FROM runs WHERE interface = 'keyboard'") == 2);  // the practice laps' runs
+  CHECK(count("SELECT COUNT(*) FROM runs WHERE interface = 'keyboard'") ==
+        2);  // the practice laps' runs
 }
 
 namespace {
@@ -561,7 +652,9 @@ int VehicleChildOf(int parent) {
 }
 }  // namespace
 
-TEST_CASE("a vehicle silent once for longer than its time-out: the trial is flagged and run again, the study goes on") {
+TEST_CASE(
+    "a vehicle silent once for longer than its time-out: the trial is flagged and run again, the "
+    "study goes on") {
   // A real-time synthetic study stopped at trial 2 on one 0.5-s gap in the
   // vehicle's states on a loaded host (issue 41): the vehicle is paused
   // (SIGSTOP) once it has answered, until the trial ends lost.
@@ -571,17 +664,21 @@ TEST_CASE("a vehicle silent once for longer than its time-out: the trial is flag
   Child study({Bin("haptel"), "study", "run", file.string(), "--database", db.string(), "--domain",
                std::to_string(test::UniqueDomain(44)), "--verbose", "--json"});
   int vehicle = 0;
-  REQUIRE(test::WaitFor([&] {
-    study.Pump();
-    vehicle = VehicleChildOf(study.pid());
-    return vehicle != 0 && test::VehicleAnswered(study.err());
-  }, 120.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        study.Pump();
+        vehicle = VehicleChildOf(study.pid());
+        return vehicle != 0 && test::VehicleAnswered(study.err());
+      },
+      120.0));
   INFO("stderr:\n" << study.err());
   REQUIRE(kill(vehicle, SIGSTOP) == 0);
-  const bool flagged = test::WaitFor([&] {
-    study.Pump();
-    return study.err().find("run again once") != std::string::npos || !study.Alive();
-  }, 120.0);
+  const bool flagged = test::WaitFor(
+      [&] {
+        study.Pump();
+        return study.err().find("run again once") != std::string::npos || !study.Alive();
+      },
+      120.0);
   kill(vehicle, SIGCONT);  // gone by now, or let go
   CHECK(flagged);
   const int code = study.Wait(300.0);
@@ -592,10 +689,11 @@ TEST_CASE("a vehicle silent once for longer than its time-out: the trial is flag
   // Both trials stand; the first is its second attempt, the redo recorded.
   record::Recorder recorder(db);
   sqlite3_stmt* select = nullptr;
-  REQUIRE(sqlite3_prepare_v2(recorder.handle(),
-                             "SELECT (SELECT count(*) FROM study_events WHERE kind = 'redo' AND detail LIKE "
-                             "'%lost: no state%'), (SELECT max(attempt) FROM study_trials)",
-                             -1, &select, nullptr) == SQLITE_OK);
+  REQUIRE(sqlite3_prepare_v2(
+              recorder.handle(),
+              "SELECT (SELECT count(*) FROM study_events WHERE kind = 'redo' AND detail LIKE "
+              "'%lost: no state%'), (SELECT max(attempt) FROM study_trials)",
+              -1, &select, nullptr) == SQLITE_OK);
   REQUIRE(sqlite3_step(select) == SQLITE_ROW);
   CHECK(sqlite3_column_int(select, 0) == 1);
   CHECK(sqlite3_column_int(select, 1) == 2);

@@ -183,13 +183,19 @@ TEST_CASE(
         std::vector<std::string>{test::JsonField(first_run, "run_id"),
                                  test::JsonField(second_run, "run_id")});
 }
-TEST_CASE("a trial the database cannot take ends the study as not saved; its file says whose trial it was") {
+TEST_CASE(
+    "a trial the database cannot take ends the study as not saved; its file says whose trial it "
+    "was") {
   const auto dir = test::ScratchDir("e2e-study-full-disk");
   const auto source = fs::current_path();
   const auto file = dir / "full.yaml";
   std::ofstream(file) << "name: full-disk-e2e\n"
-                         "run: " << (source / "config/haptel.yaml").string() << "\n"
-                         "track: " << (source / "config/tracks/test-short.yaml").string() << "\n"
+                         "run: "
+                      << (source / "config/haptel.yaml").string()
+                      << "\n"
+                         "track: "
+                      << (source / "config/tracks/test-short.yaml").string()
+                      << "\n"
                          "operators: synthetic\n"
                          "conditions:\n"
                          "  - {name: first, interface: gesture}\n"
@@ -217,7 +223,8 @@ TEST_CASE("a trial the database cannot take ends the study as not saved; its fil
       [&] {
         study.Pump();
         const auto at = study.err().find("trial 1/2");
-        return (at != std::string::npos && study.err().find("haptel-vehicle: info: vehicle", at) != std::string::npos) ||
+        return (at != std::string::npos &&
+                study.err().find("haptel-vehicle: info: vehicle", at) != std::string::npos) ||
                !study.Alive();
       },
       120.0));
@@ -244,11 +251,12 @@ TEST_CASE("a trial the database cannot take ends the study as not saved; its fil
   std::ifstream in(unsaved);
   const std::string kept((std::istreambuf_iterator<char>(in)), {});
   INFO("kept: " << kept.substr(0, 400));
-  CHECK(kept.rfind("{\"trial\":{\"study\":\"full-disk-e2e\",\"participant\":\"P7\",\"position\":1,\"condition\":"
+  CHECK(kept.rfind("{\"trial\":{\"study\":\"full-disk-e2e\",\"participant\":\"P7\",\"position\":1,"
+                   "\"condition\":"
                    "\"first\",\"repetition\":1",
                    0) == 0);
   CHECK(kept.find("\"path\":[{\"t_s\":") != std::string::npos);  // and the run itself, whole
-  CHECK(kept.size() < full_at);  // written under the same limit
+  CHECK(kept.size() < full_at);                                  // written under the same limit
 
   // The file itself is intact, without the trial: resuming runs it again.
   Db check(db);

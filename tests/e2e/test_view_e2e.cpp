@@ -30,7 +30,8 @@ std::string Bin(const std::string& name) { return (test::BinDir() / name).string
 double LastSpeed(const std::string& err) {
   static const std::regex speed(R"(speed (-?[0-9.]+) m/s)");
   double last = -1.0;
-  for (auto it = std::sregex_iterator(err.begin(), err.end(), speed); it != std::sregex_iterator(); ++it) {
+  for (auto it = std::sregex_iterator(err.begin(), err.end(), speed); it != std::sregex_iterator();
+       ++it) {
     last = std::stod((*it)[1]);
   }
   return last;
@@ -80,19 +81,23 @@ ViewAreas AreasOfDefaultView() {
 
 }  // namespace
 
-TEST_CASE("a lap in a window under Xvfb, recorded to an MP4 that decodes at 25 frames per second of lap or more") {
+TEST_CASE(
+    "a lap in a window under Xvfb, recorded to an MP4 that decodes at 25 frames per second of lap "
+    "or more") {
   XServer x;
   const auto dir = test::ScratchDir("e2e-view-lap");
   const auto mp4 = dir / "lap.mp4";
-  Child run({Bin("haptel"), "run", "--operator", "auto", "--view", "window", "--record", mp4.string(), "--track",
-             "config/tracks/test-short.yaml", "--json", "--quiet", "--domain", std::to_string(test::UniqueDomain(31)),
-             "--database", (dir / "runs.db").string(), "--vehicle-timeout", "5"});
+  Child run({Bin("haptel"), "run", "--operator", "auto", "--view", "window", "--record",
+             mp4.string(), "--track", "config/tracks/test-short.yaml", "--json", "--quiet",
+             "--domain", std::to_string(test::UniqueDomain(31)), "--database",
+             (dir / "runs.db").string(), "--vehicle-timeout", "5"});
   const int code = run.Wait(180.0);
   INFO(run.out() << run.err());
   REQUIRE(code == 0);
   const std::string json = run.LastLine();
-  for (const char* key : {"view_fps", "view_frame_p99_ms", "video_to_screen_ms_p50", "video_to_screen_ms_p99",
-                          "distance_m", "operator", "device", "interface_switches"}) {
+  for (const char* key :
+       {"view_fps", "view_frame_p99_ms", "video_to_screen_ms_p50", "video_to_screen_ms_p99",
+        "distance_m", "operator", "device", "interface_switches"}) {
     CHECK_FALSE(JsonField(json, key).empty());
   }
   CHECK(std::stod(JsonField(json, "view_fps")) > 0.0);
@@ -110,10 +115,10 @@ TEST_CASE("a lap in a window under Xvfb, recorded to an MP4 that decodes at 25 f
 TEST_CASE("a person's keys drive the robot in the view's window, and releasing them stops it") {
   XServer x;
   const auto dir = test::ScratchDir("e2e-view-keys");
-  Child run({Bin("haptel"), "run", "--operator", "person", "--interface", "keyboard", "--view", "window",
-             "--time-limit", "10", "--track", "config/tracks/test-short.yaml", "--json", "--domain",
-             std::to_string(test::UniqueDomain(32)), "--database", (dir / "runs.db").string(), "--vehicle-timeout",
-             "5"});
+  Child run({Bin("haptel"), "run", "--operator", "person", "--interface", "keyboard", "--view",
+             "window", "--time-limit", "10", "--track", "config/tracks/test-short.yaml", "--json",
+             "--domain", std::to_string(test::UniqueDomain(32)), "--database",
+             (dir / "runs.db").string(), "--vehicle-timeout", "5"});
   // The window is up once the first progress line shows; keys are pressed once the vehicle answers.
   REQUIRE(test::WaitForVehicle(run, 60.0));
   REQUIRE(XDoTool({"search", "--sync", "--name", "Haptel", "windowfocus", "--sync"}) == 0);
@@ -149,9 +154,10 @@ TEST_CASE("a person's keys drive the robot in the view's window, and releasing t
 TEST_CASE("Escape in the window aborts the run, stops the vehicle and keeps what was measured") {
   XServer x;
   const auto dir = test::ScratchDir("e2e-view-abort");
-  Child run({Bin("haptel"), "run", "--operator", "person", "--interface", "keyboard", "--view", "window", "--track",
-             "config/tracks/test-short.yaml", "--json", "--domain", std::to_string(test::UniqueDomain(33)),
-             "--database", (dir / "runs.db").string(), "--vehicle-timeout", "5"});
+  Child run({Bin("haptel"), "run", "--operator", "person", "--interface", "keyboard", "--view",
+             "window", "--track", "config/tracks/test-short.yaml", "--json", "--domain",
+             std::to_string(test::UniqueDomain(33)), "--database", (dir / "runs.db").string(),
+             "--vehicle-timeout", "5"});
   REQUIRE(test::WaitForVehicle(run, 60.0));
   const std::string json = test::EndWithEscape(run);
   CHECK(std::stoi(JsonField(json, "run_id")) >= 1);
@@ -162,18 +168,37 @@ TEST_CASE("Escape in the window aborts the run, stops the vehicle and keeps what
   CHECK(json.find("\"servo_forces_clamped\":0") != std::string::npos);
 }
 
-TEST_CASE("a recording that cannot grow (as on a full disk) ends, is said on stderr, in the summary and the JSON, "
-          "and the run exits 5") {
+TEST_CASE(
+    "a recording that cannot grow (as on a full disk) ends, is said on stderr, in the summary and "
+    "the JSON, "
+    "and the run exits 5") {
   const auto dir = test::ScratchDir("e2e-view-full");
   const auto mp4 = dir / "lap.mp4";
   // prlimit: no file this run writes may grow past the limit (a write past
   // it fails with EFBIG; haptel ignores SIGXFSZ). The database and the
   // picture stay below it; the MP4 of the lap does not.
   constexpr int kLimit = 192 * 1024;
-  Child run({"/usr/bin/prlimit", "--fsize=" + std::to_string(kLimit) + ":", "--", Bin("haptel"), "run",
-             "--operator", "auto", "--view", "none", "--record", mp4.string(), "--track",
-             "config/tracks/test-short.yaml", "--json", "--quiet", "--domain", std::to_string(test::UniqueDomain(34)),
-             "--database", (dir / "runs.db").string(), "--vehicle-timeout", "5"});
+  Child run({"/usr/bin/prlimit",
+             "--fsize=" + std::to_string(kLimit) + ":",
+             "--",
+             Bin("haptel"),
+             "run",
+             "--operator",
+             "auto",
+             "--view",
+             "none",
+             "--record",
+             mp4.string(),
+             "--track",
+             "config/tracks/test-short.yaml",
+             "--json",
+             "--quiet",
+             "--domain",
+             std::to_string(test::UniqueDomain(34)),
+             "--database",
+             (dir / "runs.db").string(),
+             "--vehicle-timeout",
+             "5"});
   const int code = run.Wait(180.0);
   INFO(run.out() << run.err());
   CHECK(code == 5);
@@ -183,11 +208,13 @@ TEST_CASE("a recording that cannot grow (as on a full disk) ends, is said on std
   const std::string error = JsonField(json, "record_error");
   CHECK(error.find("cannot write " + mp4.string() + ": File too large") != std::string::npos);
   // Said once on stderr as it happened, and in the summary instead of "recorded to".
-  const std::string said = "the operator's view is not recorded whole: cannot write " + mp4.string();
+  const std::string said =
+      "the operator's view is not recorded whole: cannot write " + mp4.string();
   const size_t first = run.err().find(said);
   CHECK(first != std::string::npos);
   CHECK(run.err().find(said, first + 1) == std::string::npos);
-  CHECK(run.out().find("operator's view NOT recorded whole: cannot write " + mp4.string()) != std::string::npos);
+  CHECK(run.out().find("operator's view NOT recorded whole: cannot write " + mp4.string()) !=
+        std::string::npos);
   CHECK(run.out().find("operator's view recorded to") == std::string::npos);
   CHECK(std::filesystem::file_size(mp4) <= static_cast<uintmax_t>(kLimit));
 }
@@ -266,7 +293,9 @@ TEST_CASE(
   }
 }
 
-TEST_CASE("--interface gesture-shared: the window draws shared control's dial, and its arrow when it pushes") {
+TEST_CASE(
+    "--interface gesture-shared: the window draws shared control's dial, and its arrow when it "
+    "pushes") {
   // Where the dial is at the view's default size, from the renderer's own layout.
   constexpr int kWidth = 1024, kHeight = 576;
   view::Overlay idle;
@@ -279,10 +308,28 @@ TEST_CASE("--interface gesture-shared: the window draws shared control's dial, a
   XServer x;
   const auto dir = test::ScratchDir("e2e-view-shared");
   const auto mp4 = dir / "view.mp4";
-  Child run({Bin("haptel"), "run", "--operator", "auto", "--interface", "gesture-shared", "--view", "window",
-             "--record", mp4.string(), "--track", "config/tracks/test-short.yaml", "--time-limit", "12", "--json",
-             "--quiet", "--domain", std::to_string(test::UniqueDomain(78)), "--database", (dir / "runs.db").string(),
-             "--vehicle-timeout", "5"});
+  Child run({Bin("haptel"),
+             "run",
+             "--operator",
+             "auto",
+             "--interface",
+             "gesture-shared",
+             "--view",
+             "window",
+             "--record",
+             mp4.string(),
+             "--track",
+             "config/tracks/test-short.yaml",
+             "--time-limit",
+             "12",
+             "--json",
+             "--quiet",
+             "--domain",
+             std::to_string(test::UniqueDomain(78)),
+             "--database",
+             (dir / "runs.db").string(),
+             "--vehicle-timeout",
+             "5"});
   const int code = run.Wait(180.0);
   INFO(run.out() << run.err());
   REQUIRE((code == 0 || code == 1));  // a lap, or the time limit
@@ -294,7 +341,8 @@ TEST_CASE("--interface gesture-shared: the window draws shared control's dial, a
     ++frames;
     // The dial: its forward tick (light grey, at the top) on its dark disc.
     const cv::Vec3b tick = frame.at<cv::Vec3b>(dial.centre_y - dial.radius + 4, dial.centre_x);
-    const cv::Vec3b disc = frame.at<cv::Vec3b>(dial.centre_y - dial.radius / 2, dial.centre_x - dial.radius / 2);
+    const cv::Vec3b disc =
+        frame.at<cv::Vec3b>(dial.centre_y - dial.radius / 2, dial.centre_x - dial.radius / 2);
     with_dial += (tick[1] > 140 && disc[1] < 90) ? 1 : 0;
     int n = 0;
     const cv::Mat part = frame(area & cv::Rect(0, 0, frame.cols, frame.rows));
@@ -314,7 +362,8 @@ TEST_CASE("--interface gesture-shared: the window draws shared control's dial, a
   CHECK(with_arrow >= 1);
 }
 
-TEST_CASE("a fleet in a window: every robot a tile, Tab turns to the next, and the frame moves with it") {
+TEST_CASE(
+    "a fleet in a window: every robot a tile, Tab turns to the next, and the frame moves with it") {
   XServer x;
   const auto dir = test::ScratchDir("e2e-view-fleet");
   const auto mp4 = dir / "fleet.mp4";
@@ -322,20 +371,23 @@ TEST_CASE("a fleet in a window: every robot a tile, Tab turns to the next, and t
   // the person's Tab turns the operator to robot-b before robot-a is done.
   std::string fleet = "name: two\nslice_s: 0\nvehicles:\n";
   for (const char* name : {"robot-a", "robot-b"}) {
-    fleet += std::string("  - {name: ") + name + ", vehicle: " +
-             std::filesystem::absolute("config/vehicles/sim-robot.yaml").string() +
-             ", world: " + std::filesystem::absolute("config/tracks/test-short.yaml").string() + "}\n";
+    fleet += std::string("  - {name: ") + name +
+             ", vehicle: " + std::filesystem::absolute("config/vehicles/sim-robot.yaml").string() +
+             ", world: " + std::filesystem::absolute("config/tracks/test-short.yaml").string() +
+             "}\n";
   }
   const auto fleet_file = test::WriteFile(dir / "fleet.yaml", fleet);
-  Child run({Bin("haptel"), "run", "--fleet", fleet_file.string(), "--view", "window", "--record", mp4.string(),
-             "--time-limit", "60", "--json", "--domain", std::to_string(test::UniqueDomain(35)), "--database",
-             (dir / "runs.db").string(), "--vehicle-timeout", "5"});
+  Child run({Bin("haptel"), "run", "--fleet", fleet_file.string(), "--view", "window", "--record",
+             mp4.string(), "--time-limit", "60", "--json", "--domain",
+             std::to_string(test::UniqueDomain(35)), "--database", (dir / "runs.db").string(),
+             "--vehicle-timeout", "5"});
   REQUIRE(test::WaitForErr(run, "driving 'robot-a'", 60.0));
   // A progress line with robot-a obeying the operator: robot-a has been
   // driven before the Tab (a "distance" line alone may come while the
   // handover still waits for robot-a's first state on a loaded machine).
   REQUIRE(test::WaitForErr(run, "robot-a operator", 60.0));
-  REQUIRE(XDoTool({"search", "--sync", "--name", "Haptel", "windowfocus", "--sync", "key", "Tab"}) == 0);
+  REQUIRE(XDoTool({"search", "--sync", "--name", "Haptel", "windowfocus", "--sync", "key",
+                   "Tab"}) == 0);
   REQUIRE(test::WaitForErr(run, "driving 'robot-b' (asked by the person)", 30.0));
   // A progress line with robot-b obeying the operator (one every 2 s).
   REQUIRE(test::WaitForErr(run, "robot-b operator", 30.0));
@@ -377,11 +429,13 @@ namespace {
 
 /// The distances (m) vehicle `name` had in each fleet progress line of
 /// `err` from `from` on ("robot-a operator (driven 3.2 s, 0.45 m)").
-std::vector<double> FleetDistances(const std::string& err, const std::string& name, size_t from = 0) {
+std::vector<double> FleetDistances(const std::string& err, const std::string& name,
+                                   size_t from = 0) {
   const std::regex part(name + R"( \S+ \(driven [0-9.]+ s, ([0-9.]+) m)");
   std::vector<double> out;
   const std::string rest = err.substr(std::min(from, err.size()));
-  for (auto it = std::sregex_iterator(rest.begin(), rest.end(), part); it != std::sregex_iterator(); ++it) {
+  for (auto it = std::sregex_iterator(rest.begin(), rest.end(), part); it != std::sregex_iterator();
+       ++it) {
     out.push_back(std::stod((*it)[1]));
   }
   return out;
@@ -389,34 +443,42 @@ std::vector<double> FleetDistances(const std::string& err, const std::string& na
 
 /// Waits (on printed lines, never on a clock) for a fleet progress line
 /// after `from` in which `name` has gone further than `beyond_m`.
-bool WaitForDistance(Child& run, const std::string& name, double beyond_m, size_t from, double timeout_s) {
-  return test::WaitFor([&] {
-    run.Pump();
-    const std::vector<double> d = FleetDistances(run.err(), name, from);
-    return !d.empty() && d.back() > beyond_m;
-  }, timeout_s);
+bool WaitForDistance(Child& run, const std::string& name, double beyond_m, size_t from,
+                     double timeout_s) {
+  return test::WaitFor(
+      [&] {
+        run.Pump();
+        const std::vector<double> d = FleetDistances(run.err(), name, from);
+        return !d.empty() && d.back() > beyond_m;
+      },
+      timeout_s);
 }
 
 }  // namespace
 
-TEST_CASE("a person drives a fleet by keys: robot-a forward, Tab, the same keys drive robot-b while robot-a is held") {
+TEST_CASE(
+    "a person drives a fleet by keys: robot-a forward, Tab, the same keys drive robot-b while "
+    "robot-a is held") {
   XServer x;
   const auto dir = test::ScratchDir("e2e-view-fleet-person");
   std::string fleet = "name: two\nvehicles:\n";
   for (const char* name : {"robot-a", "robot-b"}) {
-    fleet += std::string("  - {name: ") + name + ", vehicle: " +
-             std::filesystem::absolute("config/vehicles/sim-robot.yaml").string() +
-             ", world: " + std::filesystem::absolute("config/tracks/test-short.yaml").string() + "}\n";
+    fleet += std::string("  - {name: ") + name +
+             ", vehicle: " + std::filesystem::absolute("config/vehicles/sim-robot.yaml").string() +
+             ", world: " + std::filesystem::absolute("config/tracks/test-short.yaml").string() +
+             "}\n";
   }
   const auto fleet_file = test::WriteFile(dir / "fleet.yaml", fleet);
-  Child run({Bin("haptel"), "run", "--fleet", fleet_file.string(), "--operator", "person", "--view", "window",
-             "--time-limit", "120", "--json", "--domain", std::to_string(test::UniqueDomain(36)), "--database",
-             (dir / "runs.db").string(), "--vehicle-timeout", "5"});
+  Child run({Bin("haptel"), "run", "--fleet", fleet_file.string(), "--operator", "person", "--view",
+             "window", "--time-limit", "120", "--json", "--domain",
+             std::to_string(test::UniqueDomain(36)), "--database", (dir / "runs.db").string(),
+             "--vehicle-timeout", "5"});
   // robot-a obeys the person's interface (its handover is done).
   REQUIRE(test::WaitForErr(run, "robot-a operator", 60.0));
   INFO(run.err());
   CHECK(run.err().find("robot-a operator (driven") != std::string::npos);
-  REQUIRE(XDoTool({"search", "--sync", "--name", "Haptel", "windowfocus", "--sync", "keydown", "Up"}) == 0);
+  REQUIRE(XDoTool({"search", "--sync", "--name", "Haptel", "windowfocus", "--sync", "keydown",
+                   "Up"}) == 0);
   // The held key drives robot-a forward; robot-b stands.
   REQUIRE(WaitForDistance(run, "robot-a", 0.15, 0, 60.0));
   const std::vector<double> b_before = FleetDistances(run.err(), "robot-b");
@@ -432,10 +494,12 @@ TEST_CASE("a person drives a fleet by keys: robot-a forward, Tab, the same keys 
   // progress lines, robot-a does not move: it is held stopped.
   REQUIRE(WaitForDistance(run, "robot-b", 0.05, turned, 60.0));
   const std::vector<double> a_then = FleetDistances(run.err(), "robot-a", turned);
-  REQUIRE(test::WaitFor([&] {
-    run.Pump();
-    return FleetDistances(run.err(), "robot-a", turned).size() >= a_then.size() + 2;
-  }, 60.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        run.Pump();
+        return FleetDistances(run.err(), "robot-a", turned).size() >= a_then.size() + 2;
+      },
+      60.0));
   const double a_later = FleetDistances(run.err(), "robot-a", turned).back();
   CHECK(a_later == Approx(a_then.back()).margin(0.01));
   const double b_then = FleetDistances(run.err(), "robot-b", turned).back();
@@ -449,7 +513,8 @@ TEST_CASE("a person drives a fleet by keys: robot-a forward, Tab, the same keys 
     return at == std::string::npos ? std::string() : json.substr(at, json.find('}', at) - at + 1);
   };
   CHECK(std::stod(JsonField(entry("robot-a"), "distance_m")) == Approx(a_later).margin(0.01));
-  CHECK(std::stod(JsonField(entry("robot-b"), "distance_m")) >= b_then - 0.01);  // the line rounds to cm
+  CHECK(std::stod(JsonField(entry("robot-b"), "distance_m")) >=
+        b_then - 0.01);  // the line rounds to cm
   CHECK(std::stod(JsonField(entry("robot-b"), "driven_s")) > 0.0);
   // Each robot was driven with the keys (a person at the simulated device).
   CHECK(run.err().find("  keyboard  ") != std::string::npos);

@@ -2,7 +2,6 @@
 // An X server of the test's own (Xvfb) for the end-to-end tests with a
 // window, and xdotool to type and move the mouse in it.
 #include <catch2/catch.hpp>
-
 #include <cstdlib>
 #include <string>
 #include <vector>
@@ -15,11 +14,15 @@ namespace haptel::test {
 /// An X server of the test's own; DISPLAY points at it while it lives.
 class XServer {
  public:
-  XServer() : server_({"/usr/bin/Xvfb", "-displayfd", "1", "-screen", "0", "1280x800x24", "-nolisten", "tcp"}) {
-    REQUIRE(test::WaitFor([&] {
-      server_.Pump();
-      return server_.out().find('\n') != std::string::npos;
-    }, 30.0));
+  XServer()
+      : server_({"/usr/bin/Xvfb", "-displayfd", "1", "-screen", "0", "1280x800x24", "-nolisten",
+                 "tcp"}) {
+    REQUIRE(test::WaitFor(
+        [&] {
+          server_.Pump();
+          return server_.out().find('\n') != std::string::npos;
+        },
+        30.0));
     // Appended, not `":" + substr(...)`: GCC 12 -O2 flags that form with a
     // false -Werror=restrict.
     display_ = ":";
@@ -44,7 +47,8 @@ inline int XDoTool(std::vector<std::string> args) {
 /// Presses Escape in Haptel's window and waits for `run` to end as a person
 /// ending it does: outcome "aborted", exit 1. Returns its JSON line.
 inline std::string EndWithEscape(Child& run) {
-  REQUIRE(XDoTool({"search", "--sync", "--name", "Haptel", "windowfocus", "--sync", "key", "Escape"}) == 0);
+  REQUIRE(XDoTool({"search", "--sync", "--name", "Haptel", "windowfocus", "--sync", "key",
+                   "Escape"}) == 0);
   const int code = run.Wait(60.0);
   INFO(run.out() << run.err());
   CHECK(code == 1);

@@ -64,7 +64,7 @@ TEST_CASE("shared control's guidance pushes back past its plane, saturating at i
   f.guidance_stiffness = 150;
   f.guidance_max_force = 3.0;
   CHECK(Norm(EvaluateForceField(f, {0.12, 0.01, 0}, {0, 0, 0})) == 0.0);  // on the safe side
-  const Vec3d in = EvaluateForceField(f, {0.13, -0.01, 0}, {0, 0, 0});   // 1 cm past it
+  const Vec3d in = EvaluateForceField(f, {0.13, -0.01, 0}, {0, 0, 0});    // 1 cm past it
   CHECK(in[1] == Approx(1.5));
   CHECK(in[0] == Approx(0.0).margin(1e-12));  // along the plane nothing pushes
   // Far past it, no more than the bound: the operator can always push through.

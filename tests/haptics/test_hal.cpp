@@ -56,7 +56,8 @@ TEST_CASE("glove angles are calibrated per sensor") {
 
 TEST_CASE("the tracker keeps the last 1000 samples, oldest first") {
   Hal hal(Cm());
-  for (int i = 0; i < 1500; ++i) hal.PublishWrist(Side::kRight, At((i + 1) * kMs, {double(i), 0, 0}));
+  for (int i = 0; i < 1500; ++i)
+    hal.PublishWrist(Side::kRight, At((i + 1) * kMs, {double(i), 0, 0}));
   std::vector<TrackerSample> out(2000);
   const size_t n = hal.TrackerHistory(Side::kRight, out);
   REQUIRE(n == 1000);
@@ -150,7 +151,8 @@ TEST_CASE("two feeders writing at once never tear each other's set-point") {
     while (!done.load()) {
       const ForceSetpoint sp = hal.Setpoint(Side::kRight);
       if (sp.field.stiffness != sp.field.damping) ++torn;
-      if (sp.coupling_stiffness != sp.finger_forces[0] || sp.finger_forces[0] != sp.finger_forces[4])
+      if (sp.coupling_stiffness != sp.finger_forces[0] ||
+          sp.finger_forces[0] != sp.finger_forces[4])
         ++torn;
     }
   });

@@ -82,7 +82,8 @@ TEST_CASE("passivity: alpha is capped at the device's maximum damping") {
   CHECK(pc.energy()[0] == Approx(-0.001));  // half the deficit dissipated
 }
 
-TEST_CASE("passivity: a sampled spring leaks energy through the hold and the controller takes it back") {
+TEST_CASE(
+    "passivity: a sampled spring leaks energy through the hold and the controller takes it back") {
   // x(n) = A sin(w n T) against F = -k x: the force held over each period
   // lags the motion, so the observer sees the spring generate k/2 * dx^2 a
   // tick (Colgate's leak). Without a controller E drifts below zero.
@@ -120,7 +121,8 @@ DeviceCalibration Identity() {
 }
 }  // namespace
 
-TEST_CASE("passivity in the servo loop: the coupling port's leak is damped, and only when it is on") {
+TEST_CASE(
+    "passivity in the servo loop: the coupling port's leak is damped, and only when it is on") {
   for (const bool on : {false, true}) {
     INFO("passivity " << (on ? "on" : "off"));
     test::ScriptedDevice dev;
@@ -159,12 +161,16 @@ TEST_CASE("servo.passivity in the device file: on or off, nothing else") {
     return LoadDevice(test::WriteFile(dir / "d.yaml", "name: d\nservo:\n" + servo));
   };
   CHECK_FALSE(load("  rate_hz: 1000\n").servo.passivity);
-  const DeviceConfig on = load("  passivity: on\n  passivity_max_damping: 35\n  passivity_min_speed: 0.004\n");
+  const DeviceConfig on =
+      load("  passivity: on\n  passivity_max_damping: 35\n  passivity_min_speed: 0.004\n");
   CHECK(on.servo.passivity);
   CHECK(on.servo.passivity_max_damping == 35.0);
   CHECK(on.servo.passivity_min_speed == 0.004);
   CHECK_FALSE(load("  passivity: off\n").servo.passivity);
-  CHECK_THROWS_WITH(load("  passivity: true\n"), Catch::Contains("servo.passivity") && Catch::Contains("on or off"));
-  CHECK_THROWS_WITH(load("  passivity_max_damping: -1\n"), Catch::Contains("servo.passivity_max_damping"));
-  CHECK_THROWS_WITH(load("  passivity_min_speed: 0\n"), Catch::Contains("servo.passivity_min_speed"));
+  CHECK_THROWS_WITH(load("  passivity: true\n"),
+                    Catch::Contains("servo.passivity") && Catch::Contains("on or off"));
+  CHECK_THROWS_WITH(load("  passivity_max_damping: -1\n"),
+                    Catch::Contains("servo.passivity_max_damping"));
+  CHECK_THROWS_WITH(load("  passivity_min_speed: 0\n"),
+                    Catch::Contains("servo.passivity_min_speed"));
 }

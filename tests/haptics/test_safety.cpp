@@ -123,11 +123,11 @@ TEST_CASE("stale set-points fade to zero within timeout + fade; local forces sta
     s.Apply(t, stamp, {4, 0, 0}, {0, 0, 2}, out, fingers);
     return out;
   };
-  CHECK(at(stamp + 20 * kMs)[0] == Approx(4.0));          // within the timeout
-  CHECK(at(stamp + 35 * kMs)[0] == Approx(2.0));          // half way through the fade
+  CHECK(at(stamp + 20 * kMs)[0] == Approx(4.0));  // within the timeout
+  CHECK(at(stamp + 35 * kMs)[0] == Approx(2.0));  // half way through the fade
   CHECK(fingers[0] == Approx(2.5));
-  CHECK(at(stamp + 50 * kMs)[0] == Approx(0.0));          // gone at 50 ms
-  CHECK(out[2] == Approx(2.0));                           // gravity compensation is local: kept
+  CHECK(at(stamp + 50 * kMs)[0] == Approx(0.0));  // gone at 50 ms
+  CHECK(out[2] == Approx(2.0));                   // gravity compensation is local: kept
   CHECK(at(stamp + 500 * kMs)[0] == 0.0);
   CHECK(s.counters().stale_ticks >= 3);
 }

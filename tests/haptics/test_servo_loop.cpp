@@ -20,8 +20,12 @@ using haptel::test::ScriptedDevice;
 namespace haptel::haptics {
 /// Holds the interface's field store for a side half done (Hal's friend).
 struct HalTestAccess {
-  static void BeginFieldStore(Hal& hal, Side side) { SeqlockTestAccess::BeginStore(hal.fields_[Index(side)]); }
-  static void EndFieldStore(Hal& hal, Side side) { SeqlockTestAccess::EndStore(hal.fields_[Index(side)]); }
+  static void BeginFieldStore(Hal& hal, Side side) {
+    SeqlockTestAccess::BeginStore(hal.fields_[Index(side)]);
+  }
+  static void EndFieldStore(Hal& hal, Side side) {
+    SeqlockTestAccess::EndStore(hal.fields_[Index(side)]);
+  }
 };
 }  // namespace haptel::haptics
 
@@ -49,7 +53,9 @@ ForceField Spring(double k) {
   f.stiffness = k;
   return f;
 }
-void SetField(Hal& hal, Side side, const ForceField& f, int64_t now_ns) { hal.SetField(side, f, now_ns); }
+void SetField(Hal& hal, Side side, const ForceField& f, int64_t now_ns) {
+  hal.SetField(side, f, now_ns);
+}
 }  // namespace
 
 TEST_CASE("a servo tick publishes the sample and applies the set-point's force") {
@@ -72,7 +78,7 @@ TEST_CASE("calibration turns raw units into metres and newtons into device comma
   DeviceCalibration cal;
   cal.arms[1].tracker_scale = {0.01, 0.01, 0.01};  // device reports cm
   cal.arms[1].tracker_offset = {0.1, 0, 0};
-  cal.arms[1].force_slope = {2.0, 2.0, 2.0};      // 2 N per command unit
+  cal.arms[1].force_slope = {2.0, 2.0, 2.0};  // 2 N per command unit
   Hal hal(cal);
   ServoLoop loop(dev, hal, Immediate(), cal);
   dev.position[1] = {2.0, 0, 0};  // 2 cm raw -> 0.12 m
@@ -206,7 +212,8 @@ TEST_CASE("a servo tick allocates nothing, with the passivity controller off and
   }
 }
 
-TEST_CASE("a set-point store held in progress: the tick uses the last good set-point and counts it") {
+TEST_CASE(
+    "a set-point store held in progress: the tick uses the last good set-point and counts it") {
   ScriptedDevice dev;
   Hal hal(Identity());
   ServoLoop loop(dev, hal, Immediate(), Identity());
@@ -236,7 +243,8 @@ TEST_CASE("a set-point store held in progress: the tick uses the last good set-p
   CHECK(dev.wrist_command[1][0] == Approx(-2.0));
 }
 
-TEST_CASE("two-sided mode: both arms run on their own threads and meet every cycle, allocating nothing") {
+TEST_CASE(
+    "two-sided mode: both arms run on their own threads and meet every cycle, allocating nothing") {
   DeviceConfig c = DeviceConfig{};
   c.servo.realtime_priority = 0;
   c.servo.lock_memory = false;
@@ -288,7 +296,8 @@ TEST_CASE("the servo loop refuses a device config or calibration ValidateOrThrow
                     Catch::Contains("arms.left.force_slope[1]: expected a non-zero number"));
 }
 
-TEST_CASE("a cue is added to the set-point's force until it ends, on each side, allocating nothing") {
+TEST_CASE(
+    "a cue is added to the set-point's force until it ends, on each side, allocating nothing") {
   ScriptedDevice dev(true, true);
   Hal hal(Identity());
   ServoLoop loop(dev, hal, Immediate(), Identity());
@@ -337,10 +346,12 @@ TEST_CASE("the running loop keeps apart the periods of the ticks that played a c
   for (int side = 0; side < kSides; ++side) {
     hal.SetCue(static_cast<Side>(side), {{0.0, 0.0, 1.0}, MonotonicNs() + SToNs(600.0)});
   }
-  REQUIRE(test::WaitFor([&] { return loop.cue_period_histogram(Side::kRight).Count() >= 20; }, 30.0));
+  REQUIRE(
+      test::WaitFor([&] { return loop.cue_period_histogram(Side::kRight).Count() >= 20; }, 30.0));
   CHECK(test::WaitFor([&] { return loop.cue_period_histogram(Side::kLeft).Count() >= 20; }, 30.0));
   // Over: the count stops while the loop goes on.
-  for (int side = 0; side < kSides; ++side) hal.SetCue(static_cast<Side>(side), {{0.0, 0.0, 1.0}, 0});
+  for (int side = 0; side < kSides; ++side)
+    hal.SetCue(static_cast<Side>(side), {{0.0, 0.0, 1.0}, 0});
   const uint64_t ticks_at_end = loop.Stats(Side::kRight).ticks;
   REQUIRE(test::WaitFor([&] { return loop.Stats(Side::kRight).ticks >= ticks_at_end + 3; }, 30.0));
   const uint64_t cue_ticks = loop.cue_period_histogram(Side::kRight).Count();

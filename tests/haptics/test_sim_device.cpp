@@ -39,7 +39,8 @@ TEST_CASE("the tracker reports in device units through the hidden calibration") 
   for (int i = 0; i < 3; ++i) {
     CHECK(t.tracker_scale[i] == Approx(0.01).epsilon(0.06));
     const double metres = t.tracker_scale[i] * raw.position[i] + t.tracker_offset[i];
-    CHECK(metres == Approx(p[i]).margin(d.config().encoder_resolution));  // quantised to the encoder
+    CHECK(metres ==
+          Approx(p[i]).margin(d.config().encoder_resolution));  // quantised to the encoder
   }
 }
 
@@ -55,7 +56,8 @@ TEST_CASE("the simulated operator moves the hand to the target") {
   CHECK(p[2] == Approx(0.0).margin(0.003));  // holds the exoskeleton's weight
 }
 
-TEST_CASE("the operator pushes harder against a steady pull, but a strong force holds the hand back") {
+TEST_CASE(
+    "the operator pushes harder against a steady pull, but a strong force holds the hand back") {
   OperatorConfig op;
   auto error_under = [&](double pull) {
     SimDevice d(NoGravity(), op);
@@ -73,7 +75,8 @@ TEST_CASE("the operator pushes harder against a steady pull, but a strong force 
   CHECK(large > 3 * std::abs(small));
 }
 
-TEST_CASE("a released arm sinks under the unbalanced exoskeleton weight; friction holds a balanced one") {
+TEST_CASE(
+    "a released arm sinks under the unbalanced exoskeleton weight; friction holds a balanced one") {
   DeviceConfig c;
   SimDevice d(c, OperatorConfig{});
   d.Place(Side::kLeft, {0.1, 0, 0.1});
@@ -138,7 +141,8 @@ TEST_CASE("the glove reports integer counts through per-sensor gain and offset")
   const SimArmTruth& t = d.truth(Side::kRight);
   for (int j = 0; j < kGloveJoints; ++j) {
     CHECK(raw.sensors[j] == std::round(raw.sensors[j]));
-    CHECK(t.glove_gain[j] * raw.sensors[j] + t.glove_offset[j] == Approx(angles[j]).margin(t.glove_gain[j]));
+    CHECK(t.glove_gain[j] * raw.sensors[j] + t.glove_offset[j] ==
+          Approx(angles[j]).margin(t.glove_gain[j]));
   }
 }
 

@@ -118,7 +118,8 @@ TEST_CASE("replay plays a trace at its original timing, per side") {
   std::vector<TraceRecord> recs;
   for (int i = 0; i < 5; ++i) {
     recs.push_back(TraceRecord::FromWrist(Side::kRight, Wrist(1000 * kMs + i * 10 * kMs, i)));
-    recs.push_back(TraceRecord::FromWrist(Side::kLeft, Wrist(1000 * kMs + i * 10 * kMs + 5 * kMs, 100 + i)));
+    recs.push_back(
+        TraceRecord::FromWrist(Side::kLeft, Wrist(1000 * kMs + i * 10 * kMs + 5 * kMs, 100 + i)));
   }
   ReplayDevice replay(recs, DeviceDescription{}, false);
   WristRaw w;
@@ -138,7 +139,8 @@ TEST_CASE("replay plays a trace at its original timing, per side") {
 
 TEST_CASE("replay can loop") {
   std::vector<TraceRecord> recs;
-  for (int i = 0; i < 4; ++i) recs.push_back(TraceRecord::FromWrist(Side::kRight, Wrist(i * 10 * kMs, i)));
+  for (int i = 0; i < 4; ++i)
+    recs.push_back(TraceRecord::FromWrist(Side::kRight, Wrist(i * 10 * kMs, i)));
   ReplayDevice replay(recs, DeviceDescription{}, true);
   WristRaw w;
   replay.ReadWrist(Side::kRight, 1, w);
@@ -152,7 +154,8 @@ TEST_CASE("the replay driver opens from a device file, and a bad trace names the
   const auto dir = test::ScratchDir("replay-config");
   {
     TraceWriter writer(dir / "t.trace");
-    for (int i = 0; i < 10; ++i) writer.Push(TraceRecord::FromWrist(Side::kRight, Wrist(i * kMs, i)));
+    for (int i = 0; i < 10; ++i)
+      writer.Push(TraceRecord::FromWrist(Side::kRight, Wrist(i * kMs, i)));
   }
   std::FILE* f = std::fopen((dir / "replay.yaml").c_str(), "w");
   std::fputs("name: r\ndriver: replay\nsides: [right]\nreplay: {trace: t.trace}\n", f);

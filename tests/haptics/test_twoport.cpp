@@ -36,7 +36,8 @@ TEST_CASE("two-port: the ends split the energy crossing them by the power's sign
   CHECK(arm.energy_out()[0] == Approx(0.002));
 }
 
-TEST_CASE("two-port: a channel that delivers more than the other end put in is damped by the excess") {
+TEST_CASE(
+    "two-port: a channel that delivers more than the other end put in is damped by the excess") {
   TwoPortPassivity arm(ChannelEnd::kDevice, TwoPortLimits{100.0, 0.01});
   // The loop's end reports 2 mJ put in; the arm's end was pushed out 1 mm by
   // -3 N: 3 mJ delivered, W = 2 - 3 = -1 mJ. At -1 m/s:
@@ -200,7 +201,8 @@ TEST_CASE("two-port: a delayed spring that gains energy is held to what the spri
   CHECK(idle_margin >= -1e-12);
 }
 
-TEST_CASE("two-port: the loop's end returns its deficit on the environment's port by an offset, capped") {
+TEST_CASE(
+    "two-port: the loop's end returns its deficit on the environment's port by an offset, capped") {
   // The environment (a wall) holds -2 N on the hand while the channel hands it
   // 1 mm of motion into the wall: 2 mJ out of the channel at the loop's end,
   // against 1.5 mJ the arm's end reports in. W = -0.5 mJ.

@@ -15,8 +15,8 @@ inline DeviceCalibration Metres() {
 }
 
 /// Publishes a wrist sample at `p` (m) on `side`, stamped `t_ns`.
-inline void PutHand(haptics::Hal& hal, const haptics::Vec3d& p, haptics::Side side = haptics::Side::kRight,
-                    int64_t t_ns = 1) {
+inline void PutHand(haptics::Hal& hal, const haptics::Vec3d& p,
+                    haptics::Side side = haptics::Side::kRight, int64_t t_ns = 1) {
   haptics::WristRaw w;
   w.t_ns = t_ns;
   w.position = p;

@@ -34,9 +34,11 @@ const Vec3d kLeft{0.1, 0.05, 0.02};
 Vec3d Plus(const Vec3d& a, double x, double y, double z) { return {a[0] + x, a[1] + y, a[2] + z}; }
 }  // namespace
 
-TEST_CASE("blimp gesture: both hands at neutral give the neutral command (no power, straight ahead)") {
+TEST_CASE(
+    "blimp gesture: both hands at neutral give the neutral command (no power, straight ahead)") {
   BlimpGestureInterface g(Config());
-  const BlimpCommand c = g.Map(Plus(kLeft, 0.009, -0.009, 0.009), Plus(kRight, -0.009, 0.009, 0.0), {});
+  const BlimpCommand c =
+      g.Map(Plus(kLeft, 0.009, -0.009, 0.009), Plus(kRight, -0.009, 0.009, 0.0), {});
   CHECK(c.elevator == 0.0);
   CHECK(c.rudder == 0.0);
   CHECK(c.power == 0.0);
@@ -59,7 +61,9 @@ TEST_CASE("blimp gesture: the right hand is a stick for the stabilisers") {
   CHECK(c.tail_rotor == 0.0);
 }
 
-TEST_CASE("blimp gesture: the left hand is the power forward and the helix plane up and down; back gives no power") {
+TEST_CASE(
+    "blimp gesture: the left hand is the power forward and the helix plane up and down; back gives "
+    "no power") {
   BlimpGestureInterface g(Config());
   CHECK(g.Map(Plus(kLeft, 0.06, 0, 0), kRight, {}).power == Approx(0.5));
   CHECK(g.Map(Plus(kLeft, 0.5, 0, 0), kRight, {}).power == Approx(1.0));
@@ -72,7 +76,9 @@ TEST_CASE("blimp gesture: the left hand is the power forward and the helix plane
   CHECK(c.rudder == 0.0);
 }
 
-TEST_CASE("blimp gesture: with zero power the left hand's sideways motion drives the tail rotor (the quick turnabout), with power it does not") {
+TEST_CASE(
+    "blimp gesture: with zero power the left hand's sideways motion drives the tail rotor (the "
+    "quick turnabout), with power it does not") {
   BlimpGestureInterface g(Config());
   // Zero power (inside the dead zone, or pulled back): sideways is the tail rotor.
   CHECK(g.Map(Plus(kLeft, 0.0, 0.05, 0), kRight, {}).tail_rotor == Approx(0.5));
@@ -98,8 +104,8 @@ TEST_CASE("blimp gesture: HandTargetsFor inverts the mapping for both hands") {
     const HandTargets t = g.HandTargetsFor(want);
     REQUIRE(t[haptics::Index(Side::kLeft)].has_value());
     REQUIRE(t[haptics::Index(Side::kRight)].has_value());
-    const BlimpCommand got =
-        g.Map(t[haptics::Index(Side::kLeft)]->position, t[haptics::Index(Side::kRight)]->position, {});
+    const BlimpCommand got = g.Map(t[haptics::Index(Side::kLeft)]->position,
+                                   t[haptics::Index(Side::kRight)]->position, {});
     CHECK(got.elevator == Approx(want.elevator).margin(1e-9));
     CHECK(got.rudder == Approx(want.rudder).margin(1e-9));
     CHECK(got.power == Approx(want.power).margin(1e-9));
@@ -108,7 +114,9 @@ TEST_CASE("blimp gesture: HandTargetsFor inverts the mapping for both hands") {
   }
 }
 
-TEST_CASE("blimp gesture: fields pull both hands to neutral, harder the further they are (the effort tells the speed)") {
+TEST_CASE(
+    "blimp gesture: fields pull both hands to neutral, harder the further they are (the effort "
+    "tells the speed)") {
   BlimpGestureInterface g(Config());
   haptics::Hal hal(Metres());
   PutHand(hal, Plus(kLeft, 0.05, 0, 0), Side::kLeft);
@@ -122,8 +130,8 @@ TEST_CASE("blimp gesture: fields pull both hands to neutral, harder the further 
   REQUIRE(right.enabled);
   const double near = haptics::EvaluateForceField(left, Plus(kLeft, 0.02, 0, 0), {0, 0, 0})[0];
   const double far = haptics::EvaluateForceField(left, Plus(kLeft, 0.08, 0, 0), {0, 0, 0})[0];
-  CHECK(near < 0.0);         // pulls back towards no power
-  CHECK(far < 4.0 * near);   // four times the offset, more than four times the force
+  CHECK(near < 0.0);        // pulls back towards no power
+  CHECK(far < 4.0 * near);  // four times the offset, more than four times the force
   CHECK(haptics::EvaluateForceField(right, Plus(kRight, 0, 0.04, 0), {0, 0, 0})[1] < 0.0);
 }
 

@@ -71,8 +71,9 @@ TEST_CASE("blimp keys: W/S step the power, which stays where it is put", "[blimp
   }
 }
 
-TEST_CASE("blimp keys: arrows tilt the helix plane, page up/down trim the elevator, each on its own",
-          "[blimp_manual]") {
+TEST_CASE(
+    "blimp keys: arrows tilt the helix plane, page up/down trim the elevator, each on its own",
+    "[blimp_manual]") {
   Keys k;
   BlimpManualInterface m(KeysConfig(), k.s);
   k.Tap(Key::kArrowUp);
@@ -91,7 +92,8 @@ TEST_CASE("blimp keys: arrows tilt the helix plane, page up/down trim the elevat
   CHECK(m.Step(2 * kTick, k.s).elevator == Approx(-0.25));
 }
 
-TEST_CASE("blimp keys: A/D swing the rudder while held, the tail rotor at zero power", "[blimp_manual]") {
+TEST_CASE("blimp keys: A/D swing the rudder while held, the tail rotor at zero power",
+          "[blimp_manual]") {
   Keys k;
   BlimpManualInterface m(KeysConfig(), k.s);
   m.Step(0.0, k.s);
@@ -141,7 +143,8 @@ TEST_CASE("blimp keys: space puts everything to neutral; presses before the star
   CHECK(c.tail_rotor == 0.0);
 }
 
-TEST_CASE("blimp manual: the camera follows the head, clamped to the camera's range", "[blimp_manual]") {
+TEST_CASE("blimp manual: the camera follows the head, clamped to the camera's range",
+          "[blimp_manual]") {
   Keys k;
   BlimpManualInterface m(KeysConfig(), k.s);
   k.s.head_pan = 0.7;
@@ -153,7 +156,8 @@ TEST_CASE("blimp manual: the camera follows the head, clamped to the camera's ra
   CHECK(m.Step(kTick, k.s).camera_tilt == Approx(-kBlimpCameraTiltMax));
 }
 
-TEST_CASE("blimp gamepad: sticks and triggers map as the gesture cockpit's hands", "[blimp_manual]") {
+TEST_CASE("blimp gamepad: sticks and triggers map as the gesture cockpit's hands",
+          "[blimp_manual]") {
   InputState s;
   s.pad_connected = true;
   BlimpManualInterface m(PadConfig(), s);
@@ -165,7 +169,7 @@ TEST_CASE("blimp gamepad: sticks and triggers map as the gesture cockpit's hands
   CHECK(c.power > 0.85);
   CHECK(c.tail_rotor == 0.0);
 
-  AxisOf(s, PadAxis::kLeftY) = 0.8;  // pulled back: no power, never reverse
+  AxisOf(s, PadAxis::kLeftY) = 0.8;   // pulled back: no power, never reverse
   AxisOf(s, PadAxis::kLeftX) = -1.0;  // so sideways is the tail rotor: left
   c = m.Step(2 * kTick, s);
   CHECK(c.power == 0.0);
@@ -173,7 +177,7 @@ TEST_CASE("blimp gamepad: sticks and triggers map as the gesture cockpit's hands
 
   AxisOf(s, PadAxis::kLeftY) = 0.0;
   AxisOf(s, PadAxis::kLeftX) = 0.0;
-  AxisOf(s, PadAxis::kRightX) = 1.0;   // right: rudder right (negative)
+  AxisOf(s, PadAxis::kRightX) = 1.0;  // right: rudder right (negative)
   AxisOf(s, PadAxis::kRightY) = 0.0;
   AxisOf(s, PadAxis::kTriggerRight) = 1.0;
   c = m.Step(3 * kTick, s);
@@ -230,8 +234,10 @@ TEST_CASE("blimp manual: a step allocates nothing", "[blimp_manual][alloc]") {
   CHECK(sum > 0.0);
 }
 
-TEST_CASE("blimp manual: the shipped files load; a key of the other input or a bad value is refused by name",
-          "[blimp_manual][config]") {
+TEST_CASE(
+    "blimp manual: the shipped files load; a key of the other input or a bad value is refused by "
+    "name",
+    "[blimp_manual][config]") {
   const BlimpManualConfig keys = LoadBlimpManual("config/interfaces/blimp-keys.yaml");
   CHECK(keys.input() == BlimpManualInput::kKeys);
   CHECK(keys.power_steps == 10);
@@ -239,12 +245,15 @@ TEST_CASE("blimp manual: the shipped files load; a key of the other input or a b
   CHECK(pad.input() == BlimpManualInput::kGamepad);
 
   const std::filesystem::path dir = haptel::test::ScratchDir("blimp_manual");
-  const auto write = [&](const std::string& text) { return haptel::test::WriteFile(dir / "blimp-keys.yaml", text); };
+  const auto write = [&](const std::string& text) {
+    return haptel::test::WriteFile(dir / "blimp-keys.yaml", text);
+  };
   CHECK_THROWS_WITH(LoadBlimpManual(write("name: blimp-keys\ndead_zone: 0.1\n")),
                     Catch::Contains("dead_zone") && Catch::Contains("blimp-keys.yaml"));
   CHECK_THROWS_WITH(LoadBlimpManual(write("name: blimp-keys\npower_steps: 0\n")),
                     Catch::Contains("power_steps"));
-  CHECK_THROWS_WITH(LoadBlimpManual(write("name: blimp-pedals\n")), Catch::Contains("blimp-gamepad"));
+  CHECK_THROWS_WITH(LoadBlimpManual(write("name: blimp-pedals\n")),
+                    Catch::Contains("blimp-gamepad"));
   BlimpManualConfig bad = KeysConfig();
   bad.rudder_rate = 0.0;
   CHECK_THROWS_WITH(BlimpManualInterface(bad, InputState{}), Catch::Contains("rudder_rate"));

@@ -63,11 +63,13 @@ TEST_CASE("cockpit: Update maps the controls read through the port and actuates 
   m = cockpit.Update(0.2, bump, hal);
   CHECK(port.last.throttle_locked);
   CHECK(port.last.throttle_target == 0.0);
-  CHECK(m.left + m.right == Approx(0.0).margin(1e-12));  // turning only
+  CHECK(m.left + m.right == Approx(0.0).margin(1e-12));                       // turning only
   cockpit.Update(0.2 + 0.25 / cockpit.logic().config().shake_hz, bump, hal);  // a quarter period on
   CHECK(std::abs(port.last.wheel_torque) > 0.5 * cockpit.logic().config().shake_torque);
   // Past the lock and the shake, the lever is free again.
-  const double after = 0.2 + std::max(cockpit.logic().config().throttle_lock_s, cockpit.logic().config().shake_s) + 0.01;
+  const double after =
+      0.2 + std::max(cockpit.logic().config().throttle_lock_s, cockpit.logic().config().shake_s) +
+      0.01;
   m = cockpit.Update(after, {}, hal);
   CHECK_FALSE(port.last.throttle_locked);
   CHECK(port.last.wheel_torque == 0.0);
@@ -161,21 +163,24 @@ TEST_CASE("cockpit: the hand goals sit on the rim and the bar where the intent p
   CHECK(neutral[1]->position[0] == Approx(c.throttle_centre[0]));
 }
 
-TEST_CASE("cockpit: a control that slipped in the hand is made up for, as a person watching it would") {
+TEST_CASE(
+    "cockpit: a control that slipped in the hand is made up for, as a person watching it would") {
   PlainPort port;
   const CockpitConfig c = Shipped("cockpit");
   const GripGeometry grip;
   CockpitInterface cockpit(c, port, grip);
   haptics::Hal hal(Metres());
   const DriveIntent intent{.forward = 0.5, .turn = 0.0};
-  const double nominal_x = cockpit.HandTargetsFor(intent)[haptics::Index(Side::kRight)]->position[0];
+  const double nominal_x =
+      cockpit.HandTargetsFor(intent)[haptics::Index(Side::kRight)]->position[0];
   // The right hand is 2 cm further forward than its grip would put it on the
   // lever; the wheel 0.1 rad behind the left hand (hand on the rim's top).
   port.state = {.wheel_angle = -0.1, .throttle = 0.01, .wheel_held = true, .throttle_held = true};
   for (int i = 1; i <= 300; ++i) {
-    PutHand(hal, {c.throttle_centre[0] + 0.03, c.throttle_centre[1] + grip.reach, 0.0}, Side::kRight, i * 10'000'000LL);
-    PutHand(hal, {c.wheel_hub[0] - grip.reach, c.wheel_hub[1], c.wheel_hub[2] + c.wheel_radius}, Side::kLeft,
-            i * 10'000'000LL);
+    PutHand(hal, {c.throttle_centre[0] + 0.03, c.throttle_centre[1] + grip.reach, 0.0},
+            Side::kRight, i * 10'000'000LL);
+    PutHand(hal, {c.wheel_hub[0] - grip.reach, c.wheel_hub[1], c.wheel_hub[2] + c.wheel_radius},
+            Side::kLeft, i * 10'000'000LL);
     cockpit.Update(i * 0.01, {}, hal);
   }
   CHECK(cockpit.lever_slip() == Approx(0.02).margin(1e-4));
@@ -183,7 +188,8 @@ TEST_CASE("cockpit: a control that slipped in the hand is made up for, as a pers
   const HandTargets t = cockpit.HandTargetsFor(intent);
   CHECK(t[haptics::Index(Side::kRight)]->position[0] == Approx(nominal_x + 0.02).margin(1e-4));
   CHECK(std::atan2(t[haptics::Index(Side::kLeft)]->position[1] - c.wheel_hub[1],
-                   t[haptics::Index(Side::kLeft)]->position[2] - c.wheel_hub[2]) == Approx(0.1).margin(1e-3));
+                   t[haptics::Index(Side::kLeft)]->position[2] - c.wheel_hub[2]) ==
+        Approx(0.1).margin(1e-3));
   // Let go: nothing to make up for.
   port.state.throttle_held = port.state.wheel_held = false;
   cockpit.Update(3.01, {}, hal);

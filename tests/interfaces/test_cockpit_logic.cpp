@@ -34,7 +34,7 @@ TEST_CASE("throttle drives forward, wheel turns, both saturate") {
   m = logic.Map(c, 0.0);
   CHECK(m.right - m.left == Approx(2 * 0.5 * 0.5));
   c.wheel_angle = 135 * kDeg;  // past full turn: saturates
-  c.throttle = 1.0;           // past the end stop: saturates
+  c.throttle = 1.0;            // past the end stop: saturates
   m = logic.Map(c, 0.0);
   CHECK(std::abs(m.left) <= 1.0);
   CHECK(std::abs(m.right) <= 1.0);
@@ -43,14 +43,16 @@ TEST_CASE("throttle drives forward, wheel turns, both saturate") {
 
 TEST_CASE("ControlsFor inverts Map") {
   CockpitLogic logic(Plain());
-  for (const DriveIntent intent : {DriveIntent{0.6, 0.2}, DriveIntent{-0.3, -0.1}, DriveIntent{0.0, 0.4}}) {
+  for (const DriveIntent intent :
+       {DriveIntent{0.6, 0.2}, DriveIntent{-0.3, -0.1}, DriveIntent{0.0, 0.4}}) {
     const MotorCommand m = logic.Map(logic.ControlsFor(intent), 0.0);
     CHECK(m.left == Approx(intent.forward - intent.turn).margin(1e-9));
     CHECK(m.right == Approx(intent.forward + intent.turn).margin(1e-9));
   }
 }
 
-TEST_CASE("a bumper contact shakes the wheel for shake_s and locks the throttle for throttle_lock_s") {
+TEST_CASE(
+    "a bumper contact shakes the wheel for shake_s and locks the throttle for throttle_lock_s") {
   CockpitLogic logic(Plain());
   CockpitControls c;
   c.throttle = 0.06;
@@ -60,7 +62,8 @@ TEST_CASE("a bumper contact shakes the wheel for shake_s and locks the throttle 
   CHECK_FALSE(a.throttle_locked);
   logic.Update(1.0, {true, false, 0.0}, c);  // contact
   double peak = 0.0;
-  for (double t = 1.0; t < 1.6; t += 0.005) peak = std::max(peak, std::abs(logic.Update(t, {}, c).wheel_torque));
+  for (double t = 1.0; t < 1.6; t += 0.005)
+    peak = std::max(peak, std::abs(logic.Update(t, {}, c).wheel_torque));
   CHECK(peak == Approx(0.3).epsilon(0.05));
   CHECK(logic.Update(1.65, {}, c).wheel_torque == 0.0);  // shake over
   a = logic.Update(1.9, {}, c);
@@ -79,7 +82,7 @@ TEST_CASE("a contact that persists does not restart the shake; a new contact doe
   logic.Update(0.5, {false, true, 0.0}, c);  // still touching
   CHECK_FALSE(logic.shaking(0.7));
   logic.Update(0.8, {}, c);
-  logic.Update(0.9, {true, true, 0.0}, c);   // a new contact
+  logic.Update(0.9, {true, true, 0.0}, c);  // a new contact
   CHECK(logic.shaking(1.2));
 }
 
@@ -132,7 +135,8 @@ TEST_CASE("the shipped cockpit files load with their variants") {
   CHECK(assisted.hud);
   CHECK(assisted.return_to_zero);
   CHECK(plain.wheel_max_angle_deg == 135);
-  CHECK_THROWS_AS(LoadCockpit("config/interfaces/gesture.yaml"), ConfigError);  // wrong name, unknown keys
+  CHECK_THROWS_AS(LoadCockpit("config/interfaces/gesture.yaml"),
+                  ConfigError);  // wrong name, unknown keys
 }
 
 TEST_CASE("cockpit logic: refuses a config CockpitConfig::ValidateOrThrow refuses") {

@@ -64,7 +64,8 @@ TEST_CASE("commands stay within [-1, 1] at every corner of the workspace") {
 
 TEST_CASE("HandTargetsFor inverts the mapping and uses only the right hand") {
   GestureInterface g(Config());
-  for (const DriveIntent intent : {DriveIntent{0.6, 0.2}, DriveIntent{-0.3, -0.1}, DriveIntent{0.0, 0.0}}) {
+  for (const DriveIntent intent :
+       {DriveIntent{0.6, 0.2}, DriveIntent{-0.3, -0.1}, DriveIntent{0.0, 0.0}}) {
     const HandTargets targets = g.HandTargetsFor(intent);
     REQUIRE(targets[haptics::Index(Side::kRight)].has_value());
     CHECK_FALSE(targets[haptics::Index(Side::kLeft)].has_value());

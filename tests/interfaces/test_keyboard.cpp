@@ -182,8 +182,11 @@ TEST_CASE("keyboard: presses made before the interface existed are not replayed"
   CHECK(kb.throttle_level() == 0);
 }
 
-TEST_CASE("keyboard: taken up again (a fleet's other vehicle was driven meanwhile), it starts from rest and replays "
-          "none of the presses made meanwhile", "[keyboard]") {
+TEST_CASE(
+    "keyboard: taken up again (a fleet's other vehicle was driven meanwhile), it starts from rest "
+    "and replays "
+    "none of the presses made meanwhile",
+    "[keyboard]") {
   Keys k;
   haptics::Hal hal;
   KeyboardConfig c = Config();

@@ -38,7 +38,8 @@ RangeScan WallAhead(double distance) {
   RangeScan s = Empty();
   for (int i = 0; i < s.count; ++i) {
     const double c = std::cos(s.Angle(i));
-    if (c > 1e-6 && distance / c < kRangeMax) s.ranges[static_cast<size_t>(i)] = static_cast<float>(distance / c);
+    if (c > 1e-6 && distance / c < kRangeMax)
+      s.ranges[static_cast<size_t>(i)] = static_cast<float>(distance / c);
   }
   return s;
 }
@@ -47,7 +48,8 @@ RangeScan WallAlongRight(double offset) {
   RangeScan s = Empty();
   for (int i = 0; i < s.count; ++i) {
     const double sn = -std::sin(s.Angle(i));
-    if (sn > 1e-6 && offset / sn < kRangeMax) s.ranges[static_cast<size_t>(i)] = static_cast<float>(offset / sn);
+    if (sn > 1e-6 && offset / sn < kRangeMax)
+      s.ranges[static_cast<size_t>(i)] = static_cast<float>(offset / sn);
   }
   return s;
 }
@@ -66,13 +68,17 @@ GestureConfig SharedConfig(double horizon_s = 1.5, double max_force = 3.0) {
   c.full_forward = 0.08;
   c.full_turn = 0.08;
   c.turn_share = 0.7;
-  c.shared_control = {.enabled = true, .horizon_s = horizon_s, .max_force = max_force, .stiffness = 150.0,
+  c.shared_control = {.enabled = true,
+                      .horizon_s = horizon_s,
+                      .max_force = max_force,
+                      .stiffness = 150.0,
                       .clearance = 0.03};
   return c;
 }
 
 /// The guidance of gesture-shared with the hand at `hand` and the vehicle seeing `scan`.
-Guidance GuideAt(const Vec3d& hand, const RangeScan& scan, const GestureConfig& config = SharedConfig()) {
+Guidance GuideAt(const Vec3d& hand, const RangeScan& scan,
+                 const GestureConfig& config = SharedConfig()) {
   GestureInterface g(config, kVehicle);
   haptics::Hal hal(Metres());
   PutHand(hal, hand);
@@ -86,9 +92,11 @@ Guidance GuideAt(const Vec3d& hand, const RangeScan& scan, const GestureConfig& 
 TEST_CASE("time to collision: the commanded arc against what the beams met") {
   // Full ahead at 0.3 m/s, a wall 0.5 m ahead: the body reaches 0.14 m from
   // it after 0.36 m, at 1.2 s.
-  CHECK(TimeToCollision(WallAhead(0.5), {1.0, 1.0}, kVehicle, 0.03, 2.0) == Approx(1.2).margin(0.005));
+  CHECK(TimeToCollision(WallAhead(0.5), {1.0, 1.0}, kVehicle, 0.03, 2.0) ==
+        Approx(1.2).margin(0.005));
   // Half speed: twice as long.
-  CHECK(TimeToCollision(WallAhead(0.5), {0.5, 0.5}, kVehicle, 0.03, 3.0) == Approx(2.4).margin(0.01));
+  CHECK(TimeToCollision(WallAhead(0.5), {0.5, 0.5}, kVehicle, 0.03, 3.0) ==
+        Approx(2.4).margin(0.01));
   // Beyond the horizon: none.
   CHECK(std::isinf(TimeToCollision(WallAhead(0.5), {1.0, 1.0}, kVehicle, 0.03, 1.0)));
   // Backing away, standing, turning on the spot: none.
@@ -111,7 +119,7 @@ TEST_CASE("an obstacle ahead within the horizon pushes the hand back") {
   REQUIRE(g.active);
   CHECK(g.time_to_collision_s == Approx(1.033).margin(0.01));
   CHECK(g.danger == Approx(1.0 - 1.033 / 1.5).margin(0.01));
-  CHECK(g.force[0] < -0.1);                                 // back, towards slower
+  CHECK(g.force[0] < -0.1);                                   // back, towards slower
   CHECK(std::abs(g.force[1]) < 0.05 * std::abs(g.force[0]));  // straight back: the wall is square
   CHECK(g.normal[0] > 0.99);
   // The boundary: the fastest forward command that stops in time, reached by pulling back.
@@ -229,7 +237,10 @@ struct ControlsAt final : ControlsPort {
 CockpitConfig SharedCockpit(double horizon_s = 1.5, double max_force = 3.0) {
   CockpitConfig c;  // the shipped geometry: radius 0.12 m, travel 0.06 m, full turn 90°
   c.name = "cockpit-shared";
-  c.shared_control = {.enabled = true, .horizon_s = horizon_s, .max_force = max_force, .stiffness = 150.0,
+  c.shared_control = {.enabled = true,
+                      .horizon_s = horizon_s,
+                      .max_force = max_force,
+                      .stiffness = 150.0,
                       .clearance = 0.03};
   return c;
 }
@@ -238,9 +249,13 @@ struct CockpitAt {
   ControlsAt port;
   CockpitInterface cockpit;
   MotorCommand command;
-  CockpitAt(double throttle, double wheel_angle, const RangeScan& scan, const CockpitConfig& config = SharedCockpit())
+  CockpitAt(double throttle, double wheel_angle, const RangeScan& scan,
+            const CockpitConfig& config = SharedCockpit())
       : cockpit(config, port, GripGeometry{}, kVehicle) {
-    port.state = {.wheel_angle = wheel_angle, .throttle = throttle, .wheel_held = true, .throttle_held = true};
+    port.state = {.wheel_angle = wheel_angle,
+                  .throttle = throttle,
+                  .wheel_held = true,
+                  .throttle_held = true};
     haptics::Hal hal(Metres());
     VehicleFeedback feedback;
     feedback.ranges = scan;
@@ -250,14 +265,16 @@ struct CockpitAt {
 
 }  // namespace
 
-TEST_CASE("cockpit-shared: an obstacle ahead pushes the lever towards slower, in physics, bounded") {
+TEST_CASE(
+    "cockpit-shared: an obstacle ahead pushes the lever towards slower, in physics, bounded") {
   // Full forward on the lever (0.06 m): TTC (0.45 − 0.14) / 0.3 ≈ 1.03 s, inside 1.5 s.
   const CockpitAt c(0.06, 0.0, WallAhead(0.45));
   const Guidance& g = c.cockpit.guidance();
   REQUIRE(g.active);
   CHECK(g.time_to_collision_s == Approx(1.033).margin(0.01));
-  CHECK(g.force[0] < -0.1);                                   // back, towards slower
-  CHECK(std::abs(g.force[1]) < 0.05 * std::abs(g.force[0]));  // the wheel is left alone: the wall is square
+  CHECK(g.force[0] < -0.1);  // back, towards slower
+  CHECK(std::abs(g.force[1]) <
+        0.05 * std::abs(g.force[0]));  // the wheel is left alone: the wall is square
   // What the physics world is asked to render: the plane between the lever
   // and neutral, facing forward, with the file's stiffness and bound.
   const ControlActuation& a = c.port.last;
@@ -282,7 +299,7 @@ TEST_CASE("cockpit-shared: steering towards a post on the left turns the wheel b
   // case's command, with the post ahead-left (beam 18, +18°, 0.4 m).
   const CockpitAt left(0.045, 0.196, PointAt(18, 0.4));
   REQUIRE(left.cockpit.guidance().active);
-  CHECK(left.cockpit.guidance().force[1] < 0.0);   // along the rim, to the right
+  CHECK(left.cockpit.guidance().force[1] < 0.0);    // along the rim, to the right
   CHECK(left.port.last.guidance_normal_rim > 0.0);  // the danger lies further left
   // Mirrored.
   const CockpitAt right(0.045, -0.196, PointAt(12, 0.4));
@@ -291,7 +308,9 @@ TEST_CASE("cockpit-shared: steering towards a post on the left turns the wheel b
   CHECK(right.port.last.guidance_normal_rim < 0.0);
 }
 
-TEST_CASE("cockpit-shared: nothing pushes beyond the horizon or at rest; plain cockpit has no shared control") {
+TEST_CASE(
+    "cockpit-shared: nothing pushes beyond the horizon or at rest; plain cockpit has no shared "
+    "control") {
   const CockpitAt far(0.06, 0.0, WallAhead(1.4));
   CHECK_FALSE(far.cockpit.guidance().active);
   CHECK_FALSE(far.port.last.guidance_active);

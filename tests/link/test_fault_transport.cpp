@@ -2,12 +2,11 @@
 // (RateQueue) on a clock of the test's own, and the FaultLine the fault
 // transport feeds (loss, delay and jitter, rate and its queue, the link-down
 // switch), driven with hand-made packets into a receiver that records them.
-#include <catch2/catch.hpp>
-
 #include <algorithm>
+#include <catch2/catch.hpp>
+#include <mutex>
 #include <optional>
 #include <string>
-#include <mutex>
 #include <vector>
 
 #include "haptel/config/error.hpp"
@@ -24,8 +23,8 @@ namespace {
 /// Records what reaches it: each packet's first byte pair as a number, its size, and when.
 class Recorder : public eprosima::fastdds::rtps::TransportReceiverInterface {
  public:
-  void OnDataReceived(const eprosima::fastrtps::rtps::octet* data, const uint32_t size, const Locator_t&,
-                      const Locator_t&) override {
+  void OnDataReceived(const eprosima::fastrtps::rtps::octet* data, const uint32_t size,
+                      const Locator_t&, const Locator_t&) override {
     std::lock_guard lock(mutex_);
     REQUIRE(size >= 2);
     ids_.push_back(data[0] | (data[1] << 8));
@@ -102,7 +101,7 @@ TEST_CASE("link fault text: parsed in any order and units, written back, bad par
     }
     return std::string("accepted");
   };
-  CHECK(what("delay=100") .find("not 'delay=100'") != std::string::npos);  // no unit
+  CHECK(what("delay=100").find("not 'delay=100'") != std::string::npos);  // no unit
   CHECK(what("delay=-5ms").find("a time >= 0") != std::string::npos);
   CHECK(what("loss=100%").find("a loss from 0 to 99%") != std::string::npos);
   CHECK(what("loss=abc").find("not 'loss=abc'") != std::string::npos);
@@ -117,7 +116,9 @@ TEST_CASE("link fault text: parsed in any order and units, written back, bad par
   }
 }
 
-TEST_CASE("link fault text: a rate in kbit or Mbit and its queue, written back; the keys given override a base") {
+TEST_CASE(
+    "link fault text: a rate in kbit or Mbit and its queue, written back; the keys given override "
+    "a base") {
   const LinkFault f = ParseLinkFault("rate=1Mbit,delay=40ms");
   CHECK(f.rate_bps == Approx(1e6));
   CHECK(f.queue_s == Approx(0.1));  // the default depth
@@ -144,13 +145,15 @@ TEST_CASE("link fault text: a rate in kbit or Mbit and its queue, written back; 
 }
 
 TEST_CASE("link fault text: a bad rate or queue says what was expected and names the part") {
-  for (const char* bad : {"rate=0", "rate=-1Mbit", "rate=fast", "rate=1", "rate=1Mbps", "rate=20Gbit"}) {
+  for (const char* bad :
+       {"rate=0", "rate=-1Mbit", "rate=fast", "rate=1", "rate=1Mbps", "rate=20Gbit"}) {
     INFO(bad);
     const std::string what = ParseError(bad);
     CHECK(what.find("a rate from 1kbit to 10Gbit with its unit, such as 1Mbit or 500kbit") == 0);
     CHECK(what.find(std::string("(not '") + bad + "')") != std::string::npos);
   }
-  for (const char* bad : {"rate=1Mbit,queue=abc", "rate=1Mbit,queue=0", "rate=1Mbit,queue=0ms", "rate=1Mbit,queue=11s"}) {
+  for (const char* bad : {"rate=1Mbit,queue=abc", "rate=1Mbit,queue=0", "rate=1Mbit,queue=0ms",
+                          "rate=1Mbit,queue=11s"}) {
     INFO(bad);
     CHECK(ParseError(bad).find("a queue depth from 1ms to 10s with its unit, such as 100ms") == 0);
   }
@@ -180,14 +183,15 @@ TEST_CASE("rate queue: what it passes over time is its rate, whatever is offered
       ++dropped;
       continue;
     }
-    CHECK(*passed >= last_passed_ns + 8'000'000);  // one after the other, 8 ms each
+    CHECK(*passed >= last_passed_ns + 8'000'000);    // one after the other, 8 ms each
     CHECK(*passed - now <= SToNs(0.1) + 8'000'000);  // never queued past its depth
     last_passed_ns = *passed;
     passed_bytes += 1000;
   }
   const double seconds = NsToS(last_passed_ns);
   CHECK(passed_bytes * 8.0 / seconds == Approx(rate_bps).epsilon(0.01));
-  CHECK(dropped == Approx(1250.0).epsilon(0.02));  // half of 2500 offered, less the queue's 12 or so
+  CHECK(dropped ==
+        Approx(1250.0).epsilon(0.02));  // half of 2500 offered, less the queue's 12 or so
 
   SECTION("below its rate nothing waits and nothing is dropped") {
     link::RateQueue idle(rate_bps, 0.1);
@@ -199,7 +203,9 @@ TEST_CASE("rate queue: what it passes over time is its rate, whatever is offered
   }
 }
 
-TEST_CASE("rate queue: a burst deeper than the queue is cut at its depth (drop-tail), then served again") {
+TEST_CASE(
+    "rate queue: a burst deeper than the queue is cut at its depth (drop-tail), then served "
+    "again") {
   link::RateQueue queue(1e6, 0.1);  // 1000 bytes take 8 ms: 100 ms holds 12 behind the first
   int admitted = 0;
   for (int i = 0; i < 100; ++i) admitted += queue.Admit(0, 1000) ? 1 : 0;
@@ -209,7 +215,9 @@ TEST_CASE("rate queue: a burst deeper than the queue is cut at its depth (drop-t
   CHECK(queue.Admit(SToNs(0.2), 1000));
 }
 
-TEST_CASE("rate queue: commands and states go ahead of a saturated video queue, and take their share of the rate") {
+TEST_CASE(
+    "rate queue: commands and states go ahead of a saturated video queue, and take their share of "
+    "the rate") {
   link::RateQueue queue(1e6, 0.1);  // 1 Mbit/s: 1000 bytes take 8 ms
   // Video: 12 kilobyte packets at once, 96 ms of backlog.
   for (int i = 0; i < 12; ++i) REQUIRE(queue.Admit(0, 1000));
@@ -291,7 +299,9 @@ TEST_CASE("fault line: delayed packets arrive no earlier than their delay; jitte
   }
 }
 
-TEST_CASE("fault line: a rate delivers a burst at that rate, in order, and counts what its full queue drops") {
+TEST_CASE(
+    "fault line: a rate delivers a burst at that rate, in order, and counts what its full queue "
+    "drops") {
   // 1250-byte packets take 10 ms each at 1 Mbit/s; a 100 ms queue holds about 10 behind the first.
   link::FaultLine line(ParseLinkFault("rate=1Mbit,queue=100ms"), 5);
   Recorder to;
@@ -307,22 +317,27 @@ TEST_CASE("fault line: a rate delivers a burst at that rate, in order, and count
   CHECK(ids.front() == 0);
   // None arrives before its turn at the rate: the k-th after k + 1 packets' time.
   const std::vector<int64_t> at = to.at_ns();
-  for (size_t k = 0; k < at.size(); ++k) CHECK(at[k] - start >= static_cast<int64_t>(k + 1) * 10'000'000);
+  for (size_t k = 0; k < at.size(); ++k)
+    CHECK(at[k] - start >= static_cast<int64_t>(k + 1) * 10'000'000);
   CHECK(line.Counts().delayed == passing);
   CHECK(to.bytes() == passing * 1250);
 }
 
-TEST_CASE("rate queue: a rate changed at run time serves what comes next at the new rate, the queued at the old") {
+TEST_CASE(
+    "rate queue: a rate changed at run time serves what comes next at the new rate, the queued at "
+    "the old") {
   link::RateQueue queue(1e6, 0.1);  // 1000 bytes take 8 ms
   const int64_t first = *queue.Admit(0, 1000);
   CHECK(first == 8'000'000);
   queue.SetRate(0.5e6);  // now 16 ms
   CHECK(queue.rate_bps() == Approx(0.5e6));
   CHECK(*queue.Admit(0, 1000) == 8'000'000 + 16'000'000);  // behind the first, at the new rate
-  CHECK(*queue.Admit(100'000'000, 1000) == 116'000'000);    // an idle link: its own 16 ms
+  CHECK(*queue.Admit(100'000'000, 1000) == 116'000'000);   // an idle link: its own 16 ms
 }
 
-TEST_CASE("fault line: its rate changes at run time, is added to a line without one, and is lifted by 0") {
+TEST_CASE(
+    "fault line: its rate changes at run time, is added to a line without one, and is lifted by "
+    "0") {
   link::FaultLine line(ParseLinkFault("on"), 6);  // no rate: everything at once
   CHECK(line.rate_bps() == 0.0);
   Recorder to;

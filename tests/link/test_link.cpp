@@ -35,11 +35,14 @@ TEST_CASE("QoS profiles: command best effort with a deadline, state reliable, vi
   CHECK(cmd.deadline().period.seconds == 0);
   CHECK(cmd.deadline().period.nanosec == 100'000'000U);
   CHECK(DataReaderQosFor(Profile::kState, c).reliability().kind == dds::RELIABLE_RELIABILITY_QOS);
-  CHECK(DataWriterQosFor(Profile::kVideo, c).reliability().kind == dds::BEST_EFFORT_RELIABILITY_QOS);
+  CHECK(DataWriterQosFor(Profile::kVideo, c).reliability().kind ==
+        dds::BEST_EFFORT_RELIABILITY_QOS);
   CHECK(DataWriterQosFor(Profile::kVideo, c).history().depth == 1);
 }
 
-TEST_CASE("QoS profile latched: reliable, keep last 1, transient local, so a late reader gets the last sample") {
+TEST_CASE(
+    "QoS profile latched: reliable, keep last 1, transient local, so a late reader gets the last "
+    "sample") {
   LinkConfig c;
   namespace dds = eprosima::fastdds::dds;
   for (const auto& qos : {DataWriterQosFor(Profile::kLatched, c).durability().kind,
@@ -57,11 +60,12 @@ TEST_CASE("a command crosses between two participants intact") {
   std::mutex m;
   msg::DriveCommand got;
   std::atomic<int> count{0};
-  CommandReader reader(b, TopicName("t", "command"), Profile::kCommand, [&](const msg::DriveCommand& c) {
-    std::lock_guard lock(m);
-    got = c;
-    ++count;
-  });
+  CommandReader reader(b, TopicName("t", "command"), Profile::kCommand,
+                       [&](const msg::DriveCommand& c) {
+                         std::lock_guard lock(m);
+                         got = c;
+                         ++count;
+                       });
   CommandWriter writer(a, TopicName("t", "command"), Profile::kCommand);
   REQUIRE(test::WaitFor([&] { return writer.matched() > 0 && reader.matched() > 0; }, 20.0));
   msg::DriveCommand c;
@@ -70,7 +74,12 @@ TEST_CASE("a command crosses between two participants intact") {
   c.left(0.25F);
   c.right(-0.75F);
   // Best effort: resend until one arrives.
-  REQUIRE(test::WaitFor([&] { writer.Write(c); return count.load() > 0; }, 10.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        writer.Write(c);
+        return count.load() > 0;
+      },
+      10.0));
   std::lock_guard lock(m);
   CHECK(got.seq() == 42);
   CHECK(got.sent_ns() == 123456789);
@@ -78,7 +87,9 @@ TEST_CASE("a command crosses between two participants intact") {
   CHECK(got.right() == -0.75F);
 }
 
-TEST_CASE("a reader is told each sample's writer: its GUID, which another participant's writer does not have") {
+TEST_CASE(
+    "a reader is told each sample's writer: its GUID, which another participant's writer does not "
+    "have") {
   const LinkConfig config = Config(9);
   Participant vehicle(config, "test-vehicle");
   Participant owner(config, "test-owner");
@@ -104,13 +115,21 @@ TEST_CASE("a reader is told each sample's writer: its GUID, which another partic
     std::lock_guard lock(m);
     return std::find(from.begin(), from.end(), id) != from.end();
   };
-  REQUIRE(test::WaitFor([&] { mine.Write(c); theirs.Write(c); return heard(mine.id()) && heard(theirs.id()); }, 20.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        mine.Write(c);
+        theirs.Write(c);
+        return heard(mine.id()) && heard(theirs.id());
+      },
+      20.0));
   std::lock_guard lock(m);
   for (const WriterId& id : from) CHECK((id == mine.id() || id == theirs.id()));
   CHECK(mine.id().ToString().size() == 33);  // 12 bytes, '|', 4 bytes in hex
 }
 
-TEST_CASE("a link beyond the host without DDS Security is said; loopback, --security or --insecure: not") {
+TEST_CASE(
+    "a link beyond the host without DDS Security is said; loopback, --security or --insecure: "
+    "not") {
   LinkConfig c;  // the default: loopback only
   CHECK(LinkBeyondHost(c).empty());
   CHECK(InsecureLinkWarning(c, false).empty());
@@ -122,7 +141,9 @@ TEST_CASE("a link beyond the host without DDS Security is said; loopback, --secu
   lan.interfaces = {"127.0.0.1", "192.168.1.20"};
   CHECK(LinkBeyondHost(lan) == "interface 192.168.1.20");
   const std::string warning = InsecureLinkWarning(lan, false);
-  CHECK(warning.find("the link reaches beyond this host (interface 192.168.1.20) without DDS Security") == 0);
+  CHECK(warning.find(
+            "the link reaches beyond this host (interface 192.168.1.20) without DDS Security") ==
+        0);
   CHECK(warning.find("guards against mistakes, not attackers") != std::string::npos);
   CHECK(warning.find("--insecure silences this") != std::string::npos);
   CHECK(InsecureLinkWarning(lan, true).empty());
@@ -155,14 +176,17 @@ TEST_CASE("a latched topic: a reader that joins after the last write still gets 
   REQUIRE(writer.Write(last));  // written before anyone reads
   std::mutex m;
   std::vector<msg::SelectedSource> got;
-  SelectedReader reader(b, TopicName("robot-a", "selected"), Profile::kLatched, [&](const msg::SelectedSource& s) {
-    std::lock_guard lock(m);
-    got.push_back(s);
-  });
-  REQUIRE(test::WaitFor([&] {
-    std::lock_guard lock(m);
-    return !got.empty();
-  }, 20.0));
+  SelectedReader reader(b, TopicName("robot-a", "selected"), Profile::kLatched,
+                        [&](const msg::SelectedSource& s) {
+                          std::lock_guard lock(m);
+                          got.push_back(s);
+                        });
+  REQUIRE(test::WaitFor(
+      [&] {
+        std::lock_guard lock(m);
+        return !got.empty();
+      },
+      20.0));
   std::lock_guard lock(m);
   REQUIRE(got.size() == 1);  // keep last 1: the current one, not the history
   CHECK(std::string(got[0].source().c_str()) == "operator");
@@ -181,10 +205,12 @@ TEST_CASE("topics of different vehicles do not mix") {
   StateWriter writer(a, TopicName("mine", "state"), Profile::kState);
   REQUIRE(test::WaitFor([&] { return mine.matched() > 0 && writer.matched() > 0; }, 20.0));
   msg::VehicleState s;
-  REQUIRE(test::WaitFor([&] {
-    writer.Write(s);
-    return mine.received() >= 20;
-  }, 10.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        writer.Write(s);
+        return mine.received() >= 20;
+      },
+      10.0));
   CHECK(count.load() == 0);
   CHECK(reader.matched() == 0);
 }
@@ -206,11 +232,13 @@ TEST_CASE("a video frame of realistic size arrives byte for byte") {
   f.data().resize(90'000);  // larger than one UDP datagram: fragmented
   for (size_t i = 0; i < f.data().size(); ++i) f.data()[i] = static_cast<uint8_t>(i * 31 + 7);
   const std::vector<uint8_t> expected = f.data();
-  REQUIRE(test::WaitFor([&] {
-    writer.Write(f);
-    std::lock_guard lock(m);
-    return !got.empty();
-  }, 10.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        writer.Write(f);
+        std::lock_guard lock(m);
+        return !got.empty();
+      },
+      10.0));
   std::lock_guard lock(m);
   CHECK(got == expected);
 }

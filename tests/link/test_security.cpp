@@ -5,16 +5,16 @@
 // payload crosses the wire in plain text (the fault transport's own capture
 // of every packet received).
 #include <openssl/evp.h>
-#include <sys/wait.h>
-#include <unistd.h>
 #include <openssl/pem.h>
 #include <openssl/x509.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
-#include <catch2/catch.hpp>
 #include <atomic>
+#include <catch2/catch.hpp>
+#include <cstdio>
 #include <cstdlib>
 #include <ctime>
-#include <cstdio>
 #include <fstream>
 #include <functional>
 #include <string>
@@ -73,7 +73,8 @@ struct Vehicle {
 void Command(const LinkConfig& config, double seconds, const std::string& marker = "",
              const std::function<bool()>& until = nullptr) {
   link::Participant participant(config, "operator");
-  link::CommandWriter writer(participant, link::TopicName("robot1", "command"), link::Profile::kCommand);
+  link::CommandWriter writer(participant, link::TopicName("robot1", "command"),
+                             link::Profile::kCommand);
   msg::DriveCommand m;
   m.left(0.25f);
   m.operator_name(marker);
@@ -87,10 +88,11 @@ void Command(const LinkConfig& config, double seconds, const std::string& marker
 
 /// Signs `xml` with the folder's CA into `p7s` (openssl smime, as init does).
 void SignWithCa(const fs::path& xml, const fs::path& p7s) {
-  ChildProcess openssl("/usr/bin/openssl",
-                       {"smime", "-sign", "-text", "-in", xml.string(), "-out", p7s.string(), "-signer",
-                        (Folder() / "ca.pem").string(), "-inkey", (Folder() / "ca.key").string()},
-                       ChildProcess::Options{true});
+  ChildProcess openssl(
+      "/usr/bin/openssl",
+      {"smime", "-sign", "-text", "-in", xml.string(), "-out", p7s.string(), "-signer",
+       (Folder() / "ca.pem").string(), "-inkey", (Folder() / "ca.key").string()},
+      ChildProcess::Options{true});
   REQUIRE(openssl.Wait(60.0) == 0);
 }
 
@@ -104,8 +106,8 @@ void WriteExpiredCertificate(const fs::path& file) {
   X509_gmtime_adj(X509_getm_notAfter(cert), -1 * 86400L);
   X509_set_pubkey(cert, key);
   X509_NAME* name = X509_get_subject_name(cert);
-  X509_NAME_add_entry_by_txt(name, "CN", MBSTRING_ASC, reinterpret_cast<const unsigned char*>("haptel-operator"), -1,
-                             -1, 0);
+  X509_NAME_add_entry_by_txt(name, "CN", MBSTRING_ASC,
+                             reinterpret_cast<const unsigned char*>("haptel-operator"), -1, -1, 0);
   X509_set_issuer_name(cert, name);
   REQUIRE(X509_sign(cert, key, EVP_sha256()) > 0);
   FILE* out = std::fopen(file.c_str(), "w");
@@ -119,7 +121,8 @@ void WriteExpiredCertificate(const fs::path& file) {
 /// A copy of the deployment's operator files in a folder of its own, its
 /// permissions re-signed by the CA after `edit` (the text's `of` replaced
 /// by `with`), as init signs them.
-fs::path OperatorWithPermissions(const std::string& name, const std::string& of, const std::string& with) {
+fs::path OperatorWithPermissions(const std::string& name, const std::string& of,
+                                 const std::string& with) {
   const fs::path dir = test::ScratchDir(name);
   for (const char* file : {"ca.pem", "governance.p7s", "operator.pem", "operator.key"}) {
     fs::copy_file(Folder() / file, dir / file, fs::copy_options::overwrite_existing);
@@ -162,16 +165,19 @@ std::string CheckMessage(const fs::path& dir, const std::string& identity) {
 
 }  // namespace
 
-TEST_CASE("security init: a CA, the identities and signed documents; the check names what is missing or expired") {
+TEST_CASE(
+    "security init: a CA, the identities and signed documents; the check names what is missing or "
+    "expired") {
   const fs::path& dir = Folder();
-  for (const char* file : {"ca.pem", "governance.p7s", "operator.pem", "operator.key", "operator-permissions.p7s",
-                           "vehicle-robot1.pem", "vehicle-robot1.key", "vehicle-robot1-permissions.p7s"}) {
+  for (const char* file :
+       {"ca.pem", "governance.p7s", "operator.pem", "operator.key", "operator-permissions.p7s",
+        "vehicle-robot1.pem", "vehicle-robot1.key", "vehicle-robot1-permissions.p7s"}) {
     CHECK(fs::exists(dir / file));
   }
   CHECK(CheckMessage(dir, "operator") == "valid");
   CHECK(CheckMessage(dir, link::VehicleIdentity("robot1")) == "valid");
-  CHECK(CheckMessage(dir, link::VehicleIdentity("blimp9")).find("no vehicle-blimp9.key for identity 'vehicle-blimp9'") !=
-        std::string::npos);
+  CHECK(CheckMessage(dir, link::VehicleIdentity("blimp9"))
+            .find("no vehicle-blimp9.key for identity 'vehicle-blimp9'") != std::string::npos);
   CHECK(CheckMessage(dir / "nowhere", "operator").find("no such folder") != std::string::npos);
   // Nothing is overwritten.
   CHECK_THROWS_WITH(link::InitSecurity(dir, {"robot1"}, 30), Catch::Contains("already holds a CA"));
@@ -181,8 +187,10 @@ TEST_CASE("security init: a CA, the identities and signed documents; the check n
   const fs::path fresh = test::ScratchDir("security-names") / "deployment";
   const std::string long_name(50, 'v');
   CHECK(link::VehicleIdentityProblem(std::string(49, 'v')).empty());
-  CHECK_THAT(link::VehicleIdentityProblem(long_name), Catch::Contains("at most 49") && Catch::Contains("64"));
-  CHECK_THROWS_WITH(link::InitSecurity(fresh, {"robot1", long_name}, 30), Catch::Contains("at most 49"));
+  CHECK_THAT(link::VehicleIdentityProblem(long_name),
+             Catch::Contains("at most 49") && Catch::Contains("64"));
+  CHECK_THROWS_WITH(link::InitSecurity(fresh, {"robot1", long_name}, 30),
+                    Catch::Contains("at most 49"));
   CHECK_FALSE(fs::exists(fresh));
   CHECK(fs::is_empty(fresh.parent_path()));  // no half-made folder beside it either
   link::InitSecurity(fresh, {"robot1", std::string(49, 'v')}, 30);
@@ -190,12 +198,14 @@ TEST_CASE("security init: a CA, the identities and signed documents; the check n
   // A folder holding other files is not written into.
   const fs::path busy = test::ScratchDir("security-busy");
   test::WriteFile(busy / "notes.txt", "mine");
-  CHECK_THROWS_WITH(link::InitSecurity(busy, {"robot1"}, 30), Catch::Contains("already holds other files"));
+  CHECK_THROWS_WITH(link::InitSecurity(busy, {"robot1"}, 30),
+                    Catch::Contains("already holds other files"));
   CHECK_FALSE(fs::exists(busy / "ca.pem"));
 
   // An expired certificate is named with the day it expired.
   const fs::path expired = test::ScratchDir("security-expired");
-  for (const char* file : {"ca.pem", "governance.p7s", "operator.key", "operator-permissions.p7s"}) {
+  for (const char* file :
+       {"ca.pem", "governance.p7s", "operator.key", "operator-permissions.p7s"}) {
     fs::copy_file(dir / file, expired / file, fs::copy_options::overwrite_existing);
   }
   WriteExpiredCertificate(expired / "operator.pem");
@@ -204,24 +214,32 @@ TEST_CASE("security init: a CA, the identities and signed documents; the check n
   CHECK(message.find("haptel security init") != std::string::npos);
 }
 
-TEST_CASE("permissions out of their validity, or signed by another CA, are named before any participant exists") {
+TEST_CASE(
+    "permissions out of their validity, or signed by another CA, are named before any participant "
+    "exists") {
   SECTION("expired: the file and the day, not DDS's unexplained refusal") {
     const fs::path dir = OperatorWithPermissions("security-expired-permissions", "<not_after>",
                                                  "<not_after>2020-01-01T00:00:00");
     const std::string file = (dir / "operator-permissions.p7s").string();
     InZone("UTC0", [&] {
-      CHECK(CheckMessage(dir, "operator") == "permissions file " + file +
-                                                 " expired on 2020-01-01T00:00:00Z; run `haptel security init` "
-                                                 "again (into a new folder: it does not overwrite this one)");
+      CHECK(CheckMessage(dir, "operator") ==
+            "permissions file " + file +
+                " expired on 2020-01-01T00:00:00Z; run `haptel security init` "
+                "again (into a new folder: it does not overwrite this one)");
       // The participant is refused with the same line, before DDS is asked.
-      CHECK_THROWS_WITH(link::Participant(Link(test::UniqueDomain(63), dir, link::OperatorIdentity()), "operator"),
-                        Catch::Contains("permissions file " + file + " expired on 2020-01-01T00:00:00Z"));
+      CHECK_THROWS_WITH(
+          link::Participant(Link(test::UniqueDomain(63), dir, link::OperatorIdentity()),
+                            "operator"),
+          Catch::Contains("permissions file " + file + " expired on 2020-01-01T00:00:00Z"));
     });
-    // Fast DDS reads the date in local time: an hour east of UTC it ends an hour sooner, and the check says so.
+    // Fast DDS reads the date in local time: an hour east of UTC it ends an hour sooner, and the
+    // check says so.
     InZone("XYZ-1", [&] {
-      CHECK_THAT(CheckMessage(dir, "operator"),
-                 Catch::Contains("expired on 2019-12-31T23:00:00Z (its <not_after> 2020-01-01T00:00:00, which DDS "
-                                 "reads in this host's local time)"));
+      CHECK_THAT(
+          CheckMessage(dir, "operator"),
+          Catch::Contains(
+              "expired on 2019-12-31T23:00:00Z (its <not_after> 2020-01-01T00:00:00, which DDS "
+              "reads in this host's local time)"));
     });
   }
   SECTION("not yet valid") {
@@ -229,44 +247,52 @@ TEST_CASE("permissions out of their validity, or signed by another CA, are named
                                                  "<not_before>2090-06-01T12:00:00");
     InZone("UTC0", [&] {
       CHECK_THAT(CheckMessage(dir, "operator"),
-                 Catch::StartsWith("permissions file " + (dir / "operator-permissions.p7s").string() +
-                                   " is not valid before 2090-06-01T12:00:00Z (is this host's clock right?)"));
+                 Catch::StartsWith(
+                     "permissions file " + (dir / "operator-permissions.p7s").string() +
+                     " is not valid before 2090-06-01T12:00:00Z (is this host's clock right?)"));
     });
   }
   SECTION("a date that is not one") {
-    const fs::path dir = OperatorWithPermissions("security-bad-date", "<not_after>", "<not_after>next year");
-    CHECK_THAT(CheckMessage(dir, "operator"),
-               Catch::Contains("<not_after> 'next year' is not a date; expected YYYY-MM-DDThh:mm:ss"));
+    const fs::path dir =
+        OperatorWithPermissions("security-bad-date", "<not_after>", "<not_after>next year");
+    CHECK_THAT(
+        CheckMessage(dir, "operator"),
+        Catch::Contains("<not_after> 'next year' is not a date; expected YYYY-MM-DDThh:mm:ss"));
   }
   SECTION("a grant for another identity") {
-    const fs::path dir =
-        OperatorWithPermissions("security-other-subject", "<subject_name>", "<subject_name>CN=haptel-someone");
+    const fs::path dir = OperatorWithPermissions("security-other-subject", "<subject_name>",
+                                                 "<subject_name>CN=haptel-someone");
     CHECK_THAT(CheckMessage(dir, "operator"),
-               Catch::Contains("grants nothing to identity 'operator'") && Catch::Contains("CN=haptel-operator"));
+               Catch::Contains("grants nothing to identity 'operator'") &&
+                   Catch::Contains("CN=haptel-operator"));
   }
   SECTION("a folder made before a topic was added: the topic named, and what to do") {
     // An older version's grant: video_feedback was not among the operator's
     // topics (here the command topic stands twice in its place).
-    const fs::path dir = OperatorWithPermissions("security-old-topics", "haptel/*/video_feedback", "haptel/*/command");
-    CHECK(CheckMessage(dir, "operator") ==
-          "permissions file " + (dir / "operator-permissions.p7s").string() +
-              " does not let identity 'operator' publish topic 'haptel/*/video_feedback', which this version of "
-              "Haptel uses (the folder was made by an older one); run `haptel security init` again (into a new "
-              "folder: it does not overwrite this one)");
+    const fs::path dir = OperatorWithPermissions("security-old-topics", "haptel/*/video_feedback",
+                                                 "haptel/*/command");
+    CHECK(CheckMessage(dir, "operator") == "permissions file " +
+                                               (dir / "operator-permissions.p7s").string() +
+                                               " does not let identity 'operator' publish topic "
+                                               "'haptel/*/video_feedback', which this version of "
+                                               "Haptel uses (the folder was made by an older one); "
+                                               "run `haptel security init` again (into a new "
+                                               "folder: it does not overwrite this one)");
   }
   SECTION("permissions another CA signed, or changed since they were signed") {
-    const fs::path dir = OperatorWithPermissions("security-foreign-permissions", "<not_after>", "<not_after>2090-01-01T00:00:00");
+    const fs::path dir = OperatorWithPermissions("security-foreign-permissions", "<not_after>",
+                                                 "<not_after>2090-01-01T00:00:00");
     const auto openssl = [](const std::vector<std::string>& arguments) {
       ChildProcess p("/usr/bin/openssl", arguments, ChildProcess::Options{true});
       REQUIRE(p.Wait(60.0) == 0);
     };
     SECTION("another CA") {
-      openssl({"req", "-x509", "-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1", "-nodes", "-keyout",
-               (dir / "other-ca.key").string(), "-out", (dir / "other-ca.pem").string(), "-days", "30", "-subj",
-               "/CN=haptel-ca"});
-      openssl({"smime", "-sign", "-text", "-in", (dir / "operator-permissions.xml").string(), "-out",
-               (dir / "operator-permissions.p7s").string(), "-signer", (dir / "other-ca.pem").string(), "-inkey",
-               (dir / "other-ca.key").string()});
+      openssl({"req", "-x509", "-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1",
+               "-nodes", "-keyout", (dir / "other-ca.key").string(), "-out",
+               (dir / "other-ca.pem").string(), "-days", "30", "-subj", "/CN=haptel-ca"});
+      openssl({"smime", "-sign", "-text", "-in", (dir / "operator-permissions.xml").string(),
+               "-out", (dir / "operator-permissions.p7s").string(), "-signer",
+               (dir / "other-ca.pem").string(), "-inkey", (dir / "other-ca.key").string()});
     }
     SECTION("changed since signing") {
       std::ifstream in(dir / "operator-permissions.p7s");
@@ -277,13 +303,16 @@ TEST_CASE("permissions out of their validity, or signed by another CA, are named
       p7s.replace(at, 4, "2099");
       std::ofstream(dir / "operator-permissions.p7s") << p7s;
     }
-    CHECK_THAT(CheckMessage(dir, "operator"),
-               Catch::Contains("permissions file " + (dir / "operator-permissions.p7s").string() +
-                               " is not signed by this folder's CA (" + (dir / "ca.pem").string() + ")"));
+    CHECK_THAT(
+        CheckMessage(dir, "operator"),
+        Catch::Contains("permissions file " + (dir / "operator-permissions.p7s").string() +
+                        " is not signed by this folder's CA (" + (dir / "ca.pem").string() + ")"));
   }
 }
 
-TEST_CASE("secured: only the operator's commands reach the vehicle; no certificates, another CA or no permission: none") {
+TEST_CASE(
+    "secured: only the operator's commands reach the vehicle; no certificates, another CA or no "
+    "permission: none") {
   const int domain = test::UniqueDomain(61);
   Vehicle vehicle(domain);
   SECTION("a participant without certificates") { Command(Link(domain), 3.0); }
@@ -303,7 +332,8 @@ TEST_CASE("secured: only the operator's commands reach the vehicle; no certifica
   }
   CHECK(vehicle.received.load() == 0);
   // The control: the deployment's own operator is heard.
-  Command(Link(domain, Folder(), link::OperatorIdentity()), 60.0, "", [&] { return vehicle.received.load() > 0; });
+  Command(Link(domain, Folder(), link::OperatorIdentity()), 60.0, "",
+          [&] { return vehicle.received.load() > 0; });
   CHECK(vehicle.received.load() > 0);
 }
 
@@ -311,13 +341,15 @@ TEST_CASE("secured: no command payload crosses the wire in plain text (without s
   const std::string marker = "PLAINTEXT-MARKER-4242";
   const auto payload_seen = [&](bool secured) {
     const int domain = test::UniqueDomain(62);
-    Vehicle vehicle(secured ? Link(domain, Folder(), link::VehicleIdentity("robot1")) : Link(domain));
+    Vehicle vehicle(secured ? Link(domain, Folder(), link::VehicleIdentity("robot1"))
+                            : Link(domain));
     link::FaultLine* line = vehicle.participant.fault_line();
     REQUIRE(line != nullptr);
     line->CaptureReceived(100000);
     // Commands until some have arrived, then a second more of them: what was
     // captured is what carried them.
-    const LinkConfig sender = secured ? Link(domain, Folder(), link::OperatorIdentity()) : Link(domain);
+    const LinkConfig sender =
+        secured ? Link(domain, Folder(), link::OperatorIdentity()) : Link(domain);
     Command(sender, 60.0, marker, [&] { return vehicle.received.load() > 0; });
     CHECK(vehicle.received.load() > 0);
     Command(sender, 1.0, marker);
@@ -333,7 +365,9 @@ TEST_CASE("secured: no command payload crosses the wire in plain text (without s
   CHECK(payload_seen(true) == 0);
 }
 
-TEST_CASE("security init: DIR/, '.' and an empty folder are filled; a dead run's partial folder is cleaned (issue 41)") {
+TEST_CASE(
+    "security init: DIR/, '.' and an empty folder are filled; a dead run's partial folder is "
+    "cleaned (issue 41)") {
   const fs::path root = test::ScratchDir("security-init-paths");
   // "DIR/": it said "filesystem error ... Directory not empty" and left DIR empty.
   const fs::path slash = root / "slash";

@@ -69,7 +69,9 @@ TEST_CASE("after a bumper contact the operator backs off, turning away from the 
   CHECK(op.Decide(1.5).forward > 0.0);  // contact gone, back to driving
 }
 
-TEST_CASE("hitting again while aiming backs the operator off longer each time, and it looks closer ahead") {
+TEST_CASE(
+    "hitting again while aiming backs the operator off longer each time, and it looks closer "
+    "ahead") {
   OperatorConfig cfg;
   cfg.reaction_delay_s = 0.0;
   cfg.backoff_s = 0.8;
@@ -144,7 +146,8 @@ namespace {
 /// x = 0.1 + 0.05·forward, approached from 4 cm above, closed to 1 rad.
 struct GripInterface final : interfaces::MediatorInterface {
   std::string name() const override { return "grip"; }
-  interfaces::MotorCommand Update(double, const interfaces::VehicleFeedback&, haptics::Hal&) override {
+  interfaces::MotorCommand Update(double, const interfaces::VehicleFeedback&,
+                                  haptics::Hal&) override {
     return {};
   }
   interfaces::HandTargets HandTargetsFor(const interfaces::DriveIntent& intent) const override {

@@ -2,8 +2,8 @@
 // commands sent through a link of known delay, states coming back as late
 // (in the link's single precision), and the predictor saying where the
 // blimp is now.
-#include <catch2/catch.hpp>
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <deque>
 #include <random>
@@ -41,10 +41,11 @@ struct DelayedLink {
   double delay_s;
   double watchdog_s = 0.2;
   double dt = airship.step_s;
-  int state_every = 4;  ///< 50 Hz
-  int send_every = 10;  ///< 20 Hz: the blimp gesture cockpit's rate
-  bool sending = true;  ///< false: the operator's commands stop
-  double measured_rtt_s;  ///< the round trip the predictor is told (a faulty measurement: not 2 delay_s)
+  int state_every = 4;    ///< 50 Hz
+  int send_every = 10;    ///< 20 Hz: the blimp gesture cockpit's rate
+  bool sending = true;    ///< false: the operator's commands stop
+  double measured_rtt_s;  ///< the round trip the predictor is told (a faulty measurement: not 2
+                          ///< delay_s)
   /// A busy receiver: each state arrives up to this much later still (in order).
   double receipt_jitter_s = 0.0;
   std::mt19937 random{7};
@@ -84,7 +85,8 @@ struct DelayedLink {
     if (step % state_every == 0) {
       BlimpStateSample s = Sample(failsafe);
       s.received_s += std::uniform_real_distribution<double>(0.0, receipt_jitter_s)(random);
-      if (!states_in_flight.empty()) s.received_s = std::max(s.received_s, states_in_flight.back().received_s);
+      if (!states_in_flight.empty())
+        s.received_s = std::max(s.received_s, states_in_flight.back().received_s);
       states_in_flight.push_back(s);
     }
     while (!states_in_flight.empty() && states_in_flight.front().received_s <= t + 1e-9) {
@@ -144,7 +146,8 @@ double Percentile(std::vector<double> v, double p) {
 
 }  // namespace
 
-TEST_CASE("With the delay known exactly, the blimp's predictor says where the simulated blimp is now") {
+TEST_CASE(
+    "With the delay known exactly, the blimp's predictor says where the simulated blimp is now") {
   for (const double delay_s : {0.1, 0.4}) {
     CAPTURE(delay_s);
     DelayedLink link(delay_s);
@@ -161,11 +164,12 @@ TEST_CASE("With the delay known exactly, the blimp's predictor says where the si
       if (!have_state || link.t < 1.0) continue;
       const BlimpPredictedPose now = predictor.PoseAt(link.t);
       worst_now_m = std::max(worst_now_m, (now.position - link.blimp.position()).norm());
-      worst_heading_rad =
-          std::max(worst_heading_rad, std::abs(std::remainder(now.yaw - link.blimp.yaw(), 2.0 * M_PI)));
+      worst_heading_rad = std::max(
+          worst_heading_rad, std::abs(std::remainder(now.yaw - link.blimp.yaw(), 2.0 * M_PI)));
       worst_delayed_m = std::max(worst_delayed_m, (newest.position - link.blimp.position()).norm());
     }
-    CAPTURE(worst_now_m, worst_heading_rad, worst_delayed_m, Percentile(predictor.errors_m(), 0.95));
+    CAPTURE(worst_now_m, worst_heading_rad, worst_delayed_m,
+            Percentile(predictor.errors_m(), 0.95));
     CHECK(predictor.one_way_delay_s() == Approx(delay_s));
     CHECK(predictor.errors_m().size() > 1000);
     // The model is the blimp's own: what is left is the link's single
@@ -185,7 +189,8 @@ TEST_CASE("A wrong delay or a misfitted airship model shows in the blimp's predi
     link.measured_rtt_s = measured_rtt_s;
     BlimpPredictor predictor(model, link.course, link.watchdog_s);
     while (link.t < 22.0) {
-      link.Step(predictor, Commands(link.t), [&](const BlimpStateSample& s) { predictor.OnState(s); });
+      link.Step(predictor, Commands(link.t),
+                [&](const BlimpStateSample& s) { predictor.OnState(s); });
     }
     return Percentile(predictor.errors_m(), 0.95);
   };
@@ -209,8 +214,11 @@ TEST_CASE("States that a busy receiver takes late do not show as the blimp's pre
   BlimpPredictor predictor(link.airship, link.course, link.watchdog_s);
   double worst_now_m = 0.0;
   while (link.t < 22.0) {
-    link.Step(predictor, Commands(link.t), [&](const BlimpStateSample& s) { predictor.OnState(s); });
-    if (link.t > 1.0) worst_now_m = std::max(worst_now_m, (predictor.PoseAt(link.t).position - link.blimp.position()).norm());
+    link.Step(predictor, Commands(link.t),
+              [&](const BlimpStateSample& s) { predictor.OnState(s); });
+    if (link.t > 1.0)
+      worst_now_m =
+          std::max(worst_now_m, (predictor.PoseAt(link.t).position - link.blimp.position()).norm());
   }
   const double p95 = Percentile(predictor.errors_m(), 0.95);
   CAPTURE(worst_now_m, p95);
@@ -220,7 +228,9 @@ TEST_CASE("States that a busy receiver takes late do not show as the blimp's pre
   CHECK(worst_now_m < 0.03);
 }
 
-TEST_CASE("Resting on the ground, the predicted blimp stays on it; given power it lifts off a delay later") {
+TEST_CASE(
+    "Resting on the ground, the predicted blimp stays on it; given power it lifts off a delay "
+    "later") {
   DelayedLink link(0.3);
   BlimpPredictor predictor(link.airship, link.course, link.watchdog_s);
   for (int i = 0; i < 400; ++i) {  // 2 s on the ground, every channel at neutral
@@ -241,10 +251,12 @@ TEST_CASE("Resting on the ground, the predicted blimp stays on it; given power i
   REQUIRE(path.size() == 31);
   CHECK(path.front().t_s == Approx(link.t));
   CHECK(path.front().position.z() == Approx(rest.z()).margin(1e-3));
-  CHECK(path[3].position.z() == Approx(rest.z()).margin(1e-3));  // the command needs 0.3 s to get there
-  CHECK(path.back().position.z() > rest.z() + 0.5);               // then it climbs
+  CHECK(path[3].position.z() ==
+        Approx(rest.z()).margin(1e-3));              // the command needs 0.3 s to get there
+  CHECK(path.back().position.z() > rest.z() + 0.5);  // then it climbs
   CHECK_FALSE(path.back().contact);
-  for (size_t i = 4; i < path.size(); ++i) CHECK(path[i].position.z() >= path[i - 1].position.z() - 1e-6);
+  for (size_t i = 4; i < path.size(); ++i)
+    CHECK(path[i].position.z() >= path[i - 1].position.z() - 1e-6);
 }
 
 TEST_CASE("When commands stop, the predicted blimp goes to neutral as its watchdog puts it") {
@@ -254,12 +266,14 @@ TEST_CASE("When commands stop, the predicted blimp goes to neutral as its watchd
   cruise.power = 0.8;
   cruise.helix = 0.3;
   cruise.rudder = 0.3;
-  while (link.t < 10.0) link.Step(predictor, cruise, [&](const BlimpStateSample& s) { predictor.OnState(s); });
+  while (link.t < 10.0)
+    link.Step(predictor, cruise, [&](const BlimpStateSample& s) { predictor.OnState(s); });
   const double t_last = link.t;
   // No command after t_last: the last reaches the blimp 0.2 s later, the
   // watchdog cuts the power 0.2 s after that, and it coasts on.
   link.sending = false;
-  while (link.t < t_last + 0.05) link.Step(predictor, cruise, [&](const BlimpStateSample& s) { predictor.OnState(s); });
+  while (link.t < t_last + 0.05)
+    link.Step(predictor, cruise, [&](const BlimpStateSample& s) { predictor.OnState(s); });
   const BlimpPredictedPose coasted = predictor.PoseAt(t_last + 4.0);
   while (link.t < t_last + 4.0 - 1e-9) link.Step(predictor, cruise, [](const BlimpStateSample&) {});
   CAPTURE(coasted.position, link.blimp.position());

@@ -19,15 +19,16 @@ namespace {
 /// The session's cockpit physics, stepped by the test instead of its thread.
 struct Cockpit {
   CockpitConfig config = LoadCockpit(ShippedFile("config/interfaces/cockpit.yaml"));
-  std::unique_ptr<mediator::SessionPhysics> physics =
-      mediator::SessionPhysics::CreateIfNeeded(LoadPhysics(ShippedFile("config/physics.yaml")), {true, true}, &config, nullptr);
+  std::unique_ptr<mediator::SessionPhysics> physics = mediator::SessionPhysics::CreateIfNeeded(
+      LoadPhysics(ShippedFile("config/physics.yaml")), {true, true}, &config, nullptr);
   physics::PhysicsWorld& world = *physics->world;
   physics::ControlsLink& link = *physics->link;
   interfaces::CockpitInterface cockpit{config, *physics->port};
 
   /// `seconds` of steps with the tracked hands on `goals`, shifted by
   /// `lift` along each goal's approach direction (1 = at the approach point).
-  void Hold(const interfaces::HandTargets& goals, double seconds, double lift = 0.0, double close = 1.0) {
+  void Hold(const interfaces::HandTargets& goals, double seconds, double lift = 0.0,
+            double close = 1.0) {
     const int steps = static_cast<int>(seconds / world.config().step_s);
     for (int i = 0; i < steps; ++i) Track(goals, lift, close);
   }
@@ -36,9 +37,11 @@ struct Cockpit {
       if (!goals[s]) continue;
       haptics::HandSample sample;
       sample.valid = true;
-      for (int k = 0; k < 3; ++k) sample.position[k] = goals[s]->position[k] + lift * goals[s]->approach[k];
+      for (int k = 0; k < 3; ++k)
+        sample.position[k] = goals[s]->position[k] + lift * goals[s]->approach[k];
       sample.orientation = goals[s]->orientation;
-      for (int j = 0; j < haptics::kGloveJoints; ++j) sample.finger_angles[j] = close * goals[s]->glove[j];
+      for (int j = 0; j < haptics::kGloveJoints; ++j)
+        sample.finger_angles[j] = close * goals[s]->glove[j];
       world.hand(static_cast<Side>(s))->SetTracked(sample);
     }
     world.Step();
@@ -53,7 +56,8 @@ struct Cockpit {
   }
   /// Moves the goals from one intent to another over `seconds`, like the
   /// operator's arm would.
-  void Move(const interfaces::DriveIntent& from, const interfaces::DriveIntent& to, double seconds) {
+  void Move(const interfaces::DriveIntent& from, const interfaces::DriveIntent& to,
+            double seconds) {
     const int steps = static_cast<int>(seconds / world.config().step_s);
     for (int i = 1; i <= steps; ++i) {
       const double a = static_cast<double>(i) / steps;
@@ -66,7 +70,8 @@ struct Cockpit {
 
 }  // namespace
 
-TEST_CASE("cockpit grasp: the operator's hand goals hold the rim and the bar and set them", "[physics][cockpit]") {
+TEST_CASE("cockpit grasp: the operator's hand goals hold the rim and the bar and set them",
+          "[physics][cockpit]") {
   Cockpit c;
   const interfaces::HandTargets neutral = c.cockpit.HandTargetsFor({});
   // Open hands above the controls: nothing touched.
@@ -77,7 +82,8 @@ TEST_CASE("cockpit grasp: the operator's hand goals hold the rim and the bar and
   // Down onto them, open, then closed.
   c.Grasp();
   s = c.link.State();
-  INFO("grasped: wheel contacts " << s.wheel_contacts << ", lever contacts " << s.throttle_contacts);
+  INFO("grasped: wheel contacts " << s.wheel_contacts << ", lever contacts "
+                                  << s.throttle_contacts);
   CHECK(s.wheel_held);
   CHECK(s.throttle_held);
   CHECK(std::abs(s.wheel_angle) < 0.05);
@@ -86,16 +92,17 @@ TEST_CASE("cockpit grasp: the operator's hand goals hold the rim and the bar and
   // Each intent, reached by moving the hands: the controls follow to the
   // positions the interface's inverse map asks for.
   interfaces::DriveIntent from{};
-  for (const interfaces::DriveIntent to : {interfaces::DriveIntent{0.9, 0.0}, interfaces::DriveIntent{0.4, 0.35},
-                                           interfaces::DriveIntent{0.4, -0.5}, interfaces::DriveIntent{-0.5, 0.0}}) {
+  for (const interfaces::DriveIntent to :
+       {interfaces::DriveIntent{0.9, 0.0}, interfaces::DriveIntent{0.4, 0.35},
+        interfaces::DriveIntent{0.4, -0.5}, interfaces::DriveIntent{-0.5, 0.0}}) {
     c.Move(from, to, 1.0);
     c.Hold(c.cockpit.HandTargetsFor(to), 0.3);
     from = to;
     s = c.link.State();
     const interfaces::CockpitControls wanted = c.cockpit.logic().ControlsFor(to);
-    INFO("intent forward " << to.forward << " turn " << to.turn << ": wheel " << s.wheel_angle << " (wanted "
-                           << wanted.wheel_angle << "), lever " << s.throttle << " (wanted " << wanted.throttle
-                           << ")");
+    INFO("intent forward " << to.forward << " turn " << to.turn << ": wheel " << s.wheel_angle
+                           << " (wanted " << wanted.wheel_angle << "), lever " << s.throttle
+                           << " (wanted " << wanted.throttle << ")");
     CHECK(s.wheel_angle == Approx(wanted.wheel_angle).margin(0.1));
     CHECK(s.throttle == Approx(wanted.throttle).margin(0.006));
     CHECK(s.wheel_held);
@@ -105,12 +112,14 @@ TEST_CASE("cockpit grasp: the operator's hand goals hold the rim and the bar and
   CHECK(c.physics->controls->resets() == 0);
 }
 
-TEST_CASE("cockpit grasp: back and forth, the lever keeps its place in the hand", "[physics][cockpit]") {
+TEST_CASE("cockpit grasp: back and forth, the lever keeps its place in the hand",
+          "[physics][cockpit]") {
   Cockpit c;
   c.Grasp();
   interfaces::DriveIntent from{};
   for (int cycle = 0; cycle < 10; ++cycle) {
-    for (const interfaces::DriveIntent to : {interfaces::DriveIntent{0.9, 0.1}, interfaces::DriveIntent{0.3, -0.2}}) {
+    for (const interfaces::DriveIntent to :
+         {interfaces::DriveIntent{0.9, 0.1}, interfaces::DriveIntent{0.3, -0.2}}) {
       c.Move(from, to, 0.5);
       from = to;
     }
@@ -118,19 +127,21 @@ TEST_CASE("cockpit grasp: back and forth, the lever keeps its place in the hand"
   // Ten round trips of 3.6 cm and 0.39 rad: no ratchet, the grip holds.
   const physics::ControlsState s = c.link.State();
   const interfaces::CockpitControls wanted = c.cockpit.logic().ControlsFor(from);
-  INFO("lever " << s.throttle << " (wanted " << wanted.throttle << "), wheel " << s.wheel_angle << " (wanted "
-                << wanted.wheel_angle << ")");
+  INFO("lever " << s.throttle << " (wanted " << wanted.throttle << "), wheel " << s.wheel_angle
+                << " (wanted " << wanted.wheel_angle << ")");
   CHECK(s.throttle == Approx(wanted.throttle).margin(0.003));
   CHECK(s.wheel_angle == Approx(wanted.wheel_angle).margin(0.06));
   CHECK(s.throttle_held);
   CHECK(s.wheel_held);
 }
 
-TEST_CASE("session physics: no world without controls or scene bodies; otherwise only what was asked for",
-          "[physics]") {
+TEST_CASE(
+    "session physics: no world without controls or scene bodies; otherwise only what was asked for",
+    "[physics]") {
   const PhysicsConfig config = LoadPhysics(ShippedFile("config/physics.yaml"));
   const uint64_t before = physics::PhysicsWorld::worlds_created();
-  CHECK(mediator::SessionPhysics::CreateIfNeeded(config, {false, true}, nullptr, nullptr) == nullptr);
+  CHECK(mediator::SessionPhysics::CreateIfNeeded(config, {false, true}, nullptr, nullptr) ==
+        nullptr);
   CHECK(physics::PhysicsWorld::worlds_created() == before);
 
   // The gesture hand (right only) over a scene: its bodies, one proxy, no controls.

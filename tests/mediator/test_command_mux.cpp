@@ -1,7 +1,6 @@
 // The command mux: priorities, time-outs, locks (explicit and heartbeat),
 // zero at once when a lock takes the vehicle, and the selection's name.
 #include <catch2/catch.hpp>
-
 #include <stdexcept>
 #include <vector>
 
@@ -111,7 +110,7 @@ TEST_CASE("a heartbeat lock engages when its heartbeat stops, and before it ever
   mux.OnInput(0, 0.1);
   CHECK(mux.Select(0.1).input == 0);
   mux.OnInput(0, 0.3);
-  CHECK(mux.Select(0.3).input == 0);   // 0.3 s of silence: still held open
+  CHECK(mux.Select(0.3).input == 0);                 // 0.3 s of silence: still held open
   const CommandMux::Selection s = mux.Select(0.31);  // past it: the lock engages
   CHECK(s.lock == 0);
   CHECK(s.zero);
@@ -123,8 +122,10 @@ TEST_CASE("a heartbeat lock engages when its heartbeat stops, and before it ever
 
 TEST_CASE("the mux's entries are checked, naming the bad one") {
   CHECK_THROWS_WITH(CommandMux({{"", 1, 0.5}}, {}), Catch::Contains("inputs[0].name"));
-  CHECK_THROWS_WITH(CommandMux({{"a", 1, 0.5}, {"a", 2, 0.5}}, {}), Catch::Contains("inputs[1].name: 'a' is named twice"));
-  CHECK_THROWS_WITH(CommandMux({{"a", 256, 0.5}}, {}), Catch::Contains("inputs[0].priority: expected 0..255"));
+  CHECK_THROWS_WITH(CommandMux({{"a", 1, 0.5}, {"a", 2, 0.5}}, {}),
+                    Catch::Contains("inputs[1].name: 'a' is named twice"));
+  CHECK_THROWS_WITH(CommandMux({{"a", 256, 0.5}}, {}),
+                    Catch::Contains("inputs[0].priority: expected 0..255"));
   CHECK_THROWS_WITH(CommandMux({{"a", 1, 0.0}}, {}), Catch::Contains("inputs[0].timeout_s"));
   CHECK_THROWS_WITH(CommandMux({}, {{"l", 1, -1.0}}), Catch::Contains("locks[0].timeout_s"));
   // An input and a lock may share a name: they are told apart by kind.

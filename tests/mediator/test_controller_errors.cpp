@@ -30,7 +30,8 @@ std::string Summary(const SessionSetup& setup, const RecordedRun& run) {
 
 }  // namespace
 
-TEST_CASE("a blimp state carrying the controller's error bits is named in the next progress line, once") {
+TEST_CASE(
+    "a blimp state carrying the controller's error bits is named in the next progress line, once") {
   ControllerErrorWatch watch;
   msg::BlimpState state;
   CHECK(watch.TakeProgressText().empty());
@@ -40,11 +41,13 @@ TEST_CASE("a blimp state carrying the controller's error bits is named in the ne
   watch.ObserveState(state);
   state.controller_errors(0x0020);  // then a serial timeout
   watch.ObserveState(state);
-  CHECK(watch.TakeProgressText() == "  controller errors: serial timeout, CRC error (register 0x0028)");
+  CHECK(watch.TakeProgressText() ==
+        "  controller errors: serial timeout, CRC error (register 0x0028)");
   CHECK(watch.TakeProgressText().empty());  // said; nothing new since
   state.controller_errors(0x0100);
   watch.ObserveState(state);
-  CHECK(watch.TakeProgressText() == "  controller errors: script program counter error (register 0x0100)");
+  CHECK(watch.TakeProgressText() ==
+        "  controller errors: script program counter error (register 0x0100)");
   CHECK(watch.seen() == 0x0128);
 }
 
@@ -53,23 +56,30 @@ TEST_CASE("the run's summary and JSON line name the Maestro's errors and keep th
   setup.vehicle = LoadVehicle("config/vehicles/sim-blimp-maestro.yaml");
   RecordedRun run;
   run.result.outcome = Outcome::kVehicleLost;
-  run.result.message = "vehicle 'blimp1' stopped itself: servo controller on /dev/pts/3 cannot be trusted: ...";
+  run.result.message =
+      "vehicle 'blimp1' stopped itself: servo controller on /dev/pts/3 cannot be trusted: ...";
   run.result.record.outcome = "vehicle lost";
 
   SECTION("errors") {
     run.result.controller_errors = 0x0028;
     CHECK_THAT(Summary(setup, run),
-               Catch::Contains("\n  servo controller errors: serial timeout, CRC error (register 0x0028)\n"));
+               Catch::Contains(
+                   "\n  servo controller errors: serial timeout, CRC error (register 0x0028)\n"));
     const std::string json = RunJson(setup, run);
-    CHECK_THAT(json, Catch::Contains(R"("controller_errors":40,"controller_error_names":["serial timeout","CRC error"])"));
+    CHECK_THAT(
+        json,
+        Catch::Contains(
+            R"("controller_errors":40,"controller_error_names":["serial timeout","CRC error"])"));
   }
   SECTION("none") {
     CHECK_THAT(Summary(setup, run), Catch::Contains("\n  servo controller errors: none\n"));
-    CHECK_THAT(RunJson(setup, run), Catch::Contains(R"("controller_errors":0,"controller_error_names":[])"));
+    CHECK_THAT(RunJson(setup, run),
+               Catch::Contains(R"("controller_errors":0,"controller_error_names":[])"));
   }
   SECTION("a vehicle without a Maestro has no such line") {
     setup.vehicle = LoadVehicle("config/vehicles/sim-robot.yaml");
     CHECK_THAT(Summary(setup, run), !Catch::Contains("servo controller errors"));
-    CHECK_THAT(RunJson(setup, run), Catch::Contains(R"("controller_errors":0,"controller_error_names":[])"));
+    CHECK_THAT(RunJson(setup, run),
+               Catch::Contains(R"("controller_errors":0,"controller_error_names":[])"));
   }
 }

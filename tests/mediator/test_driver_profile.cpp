@@ -23,7 +23,10 @@ struct Controls final : interfaces::MediatorInterface {
   bool speedometer = false;
   bool stay_put = false;
   std::string name() const override { return "controls"; }
-  interfaces::MotorCommand Update(double, const interfaces::VehicleFeedback&, haptics::Hal&) override { return {}; }
+  interfaces::MotorCommand Update(double, const interfaces::VehicleFeedback&,
+                                  haptics::Hal&) override {
+    return {};
+  }
   interfaces::HandTargets HandTargetsFor(const interfaces::DriveIntent& intent) const override {
     interfaces::HandGoal g;
     g.position = {0.1 + 0.05 * intent.forward, 0.05 * intent.turn, 0.0};
@@ -71,13 +74,17 @@ TEST_CASE("the ideal driver expresses the intent as decided, on any interface") 
   CHECK(op.error_scale() == 1.0);
 }
 
-TEST_CASE("errors shrink with the trials done before: 1 + gain at the first, e-folding over learning_trials") {
+TEST_CASE(
+    "errors shrink with the trials done before: 1 + gain at the first, e-folding over "
+    "learning_trials") {
   DriverProfile p;
   p.learning_gain = 0.6;
   p.learning_trials = 2.0;
   CHECK(AutoOperator(ShortTrack(), Quick(), DriveConfig{}, p, 0).error_scale() == Approx(1.6));
-  CHECK(AutoOperator(ShortTrack(), Quick(), DriveConfig{}, p, 2).error_scale() == Approx(1.0 + 0.6 * std::exp(-1.0)));
-  CHECK(AutoOperator(ShortTrack(), Quick(), DriveConfig{}, p, 40).error_scale() == Approx(1.0).margin(1e-6));
+  CHECK(AutoOperator(ShortTrack(), Quick(), DriveConfig{}, p, 2).error_scale() ==
+        Approx(1.0 + 0.6 * std::exp(-1.0)));
+  CHECK(AutoOperator(ShortTrack(), Quick(), DriveConfig{}, p, 40).error_scale() ==
+        Approx(1.0).margin(1e-6));
   // A speed shortfall scales with it: 0.8 practised is 0.68 at the first trial.
   p.holding_cruise = 0.8;
   Controls grip;
@@ -120,14 +127,16 @@ TEST_CASE("holding controls delays the driver's reaction") {
   Controls grip;
   AutoOperator op(ShortTrack(), c, DriveConfig{}, p);
   op.Act(0.0, grip);  // grasping: the reaction delay grows by 0.3 s
-  op.Observe({1.0, ShortTrack().PointAt(0.1).x(), ShortTrack().PointAt(0.1).y(), 0.0, false, false});
+  op.Observe(
+      {1.0, ShortTrack().PointAt(0.1).x(), ShortTrack().PointAt(0.1).y(), 0.0, false, false});
   CHECK(op.Decide(1.2).forward == 0.0);  // seen 1.0, not yet reacted
   CHECK(op.Decide(1.35).forward > 0.5);
   Controls free_hands;
   free_hands.grip = false;
   AutoOperator quick(ShortTrack(), c, DriveConfig{}, p);
   quick.Act(0.0, free_hands);
-  quick.Observe({1.0, ShortTrack().PointAt(0.1).x(), ShortTrack().PointAt(0.1).y(), 0.0, false, false});
+  quick.Observe(
+      {1.0, ShortTrack().PointAt(0.1).x(), ShortTrack().PointAt(0.1).y(), 0.0, false, false});
   CHECK(quick.Decide(1.01).forward > 0.5);
 }
 
@@ -158,7 +167,8 @@ TEST_CASE("the steering wanders with the profile's spread and correlation time")
   CHECK(lag_sum / n / (sd * sd) == Approx(std::exp(-dt / 0.5)).epsilon(0.05));
 }
 
-TEST_CASE("a control slips out of the hand at the profile's rate, the hand opens and grasps again") {
+TEST_CASE(
+    "a control slips out of the hand at the profile's rate, the hand opens and grasps again") {
   DriverProfile p;
   p.slip_rate_hz = 0.2;
   p.regrasp_s = 1.0;
@@ -166,7 +176,8 @@ TEST_CASE("a control slips out of the hand at the profile's rate, the hand opens
   Controls grip;
   AutoOperator op(ShortTrack(), Quick(), DriveConfig{}, p, 100);
   const int left = haptics::Index(haptics::Side::kLeft);
-  op.Observe({0.0, ShortTrack().PointAt(0.1).x(), ShortTrack().PointAt(0.1).y(), 0.0, false, false});
+  op.Observe(
+      {0.0, ShortTrack().PointAt(0.1).x(), ShortTrack().PointAt(0.1).y(), 0.0, false, false});
   double open_time = 0.0;
   const double dt = 0.01;
   const double duration = 1000.0;
@@ -215,7 +226,9 @@ TEST_CASE("a control that stays put comes back to its centre slowly and misses i
   CHECK(spring.Express(1.5, {0.0, 0.0}, returns).turn == 0.0);
 }
 
-TEST_CASE("after a contact the driver aims: no wander and no centre miss for careful_s, then both return") {
+TEST_CASE(
+    "after a contact the driver aims: no wander and no centre miss for careful_s, then both "
+    "return") {
   DriverProfile p;
   p.steering_noise = 0.1;
   p.noise_time_s = 0.5;
@@ -233,7 +246,8 @@ TEST_CASE("after a contact the driver aims: no wander and no centre miss for car
   op.Act(0.0, stays);
   // Before any contact a small wanted turn is wandered and snapped to a missed centre.
   double before = 0.0;
-  for (double t = 1.0; t < 3.0; t += 0.05) before = std::max(before, std::abs(op.Express(t, {0.5, 0.02}, stays).turn - 0.02));
+  for (double t = 1.0; t < 3.0; t += 0.05)
+    before = std::max(before, std::abs(op.Express(t, {0.5, 0.02}, stays).turn - 0.02));
   CHECK(before > 0.02);
   REQUIRE_FALSE(op.careful(3.0));
   // A contact at t = 3: backing off until 3.8, aiming until 7.8.
@@ -245,10 +259,12 @@ TEST_CASE("after a contact the driver aims: no wander and no centre miss for car
   CHECK_FALSE(op.careful(7.9));
   // Aiming: a small turn is given as wanted once the control has come to it.
   double during = 0.0;
-  for (double t = 5.5; t < 7.7; t += 0.05) during = std::max(during, std::abs(op.Express(t, {0.5, 0.02}, stays).turn - 0.02));
+  for (double t = 5.5; t < 7.7; t += 0.05)
+    during = std::max(during, std::abs(op.Express(t, {0.5, 0.02}, stays).turn - 0.02));
   CHECK(during < 1e-3);
   // Attention lapses again.
   double after = 0.0;
-  for (double t = 7.9; t < 10.0; t += 0.05) after = std::max(after, std::abs(op.Express(t, {0.5, 0.02}, stays).turn - 0.02));
+  for (double t = 7.9; t < 10.0; t += 0.05)
+    after = std::max(after, std::abs(op.Express(t, {0.5, 0.02}, stays).turn - 0.02));
   CHECK(after > 0.02);
 }

@@ -2,9 +2,8 @@
 // (interface_handover.hpp): one interface live at a time, its forces faded
 // through the HAL's force scale (never stepped), the one left paused at
 // zero, and the person's input given to the driven vehicle only.
-#include <catch2/catch.hpp>
-
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -85,8 +84,8 @@ constexpr double kRamp_s = 0.3;   // the run's switch_ramp_s
 /// The session's tick as the fleet runs it: the handover's step, the live
 /// vehicle driven with the person's input, the ramp's scale settled.
 /// Returns the vehicle driven (-1: none).
-int SessionTick(InterfaceHandover& handover, std::vector<FakeSide*> sides, double t, haptics::Hal& hal,
-                const interfaces::InputState& input) {
+int SessionTick(InterfaceHandover& handover, std::vector<FakeSide*> sides, double t,
+                haptics::Hal& hal, const interfaces::InputState& input) {
   const int live = handover.Tick(t, hal, input);
   if (live >= 0) sides[static_cast<size_t>(live)]->Drive(t, hal, input);
   handover.Settle(t, hal, false);
@@ -95,8 +94,10 @@ int SessionTick(InterfaceHandover& handover, std::vector<FakeSide*> sides, doubl
 
 }  // namespace
 
-TEST_CASE("a turn to another vehicle fades the forces out and in through the force scale, never stepping them, and "
-          "pauses the interface left at zero") {
+TEST_CASE(
+    "a turn to another vehicle fades the forces out and in through the force scale, never stepping "
+    "them, and "
+    "pauses the interface left at zero") {
   haptics::Hal hal;
   std::vector<std::string> log;
   FakeSide a("a", 200.0, log), b("b", 400.0, log);  // 10 N and 20 N at 5 cm
@@ -133,9 +134,11 @@ TEST_CASE("a turn to another vehicle fades the forces out and in through the for
   // the strongest interface's force) from one tick to the next.
   const double step_N = kTick_s / kRamp_s * 20.0;
   double largest_N = 0.0;
-  for (size_t k = 1; k < forces.size(); ++k) largest_N = std::max(largest_N, std::abs(forces[k] - forces[k - 1]));
+  for (size_t k = 1; k < forces.size(); ++k)
+    largest_N = std::max(largest_N, std::abs(forces[k] - forces[k - 1]));
   CHECK(largest_N <= step_N + 1e-9);
-  CHECK(*std::min_element(forces.begin(), forces.end()) == Approx(0.0).margin(1e-9));  // it did go through zero
+  CHECK(*std::min_element(forces.begin(), forces.end()) ==
+        Approx(0.0).margin(1e-9));       // it did go through zero
   CHECK(forces.back() == Approx(20.0));  // b's own force, in full
   CHECK(hal.force_scale() == 1.0);
   CHECK_FALSE(handover.swapping());
@@ -162,8 +165,10 @@ TEST_CASE("a turn to another vehicle fades the forces out and in through the for
   CHECK(b.presses_at_resume == static_cast<uint32_t>(std::lround(b.driven_t.front() / kTick_s)));
 }
 
-TEST_CASE("a turn while the forces still ramp up fades them from where they are; a turn back before the swap pauses "
-          "nothing") {
+TEST_CASE(
+    "a turn while the forces still ramp up fades them from where they are; a turn back before the "
+    "swap pauses "
+    "nothing") {
   haptics::Hal hal;
   std::vector<std::string> log;
   FakeSide a("a", 200.0, log), b("b", 200.0, log);
@@ -175,7 +180,8 @@ TEST_CASE("a turn while the forces still ramp up fades them from where they are;
   SessionTick(handover, {&a, &b}, t, hal, input);
   handover.TurnTo(1, t += kTick_s, hal);
   // Into b's ramp up, part way: then back to a.
-  while (!(handover.live() == 1 && hal.force_scale() > 0.4)) SessionTick(handover, {&a, &b}, t += kTick_s, hal, input);
+  while (!(handover.live() == 1 && hal.force_scale() > 0.4))
+    SessionTick(handover, {&a, &b}, t += kTick_s, hal, input);
   const double before = hal.force_scale();
   handover.TurnTo(0, t += kTick_s, hal);
   SessionTick(handover, {&a, &b}, t, hal, input);
@@ -191,7 +197,9 @@ TEST_CASE("a turn while the forces still ramp up fades them from where they are;
   CHECK(hal.force_scale() == 1.0);
 }
 
-TEST_CASE("the vehicle's own interface switch ramping meanwhile: the lower of the two scales, still no step") {
+TEST_CASE(
+    "the vehicle's own interface switch ramping meanwhile: the lower of the two scales, still no "
+    "step") {
   haptics::Hal hal;
   std::vector<std::string> log;
   FakeSide a("a", 200.0, log), b("b", 200.0, log);
@@ -218,7 +226,9 @@ TEST_CASE("the vehicle's own interface switch ramping meanwhile: the lower of th
   }
 }
 
-TEST_CASE("without a ramp (the automatic operator) the interfaces swap at once and the force scale is left alone") {
+TEST_CASE(
+    "without a ramp (the automatic operator) the interfaces swap at once and the force scale is "
+    "left alone") {
   haptics::Hal hal;
   std::vector<std::string> log;
   FakeSide a("a", 200.0, log), b("b", 400.0, log);

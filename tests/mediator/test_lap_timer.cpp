@@ -14,8 +14,8 @@ const Track& ShortTrack() {
 /// Drives along the centre line from `from` to `to` (arc length, m), offset
 /// sideways by `offset` (m, left positive), at `speed` m/s, updating the timer
 /// every 20 ms. Returns the time reached.
-double Follow(LapTimer& lap, const Track& track, double t, double from, double to, double offset = 0.0,
-              double speed = 0.25) {
+double Follow(LapTimer& lap, const Track& track, double t, double from, double to,
+              double offset = 0.0, double speed = 0.25) {
   for (double s = from; s <= to; s += speed * 0.02) {
     const Vec2 tangent = track.TangentAt(s);
     const Vec2 normal(-tangent.y(), tangent.x());
@@ -96,10 +96,10 @@ TEST_CASE("obstacle touches count distinct contact events") {
   lap.UpdateContact(1.0, true);
   lap.UpdateContact(1.02, true);
   lap.UpdateContact(1.04, false);
-  lap.UpdateContact(1.06, true);   // chatter: clear for only 20 ms
+  lap.UpdateContact(1.06, true);  // chatter: clear for only 20 ms
   lap.UpdateContact(1.08, false);
   CHECK(lap.obstacles_touched() == 1);
-  lap.UpdateContact(2.0, true);    // a new contact after a clear second
+  lap.UpdateContact(2.0, true);  // a new contact after a clear second
   lap.UpdateContact(2.5, false);
   CHECK(lap.obstacles_touched() == 2);
 }

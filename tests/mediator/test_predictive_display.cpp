@@ -290,7 +290,9 @@ TEST_CASE(
   cv::imwrite((test::ScratchDir("predictive-display") / "view.png").string(), on);  // to look at
 }
 
-TEST_CASE("the blimp's course map: gates across their openings labelled with their heights, buildings, the landing") {
+TEST_CASE(
+    "the blimp's course map: gates across their openings labelled with their heights, buildings, "
+    "the landing") {
   const BlimpCourseConfig course = LoadBlimpCourse("config/tracks/blimp-course.yaml");
   const view::TrackMap map = CourseMapOf(course);
   REQUIRE(map.gates.size() == course.gates.size());
@@ -307,17 +309,19 @@ TEST_CASE("the blimp's course map: gates across their openings labelled with the
                          (l.by - l.ay) * std::sin(g.heading_deg * std::numbers::pi / 180);
     CHECK(along == Approx(0.0).margin(1e-9));
     char heights[48];
-    std::snprintf(heights, sizeof heights, "%.1f-%.1f m", g.centre[2] - g.height / 2, g.centre[2] + g.height / 2);
+    std::snprintf(heights, sizeof heights, "%.1f-%.1f m", g.centre[2] - g.height / 2,
+                  g.centre[2] + g.height / 2);
     CHECK(map.labels[i].text == heights);
   }
-  const auto landing = std::find_if(map.posts.begin(), map.posts.end(), [](const view::TrackMap::Post& p) {
-    return p.kind == view::TrackMap::PostKind::kLanding;
-  });
+  const auto landing = std::find_if(
+      map.posts.begin(), map.posts.end(),
+      [](const view::TrackMap::Post& p) { return p.kind == view::TrackMap::PostKind::kLanding; });
   REQUIRE(landing != map.posts.end());
   CHECK(landing->radius == course.landing.radius);
 }
 
-TEST_CASE("the blimp's prediction is drawn on the course map with its heights, and not in the picture") {
+TEST_CASE(
+    "the blimp's prediction is drawn on the course map with its heights, and not in the picture") {
   constexpr int kWidth = 1024, kHeight = 576;
   const BlimpCourseConfig course = LoadBlimpCourse("config/tracks/blimp-course.yaml");
   const auto map = std::make_shared<const view::TrackMap>(CourseMapOf(course));
@@ -329,7 +333,8 @@ TEST_CASE("the blimp's prediction is drawn on the course map with its heights, a
   for (int i = 0; i < 21; ++i) {
     BlimpPredictedPose p = reported;
     p.t_s = 0.05 * i;
-    p.position += Eigen::Vector3d(std::cos(reported.yaw), std::sin(reported.yaw), 0.0) * (2.0 + 0.1 * i);
+    p.position +=
+        Eigen::Vector3d(std::cos(reported.yaw), std::sin(reported.yaw), 0.0) * (2.0 + 0.1 * i);
     p.position.z() = 1.7 + 0.02 * i;
     path.push_back(p);
   }
@@ -381,5 +386,6 @@ TEST_CASE("the blimp's prediction is drawn on the course map with its heights, a
   CHECK(CountMagenta(off) == 0);
   CHECK(CountMagenta(on) > 100);
   CHECK(CountMagenta(off(around)) == 0);
-  cv::imwrite((test::ScratchDir("predictive-display") / "blimp-map.png").string(), on);  // to look at
+  cv::imwrite((test::ScratchDir("predictive-display") / "blimp-map.png").string(),
+              on);  // to look at
 }

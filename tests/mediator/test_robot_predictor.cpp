@@ -1,8 +1,8 @@
 // The predictive display's robot model against the simulated robot itself:
 // commands sent through a link of known delay, states coming back as late,
 // and the predictor saying where the robot is now.
-#include <catch2/catch.hpp>
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <deque>
 #include <vector>
@@ -42,9 +42,12 @@ struct DelayedLink {
   std::deque<Sent> in_flight;
   std::deque<RobotStateSample> states_in_flight;
 
-  double measured_rtt_s;  ///< the round trip the predictor is told (a faulty measurement: not 2 delay_s)
+  double measured_rtt_s;  ///< the round trip the predictor is told (a faulty measurement: not 2
+                          ///< delay_s)
 
-  explicit DelayedLink(double delay) : delay_s(delay), measured_rtt_s(2.0 * delay) { robot.Place(25.0, 0.0, 0.0); }
+  explicit DelayedLink(double delay) : delay_s(delay), measured_rtt_s(2.0 * delay) {
+    robot.Place(25.0, 0.0, 0.0);
+  }
 
   /// One step: the operator sends (left, right); commands that arrived are
   /// applied; the robot moves; its state leaves now and arrives delay_s later.
@@ -54,15 +57,16 @@ struct DelayedLink {
     predictor.OnCommand(t, left, right);
     in_flight.push_back({t, left, right});
     while (!in_flight.empty() && in_flight.front().t + delay_s <= t + 1e-9) {
-      robot.SetMotors({vehicles::QuantiseCommand(in_flight.front().left, vehicle.drive.speed_levels),
-                       vehicles::QuantiseCommand(in_flight.front().right, vehicle.drive.speed_levels)});
+      robot.SetMotors(
+          {vehicles::QuantiseCommand(in_flight.front().left, vehicle.drive.speed_levels),
+           vehicles::QuantiseCommand(in_flight.front().right, vehicle.drive.speed_levels)});
       in_flight.pop_front();
     }
     robot.Update(dt);
     t += dt;
     const vehicles::AdapterState s = robot.State();
-    states_in_flight.push_back({t + delay_s, s.x, s.y, s.heading, s.speed, s.yaw_rate, s.applied.left,
-                                s.applied.right});
+    states_in_flight.push_back(
+        {t + delay_s, s.x, s.y, s.heading, s.speed, s.yaw_rate, s.applied.left, s.applied.right});
     while (!states_in_flight.empty() && states_in_flight.front().received_s <= t + 1e-9) {
       predictor.OnRoundTrip(measured_rtt_s);
       on_state(states_in_flight.front());
@@ -105,7 +109,8 @@ TEST_CASE("With the delay known exactly, the predictor says where the simulated 
       const vehicles::AdapterState truth = link.robot.State();
       const PredictedPose now = predictor.PoseAt(link.t);
       worst_now_m = std::max(worst_now_m, std::hypot(now.x - truth.x, now.y - truth.y));
-      worst_delayed_m = std::max(worst_delayed_m, std::hypot(newest.x - truth.x, newest.y - truth.y));
+      worst_delayed_m =
+          std::max(worst_delayed_m, std::hypot(newest.x - truth.x, newest.y - truth.y));
     }
     CHECK(predictor.one_way_delay_s() == Approx(delay_s));
     // The model is the robot's own drive: what is left is the integration's rounding.

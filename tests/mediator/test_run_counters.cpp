@@ -4,11 +4,11 @@
 // counters.
 #include <catch2/catch.hpp>
 
+#include "../../mediator/src/session_loop.hpp"
 #include "haptel/core/clock.hpp"
+#include "haptel/core/process_identity.hpp"
 #include "haptel/mediator/run_counters.hpp"
 #include "haptel/mediator/vehicle_link.hpp"
-#include "haptel/core/process_identity.hpp"
-#include "../../mediator/src/session_loop.hpp"
 
 using namespace haptel;
 using haptel::mediator::LinkCounts;
@@ -62,7 +62,9 @@ TEST_CASE("the states tell missed states, watchdog trips and commands the vehicl
   CHECK(inbox.Drain().size() == 11);
 }
 
-TEST_CASE("the states tell the video feedback the vehicle refused, from the first state this run received") {
+TEST_CASE(
+    "the states tell the video feedback the vehicle refused, from the first state this run "
+    "received") {
   StateInbox inbox;
   const auto state = [](uint64_t seq, uint64_t refused) {
     msg::VehicleState s = State(seq, false, 0, 0);
@@ -116,9 +118,12 @@ TEST_CASE("the progress line lists the counters that are not zero") {
       "servo_overruns 3, video_frames_dropped 12");
 }
 
-TEST_CASE("a run that started its vehicle takes states from that process only; a stranger's first state is a conflict") {
+TEST_CASE(
+    "a run that started its vehicle takes states from that process only; a stranger's first state "
+    "is a conflict") {
   const int64_t spawned = 4242;
-  mediator::VehicleHealth health("robot1", 7, /*session=*/99, link::WriterId{}, /*vehicle_timeout_s=*/1.0,
+  mediator::VehicleHealth health("robot1", 7, /*session=*/99, link::WriterId{},
+                                 /*vehicle_timeout_s=*/1.0,
                                  mediator::VehicleHealth::kStartupTimeout_s, spawned);
   msg::VehicleState ours;
   ours.vehicle_pid(spawned);
@@ -136,8 +141,9 @@ TEST_CASE("a run that started its vehicle takes states from that process only; a
   REQUIRE(end);
   CHECK(end->outcome == mediator::Outcome::kConflict);
   // Named by the first stranger seen, against the run's own vehicle.
-  CHECK(end->message.find("another vehicle answers as 'robot1' on domain 7 (pid 4242 on host 'other-host', "
-                          "not the vehicle this run started, pid 4242)") != std::string::npos);
+  CHECK(end->message.find(
+            "another vehicle answers as 'robot1' on domain 7 (pid 4242 on host 'other-host', "
+            "not the vehicle this run started, pid 4242)") != std::string::npos);
   CHECK_FALSE(health.FromAnotherProcess(ours));  // its own states are still its own
 
   // Attached (no process of the run's): any process may send the states.
@@ -168,7 +174,9 @@ msg::VehicleState OwnedBy(const link::WriterId& writer, uint64_t session, const 
 
 }  // namespace
 
-TEST_CASE("a run that drove its vehicle says at once when another writer's commands are obeyed: lost control") {
+TEST_CASE(
+    "a run that drove its vehicle says at once when another writer's commands are obeyed: lost "
+    "control") {
   const link::WriterId mine = WriterOf(1);
   const int64_t ms = 1'000'000;
   {
@@ -184,8 +192,9 @@ TEST_CASE("a run that drove its vehicle says at once when another writer's comma
     CHECK(end->outcome == mediator::Outcome::kLostControl);
     CHECK(mediator::ToString(end->outcome) == "lost control");
     CHECK(mediator::ExitCode(end->outcome) == 2);
-    CHECK(end->message.find("vehicle 'robot1' on domain 7 obeys another writer's commands now, not this run's: "
-                            "'haptel run, bo@lab pid 7', writer ") != std::string::npos);
+    CHECK(end->message.find(
+              "vehicle 'robot1' on domain 7 obeys another writer's commands now, not this run's: "
+              "'haptel run, bo@lab pid 7', writer ") != std::string::npos);
     CHECK(end->message.find("this run lost control") != std::string::npos);
   }
   {
@@ -212,13 +221,15 @@ TEST_CASE("a run that drove its vehicle says at once when another writer's comma
   }
 }
 
-TEST_CASE("commands dropped count this run's echoes only: a stranger's sequence is not this run's") {
+TEST_CASE(
+    "commands dropped count this run's echoes only: a stranger's sequence is not this run's") {
   // The issue's figure: a stranger obeyed with sequence numbers from 10^9
   // made the owner's run report 999999724 commands dropped.
   const link::WriterId mine = WriterOf(1);
   StateInbox inbox;
   inbox.SetOwnWriter(mine);
-  const auto state = [](uint64_t seq, const link::WriterId& owner, uint64_t echoed, uint64_t accepted) {
+  const auto state = [](uint64_t seq, const link::WriterId& owner, uint64_t echoed,
+                        uint64_t accepted) {
     msg::VehicleState s = State(seq, false, echoed, accepted);
     s.owner_writer(owner.guid);
     return s;

@@ -1,20 +1,19 @@
 // The session's parts, each on its own: the interface set's switch (forces
 // ramp, no jolt), the device part's calibration policy, replay alignment.
 #include <catch2/catch.hpp>
-
 #include <cmath>
 #include <fstream>
 
 #include "../interfaces/hal_fixture.hpp"
 #include "haptel/config/error.hpp"
+#include "haptel/config/paths.hpp"
+#include "haptel/config/run.hpp"
 #include "haptel/haptics/force_field.hpp"
 #include "haptel/haptics/trace.hpp"
 #include "haptel/interfaces/gesture.hpp"
 #include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/interface_catalog.hpp"
 #include "haptel/mediator/interface_set.hpp"
-#include "haptel/config/paths.hpp"
-#include "haptel/config/run.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;
@@ -36,7 +35,9 @@ haptics::Vec3d RightForce(const haptics::Hal& hal, const haptics::Vec3d& hand) {
 
 }  // namespace
 
-TEST_CASE("switching interfaces ramps the forces down and up: no jump, zero command meanwhile, recorded") {
+TEST_CASE(
+    "switching interfaces ramps the forces down and up: no jump, zero command meanwhile, "
+    "recorded") {
   haptics::Hal hal(test::Metres());
   const haptics::Vec3d hand{0.03, 0.0, 0.0};
   test::PutHand(hal, hand);
@@ -121,13 +122,13 @@ TEST_CASE("calibration policy: a real device needs its own measured calibration"
   udp.name = "arms";
   udp.driver = "udp";
   SECTION("none named") {
-    CHECK_THROWS_WITH(mediator::DeviceCalibrationFor(udp), Catch::Contains("haptel calibrate --device") &&
-                                                                Catch::Contains("udp.yaml"));
+    CHECK_THROWS_WITH(mediator::DeviceCalibrationFor(udp),
+                      Catch::Contains("haptel calibrate --device") && Catch::Contains("udp.yaml"));
   }
   SECTION("named but missing") {
     udp.calibration = dir / "nowhere.yaml";
-    CHECK_THROWS_WITH(mediator::DeviceCalibrationFor(udp), Catch::Contains("does not exist") &&
-                                                                Catch::Contains("haptel calibrate"));
+    CHECK_THROWS_WITH(mediator::DeviceCalibrationFor(udp),
+                      Catch::Contains("does not exist") && Catch::Contains("haptel calibrate"));
   }
   SECTION("measured on another device") {
     DeviceCalibration other;
@@ -155,7 +156,8 @@ TEST_CASE("calibration policy: a real device needs its own measured calibration"
     replay.file = dir / "replay.yaml";
     replay.driver = "replay";
     replay.replay.trace = dir / "lap.trace";
-    CHECK_THROWS_WITH(mediator::DeviceCalibrationFor(replay), Catch::Contains("haptel run --trace"));
+    CHECK_THROWS_WITH(mediator::DeviceCalibrationFor(replay),
+                      Catch::Contains("haptel run --trace"));
     DeviceCalibration recorded;
     recorded.device = "sim";
     recorded.arms[1].tracker_offset = {0.1, 0.0, 0.0};
@@ -179,13 +181,16 @@ TEST_CASE("a held replay reports its first readings until Begin, then plays from
   haptics::ReplayDevice replay(records, d, false);
   replay.HoldUntilBegin();
   haptics::WristRaw out;
-  REQUIRE(replay.ReadWrist(haptics::Side::kRight, 5'000'000'000, out) == haptics::DeviceStatus::kOk);
+  REQUIRE(replay.ReadWrist(haptics::Side::kRight, 5'000'000'000, out) ==
+          haptics::DeviceStatus::kOk);
   CHECK(out.position[0] == 0.0);
-  REQUIRE(replay.ReadWrist(haptics::Side::kRight, 9'000'000'000, out) == haptics::DeviceStatus::kOk);
+  REQUIRE(replay.ReadWrist(haptics::Side::kRight, 9'000'000'000, out) ==
+          haptics::DeviceStatus::kOk);
   CHECK(out.position[0] == 0.0);  // still holding, however late
   CHECK_FALSE(replay.finished(9'000'000'000));
   replay.Begin(10'000'000'000);
-  REQUIRE(replay.ReadWrist(haptics::Side::kRight, 10'000'000'000 + 4'500'000, out) == haptics::DeviceStatus::kOk);
+  REQUIRE(replay.ReadWrist(haptics::Side::kRight, 10'000'000'000 + 4'500'000, out) ==
+          haptics::DeviceStatus::kOk);
   CHECK(out.position[0] == 4.0);
   CHECK(replay.finished(10'000'000'000 + 20'000'000));
 }
@@ -197,15 +202,18 @@ TEST_CASE("a paused trace writer lets records go without counting them as droppe
     haptics::TraceWriter writer(file);
     writer.SetRecording(false);
     haptics::WristRaw w;
-    for (int i = 0; i < 5; ++i) CHECK(writer.Push(haptics::TraceRecord::FromWrist(haptics::Side::kLeft, w)));
+    for (int i = 0; i < 5; ++i)
+      CHECK(writer.Push(haptics::TraceRecord::FromWrist(haptics::Side::kLeft, w)));
     writer.SetRecording(true);
-    for (int i = 0; i < 3; ++i) CHECK(writer.Push(haptics::TraceRecord::FromWrist(haptics::Side::kLeft, w)));
+    for (int i = 0; i < 3; ++i)
+      CHECK(writer.Push(haptics::TraceRecord::FromWrist(haptics::Side::kLeft, w)));
     CHECK(writer.dropped() == 0);
   }
   CHECK(haptics::ReadTrace(file).size() == 3);
 }
 
-TEST_CASE("an interface built when first asked for fills its empty place and can then be switched to") {
+TEST_CASE(
+    "an interface built when first asked for fills its empty place and can then be switched to") {
   haptics::Hal hal(test::Metres());
   test::PutHand(hal, {0.03, 0.0, 0.0});
   std::vector<std::unique_ptr<interfaces::MediatorInterface>> list;
@@ -220,13 +228,17 @@ TEST_CASE("an interface built when first asked for fills its empty place and can
   CHECK(set.current_index() == 1);
   CHECK(set.current().name() == "far");
   // Only an empty place takes one, and only a place the run lists.
-  CHECK_THROWS_AS(set.Provide(1, std::make_unique<interfaces::GestureInterface>(Gesture("again", 0.0))),
-                  std::invalid_argument);
-  CHECK_THROWS_AS(set.Provide(2, std::make_unique<interfaces::GestureInterface>(Gesture("beyond", 0.0))),
-                  std::invalid_argument);
+  CHECK_THROWS_AS(
+      set.Provide(1, std::make_unique<interfaces::GestureInterface>(Gesture("again", 0.0))),
+      std::invalid_argument);
+  CHECK_THROWS_AS(
+      set.Provide(2, std::make_unique<interfaces::GestureInterface>(Gesture("beyond", 0.0))),
+      std::invalid_argument);
 }
 
-TEST_CASE("every robot interface of the table loads from its shipped file with the table's hands and physics") {
+TEST_CASE(
+    "every robot interface of the table loads from its shipped file with the table's hands and "
+    "physics") {
   const RunConfig run = LoadRun(ShippedFile("config/haptel.yaml"));
   interfaces::InputBox input;
   mediator::InterfaceParts parts;
@@ -248,8 +260,10 @@ TEST_CASE("every robot interface of the table loads from its shipped file with t
       CHECK(mediator::MakeInterface(spec, parts)->name() == kind.name);
     }
   }
-  CHECK(robot == 8);  // gesture, gesture-shared, the four cockpits (cockpit-shared among them), keyboard, gamepad
+  CHECK(robot == 8);  // gesture, gesture-shared, the four cockpits (cockpit-shared among them),
+                      // keyboard, gamepad
   // A blimp's interface is refused for the robot, naming the robot's.
-  CHECK_THROWS_WITH(mediator::LoadInterfaceSpec(run, "blimp-gesture"),
-                    Catch::Contains("flies a blimp") && Catch::Contains("gesture, gesture-shared, cockpit"));
+  CHECK_THROWS_WITH(
+      mediator::LoadInterfaceSpec(run, "blimp-gesture"),
+      Catch::Contains("flies a blimp") && Catch::Contains("gesture, gesture-shared, cockpit"));
 }

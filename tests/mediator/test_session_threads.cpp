@@ -90,11 +90,14 @@ TEST_CASE("a fleet of two robots in this process: both driven in turn, each reco
   // its physics thread while the servo loop runs.
   const std::string robot = fs::absolute("config/vehicles/sim-robot.yaml").string();
   const std::string track = fs::absolute("config/tracks/test-short.yaml").string();
-  const fs::path fleet = test::WriteFile(dir / "fleet.yaml",
-                                         "name: two-robots\nslice_s: 2\nvehicles:\n"
-                                         "  - {name: robot-a, vehicle: " + robot + ", world: " + track + "}\n"
-                                         "  - {name: robot-b, vehicle: " + robot + ", world: " + track +
-                                             ", interface: cockpit}\n");
+  const fs::path fleet =
+      test::WriteFile(dir / "fleet.yaml",
+                      "name: two-robots\nslice_s: 2\nvehicles:\n"
+                      "  - {name: robot-a, vehicle: " +
+                          robot + ", world: " + track +
+                          "}\n"
+                          "  - {name: robot-b, vehicle: " +
+                          robot + ", world: " + track + ", interface: cockpit}\n");
   const std::unique_ptr<vehicles::Node> a = StartRobot("robot-a", domain);
   const std::unique_ptr<vehicles::Node> b = StartRobot("robot-b", domain);
   const fs::path database = dir / "runs.db";

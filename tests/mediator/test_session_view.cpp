@@ -81,14 +81,17 @@ TEST_CASE("the overlay's HUD is the HUD cockpit's own, and only a HUD interface 
   CHECK(view::HudSpeedText(p).empty());
 }
 
-TEST_CASE("a practice lap on the keyboard alone: the hint offers no switching, the title says whose practice") {
+TEST_CASE(
+    "a practice lap on the keyboard alone: the hint offers no switching, the title says whose "
+    "practice") {
   const Track track(LoadTrack(ShippedFile("config/tracks/test-short.yaml")));
   SessionSetup setup;
   setup.operator_kind = "person";
   setup.run.name = "default";
   LapTimer lap(track);
   interfaces::InputBox input;
-  InterfaceSet set = One(std::make_unique<interfaces::KeyboardInterface>(KeyboardConfig{}, input, 8));
+  InterfaceSet set =
+      One(std::make_unique<interfaces::KeyboardInterface>(KeyboardConfig{}, input, 8));
   const interfaces::MotorCommand still{};
   OverlayFeed switching(setup, track);
   CHECK(std::string(switching.Make(1.0, lap, set, {}, still, true, false).message).find("F1-F6") !=
@@ -103,7 +106,8 @@ TEST_CASE("a practice lap on the keyboard alone: the hint offers no switching, t
   CHECK(ViewOptionsFor(setup).title == "Haptel - practice lap - P3");
 }
 
-TEST_CASE("with gesture-shared the overlay carries what pushes the hand; plain gesture shows none") {
+TEST_CASE(
+    "with gesture-shared the overlay carries what pushes the hand; plain gesture shows none") {
   const Track track(LoadTrack(ShippedFile("config/tracks/test-short.yaml")));
   SessionSetup setup;
   LapTimer lap(track);
@@ -132,17 +136,23 @@ TEST_CASE("with gesture-shared the overlay carries what pushes the hand; plain g
   CHECK(o.hud);  // gesture's speedometer stays
 
   InterfaceSet plain = One(std::make_unique<interfaces::GestureInterface>(GestureConfig{}));
-  const view::Overlay p = feed.Make(1.0, lap, plain, feedback, plain.Update(1.0, feedback, hal), true, false);
+  const view::Overlay p =
+      feed.Make(1.0, lap, plain, feedback, plain.Update(1.0, feedback, hal), true, false);
   CHECK_FALSE(p.guidance_shown);
 }
 
-TEST_CASE("with cockpit-shared the overlay carries what pushes the lever and the wheel, as gesture-shared's") {
+TEST_CASE(
+    "with cockpit-shared the overlay carries what pushes the lever and the wheel, as "
+    "gesture-shared's") {
   const Track track(LoadTrack(ShippedFile("config/tracks/test-short.yaml")));
   SessionSetup setup;
   LapTimer lap(track);
   haptics::Hal hal(Metres());
   PlainPort port;
-  port.state = {.wheel_angle = 0.0, .throttle = 0.06, .wheel_held = true, .throttle_held = true};  // full ahead
+  port.state = {.wheel_angle = 0.0,
+                .throttle = 0.06,
+                .wheel_held = true,
+                .throttle_held = true};  // full ahead
   interfaces::VehicleFeedback feedback;  // the wall 0.4 m ahead of the gesture-shared case
   feedback.ranges.count = 3;
   feedback.ranges.angle_min = -0.1;
@@ -165,8 +175,10 @@ TEST_CASE("with cockpit-shared the overlay carries what pushes the lever and the
   CHECK_FALSE(o.hud);  // the plain cockpit's view: no speedometer
 
   PlainPort plain_port = port;
-  InterfaceSet plain = One(std::make_unique<interfaces::CockpitInterface>(Shipped("cockpit"), plain_port));
-  const view::Overlay p = feed.Make(1.0, lap, plain, feedback, plain.Update(1.0, feedback, hal), true, false);
+  InterfaceSet plain =
+      One(std::make_unique<interfaces::CockpitInterface>(Shipped("cockpit"), plain_port));
+  const view::Overlay p =
+      feed.Make(1.0, lap, plain, feedback, plain.Update(1.0, feedback, hal), true, false);
   CHECK_FALSE(p.guidance_shown);
 }
 

@@ -2,9 +2,8 @@
 // process. The same seed gives the same lap to the tick; the lap is timed
 // by the same lap timer and stored in the same row as a real-time one; the
 // link's delay is the configured one; what cannot be stepped here is refused.
-#include <catch2/catch.hpp>
-
 #include <atomic>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -21,12 +20,21 @@ namespace {
 
 /// `haptel run` with these words after the shared ones, into `database`.
 mediator::SessionSetup Setup(const std::filesystem::path& database, std::vector<std::string> more) {
-  std::vector<std::string> words = {"run", "--track", "config/tracks/test-short.yaml", "--operator", "auto",
-                                    "--view", "none", "--quiet", "--database", database.string()};
+  std::vector<std::string> words = {"run",
+                                    "--track",
+                                    "config/tracks/test-short.yaml",
+                                    "--operator",
+                                    "auto",
+                                    "--view",
+                                    "none",
+                                    "--quiet",
+                                    "--database",
+                                    database.string()};
   words.insert(words.end(), more.begin(), more.end());
   std::vector<const char*> argv;
   for (const std::string& w : words) argv.push_back(w.c_str());
-  return mediator::RunSetupFromArgs(mediator::ParseRunArgs(static_cast<int>(argv.size()), argv.data()));
+  return mediator::RunSetupFromArgs(
+      mediator::ParseRunArgs(static_cast<int>(argv.size()), argv.data()));
 }
 
 mediator::RecordedRun Run(const mediator::SessionSetup& setup) {
@@ -62,9 +70,11 @@ void CheckSameLap(const mediator::RecordedRun& a, const mediator::RecordedRun& b
 
 }  // namespace
 
-TEST_CASE("simulated time: the same seed drives the same gesture lap to the tick", "[simulated-time]") {
+TEST_CASE("simulated time: the same seed drives the same gesture lap to the tick",
+          "[simulated-time]") {
   const auto dir = test::ScratchDir("simtime-gesture");
-  const mediator::SessionSetup setup = Setup(dir / "runs.db", {"--interface", "gesture", "--simulated-time"});
+  const mediator::SessionSetup setup =
+      Setup(dir / "runs.db", {"--interface", "gesture", "--simulated-time"});
   REQUIRE(setup.simulated_time);
   const mediator::RecordedRun first = Run(setup);
   const mediator::RecordedRun second = Run(setup);
@@ -82,12 +92,13 @@ TEST_CASE("simulated time: the same seed drives the same gesture lap to the tick
   CHECK_FALSE(SimulatedClockOn());
 }
 
-TEST_CASE("simulated time: a cockpit's physics steps in lock-step, the same every run", "[simulated-time]") {
+TEST_CASE("simulated time: a cockpit's physics steps in lock-step, the same every run",
+          "[simulated-time]") {
   const auto dir = test::ScratchDir("simtime-cockpit");
   // Long enough to grasp the wheel and the lever and drive off (the lap limit
   // ends it on the lap's clock, or before the line).
-  const mediator::SessionSetup setup =
-      Setup(dir / "runs.db", {"--interface", "cockpit-assisted", "--simulated-time", "--lap-limit", "3"});
+  const mediator::SessionSetup setup = Setup(
+      dir / "runs.db", {"--interface", "cockpit-assisted", "--simulated-time", "--lap-limit", "3"});
   const mediator::RecordedRun first = Run(setup);
   const mediator::RecordedRun second = Run(setup);
   INFO(first.result.message);
@@ -99,9 +110,11 @@ TEST_CASE("simulated time: a cockpit's physics steps in lock-step, the same ever
         static_cast<uint64_t>(std::llround(first.result.simulated_s / setup.physics.step_s)));
 }
 
-TEST_CASE("simulated time: the lap is timed and stored as a real-time one, with its speed-up", "[simulated-time]") {
+TEST_CASE("simulated time: the lap is timed and stored as a real-time one, with its speed-up",
+          "[simulated-time]") {
   const auto dir = test::ScratchDir("simtime-row");
-  const mediator::SessionSetup setup = Setup(dir / "runs.db", {"--interface", "gesture", "--simulated-time"});
+  const mediator::SessionSetup setup =
+      Setup(dir / "runs.db", {"--interface", "gesture", "--simulated-time"});
   const mediator::RecordedRun run = Run(setup);
   REQUIRE(run.run_id != 0);
   const record::RunRecord& r = run.result.record;
@@ -129,29 +142,40 @@ TEST_CASE("simulated time: the lap is timed and stored as a real-time one, with 
   CHECK(recorder.LoadAll().at(static_cast<size_t>(id - 1)).speedup == -1.0);
 }
 
-TEST_CASE("simulated time: commands and states take the link's configured delay each way", "[simulated-time]") {
+TEST_CASE("simulated time: commands and states take the link's configured delay each way",
+          "[simulated-time]") {
   const auto dir = test::ScratchDir("simtime-delay");
-  const mediator::SessionSetup setup = Setup(
-      dir / "runs.db", {"--interface", "gesture", "--simulated-time", "--link-fault", "delay=100ms", "--lap-limit", "2"});
+  const mediator::SessionSetup setup =
+      Setup(dir / "runs.db", {"--interface", "gesture", "--simulated-time", "--link-fault",
+                              "delay=100ms", "--lap-limit", "2"});
   const mediator::RecordedRun run = Run(setup);
   // Round trip less the wait at the vehicle: twice the delay (10 us bins).
   CHECK(run.result.record.command_rtt_ms_p50 == Approx(200.0).margin(0.02));
   CHECK(run.result.record.command_rtt_ms_p99 == Approx(200.0).margin(0.02));
 }
 
-TEST_CASE("simulated time: what cannot step in this process is refused, naming what is needed", "[simulated-time]") {
+TEST_CASE("simulated time: what cannot step in this process is refused, naming what is needed",
+          "[simulated-time]") {
   const auto dir = test::ScratchDir("simtime-refused");
   const auto db = dir / "runs.db";
-  CHECK_THAT(test::WhatOf<UsageError>([&] { Setup(db, {"--simulated-time", "--operator", "person"}); }),
+  CHECK_THAT(test::WhatOf<UsageError>([&] {
+               Setup(db, {"--simulated-time", "--operator", "person"});
+             }),
              Catch::Contains("--operator auto"));
-  CHECK_THAT(test::WhatOf<UsageError>(
-                 [&] { Setup(db, {"--simulated-time", "--vehicle", "config/vehicles/can-robot-sim.yaml"}); }),
+  CHECK_THAT(test::WhatOf<UsageError>([&] {
+               Setup(db, {"--simulated-time", "--vehicle", "config/vehicles/can-robot-sim.yaml"});
+             }),
              Catch::Contains("sim-robot"));
-  CHECK_THAT(test::WhatOf<UsageError>(
-                 [&] { Setup(db, {"--simulated-time", "--vehicle", "config/vehicles/sim-blimp.yaml"}); }),
+  CHECK_THAT(test::WhatOf<UsageError>([&] {
+               Setup(db, {"--simulated-time", "--vehicle", "config/vehicles/sim-blimp.yaml"});
+             }),
              Catch::Contains("sim-robot"));
-  CHECK_THAT(test::WhatOf<UsageError>([&] { Setup(db, {"--simulated-time", "--link-fault", "delay=50ms,loss=5%"}); }),
+  CHECK_THAT(test::WhatOf<UsageError>([&] {
+               Setup(db, {"--simulated-time", "--link-fault", "delay=50ms,loss=5%"});
+             }),
              Catch::Contains("delay alone"));
-  CHECK_THAT(test::WhatOf<UsageError>([&] { Setup(db, {"--simulated-time", "--attach"}); }),
+  CHECK_THAT(test::WhatOf<UsageError>([&] {
+               Setup(db, {"--simulated-time", "--attach"});
+             }),
              Catch::Contains("--attach"));
 }

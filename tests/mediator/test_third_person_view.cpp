@@ -4,12 +4,12 @@
 // the view without allocating, and — drawn by the real renderer offscreen —
 // the labelled inset with the robot in its lower middle, and nothing of it
 // when the model has no third-person picture.
-#include <catch2/catch.hpp>
 #include <atomic>
+#include <catch2/catch.hpp>
 #include <cmath>
-#include <thread>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <thread>
 
 #include "../view/offscreen_gl.hpp"
 #include "haptel/config/track.hpp"
@@ -68,7 +68,8 @@ TEST_CASE("the chase camera stands behind the robot, which its picture shows in 
   const VehicleConfig vehicle = LoadVehicle("config/vehicles/sim-robot.yaml");
   const Track track(LoadTrack("config/tracks/test-short.yaml"));
   ThirdPersonView chase(track, vehicle);
-  const PredictedPose robot{1.0, track.StartPosition().x(), track.StartPosition().y(), track.StartHeading()};
+  const PredictedPose robot{1.0, track.StartPosition().x(), track.StartPosition().y(),
+                            track.StartHeading()};
 
   // Three body lengths behind it, looking along its heading, above the floor.
   const video::CameraPose pose = chase.ChasePose(robot);
@@ -91,7 +92,7 @@ TEST_CASE("the chase camera stands behind the robot, which its picture shows in 
   CHECK(BodyIn(track_only, {0, 0, with.cols, with.rows}).count == 0);
   REQUIRE(blob.count > 200);
   CHECK(std::abs(blob.x - with.cols / 2.0) < 0.05 * with.cols);  // straight ahead
-  CHECK(blob.y > 0.6 * with.rows);                               // below the horizon, near the bottom
+  CHECK(blob.y > 0.6 * with.rows);  // below the horizon, near the bottom
   CHECK(blob.y < 0.95 * with.rows);
   // Where the projection puts it: the body's centre at mid-height.
   const video::LevelCamera lens = chase.Lens(robot);
@@ -110,14 +111,16 @@ TEST_CASE("the chase camera stands behind the robot, which its picture shows in 
   // Turned left a quarter turn, the chase camera turns with it: the robot stays in the middle.
   const PredictedPose turned{2.0, robot.x, robot.y, robot.heading + 1.5707963};
   chase.Render(turned, with);
-  CHECK(std::abs(BodyIn(with, {0, 0, with.cols, with.rows}).x - with.cols / 2.0) < 0.05 * with.cols);
+  CHECK(std::abs(BodyIn(with, {0, 0, with.cols, with.rows}).x - with.cols / 2.0) <
+        0.05 * with.cols);
 }
 
 TEST_CASE("the third-person pictures are reused, never one the view still holds") {
   const VehicleConfig vehicle = LoadVehicle("config/vehicles/sim-robot.yaml");
   const Track track(LoadTrack("config/tracks/test-short.yaml"));
   ThirdPersonView chase(track, vehicle);
-  const PredictedPose robot{0.0, track.StartPosition().x(), track.StartPosition().y(), track.StartHeading()};
+  const PredictedPose robot{0.0, track.StartPosition().x(), track.StartPosition().y(),
+                            track.StartHeading()};
   CHECK(chase.Latest().image == nullptr);  // nothing before the first pose
 
   // The view holds each picture it was given: four pictures, then none free.
@@ -186,12 +189,15 @@ TEST_CASE("the view reads each third-person picture whole while the session draw
   CHECK(torn.load() == 0);
 }
 
-TEST_CASE("the view draws the third-person picture as a labelled inset with the robot in its lower middle; "
-          "without one, nothing") {
+TEST_CASE(
+    "the view draws the third-person picture as a labelled inset with the robot in its lower "
+    "middle; "
+    "without one, nothing") {
   constexpr int kWidth = 1024, kHeight = 576;  // the view's default size
   const VehicleConfig vehicle = LoadVehicle("config/vehicles/sim-robot.yaml");
   const Track track(LoadTrack("config/tracks/test-short.yaml"));
-  const PredictedPose robot{1.0, track.StartPosition().x(), track.StartPosition().y(), track.StartHeading()};
+  const PredictedPose robot{1.0, track.StartPosition().x(), track.StartPosition().y(),
+                            track.StartHeading()};
   // The robot's camera picture, filling the view as in a practice lap.
   view::ViewModel model;
   auto picture = std::make_shared<cv::Mat>();
@@ -249,9 +255,11 @@ TEST_CASE("--third-person is for simulated robots only: others are refused with 
   const std::string real = ThirdPersonProblem(LoadVehicle("config/vehicles/can-robot.yaml"));
   CHECK(real.find("is not simulated") != std::string::npos);
   CHECK(real.find("can-robot.yaml") != std::string::npos);
-  CHECK(real.find("expected a simulated robot (kind sim-robot or can-robot-sim)") != std::string::npos);
-  CHECK(ThirdPersonProblem(LoadVehicle("config/vehicles/ros2-robot.yaml")).find("is not simulated") !=
+  CHECK(real.find("expected a simulated robot (kind sim-robot or can-robot-sim)") !=
         std::string::npos);
+  CHECK(
+      ThirdPersonProblem(LoadVehicle("config/vehicles/ros2-robot.yaml")).find("is not simulated") !=
+      std::string::npos);
   CHECK(ThirdPersonProblem(LoadVehicle("config/vehicles/sim-blimp.yaml")).find("flies a course") !=
         std::string::npos);
 }

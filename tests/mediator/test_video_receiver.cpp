@@ -5,15 +5,14 @@
 // back and the time spent stale is counted.
 #include <algorithm>
 #include <atomic>
+#include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
+#include <opencv2/core.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <catch2/catch.hpp>
-#include <opencv2/core.hpp>
 
 #include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"
@@ -37,7 +36,9 @@ const std::vector<cv::Mat>& Frames() {
 }
 
 /// Every received frame ends as a picture, a skipped frame or a failure.
-uint64_t Handled(const mediator::VideoStats& s) { return s.frames + s.frames_skipped + s.decode_failures; }
+uint64_t Handled(const mediator::VideoStats& s) {
+  return s.frames + s.frames_skipped + s.decode_failures;
+}
 
 /// The nice value of this process's thread named `name` (from
 /// /proc/self/task), or -100 when no thread has that name.
@@ -71,27 +72,33 @@ TEST_CASE("The decoder runs below the priority of the link's threads, which carr
   const int session_nice = ThreadNice();
   mediator::VideoReceiver receiver(op, "robot1", /*session=*/7, /*decode=*/true);
   int decoder_nice = -100;
-  REQUIRE(test::WaitFor([&] { return (decoder_nice = NiceOfThreadNamed("video-decode")) != -100; }, 20.0));
+  REQUIRE(test::WaitFor([&] { return (decoder_nice = NiceOfThreadNamed("video-decode")) != -100; },
+                        20.0));
   CHECK(decoder_nice == std::min(19, session_nice + kBackgroundNiceSteps));
   CHECK(ThreadNice() == session_nice);
 }
 
-TEST_CASE("H.264 frame lost on the link: stale picture marked, key frame requested until it comes, picture back",
-          "[mediator][video]") {
+TEST_CASE(
+    "H.264 frame lost on the link: stale picture marked, key frame requested until it comes, "
+    "picture back",
+    "[mediator][video]") {
   LinkConfig config;
   config.domain_id = test::UniqueDomain(67);
   link::Participant vehicle(config, "test-vehicle");
   link::Participant op(config, "test-operator");
   mediator::VideoReceiver receiver(op, "robot1", /*session=*/7, /*decode=*/true);
   std::atomic<uint64_t> requests{0};
-  link::VideoFeedbackReader feedback(vehicle, link::TopicName("robot1", "video_feedback"), link::Profile::kState,
-                                     [&](const msg::VideoFeedback& f) {
+  link::VideoFeedbackReader feedback(vehicle, link::TopicName("robot1", "video_feedback"),
+                                     link::Profile::kState, [&](const msg::VideoFeedback& f) {
                                        if (f.key_frame_request()) requests.fetch_add(1);
                                      });
   link::VideoWriter writer(vehicle, link::TopicName("robot1", "video"), link::Profile::kVideo);
   REQUIRE(test::WaitFor([&] { return writer.matched() > 0; }, 20.0));
 
-  video::H264Encoder encoder({.width = 640, .height = 480, .rate_hz = 30.0, .bitrate_kbps = 1000,
+  video::H264Encoder encoder({.width = 640,
+                              .height = 480,
+                              .rate_hz = 30.0,
+                              .bitrate_kbps = 1000,
                               .key_frame_interval_s = 1000.0});  // only requested IDRs
   uint64_t seq = 0;
   uint64_t requests_seen = 0;
@@ -158,8 +165,10 @@ TEST_CASE("H.264 frame lost on the link: stale picture marked, key frame request
   CHECK(requests.load() <= after + 1);  // one may have been in flight
 }
 
-TEST_CASE("the link's rate estimate reaches the vehicle on the feedback topic, at most ten times a second",
-          "[mediator][video]") {
+TEST_CASE(
+    "the link's rate estimate reaches the vehicle on the feedback topic, at most ten times a "
+    "second",
+    "[mediator][video]") {
   LinkConfig config;
   config.domain_id = test::UniqueDomain(68);
   link::Participant vehicle(config, "test-vehicle");
@@ -167,10 +176,11 @@ TEST_CASE("the link's rate estimate reaches the vehicle on the feedback topic, a
   mediator::VideoReceiver receiver(op, "robot1", /*session=*/7, /*decode=*/false);
   std::mutex mutex;
   std::vector<uint32_t> targets;
-  link::VideoFeedbackReader feedback(vehicle, link::TopicName("robot1", "video_feedback"), link::Profile::kState,
-                                     [&](const msg::VideoFeedback& f) {
+  link::VideoFeedbackReader feedback(vehicle, link::TopicName("robot1", "video_feedback"),
+                                     link::Profile::kState, [&](const msg::VideoFeedback& f) {
                                        std::lock_guard lock(mutex);
-                                       if (!f.key_frame_request()) targets.push_back(f.target_kbps());
+                                       if (!f.key_frame_request())
+                                         targets.push_back(f.target_kbps());
                                      });
   link::VideoWriter writer(vehicle, link::TopicName("robot1", "video"), link::Profile::kVideo);
   REQUIRE(test::WaitFor([&] { return writer.matched() > 0; }, 20.0));
@@ -187,10 +197,12 @@ TEST_CASE("the link's rate estimate reaches the vehicle on the feedback topic, a
     writer.Write(f);
     SleepUntilNs(MonotonicNs() + 33'000'000);
   }
-  REQUIRE(test::WaitFor([&] {
-    std::lock_guard lock(mutex);
-    return !targets.empty();
-  }, 10.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        std::lock_guard lock(mutex);
+        return !targets.empty();
+      },
+      10.0));
   const double elapsed_s = NsToS(MonotonicNs() - start);
   std::lock_guard lock(mutex);
   INFO(targets.size() << " estimates in " << elapsed_s << " s");

@@ -155,7 +155,8 @@ TEST_CASE("cockpit controls: a locked lever holds at the target against a push; 
 
 /// Shared control's guidance (cockpit-shared): a plane at `throttle` (m) and
 /// `wheel_angle` (rad), normal (lever, rim), 150 N/m, at most 3 N.
-ControlsActuation Guiding(double throttle, double wheel_angle, double normal_throttle, double normal_rim) {
+ControlsActuation Guiding(double throttle, double wheel_angle, double normal_throttle,
+                          double normal_rim) {
   ControlsActuation a;
   a.guidance_active = true;
   a.guidance_throttle = throttle;
@@ -167,10 +168,13 @@ ControlsActuation Guiding(double throttle, double wheel_angle, double normal_thr
   return a;
 }
 
-TEST_CASE("cockpit controls: shared control's guidance pushes the lever back to its plane, and a hand pushes through",
-          "[physics][cockpit]") {
+TEST_CASE(
+    "cockpit controls: shared control's guidance pushes the lever back to its plane, and a hand "
+    "pushes through",
+    "[physics][cockpit]") {
   Rig rig;
-  const ControlsActuation a = Guiding(0.02, 0.0, 1.0, 0.0);  // commands beyond 2 cm forward lead into danger
+  const ControlsActuation a =
+      Guiding(0.02, 0.0, 1.0, 0.0);  // commands beyond 2 cm forward lead into danger
   // Pushed forward by 1 N, the lever rests where the spring answers it: 1/150 m past the plane.
   ControlsState s = rig.Run(a, 3000, 1.0);
   CHECK(s.throttle == Approx(0.02 + 1.0 / 150.0).margin(0.001));
@@ -189,12 +193,14 @@ TEST_CASE("cockpit controls: shared control's guidance pushes the lever back to 
   CHECK(rig.controls.guidance_force() == 0.0);
 }
 
-TEST_CASE("cockpit controls: shared control's guidance turns the wheel back from a steer to the left",
-          "[physics][cockpit]") {
+TEST_CASE(
+    "cockpit controls: shared control's guidance turns the wheel back from a steer to the left",
+    "[physics][cockpit]") {
   Rig rig;
   const double r = rig.cockpit.wheel_radius;
   const ControlsActuation push_left = [] {
-    ControlsActuation a = Guiding(0.0, 0.1, 0.0, 1.0);  // steering left of 0.1 rad leads into danger
+    ControlsActuation a =
+        Guiding(0.0, 0.1, 0.0, 1.0);  // steering left of 0.1 rad leads into danger
     return a;
   }();
   // A steady 0.2 N·m to the left: it rests where the rim's spring answers it,
@@ -335,8 +341,10 @@ TEST_CASE("cockpit controls: a palm pushes the lever, not while it is locked",
   CHECK_FALSE(s.wheel_held);
 }
 
-TEST_CASE("cockpit controls: the link trades state and actuation across threads' seqlocks, allocating nothing",
-          "[physics][cockpit]") {
+TEST_CASE(
+    "cockpit controls: the link trades state and actuation across threads' seqlocks, allocating "
+    "nothing",
+    "[physics][cockpit]") {
   Rig rig;
   rig.world.AddHand(Side::kRight);
   haptel::physics::ControlsLink link(rig.world, rig.controls);

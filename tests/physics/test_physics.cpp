@@ -8,22 +8,22 @@
 #include <limits>
 #include <memory>
 
-#include "haptel/testing/vec_math.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/physics.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/haptics/hal.hpp"
-#include "haptel/testing/box_grip.hpp"
 #include "haptel/physics/world.hpp"
+#include "haptel/testing/box_grip.hpp"
+#include "haptel/testing/vec_math.hpp"
 #include "test_env.hpp"
 
 namespace {
 
 using haptel::PhysicsConfig;
-using haptel::haptics::HandSample;
 using haptel::haptics::AxisAngle;
 using haptel::haptics::Distance;
+using haptel::haptics::HandSample;
 using haptel::haptics::Side;
 using haptel::haptics::TrackedHand;
 using haptel::physics::PhysicsWorld;
@@ -82,7 +82,8 @@ TEST_CASE("physics: the shipped file loads, strictly", "[physics]") {
     std::ofstream out(file);
     out << "hand:\n  material:\n    rolling_friction: 0\n    spinning_friction: 0.002\n";
   }
-  REQUIRE_THROWS_WITH(haptel::LoadPhysics(file), Catch::Contains("hand.material.spinning_friction"));
+  REQUIRE_THROWS_WITH(haptel::LoadPhysics(file),
+                      Catch::Contains("hand.material.spinning_friction"));
   {
     std::ofstream out(file);
     out << "hand:\n  material:\n    rolling_friction: 0\n";
@@ -308,8 +309,9 @@ TEST_CASE("physics: a phalanx capsule resting or pressed on a box does not roll"
   shape->calculateLocalInertia(mass, inertia);
   ph::Pose pose;
   pose.position = {0.0, 0.0, 2.0 * half + r};
-  const ph::BodyId id = world.AddRigidBody(std::move(shape), {}, mass, {inertia.x(), inertia.y(), inertia.z()},
-                                           pose, config.hand.material);
+  const ph::BodyId id =
+      world.AddRigidBody(std::move(shape), {}, mass, {inertia.x(), inertia.y(), inertia.z()}, pose,
+                         config.hand.material);
   btRigidBody& capsule = world.body(id);
   capsule.setActivationState(DISABLE_DEACTIVATION);
   world.body(box).setActivationState(DISABLE_DEACTIVATION);
@@ -327,8 +329,9 @@ TEST_CASE("physics: a phalanx capsule resting or pressed on a box does not roll"
   CHECK(p[2] == Approx(2.0 * half + r).margin(0.001));
 }
 
-TEST_CASE("physics: a sleeping box stays put; a palm pushing it wakes it and slides it on the floor",
-          "[physics]") {
+TEST_CASE(
+    "physics: a sleeping box stays put; a palm pushing it wakes it and slides it on the floor",
+    "[physics]") {
   // The world skips sleeping bodies (no bounding-box refresh, no integration):
   // a sleeping body must not move at all, and once woken it must collide
   // where it went.
@@ -356,8 +359,8 @@ TEST_CASE("physics: a sleeping box stays put; a palm pushing it wakes it and sli
   for (int i = 0; i < 500; ++i) step_at(0.1);
   const Vec3d p = world.BodyPose(box).position;
   INFO("box at " << p[0] << ", " << p[1] << ", " << p[2]);
-  CHECK(p[0] > 0.1);                           // pushed: its back face is at the palm
-  CHECK(p[2] == Approx(half).margin(0.002));   // still on the floor where it went
+  CHECK(p[0] > 0.1);                          // pushed: its back face is at the palm
+  CHECK(p[2] == Approx(half).margin(0.002));  // still on the floor where it went
   CHECK(std::abs(p[1]) < 0.02);
   CHECK(world.Counters().body_resets == 0);
 }

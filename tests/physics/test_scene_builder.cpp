@@ -10,10 +10,10 @@
 #include <stdexcept>
 #include <vector>
 
-#include "haptel/geometry/mass_properties.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/physics.hpp"
 #include "haptel/config/scene.hpp"
+#include "haptel/geometry/mass_properties.hpp"
 #include "haptel/physics/scene_builder.hpp"
 #include "haptel/physics/world.hpp"
 
@@ -163,9 +163,8 @@ TEST_CASE("scene builder: a compound body sits at its centre of mass, along its 
           "[physics][scene]") {
   // An L of two boxes, turned and lifted: its centre of mass is off both boxes'
   // centres and its inertia is not diagonal in the object frame.
-  SceneObject l = DynamicObject({Box({0.1, 0.02, 0.02}, {0.0, 0.0, 0.0}),
-                                 Box({0.02, 0.06, 0.02}, {0.08, 0.08, 0.0})},
-                                1.2);
+  SceneObject l = DynamicObject(
+      {Box({0.1, 0.02, 0.02}, {0.0, 0.0, 0.0}), Box({0.02, 0.06, 0.02}, {0.08, 0.08, 0.0})}, 1.2);
   l.position = {0.3, -0.2, 1.0};
   l.rotation = Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
   SceneShape hull;

@@ -120,7 +120,8 @@ RunRecord MakeRun(int n, int split_count) {
   run.link_fault = n % 2 == 1 ? "delay=0.2s,jitter=0s,loss=0" : "";
   run.prediction_error_m_p50 = n % 3 == 0 ? -1.0 : 0.004 * n;  // -1: none (stored as NULL)
   run.speedup = n % 2 == 0 ? -1.0 : 12.5 * n;  // -1: a real-time run (stored as NULL)
-  run.controller_errors = n % 2 == 0 ? -1 : (n % 4 == 1 ? 0 : 0x0008);  // -1: no servo controller (NULL)
+  run.controller_errors =
+      n % 2 == 0 ? -1 : (n % 4 == 1 ? 0 : 0x0008);  // -1: no servo controller (NULL)
   run.video_kbps = 850.5 + n;
   run.video_stale_s = 0.25 * n;
   run.prediction_error_m_p95 = n % 3 == 0 ? -1.0 : 0.011 * n;
@@ -466,7 +467,8 @@ TEST_CASE("A database whose inner pages are garbage is refused at opening, befor
   haptel::test::DamageMiddlePage(file);
   // Opening reads only page 1: without the check the file would open, and
   // the run's save would meet the garbage at its end.
-  RequireThrowsMentioning([&] { Recorder recorder(file); }, "database " + file.string() + ": is damaged");
+  RequireThrowsMentioning([&] { Recorder recorder(file); },
+                          "database " + file.string() + ": is damaged");
   RequireThrowsMentioning([&] { Recorder recorder(file); }, "SQLite's quick_check");
   RequireThrowsMentioning([&] { Recorder recorder(file); }, "another --database");
 }

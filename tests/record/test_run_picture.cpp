@@ -189,7 +189,8 @@ TEST_CASE("DrawRunPicture writes a PNG and names the file it cannot write", "[ru
   const TrackConfig config = LoadTrack(ShippedFile("config/tracks/test-short.yaml"));
   const RunRecord run = LapOn(Track(config));
 
-  CHECK(RunPicturePath("/data/study/runs.db", 12) == fs::path("/data/study/pictures/runs-run-12.png"));
+  CHECK(RunPicturePath("/data/study/runs.db", 12) ==
+        fs::path("/data/study/pictures/runs-run-12.png"));
   const fs::path png = RunPicturePath(dir / "runs.db", 7);
   DrawRunPicture(run, config, png);  // creates pictures/
   const cv::Mat read = cv::imread(png.string());
@@ -231,7 +232,8 @@ TEST_CASE("Two databases in one folder never share a picture's name", "[run_pict
 
 TEST_CASE("The blimp's flight picture: the whole course to scale, gates by outcome, the flown path",
           "[run_picture]") {
-  const haptel::BlimpCourseConfig course = haptel::LoadBlimpCourse(ShippedFile("config/tracks/blimp-hop.yaml"));
+  const haptel::BlimpCourseConfig course =
+      haptel::LoadBlimpCourse(ShippedFile("config/tracks/blimp-hop.yaml"));
   REQUIRE(course.gates.size() == 1);
   REQUIRE(course.buildings.size() == 1);
   RunRecord run;
@@ -255,12 +257,14 @@ TEST_CASE("The blimp's flight picture: the whole course to scale, gates by outco
   const auto& gate = course.gates[0];
   CHECK(GreenDominant(At(picture, Vec2(gate.centre[0], gate.centre[1] + gate.width / 2 - 0.5))));
   // The landing circle's rim is black; the path is drawn where it flew.
-  const cv::Vec3b rim = At(picture, Vec2(course.landing.centre[0] + course.landing.radius, course.landing.centre[1]));
+  const cv::Vec3b rim =
+      At(picture, Vec2(course.landing.centre[0] + course.landing.radius, course.landing.centre[1]));
   CHECK(Red(rim) < 90);
   CHECK(Green(rim) < 90);
   CHECK(At(picture, Vec2(20.0, 0.0)) != cv::Vec3b(255, 255, 255));
   // Not reached: the same gate grey.
   run.splits[0] = {0, false, -1.0};
   const RunPicture unreached = haptel::record::RenderBlimpRunPicture(run, course);
-  CHECK_FALSE(GreenDominant(At(unreached, Vec2(gate.centre[0], gate.centre[1] + gate.width / 2 - 0.5))));
+  CHECK_FALSE(
+      GreenDominant(At(unreached, Vec2(gate.centre[0], gate.centre[1] + gate.width / 2 - 0.5))));
 }

@@ -23,7 +23,9 @@ inline std::string FormToken(const std::string& page) {
 
 class ConsoleClient {
  public:
-  ConsoleClient(const std::string& host, int port) : client_(host, port) { client_.set_read_timeout(20, 0); }
+  ConsoleClient(const std::string& host, int port) : client_(host, port) {
+    client_.set_read_timeout(20, 0);
+  }
 
   httplib::Result Get(const std::string& path) { return client_.Get(path); }
   /// A form post as the page sends it: with the form token.

@@ -22,7 +22,11 @@ int main(int argc, char** argv) {
   std::filesystem::create_directories(dir);
   StudyConfig config;
   config.file = dir / "browser.yaml";
-  { std::FILE* f = std::fopen(config.file.c_str(), "w"); std::fputs("name: browser\n", f); std::fclose(f); }
+  {
+    std::FILE* f = std::fopen(config.file.c_str(), "w");
+    std::fputs("name: browser\n", f);
+    std::fclose(f);
+  }
   config.name = "browser";
   config.conditions = {{"cockpit", "cockpit"}, {"gesture", "gesture"}};
   config.participants = {{"A", ""}};

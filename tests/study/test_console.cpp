@@ -4,19 +4,18 @@
 #include <httplib.h>
 
 #include <atomic>
+#include <catch2/catch.hpp>
 #include <chrono>
 #include <fstream>
 #include <iterator>
 #include <thread>
 
-#include <catch2/catch.hpp>
-
+#include "console_client.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/record/recorder.hpp"
 #include "haptel/study/console.hpp"
 #include "haptel/study/report.hpp"
 #include "haptel/study/submission.hpp"
-#include "console_client.hpp"
 #include "study_test_run.hpp"
 #include "test_env.hpp"
 
@@ -26,8 +25,8 @@ using namespace haptel::study;
 namespace {
 
 /// A study file of the test's own in `dir`, named `name`-study.
-StudyConfig SmallStudy(const std::filesystem::path& dir, const std::string& name, const std::string& operators,
-                       std::vector<StudyCondition> conditions) {
+StudyConfig SmallStudy(const std::filesystem::path& dir, const std::string& name,
+                       const std::string& operators, std::vector<StudyCondition> conditions) {
   StudyConfig config;
   config.file = dir / (name + ".yaml");
   test::WriteFile(config.file, "name: " + name + "\n");
@@ -62,7 +61,8 @@ TEST_CASE("The console serves the schedule and forms, and takes each questionnai
   }
   const std::filesystem::path shipped = ShippedFile("config/questionnaires");
   const std::map<std::string, Questionnaire> questionnaires = {
-      {"thesis", FindQuestionnaire(shipped, "thesis")}, {"rating", FindQuestionnaire(shipped, "rating")}};
+      {"thesis", FindQuestionnaire(shipped, "thesis")},
+      {"rating", FindQuestionnaire(shipped, "rating")}};
   ConsoleOptions options;
   options.port = 0;  // any free port
   StudyConsole console(config, plan, db, questionnaires, options);
@@ -75,7 +75,8 @@ TEST_CASE("The console serves the schedule and forms, and takes each questionnai
   CHECK(schedule->body.find("1 of 2 trials done") != std::string::npos);
   CHECK(schedule->body.find("21.50 s") != std::string::npos);
   CHECK(schedule->body.find("participant A, cockpit: lap 3.2 s") != std::string::npos);
-  CHECK(schedule->body.find("/questionnaire?participant=A&amp;condition=gesture&amp;name=thesis") != std::string::npos);
+  CHECK(schedule->body.find("/questionnaire?participant=A&amp;condition=gesture&amp;name=thesis") !=
+        std::string::npos);
 
   const auto form = client.Get("/questionnaire?participant=A&condition=gesture&name=thesis");
   REQUIRE(form);
@@ -83,8 +84,9 @@ TEST_CASE("The console serves the schedule and forms, and takes each questionnai
   CHECK(form->body.find("name=\"easy_to_learn\" value=\"5\"") != std::string::npos);
   CHECK(form->body.find("<textarea name=\"remarks\"") != std::string::npos);
 
-  const httplib::Params good = {{"participant", "A"}, {"condition", "gesture"}, {"questionnaire", "thesis"},
-                                {"easy_to_learn", "4"}, {"efficient", "5"}, {"remarks", "fine"}};
+  const httplib::Params good = {{"participant", "A"},        {"condition", "gesture"},
+                                {"questionnaire", "thesis"}, {"easy_to_learn", "4"},
+                                {"efficient", "5"},          {"remarks", "fine"}};
   const auto first = client.Post("/answers", good);
   REQUIRE(first);
   CHECK(first->status == 200);
@@ -93,22 +95,29 @@ TEST_CASE("The console serves the schedule and forms, and takes each questionnai
   CHECK(twice->status == 409);
   CHECK(twice->body.find("already answered") != std::string::npos);
 
-  const auto incomplete = client.Post("/answers", httplib::Params{{"participant", "A"}, {"condition", "gesture"},
-                                                   {"questionnaire", "rating"}, {"rating", "5"}});
+  const auto incomplete = client.Post("/answers", httplib::Params{{"participant", "A"},
+                                                                  {"condition", "gesture"},
+                                                                  {"questionnaire", "rating"},
+                                                                  {"rating", "5"}});
   REQUIRE(incomplete);
   CHECK(incomplete->status == 422);
-  const auto early = client.Post("/answers", httplib::Params{{"participant", "A"}, {"condition", "cockpit"},
-                                              {"questionnaire", "thesis"}, {"easy_to_learn", "4"},
-                                              {"efficient", "5"}});
+  const auto early = client.Post("/answers", httplib::Params{{"participant", "A"},
+                                                             {"condition", "cockpit"},
+                                                             {"questionnaire", "thesis"},
+                                                             {"easy_to_learn", "4"},
+                                                             {"efficient", "5"}});
   REQUIRE(early);
   CHECK(early->status == 409);
   CHECK(early->body.find("has not finished condition cockpit") != std::string::npos);
 
   // The rating tree as the form sends it: a yes/no per question, then the rating.
-  const auto rating = client.Post("/answers", httplib::Params{{"participant", "A"}, {"condition", "gesture"},
-                                               {"questionnaire", "rating"}, {"rating.node.controllable", "yes"},
-                                               {"rating.node.adequate", "yes"}, {"rating.node.satisfactory", "no"},
-                                               {"rating", "5"}});
+  const auto rating = client.Post("/answers", httplib::Params{{"participant", "A"},
+                                                              {"condition", "gesture"},
+                                                              {"questionnaire", "rating"},
+                                                              {"rating.node.controllable", "yes"},
+                                                              {"rating.node.adequate", "yes"},
+                                                              {"rating.node.satisfactory", "no"},
+                                                              {"rating", "5"}});
   REQUIRE(rating);
   CHECK(rating->status == 200);
 
@@ -141,8 +150,9 @@ TEST_CASE("The console serves the schedule and forms, and takes each questionnai
   // A second console on the same port: a clear error naming it.
   ConsoleOptions taken;
   taken.port = console.port();
-  CHECK_THROWS_WITH(StudyConsole(config, plan, db, questionnaires, taken),
-                    Catch::Contains("127.0.0.1:" + std::to_string(console.port())) && Catch::Contains("in use"));
+  CHECK_THROWS_WITH(
+      StudyConsole(config, plan, db, questionnaires, taken),
+      Catch::Contains("127.0.0.1:" + std::to_string(console.port())) && Catch::Contains("in use"));
   // ... refused before it wrote anything: a study whose console cannot
   // listen has no plan in its database (it was written first, and then refused).
   const auto untouched = dir / "untouched.db";
@@ -153,7 +163,8 @@ TEST_CASE("The console serves the schedule and forms, and takes each questionnai
 
 TEST_CASE("The console adds participants to an open study, each once, and finishes it on request") {
   const auto dir = test::ScratchDir("study-console-open");
-  StudyConfig config = SmallStudy(dir, "open", "person", {{"cockpit", "cockpit"}, {"gesture", "gesture"}});
+  StudyConfig config =
+      SmallStudy(dir, "open", "person", {{"cockpit", "cockpit"}, {"gesture", "gesture"}});
   const auto db = dir / "open.db";
   ConsoleOptions options;
   options.port = 0;
@@ -174,7 +185,8 @@ TEST_CASE("The console adds participants to an open study, each once, and finish
   const auto page = client.Get("/");
   REQUIRE(page);
   // Two conditions: Williams' square has two rows, so a block is two people.
-  CHECK(page->body.find("1 participant; the balanced Latin square is balanced over blocks of 2: add 1 more") !=
+  CHECK(page->body.find(
+            "1 participant; the balanced Latin square is balanced over blocks of 2: add 1 more") !=
         std::string::npos);
   CHECK(client.Post("/participants", httplib::Params{{"id", "P2"}})->status == 303);
 
@@ -189,7 +201,8 @@ TEST_CASE("The console adds participants to an open study, each once, and finish
 
   // Finish only while nothing is left to run.
   CHECK(client.Post("/finish")->status == 409);
-  for (const PlannedTrial& t : plan) recorder.Save(test::TrialRun(30.0), store.TrialWriter(t, 600.0));
+  for (const PlannedTrial& t : plan)
+    recorder.Save(test::TrialRun(30.0), store.TrialWriter(t, 600.0));
   std::atomic<bool> stop{false};
   std::thread press([&] {
     for (int i = 0; i < 500; ++i) {
@@ -248,9 +261,12 @@ TEST_CASE("Simulated drivers come from the study file, not the console") {
   CHECK(added->body.find("study file") != std::string::npos);
 }
 
-TEST_CASE("The experimenter's notes: on a trial or the one under way, stored, exported escaped, refused with a reason") {
+TEST_CASE(
+    "The experimenter's notes: on a trial or the one under way, stored, exported escaped, refused "
+    "with a reason") {
   const auto dir = test::ScratchDir("study-console-notes");
-  StudyConfig config = SmallStudy(dir, "notes", "person", {{"cockpit", "cockpit"}, {"gesture", "gesture"}});
+  StudyConfig config =
+      SmallStudy(dir, "notes", "person", {{"cockpit", "cockpit"}, {"gesture", "gesture"}});
   config.participants = {{"A", ""}};
   const std::vector<PlannedTrial> plan = {{"A", 1, "gesture", 1}, {"A", 2, "cockpit", 1}};
   const auto db = dir / "notes.db";
@@ -266,36 +282,46 @@ TEST_CASE("The experimenter's notes: on a trial or the one under way, stored, ex
   CHECK(page->body.find("action=\"/notes\"") != std::string::npos);
   CHECK(page->body.find("id=\"live-note\"") != std::string::npos);
 
-  const auto noted = client.Post("/notes", {{"participant", "A"}, {"position", "1"},
+  const auto noted = client.Post("/notes", {{"participant", "A"},
+                                            {"position", "1"},
                                             {"text", "  looked at the hands, not the screen  "}});
   REQUIRE(noted);
   CHECK(noted->status == 303);
   // A remark a spreadsheet would run as a formula, on the participant as a whole.
-  CHECK(client.Post("/notes", {{"participant", "A"}, {"position", "0"}, {"text", "=HYPERLINK(\"x\")"}})->status == 303);
+  CHECK(
+      client
+          .Post("/notes", {{"participant", "A"}, {"position", "0"}, {"text", "=HYPERLINK(\"x\")"}})
+          ->status == 303);
   // Characters, not bytes: 2000 CJK characters (6000 bytes, 18000 url-encoded) fit; 2001 do not.
   std::string cjk;
   for (int i = 0; i < kMaxNoteCharacters; ++i) cjk += "\xE6\xBC\xA2";
-  CHECK(client.Post("/notes", {{"participant", "A"}, {"position", "2"}, {"text", cjk}})->status == 303);
-  const auto long_note = client.Post("/notes", {{"participant", "A"}, {"position", "2"}, {"text", cjk + "x"}});
+  CHECK(client.Post("/notes", {{"participant", "A"}, {"position", "2"}, {"text", cjk}})->status ==
+        303);
+  const auto long_note =
+      client.Post("/notes", {{"participant", "A"}, {"position", "2"}, {"text", cjk + "x"}});
   REQUIRE(long_note);
   CHECK(long_note->status == 422);
   CHECK(long_note->body.find("at most 2000 characters, this one has 2001") != std::string::npos);
-  const auto empty = client.Post("/notes", {{"participant", "A"}, {"position", "1"}, {"text", "  "}});
+  const auto empty =
+      client.Post("/notes", {{"participant", "A"}, {"position", "1"}, {"text", "  "}});
   REQUIRE(empty);
   CHECK(empty->status == 422);
   CHECK(empty->body.find("the note is empty") != std::string::npos);
-  const auto nowhere = client.Post("/notes", {{"participant", "A"}, {"position", "7"}, {"text", "x"}});
+  const auto nowhere =
+      client.Post("/notes", {{"participant", "A"}, {"position", "7"}, {"text", "x"}});
   REQUIRE(nowhere);
   CHECK(nowhere->status == 400);
   CHECK(nowhere->body.find("no trial at position &#39;7&#39;") != std::string::npos);
-  CHECK(client.Post("/notes", {{"participant", "Z"}, {"position", "1"}, {"text", "x"}})->status == 400);
+  CHECK(client.Post("/notes", {{"participant", "Z"}, {"position", "1"}, {"text", "x"}})->status ==
+        400);
   // Another site's form, or one without the console's token: refused, nothing stored.
-  const httplib::Params forged = {{"participant", "A"}, {"position", "1"}, {"text", "forged"}, {"csrf", client.token()}};
+  const httplib::Params forged = {
+      {"participant", "A"}, {"position", "1"}, {"text", "forged"}, {"csrf", client.token()}};
   const auto cross = client.raw().Post("/notes", {{"Origin", "http://evil.example"}}, forged);
   REQUIRE(cross);
   CHECK(cross->status == 403);
-  const auto tokenless =
-      client.raw().Post("/notes", httplib::Params{{"participant", "A"}, {"position", "1"}, {"text", "forged"}});
+  const auto tokenless = client.raw().Post(
+      "/notes", httplib::Params{{"participant", "A"}, {"position", "1"}, {"text", "forged"}});
   REQUIRE(tokenless);
   CHECK(tokenless->status == 403);
 
@@ -323,7 +349,8 @@ TEST_CASE("The experimenter's notes: on a trial or the one under way, stored, ex
   REQUIRE(results.notes.size() == 3);
   CHECK(results.notes[0].condition == "gesture");
   const StudyReport report = ComputeReport(results, PostHocMethod::kNemenyi);
-  CHECK(FormatReport(results, report).find("A, gesture (position 1): looked at the hands") != std::string::npos);
+  CHECK(FormatReport(results, report).find("A, gesture (position 1): looked at the hands") !=
+        std::string::npos);
   const ReportFiles files = WriteReport(results, report, dir / "report");
   const std::string csv = ReadText(files.notes_csv);
   CHECK(csv.rfind("study,participant,position,condition,noted_utc,text\n", 0) == 0);
@@ -333,18 +360,24 @@ TEST_CASE("The experimenter's notes: on a trial or the one under way, stored, ex
   CHECK(ReadText(files.html).find("looked at the hands, not the screen") != std::string::npos);
 }
 
-TEST_CASE("The participants' background: asked once before the first trial, stored with no condition, exported") {
+TEST_CASE(
+    "The participants' background: asked once before the first trial, stored with no condition, "
+    "exported") {
   const auto dir = test::ScratchDir("study-console-demographics");
-  StudyConfig config = SmallStudy(dir, "background", "person", {{"cockpit", "cockpit"}, {"gesture", "gesture"}});
+  StudyConfig config =
+      SmallStudy(dir, "background", "person", {{"cockpit", "cockpit"}, {"gesture", "gesture"}});
   config.participants = {{"A", ""}, {"B", ""}};
   config.questionnaires = {"thesis"};
   config.demographics = "demographics";
-  const std::vector<PlannedTrial> plan = {
-      {"A", 1, "gesture", 1}, {"A", 2, "cockpit", 1}, {"B", 1, "cockpit", 1}, {"B", 2, "gesture", 1}};
+  const std::vector<PlannedTrial> plan = {{"A", 1, "gesture", 1},
+                                          {"A", 2, "cockpit", 1},
+                                          {"B", 1, "cockpit", 1},
+                                          {"B", 2, "gesture", 1}};
   const auto db = dir / "background.db";
   const std::filesystem::path shipped = ShippedFile("config/questionnaires");
   const std::map<std::string, Questionnaire> questionnaires = {
-      {"thesis", FindQuestionnaire(shipped, "thesis")}, {"demographics", FindQuestionnaire(shipped, "demographics")}};
+      {"thesis", FindQuestionnaire(shipped, "thesis")},
+      {"demographics", FindQuestionnaire(shipped, "demographics")}};
   ConsoleOptions options;
   options.port = 0;
   StudyConsole console(config, plan, db, questionnaires, options);
@@ -353,16 +386,24 @@ TEST_CASE("The participants' background: asked once before the first trial, stor
   // Before any trial: each participant's first row links to the form.
   const auto schedule = client.Get("/");
   REQUIRE(schedule);
-  CHECK(schedule->body.find("/questionnaire?participant=A&amp;condition=&amp;name=demographics") != std::string::npos);
-  CHECK(schedule->body.find("/questionnaire?participant=B&amp;condition=&amp;name=demographics") != std::string::npos);
+  CHECK(schedule->body.find("/questionnaire?participant=A&amp;condition=&amp;name=demographics") !=
+        std::string::npos);
+  CHECK(schedule->body.find("/questionnaire?participant=B&amp;condition=&amp;name=demographics") !=
+        std::string::npos);
   const auto form = client.Get("/questionnaire?participant=A&condition=&name=demographics");
   REQUIRE(form);
   CHECK(form->body.find("before their first trial") != std::string::npos);
   CHECK(form->body.find("value=\"prefer-not-to-say\"") != std::string::npos);
 
-  httplib::Params answers = {{"participant", "A"},       {"condition", ""},           {"questionnaire", "demographics"},
-                             {"age_band", "25-34"},      {"gender", "self-described"}, {"gender_description", "=agender"},
-                             {"handedness", "left"},     {"video_games", "weekly"},   {"driving", "no-licence"},
+  httplib::Params answers = {{"participant", "A"},
+                             {"condition", ""},
+                             {"questionnaire", "demographics"},
+                             {"age_band", "25-34"},
+                             {"gender", "self-described"},
+                             {"gender_description", "=agender"},
+                             {"handedness", "left"},
+                             {"video_games", "weekly"},
+                             {"driving", "no-licence"},
                              {"haptic_devices", "never"}};
   const auto first = client.Post("/answers", answers);
   REQUIRE(first);
@@ -378,18 +419,30 @@ TEST_CASE("The participants' background: asked once before the first trial, stor
   REQUIRE(after);
   CHECK(after->status == 400);
   CHECK(after->body.find("before their first trial") != std::string::npos);
-  const auto thesis = client.Post("/answers", {{"participant", "B"}, {"condition", ""}, {"questionnaire", "thesis"},
-                                               {"easy_to_learn", "4"}, {"efficient", "4"}});
+  const auto thesis = client.Post("/answers", {{"participant", "B"},
+                                               {"condition", ""},
+                                               {"questionnaire", "thesis"},
+                                               {"easy_to_learn", "4"},
+                                               {"efficient", "4"}});
   REQUIRE(thesis);
   CHECK(thesis->status == 400);
   // A missing choice is refused like any questionnaire's.
-  const auto incomplete = client.Post("/answers", {{"participant", "B"}, {"condition", ""},
-                                                   {"questionnaire", "demographics"}, {"age_band", "18-24"}});
+  const auto incomplete = client.Post("/answers", {{"participant", "B"},
+                                                   {"condition", ""},
+                                                   {"questionnaire", "demographics"},
+                                                   {"age_band", "18-24"}});
   REQUIRE(incomplete);
   CHECK(incomplete->status == 422);
-  CHECK(client.Post("/answers", {{"participant", "B"}, {"condition", ""}, {"questionnaire", "demographics"},
-                                 {"age_band", "18-24"}, {"gender", "prefer-not-to-say"}, {"handedness", "right"},
-                                 {"video_games", "never"}, {"driving", "daily"}, {"haptic_devices", "regularly"}})
+  CHECK(client
+            .Post("/answers", {{"participant", "B"},
+                               {"condition", ""},
+                               {"questionnaire", "demographics"},
+                               {"age_band", "18-24"},
+                               {"gender", "prefer-not-to-say"},
+                               {"handedness", "right"},
+                               {"video_games", "never"},
+                               {"driving", "daily"},
+                               {"haptic_devices", "regularly"}})
             ->status == 200);
   const auto done = client.Get("/");
   REQUIRE(done);
@@ -404,23 +457,31 @@ TEST_CASE("The participants' background: asked once before the first trial, stor
   }
   CHECK(background == 13);  // A: 7 items; B: 6 (no description)
   const StudyReport report = ComputeReport(results, PostHocMethod::kNemenyi);
-  CHECK(FormatReport(results, report).find("demographics.age_band: 25-34 1, 18-24 1") != std::string::npos);
+  CHECK(FormatReport(results, report).find("demographics.age_band: 25-34 1, 18-24 1") !=
+        std::string::npos);
   const ReportFiles files = WriteReport(results, report, dir / "report");
   const std::string csv = ReadText(files.demographics_csv);
-  CHECK(csv.rfind("study,participant,age_band,gender,gender_description,handedness,video_games,driving,"
-                  "haptic_devices\n",
-                  0) == 0);
-  CHECK(csv.find("background-study,A,25-34,self-described,\"'=agender\",left,weekly,no-licence,never\n") !=
+  CHECK(csv.rfind(
+            "study,participant,age_band,gender,gender_description,handedness,video_games,driving,"
+            "haptic_devices\n",
+            0) == 0);
+  CHECK(
+      csv.find(
+          "background-study,A,25-34,self-described,\"'=agender\",left,weekly,no-licence,never\n") !=
+      std::string::npos);
+  CHECK(csv.find("background-study,B,18-24,prefer-not-to-say,,right,never,daily,regularly\n") !=
         std::string::npos);
-  CHECK(csv.find("background-study,B,18-24,prefer-not-to-say,,right,never,daily,regularly\n") != std::string::npos);
-  CHECK(ReadText(files.answers_csv).find("background-study,A,,demographics,age_band,25-34") != std::string::npos);
+  CHECK(ReadText(files.answers_csv).find("background-study,A,,demographics,age_band,25-34") !=
+        std::string::npos);
   // Not a remark about an interface.
   CHECK(ReadText(files.html).find("<h2>Remarks</h2>") == std::string::npos);
 }
 
-TEST_CASE("A flagged trial is marked on the schedule with its flags; its redo keeps it as superseded") {
+TEST_CASE(
+    "A flagged trial is marked on the schedule with its flags; its redo keeps it as superseded") {
   const auto dir = test::ScratchDir("study-console-flagged");
-  StudyConfig config = SmallStudy(dir, "flagged", "person", {{"cockpit", "cockpit"}, {"gesture", "gesture"}});
+  StudyConfig config =
+      SmallStudy(dir, "flagged", "person", {{"cockpit", "cockpit"}, {"gesture", "gesture"}});
   config.participants = {{"A", ""}};
   const std::vector<PlannedTrial> plan = {{"A", 1, "gesture", 1}, {"A", 2, "cockpit", 1}};
   const auto db = dir / "flagged.db";
@@ -462,6 +523,8 @@ TEST_CASE("A flagged trial is marked on the schedule with its flags; its redo ke
   const StudyReport report = ComputeReport(results, PostHocMethod::kNemenyi);
   CHECK(report.conditions[1].total_lap_time_s == 22.0);  // gesture: the second attempt
   const std::string text = FormatReport(results, report);
-  CHECK(text.find("superseded trials (run again; only the latest attempt is counted)") != std::string::npos);
-  CHECK(text.find("A, gesture (position 1, attempt 1, run 1): 25.00 s; from the console") != std::string::npos);
+  CHECK(text.find("superseded trials (run again; only the latest attempt is counted)") !=
+        std::string::npos);
+  CHECK(text.find("A, gesture (position 1, attempt 1, run 1): 25.00 s; from the console") !=
+        std::string::npos);
 }

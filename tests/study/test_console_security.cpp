@@ -10,12 +10,11 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <catch2/catch.hpp>
 #include <chrono>
 #include <cstdlib>
 #include <thread>
 #include <vector>
-
-#include <catch2/catch.hpp>
 
 #include "console_client.hpp"
 #include "haptel/config/paths.hpp"
@@ -46,7 +45,8 @@ struct Study {
     config.conditions = {{"cockpit", "cockpit"}, {"gesture", "gesture"}};
     config.participants = {{"A", ""}};
     config.questionnaires = {"thesis"};
-    questionnaires = {{"thesis", FindQuestionnaire(ShippedFile("config/questionnaires"), "thesis")}};
+    questionnaires = {
+        {"thesis", FindQuestionnaire(ShippedFile("config/questionnaires"), "thesis")}};
     record::Recorder recorder(db);
     StudyStore store(recorder, config, plan);
     recorder.Save(test::TrialRun(21.5), store.TrialWriter(plan[0], 600.0));
@@ -105,19 +105,22 @@ TEST_CASE("A page of another site, or a forged Host, neither changes the study n
     REQUIRE(null_origin);
     CHECK(null_origin->status == 403);
     // A browser that sends neither header: the form token stops it.
-    const auto no_token = page.raw().Post("/redo", httplib::Params{{"participant", "A"}, {"position", "1"}});
+    const auto no_token =
+        page.raw().Post("/redo", httplib::Params{{"participant", "A"}, {"position", "1"}});
     REQUIRE(no_token);
     CHECK(no_token->status == 403);
     CHECK(no_token->body.find("not one this console served") != std::string::npos);
     const auto wrong_token = page.raw().Post(
-        "/redo", httplib::Params{{"participant", "A"}, {"position", "1"}, {"csrf", std::string(32, '0')}});
+        "/redo",
+        httplib::Params{{"participant", "A"}, {"position", "1"}, {"csrf", std::string(32, '0')}});
     REQUIRE(wrong_token);
     CHECK(wrong_token->status == 403);
     const auto add = page.raw().Post("/participants", {{"Origin", "http://evil.example"}},
                                      httplib::Params{{"id", "P9"}, {"csrf", token}});
     REQUIRE(add);
     CHECK(add->status == 403);
-    const auto abort = page.raw().Post("/abort", {{"Sec-Fetch-Site", "same-site"}}, httplib::Params{{"csrf", token}});
+    const auto abort = page.raw().Post("/abort", {{"Sec-Fetch-Site", "same-site"}},
+                                       httplib::Params{{"csrf", token}});
     REQUIRE(abort);
     CHECK(abort->status == 403);
     CHECK(study.Trials() == 1);
@@ -126,21 +129,24 @@ TEST_CASE("A page of another site, or a forged Host, neither changes the study n
     CHECK(console.connection_counters().refused_requests >= 7);
 
     // The console's own page, as the browser sends it, does what it says.
-    const auto same = page.raw().Post("/redo", {{"Origin", own}, {"Sec-Fetch-Site", "same-origin"}}, redo);
+    const auto same =
+        page.raw().Post("/redo", {{"Origin", own}, {"Sec-Fetch-Site", "same-origin"}}, redo);
     REQUIRE(same);
     CHECK(same->status == 303);
     CHECK(study.Trials() == 0);
   }
 
   SECTION("another Host is refused: a rebound DNS name reads neither the schedule nor the camera") {
-    for (const std::string path : {"/", "/video.jpg", "/status.json", "/questionnaire?name=thesis"}) {
-      const std::string answer =
-          Exchange(console.port(), "GET " + path + " HTTP/1.1\r\nHost: evil.example:" +
-                                       std::to_string(console.port()) + "\r\nConnection: close\r\n\r\n");
+    for (const std::string path :
+         {"/", "/video.jpg", "/status.json", "/questionnaire?name=thesis"}) {
+      const std::string answer = Exchange(
+          console.port(), "GET " + path + " HTTP/1.1\r\nHost: evil.example:" +
+                              std::to_string(console.port()) + "\r\nConnection: close\r\n\r\n");
       CAPTURE(path, answer.substr(0, 200));
       CHECK(StatusLine(answer) == "HTTP/1.1 403 Forbidden");
       CHECK(answer.find("does not answer to Host") != std::string::npos);
-      CHECK(answer.find("console-cross-site") == std::string::npos);  // the study's name is not in it
+      CHECK(answer.find("console-cross-site") ==
+            std::string::npos);  // the study's name is not in it
       CHECK(answer.find("\xFF\xD8") == std::string::npos);
     }
     const std::string nameless = Exchange(console.port(), "GET / HTTP/1.0\r\n\r\n");
@@ -166,23 +172,25 @@ TEST_CASE("Bodies are bounded before they are read, and the limits count charact
   const std::string host = "Host: 127.0.0.1:" + std::to_string(console.port()) + "\r\n";
 
   SECTION("a 1 GiB form is refused from its head, with a reason, without its body being sent") {
-    const std::string answer =
-        Exchange(console.port(), "POST /answers HTTP/1.1\r\n" + host +
-                                     "Content-Type: application/x-www-form-urlencoded\r\n"
-                                     "Content-Length: 1073741824\r\nConnection: close\r\n\r\nparticipant=A");
+    const std::string answer = Exchange(
+        console.port(), "POST /answers HTTP/1.1\r\n" + host +
+                            "Content-Type: application/x-www-form-urlencoded\r\n"
+                            "Content-Length: 1073741824\r\nConnection: close\r\n\r\nparticipant=A");
     CHECK(StatusLine(answer) == "HTTP/1.1 413 Payload Too Large");
     CHECK(answer.find("the form is 1073741824 bytes") != std::string::npos);
-    const std::string other = Exchange(console.port(), "POST /participants HTTP/1.1\r\n" + host +
-                                                           "Content-Type: application/x-www-form-urlencoded\r\n"
-                                                           "Content-Length: 100000\r\nConnection: close\r\n\r\nid=");
+    const std::string other =
+        Exchange(console.port(), "POST /participants HTTP/1.1\r\n" + host +
+                                     "Content-Type: application/x-www-form-urlencoded\r\n"
+                                     "Content-Length: 100000\r\nConnection: close\r\n\r\nid=");
     CHECK(StatusLine(other) == "HTTP/1.1 413 Payload Too Large");
   }
 
   SECTION("a chunked body with no length stops at the limit") {
     const std::string chunk(60000, 'x');
-    std::string request = "POST /answers HTTP/1.1\r\n" + host +
-                          "Content-Type: application/x-www-form-urlencoded\r\nTransfer-Encoding: chunked\r\n"
-                          "Connection: close\r\n\r\n";
+    std::string request =
+        "POST /answers HTTP/1.1\r\n" + host +
+        "Content-Type: application/x-www-form-urlencoded\r\nTransfer-Encoding: chunked\r\n"
+        "Connection: close\r\n\r\n";
     char size[32];
     std::snprintf(size, sizeof size, "%zx\r\n", chunk.size());
     for (int i = 0; i < 20; ++i) request += size + chunk + "\r\n";
@@ -192,7 +200,8 @@ TEST_CASE("Bodies are bounded before they are read, and the limits count charact
     CHECK(study.Answers() == 0);
   }
 
-  SECTION("a chunked body, or one with no length, to a short form's route is refused from its head") {
+  SECTION(
+      "a chunked body, or one with no length, to a short form's route is refused from its head") {
     // 256 kB of chunks, with no last chunk: a console that reads the body
     // takes them all and waits for more (the attack's 1 GiB was read whole).
     std::string chunks;
@@ -203,23 +212,28 @@ TEST_CASE("Bodies are bounded before they are read, and the limits count charact
       const std::string head = std::string("POST ") + path + " HTTP/1.1\r\n" + host +
                                "Content-Type: application/x-www-form-urlencoded\r\n";
       const std::string chunked =
-          Exchange(console.port(), head + "Transfer-Encoding: chunked\r\nConnection: close\r\n\r\n" + chunks);
+          Exchange(console.port(),
+                   head + "Transfer-Encoding: chunked\r\nConnection: close\r\n\r\n" + chunks);
       CHECK(StatusLine(chunked) == "HTTP/1.1 411 Length Required");
       CHECK(chunked.find("Content-Length") != std::string::npos);
       // Both headers: the library would read the chunks, not the length.
       const std::string both = Exchange(
-          console.port(), head + "Content-Length: 10\r\nTransfer-Encoding: chunked\r\nConnection: close\r\n\r\n" + chunks);
+          console.port(),
+          head + "Content-Length: 10\r\nTransfer-Encoding: chunked\r\nConnection: close\r\n\r\n" +
+              chunks);
       CHECK(StatusLine(both) == "HTTP/1.1 411 Length Required");
       // No length at all: the library would read until the client closes.
-      const std::string unbounded = Exchange(console.port(), head + "Connection: close\r\n\r\n" + chunk);
+      const std::string unbounded =
+          Exchange(console.port(), head + "Connection: close\r\n\r\n" + chunk);
       CHECK(StatusLine(unbounded) == "HTTP/1.1 411 Length Required");
     }
     CHECK(study.Participants() == 1);
     // The routes that read their form themselves stop a chunked body at their limit.
-    const std::string note = Exchange(console.port(), "POST /notes HTTP/1.1\r\n" + host +
-                                                          "Content-Type: application/x-www-form-urlencoded\r\n"
-                                                          "Transfer-Encoding: chunked\r\nConnection: close\r\n\r\n" +
-                                                          chunks);
+    const std::string note =
+        Exchange(console.port(), "POST /notes HTTP/1.1\r\n" + host +
+                                     "Content-Type: application/x-www-form-urlencoded\r\n"
+                                     "Transfer-Encoding: chunked\r\nConnection: close\r\n\r\n" +
+                                     chunks);
     CHECK(StatusLine(note) == "HTTP/1.1 413 Payload Too Large");
   }
 
@@ -234,12 +248,18 @@ TEST_CASE("Bodies are bounded before they are read, and the limits count charact
     CHECK_FALSE(all_sent);
   }
 
-  SECTION("a remark of 1 000 CJK characters is taken; one past the item's 2 000 characters is refused saying so") {
+  SECTION(
+      "a remark of 1 000 CJK characters is taken; one past the item's 2 000 characters is refused "
+      "saying so") {
     std::string cjk;
-    for (int i = 0; i < 1000; ++i) cjk += "\xE6\xBC\xA2";  // U+6F22, 3 bytes of UTF-8, 9 once url-encoded
-    const auto taken = page.Post("/answers", {{"participant", "A"}, {"condition", "gesture"},
-                                              {"questionnaire", "thesis"}, {"easy_to_learn", "4"},
-                                              {"efficient", "5"}, {"remarks", cjk}});
+    for (int i = 0; i < 1000; ++i)
+      cjk += "\xE6\xBC\xA2";  // U+6F22, 3 bytes of UTF-8, 9 once url-encoded
+    const auto taken = page.Post("/answers", {{"participant", "A"},
+                                              {"condition", "gesture"},
+                                              {"questionnaire", "thesis"},
+                                              {"easy_to_learn", "4"},
+                                              {"efficient", "5"},
+                                              {"remarks", cjk}});
     REQUIRE(taken);
     CHECK(taken->status == 200);
     CHECK(study.Answers() == 3);
@@ -251,8 +271,11 @@ TEST_CASE("Bodies are bounded before they are read, and the limits count charact
     test::ConsoleClient page2("127.0.0.1", second.port());
     std::string widest;
     for (int i = 0; i < 2000; ++i) widest += "\xF0\x9F\x98\x80";  // U+1F600
-    const httplib::Params form = {{"participant", "A"}, {"condition", "gesture"}, {"questionnaire", "thesis"},
-                                  {"easy_to_learn", "4"}, {"efficient", "5"}};
+    const httplib::Params form = {{"participant", "A"},
+                                  {"condition", "gesture"},
+                                  {"questionnaire", "thesis"},
+                                  {"easy_to_learn", "4"},
+                                  {"efficient", "5"}};
     httplib::Params too_long = form;
     too_long.emplace("remarks", widest + "x");
     const auto refused = page2.Post("/answers", too_long);
@@ -329,13 +352,16 @@ TEST_CASE("Slow clients neither stall the console nor hold its connections") {
   CHECK(counters.cut_deadline >= 1);
 }
 
-TEST_CASE("A hundred slow connections, from the experimenter's address and others, do not keep the page from them") {
+TEST_CASE(
+    "A hundred slow connections, from the experimenter's address and others, do not keep the page "
+    "from them") {
   Study study("console-slowloris");
   ConsoleOptions options;  // the defaults: what `haptel study run` serves with
   options.port = 0;
   StudyConsole console(study.config, study.plan, study.db, study.questionnaires, options);
   const int port = console.port();
-  const std::string partial = "GET / HTTP/1.1\r\nHost: 127.0.0.1:" + std::to_string(port) + "\r\nX-Slow: ";
+  const std::string partial =
+      "GET / HTTP/1.1\r\nHost: 127.0.0.1:" + std::to_string(port) + "\r\nX-Slow: ";
 
   // 40 from 127.0.0.1 (the experimenter's own address), 3 from each of
   // 127.0.0.2..21; every other one dribbles a partial request a byte at a
@@ -348,7 +374,8 @@ TEST_CASE("A hundred slow connections, from the experimenter's address and other
   };
   std::vector<Slow> slow;
   for (int i = 0; i < 100; ++i) {
-    slow.push_back({i < 40 ? "127.0.0.1" : "127.0.0." + std::to_string(2 + (i - 40) / 3), i % 2 == 0});
+    slow.push_back(
+        {i < 40 ? "127.0.0.1" : "127.0.0." + std::to_string(2 + (i - 40) / 3), i % 2 == 0});
   }
   std::atomic<bool> stop{false};
   std::atomic<int> opened{0};
@@ -390,7 +417,8 @@ TEST_CASE("A hundred slow connections, from the experimenter's address and other
     REQUIRE(fd >= 0);
     timeval wait{10, 0};
     setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &wait, sizeof wait);
-    test::SendAll(fd, "GET / HTTP/1.1\r\nHost: 127.0.0.1:" + std::to_string(port) + "\r\nConnection: close\r\n\r\n");
+    test::SendAll(fd, "GET / HTTP/1.1\r\nHost: 127.0.0.1:" + std::to_string(port) +
+                          "\r\nConnection: close\r\n\r\n");
     const std::string answer = test::ReadUntilClosed(fd);
     close(fd);
     CHECK(StatusLine(answer) == "HTTP/1.1 200 OK");
@@ -424,13 +452,16 @@ TEST_CASE("Beyond loopback the console asks once for its access token") {
     CHECK(std::find(urls.begin(), urls.end(), loopback) != urls.end());
     for (const std::string& url : urls) CHECK(url.find("0.0.0.0") == std::string::npos);
     // Bound to one address, that address.
-    CHECK(ConsoleUrls("127.0.0.1", 8470, false, {}) == std::vector<std::string>{"http://127.0.0.1:8470/"});
-    CHECK(ConsoleUrls("0.0.0.0", 8470, true, {"console.test"}) == std::vector<std::string>{"https://console.test:8470/"});
+    CHECK(ConsoleUrls("127.0.0.1", 8470, false, {}) ==
+          std::vector<std::string>{"http://127.0.0.1:8470/"});
+    CHECK(ConsoleUrls("0.0.0.0", 8470, true, {"console.test"}) ==
+          std::vector<std::string>{"https://console.test:8470/"});
   }
 
   SECTION("without HTTPS it is refused unless plain HTTP is asked for") {
-    CHECK_THROWS_WITH(StudyConsole(study.config, study.plan, study.db, study.questionnaires, options),
-                      Catch::Contains("haptel security init") && Catch::Contains("--plain-http"));
+    CHECK_THROWS_WITH(
+        StudyConsole(study.config, study.plan, study.db, study.questionnaires, options),
+        Catch::Contains("haptel security init") && Catch::Contains("--plain-http"));
   }
 
   SECTION("the page asks for the token, then a cookie holds it") {
@@ -464,18 +495,22 @@ TEST_CASE("Beyond loopback the console asks once for its access token") {
     CHECK(cookie.find("HttpOnly") != std::string::npos);
     CHECK(cookie.find("SameSite=Strict") != std::string::npos);
 
-    const auto schedule = page.raw().Get("/", {{"Cookie", "other=1; haptel_console=" + options.access_token}});
+    const auto schedule =
+        page.raw().Get("/", {{"Cookie", "other=1; haptel_console=" + options.access_token}});
     REQUIRE(schedule);
     CHECK(schedule->status == 200);
     CHECK(schedule->body.find("1 of 2 trials done") != std::string::npos);
   }
 }
 
-TEST_CASE("The console serves HTTPS with the certificate security init makes; its names are the hosts it answers to") {
+TEST_CASE(
+    "The console serves HTTPS with the certificate security init makes; its names are the hosts it "
+    "answers to") {
   const auto dir = test::ScratchDir("console-https") / "sec";
   link::InitSecurity(dir, {}, 2, {"console.test", "127.0.0.1"});
   // Another certificate for the same folder is refused, as are names a certificate cannot hold.
-  CHECK_THROWS_WITH(link::AddConsoleCertificate(dir, {"other.test"}, 2), Catch::Contains("already holds"));
+  CHECK_THROWS_WITH(link::AddConsoleCertificate(dir, {"other.test"}, 2),
+                    Catch::Contains("already holds"));
   CHECK_THROWS_WITH(link::InitSecurity(dir.parent_path() / "bad", {}, 2, {"two words"}),
                     Catch::Contains("console name 'two words'"));
   CHECK_FALSE(std::filesystem::exists(dir.parent_path() / "bad"));

@@ -56,7 +56,9 @@ Outcome Power(const std::vector<std::string>& words) {
   return o;
 }
 
-int Lines(const std::string& text) { return static_cast<int>(std::count(text.begin(), text.end(), '\n')); }
+int Lines(const std::string& text) {
+  return static_cast<int>(std::count(text.begin(), text.end(), '\n'));
+}
 
 const std::string kStudy = haptel::ShippedFile("config/studies/grand-prix-synthetic.yaml").string();
 
@@ -68,7 +70,8 @@ TEST_CASE("haptel study power: bad options are one line and exit 2", "[power]") 
     std::string says;
   };
   const std::vector<Case> cases = {
-      {{kStudy, "--participants", "0"}, "option --participants: expected a comma-separated list of counts from 1"},
+      {{kStudy, "--participants", "0"},
+       "option --participants: expected a comma-separated list of counts from 1"},
       {{kStudy, "--participants", "4,x"}, "option --participants"},
       // The grand prix's balanced Latin square has 4 rows: a balanced draw needs multiples of 4.
       {{kStudy, "--participants", "3"}, "expected multiples of 4"},
@@ -106,14 +109,17 @@ namespace {
 
 /// The command's children (its worker processes), from /proc.
 bool HasChildren(pid_t pid) {
-  std::ifstream children("/proc/" + std::to_string(pid) + "/task/" + std::to_string(pid) + "/children");
+  std::ifstream children("/proc/" + std::to_string(pid) + "/task/" + std::to_string(pid) +
+                         "/children");
   std::string first;
   return static_cast<bool>(children >> first);
 }
 
 }  // namespace
 
-TEST_CASE("haptel study power: a signal during the analysis ends it at once, exit 1, no file written", "[power]") {
+TEST_CASE(
+    "haptel study power: a signal during the analysis ends it at once, exit 1, no file written",
+    "[power]") {
   using namespace haptel;
   // A pool of 8 whose every trial is recorded already, as a finished (or
   // resumed) pool is: the command goes straight to its simulations.
@@ -128,22 +134,25 @@ TEST_CASE("haptel study power: a signal during the analysis ends it at once, exi
     study::StudyStore store(recorder, pool, plan);
     int i = 0;
     for (const study::PlannedTrial& t : plan) {
-      recorder.Save(test::TrialRun(30.0 + 3.0 * t.condition.size() + (i++ % 7)), store.TrialWriter(t, 600.0));
+      recorder.Save(test::TrialRun(30.0 + 3.0 * t.condition.size() + (i++ % 7)),
+                    store.TrialWriter(t, 600.0));
     }
   }
   // A million simulations per count: hours, unless the signal ends them.
   ChildProcess command((test::BinDir() / "haptel").string(),
-                       {"study", "power", kStudy, "--pool", "8", "--simulations", "1000000", "--jobs", "1", "--out",
-                        out.string()},
+                       {"study", "power", kStudy, "--pool", "8", "--simulations", "1000000",
+                        "--jobs", "1", "--out", out.string()},
                        ChildProcess::Options{true});
   // The pool's phase is over once its worker has come and gone.
   bool worker_seen = false;
-  const bool analysing = test::WaitFor([&] {
-    command.Pump();
-    const bool children = HasChildren(command.pid());
-    worker_seen = worker_seen || children;
-    return worker_seen && !children && command.err().find("a pool of 8") != std::string::npos;
-  }, 60.0);
+  const bool analysing = test::WaitFor(
+      [&] {
+        command.Pump();
+        const bool children = HasChildren(command.pid());
+        worker_seen = worker_seen || children;
+        return worker_seen && !children && command.err().find("a pool of 8") != std::string::npos;
+      },
+      60.0);
   INFO(command.err());
   REQUIRE(analysing);
   kill(command.pid(), SIGTERM);

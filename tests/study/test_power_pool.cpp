@@ -20,11 +20,15 @@ using namespace haptel::study;
 namespace {
 
 /// The file's profile a pool profile was varied from: "S07-hasty" -> "hasty".
-std::string ModelOf(const std::string& pool_profile) { return pool_profile.substr(pool_profile.find('-') + 1); }
+std::string ModelOf(const std::string& pool_profile) {
+  return pool_profile.substr(pool_profile.find('-') + 1);
+}
 
 }  // namespace
 
-TEST_CASE("power pool: each order row gets each of the file's profiles alike, in the study's design", "[power]") {
+TEST_CASE(
+    "power pool: each order row gets each of the file's profiles alike, in the study's design",
+    "[power]") {
   const StudyConfig study = LoadStudy(ShippedFile("config/studies/grand-prix-synthetic.yaml"));
   REQUIRE(BlockSize(study) == 4);
   const StudyConfig pool = PowerPoolStudy(study, 32, 4, 1);
@@ -54,7 +58,8 @@ TEST_CASE("power pool: each order row gets each of the file's profiles alike, in
   }
 }
 
-TEST_CASE("power pool: traits vary about 10 % around the profile's, within range, a seed each", "[power]") {
+TEST_CASE("power pool: traits vary about 10 % around the profile's, within range, a seed each",
+          "[power]") {
   const StudyConfig study = LoadStudy(ShippedFile("config/studies/grand-prix-synthetic.yaml"));
   const StudyConfig pool = PowerPoolStudy(study, 200, 4, 7);
   std::set<uint64_t> seeds;
@@ -90,7 +95,8 @@ TEST_CASE("power pool: traits vary about 10 % around the profile's, within range
   CHECK(sd < 0.11);
 }
 
-TEST_CASE("power pool: the same seed gives the same participants, whatever the pool's size", "[power]") {
+TEST_CASE("power pool: the same seed gives the same participants, whatever the pool's size",
+          "[power]") {
   const StudyConfig study = LoadStudy(ShippedFile("config/studies/grand-prix-synthetic.yaml"));
   const StudyConfig small = PowerPoolStudy(study, 8, 4, 3);
   const StudyConfig large = PowerPoolStudy(study, 32, 4, 3);

@@ -23,10 +23,11 @@ namespace {
 const std::vector<std::string> kConditions = {"cockpit", "cockpit-hud", "assisted", "gesture"};
 const std::vector<std::string> kDrivers = {"A", "B", "C", "D", "E"};
 // Tables 8.1–8.4 (B reached the 10-minute cap with both plain cockpits).
-const double kTimes[4][5] = {{210, 600, 245, 320, 310}, {225, 600, 220, 405, 240}, {170, 150, 190, 325, 220},
+const double kTimes[4][5] = {{210, 600, 245, 320, 310},
+                             {225, 600, 220, 405, 240},
+                             {170, 150, 190, 325, 220},
                              {120, 120, 110, 210, 200}};
 const int kObstacles[4][5] = {{1, 5, 1, 1, 1}, {1, 5, 0, 1, 0}, {0, 1, 1, 1, 0}, {0, 1, 1, 0, 0}};
-
 
 std::string Read(const std::filesystem::path& file) {
   std::ifstream in(file);
@@ -36,7 +37,8 @@ std::string Read(const std::filesystem::path& file) {
 }
 
 /// The thesis's study recorded in `db`: every trial, and two answers.
-void RecordThesis(const std::filesystem::path& dir, const std::filesystem::path& db, int drivers = 5) {
+void RecordThesis(const std::filesystem::path& dir, const std::filesystem::path& db,
+                  int drivers = 5) {
   StudyConfig config;
   config.file = dir / "thesis.yaml";
   test::WriteFile(config.file, "name: thesis\n");
@@ -47,21 +49,27 @@ void RecordThesis(const std::filesystem::path& dir, const std::filesystem::path&
   std::vector<PlannedTrial> plan;
   for (int p = 0; p < drivers; ++p) {
     config.participants.push_back({kDrivers[static_cast<size_t>(p)], ""});
-    for (int c = 0; c < 4; ++c) plan.push_back({kDrivers[static_cast<size_t>(p)], c + 1, kConditions[static_cast<size_t>(c)], 1});
+    for (int c = 0; c < 4; ++c)
+      plan.push_back(
+          {kDrivers[static_cast<size_t>(p)], c + 1, kConditions[static_cast<size_t>(c)], 1});
   }
   record::Recorder recorder(db);
   StudyStore store(recorder, config, plan);
   for (const PlannedTrial& t : plan) {
     const size_t c = static_cast<size_t>(t.position - 1);
-    const size_t p = static_cast<size_t>(std::find(kDrivers.begin(), kDrivers.end(), t.participant) - kDrivers.begin());
+    const size_t p = static_cast<size_t>(
+        std::find(kDrivers.begin(), kDrivers.end(), t.participant) - kDrivers.begin());
     const double lap = kTimes[c][p];
-    recorder.Save(test::TrialRun(lap, lap < 600, kObstacles[c][p]), store.TrialWriter(t, config.trial_cap_s));
+    recorder.Save(test::TrialRun(lap, lap < 600, kObstacles[c][p]),
+                  store.TrialWriter(t, config.trial_cap_s));
   }
-  store.SaveAnswers("A", "gesture", "thesis", {{"easy_to_learn", "3"}, {"remarks", "<script>alert(1)</script>, \"odd\""}});
+  store.SaveAnswers("A", "gesture", "thesis",
+                    {{"easy_to_learn", "3"}, {"remarks", "<script>alert(1)</script>, \"odd\""}});
   store.SaveAnswers("A", "gesture", "rating", {{"rating", "2"}, {"score", "2"}});
   // Remarks a spreadsheet would run as formulas, and a negative number it must not touch.
   store.SaveAnswers("B", "gesture", "thesis",
-                    {{"remarks", "=HYPERLINK(\"http://x.example\",\"see\")"}, {"efficient", "@SUM(1)"},
+                    {{"remarks", "=HYPERLINK(\"http://x.example\",\"see\")"},
+                     {"efficient", "@SUM(1)"},
                      {"easy_to_learn", "-2"}});
 }
 
@@ -96,7 +104,8 @@ TEST_CASE("The report on the thesis's data gives its tables, ranks and statistic
   // The statistics equal SciPy's for this data (tests/study/stats: friedmanchisquare).
   REQUIRE(report.analysis);
   CHECK(report.analysis->friedman.chi_square == Approx(12.183673469387752).epsilon(1e-12));
-  CHECK(report.analysis->friedman.p_value_asymptotic == Approx(0.0067797401305199397).epsilon(1e-9));
+  CHECK(report.analysis->friedman.p_value_asymptotic ==
+        Approx(0.0067797401305199397).epsilon(1e-9));
   // 5 participants, 4 conditions: the exact p (9168 of 24^5 orderings; tests/study/stats).
   CHECK(report.analysis->friedman.p_exact);
   CHECK(report.analysis->friedman.p_value == Approx(9168.0 / 7962624.0).epsilon(1e-9));
@@ -106,15 +115,19 @@ TEST_CASE("The report on the thesis's data gives its tables, ranks and statistic
   // The files.
   const ReportFiles files = WriteReport(results, report, dir / "out");
   const std::string trials = Read(files.trials_csv);
-  CHECK(trials.rfind("study,participant,condition,position,lap_time_s,approach_s,completed,obstacles", 0) == 0);
+  CHECK(trials.rfind(
+            "study,participant,condition,position,lap_time_s,approach_s,completed,obstacles", 0) ==
+        0);
   CHECK(trials.find("\nthesis,B,cockpit,1,600.000,,false,5,") != std::string::npos);
   CHECK(trials.find("\nthesis,E,gesture,4,200.000,,true,0,") != std::string::npos);
   CHECK(std::count(trials.begin(), trials.end(), '\n') == 21);
   const std::string answers = Read(files.answers_csv);
-  CHECK(answers.find("thesis,A,gesture,thesis,remarks,\"<script>alert(1)</script>, \"\"odd\"\"\"") != std::string::npos);
+  CHECK(
+      answers.find("thesis,A,gesture,thesis,remarks,\"<script>alert(1)</script>, \"\"odd\"\"\"") !=
+      std::string::npos);
   // Formulas are written as text (after a single quote); numbers as they are.
-  CHECK(answers.find("thesis,B,gesture,thesis,remarks,\"'=HYPERLINK(\"\"http://x.example\"\",\"\"see\"\")\"") !=
-        std::string::npos);
+  CHECK(answers.find("thesis,B,gesture,thesis,remarks,\"'=HYPERLINK(\"\"http://"
+                     "x.example\"\",\"\"see\"\")\"") != std::string::npos);
   CHECK(answers.find("thesis,B,gesture,thesis,efficient,\"'@SUM(1)\"") != std::string::npos);
   CHECK(answers.find("thesis,B,gesture,thesis,easy_to_learn,-2\n") != std::string::npos);
   CHECK(answers.find(",=") == std::string::npos);
@@ -206,6 +219,7 @@ TEST_CASE("The report says what it lacks instead of failing") {
   CHECK(ReportJson(results, report, files).find("\"friedman_chi2\":null") != std::string::npos);
   CHECK(ReportJson(results, report, files).find("\"friedman_p_exact\":null") != std::string::npos);
 
-  CHECK_THROWS_WITH(LoadStudyResults(db, "other"), Catch::Contains("no study 'other'") && Catch::Contains("thesis"));
+  CHECK_THROWS_WITH(LoadStudyResults(db, "other"),
+                    Catch::Contains("no study 'other'") && Catch::Contains("thesis"));
   CHECK_THROWS_WITH(LoadStudyResults(dir / "none.db", "thesis"), Catch::Contains("no such file"));
 }

@@ -32,14 +32,13 @@ struct Lap {
 
 // tests/study/stats/lme4_reference.R's balanced data set.
 const std::vector<Lap> kBalanced = {
-    {1, 0, 1, 113.51}, {1, 1, 2, 100.92}, {1, 3, 3, 48.99}, {1, 2, 4, 74.44},
-    {2, 1, 1, 105.82}, {2, 2, 2, 70.27},  {2, 0, 3, 63.68}, {2, 3, 4, 41.47},
-    {3, 2, 1, 40.29},  {3, 3, 2, 30.67},  {3, 1, 3, 55.06}, {3, 0, 4, 47.46},
-    {4, 3, 1, 29.48},  {4, 0, 2, 37.51},  {4, 2, 3, 39.78}, {4, 1, 4, 45.81},
-    {5, 0, 1, 33.64},  {5, 1, 2, 46.47},  {5, 3, 3, 27.83}, {5, 2, 4, 42.35},
-    {6, 1, 1, 86.39},  {6, 2, 2, 60.50},  {6, 0, 3, 57.69}, {6, 3, 4, 35.46},
-    {7, 2, 1, 71.43},  {7, 3, 2, 33.67},  {7, 1, 3, 61.43}, {7, 0, 4, 59.86},
-    {8, 3, 1, 57.76},  {8, 0, 2, 78.83},  {8, 2, 3, 65.04}, {8, 1, 4, 85.67}};
+    {1, 0, 1, 113.51}, {1, 1, 2, 100.92}, {1, 3, 3, 48.99}, {1, 2, 4, 74.44}, {2, 1, 1, 105.82},
+    {2, 2, 2, 70.27},  {2, 0, 3, 63.68},  {2, 3, 4, 41.47}, {3, 2, 1, 40.29}, {3, 3, 2, 30.67},
+    {3, 1, 3, 55.06},  {3, 0, 4, 47.46},  {4, 3, 1, 29.48}, {4, 0, 2, 37.51}, {4, 2, 3, 39.78},
+    {4, 1, 4, 45.81},  {5, 0, 1, 33.64},  {5, 1, 2, 46.47}, {5, 3, 3, 27.83}, {5, 2, 4, 42.35},
+    {6, 1, 1, 86.39},  {6, 2, 2, 60.50},  {6, 0, 3, 57.69}, {6, 3, 4, 35.46}, {7, 2, 1, 71.43},
+    {7, 3, 2, 33.67},  {7, 1, 3, 61.43},  {7, 0, 4, 59.86}, {8, 3, 1, 57.76}, {8, 0, 2, 78.83},
+    {8, 2, 3, 65.04},  {8, 1, 4, 85.67}};
 
 std::string Read(const std::filesystem::path& file) {
   std::ifstream in(file);
@@ -57,8 +56,8 @@ std::string Participant(int p) {
 
 /// Records `laps` as study "lmm" in `db`, on a track whose reference lap is
 /// `reference_lap` ("" for none).
-void Record(const std::filesystem::path& dir, const std::filesystem::path& db, const std::vector<Lap>& laps,
-            const std::string& reference_lap) {
+void Record(const std::filesystem::path& dir, const std::filesystem::path& db,
+            const std::vector<Lap>& laps, const std::string& reference_lap) {
   StudyConfig config;
   config.file = dir / "lmm.yaml";
   test::WriteFile(config.file, "name: lmm\n");
@@ -73,12 +72,14 @@ void Record(const std::filesystem::path& dir, const std::filesystem::path& db, c
   std::vector<PlannedTrial> plan;
   for (const Lap& lap : laps) {
     if (lap.position == 1) config.participants.push_back({Participant(lap.participant), ""});
-    plan.push_back({Participant(lap.participant), lap.position, kConditions[static_cast<size_t>(lap.condition)], 1});
+    plan.push_back({Participant(lap.participant), lap.position,
+                    kConditions[static_cast<size_t>(lap.condition)], 1});
   }
   record::Recorder recorder(db);
   StudyStore store(recorder, config, plan);
   for (size_t i = 0; i < laps.size(); ++i) {
-    recorder.Save(test::TrialRun(laps[i].lap_time_s), store.TrialWriter(plan[i], config.trial_cap_s));
+    recorder.Save(test::TrialRun(laps[i].lap_time_s),
+                  store.TrialWriter(plan[i], config.trial_cap_s));
   }
 }
 
@@ -97,7 +98,9 @@ double NumberAfter(const std::string& json, const std::string& key) {
 
 }  // namespace
 
-TEST_CASE("The report fits the mixed model to log lap times and measures laps against the reference lap") {
+TEST_CASE(
+    "The report fits the mixed model to log lap times and measures laps against the reference "
+    "lap") {
   const auto dir = test::ScratchDir("study-report-lmm");
   const auto db = dir / "lmm.db";
   Record(dir, db, kBalanced, "reference_lap_s: 30\n");
@@ -115,8 +118,8 @@ TEST_CASE("The report fits the mixed model to log lap times and measures laps ag
   CHECK(m.position->estimate == Approx(-0.04898715447).margin(1e-6));
 
   const std::string text = FormatReport(results, report);
-  CHECK(text.find("mixed model: log(lap time) ~ condition + position + (1 | participant), 32 trials of 8") !=
-        std::string::npos);
+  CHECK(text.find("mixed model: log(lap time) ~ condition + position + (1 | participant), 32 "
+                  "trials of 8") != std::string::npos);
   CHECK(text.find("clock: the lap clock") != std::string::npos);
   CHECK(text.find("Satterthwaite") != std::string::npos);
   CHECK(text.find("Satterthwaite's F = 34.494 on 3 and 20.0 df") != std::string::npos);
@@ -186,7 +189,8 @@ TEST_CASE("The report's mixed model with one participant, and without a referenc
   const std::string trials = Read(files.trials_csv);
   CHECK(trials.find(",flags,over_reference_percent\n") != std::string::npos);
   size_t rows = 0, empty = 0;
-  for (size_t at = trials.find('\n'); at != std::string::npos && at + 1 < trials.size(); at = trials.find('\n', at + 1)) {
+  for (size_t at = trials.find('\n'); at != std::string::npos && at + 1 < trials.size();
+       at = trials.find('\n', at + 1)) {
     ++rows;
     if (trials[trials.find('\n', at + 1) - 1] == ',') ++empty;
   }
@@ -196,10 +200,12 @@ TEST_CASE("The report's mixed model with one participant, and without a referenc
   CHECK(json.find("\"lmm\":null,\"why_no_lmm\":\"no mixed model: ") != std::string::npos);
   CHECK(json.find("\"baseline\":{\"reference_lap_s\":null,\"why\":") != std::string::npos);
   const std::string text = FormatReport(results, report);
-  CHECK(text.find("no mixed model: mixed model: expected at least 2 participants") != std::string::npos);
+  CHECK(text.find("no mixed model: mixed model: expected at least 2 participants") !=
+        std::string::npos);
 }
 
-TEST_CASE("The report's mixed model leaves out a position that the order confounds with the condition") {
+TEST_CASE(
+    "The report's mixed model leaves out a position that the order confounds with the condition") {
   // Every participant in the study file's order: position = condition + 1.
   const auto dir = test::ScratchDir("study-report-lmm-fixed");
   const auto db = dir / "fixed.db";
@@ -233,9 +239,9 @@ TEST_CASE("The report says when Friedman's p is the chi-square approximation") {
   CHECK_FALSE(report.analysis->friedman.p_exact);
   const std::string text = FormatReport(results, report);
   INFO(text.substr(text.find("  Friedman"), 160));
-  CHECK(text.find(Fixed4(report.analysis->friedman.p_value_asymptotic) + " (chi2 approximation);") != std::string::npos);
+  CHECK(text.find(Fixed4(report.analysis->friedman.p_value_asymptotic) +
+                  " (chi2 approximation);") != std::string::npos);
   const std::string json = ReportJson(results, report, WriteReport(results, report, dir / "out"));
   CHECK(json.find("\"friedman_p_exact\":false") != std::string::npos);
   CHECK(NumberAfter(json, "\"friedman_p\":") == NumberAfter(json, "\"friedman_p_asymptotic\":"));
 }
-

@@ -12,8 +12,8 @@
 #include <fstream>
 #include <iterator>
 
-#include "haptel/record/recorder.hpp"
 #include "haptel/mediator/session.hpp"
+#include "haptel/record/recorder.hpp"
 #include "haptel/study/definition.hpp"
 #include "haptel/study/plan.hpp"
 #include "haptel/study/store.hpp"
@@ -38,7 +38,8 @@ StudyConfig FourConditions(const std::filesystem::path& dir, int participants) {
   test::WriteFile(config.file, "name: s\n");
   config.name = "store-study";
   config.operators = "person";
-  config.conditions = {{"a", "cockpit"}, {"b", "cockpit-hud"}, {"c", "cockpit-assisted"}, {"d", "gesture"}};
+  config.conditions = {
+      {"a", "cockpit"}, {"b", "cockpit-hud"}, {"c", "cockpit-assisted"}, {"d", "gesture"}};
   for (int i = 0; i < participants; ++i) config.participants.push_back({Id(i + 1), ""});
   return config;
 }
@@ -100,9 +101,11 @@ TEST_CASE("The store keeps a study's plan, trials and answers across restarts, e
     // A finished trial and an unfinished one, scored at the cap.
     record::RunRecord first = test::TrialRun(42.0, true, 2);
     first.approach_s = 3.25;  // before the start line: kept apart, not scored
-    // What could have spoiled it, kept with the trial; clamped forces are the safety at work, not a flag.
+    // What could have spoiled it, kept with the trial; clamped forces are the safety at work, not a
+    // flag.
     first.servo_rate_short = true;
-    first.counters = {{"servo_forces_clamped", 5}, {"vehicle_watchdog_trips", 2}, {"link_states_missed", 0}};
+    first.counters = {
+        {"servo_forces_clamped", 5}, {"vehicle_watchdog_trips", 2}, {"link_states_missed", 0}};
     recorder.Save(first, store.TrialWriter(plan[0], 600.0));
     recorder.Save(test::TrialRun(700.0, false), store.TrialWriter(plan[1], 600.0));
     // A run that ended in a fault: recorded, but the trial is not done.
@@ -141,9 +144,11 @@ TEST_CASE("The store keeps a study's plan, trials and answers across restarts, e
 
   SECTION("answers: once per participant, condition and questionnaire") {
     CHECK_FALSE(store.Answered("P1", plan[0].condition, "thesis"));
-    store.SaveAnswers("P1", plan[0].condition, "thesis", {{"easy_to_learn", "4"}, {"efficient", "3"}});
+    store.SaveAnswers("P1", plan[0].condition, "thesis",
+                      {{"easy_to_learn", "4"}, {"efficient", "3"}});
     CHECK(store.Answered("P1", plan[0].condition, "thesis"));
-    CHECK_THROWS_AS(store.SaveAnswers("P1", plan[0].condition, "thesis", {{"easy_to_learn", "5"}}), AlreadyAnswered);
+    CHECK_THROWS_AS(store.SaveAnswers("P1", plan[0].condition, "thesis", {{"easy_to_learn", "5"}}),
+                    AlreadyAnswered);
     CHECK(store.Answers().size() == 2);
   }
   SECTION("redo takes a trial back once, keeping it as superseded; the next row is attempt 2") {
@@ -189,7 +194,8 @@ TEST_CASE("The store keeps a study's plan, trials and answers across restarts, e
   }
   SECTION("the practice lap is remembered per participant") {
     CHECK_FALSE(store.Practised("P2"));
-    store.Event("practice interrupted", "P2", 0, "run 8: aborted from the console");  // offered again
+    store.Event("practice interrupted", "P2", 0,
+                "run 8: aborted from the console");  // offered again
     CHECK_FALSE(store.Practised("P2"));
     store.Event("practice", "P2", 0, "run 9");
     CHECK(store.Practised("P2"));
@@ -208,12 +214,14 @@ TEST_CASE("The store keeps a study's plan, trials and answers across restarts, e
   SECTION("a study planned differently is refused, saying what differs") {
     StudyConfig changed = config;
     changed.order = StudyOrder::kFixed;
-    CHECK_THROWS_WITH(StudyStore(recorder, changed, PlanTrials(changed)),
-                      Catch::Contains("design.order: balanced-latin-square, the file now says fixed") &&
-                          Catch::Contains("another name"));
+    CHECK_THROWS_WITH(
+        StudyStore(recorder, changed, PlanTrials(changed)),
+        Catch::Contains("design.order: balanced-latin-square, the file now says fixed") &&
+            Catch::Contains("another name"));
     StudyConfig more = FourConditions(dir, 8);
-    CHECK_THROWS_WITH(StudyStore(recorder, more, PlanTrials(more)),
-                      Catch::Contains("participants: P1, P2, P3, P4, the file now says P1, P2, P3, P4, P5"));
+    CHECK_THROWS_WITH(
+        StudyStore(recorder, more, PlanTrials(more)),
+        Catch::Contains("participants: P1, P2, P3, P4, the file now says P1, P2, P3, P4, P5"));
   }
 }
 
@@ -238,7 +246,9 @@ std::string ResumedStudy() {
   return "# a study resumed from a file that may have changed\n"
          "name: resumed\n"
          "description: first words\n"
-         "run: " + (source / "config/haptel.yaml").string() + "\n"
+         "run: " +
+         (source / "config/haptel.yaml").string() +
+         "\n"
          "track: track.yaml\n"
          "operators: person\n"
          "conditions:\n"
@@ -256,11 +266,13 @@ std::string ResumedStudy() {
 
 }  // namespace
 
-TEST_CASE("A study resumed from a changed file is refused, naming each changed key and both values") {
+TEST_CASE(
+    "A study resumed from a changed file is refused, naming each changed key and both values") {
   const auto dir = test::ScratchDir("study-store-changed");
   std::filesystem::remove(dir / "s.db");
   const auto track = dir / "track.yaml";
-  std::filesystem::copy_file("config/tracks/test-short.yaml", track, std::filesystem::copy_options::overwrite_existing);
+  std::filesystem::copy_file("config/tracks/test-short.yaml", track,
+                             std::filesystem::copy_options::overwrite_existing);
   const auto file = test::WriteFile(dir / "study.yaml", ResumedStudy());
   const auto db = dir / "s.db";
   record::Recorder recorder(db);
@@ -301,9 +313,11 @@ TEST_CASE("A study resumed from a changed file is refused, naming each changed k
     CHECK(store.Plan().size() == 8);
   }
   SECTION("another track") {
-    const std::string what = refusal(Replaced(study, "track: track.yaml", "track: " +
-        (std::filesystem::current_path() / "config/tracks/grand-prix.yaml").string()));
-    CHECK_THAT(what, Catch::Contains("study 'resumed' in " + db.string() + " was planned with track: track.yaml, "
+    const std::string what = refusal(Replaced(
+        study, "track: track.yaml",
+        "track: " + (std::filesystem::current_path() / "config/tracks/grand-prix.yaml").string()));
+    CHECK_THAT(what, Catch::Contains("study 'resumed' in " + db.string() +
+                                     " was planned with track: track.yaml, "
                                      "the file now says ") &&
                          Catch::Contains("config/tracks/grand-prix.yaml") &&
                          !Catch::Contains("track.name") &&
@@ -312,8 +326,8 @@ TEST_CASE("A study resumed from a changed file is refused, naming each changed k
   SECTION("the track file edited under the same name") {
     const std::string planned_track = FileText(track);
     test::WriteFile(track, Replaced(planned_track, "  - {along: 0.2}", "  - {along: 0.25}"));
-    CHECK_THAT(refusal(study),
-               Catch::Contains("track.gates[1]: along 0.2 m, width 0.4 m, the file now says along 0.25 m, width 0.4 m"));
+    CHECK_THAT(refusal(study), Catch::Contains("track.gates[1]: along 0.2 m, width 0.4 m, the file "
+                                               "now says along 0.25 m, width 0.4 m"));
     test::WriteFile(track, planned_track);
   }
   SECTION("another cap") {
@@ -321,13 +335,15 @@ TEST_CASE("A study resumed from a changed file is refused, naming each changed k
                Catch::Contains("was planned with trial_cap_s: 5, the file now says 3600;"));
   }
   SECTION("a condition given another interface under its name") {
-    CHECK_THAT(refusal(Replaced(study, "{name: b, interface: gesture}", "{name: b, interface: cockpit-hud}")),
+    CHECK_THAT(refusal(Replaced(study, "{name: b, interface: gesture}",
+                                "{name: b, interface: cockpit-hud}")),
                Catch::Contains("conditions.b.interface: gesture, the file now says cockpit-hud"));
   }
   SECTION("a condition renamed") {
-    CHECK_THAT(refusal(Replaced(study, "{name: b, interface: gesture}", "{name: g, interface: gesture}")),
-               Catch::Contains("conditions: a, b, the file now says a, g") &&
-                   Catch::Contains("conditions.b.interface: gesture, the file now says (absent)"));
+    CHECK_THAT(
+        refusal(Replaced(study, "{name: b, interface: gesture}", "{name: g, interface: gesture}")),
+        Catch::Contains("conditions: a, b, the file now says a, g") &&
+            Catch::Contains("conditions.b.interface: gesture, the file now says (absent)"));
   }
   SECTION("other questionnaires") {
     CHECK_THAT(refusal(Replaced(study, "questionnaires: [thesis]", "questionnaires: [tlx, sus]")),
@@ -364,11 +380,12 @@ TEST_CASE("A simulated driver's profile is part of the study") {
   const auto dir = test::ScratchDir("study-store-profiles");
   std::filesystem::remove(dir / "s.db");
   const auto source = std::filesystem::current_path();
-  const std::string study = "name: drivers\nrun: " + (source / "config/haptel.yaml").string() +
-                            "\noperators: synthetic\nconditions:\n  - {name: a, interface: cockpit}\n"
-                            "  - {name: b, interface: gesture}\nprofiles:\n"
-                            "  p: {steering_noise: 0.02, seed: 7}\n  unused: {hud_use: 0.5}\n"
-                            "participants:\n  - {id: A, profile: p}\n  - {id: B, profile: p}\n";
+  const std::string study =
+      "name: drivers\nrun: " + (source / "config/haptel.yaml").string() +
+      "\noperators: synthetic\nconditions:\n  - {name: a, interface: cockpit}\n"
+      "  - {name: b, interface: gesture}\nprofiles:\n"
+      "  p: {steering_noise: 0.02, seed: 7}\n  unused: {hud_use: 0.5}\n"
+      "participants:\n  - {id: A, profile: p}\n  - {id: B, profile: p}\n";
   const auto file = dir / "study.yaml";
   record::Recorder recorder(dir / "s.db");
   auto resume = [&](const std::string& text) {
@@ -379,28 +396,36 @@ TEST_CASE("A simulated driver's profile is part of the study") {
   CHECK_FALSE(resume(study).resumed());
   // A profile nobody drives with changes no trial.
   CHECK(resume(Replaced(study, "unused: {hud_use: 0.5}", "unused: {hud_use: 0.9}")).resumed());
-  CHECK_THAT(test::WhatOf<std::runtime_error>(
-                 [&] { resume(Replaced(study, "p: {steering_noise: 0.02, seed: 7}", "p: {steering_noise: 0.03, seed: 7}")); }),
+  CHECK_THAT(test::WhatOf<std::runtime_error>([&] {
+               resume(Replaced(study, "p: {steering_noise: 0.02, seed: 7}",
+                               "p: {steering_noise: 0.03, seed: 7}"));
+             }),
              Catch::Contains("profiles.p.steering_noise: 0.02, the file now says 0.03"));
-  CHECK_THAT(test::WhatOf<std::runtime_error>(
-                 [&] { resume(Replaced(study, "p: {steering_noise: 0.02, seed: 7}", "p: {steering_noise: 0.02, seed: 8}")); }),
+  CHECK_THAT(test::WhatOf<std::runtime_error>([&] {
+               resume(Replaced(study, "p: {steering_noise: 0.02, seed: 7}",
+                               "p: {steering_noise: 0.02, seed: 8}"));
+             }),
              Catch::Contains("profiles.p.seed: 7, the file now says 8"));
   CHECK_THAT(test::WhatOf<std::runtime_error>([&] {
                resume(Replaced(study, "{id: B, profile: p}", "{id: B, profile: unused}"));
              }),
              Catch::Contains("participants.B.profile: p, the file now says unused"));
-  // No console adds a simulated driver, and none is added to the file's list of an open study either.
-  CHECK_THAT(test::WhatOf<std::runtime_error>([&] { resume(study + "  - {id: C, profile: p}\n  - {id: D, profile: p}\n"); }),
+  // No console adds a simulated driver, and none is added to the file's list of an open study
+  // either.
+  CHECK_THAT(test::WhatOf<std::runtime_error>(
+                 [&] { resume(study + "  - {id: C, profile: p}\n  - {id: D, profile: p}\n"); }),
              Catch::Contains("participants: A, B, the file now says A, B, C, D") &&
                  !Catch::Contains("console"));
 }
 
-TEST_CASE("A study planned before the database kept definitions resumes once, then is held to its file") {
+TEST_CASE(
+    "A study planned before the database kept definitions resumes once, then is held to its file") {
   const auto dir = test::ScratchDir("study-store-v5");
   const auto db = dir / "v5.db";
   std::filesystem::remove(db);
   const auto track = dir / "track.yaml";
-  std::filesystem::copy_file("config/tracks/test-short.yaml", track, std::filesystem::copy_options::overwrite_existing);
+  std::filesystem::copy_file("config/tracks/test-short.yaml", track,
+                             std::filesystem::copy_options::overwrite_existing);
   const auto file = test::WriteFile(dir / "study.yaml", ResumedStudy());
   {
     record::Recorder recorder(db);
@@ -415,14 +440,21 @@ TEST_CASE("A study planned before the database kept definitions resumes once, th
   {
     sqlite3* raw = nullptr;
     REQUIRE(sqlite3_open(db.c_str(), &raw) == SQLITE_OK);
-    REQUIRE(sqlite3_exec(raw,
-                         "ALTER TABLE studies DROP COLUMN definition_form; ALTER TABLE runs DROP COLUMN predict; "
-                         "ALTER TABLE runs DROP COLUMN link_fault; ALTER TABLE runs DROP COLUMN prediction_error_m_p50; "
-                         "ALTER TABLE runs DROP COLUMN prediction_error_m_p95; ALTER TABLE runs DROP COLUMN approach_s; "
-                         "ALTER TABLE study_trials DROP COLUMN approach_s; ALTER TABLE study_trials DROP COLUMN flags; "
-                         "ALTER TABLE runs DROP COLUMN video_kbps; ALTER TABLE runs DROP COLUMN video_stale_s; "
-                         "ALTER TABLE runs DROP COLUMN speedup; ALTER TABLE runs DROP COLUMN controller_errors; DROP TABLE study_notes; DROP TABLE study_superseded_trials; PRAGMA user_version = 5",
-                         nullptr, nullptr, nullptr) == SQLITE_OK);
+    REQUIRE(
+        sqlite3_exec(
+            raw,
+            "ALTER TABLE studies DROP COLUMN definition_form; ALTER TABLE runs DROP COLUMN "
+            "predict; "
+            "ALTER TABLE runs DROP COLUMN link_fault; ALTER TABLE runs DROP COLUMN "
+            "prediction_error_m_p50; "
+            "ALTER TABLE runs DROP COLUMN prediction_error_m_p95; ALTER TABLE runs DROP COLUMN "
+            "approach_s; "
+            "ALTER TABLE study_trials DROP COLUMN approach_s; ALTER TABLE study_trials DROP COLUMN "
+            "flags; "
+            "ALTER TABLE runs DROP COLUMN video_kbps; ALTER TABLE runs DROP COLUMN video_stale_s; "
+            "ALTER TABLE runs DROP COLUMN speedup; ALTER TABLE runs DROP COLUMN controller_errors; "
+            "DROP TABLE study_notes; DROP TABLE study_superseded_trials; PRAGMA user_version = 5",
+            nullptr, nullptr, nullptr) == SQLITE_OK);
     sqlite3_close(raw);
   }
   record::Recorder recorder(db);  // migrated to v12: the study has no definition on record
@@ -433,7 +465,8 @@ TEST_CASE("A study planned before the database kept definitions resumes once, th
   };
   const std::string changed_cap = Replaced(ResumedStudy(), "trial_cap_s: 5", "trial_cap_s: 60");
   {
-    // Its plan is all there is to check, and it matches: it resumes, and keeps the file's definition from now on.
+    // Its plan is all there is to check, and it matches: it resumes, and keeps the file's
+    // definition from now on.
     StudyStore store = resume(changed_cap);
     CHECK(store.resumed());
   }
@@ -441,12 +474,14 @@ TEST_CASE("A study planned before the database kept definitions resumes once, th
              Catch::Contains("trial_cap_s: 60, the file now says 5"));
   CHECK(resume(changed_cap).resumed());
   // A plan that differs is refused as before.
-  CHECK_THAT(test::WhatOf<std::runtime_error>([&] { resume(ResumedStudy() + "  - {id: P3}\n  - {id: P4}\n"); }),
+  CHECK_THAT(test::WhatOf<std::runtime_error>(
+                 [&] { resume(ResumedStudy() + "  - {id: P3}\n  - {id: P4}\n"); }),
              Catch::Contains("participants: P1, P2, the file now says P1, P2, P3, P4"));
 }
 
 TEST_CASE("A study's definition reads back as written, escapes and all") {
-  const std::vector<DefiningValue> values = {{"form", "1"}, {"odd: key", "a\nb\\c: d"}, {"empty", ""}};
+  const std::vector<DefiningValue> values = {
+      {"form", "1"}, {"odd: key", "a\nb\\c: d"}, {"empty", ""}};
   const std::vector<DefiningValue> back = ParseDefinition(DefinitionText(values));
   REQUIRE(back.size() == values.size());
   for (size_t i = 0; i < values.size(); ++i) {
@@ -455,11 +490,14 @@ TEST_CASE("A study's definition reads back as written, escapes and all") {
   }
   CHECK(DefinitionChanges(values, back).empty());
   // Another version's form is compared only on the keys both know.
-  const std::vector<DefiningValue> newer = {{"form", "2"}, {"odd: key", "a\nb\\c: d"}, {"new", "x"}};
+  const std::vector<DefiningValue> newer = {
+      {"form", "2"}, {"odd: key", "a\nb\\c: d"}, {"new", "x"}};
   CHECK(DefinitionChanges(values, newer).empty());
 }
 
-TEST_CASE("A study's file deleted or replaced while it runs: its writes are refused, not acknowledged into the void") {
+TEST_CASE(
+    "A study's file deleted or replaced while it runs: its writes are refused, not acknowledged "
+    "into the void") {
   // SQLite in WAL mode would write on into the unlinked file, and the console
   // would answer 303 for a participant or a note that no file keeps.
   const auto dir = test::ScratchDir("study-store-moved");
@@ -481,7 +519,9 @@ TEST_CASE("A study's file deleted or replaced while it runs: its writes are refu
   CHECK_THAT(participant, Catch::Contains(db.string()));
   CHECK_THAT(test::WhatOf<std::runtime_error>([&] { store.SaveNote("P1", 0, "kept?"); }),
              Catch::Contains("deleted or replaced"));
-  CHECK_THAT(test::WhatOf<std::runtime_error>([&] { store.SaveAnswers("P1", "a", "q", {{"item", "1"}}); }),
+  CHECK_THAT(test::WhatOf<std::runtime_error>([&] {
+               store.SaveAnswers("P1", "a", "q", {{"item", "1"}});
+             }),
              Catch::Contains("deleted or replaced"));
   CHECK_THAT(test::WhatOf<std::runtime_error>([&] { store.Event("note", "P1", 0, "x"); }),
              Catch::Contains("deleted or replaced"));

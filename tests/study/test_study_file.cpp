@@ -18,14 +18,17 @@ using namespace haptel::study;
 namespace {
 
 /// A valid synthetic study with `tail` appended (or replacing a section).
-std::string Study(const std::string& conditions, const std::string& participants, const std::string& extra = "") {
+std::string Study(const std::string& conditions, const std::string& participants,
+                  const std::string& extra = "") {
   const auto source = std::filesystem::current_path();
-  return "name: s\nrun: " + (source / "config/haptel.yaml").string() + "\noperators: synthetic\nconditions:\n" +
-         conditions + "profiles:\n  p: {steering_noise: 0.02}\nparticipants:\n" + participants + extra;
+  return "name: s\nrun: " + (source / "config/haptel.yaml").string() +
+         "\noperators: synthetic\nconditions:\n" + conditions +
+         "profiles:\n  p: {steering_noise: 0.02}\nparticipants:\n" + participants + extra;
 }
 
-const std::string kFour = "  - {name: a, interface: gesture}\n  - {name: b, interface: cockpit}\n"
-                          "  - {name: c, interface: cockpit-hud}\n  - {name: d, interface: cockpit-assisted}\n";
+const std::string kFour =
+    "  - {name: a, interface: gesture}\n  - {name: b, interface: cockpit}\n"
+    "  - {name: c, interface: cockpit-hud}\n  - {name: d, interface: cockpit-assisted}\n";
 std::string People(int n) {
   std::string out;
   for (int i = 0; i < n; ++i) out += "  - {id: P" + std::to_string(i) + ", profile: p}\n";
@@ -61,7 +64,9 @@ TEST_CASE("The shipped synthetic study loads and plans a balanced Latin square")
   }
 }
 
-TEST_CASE("The shipped people's study loads and plans the thesis's study: four people, four interfaces, questionnaires") {
+TEST_CASE(
+    "The shipped people's study loads and plans the thesis's study: four people, four interfaces, "
+    "questionnaires") {
   const StudyConfig s = LoadStudy("config/studies/grand-prix.yaml");
   CHECK(s.name == "grand-prix");
   CHECK(s.operators == "person");
@@ -91,21 +96,25 @@ TEST_CASE("Conditions may differ only in the predictive display; the link's faul
 
   const std::string bad_fault = ErrorOf(Study(kFour, People(4), "link_fault: delay=fast\n"));
   CHECK_THAT(bad_fault, Catch::Contains("bad.yaml") && Catch::Contains("link_fault"));
-  const StudyConfig on_lte = LoadStudy(test::WriteFile(
-      dir / "lte.yaml", Study(kFour, People(4), "link_profile: lte-uplink\nlink_fault: loss=2%\n")));
+  const StudyConfig on_lte = LoadStudy(
+      test::WriteFile(dir / "lte.yaml",
+                      Study(kFour, People(4), "link_profile: lte-uplink\nlink_fault: loss=2%\n")));
   CHECK(on_lte.link_profile == "lte-uplink");
   const std::string bad_profile = ErrorOf(Study(kFour, People(4), "link_profile: dialup\n"));
-  CHECK_THAT(bad_profile, Catch::Contains("bad.yaml") && Catch::Contains("link_profile") &&
-                              Catch::Contains("expected one of lan, lte-uplink, satellite, wifi-busy"));
-  const std::string bad_predict =
-      ErrorOf(Study("  - {name: a, interface: gesture, predict: maybe}\n  - {name: b, interface: gesture}\n",
-                    People(2)));
+  CHECK_THAT(bad_profile,
+             Catch::Contains("bad.yaml") && Catch::Contains("link_profile") &&
+                 Catch::Contains("expected one of lan, lte-uplink, satellite, wifi-busy"));
+  const std::string bad_predict = ErrorOf(Study(
+      "  - {name: a, interface: gesture, predict: maybe}\n  - {name: b, interface: gesture}\n",
+      People(2)));
   CHECK_THAT(bad_predict, Catch::Contains("conditions[0].predict"));
 }
 
-TEST_CASE("A study file that cannot work is refused naming the file, the key and what was expected") {
+TEST_CASE(
+    "A study file that cannot work is refused naming the file, the key and what was expected") {
   SECTION("an unknown interface") {
-    const std::string e = ErrorOf(Study("  - {name: a, interface: gesture}\n  - {name: b, interface: wheelchair}\n", People(2)));
+    const std::string e = ErrorOf(Study(
+        "  - {name: a, interface: gesture}\n  - {name: b, interface: wheelchair}\n", People(2)));
     CHECK_THAT(e, Catch::Contains("bad.yaml") && Catch::Contains("conditions[1].interface") &&
                       Catch::Contains("wheelchair"));
   }
@@ -115,12 +124,14 @@ TEST_CASE("A study file that cannot work is refused naming the file, the key and
   }
   SECTION("a balanced Latin square that does not fit the participants") {
     const std::string e = ErrorOf(Study(kFour, People(3)));
-    CHECK_THAT(e, Catch::Contains("bad.yaml") && Catch::Contains("'design'") && Catch::Contains("multiple of 4") &&
-                      Catch::Contains("3"));
+    CHECK_THAT(e, Catch::Contains("bad.yaml") && Catch::Contains("'design'") &&
+                      Catch::Contains("multiple of 4") && Catch::Contains("3"));
   }
   SECTION("a person's keyboard for a simulated driver") {
-    const std::string e = ErrorOf(Study("  - {name: a, interface: gesture}\n  - {name: k, interface: keyboard}\n", People(2)));
-    CHECK_THAT(e, Catch::Contains("conditions[1].interface") && Catch::Contains("simulated driver"));
+    const std::string e = ErrorOf(Study(
+        "  - {name: a, interface: gesture}\n  - {name: k, interface: keyboard}\n", People(2)));
+    CHECK_THAT(e,
+               Catch::Contains("conditions[1].interface") && Catch::Contains("simulated driver"));
   }
   SECTION("an unknown profile") {
     const std::string e = ErrorOf(Study(kFour, "  - {id: A, profile: ghost}\n"));
@@ -136,9 +147,11 @@ TEST_CASE("A study file that cannot work is refused naming the file, the key and
     CHECK_THAT(ErrorOf("name: my study\n"), Catch::Contains("'name'"));
     CHECK_THAT(ErrorOf(Study(kFour, People(4), "design: {order: fixed, seed: 3}\n")),
                Catch::Contains("design.seed") && Catch::Contains("order: random"));
-    CHECK_THAT(ErrorOf(Study(kFour, People(4), "lap_count: 3\n")), Catch::Contains("lap_count") && Catch::Contains("unknown key"));
+    CHECK_THAT(ErrorOf(Study(kFour, People(4), "lap_count: 3\n")),
+               Catch::Contains("lap_count") && Catch::Contains("unknown key"));
   }
-  SECTION("demographics: people only, a questionnaire's name, not also asked after each condition") {
+  SECTION(
+      "demographics: people only, a questionnaire's name, not also asked after each condition") {
     CHECK_THAT(ErrorOf(Study(kFour, People(4), "demographics: demographics\n")),
                Catch::Contains("'demographics'") && Catch::Contains("simulated drivers"));
     std::string person = Study(kFour, "  - {id: A}\n", "demographics: demographics\n");
@@ -148,7 +161,8 @@ TEST_CASE("A study file that cannot work is refused naming the file, the key and
     const auto dir = test::ScratchDir("study-file-demographics");
     CHECK(LoadStudy(test::WriteFile(dir / "good.yaml", person)).demographics == "demographics");
     std::string twice = person + "questionnaires: [demographics]\n";
-    CHECK_THAT(ErrorOf(twice), Catch::Contains("'demographics'") && Catch::Contains("in 'questionnaires'"));
+    CHECK_THAT(ErrorOf(twice),
+               Catch::Contains("'demographics'") && Catch::Contains("in 'questionnaires'"));
     std::string spaced = person;
     spaced.replace(spaced.find("demographics: demographics"), 26, "demographics: about you");
     CHECK_THAT(ErrorOf(spaced), Catch::Contains("'demographics'") && Catch::Contains("1 to 40"));

@@ -16,7 +16,8 @@ TEST_CASE("A practice lap shows the simulated robot in the third person; a trial
   const std::vector<PlannedTrial> plan = PlanTrials(config);
   REQUIRE_FALSE(plan.empty());
   const auto dir = test::ScratchDir("study-sessions");
-  const mediator::SessionSetup trial = TrialSetup(config, plan.front(), dir / "study.db", "", false, 0, false);
+  const mediator::SessionSetup trial =
+      TrialSetup(config, plan.front(), dir / "study.db", "", false, 0, false);
   REQUIRE(trial.vehicle.kind == "sim-robot");
   CHECK_FALSE(trial.third_person);
   CHECK_FALSE(trial.direct_view);

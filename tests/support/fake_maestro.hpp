@@ -95,7 +95,8 @@ class FakeMaestro {
   }
 
   void Reply(uint16_t value) {
-    const std::array<uint8_t, 2> bytes = {static_cast<uint8_t>(value & 0xFF), static_cast<uint8_t>(value >> 8)};
+    const std::array<uint8_t, 2> bytes = {static_cast<uint8_t>(value & 0xFF),
+                                          static_cast<uint8_t>(value >> 8)};
     bytes_written_ += line_->Write(bytes.data(), bytes.size());
     ++replies_sent_;
   }

@@ -32,7 +32,8 @@ inline std::filesystem::path BinDir() {
 /// A fresh folder for this process's scratch files.
 inline std::filesystem::path ScratchDir(const std::string& name) {
   const char* base = std::getenv("HAPTEL_TEST_TMP");
-  const std::filesystem::path root = base != nullptr ? base : std::filesystem::temp_directory_path();
+  const std::filesystem::path root =
+      base != nullptr ? base : std::filesystem::temp_directory_path();
   const auto dir = root / (name + "-" + std::to_string(getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
@@ -45,7 +46,8 @@ inline std::filesystem::path ScratchDir(const std::string& name) {
 /// intact, so the file opens as before and only reading that page finds it.
 inline void DamageMiddlePage(const std::filesystem::path& file, size_t page_size = 4096) {
   const auto size = static_cast<size_t>(std::filesystem::file_size(file));
-  if (size < 8 * page_size) throw std::runtime_error("test file " + file.string() + " is too small to damage");
+  if (size < 8 * page_size)
+    throw std::runtime_error("test file " + file.string() + " is too small to damage");
   std::fstream io(file, std::ios::binary | std::ios::in | std::ios::out);
   io.seekp(static_cast<std::streamoff>(size / page_size / 2 * page_size));
   io << std::string(page_size, '\x5a');
@@ -101,13 +103,15 @@ inline int UniqueDomain(int salt = 0) {
   if (const auto it = claimed.find(salt); it != claimed.end()) return it->second;
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / "haptel-test-domains";
   std::filesystem::create_directories(dir);
-  std::filesystem::permissions(dir, std::filesystem::perms::all, std::filesystem::perm_options::add);
+  std::filesystem::permissions(dir, std::filesystem::perms::all,
+                               std::filesystem::perm_options::add);
   for (int k = 0; k < 230; ++k) {
     const int domain = 1 + static_cast<int>((getpid() * 7 + salt + k) % 230);
     bool mine = false;
     for (const auto& [s, d] : claimed) mine = mine || d == domain;
     if (mine) continue;
-    const int fd = ::open((dir / std::to_string(domain)).c_str(), O_CREAT | O_RDONLY | O_CLOEXEC, 0666);
+    const int fd =
+        ::open((dir / std::to_string(domain)).c_str(), O_CREAT | O_RDONLY | O_CLOEXEC, 0666);
     if (fd < 0) continue;
     if (::flock(fd, LOCK_EX | LOCK_NB) == 0) {  // held (fd kept open) until the process ends
       claimed[salt] = domain;

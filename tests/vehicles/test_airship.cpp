@@ -157,7 +157,9 @@ TEST_CASE("the wind's gusts have the configured rms, the same on every run") {
   CHECK(Airship(c).Wind(3.0) != a.Wind(3.0));
 }
 
-TEST_CASE("an attitude from yaw, pitch and roll gives them back (what a predictor rebuilds from a state)") {
+TEST_CASE(
+    "an attitude from yaw, pitch and roll gives them back (what a predictor rebuilds from a "
+    "state)") {
   Airship ship(Neutral());
   for (const double yaw : {-3.0, -0.5, 0.0, 1.2, 3.1}) {
     for (const double pitch : {-0.4, 0.0, 0.25}) {
@@ -193,7 +195,8 @@ TEST_CASE("bad airship parameters are refused by name") {
   CHECK_THROWS_AS(light.ValidateOrThrow(), ConfigFieldError);
 }
 
-TEST_CASE("the model's defaults are the shipped sim-blimp.yaml's values, which the pty twins rely on") {
+TEST_CASE(
+    "the model's defaults are the shipped sim-blimp.yaml's values, which the pty twins rely on") {
   // sim-blimp-maestro.yaml and sim-blimp-sc8000.yaml say `airship: {}`: the
   // defaults, which must be the thesis's blimp as sim-blimp.yaml writes it.
   const VehicleConfig shipped = LoadVehicle("config/vehicles/sim-blimp.yaml");

@@ -4,8 +4,6 @@
 // frame's encode (issue 24: commands and states come first; the command
 // round trip's p99 was 3.8 times raw Fast DDS's). Priorities are asserted,
 // never timings.
-#include "haptel/vehicles/camera_streamer.hpp"
-
 #include <algorithm>
 #include <atomic>
 #include <catch2/catch.hpp>
@@ -14,6 +12,7 @@
 
 #include "haptel/core/loop_meter.hpp"
 #include "haptel/link/participant.hpp"
+#include "haptel/vehicles/camera_streamer.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;
@@ -37,8 +36,9 @@ class PriorityNotingCamera final : public video::CameraSource {
 
 }  // namespace
 
-TEST_CASE("CameraStreamer: frames are grabbed and encoded below the priority of the node's other threads",
-          "[vehicles][video]") {
+TEST_CASE(
+    "CameraStreamer: frames are grabbed and encoded below the priority of the node's other threads",
+    "[vehicles][video]") {
   LinkConfig link;
   link.domain_id = test::UniqueDomain(71);
   link::Participant participant(link, "test-camera-priority");
@@ -50,10 +50,13 @@ TEST_CASE("CameraStreamer: frames are grabbed and encoded below the priority of 
   config.height = 48;
   config.rate_hz = 50.0;
   const int node_nice = ThreadNice();
-  vehicles::CameraStreamer streamer(config, std::move(camera), participant, "robot1", [] { return link::WriterId{}; });
+  vehicles::CameraStreamer streamer(config, std::move(camera), participant, "robot1",
+                                    [] { return link::WriterId{}; });
   streamer.Start();
-  REQUIRE(test::WaitFor([&] { return seen.grabs.load() >= 2 && streamer.Counters().frames_published >= 1; }, 30.0));
+  REQUIRE(test::WaitFor(
+      [&] { return seen.grabs.load() >= 2 && streamer.Counters().frames_published >= 1; }, 30.0));
   streamer.Stop();
   CHECK(seen.nice.load() == std::min(19, node_nice + kBackgroundNiceSteps));
-  CHECK(ThreadNice() == node_nice);  // the node's own thread (its control loop's creator) keeps its priority
+  CHECK(ThreadNice() ==
+        node_nice);  // the node's own thread (its control loop's creator) keeps its priority
 }

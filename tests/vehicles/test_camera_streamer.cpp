@@ -2,9 +2,8 @@
 // bitrate) from the participant that owns the vehicle only: another
 // participant on the domain cannot hold its video at the lowest rung, even
 // naming the owner's session.
-#include <catch2/catch.hpp>
-
 #include <atomic>
+#include <catch2/catch.hpp>
 #include <memory>
 #include <mutex>
 
@@ -42,7 +41,9 @@ struct FeedbackSender {
 
 }  // namespace
 
-TEST_CASE("video feedback from a participant that does not own the vehicle is refused and counted; the owner's works") {
+TEST_CASE(
+    "video feedback from a participant that does not own the vehicle is refused and counted; the "
+    "owner's works") {
   const Track track(LoadTrack("config/tracks/test-short.yaml"));
   LinkConfig link;
   link.domain_id = test::UniqueDomain(81);
@@ -56,8 +57,8 @@ TEST_CASE("video feedback from a participant that does not own the vehicle is re
   std::mutex mutex;
   link::WriterId owner = op.writer.id();
   owner.guid[15] ^= 0x40;  // another entity of the same participant
-  vehicles::CameraStreamer streamer(camera, std::make_unique<video::SyntheticSource>(track, camera), vehicle,
-                                    "robot1", [&] {
+  vehicles::CameraStreamer streamer(camera, std::make_unique<video::SyntheticSource>(track, camera),
+                                    vehicle, "robot1", [&] {
                                       std::lock_guard lock(mutex);
                                       return owner;
                                     });
@@ -72,8 +73,8 @@ TEST_CASE("video feedback from a participant that does not own the vehicle is re
       },
       30.0));
   vehicles::CameraCounters c = streamer.Counters();
-  CHECK(c.target_kbps == 0);          // the target is not the stranger's
-  CHECK(c.key_frame_requests == 0);   // nor is a key frame forced
+  CHECK(c.target_kbps == 0);         // the target is not the stranger's
+  CHECK(c.key_frame_requests == 0);  // nor is a key frame forced
   // Nor with any other session.
   const uint64_t refused = c.feedback_refused;
   REQUIRE(test::WaitFor(
@@ -119,8 +120,8 @@ TEST_CASE("video feedback while nobody owns the vehicle is taken from any partic
   CameraConfig camera;
   camera.codec = CameraCodec::kJpeg;
   link::Participant vehicle(link, "test-vehicle");
-  vehicles::CameraStreamer streamer(camera, std::make_unique<video::SyntheticSource>(track, camera), vehicle,
-                                    "robot1", [] { return link::WriterId{}; });
+  vehicles::CameraStreamer streamer(camera, std::make_unique<video::SyntheticSource>(track, camera),
+                                    vehicle, "robot1", [] { return link::WriterId{}; });
   FeedbackSender op(link, "test-operator");
   REQUIRE(test::WaitFor(
       [&] {

@@ -88,7 +88,8 @@ TEST_CASE("CAN Simple frames are the bytes the ODrive documentation gives") {
   CHECK(FormatCandumpFrame(io_node::Heartbeat(3, 1)) == "061#0100");
   // Decoded back; refused with a reason when short or not finite.
   CHECK(odrive::DecodeHeartbeat(odrive::Heartbeat(1, 0x40, 8))->axis_error == 0x40);
-  CHECK(odrive::DecodeEncoderEstimates(odrive::EncoderEstimates(2, 1.0F, -0.5F))->velocity_turns_per_s == -0.5F);
+  CHECK(odrive::DecodeEncoderEstimates(odrive::EncoderEstimates(2, 1.0F, -0.5F))
+            ->velocity_turns_per_s == -0.5F);
   std::string why;
   can_frame short_beat = odrive::Heartbeat(1, 0, 8);
   short_beat.can_dlc = 3;
@@ -185,7 +186,8 @@ TEST_CASE("an axis error stops the robot at once, decoded; clear-errors is never
   b.Beat(0.01, true, true, odrive::kErrorMotorFailed);
   const AdapterState s = b.robot->State();
   REQUIRE(s.fault);
-  CHECK(s.fault_message == "left wheel (ODrive node 1) reports axis error MOTOR_FAILED; robot stopped");
+  CHECK(s.fault_message ==
+        "left wheel (ODrive node 1) reports axis error MOTOR_FAILED; robot stopped");
   CHECK(b.robot->counters().faults == 1);
   const std::vector<can_frame> after = b.Sent();
   CHECK(LastVelocity(after, 1) == 0.0F);
@@ -270,9 +272,10 @@ TEST_CASE("a recorded log replayed into the decoder gives the state it recorded"
   {
     CandumpWriter log(file, "can0");
     int64_t t = 1'795'503'326'000'000'000;
-    for (const can_frame& f : {odrive::Heartbeat(1, 0, 8), odrive::Heartbeat(2, 0, 8), io_node::Heartbeat(3, 1),
-                               io_node::Inputs(3, true, false, 1), odrive::EncoderEstimates(1, 3.0F, 1.0F),
-                               odrive::EncoderEstimates(2, -3.0F, -1.0F)}) {
+    for (const can_frame& f :
+         {odrive::Heartbeat(1, 0, 8), odrive::Heartbeat(2, 0, 8), io_node::Heartbeat(3, 1),
+          io_node::Inputs(3, true, false, 1), odrive::EncoderEstimates(1, 3.0F, 1.0F),
+          odrive::EncoderEstimates(2, -3.0F, -1.0F)}) {
       log.Write(f, t += 1'000'000);
     }
   }
@@ -301,7 +304,8 @@ TEST_CASE("a million random frames through the decoder: no crash, state stays fi
     can_frame f{};
     const uint64_t r = random();
     f.can_id = static_cast<uint32_t>(r & 0x7FF);
-    if ((r >> 11) % 16 == 0) f.can_id |= CAN_ERR_FLAG | static_cast<uint32_t>((r >> 16) & CAN_ERR_MASK);
+    if ((r >> 11) % 16 == 0)
+      f.can_id |= CAN_ERR_FLAG | static_cast<uint32_t>((r >> 16) & CAN_ERR_MASK);
     if ((r >> 11) % 16 == 1) f.can_id |= CAN_RTR_FLAG;
     if ((r >> 11) % 16 == 2) f.can_id |= CAN_EFF_FLAG;
     f.can_dlc = static_cast<uint8_t>((r >> 40) % 9);
@@ -309,11 +313,15 @@ TEST_CASE("a million random frames through the decoder: no crash, state stays fi
     std::memcpy(f.data, &bytes, 8);
     robot.Decode(f);
   }
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::printf("CAN decoder fuzz: %d frames in %.3f s (%.0f frames/s); %llu malformed, %llu unknown, %llu error frames\n",
-              kFrames, seconds, kFrames / seconds, static_cast<unsigned long long>(robot.counters().malformed),
-              static_cast<unsigned long long>(robot.counters().unknown),
-              static_cast<unsigned long long>(robot.counters().error_frames));
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf(
+      "CAN decoder fuzz: %d frames in %.3f s (%.0f frames/s); %llu malformed, %llu unknown, %llu "
+      "error frames\n",
+      kFrames, seconds, kFrames / seconds,
+      static_cast<unsigned long long>(robot.counters().malformed),
+      static_cast<unsigned long long>(robot.counters().unknown),
+      static_cast<unsigned long long>(robot.counters().error_frames));
   CHECK(robot.counters().received == static_cast<uint64_t>(kFrames));
   CHECK(std::isfinite(robot.State().speed));
   CHECK(std::isfinite(robot.State().yaw_rate));
@@ -343,16 +351,21 @@ TEST_CASE("the simulated CAN robot drives through the bus, and stops itself on a
   CHECK(std::abs(sim.robot().State().speed) < 0.02);  // stopped within a further 0.5 s
 }
 
-TEST_CASE("the CAN robot's log on a full disk (/dev/full): the state reports it and the robot drives on") {
+TEST_CASE(
+    "the CAN robot's log on a full disk (/dev/full): the state reports it and the robot drives "
+    "on") {
   const Track track(LoadTrack("config/tracks/test-short.yaml"));
-  SimulatedCanRobot sim(track, CanConfigured(), std::make_unique<CandumpWriter>("/dev/full", "can0"));
+  SimulatedCanRobot sim(track, CanConfigured(),
+                        std::make_unique<CandumpWriter>("/dev/full", "can0"));
   CHECK(sim.State().can_log.path == "/dev/full");
   CHECK(sim.State().can_log.error.empty());
   sim.SetMotors({8, 8});
-  for (int i = 0; i < 200; ++i) sim.Update(0.005);  // a second of bus traffic: several hundred frames
+  for (int i = 0; i < 200; ++i)
+    sim.Update(0.005);  // a second of bus traffic: several hundred frames
   const CanLogStatus log = sim.State().can_log;
   INFO(log.error);
-  CHECK(log.error.find("cannot write /dev/full: " + std::string(std::strerror(ENOSPC))) != std::string::npos);
+  CHECK(log.error.find("cannot write /dev/full: " + std::string(std::strerror(ENOSPC))) !=
+        std::string::npos);
   CHECK(log.frames == 0);
   CHECK(log.frames_lost > CandumpWriter::kFlushEvery);
   CHECK_FALSE(sim.State().fault);  // the log's end does not stop the robot

@@ -8,10 +8,10 @@
 #include <fstream>
 #include <sstream>
 
+#include "file_size_limit.hpp"
 #include "haptel/vehicles/can_bus.hpp"
 #include "haptel/vehicles/candump_log.hpp"
 #include "haptel/vehicles/odrive_can.hpp"
-#include "file_size_limit.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;
@@ -31,7 +31,8 @@ TEST_CASE("python-can's LogReader and log2asc read the robot's candump log") {
       "/usr/bin/python3 -c \"import can, sys\n"
       "msgs = list(can.LogReader(sys.argv[1]))\n"
       "print(len(msgs))\n"
-      "for m in msgs: print('%03X %s %.6f %s' % (m.arbitration_id, bytes(m.data).hex().upper(), m.timestamp, m.channel))\" " +
+      "for m in msgs: print('%03X %s %.6f %s' % (m.arbitration_id, bytes(m.data).hex().upper(), "
+      "m.timestamp, m.channel))\" " +
       log.string() + " > " + out.string() + " 2>&1";
   REQUIRE(std::system(python.c_str()) == 0);
   std::ifstream in(out);
@@ -44,7 +45,8 @@ TEST_CASE("python-can's LogReader and log2asc read the robot's candump log") {
   CHECK(text.str().find("022  ") != std::string::npos);  // no data
 
   const auto asc = dir / "robot1.asc";
-  const std::string log2asc = "/usr/bin/log2asc -I " + log.string() + " -O " + asc.string() + " can0";
+  const std::string log2asc =
+      "/usr/bin/log2asc -I " + log.string() + " -O " + asc.string() + " can0";
   REQUIRE(std::system(log2asc.c_str()) == 0);
   std::ifstream asc_in(asc);
   std::stringstream asc_text;
@@ -55,13 +57,16 @@ TEST_CASE("python-can's LogReader and log2asc read the robot's candump log") {
   CHECK(asc_text.str().find("00 00 C0 3F 00 00 00 00") != std::string::npos);
 }
 
-TEST_CASE("a CAN log whose writes fail (/dev/full: ENOSPC) is ended, counted and says why; it never throws") {
+TEST_CASE(
+    "a CAN log whose writes fail (/dev/full: ENOSPC) is ended, counted and says why; it never "
+    "throws") {
   CandumpWriter writer("/dev/full", "can0");
   int64_t t = 1'795'503'326'000'000'000;
   constexpr uint64_t kFrames = 3 * CandumpWriter::kFlushEvery;
   for (uint64_t i = 0; i < kFrames; ++i) writer.Write(odrive::SetInputVel(1, 1.5F), t += 1'000'000);
   INFO(writer.error());
-  CHECK(writer.error().find("cannot write /dev/full: " + std::string(std::strerror(ENOSPC))) != std::string::npos);
+  CHECK(writer.error().find("cannot write /dev/full: " + std::string(std::strerror(ENOSPC))) !=
+        std::string::npos);
   CHECK(writer.error().find("after 0 frames") != std::string::npos);
   CHECK(writer.lines() == kFrames);
   CHECK(writer.frames_written() == 0);
@@ -69,7 +74,9 @@ TEST_CASE("a CAN log whose writes fail (/dev/full: ENOSPC) is ended, counted and
   CHECK_FALSE(writer.Close());
 }
 
-TEST_CASE("a CAN log that cannot grow (a file size limit: EFBIG) keeps what it flushed and counts the rest as lost") {
+TEST_CASE(
+    "a CAN log that cannot grow (a file size limit: EFBIG) keeps what it flushed and counts the "
+    "rest as lost") {
   const auto file = test::ScratchDir("candump-full") / "robot1.log";
   CandumpWriter writer(file, "can0");
   constexpr rlim_t kLimit = 16 * 1024;  // bytes: a few hundred lines
@@ -77,13 +84,16 @@ TEST_CASE("a CAN log that cannot grow (a file size limit: EFBIG) keeps what it f
   int64_t t = 1'795'503'326'000'000'000;
   {
     test::FileSizeLimit limit(kLimit);
-    for (uint64_t i = 0; i < kFrames; ++i) writer.Write(odrive::Heartbeat(2, 0x40, 8), t += 1'000'000);
+    for (uint64_t i = 0; i < kFrames; ++i)
+      writer.Write(odrive::Heartbeat(2, 0x40, 8), t += 1'000'000);
   }
   INFO(writer.error());
-  CHECK(writer.error().find("cannot write " + file.string() + ": " + std::strerror(EFBIG)) != std::string::npos);
+  CHECK(writer.error().find("cannot write " + file.string() + ": " + std::strerror(EFBIG)) !=
+        std::string::npos);
   CHECK(writer.frames_written() > 0);
   CHECK(writer.frames_written() + writer.frames_lost() == kFrames);
-  CHECK(writer.error().find("after " + std::to_string(writer.frames_written()) + " frames") != std::string::npos);
+  CHECK(writer.error().find("after " + std::to_string(writer.frames_written()) + " frames") !=
+        std::string::npos);
   CHECK_FALSE(writer.Close());
   // What it counts as written is in the file, whole.
   size_t malformed = 0;

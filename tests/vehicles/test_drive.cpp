@@ -65,7 +65,8 @@ TEST_CASE("the watchdog rejects a non-positive timeout") {
   CHECK_THROWS_AS(CommandWatchdog(-1.0), std::invalid_argument);
 }
 
-TEST_CASE("command intake: malformed and stale commands are counted and dropped, the newest is applied") {
+TEST_CASE(
+    "command intake: malformed and stale commands are counted and dropped, the newest is applied") {
   CommandIntake<int> in(0.25);
   const int64_t ms = 1'000'000;
   CHECK(in.Poll(0));  // nothing yet: expired
@@ -104,7 +105,9 @@ haptel::link::WriterId Writer(uint8_t p, uint8_t w) {
 }
 }  // namespace
 
-TEST_CASE("command intake: one operator's writer at a time; a release or the owner's silence frees the vehicle") {
+TEST_CASE(
+    "command intake: one operator's writer at a time; a release or the owner's silence frees the "
+    "vehicle") {
   CommandIntake<int> in(0.25);
   const int64_t ms = 1'000'000;
   const CommandSender ana{Writer(1, 3), 11, "ana's run", false};
@@ -148,7 +151,9 @@ TEST_CASE("command intake: one operator's writer at a time; a release or the own
   CHECK(in.refused() == 3);
 }
 
-TEST_CASE("command intake: a stranger naming the owner's session is refused, its commands and its release") {
+TEST_CASE(
+    "command intake: a stranger naming the owner's session is refused, its commands and its "
+    "release") {
   // The session is in every state the vehicle publishes: anyone on the
   // domain can copy it. The owner is its writer, which nobody else has.
   CommandIntake<int> in(0.25);
@@ -171,7 +176,9 @@ TEST_CASE("command intake: a stranger naming the owner's session is refused, its
   CHECK(in.refused() == 3);
 }
 
-TEST_CASE("video feedback is followed from the owner's participant only, anybody's while nobody owns the vehicle") {
+TEST_CASE(
+    "video feedback is followed from the owner's participant only, anybody's while nobody owns the "
+    "vehicle") {
   const haptel::link::WriterId owner = Writer(1, 3);
   CHECK(FeedbackFromOwner(owner, Writer(1, 7)));  // the owner's run: its feedback writer
   CHECK_FALSE(FeedbackFromOwner(owner, Writer(9, 7)));
@@ -189,7 +196,8 @@ TEST_CASE("command intake: ownership allocates nothing on the DDS thread", "[all
     in.Offer(true, ana, i, 0, 1, static_cast<int64_t>(i) * 1000);
     in.Offer(true, bo, i, 0, 1, static_cast<int64_t>(i) * 1000);
     if (i % 100 == 0) {
-      in.Offer(true, {Writer(1, 3), 11, "ana's run", true}, i, 0, 0, static_cast<int64_t>(i) * 1000 + 1);
+      in.Offer(true, {Writer(1, 3), 11, "ana's run", true}, i, 0, 0,
+               static_cast<int64_t>(i) * 1000 + 1);
     }
   }
   CHECK(haptel::test::ThreadAllocations() == before);

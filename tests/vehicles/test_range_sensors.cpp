@@ -30,7 +30,8 @@ TEST_CASE("a ray reads the distance to the first wall or post it meets") {
   CHECK(CastRay(track, {1.0, 0.0}, Direction(std::numbers::pi / 2), 1.5) == Approx(0.5));
   CHECK(CastRay(track, {1.0, 0.1}, Direction(-std::numbers::pi / 2), 1.5) == Approx(0.6));
   // At 45° to the right wall: 0.5·√2.
-  CHECK(CastRay(track, {1.0, 0.0}, Direction(-std::numbers::pi / 4), 1.5) == Approx(0.5 * std::sqrt(2.0)));
+  CHECK(CastRay(track, {1.0, 0.0}, Direction(-std::numbers::pi / 4), 1.5) ==
+        Approx(0.5 * std::sqrt(2.0)));
   // At the left post's centre: its centre's distance less its radius.
   const Vec2 post(2.0, 0.3);
   const Vec2 to_post = post - Vec2(1.0, 0.0);
@@ -44,7 +45,8 @@ TEST_CASE("a ray reads the distance to the first wall or post it meets") {
 TEST_CASE("the simulated robot publishes its scan, laid out as configured") {
   const Track track(Corridor());
   VehicleConfig config;
-  config.range_sensors = {.beams = 31, .fov_deg = 180.0, .max_range = 1.5, .noise_sd = 0.0, .seed = 1};
+  config.range_sensors = {
+      .beams = 31, .fov_deg = 180.0, .max_range = 1.5, .noise_sd = 0.0, .seed = 1};
   SimRobot robot(track, config);
   robot.Place(1.0, 0.0, 0.0);
   const RangeScan scan = robot.State().ranges;
@@ -66,7 +68,8 @@ TEST_CASE("the simulated robot publishes its scan, laid out as configured") {
 
 TEST_CASE("range noise is seeded, spread as configured, and spares beams that meet nothing") {
   const Track track(Corridor());
-  const RangeSensorConfig config{.beams = 3, .fov_deg = 180.0, .max_range = 1.5, .noise_sd = 0.01, .seed = 7};
+  const RangeSensorConfig config{
+      .beams = 3, .fov_deg = 180.0, .max_range = 1.5, .noise_sd = 0.01, .seed = 7};
   std::mt19937_64 first(config.seed), second(config.seed);
   double sum = 0.0, sum2 = 0.0;
   constexpr int kScans = 2000;

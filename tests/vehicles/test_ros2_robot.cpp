@@ -2,20 +2,20 @@
 // on a domain of its own: what it sends on cmd_vel, how odometry becomes the
 // track-frame pose, the silent robot, bad odometry, the camera topic, the
 // laser scan as the state's range field, and the configuration's checks.
+#include <zlib.h>
+
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
-
-#include <cmath>
 #include <limits>
 #include <numbers>
 #include <opencv2/imgcodecs.hpp>
 #include <thread>
-#include <zlib.h>
 
 #include "haptel/config/error.hpp"
 #include "haptel/link/participant.hpp"
@@ -55,10 +55,12 @@ struct FakeRobot {
     using link::detail::MakeTopic;
     cmd = MakeTopic<geometry_msgs::msg::dds_::Twist_PubSubType>(participant, "rt/cmd_vel");
     odom = MakeTopic<nav_msgs::msg::dds_::Odometry_PubSubType>(participant, "rt/odom");
-    image = MakeTopic<sensor_msgs::msg::dds_::CompressedImage_PubSubType>(participant, "rt/camera/image_raw/compressed");
+    image = MakeTopic<sensor_msgs::msg::dds_::CompressedImage_PubSubType>(
+        participant, "rt/camera/image_raw/compressed");
     scan = MakeTopic<sensor_msgs::msg::dds_::LaserScan_PubSubType>(participant, "rt/scan");
     fdds::DataReaderQos rq = fdds::DATAREADER_QOS_DEFAULT;
-    rq.reliability().kind = fdds::RELIABLE_RELIABILITY_QOS;  // as a ROS 2 subscriber: the adapter must match it
+    rq.reliability().kind =
+        fdds::RELIABLE_RELIABILITY_QOS;  // as a ROS 2 subscriber: the adapter must match it
     twist_reader = participant.subscriber()->create_datareader(cmd, rq);
     odom_writer = participant.publisher()->create_datawriter(odom, fdds::DATAWRITER_QOS_DEFAULT);
     image_writer = participant.publisher()->create_datawriter(image, fdds::DATAWRITER_QOS_DEFAULT);
@@ -132,7 +134,8 @@ std::vector<uint8_t> BlackPng(uint32_t width, uint32_t height) {
   std::vector<uint8_t> ihdr;
   be32(ihdr, width);
   be32(ihdr, height);
-  for (uint8_t b : {8, 0, 0, 0, 0}) ihdr.push_back(b);  // 8-bit grey, deflate, no filter, no interlace
+  for (uint8_t b : {8, 0, 0, 0, 0})
+    ihdr.push_back(b);  // 8-bit grey, deflate, no filter, no interlace
   chunk("IHDR", ihdr);
   z_stream z{};
   REQUIRE(deflateInit(&z, Z_BEST_COMPRESSION) == Z_OK);
@@ -174,7 +177,8 @@ TEST_CASE("ros2: motor levels are a differential drive's twist") {
   CHECK(t[1] == Approx(0.15 / 0.16));
 }
 
-TEST_CASE("ros2: twists out, odometry in the track's frame, a silent robot is a fault and told to stop") {
+TEST_CASE(
+    "ros2: twists out, odometry in the track's frame, a silent robot is a fault and told to stop") {
   const int domain = test::UniqueDomain(61);
   const Track track(NorthTrack());
   Ros2Robot adapter(Ros2Vehicle(domain), track);
@@ -184,22 +188,26 @@ TEST_CASE("ros2: twists out, odometry in the track's frame, a silent robot is a 
   // Until the twists arrive (discovery), keep asking for half speed ahead.
   double v = 0.0;
   double w = 0.0;
-  REQUIRE(test::WaitFor([&] {
-    adapter.SetMotors({4, 4});
-    adapter.Update(0.05);
-    return robot.LastTwist(v, w) && v > 0.0;
-  }, 30.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        adapter.SetMotors({4, 4});
+        adapter.Update(0.05);
+        return robot.LastTwist(v, w) && v > 0.0;
+      },
+      30.0));
   CHECK(v == Approx(0.15));
   CHECK(w == Approx(0.0));
 
   // 1 m ahead and a quarter turn left in the odometry frame: with the start
   // facing north that is 1 m north of the start, heading west.
   const Vec2 start = track.StartPosition();
-  REQUIRE(test::WaitFor([&] {
-    robot.Odom(1.0, 0.0, std::numbers::pi / 2, 0.2, 0.1);
-    adapter.Update(0.01);
-    return adapter.State().pose_valid;
-  }, 30.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        robot.Odom(1.0, 0.0, std::numbers::pi / 2, 0.2, 0.1);
+        adapter.Update(0.01);
+        return adapter.State().pose_valid;
+      },
+      30.0));
   AdapterState s = adapter.State();
   CHECK(s.x == Approx(start.x()).margin(1e-9));
   CHECK(s.y == Approx(start.y() + 1.0));
@@ -210,10 +218,12 @@ TEST_CASE("ros2: twists out, odometry in the track's frame, a silent robot is a 
 
   // Non-finite odometry is dropped and counted; the pose stays.
   robot.Odom(std::nan(""), 0.0, 0.0, 0.0, 0.0);
-  REQUIRE(test::WaitFor([&] {
-    adapter.Update(0.01);
-    return adapter.Counters().odom_dropped == 1;
-  }, 30.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        adapter.Update(0.01);
+        return adapter.Counters().odom_dropped == 1;
+      },
+      30.0));
   CHECK(adapter.State().y == Approx(start.y() + 1.0));
 
   // Silent past odom_timeout_s: a fault, and zero velocity though the command holds.
@@ -223,16 +233,20 @@ TEST_CASE("ros2: twists out, odometry in the track's frame, a silent robot is a 
   s = adapter.State();
   CHECK(s.fault);
   CHECK(s.fault_message.find("no odometry on /odom") != std::string::npos);
-  REQUIRE(test::WaitFor([&] {
-    adapter.Update(0.06);
-    return robot.LastTwist(v, w) && v == 0.0;
-  }, 30.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        adapter.Update(0.06);
+        return robot.LastTwist(v, w) && v == 0.0;
+      },
+      30.0));
   // Odometry again: the fault clears.
   robot.Odom(1.0, 0.0, 0.0, 0.0, 0.0);
-  REQUIRE(test::WaitFor([&] {
-    adapter.Update(0.01);
-    return !adapter.State().fault;
-  }, 30.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        adapter.Update(0.01);
+        return !adapter.State().fault;
+      },
+      30.0));
 
   // Stop: zero velocity at once.
   adapter.Stop();
@@ -254,14 +268,16 @@ TEST_CASE("ros2: the image topic is the camera; an image that does not decode is
   REQUIRE(cv::imencode(".jpg", red, jpeg));
   cv::Mat frame;
   bool grabbed = false;
-  REQUIRE(test::WaitFor([&] {
-    sensor_msgs::msg::dds_::CompressedImage_ image;
-    image.format("jpeg");
-    image.data(jpeg);
-    robot.image_writer->write(&image);
-    grabbed = camera->Grab({}, frame);
-    return grabbed;
-  }, 30.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        sensor_msgs::msg::dds_::CompressedImage_ image;
+        image.format("jpeg");
+        image.data(jpeg);
+        robot.image_writer->write(&image);
+        grabbed = camera->Grab({}, frame);
+        return grabbed;
+      },
+      30.0));
   CHECK(frame.cols == config.camera.width);  // resized to what is streamed
   CHECK(frame.rows == config.camera.height);
   const cv::Vec3b centre = frame.at<cv::Vec3b>(frame.rows / 2, frame.cols / 2);
@@ -275,14 +291,18 @@ TEST_CASE("ros2: the image topic is the camera; an image that does not decode is
   sensor_msgs::msg::dds_::CompressedImage_ junk;
   junk.format("png");
   junk.data(broken);
-  REQUIRE(test::WaitFor([&] {
-    robot.image_writer->write(&junk);
-    camera->Grab({}, frame);
-    return adapter.Counters().images_dropped > 0;
-  }, 30.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        robot.image_writer->write(&junk);
+        camera->Grab({}, frame);
+        return adapter.Counters().images_dropped > 0;
+      },
+      30.0));
 }
 
-TEST_CASE("ros2: a LaserScan is the state's range field, beam for beam; inf meets nothing, out of range is dropped") {
+TEST_CASE(
+    "ros2: a LaserScan is the state's range field, beam for beam; inf meets nothing, out of range "
+    "is dropped") {
   // Five beams from -90 degrees to +90 degrees, a laser seeing 0.1 to 4 m.
   const double quarter = std::numbers::pi / 2;
   const std::vector<float> ranges = {1.5f, kInf, 0.05f, kNaN, -kInf};
@@ -293,11 +313,11 @@ TEST_CASE("ros2: a LaserScan is the state's range field, beam for beam; inf meet
   CHECK(s.range_max == Approx(4.0));
   CHECK(s.Hit(0));
   CHECK(s.ranges[0] == Approx(1.5f));
-  CHECK_FALSE(s.Hit(1));                   // +inf: nothing within range
+  CHECK_FALSE(s.Hit(1));  // +inf: nothing within range
   CHECK(s.ranges[1] == Approx(4.0f));
-  CHECK_FALSE(s.Hit(2));                   // 5 cm under range_min: invalid, dropped
-  CHECK_FALSE(s.Hit(3));                   // NaN: no reading
-  CHECK(s.Hit(4));                         // -inf: nearer than the laser can tell
+  CHECK_FALSE(s.Hit(2));  // 5 cm under range_min: invalid, dropped
+  CHECK_FALSE(s.Hit(3));  // NaN: no reading
+  CHECK(s.Hit(4));        // -inf: nearer than the laser can tell
   CHECK(s.ranges[4] == Approx(0.1f));
   CHECK(s.Angle(4) == Approx(quarter));
 
@@ -310,7 +330,9 @@ TEST_CASE("ros2: a LaserScan is the state's range field, beam for beam; inf meet
   CHECK(Ros2Robot::RangeScanFor(kNaN, 0.1, 0.1, 4.0, std::vector<float>{1.0f}).count == 0);
 }
 
-TEST_CASE("ros2: a scan of more beams than the field holds is read in sectors, each its nearest valid range") {
+TEST_CASE(
+    "ros2: a scan of more beams than the field holds is read in sectors, each its nearest valid "
+    "range") {
   // A 360-beam laser, one beam a degree from -180 degrees, nothing in range
   // but a post 0.8 m away seen by beams 100 and 101, a wall at 2 m by beams
   // 300..359 and a reading under range_min in beam 5.
@@ -338,7 +360,9 @@ TEST_CASE("ros2: a scan of more beams than the field holds is read in sectors, e
   }
 }
 
-TEST_CASE("ros2: the robot's LaserScan topic reaches the state's range field, and a stale scan is withdrawn") {
+TEST_CASE(
+    "ros2: the robot's LaserScan topic reaches the state's range field, and a stale scan is "
+    "withdrawn") {
   const int domain = test::UniqueDomain(63);
   const Track track(NorthTrack());
   Ros2Robot adapter(Ros2Vehicle(domain), track);  // odom_timeout_s 0.3
@@ -352,11 +376,13 @@ TEST_CASE("ros2: the robot's LaserScan topic reaches the state's range field, an
   laser.range_min(0.05f);
   laser.range_max(3.0f);
   laser.ranges({kInf, 0.7f, 3.5f});
-  REQUIRE(test::WaitFor([&] {
-    robot.scan_writer->write(&laser);
-    adapter.Update(0.01);
-    return adapter.State().ranges.count > 0;
-  }, 30.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        robot.scan_writer->write(&laser);
+        adapter.Update(0.01);
+        return adapter.State().ranges.count > 0;
+      },
+      30.0));
   const RangeScan s = adapter.State().ranges;
   REQUIRE(s.count == 3);
   CHECK(s.angle_min == Approx(-0.5));
@@ -368,11 +394,13 @@ TEST_CASE("ros2: the robot's LaserScan topic reaches the state's range field, an
   // A scan without beams is counted and dropped; the last good one stays.
   sensor_msgs::msg::dds_::LaserScan_ empty = laser;
   empty.ranges({});
-  REQUIRE(test::WaitFor([&] {
-    robot.scan_writer->write(&empty);
-    adapter.Update(0.01);
-    return adapter.Counters().scans_dropped > 0;
-  }, 30.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        robot.scan_writer->write(&empty);
+        adapter.Update(0.01);
+        return adapter.Counters().scans_dropped > 0;
+      },
+      30.0));
   CHECK(adapter.State().ranges.count == 3);
 
   // No scan for longer than odom_timeout_s: what it saw is withdrawn.
@@ -420,8 +448,10 @@ TEST_CASE("ros2: a scan of impossible geometry is refused, saying what is imposs
   CHECK_THAT(Ros2Robot::ScanProblem(-1.0, 1.0, -0.05, 0.1, 4.0, 41),
              Catch::Matchers::Contains("angle_increment") && Catch::Matchers::Contains("sign"));
   CHECK_THAT(Ros2Robot::ScanProblem(0.0, 0.0, 0.0, 0.1, 4.0, 2), Catch::Matchers::Contains("zero"));
-  CHECK_THAT(Ros2Robot::ScanProblem(0.0, 0.1, 0.1, 0.1, 1e30, 2), Catch::Matchers::Contains("range_max"));
-  CHECK_THAT(Ros2Robot::ScanProblem(0.0, kInf, 0.1, 0.1, 4.0, 2), Catch::Matchers::Contains("angle_max"));
+  CHECK_THAT(Ros2Robot::ScanProblem(0.0, 0.1, 0.1, 0.1, 1e30, 2),
+             Catch::Matchers::Contains("range_max"));
+  CHECK_THAT(Ros2Robot::ScanProblem(0.0, kInf, 0.1, 0.1, 4.0, 2),
+             Catch::Matchers::Contains("angle_max"));
   // A real laser's full turn, counter-clockwise or clockwise, is fine.
   const double degree = std::numbers::pi / 180;
   CHECK(Ros2Robot::ScanProblem(-180 * degree, 179 * degree, degree, 0.05, 12.0, 360).empty());
@@ -430,7 +460,9 @@ TEST_CASE("ros2: a scan of impossible geometry is refused, saying what is imposs
   CHECK(Ros2Robot::ScanProblem(0.3, 0.3, 0.0, 0.05, 12.0, 1).empty());
 }
 
-TEST_CASE("ros2: an image too large to decode is refused from its header, before decoding, and counted (issue 41)") {
+TEST_CASE(
+    "ros2: an image too large to decode is refused from its header, before decoding, and counted "
+    "(issue 41)") {
   // A 10 000 x 10 000 PNG of 100 kB took the vehicle from 78 to 654 MiB and its video to 1 fps.
   const std::vector<uint8_t> huge_png = BlackPng(10000, 10000);
   CHECK(huge_png.size() < 1000000);
@@ -454,11 +486,13 @@ TEST_CASE("ros2: an image too large to decode is refused from its header, before
     robot.image_writer->write(&image);
   };
   cv::Mat frame;
-  REQUIRE(test::WaitFor([&] {
-    send(huge_png, "png");
-    CHECK_FALSE(camera->Grab({}, frame));
-    return adapter.Counters().images_refused > 0;
-  }, 30.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        send(huge_png, "png");
+        CHECK_FALSE(camera->Grab({}, frame));
+        return adapter.Counters().images_refused > 0;
+      },
+      30.0));
   CHECK(adapter.Counters().images_dropped == 0);  // refused, not decoded and failed
 
   // A JPEG whose frame header says 10 000 x 10 000 (its SOF patched): refused too.
@@ -476,29 +510,36 @@ TEST_CASE("ros2: an image too large to decode is refused from its header, before
   REQUIRE(video::JpegFrameSize(huge_jpeg.data(), huge_jpeg.size(), width, height));
   REQUIRE(width == 10000);
   const uint64_t before = adapter.Counters().images_refused;
-  REQUIRE(test::WaitFor([&] {
-    send(huge_jpeg, "jpeg");
-    std::vector<uint8_t> bytes;
-    CHECK_FALSE(camera->GrabJpeg(bytes));  // not handed on to be passed through or decoded either
-    return adapter.Counters().images_refused > before;
-  }, 30.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        send(huge_jpeg, "jpeg");
+        std::vector<uint8_t> bytes;
+        CHECK_FALSE(
+            camera->GrabJpeg(bytes));  // not handed on to be passed through or decoded either
+        return adapter.Counters().images_refused > before;
+      },
+      30.0));
 
   // Another format than JPEG and PNG (a BMP) is refused: its size is not read.
   std::vector<uint8_t> bmp;
   REQUIRE(cv::imencode(".bmp", red, bmp));
   const uint64_t before_bmp = adapter.Counters().images_refused;
-  REQUIRE(test::WaitFor([&] {
-    send(bmp, "bmp");
-    CHECK_FALSE(camera->Grab({}, frame));
-    return adapter.Counters().images_refused > before_bmp;
-  }, 30.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        send(bmp, "bmp");
+        CHECK_FALSE(camera->Grab({}, frame));
+        return adapter.Counters().images_refused > before_bmp;
+      },
+      30.0));
 
   // A PNG of a sensible size still decodes.
   std::vector<uint8_t> small_png;
   REQUIRE(cv::imencode(".png", red, small_png));
-  REQUIRE(test::WaitFor([&] {
-    send(small_png, "png");
-    return camera->Grab({}, frame);
-  }, 30.0));
+  REQUIRE(test::WaitFor(
+      [&] {
+        send(small_png, "png");
+        return camera->Grab({}, frame);
+      },
+      30.0));
   CHECK(frame.at<cv::Vec3b>(frame.rows / 2, frame.cols / 2)[2] > 200);
 }

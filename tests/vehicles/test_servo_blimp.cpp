@@ -61,7 +61,8 @@ struct Rig {
           adapter->Update(0.0);  // reads; no time passes, so nothing new is due
           const servo::ServoOutputCounters& c = counters();
           if (maestro->bytes_read() != c.bytes_sent) return false;
-          if (!random_bytes) return c.error_replies == static_cast<uint64_t>(maestro->replies_sent());
+          if (!random_bytes)
+            return c.error_replies == static_cast<uint64_t>(maestro->replies_sent());
           return 2 * c.error_replies + c.unexpected_bytes + 1 >= maestro->bytes_written();
         },
         kWait_s);
@@ -81,13 +82,15 @@ struct Rig {
   /// The pulses on the wire, per channel, as the fake decoded them.
   std::array<double, kBlimpChannels> WirePulses() const {
     std::array<double, kBlimpChannels> out{};
-    for (int i = 0; i < kBlimpChannels; ++i) out[i] = maestro->output_us(config.channels[i].channel);
+    for (int i = 0; i < kBlimpChannels; ++i)
+      out[i] = maestro->output_us(config.channels[i].channel);
     return out;
   }
 };
 
 /// Every channel within a quarter µs (the Maestro's resolution) of `want`.
-bool Near(const std::array<double, kBlimpChannels>& have, const std::array<double, kBlimpChannels>& want) {
+bool Near(const std::array<double, kBlimpChannels>& have,
+          const std::array<double, kBlimpChannels>& want) {
   for (size_t i = 0; i < have.size(); ++i) {
     if (std::abs(have[i] - want[i]) > 0.26) return false;
   }
@@ -104,7 +107,9 @@ BlimpCommand Climbing() {
 
 }  // namespace
 
-TEST_CASE("a Maestro that cannot be trusted is a fault naming its errors, and every channel goes neutral") {
+TEST_CASE(
+    "a Maestro that cannot be trusted is a fault naming its errors, and every channel goes "
+    "neutral") {
   const Manner manner = GENERATE(Manner::kCrcErrorEveryPoll, Manner::kSilent, Manner::kRandomBytes);
   const bool random_bytes = manner == Manner::kRandomBytes;
   Rig rig(manner);
@@ -117,19 +122,23 @@ TEST_CASE("a Maestro that cannot be trusted is a fault naming its errors, and ev
   while (!rig.adapter->State().fault && windows < 10) {
     rig.FlyWindow(command, random_bytes);
     ++windows;
-    if (!rig.adapter->State().fault) CHECK(Near(rig.WirePulses(), commanded));  // still flying as told
+    if (!rig.adapter->State().fault)
+      CHECK(Near(rig.WirePulses(), commanded));  // still flying as told
   }
-  INFO("windows flown: " << windows << ", polls answered " << rig.counters().error_replies << ", missing "
-                         << rig.counters().replies_missing << ", stray bytes " << rig.counters().unexpected_bytes);
+  INFO("windows flown: " << windows << ", polls answered " << rig.counters().error_replies
+                         << ", missing " << rig.counters().replies_missing << ", stray bytes "
+                         << rig.counters().unexpected_bytes);
   const vehicles::BlimpAdapterState state = rig.adapter->State();
   REQUIRE(state.fault);
   // Judged at the poll that closed the third wrong window in a row, not before.
-  CHECK(rig.counters().polls_wrong == static_cast<uint64_t>(servo::ServoOutput::kUntrustedAfterPolls));
+  CHECK(rig.counters().polls_wrong ==
+        static_cast<uint64_t>(servo::ServoOutput::kUntrustedAfterPolls));
   CHECK(rig.adapter->output().untrusted());
 
   const std::string& why = state.fault_message;
-  CHECK_THAT(why, Catch::Contains("servo controller on " + rig.pty.slave_path() + " cannot be trusted") &&
-                      Catch::Contains("3 error polls in a row went wrong"));
+  CHECK_THAT(
+      why, Catch::Contains("servo controller on " + rig.pty.slave_path() + " cannot be trusted") &&
+               Catch::Contains("3 error polls in a row went wrong"));
   switch (manner) {
     case Manner::kCrcErrorEveryPoll:
       CHECK_THAT(why, Catch::Contains("CRC error (register 0x0008)"));

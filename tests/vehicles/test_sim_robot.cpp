@@ -140,6 +140,7 @@ TEST_CASE(
   CHECK_THROWS_AS(SimRobot(track, cfg), ConfigFieldError);
   // Before any DDS participant is made: the node's config is checked first.
   auto camera = video::MakeCameraSource(cfg.camera, &track, "test");
-  CHECK_THROWS_WITH(RobotNode(cfg, std::move(camera), std::make_unique<SimRobot>(track, VehicleConfig{})),
-                    Catch::Contains("drive.track_width"));
+  CHECK_THROWS_WITH(
+      RobotNode(cfg, std::move(camera), std::make_unique<SimRobot>(track, VehicleConfig{})),
+      Catch::Contains("drive.track_width"));
 }

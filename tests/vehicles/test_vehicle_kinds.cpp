@@ -3,7 +3,6 @@
 // loaded from its file, opened by OpenVehicle and driven through the one
 // vehicle node over DDS, with the watchdog stopping it.
 #include <catch2/catch.hpp>
-
 #include <cmath>
 #include <mutex>
 #include <optional>
@@ -24,7 +23,9 @@ namespace {
 /// levels (max_speed at the top level) and turns at their difference.
 class ToyRobot final : public VehicleAdapter {
  public:
-  explicit ToyRobot(const VehicleConfig& config) : drive_(config.drive) { state_.pose_valid = true; }
+  explicit ToyRobot(const VehicleConfig& config) : drive_(config.drive) {
+    state_.pose_valid = true;
+  }
   void SetMotors(const MotorLevels& levels) override { state_.applied = levels; }
   void Update(double dt) override {
     const double top = drive_.max_speed / drive_.speed_levels;
@@ -68,7 +69,8 @@ std::filesystem::path ToyFile(const std::filesystem::path& dir, int domain) {
   return test::WriteFile(dir / "toy.yaml",
                          "name: toy1\n"
                          "kind: toy-robot\n"
-                         "world: " + std::filesystem::absolute("config/tracks/test-short.yaml").string() +
+                         "world: " +
+                             std::filesystem::absolute("config/tracks/test-short.yaml").string() +
                              "\n"
                              "watchdog_timeout_s: 0.2\n"
                              "camera: {rate_hz: 5, width: 64, height: 48}\n"
@@ -122,12 +124,15 @@ TEST_CASE("a registered kind is in the table with its family; names are checked"
   CHECK_THAT(VehicleKindNames(), Catch::Contains("sim-robot") && Catch::Contains("toy-robot"));
   // Taken, malformed, or without a factory: refused, and the table unchanged.
   const size_t kinds = VehicleKinds().size();
-  CHECK_THROWS_WITH(RegisterKind<RobotFamily>(Kind("toy-robot"), [](const VehicleConfig&, const Track&) {
-                      return KindParts<RobotFamily>{};
-                    }),
+  CHECK_THROWS_WITH(RegisterKind<RobotFamily>(Kind("toy-robot"),
+                                              [](const VehicleConfig&, const Track&) {
+                                                return KindParts<RobotFamily>{};
+                                              }),
                     Catch::Contains("registered already"));
-  CHECK_THROWS_WITH(RegisterVehicleKind(Kind("toy robot")), Catch::Contains("letters, digits and '-'"));
-  CHECK_THROWS_WITH(RegisterKind<RobotFamily>(Kind("no-factory"), nullptr), Catch::Contains("no factory"));
+  CHECK_THROWS_WITH(RegisterVehicleKind(Kind("toy robot")),
+                    Catch::Contains("letters, digits and '-'"));
+  CHECK_THROWS_WITH(RegisterKind<RobotFamily>(Kind("no-factory"), nullptr),
+                    Catch::Contains("no factory"));
   CHECK(VehicleKinds().size() == kinds);
 }
 
@@ -143,12 +148,14 @@ TEST_CASE("every built-in kind has a factory in its family, and only there") {
 
 TEST_CASE("a vehicle file naming an unknown kind is refused with the known kinds") {
   const auto dir = test::ScratchDir("kinds");
-  const auto file = test::WriteFile(dir / "odd.yaml", "name: odd\nkind: hovercraft\nworld: x.yaml\n");
+  const auto file =
+      test::WriteFile(dir / "odd.yaml", "name: odd\nkind: hovercraft\nworld: x.yaml\n");
   const std::string what = test::WhatOf<std::exception>([&] { LoadVehicle(file); });
   CHECK_THAT(what, Catch::Contains("kind") && Catch::Contains("sim-robot, can-robot"));
 }
 
-TEST_CASE("a toy kind registered as the docs show is loaded, opened and driven through the one node") {
+TEST_CASE(
+    "a toy kind registered as the docs show is loaded, opened and driven through the one node") {
   RegisterToy();
   const int domain = test::UniqueDomain(71);
   const auto dir = test::ScratchDir("toy-kind");
@@ -176,7 +183,8 @@ TEST_CASE("a toy kind registered as the docs show is loaded, opened and driven t
   CHECK(s->motor_right_level() == config.drive.speed_levels);
   CHECK(std::abs(s->y()) < 1e-3f);  // straight ahead: the toy's treads are even
   CHECK(s->owner_session() == 42);
-  CHECK(link::WriterId{s->owner_writer()} == op.commands.id());  // the owner is the writer DDS named
+  CHECK(link::WriterId{s->owner_writer()} ==
+        op.commands.id());  // the owner is the writer DDS named
 
   // No more commands: the watchdog stops it, the toy stands still.
   REQUIRE(test::WaitFor(

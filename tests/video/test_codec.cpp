@@ -1,15 +1,14 @@
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdint>
 #include <deque>
-#include <random>
-#include <stdexcept>
-#include <vector>
-
-#include <catch2/catch.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <random>
+#include <stdexcept>
+#include <vector>
 
 #include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"
@@ -188,7 +187,8 @@ TEST_CASE("jpeg decoder accepts zero padding after the end marker") {
   CHECK(decoder.failures() == 0);
 }
 
-TEST_CASE("jpeg's ladder follows the link: quality, then resolution, then frame rate, and back up") {
+TEST_CASE(
+    "jpeg's ladder follows the link: quality, then resolution, then frame rate, and back up") {
   const cv::Mat frame = RenderedFrame();
   JpegEncoder encoder(80, 30.0);
   std::vector<uint8_t> bytes;
@@ -233,7 +233,9 @@ TEST_CASE("jpeg's ladder follows the link: quality, then resolution, then frame 
   CHECK(encoder.quality() == 80);  // never above the file's quality
 }
 
-TEST_CASE("jpeg's ladder: each rung's bitrate is below the one above, by at most kMaxRungRatio, on real frames") {
+TEST_CASE(
+    "jpeg's ladder: each rung's bitrate is below the one above, by at most kMaxRungRatio, on real "
+    "frames") {
   // A rung more than about 1.4 times the one below cannot be climbed back
   // to: the operator's estimate grows to at most 1.5 times what arrives.
   const std::vector<cv::Mat> frames = LapFrames(8);
@@ -253,17 +255,20 @@ TEST_CASE("jpeg's ladder: each rung's bitrate is below the one above, by at most
         REQUIRE(encoder.Encode(frame, bytes));
         total += bytes.size();
       }
-      kbps.push_back(static_cast<double>(total) / frames.size() * 8.0 * 30.0 * ladder[r].frame_share / 1000.0);
+      kbps.push_back(static_cast<double>(total) / frames.size() * 8.0 * 30.0 *
+                     ladder[r].frame_share / 1000.0);
     }
     for (size_t r = 1; r < ladder.size(); ++r) {
-      INFO("top quality " << top << ", rung " << r << " (quality " << ladder[r].quality << ", scale "
-                          << ladder[r].scale << ", frames " << ladder[r].frame_share << "): " << kbps[r]
-                          << " kbit/s, the rung above " << kbps[r - 1] << " (guessed ratio "
+      INFO("top quality " << top << ", rung " << r << " (quality " << ladder[r].quality
+                          << ", scale " << ladder[r].scale << ", frames " << ladder[r].frame_share
+                          << "): " << kbps[r] << " kbit/s, the rung above " << kbps[r - 1]
+                          << " (guessed ratio "
                           << ladder[r - 1].relative_kbps / ladder[r].relative_kbps << ")");
       CHECK(kbps[r] < kbps[r - 1]);
       CHECK(kbps[r - 1] / kbps[r] <= JpegEncoder::kMaxRungRatio);
       // The first guess is near the measured ratio (the ladder learns the rest).
-      CHECK(std::abs(ladder[r - 1].relative_kbps / ladder[r].relative_kbps - kbps[r - 1] / kbps[r]) < 0.15);
+      CHECK(std::abs(ladder[r - 1].relative_kbps / ladder[r].relative_kbps -
+                     kbps[r - 1] / kbps[r]) < 0.15);
     }
     // The bottom: the lowest quality, half size, a quarter of the frames.
     CHECK(ladder.back().quality == std::min(top, JpegEncoder::kMinQuality));
@@ -296,7 +301,9 @@ TEST_CASE("jpeg's ladder climbs back after a cut of the link, through the operat
   double link_free_s = 0.0;
   uint64_t seq = 0;
   std::vector<uint8_t> bytes;
-  const auto capacity_kbps = [](double t_s) { return t_s < 20.0 ? 1000.0 : t_s < 35.0 ? 300.0 : 1000.0; };
+  const auto capacity_kbps = [](double t_s) {
+    return t_s < 20.0 ? 1000.0 : t_s < 35.0 ? 300.0 : 1000.0;
+  };
   for (int tick = 0; tick < 30 * 75; ++tick) {
     const double now = tick / 30.0;
     while (!in_flight.empty() && in_flight.front().arrival_s <= now) {
@@ -326,14 +333,17 @@ TEST_CASE("jpeg's ladder climbs back after a cut of the link, through the operat
   const double before_cut = kbps_between(15.0, 20.0);
   const double during_cut = kbps_between(30.0, 35.0);
   const double after = kbps_between(70.0, 75.0);
-  INFO("before the cut " << before_cut << " kbit/s, during " << during_cut << ", 35 s after " << after
-                         << "; the estimate at the end " << estimator.target_kbps() << " kbit/s");
+  INFO("before the cut " << before_cut << " kbit/s, during " << during_cut << ", 35 s after "
+                         << after << "; the estimate at the end " << estimator.target_kbps()
+                         << " kbit/s");
   CHECK(before_cut > 500.0);  // the link is used before the cut
   CHECK(during_cut < 330.0);  // the ladder went down to fit
   CHECK(after >= 0.7 * before_cut);
 }
 
-TEST_CASE("a camera's JPEG: its size read from the frame header without decoding, baseline and progressive") {
+TEST_CASE(
+    "a camera's JPEG: its size read from the frame header without decoding, baseline and "
+    "progressive") {
   const cv::Mat frame = RenderedFrame();
   int width = 0;
   int height = 0;
@@ -355,16 +365,20 @@ TEST_CASE("a camera's JPEG: its size read from the frame header without decoding
   CHECK_FALSE(haptel::video::JpegFrameSize(nullptr, 0, width, height));
 }
 
-TEST_CASE("a camera's JPEG passes through undecoded only at the configured size, as JPEG, within the asked bitrate") {
+TEST_CASE(
+    "a camera's JPEG passes through undecoded only at the configured size, as JPEG, within the "
+    "asked bitrate") {
   const std::vector<uint8_t> jpeg = Encoded(RenderedFrame(), 80);  // 640x480
-  haptel::CameraConfig camera;  // 640x480 JPEG at 30 Hz
+  haptel::CameraConfig camera;                                     // 640x480 JPEG at 30 Hz
   const double kbps = static_cast<double>(jpeg.size()) * 8.0 * camera.rate_hz / 1000.0;
   INFO(jpeg.size() << " bytes a frame: " << kbps << " kbit/s at 30 Hz");
   // No bitrate asked for yet, or one it fits: as it is.
   CHECK(haptel::video::JpegPassesThrough(jpeg.data(), jpeg.size(), camera, 0));
-  CHECK(haptel::video::JpegPassesThrough(jpeg.data(), jpeg.size(), camera, static_cast<uint32_t>(kbps) + 1));
+  CHECK(haptel::video::JpegPassesThrough(jpeg.data(), jpeg.size(), camera,
+                                         static_cast<uint32_t>(kbps) + 1));
   // Over the bitrate the link carries: encoded again (down the ladder).
-  CHECK_FALSE(haptel::video::JpegPassesThrough(jpeg.data(), jpeg.size(), camera, static_cast<uint32_t>(kbps * 0.8)));
+  CHECK_FALSE(haptel::video::JpegPassesThrough(jpeg.data(), jpeg.size(), camera,
+                                               static_cast<uint32_t>(kbps * 0.8)));
   // Another size than the vehicle file's, or a vehicle that sends H.264: encoded again.
   haptel::CameraConfig smaller = camera;
   smaller.width = 320;
@@ -379,7 +393,7 @@ TEST_CASE("a camera's JPEG passes through undecoded only at the configured size,
   REQUIRE(haptel::video::DecodeCameraJpeg(jpeg, smaller, scratch, picture));
   CHECK(picture.cols == 320);
   CHECK(picture.rows == 240);
-  CHECK_FALSE(haptel::video::DecodeCameraJpeg(std::vector<uint8_t>(jpeg.begin(), jpeg.begin() + 10), smaller, scratch,
-                                              picture));
+  CHECK_FALSE(haptel::video::DecodeCameraJpeg(std::vector<uint8_t>(jpeg.begin(), jpeg.begin() + 10),
+                                              smaller, scratch, picture));
   CHECK(picture.cols == 320);  // left as it was
 }

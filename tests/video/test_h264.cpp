@@ -1,8 +1,7 @@
-#include <cstdint>
-#include <vector>
-
 #include <catch2/catch.hpp>
+#include <cstdint>
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"
@@ -22,7 +21,8 @@ namespace {
 /// Two seconds of the synthetic camera driving the grand prix from its start.
 const std::vector<cv::Mat>& Frames() {
   static const haptel::Track track(haptel::LoadTrack("config/tracks/grand-prix.yaml"));
-  static const std::vector<cv::Mat> frames = haptel::testing::LapFrames(track, haptel::CameraConfig{}, 1, 60);
+  static const std::vector<cv::Mat> frames =
+      haptel::testing::LapFrames(track, haptel::CameraConfig{}, 1, 60);
   return frames;
 }
 
@@ -66,18 +66,26 @@ TEST_CASE("H.264 round trip of the synthetic camera's frames at 1 Mbit/s keeps S
   CHECK(worst_ssim > 0.9);
   CHECK_FALSE(decoder.awaiting_key_frame());
   // Near the target: 1 Mbit/s is 4.2 kB a frame at 30 fps.
-  const double kbps = static_cast<double>(bytes) * 8.0 / (static_cast<double>(Frames().size()) / 30.0) / 1000.0;
+  const double kbps =
+      static_cast<double>(bytes) * 8.0 / (static_cast<double>(Frames().size()) / 30.0) / 1000.0;
   CHECK(kbps < 1500.0);
 }
 
-TEST_CASE("A frame lost between H.264 encoder and decoder: loss reported, key frame requested, picture back",
-          "[video][h264]") {
-  H264Encoder encoder({.width = 640, .height = 480, .rate_hz = 30.0, .bitrate_kbps = 1000,
+TEST_CASE(
+    "A frame lost between H.264 encoder and decoder: loss reported, key frame requested, picture "
+    "back",
+    "[video][h264]") {
+  H264Encoder encoder({.width = 640,
+                       .height = 480,
+                       .rate_hz = 30.0,
+                       .bitrate_kbps = 1000,
                        .key_frame_interval_s = 100.0});  // no periodic IDR to rescue it
   H264Decoder decoder;
   cv::Mat image;
   uint64_t seq = 0;
-  for (int i = 0; i < 10; ++i) REQUIRE(DecodeSent(decoder, EncodeNext(encoder, Frames()[i], ++seq), image) == DecodeResult::kPicture);
+  for (int i = 0; i < 10; ++i)
+    REQUIRE(DecodeSent(decoder, EncodeNext(encoder, Frames()[i], ++seq), image) ==
+            DecodeResult::kPicture);
   const cv::Mat before = image.clone();
 
   (void)EncodeNext(encoder, Frames()[10], ++seq);  // lost on the link
@@ -87,7 +95,8 @@ TEST_CASE("A frame lost between H.264 encoder and decoder: loss reported, key fr
   CHECK(decoder.awaiting_key_frame());
   CHECK(cv::norm(image, before, cv::NORM_INF) == 0.0);  // the last picture stays
   // Delta frames are refused until a key frame comes.
-  CHECK(DecodeSent(decoder, EncodeNext(encoder, Frames()[12], ++seq), image) == DecodeResult::kAwaitingKeyFrame);
+  CHECK(DecodeSent(decoder, EncodeNext(encoder, Frames()[12], ++seq), image) ==
+        DecodeResult::kAwaitingKeyFrame);
 
   encoder.RequestKeyFrame();
   const Sent idr = EncodeNext(encoder, Frames()[13], ++seq);
@@ -103,16 +112,22 @@ TEST_CASE("A frame lost between H.264 encoder and decoder: loss reported, key fr
 }
 
 TEST_CASE("A corrupt H.264 frame is reported and waits for a key frame", "[video][h264]") {
-  H264Encoder encoder({.width = 640, .height = 480, .rate_hz = 30.0, .bitrate_kbps = 1000,
+  H264Encoder encoder({.width = 640,
+                       .height = 480,
+                       .rate_hz = 30.0,
+                       .bitrate_kbps = 1000,
                        .key_frame_interval_s = 100.0});
   H264Decoder decoder;
   cv::Mat image;
   uint64_t seq = 0;
-  for (int i = 0; i < 5; ++i) REQUIRE(DecodeSent(decoder, EncodeNext(encoder, Frames()[i], ++seq), image) == DecodeResult::kPicture);
+  for (int i = 0; i < 5; ++i)
+    REQUIRE(DecodeSent(decoder, EncodeNext(encoder, Frames()[i], ++seq), image) ==
+            DecodeResult::kPicture);
   Sent broken = EncodeNext(encoder, Frames()[5], ++seq);
   // A frame cut short and its tail overwritten: what a damaged datagram leaves.
   broken.bytes.resize(broken.bytes.size() / 2);
-  for (size_t i = broken.bytes.size() / 2; i < broken.bytes.size(); ++i) broken.bytes[i] = static_cast<uint8_t>(i * 37);
+  for (size_t i = broken.bytes.size() / 2; i < broken.bytes.size(); ++i)
+    broken.bytes[i] = static_cast<uint8_t>(i * 37);
   CHECK(DecodeSent(decoder, broken, image) == DecodeResult::kCorrupt);
   CHECK(decoder.awaiting_key_frame());
   encoder.RequestKeyFrame();
@@ -144,7 +159,8 @@ TEST_CASE("H.264's target bitrate follows SetTargetBitrate", "[video][h264]") {
 
 TEST_CASE("H.264 encoder options are checked", "[video][h264]") {
   CHECK_THROWS_AS(H264Encoder({.width = 641, .height = 480}), std::invalid_argument);
-  CHECK_THROWS_AS(H264Encoder({.width = 640, .height = 480, .rate_hz = 0.0}), std::invalid_argument);
+  CHECK_THROWS_AS(H264Encoder({.width = 640, .height = 480, .rate_hz = 0.0}),
+                  std::invalid_argument);
   CHECK_THROWS_AS(H264Encoder({.width = 640, .height = 480, .rate_hz = 30.0, .bitrate_kbps = 0}),
                   std::invalid_argument);
 }

@@ -2,10 +2,9 @@
 // the estimator's target through a bottleneck of the test's own (a
 // drop-tail queue served at the link's capacity, a propagation delay, a
 // little jitter), in simulated time.
-#include <catch2/catch.hpp>
-
 #include <algorithm>
 #include <array>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <deque>
 #include <functional>
@@ -65,7 +64,8 @@ struct LinkRun {
       if (unit(rng) < loss) continue;
       const double arrival = link_free_s + delay_s + jitter_s * (2 * unit(rng) - 1);
       estimator.OnFrame(frame, t, arrival, static_cast<size_t>(bytes));
-      if (estimator.FeedbackDue(arrival)) on_their_way.emplace_back(arrival + feedback_delay_s, estimator.target_kbps());
+      if (estimator.FeedbackDue(arrival))
+        on_their_way.emplace_back(arrival + feedback_delay_s, estimator.target_kbps());
     }
     return out;
   }
@@ -96,8 +96,17 @@ struct BurstyJpegRun {
     double kbps;
     int every;  ///< one frame in `every` is sent
   };
-  static constexpr std::array<Rung, 11> kRungs{{{6000, 1}, {5000, 1}, {4200, 1}, {3500, 1}, {3000, 1}, {2400, 1},
-                                               {1800, 1}, {510, 1}, {510, 2}, {510, 3}, {510, 4}}};
+  static constexpr std::array<Rung, 11> kRungs{{{6000, 1},
+                                                {5000, 1},
+                                                {4200, 1},
+                                                {3500, 1},
+                                                {3000, 1},
+                                                {2400, 1},
+                                                {1800, 1},
+                                                {510, 1},
+                                                {510, 2},
+                                                {510, 3},
+                                                {510, 4}}};
 
   std::vector<Sample> Run(RateEstimator& estimator, double duration_s) const {
     std::mt19937 rng(seed);
@@ -126,7 +135,8 @@ struct BurstyJpegRun {
         const double rate = kRungs[rung].kbps / kRungs[rung].every;
         if (rate > 1.05 * followed_kbps && rung + 1 < kRungs.size()) {
           ++rung, frames_at_rung = 0;
-        } else if (rung > 0 && kRungs[rung - 1].kbps / kRungs[rung - 1].every < 0.9 * followed_kbps) {
+        } else if (rung > 0 &&
+                   kRungs[rung - 1].kbps / kRungs[rung - 1].every < 0.9 * followed_kbps) {
           --rung, frames_at_rung = 0;
         }
       }
@@ -149,14 +159,16 @@ struct BurstyJpegRun {
       if (lost) continue;
       const double arrival = last_out + delay_s;
       estimator.OnFrame(seq, t, arrival, static_cast<size_t>(frame_bytes));
-      if (estimator.FeedbackDue(arrival)) on_their_way.emplace_back(arrival + feedback_delay_s, estimator.target_kbps());
+      if (estimator.FeedbackDue(arrival))
+        on_their_way.emplace_back(arrival + feedback_delay_s, estimator.target_kbps());
     }
     return out;
   }
 };
 
 /// The first time at or after `from_s` when `test` holds, or -1.
-double FirstTime(const std::vector<Sample>& run, double from_s, const std::function<bool(const Sample&)>& test) {
+double FirstTime(const std::vector<Sample>& run, double from_s,
+                 const std::function<bool(const Sample&)>& test) {
   for (const Sample& s : run) {
     if (s.t_s >= from_s && test(s)) return s.t_s;
   }
@@ -171,7 +183,8 @@ TEST_CASE("a step down in capacity is detected within 1 s and the target follows
   link.capacity = [](double t) { return t < 20.0 ? 2000.0 : 500.0; };
   const std::vector<Sample> run = link.Run(estimator, 30.0);
   // Before the step the target had found the 2 Mbit/s link: near it, not far over.
-  const auto before = std::find_if(run.begin(), run.end(), [](const Sample& s) { return s.t_s >= 19.9; });
+  const auto before =
+      std::find_if(run.begin(), run.end(), [](const Sample& s) { return s.t_s >= 19.9; });
   REQUIRE(before != run.end());
   INFO("target before the step " << before->target_kbps << " kbit/s");
   CHECK(before->target_kbps > 0.6 * 2000.0);
@@ -203,7 +216,9 @@ TEST_CASE("a link faster than the video: the target climbs to the most and is ne
   CHECK(estimator.usage() != LinkUsage::kOveruse);
 }
 
-TEST_CASE("a steady link the video fills: the target stays in a band around the capacity, no oscillation") {
+TEST_CASE(
+    "a steady link the video fills: the target stays in a band around the capacity, no "
+    "oscillation") {
   RateEstimator estimator;
   LinkRun link;
   link.capacity = [](double) { return 1500.0; };
@@ -214,7 +229,8 @@ TEST_CASE("a steady link the video fills: the target stays in a band around the 
     low = std::min(low, s.target_kbps);
     high = std::max(high, s.target_kbps);
   }
-  INFO("target between " << low << " and " << high << " kbit/s; " << estimator.decreases() << " cuts");
+  INFO("target between " << low << " and " << high << " kbit/s; " << estimator.decreases()
+                         << " cuts");
   CHECK(low > 0.6 * 1500.0);
   CHECK(high < 1.2 * 1500.0);
   // AIMD probes the capacity now and then; it does not saw at every frame.
@@ -284,9 +300,9 @@ TEST_CASE("bursty JPEG frames on a 1 Mbit/s link: the target settles within 30 %
         low = std::min(low, s.target_kbps);
         high = std::max(high, s.target_kbps);
       }
-      INFO("target between " << low << " and " << high << " kbit/s after 20 s; last " << run.back().target_kbps
-                             << "; received " << estimator.received_kbps() << "; " << estimator.decreases()
-                             << " cuts");
+      INFO("target between " << low << " and " << high << " kbit/s after 20 s; last "
+                             << run.back().target_kbps << "; received " << estimator.received_kbps()
+                             << "; " << estimator.decreases() << " cuts");
       CHECK(low >= 0.7 * 1000.0);
       CHECK(high <= 1.3 * 1000.0);
     }

@@ -69,9 +69,12 @@ TEST_CASE("Mp4Writer writes every frame into an H.264 MP4 that decodes at its fr
   CHECK(DecodedFrames(mp4) == 40);
 }
 
-TEST_CASE("Mp4Writer: a write that fails ends the recording, names the file and the OS's reason, and keeps what was written") {
+TEST_CASE(
+    "Mp4Writer: a write that fails ends the recording, names the file and the OS's reason, and "
+    "keeps what was written") {
   const auto mp4 = test::ScratchDir("mp4-writer-full") / "cut.mp4";
-  constexpr rlim_t kLimit = 2 * 1024 * 1024;  // bytes: some whole fragments, far less than the frames
+  constexpr rlim_t kLimit =
+      2 * 1024 * 1024;  // bytes: some whole fragments, far less than the frames
   constexpr int kFrames = 600;
   Mp4Writer writer(mp4, kWidth, kHeight, 10.0);
   int accepted = 0;
@@ -87,7 +90,8 @@ TEST_CASE("Mp4Writer: a write that fails ends the recording, names the file and 
   CHECK(writer.failed());
   CHECK(writer.error().find(mp4.string()) != std::string::npos);
   CHECK(writer.error().find(std::strerror(EFBIG)) != std::string::npos);  // "File too large"
-  CHECK(writer.error().find("after " + std::to_string(writer.frames()) + " frames") != std::string::npos);
+  CHECK(writer.error().find("after " + std::to_string(writer.frames()) + " frames") !=
+        std::string::npos);
   // Ended: nothing more is taken, the answer stays.
   const std::string error = writer.error();
   CHECK_FALSE(writer.Write(Frame(0)));
@@ -100,7 +104,9 @@ TEST_CASE("Mp4Writer: a write that fails ends the recording, names the file and 
   CHECK(decoded <= accepted);
 }
 
-TEST_CASE("the View: a recording whose file fails ends, its stats say why, and the view goes on drawing") {
+TEST_CASE(
+    "the View: a recording whose file fails ends, its stats say why, and the view goes on "
+    "drawing") {
   const auto mp4 = test::ScratchDir("view-mp4-full") / "view.mp4";
   NoiseSource source;
   ViewOptions options;

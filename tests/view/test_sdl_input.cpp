@@ -54,10 +54,13 @@ TEST_CASE("sdl input: arrows and W/A/S/D set held flags and count presses", "[sd
   CHECK_FALSE(s.key_stop);
 }
 
-TEST_CASE("sdl input: each physical key is also seen on its own (the blimp's keys)", "[sdl_input]") {
+TEST_CASE("sdl input: each physical key is also seen on its own (the blimp's keys)",
+          "[sdl_input]") {
   using haptel::interfaces::Key;
   const auto held = [](const InputState& s, Key k) { return s.keys_held[static_cast<size_t>(k)]; };
-  const auto presses = [](const InputState& s, Key k) { return s.key_presses[static_cast<size_t>(k)]; };
+  const auto presses = [](const InputState& s, Key k) {
+    return s.key_presses[static_cast<size_t>(k)];
+  };
   InputBox box;
   SdlInput input(box);
   input.OnEvent(Down(SDL_SCANCODE_W));
@@ -119,8 +122,9 @@ TEST_CASE("sdl input: F1..F6 request interfaces 0..5, one request per press", "[
   CHECK(box.Load().interface_requests == 3);
 }
 
-TEST_CASE("sdl input: Tab asks a fleet for the next vehicle, 1..9 for that one, one request per press",
-          "[sdl_input]") {
+TEST_CASE(
+    "sdl input: Tab asks a fleet for the next vehicle, 1..9 for that one, one request per press",
+    "[sdl_input]") {
   InputBox box;
   SdlInput input(box);
   CHECK(box.Load().vehicle_requests == 0);
@@ -217,8 +221,9 @@ SDL_Event Motion(int xrel, int yrel, Uint32 buttons) {
 }
 }  // namespace
 
-TEST_CASE("sdl input: dragging the mouse turns the head, within the camera's range; Home looks ahead",
-          "[sdl_input]") {
+TEST_CASE(
+    "sdl input: dragging the mouse turns the head, within the camera's range; Home looks ahead",
+    "[sdl_input]") {
   InputBox box;
   SdlInput input(box);
   // The pointer passing over the window without a button held turns nothing.
@@ -248,11 +253,10 @@ TEST_CASE("sdl input: dragging the mouse turns the head, within the camera's ran
 TEST_CASE("sdl input: events allocate nothing", "[sdl_input][alloc]") {
   InputBox box;
   SdlInput input(box);
-  const SDL_Event events[] = {Down(SDL_SCANCODE_UP),   Up(SDL_SCANCODE_UP),
-                              Down(SDL_SCANCODE_A, 0), Down(SDL_SCANCODE_F2),
-                              Up(SDL_SCANCODE_SPACE),  Down(SDL_SCANCODE_SPACE),
-                              Down(SDL_SCANCODE_PAGEUP), Up(SDL_SCANCODE_PAGEUP),
-                              Motion(3, -2, SDL_BUTTON_LMASK)};
+  const SDL_Event events[] = {
+      Down(SDL_SCANCODE_UP),     Up(SDL_SCANCODE_UP),     Down(SDL_SCANCODE_A, 0),
+      Down(SDL_SCANCODE_F2),     Up(SDL_SCANCODE_SPACE),  Down(SDL_SCANCODE_SPACE),
+      Down(SDL_SCANCODE_PAGEUP), Up(SDL_SCANCODE_PAGEUP), Motion(3, -2, SDL_BUTTON_LMASK)};
   const uint64_t before = haptel::test::ThreadAllocations();
   for (int i = 0; i < 1000; ++i) {
     for (const SDL_Event& e : events) input.OnEvent(e);

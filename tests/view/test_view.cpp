@@ -117,7 +117,9 @@ TEST_CASE("the direct view puts the camera's picture over most of the frame (the
   CHECK(height > 1.5 * (ScreenPoint(usual, 0.0, 1.0).y - ScreenPoint(usual, 0.0, 0.0).y));
 }
 
-TEST_CASE("a tracked gaze: the screen hangs where the vehicle camera looks, the view turns with the head") {
+TEST_CASE(
+    "a tracked gaze: the screen hangs where the vehicle camera looks, the view turns with the "
+    "head") {
   OffscreenGl gl;
   Renderer renderer(kWidth, kHeight, HeadTrackedScreen());
   ViewModel model;
@@ -435,11 +437,14 @@ TEST_CASE("shared control's arrow shows which way and how hard the hand is pushe
   CHECK(sideways.below == 0);
   // And in words, on the panel's lines.
   bool said = false;
-  for (const std::string& line : OverlayLines(model.overlay)) said |= line == "shared control: push 1.0 N, obstacle in 0.6 s";
+  for (const std::string& line : OverlayLines(model.overlay))
+    said |= line == "shared control: push 1.0 N, obstacle in 0.6 s";
   CHECK(said);
 }
 
-TEST_CASE("a fleet's tiles: each vehicle's picture and text down the right edge, the driven one framed in yellow") {
+TEST_CASE(
+    "a fleet's tiles: each vehicle's picture and text down the right edge, the driven one framed "
+    "in yellow") {
   OffscreenGl gl;
   Renderer renderer(kWidth, kHeight);
   ViewModel model;

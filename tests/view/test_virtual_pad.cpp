@@ -191,8 +191,9 @@ TEST_CASE("stopping the pump lets the controller go without a disconnect; a new 
   CHECK_FALSE(s.pad_connected);
 }
 
-TEST_CASE("a virtual game controller flies the simulated blimp: climb away, tail-rotor turnabout, unplug",
-          "[view_input][virtual_pad][blimp]") {
+TEST_CASE(
+    "a virtual game controller flies the simulated blimp: climb away, tail-rotor turnabout, unplug",
+    "[view_input][virtual_pad][blimp]") {
   InputBox box;
   InputPump pump(box);
   VirtualPad stick(pump);
@@ -244,8 +245,9 @@ TEST_CASE("a virtual game controller flies the simulated blimp: climb away, tail
   CHECK(blimp.applied().power == 0.0);
 }
 
-TEST_CASE("a virtual game controller's Back button asks a fleet for its next vehicle, once per press",
-          "[view_input][virtual_pad]") {
+TEST_CASE(
+    "a virtual game controller's Back button asks a fleet for its next vehicle, once per press",
+    "[view_input][virtual_pad]") {
   InputBox box;
   InputPump pump(box);
   VirtualPad stick(pump);

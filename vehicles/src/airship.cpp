@@ -15,7 +15,9 @@ double SignedSquare(double v) { return v * std::abs(v); }
 
 Eigen::Quaterniond Exp(const Eigen::Vector3d& rotation) {
   const double angle = rotation.norm();
-  if (angle < 1e-12) return Eigen::Quaterniond(1.0, 0.5 * rotation.x(), 0.5 * rotation.y(), 0.5 * rotation.z()).normalized();
+  if (angle < 1e-12)
+    return Eigen::Quaterniond(1.0, 0.5 * rotation.x(), 0.5 * rotation.y(), 0.5 * rotation.z())
+        .normalized();
   return Eigen::Quaterniond(Eigen::AngleAxisd(angle, rotation / angle));
 }
 
@@ -90,8 +92,8 @@ Eigen::Vector3d Airship::Airspeed() const {
   return state_.velocity - state_.attitude.conjugate() * Wind(time_s_);
 }
 
-void Airship::Loads(double t_s, const AirshipState& s, const AirshipControls& c, Eigen::Vector3d* force,
-                    Eigen::Vector3d* moment) const {
+void Airship::Loads(double t_s, const AirshipState& s, const AirshipControls& c,
+                    Eigen::Vector3d* force, Eigen::Vector3d* moment) const {
   const AirshipConfig& k = config_;
   const Eigen::Quaterniond to_body = s.attitude.conjugate();
   Eigen::Vector3d f = to_body * Eigen::Vector3d(0.0, 0.0, mass_.buoyancy - mass_.weight);
@@ -105,11 +107,13 @@ void Airship::Loads(double t_s, const AirshipState& s, const AirshipControls& c,
     const double a = k.length / 2.0;
     // Hull: axial drag on V^(2/3), cross-flow drag on the side area, and the
     // cross-flow drag of the hull turning about its centre (∫ x·x|x| dx = a⁴/2).
-    f.x() -= half_rho * k.axial_drag_coefficient * std::pow(k.volume, 2.0 / 3.0) * SignedSquare(air.x());
+    f.x() -=
+        half_rho * k.axial_drag_coefficient * std::pow(k.volume, 2.0 / 3.0) * SignedSquare(air.x());
     const double side_area = M_PI / 4.0 * k.length * k.diameter;
     f.y() -= half_rho * k.crossflow_drag_coefficient * side_area * SignedSquare(air.y());
     f.z() -= half_rho * k.crossflow_drag_coefficient * side_area * SignedSquare(air.z());
-    const double turning = half_rho * k.crossflow_drag_coefficient * k.diameter * std::pow(a, 4) / 2.0;
+    const double turning =
+        half_rho * k.crossflow_drag_coefficient * k.diameter * std::pow(a, 4) / 2.0;
     m.y() -= turning * SignedSquare(s.rates.y());
     m.z() -= turning * SignedSquare(s.rates.z());
 
@@ -123,9 +127,9 @@ void Airship::Loads(double t_s, const AirshipState& s, const AirshipControls& c,
     const double fin = half_rho * k.fin_area * k.fin_lift_slope * onset;
     const double max_surface = k.max_surface_deg * M_PI / 180.0;
     const double deflect = k.control_effectiveness * SignedSquare(at_tail.x());
-    const Eigen::Vector3d fins(0.0,
-                               -2.0 * fin * (speed * at_tail.y() + deflect * c.rudder * max_surface),
-                               -2.0 * fin * (speed * at_tail.z() + deflect * c.elevator * max_surface));
+    const Eigen::Vector3d fins(
+        0.0, -2.0 * fin * (speed * at_tail.y() + deflect * c.rudder * max_surface),
+        -2.0 * fin * (speed * at_tail.z() + deflect * c.elevator * max_surface));
     f += fins;
     m += tail.cross(fins);
     // Rolling moves each fin's centre of pressure (at half a metre beyond the
@@ -135,7 +139,8 @@ void Airship::Loads(double t_s, const AirshipState& s, const AirshipControls& c,
   }
 
   // Main propellers on the tilting helix plane, and the tail rotor.
-  const Eigen::Vector3d thrust = s.thrust * Eigen::Vector3d(std::cos(s.helix_rad), 0.0, std::sin(s.helix_rad));
+  const Eigen::Vector3d thrust =
+      s.thrust * Eigen::Vector3d(std::cos(s.helix_rad), 0.0, std::sin(s.helix_rad));
   f += thrust;
   m += Eigen::Vector3d(k.propeller_x, 0.0, k.propeller_z).cross(thrust);
   const Eigen::Vector3d tail_force(0.0, -s.tail, 0.0);
@@ -145,11 +150,13 @@ void Airship::Loads(double t_s, const AirshipState& s, const AirshipControls& c,
   *moment = m;
 }
 
-Airship::Derivative Airship::Evaluate(double t_s, const AirshipState& s, const AirshipControls& c) const {
+Airship::Derivative Airship::Evaluate(double t_s, const AirshipState& s,
+                                      const AirshipControls& c) const {
   Eigen::Vector3d force, moment;
   Loads(t_s, s, c, &force, &moment);
   if (contact_ != nullptr) {
-    Eigen::Vector3d contact_force = Eigen::Vector3d::Zero(), contact_moment = Eigen::Vector3d::Zero();
+    Eigen::Vector3d contact_force = Eigen::Vector3d::Zero(),
+                    contact_moment = Eigen::Vector3d::Zero();
     contact_->Loads(s, &contact_force, &contact_moment);
     force += contact_force;
     moment += contact_moment;
@@ -169,11 +176,13 @@ Airship::Derivative Airship::Evaluate(double t_s, const AirshipState& s, const A
   d.velocity_dot = (force - s.rates.cross(momentum)).cwiseQuotient(M);
   d.rates_dot = (moment - s.rates.cross(angular) - air.cross(added)).cwiseQuotient(J);
   d.position_dot = s.attitude * s.velocity;
-  const Eigen::Quaterniond spin = s.attitude * Eigen::Quaterniond(0.0, s.rates.x(), s.rates.y(), s.rates.z());
+  const Eigen::Quaterniond spin =
+      s.attitude * Eigen::Quaterniond(0.0, s.rates.x(), s.rates.y(), s.rates.z());
   d.attitude_dot = 0.5 * spin.coeffs();
   const AirshipConfig& k = config_;
   d.thrust_dot = (std::clamp(c.power, 0.0, 1.0) * k.max_thrust - s.thrust) / k.thrust_time_constant;
-  d.tail_dot = (std::clamp(c.tail_rotor, -1.0, 1.0) * k.tail_thrust - s.tail) / k.tail_time_constant;
+  d.tail_dot =
+      (std::clamp(c.tail_rotor, -1.0, 1.0) * k.tail_thrust - s.tail) / k.tail_time_constant;
   const double helix_target = std::clamp(c.helix, -1.0, 1.0) * k.max_helix_deg * M_PI / 180.0;
   const double rate = k.helix_rate_deg_s * M_PI / 180.0;
   d.helix_dot = std::clamp((helix_target - s.helix_rad) / kServoTimeConstant, -rate, rate);
@@ -221,10 +230,13 @@ void Airship::Step(double h, const AirshipControls& c) {
       const Derivative d3 = Evaluate(t + h / 2, Apply(state_, d2, h / 2), c);
       const Derivative d4 = Evaluate(t + h, Apply(state_, d3, h), c);
       Derivative sum;
-      sum.position_dot = (d1.position_dot + 2 * d2.position_dot + 2 * d3.position_dot + d4.position_dot) / 6;
-      sum.velocity_dot = (d1.velocity_dot + 2 * d2.velocity_dot + 2 * d3.velocity_dot + d4.velocity_dot) / 6;
+      sum.position_dot =
+          (d1.position_dot + 2 * d2.position_dot + 2 * d3.position_dot + d4.position_dot) / 6;
+      sum.velocity_dot =
+          (d1.velocity_dot + 2 * d2.velocity_dot + 2 * d3.velocity_dot + d4.velocity_dot) / 6;
       sum.rates_dot = (d1.rates_dot + 2 * d2.rates_dot + 2 * d3.rates_dot + d4.rates_dot) / 6;
-      sum.attitude_dot = (d1.attitude_dot + 2 * d2.attitude_dot + 2 * d3.attitude_dot + d4.attitude_dot) / 6;
+      sum.attitude_dot =
+          (d1.attitude_dot + 2 * d2.attitude_dot + 2 * d3.attitude_dot + d4.attitude_dot) / 6;
       sum.thrust_dot = (d1.thrust_dot + 2 * d2.thrust_dot + 2 * d3.thrust_dot + d4.thrust_dot) / 6;
       sum.helix_dot = (d1.helix_dot + 2 * d2.helix_dot + 2 * d3.helix_dot + d4.helix_dot) / 6;
       sum.tail_dot = (d1.tail_dot + 2 * d2.tail_dot + 2 * d3.tail_dot + d4.tail_dot) / 6;
@@ -246,19 +258,22 @@ double Airship::Energy() const {
   const AirshipState& s = state_;
   const double kinetic = 0.5 * s.velocity.dot(mass_.inertia_mass.cwiseProduct(s.velocity)) +
                          0.5 * s.rates.dot(mass_.inertia_moment.cwiseProduct(s.rates));
-  const double buoyancy_height = s.position.z() + (s.attitude * Eigen::Vector3d(0.0, 0.0, config_.cg_below_cb)).z();
+  const double buoyancy_height =
+      s.position.z() + (s.attitude * Eigen::Vector3d(0.0, 0.0, config_.cg_below_cb)).z();
   return kinetic + mass_.weight * s.position.z() - mass_.buoyancy * buoyancy_height;
 }
 
 Eigen::Vector3d Airship::YawPitchRoll() const {
   const Eigen::Matrix3d r = state_.attitude.toRotationMatrix();
-  return {std::atan2(r(1, 0), r(0, 0)), std::asin(std::clamp(r(2, 0), -1.0, 1.0)), std::atan2(r(2, 1), r(2, 2))};
+  return {std::atan2(r(1, 0), r(0, 0)), std::asin(std::clamp(r(2, 0), -1.0, 1.0)),
+          std::atan2(r(2, 1), r(2, 2))};
 }
 
 bool Airship::Finite() const {
   const AirshipState& s = state_;
-  return s.position.allFinite() && s.velocity.allFinite() && s.rates.allFinite() && s.attitude.coeffs().allFinite() &&
-         std::isfinite(s.thrust) && std::isfinite(s.helix_rad) && std::isfinite(s.tail);
+  return s.position.allFinite() && s.velocity.allFinite() && s.rates.allFinite() &&
+         s.attitude.coeffs().allFinite() && std::isfinite(s.thrust) && std::isfinite(s.helix_rad) &&
+         std::isfinite(s.tail);
 }
 
 }  // namespace haptel::vehicles

@@ -14,7 +14,8 @@ void Fly(Airship& ship, const AirshipControls& controls, double seconds) {
 }  // namespace
 
 AirshipConfig NeutrallyBuoyant(AirshipConfig config) {
-  config.payload_mass = (config.air_density - config.helium_density) * config.volume - config.structure_mass;
+  config.payload_mass =
+      (config.air_density - config.helium_density) * config.volume - config.structure_mass;
   return config;
 }
 
@@ -60,8 +61,8 @@ double EnergyDrift(const AirshipConfig& config, double seconds, bool* finite) {
   AirshipState start;
   start.velocity = {3.0, 0.5, -0.3};
   start.rates = {0.2, 0.05, 0.15};
-  start.attitude =
-      Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()) * Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitY());
+  start.attitude = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()) *
+                   Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitY());
   Airship ship(c);
   ship.set_state(start);
   const double e0 = ship.Energy();

@@ -7,7 +7,12 @@
 namespace haptel::vehicles {
 
 std::array<double, kBlimpChannels> ChannelValues(const BlimpCommand& c) {
-  return {c.elevator, c.rudder, c.power, c.helix, c.tail_rotor, c.camera_pan / kBlimpCameraPanMax,
+  return {c.elevator,
+          c.rudder,
+          c.power,
+          c.helix,
+          c.tail_rotor,
+          c.camera_pan / kBlimpCameraPanMax,
           c.camera_tilt / kBlimpCameraTiltMax};
 }
 
@@ -52,7 +57,8 @@ BlimpAdapterState SimBlimpAdapter::State() const {
   return s;
 }
 
-ServoBlimpAdapter::ServoBlimpAdapter(const ServoControllerConfig& config, std::unique_ptr<servo::ByteStream> port)
+ServoBlimpAdapter::ServoBlimpAdapter(const ServoControllerConfig& config,
+                                     std::unique_ptr<servo::ByteStream> port)
     : config_(config), output_(config, std::move(port)) {
   Apply(BlimpCommand{});
   output_.Send(pulse_us_);
@@ -60,7 +66,8 @@ ServoBlimpAdapter::ServoBlimpAdapter(const ServoControllerConfig& config, std::u
 
 void ServoBlimpAdapter::Apply(const BlimpCommand& command) {
   applied_ = output_.untrusted() ? BlimpCommand{} : Clamped(command);
-  const std::array<double, kBlimpChannels> pulses = servo::PulsesFromCommands(config_, ChannelValues(applied_));
+  const std::array<double, kBlimpChannels> pulses =
+      servo::PulsesFromCommands(config_, ChannelValues(applied_));
   // A change (a new command, the failsafe's neutral) goes out at the next
   // update, not at the next refresh: the watchdog's neutral is not held back.
   if (pulses != pulse_us_) next_send_s_ = std::min(next_send_s_, time_s_);
@@ -95,7 +102,8 @@ BlimpAdapterState ServoBlimpAdapter::State() const {
   return s;
 }
 
-SimulatedServoBlimp::SimulatedServoBlimp(const ServoControllerConfig& config, const AirshipConfig& airship,
+SimulatedServoBlimp::SimulatedServoBlimp(const ServoControllerConfig& config,
+                                         const AirshipConfig& airship,
                                          const BlimpCourseConfig& course)
     : config_(config), sim_(airship, course) {
   // The adapter opens the pty's far end by its path, as it would a device.

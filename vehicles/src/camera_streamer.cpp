@@ -8,7 +8,8 @@
 
 namespace haptel::vehicles {
 
-CameraStreamer::CameraStreamer(const CameraConfig& config, std::unique_ptr<video::CameraSource> camera,
+CameraStreamer::CameraStreamer(const CameraConfig& config,
+                               std::unique_ptr<video::CameraSource> camera,
                                link::Participant& participant, const std::string& vehicle_name,
                                OwnerWriter owner_writer)
     : config_(config),
@@ -24,8 +25,8 @@ CameraStreamer::CameraStreamer(const CameraConfig& config, std::unique_ptr<video
       // Rendering and encoding a frame takes milliseconds of CPU: behind the
       // control loop and the link's threads, so commands and states never
       // wait for it on a busy host.
-      PeriodicThread::Options{.name = "vehicle-camera", .rate_hz = config.rate_hz,
-                              .nice_steps = kBackgroundNiceSteps},
+      PeriodicThread::Options{
+          .name = "vehicle-camera", .rate_hz = config.rate_hz, .nice_steps = kBackgroundNiceSteps},
       [this](int64_t now) { Tick(now); });
   // Reliable: a request is small and rare (at most ten a second, while the
   // operator waits), and one lost would leave the picture stale longer.
@@ -41,7 +42,8 @@ void CameraStreamer::OnFeedback(const msg::VideoFeedback& feedback, const link::
     feedback_refused_.fetch_add(1, std::memory_order_relaxed);
     return;
   }
-  if (feedback.target_kbps() > 0) target_kbps_.store(feedback.target_kbps(), std::memory_order_relaxed);
+  if (feedback.target_kbps() > 0)
+    target_kbps_.store(feedback.target_kbps(), std::memory_order_relaxed);
   if (!feedback.key_frame_request()) return;
   key_frame_requests_.fetch_add(1, std::memory_order_relaxed);
   key_frame_wanted_.store(true, std::memory_order_release);
@@ -89,8 +91,10 @@ void CameraStreamer::Tick(int64_t now_ns) {
     encoder_->FollowBitrate(target);
   }
   const bool pass_through =
-      jpeg_source && video::JpegPassesThrough(camera_jpeg_.data(), camera_jpeg_.size(), config_, target);
-  if (jpeg_source && !pass_through && !video::DecodeCameraJpeg(camera_jpeg_, config_, camera_decoded_, image_)) {
+      jpeg_source &&
+      video::JpegPassesThrough(camera_jpeg_.data(), camera_jpeg_.size(), config_, target);
+  if (jpeg_source && !pass_through &&
+      !video::DecodeCameraJpeg(camera_jpeg_, config_, camera_decoded_, image_)) {
     frames_failed_.fetch_add(1, std::memory_order_relaxed);
     return;
   }

@@ -41,10 +41,12 @@ SocketCanBus::SocketCanBus(const std::string& interface) : interface_(interface)
   if (fd_ < 0) {
     const int e = errno;
     if (e == EAFNOSUPPORT) {
-      throw CanUnavailable("CAN interface " + interface + ": the kernel has no CAN support (socket(PF_CAN) failed: " +
-                           Errno(e) + "); load the can and can_raw modules");
+      throw CanUnavailable("CAN interface " + interface +
+                           ": the kernel has no CAN support (socket(PF_CAN) failed: " + Errno(e) +
+                           "); load the can and can_raw modules");
     }
-    throw CanUnavailable("CAN interface " + interface + ": socket(PF_CAN) failed (" + Errno(e) + ")");
+    throw CanUnavailable("CAN interface " + interface + ": socket(PF_CAN) failed (" + Errno(e) +
+                         ")");
   }
   ifreq request{};
   std::strncpy(request.ifr_name, interface.c_str(), IFNAMSIZ - 1);

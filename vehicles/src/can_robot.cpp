@@ -27,8 +27,12 @@ const CanConfig& ValidatedCan(const VehicleConfig& config) {
 
 }  // namespace
 
-CanRobot::CanRobot(std::unique_ptr<CanBus> bus, const VehicleConfig& config, std::unique_ptr<CandumpWriter> log)
-    : bus_(std::move(bus)), can_(ValidatedCan(config)), track_width_(config.drive.track_width), log_(std::move(log)) {
+CanRobot::CanRobot(std::unique_ptr<CanBus> bus, const VehicleConfig& config,
+                   std::unique_ptr<CandumpWriter> log)
+    : bus_(std::move(bus)),
+      can_(ValidatedCan(config)),
+      track_width_(config.drive.track_width),
+      log_(std::move(log)) {
   if (bus_ == nullptr) throw std::invalid_argument("CanRobot: no bus");
   state_.pose_valid = false;  // a real robot knows no pose; a tracker would give it
   if (log_) state_.can_log.path = std::filesystem::absolute(log_->path()).string();
@@ -44,7 +48,8 @@ void CanRobot::UpdateLogStatus() {
 
 double CanRobot::LevelTurns(int level) const {
   if (level == 0) return 0.0;
-  const size_t index = static_cast<size_t>(std::min(std::abs(level), static_cast<int>(can_.level_turns_per_s.size())));
+  const size_t index = static_cast<size_t>(
+      std::min(std::abs(level), static_cast<int>(can_.level_turns_per_s.size())));
   return (level > 0 ? 1.0 : -1.0) * can_.level_turns_per_s[index - 1];
 }
 
@@ -89,7 +94,8 @@ void CanRobot::Stop() {
   state_.applied = {};
   if (idle_ || !started_) return;
   for (const int node : {can_.left_node, can_.right_node}) Send(odrive::SetInputVel(node, 0.0F));
-  for (const int node : {can_.left_node, can_.right_node}) Send(odrive::SetAxisState(node, odrive::kIdle));
+  for (const int node : {can_.left_node, can_.right_node})
+    Send(odrive::SetAxisState(node, odrive::kIdle));
   idle_ = true;
 }
 
@@ -101,7 +107,8 @@ void CanRobot::Fault(const std::string& message) {
   wheel_cmd_ = {0.0, 0.0};
   state_.applied = {};
   for (const int node : {can_.left_node, can_.right_node}) Send(odrive::SetInputVel(node, 0.0F));
-  for (const int node : {can_.left_node, can_.right_node}) Send(odrive::SetAxisState(node, odrive::kIdle));
+  for (const int node : {can_.left_node, can_.right_node})
+    Send(odrive::SetAxisState(node, odrive::kIdle));
   idle_ = true;
 }
 
@@ -119,7 +126,8 @@ void CanRobot::Decode(const can_frame& frame) {
   if ((frame.can_id & CAN_ERR_FLAG) != 0) {
     ++counters_.error_frames;
     const uint32_t cls = frame.can_id & CAN_ERR_MASK;
-    if ((cls & CAN_ERR_CRTL) != 0 && (frame.data[1] & (CAN_ERR_CRTL_RX_PASSIVE | CAN_ERR_CRTL_TX_PASSIVE)) != 0) {
+    if ((cls & CAN_ERR_CRTL) != 0 &&
+        (frame.data[1] & (CAN_ERR_CRTL_RX_PASSIVE | CAN_ERR_CRTL_TX_PASSIVE)) != 0) {
       ++counters_.error_passive;
     }
     if ((cls & CAN_ERR_RESTARTED) != 0) ++counters_.restarted;
@@ -159,7 +167,8 @@ void CanRobot::Decode(const can_frame& frame) {
     }
     wheel_vel_[static_cast<size_t>(wheel)] = m->velocity_turns_per_s;
     const double left = wheel_vel_[kLeft] * can_.wheel_circumference;
-    const double right = (can_.right_reversed ? -1.0 : 1.0) * wheel_vel_[kRight] * can_.wheel_circumference;
+    const double right =
+        (can_.right_reversed ? -1.0 : 1.0) * wheel_vel_[kRight] * can_.wheel_circumference;
     state_.speed = 0.5 * (left + right);
     state_.yaw_rate = (right - left) / track_width_;
     return;
@@ -209,8 +218,8 @@ void CanRobot::Update(double dt) {
       const int node = i == kLeft ? can_.left_node : i == kRight ? can_.right_node : can_.io_node;
       char seconds[16];
       std::snprintf(seconds, sizeof seconds, "%.2f", silent);
-      Fault(std::string(kNodeNames[i]) + " (node " + std::to_string(node) + ") silent: no heartbeat for " + seconds +
-            " s; robot stopped");
+      Fault(std::string(kNodeNames[i]) + " (node " + std::to_string(node) +
+            ") silent: no heartbeat for " + seconds + " s; robot stopped");
     }
   }
   if (t_s_ + 1e-9 >= next_command_s_) {

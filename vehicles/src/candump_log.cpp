@@ -36,7 +36,8 @@ std::string FormatCandumpFrame(const can_frame& frame) {
     return text;
   }
   const int len = frame.can_dlc > CAN_MAX_DLEN ? CAN_MAX_DLEN : frame.can_dlc;
-  for (int i = 0; i < len; ++i) n += std::snprintf(text + n, sizeof text - static_cast<size_t>(n), "%02X", frame.data[i]);
+  for (int i = 0; i < len; ++i)
+    n += std::snprintf(text + n, sizeof text - static_cast<size_t>(n), "%02X", frame.data[i]);
   return text;
 }
 
@@ -110,7 +111,8 @@ CandumpWriter::CandumpWriter(const std::filesystem::path& file, std::string inte
   if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path(), ignored);
   file_ = std::fopen(file.c_str(), "w");
   if (file_ == nullptr) {
-    throw std::runtime_error("cannot write the CAN log " + file.string() + ": " + std::strerror(errno));
+    throw std::runtime_error("cannot write the CAN log " + file.string() + ": " +
+                             std::strerror(errno));
   }
 }
 

@@ -17,8 +17,8 @@ void PutF32(uint8_t* p, float v) {
   PutU32(p, bits);
 }
 uint32_t GetU32(const uint8_t* p) {
-  return static_cast<uint32_t>(p[0]) | static_cast<uint32_t>(p[1]) << 8 | static_cast<uint32_t>(p[2]) << 16 |
-         static_cast<uint32_t>(p[3]) << 24;
+  return static_cast<uint32_t>(p[0]) | static_cast<uint32_t>(p[1]) << 8 |
+         static_cast<uint32_t>(p[2]) << 16 | static_cast<uint32_t>(p[3]) << 24;
 }
 float GetF32(const uint8_t* p) {
   const uint32_t bits = GetU32(p);
@@ -73,8 +73,8 @@ can_frame SetInputVel(int node, float turns_per_s, float torque_ff) {
   return MakeFrame(Id(node, kSetInputVel), d, 8);
 }
 
-can_frame Heartbeat(int node, uint32_t axis_error, uint32_t state, uint8_t motor_flag, uint8_t encoder_flag,
-                    uint8_t controller_flag) {
+can_frame Heartbeat(int node, uint32_t axis_error, uint32_t state, uint8_t motor_flag,
+                    uint8_t encoder_flag, uint8_t controller_flag) {
   uint8_t d[8];
   PutU32(d, axis_error);
   d[4] = static_cast<uint8_t>(state);
@@ -105,7 +105,8 @@ std::optional<HeartbeatMsg> DecodeHeartbeat(const can_frame& f, std::string* why
 std::optional<EncoderMsg> DecodeEncoderEstimates(const can_frame& f, std::string* why) {
   if (!Shape(f, 8, why)) return std::nullopt;
   EncoderMsg m{GetF32(f.data), GetF32(f.data + 4)};
-  if (!Finite(m.position_turns, "position", why) || !Finite(m.velocity_turns_per_s, "velocity", why)) {
+  if (!Finite(m.position_turns, "position", why) ||
+      !Finite(m.velocity_turns_per_s, "velocity", why)) {
     return std::nullopt;
   }
   return m;
@@ -163,10 +164,14 @@ std::string DescribeAxisError(uint32_t bits) {
 
 std::string DescribeAxisState(uint32_t state) {
   switch (state) {
-    case kUndefined: return "UNDEFINED";
-    case kIdle: return "IDLE";
-    case kClosedLoop: return "CLOSED_LOOP_CONTROL";
-    default: return std::to_string(state);
+    case kUndefined:
+      return "UNDEFINED";
+    case kIdle:
+      return "IDLE";
+    case kClosedLoop:
+      return "CLOSED_LOOP_CONTROL";
+    default:
+      return std::to_string(state);
   }
 }
 
@@ -180,7 +185,8 @@ can_frame Heartbeat(int node, uint8_t state, uint8_t errors) {
 }
 
 can_frame Inputs(int node, bool bumper_left, bool bumper_right, uint8_t counter) {
-  const uint8_t d[2] = {static_cast<uint8_t>((bumper_left ? 1 : 0) | (bumper_right ? 2 : 0)), counter};
+  const uint8_t d[2] = {static_cast<uint8_t>((bumper_left ? 1 : 0) | (bumper_right ? 2 : 0)),
+                        counter};
   return MakeFrame(odrive::Id(node, kInputs), d, 2);
 }
 

@@ -43,8 +43,8 @@ double CastRay(const Track& track, const Vec2& origin, const Vec2& direction, do
   return nearest;
 }
 
-RangeScan ScanTrack(const Track& track, double x, double y, double heading, const RangeSensorConfig& config,
-                    std::mt19937_64& noise) {
+RangeScan ScanTrack(const Track& track, double x, double y, double heading,
+                    const RangeSensorConfig& config, std::mt19937_64& noise) {
   RangeScan scan;
   scan.count = std::clamp(config.beams, 0, kMaxRangeBeams);
   if (scan.count == 0) return scan;
@@ -58,7 +58,8 @@ RangeScan ScanTrack(const Track& track, double x, double y, double heading, cons
     double range = CastRay(track, origin, Vec2(std::cos(angle), std::sin(angle)), config.max_range);
     // Noise only on what the beam meets: "nothing within range" stays exact.
     if (range < config.max_range && config.noise_sd > 0.0) {
-      range = std::clamp(range + config.noise_sd * Normal(noise), 0.0, std::nextafter(config.max_range, 0.0));
+      range = std::clamp(range + config.noise_sd * Normal(noise), 0.0,
+                         std::nextafter(config.max_range, 0.0));
     }
     scan.ranges[static_cast<size_t>(i)] = static_cast<float>(range);
   }

@@ -1,16 +1,15 @@
 #include "haptel/vehicles/ros2_robot.hpp"
 
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdio>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
-
-#include <algorithm>
-#include <atomic>
-#include <cmath>
-#include <cstdio>
 #include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -58,15 +57,17 @@ dds::DataReaderQos ReaderQos(int depth) {
 }
 
 double YawOf(const geometry_msgs::msg::dds_::Quaternion_& q) {
-  return std::atan2(2.0 * (q.w() * q.z() + q.x() * q.y()), 1.0 - 2.0 * (q.y() * q.y() + q.z() * q.z()));
+  return std::atan2(2.0 * (q.w() * q.z() + q.x() * q.y()),
+                    1.0 - 2.0 * (q.y() * q.y() + q.z() * q.z()));
 }
 
 bool Finite(const Odometry_& o) {
   const auto& p = o.pose().pose();
   const auto& t = o.twist().twist();
-  return std::isfinite(p.position().x()) && std::isfinite(p.position().y()) && std::isfinite(p.orientation().x()) &&
-         std::isfinite(p.orientation().y()) && std::isfinite(p.orientation().z()) &&
-         std::isfinite(p.orientation().w()) && std::isfinite(t.linear().x()) && std::isfinite(t.angular().z());
+  return std::isfinite(p.position().x()) && std::isfinite(p.position().y()) &&
+         std::isfinite(p.orientation().x()) && std::isfinite(p.orientation().y()) &&
+         std::isfinite(p.orientation().z()) && std::isfinite(p.orientation().w()) &&
+         std::isfinite(t.linear().x()) && std::isfinite(t.angular().z());
 }
 
 }  // namespace
@@ -77,8 +78,10 @@ struct Ros2Robot::Graph {
   explicit Graph(const VehicleConfig& config)
       : participant(RobotLink(config), "haptel-ros2-" + config.name) {
     using link::detail::MakeTopic;
-    cmd_topic = MakeTopic<geometry_msgs::msg::dds_::Twist_PubSubType>(participant, Ros2DdsTopic(config.ros2.cmd_vel));
-    odom_topic = MakeTopic<nav_msgs::msg::dds_::Odometry_PubSubType>(participant, Ros2DdsTopic(config.ros2.odom));
+    cmd_topic = MakeTopic<geometry_msgs::msg::dds_::Twist_PubSubType>(
+        participant, Ros2DdsTopic(config.ros2.cmd_vel));
+    odom_topic = MakeTopic<nav_msgs::msg::dds_::Odometry_PubSubType>(
+        participant, Ros2DdsTopic(config.ros2.odom));
     // ROS 2's default for a subscriber: RELIABLE, VOLATILE, keep last 10.
     dds::DataWriterQos wq = dds::DATAWRITER_QOS_DEFAULT;
     wq.reliability().kind = dds::RELIABLE_RELIABILITY_QOS;
@@ -88,7 +91,8 @@ struct Ros2Robot::Graph {
     twist_writer = participant.publisher()->create_datawriter(cmd_topic, wq);
     odom_reader = participant.subscriber()->create_datareader(odom_topic, ReaderQos(10));
     if (!config.ros2.scan.empty()) {
-      scan_topic = MakeTopic<sensor_msgs::msg::dds_::LaserScan_PubSubType>(participant, Ros2DdsTopic(config.ros2.scan));
+      scan_topic = MakeTopic<sensor_msgs::msg::dds_::LaserScan_PubSubType>(
+          participant, Ros2DdsTopic(config.ros2.scan));
       // A laser's driver publishes with the sensor-data profile (BEST_EFFORT);
       // only the newest scan is read.
       scan_reader = participant.subscriber()->create_datareader(scan_topic, ReaderQos(1));
@@ -98,7 +102,8 @@ struct Ros2Robot::Graph {
           participant, Ros2DdsTopic(config.ros2.image));
       image_reader = participant.subscriber()->create_datareader(image_topic, ReaderQos(1));
     }
-    if (twist_writer == nullptr || odom_reader == nullptr || (image_topic != nullptr && image_reader == nullptr) ||
+    if (twist_writer == nullptr || odom_reader == nullptr ||
+        (image_topic != nullptr && image_reader == nullptr) ||
         (scan_topic != nullptr && scan_reader == nullptr)) {
       Delete();
       throw std::runtime_error("ros2: DDS refused an endpoint on the robot's topics");
@@ -230,20 +235,22 @@ std::string Ros2Robot::ImageProblem(std::span<const uint8_t> data) {
   if (!video::JpegFrameSize(data.data(), data.size(), width, height)) {
     format = "PNG";
     if (!video::PngFrameSize(data.data(), data.size(), width, height)) {
-      return "neither a JPEG nor a PNG with its size in its header (" + std::to_string(data.size()) + " bytes)";
+      return "neither a JPEG nor a PNG with its size in its header (" +
+             std::to_string(data.size()) + " bytes)";
     }
   }
   if (width > kMaxImageSide || height > kMaxImageSide) {
-    return std::string("a ") + format + " of " + std::to_string(width) + " x " + std::to_string(height) +
-           " pixels; expected at most " + std::to_string(kMaxImageSide) + " a side";
+    return std::string("a ") + format + " of " + std::to_string(width) + " x " +
+           std::to_string(height) + " pixels; expected at most " + std::to_string(kMaxImageSide) +
+           " a side";
   }
   return "";
 }
 
-std::string Ros2Robot::ScanProblem(double angle_min, double angle_max, double angle_increment, double range_min,
-                                   double range_max, size_t beams) {
+std::string Ros2Robot::ScanProblem(double angle_min, double angle_max, double angle_increment,
+                                   double range_min, double range_max, size_t beams) {
   constexpr double kTurn = 2.0 * M_PI;
-  constexpr double kSlack = 1e-3;  // rad: float32 angles of a full turn round to a little over it
+  constexpr double kSlack = 1e-3;    // rad: float32 angles of a full turn round to a little over it
   constexpr double kMaxRange = 1e4;  // m: no range sensor sees 10 km
   const auto text = [](const char* what, double value) {
     char line[160];
@@ -253,13 +260,17 @@ std::string Ros2Robot::ScanProblem(double angle_min, double angle_max, double an
   if (beams == 0) return "no beams";
   if (!std::isfinite(angle_min)) return text("a non-finite angle_min:", angle_min);
   if (!std::isfinite(angle_max)) return text("a non-finite angle_max:", angle_max);
-  if (!std::isfinite(angle_increment)) return text("a non-finite angle_increment:", angle_increment);
-  if (std::abs(angle_min) > kTurn + kSlack) return text("angle_min more than a full turn from the heading: rad", angle_min);
-  if (std::abs(angle_max) > kTurn + kSlack) return text("angle_max more than a full turn from the heading: rad", angle_max);
-  if (beams > 1 && angle_increment == 0.0) return "an angle_increment of zero over " + std::to_string(beams) + " beams";
+  if (!std::isfinite(angle_increment))
+    return text("a non-finite angle_increment:", angle_increment);
+  if (std::abs(angle_min) > kTurn + kSlack)
+    return text("angle_min more than a full turn from the heading: rad", angle_min);
+  if (std::abs(angle_max) > kTurn + kSlack)
+    return text("angle_max more than a full turn from the heading: rad", angle_max);
+  if (beams > 1 && angle_increment == 0.0)
+    return "an angle_increment of zero over " + std::to_string(beams) + " beams";
   if (beams > 1 && angle_max != angle_min && (angle_max - angle_min) * angle_increment < 0.0) {
-    return text("an angle_increment of the wrong sign: rad", angle_increment) + text(" from angle_min", angle_min) +
-           text(" to angle_max", angle_max);
+    return text("an angle_increment of the wrong sign: rad", angle_increment) +
+           text(" from angle_min", angle_min) + text(" to angle_max", angle_max);
   }
   const double sweep = std::abs(angle_increment) * static_cast<double>(beams - 1);
   if (sweep > kTurn + std::abs(angle_increment) + kSlack) {
@@ -274,8 +285,8 @@ std::string Ros2Robot::ScanProblem(double angle_min, double angle_max, double an
   return "";
 }
 
-RangeScan Ros2Robot::RangeScanFor(double angle_min, double angle_increment, double range_min, double range_max,
-                                  std::span<const float> ranges) {
+RangeScan Ros2Robot::RangeScanFor(double angle_min, double angle_increment, double range_min,
+                                  double range_max, std::span<const float> ranges) {
   RangeScan scan;
   const size_t n = ranges.size();
   const double last = angle_min + angle_increment * static_cast<double>(n > 0 ? n - 1 : 0);
@@ -292,7 +303,8 @@ RangeScan Ros2Robot::RangeScanFor(double angle_min, double angle_increment, doub
     const size_t first = static_cast<size_t>(sector) * per_sector;
     for (size_t i = first; i < std::min(n, first + per_sector); ++i) {
       const double r = ranges[i];
-      if (std::isnan(r) || r == std::numeric_limits<double>::infinity()) continue;  // no reading; nothing in range
+      if (std::isnan(r) || r == std::numeric_limits<double>::infinity())
+        continue;  // no reading; nothing in range
       if (r == -std::numeric_limits<double>::infinity()) {
         nearest = std::min(nearest, range_min);  // nearer than the sensor can tell
       } else if (r >= range_min && r <= range_max) {
@@ -353,11 +365,13 @@ void Ros2Robot::Update(double dt) {
     LaserScan_ laser;
     while (graph_->scan_reader->take_next_sample(&laser, &info) == ReturnCode_t::RETCODE_OK) {
       if (!info.valid_data) continue;
-      const std::string problem = ScanProblem(laser.angle_min(), laser.angle_max(), laser.angle_increment(),
-                                              laser.range_min(), laser.range_max(), laser.ranges().size());
-      const RangeScan scan = problem.empty() ? RangeScanFor(laser.angle_min(), laser.angle_increment(),
-                                                            laser.range_min(), laser.range_max(), laser.ranges())
-                                             : RangeScan{};
+      const std::string problem =
+          ScanProblem(laser.angle_min(), laser.angle_max(), laser.angle_increment(),
+                      laser.range_min(), laser.range_max(), laser.ranges().size());
+      const RangeScan scan =
+          problem.empty() ? RangeScanFor(laser.angle_min(), laser.angle_increment(),
+                                         laser.range_min(), laser.range_max(), laser.ranges())
+                          : RangeScan{};
       if (scan.count == 0) {
         graph_->scans_dropped.fetch_add(1, std::memory_order_relaxed);
         if (!scan_problem_said_) {
@@ -372,9 +386,11 @@ void Ros2Robot::Update(double dt) {
       last_scan_ns_ = now;
     }
     // What the robot saw a while ago is not what is ahead of it now.
-    if (last_scan_ns_ != 0 && NsToS(now - last_scan_ns_) > config_.ros2.odom_timeout_s) state_.ranges = RangeScan{};
+    if (last_scan_ns_ != 0 && NsToS(now - last_scan_ns_) > config_.ros2.odom_timeout_s)
+      state_.ranges = RangeScan{};
   }
-  const bool silent = last_odom_ns_ != 0 && NsToS(now - last_odom_ns_) > config_.ros2.odom_timeout_s;
+  const bool silent =
+      last_odom_ns_ != 0 && NsToS(now - last_odom_ns_) > config_.ros2.odom_timeout_s;
   if (silent && !state_.fault) {
     state_.fault = true;
     state_.fault_message = "ROS 2 robot silent: no odometry on " + config_.ros2.odom + " for " +

@@ -19,7 +19,6 @@ namespace {
 /// 2 % past the tips).
 constexpr double kHullStations[] = {0.0, 0.33, -0.33, 0.62, -0.62, 0.85, -0.85};
 
-
 /// m: the features this near an obstacle just before a contact began are
 /// the ones whose closing speed the impact is (a step moves 5 cm at 10 m/s).
 constexpr double kApproachGap = 0.5;

@@ -94,14 +94,16 @@ void SimCanNodes::Step(double dt) {
   // The velocity ramp: closed loop in velocity mode follows input_vel at
   // vel_ramp_rate; idle lets the wheel stop (modelled as a ramp to zero).
   for (Axis& a : axes_) {
-    const bool driving = a.state == odrive::kClosedLoop && a.control_mode == odrive::kControlModeVelocity;
+    const bool driving =
+        a.state == odrive::kClosedLoop && a.control_mode == odrive::kControlModeVelocity;
     const float target = driving ? a.input_vel : 0.0F;
     const float step = static_cast<float>(can_.vel_ramp_rate * dt);
     a.vel += std::clamp(target - a.vel, -step, step);
     a.pos += a.vel * dt;
   }
   const double right_sign = can_.right_reversed ? -1.0 : 1.0;
-  robot_.SetTreadTargets(axes_[0].vel * can_.wheel_circumference, right_sign * axes_[1].vel * can_.wheel_circumference);
+  robot_.SetTreadTargets(axes_[0].vel * can_.wheel_circumference,
+                         right_sign * axes_[1].vel * can_.wheel_circumference);
   robot_.Update(dt);
 
   if (t_s_ + 1e-9 >= next_heartbeat_s_) {
@@ -115,7 +117,8 @@ void SimCanNodes::Step(double dt) {
     next_encoder_s_ += kEncoderPeriodS;
     for (size_t i = 0; i < 2; ++i) {
       if (!silent_[i]) {
-        bus_->Send(odrive::EncoderEstimates(axes_[i].node, static_cast<float>(axes_[i].pos), axes_[i].vel));
+        bus_->Send(odrive::EncoderEstimates(axes_[i].node, static_cast<float>(axes_[i].pos),
+                                            axes_[i].vel));
       }
     }
   }

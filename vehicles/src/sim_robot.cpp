@@ -67,7 +67,8 @@ void SimRobot::Update(double dt) {
   const Vec2 forward(std::cos(state_.heading), std::sin(state_.heading));
   state_.speed = (after - before).dot(forward) / dt;  // blocked robots report 0
   state_.yaw_rate = omega;
-  state_.ranges = ScanTrack(track_, state_.x, state_.y, state_.heading, range_sensors_, range_noise_);
+  state_.ranges =
+      ScanTrack(track_, state_.x, state_.y, state_.heading, range_sensors_, range_noise_);
 }
 
 void SimRobot::Contact(const Vec2& point) {

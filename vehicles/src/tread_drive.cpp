@@ -6,9 +6,11 @@
 
 namespace haptel::vehicles {
 
-double StepTreads(const DriveConfig& drive, double target_left, double target_right, double dt, TreadState& state) {
+double StepTreads(const DriveConfig& drive, double target_left, double target_right, double dt,
+                  TreadState& state) {
   if (!(dt > 0.0)) return 0.0;
-  const double alpha = drive.motor_time_constant > 0 ? 1.0 - std::exp(-dt / drive.motor_time_constant) : 1.0;
+  const double alpha =
+      drive.motor_time_constant > 0 ? 1.0 - std::exp(-dt / drive.motor_time_constant) : 1.0;
   state.v_left += (target_left * drive.left_gain - state.v_left) * alpha;
   state.v_right += (target_right * drive.right_gain - state.v_right) * alpha;
   const double v = 0.5 * (state.v_left + state.v_right);

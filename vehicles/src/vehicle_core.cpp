@@ -13,9 +13,12 @@ namespace haptel::vehicles {
 
 template <class Family>
 VehicleCoreOf<Family>::VehicleCoreOf(const VehicleConfig& config, std::unique_ptr<Adapter> adapter)
-    : config_(Validated(config)), adapter_(std::move(adapter)), commands_(config.watchdog_timeout_s) {
+    : config_(Validated(config)),
+      adapter_(std::move(adapter)),
+      commands_(config.watchdog_timeout_s) {
   if (adapter_ == nullptr) throw std::invalid_argument("vehicle node: no adapter");
-  ticks_per_state_ = std::max(1, static_cast<int>(std::lround(config.sim_rate_hz / config.state_rate_hz)));
+  ticks_per_state_ =
+      std::max(1, static_cast<int>(std::lround(config.sim_rate_hz / config.state_rate_hz)));
   // Who publishes: set once, every state carries it (the message is reused).
   state_msg_.vehicle_pid(static_cast<int64_t>(getpid()));
   state_msg_.vehicle_host(HostName());
@@ -23,12 +26,12 @@ VehicleCoreOf<Family>::VehicleCoreOf(const VehicleConfig& config, std::unique_pt
 }
 
 template <class Family>
-void VehicleCoreOf<Family>::OnCommand(const typename Family::CommandMsg& cmd, const link::WriterId& writer,
-                                      int64_t now_ns) {
+void VehicleCoreOf<Family>::OnCommand(const typename Family::CommandMsg& cmd,
+                                      const link::WriterId& writer, int64_t now_ns) {
   Command command;
   const bool valid = Family::Decode(cmd, command);
-  commands_.Offer(valid, {writer, cmd.session(), cmd.operator_name().c_str(), cmd.release()}, cmd.seq(),
-                  cmd.sent_ns(), command, now_ns);
+  commands_.Offer(valid, {writer, cmd.session(), cmd.operator_name().c_str(), cmd.release()},
+                  cmd.seq(), cmd.sent_ns(), command, now_ns);
 }
 
 template <class Family>

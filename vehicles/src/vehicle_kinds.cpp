@@ -36,8 +36,9 @@ std::string FileStamp(int64_t wall_ns) {
 /// (candump -L) when it is set.
 std::unique_ptr<CandumpWriter> OpenCanLog(const VehicleConfig& config) {
   if (config.can.log_dir.empty()) return nullptr;
-  return std::make_unique<CandumpWriter>(config.can.log_dir / (config.name + "-" + FileStamp(WallNs()) + ".log"),
-                                         config.can.interface);
+  return std::make_unique<CandumpWriter>(
+      config.can.log_dir / (config.name + "-" + FileStamp(WallNs()) + ".log"),
+      config.can.interface);
 }
 
 template <class Family>
@@ -45,7 +46,8 @@ using FactoryTable = std::map<std::string, KindFactory<Family>>;
 
 /// Parts of an adapter alone: its camera is the vehicle file's.
 template <class Family>
-KindParts<Family> AdapterOnly(std::unique_ptr<typename Family::Adapter> adapter, std::string detail = {}) {
+KindParts<Family> AdapterOnly(std::unique_ptr<typename Family::Adapter> adapter,
+                              std::string detail = {}) {
   KindParts<Family> parts;
   parts.adapter = std::move(adapter);
   parts.detail = std::move(detail);
@@ -61,16 +63,21 @@ FactoryTable<RobotFamily>& Factories<RobotFamily>() {
   using Parts = KindParts<RobotFamily>;
   static FactoryTable<RobotFamily> table{
       {"sim-robot",
-       [](const VehicleConfig& c, const Track& track) { return AdapterOnly<RobotFamily>(std::make_unique<SimRobot>(track, c)); }},
+       [](const VehicleConfig& c, const Track& track) {
+         return AdapterOnly<RobotFamily>(std::make_unique<SimRobot>(track, c));
+       }},
       {"can-robot",
        [](const VehicleConfig& c, const Track&) {
-         auto bus = std::make_unique<SocketCanBus>(c.can.interface);  // CanUnavailable: a set-up error
-         return AdapterOnly<RobotFamily>(std::make_unique<CanRobot>(std::move(bus), c, OpenCanLog(c)),
-                                         ", CAN bus " + c.can.interface);
+         auto bus =
+             std::make_unique<SocketCanBus>(c.can.interface);  // CanUnavailable: a set-up error
+         return AdapterOnly<RobotFamily>(
+             std::make_unique<CanRobot>(std::move(bus), c, OpenCanLog(c)),
+             ", CAN bus " + c.can.interface);
        }},
       {"can-robot-sim",
        [](const VehicleConfig& c, const Track& track) {
-         return AdapterOnly<RobotFamily>(std::make_unique<SimulatedCanRobot>(track, c, OpenCanLog(c)));
+         return AdapterOnly<RobotFamily>(
+             std::make_unique<SimulatedCanRobot>(track, c, OpenCanLog(c)));
        }},
       {"ros2",
        [](const VehicleConfig& c, const Track& track) {
@@ -78,8 +85,8 @@ FactoryTable<RobotFamily>& Factories<RobotFamily>() {
          // Its camera is its image topic (unless it names none).
          auto camera = robot->MakeCamera();
          return Parts{std::move(robot), std::move(camera),
-                      ", ROS 2 robot on domain " + std::to_string(c.ros2.domain_id) + " (" + c.ros2.cmd_vel +
-                          " out, " + c.ros2.odom + " in)"};
+                      ", ROS 2 robot on domain " + std::to_string(c.ros2.domain_id) + " (" +
+                          c.ros2.cmd_vel + " out, " + c.ros2.odom + " in)"};
        }},
   };
   return table;
@@ -95,17 +102,19 @@ FactoryTable<BlimpFamily>& Factories<BlimpFamily>() {
       {"servo-blimp",
        [](const VehicleConfig& c, const BlimpCourseConfig&) {
          if (c.servo.port.empty()) {
-           throw UsageError("the servo controller's serial port: give --serial-port PATH (or servo.port in " +
-                            c.file.string() + ")");
+           throw UsageError(
+               "the servo controller's serial port: give --serial-port PATH (or servo.port in " +
+               c.file.string() + ")");
          }
          return AdapterOnly<BlimpFamily>(
-             std::make_unique<ServoBlimpAdapter>(c.servo,
-                                                 std::make_unique<servo::SerialPort>(c.servo.port, c.servo.baud)),
+             std::make_unique<ServoBlimpAdapter>(
+                 c.servo, std::make_unique<servo::SerialPort>(c.servo.port, c.servo.baud)),
              ", servo controller on " + c.servo.port);
        }},
       {"servo-blimp-sim",
        [](const VehicleConfig& c, const BlimpCourseConfig& course) {
-         return AdapterOnly<BlimpFamily>(std::make_unique<SimulatedServoBlimp>(c.servo, c.airship, course));
+         return AdapterOnly<BlimpFamily>(
+             std::make_unique<SimulatedServoBlimp>(c.servo, c.airship, course));
        }},
   };
   return table;
@@ -115,16 +124,19 @@ FactoryTable<BlimpFamily>& Factories<BlimpFamily>() {
 std::unique_ptr<Track> LoadWorld(const std::filesystem::path& file, const RobotFamily*) {
   return std::make_unique<Track>(LoadTrack(file));
 }
-std::unique_ptr<BlimpCourseConfig> LoadWorld(const std::filesystem::path& file, const BlimpFamily*) {
+std::unique_ptr<BlimpCourseConfig> LoadWorld(const std::filesystem::path& file,
+                                             const BlimpFamily*) {
   return std::make_unique<BlimpCourseConfig>(LoadBlimpCourse(file));
 }
 std::string WorldName(const Track& track) { return "track '" + track.config().name + "'"; }
 std::string WorldName(const BlimpCourseConfig& course) { return "course '" + course.name + "'"; }
 /// The camera the vehicle file describes, looking at the family's world.
-std::unique_ptr<video::CameraSource> FileCamera(const VehicleConfig& c, const Track& track, const std::string& file) {
+std::unique_ptr<video::CameraSource> FileCamera(const VehicleConfig& c, const Track& track,
+                                                const std::string& file) {
   return video::MakeCameraSource(c.camera, &track, file);
 }
-std::unique_ptr<video::CameraSource> FileCamera(const VehicleConfig& c, const BlimpCourseConfig& course,
+std::unique_ptr<video::CameraSource> FileCamera(const VehicleConfig& c,
+                                                const BlimpCourseConfig& course,
                                                 const std::string& file) {
   return video::MakeBlimpCameraSource(c.camera, course, file);
 }
@@ -133,20 +145,23 @@ template <class Family>
 OpenedVehicle Open(const VehicleConfig& config, const std::string& file) {
   const KindFactory<Family>* factory = FindKindFactory<Family>(config.kind);
   if (factory == nullptr) {
-    throw std::invalid_argument("vehicle kind '" + config.kind + "' has no " + ToString(Family::kFamily) +
-                                " adapter registered");
+    throw std::invalid_argument("vehicle kind '" + config.kind + "' has no " +
+                                ToString(Family::kFamily) + " adapter registered");
   }
   // Shared: the node's simulator (and camera) keep a reference to the world
   // for as long as the node runs.
-  std::shared_ptr<const typename Family::World> world = LoadWorld(config.world, static_cast<const Family*>(nullptr));
+  std::shared_ptr<const typename Family::World> world =
+      LoadWorld(config.world, static_cast<const Family*>(nullptr));
   // The hardware first: a bus or port that cannot open stops here.
   KindParts<Family> parts = (*factory)(config, *world);
-  if (parts.adapter == nullptr) throw std::logic_error("vehicle kind '" + config.kind + "': its factory made no adapter");
+  if (parts.adapter == nullptr)
+    throw std::logic_error("vehicle kind '" + config.kind + "': its factory made no adapter");
   if (!parts.camera) parts.camera = FileCamera(config, *world, file);
   OpenedVehicle opened;
-  opened.description = WorldName(*world) + ", camera " + parts.camera->Describe() + " " +
-                       std::to_string(config.camera.width) + "x" + std::to_string(config.camera.height) + " at " +
-                       std::to_string(static_cast<int>(std::lround(config.camera.rate_hz))) + " Hz" + parts.detail;
+  opened.description =
+      WorldName(*world) + ", camera " + parts.camera->Describe() + " " +
+      std::to_string(config.camera.width) + "x" + std::to_string(config.camera.height) + " at " +
+      std::to_string(static_cast<int>(std::lround(config.camera.rate_hz))) + " Hz" + parts.detail;
   // The node owns the world with its adapter: a std::function must be
   // copyable, so the parts wait in a shared holder until it is built.
   auto held = std::make_shared<KindParts<Family>>(std::move(parts));
@@ -157,8 +172,10 @@ OpenedVehicle Open(const VehicleConfig& config, const std::string& file) {
       std::shared_ptr<const typename Family::World> world;
     };
     struct Owning final : WorldHolder, VehicleNodeOf<Family> {
-      Owning(const VehicleConfig& c, std::shared_ptr<const typename Family::World> w, KindParts<Family>& p)
-          : WorldHolder{std::move(w)}, VehicleNodeOf<Family>(c, std::move(p.camera), std::move(p.adapter)) {}
+      Owning(const VehicleConfig& c, std::shared_ptr<const typename Family::World> w,
+             KindParts<Family>& p)
+          : WorldHolder{std::move(w)},
+            VehicleNodeOf<Family>(c, std::move(p.camera), std::move(p.adapter)) {}
     };
     return std::make_unique<Owning>(config, world, *held);
   };
@@ -189,8 +206,10 @@ template void RegisterKind<BlimpFamily>(VehicleKindInfo, KindFactory<BlimpFamily
 
 OpenedVehicle OpenVehicle(const VehicleConfig& config, const std::string& file) {
   if (config.world.empty()) {
-    throw ConfigError(file + ": key 'world': expected the track file a simulated vehicle drives on (or a blimp's "
-                      "course; or --track FILE)");
+    throw ConfigError(
+        file +
+        ": key 'world': expected the track file a simulated vehicle drives on (or a blimp's "
+        "course; or --track FILE)");
   }
   switch (config.family()) {
     case VehicleFamily::kRobot:

@@ -1,7 +1,5 @@
 #include "haptel/vehicles/vehicle_node.hpp"
 
-#include "haptel/link/fault_transport.hpp"
-
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -9,11 +7,13 @@
 #include "haptel/config/error.hpp"
 #include "haptel/core/cli.hpp"
 #include "haptel/core/clock.hpp"
+#include "haptel/link/fault_transport.hpp"
 
 namespace haptel::vehicles {
 
 template <class Family>
-VehicleNodeOf<Family>::VehicleNodeOf(const VehicleConfig& config, std::unique_ptr<video::CameraSource> camera,
+VehicleNodeOf<Family>::VehicleNodeOf(const VehicleConfig& config,
+                                     std::unique_ptr<video::CameraSource> camera,
                                      std::unique_ptr<Adapter> adapter)
     : core_(config, std::move(adapter)) {
   if (camera == nullptr) throw std::invalid_argument("vehicle node: no camera source");

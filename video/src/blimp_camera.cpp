@@ -95,7 +95,6 @@ cv::Vec3b ToPixel(const cv::Vec3d& c) {
 cv::Scalar ToScalar(const cv::Vec3d& c) { return {c[0], c[1], c[2]}; }
 cv::Vec3d Mix(const cv::Vec3d& a, const cv::Vec3d& b, double t) { return a * (1 - t) + b * t; }
 
-
 /// A colour seen through `dist` metres of air.
 cv::Vec3d Hazed(const cv::Vec3d& c, double dist) {
   return Mix(c, kAirHazeColour, 1.0 - std::exp(-dist / kAirHaze));
@@ -490,7 +489,8 @@ BlimpCourseCamera::BlimpCourseCamera(const BlimpCourseConfig& course, const Came
   for (size_t i = 0; i < course.buildings.size(); ++i) {
     const auto& bld = course.buildings[i];
     const cv::Vec3d colour = kBuildings[i % kBuildings.size()];
-    boxes_.push_back(MakeBox(Vec3(bld.centre[0], bld.centre[1], bld.height / 2), Radians(bld.yaw_deg),
+    boxes_.push_back(MakeBox(Vec3(bld.centre[0], bld.centre[1], bld.height / 2),
+                             Radians(bld.yaw_deg),
                              Vec3(bld.size[0] / 2, bld.size[1] / 2, bld.height / 2), colour,
                              colour * 0.8, kBuildingAmbient));
   }

@@ -5,14 +5,13 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <string>
 #include <utility>
 
 #include "haptel/video/h264_codec.hpp"
-
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
 namespace haptel::video {
 
@@ -55,18 +54,22 @@ double ScaleBytes(double scale) { return std::pow(scale, 1.6); }
 
 std::vector<JpegRung> JpegLadder(int top_quality) {
   if (top_quality < 1 || top_quality > 100) {
-    throw std::invalid_argument("JpegLadder: quality " + std::to_string(top_quality) + ", expected 1..100");
+    throw std::invalid_argument("JpegLadder: quality " + std::to_string(top_quality) +
+                                ", expected 1..100");
   }
   // Steps of 1 or 2 near 100, where the bytes grow fastest; of 10 below 80,
   // where they change little (quality 20 is still more than half the bytes
   // of 80 on the synthetic camera: resolution is where the bytes are).
-  static constexpr std::array<int, 15> kQualities{100, 99, 98, 96, 94, 92, 90, 85, 80, 70, 60, 50, 40, 30, 20};
+  static constexpr std::array<int, 15> kQualities{100, 99, 98, 96, 94, 92, 90, 85,
+                                                  80,  70, 60, 50, 40, 30, 20};
   static constexpr std::array<double, 5> kScales{0.875, 0.75, 0.625, 0.5625, 0.5};
-  static constexpr std::array<double, 6> kFrameShares{4.0 / 5, 2.0 / 3, 1.0 / 2, 2.0 / 5, 1.0 / 3, 1.0 / 4};
+  static constexpr std::array<double, 6> kFrameShares{4.0 / 5, 2.0 / 3, 1.0 / 2,
+                                                      2.0 / 5, 1.0 / 3, 1.0 / 4};
   const double top_bytes = QualityBytes(top_quality);
   std::vector<JpegRung> ladder;
   const auto add = [&](int quality, double scale, double share) {
-    ladder.push_back({quality, scale, share, QualityBytes(quality) / top_bytes * ScaleBytes(scale) * share});
+    ladder.push_back(
+        {quality, scale, share, QualityBytes(quality) / top_bytes * ScaleBytes(scale) * share});
   };
   add(top_quality, 1.0, 1.0);
   for (const int q : kQualities) {
@@ -91,7 +94,8 @@ JpegEncoder::JpegEncoder(int quality, double frame_rate_hz)
 
 void JpegEncoder::SetQuality(int quality) {
   if (quality < 1 || quality > 100) {
-    throw std::invalid_argument("JpegEncoder: quality " + std::to_string(quality) + ", expected 1..100");
+    throw std::invalid_argument("JpegEncoder: quality " + std::to_string(quality) +
+                                ", expected 1..100");
   }
   quality_ = quality;
   params_[1] = quality;
@@ -165,7 +169,8 @@ double JpegEncoder::Predicted(size_t to) const {
 void JpegEncoder::Climb(size_t bytes) {
   if (target_kbps_ <= 0.0) return;
   // The rung's bitrate, smoothed over its frames.
-  const double kbps = static_cast<double>(bytes) * 8.0 * frame_rate_hz_ * ladder_[rung_].frame_share / 1000.0;
+  const double kbps =
+      static_cast<double>(bytes) * 8.0 * frame_rate_hz_ * ladder_[rung_].frame_share / 1000.0;
   rung_kbps_ = frames_at_rung_ == 0 ? kbps : 0.7 * rung_kbps_ + 0.3 * kbps;
   if (++frames_at_rung_ < kFramesPerRung) return;
   measured_kbps_[rung_] = rung_kbps_;
@@ -239,7 +244,8 @@ bool JpegFrameSize(const uint8_t* data, size_t size, int& width, int& height) {
       at += 2;
       continue;
     }
-    if (marker == 0xD9 || marker == 0xDA) return false;  // end, or scan data before any frame header
+    if (marker == 0xD9 || marker == 0xDA)
+      return false;  // end, or scan data before any frame header
     const size_t length = (static_cast<size_t>(data[at + 2]) << 8) | data[at + 3];
     if (length < 2 || at + 2 + length > size) return false;
     // SOF0..SOF15 but DHT (C4), JPG (C8) and DAC (CC): precision, height, width.
@@ -257,11 +263,13 @@ bool JpegFrameSize(const uint8_t* data, size_t size, int& width, int& height) {
 bool PngFrameSize(const uint8_t* data, size_t size, int& width, int& height) {
   static constexpr uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A};
   // Signature, then the IHDR chunk: length 13, "IHDR", width, height (big-endian).
-  if (data == nullptr || size < 24 || std::memcmp(data, kSignature, 8) != 0 || std::memcmp(data + 12, "IHDR", 4) != 0) {
+  if (data == nullptr || size < 24 || std::memcmp(data, kSignature, 8) != 0 ||
+      std::memcmp(data + 12, "IHDR", 4) != 0) {
     return false;
   }
   const auto be32 = [&](size_t at) {
-    return (uint32_t{data[at]} << 24) | (uint32_t{data[at + 1]} << 16) | (uint32_t{data[at + 2]} << 8) | data[at + 3];
+    return (uint32_t{data[at]} << 24) | (uint32_t{data[at + 1]} << 16) |
+           (uint32_t{data[at + 2]} << 8) | data[at + 3];
   };
   const uint32_t w = be32(16);
   const uint32_t h = be32(20);
@@ -272,18 +280,20 @@ bool PngFrameSize(const uint8_t* data, size_t size, int& width, int& height) {
   return true;
 }
 
-bool JpegPassesThrough(const uint8_t* data, size_t size, const CameraConfig& camera, uint32_t target_kbps) {
+bool JpegPassesThrough(const uint8_t* data, size_t size, const CameraConfig& camera,
+                       uint32_t target_kbps) {
   if (camera.codec != CameraCodec::kJpeg) return false;
   int width = 0;
   int height = 0;
-  if (!JpegFrameSize(data, size, width, height) || width != camera.width || height != camera.height) return false;
+  if (!JpegFrameSize(data, size, width, height) || width != camera.width || height != camera.height)
+    return false;
   if (target_kbps == 0) return true;
   const double kbps = static_cast<double>(size) * 8.0 * camera.rate_hz / 1000.0;
   return kbps <= target_kbps;
 }
 
-bool DecodeCameraJpeg(const std::vector<uint8_t>& jpeg, const CameraConfig& camera, cv::Mat& scratch,
-                      cv::Mat& bgr_out) {
+bool DecodeCameraJpeg(const std::vector<uint8_t>& jpeg, const CameraConfig& camera,
+                      cv::Mat& scratch, cv::Mat& bgr_out) {
   if (jpeg.empty()) return false;
   const cv::Mat bytes(1, static_cast<int>(jpeg.size()), CV_8UC1, const_cast<uint8_t*>(jpeg.data()));
   scratch = cv::imdecode(bytes, cv::IMREAD_COLOR);
@@ -302,10 +312,11 @@ std::unique_ptr<VideoEncoder> MakeVideoEncoder(const CameraConfig& camera) {
     case CameraCodec::kJpeg:
       return std::make_unique<JpegEncoder>(camera.jpeg_quality, camera.rate_hz);
     case CameraCodec::kH264:
-      return std::make_unique<H264Encoder>(H264Encoder::Options{.width = camera.width,
-                                                                .height = camera.height,
-                                                                .rate_hz = camera.rate_hz,
-                                                                .bitrate_kbps = camera.bitrate_kbps});
+      return std::make_unique<H264Encoder>(
+          H264Encoder::Options{.width = camera.width,
+                               .height = camera.height,
+                               .rate_hz = camera.rate_hz,
+                               .bitrate_kbps = camera.bitrate_kbps});
   }
   throw std::invalid_argument("MakeVideoEncoder: unknown codec");
 }

@@ -5,10 +5,9 @@
 #include <cstdlib>
 #include <cstring>
 #include <mutex>
+#include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <string>
-
-#include <opencv2/imgproc.hpp>
 
 extern "C" {
 #include <libavcodec/avcodec.h>
@@ -43,7 +42,8 @@ void CopyI420ToFrame(const cv::Mat& yuv, int width, int height, AVFrame* frame) 
   for (int p = 0; p < 3; ++p) {
     for (int row = 0; row < heights[p]; ++row) {
       std::memcpy(frame->data[p] + static_cast<ptrdiff_t>(row) * frame->linesize[p],
-                  planes[p] + static_cast<ptrdiff_t>(row) * widths[p], static_cast<size_t>(widths[p]));
+                  planes[p] + static_cast<ptrdiff_t>(row) * widths[p],
+                  static_cast<size_t>(widths[p]));
     }
   }
 }
@@ -53,13 +53,15 @@ void CopyFrameToI420(const AVFrame* frame, cv::Mat& yuv) {
   const int width = frame->width;
   const int height = frame->height;
   yuv.create(height * 3 / 2, width, CV_8UC1);
-  uint8_t* planes[3] = {yuv.data, yuv.data + width * height, yuv.data + width * height + width * height / 4};
+  uint8_t* planes[3] = {yuv.data, yuv.data + width * height,
+                        yuv.data + width * height + width * height / 4};
   const int widths[3] = {width, width / 2, width / 2};
   const int heights[3] = {height, height / 2, height / 2};
   for (int p = 0; p < 3; ++p) {
     for (int row = 0; row < heights[p]; ++row) {
       std::memcpy(planes[p] + static_cast<ptrdiff_t>(row) * widths[p],
-                  frame->data[p] + static_cast<ptrdiff_t>(row) * frame->linesize[p], static_cast<size_t>(widths[p]));
+                  frame->data[p] + static_cast<ptrdiff_t>(row) * frame->linesize[p],
+                  static_cast<size_t>(widths[p]));
     }
   }
 }
@@ -89,7 +91,8 @@ void SetRate(AVCodecContext* codec, int kbps, double rate_hz) {
   const int64_t bits_per_s = static_cast<int64_t>(kbps) * 1000;
   codec->bit_rate = bits_per_s;
   codec->rc_max_rate = bits_per_s;
-  codec->rc_buffer_size = static_cast<int>(std::max<double>(1000.0, static_cast<double>(bits_per_s) / rate_hz));
+  codec->rc_buffer_size =
+      static_cast<int>(std::max<double>(1000.0, static_cast<double>(bits_per_s) / rate_hz));
 }
 
 }  // namespace
@@ -97,16 +100,19 @@ void SetRate(AVCodecContext* codec, int kbps, double rate_hz) {
 H264Encoder::H264Encoder(const Options& options)
     : av_(std::make_unique<Ffmpeg>()), options_(options), bitrate_kbps_(options.bitrate_kbps) {
   auto bad = [](const std::string& what) { throw std::invalid_argument("H264Encoder: " + what); };
-  if (options.width <= 0 || options.height <= 0 || options.width % 2 != 0 || options.height % 2 != 0) {
+  if (options.width <= 0 || options.height <= 0 || options.width % 2 != 0 ||
+      options.height % 2 != 0) {
     bad("width and height must be positive and even, got " + std::to_string(options.width) + "x" +
         std::to_string(options.height));
   }
   if (!(options.rate_hz > 0.0)) bad("the frame rate must be > 0");
-  if (options.bitrate_kbps <= 0) bad("the bitrate must be > 0 kbit/s, got " + std::to_string(options.bitrate_kbps));
+  if (options.bitrate_kbps <= 0)
+    bad("the bitrate must be > 0 kbit/s, got " + std::to_string(options.bitrate_kbps));
   if (!(options.key_frame_interval_s > 0.0)) bad("the key frame interval must be > 0 s");
   QuietFfmpeg();
   const AVCodec* x264 = avcodec_find_encoder_by_name("libx264");
-  if (x264 == nullptr) throw std::runtime_error("H.264: this FFmpeg's libavcodec has no libx264 encoder");
+  if (x264 == nullptr)
+    throw std::runtime_error("H.264: this FFmpeg's libavcodec has no libx264 encoder");
   Ffmpeg& av = *av_;
   av.codec = avcodec_alloc_context3(x264);
   av.frame = av_frame_alloc();
@@ -118,14 +124,16 @@ H264Encoder::H264Encoder(const Options& options)
   av.codec->pix_fmt = AV_PIX_FMT_YUV420P;
   av.codec->time_base = av_inv_q(rate);
   av.codec->framerate = rate;
-  av.codec->gop_size = std::max(1, static_cast<int>(std::lround(options.key_frame_interval_s * options.rate_hz)));
+  av.codec->gop_size =
+      std::max(1, static_cast<int>(std::lround(options.key_frame_interval_s * options.rate_hz)));
   av.codec->max_b_frames = 0;
   av.codec->thread_count = 1;
   SetRate(av.codec, bitrate_kbps_, options.rate_hz);
   AVDictionary* opts = nullptr;
   av_dict_set(&opts, "preset", "veryfast", 0);
   av_dict_set(&opts, "tune", "zerolatency", 0);  // no B-frames, no look-ahead, no frame delay
-  av_dict_set(&opts, "forced-idr", "1", 0);      // a requested key frame is an IDR, not a recovery point
+  av_dict_set(&opts, "forced-idr", "1",
+              0);  // a requested key frame is an IDR, not a recovery point
   const int ret = avcodec_open2(av.codec, x264, &opts);
   av_dict_free(&opts);
   if (ret < 0) throw std::runtime_error("H.264: libx264 does not open: " + AvErrorText(ret));
@@ -138,7 +146,9 @@ H264Encoder::H264Encoder(const Options& options)
 H264Encoder::~H264Encoder() = default;
 
 void H264Encoder::SetTargetBitrate(int kbps) {
-  if (kbps <= 0) throw std::invalid_argument("H264Encoder: bitrate " + std::to_string(kbps) + " kbit/s, expected > 0");
+  if (kbps <= 0)
+    throw std::invalid_argument("H264Encoder: bitrate " + std::to_string(kbps) +
+                                " kbit/s, expected > 0");
   bitrate_kbps_ = kbps;
   // libavcodec's libx264 wrapper compares these with x264's parameters
   // before each frame and reconfigures x264 when they changed.
@@ -193,7 +203,8 @@ struct H264Decoder::Ffmpeg {
   AVCodecContext* codec = nullptr;
   AVFrame* frame = nullptr;
   AVPacket* packet = nullptr;
-  std::vector<uint8_t> padded;  ///< the frame's bytes and the zeroed tail libavcodec reads past the end
+  std::vector<uint8_t>
+      padded;  ///< the frame's bytes and the zeroed tail libavcodec reads past the end
 
   ~Ffmpeg() {
     av_packet_free(&packet);
@@ -205,7 +216,8 @@ struct H264Decoder::Ffmpeg {
 H264Decoder::H264Decoder() : av_(std::make_unique<Ffmpeg>()) {
   QuietFfmpeg();
   const AVCodec* h264 = avcodec_find_decoder(AV_CODEC_ID_H264);
-  if (h264 == nullptr) throw std::runtime_error("H.264: this FFmpeg's libavcodec has no H.264 decoder");
+  if (h264 == nullptr)
+    throw std::runtime_error("H.264: this FFmpeg's libavcodec has no H.264 decoder");
   Ffmpeg& av = *av_;
   av.codec = avcodec_alloc_context3(h264);
   av.frame = av_frame_alloc();
@@ -222,7 +234,8 @@ H264Decoder::H264Decoder() : av_(std::make_unique<Ffmpeg>()) {
 H264Decoder::~H264Decoder() = default;
 
 DecodeResult H264Decoder::DecodeFrame(const EncodedFrameView& frame, cv::Mat& image) {
-  if (have_seq_ && frame.seq <= last_seq_) return DecodeResult::kCorrupt;  // out of order: the stream moved on
+  if (have_seq_ && frame.seq <= last_seq_)
+    return DecodeResult::kCorrupt;  // out of order: the stream moved on
   const bool gap = have_seq_ && frame.seq != last_seq_ + 1;
   have_seq_ = true;
   last_seq_ = frame.seq;
@@ -231,7 +244,8 @@ DecodeResult H264Decoder::DecodeFrame(const EncodedFrameView& frame, cv::Mat& im
     return DecodeResult::kLost;
   }
   if (awaiting_key_frame_ && !frame.key_frame) return DecodeResult::kAwaitingKeyFrame;
-  if (frame.data == nullptr || frame.size == 0 || frame.size > static_cast<size_t>(INT32_MAX) - 64) {
+  if (frame.data == nullptr || frame.size == 0 ||
+      frame.size > static_cast<size_t>(INT32_MAX) - 64) {
     awaiting_key_frame_ = true;
     return DecodeResult::kCorrupt;
   }
@@ -254,7 +268,8 @@ DecodeResult H264Decoder::DecodeFrame(const EncodedFrameView& frame, cv::Mat& im
       damaged = true;
       break;
     }
-    damaged = damaged || av.frame->decode_error_flags != 0 || (av.frame->flags & AV_FRAME_FLAG_CORRUPT) != 0;
+    damaged = damaged || av.frame->decode_error_flags != 0 ||
+              (av.frame->flags & AV_FRAME_FLAG_CORRUPT) != 0;
     if (!damaged) {
       CopyFrameToI420(av.frame, yuv_);
       got = true;

@@ -2,9 +2,8 @@
 
 #include <cmath>
 #include <limits>
-#include <stdexcept>
-
 #include <opencv2/imgproc.hpp>
+#include <stdexcept>
 
 namespace haptel::video {
 namespace {
@@ -12,7 +11,8 @@ namespace {
 void CheckPair(const cv::Mat& a, const cv::Mat& b, const char* what) {
   if (a.empty() || a.size() != b.size() || a.type() != b.type() ||
       (a.type() != CV_8UC3 && a.type() != CV_8UC1)) {
-    throw std::invalid_argument(std::string(what) + ": two 8-bit images of one size and type expected");
+    throw std::invalid_argument(std::string(what) +
+                                ": two 8-bit images of one size and type expected");
   }
 }
 

@@ -19,11 +19,11 @@ constexpr double kThresholdUp = 0.0087;
 constexpr double kThresholdDown = 0.039;
 constexpr double kThresholdMin_ms = 6.0, kThresholdMax_ms = 600.0;
 // The rate controller (§5.5).
-constexpr double kBeta = 0.85;                 ///< a cut takes the rate to this share of what arrives
-constexpr double kMultiplicativeGain = 1.08;   ///< per second, far from the link's capacity
-constexpr double kPacketBits = 1200.0 * 8.0;   ///< the additive step: a packet per response time
-constexpr double kResponseTime_s = 0.2;        ///< the link's round trip (small) plus 100 ms
-constexpr double kMinCutInterval_s = 0.3;      ///< one cut per queue drain
+constexpr double kBeta = 0.85;  ///< a cut takes the rate to this share of what arrives
+constexpr double kMultiplicativeGain = 1.08;  ///< per second, far from the link's capacity
+constexpr double kPacketBits = 1200.0 * 8.0;  ///< the additive step: a packet per response time
+constexpr double kResponseTime_s = 0.2;       ///< the link's round trip (small) plus 100 ms
+constexpr double kMinCutInterval_s = 0.3;     ///< one cut per queue drain
 // Loss (§6): cut above 10 %, grow below 2 %, over windows of a second.
 constexpr double kLossWindow_s = 1.0;
 constexpr double kLossHigh = 0.10, kLossLow = 0.02;
@@ -37,7 +37,8 @@ void RateEstimatorConfig::ValidateOrThrow() const {
   };
   if (!(min_kbps > 0)) fail("min_kbps", "a rate above 0");
   if (!(start_kbps >= min_kbps)) fail("start_kbps", "at least min_kbps");
-  if (!(max_kbps >= start_kbps) || !std::isfinite(max_kbps)) fail("max_kbps", "a finite rate, at least start_kbps");
+  if (!(max_kbps >= start_kbps) || !std::isfinite(max_kbps))
+    fail("max_kbps", "a finite rate, at least start_kbps");
   if (!(feedback_period_s > 0)) fail("feedback_period_s", "a period above 0 s");
 }
 
@@ -71,7 +72,8 @@ bool RateEstimator::OnSilence(double now_s) {
   return true;
 }
 
-void RateEstimator::OnFrame(uint64_t frame_number, double capture_s, double arrival_s, size_t bytes) {
+void RateEstimator::OnFrame(uint64_t frame_number, double capture_s, double arrival_s,
+                            size_t bytes) {
   last_frame_s_ = std::max(last_frame_s_, arrival_s);
   if (last_silence_cut_s_ >= 0) {
     // The frames lost in the silence were answered by its cuts: the loss
@@ -90,7 +92,8 @@ void RateEstimator::OnFrame(uint64_t frame_number, double capture_s, double arri
   arrival_bytes_[static_cast<size_t>(slot)] = bytes;
   ++arrivals_count_;
   window_bytes_ += bytes;
-  while (arrivals_count_ > 1 && arrival_s_[static_cast<size_t>(arrivals_head_)] < arrival_s - kRateWindow_s) {
+  while (arrivals_count_ > 1 &&
+         arrival_s_[static_cast<size_t>(arrivals_head_)] < arrival_s - kRateWindow_s) {
     window_bytes_ -= arrival_bytes_[static_cast<size_t>(arrivals_head_)];
     arrivals_head_ = (arrivals_head_ + 1) % kArrivals;
     --arrivals_count_;
@@ -123,7 +126,8 @@ void RateEstimator::OnFrame(uint64_t frame_number, double capture_s, double arri
   UpdateRate(arrival_s);
 }
 
-void RateEstimator::UpdateTrend(double arrival_delta_ms, double capture_delta_ms, double arrival_ms) {
+void RateEstimator::UpdateTrend(double arrival_delta_ms, double capture_delta_ms,
+                                double arrival_ms) {
   ++deltas_;
   if (first_arrival_ms_ < 0) first_arrival_ms_ = arrival_ms;
   accumulated_ms_ += arrival_delta_ms - capture_delta_ms;
@@ -157,9 +161,11 @@ void RateEstimator::Detect(double capture_delta_ms, double arrival_ms) {
   if (deltas_ < 2) return;
   if (modified_trend_ > threshold_ms_) {
     // Over for long enough, twice in a row, and not falling: the queue grows.
-    time_over_using_ms_ = time_over_using_ms_ < 0 ? capture_delta_ms / 2 : time_over_using_ms_ + capture_delta_ms;
+    time_over_using_ms_ =
+        time_over_using_ms_ < 0 ? capture_delta_ms / 2 : time_over_using_ms_ + capture_delta_ms;
     ++overuse_count_;
-    if (time_over_using_ms_ > kOveruseTime_ms && overuse_count_ > 1 && modified_trend_ >= previous_trend_) {
+    if (time_over_using_ms_ > kOveruseTime_ms && overuse_count_ > 1 &&
+        modified_trend_ >= previous_trend_) {
       time_over_using_ms_ = 0;
       overuse_count_ = 0;
       usage_ = LinkUsage::kOveruse;
@@ -188,8 +194,8 @@ void RateEstimator::UpdateThreshold(double arrival_ms) {
   }
   const double k = magnitude < threshold_ms_ ? kThresholdDown : kThresholdUp;
   const double dt_ms = std::min(arrival_ms - last_threshold_update_ms_, 100.0);
-  threshold_ms_ = std::clamp(threshold_ms_ + k * (magnitude - threshold_ms_) * dt_ms, kThresholdMin_ms,
-                             kThresholdMax_ms);
+  threshold_ms_ = std::clamp(threshold_ms_ + k * (magnitude - threshold_ms_) * dt_ms,
+                             kThresholdMin_ms, kThresholdMax_ms);
   last_threshold_update_ms_ = arrival_ms;
 }
 
@@ -255,14 +261,16 @@ void RateEstimator::UpdateLoss(uint64_t frame_number, double now_s) {
   if (loss_share_ > kLossHigh) {
     // No higher than what arrived while the link dropped the rest: its
     // capacity, as far as this side can tell (GCC's acknowledged bitrate).
-    loss_kbps_ = std::min(std::min(loss_kbps_, target_kbps()) * (1.0 - 0.5 * loss_share_), received_kbps_);
+    loss_kbps_ =
+        std::min(std::min(loss_kbps_, target_kbps()) * (1.0 - 0.5 * loss_share_), received_kbps_);
     cut_pending_ = true;
     next_feedback_s_ = std::min(next_feedback_s_, now_s);
   } else if (loss_share_ < kLossLow) {
     // Up while nothing is lost, but never far above what arrives (as the
     // delay-based estimate): an unused rate is no evidence of capacity.
     const double grown = loss_kbps_ * std::pow(kMultiplicativeGain, window_s);
-    loss_kbps_ = std::min({config_.max_kbps, grown, std::max(loss_kbps_, 1.5 * received_kbps_ + 10.0)});
+    loss_kbps_ =
+        std::min({config_.max_kbps, grown, std::max(loss_kbps_, 1.5 * received_kbps_ + 10.0)});
   }
   loss_kbps_ = std::clamp(loss_kbps_, config_.min_kbps, config_.max_kbps);
   loss_window_start_s_ = now_s;

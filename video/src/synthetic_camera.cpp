@@ -29,14 +29,14 @@ namespace haptel::video {
 namespace {
 
 constexpr double kNear = LevelCamera::kNear;  // near plane, m
-constexpr double kWallHeight = 0.25;      // m
-constexpr double kPostHeight = 0.3;       // m, gate posts and round obstacles
-constexpr double kWallPiece = 0.15;       // m, wall pieces for sorting and shading
-constexpr double kTile = 0.5;             // m, floor checkerboard
-constexpr double kStartLineWidth = 0.04;  // m
-constexpr double kMaxPoseCoord = 1e6;     // m; poses farther out are rendered as invalid
-constexpr double kMaxPixelCoord = 1e6;    // px; drawing coordinates are clamped to this
-constexpr int kShift = 4;                 // sub-pixel bits for fillConvexPoly
+constexpr double kWallHeight = 0.25;          // m
+constexpr double kPostHeight = 0.3;           // m, gate posts and round obstacles
+constexpr double kWallPiece = 0.15;           // m, wall pieces for sorting and shading
+constexpr double kTile = 0.5;                 // m, floor checkerboard
+constexpr double kStartLineWidth = 0.04;      // m
+constexpr double kMaxPoseCoord = 1e6;         // m; poses farther out are rendered as invalid
+constexpr double kMaxPixelCoord = 1e6;        // px; drawing coordinates are clamped to this
+constexpr int kShift = 4;                     // sub-pixel bits for fillConvexPoly
 constexpr double kOne = 1 << kShift;
 
 // Palette (BGR).

@@ -83,7 +83,8 @@ Mp4Writer::Mp4Writer(const std::filesystem::path& file, int width, int height, d
   av.codec->framerate = rate;
   // A key frame a second: each is a fragment's start (see the header).
   av.codec->gop_size = std::max(1, static_cast<int>(fps + 0.5));
-  if (av.format->oformat->flags & AVFMT_GLOBALHEADER) av.codec->flags |= AV_CODEC_FLAG_GLOBAL_HEADER;
+  if (av.format->oformat->flags & AVFMT_GLOBALHEADER)
+    av.codec->flags |= AV_CODEC_FLAG_GLOBAL_HEADER;
   AVDictionary* codec_options = nullptr;
   // A fast x264 preset: the recording must keep up on a small machine beside
   // the servo loop and the physics.
@@ -163,7 +164,8 @@ bool Mp4Writer::Write(const cv::Mat& bgr) {
   for (int p = 0; p < 3; ++p) {
     for (int row = 0; row < heights[p]; ++row) {
       std::memcpy(av.frame->data[p] + static_cast<ptrdiff_t>(row) * av.frame->linesize[p],
-                  planes[p] + static_cast<ptrdiff_t>(row) * widths[p], static_cast<size_t>(widths[p]));
+                  planes[p] + static_cast<ptrdiff_t>(row) * widths[p],
+                  static_cast<size_t>(widths[p]));
     }
   }
   av.frame->pts = static_cast<int64_t>(frames_);

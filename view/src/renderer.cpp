@@ -293,9 +293,10 @@ Eigen::Quaternionf Turn(double pan, double tilt) {
 
 /// `point` turned about the eye by `turn`.
 std::array<double, 3> AboutEye(const Eigen::Quaternionf& turn, const std::array<double, 3>& point) {
-  const Eigen::Vector3f p = kEye + turn * (Eigen::Vector3f(static_cast<float>(point[0]), static_cast<float>(point[1]),
-                                                           static_cast<float>(point[2])) -
-                                           kEye);
+  const Eigen::Vector3f p =
+      kEye + turn * (Eigen::Vector3f(static_cast<float>(point[0]), static_cast<float>(point[1]),
+                                     static_cast<float>(point[2])) -
+                     kEye);
   return {p.x(), p.y(), p.z()};
 }
 
@@ -410,8 +411,8 @@ std::string TileText(const Tiles::Tile& tile) {
                       : tile.state == TileState::kDone ? "done"
                                                        : "LOST";
   char text[96];
-  std::snprintf(text, sizeof text, "%s %s  lap %.1f s  %d/%d", tile.name, state, tile.lap_time_s, tile.gates_passed,
-                tile.gates_total);
+  std::snprintf(text, sizeof text, "%s %s  lap %.1f s  %d/%d", tile.name, state, tile.lap_time_s,
+                tile.gates_passed, tile.gates_total);
   return text;
 }
 
@@ -452,7 +453,8 @@ std::vector<std::string> OverlayLines(const Overlay& o) {
   if (o.guidance_shown) {
     const double push = std::hypot(o.guidance_forward_n, o.guidance_left_n);
     if (o.guidance_ttc_s >= 0.0) {
-      std::snprintf(line, sizeof line, "shared control: push %.1f N, obstacle in %.1f s", push, o.guidance_ttc_s);
+      std::snprintf(line, sizeof line, "shared control: push %.1f N, obstacle in %.1f s", push,
+                    o.guidance_ttc_s);
     } else {
       std::snprintf(line, sizeof line, "shared control: clear");
     }
@@ -488,8 +490,10 @@ GuidanceDial GuidanceDialOf(const Overlay& o, int width, int height) {
   const double fraction = std::min(1.0, push / std::max(o.guidance_max_n, 1e-6));
   const double norm = std::max(push, 1e-12);
   // Forward (x) is up the screen, left (y) is left: a push back points down.
-  d.tip_x = d.centre_x - static_cast<int>(std::lround(d.radius * fraction * o.guidance_left_n / norm));
-  d.tip_y = d.centre_y - static_cast<int>(std::lround(d.radius * fraction * o.guidance_forward_n / norm));
+  d.tip_x =
+      d.centre_x - static_cast<int>(std::lround(d.radius * fraction * o.guidance_left_n / norm));
+  d.tip_y =
+      d.centre_y - static_cast<int>(std::lround(d.radius * fraction * o.guidance_forward_n / norm));
   return d;
 }
 
@@ -612,7 +616,8 @@ Renderer::Renderer(int width, int height, const ScreenPlacement& screen)
   make_texture(g.tiles_texture);  // its storage comes with the first tiles
   make_texture(g.third_texture);  // its storage comes with the first picture
 
-  g.projection = Perspective(kFovYDeg, static_cast<float>(width) / static_cast<float>(height), kNear, kFar);
+  g.projection =
+      Perspective(kFovYDeg, static_cast<float>(width) / static_cast<float>(height), kNear, kFar);
   g.view_projection = g.projection * LookAt(kEye, kTarget, Eigen::Vector3f::UnitZ());
   glViewport(0, 0, width, height);
 }
@@ -670,13 +675,15 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
     // A tracked head looks level when it looks ahead (a pilot's eyes, not a
     // desk's): the screen should hang at the eye's height in front of it.
     const Eigen::Vector3f target =
-        gaze_.tracked ? Eigen::Vector3f(kEye + Turn(gaze_.look_pan, gaze_.look_tilt) * Eigen::Vector3f::UnitX())
+        gaze_.tracked ? Eigen::Vector3f(kEye + Turn(gaze_.look_pan, gaze_.look_tilt) *
+                                                   Eigen::Vector3f::UnitX())
                       : kTarget;
     g.view_projection = g.projection * LookAt(kEye, target, Eigen::Vector3f::UnitZ());
   }
   const Eigen::Quaternionf screen_turn =
       gaze_.tracked ? Turn(gaze_.screen_pan, gaze_.screen_tilt) : Eigen::Quaternionf::Identity();
-  const std::array<double, 4> screen_q{screen_turn.w(), screen_turn.x(), screen_turn.y(), screen_turn.z()};
+  const std::array<double, 4> screen_q{screen_turn.w(), screen_turn.x(), screen_turn.y(),
+                                       screen_turn.z()};
   glViewport(0, 0, width_, height_);
   glClearColor(0.55f, 0.62f, 0.70f, 1.0f);  // a light room
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
@@ -953,12 +960,14 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
       // above, the push on the hand as an orange arrow from its centre.
       const GuidanceDial d = GuidanceDialOf(o, width_, height_);
       const cv::Point centre(d.centre_x, d.centre_y), tip(d.tip_x, d.tip_y);
-      g.overlay_rects.emplace_back(d.centre_x - d.radius - 8, d.centre_y - d.radius - 8, 2 * d.radius + 16,
-                                   2 * d.radius + 16);
+      g.overlay_rects.emplace_back(d.centre_x - d.radius - 8, d.centre_y - d.radius - 8,
+                                   2 * d.radius + 16, 2 * d.radius + 16);
       cv::circle(ov, centre, d.radius + 6, Bgra(20, 20, 20, 190), cv::FILLED, cv::LINE_AA);
       cv::circle(ov, centre, d.radius, Bgra(120, 120, 120), 1, cv::LINE_AA);
-      cv::line(ov, centre + cv::Point(0, -d.radius), centre + cv::Point(0, -d.radius + 8), Bgra(200, 200, 200), 2);
-      if (tip != centre) cv::arrowedLine(ov, centre, tip, Bgra(0, 140, 255), 4, cv::LINE_AA, 0, 0.3);
+      cv::line(ov, centre + cv::Point(0, -d.radius), centre + cv::Point(0, -d.radius + 8),
+               Bgra(200, 200, 200), 2);
+      if (tip != centre)
+        cv::arrowedLine(ov, centre, tip, Bgra(0, 140, 255), 4, cv::LINE_AA, 0, 0.3);
     }
     if (o.message[0] != '\0') {
       int base = 0;
@@ -977,14 +986,15 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
       const cv::Rect box(at.x - 8, at.y - ts.height - 8, ts.width + 16, ts.height + 16);
       cv::rectangle(ov, box, Bgra(0, 0, 0, 160), cv::FILLED);
       g.overlay_rects.push_back(box);
-      cv::putText(ov, model.tiles.line, at, font, scale, Bgra(kTileFrameBgr[0], kTileFrameBgr[1], kTileFrameBgr[2]), 1,
-                  cv::LINE_AA);
+      cv::putText(ov, model.tiles.line, at, font, scale,
+                  Bgra(kTileFrameBgr[0], kTileFrameBgr[1], kTileFrameBgr[2]), 1, cv::LINE_AA);
     }
     if (third_shown) {
       // The third-person view's frame and label; its picture goes over the frame.
       const TileBox label = ThirdPersonLabelRect(width_, height_);
       const TileBox picture = ThirdPersonRect(width_, height_);
-      const cv::Rect frame(label.x - 3, label.y, label.width + 6, label.height + picture.height + 3);
+      const cv::Rect frame(label.x - 3, label.y, label.width + 6,
+                           label.height + picture.height + 3);
       cv::rectangle(ov, frame, Bgra(0, 0, 0, 200), cv::FILLED);
       g.overlay_rects.push_back(frame);
       cv::putText(ov, kThirdPersonLabel, cv::Point(label.x + 4, label.y + label.height - 6), font,
@@ -1019,15 +1029,18 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
   // panel: uploaded only when a new one came. ---
   if (third_shown) {
     glBindTexture(GL_TEXTURE_2D, g.third_texture);
-    if (model.third_person.id != g.third_id || third->cols != g.third_cols || third->rows != g.third_rows) {
+    if (model.third_person.id != g.third_id || third->cols != g.third_cols ||
+        third->rows != g.third_rows) {
       glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
       glPixelStorei(GL_UNPACK_ROW_LENGTH, static_cast<GLint>(third->step / 3));
       if (third->cols != g.third_cols || third->rows != g.third_rows) {
-        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, third->cols, third->rows, 0, GL_BGR, GL_UNSIGNED_BYTE, third->data);
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, third->cols, third->rows, 0, GL_BGR,
+                     GL_UNSIGNED_BYTE, third->data);
         g.third_cols = third->cols;
         g.third_rows = third->rows;
       } else {
-        glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, third->cols, third->rows, GL_BGR, GL_UNSIGNED_BYTE, third->data);
+        glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, third->cols, third->rows, GL_BGR, GL_UNSIGNED_BYTE,
+                        third->data);
       }
       glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
       g.third_id = model.third_person.id;
@@ -1075,21 +1088,23 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
           // Its last picture is stale: crossed out.
           cv::line(g.tiles, picture.tl(), picture.br(), Bgra(0, 0, 255), 3, cv::LINE_AA);
           cv::line(g.tiles, cv::Point(picture.x + picture.width, picture.y),
-                   cv::Point(picture.x, picture.y + picture.height), Bgra(0, 0, 255), 3, cv::LINE_AA);
+                   cv::Point(picture.x, picture.y + picture.height), Bgra(0, 0, 255), 3,
+                   cv::LINE_AA);
         }
-        cv::putText(g.tiles, TileText(tile), cv::Point(at.x + 4, at.y + at.height - 6), cv::FONT_HERSHEY_SIMPLEX,
-                    text, Bgra(255, 255, 255), 1, cv::LINE_AA);
+        cv::putText(g.tiles, TileText(tile), cv::Point(at.x + 4, at.y + at.height - 6),
+                    cv::FONT_HERSHEY_SIMPLEX, text, Bgra(255, 255, 255), 1, cv::LINE_AA);
         if (tile.state == TileState::kDriven) {
           cv::rectangle(g.tiles, at, Bgra(kTileFrameBgr[0], kTileFrameBgr[1], kTileFrameBgr[2]), 4);
         }
       }
       glBindTexture(GL_TEXTURE_2D, g.tiles_texture);
       glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
-      glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, g.tiles.cols, g.tiles.rows, 0, GL_BGRA, GL_UNSIGNED_BYTE,
-                   g.tiles.data);
+      glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, g.tiles.cols, g.tiles.rows, 0, GL_BGRA,
+                   GL_UNSIGNED_BYTE, g.tiles.data);
     }
     glBindTexture(GL_TEXTURE_2D, g.tiles_texture);
-    const Eigen::Matrix4f m = PixelRect(column.x, column.y, column.width, column.height, width_, height_);
+    const Eigen::Matrix4f m =
+        PixelRect(column.x, column.y, column.width, column.height, width_, height_);
     glUniformMatrix4fv(g.tex_mvp, 1, GL_FALSE, m.data());
     glUniform4f(g.tex_uv_rect, 0.0f, 0.0f, 1.0f, 1.0f);
     g.fullscreen.Draw();
@@ -1197,7 +1212,8 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
     glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
     glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, g.map.cols, g.map.rows, 0, GL_BGRA, GL_UNSIGNED_BYTE,
                  g.map.data);
-    const Eigen::Matrix4f m = PixelRect(panel.x, panel.y, panel.width, panel.height, width_, height_);
+    const Eigen::Matrix4f m =
+        PixelRect(panel.x, panel.y, panel.width, panel.height, width_, height_);
     glUniformMatrix4fv(g.tex_mvp, 1, GL_FALSE, m.data());
     glUniform4f(g.tex_uv_rect, 0.0f, 0.0f, 1.0f, 1.0f);
     g.fullscreen.Draw();

@@ -74,18 +74,50 @@ void SdlInput::OnKey(const SDL_KeyboardEvent& key, bool down) {
   Key which = Key::kCount;
   uint32_t InputState::*presses = nullptr;  // the robot's counter: arrows and W/A/S/D are one set
   switch (key.keysym.scancode) {
-    case SDL_SCANCODE_UP: which = Key::kArrowUp; presses = &InputState::presses_up; break;
-    case SDL_SCANCODE_W: which = Key::kW; presses = &InputState::presses_up; break;
-    case SDL_SCANCODE_DOWN: which = Key::kArrowDown; presses = &InputState::presses_down; break;
-    case SDL_SCANCODE_S: which = Key::kS; presses = &InputState::presses_down; break;
-    case SDL_SCANCODE_LEFT: which = Key::kArrowLeft; presses = &InputState::presses_left; break;
-    case SDL_SCANCODE_A: which = Key::kA; presses = &InputState::presses_left; break;
-    case SDL_SCANCODE_RIGHT: which = Key::kArrowRight; presses = &InputState::presses_right; break;
-    case SDL_SCANCODE_D: which = Key::kD; presses = &InputState::presses_right; break;
-    case SDL_SCANCODE_SPACE: which = Key::kSpace; presses = &InputState::presses_stop; break;
-    case SDL_SCANCODE_PAGEUP: which = Key::kPageUp; break;
-    case SDL_SCANCODE_PAGEDOWN: which = Key::kPageDown; break;
-    default: break;
+    case SDL_SCANCODE_UP:
+      which = Key::kArrowUp;
+      presses = &InputState::presses_up;
+      break;
+    case SDL_SCANCODE_W:
+      which = Key::kW;
+      presses = &InputState::presses_up;
+      break;
+    case SDL_SCANCODE_DOWN:
+      which = Key::kArrowDown;
+      presses = &InputState::presses_down;
+      break;
+    case SDL_SCANCODE_S:
+      which = Key::kS;
+      presses = &InputState::presses_down;
+      break;
+    case SDL_SCANCODE_LEFT:
+      which = Key::kArrowLeft;
+      presses = &InputState::presses_left;
+      break;
+    case SDL_SCANCODE_A:
+      which = Key::kA;
+      presses = &InputState::presses_left;
+      break;
+    case SDL_SCANCODE_RIGHT:
+      which = Key::kArrowRight;
+      presses = &InputState::presses_right;
+      break;
+    case SDL_SCANCODE_D:
+      which = Key::kD;
+      presses = &InputState::presses_right;
+      break;
+    case SDL_SCANCODE_SPACE:
+      which = Key::kSpace;
+      presses = &InputState::presses_stop;
+      break;
+    case SDL_SCANCODE_PAGEUP:
+      which = Key::kPageUp;
+      break;
+    case SDL_SCANCODE_PAGEDOWN:
+      which = Key::kPageDown;
+      break;
+    default:
+      break;
   }
   if (which != Key::kCount) {
     const auto i = static_cast<size_t>(which);
@@ -114,7 +146,8 @@ void SdlInput::OnKey(const SDL_KeyboardEvent& key, bool down) {
     state_.vehicle_request = interfaces::kNextVehicle;
     ++state_.vehicle_requests;
   }
-  if (down && key.repeat == 0 && key.keysym.scancode >= SDL_SCANCODE_1 && key.keysym.scancode <= SDL_SCANCODE_9) {
+  if (down && key.repeat == 0 && key.keysym.scancode >= SDL_SCANCODE_1 &&
+      key.keysym.scancode <= SDL_SCANCODE_9) {
     state_.vehicle_request = key.keysym.scancode - SDL_SCANCODE_1;
     ++state_.vehicle_requests;
   }
@@ -130,10 +163,10 @@ void SdlInput::OnMouseMotion(const SDL_MouseMotionEvent& motion) {
   // Dragging right looks right (pan is positive left); dragging up looks up
   // (SDL's y grows downward). The range is the pilot camera's: a head that
   // could turn past it would have to drag back over nothing.
-  state_.head_pan = std::clamp(state_.head_pan - motion.xrel * kHeadRadPerPixel, -kBlimpCameraPanMax,
-                               kBlimpCameraPanMax);
-  state_.head_tilt = std::clamp(state_.head_tilt - motion.yrel * kHeadRadPerPixel, -kBlimpCameraTiltMax,
-                                kBlimpCameraTiltMax);
+  state_.head_pan = std::clamp(state_.head_pan - motion.xrel * kHeadRadPerPixel,
+                               -kBlimpCameraPanMax, kBlimpCameraPanMax);
+  state_.head_tilt = std::clamp(state_.head_tilt - motion.yrel * kHeadRadPerPixel,
+                                -kBlimpCameraTiltMax, kBlimpCameraTiltMax);
 }
 
 void SdlInput::OnControllerAdded(int device_index) {
@@ -181,8 +214,8 @@ void SdlInput::OnEvent(const SDL_Event& event) {
       if (event.cbutton.button >= static_cast<int>(PadButton::kCount)) return;
       // Back (the "view" button) asks for the fleet's next vehicle: no
       // interface drives with it, so a switch never doubles as a command.
-      if (event.cbutton.button == SDL_CONTROLLER_BUTTON_BACK && event.cbutton.state == SDL_PRESSED &&
-          !state_.pad_buttons[event.cbutton.button]) {
+      if (event.cbutton.button == SDL_CONTROLLER_BUTTON_BACK &&
+          event.cbutton.state == SDL_PRESSED && !state_.pad_buttons[event.cbutton.button]) {
         state_.vehicle_request = interfaces::kNextVehicle;
         ++state_.vehicle_requests;
       }

@@ -34,7 +34,9 @@ std::array<GlovePosture, kGlovePostureCount> MakePostures() {
   p[1].angles[19] = 0.5;  // palm arch
 
   p[2].name = "spread";
-  p[2].how = "a 'stop' sign: fingers straight and spread wide, thumb out, wrist bent back and toward the thumb";
+  p[2].how =
+      "a 'stop' sign: fingers straight and spread wide, thumb out, wrist bent back and toward the "
+      "thumb";
   p[2].angles[3] = 1.0;    // thumb abduction
   p[2].angles[16] = 0.4;   // index-middle abduction
   p[2].angles[17] = 0.3;   // middle-ring abduction
@@ -49,7 +51,9 @@ std::array<GlovePosture, kGlovePostureCount> MakePostures() {
   return p;
 }
 
-bool AllFinite(const Vec3d& v) { return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]); }
+bool AllFinite(const Vec3d& v) {
+  return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]);
+}
 
 std::string Join(const std::vector<std::string>& items) {
   std::string out;
@@ -84,7 +88,8 @@ void GloveFit::ApplyTo(ArmCalibration& arm) const {
 void GloveCalibrator::Store(int index, const std::array<double, kGloveJoints>& raw) {
   for (int j = 0; j < kGloveJoints; ++j) {
     if (!std::isfinite(raw[static_cast<size_t>(j)])) {
-      throw CalibrationError("glove posture '" + std::string(GlovePostures()[static_cast<size_t>(index)].name) +
+      throw CalibrationError("glove posture '" +
+                             std::string(GlovePostures()[static_cast<size_t>(index)].name) +
                              "': sensor " + std::string(kGloveSensorNames[static_cast<size_t>(j)]) +
                              " read a non-finite value");
     }
@@ -97,25 +102,31 @@ int RequirePosture(std::string_view posture) {
   const int index = GlovePostureIndex(posture);
   if (index < 0) {
     std::string names;
-    for (const auto& p : GlovePostures()) names += (names.empty() ? "" : ", ") + std::string(p.name);
-    throw CalibrationError("unknown glove posture '" + std::string(posture) + "' (expected one of: " + names + ")");
+    for (const auto& p : GlovePostures())
+      names += (names.empty() ? "" : ", ") + std::string(p.name);
+    throw CalibrationError("unknown glove posture '" + std::string(posture) +
+                           "' (expected one of: " + names + ")");
   }
   return index;
 }
 }  // namespace
 
-void GloveCalibrator::Capture(std::string_view posture, const std::array<double, kGloveJoints>& raw) {
+void GloveCalibrator::Capture(std::string_view posture,
+                              const std::array<double, kGloveJoints>& raw) {
   const int index = RequirePosture(posture);
   if (raw_[static_cast<size_t>(index)]) {
-    throw CalibrationError("glove posture '" + std::string(posture) + "' is already captured (redo it with Recapture)");
+    throw CalibrationError("glove posture '" + std::string(posture) +
+                           "' is already captured (redo it with Recapture)");
   }
   Store(index, raw);
 }
 
-void GloveCalibrator::Recapture(std::string_view posture, const std::array<double, kGloveJoints>& raw) {
+void GloveCalibrator::Recapture(std::string_view posture,
+                                const std::array<double, kGloveJoints>& raw) {
   const int index = RequirePosture(posture);
   if (!raw_[static_cast<size_t>(index)]) {
-    throw CalibrationError("glove posture '" + std::string(posture) + "' was never captured: nothing to redo");
+    throw CalibrationError("glove posture '" + std::string(posture) +
+                           "' was never captured: nothing to redo");
   }
   Store(index, raw);
 }
@@ -132,8 +143,9 @@ std::vector<std::string_view> GloveCalibrator::Undetermined() const {
     bool determined = false;
     for (size_t a = 0; a < raw_.size() && !determined; ++a) {
       for (size_t b = a + 1; b < raw_.size() && !determined; ++b) {
-        determined = raw_[a] && raw_[b] &&
-                     std::abs(postures[b].angles[j] - postures[a].angles[j]) >= kMinPostureAngleSpan;
+        determined =
+            raw_[a] && raw_[b] &&
+            std::abs(postures[b].angles[j] - postures[a].angles[j]) >= kMinPostureAngleSpan;
       }
     }
     if (!determined) out.push_back(kGloveSensorNames[j]);
@@ -151,8 +163,8 @@ GloveFit GloveCalibrator::Fit() const {
     for (size_t i = 0; i < raw_.size(); ++i) {
       if (!raw_[i]) missing += (missing.empty() ? "" : ", ") + std::string(GlovePostures()[i].name);
     }
-    throw CalibrationError("glove: sensors not determined by the captured postures: " + Join(names) +
-                           " (capture: " + missing + ")");
+    throw CalibrationError("glove: sensors not determined by the captured postures: " +
+                           Join(names) + " (capture: " + missing + ")");
   }
   const auto& postures = GlovePostures();
   GloveFit fit;
@@ -165,7 +177,8 @@ GloveFit GloveCalibrator::Fit() const {
     for (size_t a = 0; a < raw_.size(); ++a) {
       for (size_t b = a + 1; b < raw_.size(); ++b) {
         if (!raw_[a] || !raw_[b]) continue;
-        if (std::abs(postures[b].angles[j] - postures[a].angles[j]) < kMinPostureAngleSpan) continue;
+        if (std::abs(postures[b].angles[j] - postures[a].angles[j]) < kMinPostureAngleSpan)
+          continue;
         const double span = std::abs((*raw_[b])[j] - (*raw_[a])[j]);
         if (s.posture_a < 0 || span > s.raw_span) {
           s.posture_a = static_cast<int>(a);
@@ -191,7 +204,9 @@ GloveFit GloveCalibrator::Fit() const {
     s.gain = (tb - ta) / (rb - ra);
     s.offset = 0.5 * (ta + tb) - s.gain * 0.5 * (ra + rb);
     for (size_t k = 0; k < raw_.size(); ++k) {
-      if (raw_[k]) s.check_error = std::max(s.check_error, std::abs(s.gain * (*raw_[k])[j] + s.offset - postures[k].angles[j]));
+      if (raw_[k])
+        s.check_error = std::max(
+            s.check_error, std::abs(s.gain * (*raw_[k])[j] + s.offset - postures[k].angles[j]));
     }
   }
   if (!degenerate.empty()) {
@@ -241,8 +256,9 @@ TrackerFit FitTracker(const std::vector<TrackerReference>& references, double de
     if (metres_max - metres_min >= kMinTrackerScaleSpan) {
       if (raw_max == raw_min) {
         std::ostringstream msg;
-        msg << "tracker axis " << kAxisNames[i] << ": the reading did not change between reference poses "
-            << (metres_max - metres_min) << " m apart";
+        msg << "tracker axis " << kAxisNames[i]
+            << ": the reading did not change between reference poses " << (metres_max - metres_min)
+            << " m apart";
         throw CalibrationError(msg.str());
       }
       double sxy = 0.0;
@@ -259,7 +275,8 @@ TrackerFit FitTracker(const std::vector<TrackerReference>& references, double de
     }
     fit.offset[i] = metres_mean - fit.scale[i] * raw_mean;
     if (fit.scale[i] == 0.0 || !std::isfinite(fit.scale[i]) || !std::isfinite(fit.offset[i])) {
-      throw CalibrationError(std::string("tracker axis ") + kAxisNames[i] + ": the fit is degenerate");
+      throw CalibrationError(std::string("tracker axis ") + kAxisNames[i] +
+                             ": the fit is degenerate");
     }
     double ssr = 0.0;
     for (const auto& r : references) {

@@ -1,7 +1,4 @@
-#include "haptel/config/paths.hpp"
 #include "haptel/calibration/calibration_procedure.hpp"
-
-#include "haptel/haptics/device_factory.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -15,10 +12,12 @@
 
 #include "haptel/config/device.hpp"
 #include "haptel/config/error.hpp"
+#include "haptel/config/paths.hpp"
 #include "haptel/config/run.hpp"
 #include "haptel/core/args.hpp"
 #include "haptel/core/cli.hpp"
 #include "haptel/core/clock.hpp"
+#include "haptel/haptics/device_factory.hpp"
 #include "haptel/haptics/sim_device.hpp"
 
 namespace haptel::haptics {
@@ -76,7 +75,8 @@ struct Session {
   /// Waits for the operator's Enter.
   void WaitEnter() const {
     std::string line;
-    if (!std::getline(in, line)) throw CalibrationError("the input ended before the calibration was done");
+    if (!std::getline(in, line))
+      throw CalibrationError("the input ended before the calibration was done");
   }
 
   /// One wrist reading one tick later, the wrist force held at zero.
@@ -133,8 +133,8 @@ std::array<double, kGloveJoints> CaptureGlove(const Session& s, int posture, boo
     s.log << "  " << s.name() << " hand: '" << p.name << "'"
           << (fumbled ? " (fumbled: half-way from '" + std::string(from.name) + "')" : "") << "\n";
   } else {
-    s.log << "  " << s.name() << " hand, posture '" << p.name << "': " << p.how << ". Hold it and press Enter."
-          << std::endl;
+    s.log << "  " << s.name() << " hand, posture '" << p.name << "': " << p.how
+          << ". Hold it and press Enter." << std::endl;
     s.WaitEnter();
   }
   return s.MeanGlove(s.options.glove_samples);
@@ -152,7 +152,8 @@ void CalibrateGlove(const Session& s, ArmCalibration& arm) {
   }
   for (size_t k = 0; k < order.size(); ++k) {
     const bool fumbled = s.sim != nullptr && k == 0;
-    calibrator.Capture(postures[static_cast<size_t>(order[k])].name, CaptureGlove(s, order[k], fumbled));
+    calibrator.Capture(postures[static_cast<size_t>(order[k])].name,
+                       CaptureGlove(s, order[k], fumbled));
   }
   // Redo postures: the operator names them; unattended, the fumbled first one.
   if (s.sim != nullptr) {
@@ -161,9 +162,11 @@ void CalibrateGlove(const Session& s, ArmCalibration& arm) {
     calibrator.Recapture(p.name, CaptureGlove(s, order[0], false));
   } else {
     for (;;) {
-      s.log << "  Redo a posture? Type its name (flat, fist, spread, bent) or press Enter to go on." << std::endl;
+      s.log << "  Redo a posture? Type its name (flat, fist, spread, bent) or press Enter to go on."
+            << std::endl;
       std::string line;
-      if (!std::getline(s.in, line)) throw CalibrationError("the input ended before the calibration was done");
+      if (!std::getline(s.in, line))
+        throw CalibrationError("the input ended before the calibration was done");
       line.erase(0, line.find_first_not_of(" \t\r"));
       line.erase(line.find_last_not_of(" \t\r") + 1);
       if (line.empty()) break;
@@ -185,8 +188,8 @@ void CalibrateGlove(const Session& s, ArmCalibration& arm) {
       worst_sensor = j;
     }
   }
-  s.log << "  fitted 22 sensors; largest disagreement of a posture with its sensor's line: " << worst << " rad ("
-        << kGloveSensorNames[static_cast<size_t>(worst_sensor)] << ")\n";
+  s.log << "  fitted 22 sensors; largest disagreement of a posture with its sensor's line: "
+        << worst << " rad (" << kGloveSensorNames[static_cast<size_t>(worst_sensor)] << ")\n";
 }
 
 // -------------------------------------------------------------- tracker ----
@@ -206,23 +209,26 @@ Vec3d CaptureReference(const Session& s, const Vec3d& target) {
     s.sim->Place(s.side, target);
     for (int64_t t = 0; t < kDockNs; t += kMs) s.ReadWrist();
   } else {
-    s.log << "  Put the " << s.name() << " wrist in the jig at (" << target[0] << ", " << target[1] << ", "
-          << target[2] << ") m and press Enter." << std::endl;
+    s.log << "  Put the " << s.name() << " wrist in the jig at (" << target[0] << ", " << target[1]
+          << ", " << target[2] << ") m and press Enter." << std::endl;
     s.WaitEnter();
   }
   return s.MeanWrist(s.options.wrist_samples);
 }
 
 void CalibrateTracker(const Session& s, ArmCalibration& arm) {
-  s.log << "Tracker, " << s.name() << " arm: " << s.options.references.size() << " reference poses\n";
+  s.log << "Tracker, " << s.name() << " arm: " << s.options.references.size()
+        << " reference poses\n";
   std::vector<TrackerReference> references;
-  for (const Vec3d& target : s.options.references) references.push_back({CaptureReference(s, target), target});
+  for (const Vec3d& target : s.options.references)
+    references.push_back({CaptureReference(s, target), target});
   const TrackerFit fit = FitTracker(references);
   fit.ApplyTo(arm);
   for (int i = 0; i < 3; ++i) {
     s.log << "  " << kAxisNames[i] << ": scale " << fit.scale[i] << " m/unit"
-          << (fit.scale_fitted[i] ? "" : " (default: references do not span this axis)") << ", offset "
-          << fit.offset[i] << " m, residual " << fit.residual_rms[i] * 1e3 << " mm\n";
+          << (fit.scale_fitted[i] ? "" : " (default: references do not span this axis)")
+          << ", offset " << fit.offset[i] << " m, residual " << fit.residual_rms[i] * 1e3
+          << " mm\n";
   }
 }
 
@@ -232,7 +238,8 @@ double AskGauge(const Session& s, int axis) {
   for (;;) {
     s.log << "  Gauge reading along " << kAxisNames[axis] << " (N, signed): " << std::flush;
     std::string line;
-    if (!std::getline(s.in, line)) throw CalibrationError("the input ended before the calibration was done");
+    if (!std::getline(s.in, line))
+      throw CalibrationError("the input ended before the calibration was done");
     std::istringstream parse(line);
     double value = 0.0;
     std::string rest;
@@ -263,8 +270,8 @@ void CalibrateForce(const Session& s, ArmCalibration& arm) {
   }
   const ForceFit fit = FitForce(samples);
   fit.ApplyTo(arm);
-  s.log << "  slopes " << fit.slope[0] << ", " << fit.slope[1] << ", " << fit.slope[2] << " N/unit, residual "
-        << fit.residual << " N\n";
+  s.log << "  slopes " << fit.slope[0] << ", " << fit.slope[1] << ", " << fit.slope[2]
+        << " N/unit, residual " << fit.residual << " N\n";
 }
 
 std::string Percent(double relative) {
@@ -287,12 +294,13 @@ std::vector<Vec3d> DefaultTrackerReferences() {
   return out;
 }
 
-DeviceCalibration RunCalibration(Device& device, const CalibrationOptions& options, std::ostream& log,
-                                 std::istream& in) {
+DeviceCalibration RunCalibration(Device& device, const CalibrationOptions& options,
+                                 std::ostream& log, std::istream& in) {
   SimDevice* sim = nullptr;
   if (options.auto_mode) {
     sim = dynamic_cast<SimDevice*>(&device);
-    if (sim == nullptr) throw CalibrationError("unattended calibration (--auto) needs the sim device");
+    if (sim == nullptr)
+      throw CalibrationError("unattended calibration (--auto) needs the sim device");
   }
   if (options.glove_samples < 1 || options.wrist_samples < 1) {
     throw CalibrationError("glove_samples and wrist_samples must be at least 1");
@@ -313,21 +321,27 @@ DeviceCalibration RunCalibration(Device& device, const CalibrationOptions& optio
   return result;
 }
 
-DeviceCalibration RunCalibration(Device& device, const CalibrationOptions& options, std::ostream& log) {
+DeviceCalibration RunCalibration(Device& device, const CalibrationOptions& options,
+                                 std::ostream& log) {
   return RunCalibration(device, options, log, std::cin);
 }
 
 TruthErrors CompareWithTruth(const ArmCalibration& c, const SimArmTruth& t) {
   TruthErrors e;
   for (int i = 0; i < 3; ++i) {
-    e.tracker_scale_rel = std::max(e.tracker_scale_rel, std::abs(c.tracker_scale[i] / t.tracker_scale[i] - 1.0));
-    e.tracker_offset_m = std::max(e.tracker_offset_m, std::abs(c.tracker_offset[i] - t.tracker_offset[i]));
-    e.force_slope_rel = std::max(e.force_slope_rel, std::abs(c.force_slope[i] / t.force_slope[i] - 1.0));
+    e.tracker_scale_rel =
+        std::max(e.tracker_scale_rel, std::abs(c.tracker_scale[i] / t.tracker_scale[i] - 1.0));
+    e.tracker_offset_m =
+        std::max(e.tracker_offset_m, std::abs(c.tracker_offset[i] - t.tracker_offset[i]));
+    e.force_slope_rel =
+        std::max(e.force_slope_rel, std::abs(c.force_slope[i] / t.force_slope[i] - 1.0));
   }
   const auto& postures = GlovePostures();
   for (size_t j = 0; j < kGloveJoints; ++j) {
-    e.glove_gain_rel = std::max(e.glove_gain_rel, std::abs(c.glove_gain[j] / t.glove_gain[j] - 1.0));
-    e.glove_offset_rad = std::max(e.glove_offset_rad, std::abs(c.glove_offset[j] - t.glove_offset[j]));
+    e.glove_gain_rel =
+        std::max(e.glove_gain_rel, std::abs(c.glove_gain[j] / t.glove_gain[j] - 1.0));
+    e.glove_offset_rad =
+        std::max(e.glove_offset_rad, std::abs(c.glove_offset[j] - t.glove_offset[j]));
     // The error is linear in the reading: its largest value over the
     // postures' range is at one end of it.
     double lo = postures[0].angles[j];
@@ -338,13 +352,15 @@ TruthErrors CompareWithTruth(const ArmCalibration& c, const SimArmTruth& t) {
     }
     for (double angle : {lo, hi}) {
       const double raw = (angle - t.glove_offset[j]) / t.glove_gain[j];
-      e.glove_angle_rad = std::max(e.glove_angle_rad, std::abs(c.glove_gain[j] * raw + c.glove_offset[j] - angle));
+      e.glove_angle_rad =
+          std::max(e.glove_angle_rad, std::abs(c.glove_gain[j] * raw + c.glove_offset[j] - angle));
     }
   }
   return e;
 }
 
-void PrintCalibrationSummary(std::ostream& out, const DeviceCalibration& calibration, const Device& device) {
+void PrintCalibrationSummary(std::ostream& out, const DeviceCalibration& calibration,
+                             const Device& device) {
   const auto* sim = dynamic_cast<const SimDevice*>(&device);
   const std::ios::fmtflags flags = out.flags();
   const std::streamsize precision = out.precision();
@@ -355,9 +371,10 @@ void PrintCalibrationSummary(std::ostream& out, const DeviceCalibration& calibra
     out << "\n" << kSideNames[s] << " arm" << std::string(18, ' ') << std::setw(16) << "recovered";
     if (sim != nullptr) out << std::setw(16) << "true" << std::setw(16) << "error";
     out << "\n";
-    auto row = [&](const std::string& label, double value, std::optional<double> truth, const std::string& error) {
-      out << "  " << std::left << std::setw(24) << label << std::right << std::setw(16) << std::setprecision(7)
-          << value;
+    auto row = [&](const std::string& label, double value, std::optional<double> truth,
+                   const std::string& error) {
+      out << "  " << std::left << std::setw(24) << label << std::right << std::setw(16)
+          << std::setprecision(7) << value;
       if (sim != nullptr) {
         out << std::setw(16);
         if (truth) {
@@ -378,7 +395,8 @@ void PrintCalibrationSummary(std::ostream& out, const DeviceCalibration& calibra
     for (int i = 0; i < 3; ++i) {
       const double truth = t != nullptr ? t->tracker_offset[i] : 0.0;
       std::ostringstream err;
-      err << std::showpos << std::fixed << std::setprecision(4) << (c.tracker_offset[i] - truth) * 1e3 << " mm";
+      err << std::showpos << std::fixed << std::setprecision(4)
+          << (c.tracker_offset[i] - truth) * 1e3 << " mm";
       row(std::string("tracker offset ") + kAxisNames[i] + " (m)", c.tracker_offset[i], truth,
           t != nullptr ? err.str() : "");
     }
@@ -396,11 +414,13 @@ void PrintCalibrationSummary(std::ostream& out, const DeviceCalibration& calibra
       gain_lo = std::min(gain_lo, g);
       gain_hi = std::max(gain_hi, g);
     }
-    out << "  glove gains " << std::setprecision(4) << gain_lo << " .. " << gain_hi << " rad/count (22 sensors)\n";
+    out << "  glove gains " << std::setprecision(4) << gain_lo << " .. " << gain_hi
+        << " rad/count (22 sensors)\n";
     if (t != nullptr) {
       const TruthErrors e = CompareWithTruth(c, *t);
-      out << "  worst glove errors: gain " << Percent(e.glove_gain_rel) << ", offset " << std::setprecision(3)
-          << e.glove_offset_rad << " rad, angle over the postures' range " << e.glove_angle_rad << " rad\n";
+      out << "  worst glove errors: gain " << Percent(e.glove_gain_rel) << ", offset "
+          << std::setprecision(3) << e.glove_offset_rad << " rad, angle over the postures' range "
+          << e.glove_angle_rad << " rad\n";
     }
   }
   out.flags(flags);
@@ -432,12 +452,13 @@ int CalibrateMain(int argc, const char* const* argv) {
         throw UsageError("the sim device has nobody to hold its arms: use --auto");
       }
       if (config.driver != "sim" && options.auto_mode) {
-        throw UsageError("--auto needs the sim device (" + device_file.string() + " names driver '" +
-                         config.driver + "'); a real device is calibrated with an operator at the prompts");
+        throw UsageError("--auto needs the sim device (" + device_file.string() +
+                         " names driver '" + config.driver +
+                         "'); a real device is calibrated with an operator at the prompts");
       }
       options.user = args.Value("user").value_or("default");
-      out_file =
-          args.Value("out").value_or((std::filesystem::path("calibration") / (config.name + ".yaml")).string());
+      out_file = args.Value("out").value_or(
+          (std::filesystem::path("calibration") / (config.name + ".yaml")).string());
     });
     const std::unique_ptr<Device> device = MakeDevice(config);
     const DeviceCalibration calibration = RunCalibration(*device, options, std::cout);

@@ -5,10 +5,8 @@
 #include <cstdio>
 #include <stdexcept>
 
-
 namespace haptel::haptics {
 namespace {
-
 
 /// metres = scale · raw + offset (private so this file does not depend on the
 /// calibration helpers being written alongside).

@@ -26,8 +26,8 @@ ArmUnits UnitsOf(const SimDevice& sim, Side side) {
   return u;
 }
 
-ArmServer::ArmServer(Device& arm, Side side, int fd, const ArmServerOptions& options, const ArmUnits& units,
-                     Clock& clock)
+ArmServer::ArmServer(Device& arm, Side side, int fd, const ArmServerOptions& options,
+                     const ArmUnits& units, Clock& clock)
     : sim_(arm),
       units_(units),
       side_(side),
@@ -42,13 +42,14 @@ void ArmServer::Poll(int64_t wait_ns) {
   CheckWatchdog();
   if (wait_ns > 0) {
     pollfd p{fd_, POLLIN, 0};
-    const timespec ts{static_cast<time_t>(wait_ns / 1'000'000'000), static_cast<long>(wait_ns % 1'000'000'000)};
+    const timespec ts{static_cast<time_t>(wait_ns / 1'000'000'000),
+                      static_cast<long>(wait_ns % 1'000'000'000)};
     if (::ppoll(&p, 1, &ts, nullptr) <= 0) return;
   }
   for (;;) {
     from_len_ = sizeof from_;
-    const ssize_t n = ::recvfrom(fd_, rx_.data(), rx_.size(), MSG_DONTWAIT, reinterpret_cast<sockaddr*>(&from_),
-                                 &from_len_);
+    const ssize_t n = ::recvfrom(fd_, rx_.data(), rx_.size(), MSG_DONTWAIT,
+                                 reinterpret_cast<sockaddr*>(&from_), &from_len_);
     if (n < 0) break;
     Handle(static_cast<std::size_t>(n));
   }
@@ -75,7 +76,8 @@ void ArmServer::Handle(std::size_t size) {
     if (request) Reply(ErrorReply{ErrorCode::kWrongSide});
     return;
   }
-  CheckWatchdog();  // a client quiet for too long loses the arm (forces zeroed) before anyone takes over
+  CheckWatchdog();  // a client quiet for too long loses the arm (forces zeroed) before anyone takes
+                    // over
   const bool same_peer = from_len_ == peer_len_ && std::memcmp(&from_, &peer_, peer_len_) == 0;
   if (session_ && !same_peer) {
     ++c_.busy;
@@ -131,7 +133,8 @@ void ArmServer::Handle(std::size_t size) {
   } else if (const auto* w = std::get_if<WristForce>(&msg_.payload)) {
     const WristForce force = *w;
     // A stale one changes nothing: the arm is serviced with the next datagram.
-    if (QueueWrist(force.command, msg_.version >= 2 ? &force.energy : nullptr, now) && !Service(now)) {
+    if (QueueWrist(force.command, msg_.version >= 2 ? &force.energy : nullptr, now) &&
+        !Service(now)) {
       ++c_.device_lost;
     }
   } else if (const auto* f = std::get_if<FingerForce>(&msg_.payload)) {
@@ -159,7 +162,8 @@ bool ArmServer::QueueWrist(const Vec3d& command, const EnergyReport* report, int
 }
 
 void ArmServer::ApplyFingers(const std::array<double, kFingers>& command) {
-  if (has_finger_seq_ && !SequenceAfter(msg_.sequence, finger_seq_) && msg_.sequence != finger_seq_) {
+  if (has_finger_seq_ && !SequenceAfter(msg_.sequence, finger_seq_) &&
+      msg_.sequence != finger_seq_) {
     ++c_.stale_commands;
     return;
   }
@@ -266,8 +270,8 @@ EnergyReport ArmServer::OwnReport() const {
 void ArmServer::Reply(const Payload& payload) {
   const Message reply{msg_.sequence, msg_.side, payload, msg_.version};
   const std::size_t size = Encode(reply, tx_);
-  if (size == 0 ||
-      ::sendto(fd_, tx_.data(), size, 0, reinterpret_cast<const sockaddr*>(&from_), from_len_) < 0) {
+  if (size == 0 || ::sendto(fd_, tx_.data(), size, 0, reinterpret_cast<const sockaddr*>(&from_),
+                            from_len_) < 0) {
     ++c_.send_errors;
   }
 }

@@ -146,8 +146,8 @@ DeviceStatus UdpDevice::ReadWrist(Side side, int64_t now_ns, WristRaw& out) {
   Drain(side, s);
   const uint32_t sequence = NextSequence(s);
   const uint16_t version = s.version.load(std::memory_order_relaxed);
-  const udp::Message request{sequence, side, udp::WristRequest{s.wrist_command, s.finger_command, s.local},
-                             version};
+  const udp::Message request{
+      sequence, side, udp::WristRequest{s.wrist_command, s.finger_command, s.local}, version};
   const std::size_t size = udp::Encode(request, s.tx);  // commands were sanitised when stored
   Bump(s.counters.requests);
   const Wait wait = Transact(side, s, size, sequence, udp::MessageType::kWristReply);
@@ -170,7 +170,8 @@ DeviceStatus UdpDevice::ReadGlove(Side side, int64_t now_ns, GloveRaw& out) {
   if (s.socket.get() < 0) return DeviceStatus::kLost;
   Drain(side, s);
   const uint32_t sequence = NextSequence(s);
-  const udp::Message request{sequence, side, udp::GloveRequest{}, s.version.load(std::memory_order_relaxed)};
+  const udp::Message request{sequence, side, udp::GloveRequest{},
+                             s.version.load(std::memory_order_relaxed)};
   const std::size_t size = udp::Encode(request, s.tx);
   Bump(s.counters.requests);
   const Wait wait = Transact(side, s, size, sequence, udp::MessageType::kGloveReply);
@@ -313,7 +314,8 @@ DeviceStatus UdpDevice::Outcome(SideState& s, Wait wait) {
     // Unanswered before any answer: perhaps a server of the other version,
     // which drops ours unread. Try the other for the next request.
     const uint16_t v = s.version.load(std::memory_order_relaxed);
-    s.version.store(v == udp::kVersion ? udp::kMinVersion : udp::kVersion, std::memory_order_relaxed);
+    s.version.store(v == udp::kVersion ? udp::kMinVersion : udp::kVersion,
+                    std::memory_order_relaxed);
   }
   if (wait == Wait::kReply) {
     s.last_valid_ns = now;
@@ -361,7 +363,8 @@ UdpCounters UdpDevice::Counters() const {
 
 bool UdpDevice::LinkPassivity(Side side, LinkEnergy& remote) {
   const SideState& s = sides_[Index(side)];
-  if (s.version.load(std::memory_order_relaxed) < 2 || !s.remote.active || s.remote.epoch != s.local.epoch) {
+  if (s.version.load(std::memory_order_relaxed) < 2 || !s.remote.active ||
+      s.remote.epoch != s.local.epoch) {
     return false;
   }
   remote.energy_in = s.remote.energy_in;

@@ -188,7 +188,8 @@ DecodeStatus ReadReport(Reader& r, EnergyReport& e) {
   e.max_alpha = r.F64(finite);
   e.active = (flags & kReportActive) != 0;
   if (!finite) return DecodeStatus::kNonFinite;
-  if ((flags & ~kReportActive) != 0 || !AllNonNegative(ReportDoubles(e))) return DecodeStatus::kBadValue;
+  if ((flags & ~kReportActive) != 0 || !AllNonNegative(ReportDoubles(e)))
+    return DecodeStatus::kBadValue;
   return DecodeStatus::kOk;
 }
 
@@ -237,7 +238,8 @@ DecodeStatus ReadPayload(MessageType type, uint16_t version, Reader& r, Payload&
       r.F64s(p.finger_forces, finite);
       const DecodeStatus report = v2 ? ReadReport(r, p.energy) : DecodeStatus::kOk;
       if (!finite || report == DecodeStatus::kNonFinite) return DecodeStatus::kNonFinite;
-      if (!AllNonNegative(p.finger_forces) || report != DecodeStatus::kOk) return DecodeStatus::kBadValue;
+      if (!AllNonNegative(p.finger_forces) || report != DecodeStatus::kOk)
+        return DecodeStatus::kBadValue;
       out = p;
       return DecodeStatus::kOk;
     }
@@ -248,7 +250,8 @@ DecodeStatus ReadPayload(MessageType type, uint16_t version, Reader& r, Payload&
       r.F64s(p.orientation, finite);
       const DecodeStatus report = v2 ? ReadReport(r, p.energy) : DecodeStatus::kOk;
       if (!finite || report == DecodeStatus::kNonFinite) return DecodeStatus::kNonFinite;
-      if (!UnitQuaternion(p.orientation) || report != DecodeStatus::kOk) return DecodeStatus::kBadValue;
+      if (!UnitQuaternion(p.orientation) || report != DecodeStatus::kOk)
+        return DecodeStatus::kBadValue;
       out = p;
       return DecodeStatus::kOk;
     }

@@ -55,7 +55,8 @@ void BlimpLapTimer::Update(const BlimpObservation& o) {
     }
   }
 
-  const bool landing_ground = next_gate_ >= gates_total() && OnLandingGround(course_, o.position, start_z_);
+  const bool landing_ground =
+      next_gate_ >= gates_total() && OnLandingGround(course_, o.position, start_z_);
   if (onsets > 0) {
     if (o.impact_speed > course_.crash_speed) {
       crashed_ = true;
@@ -77,8 +78,8 @@ double BlimpLapTimer::lap_time_s() const {
 }
 
 int BlimpLapTimer::gates_passed() const {
-  return static_cast<int>(
-      std::count_if(splits_.begin(), splits_.end(), [](const BlimpGateSplit& s) { return s.passed; }));
+  return static_cast<int>(std::count_if(splits_.begin(), splits_.end(),
+                                        [](const BlimpGateSplit& s) { return s.passed; }));
 }
 
 int BlimpLapTimer::gates_missed() const { return next_gate_ - gates_passed(); }

@@ -80,7 +80,8 @@ BlimpAutoPilot::BlimpAutoPilot(const BlimpCourseConfig& course, const BlimpPilot
       footprints_(MakeFootprints(course)) {}
 
 double BlimpAutoPilot::ApproachSpeed(double distance) const {
-  return std::min(config_.cruise_airspeed, config_.landing_speed * std::exp(distance / config_.landing_coast_length));
+  return std::min(config_.cruise_airspeed,
+                  config_.landing_speed * std::exp(distance / config_.landing_coast_length));
 }
 
 void BlimpAutoPilot::Observe(const BlimpObservation& observation) {
@@ -101,7 +102,8 @@ const BlimpObservation* BlimpAutoPilot::Seen(double t) const {
 double BlimpAutoPilot::SafeHeight(const Eigen::Vector3d& p, const Eigen::Vector2d& target) const {
   double z = -std::numeric_limits<double>::infinity();
   for (const BlimpFootprint& b : footprints_) {
-    if (b.Distance(Horizontal(p), target) < config_.building_margin) z = std::max(z, b.height() + config_.building_clearance);
+    if (b.Distance(Horizontal(p), target) < config_.building_margin)
+      z = std::max(z, b.height() + config_.building_clearance);
   }
   return z;
 }
@@ -167,7 +169,8 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
   bool landing_vertical = false;  // thrust up only: it sinks on its own weight
   if (phase_ == Phase::kTakeOff && height > config_.takeoff_height)
     phase_ = Phase::kGates;  // a course has at least one gate
-  if (phase_ == Phase::kLanding && o.contact && OnLandingGround(course_, o.position, start_z_)) phase_ = Phase::kLanded;
+  if (phase_ == Phase::kLanding && o.contact && OnLandingGround(course_, o.position, start_z_))
+    phase_ = Phase::kLanded;
   // Slid out of the circle on the ground: up and in again.
   if (phase_ == Phase::kLanded && (position - landing).norm() > course_.landing.radius) {
     phase_ = Phase::kLanding;
@@ -190,8 +193,10 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
       // The landing near after the last gate: through it no faster than
       // the approach's speed there, or the hull coasts past the circle.
       if (gate_ == gates - 1) {
-        const double to_landing = (Horizontal(g.centre) - position).norm() + (landing - Horizontal(g.centre)).norm();
-        forward_speed = std::max(ApproachSpeed(to_landing), std::min(2.0 * config_.tail_rotor_speed, config_.cruise_airspeed));
+        const double to_landing =
+            (Horizontal(g.centre) - position).norm() + (landing - Horizontal(g.centre)).norm();
+        forward_speed = std::max(ApproachSpeed(to_landing),
+                                 std::min(2.0 * config_.tail_rotor_speed, config_.cruise_airspeed));
       }
       break;
     }
@@ -267,11 +272,13 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
   // (higher up, the height can wait for the heading).
   const double height_error = target_z_ - o.position.z();
   const double climb_rate = std::abs(o.velocity.z());
-  const bool height_settled = !landing_vertical || (std::abs(height_error) < config_.turnabout_height_error &&
-                                                    climb_rate < config_.turnabout_climb);
+  const bool height_settled =
+      !landing_vertical || (std::abs(height_error) < config_.turnabout_height_error &&
+                            climb_rate < config_.turnabout_climb);
   const bool height_lost =
-      landing_vertical && (std::abs(height_error) > 2.0 * config_.turnabout_height_error ||
-                           (climb_rate > 2.0 * config_.turnabout_climb && o.velocity.z() * height_error < 0.0));
+      landing_vertical &&
+      (std::abs(height_error) > 2.0 * config_.turnabout_height_error ||
+       (climb_rate > 2.0 * config_.turnabout_climb && o.velocity.z() * height_error < 0.0));
   // Slow and off course, a turnabout: the gesture cockpit's tail rotor turns
   // only with the power off (the left hand sideways at zero power), so the
   // pilot lets go of the power and turns on the tail rotor until it heads
@@ -282,14 +289,15 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
   if (turnabout_) {
     const double lasted = t_s - turnabout_since_;
     const bool stuck = lasted > 2.0 && yaw_rate_ * (error > 0.0 ? 1.0 : -1.0) < 0.05;
-    if (std::abs(error) < config_.turnabout_done_error || o.airspeed > config_.tail_rotor_speed + 1.0 ||
-        lasted > config_.turnabout_max_s || stuck || height_lost) {
+    if (std::abs(error) < config_.turnabout_done_error ||
+        o.airspeed > config_.tail_rotor_speed + 1.0 || lasted > config_.turnabout_max_s || stuck ||
+        height_lost) {
       turnabout_ = false;
       turnabout_since_ = t_s;
     }
   } else if (o.airspeed < config_.tail_rotor_speed &&
              std::abs(error) > (phase_ == Phase::kLanding ? config_.landing_turnabout_error
-                                                           : config_.turnabout_error) &&
+                                                          : config_.turnabout_error) &&
              t_s - turnabout_since_ > config_.turnabout_max_s && height_settled) {
     turnabout_ = true;
     turnabout_since_ = t_s;
@@ -299,11 +307,12 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
   // Landing, the sink slows as the ground nears (a flare): touchdown well
   // under the course's crash speed.
   const double max_sink =
-      landing_vertical ? std::min(config_.landing_max_sink, config_.touchdown_sink + config_.flare_gain * std::max(0.0, height))
-                       : config_.max_sink;
-  const double climb =
-      std::clamp(config_.height_gain * (target_z_ - o.position.z()), -max_sink,
-                 landing_vertical ? config_.landing_climb : config_.max_climb);
+      landing_vertical
+          ? std::min(config_.landing_max_sink,
+                     config_.touchdown_sink + config_.flare_gain * std::max(0.0, height))
+          : config_.max_sink;
+  const double climb = std::clamp(config_.height_gain * (target_z_ - o.position.z()), -max_sink,
+                                  landing_vertical ? config_.landing_climb : config_.max_climb);
   const double climb_error = climb - o.velocity.z();
   // (The integrators hold still while the power is off for a turnabout.)
   if (!turnabout_)

@@ -280,7 +280,6 @@ size_t Utf8Characters(const std::string& s) {
   return n;
 }
 
-
 std::string PathKey(const std::string& tree_item_id) { return tree_item_id + ".path"; }
 
 AnswerCheck ValidateAnswers(const Questionnaire& questionnaire,

@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <limits>
 #include <map>
@@ -50,7 +50,8 @@ bool IsNumber(const std::string& text) {
 /// quote, as OWASP advises against CSV injection: a participant's remark
 /// "=HYPERLINK(...)" stays text on the experimenter's machine.
 std::string Csv(const std::string& text) {
-  const bool formula = !text.empty() && std::string("=+-@\t\r").find(text.front()) != std::string::npos &&
+  const bool formula = !text.empty() &&
+                       std::string("=+-@\t\r").find(text.front()) != std::string::npos &&
                        !IsNumber(text);
   if (formula) {
     std::string out = "\"'";
@@ -68,7 +69,10 @@ std::string Html(const std::string& text) { return HtmlEscape(text); }
 std::string Ordinal(double rank) {
   if (std::abs(rank - std::round(rank)) > 1e-9) return Fixed(rank, 1);
   const int r = static_cast<int>(std::lround(rank));
-  const char* suffix = r % 10 == 1 && r != 11 ? "st" : r % 10 == 2 && r != 12 ? "nd" : r % 10 == 3 && r != 13 ? "rd" : "th";
+  const char* suffix = r % 10 == 1 && r != 11   ? "st"
+                       : r % 10 == 2 && r != 12 ? "nd"
+                       : r % 10 == 3 && r != 13 ? "rd"
+                                                : "th";
   return std::to_string(r) + suffix;
 }
 
@@ -89,7 +93,8 @@ bool IsNumber(const std::string& text, double& value) {
 /// A table cell's marks for `participant`'s trials of `condition`: "*" when
 /// one stopped at the cap (scored at it), "!" when one has flags (something
 /// could have spoiled it: trials.csv's flags column says what).
-std::string Marks(const StudyResults& results, const std::string& participant, const std::string& condition) {
+std::string Marks(const StudyResults& results, const std::string& participant,
+                  const std::string& condition) {
   bool capped = false;
   bool flagged = false;
   for (const StudyResults::Trial& t : results.trials) {
@@ -105,8 +110,9 @@ std::vector<std::string> FlaggedTrials(const StudyResults& results) {
   std::vector<std::string> lines;
   for (const StudyResults::Trial& t : results.trials) {
     if (t.flags.empty()) continue;
-    lines.push_back(t.participant + ", " + t.condition + " (position " + std::to_string(t.position) + ", run " +
-                    std::to_string(t.run_id) + "): " + t.flags);
+    lines.push_back(t.participant + ", " + t.condition + " (position " +
+                    std::to_string(t.position) + ", run " + std::to_string(t.run_id) +
+                    "): " + t.flags);
   }
   return lines;
 }
@@ -114,14 +120,17 @@ std::vector<std::string> FlaggedTrials(const StudyResults& results) {
 /// The participants' background (the answers given about no condition: the
 /// study's demographics questionnaire): per item, in the order first
 /// answered, each value with how many participants gave it.
-std::vector<std::pair<std::string, std::vector<std::pair<std::string, int>>>> Background(const StudyResults& results) {
+std::vector<std::pair<std::string, std::vector<std::pair<std::string, int>>>> Background(
+    const StudyResults& results) {
   std::vector<std::pair<std::string, std::vector<std::pair<std::string, int>>>> items;
   for (const StudyResults::Answer& a : results.answers) {
     if (!a.condition.empty()) continue;
     const std::string key = a.questionnaire + "." + a.item;
-    auto item = std::find_if(items.begin(), items.end(), [&](const auto& i) { return i.first == key; });
+    auto item =
+        std::find_if(items.begin(), items.end(), [&](const auto& i) { return i.first == key; });
     if (item == items.end()) item = items.insert(items.end(), {key, {}});
-    auto value = std::find_if(item->second.begin(), item->second.end(), [&](const auto& v) { return v.first == a.value; });
+    auto value = std::find_if(item->second.begin(), item->second.end(),
+                              [&](const auto& v) { return v.first == a.value; });
     if (value == item->second.end()) {
       item->second.push_back({a.value, 1});
     } else {
@@ -134,7 +143,8 @@ std::vector<std::pair<std::string, std::vector<std::pair<std::string, int>>>> Ba
 /// One item's counts: "18-24 2, 25-34 1".
 std::string Counts(const std::vector<std::pair<std::string, int>>& values) {
   std::string text;
-  for (const auto& [value, n] : values) text += (text.empty() ? "" : ", ") + value + " " + std::to_string(n);
+  for (const auto& [value, n] : values)
+    text += (text.empty() ? "" : ", ") + value + " " + std::to_string(n);
   return text;
 }
 
@@ -143,9 +153,10 @@ std::vector<std::string> SupersededTrials(const StudyResults& results) {
   std::vector<std::string> lines;
   for (const StudyResults::Superseded& s : results.superseded) {
     const StudyResults::Trial& t = s.trial;
-    lines.push_back(t.participant + ", " + t.condition + " (position " + std::to_string(t.position) + ", attempt " +
-                    std::to_string(t.attempt) + ", run " + std::to_string(t.run_id) + "): " +
-                    Fixed(t.lap_time_s, 2) + " s" + (t.completed ? "" : " (cap)") + "; " + s.why);
+    lines.push_back(t.participant + ", " + t.condition + " (position " +
+                    std::to_string(t.position) + ", attempt " + std::to_string(t.attempt) +
+                    ", run " + std::to_string(t.run_id) + "): " + Fixed(t.lap_time_s, 2) + " s" +
+                    (t.completed ? "" : " (cap)") + "; " + s.why);
   }
   return lines;
 }
@@ -176,7 +187,8 @@ void ReadTrial(Reader& row, StudyResults::Trial& t) {
 
 StudyResults LoadStudyResults(const std::filesystem::path& database, const std::string& name) {
   if (!std::filesystem::is_regular_file(database)) {
-    throw std::runtime_error("database " + database.string() + ": no such file (run `haptel study run` first)");
+    throw std::runtime_error("database " + database.string() +
+                             ": no such file (run `haptel study run` first)");
   }
   sqlite3* raw = nullptr;
   if (sqlite3_open_v2(database.c_str(), &raw, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
@@ -192,10 +204,11 @@ StudyResults LoadStudyResults(const std::filesystem::path& database, const std::
   int64_t id = 0;
   {
     sqlite3_stmt* probe = nullptr;
-    if (sqlite3_prepare_v2(raw, "SELECT id, operators, trial_cap_s FROM studies WHERE name = ?", -1, &probe, nullptr) !=
-        SQLITE_OK) {
+    if (sqlite3_prepare_v2(raw, "SELECT id, operators, trial_cap_s FROM studies WHERE name = ?", -1,
+                           &probe, nullptr) != SQLITE_OK) {
       sqlite3_finalize(probe);
-      throw std::runtime_error("database " + database.string() + ": holds no studies (" + sqlite3_errmsg(raw) + ")");
+      throw std::runtime_error("database " + database.string() + ": holds no studies (" +
+                               sqlite3_errmsg(raw) + ")");
     }
     Stmt find(probe);
     Binder(database, raw, find.get()).Text(name);
@@ -207,9 +220,11 @@ StudyResults LoadStudyResults(const std::filesystem::path& database, const std::
     }
   }
   if (id == 0) {
-    Stmt all = Prepare(database, raw, "SELECT name FROM studies ORDER BY id", "cannot list the studies");
+    Stmt all =
+        Prepare(database, raw, "SELECT name FROM studies ORDER BY id", "cannot list the studies");
     std::string names;
-    while (sqlite3_step(all.get()) == SQLITE_ROW) names += (names.empty() ? "" : ", ") + Reader(all.get()).Text();
+    while (sqlite3_step(all.get()) == SQLITE_ROW)
+      names += (names.empty() ? "" : ", ") + Reader(all.get()).Text();
     throw std::runtime_error("database " + database.string() + ": no study '" + name + "' (" +
                              (names.empty() ? "it holds none" : "it holds: " + names) + ")");
   }
@@ -224,29 +239,39 @@ StudyResults LoadStudyResults(const std::filesystem::path& database, const std::
       ReadBaseline(file, row.Text(), r);
     }
   }
-  Stmt conditions = Prepare(database, raw, "SELECT name FROM study_conditions WHERE study_id = ? ORDER BY position",
-                            "cannot read the conditions");
+  Stmt conditions = Prepare(
+      database, raw, "SELECT name FROM study_conditions WHERE study_id = ? ORDER BY position",
+      "cannot read the conditions");
   Binder(database, raw, conditions.get()).Int(id);
-  while (sqlite3_step(conditions.get()) == SQLITE_ROW) r.conditions.push_back(Reader(conditions.get()).Text());
-  Stmt participants = Prepare(database, raw,
-                              "SELECT participant FROM study_participants WHERE study_id = ? ORDER BY row_index",
-                              "cannot read the participants");
+  while (sqlite3_step(conditions.get()) == SQLITE_ROW)
+    r.conditions.push_back(Reader(conditions.get()).Text());
+  Stmt participants =
+      Prepare(database, raw,
+              "SELECT participant FROM study_participants WHERE study_id = ? ORDER BY row_index",
+              "cannot read the participants");
   Binder(database, raw, participants.get()).Int(id);
-  while (sqlite3_step(participants.get()) == SQLITE_ROW) r.participants.push_back(Reader(participants.get()).Text());
-  Stmt planned = Prepare(database, raw, "SELECT COUNT(*) FROM study_plan WHERE study_id = ?", "cannot read the plan");
+  while (sqlite3_step(participants.get()) == SQLITE_ROW)
+    r.participants.push_back(Reader(participants.get()).Text());
+  Stmt planned = Prepare(database, raw, "SELECT COUNT(*) FROM study_plan WHERE study_id = ?",
+                         "cannot read the plan");
   Binder(database, raw, planned.get()).Int(id);
-  if (sqlite3_step(planned.get()) == SQLITE_ROW) r.trials_planned = static_cast<int>(Reader(planned.get()).Int());
+  if (sqlite3_step(planned.get()) == SQLITE_ROW)
+    r.trials_planned = static_cast<int>(Reader(planned.get()).Int());
   // Read-only, so not migrated: a database from before v8 has neither the
   // approach nor the flags (read as unknown and none).
   int version = 0;
   {
     Stmt pragma = Prepare(database, raw, "PRAGMA user_version", "cannot read the schema version");
-    if (sqlite3_step(pragma.get()) == SQLITE_ROW) version = static_cast<int>(Reader(pragma.get()).Int());
+    if (sqlite3_step(pragma.get()) == SQLITE_ROW)
+      version = static_cast<int>(Reader(pragma.get()).Int());
   }
   const std::string v8 = version >= 8 ? "t.approach_s, t.flags" : "NULL, ''";
   const std::string select_trials =
-      "SELECT t.participant, t.position, t.condition, t.lap_time_s, t.completed, t.obstacles, t.run_id, t.outcome, "
-      "t.attempt, " + v8 + " FROM study_trials t JOIN study_participants s ON s.study_id = t.study_id AND "
+      "SELECT t.participant, t.position, t.condition, t.lap_time_s, t.completed, t.obstacles, "
+      "t.run_id, t.outcome, "
+      "t.attempt, " +
+      v8 +
+      " FROM study_trials t JOIN study_participants s ON s.study_id = t.study_id AND "
       "s.participant = t.participant WHERE t.study_id = ? ORDER BY s.row_index, t.position";
   Stmt trials = Prepare(database, raw, select_trials.c_str(), "cannot read the trials");
   Binder(database, raw, trials.get()).Int(id);
@@ -256,10 +281,11 @@ StudyResults LoadStudyResults(const std::filesystem::path& database, const std::
     ReadTrial(row, t);
     r.trials.push_back(t);
   }
-  Stmt answers = Prepare(database, raw,
-                         "SELECT participant, condition, questionnaire, item, value FROM study_answers WHERE "
-                         "study_id = ? ORDER BY rowid",
-                         "cannot read the answers");
+  Stmt answers =
+      Prepare(database, raw,
+              "SELECT participant, condition, questionnaire, item, value FROM study_answers WHERE "
+              "study_id = ? ORDER BY rowid",
+              "cannot read the answers");
   Binder(database, raw, answers.get()).Int(id);
   while (sqlite3_step(answers.get()) == SQLITE_ROW) {
     Reader row(answers.get());
@@ -272,11 +298,12 @@ StudyResults LoadStudyResults(const std::filesystem::path& database, const std::
     r.answers.push_back(a);
   }
   if (version >= 10) {  // notes and superseded trials: v10
-    Stmt superseded = Prepare(database, raw,
-                              "SELECT participant, position, condition, lap_time_s, completed, obstacles, run_id, "
-                              "outcome, attempt, approach_s, flags, why FROM study_superseded_trials WHERE "
-                              "study_id = ? ORDER BY id",
-                              "cannot read the superseded trials");
+    Stmt superseded = Prepare(
+        database, raw,
+        "SELECT participant, position, condition, lap_time_s, completed, obstacles, run_id, "
+        "outcome, attempt, approach_s, flags, why FROM study_superseded_trials WHERE "
+        "study_id = ? ORDER BY id",
+        "cannot read the superseded trials");
     Binder(database, raw, superseded.get()).Int(id);
     while (sqlite3_step(superseded.get()) == SQLITE_ROW) {
       Reader row(superseded.get());
@@ -285,11 +312,12 @@ StudyResults LoadStudyResults(const std::filesystem::path& database, const std::
       s.why = row.Text();
       r.superseded.push_back(s);
     }
-    Stmt notes = Prepare(database, raw,
-                         "SELECT n.participant, n.position, COALESCE(p.condition, ''), n.text, n.noted_utc FROM "
-                         "study_notes n LEFT JOIN study_plan p ON p.study_id = n.study_id AND p.participant = "
-                         "n.participant AND p.position = n.position WHERE n.study_id = ? ORDER BY n.id",
-                         "cannot read the notes");
+    Stmt notes = Prepare(
+        database, raw,
+        "SELECT n.participant, n.position, COALESCE(p.condition, ''), n.text, n.noted_utc FROM "
+        "study_notes n LEFT JOIN study_plan p ON p.study_id = n.study_id AND p.participant = "
+        "n.participant AND p.position = n.position WHERE n.study_id = ? ORDER BY n.id",
+        "cannot read the notes");
     Binder(database, raw, notes.get()).Int(id);
     while (sqlite3_step(notes.get()) == SQLITE_ROW) {
       Reader row(notes.get());
@@ -318,7 +346,8 @@ StudyReport ComputeReport(const StudyResults& results, PostHocMethod post_hoc, d
     report.conditions.push_back(summary);
   }
   for (const StudyResults::Trial& t : results.trials) {
-    const auto p = std::find(results.participants.begin(), results.participants.end(), t.participant);
+    const auto p =
+        std::find(results.participants.begin(), results.participants.end(), t.participant);
     const auto c = std::find(results.conditions.begin(), results.conditions.end(), t.condition);
     if (p == results.participants.end() || c == results.conditions.end()) continue;
     const size_t pi = static_cast<size_t>(p - results.participants.begin());
@@ -373,8 +402,9 @@ StudyReport ComputeReport(const StudyResults& results, PostHocMethod post_hoc, d
     c.mean_rank = used > 0 ? rank_sum / used : kNaN;
   }
   if (matrix.size() < 2) {
-    report.why_no_statistics = "the statistics need at least 2 participants with a trial in every condition (" +
-                               std::to_string(matrix.size()) + " so far)";
+    report.why_no_statistics =
+        "the statistics need at least 2 participants with a trial in every condition (" +
+        std::to_string(matrix.size()) + " so far)";
   } else {
     try {
       report.analysis = AnalyzeWithinSubject(matrix, post_hoc, alpha);
@@ -411,16 +441,20 @@ std::string FormatReport(const StudyResults& results, const StudyReport& report)
   std::ostringstream o;
   o << "study " << results.name << ": " << results.trials.size() << " of " << results.trials_planned
     << " trials, " << results.participants.size() << " participants, " << results.conditions.size()
-    << " conditions (lap times in s as scored, on the lap's clock from the start line; unfinished laps count "
+    << " conditions (lap times in s as scored, on the lap's clock from the start line; unfinished "
+       "laps count "
        "as the "
     << Fixed(results.trial_cap_s, 0)
-    << " s cap, on the same clock; the approach before the line is trials.csv's approach_s, not scored)\n";
+    << " s cap, on the same clock; the approach before the line is trials.csv's approach_s, not "
+       "scored)\n";
   for (const ConditionSummary& c : report.conditions) {
     o << "\n  " << c.name << "\n    " << std::string(10, ' ');
-    for (const std::string& p : results.participants) o << " " << std::string(std::max<int>(0, 8 - static_cast<int>(p.size())), ' ') << p;
+    for (const std::string& p : results.participants)
+      o << " " << std::string(std::max<int>(0, 8 - static_cast<int>(p.size())), ' ') << p;
     o << "\n    Time      ";
     for (size_t p = 0; p < c.lap_time_s.size(); ++p) {
-      const std::string text = Fixed(c.lap_time_s[p], 2) + Marks(results, results.participants[p], c.name);
+      const std::string text =
+          Fixed(c.lap_time_s[p], 2) + Marks(results, results.participants[p], c.name);
       o << " " << std::string(std::max(0, 8 - static_cast<int>(text.size())), ' ') << text;
     }
     o << "\n    Rank      ";
@@ -429,10 +463,13 @@ std::string FormatReport(const StudyResults& results, const StudyReport& report)
       o << " " << std::string(std::max(0, 8 - static_cast<int>(text.size())), ' ') << text;
     }
     o << "\n    Obstacles ";
-    for (const int v : c.obstacles) o << " " << std::string(std::max(0, 8 - static_cast<int>(std::to_string(v).size())), ' ') << v;
-    o << "\n    total " << Fixed(c.total_lap_time_s, 2) << " s, mean " << Fixed(c.mean_lap_time_s, 2) << " s, median "
-      << Fixed(c.median_lap_time_s, 2) << " s, mean rank " << Fixed(c.mean_rank, 2) << ", obstacles "
-      << c.total_obstacles << (c.unfinished > 0 ? ", unfinished " + std::to_string(c.unfinished) : "") << "\n";
+    for (const int v : c.obstacles)
+      o << " " << std::string(std::max(0, 8 - static_cast<int>(std::to_string(v).size())), ' ')
+        << v;
+    o << "\n    total " << Fixed(c.total_lap_time_s, 2) << " s, mean "
+      << Fixed(c.mean_lap_time_s, 2) << " s, median " << Fixed(c.median_lap_time_s, 2)
+      << " s, mean rank " << Fixed(c.mean_rank, 2) << ", obstacles " << c.total_obstacles
+      << (c.unfinished > 0 ? ", unfinished " + std::to_string(c.unfinished) : "") << "\n";
   }
   o << "\n  (* capped: scored at the cap; ! flagged: something could have spoiled the trial)\n";
   const std::vector<std::string> flagged = FlaggedTrials(results);
@@ -451,21 +488,23 @@ std::string FormatReport(const StudyResults& results, const StudyReport& report)
     const WithinSubjectAnalysis& a = *report.analysis;
     // Which p it is: with few participants the χ² approximation can be far
     // off (k = 2, N = 4 all one way: 0.046 against the exact 0.125).
-    const std::string p_kind = a.friedman.p_exact
-                                   ? "exact; chi2 approximation " + Fixed(a.friedman.p_value_asymptotic, 4)
-                                   : "chi2 approximation";
-    o << "  Friedman: chi2 = " << Fixed(a.friedman.chi_square, 3) << ", df = " << a.friedman.degrees_of_freedom
-      << ", p = " << Fixed(a.friedman.p_value, 4) << " (" << p_kind
-      << "); Kendall's W = " << Fixed(a.friedman.kendall_w, 3) << " (N = " << a.friedman.participants
-      << ", k = " << a.friedman.conditions << ")\n";
+    const std::string p_kind =
+        a.friedman.p_exact ? "exact; chi2 approximation " + Fixed(a.friedman.p_value_asymptotic, 4)
+                           : "chi2 approximation";
+    o << "  Friedman: chi2 = " << Fixed(a.friedman.chi_square, 3)
+      << ", df = " << a.friedman.degrees_of_freedom << ", p = " << Fixed(a.friedman.p_value, 4)
+      << " (" << p_kind << "); Kendall's W = " << Fixed(a.friedman.kendall_w, 3)
+      << " (N = " << a.friedman.participants << ", k = " << a.friedman.conditions << ")\n";
     o << "  post-hoc: " << a.post_hoc.method;
     if (!a.post_hoc.pairs.empty() && a.post_hoc.pairs[0].critical_difference) {
-      o << ", critical difference " << Fixed(*a.post_hoc.pairs[0].critical_difference, 3) << " (mean ranks)";
+      o << ", critical difference " << Fixed(*a.post_hoc.pairs[0].critical_difference, 3)
+        << " (mean ranks)";
     }
     o << "\n";
     for (const PairComparison& pair : a.post_hoc.pairs) {
       o << "    " << report.conditions[static_cast<size_t>(pair.condition_a)].name << " vs "
-        << report.conditions[static_cast<size_t>(pair.condition_b)].name << ": " << Fixed(pair.statistic, 3);
+        << report.conditions[static_cast<size_t>(pair.condition_b)].name << ": "
+        << Fixed(pair.statistic, 3);
       if (pair.p_value) o << ", p = " << Fixed(*pair.p_value, 4);
       o << (pair.significant ? "  significant" : "") << "\n";
     }
@@ -474,22 +513,25 @@ std::string FormatReport(const StudyResults& results, const StudyReport& report)
   if (!report.items.empty()) {
     o << "\n  questionnaires (mean, median, n):\n";
     for (const ItemSummary& s : report.items) {
-      o << "    " << s.questionnaire << "." << s.item << " " << s.condition << ": " << Fixed(s.mean, 2) << ", "
-        << Fixed(s.median, 2) << ", " << s.n << "\n";
+      o << "    " << s.questionnaire << "." << s.item << " " << s.condition << ": "
+        << Fixed(s.mean, 2) << ", " << Fixed(s.median, 2) << ", " << s.n << "\n";
     }
   }
   if (const auto background = Background(results); !background.empty()) {
     o << "\n  participants' background (demographics.csv; answers and how many gave each):\n";
-    for (const auto& [item, values] : background) o << "    " << item << ": " << Counts(values) << "\n";
+    for (const auto& [item, values] : background)
+      o << "    " << item << ": " << Counts(values) << "\n";
   }
   if (!results.notes.empty()) {
     o << "\n  the experimenter's notes (notes.csv):\n";
-    for (const StudyResults::Note& n : results.notes) o << "    " << NotePlace(n) << ": " << n.text << "\n";
+    for (const StudyResults::Note& n : results.notes)
+      o << "    " << NotePlace(n) << ": " << n.text << "\n";
   }
   return o.str();
 }
 
-ReportFiles WriteReport(const StudyResults& results, const StudyReport& report, const std::filesystem::path& dir) {
+ReportFiles WriteReport(const StudyResults& results, const StudyReport& report,
+                        const std::filesystem::path& dir) {
   std::filesystem::create_directories(dir);
   ReportFiles files;
   files.trials_csv = dir / "trials.csv";
@@ -501,25 +543,28 @@ ReportFiles WriteReport(const StudyResults& results, const StudyReport& report, 
   files.html = dir / "index.html";
 
   std::string trials =
-      "study,participant,condition,position,lap_time_s,approach_s,completed,obstacles,run_id,outcome,attempt,"
+      "study,participant,condition,position,lap_time_s,approach_s,completed,obstacles,run_id,"
+      "outcome,attempt,"
       "flags,over_reference_percent\n";
   for (const StudyResults::Trial& t : results.trials) {
     // The lap against the track's reference lap, as the report's baseline
     // table shows it (empty when the track gives none).
     const std::string over_reference =
-        results.reference_lap_s ? Fixed(PercentOverReference(t.lap_time_s, *results.reference_lap_s), 2) : "";
+        results.reference_lap_s
+            ? Fixed(PercentOverReference(t.lap_time_s, *results.reference_lap_s), 2)
+            : "";
     trials += Csv(results.name) + "," + Csv(t.participant) + "," + Csv(t.condition) + "," +
               std::to_string(t.position) + "," + Fixed(t.lap_time_s, 3) + "," +
               (std::isfinite(t.approach_s) ? Fixed(t.approach_s, 3) : std::string()) + "," +
-              (t.completed ? "true" : "false") +
-              "," + std::to_string(t.obstacles) + "," + std::to_string(t.run_id) + "," + Csv(t.outcome) + "," +
-              std::to_string(t.attempt) + "," + Csv(t.flags) + "," + over_reference + "\n";
+              (t.completed ? "true" : "false") + "," + std::to_string(t.obstacles) + "," +
+              std::to_string(t.run_id) + "," + Csv(t.outcome) + "," + std::to_string(t.attempt) +
+              "," + Csv(t.flags) + "," + over_reference + "\n";
   }
   WriteFile(files.trials_csv, trials);
   std::string answers = "study,participant,condition,questionnaire,item,value\n";
   for (const StudyResults::Answer& a : results.answers) {
-    answers += Csv(results.name) + "," + Csv(a.participant) + "," + Csv(a.condition) + "," + Csv(a.questionnaire) +
-               "," + Csv(a.item) + "," + Csv(a.value) + "\n";
+    answers += Csv(results.name) + "," + Csv(a.participant) + "," + Csv(a.condition) + "," +
+               Csv(a.questionnaire) + "," + Csv(a.item) + "," + Csv(a.value) + "\n";
   }
   WriteFile(files.answers_csv, answers);
   std::string notes = "study,participant,position,condition,noted_utc,text\n";
@@ -535,7 +580,8 @@ ReportFiles WriteReport(const StudyResults& results, const StudyReport& report, 
   std::map<std::string, std::map<std::string, std::string>> by_participant;
   for (const StudyResults::Answer& a : results.answers) {
     if (!a.condition.empty()) continue;
-    if (std::find(columns.begin(), columns.end(), a.item) == columns.end()) columns.push_back(a.item);
+    if (std::find(columns.begin(), columns.end(), a.item) == columns.end())
+      columns.push_back(a.item);
     by_participant[a.participant][a.item] = a.value;
   }
   std::string demographics = "study,participant";
@@ -556,39 +602,49 @@ ReportFiles WriteReport(const StudyResults& results, const StudyReport& report, 
     demographics += "\n";
   }
   WriteFile(files.demographics_csv, demographics);
-  std::string summary = "study,condition,trials,unfinished,total_lap_time_s,mean_lap_time_s,median_lap_time_s,mean_rank,obstacles\n";
+  std::string summary =
+      "study,condition,trials,unfinished,total_lap_time_s,mean_lap_time_s,median_lap_time_s,mean_"
+      "rank,obstacles\n";
   for (const ConditionSummary& c : report.conditions) {
     summary += Csv(results.name) + "," + Csv(c.name) + "," + std::to_string(c.trials) + "," +
-               std::to_string(c.unfinished) + "," + Fixed(c.total_lap_time_s, 3) + "," + Fixed(c.mean_lap_time_s, 3) +
-               "," + Fixed(c.median_lap_time_s, 3) + "," + Fixed(c.mean_rank, 3) + "," +
-               std::to_string(c.total_obstacles) + "\n";
+               std::to_string(c.unfinished) + "," + Fixed(c.total_lap_time_s, 3) + "," +
+               Fixed(c.mean_lap_time_s, 3) + "," + Fixed(c.median_lap_time_s, 3) + "," +
+               Fixed(c.mean_rank, 3) + "," + std::to_string(c.total_obstacles) + "\n";
   }
   WriteFile(files.summary_csv, summary);
 
   DrawLapTimes(results, report, files.lap_times_png);
   DrawRanks(report, files.ranks_png);
   if (DrawRatings(results, dir / "ratings.png")) files.ratings_png = dir / "ratings.png";
-  if (DrawModelMeans(results, report, dir / "model_means.png")) files.model_means_png = dir / "model_means.png";
+  if (DrawModelMeans(results, report, dir / "model_means.png"))
+    files.model_means_png = dir / "model_means.png";
 
   // The page: the thesis's tables, the statistics, the questionnaires, the plots.
   std::ostringstream h;
   h << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>Study " << Html(results.name)
-    << "</title>\n<style>body{font-family:sans-serif;margin:2em;max-width:70em}table{border-collapse:collapse;"
+    << "</"
+       "title>\n<style>body{font-family:sans-serif;margin:2em;max-width:70em}table{border-collapse:"
+       "collapse;"
        "margin:0.5em 0 1.5em}td,th{border:1px solid #999;padding:0.2em 0.6em;text-align:right}"
        "th{background:#eee}caption{text-align:left;font-weight:bold}</style></head><body>\n";
-  h << "<h1>Study " << Html(results.name) << "</h1>\n<p>" << results.trials.size() << " of " << results.trials_planned
-    << " trials; lap times in seconds as scored, on the lap's clock: from the start line to the finish (an "
+  h << "<h1>Study " << Html(results.name) << "</h1>\n<p>" << results.trials.size() << " of "
+    << results.trials_planned
+    << " trials; lap times in seconds as scored, on the lap's clock: from the start line to the "
+       "finish (an "
        "unfinished lap counts as the "
     << Fixed(results.trial_cap_s, 0)
-    << " s cap, on the same clock, whatever the interface). The time before the line (the approach, a "
-       "cockpit's grasp of its controls) is kept apart as <code>approach_s</code> in trials.csv and not "
+    << " s cap, on the same clock, whatever the interface). The time before the line (the "
+       "approach, a "
+       "cockpit's grasp of its controls) is kept apart as <code>approach_s</code> in trials.csv "
+       "and not "
        "scored.</p>\n";
   for (const ConditionSummary& c : report.conditions) {
     h << "<table><caption>" << Html(c.name) << "</caption><tr><th>People</th>";
     for (const std::string& p : results.participants) h << "<th>" << Html(p) << "</th>";
     h << "<th>total</th></tr>\n<tr><th>Time</th>";
     for (size_t p = 0; p < c.lap_time_s.size(); ++p) {
-      h << "<td>" << Fixed(c.lap_time_s[p], 2) << Html(Marks(results, results.participants[p], c.name)) << "</td>";
+      h << "<td>" << Fixed(c.lap_time_s[p], 2)
+        << Html(Marks(results, results.participants[p], c.name)) << "</td>";
     }
     h << "<td>" << Fixed(c.total_lap_time_s, 2) << "</td></tr>\n<tr><th>Rank</th>";
     for (const double r : c.rank) h << "<td>" << (std::isfinite(r) ? Ordinal(r) : "-") << "</td>";
@@ -598,7 +654,8 @@ ReportFiles WriteReport(const StudyResults& results, const StudyReport& report, 
   }
   h << "<p>* capped: scored at the cap. ! flagged: something could have spoiled the trial.</p>\n";
   if (const std::vector<std::string> flagged = FlaggedTrials(results); !flagged.empty()) {
-    h << "<h2>Flagged trials</h2>\n<p>Scored like the others; the console's redo runs one again.</p>\n<ul>\n";
+    h << "<h2>Flagged trials</h2>\n<p>Scored like the others; the console's redo runs one "
+         "again.</p>\n<ul>\n";
     for (const std::string& line : flagged) h << "<li>" << Html(line) << "</li>\n";
     h << "</ul>\n";
   }
@@ -615,23 +672,27 @@ ReportFiles WriteReport(const StudyResults& results, const StudyReport& report, 
     if (const size_t at = text.find(own); at != std::string::npos) text.resize(at + 1);
   }
   const size_t at = text.find("  Friedman");
-  h << Html(at != std::string::npos ? text.substr(at)
-                                    : report.why_no_statistics + "\n\n" + FormatLapTimeModel(results, report) +
-                                          "\n" + FormatBaseline(results, report))
+  h << Html(at != std::string::npos
+                ? text.substr(at)
+                : report.why_no_statistics + "\n\n" + FormatLapTimeModel(results, report) + "\n" +
+                      FormatBaseline(results, report))
     << "</pre>\n";
   bool remarks = false;
   for (const StudyResults::Answer& a : results.answers) {
     double value = 0.0;
-    if (a.condition.empty() || IsNumber(a.value, value) || a.item.find(".path") != std::string::npos) continue;
+    if (a.condition.empty() || IsNumber(a.value, value) ||
+        a.item.find(".path") != std::string::npos)
+      continue;
     if (!remarks) h << "<h2>Remarks</h2>\n<ul>\n";
     remarks = true;
-    h << "<li>" << Html(a.participant) << ", " << Html(a.condition) << " (" << Html(a.questionnaire) << "."
-      << Html(a.item) << "): " << Html(a.value) << "</li>\n";
+    h << "<li>" << Html(a.participant) << ", " << Html(a.condition) << " (" << Html(a.questionnaire)
+      << "." << Html(a.item) << "): " << Html(a.value) << "</li>\n";
   }
   if (remarks) h << "</ul>\n";
   if (const auto background = Background(results); !background.empty()) {
     h << "<h2>Participants' background</h2>\n<ul id=\"background\">\n";
-    for (const auto& [item, values] : background) h << "<li>" << Html(item) << ": " << Html(Counts(values)) << "</li>\n";
+    for (const auto& [item, values] : background)
+      h << "<li>" << Html(item) << ": " << Html(Counts(values)) << "</li>\n";
     h << "</ul>\n";
   }
   if (!results.notes.empty()) {
@@ -643,27 +704,34 @@ ReportFiles WriteReport(const StudyResults& results, const StudyReport& report, 
   }
   h << "<h2>Plots</h2>\n<p><img src=\"lap_times.png\" alt=\"lap times per condition\"></p>\n"
     << "<p><img src=\"ranks.png\" alt=\"mean ranks per condition\"></p>\n";
-  if (!files.ratings_png.empty()) h << "<p><img src=\"ratings.png\" alt=\"questionnaire scores\"></p>\n";
+  if (!files.ratings_png.empty())
+    h << "<p><img src=\"ratings.png\" alt=\"questionnaire scores\"></p>\n";
   if (!files.model_means_png.empty()) {
-    h << "<p><img src=\"model_means.png\" alt=\"the mixed model's estimated mean lap time per condition\"></p>\n";
+    h << "<p><img src=\"model_means.png\" alt=\"the mixed model's estimated mean lap time per "
+         "condition\"></p>\n";
   }
   h << "<p>Data: <a href=\"trials.csv\">trials.csv</a>, <a href=\"answers.csv\">answers.csv</a>, "
-       "<a href=\"summary.csv\">summary.csv</a>, <a href=\"notes.csv\">notes.csv</a>, <a href=\"demographics.csv\">demographics.csv</a>.</p>\n</body></html>\n";
+       "<a href=\"summary.csv\">summary.csv</a>, <a href=\"notes.csv\">notes.csv</a>, <a "
+       "href=\"demographics.csv\">demographics.csv</a>.</p>\n</body></html>\n";
   WriteFile(files.html, h.str());
   return files;
 }
 
-std::string ReportJson(const StudyResults& results, const StudyReport& report, const ReportFiles& files) {
+std::string ReportJson(const StudyResults& results, const StudyReport& report,
+                       const ReportFiles& files) {
   auto number = [](double v) { return std::isfinite(v) ? JsonNumber(v) : std::string("null"); };
   std::string out = "{\"study\":" + JsonString(results.name) +
                     ",\"trials\":" + std::to_string(results.trials.size()) +
                     ",\"trials_planned\":" + std::to_string(results.trials_planned) +
-                    ",\"participants_used\":" + std::to_string(report.participants_used.size()) + ",\"conditions\":[";
+                    ",\"participants_used\":" + std::to_string(report.participants_used.size()) +
+                    ",\"conditions\":[";
   for (size_t i = 0; i < report.conditions.size(); ++i) {
     const ConditionSummary& c = report.conditions[i];
     if (i > 0) out += ",";
-    out += "{\"name\":" + JsonString(c.name) + ",\"total_lap_time_s\":" + number(c.total_lap_time_s) +
-           ",\"mean_lap_time_s\":" + number(c.mean_lap_time_s) + ",\"mean_rank\":" + number(c.mean_rank) +
+    out += "{\"name\":" + JsonString(c.name) +
+           ",\"total_lap_time_s\":" + number(c.total_lap_time_s) +
+           ",\"mean_lap_time_s\":" + number(c.mean_lap_time_s) +
+           ",\"mean_rank\":" + number(c.mean_rank) +
            ",\"obstacles\":" + std::to_string(c.total_obstacles) + "}";
   }
   out += "]";
@@ -675,32 +743,36 @@ std::string ReportJson(const StudyResults& results, const StudyReport& report, c
            ",\"friedman_p_exact\":" + (a.friedman.p_exact ? "true" : "false") +
            ",\"friedman_p_asymptotic\":" + number(a.friedman.p_value_asymptotic) +
            ",\"kendall_w\":" + number(a.friedman.kendall_w) +
-           ",\"post_hoc\":{\"method\":" + JsonString(a.post_hoc.method) + ",\"alpha\":" + number(a.post_hoc.alpha) +
-           ",\"pairs\":[";
+           ",\"post_hoc\":{\"method\":" + JsonString(a.post_hoc.method) +
+           ",\"alpha\":" + number(a.post_hoc.alpha) + ",\"pairs\":[";
     for (size_t i = 0; i < a.post_hoc.pairs.size(); ++i) {
       const PairComparison& p = a.post_hoc.pairs[i];
       if (i > 0) out += ",";
       out += "{\"a\":" + JsonString(report.conditions[static_cast<size_t>(p.condition_a)].name) +
              ",\"b\":" + JsonString(report.conditions[static_cast<size_t>(p.condition_b)].name) +
-             ",\"statistic\":" + number(p.statistic) +
-             ",\"critical_difference\":" + (p.critical_difference ? number(*p.critical_difference) : "null") +
+             ",\"statistic\":" + number(p.statistic) + ",\"critical_difference\":" +
+             (p.critical_difference ? number(*p.critical_difference) : "null") +
              ",\"p\":" + (p.p_value ? number(*p.p_value) : "null") +
              ",\"significant\":" + (p.significant ? "true" : "false") + "}";
     }
     out += "]}";
   } else {
-    out += ",\"friedman_chi2\":null,\"friedman_df\":null,\"friedman_p\":null,\"friedman_p_exact\":null,\"friedman_p_asymptotic\":null,\"kendall_w\":null,\"post_hoc\":null";
+    out +=
+        ",\"friedman_chi2\":null,\"friedman_df\":null,\"friedman_p\":null,\"friedman_p_exact\":"
+        "null,\"friedman_p_asymptotic\":null,\"kendall_w\":null,\"post_hoc\":null";
   }
   out += ",\"why_no_statistics\":" + JsonString(report.why_no_statistics);
   out += ",\"experimenter_notes\":" + std::to_string(results.notes.size());
   out += ",\"superseded_trials\":" + std::to_string(results.superseded.size());
   out += "," + LapTimeModelJson(results, report) + "," + BaselineJson(results, report);
-  out += ",\"files\":{\"html\":" + JsonString(files.html.string()) + ",\"trials_csv\":" +
-         JsonString(files.trials_csv.string()) + ",\"answers_csv\":" + JsonString(files.answers_csv.string()) +
+  out += ",\"files\":{\"html\":" + JsonString(files.html.string()) +
+         ",\"trials_csv\":" + JsonString(files.trials_csv.string()) +
+         ",\"answers_csv\":" + JsonString(files.answers_csv.string()) +
          ",\"summary_csv\":" + JsonString(files.summary_csv.string()) +
          ",\"notes_csv\":" + JsonString(files.notes_csv.string()) +
-         ",\"demographics_csv\":" + JsonString(files.demographics_csv.string()) + ",\"lap_times_png\":" +
-         JsonString(files.lap_times_png.string()) + ",\"ranks_png\":" + JsonString(files.ranks_png.string()) +
+         ",\"demographics_csv\":" + JsonString(files.demographics_csv.string()) +
+         ",\"lap_times_png\":" + JsonString(files.lap_times_png.string()) +
+         ",\"ranks_png\":" + JsonString(files.ranks_png.string()) +
          ",\"ratings_png\":" + JsonString(files.ratings_png.string()) +
          ",\"model_means_png\":" + JsonString(files.model_means_png.string()) + "}}";
   return out;

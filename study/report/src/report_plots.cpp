@@ -1,12 +1,11 @@
 // The report's plots, drawn with OpenCV (as the run pictures are): plain
 // axes, one colour per participant, labels in the plot.
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "haptel/study/report.hpp"
 
@@ -21,9 +20,9 @@ const cv::Scalar kGrid(220, 220, 220);
 
 /// A qualitative palette (BGR).
 cv::Scalar Colour(size_t i) {
-  static const cv::Scalar kPalette[] = {{180, 119, 31}, {14, 127, 255}, {44, 160, 44},  {40, 39, 214},
-                                        {189, 103, 148}, {75, 86, 140}, {194, 119, 227}, {127, 127, 127},
-                                        {34, 189, 188},  {207, 190, 23}};
+  static const cv::Scalar kPalette[] = {
+      {180, 119, 31}, {14, 127, 255},  {44, 160, 44},   {40, 39, 214},  {189, 103, 148},
+      {75, 86, 140},  {194, 119, 227}, {127, 127, 127}, {34, 189, 188}, {207, 190, 23}};
   return kPalette[i % std::size(kPalette)];
 }
 
@@ -33,7 +32,8 @@ std::string Text(double value, int decimals) {
   return buffer;
 }
 
-void Label(cv::Mat& image, const std::string& text, cv::Point at, double scale = 0.5, bool centred = false) {
+void Label(cv::Mat& image, const std::string& text, cv::Point at, double scale = 0.5,
+           bool centred = false) {
   int baseline = 0;
   const cv::Size size = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, scale, 1, &baseline);
   if (centred) at.x -= size.width / 2;
@@ -44,7 +44,8 @@ void Label(cv::Mat& image, const std::string& text, cv::Point at, double scale =
 struct Frame {
   double y_min, y_max;
   int Y(double v) const {
-    return kTop + static_cast<int>(std::lround((y_max - v) / (y_max - y_min) * (kHeight - kTop - kBottom)));
+    return kTop + static_cast<int>(
+                      std::lround((y_max - v) / (y_max - y_min) * (kHeight - kTop - kBottom)));
   }
   int X(size_t i, size_t n) const {
     const double step = static_cast<double>(kWidth - kLeft - kRight) / static_cast<double>(n);
@@ -52,14 +53,16 @@ struct Frame {
   }
 };
 
-Frame Axes(cv::Mat& image, const std::string& title, const std::string& y_label, double y_min, double y_max,
-           const std::vector<std::string>& categories) {
+Frame Axes(cv::Mat& image, const std::string& title, const std::string& y_label, double y_min,
+           double y_max, const std::vector<std::string>& categories) {
   Frame f{y_min, y_max};
   Label(image, title, {kLeft, 22}, 0.6);
   const double span = y_max - y_min;
   const double raw = span / 6.0;
   const double magnitude = std::pow(10.0, std::floor(std::log10(raw)));
-  const double step = raw / magnitude < 2 ? 2 * magnitude : raw / magnitude < 5 ? 5 * magnitude : 10 * magnitude;
+  const double step = raw / magnitude < 2   ? 2 * magnitude
+                      : raw / magnitude < 5 ? 5 * magnitude
+                                            : 10 * magnitude;
   for (double v = std::ceil(y_min / step) * step; v <= y_max + 1e-9; v += step) {
     cv::line(image, {kLeft, f.Y(v)}, {kWidth - kRight, f.Y(v)}, kGrid, 1);
     Label(image, Text(v, step < 1 ? 1 : 0), {8, f.Y(v) + 5}, 0.45);
@@ -87,7 +90,8 @@ double Quantile(std::vector<double> v, double q) {
 
 /// Whether any of `participant`'s trials of `condition` stopped at the cap
 /// (an unfinished lap, scored at the cap): its point is not a lap time.
-bool Capped(const StudyResults& results, const std::string& participant, const std::string& condition) {
+bool Capped(const StudyResults& results, const std::string& participant,
+            const std::string& condition) {
   for (const StudyResults::Trial& t : results.trials) {
     if (t.participant == participant && t.condition == condition && !t.completed) return true;
   }
@@ -98,7 +102,8 @@ bool Capped(const StudyResults& results, const std::string& participant, const s
 /// that it reads apart from a finished lap's dot even in grey print.
 void CappedMarker(cv::Mat& image, cv::Point at, const cv::Scalar& colour) {
   constexpr int r = 7;
-  cv::rectangle(image, {at.x - r, at.y - r}, {at.x + r, at.y + r}, cv::Scalar(255, 255, 255), cv::FILLED);
+  cv::rectangle(image, {at.x - r, at.y - r}, {at.x + r, at.y + r}, cv::Scalar(255, 255, 255),
+                cv::FILLED);
   cv::rectangle(image, {at.x - r, at.y - r}, {at.x + r, at.y + r}, colour, 2, cv::LINE_AA);
   cv::line(image, {at.x - r, at.y - r}, {at.x + r, at.y + r}, colour, 1, cv::LINE_AA);
   cv::line(image, {at.x - r, at.y + r}, {at.x + r, at.y - r}, colour, 1, cv::LINE_AA);
@@ -106,7 +111,8 @@ void CappedMarker(cv::Mat& image, cv::Point at, const cv::Scalar& colour) {
 
 }  // namespace
 
-void DrawLapTimes(const StudyResults& results, const StudyReport& report, const std::filesystem::path& png) {
+void DrawLapTimes(const StudyResults& results, const StudyReport& report,
+                  const std::filesystem::path& png) {
   cv::Mat image(kHeight, kWidth, CV_8UC3, cv::Scalar(255, 255, 255));
   double top = 1.0;
   for (const ConditionSummary& c : report.conditions) {
@@ -116,10 +122,12 @@ void DrawLapTimes(const StudyResults& results, const StudyReport& report, const 
   }
   std::vector<std::string> names;
   for (const ConditionSummary& c : report.conditions) names.push_back(c.name);
-  const Frame f = Axes(image, "Lap time per condition (box: quartiles, whiskers: range; lines: participants)",
-                       "lap time (s)", 0.0, top * 1.1, names);
+  const Frame f =
+      Axes(image, "Lap time per condition (box: quartiles, whiskers: range; lines: participants)",
+           "lap time (s)", 0.0, top * 1.1, names);
   const size_t k = report.conditions.size();
-  const int half = std::max(8, (kWidth - kLeft - kRight) / static_cast<int>(std::max<size_t>(k, 1)) / 5);
+  const int half =
+      std::max(8, (kWidth - kLeft - kRight) / static_cast<int>(std::max<size_t>(k, 1)) / 5);
   for (size_t c = 0; c < k; ++c) {
     std::vector<double> values;
     for (const double v : report.conditions[c].lap_time_s) {
@@ -128,10 +136,12 @@ void DrawLapTimes(const StudyResults& results, const StudyReport& report, const 
     if (values.empty()) continue;
     const int x = f.X(c, k);
     cv::line(image, {x, f.Y(Quantile(values, 0.0))}, {x, f.Y(Quantile(values, 1.0))}, kInk, 1);
-    cv::rectangle(image, {x - half, f.Y(Quantile(values, 0.75))}, {x + half, f.Y(Quantile(values, 0.25))},
-                  cv::Scalar(235, 225, 210), cv::FILLED);
-    cv::rectangle(image, {x - half, f.Y(Quantile(values, 0.75))}, {x + half, f.Y(Quantile(values, 0.25))}, kInk, 1);
-    cv::line(image, {x - half, f.Y(Quantile(values, 0.5))}, {x + half, f.Y(Quantile(values, 0.5))}, kInk, 2);
+    cv::rectangle(image, {x - half, f.Y(Quantile(values, 0.75))},
+                  {x + half, f.Y(Quantile(values, 0.25))}, cv::Scalar(235, 225, 210), cv::FILLED);
+    cv::rectangle(image, {x - half, f.Y(Quantile(values, 0.75))},
+                  {x + half, f.Y(Quantile(values, 0.25))}, kInk, 1);
+    cv::line(image, {x - half, f.Y(Quantile(values, 0.5))}, {x + half, f.Y(Quantile(values, 0.5))},
+             kInk, 2);
   }
   bool any_capped = false;
   for (size_t p = 0; p < results.participants.size(); ++p) {
@@ -162,7 +172,8 @@ void DrawLapTimes(const StudyResults& results, const StudyReport& report, const 
     const int x = kWidth - kRight - 230;
     const int y = kHeight - 25;
     CappedMarker(image, {x + 8, y - 4}, kInk);
-    Label(image, "capped: scored at the " + Text(results.trial_cap_s, 0) + " s cap", {x + 22, y}, 0.45);
+    Label(image, "capped: scored at the " + Text(results.trial_cap_s, 0) + " s cap", {x + 22, y},
+          0.45);
   }
   Save(image, png);
 }
@@ -174,7 +185,8 @@ void DrawRanks(const StudyReport& report, const std::filesystem::path& png) {
   for (const ConditionSummary& c : report.conditions) names.push_back(c.name);
   const Frame f = Axes(image, "Mean rank per condition (1 = fastest)", "mean rank", 0.0,
                        static_cast<double>(std::max<size_t>(k, 1)) + 0.5, names);
-  const int half = std::max(8, (kWidth - kLeft - kRight) / static_cast<int>(std::max<size_t>(k, 1)) / 4);
+  const int half =
+      std::max(8, (kWidth - kLeft - kRight) / static_cast<int>(std::max<size_t>(k, 1)) / 4);
   for (size_t c = 0; c < k; ++c) {
     const double rank = report.conditions[c].mean_rank;
     if (!std::isfinite(rank)) continue;
@@ -215,7 +227,8 @@ bool DrawRatings(const StudyResults& results, const std::filesystem::path& png) 
   for (const auto& [q, by_condition] : scores) {
     for (const auto& [c, s] : by_condition) top = std::max(top, s.first / s.second);
   }
-  const Frame f = Axes(image, "Questionnaire scores per condition (mean)", "score", 0.0, top * 1.15, results.conditions);
+  const Frame f = Axes(image, "Questionnaire scores per condition (mean)", "score", 0.0, top * 1.15,
+                       results.conditions);
   const size_t k = results.conditions.size();
   const int group = (kWidth - kLeft - kRight) / static_cast<int>(std::max<size_t>(k, 1));
   const int bar = std::max(4, group / static_cast<int>(scores.size() + 1) - 4);
@@ -239,7 +252,8 @@ bool DrawRatings(const StudyResults& results, const std::filesystem::path& png) 
   return true;
 }
 
-bool DrawModelMeans(const StudyResults& results, const StudyReport& report, const std::filesystem::path& png) {
+bool DrawModelMeans(const StudyResults& results, const StudyReport& report,
+                    const std::filesystem::path& png) {
   if (!report.mixed_model) return false;
   const MixedModelResult& m = *report.mixed_model;
   // Back-transformed from the log scale: geometric-mean lap times in s; the
@@ -250,14 +264,17 @@ bool DrawModelMeans(const StudyResults& results, const StudyReport& report, cons
   }
   cv::Mat image(kHeight, kWidth, CV_8UC3, cv::Scalar(255, 255, 255));
   const Frame f = Axes(image,
-                       "Mixed model: estimated mean lap time, 95 % CI (at position " + Text(m.mean_position, 1) + ")",
+                       "Mixed model: estimated mean lap time, 95 % CI (at position " +
+                           Text(m.mean_position, 1) + ")",
                        "lap time (s)", 0.0, top * 1.15, results.conditions);
   const size_t k = results.conditions.size();
   if (results.reference_lap_s) {
     // The baseline, dashed across the plot.
     const int y = f.Y(*results.reference_lap_s);
-    for (int x = kLeft; x < kWidth - kRight; x += 16) cv::line(image, {x, y}, {std::min(x + 9, kWidth - kRight), y}, kInk, 1);
-    Label(image, "reference lap " + Text(*results.reference_lap_s, 0) + " s", {kLeft + 6, y - 6}, 0.45);
+    for (int x = kLeft; x < kWidth - kRight; x += 16)
+      cv::line(image, {x, y}, {std::min(x + 9, kWidth - kRight), y}, kInk, 1);
+    Label(image, "reference lap " + Text(*results.reference_lap_s, 0) + " s", {kLeft + 6, y - 6},
+          0.45);
   }
   for (size_t c = 0; c < k && c < m.conditions.size(); ++c) {
     const int x = f.X(c, k);
@@ -272,7 +289,8 @@ bool DrawModelMeans(const StudyResults& results, const StudyReport& report, cons
     cv::line(image, {x - 10, low}, {x + 10, low}, Colour(c), 2);
     cv::line(image, {x - 10, high}, {x + 10, high}, Colour(c), 2);
     cv::circle(image, {x, f.Y(std::exp(mean.estimate))}, 6, Colour(c), cv::FILLED, cv::LINE_AA);
-    const std::string label = Text(std::exp(mean.estimate), 1) + " s" + (m.conditions[c].reference ? " (reference)" : "");
+    const std::string label =
+        Text(std::exp(mean.estimate), 1) + " s" + (m.conditions[c].reference ? " (reference)" : "");
     Label(image, label, {x + 14, f.Y(std::exp(mean.estimate)) + 5}, 0.45);
   }
   Save(image, png);
@@ -283,7 +301,8 @@ bool DrawModelMeans(const StudyResults& results, const StudyReport& report, cons
 
 namespace haptel::study {
 
-void DrawPowerCurve(const PowerResult& power, const std::string& title, const std::filesystem::path& png) {
+void DrawPowerCurve(const PowerResult& power, const std::string& title,
+                    const std::filesystem::path& png) {
   cv::Mat image(kHeight, kWidth, CV_8UC3, cv::Scalar(255, 255, 255));
   std::vector<std::string> counts;
   for (const PowerPoint& p : power.points) counts.push_back(std::to_string(p.participants));
@@ -294,7 +313,8 @@ void DrawPowerCurve(const PowerResult& power, const std::string& title, const st
   for (int x = kLeft; x < kWidth - kRight; x += 16) {
     cv::line(image, {x, target_y}, {std::min(x + 9, kWidth - kRight), target_y}, kInk, 1);
   }
-  Label(image, "target " + Text(100.0 * power.target_power, 0) + " %", {kLeft + 6, target_y - 6}, 0.45);
+  Label(image, "target " + Text(100.0 * power.target_power, 0) + " %", {kLeft + 6, target_y - 6},
+        0.45);
   const size_t n = power.points.size();
   // Each test a line with its 95 % interval as whiskers, the two a few
   // pixels apart so the whiskers do not hide each other.
@@ -304,8 +324,9 @@ void DrawPowerCurve(const PowerResult& power, const std::string& title, const st
     BinomialInterval PowerPoint::*interval;
     int shift;
   };
-  const Test tests[] = {{"Friedman", &PowerPoint::friedman_power, &PowerPoint::friedman_interval, -5},
-                        {"mixed model (LRT of condition)", &PowerPoint::lmm_power, &PowerPoint::lmm_interval, 5}};
+  const Test tests[] = {
+      {"Friedman", &PowerPoint::friedman_power, &PowerPoint::friedman_interval, -5},
+      {"mixed model (LRT of condition)", &PowerPoint::lmm_power, &PowerPoint::lmm_interval, 5}};
   for (size_t t = 0; t < std::size(tests); ++t) {
     const cv::Scalar colour = Colour(t);
     cv::Point previous;
@@ -323,7 +344,8 @@ void DrawPowerCurve(const PowerResult& power, const std::string& title, const st
     }
     // Lower right: power curves rise to the right, so that corner is free.
     const int legend_y = kHeight - kBottom - 50 + 20 * static_cast<int>(t);
-    cv::line(image, {kWidth - kRight - 290, legend_y - 5}, {kWidth - kRight - 260, legend_y - 5}, colour, 2);
+    cv::line(image, {kWidth - kRight - 290, legend_y - 5}, {kWidth - kRight - 260, legend_y - 5},
+             colour, 2);
     Label(image, tests[t].name, {kWidth - kRight - 252, legend_y}, 0.45);
   }
   Save(image, png);

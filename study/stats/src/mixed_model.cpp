@@ -1,7 +1,6 @@
 #include "haptel/study/mixed_model.hpp"
 
 #include <Eigen/Dense>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -85,7 +84,8 @@ Profile Solve(const Design& d, const GroupSums& s, double theta) {
   }
   const Eigen::LLT<MatrixXd> llt(p.xt_hinv_x);
   p.beta = llt.solve(rhs);
-  for (Eigen::Index i = 0; i < p.xt_hinv_x.rows(); ++i) p.log_det_xt_hinv_x += 2.0 * std::log(llt.matrixL()(i, i));
+  for (Eigen::Index i = 0; i < p.xt_hinv_x.rows(); ++i)
+    p.log_det_xt_hinv_x += 2.0 * std::log(llt.matrixL()(i, i));
   // q from the residuals, not as y'H⁻¹y − r'β: that difference would cancel.
   const VectorXd e = d.y - d.x * p.beta;
   VectorXd e_sums = VectorXd::Zero(d.groups);
@@ -170,7 +170,9 @@ Profile Fit(const Design& d, bool reml, bool separable) {
   if (!separable) return Solve(d, s, 0.0);
   const double n = static_cast<double>(d.y.size());
   const double fixed = static_cast<double>(d.x.cols());
-  const auto criterion = [&](double theta) { return Criterion(Solve(d, s, theta), n, fixed, reml); };
+  const auto criterion = [&](double theta) {
+    return Criterion(Solve(d, s, theta), n, fixed, reml);
+  };
   std::vector<double> grid{0.0};
   for (int k = -32; k <= 32; ++k) grid.push_back(std::pow(10.0, k / 8.0));
   size_t best = 0;
@@ -201,14 +203,16 @@ struct Inference {
   double fallback_df = 0.0;  ///< n − p, when Satterthwaite's df is not finite
 };
 
-Inference Infer(const Design& d, double participant_variance, double residual_variance, bool boundary) {
+Inference Infer(const Design& d, double participant_variance, double residual_variance,
+                bool boundary) {
   const Eigen::Index n = d.y.size();
   Inference in;
   in.boundary = boundary;
   in.fallback_df = static_cast<double>(n - d.x.cols());
   in.z = MatrixXd::Zero(n, d.groups);
   for (Eigen::Index r = 0; r < n; ++r) in.z(r, d.group[static_cast<size_t>(r)]) = 1.0;
-  const MatrixXd v = residual_variance * MatrixXd::Identity(n, n) + participant_variance * in.z * in.z.transpose();
+  const MatrixXd v =
+      residual_variance * MatrixXd::Identity(n, n) + participant_variance * in.z * in.z.transpose();
   const Eigen::LDLT<MatrixXd> v_ldlt(v);
   const MatrixXd v_inverse = v_ldlt.solve(MatrixXd::Identity(n, n));
   in.v_inverse_x = v_inverse * d.x;
@@ -252,8 +256,9 @@ MixedModelContrast Contrast(const VectorXd& l, const VectorXd& beta, const Infer
   const double spread = g.dot(in.component_covariance * g);
   c.degrees_of_freedom = 2.0 * variance * variance / spread;
   if (!std::isfinite(c.degrees_of_freedom) || !(c.degrees_of_freedom > 0.0)) {
-    notes.push_back("Satterthwaite's degrees of freedom were not finite for one contrast; it uses n - p = " +
-                    Number(in.fallback_df));
+    notes.push_back(
+        "Satterthwaite's degrees of freedom were not finite for one contrast; it uses n - p = " +
+        Number(in.fallback_df));
     c.degrees_of_freedom = in.fallback_df;
   }
   if (c.standard_error > 0.0) {
@@ -274,15 +279,17 @@ int Rank(const MatrixXd& x) {
 
 }  // namespace
 
-MixedModelResult FitMixedModel(const std::vector<MixedModelObservation>& observations, int conditions,
-                               int reference) {
+MixedModelResult FitMixedModel(const std::vector<MixedModelObservation>& observations,
+                               int conditions, int reference) {
   const std::string what = "mixed model";
   if (conditions < 2) {
-    throw std::invalid_argument(what + ": expected at least 2 conditions, got " + std::to_string(conditions));
+    throw std::invalid_argument(what + ": expected at least 2 conditions, got " +
+                                std::to_string(conditions));
   }
   if (reference < 0 || reference >= conditions) {
-    throw std::invalid_argument(what + ": expected a reference condition in 0.." + std::to_string(conditions - 1) +
-                                ", got " + std::to_string(reference));
+    throw std::invalid_argument(what + ": expected a reference condition in 0.." +
+                                std::to_string(conditions - 1) + ", got " +
+                                std::to_string(reference));
   }
   std::map<int, int> group_of;
   std::vector<int> per_condition(static_cast<size_t>(conditions), 0);
@@ -290,18 +297,20 @@ MixedModelResult FitMixedModel(const std::vector<MixedModelObservation>& observa
     const MixedModelObservation& o = observations[i];
     if (o.condition < 0 || o.condition >= conditions) {
       throw std::invalid_argument(what + ": observation " + std::to_string(i) + " has condition " +
-                                  std::to_string(o.condition) + ", expected 0.." + std::to_string(conditions - 1));
+                                  std::to_string(o.condition) + ", expected 0.." +
+                                  std::to_string(conditions - 1));
     }
     if (!std::isfinite(o.response) || !std::isfinite(o.position)) {
       throw std::invalid_argument(what + ": observation " + std::to_string(i) +
-                                  " expected a finite response and position, got " + Number(o.response) + " and " +
-                                  Number(o.position));
+                                  " expected a finite response and position, got " +
+                                  Number(o.response) + " and " + Number(o.position));
     }
     group_of.emplace(o.participant, static_cast<int>(group_of.size()));
     per_condition[static_cast<size_t>(o.condition)] += 1;
   }
   if (group_of.size() < 2) {
-    throw std::invalid_argument(what + ": expected at least 2 participants, got " + std::to_string(group_of.size()) +
+    throw std::invalid_argument(what + ": expected at least 2 participants, got " +
+                                std::to_string(group_of.size()) +
                                 " (the participants' variance needs more than one)");
   }
   std::vector<int> with_data;
@@ -313,9 +322,10 @@ MixedModelResult FitMixedModel(const std::vector<MixedModelObservation>& observa
                                 std::to_string(with_data.size()));
   }
   if (observations.size() <= group_of.size()) {
-    throw std::invalid_argument(what + ": expected some participant with more than one trial (" +
-                                std::to_string(observations.size()) + " trials, " + std::to_string(group_of.size()) +
-                                " participants): the participants' variance cannot be told from the residual");
+    throw std::invalid_argument(
+        what + ": expected some participant with more than one trial (" +
+        std::to_string(observations.size()) + " trials, " + std::to_string(group_of.size()) +
+        " participants): the participants' variance cannot be told from the residual");
   }
 
   MixedModelResult result;
@@ -348,7 +358,8 @@ MixedModelResult FitMixedModel(const std::vector<MixedModelObservation>& observa
   for (Eigen::Index r = 0; r < n; ++r) {
     const MixedModelObservation& o = observations[static_cast<size_t>(r)];
     full.x(r, 0) = 1.0;
-    if (column_of[static_cast<size_t>(o.condition)] >= 0) full.x(r, column_of[static_cast<size_t>(o.condition)]) = 1.0;
+    if (column_of[static_cast<size_t>(o.condition)] >= 0)
+      full.x(r, column_of[static_cast<size_t>(o.condition)]) = 1.0;
     full.x(r, position_column) = o.position;
     full.y(r) = o.response;
     full.group.push_back(group_of.at(o.participant));
@@ -361,22 +372,27 @@ MixedModelResult FitMixedModel(const std::vector<MixedModelObservation>& observa
     --columns;
     position_column = -1;
     result.notes.push_back(
-        "the position is left out: it is a function of the condition (every participant ran the conditions in "
+        "the position is left out: it is a function of the condition (every participant ran the "
+        "conditions in "
         "the same order), so learning cannot be told apart from the conditions");
     if (Rank(full.x) < columns) {
-      throw std::invalid_argument(what + ": the conditions' columns are not independent (internal error)");
+      throw std::invalid_argument(what +
+                                  ": the conditions' columns are not independent (internal error)");
     }
   }
   if (n <= columns) {
-    throw std::invalid_argument(what + ": expected more trials than the " + std::to_string(columns) +
-                                " fixed effects, got " + std::to_string(n));
+    throw std::invalid_argument(what + ": expected more trials than the " +
+                                std::to_string(columns) + " fixed effects, got " +
+                                std::to_string(n));
   }
   {
     const Eigen::LLT<MatrixXd> llt(full.x.transpose() * full.x);
     const VectorXd residual = full.y - full.x * llt.solve(full.x.transpose() * full.y);
     if (residual.squaredNorm() <= 1e-20 * std::max(1.0, full.y.squaredNorm())) {
-      throw std::invalid_argument(what + ": the fixed effects fit every trial exactly (e.g. every lap at the cap); "
-                                         "there is no variation left to estimate a variance from");
+      throw std::invalid_argument(
+          what +
+          ": the fixed effects fit every trial exactly (e.g. every lap at the cap); "
+          "there is no variation left to estimate a variance from");
     }
   }
 
@@ -392,13 +408,16 @@ MixedModelResult FitMixedModel(const std::vector<MixedModelObservation>& observa
   // liberal.
   MatrixXd with_participants(n, columns + full.groups);
   with_participants << full.x, MatrixXd::Zero(n, full.groups);
-  for (Eigen::Index r = 0; r < n; ++r) with_participants(r, columns + full.group[static_cast<size_t>(r)]) = 1.0;
+  for (Eigen::Index r = 0; r < n; ++r)
+    with_participants(r, columns + full.group[static_cast<size_t>(r)]) = 1.0;
   const bool separable = Rank(with_participants) < n;
   if (!separable) {
     result.notes.push_back(
-        "no variation within participants is left once the fixed effects are fitted (" + std::to_string(n) +
-        " trials, " + std::to_string(full.groups) + " participants, " + std::to_string(columns) +
-        " fixed effects), so the participants' variance cannot be told from the residual's: it is set to 0 "
+        "no variation within participants is left once the fixed effects are fitted (" +
+        std::to_string(n) + " trials, " + std::to_string(full.groups) + " participants, " +
+        std::to_string(columns) +
+        " fixed effects), so the participants' variance cannot be told from the residual's: it is "
+        "set to 0 "
         "(ordinary least squares; the tests are conservative)");
   }
 
@@ -410,10 +429,12 @@ MixedModelResult FitMixedModel(const std::vector<MixedModelObservation>& observa
   result.boundary = reml.theta == 0.0;
   if (result.boundary) {
     result.notes.push_back(
-        "REML puts no variance between participants (a boundary fit, lme4's 'singular'): the fit is ordinary "
+        "REML puts no variance between participants (a boundary fit, lme4's 'singular'): the fit "
+        "is ordinary "
         "least squares and the t tests have n - p degrees of freedom");
   }
-  const Inference inference = Infer(full, result.participant_variance, result.residual_variance, result.boundary);
+  const Inference inference =
+      Infer(full, result.participant_variance, result.residual_variance, result.boundary);
 
   for (int c = 0; c < conditions; ++c) {
     MixedModelCondition& condition = result.conditions[static_cast<size_t>(c)];
@@ -445,7 +466,8 @@ MixedModelResult FitMixedModel(const std::vector<MixedModelObservation>& observa
   test.degrees_of_freedom = condition_columns;
   {
     MatrixXd l = MatrixXd::Zero(condition_columns, columns);
-    for (int row = 0; row < condition_columns; ++row) l(row, row + 1) = 1.0;  // the columns after the intercept
+    for (int row = 0; row < condition_columns; ++row)
+      l(row, row + 1) = 1.0;  // the columns after the intercept
     const Eigen::SelfAdjointEigenSolver<MatrixXd> eigen(l * inference.covariance * l.transpose());
     double t_squares = 0.0;
     std::vector<double> dfs;
@@ -457,9 +479,8 @@ MixedModelResult FitMixedModel(const std::vector<MixedModelObservation>& observa
     }
     test.f = t_squares / condition_columns;
     test.denominator_df = dfs.front();
-    const bool all_equal = std::all_of(dfs.begin(), dfs.end(), [&](double df) {
-      return std::abs(df - dfs.front()) < 1e-8;
-    });
+    const bool all_equal = std::all_of(
+        dfs.begin(), dfs.end(), [&](double df) { return std::abs(df - dfs.front()) < 1e-8; });
     if (!all_equal) {
       // lmerTest's get_Fstat_ddf: 2 when any ν_i ≤ 2 (the F's mean is not finite).
       double e = 0.0;
@@ -473,7 +494,8 @@ MixedModelResult FitMixedModel(const std::vector<MixedModelObservation>& observa
     const double q = condition_columns;
     const double d = test.denominator_df;
     // P(F > f) = I_{d/(d + q f)}(d/2, q/2).
-    test.p_value = test.f > 0.0 ? RegularizedIncompleteBeta(d / 2.0, q / 2.0, d / (d + q * test.f)) : 1.0;
+    test.p_value =
+        test.f > 0.0 ? RegularizedIncompleteBeta(d / 2.0, q / 2.0, d / (d + q * test.f)) : 1.0;
   }
 
   // Then for comparison the likelihood ratio: ML refits with and without its columns.
@@ -484,15 +506,18 @@ MixedModelResult FitMixedModel(const std::vector<MixedModelObservation>& observa
   const Profile ml_full = Fit(full, false, separable);
   const Profile ml_reduced = Fit(reduced, false, separable);
   test.ml_deviance_full = Criterion(ml_full, static_cast<double>(n), fixed, false);
-  test.ml_deviance_reduced = Criterion(ml_reduced, static_cast<double>(n), static_cast<double>(reduced.x.cols()), false);
+  test.ml_deviance_reduced =
+      Criterion(ml_reduced, static_cast<double>(n), static_cast<double>(reduced.x.cols()), false);
   test.chi_square = std::max(0.0, test.ml_deviance_reduced - test.ml_deviance_full);
   test.likelihood_ratio_p_value = ChiSquareSurvival(test.chi_square, test.degrees_of_freedom);
 
   std::sort(result.notes.begin(), result.notes.end());
   result.notes.erase(std::unique(result.notes.begin(), result.notes.end()), result.notes.end());
   result.method =
-      "REML fit with a random intercept per participant (lme4's criterion); per-condition t tests with Satterthwaite's degrees of freedom (as lmerTest); the condition as a whole by "
-      "Satterthwaite's F test (as lmerTest's anova), a likelihood-ratio test of ML refits beside it";
+      "REML fit with a random intercept per participant (lme4's criterion); per-condition t tests "
+      "with Satterthwaite's degrees of freedom (as lmerTest); the condition as a whole by "
+      "Satterthwaite's F test (as lmerTest's anova), a likelihood-ratio test of ML refits beside "
+      "it";
   return result;
 }
 

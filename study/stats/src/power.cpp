@@ -38,16 +38,21 @@ struct Prepared {
 };
 
 std::vector<Prepared> Prepare(const std::vector<PowerParticipant>& pool, int conditions, int rows) {
-  if (conditions < 2) throw std::invalid_argument("power: expected at least 2 conditions, got " +
-                                                  std::to_string(conditions));
-  if (rows < 1) throw std::invalid_argument("power: expected at least 1 order row, got " + std::to_string(rows));
-  if (pool.empty()) throw std::invalid_argument("power: the pool of simulated participants is empty");
+  if (conditions < 2)
+    throw std::invalid_argument("power: expected at least 2 conditions, got " +
+                                std::to_string(conditions));
+  if (rows < 1)
+    throw std::invalid_argument("power: expected at least 1 order row, got " +
+                                std::to_string(rows));
+  if (pool.empty())
+    throw std::invalid_argument("power: the pool of simulated participants is empty");
   std::vector<int> per_row(static_cast<size_t>(rows), 0);
   std::vector<Prepared> prepared;
   for (const PowerParticipant& p : pool) {
     if (p.row < 0 || p.row >= rows) {
-      throw std::invalid_argument("power: participant '" + p.id + "' has order row " + std::to_string(p.row) +
-                                  ", expected 0.." + std::to_string(rows - 1));
+      throw std::invalid_argument("power: participant '" + p.id + "' has order row " +
+                                  std::to_string(p.row) + ", expected 0.." +
+                                  std::to_string(rows - 1));
     }
     ++per_row[static_cast<size_t>(p.row)];
     std::vector<double> sum(static_cast<size_t>(conditions), 0.0);
@@ -60,7 +65,8 @@ std::vector<Prepared> Prepare(const std::vector<PowerParticipant>& pool, int con
       }
       if (!(t.lap_time_s > 0.0) || !std::isfinite(t.lap_time_s)) {
         throw std::invalid_argument("power: participant '" + p.id + "' has a lap time of " +
-                                    std::to_string(t.lap_time_s) + " s, expected a finite time > 0");
+                                    std::to_string(t.lap_time_s) +
+                                    " s, expected a finite time > 0");
       }
       sum[static_cast<size_t>(t.condition)] += t.lap_time_s;
       ++count[static_cast<size_t>(t.condition)];
@@ -69,7 +75,8 @@ std::vector<Prepared> Prepare(const std::vector<PowerParticipant>& pool, int con
     for (int c = 0; c < conditions; ++c) {
       if (count[static_cast<size_t>(c)] == 0) {
         throw std::invalid_argument("power: participant '" + p.id + "' has no trial of condition " +
-                                    std::to_string(c) + "; every pool participant needs every condition");
+                                    std::to_string(c) +
+                                    "; every pool participant needs every condition");
       }
       row.mean_lap_s.push_back(sum[static_cast<size_t>(c)] / count[static_cast<size_t>(c)]);
     }
@@ -78,8 +85,9 @@ std::vector<Prepared> Prepare(const std::vector<PowerParticipant>& pool, int con
   }
   for (int r = 0; r < rows; ++r) {
     if (per_row[static_cast<size_t>(r)] == 0) {
-      throw std::invalid_argument("power: the pool has no participant in order row " + std::to_string(r) +
-                                  " of " + std::to_string(rows) + "; a balanced draw needs every row");
+      throw std::invalid_argument("power: the pool has no participant in order row " +
+                                  std::to_string(r) + " of " + std::to_string(rows) +
+                                  "; a balanced draw needs every row");
     }
   }
   return prepared;
@@ -87,9 +95,10 @@ std::vector<Prepared> Prepare(const std::vector<PowerParticipant>& pool, int con
 
 void CheckCount(int participants, int rows) {
   if (participants < 1 || participants % rows != 0) {
-    throw std::invalid_argument("power: expected a participant count that is a positive multiple of the design's " +
-                                std::to_string(rows) + " order rows (a balanced design is balanced only over " +
-                                "whole rows), got " + std::to_string(participants));
+    throw std::invalid_argument(
+        "power: expected a participant count that is a positive multiple of the design's " +
+        std::to_string(rows) + " order rows (a balanced design is balanced only over " +
+        "whole rows), got " + std::to_string(participants));
   }
 }
 
@@ -97,8 +106,9 @@ void CheckCount(int participants, int rows) {
 
 BinomialInterval ClopperPearsonInterval(int successes, int trials, double confidence) {
   if (trials < 1 || successes < 0 || successes > trials) {
-    throw std::invalid_argument("binomial interval: expected 0 <= successes <= trials and trials >= 1, got " +
-                                std::to_string(successes) + " of " + std::to_string(trials));
+    throw std::invalid_argument(
+        "binomial interval: expected 0 <= successes <= trials and trials >= 1, got " +
+        std::to_string(successes) + " of " + std::to_string(trials));
   }
   if (!(confidence > 0.0 && confidence < 1.0)) {
     throw std::invalid_argument("binomial interval: expected a confidence in (0, 1)");
@@ -112,18 +122,20 @@ BinomialInterval ClopperPearsonInterval(int successes, int trials, double confid
   return interval;
 }
 
-std::vector<size_t> DrawBalancedSample(const std::vector<PowerParticipant>& pool, int rows, int participants,
-                                       std::mt19937_64& random) {
+std::vector<size_t> DrawBalancedSample(const std::vector<PowerParticipant>& pool, int rows,
+                                       int participants, std::mt19937_64& random) {
   CheckCount(participants, rows);
   std::vector<std::vector<size_t>> by_row(static_cast<size_t>(rows));
   for (size_t i = 0; i < pool.size(); ++i) {
-    if (pool[i].row >= 0 && pool[i].row < rows) by_row[static_cast<size_t>(pool[i].row)].push_back(i);
+    if (pool[i].row >= 0 && pool[i].row < rows)
+      by_row[static_cast<size_t>(pool[i].row)].push_back(i);
   }
   std::vector<size_t> sample;
   for (int r = 0; r < rows; ++r) {
     const std::vector<size_t>& members = by_row[static_cast<size_t>(r)];
     if (members.empty()) {
-      throw std::invalid_argument("power: the pool has no participant in order row " + std::to_string(r));
+      throw std::invalid_argument("power: the pool has no participant in order row " +
+                                  std::to_string(r));
     }
     for (int i = 0; i < participants / rows; ++i) {
       sample.push_back(members[UniformBelow(random, members.size())]);
@@ -136,12 +148,15 @@ PowerResult EstimatePower(const std::vector<PowerParticipant>& pool, int conditi
                           const PowerOptions& options) {
   const std::vector<Prepared> prepared = Prepare(pool, conditions, rows);
   if (options.simulations < 1) {
-    throw std::invalid_argument("power: expected at least 1 simulation, got " + std::to_string(options.simulations));
+    throw std::invalid_argument("power: expected at least 1 simulation, got " +
+                                std::to_string(options.simulations));
   }
-  if (!(options.alpha > 0.0 && options.alpha < 1.0) || !(options.target_power > 0.0 && options.target_power < 1.0)) {
+  if (!(options.alpha > 0.0 && options.alpha < 1.0) ||
+      !(options.target_power > 0.0 && options.target_power < 1.0)) {
     throw std::invalid_argument("power: expected alpha and the target power in (0, 1)");
   }
-  if (options.participant_counts.empty()) throw std::invalid_argument("power: expected at least one participant count");
+  if (options.participant_counts.empty())
+    throw std::invalid_argument("power: expected at least one participant count");
   for (const int n : options.participant_counts) CheckCount(n, rows);
 
   PowerResult result;
@@ -159,8 +174,8 @@ PowerResult EstimatePower(const std::vector<PowerParticipant>& pool, int conditi
         return result;
       }
       std::seed_seq seeds{static_cast<std::uint32_t>(options.seed & 0xffffffffu),
-                          static_cast<std::uint32_t>(options.seed >> 32), static_cast<std::uint32_t>(n),
-                          static_cast<std::uint32_t>(s)};
+                          static_cast<std::uint32_t>(options.seed >> 32),
+                          static_cast<std::uint32_t>(n), static_cast<std::uint32_t>(s)};
       std::mt19937_64 random(seeds);
       const std::vector<size_t> sample = DrawBalancedSample(pool, rows, n, random);
       BlockMatrix matrix;
@@ -189,7 +204,8 @@ PowerResult EstimatePower(const std::vector<PowerParticipant>& pool, int conditi
     }
     point.friedman_power = static_cast<double>(point.friedman_significant) / options.simulations;
     point.lmm_power = static_cast<double>(point.lmm_significant) / options.simulations;
-    point.friedman_interval = ClopperPearsonInterval(point.friedman_significant, options.simulations);
+    point.friedman_interval =
+        ClopperPearsonInterval(point.friedman_significant, options.simulations);
     point.lmm_interval = ClopperPearsonInterval(point.lmm_significant, options.simulations);
     if (point.lmm_power >= options.target_power &&
         (!result.recommended_participants || n < *result.recommended_participants)) {

@@ -165,7 +165,8 @@ std::vector<std::int64_t> DoubledRanks(const std::vector<double>& row) {
 std::int64_t QuadrupledSpread(const std::vector<std::int64_t>& doubled_sums, std::int64_t rows) {
   const std::int64_t doubled_expected = rows * static_cast<std::int64_t>(doubled_sums.size() + 1);
   std::int64_t spread = 0;
-  for (std::int64_t sum : doubled_sums) spread += (sum - doubled_expected) * (sum - doubled_expected);
+  for (std::int64_t sum : doubled_sums)
+    spread += (sum - doubled_expected) * (sum - doubled_expected);
   return spread;
 }
 
@@ -225,7 +226,8 @@ std::optional<FriedmanNullDistribution> ComputeFriedmanNull(const FriedmanNullKe
   if (key_range > 9.0e18) return std::nullopt;  // would not fit the packed key
   const auto pack = [&](const std::int64_t* ascending) {
     std::uint64_t packed = 0;
-    for (int j = k - 2; j >= 0; --j) packed = packed * base + static_cast<std::uint64_t>(ascending[j]);
+    for (int j = k - 2; j >= 0; --j)
+      packed = packed * base + static_cast<std::uint64_t>(ascending[j]);
     return packed;
   };
 
@@ -256,7 +258,8 @@ std::optional<FriedmanNullDistribution> ComputeFriedmanNull(const FriedmanNullKe
     // The states never become fewer (sort(c + o) for the ascending ordering o
     // is c + o, one new state per old one), so this row and the rest take at
     // least states × their orderings steps: give up now rather than later.
-    if (steps + static_cast<long>(states.size()) * remaining_orderings > key.max_steps) return std::nullopt;
+    if (steps + static_cast<long>(states.size()) * remaining_orderings > key.max_steps)
+      return std::nullopt;
     remaining_orderings -= static_cast<long>(orderings->size());
     steps += static_cast<long>(states.size() * orderings->size());
 
@@ -277,13 +280,15 @@ std::optional<FriedmanNullDistribution> ComputeFriedmanNull(const FriedmanNullKe
           const std::int64_t value = candidate.sums[static_cast<std::size_t>(j)];
           int i = j - 1;
           for (; i >= 0 && candidate.sums[static_cast<std::size_t>(i)] > value; --i) {
-            candidate.sums[static_cast<std::size_t>(i + 1)] = candidate.sums[static_cast<std::size_t>(i)];
+            candidate.sums[static_cast<std::size_t>(i + 1)] =
+                candidate.sums[static_cast<std::size_t>(i)];
           }
           candidate.sums[static_cast<std::size_t>(i + 1)] = value;
         }
         const std::uint64_t packed = pack(candidate.sums.data());
         std::size_t slot = slot_of(packed);
-        while (slot_keys[slot] != kEmpty && slot_keys[slot] != packed) slot = (slot + 1) & (slot_keys.size() - 1);
+        while (slot_keys[slot] != kEmpty && slot_keys[slot] != packed)
+          slot = (slot + 1) & (slot_keys.size() - 1);
         if (slot_keys[slot] == packed) {
           next[slot_index[slot]].probability += candidate.probability;
           continue;
@@ -296,7 +301,8 @@ std::optional<FriedmanNullDistribution> ComputeFriedmanNull(const FriedmanNullKe
           for (std::size_t i = 0; i < next.size(); ++i) {
             const std::uint64_t moved = pack(next[i].sums.data());
             std::size_t free_slot = slot_of(moved);
-            while (slot_keys[free_slot] != kEmpty) free_slot = (free_slot + 1) & (slot_keys.size() - 1);
+            while (slot_keys[free_slot] != kEmpty)
+              free_slot = (free_slot + 1) & (slot_keys.size() - 1);
             slot_keys[free_slot] = moved;
             slot_index[free_slot] = i;
           }
@@ -331,15 +337,18 @@ std::optional<FriedmanNullDistribution> ComputeFriedmanNull(const FriedmanNullKe
 /// distribution (and the same refusal) hundreds of times per participant
 /// count. At most kMaxCached keys, emptied when full; each distribution holds
 /// one entry per value of S. Guarded, as callers may run in threads.
-std::shared_ptr<const std::optional<FriedmanNullDistribution>> CachedFriedmanNull(const FriedmanNullKey& key) {
+std::shared_ptr<const std::optional<FriedmanNullDistribution>> CachedFriedmanNull(
+    const FriedmanNullKey& key) {
   constexpr std::size_t kMaxCached = 32;
   static std::mutex mutex;
-  static std::map<FriedmanNullKey, std::shared_ptr<const std::optional<FriedmanNullDistribution>>> cache;
+  static std::map<FriedmanNullKey, std::shared_ptr<const std::optional<FriedmanNullDistribution>>>
+      cache;
   {
     const std::lock_guard<std::mutex> lock(mutex);
     if (const auto it = cache.find(key); it != cache.end()) return it->second;
   }
-  auto computed = std::make_shared<const std::optional<FriedmanNullDistribution>>(ComputeFriedmanNull(key));
+  auto computed =
+      std::make_shared<const std::optional<FriedmanNullDistribution>>(ComputeFriedmanNull(key));
   const std::lock_guard<std::mutex> lock(mutex);
   if (cache.size() >= kMaxCached) cache.clear();
   cache.emplace(key, computed);
@@ -468,24 +477,27 @@ double BetaContinuedFraction(double a, double b, double x) {
 }  // namespace
 
 double RegularizedIncompleteBeta(double a, double b, double x) {
-  if (!(a > 0.0) || !std::isfinite(a) || !(b > 0.0) || !std::isfinite(b) || !(x >= 0.0 && x <= 1.0)) {
+  if (!(a > 0.0) || !std::isfinite(a) || !(b > 0.0) || !std::isfinite(b) ||
+      !(x >= 0.0 && x <= 1.0)) {
     throw std::invalid_argument(
-        "RegularizedIncompleteBeta: expected finite a > 0, b > 0 and x in [0, 1], got a = " + Number(a) +
-        ", b = " + Number(b) + ", x = " + Number(x));
+        "RegularizedIncompleteBeta: expected finite a > 0, b > 0 and x in [0, 1], got a = " +
+        Number(a) + ", b = " + Number(b) + ", x = " + Number(x));
   }
   if (x == 0.0) return 0.0;
   if (x == 1.0) return 1.0;
   // x^a (1 − x)^b / (a B(a, b)), the fraction's prefactor, through logs.
-  const double log_front = std::lgamma(a + b) - std::lgamma(a) - std::lgamma(b) + a * std::log(x) +
-                           b * std::log1p(-x);
-  if (x < (a + 1.0) / (a + b + 2.0)) return std::exp(log_front) * BetaContinuedFraction(a, b, x) / a;
+  const double log_front =
+      std::lgamma(a + b) - std::lgamma(a) - std::lgamma(b) + a * std::log(x) + b * std::log1p(-x);
+  if (x < (a + 1.0) / (a + b + 2.0))
+    return std::exp(log_front) * BetaContinuedFraction(a, b, x) / a;
   return 1.0 - std::exp(log_front) * BetaContinuedFraction(b, a, 1.0 - x) / b;
 }
 
 double StudentTTwoSidedP(double t, double degrees_of_freedom) {
   if (!(degrees_of_freedom > 0.0) || !std::isfinite(degrees_of_freedom) || std::isnan(t)) {
-    throw std::invalid_argument("StudentTTwoSidedP: expected t not NaN and finite df > 0, got t = " + Number(t) +
-                                ", df = " + Number(degrees_of_freedom));
+    throw std::invalid_argument(
+        "StudentTTwoSidedP: expected t not NaN and finite df > 0, got t = " + Number(t) +
+        ", df = " + Number(degrees_of_freedom));
   }
   if (std::isinf(t)) return 0.0;
   return RegularizedIncompleteBeta(0.5 * degrees_of_freedom, 0.5,
@@ -495,8 +507,9 @@ double StudentTTwoSidedP(double t, double degrees_of_freedom) {
 double StudentTQuantile(double probability, double degrees_of_freedom) {
   if (!(probability > 0.0 && probability < 1.0) || !(degrees_of_freedom > 0.0) ||
       !std::isfinite(degrees_of_freedom)) {
-    throw std::invalid_argument("StudentTQuantile: expected a probability in (0, 1) and finite df > 0, got " +
-                                Number(probability) + " and df = " + Number(degrees_of_freedom));
+    throw std::invalid_argument(
+        "StudentTQuantile: expected a probability in (0, 1) and finite df > 0, got " +
+        Number(probability) + " and df = " + Number(degrees_of_freedom));
   }
   if (probability == 0.5) return 0.0;
   // The upper tail's two-sided p: P(|T| ≥ t) = 2 min(probability, 1 − probability).
@@ -532,7 +545,8 @@ std::optional<double> FriedmanExactP(const BlockMatrix& values, long max_steps) 
     key.sorted_rows.push_back(std::move(doubled));
   }
   std::sort(key.sorted_rows.begin(), key.sorted_rows.end());
-  const std::int64_t observed = QuadrupledSpread(observed_sums, static_cast<std::int64_t>(values.size()));
+  const std::int64_t observed =
+      QuadrupledSpread(observed_sums, static_cast<std::int64_t>(values.size()));
 
   const auto null = CachedFriedmanNull(key);
   if (!null->has_value()) return std::nullopt;
@@ -541,7 +555,8 @@ std::optional<double> FriedmanExactP(const BlockMatrix& values, long max_steps) 
   const auto at = std::lower_bound(distribution.quadrupled_spread.begin(),
                                    distribution.quadrupled_spread.end(), observed);
   if (at == distribution.quadrupled_spread.end()) return 0.0;  // above every value; S_obs never is
-  return distribution.at_least[static_cast<std::size_t>(at - distribution.quadrupled_spread.begin())];
+  return distribution
+      .at_least[static_cast<std::size_t>(at - distribution.quadrupled_spread.begin())];
 }
 
 FriedmanResult FriedmanTest(const BlockMatrix& values) {

@@ -13,10 +13,10 @@
 #include <streambuf>
 
 #include "alloc_counter.hpp"
-#include "haptel/config/device.hpp"
-#include "haptel/config/run.hpp"
 #include "haptel/calibration/calibration.hpp"
 #include "haptel/calibration/calibration_procedure.hpp"
+#include "haptel/config/device.hpp"
+#include "haptel/config/run.hpp"
 #include "haptel/haptics/sim_device.hpp"
 #include "test_env.hpp"
 
@@ -55,7 +55,9 @@ struct SyntheticGlove {
   }
 };
 
-bool Near(double a, double b, double relative) { return std::abs(a - b) <= relative * std::max(std::abs(a), std::abs(b)); }
+bool Near(double a, double b, double relative) {
+  return std::abs(a - b) <= relative * std::max(std::abs(a), std::abs(b));
+}
 
 /// An input stream whose lines are produced one at a time, when the reader
 /// gets to them: the generator is the scripted operator acting on a prompt.
@@ -88,8 +90,12 @@ class RecordingDevice final : public Device {
  public:
   explicit RecordingDevice(SimDevice& sim) : sim_(sim) {}
   const DeviceDescription& description() const override { return sim_.description(); }
-  DeviceStatus ReadWrist(Side side, int64_t now_ns, WristRaw& out) override { return sim_.ReadWrist(side, now_ns, out); }
-  DeviceStatus ReadGlove(Side side, int64_t now_ns, GloveRaw& out) override { return sim_.ReadGlove(side, now_ns, out); }
+  DeviceStatus ReadWrist(Side side, int64_t now_ns, WristRaw& out) override {
+    return sim_.ReadWrist(side, now_ns, out);
+  }
+  DeviceStatus ReadGlove(Side side, int64_t now_ns, GloveRaw& out) override {
+    return sim_.ReadGlove(side, now_ns, out);
+  }
   DeviceStatus WriteWristForce(Side side, const Vec3d& command) override {
     last_command[Index(side)] = command;
     return sim_.WriteWristForce(side, command);
@@ -111,7 +117,8 @@ DeviceConfig SimConfig(int seed) {
 
 /// Asserts one arm's calibration against the sim's truth, within the worst
 /// cases the physics of each measurement allows (see calibration_procedure.hpp).
-void CheckAgainstTruth(const ArmCalibration& c, const SimArmTruth& t, const SimArmConfig& sim, bool glove = true) {
+void CheckAgainstTruth(const ArmCalibration& c, const SimArmTruth& t, const SimArmConfig& sim,
+                       bool glove = true) {
   // Tracker: encoder quantisation r (≤ r/2 per reading) with references at
   // ±a about the centre: ε = |Δs/s| ≤ (r/2a)·(1 + 7r/4a)/(1 − r/a) (the exact
   // worst case of the least-squares ratio for the 7 default poses) and
@@ -123,7 +130,8 @@ void CheckAgainstTruth(const ArmCalibration& c, const SimArmTruth& t, const SimA
     INFO("tracker axis " << i);
     const double scale_error = std::abs(c.tracker_scale[i] / t.tracker_scale[i] - 1.0);
     CHECK(scale_error <= scale_bound);
-    const double offset_bound = std::abs(kReferenceCentre[i] - t.tracker_offset[i]) * scale_bound + (1 + scale_bound) * r / 2;
+    const double offset_bound = std::abs(kReferenceCentre[i] - t.tracker_offset[i]) * scale_bound +
+                                (1 + scale_bound) * r / 2;
     CHECK(std::abs(c.tracker_offset[i] - t.tracker_offset[i]) <= offset_bound);
     // The sim's gauge is exact: rounding only.
     CHECK(std::abs(c.force_slope[i] / t.force_slope[i] - 1.0) <= 1e-9);
@@ -157,7 +165,8 @@ void CheckAgainstTruth(const ArmCalibration& c, const SimArmTruth& t, const SimA
         const double rb = (postures[q].angles[j] - t.glove_offset[j]) / t.glove_gain[j];
         const double n = std::abs(rb - ra);
         gain_bound = std::max(gain_bound, 1.0 / (n - 1.0));
-        offset_bound = std::max(offset_bound, 0.5 * g * (std::abs(ra) + std::abs(rb) + 1.0) / (n - 1.0));
+        offset_bound =
+            std::max(offset_bound, 0.5 * g * (std::abs(ra) + std::abs(rb) + 1.0) / (n - 1.0));
       }
     }
     CHECK(std::abs(c.glove_gain[j] / t.glove_gain[j] - 1.0) <= gain_bound + 1e-12);
@@ -247,8 +256,9 @@ TEST_CASE("glove fit uses the two postures whose readings differ most") {
 TEST_CASE("glove postures captured in any order give the same fit") {
   const SyntheticGlove glove(13);
   std::array<Sensors, 4> raw{};
-  for (int p = 0; p < 4; ++p) raw[p] = glove.Read(GlovePostures()[p].angles, true);  // integer counts
-  raw[0][20] += 7;                                                                   // a sloppy flat wrist
+  for (int p = 0; p < 4; ++p)
+    raw[p] = glove.Read(GlovePostures()[p].angles, true);  // integer counts
+  raw[0][20] += 7;                                         // a sloppy flat wrist
   std::array<int, 4> order{0, 1, 2, 3};
   std::optional<GloveFit> first;
   int orders = 0;
@@ -288,7 +298,8 @@ TEST_CASE("recapturing a glove posture replaces it") {
 
   GloveCalibrator fresh;
   CHECK_THROWS_WITH(fresh.Recapture("flat", glove.Read("flat")), Contains("never captured"));
-  CHECK_THROWS_WITH(fresh.Capture("thumbs-up", glove.Read("flat")), Contains("unknown glove posture 'thumbs-up'"));
+  CHECK_THROWS_WITH(fresh.Capture("thumbs-up", glove.Read("flat")),
+                    Contains("unknown glove posture 'thumbs-up'"));
   Sensors bad = glove.Read("flat");
   bad[9] = std::nan("");
   CHECK_THROWS_WITH(fresh.Capture("flat", bad), Contains("middle_dip"));
@@ -299,8 +310,8 @@ TEST_CASE("a glove sensor that barely changes is an error naming it") {
   const SyntheticGlove glove(15);
   std::array<Sensors, 4> raw{};
   for (int p = 0; p < 4; ++p) raw[p] = glove.Read(GlovePostures()[p].angles, true);
-  for (int p = 0; p < 4; ++p) raw[p][7] = 512;      // middle_mcp stuck
-  raw[2][18] = raw[0][18] + 4;                      // ring_pinky_abduction: 4 counts only
+  for (int p = 0; p < 4; ++p) raw[p][7] = 512;  // middle_mcp stuck
+  raw[2][18] = raw[0][18] + 4;                  // ring_pinky_abduction: 4 counts only
   GloveCalibrator calibrator;
   for (int p = 0; p < 4; ++p) calibrator.Capture(GlovePostures()[p].name, raw[p]);
   try {
@@ -336,7 +347,9 @@ TEST_CASE("tracker scale and offset are recovered exactly from reference poses")
   const Vec3d offset{0.02, -0.015, 0.005};
   std::vector<TrackerReference> refs;
   for (const Vec3d& m : DefaultTrackerReferences()) {
-    refs.push_back({{(m[0] - offset[0]) / scale[0], (m[1] - offset[1]) / scale[1], (m[2] - offset[2]) / scale[2]}, m});
+    refs.push_back({{(m[0] - offset[0]) / scale[0], (m[1] - offset[1]) / scale[1],
+                     (m[2] - offset[2]) / scale[2]},
+                    m});
   }
   const TrackerFit fit = FitTracker(refs);
   for (int i = 0; i < 3; ++i) {
@@ -373,7 +386,8 @@ TEST_CASE("one reference pose fits the offset with the default scale") {
 TEST_CASE("degenerate tracker references are errors naming the axis") {
   CHECK_THROWS_WITH(FitTracker({}), Contains("no reference pose"));
   std::vector<TrackerReference> refs;
-  for (double v : {-0.1, 0.0, 0.1}) refs.push_back({{v * 100, 7.0, v * 100}, {v, v, v}});  // y stuck
+  for (double v : {-0.1, 0.0, 0.1})
+    refs.push_back({{v * 100, 7.0, v * 100}, {v, v, v}});  // y stuck
   CHECK_THROWS_WITH(FitTracker(refs), Contains("tracker axis y"));
   refs[0].raw[1] = std::nan("");
   CHECK_THROWS_WITH(FitTracker(refs), Contains("reference pose 1"));
@@ -517,7 +531,8 @@ TEST_CASE("both calibrated arms report the same point in one frame") {
   }
   // Without calibration the arms disagree by centimetres (hidden offsets).
   double apart = 0.0;
-  for (int i = 0; i < 3; ++i) apart = std::max(apart, std::abs(uncalibrated[0][i] - uncalibrated[1][i]));
+  for (int i = 0; i < 3; ++i)
+    apart = std::max(apart, std::abs(uncalibrated[0][i] - uncalibrated[1][i]));
   CHECK(apart > 0.005);
 }
 
@@ -531,7 +546,8 @@ TEST_CASE("attended calibration follows the operator's answers") {
     auto make = [&sim, side](int posture, double formed) {
       return [&sim, side, posture, formed] {
         Sensors angles{};
-        for (int j = 0; j < kGloveJoints; ++j) angles[j] = formed * GlovePostures()[posture].angles[j];
+        for (int j = 0; j < kGloveJoints; ++j)
+          angles[j] = formed * GlovePostures()[posture].angles[j];
         sim.SetGlovePosture(side, angles);
         return std::string();
       };
@@ -631,7 +647,8 @@ TEST_CASE("haptel calibrate writes a file the loader accepts") {
   CHECK(c.user == "alice");
   CHECK(c.device == "sim");
   SimDevice sim(SimConfig(0), OperatorConfig{});
-  for (int s = 0; s < kSides; ++s) CheckAgainstTruth(c.arms[s], sim.truth(static_cast<Side>(s)), sim.config());
+  for (int s = 0; s < kSides; ++s)
+    CheckAgainstTruth(c.arms[s], sim.truth(static_cast<Side>(s)), sim.config());
 
   // Default output: calibration/<device>.yaml under the working directory.
   const std::string device = std::filesystem::absolute("config/devices/sim.yaml").string();
@@ -648,7 +665,8 @@ TEST_CASE("haptel calibrate rejects bad arguments and configuration with status 
   CHECK(Calibrate({"calibrate", "--auto", "extra"}) == 2);
   CHECK(Calibrate({"calibrate"}) == 2);  // the sim needs --auto
   CHECK(Calibrate({"calibrate", "--auto", "--device", (dir / "absent.yaml").c_str()}) == 2);
-  std::ofstream(dir / "udp.yaml") << "name: exo\ndriver: udp\nudp:\n  left: {port: 5000}\n  right: {port: 5001}\n";
+  std::ofstream(dir / "udp.yaml")
+      << "name: exo\ndriver: udp\nudp:\n  left: {port: 5000}\n  right: {port: 5001}\n";
   CHECK(Calibrate({"calibrate", "--auto", "--device", (dir / "udp.yaml").c_str()}) == 2);
   CHECK_FALSE(std::filesystem::exists(dir / "calibration"));
 }

@@ -26,19 +26,19 @@ std::string Repeat(const std::string& value, int count) {
 std::string ValidFile(const std::vector<std::pair<std::string, std::string>>& right = {},
                       const std::string& extra_right_line = "", bool with_right = true) {
   std::vector<std::pair<std::string, std::string>> keys = {
-      {"tracker_scale", "[0.01, 0.0101, 0.0099]"},   // right: line 13
-      {"tracker_offset", "[0.01, -0.02, 0.005]"},    // 14
-      {"glove_gain", Repeat("0.005", 22)},           // 15
-      {"glove_offset", Repeat("-0.1", 22)},          // 16
-      {"force_slope", "[1.1, 0.9, 1.05]"},           // 17
-      {"force_residual", "0.02"},                    // 18
-      {"finger_force_slope", "0.95"},                // 19
+      {"tracker_scale", "[0.01, 0.0101, 0.0099]"},  // right: line 13
+      {"tracker_offset", "[0.01, -0.02, 0.005]"},   // 14
+      {"glove_gain", Repeat("0.005", 22)},          // 15
+      {"glove_offset", Repeat("-0.1", 22)},         // 16
+      {"force_slope", "[1.1, 0.9, 1.05]"},          // 17
+      {"force_residual", "0.02"},                   // 18
+      {"finger_force_slope", "0.95"},               // 19
   };
   std::ostringstream out;
-  out << "device: sim\n"   // 1
-      << "user: alice\n"   // 2
-      << "arms:\n"         // 3
-      << "  left:\n";      // 4
+  out << "device: sim\n"                                                                // 1
+      << "user: alice\n"                                                                // 2
+      << "arms:\n"                                                                      // 3
+      << "  left:\n";                                                                   // 4
   for (const auto& [key, value] : keys) out << "    " << key << ": " << value << "\n";  // 5..11
   if (with_right) {
     out << "  right:\n";  // 12
@@ -145,10 +145,12 @@ TEST_CASE("SaveCalibration refuses values the loader would reject") {
   DeviceCalibration c;
   c.device = "sim";
   c.arms[1].glove_gain[3] = std::numeric_limits<double>::quiet_NaN();
-  CHECK_THROWS_WITH(SaveCalibration(dir / "x.yaml", c), Catch::Contains("arms.right.glove_gain[3]"));
+  CHECK_THROWS_WITH(SaveCalibration(dir / "x.yaml", c),
+                    Catch::Contains("arms.right.glove_gain[3]"));
   c.arms[1].glove_gain[3] = 0.005;
   c.arms[0].tracker_scale[2] = 0.0;
-  CHECK_THROWS_WITH(SaveCalibration(dir / "x.yaml", c), Catch::Contains("arms.left.tracker_scale[2]"));
+  CHECK_THROWS_WITH(SaveCalibration(dir / "x.yaml", c),
+                    Catch::Contains("arms.left.tracker_scale[2]"));
   CHECK_FALSE(std::filesystem::exists(dir / "x.yaml"));
 }
 

@@ -15,8 +15,8 @@
 #include "haptel/config/gravity_grid.hpp"
 #include "haptel/config/run.hpp"
 #include "haptel/gravity/gravity_sampler.hpp"
-#include "haptel/testing/gravity_on_sim.hpp"
 #include "haptel/haptics/sim_device.hpp"
+#include "haptel/testing/gravity_on_sim.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;

@@ -32,8 +32,8 @@
 #include "haptel/config/error.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/udp/udp_device.hpp"
-#include "loopback.hpp"
 #include "haptel/udp/udp_protocol.hpp"
+#include "loopback.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;

@@ -27,8 +27,8 @@
 #include "haptel/haptics/twoport.hpp"
 #include "haptel/udp/arm_server.hpp"
 #include "haptel/udp/udp_device.hpp"
-#include "loopback.hpp"
 #include "haptel/udp/udp_protocol.hpp"
+#include "loopback.hpp"
 
 using namespace haptel;
 using namespace haptel::haptics;
@@ -84,7 +84,8 @@ struct ServedArm {
     o.limits.max_damping = max_damping;
     o.limits.min_speed = 0.002;
     server_fd = BoundLoopback(port);
-    server = std::make_unique<udp::ArmServer>(device, kArm, server_fd.get(), o, udp::ArmUnits{}, clock);
+    server =
+        std::make_unique<udp::ArmServer>(device, kArm, server_fd.get(), o, udp::ArmUnits{}, clock);
     client = ConnectedLoopback(port);
   }
   /// Sends `m` from the test's client and lets the server handle it at `t_ns`.
@@ -133,8 +134,9 @@ udp::Message Force(uint32_t seq, double force_x, const udp::EnergyReport& e) {
 
 }  // namespace
 
-TEST_CASE("protocol v2: the energy report round-trips; v1 leaves it out; another version is bad_version",
-          "[udp][protocol][passivity]") {
+TEST_CASE(
+    "protocol v2: the energy report round-trips; v1 leaves it out; another version is bad_version",
+    "[udp][protocol][passivity]") {
   udp::EnergyReport e;
   e.active = true;
   e.epoch = 7;
@@ -289,7 +291,8 @@ TEST_CASE("arm server: a lost or late energy report changes nothing once a newer
   }
   CHECK(a.device.wrist_command[1][0] == Approx(b.device.wrist_command[1][0]));
   CHECK(a.server->counters().passivity_ticks == b.server->counters().passivity_ticks);
-  CHECK(a.server->counters().passivity_dissipated_j == Approx(b.server->counters().passivity_dissipated_j));
+  CHECK(a.server->counters().passivity_dissipated_j ==
+        Approx(b.server->counters().passivity_dissipated_j));
   CHECK(a.server->counters().passivity_ticks == 1);  // it did have to act, at tick 2
 }
 
@@ -380,8 +383,8 @@ TEST_CASE("udp device: finds a v1 server by falling back, and speaks v2 to a v2 
         }
         if (m.type() != udp::MessageType::kWristRequest) continue;
         udp::Buffer b{};
-        const std::size_t size =
-            udp::Encode(udp::Message{m.sequence, kArm, udp::WristReply{1, {0.5, 0, 0}, {1, 0, 0, 0}}, 1}, b);
+        const std::size_t size = udp::Encode(
+            udp::Message{m.sequence, kArm, udp::WristReply{1, {0.5, 0, 0}, {1, 0, 0, 0}}, 1}, b);
         ::sendto(server.get(), b.data(), size, 0, reinterpret_cast<sockaddr*>(&from), len);
       }
     };
@@ -415,7 +418,8 @@ TEST_CASE("udp device: finds a v1 server by falling back, and speaks v2 to a v2 
     LinkEnergy remote;
     CHECK(device.ReadWrist(kArm, 0, raw) == DeviceStatus::kOk);
     CHECK(device.ProtocolVersion(kArm) == 2);
-    CHECK_FALSE(device.LinkPassivity(kArm, remote));  // the client has not reported: the server waits
+    CHECK_FALSE(
+        device.LinkPassivity(kArm, remote));  // the client has not reported: the server waits
     device.SetLinkEnergy(kArm, LinkEnergy{{0.001, 0, 0}, {}, 0.0, 0, 0.0});
     CHECK(device.WriteWristForce(kArm, {-1.0, 0, 0}) == DeviceStatus::kOk);
     server.Poll(0);
@@ -426,8 +430,10 @@ TEST_CASE("udp device: finds a v1 server by falling back, and speaks v2 to a v2 
   }
 }
 
-TEST_CASE("a servo tick on the UDP device's v2 path with the two-port allocates nothing, client and server",
-          "[udp][passivity][servo]") {
+TEST_CASE(
+    "a servo tick on the UDP device's v2 path with the two-port allocates nothing, client and "
+    "server",
+    "[udp][passivity][servo]") {
   DeviceConfig config;
   config.safety.soft_start_s = 0.0;
   config.safety.max_force_rate = 1e6;

@@ -13,15 +13,15 @@
 #include "alloc_counter.hpp"
 #include "haptel/config/blimp_course.hpp"
 #include "haptel/config/blimp_gesture.hpp"
-#include "haptel/config/error.hpp"
-#include "haptel/config/vehicle.hpp"
 #include "haptel/config/device.hpp"
+#include "haptel/config/error.hpp"
 #include "haptel/config/run.hpp"
+#include "haptel/config/vehicle.hpp"
+#include "haptel/interfaces/blimp_gesture.hpp"
+#include "haptel/mediator/blimp/blimp_lap_timer.hpp"
+#include "haptel/mediator/blimp/blimp_pilot.hpp"
 #include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/operator.hpp"
-#include "haptel/mediator/blimp/blimp_lap_timer.hpp"
-#include "haptel/interfaces/blimp_gesture.hpp"
-#include "haptel/mediator/blimp/blimp_pilot.hpp"
 #include "haptel/vehicles/sim_blimp.hpp"
 #include "test_env.hpp"
 
@@ -510,12 +510,13 @@ Flight Fly(const AirshipConfig& airship, const BlimpCourseConfig& course, bool a
   vehicles::SimBlimp sim(airship, course);
   BlimpAutoPilot pilot(course, PilotKnowing(airship));
   BlimpLapTimer lap(course);
-  interfaces::BlimpGestureInterface cockpit(LoadBlimpGesture("config/interfaces/blimp-gesture.yaml"));
+  interfaces::BlimpGestureInterface cockpit(
+      LoadBlimpGesture("config/interfaces/blimp-gesture.yaml"));
   const DeviceConfig device = LoadDevice("config/devices/sim.yaml");
   std::unique_ptr<HapticSide> hands;
   if (arms) {
-    hands = std::make_unique<HapticSide>(device, std::nullopt, std::nullopt, LoadRun("config/blimp.yaml").op,
-                                         std::filesystem::path());
+    hands = std::make_unique<HapticSide>(device, std::nullopt, std::nullopt,
+                                         LoadRun("config/blimp.yaml").op, std::filesystem::path());
     PlaceHands(*hands->sim(), cockpit.HandTargetsFor({}));
   }
   const auto servo_period_ns = static_cast<int64_t>(std::llround(1e9 / device.servo.rate_hz));
@@ -540,16 +541,19 @@ Flight Fly(const AirshipConfig& airship, const BlimpCourseConfig& course, bool a
       if (hands) {
         HoldHands(*hands->sim(), targets);
         const auto now_ns = static_cast<int64_t>(std::llround(sim.time_s() * 1e9));
-        for (; next_servo_ns <= now_ns; next_servo_ns += servo_period_ns) hands->Tick(next_servo_ns);
+        for (; next_servo_ns <= now_ns; next_servo_ns += servo_period_ns)
+          hands->Tick(next_servo_ns);
         read = cockpit.Update(head, hands->hal(), now_ns);
       } else {
         read = cockpit.Map(targets[haptics::Index(haptics::Side::kLeft)]->position,
                            targets[haptics::Index(haptics::Side::kRight)]->position, head);
         // The pilot wants only what the cockpit can express: from where it
         // holds its hands the cockpit reads back the command it wanted.
-        const double want[5] = {intent.elevator, intent.rudder, intent.power, intent.helix, intent.tail_rotor};
+        const double want[5] = {intent.elevator, intent.rudder, intent.power, intent.helix,
+                                intent.tail_rotor};
         const double got[5] = {read.elevator, read.rudder, read.power, read.helix, read.tail_rotor};
-        for (int ch = 0; ch < 5; ++ch) f.cockpit_ok = f.cockpit_ok && std::abs(want[ch] - got[ch]) < 1e-9;
+        for (int ch = 0; ch < 5; ++ch)
+          f.cockpit_ok = f.cockpit_ok && std::abs(want[ch] - got[ch]) < 1e-9;
       }
     }
     if (k % send_every == 0) command = read;
@@ -569,8 +573,13 @@ Flight Fly(const AirshipConfig& airship, const BlimpCourseConfig& course, bool a
 
 void CheckLap(const Flight& f, const BlimpCourseConfig& course, const char* what) {
   std::printf(
-      "blimp lap (%s): %s in %.1f s, gates %d passed / %d missed, obstacles %d, ended at (%.1f, %.1f)\n",
-      what, f.completed ? "completed" : f.crashed ? "crashed" : f.timed_out ? "timed out" : "unfinished",
+      "blimp lap (%s): %s in %.1f s, gates %d passed / %d missed, obstacles %d, ended at (%.1f, "
+      "%.1f)\n",
+      what,
+      f.completed   ? "completed"
+      : f.crashed   ? "crashed"
+      : f.timed_out ? "timed out"
+                    : "unfinished",
       f.lap_time_s, f.gates_passed, f.gates_missed, f.obstacles, f.end.x(), f.end.y());
   INFO(what);
   CHECK(f.finite);

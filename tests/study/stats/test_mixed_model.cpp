@@ -4,10 +4,9 @@
 // holds. Estimates and standard errors match to 1e-4 (in fact ~1e-7); the
 // Satterthwaite df, which lmerTest takes from a finite-difference Hessian, to
 // 1e-3 relative, and the p-values and intervals that follow from them to 1e-5.
-#include <catch2/catch.hpp>
-
 #include <algorithm>
 #include <array>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdint>
 #include <random>
@@ -33,25 +32,23 @@ struct Lap {
 
 // 4 conditions x 8 participants in the balanced Latin square's orders.
 const std::vector<Lap> kBalanced = {
-    {1, 0, 1, 113.51}, {1, 1, 2, 100.92}, {1, 3, 3, 48.99}, {1, 2, 4, 74.44},
-    {2, 1, 1, 105.82}, {2, 2, 2, 70.27},  {2, 0, 3, 63.68}, {2, 3, 4, 41.47},
-    {3, 2, 1, 40.29},  {3, 3, 2, 30.67},  {3, 1, 3, 55.06}, {3, 0, 4, 47.46},
-    {4, 3, 1, 29.48},  {4, 0, 2, 37.51},  {4, 2, 3, 39.78}, {4, 1, 4, 45.81},
-    {5, 0, 1, 33.64},  {5, 1, 2, 46.47},  {5, 3, 3, 27.83}, {5, 2, 4, 42.35},
-    {6, 1, 1, 86.39},  {6, 2, 2, 60.50},  {6, 0, 3, 57.69}, {6, 3, 4, 35.46},
-    {7, 2, 1, 71.43},  {7, 3, 2, 33.67},  {7, 1, 3, 61.43}, {7, 0, 4, 59.86},
-    {8, 3, 1, 57.76},  {8, 0, 2, 78.83},  {8, 2, 3, 65.04}, {8, 1, 4, 85.67}};
+    {1, 0, 1, 113.51}, {1, 1, 2, 100.92}, {1, 3, 3, 48.99}, {1, 2, 4, 74.44}, {2, 1, 1, 105.82},
+    {2, 2, 2, 70.27},  {2, 0, 3, 63.68},  {2, 3, 4, 41.47}, {3, 2, 1, 40.29}, {3, 3, 2, 30.67},
+    {3, 1, 3, 55.06},  {3, 0, 4, 47.46},  {4, 3, 1, 29.48}, {4, 0, 2, 37.51}, {4, 2, 3, 39.78},
+    {4, 1, 4, 45.81},  {5, 0, 1, 33.64},  {5, 1, 2, 46.47}, {5, 3, 3, 27.83}, {5, 2, 4, 42.35},
+    {6, 1, 1, 86.39},  {6, 2, 2, 60.50},  {6, 0, 3, 57.69}, {6, 3, 4, 35.46}, {7, 2, 1, 71.43},
+    {7, 3, 2, 33.67},  {7, 1, 3, 61.43},  {7, 0, 4, 59.86}, {8, 3, 1, 57.76}, {8, 0, 2, 78.83},
+    {8, 2, 3, 65.04},  {8, 1, 4, 85.67}};
 
 // Other draws without participant variance: REML's lands on 0.
 const std::vector<Lap> kSingular = {
-    {1, 0, 1, 54.62}, {1, 1, 2, 68.85}, {1, 3, 3, 34.43}, {1, 2, 4, 64.30},
-    {2, 1, 1, 73.24}, {2, 2, 2, 48.49}, {2, 0, 3, 59.59}, {2, 3, 4, 41.89},
-    {3, 2, 1, 62.22}, {3, 3, 2, 38.80}, {3, 1, 3, 80.73}, {3, 0, 4, 56.42},
-    {4, 3, 1, 38.52}, {4, 0, 2, 41.35}, {4, 2, 3, 62.37}, {4, 1, 4, 61.41},
-    {5, 0, 1, 59.85}, {5, 1, 2, 77.16}, {5, 3, 3, 44.15}, {5, 2, 4, 55.34},
-    {6, 1, 1, 80.01}, {6, 2, 2, 61.66}, {6, 0, 3, 56.01}, {6, 3, 4, 27.83},
-    {7, 2, 1, 62.63}, {7, 3, 2, 40.28}, {7, 1, 3, 62.86}, {7, 0, 4, 42.68},
-    {8, 3, 1, 39.35}, {8, 0, 2, 61.38}, {8, 2, 3, 64.60}, {8, 1, 4, 60.88}};
+    {1, 0, 1, 54.62}, {1, 1, 2, 68.85}, {1, 3, 3, 34.43}, {1, 2, 4, 64.30}, {2, 1, 1, 73.24},
+    {2, 2, 2, 48.49}, {2, 0, 3, 59.59}, {2, 3, 4, 41.89}, {3, 2, 1, 62.22}, {3, 3, 2, 38.80},
+    {3, 1, 3, 80.73}, {3, 0, 4, 56.42}, {4, 3, 1, 38.52}, {4, 0, 2, 41.35}, {4, 2, 3, 62.37},
+    {4, 1, 4, 61.41}, {5, 0, 1, 59.85}, {5, 1, 2, 77.16}, {5, 3, 3, 44.15}, {5, 2, 4, 55.34},
+    {6, 1, 1, 80.01}, {6, 2, 2, 61.66}, {6, 0, 3, 56.01}, {6, 3, 4, 27.83}, {7, 2, 1, 62.63},
+    {7, 3, 2, 40.28}, {7, 1, 3, 62.86}, {7, 0, 4, 42.68}, {8, 3, 1, 39.35}, {8, 0, 2, 61.38},
+    {8, 2, 3, 64.60}, {8, 1, 4, 60.88}};
 
 /// kBalanced without participant 3's trial at position 2.
 std::vector<Lap> Missing() {
@@ -65,7 +62,8 @@ std::vector<Lap> Missing() {
 std::vector<MixedModelObservation> LogLaps(const std::vector<Lap>& laps) {
   std::vector<MixedModelObservation> out;
   for (const Lap& lap : laps) {
-    out.push_back({lap.participant, lap.condition, static_cast<double>(lap.position), std::log(lap.lap_time_s)});
+    out.push_back({lap.participant, lap.condition, static_cast<double>(lap.position),
+                   std::log(lap.lap_time_s)});
   }
   return out;
 }
@@ -185,7 +183,8 @@ void CheckAgainstLme4(const MixedModelResult& fit, const Reference& r, int obser
     REQUIRE(fit.conditions[c].mean.has_value());
     CHECK(fit.conditions[c].mean->estimate == Approx(r.mean_estimate[c]).margin(1e-6));
     CHECK(fit.conditions[c].mean->standard_error == Approx(r.mean_standard_error[c]).margin(1e-6));
-    CHECK(fit.conditions[c].mean->degrees_of_freedom == Approx(r.mean_degrees_of_freedom[c]).epsilon(1e-3));
+    CHECK(fit.conditions[c].mean->degrees_of_freedom ==
+          Approx(r.mean_degrees_of_freedom[c]).epsilon(1e-3));
   }
   CHECK(fit.participant_variance == Approx(r.participant_variance).margin(1e-6));
   CHECK(fit.residual_variance == Approx(r.residual_variance).margin(1e-6));
@@ -250,7 +249,8 @@ TEST_CASE("FitMixedModel: no participant variance lands on the boundary, as lme4
   CHECK_THAT(fit.notes[0], Contains("boundary"));
 }
 
-TEST_CASE("FitMixedModel: the participants' order does not matter, nor their ids", "[study][stats]") {
+TEST_CASE("FitMixedModel: the participants' order does not matter, nor their ids",
+          "[study][stats]") {
   std::vector<MixedModelObservation> shuffled = LogLaps(kBalanced);
   std::reverse(shuffled.begin(), shuffled.end());
   for (MixedModelObservation& o : shuffled) o.participant = 100 - 7 * o.participant;
@@ -289,8 +289,9 @@ TEST_CASE("FitMixedModel: a condition without trials is not estimable, the other
   }
 }
 
-TEST_CASE("FitMixedModel: a fixed order confounds position with condition; the position is left out",
-          "[study][stats]") {
+TEST_CASE(
+    "FitMixedModel: a fixed order confounds position with condition; the position is left out",
+    "[study][stats]") {
   std::vector<MixedModelObservation> data = LogLaps(kBalanced);
   for (MixedModelObservation& o : data) o.position = o.condition + 1.0;
   const MixedModelResult fit = FitMixedModel(data, 4);
@@ -319,7 +320,8 @@ TEST_CASE("FitMixedModel: refuses what it cannot fit, saying what it expected", 
   bad[5].response = std::nan("");
   CHECK_THROWS_WITH(FitMixedModel(bad, 4), Contains("observation 5"));
   CHECK_THROWS_WITH(FitMixedModel(LogLaps(kBalanced), 3), Contains("expected 0..2"));
-  CHECK_THROWS_WITH(FitMixedModel({{1, 0, 1, 1.0}, {2, 1, 1, 2.0}}, 2), Contains("more than one trial"));
+  CHECK_THROWS_WITH(FitMixedModel({{1, 0, 1, 1.0}, {2, 1, 1, 2.0}}, 2),
+                    Contains("more than one trial"));
 }
 
 namespace {
@@ -352,15 +354,18 @@ double RejectionRate(int participants, int datasets, double effect, std::uint64_
 
 }  // namespace
 
-TEST_CASE("FitMixedModel: with no condition effect the condition test rejects in about alpha of the data sets",
-          "[study][stats]") {
+TEST_CASE(
+    "FitMixedModel: with no condition effect the condition test rejects in about alpha of the data "
+    "sets",
+    "[study][stats]") {
   // Binomial(400, 0.05): mean 20, SD 4.4; 0.10 is 40 rejections, 4.6 SD
   // above. Two participants leave no within-participant residual once
   // condition and position are fitted: the test must not find an effect in
   // noise there (it found one in every data set).
   for (const int participants : {2, 4, 8}) {
     INFO(participants << " participants");
-    const double rate = RejectionRate(participants, 400, 0.0, 1000 + static_cast<std::uint64_t>(participants));
+    const double rate =
+        RejectionRate(participants, 400, 0.0, 1000 + static_cast<std::uint64_t>(participants));
     INFO("rejection rate " << rate);
     CHECK(rate <= 0.10);
   }

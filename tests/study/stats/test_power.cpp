@@ -19,8 +19,8 @@ namespace {
 /// `per_row` participants per Williams row of 4 conditions; participant p's
 /// lap in condition c is base_p · exp(effect_c + ε), base_p ~ 20 s · exp(N(0, 0.3²))
 /// (participants differ a lot), ε ~ N(0, noise²) per trial.
-std::vector<PowerParticipant> SyntheticPool(int per_row, const std::vector<double>& log_effect, double noise,
-                                            std::uint64_t seed) {
+std::vector<PowerParticipant> SyntheticPool(int per_row, const std::vector<double>& log_effect,
+                                            double noise, std::uint64_t seed) {
   const int k = static_cast<int>(log_effect.size());
   const std::vector<std::vector<int>> rows = WilliamsRows(k);
   std::mt19937_64 random(seed);
@@ -34,8 +34,9 @@ std::vector<PowerParticipant> SyntheticPool(int per_row, const std::vector<doubl
       const double base_s = 20.0 * std::exp(0.3 * normal(random));
       for (size_t position = 0; position < rows[r].size(); ++position) {
         const int c = rows[r][position];
-        p.trials.push_back({c, static_cast<int>(position) + 1,
-                            base_s * std::exp(log_effect[static_cast<size_t>(c)] + noise * normal(random))});
+        p.trials.push_back(
+            {c, static_cast<int>(position) + 1,
+             base_s * std::exp(log_effect[static_cast<size_t>(c)] + noise * normal(random))});
       }
       pool.push_back(p);
     }
@@ -87,7 +88,8 @@ TEST_CASE("power: with no effect the tests find one in about alpha of the simula
   CHECK_FALSE(result.recommended_participants.has_value());
 }
 
-TEST_CASE("power: two identical conditions are not told apart with 2 or 4 participants", "[power]") {
+TEST_CASE("power: two identical conditions are not told apart with 2 or 4 participants",
+          "[power]") {
   // The shared-control pilot's case: the same interface twice, one trial
   // each, the two orders of a balanced square. The mixed model found an
   // effect in every draw of 2 participants (power 1.0 of nothing).
@@ -111,7 +113,8 @@ TEST_CASE("power: two identical conditions are not told apart with 2 or 4 partic
   CHECK_FALSE(result.recommended_participants.has_value());
 }
 
-TEST_CASE("power: the same seed gives the same estimate, the counts in the order asked", "[power]") {
+TEST_CASE("power: the same seed gives the same estimate, the counts in the order asked",
+          "[power]") {
   const auto pool = SyntheticPool(2, {0.0, 0.05, 0.1, 0.15}, 0.1, 13);
   PowerOptions options;
   options.participant_counts = {12, 4};
@@ -127,7 +130,8 @@ TEST_CASE("power: the same seed gives the same estimate, the counts in the order
     CHECK(a.points[i].lmm_significant == b.points[i].lmm_significant);
   }
   // The recommendation is the smallest count reaching the target, whatever the order.
-  if (a.points[0].lmm_power >= 0.8 && a.points[1].lmm_power >= 0.8) CHECK(*a.recommended_participants == 4);
+  if (a.points[0].lmm_power >= 0.8 && a.points[1].lmm_power >= 0.8)
+    CHECK(*a.recommended_participants == 4);
 }
 
 TEST_CASE("power: the balanced draw takes participants / rows from each row", "[power]") {
@@ -161,11 +165,13 @@ TEST_CASE("power: the balanced draw takes participants / rows from each row", "[
   CHECK(seen.size() == pool.size());
 }
 
-TEST_CASE("power: counts that cannot be balanced and broken pools are refused, saying why", "[power]") {
+TEST_CASE("power: counts that cannot be balanced and broken pools are refused, saying why",
+          "[power]") {
   const auto pool = SyntheticPool(2, {0.0, 0.1, 0.2, 0.3}, 0.1, 1);
   std::mt19937_64 random(1);
   CHECK_THROWS_WITH(DrawBalancedSample(pool, 4, 6, random),
-                    Catch::Contains("positive multiple of the design's 4 order rows") && Catch::Contains("got 6"));
+                    Catch::Contains("positive multiple of the design's 4 order rows") &&
+                        Catch::Contains("got 6"));
   CHECK_THROWS_WITH(DrawBalancedSample(pool, 4, 0, random), Catch::Contains("got 0"));
   PowerOptions options;
   options.participant_counts = {4};
@@ -173,15 +179,18 @@ TEST_CASE("power: counts that cannot be balanced and broken pools are refused, s
   CHECK_THROWS_WITH(EstimatePower(pool, 4, 4, options), Catch::Contains("at least 1 simulation"));
   options.simulations = 10;
   std::vector<PowerParticipant> missing_row(pool.begin(), pool.begin() + 6);  // rows 0..2 only
-  CHECK_THROWS_WITH(EstimatePower(missing_row, 4, 4, options), Catch::Contains("no participant in order row 3"));
+  CHECK_THROWS_WITH(EstimatePower(missing_row, 4, 4, options),
+                    Catch::Contains("no participant in order row 3"));
   std::vector<PowerParticipant> missing_condition = pool;
   missing_condition[0].trials.pop_back();
-  CHECK_THROWS_WITH(EstimatePower(missing_condition, 4, 4, options), Catch::Contains("has no trial of condition"));
+  CHECK_THROWS_WITH(EstimatePower(missing_condition, 4, 4, options),
+                    Catch::Contains("has no trial of condition"));
   CHECK_THROWS_WITH(EstimatePower({}, 4, 4, options), Catch::Contains("empty"));
 }
 
 TEST_CASE("power: Clopper-Pearson intervals are R's binom.test", "[power]") {
-  // R 4.2: binom.test(5, 10)$conf.int, binom.test(0, 10), binom.test(80, 100), binom.test(100, 100).
+  // R 4.2: binom.test(5, 10)$conf.int, binom.test(0, 10), binom.test(80, 100), binom.test(100,
+  // 100).
   const BinomialInterval half = ClopperPearsonInterval(5, 10);
   CHECK(half.low == Approx(0.1870860).margin(1e-6));
   CHECK(half.high == Approx(0.8129140).margin(1e-6));

@@ -124,8 +124,8 @@
 //   pair 2 3 exact T=0 p=0.0625
 //   holm ['1', '0.3125', '0.25300918258293575', '0.3125', '0.3125', '0.3125']
 // clang-format on
-#include <catch2/catch.hpp>
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -406,7 +406,8 @@ TEST_CASE("FriedmanTest: exact p as the published tables, k = 4, N = 4 (docs/stu
   CHECK(s.p_value_asymptotic == Approx(0.044).margin(0.0005));
 }
 
-TEST_CASE("FriedmanTest: 2 conditions, 4 participants all one way: the sign test's p", "[study][stats]") {
+TEST_CASE("FriedmanTest: 2 conditions, 4 participants all one way: the sign test's p",
+          "[study][stats]") {
   // χ²_F = 4 gives the χ² p 0.0455, below 0.05; the exact test is the
   // two-sided sign test: 2 of the 16 sign patterns are as extreme, p = 0.125.
   const BlockMatrix all_prefer_a = {{10, 12}, {9, 15}, {20, 21}, {11, 30}};
@@ -449,7 +450,8 @@ TEST_CASE("FriedmanTest: past the exact p's limits the chi-square p is kept", "[
   // 4 conditions, 40 participants: thousands of rank-sum vectors times 24
   // orderings a row, past kFriedmanExactMaxSteps.
   BlockMatrix many;
-  for (int i = 0; i < 40; ++i) many.push_back({double(i % 4), double((i + 1) % 4), double((i * 3 + 2) % 4), 3.5});
+  for (int i = 0; i < 40; ++i)
+    many.push_back({double(i % 4), double((i + 1) % 4), double((i * 3 + 2) % 4), 3.5});
   const auto m = haptel::study::FriedmanTest(many);
   CHECK_FALSE(m.p_exact);
   CHECK(m.p_value == m.p_value_asymptotic);

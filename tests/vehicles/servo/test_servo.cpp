@@ -777,7 +777,9 @@ TEST_CASE("The output resynchronises on stray reply bytes and a port that takes 
   }
 }
 
-TEST_CASE("Only error polls going wrong three in a row make the Maestro untrusted; a good one in between resets") {
+TEST_CASE(
+    "Only error polls going wrong three in a row make the Maestro untrusted; a good one in between "
+    "resets") {
   const ServoControllerConfig config = Configured(ServoProtocol::kMaestro);  // polled every 0.5 s
   auto stream = std::make_unique<MemoryStream>();
   MemoryStream& line = *stream;
@@ -790,7 +792,7 @@ TEST_CASE("Only error polls going wrong three in a row make the Maestro untruste
     t += config.error_poll_s;
     out.Update(t);
   };
-  out.Update(t);  // the first poll opens the first window
+  out.Update(t);         // the first poll opens the first window
   window({0x08, 0x00});  // a CRC error
   window({});            // no answer
   CHECK(out.polls_wrong_in_a_row() == 2);
@@ -806,13 +808,16 @@ TEST_CASE("Only error polls going wrong three in a row make the Maestro untruste
   CHECK(out.counters().polls_wrong == 5);
   // The reason names the run that decided, not the CRC error and the
   // missing reply before the good poll.
-  CHECK_THAT(out.untrusted_reason(),
-             Catch::Contains("servo controller on memory cannot be trusted: 3 error polls in a row went wrong "
-                             "(over 1.5 s)") &&
-                 Catch::Contains("1 bytes that answer no request") &&
-                 Catch::Contains("replies carried serial timeout, protocol error (register 0x0030)") &&
-                 !Catch::Contains("no reply") && !Catch::Contains("CRC"));
-  CHECK(out.errors_seen() == (maestro::kSerialCrcError | maestro::kSerialTimeout | maestro::kSerialProtocolError));
+  CHECK_THAT(
+      out.untrusted_reason(),
+      Catch::Contains(
+          "servo controller on memory cannot be trusted: 3 error polls in a row went wrong "
+          "(over 1.5 s)") &&
+          Catch::Contains("1 bytes that answer no request") &&
+          Catch::Contains("replies carried serial timeout, protocol error (register 0x0030)") &&
+          !Catch::Contains("no reply") && !Catch::Contains("CRC"));
+  CHECK(out.errors_seen() ==
+        (maestro::kSerialCrcError | maestro::kSerialTimeout | maestro::kSerialProtocolError));
   // Untrusted for good: good polls after it change nothing.
   window({0x00, 0x00});
   window({0x00, 0x00});

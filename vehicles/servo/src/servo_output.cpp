@@ -7,9 +7,9 @@
 #include <utility>
 
 #include "haptel/config/error.hpp"
+#include "haptel/servo/calibration.hpp"
 #include "haptel/servo/maestro.hpp"
 #include "haptel/servo/sc8000.hpp"
-#include "haptel/servo/calibration.hpp"
 
 namespace haptel::servo {
 namespace {
@@ -144,18 +144,21 @@ void ServoOutput::JudgeWindow(double now_s) {
   untrusted_ = true;
   // Once: the one allocation after construction.
   char span[96];
-  std::snprintf(span, sizeof span, "%d error polls in a row went wrong (over %.1f s): ", wrong_in_a_row_,
+  std::snprintf(span, sizeof span,
+                "%d error polls in a row went wrong (over %.1f s): ", wrong_in_a_row_,
                 now_s - wrong_since_s_);
   std::string why;
   const auto add = [&why](const std::string& part) { why += (why.empty() ? "" : "; ") + part; };
   if (wrong_unexpected_ > 0) {
     add(std::to_string(wrong_unexpected_) +
-        " bytes that answer no request (a Maestro speaks only when asked: another device on the port, a wrong "
+        " bytes that answer no request (a Maestro speaks only when asked: another device on the "
+        "port, a wrong "
         "baud rate, or noise on the line)");
   }
   if (wrong_unanswered_ > 0) {
     add(std::to_string(wrong_unanswered_) +
-        " of them got no reply (does the controller answer on this port: powered, its serial mode, its baud rate?)");
+        " of them got no reply (does the controller answer on this port: powered, its serial mode, "
+        "its baud rate?)");
   }
   if (wrong_errors_ != 0) add("replies carried " + maestro_errors::ErrorsText(wrong_errors_));
   untrusted_reason_ = "servo controller on " + port_->name() + " cannot be trusted: " + span + why;

@@ -15,7 +15,8 @@ namespace haptel::app {
 /// The robot `vehicle` describes, on `track` (kept by reference). Throws
 /// ConfigError when its kind does not step in process
 /// (VehicleKindInfo::steps_in_process) or has no factory.
-std::unique_ptr<mediator::InProcessRobot> MakeInProcessRobot(const VehicleConfig& vehicle, const Track& track);
+std::unique_ptr<mediator::InProcessRobot> MakeInProcessRobot(const VehicleConfig& vehicle,
+                                                             const Track& track);
 
 /// Registers MakeInProcessRobot with the mediator (SetInProcessRobotFactory).
 void RegisterInProcessRobot();

@@ -15,8 +15,8 @@ namespace haptel {
 /// integrator and step size sees alike.
 struct WindConfig {
   std::array<double, 3> mean{0.0, 0.0, 0.0};  ///< m/s
-  double gust_rms = 0.0;       ///< m/s per horizontal axis (a third of it vertically)
-  double gust_time_s = 8.0;    ///< period of the slowest gust component
+  double gust_rms = 0.0;     ///< m/s per horizontal axis (a third of it vertically)
+  double gust_time_s = 8.0;  ///< period of the slowest gust component
   uint64_t seed = 1;
 
   void ValidateOrThrow() const;
@@ -32,17 +32,18 @@ bool ParseAirshipIntegrator(const std::string& name, AirshipIntegrator* integrat
 
 struct AirshipConfig {
   // Hull: a prolate spheroid.
-  double length = 6.75;    ///< m
-  double diameter = 2.2;   ///< m
-  double volume = 11.0;    ///< m³ of helium
-  double air_density = 1.225;     ///< kg/m³ (ISA sea level)
-  double helium_density = 0.1786; ///< kg/m³
-  double structure_mass = 9.0;    ///< kg: envelope, gondola, motors, batteries (all-up, thesis)
+  double length = 6.75;            ///< m
+  double diameter = 2.2;           ///< m
+  double volume = 11.0;            ///< m³ of helium
+  double air_density = 1.225;      ///< kg/m³ (ISA sea level)
+  double helium_density = 0.1786;  ///< kg/m³
+  double structure_mass = 9.0;     ///< kg: envelope, gondola, motors, batteries (all-up, thesis)
   /// kg: cameras, video link and ballast. 11 m³ lifts 11.51 kg net of its
   /// helium, so 2.55 kg over the 9 kg leaves the blimp 40 g heavy (the
   /// thesis: "around 2 kg of maximum payload").
   double payload_mass = 2.55;
-  double cg_below_cb = 0.5;       ///< m: the gondola hangs the centre of gravity below the centre of buoyancy
+  double cg_below_cb =
+      0.5;  ///< m: the gondola hangs the centre of gravity below the centre of buoyancy
 
   // Aerodynamics.
   /// Hull axial drag coefficient on the volume-based area V^(2/3); 0.103 is
@@ -51,34 +52,34 @@ struct AirshipConfig {
   /// Cross-flow drag coefficient of the hull (sideways and vertical motion,
   /// rotation), on the hull's side area π·L·D/4.
   double crossflow_drag_coefficient = 0.4;
-  double fin_area = 0.6;          ///< m², each of four fins (cruciform tail)
-  double fin_lift_slope = 3.0;    ///< per rad: a low-aspect-ratio fin
-  double fin_arm = 2.9;           ///< m from the centre of gravity back to the fins' centre of pressure
+  double fin_area = 0.6;        ///< m², each of four fins (cruciform tail)
+  double fin_lift_slope = 3.0;  ///< per rad: a low-aspect-ratio fin
+  double fin_arm = 2.9;  ///< m from the centre of gravity back to the fins' centre of pressure
   /// Lift per radian of surface deflection, as a fraction of the fin's lift slope.
   double control_effectiveness = 0.5;
   double max_surface_deg = 25.0;  ///< elevator and rudder travel
   /// The thesis: the stabilisers bite only above about 8 km/h. The fins'
   /// lift is scaled by V⁴/(V⁴ + V_on⁴), a smooth onset (our form: small
   /// surfaces in the hull's thick low-speed boundary layer).
-  double fin_onset_speed = 2.2;   ///< m/s (8 km/h)
+  double fin_onset_speed = 2.2;  ///< m/s (8 km/h)
 
   // Propulsion.
-  double max_thrust = 29.4;       ///< N, both main motors together (2 × 1.5 kgf, thesis)
-  double thrust_time_constant = 0.5;   ///< s, motor and propeller spin-up
-  double propeller_x = 0.3;       ///< m ahead of the centre of gravity
-  double propeller_z = -0.15;     ///< m (below the centre of gravity: negative)
-  double max_helix_deg = 90.0;    ///< helix plane tilt each way (up: climb)
-  double helix_rate_deg_s = 90.0; ///< the tilt servo's slew rate
-  double tail_thrust = 2.0;       ///< N, the reversible tail rotor at full
-  double tail_time_constant = 0.3;  ///< s
-  double tail_arm = 3.0;          ///< m behind the centre of gravity (on the lower fin)
-  double tail_z = -0.9;           ///< m
+  double max_thrust = 29.4;           ///< N, both main motors together (2 × 1.5 kgf, thesis)
+  double thrust_time_constant = 0.5;  ///< s, motor and propeller spin-up
+  double propeller_x = 0.3;           ///< m ahead of the centre of gravity
+  double propeller_z = -0.15;         ///< m (below the centre of gravity: negative)
+  double max_helix_deg = 90.0;        ///< helix plane tilt each way (up: climb)
+  double helix_rate_deg_s = 90.0;     ///< the tilt servo's slew rate
+  double tail_thrust = 2.0;           ///< N, the reversible tail rotor at full
+  double tail_time_constant = 0.3;    ///< s
+  double tail_arm = 3.0;              ///< m behind the centre of gravity (on the lower fin)
+  double tail_z = -0.9;               ///< m
 
   WindConfig wind;
 
   // Numerics.
   AirshipIntegrator integrator = AirshipIntegrator::kRk4;
-  double step_s = 0.005;          ///< integration step (substeps of the vehicle's tick)
+  double step_s = 0.005;  ///< integration step (substeps of the vehicle's tick)
   /// Off: no aerodynamic force at all (hull drag, fins) — for checking the
   /// conservative part of the model (energy), not for flying.
   bool aerodynamics = true;

@@ -71,5 +71,4 @@ struct BlimpCourseConfig {
 /// the key and what was expected (unknown keys too).
 BlimpCourseConfig LoadBlimpCourse(const std::filesystem::path& file);
 
-
 }  // namespace haptel

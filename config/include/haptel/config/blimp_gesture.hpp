@@ -23,15 +23,15 @@ struct BlimpGestureConfig {
   std::string name = "blimp-gesture";
   std::array<double, 3> right_neutral{0.0, 0.0, 0.0};  ///< m, right arm's device frame
   std::array<double, 3> left_neutral{0.0, 0.0, 0.0};   ///< m, left arm's device frame
-  double dead_zone = 0.01;     ///< m of offset that does nothing
-  double full_elevator = 0.08; ///< m: right hand forward/back
-  double full_rudder = 0.08;   ///< m: right hand sideways
-  double full_power = 0.10;    ///< m: left hand forward
-  double full_helix = 0.06;    ///< m: left hand up/down
-  double full_tail = 0.08;     ///< m: left hand sideways, at zero power
-  double field_stiffness = 40.0;          ///< N/m
-  double field_stiffness_growth = 300.0;  ///< N/m²
-  double field_damping = 2.0;             ///< N·s/m
+  double dead_zone = 0.01;                             ///< m of offset that does nothing
+  double full_elevator = 0.08;                         ///< m: right hand forward/back
+  double full_rudder = 0.08;                           ///< m: right hand sideways
+  double full_power = 0.10;                            ///< m: left hand forward
+  double full_helix = 0.06;                            ///< m: left hand up/down
+  double full_tail = 0.08;                             ///< m: left hand sideways, at zero power
+  double field_stiffness = 40.0;                       ///< N/m
+  double field_stiffness_growth = 300.0;               ///< N/m²
+  double field_damping = 2.0;                          ///< N·s/m
   double command_rate_hz = 50.0;
 
   /// Throws ConfigFieldError naming the first field out of range.

@@ -32,11 +32,11 @@ struct BlimpManualConfig {
   /// "blimp-keys" or "blimp-gamepad": which input flies.
   std::string name = "blimp-keys";
   // --- Keys ---
-  int power_steps = 10;     ///< presses of W from no power to full
-  int helix_steps = 4;      ///< presses of ↑ from a level helix plane to full tilt
-  int elevator_steps = 4;   ///< presses of Page Up from centred to full elevator
-  double repeat_s = 0.15;   ///< s: a held key steps again this often
-  double rudder_rate = 3.0; ///< full deflections per second the rudder (tail rotor) swings at
+  int power_steps = 10;      ///< presses of W from no power to full
+  int helix_steps = 4;       ///< presses of ↑ from a level helix plane to full tilt
+  int elevator_steps = 4;    ///< presses of Page Up from centred to full elevator
+  double repeat_s = 0.15;    ///< s: a held key steps again this often
+  double rudder_rate = 3.0;  ///< full deflections per second the rudder (tail rotor) swings at
   // --- Game controller ---
   double dead_zone = 0.12;          ///< radial, fraction of each stick's full deflection
   double trigger_dead_zone = 0.05;  ///< fraction of a trigger's full pull

@@ -22,25 +22,25 @@ struct CockpitConfig {
 
   /// Steering wheel: a rim on a hinge whose axis points at the driver.
   std::array<double, 3> wheel_hub{0.05, 0.0, 0.0};  ///< m, device frame
-  double wheel_radius = 0.12;         ///< m
-  double wheel_max_angle_deg = 135;   ///< hinge end stops, ±
-  double wheel_full_turn_deg = 90;    ///< angle giving the full turn command
+  double wheel_radius = 0.12;                       ///< m
+  double wheel_max_angle_deg = 135;                 ///< hinge end stops, ±
+  double wheel_full_turn_deg = 90;                  ///< angle giving the full turn command
 
   /// Throttle lever: a slider along x (forward = faster).
   std::array<double, 3> throttle_centre{0.05, -0.25, -0.05};  ///< m, device frame
-  double throttle_travel = 0.06;      ///< m from centre to each end stop
+  double throttle_travel = 0.06;                              ///< m from centre to each end stop
 
-  double turn_share = 0.7;            ///< share of the motor range turning may take
+  double turn_share = 0.7;  ///< share of the motor range turning may take
 
   /// On a bumper contact: the wheel shakes, the throttle locks at zero.
   double shake_s = 0.6;
-  double shake_torque = 0.3;          ///< N·m amplitude
+  double shake_torque = 0.3;  ///< N·m amplitude
   double shake_hz = 12.0;
   double throttle_lock_s = 1.0;
 
   /// Return-to-zero springs (cockpit-assisted), acting while released.
-  double wheel_return_stiffness = 0.6;     ///< N·m/rad
-  double throttle_return_stiffness = 60.0; ///< N/m
+  double wheel_return_stiffness = 0.6;      ///< N·m/rad
+  double throttle_return_stiffness = 60.0;  ///< N/m
 
   double command_rate_hz = 50.0;
 

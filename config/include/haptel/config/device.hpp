@@ -46,12 +46,12 @@ struct ServoLoopConfig {
 
 /// Force safety, applied in the servo loop to every force before the device.
 struct SafetyConfig {
-  double wrist_force_limit = 7.0;     ///< N (also capped by the device description)
-  double finger_force_limit = 10.0;   ///< N
-  double max_force_rate = 2000.0;     ///< N/s, per axis / finger
-  double soft_start_s = 0.5;          ///< forces ramp in after connect or reconnect
-  double setpoint_timeout_s = 0.02;   ///< set-points older than this are stale
-  double fade_s = 0.03;               ///< stale set-points fade to zero over this
+  double wrist_force_limit = 7.0;    ///< N (also capped by the device description)
+  double finger_force_limit = 10.0;  ///< N
+  double max_force_rate = 2000.0;    ///< N/s, per axis / finger
+  double soft_start_s = 0.5;         ///< forces ramp in after connect or reconnect
+  double setpoint_timeout_s = 0.02;  ///< set-points older than this are stale
+  double fade_s = 0.03;              ///< stale set-points fade to zero over this
 
   /// Throws ConfigFieldError unless every value is in range and
   /// setpoint_timeout_s + fade_s <= 0.05 (forces gone 50 ms after a stall).
@@ -61,13 +61,13 @@ struct SafetyConfig {
 /// The simulated device: point-mass arms moved by a simulated operator, with
 /// the imperfections calibration and gravity compensation must fix.
 struct SimArmConfig {
-  double arm_mass = 0.8;               ///< kg
-  double damping = 1.0;                ///< N·s/m viscous
-  double coulomb_friction = 0.3;       ///< N
-  double exo_unbalanced_mass = 0.6;    ///< kg at the worst place in the workspace
-  double encoder_resolution = 60e-6;   ///< m
-  double force_limit = 7.0;            ///< N the hardware saturates at
-  double glove_noise = 0.0;            ///< raw units, standard deviation
+  double arm_mass = 0.8;              ///< kg
+  double damping = 1.0;               ///< N·s/m viscous
+  double coulomb_friction = 0.3;      ///< N
+  double exo_unbalanced_mass = 0.6;   ///< kg at the worst place in the workspace
+  double encoder_resolution = 60e-6;  ///< m
+  double force_limit = 7.0;           ///< N the hardware saturates at
+  double glove_noise = 0.0;           ///< raw units, standard deviation
   /// Workspace box (hard stops), m, device frame.
   std::array<double, 3> workspace_min{-0.20, -0.30, -0.20};
   std::array<double, 3> workspace_max{0.30, 0.30, 0.25};
@@ -89,9 +89,9 @@ struct UdpArmEndpoint {
 
 struct UdpDeviceConfig {
   std::array<UdpArmEndpoint, 2> arms;  ///< [left, right]
-  double timeout_s = 0.002;   ///< per request
-  int retries = 1;            ///< extra attempts after a timeout
-  double lost_after_s = 0.1;  ///< no valid answer for this long: device lost
+  double timeout_s = 0.002;            ///< per request
+  int retries = 1;                     ///< extra attempts after a timeout
+  double lost_after_s = 0.1;           ///< no valid answer for this long: device lost
 
   /// Throws ConfigFieldError unless the endpoints ("left.*", "right.*") and
   /// the timing values are valid.
@@ -110,7 +110,7 @@ struct ReplayDeviceConfig {
 struct DeviceConfig {
   std::filesystem::path file;
   std::string name = "sim";
-  std::string driver = "sim";  ///< sim | udp | replay
+  std::string driver = "sim";             ///< sim | udp | replay
   std::array<bool, 2> sides{true, true};  ///< [left, right]
   bool has_glove = true;
   bool has_grasp = true;

@@ -25,11 +25,11 @@
 namespace haptel {
 
 struct FleetVehicle {
-  std::string name;                ///< on the domain and in the results
-  std::filesystem::path vehicle;   ///< its vehicle file
-  std::filesystem::path world;     ///< its track (robot) or course (blimp) file
-  std::string interface;           ///< the interface it is driven with ("": the run's)
-  bool attach = false;             ///< already running: spawn none
+  std::string name;               ///< on the domain and in the results
+  std::filesystem::path vehicle;  ///< its vehicle file
+  std::filesystem::path world;    ///< its track (robot) or course (blimp) file
+  std::string interface;          ///< the interface it is driven with ("": the run's)
+  bool attach = false;            ///< already running: spawn none
 };
 
 struct FleetConfig {

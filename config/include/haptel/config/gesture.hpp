@@ -13,16 +13,16 @@ struct GestureConfig {
   std::string name = "gesture";
   /// Right-hand neutral point in the device frame (x forward, y left, z up), m.
   std::array<double, 3> neutral{0.0, 0.0, 0.0};
-  double dead_zone = 0.01;      ///< m of offset that does nothing
-  double full_forward = 0.08;   ///< forward offset past the dead zone for full speed, m
-  double full_turn = 0.08;      ///< sideways offset past the dead zone for full turn, m
-  double turn_share = 0.7;      ///< how much of the motor range turning may take
+  double dead_zone = 0.01;     ///< m of offset that does nothing
+  double full_forward = 0.08;  ///< forward offset past the dead zone for full speed, m
+  double full_turn = 0.08;     ///< sideways offset past the dead zone for full turn, m
+  double turn_share = 0.7;     ///< how much of the motor range turning may take
   /// Centring field F = -(k + k2·|d|)·d − b·v: stronger with distance.
-  double field_stiffness = 40.0;            ///< N/m
-  double field_stiffness_growth = 300.0;    ///< N/m²
-  double field_damping = 2.0;               ///< N·s/m
-  double wall_stiffness = 1500.0;           ///< N/m
-  double wall_release_s = 0.3;  ///< the wall stays this long after the contact clears
+  double field_stiffness = 40.0;          ///< N/m
+  double field_stiffness_growth = 300.0;  ///< N/m²
+  double field_damping = 2.0;             ///< N·s/m
+  double wall_stiffness = 1500.0;         ///< N/m
+  double wall_release_s = 0.3;            ///< the wall stays this long after the contact clears
   double command_rate_hz = 50.0;
   SharedControlConfig shared_control;  ///< gesture-shared's; disabled for gesture
 

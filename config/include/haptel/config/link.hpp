@@ -19,10 +19,10 @@ namespace haptel {
 /// turn at the rate (a drop-tail FIFO served at `rate_bps`), then is
 /// delayed by delay ± jitter; loss is drawn before either.
 struct LinkFault {
-  bool enabled = false;  ///< the fault transport is in (also for the link-down switch, SIGUSR1)
-  double delay_s = 0.0;  ///< added to every packet received
-  double jitter_s = 0.0; ///< each packet's delay varies uniformly by ± this (packets may reorder)
-  double loss = 0.0;     ///< fraction of packets received that are dropped, in [0, 1)
+  bool enabled = false;   ///< the fault transport is in (also for the link-down switch, SIGUSR1)
+  double delay_s = 0.0;   ///< added to every packet received
+  double jitter_s = 0.0;  ///< each packet's delay varies uniformly by ± this (packets may reorder)
+  double loss = 0.0;      ///< fraction of packets received that are dropped, in [0, 1)
   /// The rate the received packets are served at, bit/s (0: no limit): each
   /// takes its size × 8 / rate to pass, after those ahead of it.
   double rate_bps = 0.0;
@@ -64,14 +64,15 @@ LinkFault LoadLinkProfile(const std::string& name_or_file);
 /// more than once a minute (on average), or a jitter that holds a state back
 /// longer than the time-out, would end the run as a vehicle lost (or one that
 /// never answered) though the vehicle runs: said instead, before it starts.
-std::string LinkFaultProblem(const LinkFault& fault, double state_rate_hz, double vehicle_timeout_s);
+std::string LinkFaultProblem(const LinkFault& fault, double state_rate_hz,
+                             double vehicle_timeout_s);
 
 /// --link-profile and --link-fault together (either may be absent): the
 /// profile, then the keys --link-fault names over it; `otherwise` when
 /// neither is given. A bad profile or fault is a UsageError naming its
 /// option and what was expected.
-LinkFault LinkFaultFromOptions(const std::optional<std::string>& profile, const std::optional<std::string>& fault,
-                               const LinkFault& otherwise);
+LinkFault LinkFaultFromOptions(const std::optional<std::string>& profile,
+                               const std::optional<std::string>& fault, const LinkFault& otherwise);
 /// A comma-separated list of IPv4 addresses for option `--option` (the
 /// --dds-interfaces and --dds-peers of haptel run and haptel-vehicle):
 /// a UsageError naming the option and the address that is not one.

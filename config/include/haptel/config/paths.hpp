@@ -22,6 +22,7 @@ std::string NotRegularFile(const std::filesystem::path& file);
 /// --trace, --trace-in, --database): throws UsageError "option --OPTION:
 /// 'FILE' is a folder; expected EXPECTED" (or is not a regular file) before
 /// anything opens it. Nothing for a regular or missing file.
-void CheckFileOption(const std::string& option, const std::filesystem::path& file, const std::string& expected);
+void CheckFileOption(const std::string& option, const std::filesystem::path& file,
+                     const std::string& expected);
 
 }  // namespace haptel

@@ -12,16 +12,16 @@ namespace haptel {
 /// The automatic operator: a simulated person driving through the interface.
 struct OperatorConfig {
   double reaction_delay_s = 0.15;
-  double arm_time_constant_s = 0.1;  ///< lag of the hand target behind intent
-  double lookahead = 0.35;           ///< pure-pursuit look-ahead, m
-  double cruise = 0.9;               ///< forward command on straights (0..1)
-  double min_forward = 0.35;         ///< forward command in the tightest turn
-  double slow_radius = 0.15;         ///< turn radius at which it slows to min_forward, m
-  double muscle_stiffness = 250.0;   ///< N/m
-  double muscle_damping = 12.0;      ///< N·s/m
-  double muscle_max_force = 8.0;     ///< N
+  double arm_time_constant_s = 0.1;     ///< lag of the hand target behind intent
+  double lookahead = 0.35;              ///< pure-pursuit look-ahead, m
+  double cruise = 0.9;                  ///< forward command on straights (0..1)
+  double min_forward = 0.35;            ///< forward command in the tightest turn
+  double slow_radius = 0.15;            ///< turn radius at which it slows to min_forward, m
+  double muscle_stiffness = 250.0;      ///< N/m
+  double muscle_damping = 12.0;         ///< N·s/m
+  double muscle_max_force = 8.0;        ///< N
   double muscle_integral_gain = 400.0;  ///< N/(m·s): pushing harder against a pull
-  double backoff_s = 0.8;            ///< reverse this long after a bumper contact
+  double backoff_s = 0.8;               ///< reverse this long after a bumper contact
   /// After backing off, steer this long with full attention: a person who
   /// has just hit something aims the next attempt (half the look-ahead, no
   /// steering wander, and a control that stays put is brought exactly where
@@ -43,7 +43,8 @@ struct RunConfig {
   std::filesystem::path vehicle;
   std::string interface = "gesture";
   /// The interfaces keys F1-F6 switch between during a run, in key order.
-  std::vector<std::string> interfaces{"gesture", "cockpit", "cockpit-hud", "cockpit-assisted", "keyboard", "gamepad"};
+  std::vector<std::string> interfaces{"gesture",          "cockpit",  "cockpit-hud",
+                                      "cockpit-assisted", "keyboard", "gamepad"};
   /// A person's run ends here unless --time-limit says otherwise (the thesis's 10-minute cap).
   double person_time_limit_s = 600.0;
   /// Forces ramp down and up over this when the interface changes.
@@ -53,7 +54,7 @@ struct RunConfig {
   double vehicle_timeout_s = 0.5;  ///< no state for this long: vehicle lost
   double session_rate_hz = 100.0;
   bool video_decode = true;
-  std::filesystem::path device;  ///< haptic device file (config/devices/*.yaml)
+  std::filesystem::path device;   ///< haptic device file (config/devices/*.yaml)
   std::filesystem::path physics;  ///< physics world file, for interfaces with bodies
   std::filesystem::path scene;    ///< haptic scene (YAML or MHaptic XML); empty: none
   /// Where the scene goes in the device frame (PlaceScene), from

@@ -15,10 +15,12 @@ namespace haptel {
 /// the wheel's rim). No section (`enabled` false): the plain interface.
 struct SharedControlConfig {
   bool enabled = false;
-  double horizon_s = 1.0;     ///< s of predicted motion looked through
-  double max_force = 6.0;     ///< N: the most the guidance ever pushes (at the hand, the lever, the rim)
-  double stiffness = 600.0;   ///< N/m of travel (hand; lever; along the rim) past the safe commands' boundary
-  double clearance = 0.03;    ///< m kept between the body and an obstacle (beyond its radius)
+  double horizon_s = 1.0;  ///< s of predicted motion looked through
+  double max_force =
+      6.0;  ///< N: the most the guidance ever pushes (at the hand, the lever, the rim)
+  double stiffness =
+      600.0;  ///< N/m of travel (hand; lever; along the rim) past the safe commands' boundary
+  double clearance = 0.03;  ///< m kept between the body and an obstacle (beyond its radius)
 
   /// Throws ConfigFieldError unless every value is in range.
   void ValidateOrThrow() const;

@@ -56,10 +56,10 @@ TrackConfig LoadTrack(const std::filesystem::path& file);
 /// A gate as placed on the track.
 struct Gate {
   Vec2 center;
-  Vec2 tangent;       ///< unit direction of travel
-  Vec2 left_post;     ///< centre of the post on the driver's left
+  Vec2 tangent;    ///< unit direction of travel
+  Vec2 left_post;  ///< centre of the post on the driver's left
   Vec2 right_post;
-  Segment2 line;      ///< across the whole corridor, right wall to left wall
+  Segment2 line;  ///< across the whole corridor, right wall to left wall
   double along = 0.0;
 };
 

@@ -6,21 +6,21 @@
 #include <vector>
 
 #include "haptel/config/airship.hpp"
-#include "haptel/core/range_scan.hpp"
 #include "haptel/config/link.hpp"
 #include "haptel/config/servo.hpp"
 #include "haptel/config/vehicle_kinds.hpp"
+#include "haptel/core/range_scan.hpp"
 
 namespace haptel {
 
 /// Differential drive of the Lego-style tank: each motor takes a signed speed
 /// level, as the brick does; commands are quantised to these levels.
 struct DriveConfig {
-  int speed_levels = 8;              ///< levels in each direction
-  double max_speed = 0.3;            ///< tread speed at the top level, m/s
-  double track_width = 0.16;         ///< distance between treads, m
-  double motor_time_constant = 0.08; ///< first-order motor lag, s
-  double left_gain = 1.0;            ///< per-motor gain: uneven turning
+  int speed_levels = 8;               ///< levels in each direction
+  double max_speed = 0.3;             ///< tread speed at the top level, m/s
+  double track_width = 0.16;          ///< distance between treads, m
+  double motor_time_constant = 0.08;  ///< first-order motor lag, s
+  double left_gain = 1.0;             ///< per-motor gain: uneven turning
   double right_gain = 0.95;
 
   /// Throws ConfigFieldError unless every value is in range.
@@ -33,11 +33,11 @@ struct DriveConfig {
 /// along it, with Gaussian noise, capped at `max_range` (nothing seen).
 /// What the shared-control interfaces (gesture-shared) look ahead with.
 struct RangeSensorConfig {
-  int beams = 31;            ///< 0: none; at most kMaxRangeBeams (core/range_scan.hpp)
-  double fov_deg = 180.0;    ///< from the first beam to the last, centred on the heading
-  double max_range = 1.5;    ///< m
-  double noise_sd = 0.005;   ///< m, standard deviation of each reading's noise
-  unsigned seed = 1;         ///< the noise's seed: a run repeats exactly
+  int beams = 31;           ///< 0: none; at most kMaxRangeBeams (core/range_scan.hpp)
+  double fov_deg = 180.0;   ///< from the first beam to the last, centred on the heading
+  double max_range = 1.5;   ///< m
+  double noise_sd = 0.005;  ///< m, standard deviation of each reading's noise
+  unsigned seed = 1;        ///< the noise's seed: a run repeats exactly
 
   /// Throws ConfigFieldError unless every value is in range.
   void ValidateOrThrow() const;
@@ -86,7 +86,7 @@ struct CameraConfig {
   /// Published frame size; captured frames of another size are resized.
   int width = 640;
   int height = 480;
-  double fov_deg = 55.0;    ///< horizontal, webcam-like
+  double fov_deg = 55.0;  ///< horizontal, webcam-like
   CameraCodec codec = CameraCodec::kJpeg;
   int jpeg_quality = 80;  ///< codec: jpeg, 1..100
   /// codec: h264, the encoder's target bitrate (kbit/s) until the operator
@@ -106,7 +106,7 @@ struct CanConfig {
   std::string interface = "can0";  ///< SocketCAN interface (can-robot)
   int left_node = 1;               ///< ODrive node ids, 0..63, all distinct
   int right_node = 2;
-  int io_node = 3;                 ///< the bumper I/O node
+  int io_node = 3;  ///< the bumper I/O node
   /// The right motor is mounted mirrored: positive turns drive it backwards.
   bool right_reversed = true;
   /// Wheel velocity of each speed level 1..drive.speed_levels (turn/s,
@@ -160,13 +160,14 @@ struct VehicleConfig {
   std::filesystem::path file;
   std::string name = "robot1";
   std::string kind = "sim-robot";  ///< a kind of the table (vehicle_kinds.hpp)
-  std::filesystem::path world;  ///< track the simulator drives on
+  std::filesystem::path world;     ///< track the simulator drives on
   double sim_rate_hz = 200.0;
   double state_rate_hz = 50.0;
-  double watchdog_timeout_s = 0.2;   ///< no command for this long: made safe (0.2 s, as the blimp's)
+  double watchdog_timeout_s = 0.2;  ///< no command for this long: made safe (0.2 s, as the blimp's)
   DriveConfig drive;
   BodyConfig body;
-  RangeSensorConfig range_sensors;  ///< the simulated robot's (other kinds report their own, or none)
+  RangeSensorConfig
+      range_sensors;  ///< the simulated robot's (other kinds report their own, or none)
   CameraConfig camera;
   LinkConfig link;
   CanConfig can;                ///< kinds that use kCanSection

@@ -7,8 +7,8 @@
 ///
 /// Adding a kind: a row here (or RegisterVehicleKind at start-up), its
 /// adapter and factory in vehicles/, and a vehicle file (docs/vehicles.md).
-#include <string>
 #include <deque>
+#include <string>
 
 namespace haptel {
 

@@ -9,13 +9,13 @@
 namespace haptel {
 
 struct BlimpCommand {
-  double elevator = 0.0;    ///< -1..1 of full travel; positive: nose up
-  double rudder = 0.0;      ///< -1..1; positive: turn left
-  double power = 0.0;       ///< 0..1 of both main motors' full thrust
-  double helix = 0.0;       ///< -1..1 of the helix plane's tilt; positive: thrust tilts up (climb)
-  double tail_rotor = 0.0;  ///< -1..1 of the reversible tail rotor; positive: turn left
-  double camera_pan = 0.0;  ///< rad, positive: look left
-  double camera_tilt = 0.0; ///< rad, positive: look up
+  double elevator = 0.0;     ///< -1..1 of full travel; positive: nose up
+  double rudder = 0.0;       ///< -1..1; positive: turn left
+  double power = 0.0;        ///< 0..1 of both main motors' full thrust
+  double helix = 0.0;        ///< -1..1 of the helix plane's tilt; positive: thrust tilts up (climb)
+  double tail_rotor = 0.0;   ///< -1..1 of the reversible tail rotor; positive: turn left
+  double camera_pan = 0.0;   ///< rad, positive: look left
+  double camera_tilt = 0.0;  ///< rad, positive: look up
 };
 
 /// The pilot camera's mechanical range (a standard pan/tilt head).
@@ -23,8 +23,8 @@ constexpr double kBlimpCameraPanMax = 1.5708;   ///< rad each way (±90°)
 constexpr double kBlimpCameraTiltMax = 0.7854;  ///< rad each way (±45°)
 
 /// Whether every value is finite and within its range, widened by `slack`
-/// at each end (a float's rounding past an end is not malformed). What a vehicle accepts; anything else is a malformed
-/// command, counted and dropped.
+/// at each end (a float's rounding past an end is not malformed). What a vehicle accepts; anything
+/// else is a malformed command, counted and dropped.
 inline bool InRange(const BlimpCommand& c, double slack = 0.0) {
   auto in = [slack](double v, double lo, double hi) {
     return std::isfinite(v) && v >= lo - slack && v <= hi + slack;
@@ -36,7 +36,9 @@ inline bool InRange(const BlimpCommand& c, double slack = 0.0) {
 
 /// The same command with every value clamped into its range (NaN → neutral).
 inline BlimpCommand Clamped(const BlimpCommand& c) {
-  auto clamp = [](double v, double lo, double hi) { return std::isfinite(v) ? std::clamp(v, lo, hi) : 0.0; };
+  auto clamp = [](double v, double lo, double hi) {
+    return std::isfinite(v) ? std::clamp(v, lo, hi) : 0.0;
+  };
   BlimpCommand out;
   out.elevator = clamp(c.elevator, -1, 1);
   out.rudder = clamp(c.rudder, -1, 1);

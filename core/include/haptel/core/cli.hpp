@@ -15,9 +15,9 @@
 namespace haptel::cli {
 
 inline constexpr int kExitOk = 0;
-inline constexpr int kExitFailed = 1;    ///< something failed while running
-inline constexpr int kExitBadInput = 2;  ///< bad arguments or configuration: nothing ran
-inline constexpr int kExitLost = 3;      ///< the vehicle or the haptic device was lost
+inline constexpr int kExitFailed = 1;       ///< something failed while running
+inline constexpr int kExitBadInput = 2;     ///< bad arguments or configuration: nothing ran
+inline constexpr int kExitLost = 3;         ///< the vehicle or the haptic device was lost
 inline constexpr int kExitNotRecorded = 4;  ///< results went to a fallback file, not the database
 /// The run is in the database, but an output it was asked to keep (the
 /// --record MP4, the vehicle's CAN bus log) failed to be written; the
@@ -48,7 +48,8 @@ bool HelpRequested(int argc, const char* const* argv);
 /// Prints the usage for --help (exit 0); otherwise runs body and maps what
 /// escapes it to one line on stderr and an exit code. A UsageError's line
 /// adds "(see NAME --help)".
-int Main(const Program& program, int argc, const char* const* argv, const std::function<int()>& body);
+int Main(const Program& program, int argc, const char* const* argv,
+         const std::function<int()>& body);
 
 /// Runs `read` (reading arguments and files): whatever it throws is bad input.
 template <class Read>

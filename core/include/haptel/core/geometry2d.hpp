@@ -1,9 +1,8 @@
 #pragma once
 /// @file Planar geometry shared by track timing and the vehicle simulator.
+#include <Eigen/Core>
 #include <numbers>
 #include <optional>
-
-#include <Eigen/Core>
 
 namespace haptel {
 

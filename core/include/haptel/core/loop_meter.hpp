@@ -13,11 +13,11 @@ namespace haptel {
 struct LoopStats {
   uint64_t ticks = 0;
   double elapsed_s = 0.0;
-  double rate_hz = 0.0;          ///< ticks per second over the measured span
-  double period_p50_us = 0.0;    ///< start-to-start period percentiles
+  double rate_hz = 0.0;        ///< ticks per second over the measured span
+  double period_p50_us = 0.0;  ///< start-to-start period percentiles
   double period_p99_us = 0.0;
   double period_max_us = 0.0;
-  uint64_t overruns = 0;         ///< ticks that started more than one period late, plus skipped ones
+  uint64_t overruns = 0;  ///< ticks that started more than one period late, plus skipped ones
   double max_lateness_us = 0.0;  ///< worst start delay against the schedule
   bool realtime = false;         ///< SCHED_FIFO was granted
 };

@@ -14,17 +14,17 @@
 namespace haptel::haptics {
 
 enum class DeviceStatus {
-  kOk,       ///< fresh reading / command accepted
-  kNoData,   ///< no new reading this tick (keep the last one); not an error
-  kLost,     ///< the device stopped answering: forces must be zero
+  kOk,      ///< fresh reading / command accepted
+  kNoData,  ///< no new reading this tick (keep the last one); not an error
+  kLost,    ///< the device stopped answering: forces must be zero
 };
 
 /// What a device is and may be asked: from its driver or its YAML file.
 struct DeviceDescription {
   std::string name = "device";
   std::array<bool, kSides> has_side{true, true};
-  double wrist_force_limit = 7.0;   ///< N at the wrist
-  double finger_force_limit = 10.0; ///< N per finger
+  double wrist_force_limit = 7.0;    ///< N at the wrist
+  double finger_force_limit = 10.0;  ///< N per finger
   bool has_glove = true;
   bool has_grasp = true;
 };
@@ -58,7 +58,8 @@ class Device {
   /// Wrist force command, device units (newtons / calibrated slope).
   virtual DeviceStatus WriteWristForce(Side side, const Vec3d& command) = 0;
   /// Finger force commands, device units, each ≥ 0.
-  virtual DeviceStatus WriteFingerForces(Side side, const std::array<double, kFingers>& command) = 0;
+  virtual DeviceStatus WriteFingerForces(Side side,
+                                         const std::array<double, kFingers>& command) = 0;
 
   // Two-port passivity across the device's link (a device whose arms sit
   // behind a network: the udp driver's protocol version 2). A local device

@@ -11,6 +11,7 @@ namespace haptel::haptics {
 /// Throws ConfigFieldError (a `config` DeviceConfig::ValidateOrThrow refuses),
 /// ConfigError (bad trace file, naming it) or std::runtime_error (a socket
 /// that cannot be opened) at set-up. `muscle` drives the sim's operator.
-std::unique_ptr<Device> MakeDevice(const DeviceConfig& config, const OperatorConfig& muscle = OperatorConfig{});
+std::unique_ptr<Device> MakeDevice(const DeviceConfig& config,
+                                   const OperatorConfig& muscle = OperatorConfig{});
 
 }  // namespace haptel::haptics

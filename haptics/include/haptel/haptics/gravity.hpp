@@ -26,7 +26,6 @@
 
 namespace haptel::haptics {
 
-
 // ---------------------------------------------------------------- online ---
 
 class GravityGrid {

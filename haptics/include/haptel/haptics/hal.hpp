@@ -113,7 +113,8 @@ class Hal {
   friend struct HalTestAccess;
   Vec3d ToMetres(Side side, const Vec3d& raw) const;
   /// Combines the two feeders' parts and applies the force scale.
-  ForceSetpoint Combine(ForceSetpoint contacts, const ForceField& latest_field, int64_t field_stamp_ns) const;
+  ForceSetpoint Combine(ForceSetpoint contacts, const ForceField& latest_field,
+                        int64_t field_stamp_ns) const;
 
   DeviceCalibration calibration_;
   std::array<Seqlock<WristRaw>, kSides> wrist_;

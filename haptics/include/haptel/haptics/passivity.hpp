@@ -43,15 +43,16 @@ struct PassivityLimits {
 
 /// What a port's controller did on one tick.
 struct PassivityAction {
-  Vec3d damping_force{};  ///< N, to add to the port's rendered force: −α·v per axis
-  Vec3d alpha{};          ///< N·s/m per axis (0 where E ≥ 0)
+  Vec3d damping_force{};    ///< N, to add to the port's rendered force: −α·v per axis
+  Vec3d alpha{};            ///< N·s/m per axis (0 where E ≥ 0)
   double dissipated = 0.0;  ///< J, T·α·v² summed over the axes
   bool acted = false;       ///< α > 0 on some axis
 };
 
 class PassivityController {
  public:
-  explicit PassivityController(const PassivityLimits& limits = PassivityLimits{}) : limits_(limits) {}
+  explicit PassivityController(const PassivityLimits& limits = PassivityLimits{})
+      : limits_(limits) {}
 
   /// One tick of period `period_s`. `rendered` is the force the port asks of
   /// the device now (N, on the hand, before this controller), `displacement`

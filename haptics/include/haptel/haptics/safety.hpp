@@ -17,10 +17,10 @@
 namespace haptel::haptics {
 
 struct SafetyCounters {
-  uint64_t non_finite = 0;      ///< ticks with a NaN/Inf force (zeroed)
-  uint64_t clamped = 0;         ///< ticks a force was limited to its maximum
-  uint64_t rate_limited = 0;    ///< ticks a force change was slowed
-  uint64_t stale_ticks = 0;     ///< ticks with a set-point gone stale (fading or faded)
+  uint64_t non_finite = 0;    ///< ticks with a NaN/Inf force (zeroed)
+  uint64_t clamped = 0;       ///< ticks a force was limited to its maximum
+  uint64_t rate_limited = 0;  ///< ticks a force change was slowed
+  uint64_t stale_ticks = 0;   ///< ticks with a set-point gone stale (fading or faded)
 };
 
 class ForceSafety {

@@ -68,16 +68,16 @@ struct ServoCounters {
   /// Ticks whose set-point read met a feeder's store in progress through every
   /// bounded attempt: the tick used the last good set-point.
   uint64_t setpoint_read_fallbacks = 0;
-  uint64_t passivity_ticks = 0;        ///< ticks the passivity controller added damping
-  double passivity_dissipated_j = 0.0; ///< J it dissipated (predicted T·α·v², summed)
-  double passivity_max_alpha = 0.0;    ///< N·s/m, the largest damping it added
+  uint64_t passivity_ticks = 0;         ///< ticks the passivity controller added damping
+  double passivity_dissipated_j = 0.0;  ///< J it dissipated (predicted T·α·v², summed)
+  double passivity_max_alpha = 0.0;     ///< N·s/m, the largest damping it added
   /// Two-port across a link (the loop's end counts in the three above: its
   /// ticks, and the energy its offset returned): the device end's, as its
   /// server reports them, summed over the link's restarts.
-  uint64_t passivity_device_ticks = 0;        ///< ticks the device end's controller damped the arm
-  double passivity_device_dissipated_j = 0.0; ///< J it dissipated
-  double passivity_device_max_alpha = 0.0;    ///< N·s/m, the largest damping it added
-  uint64_t passivity_link_ticks = 0;          ///< ticks the two-port ran (the far end reporting)
+  uint64_t passivity_device_ticks = 0;         ///< ticks the device end's controller damped the arm
+  double passivity_device_dissipated_j = 0.0;  ///< J it dissipated
+  double passivity_device_max_alpha = 0.0;     ///< N·s/m, the largest damping it added
+  uint64_t passivity_link_ticks = 0;           ///< ticks the two-port ran (the far end reporting)
   SafetyCounters safety;
 };
 
@@ -85,8 +85,8 @@ class ServoLoop {
  public:
   /// `device`, `hal` and `gravity` (optional, may be null) must outlive the
   /// loop. Validates `config` and `calibration` first (ConfigFieldError).
-  ServoLoop(Device& device, Hal& hal, const DeviceConfig& config, const DeviceCalibration& calibration,
-            const GravityGrid* gravity = nullptr);
+  ServoLoop(Device& device, Hal& hal, const DeviceConfig& config,
+            const DeviceCalibration& calibration, const GravityGrid* gravity = nullptr);
   ~ServoLoop();
   ServoLoop(const ServoLoop&) = delete;
   ServoLoop& operator=(const ServoLoop&) = delete;
@@ -124,22 +124,22 @@ class ServoLoop {
     bool have_previous = false;
     Vec3d previous_position{};
     int64_t previous_ns = 0;
-    Vec3d velocity{};  ///< low-pass filtered, m/s
-    Vec3d displacement{};  ///< m, since the previous tick (0 without a fresh reading)
+    Vec3d velocity{};          ///< low-pass filtered, m/s
+    Vec3d displacement{};      ///< m, since the previous tick (0 without a fresh reading)
     int64_t last_tick_ns = 0;  ///< 0: no previous tick to take a period from
     ForceSetpoint setpoint;    ///< the last good set-point read
     PassivityController field_port;
     PassivityController coupling_port;
     TwoPortPassivity link_end{ChannelEnd::kLoop};  ///< the loop's end across a device's link
     LinkEnergy link_remote;                        ///< the far end's newest report
-    uint64_t link_base_ticks = 0;       ///< the device end's counts before the link's last restart
+    uint64_t link_base_ticks = 0;  ///< the device end's counts before the link's last restart
     double link_base_dissipated_j = 0.0;
     uint64_t cycle = 0;
     WristRaw wrist{};
     GloveRaw glove{};
-    bool cue_felt = false;  ///< the last tick added a cue's force
-    ServoCounters counters;             ///< the arm's thread only
-    Seqlock<ServoCounters> published;   ///< copy for readers, every cycle
+    bool cue_felt = false;             ///< the last tick added a cue's force
+    ServoCounters counters;            ///< the arm's thread only
+    Seqlock<ServoCounters> published;  ///< copy for readers, every cycle
   };
   /// Runs once per cycle while both arms wait at the rendezvous: advances the
   /// shared schedule, re-anchors it when hopelessly behind, latches stop.
@@ -170,8 +170,8 @@ class ServoLoop {
   // Written only in the completion step (or before the threads start); the
   // barrier orders those writes before every arm's next read.
   bool stop_latched_ = false;
-  int64_t anchor_ns_ = 0;   ///< schedule origin
-  uint64_t cycle_ = 0;      ///< cycles since the anchor
+  int64_t anchor_ns_ = 0;  ///< schedule origin
+  uint64_t cycle_ = 0;     ///< cycles since the anchor
   int64_t period_ns_ = 0;
   bool two_threads_ = false;
   bool memory_locked_ = false;

@@ -26,11 +26,11 @@ namespace haptel::haptics {
 
 /// The parameters a perfect calibration would find for one simulated arm.
 struct SimArmTruth {
-  Vec3d tracker_scale{};   ///< metres = scale · raw + offset
+  Vec3d tracker_scale{};  ///< metres = scale · raw + offset
   Vec3d tracker_offset{};
-  std::array<double, kGloveJoints> glove_gain{};    ///< radians = gain · raw + offset
+  std::array<double, kGloveJoints> glove_gain{};  ///< radians = gain · raw + offset
   std::array<double, kGloveJoints> glove_offset{};
-  Vec3d force_slope{};     ///< newtons = slope · command
+  Vec3d force_slope{};  ///< newtons = slope · command
   double finger_force_slope = 1.0;
 };
 

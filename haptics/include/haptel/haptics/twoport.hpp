@@ -122,7 +122,8 @@ class TwoPortPassivity {
   /// axis) to add to the arm's position wherever the virtual environment
   /// reads it this tick. `acted` (optional) is set when it moved δ to
   /// return a deficit.
-  const Vec3d& ControlPosition(const Vec3d& remote_energy_in, double period_s, bool* acted = nullptr);
+  const Vec3d& ControlPosition(const Vec3d& remote_energy_in, double period_s,
+                               bool* acted = nullptr);
 
   /// The loop's end without a controller: its deficit (−W where W < 0) is
   /// charged to the arm's end instead — `charged` keeps the largest so far

@@ -22,13 +22,13 @@ using Vec3d = std::array<double, 3>;
 
 /// One device reading for one hand, stamped on the servo thread.
 struct HandSample {
-  int64_t t_ns = 0;                           ///< CLOCK_MONOTONIC
-  bool valid = false;                         ///< false: no reading yet, or device lost
-  Vec3d position{};                           ///< wrist, m
-  Vec3d velocity{};                           ///< wrist, m/s
-  std::array<double, 4> orientation{1, 0, 0, 0};  ///< wrist quaternion (w, x, y, z)
+  int64_t t_ns = 0;                                  ///< CLOCK_MONOTONIC
+  bool valid = false;                                ///< false: no reading yet, or device lost
+  Vec3d position{};                                  ///< wrist, m
+  Vec3d velocity{};                                  ///< wrist, m/s
+  std::array<double, 4> orientation{1, 0, 0, 0};     ///< wrist quaternion (w, x, y, z)
   std::array<double, kGloveJoints> finger_angles{};  ///< rad
-  Vec3d force{};                              ///< wrist force last commanded, N
+  Vec3d force{};                                     ///< wrist force last commanded, N
 };
 
 /// A force field the interface sets and the servo loop evaluates every tick,
@@ -43,9 +43,9 @@ struct ForceField {
   double damping = 0.0;           ///< N·s/m
   bool wall_active = false;
   Vec3d wall_point{};
-  Vec3d wall_normal{1, 0, 0};     ///< unit, pointing into the wall
-  double wall_stiffness = 0.0;    ///< N/m
-  double wall_damping = 0.0;      ///< N·s/m
+  Vec3d wall_normal{1, 0, 0};   ///< unit, pointing into the wall
+  double wall_stiffness = 0.0;  ///< N/m
+  double wall_damping = 0.0;    ///< N·s/m
   /// Haptic shared control's guidance (interfaces/shared_control.hpp): past
   /// the plane through `guidance_point` facing `guidance_normal` lie the
   /// commands that lead into an obstacle; a hand beyond it is pushed back by
@@ -53,9 +53,9 @@ struct ForceField {
   /// always push through.
   bool guidance_active = false;
   Vec3d guidance_point{};
-  Vec3d guidance_normal{1, 0, 0};    ///< unit, pointing towards the dangerous commands
-  double guidance_stiffness = 0.0;   ///< N/m
-  double guidance_max_force = 0.0;   ///< N, the most it ever pushes
+  Vec3d guidance_normal{1, 0, 0};   ///< unit, pointing towards the dangerous commands
+  double guidance_stiffness = 0.0;  ///< N/m
+  double guidance_max_force = 0.0;  ///< N, the most it ever pushes
 };
 
 /// A wrist tracker reading as the device reports it: position in device
@@ -79,13 +79,13 @@ struct GloveRaw {
 /// loop turns it into forces every tick from the latest hand pose; when
 /// `stamp_ns` grows old (the feeder stalled) the forces fade to zero.
 struct ForceSetpoint {
-  int64_t stamp_ns = 0;        ///< CLOCK_MONOTONIC time the feeder wrote it; 0 = never
-  ForceField field;            ///< interface force field
+  int64_t stamp_ns = 0;           ///< CLOCK_MONOTONIC time the feeder wrote it; 0 = never
+  ForceField field;               ///< interface force field
   bool coupling_enabled = false;  ///< proxy coupling: F = k·(target − p) − b·v
   Vec3d coupling_target{};
-  double coupling_stiffness = 0.0;  ///< N/m
-  double coupling_damping = 0.0;    ///< N·s/m
-  Vec3d wrist_force{};              ///< added as is, N
+  double coupling_stiffness = 0.0;               ///< N/m
+  double coupling_damping = 0.0;                 ///< N·s/m
+  Vec3d wrist_force{};                           ///< added as is, N
   std::array<double, kFingers> finger_forces{};  ///< N, pulling each finger back (≥ 0)
 };
 

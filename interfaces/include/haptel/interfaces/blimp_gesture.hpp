@@ -36,7 +36,8 @@ class BlimpGestureInterface {
   BlimpCommand Update(const HeadDirection& head, haptics::Hal& hal);
 
   /// Pure mapping from both hands' positions (and the head) to a command.
-  BlimpCommand Map(const haptics::Vec3d& left, const haptics::Vec3d& right, const HeadDirection& head) const;
+  BlimpCommand Map(const haptics::Vec3d& left, const haptics::Vec3d& right,
+                   const HeadDirection& head) const;
 
   /// Where a pilot would hold their hands to give `command` (its camera
   /// angles are not the hands' business). Tail rotor commands need zero
@@ -44,7 +45,9 @@ class BlimpGestureInterface {
   HandTargets HandTargetsFor(const BlimpCommand& command) const;
 
   /// The field on each hand (what Update puts in the HAL).
-  const haptics::ForceField& field(haptics::Side side) const { return fields_[haptics::Index(side)]; }
+  const haptics::ForceField& field(haptics::Side side) const {
+    return fields_[haptics::Index(side)];
+  }
 
  private:
   BlimpGestureConfig config_;

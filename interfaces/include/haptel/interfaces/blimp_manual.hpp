@@ -42,9 +42,9 @@ class BlimpManualInterface {
   BlimpCommand Pad(const InputState& input);
 
   BlimpManualConfig config_;
-  KeyLevel power_;     ///< W/S
-  KeyLevel helix_;     ///< ↑/↓
-  KeyLevel elevator_;  ///< Page Up/Down
+  KeyLevel power_;      ///< W/S
+  KeyLevel helix_;      ///< ↑/↓
+  KeyLevel elevator_;   ///< Page Up/Down
   double swing_ = 0.0;  ///< rudder (or tail rotor at zero power), −1..1: A/D or ←/→
   double last_t_s_ = 0.0;
   bool started_ = false;

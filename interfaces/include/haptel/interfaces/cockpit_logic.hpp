@@ -13,19 +13,19 @@ namespace haptel::interfaces {
 
 /// The controls as the physics world reports them.
 struct CockpitControls {
-  double wheel_angle = 0.0;     ///< rad, positive = turned left (counter-clockwise seen by the driver)
-  double throttle = 0.0;        ///< lever position, m from centre, positive = forward
-  bool wheel_held = false;      ///< a hand grasps the rim
-  bool throttle_held = false;   ///< a hand grasps the lever
+  double wheel_angle = 0.0;  ///< rad, positive = turned left (counter-clockwise seen by the driver)
+  double throttle = 0.0;     ///< lever position, m from centre, positive = forward
+  bool wheel_held = false;   ///< a hand grasps the rim
+  bool throttle_held = false;  ///< a hand grasps the lever
 };
 
 /// What the physics world must apply to the controls this tick.
 struct ControlActuation {
-  double wheel_torque = 0.0;           ///< N·m about the hinge (shake)
-  double wheel_spring = 0.0;           ///< N·m/rad toward 0 (return to zero)
-  double throttle_spring = 0.0;        ///< N/m toward `throttle_target`
-  double throttle_target = 0.0;        ///< m
-  bool throttle_locked = false;        ///< hold the lever at throttle_target rigidly
+  double wheel_torque = 0.0;     ///< N·m about the hinge (shake)
+  double wheel_spring = 0.0;     ///< N·m/rad toward 0 (return to zero)
+  double throttle_spring = 0.0;  ///< N/m toward `throttle_target`
+  double throttle_target = 0.0;  ///< m
+  bool throttle_locked = false;  ///< hold the lever at throttle_target rigidly
 
   /// Haptic shared control (cockpit-shared; shared_control.hpp): a spring
   /// past a plane in the controls' space — the lever's travel (m) and the
@@ -46,8 +46,8 @@ struct ControlActuation {
 
 /// View elements of the HUD cockpits.
 struct HudState {
-  double speed = 0.0;         ///< m/s, the vehicle's reported speed
-  bool turn_left = false;     ///< indicator lights
+  double speed = 0.0;      ///< m/s, the vehicle's reported speed
+  bool turn_left = false;  ///< indicator lights
   bool turn_right = false;
   bool throttle_locked = false;
 };
@@ -61,7 +61,8 @@ class CockpitLogic {
   MotorCommand Map(const CockpitControls& controls, double t_s) const;
   /// Reacts to the vehicle (a new bumper contact starts shake and lock) and
   /// returns what the controls must feel now.
-  ControlActuation Update(double t_s, const VehicleFeedback& feedback, const CockpitControls& controls);
+  ControlActuation Update(double t_s, const VehicleFeedback& feedback,
+                          const CockpitControls& controls);
   HudState Hud(const VehicleFeedback& feedback, const CockpitControls& controls, double t_s) const;
 
   /// The control positions that express an intent (inverse of Map).

@@ -12,17 +12,50 @@ namespace haptel::interfaces {
 
 /// Buttons of a game controller, in SDL's GameController order.
 enum class PadButton : int {
-  kA = 0, kB, kX, kY, kBack, kGuide, kStart, kLeftStick, kRightStick,
-  kLeftShoulder, kRightShoulder, kDpadUp, kDpadDown, kDpadLeft, kDpadRight, kCount
+  kA = 0,
+  kB,
+  kX,
+  kY,
+  kBack,
+  kGuide,
+  kStart,
+  kLeftStick,
+  kRightStick,
+  kLeftShoulder,
+  kRightShoulder,
+  kDpadUp,
+  kDpadDown,
+  kDpadLeft,
+  kDpadRight,
+  kCount
 };
 /// Axes of a game controller, in SDL's GameController order.
-enum class PadAxis : int { kLeftX = 0, kLeftY, kRightX, kRightY, kTriggerLeft, kTriggerRight, kCount };
+enum class PadAxis : int {
+  kLeftX = 0,
+  kLeftY,
+  kRightX,
+  kRightY,
+  kTriggerLeft,
+  kTriggerRight,
+  kCount
+};
 
 /// The physical keys that drive, by position (scancode): the robot's
 /// keyboard reads arrows and W/A/S/D as one set, the blimp's gives them
 /// different jobs.
 enum class Key : int {
-  kArrowUp = 0, kArrowDown, kArrowLeft, kArrowRight, kW, kS, kA, kD, kSpace, kPageUp, kPageDown, kCount
+  kArrowUp = 0,
+  kArrowDown,
+  kArrowLeft,
+  kArrowRight,
+  kW,
+  kS,
+  kA,
+  kD,
+  kSpace,
+  kPageUp,
+  kPageDown,
+  kCount
 };
 
 /// InputState::vehicle_request asking for the vehicle after the driven one.

@@ -48,12 +48,13 @@ struct VehicleFeedback {
 /// wheel angle × radius, + left; m).
 struct Guidance {
   double time_to_collision_s = std::numeric_limits<double>::infinity();
-  double danger = 0.0;  ///< 0 (beyond the horizon) .. 1 (collision now)
-  bool active = false;  ///< a guidance plane is set
-  haptics::Vec3d point{};   ///< on the boundary of the safe commands, m
+  double danger = 0.0;             ///< 0 (beyond the horizon) .. 1 (collision now)
+  bool active = false;             ///< a guidance plane is set
+  haptics::Vec3d point{};          ///< on the boundary of the safe commands, m
   haptics::Vec3d normal{1, 0, 0};  ///< unit, towards the dangerous commands
-  haptics::Vec3d force{};   ///< N: what the plane pushes (forward, left) where the hand or controls are now
-  double max_force = 0.0;   ///< N: the most it may push (the config's bound)
+  haptics::Vec3d
+      force{};  ///< N: what the plane pushes (forward, left) where the hand or controls are now
+  double max_force = 0.0;  ///< N: the most it may push (the config's bound)
 };
 
 /// How a driver holds one hand to express an intent.

@@ -21,7 +21,8 @@ class KeyLevel {
 
   /// One step at time `t_s` (s, non-decreasing) with the keys' state now.
   /// Allocation-free; counters may wrap around.
-  void Step(double t_s, bool plus_held, bool minus_held, uint32_t plus_presses, uint32_t minus_presses);
+  void Step(double t_s, bool plus_held, bool minus_held, uint32_t plus_presses,
+            uint32_t minus_presses);
 
   int level() const { return level_; }
   void set_level(int level);

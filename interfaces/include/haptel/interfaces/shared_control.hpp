@@ -49,8 +49,8 @@ struct VehicleGeometry {
 /// an obstacle `scan` sees (its body grown by `clearance`), looking no
 /// further than `horizon_s`; +infinity when it meets none by then (or the
 /// scan is empty).
-double TimeToCollision(const RangeScan& scan, const MotorCommand& command, const VehicleGeometry& vehicle,
-                       double clearance, double horizon_s);
+double TimeToCollision(const RangeScan& scan, const MotorCommand& command,
+                       const VehicleGeometry& vehicle, double clearance, double horizon_s);
 
 class SharedControl {
  public:
@@ -72,14 +72,16 @@ class SharedControl {
  private:
   /// The danger of `command`: 0 beyond the horizon, 1 at collision now.
   double Danger(const RangeScan& scan, const MotorCommand& command) const {
-    const double ttc = TimeToCollision(scan, command, vehicle_, config_.clearance, config_.horizon_s);
+    const double ttc =
+        TimeToCollision(scan, command, vehicle_, config_.clearance, config_.horizon_s);
     return std::isfinite(ttc) ? std::clamp(1.0 - ttc / config_.horizon_s, 0.0, 1.0) : 0.0;
   }
   /// The danger of the path of the command a hand at `p` gives, driven at
   /// forward command `forward` (the hand's own): the same arc (the treads'
   /// ratio kept), so that only where it leads counts, not how fast.
   template <typename Map>
-  double PathDangerAt(const RangeScan& scan, const haptics::Vec3d& p, double forward, const Map& map) const {
+  double PathDangerAt(const RangeScan& scan, const haptics::Vec3d& p, double forward,
+                      const Map& map) const {
     const MotorCommand c = map(p);
     const double own = 0.5 * (c.left + c.right);
     if (std::abs(own) < 1e-6 || (own > 0.0) != (forward > 0.0)) return Danger(scan, c);
@@ -92,12 +94,13 @@ class SharedControl {
 };
 
 template <typename Map>
-Guidance SharedControl::Guide(const RangeScan& scan, const haptics::Vec3d& hand, const haptics::Vec3d& neutral,
-                              const Map& map) const {
+Guidance SharedControl::Guide(const RangeScan& scan, const haptics::Vec3d& hand,
+                              const haptics::Vec3d& neutral, const Map& map) const {
   Guidance g;
   g.max_force = config_.max_force;
   if (scan.count == 0) return g;
-  g.time_to_collision_s = TimeToCollision(scan, map(hand), vehicle_, config_.clearance, config_.horizon_s);
+  g.time_to_collision_s =
+      TimeToCollision(scan, map(hand), vehicle_, config_.clearance, config_.horizon_s);
   if (!std::isfinite(g.time_to_collision_s)) return g;
   g.danger = std::clamp(1.0 - g.time_to_collision_s / config_.horizon_s, 0.0, 1.0);
 

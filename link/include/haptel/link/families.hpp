@@ -34,8 +34,8 @@ struct RobotMessages {
   /// The command in `m`; false when it is malformed (non-finite, out of range).
   static bool Decode(const CommandMsg& m, Command& out) {
     out = {m.left(), m.right()};
-    return std::isfinite(m.left()) && std::isfinite(m.right()) && std::abs(m.left()) <= kMaxCommand &&
-           std::abs(m.right()) <= kMaxCommand;
+    return std::isfinite(m.left()) && std::isfinite(m.right()) &&
+           std::abs(m.left()) <= kMaxCommand && std::abs(m.right()) <= kMaxCommand;
   }
   /// The vehicle's command watchdog holds it stopped.
   static bool WatchdogTripped(const StateMsg& s) { return s.watchdog_tripped(); }

@@ -12,6 +12,10 @@
 /// each direction the fault once. A FaultLine's thread delivers the delayed
 /// packets when due; it is shut down before its participant is deleted, so
 /// no packet reaches a receiver being torn down.
+#include <fastdds/rtps/transport/TransportDescriptorInterface.h>
+#include <fastdds/rtps/transport/TransportReceiverInterface.h>
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+
 #include <algorithm>
 #include <atomic>
 #include <condition_variable>
@@ -23,10 +27,6 @@
 #include <random>
 #include <thread>
 #include <vector>
-
-#include <fastdds/rtps/transport/TransportDescriptorInterface.h>
-#include <fastdds/rtps/transport/TransportReceiverInterface.h>
-#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 
 #include "haptel/config/link.hpp"
 
@@ -42,10 +42,10 @@ void InstallLinkDownSignal();
 
 /// What a participant's fault transports did.
 struct FaultCounts {
-  uint64_t received = 0;      ///< packets that reached the transport
-  uint64_t lost = 0;          ///< dropped by `loss`
-  uint64_t delayed = 0;       ///< delivered late by the delay line
-  uint64_t dropped_down = 0;  ///< dropped, in or out, while the link was down
+  uint64_t received = 0;             ///< packets that reached the transport
+  uint64_t lost = 0;                 ///< dropped by `loss`
+  uint64_t delayed = 0;              ///< delivered late by the delay line
+  uint64_t dropped_down = 0;         ///< dropped, in or out, while the link was down
   uint64_t queue_dropped = 0;        ///< dropped by the rate's full queue (drop-tail)
   uint64_t queue_dropped_bytes = 0;  ///< their bytes
 };
@@ -127,8 +127,9 @@ class FaultLine {
   double rate_bps() const;
 
   /// A packet the transport received: dropped, delivered now, or queued.
-  void Receive(eprosima::fastdds::rtps::TransportReceiverInterface* next, const uint8_t* data, uint32_t size,
-               const eprosima::fastrtps::rtps::Locator_t& local, const eprosima::fastrtps::rtps::Locator_t& remote);
+  void Receive(eprosima::fastdds::rtps::TransportReceiverInterface* next, const uint8_t* data,
+               uint32_t size, const eprosima::fastrtps::rtps::Locator_t& local,
+               const eprosima::fastrtps::rtps::Locator_t& remote);
   /// Whether a packet about to be sent is dropped (the link is down).
   bool DropSend();
 
@@ -170,6 +171,7 @@ class FaultLine {
 /// The transport descriptor to put in a participant's user transports:
 /// `udp` wrapped in the fault transport feeding `line`.
 std::shared_ptr<eprosima::fastdds::rtps::TransportDescriptorInterface> MakeFaultTransport(
-    std::shared_ptr<eprosima::fastdds::rtps::UDPv4TransportDescriptor> udp, std::shared_ptr<FaultLine> line);
+    std::shared_ptr<eprosima::fastdds::rtps::UDPv4TransportDescriptor> udp,
+    std::shared_ptr<FaultLine> line);
 
 }  // namespace haptel::link

@@ -50,8 +50,8 @@ SecurityFiles SecurityFilesFor(const std::filesystem::path& dir, const std::stri
 void CheckSecurity(const std::filesystem::path& dir, const std::string& identity);
 
 /// The Fast DDS participant properties for `identity` in `dir`.
-std::vector<std::pair<std::string, std::string>> SecurityProperties(const std::filesystem::path& dir,
-                                                                     const std::string& identity);
+std::vector<std::pair<std::string, std::string>> SecurityProperties(
+    const std::filesystem::path& dir, const std::string& identity);
 
 /// What a vehicle name lacks for a certificate, as the "expected …" part of
 /// an error ("" when it fits): its identity's common name
@@ -81,8 +81,8 @@ std::string InitFolderProblem(const std::filesystem::path& dir);
 /// With `console_names`, also the experimenter's console's HTTPS key and
 /// certificate (console.key, console.pem), signed by the same CA, for those
 /// host names and addresses (AddConsoleCertificate).
-void InitSecurity(const std::filesystem::path& dir, const std::vector<std::string>& vehicles, int days,
-                  const std::vector<std::string>& console_names = {});
+void InitSecurity(const std::filesystem::path& dir, const std::vector<std::string>& vehicles,
+                  int days, const std::vector<std::string>& console_names = {});
 
 /// `haptel security console DIR --names NAME,...`: the console's HTTPS key
 /// and certificate (console.key, console.pem) in an existing folder, signed
@@ -91,7 +91,8 @@ void InitSecurity(const std::filesystem::path& dir, const std::vector<std::strin
 /// Throws std::runtime_error when DIR holds no CA or already a console
 /// certificate (nothing is changed), std::invalid_argument for a name that
 /// is neither a host name nor an address.
-void AddConsoleCertificate(const std::filesystem::path& dir, const std::vector<std::string>& names, int days);
+void AddConsoleCertificate(const std::filesystem::path& dir, const std::vector<std::string>& names,
+                           int days);
 
 /// What a console name lacks ("" when it is a host name or an IP address).
 std::string ConsoleNameProblem(const std::string& name);

@@ -5,6 +5,7 @@
 /// seqlock or queue) and never call them from a real-time loop. A callback
 /// may take the sample's writer (WriterId, from DDS's SampleInfo) beside
 /// the sample: who sent it, as no field of the sample can say.
+#include <atomic>
 #include <fastdds/dds/core/status/DeadlineMissedStatus.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/publisher/DataWriterListener.hpp>
@@ -13,8 +14,6 @@
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
-
-#include <atomic>
 #include <functional>
 #include <stdexcept>
 #include <string>
@@ -55,7 +54,8 @@ class Writer : private eprosima::fastdds::dds::DataWriterListener {
     topic_ = detail::MakeTopic<PubSubType>(participant, topic);
     writer_ = participant.publisher()->create_datawriter(
         topic_, DataWriterQosFor(profile, participant.config()), this);
-    if (writer_ == nullptr) throw std::runtime_error("link: cannot create writer on '" + topic + "'");
+    if (writer_ == nullptr)
+      throw std::runtime_error("link: cannot create writer on '" + topic + "'");
   }
   ~Writer() override {
     participant_.publisher()->delete_datawriter(writer_);
@@ -81,8 +81,9 @@ class Writer : private eprosima::fastdds::dds::DataWriterListener {
                               const eprosima::fastdds::dds::PublicationMatchedStatus& s) override {
     matched_.store(s.current_count);
   }
-  void on_offered_deadline_missed(eprosima::fastdds::dds::DataWriter*,
-                                  const eprosima::fastdds::dds::OfferedDeadlineMissedStatus&) override {
+  void on_offered_deadline_missed(
+      eprosima::fastdds::dds::DataWriter*,
+      const eprosima::fastdds::dds::OfferedDeadlineMissedStatus&) override {
     deadlines_missed_.fetch_add(1);
   }
 
@@ -102,14 +103,17 @@ class Reader : private eprosima::fastdds::dds::DataReaderListener {
   using OriginCallback = std::function<void(const Msg&, const WriterId&)>;
 
   Reader(Participant& participant, const std::string& topic, Profile profile, Callback on_sample)
-      : Reader(participant, topic, profile,
-               OriginCallback([f = std::move(on_sample)](const Msg& m, const WriterId&) { f(m); })) {}
-  Reader(Participant& participant, const std::string& topic, Profile profile, OriginCallback on_sample)
+      : Reader(
+            participant, topic, profile,
+            OriginCallback([f = std::move(on_sample)](const Msg& m, const WriterId&) { f(m); })) {}
+  Reader(Participant& participant, const std::string& topic, Profile profile,
+         OriginCallback on_sample)
       : participant_(participant), on_sample_(std::move(on_sample)) {
     topic_ = detail::MakeTopic<PubSubType>(participant, topic);
     reader_ = participant.subscriber()->create_datareader(
         topic_, DataReaderQosFor(profile, participant.config()), this);
-    if (reader_ == nullptr) throw std::runtime_error("link: cannot create reader on '" + topic + "'");
+    if (reader_ == nullptr)
+      throw std::runtime_error("link: cannot create reader on '" + topic + "'");
   }
   ~Reader() override {
     // Detach the listener first so no callback runs into a half-destroyed object.
@@ -133,8 +137,9 @@ class Reader : private eprosima::fastdds::dds::DataReaderListener {
       on_sample_(sample_, ToWriterId(info.sample_identity.writer_guid()));
     }
   }
-  void on_subscription_matched(eprosima::fastdds::dds::DataReader*,
-                               const eprosima::fastdds::dds::SubscriptionMatchedStatus& s) override {
+  void on_subscription_matched(
+      eprosima::fastdds::dds::DataReader*,
+      const eprosima::fastdds::dds::SubscriptionMatchedStatus& s) override {
     matched_.store(s.current_count);
   }
   void on_requested_deadline_missed(

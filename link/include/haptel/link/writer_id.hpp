@@ -24,7 +24,9 @@ struct WriterId {
   std::array<uint8_t, kSize> guid{};
 
   /// All zero: no writer (nobody owns a vehicle).
-  bool empty() const { return std::all_of(guid.begin(), guid.end(), [](uint8_t b) { return b == 0; }); }
+  bool empty() const {
+    return std::all_of(guid.begin(), guid.end(), [](uint8_t b) { return b == 0; });
+  }
   /// Both are writers of one participant (the same GUID prefix): a run's
   /// command writer and its video feedback writer.
   bool SameParticipant(const WriterId& other) const {
@@ -48,6 +50,7 @@ struct WriterId {
 /// The writer of a session that steps its vehicle in its own process
 /// (`haptel run --simulated-time`: no DDS, one sender): never a Fast DDS
 /// GUID (those begin with the vendor id 01.0f).
-inline constexpr WriterId kInProcessWriter{{0xff, 0xff, 'i', 'n', '-', 'p', 'r', 'o', 'c', 'e', 's', 's', 0, 0, 0, 1}};
+inline constexpr WriterId kInProcessWriter{
+    {0xff, 0xff, 'i', 'n', '-', 'p', 'r', 'o', 'c', 'e', 's', 's', 0, 0, 0, 1}};
 
 }  // namespace haptel::link

@@ -26,9 +26,8 @@
 #include <deque>
 #include <random>
 
-#include "haptel/config/study.hpp"
-
 #include "haptel/config/run.hpp"
+#include "haptel/config/study.hpp"
 #include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"
 #include "haptel/interfaces/interface.hpp"
@@ -70,9 +69,7 @@ class AutoOperator {
   bool careful(double t_s) const { return t_s < careful_until_s_; }
   /// The hands hold their controls (or there is nothing to grasp) and the
   /// operator drives.
-  bool grasped(double t_s) const {
-    return start_s_ >= 0 && t_s >= start_s_ + grasp_s_;
-  }
+  bool grasped(double t_s) const { return start_s_ >= 0 && t_s >= start_s_ + grasp_s_; }
   /// Times a control slipped out of a hand so far.
   int slips() const { return slips_; }
   /// The profile's error scale for this driver's experience (1: practised).

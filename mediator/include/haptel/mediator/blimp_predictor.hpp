@@ -38,15 +38,14 @@
 /// (from the states it had then: a delay's extrapolation): errors_m(), the
 /// 3-D distance between the two centres of gravity (horizontal and height
 /// error together: both matter to a blimp among buildings).
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <array>
 #include <cstddef>
 #include <cstdint>
 #include <deque>
 #include <functional>
 #include <vector>
-
-#include <Eigen/Core>
-#include <Eigen/Geometry>
 
 #include "haptel/config/airship.hpp"
 #include "haptel/config/blimp_course.hpp"
@@ -63,11 +62,12 @@ struct BlimpStateSample {
   /// operator's, and rates from two states); 0: unknown (arrival less the delay).
   int64_t stamp_ns = 0;
   Eigen::Vector3d position = Eigen::Vector3d::Zero();  ///< centre of gravity, course frame, m
-  double yaw = 0.0;    ///< rad, counter-clockwise from +x
-  double pitch = 0.0;  ///< rad, nose up positive
-  double roll = 0.0;   ///< rad, right side down positive
+  double yaw = 0.0;                                    ///< rad, counter-clockwise from +x
+  double pitch = 0.0;                                  ///< rad, nose up positive
+  double roll = 0.0;                                   ///< rad, right side down positive
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  ///< ground velocity, course frame, m/s
-  BlimpCommand applied;  ///< the channels in effect when it was sampled (the failsafe's neutral included)
+  BlimpCommand
+      applied;  ///< the channels in effect when it was sampled (the failsafe's neutral included)
   /// When the command in effect was sent (operator's clock, as the state
   /// echoes it): the commands sent after it are the ones to replay.
   /// Negative: no echo (those whose arrival, sent + the delay, is after the
@@ -95,7 +95,8 @@ class BlimpPredictor {
   /// `airship`, `course`: the vehicle file's model and the course flown
   /// (validated: ConfigFieldError). `watchdog_s`: every channel goes to
   /// neutral this long after the last command reached the blimp.
-  BlimpPredictor(const AirshipConfig& airship, const BlimpCourseConfig& course, double watchdog_s = 0.2);
+  BlimpPredictor(const AirshipConfig& airship, const BlimpCourseConfig& course,
+                 double watchdog_s = 0.2);
 
   /// A command as sent at `t_s` (the blimp clamps it as it applies it).
   void OnCommand(double t_s, const BlimpCommand& command);
@@ -116,8 +117,8 @@ class BlimpPredictor {
   /// The path from `now_s` over `horizon_s`: the commands still on their
   /// way, then `given` held from now on; a pose every `spacing_s`, the
   /// first at now (into `path`, which is cleared first).
-  void PathAhead(double now_s, double horizon_s, const BlimpCommand& given, std::vector<BlimpPredictedPose>& path,
-                 double spacing_s = 0.1) const;
+  void PathAhead(double now_s, double horizon_s, const BlimpCommand& given,
+                 std::vector<BlimpPredictedPose>& path, double spacing_s = 0.1) const;
   /// Every state's prediction error so far (m, 3-D).
   const std::vector<double>& errors_m() const { return errors_m_; }
 

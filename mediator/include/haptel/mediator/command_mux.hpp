@@ -34,7 +34,7 @@ struct MuxInputSpec {
 
 struct MuxLockSpec {
   std::string name;
-  int priority = 0;        ///< holds inputs of this priority and below
+  int priority = 0;  ///< holds inputs of this priority and below
   /// > 0: silence for this long engages the lock (a heartbeat); 0: only an
   /// explicit message engages or releases it.
   double timeout_s = 0.0;
@@ -79,9 +79,9 @@ class CommandMux {
 
   std::vector<MuxInputSpec> inputs_;
   std::vector<MuxLockSpec> locks_;
-  std::vector<double> input_seen_s_;  ///< newest command; -inf: never
-  std::vector<double> lock_seen_s_;   ///< newest message; -inf: never
-  std::vector<char> lock_engaged_;    ///< what the newest message said
+  std::vector<double> input_seen_s_;     ///< newest command; -inf: never
+  std::vector<double> lock_seen_s_;      ///< newest message; -inf: never
+  std::vector<char> lock_engaged_;       ///< what the newest message said
   std::vector<std::string> lock_names_;  ///< "lock:<name>", made once
   Selection last_;
   bool selected_once_ = false;

@@ -105,7 +105,8 @@ struct FleetResult {
   int handovers_untimed = 0;
   double handover_ms_p50 = -1.0;  ///< nearest rank; negative: no handover
   double handover_ms_p95 = -1.0;
-  std::vector<std::string> lost;  ///< the vehicles lost mid-run, by name (those that never answered too)
+  std::vector<std::string>
+      lost;  ///< the vehicles lost mid-run, by name (those that never answered too)
   /// Of `lost`, those never heard from (outcome vehicle did not start): an
   /// attached vehicle that is not running, or a spawned one that never came up.
   std::vector<std::string> never_answered;
@@ -121,7 +122,7 @@ struct FleetResult {
   double servo_period_p99_us = 0.0;
   double servo_cue_period_p99_us = -1.0;
   uint64_t servo_cue_ticks = 0;
-  std::string fleet_run;          ///< "fleet <name> <started, UTC>": shared by its rows
+  std::string fleet_run;  ///< "fleet <name> <started, UTC>": shared by its rows
 };
 
 /// Runs the fleet until every vehicle's course is done (completed, lost,

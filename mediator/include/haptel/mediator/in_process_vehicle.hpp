@@ -34,8 +34,8 @@ class InProcessRobot {
 /// Makes the in-process robot of a vehicle file (whose kind steps in
 /// process, VehicleKindInfo::steps_in_process) on `track` (kept by
 /// reference). Throws ConfigError for one it cannot make.
-using InProcessRobotFactory =
-    std::function<std::unique_ptr<InProcessRobot>(const VehicleConfig& vehicle, const Track& track)>;
+using InProcessRobotFactory = std::function<std::unique_ptr<InProcessRobot>(
+    const VehicleConfig& vehicle, const Track& track)>;
 
 /// Registered once at start-up, before any run (haptel's main).
 void SetInProcessRobotFactory(InProcessRobotFactory factory);

@@ -58,11 +58,13 @@ struct InterfaceParts {
   interfaces::ControlsPort* controls = nullptr;  ///< a cockpit's controls (physics)
   const interfaces::InputBox* input = nullptr;   ///< a person's keys and controller
   int speed_levels = 8;                          ///< the vehicle's levels per direction
-  /// The vehicle's drive and body, for shared control's prediction (gesture-shared, cockpit-shared).
+  /// The vehicle's drive and body, for shared control's prediction (gesture-shared,
+  /// cockpit-shared).
   interfaces::VehicleGeometry vehicle;
 };
 
 /// Builds the interface. Throws std::invalid_argument when a part it needs is missing.
-std::unique_ptr<interfaces::MediatorInterface> MakeInterface(const InterfaceSpec& spec, const InterfaceParts& parts);
+std::unique_ptr<interfaces::MediatorInterface> MakeInterface(const InterfaceSpec& spec,
+                                                             const InterfaceParts& parts);
 
 }  // namespace haptel::mediator

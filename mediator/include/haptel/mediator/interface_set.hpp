@@ -22,7 +22,9 @@ class InterfaceSet {
                double ramp_s = 0.3);
 
   interfaces::MediatorInterface& current() { return *interfaces_[static_cast<size_t>(current_)]; }
-  const interfaces::MediatorInterface& current() const { return *interfaces_[static_cast<size_t>(current_)]; }
+  const interfaces::MediatorInterface& current() const {
+    return *interfaces_[static_cast<size_t>(current_)];
+  }
   int current_index() const { return current_; }
   int size() const { return static_cast<int>(interfaces_.size()); }
   /// The interface at `index`, or null.
@@ -37,7 +39,8 @@ class InterfaceSet {
   bool Request(int index, double t_s);
   /// Runs the current interface at t_s and drives a switch under way
   /// through `hal`'s force scale. Returns the motor command (zero while switching).
-  interfaces::MotorCommand Update(double t_s, const interfaces::VehicleFeedback& feedback, haptics::Hal& hal);
+  interfaces::MotorCommand Update(double t_s, const interfaces::VehicleFeedback& feedback,
+                                  haptics::Hal& hal);
   bool switching() const { return target_ >= 0 || ramp_up_until_s_ > 0; }
   const std::vector<SwitchRecord>& switches() const { return switches_; }
 
@@ -45,7 +48,7 @@ class InterfaceSet {
   std::vector<std::unique_ptr<interfaces::MediatorInterface>> interfaces_;
   int current_ = 0;
   double ramp_s_;
-  int target_ = -1;              ///< switching to this (ramping down)
+  int target_ = -1;  ///< switching to this (ramping down)
   double ramp_start_s_ = 0.0;
   double ramp_up_until_s_ = -1;  ///< ramping up until then (after the swap)
   std::vector<SwitchRecord> switches_;

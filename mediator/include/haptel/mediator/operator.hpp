@@ -52,7 +52,8 @@ class AutomaticOperator final : public Operator {
  public:
   /// Keeps references to `track` and `device`.
   AutomaticOperator(const Track& track, const OperatorConfig& config, const DriveConfig& drive,
-                    haptics::SimDevice& device, const DriverProfile& profile = {}, int experience = 0);
+                    haptics::SimDevice& device, const DriverProfile& profile = {},
+                    int experience = 0);
   std::string kind() const override { return "auto"; }
   /// Hands at the interface's neutral — or, for controls to grasp, open above them.
   void Prepare(const interfaces::MediatorInterface& interface) override;

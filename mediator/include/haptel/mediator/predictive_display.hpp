@@ -56,8 +56,9 @@ class BodySilhouette {
   /// (x, y), seen by `camera` (whose picture is `width`×`height_px`
   /// pixels), into `out` as picture fractions; returns how many corners (0:
   /// out of the camera's sight, or behind it).
-  int Make(const video::LevelCamera& camera, double width, double height_px, double x, double y, double radius,
-           double height, std::array<view::PicturePoint, view::Prediction::kOutlineMax>& out);
+  int Make(const video::LevelCamera& camera, double width, double height_px, double x, double y,
+           double radius, double height,
+           std::array<view::PicturePoint, view::Prediction::kOutlineMax>& out);
 
   /// The footprint as Make last clipped it, camera coordinates (depth,
   /// lateral): its top face is this at the body's height.
@@ -107,8 +108,9 @@ view::TrackMap TrackMapOf(const Track& track);
 /// milliseconds ahead (at 2 m/s, under a metre) would surround the camera
 /// rather than stand in front of it. `hull_length`: the map draws the hull
 /// as a disc of half that. Allocates nothing.
-void MakeBlimpPrediction(const BlimpPredictedPose& reported, const std::vector<BlimpPredictedPose>& path,
-                         double hull_length, double one_way_delay_s, view::Prediction& out);
+void MakeBlimpPrediction(const BlimpPredictedPose& reported,
+                         const std::vector<BlimpPredictedPose>& path, double hull_length,
+                         double one_way_delay_s, view::Prediction& out);
 
 /// The blimp course's map: each gate across its opening from post to post,
 /// labelled with the opening's heights above the ground; each building's

@@ -74,8 +74,8 @@ class RobotPredictor {
   /// The path from `now_s` over `horizon_s`: the commands still on their
   /// way, then `left`/`right` held from now on; a pose every `spacing_s`,
   /// the first at now (appended to `path`, which is cleared first).
-  void PathAhead(double now_s, double horizon_s, double left, double right, std::vector<PredictedPose>& path,
-                 double spacing_s = 0.05) const;
+  void PathAhead(double now_s, double horizon_s, double left, double right,
+                 std::vector<PredictedPose>& path, double spacing_s = 0.05) const;
   /// Every state's prediction error so far (m).
   const std::vector<double>& errors_m() const { return errors_m_; }
 

@@ -56,7 +56,8 @@ class SessionView final : public view::ViewSource {
   /// A fleet's view (haptel run --fleet): one Parts per vehicle (at most
   /// view::Tiles::kMax), each vehicle's video on its tile, and the shown
   /// one's (Show) world, hands and video on the big screen.
-  SessionView(const view::ViewOptions& options, std::vector<Parts> fleet, interfaces::InputBox& input);
+  SessionView(const view::ViewOptions& options, std::vector<Parts> fleet,
+              interfaces::InputBox& input);
   ~SessionView() override;
 
   /// Session thread: the overlay for the next frames (a seqlock store: never waits).
@@ -107,8 +108,9 @@ void StopAndRecord(SessionView& view, SessionResult& result);
 
 /// The overlay's lines every vehicle's view has: the interface and operator,
 /// the run and lap clocks, the time left, the gates and obstacles.
-view::Overlay LapOverlay(const SessionSetup& setup, const char* interface_name, double t, double lap_time_s,
-                         int gates_passed, int gates_total, int obstacles_touched);
+view::Overlay LapOverlay(const SessionSetup& setup, const char* interface_name, double t,
+                         double lap_time_s, int gates_passed, int gates_total,
+                         int obstacles_touched);
 
 /// The overlay the view shows, from the session loop's state: the lap clock,
 /// gates, the last contact, and the HUD exactly as the interface computed it

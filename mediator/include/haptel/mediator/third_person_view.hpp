@@ -36,7 +36,6 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
-
 #include <opencv2/core.hpp>
 
 #include "haptel/config/track.hpp"

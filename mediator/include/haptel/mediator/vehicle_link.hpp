@@ -285,8 +285,8 @@ class VehicleLink {
 template <class Messages>
 CommandChannel<Messages>& VehicleLink::channel() {
   if (family() != Messages::kFamily) {
-    throw std::logic_error(std::string("vehicle link: '") + name() + "' is a " + ToString(family()) + ", not a " +
-                           ToString(Messages::kFamily));
+    throw std::logic_error(std::string("vehicle link: '") + name() + "' is a " +
+                           ToString(family()) + ", not a " + ToString(Messages::kFamily));
   }
   return static_cast<CommandChannel<Messages>&>(*channel_);
 }

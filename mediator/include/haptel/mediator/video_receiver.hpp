@@ -24,11 +24,10 @@
 #include <deque>
 #include <memory>
 #include <mutex>
+#include <opencv2/core.hpp>
 #include <string>
 #include <thread>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "haptel/core/histogram.hpp"
 #include "haptel/link/topic.hpp"
@@ -38,21 +37,22 @@
 namespace haptel::mediator {
 
 struct VideoStats {
-  uint64_t frames = 0;          ///< frames received and (when decoding) decoded
-  uint64_t dropped = 0;         ///< replaced in the slot before the decoder got to them
-  uint64_t decode_failures = 0; ///< corrupt frames, counted and dropped
-  uint64_t frames_lost = 0;     ///< gaps in the vehicle's frame numbers (never received)
-  uint64_t frames_skipped = 0;  ///< H.264 delta frames not decoded (after a gap, or while a key frame is awaited)
+  uint64_t frames = 0;           ///< frames received and (when decoding) decoded
+  uint64_t dropped = 0;          ///< replaced in the slot before the decoder got to them
+  uint64_t decode_failures = 0;  ///< corrupt frames, counted and dropped
+  uint64_t frames_lost = 0;      ///< gaps in the vehicle's frame numbers (never received)
+  uint64_t frames_skipped =
+      0;  ///< H.264 delta frames not decoded (after a gap, or while a key frame is awaited)
   uint64_t key_frame_requests = 0;  ///< asked of the vehicle (a frame lost or corrupt)
-  uint64_t key_frames = 0;      ///< received frames that decode alone
+  uint64_t key_frames = 0;          ///< received frames that decode alone
   double fps = 0.0;
   double latency_ms_p50 = 0.0;  ///< capture -> decoded
   double latency_ms_p99 = 0.0;
-  double kbps = 0.0;            ///< the video's bitrate as received, kbit/s
-  uint64_t bytes = 0;           ///< the video's bytes received (every frame's)
-  double stale_s = 0.0;         ///< time the screen showed an old picture marked stale
-  double target_kbps = 0.0;     ///< the link's rate as last estimated and sent to the vehicle
-  uint64_t rate_cuts = 0;       ///< times the estimate was cut for a filling queue (overuse)
+  double kbps = 0.0;         ///< the video's bitrate as received, kbit/s
+  uint64_t bytes = 0;        ///< the video's bytes received (every frame's)
+  double stale_s = 0.0;      ///< time the screen showed an old picture marked stale
+  double target_kbps = 0.0;  ///< the link's rate as last estimated and sent to the vehicle
+  uint64_t rate_cuts = 0;    ///< times the estimate was cut for a filling queue (overuse)
 };
 
 /// The latest decoded image, shared (never copied) with whoever shows it.
@@ -76,7 +76,8 @@ class VideoReceiver {
   /// (the run's, as its commands: the vehicle takes its owner's feedback
   /// only). With `decode` false frames are only counted (no screen to show
   /// them on; no requests).
-  VideoReceiver(link::Participant& participant, const std::string& vehicle, uint64_t session, bool decode);
+  VideoReceiver(link::Participant& participant, const std::string& vehicle, uint64_t session,
+                bool decode);
   /// A receiver on no link: it receives nothing (zero frames), and runs
   /// no thread (a simulated-time run, whose driver reads the state).
   VideoReceiver();
@@ -121,11 +122,11 @@ class VideoReceiver {
   std::vector<std::vector<uint8_t>> spare_;  ///< byte buffers going round: no allocation per frame
   bool stop_ = false;
   LatestFrame latest_;
-  std::shared_ptr<const cv::Mat> latest_good_;  ///< the last good picture, unmarked
-  std::vector<uint8_t> last_bytes_;  ///< the latest good JPEG frame's bytes
-  std::vector<uint8_t> last_key_bytes_;  ///< without a screen: the latest H.264 key frame
+  std::shared_ptr<const cv::Mat> latest_good_;    ///< the last good picture, unmarked
+  std::vector<uint8_t> last_bytes_;               ///< the latest good JPEG frame's bytes
+  std::vector<uint8_t> last_key_bytes_;           ///< without a screen: the latest H.264 key frame
   std::unique_ptr<video::VideoDecoder> decoder_;  ///< made for the codec the frames carry
-  Histogram latency_{100.0, 5000};  // µs bins up to 500 ms
+  Histogram latency_{100.0, 5000};                // µs bins up to 500 ms
   uint64_t frames_ = 0;
   uint64_t dropped_ = 0;
   uint64_t decode_failures_ = 0;
@@ -133,8 +134,8 @@ class VideoReceiver {
   uint64_t frames_skipped_ = 0;
   uint64_t key_frame_requests_ = 0;
   uint64_t key_frames_ = 0;
-  uint64_t last_seq_ = 0;  ///< the last frame number received (0: none yet)
-  uint64_t bytes_ = 0;     ///< received after the first frame (the bitrate's numerator)
+  uint64_t last_seq_ = 0;     ///< the last frame number received (0: none yet)
+  uint64_t bytes_ = 0;        ///< received after the first frame (the bitrate's numerator)
   uint64_t total_bytes_ = 0;  ///< every frame's
   int64_t first_arrival_ns_ = 0;
   int64_t last_arrival_ns_ = 0;

@@ -70,9 +70,9 @@ struct ControlsBodyConfig {
   double knob_mass = 0.1;       ///< kg
   /// m: a bar along the lever's travel (x), grasped like the wheel's rim
   std::array<double, 3> knob_half_extents{0.04, 0.012, 0.012};
-  double throttle_damping = 1.0;                                 ///< N·s/m
-  PhysicsMaterial material{1.0, 0.0};                            ///< rubbery: fingers grip it
-  double contact_distance = 0.002;  ///< m, a manifold point this close counts as touching
+  double throttle_damping = 1.0;       ///< N·s/m
+  PhysicsMaterial material{1.0, 0.0};  ///< rubbery: fingers grip it
+  double contact_distance = 0.002;     ///< m, a manifold point this close counts as touching
 
   /// Throws ConfigFieldError unless masses, radii and extents are finite and
   /// > 0, dampings >= 0, rim_segments in [6, 1000] and the material is valid.

@@ -68,7 +68,7 @@ struct RunRecord {
   std::string vehicle;
   std::string vehicle_kind;  ///< sim-robot, can-robot, can-robot-sim (v5; "" before)
   bool completed = false;
-  std::string outcome;  ///< "completed", "lap cap", "vehicle lost", "interrupted", ...
+  std::string outcome;      ///< "completed", "lap cap", "vehicle lost", "interrupted", ...
   double lap_time_s = 0.0;  ///< the lap's clock: from the start line
   /// From the session's start to the start line (the approach and, in a
   /// cockpit, the grasp of its controls), s: the whole run when the line
@@ -86,7 +86,7 @@ struct RunRecord {
   int64_t video_frames = 0;
   double video_fps = 0.0;
   double video_latency_ms_p50 = 0.0;
-  double video_kbps = 0.0;     ///< the video's bitrate as received (v9)
+  double video_kbps = 0.0;  ///< the video's bitrate as received (v9)
   /// Time the screen showed an old picture marked stale, waiting for an
   /// H.264 key frame after a lost or corrupt frame (v8; 0 for JPEG).
   double video_stale_s = 0.0;

@@ -42,7 +42,8 @@ struct RunPicture {
 /// (reversing counts as moving); non-finite path points and contacts are left out.
 /// `also_show`: world points the map must take in besides the track and the
 /// path (a blimp course's buildings and gates).
-RunPicture RenderRunPicture(const RunRecord& run, const TrackConfig& track, const std::vector<Vec2>& also_show = {});
+RunPicture RenderRunPicture(const RunRecord& run, const TrackConfig& track,
+                            const std::vector<Vec2>& also_show = {});
 
 /// The picture of a blimp's flight: the course from above (buildings
 /// outlined, each gate a bar across its opening coloured as the run took it,

@@ -34,7 +34,8 @@ using Stmt = std::unique_ptr<sqlite3_stmt, StmtFinalizer>;
 
 /// Throws naming the database file, what was being done, and SQLite's message
 /// (with what a lock means: another connection holds the file).
-[[noreturn]] inline void Fail(const std::filesystem::path& file, sqlite3* db, std::string_view what) {
+[[noreturn]] inline void Fail(const std::filesystem::path& file, sqlite3* db,
+                              std::string_view what) {
   std::string message(what);
   if (db != nullptr) {
     const int code = sqlite3_extended_errcode(db) & 0xff;
@@ -46,12 +47,13 @@ using Stmt = std::unique_ptr<sqlite3_stmt, StmtFinalizer>;
   FailWith(file, message);
 }
 
-inline void Exec(const std::filesystem::path& file, sqlite3* db, const char* sql, std::string_view what) {
+inline void Exec(const std::filesystem::path& file, sqlite3* db, const char* sql,
+                 std::string_view what) {
   if (sqlite3_exec(db, sql, nullptr, nullptr, nullptr) != SQLITE_OK) Fail(file, db, what);
 }
 
 inline Stmt Prepare(const std::filesystem::path& file, sqlite3* db, const char* sql,
-             std::string_view what) {
+                    std::string_view what) {
   sqlite3_stmt* raw = nullptr;
   if (sqlite3_prepare_v2(db, sql, -1, &raw, nullptr) != SQLITE_OK) {
     sqlite3_finalize(raw);
@@ -130,7 +132,8 @@ class Reader {
   /// The column's integer, or `null_value` for NULL.
   int64_t IntOr(int64_t null_value) {
     const int i = index_++;
-    return sqlite3_column_type(stmt_, i) == SQLITE_NULL ? null_value : sqlite3_column_int64(stmt_, i);
+    return sqlite3_column_type(stmt_, i) == SQLITE_NULL ? null_value
+                                                        : sqlite3_column_int64(stmt_, i);
   }
   double Real() {
     const int i = index_++;
@@ -153,7 +156,7 @@ class Reader {
 
 /// Steps a statement that returns no rows.
 inline void StepDone(const std::filesystem::path& file, sqlite3* db, sqlite3_stmt* stmt,
-              std::string_view what) {
+                     std::string_view what) {
   if (sqlite3_step(stmt) != SQLITE_DONE) Fail(file, db, what);
 }
 

@@ -95,7 +95,7 @@ struct ConsoleOptions {
   /// The address to listen on. Beyond loopback the page asks for an access
   /// token, and HTTPS is required unless `plain_http` says otherwise.
   std::string host = "127.0.0.1";
-  int port = 8470;                 ///< 0: any free port (tests)
+  int port = 8470;  ///< 0: any free port (tests)
   /// Show the vehicle's camera (SetPicture, from the trial's session).
   bool thumbnail = false;
   /// HTTPS: a PEM certificate (chain) and its key. Empty: plain HTTP.
@@ -139,7 +139,8 @@ class StudyConsole {
   /// already) and serves from threads of its own. Throws ConsoleError naming
   /// the address when it cannot bind ("port 8470 on 127.0.0.1 is in use").
   StudyConsole(const StudyConfig& config, const std::vector<PlannedTrial>& plan,
-               const std::filesystem::path& database, const std::map<std::string, Questionnaire>& questionnaires,
+               const std::filesystem::path& database,
+               const std::map<std::string, Questionnaire>& questionnaires,
                const ConsoleOptions& options);
   ~StudyConsole();
   StudyConsole(const StudyConsole&) = delete;

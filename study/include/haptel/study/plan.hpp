@@ -18,7 +18,8 @@ std::vector<PlannedTrial> PlanTrials(const StudyConfig& config);
 /// `row_index`-th of the study (0-based, counting those in the file): the
 /// same sequence PlanTrials would give them. A balanced Latin square is only
 /// balanced over whole blocks of participants; BlockSize says how many.
-std::vector<PlannedTrial> PlanParticipant(const StudyConfig& config, const std::string& id, int row_index);
+std::vector<PlannedTrial> PlanParticipant(const StudyConfig& config, const std::string& id,
+                                          int row_index);
 
 /// Participants per balanced block: the Williams square's rows for a
 /// balanced Latin square (k for even k, 2k for odd), 1 otherwise.

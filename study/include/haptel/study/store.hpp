@@ -107,7 +107,8 @@ class StudyStore {
   /// database kept definitions (schema v5) is checked by its plan alone, and
   /// keeps the file's definition from this resume on. Throws ConfigError when
   /// the track cannot be loaded. Keeps a reference to `recorder`.
-  StudyStore(record::Recorder& recorder, const StudyConfig& config, const std::vector<PlannedTrial>& plan);
+  StudyStore(record::Recorder& recorder, const StudyConfig& config,
+             const std::vector<PlannedTrial>& plan);
 
   int64_t id() const { return id_; }
   /// Whether the study was already in the database (this run resumes it).
@@ -154,7 +155,8 @@ class StudyStore {
                 const std::string& questionnaire) const;
   /// All answers of one questionnaire in one transaction; throws
   /// AlreadyAnswered if any answer of it is there already.
-  void SaveAnswers(const std::string& participant, const std::string& condition, const std::string& questionnaire,
+  void SaveAnswers(const std::string& participant, const std::string& condition,
+                   const std::string& questionnaire,
                    const std::vector<std::pair<std::string, std::string>>& item_values);
   std::vector<AnswerRow> Answers() const;
 

@@ -21,8 +21,8 @@ namespace haptel::study {
 /// screen, the interfaces' controls, no third-person view. Throws
 /// ConfigError/UsageError as `haptel run`.
 mediator::SessionSetup TrialSetup(const StudyConfig& config, const PlannedTrial& trial,
-                                  const std::filesystem::path& database, const std::string& domain, bool verbose,
-                                  int experience, bool simulated_time);
+                                  const std::filesystem::path& database, const std::string& domain,
+                                  bool verbose, int experience, bool simulated_time);
 
 /// Makes `setup` a person's practice lap (the thesis's): the camera's
 /// picture filling the window, the keyboard alone (nothing else drawn over
@@ -34,7 +34,9 @@ void MakePracticeLap(mediator::SessionSetup& setup, const std::string& participa
 /// A person's practice lap on the study's track with the keyboard, recorded
 /// as a run but not as a trial (needs a display: its keys are read in the
 /// view's window).
-mediator::SessionSetup PracticeSetup(const StudyConfig& config, const std::filesystem::path& database,
-                                     const std::string& domain, bool verbose, const std::string& participant);
+mediator::SessionSetup PracticeSetup(const StudyConfig& config,
+                                     const std::filesystem::path& database,
+                                     const std::string& domain, bool verbose,
+                                     const std::string& participant);
 
 }  // namespace haptel::study

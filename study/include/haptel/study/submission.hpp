@@ -33,9 +33,11 @@ struct SubmissionResult {
 /// answered once per participant with an empty `condition`, at any time
 /// (the study asks for it before their first trial). Throws only if the
 /// database fails.
-SubmissionResult SubmitAnswers(StudyStore& store, const std::map<std::string, Questionnaire>& questionnaires,
+SubmissionResult SubmitAnswers(StudyStore& store,
+                               const std::map<std::string, Questionnaire>& questionnaires,
                                const std::string& participant, const std::string& condition,
-                               const std::string& questionnaire, const std::map<std::string, std::string>& fields,
+                               const std::string& questionnaire,
+                               const std::map<std::string, std::string>& fields,
                                const std::string& demographics = "");
 
 /// The longest note the console takes, in characters (UTF-8 code points,
@@ -49,7 +51,7 @@ inline constexpr int kMaxNoteCharacters = 2000;
 /// one that is not UTF-8 or longer than kMaxNoteCharacters (naming both
 /// counts). The text is kept as written, surrounding white space removed.
 /// Throws only if the database fails.
-SubmissionResult SubmitNote(StudyStore& store, const std::string& participant, const std::string& position,
-                            const std::string& text);
+SubmissionResult SubmitNote(StudyStore& store, const std::string& participant,
+                            const std::string& position, const std::string& text);
 
 }  // namespace haptel::study

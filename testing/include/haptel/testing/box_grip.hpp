@@ -6,8 +6,8 @@
 #include <array>
 #include <cmath>
 
-#include "haptel/testing/vec_math.hpp"
 #include "haptel/physics/world.hpp"
+#include "haptel/testing/vec_math.hpp"
 
 namespace haptel::physics {
 
@@ -21,7 +21,8 @@ struct BoxGrip {
   /// Adds the floor, the box at rest on it and both hands to `world`.
   explicit BoxGrip(PhysicsWorld& w)
       : world(w),
-        box((w.AddStaticPlane({0, 0, 1}, 0.0), w.AddDynamicBox({0, 0, kHalf}, {kHalf, kHalf, kHalf}, kMass))) {
+        box((w.AddStaticPlane({0, 0, 1}, 0.0),
+             w.AddDynamicBox({0, 0, kHalf}, {kHalf, kHalf, kHalf}, kMass))) {
     w.AddHand(haptics::Side::kLeft);
     w.AddHand(haptics::Side::kRight);
   }

@@ -13,7 +13,9 @@ namespace haptel::haptics {
 /// start_ns): each vertex is reached with SimDevice::Place and then
 /// SimDevice::Release, so only the device force holds the arm. Measures the
 /// wall time too. Leaves the device with zero force commanded.
-GravitySampleReport SampleGravityOnSim(SimDevice& device, Side side, const ArmCalibration& calibration,
-                                       const GravitySamplerConfig& config, int64_t start_ns = 1'000'000);
+GravitySampleReport SampleGravityOnSim(SimDevice& device, Side side,
+                                       const ArmCalibration& calibration,
+                                       const GravitySamplerConfig& config,
+                                       int64_t start_ns = 1'000'000);
 
 }  // namespace haptel::haptics

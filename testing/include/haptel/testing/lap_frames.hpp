@@ -3,9 +3,8 @@
 /// test or benchmark needs them: clips driven along the centre line at the
 /// robot's pace, spread evenly around the lap (a straight, a bend, a gate...).
 #include <cmath>
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"

@@ -23,12 +23,12 @@ struct AdapterState {
   double speed = 0.0;     ///< m/s, forward positive
   double yaw_rate = 0.0;  ///< rad/s, counter-clockwise positive
   bool pose_valid = false;
-  double x = 0.0;         ///< m
+  double x = 0.0;  ///< m
   double y = 0.0;
-  double heading = 0.0;   ///< rad
+  double heading = 0.0;  ///< rad
   bool bumper_left = false;
   bool bumper_right = false;
-  MotorLevels applied;    ///< levels the motors run at now
+  MotorLevels applied;  ///< levels the motors run at now
   /// The vehicle stopped itself (a motor controller's error, a silent node,
   /// bus-off) and will not move until its faults are cleared.
   bool fault = false;

@@ -43,19 +43,20 @@ struct AirshipState {
   Eigen::Quaterniond attitude = Eigen::Quaterniond::Identity();  ///< body → world
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  ///< ground velocity, body frame, m/s
   Eigen::Vector3d rates = Eigen::Vector3d::Zero();     ///< angular velocity, body frame, rad/s
-  double thrust = 0.0;      ///< N, both main motors, as spun up
-  double helix_rad = 0.0;   ///< helix plane tilt, as slewed
-  double tail = 0.0;        ///< N, the tail rotor's thrust (positive: turn left)
+  double thrust = 0.0;                                 ///< N, both main motors, as spun up
+  double helix_rad = 0.0;                              ///< helix plane tilt, as slewed
+  double tail = 0.0;  ///< N, the tail rotor's thrust (positive: turn left)
 };
 
 /// Quantities derived from the state and the constants.
 struct AirshipMassProperties {
-  double mass = 0.0;          ///< kg: structure, payload, helium
-  double buoyancy = 0.0;      ///< N: displaced air's weight
-  double weight = 0.0;        ///< N
-  Eigen::Vector3d inertia_mass = Eigen::Vector3d::Zero();     ///< diag of M (mass + added mass), kg
-  Eigen::Vector3d inertia_moment = Eigen::Vector3d::Zero();   ///< diag of J (inertia + added inertia), kg·m²
-  double lamb_k1 = 0.0, lamb_k2 = 0.0, lamb_k_rot = 0.0;      ///< Lamb's factors used
+  double mass = 0.0;                                       ///< kg: structure, payload, helium
+  double buoyancy = 0.0;                                   ///< N: displaced air's weight
+  double weight = 0.0;                                     ///< N
+  Eigen::Vector3d inertia_mass = Eigen::Vector3d::Zero();  ///< diag of M (mass + added mass), kg
+  Eigen::Vector3d inertia_moment =
+      Eigen::Vector3d::Zero();  ///< diag of J (inertia + added inertia), kg·m²
+  double lamb_k1 = 0.0, lamb_k2 = 0.0, lamb_k_rot = 0.0;  ///< Lamb's factors used
 };
 
 /// An external load that depends on the state alone (contact with the
@@ -67,7 +68,8 @@ class AirshipContact {
   virtual ~AirshipContact() = default;
   /// Adds nothing when there is no contact; otherwise writes the body-frame
   /// force (N) and moment about the centre of gravity (N·m).
-  virtual void Loads(const AirshipState& state, Eigen::Vector3d* force_body, Eigen::Vector3d* moment_body) const = 0;
+  virtual void Loads(const AirshipState& state, Eigen::Vector3d* force_body,
+                     Eigen::Vector3d* moment_body) const = 0;
 };
 
 /// Lamb's added-mass factors of a prolate spheroid with this length/diameter

@@ -13,14 +13,14 @@ namespace haptel::vehicles {
 /// what it sent (no pose: pose_valid false).
 struct BlimpAdapterState {
   bool pose_valid = false;
-  double x = 0.0, y = 0.0, z = 0.0;            ///< m, course frame (x east, y north, z up)
-  double yaw = 0.0, pitch = 0.0, roll = 0.0;   ///< rad
-  double vx = 0.0, vy = 0.0, vz = 0.0;         ///< m/s, ground velocity, course frame
-  double airspeed = 0.0;                       ///< m/s
-  bool contact = false;         ///< touching the ground or a building
-  double impact_speed = 0.0;    ///< m/s, closing speed at the latest contact's onset
-  uint32_t contacts = 0;        ///< contact onsets so far
-  BlimpCommand applied;         ///< the channels as applied now
+  double x = 0.0, y = 0.0, z = 0.0;           ///< m, course frame (x east, y north, z up)
+  double yaw = 0.0, pitch = 0.0, roll = 0.0;  ///< rad
+  double vx = 0.0, vy = 0.0, vz = 0.0;        ///< m/s, ground velocity, course frame
+  double airspeed = 0.0;                      ///< m/s
+  bool contact = false;                       ///< touching the ground or a building
+  double impact_speed = 0.0;                  ///< m/s, closing speed at the latest contact's onset
+  uint32_t contacts = 0;                      ///< contact onsets so far
+  BlimpCommand applied;                       ///< the channels as applied now
   std::array<double, 7> pulse_us{};  ///< per channel where a servo controller drives them (0: none)
   uint16_t controller_errors = 0;    ///< the servo controller's error register (Maestro bits)
   bool fault = false;

@@ -62,7 +62,8 @@ class CameraStreamer {
   /// `owner_writer` says whose feedback is taken (FeedbackFromOwner). It
   /// must not be null.
   CameraStreamer(const CameraConfig& config, std::unique_ptr<video::CameraSource> camera,
-                 link::Participant& participant, const std::string& vehicle_name, OwnerWriter owner_writer);
+                 link::Participant& participant, const std::string& vehicle_name,
+                 OwnerWriter owner_writer);
   ~CameraStreamer();
   CameraStreamer(const CameraStreamer&) = delete;
   CameraStreamer& operator=(const CameraStreamer&) = delete;
@@ -81,7 +82,8 @@ class CameraStreamer {
 
   const CameraConfig config_;
   const OwnerWriter owner_writer_;
-  const bool passthrough_possible_;  ///< the vehicle sends JPEG: a camera's own JPEG may go as it is
+  const bool
+      passthrough_possible_;  ///< the vehicle sends JPEG: a camera's own JPEG may go as it is
   std::unique_ptr<video::CameraSource> camera_;
   Seqlock<video::CameraPose> pose_;
   video::GrabMonitor grab_monitor_;
@@ -95,7 +97,8 @@ class CameraStreamer {
   cv::Mat camera_decoded_;            ///< its picture when it must be encoded again
   uint64_t frame_seq_ = 0;
   std::atomic<uint64_t> frames_{0}, frames_failed_{0}, grabs_failed_{0}, camera_stalls_{0};
-  std::atomic<uint64_t> key_frame_requests_{0}, key_frames_sent_{0}, frames_skipped_{0}, frames_passed_through_{0};
+  std::atomic<uint64_t> key_frame_requests_{0}, key_frames_sent_{0}, frames_skipped_{0},
+      frames_passed_through_{0};
   /// The operator's estimate of the link (kbit/s; 0: none yet), set by the
   /// feedback's DDS thread; the camera's thread hands it to the encoder.
   std::atomic<uint32_t> target_kbps_{0};

@@ -27,16 +27,16 @@ namespace haptel::vehicles {
 
 struct CanCounters {
   uint64_t sent = 0;
-  uint64_t send_failed = 0;   ///< the bus's queue was full
+  uint64_t send_failed = 0;  ///< the bus's queue was full
   uint64_t received = 0;
-  uint64_t malformed = 0;     ///< wrong length, non-finite values: dropped
-  uint64_t unknown = 0;       ///< ids of no known node or command: dropped
+  uint64_t malformed = 0;  ///< wrong length, non-finite values: dropped
+  uint64_t unknown = 0;    ///< ids of no known node or command: dropped
   uint64_t error_frames = 0;
   uint64_t bus_off = 0;
   uint64_t error_passive = 0;
-  uint64_t restarted = 0;     ///< the controller restarted after bus-off
+  uint64_t restarted = 0;  ///< the controller restarted after bus-off
   uint64_t heartbeats = 0;
-  uint64_t faults = 0;        ///< times the robot stopped itself
+  uint64_t faults = 0;  ///< times the robot stopped itself
 };
 
 class CanRobot final : public VehicleAdapter {
@@ -44,7 +44,8 @@ class CanRobot final : public VehicleAdapter {
   /// Takes the bus. `log` (may be null) receives every frame sent and
   /// received; the state's can_log says how it fares (a failed write ends
   /// the log, not the driving). Validates config.can (ConfigFieldError).
-  CanRobot(std::unique_ptr<CanBus> bus, const VehicleConfig& config, std::unique_ptr<CandumpWriter> log = nullptr);
+  CanRobot(std::unique_ptr<CanBus> bus, const VehicleConfig& config,
+           std::unique_ptr<CandumpWriter> log = nullptr);
 
   void SetMotors(const MotorLevels& levels) override;
   /// Zero velocity now, then both axes idle; the next non-zero SetMotors
@@ -86,9 +87,9 @@ class CanRobot final : public VehicleAdapter {
   CanCounters counters_;
   double t_s_ = 0.0;
   double next_command_s_ = 0.0;
-  bool started_ = false;   ///< closed loop requested
-  bool bus_lost_ = false;  ///< the bus is gone: nothing more is sent
-  bool idle_ = false;      ///< Stop() put the axes in idle
+  bool started_ = false;               ///< closed loop requested
+  bool bus_lost_ = false;              ///< the bus is gone: nothing more is sent
+  bool idle_ = false;                  ///< Stop() put the axes in idle
   std::array<double, 2> wheel_cmd_{};  ///< turn/s, left and right as sent
   std::array<double, 2> wheel_vel_{};  ///< turn/s from the encoders, as reported
   /// Last heartbeat per node: left, right, io (< 0: none yet).

@@ -26,7 +26,8 @@ struct LoggedFrame {
 };
 
 /// Every well-formed line of a candump -L log; `malformed` counts the others.
-std::vector<LoggedFrame> ReadCandumpLog(const std::filesystem::path& file, size_t* malformed = nullptr);
+std::vector<LoggedFrame> ReadCandumpLog(const std::filesystem::path& file,
+                                        size_t* malformed = nullptr);
 
 /// Appends frames to a candump -L file: buffered, and flushed every
 /// kFlushEvery frames, at least every kFlushPeriod_ns of the frames' stamps,

@@ -139,8 +139,8 @@ class CommandIntake {
 
   /// DDS thread: a command received at `now_ns` from `from`; `valid` is its
   /// range check. Returns whether it was taken.
-  bool Offer(bool valid, const CommandSender& from, uint64_t seq, int64_t sent_ns, const Command& command,
-             int64_t now_ns) {
+  bool Offer(bool valid, const CommandSender& from, uint64_t seq, int64_t sent_ns,
+             const Command& command, int64_t now_ns) {
     if (!valid) {
       malformed_.fetch_add(1, std::memory_order_relaxed);
       return false;
@@ -177,7 +177,9 @@ class CommandIntake {
   /// Control thread: the command taken by the last Poll.
   const ReceivedCommand<Command>& applied() const { return applied_; }
   /// Age of the applied command at `now_ns` (0 before the first).
-  int64_t AppliedAgeNs(int64_t now_ns) const { return applied_.seq == 0 ? 0 : now_ns - applied_.received_ns; }
+  int64_t AppliedAgeNs(int64_t now_ns) const {
+    return applied_.seq == 0 ? 0 : now_ns - applied_.received_ns;
+  }
 
   // Any thread.
   uint64_t accepted() const { return accepted_.load(); }
@@ -195,7 +197,8 @@ class CommandIntake {
   CommandSequence sequence_;  // DDS thread
   Seqlock<ReceivedCommand<Command>> latest_;
   CommandWatchdog watchdog_;  // control thread
-  uint64_t applied_version_;  ///< the seqlock's version last taken (its initial value is no command)
+  uint64_t
+      applied_version_;  ///< the seqlock's version last taken (its initial value is no command)
   ReceivedCommand<Command> applied_;
   std::atomic<uint64_t> accepted_{0}, malformed_{0}, stale_{0}, trips_{0};
   std::atomic<bool> expired_{true};
@@ -205,7 +208,8 @@ class CommandIntake {
 /// tick, then the time since the last, at most 50 ms (a stalled thread does
 /// not make the simulation leap).
 inline double ControlStep(int64_t& last_tick_ns, int64_t now_ns, double rate_hz) {
-  const double dt = last_tick_ns == 0 ? 1.0 / rate_hz : std::min(0.05, NsToS(now_ns - last_tick_ns));
+  const double dt =
+      last_tick_ns == 0 ? 1.0 / rate_hz : std::min(0.05, NsToS(now_ns - last_tick_ns));
   last_tick_ns = now_ns;
   return dt;
 }

@@ -39,7 +39,9 @@ struct RobotFamily : link::RobotMessages {
   }
   /// Hardware: zero velocity, then idle.
   static void MakeSafe(Adapter& adapter) { adapter.Stop(); }
-  static video::CameraPose CameraPoseOf(const AdapterState& s) { return {.x = s.x, .y = s.y, .heading = s.heading}; }
+  static video::CameraPose CameraPoseOf(const AdapterState& s) {
+    return {.x = s.x, .y = s.y, .heading = s.heading};
+  }
   /// The family's own fields of the state; `watchdog_expired` is the node's.
   static void FillState(const AdapterState& s, bool watchdog_expired, StateMsg& m) {
     m.speed(static_cast<float>(s.speed));
@@ -104,8 +106,9 @@ struct BlimpFamily : link::BlimpMessages {
     m.impact_speed(static_cast<float>(s.impact_speed));
     m.contacts(s.contacts);
     const BlimpCommand& a = s.applied;
-    m.outputs({static_cast<float>(a.elevator), static_cast<float>(a.rudder), static_cast<float>(a.power),
-               static_cast<float>(a.helix), static_cast<float>(a.tail_rotor), static_cast<float>(a.camera_pan),
+    m.outputs({static_cast<float>(a.elevator), static_cast<float>(a.rudder),
+               static_cast<float>(a.power), static_cast<float>(a.helix),
+               static_cast<float>(a.tail_rotor), static_cast<float>(a.camera_pan),
                static_cast<float>(a.camera_tilt)});
     std::array<float, 7> pulses{};
     for (size_t i = 0; i < pulses.size(); ++i) pulses[i] = static_cast<float>(s.pulse_us[i]);

@@ -46,7 +46,9 @@ enum AxisError : uint32_t {
   kErrorUnknownPosition = 0x80000,
 };
 
-constexpr uint32_t Id(int node, uint32_t command) { return (static_cast<uint32_t>(node) << 5) | command; }
+constexpr uint32_t Id(int node, uint32_t command) {
+  return (static_cast<uint32_t>(node) << 5) | command;
+}
 constexpr int NodeOf(uint32_t id) { return static_cast<int>((id >> 5) & 0x3F); }
 constexpr uint32_t CommandOf(uint32_t id) { return id & 0x1F; }
 
@@ -58,8 +60,8 @@ can_frame ClearErrors(int node);
 /// What a node sends: heartbeat (error, state, the error flags of 0.5.x:
 /// motor, encoder, controller; bit 7 of the last, trajectory done) and the
 /// encoder estimates (position turns, velocity turn/s).
-can_frame Heartbeat(int node, uint32_t axis_error, uint32_t state, uint8_t motor_flag = 0, uint8_t encoder_flag = 0,
-                    uint8_t controller_flag = 0);
+can_frame Heartbeat(int node, uint32_t axis_error, uint32_t state, uint8_t motor_flag = 0,
+                    uint8_t encoder_flag = 0, uint8_t controller_flag = 0);
 can_frame EncoderEstimates(int node, float position_turns, float velocity_turns_per_s);
 
 struct HeartbeatMsg {
@@ -87,7 +89,8 @@ struct ControllerModeMsg {
 std::optional<HeartbeatMsg> DecodeHeartbeat(const can_frame& f, std::string* why = nullptr);
 std::optional<EncoderMsg> DecodeEncoderEstimates(const can_frame& f, std::string* why = nullptr);
 std::optional<SetInputVelMsg> DecodeSetInputVel(const can_frame& f, std::string* why = nullptr);
-std::optional<ControllerModeMsg> DecodeControllerMode(const can_frame& f, std::string* why = nullptr);
+std::optional<ControllerModeMsg> DecodeControllerMode(const can_frame& f,
+                                                      std::string* why = nullptr);
 std::optional<uint32_t> DecodeAxisState(const can_frame& f, std::string* why = nullptr);
 
 /// "MOTOR_FAILED | ENCODER_FAILED" (unknown bits as hex); "none" for 0.

@@ -18,7 +18,7 @@ double CastRay(const Track& track, const Vec2& origin, const Vec2& direction, do
 
 /// The scan of a robot at (x, y, heading) on `track`, laid out by `config`;
 /// `noise` draws each reading's noise (none when config.noise_sd is 0).
-RangeScan ScanTrack(const Track& track, double x, double y, double heading, const RangeSensorConfig& config,
-                    std::mt19937_64& noise);
+RangeScan ScanTrack(const Track& track, double x, double y, double heading,
+                    const RangeSensorConfig& config, std::mt19937_64& noise);
 
 }  // namespace haptel::vehicles

@@ -43,12 +43,14 @@ namespace haptel::vehicles {
 struct Ros2Counters {
   uint64_t twists_sent = 0;
   uint64_t odom_received = 0;
-  uint64_t odom_dropped = 0;   ///< non-finite pose or twist
+  uint64_t odom_dropped = 0;  ///< non-finite pose or twist
   uint64_t images_received = 0;
-  uint64_t images_dropped = 0; ///< not decodable
-  uint64_t images_refused = 0; ///< too large, or neither JPEG nor PNG, by its header: never decoded (ImageProblem)
+  uint64_t images_dropped = 0;  ///< not decodable
+  uint64_t images_refused =
+      0;  ///< too large, or neither JPEG nor PNG, by its header: never decoded (ImageProblem)
   uint64_t scans_received = 0;
-  uint64_t scans_dropped = 0;  ///< a scan whose geometry makes no sense (ScanProblem); the first is said
+  uint64_t scans_dropped =
+      0;  ///< a scan whose geometry makes no sense (ScanProblem); the first is said
 };
 
 class Ros2Robot final : public VehicleAdapter {
@@ -96,8 +98,8 @@ class Ros2Robot final : public VehicleAdapter {
   ///
   /// A scan whose geometry makes no sense (ScanProblem, its angle_max
   /// taken as its last beam's) gives count 0.
-  static RangeScan RangeScanFor(double angle_min, double angle_increment, double range_min, double range_max,
-                                std::span<const float> ranges);
+  static RangeScan RangeScanFor(double angle_min, double angle_increment, double range_min,
+                                double range_max, std::span<const float> ranges);
 
   /// The largest image side decoded, px: 4K UHD's 3840 fits; 4096 x 4096
   /// decodes to 50 MB, where a 10 000-pixel square would take 300 MB.
@@ -113,8 +115,8 @@ class Ros2Robot final : public VehicleAdapter {
   /// of the sign opposite to angle_max − angle_min; beams spanning more than
   /// a full turn (and one beam); range_max not in (0, 10 km], range_min not
   /// in [0, range_max).
-  static std::string ScanProblem(double angle_min, double angle_max, double angle_increment, double range_min,
-                                 double range_max, size_t beams);
+  static std::string ScanProblem(double angle_min, double angle_max, double angle_increment,
+                                 double range_min, double range_max, size_t beams);
 
   /// The participant and endpoints on the robot's domain (shared with the camera).
   struct Graph;
@@ -132,8 +134,8 @@ class Ros2Robot final : public VehicleAdapter {
   double w_ = 0.0;
   double since_twist_s_ = 0.0;
   bool twist_due_ = true;
-  int64_t last_odom_ns_ = 0;  ///< 0: none yet
-  int64_t last_scan_ns_ = 0;  ///< 0: none yet
+  int64_t last_odom_ns_ = 0;        ///< 0: none yet
+  int64_t last_scan_ns_ = 0;        ///< 0: none yet
   bool scan_problem_said_ = false;  ///< the first impossible scan is said, the rest counted
 };
 

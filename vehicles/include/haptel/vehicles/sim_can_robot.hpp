@@ -52,8 +52,8 @@ class SimCanNodes {
     uint32_t control_mode = 2;
     uint32_t input_mode = 1;
     float input_vel = 0.0F;
-    float vel = 0.0F;   ///< after the ramp, turn/s
-    double pos = 0.0;   ///< turns
+    float vel = 0.0F;  ///< after the ramp, turn/s
+    double pos = 0.0;  ///< turns
   };
   void Handle(const can_frame& f);
 
@@ -80,7 +80,8 @@ class SimCanNodes {
 /// motors, bumpers and faults are what came over the bus.
 class SimulatedCanRobot final : public VehicleAdapter {
  public:
-  SimulatedCanRobot(const Track& track, const VehicleConfig& config, std::unique_ptr<CandumpWriter> log = nullptr);
+  SimulatedCanRobot(const Track& track, const VehicleConfig& config,
+                    std::unique_ptr<CandumpWriter> log = nullptr);
   void SetMotors(const MotorLevels& levels) override { adapter_->SetMotors(levels); }
   void Stop() override { adapter_->Stop(); }
   void Update(double dt) override;

@@ -29,10 +29,12 @@ inline double LevelSpeed(const DriveConfig& drive, int level) {
 /// Advances `state` by `dt` towards tread targets (m/s, before the gains):
 /// each tread follows with the motor lag, then the body moves on the arc.
 /// Returns the yaw rate (rad/s) over the step.
-double StepTreads(const DriveConfig& drive, double target_left, double target_right, double dt, TreadState& state);
+double StepTreads(const DriveConfig& drive, double target_left, double target_right, double dt,
+                  TreadState& state);
 
 /// The treads' speeds from a body's forward speed and yaw rate.
-inline void TreadsFromMotion(const DriveConfig& drive, double speed, double yaw_rate, TreadState& state) {
+inline void TreadsFromMotion(const DriveConfig& drive, double speed, double yaw_rate,
+                             TreadState& state) {
   state.v_left = speed - 0.5 * yaw_rate * drive.track_width;
   state.v_right = speed + 0.5 * yaw_rate * drive.track_width;
 }

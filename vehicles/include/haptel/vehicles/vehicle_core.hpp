@@ -36,7 +36,8 @@ class VehicleCoreOf {
   /// A command message from `writer` (as DDS gave it with the sample)
   /// received at `now_ns`: decoded, range-checked and offered to the intake
   /// (owner, sequence, watchdog).
-  void OnCommand(const typename Family::CommandMsg& cmd, const link::WriterId& writer, int64_t now_ns);
+  void OnCommand(const typename Family::CommandMsg& cmd, const link::WriterId& writer,
+                 int64_t now_ns);
   /// The same from the one session that steps this vehicle in its own
   /// process (link::kInProcessWriter).
   void OnCommand(const typename Family::CommandMsg& cmd, int64_t now_ns) {

@@ -35,7 +35,8 @@ struct KindParts {
 /// world (a track, a blimp course). Set-up errors throw (ConfigError,
 /// UsageError, CanUnavailable, a serial port's error): the program exits 2.
 template <class Family>
-using KindFactory = std::function<KindParts<Family>(const VehicleConfig&, const typename Family::World&)>;
+using KindFactory =
+    std::function<KindParts<Family>(const VehicleConfig&, const typename Family::World&)>;
 
 /// The factory of `kind` in `Family`, or null.
 template <class Family>

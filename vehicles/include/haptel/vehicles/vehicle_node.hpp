@@ -41,12 +41,13 @@ struct NodeCounters {
   bool camera_ended = false;   ///< a file source that does not loop has ended
   uint64_t link_queue_dropped = 0;        ///< received packets the link fault's rate queue dropped
   uint64_t link_queue_dropped_bytes = 0;  ///< their bytes
-  uint64_t key_frame_requests = 0;  ///< the operator's, received (a video frame lost)
-  uint64_t key_frames_sent = 0;     ///< frames published that decode alone
-  uint64_t frames_skipped = 0;      ///< grabbed but skipped to fit the link
-  uint64_t frames_passed_through = 0;  ///< a camera's own JPEGs sent undecoded
-  uint32_t target_kbps = 0;         ///< the operator's last estimate of the link (0: none came)
-  uint64_t video_feedback_refused = 0;  ///< video feedback from another session than the owner: ignored
+  uint64_t key_frame_requests = 0;        ///< the operator's, received (a video frame lost)
+  uint64_t key_frames_sent = 0;           ///< frames published that decode alone
+  uint64_t frames_skipped = 0;            ///< grabbed but skipped to fit the link
+  uint64_t frames_passed_through = 0;     ///< a camera's own JPEGs sent undecoded
+  uint32_t target_kbps = 0;  ///< the operator's last estimate of the link (0: none came)
+  uint64_t video_feedback_refused =
+      0;  ///< video feedback from another session than the owner: ignored
   bool watchdog_expired = true;
 };
 

@@ -6,9 +6,8 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "haptel/config/vehicle.hpp"
 
@@ -152,7 +151,7 @@ class JpegEncoder final : public VideoEncoder {
   /// Each rung's bitrate when it was last left (kbit/s; 0: never measured).
   std::vector<double> measured_kbps_;
   size_t rung_ = 0;
-  double target_kbps_ = 0.0;  ///< 0: not following
+  double target_kbps_ = 0.0;   ///< 0: not following
   double frame_credit_ = 0.0;  ///< frames owed at a rung that sends a share of them
   int frames_at_rung_ = 0;
   double rung_kbps_ = 0.0;
@@ -192,13 +191,14 @@ bool PngFrameSize(const uint8_t* data, size_t size, int& width, int& height);
 /// and sent at the configured frame rate it fits the bitrate the operator
 /// last asked for (`target_kbps`; 0, none asked yet: it fits). Otherwise
 /// the frame is decoded and goes through the encoder's ladder like any other.
-bool JpegPassesThrough(const uint8_t* data, size_t size, const CameraConfig& camera, uint32_t target_kbps);
+bool JpegPassesThrough(const uint8_t* data, size_t size, const CameraConfig& camera,
+                       uint32_t target_kbps);
 
 /// Decodes a camera's JPEG into `bgr_out` at `camera`'s size (resized when
 /// it differs), using `scratch` for the decoded picture. False, with
 /// `bgr_out` unchanged, when the bytes do not decode.
-bool DecodeCameraJpeg(const std::vector<uint8_t>& jpeg, const CameraConfig& camera, cv::Mat& scratch,
-                      cv::Mat& bgr_out);
+bool DecodeCameraJpeg(const std::vector<uint8_t>& jpeg, const CameraConfig& camera,
+                      cv::Mat& scratch, cv::Mat& bgr_out);
 
 /// The encoder `camera` asks for (codec, quality or bitrate, size, rate).
 /// Throws std::runtime_error when the codec cannot be opened (an FFmpeg

@@ -4,9 +4,8 @@
 /// lost or corrupt.
 #include <cstdint>
 #include <memory>
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "haptel/video/codec.hpp"
 
@@ -25,10 +24,10 @@ namespace haptel::video {
 class H264Encoder final : public VideoEncoder {
  public:
   struct Options {
-    int width = 640;          ///< even, > 0
-    int height = 480;         ///< even, > 0
-    double rate_hz = 30.0;    ///< frames per second the camera delivers
-    int bitrate_kbps = 1000;  ///< target, > 0
+    int width = 640;                    ///< even, > 0
+    int height = 480;                   ///< even, > 0
+    double rate_hz = 30.0;              ///< frames per second the camera delivers
+    int bitrate_kbps = 1000;            ///< target, > 0
     double key_frame_interval_s = 1.0;  ///< the longest stretch between IDRs
   };
 

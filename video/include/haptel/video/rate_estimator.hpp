@@ -41,9 +41,9 @@
 namespace haptel::video {
 
 struct RateEstimatorConfig {
-  double min_kbps = 100.0;    ///< never asks for less
-  double max_kbps = 6000.0;   ///< nor more (what the encoder can use)
-  double start_kbps = 1000.0; ///< before anything is known
+  double min_kbps = 100.0;     ///< never asks for less
+  double max_kbps = 6000.0;    ///< nor more (what the encoder can use)
+  double start_kbps = 1000.0;  ///< before anything is known
   /// At most one target sent to the vehicle per this period (s): 10 Hz.
   double feedback_period_s = 0.1;
 
@@ -151,7 +151,7 @@ class RateEstimator {
   uint64_t loss_window_received_ = 0;
   double loss_share_ = 0;
 
-  double last_frame_s_ = -1;    ///< the newest arrival, or the first OnSilence
+  double last_frame_s_ = -1;  ///< the newest arrival, or the first OnSilence
   double last_silence_cut_s_ = -1;
   double next_feedback_s_ = 0;
   bool cut_pending_ = false;

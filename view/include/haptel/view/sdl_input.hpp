@@ -11,8 +11,8 @@
 /// (each key also on its own, with Page Up/Down, for the blimp's keys),
 /// space stops, F1..F6 ask for interface 0..5 of the run, and closing the
 /// window asks to quit. In a fleet, Tab or the controller's Back button ask
-/// for the next vehicle and 1..9 for that vehicle of the fleet file. Dragging the mouse with a button held turns the
-/// head (mouse-look: kHeadRadPerPixel, clamped to the pilot camera's range);
+/// for the next vehicle and 1..9 for that vehicle of the fleet file. Dragging the mouse with a
+/// button held turns the head (mouse-look: kHeadRadPerPixel, clamped to the pilot camera's range);
 /// Home looks straight ahead. The first game controller SDL reports is opened;
 /// another one is ignored until it goes away.
 #include <SDL2/SDL.h>

@@ -39,11 +39,11 @@ struct ViewOptions {
   ViewMode mode = ViewMode::kWindow;
   int width = 1024;
   int height = 576;
-  double rate_hz = 60.0;          ///< frames per second drawn (vsync off)
-  std::filesystem::path record;   ///< MP4 to write (empty: none)
-  double record_fps = 30.0;       ///< fixed frame rate of the MP4
+  double rate_hz = 60.0;         ///< frames per second drawn (vsync off)
+  std::filesystem::path record;  ///< MP4 to write (empty: none)
+  double record_fps = 30.0;      ///< fixed frame rate of the MP4
   std::string title = "Haptel";
-  ScreenPlacement screen;         ///< where the camera's picture hangs
+  ScreenPlacement screen;  ///< where the camera's picture hangs
 };
 
 /// Fills the frame's model on the view thread. Must not block on anything a
@@ -65,14 +65,14 @@ class EventSink {
 struct ViewStats {
   uint64_t frames = 0;
   double fps = 0.0;
-  double frame_ms_p50 = 0.0;        ///< render + swap time of a frame
+  double frame_ms_p50 = 0.0;  ///< render + swap time of a frame
   double frame_ms_p99 = 0.0;
-  double cpu_share = 0.0;           ///< view thread CPU seconds per wall second
-  uint64_t video_frames_shown = 0;  ///< distinct camera frames that reached the screen
+  double cpu_share = 0.0;               ///< view thread CPU seconds per wall second
+  uint64_t video_frames_shown = 0;      ///< distinct camera frames that reached the screen
   double video_to_screen_ms_p50 = 0.0;  ///< capture stamp -> the swap that first showed it
   double video_to_screen_ms_p99 = 0.0;
   uint64_t recorded_frames = 0;
-  uint64_t record_dropped = 0;      ///< frames the encoder could not take in time
+  uint64_t record_dropped = 0;  ///< frames the encoder could not take in time
   /// "" while the MP4 is whole; else why it is not (a failed write ended
   /// the recording: the file, the OS's reason, the frames it holds).
   std::string record_error;

@@ -7,10 +7,9 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 namespace haptel::view {
 
@@ -47,9 +46,9 @@ struct VideoImage {
 struct Overlay {
   char interface_name[32] = "";
   char operator_name[16] = "";
-  double t_s = 0.0;          ///< run clock
-  double lap_time_s = 0.0;   ///< lap clock
-  double time_left_s = -1;   ///< until the time limit (negative: none)
+  double t_s = 0.0;         ///< run clock
+  double lap_time_s = 0.0;  ///< lap clock
+  double time_left_s = -1;  ///< until the time limit (negative: none)
   int gates_passed = 0;
   int gates_total = 0;
   int obstacles_touched = 0;
@@ -59,11 +58,11 @@ struct Overlay {
   bool hud = false;
   double speed_mps = 0.0;
   double speed_max_mps = 1.0;  ///< the speedometer's full scale
-  bool turn_left = false;    ///< indicator: on while turning left (drawn flashing)
+  bool turn_left = false;      ///< indicator: on while turning left (drawn flashing)
   bool turn_right = false;
   bool throttle_locked = false;
-  char message[96] = "";     ///< one line for the person (e.g. "grasp the wheel")
-  char status[64] = "";      ///< the vehicle's own line (the blimp: height, power); empty: none
+  char message[96] = "";  ///< one line for the person (e.g. "grasp the wheel")
+  char status[64] = "";   ///< the vehicle's own line (the blimp: height, power); empty: none
   /// Haptic shared control (gesture-shared): what pushes the hand, drawn as
   /// an arrow on a dial of the hand's horizontal plane (forward up, left
   /// left), as long as the push is strong.
@@ -71,7 +70,8 @@ struct Overlay {
   double guidance_forward_n = 0.0;  ///< N along the device's x (forward)
   double guidance_left_n = 0.0;     ///< N along its y (left)
   double guidance_max_n = 1.0;      ///< the push's bound: the dial's full length
-  double guidance_ttc_s = -1.0;     ///< time to collision of the hand's command (negative: none in sight)
+  double guidance_ttc_s =
+      -1.0;  ///< time to collision of the hand's command (negative: none in sight)
 };
 
 /// A head-tracked view (the blimp's pilot camera, thesis 8.2.3): the view
@@ -79,10 +79,11 @@ struct Overlay {
 /// camera actually points, so the picture stays where it looks. Angles turn
 /// about the eye: pan positive left, tilt positive up, rad.
 struct Gaze {
-  bool tracked = false;      ///< false: the fixed view, the screen where it was placed
-  double look_pan = 0.0;     ///< the person's head
+  bool tracked = false;   ///< false: the fixed view, the screen where it was placed
+  double look_pan = 0.0;  ///< the person's head
   double look_tilt = 0.0;
-  double screen_pan = 0.0;   ///< the vehicle camera's direction as applied (lags the head by the link)
+  double screen_pan =
+      0.0;  ///< the vehicle camera's direction as applied (lags the head by the link)
   double screen_tilt = 0.0;
 };
 

@@ -43,12 +43,28 @@ class CalibrationError : public std::runtime_error {
 /// DIP), three abductions between neighbouring fingers, palm arch, wrist
 /// pitch (flexion +), wrist yaw (radial deviation, toward the thumb, +).
 inline constexpr std::array<std::string_view, kGloveJoints> kGloveSensorNames{
-    "thumb_roll",   "thumb_mcp",     "thumb_ip",      "thumb_abduction",
-    "index_mcp",    "index_pip",     "index_dip",     "middle_mcp",
-    "middle_pip",   "middle_dip",    "ring_mcp",      "ring_pip",
-    "ring_dip",     "pinky_mcp",     "pinky_pip",     "pinky_dip",
-    "index_middle_abduction", "middle_ring_abduction", "ring_pinky_abduction",
-    "palm_arch",    "wrist_pitch",   "wrist_yaw"};
+    "thumb_roll",
+    "thumb_mcp",
+    "thumb_ip",
+    "thumb_abduction",
+    "index_mcp",
+    "index_pip",
+    "index_dip",
+    "middle_mcp",
+    "middle_pip",
+    "middle_dip",
+    "ring_mcp",
+    "ring_pip",
+    "ring_dip",
+    "pinky_mcp",
+    "pinky_pip",
+    "pinky_dip",
+    "index_middle_abduction",
+    "middle_ring_abduction",
+    "ring_pinky_abduction",
+    "palm_arch",
+    "wrist_pitch",
+    "wrist_yaw"};
 
 /// A calibration posture: the joint angles (rad) a hand makes when told `how`.
 struct GlovePosture {

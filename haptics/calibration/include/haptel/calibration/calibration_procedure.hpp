@@ -41,8 +41,8 @@
 #include <string>
 #include <vector>
 
-#include "haptel/config/calibration.hpp"
 #include "haptel/calibration/calibration.hpp"
+#include "haptel/config/calibration.hpp"
 #include "haptel/haptics/device.hpp"
 
 namespace haptel::haptics {
@@ -60,42 +60,44 @@ constexpr double kReferenceHalfSpan = 0.125;
 std::vector<Vec3d> DefaultTrackerReferences();
 
 struct CalibrationOptions {
-  bool auto_mode = false;         ///< unattended, sim device only
-  std::string user = "default";   ///< recorded in the file
-  bool glove = true;              ///< steps to run; skipped ones keep `base`
+  bool auto_mode = false;        ///< unattended, sim device only
+  std::string user = "default";  ///< recorded in the file
+  bool glove = true;             ///< steps to run; skipped ones keep `base`
   bool tracker = true;
   bool force = true;
-  DeviceCalibration base;         ///< starting values (and the sides not present)
+  DeviceCalibration base;  ///< starting values (and the sides not present)
   std::vector<Vec3d> references = DefaultTrackerReferences();  ///< m, device frame
-  double force_fraction = 0.7;    ///< largest command, × wrist force limit (slopes ≈ 1 ± 20 %)
-  int glove_samples = 20;         ///< readings averaged per posture
-  int wrist_samples = 50;         ///< readings averaged per reference pose
-  unsigned seed = 1;              ///< shuffles the posture order in auto mode
+  double force_fraction = 0.7;  ///< largest command, × wrist force limit (slopes ≈ 1 ± 20 %)
+  int glove_samples = 20;       ///< readings averaged per posture
+  int wrist_samples = 50;       ///< readings averaged per reference pose
+  unsigned seed = 1;            ///< shuffles the posture order in auto mode
 };
 
 /// Runs the steps on every side of `device`, prompting on `log` and reading
 /// the operator's answers from `in` when not in auto mode. Throws
 /// CalibrationError when a measurement is unusable or the device is lost.
-DeviceCalibration RunCalibration(Device& device, const CalibrationOptions& options, std::ostream& log,
-                                 std::istream& in);
+DeviceCalibration RunCalibration(Device& device, const CalibrationOptions& options,
+                                 std::ostream& log, std::istream& in);
 /// Same, answers read from std::cin.
-DeviceCalibration RunCalibration(Device& device, const CalibrationOptions& options, std::ostream& log);
+DeviceCalibration RunCalibration(Device& device, const CalibrationOptions& options,
+                                 std::ostream& log);
 
 /// Worst errors of one arm's calibration against the simulated truth.
 struct TruthErrors {
-  double tracker_scale_rel = 0.0;   ///< max over axes of |Δscale/scale|
-  double tracker_offset_m = 0.0;    ///< max over axes of |Δoffset|, m
-  double glove_gain_rel = 0.0;      ///< max over sensors of |Δgain/gain|
-  double glove_offset_rad = 0.0;    ///< max over sensors of |Δoffset|, rad
+  double tracker_scale_rel = 0.0;  ///< max over axes of |Δscale/scale|
+  double tracker_offset_m = 0.0;   ///< max over axes of |Δoffset|, m
+  double glove_gain_rel = 0.0;     ///< max over sensors of |Δgain/gain|
+  double glove_offset_rad = 0.0;   ///< max over sensors of |Δoffset|, rad
   /// max over sensors of the angle error over the postures' range, rad
   double glove_angle_rad = 0.0;
-  double force_slope_rel = 0.0;     ///< max over axes of |Δslope/slope|
+  double force_slope_rel = 0.0;  ///< max over axes of |Δslope/slope|
 };
 TruthErrors CompareWithTruth(const ArmCalibration& calibration, const SimArmTruth& truth);
 
 /// A readable table of the calibration per arm; with a sim device, the
 /// errors against its truth too.
-void PrintCalibrationSummary(std::ostream& out, const DeviceCalibration& calibration, const Device& device);
+void PrintCalibrationSummary(std::ostream& out, const DeviceCalibration& calibration,
+                             const Device& device);
 
 /// `haptel calibrate [--device FILE] [--out FILE] [--auto] [--user NAME]`.
 /// argv as main() received it; a leading "calibrate" word is accepted.

@@ -41,8 +41,8 @@ namespace haptel::haptics::udp {
 struct ArmUnits {
   Vec3d tracker_scale{1.0, 1.0, 1.0};  ///< metres = scale · raw + offset
   Vec3d tracker_offset{};
-  Vec3d force_slope{1.0, 1.0, 1.0};    ///< newtons = slope · command
-  double force_limit_n = 1e9;          ///< the arm saturates here (vector norm), N
+  Vec3d force_slope{1.0, 1.0, 1.0};  ///< newtons = slope · command
+  double force_limit_n = 1e9;        ///< the arm saturates here (vector norm), N
 };
 /// A sim arm's truth as ArmUnits.
 ArmUnits UnitsOf(const SimDevice& sim, Side side);
@@ -159,8 +159,8 @@ class ArmServer {
   TwoPortPassivity arm_end_;
   EnergyReport remote_;  ///< the client's, merged as its commands took effect
   bool remote_seen_ = false;
-  Vec3d position_{};     ///< m, the arm at the last service
-  Vec3d velocity_{};     ///< m/s, low-pass filtered
+  Vec3d position_{};  ///< m, the arm at the last service
+  Vec3d velocity_{};  ///< m/s, low-pass filtered
   int64_t last_service_ns_ = 0;
   int64_t last_request_ns_ = 0;
   double period_s_ = 0.001;  ///< the client's tick, from its requests

@@ -24,12 +24,12 @@
 /// a test passes a fake whose time moves only when the test (or a wait that
 /// nothing will answer) moves it, so retry counts and the lost transition do
 /// not depend on how loaded the machine is.
-#include "haptel/core/unique_fd.hpp"
 #include <array>
 #include <atomic>
 #include <cstdint>
 
 #include "haptel/config/device.hpp"
+#include "haptel/core/unique_fd.hpp"
 #include "haptel/haptics/device.hpp"
 #include "haptel/udp/udp_protocol.hpp"
 

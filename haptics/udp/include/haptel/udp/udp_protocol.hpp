@@ -79,10 +79,10 @@ std::string_view ToString(ErrorCode code);
 /// epoch, restarts its end too and echoes it, so both ends count from zero
 /// together. 80 bytes on the wire (PROTOCOL.md).
 struct EnergyReport {
-  bool active = false;   ///< this end runs its observer; when false the rest means nothing
-  uint32_t epoch = 0;    ///< set by the client; the server echoes the client's
-  Vec3d energy_in{};     ///< J per axis: what entered the channel at this end (E_in), ≥ 0
-  Vec3d charged{};       ///< J per axis: deficit this end could not dissipate itself, ≥ 0
+  bool active = false;        ///< this end runs its observer; when false the rest means nothing
+  uint32_t epoch = 0;         ///< set by the client; the server echoes the client's
+  Vec3d energy_in{};          ///< J per axis: what entered the channel at this end (E_in), ≥ 0
+  Vec3d charged{};            ///< J per axis: deficit this end could not dissipate itself, ≥ 0
   double dissipated_j = 0.0;  ///< J, this end's controller over all axes, ≥ 0
   uint64_t acted_ticks = 0;   ///< ticks this end's controller acted
   double max_alpha = 0.0;     ///< the largest damping (N·s/m) this end's controller added, ≥ 0
@@ -102,7 +102,7 @@ struct WristReply {
   int64_t device_ns = 0;  ///< the server's clock (not comparable with the client's)
   Vec3d position{};
   std::array<double, 4> orientation{1, 0, 0, 0};  ///< unit quaternion (w, x, y, z)
-  EnergyReport energy{};  ///< version 2 only: the device's end
+  EnergyReport energy{};                          ///< version 2 only: the device's end
 };
 struct GloveRequest {};
 struct GloveReply {

@@ -128,8 +128,8 @@ StudyReport ComputeReport(const StudyResults& results, PostHocMethod post_hoc, d
 
 /// Files written into a folder.
 struct ReportFiles {
-  std::filesystem::path html, trials_csv, answers_csv, summary_csv, notes_csv, demographics_csv, lap_times_png,
-      ranks_png, ratings_png, model_means_png;
+  std::filesystem::path html, trials_csv, answers_csv, summary_csv, notes_csv, demographics_csv,
+      lap_times_png, ranks_png, ratings_png, model_means_png;
 };
 
 /// Writes trials.csv, answers.csv, summary.csv, notes.csv (the
@@ -138,27 +138,32 @@ struct ReportFiles {
 /// no condition: one row per participant), lap_times.png, ranks.png,
 /// ratings.png (when there are scored questionnaires) and index.html into
 /// `dir` (created). Throws std::runtime_error naming a file it cannot write.
-ReportFiles WriteReport(const StudyResults& results, const StudyReport& report, const std::filesystem::path& dir);
+ReportFiles WriteReport(const StudyResults& results, const StudyReport& report,
+                        const std::filesystem::path& dir);
 
 /// The tables (one block per condition, participants as columns, as the
 /// thesis's tables 8.1–8.4) and the statistics, readable.
 std::string FormatReport(const StudyResults& results, const StudyReport& report);
 /// One JSON line (no newline).
-std::string ReportJson(const StudyResults& results, const StudyReport& report, const ReportFiles& files);
+std::string ReportJson(const StudyResults& results, const StudyReport& report,
+                       const ReportFiles& files);
 
 /// Draws the plots (report_plots.cpp).
-void DrawLapTimes(const StudyResults& results, const StudyReport& report, const std::filesystem::path& png);
+void DrawLapTimes(const StudyResults& results, const StudyReport& report,
+                  const std::filesystem::path& png);
 void DrawRanks(const StudyReport& report, const std::filesystem::path& png);
 /// `haptel study power`'s curve: each test's power per participant count
 /// with its 95 % interval, and the target as a dashed line. Throws
 /// std::runtime_error naming the file when it cannot be written.
-void DrawPowerCurve(const PowerResult& power, const std::string& title, const std::filesystem::path& png);
+void DrawPowerCurve(const PowerResult& power, const std::string& title,
+                    const std::filesystem::path& png);
 /// Returns false (and writes nothing) when no answer is a questionnaire's score.
 bool DrawRatings(const StudyResults& results, const std::filesystem::path& png);
 /// The mixed model's estimated mean lap time per condition (back-transformed
 /// to s) with its 95 % interval, and the reference lap when there is one.
 /// Returns false (and writes nothing) without a fitted model.
-bool DrawModelMeans(const StudyResults& results, const StudyReport& report, const std::filesystem::path& png);
+bool DrawModelMeans(const StudyResults& results, const StudyReport& report,
+                    const std::filesystem::path& png);
 
 /// The mixed model and the baseline in the report (report_model.cpp).
 /// Fits report.mixed_model from the results' trials, or says why not.

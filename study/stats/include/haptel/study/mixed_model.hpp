@@ -98,10 +98,11 @@ struct MixedModelCondition {
 /// The test of the condition effect as a whole: Satterthwaite's F test
 /// (its p is the test's), and the likelihood-ratio test for comparison.
 struct MixedModelConditionTest {
-  int degrees_of_freedom = 0;        ///< conditions with data − 1: F's numerator df, χ²'s df
-  double f = 0.0;                    ///< Satterthwaite's F (t² for two conditions)
-  double denominator_df = 0.0;       ///< F's denominator df, Satterthwaite's (the t test's for two conditions)
-  double p_value = 1.0;              ///< of the F test: the condition test's p
+  int degrees_of_freedom = 0;  ///< conditions with data − 1: F's numerator df, χ²'s df
+  double f = 0.0;              ///< Satterthwaite's F (t² for two conditions)
+  double denominator_df =
+      0.0;               ///< F's denominator df, Satterthwaite's (the t test's for two conditions)
+  double p_value = 1.0;  ///< of the F test: the condition test's p
   double ml_deviance_full = 0.0;     ///< −2 log L of the ML refit with condition
   double ml_deviance_reduced = 0.0;  ///< −2 log L of the ML refit without it
   double chi_square = 0.0;           ///< reduced − full (≥ 0)
@@ -121,7 +122,7 @@ struct MixedModelResult {
   /// The slope per position (per trial of experience); nullopt when the
   /// position was left out (see notes).
   std::optional<MixedModelContrast> position;
-  double mean_position = 0.0;  ///< where `mean` of each condition is taken
+  double mean_position = 0.0;         ///< where `mean` of each condition is taken
   double participant_variance = 0.0;  ///< σ_b², REML
   double residual_variance = 0.0;     ///< σ², REML
   /// σ_b² = 0: REML puts no variance between participants (lme4's
@@ -140,7 +141,7 @@ struct MixedModelResult {
 /// more than one observation, no more observations than fixed effects plus
 /// one, a non-finite response or position, a condition index out of range,
 /// or no variation left to estimate a residual variance from.
-MixedModelResult FitMixedModel(const std::vector<MixedModelObservation>& observations, int conditions,
-                               int reference = 0);
+MixedModelResult FitMixedModel(const std::vector<MixedModelObservation>& observations,
+                               int conditions, int reference = 0);
 
 }  // namespace haptel::study

@@ -90,12 +90,12 @@ BinomialInterval ClopperPearsonInterval(int successes, int trials, double confid
 struct PowerPoint {
   int participants = 0;
   int simulations = 0;
-  int friedman_significant = 0;  ///< simulations whose Friedman p < α
-  int lmm_significant = 0;       ///< simulations whose condition test (F) has p < α
-  int friedman_not_analysed = 0;  ///< Friedman could not be computed (counted as not finding)
-  int lmm_not_analysed = 0;       ///< the mixed model could not be fitted (likewise)
-  double friedman_power = 0.0;   ///< friedman_significant / simulations
-  double lmm_power = 0.0;        ///< lmm_significant / simulations
+  int friedman_significant = 0;        ///< simulations whose Friedman p < α
+  int lmm_significant = 0;             ///< simulations whose condition test (F) has p < α
+  int friedman_not_analysed = 0;       ///< Friedman could not be computed (counted as not finding)
+  int lmm_not_analysed = 0;            ///< the mixed model could not be fitted (likewise)
+  double friedman_power = 0.0;         ///< friedman_significant / simulations
+  double lmm_power = 0.0;              ///< lmm_significant / simulations
   BinomialInterval friedman_interval;  ///< 95 %, Clopper–Pearson
   BinomialInterval lmm_interval;
 };
@@ -117,8 +117,8 @@ struct PowerResult {
 /// in turn (0, 1, ...), participants / rows of that row's pool participants,
 /// uniformly with replacement. std::invalid_argument when `participants` is
 /// not a positive multiple of `rows` or a row has no participant in the pool.
-std::vector<size_t> DrawBalancedSample(const std::vector<PowerParticipant>& pool, int rows, int participants,
-                                       std::mt19937_64& random);
+std::vector<size_t> DrawBalancedSample(const std::vector<PowerParticipant>& pool, int rows,
+                                       int participants, std::mt19937_64& random);
 
 /// The Monte Carlo estimate described above, for a design of `conditions`
 /// conditions in `rows` order rows. std::invalid_argument (saying what was

@@ -104,7 +104,7 @@ struct FriedmanResult {
   double p_value_asymptotic = 1.0;
   /// Whether p_value is the exact permutation p (true) or the χ² one (false).
   bool p_exact = false;
-  double kendall_w = 0.0;            ///< coefficient of concordance, 0..1, tie-corrected
+  double kendall_w = 0.0;  ///< coefficient of concordance, 0..1, tie-corrected
 };
 
 /// Largest k for which FriedmanTest tries the exact p: each row has up to k!

@@ -7,7 +7,6 @@
 /// Reads and writes never block. Set-up errors throw SerialUnavailable (bad
 /// input, exit 2); a port that goes away while in use throws SerialLost
 /// (the vehicle node's exit 3).
-#include "haptel/core/unique_fd.hpp"
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -15,6 +14,7 @@
 #include <string>
 
 #include "haptel/core/cli.hpp"
+#include "haptel/core/unique_fd.hpp"
 
 namespace haptel::servo {
 

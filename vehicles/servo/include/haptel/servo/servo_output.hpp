@@ -51,7 +51,7 @@ struct ServoOutputCounters {
   uint64_t error_replies = 0;     ///< Get Errors replies read (Maestro)
   uint64_t replies_missing = 0;   ///< polls whose reply had not come by the next poll (Maestro)
   uint64_t unexpected_bytes = 0;  ///< bytes read that answer no request (dropped)
-  uint64_t polls_wrong = 0;       ///< poll windows that went wrong (an error bit, no reply, stray bytes)
+  uint64_t polls_wrong = 0;  ///< poll windows that went wrong (an error bit, no reply, stray bytes)
 };
 
 class ServoOutput {
@@ -127,9 +127,9 @@ class ServoOutput {
   uint16_t window_errors_ = 0;           ///< error bits of the replies in this window
   uint64_t window_unexpected_from_ = 0;  ///< counters_.unexpected_bytes when it opened
   int wrong_in_a_row_ = 0;
-  double wrong_since_s_ = 0.0;  ///< when the first window of the run opened
-  uint16_t wrong_errors_ = 0;   ///< error bits over the run
-  int wrong_unanswered_ = 0;    ///< polls without a reply over the run
+  double wrong_since_s_ = 0.0;     ///< when the first window of the run opened
+  uint16_t wrong_errors_ = 0;      ///< error bits over the run
+  int wrong_unanswered_ = 0;       ///< polls without a reply over the run
   uint64_t wrong_unexpected_ = 0;  ///< stray bytes over the run
   double window_opened_s_ = 0.0;
   bool untrusted_ = false;

@@ -33,8 +33,8 @@
 
 #include "haptel/config/airship.hpp"
 #include "haptel/config/blimp_course.hpp"
-#include "haptel/core/blimp_command.hpp"
 #include "haptel/config/blimp_course_geometry.hpp"
+#include "haptel/core/blimp_command.hpp"
 #include "haptel/mediator/blimp/observation.hpp"
 
 namespace haptel::mediator {
@@ -54,14 +54,14 @@ struct BlimpPilotConfig {
   double building_margin = 6.0;     ///< m: buildings this close to the way ahead are climbed over
   double takeoff_height = 2.5;      ///< m above the start before heading off at speed
   // Height.
-  double height_gain = 0.6;        ///< 1/s: climb rate per metre of height error
-  double max_climb = 1.5;          ///< m/s
-  double max_sink = 1.5;           ///< m/s
+  double height_gain = 0.6;  ///< 1/s: climb rate per metre of height error
+  double max_climb = 1.5;    ///< m/s
+  double max_sink = 1.5;     ///< m/s
   /// m/s: landing, the fastest sink at the ground, growing by flare_gain
   /// per metre above it (up to landing_max_sink).
   double touchdown_sink = 0.4;
-  double flare_gain = 0.3;        ///< 1/s
-  double landing_max_sink = 0.8;  ///< m/s (the course's crash speed is 1.5)
+  double flare_gain = 0.3;         ///< 1/s
+  double landing_max_sink = 0.8;   ///< m/s (the course's crash speed is 1.5)
   double vertical_gain = 10.0;     ///< N per m/s of climb-rate error
   double vertical_integral = 3.0;  ///< N per m of integrated climb-rate error (trims the weight)
   double vertical_drag_per_speed2 =
@@ -175,8 +175,8 @@ class BlimpAutoPilot {
   double target_z_ = 0.0;
   double helix_ = 0.0;
   bool helix_up_ = true;
-  bool sinking_ = false;  ///< over the landing circle, on the way down
-  bool turnabout_ = false;  ///< power off, turning on the tail rotor
+  bool sinking_ = false;           ///< over the landing circle, on the way down
+  bool turnabout_ = false;         ///< power off, turning on the tail rotor
   double turnabout_since_ = -1e9;  ///< when the turnabout began, or the last one ended
   Eigen::Vector2d wind_ = Eigen::Vector2d::Zero();
 };
