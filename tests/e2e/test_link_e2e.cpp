@@ -377,12 +377,15 @@ TEST_CASE(
     "a run whose link reaches beyond the host without --security says so in one line; --insecure "
     "silences it") {
   const auto dir = test::ScratchDir("e2e-insecure");
-  // A folder for a database: refused (exit 2) right after the link's line,
-  // before anything is spawned: the line is what is checked.
+  // A file that is not a database: refused (exit 2) when it is opened, right
+  // after the link's line and before anything is spawned: the line is what
+  // is checked. (A folder is refused earlier, with the other options.)
+  const auto not_a_database = dir / "notes.db";
+  std::ofstream(not_a_database) << std::string(200, 'x') << '\n';
   const std::vector<std::string> base{Bin("haptel"), "run",
                                       "--track",     "config/tracks/test-short.yaml",
                                       "--dds-peers", "127.0.0.1,10.0.0.7",
-                                      "--database",  dir.string()};
+                                      "--database",  not_a_database.string()};
   std::vector<std::string> insecure = base;
   insecure.push_back("--insecure");
   std::vector<std::string> loopback = base;
