@@ -13,6 +13,7 @@
 #include <functional>
 #include <stdexcept>
 #include <string_view>
+#include <thread>
 
 namespace haptel::study {
 namespace {
@@ -342,10 +343,27 @@ void ConsoleServer::HeadDone(int fd) {
 }
 
 void ConsoleServer::StopAll() {
-  {
-    const std::lock_guard<std::mutex> lock(mutex_);
-    stopping_ = true;
-    for (const auto& [fd, c] : open_) shutdown(fd, SHUT_RDWR);
+  // A request being answered (its head read) may be the one that ended the
+  // study (Finish): its answer is written before its socket is cut, within
+  // a grace; connections still without their head are cut at once.
+  constexpr auto kGrace = std::chrono::seconds(2);
+  const Clock::time_point until = Clock::now() + kGrace;
+  for (;;) {
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      stopping_ = true;
+      bool answering = false;
+      const bool late = Clock::now() >= until;
+      for (const auto& [fd, c] : open_) {
+        if (c.head_done && !late) {
+          answering = true;
+        } else if (!c.cut) {
+          shutdown(fd, SHUT_RDWR);
+        }
+      }
+      if (!answering) break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
   stop();
 }

@@ -39,8 +39,10 @@ class ConsoleServer : public httplib::Server {
   ConsoleServer(const ConnectionPolicy& policy, TlsContext tls);
   ~ConsoleServer() override;
 
-  /// Stops accepting and ends every open connection at once (slow clients
-  /// included), so that listen_after_bind() returns promptly.
+  /// Stops accepting and ends every open connection (slow clients included)
+  /// so that listen_after_bind() returns promptly; a request already being
+  /// answered gets up to 2 s to write its answer first (the Finish that
+  /// ended the study is answered, not cut).
   void StopAll();
   ConnectionCounters counters() const;
   bool tls() const { return tls_ != nullptr; }

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <fstream>
 #include <iterator>
+#include <memory>
 #include <thread>
 
 #include "console_client.hpp"
@@ -222,6 +223,42 @@ TEST_CASE("The console adds participants to an open study, each once, and finish
   REQUIRE(picture);
   CHECK(picture->status == 404);
   CHECK(console.video_frames() == 0);
+}
+
+TEST_CASE("The Finish that ends an open study is answered before the console stops") {
+  // The study ends as soon as Finish is taken, and the console's end cut
+  // every open socket: the Finish's own 303 could be cut before it was
+  // written (a person study's e2e case saw no answer under load).
+  const auto dir = test::ScratchDir("study-console-finish");
+  StudyConfig config = SmallStudy(dir, "finish", "person", {{"cockpit", "cockpit"}});
+  int answered = 0;
+  constexpr int kRounds = 25;
+  for (int round = 0; round < kRounds; ++round) {
+    ConsoleOptions options;
+    options.port = 0;
+    auto console = std::make_unique<StudyConsole>(config, std::vector<PlannedTrial>{},
+                                                  dir / ("finish-" + std::to_string(round) + ".db"),
+                                                  std::map<std::string, Questionnaire>{}, options);
+    test::ConsoleClient client("127.0.0.1", console->port());
+    REQUIRE_FALSE(client.token().empty());
+    int finish_status = 0;  // 0: no answer
+    std::atomic<bool> stop{false};
+    std::thread press([&] {
+      // Finish is refused (409) until the study waits for more.
+      for (int i = 0; i < 500; ++i) {
+        const auto finish = client.Post("/finish");
+        finish_status = finish ? finish->status : 0;
+        if (finish_status != 409) return;
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      }
+      stop.store(true);
+    });
+    CHECK_FALSE(console->WaitForMore(stop));
+    console.reset();  // at once, as the study's end does
+    press.join();
+    answered += finish_status == 303 ? 1 : 0;
+  }
+  CHECK(answered == kRounds);
 }
 
 TEST_CASE("the thumbnail is the picture the trial's session hands over, as it came") {
