@@ -194,7 +194,7 @@ TEST_CASE(
   const auto dir = test::ScratchDir("e2e-study-abort");
   const auto file = SmallStudy(dir, 1);
   const auto db = dir / "abort.db";
-  const int port = 20000 + static_cast<int>((getpid() + 7919) % 20000);
+  const int port = test::FreeLoopbackPort();
   Child study({Bin("haptel"), "study", "run", file.string(), "--database", db.string(), "--domain",
                std::to_string(test::UniqueDomain(43)), "--console", "--port", std::to_string(port),
                "--json"});
@@ -498,7 +498,7 @@ TEST_CASE(
                          "trial_cap_s: 12\n"
                          "questionnaires: [thesis]\n";  // no participants: added in the console
   const auto db = dir / "person.db";
-  const int port = 20000 + static_cast<int>(getpid() % 20000);
+  const int port = test::FreeLoopbackPort();
   Child study({Bin("haptel"), "study", "run", file.string(), "--database", db.string(), "--domain",
                std::to_string(test::UniqueDomain(47)), "--port", std::to_string(port), "--json"});
   test::ConsoleClient console("127.0.0.1", port);

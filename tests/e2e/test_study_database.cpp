@@ -40,20 +40,6 @@ namespace {
 
 std::string Bin(const std::string& name) { return (test::BinDir() / name).string(); }
 
-/// A loopback TCP port nothing listens on now (the kernel's choice).
-int FreePort() {
-  const int fd = socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in at{};
-  at.sin_family = AF_INET;
-  at.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  socklen_t size = sizeof at;
-  const bool ok = fd >= 0 && bind(fd, reinterpret_cast<sockaddr*>(&at), sizeof at) == 0 &&
-                  getsockname(fd, reinterpret_cast<sockaddr*>(&at), &size) == 0;
-  if (fd >= 0) close(fd);
-  if (!ok) throw std::runtime_error("no free loopback port");
-  return ntohs(at.sin_port);
-}
-
 /// A read-only connection of the test's own, closed when it goes.
 class Db {
  public:
@@ -125,7 +111,7 @@ TEST_CASE(
                          "practice: false\n"
                          "trial_cap_s: 12\n";
   const auto db = dir / "shared.db";
-  const int port = FreePort();
+  const int port = test::FreeLoopbackPort();
   Child study({Bin("haptel"), "study", "run", file.string(), "--database", db.string(), "--domain",
                std::to_string(test::UniqueDomain(61)), "--port", std::to_string(port)});
   test::ConsoleClient console("127.0.0.1", port);
