@@ -49,6 +49,7 @@
 #include "haptel/servo/sim_servo_controller.hpp"
 #include "haptel/study/console.hpp"
 #include "haptel/study/questionnaire.hpp"
+#include "haptel/testing/loopback.hpp"
 #include "haptel/udp/udp_protocol.hpp"
 #include "haptel/vehicles/candump_log.hpp"
 #include "haptel/vehicles/odrive_can.hpp"
@@ -513,28 +514,6 @@ int HttpExchange(int port, const Bytes& request) {
   return std::sscanf(answer.c_str(), "HTTP/1.%*d %d", &status) == 1 ? status : 0;
 }
 
-/// A connection to 127.0.0.1:`port` from `source` (another loopback
-/// address is another client to the console); -1 when it fails.
-int ConnectFrom(const std::string& source, int port) {
-  const int fd = socket(AF_INET, SOCK_STREAM, 0);
-  if (fd < 0) return -1;
-  sockaddr_in from{};
-  from.sin_family = AF_INET;
-  inet_pton(AF_INET, source.c_str(), &from.sin_addr);
-  sockaddr_in to{};
-  to.sin_family = AF_INET;
-  to.sin_port = htons(static_cast<uint16_t>(port));
-  inet_pton(AF_INET, "127.0.0.1", &to.sin_addr);
-  if (bind(fd, reinterpret_cast<sockaddr*>(&from), sizeof from) != 0 ||
-      connect(fd, reinterpret_cast<sockaddr*>(&to), sizeof to) != 0) {
-    close(fd);
-    return -1;
-  }
-  timeval wait{10, 0};
-  setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &wait, sizeof wait);
-  return fd;
-}
-
 /// The slowest of 5 page requests (GET /, from 127.0.0.1, the
 /// experimenter's address) while 100 slow connections hold on: 40 from
 /// 127.0.0.1 and 3 from each of 127.0.0.2..21, half dribbling a partial
@@ -554,7 +533,7 @@ double PageUnderSlowClientsMs(int port) {
     while (!stop.load()) {
       for (size_t i = 0; i < fds.size(); ++i) {
         if (fds[i] < 0) {
-          fds[i] = ConnectFrom(from(i), port);
+          fds[i] = testing::ConnectFrom(from(i), port, 10);
           sent[i] = 0;
           if (fds[i] >= 0) ++opened;
           continue;
@@ -580,7 +559,7 @@ double PageUnderSlowClientsMs(int port) {
   double slowest_ms = 0.0;
   for (int i = 0; i < 5; ++i) {
     const int64_t t0 = MonotonicNs();
-    const int fd = ConnectFrom("127.0.0.1", port);
+    const int fd = testing::ConnectFrom("127.0.0.1", port, 10);
     std::string answer;
     if (fd >= 0) {
       const std::string r = "GET / HTTP/1.1\r\nHost: 127.0.0.1:" + std::to_string(port) +

@@ -31,6 +31,7 @@
 #include "haptel/core/child_process.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/core/json.hpp"
+#include "haptel/testing/loopback.hpp"
 #include "smoke.hpp"
 
 namespace haptel::bench {
@@ -53,21 +54,6 @@ constexpr int kStudyFailuresAllowed = 3;
 enum class Kind { kStudy, kRun, kReader };
 constexpr const char* kKindNames[] = {"study", "run", "reader"};
 const char* Name(Kind k) { return kKindNames[static_cast<int>(k)]; }
-
-/// A loopback TCP port nothing listens on now (the kernel's choice): the
-/// console's, kept across the study's restarts.
-int FreePort() {
-  const int fd = socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in at{};
-  at.sin_family = AF_INET;
-  at.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  socklen_t size = sizeof at;
-  const bool ok = fd >= 0 && bind(fd, reinterpret_cast<sockaddr*>(&at), sizeof at) == 0 &&
-                  getsockname(fd, reinterpret_cast<sockaddr*>(&at), &size) == 0;
-  if (fd >= 0) close(fd);
-  if (!ok) throw std::runtime_error("no free loopback port for the console");
-  return ntohs(at.sin_port);
-}
 
 std::unique_ptr<ChildProcess> Start(const std::string& program,
                                     const std::vector<std::string>& words) {
@@ -312,7 +298,7 @@ int BenchSoakMain(int argc, const char* const* argv) {
       }
     }
     seed = static_cast<uint32_t>(args.Int("seed", 0, 1 << 30).value_or(1));
-    port = args.Int("port", 1024, 65535).value_or(FreePort());
+    port = args.Int("port", 1024, 65535).value_or(testing::FreeLoopbackPort());
     domain = args.Int("domain", 0, 232).value_or(domain);
     if (!fs::exists(kSqliteTool)) {
       throw UsageError(std::string("the sqlite3 tool is not at ") + kSqliteTool +

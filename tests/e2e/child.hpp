@@ -1,19 +1,14 @@
 #pragma once
 // The program under an end-to-end test: the product's own ChildProcess with
 // its stdout and stderr captured (one way to start processes in Haptel).
-#include <arpa/inet.h>
-#include <netinet/in.h>
-#include <sys/socket.h>
-#include <unistd.h>
-
 #include <memory>
 #include <regex>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "haptel/core/child_process.hpp"
 #include "haptel/core/json.hpp"
+#include "haptel/testing/loopback.hpp"
 #include "test_env.hpp"
 
 namespace haptel::test {
@@ -72,20 +67,6 @@ inline std::string JsonField(const std::string& json, const std::string& key) {
   return JsonFieldOf(json, key);
 }
 
-/// A loopback TCP port nothing listens on now (the kernel's choice), for a
-/// console a child serves: a port derived from the pid can be one another
-/// program holds (an outgoing connection's ephemeral port among them).
-inline int FreeLoopbackPort() {
-  const int fd = socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in at{};
-  at.sin_family = AF_INET;
-  at.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  socklen_t size = sizeof at;
-  const bool ok = fd >= 0 && bind(fd, reinterpret_cast<sockaddr*>(&at), sizeof at) == 0 &&
-                  getsockname(fd, reinterpret_cast<sockaddr*>(&at), &size) == 0;
-  if (fd >= 0) close(fd);
-  if (!ok) throw std::runtime_error("no free loopback port");
-  return ntohs(at.sin_port);
-}
+using haptel::testing::FreeLoopbackPort;
 
 }  // namespace haptel::test

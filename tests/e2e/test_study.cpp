@@ -23,6 +23,7 @@
 #include "../study/console_client.hpp"
 #include "child.hpp"
 #include "haptel/record/recorder.hpp"
+#include "study_file.hpp"
 #include "test_env.hpp"
 #include "xserver.hpp"
 
@@ -269,18 +270,11 @@ TEST_CASE(
   // cap, a few seconds of CPU instead of two real laps, and no loop can fall
   // short of its rate, so no trial is flagged and run again.
   const auto dir = test::ScratchDir("e2e-study-cap");
-  const auto source = std::filesystem::current_path();
   const auto file = dir / "cap-study.yaml";
   {
     std::ofstream out(file);
-    out << "name: cap-e2e\n"
-           "run: "
-        << (source / "config/haptel.yaml").string()
-        << "\n"
-           "track: "
-        << (source / "config/tracks/test-short.yaml").string()
-        << "\n"
-           "operators: synthetic\n"
+    out << test::StudyFileHead("cap-e2e")
+        << "operators: synthetic\n"
            "conditions:\n"
            "  - {name: wheel, interface: cockpit}\n"
            "  - {name: hand, interface: gesture}\n"
@@ -433,17 +427,10 @@ TEST_CASE("a study that cannot work is refused before anything runs") {
     const char* display = std::getenv("DISPLAY");
     const std::string saved = display != nullptr ? display : "";
     unsetenv("DISPLAY");
-    const auto source = std::filesystem::current_path();
     const auto person = dir / "practice.yaml";
     std::ofstream(person)
-        << "name: practice-e2e\n"
-           "run: "
-        << (source / "config/haptel.yaml").string()
-        << "\n"
-           "track: "
-        << (source / "config/tracks/test-short.yaml").string()
-        << "\n"
-           "operators: person\n"
+        << test::StudyFileHead("practice-e2e")
+        << "operators: person\n"
            "conditions: [{name: one, interface: gesture}, {name: two, interface: cockpit}]\n"
            "design: {order: fixed}\n";
     const auto fresh = dir / "practice.db";
@@ -477,16 +464,9 @@ TEST_CASE(
   // A display of the test's own: the practice lap is driven with the keys in a window.
   const test::XServer x;
   const auto dir = test::ScratchDir("e2e-study-person");
-  const auto source = std::filesystem::current_path();
   const auto file = dir / "person.yaml";
-  std::ofstream(file) << "name: person-e2e\n"
-                         "run: "
-                      << (source / "config/haptel.yaml").string()
-                      << "\n"
-                         "track: "
-                      << (source / "config/tracks/test-short.yaml").string()
-                      << "\n"
-                         "operators: person\n"
+  std::ofstream(file) << test::StudyFileHead("person-e2e")
+                      << "operators: person\n"
                          "conditions:\n"
                          "  - {name: first, interface: gesture}\n"
                          "  - {name: second, interface: gesture}\n"

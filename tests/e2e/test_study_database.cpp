@@ -30,6 +30,7 @@
 #include "../study/console_client.hpp"
 #include "child.hpp"
 #include "file_size_limit.hpp"
+#include "study_file.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;
@@ -92,18 +93,11 @@ std::string SimulatedRun(const fs::path& db, int domain) {
 TEST_CASE(
     "a study's acknowledged rows survive other processes opening its database, and a kill -9") {
   const auto dir = test::ScratchDir("e2e-study-shared-db");
-  const auto source = fs::current_path();
   const auto file = dir / "open.yaml";
   // A person study with no participants: they are added in the console, and
   // nothing else runs until a trial is started (none is).
-  std::ofstream(file) << "name: shared-db-e2e\n"
-                         "run: "
-                      << (source / "config/haptel.yaml").string()
-                      << "\n"
-                         "track: "
-                      << (source / "config/tracks/test-short.yaml").string()
-                      << "\n"
-                         "operators: person\n"
+  std::ofstream(file) << test::StudyFileHead("shared-db-e2e")
+                      << "operators: person\n"
                          "conditions:\n"
                          "  - {name: first, interface: gesture}\n"
                          "  - {name: second, interface: gesture}\n"
@@ -173,16 +167,9 @@ TEST_CASE(
     "a trial the database cannot take ends the study as not saved; its file says whose trial it "
     "was") {
   const auto dir = test::ScratchDir("e2e-study-full-disk");
-  const auto source = fs::current_path();
   const auto file = dir / "full.yaml";
-  std::ofstream(file) << "name: full-disk-e2e\n"
-                         "run: "
-                      << (source / "config/haptel.yaml").string()
-                      << "\n"
-                         "track: "
-                      << (source / "config/tracks/test-short.yaml").string()
-                      << "\n"
-                         "operators: synthetic\n"
+  std::ofstream(file) << test::StudyFileHead("full-disk-e2e")
+                      << "operators: synthetic\n"
                          "conditions:\n"
                          "  - {name: first, interface: gesture}\n"
                          "  - {name: second, interface: gesture}\n"

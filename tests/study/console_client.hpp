@@ -12,6 +12,8 @@
 #include <regex>
 #include <string>
 
+#include "haptel/testing/loopback.hpp"
+
 namespace haptel::test {
 
 /// The form token in a console page ("" when the page has no form).
@@ -47,27 +49,7 @@ class ConsoleClient {
   std::string token_;
 };
 
-/// A TCP connection to 127.0.0.1:`port` from `source` (any 127.x.y.z: each
-/// is another client address to the console). -1 when it fails.
-inline int ConnectFrom(const std::string& source, int port) {
-  const int fd = socket(AF_INET, SOCK_STREAM, 0);
-  if (fd < 0) return -1;
-  sockaddr_in from{};
-  from.sin_family = AF_INET;
-  inet_pton(AF_INET, source.c_str(), &from.sin_addr);
-  sockaddr_in to{};
-  to.sin_family = AF_INET;
-  to.sin_port = htons(static_cast<uint16_t>(port));
-  inet_pton(AF_INET, "127.0.0.1", &to.sin_addr);
-  if (bind(fd, reinterpret_cast<sockaddr*>(&from), sizeof from) != 0 ||
-      connect(fd, reinterpret_cast<sockaddr*>(&to), sizeof to) != 0) {
-    close(fd);
-    return -1;
-  }
-  timeval wait{20, 0};  // a test that waits longer has failed
-  setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &wait, sizeof wait);
-  return fd;
-}
+using haptel::testing::ConnectFrom;
 
 inline bool SendAll(int fd, const std::string& bytes) {
   size_t sent = 0;
