@@ -36,7 +36,7 @@ std::string Read(const fs::path& file) {
   return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
-/// Every counter name the JSON line and the database carry (README, "The JSON line").
+/// Every counter name the JSON line and the database carry (docs/results.md, "The JSON line").
 const std::vector<std::string> kCounters{"servo_overruns",
                                          "servo_device_lost_ticks",
                                          "servo_no_data_ticks",

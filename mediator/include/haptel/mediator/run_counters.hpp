@@ -5,7 +5,7 @@
 /// The loops count instead of logging (DESIGN: status codes and counters in
 /// loops); like MuJoCo's warning counters, every count reaches the user: the
 /// progress line shows the non-zero ones, the JSON line and the database row
-/// carry them all. The names and their meanings are listed in README, "The
+/// carry them all. The names and their meanings are listed in docs/results.md, "The
 /// JSON line"; CollectCounters gives them in that order, zeros included
 /// (a part the run does not have counts 0).
 #include <cstdint>

@@ -48,7 +48,7 @@ struct ContactPoint {
 };
 
 /// One of the counters the session's parts keep (servo overruns, clamped
-/// forces, dropped video frames, ...): names and meanings in README, "The
+/// forces, dropped video frames, ...): names and meanings in docs/results.md, "The
 /// JSON line".
 struct RunCounter {
   std::string name;
