@@ -226,15 +226,15 @@ class BlimpSession final : public FamilySession {
       if (!s.pose_valid()) continue;
       predictor_.OnState(Sample(ts, s, t0));
       const BlimpObservation o = Observe(ts, s);
-      // With prediction the pilot sees the blimp as it will be (Drive).
+      // With prediction the pilot sees the blimp as it will be (Command).
       if (pilot_ && !setup_.predict) pilot_->Observe(o);
       lap_.Update(o);
       trace.Add(ts, s.x(), s.y(), s.z(), o.velocity.norm(), s.contact());
     }
   }
 
-  std::optional<LoopEnd> Drive(double t, int64_t now, const interfaces::InputState& person,
-                               bool vehicle_up, HapticSide& haptic, VehicleLink& link) override {
+  std::optional<LoopEnd> Command(double t, int64_t now, const interfaces::InputState& person,
+                                 bool vehicle_up, HapticSide& haptic, VehicleLink& link) override {
     // The pilot's hands and gaze; a person's head turns with mouse-look.
     head_ = {person.head_pan, person.head_tilt};
     // With prediction the pilot flies the blimp as it will be when the

@@ -2,9 +2,10 @@
 // The part of a session that depends on the vehicle's family (VehicleFamily):
 // its world and lap timer, the interfaces that make its commands, the
 // operator who drives it, and what its view and progress lines add. The one
-// session loop (RunSession) is written over it; the robot's part is in
-// robot_session.cpp, the blimp's in blimp_session.cpp. Internal to the
-// mediator library.
+// session loop (session.cpp, for one vehicle or a fleet) is written over it
+// and never asks which family it drives; the robot's part is in
+// robot_session.cpp, the blimp's in blimp_session.cpp, and MakeFamilySession
+// picks one. Internal to the mediator library.
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -12,12 +13,15 @@
 #include <filesystem>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "haptel/interfaces/input.hpp"
+#include "haptel/mediator/fleet.hpp"
 #include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/interface_handover.hpp"
+#include "haptel/mediator/run_counters.hpp"
 #include "haptel/mediator/session.hpp"
 #include "haptel/mediator/session_physics.hpp"
 #include "haptel/mediator/session_view.hpp"
@@ -66,12 +70,13 @@ class FamilySession : public HandoverSide {
   /// the trace and the operator see each pose.
   virtual void Drain(VehicleLink& link, VehicleHealth& health, HapticSide& haptic, RunTrace& trace,
                      int64_t t0_ns) = 0;
-  /// Each tick: the person's requests, the operator's act, the interface's
-  /// command (sent when due; a safe one while the vehicle is not up). Ends
-  /// the run when the person's controller went away.
-  virtual std::optional<LoopEnd> Drive(double t_s, int64_t now_ns,
-                                       const interfaces::InputState& person, bool vehicle_up,
-                                       HapticSide& haptic, VehicleLink& link) = 0;
+  /// Each tick the vehicle is the operator's: the person's requests, the
+  /// operator's act, the interface's command (sent when due; a safe one
+  /// while the vehicle is not up). Ends the run when the person's
+  /// controller went away.
+  virtual std::optional<LoopEnd> Command(double t_s, int64_t now_ns,
+                                         const interfaces::InputState& person, bool vehicle_up,
+                                         HapticSide& haptic, VehicleLink& link) = 0;
   /// The interfaces are switching (F1–F6) and ramp the force scale themselves.
   virtual bool SwitchingInterface() const { return false; }
   /// The lap's own end: completed (or crashed).
@@ -116,5 +121,38 @@ std::unique_ptr<FamilySession> MakeRobotSession(const SessionSetup& setup, Hapti
 /// game controller), the automatic pilot or a person.
 std::unique_ptr<FamilySession> MakeBlimpSession(const SessionSetup& setup, HapticSide& haptic,
                                                 interfaces::InputBox& input, RunRecord& rec);
+/// The part of `setup.vehicle`'s family (the robot's or the blimp's above):
+/// the one place a session tells the families apart.
+inline std::unique_ptr<FamilySession> MakeFamilySession(const SessionSetup& setup,
+                                                        HapticSide& haptic,
+                                                        interfaces::InputBox& input,
+                                                        const std::atomic<bool>& interrupted,
+                                                        RunRecord& rec) {
+  switch (setup.vehicle.family()) {
+    case VehicleFamily::kRobot:
+      return MakeRobotSession(setup, haptic, input, interrupted, rec);
+    case VehicleFamily::kBlimp:
+      return MakeBlimpSession(setup, haptic, input, rec);
+  }
+  throw std::logic_error("vehicle family without a session part");
+}
+
+/// One vehicle of a session (a single run's, or one of a fleet's) and what
+/// the loop keeps for it: its family's part, its link, health, trace and
+/// loop watch, and its result. Built in that order by the loop's set-up.
+struct VehicleRun {
+  explicit VehicleRun(const SessionSetup& s) : setup(s) {}
+
+  const SessionSetup& setup;
+  FleetVehicleResult out;  ///< its outcome and record; a fleet's turn figures
+  std::unique_ptr<FamilySession> family;
+  std::unique_ptr<VehicleLink> link;
+  std::unique_ptr<VehicleHealth> health;
+  std::unique_ptr<RunTrace> trace;
+  std::unique_ptr<LoopWatch> watch;
+  bool done = false;      ///< its course is over (completed, lost, crashed, capped)
+  bool lost = false;      ///< nothing more to hold: its process or its states are gone
+  view::Overlay overlay;  ///< its view's overlay, made each tick the view is fed
+};
 
 }  // namespace haptel::mediator

@@ -261,7 +261,7 @@ int RunFleetCommand(int argc, const char* const* argv, const std::atomic<bool>& 
   }
   auto recorder =
       cli::ReadInput([&] { return std::make_unique<Recorder>(setup.vehicles.at(0).run.database); });
-  FleetResult fleet = RunFleet(setup, interrupted);
+  FleetResult fleet = RunSession(setup, interrupted);
   std::vector<int64_t> ids;
   bool recorded = true;
   for (size_t i = 0; i < fleet.vehicles.size(); ++i) {

@@ -168,7 +168,7 @@ class RobotSession final : public FamilySession {
         predictor_.OnState({ts, s.x(), s.y(), s.heading(), s.speed(), s.yaw_rate(),
                             s.motor_left_level(), s.motor_right_level()});
         reported_ = {ts, s.x(), s.y(), s.heading()};
-        // With prediction the operator sees the vehicle where it is now (Drive).
+        // With prediction the operator sees the vehicle where it is now (Command).
         if (!setup_.predict)
           op_->Observe({ts, s.x(), s.y(), s.heading(), s.bumper_left(), s.bumper_right()});
         lap_.Update(ts, Vec2(s.x(), s.y()));
@@ -191,8 +191,8 @@ class RobotSession final : public FamilySession {
     }
   }
 
-  std::optional<LoopEnd> Drive(double t, int64_t now, const interfaces::InputState& person,
-                               bool vehicle_up, HapticSide& haptic, VehicleLink& link) override {
+  std::optional<LoopEnd> Command(double t, int64_t now, const interfaces::InputState& person,
+                                 bool vehicle_up, HapticSide& haptic, VehicleLink& link) override {
     // A person's requests: another interface (F1–F6); a controller that went away.
     if (person.interface_requests != requests_seen_) {
       requests_seen_ = person.interface_requests;
@@ -211,7 +211,7 @@ class RobotSession final : public FamilySession {
     FinishDeferred(t, haptic);
     if (person.pad_disconnects != disconnects_seen_) {
       disconnects_seen_ = person.pad_disconnects;
-      if (interfaces_->current().name() == "gamepad")
+      if (setup_.interfaces[static_cast<size_t>(interfaces_->current_index())].is_gamepad())
         return LoopEnd{Outcome::kAborted, "the game controller was disconnected"};
     }
     // The operator acts on the device; the interface reads the device.

@@ -1,15 +1,26 @@
+// The one session loop: `haptel run`'s single vehicle, driven all along,
+// and a fleet's vehicles (`haptel run --fleet`), driven in turns
+// (fleet_turns.hpp), go through the same steps over the same per-vehicle
+// parts (VehicleRun), whatever their family (FamilySession).
 #include "haptel/mediator/session.hpp"
+
+#include <sys/resource.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
+#include <limits>
 #include <memory>
+#include <stdexcept>
+#include <thread>
 
 #include "family_session.hpp"
-#include "haptel/config/error.hpp"
+#include "fleet_turns.hpp"
 #include "haptel/config/link.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/core/log.hpp"
+#include "haptel/mediator/fleet.hpp"
 #include "haptel/mediator/run_counters.hpp"
 #include "haptel/view/sdl_input.hpp"
 #include "simulated_time.hpp"
@@ -86,230 +97,503 @@ void RecordSimulatedFigures(const SimulatedTime& simulated, int64_t session_ns, 
   }
 }
 
-}  // namespace
+/// The process's CPU time (every thread), s.
+double ProcessCpuS() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+         static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec) * 1e-6;
+}
 
-SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& interrupted) {
-  const int64_t wall_start_ns = RealMonotonicNs();
-  const double cpu_start_s = ThreadCpuSeconds();
-  // In simulated time the clock comes first: every stamp the set-up takes is
-  // on it. Destroyed last, back to the real clock.
-  std::unique_ptr<SimulatedTime> simulated;
-  if (setup.simulated_time) simulated = std::make_unique<SimulatedTime>(setup);
-  const RunConfig& run = setup.run;
-  SessionResult result;
-  RunRecord& rec = result.record;
-  rec.started_wall_ns = WallNs();
-  rec.config_name = run.name;
-  rec.vehicle = setup.vehicle.name;
-  rec.vehicle_kind = setup.vehicle.kind;
-  rec.link_fault = setup.run.link.fault.enabled ? LinkFaultText(setup.run.link.fault) : "";
-  rec.operator_kind = setup.operator_kind;
-  rec.device = setup.device.name;
+/// "fleet <name> <started, UTC>": the name the rows of one fleet run share.
+std::string FleetRunName(const std::string& fleet, int64_t wall_ns) {
+  const std::time_t seconds = static_cast<std::time_t>(wall_ns / 1000000000);
+  std::tm utc{};
+  gmtime_r(&seconds, &utc);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &utc);
+  return "fleet " + fleet + " " + text;
+}
 
-  // --- The haptic side first, then the family's part (its world, its
-  // interfaces, its operator): the hands are held before anything moves. ---
-  HapticSide haptic(setup.device, setup.calibration, setup.gravity, run.op, setup.trace);
-  interfaces::InputBox input;
-  std::unique_ptr<FamilySession> family;
-  switch (setup.vehicle.family()) {
-    case VehicleFamily::kRobot:
-      family = MakeRobotSession(setup, haptic, input, interrupted, rec);
-      break;
-    case VehicleFamily::kBlimp:
-      family = MakeBlimpSession(setup, haptic, input, rec);
-      break;
+/// The session loop over the run's vehicles: one, driven all along (a
+/// single run), or a fleet's, driven in turns (FleetTurns). Its steps: the
+/// set-up (SetUp: the haptic side, each vehicle's family part, link and
+/// health, the view); each tick (Loop), the operator side, every vehicle's
+/// states and health (WatchVehicles), the fleet's turn, the commands
+/// (CommandVehicles), the view (FeedView), the courses' and the session's
+/// limits (CheckLimits), the progress lines (LogProgress); and the end
+/// (Finish: made safe, stopped, recorded). Each vehicle's result is in its
+/// VehicleRun's `out`.
+class SessionLoop {
+ public:
+  /// `fleet` and `fleet_result`: a fleet's run (both null: one vehicle).
+  SessionLoop(const std::vector<const SessionSetup*>& setups, const FleetConfig* fleet,
+              FleetResult* fleet_result, const std::atomic<bool>& interrupted);
+
+  void Run() {
+    if (SetUp()) Finish(Loop());
   }
-  if (interrupted.load()) {
-    // During the set-up (thousands of scene bodies take a while): nothing has
-    // started yet, nothing is spawned; the run ends here, recorded.
-    result.outcome = Outcome::kInterrupted;
-    result.message = "interrupted by the operator during the set-up";
-    rec.outcome = ToString(result.outcome);
-    family->AbandonSetup(result);
-    return result;
+  std::vector<std::unique_ptr<VehicleRun>>& vehicles() { return vehicles_; }
+
+ private:
+  /// False when interrupted before anything started (recorded so).
+  bool SetUp();
+  void AbandonSetup();
+  void Link(VehicleRun& vehicle);
+  void SayLinked(const VehicleRun& vehicle) const;
+  void OpenView();
+  /// The loops until the session's end (none: every course of a fleet is over).
+  std::optional<LoopEnd> Loop();
+  /// Sleeps until the next tick (in simulated time: steps every part to it).
+  void Pace();
+  std::optional<LoopEnd> WatchVehicles(int64_t now_ns, double t_s);
+  std::optional<LoopEnd> CommandVehicles(const interfaces::InputState& person, int64_t now_ns,
+                                         double t_s, double dt_s);
+  void FeedView(int64_t now_ns, double t_s);
+  std::optional<LoopEnd> CheckLimits(double t_s);
+  void LogProgress(int64_t now_ns, double t_s);
+  /// A vehicle's end: the session's for a single run; a fleet's turns say.
+  std::optional<LoopEnd> OnVehicleEnd(VehicleRun& vehicle, LoopEnd end);
+  void Finish(const std::optional<LoopEnd>& end);
+  void StopLinks();
+
+  const SessionSetup& first_;  ///< the device, operator, view and limits are the first's
+  const FleetConfig* fleet_;
+  FleetResult* fleet_result_;
+  const std::atomic<bool>& interrupted_;
+  const int64_t wall_start_ns_;
+  const double cpu_start_s_;
+  // Declared in the order they are built; destroyed the other way round
+  // (the simulated clock last, back to the real clock).
+  std::unique_ptr<SimulatedTime> simulated_;
+  std::unique_ptr<HapticSide> haptic_;
+  interfaces::InputBox input_;
+  std::vector<std::unique_ptr<VehicleRun>> vehicles_;
+  std::unique_ptr<FleetTurns> turns_;  ///< a fleet's; none for one vehicle
+  std::unique_ptr<SessionView> view_;
+  std::unique_ptr<view::InputPump> pump_;
+  int64_t t0_ = 0;
+  int64_t period_ns_ = 0;
+  int64_t next_tick_ = 0;
+  int64_t next_progress_ns_ = 0;
+  int64_t next_live_ns_ = 0;
+  uint64_t pictures_seen_ = 0;
+  double last_t_ = 0.0;
+  double loop_cpu_start_s_ = 0.0;  ///< the process's, when the loop began
+};
+
+SessionLoop::SessionLoop(const std::vector<const SessionSetup*>& setups, const FleetConfig* fleet,
+                         FleetResult* fleet_result, const std::atomic<bool>& interrupted)
+    : first_(*setups.at(0)),
+      fleet_(fleet),
+      fleet_result_(fleet_result),
+      interrupted_(interrupted),
+      wall_start_ns_(RealMonotonicNs()),
+      cpu_start_s_(ThreadCpuSeconds()) {
+  // In simulated time the clock comes first: every stamp the set-up takes
+  // is on it. It steps one robot in this process: a single run's.
+  if (first_.simulated_time) {
+    if (setups.size() != 1) throw std::invalid_argument("simulated time runs one vehicle");
+    simulated_ = std::make_unique<SimulatedTime>(first_);
   }
-  if (!simulated) {
+  const int64_t started_wall_ns = WallNs();
+  if (fleet_result_) fleet_result_->fleet_run = FleetRunName(fleet_->name, started_wall_ns);
+  for (const SessionSetup* s : setups) {
+    auto v = std::make_unique<VehicleRun>(*s);
+    RunRecord& rec = v->out.result.record;
+    rec.started_wall_ns = started_wall_ns;
+    // The rows of one fleet run share its name.
+    rec.config_name = fleet_result_ ? fleet_result_->fleet_run : s->run.name;
+    rec.vehicle = s->vehicle.name;
+    rec.vehicle_kind = s->vehicle.kind;
+    rec.link_fault = s->run.link.fault.enabled ? LinkFaultText(s->run.link.fault) : "";
+    rec.operator_kind = s->operator_kind;
+    rec.device = s->device.name;
+    vehicles_.push_back(std::move(v));
+  }
+}
+
+bool SessionLoop::SetUp() {
+  // The haptic side first, then each vehicle's family part (its world, its
+  // interfaces, its operator): the hands are held before anything moves.
+  haptic_ = std::make_unique<HapticSide>(first_.device, first_.calibration, first_.gravity,
+                                         first_.run.op, first_.trace);
+  for (auto& v : vehicles_) {
+    v->family = MakeFamilySession(v->setup, *haptic_, input_, interrupted_, v->out.result.record);
+    if (interrupted_.load()) break;
+  }
+  if (interrupted_.load()) {
+    AbandonSetup();
+    return false;
+  }
+  if (!simulated_) {
     // In simulated time these are stepped by the session's own thread (AdvanceTo).
-    haptic.Start(setup.progress);
-    family->Start(haptic);
+    haptic_->Start(first_.progress);
+    for (auto& v : vehicles_) v->family->Start(*haptic_);
   }
+  if (fleet_) {
+    std::vector<VehicleRun*> runs;
+    for (auto& v : vehicles_) runs.push_back(v.get());
+    turns_ = std::make_unique<FleetTurns>(*fleet_, std::move(runs), *haptic_, *fleet_result_);
+  }
+  for (auto& v : vehicles_) Link(*v);
+  OpenView();
+  // A person's controller without a view: a thread of its own polls it.
+  if (!view_ && std::any_of(vehicles_.begin(), vehicles_.end(),
+                            [](const auto& v) { return v->family->UsesGamepad(); })) {
+    pump_ = std::make_unique<view::InputPump>(input_);
+  }
+  if (turns_) turns_->Begin(view_.get(), input_.Load().vehicle_requests);
 
-  // --- The vehicle. ---
-  VehicleLinkOptions link_options;
-  link_options.vehicle = setup.vehicle;
-  link_options.link = run.link;
-  link_options.track_file = family->world_file();
-  link_options.program = setup.vehicle_program;
-  link_options.decode_video = run.video_decode && DecodesVideo(setup.view);
-  if (simulated) {
-    link_options.program.clear();
-    link_options.in_process_robot = [&simulated](const msg::DriveCommand& command) {
+  t0_ = MonotonicNs();
+  loop_cpu_start_s_ = ProcessCpuS();
+  const RunConfig& run = first_.run;
+  for (auto& v : vehicles_) {
+    v->health = std::make_unique<VehicleHealth>(
+        v->setup.vehicle.name, run.link.domain_id, v->link->session(), v->link->command_writer(),
+        run.vehicle_timeout_s, VehicleHealth::kStartupTimeout_s, v->link->pid());
+    v->trace = std::make_unique<RunTrace>(v->out.result.record);
+    v->out.result.record.path.reserve(16384);
+    // The view's loop is watched with the first vehicle's (one window for all).
+    v->watch = std::make_unique<LoopWatch>(*haptic_, v->family->physics(), *v->link,
+                                           v == vehicles_.front() ? view_.get() : nullptr, t0_);
+  }
+  period_ns_ = static_cast<int64_t>(1e9 / run.session_rate_hz);
+  next_tick_ = t0_;
+  next_progress_ns_ = t0_ + SToNs(2.0);
+  next_live_ns_ = t0_;
+  return true;
+}
+
+// During the set-up (thousands of scene bodies take a while): nothing has
+// started yet, nothing is spawned; the run ends here, recorded.
+void SessionLoop::AbandonSetup() {
+  const LoopEnd end{Outcome::kInterrupted, "interrupted by the operator during the set-up"};
+  if (fleet_result_) {
+    fleet_result_->outcome = end.outcome;
+    fleet_result_->message = end.message;
+  }
+  for (auto& v : vehicles_) {
+    SessionResult& r = v->out.result;
+    r.outcome = end.outcome;
+    r.message = end.message;
+    r.record.outcome = ToString(r.outcome);
+    if (v->family) v->family->AbandonSetup(r);
+  }
+}
+
+// The vehicle: spawned (or attached to) and linked, on the run's domain.
+void SessionLoop::Link(VehicleRun& v) {
+  VehicleLinkOptions options;
+  options.vehicle = v.setup.vehicle;
+  options.link = v.setup.run.link;
+  options.track_file = v.family->world_file();
+  options.program = v.setup.vehicle_program;
+  options.decode_video = first_.run.video_decode && DecodesVideo(first_.view);
+  options.publish_selected = turns_ != nullptr;  // who commands each of a fleet's vehicles
+  if (simulated_) {
+    options.program.clear();
+    options.in_process_robot = [simulated = simulated_.get()](const msg::DriveCommand& command) {
       simulated->OnCommand(command);
     };
   }
-  VehicleLink vehicle(link_options);
-  rec.vehicle_pid = vehicle.pid();
-  if (setup.progress && setup.attach) {
-    log::Info("attached to vehicle '" + setup.vehicle.name + "' on domain " +
-              std::to_string(run.link.domain_id) + " (session " +
-              std::to_string(vehicle.session()) + "): spawning none");
+  v.link = std::make_unique<VehicleLink>(options);
+  v.out.result.record.vehicle_pid = v.link->pid();
+  SayLinked(v);
+}
+
+void SessionLoop::SayLinked(const VehicleRun& v) const {
+  if (!first_.progress) return;
+  const std::string& name = v.setup.vehicle.name;
+  const std::string& kind = v.setup.vehicle.kind;
+  const int64_t pid = v.link->pid();
+  if (fleet_) {
+    log::Info("fleet '" + fleet_->name + "': vehicle '" + name + "' (" + kind + ") " +
+              (pid != 0 ? "started, pid " + std::to_string(pid)
+                        : std::string("attaching on domain ") +
+                              std::to_string(first_.run.link.domain_id) +
+                              " (a vehicle already running there)"));
+    return;
   }
-  if (setup.progress && simulated) {
-    log::Info("vehicle '" + setup.vehicle.name + "' (" + setup.vehicle.kind +
+  if (v.setup.attach) {
+    log::Info("attached to vehicle '" + name + "' on domain " +
+              std::to_string(v.setup.run.link.domain_id) + " (session " +
+              std::to_string(v.link->session()) + "): spawning none");
+  }
+  if (simulated_) {
+    log::Info("vehicle '" + name + "' (" + kind +
               ") stepped in this process, on the simulated clock");
   }
-  if (setup.progress && vehicle.pid() != 0) {
-    log::Info("vehicle '" + setup.vehicle.name + "' (" + setup.vehicle.kind + ") started, pid " +
-              std::to_string(vehicle.pid()));
+  if (pid != 0)
+    log::Info("vehicle '" + name + "' (" + kind + ") started, pid " + std::to_string(pid));
+}
+
+// The view, when something shows it (a window, or offscreen for the MP4):
+// each vehicle's parts, the driven one's on the big screen and, in a fleet,
+// every vehicle's video on its tile.
+void SessionLoop::OpenView() {
+  if (first_.view == ViewKind::kNone) return;
+  view::ViewOptions options = ViewOptionsFor(first_);
+  if (fleet_) options.title = "Haptel - fleet " + fleet_->name;
+  std::vector<SessionView::Parts> parts;
+  for (size_t i = 0; i < vehicles_.size(); ++i) {
+    VehicleRun& v = *vehicles_[i];
+    SessionView::Parts p;
+    p.hal = &haptic_->hal();
+    p.physics_config = &v.setup.physics;  // the hands' size, with or without a world
+    p.video = &v.link->video();
+    view::ViewOptions own = options;  // the window is the first vehicle's: its screen placement
+    v.family->ConfigureView(p, i == 0 ? options : own);
+    parts.push_back(p);
   }
+  view_ = std::make_unique<SessionView>(options, std::move(parts), input_);
+}
 
-  // --- The view, when something shows it: a window, or offscreen for the MP4. ---
-  std::unique_ptr<SessionView> view_part;
-  if (setup.view != ViewKind::kNone) {
-    view::ViewOptions options = ViewOptionsFor(setup);
-    SessionView::Parts view_parts;
-    view_parts.hal = &haptic.hal();
-    view_parts.physics_config = &setup.physics;  // the hands' size, with or without a world
-    view_parts.video = &vehicle.video();
-    family->ConfigureView(view_parts, options);
-    view_part = std::make_unique<SessionView>(options, view_parts, input);
-  }
-  // A person's controller without a view: a thread of its own polls it.
-  std::unique_ptr<view::InputPump> pump;
-  if (family->UsesGamepad() && !view_part) pump = std::make_unique<view::InputPump>(input);
-
-  const int64_t t0 = MonotonicNs();
-  LoopWatch watch(haptic, family->physics(), vehicle, view_part.get(), t0);
-  const auto period_ns = static_cast<int64_t>(1e9 / run.session_rate_hz);
-  int64_t next_progress_ns = t0 + SToNs(2.0);
-  int64_t next_live_ns = t0;
-  uint64_t pictures_seen = 0;
-  int64_t next_tick = t0;
-  VehicleHealth health(setup.vehicle.name, run.link.domain_id, vehicle.session(),
-                       vehicle.command_writer(), run.vehicle_timeout_s,
-                       VehicleHealth::kStartupTimeout_s, vehicle.pid());
-  RunTrace trace(rec);
-  rec.path.reserve(16384);
-  const auto finish = [&](LoopEnd end) { Finish(result, std::move(end), family->MadeSafe()); };
-
+std::optional<LoopEnd> SessionLoop::Loop() {
   for (;;) {
-    if (simulated) {
-      simulated->AdvanceTo(next_tick, haptic, family->physics(), vehicle);
-    } else {
-      SleepUntilNs(next_tick);
-    }
-    next_tick += period_ns;
+    Pace();
     const int64_t now = MonotonicNs();
-    const double t = NsToS(now - t0);
+    const double t = NsToS(now - t0_);
+    const double dt = t - last_t_;
+    last_t_ = t;
+    if (auto end = CheckOperatorSide(interrupted_, *haptic_, first_.device.name)) return end;
+    const interfaces::InputState person = input_.Load();
+    if (person.quit) return LoopEnd{Outcome::kAborted, "the view was closed"};
+    if (auto end = WatchVehicles(now, t)) return end;
+    if (turns_ && !turns_->Turn(person, now, t)) return std::nullopt;  // every course is over
+    if (auto end = CommandVehicles(person, now, t, dt)) return end;
+    FeedView(now, t);
+    if (auto end = CheckLimits(t)) return end;
+    LogProgress(now, t);
+  }
+}
 
-    if (auto end = CheckOperatorSide(interrupted, haptic, setup.device.name)) {
-      finish(std::move(*end));
-      break;
+void SessionLoop::Pace() {
+  if (simulated_) {
+    const VehicleRun& v = *vehicles_.front();
+    simulated_->AdvanceTo(next_tick_, *haptic_, v.family->physics(), *v.link);
+  } else {
+    SleepUntilNs(next_tick_);
+  }
+  next_tick_ += period_ns_;
+}
+
+// Every vehicle's health and states, driven or not: a fleet's operator
+// keeps an eye on all of them, and each one's lap and trace go on.
+std::optional<LoopEnd> SessionLoop::WatchVehicles(int64_t now, double t) {
+  for (auto& vp : vehicles_) {
+    VehicleRun& v = *vp;
+    if (v.lost) continue;
+    std::optional<LoopEnd> end = v.health->CheckProcess(*v.link, now);
+    if (!end) {
+      v.family->Drain(*v.link, *v.health, *haptic_, *v.trace, t0_);
+      end = v.health->CheckStates(*v.link, now, t);
     }
-    const interfaces::InputState person = input.Load();
-    if (person.quit) {
-      finish({Outcome::kAborted, "the view was closed"});
-      break;
+    if (!end) continue;
+    if (auto session_end = OnVehicleEnd(v, std::move(*end))) return session_end;
+  }
+  return std::nullopt;
+}
+
+// The operator's vehicle is commanded by its family's interface; a fleet's
+// others are held safe by the turns.
+std::optional<LoopEnd> SessionLoop::CommandVehicles(const interfaces::InputState& person,
+                                                    int64_t now, double t, double dt) {
+  if (turns_) turns_->TickInterfaces(t, person);
+  for (size_t i = 0; i < vehicles_.size(); ++i) {
+    VehicleRun& v = *vehicles_[i];
+    if (v.lost) continue;
+    if (!turns_ || turns_->Operated(i, now, t, dt)) {
+      if (auto end = v.family->Command(t, now, person, v.health->up(), *haptic_, *v.link))
+        return end;
     }
-    if (auto end = health.CheckProcess(vehicle, now)) {
-      finish(std::move(*end));
-      break;
-    }
-    family->Drain(vehicle, health, haptic, trace, t0);
-    if (auto end = health.CheckStates(vehicle, now, t)) {
-      finish(std::move(*end));
-      break;
-    }
-    const bool vehicle_up = health.up();
-    if (auto end = family->Drive(t, now, person, vehicle_up, haptic, vehicle)) {
-      finish(std::move(*end));
-      break;
-    }
-    if (family->physics() != watch.physics()) {
+    if (const SessionPhysics* physics = v.family->physics(); physics != v.watch->physics()) {
       // A world built for an interface just asked for: watched and drawn from now on.
-      watch.AddPhysics(family->physics(), now);
-      if (view_part) view_part->SetPhysics(family->physics());
+      v.watch->AddPhysics(physics, now);
+      if (view_) view_->SetPhysics(static_cast<int>(i), physics);
     }
-    // Twice a second, whoever watches the run live (a study's console).
-    const bool live_due = (setup.on_live || setup.on_picture) && now >= next_live_ns;
-    if (live_due) next_live_ns = now + SToNs(0.5);
-    if (view_part || setup.on_live) {
-      // Made every tick: the overlay notices contacts by their edges.
-      const view::Overlay overlay = family->Overlay(t, vehicle_up, trace.touching());
-      if (view_part) {
-        view_part->Publish(overlay);
-        if (const std::optional<view::Gaze> gaze = family->Gaze()) view_part->Publish(*gaze);
-        if (const std::optional<view::Prediction> prediction = family->Prediction(t))
-          view_part->Publish(*prediction);
-      }
-      if (setup.on_live && live_due) setup.on_live(overlay);
+  }
+  if (turns_) turns_->Settle(t);
+  return std::nullopt;
+}
+
+// The view's next frames: the driven vehicle's overlay, gaze and ghost on
+// the big screen (a fixed gaze and no ghost when it has none), and a
+// fleet's tiles; twice a second, whoever watches the run live (a study's
+// console). The overlays are made every tick: they notice contacts by
+// their edges. Allocation-free: overlays and tiles are flat.
+void SessionLoop::FeedView(int64_t now, double t) {
+  const bool live_due = (first_.on_live || first_.on_picture) && now >= next_live_ns_;
+  if (live_due) next_live_ns_ = now + SToNs(0.5);
+  if (view_ || first_.on_live) {
+    for (auto& v : vehicles_)
+      v->overlay = v->family->Overlay(t, !v->lost && v->health->up(), v->trace->touching());
+    const int shown = turns_ ? turns_->driven() : 0;
+    if (view_ && shown >= 0) {
+      VehicleRun& v = *vehicles_[static_cast<size_t>(shown)];
+      view_->Publish(v.overlay);
+      view_->Publish(v.family->Gaze().value_or(view::Gaze{}));
+      view_->Publish(v.family->Prediction(t).value_or(view::Prediction{}));
     }
-    if (setup.on_picture && live_due) {
-      const uint64_t frames = vehicle.video().Stats().frames;
-      if (frames != pictures_seen) {
-        pictures_seen = frames;
-        setup.on_picture(vehicle.video().LatestPicture(), frames);
-      }
+    if (view_ && turns_) turns_->PublishTiles(*view_, t);
+    if (first_.on_live && live_due) first_.on_live(vehicles_.front()->overlay);
+  }
+  if (first_.on_picture && live_due) {
+    const VideoReceiver& video = vehicles_.front()->link->video();
+    const uint64_t frames = video.Stats().frames;
+    if (frames != pictures_seen_) {
+      pictures_seen_ = frames;
+      first_.on_picture(video.LatestPicture(), frames);
     }
-    if (auto end = family->LapEnd()) {
-      finish(std::move(*end));
-      break;
+  }
+}
+
+// Each course's own end (completed, crashed) and cap, then the session's
+// time limit. A single run's lap clock starts at its start line and its
+// limits are the session's (CheckLimits); a fleet's vehicle's cap counts
+// the time it was driven.
+std::optional<LoopEnd> SessionLoop::CheckLimits(double t) {
+  for (auto& vp : vehicles_) {
+    VehicleRun& v = *vp;
+    if (v.done) continue;
+    std::optional<LoopEnd> end = v.family->LapEnd();
+    if (!end && turns_) end = turns_->CapEnd(v);
+    if (!end && !turns_) {
+      end = mediator::CheckLimits(t, v.family->lap_start_s(), v.setup.time_limit_s,
+                                  v.setup.lap_limit_s, v.family->lap_cap_s());
     }
-    if (auto end = CheckLimits(t, family->lap_start_s(), setup.time_limit_s, setup.lap_limit_s,
-                               family->lap_cap_s())) {
-      finish(std::move(*end));
-      break;
+    if (!end) continue;
+    if (auto session_end = OnVehicleEnd(v, std::move(*end))) return session_end;
+  }
+  return mediator::CheckLimits(t, std::nullopt, first_.time_limit_s, 0.0,
+                               std::numeric_limits<double>::infinity());
+}
+
+void SessionLoop::LogProgress(int64_t now, double t) {
+  if (now < next_progress_ns_) return;
+  next_progress_ns_ += SToNs(2.0);
+  // In simulated time every loop keeps its rate by construction (no thread
+  // measures it). The first vehicle's watch says the shared loops' (servo, view).
+  std::vector<std::string> short_loops;
+  if (!simulated_) {
+    for (auto& v : vehicles_) {
+      std::vector<std::string> lines = v->watch->EndInterval(now);
+      if (v == vehicles_.front()) short_loops = std::move(lines);
     }
-    if (now >= next_progress_ns) {
-      next_progress_ns += SToNs(2.0);
-      // In simulated time every loop keeps its rate by construction (no thread measures it).
-      const std::vector<std::string> short_loops =
-          simulated ? std::vector<std::string>{} : watch.EndInterval(now);
-      if (setup.progress) {
-        family->LogProgress(t, vehicle, rec.distance_m);
-        for (const std::string& loop : short_loops) log::Warn(loop);
-        const std::string counters = NonZeroCounters(watch.Counters());
-        if (!counters.empty()) log::Info("         counters: " + counters);
-      }
+  }
+  if (!first_.progress) return;
+  if (turns_) {
+    for (const std::string& loop : short_loops) log::Warn(loop);
+    turns_->LogProgress(t);
+    return;
+  }
+  const VehicleRun& v = *vehicles_.front();
+  v.family->LogProgress(t, *v.link, v.out.result.record.distance_m);
+  for (const std::string& loop : short_loops) log::Warn(loop);
+  const std::string counters = NonZeroCounters(v.watch->Counters());
+  if (!counters.empty()) log::Info("         counters: " + counters);
+}
+
+std::optional<LoopEnd> SessionLoop::OnVehicleEnd(VehicleRun& v, LoopEnd end) {
+  if (turns_) return turns_->OnVehicleEnd(v, std::move(end));
+  return end;
+}
+
+void SessionLoop::Finish(const std::optional<LoopEnd>& end) {
+  // Who was not done ends as the session did.
+  if (end) {
+    for (auto& v : vehicles_) {
+      if (v->done) continue;
+      mediator::Finish(v->out.result, *end, v->family->MadeSafe());
+      v->done = true;
     }
   }
   const int64_t end_ns = MonotonicNs();
-  if (!simulated) {
-    for (const std::string& loop : watch.EndInterval(end_ns)) {
-      if (setup.progress) log::Warn(loop);
+  if (fleet_result_) {
+    fleet_result_->operator_cpu_share =
+        (ProcessCpuS() - loop_cpu_start_s_) / std::max(NsToS(end_ns - t0_), 1e-3);
+  }
+  if (!simulated_) {
+    for (auto& v : vehicles_) {
+      const std::vector<std::string> short_loops = v->watch->EndInterval(end_ns);
+      // A single run says its last stretch's short loops; a fleet's progress lines only.
+      if (first_.progress && !turns_) {
+        for (const std::string& loop : short_loops) log::Warn(loop);
+      }
     }
   }
-  // The lap's clock and the approach's are kept apart: a run that never
-  // reached the line was all approach.
-  const double end_s = NsToS(end_ns - t0);
-  const std::optional<double> lap_start = family->lap_start_s();
-  rec.approach_s = lap_start.value_or(end_s);
 
   // Make safe: forces to zero (a physics world's leave the HAL at once too,
-  // whatever its step is doing), the vehicle stopped or at neutral.
-  haptic.hal().ZeroForces();
-  family->RequestStop();
-  vehicle.SendSafe();
-  if (simulated) simulated->Stop();
-  if (view_part) StopAndRecord(*view_part, result);
-  family->Finish(result, setup.progress);
-  // A lap stopped by a limit ran until the run ended, on the same clock as the
-  // limits (the last state may be a few ms older): a lap stopped by its cap
-  // shows the whole cap.
-  if (lap_start && (result.outcome == Outcome::kTimeLimit || result.outcome == Outcome::kLapCap)) {
-    rec.lap_time_s = std::max(rec.lap_time_s, end_s - *lap_start);
+  // whatever its step is doing), every vehicle stopped or at neutral.
+  haptic_->hal().ZeroForces();
+  for (auto& v : vehicles_) {
+    v->family->RequestStop();
+    if (!v->lost) v->link->SendSafe();
   }
-  haptic.Stop();
-  if (pump) pump->Stop();
-  vehicle.Stop();
+  if (simulated_) simulated_->Stop();
+  // The view's figures are the first vehicle's record's (one window for all).
+  if (view_) StopAndRecord(*view_, vehicles_.front()->out.result);
+  const double end_s = NsToS(end_ns - t0_);
+  for (auto& v : vehicles_) {
+    v->family->Finish(v->out.result, first_.progress);
+    if (turns_) continue;  // a fleet's laps count the time each was driven, not the session's
+    // The lap's clock and the approach's are kept apart: a run that never
+    // reached the line was all approach. A lap stopped by a limit ran until
+    // the run ended, on the same clock as the limits (the last state may be
+    // a few ms older): a lap stopped by its cap shows the whole cap.
+    RunRecord& rec = v->out.result.record;
+    const std::optional<double> lap_start = v->family->lap_start_s();
+    rec.approach_s = lap_start.value_or(end_s);
+    const Outcome outcome = v->out.result.outcome;
+    if (lap_start && (outcome == Outcome::kTimeLimit || outcome == Outcome::kLapCap))
+      rec.lap_time_s = std::max(rec.lap_time_s, end_s - *lap_start);
+  }
+  haptic_->Stop();
+  if (pump_) pump_->Stop();
+  StopLinks();
+  for (auto& v : vehicles_) {
+    RecordLinkFigures(*haptic_, *v->link, v->out.result);
+    v->watch->Finish(v->out.result.record);
+  }
+  if (simulated_) {
+    SessionResult& result = vehicles_.front()->out.result;
+    RecordSimulatedFigures(*simulated_, end_ns - t0_, RealMonotonicNs() - wall_start_ns_, result);
+    result.cpu_s = ThreadCpuSeconds() - cpu_start_s_;
+  }
+  if (turns_) turns_->Finish(end, *haptic_);
+}
 
-  RecordLinkFigures(haptic, vehicle, result);
-  watch.Finish(rec);
-  if (simulated) {
-    RecordSimulatedFigures(*simulated, end_ns - t0, RealMonotonicNs() - wall_start_ns, result);
-    result.cpu_s = ThreadCpuSeconds() - cpu_start_s;
+void SessionLoop::StopLinks() {
+  if (!turns_) {
+    vehicles_.front()->link->Stop();
+    return;
   }
-  return result;
+  // Every vehicle released and ended at once: one after the other, each
+  // would wait for the others' processes to end, past its watchdog.
+  std::vector<std::thread> stopping;
+  for (auto& v : vehicles_) {
+    if (!v->lost) v->link->SendSafe();
+    stopping.emplace_back([link = v->link.get()] { link->Stop(); });
+  }
+  for (std::thread& thread : stopping) thread.join();
+}
+
+}  // namespace
+
+SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& interrupted) {
+  SessionLoop loop({&setup}, nullptr, nullptr, interrupted);
+  loop.Run();
+  return std::move(loop.vehicles().front()->out.result);
+}
+
+FleetResult RunSession(const FleetSetup& setup, const std::atomic<bool>& interrupted) {
+  std::vector<const SessionSetup*> setups;
+  for (const SessionSetup& s : setup.vehicles) setups.push_back(&s);
+  FleetResult fleet;
+  SessionLoop loop(setups, &setup.fleet, &fleet, interrupted);
+  loop.Run();
+  for (auto& v : loop.vehicles()) fleet.vehicles.push_back(std::move(v->out));
+  return fleet;
 }
 
 }  // namespace haptel::mediator

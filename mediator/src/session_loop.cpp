@@ -189,7 +189,8 @@ std::optional<LoopEnd> CheckLimits(double t_s, std::optional<double> lap_start_s
         "time limit of " + std::to_string(static_cast<int>(time_limit_s)) + " s reached"};
   }
   const double lap_clock_s = lap_start_s ? t_s - *lap_start_s : t_s;
-  const std::string clock = lap_start_s ? " on the lap clock" : " before the start line";
+  // Said only when a limit is reached: the loop calls this every tick.
+  const char* clock = lap_start_s ? " on the lap clock" : " before the start line";
   if (lap_limit_s > 0 && lap_clock_s > lap_limit_s) {
     return LoopEnd{Outcome::kTimeLimit,
                    "lap limit of " + JsonNumber(lap_limit_s) + " s reached" + clock};

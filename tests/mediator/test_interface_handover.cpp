@@ -27,8 +27,8 @@ class FakeSide final : public HandoverSide {
   FakeSide(std::string name, double stiffness, std::vector<std::string>& log)
       : name_(std::move(name)), stiffness_(stiffness), log_(log) {}
 
-  /// The session drove its vehicle with the person's input (its command sent).
-  void Drive(double t_s, haptics::Hal& hal, const interfaces::InputState& input) {
+  /// The session commanded its vehicle with the person's input (FamilySession::Command).
+  void Command(double t_s, haptics::Hal& hal, const interfaces::InputState& input) {
     Render(hal);
     driven_t.push_back(t_s);
     presses_seen = input.presses_up;
@@ -87,7 +87,7 @@ constexpr double kRamp_s = 0.3;   // the run's switch_ramp_s
 int SessionTick(InterfaceHandover& handover, std::vector<FakeSide*> sides, double t,
                 haptics::Hal& hal, const interfaces::InputState& input) {
   const int live = handover.Tick(t, hal, input);
-  if (live >= 0) sides[static_cast<size_t>(live)]->Drive(t, hal, input);
+  if (live >= 0) sides[static_cast<size_t>(live)]->Command(t, hal, input);
   handover.Settle(t, hal, false);
   return live;
 }

@@ -125,12 +125,13 @@ struct FleetResult {
   std::string fleet_run;  ///< "fleet <name> <started, UTC>": shared by its rows
 };
 
-/// Runs the fleet until every vehicle's course is done (completed, lost,
-/// crashed or capped: a vehicle's lap cap counts the time it was driven),
-/// the time limit, the device lost, a refusal or conflict, or
-/// `interrupted`. Throws ConfigError / std::runtime_error for parts that
+/// Runs the fleet, in the session loop a single vehicle's run goes through
+/// (RunSession in session.hpp), until every vehicle's course is done
+/// (completed, lost, crashed or capped: a vehicle's lap cap counts the time
+/// it was driven), the time limit, the device lost, a refusal or conflict,
+/// or `interrupted`. Throws ConfigError / std::runtime_error for parts that
 /// cannot be set up (before anything moves).
-FleetResult RunFleet(const FleetSetup& setup, const std::atomic<bool>& interrupted);
+FleetResult RunSession(const FleetSetup& setup, const std::atomic<bool>& interrupted);
 
 /// `haptel run --fleet FILE ...` (argv[0] is "run"): sets up each vehicle
 /// as `haptel run` would with the fleet file's vehicle, world, name and

@@ -12,9 +12,10 @@
 ///   pilot, or a person),
 /// - the vehicle link (VehicleLink: spawned simulator, DDS, video),
 /// - the view and a person's input (SessionView: window or offscreen, MP4),
-/// - and the session loop (this thread, `session_rate_hz`), which feeds the
-///   operator, runs the interface, sends commands at the interface's command
-///   rate, times the lap and watches the vehicle, the device and the person.
+/// - and the session loop (this thread, `session_rate_hz`; session.cpp, the
+///   same for one vehicle and for a fleet), which feeds the operator, runs
+///   the interface, sends commands at the interface's command rate, times
+///   the lap and watches the vehicle, the device and the person.
 ///
 /// The recorder (Recorder) stores the result afterwards: `haptel run` opens
 /// and checks the database before the session starts, and saves into it at
@@ -224,8 +225,10 @@ struct SessionResult {
 };
 
 /// Runs one lap (or until the cap, the time limit, a lost vehicle or device,
-/// the person's abort, or `interrupted`). Throws ConfigError /
-/// std::runtime_error for parts that cannot be set up (before anything moves).
+/// the person's abort, or `interrupted`): the session loop with one vehicle,
+/// driven all along (a fleet's, fleet.hpp, drives several in turns). Throws
+/// ConfigError / std::runtime_error for parts that cannot be set up (before
+/// anything moves).
 SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& interrupted);
 
 }  // namespace haptel::mediator
