@@ -618,8 +618,15 @@ int VehicleChildOf(int parent) {
   for (const auto& entry : std::filesystem::directory_iterator("/proc")) {
     const std::string name = entry.path().filename().string();
     if (name.find_first_not_of("0123456789") != std::string::npos) continue;
-    std::ifstream stat(entry.path() / "stat");
-    std::string text((std::istreambuf_iterator<char>(stat)), {});
+    // A process may end while its stat is read: libstdc++'s filebuf then
+    // throws ("No such process"); it is simply not the vehicle.
+    std::string text;
+    try {
+      std::ifstream stat(entry.path() / "stat");
+      text.assign(std::istreambuf_iterator<char>(stat), {});
+    } catch (const std::ios_base::failure&) {
+      continue;
+    }
     const size_t close = text.rfind(')');
     if (close == std::string::npos || text.find("(haptel-vehicle)") == std::string::npos) continue;
     std::istringstream rest(text.substr(close + 2));
