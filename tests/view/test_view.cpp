@@ -495,3 +495,32 @@ TEST_CASE(
   CHECK(ninth.y + ninth.height <= kHeight);
   CHECK(ninth.width > 0);
 }
+
+TEST_CASE("a fleet's line is drawn bottom left in the tiles' yellow, with the tiles only") {
+  OffscreenGl gl;
+  Renderer renderer(kWidth, kHeight);
+  ViewModel model;
+  model.tiles.count = 2;
+  std::snprintf(model.tiles.line, sizeof model.tiles.line, "driving robot-a (Tab: next)");
+  const auto yellow_in_bottom_left = [&](const ViewModel& m) {
+    cv::Mat image;
+    renderer.Draw(m, 0.0);
+    renderer.ReadPixels(image);
+    int n = 0;
+    for (int y = kHeight / 2; y < kHeight; ++y) {
+      for (int x = 0; x < kWidth / 2; ++x) {
+        const cv::Vec3b c = image.at<cv::Vec3b>(y, x);
+        n += (c[0] < 60 && c[1] > 180 && c[2] > 200) ? 1 : 0;
+      }
+    }
+    return n;
+  };
+  CHECK(yellow_in_bottom_left(model) > 30);
+  ViewModel no_line = model;
+  no_line.tiles.line[0] = '\0';
+  CHECK(yellow_in_bottom_left(no_line) == 0);
+  ViewModel no_tiles = model;
+  no_tiles.tiles.count = 0;
+  CHECK(yellow_in_bottom_left(no_tiles) == 0);
+  CHECK(yellow_in_bottom_left(model) > 30);  // drawn again when it comes back
+}

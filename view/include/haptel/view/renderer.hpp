@@ -10,6 +10,9 @@
 /// with the vehicle camera. Everything is in the device frame (x forward,
 /// y left, z up; metres). A Renderer needs a current GL 3.3 context on the
 /// calling thread for its whole life; it allocates its GL objects once.
+/// It draws a list of layers, back to front, each in its own file under
+/// view/src/layers/ (the world, the screen, the ghost, the overlay, the
+/// third-person inset, the fleet's tiles, the map).
 #include <array>
 #include <memory>
 #include <opencv2/core.hpp>
@@ -112,13 +115,11 @@ class Renderer {
   int height() const { return height_; }
 
  private:
-  struct Gl;
+  /// The camera, the screen and the layers (view/src/layers/).
+  struct State;
   int width_;
   int height_;
-  ScreenPlacement screen_;
-  double screen_aspect_ = 3.0 / 4.0;  ///< height / width of the video
-  Gaze gaze_;                         ///< as last drawn
-  std::unique_ptr<Gl> gl_;
+  std::unique_ptr<State> state_;
 };
 
 }  // namespace haptel::view
