@@ -277,11 +277,6 @@ VideoStats VideoReceiver::Stats() const {
   return s;
 }
 
-cv::Mat VideoReceiver::Screen() const {
-  const Frame latest = Latest();
-  return latest.image ? latest.image->clone() : cv::Mat();
-}
-
 std::vector<uint8_t> VideoReceiver::LatestPicture() const {
   std::shared_ptr<const cv::Mat> picture;
   std::vector<uint8_t> key_frame;

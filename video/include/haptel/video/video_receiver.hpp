@@ -74,8 +74,6 @@ class VideoReceiver final : public FrameSource {
   ~VideoReceiver() override;
 
   VideoStats Stats() const;
-  /// Copy of the latest decoded image (empty before the first).
-  cv::Mat Screen() const;
   /// The latest decoded image without copying it: a short lock, any thread.
   Frame Latest() const override;
   /// The latest good picture as JPEG; empty before the first. JPEG frames
