@@ -201,7 +201,7 @@ RttFigures HaptelRoundTrip(int domain, double seconds, const std::filesystem::pa
   figures.out_p99_ms = out.Percentile(0.99) * 1e-3;
   figures.back_p50_ms = back.Percentile(0.5) * 1e-3;
   figures.back_p99_ms = back.Percentile(0.99) * 1e-3;
-  const mediator::VideoStats video = vehicle.video().Stats();
+  const video::VideoStats video = vehicle.video().Stats();
   figures.video_p50_ms = video.latency_ms_p50;
   figures.video_p99_ms = video.latency_ms_p99;
   vehicle.Stop();

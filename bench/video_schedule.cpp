@@ -292,7 +292,7 @@ ScheduleResult RunCapacitySchedule(const VehicleConfig& vehicle, CameraCodec cod
       phase.step_down = p > 0 && phase.capacity_kbps < options.capacities_kbps[p - 1];
       line->SetRate(phase.capacity_kbps * 1000.0);
       link.ResetRtt();
-      const mediator::VideoStats before = link.video().Stats();
+      const video::VideoStats before = link.video().Stats();
       const int64_t phase_start = MonotonicNs();
       const int64_t phase_end = start_ns + SToNs(options.phase_s * static_cast<double>(p + 1));
       std::vector<double> latencies;
@@ -307,7 +307,7 @@ ScheduleResult RunCapacitySchedule(const VehicleConfig& vehicle, CameraCodec cod
           link.Send(TreadCommand{v, v});
           link.channel<link::RobotMessages>().inbox().Drain();
         }
-        const mediator::LatestFrame latest = link.video().Latest();
+        const video::Frame latest = link.video().Latest();
         if (latest.id != last_id && !latest.stale && latest.decoded_wall_ns != 0) {
           last_id = latest.id;
           ++pictures;
@@ -322,7 +322,7 @@ ScheduleResult RunCapacitySchedule(const VehicleConfig& vehicle, CameraCodec cod
         }
         if (now >= next_trace) {
           next_trace += SToNs(0.1);
-          const mediator::VideoStats s = link.video().Stats();
+          const video::VideoStats s = link.video().Stats();
           byte_samples.emplace_back(now, s.bytes);
           while (byte_samples.size() > 1 && byte_samples.front().first < now - SToNs(kWindow_s)) {
             byte_samples.pop_front();
@@ -336,7 +336,7 @@ ScheduleResult RunCapacitySchedule(const VehicleConfig& vehicle, CameraCodec cod
                            WindowP95(shown, NsToS(now - start_ns))});
         }
       }
-      const mediator::VideoStats after = link.video().Stats();
+      const video::VideoStats after = link.video().Stats();
       const double seconds = NsToS(MonotonicNs() - phase_start);
       phase.video_kbps = static_cast<double>(after.bytes - before.bytes) * 8.0 / seconds / 1000.0;
       phase.target_kbps = after.target_kbps;

@@ -29,7 +29,6 @@
 #include "haptel/mediator/session_physics.hpp"
 #include "haptel/mediator/session_view.hpp"
 #include "haptel/mediator/vehicle_link.hpp"
-#include "haptel/mediator/video_receiver.hpp"
 #include "plot.hpp"
 #include "smoke.hpp"
 

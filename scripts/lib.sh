@@ -80,8 +80,9 @@ haptel_build() {
 #   servo loop), test_udp (UDP device and server), test_physics (physics
 #   thread and controls link), test_view_input (SDL input pump);
 # - test_link: DDS participants, writers and readers' callbacks;
-# - test_mediator: the video receiver's threads against a DDS vehicle
-#   stand-in (H.264), and the session's parts;
+# - test_video_stream: the video receiver's threads against a DDS vehicle
+#   stand-in (H.264), and the camera streamer's;
+# - test_mediator: the session's parts;
 # - test_session_threads: a real-time run and a two-robot fleet (its
 #   handovers) attached to vehicle nodes in the same process: the session
 #   loop, servo, physics, DDS callbacks and the vehicles' loops together;
@@ -90,8 +91,8 @@ haptel_build() {
 # Fast DDS's timed mutexes need tests/support/tsan_clocklock.cpp (linked
 # into every test of this build). scripts/tsan.supp lists what is left out
 # or suppressed, each with its reason.
-HAPTEL_TSAN_TESTS=(test_core test_haptics test_udp test_physics test_view_input test_link test_mediator
-                   test_session_threads test_third_person_view test_study_console)
+HAPTEL_TSAN_TESTS=(test_core test_haptics test_udp test_physics test_view_input test_link
+                   test_video_stream test_mediator test_session_threads test_third_person_view test_study_console)
 
 haptel_test_tsan() {
   local dir="${HAPTEL_TSAN_BUILD_DIR:-$ROOT/build-tsan}"

@@ -29,7 +29,7 @@ std::vector<RunCounter> CollectCounters(const HapticSide& haptic, const SessionP
   }
   const LinkCounts link = vehicle.Counts();
   const auto fault = vehicle.FaultCounts();
-  const VideoStats video = vehicle.video().Stats();
+  const video::VideoStats video = vehicle.video().Stats();
   const uint64_t record_dropped = view != nullptr ? view->Stats().record_dropped : 0;
   return {
       {"servo_overruns", haptic.Stats().overruns},

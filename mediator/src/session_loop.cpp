@@ -206,7 +206,7 @@ void RecordLinkFigures(const HapticSide& haptic, const VehicleLink& vehicle,
                        SessionResult& result) {
   RunRecord& rec = result.record;
   const LoopStats servo = haptic.Stats();
-  const VideoStats v = vehicle.video().Stats();
+  const video::VideoStats v = vehicle.video().Stats();
   const Histogram& rtt = vehicle.Rtt();
   rec.completed = result.outcome == Outcome::kCompleted;
   rec.outcome = ToString(result.outcome);

@@ -10,7 +10,6 @@
 #include "haptel/interfaces/cockpit.hpp"
 #include "haptel/mediator/session_physics.hpp"
 #include "haptel/mediator/third_person_view.hpp"
-#include "haptel/mediator/video_receiver.hpp"
 #include "haptel/mediator/world_shapes.hpp"
 
 namespace haptel::mediator {
@@ -50,16 +49,9 @@ void SessionView::Fill(view::ViewModel& model) {
   model.map = part.map;
   model.tiles = tiles_.Load();
   for (int i = 0; i < model.tiles.count && i < static_cast<int>(parts_.size()); ++i) {
-    const VideoReceiver* video = parts_[static_cast<size_t>(i)].video;
-    view::VideoImage& tile = model.tile_video[static_cast<size_t>(i)];
-    if (video == nullptr) {
-      tile = {};
-      continue;
-    }
-    const LatestFrame frame = video->Latest();
-    tile.image = frame.image;
-    tile.id = frame.id;
-    tile.capture_wall_ns = frame.capture_wall_ns;
+    const video::FrameSource* source = parts_[static_cast<size_t>(i)].video;
+    model.tile_video[static_cast<size_t>(i)] =
+        source != nullptr ? source->Latest() : video::Frame{};
   }
   // The hands: the proxies where a world moves them, the tracked hands otherwise.
   const SessionPhysics* physics = physics_[shown].load(std::memory_order_acquire);
@@ -85,15 +77,8 @@ void SessionView::Fill(view::ViewModel& model) {
     const haptics::ForceField field = part.hal->Setpoint(static_cast<haptics::Side>(i)).field;
     if (field.wall_active) AppendWall(model.shapes, field);
   }
-  model.third_person =
-      part.third_person != nullptr ? part.third_person->Latest() : view::VideoImage{};
-  if (part.video != nullptr) {
-    const LatestFrame frame = part.video->Latest();
-    model.video.image = frame.image;
-    model.video.id = frame.id;
-    model.video.capture_wall_ns = frame.capture_wall_ns;
-    model.video.stale = frame.stale;
-  }
+  model.third_person = part.third_person != nullptr ? part.third_person->Latest() : video::Frame{};
+  if (part.video != nullptr) model.video = part.video->Latest();
 }
 
 view::ViewOptions ViewOptionsFor(const SessionSetup& setup) {

@@ -124,8 +124,8 @@ bool ThirdPersonView::Update(const PredictedPose& robot) {
   return false;
 }
 
-view::VideoImage ThirdPersonView::Latest() const {
-  view::VideoImage image;
+video::Frame ThirdPersonView::Latest() const {
+  video::Frame image;
   std::lock_guard<std::mutex> lock(mutex_);
   image.image = latest_;
   image.id = id_;

@@ -209,7 +209,7 @@ VehicleLink::VehicleLink(const VehicleLinkOptions& options)
                              "; only a robot steps in this process");
     }
     channel_ = std::make_unique<RobotChannel>(options_.in_process_robot, session_, operator_name_);
-    video_ = std::make_unique<VideoReceiver>();
+    video_ = std::make_unique<video::VideoReceiver>();
     return;
   }
   if (!options_.program.empty()) {
@@ -239,7 +239,8 @@ VehicleLink::VehicleLink(const VehicleLinkOptions& options)
       channel_ = std::make_unique<BlimpChannel>(*participant_, name(), session_, who);
       break;
   }
-  video_ = std::make_unique<VideoReceiver>(*participant_, name(), session_, options_.decode_video);
+  video_ = std::make_unique<video::VideoReceiver>(*participant_, name(), session_,
+                                                  options_.decode_video);
   operator_name_ = who;
   if (options_.publish_selected) {
     selected_ = std::make_unique<SelectedWriter>(*participant_, link::TopicName(name(), "selected"),

@@ -1,9 +1,13 @@
 // The session's view part on its own: the overlay it feeds the view (the HUD
-// exactly as the interface computed it, the lap clock, the last contact) and
-// the world's shapes (the wheel turns with the controls, the hands, the wall).
+// exactly as the interface computed it, the lap clock, the last contact), the
+// world's shapes (the wheel turns with the controls, the hands, the wall) and
+// each vehicle's picture, whole, on the screen and its fleet tile.
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstring>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <vector>
 
 #include "../interfaces/hal_fixture.hpp"
 #include "haptel/config/cockpit.hpp"
@@ -15,6 +19,7 @@
 #include "haptel/interfaces/keyboard.hpp"
 #include "haptel/mediator/session_view.hpp"
 #include "haptel/mediator/world_shapes.hpp"
+#include "haptel/video/frame.hpp"
 #include "haptel/view/renderer.hpp"
 
 using namespace haptel;
@@ -32,6 +37,12 @@ struct PlainPort final : interfaces::ControlsPort {
 CockpitConfig Shipped(const char* name) {
   return LoadCockpit(ShippedFile(std::string("config/interfaces/") + name + ".yaml"));
 }
+
+/// A vehicle's video that hands one picture, as a receiver hands its latest.
+struct OnePicture final : video::FrameSource {
+  video::Frame frame;
+  video::Frame Latest() const override { return frame; }
+};
 
 InterfaceSet One(std::unique_ptr<interfaces::MediatorInterface> i) {
   std::vector<std::unique_ptr<interfaces::MediatorInterface>> v;
@@ -259,4 +270,48 @@ TEST_CASE(
   CHECK(hand[0].kind == view::ShapeKind::kBox);
   CHECK(hand[0].position[0] ==
         Approx(ProxyHandConfig{}.palm_half_extents[0]));  // half a palm ahead of the wrist
+}
+
+TEST_CASE(
+    "a fleet's tiles and its big screen take each vehicle's picture whole: a stale one stays "
+    "marked stale",
+    "[view]") {
+  // The receiver hands an old picture marked stale while a key frame is
+  // awaited; the tile's copy once dropped the mark.
+  haptics::Hal hal(Metres());
+  OnePicture fresh, stale;
+  fresh.frame = {std::make_shared<const cv::Mat>(48, 64, CV_8UC3, cv::Scalar(0, 200, 0)), 12, 1'000,
+                 false, 3'000};
+  stale.frame = {std::make_shared<const cv::Mat>(48, 64, CV_8UC3, cv::Scalar(0, 0, 200)), 7, 500,
+                 true, 900};
+  std::vector<SessionView::Parts> fleet(2);
+  for (SessionView::Parts& parts : fleet) {
+    parts.hal = &hal;
+    parts.hands = {false, false};
+  }
+  fleet[0].video = &fresh;
+  fleet[1].video = &stale;
+  view::ViewOptions options;
+  options.mode = view::ViewMode::kOffscreen;
+  interfaces::InputBox input;
+  SessionView session_view(options, fleet, input);
+  view::Tiles tiles;
+  tiles.count = 2;
+  session_view.Publish(tiles);
+
+  view::ViewModel model;
+  session_view.Fill(model);
+  const auto same = [](const video::Frame& a, const video::Frame& b) {
+    return a.image == b.image && a.id == b.id && a.capture_wall_ns == b.capture_wall_ns &&
+           a.stale == b.stale && a.decoded_wall_ns == b.decoded_wall_ns;
+  };
+  CHECK(same(model.tile_video[0], fresh.frame));
+  CHECK(same(model.tile_video[1], stale.frame));
+  CHECK(model.tile_video[1].stale);
+  CHECK(same(model.video, fresh.frame));  // the first is on the big screen
+  session_view.Show(1);
+  session_view.Fill(model);
+  CHECK(same(model.video, stale.frame));
+  CHECK(model.video.stale);
+  CHECK(model.tile_video[1].stale);
 }

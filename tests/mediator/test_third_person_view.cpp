@@ -124,7 +124,7 @@ TEST_CASE("the third-person pictures are reused, never one the view still holds"
   CHECK(chase.Latest().image == nullptr);  // nothing before the first pose
 
   // The view holds each picture it was given: four pictures, then none free.
-  std::vector<view::VideoImage> held;
+  std::vector<video::Frame> held;
   for (int i = 0; i < 4; ++i) {
     REQUIRE(chase.Update(robot));
     held.push_back(chase.Latest());
@@ -169,7 +169,7 @@ TEST_CASE("the view reads each third-person picture whole while the session draw
   test::Thread view("view", [&] {
     while (!done.load()) {
       {
-        const view::VideoImage image = chase.Latest();
+        const video::Frame image = chase.Latest();
         if (image.image != nullptr) {
           if (bytes_sum(*image.image) != expected_sum) ++torn;
           ++read;

@@ -3,7 +3,6 @@
 #include <limits>
 
 #include "alloc_counter.hpp"
-#include "haptel/vehicles/camera_streamer.hpp"
 #include "haptel/vehicles/command_intake.hpp"
 #include "haptel/vehicles/drive.hpp"
 
@@ -174,16 +173,6 @@ TEST_CASE(
   // Another writer of the owner's own participant is not the owner either.
   CHECK_FALSE(in.Offer(true, {Writer(1, 4), 11, "ana's run", false}, 3, 0, 3, 50 * ms));
   CHECK(in.refused() == 3);
-}
-
-TEST_CASE(
-    "video feedback is followed from the owner's participant only, anybody's while nobody owns the "
-    "vehicle") {
-  const haptel::link::WriterId owner = Writer(1, 3);
-  CHECK(FeedbackFromOwner(owner, Writer(1, 7)));  // the owner's run: its feedback writer
-  CHECK_FALSE(FeedbackFromOwner(owner, Writer(9, 7)));
-  CHECK_FALSE(FeedbackFromOwner(owner, Writer(9, 3)));
-  CHECK(FeedbackFromOwner({}, Writer(9, 7)));
 }
 
 TEST_CASE("command intake: ownership allocates nothing on the DDS thread", "[alloc]") {

@@ -21,8 +21,9 @@ VehicleNodeOf<Family>::VehicleNodeOf(const VehicleConfig& config,
   participant_ = std::make_unique<link::Participant>(c.link, "haptel-vehicle-" + c.name);
   state_writer_ = std::make_unique<typename Family::StateWriter>(
       *participant_, link::TopicName(c.name, "state"), link::Profile::kState);
-  camera_ = std::make_unique<CameraStreamer>(c.camera, std::move(camera), *participant_, c.name,
-                                             [this] { return core_.commands().owner().writer; });
+  camera_ =
+      std::make_unique<video::CameraStreamer>(c.camera, std::move(camera), *participant_, c.name,
+                                              [this] { return core_.commands().owner().writer; });
   camera_->SetPose(Family::CameraPoseOf(core_.adapter().State()));
   command_reader_ = std::make_unique<typename Family::CommandReader>(
       *participant_, link::TopicName(c.name, "command"), link::Profile::kCommand,

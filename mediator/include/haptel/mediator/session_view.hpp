@@ -23,6 +23,7 @@
 #include "haptel/mediator/lap_timer.hpp"
 #include "haptel/mediator/session.hpp"
 #include "haptel/physics/cockpit_controls.hpp"
+#include "haptel/video/frame.hpp"
 #include "haptel/view/sdl_input.hpp"
 #include "haptel/view/view.hpp"
 
@@ -30,7 +31,6 @@ namespace haptel::mediator {
 
 struct SessionPhysics;
 class ThirdPersonView;
-class VideoReceiver;
 
 class SessionView final : public view::ViewSource {
  public:
@@ -41,7 +41,8 @@ class SessionView final : public view::ViewSource {
     const PhysicsConfig* physics_config = nullptr;
     const CockpitConfig* cockpit = nullptr;  ///< the controls' geometry, when there are controls
     physics::ControlsBodyConfig controls_bodies;  ///< as the world built them
-    const VideoReceiver* video = nullptr;
+    /// The vehicle's pictures (its VideoReceiver; null: no video).
+    const video::FrameSource* video = nullptr;
     std::array<bool, 2> hands{false, true};  ///< tracked hands to draw without a world
     /// The track's map for the predictive display (null: prediction off, no map).
     std::shared_ptr<const view::TrackMap> map;

@@ -42,6 +42,7 @@
 #include "haptel/config/vehicle.hpp"
 #include "haptel/mediator/predictive_display.hpp"
 #include "haptel/mediator/robot_predictor.hpp"
+#include "haptel/video/frame.hpp"
 #include "haptel/video/synthetic_camera.hpp"
 #include "haptel/view/view_model.hpp"
 
@@ -79,7 +80,7 @@ class ThirdPersonView {
   /// view keeps the one before).
   bool Update(const PredictedPose& robot);
   /// View thread: the latest picture (no image before the first Update).
-  view::VideoImage Latest() const;
+  video::Frame Latest() const;
 
   /// The chase camera's configuration (size, field of view, height).
   const CameraConfig& camera() const { return chase_; }

@@ -24,7 +24,7 @@
 #include "haptel/link/families.hpp"
 #include "haptel/link/fault_transport.hpp"
 #include "haptel/link/topic.hpp"
-#include "haptel/mediator/video_receiver.hpp"
+#include "haptel/video/video_receiver.hpp"
 
 namespace haptel::mediator {
 
@@ -233,7 +233,7 @@ class VehicleLink {
   /// arrived (0: none yet). See StateInboxOf::WatchEcho.
   void WatchEcho(int64_t sent_ns) { channel_->WatchEcho(sent_ns); }
   int64_t EchoReceivedNs() const { return channel_->EchoReceivedNs(); }
-  const VideoReceiver& video() const { return *video_; }
+  const video::VideoReceiver& video() const { return *video_; }
   /// False once a spawned vehicle process has exited (always true for a
   /// vehicle that runs elsewhere).
   bool ProcessAlive();
@@ -276,7 +276,7 @@ class VehicleLink {
   std::unique_ptr<ChildProcess> process_;
   std::unique_ptr<link::Participant> participant_;
   std::unique_ptr<LinkChannel> channel_;
-  std::unique_ptr<VideoReceiver> video_;
+  std::unique_ptr<video::VideoReceiver> video_;
   std::unique_ptr<SelectedWriter> selected_;
   std::string operator_name_;
   bool stopped_ = false;

@@ -19,11 +19,11 @@
 #include "haptel/config/vehicle.hpp"
 #include "haptel/core/periodic_thread.hpp"
 #include "haptel/link/topic.hpp"
-#include "haptel/vehicles/camera_streamer.hpp"
 #include "haptel/vehicles/command_intake.hpp"
 #include "haptel/vehicles/families.hpp"
 #include "haptel/vehicles/vehicle_core.hpp"
 #include "haptel/video/camera_source.hpp"
+#include "haptel/video/camera_streamer.hpp"
 
 namespace haptel::vehicles {
 
@@ -53,8 +53,8 @@ struct NodeCounters {
 
 /// A node's counters: its commands' and its camera's.
 template <typename Command>
-NodeCounters MakeNodeCounters(const CommandIntake<Command>& commands, const CameraCounters& camera,
-                              uint64_t states_published) {
+NodeCounters MakeNodeCounters(const CommandIntake<Command>& commands,
+                              const video::CameraCounters& camera, uint64_t states_published) {
   NodeCounters c;
   c.commands_accepted = commands.accepted();
   c.commands_malformed = commands.malformed();
@@ -132,7 +132,7 @@ class VehicleNodeOf : public Node {
   // Declared last: destroyed first, so no DDS callback outlives the rest.
   std::unique_ptr<link::Participant> participant_;
   std::unique_ptr<typename Family::StateWriter> state_writer_;
-  std::unique_ptr<CameraStreamer> camera_;
+  std::unique_ptr<video::CameraStreamer> camera_;
   std::unique_ptr<typename Family::CommandReader> command_reader_;
   std::unique_ptr<PeriodicThread> control_;
 };

@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "haptel/video/frame.hpp"
+
 namespace haptel::view {
 
 struct Rgba {
@@ -30,16 +32,6 @@ struct Shape {
   std::array<double, 4> orientation{1, 0, 0, 0};  ///< (w, x, y, z)
   std::array<double, 3> size{};
   Rgba color;
-};
-
-/// A decoded camera image and when the vehicle captured it.
-struct VideoImage {
-  std::shared_ptr<const cv::Mat> image;  ///< BGR 8-bit; null before the first frame
-  uint64_t id = 0;                       ///< changes with each new frame
-  int64_t capture_wall_ns = 0;           ///< vehicle's CLOCK_REALTIME at capture
-  /// An old picture, marked so, shown while the video waits for a key frame
-  /// (not a new frame: it takes no part in the video-to-screen latency).
-  bool stale = false;
 };
 
 /// Text and indicators drawn over the world.
@@ -197,7 +189,7 @@ struct ViewModel {
   /// Everything in the world: proxy or tracked hands, controls, scene bodies,
   /// the gesture wall. Reserved once; Fill clears and refills it.
   std::vector<Shape> shapes;
-  VideoImage video;
+  video::Frame video;  ///< the vehicle's latest picture, for the screen
   Overlay overlay;
   Gaze gaze;
   Prediction prediction;
@@ -205,11 +197,11 @@ struct ViewModel {
   std::shared_ptr<const TrackMap> map;
   /// A fleet's tiles and each tile's latest picture (same order).
   Tiles tiles;
-  std::array<VideoImage, Tiles::kMax> tile_video;
+  std::array<video::Frame, Tiles::kMax> tile_video;
   /// The third-person view (a practice lap; haptel run --third-person): a
   /// chase camera's picture of the robot on its track, drawn as an inset
   /// labelled kThirdPersonLabel (renderer.hpp). No image: no inset.
-  VideoImage third_person;
+  video::Frame third_person;
 };
 
 }  // namespace haptel::view

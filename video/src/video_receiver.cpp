@@ -1,4 +1,4 @@
-#include "haptel/mediator/video_receiver.hpp"
+#include "haptel/video/video_receiver.hpp"
 
 #include <pthread.h>
 
@@ -10,7 +10,7 @@
 #include "haptel/core/loop_meter.hpp"
 #include "haptel/video/h264_codec.hpp"
 
-namespace haptel::mediator {
+namespace haptel::video {
 namespace {
 
 /// H.264 frames waiting for the decoder beyond this are dropped, all of them
@@ -154,15 +154,14 @@ void VideoReceiver::RequestKeyFrameIfDue(int64_t now_ns) {
 
 bool VideoReceiver::DecodeOne(Pending& frame, cv::Mat& image) {
   const CameraCodec codec = frame.h264 ? CameraCodec::kH264 : CameraCodec::kJpeg;
-  if (decoder_ == nullptr || decoder_->codec() != codec) decoder_ = video::MakeVideoDecoder(codec);
-  const video::DecodeResult result = decoder_->DecodeFrame(
+  if (decoder_ == nullptr || decoder_->codec() != codec) decoder_ = MakeVideoDecoder(codec);
+  const DecodeResult result = decoder_->DecodeFrame(
       {frame.bytes.data(), frame.bytes.size(), frame.seq, frame.key_frame}, image);
-  if (result == video::DecodeResult::kPicture) return true;
+  if (result == DecodeResult::kPicture) return true;
   std::lock_guard lock(mutex_);
-  if (result == video::DecodeResult::kCorrupt) ++decode_failures_;
+  if (result == DecodeResult::kCorrupt) ++decode_failures_;
   // A frame after a gap is as undecodable as one while a key frame is awaited.
-  if (result == video::DecodeResult::kAwaitingKeyFrame || result == video::DecodeResult::kLost)
-    ++frames_skipped_;
+  if (result == DecodeResult::kAwaitingKeyFrame || result == DecodeResult::kLost) ++frames_skipped_;
   return false;
 }
 
@@ -278,11 +277,6 @@ VideoStats VideoReceiver::Stats() const {
   return s;
 }
 
-cv::Mat VideoReceiver::Screen() const {
-  const LatestFrame latest = Latest();
-  return latest.image ? latest.image->clone() : cv::Mat();
-}
-
 std::vector<uint8_t> VideoReceiver::LatestPicture() const {
   std::shared_ptr<const cv::Mat> picture;
   std::vector<uint8_t> key_frame;
@@ -295,20 +289,20 @@ std::vector<uint8_t> VideoReceiver::LatestPicture() const {
   std::vector<uint8_t> jpeg;
   if (!picture && !key_frame.empty()) {
     // No screen, so no decoder running: the last key frame decodes alone.
-    video::H264Decoder decoder;
+    H264Decoder decoder;
     cv::Mat image;
     if (decoder.DecodeFrame({key_frame.data(), key_frame.size(), 1, true}, image) ==
-        video::DecodeResult::kPicture) {
+        DecodeResult::kPicture) {
       picture = std::make_shared<const cv::Mat>(std::move(image));
     }
   }
-  if (picture) video::JpegEncoder(80).Encode(*picture, jpeg);
+  if (picture) JpegEncoder(80).Encode(*picture, jpeg);
   return jpeg;
 }
 
-LatestFrame VideoReceiver::Latest() const {
+Frame VideoReceiver::Latest() const {
   std::lock_guard lock(mutex_);
   return latest_;
 }
 
-}  // namespace haptel::mediator
+}  // namespace haptel::video

@@ -1,4 +1,4 @@
-#include "haptel/vehicles/camera_streamer.hpp"
+#include "haptel/video/camera_streamer.hpp"
 
 #include <stdexcept>
 #include <utility>
@@ -6,17 +6,16 @@
 #include "haptel/core/clock.hpp"
 #include "haptel/core/log.hpp"
 
-namespace haptel::vehicles {
+namespace haptel::video {
 
-CameraStreamer::CameraStreamer(const CameraConfig& config,
-                               std::unique_ptr<video::CameraSource> camera,
+CameraStreamer::CameraStreamer(const CameraConfig& config, std::unique_ptr<CameraSource> camera,
                                link::Participant& participant, const std::string& vehicle_name,
                                OwnerWriter owner_writer)
     : config_(config),
       owner_writer_(std::move(owner_writer)),
       passthrough_possible_(config.codec == CameraCodec::kJpeg),
       camera_(std::move(camera)),
-      encoder_(video::MakeVideoEncoder(config)),
+      encoder_(MakeVideoEncoder(config)),
       codec_name_(CameraCodecName(config.codec)),
       writer_(participant, link::TopicName(vehicle_name, "video"), link::Profile::kVideo) {
   if (camera_ == nullptr) throw std::invalid_argument("CameraStreamer: no camera source");
@@ -65,7 +64,7 @@ void CameraStreamer::Tick(int64_t now_ns) {
     }
     return;
   }
-  const video::CameraPose pose = pose_.Load();
+  const CameraPose pose = pose_.Load();
   const int64_t before_grab_wall_ns = WallNs();
   // A camera whose frames come as JPEG, on a vehicle that sends JPEG: its
   // frame is taken undecoded, and decoded only when it does not fit as it is.
@@ -75,7 +74,7 @@ void CameraStreamer::Tick(int64_t now_ns) {
   // when Grab returns. A rendered frame shows the pose read before Grab.
   const int64_t capture_wall_ns = camera_->RendersAtGrab() ? before_grab_wall_ns : WallNs();
   if (!grabbed && camera_->Ended()) return;  // an end, not a failure: reported next tick
-  if (grab_monitor_.OnGrab(grabbed, now_ns) == video::GrabMonitor::Event::kStalled) {
+  if (grab_monitor_.OnGrab(grabbed, now_ns) == GrabMonitor::Event::kStalled) {
     log::Warn("camera " + camera_->Describe() + " delivers no frames (" +
               std::to_string(grab_monitor_.failures_in_a_row()) +
               " grabs in a row failed); the vehicle runs on without video (reported once; "
@@ -91,10 +90,9 @@ void CameraStreamer::Tick(int64_t now_ns) {
     encoder_->FollowBitrate(target);
   }
   const bool pass_through =
-      jpeg_source &&
-      video::JpegPassesThrough(camera_jpeg_.data(), camera_jpeg_.size(), config_, target);
+      jpeg_source && JpegPassesThrough(camera_jpeg_.data(), camera_jpeg_.size(), config_, target);
   if (jpeg_source && !pass_through &&
-      !video::DecodeCameraJpeg(camera_jpeg_, config_, camera_decoded_, image_)) {
+      !DecodeCameraJpeg(camera_jpeg_, config_, camera_decoded_, image_)) {
     frames_failed_.fetch_add(1, std::memory_order_relaxed);
     return;
   }
@@ -140,4 +138,4 @@ CameraCounters CameraStreamer::Counters() const {
   return c;
 }
 
-}  // namespace haptel::vehicles
+}  // namespace haptel::video

@@ -16,7 +16,7 @@
 /// again and again until one decodes.
 ///
 /// Every frame's arrival also feeds the link's rate estimate
-/// (video::RateEstimator, after Google Congestion Control): at most ten
+/// (RateEstimator, after Google Congestion Control): at most ten
 /// times a second the estimate goes to the vehicle on the same feedback
 /// topic, and its encoder follows it (H.264's bitrate, JPEG's ladder).
 #include <condition_variable>
@@ -32,9 +32,10 @@
 #include "haptel/core/histogram.hpp"
 #include "haptel/link/topic.hpp"
 #include "haptel/video/codec.hpp"
+#include "haptel/video/frame.hpp"
 #include "haptel/video/rate_estimator.hpp"
 
-namespace haptel::mediator {
+namespace haptel::video {
 
 struct VideoStats {
   uint64_t frames = 0;           ///< frames received and (when decoding) decoded
@@ -55,18 +56,7 @@ struct VideoStats {
   uint64_t rate_cuts = 0;    ///< times the estimate was cut for a filling queue (overuse)
 };
 
-/// The latest decoded image, shared (never copied) with whoever shows it.
-struct LatestFrame {
-  std::shared_ptr<const cv::Mat> image;  ///< BGR; null before the first frame
-  uint64_t id = 0;                       ///< grows with each decoded frame
-  int64_t capture_wall_ns = 0;           ///< the vehicle's capture stamp
-  bool stale = false;  ///< an old picture (marked so) while a key frame is awaited
-  /// When it was decoded (CLOCK_REALTIME, as the capture stamp): minus
-  /// capture_wall_ns, the frame's latency as the view gets it.
-  int64_t decoded_wall_ns = 0;
-};
-
-class VideoReceiver {
+class VideoReceiver final : public FrameSource {
  public:
   /// Key frame requests while one is awaited: at most one per this period.
   static constexpr int64_t kKeyFrameRequestPeriodNs = 100'000'000;
@@ -81,13 +71,11 @@ class VideoReceiver {
   /// A receiver on no link: it receives nothing (zero frames), and runs
   /// no thread (a simulated-time run, whose driver reads the state).
   VideoReceiver();
-  ~VideoReceiver();
+  ~VideoReceiver() override;
 
   VideoStats Stats() const;
-  /// Copy of the latest decoded image (empty before the first).
-  cv::Mat Screen() const;
   /// The latest decoded image without copying it: a short lock, any thread.
-  LatestFrame Latest() const;
+  Frame Latest() const override;
   /// The latest good picture as JPEG; empty before the first. JPEG frames
   /// are kept as they came; an H.264 picture is encoded when asked (without
   /// a screen: the latest key frame, decoded then). Any thread, now and then
@@ -121,12 +109,12 @@ class VideoReceiver {
   std::deque<Pending> pending_;
   std::vector<std::vector<uint8_t>> spare_;  ///< byte buffers going round: no allocation per frame
   bool stop_ = false;
-  LatestFrame latest_;
-  std::shared_ptr<const cv::Mat> latest_good_;    ///< the last good picture, unmarked
-  std::vector<uint8_t> last_bytes_;               ///< the latest good JPEG frame's bytes
-  std::vector<uint8_t> last_key_bytes_;           ///< without a screen: the latest H.264 key frame
-  std::unique_ptr<video::VideoDecoder> decoder_;  ///< made for the codec the frames carry
-  Histogram latency_{100.0, 5000};                // µs bins up to 500 ms
+  Frame latest_;
+  std::shared_ptr<const cv::Mat> latest_good_;  ///< the last good picture, unmarked
+  std::vector<uint8_t> last_bytes_;             ///< the latest good JPEG frame's bytes
+  std::vector<uint8_t> last_key_bytes_;         ///< without a screen: the latest H.264 key frame
+  std::unique_ptr<VideoDecoder> decoder_;       ///< made for the codec the frames carry
+  Histogram latency_{100.0, 5000};              // µs bins up to 500 ms
   uint64_t frames_ = 0;
   uint64_t dropped_ = 0;
   uint64_t decode_failures_ = 0;
@@ -143,10 +131,10 @@ class VideoReceiver {
   int64_t stale_ns_ = 0;        ///< stretches of staleness that ended
   int64_t last_request_ns_ = 0;
   uint64_t feedback_seq_ = 0;
-  video::RateEstimator estimator_{RateEstimatorFor()};
+  RateEstimator estimator_{RateEstimatorFor()};
   double target_kbps_sent_ = 0.0;
-  static video::RateEstimatorConfig RateEstimatorFor() {
-    video::RateEstimatorConfig c;
+  static RateEstimatorConfig RateEstimatorFor() {
+    RateEstimatorConfig c;
     // Start at the most and cut on the first sign of a filling queue: a
     // link that carries the vehicle's file's video never changes it (the
     // vehicle caps the target at its file's bitrate or quality; JPEG at
@@ -166,4 +154,4 @@ class VideoReceiver {
 /// `picture` with a visible stale mark: a red frame round it and "STALE".
 cv::Mat MarkStale(const cv::Mat& picture);
 
-}  // namespace haptel::mediator
+}  // namespace haptel::video

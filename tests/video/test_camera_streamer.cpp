@@ -12,8 +12,8 @@
 #include "haptel/core/clock.hpp"
 #include "haptel/link/participant.hpp"
 #include "haptel/link/topic.hpp"
-#include "haptel/vehicles/camera_streamer.hpp"
 #include "haptel/video/camera_source.hpp"
+#include "haptel/video/camera_streamer.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;
@@ -42,6 +42,25 @@ struct FeedbackSender {
 }  // namespace
 
 TEST_CASE(
+    "video feedback is followed from the owner's participant only, anybody's while nobody owns the "
+    "vehicle") {
+  // Writer `entity` of participant `participant` (the GUID prefix's last byte).
+  const auto writer = [](uint8_t participant, uint8_t entity) {
+    link::WriterId id;
+    id.guid[0] = 0x01;
+    id.guid[1] = 0x0f;
+    id.guid[11] = participant;
+    id.guid[15] = entity;
+    return id;
+  };
+  const link::WriterId owner = writer(1, 3);
+  CHECK(video::FeedbackFromOwner(owner, writer(1, 7)));  // the owner's run: its feedback writer
+  CHECK_FALSE(video::FeedbackFromOwner(owner, writer(9, 7)));
+  CHECK_FALSE(video::FeedbackFromOwner(owner, writer(9, 3)));
+  CHECK(video::FeedbackFromOwner({}, writer(9, 7)));
+}
+
+TEST_CASE(
     "video feedback from a participant that does not own the vehicle is refused and counted; the "
     "owner's works") {
   const Track track(LoadTrack("config/tracks/test-short.yaml"));
@@ -57,11 +76,11 @@ TEST_CASE(
   std::mutex mutex;
   link::WriterId owner = op.writer.id();
   owner.guid[15] ^= 0x40;  // another entity of the same participant
-  vehicles::CameraStreamer streamer(camera, std::make_unique<video::SyntheticSource>(track, camera),
-                                    vehicle, "robot1", [&] {
-                                      std::lock_guard lock(mutex);
-                                      return owner;
-                                    });
+  video::CameraStreamer streamer(camera, std::make_unique<video::SyntheticSource>(track, camera),
+                                 vehicle, "robot1", [&] {
+                                   std::lock_guard lock(mutex);
+                                   return owner;
+                                 });
 
   // A stranger asks for the lowest bitrate and a key frame, naming the
   // owner's session (read off the wire), until the vehicle has heard it (a
@@ -72,7 +91,7 @@ TEST_CASE(
         return streamer.Counters().feedback_refused >= 3;
       },
       30.0));
-  vehicles::CameraCounters c = streamer.Counters();
+  video::CameraCounters c = streamer.Counters();
   CHECK(c.target_kbps == 0);         // the target is not the stranger's
   CHECK(c.key_frame_requests == 0);  // nor is a key frame forced
   // Nor with any other session.
@@ -120,8 +139,8 @@ TEST_CASE("video feedback while nobody owns the vehicle is taken from any partic
   CameraConfig camera;
   camera.codec = CameraCodec::kJpeg;
   link::Participant vehicle(link, "test-vehicle");
-  vehicles::CameraStreamer streamer(camera, std::make_unique<video::SyntheticSource>(track, camera),
-                                    vehicle, "robot1", [] { return link::WriterId{}; });
+  video::CameraStreamer streamer(camera, std::make_unique<video::SyntheticSource>(track, camera),
+                                 vehicle, "robot1", [] { return link::WriterId{}; });
   FeedbackSender op(link, "test-operator");
   REQUIRE(test::WaitFor(
       [&] {

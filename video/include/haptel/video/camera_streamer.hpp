@@ -23,7 +23,7 @@
 #include "haptel/video/camera_source.hpp"
 #include "haptel/video/codec.hpp"
 
-namespace haptel::vehicles {
+namespace haptel::video {
 
 struct CameraCounters {
   uint64_t frames_published = 0;
@@ -61,7 +61,7 @@ class CameraStreamer {
   /// `camera` must not be null; `participant` must outlive the streamer.
   /// `owner_writer` says whose feedback is taken (FeedbackFromOwner). It
   /// must not be null.
-  CameraStreamer(const CameraConfig& config, std::unique_ptr<video::CameraSource> camera,
+  CameraStreamer(const CameraConfig& config, std::unique_ptr<CameraSource> camera,
                  link::Participant& participant, const std::string& vehicle_name,
                  OwnerWriter owner_writer);
   ~CameraStreamer();
@@ -71,7 +71,7 @@ class CameraStreamer {
   void Start();
   void Stop();
   /// Where the camera is now (any thread; a synthetic source renders from it).
-  void SetPose(const video::CameraPose& pose) { pose_.Store(pose); }
+  void SetPose(const CameraPose& pose) { pose_.Store(pose); }
   CameraCounters Counters() const;
   /// Feedback refused (CameraCounters::feedback_refused), cheaper than Counters().
   uint64_t feedback_refused() const { return feedback_refused_.load(std::memory_order_relaxed); }
@@ -84,11 +84,11 @@ class CameraStreamer {
   const OwnerWriter owner_writer_;
   const bool
       passthrough_possible_;  ///< the vehicle sends JPEG: a camera's own JPEG may go as it is
-  std::unique_ptr<video::CameraSource> camera_;
-  Seqlock<video::CameraPose> pose_;
-  video::GrabMonitor grab_monitor_;
+  std::unique_ptr<CameraSource> camera_;
+  Seqlock<CameraPose> pose_;
+  GrabMonitor grab_monitor_;
   bool end_reported_ = false;
-  std::unique_ptr<video::VideoEncoder> encoder_;
+  std::unique_ptr<VideoEncoder> encoder_;
   const char* codec_name_;
   cv::Mat image_;
   msg::VideoFrame frame_msg_;
@@ -112,4 +112,4 @@ class CameraStreamer {
   std::unique_ptr<link::VideoFeedbackReader> feedback_;  // last: destroyed first
 };
 
-}  // namespace haptel::vehicles
+}  // namespace haptel::video

@@ -12,7 +12,7 @@
 
 #include "haptel/core/loop_meter.hpp"
 #include "haptel/link/participant.hpp"
-#include "haptel/vehicles/camera_streamer.hpp"
+#include "haptel/video/camera_streamer.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;
@@ -38,7 +38,7 @@ class PriorityNotingCamera final : public video::CameraSource {
 
 TEST_CASE(
     "CameraStreamer: frames are grabbed and encoded below the priority of the node's other threads",
-    "[vehicles][video]") {
+    "[video]") {
   LinkConfig link;
   link.domain_id = test::UniqueDomain(71);
   link::Participant participant(link, "test-camera-priority");
@@ -50,8 +50,8 @@ TEST_CASE(
   config.height = 48;
   config.rate_hz = 50.0;
   const int node_nice = ThreadNice();
-  vehicles::CameraStreamer streamer(config, std::move(camera), participant, "robot1",
-                                    [] { return link::WriterId{}; });
+  video::CameraStreamer streamer(config, std::move(camera), participant, "robot1",
+                                 [] { return link::WriterId{}; });
   streamer.Start();
   REQUIRE(test::WaitFor(
       [&] { return seen.grabs.load() >= 2 && streamer.Counters().frames_published >= 1; }, 30.0));

@@ -19,10 +19,10 @@
 #include "haptel/core/clock.hpp"
 #include "haptel/core/loop_meter.hpp"
 #include "haptel/link/topic.hpp"
-#include "haptel/mediator/video_receiver.hpp"
 #include "haptel/testing/lap_frames.hpp"
 #include "haptel/video/h264_codec.hpp"
 #include "haptel/video/image_quality.hpp"
+#include "haptel/video/video_receiver.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;
@@ -36,7 +36,7 @@ const std::vector<cv::Mat>& Frames() {
 }
 
 /// Every received frame ends as a picture, a skipped frame or a failure.
-uint64_t Handled(const mediator::VideoStats& s) {
+uint64_t Handled(const video::VideoStats& s) {
   return s.frames + s.frames_skipped + s.decode_failures;
 }
 
@@ -62,7 +62,7 @@ int NiceOfThreadNamed(const std::string& name) {
 }  // namespace
 
 TEST_CASE("The decoder runs below the priority of the link's threads, which carry the states",
-          "[mediator][video]") {
+          "[video]") {
   // Decoding a frame takes milliseconds of CPU: on a busy host it must not
   // hold off the receive thread a state arrives on (issue 24: commands and
   // states come first). Priorities are asserted, never timings.
@@ -70,7 +70,7 @@ TEST_CASE("The decoder runs below the priority of the link's threads, which carr
   config.domain_id = test::UniqueDomain(68);
   link::Participant op(config, "test-operator");
   const int session_nice = ThreadNice();
-  mediator::VideoReceiver receiver(op, "robot1", /*session=*/7, /*decode=*/true);
+  video::VideoReceiver receiver(op, "robot1", /*session=*/7, /*decode=*/true);
   int decoder_nice = -100;
   REQUIRE(test::WaitFor([&] { return (decoder_nice = NiceOfThreadNamed("video-decode")) != -100; },
                         20.0));
@@ -81,12 +81,12 @@ TEST_CASE("The decoder runs below the priority of the link's threads, which carr
 TEST_CASE(
     "H.264 frame lost on the link: stale picture marked, key frame requested until it comes, "
     "picture back",
-    "[mediator][video]") {
+    "[video]") {
   LinkConfig config;
   config.domain_id = test::UniqueDomain(67);
   link::Participant vehicle(config, "test-vehicle");
   link::Participant op(config, "test-operator");
-  mediator::VideoReceiver receiver(op, "robot1", /*session=*/7, /*decode=*/true);
+  video::VideoReceiver receiver(op, "robot1", /*session=*/7, /*decode=*/true);
   std::atomic<uint64_t> requests{0};
   link::VideoFeedbackReader feedback(vehicle, link::TopicName("robot1", "video_feedback"),
                                      link::Profile::kState, [&](const msg::VideoFeedback& f) {
@@ -152,7 +152,7 @@ TEST_CASE(
   send(false);  // a delta frame whose reference never came
   CHECK(receiver.Stats().frames_lost == 1);
   CHECK(test::WaitFor([&] { return receiver.Latest().stale; }, 5.0));
-  const mediator::LatestFrame stale = receiver.Latest();
+  const video::Frame stale = receiver.Latest();
   REQUIRE(stale.image);
   // The old picture, visibly marked: a red frame round it.
   const cv::Vec3b corner = stale.image->at<cv::Vec3b>(1, 1);
@@ -169,7 +169,7 @@ TEST_CASE(
   // The picture is published just after the frame is counted.
   CHECK(test::WaitFor([&] { return !receiver.Latest().stale; }, 5.0));
   CHECK(video::Ssim(Frames()[next - 1], *receiver.Latest().image) > 0.85);
-  const mediator::VideoStats s = receiver.Stats();
+  const video::VideoStats s = receiver.Stats();
   CHECK(s.stale_s > 0.1);  // at least the two requests' spacing
   CHECK(s.frames_skipped >= 1);
   CHECK(s.kbps > 0.0);
@@ -183,12 +183,12 @@ TEST_CASE(
 TEST_CASE(
     "the link's rate estimate reaches the vehicle on the feedback topic, at most ten times a "
     "second",
-    "[mediator][video]") {
+    "[video]") {
   LinkConfig config;
   config.domain_id = test::UniqueDomain(68);
   link::Participant vehicle(config, "test-vehicle");
   link::Participant op(config, "test-operator");
-  mediator::VideoReceiver receiver(op, "robot1", /*session=*/7, /*decode=*/false);
+  video::VideoReceiver receiver(op, "robot1", /*session=*/7, /*decode=*/false);
   std::mutex mutex;
   std::vector<uint32_t> targets;
   link::VideoFeedbackReader feedback(vehicle, link::TopicName("robot1", "video_feedback"),
