@@ -388,6 +388,8 @@ struct StudyConsole::Impl {
     return text;
   }
 
+  /// The schedule page: the trial under way, what is next, every planned
+  /// trial with its results, questionnaires and notes, and the forms.
   std::string Schedule() {
     const std::lock_guard<std::mutex> lock(mutex);
     const std::vector<PlannedTrial> plan = store->Plan();
@@ -397,26 +399,7 @@ struct StudyConsole::Impl {
     h << "<h1>Study " << Html(config.name) << "</h1>\n<p id=\"progress\">" << trials.size()
       << " of " << plan.size() << " trials done</p>\n<p id=\"live\">"
       << (live.empty() ? "No trial under way." : Html(live)) << "</p>\n";
-    if (!live.empty()) {
-      if (have_progress) {
-        h << "<p id=\"progress-live\">lap " << FormatSeconds(progress.lap_time_s)
-          << " &middot; gates " << progress.gates_passed << " of " << progress.gates_total
-          << " &middot; contacts " << progress.obstacles;
-        if (!progress.last_contact.empty()) h << " (last: " << Html(progress.last_contact) << ")";
-        h << "</p>\n";
-      }
-      if (thumbnail) {
-        h << "<p><img id=\"thumbnail\" src=\"/video.jpg?n=" << thumbnail->frames()
-          << "\" width=\"320\" alt=\"the vehicle's camera (no picture yet)\"></p>\n";
-      }
-      h << "<form method=\"post\" action=\"/abort\">" << TokenField(access.form_token)
-        << "<button id=\"abort\">Abort this trial</button> (it is "
-           "run again)</form>\n";
-      if (!live_participant.empty()) {
-        h << "<p>Note on this " << (live_position == 0 ? "practice lap" : "trial") << ": "
-          << NoteForm(access.form_token, live_participant, live_position, "live-note") << "</p>\n";
-      }
-    }
+    if (!live.empty()) LiveTrial(h);
     if (!waiting.empty()) h << "<p id=\"waiting\">Waiting for " << Html(waiting) << "</p>\n";
     if (!next.empty()) {
       h << "<form method=\"post\" action=\"/start\">" << TokenField(access.form_token)
@@ -426,70 +409,9 @@ struct StudyConsole::Impl {
     h << "<table "
          "id=\"schedule\"><tr><th>participant</th><th>position</th><th>condition</th><th>lap</th>"
          "<th>questionnaires</th><th>notes</th></tr>\n";
-    for (const PlannedTrial& t : plan) {
-      const TrialRow* row = nullptr;
-      for (const TrialRow& r : trials) {
-        if (r.participant == t.participant && r.position == t.position) row = &r;
-      }
-      const bool flagged = row != nullptr && !row->flags.empty();
-      h << "<tr"
-        << (row == nullptr ? ""
-            : flagged      ? " class=\"done flagged\""
-                           : " class=\"done\"")
-        << "><td>" << Html(t.participant) << "</td><td>" << t.position << "</td><td>"
-        << Html(t.condition) << "</td><td>"
-        << (row == nullptr ? ""
-                           : FormatSeconds(row->lap_time_s) + (row->completed ? "" : " (cap)"));
-      // What could have spoiled it: the experimenter decides whether to redo it.
-      if (flagged) h << " <span class=\"flags\">! " << Html(row->flags) << "</span>";
-      if (row != nullptr && row->attempt > 1) h << " (attempt " << row->attempt << ")";
-      if (row != nullptr) {
-        h << " <form method=\"post\" action=\"/redo\" style=\"display:inline\">"
-          << TokenField(access.form_token)
-          << "<input type=\"hidden\" "
-             "name=\"participant\" value=\""
-          << Html(t.participant) << "\"><input type=\"hidden\" name=\"position\" value=\""
-          << t.position << "\"><button>redo</button></form>";
-      }
-      h << "</td><td>";
-      // The participant's background, asked once before their first trial.
-      if (!config.demographics.empty() && t.position == 1) {
-        if (store->Answered(t.participant, "", config.demographics)) {
-          h << Html(config.demographics) << " &#10003; ";
-        } else {
-          h << "<a class=\"demographics\" href=\""
-            << Html(Query(t.participant, "", config.demographics)) << "\">"
-            << Html(config.demographics) << "</a> (before the first trial) ";
-        }
-      }
-      if (row != nullptr) {
-        for (const std::string& name : config.questionnaires) {
-          if (store->Answered(t.participant, t.condition, name)) {
-            h << Html(name) << " &#10003; ";
-          } else {
-            h << "<a href=\"" << Html(Query(t.participant, t.condition, name)) << "\">"
-              << Html(name) << "</a> ";
-          }
-        }
-      }
-      h << "</td><td>";
-      for (const NoteRow& n : notes) {
-        if (n.participant == t.participant && n.position == t.position) {
-          h << "<div class=\"note-text\">" << Html(n.text) << "</div>";
-        }
-      }
-      h << NoteForm(access.form_token, t.participant, t.position, "") << "</td></tr>\n";
-    }
+    for (const PlannedTrial& t : plan) ScheduleRow(h, t, trials, notes);
     h << "</table>\n";
-    // Notes on a participant as a whole (their practice lap, their manner).
-    bool general = false;
-    for (const NoteRow& n : notes) {
-      if (n.position != 0) continue;
-      if (!general) h << "<h2>Notes on participants</h2>\n<ul id=\"participant-notes\">\n";
-      general = true;
-      h << "<li>" << Html(n.participant) << ": " << Html(n.text) << "</li>\n";
-    }
-    if (general) h << "</ul>\n";
+    ParticipantNotes(h, notes);
     if (config.operators == "person") {
       h << "<p id=\"participants\">" << Html(Blocks(store->Participants().size())) << "</p>\n"
         << "<form method=\"post\" action=\"/participants\">" << TokenField(access.form_token)
@@ -506,6 +428,99 @@ struct StudyConsole::Impl {
     const bool changing = !live.empty() || !waiting.empty();
     return Page("Study " + config.name, h.str(),
                 changing ? "<meta http-equiv=\"refresh\" content=\"2\">" : "");
+  }
+
+  /// The trial under way: its progress, the thumbnail, Abort, and its note
+  /// form. The caller holds `mutex`.
+  void LiveTrial(std::ostringstream& h) const {
+    if (have_progress) {
+      h << "<p id=\"progress-live\">lap " << FormatSeconds(progress.lap_time_s)
+        << " &middot; gates " << progress.gates_passed << " of " << progress.gates_total
+        << " &middot; contacts " << progress.obstacles;
+      if (!progress.last_contact.empty()) h << " (last: " << Html(progress.last_contact) << ")";
+      h << "</p>\n";
+    }
+    if (thumbnail) {
+      h << "<p><img id=\"thumbnail\" src=\"/video.jpg?n=" << thumbnail->frames()
+        << "\" width=\"320\" alt=\"the vehicle's camera (no picture yet)\"></p>\n";
+    }
+    h << "<form method=\"post\" action=\"/abort\">" << TokenField(access.form_token)
+      << "<button id=\"abort\">Abort this trial</button> (it is "
+         "run again)</form>\n";
+    if (!live_participant.empty()) {
+      h << "<p>Note on this " << (live_position == 0 ? "practice lap" : "trial") << ": "
+        << NoteForm(access.form_token, live_participant, live_position, "live-note") << "</p>\n";
+    }
+  }
+
+  /// One planned trial's row: its result and flags, redo, the questionnaires
+  /// (the participant's background on their first row), notes. The caller
+  /// holds `mutex`.
+  void ScheduleRow(std::ostringstream& h, const PlannedTrial& t,
+                   const std::vector<TrialRow>& trials, const std::vector<NoteRow>& notes) const {
+    const TrialRow* row = nullptr;
+    for (const TrialRow& r : trials) {
+      if (r.participant == t.participant && r.position == t.position) row = &r;
+    }
+    const bool flagged = row != nullptr && !row->flags.empty();
+    h << "<tr"
+      << (row == nullptr ? ""
+          : flagged      ? " class=\"done flagged\""
+                         : " class=\"done\"")
+      << "><td>" << Html(t.participant) << "</td><td>" << t.position << "</td><td>"
+      << Html(t.condition) << "</td><td>"
+      << (row == nullptr ? "" : FormatSeconds(row->lap_time_s) + (row->completed ? "" : " (cap)"));
+    // What could have spoiled it: the experimenter decides whether to redo it.
+    if (flagged) h << " <span class=\"flags\">! " << Html(row->flags) << "</span>";
+    if (row != nullptr && row->attempt > 1) h << " (attempt " << row->attempt << ")";
+    if (row != nullptr) {
+      h << " <form method=\"post\" action=\"/redo\" style=\"display:inline\">"
+        << TokenField(access.form_token)
+        << "<input type=\"hidden\" "
+           "name=\"participant\" value=\""
+        << Html(t.participant) << "\"><input type=\"hidden\" name=\"position\" value=\""
+        << t.position << "\"><button>redo</button></form>";
+    }
+    h << "</td><td>";
+    // The participant's background, asked once before their first trial.
+    if (!config.demographics.empty() && t.position == 1) {
+      if (store->Answered(t.participant, "", config.demographics)) {
+        h << Html(config.demographics) << " &#10003; ";
+      } else {
+        h << "<a class=\"demographics\" href=\""
+          << Html(Query(t.participant, "", config.demographics)) << "\">"
+          << Html(config.demographics) << "</a> (before the first trial) ";
+      }
+    }
+    if (row != nullptr) {
+      for (const std::string& name : config.questionnaires) {
+        if (store->Answered(t.participant, t.condition, name)) {
+          h << Html(name) << " &#10003; ";
+        } else {
+          h << "<a href=\"" << Html(Query(t.participant, t.condition, name)) << "\">" << Html(name)
+            << "</a> ";
+        }
+      }
+    }
+    h << "</td><td>";
+    for (const NoteRow& n : notes) {
+      if (n.participant == t.participant && n.position == t.position) {
+        h << "<div class=\"note-text\">" << Html(n.text) << "</div>";
+      }
+    }
+    h << NoteForm(access.form_token, t.participant, t.position, "") << "</td></tr>\n";
+  }
+
+  /// Notes on a participant as a whole (their practice lap, their manner).
+  static void ParticipantNotes(std::ostringstream& h, const std::vector<NoteRow>& notes) {
+    bool general = false;
+    for (const NoteRow& n : notes) {
+      if (n.position != 0) continue;
+      if (!general) h << "<h2>Notes on participants</h2>\n<ul id=\"participant-notes\">\n";
+      general = true;
+      h << "<li>" << Html(n.participant) << ": " << Html(n.text) << "</li>\n";
+    }
+    if (general) h << "</ul>\n";
   }
 };
 
