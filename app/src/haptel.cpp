@@ -11,12 +11,12 @@
 #include "haptel/app/in_process_robot.hpp"
 #include "haptel/app/link_commands.hpp"
 #include "haptel/app/scene_command.hpp"
+#include "haptel/app/study_command.hpp"
 #include "haptel/calibration/calibration_procedure.hpp"
 #include "haptel/core/child_process.hpp"
 #include "haptel/core/cli.hpp"
 #include "haptel/core/log.hpp"
 #include "haptel/mediator/run_command.hpp"
-#include "haptel/study/study_command.hpp"
 
 namespace {
 
@@ -59,7 +59,7 @@ int main(int argc, char** argv) {
   if (command == "calibrate") return haptics::CalibrateMain(argc - 1, argv + 1);
   if (command == "scene") return app::SceneCommand(argc - 1, argv + 1, std::cout, std::cerr);
   if (command == "bench") return ExecBench(argv + 1);
-  if (command == "study") return study::StudyCommand(argc - 1, argv + 1);
+  if (command == "study") return app::StudyCommand(argc - 1, argv + 1);
   if (command == "security") return app::SecurityCommand(argc - 1, argv + 1);
   if (command == "discovery-server") return app::DiscoveryServerCommand(argc - 1, argv + 1);
   return cli::Main({"haptel", kUsage}, argc, argv, [&]() -> int {

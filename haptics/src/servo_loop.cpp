@@ -21,6 +21,27 @@ namespace {
 /// a raw 1 ms difference is noise; 5 ms keeps damping smooth and responsive.
 constexpr double kVelocityFilter_s = 0.005;
 
+/// The wrist force the set-point asks for at the arm's position and velocity,
+/// by port: the interface's force field, and the proxy coupling with the
+/// direct force. Each port is watched by the passivity controller apart.
+struct SetpointForce {
+  Vec3d field{};
+  Vec3d coupling{};
+};
+
+SetpointForce ComposeSetpointForce(const ForceSetpoint& sp, const Vec3d& p, const Vec3d& v) {
+  SetpointForce f;
+  f.field = EvaluateForceField(sp.field, p, v);
+  for (int i = 0; i < 3; ++i) {
+    if (sp.coupling_enabled) {
+      f.coupling[i] =
+          sp.coupling_stiffness * (sp.coupling_target[i] - p[i]) - sp.coupling_damping * v[i];
+    }
+    f.coupling[i] += sp.wrist_force[i];
+  }
+  return f;
+}
+
 }  // namespace
 
 ServoLoop::ServoLoop(Device& device, Hal& hal, const DeviceConfig& config,
@@ -35,14 +56,7 @@ ServoLoop::ServoLoop(Device& device, Hal& hal, const DeviceConfig& config,
   for (int i = 0; i < kSides; ++i) {
     arms_[i] = std::make_unique<Arm>(
         ForceSafety(config.safety, d.wrist_force_limit, d.finger_force_limit));
-    const PassivityLimits limits{config.servo.passivity_max_damping,
-                                 config.servo.passivity_min_speed};
-    arms_[i]->field_port = PassivityController(limits);
-    arms_[i]->coupling_port = PassivityController(limits);
-    TwoPortLimits link_limits;
-    link_limits.max_damping = limits.max_damping;
-    link_limits.min_speed = limits.min_speed;
-    arms_[i]->link_end = TwoPortPassivity(ChannelEnd::kLoop, link_limits);
+    arms_[i]->passivity = ArmPassivity(config.servo, observe_link_);
   }
 }
 
@@ -51,144 +65,37 @@ ServoLoop::~ServoLoop() { Stop(); }
 void ServoLoop::Tick(Side side, int64_t now_ns) {
   Arm& arm = *arms_[Index(side)];
   ServoCounters& c = arm.counters;
-  const ArmCalibration& cal = calibration_.arms[Index(side)];
   ++c.cycles;
   arm.cue_felt = false;
-
-  const DeviceDescription& d = device_.description();
-  if ((d.has_glove || d.has_grasp) &&
-      arm.cycle % static_cast<uint64_t>(config_.servo.slow_channel_divider) == 0) {
-    if (device_.ReadGlove(side, now_ns, arm.glove) == DeviceStatus::kOk) {
-      hal_.PublishGlove(side, arm.glove);
-      if (trace_ != nullptr) trace_->Push(TraceRecord::FromGlove(side, arm.glove));
-      ++c.slow_reads;
-    }
-  }
-  ++arm.cycle;
-
-  const DeviceStatus status = device_.ReadWrist(side, now_ns, arm.wrist);
-  if (status == DeviceStatus::kLost) {
-    ++c.device_lost_ticks;
-    if (arm.connected) {
-      arm.connected = false;
-      arm.safety.OnLost();
-      hal_.PublishLost(side, true);
-    }
-    // Zero force, whatever the set-points say; a lost device may not hear it.
-    device_.WriteWristForce(side, Vec3d{});
-    device_.WriteFingerForces(side, {});
-    arm.have_previous = false;
-    arm.last_tick_ns = 0;
-    arm.field_port.Reset();
-    arm.coupling_port.Reset();
-    if (arm.link_end.energy_in() != Vec3d{} || arm.link_remote.acted_ticks != 0) {
-      // Both ends of the link count afresh once the arm is back.
-      arm.link_base_ticks += arm.link_remote.acted_ticks;
-      arm.link_base_dissipated_j += arm.link_remote.dissipated_j;
-      arm.link_remote = LinkEnergy{};
-      arm.link_end.Reset();
-      device_.RestartLinkEnergy(side);
-    }
+  ReadSlowChannels(arm, side, now_ns);
+  TrackWrist(arm, side, now_ns);
+  if (!arm.connected || !arm.have_previous) {
     arm.published.Store(c);
-    return;
-  }
-  if (!arm.connected) {
-    arm.connected = true;
-    arm.safety.OnConnect(now_ns);
-    hal_.PublishLost(side, false);
-  }
-  if (status == DeviceStatus::kOk) {
-    hal_.PublishWrist(side, arm.wrist);
-    if (trace_ != nullptr) trace_->Push(TraceRecord::FromWrist(side, arm.wrist));
-    const Vec3d p = TrackerToMetres(cal, arm.wrist.position);
-    for (int i = 0; i < 3; ++i)
-      arm.displacement[i] = arm.have_previous ? p[i] - arm.previous_position[i] : 0.0;
-    if (arm.have_previous && now_ns > arm.previous_ns) {
-      const double dt = static_cast<double>(now_ns - arm.previous_ns) * 1e-9;
-      const double alpha = dt / (kVelocityFilter_s + dt);
-      for (int i = 0; i < 3; ++i) {
-        arm.velocity[i] += alpha * ((p[i] - arm.previous_position[i]) / dt - arm.velocity[i]);
-      }
-    }
-    arm.previous_position = p;
-    arm.previous_ns = now_ns;
-    arm.have_previous = true;
-  } else {
-    ++c.no_data_ticks;
-    arm.displacement = Vec3d{};
-  }
-  if (!arm.have_previous) {
-    arm.published.Store(c);
-    return;  // nothing to compute forces from yet
+    return;  // lost (forces zeroed), or nothing to compute forces from yet
   }
 
   const double period_s =
       arm.last_tick_ns != 0 ? static_cast<double>(now_ns - arm.last_tick_ns) * 1e-9 : 0.0;
   arm.last_tick_ns = now_ns;
-  // The two-port's loop end: what crossed the channel here over the period
-  // just ended, and the offset that returns a deficit to the environment.
-  const bool link = observe_link_ && device_.LinkPassivity(side, arm.link_remote);
+  // The position the forces are computed at: the arm's, or with the link's
+  // admittance the arm's plus the offset that returns a deficit.
   Vec3d p = arm.previous_position;
-  if (observe_link_) {
-    arm.link_end.Observe(arm.displacement);
-    if (link) {
-      ++c.passivity_link_ticks;
-      Vec3d remote_in{};
-      for (int i = 0; i < 3; ++i)
-        remote_in[i] = arm.link_remote.energy_in[i] - arm.link_remote.charged[i];
-      const double was = arm.link_end.dissipated_total_j();
-      bool acted = false;
-      if (config_.servo.passivity_link_admittance) {
-        const Vec3d& offset = arm.link_end.ControlPosition(remote_in, period_s, &acted);
-        for (int i = 0; i < 3; ++i) p[i] += offset[i];
-      } else {
-        arm.link_end.ChargeDeficit(remote_in);
-      }
-      c.passivity_dissipated_j += arm.link_end.dissipated_total_j() - was;
-      if (acted) ++c.passivity_ticks;
-      c.passivity_device_ticks = arm.link_base_ticks + arm.link_remote.acted_ticks;
-      c.passivity_device_dissipated_j = arm.link_base_dissipated_j + arm.link_remote.dissipated_j;
-      c.passivity_device_max_alpha =
-          std::max(c.passivity_device_max_alpha, arm.link_remote.max_alpha);
-    }
-  }
+  arm.passivity.ObserveLink(device_, side, arm.displacement, period_s, p, c);
 
   // Forces from the latest set-point, at full rate whatever the feeders' rates.
   if (!hal_.TrySetpoint(side, arm.setpoint)) ++c.setpoint_read_fallbacks;
   const ForceSetpoint& sp = arm.setpoint;
-  const Vec3d& v = arm.velocity;
-  const Vec3d field = EvaluateForceField(sp.field, p, v);
-  Vec3d coupling{};
-  for (int i = 0; i < 3; ++i) {
-    if (sp.coupling_enabled) {
-      coupling[i] =
-          sp.coupling_stiffness * (sp.coupling_target[i] - p[i]) - sp.coupling_damping * v[i];
-    }
-    coupling[i] += sp.wrist_force[i];
-  }
+  const SetpointForce ports = ComposeSetpointForce(sp, p, arm.velocity);
   Vec3d from_setpoint{};
-  for (int i = 0; i < 3; ++i) from_setpoint[i] = field[i] + coupling[i];
+  for (int i = 0; i < 3; ++i) from_setpoint[i] = ports.field[i] + ports.coupling[i];
   // A cue (a fleet's switch) is felt on top of whatever the interface asks,
   // outside the passivity ports: it is a short open-loop pulse, not a field.
   if (Hal::Cue cue; hal_.TryCue(side, cue) && now_ns < cue.until_ns) {
     for (int i = 0; i < 3; ++i) from_setpoint[i] += cue.force[i];
     arm.cue_felt = true;
   }
-  if (config_.servo.passivity && !link) {
-    bool acted = false;
-    for (PassivityController* port : {&arm.field_port, &arm.coupling_port}) {
-      const PassivityAction a =
-          port->Update(port == &arm.field_port ? field : coupling, arm.displacement, v, period_s);
-      if (!a.acted) continue;
-      acted = true;
-      c.passivity_dissipated_j += a.dissipated;
-      for (int i = 0; i < 3; ++i) {
-        from_setpoint[i] += a.damping_force[i];
-        c.passivity_max_alpha = std::max(c.passivity_max_alpha, a.alpha[i]);
-      }
-    }
-    if (acted) ++c.passivity_ticks;
-  }
+  arm.passivity.DampPorts(ports.field, ports.coupling, arm.displacement, arm.velocity, period_s,
+                          from_setpoint, c);
   Vec3d local{};
   if (gravity_ != nullptr)
     local[2] = gravity_->Evaluate(arm.previous_position);  // the arm's own weight
@@ -196,23 +103,89 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
   std::array<double, kFingers> fingers = sp.finger_forces;
   arm.safety.Apply(now_ns, sp.stamp_ns, from_setpoint, local, wrist, fingers);
 
-  if (observe_link_) {
-    // The force held over the next period, and the report the commands carry.
-    arm.link_end.Hold(wrist);
-    device_.SetLinkEnergy(side,
-                          LinkEnergy{arm.link_end.energy_in(), arm.link_end.charged(),
-                                     arm.link_end.dissipated_total_j(), c.passivity_ticks, 0.0});
+  arm.passivity.ReportLink(device_, side, wrist, c);
+  WriteForces(arm, side, now_ns, wrist, fingers);
+  c.safety = arm.safety.counters();
+  arm.published.Store(c);
+}
+
+/// The glove and grasp strings, every `slow_channel_divider`-th cycle.
+void ServoLoop::ReadSlowChannels(Arm& arm, Side side, int64_t now_ns) {
+  const DeviceDescription& d = device_.description();
+  if ((d.has_glove || d.has_grasp) &&
+      arm.cycle % static_cast<uint64_t>(config_.servo.slow_channel_divider) == 0) {
+    if (device_.ReadGlove(side, now_ns, arm.glove) == DeviceStatus::kOk) {
+      hal_.PublishGlove(side, arm.glove);
+      if (trace_ != nullptr) trace_->Push(TraceRecord::FromGlove(side, arm.glove));
+      ++arm.counters.slow_reads;
+    }
   }
+  ++arm.cycle;
+}
+
+/// The wrist's reading: published, and the arm's motion (position,
+/// displacement, filtered velocity) updated from it; a lost arm handled.
+void ServoLoop::TrackWrist(Arm& arm, Side side, int64_t now_ns) {
+  const DeviceStatus status = device_.ReadWrist(side, now_ns, arm.wrist);
+  if (status == DeviceStatus::kLost) {
+    OnArmLost(arm, side);
+    return;
+  }
+  if (!arm.connected) {
+    arm.connected = true;
+    arm.safety.OnConnect(now_ns);
+    hal_.PublishLost(side, false);
+  }
+  if (status != DeviceStatus::kOk) {
+    ++arm.counters.no_data_ticks;
+    arm.displacement = Vec3d{};
+    return;
+  }
+  hal_.PublishWrist(side, arm.wrist);
+  if (trace_ != nullptr) trace_->Push(TraceRecord::FromWrist(side, arm.wrist));
+  const Vec3d p = TrackerToMetres(calibration_.arms[Index(side)], arm.wrist.position);
+  for (int i = 0; i < 3; ++i)
+    arm.displacement[i] = arm.have_previous ? p[i] - arm.previous_position[i] : 0.0;
+  if (arm.have_previous && now_ns > arm.previous_ns) {
+    const double dt = static_cast<double>(now_ns - arm.previous_ns) * 1e-9;
+    const double alpha = dt / (kVelocityFilter_s + dt);
+    for (int i = 0; i < 3; ++i) {
+      arm.velocity[i] += alpha * ((p[i] - arm.previous_position[i]) / dt - arm.velocity[i]);
+    }
+  }
+  arm.previous_position = p;
+  arm.previous_ns = now_ns;
+  arm.have_previous = true;
+}
+
+void ServoLoop::OnArmLost(Arm& arm, Side side) {
+  ++arm.counters.device_lost_ticks;
+  if (arm.connected) {
+    arm.connected = false;
+    arm.safety.OnLost();
+    hal_.PublishLost(side, true);
+  }
+  // Zero force, whatever the set-points say; a lost device may not hear it.
+  device_.WriteWristForce(side, Vec3d{});
+  device_.WriteFingerForces(side, {});
+  arm.have_previous = false;
+  arm.last_tick_ns = 0;
+  arm.passivity.OnLost(device_, side);
+}
+
+/// The forces in the device's units, and the newtons to the HAL.
+void ServoLoop::WriteForces(Arm& arm, Side side, int64_t now_ns, const Vec3d& wrist,
+                            const std::array<double, kFingers>& fingers) {
+  const ArmCalibration& cal = calibration_.arms[Index(side)];
+  ServoCounters& c = arm.counters;
   if (device_.WriteWristForce(side, NewtonsToCommand(cal, wrist)) != DeviceStatus::kOk)
     ++c.write_failures;
-  if (d.has_grasp) {
+  if (device_.description().has_grasp) {
     std::array<double, kFingers> finger_commands{};
     for (int k = 0; k < kFingers; ++k) finger_commands[k] = FingerNewtonsToCommand(cal, fingers[k]);
     if (device_.WriteFingerForces(side, finger_commands) != DeviceStatus::kOk) ++c.write_failures;
   }
   hal_.PublishForces(side, {now_ns, wrist, fingers});
-  c.safety = arm.safety.counters();
-  arm.published.Store(c);
 }
 
 void ServoLoop::Start() {

@@ -293,14 +293,53 @@ struct StudyConsole::Impl {
                     "text/html; charset=utf-8");
   }
 
+  // The constructor's steps, in its order.
+  void MakeServer();
+  void SetAccess();
+  void SetDefences();
+  void AddRoutes();
+  void Listen();
+
+  // The routes (AddRoutes is their table).
+  using Handler = void (Impl::*)(const httplib::Request&, httplib::Response&);
+  using FormHandler = void (Impl::*)(const httplib::Request&, httplib::Response&,
+                                     const httplib::ContentReader&);
+  void Get(const std::string& path, Handler handler) {
+    server->Get(path, [this, handler](const httplib::Request& req, httplib::Response& res) {
+      (this->*handler)(req, res);
+    });
+  }
   /// A state-changing route: its form must carry the console's token.
-  void Post(const std::string& path, httplib::Server::Handler handler) {
+  void Post(const std::string& path, Handler handler) {
     server->Post(path, [this, handler](const httplib::Request& req, httplib::Response& res) {
       if (const Refusal refusal = CheckFormToken(access, req.get_param_value("csrf")))
         return Refuse(res, refusal);
-      handler(req, res);
+      (this->*handler)(req, res);
     });
   }
+  /// A state-changing route whose form it reads itself (ReadForm: bounded as
+  /// it is read, then its token checked).
+  void PostForm(const std::string& path, FormHandler handler) {
+    server->Post(path, [this, handler](const httplib::Request& req, httplib::Response& res,
+                                       const httplib::ContentReader& read) {
+      (this->*handler)(req, res, read);
+    });
+  }
+  void LoginForm(const httplib::Request& req, httplib::Response& res);
+  void Login(const httplib::Request& req, httplib::Response& res);
+  void SchedulePage(const httplib::Request& req, httplib::Response& res);
+  void Status(const httplib::Request& req, httplib::Response& res);
+  void Start(const httplib::Request& req, httplib::Response& res);
+  void Redo(const httplib::Request& req, httplib::Response& res);
+  void AddParticipant(const httplib::Request& req, httplib::Response& res);
+  void Finish(const httplib::Request& req, httplib::Response& res);
+  void Picture(const httplib::Request& req, httplib::Response& res);
+  void Abort(const httplib::Request& req, httplib::Response& res);
+  void QuestionnaireForm(const httplib::Request& req, httplib::Response& res);
+  void Answers(const httplib::Request& req, httplib::Response& res,
+               const httplib::ContentReader& read);
+  void Note(const httplib::Request& req, httplib::Response& res,
+            const httplib::ContentReader& read);
 
   /// A url-encoded form read here, not by the library (which buffers one
   /// whole and refuses it past 8 kB, shorter than a long answer or note):
@@ -349,6 +388,8 @@ struct StudyConsole::Impl {
     return text;
   }
 
+  /// The schedule page: the trial under way, what is next, every planned
+  /// trial with its results, questionnaires and notes, and the forms.
   std::string Schedule() {
     const std::lock_guard<std::mutex> lock(mutex);
     const std::vector<PlannedTrial> plan = store->Plan();
@@ -358,26 +399,7 @@ struct StudyConsole::Impl {
     h << "<h1>Study " << Html(config.name) << "</h1>\n<p id=\"progress\">" << trials.size()
       << " of " << plan.size() << " trials done</p>\n<p id=\"live\">"
       << (live.empty() ? "No trial under way." : Html(live)) << "</p>\n";
-    if (!live.empty()) {
-      if (have_progress) {
-        h << "<p id=\"progress-live\">lap " << FormatSeconds(progress.lap_time_s)
-          << " &middot; gates " << progress.gates_passed << " of " << progress.gates_total
-          << " &middot; contacts " << progress.obstacles;
-        if (!progress.last_contact.empty()) h << " (last: " << Html(progress.last_contact) << ")";
-        h << "</p>\n";
-      }
-      if (thumbnail) {
-        h << "<p><img id=\"thumbnail\" src=\"/video.jpg?n=" << thumbnail->frames()
-          << "\" width=\"320\" alt=\"the vehicle's camera (no picture yet)\"></p>\n";
-      }
-      h << "<form method=\"post\" action=\"/abort\">" << TokenField(access.form_token)
-        << "<button id=\"abort\">Abort this trial</button> (it is "
-           "run again)</form>\n";
-      if (!live_participant.empty()) {
-        h << "<p>Note on this " << (live_position == 0 ? "practice lap" : "trial") << ": "
-          << NoteForm(access.form_token, live_participant, live_position, "live-note") << "</p>\n";
-      }
-    }
+    if (!live.empty()) LiveTrial(h);
     if (!waiting.empty()) h << "<p id=\"waiting\">Waiting for " << Html(waiting) << "</p>\n";
     if (!next.empty()) {
       h << "<form method=\"post\" action=\"/start\">" << TokenField(access.form_token)
@@ -387,70 +409,9 @@ struct StudyConsole::Impl {
     h << "<table "
          "id=\"schedule\"><tr><th>participant</th><th>position</th><th>condition</th><th>lap</th>"
          "<th>questionnaires</th><th>notes</th></tr>\n";
-    for (const PlannedTrial& t : plan) {
-      const TrialRow* row = nullptr;
-      for (const TrialRow& r : trials) {
-        if (r.participant == t.participant && r.position == t.position) row = &r;
-      }
-      const bool flagged = row != nullptr && !row->flags.empty();
-      h << "<tr"
-        << (row == nullptr ? ""
-            : flagged      ? " class=\"done flagged\""
-                           : " class=\"done\"")
-        << "><td>" << Html(t.participant) << "</td><td>" << t.position << "</td><td>"
-        << Html(t.condition) << "</td><td>"
-        << (row == nullptr ? ""
-                           : FormatSeconds(row->lap_time_s) + (row->completed ? "" : " (cap)"));
-      // What could have spoiled it: the experimenter decides whether to redo it.
-      if (flagged) h << " <span class=\"flags\">! " << Html(row->flags) << "</span>";
-      if (row != nullptr && row->attempt > 1) h << " (attempt " << row->attempt << ")";
-      if (row != nullptr) {
-        h << " <form method=\"post\" action=\"/redo\" style=\"display:inline\">"
-          << TokenField(access.form_token)
-          << "<input type=\"hidden\" "
-             "name=\"participant\" value=\""
-          << Html(t.participant) << "\"><input type=\"hidden\" name=\"position\" value=\""
-          << t.position << "\"><button>redo</button></form>";
-      }
-      h << "</td><td>";
-      // The participant's background, asked once before their first trial.
-      if (!config.demographics.empty() && t.position == 1) {
-        if (store->Answered(t.participant, "", config.demographics)) {
-          h << Html(config.demographics) << " &#10003; ";
-        } else {
-          h << "<a class=\"demographics\" href=\""
-            << Html(Query(t.participant, "", config.demographics)) << "\">"
-            << Html(config.demographics) << "</a> (before the first trial) ";
-        }
-      }
-      if (row != nullptr) {
-        for (const std::string& name : config.questionnaires) {
-          if (store->Answered(t.participant, t.condition, name)) {
-            h << Html(name) << " &#10003; ";
-          } else {
-            h << "<a href=\"" << Html(Query(t.participant, t.condition, name)) << "\">"
-              << Html(name) << "</a> ";
-          }
-        }
-      }
-      h << "</td><td>";
-      for (const NoteRow& n : notes) {
-        if (n.participant == t.participant && n.position == t.position) {
-          h << "<div class=\"note-text\">" << Html(n.text) << "</div>";
-        }
-      }
-      h << NoteForm(access.form_token, t.participant, t.position, "") << "</td></tr>\n";
-    }
+    for (const PlannedTrial& t : plan) ScheduleRow(h, t, trials, notes);
     h << "</table>\n";
-    // Notes on a participant as a whole (their practice lap, their manner).
-    bool general = false;
-    for (const NoteRow& n : notes) {
-      if (n.position != 0) continue;
-      if (!general) h << "<h2>Notes on participants</h2>\n<ul id=\"participant-notes\">\n";
-      general = true;
-      h << "<li>" << Html(n.participant) << ": " << Html(n.text) << "</li>\n";
-    }
-    if (general) h << "</ul>\n";
+    ParticipantNotes(h, notes);
     if (config.operators == "person") {
       h << "<p id=\"participants\">" << Html(Blocks(store->Participants().size())) << "</p>\n"
         << "<form method=\"post\" action=\"/participants\">" << TokenField(access.form_token)
@@ -468,6 +429,99 @@ struct StudyConsole::Impl {
     return Page("Study " + config.name, h.str(),
                 changing ? "<meta http-equiv=\"refresh\" content=\"2\">" : "");
   }
+
+  /// The trial under way: its progress, the thumbnail, Abort, and its note
+  /// form. The caller holds `mutex`.
+  void LiveTrial(std::ostringstream& h) const {
+    if (have_progress) {
+      h << "<p id=\"progress-live\">lap " << FormatSeconds(progress.lap_time_s)
+        << " &middot; gates " << progress.gates_passed << " of " << progress.gates_total
+        << " &middot; contacts " << progress.obstacles;
+      if (!progress.last_contact.empty()) h << " (last: " << Html(progress.last_contact) << ")";
+      h << "</p>\n";
+    }
+    if (thumbnail) {
+      h << "<p><img id=\"thumbnail\" src=\"/video.jpg?n=" << thumbnail->frames()
+        << "\" width=\"320\" alt=\"the vehicle's camera (no picture yet)\"></p>\n";
+    }
+    h << "<form method=\"post\" action=\"/abort\">" << TokenField(access.form_token)
+      << "<button id=\"abort\">Abort this trial</button> (it is "
+         "run again)</form>\n";
+    if (!live_participant.empty()) {
+      h << "<p>Note on this " << (live_position == 0 ? "practice lap" : "trial") << ": "
+        << NoteForm(access.form_token, live_participant, live_position, "live-note") << "</p>\n";
+    }
+  }
+
+  /// One planned trial's row: its result and flags, redo, the questionnaires
+  /// (the participant's background on their first row), notes. The caller
+  /// holds `mutex`.
+  void ScheduleRow(std::ostringstream& h, const PlannedTrial& t,
+                   const std::vector<TrialRow>& trials, const std::vector<NoteRow>& notes) const {
+    const TrialRow* row = nullptr;
+    for (const TrialRow& r : trials) {
+      if (r.participant == t.participant && r.position == t.position) row = &r;
+    }
+    const bool flagged = row != nullptr && !row->flags.empty();
+    h << "<tr"
+      << (row == nullptr ? ""
+          : flagged      ? " class=\"done flagged\""
+                         : " class=\"done\"")
+      << "><td>" << Html(t.participant) << "</td><td>" << t.position << "</td><td>"
+      << Html(t.condition) << "</td><td>"
+      << (row == nullptr ? "" : FormatSeconds(row->lap_time_s) + (row->completed ? "" : " (cap)"));
+    // What could have spoiled it: the experimenter decides whether to redo it.
+    if (flagged) h << " <span class=\"flags\">! " << Html(row->flags) << "</span>";
+    if (row != nullptr && row->attempt > 1) h << " (attempt " << row->attempt << ")";
+    if (row != nullptr) {
+      h << " <form method=\"post\" action=\"/redo\" style=\"display:inline\">"
+        << TokenField(access.form_token)
+        << "<input type=\"hidden\" "
+           "name=\"participant\" value=\""
+        << Html(t.participant) << "\"><input type=\"hidden\" name=\"position\" value=\""
+        << t.position << "\"><button>redo</button></form>";
+    }
+    h << "</td><td>";
+    // The participant's background, asked once before their first trial.
+    if (!config.demographics.empty() && t.position == 1) {
+      if (store->Answered(t.participant, "", config.demographics)) {
+        h << Html(config.demographics) << " &#10003; ";
+      } else {
+        h << "<a class=\"demographics\" href=\""
+          << Html(Query(t.participant, "", config.demographics)) << "\">"
+          << Html(config.demographics) << "</a> (before the first trial) ";
+      }
+    }
+    if (row != nullptr) {
+      for (const std::string& name : config.questionnaires) {
+        if (store->Answered(t.participant, t.condition, name)) {
+          h << Html(name) << " &#10003; ";
+        } else {
+          h << "<a href=\"" << Html(Query(t.participant, t.condition, name)) << "\">" << Html(name)
+            << "</a> ";
+        }
+      }
+    }
+    h << "</td><td>";
+    for (const NoteRow& n : notes) {
+      if (n.participant == t.participant && n.position == t.position) {
+        h << "<div class=\"note-text\">" << Html(n.text) << "</div>";
+      }
+    }
+    h << NoteForm(access.form_token, t.participant, t.position, "") << "</td></tr>\n";
+  }
+
+  /// Notes on a participant as a whole (their practice lap, their manner).
+  static void ParticipantNotes(std::ostringstream& h, const std::vector<NoteRow>& notes) {
+    bool general = false;
+    for (const NoteRow& n : notes) {
+      if (n.position != 0) continue;
+      if (!general) h << "<h2>Notes on participants</h2>\n<ul id=\"participant-notes\">\n";
+      general = true;
+      h << "<li>" << Html(n.participant) << ": " << Html(n.text) << "</li>\n";
+    }
+    if (general) h << "</ul>\n";
+  }
 };
 
 StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedTrial>& plan,
@@ -475,10 +529,18 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
                            const std::map<std::string, Questionnaire>& questionnaires,
                            const ConsoleOptions& options)
     : impl_(std::make_unique<Impl>(config, plan, database, questionnaires, options)) {
-  Impl& s = *impl_;
+  impl_->MakeServer();
+  impl_->SetAccess();
+  impl_->SetDefences();
+  impl_->AddRoutes();
+  impl_->Listen();
+}
+
+/// The server, over TLS when a certificate is given; refused beyond
+/// loopback in clear unless `plain_http` accepts it.
+void StudyConsole::Impl::MakeServer() {
   const bool tls = !options.tls_certificate.empty();
-  const bool beyond_loopback = !IsLoopbackAddress(options.host);
-  if (beyond_loopback && !tls && !options.plain_http) {
+  if (!IsLoopbackAddress(options.host) && !tls && !options.plain_http) {
     throw ConsoleError(
         "the console would listen on " + options.host +
         ", beyond this machine, without HTTPS: its access token would cross the network in clear. "
@@ -494,40 +556,52 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
     }
   }
   try {
-    s.server = std::make_unique<ConsoleServer>(options.connections, std::move(context));
+    server = std::make_unique<ConsoleServer>(options.connections, std::move(context));
   } catch (const std::invalid_argument& e) {
     throw ConsoleError(e.what());
   }
-  s.access.tls = tls;
-  s.access.form_token = RandomToken();
-  s.access.access_token =
-      beyond_loopback ? (options.access_token.empty() ? RandomToken() : options.access_token) : "";
-  s.access.max_answers_bytes = LargestAnswers(questionnaires);
+}
+
+/// The tokens (the forms', and beyond loopback the page's access token) and
+/// the bounds on a form's body.
+void StudyConsole::Impl::SetAccess() {
+  access.tls = !options.tls_certificate.empty();
+  access.form_token = RandomToken();
+  access.access_token = !IsLoopbackAddress(options.host)
+                            ? (options.access_token.empty() ? RandomToken() : options.access_token)
+                            : "";
+  access.max_answers_bytes = LargestAnswers(questionnaires);
   // A note's characters as 4 bytes of UTF-8 each, url-encoded, and room for
   // its hidden fields and what a browser adds.
-  s.access.max_note_bytes = FormBytesFor(kMaxNoteCharacters, 4) + 4096;
+  access.max_note_bytes = FormBytesFor(kMaxNoteCharacters, 4) + 4096;
   // Chunked bodies (no Content-Length) stop here as they are read.
-  s.server->set_payload_max_length(std::max(s.access.max_answers_bytes, s.access.max_note_bytes));
+  server->set_payload_max_length(std::max(access.max_answers_bytes, access.max_note_bytes));
+}
+
+/// What every answer carries, the checks every request's head passes
+/// before its body is read or a route runs, and the pages of what the
+/// library refuses by itself.
+void StudyConsole::Impl::SetDefences() {
   // Not to be framed by another page (a hidden Abort button under a click),
   // sniffed as another type, cached, or named in a Referer to another site.
   // Not "no-referrer": under it Chromium sends the console's own form posts
   // with "Origin: null", which the Origin check must refuse.
-  s.server->set_default_headers({{"X-Frame-Options", "DENY"},
-                                 {"Content-Security-Policy", "frame-ancestors 'none'"},
-                                 {"X-Content-Type-Options", "nosniff"},
-                                 {"Referrer-Policy", "same-origin"},
-                                 {"Cache-Control", "no-store"}});
+  server->set_default_headers({{"X-Frame-Options", "DENY"},
+                               {"Content-Security-Policy", "frame-ancestors 'none'"},
+                               {"X-Content-Type-Options", "nosniff"},
+                               {"Referrer-Policy", "same-origin"},
+                               {"Cache-Control", "no-store"}});
   // Every request's head, before its body is read or a route runs.
-  s.server->set_pre_routing_handler([&s](const httplib::Request& req, httplib::Response& res) {
-    if (const Refusal refusal = CheckRequest(s.access, req)) {
-      s.Refuse(res, refusal);
+  server->set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
+    if (const Refusal refusal = CheckRequest(access, req)) {
+      Refuse(res, refusal);
       return httplib::Server::HandlerResponse::Handled;
     }
     return httplib::Server::HandlerResponse::Unhandled;
   });
   // What the library refuses by itself (a malformed request, a chunked body
   // past the limit, a path that is not a route) says so on a page too.
-  s.server->set_error_handler([](const httplib::Request&, httplib::Response& res) {
+  server->set_error_handler([](const httplib::Request&, httplib::Response& res) {
     if (!res.body.empty()) return;  // a route's own page, which says why
     const std::string why =
         res.status == 404   ? "no such page on the study's console"
@@ -536,250 +610,285 @@ StudyConsole::StudyConsole(const StudyConfig& config, const std::vector<PlannedT
                             : "the request was refused (HTTP " + std::to_string(res.status) + ")";
     res.set_content(ErrorPage("Refused", why), "text/html; charset=utf-8");
   });
-  s.server->Get("/login", [&s](const httplib::Request&, httplib::Response& res) {
-    res.set_content(LoginPage(s.access.form_token, "The console asks for its access token, once."),
-                    "text/html; charset=utf-8");
-  });
-  s.Post("/login", [&s](const httplib::Request& req, httplib::Response& res) {
-    if (s.access.access_token.empty()) return res.set_redirect("/", 303);
-    if (!IsAccessToken(s.access, req.get_param_value("token"))) {
-      return s.Refuse(res, {401, "that is not the console's access token"});
-    }
-    res.set_header("Set-Cookie", std::string(kAccessCookie) + "=" + s.access.access_token +
-                                     "; Path=/; HttpOnly; SameSite=Strict" +
-                                     (s.access.tls ? "; Secure" : ""));
-    res.set_redirect("/", 303);
-  });
-  s.server->Get("/", [&s](const httplib::Request&, httplib::Response& res) {
-    res.set_content(s.Schedule(), "text/html; charset=utf-8");
-  });
-  s.server->Get("/status.json", [&s](const httplib::Request&, httplib::Response& res) {
-    const ConnectionCounters c = s.server->counters();
-    const std::lock_guard<std::mutex> lock(s.mutex);
-    res.set_content(
-        "{\"study\":" + JsonString(s.config.name) +
-            ",\"trials_done\":" + std::to_string(s.store->Trials().size()) +
-            ",\"trials_planned\":" + std::to_string(s.store->Plan().size()) + ",\"participants\":" +
-            std::to_string(s.store->Participants().size()) + ",\"live\":" + JsonString(s.live) +
-            ",\"lap_time_s\":" + JsonNumber(s.progress.lap_time_s) +
-            ",\"gates_passed\":" + std::to_string(s.progress.gates_passed) +
-            ",\"obstacles\":" + std::to_string(s.progress.obstacles) +
-            ",\"video_frames\":" + std::to_string(s.thumbnail ? s.thumbnail->frames() : 0) +
-            ",\"next\":" + JsonString(s.next) + ",\"waiting\":" + JsonString(s.waiting) +
-            ",\"waiting_for_participants\":" + (s.waiting_for_more ? "true" : "false") +
-            ",\"connections\":{\"served\":" + std::to_string(c.served) + ",\"refused_busy\":" +
-            std::to_string(c.refused_busy) + ",\"cut_deadline\":" + std::to_string(c.cut_deadline) +
-            ",\"cut_for_room\":" + std::to_string(c.cut_for_room) +
-            ",\"tls_failed\":" + std::to_string(c.tls_failed) +
-            ",\"refused_requests\":" + std::to_string(s.refused_requests.load()) + "}}",
-        "application/json");
-  });
-  s.Post("/start", [&s](const httplib::Request&, httplib::Response& res) {
-    std::unique_lock<std::mutex> lock(s.mutex);
-    if (s.next.empty()) {
-      res.status = 409;
-      const std::string why =
-          s.waiting.empty() ? "no trial is waiting to start" : "waiting for " + s.waiting;
-      res.set_content(ErrorPage("Not started", why), "text/html; charset=utf-8");
-      return;
-    }
-    s.start_requested = true;
-    s.started.notify_all();
-    res.set_redirect("/", 303);
-  });
-  s.Post("/redo", [&s](const httplib::Request& req, httplib::Response& res) {
-    const std::string participant = req.get_param_value("participant");
-    int position = 0;
-    try {
-      position = std::stoi(req.get_param_value("position"));
-    } catch (const std::exception&) {
-      position = 0;
-    }
-    bool taken = false;
-    {
-      const std::lock_guard<std::mutex> lock(s.mutex);
-      taken = position > 0 && s.store->Redo(participant, position, "from the console");
-    }
-    if (!taken) {
-      res.status = 409;
-      res.set_content(ErrorPage("Not redone", "participant " + participant +
-                                                  " has no finished trial at position " +
-                                                  req.get_param_value("position")),
-                      "text/html; charset=utf-8");
-      return;
-    }
-    res.set_redirect("/", 303);
-  });
-  s.Post("/participants", [&s](const httplib::Request& req, httplib::Response& res) {
-    const std::string id = req.get_param_value("id");
-    if (s.config.operators != "person") {
-      res.status = 409;
-      res.set_content(
-          ErrorPage("Not added", "simulated drivers come from the study file, each with a profile"),
-          "text/html; charset=utf-8");
-      return;
-    }
-    if (!IsPlainName(id)) {
-      res.status = 422;
-      res.set_content(
-          ErrorPage(
-              "Not added",
-              "a participant's id is 1 to 40 letters, digits, '-', '_' or '.', got '" + id + "'"),
-          "text/html; charset=utf-8");
-      return;
-    }
-    try {
-      const std::lock_guard<std::mutex> lock(s.mutex);
-      const int row = static_cast<int>(s.store->Participants().size());
-      s.store->AddParticipant(id, PlanParticipant(s.config, id, row));
-    } catch (const AlreadyAnswered& e) {
-      res.status = 409;
-      res.set_content(ErrorPage("Not added", e.what()), "text/html; charset=utf-8");
-      return;
-    }
-    s.started.notify_all();
-    res.set_redirect("/", 303);
-  });
-  s.Post("/finish", [&s](const httplib::Request&, httplib::Response& res) {
-    {
-      const std::lock_guard<std::mutex> lock(s.mutex);
-      if (!s.waiting_for_more) {
-        res.status = 409;
-        res.set_content(ErrorPage("Not finished", "the study still has trials to run"),
-                        "text/html; charset=utf-8");
-        return;
-      }
-      s.finish_requested = true;
-    }
-    s.started.notify_all();
-    res.set_redirect("/", 303);
-  });
-  s.server->Get("/video.jpg", [&s](const httplib::Request&, httplib::Response& res) {
-    const std::vector<uint8_t> jpeg = s.thumbnail ? s.thumbnail->Latest() : std::vector<uint8_t>();
-    if (jpeg.empty()) {
-      res.status = 404;
-      res.set_content("no picture from the vehicle's camera yet", "text/plain");
-      return;
-    }
-    res.set_content(std::string(jpeg.begin(), jpeg.end()), "image/jpeg");
-  });
-  s.Post("/abort", [&s](const httplib::Request&, httplib::Response& res) {
-    {
-      const std::lock_guard<std::mutex> lock(s.mutex);
-      if (s.live.empty()) {
-        res.status = 409;
-        res.set_content(ErrorPage("Not aborted", "no trial is under way"),
-                        "text/html; charset=utf-8");
-        return;
-      }
-    }
-    s.abort_requested.store(true);
-    res.set_redirect("/", 303);
-  });
-  s.server->Get("/questionnaire", [&s](const httplib::Request& req, httplib::Response& res) {
-    const auto q = s.questionnaires.find(req.get_param_value("name"));
-    if (q == s.questionnaires.end()) {
-      res.status = 404;
-      res.set_content(
-          Page("Not found", "<p class=\"error\">No such questionnaire in this study.</p>"),
-          "text/html; charset=utf-8");
-      return;
-    }
-    res.set_content(
-        Page(q->second.title, Form(q->second, req.get_param_value("participant"),
-                                   req.get_param_value("condition"), s.access.form_token)),
-        "text/html; charset=utf-8");
-  });
-  // Read here, not by the library: it buffers a url-encoded body whole and
-  // refuses one past 8 kB, shorter than the answers a text item allows.
-  s.server->Post("/answers", [&s](const httplib::Request& req, httplib::Response& res,
-                                  const httplib::ContentReader& read) {
-    httplib::Params params;
-    if (!s.ReadForm(req, res, read, s.access.max_answers_bytes, "this study's questionnaires allow",
-                    params))
-      return;
-    std::map<std::string, std::string> fields;
-    for (const auto& [key, value] : params) fields[key] = value;
-    const std::string participant = fields["participant"];
-    const std::string condition = fields["condition"];
-    const std::string name = fields["questionnaire"];
-    for (const char* hidden : {"participant", "condition", "questionnaire", "csrf"})
-      fields.erase(hidden);
-    const auto q = s.questionnaires.find(name);
-    if (q != s.questionnaires.end()) {
-      for (const Item& item : q->second.items) {
-        if (item.type == ItemType::kTree) TreePath(item, fields);
-      }
-    }
-    SubmissionResult result;
-    {
-      const std::lock_guard<std::mutex> lock(s.mutex);
-      result = SubmitAnswers(*s.store, s.questionnaires, participant, condition, name, fields,
-                             s.config.demographics);
-    }
-    res.status = result.status;
-    std::string page = std::string("<p id=\"result\" class=\"") +
-                       (result.accepted ? "ok" : "error") + "\">" + Html(result.message) + "</p>\n";
-    if (!result.errors.empty()) {
-      page += "<ul id=\"errors\">\n";
-      for (const AnswerError& e : result.errors) page += "<li>" + Html(e.message) + "</li>\n";
-      page += "</ul>\n<p><a href=\"" + Html(Query(participant, condition, name)) +
-              "\">back to the form</a></p>\n";
-    }
-    page += "<p><a href=\"/\">schedule</a></p>";
-    res.set_content(Page(result.accepted ? "Recorded" : "Not recorded", page),
-                    "text/html; charset=utf-8");
-  });
-  // One of the experimenter's notes on a trial; a long note (in any
-  // script) is larger than the library's own form limit, so read here.
-  s.server->Post("/notes", [&s](const httplib::Request& req, httplib::Response& res,
-                                const httplib::ContentReader& read) {
-    httplib::Params params;
-    if (!s.ReadForm(req, res, read, s.access.max_note_bytes,
-                    "a note of " + std::to_string(kMaxNoteCharacters) + " characters takes",
-                    params)) {
-      return;
-    }
-    const auto field = [&params](const char* key) {
-      const auto it = params.find(key);
-      return it == params.end() ? std::string() : it->second;
-    };
-    SubmissionResult result;
-    {
-      const std::lock_guard<std::mutex> lock(s.mutex);
-      result = SubmitNote(*s.store, field("participant"), field("position"), field("text"));
-    }
-    if (result.accepted) return res.set_redirect("/", 303);
-    res.status = result.status;
-    res.set_content(ErrorPage("Not noted", result.message), "text/html; charset=utf-8");
-  });
+}
+
+/// The console's routes, one a line. Every POST carries the form token:
+/// Post checks it; PostForm's handlers read their forms themselves
+/// (ReadForm), bounded, and check it there.
+void StudyConsole::Impl::AddRoutes() {
+  Get("/login", &Impl::LoginForm);
+  Post("/login", &Impl::Login);
+  Get("/", &Impl::SchedulePage);
+  Get("/status.json", &Impl::Status);
+  Post("/start", &Impl::Start);
+  Post("/redo", &Impl::Redo);
+  Post("/participants", &Impl::AddParticipant);
+  Post("/finish", &Impl::Finish);
+  Get("/video.jpg", &Impl::Picture);
+  Post("/abort", &Impl::Abort);
+  Get("/questionnaire", &Impl::QuestionnaireForm);
+  PostForm("/answers", &Impl::Answers);
+  PostForm("/notes", &Impl::Note);
+}
+
+/// Binds (refused when the port is taken), writes the study's tables, and
+/// serves from a thread of its own.
+void StudyConsole::Impl::Listen() {
   // SO_REUSEADDR only: httplib's default adds SO_REUSEPORT, with which a
   // second console would share the port silently instead of being refused.
-  s.server->set_socket_options([](socket_t sock) {
+  server->set_socket_options([](socket_t sock) {
     int yes = 1;
     setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
   });
   if (options.port == 0) {
-    s.port = s.server->bind_to_any_port(options.host);
-  } else if (s.server->bind_to_port(options.host, options.port)) {
-    s.port = options.port;
+    port = server->bind_to_any_port(options.host);
+  } else if (server->bind_to_port(options.host, options.port)) {
+    port = options.port;
   }
-  if (s.port <= 0) {
+  if (port <= 0) {
     throw ConsoleError("the console cannot listen on " + options.host + ":" +
                        std::to_string(options.port) +
                        " (the port is in use, or the address is not this machine's); choose "
                        "another with --port N");
   }
-  s.access.hosts = ConsoleHosts(options.host, s.port, tls, options.names);
+  access.hosts = ConsoleHosts(options.host, port, access.tls, options.names);
   // The study's tables only once the port is ours: a console that cannot
   // listen writes nothing.
-  s.store = std::make_unique<StudyStore>(s.recorder, s.config, s.plan);
-  s.thread = std::thread([&s] { s.server->listen_after_bind(); });
+  store = std::make_unique<StudyStore>(recorder, config, plan);
+  thread = std::thread([this] { server->listen_after_bind(); });
   // Serving before the constructor returns: a stop() before the listening
   // loop has started would be lost, and the destructor would wait forever.
-  for (int i = 0; i < 500 && !s.server->is_running(); ++i) {
+  for (int i = 0; i < 500 && !server->is_running(); ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
+}
+
+void StudyConsole::Impl::LoginForm(const httplib::Request&, httplib::Response& res) {
+  res.set_content(LoginPage(access.form_token, "The console asks for its access token, once."),
+                  "text/html; charset=utf-8");
+}
+
+void StudyConsole::Impl::Login(const httplib::Request& req, httplib::Response& res) {
+  if (access.access_token.empty()) return res.set_redirect("/", 303);
+  if (!IsAccessToken(access, req.get_param_value("token"))) {
+    return Refuse(res, {401, "that is not the console's access token"});
+  }
+  res.set_header("Set-Cookie", std::string(kAccessCookie) + "=" + access.access_token +
+                                   "; Path=/; HttpOnly; SameSite=Strict" +
+                                   (access.tls ? "; Secure" : ""));
+  res.set_redirect("/", 303);
+}
+
+void StudyConsole::Impl::SchedulePage(const httplib::Request&, httplib::Response& res) {
+  res.set_content(Schedule(), "text/html; charset=utf-8");
+}
+
+void StudyConsole::Impl::Status(const httplib::Request&, httplib::Response& res) {
+  const ConnectionCounters c = server->counters();
+  const std::lock_guard<std::mutex> lock(mutex);
+  res.set_content(
+      "{\"study\":" + JsonString(config.name) +
+          ",\"trials_done\":" + std::to_string(store->Trials().size()) +
+          ",\"trials_planned\":" + std::to_string(store->Plan().size()) +
+          ",\"participants\":" + std::to_string(store->Participants().size()) +
+          ",\"live\":" + JsonString(live) + ",\"lap_time_s\":" + JsonNumber(progress.lap_time_s) +
+          ",\"gates_passed\":" + std::to_string(progress.gates_passed) +
+          ",\"obstacles\":" + std::to_string(progress.obstacles) +
+          ",\"video_frames\":" + std::to_string(thumbnail ? thumbnail->frames() : 0) +
+          ",\"next\":" + JsonString(next) + ",\"waiting\":" + JsonString(waiting) +
+          ",\"waiting_for_participants\":" + (waiting_for_more ? "true" : "false") +
+          ",\"connections\":{\"served\":" + std::to_string(c.served) + ",\"refused_busy\":" +
+          std::to_string(c.refused_busy) + ",\"cut_deadline\":" + std::to_string(c.cut_deadline) +
+          ",\"cut_for_room\":" + std::to_string(c.cut_for_room) +
+          ",\"tls_failed\":" + std::to_string(c.tls_failed) +
+          ",\"refused_requests\":" + std::to_string(refused_requests.load()) + "}}",
+      "application/json");
+}
+
+void StudyConsole::Impl::Start(const httplib::Request&, httplib::Response& res) {
+  std::unique_lock<std::mutex> lock(mutex);
+  if (next.empty()) {
+    res.status = 409;
+    const std::string why =
+        waiting.empty() ? "no trial is waiting to start" : "waiting for " + waiting;
+    res.set_content(ErrorPage("Not started", why), "text/html; charset=utf-8");
+    return;
+  }
+  start_requested = true;
+  started.notify_all();
+  res.set_redirect("/", 303);
+}
+
+void StudyConsole::Impl::Redo(const httplib::Request& req, httplib::Response& res) {
+  const std::string participant = req.get_param_value("participant");
+  int position = 0;
+  try {
+    position = std::stoi(req.get_param_value("position"));
+  } catch (const std::exception&) {
+    position = 0;
+  }
+  bool taken = false;
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    taken = position > 0 && store->Redo(participant, position, "from the console");
+  }
+  if (!taken) {
+    res.status = 409;
+    res.set_content(ErrorPage("Not redone", "participant " + participant +
+                                                " has no finished trial at position " +
+                                                req.get_param_value("position")),
+                    "text/html; charset=utf-8");
+    return;
+  }
+  res.set_redirect("/", 303);
+}
+
+void StudyConsole::Impl::AddParticipant(const httplib::Request& req, httplib::Response& res) {
+  const std::string id = req.get_param_value("id");
+  if (config.operators != "person") {
+    res.status = 409;
+    res.set_content(
+        ErrorPage("Not added", "simulated drivers come from the study file, each with a profile"),
+        "text/html; charset=utf-8");
+    return;
+  }
+  if (!IsPlainName(id)) {
+    res.status = 422;
+    res.set_content(
+        ErrorPage(
+            "Not added",
+            "a participant's id is 1 to 40 letters, digits, '-', '_' or '.', got '" + id + "'"),
+        "text/html; charset=utf-8");
+    return;
+  }
+  try {
+    const std::lock_guard<std::mutex> lock(mutex);
+    const int row = static_cast<int>(store->Participants().size());
+    store->AddParticipant(id, PlanParticipant(config, id, row));
+  } catch (const AlreadyAnswered& e) {
+    res.status = 409;
+    res.set_content(ErrorPage("Not added", e.what()), "text/html; charset=utf-8");
+    return;
+  }
+  started.notify_all();
+  res.set_redirect("/", 303);
+}
+
+void StudyConsole::Impl::Finish(const httplib::Request&, httplib::Response& res) {
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    if (!waiting_for_more) {
+      res.status = 409;
+      res.set_content(ErrorPage("Not finished", "the study still has trials to run"),
+                      "text/html; charset=utf-8");
+      return;
+    }
+    finish_requested = true;
+  }
+  started.notify_all();
+  res.set_redirect("/", 303);
+}
+
+void StudyConsole::Impl::Picture(const httplib::Request&, httplib::Response& res) {
+  const std::vector<uint8_t> jpeg = thumbnail ? thumbnail->Latest() : std::vector<uint8_t>();
+  if (jpeg.empty()) {
+    res.status = 404;
+    res.set_content("no picture from the vehicle's camera yet", "text/plain");
+    return;
+  }
+  res.set_content(std::string(jpeg.begin(), jpeg.end()), "image/jpeg");
+}
+
+void StudyConsole::Impl::Abort(const httplib::Request&, httplib::Response& res) {
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    if (live.empty()) {
+      res.status = 409;
+      res.set_content(ErrorPage("Not aborted", "no trial is under way"),
+                      "text/html; charset=utf-8");
+      return;
+    }
+  }
+  abort_requested.store(true);
+  res.set_redirect("/", 303);
+}
+
+void StudyConsole::Impl::QuestionnaireForm(const httplib::Request& req, httplib::Response& res) {
+  const auto q = questionnaires.find(req.get_param_value("name"));
+  if (q == questionnaires.end()) {
+    res.status = 404;
+    res.set_content(
+        Page("Not found", "<p class=\"error\">No such questionnaire in this study.</p>"),
+        "text/html; charset=utf-8");
+    return;
+  }
+  res.set_content(Page(q->second.title, Form(q->second, req.get_param_value("participant"),
+                                             req.get_param_value("condition"), access.form_token)),
+                  "text/html; charset=utf-8");
+}
+
+// Read here, not by the library: it buffers a url-encoded body whole and
+// refuses one past 8 kB, shorter than the answers a text item allows.
+void StudyConsole::Impl::Answers(const httplib::Request& req, httplib::Response& res,
+                                 const httplib::ContentReader& read) {
+  httplib::Params params;
+  if (!ReadForm(req, res, read, access.max_answers_bytes, "this study's questionnaires allow",
+                params))
+    return;
+  std::map<std::string, std::string> fields;
+  for (const auto& [key, value] : params) fields[key] = value;
+  const std::string participant = fields["participant"];
+  const std::string condition = fields["condition"];
+  const std::string name = fields["questionnaire"];
+  for (const char* hidden : {"participant", "condition", "questionnaire", "csrf"})
+    fields.erase(hidden);
+  const auto q = questionnaires.find(name);
+  if (q != questionnaires.end()) {
+    for (const Item& item : q->second.items) {
+      if (item.type == ItemType::kTree) TreePath(item, fields);
+    }
+  }
+  SubmissionResult result;
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    result = SubmitAnswers(*store, questionnaires, participant, condition, name, fields,
+                           config.demographics);
+  }
+  res.status = result.status;
+  std::string page = std::string("<p id=\"result\" class=\"") + (result.accepted ? "ok" : "error") +
+                     "\">" + Html(result.message) + "</p>\n";
+  if (!result.errors.empty()) {
+    page += "<ul id=\"errors\">\n";
+    for (const AnswerError& e : result.errors) page += "<li>" + Html(e.message) + "</li>\n";
+    page += "</ul>\n<p><a href=\"" + Html(Query(participant, condition, name)) +
+            "\">back to the form</a></p>\n";
+  }
+  page += "<p><a href=\"/\">schedule</a></p>";
+  res.set_content(Page(result.accepted ? "Recorded" : "Not recorded", page),
+                  "text/html; charset=utf-8");
+}
+
+// One of the experimenter's notes on a trial; a long note (in any script)
+// is larger than the library's own form limit, so read here.
+void StudyConsole::Impl::Note(const httplib::Request& req, httplib::Response& res,
+                              const httplib::ContentReader& read) {
+  httplib::Params params;
+  if (!ReadForm(req, res, read, access.max_note_bytes,
+                "a note of " + std::to_string(kMaxNoteCharacters) + " characters takes", params)) {
+    return;
+  }
+  const auto field = [&params](const char* key) {
+    const auto it = params.find(key);
+    return it == params.end() ? std::string() : it->second;
+  };
+  SubmissionResult result;
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    result = SubmitNote(*store, field("participant"), field("position"), field("text"));
+  }
+  if (result.accepted) return res.set_redirect("/", 303);
+  res.status = result.status;
+  res.set_content(ErrorPage("Not noted", result.message), "text/html; charset=utf-8");
 }
 
 StudyConsole::~StudyConsole() {

@@ -28,6 +28,127 @@ std::string Describe(const PlannedTrial& t) {
   return t.participant + " #" + std::to_string(t.position) + " " + t.condition;
 }
 
+/// A new study's rows: the study with its definition, its conditions, the
+/// file's participants and the plan. Returns its id.
+int64_t InsertStudy(const std::filesystem::path& file, sqlite3* db, const StudyConfig& config,
+                    const std::vector<PlannedTrial>& plan, const std::string& form) {
+  Stmt insert =
+      Prepare(file, db,
+              "INSERT INTO studies (name, file, definition, operators, design, "
+              "trial_cap_s, created_utc, definition_form) VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
+              "cannot insert the study");
+  Binder(file, db, insert.get())
+      .Text(config.name)
+      .Text(std::filesystem::absolute(config.file).string())
+      .Text(FileText(config.file))
+      .Text(config.operators)
+      .Text(ToString(config.order))
+      .Real(config.trial_cap_s)
+      .Text(NowUtc())
+      .Text(form);
+  StepDone(file, db, insert.get(), "cannot insert the study");
+  const int64_t id = sqlite3_last_insert_rowid(db);
+  Stmt condition = Prepare(
+      file, db,
+      "INSERT INTO study_conditions (study_id, position, name, interface) VALUES (?, ?, ?, ?)",
+      "cannot insert a condition");
+  for (size_t i = 0; i < config.conditions.size(); ++i) {
+    sqlite3_reset(condition.get());
+    Binder(file, db, condition.get())
+        .Int(id)
+        .Int(static_cast<int64_t>(i))
+        .Text(config.conditions[i].name)
+        .Text(config.conditions[i].interface);
+    StepDone(file, db, condition.get(), "cannot insert condition " + config.conditions[i].name);
+  }
+  Stmt participant = Prepare(file, db,
+                             "INSERT INTO study_participants (study_id, participant, row_index, "
+                             "profile, added_utc) VALUES (?, ?, ?, ?, ?)",
+                             "cannot insert a participant");
+  for (size_t i = 0; i < config.participants.size(); ++i) {
+    sqlite3_reset(participant.get());
+    Binder(file, db, participant.get())
+        .Int(id)
+        .Text(config.participants[i].id)
+        .Int(static_cast<int64_t>(i))
+        .Text(config.participants[i].profile)
+        .Text(NowUtc());
+    StepDone(file, db, participant.get(), "cannot insert participant " + config.participants[i].id);
+  }
+  Stmt planned = Prepare(file, db,
+                         "INSERT INTO study_plan (study_id, participant, position, condition, "
+                         "repetition) VALUES (?, ?, ?, ?, ?)",
+                         "cannot insert the plan");
+  for (const PlannedTrial& t : plan) {
+    sqlite3_reset(planned.get());
+    Binder(file, db, planned.get())
+        .Int(id)
+        .Text(t.participant)
+        .Int(t.position)
+        .Text(t.condition)
+        .Int(t.repetition);
+    StepDone(file, db, planned.get(), "cannot insert planned trial " + Describe(t));
+  }
+  return id;
+}
+
+constexpr const char* kChangedStudy =
+    "; a changed study is a new one: give it another name (or put the file back as it was)";
+
+/// Resuming: the study on record is the study. Everything that defines it
+/// first, each changed key named with both values.
+void CheckDefinitionUnchanged(const std::filesystem::path& file, const StudyConfig& config,
+                              const std::string& recorded_form,
+                              const std::vector<DefiningValue>& definition) {
+  const std::vector<std::string> changes =
+      DefinitionChanges(ParseDefinition(recorded_form), definition);
+  if (changes.empty()) return;
+  constexpr size_t kNamed =
+      8;  // a track file rewritten changes every point: the first few say enough
+  std::string named;
+  bool participants = false;
+  for (size_t i = 0; i < changes.size(); ++i) {
+    participants = participants || changes[i].rfind("participants: ", 0) == 0;
+    if (i < kNamed) named += (i == 0 ? "" : "; ") + changes[i];
+  }
+  if (changes.size() > kNamed)
+    named += "; and " + std::to_string(changes.size() - kNamed) + " more";
+  // The file's participants are its rows of the design; more people join
+  // an open person study in the console, after them.
+  const std::string hint = participants && config.operators == "person"
+                               ? " (participants who join later are added in the console)"
+                               : "";
+  throw std::runtime_error("study '" + config.name + "' in " + file.string() +
+                           " was planned with " + named + hint + kChangedStudy);
+}
+
+/// Then the plan (for a study planned before its definition was kept, the
+/// only check there is). Participants added in the console come after the
+/// file's: the file's plan is the record's beginning.
+void CheckPlanUnchanged(const std::filesystem::path& file, const StudyConfig& config,
+                        const std::vector<PlannedTrial>& recorded,
+                        const std::vector<PlannedTrial>& plan) {
+  std::string difference;
+  if (recorded.size() < plan.size()) {
+    difference = std::to_string(recorded.size()) + " trials on record, " +
+                 std::to_string(plan.size()) + " in the file";
+  } else {
+    for (size_t i = 0; i < plan.size() && difference.empty(); ++i) {
+      const PlannedTrial& a = recorded[i];
+      const PlannedTrial& b = plan[i];
+      if (a.participant != b.participant || a.position != b.position ||
+          a.condition != b.condition) {
+        difference = "trial " + std::to_string(i + 1) + " is " + Describe(a) + " on record, " +
+                     Describe(b) + " in the file";
+      }
+    }
+  }
+  if (!difference.empty()) {
+    throw std::runtime_error("study '" + config.name + "' in " + file.string() +
+                             " was planned differently (" + difference + ")" + kChangedStudy);
+  }
+}
+
 }  // namespace
 
 StudyStore::StudyStore(record::Recorder& recorder, const StudyConfig& config,
@@ -52,125 +173,14 @@ StudyStore::StudyStore(record::Recorder& recorder, const StudyConfig& config,
     }
   }
   if (!resumed_) {
-    Stmt insert =
-        Prepare(file, db,
-                "INSERT INTO studies (name, file, definition, operators, design, trial_cap_s, "
-                "created_utc, definition_form) VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
-                "cannot insert the study");
-    Binder(file, db, insert.get())
-        .Text(config.name)
-        .Text(std::filesystem::absolute(config.file).string())
-        .Text(FileText(config.file))
-        .Text(config.operators)
-        .Text(ToString(config.order))
-        .Real(config.trial_cap_s)
-        .Text(NowUtc())
-        .Text(form);
-    StepDone(file, db, insert.get(), "cannot insert the study");
-    id_ = sqlite3_last_insert_rowid(db);
-    Stmt condition = Prepare(
-        file, db,
-        "INSERT INTO study_conditions (study_id, position, name, interface) VALUES (?, ?, ?, ?)",
-        "cannot insert a condition");
-    for (size_t i = 0; i < config.conditions.size(); ++i) {
-      sqlite3_reset(condition.get());
-      Binder(file, db, condition.get())
-          .Int(id_)
-          .Int(static_cast<int64_t>(i))
-          .Text(config.conditions[i].name)
-          .Text(config.conditions[i].interface);
-      StepDone(file, db, condition.get(), "cannot insert condition " + config.conditions[i].name);
-    }
-    Stmt participant =
-        Prepare(file, db,
-                "INSERT INTO study_participants (study_id, participant, row_index, profile, "
-                "added_utc) VALUES (?, ?, ?, ?, ?)",
-                "cannot insert a participant");
-    for (size_t i = 0; i < config.participants.size(); ++i) {
-      sqlite3_reset(participant.get());
-      Binder(file, db, participant.get())
-          .Int(id_)
-          .Text(config.participants[i].id)
-          .Int(static_cast<int64_t>(i))
-          .Text(config.participants[i].profile)
-          .Text(NowUtc());
-      StepDone(file, db, participant.get(),
-               "cannot insert participant " + config.participants[i].id);
-    }
-    Stmt planned =
-        Prepare(file, db,
-                "INSERT INTO study_plan (study_id, participant, position, condition, repetition) "
-                "VALUES (?, ?, ?, ?, ?)",
-                "cannot insert the plan");
-    for (const PlannedTrial& t : plan) {
-      sqlite3_reset(planned.get());
-      Binder(file, db, planned.get())
-          .Int(id_)
-          .Text(t.participant)
-          .Int(t.position)
-          .Text(t.condition)
-          .Int(t.repetition);
-      StepDone(file, db, planned.get(), "cannot insert planned trial " + Describe(t));
-    }
-    planned.reset();
-    participant.reset();
-    condition.reset();
-    insert.reset();
+    id_ = InsertStudy(file, db, config, plan, form);
     txn.Commit();
     Event("planned", "", 0, std::to_string(plan.size()) + " trials, " + ToString(config.order));
     return;
   }
   txn.Commit();
-  const std::string refusal =
-      "; a changed study is a new one: give it another name (or put the file back as it was)";
-  // Resuming: the study on record is the study. Everything that defines it
-  // first, each changed key named with both values.
-  if (!recorded_form.empty()) {
-    const std::vector<std::string> changes =
-        DefinitionChanges(ParseDefinition(recorded_form), definition);
-    if (!changes.empty()) {
-      constexpr size_t kNamed =
-          8;  // a track file rewritten changes every point: the first few say enough
-      std::string named;
-      bool participants = false;
-      for (size_t i = 0; i < changes.size(); ++i) {
-        participants = participants || changes[i].rfind("participants: ", 0) == 0;
-        if (i < kNamed) named += (i == 0 ? "" : "; ") + changes[i];
-      }
-      if (changes.size() > kNamed)
-        named += "; and " + std::to_string(changes.size() - kNamed) + " more";
-      // The file's participants are its rows of the design; more people join
-      // an open person study in the console, after them.
-      const std::string hint = participants && config.operators == "person"
-                                   ? " (participants who join later are added in the console)"
-                                   : "";
-      throw std::runtime_error("study '" + config.name + "' in " + file.string() +
-                               " was planned with " + named + hint + refusal);
-    }
-  }
-  // Then the plan (for a study planned before its definition was kept, the
-  // only check there is). Participants added in the console come after the
-  // file's: the file's plan is the record's beginning.
-  const std::vector<PlannedTrial> recorded = Plan();
-  std::string difference;
-  if (recorded.size() < plan.size()) {
-    difference = std::to_string(recorded.size()) + " trials on record, " +
-                 std::to_string(plan.size()) + " in the file";
-  } else {
-    for (size_t i = 0; i < plan.size() && difference.empty(); ++i) {
-      const PlannedTrial& a = recorded[i];
-      const PlannedTrial& b = plan[i];
-      if (a.participant != b.participant || a.position != b.position ||
-          a.condition != b.condition) {
-        difference = "trial " + std::to_string(i + 1) + " is " + Describe(a) + " on record, " +
-                     Describe(b) + " in the file";
-      }
-    }
-  }
-  if (!difference.empty()) {
-    throw std::runtime_error("study '" + config.name + "' in " + file.string() +
-                             " was planned differently (" + difference + ")" + refusal);
-  }
+  if (!recorded_form.empty()) CheckDefinitionUnchanged(file, config, recorded_form, definition);
+  CheckPlanUnchanged(file, config, Plan(), plan);
   if (recorded_form.empty()) {
     // A study planned before the database kept definitions (schema v5 and
     // earlier): its plan matches, which is all that can be checked; from now

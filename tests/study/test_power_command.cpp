@@ -12,13 +12,13 @@
 #include <thread>
 #include <vector>
 
+#include "haptel/app/study_command.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/core/child_process.hpp"
 #include "haptel/record/recorder.hpp"
 #include "haptel/study/plan.hpp"
 #include "haptel/study/power_pool.hpp"
 #include "haptel/study/store.hpp"
-#include "haptel/study/study_command.hpp"
 #include "study_test_run.hpp"
 #include "test_env.hpp"
 
@@ -44,7 +44,7 @@ Outcome Power(const std::vector<std::string>& words) {
   REQUIRE(capture != nullptr);
   dup2(fileno(capture), fileno(stderr));
   Outcome o;
-  o.code = haptel::study::StudyCommand(static_cast<int>(argv.size()), argv.data());
+  o.code = haptel::app::StudyCommand(static_cast<int>(argv.size()), argv.data());
   std::fflush(stderr);
   dup2(saved, fileno(stderr));
   close(saved);

@@ -135,64 +135,56 @@ Scale ReadScale(YamlMap& m) {
   return s;
 }
 
-/// Reads the nodes and bands of a tree item and checks that they make one
-/// tree whose bands cover a run of ratings once each.
-DecisionTree ReadTree(YamlMap& m) {
-  DecisionTree tree;
-  std::vector<YamlMap> nodes = m.MapList("nodes");
-  if (nodes.empty()) {
-    FailCount(m, "nodes", "a list of at least one question {id, question, if_yes, if_no}", 0);
-  }
-  std::vector<YamlMap> bands = m.MapList("bands");
-  if (bands.empty()) FailCount(m, "bands", "a list of at least two bands {id, text, ratings}", 0);
-
-  std::map<std::string, std::string> where;  // node or band id -> its location
-  auto claim = [&where](YamlMap& map, const std::string& id) {
-    if (auto [it, fresh] = where.emplace(id, map.Location()); !fresh) {
+/// Node and band ids, each with where it is defined: one id, one place.
+class TreeIds {
+ public:
+  void Claim(YamlMap& map, const std::string& id) {
+    if (auto [it, fresh] = where_.emplace(id, map.Location()); !fresh) {
       map.Fail("id", "an id no other node or band of this tree has ('" + id + "' is also at " +
                          it->second + ")");
     }
-  };
-
-  for (YamlMap& n : nodes) {
-    TreeNode node;
-    node.id = RequireId(n, "id");
-    claim(n, node.id);
-    node.question = DisplayText(n, "question");
-    node.if_yes = RequireText(n, "if_yes", kBranchExpected);
-    node.if_no = RequireText(n, "if_no", kBranchExpected);
-    n.Finish();
-    tree.nodes.push_back(std::move(node));
+  }
+  bool Has(const std::string& id) const { return where_.count(id) != 0; }
+  std::string List() const {
+    std::string ids;
+    for (const auto& [id, loc] : where_) ids += (ids.empty() ? "" : ", ") + id;
+    return ids;
   }
 
-  std::map<int, std::string> band_of;  // rating -> band id
-  for (YamlMap& b : bands) {
-    TreeBand band;
-    band.id = RequireId(b, "id");
-    claim(b, band.id);
-    band.text = DisplayText(b, "text");
-    std::vector<YamlMap> ratings = b.MapList("ratings");
-    if (ratings.empty()) FailCount(b, "ratings", "a list of at least one {rating, text}", 0);
-    for (YamlMap& r : ratings) {
-      BandRating rating;
-      rating.rating = RequireInteger(r, "rating", 0, kMaxRating);
-      if (!band.ratings.empty() && rating.rating != band.ratings.back().rating + 1) {
-        r.Fail("rating", std::to_string(band.ratings.back().rating + 1) +
-                             " (a band's ratings are consecutive whole numbers, ascending)");
-      }
-      if (auto [it, fresh] = band_of.emplace(rating.rating, band.id); !fresh) {
-        r.Fail("rating", "a rating no other band has (" + std::to_string(rating.rating) +
-                             " is also in band '" + it->second + "')");
-      }
-      rating.text = DisplayText(r, "text");
-      r.Finish();
-      band.ratings.push_back(std::move(rating));
+ private:
+  std::map<std::string, std::string> where_;  // node or band id -> its location
+};
+
+/// One band: its ratings consecutive and in no other band (`band_of`:
+/// rating -> band id, over the bands read so far).
+TreeBand ReadBand(YamlMap& b, TreeIds& ids, std::map<int, std::string>& band_of) {
+  TreeBand band;
+  band.id = RequireId(b, "id");
+  ids.Claim(b, band.id);
+  band.text = DisplayText(b, "text");
+  std::vector<YamlMap> ratings = b.MapList("ratings");
+  if (ratings.empty()) FailCount(b, "ratings", "a list of at least one {rating, text}", 0);
+  for (YamlMap& r : ratings) {
+    BandRating rating;
+    rating.rating = RequireInteger(r, "rating", 0, kMaxRating);
+    if (!band.ratings.empty() && rating.rating != band.ratings.back().rating + 1) {
+      r.Fail("rating", std::to_string(band.ratings.back().rating + 1) +
+                           " (a band's ratings are consecutive whole numbers, ascending)");
     }
-    b.Finish();
-    tree.bands.push_back(std::move(band));
+    if (auto [it, fresh] = band_of.emplace(rating.rating, band.id); !fresh) {
+      r.Fail("rating", "a rating no other band has (" + std::to_string(rating.rating) +
+                           " is also in band '" + it->second + "')");
+    }
+    rating.text = DisplayText(r, "text");
+    r.Finish();
+    band.ratings.push_back(std::move(rating));
   }
+  b.Finish();
+  return band;
+}
 
-  // Missing bands: the ratings must run from the lowest to the highest.
+/// Missing bands: the ratings must run from the lowest to the highest.
+void CheckRatingsCovered(YamlMap& m, const std::map<int, std::string>& band_of) {
   int expected = band_of.begin()->first;
   for (const auto& [rating, band] : band_of) {
     if (rating != expected) {
@@ -204,21 +196,17 @@ DecisionTree ReadTree(YamlMap& m) {
     }
     ++expected;
   }
-  tree.min_rating = band_of.begin()->first;
-  tree.max_rating = band_of.rbegin()->first;
+}
 
-  // Branches: to a node or a band, never to the first node, each target
-  // reached by one branch only.
+/// Branches: to a node or a band, never to the first node, each target
+/// reached by one branch only.
+void CheckBranches(const DecisionTree& tree, std::vector<YamlMap>& nodes, const TreeIds& ids) {
   const std::string& root = tree.nodes.front().id;
   std::map<std::string, std::string> reached_from;  // target -> "nodes[i].if_yes"
   for (size_t i = 0; i < nodes.size(); ++i) {
     for (const std::string key : {"if_yes", "if_no"}) {
       const std::string& target = key == "if_yes" ? tree.nodes[i].if_yes : tree.nodes[i].if_no;
-      if (where.count(target) == 0) {
-        std::string ids;
-        for (const auto& [id, loc] : where) ids += (ids.empty() ? "" : ", ") + id;
-        nodes[i].Fail(key, kBranchExpected + " (one of: " + ids + ")");
-      }
+      if (!ids.Has(target)) nodes[i].Fail(key, kBranchExpected + " (one of: " + ids.List() + ")");
       if (target == root) {
         nodes[i].Fail(key, "a node or a band other than '" + root +
                                "', the first node, where the tree starts");
@@ -230,9 +218,13 @@ DecisionTree ReadTree(YamlMap& m) {
       }
     }
   }
+}
 
-  // Everything reachable from the first node: no orphan, no loop cut off
-  // from the rest (each of its nodes reached once, but not from the start).
+/// Everything reachable from the first node: no orphan, no loop cut off
+/// from the rest (each of its nodes reached once, but not from the start).
+void CheckReachable(const DecisionTree& tree, std::vector<YamlMap>& nodes,
+                    std::vector<YamlMap>& bands) {
+  const std::string& root = tree.nodes.front().id;
   std::set<std::string> reached{root};
   std::vector<const TreeNode*> todo{&tree.nodes.front()};
   while (!todo.empty()) {
@@ -251,6 +243,36 @@ DecisionTree ReadTree(YamlMap& m) {
   for (size_t i = 0; i < bands.size(); ++i) {
     if (reached.count(tree.bands[i].id) == 0) bands[i].Fail("id", unreached);
   }
+}
+
+/// Reads the nodes and bands of a tree item and checks that they make one
+/// tree whose bands cover a run of ratings once each.
+DecisionTree ReadTree(YamlMap& m) {
+  DecisionTree tree;
+  std::vector<YamlMap> nodes = m.MapList("nodes");
+  if (nodes.empty()) {
+    FailCount(m, "nodes", "a list of at least one question {id, question, if_yes, if_no}", 0);
+  }
+  std::vector<YamlMap> bands = m.MapList("bands");
+  if (bands.empty()) FailCount(m, "bands", "a list of at least two bands {id, text, ratings}", 0);
+  TreeIds ids;
+  for (YamlMap& n : nodes) {
+    TreeNode node;
+    node.id = RequireId(n, "id");
+    ids.Claim(n, node.id);
+    node.question = DisplayText(n, "question");
+    node.if_yes = RequireText(n, "if_yes", kBranchExpected);
+    node.if_no = RequireText(n, "if_no", kBranchExpected);
+    n.Finish();
+    tree.nodes.push_back(std::move(node));
+  }
+  std::map<int, std::string> band_of;  // rating -> band id
+  for (YamlMap& b : bands) tree.bands.push_back(ReadBand(b, ids, band_of));
+  CheckRatingsCovered(m, band_of);
+  tree.min_rating = band_of.begin()->first;
+  tree.max_rating = band_of.rbegin()->first;
+  CheckBranches(tree, nodes, ids);
+  CheckReachable(tree, nodes, bands);
   return tree;
 }
 

@@ -183,53 +183,32 @@ void ReadTrial(Reader& row, StudyResults::Trial& t) {
   t.flags = row.Text();
 }
 
-}  // namespace
-
-StudyResults LoadStudyResults(const std::filesystem::path& database, const std::string& name) {
-  if (!std::filesystem::is_regular_file(database)) {
-    throw std::runtime_error("database " + database.string() +
-                             ": no such file (run `haptel study run` first)");
-  }
-  sqlite3* raw = nullptr;
-  if (sqlite3_open_v2(database.c_str(), &raw, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
-    const std::string what = raw != nullptr ? sqlite3_errmsg(raw) : "cannot open";
-    sqlite3_close_v2(raw);
-    throw std::runtime_error("database " + database.string() + ": " + what);
-  }
-  const DbHandle db(raw);
-  sqlite3_busy_timeout(raw, 2000);
-  StudyResults r;
-  r.database = database;
-  r.name = name;
+/// The study named `name` in the database: its id (0: none), operators and cap.
+int64_t FindStudy(const std::filesystem::path& database, sqlite3* raw, const std::string& name,
+                  StudyResults& r) {
   int64_t id = 0;
-  {
-    sqlite3_stmt* probe = nullptr;
-    if (sqlite3_prepare_v2(raw, "SELECT id, operators, trial_cap_s FROM studies WHERE name = ?", -1,
-                           &probe, nullptr) != SQLITE_OK) {
-      sqlite3_finalize(probe);
-      throw std::runtime_error("database " + database.string() + ": holds no studies (" +
-                               sqlite3_errmsg(raw) + ")");
-    }
-    Stmt find(probe);
-    Binder(database, raw, find.get()).Text(name);
-    if (sqlite3_step(find.get()) == SQLITE_ROW) {
-      Reader row(find.get());
-      id = row.Int();
-      r.operators = row.Text();
-      r.trial_cap_s = row.Real();
-    }
+  sqlite3_stmt* probe = nullptr;
+  if (sqlite3_prepare_v2(raw, "SELECT id, operators, trial_cap_s FROM studies WHERE name = ?", -1,
+                         &probe, nullptr) != SQLITE_OK) {
+    sqlite3_finalize(probe);
+    throw std::runtime_error("database " + database.string() + ": holds no studies (" +
+                             sqlite3_errmsg(raw) + ")");
   }
-  if (id == 0) {
-    Stmt all =
-        Prepare(database, raw, "SELECT name FROM studies ORDER BY id", "cannot list the studies");
-    std::string names;
-    while (sqlite3_step(all.get()) == SQLITE_ROW)
-      names += (names.empty() ? "" : ", ") + Reader(all.get()).Text();
-    throw std::runtime_error("database " + database.string() + ": no study '" + name + "' (" +
-                             (names.empty() ? "it holds none" : "it holds: " + names) + ")");
+  Stmt find(probe);
+  Binder(database, raw, find.get()).Text(name);
+  if (sqlite3_step(find.get()) == SQLITE_ROW) {
+    Reader row(find.get());
+    id = row.Int();
+    r.operators = row.Text();
+    r.trial_cap_s = row.Real();
   }
+  return id;
+}
+
+/// The study's design: the baseline (the track's, read now: the reference
+/// lap changes no trial), its conditions, participants and planned trials.
+void ReadDesign(const std::filesystem::path& database, sqlite3* raw, int64_t id, StudyResults& r) {
   {
-    // The baseline is the track's, read now: the reference lap changes no trial.
     Stmt form = Prepare(database, raw, "SELECT file, definition_form FROM studies WHERE id = ?",
                         "cannot read the study's definition");
     Binder(database, raw, form.get()).Int(id);
@@ -257,14 +236,13 @@ StudyResults LoadStudyResults(const std::filesystem::path& database, const std::
   Binder(database, raw, planned.get()).Int(id);
   if (sqlite3_step(planned.get()) == SQLITE_ROW)
     r.trials_planned = static_cast<int>(Reader(planned.get()).Int());
-  // Read-only, so not migrated: a database from before v8 has neither the
-  // approach nor the flags (read as unknown and none).
-  int version = 0;
-  {
-    Stmt pragma = Prepare(database, raw, "PRAGMA user_version", "cannot read the schema version");
-    if (sqlite3_step(pragma.get()) == SQLITE_ROW)
-      version = static_cast<int>(Reader(pragma.get()).Int());
-  }
+}
+
+/// The trials, in the participants' order. Read-only, so not migrated: a
+/// database from before v8 has neither the approach nor the flags (read as
+/// unknown and none).
+void ReadTrials(const std::filesystem::path& database, sqlite3* raw, int64_t id, int version,
+                StudyResults& r) {
   const std::string v8 = version >= 8 ? "t.approach_s, t.flags" : "NULL, ''";
   const std::string select_trials =
       "SELECT t.participant, t.position, t.condition, t.lap_time_s, t.completed, t.obstacles, "
@@ -281,6 +259,9 @@ StudyResults LoadStudyResults(const std::filesystem::path& database, const std::
     ReadTrial(row, t);
     r.trials.push_back(t);
   }
+}
+
+void ReadAnswers(const std::filesystem::path& database, sqlite3* raw, int64_t id, StudyResults& r) {
   Stmt answers =
       Prepare(database, raw,
               "SELECT participant, condition, questionnaire, item, value FROM study_answers WHERE "
@@ -297,41 +278,134 @@ StudyResults LoadStudyResults(const std::filesystem::path& database, const std::
     a.value = row.Text();
     r.answers.push_back(a);
   }
-  if (version >= 10) {  // notes and superseded trials: v10
-    Stmt superseded = Prepare(
-        database, raw,
-        "SELECT participant, position, condition, lap_time_s, completed, obstacles, run_id, "
-        "outcome, attempt, approach_s, flags, why FROM study_superseded_trials WHERE "
-        "study_id = ? ORDER BY id",
-        "cannot read the superseded trials");
-    Binder(database, raw, superseded.get()).Int(id);
-    while (sqlite3_step(superseded.get()) == SQLITE_ROW) {
-      Reader row(superseded.get());
-      StudyResults::Superseded s;
-      ReadTrial(row, s.trial);
-      s.why = row.Text();
-      r.superseded.push_back(s);
-    }
-    Stmt notes = Prepare(
-        database, raw,
-        "SELECT n.participant, n.position, COALESCE(p.condition, ''), n.text, n.noted_utc FROM "
-        "study_notes n LEFT JOIN study_plan p ON p.study_id = n.study_id AND p.participant = "
-        "n.participant AND p.position = n.position WHERE n.study_id = ? ORDER BY n.id",
-        "cannot read the notes");
-    Binder(database, raw, notes.get()).Int(id);
-    while (sqlite3_step(notes.get()) == SQLITE_ROW) {
-      Reader row(notes.get());
-      StudyResults::Note n;
-      n.participant = row.Text();
-      n.position = static_cast<int>(row.Int());
-      n.condition = row.Text();
-      n.text = row.Text();
-      n.noted_utc = row.Text();
-      r.notes.push_back(n);
-    }
+}
+
+/// The superseded trials and the experimenter's notes (schema v10).
+void ReadSupersededAndNotes(const std::filesystem::path& database, sqlite3* raw, int64_t id,
+                            StudyResults& r) {
+  Stmt superseded =
+      Prepare(database, raw,
+              "SELECT participant, position, condition, lap_time_s, completed, obstacles, run_id, "
+              "outcome, attempt, approach_s, flags, why FROM study_superseded_trials WHERE "
+              "study_id = ? ORDER BY id",
+              "cannot read the superseded trials");
+  Binder(database, raw, superseded.get()).Int(id);
+  while (sqlite3_step(superseded.get()) == SQLITE_ROW) {
+    Reader row(superseded.get());
+    StudyResults::Superseded s;
+    ReadTrial(row, s.trial);
+    s.why = row.Text();
+    r.superseded.push_back(s);
   }
+  Stmt notes = Prepare(
+      database, raw,
+      "SELECT n.participant, n.position, COALESCE(p.condition, ''), n.text, n.noted_utc FROM "
+      "study_notes n LEFT JOIN study_plan p ON p.study_id = n.study_id AND p.participant = "
+      "n.participant AND p.position = n.position WHERE n.study_id = ? ORDER BY n.id",
+      "cannot read the notes");
+  Binder(database, raw, notes.get()).Int(id);
+  while (sqlite3_step(notes.get()) == SQLITE_ROW) {
+    Reader row(notes.get());
+    StudyResults::Note n;
+    n.participant = row.Text();
+    n.position = static_cast<int>(row.Int());
+    n.condition = row.Text();
+    n.text = row.Text();
+    n.noted_utc = row.Text();
+    r.notes.push_back(n);
+  }
+}
+
+}  // namespace
+
+StudyResults LoadStudyResults(const std::filesystem::path& database, const std::string& name) {
+  if (!std::filesystem::is_regular_file(database)) {
+    throw std::runtime_error("database " + database.string() +
+                             ": no such file (run `haptel study run` first)");
+  }
+  sqlite3* raw = nullptr;
+  if (sqlite3_open_v2(database.c_str(), &raw, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
+    const std::string what = raw != nullptr ? sqlite3_errmsg(raw) : "cannot open";
+    sqlite3_close_v2(raw);
+    throw std::runtime_error("database " + database.string() + ": " + what);
+  }
+  const DbHandle db(raw);
+  sqlite3_busy_timeout(raw, 2000);
+  StudyResults r;
+  r.database = database;
+  r.name = name;
+  const int64_t id = FindStudy(database, raw, name, r);
+  if (id == 0) {
+    Stmt all =
+        Prepare(database, raw, "SELECT name FROM studies ORDER BY id", "cannot list the studies");
+    std::string names;
+    while (sqlite3_step(all.get()) == SQLITE_ROW)
+      names += (names.empty() ? "" : ", ") + Reader(all.get()).Text();
+    throw std::runtime_error("database " + database.string() + ": no study '" + name + "' (" +
+                             (names.empty() ? "it holds none" : "it holds: " + names) + ")");
+  }
+  ReadDesign(database, raw, id, r);
+  int version = 0;
+  {
+    Stmt pragma = Prepare(database, raw, "PRAGMA user_version", "cannot read the schema version");
+    if (sqlite3_step(pragma.get()) == SQLITE_ROW)
+      version = static_cast<int>(Reader(pragma.get()).Int());
+  }
+  ReadTrials(database, raw, id, version, r);
+  ReadAnswers(database, raw, id, r);
+  if (version >= 10) ReadSupersededAndNotes(database, raw, id, r);
   return r;
 }
+
+namespace {
+
+/// A condition's mean and median lap time and mean rank, from its
+/// participants' lap times and ranks.
+void SummariseCondition(ConditionSummary& c) {
+  std::vector<double> values;
+  for (const double v : c.lap_time_s) {
+    if (std::isfinite(v)) values.push_back(v);
+  }
+  c.mean_lap_time_s = values.empty() ? kNaN : c.total_lap_time_s / static_cast<double>(c.trials);
+  c.median_lap_time_s = Median(values);
+  double rank_sum = 0.0;
+  int used = 0;
+  for (const double r : c.rank) {
+    if (std::isfinite(r)) {
+      rank_sum += r;
+      ++used;
+    }
+  }
+  c.mean_rank = used > 0 ? rank_sum / used : kNaN;
+}
+
+/// Numeric questionnaire answers, per questionnaire × item × condition.
+std::vector<ItemSummary> SummariseItems(const StudyResults& results) {
+  std::vector<ItemSummary> summaries;
+  std::map<std::tuple<std::string, std::string, std::string>, std::vector<double>> numeric;
+  for (const StudyResults::Answer& a : results.answers) {
+    double value = 0.0;
+    // The participants' background (no condition) is counted apart (Background).
+    if (!a.condition.empty() && IsNumber(a.value, value)) {
+      numeric[{a.questionnaire, a.item, a.condition}].push_back(value);
+    }
+  }
+  for (const auto& [key, values] : numeric) {
+    ItemSummary s;
+    std::tie(s.questionnaire, s.item, s.condition) = key;
+    s.n = static_cast<int>(values.size());
+    double sum = 0.0;
+    for (const double v : values) sum += v;
+    s.mean = sum / s.n;
+    s.median = Median(values);
+    s.min = *std::min_element(values.begin(), values.end());
+    s.max = *std::max_element(values.begin(), values.end());
+    summaries.push_back(s);
+  }
+  return summaries;
+}
+
+}  // namespace
 
 StudyReport ComputeReport(const StudyResults& results, PostHocMethod post_hoc, double alpha) {
   StudyReport report;
@@ -384,23 +458,7 @@ StudyReport ComputeReport(const StudyResults& results, PostHocMethod post_hoc, d
       report.conditions[c].obstacles.push_back(obstacles[p][c]);
     }
   }
-  for (ConditionSummary& c : report.conditions) {
-    std::vector<double> values;
-    for (const double v : c.lap_time_s) {
-      if (std::isfinite(v)) values.push_back(v);
-    }
-    c.mean_lap_time_s = values.empty() ? kNaN : c.total_lap_time_s / static_cast<double>(c.trials);
-    c.median_lap_time_s = Median(values);
-    double rank_sum = 0.0;
-    int used = 0;
-    for (const double r : c.rank) {
-      if (std::isfinite(r)) {
-        rank_sum += r;
-        ++used;
-      }
-    }
-    c.mean_rank = used > 0 ? rank_sum / used : kNaN;
-  }
+  for (ConditionSummary& c : report.conditions) SummariseCondition(c);
   if (matrix.size() < 2) {
     report.why_no_statistics =
         "the statistics need at least 2 participants with a trial in every condition (" +
@@ -413,27 +471,7 @@ StudyReport ComputeReport(const StudyResults& results, PostHocMethod post_hoc, d
     }
   }
   FitLapTimeModel(results, report);
-  // Numeric questionnaire answers, per questionnaire × item × condition.
-  std::map<std::tuple<std::string, std::string, std::string>, std::vector<double>> numeric;
-  for (const StudyResults::Answer& a : results.answers) {
-    double value = 0.0;
-    // The participants' background (no condition) is counted apart (Background).
-    if (!a.condition.empty() && IsNumber(a.value, value)) {
-      numeric[{a.questionnaire, a.item, a.condition}].push_back(value);
-    }
-  }
-  for (const auto& [key, values] : numeric) {
-    ItemSummary s;
-    std::tie(s.questionnaire, s.item, s.condition) = key;
-    s.n = static_cast<int>(values.size());
-    double sum = 0.0;
-    for (const double v : values) sum += v;
-    s.mean = sum / s.n;
-    s.median = Median(values);
-    s.min = *std::min_element(values.begin(), values.end());
-    s.max = *std::max_element(values.begin(), values.end());
-    report.items.push_back(s);
-  }
+  report.items = SummariseItems(results);
   return report;
 }
 
@@ -530,18 +568,10 @@ std::string FormatReport(const StudyResults& results, const StudyReport& report)
   return o.str();
 }
 
-ReportFiles WriteReport(const StudyResults& results, const StudyReport& report,
-                        const std::filesystem::path& dir) {
-  std::filesystem::create_directories(dir);
-  ReportFiles files;
-  files.trials_csv = dir / "trials.csv";
-  files.answers_csv = dir / "answers.csv";
-  files.summary_csv = dir / "summary.csv";
-  files.notes_csv = dir / "notes.csv";
-  files.lap_times_png = dir / "lap_times.png";
-  files.ranks_png = dir / "ranks.png";
-  files.html = dir / "index.html";
+namespace {
 
+/// trials.csv: a row per trial, with its lap against the track's reference.
+std::string TrialsCsv(const StudyResults& results) {
   std::string trials =
       "study,participant,condition,position,lap_time_s,approach_s,completed,obstacles,run_id,"
       "outcome,attempt,"
@@ -560,22 +590,32 @@ ReportFiles WriteReport(const StudyResults& results, const StudyReport& report,
               std::to_string(t.run_id) + "," + Csv(t.outcome) + "," + std::to_string(t.attempt) +
               "," + Csv(t.flags) + "," + over_reference + "\n";
   }
-  WriteFile(files.trials_csv, trials);
+  return trials;
+}
+
+/// answers.csv: a row per questionnaire item answered.
+std::string AnswersCsv(const StudyResults& results) {
   std::string answers = "study,participant,condition,questionnaire,item,value\n";
   for (const StudyResults::Answer& a : results.answers) {
     answers += Csv(results.name) + "," + Csv(a.participant) + "," + Csv(a.condition) + "," +
                Csv(a.questionnaire) + "," + Csv(a.item) + "," + Csv(a.value) + "\n";
   }
-  WriteFile(files.answers_csv, answers);
+  return answers;
+}
+
+/// notes.csv: the experimenter's notes.
+std::string NotesCsv(const StudyResults& results) {
   std::string notes = "study,participant,position,condition,noted_utc,text\n";
   for (const StudyResults::Note& n : results.notes) {
     notes += Csv(results.name) + "," + Csv(n.participant) + "," + std::to_string(n.position) + "," +
              Csv(n.condition) + "," + Csv(n.noted_utc) + "," + Csv(n.text) + "\n";
   }
-  WriteFile(files.notes_csv, notes);
-  // The background one row per participant (a paper's participants table),
-  // one column per item in the order first answered.
-  files.demographics_csv = dir / "demographics.csv";
+  return notes;
+}
+
+/// demographics.csv: the background one row per participant (a paper's
+/// participants table), one column per item in the order first answered.
+std::string DemographicsCsv(const StudyResults& results) {
   std::vector<std::string> columns;
   std::map<std::string, std::map<std::string, std::string>> by_participant;
   for (const StudyResults::Answer& a : results.answers) {
@@ -601,7 +641,11 @@ ReportFiles WriteReport(const StudyResults& results, const StudyReport& report,
     }
     demographics += "\n";
   }
-  WriteFile(files.demographics_csv, demographics);
+  return demographics;
+}
+
+/// summary.csv: a row per condition.
+std::string SummaryCsv(const StudyResults& results, const StudyReport& report) {
   std::string summary =
       "study,condition,trials,unfinished,total_lap_time_s,mean_lap_time_s,median_lap_time_s,mean_"
       "rank,obstacles\n";
@@ -611,15 +655,13 @@ ReportFiles WriteReport(const StudyResults& results, const StudyReport& report,
                Fixed(c.mean_lap_time_s, 3) + "," + Fixed(c.median_lap_time_s, 3) + "," +
                Fixed(c.mean_rank, 3) + "," + std::to_string(c.total_obstacles) + "\n";
   }
-  WriteFile(files.summary_csv, summary);
+  return summary;
+}
 
-  DrawLapTimes(results, report, files.lap_times_png);
-  DrawRanks(report, files.ranks_png);
-  if (DrawRatings(results, dir / "ratings.png")) files.ratings_png = dir / "ratings.png";
-  if (DrawModelMeans(results, report, dir / "model_means.png"))
-    files.model_means_png = dir / "model_means.png";
-
-  // The page: the thesis's tables, the statistics, the questionnaires, the plots.
+/// index.html: the thesis's tables, the statistics, the questionnaires, the
+/// plots `files` holds.
+std::string ReportPage(const StudyResults& results, const StudyReport& report,
+                       const ReportFiles& files) {
   std::ostringstream h;
   h << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>Study " << Html(results.name)
     << "</"
@@ -713,7 +755,34 @@ ReportFiles WriteReport(const StudyResults& results, const StudyReport& report,
   h << "<p>Data: <a href=\"trials.csv\">trials.csv</a>, <a href=\"answers.csv\">answers.csv</a>, "
        "<a href=\"summary.csv\">summary.csv</a>, <a href=\"notes.csv\">notes.csv</a>, <a "
        "href=\"demographics.csv\">demographics.csv</a>.</p>\n</body></html>\n";
-  WriteFile(files.html, h.str());
+  return h.str();
+}
+
+}  // namespace
+
+ReportFiles WriteReport(const StudyResults& results, const StudyReport& report,
+                        const std::filesystem::path& dir) {
+  std::filesystem::create_directories(dir);
+  ReportFiles files;
+  files.trials_csv = dir / "trials.csv";
+  files.answers_csv = dir / "answers.csv";
+  files.summary_csv = dir / "summary.csv";
+  files.notes_csv = dir / "notes.csv";
+  files.demographics_csv = dir / "demographics.csv";
+  files.lap_times_png = dir / "lap_times.png";
+  files.ranks_png = dir / "ranks.png";
+  files.html = dir / "index.html";
+  WriteFile(files.trials_csv, TrialsCsv(results));
+  WriteFile(files.answers_csv, AnswersCsv(results));
+  WriteFile(files.notes_csv, NotesCsv(results));
+  WriteFile(files.demographics_csv, DemographicsCsv(results));
+  WriteFile(files.summary_csv, SummaryCsv(results, report));
+  DrawLapTimes(results, report, files.lap_times_png);
+  DrawRanks(report, files.ranks_png);
+  if (DrawRatings(results, dir / "ratings.png")) files.ratings_png = dir / "ratings.png";
+  if (DrawModelMeans(results, report, dir / "model_means.png"))
+    files.model_means_png = dir / "model_means.png";
+  WriteFile(files.html, ReportPage(results, report, files));
   return files;
 }
 

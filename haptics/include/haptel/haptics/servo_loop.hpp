@@ -49,9 +49,8 @@
 #include "haptel/core/seqlock.hpp"
 #include "haptel/haptics/device.hpp"
 #include "haptel/haptics/hal.hpp"
-#include "haptel/haptics/passivity.hpp"
 #include "haptel/haptics/safety.hpp"
-#include "haptel/haptics/twoport.hpp"
+#include "haptel/haptics/servo_passivity.hpp"
 
 namespace haptel::haptics {
 
@@ -128,12 +127,7 @@ class ServoLoop {
     Vec3d displacement{};      ///< m, since the previous tick (0 without a fresh reading)
     int64_t last_tick_ns = 0;  ///< 0: no previous tick to take a period from
     ForceSetpoint setpoint;    ///< the last good set-point read
-    PassivityController field_port;
-    PassivityController coupling_port;
-    TwoPortPassivity link_end{ChannelEnd::kLoop};  ///< the loop's end across a device's link
-    LinkEnergy link_remote;                        ///< the far end's newest report
-    uint64_t link_base_ticks = 0;  ///< the device end's counts before the link's last restart
-    double link_base_dissipated_j = 0.0;
+    ArmPassivity passivity;    ///< the one-port ports and the link's two-port end
     uint64_t cycle = 0;
     WristRaw wrist{};
     GloveRaw glove{};
@@ -149,6 +143,12 @@ class ServoLoop {
   };
   void EndCycle() noexcept;
   void RunThread(int thread_index);
+  // Tick's steps, in its order.
+  void ReadSlowChannels(Arm& arm, Side side, int64_t now_ns);
+  void OnArmLost(Arm& arm, Side side);
+  void TrackWrist(Arm& arm, Side side, int64_t now_ns);
+  void WriteForces(Arm& arm, Side side, int64_t now_ns, const Vec3d& wrist,
+                   const std::array<double, kFingers>& fingers);
 
   Device& device_;
   Hal& hal_;

@@ -1,16 +1,12 @@
-#include "haptel/study/study_command.hpp"
+// `haptel study`: the study's subcommands, each in its own file beside this.
+#include "haptel/app/study_command.hpp"
 
 #include <string>
 
 #include "haptel/core/args.hpp"
 #include "haptel/core/cli.hpp"
 
-namespace haptel::study {
-
-int StudyRunCommand(int argc, const char* const* argv);
-int StudyReportCommand(int argc, const char* const* argv);
-int StudyPowerCommand(int argc, const char* const* argv);
-
+namespace haptel::app {
 namespace {
 constexpr const char* kUsage =
     "usage: haptel study run FILE [options]          run an A/B study (--help for options)\n"
@@ -31,4 +27,4 @@ int StudyCommand(int argc, const char* const* argv) {
   });
 }
 
-}  // namespace haptel::study
+}  // namespace haptel::app

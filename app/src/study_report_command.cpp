@@ -1,13 +1,15 @@
-// `haptel study report DATABASE --study NAME`: the tables, the statistics,
-// and the files (CSV, PNG, HTML) for one study.
+// `haptel study report DATABASE --study NAME`'s command line: the tables,
+// the statistics, and the files (CSV, PNG, HTML) for one study, as
+// study/report/ computes and writes them.
 #include <cstdio>
 #include <string>
 
+#include "haptel/app/study_command.hpp"
 #include "haptel/core/args.hpp"
 #include "haptel/core/cli.hpp"
 #include "haptel/study/report.hpp"
 
-namespace haptel::study {
+namespace haptel::app {
 namespace {
 
 constexpr const char* kReportUsage =
@@ -39,7 +41,7 @@ int StudyReportCommand(int argc, const char* const* argv) {
     std::filesystem::path database;
     std::string name;
     std::filesystem::path out;
-    PostHocMethod method = PostHocMethod::kNemenyi;
+    study::PostHocMethod method = study::PostHocMethod::kNemenyi;
     bool json = false;
     cli::ReadInput([&] {
       const Args args(argc, argv, {"study", "out", "post-hoc"}, {"json"});
@@ -55,21 +57,23 @@ int StudyReportCommand(int argc, const char* const* argv) {
       out = args.Value("out").value_or((database.parent_path() / ("report-" + name)).string());
       const std::string post_hoc = args.Value("post-hoc").value_or("nemenyi");
       if (post_hoc == "wilcoxon-holm") {
-        method = PostHocMethod::kWilcoxonHolm;
+        method = study::PostHocMethod::kWilcoxonHolm;
       } else if (post_hoc != "nemenyi") {
         throw UsageError("option --post-hoc: expected nemenyi or wilcoxon-holm, got '" + post_hoc +
                          "'");
       }
       json = args.Flag("json");
     });
-    const StudyResults results = cli::ReadInput([&] { return LoadStudyResults(database, name); });
-    const StudyReport report = ComputeReport(results, method);
-    const ReportFiles files = WriteReport(results, report, out);
-    std::printf("%s\n  report: %s\n", FormatReport(results, report).c_str(), files.html.c_str());
-    if (json) std::printf("%s\n", ReportJson(results, report, files).c_str());
+    const study::StudyResults results =
+        cli::ReadInput([&] { return study::LoadStudyResults(database, name); });
+    const study::StudyReport report = study::ComputeReport(results, method);
+    const study::ReportFiles files = study::WriteReport(results, report, out);
+    std::printf("%s\n  report: %s\n", study::FormatReport(results, report).c_str(),
+                files.html.c_str());
+    if (json) std::printf("%s\n", study::ReportJson(results, report, files).c_str());
     std::fflush(stdout);
     return cli::kExitOk;
   });
 }
 
-}  // namespace haptel::study
+}  // namespace haptel::app
