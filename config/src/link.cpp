@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "archives.hpp"
 #include "haptel/config/check.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/config/paths.hpp"
@@ -40,11 +41,9 @@ void CheckIpv4List(const std::string& key, const std::vector<std::string>& addre
 }  // namespace
 
 void LinkConfig::ValidateOrThrow() const {
-  check::Whole("domain_id", domain_id, 0, 232);
+  config_detail::CheckFields(*this);
   CheckIpv4List("interfaces", interfaces);
   CheckIpv4List("peers", peers);
-  check::Number("command_deadline_s", command_deadline_s, 0.001, 10.0);
-  check::Nested("fault", fault);
   if (!discovery_server.empty()) {
     try {
       ParseServerAddress(discovery_server);

@@ -2,8 +2,8 @@
 
 #include <sstream>
 
+#include "archives.hpp"
 #include "haptel/config/check.hpp"
-#include "servo_section.hpp"
 
 namespace haptel {
 
@@ -16,7 +16,6 @@ constexpr std::array<const char*, kBlimpChannels> kChannelNames = {
 
 /// The rates the Maestro's UART takes that a serial port offers.
 constexpr std::array<int, 8> kMaestroBauds = {1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200};
-constexpr int kSc8000Baud = 9600;
 
 std::string Number(double v) {
   std::ostringstream out;
@@ -56,10 +55,7 @@ bool ParseServoProtocol(const std::string& name, ServoProtocol* protocol) {
 }
 
 void ServoChannelConfig::ValidateOrThrow() const {
-  check::Whole("channel", channel, 0, kMaestroChannels - 1);
-  check::Number("min_us", min_us, kServoMinPulse_us, kServoMaxPulse_us);
-  check::Number("neutral_us", neutral_us, kServoMinPulse_us, kServoMaxPulse_us);
-  check::Number("max_us", max_us, kServoMinPulse_us, kServoMaxPulse_us);
+  config_detail::CheckFields(*this);
   if (!(min_us < max_us)) {
     check::Fail("min_us", "less than max_us (" + Number(max_us) + ")", {"max_us"});
   }
@@ -70,10 +66,7 @@ void ServoChannelConfig::ValidateOrThrow() const {
 }
 
 void ServoControllerConfig::ValidateOrThrow() const {
-  for (int i = 0; i < kBlimpChannels; ++i) {
-    check::Nested(std::string("channels.") + kChannelNames[static_cast<size_t>(i)],
-                  channels[static_cast<size_t>(i)]);
-  }
+  config_detail::CheckFields(*this);
   for (int i = 0; i < kBlimpChannels; ++i) {
     for (int j = 0; j < i; ++j) {
       if (channels[static_cast<size_t>(i)].channel == channels[static_cast<size_t>(j)].channel) {
@@ -85,8 +78,6 @@ void ServoControllerConfig::ValidateOrThrow() const {
       }
     }
   }
-  check::Number("controller_timeout_s", controller_timeout_s, 0.02, 60.0);
-  check::Number("error_poll_s", error_poll_s, 0.01, 60.0);
   switch (protocol) {
     case ServoProtocol::kMaestro: {
       bool known = false;
@@ -123,45 +114,4 @@ void ServoControllerConfig::ValidateOrThrow() const {
   }
 }
 
-namespace config_detail {
-
-ServoControllerConfig ReadServoController(YamlMap& section) {
-  ServoControllerConfig c;
-  const std::string protocol = section.String("protocol", ServoProtocolName(c.protocol));
-  if (!ParseServoProtocol(protocol, &c.protocol))
-    section.Fail("protocol", "one of: maestro, sc8000");
-  c.port = section.String("port", c.port);
-  c.baud = section.Integer("baud", c.protocol == ServoProtocol::kSc8000 ? kSc8000Baud : c.baud);
-  c.crc = section.Bool("crc", c.crc);
-  c.controller_timeout_s = section.Number("controller_timeout_s", c.controller_timeout_s);
-  c.error_poll_s = section.Number("error_poll_s", c.error_poll_s);
-  if (!section.IsMap("channels")) {
-    section.Fail("channels",
-                 "a mapping of the seven channels (elevator, rudder, power, helix, "
-                 "tail_rotor, camera_pan, camera_tilt)");
-  }
-  YamlMap channels = section.Map("channels");
-  for (int i = 0; i < kBlimpChannels; ++i) {
-    const char* name = kChannelNames[static_cast<size_t>(i)];
-    if (!channels.IsMap(name)) {
-      channels.Fail(name,
-                    std::string("the ") + name +
-                        " channel (a mapping: channel, min_us, neutral_us, max_us, reversed)");
-    }
-    YamlMap m = channels.Map(name);
-    ServoChannelConfig& ch = c.channels[static_cast<size_t>(i)];
-    if (!m.Has("channel")) m.Fail("channel", "the controller's output number (a whole number)");
-    ch.channel = m.Integer("channel", ch.channel);
-    ch.min_us = m.Number("min_us", ch.min_us);
-    ch.neutral_us = m.Number("neutral_us", ch.neutral_us);
-    ch.max_us = m.Number("max_us", ch.max_us);
-    ch.reversed = m.Bool("reversed", ch.reversed);
-    m.Finish();
-  }
-  channels.Finish();
-  section.Finish();
-  return c;
-}
-
-}  // namespace config_detail
 }  // namespace haptel

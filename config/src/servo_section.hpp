@@ -1,6 +1,6 @@
 #pragma once
+#include "archives.hpp"
 #include "haptel/config/servo.hpp"
-#include "yaml_map.hpp"
 
 namespace haptel::config_detail {
 
@@ -8,6 +8,8 @@ namespace haptel::config_detail {
 /// which must hold all seven channels, each with its `channel`); the
 /// enclosing config's ValidateOrThrow checks the values. `baud` defaults to
 /// 9600 for protocol sc8000.
-ServoControllerConfig ReadServoController(YamlMap& section);
+inline ServoControllerConfig ReadServoController(YamlMap& section) {
+  return ReadSection<ServoControllerConfig>(section);
+}
 
 }  // namespace haptel::config_detail

@@ -1,5 +1,6 @@
 #include "haptel/config/shared_control.hpp"
 
+#include "archives.hpp"
 #include "haptel/config/check.hpp"
 #include "shared_control_section.hpp"
 
@@ -17,8 +18,8 @@ void SharedControlConfig::ValidateOrThrow() const {
 
 namespace config_detail {
 
-void ReadSharedControl(YamlMap& root, const std::string& name, const std::string& shared_name,
-                       SharedControlConfig& out) {
+void CheckSharedControl(YamlMap& root, const std::string& name, const std::string& shared_name,
+                        SharedControlConfig& out) {
   const bool shared = name == shared_name;
   if (shared != root.Has("shared_control")) {
     root.Fail("shared_control",
@@ -26,14 +27,7 @@ void ReadSharedControl(YamlMap& root, const std::string& name, const std::string
                      : "no 'shared_control' section on '" + name + "' (name the file '" +
                            shared_name + "')");
   }
-  if (!shared) return;
-  YamlMap section = root.Map("shared_control");
-  out.enabled = true;
-  out.horizon_s = section.Number("horizon_s", out.horizon_s);
-  out.max_force = section.Number("max_force", out.max_force);
-  out.stiffness = section.Number("stiffness", out.stiffness);
-  out.clearance = section.Number("clearance", out.clearance);
-  section.Finish();
+  out.enabled = shared;
 }
 
 }  // namespace config_detail

@@ -1,6 +1,7 @@
 #pragma once
-/// @file Reading the `shared_control:` section the shared interfaces' files
-/// share (gesture.cpp, cockpit.cpp).
+/// @file The rule on the `shared_control:` section the shared interfaces'
+/// files share (gesture.cpp, cockpit.cpp); the section itself is read by
+/// their Serialize.
 #include <string>
 
 #include "haptel/config/shared_control.hpp"
@@ -11,9 +12,8 @@ namespace haptel::config_detail {
 /// An interface named `shared_name` (gesture-shared, cockpit-shared) is its
 /// base interface with shared control: the section is what makes it so, and
 /// it has no meaning on the others. Fails naming the key unless the section
-/// is there exactly when `name == shared_name`; reads it into `out` (enabled)
-/// when it is.
-void ReadSharedControl(YamlMap& root, const std::string& name, const std::string& shared_name,
-                       SharedControlConfig& out);
+/// is there exactly when `name == shared_name`; `out` is enabled when it is.
+void CheckSharedControl(YamlMap& root, const std::string& name, const std::string& shared_name,
+                        SharedControlConfig& out);
 
 }  // namespace haptel::config_detail

@@ -19,19 +19,9 @@ namespace {
 
 DriverProfile ReadProfile(YamlMap map) {
   DriverProfile p;
-  p.steering_noise = map.Number("steering_noise", p.steering_noise);
-  p.noise_time_s = map.Number("noise_time_s", p.noise_time_s);
-  p.slip_rate_hz = map.Number("slip_rate_hz", p.slip_rate_hz);
-  p.regrasp_s = map.Number("regrasp_s", p.regrasp_s);
-  p.holding_reaction_s = map.Number("holding_reaction_s", p.holding_reaction_s);
-  p.holding_cruise = map.Number("holding_cruise", p.holding_cruise);
-  p.stay_put_cruise = map.Number("stay_put_cruise", p.stay_put_cruise);
-  p.recentre_s = map.Number("recentre_s", p.recentre_s);
-  p.recentre_error = map.Number("recentre_error", p.recentre_error);
-  p.hud_use = map.Number("hud_use", p.hud_use);
-  p.unsure_cruise = map.Number("unsure_cruise", p.unsure_cruise);
-  p.learning_gain = map.Number("learning_gain", p.learning_gain);
-  p.learning_trials = map.Number("learning_trials", p.learning_trials);
+  for (const DriverProfileTrait& t : DriverProfileTraits()) {
+    p.*t.member = map.Number(t.key, p.*t.member);
+  }
   p.seed = static_cast<uint64_t>(map.Integer("seed", static_cast<int>(p.seed), 0, 1 << 30));
   map.Finish();
   config_detail::ValidateIn(map, p);

@@ -367,6 +367,14 @@ std::vector<double> YamlMap::Numbers(const std::string& key, size_t count,
   return out;
 }
 
+std::vector<double> YamlMap::NumberList(const std::string& key,
+                                        const std::vector<double>& fallback) {
+  const YAML::Node child = Child(key);
+  if (!child.IsDefined() || child.IsNull()) return fallback;
+  if (!child.IsSequence()) Fail(key, "a list of numbers");
+  return Numbers(key, child.size());
+}
+
 Vec2 YamlMap::Point(const std::string& key) {
   const YAML::Node child = Child(key);
   const std::string expected = "a point [x, y] in metres";

@@ -64,6 +64,9 @@ class YamlMap {
   /// checked); `noun` names them in errors: "a list of 22 non-zero numbers".
   std::vector<double> Numbers(const std::string& key, size_t count,
                               const std::string& noun = "numbers");
+  /// A list of finite numbers of any length (the fallback when absent);
+  /// errors name the offending element.
+  std::vector<double> NumberList(const std::string& key, const std::vector<double>& fallback);
   Vec2 Point(const std::string& key);
   std::vector<Vec2> Points(const std::string& key, size_t min_count);
   /// A list of [x, y, z] points, each coordinate within ±max_abs.

@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <string>
 
+#include "haptel/config/archive.hpp"
+
 namespace haptel {
 
 /// Wind in the world frame (x east, y north, z up): a mean and gusts. The
@@ -18,6 +20,14 @@ struct WindConfig {
   double gust_rms = 0.0;     ///< m/s per horizontal axis (a third of it vertically)
   double gust_time_s = 8.0;  ///< period of the slowest gust component
   uint64_t seed = 1;
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(HAPTEL_NVP(mean), config::Range{-30.0, 30.0});
+    a->Visit(HAPTEL_NVP(gust_rms), config::Range{0.0, 20.0});
+    a->Visit(HAPTEL_NVP(gust_time_s), config::Range{0.1, 600.0});
+    a->Visit(HAPTEL_NVP(seed), config::Range{0, 1 << 30});
+  }
 
   void ValidateOrThrow() const;
   bool operator==(const WindConfig&) const = default;
@@ -83,6 +93,45 @@ struct AirshipConfig {
   /// Off: no aerodynamic force at all (hull drag, fins) — for checking the
   /// conservative part of the model (energy), not for flying.
   bool aerodynamics = true;
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    // Every field but `aerodynamics` (a switch for tests, never in a file).
+    using config::Range;
+    a->Visit(HAPTEL_NVP(length), Range{0.1, 500.0});
+    a->Visit(HAPTEL_NVP(diameter), Range{0.05, 100.0});
+    a->Visit(HAPTEL_NVP(volume), Range{1e-3, 1e6});
+    a->Visit(HAPTEL_NVP(air_density), Range{0.1, 2.0});
+    a->Visit(HAPTEL_NVP(helium_density), Range{0.0, 1.0});
+    a->Visit(HAPTEL_NVP(structure_mass), Range{0.01, 1e5});
+    a->Visit(HAPTEL_NVP(payload_mass), Range{0.0, 1e5});
+    a->Visit(HAPTEL_NVP(cg_below_cb), Range{0.0, 50.0});
+    a->Visit(HAPTEL_NVP(axial_drag_coefficient), Range{0.0, 5.0});
+    a->Visit(HAPTEL_NVP(crossflow_drag_coefficient), Range{0.0, 5.0});
+    a->Visit(HAPTEL_NVP(fin_area), Range{0.0, 1e3});
+    a->Visit(HAPTEL_NVP(fin_lift_slope), Range{0.0, 10.0});
+    a->Visit(HAPTEL_NVP(fin_arm), Range{0.0, 250.0});
+    a->Visit(HAPTEL_NVP(control_effectiveness), Range{0.0, 1.0});
+    a->Visit(HAPTEL_NVP(max_surface_deg), Range{0.0, 60.0});
+    a->Visit(HAPTEL_NVP(fin_onset_speed), Range{0.01, 50.0});
+    a->Visit(HAPTEL_NVP(max_thrust), Range{0.0, 1e5});
+    a->Visit(HAPTEL_NVP(thrust_time_constant), Range{0.01, 10.0});
+    a->Visit(HAPTEL_NVP(propeller_x), Range{-250.0, 250.0});
+    a->Visit(HAPTEL_NVP(propeller_z), Range{-50.0, 50.0});
+    a->Visit(HAPTEL_NVP(max_helix_deg), Range{0.0, 120.0});
+    a->Visit(HAPTEL_NVP(helix_rate_deg_s), Range{1.0, 1000.0});
+    a->Visit(HAPTEL_NVP(tail_thrust), Range{0.0, 1e4});
+    a->Visit(HAPTEL_NVP(tail_time_constant), Range{0.01, 10.0});
+    a->Visit(HAPTEL_NVP(tail_arm), Range{0.0, 250.0});
+    a->Visit(HAPTEL_NVP(tail_z), Range{-50.0, 50.0});
+    a->Visit(HAPTEL_NVP(wind));
+    using Integrator = AirshipIntegrator;
+    a->Visit(HAPTEL_NVP(integrator),
+             config::Choice<Integrator>{{{Integrator::kSemiImplicitEuler, "semi-implicit-euler"},
+                                         {Integrator::kMidpoint, "midpoint"},
+                                         {Integrator::kRk4, "rk4"}}});
+    a->Visit(HAPTEL_NVP(step_s), Range{1e-5, 0.1});
+  }
 
   /// Throws ConfigFieldError naming the first field out of range.
   /// m/s: the airspeed at which both main motors at full thrust meet the

@@ -4,6 +4,8 @@
 #include <filesystem>
 #include <string>
 
+#include "haptel/config/archive.hpp"
+
 namespace haptel {
 
 /// Offsets are from each hand's neutral point, in that arm's device frame
@@ -33,6 +35,24 @@ struct BlimpGestureConfig {
   double field_stiffness_growth = 300.0;               ///< N/m²
   double field_damping = 2.0;                          ///< N·s/m
   double command_rate_hz = 50.0;
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    using config::Range;
+    a->Visit(HAPTEL_NVP(name), config::NonEmpty{});
+    a->Visit(HAPTEL_NVP(right_neutral), Range{-1.0, 1.0});
+    a->Visit(HAPTEL_NVP(left_neutral), Range{-1.0, 1.0});
+    a->Visit(HAPTEL_NVP(dead_zone), Range{0.0, 0.2});
+    a->Visit(HAPTEL_NVP(full_elevator), Range{0.005, 0.5});
+    a->Visit(HAPTEL_NVP(full_rudder), Range{0.005, 0.5});
+    a->Visit(HAPTEL_NVP(full_power), Range{0.005, 0.5});
+    a->Visit(HAPTEL_NVP(full_helix), Range{0.005, 0.5});
+    a->Visit(HAPTEL_NVP(full_tail), Range{0.005, 0.5});
+    a->Visit(HAPTEL_NVP(field_stiffness), Range{0.0, 2000.0});
+    a->Visit(HAPTEL_NVP(field_stiffness_growth), Range{0.0, 1e5});
+    a->Visit(HAPTEL_NVP(field_damping), Range{0.0, 200.0});
+    a->Visit(HAPTEL_NVP(command_rate_hz), Range{1.0, 1000.0});
+  }
 
   /// Throws ConfigFieldError naming the first field out of range.
   void ValidateOrThrow() const;

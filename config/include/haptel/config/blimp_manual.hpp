@@ -21,6 +21,7 @@
 #include <filesystem>
 #include <string>
 
+#include "haptel/config/archive.hpp"
 #include "haptel/config/interface_kinds.hpp"
 
 namespace haptel {
@@ -47,6 +48,27 @@ struct BlimpManualConfig {
     const InterfaceKindInfo* kind = FindInterfaceKind(name);
     return kind != nullptr && kind->input == InterfaceInput::kGamepad ? BlimpManualInput::kGamepad
                                                                       : BlimpManualInput::kKeys;
+  }
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    using config::Range;
+    a->Visit(HAPTEL_NVP(name));
+    // A file gives its own input's keys only (the others are unknown keys);
+    // the checker holds a struct built in code to all of them.
+    const bool reads = Archive::kReads;
+    if (!reads || input() == BlimpManualInput::kKeys) {
+      a->Visit(HAPTEL_NVP(power_steps), Range{1, 100});
+      a->Visit(HAPTEL_NVP(helix_steps), Range{1, 100});
+      a->Visit(HAPTEL_NVP(elevator_steps), Range{1, 100});
+      a->Visit(HAPTEL_NVP(repeat_s), Range{0.01, 2.0});
+      a->Visit(HAPTEL_NVP(rudder_rate), Range{0.1, 100.0});
+    }
+    if (!reads || input() == BlimpManualInput::kGamepad) {
+      a->Visit(HAPTEL_NVP(dead_zone), Range{0.0, 0.9});
+      a->Visit(HAPTEL_NVP(trigger_dead_zone), Range{0.0, 0.9});
+    }
+    a->Visit(HAPTEL_NVP(command_rate_hz), Range{1.0, 1000.0});
   }
 
   /// Throws ConfigFieldError naming the first field out of range.

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <string>
 
+#include "haptel/config/archive.hpp"
 #include "haptel/config/shared_control.hpp"
 
 namespace haptel {
@@ -48,6 +49,37 @@ struct CockpitConfig {
   /// into an obstacle and a force on the lever towards slower, in physics;
   /// disabled for the others.
   SharedControlConfig shared_control;
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    using config::MakeNameValue, config::Range;
+    a->Visit(HAPTEL_NVP(name), config::Required{}, config::NonEmpty{});
+    a->Visit(HAPTEL_NVP(hud));
+    a->Visit(HAPTEL_NVP(return_to_zero));
+    a->Visit(HAPTEL_NVP(turn_share), Range{0.0, 1.0});
+    a->Visit(HAPTEL_NVP(command_rate_hz), Range{1.0, 1000.0});
+    a->Group("wheel", [this](auto* wheel) {
+      wheel->Visit(MakeNameValue("hub", &wheel_hub), Range{-1.0, 1.0});
+      wheel->Visit(MakeNameValue("radius", &wheel_radius), Range{0.03, 0.5});
+      wheel->Visit(
+          MakeNameValue("max_angle_deg", &wheel_max_angle_deg));  // [10, 180): ValidateOrThrow
+      wheel->Visit(MakeNameValue("full_turn_deg", &wheel_full_turn_deg), Range{5.0, 720.0});
+      wheel->Visit(MakeNameValue("return_stiffness", &wheel_return_stiffness), Range{0.0, 100.0});
+    });
+    a->Group("throttle", [this](auto* throttle) {
+      throttle->Visit(MakeNameValue("centre", &throttle_centre), Range{-1.0, 1.0});
+      throttle->Visit(MakeNameValue("travel", &throttle_travel), Range{0.01, 0.5});
+      throttle->Visit(MakeNameValue("return_stiffness", &throttle_return_stiffness),
+                      Range{0.0, 1e4});
+    });
+    a->Group("contact", [this](auto* contact) {
+      contact->Visit(MakeNameValue("shake_s", &shake_s), Range{0.0, 10.0});
+      contact->Visit(MakeNameValue("shake_torque", &shake_torque), Range{0.0, 10.0});
+      contact->Visit(MakeNameValue("shake_hz", &shake_hz), Range{0.5, 100.0});
+      contact->Visit(MakeNameValue("throttle_lock_s", &throttle_lock_s), Range{0.0, 30.0});
+    });
+    a->Visit(HAPTEL_NVP(shared_control), config::IfPresent{});
+  }
 
   /// Throws ConfigFieldError (keys as in the file: "wheel.radius") unless the
   /// name is set, every value is in range and full_turn_deg <= max_angle_deg < 180

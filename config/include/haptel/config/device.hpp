@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "haptel/config/archive.hpp"
+
 namespace haptel {
 
 /// How the servo loop runs.
@@ -39,6 +41,22 @@ struct ServoLoopConfig {
   /// of force error where charge keeps 0.37 N (docs/benchmarks.md).
   bool passivity_link_admittance = false;
 
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(HAPTEL_NVP(rate_hz), config::Range{100.0, 10000.0});
+    a->Visit(HAPTEL_NVP(two_sided));
+    a->Visit(HAPTEL_NVP(slow_channel_divider), config::Range{1, 1000});
+    a->Visit(HAPTEL_NVP(realtime_priority), config::Range{0, 99});
+    a->Visit(HAPTEL_NVP(lock_memory));
+    a->Visit(HAPTEL_NVP(passivity),
+             config::Choice<bool>{{{true, "on"}, {false, "off"}}, "on or off"});
+    a->Visit(
+        config::MakeNameValue("passivity_link", &passivity_link_admittance),
+        config::Choice<bool>{{{true, "admittance"}, {false, "charge"}}, "admittance or charge"});
+    a->Visit(HAPTEL_NVP(passivity_max_damping), config::Range{0.0, 1e4});
+    a->Visit(HAPTEL_NVP(passivity_min_speed), config::Range{1e-6, 1.0});
+  }
+
   /// Throws ConfigFieldError unless the rate, divider, priority and the
   /// passivity limits are in range.
   void ValidateOrThrow() const;
@@ -52,6 +70,16 @@ struct SafetyConfig {
   double soft_start_s = 0.5;         ///< forces ramp in after connect or reconnect
   double setpoint_timeout_s = 0.02;  ///< set-points older than this are stale
   double fade_s = 0.03;              ///< stale set-points fade to zero over this
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(HAPTEL_NVP(wrist_force_limit), config::Range{0.0, 200.0});
+    a->Visit(HAPTEL_NVP(finger_force_limit), config::Range{0.0, 100.0});
+    a->Visit(HAPTEL_NVP(max_force_rate), config::Range{1.0, 1e6});
+    a->Visit(HAPTEL_NVP(soft_start_s), config::Range{0.0, 60.0});
+    a->Visit(HAPTEL_NVP(setpoint_timeout_s), config::Range{0.001, 10.0});
+    a->Visit(HAPTEL_NVP(fade_s), config::Range{0.0, 10.0});
+  }
 
   /// Throws ConfigFieldError unless every value is in range and
   /// setpoint_timeout_s + fade_s <= 0.05 (forces gone 50 ms after a stall).
@@ -74,6 +102,20 @@ struct SimArmConfig {
   /// Seed of the hidden "true" calibration parameters (scale, offsets, gains).
   int seed = 1;
 
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(HAPTEL_NVP(arm_mass), config::Range{0.01, 100.0});
+    a->Visit(HAPTEL_NVP(damping), config::Range{0.0, 1e3});
+    a->Visit(HAPTEL_NVP(coulomb_friction), config::Range{0.0, 100.0});
+    a->Visit(HAPTEL_NVP(exo_unbalanced_mass), config::Range{0.0, 20.0});
+    a->Visit(HAPTEL_NVP(encoder_resolution), config::Range{0.0, 0.01});
+    a->Visit(HAPTEL_NVP(force_limit), config::Range{0.0, 200.0});
+    a->Visit(HAPTEL_NVP(glove_noise), config::Range{0.0, 100.0});
+    a->Visit(HAPTEL_NVP(workspace_min), config::Range{-5.0, 5.0});
+    a->Visit(HAPTEL_NVP(workspace_max), config::Range{-5.0, 5.0});
+    a->Visit(HAPTEL_NVP(seed), config::Range{0, 1 << 30});
+  }
+
   /// Throws ConfigFieldError unless every value is in range and
   /// workspace_min < workspace_max on every axis.
   void ValidateOrThrow() const;
@@ -82,6 +124,12 @@ struct SimArmConfig {
 struct UdpArmEndpoint {
   std::string host = "127.0.0.1";
   int port = 0;  ///< 0: no arm on this side
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(HAPTEL_NVP(host), config::NonEmpty{});
+    a->Visit(HAPTEL_NVP(port), config::Range{0, 65535});
+  }
 
   /// Throws ConfigFieldError unless the host is set and the port in [0, 65535].
   void ValidateOrThrow() const;
@@ -93,6 +141,15 @@ struct UdpDeviceConfig {
   int retries = 1;                     ///< extra attempts after a timeout
   double lost_after_s = 0.1;           ///< no valid answer for this long: device lost
 
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(config::MakeNameValue("left", &arms[0]));
+    a->Visit(config::MakeNameValue("right", &arms[1]));
+    a->Visit(HAPTEL_NVP(timeout_s), config::Range{1e-5, 5.0});
+    a->Visit(HAPTEL_NVP(retries), config::Range{0, 100});
+    a->Visit(HAPTEL_NVP(lost_after_s), config::Range{1e-3, 60.0});
+  }
+
   /// Throws ConfigFieldError unless the endpoints ("left.*", "right.*") and
   /// the timing values are valid.
   void ValidateOrThrow() const;
@@ -101,6 +158,12 @@ struct UdpDeviceConfig {
 struct ReplayDeviceConfig {
   std::filesystem::path trace;  ///< a trace file written by the session recorder
   bool loop = false;
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(HAPTEL_NVP(trace), config::RelativeToFile{});
+    a->Visit(HAPTEL_NVP(loop));
+  }
 
   /// Nothing to check on its own (DeviceConfig requires a trace for the
   /// replay driver); there for uniformity: never throws.
@@ -122,6 +185,22 @@ struct DeviceConfig {
   /// Optional files (empty: none). Relative paths resolve against the working directory.
   std::filesystem::path calibration;
   std::filesystem::path gravity;
+
+  /// Every field but `file` and `sides` (a list of side names, read by LoadDevice).
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(HAPTEL_NVP(name), config::Required{}, config::NonEmpty{});
+    a->Visit(HAPTEL_NVP(driver));
+    a->Visit(HAPTEL_NVP(has_glove));
+    a->Visit(HAPTEL_NVP(has_grasp));
+    a->Visit(HAPTEL_NVP(calibration));
+    a->Visit(HAPTEL_NVP(gravity));
+    a->Visit(HAPTEL_NVP(servo));
+    a->Visit(HAPTEL_NVP(safety));
+    a->Visit(HAPTEL_NVP(sim));
+    a->Visit(HAPTEL_NVP(udp));
+    a->Visit(HAPTEL_NVP(replay));
+  }
 
   /// Throws ConfigFieldError unless the driver is known, a side is used, the
   /// parts are valid ("servo.*", "safety.*", ...), the udp driver has a port

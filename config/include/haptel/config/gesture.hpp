@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <string>
 
+#include "haptel/config/archive.hpp"
 #include "haptel/config/shared_control.hpp"
 
 namespace haptel {
@@ -25,6 +26,24 @@ struct GestureConfig {
   double wall_release_s = 0.3;            ///< the wall stays this long after the contact clears
   double command_rate_hz = 50.0;
   SharedControlConfig shared_control;  ///< gesture-shared's; disabled for gesture
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    using config::Range;
+    a->Visit(HAPTEL_NVP(name), config::NonEmpty{});
+    a->Visit(HAPTEL_NVP(neutral), Range{-1.0, 1.0});
+    a->Visit(HAPTEL_NVP(dead_zone), Range{0.0, 0.2});
+    a->Visit(HAPTEL_NVP(full_forward), Range{0.005, 0.5});
+    a->Visit(HAPTEL_NVP(full_turn), Range{0.005, 0.5});
+    a->Visit(HAPTEL_NVP(turn_share), Range{0.0, 1.0});
+    a->Visit(HAPTEL_NVP(field_stiffness), Range{0.0, 2000.0});
+    a->Visit(HAPTEL_NVP(field_stiffness_growth), Range{0.0, 1e5});
+    a->Visit(HAPTEL_NVP(field_damping), Range{0.0, 200.0});
+    a->Visit(HAPTEL_NVP(wall_stiffness), Range{0.0, 1e5});
+    a->Visit(HAPTEL_NVP(wall_release_s), Range{0.0, 10.0});
+    a->Visit(HAPTEL_NVP(command_rate_hz), Range{1.0, 1000.0});
+    a->Visit(HAPTEL_NVP(shared_control), config::IfPresent{});
+  }
 
   /// Throws ConfigFieldError unless the name is set and every value is in range.
   void ValidateOrThrow() const;

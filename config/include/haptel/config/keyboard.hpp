@@ -4,6 +4,8 @@
 #include <filesystem>
 #include <string>
 
+#include "haptel/config/archive.hpp"
+
 namespace haptel {
 
 struct KeyboardConfig {
@@ -17,6 +19,15 @@ struct KeyboardConfig {
   bool release_to_zero = true;
   double turn_share = 0.7;  ///< how much of the motor range turning may take
   double command_rate_hz = 50.0;
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(HAPTEL_NVP(name), config::NonEmpty{});
+    a->Visit(HAPTEL_NVP(repeat_s), config::Range{0.01, 2.0});
+    a->Visit(HAPTEL_NVP(release_to_zero));
+    a->Visit(HAPTEL_NVP(turn_share), config::Range{0.0, 1.0});
+    a->Visit(HAPTEL_NVP(command_rate_hz), config::Range{1.0, 1000.0});
+  }
 
   /// Throws ConfigFieldError unless the name is set and every value is in range.
   void ValidateOrThrow() const;

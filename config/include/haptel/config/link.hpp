@@ -6,6 +6,8 @@
 #include <utility>
 #include <vector>
 
+#include "haptel/config/archive.hpp"
+
 namespace haptel {
 
 /// Faults injected into the link by the process's own DDS transport (a
@@ -110,6 +112,18 @@ struct LinkConfig {
   /// Which identity of `security` this process is ("operator",
   /// "vehicle-robot1"): set by the program, never read from a file.
   std::string security_identity;
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    // Every field but security_identity (the program's, never a file's).
+    a->Visit(HAPTEL_NVP(domain_id), config::Range{0, 232});
+    a->Visit(HAPTEL_NVP(interfaces));
+    a->Visit(HAPTEL_NVP(peers));
+    a->Visit(HAPTEL_NVP(command_deadline_s), config::Range{0.001, 10.0});
+    a->Visit(HAPTEL_NVP(fault), config::AsText<LinkFault>{&ParseLinkFault, &LinkFaultText});
+    a->Visit(HAPTEL_NVP(security), config::RelativeToFile{});
+    a->Visit(HAPTEL_NVP(discovery_server));
+  }
 
   /// Throws ConfigFieldError unless the domain and deadline are in range and
   /// every interface and peer is a dotted IPv4 address ("peers[1]").

@@ -9,6 +9,8 @@
 #include <array>
 #include <filesystem>
 
+#include "haptel/config/archive.hpp"
+
 namespace haptel {
 
 /// Surface of a body: Bullet has one friction coefficient (static = dynamic);
@@ -26,6 +28,14 @@ struct PhysicsMaterial {
   double restitution = 0.0;
   double rolling_friction = 0.0;   ///< m
   double spinning_friction = 0.0;  ///< m
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(HAPTEL_NVP(friction), config::Range{0.0, 10.0});
+    a->Visit(HAPTEL_NVP(restitution), config::Range{0.0, 1.0});
+    a->Visit(HAPTEL_NVP(rolling_friction), config::Range{0.0, 0.05});
+    a->Visit(HAPTEL_NVP(spinning_friction), config::Range{0.0, 0.05});
+  }
 
   /// Throws ConfigFieldError unless every value is in range and spinning
   /// friction comes with rolling friction (Bullet ignores it otherwise).
@@ -69,6 +79,27 @@ struct ProxyHandConfig {
   /// (3π/16)·μ·a·N about its normal, ≈ 2.4 mm·N for μ = 1, a = 4 mm.
   PhysicsMaterial material{1.0, 0.0, 0.001, 0.002};
 
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    using config::Range;
+    a->Visit(HAPTEL_NVP(palm_mass), Range{0.01, 10.0});
+    a->Visit(HAPTEL_NVP(palm_half_extents), Range{0.002, 0.5});
+    a->Visit(HAPTEL_NVP(phalanx_mass), Range{0.001, 1.0});
+    a->Visit(HAPTEL_NVP(phalanx_length), Range{0.005, 0.2});
+    a->Visit(HAPTEL_NVP(phalanx_radius), Range{0.001, 0.05});
+    a->Visit(HAPTEL_NVP(joint_stiffness), Range{1e-4, 1e4});
+    a->Visit(HAPTEL_NVP(joint_damping), Range{0.0, 1e3});
+    a->Visit(HAPTEL_NVP(coupling_linear_stiffness), Range{1.0, 1e8});
+    a->Visit(HAPTEL_NVP(coupling_linear_damping), Range{0.0, 1e5});
+    a->Visit(HAPTEL_NVP(coupling_angular_stiffness), Range{1e-3, 1e5});
+    a->Visit(HAPTEL_NVP(coupling_angular_damping), Range{0.0, 1e3});
+    a->Visit(HAPTEL_NVP(feedback_stiffness), Range{0.0, 1e5});
+    a->Visit(HAPTEL_NVP(feedback_damping), Range{0.0, 1e3});
+    a->Visit(HAPTEL_NVP(finger_feedback_stiffness), Range{0.0, 1e5});
+    a->Visit(HAPTEL_NVP(gravity));
+    a->Visit(HAPTEL_NVP(material));
+  }
+
   /// Throws ConfigFieldError unless every value is in range (the material's
   /// too) and every phalanx_length >= 2 * phalanx_radius.
   void ValidateOrThrow() const;
@@ -95,6 +126,17 @@ struct PhysicsConfig {
   /// The finest step of a reference run (1 µs): finer than any ground truth
   /// needs, coarse enough that a step of 0 or a typo in the exponent is caught.
   static constexpr double kMinReferenceStepS = 1e-6;
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    // Every field but `file` and `reference` (the program's); step_s's range
+    // depends on `reference`: ValidateOrThrow.
+    a->Visit(HAPTEL_NVP(step_s));
+    a->Visit(HAPTEL_NVP(solver_iterations), config::Range{1, 1000});
+    a->Visit(HAPTEL_NVP(gravity), config::Range{-100.0, 100.0});
+    a->Visit(HAPTEL_NVP(realtime_priority), config::Range{0, 99});
+    a->Visit(HAPTEL_NVP(hand));
+  }
 
   /// Throws ConfigFieldError unless the step (in [kMinStepS, kMaxStepS], or
   /// from kMinReferenceStepS for a reference), solver, gravity and priority

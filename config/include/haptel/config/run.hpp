@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "haptel/config/archive.hpp"
 #include "haptel/config/link.hpp"
 #include "haptel/config/scene.hpp"
 
@@ -31,6 +32,25 @@ struct OperatorConfig {
   /// hand for this long, then close the fingers over grasp_close_s.
   double grasp_reach_s = 0.8;
   double grasp_close_s = 0.6;
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    using config::Range;
+    a->Visit(HAPTEL_NVP(reaction_delay_s), Range{0.0, 2.0});
+    a->Visit(HAPTEL_NVP(arm_time_constant_s), Range{0.0, 2.0});
+    a->Visit(HAPTEL_NVP(lookahead), Range{0.05, 10.0});
+    a->Visit(HAPTEL_NVP(cruise), Range{0.05, 1.0});
+    a->Visit(HAPTEL_NVP(min_forward), Range{0.0, 1.0});
+    a->Visit(HAPTEL_NVP(slow_radius), Range{0.0, 100.0});
+    a->Visit(HAPTEL_NVP(muscle_stiffness), Range{1.0, 1e4});
+    a->Visit(HAPTEL_NVP(muscle_damping), Range{0.0, 1e3});
+    a->Visit(HAPTEL_NVP(muscle_max_force), Range{0.1, 100.0});
+    a->Visit(HAPTEL_NVP(muscle_integral_gain), Range{0.0, 1e5});
+    a->Visit(HAPTEL_NVP(backoff_s), Range{0.0, 10.0});
+    a->Visit(HAPTEL_NVP(careful_s), Range{0.0, 60.0});
+    a->Visit(HAPTEL_NVP(grasp_reach_s), Range{0.0, 10.0});
+    a->Visit(HAPTEL_NVP(grasp_close_s), Range{0.0, 10.0});
+  }
 
   /// Throws ConfigFieldError unless every value is in range and min_forward <= cruise.
   void ValidateOrThrow() const;
@@ -63,6 +83,31 @@ struct RunConfig {
   ScenePlacement scene_placement;
   OperatorConfig op;
   LinkConfig link;
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    // Every field but `file` and `scene_placement` (read as a position and
+    // roll, pitch, yaw: LoadRun). Paths are relative to the file's folder but
+    // the database's, which is relative to the working directory.
+    using config::MakeNameValue, config::Range, config::RelativeToFile, config::Required;
+    a->Visit(HAPTEL_NVP(name), config::NonEmpty{});
+    a->Visit(HAPTEL_NVP(track), Required{}, RelativeToFile{});
+    a->Visit(HAPTEL_NVP(vehicle), Required{}, RelativeToFile{});
+    a->Visit(HAPTEL_NVP(device), RelativeToFile{});
+    a->Visit(HAPTEL_NVP(physics), RelativeToFile{});
+    a->Visit(HAPTEL_NVP(scene), RelativeToFile{});
+    a->Visit(HAPTEL_NVP(interface), config::NonEmpty{});
+    a->Visit(MakeNameValue("switchable_interfaces", &interfaces));
+    a->Visit(HAPTEL_NVP(interfaces_dir), RelativeToFile{});
+    a->Visit(HAPTEL_NVP(database));
+    a->Visit(HAPTEL_NVP(vehicle_timeout_s), Range{0.05, 60.0});
+    a->Visit(HAPTEL_NVP(session_rate_hz), Range{10.0, 1000.0});
+    a->Visit(HAPTEL_NVP(video_decode));
+    a->Visit(HAPTEL_NVP(person_time_limit_s), Range{1.0, 86400.0});
+    a->Visit(HAPTEL_NVP(switch_ramp_s), Range{0.01, 5.0});
+    a->Visit(MakeNameValue("operator", &op));
+    a->Visit(HAPTEL_NVP(link));
+  }
 
   /// Throws ConfigFieldError (keys as in the file: "operator.cruise") unless
   /// the names and timing values are valid and every part is ("operator.*",

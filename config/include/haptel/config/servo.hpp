@@ -6,6 +6,8 @@
 #include <array>
 #include <string>
 
+#include "haptel/config/archive.hpp"
+
 namespace haptel {
 
 /// The blimp's channels, in this order everywhere (thesis ch. 8.2.1).
@@ -34,6 +36,8 @@ constexpr int kMaestroChannels = 24;
 constexpr int kSc8000Channels = 8;
 constexpr double kSc8000MinPulse_us = 800.0;
 constexpr double kSc8000MaxPulse_us = 2200.0;
+/// The SC-8000's one serial rate.
+constexpr int kSc8000Baud = 9600;
 
 /// One channel's output number and calibration. A command v in [-1, 1]
 /// maps to neutral_us + v·(max_us − neutral_us) for v >= 0 and to
@@ -45,6 +49,18 @@ struct ServoChannelConfig {
   double neutral_us = 1500.0;  ///< pulse at command 0, and the controller's home position
   double max_us = 2000.0;      ///< pulse at command +1
   bool reversed = false;       ///< the command is negated before the mapping
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    using config::Range;
+    a->Visit(HAPTEL_NVP(channel),
+             config::Required{"the controller's output number (a whole number)"},
+             Range{0, kMaestroChannels - 1});
+    a->Visit(HAPTEL_NVP(min_us), Range{kServoMinPulse_us, kServoMaxPulse_us});
+    a->Visit(HAPTEL_NVP(neutral_us), Range{kServoMinPulse_us, kServoMaxPulse_us});
+    a->Visit(HAPTEL_NVP(max_us), Range{kServoMinPulse_us, kServoMaxPulse_us});
+    a->Visit(HAPTEL_NVP(reversed));
+  }
 
   /// Throws ConfigFieldError: min_us < max_us, min_us <= neutral_us <=
   /// max_us, every pulse in [500, 2500] µs, channel in [0, 23] (the
@@ -70,6 +86,36 @@ struct ServoControllerConfig {
   double error_poll_s = 0.5;
   /// Per BlimpChannel, in its order.
   std::array<ServoChannelConfig, kBlimpChannels> channels;
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(HAPTEL_NVP(protocol),
+             config::Choice<ServoProtocol>{
+                 {{ServoProtocol::kMaestro, "maestro"}, {ServoProtocol::kSc8000, "sc8000"}}});
+    a->Visit(HAPTEL_NVP(port));
+    // A file naming the SC-8000 need not give its only rate.
+    if constexpr (Archive::kReads) {
+      if (protocol == ServoProtocol::kSc8000) baud = kSc8000Baud;
+    }
+    a->Visit(HAPTEL_NVP(baud));
+    a->Visit(HAPTEL_NVP(crc));
+    a->Visit(HAPTEL_NVP(controller_timeout_s), config::Range{0.02, 60.0});
+    a->Visit(HAPTEL_NVP(error_poll_s), config::Range{0.01, 60.0});
+    a->Group(
+        "channels",
+        [this](auto* each) {
+          for (size_t i = 0; i < channels.size(); ++i) {
+            const char* name = BlimpChannelName(static_cast<BlimpChannel>(i));
+            each->Visit(
+                config::MakeNameValue(name, &channels[i]),
+                config::Required{std::string("the ") + name +
+                                 " channel (a mapping: channel, min_us, neutral_us, max_us, "
+                                 "reversed)"});
+          }
+        },
+        config::Required{"a mapping of the seven channels (elevator, rudder, power, helix, "
+                         "tail_rotor, camera_pan, camera_tilt)"});
+  }
 
   /// Throws ConfigFieldError naming the first field out of range. A
   /// channel's errors are prefixed "channels.<name>." (e.g.

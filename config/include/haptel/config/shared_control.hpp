@@ -1,6 +1,7 @@
 #pragma once
 /// @file Haptic shared control's settings (gesture-shared, cockpit-shared):
 /// the `shared_control:` section of an interface file.
+#include "haptel/config/archive.hpp"
 
 namespace haptel {
 
@@ -21,6 +22,15 @@ struct SharedControlConfig {
   double stiffness =
       600.0;  ///< N/m of travel (hand; lever; along the rim) past the safe commands' boundary
   double clearance = 0.03;  ///< m kept between the body and an obstacle (beyond its radius)
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    // `enabled` is not a key: the interface's name says it.
+    a->Visit(HAPTEL_NVP(horizon_s), config::Range{0.1, 10.0});
+    a->Visit(HAPTEL_NVP(max_force), config::Range{0.0, 15.0});
+    a->Visit(HAPTEL_NVP(stiffness), config::Range{0.0, 2000.0});
+    a->Visit(HAPTEL_NVP(clearance), config::Range{0.0, 1.0});
+  }
 
   /// Throws ConfigFieldError unless every value is in range.
   void ValidateOrThrow() const;

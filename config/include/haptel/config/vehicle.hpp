@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "haptel/config/airship.hpp"
+#include "haptel/config/archive.hpp"
 #include "haptel/config/link.hpp"
 #include "haptel/config/servo.hpp"
 #include "haptel/config/vehicle_kinds.hpp"
@@ -23,6 +24,16 @@ struct DriveConfig {
   double left_gain = 1.0;             ///< per-motor gain: uneven turning
   double right_gain = 0.95;
 
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(HAPTEL_NVP(speed_levels), config::Range{1, 1000});
+    a->Visit(HAPTEL_NVP(max_speed), config::Range{0.01, 10.0});
+    a->Visit(HAPTEL_NVP(track_width), config::Range{0.02, 5.0});
+    a->Visit(HAPTEL_NVP(motor_time_constant), config::Range{0.0, 5.0});
+    a->Visit(HAPTEL_NVP(left_gain), config::Range{0.5, 1.5});
+    a->Visit(HAPTEL_NVP(right_gain), config::Range{0.5, 1.5});
+  }
+
   /// Throws ConfigFieldError unless every value is in range.
   void ValidateOrThrow() const;
 };
@@ -39,6 +50,15 @@ struct RangeSensorConfig {
   double noise_sd = 0.005;  ///< m, standard deviation of each reading's noise
   unsigned seed = 1;        ///< the noise's seed: a run repeats exactly
 
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(HAPTEL_NVP(beams), config::Range{0, kMaxRangeBeams});
+    a->Visit(HAPTEL_NVP(fov_deg), config::Range{0.0, 360.0});
+    a->Visit(HAPTEL_NVP(max_range), config::Range{0.05, 50.0});
+    a->Visit(HAPTEL_NVP(noise_sd), config::Range{0.0, 1.0});
+    a->Visit(HAPTEL_NVP(seed), config::Range{0, 2147483647.0});
+  }
+
   /// Throws ConfigFieldError unless every value is in range.
   void ValidateOrThrow() const;
 };
@@ -49,6 +69,13 @@ struct BodyConfig {
   double bumper_half_angle_deg = 70.0;
   /// Contacts within this angle of straight ahead press both switches.
   double bumper_both_deg = 8.0;
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(HAPTEL_NVP(radius), config::Range{0.01, 5.0});
+    a->Visit(HAPTEL_NVP(bumper_half_angle_deg), config::Range{1.0, 90.0});
+    a->Visit(HAPTEL_NVP(bumper_both_deg), config::Range{0.0, 45.0});
+  }
 
   /// Throws ConfigFieldError unless every value is in range.
   void ValidateOrThrow() const;
@@ -94,6 +121,26 @@ struct CameraConfig {
   int bitrate_kbps = 1000;
   double mount_height = 0.12;  ///< m above the floor
 
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    using Source = CameraSourceKind;
+    a->Visit(HAPTEL_NVP(source), config::Choice<Source>{{{Source::kSynthetic, "synthetic"},
+                                                         {Source::kDevice, "device"},
+                                                         {Source::kFile, "file"}}});
+    a->Visit(HAPTEL_NVP(device));
+    a->Visit(HAPTEL_NVP(file), config::RelativeToFile{});
+    a->Visit(HAPTEL_NVP(loop));
+    a->Visit(HAPTEL_NVP(rate_hz), config::Range{1.0, 120.0});
+    a->Visit(HAPTEL_NVP(width), config::Range{16, 4096});
+    a->Visit(HAPTEL_NVP(height), config::Range{16, 4096});
+    a->Visit(HAPTEL_NVP(fov_deg), config::Range{10.0, 170.0});
+    a->Visit(HAPTEL_NVP(codec), config::Choice<CameraCodec>{
+                                    {{CameraCodec::kJpeg, "jpeg"}, {CameraCodec::kH264, "h264"}}});
+    a->Visit(HAPTEL_NVP(jpeg_quality), config::Range{1, 100});
+    a->Visit(HAPTEL_NVP(bitrate_kbps), config::Range{50, 50000});
+    a->Visit(HAPTEL_NVP(mount_height), config::Range{0.01, 5.0});
+  }
+
   /// Throws ConfigFieldError unless every value is in range, `device` (when
   /// set) is a V4L2 path or index, and the source has the device or file it needs.
   void ValidateOrThrow() const;
@@ -122,6 +169,21 @@ struct CanConfig {
   /// Folder for the candump -L logs of each run (empty: no log).
   std::filesystem::path log_dir;
 
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(HAPTEL_NVP(interface));
+    a->Visit(HAPTEL_NVP(left_node), config::Range{0, 63});
+    a->Visit(HAPTEL_NVP(right_node), config::Range{0, 63});
+    a->Visit(HAPTEL_NVP(io_node), config::Range{0, 63});
+    a->Visit(HAPTEL_NVP(right_reversed));
+    a->Visit(HAPTEL_NVP(level_turns_per_s));  // its length and order: ValidateOrThrow
+    a->Visit(HAPTEL_NVP(wheel_circumference), config::Range{0.01, 5.0});
+    a->Visit(HAPTEL_NVP(command_rate_hz), config::Range{10.0, 1000.0});
+    a->Visit(HAPTEL_NVP(heartbeat_period_s), config::Range{0.005, 2.0});
+    a->Visit(HAPTEL_NVP(vel_ramp_rate), config::Range{0.1, 1000.0});
+    a->Visit(HAPTEL_NVP(log_dir), config::RelativeToFile{});
+  }
+
   /// Throws ConfigFieldError naming the first field out of range; `levels`
   /// is drive.speed_levels (one velocity per level).
   void ValidateOrThrow(int levels = 8) const;
@@ -147,6 +209,17 @@ struct Ros2Config {
   /// No odometry for this long, once it came: the robot is reported silent
   /// (a fault) and sent zero velocity.
   double odom_timeout_s = 0.5;
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(HAPTEL_NVP(domain_id), config::Range{0, 232});
+    a->Visit(HAPTEL_NVP(cmd_vel));
+    a->Visit(HAPTEL_NVP(odom));
+    a->Visit(HAPTEL_NVP(image));
+    a->Visit(HAPTEL_NVP(scan));
+    a->Visit(HAPTEL_NVP(cmd_rate_hz), config::Range{1.0, 1000.0});
+    a->Visit(HAPTEL_NVP(odom_timeout_s), config::Range{0.05, 60.0});
+  }
 
   /// Throws ConfigFieldError naming the first field out of range or the
   /// topic name that is not a ROS name.
@@ -178,6 +251,27 @@ struct VehicleConfig {
   /// The kind's entry in the table (valid once validated).
   const VehicleKindInfo& Kind() const { return VehicleKind(kind); }
   VehicleFamily family() const { return Kind().family; }
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    // Every field but `file`. The kinds' sections are read when the file has
+    // them, and validated by ValidateOrThrow when the kind uses them.
+    a->Visit(HAPTEL_NVP(name), config::Required{});
+    a->Visit(HAPTEL_NVP(kind));
+    a->Visit(HAPTEL_NVP(world), config::RelativeToFile{});
+    a->Visit(HAPTEL_NVP(sim_rate_hz), config::Range{50.0, 5000.0});
+    a->Visit(HAPTEL_NVP(state_rate_hz), config::Range{1.0, 1000.0});
+    a->Visit(HAPTEL_NVP(watchdog_timeout_s), config::Range{0.01, 10.0});
+    a->Visit(HAPTEL_NVP(drive));
+    a->Visit(HAPTEL_NVP(body));
+    a->Visit(HAPTEL_NVP(range_sensors));
+    a->Visit(HAPTEL_NVP(camera));
+    a->Visit(HAPTEL_NVP(link));
+    a->Visit(HAPTEL_NVP(can), config::IfPresent{});
+    a->Visit(HAPTEL_NVP(airship), config::IfPresent{});
+    a->Visit(HAPTEL_NVP(servo), config::IfPresent{});
+    a->Visit(HAPTEL_NVP(ros2), config::IfPresent{});
+  }
 
   /// Throws ConfigFieldError unless the name suits DDS topic names, the kind
   /// is known, the rates are in range and every part is valid ("drive.*", ...).
