@@ -18,6 +18,7 @@
 #include "haptel/core/clock.hpp"
 #include "haptel/core/json.hpp"
 #include "haptel/core/stop_signals.hpp"
+#include "haptel/haptics/device_drivers.hpp"
 #include "haptel/mediator/run_command.hpp"
 #include "haptel/mediator/third_person_view.hpp"
 #include "haptel/study/console.hpp"
@@ -310,7 +311,8 @@ int StudyRunCommand(int argc, const char* const* argv) {
       plan = PlanTrials(config);
       const RunConfig run_config = LoadRun(config.run);
       const DeviceConfig device = LoadDevice(run_config.device);
-      if (device.driver == "sim") simulated_device = run_config.device.lexically_normal().string();
+      if (haptics::DriverOf(device).simulated)
+        simulated_device = run_config.device.lexically_normal().string();
       database = args.Value("database")
                      .value_or(!config.database.empty() ? config.database.string()
                                                         : run_config.database.string());
