@@ -19,6 +19,7 @@
 #include "haptel/config/run.hpp"
 #include "haptel/core/args.hpp"
 #include "haptel/core/json.hpp"
+#include "haptel/haptics/device_drivers.hpp"
 #include "haptel/testing/vec_math.hpp"
 #include "plot.hpp"
 #include "smoke.hpp"
@@ -128,7 +129,7 @@ int BenchGravityMain(int argc, const char* const* argv) {
     const std::filesystem::path device_file =
         args.Value("device").value_or(ShippedFile("config/devices/sim.yaml").string());
     config = LoadDevice(device_file);
-    if (config.driver != "sim") {
+    if (!haptics::DriverOf(config).simulated) {
       throw ConfigError(device_file.string() +
                         ": key 'driver': expected 'sim' for haptel bench gravity (it needs "
                         "the simulated arm's true position), got '" +

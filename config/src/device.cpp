@@ -1,5 +1,9 @@
 #include "haptel/config/device.hpp"
 
+#include <functional>
+#include <map>
+#include <stdexcept>
+
 #include "archives.hpp"
 #include "haptel/config/check.hpp"
 #include "yaml_map.hpp"
@@ -10,9 +14,26 @@ using config_detail::YamlMap;
 namespace check = config_check;
 
 namespace {
-/// The sides as the file names them: [left, right].
-constexpr const char* kSideNames[2] = {"left", "right"};
+
+/// The registered drivers' own checks, by name (AddDeviceDriverCheck).
+std::map<std::string, std::function<void(const DeviceConfig&)>>& DriverChecks() {
+  static std::map<std::string, std::function<void(const DeviceConfig&)>> checks;
+  return checks;
+}
+
+/// "replay, sim, udp": the registered drivers, for an error's "expected".
+std::string DriverNames() {
+  std::string names;
+  for (const auto& [name, check] : DriverChecks()) names += (names.empty() ? "" : ", ") + name;
+  return names;
+}
 }  // namespace
+
+void AddDeviceDriverCheck(const std::string& driver,
+                          std::function<void(const DeviceConfig&)> check) {
+  if (!DriverChecks().emplace(driver, std::move(check)).second)
+    throw std::invalid_argument("device driver '" + driver + "' is registered already");
+}
 
 void ServoLoopConfig::ValidateOrThrow() const { config_detail::CheckFields(*this); }
 
@@ -43,23 +64,10 @@ void ReplayDeviceConfig::ValidateOrThrow() const {}
 
 void DeviceConfig::ValidateOrThrow() const {
   config_detail::CheckFields(*this);
-  if (driver != "sim" && driver != "udp" && driver != "replay") {
-    check::Fail("driver", "one of: sim, udp, replay");
-  }
+  const auto driver_check = DriverChecks().find(driver);
+  if (driver_check == DriverChecks().end()) check::Fail("driver", "one of: " + DriverNames());
   if (!sides[0] && !sides[1]) check::Fail("sides", "at least one of 'left', 'right'");
-  if (driver == "udp") {
-    for (int i = 0; i < 2; ++i) {
-      const UdpArmEndpoint& arm = udp.arms[i];
-      if (sides[i] && arm.port == 0) {
-        check::Fail(std::string("udp.") + kSideNames[i] + ".port",
-                    std::string("a port in [1, 65535] for the ") + kSideNames[i] +
-                        " arm of the udp driver (now " + arm.host + ":0)");
-      }
-    }
-  }
-  if (driver == "replay" && replay.trace.empty()) {
-    check::Fail("replay.trace", "a trace file for the replay driver");
-  }
+  if (driver_check->second) driver_check->second(*this);
 }
 
 DeviceConfig LoadDevice(const std::filesystem::path& file) {

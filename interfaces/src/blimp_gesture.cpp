@@ -2,6 +2,7 @@
 
 #include "haptel/config/error.hpp"
 #include "haptel/core/clock.hpp"
+#include "haptel/interfaces/catalog.hpp"
 #include "offset_shape.hpp"
 
 namespace haptel::interfaces {
@@ -57,6 +58,11 @@ HandTargets BlimpGestureInterface::HandTargetsFor(const BlimpCommand& command) c
   return targets;
 }
 
+BlimpCommand BlimpGestureInterface::Update(double /*t_s*/, const BlimpReading& reading,
+                                           haptics::Hal& hal) {
+  return Update(reading.head, hal, reading.now_ns);
+}
+
 BlimpCommand BlimpGestureInterface::Update(const HeadDirection& head, haptics::Hal& hal) {
   return Update(head, hal, MonotonicNs());
 }
@@ -76,5 +82,22 @@ BlimpCommand BlimpGestureInterface::Update(const HeadDirection& head, haptics::H
   hal.SetField(Side::kRight, fields_[haptics::Index(Side::kRight)], now_ns);
   return Map(left.position, right.position, head);
 }
+
+namespace {
+
+// The blimp's gesture cockpit in the catalogue (catalog.hpp).
+const RegisterInterface<BlimpFamily, BlimpGestureConfig> kBlimpGestureInterface{
+    {{.name = "blimp-gesture",
+      .family = VehicleFamily::kBlimp,
+      .hands = {true, true},
+      .input = InterfaceInput::kHands,
+      .physics = false,
+      .summary = "the blimp's gesture cockpit: the right hand steers, the left gives power"}},
+    LoadBlimpGesture,
+    [](const BlimpGestureConfig& config, const InterfaceParts&) {
+      return std::make_unique<BlimpGestureInterface>(config);
+    }};
+
+}  // namespace
 
 }  // namespace haptel::interfaces

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "haptel/config/error.hpp"
+#include "haptel/interfaces/catalog.hpp"
 #include "haptel/interfaces/gamepad.hpp"
 
 namespace haptel::interfaces {
@@ -98,5 +99,37 @@ BlimpCommand BlimpManualInterface::Update(double t_s, const InputState& input, h
   hal.SetField(haptics::Side::kRight, haptics::ForceField{});
   return Step(t_s, input);
 }
+
+const char* BlimpManualInterface::Help(bool /*switchable*/) const {
+  if (config_.input() == BlimpManualInput::kGamepad) {
+    return "left stick power (sideways: tail rotor), right stick elevator/rudder, triggers climb";
+  }
+  return "W/S power, up/down climb, A/D turn, PgUp/PgDn elevator, space neutral, drag to look";
+}
+
+namespace {
+
+// The blimp by keys or a game controller in the catalogue (catalog.hpp): which
+// of the two is the file's name (BlimpManualConfig::input).
+const RegisterInterface<BlimpFamily, BlimpManualConfig> kBlimpManualInterfaces{
+    {{.name = "blimp-keys",
+      .family = VehicleFamily::kBlimp,
+      .hands = {false, false},
+      .input = InterfaceInput::kKeys,
+      .physics = false,
+      .summary = "the blimp by a person's keys"},
+     {.name = "blimp-gamepad",
+      .family = VehicleFamily::kBlimp,
+      .hands = {false, false},
+      .input = InterfaceInput::kGamepad,
+      .physics = false,
+      .summary = "the blimp by a person's game controller"}},
+    LoadBlimpManual,
+    [](const BlimpManualConfig& config, const InterfaceParts& parts) {
+      return std::make_unique<BlimpManualInterface>(config,
+                                                    PersonsInput(config.name, parts).Load());
+    }};
+
+}  // namespace
 
 }  // namespace haptel::interfaces

@@ -2,6 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+#include "haptel/interfaces/catalog.hpp"
 
 namespace haptel::interfaces {
 
@@ -115,5 +119,62 @@ HandTargets CockpitInterface::HandTargetsFor(const DriveIntent& intent) const {
   }
   return targets;
 }
+
+std::string CockpitInterface::ProgressLine(const MotorCommand& motors) const {
+  const CockpitControls& c = controls();
+  const HudState& h = hud();
+  char hud_text[80] = "";
+  if (logic().config().hud) {
+    std::snprintf(hud_text, sizeof hud_text, "  HUD %.2f m/s%s%s%s", h.speed,
+                  h.turn_left ? " <" : "", h.turn_right ? " >" : "",
+                  h.throttle_locked ? " locked" : "");
+  }
+  char line[260];
+  std::snprintf(line, sizeof line,
+                "         wheel %+.2f rad%s  throttle %+.3f m%s  motors %+.2f %+.2f%s",
+                c.wheel_angle, c.wheel_held ? " (held)" : "", c.throttle,
+                c.throttle_held ? " (held)" : "", motors.left, motors.right, hud_text);
+  return line;
+}
+
+namespace {
+
+// The cockpits in the catalogue (catalog.hpp): their controls are bodies
+// the proxy hands move, in a physics world.
+const RegisterInterface<RobotFamily, CockpitConfig> kCockpitInterfaces{
+    {{.name = "cockpit",
+      .family = VehicleFamily::kRobot,
+      .hands = {true, true},
+      .input = InterfaceInput::kHands,
+      .physics = true,
+      .summary = "a steering wheel and a throttle lever to grasp"},
+     {.name = "cockpit-hud",
+      .family = VehicleFamily::kRobot,
+      .hands = {true, true},
+      .input = InterfaceInput::kHands,
+      .physics = true,
+      .summary = "the cockpit with a speedometer and turn indicators"},
+     {.name = "cockpit-assisted",
+      .family = VehicleFamily::kRobot,
+      .hands = {true, true},
+      .input = InterfaceInput::kHands,
+      .physics = true,
+      .summary = "the cockpit whose controls return to zero when released"},
+     {.name = "cockpit-shared",
+      .family = VehicleFamily::kRobot,
+      .hands = {true, true},
+      .input = InterfaceInput::kHands,
+      .physics = true,
+      .summary = "the cockpit with haptic shared control: the wheel and lever pushed away from a "
+                 "steer into an obstacle"}},
+    LoadCockpit,
+    [](const CockpitConfig& config, const InterfaceParts& parts) {
+      if (parts.controls == nullptr)
+        throw std::invalid_argument("interface '" + config.name + "' needs its controls");
+      return std::make_unique<CockpitInterface>(config, *parts.controls, GripGeometry{},
+                                                parts.vehicle);
+    }};
+
+}  // namespace
 
 }  // namespace haptel::interfaces

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "haptel/config/error.hpp"
+#include "haptel/interfaces/catalog.hpp"
 
 namespace haptel::interfaces {
 
@@ -87,5 +88,22 @@ MotorCommand GamepadInterface::Update(double /*t_s*/, const VehicleFeedback& /*f
 }
 
 HandTargets GamepadInterface::HandTargetsFor(const DriveIntent& /*intent*/) const { return {}; }
+
+namespace {
+
+// The game controller in the catalogue (catalog.hpp).
+const RegisterInterface<RobotFamily, GamepadConfig> kGamepadInterface{
+    {{.name = "gamepad",
+      .family = VehicleFamily::kRobot,
+      .hands = {false, false},
+      .input = InterfaceInput::kGamepad,
+      .physics = false,
+      .summary = "a person's game controller"}},
+    LoadGamepad,
+    [](const GamepadConfig& config, const InterfaceParts& parts) {
+      return std::make_unique<GamepadInterface>(config, PersonsInput(config.name, parts));
+    }};
+
+}  // namespace
 
 }  // namespace haptel::interfaces

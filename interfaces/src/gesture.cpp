@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "haptel/config/error.hpp"
+#include "haptel/interfaces/catalog.hpp"
 #include "offset_shape.hpp"
 
 namespace haptel::interfaces {
@@ -78,5 +79,30 @@ MotorCommand GestureInterface::Update(double t_s, const VehicleFeedback& feedbac
   hal.SetField(Side::kLeft, haptics::ForceField{});
   return Map(hand.position);
 }
+
+namespace {
+
+// The gesture interfaces in the catalogue (catalog.hpp).
+const RegisterInterface<RobotFamily, GestureConfig> kGestureInterfaces{
+    {{.name = "gesture",
+      .family = VehicleFamily::kRobot,
+      .hands = {false, true},
+      .input = InterfaceInput::kHands,
+      .physics = false,
+      .summary = "no controls: the right hand's offset drives the motors, a field pulls it to "
+                 "neutral"},
+     {.name = "gesture-shared",
+      .family = VehicleFamily::kRobot,
+      .hands = {false, true},
+      .input = InterfaceInput::kHands,
+      .physics = false,
+      .summary = "gesture with haptic shared control: a bounded push away from commands that "
+                 "lead into an obstacle"}},
+    LoadGesture,
+    [](const GestureConfig& config, const InterfaceParts& parts) {
+      return std::make_unique<GestureInterface>(config, parts.vehicle);
+    }};
+
+}  // namespace
 
 }  // namespace haptel::interfaces

@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "haptel/config/error.hpp"
+#include "haptel/interfaces/catalog.hpp"
 
 namespace haptel::interfaces {
 
@@ -61,5 +62,23 @@ MotorCommand KeyboardInterface::Update(double t_s, const VehicleFeedback& /*feed
 }
 
 HandTargets KeyboardInterface::HandTargetsFor(const DriveIntent& /*intent*/) const { return {}; }
+
+namespace {
+
+// The keyboard in the catalogue (catalog.hpp).
+const RegisterInterface<RobotFamily, KeyboardConfig> kKeyboardInterface{
+    {{.name = "keyboard",
+      .family = VehicleFamily::kRobot,
+      .hands = {false, false},
+      .input = InterfaceInput::kKeys,
+      .physics = false,
+      .summary = "a person's arrow keys (or W/A/S/D)"}},
+    LoadKeyboard,
+    [](const KeyboardConfig& config, const InterfaceParts& parts) {
+      return std::make_unique<KeyboardInterface>(config, PersonsInput(config.name, parts),
+                                                 parts.speed_levels);
+    }};
+
+}  // namespace
 
 }  // namespace haptel::interfaces

@@ -14,8 +14,7 @@
 #include "haptel/core/clock.hpp"
 #include "haptel/core/log.hpp"
 #include "haptel/haptics/sim_device.hpp"
-#include "haptel/interfaces/blimp_gesture.hpp"
-#include "haptel/interfaces/blimp_manual.hpp"
+#include "haptel/interfaces/catalog.hpp"
 #include "haptel/mediator/blimp/blimp_lap_timer.hpp"
 #include "haptel/mediator/blimp/blimp_pilot.hpp"
 #include "haptel/mediator/blimp_predictor.hpp"
@@ -106,8 +105,9 @@ class BlimpOverlay {
   BlimpOverlay(const SessionSetup& setup, std::string interface, int gates_total)
       : setup_(setup), interface_(std::move(interface)), gates_total_(gates_total) {}
 
+  /// `help`: the interface's line of help for a person's first seconds (null: none).
   view::Overlay Make(double t, const BlimpLapTimer& lap, const msg::BlimpState& s,
-                     const BlimpCommand& c, bool vehicle_up) {
+                     const BlimpCommand& c, bool vehicle_up, const char* help) {
     view::Overlay o = LapOverlay(setup_, interface_.c_str(), t, lap.lap_time_s(), lap.next_gate(),
                                  gates_total_, lap.obstacles_touched());
     // A new contact onset, not the blimp resting on its pad at the start.
@@ -130,20 +130,13 @@ class BlimpOverlay {
                     setup_.vehicle.name.c_str());
     } else if (s.failsafe()) {
       std::snprintf(o.message, sizeof o.message, "failsafe: every channel at neutral");
-    } else if (setup_.operator_kind == "person" && t < kHelpS) {
-      std::snprintf(o.message, sizeof o.message, "%s", Help());
+    } else if (setup_.operator_kind == "person" && t < kHelpS && help != nullptr) {
+      std::snprintf(o.message, sizeof o.message, "%s", help);
     }
     return o;
   }
 
  private:
-  const char* Help() const {
-    if (!setup_.blimp_manual) return "drag the mouse to look around, Home looks ahead, Esc ends";
-    if (setup_.blimp_manual->input() == BlimpManualInput::kGamepad) {
-      return "left stick power (sideways: tail rotor), right stick elevator/rudder, triggers climb";
-    }
-    return "W/S power, up/down climb, A/D turn, PgUp/PgDn elevator, space neutral, drag to look";
-  }
   static constexpr double kHelpS = 15.0;
   const SessionSetup& setup_;
   std::string interface_;
@@ -160,26 +153,20 @@ class BlimpSession final : public FamilySession {
       : setup_(setup),
         course_(*setup.course),
         lap_(course_),
-        overlay_feed_(setup,
-                      setup.blimp_manual ? setup.blimp_manual->name : setup.blimp_interface->name,
-                      static_cast<int>(course_.gates.size())),
+        spec_(setup.interfaces.at(0)),
+        overlay_feed_(setup, spec_.name, static_cast<int>(course_.gates.size())),
         predictor_(setup.vehicle.airship, course_, setup.vehicle.watchdog_timeout_s) {
     hull_length_ = setup.vehicle.airship.length;
     rec.track = course_.name;
     rec.predict = setup.predict;
     rec.gates_total = static_cast<int>(course_.gates.size());
     // The gesture cockpit, or a person's keys or game controller.
-    if (setup.blimp_manual) {
-      manual_.emplace(*setup.blimp_manual, input.Load());
-      rec.interface = manual_->name();
-      command_rate_hz_ = setup.blimp_manual->command_rate_hz;
-    } else {
-      gesture_.emplace(*setup.blimp_interface);
-      rec.interface = gesture_->name();
-      command_rate_hz_ = setup.blimp_interface->command_rate_hz;
-    }
+    interfaces::InterfaceParts parts;
+    parts.input = &input;
+    interface_ = interfaces::MakeBlimpInterface(spec_, parts);
+    rec.interface = interface_->name();
     if (setup.operator_kind == "auto") {
-      if (!gesture_) {
+      if (spec_.manual()) {
         throw ConfigError("the automatic pilot flies the blimp gesture cockpit, not '" +
                           rec.interface + "'");
       }
@@ -190,7 +177,7 @@ class BlimpSession final : public FamilySession {
             setup.device.name + "' is flown by a person: use --operator person");
       }
       pilot_ = std::make_unique<BlimpAutoPilot>(course_, PilotKnowing(setup.vehicle.airship));
-      PlaceHands(*haptic.sim(), gesture_->HandTargetsFor({}));
+      PlaceHands(*haptic.sim(), interface_->HandTargetsFor({}));
     }
   }
 
@@ -200,13 +187,11 @@ class BlimpSession final : public FamilySession {
   /// The pilot camera's picture on a screen that turns with the camera, the
   /// view turning with the head (mouse-look in the window).
   void ConfigureView(SessionView::Parts& parts, view::ViewOptions& options) const override {
-    parts.hands = {gesture_.has_value(), gesture_.has_value()};
+    parts.hands = spec_.hands();
     options.screen = view::HeadTrackedScreen();
     if (setup_.predict) parts.map = std::make_shared<const view::TrackMap>(CourseMapOf(course_));
   }
-  bool UsesGamepad() const override {
-    return manual_ && manual_->input_kind() == BlimpManualInput::kGamepad;
-  }
+  bool UsesGamepad() const override { return spec_.is_gamepad(); }
 
   void Drain(VehicleLink& link, VehicleHealth& health, HapticSide& haptic, RunTrace& trace,
              int64_t t0) override {
@@ -247,16 +232,15 @@ class BlimpSession final : public FamilySession {
       head_ = {};
       if (vehicle_up) {
         const BlimpCommand intent = pilot_->Decide(t);
-        HoldHands(*haptic.sim(), gesture_->HandTargetsFor(intent));
+        HoldHands(*haptic.sim(), interface_->HandTargetsFor(intent));
         head_ = {intent.camera_pan, intent.camera_tilt};
       }
     }
-    command_ =
-        manual_ ? manual_->Update(t, person, haptic.hal()) : gesture_->Update(head_, haptic.hal());
-    if (manual_ && manual_->lost())
+    command_ = interface_->Update(t, Reading(person), haptic.hal());
+    if (interface_->lost())
       return LoopEnd{Outcome::kAborted, "the game controller was disconnected"};
     if (next_command_ns_ == 0) next_command_ns_ = now;
-    if (CommandDue(next_command_ns_, now, static_cast<int64_t>(1e9 / command_rate_hz_))) {
+    if (CommandDue(next_command_ns_, now, static_cast<int64_t>(1e9 / spec_.command_rate_hz()))) {
       const BlimpCommand sent = vehicle_up ? command_ : BlimpCommand{};
       link.Send(sent);
       predictor_.OnCommand(t, sent);
@@ -267,8 +251,8 @@ class BlimpSession final : public FamilySession {
   // --- A fleet's interface handover (interface_handover.hpp). ---
   void RenderForces(double, haptics::Hal& hal) override {
     // Its command goes nowhere: the blimp is held at neutral meanwhile.
-    if (gesture_) {
-      gesture_->Update(head_, hal);
+    if (!spec_.manual()) {
+      interface_->Update(0.0, Reading({}), hal);
     } else {
       hal.SetField(haptics::Side::kLeft,
                    haptics::ForceField{});  // keys and controllers render none
@@ -279,7 +263,7 @@ class BlimpSession final : public FamilySession {
   void ResumeForces(haptics::Hal&, const interfaces::InputState& now) override {
     // Keys pressed while another vehicle was driven were that one's, and the
     // blimp was held at neutral: its levels start from rest again.
-    if (manual_) manual_.emplace(*setup_.blimp_manual, now);
+    interface_->Rebase(now);
     command_ = {};
   }
 
@@ -300,7 +284,7 @@ class BlimpSession final : public FamilySession {
   }
 
   view::Overlay Overlay(double t, bool vehicle_up, bool) override {
-    return overlay_feed_.Make(t, lap_, last_, command_, vehicle_up);
+    return overlay_feed_.Make(t, lap_, last_, command_, vehicle_up, interface_->Help(false));
   }
   /// With prediction on: on the course map, the blimp as last reported, as
   /// it is now by its model, and its path over the next second with the
@@ -344,13 +328,17 @@ class BlimpSession final : public FamilySession {
   }
 
  private:
+  /// What the interface reads now: the person's input, the head, stamped now.
+  interfaces::BlimpReading Reading(const interfaces::InputState& person) const {
+    return {person, head_, MonotonicNs()};
+  }
+
   const SessionSetup& setup_;
   const BlimpCourseConfig& course_;
   BlimpLapTimer lap_;
+  const interfaces::InterfaceSpec& spec_;  ///< the interface flown (the catalogue's)
   BlimpOverlay overlay_feed_;
-  std::optional<interfaces::BlimpGestureInterface> gesture_;
-  std::optional<interfaces::BlimpManualInterface> manual_;
-  double command_rate_hz_ = 20.0;
+  std::unique_ptr<interfaces::BlimpInterface> interface_;
   std::unique_ptr<BlimpAutoPilot> pilot_;
   msg::BlimpState last_;
   /// Taken from by the progress line (LogProgress is const to the session loop).

@@ -7,6 +7,7 @@
 #include "haptel/config/error.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/core/log.hpp"
+#include "haptel/haptics/device_drivers.hpp"
 #include "haptel/haptics/device_factory.hpp"
 #include "haptel/haptics/gravity.hpp"
 #include "haptel/haptics/servo_loop.hpp"
@@ -21,11 +22,12 @@ std::filesystem::path TraceCalibrationFile(const std::filesystem::path& trace) {
 
 std::optional<DeviceCalibration> DeviceCalibrationFor(const DeviceConfig& device) {
   const std::string file = device.file.string();
-  if (device.driver == "sim") {
+  const haptics::CalibrationSource source = haptics::DriverOf(device).calibration;
+  if (source == haptics::CalibrationSource::kOptional) {
     if (device.calibration.empty()) return std::nullopt;
     return LoadCalibration(device.calibration);
   }
-  if (device.driver == "replay") {
+  if (source == haptics::CalibrationSource::kBesideTrace) {
     if (!device.calibration.empty()) return LoadCalibration(device.calibration);
     const std::filesystem::path beside = TraceCalibrationFile(device.replay.trace);
     if (!std::filesystem::exists(beside)) {

@@ -16,7 +16,6 @@
 #include "haptel/core/log.hpp"
 #include "haptel/haptics/sim_device.hpp"
 #include "haptel/interfaces/cockpit.hpp"
-#include "haptel/mediator/interface_catalog.hpp"
 #include "haptel/mediator/interface_set.hpp"
 #include "haptel/mediator/lap_timer.hpp"
 #include "haptel/mediator/operator.hpp"
@@ -97,10 +96,10 @@ class RobotSession final : public FamilySession {
     deferred_.assign(setup.interfaces.size(), false);
     for (size_t i = 0; i < setup.interfaces.size(); ++i) {
       if (!build[i]) continue;
-      const InterfaceSpec& spec = setup.interfaces[i];
+      const interfaces::InterfaceSpec& spec = setup.interfaces[i];
       for (int s = 0; s < haptics::kSides; ++s) hands_[s] = hands_[s] || spec.hands()[s];
       // One set of controls for the cockpits: the one the run starts with, else the first listed.
-      if (const auto* c = std::get_if<CockpitConfig>(&spec.config);
+      if (const auto* c = spec.config_as<CockpitConfig>();
           c != nullptr &&
           (cockpit_config_ == nullptr || i == static_cast<size_t>(setup.start_interface))) {
         cockpit_config_ = c;
@@ -118,8 +117,9 @@ class RobotSession final : public FamilySession {
     // The interfaces (a deferred one's place stays empty until it is asked for).
     std::vector<std::unique_ptr<interfaces::MediatorInterface>> built;
     for (size_t i = 0; i < setup.interfaces.size(); ++i) {
-      built.push_back(build[i] && !deferred_[i] ? MakeInterface(setup.interfaces[i], Parts())
-                                                : nullptr);
+      built.push_back(build[i] && !deferred_[i]
+                          ? interfaces::MakeInterface(setup.interfaces[i], Parts())
+                          : nullptr);
     }
     interfaces_ = std::make_unique<InterfaceSet>(std::move(built), setup.start_interface,
                                                  setup.run.switch_ramp_s);
@@ -225,7 +225,7 @@ class RobotSession final : public FamilySession {
     }
     if (vehicle_up) {
       op_->Act(t, interfaces_->current());
-      if (grasp_s_ == 0.0 && op_->grasped(t) && start_spec().is_cockpit()) grasp_s_ = t;
+      if (grasp_s_ == 0.0 && op_->grasped(t) && start_spec().needs_physics()) grasp_s_ = t;
     }
     motors_ = interfaces_->Update(t, feedback_, haptic.hal());
     const auto command_period_ns = static_cast<int64_t>(
@@ -302,20 +302,8 @@ class RobotSession final : public FamilySession {
                   lap_.gates_total(), lap_.obstacles_touched(), feedback_.speed, distance_m,
                   link.Rtt().Percentile(0.5) * 1e-3, link.video().Stats().fps);
     log::Info(line);
-    if (const auto* cockpit = dynamic_cast<const interfaces::CockpitInterface*>(&interface)) {
-      const interfaces::CockpitControls& c = cockpit->controls();
-      const interfaces::HudState& h = cockpit->hud();
-      char hud[80] = "";
-      if (cockpit->logic().config().hud) {
-        std::snprintf(hud, sizeof hud, "  HUD %.2f m/s%s%s%s", h.speed, h.turn_left ? " <" : "",
-                      h.turn_right ? " >" : "", h.throttle_locked ? " locked" : "");
-      }
-      std::snprintf(line, sizeof line,
-                    "         wheel %+.2f rad%s  throttle %+.3f m%s  motors %+.2f %+.2f%s",
-                    c.wheel_angle, c.wheel_held ? " (held)" : "", c.throttle,
-                    c.throttle_held ? " (held)" : "", motors_.left, motors_.right, hud);
-      log::Info(line);
-    }
+    if (const std::string controls = interface.ProgressLine(motors_); !controls.empty())
+      log::Info(controls);
   }
 
   const char* MadeSafe() const override { return "forces zeroed, vehicle stopped"; }
@@ -342,7 +330,7 @@ class RobotSession final : public FamilySession {
       result.scene_bodies = static_cast<int>(physics_->scene.nodes.size());
     }
     result.grasp_s = grasp_s_;
-    if (start_spec().is_cockpit() && result.grasp_s == 0.0) result.grasp_s = -1.0;
+    if (start_spec().needs_physics() && result.grasp_s == 0.0) result.grasp_s = -1.0;
     if (automatic_) result.operator_slips = automatic_->driver().slips();
     RunRecord& rec = result.record;
     rec.lap_time_s = lap_.lap_time_s();
@@ -374,7 +362,7 @@ class RobotSession final : public FamilySession {
     log::Info(line);
   }
 
-  const InterfaceSpec& start_spec() const {
+  const interfaces::InterfaceSpec& start_spec() const {
     return setup_.interfaces.at(static_cast<size_t>(setup_.start_interface));
   }
 
@@ -393,8 +381,8 @@ class RobotSession final : public FamilySession {
   }
 
   /// What the interfaces are built on.
-  InterfaceParts Parts() const {
-    InterfaceParts parts;
+  interfaces::InterfaceParts Parts() const {
+    interfaces::InterfaceParts parts;
     parts.controls = physics_ && physics_->port ? physics_->port.get() : nullptr;
     parts.input = input_;
     parts.speed_levels = setup_.vehicle.drive.speed_levels;
@@ -448,7 +436,8 @@ class RobotSession final : public FamilySession {
       if (physics_) physics_->world->Start(haptic.hal());
       for (size_t i = 0; i < deferred_.size(); ++i) {
         if (!deferred_[i]) continue;
-        interfaces_->Provide(static_cast<int>(i), MakeInterface(setup_.interfaces[i], Parts()));
+        interfaces_->Provide(static_cast<int>(i),
+                             interfaces::MakeInterface(setup_.interfaces[i], Parts()));
         deferred_[i] = false;
       }
     } catch (const std::exception& e) {

@@ -10,7 +10,6 @@
 #include <string>
 
 #include "haptel/calibration/calibration_procedure.hpp"
-#include "haptel/config/blimp_manual.hpp"
 #include "haptel/config/cockpit.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/config/gravity_grid.hpp"
@@ -24,6 +23,8 @@
 #include "haptel/core/json.hpp"
 #include "haptel/core/log.hpp"
 #include "haptel/core/stop_signals.hpp"
+#include "haptel/haptics/device_drivers.hpp"
+#include "haptel/interfaces/catalog.hpp"
 #include "haptel/link/fault_transport.hpp"
 #include "haptel/link/security.hpp"
 #include "haptel/mediator/controller_errors.hpp"
@@ -221,8 +222,17 @@ void CheckGatesFit(const TrackConfig& track, const VehicleConfig& vehicle) {
 
 }  // namespace
 
-SessionSetup RunSetupFromArgs(const Args& args) {
-  SessionSetup setup;
+namespace {
+
+/// What the command line says of who drives and what is shown.
+struct Operation {
+  bool person = false;   ///< a person drives (else the automatic operator)
+  bool display = false;  ///< there is a display to open a window on
+};
+
+/// The run's configuration and the options that override it: the files,
+/// the link, the database, the trace.
+void ReadRunOptions(const Args& args, SessionSetup& setup) {
   setup.progress = !args.Flag("quiet");
   setup.attach = args.Flag("attach");
   setup.run = LoadRun(args.Value("config").value_or(ShippedFile("config/haptel.yaml").string()));
@@ -256,21 +266,26 @@ SessionSetup RunSetupFromArgs(const Args& args) {
     setup.trace = *trace;
   }
   if (auto s = args.Number("vehicle-timeout", 0.05, 60.0)) setup.run.vehicle_timeout_s = *s;
-  const bool display = view::View::DisplayAvailable();
+}
+
+/// Who drives (--operator), what they see (--view, --record) and for how long.
+Operation ReadOperation(const Args& args, SessionSetup& setup) {
+  Operation op;
+  op.display = view::View::DisplayAvailable();
   // A simulated-time run is the automatic operator's, without a view, unless told otherwise (then
   // refused).
   const bool simulated_time = args.Flag("simulated-time");
   setup.operator_kind =
-      args.Value("operator").value_or(display && !simulated_time ? "person" : "auto");
+      args.Value("operator").value_or(op.display && !simulated_time ? "person" : "auto");
   if (setup.operator_kind != "auto" && setup.operator_kind != "person") {
     throw UsageError("option --operator: expected auto or person, got '" + setup.operator_kind +
                      "'");
   }
-  const bool person = setup.operator_kind == "person";
+  op.person = setup.operator_kind == "person";
   const std::string view =
-      args.Value("view").value_or(display && !simulated_time ? "window" : "none");
+      args.Value("view").value_or(op.display && !simulated_time ? "window" : "none");
   if (view == "window") {
-    if (!display) {
+    if (!op.display) {
       throw UsageError(
           "option --view window: there is no display (DISPLAY is not set or its X server is not "
           "running); use --view none, "
@@ -296,10 +311,16 @@ SessionSetup RunSetupFromArgs(const Args& args) {
   }
   if (auto s = args.Number("time-limit", 1.0, 86400.0)) {
     setup.time_limit_s = *s;
-  } else if (person) {
+  } else if (op.person) {
     setup.time_limit_s = setup.run.person_time_limit_s;
   }
   if (auto s = args.Number("lap-limit", 1.0, 86400.0)) setup.lap_limit_s = *s;
+  return op;
+}
+
+/// The vehicle, and what it drives through: the link's faults, the chase
+/// camera, simulated time, its track or course, its name.
+void ReadVehicle(const Args& args, SessionSetup& setup) {
   if (auto device = args.Value("device")) setup.run.device = *device;
   if (auto vehicle = args.Value("vehicle")) setup.run.vehicle = *vehicle;
   setup.vehicle = LoadVehicle(setup.run.vehicle);
@@ -323,16 +344,15 @@ SessionSetup RunSetupFromArgs(const Args& args) {
     }
     setup.third_person = true;
   }
-  if (simulated_time) {
+  if (args.Flag("simulated-time")) {
     // Before the rest is checked: what a simulated-time run needs, named first.
     if (const std::string problem = SimulatedTimeProblem(setup); !problem.empty()) {
       throw UsageError("option --simulated-time: " + problem);
     }
     setup.simulated_time = true;
   }
-  const bool blimp = setup.vehicle.family() == VehicleFamily::kBlimp;
   // A blimp flies a blimp course; the robot drives a track.
-  if (blimp) {
+  if (setup.vehicle.family() == VehicleFamily::kBlimp) {
     setup.course = LoadBlimpCourse(setup.run.track);
   } else {
     setup.track = LoadTrack(setup.run.track);
@@ -344,83 +364,64 @@ SessionSetup RunSetupFromArgs(const Args& args) {
     }
     setup.vehicle.name = *name;
   }
+}
+
+/// The haptic device, and what its driver needs (a trace to replay) and
+/// allows (the automatic operator moves simulated arms only).
+void ReadDevice(const Args& args, const Operation& op, SessionSetup& setup) {
   setup.device = LoadDevice(setup.run.device);
+  const haptics::DeviceDriver& driver = haptics::DriverOf(setup.device);
   if (auto trace_in = args.Value("trace-in")) {
-    if (setup.device.driver != "replay") {
+    if (!driver.reads_trace) {
       throw UsageError("option --trace-in: the device '" + setup.run.device.string() +
                        "' is not a replay device");
     }
     CheckFileOption("trace-in", *trace_in, "a trace `haptel run --trace FILE` recorded");
     setup.device.replay.trace = *trace_in;
   }
-  if (setup.device.driver == "replay" && !std::filesystem::exists(setup.device.replay.trace)) {
-    throw ConfigError(setup.run.device.string() + ": key 'replay.trace': no trace '" +
-                      setup.device.replay.trace.string() +
-                      "'; record one with `haptel run --trace FILE`");
+  if (driver.reads_trace) {
+    const std::filesystem::path& trace = setup.device.replay.trace;
+    if (!std::filesystem::exists(trace)) {
+      throw ConfigError(setup.run.device.string() + ": key 'replay.trace': no trace '" +
+                        trace.string() + "'; record one with `haptel run --trace FILE`");
+    }
+    if (const std::string what = NotRegularFile(trace); !what.empty()) {
+      throw ConfigError(setup.run.device.string() + ": key 'replay.trace': '" + trace.string() +
+                        "' is " + what + "; expected a trace `haptel run --trace FILE` recorded");
+    }
   }
-  if (const std::string what = NotRegularFile(setup.device.replay.trace);
-      setup.device.driver == "replay" && !what.empty()) {
-    throw ConfigError(setup.run.device.string() + ": key 'replay.trace': '" +
-                      setup.device.replay.trace.string() + "' is " + what +
-                      "; expected a trace `haptel run --trace FILE` recorded");
-  }
-  if (!person && setup.device.driver != "sim") {
+  if (!op.person && !driver.simulated) {
     throw UsageError(
         "option --operator auto: the automatic operator moves the simulated arms, and device '" +
         setup.device.name + "' (" + setup.device.driver +
         ") is not simulated; use --operator person");
   }
+}
+
+/// The interfaces the run may use, from the catalogue, in F1–F6 order, and
+/// the one it starts with: --interface, else the configuration's; a person
+/// at a simulated device has no arms to move, so the vehicle's keys. A blimp
+/// flies with one; the automatic operator never switches, so it needs only
+/// the one it starts with.
+void ReadInterfaces(const Args& args, const Operation& op, SessionSetup& setup) {
+  const VehicleFamily family = setup.vehicle.family();
+  const bool blimp = family == VehicleFamily::kBlimp;
+  const bool simulated_device = haptics::DriverOf(setup.device).simulated;
+  std::string start = setup.run.interface;
+  if (!args.Value("interface") && op.person && simulated_device)
+    start = interfaces::FirstInterface(family, InterfaceInput::kKeys).name;
   if (blimp) {
-    // The blimp gesture cockpit (thesis 8.2.2) needs both arms of a haptic
-    // device; a person without one flies with keys or a game controller.
-    std::string name = args.Value("interface").value_or(setup.run.interface);
-    if (!args.Value("interface") && person && setup.device.driver == "sim") name = "blimp-keys";
-    const InterfaceKindInfo* kind = FindInterfaceKind(name);
+    // Said as the option's mistake, before any file is read.
+    const InterfaceKindInfo* kind = FindInterfaceKind(start);
     if (kind == nullptr || kind->family != VehicleFamily::kBlimp) {
-      throw UsageError("option --interface " + name + ": the blimp '" + setup.run.vehicle.string() +
-                       "' is flown with " + InterfaceKindNames(VehicleFamily::kBlimp) +
+      throw UsageError("option --interface " + start + ": the blimp '" +
+                       setup.run.vehicle.string() + "' is flown with " +
+                       InterfaceKindNames(VehicleFamily::kBlimp) +
                        " (blimp-gesture: both hands on a haptic device)");
     }
-    if (IsBlimpManual(name)) {
-      if (!person) {
-        throw UsageError("option --interface " + name +
-                         ": keys and controllers are a person's; use --operator person");
-      }
-      setup.blimp_manual = LoadBlimpManual(InterfaceFile(setup.run, name));
-      if (setup.blimp_manual->input() == BlimpManualInput::kKeys &&
-          setup.view != ViewKind::kWindow) {
-        throw UsageError(
-            "option --interface blimp-keys: the keys are read in the view's window, and there is " +
-            std::string(display ? "none (--view none)" : "no display") +
-            "; use --view window, or --interface blimp-gamepad");
-      }
-    } else {
-      if (person && setup.device.driver == "sim") {
-        throw UsageError(
-            "option --interface blimp-gesture: the gesture cockpit is flown with both hands on a "
-            "haptic "
-            "device, and the simulated device has no arms for a person; use --device with a real "
-            "one, "
-            "--interface blimp-keys or blimp-gamepad, or --operator auto to watch the automatic "
-            "pilot");
-      }
-      setup.blimp_interface = LoadBlimpGesture(InterfaceFile(setup.run, name));
-    }
-    setup.calibration = DeviceCalibrationFor(setup.device);
-    if (!setup.device.gravity.empty()) setup.gravity = LoadGravityGrid(setup.device.gravity);
-    if (!setup.attach) setup.vehicle_program = ProgramDirectory() / "haptel-vehicle";
-    return setup;
   }
-  // The interface to start with: --interface, else the configuration's; a
-  // person at the simulated device has no arms to move, so the keyboard.
-  std::string start = setup.run.interface;
-  if (auto name = args.Value("interface")) {
-    start = *name;
-  } else if (person && setup.device.driver == "sim") {
-    start = "keyboard";
-  }
-  // The automatic operator never switches: it needs only the one it starts with.
-  std::vector<std::string> names = person ? setup.run.interfaces : std::vector<std::string>{start};
+  std::vector<std::string> names =
+      op.person && !blimp ? setup.run.interfaces : std::vector<std::string>{start};
   auto found = std::find(names.begin(), names.end(), start);
   if (found == names.end()) {
     names.insert(names.begin(), start);
@@ -429,29 +430,60 @@ SessionSetup RunSetupFromArgs(const Args& args) {
   }
   setup.start_interface = static_cast<int>(found - names.begin());
   for (const std::string& name : names)
-    setup.interfaces.push_back(LoadInterfaceSpec(setup.run, name));
-  CheckHands(setup.interfaces, setup.device);
-  const InterfaceSpec& first = setup.interfaces[static_cast<size_t>(setup.start_interface)];
-  if (first.manual() && !person) {
+    setup.interfaces.push_back(interfaces::LoadInterfaceSpec(setup.run, name, family));
+  if (!blimp) interfaces::CheckHands(setup.interfaces, setup.device);
+  const interfaces::InterfaceSpec& first =
+      setup.interfaces[static_cast<size_t>(setup.start_interface)];
+  if (first.manual() && !op.person) {
     throw UsageError("option --interface " + first.name +
                      ": keys and controllers are a person's; use --operator person");
   }
   if (first.is_keyboard() && setup.view != ViewKind::kWindow) {
-    throw UsageError(
-        "option --interface keyboard: the keys are read in the view's window, and there is " +
-        std::string(display ? "none (--view none)" : "no display") +
-        "; use --view window, or --interface gamepad");
+    throw UsageError("option --interface " + first.name +
+                     ": the keys are read in the view's window, and there is " +
+                     std::string(op.display ? "none (--view none)" : "no display") +
+                     "; use --view window, or --interface " +
+                     interfaces::FirstInterface(family, InterfaceInput::kGamepad).name);
   }
-  if (auto scene = args.Value("scene")) setup.run.scene = *scene;
-  if (!setup.run.scene.empty())
-    setup.scene = PlaceScene(LoadSceneFile(setup.run.scene), setup.run.scene_placement);
-  const bool any_physics = std::any_of(setup.interfaces.begin(), setup.interfaces.end(),
-                                       [](const InterfaceSpec& s) { return s.needs_physics(); });
-  if (any_physics || setup.scene) setup.physics = LoadPhysics(setup.run.physics);
+  if (blimp && !first.manual() && op.person && simulated_device) {
+    // The blimp gesture cockpit (thesis 8.2.2) needs both arms of a haptic
+    // device; a person without one flies with keys or a game controller.
+    throw UsageError(
+        "option --interface " + first.name +
+        ": the gesture cockpit is flown with both hands on a haptic device, and the simulated "
+        "device has no arms for a person; use --device with a real one, --interface blimp-keys "
+        "or blimp-gamepad, or --operator auto to watch the automatic pilot");
+  }
+}
+
+/// What the run builds besides: the scene and the physics world (the
+/// robot's), the device's calibration and gravity grid, the vehicle's program.
+void ReadWorld(const Args& args, SessionSetup& setup) {
+  if (setup.vehicle.family() == VehicleFamily::kRobot) {
+    if (auto scene = args.Value("scene")) setup.run.scene = *scene;
+    if (!setup.run.scene.empty())
+      setup.scene = PlaceScene(LoadSceneFile(setup.run.scene), setup.run.scene_placement);
+    const bool any_physics =
+        std::any_of(setup.interfaces.begin(), setup.interfaces.end(),
+                    [](const interfaces::InterfaceSpec& s) { return s.needs_physics(); });
+    if (any_physics || setup.scene) setup.physics = LoadPhysics(setup.run.physics);
+  }
   setup.calibration = DeviceCalibrationFor(setup.device);
   if (!setup.device.gravity.empty()) setup.gravity = LoadGravityGrid(setup.device.gravity);
   if (!setup.attach) setup.vehicle_program = ProgramDirectory() / "haptel-vehicle";
   if (setup.simulated_time) setup.vehicle_program.clear();  // stepped in this process
+}
+
+}  // namespace
+
+SessionSetup RunSetupFromArgs(const Args& args) {
+  SessionSetup setup;
+  ReadRunOptions(args, setup);
+  const Operation op = ReadOperation(args, setup);
+  ReadVehicle(args, setup);
+  ReadDevice(args, op, setup);
+  ReadInterfaces(args, op, setup);
+  ReadWorld(args, setup);
   return setup;
 }
 

@@ -439,7 +439,7 @@ void SessionLoop::FeedView(int64_t now, double t) {
     if (first_.on_live && live_due) first_.on_live(vehicles_.front()->overlay);
   }
   if (first_.on_picture && live_due) {
-    const VideoReceiver& video = vehicles_.front()->link->video();
+    const video::VideoReceiver& video = vehicles_.front()->link->video();
     const uint64_t frames = video.Stats().frames;
     if (frames != pictures_seen_) {
       pictures_seen_ = frames;

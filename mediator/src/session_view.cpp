@@ -144,20 +144,12 @@ view::Overlay OverlayFeed::Make(double t, const LapTimer& lap, const InterfaceSe
   std::snprintf(o.last_contact, sizeof o.last_contact, "%s", last_contact_);
   o.contact_now = touching;
   o.speed_max_mps = setup_.vehicle.drive.max_speed;
-  if (const auto* cockpit = dynamic_cast<const interfaces::CockpitInterface*>(&current)) {
-    // The HUD cockpits show what their logic computed, exactly.
-    o.hud = cockpit->logic().config().hud;
-    const interfaces::HudState& h = cockpit->hud();
-    o.speed_mps = h.speed;
-    o.turn_left = h.turn_left;
-    o.turn_right = h.turn_right;
-    o.throttle_locked = h.throttle_locked;
-  } else if (current.name() == "gesture" || current.name() == "gesture-shared") {
-    // The thesis kept the speedometer and indicators on the gesture interface.
-    o.hud = true;
-    o.speed_mps = feedback.speed;
-    o.turn_left = motors.right - motors.left > kTurnShown;
-    o.turn_right = motors.left - motors.right > kTurnShown;
+  if (const std::optional<interfaces::HudReading> hud = current.Hud(feedback, motors)) {
+    o.hud = hud->shown;
+    o.speed_mps = hud->speed_mps;
+    o.turn_left = hud->turn_left;
+    o.turn_right = hud->turn_right;
+    o.throttle_locked = hud->throttle_locked;
   }
   if (const std::optional<interfaces::Guidance> guidance = current.CurrentGuidance()) {
     // What pushes the hand: shared control's force where the hand is now.
@@ -173,11 +165,8 @@ view::Overlay OverlayFeed::Make(double t, const LapTimer& lap, const InterfaceSe
                   setup_.vehicle.name.c_str());
   } else if (interfaces.switching()) {
     std::snprintf(o.message, sizeof o.message, "switching interface: hands off for a moment");
-  } else if (current.name() == "keyboard" && t < kHelpS) {
-    std::snprintf(o.message, sizeof o.message, "%s",
-                  setup_.single_interface
-                      ? "arrows or W/A/S/D drive, space stops, Esc ends"
-                      : "arrows or W/A/S/D drive, space stops, F1-F6 switch, Esc ends");
+  } else if (const char* help = current.Help(!setup_.single_interface); help && t < kHelpS) {
+    std::snprintf(o.message, sizeof o.message, "%s", help);
   }
   return o;
 }

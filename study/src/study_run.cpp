@@ -22,6 +22,7 @@
 #include "haptel/core/cli.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/core/json.hpp"
+#include "haptel/haptics/device_drivers.hpp"
 #include "haptel/mediator/run_command.hpp"
 #include "haptel/mediator/third_person_view.hpp"
 #include "haptel/study/console.hpp"
@@ -260,7 +261,8 @@ StudyRunPlan PlanStudyRun(const StudyRunOptions& options) {
   const RunConfig run_config = LoadRun(config.run);
   const DeviceConfig device = LoadDevice(run_config.device);
   std::string simulated_device;
-  if (device.driver == "sim") simulated_device = run_config.device.lexically_normal().string();
+  if (haptics::DriverOf(device).simulated)
+    simulated_device = run_config.device.lexically_normal().string();
   p.simulated_device = simulated_device;
   p.database = options.database.value_or(!config.database.empty() ? config.database.string()
                                                                   : run_config.database.string());

@@ -10,9 +10,9 @@
 #include "haptel/config/run.hpp"
 #include "haptel/haptics/force_field.hpp"
 #include "haptel/haptics/trace.hpp"
+#include "haptel/interfaces/catalog.hpp"
 #include "haptel/interfaces/gesture.hpp"
 #include "haptel/mediator/haptic_side.hpp"
-#include "haptel/mediator/interface_catalog.hpp"
 #include "haptel/mediator/interface_set.hpp"
 #include "test_env.hpp"
 
@@ -241,29 +241,29 @@ TEST_CASE(
     "physics") {
   const RunConfig run = LoadRun(ShippedFile("config/haptel.yaml"));
   interfaces::InputBox input;
-  mediator::InterfaceParts parts;
+  interfaces::InterfaceParts parts;
   parts.input = &input;
   int robot = 0;
   for (const InterfaceKindInfo& kind : InterfaceKinds()) {
     if (kind.family != VehicleFamily::kRobot) continue;
     INFO(kind.name);
     ++robot;
-    const mediator::InterfaceSpec spec = mediator::LoadInterfaceSpec(run, kind.name);
+    const interfaces::InterfaceSpec spec = interfaces::LoadInterfaceSpec(run, kind.name);
     CHECK(spec.name == kind.name);
     CHECK(spec.hands() == kind.hands);
     CHECK(spec.needs_physics() == kind.physics);
     CHECK(spec.manual() == kind.manual());
     if (kind.physics) {
       // Its controls are bodies: without a world it cannot be built.
-      CHECK_THROWS_AS(mediator::MakeInterface(spec, parts), std::invalid_argument);
+      CHECK_THROWS_AS(interfaces::MakeInterface(spec, parts), std::invalid_argument);
     } else {
-      CHECK(mediator::MakeInterface(spec, parts)->name() == kind.name);
+      CHECK(interfaces::MakeInterface(spec, parts)->name() == kind.name);
     }
   }
   CHECK(robot == 8);  // gesture, gesture-shared, the four cockpits (cockpit-shared among them),
                       // keyboard, gamepad
   // A blimp's interface is refused for the robot, naming the robot's.
   CHECK_THROWS_WITH(
-      mediator::LoadInterfaceSpec(run, "blimp-gesture"),
+      interfaces::LoadInterfaceSpec(run, "blimp-gesture"),
       Catch::Contains("flies a blimp") && Catch::Contains("gesture, gesture-shared, cockpit"));
 }

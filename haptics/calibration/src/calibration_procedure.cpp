@@ -17,6 +17,7 @@
 #include "haptel/core/args.hpp"
 #include "haptel/core/cli.hpp"
 #include "haptel/core/clock.hpp"
+#include "haptel/haptics/device_drivers.hpp"
 #include "haptel/haptics/device_factory.hpp"
 #include "haptel/haptics/sim_device.hpp"
 
@@ -448,10 +449,11 @@ int CalibrateMain(int argc, const char* const* argv) {
           args.Value("device").value_or(ShippedFile("config/devices/sim.yaml"));
       config = LoadDevice(device_file);
       options.auto_mode = args.Flag("auto");
-      if (config.driver == "sim" && !options.auto_mode) {
+      const bool simulated = haptics::DriverOf(config).simulated;
+      if (simulated && !options.auto_mode) {
         throw UsageError("the sim device has nobody to hold its arms: use --auto");
       }
-      if (config.driver != "sim" && options.auto_mode) {
+      if (!simulated && options.auto_mode) {
         throw UsageError("--auto needs the sim device (" + device_file.string() +
                          " names driver '" + config.driver +
                          "'); a real device is calibrated with an operator at the prompts");

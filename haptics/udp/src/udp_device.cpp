@@ -117,7 +117,7 @@ UdpDevice::UdpDevice(const DeviceConfig& config, udp::Clock& clock)
       retries_(config.udp.retries) {
   // DeviceConfig::ValidateOrThrow (above) requires a port for every side
   // used when the driver is udp: this device is that driver.
-  if (config.driver != "udp") {
+  if (config.driver != kDriver) {
     throw std::invalid_argument("UdpDevice: the config's driver is '" + config.driver +
                                 "', not udp");
   }

@@ -4,6 +4,7 @@
 /// safety limits, and the files that calibrate and gravity-compensate it.
 #include <array>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -173,7 +174,7 @@ struct ReplayDeviceConfig {
 struct DeviceConfig {
   std::filesystem::path file;
   std::string name = "sim";
-  std::string driver = "sim";             ///< sim | udp | replay
+  std::string driver = "sim";             ///< a registered driver's name (sim, udp, replay)
   std::array<bool, 2> sides{true, true};  ///< [left, right]
   bool has_glove = true;
   bool has_grasp = true;
@@ -202,11 +203,21 @@ struct DeviceConfig {
     a->Visit(HAPTEL_NVP(replay));
   }
 
-  /// Throws ConfigFieldError unless the driver is known, a side is used, the
-  /// parts are valid ("servo.*", "safety.*", ...), the udp driver has a port
-  /// for every side used, and the replay driver a trace.
+  /// Throws ConfigFieldError unless the driver is registered, a side is used,
+  /// the parts are valid ("servo.*", "safety.*", ...) and the driver's own
+  /// checks pass (the udp driver's port for every side used, the replay
+  /// driver's trace).
   void ValidateOrThrow() const;
 };
+
+/// Makes `driver` a name a device file may give, with its own checks of the
+/// file (ConfigFieldError; may be empty). config/ is below the drivers, so it
+/// names none: each driver's descriptor adds itself as it registers
+/// (haptics/device_drivers.hpp), and a program that loads device files links
+/// the drivers. std::invalid_argument when the name is taken. Register before
+/// any thread validates a device.
+void AddDeviceDriverCheck(const std::string& driver,
+                          std::function<void(const DeviceConfig&)> check);
 
 /// Loads and validates (DeviceConfig::ValidateOrThrow) a device file (strict:
 /// unknown keys are errors naming file, key and line).

@@ -3,9 +3,11 @@
 /// the vehicle family each drives, the device's arms it uses, how its input
 /// comes (hands on the device, a person's keys or game controller) and
 /// whether its controls are bodies in a physics world. The loaders and the
-/// run's checks read this table instead of telling interfaces apart by name;
-/// each interface's config loader and factory sit beside it on the operator
-/// side (mediator/interface_catalog.hpp, the blimp's session).
+/// run's checks read this table instead of telling interfaces apart by name.
+/// config/ is below the interfaces, so the table holds no row of its own:
+/// each interface's descriptor, registered beside its code, adds its row
+/// (interfaces/catalog.hpp), and a program that loads study or fleet files
+/// links the interfaces.
 #include <array>
 #include <deque>
 #include <string>
@@ -34,13 +36,14 @@ struct InterfaceKindInfo {
   bool manual() const { return input != InterfaceInput::kHands; }
 };
 
-/// Every interface: the built-in ones, then any registered since (a deque:
-/// what FindInterfaceKind returned stays valid).
+/// Every interface, in the order registered (a deque: what FindInterfaceKind
+/// returned stays valid).
 const std::deque<InterfaceKindInfo>& InterfaceKinds();
 /// The interface named `name`, or null.
 const InterfaceKindInfo* FindInterfaceKind(const std::string& name);
-/// Adds an interface (a plug-in's, a test's). std::invalid_argument when the
-/// name is taken. Register before any thread reads the table.
+/// Adds an interface's row: the interface catalogue does, as each interface
+/// registers (interfaces/catalog.hpp). std::invalid_argument when the name is
+/// taken. Register before any thread reads the table.
 void RegisterInterfaceKind(const InterfaceKindInfo& info);
 /// "gesture, cockpit, …": the interfaces that drive `family`, for an error's "expected".
 std::string InterfaceKindNames(VehicleFamily family);

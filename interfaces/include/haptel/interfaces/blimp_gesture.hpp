@@ -9,22 +9,19 @@
 #include "haptel/config/blimp_gesture.hpp"
 #include "haptel/core/blimp_command.hpp"
 #include "haptel/haptics/hal.hpp"
-#include "haptel/interfaces/interface.hpp"
+#include "haptel/interfaces/blimp_interface.hpp"
 
 namespace haptel::interfaces {
 
-/// Where the operator looks, relative to straight ahead, rad.
-struct HeadDirection {
-  double pan = 0.0;   ///< positive: left
-  double tilt = 0.0;  ///< positive: up
-};
-
-class BlimpGestureInterface {
+class BlimpGestureInterface final : public BlimpInterface {
  public:
   /// Validates `config` first (BlimpGestureConfig::ValidateOrThrow: ConfigFieldError).
   explicit BlimpGestureInterface(const BlimpGestureConfig& config);
 
-  const std::string& name() const { return config_.name; }
+  std::string name() const override { return config_.name; }
+
+  /// The catalogue's Update: the hands and the head in `reading`, stamped its `now_ns`.
+  BlimpCommand Update(double t_s, const BlimpReading& reading, haptics::Hal& hal) override;
 
   /// Session thread: reads both hands from the HAL, puts the centring fields
   /// in it and returns the command. A hand without a valid sample gives the
@@ -42,7 +39,11 @@ class BlimpGestureInterface {
   /// Where a pilot would hold their hands to give `command` (its camera
   /// angles are not the hands' business). Tail rotor commands need zero
   /// power: with power the left hand's sideways offset means nothing.
-  HandTargets HandTargetsFor(const BlimpCommand& command) const;
+  HandTargets HandTargetsFor(const BlimpCommand& command) const override;
+
+  const char* Help(bool /*switchable*/) const override {
+    return "drag the mouse to look around, Home looks ahead, Esc ends";
+  }
 
   /// The field on each hand (what Update puts in the HAL).
   const haptics::ForceField& field(haptics::Side side) const {

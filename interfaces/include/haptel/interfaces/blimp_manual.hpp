@@ -10,19 +10,20 @@
 #include "haptel/config/blimp_manual.hpp"
 #include "haptel/core/blimp_command.hpp"
 #include "haptel/haptics/hal.hpp"
+#include "haptel/interfaces/blimp_interface.hpp"
 #include "haptel/interfaces/input.hpp"
 #include "haptel/interfaces/key_level.hpp"
 
 namespace haptel::interfaces {
 
-class BlimpManualInterface {
+class BlimpManualInterface final : public BlimpInterface {
  public:
   /// Presses and controller disconnects counted in `at_start` (the input as
   /// the interface starts) are not acted on. Validates `config` first
   /// (BlimpManualConfig::ValidateOrThrow: ConfigFieldError).
   BlimpManualInterface(const BlimpManualConfig& config, const InputState& at_start);
 
-  const std::string& name() const { return config_.name; }
+  std::string name() const override { return config_.name; }
   BlimpManualInput input_kind() const { return config_.input(); }
 
   /// Reads one InputState at time `t_s` (s, non-decreasing) and returns the
@@ -33,9 +34,18 @@ class BlimpManualInterface {
   /// Step, with both force fields disabled in `hal` (stamped now: the servo
   /// loop sees a live interface that renders no force).
   BlimpCommand Update(double t_s, const InputState& input, haptics::Hal& hal);
+  /// The catalogue's Update: the person's input in `reading`.
+  BlimpCommand Update(double t_s, const BlimpReading& reading, haptics::Hal& hal) override {
+    return Update(t_s, reading.person, hal);
+  }
+  /// No hands: keys and controllers.
+  HandTargets HandTargetsFor(const BlimpCommand& /*command*/) const override { return {}; }
+  /// Starts again from rest, the input up to `now` seen.
+  void Rebase(const InputState& now) override { *this = BlimpManualInterface(config_, now); }
 
   /// The game controller went away since the interface started.
-  bool lost() const { return lost_; }
+  bool lost() const override { return lost_; }
+  const char* Help(bool switchable) const override;
 
  private:
   BlimpCommand Keys(double t_s, const InputState& input);

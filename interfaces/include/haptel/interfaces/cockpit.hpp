@@ -82,6 +82,14 @@ class CockpitInterface final : public MediatorInterface {
 
   /// The view elements after the latest Update (all off without a HUD).
   const HudState& hud() const { return hud_; }
+  /// The wheel, the throttle, the motors and the HUD.
+  std::string ProgressLine(const MotorCommand& motors) const override;
+  /// The HUD cockpits show what their logic computed, exactly.
+  std::optional<HudReading> Hud(const VehicleFeedback& /*feedback*/,
+                                const MotorCommand& /*motors*/) const override {
+    return HudReading{logic_.config().hud, hud_.speed, hud_.turn_left, hud_.turn_right,
+                      hud_.throttle_locked};
+  }
   /// The controls as read by the latest Update.
   const CockpitControls& controls() const { return controls_; }
   const CockpitLogic& logic() const { return logic_; }

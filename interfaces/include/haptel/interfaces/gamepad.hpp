@@ -46,7 +46,7 @@ class GamepadInterface final : public MediatorInterface {
   MotorCommand Map(const InputState& input) const;
 
   /// A controller went away since construction (pad_disconnects grew).
-  bool lost() const;
+  bool lost() const override;
 
  private:
   GamepadConfig config_;

@@ -32,6 +32,13 @@ class GestureInterface final : public MediatorInterface {
   bool NeedsPhysics() const override { return false; }
   /// The thesis kept the speedometer and the indicators on the gesture interface.
   bool ShowsSpeed() const override { return true; }
+  /// The speedometer, and an indicator lit by a motor difference past kTurnShown.
+  std::optional<HudReading> Hud(const VehicleFeedback& feedback,
+                                const MotorCommand& motors) const override {
+    return HudReading{true, feedback.speed, motors.right - motors.left > kTurnShown,
+                      motors.left - motors.right > kTurnShown, false};
+  }
+  static constexpr double kTurnShown = 0.1;  ///< motor difference that lights an indicator
 
   /// Pure mapping from a right-hand position to motor commands.
   MotorCommand Map(const haptics::Vec3d& right_hand) const;

@@ -71,19 +71,64 @@ struct HandGoal {
 /// hand is not used by the interface).
 using HandTargets = std::array<std::optional<HandGoal>, haptics::kSides>;
 
-class MediatorInterface {
+/// What a person's head-up display shows of an interface: a speedometer and
+/// turn indicators (the HUD cockpits', kept on the gesture interface as in
+/// the thesis). The view draws it as the interface fills it.
+struct HudReading {
+  bool shown = false;      ///< drawn at all
+  double speed_mps = 0.0;  ///< the speedometer
+  bool turn_left = false;  ///< indicator lights
+  bool turn_right = false;
+  bool throttle_locked = false;
+};
+
+/// What every interface is, whatever family of vehicle it drives (`Family`:
+/// RobotFamily, BlimpFamily below): its command, the intent a driver holds
+/// their hands for, and what it reads each tick besides the HAL. The session,
+/// the catalogue (catalog.hpp) and the view are written once over it; none
+/// asks an interface its name.
+template <class Family>
+class Interface {
  public:
-  virtual ~MediatorInterface() = default;
+  using Command = typename Family::Command;
+  using Intent = typename Family::Intent;
+  using Reading = typename Family::Reading;
+
+  virtual ~Interface() = default;
   virtual std::string name() const = 0;
 
-  /// Session thread, at the session rate: reads the hands from the HAL,
-  /// sets the force fields in the HAL and returns the motor command.
-  virtual MotorCommand Update(double t_s, const VehicleFeedback& feedback, haptics::Hal& hal) = 0;
+  /// Session thread, at the session rate: reads the hands from the HAL (or
+  /// the person's input in `reading`), sets the force fields in the HAL and
+  /// returns the command.
+  virtual Command Update(double t_s, const Reading& reading, haptics::Hal& hal) = 0;
 
   /// Where a person would put their hands to express `intent` — used by the
-  /// automatic operator, and by tests.
-  virtual HandTargets HandTargetsFor(const DriveIntent& intent) const = 0;
+  /// automatic operator, and by tests (none for keys and controllers).
+  virtual HandTargets HandTargetsFor(const Intent& intent) const = 0;
 
+  /// The interface is taken up again (a fleet's operator turned back to its
+  /// vehicle): the person's input up to `now` was given to other vehicles,
+  /// so an interface that counts key presses marks them as seen and starts
+  /// from rest, not from the levels it was left at. Session thread.
+  virtual void Rebase(const InputState& /*now*/) {}
+
+  /// The person's input went away for good (a game controller disconnected).
+  virtual bool lost() const { return false; }
+
+  /// The line of help the view shows in a person's first seconds (null:
+  /// none); `switchable`: the person may switch interfaces (F1–F6).
+  virtual const char* Help(bool /*switchable*/) const { return nullptr; }
+};
+
+/// The robot: each tread's command, from the hands and what the robot reports.
+struct RobotFamily {
+  using Command = MotorCommand;
+  using Intent = DriveIntent;
+  using Reading = VehicleFeedback;
+};
+
+class MediatorInterface : public Interface<RobotFamily> {
+ public:
   /// Whether the interface has physical controls that need a physics world.
   virtual bool NeedsPhysics() const = 0;
 
@@ -98,11 +143,16 @@ class MediatorInterface {
   /// draw what pushes the hand; nullopt for interfaces without it.
   virtual std::optional<Guidance> CurrentGuidance() const { return std::nullopt; }
 
-  /// The interface is taken up again (a fleet's operator turned back to its
-  /// vehicle): the person's input up to `now` was given to other vehicles,
-  /// so an interface that counts key presses marks them as seen and starts
-  /// from rest, not from the levels it was left at. Session thread.
-  virtual void Rebase(const InputState& /*now*/) {}
+  /// A line about its controls for the run's progress log, given the command
+  /// they gave ("": nothing beyond the command).
+  virtual std::string ProgressLine(const MotorCommand& /*motors*/) const { return {}; }
+
+  /// What its head-up display shows as of the last Update, given what the
+  /// robot reported and the command it was given; nullopt: it has none.
+  virtual std::optional<HudReading> Hud(const VehicleFeedback& /*feedback*/,
+                                        const MotorCommand& /*motors*/) const {
+    return std::nullopt;
+  }
 };
 
 }  // namespace haptel::interfaces

@@ -36,6 +36,10 @@ class KeyboardInterface final : public MediatorInterface {
   void Rebase(const InputState& now) override;
   HandTargets HandTargetsFor(const DriveIntent& intent) const override;
   bool NeedsPhysics() const override { return false; }
+  const char* Help(bool switchable) const override {
+    return switchable ? "arrows or W/A/S/D drive, space stops, F1-F6 switch, Esc ends"
+                      : "arrows or W/A/S/D drive, space stops, Esc ends";
+  }
 
   /// Reads one InputState at time `t_s` (s, non-decreasing) and returns the
   /// command: what Update does, without the HAL.

@@ -28,8 +28,6 @@
 #include <vector>
 
 #include "haptel/config/blimp_course.hpp"
-#include "haptel/config/blimp_gesture.hpp"
-#include "haptel/config/blimp_manual.hpp"
 #include "haptel/config/calibration.hpp"
 #include "haptel/config/device.hpp"
 #include "haptel/config/gravity_grid.hpp"
@@ -40,7 +38,7 @@
 #include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"
 #include "haptel/core/cli.hpp"
-#include "haptel/mediator/interface_catalog.hpp"
+#include "haptel/interfaces/catalog.hpp"
 #include "haptel/mediator/interface_set.hpp"
 #include "haptel/mediator/run_record.hpp"
 #include "haptel/view/view_model.hpp"
@@ -59,8 +57,9 @@ struct SessionSetup {
   RunConfig run;
   TrackConfig track;
   VehicleConfig vehicle;
-  /// The run's interfaces in F1–F6 order, and the one it starts with.
-  std::vector<InterfaceSpec> interfaces;
+  /// The run's interfaces in F1–F6 order, and the one it starts with (a
+  /// blimp flies with one).
+  std::vector<interfaces::InterfaceSpec> interfaces;
   int start_interface = 0;
   /// The physics world, used only when an interface's controls or the
   /// scene have bodies.
@@ -136,13 +135,8 @@ struct SessionSetup {
   /// console shows it as its thumbnail, through this session's link. Must
   /// return quickly.
   std::function<void(std::vector<uint8_t> jpeg, uint64_t frames)> on_picture;
-  /// A blimp's flight (the vehicle is a blimp kind): its course, instead of
-  /// `track`, and its interface, instead of `interfaces`:
-  /// the gesture cockpit (`blimp_interface`) or a person's keys or game
-  /// controller (`blimp_manual`), one of the two.
+  /// A blimp's flight (the vehicle is a blimp kind): its course, instead of `track`.
   std::optional<BlimpCourseConfig> course;
-  std::optional<BlimpGestureConfig> blimp_interface;
-  std::optional<BlimpManualConfig> blimp_manual;
 };
 
 enum class Outcome {

@@ -125,8 +125,7 @@ class OverlayFeed {
                      const interfaces::MotorCommand& motors, bool vehicle_up, bool touching);
 
  private:
-  static constexpr double kTurnShown = 0.1;  ///< motor difference that lights an indicator
-  static constexpr double kHelpS = 15.0;     ///< how long the keyboard's help line shows
+  static constexpr double kHelpS = 15.0;  ///< how long an interface's help line shows
   const SessionSetup& setup_;
   int gates_total_;
   bool was_touching_ = false;

@@ -96,6 +96,9 @@ struct UdpCounters {
 
 class UdpDevice final : public Device {
  public:
+  /// Its name in the device registry (udp_driver.cpp) and in device files.
+  static constexpr const char* kDriver = "udp";
+
   /// Resolves and connects one socket per side in `config.sides`. Throws
   /// ConfigFieldError for a `config` DeviceConfig::ValidateOrThrow refuses (a
   /// side without a port: "udp.right.port", with host:port),
