@@ -58,8 +58,8 @@ struct DelayedLink {
     in_flight.push_back({t, left, right});
     while (!in_flight.empty() && in_flight.front().t + delay_s <= t + 1e-9) {
       robot.SetMotors(
-          {vehicles::QuantiseCommand(in_flight.front().left, vehicle.drive.speed_levels),
-           vehicles::QuantiseCommand(in_flight.front().right, vehicle.drive.speed_levels)});
+          {models::QuantiseCommand(in_flight.front().left, vehicle.drive.speed_levels),
+           models::QuantiseCommand(in_flight.front().right, vehicle.drive.speed_levels)});
       in_flight.pop_front();
     }
     robot.Update(dt);

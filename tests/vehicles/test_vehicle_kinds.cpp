@@ -15,6 +15,7 @@
 #include "test_env.hpp"
 
 using namespace haptel;
+using namespace haptel::models;
 using namespace haptel::vehicles;
 
 namespace {

@@ -12,8 +12,8 @@
 #include "haptel/interfaces/blimp_manual.hpp"
 #include "haptel/interfaces/gamepad.hpp"
 #include "haptel/mediator/fleet.hpp"
-#include "haptel/vehicles/drive.hpp"
-#include "haptel/vehicles/sim_blimp.hpp"
+#include "haptel/models/sim_blimp.hpp"
+#include "haptel/models/tread_drive.hpp"
 #include "haptel/vehicles/sim_robot.hpp"
 #include "haptel/view/sdl_input.hpp"
 #include "test_env.hpp"
@@ -91,8 +91,8 @@ double Drive(GamepadInterface& pad, haptics::Hal& hal, vehicles::SimRobot& robot
   double turned = 0.0;
   for (int tick = 0; tick < static_cast<int>(seconds * 50); ++tick, t += 0.02) {
     const MotorCommand m = pad.Update(t, {}, hal);
-    robot.SetMotors({vehicles::QuantiseCommand(m.left, drive.speed_levels),
-                     vehicles::QuantiseCommand(m.right, drive.speed_levels)});
+    robot.SetMotors({models::QuantiseCommand(m.left, drive.speed_levels),
+                     models::QuantiseCommand(m.right, drive.speed_levels)});
     for (int i = 0; i < 4; ++i) {
       const double before = robot.State().heading;
       robot.Update(0.005);
@@ -204,7 +204,7 @@ TEST_CASE(
   config.name = "blimp-gamepad";
   BlimpManualInterface pad(config, box.Load());
   haptics::Hal hal;
-  vehicles::SimBlimp blimp(AirshipConfig{}, LoadBlimpCourse("config/tracks/blimp-hop.yaml"));
+  models::SimBlimp blimp(AirshipConfig{}, LoadBlimpCourse("config/tracks/blimp-hop.yaml"));
   double t = 0.0;
   // The session's part in simulated time: the command at 50 Hz, the airship at 200 Hz.
   const auto fly = [&](double seconds) {

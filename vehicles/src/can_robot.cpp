@@ -80,7 +80,7 @@ void CanRobot::StartAxes() {
   idle_ = false;
 }
 
-void CanRobot::SetMotors(const MotorLevels& levels) {
+void CanRobot::SetMotors(const models::MotorLevels& levels) {
   if (state_.fault) return;  // stopped until ClearErrors
   if (idle_ && (levels.left != 0 || levels.right != 0)) StartAxes();
   if (idle_) return;

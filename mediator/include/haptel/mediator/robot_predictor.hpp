@@ -7,7 +7,7 @@
 /// (from its speed and yaw rate) and the speed levels it had applied. The
 /// predictor starts from it and replays every command sent after, each from
 /// the moment it reaches the robot (sent + the one-way delay), through the
-/// robot's own drive model (tread_drive.hpp, the numbers of its vehicle
+/// robot's own drive model (models/tread_drive.hpp, the numbers of its vehicle
 /// file), including the robot's watchdog stopping it when commands stop.
 /// Walls are not modelled: a robot pressed against one is predicted to move
 /// on, and the next state corrects it.
@@ -24,7 +24,7 @@
 
 #include "haptel/config/vehicle.hpp"
 #include "haptel/mediator/delay_estimate.hpp"
-#include "haptel/vehicles/tread_drive.hpp"
+#include "haptel/models/tread_drive.hpp"
 
 namespace haptel::mediator {
 
@@ -89,7 +89,7 @@ class RobotPredictor {
   struct Base {
     double received_s;
     double sample_s;  ///< when it was sampled (operator's clock)
-    vehicles::TreadState treads;
+    models::TreadState treads;
     int left;
     int right;
   };

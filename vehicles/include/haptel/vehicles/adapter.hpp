@@ -5,7 +5,7 @@
 #include <string>
 
 #include "haptel/core/range_scan.hpp"
-#include "haptel/vehicles/drive.hpp"
+#include "haptel/models/tread_drive.hpp"
 
 namespace haptel::vehicles {
 
@@ -28,7 +28,7 @@ struct AdapterState {
   double heading = 0.0;  ///< rad
   bool bumper_left = false;
   bool bumper_right = false;
-  MotorLevels applied;  ///< levels the motors run at now
+  models::MotorLevels applied;  ///< levels the motors run at now
   /// The vehicle stopped itself (a motor controller's error, a silent node,
   /// bus-off) and will not move until its faults are cleared.
   bool fault = false;
@@ -42,7 +42,7 @@ class VehicleAdapter {
  public:
   virtual ~VehicleAdapter() = default;
   /// Sets the motor speed levels (already quantised).
-  virtual void SetMotors(const MotorLevels& levels) = 0;
+  virtual void SetMotors(const models::MotorLevels& levels) = 0;
   /// Stops every motor at once (the command watchdog, shutdown); the next
   /// SetMotors drives again. Hardware may do more (idle the controllers).
   virtual void Stop() { SetMotors({}); }

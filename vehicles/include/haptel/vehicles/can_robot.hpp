@@ -47,7 +47,7 @@ class CanRobot final : public VehicleAdapter {
   CanRobot(std::unique_ptr<CanBus> bus, const VehicleConfig& config,
            std::unique_ptr<CandumpWriter> log = nullptr);
 
-  void SetMotors(const MotorLevels& levels) override;
+  void SetMotors(const models::MotorLevels& levels) override;
   /// Zero velocity now, then both axes idle; the next non-zero SetMotors
   /// requests closed loop again.
   void Stop() override;

@@ -34,8 +34,8 @@ struct RobotFamily : link::RobotMessages {
   /// Nothing moves before the first command: the motors start at rest.
   static void Prepare(Adapter&) {}
   static void Apply(Adapter& adapter, const Command& c, const VehicleConfig& config) {
-    adapter.SetMotors({QuantiseCommand(c.left, config.drive.speed_levels),
-                       QuantiseCommand(c.right, config.drive.speed_levels)});
+    adapter.SetMotors({models::QuantiseCommand(c.left, config.drive.speed_levels),
+                       models::QuantiseCommand(c.right, config.drive.speed_levels)});
   }
   /// Hardware: zero velocity, then idle.
   static void MakeSafe(Adapter& adapter) { adapter.Stop(); }

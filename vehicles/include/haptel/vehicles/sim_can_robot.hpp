@@ -82,7 +82,7 @@ class SimulatedCanRobot final : public VehicleAdapter {
  public:
   SimulatedCanRobot(const Track& track, const VehicleConfig& config,
                     std::unique_ptr<CandumpWriter> log = nullptr);
-  void SetMotors(const MotorLevels& levels) override { adapter_->SetMotors(levels); }
+  void SetMotors(const models::MotorLevels& levels) override { adapter_->SetMotors(levels); }
   void Stop() override { adapter_->Stop(); }
   void Update(double dt) override;
   AdapterState State() const override;

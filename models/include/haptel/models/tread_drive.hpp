@@ -3,13 +3,23 @@
 /// target speed with a first-order lag and its own gain, and the body moving
 /// on the exact constant-curvature arc they give. The simulated robot moves
 /// by it (before its contacts), and the operator's predictor runs it ahead
-/// of the delayed states, so the two cannot drift apart. Header and source
-/// are free of the adapters: the operator side links them without the
-/// vehicles' hardware (library haptel_vehicle_models).
+/// of the delayed states, so the two cannot drift apart. It lives in
+/// haptel_models, below both ends: the operator side links it without the
+/// vehicles, and the vehicles without the operator side.
 #include "haptel/config/vehicle.hpp"
-#include "haptel/vehicles/drive.hpp"
 
-namespace haptel::vehicles {
+namespace haptel::models {
+
+/// Signed speed levels per motor, as the robot's brick takes them.
+struct MotorLevels {
+  int left = 0;
+  int right = 0;
+};
+
+/// Maps a normalised command in [-1, 1] to the nearest of `levels` speed
+/// levels in each direction (−levels..levels). Out-of-range commands are
+/// clamped; NaN maps to 0 (stop).
+int QuantiseCommand(double command, int levels);
 
 /// The drive's state: the body's pose in the track frame and the treads'
 /// speeds (m/s).
@@ -39,4 +49,4 @@ inline void TreadsFromMotion(const DriveConfig& drive, double speed, double yaw_
   state.v_right = speed + 0.5 * yaw_rate * drive.track_width;
 }
 
-}  // namespace haptel::vehicles
+}  // namespace haptel::models
