@@ -51,7 +51,7 @@ std::string VehicleNameProblem(const std::string& name) {
   return {};
 }
 
-void DriveConfig::ValidateOrThrow() const {
+void TreadDriveConfig::ValidateOrThrow() const {
   check::Whole("speed_levels", speed_levels, 1, 1000);
   check::Number("max_speed", max_speed, 0.01, 10.0);
   check::Number("track_width", track_width, 0.02, 5.0);

@@ -15,7 +15,7 @@ CockpitInterface::CockpitInterface(const CockpitConfig& config, ControlsPort& po
     shared_.emplace(logic_.config().shared_control, vehicle);
 }
 
-MotorCommand CockpitInterface::Update(double t_s, const VehicleFeedback& feedback,
+TreadCommand CockpitInterface::Update(double t_s, const VehicleFeedback& feedback,
                                       haptics::Hal& hal) {
   controls_ = port_.Controls();
   // Slip: where each hand is against where its grip on the control would put
@@ -71,7 +71,7 @@ MotorCommand CockpitInterface::Update(double t_s, const VehicleFeedback& feedbac
   return logic_.Map(controls_, t_s);
 }
 
-HandTargets CockpitInterface::HandTargetsFor(const DriveIntent& intent) const {
+HandTargets CockpitInterface::HandTargetsFor(const MotionIntent& intent) const {
   const CockpitConfig& c = logic_.config();
   CockpitControls wanted = logic_.ControlsFor(intent);
   wanted.wheel_angle += wheel_slip_;

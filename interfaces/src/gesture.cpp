@@ -27,7 +27,7 @@ GestureInterface::GestureInterface(const GestureConfig& config, const VehicleGeo
   field_.wall_damping = 2.0 * std::sqrt(config_.wall_stiffness * 1.0);
 }
 
-MotorCommand GestureInterface::Map(const Vec3d& hand) const {
+TreadCommand GestureInterface::Map(const Vec3d& hand) const {
   const double forward =
       Shape(hand[0] - config_.neutral[0], config_.dead_zone, config_.full_forward);
   const double turn = config_.turn_share *
@@ -35,7 +35,7 @@ MotorCommand GestureInterface::Map(const Vec3d& hand) const {
   return Mix(forward, turn);
 }
 
-HandTargets GestureInterface::HandTargetsFor(const DriveIntent& intent) const {
+HandTargets GestureInterface::HandTargetsFor(const MotionIntent& intent) const {
   Vec3d target = config_.neutral;
   target[0] += Unshape(intent.forward, config_.dead_zone, config_.full_forward);
   const double turn_fraction = config_.turn_share > 0 ? intent.turn / config_.turn_share : 0.0;
@@ -45,7 +45,7 @@ HandTargets GestureInterface::HandTargetsFor(const DriveIntent& intent) const {
   return targets;
 }
 
-MotorCommand GestureInterface::Update(double t_s, const VehicleFeedback& feedback,
+TreadCommand GestureInterface::Update(double t_s, const VehicleFeedback& feedback,
                                       haptics::Hal& hal) {
   const haptics::HandSample hand = hal.LatestSample(Side::kRight);
   if (!hand.valid) {

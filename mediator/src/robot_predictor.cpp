@@ -6,7 +6,7 @@
 
 namespace haptel::mediator {
 
-RobotPredictor::RobotPredictor(const DriveConfig& drive, double watchdog_s, double step_s)
+RobotPredictor::RobotPredictor(const TreadDriveConfig& drive, double watchdog_s, double step_s)
     : drive_(drive), watchdog_s_(watchdog_s), step_s_(step_s) {}
 
 void RobotPredictor::OnCommand(double t_s, double left, double right) {

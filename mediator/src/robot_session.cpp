@@ -233,7 +233,7 @@ class RobotSession final : public FamilySession {
         setup_.interfaces[static_cast<size_t>(interfaces_->current_index())].command_rate_hz());
     if (next_command_ns_ == 0) next_command_ns_ = now;
     if (CommandDue(next_command_ns_, now, command_period_ns)) {
-      const interfaces::MotorCommand sent = vehicle_up ? motors_ : interfaces::MotorCommand{};
+      const TreadCommand sent = vehicle_up ? motors_ : TreadCommand{};
       link.Send(sent);
       predictor_.OnCommand(t, sent.left, sent.right);
     }
@@ -485,7 +485,7 @@ class RobotSession final : public FamilySession {
   interfaces::VehicleFeedback feedback_;
   /// The beams the range scan had when last said (SayRanges).
   int range_beams_said_ = 0;
-  interfaces::MotorCommand motors_;
+  TreadCommand motors_;
   uint32_t requests_seen_ = 0;
   uint32_t disconnects_seen_ = 0;
   int64_t next_command_ns_ = 0;

@@ -143,7 +143,7 @@ SessionResult RunSession(const SessionSetup& setup, const std::atomic<bool>& int
   link_options.decode_video = run.video_decode && DecodesVideo(setup.view);
   if (simulated) {
     link_options.program.clear();
-    link_options.in_process_robot = [&simulated](const msg::DriveCommand& command) {
+    link_options.in_process_robot = [&simulated](const msg::TreadCommand& command) {
       simulated->OnCommand(command);
     };
   }

@@ -13,7 +13,7 @@ int QuantiseCommand(double command, int levels) {
   return static_cast<int>(std::lround(clamped * levels));
 }
 
-double StepTreads(const DriveConfig& drive, double target_left, double target_right, double dt,
+double StepTreads(const TreadDriveConfig& drive, double target_left, double target_right, double dt,
                   TreadState& state) {
   if (!(dt > 0.0)) return 0.0;
   const double alpha =

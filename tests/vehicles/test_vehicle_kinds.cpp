@@ -40,7 +40,7 @@ class ToyRobot final : public VehicleAdapter {
   AdapterState State() const override { return state_; }
 
  private:
-  DriveConfig drive_;
+  TreadDriveConfig drive_;
   AdapterState state_;
 };
 
@@ -104,8 +104,8 @@ struct OperatorEnd {
   }
 
   link::Participant participant;
-  link::CommandWriter commands;
-  msg::DriveCommand message;
+  link::TreadCommandWriter commands;
+  msg::TreadCommand message;
   uint64_t seq = 0;
   std::mutex mutex;
   std::optional<msg::VehicleState> last;

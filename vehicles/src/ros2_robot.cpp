@@ -222,7 +222,7 @@ Ros2Robot::~Ros2Robot() {
 }
 
 std::array<double, 2> Ros2Robot::TwistFor(const models::MotorLevels& levels,
-                                          const DriveConfig& drive) {
+                                          const TreadDriveConfig& drive) {
   const double per_level = drive.max_speed / std::max(1, drive.speed_levels);
   const double left = levels.left * per_level;
   const double right = levels.right * per_level;

@@ -13,19 +13,17 @@
 
 namespace haptel::interfaces {
 
-/// What a driver wants, in motor terms: left = forward − turn,
-/// right = forward + turn (turn > 0 turns left). Both in [-1, 1].
-struct DriveIntent {
+/// The motion a driver wants, before it is mixed into each tread's command
+/// (Mix: left = forward − turn, right = forward + turn; turn > 0 turns
+/// left). Both in [-1, 1].
+struct MotionIntent {
   double forward = 0.0;
   double turn = 0.0;
 };
 
-/// Normalised motor commands, each in [-1, 1]: the robot's command.
-using MotorCommand = TreadCommand;
-
 /// Differential mix: left = forward − turn, right = forward + turn, scaled
 /// down together (keeping their ratio) when either leaves [-1, 1].
-MotorCommand Mix(double forward, double turn);
+TreadCommand Mix(double forward, double turn);
 
 /// What the vehicle reports that an interface reacts to.
 struct VehicleFeedback {
@@ -78,11 +76,11 @@ class MediatorInterface {
 
   /// Session thread, at the session rate: reads the hands from the HAL,
   /// sets the force fields in the HAL and returns the motor command.
-  virtual MotorCommand Update(double t_s, const VehicleFeedback& feedback, haptics::Hal& hal) = 0;
+  virtual TreadCommand Update(double t_s, const VehicleFeedback& feedback, haptics::Hal& hal) = 0;
 
   /// Where a person would put their hands to express `intent` — used by the
   /// automatic operator, and by tests.
-  virtual HandTargets HandTargetsFor(const DriveIntent& intent) const = 0;
+  virtual HandTargets HandTargetsFor(const MotionIntent& intent) const = 0;
 
   /// Whether the interface has physical controls that need a physics world.
   virtual bool NeedsPhysics() const = 0;

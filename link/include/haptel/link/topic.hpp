@@ -158,8 +158,8 @@ class Reader : private eprosima::fastdds::dds::DataReaderListener {
   std::atomic<uint64_t> deadlines_missed_{0};
 };
 
-using CommandWriter = Writer<msg::DriveCommand, msg::DriveCommandPubSubType>;
-using CommandReader = Reader<msg::DriveCommand, msg::DriveCommandPubSubType>;
+using TreadCommandWriter = Writer<msg::TreadCommand, msg::TreadCommandPubSubType>;
+using TreadCommandReader = Reader<msg::TreadCommand, msg::TreadCommandPubSubType>;
 using StateWriter = Writer<msg::VehicleState, msg::VehicleStatePubSubType>;
 using StateReader = Reader<msg::VehicleState, msg::VehicleStatePubSubType>;
 using VideoWriter = Writer<msg::VideoFrame, msg::VideoFramePubSubType>;

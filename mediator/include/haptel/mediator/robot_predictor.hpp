@@ -52,7 +52,8 @@ class RobotPredictor {
  public:
   /// `watchdog_s`: the robot stops this long after the last command reached
   /// it. `step_s`: the model's integration step.
-  explicit RobotPredictor(const DriveConfig& drive, double watchdog_s = 0.2, double step_s = 0.005);
+  explicit RobotPredictor(const TreadDriveConfig& drive, double watchdog_s = 0.2,
+                          double step_s = 0.005);
 
   /// A command as sent at `t_s` (normalised tread commands in [-1, 1], as
   /// the link carries them; the robot quantises them to its levels).
@@ -99,7 +100,7 @@ class RobotPredictor {
   void Run(const Base& base, const Command* extra, const std::vector<double>& at,
            std::vector<PredictedPose>& out) const;
 
-  DriveConfig drive_;
+  TreadDriveConfig drive_;
   double watchdog_s_;
   double step_s_;
   DelayEstimate delay_;

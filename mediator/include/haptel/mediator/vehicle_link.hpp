@@ -186,7 +186,7 @@ struct VehicleLinkOptions {
   /// is spawned and nothing joins DDS; each command message goes here as
   /// it is sent, the states are pushed into the robot channel's inbox by
   /// the caller, and no video comes.
-  std::function<void(const msg::DriveCommand&)> in_process_robot;
+  std::function<void(const msg::TreadCommand&)> in_process_robot;
 };
 
 /// The writer of haptel/<vehicle>/selected (the IDL's SelectedSource).

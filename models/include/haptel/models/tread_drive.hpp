@@ -32,18 +32,18 @@ struct TreadState {
 };
 
 /// The treads' target speeds (m/s) for speed levels, before the gains.
-inline double LevelSpeed(const DriveConfig& drive, int level) {
+inline double LevelSpeed(const TreadDriveConfig& drive, int level) {
   return level * (drive.max_speed / drive.speed_levels);
 }
 
 /// Advances `state` by `dt` towards tread targets (m/s, before the gains):
 /// each tread follows with the motor lag, then the body moves on the arc.
 /// Returns the yaw rate (rad/s) over the step.
-double StepTreads(const DriveConfig& drive, double target_left, double target_right, double dt,
+double StepTreads(const TreadDriveConfig& drive, double target_left, double target_right, double dt,
                   TreadState& state);
 
 /// The treads' speeds from a body's forward speed and yaw rate.
-inline void TreadsFromMotion(const DriveConfig& drive, double speed, double yaw_rate,
+inline void TreadsFromMotion(const TreadDriveConfig& drive, double speed, double yaw_rate,
                              TreadState& state) {
   state.v_left = speed - 0.5 * yaw_rate * drive.track_width;
   state.v_right = speed + 0.5 * yaw_rate * drive.track_width;

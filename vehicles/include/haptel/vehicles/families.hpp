@@ -21,7 +21,7 @@
 
 namespace haptel::vehicles {
 
-/// The robot family: motor levels for two treads (DriveCommand), the
+/// The robot family: motor levels for two treads (TreadCommand), the
 /// ground state (VehicleState), a VehicleAdapter, a track for its world.
 struct RobotFamily : link::RobotMessages {
   using World = Track;

@@ -79,7 +79,7 @@ class Ros2Robot final : public VehicleAdapter {
 
   /// The twist a differential drive's levels mean: {v m/s, ω rad/s}.
   static std::array<double, 2> TwistFor(const models::MotorLevels& levels,
-                                        const DriveConfig& drive);
+                                        const TreadDriveConfig& drive);
 
   /// A sensor_msgs/LaserScan as the state's range field (range_scan.hpp),
   /// the laser taken to be at the robot's centre facing forward (a frame_id

@@ -59,7 +59,7 @@ class SimCanNodes {
 
   std::unique_ptr<CanBus> bus_;
   CanConfig can_;
-  DriveConfig drive_;
+  TreadDriveConfig drive_;
   SimRobot& robot_;
   std::array<Axis, 2> axes_;
   std::array<bool, 3> silent_{};

@@ -42,7 +42,7 @@ class SimRobot final : public VehicleAdapter {
   void Contact(const Vec2& point);
 
   const Track& track_;
-  DriveConfig drive_;
+  TreadDriveConfig drive_;
   BodyConfig body_;
   RangeSensorConfig range_sensors_;
   std::mt19937_64 range_noise_;
