@@ -11,7 +11,6 @@
 
 using namespace haptel;
 using namespace haptel::models;
-using namespace haptel::vehicles;
 
 namespace {
 

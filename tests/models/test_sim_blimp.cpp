@@ -14,7 +14,6 @@
 
 using namespace haptel;
 using namespace haptel::models;
-using namespace haptel::vehicles;
 
 namespace {
 
