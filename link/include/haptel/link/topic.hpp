@@ -166,6 +166,9 @@ using VideoWriter = Writer<msg::VideoFrame, msg::VideoFramePubSubType>;
 using VideoReader = Reader<msg::VideoFrame, msg::VideoFramePubSubType>;
 using VideoFeedbackWriter = Writer<msg::VideoFeedback, msg::VideoFeedbackPubSubType>;
 using VideoFeedbackReader = Reader<msg::VideoFeedback, msg::VideoFeedbackPubSubType>;
+// The CAN robot's bus log, on haptel/<vehicle>/can_log (kLatched).
+using CanLogWriter = Writer<msg::CanLogStatus, msg::CanLogStatusPubSubType>;
+using CanLogReader = Reader<msg::CanLogStatus, msg::CanLogStatusPubSubType>;
 // The blimp's, on the same topic names (haptel/<vehicle>/command, .../state).
 using BlimpCommandWriter = Writer<msg::BlimpCommand, msg::BlimpCommandPubSubType>;
 using BlimpCommandReader = Reader<msg::BlimpCommand, msg::BlimpCommandPubSubType>;

@@ -191,6 +191,8 @@ struct VehicleLinkOptions {
 
 /// The writer of haptel/<vehicle>/selected (the IDL's SelectedSource).
 class SelectedWriter;
+/// The latest status on haptel/<vehicle>/can_log (the IDL's CanLogStatus).
+class CanLogInbox;
 
 class VehicleLink {
  public:
@@ -269,6 +271,10 @@ class VehicleLink {
   bool PublishSelected(const std::string& source, const std::string& lock);
   /// Readers of the selected topic matched now (0 without the writer).
   int selected_readers() const;
+  /// The vehicle's CAN bus log, as its own topic (haptel/<vehicle>/can_log:
+  /// a CAN robot that keeps one) last said: into `out` and true when a
+  /// status came since the last call. Only a robot on DDS has the topic.
+  bool TakeCanLog(msg::CanLogStatus& out);
 
  private:
   VehicleLinkOptions options_;
@@ -278,6 +284,7 @@ class VehicleLink {
   std::unique_ptr<LinkChannel> channel_;
   std::unique_ptr<VideoReceiver> video_;
   std::unique_ptr<SelectedWriter> selected_;
+  std::unique_ptr<CanLogInbox> can_log_;
   std::string operator_name_;
   bool stopped_ = false;
 };

@@ -9,15 +9,6 @@
 
 namespace haptel::vehicles {
 
-/// The adapter's log of its bus traffic, when it keeps one (the CAN robot's
-/// candump -L file in can.log_dir).
-struct CanLogStatus {
-  std::string path;          ///< on the vehicle's host; "": no log kept
-  uint64_t frames = 0;       ///< frames certainly in the file (its last flush)
-  uint64_t frames_lost = 0;  ///< frames not in it because a write failed
-  std::string error;         ///< why the log ended; "" while it is whole
-};
-
 /// What an adapter knows about its vehicle.
 struct AdapterState {
   double speed = 0.0;     ///< m/s, forward positive
@@ -33,7 +24,6 @@ struct AdapterState {
   /// bus-off) and will not move until its faults are cleared.
   bool fault = false;
   std::string fault_message;  ///< one line: what, where (empty: no fault)
-  CanLogStatus can_log;
   /// What the range sensors see now (count 0: the vehicle has none).
   RangeScan ranges;
 };

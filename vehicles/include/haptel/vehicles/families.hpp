@@ -55,10 +55,6 @@ struct RobotFamily : link::RobotMessages {
     m.motor_left_level(static_cast<int16_t>(s.applied.left));
     m.motor_right_level(static_cast<int16_t>(s.applied.right));
     m.watchdog_tripped(watchdog_expired);
-    m.can_log(s.can_log.path);
-    m.can_log_frames(s.can_log.frames);
-    m.can_log_frames_lost(s.can_log.frames_lost);
-    m.can_log_error(s.can_log.error);
     m.range_angle_min(static_cast<float>(s.ranges.angle_min));
     m.range_angle_increment(static_cast<float>(s.ranges.angle_increment));
     m.range_max(static_cast<float>(s.ranges.range_max));
