@@ -12,8 +12,8 @@
 #include "haptel/core/args.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/core/json.hpp"
-#include "haptel/vehicles/airship.hpp"
-#include "haptel/vehicles/airship_trials.hpp"
+#include "haptel/models/airship.hpp"
+#include "haptel/models/airship_trials.hpp"
 #include "plot.hpp"
 #include "smoke.hpp"
 
@@ -21,8 +21,8 @@ namespace haptel::bench {
 
 namespace {
 
-using vehicles::Airship;
-using vehicles::AirshipControls;
+using models::Airship;
+using models::AirshipControls;
 
 constexpr double kReferenceStep = 0.00025;
 
@@ -55,7 +55,7 @@ Eigen::Vector3d FlyManoeuvre(AirshipConfig config, AirshipIntegrator integrator,
   Airship ship(config);
   const int steps = static_cast<int>(std::lround(seconds / step));
   for (int i = 0; i < steps; ++i) {
-    ship.Step(step, vehicles::ManoeuvreControls(ship.time_s()));
+    ship.Step(step, models::ManoeuvreControls(ship.time_s()));
     if (!ship.Finite()) {
       *finite = false;
       break;
@@ -174,11 +174,11 @@ int BenchBlimpMain(int argc, const char* const* argv) {
 
   // ---- physics checks, at the configured integrator and step
   const AirshipConfig& still = vehicle.airship;
-  const double hover = vehicles::HoverDrift(still);
-  const double top_kmh = vehicles::TopSpeed(still) * 3.6;
+  const double hover = models::HoverDrift(still);
+  const double top_kmh = models::TopSpeed(still) * 3.6;
   double slow_kmh = 0.0, fast_kmh = 0.0;
-  const double yaw_slow = vehicles::RudderYawRate(still, 5.0, &slow_kmh);
-  const double yaw_fast = vehicles::RudderYawRate(still, 20.0, &fast_kmh);
+  const double yaw_slow = models::RudderYawRate(still, 5.0, &slow_kmh);
+  const double yaw_fast = models::RudderYawRate(still, 20.0, &fast_kmh);
   struct EnergyRow {
     AirshipIntegrator integrator;
     double drift;
@@ -190,7 +190,7 @@ int BenchBlimpMain(int argc, const char* const* argv) {
     AirshipConfig c = still;
     c.integrator = integrator;
     EnergyRow row{integrator, 0.0, true};
-    row.drift = vehicles::EnergyDrift(c, plan.energy_s, &row.finite);
+    row.drift = models::EnergyDrift(c, plan.energy_s, &row.finite);
     energy.push_back(row);
   }
   double configured_drift = 0.0;

@@ -434,13 +434,13 @@ bool Deserialize(const Bytes& input, Msg& out) {
 Target DdsTarget() {
   Target t;
   t.text = false;
-  msg::DriveCommand drive;
+  msg::TreadCommand drive;
   drive.seq(7);
   drive.left(0.5f);
   drive.right(-0.25f);
   drive.session(42);
   drive.operator_name("haptel run, ana@lab pid 1");
-  t.seeds.push_back(Serialized<msg::DriveCommandPubSubType>(drive));
+  t.seeds.push_back(Serialized<msg::TreadCommandPubSubType>(drive));
   msg::BlimpCommand blimp;
   blimp.power(0.5f);
   blimp.camera_pan(0.3f);
@@ -456,10 +456,10 @@ Target DdsTarget() {
   t.parse = [](size_t seed, const Bytes& input) {
     switch (seed) {
       case 0: {
-        msg::DriveCommand c;
-        if (!Deserialize<msg::DriveCommandPubSubType>(input, c)) return false;
+        msg::TreadCommand c;
+        if (!Deserialize<msg::TreadCommandPubSubType>(input, c)) return false;
         // The vehicle node's check of the robot family's command.
-        link::RobotMessages::Command command;
+        TreadCommand command;
         return link::RobotMessages::Decode(c, command);
       }
       case 1: {

@@ -13,7 +13,7 @@
 ///   device's decoder), and controller replies into the real adapter's
 ///   ServoOutput;
 /// - can: CAN frames into the ODrive decoders, and candump text lines;
-/// - dds: serialized DriveCommand, BlimpCommand, VehicleState and
+/// - dds: serialized TreadCommand, BlimpCommand, VehicleState and
 ///   BlimpState payloads, mutated, through Fast DDS's CDR deserializer and
 ///   then the vehicle's range checks (NaN, infinities, out of range);
 /// - console: HTTP requests (every route, forms with their token, chunked

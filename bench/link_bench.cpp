@@ -60,13 +60,13 @@ int Echo(int domain) {
   LinkConfig config;
   config.domain_id = domain;
   link::Participant participant(config, "haptel-bench-echo");
-  link::CommandWriter pong(participant, "bench/pong", link::Profile::kCommand);
-  msg::DriveCommand copy;
-  link::CommandReader ping(participant, "bench/ping", link::Profile::kCommand,
-                           [&](const msg::DriveCommand& c) {
-                             copy = c;
-                             pong.Write(copy);
-                           });
+  link::TreadCommandWriter pong(participant, "bench/pong", link::Profile::kCommand);
+  msg::TreadCommand copy;
+  link::TreadCommandReader ping(participant, "bench/ping", link::Profile::kCommand,
+                                [&](const msg::TreadCommand& c) {
+                                  copy = c;
+                                  pong.Write(copy);
+                                });
   std::printf("echo up\n");
   std::fflush(stdout);
   while (!stop.load()) std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -131,16 +131,15 @@ RttFigures RawPingPong(int domain, double seconds) {
   config.domain_id = domain;
   link::Participant participant(config, "haptel-bench-ping");
   Histogram rtt(10.0, 200000);
-  link::CommandReader pongs(participant, "bench/pong", link::Profile::kCommand,
-                            [&](const msg::DriveCommand& c) {
-                              if (c.sent_ns() != 0)
-                                rtt.Record(static_cast<double>(MonotonicNs() - c.sent_ns()) * 1e-3);
-                            });
-  link::CommandWriter pings(participant, "bench/ping", link::Profile::kCommand);
+  link::TreadCommandReader pongs(
+      participant, "bench/pong", link::Profile::kCommand, [&](const msg::TreadCommand& c) {
+        if (c.sent_ns() != 0) rtt.Record(static_cast<double>(MonotonicNs() - c.sent_ns()) * 1e-3);
+      });
+  link::TreadCommandWriter pings(participant, "bench/ping", link::Profile::kCommand);
   if (!WaitFor([&] { return pings.matched() > 0 && pongs.matched() > 0; }, 15.0)) {
     throw std::runtime_error("the echo process did not answer");
   }
-  msg::DriveCommand m;
+  msg::TreadCommand m;
   uint64_t seq = 0;
   Paced(
       seconds, [&] { rtt.Reset(); },

@@ -2,7 +2,7 @@
 /// @file `haptel bench link`: what the DDS link costs and what a bad network
 /// does to a lap.
 ///
-/// - Round trip, in one run: a raw Fast DDS ping-pong (a DriveCommand echoed
+/// - Round trip, in one run: a raw Fast DDS ping-pong (a TreadCommand echoed
 ///   at once by a second process, `haptel-bench link --echo`, on the same
 ///   transports: UDP and shared memory on loopback) against Haptel's own
 ///   command round trip to a spawned haptel-vehicle (the echo in its state,

@@ -14,7 +14,7 @@ class CoreRobot final : public mediator::InProcessRobot {
   CoreRobot(const VehicleConfig& vehicle, std::unique_ptr<vehicles::VehicleAdapter> adapter)
       : core_(vehicle, std::move(adapter)) {}
   double control_rate_hz() const override { return core_.config().sim_rate_hz; }
-  void OnCommand(const msg::DriveCommand& command, int64_t now_ns) override {
+  void OnCommand(const msg::TreadCommand& command, int64_t now_ns) override {
     core_.OnCommand(command, now_ns);
   }
   const msg::VehicleState* Tick(int64_t now_ns) override {

@@ -49,7 +49,7 @@ std::string VehicleNameProblem(const std::string& name) {
   return {};
 }
 
-void DriveConfig::ValidateOrThrow() const { config_detail::CheckFields(*this); }
+void TreadDriveConfig::ValidateOrThrow() const { config_detail::CheckFields(*this); }
 
 void BodyConfig::ValidateOrThrow() const { config_detail::CheckFields(*this); }
 

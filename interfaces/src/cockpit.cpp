@@ -19,7 +19,7 @@ CockpitInterface::CockpitInterface(const CockpitConfig& config, ControlsPort& po
     shared_.emplace(logic_.config().shared_control, vehicle);
 }
 
-MotorCommand CockpitInterface::Update(double t_s, const VehicleFeedback& feedback,
+TreadCommand CockpitInterface::Update(double t_s, const VehicleFeedback& feedback,
                                       haptics::Hal& hal) {
   controls_ = port_.Controls();
   // Slip: where each hand is against where its grip on the control would put
@@ -75,7 +75,7 @@ MotorCommand CockpitInterface::Update(double t_s, const VehicleFeedback& feedbac
   return logic_.Map(controls_, t_s);
 }
 
-HandTargets CockpitInterface::HandTargetsFor(const DriveIntent& intent) const {
+HandTargets CockpitInterface::HandTargetsFor(const MotionIntent& intent) const {
   const CockpitConfig& c = logic_.config();
   CockpitControls wanted = logic_.ControlsFor(intent);
   wanted.wheel_angle += wheel_slip_;
@@ -120,7 +120,7 @@ HandTargets CockpitInterface::HandTargetsFor(const DriveIntent& intent) const {
   return targets;
 }
 
-std::string CockpitInterface::ProgressLine(const MotorCommand& motors) const {
+std::string CockpitInterface::ProgressLine(const TreadCommand& motors) const {
   const CockpitControls& c = controls();
   const HudState& h = hud();
   char hud_text[80] = "";

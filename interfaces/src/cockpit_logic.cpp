@@ -16,7 +16,7 @@ constexpr double kIndicatorShare = 0.15;
 
 CockpitLogic::CockpitLogic(const CockpitConfig& config) : config_(Validated(config)) {}
 
-MotorCommand CockpitLogic::Map(const CockpitControls& c, double t_s) const {
+TreadCommand CockpitLogic::Map(const CockpitControls& c, double t_s) const {
   const double full = config_.wheel_full_turn_deg * kDegToRad;
   const double turn = config_.turn_share * std::clamp(c.wheel_angle / full, -1.0, 1.0);
   const double forward =
@@ -24,7 +24,7 @@ MotorCommand CockpitLogic::Map(const CockpitControls& c, double t_s) const {
   return Mix(forward, turn);
 }
 
-CockpitControls CockpitLogic::ControlsFor(const DriveIntent& intent) const {
+CockpitControls CockpitLogic::ControlsFor(const MotionIntent& intent) const {
   CockpitControls c;
   const double full = config_.wheel_full_turn_deg * kDegToRad;
   c.wheel_angle =

@@ -56,7 +56,7 @@ bool GamepadInterface::lost() const {
   return input_.Load().pad_disconnects != disconnects_at_start_;
 }
 
-DriveIntent GamepadInterface::Intent(const InputState& s) const {
+MotionIntent GamepadInterface::Intent(const InputState& s) const {
   if (!s.pad_connected || s.pad_disconnects != disconnects_at_start_) return {};
   if (!DeadmanHeld(s, config_.deadman)) return {};
   const auto left =
@@ -64,7 +64,7 @@ DriveIntent GamepadInterface::Intent(const InputState& s) const {
   const double triggers =
       TriggerDeadZone(Axis(s, PadAxis::kTriggerRight), config_.trigger_dead_zone) -
       TriggerDeadZone(Axis(s, PadAxis::kTriggerLeft), config_.trigger_dead_zone);
-  DriveIntent intent;
+  MotionIntent intent;
   intent.forward = std::clamp(-left[1] + triggers, -1.0, 1.0);
   double x = left[0];
   if (config_.turn_axis == GamepadTurnAxis::kRightX) {
@@ -74,12 +74,12 @@ DriveIntent GamepadInterface::Intent(const InputState& s) const {
   return intent;
 }
 
-MotorCommand GamepadInterface::Map(const InputState& s) const {
-  const DriveIntent intent = Intent(s);
+TreadCommand GamepadInterface::Map(const InputState& s) const {
+  const MotionIntent intent = Intent(s);
   return Mix(intent.forward, intent.turn);
 }
 
-MotorCommand GamepadInterface::Update(double /*t_s*/, const VehicleFeedback& /*feedback*/,
+TreadCommand GamepadInterface::Update(double /*t_s*/, const VehicleFeedback& /*feedback*/,
                                       haptics::Hal& hal) {
   // No hands: both fields disabled, stamped now (see KeyboardInterface).
   hal.SetField(haptics::Side::kLeft, haptics::ForceField{});
@@ -87,7 +87,7 @@ MotorCommand GamepadInterface::Update(double /*t_s*/, const VehicleFeedback& /*f
   return Map(input_.Load());
 }
 
-HandTargets GamepadInterface::HandTargetsFor(const DriveIntent& /*intent*/) const { return {}; }
+HandTargets GamepadInterface::HandTargetsFor(const MotionIntent& /*intent*/) const { return {}; }
 
 namespace {
 

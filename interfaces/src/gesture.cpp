@@ -28,7 +28,7 @@ GestureInterface::GestureInterface(const GestureConfig& config, const VehicleGeo
   field_.wall_damping = 2.0 * std::sqrt(config_.wall_stiffness * 1.0);
 }
 
-MotorCommand GestureInterface::Map(const Vec3d& hand) const {
+TreadCommand GestureInterface::Map(const Vec3d& hand) const {
   const double forward =
       Shape(hand[0] - config_.neutral[0], config_.dead_zone, config_.full_forward);
   const double turn = config_.turn_share *
@@ -36,7 +36,7 @@ MotorCommand GestureInterface::Map(const Vec3d& hand) const {
   return Mix(forward, turn);
 }
 
-HandTargets GestureInterface::HandTargetsFor(const DriveIntent& intent) const {
+HandTargets GestureInterface::HandTargetsFor(const MotionIntent& intent) const {
   Vec3d target = config_.neutral;
   target[0] += Unshape(intent.forward, config_.dead_zone, config_.full_forward);
   const double turn_fraction = config_.turn_share > 0 ? intent.turn / config_.turn_share : 0.0;
@@ -46,7 +46,7 @@ HandTargets GestureInterface::HandTargetsFor(const DriveIntent& intent) const {
   return targets;
 }
 
-MotorCommand GestureInterface::Update(double t_s, const VehicleFeedback& feedback,
+TreadCommand GestureInterface::Update(double t_s, const VehicleFeedback& feedback,
                                       haptics::Hal& hal) {
   const haptics::HandSample hand = hal.LatestSample(Side::kRight);
   if (!hand.valid) {

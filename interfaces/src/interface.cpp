@@ -5,8 +5,8 @@
 
 namespace haptel::interfaces {
 
-MotorCommand Mix(double forward, double turn) {
-  MotorCommand cmd{forward - turn, forward + turn};
+TreadCommand Mix(double forward, double turn) {
+  TreadCommand cmd{forward - turn, forward + turn};
   const double largest = std::max({1.0, std::abs(cmd.left), std::abs(cmd.right)});
   cmd.left /= largest;
   cmd.right /= largest;

@@ -34,7 +34,7 @@ void KeyboardInterface::Rebase(const InputState& now) {
   steering_.set_level(0);
 }
 
-MotorCommand KeyboardInterface::Step(double t_s, const InputState& s) {
+TreadCommand KeyboardInterface::Step(double t_s, const InputState& s) {
   throttle_.Step(t_s, s.key_up, s.key_down, s.presses_up, s.presses_down);
   steering_.Step(t_s, s.key_left, s.key_right, s.presses_left, s.presses_right);
   const bool stop_pressed = s.presses_stop != seen_stop_;
@@ -46,13 +46,13 @@ MotorCommand KeyboardInterface::Step(double t_s, const InputState& s) {
   return Command();
 }
 
-MotorCommand KeyboardInterface::Command() const {
+TreadCommand KeyboardInterface::Command() const {
   const double forward = static_cast<double>(throttle_.level()) / levels_;
   const double turn = config_.turn_share * static_cast<double>(steering_.level()) / levels_;
   return Mix(forward, turn);
 }
 
-MotorCommand KeyboardInterface::Update(double t_s, const VehicleFeedback& /*feedback*/,
+TreadCommand KeyboardInterface::Update(double t_s, const VehicleFeedback& /*feedback*/,
                                        haptics::Hal& hal) {
   // No hands: both fields disabled, stamped now, so the servo loop renders
   // no force and sees a live (not stalled) interface.
@@ -61,7 +61,7 @@ MotorCommand KeyboardInterface::Update(double t_s, const VehicleFeedback& /*feed
   return Step(t_s, input_.Load());
 }
 
-HandTargets KeyboardInterface::HandTargetsFor(const DriveIntent& /*intent*/) const { return {}; }
+HandTargets KeyboardInterface::HandTargetsFor(const MotionIntent& /*intent*/) const { return {}; }
 
 namespace {
 

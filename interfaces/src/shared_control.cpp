@@ -22,7 +22,7 @@ void ArcPosition(double v, double omega, double t, double& x, double& y) {
 
 }  // namespace
 
-double TimeToCollision(const RangeScan& scan, const MotorCommand& command,
+double TimeToCollision(const RangeScan& scan, const TreadCommand& command,
                        const VehicleGeometry& vehicle, double clearance, double horizon_s) {
   constexpr double kNever = std::numeric_limits<double>::infinity();
   const int count = std::clamp(scan.count, 0, kMaxRangeBeams);

@@ -301,12 +301,13 @@ struct GrantedTopics {
 GrantedTopics TopicsOf(const std::string& identity) {
   if (identity == OperatorIdentity()) {
     // The operator commands, asks for key frames and bitrates
-    // (video_feedback) and says who drives (selected, a fleet's).
+    // (video_feedback) and says who drives (selected, a fleet's); a CAN
+    // robot also says how its bus log fares (can_log).
     return {{"haptel/*/command", "haptel/*/video_feedback", "haptel/*/selected"},
-            {"haptel/*/state", "haptel/*/video", "haptel/*/selected"}};
+            {"haptel/*/state", "haptel/*/video", "haptel/*/selected", "haptel/*/can_log"}};
   }
   const std::string name = identity.substr(VehicleIdentity("").size());
-  return {{"haptel/" + name + "/state", "haptel/" + name + "/video"},
+  return {{"haptel/" + name + "/state", "haptel/" + name + "/video", "haptel/" + name + "/can_log"},
           {"haptel/" + name + "/command", "haptel/" + name + "/video_feedback"}};
 }
 

@@ -6,7 +6,8 @@
 namespace haptel::mediator {
 
 AutoOperator::AutoOperator(const Track& track, const OperatorConfig& config,
-                           const DriveConfig& drive, const DriverProfile& profile, int experience)
+                           const TreadDriveConfig& drive, const DriverProfile& profile,
+                           int experience)
     : track_(track),
       config_(config),
       drive_(drive),
@@ -28,7 +29,7 @@ void AutoOperator::Observe(const Observation& observation) {
   }
 }
 
-interfaces::DriveIntent AutoOperator::Decide(double t_s) {
+interfaces::MotionIntent AutoOperator::Decide(double t_s) {
   // The newest observation at least reaction_delay old.
   const Observation* o = nullptr;
   for (const Observation& candidate : seen_) {
@@ -92,11 +93,11 @@ double AutoOperator::Practised(double factor) const {
   return 1.0 - std::min(0.9, (1.0 - factor) * error_scale_);
 }
 
-interfaces::DriveIntent AutoOperator::Express(double t_s, const interfaces::DriveIntent& ideal,
-                                              const interfaces::MediatorInterface& interface) {
+interfaces::MotionIntent AutoOperator::Express(double t_s, const interfaces::MotionIntent& ideal,
+                                               const interfaces::MediatorInterface& interface) {
   const double dt = last_express_s_ < 0 ? 0.0 : std::max(0.0, t_s - last_express_s_);
   last_express_s_ = t_s;
-  interfaces::DriveIntent out = ideal;
+  interfaces::MotionIntent out = ideal;
 
   // The steering wanders (an Ornstein–Uhlenbeck process: stationary spread
   // steering_noise, correlation time noise_time_s).

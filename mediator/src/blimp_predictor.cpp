@@ -4,7 +4,7 @@
 #include <cmath>
 #include <limits>
 
-#include "haptel/vehicles/airship.hpp"
+#include "haptel/models/airship.hpp"
 
 namespace haptel::mediator {
 
@@ -22,8 +22,7 @@ AirshipConfig WithoutGusts(AirshipConfig airship) {
 }
 
 /// The actuators settled at the channels `applied`.
-void SettleActuators(const AirshipConfig& k, const BlimpCommand& applied,
-                     vehicles::AirshipState& s) {
+void SettleActuators(const AirshipConfig& k, const BlimpCommand& applied, models::AirshipState& s) {
   s.thrust = std::clamp(applied.power, 0.0, 1.0) * k.max_thrust;
   s.helix_rad = std::clamp(applied.helix, -1.0, 1.0) * k.max_helix_deg * M_PI / 180.0;
   s.tail = std::clamp(applied.tail_rotor, -1.0, 1.0) * k.tail_thrust;
@@ -50,7 +49,7 @@ double BlimpPredictor::OnState(const BlimpStateSample& state) {
     if (b.received_s <= sample_s && b.sample_s <= sample_s) known = &b;
   }
   if (known != nullptr) {
-    Run(*known, nullptr, {sample_s}, [&](double, const vehicles::SimBlimp& m) {
+    Run(*known, nullptr, {sample_s}, [&](double, const models::SimBlimp& m) {
       error_m = (m.position() - state.position).norm();
     });
     errors_m_.push_back(error_m);
@@ -63,9 +62,9 @@ double BlimpPredictor::OnState(const BlimpStateSample& state) {
   base.applied = Clamped(state.applied);
   base.applied_sent_s = state.command_sent_s;
   base.applied_since_s = state.command_age_s >= 0.0 ? sample_s - state.command_age_s : sample_s;
-  vehicles::AirshipState& s = base.state;
+  models::AirshipState& s = base.state;
   s.position = state.position;
-  s.attitude = vehicles::AttitudeFromYawPitchRoll(state.yaw, state.pitch, state.roll);
+  s.attitude = models::AttitudeFromYawPitchRoll(state.yaw, state.pitch, state.roll);
   s.velocity = s.attitude.conjugate() * state.velocity;
   if (bases_.empty()) {
     SettleActuators(airship_, base.applied, s);
@@ -75,8 +74,8 @@ double BlimpPredictor::OnState(const BlimpStateSample& state) {
     // two states' turn gives them, the rates.
     const Base& before = bases_.back();
     Eigen::Quaterniond model_attitude = before.state.attitude;
-    Run(before, nullptr, {sample_s}, [&](double, const vehicles::SimBlimp& m) {
-      const vehicles::AirshipState& run = m.airship().state();
+    Run(before, nullptr, {sample_s}, [&](double, const models::SimBlimp& m) {
+      const models::AirshipState& run = m.airship().state();
       s.thrust = run.thrust;
       s.helix_rad = run.helix_rad;
       s.tail = run.tail;
@@ -121,7 +120,7 @@ double BlimpPredictor::SampleTime(const BlimpStateSample& state, double d) {
 }
 
 void BlimpPredictor::Run(const Base& base, const Command* extra, const std::vector<double>& at,
-                         const std::function<void(double, const vehicles::SimBlimp&)>& emit) const {
+                         const std::function<void(double, const models::SimBlimp&)>& emit) const {
   const double d = delay_.one_way_s();
   model_.Place(base.state, base.applied);
   double t = base.sample_s;
@@ -171,7 +170,7 @@ void BlimpPredictor::Run(const Base& base, const Command* extra, const std::vect
   emit_until(std::numeric_limits<double>::infinity());
 }
 
-BlimpPredictedPose BlimpPredictor::PoseOf(double t_s, const vehicles::SimBlimp& model) {
+BlimpPredictedPose BlimpPredictor::PoseOf(double t_s, const models::SimBlimp& model) {
   BlimpPredictedPose p;
   p.t_s = t_s;
   p.position = model.position();
@@ -188,7 +187,7 @@ BlimpPredictedPose BlimpPredictor::PoseAt(double t_s) const {
   pose.t_s = t_s;
   if (bases_.empty()) return pose;
   Run(bases_.back(), nullptr, {t_s},
-      [&](double t, const vehicles::SimBlimp& m) { pose = PoseOf(t, m); });
+      [&](double t, const models::SimBlimp& m) { pose = PoseOf(t, m); });
   return pose;
 }
 
@@ -200,7 +199,7 @@ void BlimpPredictor::PathAhead(double now_s, double horizon_s, const BlimpComman
   for (double t = now_s; t <= now_s + horizon_s + 1e-9; t += spacing_s) at.push_back(t);
   const Command held{now_s, Clamped(given)};
   Run(bases_.back(), &held, at,
-      [&](double t, const vehicles::SimBlimp& m) { path.push_back(PoseOf(t, m)); });
+      [&](double t, const models::SimBlimp& m) { path.push_back(PoseOf(t, m)); });
 }
 
 }  // namespace haptel::mediator

@@ -33,9 +33,8 @@ bool InterfaceSet::Request(int index, double t_s) {
   return true;
 }
 
-interfaces::MotorCommand InterfaceSet::Update(double t_s,
-                                              const interfaces::VehicleFeedback& feedback,
-                                              haptics::Hal& hal) {
+TreadCommand InterfaceSet::Update(double t_s, const interfaces::VehicleFeedback& feedback,
+                                  haptics::Hal& hal) {
   if (target_ >= 0) {
     // Ramping down: the old interface still renders its forces, fading.
     const double down = (t_s - ramp_start_s_) / ramp_s_;
@@ -52,7 +51,7 @@ interfaces::MotorCommand InterfaceSet::Update(double t_s,
     ramp_start_s_ = t_s;
     ramp_up_until_s_ = t_s + ramp_s_;
   }
-  interfaces::MotorCommand command = current().Update(t_s, feedback, hal);
+  TreadCommand command = current().Update(t_s, feedback, hal);
   if (ramp_up_until_s_ > 0) {
     const double up = (t_s - ramp_start_s_) / ramp_s_;
     hal.SetForceScale(std::min(1.0, up));

@@ -24,7 +24,7 @@ void PlaceHands(haptics::SimDevice& device, const interfaces::HandTargets& targe
 }
 
 AutomaticOperator::AutomaticOperator(const Track& track, const OperatorConfig& config,
-                                     const DriveConfig& drive, haptics::SimDevice& device,
+                                     const TreadDriveConfig& drive, haptics::SimDevice& device,
                                      const DriverProfile& profile, int experience)
     : driver_(track, config, drive, profile, experience), device_(device) {}
 

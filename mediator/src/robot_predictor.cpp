@@ -6,12 +6,12 @@
 
 namespace haptel::mediator {
 
-RobotPredictor::RobotPredictor(const DriveConfig& drive, double watchdog_s, double step_s)
+RobotPredictor::RobotPredictor(const TreadDriveConfig& drive, double watchdog_s, double step_s)
     : drive_(drive), watchdog_s_(watchdog_s), step_s_(step_s) {}
 
 void RobotPredictor::OnCommand(double t_s, double left, double right) {
-  commands_.push_back({t_s, vehicles::QuantiseCommand(left, drive_.speed_levels),
-                       vehicles::QuantiseCommand(right, drive_.speed_levels)});
+  commands_.push_back({t_s, models::QuantiseCommand(left, drive_.speed_levels),
+                       models::QuantiseCommand(right, drive_.speed_levels)});
 }
 
 double RobotPredictor::OnState(const RobotStateSample& state) {
@@ -35,7 +35,7 @@ double RobotPredictor::OnState(const RobotStateSample& state) {
             {state.x, state.y, state.heading, 0.0, 0.0},
             state.applied_left,
             state.applied_right};
-  vehicles::TreadsFromMotion(drive_, state.speed, state.yaw_rate, base.treads);
+  models::TreadsFromMotion(drive_, state.speed, state.yaw_rate, base.treads);
   bases_.push_back(base);
   // A state is needed while no later one had arrived by the newest's sample.
   while (bases_.size() > 1 && bases_[1].received_s <= sample_s) bases_.pop_front();
@@ -49,7 +49,7 @@ double RobotPredictor::OnState(const RobotStateSample& state) {
 void RobotPredictor::Run(const Base& base, const Command* extra, const std::vector<double>& at,
                          std::vector<PredictedPose>& out) const {
   const double d = delay_.one_way_s();
-  vehicles::TreadState s = base.treads;
+  models::TreadState s = base.treads;
   double t = base.sample_s;
   int left = base.left;
   int right = base.right;
@@ -64,8 +64,8 @@ void RobotPredictor::Run(const Base& base, const Command* extra, const std::vect
       double end = std::min(to, t + step_s_);
       const bool stopped = t >= stop_s;
       if (!stopped && end > stop_s) end = stop_s;
-      vehicles::StepTreads(drive_, stopped ? 0.0 : vehicles::LevelSpeed(drive_, left),
-                           stopped ? 0.0 : vehicles::LevelSpeed(drive_, right), end - t, s);
+      models::StepTreads(drive_, stopped ? 0.0 : models::LevelSpeed(drive_, left),
+                         stopped ? 0.0 : models::LevelSpeed(drive_, right), end - t, s);
       t = end;
     }
   };
@@ -106,8 +106,8 @@ void RobotPredictor::PathAhead(double now_s, double horizon_s, double left, doub
   if (bases_.empty() || !(spacing_s > 0.0)) return;
   std::vector<double> at;
   for (double t = now_s; t <= now_s + horizon_s + 1e-9; t += spacing_s) at.push_back(t);
-  const Command given{now_s, vehicles::QuantiseCommand(left, drive_.speed_levels),
-                      vehicles::QuantiseCommand(right, drive_.speed_levels)};
+  const Command given{now_s, models::QuantiseCommand(left, drive_.speed_levels),
+                      models::QuantiseCommand(right, drive_.speed_levels)};
   Run(bases_.back(), &given, at, path);
 }
 

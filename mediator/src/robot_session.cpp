@@ -177,9 +177,9 @@ class RobotSession final : public FamilySession {
       lap_.UpdateContact(ts, touching);
       feedback_ = {s.bumper_left(), s.bumper_right(), s.speed(), RangesOf(s)};
       if (feedback_.ranges.count != range_beams_said_) SayRanges(feedback_.ranges);
-      OnCanLog(s);
       third_person_pose_new_ = third_person_pose_new_ || s.pose_valid();
     }
+    if (msg::CanLogStatus log; link.TakeCanLog(log)) OnCanLog(log);
     // The third-person view follows the newest pose, at most at its rate.
     if (third_person_ && third_person_pose_new_ && reported_) {
       const int64_t now = MonotonicNs();
@@ -233,7 +233,7 @@ class RobotSession final : public FamilySession {
         setup_.interfaces[static_cast<size_t>(interfaces_->current_index())].command_rate_hz());
     if (next_command_ns_ == 0) next_command_ns_ = now;
     if (CommandDue(next_command_ns_, now, command_period_ns)) {
-      const interfaces::MotorCommand sent = vehicle_up ? motors_ : interfaces::MotorCommand{};
+      const TreadCommand sent = vehicle_up ? motors_ : TreadCommand{};
       link.Send(sent);
       predictor_.OnCommand(t, sent.left, sent.right);
     }
@@ -366,15 +366,16 @@ class RobotSession final : public FamilySession {
     return setup_.interfaces.at(static_cast<size_t>(setup_.start_interface));
   }
 
-  /// The vehicle's CAN bus log: kept as reported; its end said once, as
-  /// the state first carries it (the robot drives on).
-  void OnCanLog(const msg::VehicleState& s) {
-    if (s.can_log().empty()) return;
-    can_log_.path = s.can_log();
-    can_log_.frames = s.can_log_frames();
-    can_log_.frames_lost = s.can_log_frames_lost();
-    if (can_log_.error.empty() && !s.can_log_error().empty()) {
-      can_log_.error = s.can_log_error();
+  /// The vehicle's CAN bus log (its own topic, a CAN robot's): kept as
+  /// reported; its end said once, as the status first carries it (the
+  /// robot drives on).
+  void OnCanLog(const msg::CanLogStatus& s) {
+    if (s.path().empty()) return;
+    can_log_.path = s.path();
+    can_log_.frames = s.frames();
+    can_log_.frames_lost = s.frames_lost();
+    if (can_log_.error.empty() && !s.error().empty()) {
+      can_log_.error = s.error();
       log::Error("vehicle '" + setup_.vehicle.name +
                  "': its CAN bus log is not recorded whole: " + can_log_.error);
     }
@@ -474,7 +475,7 @@ class RobotSession final : public FamilySession {
   interfaces::VehicleFeedback feedback_;
   /// The beams the range scan had when last said (SayRanges).
   int range_beams_said_ = 0;
-  interfaces::MotorCommand motors_;
+  TreadCommand motors_;
   uint32_t requests_seen_ = 0;
   uint32_t disconnects_seen_ = 0;
   int64_t next_command_ns_ = 0;

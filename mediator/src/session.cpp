@@ -293,7 +293,7 @@ void SessionLoop::Link(VehicleRun& v) {
   options.publish_selected = turns_ != nullptr;  // who commands each of a fleet's vehicles
   if (simulated_) {
     options.program.clear();
-    options.in_process_robot = [simulated = simulated_.get()](const msg::DriveCommand& command) {
+    options.in_process_robot = [simulated = simulated_.get()](const msg::TreadCommand& command) {
       simulated->OnCommand(command);
     };
   }

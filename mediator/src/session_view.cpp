@@ -128,8 +128,7 @@ OverlayFeed::OverlayFeed(const SessionSetup& setup, const Track& track)
 
 view::Overlay OverlayFeed::Make(double t, const LapTimer& lap, const InterfaceSet& interfaces,
                                 const interfaces::VehicleFeedback& feedback,
-                                const interfaces::MotorCommand& motors, bool vehicle_up,
-                                bool touching) {
+                                const TreadCommand& motors, bool vehicle_up, bool touching) {
   const interfaces::MediatorInterface& current = interfaces.current();
   view::Overlay o = LapOverlay(setup_, current.name().c_str(), t, lap.lap_time_s(),
                                lap.gates_passed(), gates_total_, lap.obstacles_touched());

@@ -78,7 +78,7 @@ SimulatedTime::SimulatedTime(const SessionSetup& setup)
 
 SimulatedTime::~SimulatedTime() { StopSimulatedClock(); }
 
-void SimulatedTime::OnCommand(const msg::DriveCommand& command) {
+void SimulatedTime::OnCommand(const msg::TreadCommand& command) {
   commands_.push_back({now_ns_ + delay_ns_, command});
 }
 

@@ -45,7 +45,7 @@ class SimulatedTime {
 
   /// The command sink for VehicleLinkOptions::in_process_robot: a command
   /// sent now reaches the robot one link delay later.
-  void OnCommand(const msg::DriveCommand& command);
+  void OnCommand(const msg::TreadCommand& command);
   /// Steps every part whose tick falls in (now, deadline_ns], in time order
   /// (at equal times: deliveries, servo, physics, vehicle), the clock set to
   /// each tick's time; leaves the clock at `deadline_ns`. `physics` may be
@@ -82,7 +82,7 @@ class SimulatedTime {
   uint64_t physics_ticks_ = 0;
   uint64_t vehicle_ticks_ = 0;
   int64_t physics_start_ns_ = 0;  ///< when the world was first seen (0: not yet)
-  std::deque<InFlight<msg::DriveCommand>> commands_;
+  std::deque<InFlight<msg::TreadCommand>> commands_;
   std::deque<InFlight<msg::VehicleState>> states_;
 };
 

@@ -17,6 +17,32 @@ class SelectedWriter : public link::Writer<msg::SelectedSource, msg::SelectedSou
   using Writer::Writer;
 };
 
+/// The CAN log's status as the DDS thread delivers it, taken by the session.
+class CanLogInbox {
+ public:
+  CanLogInbox(link::Participant& participant, const std::string& vehicle)
+      : reader_(participant, link::TopicName(vehicle, "can_log"), link::Profile::kLatched,
+                [this](const msg::CanLogStatus& s) {
+                  std::lock_guard lock(mutex_);
+                  latest_ = s;
+                  fresh_ = true;
+                }) {}
+  bool Take(msg::CanLogStatus& out) {
+    std::lock_guard lock(mutex_);
+    if (!fresh_) return false;
+    out = latest_;
+    fresh_ = false;
+    return true;
+  }
+
+ private:
+  std::mutex mutex_;
+  msg::CanLogStatus latest_;
+  bool fresh_ = false;
+  // Last: destroyed first, so no DDS callback outlives the rest.
+  link::CanLogReader reader_;
+};
+
 namespace {
 /// The vehicle's command watchdog holds it stopped (robot) or in its failsafe (blimp).
 bool WatchdogTripped(const msg::VehicleState& s) { return link::RobotMessages::WatchdogTripped(s); }
@@ -234,6 +260,7 @@ VehicleLink::VehicleLink(const VehicleLinkOptions& options)
   switch (family()) {
     case VehicleFamily::kRobot:
       channel_ = std::make_unique<RobotChannel>(*participant_, name(), session_, who);
+      can_log_ = std::make_unique<CanLogInbox>(*participant_, name());
       break;
     case VehicleFamily::kBlimp:
       channel_ = std::make_unique<BlimpChannel>(*participant_, name(), session_, who);
@@ -260,6 +287,8 @@ bool VehicleLink::PublishSelected(const std::string& source, const std::string& 
 }
 
 int VehicleLink::selected_readers() const { return selected_ ? selected_->matched() : 0; }
+
+bool VehicleLink::TakeCanLog(msg::CanLogStatus& out) { return can_log_ && can_log_->Take(out); }
 
 VehicleLink::~VehicleLink() { Stop(); }
 

@@ -250,7 +250,7 @@ TEST_CASE("TrackConfig", "[config][validate]") {
 }
 
 TEST_CASE("VehicleConfig and its parts, LinkConfig", "[config][validate]") {
-  CHECK_NOTHROW(haptel::DriveConfig{}.ValidateOrThrow());
+  CHECK_NOTHROW(haptel::TreadDriveConfig{}.ValidateOrThrow());
   CHECK_NOTHROW(haptel::BodyConfig{}.ValidateOrThrow());
   CHECK_NOTHROW(haptel::CameraConfig{}.ValidateOrThrow());
   CHECK_NOTHROW(haptel::LinkConfig{}.ValidateOrThrow());

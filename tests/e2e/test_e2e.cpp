@@ -171,8 +171,8 @@ TEST_CASE("when commands stop, the vehicle's watchdog stops its motors") {
                              last = s;
                              ++states;
                            });
-  link::CommandWriter writer(participant, link::TopicName("wd", "command"),
-                             link::Profile::kCommand);
+  link::TreadCommandWriter writer(participant, link::TopicName("wd", "command"),
+                                  link::Profile::kCommand);
   auto latest = [&] {
     std::lock_guard lock(m);
     return last;
@@ -181,7 +181,7 @@ TEST_CASE("when commands stop, the vehicle's watchdog stops its motors") {
   CHECK(latest().watchdog_tripped());  // no command yet: stopped
 
   // Drive forward at 50 Hz until the motors run.
-  msg::DriveCommand cmd;
+  msg::TreadCommand cmd;
   uint64_t seq = 0;
   auto send = [&](float left, float right) {
     cmd.seq(++seq);

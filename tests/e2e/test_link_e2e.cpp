@@ -221,7 +221,7 @@ class Stranger {
     }
     if (!session) return false;
     ++sent_;
-    msg::DriveCommand c;
+    msg::TreadCommand c;
     c.seq(1'000'000'000 + sent_);
     c.sent_ns(-static_cast<int64_t>(sent_));
     c.left(-1.0f);
@@ -261,7 +261,7 @@ class Stranger {
     return c;
   }
   link::Participant participant_;
-  link::CommandWriter commands_;
+  link::TreadCommandWriter commands_;
   link::VideoFeedbackWriter feedback_;
   std::mutex mutex_;
   std::optional<uint64_t> session_;

@@ -44,7 +44,7 @@ TEST_CASE("cockpit: Update maps the controls read through the port and actuates 
   CHECK(cockpit.NeedsPhysics());
 
   port.state = {.wheel_angle = 0.0, .throttle = 0.03, .wheel_held = true, .throttle_held = true};
-  MotorCommand m = cockpit.Update(0.0, {}, hal);
+  TreadCommand m = cockpit.Update(0.0, {}, hal);
   CHECK(m.left == Approx(0.5));
   CHECK(m.right == Approx(0.5));
   CHECK(port.actuations == 1);
@@ -119,7 +119,7 @@ TEST_CASE("cockpit: the hand goals sit on the rim and the bar where the intent p
   const CockpitConfig c = Shipped("cockpit");
   const GripGeometry grip;
   CockpitInterface cockpit(c, port, grip);
-  const DriveIntent intent{.forward = 0.5, .turn = 0.35};
+  const MotionIntent intent{.forward = 0.5, .turn = 0.35};
   const CockpitControls wanted = cockpit.logic().ControlsFor(intent);
   REQUIRE(wanted.wheel_angle > 0.1);
   const HandTargets targets = cockpit.HandTargetsFor(intent);
@@ -170,7 +170,7 @@ TEST_CASE(
   const GripGeometry grip;
   CockpitInterface cockpit(c, port, grip);
   haptics::Hal hal(Metres());
-  const DriveIntent intent{.forward = 0.5, .turn = 0.0};
+  const MotionIntent intent{.forward = 0.5, .turn = 0.0};
   const double nominal_x =
       cockpit.HandTargetsFor(intent)[haptics::Index(Side::kRight)]->position[0];
   // The right hand is 2 cm further forward than its grip would put it on the

@@ -27,7 +27,7 @@ TEST_CASE("throttle drives forward, wheel turns, both saturate") {
   CockpitLogic logic(Plain());
   CockpitControls c;
   c.throttle = 0.03;  // half travel
-  MotorCommand m = logic.Map(c, 0.0);
+  TreadCommand m = logic.Map(c, 0.0);
   CHECK(m.left == Approx(0.5));
   CHECK(m.right == Approx(0.5));
   c.wheel_angle = 45 * kDeg;  // half of full turn, left
@@ -43,9 +43,9 @@ TEST_CASE("throttle drives forward, wheel turns, both saturate") {
 
 TEST_CASE("ControlsFor inverts Map") {
   CockpitLogic logic(Plain());
-  for (const DriveIntent intent :
-       {DriveIntent{0.6, 0.2}, DriveIntent{-0.3, -0.1}, DriveIntent{0.0, 0.4}}) {
-    const MotorCommand m = logic.Map(logic.ControlsFor(intent), 0.0);
+  for (const MotionIntent intent :
+       {MotionIntent{0.6, 0.2}, MotionIntent{-0.3, -0.1}, MotionIntent{0.0, 0.4}}) {
+    const TreadCommand m = logic.Map(logic.ControlsFor(intent), 0.0);
     CHECK(m.left == Approx(intent.forward - intent.turn).margin(1e-9));
     CHECK(m.right == Approx(intent.forward + intent.turn).margin(1e-9));
   }

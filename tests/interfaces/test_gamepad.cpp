@@ -32,11 +32,11 @@ TEST_CASE("gamepad: inside the radial dead zone nothing moves", "[gamepad]") {
   InputState s = Pad();
   AxisOf(s, PadAxis::kLeftX) = 0.08;
   AxisOf(s, PadAxis::kLeftY) = -0.08;  // radius 0.113 < 0.12
-  const DriveIntent i = g.Intent(s);
+  const MotionIntent i = g.Intent(s);
   CHECK(i.forward == 0.0);
   CHECK(i.turn == 0.0);
   AxisOf(s, PadAxis::kLeftY) = -0.1;  // radius 0.128: out, both components move
-  const DriveIntent o = g.Intent(s);
+  const MotionIntent o = g.Intent(s);
   CHECK(o.forward > 0.0);
   CHECK(o.turn < 0.0);
 }
@@ -68,7 +68,7 @@ TEST_CASE("gamepad: nothing drives unless the deadman button is held", "[gamepad
     GamepadInterface g(Config(), box);
     CHECK(g.Map(s).left == Approx(1.0));
     s.pad_buttons[static_cast<int>(PadButton::kLeftShoulder)] = false;
-    const MotorCommand m = g.Map(s);
+    const TreadCommand m = g.Map(s);
     CHECK(m.left == 0.0);
     CHECK(m.right == 0.0);
   }
@@ -117,10 +117,10 @@ TEST_CASE("gamepad: stick left turns left (right motor faster), from either stic
     GamepadInterface g(Config(), box);
     AxisOf(s, PadAxis::kLeftX) = -1.0;
     CHECK(g.Intent(s).turn == Approx(0.5));  // × turn_share
-    const MotorCommand m = g.Map(s);
+    const TreadCommand m = g.Map(s);
     CHECK(m.right > m.left);
     AxisOf(s, PadAxis::kLeftX) = 1.0;
-    const MotorCommand r = g.Map(s);
+    const TreadCommand r = g.Map(s);
     CHECK(r.left > r.right);
     AxisOf(s, PadAxis::kRightX) = -1.0;  // the other stick does nothing here
     CHECK(g.Map(s).left > g.Map(s).right);
@@ -164,7 +164,7 @@ TEST_CASE("gamepad: no controller gives zero; a disconnect during the run is los
   s.pad_connected = false;
   s.pad_disconnects = 3;
   box.Store(s);
-  MotorCommand m = g.Update(0.06, {}, hal);
+  TreadCommand m = g.Update(0.06, {}, hal);
   CHECK(m.left == 0.0);
   CHECK(m.right == 0.0);
   CHECK(g.lost());

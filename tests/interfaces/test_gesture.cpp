@@ -27,27 +27,27 @@ GestureConfig Config() {
 
 TEST_CASE("inside the dead zone the robot does not move") {
   GestureInterface g(Config());
-  const MotorCommand m = g.Map({0.1 + 0.009, -0.009, 0.0});
+  const TreadCommand m = g.Map({0.1 + 0.009, -0.009, 0.0});
   CHECK(m.left == 0.0);
   CHECK(m.right == 0.0);
 }
 
 TEST_CASE("hand forward drives forward, proportionally past the dead zone") {
   GestureInterface g(Config());
-  const MotorCommand half = g.Map({0.1 + 0.01 + 0.04, 0, 0});
+  const TreadCommand half = g.Map({0.1 + 0.01 + 0.04, 0, 0});
   CHECK(half.left == Approx(0.5));
   CHECK(half.right == Approx(0.5));
-  const MotorCommand full = g.Map({0.1 + 0.5, 0, 0});  // far past full scale: saturates
+  const TreadCommand full = g.Map({0.1 + 0.5, 0, 0});  // far past full scale: saturates
   CHECK(full.left == Approx(1.0));
-  const MotorCommand back = g.Map({0.1 - 0.05, 0, 0});
+  const TreadCommand back = g.Map({0.1 - 0.05, 0, 0});
   CHECK(back.left == Approx(-0.5));
 }
 
 TEST_CASE("hand left turns left: right motor faster than left") {
   GestureInterface g(Config());
-  const MotorCommand m = g.Map({0.1 + 0.05, 0.05, 0});
+  const TreadCommand m = g.Map({0.1 + 0.05, 0.05, 0});
   CHECK(m.right > m.left);
-  const MotorCommand spin = g.Map({0.1, -0.09, 0});  // pure right turn: spin in place
+  const TreadCommand spin = g.Map({0.1, -0.09, 0});  // pure right turn: spin in place
   CHECK(spin.left == Approx(-spin.right));
   CHECK(spin.left > 0.0);
 }
@@ -56,7 +56,7 @@ TEST_CASE("commands stay within [-1, 1] at every corner of the workspace") {
   GestureInterface g(Config());
   for (double x : {-0.3, 0.0, 0.3})
     for (double y : {-0.3, 0.0, 0.3}) {
-      const MotorCommand m = g.Map({0.1 + x, y, 0});
+      const TreadCommand m = g.Map({0.1 + x, y, 0});
       CHECK(std::abs(m.left) <= 1.0);
       CHECK(std::abs(m.right) <= 1.0);
     }
@@ -64,12 +64,12 @@ TEST_CASE("commands stay within [-1, 1] at every corner of the workspace") {
 
 TEST_CASE("HandTargetsFor inverts the mapping and uses only the right hand") {
   GestureInterface g(Config());
-  for (const DriveIntent intent :
-       {DriveIntent{0.6, 0.2}, DriveIntent{-0.3, -0.1}, DriveIntent{0.0, 0.0}}) {
+  for (const MotionIntent intent :
+       {MotionIntent{0.6, 0.2}, MotionIntent{-0.3, -0.1}, MotionIntent{0.0, 0.0}}) {
     const HandTargets targets = g.HandTargetsFor(intent);
     REQUIRE(targets[haptics::Index(Side::kRight)].has_value());
     CHECK_FALSE(targets[haptics::Index(Side::kLeft)].has_value());
-    const MotorCommand m = g.Map(targets[haptics::Index(Side::kRight)]->position);
+    const TreadCommand m = g.Map(targets[haptics::Index(Side::kRight)]->position);
     CHECK(m.left == Approx(intent.forward - intent.turn).margin(1e-9));
     CHECK(m.right == Approx(intent.forward + intent.turn).margin(1e-9));
   }
@@ -79,7 +79,7 @@ TEST_CASE("Update puts a centring field for the right hand in the HAL") {
   GestureInterface g(Config());
   haptics::Hal hal(Metres());
   PutHand(hal, {0.15, 0, 0});
-  const MotorCommand m = g.Update(0.0, {}, hal);
+  const TreadCommand m = g.Update(0.0, {}, hal);
   CHECK(m.left > 0.0);
   const haptics::ForceField right = hal.Setpoint(Side::kRight).field;
   CHECK(right.enabled);
@@ -92,7 +92,7 @@ TEST_CASE("without a valid hand sample Update commands stop and zero forces") {
   GestureInterface g(Config());
   haptics::Hal hal(Metres());
   hal.SetField(Side::kRight, g.field());
-  const MotorCommand m = g.Update(0.0, {}, hal);
+  const TreadCommand m = g.Update(0.0, {}, hal);
   CHECK(m.left == 0.0);
   CHECK(m.right == 0.0);
   CHECK_FALSE(hal.Setpoint(Side::kRight).field.enabled);

@@ -46,7 +46,7 @@ TEST_CASE("keyboard: a press steps the throttle one level, even one shorter than
   CHECK(kb.Update(0.0, {}, hal).left == 0.0);
 
   k.Down(&InputState::key_up, &InputState::presses_up);
-  MotorCommand m = kb.Update(kTick, {}, hal);
+  TreadCommand m = kb.Update(kTick, {}, hal);
   CHECK(kb.throttle_level() == 1);
   CHECK(m.left == Approx(1.0 / 8));
   CHECK(m.right == Approx(1.0 / 8));
@@ -114,7 +114,7 @@ TEST_CASE("keyboard: a held key repeats every repeat_s and levels clamp at the v
     k.Down(&InputState::key_down, &InputState::presses_down);
     for (double t = 4.06; t < 8.0; t += kTick) kb.Update(t, {}, hal);
     CHECK(kb.throttle_level() == -8);
-    const MotorCommand m = kb.Update(8.0, {}, hal);
+    const TreadCommand m = kb.Update(8.0, {}, hal);
     CHECK(m.left == Approx(-1.0));
     CHECK(m.right == Approx(-1.0));
   }
@@ -147,7 +147,7 @@ TEST_CASE("keyboard: space stops both levels at once", "[keyboard]") {
   REQUIRE(kb.steering_level() == -2);
   // Even a tap of space shorter than a tick.
   k.Tap(&InputState::key_stop, &InputState::presses_stop);
-  const MotorCommand m = kb.Update(kTick, {}, hal);
+  const TreadCommand m = kb.Update(kTick, {}, hal);
   CHECK(kb.throttle_level() == 0);
   CHECK(kb.steering_level() == 0);
   CHECK(m.left == 0.0);
@@ -162,13 +162,13 @@ TEST_CASE("keyboard: the left key turns left (right motor faster than left)", "[
   KeyboardInterface kb(c, k.box, 8);
   for (int i = 0; i < 4; ++i) k.Tap(&InputState::key_up, &InputState::presses_up);
   for (int i = 0; i < 4; ++i) k.Tap(&InputState::key_left, &InputState::presses_left);
-  const MotorCommand m = kb.Update(0.0, {}, hal);
+  const TreadCommand m = kb.Update(0.0, {}, hal);
   CHECK(kb.steering_level() == 4);
   // forward 4/8, turn 0.5 × 4/8: left = 0.5 − 0.25, right = 0.5 + 0.25.
   CHECK(m.left == Approx(0.25));
   CHECK(m.right == Approx(0.75));
   for (int i = 0; i < 8; ++i) k.Tap(&InputState::key_right, &InputState::presses_right);
-  const MotorCommand r = kb.Update(kTick, {}, hal);
+  const TreadCommand r = kb.Update(kTick, {}, hal);
   CHECK(kb.steering_level() == -4);
   CHECK(r.left > r.right);
 }
@@ -199,7 +199,7 @@ TEST_CASE(
   for (int i = 0; i < 3; ++i) k.Tap(&InputState::key_up, &InputState::presses_up);
   k.Tap(&InputState::key_left, &InputState::presses_left);
   kb.Rebase(k.box.Load());
-  const MotorCommand m = kb.Update(1.0, {}, hal);
+  const TreadCommand m = kb.Update(1.0, {}, hal);
   CHECK(kb.throttle_level() == 0);
   CHECK(kb.steering_level() == 0);
   CHECK(m.left == 0.0);

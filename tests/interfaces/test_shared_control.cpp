@@ -177,10 +177,10 @@ TEST_CASE("curving into a wall beside the path steers the hand away rather than 
   // At the boundary the path clears the wall within the horizon, driven at
   // the hand's speed (the look-ahead is horizon x the hand's speed).
   GestureInterface gesture(SharedConfig(), kVehicle);
-  const MotorCommand own = gesture.Map(hand);
-  const MotorCommand boundary = gesture.Map(g.point);
+  const TreadCommand own = gesture.Map(hand);
+  const TreadCommand boundary = gesture.Map(g.point);
   const double scale = (own.left + own.right) / (boundary.left + boundary.right);
-  const MotorCommand same_speed{boundary.left * scale, boundary.right * scale};
+  const TreadCommand same_speed{boundary.left * scale, boundary.right * scale};
   CHECK(std::isinf(TimeToCollision(WallAlongRight(0.25), same_speed, kVehicle, 0.03, 1.5)));
   CHECK(std::isfinite(TimeToCollision(WallAlongRight(0.25), own, kVehicle, 0.03, 1.5)));
 }
@@ -248,7 +248,7 @@ CockpitConfig SharedCockpit(double horizon_s = 1.5, double max_force = 3.0) {
 struct CockpitAt {
   ControlsAt port;
   CockpitInterface cockpit;
-  MotorCommand command;
+  TreadCommand command;
   CockpitAt(double throttle, double wheel_angle, const RangeScan& scan,
             const CockpitConfig& config = SharedCockpit())
       : cockpit(config, port, GripGeometry{}, kVehicle) {

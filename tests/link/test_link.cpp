@@ -58,17 +58,17 @@ TEST_CASE("a command crosses between two participants intact") {
   Participant a(config, "test-a");
   Participant b(config, "test-b");
   std::mutex m;
-  msg::DriveCommand got;
+  msg::TreadCommand got;
   std::atomic<int> count{0};
-  CommandReader reader(b, TopicName("t", "command"), Profile::kCommand,
-                       [&](const msg::DriveCommand& c) {
-                         std::lock_guard lock(m);
-                         got = c;
-                         ++count;
-                       });
-  CommandWriter writer(a, TopicName("t", "command"), Profile::kCommand);
+  TreadCommandReader reader(b, TopicName("t", "command"), Profile::kCommand,
+                            [&](const msg::TreadCommand& c) {
+                              std::lock_guard lock(m);
+                              got = c;
+                              ++count;
+                            });
+  TreadCommandWriter writer(a, TopicName("t", "command"), Profile::kCommand);
   REQUIRE(test::WaitFor([&] { return writer.matched() > 0 && reader.matched() > 0; }, 20.0));
-  msg::DriveCommand c;
+  msg::TreadCommand c;
   c.seq(42);
   c.sent_ns(123456789);
   c.left(0.25F);
@@ -96,21 +96,21 @@ TEST_CASE(
   Participant stranger(config, "test-stranger");
   std::mutex m;
   std::vector<WriterId> from;
-  CommandReader reader(vehicle, TopicName("t", "command"), Profile::kCommand,
-                       [&](const msg::DriveCommand&, const WriterId& writer) {
-                         std::lock_guard lock(m);
-                         from.push_back(writer);
-                       });
-  CommandWriter mine(owner, TopicName("t", "command"), Profile::kCommand);
+  TreadCommandReader reader(vehicle, TopicName("t", "command"), Profile::kCommand,
+                            [&](const msg::TreadCommand&, const WriterId& writer) {
+                              std::lock_guard lock(m);
+                              from.push_back(writer);
+                            });
+  TreadCommandWriter mine(owner, TopicName("t", "command"), Profile::kCommand);
   VideoFeedbackWriter my_feedback(owner, TopicName("t", "video_feedback"), Profile::kState);
-  CommandWriter theirs(stranger, TopicName("t", "command"), Profile::kCommand);
+  TreadCommandWriter theirs(stranger, TopicName("t", "command"), Profile::kCommand);
   CHECK_FALSE(mine.id().empty());
   CHECK_FALSE(mine.id() == theirs.id());
   // One participant's writers share its GUID prefix; another's do not.
   CHECK(mine.id().SameParticipant(my_feedback.id()));
   CHECK_FALSE(mine.id() == my_feedback.id());
   CHECK_FALSE(mine.id().SameParticipant(theirs.id()));
-  msg::DriveCommand c;
+  msg::TreadCommand c;
   const auto heard = [&](const WriterId& id) {
     std::lock_guard lock(m);
     return std::find(from.begin(), from.end(), id) != from.end();

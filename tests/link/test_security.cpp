@@ -60,10 +60,10 @@ struct Vehicle {
   explicit Vehicle(const LinkConfig& config)
       : participant(config, "vehicle"),
         commands(participant, link::TopicName("robot1", "command"), link::Profile::kCommand,
-                 [this](const msg::DriveCommand&) { received.fetch_add(1); }) {}
+                 [this](const msg::TreadCommand&) { received.fetch_add(1); }) {}
   link::Participant participant;
   std::atomic<int> received{0};
-  link::CommandReader commands;
+  link::TreadCommandReader commands;
 };
 
 /// Commands at 100 Hz from a participant made with `config`, for `seconds`
@@ -73,9 +73,9 @@ struct Vehicle {
 void Command(const LinkConfig& config, double seconds, const std::string& marker = "",
              const std::function<bool()>& until = nullptr) {
   link::Participant participant(config, "operator");
-  link::CommandWriter writer(participant, link::TopicName("robot1", "command"),
-                             link::Profile::kCommand);
-  msg::DriveCommand m;
+  link::TreadCommandWriter writer(participant, link::TopicName("robot1", "command"),
+                                  link::Profile::kCommand);
+  msg::TreadCommand m;
   m.left(0.25f);
   m.operator_name(marker);
   for (int i = 0; i < static_cast<int>(seconds * 100); ++i) {

@@ -21,7 +21,7 @@ Observation At(double t, const Vec2& p, double heading) {
 TEST_CASE("the operator waits for its reaction delay before acting") {
   OperatorConfig cfg;
   cfg.reaction_delay_s = 0.15;
-  AutoOperator op(ShortTrack(), cfg, DriveConfig{});
+  AutoOperator op(ShortTrack(), cfg, TreadDriveConfig{});
   op.Observe(At(1.0, ShortTrack().PointAt(0.0), 0.0));
   const auto early = op.Decide(1.1);
   CHECK(early.forward == 0.0);
@@ -31,7 +31,7 @@ TEST_CASE("the operator waits for its reaction delay before acting") {
 }
 
 TEST_CASE("on a straight, aligned with the track, the operator drives straight ahead") {
-  AutoOperator op(ShortTrack(), OperatorConfig{}, DriveConfig{});
+  AutoOperator op(ShortTrack(), OperatorConfig{}, TreadDriveConfig{});
   const Vec2 p = ShortTrack().PointAt(0.1);  // first straight runs along +x
   op.Observe(At(0.0, p, 0.0));
   const auto intent = op.Decide(1.0);
@@ -40,14 +40,14 @@ TEST_CASE("on a straight, aligned with the track, the operator drives straight a
 }
 
 TEST_CASE("displaced to the right of the line, the operator steers left") {
-  AutoOperator op(ShortTrack(), OperatorConfig{}, DriveConfig{});
+  AutoOperator op(ShortTrack(), OperatorConfig{}, TreadDriveConfig{});
   const Vec2 p = ShortTrack().PointAt(0.1) + Vec2(0, -0.15);
   op.Observe(At(0.0, p, 0.0));
   CHECK(op.Decide(1.0).turn > 0.0);
 }
 
 TEST_CASE("facing backwards, the operator turns on the spot") {
-  AutoOperator op(ShortTrack(), OperatorConfig{}, DriveConfig{});
+  AutoOperator op(ShortTrack(), OperatorConfig{}, TreadDriveConfig{});
   op.Observe(At(0.0, ShortTrack().PointAt(0.1), std::numbers::pi));
   const auto intent = op.Decide(1.0);
   CHECK(intent.forward == 0.0);
@@ -57,7 +57,7 @@ TEST_CASE("facing backwards, the operator turns on the spot") {
 TEST_CASE("after a bumper contact the operator backs off, turning away from the touched side") {
   OperatorConfig cfg;
   cfg.backoff_s = 0.8;
-  AutoOperator op(ShortTrack(), cfg, DriveConfig{});
+  AutoOperator op(ShortTrack(), cfg, TreadDriveConfig{});
   Observation o = At(0.0, ShortTrack().PointAt(0.1), 0.0);
   o.bumper_left = true;
   op.Observe(o);
@@ -76,7 +76,7 @@ TEST_CASE(
   cfg.reaction_delay_s = 0.0;
   cfg.backoff_s = 0.8;
   cfg.careful_s = 4.0;
-  AutoOperator op(ShortTrack(), cfg, DriveConfig{});
+  AutoOperator op(ShortTrack(), cfg, TreadDriveConfig{});
   Observation o = At(0.0, ShortTrack().PointAt(0.1), 0.0);
   o.bumper_right = true;
   op.Observe(o);
@@ -111,7 +111,7 @@ TEST_CASE(
   // Aiming, the operator steers harder onto the line from the same offset
   // (half the look-ahead: a sharper pursuit arc).
   const Vec2 beside = ShortTrack().PointAt(0.1) + Vec2(0.0, 0.06);
-  AutoOperator relaxed(ShortTrack(), cfg, DriveConfig{});
+  AutoOperator relaxed(ShortTrack(), cfg, TreadDriveConfig{});
   relaxed.Observe(At(0.0, beside, 0.0));
   const double relaxed_turn = relaxed.Decide(0.0).turn;
   // op is aiming until 40.8 + 4 = 44.8.
@@ -126,7 +126,7 @@ TEST_CASE(
 TEST_CASE("the operator's arm lags its intent") {
   OperatorConfig cfg;
   cfg.arm_time_constant_s = 0.1;
-  AutoOperator op(ShortTrack(), cfg, DriveConfig{});
+  AutoOperator op(ShortTrack(), cfg, TreadDriveConfig{});
   const interfaces::GestureInterface gesture{GestureConfig{}};
   op.Observe(At(0.0, ShortTrack().PointAt(0.1), 0.0));
   const auto first = op.Act(1.0, gesture);  // starts from neutral
@@ -146,11 +146,10 @@ namespace {
 /// x = 0.1 + 0.05·forward, approached from 4 cm above, closed to 1 rad.
 struct GripInterface final : interfaces::MediatorInterface {
   std::string name() const override { return "grip"; }
-  interfaces::MotorCommand Update(double, const interfaces::VehicleFeedback&,
-                                  haptics::Hal&) override {
+  TreadCommand Update(double, const interfaces::VehicleFeedback&, haptics::Hal&) override {
     return {};
   }
-  interfaces::HandTargets HandTargetsFor(const interfaces::DriveIntent& intent) const override {
+  interfaces::HandTargets HandTargetsFor(const interfaces::MotionIntent& intent) const override {
     interfaces::HandGoal g;
     g.position = {0.1 + 0.05 * intent.forward, 0.0, 0.0};
     g.glove.fill(1.0);
@@ -168,7 +167,7 @@ TEST_CASE("with a control to grasp, the operator comes down open, closes, then d
   cfg.reaction_delay_s = 0.0;
   cfg.grasp_reach_s = 0.8;
   cfg.grasp_close_s = 0.6;
-  AutoOperator op(ShortTrack(), cfg, DriveConfig{});
+  AutoOperator op(ShortTrack(), cfg, TreadDriveConfig{});
   op.Observe(At(0.0, ShortTrack().PointAt(0.1), 0.0));  // on a straight: it wants to go forward
   const GripInterface grip;
   const int left = haptics::Index(haptics::Side::kLeft);
@@ -201,7 +200,7 @@ TEST_CASE("with a control to grasp, the operator comes down open, closes, then d
 }
 
 TEST_CASE("with nothing to grasp the operator drives from its first act") {
-  AutoOperator op(ShortTrack(), OperatorConfig{}, DriveConfig{});
+  AutoOperator op(ShortTrack(), OperatorConfig{}, TreadDriveConfig{});
   const interfaces::GestureInterface gesture{GestureConfig{}};
   op.Act(5.0, gesture);
   CHECK(op.grasped(5.0));

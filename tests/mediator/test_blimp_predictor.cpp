@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "haptel/mediator/blimp_predictor.hpp"
-#include "haptel/vehicles/sim_blimp.hpp"
+#include "haptel/models/sim_blimp.hpp"
 
 using namespace haptel;
 using namespace haptel::mediator;
@@ -37,7 +37,7 @@ BlimpCourseConfig OpenField() {
 struct DelayedLink {
   AirshipConfig airship;
   BlimpCourseConfig course = OpenField();
-  vehicles::SimBlimp blimp{airship, course};
+  models::SimBlimp blimp{airship, course};
   double delay_s;
   double watchdog_s = 0.2;
   double dt = airship.step_s;

@@ -56,7 +56,7 @@ struct Cockpit {
   }
   /// Moves the goals from one intent to another over `seconds`, like the
   /// operator's arm would.
-  void Move(const interfaces::DriveIntent& from, const interfaces::DriveIntent& to,
+  void Move(const interfaces::MotionIntent& from, const interfaces::MotionIntent& to,
             double seconds) {
     const int steps = static_cast<int>(seconds / world.config().step_s);
     for (int i = 1; i <= steps; ++i) {
@@ -91,10 +91,10 @@ TEST_CASE("cockpit grasp: the operator's hand goals hold the rim and the bar and
 
   // Each intent, reached by moving the hands: the controls follow to the
   // positions the interface's inverse map asks for.
-  interfaces::DriveIntent from{};
-  for (const interfaces::DriveIntent to :
-       {interfaces::DriveIntent{0.9, 0.0}, interfaces::DriveIntent{0.4, 0.35},
-        interfaces::DriveIntent{0.4, -0.5}, interfaces::DriveIntent{-0.5, 0.0}}) {
+  interfaces::MotionIntent from{};
+  for (const interfaces::MotionIntent to :
+       {interfaces::MotionIntent{0.9, 0.0}, interfaces::MotionIntent{0.4, 0.35},
+        interfaces::MotionIntent{0.4, -0.5}, interfaces::MotionIntent{-0.5, 0.0}}) {
     c.Move(from, to, 1.0);
     c.Hold(c.cockpit.HandTargetsFor(to), 0.3);
     from = to;
@@ -116,10 +116,10 @@ TEST_CASE("cockpit grasp: back and forth, the lever keeps its place in the hand"
           "[physics][cockpit]") {
   Cockpit c;
   c.Grasp();
-  interfaces::DriveIntent from{};
+  interfaces::MotionIntent from{};
   for (int cycle = 0; cycle < 10; ++cycle) {
-    for (const interfaces::DriveIntent to :
-         {interfaces::DriveIntent{0.9, 0.1}, interfaces::DriveIntent{0.3, -0.2}}) {
+    for (const interfaces::MotionIntent to :
+         {interfaces::MotionIntent{0.9, 0.1}, interfaces::MotionIntent{0.3, -0.2}}) {
       c.Move(from, to, 0.5);
       from = to;
     }

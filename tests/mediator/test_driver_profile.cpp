@@ -23,11 +23,10 @@ struct Controls final : interfaces::MediatorInterface {
   bool speedometer = false;
   bool stay_put = false;
   std::string name() const override { return "controls"; }
-  interfaces::MotorCommand Update(double, const interfaces::VehicleFeedback&,
-                                  haptics::Hal&) override {
+  TreadCommand Update(double, const interfaces::VehicleFeedback&, haptics::Hal&) override {
     return {};
   }
-  interfaces::HandTargets HandTargetsFor(const interfaces::DriveIntent& intent) const override {
+  interfaces::HandTargets HandTargetsFor(const interfaces::MotionIntent& intent) const override {
     interfaces::HandGoal g;
     g.position = {0.1 + 0.05 * intent.forward, 0.05 * intent.turn, 0.0};
     g.glove.fill(1.0);
@@ -53,7 +52,7 @@ OperatorConfig Quick() {
 /// The forward command the driver gives for a full-forward intent, once
 /// holding `controls` (the first Act starts the grasp).
 double Cruise(const DriverProfile& profile, const Controls& controls, int experience = 100) {
-  AutoOperator op(ShortTrack(), Quick(), DriveConfig{}, profile, experience);
+  AutoOperator op(ShortTrack(), Quick(), TreadDriveConfig{}, profile, experience);
   op.Act(0.0, controls);
   return op.Express(1.0, {1.0, 0.0}, controls).forward;
 }
@@ -64,10 +63,10 @@ TEST_CASE("the ideal driver expresses the intent as decided, on any interface") 
   Controls stay;
   stay.stay_put = true;
   stay.speedometer = true;
-  AutoOperator op(ShortTrack(), Quick(), DriveConfig{});
+  AutoOperator op(ShortTrack(), Quick(), TreadDriveConfig{});
   op.Act(0.0, stay);
   for (double t = 1.0; t < 3.0; t += 0.05) {
-    const interfaces::DriveIntent out = op.Express(t, {0.7, -0.2}, stay);
+    const interfaces::MotionIntent out = op.Express(t, {0.7, -0.2}, stay);
     CHECK(out.forward == Approx(0.7));
     CHECK(out.turn == Approx(-0.2));
   }
@@ -80,10 +79,10 @@ TEST_CASE(
   DriverProfile p;
   p.learning_gain = 0.6;
   p.learning_trials = 2.0;
-  CHECK(AutoOperator(ShortTrack(), Quick(), DriveConfig{}, p, 0).error_scale() == Approx(1.6));
-  CHECK(AutoOperator(ShortTrack(), Quick(), DriveConfig{}, p, 2).error_scale() ==
+  CHECK(AutoOperator(ShortTrack(), Quick(), TreadDriveConfig{}, p, 0).error_scale() == Approx(1.6));
+  CHECK(AutoOperator(ShortTrack(), Quick(), TreadDriveConfig{}, p, 2).error_scale() ==
         Approx(1.0 + 0.6 * std::exp(-1.0)));
-  CHECK(AutoOperator(ShortTrack(), Quick(), DriveConfig{}, p, 40).error_scale() ==
+  CHECK(AutoOperator(ShortTrack(), Quick(), TreadDriveConfig{}, p, 40).error_scale() ==
         Approx(1.0).margin(1e-6));
   // A speed shortfall scales with it: 0.8 practised is 0.68 at the first trial.
   p.holding_cruise = 0.8;
@@ -125,7 +124,7 @@ TEST_CASE("holding controls delays the driver's reaction") {
   p.holding_reaction_s = 0.3;
   OperatorConfig c = Quick();
   Controls grip;
-  AutoOperator op(ShortTrack(), c, DriveConfig{}, p);
+  AutoOperator op(ShortTrack(), c, TreadDriveConfig{}, p);
   op.Act(0.0, grip);  // grasping: the reaction delay grows by 0.3 s
   op.Observe(
       {1.0, ShortTrack().PointAt(0.1).x(), ShortTrack().PointAt(0.1).y(), 0.0, false, false});
@@ -133,7 +132,7 @@ TEST_CASE("holding controls delays the driver's reaction") {
   CHECK(op.Decide(1.35).forward > 0.5);
   Controls free_hands;
   free_hands.grip = false;
-  AutoOperator quick(ShortTrack(), c, DriveConfig{}, p);
+  AutoOperator quick(ShortTrack(), c, TreadDriveConfig{}, p);
   quick.Act(0.0, free_hands);
   quick.Observe(
       {1.0, ShortTrack().PointAt(0.1).x(), ShortTrack().PointAt(0.1).y(), 0.0, false, false});
@@ -147,7 +146,7 @@ TEST_CASE("the steering wanders with the profile's spread and correlation time")
   p.seed = 7;
   Controls free_hands;
   free_hands.grip = false;
-  AutoOperator op(ShortTrack(), Quick(), DriveConfig{}, p, 100);
+  AutoOperator op(ShortTrack(), Quick(), TreadDriveConfig{}, p, 100);
   op.Act(0.0, free_hands);
   double sum = 0.0, sum2 = 0.0, lag_sum = 0.0, previous = 0.0;
   const double dt = 0.05;
@@ -174,7 +173,7 @@ TEST_CASE(
   p.regrasp_s = 1.0;
   p.seed = 3;
   Controls grip;
-  AutoOperator op(ShortTrack(), Quick(), DriveConfig{}, p, 100);
+  AutoOperator op(ShortTrack(), Quick(), TreadDriveConfig{}, p, 100);
   const int left = haptics::Index(haptics::Side::kLeft);
   op.Observe(
       {0.0, ShortTrack().PointAt(0.1).x(), ShortTrack().PointAt(0.1).y(), 0.0, false, false});
@@ -192,7 +191,7 @@ TEST_CASE(
   // The hand is more than half open for half of each regrasp.
   CHECK(open_time == Approx(op.slips() * 0.5).epsilon(0.1));
   // The ideal driver never slips.
-  AutoOperator steady(ShortTrack(), Quick(), DriveConfig{});
+  AutoOperator steady(ShortTrack(), Quick(), TreadDriveConfig{});
   for (double t = 0.0; t < 100.0; t += 0.1) steady.Act(t, grip);
   CHECK(steady.slips() == 0);
 }
@@ -206,7 +205,7 @@ TEST_CASE("a control that stays put comes back to its centre slowly and misses i
   stays.stay_put = true;
   OperatorConfig c = Quick();
   c.arm_time_constant_s = 0.0;
-  AutoOperator op(ShortTrack(), c, DriveConfig{}, p, 100);
+  AutoOperator op(ShortTrack(), c, TreadDriveConfig{}, p, 100);
   op.Act(0.0, stays);
   // Away from the centre at once...
   CHECK(op.Express(1.0, {0.0, 0.8}, stays).turn == Approx(0.8));
@@ -220,7 +219,7 @@ TEST_CASE("a control that stays put comes back to its centre slowly and misses i
   CHECK(settled != 0.0);
   // A control that springs back: no lag, no miss.
   Controls returns;
-  AutoOperator spring(ShortTrack(), c, DriveConfig{}, p, 100);
+  AutoOperator spring(ShortTrack(), c, TreadDriveConfig{}, p, 100);
   spring.Act(0.0, returns);
   spring.Express(1.0, {0.0, 0.8}, returns);
   CHECK(spring.Express(1.5, {0.0, 0.0}, returns).turn == 0.0);
@@ -241,7 +240,7 @@ TEST_CASE(
   c.arm_time_constant_s = 0.0;
   c.backoff_s = 0.8;
   c.careful_s = 4.0;
-  AutoOperator op(ShortTrack(), c, DriveConfig{}, p, 100);
+  AutoOperator op(ShortTrack(), c, TreadDriveConfig{}, p, 100);
   const Vec2 at = ShortTrack().PointAt(0.1);
   op.Act(0.0, stays);
   // Before any contact a small wanted turn is wandered and snapped to a missed centre.

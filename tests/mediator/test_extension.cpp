@@ -72,12 +72,12 @@ class LeanInterface final : public interfaces::MediatorInterface {
  public:
   explicit LeanInterface(const LeanConfig& config) : name_(config.name), mapping_(config.gesture) {}
   std::string name() const override { return name_; }
-  interfaces::MotorCommand Update(double t_s, const interfaces::VehicleFeedback& feedback,
+  interfaces::TreadCommand Update(double t_s, const interfaces::VehicleFeedback& feedback,
                                   haptics::Hal& hal) override {
     ++lean_updates;
     return mapping_.Update(t_s, feedback, hal);
   }
-  interfaces::HandTargets HandTargetsFor(const interfaces::DriveIntent& intent) const override {
+  interfaces::HandTargets HandTargetsFor(const interfaces::MotionIntent& intent) const override {
     return mapping_.HandTargetsFor(intent);
   }
   bool NeedsPhysics() const override { return false; }

@@ -58,8 +58,8 @@ struct DelayedLink {
     in_flight.push_back({t, left, right});
     while (!in_flight.empty() && in_flight.front().t + delay_s <= t + 1e-9) {
       robot.SetMotors(
-          {vehicles::QuantiseCommand(in_flight.front().left, vehicle.drive.speed_levels),
-           vehicles::QuantiseCommand(in_flight.front().right, vehicle.drive.speed_levels)});
+          {models::QuantiseCommand(in_flight.front().left, vehicle.drive.speed_levels),
+           models::QuantiseCommand(in_flight.front().right, vehicle.drive.speed_levels)});
       in_flight.pop_front();
     }
     robot.Update(dt);
@@ -123,7 +123,7 @@ TEST_CASE("With the delay known exactly, the predictor says where the simulated 
 }
 
 TEST_CASE("A wrong delay or a wrong model shows in the prediction error") {
-  auto p95 = [](const DriveConfig& model, double measured_rtt_s) {
+  auto p95 = [](const TreadDriveConfig& model, double measured_rtt_s) {
     DelayedLink link(0.2);
     link.measured_rtt_s = measured_rtt_s;
     RobotPredictor predictor(model, 0.2, link.dt);
@@ -135,7 +135,7 @@ TEST_CASE("A wrong delay or a wrong model shows in the prediction error") {
   };
   const VehicleConfig vehicle;
   const double fitted = p95(vehicle.drive, 0.4);
-  DriveConfig even = vehicle.drive;
+  TreadDriveConfig even = vehicle.drive;
   even.right_gain = 1.0;  // the file says the right tread is 5 % weaker; this model forgets
   const double misfitted = p95(even, 0.4);
   const double wrong_delay = p95(vehicle.drive, 0.2);  // told half the round trip

@@ -66,7 +66,7 @@ TEST_CASE(
   bool all_zero_commands = true;
   for (int i = 0; i < 100 && set.switching(); ++i) {
     t += dt;
-    const interfaces::MotorCommand m = set.Update(t, feedback, hal);
+    const TreadCommand m = set.Update(t, feedback, hal);
     // Zero while the switch is under way (the tick that ends the ramp drives).
     if (set.switching()) all_zero_commands = all_zero_commands && m.left == 0.0 && m.right == 0.0;
     const double f = RightForce(hal, hand)[0];
@@ -89,7 +89,7 @@ TEST_CASE(
   CHECK(set.switches()[0].t_s == Approx(ramp_s).margin(dt));
   // Driving again once the ramp is over.
   test::PutHand(hal, {0.06 + 0.05, 0.0, 0.0});
-  const interfaces::MotorCommand drive = set.Update(t + dt, feedback, hal);
+  const TreadCommand drive = set.Update(t + dt, feedback, hal);
   CHECK(drive.left > 0.1);
 }
 

@@ -67,7 +67,7 @@ TEST_CASE("the overlay's HUD is the HUD cockpit's own, and only a HUD interface 
   auto hud_cockpit = std::make_unique<interfaces::CockpitInterface>(Shipped("cockpit-hud"), port);
   const interfaces::CockpitInterface& cockpit = *hud_cockpit;
   InterfaceSet hud_set = One(std::move(hud_cockpit));
-  const interfaces::MotorCommand motors = hud_set.Update(1.0, feedback, hal);
+  const TreadCommand motors = hud_set.Update(1.0, feedback, hal);
   OverlayFeed feed(setup, track);
   const view::Overlay o = feed.Make(12.0, lap, hud_set, feedback, motors, true, false);
   CHECK(o.hud);
@@ -84,7 +84,7 @@ TEST_CASE("the overlay's HUD is the HUD cockpit's own, and only a HUD interface 
 
   InterfaceSet plain_set =
       One(std::make_unique<interfaces::CockpitInterface>(Shipped("cockpit"), port));
-  const interfaces::MotorCommand plain_motors = plain_set.Update(1.0, feedback, hal);
+  const TreadCommand plain_motors = plain_set.Update(1.0, feedback, hal);
   OverlayFeed plain_feed(setup, track);
   const view::Overlay p =
       plain_feed.Make(12.0, lap, plain_set, feedback, plain_motors, true, false);
@@ -103,7 +103,7 @@ TEST_CASE(
   interfaces::InputBox input;
   InterfaceSet set =
       One(std::make_unique<interfaces::KeyboardInterface>(KeyboardConfig{}, input, 8));
-  const interfaces::MotorCommand still{};
+  const TreadCommand still{};
   OverlayFeed switching(setup, track);
   CHECK(std::string(switching.Make(1.0, lap, set, {}, still, true, false).message).find("F1-F6") !=
         std::string::npos);
@@ -135,7 +135,7 @@ TEST_CASE(
   auto shared = std::make_unique<interfaces::GestureInterface>(config);
   const interfaces::GestureInterface& gesture = *shared;
   InterfaceSet set = One(std::move(shared));
-  const interfaces::MotorCommand motors = set.Update(1.0, feedback, hal);
+  const TreadCommand motors = set.Update(1.0, feedback, hal);
   OverlayFeed feed(setup, track);
   const view::Overlay o = feed.Make(1.0, lap, set, feedback, motors, true, false);
   REQUIRE(gesture.guidance().active);
@@ -174,7 +174,7 @@ TEST_CASE(
   auto shared = std::make_unique<interfaces::CockpitInterface>(config, port);
   const interfaces::CockpitInterface& cockpit = *shared;
   InterfaceSet set = One(std::move(shared));
-  const interfaces::MotorCommand motors = set.Update(1.0, feedback, hal);
+  const TreadCommand motors = set.Update(1.0, feedback, hal);
   OverlayFeed feed(setup, track);
   const view::Overlay o = feed.Make(1.0, lap, set, feedback, motors, true, false);
   REQUIRE(cockpit.guidance().active);
@@ -202,7 +202,7 @@ TEST_CASE("the overlay remembers the last contact and says when the vehicle is n
   GestureConfig gesture;
   InterfaceSet set = One(std::make_unique<interfaces::GestureInterface>(gesture));
   OverlayFeed feed(setup, track);
-  const interfaces::MotorCommand still{};
+  const TreadCommand still{};
   view::Overlay o = feed.Make(0.5, lap, set, {}, still, false, false);
   CHECK(std::string(o.message).find("waiting for vehicle") != std::string::npos);
   CHECK(o.time_left_s < 0);  // no limit

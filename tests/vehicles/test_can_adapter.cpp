@@ -352,17 +352,17 @@ TEST_CASE("the simulated CAN robot drives through the bus, and stops itself on a
 }
 
 TEST_CASE(
-    "the CAN robot's log on a full disk (/dev/full): the state reports it and the robot drives "
-    "on") {
+    "the CAN robot's log on a full disk (/dev/full): its log status reports it and the robot "
+    "drives on") {
   const Track track(LoadTrack("config/tracks/test-short.yaml"));
   SimulatedCanRobot sim(track, CanConfigured(),
                         std::make_unique<CandumpWriter>("/dev/full", "can0"));
-  CHECK(sim.State().can_log.path == "/dev/full");
-  CHECK(sim.State().can_log.error.empty());
+  CHECK(sim.adapter().log_status().path == "/dev/full");
+  CHECK(sim.adapter().log_status().error.empty());
   sim.SetMotors({8, 8});
   for (int i = 0; i < 200; ++i)
     sim.Update(0.005);  // a second of bus traffic: several hundred frames
-  const CanLogStatus log = sim.State().can_log;
+  const CanLogStatus log = sim.adapter().log_status();
   INFO(log.error);
   CHECK(log.error.find("cannot write /dev/full: " + std::string(std::strerror(ENOSPC))) !=
         std::string::npos);

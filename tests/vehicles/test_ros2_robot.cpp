@@ -162,7 +162,7 @@ std::vector<uint8_t> BlackPng(uint32_t width, uint32_t height) {
 }  // namespace
 
 TEST_CASE("ros2: motor levels are a differential drive's twist") {
-  DriveConfig d;
+  TreadDriveConfig d;
   d.speed_levels = 8;
   d.max_speed = 0.3;
   d.track_width = 0.16;

@@ -8,6 +8,7 @@
 #include "haptel/video/camera_source.hpp"
 
 using namespace haptel;
+using namespace haptel::models;
 using namespace haptel::vehicles;
 
 namespace {

@@ -15,6 +15,7 @@
 #include "test_env.hpp"
 
 using namespace haptel;
+using namespace haptel::models;
 using namespace haptel::vehicles;
 
 namespace {
@@ -39,7 +40,7 @@ class ToyRobot final : public VehicleAdapter {
   AdapterState State() const override { return state_; }
 
  private:
-  DriveConfig drive_;
+  TreadDriveConfig drive_;
   AdapterState state_;
 };
 
@@ -103,8 +104,8 @@ struct OperatorEnd {
   }
 
   link::Participant participant;
-  link::CommandWriter commands;
-  msg::DriveCommand message;
+  link::TreadCommandWriter commands;
+  msg::TreadCommand message;
   uint64_t seq = 0;
   std::mutex mutex;
   std::optional<msg::VehicleState> last;
@@ -201,4 +202,54 @@ TEST_CASE(
   CHECK(counters.watchdog_trips >= 1);
   CHECK(node->AdapterFailure().empty());
   CHECK(std::string(node->MadeSafe()) == "motors stopped");
+}
+
+TEST_CASE(
+    "a CAN robot's bus log is its own topic (can_log), not its family's state; other kinds have "
+    "none") {
+  const int domain = test::UniqueDomain(72);
+  const auto dir = test::ScratchDir("can-log-topic");
+  const std::string world = std::filesystem::absolute("config/tracks/test-short.yaml").string();
+  const auto file =
+      test::WriteFile(dir / "can1.yaml", "name: can1\nkind: can-robot-sim\nworld: " + world +
+                                             "\ncamera: {rate_hz: 5, width: 64, height: 48}\n"
+                                             "can: {log_dir: " +
+                                             (dir / "can").string() +
+                                             "}\n"
+                                             "link: {domain_id: " +
+                                             std::to_string(domain) + "}\n");
+  const VehicleConfig config = LoadVehicle(file);
+  const Track track(LoadTrack(config.world));
+
+  // Only a kind that keeps a bus log has the topic.
+  CHECK((*FindKindFactory<RobotFamily>("can-robot-sim"))(config, track).report != nullptr);
+  VehicleConfig no_log = config;
+  no_log.can.log_dir.clear();
+  CHECK((*FindKindFactory<RobotFamily>("can-robot-sim"))(no_log, track).report == nullptr);
+  CHECK((*FindKindFactory<RobotFamily>("sim-robot"))(config, track).report == nullptr);
+
+  OpenedVehicle opened = OpenVehicle(config, file.string());
+  const std::unique_ptr<Node> node = opened.make_node();
+  node->Start();
+  link::Participant participant(config.link, "test-operator");
+  std::mutex mutex;
+  std::optional<msg::CanLogStatus> last;
+  link::CanLogReader reader(participant, link::TopicName("can1", "can_log"),
+                            link::Profile::kLatched, [&](const msg::CanLogStatus& s) {
+                              std::lock_guard lock(mutex);
+                              last = s;
+                            });
+  // The log fills with the nodes' heartbeats; its status follows each flush.
+  std::optional<msg::CanLogStatus> s;
+  REQUIRE(test::WaitFor(
+      [&] {
+        std::lock_guard lock(mutex);
+        s = last;
+        return s && s->frames() > 0;
+      },
+      20.0));
+  node->Stop();
+  CHECK(std::filesystem::path(s->path()).parent_path() == std::filesystem::absolute(dir / "can"));
+  CHECK(s->frames_lost() == 0);
+  CHECK(s->error().empty());
 }

@@ -12,8 +12,8 @@
 #include "haptel/interfaces/blimp_manual.hpp"
 #include "haptel/interfaces/gamepad.hpp"
 #include "haptel/mediator/fleet.hpp"
-#include "haptel/vehicles/drive.hpp"
-#include "haptel/vehicles/sim_blimp.hpp"
+#include "haptel/models/sim_blimp.hpp"
+#include "haptel/models/tread_drive.hpp"
 #include "haptel/vehicles/sim_robot.hpp"
 #include "haptel/view/sdl_input.hpp"
 #include "test_env.hpp"
@@ -87,12 +87,12 @@ TrackConfig Floor() {
 /// quantised to the vehicle's levels, the robot stepped at 200 Hz. Returns
 /// how much the heading turned (unwrapped, rad, counter-clockwise +).
 double Drive(GamepadInterface& pad, haptics::Hal& hal, vehicles::SimRobot& robot,
-             const DriveConfig& drive, double& t, double seconds) {
+             const TreadDriveConfig& drive, double& t, double seconds) {
   double turned = 0.0;
   for (int tick = 0; tick < static_cast<int>(seconds * 50); ++tick, t += 0.02) {
-    const MotorCommand m = pad.Update(t, {}, hal);
-    robot.SetMotors({vehicles::QuantiseCommand(m.left, drive.speed_levels),
-                     vehicles::QuantiseCommand(m.right, drive.speed_levels)});
+    const TreadCommand m = pad.Update(t, {}, hal);
+    robot.SetMotors({models::QuantiseCommand(m.left, drive.speed_levels),
+                     models::QuantiseCommand(m.right, drive.speed_levels)});
     for (int i = 0; i < 4; ++i) {
       const double before = robot.State().heading;
       robot.Update(0.005);
@@ -156,7 +156,7 @@ TEST_CASE("a virtual game controller drives the simulated robot, and unplugging 
   REQUIRE(WaitFor([&] { return box.Load().pad_disconnects == 1; }, 10.0));
   CHECK_FALSE(box.Load().pad_connected);
   CHECK(pad.lost());
-  const MotorCommand m = pad.Update(t, {}, hal);
+  const TreadCommand m = pad.Update(t, {}, hal);
   CHECK(m.left == 0.0);
   CHECK(m.right == 0.0);
   Drive(pad, hal, robot, vehicle.drive, t, 1.0);
@@ -204,7 +204,7 @@ TEST_CASE(
   config.name = "blimp-gamepad";
   BlimpManualInterface pad(config, box.Load());
   haptics::Hal hal;
-  vehicles::SimBlimp blimp(AirshipConfig{}, LoadBlimpCourse("config/tracks/blimp-hop.yaml"));
+  models::SimBlimp blimp(AirshipConfig{}, LoadBlimpCourse("config/tracks/blimp-hop.yaml"));
   double t = 0.0;
   // The session's part in simulated time: the command at 50 Hz, the airship at 200 Hz.
   const auto fly = [&](double seconds) {

@@ -28,7 +28,7 @@ BlimpCommand CommandFromChannels(const std::array<double, kBlimpChannels>& v) {
   return Clamped(c);
 }
 
-void PoseFromSim(const SimBlimp& sim, BlimpAdapterState& s) {
+void PoseFromSim(const models::SimBlimp& sim, BlimpAdapterState& s) {
   s.pose_valid = true;
   const Eigen::Vector3d p = sim.position();
   const Eigen::Vector3d v = sim.ground_velocity();

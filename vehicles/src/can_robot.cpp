@@ -6,6 +6,7 @@
 
 #include "haptel/config/error.hpp"
 #include "haptel/core/clock.hpp"
+#include "haptel/link/topic.hpp"
 #include "haptel/vehicles/odrive_can.hpp"
 
 namespace haptel::vehicles {
@@ -35,12 +36,12 @@ CanRobot::CanRobot(std::unique_ptr<CanBus> bus, const VehicleConfig& config,
       log_(std::move(log)) {
   if (bus_ == nullptr) throw std::invalid_argument("CanRobot: no bus");
   state_.pose_valid = false;  // a real robot knows no pose; a tracker would give it
-  if (log_) state_.can_log.path = std::filesystem::absolute(log_->path()).string();
+  if (log_) log_status_.path = std::filesystem::absolute(log_->path()).string();
 }
 
 void CanRobot::UpdateLogStatus() {
   if (!log_) return;
-  CanLogStatus& s = state_.can_log;
+  CanLogStatus& s = log_status_;
   s.frames = log_->frames_written();
   s.frames_lost = log_->frames_lost();
   if (s.error.empty() && !log_->error().empty()) s.error = log_->error();
@@ -80,7 +81,7 @@ void CanRobot::StartAxes() {
   idle_ = false;
 }
 
-void CanRobot::SetMotors(const MotorLevels& levels) {
+void CanRobot::SetMotors(const models::MotorLevels& levels) {
   if (state_.fault) return;  // stopped until ClearErrors
   if (idle_ && (levels.left != 0 || levels.right != 0)) StartAxes();
   if (idle_) return;
@@ -230,6 +231,42 @@ void CanRobot::Update(double dt) {
     }
   }
   UpdateLogStatus();
+}
+
+namespace {
+
+class CanLogReport final : public KindReport {
+ public:
+  explicit CanLogReport(const CanRobot& robot) : robot_(robot) {}
+
+  void Open(link::Participant& participant, const std::string& vehicle) override {
+    writer_ = std::make_unique<link::CanLogWriter>(participant, link::TopicName(vehicle, "can_log"),
+                                                   link::Profile::kLatched);
+  }
+
+  void Publish() override {
+    const CanLogStatus& now = robot_.log_status();
+    if (writer_ == nullptr || now.path.empty() || (published_ && now == last_)) return;
+    last_ = now;
+    message_.path(now.path);
+    message_.frames(now.frames);
+    message_.frames_lost(now.frames_lost);
+    message_.error(now.error);
+    published_ = writer_->Write(message_);
+  }
+
+ private:
+  const CanRobot& robot_;
+  std::unique_ptr<link::CanLogWriter> writer_;
+  msg::CanLogStatus message_;
+  CanLogStatus last_;
+  bool published_ = false;
+};
+
+}  // namespace
+
+std::unique_ptr<KindReport> MakeCanLogReport(const CanRobot& robot) {
+  return std::make_unique<CanLogReport>(robot);
 }
 
 }  // namespace haptel::vehicles

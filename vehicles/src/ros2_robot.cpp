@@ -221,7 +221,8 @@ Ros2Robot::~Ros2Robot() {
   SendTwist(0.0, 0.0);
 }
 
-std::array<double, 2> Ros2Robot::TwistFor(const MotorLevels& levels, const DriveConfig& drive) {
+std::array<double, 2> Ros2Robot::TwistFor(const models::MotorLevels& levels,
+                                          const TreadDriveConfig& drive) {
   const double per_level = drive.max_speed / std::max(1, drive.speed_levels);
   const double left = levels.left * per_level;
   const double right = levels.right * per_level;
@@ -324,7 +325,7 @@ void Ros2Robot::SendTwist(double v, double w) {
   since_twist_s_ = 0.0;
 }
 
-void Ros2Robot::SetMotors(const MotorLevels& levels) {
+void Ros2Robot::SetMotors(const models::MotorLevels& levels) {
   const auto [v, w] = TwistFor(levels, config_.drive);
   if (levels.left != state_.applied.left || levels.right != state_.applied.right) twist_due_ = true;
   state_.applied = levels;

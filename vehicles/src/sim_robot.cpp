@@ -37,7 +37,7 @@ void SimRobot::Place(double x, double y, double heading) {
   state_.ranges = ScanTrack(track_, x, y, heading, range_sensors_, range_noise_);
 }
 
-void SimRobot::SetMotors(const MotorLevels& levels) {
+void SimRobot::SetMotors(const models::MotorLevels& levels) {
   levels_.left = std::clamp(levels.left, -drive_.speed_levels, drive_.speed_levels);
   levels_.right = std::clamp(levels.right, -drive_.speed_levels, drive_.speed_levels);
   state_.applied = levels_;
@@ -52,11 +52,12 @@ void SimRobot::SetTreadTargets(double left, double right) {
 
 void SimRobot::Update(double dt) {
   if (!(dt > 0.0)) return;
-  const double target_left = use_treads_ ? tread_left_ : LevelSpeed(drive_, levels_.left);
-  const double target_right = use_treads_ ? tread_right_ : LevelSpeed(drive_, levels_.right);
+  const double target_left = use_treads_ ? tread_left_ : models::LevelSpeed(drive_, levels_.left);
+  const double target_right =
+      use_treads_ ? tread_right_ : models::LevelSpeed(drive_, levels_.right);
   const Vec2 before(state_.x, state_.y);
-  TreadState treads{state_.x, state_.y, state_.heading, v_left_, v_right_};
-  const double omega = StepTreads(drive_, target_left, target_right, dt, treads);
+  models::TreadState treads{state_.x, state_.y, state_.heading, v_left_, v_right_};
+  const double omega = models::StepTreads(drive_, target_left, target_right, dt, treads);
   state_.x = treads.x;
   state_.y = treads.y;
   state_.heading = treads.heading;

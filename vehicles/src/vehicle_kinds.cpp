@@ -41,6 +41,11 @@ std::unique_ptr<CandumpWriter> OpenCanLog(const VehicleConfig& config) {
       config.can.interface);
 }
 
+/// The CAN log's own topic, where the robot keeps a log.
+std::unique_ptr<KindReport> CanLogReportOf(const CanRobot& robot) {
+  return robot.log() != nullptr ? MakeCanLogReport(robot) : nullptr;
+}
+
 template <class Family>
 using FactoryTable = std::map<std::string, KindFactory<Family>>;
 
@@ -70,14 +75,19 @@ FactoryTable<RobotFamily>& Factories<RobotFamily>() {
        [](const VehicleConfig& c, const Track&) {
          auto bus =
              std::make_unique<SocketCanBus>(c.can.interface);  // CanUnavailable: a set-up error
-         return AdapterOnly<RobotFamily>(
-             std::make_unique<CanRobot>(std::move(bus), c, OpenCanLog(c)),
-             ", CAN bus " + c.can.interface);
+         auto robot = std::make_unique<CanRobot>(std::move(bus), c, OpenCanLog(c));
+         std::unique_ptr<KindReport> report = CanLogReportOf(*robot);
+         Parts parts = AdapterOnly<RobotFamily>(std::move(robot), ", CAN bus " + c.can.interface);
+         parts.report = std::move(report);
+         return parts;
        }},
       {"can-robot-sim",
        [](const VehicleConfig& c, const Track& track) {
-         return AdapterOnly<RobotFamily>(
-             std::make_unique<SimulatedCanRobot>(track, c, OpenCanLog(c)));
+         auto robot = std::make_unique<SimulatedCanRobot>(track, c, OpenCanLog(c));
+         std::unique_ptr<KindReport> report = CanLogReportOf(robot->adapter());
+         Parts parts = AdapterOnly<RobotFamily>(std::move(robot));
+         parts.report = std::move(report);
+         return parts;
        }},
       {"ros2",
        [](const VehicleConfig& c, const Track& track) {
@@ -86,7 +96,8 @@ FactoryTable<RobotFamily>& Factories<RobotFamily>() {
          auto camera = robot->MakeCamera();
          return Parts{std::move(robot), std::move(camera),
                       ", ROS 2 robot on domain " + std::to_string(c.ros2.domain_id) + " (" +
-                          c.ros2.cmd_vel + " out, " + c.ros2.odom + " in)"};
+                          c.ros2.cmd_vel + " out, " + c.ros2.odom + " in)",
+                      nullptr};
        }},
   };
   return table;
@@ -175,7 +186,8 @@ OpenedVehicle Open(const VehicleConfig& config, const std::string& file) {
       Owning(const VehicleConfig& c, std::shared_ptr<const typename Family::World> w,
              KindParts<Family>& p)
           : WorldHolder{std::move(w)},
-            VehicleNodeOf<Family>(c, std::move(p.camera), std::move(p.adapter)) {}
+            VehicleNodeOf<Family>(c, std::move(p.camera), std::move(p.adapter),
+                                  std::move(p.report)) {}
     };
     return std::make_unique<Owning>(config, world, *held);
   };

@@ -14,13 +14,16 @@ namespace haptel::vehicles {
 template <class Family>
 VehicleNodeOf<Family>::VehicleNodeOf(const VehicleConfig& config,
                                      std::unique_ptr<video::CameraSource> camera,
-                                     std::unique_ptr<Adapter> adapter)
+                                     std::unique_ptr<Adapter> adapter,
+                                     std::unique_ptr<KindReport> report)
     : core_(config, std::move(adapter)) {
   if (camera == nullptr) throw std::invalid_argument("vehicle node: no camera source");
   const VehicleConfig& c = core_.config();
   participant_ = std::make_unique<link::Participant>(c.link, "haptel-vehicle-" + c.name);
   state_writer_ = std::make_unique<typename Family::StateWriter>(
       *participant_, link::TopicName(c.name, "state"), link::Profile::kState);
+  report_ = std::move(report);
+  if (report_) report_->Open(*participant_, c.name);
   camera_ =
       std::make_unique<video::CameraStreamer>(c.camera, std::move(camera), *participant_, c.name,
                                               [this] { return core_.commands().owner().writer; });
@@ -68,6 +71,7 @@ void VehicleNodeOf<Family>::PublishState(int64_t now_ns) {
   state.video_feedback_refused(camera_->feedback_refused());
   state_writer_->Write(state);
   states_.fetch_add(1, std::memory_order_relaxed);
+  if (report_) report_->Publish();
 }
 
 template <class Family>

@@ -22,7 +22,7 @@
 #include "haptel/mediator/blimp/blimp_pilot.hpp"
 #include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/operator.hpp"
-#include "haptel/vehicles/sim_blimp.hpp"
+#include "haptel/models/sim_blimp.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;
@@ -481,7 +481,7 @@ struct Flight {
   bool cockpit_ok = true;  ///< perfect hands: the cockpit read every command the pilot wanted
 };
 
-BlimpObservation Observed(const vehicles::SimBlimp& sim) {
+BlimpObservation Observed(const models::SimBlimp& sim) {
   BlimpObservation o;
   o.t_s = sim.time_s();
   o.position = sim.position();
@@ -507,7 +507,7 @@ BlimpObservation Observed(const vehicles::SimBlimp& sim) {
 /// `cockpit_ok` says whether that is the command it wanted). Simulated time
 /// only.
 Flight Fly(const AirshipConfig& airship, const BlimpCourseConfig& course, bool arms = true) {
-  vehicles::SimBlimp sim(airship, course);
+  models::SimBlimp sim(airship, course);
   BlimpAutoPilot pilot(course, PilotKnowing(airship));
   BlimpLapTimer lap(course);
   interfaces::BlimpGestureInterface cockpit(

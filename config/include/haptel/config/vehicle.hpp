@@ -16,7 +16,7 @@ namespace haptel {
 
 /// Differential drive of the Lego-style tank: each motor takes a signed speed
 /// level, as the brick does; commands are quantised to these levels.
-struct DriveConfig {
+struct TreadDriveConfig {
   int speed_levels = 8;               ///< levels in each direction
   double max_speed = 0.3;             ///< tread speed at the top level, m/s
   double track_width = 0.16;          ///< distance between treads, m
@@ -237,7 +237,7 @@ struct VehicleConfig {
   double sim_rate_hz = 200.0;
   double state_rate_hz = 50.0;
   double watchdog_timeout_s = 0.2;  ///< no command for this long: made safe (0.2 s, as the blimp's)
-  DriveConfig drive;
+  TreadDriveConfig drive;
   BodyConfig body;
   RangeSensorConfig
       range_sensors;  ///< the simulated robot's (other kinds report their own, or none)

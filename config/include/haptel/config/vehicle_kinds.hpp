@@ -13,7 +13,7 @@
 namespace haptel {
 
 /// What a vehicle's link carries, and so what drives it on the operator
-/// side: the robot's motor levels and ground state (DriveCommand,
+/// side: the robot's motor levels and ground state (TreadCommand,
 /// VehicleState; a track), or the blimp's seven channels and flight state
 /// (BlimpCommand, BlimpState; a blimp course).
 enum class VehicleFamily { kRobot, kBlimp };

@@ -71,11 +71,11 @@ class CockpitInterface final : public MediatorInterface {
 
   std::string name() const override { return logic_.config().name; }
   /// Controls → motors; bumper → shake and lock; assisted → return springs.
-  MotorCommand Update(double t_s, const VehicleFeedback& feedback, haptics::Hal& hal) override;
+  TreadCommand Update(double t_s, const VehicleFeedback& feedback, haptics::Hal& hal) override;
   /// Left hand on the wheel turned to the intent's angle, right hand on the
   /// lever at the intent's position, both closed — each shifted by how far
   /// that control has slipped in the hand holding it (seen in Update).
-  HandTargets HandTargetsFor(const DriveIntent& intent) const override;
+  HandTargets HandTargetsFor(const MotionIntent& intent) const override;
   bool NeedsPhysics() const override { return true; }
   bool ShowsSpeed() const override { return logic_.config().hud; }
   bool ControlsStayPut() const override { return !logic_.config().return_to_zero; }
@@ -83,10 +83,10 @@ class CockpitInterface final : public MediatorInterface {
   /// The view elements after the latest Update (all off without a HUD).
   const HudState& hud() const { return hud_; }
   /// The wheel, the throttle, the motors and the HUD.
-  std::string ProgressLine(const MotorCommand& motors) const override;
+  std::string ProgressLine(const TreadCommand& motors) const override;
   /// The HUD cockpits show what their logic computed, exactly.
   std::optional<HudReading> Hud(const VehicleFeedback& /*feedback*/,
-                                const MotorCommand& /*motors*/) const override {
+                                const TreadCommand& /*motors*/) const override {
     return HudReading{logic_.config().hud, hud_.speed, hud_.turn_left, hud_.turn_right,
                       hud_.throttle_locked};
   }

@@ -58,7 +58,7 @@ class CockpitLogic {
   explicit CockpitLogic(const CockpitConfig& config);
 
   /// Wheel → turn, throttle → forward; zero forward while the throttle is locked.
-  MotorCommand Map(const CockpitControls& controls, double t_s) const;
+  TreadCommand Map(const CockpitControls& controls, double t_s) const;
   /// Reacts to the vehicle (a new bumper contact starts shake and lock) and
   /// returns what the controls must feel now.
   ControlActuation Update(double t_s, const VehicleFeedback& feedback,
@@ -66,7 +66,7 @@ class CockpitLogic {
   HudState Hud(const VehicleFeedback& feedback, const CockpitControls& controls, double t_s) const;
 
   /// The control positions that express an intent (inverse of Map).
-  CockpitControls ControlsFor(const DriveIntent& intent) const;
+  CockpitControls ControlsFor(const MotionIntent& intent) const;
 
   bool shaking(double t_s) const { return t_s < shake_until_s_; }
   bool throttle_locked(double t_s) const { return t_s < lock_until_s_; }

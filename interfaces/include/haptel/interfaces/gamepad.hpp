@@ -36,14 +36,14 @@ class GamepadInterface final : public MediatorInterface {
   GamepadInterface(const GamepadConfig& config, const InputBox& input);
 
   std::string name() const override { return config_.name; }
-  MotorCommand Update(double t_s, const VehicleFeedback& feedback, haptics::Hal& hal) override;
-  HandTargets HandTargetsFor(const DriveIntent& intent) const override;
+  TreadCommand Update(double t_s, const VehicleFeedback& feedback, haptics::Hal& hal) override;
+  HandTargets HandTargetsFor(const MotionIntent& intent) const override;
   bool NeedsPhysics() const override { return false; }
 
   /// Pure mapping of one InputState (what Update does, without the HAL and
   /// the box). Zero when not connected, deadman released, or lost.
-  DriveIntent Intent(const InputState& input) const;
-  MotorCommand Map(const InputState& input) const;
+  MotionIntent Intent(const InputState& input) const;
+  TreadCommand Map(const InputState& input) const;
 
   /// A controller went away since construction (pad_disconnects grew).
   bool lost() const override;

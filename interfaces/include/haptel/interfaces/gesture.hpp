@@ -27,21 +27,21 @@ class GestureInterface final : public MediatorInterface {
   explicit GestureInterface(const GestureConfig& config, const VehicleGeometry& vehicle = {});
 
   std::string name() const override { return config_.name; }
-  MotorCommand Update(double t_s, const VehicleFeedback& feedback, haptics::Hal& hal) override;
-  HandTargets HandTargetsFor(const DriveIntent& intent) const override;
+  TreadCommand Update(double t_s, const VehicleFeedback& feedback, haptics::Hal& hal) override;
+  HandTargets HandTargetsFor(const MotionIntent& intent) const override;
   bool NeedsPhysics() const override { return false; }
   /// The thesis kept the speedometer and the indicators on the gesture interface.
   bool ShowsSpeed() const override { return true; }
   /// The speedometer, and an indicator lit by a motor difference past kTurnShown.
   std::optional<HudReading> Hud(const VehicleFeedback& feedback,
-                                const MotorCommand& motors) const override {
+                                const TreadCommand& motors) const override {
     return HudReading{true, feedback.speed, motors.right - motors.left > kTurnShown,
                       motors.left - motors.right > kTurnShown, false};
   }
   static constexpr double kTurnShown = 0.1;  ///< motor difference that lights an indicator
 
   /// Pure mapping from a right-hand position to motor commands.
-  MotorCommand Map(const haptics::Vec3d& right_hand) const;
+  TreadCommand Map(const haptics::Vec3d& right_hand) const;
   /// The force field for the current state (what Update puts in the HAL).
   const haptics::ForceField& field() const { return field_; }
   bool wall_active() const { return field_.wall_active; }

@@ -13,19 +13,17 @@
 
 namespace haptel::interfaces {
 
-/// What a driver wants, in motor terms: left = forward − turn,
-/// right = forward + turn (turn > 0 turns left). Both in [-1, 1].
-struct DriveIntent {
+/// The motion a driver wants, before it is mixed into each tread's command
+/// (Mix: left = forward − turn, right = forward + turn; turn > 0 turns
+/// left). Both in [-1, 1].
+struct MotionIntent {
   double forward = 0.0;
   double turn = 0.0;
 };
 
-/// Normalised motor commands, each in [-1, 1]: the robot's command.
-using MotorCommand = TreadCommand;
-
 /// Differential mix: left = forward − turn, right = forward + turn, scaled
 /// down together (keeping their ratio) when either leaves [-1, 1].
-MotorCommand Mix(double forward, double turn);
+TreadCommand Mix(double forward, double turn);
 
 /// What the vehicle reports that an interface reacts to.
 struct VehicleFeedback {
@@ -122,8 +120,8 @@ class Interface {
 
 /// The robot: each tread's command, from the hands and what the robot reports.
 struct RobotFamily {
-  using Command = MotorCommand;
-  using Intent = DriveIntent;
+  using Command = TreadCommand;
+  using Intent = MotionIntent;
   using Reading = VehicleFeedback;
 };
 
@@ -145,12 +143,12 @@ class MediatorInterface : public Interface<RobotFamily> {
 
   /// A line about its controls for the run's progress log, given the command
   /// they gave ("": nothing beyond the command).
-  virtual std::string ProgressLine(const MotorCommand& /*motors*/) const { return {}; }
+  virtual std::string ProgressLine(const TreadCommand& /*motors*/) const { return {}; }
 
   /// What its head-up display shows as of the last Update, given what the
   /// robot reported and the command it was given; nullopt: it has none.
   virtual std::optional<HudReading> Hud(const VehicleFeedback& /*feedback*/,
-                                        const MotorCommand& /*motors*/) const {
+                                        const TreadCommand& /*motors*/) const {
     return std::nullopt;
   }
 };

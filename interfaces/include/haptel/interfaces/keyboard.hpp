@@ -31,10 +31,10 @@ class KeyboardInterface final : public MediatorInterface {
   KeyboardInterface(const KeyboardConfig& config, const InputBox& input, int speed_levels);
 
   std::string name() const override { return config_.name; }
-  MotorCommand Update(double t_s, const VehicleFeedback& feedback, haptics::Hal& hal) override;
+  TreadCommand Update(double t_s, const VehicleFeedback& feedback, haptics::Hal& hal) override;
   /// Presses so far are seen; throttle and steering back to level 0.
   void Rebase(const InputState& now) override;
-  HandTargets HandTargetsFor(const DriveIntent& intent) const override;
+  HandTargets HandTargetsFor(const MotionIntent& intent) const override;
   bool NeedsPhysics() const override { return false; }
   const char* Help(bool switchable) const override {
     return switchable ? "arrows or W/A/S/D drive, space stops, F1-F6 switch, Esc ends"
@@ -43,14 +43,14 @@ class KeyboardInterface final : public MediatorInterface {
 
   /// Reads one InputState at time `t_s` (s, non-decreasing) and returns the
   /// command: what Update does, without the HAL.
-  MotorCommand Step(double t_s, const InputState& input);
+  TreadCommand Step(double t_s, const InputState& input);
 
   int throttle_level() const { return throttle_.level(); }
   int steering_level() const { return steering_.level(); }
   int speed_levels() const { return levels_; }
 
  private:
-  MotorCommand Command() const;
+  TreadCommand Command() const;
 
   KeyboardConfig config_;
   const InputBox& input_;

@@ -49,7 +49,7 @@ struct VehicleGeometry {
 /// an obstacle `scan` sees (its body grown by `clearance`), looking no
 /// further than `horizon_s`; +infinity when it meets none by then (or the
 /// scan is empty).
-double TimeToCollision(const RangeScan& scan, const MotorCommand& command,
+double TimeToCollision(const RangeScan& scan, const TreadCommand& command,
                        const VehicleGeometry& vehicle, double clearance, double horizon_s);
 
 class SharedControl {
@@ -71,7 +71,7 @@ class SharedControl {
 
  private:
   /// The danger of `command`: 0 beyond the horizon, 1 at collision now.
-  double Danger(const RangeScan& scan, const MotorCommand& command) const {
+  double Danger(const RangeScan& scan, const TreadCommand& command) const {
     const double ttc =
         TimeToCollision(scan, command, vehicle_, config_.clearance, config_.horizon_s);
     return std::isfinite(ttc) ? std::clamp(1.0 - ttc / config_.horizon_s, 0.0, 1.0) : 0.0;
@@ -82,11 +82,11 @@ class SharedControl {
   template <typename Map>
   double PathDangerAt(const RangeScan& scan, const haptics::Vec3d& p, double forward,
                       const Map& map) const {
-    const MotorCommand c = map(p);
+    const TreadCommand c = map(p);
     const double own = 0.5 * (c.left + c.right);
     if (std::abs(own) < 1e-6 || (own > 0.0) != (forward > 0.0)) return Danger(scan, c);
     const double scale = forward / own;
-    return Danger(scan, MotorCommand{c.left * scale, c.right * scale});
+    return Danger(scan, TreadCommand{c.left * scale, c.right * scale});
   }
 
   SharedControlConfig config_;
@@ -113,7 +113,7 @@ Guidance SharedControl::Guide(const RangeScan& scan, const haptics::Vec3d& hand,
     return p;
   };
   // Steering first: the path's danger at the hand's own speed.
-  const MotorCommand own = map(hand);
+  const TreadCommand own = map(hand);
   const double forward = 0.5 * (own.left + own.right);
   auto path_danger = [&](const haptics::Vec3d& p) { return PathDangerAt(scan, p, forward, map); };
   auto time_danger = [&](const haptics::Vec3d& p) { return Danger(scan, map(p)); };

@@ -13,14 +13,14 @@
 
 namespace haptel::link {
 
-/// The robot: each tread's command (DriveCommand), the ground state (VehicleState).
+/// The robot: each tread's command (TreadCommand), the ground state (VehicleState).
 struct RobotMessages {
   static constexpr VehicleFamily kFamily = VehicleFamily::kRobot;
   using Command = TreadCommand;
-  using CommandMsg = msg::DriveCommand;
+  using CommandMsg = msg::TreadCommand;
   using StateMsg = msg::VehicleState;
-  using CommandWriter = link::CommandWriter;
-  using CommandReader = link::CommandReader;
+  using CommandWriter = link::TreadCommandWriter;
+  using CommandReader = link::TreadCommandReader;
   using StateWriter = link::StateWriter;
   using StateReader = link::StateReader;
 

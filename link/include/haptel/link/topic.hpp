@@ -158,14 +158,17 @@ class Reader : private eprosima::fastdds::dds::DataReaderListener {
   std::atomic<uint64_t> deadlines_missed_{0};
 };
 
-using CommandWriter = Writer<msg::DriveCommand, msg::DriveCommandPubSubType>;
-using CommandReader = Reader<msg::DriveCommand, msg::DriveCommandPubSubType>;
+using TreadCommandWriter = Writer<msg::TreadCommand, msg::TreadCommandPubSubType>;
+using TreadCommandReader = Reader<msg::TreadCommand, msg::TreadCommandPubSubType>;
 using StateWriter = Writer<msg::VehicleState, msg::VehicleStatePubSubType>;
 using StateReader = Reader<msg::VehicleState, msg::VehicleStatePubSubType>;
 using VideoWriter = Writer<msg::VideoFrame, msg::VideoFramePubSubType>;
 using VideoReader = Reader<msg::VideoFrame, msg::VideoFramePubSubType>;
 using VideoFeedbackWriter = Writer<msg::VideoFeedback, msg::VideoFeedbackPubSubType>;
 using VideoFeedbackReader = Reader<msg::VideoFeedback, msg::VideoFeedbackPubSubType>;
+// The CAN robot's bus log, on haptel/<vehicle>/can_log (kLatched).
+using CanLogWriter = Writer<msg::CanLogStatus, msg::CanLogStatusPubSubType>;
+using CanLogReader = Reader<msg::CanLogStatus, msg::CanLogStatusPubSubType>;
 // The blimp's, on the same topic names (haptel/<vehicle>/command, .../state).
 using BlimpCommandWriter = Writer<msg::BlimpCommand, msg::BlimpCommandPubSubType>;
 using BlimpCommandReader = Reader<msg::BlimpCommand, msg::BlimpCommandPubSubType>;

@@ -48,18 +48,18 @@ class AutoOperator {
  public:
   /// Keeps a reference to `track`. `experience`: trials this driver has done
   /// before (the profile's errors shrink with it).
-  AutoOperator(const Track& track, const OperatorConfig& config, const DriveConfig& drive,
+  AutoOperator(const Track& track, const OperatorConfig& config, const TreadDriveConfig& drive,
                const DriverProfile& profile = {}, int experience = 0);
 
   /// Something the operator saw (e.g. each vehicle state as it arrives).
   void Observe(const Observation& observation);
   /// What the operator wants at time t_s, from what it saw reaction_delay ago
   /// (the ideal intent: before the profile's errors).
-  interfaces::DriveIntent Decide(double t_s);
+  interfaces::MotionIntent Decide(double t_s);
   /// The intent as this driver expresses it on `interface`: with the
   /// profile's steering wander, speed cue and re-centring; t_s increasing.
-  interfaces::DriveIntent Express(double t_s, const interfaces::DriveIntent& ideal,
-                                  const interfaces::MediatorInterface& interface);
+  interfaces::MotionIntent Express(double t_s, const interfaces::MotionIntent& ideal,
+                                   const interfaces::MediatorInterface& interface);
   /// Hand goals after the arm's lag, for the interface's inverse map. The
   /// first call starts the grasp, if the interface has anything to grasp.
   interfaces::HandTargets Act(double t_s, const interfaces::MediatorInterface& interface);
@@ -78,7 +78,7 @@ class AutoOperator {
  private:
   const Track& track_;
   OperatorConfig config_;
-  DriveConfig drive_;
+  TreadDriveConfig drive_;
   std::deque<Observation> seen_;
   double backoff_until_s_ = -1.0;
   double backoff_turn_ = 0.0;
@@ -101,7 +101,7 @@ class AutoOperator {
   double reaction_s_;  ///< reaction delay: the config's, plus the profile's while holding controls
   double wander_ = 0.0;  ///< the steering's Ornstein–Uhlenbeck state
   double last_express_s_ = -1.0;
-  interfaces::DriveIntent applied_;      ///< the intent on controls that stay put
+  interfaces::MotionIntent applied_;     ///< the intent on controls that stay put
   std::array<double, 2> centre_miss_{};  ///< forward, turn: where "centre" ends up
   std::array<bool, 2> at_centre_{true, true};
   std::array<double, 2> slip_start_s_{-1.0, -1.0};  ///< per hand; < 0: holding

@@ -7,7 +7,7 @@
 ///
 /// A state says where the blimp was when it was sampled: its position,
 /// attitude (yaw, pitch, roll), ground velocity and the channels it had
-/// applied. The predictor starts the simulated blimp (sim_blimp.hpp: the
+/// applied. The predictor starts the simulated blimp (models/sim_blimp.hpp: the
 /// airship model and its contacts with the course's ground and buildings,
 /// the vehicle file's numbers — what the simulated vehicle flies) from it
 /// and replays every command sent after the one it had applied (the state
@@ -51,7 +51,7 @@
 #include "haptel/config/blimp_course.hpp"
 #include "haptel/core/blimp_command.hpp"
 #include "haptel/mediator/delay_estimate.hpp"
-#include "haptel/vehicles/sim_blimp.hpp"
+#include "haptel/models/sim_blimp.hpp"
 
 namespace haptel::mediator {
 
@@ -132,7 +132,7 @@ class BlimpPredictor {
     double received_s;
     double sample_s;  ///< when it was sampled (operator's clock)
     int64_t stamp_ns;
-    vehicles::AirshipState state;
+    models::AirshipState state;
     BlimpCommand applied;
     double applied_sent_s;   ///< when the applied command was sent; negative: no echo
     double applied_since_s;  ///< when the applied command reached the blimp (operator's clock)
@@ -141,8 +141,8 @@ class BlimpPredictor {
   /// given) after them, held on; calls `emit` with the model at each time of
   /// `at` (ascending).
   void Run(const Base& base, const Command* extra, const std::vector<double>& at,
-           const std::function<void(double, const vehicles::SimBlimp&)>& emit) const;
-  static BlimpPredictedPose PoseOf(double t_s, const vehicles::SimBlimp& model);
+           const std::function<void(double, const models::SimBlimp&)>& emit) const;
+  static BlimpPredictedPose PoseOf(double t_s, const models::SimBlimp& model);
   /// When `state` was sampled, operator's clock (s), with the delay `d`;
   /// notes its latency for those after.
   double SampleTime(const BlimpStateSample& state, double d);
@@ -151,7 +151,7 @@ class BlimpPredictor {
   double watchdog_s_;
   /// The model the replays run on (set to each replay's start): scratch,
   /// hence mutable; a predictor is used from one thread.
-  mutable vehicles::SimBlimp model_;
+  mutable models::SimBlimp model_;
   DelayEstimate delay_;
   /// Arrival less stamp (s) of the last kLatencyWindow states: a second at
   /// 50 Hz, long enough for one state to have come through unhurried, short

@@ -23,7 +23,7 @@ class InProcessRobot {
   /// called at it.
   virtual double control_rate_hz() const = 0;
   /// A command message as it arrives at the vehicle, at `now_ns`.
-  virtual void OnCommand(const msg::DriveCommand& command, int64_t now_ns) = 0;
+  virtual void OnCommand(const msg::TreadCommand& command, int64_t now_ns) = 0;
   /// One control tick at `now_ns`; the state it publishes (valid until the
   /// next call), or null on a tick that publishes none.
   virtual const msg::VehicleState* Tick(int64_t now_ns) = 0;

@@ -39,8 +39,7 @@ class InterfaceSet {
   bool Request(int index, double t_s);
   /// Runs the current interface at t_s and drives a switch under way
   /// through `hal`'s force scale. Returns the motor command (zero while switching).
-  interfaces::MotorCommand Update(double t_s, const interfaces::VehicleFeedback& feedback,
-                                  haptics::Hal& hal);
+  TreadCommand Update(double t_s, const interfaces::VehicleFeedback& feedback, haptics::Hal& hal);
   bool switching() const { return target_ >= 0 || ramp_up_until_s_ > 0; }
   const std::vector<SwitchRecord>& switches() const { return switches_; }
 

@@ -51,7 +51,7 @@ class Operator {
 class AutomaticOperator final : public Operator {
  public:
   /// Keeps references to `track` and `device`.
-  AutomaticOperator(const Track& track, const OperatorConfig& config, const DriveConfig& drive,
+  AutomaticOperator(const Track& track, const OperatorConfig& config, const TreadDriveConfig& drive,
                     haptics::SimDevice& device, const DriverProfile& profile = {},
                     int experience = 0);
   std::string kind() const override { return "auto"; }

@@ -7,7 +7,7 @@
 /// (from its speed and yaw rate) and the speed levels it had applied. The
 /// predictor starts from it and replays every command sent after, each from
 /// the moment it reaches the robot (sent + the one-way delay), through the
-/// robot's own drive model (tread_drive.hpp, the numbers of its vehicle
+/// robot's own drive model (models/tread_drive.hpp, the numbers of its vehicle
 /// file), including the robot's watchdog stopping it when commands stop.
 /// Walls are not modelled: a robot pressed against one is predicted to move
 /// on, and the next state corrects it.
@@ -24,7 +24,7 @@
 
 #include "haptel/config/vehicle.hpp"
 #include "haptel/mediator/delay_estimate.hpp"
-#include "haptel/vehicles/tread_drive.hpp"
+#include "haptel/models/tread_drive.hpp"
 
 namespace haptel::mediator {
 
@@ -52,7 +52,8 @@ class RobotPredictor {
  public:
   /// `watchdog_s`: the robot stops this long after the last command reached
   /// it. `step_s`: the model's integration step.
-  explicit RobotPredictor(const DriveConfig& drive, double watchdog_s = 0.2, double step_s = 0.005);
+  explicit RobotPredictor(const TreadDriveConfig& drive, double watchdog_s = 0.2,
+                          double step_s = 0.005);
 
   /// A command as sent at `t_s` (normalised tread commands in [-1, 1], as
   /// the link carries them; the robot quantises them to its levels).
@@ -89,7 +90,7 @@ class RobotPredictor {
   struct Base {
     double received_s;
     double sample_s;  ///< when it was sampled (operator's clock)
-    vehicles::TreadState treads;
+    models::TreadState treads;
     int left;
     int right;
   };
@@ -99,7 +100,7 @@ class RobotPredictor {
   void Run(const Base& base, const Command* extra, const std::vector<double>& at,
            std::vector<PredictedPose>& out) const;
 
-  DriveConfig drive_;
+  TreadDriveConfig drive_;
   double watchdog_s_;
   double step_s_;
   DelayEstimate delay_;

@@ -169,7 +169,7 @@ constexpr int kExitNotRecorded = cli::kExitNotRecorded;
 /// wins over the outcome's code).
 constexpr int kExitOutputFailed = cli::kExitOutputFailed;
 
-/// The vehicle's CAN bus log as its last state received reported it (a CAN
+/// The vehicle's CAN bus log as its last status received reported it (a CAN
 /// robot keeping one in can.log_dir; the file is on the vehicle's host).
 struct CanLogReport {
   std::string path;          ///< "": the vehicle keeps no log

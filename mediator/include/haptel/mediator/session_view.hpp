@@ -121,8 +121,8 @@ class OverlayFeed {
  public:
   OverlayFeed(const SessionSetup& setup, const Track& track);
   view::Overlay Make(double t, const LapTimer& lap, const InterfaceSet& interfaces,
-                     const interfaces::VehicleFeedback& feedback,
-                     const interfaces::MotorCommand& motors, bool vehicle_up, bool touching);
+                     const interfaces::VehicleFeedback& feedback, const TreadCommand& motors,
+                     bool vehicle_up, bool touching);
 
  private:
   static constexpr double kHelpS = 15.0;  ///< how long an interface's help line shows

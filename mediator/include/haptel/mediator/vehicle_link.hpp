@@ -186,11 +186,13 @@ struct VehicleLinkOptions {
   /// is spawned and nothing joins DDS; each command message goes here as
   /// it is sent, the states are pushed into the robot channel's inbox by
   /// the caller, and no video comes.
-  std::function<void(const msg::DriveCommand&)> in_process_robot;
+  std::function<void(const msg::TreadCommand&)> in_process_robot;
 };
 
 /// The writer of haptel/<vehicle>/selected (the IDL's SelectedSource).
 class SelectedWriter;
+/// The latest status on haptel/<vehicle>/can_log (the IDL's CanLogStatus).
+class CanLogInbox;
 
 class VehicleLink {
  public:
@@ -269,6 +271,10 @@ class VehicleLink {
   bool PublishSelected(const std::string& source, const std::string& lock);
   /// Readers of the selected topic matched now (0 without the writer).
   int selected_readers() const;
+  /// The vehicle's CAN bus log, as its own topic (haptel/<vehicle>/can_log:
+  /// a CAN robot that keeps one) last said: into `out` and true when a
+  /// status came since the last call. Only a robot on DDS has the topic.
+  bool TakeCanLog(msg::CanLogStatus& out);
 
  private:
   VehicleLinkOptions options_;
@@ -278,6 +284,7 @@ class VehicleLink {
   std::unique_ptr<LinkChannel> channel_;
   std::unique_ptr<video::VideoReceiver> video_;
   std::unique_ptr<SelectedWriter> selected_;
+  std::unique_ptr<CanLogInbox> can_log_;
   std::string operator_name_;
   bool stopped_ = false;
 };

@@ -5,18 +5,9 @@
 #include <string>
 
 #include "haptel/core/range_scan.hpp"
-#include "haptel/vehicles/drive.hpp"
+#include "haptel/models/tread_drive.hpp"
 
 namespace haptel::vehicles {
-
-/// The adapter's log of its bus traffic, when it keeps one (the CAN robot's
-/// candump -L file in can.log_dir).
-struct CanLogStatus {
-  std::string path;          ///< on the vehicle's host; "": no log kept
-  uint64_t frames = 0;       ///< frames certainly in the file (its last flush)
-  uint64_t frames_lost = 0;  ///< frames not in it because a write failed
-  std::string error;         ///< why the log ended; "" while it is whole
-};
 
 /// What an adapter knows about its vehicle.
 struct AdapterState {
@@ -28,12 +19,11 @@ struct AdapterState {
   double heading = 0.0;  ///< rad
   bool bumper_left = false;
   bool bumper_right = false;
-  MotorLevels applied;  ///< levels the motors run at now
+  models::MotorLevels applied;  ///< levels the motors run at now
   /// The vehicle stopped itself (a motor controller's error, a silent node,
   /// bus-off) and will not move until its faults are cleared.
   bool fault = false;
   std::string fault_message;  ///< one line: what, where (empty: no fault)
-  CanLogStatus can_log;
   /// What the range sensors see now (count 0: the vehicle has none).
   RangeScan ranges;
 };
@@ -42,7 +32,7 @@ class VehicleAdapter {
  public:
   virtual ~VehicleAdapter() = default;
   /// Sets the motor speed levels (already quantised).
-  virtual void SetMotors(const MotorLevels& levels) = 0;
+  virtual void SetMotors(const models::MotorLevels& levels) = 0;
   /// Stops every motor at once (the command watchdog, shutdown); the next
   /// SetMotors drives again. Hardware may do more (idle the controllers).
   virtual void Stop() { SetMotors({}); }

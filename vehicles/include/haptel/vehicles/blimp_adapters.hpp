@@ -13,11 +13,11 @@
 
 #include "haptel/config/blimp_course.hpp"
 #include "haptel/config/vehicle.hpp"
+#include "haptel/models/sim_blimp.hpp"
 #include "haptel/servo/serial_port.hpp"
 #include "haptel/servo/servo_output.hpp"
 #include "haptel/servo/sim_servo_controller.hpp"
 #include "haptel/vehicles/blimp_adapter.hpp"
-#include "haptel/vehicles/sim_blimp.hpp"
 
 namespace haptel::vehicles {
 
@@ -33,15 +33,15 @@ class SimBlimpAdapter final : public BlimpAdapter {
   void Apply(const BlimpCommand& command) override { command_ = command; }
   void Update(double dt) override { sim_.Step(dt, command_); }
   BlimpAdapterState State() const override;
-  const SimBlimp& sim() const { return sim_; }
+  const models::SimBlimp& sim() const { return sim_; }
 
  private:
-  SimBlimp sim_;
+  models::SimBlimp sim_;
   BlimpCommand command_;
 };
 
 /// Fills the pose part of `state` from the simulator.
-void PoseFromSim(const SimBlimp& sim, BlimpAdapterState& state);
+void PoseFromSim(const models::SimBlimp& sim, BlimpAdapterState& state);
 
 /// The real blimp's channels through its servo controller. A Maestro judged
 /// untrustworthy (ServoOutput::untrusted(): its errors, its silence or stray
@@ -91,7 +91,7 @@ class SimulatedServoBlimp final : public BlimpAdapter {
   servo::PtyPair pty_;
   std::unique_ptr<ServoBlimpAdapter> adapter_;
   std::unique_ptr<servo::SimServoController> controller_;
-  SimBlimp sim_;
+  models::SimBlimp sim_;
   double time_s_ = 0.0;
 };
 

@@ -22,6 +22,7 @@
 #include "haptel/vehicles/adapter.hpp"
 #include "haptel/vehicles/can_bus.hpp"
 #include "haptel/vehicles/candump_log.hpp"
+#include "haptel/vehicles/kind_report.hpp"
 
 namespace haptel::vehicles {
 
@@ -42,12 +43,12 @@ struct CanCounters {
 class CanRobot final : public VehicleAdapter {
  public:
   /// Takes the bus. `log` (may be null) receives every frame sent and
-  /// received; the state's can_log says how it fares (a failed write ends
-  /// the log, not the driving). Validates config.can (ConfigFieldError).
+  /// received; log_status() says how it fares (a failed write ends the log,
+  /// not the driving). Validates config.can (ConfigFieldError).
   CanRobot(std::unique_ptr<CanBus> bus, const VehicleConfig& config,
            std::unique_ptr<CandumpWriter> log = nullptr);
 
-  void SetMotors(const MotorLevels& levels) override;
+  void SetMotors(const models::MotorLevels& levels) override;
   /// Zero velocity now, then both axes idle; the next non-zero SetMotors
   /// requests closed loop again.
   void Stop() override;
@@ -70,12 +71,14 @@ class CanRobot final : public VehicleAdapter {
   uint32_t axis_state(int wheel) const { return axis_state_[static_cast<size_t>(wheel)]; }
   double time_s() const { return t_s_; }
   const CandumpWriter* log() const { return log_.get(); }
+  /// How the bus log fares, as of the last Update (path "": none kept).
+  const CanLogStatus& log_status() const { return log_status_; }
 
  private:
   void Send(const can_frame& frame);
   void StartAxes();
   void Fault(const std::string& message);
-  /// The log's figures and failure into the state.
+  /// The log's figures and failure into log_status_.
   void UpdateLogStatus();
   double LevelTurns(int level) const;
 
@@ -95,6 +98,12 @@ class CanRobot final : public VehicleAdapter {
   /// Last heartbeat per node: left, right, io (< 0: none yet).
   std::array<double, 3> last_heartbeat_s_{-1.0, -1.0, -1.0};
   std::array<uint32_t, 2> axis_state_{};
+  CanLogStatus log_status_;
 };
+
+/// The robot's bus log on haptel/<vehicle>/can_log (link::CanLogWriter,
+/// latched), published when it changes. `robot` must outlive it (the node
+/// owns both, the report destroyed first).
+std::unique_ptr<KindReport> MakeCanLogReport(const CanRobot& robot);
 
 }  // namespace haptel::vehicles

@@ -19,6 +19,17 @@ std::string FormatCandumpFrame(const can_frame& frame);
 /// A line's frame part ("02D#00FF"), or false (malformed).
 bool ParseCandumpFrame(const std::string& text, can_frame& frame);
 
+/// How a bus log fares, as the CAN robot reports it on its own topic
+/// (haptel/<vehicle>/can_log: CanLogReport, can_robot.hpp).
+struct CanLogStatus {
+  std::string path;          ///< on the vehicle's host; "": no log kept
+  uint64_t frames = 0;       ///< frames certainly in the file (its last flush)
+  uint64_t frames_lost = 0;  ///< frames not in it because a write failed
+  std::string error;         ///< why the log ended; "" while it is whole
+
+  bool operator==(const CanLogStatus&) const = default;
+};
+
 struct LoggedFrame {
   double t_s = 0.0;  ///< the line's time stamp
   std::string interface;

@@ -14,7 +14,7 @@
 #include "haptel/core/clock.hpp"
 #include "haptel/core/seqlock.hpp"
 #include "haptel/link/writer_id.hpp"
-#include "haptel/vehicles/drive.hpp"
+#include "haptel/vehicles/command_watchdog.hpp"
 
 namespace haptel::vehicles {
 

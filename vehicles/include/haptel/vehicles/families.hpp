@@ -21,7 +21,7 @@
 
 namespace haptel::vehicles {
 
-/// The robot family: motor levels for two treads (DriveCommand), the
+/// The robot family: motor levels for two treads (TreadCommand), the
 /// ground state (VehicleState), a VehicleAdapter, a track for its world.
 struct RobotFamily : link::RobotMessages {
   using World = Track;
@@ -34,8 +34,8 @@ struct RobotFamily : link::RobotMessages {
   /// Nothing moves before the first command: the motors start at rest.
   static void Prepare(Adapter&) {}
   static void Apply(Adapter& adapter, const Command& c, const VehicleConfig& config) {
-    adapter.SetMotors({QuantiseCommand(c.left, config.drive.speed_levels),
-                       QuantiseCommand(c.right, config.drive.speed_levels)});
+    adapter.SetMotors({models::QuantiseCommand(c.left, config.drive.speed_levels),
+                       models::QuantiseCommand(c.right, config.drive.speed_levels)});
   }
   /// Hardware: zero velocity, then idle.
   static void MakeSafe(Adapter& adapter) { adapter.Stop(); }
@@ -55,10 +55,6 @@ struct RobotFamily : link::RobotMessages {
     m.motor_left_level(static_cast<int16_t>(s.applied.left));
     m.motor_right_level(static_cast<int16_t>(s.applied.right));
     m.watchdog_tripped(watchdog_expired);
-    m.can_log(s.can_log.path);
-    m.can_log_frames(s.can_log.frames);
-    m.can_log_frames_lost(s.can_log.frames_lost);
-    m.can_log_error(s.can_log.error);
     m.range_angle_min(static_cast<float>(s.ranges.angle_min));
     m.range_angle_increment(static_cast<float>(s.ranges.angle_increment));
     m.range_max(static_cast<float>(s.ranges.range_max));

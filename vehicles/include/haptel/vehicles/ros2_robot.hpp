@@ -63,7 +63,7 @@ class Ros2Robot final : public VehicleAdapter {
   Ros2Robot(const Ros2Robot&) = delete;
   Ros2Robot& operator=(const Ros2Robot&) = delete;
 
-  void SetMotors(const MotorLevels& levels) override;
+  void SetMotors(const models::MotorLevels& levels) override;
   /// Zero velocity, sent at once.
   void Stop() override;
   /// Takes the odometry that came, sends the twist when due.
@@ -78,7 +78,8 @@ class Ros2Robot final : public VehicleAdapter {
   Ros2Counters Counters() const;
 
   /// The twist a differential drive's levels mean: {v m/s, ω rad/s}.
-  static std::array<double, 2> TwistFor(const MotorLevels& levels, const DriveConfig& drive);
+  static std::array<double, 2> TwistFor(const models::MotorLevels& levels,
+                                        const TreadDriveConfig& drive);
 
   /// A sensor_msgs/LaserScan as the state's range field (range_scan.hpp),
   /// the laser taken to be at the robot's centre facing forward (a frame_id

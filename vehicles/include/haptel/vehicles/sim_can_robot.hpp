@@ -59,7 +59,7 @@ class SimCanNodes {
 
   std::unique_ptr<CanBus> bus_;
   CanConfig can_;
-  DriveConfig drive_;
+  TreadDriveConfig drive_;
   SimRobot& robot_;
   std::array<Axis, 2> axes_;
   std::array<bool, 3> silent_{};
@@ -82,7 +82,7 @@ class SimulatedCanRobot final : public VehicleAdapter {
  public:
   SimulatedCanRobot(const Track& track, const VehicleConfig& config,
                     std::unique_ptr<CandumpWriter> log = nullptr);
-  void SetMotors(const MotorLevels& levels) override { adapter_->SetMotors(levels); }
+  void SetMotors(const models::MotorLevels& levels) override { adapter_->SetMotors(levels); }
   void Stop() override { adapter_->Stop(); }
   void Update(double dt) override;
   AdapterState State() const override;

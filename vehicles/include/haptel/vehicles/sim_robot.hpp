@@ -11,8 +11,8 @@
 
 #include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"
+#include "haptel/models/tread_drive.hpp"
 #include "haptel/vehicles/adapter.hpp"
-#include "haptel/vehicles/tread_drive.hpp"
 
 namespace haptel::vehicles {
 
@@ -22,7 +22,7 @@ class SimRobot final : public VehicleAdapter {
   /// `config` first (VehicleConfig::ValidateOrThrow: ConfigFieldError).
   SimRobot(const Track& track, const VehicleConfig& config);
 
-  void SetMotors(const MotorLevels& levels) override;
+  void SetMotors(const models::MotorLevels& levels) override;
   /// Drives the treads at these speeds (m/s) instead of the levels (the
   /// emulated motor controllers of the simulated CAN robot); each still
   /// follows with the motor lag and its gain. SetMotors switches back.
@@ -42,11 +42,11 @@ class SimRobot final : public VehicleAdapter {
   void Contact(const Vec2& point);
 
   const Track& track_;
-  DriveConfig drive_;
+  TreadDriveConfig drive_;
   BodyConfig body_;
   RangeSensorConfig range_sensors_;
   std::mt19937_64 range_noise_;
-  MotorLevels levels_;
+  models::MotorLevels levels_;
   bool use_treads_ = false;
   double tread_left_ = 0.0;
   double tread_right_ = 0.0;

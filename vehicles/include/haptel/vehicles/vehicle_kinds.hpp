@@ -29,6 +29,9 @@ struct KindParts {
   std::unique_ptr<video::CameraSource> camera;
   /// More for the start-up line (", ROS 2 robot on domain 3 …"); may be empty.
   std::string detail;
+  /// What the kind reports on a topic of its own, over its adapter (the CAN
+  /// robot's bus log); null: nothing beyond the family's state.
+  std::unique_ptr<KindReport> report;
 };
 
 /// Opens a kind's hardware (or simulator) for a validated `config` in its

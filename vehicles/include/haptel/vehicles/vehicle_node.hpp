@@ -21,6 +21,7 @@
 #include "haptel/link/topic.hpp"
 #include "haptel/vehicles/command_intake.hpp"
 #include "haptel/vehicles/families.hpp"
+#include "haptel/vehicles/kind_report.hpp"
 #include "haptel/vehicles/vehicle_core.hpp"
 #include "haptel/video/camera_source.hpp"
 #include "haptel/video/camera_streamer.hpp"
@@ -104,9 +105,10 @@ class VehicleNodeOf : public Node {
   using Adapter = typename Family::Adapter;
   /// Validates `config` first (VehicleConfig::ValidateOrThrow:
   /// ConfigFieldError), before any DDS participant exists. `camera` (the
-  /// opened source of its video) and `adapter` must not be null.
+  /// opened source of its video) and `adapter` must not be null; `report`
+  /// (the kind's own topic, over the adapter) may be.
   VehicleNodeOf(const VehicleConfig& config, std::unique_ptr<video::CameraSource> camera,
-                std::unique_ptr<Adapter> adapter);
+                std::unique_ptr<Adapter> adapter, std::unique_ptr<KindReport> report = nullptr);
   ~VehicleNodeOf() override;
   VehicleNodeOf(const VehicleNodeOf&) = delete;
   VehicleNodeOf& operator=(const VehicleNodeOf&) = delete;
@@ -132,6 +134,7 @@ class VehicleNodeOf : public Node {
   // Declared last: destroyed first, so no DDS callback outlives the rest.
   std::unique_ptr<link::Participant> participant_;
   std::unique_ptr<typename Family::StateWriter> state_writer_;
+  std::unique_ptr<KindReport> report_;  ///< null: the kind has none
   std::unique_ptr<video::CameraStreamer> camera_;
   std::unique_ptr<typename Family::CommandReader> command_reader_;
   std::unique_ptr<PeriodicThread> control_;

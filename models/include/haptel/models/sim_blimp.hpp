@@ -25,9 +25,9 @@
 #include "haptel/config/airship.hpp"
 #include "haptel/config/blimp_course.hpp"
 #include "haptel/core/blimp_command.hpp"
-#include "haptel/vehicles/airship.hpp"
+#include "haptel/models/airship.hpp"
 
-namespace haptel::vehicles {
+namespace haptel::models {
 
 /// The contact model's parameters (per contact feature).
 struct BlimpContactConfig {
@@ -215,4 +215,4 @@ void BlimpWorldContact::ForEach(const AirshipState& s, double max_gap, Visit&& v
   }
 }
 
-}  // namespace haptel::vehicles
+}  // namespace haptel::models

@@ -1,4 +1,4 @@
-#include "haptel/vehicles/sim_blimp.hpp"
+#include "haptel/models/sim_blimp.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +8,7 @@
 #include "haptel/config/error.hpp"
 #include "haptel/core/geometry2d.hpp"
 
-namespace haptel::vehicles {
+namespace haptel::models {
 
 namespace check = config_check;
 
@@ -220,4 +220,4 @@ void SimBlimp::TrackContacts() {
   }
 }
 
-}  // namespace haptel::vehicles
+}  // namespace haptel::models

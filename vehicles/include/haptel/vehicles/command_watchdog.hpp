@@ -1,19 +1,8 @@
 #pragma once
-/// @file Motor command quantisation and the command watchdog.
+/// @file The vehicle node's command watchdog.
 #include <cstdint>
 
 namespace haptel::vehicles {
-
-/// Signed speed levels per motor, as the robot's brick takes them.
-struct MotorLevels {
-  int left = 0;
-  int right = 0;
-};
-
-/// Maps a normalised command in [-1, 1] to the nearest of `levels` speed
-/// levels in each direction (−levels..levels). Out-of-range commands are
-/// clamped; NaN maps to 0 (stop).
-int QuantiseCommand(double command, int levels);
 
 /// Stops the motors when no fresh command arrived within the timeout.
 /// Time comes in as an argument, so tests drive it with any clock.

@@ -1,10 +1,10 @@
-#include "haptel/vehicles/airship.hpp"
+#include "haptel/models/airship.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <random>
 
-namespace haptel::vehicles {
+namespace haptel::models {
 
 namespace {
 
@@ -276,4 +276,4 @@ bool Airship::Finite() const {
          std::isfinite(s.tail);
 }
 
-}  // namespace haptel::vehicles
+}  // namespace haptel::models

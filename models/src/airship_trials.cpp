@@ -1,8 +1,8 @@
-#include "haptel/vehicles/airship_trials.hpp"
+#include "haptel/models/airship_trials.hpp"
 
 #include <cmath>
 
-namespace haptel::vehicles {
+namespace haptel::models {
 
 namespace {
 
@@ -91,4 +91,4 @@ AirshipControls ManoeuvreControls(double t_s) {
   return c;
 }
 
-}  // namespace haptel::vehicles
+}  // namespace haptel::models

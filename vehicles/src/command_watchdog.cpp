@@ -1,16 +1,8 @@
-#include "haptel/vehicles/drive.hpp"
+#include "haptel/vehicles/command_watchdog.hpp"
 
-#include <algorithm>
-#include <cmath>
 #include <stdexcept>
 
 namespace haptel::vehicles {
-
-int QuantiseCommand(double command, int levels) {
-  if (!std::isfinite(command)) return 0;
-  const double clamped = std::clamp(command, -1.0, 1.0);
-  return static_cast<int>(std::lround(clamped * levels));
-}
 
 CommandWatchdog::CommandWatchdog(double timeout_s)
     : timeout_ns_(static_cast<int64_t>(timeout_s * 1e9)) {

@@ -6,11 +6,11 @@
 
 #include "haptel/config/error.hpp"
 #include "haptel/config/vehicle.hpp"
-#include "haptel/vehicles/airship.hpp"
-#include "haptel/vehicles/airship_trials.hpp"
+#include "haptel/models/airship.hpp"
+#include "haptel/models/airship_trials.hpp"
 
 using namespace haptel;
-using namespace haptel::vehicles;
+using namespace haptel::models;
 
 namespace {
 

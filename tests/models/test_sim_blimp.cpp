@@ -9,11 +9,11 @@
 #include "alloc_counter.hpp"
 #include "haptel/config/blimp_course.hpp"
 #include "haptel/config/error.hpp"
-#include "haptel/vehicles/airship_trials.hpp"
-#include "haptel/vehicles/sim_blimp.hpp"
+#include "haptel/models/airship_trials.hpp"
+#include "haptel/models/sim_blimp.hpp"
 
 using namespace haptel;
-using namespace haptel::vehicles;
+using namespace haptel::models;
 
 namespace {
 

@@ -3,9 +3,9 @@
 /// its physics: the tests assert on them and `haptel bench blimp` reports
 /// them, so both judge the same manoeuvre.
 #include "haptel/config/airship.hpp"
-#include "haptel/vehicles/airship.hpp"
+#include "haptel/models/airship.hpp"
 
-namespace haptel::vehicles {
+namespace haptel::models {
 
 /// `config` ballasted to neutral buoyancy (payload_mass adjusted).
 AirshipConfig NeutrallyBuoyant(AirshipConfig config);
@@ -31,4 +31,4 @@ double EnergyDrift(const AirshipConfig& config, double seconds = 600.0, bool* fi
 /// rudder, elevator, helix plane and tail rotor all exercised.
 AirshipControls ManoeuvreControls(double t_s);
 
-}  // namespace haptel::vehicles
+}  // namespace haptel::models

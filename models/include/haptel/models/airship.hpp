@@ -25,7 +25,7 @@
 
 #include "haptel/config/airship.hpp"
 
-namespace haptel::vehicles {
+namespace haptel::models {
 
 /// What the actuators are told, in physical terms (the servo channels'
 /// pulse widths mapped through the vehicle's own linkage).
@@ -142,4 +142,4 @@ class Airship {
   double gust_phase_[3][kGustTerms]{};
 };
 
-}  // namespace haptel::vehicles
+}  // namespace haptel::models

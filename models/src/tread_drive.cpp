@@ -1,12 +1,19 @@
-#include "haptel/vehicles/tread_drive.hpp"
+#include "haptel/models/tread_drive.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "haptel/core/geometry2d.hpp"
 
-namespace haptel::vehicles {
+namespace haptel::models {
 
-double StepTreads(const DriveConfig& drive, double target_left, double target_right, double dt,
+int QuantiseCommand(double command, int levels) {
+  if (!std::isfinite(command)) return 0;
+  const double clamped = std::clamp(command, -1.0, 1.0);
+  return static_cast<int>(std::lround(clamped * levels));
+}
+
+double StepTreads(const TreadDriveConfig& drive, double target_left, double target_right, double dt,
                   TreadState& state) {
   if (!(dt > 0.0)) return 0.0;
   const double alpha =
@@ -29,4 +36,4 @@ double StepTreads(const DriveConfig& drive, double target_left, double target_ri
   return omega;
 }
 
-}  // namespace haptel::vehicles
+}  // namespace haptel::models
