@@ -72,8 +72,8 @@ class LeanInterface final : public interfaces::MediatorInterface {
  public:
   explicit LeanInterface(const LeanConfig& config) : name_(config.name), mapping_(config.gesture) {}
   std::string name() const override { return name_; }
-  interfaces::TreadCommand Update(double t_s, const interfaces::VehicleFeedback& feedback,
-                                  haptics::Hal& hal) override {
+  TreadCommand Update(double t_s, const interfaces::VehicleFeedback& feedback,
+                      haptics::Hal& hal) override {
     ++lean_updates;
     return mapping_.Update(t_s, feedback, hal);
   }
