@@ -2,6 +2,7 @@
 
 #include "archives.hpp"
 #include "haptel/config/check.hpp"
+#include "haptel/config/interface_kinds.hpp"
 #include "yaml_map.hpp"
 
 namespace haptel {
@@ -12,11 +13,11 @@ namespace check = config_check;
 void BlimpGestureConfig::ValidateOrThrow() const { config_detail::CheckFields(*this); }
 
 BlimpGestureConfig LoadBlimpGesture(const std::filesystem::path& file) {
-  return config_detail::LoadFile<BlimpGestureConfig>(file,
-                                                     [](YamlMap& root, BlimpGestureConfig& g) {
-                                                       if (g.name != "blimp-gesture")
-                                                         root.Fail("name", "'blimp-gesture'");
-                                                     });
+  return config_detail::LoadFile<BlimpGestureConfig>(
+      file, [](YamlMap& root, BlimpGestureConfig& g) {
+        if (!LoadsInto(g.name, typeid(BlimpGestureConfig)))
+          root.Fail("name", NamesLoadingInto(typeid(BlimpGestureConfig)));
+      });
 }
 
 }  // namespace haptel

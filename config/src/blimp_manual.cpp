@@ -10,13 +10,15 @@ using config_detail::YamlMap;
 namespace check = config_check;
 
 void BlimpManualConfig::ValidateOrThrow() const {
-  if (!IsBlimpManual(name)) check::Fail("name", "'blimp-keys' or 'blimp-gamepad'");
+  if (!LoadsInto(name, typeid(BlimpManualConfig)))
+    check::Fail("name", NamesLoadingInto(typeid(BlimpManualConfig)));
   config_detail::CheckFields(*this);
 }
 
 BlimpManualConfig LoadBlimpManual(const std::filesystem::path& file) {
   return config_detail::LoadFile<BlimpManualConfig>(file, [](YamlMap& root, BlimpManualConfig& c) {
-    if (!IsBlimpManual(c.name)) root.Fail("name", "'blimp-keys' or 'blimp-gamepad'");
+    if (!LoadsInto(c.name, typeid(BlimpManualConfig)))
+      root.Fail("name", NamesLoadingInto(typeid(BlimpManualConfig)));
   });
 }
 

@@ -2,6 +2,7 @@
 
 #include "archives.hpp"
 #include "haptel/config/check.hpp"
+#include "haptel/config/interface_kinds.hpp"
 #include "shared_control_section.hpp"
 #include "yaml_map.hpp"
 
@@ -24,11 +25,9 @@ void CockpitConfig::ValidateOrThrow() const {
 
 CockpitConfig LoadCockpit(const std::filesystem::path& file) {
   return config_detail::LoadFile<CockpitConfig>(file, [](YamlMap& root, CockpitConfig& c) {
-    if (c.name != "cockpit" && c.name != "cockpit-hud" && c.name != "cockpit-assisted" &&
-        c.name != "cockpit-shared") {
-      root.Fail("name", "one of: cockpit, cockpit-hud, cockpit-assisted, cockpit-shared");
-    }
-    config_detail::CheckSharedControl(root, c.name, "cockpit-shared", c.shared_control);
+    if (!LoadsInto(c.name, typeid(CockpitConfig)))
+      root.Fail("name", NamesLoadingInto(typeid(CockpitConfig)));
+    config_detail::CheckSharedControl(root, c.name, typeid(CockpitConfig), c.shared_control);
   });
 }
 

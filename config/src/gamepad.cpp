@@ -5,6 +5,7 @@
 
 #include "archives.hpp"
 #include "haptel/config/check.hpp"
+#include "haptel/config/interface_kinds.hpp"
 #include "yaml_map.hpp"
 
 namespace haptel {
@@ -16,7 +17,8 @@ void GamepadConfig::ValidateOrThrow() const { config_detail::CheckFields(*this);
 
 GamepadConfig LoadGamepad(const std::filesystem::path& file) {
   return config_detail::LoadFile<GamepadConfig>(file, [](YamlMap& root, GamepadConfig& g) {
-    if (g.name != "gamepad") root.Fail("name", "'gamepad'");
+    if (!LoadsInto(g.name, typeid(GamepadConfig)))
+      root.Fail("name", NamesLoadingInto(typeid(GamepadConfig)));
   });
 }
 

@@ -2,6 +2,7 @@
 
 #include "archives.hpp"
 #include "haptel/config/check.hpp"
+#include "haptel/config/interface_kinds.hpp"
 #include "shared_control_section.hpp"
 #include "yaml_map.hpp"
 
@@ -17,9 +18,9 @@ void GestureConfig::ValidateOrThrow() const {
 
 GestureConfig LoadGesture(const std::filesystem::path& file) {
   return config_detail::LoadFile<GestureConfig>(file, [](YamlMap& root, GestureConfig& g) {
-    if (g.name != "gesture" && g.name != "gesture-shared")
-      root.Fail("name", "'gesture' or 'gesture-shared'");
-    config_detail::CheckSharedControl(root, g.name, "gesture-shared", g.shared_control);
+    if (!LoadsInto(g.name, typeid(GestureConfig)))
+      root.Fail("name", NamesLoadingInto(typeid(GestureConfig)));
+    config_detail::CheckSharedControl(root, g.name, typeid(GestureConfig), g.shared_control);
   });
 }
 

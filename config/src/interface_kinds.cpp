@@ -1,6 +1,7 @@
 #include "haptel/config/interface_kinds.hpp"
 
 #include <stdexcept>
+#include <vector>
 
 namespace haptel {
 
@@ -29,6 +30,23 @@ void RegisterInterfaceKind(const InterfaceKindInfo& info) {
     throw std::invalid_argument("interface '" + info.name + "' is registered already");
   }
   Table().push_back(info);
+}
+
+bool LoadsInto(const std::string& name, const std::type_info& config) {
+  const InterfaceKindInfo* kind = FindInterfaceKind(name);
+  return kind != nullptr && kind->config != nullptr && *kind->config == config;
+}
+
+std::string NamesLoadingInto(const std::type_info& config) {
+  std::vector<std::string> names;
+  for (const InterfaceKindInfo& kind : Table()) {
+    if (kind.config != nullptr && *kind.config == config) names.push_back(kind.name);
+  }
+  if (names.size() == 1) return "'" + names[0] + "'";
+  if (names.size() == 2) return "'" + names[0] + "' or '" + names[1] + "'";
+  std::string list;
+  for (const std::string& name : names) list += (list.empty() ? "" : ", ") + name;
+  return "one of: " + list;
 }
 
 std::string InterfaceKindNames(VehicleFamily family) {

@@ -2,6 +2,7 @@
 
 #include "archives.hpp"
 #include "haptel/config/check.hpp"
+#include "haptel/config/interface_kinds.hpp"
 #include "yaml_map.hpp"
 
 namespace haptel {
@@ -13,7 +14,8 @@ void KeyboardConfig::ValidateOrThrow() const { config_detail::CheckFields(*this)
 
 KeyboardConfig LoadKeyboard(const std::filesystem::path& file) {
   return config_detail::LoadFile<KeyboardConfig>(file, [](YamlMap& root, KeyboardConfig& k) {
-    if (k.name != "keyboard") root.Fail("name", "'keyboard'");
+    if (!LoadsInto(k.name, typeid(KeyboardConfig)))
+      root.Fail("name", NamesLoadingInto(typeid(KeyboardConfig)));
   });
 }
 

@@ -2,6 +2,7 @@
 
 #include "archives.hpp"
 #include "haptel/config/check.hpp"
+#include "haptel/config/interface_kinds.hpp"
 #include "shared_control_section.hpp"
 
 namespace haptel {
@@ -18,10 +19,16 @@ void SharedControlConfig::ValidateOrThrow() const {
 
 namespace config_detail {
 
-void CheckSharedControl(YamlMap& root, const std::string& name, const std::string& shared_name,
+void CheckSharedControl(YamlMap& root, const std::string& name, const std::type_info& config,
                         SharedControlConfig& out) {
-  const bool shared = name == shared_name;
+  const InterfaceKindInfo* kind = FindInterfaceKind(name);
+  const bool shared = kind != nullptr && kind->shared_control;
   if (shared != root.Has("shared_control")) {
+    // The interface of the same file's kind that has shared control.
+    std::string shared_name;
+    for (const InterfaceKindInfo& k : InterfaceKinds()) {
+      if (k.shared_control && k.config != nullptr && *k.config == config) shared_name = k.name;
+    }
     root.Fail("shared_control",
               shared ? "a 'shared_control' section (horizon_s, max_force, stiffness, clearance)"
                      : "no 'shared_control' section on '" + name + "' (name the file '" +

@@ -165,6 +165,7 @@ const RegisterInterface<RobotFamily, CockpitConfig> kCockpitInterfaces{
       .hands = {true, true},
       .input = InterfaceInput::kHands,
       .physics = true,
+      .shared_control = true,
       .summary = "the cockpit with haptic shared control: the wheel and lever pushed away from a "
                  "steer into an obstacle"}},
     LoadCockpit,

@@ -96,6 +96,7 @@ const RegisterInterface<RobotFamily, GestureConfig> kGestureInterfaces{
       .hands = {false, true},
       .input = InterfaceInput::kHands,
       .physics = false,
+      .shared_control = true,
       .summary = "gesture with haptic shared control: a bounded push away from commands that "
                  "lead into an obstacle"}},
     LoadGesture,

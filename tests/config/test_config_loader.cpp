@@ -15,6 +15,7 @@
 #include "haptel/config/cockpit.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/config/gesture.hpp"
+#include "haptel/config/keyboard.hpp"
 #include "haptel/config/run.hpp"
 #include "haptel/config/scene.hpp"
 #include "haptel/config/track.hpp"
@@ -430,6 +431,25 @@ TEST_CASE("Shipped cockpit-shared interface loads: the cockpit with shared contr
     CHECK_FALSE(haptel::LoadCockpit(fs::path("config/interfaces") / (std::string(plain) + ".yaml"))
                     .shared_control.enabled);
   }
+}
+
+TEST_CASE(
+    "An interface file naming an interface its loader does not load is refused, with the names it "
+    "does",
+    "[config]") {
+  // The names come from the interface catalogue (each interface registers
+  // the config its file loads into), not from a list in the loader.
+  TempDir tmp;
+  const fs::path gesture_named = tmp.Write("g.yaml", "name: cockpit\n");
+  CHECK_THAT(ErrorOf([&] { haptel::LoadGesture(gesture_named); }),
+             Contains("key 'name': expected 'gesture' or 'gesture-shared'"));
+  const fs::path cockpit_named = tmp.Write("c.yaml", "name: gesture\n");
+  CHECK_THAT(ErrorOf([&] { haptel::LoadCockpit(cockpit_named); }),
+             Contains("key 'name': expected one of: cockpit, cockpit-hud, cockpit-assisted, "
+                      "cockpit-shared"));
+  const fs::path keys_named = tmp.Write("k.yaml", "name: gamepad\n");
+  CHECK_THAT(ErrorOf([&] { haptel::LoadKeyboard(keys_named); }),
+             Contains("key 'name': expected 'keyboard'"));
 }
 
 TEST_CASE("A cockpit's shared control section: only on cockpit-shared, checked strictly",

@@ -75,12 +75,6 @@ struct BlimpManualConfig {
   void ValidateOrThrow() const;
 };
 
-/// Whether `name` is one of the blimp's manual interfaces (keys or a controller).
-inline bool IsBlimpManual(const std::string& name) {
-  const InterfaceKindInfo* kind = FindInterfaceKind(name);
-  return kind != nullptr && kind->family == VehicleFamily::kBlimp && kind->manual();
-}
-
 /// Loads and validates (BlimpManualConfig::ValidateOrThrow). Strict: unknown
 /// keys, including the other input's, are errors naming file, key and line.
 BlimpManualConfig LoadBlimpManual(const std::filesystem::path& file);

@@ -11,6 +11,7 @@
 #include <array>
 #include <deque>
 #include <string>
+#include <typeinfo>
 
 #include "haptel/config/vehicle_kinds.hpp"
 
@@ -30,7 +31,13 @@ struct InterfaceKindInfo {
   InterfaceInput input = InterfaceInput::kHands;
   /// Its controls are bodies the proxy hands move (a physics world).
   bool physics = false;
+  /// Its file carries a `shared_control:` section (gesture-shared,
+  /// cockpit-shared: the base interface with haptic shared control).
+  bool shared_control = false;
   std::string summary;  ///< one line
+  /// The config struct its file loads into (set by the catalogue's
+  /// RegisterInterface); the loaders accept a file's `name:` by it.
+  const std::type_info* config = nullptr;
   /// Driven by a person's keys or controller, not by hands on a device
   /// (the automatic operator cannot drive it).
   bool manual() const { return input != InterfaceInput::kHands; }
@@ -47,5 +54,11 @@ const InterfaceKindInfo* FindInterfaceKind(const std::string& name);
 void RegisterInterfaceKind(const InterfaceKindInfo& info);
 /// "gesture, cockpit, …": the interfaces that drive `family`, for an error's "expected".
 std::string InterfaceKindNames(VehicleFamily family);
+/// Whether `name` is an interface whose file loads into `config`.
+bool LoadsInto(const std::string& name, const std::type_info& config);
+/// What a file loading into `config` may be named, for an error's
+/// "expected": "'keyboard'", "'gesture' or 'gesture-shared'", "one of:
+/// cockpit, cockpit-hud, …".
+std::string NamesLoadingInto(const std::type_info& config);
 
 }  // namespace haptel

@@ -19,6 +19,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <typeinfo>
 #include <utility>
 #include <vector>
 
@@ -146,6 +147,7 @@ struct RegisterInterface {
         d.make_blimp = std::move(factory);
       }
       d.kind = std::move(kind);
+      d.kind.config = &typeid(Config);
       AddInterface(std::move(d));
     }
   }
