@@ -99,6 +99,10 @@ haptel_test_tsan() {
   if [ ! -f "$dir/CMakeCache.txt" ]; then
     haptel_log "configuring $dir (ThreadSanitizer)"
     cmake -S "$ROOT" -B "$dir" -DCMAKE_BUILD_TYPE=Release -DBUILD_TESTING=ON -DHAPTEL_SANITIZE=thread >/dev/null
+  else
+    # Configured again: a test target added since (by name below) is
+    # unknown to the old Makefiles until CMake has run.
+    cmake "$dir" >/dev/null
   fi
   haptel_log "building ${HAPTEL_TSAN_TESTS[*]} with ThreadSanitizer (log: $dir/build.log)"
   if ! cmake --build "$dir" -j"$(nproc)" --target "${HAPTEL_TSAN_TESTS[@]}" >"$dir/build.log" 2>&1; then
