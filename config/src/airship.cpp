@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "archives.hpp"
+#include "haptel/config/archives.hpp"
 #include "haptel/config/check.hpp"
 
 namespace haptel {

@@ -9,7 +9,7 @@
 
 #include "haptel/config/blimp_course_geometry.hpp"
 #include "haptel/config/check.hpp"
-#include "yaml_map.hpp"
+#include "haptel/config/yaml_map.hpp"
 
 namespace haptel {
 

@@ -1,8 +1,8 @@
 #include "haptel/config/blimp_manual.hpp"
 
-#include "archives.hpp"
+#include "haptel/config/archives.hpp"
 #include "haptel/config/check.hpp"
-#include "yaml_map.hpp"
+#include "haptel/config/yaml_map.hpp"
 
 namespace haptel {
 

@@ -1,10 +1,10 @@
 #include "haptel/config/cockpit.hpp"
 
-#include "archives.hpp"
+#include "haptel/config/archives.hpp"
 #include "haptel/config/check.hpp"
 #include "haptel/config/interface_kinds.hpp"
+#include "haptel/config/yaml_map.hpp"
 #include "shared_control_section.hpp"
-#include "yaml_map.hpp"
 
 namespace haptel {
 

@@ -4,7 +4,7 @@
 
 #include "haptel/config/interface_kinds.hpp"
 #include "haptel/config/vehicle.hpp"
-#include "yaml_map.hpp"
+#include "haptel/config/yaml_map.hpp"
 
 namespace haptel {
 

@@ -10,7 +10,7 @@
 
 #include "haptel/config/check.hpp"
 #include "haptel/config/error.hpp"
-#include "yaml_map.hpp"
+#include "haptel/config/yaml_map.hpp"
 
 namespace haptel {
 

@@ -7,12 +7,12 @@
 #include <cstdio>
 #include <stdexcept>
 
-#include "archives.hpp"
+#include "haptel/config/archives.hpp"
 #include "haptel/config/check.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/config/paths.hpp"
+#include "haptel/config/yaml_map.hpp"
 #include "haptel/core/args.hpp"
-#include "yaml_map.hpp"
 
 namespace haptel {
 

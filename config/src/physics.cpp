@@ -2,9 +2,9 @@
 
 #include <string>
 
-#include "archives.hpp"
+#include "haptel/config/archives.hpp"
 #include "haptel/config/check.hpp"
-#include "yaml_map.hpp"
+#include "haptel/config/yaml_map.hpp"
 
 namespace haptel {
 

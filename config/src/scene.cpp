@@ -13,9 +13,9 @@
 
 #include "haptel/config/check.hpp"
 #include "haptel/config/error.hpp"
+#include "haptel/config/yaml_map.hpp"
 #include "haptel/geometry/mass_properties.hpp"
 #include "scene_detail.hpp"
-#include "yaml_map.hpp"
 
 namespace haptel {
 

@@ -2,7 +2,7 @@
 
 #include <sstream>
 
-#include "archives.hpp"
+#include "haptel/config/archives.hpp"
 #include "haptel/config/check.hpp"
 
 namespace haptel {

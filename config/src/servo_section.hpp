@@ -1,5 +1,5 @@
 #pragma once
-#include "archives.hpp"
+#include "haptel/config/archives.hpp"
 #include "haptel/config/servo.hpp"
 
 namespace haptel::config_detail {

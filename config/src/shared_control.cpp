@@ -1,6 +1,6 @@
 #include "haptel/config/shared_control.hpp"
 
-#include "archives.hpp"
+#include "haptel/config/archives.hpp"
 #include "haptel/config/check.hpp"
 #include "haptel/config/interface_kinds.hpp"
 #include "shared_control_section.hpp"

@@ -6,7 +6,7 @@
 #include <typeinfo>
 
 #include "haptel/config/shared_control.hpp"
-#include "yaml_map.hpp"
+#include "haptel/config/yaml_map.hpp"
 
 namespace haptel::config_detail {
 

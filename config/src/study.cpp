@@ -8,7 +8,7 @@
 #include "haptel/config/link.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/run.hpp"
-#include "yaml_map.hpp"
+#include "haptel/config/yaml_map.hpp"
 
 namespace haptel {
 

@@ -8,8 +8,8 @@
 #include <filesystem>
 #include <string>
 
-#include "archives.hpp"
 #include "haptel/config/archive.hpp"
+#include "haptel/config/archives.hpp"
 #include "haptel/config/error.hpp"
 #include "test_env.hpp"
 

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "haptel/app/in_process_robot.hpp"
+#include "haptel/config/archives.hpp"
 #include "haptel/config/check.hpp"
 #include "haptel/config/device.hpp"
 #include "haptel/config/error.hpp"
@@ -52,17 +53,26 @@ const haptics::RegisterDeviceDriver kTestDriver{{
 
 // --- A test-only interface: the gesture mapping under its own name, counting its updates. ---
 
+/// Its own file's keys, named once (Serialize): read strictly and checked by
+/// the same archives as the shipped interfaces' configs.
 struct LeanConfig {
   std::string name;
   double command_rate_hz = 50.0;
-  GestureConfig gesture;  ///< the mapping it leans on
+  double lean_scale = 1.0;  ///< the gesture mapping's command, scaled
+  GestureConfig gesture;    ///< the mapping it leans on (the shipped gesture file's)
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(HAPTEL_NVP(name), config::Required{}, config::NonEmpty{});
+    a->Visit(HAPTEL_NVP(command_rate_hz), config::Range{1.0, 1000.0});
+    a->Visit(HAPTEL_NVP(lean_scale), config::Range{0.1, 1.0});
+  }
+  void ValidateOrThrow() const { config_detail::CheckFields(*this); }
 };
 
 LeanConfig LoadLean(const std::filesystem::path& file) {
-  LeanConfig c;
-  c.name = InterfaceName(file);
+  LeanConfig c = config_detail::LoadFile<LeanConfig>(file);
   c.gesture = LoadGesture(ShippedFile("config/interfaces/gesture.yaml"));
-  c.command_rate_hz = c.gesture.command_rate_hz;
   return c;
 }
 
@@ -70,12 +80,14 @@ int lean_updates = 0;
 
 class LeanInterface final : public interfaces::MediatorInterface {
  public:
-  explicit LeanInterface(const LeanConfig& config) : name_(config.name), mapping_(config.gesture) {}
+  explicit LeanInterface(const LeanConfig& config)
+      : name_(config.name), scale_(config.lean_scale), mapping_(config.gesture) {}
   std::string name() const override { return name_; }
   TreadCommand Update(double t_s, const interfaces::VehicleFeedback& feedback,
                       haptics::Hal& hal) override {
     ++lean_updates;
-    return mapping_.Update(t_s, feedback, hal);
+    const TreadCommand full = mapping_.Update(t_s, feedback, hal);
+    return TreadCommand{full.left * scale_, full.right * scale_};
   }
   interfaces::HandTargets HandTargetsFor(const interfaces::MotionIntent& intent) const override {
     return mapping_.HandTargetsFor(intent);
@@ -85,6 +97,7 @@ class LeanInterface final : public interfaces::MediatorInterface {
 
  private:
   std::string name_;
+  double scale_;
   interfaces::GestureInterface mapping_;
 };
 
@@ -121,7 +134,8 @@ std::filesystem::path RunConfigWith(const std::filesystem::path& dir,
     std::filesystem::copy_file(entry.path(), dir / "interfaces" / entry.path().filename(),
                                std::filesystem::copy_options::overwrite_existing);
   }
-  Write(dir / "interfaces" / "test-lean.yaml", "name: test-lean\n");
+  Write(dir / "interfaces" / "test-lean.yaml",
+        "name: test-lean\ncommand_rate_hz: 40\nlean_scale: 0.9\n");
   // The shipped run's relative files, from the shipped folder.
   std::string run = Read(shipped / "haptel.yaml");
   run = std::regex_replace(run, std::regex(R"((\n(track|vehicle|device|physics|database): ))"),
@@ -188,7 +202,9 @@ TEST_CASE("a test's own interface and device driver register and drive a run",
   const mediator::SessionSetup setup = Setup(dir, "test-lean");
   REQUIRE(setup.interfaces.size() == 1);
   CHECK(setup.interfaces[0].name == "test-lean");
-  CHECK(setup.interfaces[0].config_as<LeanConfig>() != nullptr);
+  REQUIRE(setup.interfaces[0].config_as<LeanConfig>() != nullptr);
+  CHECK(setup.interfaces[0].config_as<LeanConfig>()->lean_scale == 0.9);
+  CHECK(setup.interfaces[0].command_rate_hz() == 40.0);
   CHECK(setup.device.driver == "test-sim");
   app::RegisterInProcessRobot();
   record::Recorder recorder(setup.run.database);
@@ -200,6 +216,17 @@ TEST_CASE("a test's own interface and device driver register and drive a run",
   CHECK(run.result.record.interface == "test-lean");
   CHECK(run.result.outcome == mediator::Outcome::kCompleted);
   CHECK(run.run_id != 0);
+}
+
+TEST_CASE("a test's own interface file is read as strictly as a shipped one",
+          "[catalogue][extension]") {
+  const auto dir = test::ScratchDir("extension-strict");
+  Write(dir / "typo.yaml", "name: test-lean\nlean_scael: 0.5\n");
+  CHECK_THROWS_WITH(LoadLean(dir / "typo.yaml"),
+                    Catch::Contains((dir / "typo.yaml").string()) && Catch::Contains("lean_scael"));
+  Write(dir / "range.yaml", "name: test-lean\nlean_scale: 3\n");
+  CHECK_THROWS_WITH(LoadLean(dir / "range.yaml"),
+                    Catch::Contains("lean_scale") && Catch::Contains("[0.1, 1]"));
 }
 
 TEST_CASE("a name neither the catalogue nor the registry holds is refused, naming theirs",

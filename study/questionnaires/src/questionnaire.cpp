@@ -6,7 +6,7 @@
 #include <set>
 #include <utility>
 
-#include "yaml_map.hpp"
+#include "haptel/config/yaml_map.hpp"
 
 namespace haptel::study {
 

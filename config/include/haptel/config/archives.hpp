@@ -1,7 +1,10 @@
 #pragma once
-// The archives that walk a config struct's Serialize (haptel/config/archive.hpp):
-// YamlReadArchive reads a file strictly, FieldChecker checks the fields'
-// rules (what ValidateOrThrow starts with), YamlWriteArchive writes a file.
+/// @file The archives that walk a config struct's Serialize
+/// (haptel/config/archive.hpp): YamlReadArchive reads a file strictly,
+/// FieldChecker checks the fields' rules (what ValidateOrThrow starts with),
+/// YamlWriteArchive writes a file. `LoadFile<Config>(file)` is the whole of
+/// a loader for a struct with a Serialize, in config/ or beside its code
+/// (an interface's own config: docs/architecture.md, "Adding an interface").
 #include <yaml-cpp/yaml.h>
 
 #include <array>
@@ -15,7 +18,7 @@
 
 #include "haptel/config/archive.hpp"
 #include "haptel/config/check.hpp"
-#include "yaml_map.hpp"
+#include "haptel/config/yaml_map.hpp"
 
 namespace haptel::config_detail {
 

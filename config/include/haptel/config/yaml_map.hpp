@@ -1,7 +1,10 @@
 #pragma once
-// Strict reading of one YAML mapping: every key read is remembered, and
-// Finish() rejects the keys nobody asked for. Errors name file:line:column,
-// the full key path and what was expected.
+/// @file Strict reading of one YAML mapping: every key read is remembered,
+/// and Finish() rejects the keys nobody asked for. Errors name
+/// file:line:column, the full key path and what was expected. The config
+/// loaders read through it (mostly by the archives, archives.hpp); a config
+/// that lives beside its code elsewhere (an interface's, a questionnaire)
+/// reads the same way.
 #include <yaml-cpp/yaml.h>
 
 #include <array>
