@@ -42,6 +42,12 @@ std::string NamesLoadingInto(const std::type_info& config) {
   for (const InterfaceKindInfo& kind : Table()) {
     if (kind.config != nullptr && *kind.config == config) names.push_back(kind.name);
   }
+  if (names.empty()) {
+    // The table is filled by the interfaces' registrations: a program that
+    // loads an interface file without linking haptel_interfaces has none.
+    throw std::logic_error(std::string("no interface loads into ") + config.name() +
+                           ": link haptel_interfaces (the interface catalogue)");
+  }
   if (names.size() == 1) return "'" + names[0] + "'";
   if (names.size() == 2) return "'" + names[0] + "' or '" + names[1] + "'";
   std::string list;
