@@ -16,7 +16,7 @@
 #include "haptel/core/child_process.hpp"
 #include "haptel/core/cli.hpp"
 #include "haptel/core/log.hpp"
-#include "haptel/mediator/run_command.hpp"
+#include "haptel/mediator/run_setup.hpp"
 
 namespace {
 

@@ -18,7 +18,7 @@
 #include "haptel/core/stop_signals.hpp"
 #include "haptel/link/security.hpp"
 #include "haptel/mediator/fleet.hpp"
-#include "haptel/mediator/run_command.hpp"
+#include "haptel/mediator/run_setup.hpp"
 #include "haptel/record/run_picture.hpp"
 #include "haptel/record/unsaved_run.hpp"
 #include "haptel/view/view_model.hpp"

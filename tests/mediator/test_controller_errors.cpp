@@ -8,7 +8,7 @@
 #include "haptel/config/vehicle.hpp"
 #include "haptel/link/families.hpp"
 #include "haptel/mediator/controller_errors.hpp"
-#include "haptel/mediator/run_command.hpp"
+#include "haptel/mediator/run_setup.hpp"
 
 using namespace haptel;
 using namespace haptel::mediator;

@@ -14,7 +14,7 @@
 
 #include "haptel/config/vehicle.hpp"
 #include "haptel/mediator/fleet.hpp"
-#include "haptel/mediator/run_command.hpp"
+#include "haptel/mediator/run_setup.hpp"
 #include "haptel/record/recorder.hpp"
 #include "haptel/vehicles/vehicle_kinds.hpp"
 #include "test_env.hpp"

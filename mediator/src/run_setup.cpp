@@ -1,5 +1,5 @@
 // `haptel run`: one lap from the command line.
-#include "haptel/mediator/run_command.hpp"
+#include "haptel/mediator/run_setup.hpp"
 
 #include <algorithm>
 #include <cmath>
