@@ -10,13 +10,13 @@
 
 #include "haptel/app/in_process_robot.hpp"
 #include "haptel/app/link_commands.hpp"
+#include "haptel/app/run_command.hpp"
 #include "haptel/app/scene_command.hpp"
 #include "haptel/app/study_command.hpp"
 #include "haptel/calibration/calibration_procedure.hpp"
 #include "haptel/core/child_process.hpp"
 #include "haptel/core/cli.hpp"
 #include "haptel/core/log.hpp"
-#include "haptel/mediator/run_command.hpp"
 
 namespace {
 
@@ -55,7 +55,7 @@ int main(int argc, char** argv) {
   app::RegisterInProcessRobot();  // haptel run --simulated-time (and each trial of a study's)
   // Each command parses argv from its own name on.
   const std::string command = argc > 1 ? argv[1] : "";
-  if (command == "run") return mediator::RunCommand(argc - 1, argv + 1);
+  if (command == "run") return app::RunCommand(argc - 1, argv + 1);
   if (command == "calibrate") return haptics::CalibrateMain(argc - 1, argv + 1);
   if (command == "scene") return app::SceneCommand(argc - 1, argv + 1, std::cout, std::cerr);
   if (command == "bench") return ExecBench(argv + 1);

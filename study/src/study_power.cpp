@@ -25,7 +25,7 @@
 #include "haptel/core/child_process.hpp"
 #include "haptel/core/cli.hpp"
 #include "haptel/core/json.hpp"
-#include "haptel/mediator/run_command.hpp"
+#include "haptel/mediator/run_setup.hpp"
 #include "haptel/study/plan.hpp"
 #include "haptel/study/power.hpp"
 #include "haptel/study/power_pool.hpp"

@@ -23,7 +23,7 @@
 #include "haptel/core/clock.hpp"
 #include "haptel/core/json.hpp"
 #include "haptel/haptics/device_drivers.hpp"
-#include "haptel/mediator/run_command.hpp"
+#include "haptel/mediator/run_setup.hpp"
 #include "haptel/mediator/third_person_view.hpp"
 #include "haptel/study/console.hpp"
 #include "haptel/study/plan.hpp"

@@ -5,21 +5,21 @@
 #include <cstdio>
 #include <string>
 
+#include "haptel/app/run_command.hpp"
 #include "haptel/config/vehicle.hpp"
 #include "haptel/link/families.hpp"
 #include "haptel/mediator/controller_errors.hpp"
-#include "haptel/mediator/run_command.hpp"
 
 using namespace haptel;
 using namespace haptel::mediator;
 
 namespace {
 
-/// What PrintRunSummary writes, as a string.
+/// What app::PrintRunSummary writes, as a string.
 std::string Summary(const SessionSetup& setup, const RecordedRun& run) {
   std::FILE* file = std::tmpfile();
   REQUIRE(file != nullptr);
-  PrintRunSummary(file, setup, run);
+  app::PrintRunSummary(file, setup, run);
   std::rewind(file);
   std::string text;
   char buffer[4096];
@@ -65,7 +65,7 @@ TEST_CASE("the run's summary and JSON line name the Maestro's errors and keep th
     CHECK_THAT(Summary(setup, run),
                Catch::Contains(
                    "\n  servo controller errors: serial timeout, CRC error (register 0x0028)\n"));
-    const std::string json = RunJson(setup, run);
+    const std::string json = app::RunJson(setup, run);
     CHECK_THAT(
         json,
         Catch::Contains(
@@ -73,13 +73,13 @@ TEST_CASE("the run's summary and JSON line name the Maestro's errors and keep th
   }
   SECTION("none") {
     CHECK_THAT(Summary(setup, run), Catch::Contains("\n  servo controller errors: none\n"));
-    CHECK_THAT(RunJson(setup, run),
+    CHECK_THAT(app::RunJson(setup, run),
                Catch::Contains(R"("controller_errors":0,"controller_error_names":[])"));
   }
   SECTION("a vehicle without a Maestro has no such line") {
     setup.vehicle = LoadVehicle("config/vehicles/sim-robot.yaml");
     CHECK_THAT(Summary(setup, run), !Catch::Contains("servo controller errors"));
-    CHECK_THAT(RunJson(setup, run),
+    CHECK_THAT(app::RunJson(setup, run),
                Catch::Contains(R"("controller_errors":0,"controller_error_names":[])"));
   }
 }

@@ -24,7 +24,7 @@
 #include "haptel/haptics/sim_device.hpp"
 #include "haptel/interfaces/catalog.hpp"
 #include "haptel/interfaces/gesture.hpp"
-#include "haptel/mediator/run_command.hpp"
+#include "haptel/mediator/run_setup.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;

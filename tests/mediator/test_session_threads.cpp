@@ -12,9 +12,10 @@
 #include <string>
 #include <vector>
 
+#include "haptel/app/run_command.hpp"
 #include "haptel/config/vehicle.hpp"
 #include "haptel/mediator/fleet.hpp"
-#include "haptel/mediator/run_command.hpp"
+#include "haptel/mediator/run_setup.hpp"
 #include "haptel/record/recorder.hpp"
 #include "haptel/vehicles/vehicle_kinds.hpp"
 #include "test_env.hpp"
@@ -105,7 +106,7 @@ TEST_CASE("a fleet of two robots in this process: both driven in turn, each reco
       AttachedRun(domain, database, {"--fleet", fleet.string(), "--time-limit", "20"});
   const std::vector<const char*> argv = Argv(words);
   const std::atomic<bool> interrupted{false};
-  mediator::RunFleetCommand(static_cast<int>(argv.size()), argv.data(), interrupted);
+  app::RunFleetCommand(static_cast<int>(argv.size()), argv.data(), interrupted);
   a->Stop();
   b->Stop();
 

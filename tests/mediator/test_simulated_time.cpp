@@ -11,7 +11,7 @@
 #include "haptel/app/in_process_robot.hpp"
 #include "haptel/core/args.hpp"
 #include "haptel/core/clock.hpp"
-#include "haptel/mediator/run_command.hpp"
+#include "haptel/mediator/run_setup.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;

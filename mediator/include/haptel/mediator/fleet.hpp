@@ -133,12 +133,6 @@ struct FleetResult {
 /// cannot be set up (before anything moves).
 FleetResult RunSession(const FleetSetup& setup, const std::atomic<bool>& interrupted);
 
-/// `haptel run --fleet FILE ...` (argv[0] is "run"): sets up each vehicle
-/// as `haptel run` would with the fleet file's vehicle, world, name and
-/// interface, runs the fleet, records one row per vehicle, prints a table
-/// on stderr and, with --json, one line on stdout. Returns the exit code.
-int RunFleetCommand(int argc, const char* const* argv, const std::atomic<bool>& interrupted);
-
 /// The nearest-rank percentile `p` in (0, 1] of `values`; -1 when empty.
 double NearestRank(std::vector<double> values, double p);
 

@@ -1,7 +1,7 @@
-// `haptel run --fleet FILE`: one operator, several vehicles (fleet.hpp).
-// Each vehicle is set up as `haptel run` sets up one (the same options, its
-// own vehicle, world and name from the fleet file), the fleet is run, and
-// each vehicle's run is recorded as a row of its own.
+// `haptel run --fleet FILE`'s command line: one operator, several vehicles
+// (mediator/fleet.hpp). Each vehicle is set up as `haptel run` sets up one
+// (the same options, its own vehicle, world and name from the fleet file),
+// the fleet is run, and each vehicle's run is recorded as a row of its own.
 #include <algorithm>
 #include <cstdio>
 #include <memory>
@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "haptel/app/run_command.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/core/args.hpp"
 #include "haptel/core/cli.hpp"
@@ -18,12 +19,21 @@
 #include "haptel/core/stop_signals.hpp"
 #include "haptel/link/security.hpp"
 #include "haptel/mediator/fleet.hpp"
-#include "haptel/mediator/run_command.hpp"
+#include "haptel/mediator/run_setup.hpp"
 #include "haptel/record/run_picture.hpp"
 #include "haptel/record/unsaved_run.hpp"
 #include "haptel/view/view_model.hpp"
 
-namespace haptel::mediator {
+namespace haptel::app {
+
+using mediator::FleetResult;
+using mediator::FleetSetup;
+using mediator::FleetVehicleResult;
+using mediator::Outcome;
+using mediator::Recorder;
+using mediator::RunRecord;
+using mediator::SessionSetup;
+using mediator::ViewKind;
 
 namespace {
 
@@ -73,8 +83,9 @@ FleetSetup FleetSetupFromArgs(int argc, const char* const* argv, const Args& arg
     std::vector<const char*> pointers;
     for (const std::string& w : words) pointers.push_back(w.c_str());
     try {
-      const Args vehicle_args = ParseRunArgs(static_cast<int>(pointers.size()), pointers.data());
-      setup.vehicles.push_back(RunSetupFromArgs(vehicle_args));
+      const Args vehicle_args =
+          mediator::ParseRunArgs(static_cast<int>(pointers.size()), pointers.data());
+      setup.vehicles.push_back(mediator::RunSetupFromArgs(vehicle_args));
     } catch (const ConfigError& e) {
       throw ConfigError(setup.fleet.file.string() + ": vehicle '" + vehicle.name +
                         "': " + e.what());
@@ -236,7 +247,7 @@ int RunFleetCommand(int argc, const char* const* argv, const std::atomic<bool>& 
   bool json = false;
   bool insecure = false;
   const FleetSetup setup = cli::ReadInput([&] {
-    const Args args = ParseRunArgs(argc, argv);
+    const Args args = mediator::ParseRunArgs(argc, argv);
     if (!args.positional().empty()) {
       throw UsageError("unexpected argument '" + args.positional()[0] +
                        "' (options start with --)");
@@ -261,7 +272,7 @@ int RunFleetCommand(int argc, const char* const* argv, const std::atomic<bool>& 
   }
   auto recorder =
       cli::ReadInput([&] { return std::make_unique<Recorder>(setup.vehicles.at(0).run.database); });
-  FleetResult fleet = RunSession(setup, interrupted);
+  FleetResult fleet = mediator::RunSession(setup, interrupted);
   std::vector<int64_t> ids;
   bool recorded = true;
   for (size_t i = 0; i < fleet.vehicles.size(); ++i) {
@@ -273,8 +284,8 @@ int RunFleetCommand(int argc, const char* const* argv, const std::atomic<bool>& 
   PrintFleetSummary(stderr, setup, fleet, ids);
   if (json) std::printf("%s\n", FleetJson(setup, fleet, ids, recorded).c_str());
   std::fflush(stdout);
-  if (!recorded) return kExitNotRecorded;
-  return ExitCode(fleet.outcome);
+  if (!recorded) return cli::kExitNotRecorded;
+  return mediator::ExitCode(fleet.outcome);
 }
 
-}  // namespace haptel::mediator
+}  // namespace haptel::app

@@ -1,10 +1,10 @@
 #pragma once
-/// @file `haptel run`: one lap from the command line — and the steps a study
-/// repeats for each trial: run a session that is set up, record it, print
-/// its summary and its JSON line.
+/// @file The session `haptel run` drives, set up from its options, and the
+/// steps a study repeats for each trial: set a session up from the same
+/// options, run it and record it. The command line itself (its usage, its
+/// summary, its JSON line, its exit code) is app/'s (app/run_command.hpp).
 #include <atomic>
 #include <cstdint>
-#include <cstdio>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -24,7 +24,8 @@ struct RecordedRun {
   std::string save_error;         ///< why the database did not take it ("" when it did)
 };
 
-/// `haptel run`'s options (argv[0] is "run"; see its --help).
+/// `haptel run`'s options (argv[0] is "run"; see its --help): the words a
+/// study's trial and each vehicle of a fleet are set up from too.
 Args ParseRunArgs(int argc, const char* const* argv);
 
 /// The session `haptel run` would drive for these options: every file read
@@ -40,18 +41,5 @@ SessionSetup RunSetupFromArgs(const Args& args);
 RecordedRun RunAndRecord(const SessionSetup& setup, Recorder& recorder,
                          const std::atomic<bool>& interrupted, const Recorder::AlsoSave& also = {},
                          const std::optional<record::TrialOfRun>& trial = std::nullopt);
-
-/// The process exit code: kExitNotRecorded when the database did not take the
-/// run, else kExitOutputFailed when the --record MP4 or the vehicle's CAN
-/// bus log failed, else the outcome's.
-int ExitCode(const RecordedRun& run);
-
-/// The lines `haptel run` prints after a lap.
-void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRun& run);
-/// The one JSON line of `haptel run --json` (no newline).
-std::string RunJson(const SessionSetup& setup, const RecordedRun& run);
-
-/// `haptel run`; argv[0] is "run". Returns the exit code.
-int RunCommand(int argc, const char* const* argv);
 
 }  // namespace haptel::mediator
