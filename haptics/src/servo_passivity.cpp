@@ -32,12 +32,12 @@ void ArmPassivity::OnLost(Device& device, Side side) {
   }
 }
 
-bool ArmPassivity::ObserveLink(Device& device, Side side, const Vec3d& displacement,
+void ArmPassivity::ObserveLink(Device& device, Side side, const Vec3d& displacement,
                                double period_s, Vec3d& position, ServoCounters& counters) {
   link_reporting_ = observe_link_ && device.LinkPassivity(side, link_remote_);
-  if (!observe_link_) return false;
+  if (!observe_link_) return;
   link_end_.Observe(displacement);
-  if (!link_reporting_) return false;
+  if (!link_reporting_) return;
   ++counters.passivity_link_ticks;
   Vec3d remote_in{};
   for (int i = 0; i < 3; ++i) remote_in[i] = link_remote_.energy_in[i] - link_remote_.charged[i];
@@ -55,7 +55,6 @@ bool ArmPassivity::ObserveLink(Device& device, Side side, const Vec3d& displacem
   counters.passivity_device_dissipated_j = link_base_dissipated_j_ + link_remote_.dissipated_j;
   counters.passivity_device_max_alpha =
       std::max(counters.passivity_device_max_alpha, link_remote_.max_alpha);
-  return true;
 }
 
 void ArmPassivity::DampPorts(const Vec3d& field, const Vec3d& coupling, const Vec3d& displacement,

@@ -40,9 +40,8 @@ class ArmPassivity {
   /// channel (`displacement`, m), and, when the far end reports (then the
   /// two-port runs this tick instead of the one-port ports), its deficit
   /// charged or, with `passivity_link: admittance`, the offset added to
-  /// `position` that returns it to the environment. True when the far end
-  /// reports. Nothing without a link.
-  bool ObserveLink(Device& device, Side side, const Vec3d& displacement, double period_s,
+  /// `position` that returns it to the environment. Nothing without a link.
+  void ObserveLink(Device& device, Side side, const Vec3d& displacement, double period_s,
                    Vec3d& position, ServoCounters& counters);
 
   /// The one-port ports (with `servo.passivity` on and no far end reporting
