@@ -164,6 +164,236 @@ cv::Scalar SpeedColour(const cv::Mat& colours, double speed_mps, double max_spee
   return {static_cast<double>(c[0]), static_cast<double>(c[1]), static_cast<double>(c[2])};
 }
 
+/// What the map must show: the walls, the round obstacles, the path, the
+/// contacts and `also_show`; a map at least 0.1 m across on each axis (a
+/// path that is a single point).
+struct MapExtent {
+  double cx = 0.0, cy = 0.0;            ///< its centre, m
+  double world_w = 0.0, world_h = 0.0;  ///< its size, m
+  double max_speed = 0.0;               ///< the path's top speed, m/s (0: none)
+};
+
+MapExtent ExtentOf(const RunRecord& run, const std::optional<Track>& geometry,
+                   const std::vector<Vec2>& left, const std::vector<Vec2>& right,
+                   const std::vector<Vec2>& also_show) {
+  Bounds bounds;
+  for (const Vec2& v : left) bounds.Add(v.x(), v.y());
+  for (const Vec2& v : right) bounds.Add(v.x(), v.y());
+  if (geometry) {
+    for (const CircleObstacle& o : geometry->round_obstacles()) {
+      bounds.Add(o.center.x(), o.center.y(), o.radius);
+    }
+  }
+  MapExtent e;
+  for (const PathPoint& p : run.path) {
+    bounds.Add(p.x, p.y);
+    if (Finite(p.x, p.y) && std::isfinite(p.speed_mps)) {
+      e.max_speed = std::max(e.max_speed, std::abs(p.speed_mps));
+    }
+  }
+  for (const ContactPoint& c : run.contacts) bounds.Add(c.x, c.y);
+  for (const Vec2& v : also_show) bounds.Add(v.x(), v.y());
+  if (bounds.empty()) bounds.Add(0.0, 0.0, 0.5);
+  e.cx = (bounds.min_x + bounds.max_x) / 2;
+  e.cy = (bounds.min_y + bounds.max_y) / 2;
+  e.world_w = std::max(bounds.max_x - bounds.min_x, 0.1);
+  e.world_h = std::max(bounds.max_y - bounds.min_y, 0.1);
+  return e;
+}
+
+/// The blank picture: kLongSide on the long side, the map to scale between
+/// the title band and the legend band.
+RunPicture LayOut(const MapExtent& e) {
+  RunPicture picture;
+  constexpr int kLong = RunPicture::kLongSide;
+  constexpr int kBands = kTitleBandPx + kLegendBandPx + 2 * kMarginPx;
+  double scale = (kLong - 2 * kMarginPx) / e.world_w;
+  int width = kLong;
+  int height = static_cast<int>(std::ceil(e.world_h * scale)) + kBands;
+  if (height > kLong) {  // taller than wide: the height is the long side
+    scale = (kLong - kBands) / e.world_h;
+    height = kLong;
+    width = std::max(kMinWidthPx, static_cast<int>(std::ceil(e.world_w * scale)) + 2 * kMarginPx);
+  }
+  picture.px_per_m = scale;
+  picture.min_x = e.cx - e.world_w / 2;
+  picture.max_y = e.cy + e.world_h / 2;
+  picture.origin_px = {(width - e.world_w * scale) / 2, kTitleBandPx + kMarginPx};
+  picture.max_speed_mps = e.max_speed > 0.0 ? e.max_speed : 1.0;
+  picture.image = cv::Mat(height, width, CV_8UC3, kWhite);
+  return picture;
+}
+
+/// The corridor between the walls, the centre line and the obstacles.
+void DrawTrack(RunPicture& picture, Painter& paint, const TrackConfig& track,
+               const std::vector<Vec2>& left, const std::vector<Vec2>& right) {
+  std::vector<std::vector<cv::Point>> rings(2);
+  for (size_t i = 0; i < left.size(); ++i) {
+    rings[0].push_back(paint.At(left[i]));
+    rings[1].push_back(paint.At(right[i]));
+  }
+  // One ring inside the other: the fill covers the corridor between them.
+  cv::fillPoly(picture.image, rings, kCorridor, cv::LINE_AA, kShift);
+  std::vector<cv::Point> centre;
+  for (const Vec2& v : track.centerline) centre.push_back(paint.At(v));
+  cv::polylines(picture.image, centre, true, kCentreLine, 1, cv::LINE_AA, kShift);
+  cv::polylines(picture.image, rings, true, kWall, 2, cv::LINE_AA, kShift);
+  for (const CircleObstacle& o : track.obstacles) paint.Disc(o.center, o.radius, 3, kObstacle);
+}
+
+/// The path, coloured by speed, on a dark outline.
+void DrawPath(RunPicture& picture, Painter& paint, const RunRecord& run, const cv::Mat& colours) {
+  std::vector<const PathPoint*> points;
+  for (const PathPoint& p : run.path) {
+    if (Finite(p.x, p.y)) points.push_back(&p);
+  }
+  for (size_t i = 1; i < points.size(); ++i) {
+    paint.Line({points[i - 1]->x, points[i - 1]->y}, {points[i]->x, points[i]->y}, kPathOutline, 5);
+  }
+  for (size_t i = 1; i < points.size(); ++i) {
+    const double a = std::isfinite(points[i - 1]->speed_mps) ? points[i - 1]->speed_mps : 0.0;
+    const double b = std::isfinite(points[i]->speed_mps) ? points[i]->speed_mps : 0.0;
+    const cv::Scalar colour =
+        SpeedColour(colours, (std::abs(a) + std::abs(b)) / 2, picture.max_speed_mps);
+    paint.Line({points[i - 1]->x, points[i - 1]->y}, {points[i]->x, points[i]->y}, colour, 3);
+  }
+  if (points.size() == 1) {
+    const cv::Scalar colour = SpeedColour(colours, points[0]->speed_mps, picture.max_speed_mps);
+    cv::circle(picture.image, paint.At(points[0]->x, points[0]->y), 3 << kShift, colour, cv::FILLED,
+               cv::LINE_AA, kShift);
+  }
+}
+
+/// The start line across the corridor, an arrow the way the lap goes, and
+/// where the vehicle starts (a ring).
+void DrawStart(RunPicture& picture, Painter& paint, const TrackConfig& track,
+               const Track& geometry) {
+  const Vec2 s = geometry.PointAt(0.0);
+  const Vec2 t = geometry.TangentAt(0.0);
+  const Vec2 n(-t.y(), t.x());
+  const double h = track.corridor_width / 2;
+  paint.Line(s - n * h, s + n * h, kBlack, 3);
+  // The arrow is 40 px long whatever the scale (image rows grow downwards).
+  const cv::Point tail = paint.At(s + n * (h * 0.5));
+  const cv::Point head = tail + cv::Point(static_cast<int>(std::lround(t.x() * 40 * kSubPixel)),
+                                          static_cast<int>(std::lround(-t.y() * 40 * kSubPixel)));
+  cv::arrowedLine(picture.image, tail, head, kBlack, 2, cv::LINE_AA, kShift, 0.3);
+  const Vec2 start = geometry.StartPosition();
+  cv::circle(picture.image, paint.At(start), 5 << kShift, kBlack, 2, cv::LINE_AA, kShift);
+  const cv::Point2d label = picture.ToPixel(s.x() + n.x() * h, s.y() + n.y() * h);
+  const cv::Point2d away = picture.ToPixel(s.x() + n.x() * (h + 1.0), s.y() + n.y() * (h + 1.0));
+  const cv::Point2d dir = (away - label) / std::max(cv::norm(away - label), 1e-9);
+  paint.TextCentred("start", label + dir * 22.0, 0.5);
+}
+
+/// A gate's colour as the run took it: passed, missed (crossed outside), or
+/// not reached. One rule for the track's and the blimp course's gates.
+cv::Scalar GateColour(const std::vector<GateSplit>& splits, int gate) {
+  cv::Scalar colour = kNotReached;
+  for (const GateSplit& split : splits) {
+    if (split.gate != gate) continue;
+    if (split.passed) {
+      colour = kPassed;
+    } else if (split.split_s >= 0.0) {
+      colour = kMissed;
+    }
+  }
+  return colour;
+}
+
+/// The gates, as the run took them, each numbered beyond its left post.
+void DrawGates(RunPicture& picture, Painter& paint, const RunRecord& run, const TrackConfig& track,
+               const Track& geometry) {
+  const std::vector<Gate>& gates = geometry.gates();
+  for (size_t g = 0; g < gates.size(); ++g) {
+    const cv::Scalar colour = GateColour(run.splits, static_cast<int>(g));
+    const Gate& gate = gates[g];
+    paint.Line(gate.left_post, gate.right_post, colour, 2);
+    paint.Disc(gate.left_post, track.post_radius, 6, colour);
+    paint.Disc(gate.right_post, track.post_radius, 6, colour);
+    // The number beyond the left post, away from the gate's centre.
+    const cv::Point2d post = picture.ToPixel(gate.left_post.x(), gate.left_post.y());
+    const cv::Point2d centre = picture.ToPixel(gate.center.x(), gate.center.y());
+    cv::Point2d out = post - centre;
+    out /= std::max(cv::norm(out), 1e-9);
+    const double post_px = std::max(6.0, track.post_radius * picture.px_per_m);
+    paint.TextCentred(std::to_string(g + 1), post + out * (post_px + 12.0), 0.55);
+  }
+}
+
+/// The contacts: red crosses outlined in black.
+void DrawContacts(RunPicture& picture, Painter& paint, const RunRecord& run) {
+  for (const ContactPoint& c : run.contacts) {
+    if (!Finite(c.x, c.y)) continue;
+    const cv::Point at = paint.At(c.x, c.y);
+    constexpr int kArm = 8 << kShift;
+    for (const auto& [thickness, colour] : {std::pair{6, kBlack}, std::pair{3, kContact}}) {
+      cv::line(picture.image, at + cv::Point(-kArm, -kArm), at + cv::Point(kArm, kArm), colour,
+               thickness, cv::LINE_AA, kShift);
+      cv::line(picture.image, at + cv::Point(-kArm, kArm), at + cv::Point(kArm, -kArm), colour,
+               thickness, cv::LINE_AA, kShift);
+    }
+  }
+}
+
+/// The title's two lines: the run and its result.
+void DrawTitle(const RunPicture& picture, Painter& paint, const RunRecord& run,
+               const TrackConfig& track) {
+  const int width = picture.image.cols;
+  std::string first = run.id > 0 ? "run " + std::to_string(run.id) + "  |  " : "";
+  first += (run.config_name.empty() ? "?" : run.config_name) + "  |  track " +
+           (run.track.empty() ? track.name : run.track) + "  |  " +
+           (run.interface.empty() ? "?" : run.interface) + "  |  operator " +
+           (run.operator_kind.empty() ? "?" : run.operator_kind);
+  const std::string lap =
+      std::isfinite(run.lap_time_s) ? Format("%.2f s", run.lap_time_s) : std::string("-");
+  const std::string second = (run.outcome.empty() ? "?" : run.outcome) + "  |  lap " + lap +
+                             "  |  gates passed " + std::to_string(run.gates_passed) + "/" +
+                             std::to_string(run.gates_total) + "  |  obstacles touched " +
+                             std::to_string(run.obstacles_touched);
+  paint.TextFitted(Ascii(first), {16, 26}, 0.6, width - 32);
+  paint.TextFitted(Ascii(second), {16, 52}, 0.6, width - 32);
+}
+
+/// The legend band: speed colours (left) and a scale bar (right) about a
+/// quarter of the map's width, where there is room.
+void DrawLegend(RunPicture& picture, Painter& paint, const cv::Mat& colours, double world_w) {
+  const int width = picture.image.cols;
+  const int top = picture.image.rows - kLegendBandPx;
+  cv::line(picture.image, {0, top}, {width, top}, kCentreLine, 1);
+  const int bar_x = 80;
+  const int bar_w = 300;
+  picture.speed_legend = cv::Rect(bar_x, top + 18, bar_w, 16);
+  paint.TextFitted("speed", {16, top + 31}, 0.5, 60);
+  for (int c = 0; c < bar_w; ++c) {
+    const cv::Vec3b colour = colours.at<cv::Vec3b>(
+        0, static_cast<int>(std::lround(255.0 * c / static_cast<double>(bar_w - 1))));
+    cv::line(picture.image, {bar_x + c, top + 18}, {bar_x + c, top + 33},
+             cv::Scalar(colour[0], colour[1], colour[2]), 1);
+  }
+  // The frame just outside the bar, so its end columns stay the end colours.
+  cv::rectangle(picture.image,
+                cv::Rect(bar_x - 1, top + 17, bar_w + 2, picture.speed_legend.height + 2), kBlack,
+                1);
+  paint.TextCentred("0 m/s", {static_cast<double>(bar_x), top + 50.0}, 0.45);
+  paint.TextCentred(Format("%.2f m/s", picture.max_speed_mps),
+                    {static_cast<double>(bar_x + bar_w), top + 50.0}, 0.45);
+
+  const double scale = picture.px_per_m;
+  const int room_px = width - (bar_x + bar_w + 60) - 16;
+  const double target_m = std::min(world_w * 0.25, room_px / scale);
+  if (target_m <= 0.0) return;
+  const double length_m = NiceLength(target_m);
+  const int length_px = static_cast<int>(std::lround(length_m * scale));
+  const int x1 = width - 24;
+  const int x0 = x1 - length_px;
+  const int y = top + 28;
+  cv::line(picture.image, {x0, y}, {x1, y}, kBlack, 2);
+  cv::line(picture.image, {x0, y - 6}, {x0, y + 6}, kBlack, 2);
+  cv::line(picture.image, {x1, y - 6}, {x1, y + 6}, kBlack, 2);
+  paint.TextCentred(Format("%g m", length_m), {(x0 + x1) / 2.0, top + 50.0}, 0.45);
+}
+
 }  // namespace
 
 RunPicture RenderRunPicture(const RunRecord& run, const TrackConfig& track,
@@ -176,206 +406,20 @@ RunPicture RenderRunPicture(const RunRecord& run, const TrackConfig& track,
   std::vector<Vec2> right;
   if (geometry) Walls(track, left, right);
 
-  // --- What the map must show. ---
-  Bounds bounds;
-  for (const Vec2& v : left) bounds.Add(v.x(), v.y());
-  for (const Vec2& v : right) bounds.Add(v.x(), v.y());
-  if (geometry) {
-    for (const CircleObstacle& o : geometry->round_obstacles()) {
-      bounds.Add(o.center.x(), o.center.y(), o.radius);
-    }
-  }
-  double max_speed = 0.0;
-  for (const PathPoint& p : run.path) {
-    bounds.Add(p.x, p.y);
-    if (Finite(p.x, p.y) && std::isfinite(p.speed_mps)) {
-      max_speed = std::max(max_speed, std::abs(p.speed_mps));
-    }
-  }
-  for (const ContactPoint& c : run.contacts) bounds.Add(c.x, c.y);
-  for (const Vec2& v : also_show) bounds.Add(v.x(), v.y());
-  if (bounds.empty()) bounds.Add(0.0, 0.0, 0.5);
-  // A map at least 0.1 m across on each axis (a path that is a single point).
-  const double cx = (bounds.min_x + bounds.max_x) / 2;
-  const double cy = (bounds.min_y + bounds.max_y) / 2;
-  const double world_w = std::max(bounds.max_x - bounds.min_x, 0.1);
-  const double world_h = std::max(bounds.max_y - bounds.min_y, 0.1);
-
-  // --- Layout: kLongSide on the long side, the map to scale. ---
-  RunPicture picture;
-  constexpr int kLong = RunPicture::kLongSide;
-  constexpr int kBands = kTitleBandPx + kLegendBandPx + 2 * kMarginPx;
-  double scale = (kLong - 2 * kMarginPx) / world_w;
-  int width = kLong;
-  int height = static_cast<int>(std::ceil(world_h * scale)) + kBands;
-  if (height > kLong) {  // taller than wide: the height is the long side
-    scale = (kLong - kBands) / world_h;
-    height = kLong;
-    width = std::max(kMinWidthPx, static_cast<int>(std::ceil(world_w * scale)) + 2 * kMarginPx);
-  }
-  picture.px_per_m = scale;
-  picture.min_x = cx - world_w / 2;
-  picture.max_y = cy + world_h / 2;
-  picture.origin_px = {(width - world_w * scale) / 2, kTitleBandPx + kMarginPx};
-  picture.max_speed_mps = max_speed > 0.0 ? max_speed : 1.0;
-  picture.image = cv::Mat(height, width, CV_8UC3, kWhite);
+  const MapExtent extent = ExtentOf(run, geometry, left, right, also_show);
+  RunPicture picture = LayOut(extent);
   Painter paint(picture);
-
-  // --- The track. ---
-  if (geometry) {
-    std::vector<std::vector<cv::Point>> rings(2);
-    for (size_t i = 0; i < left.size(); ++i) {
-      rings[0].push_back(paint.At(left[i]));
-      rings[1].push_back(paint.At(right[i]));
-    }
-    // One ring inside the other: the fill covers the corridor between them.
-    cv::fillPoly(picture.image, rings, kCorridor, cv::LINE_AA, kShift);
-    std::vector<cv::Point> centre;
-    for (const Vec2& v : track.centerline) centre.push_back(paint.At(v));
-    cv::polylines(picture.image, centre, true, kCentreLine, 1, cv::LINE_AA, kShift);
-    cv::polylines(picture.image, rings, true, kWall, 2, cv::LINE_AA, kShift);
-    for (const CircleObstacle& o : track.obstacles) paint.Disc(o.center, o.radius, 3, kObstacle);
-  }
-
-  // --- The path, coloured by speed, on a dark outline. ---
   const cv::Mat colours = SpeedColours();
-  {
-    std::vector<const PathPoint*> points;
-    for (const PathPoint& p : run.path) {
-      if (Finite(p.x, p.y)) points.push_back(&p);
-    }
-    for (size_t i = 1; i < points.size(); ++i) {
-      paint.Line({points[i - 1]->x, points[i - 1]->y}, {points[i]->x, points[i]->y}, kPathOutline,
-                 5);
-    }
-    for (size_t i = 1; i < points.size(); ++i) {
-      const double a = std::isfinite(points[i - 1]->speed_mps) ? points[i - 1]->speed_mps : 0.0;
-      const double b = std::isfinite(points[i]->speed_mps) ? points[i]->speed_mps : 0.0;
-      const cv::Scalar colour =
-          SpeedColour(colours, (std::abs(a) + std::abs(b)) / 2, picture.max_speed_mps);
-      paint.Line({points[i - 1]->x, points[i - 1]->y}, {points[i]->x, points[i]->y}, colour, 3);
-    }
-    if (points.size() == 1) {
-      const cv::Scalar colour = SpeedColour(colours, points[0]->speed_mps, picture.max_speed_mps);
-      cv::circle(picture.image, paint.At(points[0]->x, points[0]->y), 3 << kShift, colour,
-                 cv::FILLED, cv::LINE_AA, kShift);
-    }
-  }
-
-  // --- The start line across the corridor, an arrow the way the lap goes,
-  // and where the vehicle starts (a ring), on top of the path. ---
+  // Drawn in this order: the start line, the gates and the contacts on top of the path.
+  if (geometry) DrawTrack(picture, paint, track, left, right);
+  DrawPath(picture, paint, run, colours);
   if (geometry) {
-    const Vec2 s = geometry->PointAt(0.0);
-    const Vec2 t = geometry->TangentAt(0.0);
-    const Vec2 n(-t.y(), t.x());
-    const double h = track.corridor_width / 2;
-    paint.Line(s - n * h, s + n * h, kBlack, 3);
-    // The arrow is 40 px long whatever the scale (image rows grow downwards).
-    const cv::Point tail = paint.At(s + n * (h * 0.5));
-    const cv::Point head = tail + cv::Point(static_cast<int>(std::lround(t.x() * 40 * kSubPixel)),
-                                            static_cast<int>(std::lround(-t.y() * 40 * kSubPixel)));
-    cv::arrowedLine(picture.image, tail, head, kBlack, 2, cv::LINE_AA, kShift, 0.3);
-    const Vec2 start = geometry->StartPosition();
-    cv::circle(picture.image, paint.At(start), 5 << kShift, kBlack, 2, cv::LINE_AA, kShift);
-    const cv::Point2d label = picture.ToPixel(s.x() + n.x() * h, s.y() + n.y() * h);
-    const cv::Point2d away = picture.ToPixel(s.x() + n.x() * (h + 1.0), s.y() + n.y() * (h + 1.0));
-    const cv::Point2d dir = (away - label) / std::max(cv::norm(away - label), 1e-9);
-    paint.TextCentred("start", label + dir * 22.0, 0.5);
+    DrawStart(picture, paint, track, *geometry);
+    DrawGates(picture, paint, run, track, *geometry);
   }
-
-  // --- The gates, on top of the path, as the run took them. ---
-  if (geometry) {
-    const std::vector<Gate>& gates = geometry->gates();
-    for (size_t g = 0; g < gates.size(); ++g) {
-      cv::Scalar colour = kNotReached;
-      for (const GateSplit& split : run.splits) {
-        if (split.gate != static_cast<int>(g)) continue;
-        if (split.passed) {
-          colour = kPassed;
-        } else if (split.split_s >= 0.0) {
-          colour = kMissed;
-        }
-      }
-      const Gate& gate = gates[g];
-      paint.Line(gate.left_post, gate.right_post, colour, 2);
-      paint.Disc(gate.left_post, track.post_radius, 6, colour);
-      paint.Disc(gate.right_post, track.post_radius, 6, colour);
-      // The number beyond the left post, away from the gate's centre.
-      const cv::Point2d post = picture.ToPixel(gate.left_post.x(), gate.left_post.y());
-      const cv::Point2d centre = picture.ToPixel(gate.center.x(), gate.center.y());
-      cv::Point2d out = post - centre;
-      out /= std::max(cv::norm(out), 1e-9);
-      const double post_px = std::max(6.0, track.post_radius * picture.px_per_m);
-      paint.TextCentred(std::to_string(g + 1), post + out * (post_px + 12.0), 0.55);
-    }
-  }
-
-  // --- The contacts: red crosses outlined in black, on top of everything. ---
-  for (const ContactPoint& c : run.contacts) {
-    if (!Finite(c.x, c.y)) continue;
-    const cv::Point at = paint.At(c.x, c.y);
-    constexpr int kArm = 8 << kShift;
-    for (const auto& [thickness, colour] : {std::pair{6, kBlack}, std::pair{3, kContact}}) {
-      cv::line(picture.image, at + cv::Point(-kArm, -kArm), at + cv::Point(kArm, kArm), colour,
-               thickness, cv::LINE_AA, kShift);
-      cv::line(picture.image, at + cv::Point(-kArm, kArm), at + cv::Point(kArm, -kArm), colour,
-               thickness, cv::LINE_AA, kShift);
-    }
-  }
-
-  // --- The title. ---
-  {
-    std::string first = run.id > 0 ? "run " + std::to_string(run.id) + "  |  " : "";
-    first += (run.config_name.empty() ? "?" : run.config_name) + "  |  track " +
-             (run.track.empty() ? track.name : run.track) + "  |  " +
-             (run.interface.empty() ? "?" : run.interface) + "  |  operator " +
-             (run.operator_kind.empty() ? "?" : run.operator_kind);
-    const std::string lap =
-        std::isfinite(run.lap_time_s) ? Format("%.2f s", run.lap_time_s) : std::string("-");
-    const std::string second = (run.outcome.empty() ? "?" : run.outcome) + "  |  lap " + lap +
-                               "  |  gates passed " + std::to_string(run.gates_passed) + "/" +
-                               std::to_string(run.gates_total) + "  |  obstacles touched " +
-                               std::to_string(run.obstacles_touched);
-    paint.TextFitted(Ascii(first), {16, 26}, 0.6, width - 32);
-    paint.TextFitted(Ascii(second), {16, 52}, 0.6, width - 32);
-  }
-
-  // --- The legend band: speed colours (left) and a scale bar (right). ---
-  {
-    const int top = height - kLegendBandPx;
-    cv::line(picture.image, {0, top}, {width, top}, kCentreLine, 1);
-    const int bar_x = 80;
-    const int bar_w = 300;
-    picture.speed_legend = cv::Rect(bar_x, top + 18, bar_w, 16);
-    paint.TextFitted("speed", {16, top + 31}, 0.5, 60);
-    for (int c = 0; c < bar_w; ++c) {
-      const cv::Vec3b colour = colours.at<cv::Vec3b>(
-          0, static_cast<int>(std::lround(255.0 * c / static_cast<double>(bar_w - 1))));
-      cv::line(picture.image, {bar_x + c, top + 18}, {bar_x + c, top + 33},
-               cv::Scalar(colour[0], colour[1], colour[2]), 1);
-    }
-    // The frame just outside the bar, so its end columns stay the end colours.
-    cv::rectangle(picture.image,
-                  cv::Rect(bar_x - 1, top + 17, bar_w + 2, picture.speed_legend.height + 2), kBlack,
-                  1);
-    paint.TextCentred("0 m/s", {static_cast<double>(bar_x), top + 50.0}, 0.45);
-    paint.TextCentred(Format("%.2f m/s", picture.max_speed_mps),
-                      {static_cast<double>(bar_x + bar_w), top + 50.0}, 0.45);
-
-    const int room_px = width - (bar_x + bar_w + 60) - 16;
-    const double target_m = std::min(world_w * 0.25, room_px / scale);
-    if (target_m > 0.0) {
-      const double length_m = NiceLength(target_m);
-      const int length_px = static_cast<int>(std::lround(length_m * scale));
-      const int x1 = width - 24;
-      const int x0 = x1 - length_px;
-      const int y = top + 28;
-      cv::line(picture.image, {x0, y}, {x1, y}, kBlack, 2);
-      cv::line(picture.image, {x0, y - 6}, {x0, y + 6}, kBlack, 2);
-      cv::line(picture.image, {x1, y - 6}, {x1, y + 6}, kBlack, 2);
-      paint.TextCentred(Format("%g m", length_m), {(x0 + x1) / 2.0, top + 50.0}, 0.45);
-    }
-  }
+  DrawContacts(picture, paint, run);
+  DrawTitle(picture, paint, run, track);
+  DrawLegend(picture, paint, colours, extent.world_w);
   return picture;
 }
 
@@ -432,11 +476,7 @@ RunPicture RenderBlimpRunPicture(const RunRecord& run, const BlimpCourseConfig& 
   }
   for (size_t g = 0; g < course.gates.size(); ++g) {
     const BlimpGateSpec& gate = course.gates[g];
-    cv::Scalar colour = kNotReached;
-    for (const GateSplit& split : run.splits) {
-      if (split.gate != static_cast<int>(g)) continue;
-      colour = split.passed ? kPassed : (split.split_s >= 0.0 ? kMissed : kNotReached);
-    }
+    const cv::Scalar colour = GateColour(run.splits, static_cast<int>(g));
     const double heading = gate.heading_deg * M_PI / 180.0;
     const Vec2 across(-std::sin(heading), std::cos(heading));
     const Vec2 c(gate.centre[0], gate.centre[1]);
