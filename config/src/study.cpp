@@ -93,20 +93,10 @@ std::string ToString(StudyOrder order) {
   return "?";
 }
 
-StudyConfig LoadStudy(const std::filesystem::path& file) {
-  YamlMap root = YamlMap::Load(file);
-  const std::filesystem::path dir = file.parent_path();
-  StudyConfig s;
-  s.file = file;
-  s.name = root.RequireString("name");
-  if (!PlainName(s.name)) root.Fail("name", kPlainName);
-  s.description = root.String("description", "");
-  const std::string run = root.String("run", "");
-  s.run = run.empty() ? ShippedFile("config/haptel.yaml") : dir / run;
-  const RunConfig run_config = LoadRun(s.run);
-  const std::string track = root.String("track", "");
-  s.track = track.empty() ? run_config.track : dir / track;
-  if (const std::string db = root.String("database", ""); !db.empty()) s.database = db;
+namespace {
+
+/// `link_fault` and `link_profile`, each checked as it will be used.
+void ReadStudyLink(YamlMap& root, const std::filesystem::path& dir, StudyConfig& s) {
   s.link_fault = root.String("link_fault", "");
   if (!s.link_fault.empty()) {
     try {
@@ -128,12 +118,11 @@ StudyConfig LoadStudy(const std::filesystem::path& file) {
       root.Fail("link_profile", e.what());
     }
   }
-  s.operators = root.String("operators", s.operators);
-  if (s.operators != "synthetic" && s.operators != "person")
-    root.Fail("operators", "synthetic or person");
-  const bool synthetic = s.operators == "synthetic";
+}
 
-  // Conditions: each names an interface file of the run configuration.
+/// The conditions: each names an interface file of the run configuration
+/// (`run_config`), one a simulated driver can use when `synthetic`.
+void ReadConditions(YamlMap& root, const RunConfig& run_config, bool synthetic, StudyConfig& s) {
   std::vector<YamlMap> conditions = root.MapList("conditions");
   if (conditions.size() < 2 || conditions.size() > 10) {
     root.Fail("conditions", "a list of 2 to 10 conditions, each {name, interface, predict}");
@@ -163,14 +152,10 @@ StudyConfig LoadStudy(const std::filesystem::path& file) {
     c.Finish();
     s.conditions.push_back(condition);
   }
+}
 
-  // Simulated drivers' profiles, by name.
-  YamlMap profiles = root.Map("profiles");
-  for (const std::string& name : profiles.Keys()) {
-    s.profiles[name] = ReadProfile(profiles.Map(name));
-  }
-  profiles.Finish();
-
+/// The participants: unique ids, and a simulated driver's profile.
+void ReadParticipants(YamlMap& root, bool synthetic, StudyConfig& s) {
   std::vector<YamlMap> participants = root.MapList("participants");
   std::set<std::string> ids;
   for (YamlMap& p : participants) {
@@ -199,7 +184,10 @@ StudyConfig LoadStudy(const std::filesystem::path& file) {
         "participants",
         "the simulated drivers, each {id, profile} (a synthetic study has no console to add them)");
   }
+}
 
+/// `design`: the order of conditions, its seed, the repetitions.
+void ReadDesign(YamlMap& root, StudyConfig& s) {
   YamlMap design = root.Map("design");
   const std::string order = design.String("order", ToString(s.order));
   if (order == "balanced-latin-square") {
@@ -216,9 +204,11 @@ StudyConfig LoadStudy(const std::filesystem::path& file) {
     design.Fail("seed", "no seed unless order: random");
   s.repetitions = design.Integer("repetitions", s.repetitions, 1, 10);
   design.Finish();
+}
 
-  s.practice = root.Bool("practice", s.practice);
-  s.trial_cap_s = root.Number("trial_cap_s", s.trial_cap_s);
+/// The questionnaires asked after each condition, and the demographics one
+/// asked once before a participant's first trial.
+void ReadQuestionnaires(YamlMap& root, bool synthetic, StudyConfig& s) {
   s.questionnaires = root.Strings("questionnaires", {});
   std::set<std::string> seen;
   for (const std::string& q : s.questionnaires) {
@@ -239,6 +229,43 @@ StudyConfig LoadStudy(const std::filesystem::path& file) {
     if (synthetic)
       root.Fail("demographics", "no demographics for simulated drivers (they have no background)");
   }
+}
+
+}  // namespace
+
+StudyConfig LoadStudy(const std::filesystem::path& file) {
+  YamlMap root = YamlMap::Load(file);
+  const std::filesystem::path dir = file.parent_path();
+  StudyConfig s;
+  s.file = file;
+  s.name = root.RequireString("name");
+  if (!PlainName(s.name)) root.Fail("name", kPlainName);
+  s.description = root.String("description", "");
+  const std::string run = root.String("run", "");
+  s.run = run.empty() ? ShippedFile("config/haptel.yaml") : dir / run;
+  const RunConfig run_config = LoadRun(s.run);
+  const std::string track = root.String("track", "");
+  s.track = track.empty() ? run_config.track : dir / track;
+  if (const std::string db = root.String("database", ""); !db.empty()) s.database = db;
+  ReadStudyLink(root, dir, s);
+  s.operators = root.String("operators", s.operators);
+  if (s.operators != "synthetic" && s.operators != "person")
+    root.Fail("operators", "synthetic or person");
+  const bool synthetic = s.operators == "synthetic";
+
+  ReadConditions(root, run_config, synthetic, s);
+  // Simulated drivers' profiles, by name.
+  YamlMap profiles = root.Map("profiles");
+  for (const std::string& name : profiles.Keys()) {
+    s.profiles[name] = ReadProfile(profiles.Map(name));
+  }
+  profiles.Finish();
+
+  ReadParticipants(root, synthetic, s);
+  ReadDesign(root, s);
+  s.practice = root.Bool("practice", s.practice);
+  s.trial_cap_s = root.Number("trial_cap_s", s.trial_cap_s);
+  ReadQuestionnaires(root, synthetic, s);
   const std::string qdir = root.String("questionnaires_dir", "");
   s.questionnaires_dir = qdir.empty() ? ShippedFile("config/questionnaires") : dir / qdir;
   root.Finish();
