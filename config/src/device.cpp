@@ -62,6 +62,10 @@ void UdpDeviceConfig::ValidateOrThrow() const { config_detail::CheckFields(*this
 
 void ReplayDeviceConfig::ValidateOrThrow() const {}
 
+void MouseDeviceConfig::ValidateOrThrow() const { config_detail::CheckFields(*this); }
+
+void SdlFfDeviceConfig::ValidateOrThrow() const { config_detail::CheckFields(*this); }
+
 void DeviceConfig::ValidateOrThrow() const {
   config_detail::CheckFields(*this);
   const auto driver_check = DriverChecks().find(driver);

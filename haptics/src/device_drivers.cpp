@@ -38,4 +38,9 @@ const DeviceDriver& DriverOf(const DeviceConfig& device) {
   return *d;
 }
 
+std::string DeviceUnavailable(const DeviceConfig& device) {
+  const DeviceDriver& driver = DriverOf(device);
+  return driver.available ? driver.available(device) : std::string{};
+}
+
 }  // namespace haptel::haptics

@@ -142,6 +142,7 @@ void ServoLoop::TrackWrist(Arm& arm, Side side, int64_t now_ns) {
     return;
   }
   hal_.PublishWrist(side, arm.wrist);
+  hal_.PublishPresence(side, device_.Presence(side));
   if (trace_ != nullptr) trace_->Push(TraceRecord::FromWrist(side, arm.wrist));
   const Vec3d p = TrackerToMetres(calibration_.arms[Index(side)], arm.wrist.position);
   for (int i = 0; i < 3; ++i)

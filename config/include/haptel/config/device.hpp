@@ -156,6 +156,72 @@ struct UdpDeviceConfig {
   void ValidateOrThrow() const;
 };
 
+/// The `mouse` device (haptics/mouse): a person's mouse and keys as the
+/// device's two hands, forces shown by pseudo-haptics (docs/haptics.md).
+///
+/// The pointer moves `pointer_hand` absolutely: the window's centre is
+/// `centre`, pointer up is +x (forward), pointer right is −y (the device's y
+/// is to the left), `metres_per_pixel` apart; the scroll wheel moves it in z
+/// by `wheel_step` a notch. The other hand is the key hand: W/S, A/D and Q/E
+/// (and the arrows) move it in ±x, ±y and ±z at `key_hand_speed`; released,
+/// it goes back to `key_hand_rest` at that speed. The grasp button (the left
+/// one) closes both hands; the device counts the pointer hand held while the
+/// pointer is in the window and that button is down.
+///
+/// Forces bend the hand away from the pointer's place: the hand follows its
+/// target through a virtual coupling of `coupling_stiffness` whose time
+/// constant is `coupling_time_constant_s`, so a field of stiffness k lets the
+/// hand move k_c / (k_c + k) of the pointer's motion (Lécuyer's
+/// control/display ratio), and a force step over `shake_threshold` shakes it.
+struct MouseDeviceConfig {
+  std::array<double, 3> centre{0.0, 0.0, 0.0};  ///< m, device frame: the window's centre
+  double metres_per_pixel = 0.0005;
+  double wheel_step = 0.005;  ///< m per wheel notch
+  /// `pointer_hand: left|right` in the file; the other hand is the key hand.
+  bool pointer_on_left = false;
+  double key_hand_speed = 0.15;                        ///< m/s
+  std::array<double, 3> key_hand_rest{0.0, 0.0, 0.0};  ///< m, device frame
+  double coupling_stiffness = 100.0;                   ///< N/m
+  double coupling_time_constant_s = 0.02;
+  double shake_threshold = 1.5;  ///< N: a force step at least this big in one tick shakes the hand
+  double shake_amplitude = 0.004;  ///< m per N of the step, capped at 0.01 m
+  double shake_hz = 12.0;
+  double shake_s = 0.3;
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(HAPTEL_NVP(centre), config::Range{-5.0, 5.0});
+    a->Visit(HAPTEL_NVP(metres_per_pixel), config::Range{1e-6, 0.1});
+    a->Visit(HAPTEL_NVP(wheel_step), config::Range{0.0, 0.1});
+    a->Visit(config::MakeNameValue("pointer_hand", &pointer_on_left),
+             config::Choice<bool>{{{true, "left"}, {false, "right"}}, "left or right"});
+    a->Visit(HAPTEL_NVP(key_hand_speed), config::Range{0.0, 10.0});
+    a->Visit(HAPTEL_NVP(key_hand_rest), config::Range{-5.0, 5.0});
+    a->Visit(HAPTEL_NVP(coupling_stiffness), config::Range{1.0, 1e5});
+    a->Visit(HAPTEL_NVP(coupling_time_constant_s), config::Range{1e-4, 10.0});
+    a->Visit(HAPTEL_NVP(shake_threshold), config::Range{0.0, 1e3});
+    a->Visit(HAPTEL_NVP(shake_amplitude), config::Range{0.0, 1.0});
+    a->Visit(HAPTEL_NVP(shake_hz), config::Range{0.1, 200.0});
+    a->Visit(HAPTEL_NVP(shake_s), config::Range{0.0, 10.0});
+  }
+  /// Throws ConfigFieldError unless every value is in range.
+  void ValidateOrThrow() const;
+};
+
+/// The `sdl-ff` device (haptics/sdl_ff): a joystick or wheel SDL opens, its
+/// axes as the hands' positions and its force feedback as their forces.
+/// Filled in by its driver's work; `joystick` picks the device.
+struct SdlFfDeviceConfig {
+  /// Which joystick: its index in SDL's list, or −1 for the first that has
+  /// force feedback (else the first with rumble).
+  int joystick = -1;
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(HAPTEL_NVP(joystick), config::Range{-1, 63});
+  }
+  /// Throws ConfigFieldError unless every value is in range.
+  void ValidateOrThrow() const;
+};
+
 struct ReplayDeviceConfig {
   std::filesystem::path trace;  ///< a trace file written by the session recorder
   bool loop = false;
@@ -183,6 +249,8 @@ struct DeviceConfig {
   SimArmConfig sim;
   UdpDeviceConfig udp;
   ReplayDeviceConfig replay;
+  MouseDeviceConfig mouse;
+  SdlFfDeviceConfig sdl_ff;
   /// Optional files (empty: none). Relative paths resolve against the working directory.
   std::filesystem::path calibration;
   std::filesystem::path gravity;
@@ -201,6 +269,8 @@ struct DeviceConfig {
     a->Visit(HAPTEL_NVP(sim));
     a->Visit(HAPTEL_NVP(udp));
     a->Visit(HAPTEL_NVP(replay));
+    a->Visit(HAPTEL_NVP(mouse));
+    a->Visit(HAPTEL_NVP(sdl_ff));
   }
 
   /// Throws ConfigFieldError unless the driver is registered, a side is used,

@@ -7,6 +7,8 @@
 /// every N-th cycle. Values cross this interface in device units; the servo
 /// loop applies the calibration.
 #include <array>
+#include <cstdint>
+#include <limits>
 #include <string>
 
 #include "haptel/haptics/types.hpp"
@@ -17,6 +19,23 @@ enum class DeviceStatus {
   kOk,      ///< fresh reading / command accepted
   kNoData,  ///< no new reading this tick (keep the last one); not an error
   kLost,    ///< the device stopped answering: forces must be zero
+};
+
+/// Whether a person holds an arm, as the device itself can tell.
+enum class HandPresence : uint8_t {
+  kUnknown,   ///< it cannot tell (an exoskeleton, a replayed trace): the session infers it
+  kHeld,      ///< a person holds it (a mouse button held in the window, a deadman pressed)
+  kReleased,  ///< nobody holds it now
+};
+
+/// What a device measured of the person's use of it, for the run's record.
+struct DeviceUseReport {
+  /// How much the hand's motion was bent from the input's (a mouse's
+  /// pseudo-haptics): the hand's displacement over the pointer's, mean over
+  /// the ticks the pointer moved; NaN for a device that does not bend it.
+  double pseudo_haptic_gain_mean = std::numeric_limits<double>::quiet_NaN();
+  uint64_t ff_effects_played = 0;  ///< force-feedback effects started (SDL's haptic API)
+  uint64_t shakes = 0;             ///< contact shakes shown or played
 };
 
 /// What a device is and may be asked: from its driver or its YAML file.
@@ -60,6 +79,15 @@ class Device {
   /// Finger force commands, device units, each ≥ 0.
   virtual DeviceStatus WriteFingerForces(Side side,
                                          const std::array<double, kFingers>& command) = 0;
+
+  /// Whether a person holds `side` now, when the device can tell. Servo
+  /// thread, every tick after ReadWrist; must not block.
+  virtual HandPresence Presence(Side side) {
+    (void)side;
+    return HandPresence::kUnknown;
+  }
+  /// Its use so far. Any thread (an implementation keeps it in atomics).
+  virtual DeviceUseReport UseReport() const { return {}; }
 
   // Two-port passivity across the device's link (a device whose arms sit
   // behind a network: the udp driver's protocol version 2). A local device

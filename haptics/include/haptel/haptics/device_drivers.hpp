@@ -38,6 +38,10 @@ struct DeviceDriver {
   /// Its own checks of a device file naming it (ConfigFieldError naming the
   /// key), run by DeviceConfig::ValidateOrThrow after the common ones. May be empty.
   std::function<void(const DeviceConfig&)> check;
+  /// Whether the device is there to be opened now, without opening it ("":
+  /// yes; else a line saying what is missing: no display for the mouse, no
+  /// joystick). The study console asks before it starts a trial. Empty: always.
+  std::function<std::string(const DeviceConfig&)> available;
   /// Opens the device (ConfigError, std::runtime_error at set-up); `muscle`
   /// drives a simulated operator.
   std::function<std::unique_ptr<Device>(const DeviceConfig&, const OperatorConfig& muscle)> make;
@@ -54,5 +58,8 @@ const DeviceDriver* FindDeviceDriver(const std::string& name);
 /// The driver `device` names. std::logic_error when there is none (a config
 /// that passed DeviceConfig::ValidateOrThrow names a registered one).
 const DeviceDriver& DriverOf(const DeviceConfig& device);
+/// "" when `device`'s driver says it is there to be opened, else its line
+/// (DeviceDriver::available).
+std::string DeviceUnavailable(const DeviceConfig& device);
 
 }  // namespace haptel::haptics

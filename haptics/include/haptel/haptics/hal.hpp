@@ -15,6 +15,7 @@
 
 #include "haptel/config/calibration.hpp"
 #include "haptel/core/seqlock.hpp"
+#include "haptel/haptics/device.hpp"
 #include "haptel/haptics/types.hpp"
 
 namespace haptel::haptics {
@@ -46,6 +47,13 @@ class Hal {
   /// The device on `side` was lost (true) or answers again (false).
   void PublishLost(Side side, bool lost);
   bool lost(Side side) const { return lost_[Index(side)].load(std::memory_order_acquire); }
+  /// What the device says of a person at `side` (Device::Presence), each tick.
+  void PublishPresence(Side side, HandPresence presence) {
+    presence_[Index(side)].store(presence, std::memory_order_release);
+  }
+  HandPresence presence(Side side) const {
+    return presence_[Index(side)].load(std::memory_order_acquire);
+  }
   /// The combined set-point: the interface's field plus the physics thread's
   /// coupling, direct and finger forces. Its stamp is the older of the two
   /// feeders' stamps (a feeder that never wrote is ignored), so either one
@@ -128,6 +136,7 @@ class Hal {
   std::array<Seqlock<ForceSetpoint>, kSides> contacts_;
   std::array<Seqlock<Cue>, kSides> cues_;
   std::array<std::atomic<bool>, kSides> lost_{};
+  std::array<std::atomic<HandPresence>, kSides> presence_{};
   std::atomic<double> force_scale_{1.0};
   std::array<std::atomic<uint64_t>, kSides> wrist_count_{};
   std::array<std::atomic<uint64_t>, kSides> glove_count_{};
