@@ -38,6 +38,7 @@ const RegisterDeviceDriver kReplayDriver{{
           if (config.replay.trace.empty())
             config_check::Fail("replay.trace", "a trace file for the replay driver");
         },
+    .available = nullptr,
     .make = OpenReplay,
 }};
 

@@ -12,6 +12,7 @@ const RegisterDeviceDriver kSimDriver{{
     .reads_trace = false,
     .calibration = CalibrationSource::kOptional,
     .check = nullptr,
+    .available = nullptr,
     .make = [](const DeviceConfig& config, const OperatorConfig& muscle)
         -> std::unique_ptr<Device> { return std::make_unique<SimDevice>(config, muscle); },
 }};

@@ -44,6 +44,7 @@ const haptics::RegisterDeviceDriver kTestDriver{{
         [](const DeviceConfig& config) {
           if (!config.has_glove) config_check::Fail("has_glove", "true for the test-sim driver");
         },
+    .available = nullptr,
     .make = [](const DeviceConfig& config,
                const OperatorConfig& muscle) -> std::unique_ptr<haptics::Device> {
       ++devices_opened;

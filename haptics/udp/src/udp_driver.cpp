@@ -28,6 +28,7 @@ const RegisterDeviceDriver kUdpDriver{{
     .reads_trace = false,
     .calibration = CalibrationSource::kMeasured,
     .check = CheckPorts,
+    .available = nullptr,
     .make = [](const DeviceConfig& config, const OperatorConfig&) -> std::unique_ptr<Device> {
       return std::make_unique<UdpDevice>(config);
     },
