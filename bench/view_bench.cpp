@@ -180,6 +180,7 @@ Phase World(const std::string& name, const Parts& parts, double seconds, double 
       o.lap_time_s = t;
       o.gates_total = 2;
       o.hud = true;
+      o.controls_shown = true;  // the cockpit's wheel and lever drawn, as in a cockpit lap
       o.speed_mps = 0.15 + 0.1 * std::sin(t);
       o.turn_left = std::sin(0.5 * t) > 0.3;
       view_part->Publish(o);

@@ -73,6 +73,32 @@ haptel_build() {
   fi
 }
 
+# haptel_link_programs: makes `haptel` and `haptel-vehicle` callable by name,
+# as the README and docs/ write them: symlinks to build/bin/ in a directory
+# on the PATH. A link, not a copy, so each build is what runs, and the
+# programs still find their siblings (haptel-vehicle, haptel-bench) beside
+# their real selves. Root (the target Debian machine): /usr/local/bin, on
+# every user's PATH and sudo's; anyone else: ~/.local/bin (Debian's
+# ~/.profile puts it on the PATH once it exists; until the next login the
+# script prints the one line to type). HAPTEL_BIN_LINKS=DIR picks another
+# directory, HAPTEL_BIN_LINKS=none makes none.
+haptel_link_programs() {
+  local dir="${HAPTEL_BIN_LINKS:-}"
+  [ "$dir" = "none" ] && return 0
+  if [ -z "$dir" ]; then
+    if [ "$(id -u)" -eq 0 ]; then dir=/usr/local/bin; else dir="$HOME/.local/bin"; fi
+  fi
+  mkdir -p "$dir"
+  local program
+  for program in haptel haptel-vehicle; do
+    ln -sfn "$BUILD_DIR/bin/$program" "$dir/$program"
+  done
+  case ":$PATH:" in
+    *":$dir:"*) haptel_log "haptel and haptel-vehicle are on the PATH ($dir -> $BUILD_DIR/bin)" ;;
+    *) haptel_log "haptel and haptel-vehicle linked in $dir, which is not on this shell's PATH; type: export PATH=\"$dir:\$PATH\"" ;;
+  esac
+}
+
 # scripts/test --tsan: the tests whose code runs on several threads at once,
 # built with ThreadSanitizer into build-tsan/ (only these targets) and run
 # with halt_on_error: the first race fails its test.

@@ -69,6 +69,7 @@ BlimpCommand BlimpManualInterface::Keys(double t_s, const InputState& s) {
 
 BlimpCommand BlimpManualInterface::Pad(const InputState& s) {
   if (s.pad_disconnects != disconnects_at_start_) lost_ = true;
+  pad_connected_ = s.pad_connected;
   if (lost_ || !s.pad_connected) return {};
   const auto left =
       RadialDeadZone(Axis(s, PadAxis::kLeftX), Axis(s, PadAxis::kLeftY), config_.dead_zone);
@@ -98,6 +99,11 @@ BlimpCommand BlimpManualInterface::Update(double t_s, const InputState& input, h
   hal.SetField(haptics::Side::kLeft, haptics::ForceField{});
   hal.SetField(haptics::Side::kRight, haptics::ForceField{});
   return Step(t_s, input);
+}
+
+const char* BlimpManualInterface::Notice() const {
+  const bool waiting = config_.input() == BlimpManualInput::kGamepad && !pad_connected_;
+  return waiting && !lost_ ? kNoControllerNotice : nullptr;
 }
 
 const char* BlimpManualInterface::Help(bool /*switchable*/) const {

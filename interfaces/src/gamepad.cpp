@@ -56,6 +56,10 @@ bool GamepadInterface::lost() const {
   return input_.Load().pad_disconnects != disconnects_at_start_;
 }
 
+const char* GamepadInterface::Notice() const {
+  return input_.Load().pad_connected ? nullptr : kNoControllerNotice;
+}
+
 MotionIntent GamepadInterface::Intent(const InputState& s) const {
   if (!s.pad_connected || s.pad_disconnects != disconnects_at_start_) return {};
   if (!DeadmanHeld(s, config_.deadman)) return {};

@@ -20,6 +20,7 @@
 #include "haptel/mediator/blimp_predictor.hpp"
 #include "haptel/mediator/controller_errors.hpp"
 #include "haptel/mediator/haptic_side.hpp"
+#include "haptel/mediator/notice_log.hpp"
 #include "haptel/mediator/operator.hpp"
 #include "haptel/mediator/predictive_display.hpp"
 #include "haptel/mediator/run_counters.hpp"
@@ -105,9 +106,10 @@ class BlimpOverlay {
   BlimpOverlay(const SessionSetup& setup, std::string interface, int gates_total)
       : setup_(setup), interface_(std::move(interface)), gates_total_(gates_total) {}
 
-  /// `help`: the interface's line of help for a person's first seconds (null: none).
+  /// `help`: the interface's line of help for a person's first seconds (null: none);
+  /// `notice`: what stops the person now (Interface::Notice; null: nothing), shown while it lasts.
   view::Overlay Make(double t, const BlimpLapTimer& lap, const msg::BlimpState& s,
-                     const BlimpCommand& c, bool vehicle_up, const char* help) {
+                     const BlimpCommand& c, bool vehicle_up, const char* help, const char* notice) {
     view::Overlay o = LapOverlay(setup_, interface_.c_str(), t, lap.lap_time_s(), lap.next_gate(),
                                  gates_total_, lap.obstacles_touched());
     // A new contact onset, not the blimp resting on its pad at the start.
@@ -130,6 +132,8 @@ class BlimpOverlay {
                     setup_.vehicle.name.c_str());
     } else if (s.failsafe()) {
       std::snprintf(o.message, sizeof o.message, "failsafe: every channel at neutral");
+    } else if (notice != nullptr) {
+      std::snprintf(o.message, sizeof o.message, "%s", notice);
     } else if (setup_.operator_kind == "person" && t < kHelpS && help != nullptr) {
       std::snprintf(o.message, sizeof o.message, "%s", help);
     }
@@ -237,6 +241,7 @@ class BlimpSession final : public FamilySession {
       }
     }
     command_ = interface_->Update(t, Reading(person), haptic.hal());
+    if (const char* notice = notice_log_.Update(t, interface_->Notice())) log::Warn(notice);
     if (interface_->lost())
       return LoopEnd{Outcome::kAborted, "the game controller was disconnected"};
     if (next_command_ns_ == 0) next_command_ns_ = now;
@@ -284,7 +289,8 @@ class BlimpSession final : public FamilySession {
   }
 
   view::Overlay Overlay(double t, bool vehicle_up, bool) override {
-    return overlay_feed_.Make(t, lap_, last_, command_, vehicle_up, interface_->Help(false));
+    return overlay_feed_.Make(t, lap_, last_, command_, vehicle_up, interface_->Help(false),
+                              interface_->Notice());
   }
   /// With prediction on: on the course map, the blimp as last reported, as
   /// it is now by its model, and its path over the next second with the
@@ -338,6 +344,7 @@ class BlimpSession final : public FamilySession {
   BlimpLapTimer lap_;
   const interfaces::InterfaceSpec& spec_;  ///< the interface flown (the catalogue's)
   BlimpOverlay overlay_feed_;
+  NoticeLog notice_log_;
   std::unique_ptr<interfaces::BlimpInterface> interface_;
   std::unique_ptr<BlimpAutoPilot> pilot_;
   msg::BlimpState last_;

@@ -18,6 +18,7 @@
 #include "haptel/interfaces/cockpit.hpp"
 #include "haptel/mediator/interface_set.hpp"
 #include "haptel/mediator/lap_timer.hpp"
+#include "haptel/mediator/notice_log.hpp"
 #include "haptel/mediator/operator.hpp"
 #include "haptel/mediator/predictive_display.hpp"
 #include "haptel/mediator/robot_predictor.hpp"
@@ -228,6 +229,8 @@ class RobotSession final : public FamilySession {
       if (grasp_s_ == 0.0 && op_->grasped(t) && start_spec().needs_physics()) grasp_s_ = t;
     }
     motors_ = interfaces_->Update(t, feedback_, haptic.hal());
+    if (const char* notice = notice_log_.Update(t, interfaces_->current().Notice()))
+      log::Warn(notice);
     const auto command_period_ns = static_cast<int64_t>(
         1e9 /
         setup_.interfaces[static_cast<size_t>(interfaces_->current_index())].command_rate_hz());
@@ -460,6 +463,7 @@ class RobotSession final : public FamilySession {
   const Track track_;
   LapTimer lap_;
   OverlayFeed overlay_feed_;
+  NoticeLog notice_log_;
   std::unique_ptr<AutomaticOperator> automatic_;
   std::unique_ptr<PersonOperator> person_;
   Operator* op_ = nullptr;

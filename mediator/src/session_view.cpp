@@ -69,7 +69,10 @@ void SessionView::Fill(view::ViewModel& model) {
       if (sample.valid) AppendTrackedHand(model.shapes, sample, part.physics_config->hand);
     }
   }
-  if (physics != nullptr && physics->port && part.cockpit != nullptr) {
+  // The wheel and lever only while the interface in use has them: a world
+  // built for a cockpit stays when the person switches back to gesture.
+  if (model.overlay.controls_shown && physics != nullptr && physics->port &&
+      part.cockpit != nullptr) {
     AppendCockpit(model.shapes, *part.cockpit, part.controls_bodies, physics->port->Controls(),
                   model.overlay.contact_now);
   }
@@ -143,6 +146,7 @@ view::Overlay OverlayFeed::Make(double t, const LapTimer& lap, const InterfaceSe
   std::snprintf(o.last_contact, sizeof o.last_contact, "%s", last_contact_);
   o.contact_now = touching;
   o.speed_max_mps = setup_.vehicle.drive.max_speed;
+  o.controls_shown = current.NeedsPhysics();
   if (const std::optional<interfaces::HudReading> hud = current.Hud(feedback, motors)) {
     o.hud = hud->shown;
     o.speed_mps = hud->speed_mps;
@@ -164,6 +168,8 @@ view::Overlay OverlayFeed::Make(double t, const LapTimer& lap, const InterfaceSe
                   setup_.vehicle.name.c_str());
   } else if (interfaces.switching()) {
     std::snprintf(o.message, sizeof o.message, "switching interface: hands off for a moment");
+  } else if (const char* notice = current.Notice()) {
+    std::snprintf(o.message, sizeof o.message, "%s", notice);
   } else if (const char* help = current.Help(!setup_.single_interface); help && t < kHelpS) {
     std::snprintf(o.message, sizeof o.message, "%s", help);
   }

@@ -140,6 +140,34 @@ void TreePath(const Item& item, std::map<std::string, std::string>& fields) {
   if (!path.empty()) fields[PathKey(item.id)] = path;
 }
 
+/// The decision tree walked one question at a time (Form's tree items): from
+/// the first node, each answered question shows the node or band its answer
+/// names; everything off that path is hidden and unchecked, so what is sent
+/// is one path and a rating of the band it ends in.
+constexpr const char* kTreeWalk = R"(<script>
+document.querySelectorAll('div.tree').forEach(function (tree) {
+  function step(id) { return document.getElementById(tree.dataset.item + '-step-' + id); }
+  function walk() {
+    var shown = [];
+    var at = step(tree.dataset.first);
+    while (at && shown.indexOf(at) < 0) {
+      shown.push(at);
+      if (!at.classList.contains('tree-node')) break;
+      var answer = at.querySelector('input:checked');
+      if (!answer) break;
+      at = step(answer.value === 'yes' ? at.dataset.yes : at.dataset.no);
+    }
+    tree.querySelectorAll('.tree-node, .tree-band').forEach(function (e) {
+      e.hidden = shown.indexOf(e) < 0;
+      if (e.hidden) e.querySelectorAll('input').forEach(function (i) { i.checked = false; });
+    });
+  }
+  tree.addEventListener('change', walk);
+  walk();
+});
+</script>
+)";
+
 std::string Form(const Questionnaire& q, const std::string& participant,
                  const std::string& condition, const std::string& token) {
   std::ostringstream h;
@@ -175,30 +203,42 @@ std::string Form(const Questionnaire& q, const std::string& participant,
         h << "<textarea name=\"" << Html(item.id) << "\" rows=\"3\" cols=\"60\" maxlength=\""
           << item.max_length << "\"></textarea>";
         break;
-      case ItemType::kTree:
-        // Every question of the tree, in order; the page follows the answers
-        // to the band and the rating within it (later questions off the
-        // path are ignored).
+      case ItemType::kTree: {
+        // One question at a time, as the thesis's decision tree: the page's
+        // script (kTreeWalk) shows the first question, then only the one the
+        // answer leads to, and at the end the one band reached, whose
+        // ratings are all the participant can pick. Changing an answer
+        // clears everything after it. Without the script every question and
+        // band shows, and the server still follows the answers (TreePath).
+        const std::string id = Html(item.id);
+        h << "<div class=\"tree\" data-item=\"" << id << "\" data-first=\""
+          << Html(item.tree.nodes.empty() ? std::string() : item.tree.nodes.front().id) << "\">\n";
         for (const TreeNode& node : item.tree.nodes) {
-          h << "<p>" << Html(node.question) << " <label><input type=\"radio\" name=\""
-            << Html(item.id) << ".node." << Html(node.id)
-            << "\" value=\"yes\">yes</label> <label><input type=\"radio\" name=\"" << Html(item.id)
-            << ".node." << Html(node.id) << "\" value=\"no\">no</label></p>\n";
+          const std::string name = id + ".node." + Html(node.id);
+          h << "<p class=\"tree-node\" id=\"" << id << "-step-" << Html(node.id) << "\" data-yes=\""
+            << Html(node.if_yes) << "\" data-no=\"" << Html(node.if_no) << "\">"
+            << Html(node.question) << " <label><input type=\"radio\" name=\"" << name
+            << "\" value=\"yes\">yes</label> <label><input type=\"radio\" name=\"" << name
+            << "\" value=\"no\">no</label></p>\n";
         }
         for (const TreeBand& band : item.tree.bands) {
-          h << "<p><b>" << Html(band.text) << "</b><br>\n";
+          h << "<p class=\"tree-band\" id=\"" << id << "-step-" << Html(band.id) << "\"><b>"
+            << Html(band.text) << "</b><br>\n";
           for (const BandRating& r : band.ratings) {
-            h << "<label><input type=\"radio\" name=\"" << Html(item.id) << "\" value=\""
-              << r.rating << "\">" << r.rating << ": " << Html(r.text) << "</label><br>\n";
+            h << "<label><input type=\"radio\" name=\"" << id << "\" value=\"" << r.rating << "\">"
+              << r.rating << ": " << Html(r.text) << "</label><br>\n";
           }
           h << "</p>\n";
         }
+        h << "</div>\n";
         break;
+      }
     }
     h << "</fieldset>\n";
   }
   h << "<button type=\"submit\" id=\"submit\">Submit</button>\n</form>\n<p><a "
-       "href=\"/\">schedule</a></p>";
+       "href=\"/\">schedule</a></p>"
+    << kTreeWalk;
   return h.str();
 }
 

@@ -303,6 +303,23 @@ TEST_CASE(
   CHECK(blind.err().find("--interface blimp-gamepad") != std::string::npos);
 }
 
+TEST_CASE("a game controller's run with none attached says so in the log") {
+  // No controller on the suite's machine: the run starts, the robot waits,
+  // and the log says why (issue 40: it used to start without a word).
+  const auto dir = test::ScratchDir("e2e-no-pad");
+  Child run({Bin("haptel"), "run", "--operator", "person", "--view", "none", "--interface",
+             "gamepad", "--track", "config/tracks/test-short.yaml", "--time-limit", "4", "--json",
+             "--domain", std::to_string(test::UniqueDomain(25)), "--database",
+             (dir / "runs.db").string(), "--vehicle-timeout", "5"});
+  const int code = run.Wait(90.0);
+  INFO(run.err());
+  CHECK(code == 1);  // nobody drove: the time limit
+  const std::string notice = "no game controller connected: plug one in";
+  const size_t at = run.err().find(notice);
+  CHECK(at != std::string::npos);
+  CHECK(run.err().find(notice, at + 1) == std::string::npos);  // said once
+}
+
 TEST_CASE("a person's bad input exits 2 with one line naming the fix") {
   const auto dir = test::ScratchDir("e2e-person-bad");
   SECTION("a window without a display suggests recording") {

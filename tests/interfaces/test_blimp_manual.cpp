@@ -4,6 +4,7 @@
 #include "alloc_counter.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/interfaces/blimp_manual.hpp"
+#include "haptel/interfaces/gamepad.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;
@@ -202,9 +203,12 @@ TEST_CASE("blimp gamepad: no controller, or one that went away, flies nothing", 
   InputState s;
   BlimpManualInterface m(PadConfig(), s);
   AxisOf(s, PadAxis::kLeftY) = -1.0;
-  CHECK(m.Step(0.0, s).power == 0.0);  // not connected yet
+  CHECK(m.Step(0.0, s).power == 0.0);  // not connected yet: the person is told
+  REQUIRE(m.Notice() != nullptr);
+  CHECK(std::string(m.Notice()) == kNoControllerNotice);
   s.pad_connected = true;
   CHECK(m.Step(kTick, s).power > 0.8);
+  CHECK(m.Notice() == nullptr);
   CHECK_FALSE(m.lost());
   s.pad_connected = false;
   ++s.pad_disconnects;

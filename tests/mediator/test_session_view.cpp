@@ -15,8 +15,11 @@
 #include "haptel/config/paths.hpp"
 #include "haptel/config/track.hpp"
 #include "haptel/interfaces/cockpit.hpp"
+#include "haptel/interfaces/gamepad.hpp"
 #include "haptel/interfaces/gesture.hpp"
 #include "haptel/interfaces/keyboard.hpp"
+#include "haptel/mediator/notice_log.hpp"
+#include "haptel/mediator/session_physics.hpp"
 #include "haptel/mediator/session_view.hpp"
 #include "haptel/mediator/world_shapes.hpp"
 #include "haptel/video/frame.hpp"
@@ -314,4 +317,88 @@ TEST_CASE(
   CHECK(same(model.video, stale.frame));
   CHECK(model.video.stale);
   CHECK(model.tile_video[1].stale);
+}
+
+TEST_CASE(
+    "no game controller: the person reads it on screen at once, and the log says it once it "
+    "lasts") {
+  const Track track(LoadTrack(ShippedFile("config/tracks/test-short.yaml")));
+  SessionSetup setup;
+  setup.operator_kind = "person";
+  LapTimer lap(track);
+  haptics::Hal hal(Metres());
+  interfaces::InputBox input;  // nothing plugged in
+  InterfaceSet set = One(std::make_unique<interfaces::GamepadInterface>(GamepadConfig{}, input));
+  OverlayFeed feed(setup, track);
+  const TreadCommand still{};
+  CHECK(std::string(feed.Make(0.5, lap, set, {}, still, true, false).message) ==
+        interfaces::kNoControllerNotice);
+  CHECK(std::string(feed.Make(40.0, lap, set, {}, still, true, false).message) ==
+        interfaces::kNoControllerNotice);  // not only in the help's first seconds
+
+  NoticeLog log;
+  CHECK(log.Update(0.0, set.current().Notice()) == nullptr);  // the controller may open yet
+  const char* said = log.Update(1.5, set.current().Notice());
+  REQUIRE(said != nullptr);
+  CHECK(std::string(said) == interfaces::kNoControllerNotice);
+  CHECK(log.Update(2.0, set.current().Notice()) == nullptr);  // once
+
+  interfaces::InputState plugged = input.Load();
+  plugged.pad_connected = true;
+  input.Store(plugged);
+  CHECK(set.current().Notice() == nullptr);
+  CHECK(std::string(feed.Make(40.0, lap, set, {}, still, true, false).message).empty());
+  CHECK(log.Update(3.0, set.current().Notice()) == nullptr);
+}
+
+TEST_CASE("back from a cockpit to gesture, the view draws no wheel and no lever") {
+  const Track track(LoadTrack(ShippedFile("config/tracks/test-short.yaml")));
+  SessionSetup setup;
+  setup.operator_kind = "person";
+  LapTimer lap(track);
+  haptics::Hal hal(Metres());
+  const CockpitConfig cockpit = Shipped("cockpit");
+  const PhysicsConfig physics_config;
+  // The world a cockpit was built with: it stays after the switch.
+  std::unique_ptr<SessionPhysics> physics =
+      SessionPhysics::CreateIfNeeded(physics_config, {true, true}, &cockpit, nullptr);
+  REQUIRE(physics);
+  REQUIRE(physics->port);
+  std::vector<std::unique_ptr<interfaces::MediatorInterface>> list;
+  list.push_back(std::make_unique<interfaces::CockpitInterface>(cockpit, *physics->port));
+  list.push_back(std::make_unique<interfaces::GestureInterface>(GestureConfig{}));
+  InterfaceSet set(std::move(list), 0, 0.3);
+
+  SessionView::Parts parts;
+  parts.hal = &hal;
+  parts.physics = physics.get();
+  parts.physics_config = &physics_config;
+  parts.cockpit = &cockpit;
+  parts.hands = {true, true};
+  view::ViewOptions options;
+  options.mode = view::ViewMode::kOffscreen;
+  interfaces::InputBox input;
+  SessionView session_view(options, parts, input);
+  OverlayFeed feed(setup, track);
+  const auto shapes_now = [&](double t) {
+    set.Update(t, {}, hal);
+    session_view.Publish(feed.Make(t, lap, set, {}, {}, true, false));
+    view::ViewModel model;
+    session_view.Fill(model);
+    return model.shapes.size();
+  };
+  std::vector<view::Shape> controls;
+  AppendCockpit(controls, cockpit, physics::ControlsBodyConfig{}, {}, false);
+  REQUIRE_FALSE(controls.empty());
+
+  const size_t with_cockpit = shapes_now(1.0);
+  REQUIRE(set.Request(1, 2.0));
+  double t = 2.0;
+  while (set.switching() && t < 10.0) shapes_now(t += 0.05);
+  REQUIRE(set.current().name() == "gesture");
+  const size_t with_gesture = shapes_now(t + 0.05);
+  CHECK(with_cockpit - with_gesture == controls.size());  // the hands stay, the controls go
+  REQUIRE(set.Request(0, t + 0.1));
+  while (set.switching() && t < 20.0) shapes_now(t += 0.05);
+  CHECK(shapes_now(t + 0.05) == with_cockpit);  // and come back with the cockpit
 }

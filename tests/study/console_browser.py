@@ -2,9 +2,10 @@
 """The experimenter's console in a real browser (headless Chromium through
 Selenium): a participant fills in their background (the demographics, once
 before their first trial) and both questionnaires after the condition they
-drove; the same form sent twice and an incomplete one are refused on the
-page; the experimenter writes a note on a trial from the schedule; the
-database holds exactly one row per answer and the note as written.
+drove, the rating tree walked one question at a time; the same form sent
+twice and an incomplete one are refused on the page; the experimenter
+writes a note on a trial from the schedule; the database holds exactly one
+row per answer and the note as written.
 
 usage: console_browser.py FIXTURE SCRATCH_DIR   (run by ctest)
 """
@@ -127,13 +128,52 @@ def run(browser, url):
     assert "to correct" in message, message
     assert browser.find_elements(By.CSS_SELECTOR, "#errors li")
 
-    browser.get(rating)
-    for node, answer in (("controllable", "yes"), ("adequate", "yes"), ("satisfactory", "no")):
-        browser.find_element(By.CSS_SELECTOR, f'input[name="rating.node.{node}"][value="{answer}"]').click()
-    browser.find_element(By.CSS_SELECTOR, 'input[name="rating"][value="5"]').click()
+    walk_rating_tree(browser, rating)
     browser.find_element(By.ID, "submit").click()
     message = result(browser)
     assert "recorded rating" in message, message
+
+
+def walk_rating_tree(browser, rating):
+    """The 1-10 rating tree, one question at a time as the thesis's decision
+    tree: only the question the last answer leads to shows, then only the
+    ratings of the band the path ends in; changing an answer drops what came
+    after it. Ends on the path to 5 (satisfactory? no)."""
+    browser.get(rating)
+
+    def shown():
+        """The ids of the tree's steps on screen (questions and bands), top to bottom."""
+        return [e.get_attribute("id") for e in browser.find_elements(
+            By.CSS_SELECTOR, "div.tree .tree-node, div.tree .tree-band") if e.is_displayed()]
+
+    def answer(node, value):
+        browser.find_element(By.CSS_SELECTOR, f'input[name="rating.node.{node}"][value="{value}"]').click()
+
+    def ratings():
+        return sorted(int(e.get_attribute("value")) for e in browser.find_elements(
+            By.CSS_SELECTOR, 'input[name="rating"]') if e.is_displayed())
+
+    assert shown() == ["rating-step-controllable"], shown()
+    assert ratings() == [], ratings()
+    answer("controllable", "no")  # straight to 10
+    assert shown() == ["rating-step-controllable", "rating-step-uncontrollable"], shown()
+    assert ratings() == [10], ratings()
+    answer("controllable", "yes")  # changed: the band goes, the next question comes
+    assert shown() == ["rating-step-controllable", "rating-step-adequate"], shown()
+    answer("adequate", "yes")
+    assert shown()[-1] == "rating-step-satisfactory", shown()
+    answer("satisfactory", "yes")
+    assert ratings() == [1, 2, 3], ratings()
+    browser.find_element(By.CSS_SELECTOR, 'input[name="rating"][value="2"]').click()
+    answer("adequate", "no")  # back up: satisfactory's question and the 2 are gone
+    assert shown() == ["rating-step-controllable", "rating-step-adequate", "rating-step-inadequate"], shown()
+    assert ratings() == [7, 8, 9], ratings()
+    assert not browser.find_elements(By.CSS_SELECTOR, 'input[name="rating"]:checked')
+    assert not browser.find_elements(By.CSS_SELECTOR, 'input[name="rating.node.satisfactory"]:checked')
+    answer("adequate", "yes")
+    answer("satisfactory", "no")
+    assert ratings() == [4, 5, 6], ratings()
+    browser.find_element(By.CSS_SELECTOR, 'input[name="rating"][value="5"]').click()
 
 
 if __name__ == "__main__":

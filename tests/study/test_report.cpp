@@ -223,3 +223,12 @@ TEST_CASE("The report says what it lacks instead of failing") {
                     Catch::Contains("no study 'other'") && Catch::Contains("thesis"));
   CHECK_THROWS_WITH(LoadStudyResults(dir / "none.db", "thesis"), Catch::Contains("no such file"));
 }
+
+TEST_CASE("The power curve's legend names the test the power is computed by") {
+  // power.hpp: the mixed model's condition is Satterthwaite's F test, not
+  // the likelihood-ratio test (issue 40: the legend said "LRT").
+  const std::string mixed = kPowerMixedModelLegend;
+  CHECK(mixed.find("Satterthwaite") != std::string::npos);
+  CHECK(mixed.find("LRT") == std::string::npos);
+  CHECK(std::string(kPowerFriedmanLegend) == "Friedman");
+}

@@ -496,6 +496,39 @@ TEST_CASE(
   CHECK(ninth.width > 0);
 }
 
+TEST_CASE("a tile's label fits its tile, whatever the name, the view's size and the tiles") {
+  // Issue 40: the one line of text ran past the tile's edge and was cut off.
+  Tiles::Tile tile;
+  std::snprintf(tile.name, sizeof tile.name, "%s", "robot-with-a-longer-nam");  // 23: the most
+  tile.state = TileState::kDriven;
+  tile.lap_time_s = 123.4;
+  tile.gates_passed = 5;
+  tile.gates_total = 5;
+  for (const auto& [width, height] : {std::pair{640, 360}, {1024, 576}, {1920, 1080}}) {
+    for (const int count : {1, 3, 4}) {  // the shipped fleets' sizes (config/fleets/four.yaml)
+      const TileBox box = TileRect(0, count, width, height);
+      const TileLabel label = TileLabelFor(tile, box.width, height);
+      INFO(width << "x" << height << ", " << count << " tiles, scale " << label.scale);
+      CHECK(label.scale > 0.0);
+      CHECK(label.scale <= 0.40 * height / 576.0);
+      int base_line = 0;
+      for (const std::string& line : label.lines) {
+        const cv::Size size =
+            cv::getTextSize(line, cv::FONT_HERSHEY_SIMPLEX, label.scale, 1, &base_line);
+        CHECK(size.width <= box.width - 2 * label.margin);
+        CHECK(size.height + base_line <= label.line_height + 3);
+      }
+      // Both lines under the picture, inside the tile.
+      CHECK(box.width * 3 / 4 + 2 * label.line_height <= box.height);
+    }
+  }
+  // A short name at the usual size keeps the view's own scale; the words are TileText's.
+  std::snprintf(tile.name, sizeof tile.name, "%s", "robot-a");
+  const TileLabel usual = TileLabelFor(tile, TileRect(0, 3, 1024, 576).width, 576);
+  CHECK(usual.scale == Approx(0.40));
+  CHECK(usual.lines[0] + "  " + usual.lines[1] == TileText(tile));
+}
+
 TEST_CASE("a fleet's line is drawn bottom left in the tiles' yellow, with the tiles only") {
   OffscreenGl gl;
   Renderer renderer(kWidth, kHeight);

@@ -325,8 +325,8 @@ void DrawPowerCurve(const PowerResult& power, const std::string& title,
     int shift;
   };
   const Test tests[] = {
-      {"Friedman", &PowerPoint::friedman_power, &PowerPoint::friedman_interval, -5},
-      {"mixed model (LRT of condition)", &PowerPoint::lmm_power, &PowerPoint::lmm_interval, 5}};
+      {kPowerFriedmanLegend, &PowerPoint::friedman_power, &PowerPoint::friedman_interval, -5},
+      {kPowerMixedModelLegend, &PowerPoint::lmm_power, &PowerPoint::lmm_interval, 5}};
   for (size_t t = 0; t < std::size(tests); ++t) {
     const cv::Scalar colour = Colour(t);
     cv::Point previous;

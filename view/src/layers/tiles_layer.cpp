@@ -1,26 +1,57 @@
 #include "tiles_layer.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <opencv2/imgproc.hpp>
 
 namespace haptel::view {
 
+namespace {
+
+const char* TileStateText(TileState state) {
+  return state == TileState::kDriven ? "DRIVEN"
+         : state == TileState::kHeld ? "held"
+         : state == TileState::kDone ? "done"
+                                     : "LOST";
+}
+
+/// The tiles' text at 576 px high, and its two lines' height under the picture.
+constexpr double kTileTextScale = 0.40;
+constexpr int kTileTextHeight = 34;
+
+}  // namespace
+
 std::string TileText(const Tiles::Tile& tile) {
-  const char* state = tile.state == TileState::kDriven ? "DRIVEN"
-                      : tile.state == TileState::kHeld ? "held"
-                      : tile.state == TileState::kDone ? "done"
-                                                       : "LOST";
-  char text[96];
-  std::snprintf(text, sizeof text, "%s %s  lap %.1f s  %d/%d", tile.name, state, tile.lap_time_s,
-                tile.gates_passed, tile.gates_total);
-  return text;
+  const TileLabel label = TileLabelFor(tile, 1 << 20, 576);
+  return label.lines[0] + "  " + label.lines[1];
+}
+
+TileLabel TileLabelFor(const Tiles::Tile& tile, int tile_width, int view_height) {
+  TileLabel label;
+  char text[64];
+  std::snprintf(text, sizeof text, "%s %s", tile.name, TileStateText(tile.state));
+  label.lines[0] = text;
+  std::snprintf(text, sizeof text, "lap %.1f s  %d/%d", tile.lap_time_s, tile.gates_passed,
+                tile.gates_total);
+  label.lines[1] = text;
+  const double base = kTileTextScale * view_height / 576.0;
+  const int room = std::max(1, tile_width - 2 * label.margin);
+  int widest = 1, base_line = 0;
+  for (const std::string& line : label.lines) {
+    widest = std::max(widest,
+                      cv::getTextSize(line, cv::FONT_HERSHEY_SIMPLEX, base, 1, &base_line).width);
+  }
+  // Text width is proportional to the scale; floor so rounding never spills.
+  label.scale = widest <= room ? base : std::floor(base * room / widest * 100.0) / 100.0;
+  label.line_height = std::max(1, kTileTextHeight * view_height / 576 / 2);
+  return label;
 }
 
 TileBox TileRect(int index, int count, int width, int height) {
   // Up to four at 18% of the width; more shrink so the column still fits.
   const int gap = 6;
-  const int line_h = static_cast<int>(20 * height / 576.0);
+  const int line_h = static_cast<int>(kTileTextHeight * height / 576.0);
   int tile_w = static_cast<int>(0.18 * width);
   const int n = std::max(count, 1);
   const int room = height - 16 - (n - 1) * gap;
@@ -92,7 +123,6 @@ void TilesLayer::RasteriseColumn(const ViewModel& model, int count, const cv::Re
                                  const Frame& frame) {
   if (column_.size() != column.size()) column_ = cv::Mat(column.height, column.width, CV_8UC4);
   column_.setTo(cv::Scalar(0, 0, 0, 0));
-  const double text = 0.40 * frame.height / 576.0;
   for (int i = 0; i < count; ++i) {
     const Tiles::Tile& tile = model.tiles.tile[static_cast<size_t>(i)];
     const TileBox box = TileRect(i, count, frame.width, frame.height);
@@ -113,8 +143,12 @@ void TilesLayer::RasteriseColumn(const ViewModel& model, int count, const cv::Re
       cv::line(column_, cv::Point(picture.x + picture.width, picture.y),
                cv::Point(picture.x, picture.y + picture.height), Bgra(0, 0, 255), 3, cv::LINE_AA);
     }
-    cv::putText(column_, TileText(tile), cv::Point(at.x + 4, at.y + at.height - 6),
-                cv::FONT_HERSHEY_SIMPLEX, text, Bgra(255, 255, 255), 1, cv::LINE_AA);
+    const TileLabel label = TileLabelFor(tile, box.width, frame.height);
+    for (size_t line = 0; line < label.lines.size(); ++line) {
+      const int baseline = at.y + picture_h + static_cast<int>(line + 1) * label.line_height - 3;
+      cv::putText(column_, label.lines[line], cv::Point(at.x + label.margin, baseline),
+                  cv::FONT_HERSHEY_SIMPLEX, label.scale, Bgra(255, 255, 255), 1, cv::LINE_AA);
+    }
     if (tile.state == TileState::kDriven) cv::rectangle(column_, at, kFrameColour, 4);
   }
 }

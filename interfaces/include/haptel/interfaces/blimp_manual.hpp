@@ -45,6 +45,9 @@ class BlimpManualInterface final : public BlimpInterface {
 
   /// The game controller went away since the interface started.
   bool lost() const override { return lost_; }
+  /// A game controller's, while none is connected (as of the last Step):
+  /// kNoControllerNotice (gamepad.hpp).
+  const char* Notice() const override;
   const char* Help(bool switchable) const override;
 
  private:
@@ -61,6 +64,7 @@ class BlimpManualInterface final : public BlimpInterface {
   uint32_t seen_stop_ = 0;
   uint32_t disconnects_at_start_ = 0;
   bool lost_ = false;
+  bool pad_connected_ = false;  ///< as of the last Step
 };
 
 }  // namespace haptel::interfaces

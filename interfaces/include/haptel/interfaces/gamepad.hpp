@@ -28,6 +28,11 @@ std::array<double, 2> RadialDeadZone(double x, double y, double dz);
 /// A trigger's pull past its dead zone, rescaled to [0, 1].
 double TriggerDeadZone(double t, double dz);
 
+/// What the person reads on screen and in the log while no game controller
+/// is connected.
+inline constexpr const char* kNoControllerNotice =
+    "no game controller connected: plug one in (Esc ends the run)";
+
 class GamepadInterface final : public MediatorInterface {
  public:
   /// Keeps a reference to `input` (it must outlive the interface).
@@ -47,6 +52,10 @@ class GamepadInterface final : public MediatorInterface {
 
   /// A controller went away since construction (pad_disconnects grew).
   bool lost() const override;
+
+  /// While no controller is connected (none was found at the start, or it
+  /// has not been opened yet): kNoControllerNotice.
+  const char* Notice() const override;
 
  private:
   GamepadConfig config_;

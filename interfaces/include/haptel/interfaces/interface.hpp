@@ -116,6 +116,12 @@ class Interface {
   /// The line of help the view shows in a person's first seconds (null:
   /// none); `switchable`: the person may switch interfaces (F1–F6).
   virtual const char* Help(bool /*switchable*/) const { return nullptr; }
+
+  /// What stops the person driving now and what to do about it (a game
+  /// controller not connected); null: nothing. The view shows it for as long
+  /// as it lasts, in place of the help, and the session logs it. A string
+  /// that lives as long as the interface. Session thread.
+  virtual const char* Notice() const { return nullptr; }
 };
 
 /// The robot: each tread's command, from the hands and what the robot reports.

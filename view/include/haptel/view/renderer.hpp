@@ -45,12 +45,23 @@ std::vector<std::string> OverlayLines(const Overlay& overlay);
 std::string HudSpeedText(const Overlay& overlay);
 /// Where a fleet's tile `index` of `count` is drawn in a `width`×`height`
 /// view, pixels from the top-left corner: a column down the right edge, the
-/// picture over one line of text (TileText). The driven one has a yellow
-/// frame (kTileFrameBgr) around it, the others none.
+/// picture over two lines of text (TileLabelFor). The driven one has a
+/// yellow frame (kTileFrameBgr) around it, the others none.
 struct TileBox {
   int x = 0, y = 0, width = 0, height = 0;
 };
 TileBox TileRect(int index, int count, int width, int height);
+/// A tile's text as drawn under its picture (TileText's words): the name and
+/// state, then the lap and gates, each line at the largest scale up to the
+/// view's own (0.40 at 576 px high) at which it fits the tile's width, so
+/// nothing is cut off whatever the name or the number of tiles.
+struct TileLabel {
+  std::array<std::string, 2> lines;
+  double scale = 0.0;   ///< cv::FONT_HERSHEY_SIMPLEX's font scale
+  int line_height = 0;  ///< px from one baseline to the next
+  int margin = 4;       ///< px left clear inside the tile on either side
+};
+TileLabel TileLabelFor(const Tiles::Tile& tile, int tile_width, int view_height);
 /// The driven tile's frame, BGR: nothing else in the view is this yellow.
 inline constexpr std::array<int, 3> kTileFrameBgr{0, 220, 255};
 

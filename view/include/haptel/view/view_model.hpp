@@ -55,6 +55,9 @@ struct Overlay {
   bool throttle_locked = false;
   char message[96] = "";  ///< one line for the person (e.g. "grasp the wheel")
   char status[64] = "";   ///< the vehicle's own line (the blimp: height, power); empty: none
+  /// The interface in use has controls in the world (a cockpit's wheel and
+  /// lever): drawn only then, not after a switch to one without.
+  bool controls_shown = false;
   /// Haptic shared control (gesture-shared): what pushes the hand, drawn as
   /// an arrow on a dial of the hand's horizontal plane (forward up, left
   /// left), as long as the push is strong.

@@ -152,6 +152,10 @@ std::string ReportJson(const StudyResults& results, const StudyReport& report,
 void DrawLapTimes(const StudyResults& results, const StudyReport& report,
                   const std::filesystem::path& png);
 void DrawRanks(const StudyReport& report, const std::filesystem::path& png);
+/// The power curve's legend: the tests power.hpp runs, as they are named in
+/// the plot (the mixed model's is Satterthwaite's F test of the condition).
+inline constexpr const char* kPowerFriedmanLegend = "Friedman";
+inline constexpr const char* kPowerMixedModelLegend = "mixed model (Satterthwaite's F)";
 /// `haptel study power`'s curve: each test's power per participant count
 /// with its 95 % interval, and the target as a dashed line. Throws
 /// std::runtime_error naming the file when it cannot be written.
