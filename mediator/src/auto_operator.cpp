@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace haptel::mediator {
 
@@ -22,23 +23,65 @@ AutoOperator::AutoOperator(const Track& track, const OperatorConfig& config,
 }
 
 void AutoOperator::Observe(const Observation& observation) {
-  seen_.push_back(observation);
+  if (!observation.bumper_left && !observation.bumper_right) ++clears_;
+  seen_.push_back({observation, clears_});
   // Keep a little more than the reaction delay's worth.
-  while (seen_.size() > 2 && seen_[1].t_s < observation.t_s - reaction_s_ - 0.5) {
+  while (seen_.size() > 2 && seen_[1].observation.t_s < observation.t_s - reaction_s_ - 0.5) {
     seen_.pop_front();
   }
 }
 
+double AutoOperator::PassingOffset(const Observation& o) const {
+  // The round obstacle (post or obstacle) the robot's bumper touches, if
+  // any: the nearest one within reach ahead, on the touched side.
+  const Vec2 p(o.x, o.y);
+  const Vec2 ahead(std::cos(o.heading), std::sin(o.heading));
+  const Vec2 left(-ahead.y(), ahead.x());
+  const CircleObstacle* hit = nullptr;
+  double nearest = std::numeric_limits<double>::infinity();
+  for (const CircleObstacle& c : track_.round_obstacles()) {
+    const Vec2 to = c.center - p;
+    const double gap = to.norm() - c.radius;
+    const bool on_touched_side = (o.bumper_left && o.bumper_right) ||
+                                 (o.bumper_left ? to.dot(left) >= 0.0 : to.dot(left) <= 0.0);
+    if (to.dot(ahead) > 0.0 && on_touched_side && gap < kObstacleReach && gap < nearest) {
+      nearest = gap;
+      hit = &c;
+    }
+  }
+  if (hit == nullptr) return 0.0;  // a wall: the centre line is the way
+  // Pass it on the side of the corridor with more room, clear of it by the
+  // robot's width.
+  const double s = track_.ClosestArcLength(hit->center);
+  const Vec2 tangent = track_.TangentAt(s);
+  const double lateral = (hit->center - track_.PointAt(s)).dot(Vec2(-tangent.y(), tangent.x()));
+  const double clearance = hit->radius + drive_.track_width;
+  const double side =
+      lateral > 0.0 ? -1.0
+      : lateral < 0.0
+          ? 1.0
+          : ((p - track_.PointAt(s)).dot(Vec2(-tangent.y(), tangent.x())) < 0.0 ? -1.0 : 1.0);
+  return lateral + side * clearance;
+}
+
 interfaces::MotionIntent AutoOperator::Decide(double t_s) {
   // The newest observation at least reaction_delay old.
-  const Observation* o = nullptr;
-  for (const Observation& candidate : seen_) {
-    if (candidate.t_s <= t_s - reaction_s_) o = &candidate;
+  const Seen* seen = nullptr;
+  for (const Seen& candidate : seen_) {
+    if (candidate.observation.t_s <= t_s - reaction_s_) seen = &candidate;
   }
-  if (o == nullptr) return {};
+  if (seen == nullptr) return {};
+  const Observation* o = &seen->observation;
 
   const bool touching = o->bumper_left || o->bumper_right;
-  if (touching && !backing_off(t_s)) {
+  // A contact is new once the bumpers have been clear since the one that
+  // started the last back-off. One that outlasts its back-off is the same
+  // contact: reversing did not free the robot (something behind it, where
+  // it has no bumper to tell), and reversing again would only push it there
+  // for ever, short of a finish it has not crossed.
+  const bool new_contact = touching && seen->clears != backoff_clears_;
+  if (new_contact && !backing_off(t_s)) {
+    backoff_clears_ = seen->clears;
     // Hitting again while still aiming: the last attempt had too little
     // room, so back off further each time (up to four back-offs' worth).
     repeat_contacts_ = careful(t_s) ? std::min(repeat_contacts_ + 1, 3) : 0;
@@ -48,6 +91,7 @@ interfaces::MotionIntent AutoOperator::Decide(double t_s) {
     backoff_turn_ = o->bumper_left && !o->bumper_right   ? -0.25
                     : o->bumper_right && !o->bumper_left ? 0.25
                                                          : 0.0;
+    aim_offset_ = PassingOffset(*o);
   }
   if (backing_off(t_s)) return {-0.5, backoff_turn_};
 
@@ -57,9 +101,22 @@ interfaces::MotionIntent AutoOperator::Decide(double t_s) {
   const double s = track_.ClosestArcLength(p);
   // Aiming after a contact, the driver looks closer ahead (tighter tracking).
   const double lookahead = careful(t_s) ? config_.lookahead / 2.0 : config_.lookahead;
-  const Vec2 goal = track_.PointAt(s + lookahead);
+  Vec2 goal = track_.PointAt(s + lookahead);
+  if (careful(t_s) && aim_offset_ != 0.0) {
+    // Aiming past the obstacle it hit: the centre line shifted beside it.
+    const Vec2 tangent = track_.TangentAt(s + lookahead);
+    goal += Vec2(-tangent.y(), tangent.x()) * aim_offset_;
+  }
   const Vec2 d = goal - p;
   const double alpha = WrapAngle(std::atan2(d.y(), d.x()) - o->heading);
+  // Still touching after backing off: turn on the spot, away from the
+  // touched side (head-on: towards the goal), until the bumpers are clear.
+  if (touching) {
+    const double away = o->bumper_left && !o->bumper_right   ? -1.0
+                        : o->bumper_right && !o->bumper_left ? 1.0
+                                                             : std::copysign(1.0, alpha);
+    return {0.0, 0.4 * away};
+  }
   const double distance = std::max(d.norm(), 1e-3);
   const double curvature = 2.0 * std::sin(alpha) / distance;
   // Slow down in turns: full cruise on straights, min_forward on an arc of

@@ -70,6 +70,43 @@ TEST_CASE("after a bumper contact the operator backs off, turning away from the 
 }
 
 TEST_CASE(
+    "a contact that outlasts its back-off is not backed off again: the operator turns free and "
+    "never backs away from the finish for good") {
+  // Wedged a robot's length short of the finish line, facing it, its front
+  // still touching after the back-off (blocked behind, where it has no
+  // bumper): a minute of the same contact reverses it for one back-off only.
+  OperatorConfig cfg;
+  cfg.backoff_s = 0.8;
+  AutoOperator op(ShortTrack(), cfg, TreadDriveConfig{});
+  const double length = ShortTrack().length();
+  const Vec2 short_of_finish = ShortTrack().PointAt(length - 0.22);
+  const double heading = std::atan2(ShortTrack().TangentAt(length - 0.22).y(),
+                                    ShortTrack().TangentAt(length - 0.22).x());
+  double reversing_s = 0.0;
+  double last_turn = 0.0;
+  constexpr double kStep = 0.01;
+  for (double t = 0.0; t < 60.0; t += kStep) {
+    Observation o = At(t, short_of_finish, heading);
+    o.bumper_left = true;
+    op.Observe(o);
+    const auto intent = op.Decide(t);
+    if (intent.forward < 0.0) reversing_s += kStep;
+    last_turn = intent.turn;
+    CHECK(intent.forward <= 0.0);  // never pushes on into what it touches
+  }
+  CHECK(reversing_s == Approx(cfg.backoff_s).margin(2 * kStep));
+  CHECK(last_turn < 0.0);  // turning on the spot, away from the left contact
+  // Once clear, it heads for the line.
+  op.Observe(At(60.0, short_of_finish, heading));
+  CHECK(op.Decide(60.0 + cfg.reaction_delay_s).forward > 0.0);
+  // The bumpers let go and touch again: a new contact, backed off again.
+  Observation again = At(60.5, short_of_finish, heading);
+  again.bumper_right = true;
+  op.Observe(again);
+  CHECK(op.Decide(60.5 + cfg.reaction_delay_s).forward < 0.0);
+}
+
+TEST_CASE(
     "hitting again while aiming backs the operator off longer each time, and it looks closer "
     "ahead") {
   OperatorConfig cfg;
@@ -77,35 +114,32 @@ TEST_CASE(
   cfg.backoff_s = 0.8;
   cfg.careful_s = 4.0;
   AutoOperator op(ShortTrack(), cfg, TreadDriveConfig{});
-  Observation o = At(0.0, ShortTrack().PointAt(0.1), 0.0);
-  o.bumper_right = true;
-  op.Observe(o);
-  op.Decide(0.0);
+  // Each contact comes after a clear state (the bumpers let go in between).
+  const auto hit = [&op](double t) {
+    op.Observe(At(t - 0.1, ShortTrack().PointAt(0.1), 0.0));
+    Observation o = At(t, ShortTrack().PointAt(0.1), 0.0);
+    o.bumper_right = true;
+    op.Observe(o);
+    op.Decide(t);
+  };
+  hit(0.0);
   CHECK(op.backing_off(0.79));
   CHECK_FALSE(op.backing_off(0.81));
   // A second contact at t = 2 (aiming until 4.8): twice as long.
-  o.t_s = 2.0;
-  op.Observe(o);
-  op.Decide(2.0);
+  hit(2.0);
   CHECK(op.backing_off(3.59));
   CHECK_FALSE(op.backing_off(3.61));
   // A third: three times; the fourth and later stay at four.
-  o.t_s = 4.0;
-  op.Observe(o);
-  op.Decide(4.0);
+  hit(4.0);
   CHECK(op.backing_off(6.39));
   CHECK_FALSE(op.backing_off(6.41));
   for (double t : {7.0, 11.0}) {
-    o.t_s = t;
-    op.Observe(o);
-    op.Decide(t);
+    hit(t);
     CHECK(op.backing_off(t + 3.19));
     CHECK_FALSE(op.backing_off(t + 3.21));
   }
   // Long after, a contact is a first one again.
-  o.t_s = 40.0;
-  op.Observe(o);
-  op.Decide(40.0);
+  hit(40.0);
   CHECK_FALSE(op.backing_off(40.81));
 
   // Aiming, the operator steers harder onto the line from the same offset

@@ -12,13 +12,16 @@
 
 #include "haptel/config/device.hpp"
 #include "haptel/config/error.hpp"
+#include "haptel/config/gravity_grid.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/run.hpp"
 #include "haptel/core/args.hpp"
 #include "haptel/core/cli.hpp"
 #include "haptel/core/clock.hpp"
+#include "haptel/gravity/gravity_procedure.hpp"
 #include "haptel/haptics/device_drivers.hpp"
 #include "haptel/haptics/device_factory.hpp"
+#include "haptel/haptics/device_ticker.hpp"
 #include "haptel/haptics/sim_device.hpp"
 
 namespace haptel::haptics {
@@ -37,26 +40,6 @@ constexpr int64_t kSettleTimeoutNs = 3000 * kMs;
 /// Time the docked arm is left before it is read.
 constexpr int64_t kDockNs = 100 * kMs;
 
-/// Device time: simulated (advances by the step, never sleeps) or the
-/// monotonic clock (sleeps until the next step).
-class Ticker {
- public:
-  explicit Ticker(bool simulated) : simulated_(simulated), now_(simulated ? kMs : MonotonicNs()) {}
-  int64_t Next(int64_t step_ns) {
-    if (simulated_) {
-      now_ += step_ns;
-    } else {
-      SleepUntilNs(std::max(now_ + step_ns, MonotonicNs()));
-      now_ = MonotonicNs();
-    }
-    return now_;
-  }
-
- private:
-  bool simulated_;
-  int64_t now_;
-};
-
 /// Everything one side's steps need.
 struct Session {
   Device& device;
@@ -65,7 +48,7 @@ struct Session {
   const CalibrationOptions& options;
   std::ostream& log;
   std::istream& in;
-  Ticker& ticker;
+  DeviceTicker& ticker;
 
   const char* name() const { return kSideNames[Index(side)]; }
 
@@ -309,7 +292,7 @@ DeviceCalibration RunCalibration(Device& device, const CalibrationOptions& optio
   DeviceCalibration result = options.base;
   result.device = device.description().name;
   result.user = options.user;
-  Ticker ticker(sim != nullptr);
+  DeviceTicker ticker(sim != nullptr);
   for (int i = 0; i < kSides; ++i) {
     const Side side = static_cast<Side>(i);
     if (!device.HasSide(side)) continue;
@@ -428,19 +411,76 @@ void PrintCalibrationSummary(std::ostream& out, const DeviceCalibration& calibra
   out.precision(precision);
 }
 
+namespace {
+
+/// The calibration gravity is sampled in: the device file's `calibration:`,
+/// or, for the sim device with none, one measured unattended now (as
+/// `haptel run` does). A real device names one (CalibrateMain checks first).
+DeviceCalibration CalibrationForGravity(const DeviceConfig& config, Device& device) {
+  if (!config.calibration.empty()) return LoadCalibration(config.calibration);
+  CalibrationOptions options;
+  options.auto_mode = true;
+  std::ostringstream quiet;
+  return RunCalibration(device, options, quiet);
+}
+
+/// `haptel calibrate --gravity`: samples the grid and writes it to `out_file`.
+int SampleGravityGrid(const DeviceConfig& config, Device& device, bool auto_mode, int counts,
+                      const std::filesystem::path& out_file) {
+  const Side side = config.sides[Index(Side::kRight)] ? Side::kRight : Side::kLeft;
+  const DeviceCalibration calibration = CalibrationForGravity(config, device);
+  GravitySamplerConfig sampler;
+  sampler.counts = {counts, counts, counts};
+  sampler.device = config.name;
+  GravityProcedureOptions options;
+  options.auto_mode = auto_mode;
+  options.rate_hz = config.servo.rate_hz;
+  const GravitySampleReport report = SampleGravity(device, side, calibration.arms[Index(side)],
+                                                   sampler, options, std::cout, std::cin);
+  if (!report.ok) {
+    std::cerr << "haptel calibrate: " << report.error << "\n";
+    return cli::kExitFailed;
+  }
+  SaveGravityGrid(out_file, report.grid);
+  double low = report.grid.force_z.front();
+  double high = low;
+  for (double f : report.grid.force_z) {
+    low = std::min(low, f);
+    high = std::max(high, f);
+  }
+  std::cout << "  " << report.vertices.size() << " vertices held still, upward force " << low
+            << " .. " << high << " N; " << report.sim_time_s << " s of device time, "
+            << report.wall_time_s << " s wall-clock\n"
+            << "wrote " << out_file.string() << "\n";
+  if (out_file != config.gravity) {
+    std::cout << "name it in " << config.file.string() << "'s 'gravity:' key to use it\n";
+  }
+  return cli::kExitOk;
+}
+
+}  // namespace
+
 int CalibrateMain(int argc, const char* const* argv) {
   constexpr const char* kUsage =
       "usage: haptel calibrate [options]\n"
       "  --device FILE  device configuration (default config/devices/sim.yaml)\n"
-      "  --out FILE     calibration file to write (default calibration/<device>.yaml)\n"
+      "  --out FILE     file to write (default calibration/<device>.yaml; with --gravity,\n"
+      "                 the file the device file's 'gravity:' names)\n"
       "  --auto         unattended: the sim device's simulated operator does every step\n"
-      "  --user NAME    whose calibration this is (default 'default')\n";
+      "  --user NAME    whose calibration this is (default 'default')\n"
+      "  --gravity      sample the gravity-compensation grid instead (the right arm, or the\n"
+      "                 left on a device without one): at each vertex the arm is let go and\n"
+      "                 held still by the force found; needs the device's calibration file\n"
+      "                 (the sim device with --auto calibrates itself when it names none)\n"
+      "  --counts N     with --gravity: vertices per axis, 2 to 50 (default 5)\n";
   return cli::Main({"haptel calibrate", kUsage}, argc, argv, [&] {
     DeviceConfig config;
     std::filesystem::path out_file;
     CalibrationOptions options;
+    bool gravity = false;
+    int counts = 5;
     cli::ReadInput([&] {
-      const Args args(argc, argv, {"device", "out", "user"}, {"auto"});
+      const Args args(argc, argv, {"device", "out", "user", "counts"}, {"auto", "gravity"});
       const auto& words = args.positional();
       if (words.size() > 1 || (words.size() == 1 && words[0] != "calibrate")) {
         throw UsageError("unexpected argument '" + words.back() + "'");
@@ -449,6 +489,7 @@ int CalibrateMain(int argc, const char* const* argv) {
           args.Value("device").value_or(ShippedFile("config/devices/sim.yaml"));
       config = LoadDevice(device_file);
       options.auto_mode = args.Flag("auto");
+      gravity = args.Flag("gravity");
       const bool simulated = haptics::DriverOf(config).simulated;
       if (simulated && !options.auto_mode) {
         throw UsageError("the sim device has nobody to hold its arms: use --auto");
@@ -458,11 +499,35 @@ int CalibrateMain(int argc, const char* const* argv) {
                          " names driver '" + config.driver +
                          "'); a real device is calibrated with an operator at the prompts");
       }
+      if (!gravity && args.Value("counts")) throw UsageError("--counts goes with --gravity");
+      counts = args.Int("counts", 2, 50).value_or(counts);
       options.user = args.Value("user").value_or("default");
-      out_file = args.Value("out").value_or(
-          (std::filesystem::path("calibration") / (config.name + ".yaml")).string());
+      if (gravity && !options.auto_mode && config.calibration.empty()) {
+        throw ConfigError(device_file.string() +
+                          ": key 'calibration': expected the device's calibration file, which "
+                          "gravity is sampled through; make one with `haptel calibrate --device " +
+                          device_file.string() + " --out calibration/" + config.name +
+                          ".yaml` and name it here");
+      }
+      if (gravity) {
+        out_file = args.Value("out").value_or(config.gravity.string());
+        if (out_file.empty()) {
+          throw ConfigError(device_file.string() +
+                            ": key 'gravity': expected the grid file to write (e.g. gravity: "
+                            "calibration/" +
+                            config.name +
+                            "-gravity.yaml); the device file names none (or give "
+                            "--out FILE)");
+        }
+      } else {
+        out_file = args.Value("out").value_or(
+            (std::filesystem::path("calibration") / (config.name + ".yaml")).string());
+      }
+      // Now, not after the sampling: a FIFO would be waited on for ever.
+      CheckFileOption("out", out_file, "a file name to write, such as out.yaml");
     });
     const std::unique_ptr<Device> device = MakeDevice(config);
+    if (gravity) return SampleGravityGrid(config, *device, options.auto_mode, counts, out_file);
     const DeviceCalibration calibration = RunCalibration(*device, options, std::cout);
     SaveCalibration(out_file, calibration);
     std::cout << "\n";

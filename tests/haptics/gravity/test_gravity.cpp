@@ -1,15 +1,21 @@
 // Gravity compensation: the grid file, online interpolation and fade, the
 // sampler's decision table, sampling on the sim device, and the drift the
 // sampled grid removes. Everything runs in simulated time: no wall clock.
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <fstream>
+#include <iostream>
+#include <iterator>
 #include <random>
 #include <set>
 
 #include "alloc_counter.hpp"
 #include "gravity_bench.hpp"
+#include "haptel/calibration/calibration_procedure.hpp"
 #include "haptel/config/device.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/config/gravity_grid.hpp"
@@ -553,4 +559,92 @@ TEST_CASE("an invalid grid is refused with the key GravityGridData::ValidateOrTh
   CHECK_THROWS_AS(GravityGrid(g), ConfigFieldError);
   CHECK_THROWS_WITH(GravityGrid(g),
                     Contains("counts: expected a list of 3 whole numbers in [2, 1000]"));
+}
+
+// ------------------------------------------- haptel calibrate --gravity
+
+namespace {
+/// `haptel calibrate` with these words; its stderr, when `err` is given.
+int Calibrate(std::vector<std::string> words, std::string* err = nullptr) {
+  words.insert(words.begin(), "haptel");
+  std::vector<const char*> argv;
+  for (const std::string& w : words) argv.push_back(w.c_str());
+  const auto capture = test::ScratchDir("calibrate-gravity-stderr") / "stderr.txt";
+  std::fflush(stderr);
+  const int saved = dup(2);
+  const int file = open(capture.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  dup2(file, 2);
+  const int code = CalibrateMain(static_cast<int>(argv.size()), argv.data());
+  std::fflush(stderr);
+  std::cerr.flush();
+  dup2(saved, 2);
+  close(saved);
+  close(file);
+  if (err != nullptr) {
+    std::ifstream in(capture);
+    *err = std::string(std::istreambuf_iterator<char>(in), {});
+  }
+  return code;
+}
+}  // namespace
+
+TEST_CASE(
+    "haptel calibrate --gravity samples the sim device's grid and writes it where the device file "
+    "names it; the grid loads and compensates") {
+  const auto dir = test::ScratchDir("calibrate-gravity");
+  const auto grid_file = dir / "grids" / "sim-gravity.yaml";
+  std::ifstream shipped("config/devices/sim.yaml");
+  const std::string sim_yaml(std::istreambuf_iterator<char>(shipped), {});
+  const auto device_file =
+      test::WriteFile(dir / "sim.yaml", sim_yaml + "gravity: " + grid_file.string() + "\n");
+  std::string err;
+  REQUIRE(Calibrate({"calibrate", "--gravity", "--auto", "--device", device_file.string(),
+                     "--counts", "2"},
+                    &err) == 0);
+  INFO(err);
+  const GravityGridData data = LoadGravityGrid(grid_file);
+  CHECK(data.counts == std::array<int, 3>{2, 2, 2});
+  CHECK(data.device == "sim");
+
+  // As haptel bench gravity checks it: released in the box, the arm drifts
+  // far less with the grid's force than with none.
+  const DeviceConfig d = LoadDevice(device_file);
+  SimDevice dev(d, OperatorConfig{});
+  const ArmCalibration cal = bench::SimTruthCalibration(dev, Side::kRight);
+  const GravityGrid grid(data);
+  int64_t now = 1'000'000;
+  double off = 0.0, on = 0.0;
+  for (const Vec3d& p : {Vec3d{0.0, -0.1, 0.0}, Vec3d{0.15, 0.1, 0.1}, Vec3d{0.05, 0.0, -0.05}}) {
+    off += bench::MeasureDrift(dev, Side::kRight, cal, nullptr, p, 1.0, now);
+    on += bench::MeasureDrift(dev, Side::kRight, cal, &grid, p, 1.0, now);
+  }
+  INFO("drift off " << off / 3 * 1e3 << " mm/s, on " << on / 3 * 1e3 << " mm/s");
+  CHECK(off > 0.03);
+  CHECK(on * 5.0 < off);
+
+  // --out writes elsewhere, whatever the device file names.
+  const auto elsewhere = dir / "elsewhere.yaml";
+  REQUIRE(Calibrate({"calibrate", "--gravity", "--auto", "--counts", "2", "--out",
+                     elsewhere.string()}) == 0);
+  CHECK(LoadGravityGrid(elsewhere).counts == std::array<int, 3>{2, 2, 2});
+}
+
+TEST_CASE("haptel calibrate --gravity says which key is missing, and refuses bad usage") {
+  const auto dir = test::ScratchDir("calibrate-gravity-bad");
+  std::string err;
+  // The shipped sim.yaml names no grid file: nothing to write to.
+  CHECK(Calibrate({"calibrate", "--gravity", "--auto"}, &err) == 2);
+  CHECK_THAT(err, Contains("sim.yaml: key 'gravity'") && Contains("--out"));
+  CHECK(Calibrate({"calibrate", "--gravity", "--auto", "--counts", "1", "--out",
+                   (dir / "g.yaml").string()},
+                  &err) == 2);
+  CHECK(Calibrate({"calibrate", "--auto", "--counts", "3"}, &err) == 2);
+  CHECK_THAT(err, Contains("--counts goes with --gravity"));
+  // A real device is sampled through its measured calibration: none named.
+  const auto udp = test::WriteFile(dir / "udp.yaml",
+                                   "name: exo\ndriver: udp\ngravity: " + (dir / "g.yaml").string() +
+                                       "\nudp:\n  left: {port: 5000}\n  right: {port: 5001}\n");
+  CHECK(Calibrate({"calibrate", "--gravity", "--device", udp.string()}, &err) != 0);
+  CHECK_THAT(err, Contains("key 'calibration'"));
+  CHECK_FALSE(std::filesystem::exists(dir / "g.yaml"));
 }

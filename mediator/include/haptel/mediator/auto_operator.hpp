@@ -10,7 +10,14 @@
 /// After a bumper contact it backs off, turning away from the touched side,
 /// then aims its next attempt: for careful_s it looks half as far ahead and
 /// its steering has full attention (none of the profile's wander or
-/// re-centring miss, below). A contact while aiming backs it off further.
+/// re-centring miss, below), along a line beside the post or obstacle it
+/// hit (on the side of the corridor with more room). A new contact while aiming (the bumpers were
+/// clear in between) backs it off further. A contact that outlasts its
+/// back-off is not backed off again — the robot has no rear bumper, so
+/// reversing further may only push it into what is behind — the operator
+/// turns on the spot away from it instead: it never reverses for longer
+/// than one back-off per contact, so it never backs away for good from a
+/// finish it has not crossed.
 ///
 /// When the interface has controls to grasp (a hand goal with an approach
 /// offset), the operator first brings its open hands down onto them over
@@ -23,6 +30,7 @@
 /// re-centring a control that stays where it was left, a speedometer read
 /// now and then, and errors that shrink with the trials done before.
 #include <array>
+#include <cstdint>
 #include <deque>
 #include <random>
 
@@ -79,9 +87,24 @@ class AutoOperator {
   const Track& track_;
   OperatorConfig config_;
   TreadDriveConfig drive_;
-  std::deque<Observation> seen_;
+  struct Seen {
+    Observation observation;
+    uint64_t clears = 0;  ///< observations with clear bumpers up to this one
+  };
+  std::deque<Seen> seen_;
+  uint64_t clears_ = 0;
+  /// `clears` of the contact that started the last back-off (none yet: never matches).
+  uint64_t backoff_clears_ = UINT64_MAX;
   double backoff_until_s_ = -1.0;
   double backoff_turn_ = 0.0;
+  /// While aiming after hitting a post or an obstacle: the line it aims
+  /// along, left of the centre line (m), beside what it hit; 0 after a wall.
+  double aim_offset_ = 0.0;
+  /// How far from the robot's centre a round obstacle ahead counts as the
+  /// one it touched, m (its body's radius and more).
+  static constexpr double kObstacleReach = 0.2;
+  /// The aim offset that passes the round obstacle `o`'s front touches.
+  double PassingOffset(const Observation& o) const;
   double careful_until_s_ = -1.0;
   int repeat_contacts_ = 0;  ///< contacts in a row, each while aiming after the last
   interfaces::HandTargets arm_;

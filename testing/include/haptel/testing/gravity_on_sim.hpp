@@ -1,7 +1,8 @@
 #pragma once
 /// @file The gravity sampler run on the simulated device, in simulated time:
-/// for the gravity tests and `haptel bench gravity`. A real device is sampled
-/// by GravitySampler with a person placing the arm; the sim places it itself.
+/// for the gravity tests and `haptel bench gravity`. It is `haptel calibrate
+/// --gravity --auto`'s procedure (SampleGravity), its log discarded; a real
+/// device is sampled by the same procedure with a person placing the arm.
 #include <cstdint>
 
 #include "haptel/gravity/gravity_sampler.hpp"
