@@ -492,6 +492,11 @@ DeviceUseReport SdlFfDevice::UseReport() const {
   return report;
 }
 
+std::string SdlFfDevice::UnpluggedLine() const {
+  if (!io_->lost.load(std::memory_order_acquire)) return {};
+  return "joystick '" + io_->joystick.name + "' was unplugged";
+}
+
 const std::string& SdlFfDevice::joystick_name() const { return io_->joystick.name; }
 bool SdlFfDevice::plays_effects() const { return io_->plays; }
 bool SdlFfDevice::rumbles() const { return !io_->plays; }

@@ -13,12 +13,15 @@
 #include <cmath>
 #include <thread>
 
+#include "alloc_counter.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/haptics/device_drivers.hpp"
 #include "haptel/haptics/device_factory.hpp"
+#include "haptel/haptics/hal.hpp"
+#include "haptel/haptics/servo_loop.hpp"
 #include "haptel/sdl_ff/sdl_ff_device.hpp"
-#include "virtual_joystick.hpp"
+#include "virtual_joystick.hpp"  // tests/support
 
 using namespace haptel;
 using namespace haptel::haptics;
@@ -171,4 +174,37 @@ TEST_CASE("sdl-ff: no joystick, or none that plays anything, is said plainly") {
   file.sdl_ff.right.x.axis = 9;  // it has 4
   CHECK_THROWS_WITH(MakeDevice(file),
                     Catch::Contains("sdl_ff.right.x.axis") && Catch::Contains("it has 4"));
+}
+
+TEST_CASE("sdl-ff: the servo loop's ticks on the device allocate nothing") {
+  VirtualJoystick stick(/*rumble=*/true);
+  const DeviceConfig config = StickFile();
+  const std::unique_ptr<Device> device = MakeDevice(config);
+  DeviceCalibration metres;  // the device calibrates itself
+  for (ArmCalibration& arm : metres.arms) arm.tracker_scale = {1.0, 1.0, 1.0};
+  Hal hal(metres);
+  ServoLoop loop(*device, hal, config, metres);
+  ForceField field;
+  field.enabled = true;
+  field.stiffness = 40.0;
+  field.wall_active = true;
+  field.wall_point = {0.01, 0.0, 0.0};
+  field.wall_stiffness = 1500.0;
+  hal.SetField(Side::kRight, field);
+  stick.SetAxis(1, -16384);  // into the wall
+  const auto tick = [&] {
+    const int64_t now = MonotonicNs();
+    loop.Tick(Side::kLeft, now);
+    loop.Tick(Side::kRight, now);
+    std::this_thread::sleep_for(std::chrono::microseconds(500));
+  };
+  for (int i = 0; i < 20; ++i) tick();  // warm up
+  const uint64_t before = test::ThreadAllocations();
+  for (int i = 0; i < 200; ++i) tick();
+  CHECK(test::ThreadAllocations() == before);
+  const HandSample hand = hal.LatestSample(Side::kRight);
+  REQUIRE(hand.valid);
+  CHECK(hand.position[0] == Approx(0.05).margin(1e-3));  // metres, as the device reports them
+  CHECK(hal.presence(Side::kRight) == HandPresence::kReleased);
+  CHECK(loop.Counters(Side::kRight).no_data_ticks > 0);  // between the device's polls
 }

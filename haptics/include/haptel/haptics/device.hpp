@@ -95,6 +95,11 @@ class Device {
     (void)side;
     (void)setpoint;
   }
+  /// Why the device answers kLost when the person took it away (a joystick
+  /// unplugged): a line saying so, and the run ends aborted, as when a game
+  /// controller is disconnected. "" (the default): lost is the device's
+  /// fault (the run ends "device lost"). Any thread.
+  virtual std::string UnpluggedLine() const { return {}; }
   /// Its use so far. Any thread (an implementation keeps it in atomics).
   virtual DeviceUseReport UseReport() const { return {}; }
 

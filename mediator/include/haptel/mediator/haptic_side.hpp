@@ -73,6 +73,9 @@ class HapticSide {
   bool replay_finished() const;
   /// An arm the device has (has_side) stopped answering: forces are zero.
   bool lost() const;
+  /// When lost because the person unplugged the device (a joystick), the
+  /// device's line saying so; else "" (Device::UnpluggedLine).
+  std::string unplugged() const { return device_->UnpluggedLine(); }
   /// How long the lost arm has been silent: seconds since its newest wrist
   /// reading (the longest, if both are lost; 0 when none is).
   double silent_s() const;

@@ -47,6 +47,8 @@ class SdlFfDevice final : public Device {
   HandPresence Presence(Side side) override;
   void SetpointHint(Side side, const ForceSetpoint& setpoint) override;
   DeviceUseReport UseReport() const override;
+  /// "joystick 'NAME' was unplugged" once it was; "" until then.
+  std::string UnpluggedLine() const override;
 
   /// SDL's name of the joystick opened, and what it plays.
   const std::string& joystick_name() const;

@@ -32,7 +32,7 @@ class VirtualJoystick {
     SDL_VirtualJoystickDesc desc;
     SDL_zero(desc);
     desc.version = SDL_VIRTUAL_JOYSTICK_DESC_VERSION;
-    desc.type = SDL_JOYSTICK_TYPE_GAMECONTROLLER;
+    desc.type = SDL_JOYSTICK_TYPE_UNKNOWN;
     desc.naxes = 4;
     desc.nbuttons = 4;
     desc.name = kName;
