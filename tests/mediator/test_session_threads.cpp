@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <atomic>
 #include <catch2/catch.hpp>
+#include <chrono>
 #include <filesystem>
 #include <memory>
 #include <mutex>
@@ -173,12 +174,19 @@ TEST_CASE("a joystick unplugged mid-run: the run ends aborted, saying so, the ro
   const std::vector<const char*> argv = Argv(words);
   const mediator::SessionSetup setup = mediator::RunSetupFromArgs(
       mediator::ParseRunArgs(static_cast<int>(argv.size()), argv.data()));
-  // The person holds the trigger and pushes the stick forward; once the
+  // The person holds the trigger and pushes the stick forward, from
+  // neutral again now and then (a run engages only from rest); once the
   // robot drives, the stick is unplugged.
   std::thread person([&] {
     stick.SetButton(0, true);
-    stick.SetAxis(1, -20000);
-    test::WaitFor([&] { return speed() > 0.05; }, 30.0);
+    test::WaitFor(
+        [&] {
+          stick.SetAxis(1, 0);
+          std::this_thread::sleep_for(std::chrono::milliseconds(300));
+          stick.SetAxis(1, -20000);
+          return test::WaitFor([&] { return speed() > 0.05; }, 1.0);
+        },
+        30.0);
     stick.Detach();
   });
   mediator::Recorder recorder(setup.run.database);

@@ -66,6 +66,10 @@ class VirtualJoystick {
     }
   }
 
+  /// Still plugged in, as SDL sees it.
+  bool attached() const {
+    return joystick_ != nullptr && SDL_JoystickGetAttached(joystick_) == SDL_TRUE;
+  }
   int rumbles() const { return rumbles_.load(); }
   int last_low() const { return last_low_.load(); }
   int last_high() const { return last_high_.load(); }

@@ -6,9 +6,11 @@
 
 #include "haptel/config/cockpit.hpp"
 #include "haptel/config/device.hpp"
+#include "haptel/config/error.hpp"
 #include "haptel/interfaces/cockpit.hpp"
 #include "haptel/sdl_ff/ff_model.hpp"
 #include "haptel/sdl_ff/sdl_effects.hpp"
+#include "test_env.hpp"
 
 using namespace haptel;
 using namespace haptel::haptics;
@@ -272,4 +274,24 @@ TEST_CASE("sdl-ff: SDL's effects: spring axes, constant force's direction and le
   CHECK(RumbleLevel(0.5) == 32768);
   CHECK(RumbleLevel(2.0) == 65535);
   CHECK(RumbleLevel(-1.0) == 0);
+}
+
+TEST_CASE("sdl-ff: a device file's sdl_ff section is checked, naming the key") {
+  const auto dir = haptel::test::ScratchDir("sdl-ff-config");
+  const auto load = [&](const std::string& section) {
+    return LoadDevice(haptel::test::WriteFile(
+        dir / "stick.yaml", "name: stick\ndriver: sdl-ff\nsides: [right]\nsdl_ff:\n" + section));
+  };
+  CHECK(load("  deadman: {button: -1, axis: 5, rest: high}\n").sdl_ff.deadman.rest_high);
+  CHECK_THROWS_WITH(load("  deadman: {button: 1, axis: 5}\n"),
+                    Catch::Contains("sdl_ff.deadman.button") &&
+                        Catch::Contains("exactly one of 'button' and 'axis'"));
+  CHECK_THROWS_WITH(load("  deadman: {button: -1}\n"), Catch::Contains("sdl_ff.deadman.button"));
+  CHECK_THROWS_WITH(
+      load("  right: {rim: {axis: 0}, y: {axis: 1, span: 0.1}}\n"),
+      Catch::Contains("sdl_ff.right.rim.axis") && Catch::Contains("a rim moves y and z"));
+  CHECK_THROWS_WITH(load("  right: {x: {axis: 1, span: 0.1, rest: middle}}\n"),
+                    Catch::Contains("sdl_ff.right.x.rest") && Catch::Contains("centre, low, high"));
+  CHECK_THROWS_WITH(load("  right: {x: {axis: 64}}\n"), Catch::Contains("sdl_ff.right.x.axis"));
+  CHECK_THROWS_WITH(load("  stick: 1\n"), Catch::Contains("stick"));  // unknown keys refused
 }

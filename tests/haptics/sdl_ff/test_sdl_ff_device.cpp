@@ -11,6 +11,7 @@
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <thread>
 
 #include "alloc_counter.hpp"
@@ -21,6 +22,7 @@
 #include "haptel/haptics/hal.hpp"
 #include "haptel/haptics/servo_loop.hpp"
 #include "haptel/sdl_ff/sdl_ff_device.hpp"
+#include "test_env.hpp"
 #include "virtual_joystick.hpp"  // tests/support
 
 using namespace haptel;
@@ -31,25 +33,17 @@ namespace {
 
 DeviceConfig StickFile() { return LoadDevice("config/devices/sdl-ff.yaml"); }
 
-/// Polls `read` until it answers kOk and `done` holds for its reading, or 5 s.
+/// Polls the device's wrist until it answers kOk with a reading `done` takes, or 5 s.
 bool WaitForWrist(Device& device, Side side, const std::function<bool(const WristRaw&)>& done) {
-  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(5);
-  while (std::chrono::steady_clock::now() < until) {
-    WristRaw raw;
-    if (device.ReadWrist(side, MonotonicNs(), raw) == DeviceStatus::kOk && done(raw)) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  }
-  return false;
+  return test::WaitFor(
+      [&] {
+        WristRaw raw;
+        return device.ReadWrist(side, MonotonicNs(), raw) == DeviceStatus::kOk && done(raw);
+      },
+      5.0);
 }
 
-bool WaitFor(const std::function<bool()>& done) {
-  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(5);
-  while (std::chrono::steady_clock::now() < until) {
-    if (done()) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  }
-  return false;
-}
+bool WaitFor(const std::function<bool()>& done) { return test::WaitFor(done, 5.0); }
 
 /// One servo tick's worth of what the loop gives the device, stamped now.
 void Feed(Device& device, const ForceField& field, const Vec3d& force) {
