@@ -205,3 +205,52 @@ TEST_CASE("a joystick unplugged mid-run: the run ends aborted, saying so, the ro
   CHECK(run.run_id != 0);
   CHECK(stopped);
 }
+
+TEST_CASE("a wheel and pedals drive the cockpit: the hands grip while the deadman is held",
+          "[threads]") {
+  test::VirtualJoystick wheel(/*rumble=*/true);
+  wheel.SetAxis(2, 32767);  // both pedals released: they rest high
+  wheel.SetAxis(3, 32767);
+  const int domain = test::UniqueDomain(3);
+  const fs::path dir = test::ScratchDir("session-threads-wheel");
+  const std::unique_ptr<vehicles::Node> robot = StartRobot("robot1", domain);
+  const std::vector<std::string> words = {"run",
+                                          "--attach",
+                                          "--domain",
+                                          std::to_string(domain),
+                                          "--operator",
+                                          "person",
+                                          "--device",
+                                          "config/devices/sdl-ff-wheel.yaml",
+                                          "--interface",
+                                          "cockpit",
+                                          "--view",
+                                          "none",
+                                          "--quiet",
+                                          "--database",
+                                          (dir / "runs.db").string(),
+                                          "--vehicle-timeout",
+                                          "10",
+                                          "--track",
+                                          "config/tracks/test-short.yaml",
+                                          "--time-limit",
+                                          "8"};
+  const std::vector<const char*> argv = Argv(words);
+  const mediator::SessionSetup setup = mediator::RunSetupFromArgs(
+      mediator::ParseRunArgs(static_cast<int>(argv.size()), argv.data()));
+  std::thread person([&] {
+    std::this_thread::sleep_for(std::chrono::seconds(1));
+    wheel.SetButton(4, true);  // the deadman: the hands close on the rim and the lever
+    std::this_thread::sleep_for(std::chrono::seconds(1));
+    wheel.SetAxis(2, -32768);  // the accelerator down: the lever forward
+  });
+  mediator::Recorder recorder(setup.run.database);
+  const std::atomic<bool> interrupted{false};
+  const mediator::RecordedRun run = mediator::RunAndRecord(setup, recorder, interrupted);
+  person.join();
+  robot->Stop();
+  const record::RunRecord& record = run.result.record;
+  INFO("outcome " << record.outcome << ": " << run.result.message);
+  CHECK(record.outcome == "time limit");
+  CHECK(record.distance_m > 0.2);
+}

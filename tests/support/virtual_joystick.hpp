@@ -27,14 +27,15 @@ class VirtualJoystick {
     Subsystem& operator=(const Subsystem&) = delete;
   };
 
-  /// Four axes and four buttons, with a Rumble callback when `rumble`.
+  /// Four axes (a stick, or a wheel and two pedals) and eight buttons, with a
+  /// Rumble callback when `rumble`.
   explicit VirtualJoystick(bool rumble) {
     SDL_VirtualJoystickDesc desc;
     SDL_zero(desc);
     desc.version = SDL_VIRTUAL_JOYSTICK_DESC_VERSION;
     desc.type = SDL_JOYSTICK_TYPE_UNKNOWN;
     desc.naxes = 4;
-    desc.nbuttons = 4;
+    desc.nbuttons = 8;
     desc.name = kName;
     desc.userdata = this;
     if (rumble) desc.Rumble = &VirtualJoystick::OnRumble;
