@@ -64,6 +64,7 @@ bool RateEstimator::OnSilence(double now_s) {
   // Again only once the sender had time to follow the last cut (its
   // encoder steps down over several frames).
   if (last_silence_cut_s_ >= 0 && now_s - last_silence_cut_s_ < kSilenceRepeat_s) return false;
+  if (last_silence_cut_s_ < 0) before_silence_kbps_ = loss_kbps_;  // a silence begins
   last_silence_cut_s_ = now_s;
   loss_kbps_ = std::clamp(0.5 * target_kbps(), config_.min_kbps, config_.max_kbps);
   received_kbps_ = 0;  // nothing arrives
@@ -75,8 +76,17 @@ bool RateEstimator::OnSilence(double now_s) {
 void RateEstimator::OnFrame(uint64_t frame_number, double sent_s, double arrival_s, size_t bytes) {
   last_frame_s_ = std::max(last_frame_s_, arrival_s);
   if (last_silence_cut_s_ >= 0) {
-    // The frames lost in the silence were answered by its cuts: the loss
+    // The silence is over. When the frame numbers run on (none was lost
+    // in it), the sender sent nothing — its camera or its host stalled —
+    // which says nothing of the link: its cuts are undone, at once. Else
+    // the frames lost in the silence were answered by its cuts: the loss
     // window starts again here, not counting them twice.
+    // (Before any frame, only a first frame numbered 1 shows that.)
+    if (have_group_ ? frame_number == newest_frame_ + 1 : frame_number == 1) {
+      loss_kbps_ = before_silence_kbps_;
+      cut_pending_ = true;
+      next_feedback_s_ = std::min(next_feedback_s_, arrival_s);
+    }
     last_silence_cut_s_ = -1;
     loss_window_start_s_ = -1;
   }

@@ -46,6 +46,9 @@
 /// it climb a rung the link cannot carry). And a link that carries no
 /// whole frame at all (every burst cut) says so only by its silence:
 /// OnSilence halves the target while frames are expected and none come.
+/// A silence after which the frame numbers run on (no frame was lost in
+/// it) was the sender's — its camera or its host stalled, as a loaded
+/// vehicle's does — not the link's: its cuts are undone when it ends.
 ///
 /// Not thread-safe; the operator's video thread owns it. Allocation-free
 /// after construction.
@@ -181,6 +184,7 @@ class RateEstimator {
 
   double last_frame_s_ = -1;  ///< the newest arrival, or the first OnSilence
   double last_silence_cut_s_ = -1;
+  double before_silence_kbps_ = 0;  ///< the loss-based estimate before the silence's cuts
   double next_feedback_s_ = 0;
   bool cut_pending_ = false;
 };
