@@ -66,9 +66,10 @@ constexpr Usage kUsage[] = {
      "console HTTP"},
     {"fleet",
      "[--fleet FILE] [--counts LIST] [--slice S] [--time-limit S] [--device FILE] [--domain D] "
-     "[--smoke] [--json]",
+     "[--video-seconds S] [--video-only] [--full-tiles] [--smoke] [--json]",
      "one operator, 1..N vehicles: handover p50/p95, operator CPU per vehicle, the servo loop "
-     "against the bare loop"},
+     "against the bare loop; then each vehicle's video (kbit/s, rate estimate, SSIM) on the "
+     "driven screen and the tiles, with a window"},
     {"soak",
      "[--duration S] [--kill-every MIN,MAX] [--seed N] [--port N] [--domain D] [--smoke] [--json]",
      "the study database under concurrency: a study with its console, two runs, the sqlite3 tool, "

@@ -22,17 +22,30 @@
 /// loop showed in this bench run (its run-to-run spread on this machine)
 /// plus one 10 µs histogram bin.
 ///
+/// Then the video (fleet_video.hpp, issue 40), per count: N vehicles
+/// streaming the lap on loopback into this process's receivers and a view
+/// (a window on $DISPLAY, offscreen without one), the first driven, the
+/// others tiles asking for previews (--full-tiles: not, the figure before);
+/// per vehicle its kbit/s, rate estimate (last, least), cuts, pictures per
+/// second, size and SSIM. Targets at 3 vehicles: the driven video within
+/// 20 % of a single vehicle's, SSIM >= 0.95, no estimate under 300 kbit/s.
+/// --video-only skips the runs above; --video-seconds sets the measurement.
+///
 /// Prints a table; writes build/bench/fleet.csv and fleet.png (operator CPU
-/// and handover p95 against the vehicle count); with --json the last stdout
-/// line is {"counts":[…],"handover_ms_p95_at_4":…,"servo_p99_us_bare":…,
-/// "servo_p99_us_fleet":…,…}.
+/// and handover p95 against the vehicle count) and fleet_video.csv; with
+/// --json the last stdout line is {"counts":[…],"handover_ms_p95_at_4":…,
+/// "servo_p99_us_bare":…,"servo_p99_us_fleet":…,…,"video":{"counts":[…],
+/// "driven_kbps_ratio_3_to_1":…,"driven_ssim_at_3":…,"target_kbps_least":…,
+/// "target_met":…}}.
 ///
 /// --smoke (smoke.hpp): the counts 1 and N only, each cut at 6 s
-/// (--time-limit) with a 1 s slice, the bare loop for 0.5 s.
+/// (--time-limit) with a 1 s slice, the bare loop for 0.5 s; the video 3 s
+/// per count after a 1 s warm-up.
 namespace haptel::bench {
 
 /// `haptel bench fleet [--fleet FILE] [--counts LIST] [--slice S] [--time-limit S]
-/// [--device FILE] [--domain D] [--smoke] [--json]`. Returns 0 when every count
+/// [--device FILE] [--domain D] [--video-seconds S] [--video-only] [--full-tiles] [--smoke]
+/// [--json]`. Returns 0 when every count
 /// ran and gave its figures, 1 when one did not, 2 for bad usage.
 int BenchFleetMain(int argc, const char* const* argv);
 

@@ -21,6 +21,7 @@
 #include "haptel/mediator/vehicle_link.hpp"
 #include "haptel/video/image_quality.hpp"
 #include "plot.hpp"
+#include "video_source.hpp"
 
 namespace haptel::bench {
 namespace {
@@ -29,57 +30,6 @@ constexpr double kCommandRateHz = 100.0;
 constexpr double kLatencyLimit_ms = 150.0;  ///< issue 24's target for the video latency p95
 constexpr double kWindow_s = 1.0;           ///< adapt_s's trailing window
 constexpr double kSsimPerSecond = 3.0;      ///< pictures compared with their source
-
-/// Writes `frames` losslessly (FFV1) for the vehicle's file camera; throws
-/// std::runtime_error naming the file when it cannot.
-void WriteSource(const std::filesystem::path& file, const std::vector<cv::Mat>& frames,
-                 double rate_hz) {
-  cv::VideoWriter writer(file.string(), cv::CAP_FFMPEG, cv::VideoWriter::fourcc('F', 'F', 'V', '1'),
-                         rate_hz, frames.front().size());
-  if (!writer.isOpened())
-    throw std::runtime_error("cannot write the source video " + file.string() + " (FFV1)");
-  for (const cv::Mat& f : frames) writer.write(f);
-}
-
-/// `vehicle`'s file with the camera playing `source` (looping) through
-/// `codec`, and the world as an absolute path: the copy lives elsewhere.
-void WriteVehicleFile(const VehicleConfig& vehicle, CameraCodec codec,
-                      const std::filesystem::path& source, const std::filesystem::path& out) {
-  std::ifstream in(vehicle.file);
-  if (!in) throw std::runtime_error("cannot read the vehicle file " + vehicle.file.string());
-  std::ostringstream o;
-  bool in_camera = false, source_done = false, codec_done = false;
-  std::string line;
-  while (std::getline(in, line)) {
-    const bool top_level = !line.empty() && line[0] != ' ' && line[0] != '#';
-    if (top_level) in_camera = line.rfind("camera:", 0) == 0;
-    const size_t key = line.find_first_not_of(' ');
-    const std::string indent = line.substr(0, key == std::string::npos ? 0 : key);
-    if (top_level && line.rfind("world:", 0) == 0 && !vehicle.world.empty()) {
-      o << "world: " << std::filesystem::absolute(vehicle.world).string() << "\n";
-    } else if (in_camera && key != std::string::npos && line.compare(key, 7, "source:") == 0) {
-      o << indent << "source: file\n"
-        << indent << "file: " << std::filesystem::absolute(source).string() << "\n"
-        << indent << "loop: true\n";
-      source_done = true;
-    } else if (in_camera && key != std::string::npos &&
-               (line.compare(key, 5, "file:") == 0 || line.compare(key, 5, "loop:") == 0)) {
-      continue;  // replaced above
-    } else if (in_camera && key != std::string::npos && line.compare(key, 6, "codec:") == 0) {
-      o << indent << "codec: " << CameraCodecName(codec) << "\n";
-      codec_done = true;
-    } else {
-      o << line << "\n";
-    }
-  }
-  if (!source_done || !codec_done) {
-    throw std::runtime_error(vehicle.file.string() +
-                             ": expected camera.source and camera.codec lines to replace");
-  }
-  std::ofstream file(out);
-  file << o.str();
-  if (!file.flush()) throw std::runtime_error("cannot write " + out.string());
-}
 
 double Percentile(std::vector<double> v, double q) {
   if (v.empty()) return std::nan("");
@@ -94,116 +44,6 @@ struct Shown {
   double t_s;  ///< since the schedule began
   double latency_ms;
   int phase;
-};
-
-/// Compares sampled pictures with their source frames on a thread of its
-/// own, so the measuring loop never waits for an SSIM; at most a few wait
-/// (more are not taken: a sample, not every picture).
-class SsimWorker {
- public:
-  SsimWorker(const std::vector<cv::Mat>& sources, double rate_hz, size_t phases)
-      : sources_(sources), rate_hz_(rate_hz), sum_(phases, 0.0), count_(phases, 0) {
-    for (const cv::Mat& s : sources_) small_.push_back(Small(s));
-    thread_ = std::thread([this] { Loop(); });
-  }
-  ~SsimWorker() {
-    {
-      std::lock_guard lock(mutex_);
-      stop_ = true;
-    }
-    wake_.notify_all();
-    thread_.join();
-  }
-  /// False when the queue is full (the sample is skipped).
-  bool Offer(std::shared_ptr<const cv::Mat> picture, int64_t capture_wall_ns, int phase) {
-    {
-      std::lock_guard lock(mutex_);
-      if (queue_.size() >= 4) return false;
-      queue_.push_back({std::move(picture), capture_wall_ns, phase});
-    }
-    wake_.notify_one();
-    return true;
-  }
-  /// Waits for the queue to empty, then the mean per phase (NaN: none) and the count.
-  std::pair<double, int> Phase(int phase) {
-    std::unique_lock lock(mutex_);
-    idle_.wait(lock, [this] { return queue_.empty() && !busy_; });
-    const int n = count_[static_cast<size_t>(phase)];
-    return {n > 0 ? sum_[static_cast<size_t>(phase)] / n : std::nan(""), n};
-  }
-
- private:
-  struct Job {
-    std::shared_ptr<const cv::Mat> picture;
-    int64_t capture_wall_ns;
-    int phase;
-  };
-  static cv::Mat Small(const cv::Mat& bgr) {
-    cv::Mat gray, small;
-    cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
-    cv::resize(gray, small, cv::Size(80, 60), 0, 0, cv::INTER_AREA);
-    small.convertTo(small, CV_32F);
-    return small;
-  }
-  /// The source frame `picture` shows: near where the capture stamp puts
-  /// it (from the last match and the frame rate), the closest by a small
-  /// picture's difference; the whole loop before the first match.
-  size_t Match(const cv::Mat& picture, int64_t capture_wall_ns) {
-    const cv::Mat small = Small(picture);
-    const auto n = static_cast<int64_t>(sources_.size());
-    int64_t from = 0, to = n - 1;
-    if (anchor_ns_ != 0) {
-      const auto expected =
-          anchor_index_ + std::llround(NsToS(capture_wall_ns - anchor_ns_) * rate_hz_);
-      from = expected - 3;
-      to = expected + 3;
-    }
-    double best = 1e300;
-    int64_t best_index = 0;
-    for (int64_t i = from; i <= to; ++i) {
-      const size_t k = static_cast<size_t>(((i % n) + n) % n);
-      const double d = cv::norm(small, small_[k], cv::NORM_L2SQR);
-      if (d < best) best = d, best_index = static_cast<int64_t>(k);
-    }
-    anchor_ns_ = capture_wall_ns;
-    anchor_index_ = best_index;
-    return static_cast<size_t>(best_index);
-  }
-  void Loop() {
-    std::unique_lock lock(mutex_);
-    for (;;) {
-      wake_.wait(lock, [this] { return stop_ || !queue_.empty(); });
-      if (stop_) return;
-      Job job = std::move(queue_.front());
-      queue_.pop_front();
-      busy_ = true;
-      lock.unlock();
-      cv::Mat picture = *job.picture;
-      const cv::Mat& source = sources_[0];
-      // A half-resolution rung (JPEG's ladder) is shown scaled up, as the view does.
-      if (picture.size() != source.size())
-        cv::resize(picture, picture, source.size(), 0, 0, cv::INTER_LINEAR);
-      const double ssim = video::Ssim(sources_[Match(picture, job.capture_wall_ns)], picture);
-      lock.lock();
-      sum_[static_cast<size_t>(job.phase)] += ssim;
-      ++count_[static_cast<size_t>(job.phase)];
-      busy_ = false;
-      if (queue_.empty()) idle_.notify_all();
-    }
-  }
-
-  const std::vector<cv::Mat>& sources_;
-  std::vector<cv::Mat> small_;
-  double rate_hz_;
-  int64_t anchor_ns_ = 0;
-  int64_t anchor_index_ = 0;
-  std::mutex mutex_;
-  std::condition_variable wake_, idle_;
-  std::deque<Job> queue_;
-  bool stop_ = false, busy_ = false;
-  std::vector<double> sum_;
-  std::vector<int> count_;
-  std::thread thread_;
 };
 
 /// The latency p95 over the trailing window ending at `t_s` (NaN: no picture in it).
@@ -253,8 +93,8 @@ ScheduleResult RunCapacitySchedule(const VehicleConfig& vehicle, CameraCodec cod
   };
   std::vector<TracePoint> trace;
   try {
-    if (!std::filesystem::exists(source)) WriteSource(source, frames, rate_hz);
-    WriteVehicleFile(vehicle, codec, source, vehicle_file);
+    if (!std::filesystem::exists(source)) WriteLosslessSource(source, frames, rate_hz);
+    WriteVehicleFileWithSource(vehicle, codec, source, vehicle_file);
     mediator::VehicleLinkOptions link_options;
     link_options.vehicle = LoadVehicle(vehicle_file);
     link_options.link = link_options.vehicle.link;

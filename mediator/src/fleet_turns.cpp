@@ -191,7 +191,13 @@ void FleetTurns::SwitchTo(int to, int64_t now, double t, const char* why) {
                   v.setup.vehicle.name.c_str(), why);
     switch_note_until_t_ = t + 3.0;
   }
-  if (view_) view_->Show(to);
+  if (view_) {
+    view_->Show(to);
+    // Only the driven vehicle's video is shown in full: the others are
+    // tiles, and are asked for a preview (fewer pixels and frames).
+    for (size_t i = 0; i < vehicles_.size(); ++i)
+      vehicles_[i]->link->video().ShowAsTile(static_cast<int>(i) != to);
+  }
   if (progress_) log::Info("fleet: driving '" + v.setup.vehicle.name + "' (" + why + ")");
 }
 

@@ -381,7 +381,26 @@ TEST_CASE("bench fleet --smoke: the fewest and the most vehicles, each count's f
   CHECK(Finite(j["servo_p99_us_fleet"]) > 0.0);
   CHECK_NOTHROW(j["handover_ms_p95_at_4"]);
   CHECK_NOTHROW(j["servo_unchanged"].boolean());
-  RequireFiles({"fleet.csv", "fleet.png"});
+  // The video (issue 40): each vehicle's, the first on the big screen at
+  // the camera's size, the others tiles at a preview's (half of it).
+  const auto& video = j["video"]["counts"].array();
+  REQUIRE(video.size() == 2);
+  for (const JsonValue& c : video) {
+    INFO("video of " << c["vehicles"].number() << " vehicle(s): " << c["error"].string());
+    CHECK(c["ran"].boolean());
+    const auto& vehicles = c["vehicle"].array();
+    REQUIRE(vehicles.size() == static_cast<size_t>(c["vehicles"].number()));
+    CHECK(vehicles[0]["shown"].string() == "screen");
+    CHECK(vehicles[0]["width"].number() == 640);
+    for (const JsonValue& v : vehicles) {
+      INFO(v["name"].string());
+      CHECK(Finite(v["kbps"]) > 0.0);
+      CHECK(Finite(v["fps"]) > 0.0);
+      CHECK(Finite(v["target_kbps"]) > 0.0);
+      if (v["shown"].string() == "tile") CHECK(v["width"].number() == 320);
+    }
+  }
+  RequireFiles({"fleet.csv", "fleet.png", "fleet_video.csv"});
 }
 
 TEST_CASE("bench fuzz --smoke", "[bench][smoke]") {

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "haptel/config/error.hpp"
+#include "haptel/core/clock.hpp"
 #include "haptel/link/security.hpp"
 #include "haptel/link/topic.hpp"
 #include "test_env.hpp"
@@ -125,6 +126,47 @@ TEST_CASE(
   std::lock_guard lock(m);
   for (const WriterId& id : from) CHECK((id == mine.id() || id == theirs.id()));
   CHECK(mine.id().ToString().size() == 33);  // 12 bytes, '|', 4 bytes in hex
+}
+
+TEST_CASE(
+    "a reader may take each sample's stamps: sent when its writer wrote it (the writer's wall "
+    "clock), arrived when this side took it (the monotonic clock)") {
+  const LinkConfig config = Config(10);
+  Participant vehicle(config, "test-vehicle");
+  Participant op(config, "test-operator");
+  std::mutex m;
+  std::vector<std::pair<SampleStamps, uint64_t>> heard;  // the stamps, the sample's seq
+  VideoReader reader(op, TopicName("t", "video"), Profile::kVideo,
+                     [&](const msg::VideoFrame& f, const SampleStamps& stamps) {
+                       std::lock_guard lock(m);
+                       heard.emplace_back(stamps, f.seq());
+                     });
+  VideoWriter writer(vehicle, TopicName("t", "video"), Profile::kVideo);
+  msg::VideoFrame f;
+  std::vector<std::pair<int64_t, int64_t>> written;  // per seq: wall clock before and after write()
+  std::vector<int64_t> written_mono;                 // per seq: monotonic clock before write()
+  const auto any = [&] {
+    std::lock_guard lock(m);
+    return !heard.empty();
+  };
+  REQUIRE(test::WaitFor(
+      [&] {
+        f.seq(written.size());
+        written_mono.push_back(MonotonicNs());
+        const int64_t before = WallNs();
+        writer.Write(f);
+        written.emplace_back(before, WallNs());
+        return any();
+      },
+      20.0));
+  std::lock_guard lock(m);
+  const auto& [stamps, seq] = heard.front();
+  REQUIRE(seq < written.size());
+  CHECK(stamps.writer == writer.id());
+  CHECK(stamps.sent_ns >= written[seq].first);
+  CHECK(stamps.sent_ns <= written[seq].second);
+  CHECK(stamps.arrived_ns >= written_mono[seq]);
+  CHECK(stamps.arrived_ns <= MonotonicNs());
 }
 
 TEST_CASE(

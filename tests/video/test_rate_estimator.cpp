@@ -308,3 +308,30 @@ TEST_CASE("bursty JPEG frames on a 1 Mbit/s link: the target settles within 30 %
     }
   }
 }
+
+TEST_CASE(
+    "a sender that pauses (its camera or host stalls, no frame lost): the silence's cuts are "
+    "undone when it resumes; frames lost in a silence keep them") {
+  RateEstimator estimator(ReceiverConfig());
+  uint64_t seq = 0;
+  double t = 0.0;
+  for (; t < 2.0; t += 1.0 / 30.0) estimator.OnFrame(++seq, t, t + 0.02, 4000);
+  const double before = estimator.target_kbps();
+  const auto silence = [&](double from, double seconds) {
+    for (double now = from; now < from + seconds; now += 0.1) estimator.OnSilence(now);
+  };
+  silence(t, 2.5);
+  const double halved = estimator.target_kbps();
+  CHECK(halved <= before / 4);  // two halvings, a second apart
+  t += 2.5;
+  estimator.OnFrame(++seq, t, t + 0.02, 4000);  // the next number: nothing was lost
+  CHECK(estimator.target_kbps() == Approx(before));
+  CHECK(estimator.FeedbackDue(t + 0.02));  // and the vehicle is told at once
+
+  silence(t, 2.5);
+  const double cut = estimator.target_kbps();
+  seq += 40;  // forty frames sent in the silence never came: the link's
+  t += 2.5;
+  estimator.OnFrame(++seq, t, t + 0.02, 4000);
+  CHECK(estimator.target_kbps() <= cut);
+}

@@ -1,12 +1,36 @@
 #include "haptel/video/camera_streamer.hpp"
 
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <utility>
 
 #include "haptel/core/clock.hpp"
 #include "haptel/core/log.hpp"
+#include "haptel/video/h264_codec.hpp"
 
 namespace haptel::video {
+
+namespace {
+
+/// Half `size`, even (H.264's 4:2:0 needs it) and at least 16.
+int HalfEven(int size) { return std::max(16, size / 2 / 2 * 2); }
+
+CameraConfig PreviewConfig(const CameraConfig& full) {
+  CameraConfig c = full;
+  c.width = HalfEven(full.width);
+  c.height = HalfEven(full.height);
+  c.rate_hz = std::min(full.rate_hz, CameraStreamer::kPreviewRate_hz);
+  // A quarter of the pixels at a third of the frames: the full bitrate's
+  // share of them, at least the encoder's least.
+  c.bitrate_kbps =
+      std::max(H264Encoder::kMinFollowKbps,
+               static_cast<int>(full.bitrate_kbps / 4.0 * std::min(1.0, c.rate_hz / full.rate_hz)));
+  return c;
+}
+
+}  // namespace
 
 CameraStreamer::CameraStreamer(const CameraConfig& config, std::unique_ptr<CameraSource> camera,
                                link::Participant& participant, const std::string& vehicle_name,
@@ -16,6 +40,7 @@ CameraStreamer::CameraStreamer(const CameraConfig& config, std::unique_ptr<Camer
       passthrough_possible_(config.codec == CameraCodec::kJpeg),
       camera_(std::move(camera)),
       encoder_(MakeVideoEncoder(config)),
+      preview_config_(PreviewConfig(config)),
       codec_name_(CameraCodecName(config.codec)),
       writer_(participant, link::TopicName(vehicle_name, "video"), link::Profile::kVideo) {
   if (camera_ == nullptr) throw std::invalid_argument("CameraStreamer: no camera source");
@@ -43,6 +68,7 @@ void CameraStreamer::OnFeedback(const msg::VideoFeedback& feedback, const link::
   }
   if (feedback.target_kbps() > 0)
     target_kbps_.store(feedback.target_kbps(), std::memory_order_relaxed);
+  preview_wanted_.store(feedback.preview(), std::memory_order_relaxed);
   if (!feedback.key_frame_request()) return;
   key_frame_requests_.fetch_add(1, std::memory_order_relaxed);
   key_frame_wanted_.store(true, std::memory_order_release);
@@ -83,26 +109,47 @@ void CameraStreamer::Tick(int64_t now_ns) {
   grabs_failed_.store(grab_monitor_.failures(), std::memory_order_relaxed);
   camera_stalls_.store(grab_monitor_.stalls(), std::memory_order_relaxed);
   if (!grabbed) return;
+  // A tile's preview: one grab in every (rate / preview rate), the first at once.
+  const bool preview = preview_wanted_.load(std::memory_order_relaxed);
+  if (preview != previewing_) grabs_since_preview_ = 0;
+  if (preview &&
+      grabs_since_preview_++ % static_cast<uint64_t>(std::max(
+                                   1.0, std::round(config_.rate_hz / preview_config_.rate_hz))) !=
+          0) {
+    return;
+  }
+  VideoEncoder& encoder = EncoderFor(preview);
+  if (preview != previewing_) {
+    // The other stream's references are not this one's: a key frame first.
+    previewing_ = preview;
+    encoder.RequestKeyFrame();
+  }
   // The operator's estimate of the link, followed by the encoder.
   const uint32_t target = target_kbps_.load(std::memory_order_relaxed);
   if (target != followed_kbps_) {
     followed_kbps_ = target;
     encoder_->FollowBitrate(target);
+    if (preview_encoder_) preview_encoder_->FollowBitrate(target);
   }
   const bool pass_through =
-      jpeg_source && JpegPassesThrough(camera_jpeg_.data(), camera_jpeg_.size(), config_, target);
+      jpeg_source && !preview &&
+      JpegPassesThrough(camera_jpeg_.data(), camera_jpeg_.size(), config_, target);
   if (jpeg_source && !pass_through &&
       !DecodeCameraJpeg(camera_jpeg_, config_, camera_decoded_, image_)) {
     frames_failed_.fetch_add(1, std::memory_order_relaxed);
     return;
   }
   if (!pass_through) {
-    if (encoder_->SkipFrame()) {
+    if (encoder.SkipFrame()) {
       frames_skipped_.fetch_add(1, std::memory_order_relaxed);
       return;
     }
-    if (key_frame_wanted_.exchange(false, std::memory_order_acq_rel)) encoder_->RequestKeyFrame();
-    if (!encoder_->Encode(image_, encoded_)) {
+    if (key_frame_wanted_.exchange(false, std::memory_order_acq_rel)) encoder.RequestKeyFrame();
+    if (preview) {
+      cv::resize(image_, preview_image_, cv::Size(preview_config_.width, preview_config_.height), 0,
+                 0, cv::INTER_AREA);
+    }
+    if (!encoder.Encode(preview ? preview_image_ : image_, encoded_)) {
       frames_failed_.fetch_add(1, std::memory_order_relaxed);
       return;
     }
@@ -111,15 +158,26 @@ void CameraStreamer::Tick(int64_t now_ns) {
   msg::VideoFrame& f = frame_msg_;
   f.seq(++frame_seq_);
   f.capture_wall_ns(capture_wall_ns);
-  f.width(static_cast<uint16_t>(config_.width));
-  f.height(static_cast<uint16_t>(config_.height));
+  const CameraConfig& sent = preview ? preview_config_ : config_;
+  f.width(static_cast<uint16_t>(sent.width));
+  f.height(static_cast<uint16_t>(sent.height));
   f.encoding(codec_name_);
-  f.key_frame(pass_through || encoder_->last_was_key_frame());
+  f.key_frame(pass_through || encoder.last_was_key_frame());
   f.data().assign(bytes.begin(), bytes.end());
   if (pass_through) frames_passed_through_.fetch_add(1, std::memory_order_relaxed);
   writer_.Write(f);
   frames_.fetch_add(1, std::memory_order_relaxed);
+  if (preview) preview_frames_.fetch_add(1, std::memory_order_relaxed);
   if (f.key_frame()) key_frames_sent_.fetch_add(1, std::memory_order_relaxed);
+}
+
+VideoEncoder& CameraStreamer::EncoderFor(bool preview) {
+  if (!preview) return *encoder_;
+  if (!preview_encoder_) {
+    preview_encoder_ = MakeVideoEncoder(preview_config_);
+    if (followed_kbps_ > 0) preview_encoder_->FollowBitrate(followed_kbps_);
+  }
+  return *preview_encoder_;
 }
 
 CameraCounters CameraStreamer::Counters() const {
@@ -135,6 +193,8 @@ CameraCounters CameraStreamer::Counters() const {
   c.frames_passed_through = frames_passed_through_.load();
   c.target_kbps = target_kbps_.load();
   c.feedback_refused = feedback_refused_.load();
+  c.preview = preview_wanted_.load();
+  c.preview_frames = preview_frames_.load();
   return c;
 }
 

@@ -64,6 +64,7 @@ bool RateEstimator::OnSilence(double now_s) {
   // Again only once the sender had time to follow the last cut (its
   // encoder steps down over several frames).
   if (last_silence_cut_s_ >= 0 && now_s - last_silence_cut_s_ < kSilenceRepeat_s) return false;
+  if (last_silence_cut_s_ < 0) before_silence_kbps_ = loss_kbps_;  // a silence begins
   last_silence_cut_s_ = now_s;
   loss_kbps_ = std::clamp(0.5 * target_kbps(), config_.min_kbps, config_.max_kbps);
   received_kbps_ = 0;  // nothing arrives
@@ -72,12 +73,20 @@ bool RateEstimator::OnSilence(double now_s) {
   return true;
 }
 
-void RateEstimator::OnFrame(uint64_t frame_number, double capture_s, double arrival_s,
-                            size_t bytes) {
+void RateEstimator::OnFrame(uint64_t frame_number, double sent_s, double arrival_s, size_t bytes) {
   last_frame_s_ = std::max(last_frame_s_, arrival_s);
   if (last_silence_cut_s_ >= 0) {
-    // The frames lost in the silence were answered by its cuts: the loss
+    // The silence is over. When the frame numbers run on (none was lost
+    // in it), the sender sent nothing — its camera or its host stalled —
+    // which says nothing of the link: its cuts are undone, at once. Else
+    // the frames lost in the silence were answered by its cuts: the loss
     // window starts again here, not counting them twice.
+    // (Before any frame, only a first frame numbered 1 shows that.)
+    if (have_group_ ? frame_number == newest_frame_ + 1 : frame_number == 1) {
+      loss_kbps_ = before_silence_kbps_;
+      cut_pending_ = true;
+      next_feedback_s_ = std::min(next_feedback_s_, arrival_s);
+    }
     last_silence_cut_s_ = -1;
     loss_window_start_s_ = -1;
   }
@@ -107,30 +116,51 @@ void RateEstimator::OnFrame(uint64_t frame_number, double capture_s, double arri
   UpdateLoss(frame_number, arrival_s);
 
   // A sender that started over (a new vehicle process) starts the trend over.
-  if (have_previous_ && frame_number + 1000 < newest_frame_) have_previous_ = false;
-  if (!have_previous_) {
-    have_previous_ = true;
+  if (have_group_ && frame_number + 1000 < newest_frame_) have_group_ = have_previous_ = false;
+  if (!have_group_) {
+    have_group_ = true;
     newest_frame_ = frame_number;
-    previous_capture_s_ = capture_s;
-    previous_arrival_s_ = arrival_s;
+    group_ = {sent_s, sent_s, arrival_s, arrival_s};
     if (last_rate_update_s_ < 0) last_rate_update_s_ = arrival_s;
     return;
   }
   if (frame_number <= newest_frame_) return;  // late or repeated: no place in the trend
   newest_frame_ = frame_number;
-  const double capture_delta_ms = (capture_s - previous_capture_s_) * 1e3;
-  const double arrival_delta_ms = (arrival_s - previous_arrival_s_) * 1e3;
-  previous_capture_s_ = capture_s;
-  previous_arrival_s_ = arrival_s;
-  UpdateTrend(arrival_delta_ms, capture_delta_ms, arrival_s * 1e3);
-  UpdateRate(arrival_s);
+  if (BelongsToGroup(sent_s, arrival_s)) {
+    group_.last_sent_s = std::max(group_.last_sent_s, sent_s);
+    group_.last_arrival_s = arrival_s;
+    return;
+  }
+  // The group is complete: its delay variation against the one before.
+  if (have_previous_) {
+    const double send_delta_ms = (group_.last_sent_s - previous_.last_sent_s) * 1e3;
+    const double arrival_delta_ms = (group_.last_arrival_s - previous_.last_arrival_s) * 1e3;
+    UpdateTrend(arrival_delta_ms, send_delta_ms, group_.last_arrival_s * 1e3);
+    UpdateRate(arrival_s);
+  }
+  previous_ = group_;
+  have_previous_ = true;
+  group_ = {sent_s, sent_s, arrival_s, arrival_s};
 }
 
-void RateEstimator::UpdateTrend(double arrival_delta_ms, double capture_delta_ms,
-                                double arrival_ms) {
+bool RateEstimator::BelongsToGroup(double sent_s, double arrival_s) const {
+  // Sent within a burst of the group's first: one group (a frame's
+  // packets, or frames sent back to back).
+  if (sent_s - group_.first_sent_s <= kGroupSpan_s) return true;
+  // Arrived right after the group, sooner than it was sent after it, and
+  // the group not yet long: the receiving host held the packets back and
+  // delivered them together (its receive thread was not scheduled). What
+  // the network did cannot be told from that: WebRTC's burst grouping.
+  const double arrival_delta_s = arrival_s - group_.last_arrival_s;
+  const double send_delta_s = sent_s - group_.last_sent_s;
+  return arrival_delta_s >= 0 && arrival_delta_s <= kBurstDelta_s &&
+         arrival_delta_s - send_delta_s < 0 && arrival_s - group_.first_arrival_s < kMaxBurst_s;
+}
+
+void RateEstimator::UpdateTrend(double arrival_delta_ms, double send_delta_ms, double arrival_ms) {
   ++deltas_;
   if (first_arrival_ms_ < 0) first_arrival_ms_ = arrival_ms;
-  accumulated_ms_ += arrival_delta_ms - capture_delta_ms;
+  accumulated_ms_ += arrival_delta_ms - send_delta_ms;
   smoothed_ms_ = kSmoothing * smoothed_ms_ + (1 - kSmoothing) * accumulated_ms_;
   times_ms_[static_cast<size_t>(window_next_)] = arrival_ms - first_arrival_ms_;
   delays_ms_[static_cast<size_t>(window_next_)] = smoothed_ms_;
@@ -154,15 +184,15 @@ void RateEstimator::UpdateTrend(double arrival_delta_ms, double capture_delta_ms
     const double slope = den > 0 ? num / den : 0.0;
     modified_trend_ = std::min(deltas_, kMaxDeltas) * slope * kTrendGain;
   }
-  Detect(capture_delta_ms, arrival_ms);
+  Detect(send_delta_ms, arrival_ms);
 }
 
-void RateEstimator::Detect(double capture_delta_ms, double arrival_ms) {
+void RateEstimator::Detect(double send_delta_ms, double arrival_ms) {
   if (deltas_ < 2) return;
   if (modified_trend_ > threshold_ms_) {
     // Over for long enough, twice in a row, and not falling: the queue grows.
     time_over_using_ms_ =
-        time_over_using_ms_ < 0 ? capture_delta_ms / 2 : time_over_using_ms_ + capture_delta_ms;
+        time_over_using_ms_ < 0 ? send_delta_ms / 2 : time_over_using_ms_ + send_delta_ms;
     ++overuse_count_;
     if (time_over_using_ms_ > kOveruseTime_ms && overuse_count_ > 1 &&
         modified_trend_ >= previous_trend_) {

@@ -42,9 +42,9 @@ VideoReceiver::VideoReceiver(link::Participant& participant, const std::string& 
       feedback_(std::make_unique<link::VideoFeedbackWriter>(
           participant, link::TopicName(vehicle, "video_feedback"), link::Profile::kState)) {
   decoder_thread_ = std::thread([this] { DecodeLoop(); });
-  reader_ = std::make_unique<link::VideoReader>(participant, link::TopicName(vehicle, "video"),
-                                                link::Profile::kVideo,
-                                                [this](const msg::VideoFrame& f) { OnFrame(f); });
+  reader_ = std::make_unique<link::VideoReader>(
+      participant, link::TopicName(vehicle, "video"), link::Profile::kVideo,
+      [this](const msg::VideoFrame& f, const link::SampleStamps& stamps) { OnFrame(f, stamps); });
   std::lock_guard lock(mutex_);
   reader_ready_ = true;
 }
@@ -63,17 +63,18 @@ VideoReceiver::~VideoReceiver() {
   if (decoder_thread_.joinable()) decoder_thread_.join();
 }
 
-void VideoReceiver::OnFrame(const msg::VideoFrame& frame) {
-  const int64_t now = MonotonicNs();
+void VideoReceiver::OnFrame(const msg::VideoFrame& frame, const link::SampleStamps& stamps) {
+  const int64_t now = stamps.arrived_ns;
   const bool h264 = frame.encoding() == CameraCodecName(CameraCodec::kH264);
   msg::VideoFeedback rate;  // sent below when the estimate is due
   bool rate_due = false;
   {
     std::lock_guard lock(mutex_);
-    // The link's rate from this frame's arrival against its capture (only
-    // differences of each: the clocks need not agree).
-    estimator_.OnFrame(frame.seq(), NsToS(frame.capture_wall_ns()), NsToS(now),
-                       frame.data().size());
+    // The link's rate from this frame's arrival against its sending (only
+    // differences of each: the clocks need not agree), both stamped on the
+    // link's threads: neither the vehicle's encoding nor this side's
+    // decoding is in the delay.
+    estimator_.OnFrame(frame.seq(), NsToS(stamps.sent_ns), NsToS(now), frame.data().size());
     if (estimator_.FeedbackDue(NsToS(now))) {
       rate_due = true;
       rate = RateFeedback(now, frame.seq());
@@ -120,7 +121,26 @@ msg::VideoFeedback VideoReceiver::RateFeedback(int64_t now_ns, uint64_t last_fra
   rate.key_frame_request(false);
   rate.last_frame_seq(last_frame_seq);
   rate.target_kbps(static_cast<uint32_t>(target_kbps_sent_));
+  rate.preview(tile_);
   return rate;
+}
+
+void VideoReceiver::ShowAsTile(bool tile) {
+  if (!feedback_) return;
+  msg::VideoFeedback said;
+  {
+    std::lock_guard lock(mutex_);
+    if (tile == tile_) return;
+    tile_ = tile;
+    said.seq(++feedback_seq_);
+    said.session(session_);
+    said.sent_ns(MonotonicNs());
+    said.key_frame_request(false);
+    said.last_frame_seq(last_seq_);
+    said.target_kbps(static_cast<uint32_t>(target_kbps_sent_));
+    said.preview(tile_);
+  }
+  feedback_->Write(said);
 }
 
 void VideoReceiver::CheckSilence(int64_t now_ns) {
@@ -147,6 +167,7 @@ void VideoReceiver::RequestKeyFrameIfDue(int64_t now_ns) {
     request.seq(++feedback_seq_);
     request.last_frame_seq(last_seq_);
     request.target_kbps(static_cast<uint32_t>(target_kbps_sent_));
+    request.preview(tile_);
     ++key_frame_requests_;
   }
   feedback_->Write(request);
@@ -274,6 +295,7 @@ VideoStats VideoReceiver::Stats() const {
   s.stale_s = NsToS(stale_ns_ + (stale_since_ns_ != 0 ? now - stale_since_ns_ : 0));
   s.target_kbps = target_kbps_sent_;
   s.rate_cuts = estimator_.decreases();
+  s.tile = tile_;
   return s;
 }
 

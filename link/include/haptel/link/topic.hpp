@@ -4,7 +4,8 @@
 /// Reader callbacks run on a DDS thread: keep them short (copy into a
 /// seqlock or queue) and never call them from a real-time loop. A callback
 /// may take the sample's writer (WriterId, from DDS's SampleInfo) beside
-/// the sample: who sent it, as no field of the sample can say.
+/// the sample: who sent it, as no field of the sample can say; or its
+/// SampleStamps: when it was written and when it arrived.
 #include <atomic>
 #include <fastdds/dds/core/status/DeadlineMissedStatus.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
@@ -18,6 +19,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "haptel/core/clock.hpp"
 #include "haptel/link/participant.hpp"
 #include "haptel/link/writer_id.hpp"
 #include "haptel/msg/haptel.h"
@@ -45,6 +47,20 @@ inline WriterId ToWriterId(const eprosima::fastrtps::rtps::GUID_t& guid) {
   std::copy(guid.entityId.value, guid.entityId.value + 4, id.guid.begin() + WriterId::kPrefixSize);
   return id;
 }
+
+/// When a sample left its writer and when it reached this reader, for a
+/// delay-based rate estimate (video/rate_estimator.hpp): `sent_ns` is the
+/// DDS source timestamp, the writer host's wall clock when write() was
+/// called (after the sample was made: a video frame's encoding is not in
+/// it); `arrived_ns` this host's monotonic clock in the reader's DDS
+/// callback, on the transport's receive thread, before anything is done
+/// with the sample. The two clocks differ: only differences of each mean
+/// anything.
+struct SampleStamps {
+  WriterId writer;
+  int64_t sent_ns = 0;
+  int64_t arrived_ns = 0;
+};
 
 template <typename Msg, typename PubSubType>
 class Writer : private eprosima::fastdds::dds::DataWriterListener {
@@ -101,13 +117,21 @@ class Reader : private eprosima::fastdds::dds::DataReaderListener {
   using Callback = std::function<void(const Msg&)>;
   /// The sample and its writer.
   using OriginCallback = std::function<void(const Msg&, const WriterId&)>;
+  /// The sample, its writer and its stamps.
+  using StampedCallback = std::function<void(const Msg&, const SampleStamps&)>;
 
   Reader(Participant& participant, const std::string& topic, Profile profile, Callback on_sample)
-      : Reader(
-            participant, topic, profile,
-            OriginCallback([f = std::move(on_sample)](const Msg& m, const WriterId&) { f(m); })) {}
+      : Reader(participant, topic, profile,
+               StampedCallback(
+                   [f = std::move(on_sample)](const Msg& m, const SampleStamps&) { f(m); })) {}
   Reader(Participant& participant, const std::string& topic, Profile profile,
          OriginCallback on_sample)
+      : Reader(participant, topic, profile,
+               StampedCallback([f = std::move(on_sample)](const Msg& m, const SampleStamps& s) {
+                 f(m, s.writer);
+               })) {}
+  Reader(Participant& participant, const std::string& topic, Profile profile,
+         StampedCallback on_sample)
       : participant_(participant), on_sample_(std::move(on_sample)) {
     topic_ = detail::MakeTopic<PubSubType>(participant, topic);
     reader_ = participant.subscriber()->create_datareader(
@@ -134,7 +158,11 @@ class Reader : private eprosima::fastdds::dds::DataReaderListener {
     while (reader->take_next_sample(&sample_, &info) == ReturnCode_t::RETCODE_OK) {
       if (!info.valid_data) continue;
       received_.fetch_add(1, std::memory_order_relaxed);
-      on_sample_(sample_, ToWriterId(info.sample_identity.writer_guid()));
+      SampleStamps stamps;
+      stamps.writer = ToWriterId(info.sample_identity.writer_guid());
+      stamps.sent_ns = info.source_timestamp.to_ns();
+      stamps.arrived_ns = MonotonicNs();
+      on_sample_(sample_, stamps);
     }
   }
   void on_subscription_matched(
@@ -149,7 +177,7 @@ class Reader : private eprosima::fastdds::dds::DataReaderListener {
   }
 
   Participant& participant_;
-  OriginCallback on_sample_;
+  StampedCallback on_sample_;
   Msg sample_;  ///< reused for every take: no allocation per sample for fixed-size types
   eprosima::fastdds::dds::Topic* topic_ = nullptr;
   eprosima::fastdds::dds::DataReader* reader_ = nullptr;

@@ -236,6 +236,7 @@ class VehicleLink {
   void WatchEcho(int64_t sent_ns) { channel_->WatchEcho(sent_ns); }
   int64_t EchoReceivedNs() const { return channel_->EchoReceivedNs(); }
   const video::VideoReceiver& video() const { return *video_; }
+  video::VideoReceiver& video() { return *video_; }
   /// False once a spawned vehicle process has exited (always true for a
   /// vehicle that runs elsewhere).
   bool ProcessAlive();

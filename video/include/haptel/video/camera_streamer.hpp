@@ -9,6 +9,13 @@
 /// (CommandOwner; FeedbackFromOwner): anybody else on the domain could
 /// otherwise hold its video at the lowest rung or make it send key frames
 /// without end. Any vehicle node has one.
+///
+/// While the operator shows this vehicle only as a fleet's tile (the
+/// feedback's `preview`), it sends a preview: half the width and height
+/// (cv::resize, encoded by an encoder of that size) at most kPreviewRate_hz
+/// — a tile needs far fewer pixels and frames than the driven screen, and
+/// the operator's host decodes them for three vehicles on two cores. Asked
+/// for the full picture again, the next frame is a full-size key frame.
 #include <atomic>
 #include <cstdint>
 #include <functional>
@@ -35,6 +42,8 @@ struct CameraCounters {
   uint64_t key_frames_sent = 0;     ///< frames published that decode alone (every JPEG)
   uint64_t frames_skipped = 0;      ///< grabbed but skipped to fit the link (JPEG's lowest rungs)
   uint32_t target_kbps = 0;         ///< the operator's last estimate of the link (0: none came)
+  bool preview = false;             ///< sending the preview (the operator shows a tile)
+  uint64_t preview_frames = 0;      ///< frames published as previews
   /// Feedback (key frame requests, targets) from another participant than
   /// the vehicle's owner's: ignored.
   uint64_t feedback_refused = 0;
@@ -55,6 +64,9 @@ inline bool FeedbackFromOwner(const link::WriterId& owner, const link::WriterId&
 
 class CameraStreamer {
  public:
+  /// A preview's most frames per second.
+  static constexpr double kPreviewRate_hz = 10.0;
+
   /// The command writer the vehicle obeys now (empty: none), from any thread.
   using OwnerWriter = std::function<link::WriterId()>;
 
@@ -78,6 +90,9 @@ class CameraStreamer {
 
  private:
   void Tick(int64_t now_ns);
+  /// The encoder for this frame (the full one, or the preview's, made on
+  /// first use), its image, and whether this grab is sent at all.
+  VideoEncoder& EncoderFor(bool preview);
   void OnFeedback(const msg::VideoFeedback& feedback, const link::WriterId& sender);
 
   const CameraConfig config_;
@@ -89,6 +104,11 @@ class CameraStreamer {
   GrabMonitor grab_monitor_;
   bool end_reported_ = false;
   std::unique_ptr<VideoEncoder> encoder_;
+  const CameraConfig preview_config_;  ///< half the size, kPreviewRate_hz
+  std::unique_ptr<VideoEncoder> preview_encoder_;
+  cv::Mat preview_image_;
+  bool previewing_ = false;           ///< camera thread only: the last frame sent was a preview
+  uint64_t grabs_since_preview_ = 0;  ///< camera thread only
   const char* codec_name_;
   cv::Mat image_;
   msg::VideoFrame frame_msg_;
@@ -105,6 +125,9 @@ class CameraStreamer {
   uint32_t followed_kbps_ = 0;  ///< camera thread only
   /// Set by the feedback's DDS thread, taken by the camera's thread.
   std::atomic<bool> key_frame_wanted_{false};
+  /// The operator shows only a tile (set by the feedback's DDS thread).
+  std::atomic<bool> preview_wanted_{false};
+  std::atomic<uint64_t> preview_frames_{0};
   std::atomic<uint64_t> feedback_refused_{0};
   std::atomic<bool> camera_ended_{false};
   link::VideoWriter writer_;

@@ -15,10 +15,25 @@
 /// link is not mistaken for a congested one, and it grows quickly with
 /// large variations so a competing flow does not starve the video.
 ///
-/// Only differences of capture stamps and of arrival times are used: the
-/// vehicle's and the operator's clocks need not agree. Each frame is one
-/// group (it is sent as one burst, and arrives when its last packet does).
-/// Losses are gaps in the frame numbers.
+/// What the delay is measured between: when each frame was sent (the
+/// sender's stamp at the moment it hands the encoded frame to the link —
+/// DDS's source timestamp, link::SampleStamps — not its capture, which
+/// comes before the camera's rendering and the encoder's work) and when it
+/// arrived (stamped on the receiving transport's thread, before the frame
+/// is queued for decoding). So the CPU either host spends making or
+/// showing pictures is not in it, only the way between: time spent
+/// decoding and drawing three fleets' streams on two cores is no queue.
+/// Only differences of send stamps and of arrival stamps are used (the
+/// inter-group delay variation of WebRTC's InterArrivalDelta and
+/// TrendlineEstimator): the vehicle's and the operator's clocks need not
+/// agree. A group is what was sent within kGroupSpan_s of its first frame
+/// (a frame is sent as one burst, and arrives when its last packet does);
+/// a frame that arrives within kBurstDelta_s of the group's last, sooner
+/// after it than it was sent after it, joins the group too: the receiving
+/// host held the packets back (its receive thread was not scheduled) and
+/// delivered them together, and that says nothing of the network (WebRTC's
+/// burst grouping, at most kMaxBurst_s long). Losses are gaps in the frame
+/// numbers.
 ///
 /// What arrives bounds the estimate, as GCC's acknowledged bitrate does
 /// (WebRTC's loss-based estimator cuts to a share of it): a link whose
@@ -31,6 +46,9 @@
 /// it climb a rung the link cannot carry). And a link that carries no
 /// whole frame at all (every burst cut) says so only by its silence:
 /// OnSilence halves the target while frames are expected and none come.
+/// A silence after which the frame numbers run on (no frame was lost in
+/// it) was the sender's — its camera or its host stalled, as a loaded
+/// vehicle's does — not the link's: its cuts are undone when it ends.
 ///
 /// Not thread-safe; the operator's video thread owns it. Allocation-free
 /// after construction.
@@ -60,11 +78,11 @@ class RateEstimator {
   explicit RateEstimator(const RateEstimatorConfig& config = {});
 
   /// One frame received whole: `frame_number` the sender's count (a gap is
-  /// a loss), `capture_s` its capture time on the sender's clock, `arrival_s`
-  /// when it arrived on this side's clock, `bytes` its encoded size. Frames
-  /// arriving out of order (a number below the newest) are counted as
-  /// received but not used for the delay trend.
-  void OnFrame(uint64_t frame_number, double capture_s, double arrival_s, size_t bytes);
+  /// a loss), `sent_s` when the sender handed it to the link on its clock,
+  /// `arrival_s` when it arrived on this side's clock, `bytes` its encoded
+  /// size. Frames arriving out of order (a number below the newest) are
+  /// counted as received but not used for the delay trend.
+  void OnFrame(uint64_t frame_number, double sent_s, double arrival_s, size_t bytes);
 
   /// Called now and then (a few times a second or more) while a sender is
   /// known to publish frames: when none has arrived for kSilence_s (since
@@ -96,20 +114,33 @@ class RateEstimator {
   static constexpr double kRateWindow_s = 0.5;
   /// No frame for this long while frames are expected: the link carries none.
   static constexpr double kSilence_s = 0.5;
+  /// Frames sent within this of a group's first are one group (WebRTC: 5 ms).
+  static constexpr double kGroupSpan_s = 0.005;
+  /// A frame arriving within this of the group's last, sooner than it was
+  /// sent after it, was held back on the receiving host: the same group.
+  static constexpr double kBurstDelta_s = 0.005;
+  /// A group held together so is at most this long (WebRTC: 100 ms).
+  static constexpr double kMaxBurst_s = 0.1;
 
  private:
-  void UpdateTrend(double arrival_delta_ms, double capture_delta_ms, double arrival_ms);
-  void Detect(double capture_delta_ms, double arrival_ms);
+  /// Whether a frame sent at `sent_s` and arrived at `arrival_s` joins the group.
+  bool BelongsToGroup(double sent_s, double arrival_s) const;
+  void UpdateTrend(double arrival_delta_ms, double send_delta_ms, double arrival_ms);
+  void Detect(double send_delta_ms, double arrival_ms);
   void UpdateThreshold(double arrival_ms);
   void UpdateRate(double now_s);
   void UpdateLoss(uint64_t frame_number, double now_s);
 
   RateEstimatorConfig config_;
 
-  // The previous frame (the previous group).
-  bool have_previous_ = false;
+  // The group being gathered, and the complete one before it.
+  struct Group {
+    double first_sent_s = 0, last_sent_s = 0;
+    double first_arrival_s = 0, last_arrival_s = 0;
+  };
+  bool have_group_ = false, have_previous_ = false;
   uint64_t newest_frame_ = 0;
-  double previous_capture_s_ = 0, previous_arrival_s_ = 0;
+  Group group_, previous_;
 
   // The trendline: accumulated and smoothed delay variation against arrival
   // time, over the last kWindow groups (a ring).
@@ -153,6 +184,7 @@ class RateEstimator {
 
   double last_frame_s_ = -1;  ///< the newest arrival, or the first OnSilence
   double last_silence_cut_s_ = -1;
+  double before_silence_kbps_ = 0;  ///< the loss-based estimate before the silence's cuts
   double next_feedback_s_ = 0;
   bool cut_pending_ = false;
 };

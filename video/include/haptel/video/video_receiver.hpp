@@ -16,7 +16,9 @@
 /// again and again until one decodes.
 ///
 /// Every frame's arrival also feeds the link's rate estimate
-/// (RateEstimator, after Google Congestion Control): at most ten
+/// (RateEstimator, after Google Congestion Control; its delay is between
+/// DDS's send stamp and the arrival stamped in the DDS callback, before
+/// the frame waits for the decoder): at most ten
 /// times a second the estimate goes to the vehicle on the same feedback
 /// topic, and its encoder follows it (H.264's bitrate, JPEG's ladder).
 #include <condition_variable>
@@ -54,6 +56,7 @@ struct VideoStats {
   double stale_s = 0.0;      ///< time the screen showed an old picture marked stale
   double target_kbps = 0.0;  ///< the link's rate as last estimated and sent to the vehicle
   uint64_t rate_cuts = 0;    ///< times the estimate was cut for a filling queue (overuse)
+  bool tile = false;         ///< shown only as a tile: the vehicle is asked for a preview
 };
 
 class VideoReceiver final : public FrameSource {
@@ -74,6 +77,12 @@ class VideoReceiver final : public FrameSource {
   ~VideoReceiver() override;
 
   VideoStats Stats() const;
+  /// Whether this vehicle's video is shown only as a fleet's tile (true) or
+  /// on the driven screen (false, the start): the vehicle is told at once
+  /// and with every rate estimate after (VideoFeedback's `preview`), and
+  /// sends a small, slow preview while it is a tile (CameraStreamer). Any
+  /// thread; on no link, nothing.
+  void ShowAsTile(bool tile);
   /// The latest decoded image without copying it: a short lock, any thread.
   Frame Latest() const override;
   /// The latest good picture as JPEG; empty before the first. JPEG frames
@@ -91,7 +100,7 @@ class VideoReceiver final : public FrameSource {
     bool h264 = false;
   };
 
-  void OnFrame(const msg::VideoFrame& frame);
+  void OnFrame(const msg::VideoFrame& frame, const link::SampleStamps& stamps);
   void DecodeLoop();
   /// Decodes one frame in order; returns whether it gave a picture.
   bool DecodeOne(Pending& frame, cv::Mat& image);
@@ -133,6 +142,7 @@ class VideoReceiver final : public FrameSource {
   uint64_t feedback_seq_ = 0;
   RateEstimator estimator_{RateEstimatorFor()};
   double target_kbps_sent_ = 0.0;
+  bool tile_ = false;  ///< shown only as a tile: ask for the preview (under mutex_)
   static RateEstimatorConfig RateEstimatorFor() {
     RateEstimatorConfig c;
     // Start at the most and cut on the first sign of a filling queue: a
