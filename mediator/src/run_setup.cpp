@@ -273,17 +273,6 @@ void ReadDevice(const Args& args, const Operation& op, SessionSetup& setup) {
     }
   }
   const haptics::DeviceDriver& driver = haptics::DriverOf(setup.device);
-  if (driver.reads_window && setup.view != ViewKind::kWindow) {
-    throw UsageError("option --device " + setup.run.device.string() + ": device '" +
-                     setup.device.name + "' (" + setup.device.driver +
-                     ") is moved with the pointer and keys in the view's window, and there is " +
-                     (setup.view == ViewKind::kNone ? "none (--view none)"
-                                                    : "only an offscreen view (--record)") +
-                     "; use --view window");
-  }
-  if (const std::string missing = haptics::DeviceUnavailable(setup.device); !missing.empty()) {
-    throw UsageError("option --device " + setup.run.device.string() + ": " + missing);
-  }
   if (auto trace_in = args.Value("trace-in")) {
     if (!driver.reads_trace) {
       throw UsageError("option --trace-in: the device '" + setup.run.device.string() +
@@ -308,6 +297,17 @@ void ReadDevice(const Args& args, const Operation& op, SessionSetup& setup) {
         "option --operator auto: the automatic operator moves the simulated arms, and device '" +
         setup.device.name + "' (" + setup.device.driver +
         ") is not simulated; use --operator person");
+  }
+  if (driver.reads_window && setup.view != ViewKind::kWindow) {
+    throw UsageError("option --device " + setup.run.device.string() + ": device '" +
+                     setup.device.name + "' (" + setup.device.driver +
+                     ") is moved with the pointer and keys in the view's window, and there is " +
+                     (setup.view == ViewKind::kNone ? "none (--view none)"
+                                                    : "only an offscreen view (--record)") +
+                     "; use --view window");
+  }
+  if (const std::string missing = haptics::DeviceUnavailable(setup.device); !missing.empty()) {
+    throw UsageError("option --device " + setup.run.device.string() + ": " + missing);
   }
 }
 

@@ -361,6 +361,20 @@ TEST_CASE("a person's bad input exits 2 with one line naming the fix") {
     CHECK(c.err().find("--record") != std::string::npos);
     CHECK(OneLine(c.err()) == 1);
   }
+  SECTION("the mouse without its window, or with the automatic operator, is refused") {
+    unsetenv("DISPLAY");
+    Child none({Bin("haptel"), "run", "--operator", "person", "--view", "none", "--device",
+                "config/devices/mouse.yaml"});
+    CHECK(none.Wait(30.0) == 2);
+    CHECK(none.err().find("pointer and keys in the view's window") != std::string::npos);
+    CHECK(none.err().find("--view window") != std::string::npos);
+    CHECK(OneLine(none.err()) == 1);
+    Child automatic({Bin("haptel"), "run", "--operator", "auto", "--view", "none", "--device",
+                     "config/devices/mouse.yaml"});
+    CHECK(automatic.Wait(30.0) == 2);
+    CHECK(automatic.err().find("--operator person") != std::string::npos);
+    CHECK(OneLine(automatic.err()) == 1);
+  }
   SECTION("a real device without a calibration names the command that makes one") {
     const auto device = UdpDeviceFile(dir, 47001, 47002, "");
     Child c({Bin("haptel"), "run", "--operator", "person", "--view", "none", "--device",

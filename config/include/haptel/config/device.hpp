@@ -176,7 +176,8 @@ struct UdpDeviceConfig {
 /// The coupling's damping, τ·k_c, must stay well above the damping of what
 /// pushes the hand (the servo loop's force lags a tick and its velocity is
 /// filtered): 0.06 s × 100 N/m holds the gesture's wall (1500 N/m, 77 N·s/m)
-/// without chatter, 0.02 s does not (tests/haptics/test_mouse_device.cpp).
+/// without chatter (tests/haptics/mouse/test_mouse_device.cpp); 0.02 s
+/// chatters by millimetres there.
 /// The forces are not felt, so the device file's safety limits may be far
 /// above an arm's: a wall holds the hand only up to the force limit.
 struct MouseDeviceConfig {
