@@ -7,6 +7,7 @@
 #include "haptel/config/error.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/core/log.hpp"
+#include "haptel/haptics/calibrated_units.hpp"
 #include "haptel/haptics/device_drivers.hpp"
 #include "haptel/haptics/device_factory.hpp"
 #include "haptel/haptics/gravity.hpp"
@@ -29,10 +30,7 @@ std::optional<DeviceCalibration> DeviceCalibrationFor(const DeviceConfig& device
   }
   if (source == haptics::CalibrationSource::kSelf) {
     if (!device.calibration.empty()) return LoadCalibration(device.calibration);
-    DeviceCalibration identity;
-    identity.device = device.name;
-    for (ArmCalibration& arm : identity.arms) arm.tracker_scale = {1.0, 1.0, 1.0};
-    return identity;  // the rest of ArmCalibration's defaults are the identity already
+    return haptics::IdentityCalibration(device.name);  // metres, radians, newtons already
   }
   if (source == haptics::CalibrationSource::kBesideTrace) {
     if (!device.calibration.empty()) return LoadCalibration(device.calibration);

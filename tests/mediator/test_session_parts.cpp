@@ -151,6 +151,20 @@ TEST_CASE("calibration policy: a real device needs its own measured calibration"
     DeviceConfig sim;
     CHECK_FALSE(mediator::DeviceCalibrationFor(sim).has_value());
   }
+  SECTION("the mouse reports SI: without a file, the identity (metres as metres)") {
+    DeviceConfig mouse = LoadDevice(ShippedFile("config/devices/mouse.yaml"));
+    mouse.servo.realtime_priority = 0;
+    mouse.servo.lock_memory = false;
+    const auto identity = mediator::DeviceCalibrationFor(mouse);
+    REQUIRE(identity.has_value());
+    mediator::HapticSide side(mouse, identity, std::nullopt, OperatorConfig{}, {});
+    side.Tick(1'000'000);
+    side.Tick(2'000'000);
+    // The key hand rests where the file says, in metres, through the HAL.
+    const haptics::HandSample left = side.hal().LatestSample(haptics::Side::kLeft);
+    REQUIRE(left.valid);
+    for (int i = 0; i < 3; ++i) CHECK(left.position[i] == Approx(mouse.mouse.key_hand_rest[i]));
+  }
   SECTION("a replay uses the calibration recorded beside its trace") {
     DeviceConfig replay;
     replay.file = dir / "replay.yaml";

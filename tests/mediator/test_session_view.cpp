@@ -265,6 +265,33 @@ TEST_CASE(
   CHECK(x_y == Approx(1.0).margin(1e-9));
   CHECK(wall[0].color.a < 1.0f);
 
+  // A bent hand (the mouse): a ghost at the pointer's place, a line to the
+  // hand once they part; a force arrow along the force; a shake moves shapes.
+  haptics::PseudoHapticReport bent;
+  bent.target = {0.05, 0.0, 0.0};
+  bent.hand = {0.035, 0.0, 0.0};
+  bent.held = true;
+  std::vector<view::Shape> ghost;
+  AppendPseudoHaptics(ghost, bent);
+  REQUIRE(ghost.size() == 2);
+  CHECK(ghost[0].kind == view::ShapeKind::kSphere);
+  CHECK(ghost[0].position[0] == Approx(0.05));
+  CHECK(ghost[0].color.a < 1.0f);
+  CHECK(ghost[1].position[0] == Approx(0.0425));  // the line's middle
+  bent.hand = bent.target;
+  ghost.clear();
+  AppendPseudoHaptics(ghost, bent);
+  CHECK(ghost.size() == 1);
+  std::vector<view::Shape> arrow;
+  AppendForceArrow(arrow, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.01});
+  CHECK(arrow.empty());  // too small to show
+  AppendForceArrow(arrow, {0.0, 0.0, 0.0}, {-5.0, 0.0, 0.0});
+  REQUIRE(arrow.size() == 2);
+  CHECK(arrow[1].position[0] == Approx(-0.05));  // 1 cm a newton: the head
+  ShiftShapes(arrow, 1, {0.0, 0.0, 0.01});
+  CHECK(arrow[0].position[2] == 0.0);
+  CHECK(arrow[1].position[2] == Approx(0.01));
+
   physics::HandPoses poses;
   poses.valid = true;
   std::vector<view::Shape> hand;

@@ -11,6 +11,7 @@ const RegisterDeviceDriver kSdlFfDriver{{
     .name = SdlFfDevice::kDriver,
     .simulated = false,
     .reads_trace = false,
+    .reads_window = false,
     .calibration = CalibrationSource::kSelf,
     .check = nullptr,
     .available = SdlFfUnavailable,

@@ -8,9 +8,10 @@
 /// key, and is never calibrated automatically; a missing file, or one
 /// measured on another device, is an error naming the command that makes
 /// one. The `sim` device without a file is calibrated at start-up, unattended.
-/// A device that measures in SI itself (`sdl-ff`) gets the identity
-/// calibration unless its file names one. A `replay` device uses its file's calibration or the one
-/// recorded beside the trace (`<trace>.calibration.yaml`, written by `haptel run --trace`).
+/// A device that measures in SI itself (`sdl-ff`, the mouse) gets the identity
+/// calibration unless its file names one. A `replay` device uses its file's
+/// calibration or the one recorded beside the trace
+/// (`<trace>.calibration.yaml`, written by `haptel run --trace`).
 #include <filesystem>
 #include <memory>
 #include <optional>
