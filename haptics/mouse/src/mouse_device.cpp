@@ -61,10 +61,11 @@ void MouseDevice::Step(Hand& h, const PointerState& pointer, double dt_s) {
   } else {
     h.target = StepKeyHand(h.target, pointer, c, dt_s);
   }
-  h.held = pointer.window_open && pointer.in_window && pointer.grasp_button;
+  h.coupled = pointer.window_open && pointer.in_window;
+  h.held = h.coupled && pointer.grasp_button;
   const double tau = c.coupling_time_constant_s;
   const double dt = std::min(dt_s, kMaxStepS);
-  if (h.held) {
+  if (h.coupled) {
     // Exact for the tick with F held: H relaxes towards T + F/k_c.
     const double keep = std::exp(-dt / tau);
     for (int i = 0; i < 3; ++i) {

@@ -287,8 +287,9 @@ TEST_CASE("mouse device: the key hand moves while its key is held and goes back 
   rig.pointer.Store(p);
   rig.Run(1.2);
   CHECK(rig.Hand(Side::kLeft)[0] == Approx(rest[0]).margin(1e-4));
-  // Not held, the keys move its target but not the hand (no force: it stays).
-  p.grasp_button = false;
+  // With the pointer out of the window, the keys move its target but not
+  // the hand (no force: it stays).
+  p.in_window = false;
   p.key_hand[static_cast<size_t>(KeyHandKey::kMinusY)] = true;
   rig.pointer.Store(p);
   rig.Run(0.3);
@@ -296,16 +297,24 @@ TEST_CASE("mouse device: the key hand moves while its key is held and goes back 
   CHECK(rig.Hand(Side::kLeft)[1] == Approx(rest[1]).margin(1e-6));
 }
 
-TEST_CASE("mouse device: not held, the hand is free: the field pulls it back to neutral",
-          "[mouse]") {
+TEST_CASE(
+    "mouse device: the button up, the open hand still follows the pointer (to be brought to a "
+    "control); out of the window it is free and the field pulls it back to neutral",
+    "[mouse]") {
   Rig rig;
   const Vec3d centre = rig.mouse().centre;
   rig.field = Spring(40.0, centre);
-  rig.pointer.Store(PointerAt({centre[0], centre[1] - 0.06, centre[2]}, rig.mouse(), true));
-  rig.Run(1.5);
-  CHECK(rig.Hand(Side::kRight)[1] < centre[1] - 0.03);
-  // The button let go where the pointer is: the hand drifts back.
   rig.pointer.Store(PointerAt({centre[0], centre[1] - 0.06, centre[2]}, rig.mouse(), false));
+  rig.Run(1.5);
+  CHECK(rig.Hand(Side::kRight)[1] < centre[1] - 0.03);  // followed, bent by the field
+  CHECK(rig.device.Presence(Side::kRight) == HandPresence::kReleased);
+  GloveRaw open{};
+  rig.device.ReadGlove(Side::kRight, 0, open);
+  for (const double s : open.sensors) CHECK(s == 0.0);  // open: not grasping
+  // The pointer left the window where it is: the hand drifts back.
+  PointerState away = PointerAt({centre[0], centre[1] - 0.06, centre[2]}, rig.mouse(), false);
+  away.in_window = false;
+  rig.pointer.Store(away);
   rig.Run(2.0);
   CHECK(rig.Hand(Side::kRight)[1] == Approx(centre[1]).margin(0.005));
 }

@@ -7,19 +7,23 @@
 ///
 /// Each tick a side's target is where its input puts it: the pointer hand's
 /// PointerTarget(DesktopPointer()), the key hand's StepKeyHand from its last
-/// target. While the person holds it (a window is open, the pointer is in
-/// it and the grasp button is down) the hand H follows its target T through
-/// the virtual coupling, pushed by the last force F written to it:
+/// target. While the pointer is in an open window the hand H follows its
+/// target T through the virtual coupling, pushed by the last force F written
+/// to it:
 ///   dH/dt = (T − H)/τ + F/(τ·k_c),
 /// stepped exactly for the tick with F held (the coupling itself never goes
-/// unstable, whatever the tick's length). Not held, it is free: dH/dt =
-/// F/(τ·k_c), so a centring field pulls it back as an unheld arm would go.
+/// unstable, whatever the tick's length); an open hand can so be brought to
+/// a control before it closes on it. The person holds it (Presence kHeld,
+/// the hand closed) while the grasp button is down too. With the pointer
+/// out of the window it is free: dH/dt = F/(τ·k_c), so a centring field
+/// pulls it back as an unheld arm would go.
 /// A force step of at least `shake_threshold` in one tick starts a shake of
 /// the shown hand (PseudoHaptics' `shake`, not the reading the interfaces
 /// drive with) along the step, decaying over `shake_s`.
 ///
-/// The device reports metres and radians and takes newtons (reports_si):
-/// without a calibration file the session gives it the identity. Glove:
+/// The device reports metres and radians and takes newtons (its driver's
+/// CalibrationSource::kSelf): without a calibration file the session gives
+/// it the identity. Glove:
 /// both hands close into the cockpit's grip posture while held.
 ///
 /// Threads: each side's calls come from its own servo thread and touch only
@@ -73,7 +77,8 @@ class MouseDevice final : public Device {
     Vec3d hand{};
     Vec3d force{};
     std::array<double, 4> orientation{1, 0, 0, 0};
-    bool held = false;
+    bool coupled = false;  ///< the pointer is in an open window: the hand follows
+    bool held = false;     ///< coupled, and the grasp button is down
     int64_t last_ns = 0;
     // The shake: started at shake_start_ns along shake_direction.
     bool shaking = false;
