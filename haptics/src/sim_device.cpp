@@ -99,6 +99,7 @@ void SimDevice::SetOperatorTarget(Side side, const Vec3d& target) {
 void SimDevice::Release(Side side) {
   OperatorInput in = operator_[Index(side)].Load();
   in.holding = false;
+  in.docked = false;
   operator_[Index(side)].Store(in);
   arms_[Index(side)].integral = Vec3d{};
 }
@@ -122,7 +123,17 @@ void SimDevice::Place(Side side, const Vec3d& position) {
   operator_[Index(side)].Store({position, true});
 }
 
+void SimDevice::Dock(Side side, const Vec3d& position) {
+  Place(side, position);
+  operator_[Index(side)].Store({position, true, true});
+}
+
 void SimDevice::Step(Arm& arm, const OperatorInput& input, double dt) {
+  if (input.docked) {
+    arm.position = input.target;
+    arm.velocity = Vec3d{};
+    return;
+  }
   const double max_integral = 0.6 * muscle_.muscle_max_force;
   const double weight = UnbalancedMass(arm.position) * kGravity;
   for (int i = 0; i < 3; ++i) {

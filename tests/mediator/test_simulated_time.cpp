@@ -193,9 +193,12 @@ TEST_CASE("a gesture run with nobody at the simulated arms moves the vehicle 0 m
   const auto dir = test::ScratchDir("simtime-nobody");
   // `haptel run --operator person --device config/devices/sim.yaml --interface gesture`:
   // nobody holds the arms (issue 36: it drove off at 0.15 m/s).
-  const mediator::SessionSetup setup =
+  mediator::SessionSetup setup =
       Setup(dir / "runs.db", {"--operator", "person", "--device", "config/devices/sim.yaml",
                               "--interface", "gesture", "--simulated-time", "--time-limit", "60"});
+  // What the view shows (as a study's console watches it live).
+  std::vector<std::string> shown;
+  setup.on_live = [&](const view::Overlay& o) { shown.emplace_back(o.message); };
   const mediator::RecordedRun run = Run(setup);
   const record::RunRecord& r = run.result.record;
   CHECK(run.result.outcome == mediator::Outcome::kTimeLimit);
@@ -206,6 +209,9 @@ TEST_CASE("a gesture run with nobody at the simulated arms moves the vehicle 0 m
   CHECK(r.disengaged_s == Approx(60.0).margin(1.0));
   CHECK(std::isnan(r.pseudo_haptic_gain_mean));  // the sim device bends nothing
   CHECK(r.ff_effects_played == 0);
+  // The person is told, all along.
+  REQUIRE(shown.size() > 100);
+  CHECK(shown.back() == "Not engaged - nobody holds the device: take hold of it to drive");
   // The JSON line and the database row say the same.
   const std::string json = app::RunJson(setup, run);
   CHECK_THAT(json, Catch::Contains("\"distance_m\":0,"));

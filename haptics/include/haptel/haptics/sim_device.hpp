@@ -64,6 +64,11 @@ class SimDevice final : public Device {
   // --- Set-up, tests and calibration procedures (not while a loop runs). ---
   /// Puts the arm at rest at `position` (true metres), the operator holding it there.
   void Place(Side side, const Vec3d& position);
+  /// Docks the arm in a jig at `position` (true metres): fixed there, the
+  /// operator's tremor and every force taken by the jig, until the operator
+  /// takes it again (SetOperatorTarget) or lets go (Release). Calibration's
+  /// reference poses.
+  void Dock(Side side, const Vec3d& position);
   /// Makes the side answer kLost (a pulled cable) or recover.
   void SetLost(Side side, bool lost) { lost_[Index(side)].store(lost); }
   const SimArmTruth& truth(Side side) const { return truth_[Index(side)]; }
@@ -89,6 +94,7 @@ class SimDevice final : public Device {
   struct OperatorInput {
     Vec3d target{};
     bool holding = false;
+    bool docked = false;  ///< in a jig at `target`
   };
   void Step(Arm& arm, const OperatorInput& input, double dt);
 
