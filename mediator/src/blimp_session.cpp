@@ -231,7 +231,12 @@ class BlimpSession final : public FamilySession {
     }
     if (pilot_) {
       head_ = {};
+      if (vehicle_up && !engaged && flown_) {
+        // Let go after flying: the hands back to neutral, so that it engages again.
+        HoldHands(*haptic.sim(), interface_->HandTargetsFor({}));
+      }
       if (vehicle_up && engaged) {  // it flies once the interface engages
+        flown_ = true;
         const BlimpCommand intent = pilot_->Decide(t);
         HoldHands(*haptic.sim(), interface_->HandTargetsFor(intent));
         head_ = {intent.camera_pan, intent.camera_tilt};
@@ -363,6 +368,7 @@ class BlimpSession final : public FamilySession {
   BlimpPredictor predictor_;
   static constexpr double kPredictionPeriod_s = 0.05;
   bool have_state_ = false;
+  bool flown_ = false;  ///< the pilot has flown (engaged) since the start
   double hull_length_ = 0.0;
   double next_prediction_s_ = 0.0;
   std::vector<BlimpPredictedPose> path_ahead_;

@@ -18,7 +18,8 @@ constexpr double kCoveredShare = 0.9;
 }  // namespace
 
 HandMotion MeasureHandMotion(std::span<const haptics::TrackerSample> samples,
-                             const ArmCalibration& arm) {
+                             const ArmCalibration& arm, bool was_held) {
+  const double floor = was_held ? HandMotionRule::kStayRms_mps : HandMotionRule::kMinRms_mps;
   HandMotion out;
   if (samples.size() < 2) return out;
   const int64_t end_ns = samples.back().t_ns;
@@ -76,7 +77,7 @@ HandMotion MeasureHandMotion(std::span<const haptics::TrackerSample> samples,
                                     sum_squares.begin());
   out.rms_mps = std::sqrt(sum_squares[axis] / kPassed);
   // Reversals past a band of ±half the floor, so that noise about zero does not count.
-  const double band = 0.5 * HandMotionRule::kMinRms_mps;
+  const double band = 0.5 * floor;
   int sign = 0;
   int reversals = 0;
   for (double x : passed[axis]) {
@@ -86,8 +87,7 @@ HandMotion MeasureHandMotion(std::span<const haptics::TrackerSample> samples,
     sign = now;
   }
   out.reversals_hz = reversals / (kPassed * HandMotionRule::kBin_s);
-  out.held = out.rms_mps >= HandMotionRule::kMinRms_mps &&
-             out.reversals_hz >= HandMotionRule::kMinReversals_hz;
+  out.held = out.rms_mps >= floor && out.reversals_hz >= HandMotionRule::kMinReversals_hz;
   return out;
 }
 
@@ -144,7 +144,7 @@ Disengaged Engagement::Held(const haptics::Hal& hal, Side side) {
   }
   const size_t n = hal.TrackerHistory(side, history_);
   HandMotion& motion = motion_[static_cast<size_t>(haptics::Index(side))];
-  motion = MeasureHandMotion(std::span(history_.data(), n), hal.calibration(side));
+  motion = MeasureHandMotion(std::span(history_.data(), n), hal.calibration(side), motion.held);
   return motion.held ? Disengaged::kNone : Disengaged::kNoHand;
 }
 

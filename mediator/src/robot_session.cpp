@@ -227,7 +227,9 @@ class RobotSession final : public FamilySession {
     // The operator drives once the interface engages (the automatic one
     // holds its hands where it prepared them until then, as a person takes
     // hold before driving).
+    if (vehicle_up && !engaged && acted_) op_->Rest(interfaces_->current());
     if (vehicle_up && engaged) {
+      acted_ = true;
       op_->Act(t, interfaces_->current());
       if (grasp_s_ == 0.0 && op_->grasped(t) && start_spec().needs_physics()) grasp_s_ = t;
     }
@@ -491,6 +493,7 @@ class RobotSession final : public FamilySession {
   uint32_t disconnects_seen_ = 0;
   int64_t next_command_ns_ = 0;
   double grasp_s_ = 0.0;
+  bool acted_ = false;  ///< the operator has driven (engaged) since the start
   RobotPredictor predictor_;
   PredictiveDisplay display_;
   std::optional<PredictedPose> reported_;  ///< the newest state's pose, when one had a pose

@@ -46,6 +46,9 @@ struct HandMotionRule {
   /// tremor at 8-12 Hz reverses 16-24 times a second, an arm settling under
   /// a field (1-3 Hz) 2-6 times.
   static constexpr double kMinReversals_hz = 8.0;
+  /// A hand already held stays held down to this RMS (reversals counted past
+  /// half of it): pushing against a stiff field, its tremor moves it less.
+  static constexpr double kStayRms_mps = 0.5e-3;
 };
 
 /// What the newest HandMotionRule::kWindow_s of an arm's tracker says.
@@ -58,8 +61,9 @@ struct HandMotion {
 
 /// Judges `samples` (oldest first, raw device units, as Hal::TrackerHistory
 /// gives them; their calibration `arm`) by HandMotionRule. Allocates nothing.
+/// `was_held`: judged held last time (the lower floor, kStayRms_mps, applies).
 HandMotion MeasureHandMotion(std::span<const haptics::TrackerSample> samples,
-                             const ArmCalibration& arm);
+                             const ArmCalibration& arm, bool was_held = false);
 
 /// What engagement asks of the interface a vehicle is driven with now.
 struct InterfaceRest {
