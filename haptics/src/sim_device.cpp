@@ -96,6 +96,12 @@ void SimDevice::SetOperatorTarget(Side side, const Vec3d& target) {
   operator_[Index(side)].Store({target, true});
 }
 
+HandPresence SimDevice::Presence(Side side) {
+  // A jig holds the arm, not a hand (calibration leaves it docked).
+  const OperatorInput in = operator_[Index(side)].Load();
+  return in.holding && !in.docked ? HandPresence::kHeld : HandPresence::kUnknown;
+}
+
 void SimDevice::Release(Side side) {
   OperatorInput in = operator_[Index(side)].Load();
   in.holding = false;

@@ -49,6 +49,9 @@ class SimDevice final : public Device {
   DeviceStatus ReadGlove(Side side, int64_t now_ns, GloveRaw& out) override;
   DeviceStatus WriteWristForce(Side side, const Vec3d& command) override;
   DeviceStatus WriteFingerForces(Side side, const std::array<double, kFingers>& command) override;
+  /// Held while its simulated operator holds the arm (it knows); released
+  /// or docked in a jig, kUnknown: the session judges the arm's motion.
+  HandPresence Presence(Side side) override;
 
   // --- The simulated operator (any thread). ---
   /// Where the operator wants the wrist, true metres; the operator holds on.

@@ -48,7 +48,7 @@ struct HandMotionRule {
   static constexpr double kMinReversals_hz = 8.0;
   /// A hand already held stays held down to this RMS (reversals counted past
   /// half of it): pushing against a stiff field, its tremor moves it less.
-  static constexpr double kStayRms_mps = 0.5e-3;
+  static constexpr double kStayRms_mps = 0.2e-3;
 };
 
 /// What the newest HandMotionRule::kWindow_s of an arm's tracker says.
