@@ -623,6 +623,7 @@ int BenchPassivityMain(int argc, const char* const* argv) {
   grip.muscle_stiffness = 250.0;
   grip.muscle_damping = 2.0;
   grip.muscle_integral_gain = 0.0;
+  grip.tremor_amplitude = 0.0;  // the loop's stability is measured, not the hand's shaking
 
   const std::vector<double> delays_ms =
       smoke ? std::vector<double>{0, 3} : std::vector<double>{0, 1, 3, 5};

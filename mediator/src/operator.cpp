@@ -45,4 +45,8 @@ void AutomaticOperator::Act(double t_s, const interfaces::MediatorInterface& int
   HoldHands(device_, driver_.Act(t_s, interface));
 }
 
+void AutomaticOperator::Rest(const interfaces::MediatorInterface& interface) {
+  HoldHands(device_, interface.HandTargetsFor({}));
+}
+
 }  // namespace haptel::mediator

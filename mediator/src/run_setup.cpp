@@ -192,7 +192,6 @@ Operation ReadOperation(const Args& args, SessionSetup& setup) {
 /// The vehicle, and what it drives through: the link's faults, the chase
 /// camera, simulated time, its track or course, its name.
 void ReadVehicle(const Args& args, SessionSetup& setup) {
-  if (auto device = args.Value("device")) setup.run.device = *device;
   if (auto vehicle = args.Value("vehicle")) setup.run.vehicle = *vehicle;
   setup.vehicle = LoadVehicle(setup.run.vehicle);
   // A fault nothing can be driven through is said now, not as "did not start" or "lost" once the
@@ -261,6 +260,7 @@ bool PersonTakesTheMouse(const Args& args, const Operation& op, const SessionSet
 /// view's window) and allows (the automatic operator moves simulated arms
 /// only); a device that is not there is said now.
 void ReadDevice(const Args& args, const Operation& op, SessionSetup& setup) {
+  if (auto device = args.Value("device")) setup.run.device = *device;
   setup.device = LoadDevice(setup.run.device);
   if (PersonTakesTheMouse(args, op, setup)) {
     setup.run.device = ShippedFile(kPersonDeviceFile);
@@ -393,8 +393,10 @@ SessionSetup RunSetupFromArgs(const Args& args) {
   SessionSetup setup;
   ReadRunOptions(args, setup);
   const Operation op = ReadOperation(args, setup);
-  ReadVehicle(args, setup);
+  // The device first: whether a simulated-time run may be a person's
+  // depends on it (at the simulated arms nobody is).
   ReadDevice(args, op, setup);
+  ReadVehicle(args, setup);
   ReadInterfaces(args, op, setup);
   ReadWorld(args, setup);
   return setup;

@@ -190,7 +190,7 @@ Vec3d CaptureReference(const Session& s, const Vec3d& target) {
       still_ns = (p == last) ? still_ns + kMs : 0;
       last = p;
     }
-    s.sim->Place(s.side, target);
+    s.sim->Dock(s.side, target);
     for (int64_t t = 0; t < kDockNs; t += kMs) s.ReadWrist();
   } else {
     s.log << "  Put the " << s.name() << " wrist in the jig at (" << target[0] << ", " << target[1]

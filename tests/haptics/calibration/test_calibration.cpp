@@ -508,7 +508,7 @@ TEST_CASE("both calibrated arms report the same point in one frame") {
   std::array<Vec3d, kSides> uncalibrated{};
   for (int s = 0; s < kSides; ++s) {
     const Side side = static_cast<Side>(s);
-    sim.Place(side, point);
+    sim.Dock(side, point);  // fixed there (a hand holding it would shake)
     WristRaw raw;
     REQUIRE(sim.ReadWrist(side, 1'000'000'000'000, raw) == DeviceStatus::kOk);
     calibrated[s] = TrackerToMetres(c.arms[s], raw.position);
@@ -564,7 +564,7 @@ TEST_CASE("attended calibration follows the operator's answers") {
     // Tracker: the wrist goes into the jig at each reference.
     for (const Vec3d& ref : refs) {
       script.Add([&sim, side, ref] {
-        sim.Place(side, ref);
+        sim.Dock(side, ref);
         return std::string();
       });
     }

@@ -13,7 +13,10 @@
 ///
 /// The muscle is a spring-damper with a slow, bounded integral term toward a
 /// target the operator sets: a person who pushes harder when something pulls
-/// back, but cannot push through a stiff wall. A released arm has no muscle.
+/// back, but cannot push through a stiff wall. A held arm also shakes with
+/// the operator's physiological tremor (OperatorConfig::tremor_amplitude at
+/// tremor_frequency_hz): a force oscillation sized so that the arm moves by
+/// the amplitude. A released arm has no muscle, and no tremor.
 #include <array>
 #include <atomic>
 
@@ -46,6 +49,9 @@ class SimDevice final : public Device {
   DeviceStatus ReadGlove(Side side, int64_t now_ns, GloveRaw& out) override;
   DeviceStatus WriteWristForce(Side side, const Vec3d& command) override;
   DeviceStatus WriteFingerForces(Side side, const std::array<double, kFingers>& command) override;
+  /// Held while its simulated operator holds the arm (it knows); released
+  /// or docked in a jig, kUnknown: the session judges the arm's motion.
+  HandPresence Presence(Side side) override;
 
   // --- The simulated operator (any thread). ---
   /// Where the operator wants the wrist, true metres; the operator holds on.
@@ -61,6 +67,11 @@ class SimDevice final : public Device {
   // --- Set-up, tests and calibration procedures (not while a loop runs). ---
   /// Puts the arm at rest at `position` (true metres), the operator holding it there.
   void Place(Side side, const Vec3d& position);
+  /// Docks the arm in a jig at `position` (true metres): fixed there, the
+  /// operator's tremor and every force taken by the jig, until the operator
+  /// takes it again (SetOperatorTarget) or lets go (Release). Calibration's
+  /// reference poses.
+  void Dock(Side side, const Vec3d& position);
   /// Makes the side answer kLost (a pulled cable) or recover.
   void SetLost(Side side, bool lost) { lost_[Index(side)].store(lost); }
   const SimArmTruth& truth(Side side) const { return truth_[Index(side)]; }
@@ -79,17 +90,22 @@ class SimDevice final : public Device {
     Vec3d velocity{};
     Vec3d device_force{};  ///< N actually applied
     Vec3d integral{};      ///< integral part of the muscle force, N
+    Vec3d tremor_phase{};  ///< rad, per axis
     std::array<double, kFingers> finger_force{};
     int64_t last_ns = 0;
   };
   struct OperatorInput {
     Vec3d target{};
     bool holding = false;
+    bool docked = false;  ///< in a jig at `target`
   };
   void Step(Arm& arm, const OperatorInput& input, double dt);
 
   SimArmConfig config_;
   OperatorConfig muscle_;
+  /// The tremor's force amplitude (N) and angular frequency (rad/s) per axis.
+  double tremor_force_ = 0.0;
+  Vec3d tremor_omega_{};
   DeviceDescription description_;
   std::array<SimArmTruth, kSides> truth_{};
   std::array<Arm, kSides> arms_{};

@@ -40,6 +40,10 @@ class Operator {
   virtual void Observe(const Observation& /*observation*/) {}
   /// Session thread, at the session rate, once the vehicle answers.
   virtual void Act(double /*t_s*/, const interfaces::MediatorInterface& /*interface*/) {}
+  /// The interface let go of the vehicle after the operator drove it (a
+  /// hand out of reach, or not seen to be held): bring the hands back to its
+  /// neutral, so that it engages again.
+  virtual void Rest(const interfaces::MediatorInterface& /*interface*/) {}
   /// The hands hold the interface's controls (always, for a person: the
   /// session cannot tell).
   virtual bool grasped(double /*t_s*/) const { return true; }
@@ -59,6 +63,7 @@ class AutomaticOperator final : public Operator {
   void Prepare(const interfaces::MediatorInterface& interface) override;
   void Observe(const Observation& observation) override { driver_.Observe(observation); }
   void Act(double t_s, const interfaces::MediatorInterface& interface) override;
+  void Rest(const interfaces::MediatorInterface& interface) override;
   bool grasped(double t_s) const override { return driver_.grasped(t_s); }
   /// It learned one interface's grasp; it does not switch.
   bool can_switch() const override { return false; }
