@@ -35,6 +35,9 @@ class NoControls final : public interfaces::ControlsPort {
   void Actuate(const interfaces::ControlActuation&) override {}
 };
 
+/// Held at neutral this long after the run's commands reach the vehicle.
+constexpr double kTakeHold_s = 1.0;
+
 }  // namespace
 
 PointerHands::PointerHands(const MouseDeviceConfig& mouse)
@@ -93,6 +96,7 @@ struct PointerPilot::Parts {
   std::unique_ptr<link::StateReader> states;
   std::mutex inbox_mutex;
   std::deque<mediator::Observation> inbox;
+  bool commanded = false;  ///< a state says the run's commands reach the vehicle (inbox_mutex)
   int64_t t0_ns = 0;
 };
 
@@ -110,7 +114,13 @@ PointerPilot::PointerPilot(PilotSetup setup) : setup_(std::move(setup)), parts_(
                    .track_width = p.vehicle.drive.track_width,
                    .body_radius = p.vehicle.body.radius};
   p.interface = interfaces::MakeInterface(p.spec, parts);
-  p.driver = std::make_unique<mediator::AutoOperator>(*p.track, p.run.op, p.vehicle.drive);
+  // The pilot takes hold at the interface's neutral itself (Run), hands
+  // closed on any controls there: the operator's own reach and grasp would
+  // open them again, which a mouse's button held throughout does not.
+  OperatorConfig op = p.run.op;
+  op.grasp_reach_s = 0.0;
+  op.grasp_close_s = 0.0;
+  p.driver = std::make_unique<mediator::AutoOperator>(*p.track, op, p.vehicle.drive);
 }
 
 PointerPilot::~PointerPilot() { Stop(); }
@@ -127,6 +137,7 @@ void PointerPilot::Start() {
         if (!s.pose_valid()) return;
         const double t = 1e-9 * static_cast<double>(MonotonicNs() - p.t0_ns);
         std::lock_guard lock(p.inbox_mutex);
+        p.commanded = p.commanded || s.last_command_sent_ns() > 0;
         p.inbox.push_back({t, s.x(), s.y(), s.heading(), s.bumper_left(), s.bumper_right()});
       });
   thread_ = std::thread([this] { Run(); });
@@ -165,14 +176,17 @@ void PointerPilot::Run() {
     const auto period = std::chrono::nanoseconds(static_cast<int64_t>(1e9 / setup_.rate_hz));
     auto next = std::chrono::steady_clock::now();
     double last_t = -1.0;
+    double hold_until_s = -1.0;
     int64_t next_refresh_ns = 0;
     while (!stop_) {
       next += period;
       std::this_thread::sleep_until(next);
       std::deque<mediator::Observation> seen;
+      bool commanded = false;
       {
         std::lock_guard lock(p.inbox_mutex);
         seen.swap(p.inbox);
+        commanded = p.commanded;
       }
       int contacts = 0;
       for (const auto& o : seen) {
@@ -195,8 +209,13 @@ void PointerPilot::Run() {
       const double t = 1e-9 * static_cast<double>(now_ns - p.t0_ns);
       const double dt = last_t < 0.0 ? 0.0 : t - last_t;
       last_t = t;
-      const PointerGesture g = hands.Step(p.driver->Act(t, *p.interface), neutral, dt,
-                                          window->width_px, window->height_px);
+      // A person takes hold first, at neutral, and drives once the run
+      // engages (its commands reach the vehicle, and a moment after): an
+      // interface engages only from rest (mediator/engagement.hpp).
+      if (commanded && hold_until_s < 0.0) hold_until_s = t + kTakeHold_s;
+      const bool holding = hold_until_s < 0.0 || t < hold_until_s;
+      const PointerGesture g = hands.Step(holding ? neutral : p.driver->Act(t, *p.interface),
+                                          neutral, dt, window->width_px, window->height_px);
       int moves = 0, presses = 0, notches = 0;
       if (g.pointer_used && (first || g.pixel != sent.pixel)) {
         desktop.MovePointer(*window, g.pixel[0], g.pixel[1]);

@@ -33,6 +33,10 @@ Window FindByTitle(Display* d, Window w, const std::string& title) {
   return found;
 }
 
+/// Xlib's default handler ends the process on any error; a window that went
+/// away (its run ended) while the pilot still moved over it is no reason to.
+int KeepGoing(Display*, XErrorEvent*) { return 0; }
+
 }  // namespace
 
 void XDesktop::Close::operator()(_XDisplay* d) const { XCloseDisplay(d); }
@@ -43,6 +47,7 @@ XDesktop::XDesktop() : display_(XOpenDisplay(nullptr)) {
     throw std::runtime_error(std::string("cannot open the X display '") +
                              (name != nullptr ? name : "") + "' (DISPLAY)");
   }
+  XSetErrorHandler(KeepGoing);
   int event = 0, error = 0, major = 0, minor = 0;
   if (!XTestQueryExtension(display_.get(), &event, &error, &major, &minor)) {
     throw std::runtime_error(std::string("the X display '") + (name != nullptr ? name : "") +
