@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -235,12 +236,54 @@ void ReadVehicle(const Args& args, SessionSetup& setup) {
   }
 }
 
-/// The haptic device, and what its driver needs (a trace to replay) and
-/// allows (the automatic operator moves simulated arms only).
+/// The device a person holds a hand interface with when the run names a
+/// simulated one and --device nothing: the mouse (issue 36's default for a
+/// person without a haptic device).
+constexpr const char* kPersonDeviceFile = "config/devices/mouse.yaml";
+
+/// Whether a person asked for a robot's hand interface (--interface) with
+/// the run file's simulated device and a window to hold the mouse in: the
+/// mouse stands in for the device they do not have. Without --interface the
+/// run keeps the keys it starts a person at the simulated device with; the
+/// blimp's gesture cockpit still asks for a real device (its two hands'
+/// fields are its meaning; not tried with the mouse).
+bool PersonTakesTheMouse(const Args& args, const Operation& op, const SessionSetup& setup) {
+  if (!op.person || args.Value("device") || setup.view != ViewKind::kWindow) return false;
+  const std::optional<std::string> name = args.Value("interface");
+  const InterfaceKindInfo* kind = name ? FindInterfaceKind(*name) : nullptr;
+  return kind != nullptr && kind->input == InterfaceInput::kHands &&
+         kind->family == VehicleFamily::kRobot && setup.vehicle.family() == VehicleFamily::kRobot &&
+         haptics::DriverOf(setup.device).simulated;
+}
+
+/// The haptic device, and what its driver needs (a trace to replay, the
+/// view's window) and allows (the automatic operator moves simulated arms
+/// only); a device that is not there is said now.
 void ReadDevice(const Args& args, const Operation& op, SessionSetup& setup) {
   if (auto device = args.Value("device")) setup.run.device = *device;
   setup.device = LoadDevice(setup.run.device);
+  if (PersonTakesTheMouse(args, op, setup)) {
+    setup.run.device = ShippedFile(kPersonDeviceFile);
+    setup.device = LoadDevice(setup.run.device);
+    if (setup.progress) {
+      std::fprintf(stderr,
+                   "[haptel] no haptic device given: the mouse moves the hands (%s; --device "
+                   "another to change)\n",
+                   kPersonDeviceFile);
+    }
+  }
   const haptics::DeviceDriver& driver = haptics::DriverOf(setup.device);
+  if (driver.reads_window && setup.view != ViewKind::kWindow) {
+    throw UsageError("option --device " + setup.run.device.string() + ": device '" +
+                     setup.device.name + "' (" + setup.device.driver +
+                     ") is moved with the pointer and keys in the view's window, and there is " +
+                     (setup.view == ViewKind::kNone ? "none (--view none)"
+                                                    : "only an offscreen view (--record)") +
+                     "; use --view window");
+  }
+  if (const std::string missing = haptics::DeviceUnavailable(setup.device); !missing.empty()) {
+    throw UsageError("option --device " + setup.run.device.string() + ": " + missing);
+  }
   if (auto trace_in = args.Value("trace-in")) {
     if (!driver.reads_trace) {
       throw UsageError("option --trace-in: the device '" + setup.run.device.string() +

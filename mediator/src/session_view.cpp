@@ -57,17 +57,23 @@ void SessionView::Fill(view::ViewModel& model) {
   const SessionPhysics* physics = physics_[shown].load(std::memory_order_acquire);
   for (int i = 0; i < haptics::kSides; ++i) {
     const auto side = static_cast<haptics::Side>(i);
-    if (physics != nullptr) {
-      const physics::HandPoses poses = physics->world->Poses(side);
-      if (poses.valid) {
-        AppendProxyHand(model.shapes, poses, part.physics_config->hand, side);
-        continue;
-      }
+    const size_t first = model.shapes.size();
+    const physics::HandPoses poses =
+        physics != nullptr ? physics->world->Poses(side) : physics::HandPoses{};
+    const haptics::HandSample sample = part.hal->LatestSample(side);
+    if (poses.valid) {
+      AppendProxyHand(model.shapes, poses, part.physics_config->hand, side);
+    } else if (part.hands[i] && sample.valid) {
+      AppendTrackedHand(model.shapes, sample, part.physics_config->hand);
     }
-    if (part.hands[i]) {
-      const haptics::HandSample sample = part.hal->LatestSample(side);
-      if (sample.valid) AppendTrackedHand(model.shapes, sample, part.physics_config->hand);
+    // A device that bends the hand's motion (the mouse): the hand shakes
+    // where it is drawn, and a ghost shows where the pointer alone puts it.
+    if (const haptics::Hal::PseudoHaptics bent = part.hal->pseudo_haptics(side); bent.shown) {
+      ShiftShapes(model.shapes, first, bent.report.shake);
+      AppendPseudoHaptics(model.shapes, bent.report);
     }
+    if (input_.force_arrows() && sample.valid && model.shapes.size() > first)
+      AppendForceArrow(model.shapes, sample.position, sample.force);
   }
   if (physics != nullptr && physics->port && part.cockpit != nullptr) {
     AppendCockpit(model.shapes, *part.cockpit, part.controls_bodies, physics->port->Controls(),

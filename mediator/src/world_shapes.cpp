@@ -14,6 +14,14 @@ const view::Rgba kRim{0.15f, 0.15f, 0.17f, 1.0f};
 const view::Rgba kHeld{0.2f, 0.55f, 0.95f, 1.0f};
 const view::Rgba kShaking{0.85f, 0.12f, 0.1f, 1.0f};
 const view::Rgba kMetal{0.6f, 0.62f, 0.65f, 1.0f};
+const view::Rgba kGhostHeld{0.25f, 0.55f, 1.0f, 0.4f};
+const view::Rgba kGhostFree{0.6f, 0.6f, 0.65f, 0.3f};
+const view::Rgba kBend{0.25f, 0.55f, 1.0f, 0.7f};
+const view::Rgba kForce{1.0f, 0.45f, 0.05f, 1.0f};
+
+/// A capsule from `a` to `b` (its axis is its local x).
+view::Shape Segment(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius,
+                    const view::Rgba& color);
 
 Eigen::Quaterniond Q(const std::array<double, 4>& q) {
   return Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized();
@@ -121,6 +129,42 @@ void AppendWall(std::vector<view::Shape>& shapes, const haptics::ForceField& fie
   // Just beyond the plane, so a hand pressing into it stays in front.
   shapes.push_back(Make(view::ShapeKind::kBox, V(field.wall_point) + n * 0.003, q,
                         {0.003, 0.15, 0.15}, {0.9f, 0.15f, 0.1f, 0.55f}));
+}
+
+namespace {
+view::Shape Segment(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius,
+                    const view::Rgba& color) {
+  const Eigen::Vector3d d = b - a;
+  const Eigen::Quaterniond q = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitX(), d);
+  return Make(view::ShapeKind::kCapsule, 0.5 * (a + b), q, {radius, 0.5 * d.norm(), 0}, color);
+}
+}  // namespace
+
+void AppendPseudoHaptics(std::vector<view::Shape>& shapes,
+                         const haptics::PseudoHapticReport& report) {
+  const Eigen::Vector3d target = V(report.target);
+  const Eigen::Vector3d hand = V(report.hand);
+  shapes.push_back(Make(view::ShapeKind::kSphere, target, Eigen::Quaterniond::Identity(),
+                        {0.012, 0, 0}, report.held ? kGhostHeld : kGhostFree));
+  if ((hand - target).norm() > 0.005) shapes.push_back(Segment(target, hand, 0.002, kBend));
+}
+
+void AppendForceArrow(std::vector<view::Shape>& shapes, const haptics::Vec3d& at,
+                      const haptics::Vec3d& force) {
+  const Eigen::Vector3d f = V(force);
+  const double n = f.norm();
+  if (n < 0.05) return;
+  const Eigen::Vector3d from = V(at);
+  const Eigen::Vector3d to = from + f / n * std::min(0.01 * n, 0.15);
+  shapes.push_back(Segment(from, to, 0.003, kForce));
+  shapes.push_back(
+      Make(view::ShapeKind::kSphere, to, Eigen::Quaterniond::Identity(), {0.007, 0, 0}, kForce));
+}
+
+void ShiftShapes(std::vector<view::Shape>& shapes, size_t first, const haptics::Vec3d& offset) {
+  for (size_t i = first; i < shapes.size(); ++i) {
+    for (int k = 0; k < 3; ++k) shapes[i].position[static_cast<size_t>(k)] += offset[k];
+  }
 }
 
 }  // namespace haptel::mediator

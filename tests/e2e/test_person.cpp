@@ -4,6 +4,7 @@
 // bad input a person can give.
 #include <signal.h>
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdlib>
@@ -13,6 +14,7 @@
 
 #include "child.hpp"
 #include "haptel/config/calibration.hpp"
+#include "haptel/haptics/trace.hpp"
 #include "test_env.hpp"
 #include "xserver.hpp"
 
@@ -228,12 +230,13 @@ TEST_CASE(
         return LastCameraPan(run.err()) == 0.0;
       },
       90.0));
-  // Drag 150 px to the right: the head turns right by 150 × 5.236 mrad.
+  // Drag 150 px to the right with the right button (mouse-look; the left
+  // one grasps): the head turns right by 150 × 5.236 mrad.
   REQUIRE(
       XDoTool(
           {"search",   "--sync", "--name", "Haptel", "windowfocus", "--sync", "mousemove",
-           "--window", "%1",     "400",    "300",    "mousedown",   "1",      "mousemove_relative",
-           "--sync",   "--",     "150",    "0",      "mouseup",     "1"}) == 0);
+           "--window", "%1",     "400",    "300",    "mousedown",   "3",      "mousemove_relative",
+           "--sync",   "--",     "150",    "0",      "mouseup",     "3"}) == 0);
   // The camera as the vehicle applied it follows (a state seen in the next progress lines).
   const bool followed = test::WaitFor(
       [&] {
@@ -301,6 +304,51 @@ TEST_CASE(
                "--view", "none"});
   CHECK(blind.Wait(30.0) == 2);
   CHECK(blind.err().find("--interface blimp-gamepad") != std::string::npos);
+}
+
+TEST_CASE(
+    "a person holds the gesture interface with the mouse: dragging with the left button moves "
+    "the hand, bent by the field, and the robot drives") {
+  XServer x;
+  const auto dir = test::ScratchDir("e2e-mouse");
+  const auto trace = dir / "mouse.trace";
+  // No --device: a person asking for a hand interface gets the mouse.
+  Child run({Bin("haptel"), "run", "--operator", "person", "--interface", "gesture", "--track",
+             "config/tracks/test-short.yaml", "--json", "--domain",
+             std::to_string(test::UniqueDomain(25)), "--database", (dir / "runs.db").string(),
+             "--vehicle-timeout", "5", "--time-limit", "60", "--trace", trace.string()});
+  REQUIRE(test::WaitFor(
+      [&] {
+        run.Pump();
+        return run.err().find("lap") != std::string::npos;  // the first progress line: running
+      },
+      60.0));
+  CHECK(run.err().find("the mouse moves the hands") != std::string::npos);
+  // Press at the window's centre (the neutral point), drag 90 px up: the
+  // pointer puts the hand 5.4 cm forward (0.0006 m a pixel), and holds it.
+  REQUIRE(XDoTool({"search",    "--sync",    "--name", "Haptel", "windowfocus", "--sync",
+                   "mousemove", "--window",  "%1",     "512",    "288",         "sleep",
+                   "0.3",       "mousedown", "1",      "sleep",  "0.3",         "mousemove",
+                   "--window",  "%1",        "512",    "198",    "sleep",       "3",
+                   "mouseup",   "1"}) == 0);
+  const std::string json = test::EndWithEscape(run);
+  CHECK(JsonField(json, "device") == "mouse");
+  CHECK(JsonField(json, "interface") == "gesture");
+  CHECK(std::stod(JsonField(json, "distance_m")) > 0.2);  // the hand forward drove it
+  // The right hand as the device reported it: forward, but less than the
+  // pointer's 5.4 cm (the centring field bends it: 100/(100+k) of it). The
+  // median over the drag: a stalled session loop (a loaded machine) fades
+  // the field for a moment, and the hand runs to the pointer meanwhile.
+  std::vector<double> forward;
+  for (const haptics::TraceRecord& r : haptics::ReadTrace(trace)) {
+    const double x = r.ToWrist().position[0];
+    if (r.kind == haptics::TraceRecord::kWrist && r.side == 1 && x > 0.01) forward.push_back(x);
+  }
+  REQUIRE(forward.size() > 1000);  // held forward for seconds, at 1 kHz
+  std::sort(forward.begin(), forward.end());
+  const double median = forward[forward.size() / 2];
+  CHECK(median > 0.025);
+  CHECK(median < 0.048);
 }
 
 TEST_CASE("a person's bad input exits 2 with one line naming the fix") {

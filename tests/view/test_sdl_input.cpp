@@ -3,6 +3,7 @@
 
 #include "alloc_counter.hpp"
 #include "haptel/core/blimp_command.hpp"
+#include "haptel/haptics/pointer.hpp"
 #include "haptel/view/sdl_input.hpp"
 
 using namespace haptel;
@@ -222,28 +223,32 @@ SDL_Event Motion(int xrel, int yrel, Uint32 buttons) {
 }  // namespace
 
 TEST_CASE(
-    "sdl input: dragging the mouse turns the head, within the camera's range; Home looks ahead",
+    "sdl input: dragging the mouse with the right button turns the head, within the camera's "
+    "range; Home looks ahead",
     "[sdl_input]") {
   InputBox box;
-  SdlInput input(box);
-  // The pointer passing over the window without a button held turns nothing.
+  haptel::haptics::PointerBox pointer;
+  SdlInput input(box, pointer);
+  // The pointer passing over the window without a button held turns nothing,
+  // nor does a drag with the left button (it grasps: the mouse device).
   input.OnEvent(Motion(200, 50, 0));
+  input.OnEvent(Motion(200, 50, SDL_BUTTON_LMASK));
   CHECK(box.Load().head_pan == 0.0);
   CHECK(box.Load().head_tilt == 0.0);
   // Dragging right looks right (pan is positive left), dragging up looks up.
-  input.OnEvent(Motion(100, 0, SDL_BUTTON_LMASK));
+  input.OnEvent(Motion(100, 0, SDL_BUTTON_RMASK));
   CHECK(box.Load().head_pan == Approx(-100 * SdlInput::kHeadRadPerPixel));
-  input.OnEvent(Motion(-40, -30, SDL_BUTTON_RMASK));
+  input.OnEvent(Motion(-40, -30, SDL_BUTTON_RMASK | SDL_BUTTON_LMASK));
   CHECK(box.Load().head_pan == Approx(-60 * SdlInput::kHeadRadPerPixel));
   CHECK(box.Load().head_tilt == Approx(30 * SdlInput::kHeadRadPerPixel));
   // 300 px is a quarter turn; far past the camera's range stops at its end.
-  input.OnEvent(Motion(-360, 0, SDL_BUTTON_LMASK));
+  input.OnEvent(Motion(-360, 0, SDL_BUTTON_RMASK));
   CHECK(box.Load().head_pan == Approx(kBlimpCameraPanMax).margin(1e-3));
-  input.OnEvent(Motion(-5000, 5000, SDL_BUTTON_LMASK));
+  input.OnEvent(Motion(-5000, 5000, SDL_BUTTON_RMASK));
   CHECK(box.Load().head_pan == Approx(kBlimpCameraPanMax));
   CHECK(box.Load().head_tilt == Approx(-kBlimpCameraTiltMax));
   // Coming back needs only the way back, not the overshoot.
-  input.OnEvent(Motion(300, 0, SDL_BUTTON_LMASK));
+  input.OnEvent(Motion(300, 0, SDL_BUTTON_RMASK));
   CHECK(box.Load().head_pan == Approx(0.0).margin(1e-3));
   input.OnEvent(Down(SDL_SCANCODE_HOME));
   CHECK(box.Load().head_pan == 0.0);
@@ -254,12 +259,142 @@ TEST_CASE("sdl input: events allocate nothing", "[sdl_input][alloc]") {
   InputBox box;
   SdlInput input(box);
   const SDL_Event events[] = {
-      Down(SDL_SCANCODE_UP),     Up(SDL_SCANCODE_UP),     Down(SDL_SCANCODE_A, 0),
-      Down(SDL_SCANCODE_F2),     Up(SDL_SCANCODE_SPACE),  Down(SDL_SCANCODE_SPACE),
-      Down(SDL_SCANCODE_PAGEUP), Up(SDL_SCANCODE_PAGEUP), Motion(3, -2, SDL_BUTTON_LMASK)};
+      Down(SDL_SCANCODE_UP),           Up(SDL_SCANCODE_UP),     Down(SDL_SCANCODE_A, 0),
+      Down(SDL_SCANCODE_F2),           Up(SDL_SCANCODE_SPACE),  Down(SDL_SCANCODE_SPACE),
+      Down(SDL_SCANCODE_PAGEUP),       Up(SDL_SCANCODE_PAGEUP), Motion(3, -2, SDL_BUTTON_RMASK),
+      Motion(3, -2, SDL_BUTTON_LMASK), Down(SDL_SCANCODE_Q),    Up(SDL_SCANCODE_Q)};
   const uint64_t before = haptel::test::ThreadAllocations();
   for (int i = 0; i < 1000; ++i) {
     for (const SDL_Event& e : events) input.OnEvent(e);
   }
   CHECK(haptel::test::ThreadAllocations() == before);
+}
+
+namespace {
+SDL_Event MotionAt(int x, int y, Uint32 buttons) {
+  SDL_Event e = Motion(0, 0, buttons);
+  e.motion.x = x;
+  e.motion.y = y;
+  return e;
+}
+SDL_Event Button(Uint32 type, Uint8 button, int x, int y) {
+  SDL_Event e{};
+  e.type = type;
+  e.button.type = type;
+  e.button.button = button;
+  e.button.state = type == SDL_MOUSEBUTTONDOWN ? SDL_PRESSED : SDL_RELEASED;
+  e.button.x = x;
+  e.button.y = y;
+  return e;
+}
+SDL_Event Window(Uint8 what, int data1 = 0, int data2 = 0) {
+  SDL_Event e{};
+  e.type = SDL_WINDOWEVENT;
+  e.window.type = SDL_WINDOWEVENT;
+  e.window.event = what;
+  e.window.data1 = data1;
+  e.window.data2 = data2;
+  return e;
+}
+SDL_Event Wheel(int notches, bool flipped = false) {
+  SDL_Event e{};
+  e.type = SDL_MOUSEWHEEL;
+  e.wheel.type = SDL_MOUSEWHEEL;
+  e.wheel.y = notches;
+  e.wheel.direction = flipped ? SDL_MOUSEWHEEL_FLIPPED : SDL_MOUSEWHEEL_NORMAL;
+  return e;
+}
+}  // namespace
+
+TEST_CASE(
+    "sdl input: the pointer's window, place, button, wheel and the key hand's keys are stored "
+    "for the mouse device",
+    "[sdl_input]") {
+  using haptel::haptics::KeyHandKey;
+  using haptel::haptics::PointerState;
+  InputBox box;
+  haptel::haptics::PointerBox pointer;
+  SdlInput input(box, pointer);
+  const auto key = [](const PointerState& p, KeyHandKey k) {
+    return p.key_hand[static_cast<size_t>(k)];
+  };
+  CHECK_FALSE(pointer.Load().window_open);
+  input.OnWindowOpened(1024, 576);
+  PointerState p = pointer.Load();
+  CHECK(p.window_open);
+  CHECK(p.width_px == 1024);
+  CHECK(p.height_px == 576);
+  const uint64_t events = p.events;
+  // Enter, move (no button), press the left button, drag, release.
+  input.OnEvent(Window(SDL_WINDOWEVENT_ENTER));
+  CHECK(pointer.Load().in_window);
+  input.OnEvent(MotionAt(300, 200, 0));
+  CHECK(pointer.Load().x_px == 300);
+  CHECK(pointer.Load().y_px == 200);
+  input.OnEvent(Button(SDL_MOUSEBUTTONDOWN, SDL_BUTTON_LEFT, 310, 205));
+  p = pointer.Load();
+  CHECK(p.grasp_button);
+  CHECK(p.x_px == 310);
+  input.OnEvent(MotionAt(400, 100, SDL_BUTTON_LMASK));
+  CHECK(pointer.Load().x_px == 400);
+  CHECK(pointer.Load().grasp_button);
+  CHECK(box.Load().head_pan == 0.0);  // the left button grasps; it does not look
+  // A drag out of the window is reported from outside it: not in the window.
+  input.OnEvent(MotionAt(1100, 100, SDL_BUTTON_LMASK));
+  CHECK_FALSE(pointer.Load().in_window);
+  input.OnEvent(MotionAt(500, 100, SDL_BUTTON_LMASK));
+  CHECK(pointer.Load().in_window);
+  input.OnEvent(Button(SDL_MOUSEBUTTONUP, SDL_BUTTON_LEFT, 500, 100));
+  CHECK_FALSE(pointer.Load().grasp_button);
+  // The right button is not the grasp.
+  input.OnEvent(Button(SDL_MOUSEBUTTONDOWN, SDL_BUTTON_RIGHT, 500, 100));
+  CHECK_FALSE(pointer.Load().grasp_button);
+  // The wheel: + away from the user, whichever way the system turns it.
+  input.OnEvent(Wheel(2));
+  input.OnEvent(Wheel(1, true));
+  CHECK(pointer.Load().wheel_notches == 1);
+  // A new size; leaving.
+  input.OnEvent(Window(SDL_WINDOWEVENT_SIZE_CHANGED, 800, 600));
+  CHECK(pointer.Load().width_px == 800);
+  CHECK(pointer.Load().height_px == 600);
+  input.OnEvent(Window(SDL_WINDOWEVENT_LEAVE));
+  CHECK_FALSE(pointer.Load().in_window);
+  // The key hand: W and the up arrow are +x (held until both are up), A +y, E −z.
+  input.OnEvent(Down(SDL_SCANCODE_W));
+  input.OnEvent(Down(SDL_SCANCODE_UP));
+  input.OnEvent(Up(SDL_SCANCODE_W));
+  CHECK(key(pointer.Load(), KeyHandKey::kPlusX));
+  input.OnEvent(Up(SDL_SCANCODE_UP));
+  CHECK_FALSE(key(pointer.Load(), KeyHandKey::kPlusX));
+  input.OnEvent(Down(SDL_SCANCODE_A));
+  input.OnEvent(Down(SDL_SCANCODE_E));
+  input.OnEvent(Down(SDL_SCANCODE_RIGHT));
+  p = pointer.Load();
+  CHECK(key(p, KeyHandKey::kPlusY));
+  CHECK(key(p, KeyHandKey::kMinusY));
+  CHECK(key(p, KeyHandKey::kMinusZ));
+  CHECK_FALSE(key(p, KeyHandKey::kPlusZ));
+  CHECK_FALSE(key(p, KeyHandKey::kMinusX));
+  input.OnEvent(Down(SDL_SCANCODE_Q));
+  CHECK(key(pointer.Load(), KeyHandKey::kPlusZ));
+  CHECK(box.Load().key_left);  // the keys still drive the key interfaces too
+  CHECK(pointer.Load().events > events);
+  // The window closes: nothing is known of the pointer any more.
+  input.OnWindowClosed();
+  CHECK_FALSE(pointer.Load().window_open);
+  CHECK_FALSE(pointer.Load().in_window);
+}
+
+TEST_CASE("sdl input: F turns the force arrows on and off", "[sdl_input]") {
+  InputBox box;
+  haptel::haptics::PointerBox pointer;
+  SdlInput input(box, pointer);
+  CHECK_FALSE(input.force_arrows());
+  input.OnEvent(Down(SDL_SCANCODE_F));
+  CHECK(input.force_arrows());
+  input.OnEvent(Down(SDL_SCANCODE_F, 1));  // auto-repeat: no toggle
+  input.OnEvent(Up(SDL_SCANCODE_F));
+  CHECK(input.force_arrows());
+  input.OnEvent(Down(SDL_SCANCODE_F));
+  CHECK_FALSE(input.force_arrows());
 }

@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "haptel/core/blimp_command.hpp"
+#include "haptel/core/clock.hpp"
 
 namespace haptel::view {
 
@@ -27,12 +28,98 @@ static_assert(static_cast<int>(PadButton::kLeftShoulder) == SDL_CONTROLLER_BUTTO
 static_assert(static_cast<int>(PadButton::kDpadRight) == SDL_CONTROLLER_BUTTON_DPAD_RIGHT);
 static_assert(static_cast<int>(PadButton::kCount) == SDL_CONTROLLER_BUTTON_MISC1);
 
-SdlInput::SdlInput(interfaces::InputBox& box) : box_(box), state_(box.Load()) {
+SdlInput::SdlInput(interfaces::InputBox& box) : SdlInput(box, haptics::DesktopPointer()) {}
+
+SdlInput::SdlInput(interfaces::InputBox& box, haptics::PointerBox& pointer)
+    : box_(box), state_(box.Load()), pointer_box_(pointer), pointer_(pointer.Load()) {
   // A fresh sink owns no controller and holds no key, whatever was before.
   ClearPad();
   state_.pad_connected = false;
   state_.key_up = state_.key_down = state_.key_left = state_.key_right = state_.key_stop = false;
   state_.keys_held = {};
+  pointer_.key_hand = {};
+}
+
+void SdlInput::OnWindowOpened(int width_px, int height_px) {
+  pointer_.window_open = true;
+  pointer_.width_px = width_px;
+  pointer_.height_px = height_px;
+  pointer_.in_window = SDL_GetMouseFocus() != nullptr;
+  pointer_.grasp_button = false;
+  StorePointer();
+}
+
+void SdlInput::OnWindowClosed() {
+  pointer_.window_open = false;
+  pointer_.in_window = false;
+  pointer_.grasp_button = false;
+  StorePointer();
+}
+
+void SdlInput::StorePointer() {
+  ++pointer_.events;
+  pointer_.t_ns = MonotonicNs();
+  pointer_box_.Store(pointer_);
+}
+
+void SdlInput::UpdateKeyHand() {
+  using haptics::KeyHandKey;
+  using interfaces::Key;
+  const auto held = [this](Key k) { return state_.keys_held[static_cast<size_t>(k)]; };
+  const auto set = [this](KeyHandKey k, bool on) {
+    pointer_.key_hand[static_cast<size_t>(k)] = on;
+  };
+  set(KeyHandKey::kPlusX, held(Key::kW) || held(Key::kArrowUp));
+  set(KeyHandKey::kMinusX, held(Key::kS) || held(Key::kArrowDown));
+  set(KeyHandKey::kPlusY, held(Key::kA) || held(Key::kArrowLeft));
+  set(KeyHandKey::kMinusY, held(Key::kD) || held(Key::kArrowRight));
+  set(KeyHandKey::kPlusZ, key_up_z_);
+  set(KeyHandKey::kMinusZ, key_down_z_);
+}
+
+bool SdlInput::OnPointerEvent(const SDL_Event& event) {
+  // The pointer is in the window when SDL reports it inside its bounds (a
+  // drag that leaves the window keeps reporting, from outside).
+  const auto place = [this](int x, int y) {
+    pointer_.x_px = x;
+    pointer_.y_px = y;
+    if (pointer_.width_px > 0 && pointer_.height_px > 0) {
+      pointer_.in_window = x >= 0 && y >= 0 && x < pointer_.width_px && y < pointer_.height_px;
+    }
+  };
+  switch (event.type) {
+    case SDL_MOUSEMOTION:
+      place(event.motion.x, event.motion.y);
+      return true;
+    case SDL_MOUSEBUTTONDOWN:
+    case SDL_MOUSEBUTTONUP:
+      place(event.button.x, event.button.y);
+      if (event.button.button == SDL_BUTTON_LEFT)
+        pointer_.grasp_button = event.type == SDL_MOUSEBUTTONDOWN;
+      return true;
+    case SDL_MOUSEWHEEL:
+      pointer_.wheel_notches +=
+          event.wheel.direction == SDL_MOUSEWHEEL_FLIPPED ? -event.wheel.y : event.wheel.y;
+      return true;
+    case SDL_WINDOWEVENT:
+      switch (event.window.event) {
+        case SDL_WINDOWEVENT_ENTER:
+          pointer_.in_window = true;
+          return true;
+        case SDL_WINDOWEVENT_LEAVE:
+          pointer_.in_window = false;
+          return true;
+        case SDL_WINDOWEVENT_SIZE_CHANGED:
+        case SDL_WINDOWEVENT_RESIZED:
+          pointer_.width_px = event.window.data1;
+          pointer_.height_px = event.window.data2;
+          return true;
+        default:
+          return false;
+      }
+    default:
+      return false;
+  }
 }
 
 SdlInput::~SdlInput() {
@@ -71,6 +158,17 @@ void SdlInput::ClearPad() {
 
 void SdlInput::OnKey(const SDL_KeyboardEvent& key, bool down) {
   using interfaces::Key;
+  // The mouse device's key hand: Q/E up and down (W/S/A/D and the arrows below).
+  if (key.keysym.scancode == SDL_SCANCODE_Q || key.keysym.scancode == SDL_SCANCODE_E) {
+    (key.keysym.scancode == SDL_SCANCODE_Q ? key_up_z_ : key_down_z_) = down;
+    UpdateKeyHand();
+    StorePointer();
+    return;
+  }
+  if (down && key.repeat == 0 && key.keysym.scancode == SDL_SCANCODE_F) {
+    force_arrows_ = !force_arrows_;
+    return;
+  }
   Key which = Key::kCount;
   uint32_t InputState::*presses = nullptr;  // the robot's counter: arrows and W/A/S/D are one set
   switch (key.keysym.scancode) {
@@ -134,6 +232,8 @@ void SdlInput::OnKey(const SDL_KeyboardEvent& key, bool down) {
     state_.key_left = held(Key::kArrowLeft) || held(Key::kA);
     state_.key_right = held(Key::kArrowRight) || held(Key::kD);
     state_.key_stop = held(Key::kSpace);
+    UpdateKeyHand();
+    StorePointer();
     return;
   }
   if (down && key.repeat == 0 && key.keysym.scancode >= SDL_SCANCODE_F1 &&
@@ -188,13 +288,15 @@ void SdlInput::OnControllerRemoved(SDL_JoystickID instance) {
 }
 
 void SdlInput::OnEvent(const SDL_Event& event) {
+  if (OnPointerEvent(event)) StorePointer();
   switch (event.type) {
     case SDL_KEYDOWN:
     case SDL_KEYUP:
       OnKey(event.key, event.type == SDL_KEYDOWN);
       break;
     case SDL_MOUSEMOTION:
-      if (event.motion.state == 0) return;  // no button held: the pointer only passes
+      // Mouse-look is the right button's: the left one grasps (the mouse device).
+      if ((event.motion.state & SDL_BUTTON_RMASK) == 0) return;
       OnMouseMotion(event.motion);
       break;
     case SDL_CONTROLLERDEVICEADDED:

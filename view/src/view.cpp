@@ -215,6 +215,8 @@ struct View::Impl {
         recorder = std::make_unique<Mp4Recorder>(options.record, options.width, options.height,
                                                  options.record_fps);
       }
+      if (sink != nullptr && options.mode == ViewMode::kWindow)
+        sink->OnWindowOpened(options.width, options.height);
       ready.set_value();
     } catch (...) {
       renderer.reset();
@@ -226,6 +228,7 @@ struct View::Impl {
     }
 
     Loop(*window, *renderer);
+    if (sink != nullptr && options.mode == ViewMode::kWindow) sink->OnWindowClosed();
 
     if (recorder) recorder->Finish();
     renderer.reset();

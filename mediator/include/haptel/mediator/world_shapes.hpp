@@ -8,6 +8,7 @@
 
 #include "haptel/config/cockpit.hpp"
 #include "haptel/config/physics.hpp"
+#include "haptel/haptics/device.hpp"
 #include "haptel/haptics/types.hpp"
 #include "haptel/interfaces/cockpit_logic.hpp"
 #include "haptel/physics/cockpit_controls.hpp"
@@ -36,5 +37,20 @@ void AppendCockpit(std::vector<view::Shape>& shapes, const CockpitConfig& cockpi
 /// The gesture interface's wall while it pushes back: a translucent red slab
 /// on its plane, facing along its normal.
 void AppendWall(std::vector<view::Shape>& shapes, const haptics::ForceField& field);
+
+/// What a device that bends the hand's motion shows of it (the mouse's
+/// pseudo-haptics): a translucent ghost where the input alone would put the
+/// hand (blue while held, grey while free) and, once the two are more than
+/// 5 mm apart, a thin line from the ghost to the hand: the bend.
+void AppendPseudoHaptics(std::vector<view::Shape>& shapes,
+                         const haptics::PseudoHapticReport& report);
+
+/// The force on a hand as an arrow from `at` along it: 1 cm a newton, at
+/// most 15 cm; none under 0.05 N.
+void AppendForceArrow(std::vector<view::Shape>& shapes, const haptics::Vec3d& at,
+                      const haptics::Vec3d& force);
+
+/// Moves the shapes from index `first` on by `offset` (a hand's shake).
+void ShiftShapes(std::vector<view::Shape>& shapes, size_t first, const haptics::Vec3d& offset);
 
 }  // namespace haptel::mediator

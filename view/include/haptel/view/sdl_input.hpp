@@ -11,10 +11,17 @@
 /// (each key also on its own, with Page Up/Down, for the blimp's keys),
 /// space stops, F1..F6 ask for interface 0..5 of the run, and closing the
 /// window asks to quit. In a fleet, Tab or the controller's Back button ask
-/// for the next vehicle and 1..9 for that vehicle of the fleet file. Dragging the mouse with a
-/// button held turns the head (mouse-look: kHeadRadPerPixel, clamped to the pilot camera's range);
-/// Home looks straight ahead. The first game controller SDL reports is opened;
+/// for the next vehicle and 1..9 for that vehicle of the fleet file. Dragging the mouse with the
+/// right button held turns the head (mouse-look: kHeadRadPerPixel, clamped to the pilot camera's
+/// range); Home looks straight ahead. The first game controller SDL reports is opened;
 /// another one is ignored until it goes away.
+///
+/// It is also the writer of the desktop's pointer (haptel/haptics/pointer.hpp),
+/// which the mouse device reads: every change of the pointer in the window
+/// (its place, enter and leave, the left button that grasps, the wheel, the
+/// window's size) and of the key hand's keys (W/S, A/D, Q/E, the arrows as
+/// W/S/A/D) is stored there. F turns the force arrows on the hands on and off
+/// (force_arrows()).
 #include <SDL2/SDL.h>
 
 #include <array>
@@ -23,6 +30,7 @@
 #include <functional>
 #include <memory>
 
+#include "haptel/haptics/pointer.hpp"
 #include "haptel/interfaces/input.hpp"
 #include "haptel/view/view.hpp"
 
@@ -33,6 +41,8 @@ class SdlInput : public EventSink {
   /// Publishes into `box` (which must outlive this); starts from `box`'s
   /// current value so counters keep counting across sinks.
   explicit SdlInput(interfaces::InputBox& box);
+  /// Stores the pointer into `pointer` (a test's own box) instead of the desktop's.
+  SdlInput(interfaces::InputBox& box, haptics::PointerBox& pointer);
   /// Closes the controller if SDL's game controller subsystem is still up
   /// (after SDL_Quit SDL has freed it already).
   ~SdlInput() override;
@@ -42,6 +52,17 @@ class SdlInput : public EventSink {
   /// Allocation-free for key, axis, button and window events (opening a
   /// newly added controller is SDL's own allocation, once per device).
   void OnEvent(const SDL_Event& event) override;
+  /// The pointer's window is open at this size (the pointer inside it if
+  /// SDL says the window has the mouse's focus).
+  void OnWindowOpened(int width_px, int height_px) override;
+  /// No window reports the pointer any more: the mouse device lets go.
+  void OnWindowClosed() override;
+
+  /// Whether the hands' force arrows are shown (F toggles; off at start).
+  /// The view thread's, as the events are.
+  bool force_arrows() const { return force_arrows_; }
+  /// The pointer as last stored.
+  const haptics::PointerState& pointer() const { return pointer_; }
 
   /// Closes the open controller and publishes pad_connected = false (not
   /// counted as a disconnect: it was let go on purpose). Call on the SDL
@@ -61,6 +82,11 @@ class SdlInput : public EventSink {
  private:
   void OnKey(const SDL_KeyboardEvent& key, bool down);
   void OnMouseMotion(const SDL_MouseMotionEvent& motion);
+  /// Pointer events into pointer_; false when nothing of it changed.
+  bool OnPointerEvent(const SDL_Event& event);
+  /// The key hand's keys from the held keys (W/S/A/D and arrows, Q/E).
+  void UpdateKeyHand();
+  void StorePointer();
   void OnControllerAdded(int device_index);
   void OnControllerRemoved(SDL_JoystickID instance);
   void ClearPad();
@@ -70,6 +96,11 @@ class SdlInput : public EventSink {
   interfaces::InputState state_;
   SDL_GameController* pad_ = nullptr;
   SDL_JoystickID pad_id_ = -1;
+  haptics::PointerBox& pointer_box_;
+  haptics::PointerState pointer_;
+  bool key_up_z_ = false;    ///< Q held
+  bool key_down_z_ = false;  ///< E held
+  bool force_arrows_ = false;
 };
 
 /// For runs with a game controller and no view: a thread that owns SDL's

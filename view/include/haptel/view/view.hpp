@@ -60,6 +60,14 @@ class EventSink {
  public:
   virtual ~EventSink() = default;
   virtual void OnEvent(const SDL_Event& event) = 0;
+  /// The window is open, `width_px` × `height_px`, before its first event
+  /// (SDL says a size only when it changes). Not called offscreen.
+  virtual void OnWindowOpened(int width_px, int height_px) {
+    (void)width_px;
+    (void)height_px;
+  }
+  /// The window is about to close (after its last event).
+  virtual void OnWindowClosed() {}
 };
 
 struct ViewStats {
