@@ -1,7 +1,10 @@
 #pragma once
 /// @file What a test or a benchmark hears of a robot run on its DDS domain,
-/// beside the run: the commands it sends (when each arrived) and its
-/// vehicle's bumpers (when the first contact came after Arm).
+/// beside the run, from its vehicle's states alone: the commands the
+/// vehicle obeyed (each state names the last one: when the run sent it, and
+/// the motor levels it set) and its bumpers (when the first contact came
+/// after Arm). Not from the command topic: a second reader there is a second
+/// vehicle to the run, which ends it as a conflict.
 #include <cstdint>
 #include <mutex>
 #include <string>
@@ -14,7 +17,9 @@
 
 namespace haptel::testing {
 
-/// One command as it arrived (CLOCK_MONOTONIC, ns).
+/// One command the vehicle obeyed: when the run sent it (CLOCK_MONOTONIC,
+/// ns, the run's clock and this one's on one machine) and the motor levels
+/// it set (signed; 0 stopped).
 struct HeardCommand {
   int64_t t_ns = 0;
   double left = 0.0;
@@ -24,19 +29,19 @@ struct HeardCommand {
 
 class RunWatch {
  public:
-  /// Subscribes to `vehicle`'s command and state topics with `link`'s
-  /// settings (the run's: its domain, transports, security).
+  /// Subscribes to `vehicle`'s state topic with `link`'s settings (the
+  /// run's: its domain, transports, security).
   RunWatch(const LinkConfig& link, const std::string& vehicle)
       : participant_(link, "run-watch"),
-        commands_(participant_, link::TopicName(vehicle, "command"), link::Profile::kCommand,
-                  [this](const msg::TreadCommand& c) {
-                    std::lock_guard lock(mutex_);
-                    commands_seen_.push_back({MonotonicNs(), c.left(), c.right()});
-                  }),
         states_(participant_, link::TopicName(vehicle, "state"), link::Profile::kState,
                 [this](const msg::VehicleState& s) {
                   std::lock_guard lock(mutex_);
                   ++states_seen_;
+                  const int64_t sent = s.last_command_sent_ns();
+                  if (sent > 0 && (commands_seen_.empty() || commands_seen_.back().t_ns != sent)) {
+                    commands_seen_.push_back({sent, static_cast<double>(s.motor_left_level()),
+                                              static_cast<double>(s.motor_right_level())});
+                  }
                   if (armed_ && contact_ns_ == 0 && (s.bumper_left() || s.bumper_right()))
                     contact_ns_ = MonotonicNs();
                 }) {}
@@ -68,8 +73,7 @@ class RunWatch {
   int states_seen_ = 0;
   bool armed_ = false;
   int64_t contact_ns_ = 0;
-  link::TreadCommandReader commands_;  // last: destroyed first, no callback after
-  link::StateReader states_;
+  link::StateReader states_;  // last: destroyed first, no callback after
 };
 
 }  // namespace haptel::testing
