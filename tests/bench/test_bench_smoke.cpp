@@ -481,7 +481,7 @@ TEST_CASE("bench hands --smoke: the gesture interface through the real window, e
   CHECK(g["interface"].string() == "gesture");
   CHECK(g["ran"].boolean());
   CHECK(g["commands"].number() > 0);
-  CHECK(g["steps"].number() == 3);  // 4 steps: 3 between them
+  CHECK(g["steps"].number() == 4);  // each step, up to the next (the last, to the push)
   CHECK(Finite(g["ratio_free"]) >= 0.0);
   CHECK(Finite(g["servo_p99_us"]) > 0.0);
   CHECK(Finite(g["bare_alone_p99_us"]) > 0.0);
