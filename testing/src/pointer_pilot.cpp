@@ -37,6 +37,8 @@ class NoControls final : public interfaces::ControlsPort {
 
 /// Held at neutral this long after the run's commands reach the vehicle.
 constexpr double kTakeHold_s = 1.0;
+/// Driving this long with the motors still: take hold again.
+constexpr double kRetakeAfter_s = 3.0;
 
 }  // namespace
 
@@ -97,6 +99,7 @@ struct PointerPilot::Parts {
   std::mutex inbox_mutex;
   std::deque<mediator::Observation> inbox;
   bool commanded = false;  ///< a state says the run's commands reach the vehicle (inbox_mutex)
+  int64_t moving_ns = 0;   ///< the last state whose obeyed command moved the motors (inbox_mutex)
   int64_t t0_ns = 0;
 };
 
@@ -138,6 +141,7 @@ void PointerPilot::Start() {
         const double t = 1e-9 * static_cast<double>(MonotonicNs() - p.t0_ns);
         std::lock_guard lock(p.inbox_mutex);
         p.commanded = p.commanded || s.last_command_sent_ns() > 0;
+        if (s.motor_left_level() != 0 || s.motor_right_level() != 0) p.moving_ns = MonotonicNs();
         p.inbox.push_back({t, s.x(), s.y(), s.heading(), s.bumper_left(), s.bumper_right()});
       });
   thread_ = std::thread([this] { Run(); });
@@ -183,10 +187,12 @@ void PointerPilot::Run() {
       std::this_thread::sleep_until(next);
       std::deque<mediator::Observation> seen;
       bool commanded = false;
+      int64_t moving_ns = 0;
       {
         std::lock_guard lock(p.inbox_mutex);
         seen.swap(p.inbox);
         commanded = p.commanded;
+        moving_ns = p.moving_ns;
       }
       int contacts = 0;
       for (const auto& o : seen) {
@@ -213,6 +219,13 @@ void PointerPilot::Run() {
       // engages (its commands reach the vehicle, and a moment after): an
       // interface engages only from rest (mediator/engagement.hpp).
       if (commanded && hold_until_s < 0.0) hold_until_s = t + kTakeHold_s;
+      // Driving, yet the motors have not moved for a while: the run did not
+      // engage (it took hold later than the pilot thought). A person told
+      // so on screen goes back to neutral and takes hold again.
+      const double still_s = 1e-9 * static_cast<double>(now_ns - std::max(moving_ns, p.t0_ns));
+      if (hold_until_s >= 0.0 && t >= hold_until_s + kRetakeAfter_s && still_s > kRetakeAfter_s) {
+        hold_until_s = t + kTakeHold_s;
+      }
       const bool holding = hold_until_s < 0.0 || t < hold_until_s;
       const PointerGesture g = hands.Step(holding ? neutral : p.driver->Act(t, *p.interface),
                                           neutral, dt, window->width_px, window->height_px);
