@@ -39,7 +39,7 @@ namespace {
 using namespace haptel::sql;
 
 /// Schema version stored in PRAGMA user_version.
-constexpr int kSchemaVersion = 12;
+constexpr int kSchemaVersion = 13;
 
 /// Schema steps: kMigrations[v - 1] takes a database from version v - 1 to v.
 /// A new database runs them all, so the upgrade path of an old file is the
@@ -299,9 +299,19 @@ constexpr const char* kSchemaV12 = R"sql(
 ALTER TABLE runs ADD COLUMN controller_errors INTEGER DEFAULT NULL;
 )sql";
 
-constexpr const char* kMigrations[] = {kSchemaV1, kSchemaV2,  kSchemaV3,  kSchemaV4,
-                                       kSchemaV5, kSchemaV6,  kSchemaV7,  kSchemaV8,
-                                       kSchemaV9, kSchemaV10, kSchemaV11, kSchemaV12};
+// v13: the input device of each study trial (a study names one per
+// condition: the mouse, a force-feedback wheel...), by its device file's
+// name: the one planned, and the one a recorded (or superseded) trial was
+// driven with. Trials planned before v13 get '' (not kept).
+constexpr const char* kSchemaV13 = R"sql(
+ALTER TABLE study_plan ADD COLUMN device TEXT NOT NULL DEFAULT '';
+ALTER TABLE study_trials ADD COLUMN device TEXT NOT NULL DEFAULT '';
+ALTER TABLE study_superseded_trials ADD COLUMN device TEXT NOT NULL DEFAULT '';
+)sql";
+
+constexpr const char* kMigrations[] = {kSchemaV1,  kSchemaV2,  kSchemaV3, kSchemaV4, kSchemaV5,
+                                       kSchemaV6,  kSchemaV7,  kSchemaV8, kSchemaV9, kSchemaV10,
+                                       kSchemaV11, kSchemaV12, kSchemaV13};
 static_assert(std::size(kMigrations) == kSchemaVersion, "one migration per schema version");
 
 constexpr const char* kInsertRun = R"sql(
