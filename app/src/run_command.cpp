@@ -167,8 +167,13 @@ void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRu
   std::fprintf(out, "  track %s, interface %s, vehicle %s (pid %d), operator %s, device %s\n",
                r.track.c_str(), r.interface.c_str(), r.vehicle.c_str(), r.vehicle_pid,
                r.operator_kind.c_str(), r.device.c_str());
-  std::fprintf(out, "  distance driven %.2f m, %zu interface switches\n", r.distance_m,
-               r.switches.size());
+  std::fprintf(out, "  distance driven %.2f m, %zu interface switches, not engaged %.1f s\n",
+               r.distance_m, r.switches.size(), r.disengaged_s);
+  if (std::isfinite(r.pseudo_haptic_gain_mean) || r.ff_effects_played > 0) {
+    std::fprintf(out,
+                 "  device: pseudo-haptic gain mean %.2f, force-feedback effects played %lld\n",
+                 r.pseudo_haptic_gain_mean, static_cast<long long>(r.ff_effects_played));
+  }
   std::fprintf(
       out,
       "  lap time %.2f s (from the start line; %.2f s before it), gates passed %d/%d, missed %d, "
@@ -297,6 +302,9 @@ std::string RunJson(const SessionSetup& setup, const RecordedRun& run) {
     << ",\"video_to_screen_ms_p99\":" << JsonNumber(r.video_to_screen_ms_p99)
     << ",\"distance_m\":" << JsonNumber(r.distance_m)
     << ",\"operator\":" << JsonString(r.operator_kind) << ",\"device\":" << JsonString(r.device)
+    << ",\"disengaged_s\":" << JsonNumber(r.disengaged_s)
+    << ",\"pseudo_haptic_gain_mean\":" << JsonNumber(r.pseudo_haptic_gain_mean)
+    << ",\"ff_effects_played\":" << r.ff_effects_played
     << ",\"interface_switches\":" << SwitchesJson(r.switches)
     << ",\"interface\":" << JsonString(r.interface) << ",\"track\":" << JsonString(r.track)
     << ",\"counters\":" << CountersJson(r.counters)

@@ -39,6 +39,25 @@ SimDevice::SimDevice(const DeviceConfig& config, const OperatorConfig& muscle)
   std::uniform_real_distribution<double> centimetres(-0.03, 0.03);
   std::uniform_real_distribution<double> gain(0.004, 0.008);  // rad per sensor count
   std::uniform_real_distribution<double> offset(-0.3, 0.1);   // rad
+  // The tremor's own draws, so that the truth above is the same with or without it.
+  std::mt19937 tremor_rng(static_cast<uint32_t>(config.sim.seed) ^ 0x7e3a2u);
+  std::uniform_real_distribution<double> phase(0.0, 2.0 * std::numbers::pi);
+  // The tremor: each axis a few percent off the nominal frequency, so the
+  // hand traces no fixed figure. Its force is what moves the held arm by the
+  // amplitude at that frequency: the arm's impedance there, |k − mω² + jcω|,
+  // the muscle's spring k and the arm's mass m, c the muscle's and the
+  // arm's damping plus Coulomb friction's describing function (4·F_c/(π·A·ω):
+  // the damping that dissipates as much per cycle).
+  std::uniform_real_distribution<double> spread(-0.06, 0.06);
+  const double omega = 2.0 * std::numbers::pi * muscle_.tremor_frequency_hz;
+  for (int i = 0; i < 3; ++i) tremor_omega_[i] = omega * (1.0 + spread(tremor_rng));
+  if (muscle_.tremor_amplitude > 0.0) {
+    const double a = muscle_.tremor_amplitude;
+    const double c = muscle_.muscle_damping + config_.damping +
+                     4.0 * config_.coulomb_friction / (std::numbers::pi * a * omega);
+    tremor_force_ =
+        a * std::hypot(muscle_.muscle_stiffness - config_.arm_mass * omega * omega, c * omega);
+  }
   for (int s = 0; s < kSides; ++s) {
     orientation_[s].Store({1.0, 0.0, 0.0, 0.0});
     SimArmTruth& t = truth_[s];
@@ -52,6 +71,7 @@ SimDevice::SimDevice(const DeviceConfig& config, const OperatorConfig& muscle)
       t.glove_gain[j] = gain(rng);
       t.glove_offset[j] = offset(rng);
     }
+    arms_[s].tremor_phase = {phase(tremor_rng), phase(tremor_rng), phase(tremor_rng)};
     glove_noise_state_[s] =
         0x9E3779B97F4A7C15ULL + static_cast<uint64_t>(s) + static_cast<uint64_t>(config.sim.seed);
     lost_[s].store(false);
@@ -114,6 +134,11 @@ void SimDevice::Step(Arm& arm, const OperatorInput& input, double dt) {
       muscle = std::clamp(muscle_.muscle_stiffness * error + arm.integral[i] -
                               muscle_.muscle_damping * arm.velocity[i],
                           -muscle_.muscle_max_force, muscle_.muscle_max_force);
+      if (tremor_force_ > 0.0) {
+        arm.tremor_phase[i] =
+            std::fmod(arm.tremor_phase[i] + tremor_omega_[i] * dt, 2.0 * std::numbers::pi);
+        muscle += tremor_force_ * std::sin(arm.tremor_phase[i]);
+      }
     }
     const double gravity = i == 2 ? -weight : 0.0;
     const double drive = muscle + arm.device_force[i] + gravity - config_.damping * arm.velocity[i];

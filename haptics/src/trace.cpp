@@ -175,7 +175,16 @@ DeviceStatus ReplayDevice::ReadWrist(Side side, int64_t now_ns, WristRaw& out) {
   if (i < 0) return DeviceStatus::kNoData;
   out = records_[static_cast<size_t>(i)].ToWrist();
   out.t_ns = now_ns;
+  last_read_ns_[Index(side)] = now_ns;
   return DeviceStatus::kOk;
+}
+
+HandPresence ReplayDevice::Presence(Side side) {
+  if (holding_.load(std::memory_order_acquire)) return HandPresence::kHeld;
+  const int64_t start = start_ns_.load();
+  const int64_t played = last_read_ns_[Index(side)] - start;
+  if (start == 0 || played < static_cast<int64_t>(kHeldAtStart_s * 1e9)) return HandPresence::kHeld;
+  return HandPresence::kUnknown;
 }
 
 DeviceStatus ReplayDevice::ReadGlove(Side side, int64_t now_ns, GloveRaw& out) {

@@ -219,7 +219,8 @@ class BlimpSession final : public FamilySession {
   }
 
   std::optional<LoopEnd> Command(double t, int64_t now, const interfaces::InputState& person,
-                                 bool vehicle_up, HapticSide& haptic, VehicleLink& link) override {
+                                 bool vehicle_up, bool engaged, HapticSide& haptic,
+                                 VehicleLink& link) override {
     // The pilot's hands and gaze; a person's head turns with mouse-look.
     head_ = {person.head_pan, person.head_tilt};
     // With prediction the pilot flies the blimp as it will be when the
@@ -230,7 +231,7 @@ class BlimpSession final : public FamilySession {
     }
     if (pilot_) {
       head_ = {};
-      if (vehicle_up) {
+      if (vehicle_up && engaged) {  // it flies once the interface engages
         const BlimpCommand intent = pilot_->Decide(t);
         HoldHands(*haptic.sim(), interface_->HandTargetsFor(intent));
         head_ = {intent.camera_pan, intent.camera_tilt};
@@ -241,11 +242,23 @@ class BlimpSession final : public FamilySession {
       return LoopEnd{Outcome::kAborted, "the game controller was disconnected"};
     if (next_command_ns_ == 0) next_command_ns_ = now;
     if (CommandDue(next_command_ns_, now, static_cast<int64_t>(1e9 / spec_.command_rate_hz()))) {
-      const BlimpCommand sent = vehicle_up ? command_ : BlimpCommand{};
+      // Disengaged: the neutral command, the camera still where the pilot looks.
+      BlimpCommand sent{};
+      if (vehicle_up && engaged) {
+        sent = command_;
+      } else if (vehicle_up) {
+        sent.camera_pan = command_.camera_pan;
+        sent.camera_tilt = command_.camera_tilt;
+      }
       link.Send(sent);
       predictor_.OnCommand(t, sent);
     }
     return std::nullopt;
+  }
+
+  InterfaceRest Rest() const override {
+    if (spec_.manual()) return {};
+    return RestOf(spec_.hands(), interface_->HandTargetsFor(BlimpCommand{}), AtRest(command_));
   }
 
   // --- A fleet's interface handover (interface_handover.hpp). ---

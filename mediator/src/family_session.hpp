@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "haptel/interfaces/input.hpp"
+#include "haptel/mediator/engagement.hpp"
 #include "haptel/mediator/fleet.hpp"
 #include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/interface_handover.hpp"
@@ -72,11 +73,15 @@ class FamilySession : public HandoverSide {
                      int64_t t0_ns) = 0;
   /// Each tick the vehicle is the operator's: the person's requests, the
   /// operator's act, the interface's command (sent when due; a safe one
-  /// while the vehicle is not up). Ends the run when the person's
+  /// while the vehicle is not up or the operator does not engage the
+  /// interface: `engaged`, engagement.hpp). Ends the run when the person's
   /// controller went away.
   virtual std::optional<LoopEnd> Command(double t_s, int64_t now_ns,
                                          const interfaces::InputState& person, bool vehicle_up,
-                                         HapticSide& haptic, VehicleLink& link) = 0;
+                                         bool engaged, HapticSide& haptic, VehicleLink& link) = 0;
+  /// What engagement asks of the interface driven now: the device's arms it
+  /// uses, their neutral places, whether its last command is at rest.
+  virtual InterfaceRest Rest() const = 0;
   /// The interfaces are switching (F1–F6) and ramp the force scale themselves.
   virtual bool SwitchingInterface() const { return false; }
   /// The lap's own end: completed (or crashed).

@@ -192,7 +192,8 @@ class RobotSession final : public FamilySession {
   }
 
   std::optional<LoopEnd> Command(double t, int64_t now, const interfaces::InputState& person,
-                                 bool vehicle_up, HapticSide& haptic, VehicleLink& link) override {
+                                 bool vehicle_up, bool engaged, HapticSide& haptic,
+                                 VehicleLink& link) override {
     // A person's requests: another interface (F1–F6); a controller that went away.
     if (person.interface_requests != requests_seen_) {
       requests_seen_ = person.interface_requests;
@@ -223,7 +224,10 @@ class RobotSession final : public FamilySession {
       const PredictedPose ahead = predictor_.PoseAt(t + predictor_.one_way_delay_s());
       op_->Observe({t, ahead.x, ahead.y, ahead.heading, bumpers_[0], bumpers_[1]});
     }
-    if (vehicle_up) {
+    // The operator drives once the interface engages (the automatic one
+    // holds its hands where it prepared them until then, as a person takes
+    // hold before driving).
+    if (vehicle_up && engaged) {
       op_->Act(t, interfaces_->current());
       if (grasp_s_ == 0.0 && op_->grasped(t) && start_spec().needs_physics()) grasp_s_ = t;
     }
@@ -233,11 +237,18 @@ class RobotSession final : public FamilySession {
         setup_.interfaces[static_cast<size_t>(interfaces_->current_index())].command_rate_hz());
     if (next_command_ns_ == 0) next_command_ns_ = now;
     if (CommandDue(next_command_ns_, now, command_period_ns)) {
-      const TreadCommand sent = vehicle_up ? motors_ : TreadCommand{};
+      const TreadCommand sent = vehicle_up && engaged ? motors_ : TreadCommand{};
       link.Send(sent);
       predictor_.OnCommand(t, sent.left, sent.right);
     }
     return std::nullopt;
+  }
+
+  InterfaceRest Rest() const override {
+    const interfaces::InterfaceSpec& spec =
+        setup_.interfaces[static_cast<size_t>(interfaces_->current_index())];
+    if (spec.manual()) return {};
+    return RestOf(spec.hands(), interfaces_->current().HandTargetsFor({}), AtRest(motors_));
   }
 
   bool SwitchingInterface() const override { return interfaces_->switching(); }

@@ -191,7 +191,6 @@ Operation ReadOperation(const Args& args, SessionSetup& setup) {
 /// The vehicle, and what it drives through: the link's faults, the chase
 /// camera, simulated time, its track or course, its name.
 void ReadVehicle(const Args& args, SessionSetup& setup) {
-  if (auto device = args.Value("device")) setup.run.device = *device;
   if (auto vehicle = args.Value("vehicle")) setup.run.vehicle = *vehicle;
   setup.vehicle = LoadVehicle(setup.run.vehicle);
   // A fault nothing can be driven through is said now, not as "did not start" or "lost" once the
@@ -239,6 +238,7 @@ void ReadVehicle(const Args& args, SessionSetup& setup) {
 /// The haptic device, and what its driver needs (a trace to replay) and
 /// allows (the automatic operator moves simulated arms only).
 void ReadDevice(const Args& args, const Operation& op, SessionSetup& setup) {
+  if (auto device = args.Value("device")) setup.run.device = *device;
   setup.device = LoadDevice(setup.run.device);
   const haptics::DeviceDriver& driver = haptics::DriverOf(setup.device);
   if (auto trace_in = args.Value("trace-in")) {
@@ -350,8 +350,10 @@ SessionSetup RunSetupFromArgs(const Args& args) {
   SessionSetup setup;
   ReadRunOptions(args, setup);
   const Operation op = ReadOperation(args, setup);
-  ReadVehicle(args, setup);
+  // The device first: whether a simulated-time run may be a person's
+  // depends on it (at the simulated arms nobody is).
   ReadDevice(args, op, setup);
+  ReadVehicle(args, setup);
   ReadInterfaces(args, op, setup);
   ReadWorld(args, setup);
   return setup;

@@ -149,6 +149,9 @@ class SessionLoop {
   std::optional<LoopEnd> WatchVehicles(int64_t now_ns, double t_s);
   std::optional<LoopEnd> CommandVehicles(const interfaces::InputState& person, int64_t now_ns,
                                          double t_s, double dt_s);
+  /// Whether the operator engages the interface `vehicle` is driven with
+  /// now (engagement.hpp); a change is said, the time disengaged counted.
+  bool Engage(VehicleRun& vehicle, double t_s, double dt_s);
   void FeedView(int64_t now_ns, double t_s);
   std::optional<LoopEnd> CheckLimits(double t_s);
   void LogProgress(int64_t now_ns, double t_s);
@@ -172,6 +175,10 @@ class SessionLoop {
   std::unique_ptr<FleetTurns> turns_;  ///< a fleet's; none for one vehicle
   std::unique_ptr<SessionView> view_;
   std::unique_ptr<view::InputPump> pump_;
+  Engagement engagement_;  ///< the person's, with whichever vehicle they drive
+  /// What the progress log said of it last (as if engaged before the start:
+  /// a run that starts without a hand says so).
+  Disengaged engagement_said_ = Disengaged::kNone;
   int64_t t0_ = 0;
   int64_t period_ns_ = 0;
   int64_t next_tick_ = 0;
@@ -208,7 +215,7 @@ SessionLoop::SessionLoop(const std::vector<const SessionSetup*>& setups, const F
     rec.vehicle_kind = s->vehicle.kind;
     rec.link_fault = s->run.link.fault.enabled ? LinkFaultText(s->run.link.fault) : "";
     rec.operator_kind = s->operator_kind;
-    rec.device = s->device.name;
+    rec.device = s->device.driver;
     vehicles_.push_back(std::move(v));
   }
 }
@@ -404,7 +411,8 @@ std::optional<LoopEnd> SessionLoop::CommandVehicles(const interfaces::InputState
     VehicleRun& v = *vehicles_[i];
     if (v.lost) continue;
     if (!turns_ || turns_->Operated(i, now, t, dt)) {
-      if (auto end = v.family->Command(t, now, person, v.health->up(), *haptic_, *v.link))
+      const bool engaged = Engage(v, t, dt);
+      if (auto end = v.family->Command(t, now, person, v.health->up(), engaged, *haptic_, *v.link))
         return end;
     }
     if (const SessionPhysics* physics = v.family->physics(); physics != v.watch->physics()) {
@@ -417,6 +425,22 @@ std::optional<LoopEnd> SessionLoop::CommandVehicles(const interfaces::InputState
   return std::nullopt;
 }
 
+// Disengaged, the vehicle gets a zero command; the time it was up and not
+// engaged is the run's disengaged_s.
+bool SessionLoop::Engage(VehicleRun& v, double t, double dt) {
+  const bool engaged = engagement_.Update(haptic_->hal(), v.family->Rest());
+  if (!engaged && v.health->up()) v.out.result.record.disengaged_s += dt;
+  if (engagement_.why() != engagement_said_ && first_.progress) {
+    engagement_said_ = engagement_.why();
+    char line[160];
+    std::snprintf(
+        line, sizeof line, "%6.1f s  %s: %s", t, engaged ? "engaged" : "not engaged",
+        engaged ? "the vehicle takes the interface's command" : ToString(engagement_.why()));
+    log::Info(line);
+  }
+  return engaged;
+}
+
 // The view's next frames: the driven vehicle's overlay, gaze and ghost on
 // the big screen (a fixed gaze and no ghost when it has none), and a
 // fleet's tiles; twice a second, whoever watches the run live (a study's
@@ -426,9 +450,17 @@ void SessionLoop::FeedView(int64_t now, double t) {
   const bool live_due = (first_.on_live || first_.on_picture) && now >= next_live_ns_;
   if (live_due) next_live_ns_ = now + SToNs(0.5);
   if (view_ || first_.on_live) {
-    for (auto& v : vehicles_)
-      v->overlay = v->family->Overlay(t, !v->lost && v->health->up(), v->trace->touching());
     const int shown = turns_ ? turns_->driven() : 0;
+    for (size_t i = 0; i < vehicles_.size(); ++i) {
+      VehicleRun& v = *vehicles_[i];
+      const bool up = !v.lost && v.health->up();
+      v.overlay = v.family->Overlay(t, up, v.trace->touching());
+      // Not engaged: said over the interface's help (a switch or a wait says more).
+      if (static_cast<int>(i) == shown && up && !engagement_.engaged() &&
+          !v.family->SwitchingInterface()) {
+        std::snprintf(v.overlay.message, sizeof v.overlay.message, "%s", engagement_.Line());
+      }
+    }
     if (view_ && shown >= 0) {
       VehicleRun& v = *vehicles_[static_cast<size_t>(shown)];
       view_->Publish(v.overlay);
@@ -551,9 +583,12 @@ void SessionLoop::Finish(const std::optional<LoopEnd>& end) {
   haptic_->Stop();
   if (pump_) pump_->Stop();
   StopLinks();
+  const haptics::DeviceUseReport use = haptic_->UseReport();
   for (auto& v : vehicles_) {
     RecordLinkFigures(*haptic_, *v->link, v->out.result);
     v->watch->Finish(v->out.result.record);
+    v->out.result.record.pseudo_haptic_gain_mean = use.pseudo_haptic_gain_mean;
+    v->out.result.record.ff_effects_played = static_cast<int64_t>(use.ff_effects_played);
   }
   if (simulated_) {
     SessionResult& result = vehicles_.front()->out.result;

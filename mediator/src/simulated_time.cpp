@@ -8,6 +8,7 @@
 #include "haptel/config/error.hpp"
 #include "haptel/config/vehicle_kinds.hpp"
 #include "haptel/core/clock.hpp"
+#include "haptel/haptics/device_drivers.hpp"
 
 namespace haptel::mediator {
 
@@ -27,7 +28,9 @@ void SetInProcessRobotFactory(InProcessRobotFactory factory) { Factory() = std::
 const InProcessRobotFactory& GetInProcessRobotFactory() { return Factory(); }
 
 std::string SimulatedTimeProblem(const SessionSetup& setup) {
-  if (setup.operator_kind != "auto") {
+  // A person's run at the simulated arms has nobody at them: nothing
+  // happens in it that needs a person's time (it shows that nothing moves).
+  if (setup.operator_kind != "auto" && !haptics::DriverOf(setup.device).simulated) {
     return "the automatic operator drives a simulated-time run (a person drives in real time); use "
            "--operator auto";
   }

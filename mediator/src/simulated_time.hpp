@@ -27,7 +27,8 @@ namespace haptel::mediator {
 constexpr int64_t kSimulatedEpochNs = 1'000'000'000'000;
 
 /// Why a setup cannot run in simulated time ("" when it can): the
-/// automatic operator, a simulated robot that steps in process, no view,
+/// automatic operator (or a person's run at the simulated device, whose
+/// arms nobody holds), a simulated robot that steps in process, no view,
 /// no recording, no vehicle attached, a link fault of a delay alone.
 std::string SimulatedTimeProblem(const SessionSetup& setup);
 

@@ -39,7 +39,7 @@ namespace {
 using namespace haptel::sql;
 
 /// Schema version stored in PRAGMA user_version.
-constexpr int kSchemaVersion = 13;
+constexpr int kSchemaVersion = 14;
 
 /// Schema steps: kMigrations[v - 1] takes a database from version v - 1 to v.
 /// A new database runs them all, so the upgrade path of an old file is the
@@ -299,11 +299,22 @@ constexpr const char* kSchemaV12 = R"sql(
 ALTER TABLE runs ADD COLUMN controller_errors INTEGER DEFAULT NULL;
 )sql";
 
-// v13: the input device of each study trial (a study names one per
+// v13: a hand that lets go stops the vehicle (issue 36): the time the
+// operator did not engage the interface, and what the device measured of
+// its use: the pseudo-haptic gain (NULL: the device does not bend the
+// hand) and the force-feedback effects it played. `device` holds the
+// device's driver from now on (the shipped files' names were their drivers').
+constexpr const char* kSchemaV13 = R"sql(
+ALTER TABLE runs ADD COLUMN disengaged_s REAL DEFAULT NULL;
+ALTER TABLE runs ADD COLUMN pseudo_haptic_gain_mean REAL DEFAULT NULL;
+ALTER TABLE runs ADD COLUMN ff_effects_played INTEGER DEFAULT NULL;
+)sql";
+
+// v14: the input device of each study trial (a study names one per
 // condition: the mouse, a force-feedback wheel...), by its device file's
 // name: the one planned, and the one a recorded (or superseded) trial was
-// driven with. Trials planned before v13 get '' (not kept).
-constexpr const char* kSchemaV13 = R"sql(
+// driven with. Trials planned before v14 get '' (not kept).
+constexpr const char* kSchemaV14 = R"sql(
 ALTER TABLE study_plan ADD COLUMN device TEXT NOT NULL DEFAULT '';
 ALTER TABLE study_trials ADD COLUMN device TEXT NOT NULL DEFAULT '';
 ALTER TABLE study_superseded_trials ADD COLUMN device TEXT NOT NULL DEFAULT '';
@@ -311,7 +322,7 @@ ALTER TABLE study_superseded_trials ADD COLUMN device TEXT NOT NULL DEFAULT '';
 
 constexpr const char* kMigrations[] = {kSchemaV1,  kSchemaV2,  kSchemaV3, kSchemaV4, kSchemaV5,
                                        kSchemaV6,  kSchemaV7,  kSchemaV8, kSchemaV9, kSchemaV10,
-                                       kSchemaV11, kSchemaV12, kSchemaV13};
+                                       kSchemaV11, kSchemaV12, kSchemaV13, kSchemaV14};
 static_assert(std::size(kMigrations) == kSchemaVersion, "one migration per schema version");
 
 constexpr const char* kInsertRun = R"sql(
@@ -324,9 +335,9 @@ INSERT INTO runs (started_utc, started_wall_ns, config_name, track, interface, v
                   servo_target_hz, servo_rate_short, physics_rate_hz, physics_target_hz,
                   physics_rate_short, vehicle_kind, predict, link_fault, prediction_error_m_p50,
                   prediction_error_m_p95, approach_s, video_kbps, video_stale_s, speedup,
-                  controller_errors)
+                  controller_errors, disengaged_s, pseudo_haptic_gain_mean, ff_effects_played)
 VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?,
-        ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)
+        ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)
 )sql";
 
 constexpr const char* kInsertSplit =
@@ -350,7 +361,8 @@ SELECT id, started_wall_ns, config_name, track, interface, vehicle, completed, o
        view_fps, view_frame_p99_ms, video_to_screen_ms_p50, video_to_screen_ms_p99, picture,
        servo_target_hz, servo_rate_short, physics_rate_hz, physics_target_hz, physics_rate_short,
        vehicle_kind, predict, link_fault, prediction_error_m_p50, prediction_error_m_p95, approach_s,
-       video_kbps, video_stale_s, speedup, controller_errors
+       video_kbps, video_stale_s, speedup, controller_errors, disengaged_s,
+       pseudo_haptic_gain_mean, ff_effects_played
 FROM runs ORDER BY id
 )sql";
 
@@ -619,7 +631,10 @@ int64_t Recorder::Save(const RunRecord& run, const AlsoSave& also) {
       .Real(run.video_kbps)
       .Real(run.video_stale_s)
       .RealOrNull(run.speedup, run.speedup > 0.0)
-      .IntOrNull(run.controller_errors, run.controller_errors >= 0);
+      .IntOrNull(run.controller_errors, run.controller_errors >= 0)
+      .RealOrNull(run.disengaged_s, std::isfinite(run.disengaged_s))
+      .RealOrNull(run.pseudo_haptic_gain_mean, std::isfinite(run.pseudo_haptic_gain_mean))
+      .IntOrNull(run.ff_effects_played, run.ff_effects_played >= 0);
   StepDone(path_, db_, insert_run.get(), "cannot insert run");
   const int64_t run_id = sqlite3_last_insert_rowid(db_);
 
@@ -761,7 +776,10 @@ std::vector<RunRecord> Recorder::LoadAll() const {
       const double speedup = r.Real();  // NaN for NULL: a real-time run, or recorded before v11
       run.speedup = std::isnan(speedup) ? -1.0 : speedup;
       run.controller_errors =
-          static_cast<int>(r.IntOr(-1));  // NULL: no servo controller, or before v12
+          static_cast<int>(r.IntOr(-1));       // NULL: no servo controller, or before v12
+      run.disengaged_s = r.Real();             // NaN for NULL: recorded before v13
+      run.pseudo_haptic_gain_mean = r.Real();  // NaN for NULL: not measured, or before v13
+      run.ff_effects_played = r.IntOr(-1);     // NULL: recorded before v13
       index_of.emplace(run.id, runs.size());
       runs.push_back(std::move(run));
     }

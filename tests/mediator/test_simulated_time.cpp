@@ -9,8 +9,11 @@
 #include <vector>
 
 #include "haptel/app/in_process_robot.hpp"
+#include "haptel/app/run_command.hpp"
 #include "haptel/core/args.hpp"
 #include "haptel/core/clock.hpp"
+#include "haptel/core/json.hpp"
+#include "haptel/mediator/engagement.hpp"
 #include "haptel/mediator/run_setup.hpp"
 #include "test_env.hpp"
 
@@ -88,6 +91,9 @@ TEST_CASE("simulated time: the same seed drives the same gesture lap to the tick
   CHECK(first.result.vehicle_ticks == static_cast<uint64_t>(std::llround(span_s * 200.0)));
   CHECK_FALSE(first.result.record.servo_rate_short);
   CHECK(first.result.record.speedup > 0.0);
+  // The automatic operator's hand shakes as a held hand does: engaged all
+  // lap, but for the start (half a second of its motion must be seen first).
+  CHECK(first.result.record.disengaged_s < mediator::HandMotionRule::kWindow_s);
   // The clock is the real one again after the run.
   CHECK_FALSE(SimulatedClockOn());
 }
@@ -158,8 +164,10 @@ TEST_CASE("simulated time: what cannot step in this process is refused, naming w
           "[simulated-time]") {
   const auto dir = test::ScratchDir("simtime-refused");
   const auto db = dir / "runs.db";
+  // A person drives in real time (at the simulated arms nobody does: below).
   CHECK_THAT(test::WhatOf<UsageError>([&] {
-               Setup(db, {"--simulated-time", "--operator", "person"});
+               Setup(db, {"--simulated-time", "--operator", "person", "--device",
+                          "config/devices/udp.yaml"});
              }),
              Catch::Contains("--operator auto"));
   CHECK_THAT(test::WhatOf<UsageError>([&] {
@@ -178,4 +186,35 @@ TEST_CASE("simulated time: what cannot step in this process is refused, naming w
                Setup(db, {"--simulated-time", "--attach"});
              }),
              Catch::Contains("--attach"));
+}
+
+TEST_CASE("a gesture run with nobody at the simulated arms moves the vehicle 0 m in 60 s",
+          "[simulated-time][engagement]") {
+  const auto dir = test::ScratchDir("simtime-nobody");
+  // `haptel run --operator person --device config/devices/sim.yaml --interface gesture`:
+  // nobody holds the arms (issue 36: it drove off at 0.15 m/s).
+  const mediator::SessionSetup setup =
+      Setup(dir / "runs.db", {"--operator", "person", "--device", "config/devices/sim.yaml",
+                              "--interface", "gesture", "--simulated-time", "--time-limit", "60"});
+  const mediator::RecordedRun run = Run(setup);
+  const record::RunRecord& r = run.result.record;
+  CHECK(run.result.outcome == mediator::Outcome::kTimeLimit);
+  CHECK(r.distance_m == 0.0);
+  CHECK(r.obstacles_touched == 0);
+  CHECK(r.device == "sim");
+  // Not engaged all along once the vehicle was up (at once, in this process).
+  CHECK(r.disengaged_s == Approx(60.0).margin(1.0));
+  CHECK(std::isnan(r.pseudo_haptic_gain_mean));  // the sim device bends nothing
+  CHECK(r.ff_effects_played == 0);
+  // The JSON line and the database row say the same.
+  const std::string json = app::RunJson(setup, run);
+  CHECK_THAT(json, Catch::Contains("\"distance_m\":0,"));
+  CHECK_THAT(json, Catch::Contains("\"device\":\"sim\""));
+  CHECK_THAT(json, Catch::Contains("\"pseudo_haptic_gain_mean\":null,\"ff_effects_played\":0"));
+  CHECK_THAT(json, Catch::Contains("\"disengaged_s\":" + JsonNumber(r.disengaged_s)));
+  const std::vector<record::RunRecord> rows = record::Recorder(setup.run.database).LoadAll();
+  REQUIRE(rows.size() == 1);
+  CHECK(rows[0].distance_m == 0.0);
+  CHECK(rows[0].disengaged_s == r.disengaged_s);
+  CHECK(rows[0].device == "sim");
 }

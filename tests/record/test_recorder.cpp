@@ -124,6 +124,10 @@ RunRecord MakeRun(int n, int split_count) {
       n % 2 == 0 ? -1 : (n % 4 == 1 ? 0 : 0x0008);  // -1: no servo controller (NULL)
   run.video_kbps = 850.5 + n;
   run.video_stale_s = 0.25 * n;
+  run.disengaged_s = 1.5 + 0.25 * n;
+  run.pseudo_haptic_gain_mean =  // NaN: the device does not bend the hand (NULL)
+      n % 2 == 0 ? std::numeric_limits<double>::quiet_NaN() : 0.375 + 0.01 * n;
+  run.ff_effects_played = n % 2 == 0 ? 0 : 5'000'000'000LL + n;  // needs 64 bits
   run.prediction_error_m_p95 = n % 3 == 0 ? -1.0 : 0.011 * n;
   run.completed = (n % 2 == 0);
   run.outcome = run.completed ? "completed" : "lap cap";
@@ -189,6 +193,9 @@ void CheckSame(const RunRecord& got, const RunRecord& want) {
   CHECK(got.prediction_error_m_p95 == want.prediction_error_m_p95);
   CHECK(got.speedup == want.speedup);
   CHECK(got.controller_errors == want.controller_errors);
+  CHECK(SameReal(got.disengaged_s, want.disengaged_s));
+  CHECK(SameReal(got.pseudo_haptic_gain_mean, want.pseudo_haptic_gain_mean));
+  CHECK(got.ff_effects_played == want.ff_effects_played);
   CHECK(got.completed == want.completed);
   CHECK(got.outcome == want.outcome);
   CHECK(SameReal(got.lap_time_s, want.lap_time_s));
@@ -355,7 +362,7 @@ TEST_CASE("Recorder stores the start time as ISO-8601 UTC and a schema version",
   }
   RawDb raw(file);
   CHECK(raw.Text("SELECT started_utc FROM runs") == "2024-05-01T12:34:56.789Z");
-  CHECK(raw.Integer("PRAGMA user_version") == 13);
+  CHECK(raw.Integer("PRAGMA user_version") == 14);
 }
 
 TEST_CASE("Recorder creates missing parent folders", "[recorder]") {
@@ -392,10 +399,10 @@ TEST_CASE("Recorder set-up errors name the database file", "[recorder]") {
     const fs::path file = tmp.path() / "future.db";
     {
       RawDb raw(file);
-      raw.Exec("PRAGMA user_version = 14");
+      raw.Exec("PRAGMA user_version = 15");
     }
     RequireThrowsMentioning([&] { Recorder recorder(file); }, file.string());
-    RequireThrowsMentioning([&] { Recorder recorder(file); }, "schema version 14");
+    RequireThrowsMentioning([&] { Recorder recorder(file); }, "schema version 15");
   }
 
   SECTION("the path is a folder") {
@@ -510,6 +517,7 @@ TEST_CASE("A run the database did not take is written whole beside it", "[record
   for (const std::string& part :
        {std::string("\"config_name\":\"quote \\\" and\\u000anewline\""),
         std::string("\"lap_time_s\":null"), std::string("\"physics_rate_short\":true"),
+        std::string("\"disengaged_s\":2,\"pseudo_haptic_gain_mean\":null,\"ff_effects_played\":0"),
         std::string("\"counters\":{\"servo_overruns\":5,\"servo_forces_clamped\":0,"
                     "\"video_frames_dropped\":1099511627776}"),
         std::string("\"splits\":[{\"gate\":0,"), std::string("\"switches\":[{\"t_s\":3.25,"),
@@ -690,6 +698,8 @@ RunRecord V1Run() {
   run.servo_target_hz = nan;
   run.physics_rate_hz = nan;
   run.physics_target_hz = nan;
+  run.disengaged_s = nan;      // v13's: not recorded (NULL)
+  run.ff_effects_played = -1;  // v13's: not recorded (NULL)
   run.splits = {{0, true, 20.0}, {1, false, 41.5}};
   return run;
 }
@@ -723,7 +733,7 @@ TEST_CASE("A v1 database is migrated to the current schema in place and keeps it
   }
 
   RawDb raw(file);
-  CHECK(raw.Integer("PRAGMA user_version") == 13);
+  CHECK(raw.Integer("PRAGMA user_version") == 14);
   CHECK(raw.Text("PRAGMA integrity_check") == "ok");
   CHECK(raw.Integer("SELECT COUNT(*) FROM pragma_foreign_key_check") == 0);
   for (const char* table : {"interface_switches", "run_path", "run_contacts", "run_counters"}) {
@@ -741,7 +751,7 @@ TEST_CASE("A v1 database is migrated to the current schema in place and keeps it
     Recorder again(file);
     CHECK(again.LoadAll().size() == 2);
   }
-  CHECK(raw.Integer("PRAGMA user_version") == 13);
+  CHECK(raw.Integer("PRAGMA user_version") == 14);
 }
 
 namespace {
@@ -830,7 +840,7 @@ TEST_CASE("A v2 database is migrated to v3: its runs keep everything, new runs k
   CheckSame(runs[0], V2Run());
   CheckSame(runs[1], fresh);
   RawDb raw(file);
-  CHECK(raw.Integer("PRAGMA user_version") == 13);
+  CHECK(raw.Integer("PRAGMA user_version") == 14);
   CHECK(raw.Text("PRAGMA integrity_check") == "ok");
   CHECK(raw.Integer(
             "SELECT value FROM run_counters WHERE run_id = 2 AND name = 'servo_overruns'") == 9);

@@ -457,7 +457,8 @@ TEST_CASE(
   // and the runs' prediction and link fault (v7), the approach (v8), the
   // video's bitrate and stale time (v9), the notes and the superseded
   // trials (v10), the simulated-time speed-up (v11), the servo controller's
-  // errors (v12), the trials' devices (v13).
+  // errors (v12), the runs' engagement and device use (v13), the trials'
+  // devices (v14).
   {
     sqlite3* raw = nullptr;
     REQUIRE(sqlite3_open(db.c_str(), &raw) == SQLITE_OK);
@@ -474,13 +475,15 @@ TEST_CASE(
             "flags; "
             "ALTER TABLE runs DROP COLUMN video_kbps; ALTER TABLE runs DROP COLUMN video_stale_s; "
             "ALTER TABLE runs DROP COLUMN speedup; ALTER TABLE runs DROP COLUMN controller_errors; "
+            "ALTER TABLE runs DROP COLUMN disengaged_s; ALTER TABLE runs DROP COLUMN "
+            "pseudo_haptic_gain_mean; ALTER TABLE runs DROP COLUMN ff_effects_played; "
             "ALTER TABLE study_plan DROP COLUMN device; ALTER TABLE study_trials DROP COLUMN "
             "device; "
             "DROP TABLE study_notes; DROP TABLE study_superseded_trials; PRAGMA user_version = 5",
             nullptr, nullptr, nullptr) == SQLITE_OK);
     sqlite3_close(raw);
   }
-  record::Recorder recorder(db);  // migrated to v13: the study has no definition on record
+  record::Recorder recorder(db);  // migrated to v14: the study has no definition on record
   auto resume = [&](const std::string& text) {
     test::WriteFile(file, text);
     const StudyConfig config = LoadStudy(file);

@@ -241,16 +241,16 @@ void ReadDesign(const std::filesystem::path& database, sqlite3* raw, int64_t id,
 
 /// The trials, in the participants' order. Read-only, so not migrated: a
 /// database from before v8 has neither the approach nor the flags (read as
-/// unknown and none), one before v13 not the device ('').
+/// unknown and none), one before v14 not the device ('').
 void ReadTrials(const std::filesystem::path& database, sqlite3* raw, int64_t id, int version,
                 StudyResults& r) {
   const std::string v8 = version >= 8 ? "t.approach_s, t.flags" : "NULL, ''";
-  const std::string v13 = version >= 13 ? "t.device" : "''";
+  const std::string v14 = version >= 14 ? "t.device" : "''";
   const std::string select_trials =
       "SELECT t.participant, t.position, t.condition, t.lap_time_s, t.completed, t.obstacles, "
       "t.run_id, t.outcome, "
       "t.attempt, " +
-      v8 + ", " + v13 +
+      v8 + ", " + v14 +
       " FROM study_trials t JOIN study_participants s ON s.study_id = t.study_id AND "
       "s.participant = t.participant WHERE t.study_id = ? ORDER BY s.row_index, t.position";
   Stmt trials = Prepare(database, raw, select_trials.c_str(), "cannot read the trials");
@@ -289,7 +289,7 @@ void ReadSupersededAndNotes(const std::filesystem::path& database, sqlite3* raw,
       std::string(
           "SELECT participant, position, condition, lap_time_s, completed, obstacles, run_id, "
           "outcome, attempt, approach_s, flags, ") +
-      (version >= 13 ? "device" : "''") +
+      (version >= 14 ? "device" : "''") +
       ", why FROM study_superseded_trials WHERE study_id = ? ORDER BY id";
   Stmt superseded =
       Prepare(database, raw, select_superseded.c_str(), "cannot read the superseded trials");

@@ -32,6 +32,14 @@ struct OperatorConfig {
   /// hand for this long, then close the fingers over grasp_close_s.
   double grasp_reach_s = 0.8;
   double grasp_close_s = 0.6;
+  /// The physiological tremor of a hand that holds an arm: every person's
+  /// hand shakes at 8-12 Hz by about 0.1-0.5 mm even when held still
+  /// (Elble & Koller, "Tremor", 1990), and the session knows a held arm by
+  /// it (mediator/engagement.hpp; docs/haptics.md). The held hand's
+  /// displacement amplitude along each axis, m (0: a hand that never shakes),
+  /// and its frequency, each axis a few percent apart (the device's seed).
+  double tremor_amplitude = 0.2e-3;
+  double tremor_frequency_hz = 10.0;
 
   template <typename Archive>
   void Serialize(Archive* a) {
@@ -50,6 +58,8 @@ struct OperatorConfig {
     a->Visit(HAPTEL_NVP(careful_s), Range{0.0, 60.0});
     a->Visit(HAPTEL_NVP(grasp_reach_s), Range{0.0, 10.0});
     a->Visit(HAPTEL_NVP(grasp_close_s), Range{0.0, 10.0});
+    a->Visit(HAPTEL_NVP(tremor_amplitude), Range{0.0, 5e-3});
+    a->Visit(HAPTEL_NVP(tremor_frequency_hz), Range{1.0, 30.0});
   }
 
   /// Throws ConfigFieldError unless every value is in range and min_forward <= cruise.

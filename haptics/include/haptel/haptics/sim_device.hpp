@@ -13,7 +13,10 @@
 ///
 /// The muscle is a spring-damper with a slow, bounded integral term toward a
 /// target the operator sets: a person who pushes harder when something pulls
-/// back, but cannot push through a stiff wall. A released arm has no muscle.
+/// back, but cannot push through a stiff wall. A held arm also shakes with
+/// the operator's physiological tremor (OperatorConfig::tremor_amplitude at
+/// tremor_frequency_hz): a force oscillation sized so that the arm moves by
+/// the amplitude. A released arm has no muscle, and no tremor.
 #include <array>
 #include <atomic>
 
@@ -79,6 +82,7 @@ class SimDevice final : public Device {
     Vec3d velocity{};
     Vec3d device_force{};  ///< N actually applied
     Vec3d integral{};      ///< integral part of the muscle force, N
+    Vec3d tremor_phase{};  ///< rad, per axis
     std::array<double, kFingers> finger_force{};
     int64_t last_ns = 0;
   };
@@ -90,6 +94,9 @@ class SimDevice final : public Device {
 
   SimArmConfig config_;
   OperatorConfig muscle_;
+  /// The tremor's force amplitude (N) and angular frequency (rad/s) per axis.
+  double tremor_force_ = 0.0;
+  Vec3d tremor_omega_{};
   DeviceDescription description_;
   std::array<SimArmTruth, kSides> truth_{};
   std::array<Arm, kSides> arms_{};

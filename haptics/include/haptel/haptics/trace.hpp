@@ -91,6 +91,15 @@ class ReplayDevice final : public Device {
   DeviceStatus ReadGlove(Side side, int64_t now_ns, GloveRaw& out) override;
   DeviceStatus WriteWristForce(Side side, const Vec3d&) override;
   DeviceStatus WriteFingerForces(Side side, const std::array<double, kFingers>&) override;
+  /// A trace records what the hand did, not whether it was held: the
+  /// session judges that from the replayed motion (kUnknown), as it does
+  /// for a live arm — but it needs half a second of motion to see a hand
+  /// (mediator/engagement.hpp), and a trace starts when the vehicle
+  /// answered, with no motion before. So while it holds its first reading
+  /// and for its first kHeldAtStart_s it says kHeld, as the recorded hand
+  /// was when the recorded vehicle answered (it drove that lap).
+  HandPresence Presence(Side side) override;
+  static constexpr double kHeldAtStart_s = 1.0;
 
   uint64_t commands_ignored(Side side) const { return ignored_[Index(side)].load(); }
 
@@ -110,6 +119,7 @@ class ReplayDevice final : public Device {
   std::array<int64_t, kSides> wrist_round_{};
   std::array<int64_t, kSides> glove_round_{};
   std::array<std::atomic<uint64_t>, kSides> ignored_{};
+  std::array<int64_t, kSides> last_read_ns_{};  ///< the servo thread's, per side
 };
 
 }  // namespace haptel::haptics

@@ -87,6 +87,8 @@ class HapticSide {
   /// Of the same arm: the periods of the ticks that rendered a cue (a fleet's switch).
   const Histogram& ServoCuePeriods() const;
   const DeviceConfig& config() const { return config_; }
+  /// What the device measured of the person's use of it (Device::UseReport). Any thread.
+  haptics::DeviceUseReport UseReport() const { return device_->UseReport(); }
 
  private:
   DeviceConfig config_;

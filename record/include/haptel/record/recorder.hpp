@@ -107,9 +107,22 @@ struct RunRecord {
   /// servo controller, or the run was recorded before v12).
   int controller_errors = -1;
   std::string operator_kind;  ///< "auto" or "person"
-  std::string device;         ///< the haptic device's name
-  double distance_m = 0.0;    ///< driven, summed over the vehicle's positions
-  double view_fps = 0.0;      ///< the operator's view (0: none)
+  /// The haptic device's driver: sim, udp, replay, mouse, sdl-ff (v13;
+  /// before, the device file's name, the same for the shipped files).
+  std::string device;
+  /// Time the vehicle was up and the operator did not engage the interface
+  /// (a hand let go, out of reach, not yet back at neutral; engagement.hpp
+  /// in the mediator), s (v13; NaN before).
+  double disengaged_s = 0.0;
+  /// How much the device bent the hand's motion from its input's (a mouse's
+  /// pseudo-haptics: the hand's displacement over the pointer's, mean; NaN:
+  /// the device does not bend it, or recorded before v13).
+  double pseudo_haptic_gain_mean = std::numeric_limits<double>::quiet_NaN();
+  /// Force-feedback effects the device started (SDL's haptic API; 0 for a
+  /// device without; -1: recorded before v13).
+  int64_t ff_effects_played = 0;
+  double distance_m = 0.0;  ///< driven, summed over the vehicle's positions
+  double view_fps = 0.0;    ///< the operator's view (0: none)
   double view_frame_p99_ms = 0.0;
   double video_to_screen_ms_p50 = 0.0;  ///< capture stamp -> first shown on screen
   double video_to_screen_ms_p99 = 0.0;
@@ -134,7 +147,7 @@ struct RunRecord {
 class Recorder {
  public:
   /// Opens (creating it and its parent folders if needed) the database and its
-  /// schema; an older schema (v1 to v8) is migrated in place, in one
+  /// schema; an older schema (v1 to v12) is migrated in place, in one
   /// transaction. The schema is read inside a write transaction, so a file
   /// that opens here can be written; every page is checked first (SQLite's
   /// quick_check), so a file damaged inside is refused here, not at the save.

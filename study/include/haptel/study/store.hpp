@@ -1,6 +1,6 @@
 #pragma once
 /// @file A study's tables in the run database (schema v4, v6's
-/// definition_form, v10's notes, v13's devices; recorder.cpp): the study, what defines it
+/// definition_form, v10's notes, v14's devices; recorder.cpp): the study, what defines it
 /// (definition.hpp) and its plan, written once when it is first run; one trial row per
 /// planned trial, written in its run's own transaction; the questionnaire
 /// answers, one transaction per questionnaire; the experimenter's notes; and
@@ -30,7 +30,7 @@ struct PlannedTrial {
   std::string condition;
   int repetition = 1;
   /// The device's name (StudyCondition::device_name: "mouse", "sim"); "":
-  /// planned before the database kept it (schema v13).
+  /// planned before the database kept it (schema v14).
   std::string device{};
 };
 
@@ -57,7 +57,7 @@ struct TrialRow {
   /// What could have spoiled the trial, from its run (TrialFlags); "": nothing.
   std::string flags;
   /// The input device it was driven with (PlannedTrial::device); "":
-  /// recorded before the database kept it (schema v13).
+  /// recorded before the database kept it (schema v14).
   std::string device{};
 };
 
