@@ -32,6 +32,7 @@ const RegisterDeviceDriver kReplayDriver{{
     .name = "replay",
     .simulated = false,
     .reads_trace = true,
+    .reads_window = false,
     .calibration = CalibrationSource::kBesideTrace,
     .check =
         [](const DeviceConfig& config) {

@@ -143,8 +143,18 @@ void ServoLoop::TrackWrist(Arm& arm, Side side, int64_t now_ns) {
   }
   hal_.PublishWrist(side, arm.wrist);
   hal_.PublishPresence(side, device_.Presence(side));
+  const ArmCalibration& cal = calibration_.arms[Index(side)];
+  if (PseudoHapticReport shown; device_.PseudoHaptics(side, shown)) {
+    shown.target = TrackerToMetres(cal, shown.target);
+    shown.hand = TrackerToMetres(cal, shown.hand);
+    for (int i = 0; i < 3; ++i) {
+      shown.force[i] *= cal.force_slope[i];
+      shown.shake[i] *= cal.tracker_scale[i];
+    }
+    hal_.PublishPseudoHaptics(side, shown);
+  }
   if (trace_ != nullptr) trace_->Push(TraceRecord::FromWrist(side, arm.wrist));
-  const Vec3d p = TrackerToMetres(calibration_.arms[Index(side)], arm.wrist.position);
+  const Vec3d p = TrackerToMetres(cal, arm.wrist.position);
   for (int i = 0; i < 3; ++i)
     arm.displacement[i] = arm.have_previous ? p[i] - arm.previous_position[i] : 0.0;
   if (arm.have_previous && now_ns > arm.previous_ns) {

@@ -10,6 +10,7 @@ const RegisterDeviceDriver kSimDriver{{
     .name = "sim",
     .simulated = true,
     .reads_trace = false,
+    .reads_window = false,
     .calibration = CalibrationSource::kOptional,
     .check = nullptr,
     .available = nullptr,

@@ -7,6 +7,7 @@
 #include "haptel/config/error.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/core/log.hpp"
+#include "haptel/haptics/calibrated_units.hpp"
 #include "haptel/haptics/device_drivers.hpp"
 #include "haptel/haptics/device_factory.hpp"
 #include "haptel/haptics/gravity.hpp"
@@ -77,6 +78,8 @@ HapticSide::HapticSide(const DeviceConfig& device,
     haptics::CalibrationOptions options;
     options.auto_mode = true;
     calibration_ = haptics::RunCalibration(*sim_, options, quiet);
+  } else if (device_->description().reports_si) {
+    calibration_ = haptics::IdentityCalibration(device.name);  // metres, radians, newtons already
   } else {
     throw ConfigError(device.file.string() + ": no calibration for device '" + device.name + "'");
   }

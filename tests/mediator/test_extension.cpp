@@ -39,6 +39,7 @@ const haptics::RegisterDeviceDriver kTestDriver{{
     .name = "test-sim",
     .simulated = true,
     .reads_trace = false,
+    .reads_window = false,
     .calibration = haptics::CalibrationSource::kOptional,
     .check =
         [](const DeviceConfig& config) {

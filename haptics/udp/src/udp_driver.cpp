@@ -26,6 +26,7 @@ const RegisterDeviceDriver kUdpDriver{{
     .name = UdpDevice::kDriver,
     .simulated = false,
     .reads_trace = false,
+    .reads_window = false,
     .calibration = CalibrationSource::kMeasured,
     .check = CheckPorts,
     .available = nullptr,

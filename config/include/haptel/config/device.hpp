@@ -173,6 +173,12 @@ struct UdpDeviceConfig {
 /// constant is `coupling_time_constant_s`, so a field of stiffness k lets the
 /// hand move k_c / (k_c + k) of the pointer's motion (Lécuyer's
 /// control/display ratio), and a force step over `shake_threshold` shakes it.
+/// The coupling's damping, τ·k_c, must stay well above the damping of what
+/// pushes the hand (the servo loop's force lags a tick and its velocity is
+/// filtered): 0.06 s × 100 N/m holds the gesture's wall (1500 N/m, 77 N·s/m)
+/// without chatter, 0.02 s does not (tests/haptics/test_mouse_device.cpp).
+/// The forces are not felt, so the device file's safety limits may be far
+/// above an arm's: a wall holds the hand only up to the force limit.
 struct MouseDeviceConfig {
   std::array<double, 3> centre{0.0, 0.0, 0.0};  ///< m, device frame: the window's centre
   double metres_per_pixel = 0.0005;
@@ -182,11 +188,16 @@ struct MouseDeviceConfig {
   double key_hand_speed = 0.15;                        ///< m/s
   std::array<double, 3> key_hand_rest{0.0, 0.0, 0.0};  ///< m, device frame
   double coupling_stiffness = 100.0;                   ///< N/m
-  double coupling_time_constant_s = 0.02;
+  double coupling_time_constant_s = 0.06;
   double shake_threshold = 1.5;  ///< N: a force step at least this big in one tick shakes the hand
   double shake_amplitude = 0.004;  ///< m per N of the step, capped at 0.01 m
   double shake_hz = 12.0;
   double shake_s = 0.3;
+  /// Each hand's wrist turned about z (up), degrees, positive to the left:
+  /// the grip the interface's controls want (the cockpit holds its lever
+  /// turned −90°, the fingers across the bar; its wheel at 0).
+  double pointer_hand_yaw_deg = 0.0;
+  double key_hand_yaw_deg = 0.0;
   template <typename Archive>
   void Serialize(Archive* a) {
     a->Visit(HAPTEL_NVP(centre), config::Range{-5.0, 5.0});
@@ -202,6 +213,8 @@ struct MouseDeviceConfig {
     a->Visit(HAPTEL_NVP(shake_amplitude), config::Range{0.0, 1.0});
     a->Visit(HAPTEL_NVP(shake_hz), config::Range{0.1, 200.0});
     a->Visit(HAPTEL_NVP(shake_s), config::Range{0.0, 10.0});
+    a->Visit(HAPTEL_NVP(pointer_hand_yaw_deg), config::Range{-180.0, 180.0});
+    a->Visit(HAPTEL_NVP(key_hand_yaw_deg), config::Range{-180.0, 180.0});
   }
   /// Throws ConfigFieldError unless every value is in range.
   void ValidateOrThrow() const;

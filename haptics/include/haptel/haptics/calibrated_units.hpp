@@ -3,6 +3,7 @@
 /// SI and back. These run in the servo loop: inline, noexcept,
 /// allocation-free.
 #include <array>
+#include <string>
 
 #include "haptel/config/calibration.hpp"
 #include "haptel/haptics/types.hpp"
@@ -40,6 +41,22 @@ inline void GloveToRadians(const ArmCalibration& c, const std::array<double, kGl
                            std::array<double, kGloveJoints>& radians) noexcept {
   for (int j = 0; j < kGloveJoints; ++j)
     radians[static_cast<size_t>(j)] = GloveToRadians(c, j, raw[static_cast<size_t>(j)]);
+}
+
+/// The calibration of a device that reports SI itself
+/// (DeviceDescription::reports_si): metres, radians and newtons unchanged.
+inline DeviceCalibration IdentityCalibration(const std::string& device) {
+  DeviceCalibration c;
+  c.device = device;
+  for (ArmCalibration& arm : c.arms) {
+    arm.tracker_scale = {1.0, 1.0, 1.0};
+    arm.tracker_offset = {0.0, 0.0, 0.0};
+    arm.glove_gain.fill(1.0);
+    arm.glove_offset.fill(0.0);
+    arm.force_slope = {1.0, 1.0, 1.0};
+    arm.finger_force_slope = 1.0;
+  }
+  return c;
 }
 
 /// Finger force in newtons → device command.

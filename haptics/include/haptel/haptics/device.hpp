@@ -38,6 +38,19 @@ struct DeviceUseReport {
   uint64_t shakes = 0;             ///< contact shakes shown or played
 };
 
+/// What a device that bends its hand's motion away from the person's input
+/// (the mouse's pseudo-haptics, docs/haptics.md) shows of one side: where
+/// the input alone would put the hand, where the hand is, what pushes it and
+/// how it shakes. Device units as ReadWrist's and WriteWristForce's (the
+/// servo loop publishes it into the HAL in metres and newtons).
+struct PseudoHapticReport {
+  Vec3d target{};  ///< where the input alone puts the hand
+  Vec3d hand{};    ///< where the hand is (what ReadWrist reports)
+  Vec3d force{};   ///< the wrist force last written
+  Vec3d shake{};   ///< the shown hand's offset from `hand` now (a contact's shake; zero when none)
+  bool held = false;  ///< the input moves the hand now (else it is free)
+};
+
 /// What a device is and may be asked: from its driver or its YAML file.
 struct DeviceDescription {
   std::string name = "device";
@@ -46,6 +59,9 @@ struct DeviceDescription {
   double finger_force_limit = 10.0;  ///< N per finger
   bool has_glove = true;
   bool has_grasp = true;
+  /// It reports metres and radians and takes newtons itself (the mouse):
+  /// without a calibration file it gets the identity calibration.
+  bool reports_si = false;
 };
 
 /// One end's two-port passivity report across a device's link (twoport.hpp),
@@ -88,6 +104,13 @@ class Device {
   }
   /// Its use so far. Any thread (an implementation keeps it in atomics).
   virtual DeviceUseReport UseReport() const { return {}; }
+  /// A device that bends its hand's motion (pseudo-haptics) fills `out` and
+  /// returns true; others false. Servo thread, every tick after ReadWrist.
+  virtual bool PseudoHaptics(Side side, PseudoHapticReport& out) {
+    (void)side;
+    (void)out;
+    return false;
+  }
 
   // Two-port passivity across the device's link (a device whose arms sit
   // behind a network: the udp driver's protocol version 2). A local device

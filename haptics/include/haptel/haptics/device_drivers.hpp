@@ -34,6 +34,9 @@ struct DeviceDriver {
   bool simulated = false;
   /// It plays back a recorded trace (the device file's `replay.trace`, or --trace-in).
   bool reads_trace = false;
+  /// A person moves it with the pointer and keys of the view's window (the
+  /// mouse): a run with it needs the window (--view window).
+  bool reads_window = false;
   CalibrationSource calibration = CalibrationSource::kMeasured;
   /// Its own checks of a device file naming it (ConfigFieldError naming the
   /// key), run by DeviceConfig::ValidateOrThrow after the common ones. May be empty.

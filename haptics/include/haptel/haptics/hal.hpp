@@ -54,6 +54,17 @@ class Hal {
   HandPresence presence(Side side) const {
     return presence_[Index(side)].load(std::memory_order_acquire);
   }
+  /// What a device that bends its hand's motion shows of `side`, in metres
+  /// and newtons (Device::PseudoHaptics), each tick; `shown` false until
+  /// such a device publishes one.
+  struct PseudoHaptics {
+    bool shown = false;
+    PseudoHapticReport report;
+  };
+  void PublishPseudoHaptics(Side side, const PseudoHapticReport& report) {
+    pseudo_haptics_[Index(side)].Store({true, report});
+  }
+  PseudoHaptics pseudo_haptics(Side side) const { return pseudo_haptics_[Index(side)].Load(); }
   /// The combined set-point: the interface's field plus the physics thread's
   /// coupling, direct and finger forces. Its stamp is the older of the two
   /// feeders' stamps (a feeder that never wrote is ignored), so either one
@@ -137,6 +148,7 @@ class Hal {
   std::array<Seqlock<Cue>, kSides> cues_;
   std::array<std::atomic<bool>, kSides> lost_{};
   std::array<std::atomic<HandPresence>, kSides> presence_{};
+  std::array<Seqlock<PseudoHaptics>, kSides> pseudo_haptics_;
   std::atomic<double> force_scale_{1.0};
   std::array<std::atomic<uint64_t>, kSides> wrist_count_{};
   std::array<std::atomic<uint64_t>, kSides> glove_count_{};

@@ -38,6 +38,9 @@ class PointerBox {
  public:
   void Store(const PointerState& state) { state_.Store(state); }
   PointerState Load() const { return state_.Load(); }
+  /// For the servo thread: a few attempts, then false with `out` untouched
+  /// (the writer was pre-empted mid-store; the caller keeps its last value).
+  bool TryLoad(PointerState& out) const { return state_.TryLoad(out, 4); }
 
  private:
   Seqlock<PointerState> state_;

@@ -7,7 +7,8 @@
 /// file `haptel calibrate` wrote, named by the device file's `calibration:`
 /// key, and is never calibrated automatically; a missing file, or one
 /// measured on another device, is an error naming the command that makes
-/// one. The `sim` device without a file is calibrated at start-up, unattended.
+/// one. The `sim` device without a file is calibrated at start-up, unattended;
+/// a device that reports SI itself (the mouse) gets the identity.
 /// A `replay` device uses its file's calibration or the one recorded beside
 /// the trace (`<trace>.calibration.yaml`, written by `haptel run --trace`).
 #include <filesystem>
