@@ -64,6 +64,26 @@ void ReplayDeviceConfig::ValidateOrThrow() const {}
 
 void MouseDeviceConfig::ValidateOrThrow() const { config_detail::CheckFields(*this); }
 
+void SdlFfAxisMap::ValidateOrThrow() const { config_detail::CheckFields(*this); }
+
+void SdlFfRimMap::ValidateOrThrow() const { config_detail::CheckFields(*this); }
+
+void SdlFfHandMap::ValidateOrThrow() const {
+  config_detail::CheckFields(*this);
+  if (rim.axis >= 0 && (y.axis >= 0 || z.axis >= 0 || y.reverse_axis >= 0 || z.reverse_axis >= 0)) {
+    check::Fail("rim.axis", "a rim moves y and z: y.axis and z.axis at -1 (or no rim: -1)",
+                {y.axis >= 0 ? "y.axis" : "z.axis"});
+  }
+}
+
+void SdlFfDeadman::ValidateOrThrow() const {
+  config_detail::CheckFields(*this);
+  if ((button >= 0) == (axis >= 0)) {
+    check::Fail("button", "exactly one of 'button' and 'axis' (the other -1): the deadman",
+                {"axis"});
+  }
+}
+
 void SdlFfDeviceConfig::ValidateOrThrow() const { config_detail::CheckFields(*this); }
 
 void DeviceConfig::ValidateOrThrow() const {

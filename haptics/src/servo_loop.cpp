@@ -85,6 +85,7 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
   // Forces from the latest set-point, at full rate whatever the feeders' rates.
   if (!hal_.TrySetpoint(side, arm.setpoint)) ++c.setpoint_read_fallbacks;
   const ForceSetpoint& sp = arm.setpoint;
+  device_.SetpointHint(side, sp);
   const SetpointForce ports = ComposeSetpointForce(sp, p, arm.velocity);
   Vec3d from_setpoint{};
   for (int i = 0; i < 3; ++i) from_setpoint[i] = ports.field[i] + ports.coupling[i];

@@ -28,6 +28,13 @@ std::optional<DeviceCalibration> DeviceCalibrationFor(const DeviceConfig& device
     if (device.calibration.empty()) return std::nullopt;
     return LoadCalibration(device.calibration);
   }
+  if (source == haptics::CalibrationSource::kSelf) {
+    if (!device.calibration.empty()) return LoadCalibration(device.calibration);
+    DeviceCalibration identity;
+    identity.device = device.name;
+    for (ArmCalibration& arm : identity.arms) arm.tracker_scale = {1.0, 1.0, 1.0};
+    return identity;  // the rest of ArmCalibration's defaults are the identity already
+  }
   if (source == haptics::CalibrationSource::kBesideTrace) {
     if (!device.calibration.empty()) return LoadCalibration(device.calibration);
     const std::filesystem::path beside = TraceCalibrationFile(device.replay.trace);

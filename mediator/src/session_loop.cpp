@@ -25,6 +25,11 @@ std::optional<LoopEnd> CheckOperatorSide(const std::atomic<bool>& interrupted,
                                          const HapticSide& haptic, const std::string& device_name) {
   if (interrupted.load()) return LoopEnd{Outcome::kInterrupted, "interrupted by the operator"};
   if (haptic.lost()) {
+    // Unplugged by the person: aborted, as a disconnected game controller is.
+    if (const std::string line = haptic.unplugged(); !line.empty()) {
+      return LoopEnd{Outcome::kAborted, "haptic device '" + device_name + "': " + line,
+                     haptic.silent_s()};
+    }
     return LoopEnd{Outcome::kDeviceLost,
                    "haptic device '" + device_name + "' lost: an arm stopped answering",
                    haptic.silent_s()};

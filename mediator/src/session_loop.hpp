@@ -26,7 +26,8 @@ struct LoopEnd {
 void Finish(SessionResult& result, LoopEnd end, const char* made_safe);
 
 /// The stops every loop checks first, each tick: an interruption, then the
-/// haptic device (a lost arm means no forces, so no driving either).
+/// haptic device (a lost arm means no forces, so no driving either; one
+/// the person unplugged ends the run aborted).
 std::optional<LoopEnd> CheckOperatorSide(const std::atomic<bool>& interrupted,
                                          const HapticSide& haptic, const std::string& device_name);
 

@@ -7,18 +7,25 @@
 #include <algorithm>
 #include <atomic>
 #include <catch2/catch.hpp>
+#include <chrono>
 #include <filesystem>
 #include <memory>
+#include <mutex>
+#include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "haptel/app/run_command.hpp"
 #include "haptel/config/vehicle.hpp"
+#include "haptel/link/participant.hpp"
+#include "haptel/link/topic.hpp"
 #include "haptel/mediator/fleet.hpp"
 #include "haptel/mediator/run_setup.hpp"
 #include "haptel/record/recorder.hpp"
 #include "haptel/vehicles/vehicle_kinds.hpp"
 #include "test_env.hpp"
+#include "virtual_joystick.hpp"
 
 namespace fs = std::filesystem;
 using namespace haptel;
@@ -120,4 +127,130 @@ TEST_CASE("a fleet of two robots in this process: both driven in turn, each reco
     CHECK(row.outcome != "refused");
     CHECK(row.outcome != "vehicle lost");
   }
+}
+
+TEST_CASE("a joystick unplugged mid-run: the run ends aborted, saying so, the robot stopped",
+          "[threads]") {
+  test::VirtualJoystick stick(/*rumble=*/true);
+  const int domain = test::UniqueDomain(2);  // not the runs' above
+  const fs::path dir = test::ScratchDir("session-threads-unplugged");
+  const std::unique_ptr<vehicles::Node> robot = StartRobot("robot1", domain);
+  // What the robot reports, read as a second operator would.
+  LinkConfig link;
+  link.domain_id = domain;
+  link::Participant participant(link, "test-watcher");
+  std::mutex mutex;
+  std::optional<msg::VehicleState> last;
+  link::StateReader states(participant, link::TopicName("robot1", "state"), link::Profile::kState,
+                           [&](const msg::VehicleState& s) {
+                             std::lock_guard lock(mutex);
+                             last = s;
+                           });
+  const auto speed = [&] {
+    std::lock_guard lock(mutex);
+    return last ? static_cast<double>(last->speed()) : 0.0;
+  };
+  const std::vector<std::string> words = {"run",
+                                          "--attach",
+                                          "--domain",
+                                          std::to_string(domain),
+                                          "--operator",
+                                          "person",
+                                          "--device",
+                                          "config/devices/sdl-ff.yaml",
+                                          "--interface",
+                                          "gesture",
+                                          "--view",
+                                          "none",
+                                          "--quiet",
+                                          "--database",
+                                          (dir / "runs.db").string(),
+                                          "--vehicle-timeout",
+                                          "10",
+                                          "--track",
+                                          "config/tracks/test-short.yaml",
+                                          "--time-limit",
+                                          "60"};
+  const std::vector<const char*> argv = Argv(words);
+  const mediator::SessionSetup setup = mediator::RunSetupFromArgs(
+      mediator::ParseRunArgs(static_cast<int>(argv.size()), argv.data()));
+  // The person holds the trigger and pushes the stick forward, from
+  // neutral again now and then (a run engages only from rest); once the
+  // robot drives, the stick is unplugged.
+  std::thread person([&] {
+    stick.SetButton(0, true);
+    test::WaitFor(
+        [&] {
+          stick.SetAxis(1, 0);
+          std::this_thread::sleep_for(std::chrono::milliseconds(300));
+          stick.SetAxis(1, -20000);
+          return test::WaitFor([&] { return speed() > 0.05; }, 1.0);
+        },
+        30.0);
+    stick.Detach();
+  });
+  mediator::Recorder recorder(setup.run.database);
+  const std::atomic<bool> interrupted{false};
+  const mediator::RecordedRun run = mediator::RunAndRecord(setup, recorder, interrupted);
+  person.join();
+  // Held safe: the robot comes to rest (the run's stop, or its watchdog).
+  const bool stopped = test::WaitFor([&] { return std::abs(speed()) < 0.01; }, 5.0);
+  robot->Stop();
+
+  const record::RunRecord& record = run.result.record;
+  INFO("outcome " << record.outcome << ": " << run.result.message);
+  CHECK(record.outcome == "aborted");
+  CHECK_THAT(run.result.message, Catch::Contains("joystick 'Haptel test stick' was unplugged"));
+  CHECK(record.distance_m > 0.0);  // it drove before: what was measured is kept
+  CHECK(run.run_id != 0);
+  CHECK(stopped);
+}
+
+TEST_CASE("a wheel and pedals drive the cockpit: the hands grip while the deadman is held",
+          "[threads]") {
+  test::VirtualJoystick wheel(/*rumble=*/true);
+  wheel.SetAxis(2, 32767);  // both pedals released: they rest high
+  wheel.SetAxis(3, 32767);
+  const int domain = test::UniqueDomain(3);
+  const fs::path dir = test::ScratchDir("session-threads-wheel");
+  const std::unique_ptr<vehicles::Node> robot = StartRobot("robot1", domain);
+  const std::vector<std::string> words = {"run",
+                                          "--attach",
+                                          "--domain",
+                                          std::to_string(domain),
+                                          "--operator",
+                                          "person",
+                                          "--device",
+                                          "config/devices/sdl-ff-wheel.yaml",
+                                          "--interface",
+                                          "cockpit",
+                                          "--view",
+                                          "none",
+                                          "--quiet",
+                                          "--database",
+                                          (dir / "runs.db").string(),
+                                          "--vehicle-timeout",
+                                          "10",
+                                          "--track",
+                                          "config/tracks/test-short.yaml",
+                                          "--time-limit",
+                                          "8"};
+  const std::vector<const char*> argv = Argv(words);
+  const mediator::SessionSetup setup = mediator::RunSetupFromArgs(
+      mediator::ParseRunArgs(static_cast<int>(argv.size()), argv.data()));
+  std::thread person([&] {
+    std::this_thread::sleep_for(std::chrono::seconds(1));
+    wheel.SetButton(4, true);  // the deadman: the hands close on the rim and the lever
+    std::this_thread::sleep_for(std::chrono::seconds(1));
+    wheel.SetAxis(2, -32768);  // the accelerator down: the lever forward
+  });
+  mediator::Recorder recorder(setup.run.database);
+  const std::atomic<bool> interrupted{false};
+  const mediator::RecordedRun run = mediator::RunAndRecord(setup, recorder, interrupted);
+  person.join();
+  robot->Stop();
+  const record::RunRecord& record = run.result.record;
+  INFO("outcome " << record.outcome << ": " << run.result.message);
+  CHECK(record.outcome == "time limit");
+  CHECK(record.distance_m > 0.2);
 }

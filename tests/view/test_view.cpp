@@ -12,6 +12,7 @@
 #include "haptel/view/view.hpp"
 #include "offscreen_gl.hpp"
 #include "test_env.hpp"
+#include "virtual_joystick.hpp"
 
 using namespace haptel;
 using namespace haptel::view;
@@ -350,6 +351,22 @@ TEST_CASE("the View records what it draws offscreen to an H.264 MP4 at the fixed
   CHECK(Green(At(last, ScreenPoint(renderer, 0.75, 0.25))));
   CHECK(Blue(At(last, ScreenPoint(renderer, 0.25, 0.75))));
   CHECK(White(At(last, ScreenPoint(renderer, 0.75, 0.75))));
+}
+
+TEST_CASE("the view's end leaves SDL's joystick to whoever else holds it (an sdl-ff device)") {
+  test::VirtualJoystick stick(/*rumble=*/true);  // holds the joystick subsystem, as the device does
+  QuadrantSource source;
+  ViewOptions options;
+  options.mode = ViewMode::kOffscreen;
+  options.width = kWidth;
+  options.height = kHeight;
+  {
+    View view(options, source, nullptr);
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    view.Stop();
+  }
+  CHECK(SDL_WasInit(SDL_INIT_JOYSTICK) != 0);
+  CHECK(stick.attached());  // not closed under its holder
 }
 
 TEST_CASE("view set-up errors are one clear line") {

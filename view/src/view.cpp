@@ -23,6 +23,14 @@
 namespace haptel::view {
 namespace {
 
+/// Leaves SDL as the view found it: its own subsystems quit, and SDL itself
+/// only when nothing else uses it (an sdl-ff device's thread keeps its
+/// joystick and haptic subsystems through the view's end).
+void QuitViewSdl() {
+  SDL_QuitSubSystem(SDL_INIT_VIDEO | SDL_INIT_GAMECONTROLLER);
+  if (SDL_WasInit(0) == 0) SDL_Quit();
+}
+
 int64_t Now(clockid_t clock) {
   timespec ts{};
   clock_gettime(clock, &ts);
@@ -220,7 +228,7 @@ struct View::Impl {
       renderer.reset();
       if (context != nullptr) SDL_GL_DeleteContext(context);
       if (window != nullptr) SDL_DestroyWindow(window);
-      if (sdl_up) SDL_Quit();
+      if (sdl_up) QuitViewSdl();
       ready.set_exception(std::current_exception());
       return;
     }
@@ -231,7 +239,7 @@ struct View::Impl {
     renderer.reset();
     SDL_GL_DeleteContext(context);
     SDL_DestroyWindow(window);
-    SDL_Quit();
+    QuitViewSdl();
   }
 
   void Loop(SDL_Window& window, Renderer& renderer) {

@@ -3,6 +3,7 @@
 /// driver, what the device may be asked, how the servo loop runs it, its
 /// safety limits, and the files that calibrate and gravity-compensate it.
 #include <array>
+#include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <string>
@@ -220,18 +221,129 @@ struct MouseDeviceConfig {
   void ValidateOrThrow() const;
 };
 
-/// The `sdl-ff` device (haptics/sdl_ff): a joystick or wheel SDL opens, its
-/// axes as the hands' positions and its force feedback as their forces.
-/// Filled in by its driver's work; `joystick` picks the device.
+/// Where an `sdl-ff` axis rests: a stick at its centre (deflection in
+/// [−1, 1]); a pedal or trigger at one end of SDL's range, low (−32768) or
+/// high (32767: many wheels' pedals), its deflection in [0, 1] from there.
+enum class SdlFfAxisRest : uint8_t { kCentre, kLow, kHigh };
+
+/// One coordinate of an `sdl-ff` hand that an axis moves: the hand's centre
+/// plus `span` times the axis' deflection. A second axis (a brake pedal,
+/// resting where `rest` says, or low for a stick) may move it the other way.
+struct SdlFfAxisMap {
+  int axis = -1;      ///< SDL's axis index; −1: the coordinate stays at the centre
+  double span = 0.0;  ///< m at full deflection; its sign says which way
+  SdlFfAxisRest rest = SdlFfAxisRest::kCentre;
+  int reverse_axis = -1;  ///< −1: none
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(HAPTEL_NVP(axis), config::Range{-1, 63});
+    a->Visit(HAPTEL_NVP(span), config::Range{-1.0, 1.0});
+    a->Visit(HAPTEL_NVP(rest), config::Choice<SdlFfAxisRest>{{{SdlFfAxisRest::kCentre, "centre"},
+                                                              {SdlFfAxisRest::kLow, "low"},
+                                                              {SdlFfAxisRest::kHigh, "high"}}});
+    a->Visit(HAPTEL_NVP(reverse_axis), config::Range{-1, 63});
+  }
+  void ValidateOrThrow() const;
+};
+
+/// A wheel's axis moving a hand around the rim: the hand on the circle of
+/// `radius` about the hand's centre in the y–z plane, at angle θ =
+/// `angle_deg` × deflection from the top (+θ: to the left, turned about
+/// −x as the cockpit's wheel turns), its orientation turned with it.
+struct SdlFfRimMap {
+  int axis = -1;            ///< −1: no rim
+  double radius = 0.143;    ///< m, hub to wrist (the cockpit: rim 0.12 + grip height 0.023)
+  double angle_deg = -135;  ///< at full deflection (a wheel turned right turns the rim right: −)
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(HAPTEL_NVP(axis), config::Range{-1, 63});
+    a->Visit(HAPTEL_NVP(radius), config::Range{0.0, 1.0});
+    a->Visit(HAPTEL_NVP(angle_deg), config::Range{-720.0, 720.0});
+  }
+  void ValidateOrThrow() const;
+};
+
+/// One hand of an `sdl-ff` device: where it is with every axis at rest, how
+/// it is turned, and which axes move it (per coordinate, or around a rim).
+struct SdlFfHandMap {
+  std::array<double, 3> centre{0.0, 0.0, 0.0};  ///< m, device frame (a rim's hub)
+  /// deg: roll, pitch, yaw (about x, y, z, applied z then y then x)
+  std::array<double, 3> orientation_deg{0.0, 0.0, 0.0};
+  SdlFfAxisMap x, y, z;
+  SdlFfRimMap rim;  ///< moves y and z: leave their axes at −1
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(HAPTEL_NVP(centre), config::Range{-5.0, 5.0});
+    a->Visit(HAPTEL_NVP(orientation_deg), config::Range{-360.0, 360.0});
+    a->Visit(HAPTEL_NVP(x));
+    a->Visit(HAPTEL_NVP(y));
+    a->Visit(HAPTEL_NVP(z));
+    a->Visit(HAPTEL_NVP(rim));
+  }
+  /// Throws ConfigFieldError unless the fields are in range and a rim
+  /// leaves y and z alone.
+  void ValidateOrThrow() const;
+};
+
+/// The deadman (ROS teleop_twist_joy's enable_button): a button, or an axis
+/// (a trigger or pedal resting low or high) pressed past `threshold` of its travel.
+struct SdlFfDeadman {
+  int button = 0;          ///< −1: an axis instead
+  int axis = -1;           ///< −1: a button instead
+  bool rest_high = false;  ///< `rest: low|high`
+  double threshold = 0.5;
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(HAPTEL_NVP(button), config::Range{-1, 63});
+    a->Visit(HAPTEL_NVP(axis), config::Range{-1, 63});
+    a->Visit(config::MakeNameValue("rest", &rest_high),
+             config::Choice<bool>{{{true, "high"}, {false, "low"}}, "low or high"});
+    a->Visit(HAPTEL_NVP(threshold), config::Range{0.0, 1.0});
+  }
+  /// Throws ConfigFieldError unless exactly one of button and axis is set.
+  void ValidateOrThrow() const;
+};
+
+/// The `sdl-ff` device (haptics/sdl_ff, docs/haptics.md): a joystick or
+/// wheel SDL opens, its axes as the hands' positions (metres, so the device
+/// calibrates itself) and its force feedback as their forces: the
+/// interface's centring field as the device's spring, the rest of the wrist
+/// force as a constant force, a contact as a sine shake (or rumble on a
+/// device with rumble only), all at `effect_hz`. The device's full effect
+/// level is `safety.wrist_force_limit` newtons at the hand.
 struct SdlFfDeviceConfig {
   /// Which joystick: its index in SDL's list, or −1 for the first that has
   /// force feedback (else the first with rumble).
   int joystick = -1;
+  SdlFfDeadman deadman;
+  SdlFfHandMap left, right;
+  double poll_hz = 250.0;    ///< the I/O thread reads the axes this often
+  double effect_hz = 100.0;  ///< and updates the effects this often
+  /// A contact: the wall rising, or the wrist force jumping by this much
+  /// (N) within one effect period, plays a shake.
+  double shake_threshold = 1.5;
+  double shake_level = 0.6;  ///< of the device's full effect level
+  double shake_hz = 12.0;
+  double shake_s = 0.3;
+  /// The hands close (four fingers' MCP, PIP, DIP, rad) while the deadman is
+  /// held: the cockpit's grip.
+  std::array<double, 3> grasp_flexion{0.2, 1.6, 1.4};
   template <typename Archive>
   void Serialize(Archive* a) {
     a->Visit(HAPTEL_NVP(joystick), config::Range{-1, 63});
+    a->Visit(HAPTEL_NVP(deadman));
+    a->Visit(HAPTEL_NVP(left));
+    a->Visit(HAPTEL_NVP(right));
+    a->Visit(HAPTEL_NVP(poll_hz), config::Range{10.0, 2000.0});
+    a->Visit(HAPTEL_NVP(effect_hz), config::Range{1.0, 1000.0});
+    a->Visit(HAPTEL_NVP(shake_threshold), config::Range{0.0, 1e3});
+    a->Visit(HAPTEL_NVP(shake_level), config::Range{0.0, 1.0});
+    a->Visit(HAPTEL_NVP(shake_hz), config::Range{0.1, 200.0});
+    a->Visit(HAPTEL_NVP(shake_s), config::Range{0.0, 10.0});
+    a->Visit(HAPTEL_NVP(grasp_flexion), config::Range{-3.2, 3.2});
   }
-  /// Throws ConfigFieldError unless every value is in range.
+  /// Throws ConfigFieldError unless every value is in range and the hands
+  /// and the deadman are valid ("right.rim.axis", "deadman.button").
   void ValidateOrThrow() const;
 };
 

@@ -102,6 +102,20 @@ class Device {
     (void)side;
     return HandPresence::kUnknown;
   }
+  /// The tick's set-point, which the force written next is computed from:
+  /// for a device that renders part of it itself (the sdl-ff device plays
+  /// the field's centring as its own spring, its wall as a shake). Servo
+  /// thread, every tick the arm answers, before WriteWristForce; must not
+  /// block or allocate. Forces come from WriteWristForce alone otherwise.
+  virtual void SetpointHint(Side side, const ForceSetpoint& setpoint) {
+    (void)side;
+    (void)setpoint;
+  }
+  /// Why the device answers kLost when the person took it away (a joystick
+  /// unplugged): a line saying so, and the run ends aborted, as when a game
+  /// controller is disconnected. "" (the default): lost is the device's
+  /// fault (the run ends "device lost"). Any thread.
+  virtual std::string UnpluggedLine() const { return {}; }
   /// Its use so far. Any thread (an implementation keeps it in atomics).
   virtual DeviceUseReport UseReport() const { return {}; }
   /// A device that bends its hand's motion (pseudo-haptics) fills `out` and

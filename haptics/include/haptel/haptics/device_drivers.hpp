@@ -25,6 +25,10 @@ enum class CalibrationSource {
   kOptional,     ///< a file if the device file names one, else the device calibrates itself
   kBesideTrace,  ///< the file named, else the one recorded beside the trace
   kMeasured,     ///< a real device: only a measured file, made on that device, will do
+  /// The device reports metres, radians and takes newtons itself (a
+  /// joystick's axes mapped to metres): the identity calibration, or a file
+  /// if the device file names one.
+  kSelf,
 };
 
 struct DeviceDriver {

@@ -7,10 +7,11 @@
 /// file `haptel calibrate` wrote, named by the device file's `calibration:`
 /// key, and is never calibrated automatically; a missing file, or one
 /// measured on another device, is an error naming the command that makes
-/// one. The `sim` device without a file is calibrated at start-up, unattended;
-/// a device that reports SI itself (the mouse) gets the identity.
-/// A `replay` device uses its file's calibration or the one recorded beside
-/// the trace (`<trace>.calibration.yaml`, written by `haptel run --trace`).
+/// one. The `sim` device without a file is calibrated at start-up, unattended.
+/// A device that measures in SI itself (the mouse, `sdl-ff`) gets the
+/// identity calibration unless its file names one. A `replay` device uses
+/// its file's calibration or the one recorded beside the trace
+/// (`<trace>.calibration.yaml`, written by `haptel run --trace`).
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -73,6 +74,9 @@ class HapticSide {
   bool replay_finished() const;
   /// An arm the device has (has_side) stopped answering: forces are zero.
   bool lost() const;
+  /// When lost because the person unplugged the device (a joystick), the
+  /// device's line saying so; else "" (Device::UnpluggedLine).
+  std::string unplugged() const { return device_->UnpluggedLine(); }
   /// How long the lost arm has been silent: seconds since its newest wrist
   /// reading (the longest, if both are lost; 0 when none is).
   double silent_s() const;
