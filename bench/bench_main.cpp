@@ -9,6 +9,7 @@
 #include "fleet_bench.hpp"
 #include "fuzz_bench.hpp"
 #include "gravity_bench.hpp"
+#include "hands_bench.hpp"
 #include "haptel/core/args.hpp"
 #include "haptel/core/cli.hpp"
 #include "link_bench.hpp"
@@ -22,6 +23,16 @@
 #include "view_bench.hpp"
 
 using namespace haptel::bench;
+
+#ifndef HAPTEL_BENCH_HANDS
+// Built without libXtst (a test package): the benchmark says what it needs.
+int haptel::bench::BenchHandsMain(int /*argc*/, const char* const* /*argv*/) {
+  std::fprintf(stderr,
+               "haptel bench hands: not built: it moves the X pointer through libXtst (Debian: "
+               "libxtst-dev, which scripts/test installs); install it and rebuild\n");
+  return 1;
+}
+#endif
 
 namespace {
 
@@ -74,6 +85,11 @@ constexpr Usage kUsage[] = {
      "the study database under concurrency: a study with its console, two runs, the sqlite3 tool, "
      "random kill -9s; "
      "integrity after every kill, every acknowledged row found"},
+    {"hands",
+     "[--interfaces LIST] [--device FILE] [--steps N] [--nobody-s S] [--domain D] [--smoke] "
+     "[--json]",
+     "the mouse device as every interface's hands, through the real window under Xvfb: commands, "
+     "input-to-command, pseudo-haptic ratios, contact to shake, servo p99, nobody engaged"},
 };
 
 using BenchMain = int (*)(int argc, const char* const* argv);
@@ -86,7 +102,7 @@ constexpr Bench kBenches[] = {
     {"physics", BenchPhysicsMain},     {"stability", BenchStabilityMain}, {"view", BenchViewMain},
     {"blimp", BenchBlimpMain},         {"link", BenchLinkMain},           {"fuzz", BenchFuzzMain},
     {"passivity", BenchPassivityMain}, {"video", BenchVideoMain},         {"fleet", BenchFleetMain},
-    {"soak", BenchSoakMain},
+    {"soak", BenchSoakMain},           {"hands", BenchHandsMain},
 };
 
 std::string UsageText(const std::string& only) {

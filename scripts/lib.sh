@@ -28,6 +28,7 @@ HAPTEL_TEST_PACKAGES=(
   chromium chromium-driver python3-selenium   # the study console tested in a real browser
   python3-can can-utils   # the CAN logs checked with python-can's LogReader and log2asc
   xvfb xauth xdotool   # an X server of its own for the window tests, xdotool for keys
+  libxtst-dev   # the pointer pilot (testing/): the real X pointer, button and keys through XTest
   clang-format   # the suite's check that every C++ file is as .clang-format says (scripts/format)
 )
 

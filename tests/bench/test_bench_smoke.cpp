@@ -472,6 +472,28 @@ TEST_CASE("bench video --smoke", "[bench][smoke][network]") {
                 "video_schedule_" + j["default"]["codec"].string() + ".png"});
 }
 
+TEST_CASE("bench hands --smoke: the gesture interface through the real window, engaged and not",
+          "[bench][smoke][hands]") {
+  const JsonValue j = Smoke("hands").json;
+  REQUIRE(j["interfaces"].array().size() == 1);
+  const JsonValue& g = j["interfaces"][0];
+  INFO("error: " << g["error"].string());
+  CHECK(g["interface"].string() == "gesture");
+  CHECK(g["ran"].boolean());
+  CHECK(g["commands"].number() > 0);
+  CHECK(g["steps"].number() == 3);  // 4 steps: 3 between them
+  CHECK(Finite(g["ratio_free"]) >= 0.0);
+  CHECK(Finite(g["servo_p99_us"]) > 0.0);
+  CHECK(Finite(g["bare_alone_p99_us"]) > 0.0);
+  CHECK(Finite(g["bare_beside_p99_us"]) > 0.0);
+  CHECK(g["nobody_commands"].number() > 0);
+  // Nobody engaged: no command that moves the vehicle (behaviour, not a figure).
+  CHECK(g["nobody_moving_commands"].number() == 0);
+  CHECK_NOTHROW(j["input_to_command_target_met"].boolean());
+  CHECK_NOTHROW(j["servo_unchanged"].boolean());
+  RequireFiles({"hands.csv", "hands.png"});
+}
+
 TEST_CASE("haptel bench NAME --smoke through the haptel program; every usage line offers --smoke",
           "[bench][smoke]") {
   const JsonValue j =
@@ -490,5 +512,5 @@ TEST_CASE("haptel bench NAME --smoke through the haptel program; every usage lin
     ++benches;
     CHECK_THAT(line, Catch::Contains("[--smoke]"));
   }
-  CHECK(benches == 13);
+  CHECK(benches == 14);
 }

@@ -3,38 +3,25 @@
 // window, and xdotool to type and move the mouse in it.
 #include <catch2/catch.hpp>
 #include <cstdlib>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "child.hpp"
+#include "haptel/testing/xvfb.hpp"
 #include "test_env.hpp"
 
 namespace haptel::test {
 
-/// An X server of the test's own; DISPLAY points at it while it lives.
+/// An X server of the test's own (testing/xvfb.hpp); DISPLAY points at it
+/// while it lives.
 class XServer {
  public:
-  XServer()
-      : server_({"/usr/bin/Xvfb", "-displayfd", "1", "-screen", "0", "1280x800x24", "-nolisten",
-                 "tcp"}) {
-    REQUIRE(test::WaitFor(
-        [&] {
-          server_.Pump();
-          return server_.out().find('\n') != std::string::npos;
-        },
-        30.0));
-    // Appended, not `":" + substr(...)`: GCC 12 -O2 flags that form with a
-    // false -Werror=restrict.
-    display_ = ":";
-    display_.append(server_.out(), 0, server_.out().find('\n'));
-    setenv("DISPLAY", display_.c_str(), 1);
-  }
-  ~XServer() { unsetenv("DISPLAY"); }
-  const std::string& display() const { return display_; }
+  XServer() { REQUIRE_NOTHROW(server_ = std::make_unique<testing::Xvfb>()); }
+  const std::string& display() const { return server_->display(); }
 
  private:
-  Child server_;
-  std::string display_;
+  std::unique_ptr<testing::Xvfb> server_;
 };
 
 /// Runs xdotool with `args` on the current DISPLAY; returns its exit code.

@@ -1,0 +1,577 @@
+#include "hands_bench.hpp"
+
+#include <X11/keysym.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "bare_loop.hpp"
+#include "haptel/config/device.hpp"
+#include "haptel/config/paths.hpp"
+#include "haptel/config/run.hpp"
+#include "haptel/core/args.hpp"
+#include "haptel/core/child_process.hpp"
+#include "haptel/core/clock.hpp"
+#include "haptel/core/json.hpp"
+#include "haptel/haptics/pointer.hpp"
+#include "haptel/haptics/trace.hpp"
+#include "haptel/testing/hand_trace.hpp"
+#include "haptel/testing/obstacle_track.hpp"
+#include "haptel/testing/run_watch.hpp"
+#include "haptel/testing/x_desktop.hpp"
+#include "haptel/testing/xvfb.hpp"
+#include "plot.hpp"
+#include "smoke.hpp"
+
+namespace haptel::bench {
+namespace {
+
+using testing::HeardCommand;
+using testing::PositionAt;
+using testing::RunWatch;
+using testing::WristsOf;
+using testing::WristTrack;
+using testing::XDesktop;
+using testing::XWindowInfo;
+
+/// The target for a pointer step to the command it changes.
+constexpr double kInputToCommandP95Target_ms = 20.0;
+/// The servo histogram's bin (LoopMeter): the resolution of every p99 here.
+constexpr double kBin_us = 10.0;
+/// The scripted path, pixels and seconds (the same for every interface).
+constexpr int kStep_px = 100;
+constexpr double kStepHold_s = 0.6;
+constexpr int kPush_px = 60;
+constexpr double kPushHold_s = 0.8;
+/// A hand's first motion after a contact counts from this far, m.
+constexpr double kShakeFrom_m = 0.001;
+/// Bounds on waits (a hang, not a timing check).
+constexpr double kStartBound_s = 90.0;
+constexpr double kRunBound_s = 600.0;
+constexpr const char* kVehicleName = "hands";
+
+double Nan() { return std::nan(""); }
+std::string Num(double v) { return std::isfinite(v) ? JsonNumber(v) : std::string("null"); }
+
+double Percentile(std::vector<double> v, double p) {
+  if (v.empty()) return Nan();
+  std::sort(v.begin(), v.end());
+  return v[static_cast<size_t>(std::min<double>(v.size() - 1, std::floor(p * v.size())))];
+}
+
+double Number(const std::string& json, const std::string& key) {
+  const std::string v = JsonFieldOf(json, key);
+  try {
+    return v.empty() || v == "null" ? Nan() : std::stod(v);
+  } catch (const std::exception&) {
+    return Nan();
+  }
+}
+
+/// A pointer position sent (CLOCK_MONOTONIC, ns; pixels in the window).
+struct CursorAt {
+  int64_t t_ns = 0;
+  int x = 0, y = 0;
+};
+
+/// The run's link settings on the bench's domain.
+LinkConfig LinkOn(int domain) {
+  LinkConfig link = LoadRun(ShippedFile("config/haptel.yaml")).link;
+  link.domain_id = domain;
+  return link;
+}
+
+struct Options {
+  std::vector<std::string> interfaces{"gesture", "gesture-shared", "cockpit", "cockpit-assisted"};
+  std::filesystem::path device;
+  int steps = 20;
+  double nobody_s = 60.0;
+  double contact_bound_s = 15.0;
+  double bare_s = 2.0;
+  double servo_rate_hz = 1000.0;  ///< the device's servo loop, for the bare loop
+  int servo_priority = 80;
+  int domain = 0;
+  bool smoke = false;
+};
+
+struct Row {
+  std::string interface;
+  bool ran = false;
+  std::string outcome;
+  std::string error;
+  int commands = 0;
+  double max_forward = 0.0, max_turn = 0.0;
+  std::vector<double> latencies_ms;
+  int steps_unanswered = 0;
+  double ratio_free = Nan(), ratio_across = Nan(), ratio_along = Nan();
+  bool contact = false;
+  double contact_to_shake_ms = Nan();
+  double servo_p99_us = Nan(), bare_beside_p99_us = Nan(), bare_alone_p99_us = Nan();
+  double pseudo_haptic_gain_mean = Nan();
+  int nobody_moving_commands = -1;
+  int nobody_commands = 0;
+  double nobody_distance_m = Nan();
+  Series hand{"", {}, {}};
+  Series cursor{"", {}, {}};
+};
+
+std::vector<std::string> RunArgs(const Options& o, const std::string& interface,
+                                 const std::filesystem::path& dir,
+                                 const std::filesystem::path& track, const std::string& tag,
+                                 double time_limit_s) {
+  return {"run",
+          "--operator",
+          "person",
+          "--device",
+          o.device.string(),
+          "--view",
+          "window",
+          "--interface",
+          interface,
+          "--track",
+          track.string(),
+          "--json",
+          "--quiet",
+          "--domain",
+          std::to_string(o.domain),
+          "--vehicle-name",
+          kVehicleName,
+          "--database",
+          (dir / "hands.db").string(),
+          "--trace",
+          (dir / ("hands-" + interface + "-" + tag + ".trace")).string(),
+          "--vehicle-timeout",
+          "5",
+          "--time-limit",
+          JsonNumber(time_limit_s)};
+}
+
+/// The pointer, moved and logged: where the cursor was sent, and when.
+class Cursor {
+ public:
+  Cursor(XDesktop& desktop, const XWindowInfo& window) : desktop_(desktop), window_(window) {}
+  int64_t MoveTo(int x, int y) {
+    const int64_t t = MonotonicNs();
+    desktop_.MovePointer(window_, x, y);
+    log_.push_back({t, x, y});
+    return t;
+  }
+  /// Glides to (x, y) over `seconds` in 10 ms steps (a hand's move, not a jump).
+  void GlideTo(int x, int y, double seconds) {
+    const CursorAt from = log_.empty() ? CursorAt{} : log_.back();
+    const int n = std::max(1, static_cast<int>(seconds / 0.01));
+    for (int i = 1; i <= n; ++i) {
+      const double f = static_cast<double>(i) / n;
+      MoveTo(from.x + static_cast<int>(std::lround((x - from.x) * f)),
+             from.y + static_cast<int>(std::lround((y - from.y) * f)));
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+  }
+  const std::vector<CursorAt>& log() const { return log_; }
+  const XWindowInfo& window() const { return window_; }
+
+ private:
+  XDesktop& desktop_;
+  XWindowInfo window_;
+  std::vector<CursorAt> log_;
+};
+
+void Sleep(double s) { std::this_thread::sleep_for(std::chrono::duration<double>(s)); }
+
+/// The engaged run: the scripted path with the button held. Fills the row's
+/// commands, latencies, ratios and contact figures.
+void Engaged(const Options& o, const std::filesystem::path& dir, const std::filesystem::path& track,
+             const MouseDeviceConfig& mouse, Row& row) {
+  // The script's length and a margin: the run ends by Escape, or by this limit.
+  const double limit_s = o.steps * kStepHold_s + o.contact_bound_s + 20.0;
+  const auto args = RunArgs(o, row.interface, dir, track, "engaged", limit_s);
+  RunWatch listener(LinkOn(o.domain), kVehicleName);
+  std::string json, err;
+  std::vector<int64_t> step_ns;
+  int64_t across_from = 0, across_to = 0, along_from = 0, along_to = 0, still_from = 0;
+  std::vector<CursorAt> cursor_log;
+  const BareLoop beside = MeasureBareLoopWhile(o.servo_rate_hz, o.servo_priority, [&] {
+    ChildProcess run((ProgramDirectory() / "haptel").string(), args, ChildProcess::Options{true});
+    try {
+      XDesktop desktop;
+      std::optional<XWindowInfo> window;
+      const int64_t deadline = MonotonicNs() + static_cast<int64_t>(kStartBound_s * 1e9);
+      while (!(window = desktop.FindWindow("Haptel")) || listener.states() == 0) {
+        if (MonotonicNs() > deadline || !run.Alive())
+          throw std::runtime_error("the run's window or vehicle did not come up");
+        run.Pump();
+        Sleep(0.05);
+      }
+      desktop.Focus(*window);
+      Cursor cursor(desktop, *window);
+      const int cx = window->width_px / 2, cy = window->height_px / 2;
+      cursor.MoveTo(cx, cy);
+      Sleep(0.3);
+      desktop.Button(1, true);
+      Sleep(0.5);
+      // Steps up and down (forward and back), the same for every interface.
+      for (int i = 0; i < o.steps; ++i) {
+        step_ns.push_back(cursor.MoveTo(cx, cy + (i % 2 == 0 ? -kStep_px : kStep_px)));
+        Sleep(kStepHold_s);
+        run.Pump();
+      }
+      step_ns.push_back(MonotonicNs());  // the last step's end
+      // Forward until the bumper touches, then still.
+      listener.Arm();
+      cursor.MoveTo(cx, cy - kStep_px);
+      const int64_t contact_deadline =
+          MonotonicNs() + static_cast<int64_t>(o.contact_bound_s * 1e9);
+      while (listener.contact_ns() == 0 && MonotonicNs() < contact_deadline) {
+        run.Pump();
+        Sleep(0.02);
+      }
+      still_from = MonotonicNs();
+      Sleep(1.0);
+      // Across the wall (further forward), then along it (right).
+      across_from = MonotonicNs();
+      cursor.GlideTo(cx, cy - kStep_px - kPush_px, 0.3);
+      Sleep(kPushHold_s);
+      across_to = MonotonicNs();
+      along_from = across_to;
+      cursor.GlideTo(cx + kPush_px, cy - kStep_px - kPush_px, 0.3);
+      Sleep(kPushHold_s);
+      along_to = MonotonicNs();
+      desktop.Button(1, false);
+      desktop.Key(XK_Escape, true);
+      desktop.Key(XK_Escape, false);
+      cursor_log = cursor.log();
+    } catch (const std::exception& e) {
+      row.error = e.what();
+      run.Terminate();
+    }
+    run.Wait(kRunBound_s);
+    json = run.LastLine();
+    err = run.err();
+  });
+  std::ofstream(dir / ("hands-" + row.interface + "-engaged.log")) << err;
+  row.bare_beside_p99_us = beside.stats.period_p99_us;
+  if (json.empty() || json.front() != '{') {
+    if (row.error.empty()) row.error = "the engaged run gave no result";
+    return;
+  }
+  row.ran = row.error.empty();
+  row.outcome = JsonFieldOf(json, "outcome");
+  row.servo_p99_us = Number(json, "servo_period_p99_us");
+  row.pseudo_haptic_gain_mean = Number(json, "pseudo_haptic_gain_mean");
+
+  // Commands: how many, their largest forward and turn, and each step's answer.
+  const std::vector<HeardCommand> commands = listener.commands();
+  row.commands = static_cast<int>(commands.size());
+  for (const HeardCommand& c : commands) {
+    row.max_forward = std::max(row.max_forward, std::abs(0.5 * (c.left + c.right)));
+    row.max_turn = std::max(row.max_turn, std::abs(0.5 * (c.right - c.left)));
+  }
+  for (size_t i = 0; i + 1 < step_ns.size(); ++i) {
+    const int64_t sent = step_ns[i];
+    HeardCommand before{};
+    for (const HeardCommand& c : commands) {
+      if (c.t_ns < sent) before = c;
+    }
+    bool answered = false;
+    for (const HeardCommand& c : commands) {
+      if (c.t_ns < sent || c.t_ns > step_ns[i + 1]) continue;
+      if (c.left != before.left || c.right != before.right) {
+        row.latencies_ms.push_back(1e-6 * static_cast<double>(c.t_ns - sent));
+        answered = true;
+        break;
+      }
+    }
+    row.steps_unanswered += answered ? 0 : 1;
+  }
+
+  // The hands, from the run's device trace.
+  std::vector<haptics::TraceRecord> trace;
+  try {
+    trace = haptics::ReadTrace(dir / ("hands-" + row.interface + "-engaged.trace"));
+  } catch (const std::exception& e) {
+    row.error = e.what();
+    return;
+  }
+  using haptics::Side;
+  const WristTrack hand = WristsOf(trace, mouse.pointer_on_left ? Side::kLeft : Side::kRight);
+  const WristTrack other = WristsOf(trace, mouse.pointer_on_left ? Side::kRight : Side::kLeft);
+  const double m = mouse.metres_per_pixel;
+  // The hand's forward offset over the cursor's, step by step: each step's
+  // settled hand (just before the next step) against the one before.
+  std::vector<double> free;
+  for (size_t i = 1; i + 1 < step_ns.size(); ++i) {
+    const int64_t settled = step_ns[i + 1] - 20'000'000, before = step_ns[i] - 20'000'000;
+    const double cursor_m = 2.0 * kStep_px * m;
+    free.push_back(std::abs(PositionAt(hand, settled)[0] - PositionAt(hand, before)[0]) / cursor_m);
+  }
+  row.ratio_free = Percentile(free, 0.5);
+  row.ratio_across =
+      std::abs(PositionAt(hand, across_to)[0] - PositionAt(hand, across_from)[0]) / (kPush_px * m);
+  row.ratio_along =
+      std::abs(PositionAt(hand, along_to)[1] - PositionAt(hand, along_from)[1]) / (kPush_px * m);
+  const int64_t contact = listener.contact_ns();
+  row.contact = contact != 0;
+  if (row.contact) {
+    for (const auto* w : {&hand, &other}) {
+      const haptics::Vec3d p0 = PositionAt(*w, contact);
+      for (const auto& [t, p] : *w) {
+        if (t <= contact || t > still_from + 1'000'000'000) continue;
+        const double d = std::hypot(p[0] - p0[0], p[1] - p0[1], p[2] - p0[2]);
+        if (d >= kShakeFrom_m) {
+          const double ms = 1e-6 * static_cast<double>(t - contact);
+          row.contact_to_shake_ms =
+              std::isfinite(row.contact_to_shake_ms) ? std::min(row.contact_to_shake_ms, ms) : ms;
+          break;
+        }
+      }
+    }
+  }
+  // The plot: the pointer hand's forward offset and the cursor's, mm, over the path.
+  if (!hand.empty() && !cursor_log.empty()) {
+    const int64_t t0 = cursor_log.front().t_ns;
+    const int cy = cursor_log.front().y;
+    row.hand.name = row.interface + ": hand";
+    for (const auto& [t, p] : hand) {
+      if (t < t0 || t > along_to) continue;
+      row.hand.x.push_back(1e-9 * static_cast<double>(t - t0));
+      row.hand.y.push_back(1e3 * (p[0] - mouse.centre[0]));
+    }
+    row.cursor.name = row.interface + ": cursor";
+    for (const CursorAt& c : cursor_log) {
+      row.cursor.x.push_back(1e-9 * static_cast<double>(c.t_ns - t0));
+      row.cursor.y.push_back(1e3 * (cy - c.y) * m);
+    }
+  }
+}
+
+/// The same path with nobody engaged (no button), for `nobody_s`: the
+/// commands that would move the vehicle.
+void Nobody(const Options& o, const std::filesystem::path& dir, const std::filesystem::path& track,
+            Row& row) {
+  RunWatch listener(LinkOn(o.domain), kVehicleName);
+  ChildProcess run((ProgramDirectory() / "haptel").string(),
+                   RunArgs(o, row.interface, dir, track, "nobody", o.nobody_s),
+                   ChildProcess::Options{true});
+  try {
+    XDesktop desktop;
+    std::optional<XWindowInfo> window;
+    const int64_t deadline = MonotonicNs() + static_cast<int64_t>(kStartBound_s * 1e9);
+    while (!(window = desktop.FindWindow("Haptel"))) {
+      if (MonotonicNs() > deadline || !run.Alive())
+        throw std::runtime_error("the run's window did not come up");
+      run.Pump();
+      Sleep(0.05);
+    }
+    Cursor cursor(desktop, *window);
+    const int cx = window->width_px / 2, cy = window->height_px / 2;
+    for (int i = 0; run.Alive(); ++i) {
+      cursor.MoveTo(cx + (i % 3 - 1) * kPush_px, cy + (i % 2 == 0 ? -kStep_px : kStep_px));
+      Sleep(kStepHold_s);
+      run.Pump();
+    }
+  } catch (const std::exception& e) {
+    row.error += (row.error.empty() ? "" : "; ") + std::string(e.what());
+    run.Terminate();
+  }
+  run.Wait(kRunBound_s);
+  const std::string json = run.LastLine();
+  std::ofstream(dir / ("hands-" + row.interface + "-nobody.log")) << run.err();
+  if (json.empty() || json.front() != '{') {
+    row.error +=
+        (row.error.empty() ? "" : "; ") + std::string("the run with nobody gave no result");
+    row.ran = false;
+    return;
+  }
+  row.nobody_distance_m = Number(json, "distance_m");
+  row.nobody_moving_commands = 0;
+  const auto commands = listener.commands();
+  row.nobody_commands = static_cast<int>(commands.size());
+  for (const HeardCommand& c : commands) row.nobody_moving_commands += c.moves() ? 1 : 0;
+}
+
+}  // namespace
+
+int BenchHandsMain(int argc, const char* const* argv) {
+  bool json = false;
+  Options o;
+  DeviceConfig device;
+  o.domain = 150 + static_cast<int>(getpid() % 30);
+  try {
+    const Args args(argc, argv, {"interfaces", "device", "steps", "nobody-s", "domain"},
+                    {"json", kSmokeFlag});
+    json = args.Flag("json");
+    o.smoke = args.Flag(kSmokeFlag);
+    if (o.smoke) {
+      o.interfaces = {"gesture"};
+      o.steps = 4;
+      o.nobody_s = 3.0;
+      o.contact_bound_s = 5.0;
+      o.bare_s = 0.5;
+    }
+    if (auto list = args.Value("interfaces")) o.interfaces = SplitList(*list);
+    if (o.interfaces.empty()) throw UsageError("option --interfaces: expected interface names");
+    o.device = args.Value("device").value_or(ShippedFile("config/devices/mouse.yaml").string());
+    device = LoadDevice(o.device);
+    if (device.driver != "mouse") {
+      throw UsageError("option --device: " + o.device.string() + " is a '" + device.driver +
+                       "' device; expected the mouse device (config/devices/mouse.yaml)");
+    }
+    o.servo_rate_hz = device.servo.rate_hz;
+    o.servo_priority = device.servo.realtime_priority;
+    o.steps = args.Int("steps", 2, 1000).value_or(o.steps);
+    o.nobody_s = args.Number("nobody-s", 1.0, 3600.0).value_or(o.nobody_s);
+    o.domain = args.Int("domain", 0, 232).value_or(o.domain);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "haptel bench hands: %s\n", e.what());
+    return 2;
+  }
+  const auto dir = OutputDir(o.smoke);
+  PrintSmokeNote("hands", o.smoke, "gesture only, %d steps, %.0f s with nobody engaged", o.steps,
+                 o.nobody_s);
+  std::unique_ptr<testing::Xvfb> x;
+  try {
+    x = std::make_unique<testing::Xvfb>();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "haptel bench hands: %s\n", e.what());
+    return 1;
+  }
+  const std::filesystem::path track =
+      testing::WriteObstacleAheadTrack(ShippedFile("config/tracks/test-short.yaml"), dir);
+  std::printf(
+      "haptel bench hands: %s through the real window on Xvfb %s, the short track with an "
+      "obstacle ahead\n\n",
+      o.device.c_str(), x->display().c_str());
+  std::printf(
+      "  interface          outcome   cmds  fwd max turn max  in->cmd p50/p95 ms  ratio "
+      "free/across/"
+      "along  contact->hand ms  servo p99 us  bare beside/alone  nobody: moving/cmds  m\n");
+  std::vector<Row> rows;
+  for (const std::string& interface : o.interfaces) {
+    Row row;
+    row.interface = interface;
+    row.bare_alone_p99_us =
+        MeasureBareLoop(device.servo.rate_hz, device.servo.realtime_priority, o.bare_s)
+            .stats.period_p99_us;
+    Engaged(o, dir, track, device.mouse, row);
+    Nobody(o, dir, track, row);
+    if (!row.error.empty()) {
+      std::fprintf(stderr, "haptel bench hands: %s: %s (the run's output: %s)\n", interface.c_str(),
+                   row.error.c_str(), (dir / ("hands-" + interface + "-engaged.log")).c_str());
+    }
+    std::printf(
+        "  %-17s  %-8s  %4d  %7.2f  %8.2f  %7.1f / %7.1f    %5.2f / %5.2f / %5.2f  %16.0f  %12.0f  "
+        "%6.0f / %5.0f  %7d / %5d  %5.3f\n",
+        interface.c_str(), row.ran ? row.outcome.c_str() : "failed", row.commands, row.max_forward,
+        row.max_turn, Percentile(row.latencies_ms, 0.5), Percentile(row.latencies_ms, 0.95),
+        row.ratio_free, row.ratio_across, row.ratio_along, row.contact_to_shake_ms,
+        row.servo_p99_us, row.bare_beside_p99_us, row.bare_alone_p99_us, row.nobody_moving_commands,
+        row.nobody_commands, row.nobody_distance_m);
+    std::fflush(stdout);
+    rows.push_back(std::move(row));
+  }
+
+  bool latency_met = true, nobody_met = true, servo_unchanged = true;
+  for (const Row& r : rows) {
+    latency_met = latency_met && !r.latencies_ms.empty() &&
+                  Percentile(r.latencies_ms, 0.95) <= kInputToCommandP95Target_ms;
+    nobody_met = nobody_met && r.nobody_moving_commands == 0;
+    servo_unchanged =
+        servo_unchanged &&
+        r.servo_p99_us <= std::max(r.bare_beside_p99_us, r.bare_alone_p99_us) + kBin_us;
+  }
+  std::printf(
+      "\n  in->cmd: a pointer step sent through XTest to the first command after it that differs; "
+      "ratio: the\n"
+      "  pointer hand's displacement over the cursor's (1: it follows; below: bent by a force), "
+      "free (the\n"
+      "  steps), across the wall (pushed on towards the obstacle) and along it; contact->hand: the "
+      "bumper's\n"
+      "  state to the hands' first 1 mm with the pointer still (the shake or the push-back); servo "
+      "p99: the\n"
+      "  run's, against an empty loop at its rate beside the run and alone; nobody: the same path "
+      "with no\n"
+      "  button, commands that would move the vehicle, and the metres it went.\n\n");
+  std::printf("  target: input-to-command p95 <= %.0f ms: %s\n", kInputToCommandP95Target_ms,
+              latency_met ? "met" : "MISSED");
+  std::printf("  target: nobody engaged, 0 commands that move the vehicle: %s\n",
+              nobody_met ? "met" : "MISSED");
+  std::printf("  target: servo p99 unchanged (<= the bare loop's + one %.0f us bin): %s\n", kBin_us,
+              servo_unchanged ? "met" : "MISSED");
+
+  {
+    std::ofstream csv(dir / "hands.csv");
+    csv << "interface,outcome,commands,max_forward,max_turn,input_to_command_ms_p50,"
+           "input_to_command_ms_p95,steps_unanswered,ratio_free,ratio_across_wall,"
+           "ratio_along_wall,contact,contact_to_hand_ms,pseudo_haptic_gain_mean,servo_p99_us,"
+           "bare_beside_p99_us,bare_alone_p99_us,nobody_moving_commands,nobody_commands,"
+           "nobody_distance_m\n";
+    for (const Row& r : rows) {
+      csv << r.interface << "," << r.outcome << "," << r.commands << "," << r.max_forward << ","
+          << r.max_turn << "," << Percentile(r.latencies_ms, 0.5) << ","
+          << Percentile(r.latencies_ms, 0.95) << "," << r.steps_unanswered << "," << r.ratio_free
+          << "," << r.ratio_across << "," << r.ratio_along << "," << r.contact << ","
+          << r.contact_to_shake_ms << "," << r.pseudo_haptic_gain_mean << "," << r.servo_p99_us
+          << "," << r.bare_beside_p99_us << "," << r.bare_alone_p99_us << ","
+          << r.nobody_moving_commands << "," << r.nobody_commands << "," << r.nobody_distance_m
+          << "\n";
+    }
+  }
+  std::vector<Series> series;
+  for (const Row& r : rows) {
+    if (r.hand.x.empty()) continue;
+    if (series.empty()) series.push_back(r.cursor);
+    series.push_back(r.hand);
+  }
+  if (!series.empty()) {
+    PlotLines(dir / "hands.png", series,
+              {"The pointer hand's forward offset against the cursor's (the same path)", "s",
+               "mm forward of the centre"});
+  }
+  std::printf("\n  wrote %s, %s\n", (dir / "hands.csv").c_str(), (dir / "hands.png").c_str());
+
+  const bool all_ran = std::all_of(rows.begin(), rows.end(), [](const Row& r) { return r.ran; });
+  if (json) {
+    std::ostringstream out;
+    out << "{\"interfaces\":[";
+    for (size_t i = 0; i < rows.size(); ++i) {
+      const Row& r = rows[i];
+      out << (i ? "," : "") << "{\"interface\":" << JsonString(r.interface)
+          << ",\"ran\":" << (r.ran ? "true" : "false") << ",\"outcome\":" << JsonString(r.outcome)
+          << ",\"error\":" << JsonString(r.error) << ",\"commands\":" << r.commands
+          << ",\"max_forward\":" << Num(r.max_forward) << ",\"max_turn\":" << Num(r.max_turn)
+          << ",\"input_to_command_ms_p50\":" << Num(Percentile(r.latencies_ms, 0.5))
+          << ",\"input_to_command_ms_p95\":" << Num(Percentile(r.latencies_ms, 0.95))
+          << ",\"steps\":" << r.latencies_ms.size() + static_cast<size_t>(r.steps_unanswered)
+          << ",\"steps_unanswered\":" << r.steps_unanswered
+          << ",\"ratio_free\":" << Num(r.ratio_free)
+          << ",\"ratio_across_wall\":" << Num(r.ratio_across)
+          << ",\"ratio_along_wall\":" << Num(r.ratio_along)
+          << ",\"contact\":" << (r.contact ? "true" : "false")
+          << ",\"contact_to_hand_ms\":" << Num(r.contact_to_shake_ms)
+          << ",\"pseudo_haptic_gain_mean\":" << Num(r.pseudo_haptic_gain_mean)
+          << ",\"servo_p99_us\":" << Num(r.servo_p99_us)
+          << ",\"bare_beside_p99_us\":" << Num(r.bare_beside_p99_us)
+          << ",\"bare_alone_p99_us\":" << Num(r.bare_alone_p99_us)
+          << ",\"nobody_s\":" << Num(o.nobody_s)
+          << ",\"nobody_moving_commands\":" << r.nobody_moving_commands
+          << ",\"nobody_commands\":" << r.nobody_commands
+          << ",\"nobody_distance_m\":" << Num(r.nobody_distance_m) << "}";
+    }
+    out << "],\"input_to_command_target_met\":" << (latency_met ? "true" : "false")
+        << ",\"nobody_target_met\":" << (nobody_met ? "true" : "false")
+        << ",\"servo_unchanged\":" << (servo_unchanged ? "true" : "false") << "}";
+    std::printf("%s\n", JsonLine(out.str(), o.smoke).c_str());
+  }
+  return all_ran ? 0 : 1;
+}
+
+}  // namespace haptel::bench

@@ -1,0 +1,127 @@
+#pragma once
+/// @file The pointer pilot: the automatic operator (mediator::AutoOperator)
+/// sat at a desktop, driving a `haptel run --device <mouse> --operator person
+/// --view window` through the real X pointer, its left button, its wheel and
+/// the key hand's keys, as a person at the mouse would. For the end-to-end
+/// tests and `haptel bench hands`; no product code links it.
+///
+/// It sees the vehicle as the run's operator does (its state topic, on the
+/// run's DDS domain), decides as the automatic operator does (Observe each
+/// state, Act → hand targets from the interface's own inverse map), and
+/// expresses the targets through the mouse device's own map
+/// (haptel/haptics/pointer.hpp): the pointer hand's target becomes a pixel
+/// (PointerPixelFor) and a number of wheel notches; the key hand's target is
+/// reached by holding W/S, A/D, Q/E while a model of the key hand
+/// (StepKeyHand from the keys held) is short of it. The left button is held
+/// while the hands grasp (at once for an interface with nothing to grasp:
+/// there the button is what engages it).
+#include <X11/keysym.h>
+
+#include <array>
+#include <atomic>
+#include <filesystem>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "haptel/config/device.hpp"
+#include "haptel/haptics/pointer.hpp"
+#include "haptel/interfaces/interface.hpp"
+#include "haptel/testing/x_desktop.hpp"
+
+namespace haptel::testing {
+
+/// The keys of the key hand, in KeyHandKey order (+x, −x, +y, −y, +z, −z):
+/// W/S forward and back, A/D left and right (the device's +y is its left),
+/// Q/E up and down.
+inline constexpr std::array<unsigned long, 6> kKeyHandKeysyms{XK_w, XK_s, XK_a, XK_d, XK_q, XK_e};
+
+/// What the desktop is told in one step: where the pointer goes, the wheel's
+/// notches so far, the button and the key hand's keys.
+struct PointerGesture {
+  std::array<int, 2> pixel{};  ///< from the window's top-left corner
+  bool pointer_used = false;   ///< the interface uses the pointer hand
+  int64_t wheel_notches = 0;
+  bool button = false;
+  std::array<bool, 6> keys{};  ///< KeyHandKey order
+};
+
+/// Turns hand targets into a PointerGesture, stepping its model of the key
+/// hand (pure: no X; the pilot sends what it returns).
+class PointerHands {
+ public:
+  explicit PointerHands(const MouseDeviceConfig& mouse);
+  /// `targets`: the operator's hands now; `neutral`: the interface's at rest
+  /// (its glove says whether there is anything to grasp); `dt_s` since the
+  /// last step; the window's size.
+  PointerGesture Step(const interfaces::HandTargets& targets,
+                      const interfaces::HandTargets& neutral, double dt_s, int width_px,
+                      int height_px);
+  /// The model of the key hand: where the device puts it after the keys held.
+  const haptics::Vec3d& key_hand() const { return key_hand_; }
+  size_t pointer_index() const { return pointer_; }
+  size_t key_index() const { return 1 - pointer_; }
+
+ private:
+  MouseDeviceConfig mouse_;
+  size_t pointer_;
+  haptics::Vec3d key_hand_;
+  std::array<bool, 6> keys_{};
+};
+
+/// Where a pilot drives.
+struct PilotSetup {
+  int domain = 0;            ///< the run's DDS domain
+  std::string vehicle_name;  ///< the run's --vehicle-name
+  std::filesystem::path run_file = "config/haptel.yaml";
+  std::filesystem::path track;  ///< empty: the run file's
+  std::filesystem::path device = "config/devices/mouse.yaml";
+  std::string interface = "gesture";
+  std::string window_title = "Haptel";
+  double rate_hz = 50.0;  ///< steps per second (a mouse reports at 125 Hz and more)
+};
+
+/// What a pilot did, so far.
+struct PilotCounts {
+  int states = 0;         ///< vehicle states seen
+  int steps = 0;          ///< steps acted (after the vehicle answered)
+  int pointer_moves = 0;  ///< pointer motions sent
+  int key_presses = 0;    ///< key-down events sent
+  int wheel_notches = 0;  ///< wheel notches sent
+  int contacts = 0;       ///< states with a bumper pressed, from none
+  bool window_found = false;
+  std::string error;  ///< why the pilot stopped early (empty: it did not)
+};
+
+class PointerPilot {
+ public:
+  /// Loads the run, vehicle, track, device and interface files (ConfigError
+  /// naming the file and key); starts nothing.
+  explicit PointerPilot(PilotSetup setup);
+  ~PointerPilot();
+  PointerPilot(const PointerPilot&) = delete;
+  PointerPilot& operator=(const PointerPilot&) = delete;
+
+  /// Subscribes to the vehicle's state and starts driving on a thread of its
+  /// own: waits for the window (its title), then acts at rate_hz once the
+  /// vehicle answers.
+  void Start();
+  /// Stops driving and lets go: button and keys released, the pointer left
+  /// where it was.
+  void Stop();
+  PilotCounts counts() const;
+
+ private:
+  struct Parts;
+  void Run();
+  PilotSetup setup_;
+  std::unique_ptr<Parts> parts_;
+  std::atomic<bool> stop_{false};
+  mutable std::mutex counts_mutex_;
+  PilotCounts counts_;
+  std::thread thread_;
+};
+
+}  // namespace haptel::testing

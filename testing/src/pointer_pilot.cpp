@@ -1,0 +1,235 @@
+#include "haptel/testing/pointer_pilot.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <deque>
+
+#include "haptel/config/run.hpp"
+#include "haptel/config/track.hpp"
+#include "haptel/config/vehicle.hpp"
+#include "haptel/core/clock.hpp"
+#include "haptel/interfaces/catalog.hpp"
+#include "haptel/interfaces/cockpit.hpp"
+#include "haptel/link/participant.hpp"
+#include "haptel/link/topic.hpp"
+#include "haptel/mediator/auto_operator.hpp"
+
+namespace haptel::testing {
+namespace {
+
+double GloveSum(const interfaces::HandTargets& targets) {
+  double sum = 0.0;
+  for (const auto& hand : targets) {
+    if (!hand) continue;
+    for (const double angle : hand->glove) sum += std::abs(angle);
+  }
+  return sum;
+}
+
+/// The pilot never runs the interface (the run does), so nothing reads its
+/// controls: the cockpit's inverse map is a function of the intent alone.
+class NoControls final : public interfaces::ControlsPort {
+ public:
+  interfaces::CockpitControls Controls() const override { return {}; }
+  void Actuate(const interfaces::ControlActuation&) override {}
+};
+
+}  // namespace
+
+PointerHands::PointerHands(const MouseDeviceConfig& mouse)
+    : mouse_(mouse),
+      pointer_(mouse.pointer_on_left ? size_t{0} : size_t{1}),
+      key_hand_{mouse.key_hand_rest[0], mouse.key_hand_rest[1], mouse.key_hand_rest[2]} {}
+
+PointerGesture PointerHands::Step(const interfaces::HandTargets& targets,
+                                  const interfaces::HandTargets& neutral, double dt_s, int width_px,
+                                  int height_px) {
+  // The keys held since the last step moved the device's key hand.
+  haptics::PointerState held;
+  for (size_t k = 0; k < keys_.size(); ++k) held.key_hand[k] = keys_[k];
+  key_hand_ = haptics::StepKeyHand(key_hand_, held, mouse_, dt_s);
+
+  PointerGesture g;
+  if (const auto& hand = targets[pointer_]) {
+    g.pointer_used = true;
+    const auto pixel = haptics::PointerPixelFor(hand->position, mouse_, width_px, height_px);
+    // Kept inside the window: outside it, the hand is let go.
+    g.pixel = {std::clamp(pixel[0], 0, width_px - 1), std::clamp(pixel[1], 0, height_px - 1)};
+    if (mouse_.wheel_step > 0.0) {
+      g.wheel_notches = std::lround((hand->position[2] - mouse_.centre[2]) / mouse_.wheel_step);
+    }
+  }
+  // Nothing to grasp: the button engages the interface, held throughout.
+  // Controls to grasp: held once the operator's fingers are half closed.
+  const double closed = GloveSum(neutral);
+  g.button = closed == 0.0 || GloveSum(targets) >= 0.5 * closed;
+
+  // The key hand: a key held along each axis while the model is more than
+  // one step short of the target (bang-bang, as a person taps keys).
+  keys_ = {};
+  if (const auto& hand = targets[key_index()]) {
+    const double band = std::max(1e-3, mouse_.key_hand_speed * dt_s);
+    for (size_t axis = 0; axis < 3; ++axis) {
+      const double error = hand->position[axis] - key_hand_[axis];
+      if (error > band) keys_[2 * axis] = true;
+      if (error < -band) keys_[2 * axis + 1] = true;
+    }
+  }
+  g.keys = keys_;
+  return g;
+}
+
+struct PointerPilot::Parts {
+  RunConfig run;
+  VehicleConfig vehicle;
+  std::unique_ptr<Track> track;
+  DeviceConfig device;
+  interfaces::InterfaceSpec spec;
+  NoControls controls;
+  std::unique_ptr<interfaces::MediatorInterface> interface;
+  std::unique_ptr<mediator::AutoOperator> driver;
+  std::unique_ptr<link::Participant> participant;
+  std::unique_ptr<link::StateReader> states;
+  std::mutex inbox_mutex;
+  std::deque<mediator::Observation> inbox;
+  int64_t t0_ns = 0;
+};
+
+PointerPilot::PointerPilot(PilotSetup setup) : setup_(std::move(setup)), parts_(new Parts) {
+  Parts& p = *parts_;
+  p.run = LoadRun(setup_.run_file);
+  p.vehicle = LoadVehicle(p.run.vehicle);
+  p.track = std::make_unique<Track>(LoadTrack(setup_.track.empty() ? p.run.track : setup_.track));
+  p.device = LoadDevice(setup_.device);
+  p.spec = interfaces::LoadInterfaceSpec(p.run, setup_.interface);
+  interfaces::InterfaceParts parts;
+  parts.controls = &p.controls;
+  parts.speed_levels = p.vehicle.drive.speed_levels;
+  parts.vehicle = {.max_speed = p.vehicle.drive.max_speed,
+                   .track_width = p.vehicle.drive.track_width,
+                   .body_radius = p.vehicle.body.radius};
+  p.interface = interfaces::MakeInterface(p.spec, parts);
+  p.driver = std::make_unique<mediator::AutoOperator>(*p.track, p.run.op, p.vehicle.drive);
+}
+
+PointerPilot::~PointerPilot() { Stop(); }
+
+void PointerPilot::Start() {
+  Parts& p = *parts_;
+  p.t0_ns = MonotonicNs();
+  LinkConfig link = p.run.link;
+  link.domain_id = setup_.domain;
+  p.participant = std::make_unique<link::Participant>(link, "pointer-pilot");
+  p.states = std::make_unique<link::StateReader>(
+      *p.participant, link::TopicName(setup_.vehicle_name, "state"), link::Profile::kState,
+      [&p](const msg::VehicleState& s) {
+        if (!s.pose_valid()) return;
+        const double t = 1e-9 * static_cast<double>(MonotonicNs() - p.t0_ns);
+        std::lock_guard lock(p.inbox_mutex);
+        p.inbox.push_back({t, s.x(), s.y(), s.heading(), s.bumper_left(), s.bumper_right()});
+      });
+  thread_ = std::thread([this] { Run(); });
+}
+
+void PointerPilot::Stop() {
+  stop_ = true;
+  if (thread_.joinable()) thread_.join();
+  if (parts_) parts_->states.reset();  // no callback after this
+}
+
+PilotCounts PointerPilot::counts() const {
+  std::lock_guard lock(counts_mutex_);
+  return counts_;
+}
+
+void PointerPilot::Run() {
+  Parts& p = *parts_;
+  try {
+    XDesktop desktop;
+    std::optional<XWindowInfo> window;
+    while (!stop_ && !(window = desktop.FindWindow(setup_.window_title))) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    if (!window) return;
+    {
+      std::lock_guard lock(counts_mutex_);
+      counts_.window_found = true;
+    }
+    desktop.Focus(*window);
+    PointerHands hands(p.device.mouse);
+    const interfaces::HandTargets neutral = p.interface->HandTargetsFor({});
+    PointerGesture sent;
+    bool first = true;
+    bool touching = false;
+    const auto period = std::chrono::nanoseconds(static_cast<int64_t>(1e9 / setup_.rate_hz));
+    auto next = std::chrono::steady_clock::now();
+    double last_t = -1.0;
+    int64_t next_refresh_ns = 0;
+    while (!stop_) {
+      next += period;
+      std::this_thread::sleep_until(next);
+      std::deque<mediator::Observation> seen;
+      {
+        std::lock_guard lock(p.inbox_mutex);
+        seen.swap(p.inbox);
+      }
+      int contacts = 0;
+      for (const auto& o : seen) {
+        p.driver->Observe(o);
+        const bool now_touching = o.bumper_left || o.bumper_right;
+        contacts += now_touching && !touching ? 1 : 0;
+        touching = now_touching;
+      }
+      {
+        std::lock_guard lock(counts_mutex_);
+        counts_.states += static_cast<int>(seen.size());
+        counts_.contacts += contacts;
+        if (counts_.states == 0) continue;  // the vehicle has not answered yet
+      }
+      const int64_t now_ns = MonotonicNs();
+      if (now_ns >= next_refresh_ns) {  // the window may be resized
+        window = desktop.Refresh(*window);
+        next_refresh_ns = now_ns + 1'000'000'000;
+      }
+      const double t = 1e-9 * static_cast<double>(now_ns - p.t0_ns);
+      const double dt = last_t < 0.0 ? 0.0 : t - last_t;
+      last_t = t;
+      const PointerGesture g = hands.Step(p.driver->Act(t, *p.interface), neutral, dt,
+                                          window->width_px, window->height_px);
+      int moves = 0, presses = 0, notches = 0;
+      if (g.pointer_used && (first || g.pixel != sent.pixel)) {
+        desktop.MovePointer(*window, g.pixel[0], g.pixel[1]);
+        ++moves;
+      }
+      for (int64_t n = sent.wheel_notches; n != g.wheel_notches;
+           n += n < g.wheel_notches ? 1 : -1) {
+        desktop.WheelNotch(n < g.wheel_notches);
+        ++notches;
+      }
+      if (first || g.button != sent.button) desktop.Button(1, g.button);
+      for (size_t k = 0; k < g.keys.size(); ++k) {
+        if (g.keys[k] == sent.keys[k]) continue;
+        desktop.Key(kKeyHandKeysyms[k], g.keys[k]);
+        presses += g.keys[k] ? 1 : 0;
+      }
+      sent = g;
+      first = false;
+      std::lock_guard lock(counts_mutex_);
+      ++counts_.steps;
+      counts_.pointer_moves += moves;
+      counts_.key_presses += presses;
+      counts_.wheel_notches += notches;
+    }
+    // Let go.
+    if (sent.button) desktop.Button(1, false);
+    for (size_t k = 0; k < sent.keys.size(); ++k) {
+      if (sent.keys[k]) desktop.Key(kKeyHandKeysyms[k], false);
+    }
+  } catch (const std::exception& e) {
+    std::lock_guard lock(counts_mutex_);
+    counts_.error = e.what();
+  }
+}
+
+}  // namespace haptel::testing

@@ -1,0 +1,314 @@
+// End to end with the mouse device (issue 36): a real X server (Xvfb), the
+// real `haptel` window, and the pointer pilot (testing/pointer_pilot.hpp)
+// moving the real pointer, holding its button and the key hand's keys as a
+// person at a mouse would, deciding as the automatic operator does.
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <chrono>
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "child.hpp"
+#include "haptel/config/device.hpp"
+#include "haptel/config/run.hpp"
+#include "haptel/core/clock.hpp"
+#include "haptel/haptics/trace.hpp"
+#include "haptel/interfaces/interface.hpp"
+#include "haptel/testing/hand_trace.hpp"
+#include "haptel/testing/obstacle_track.hpp"
+#include "haptel/testing/pointer_pilot.hpp"
+#include "haptel/testing/run_watch.hpp"
+#include "haptel/testing/x_desktop.hpp"
+#include "test_env.hpp"
+#include "xserver.hpp"
+
+using namespace haptel;
+using haptel::test::Child;
+using haptel::test::JsonField;
+using haptel::test::XServer;
+using haptel::testing::PilotSetup;
+using haptel::testing::PointerGesture;
+using haptel::testing::PointerHands;
+using haptel::testing::PointerPilot;
+
+namespace {
+
+std::string Bin(const std::string& name) { return (test::BinDir() / name).string(); }
+
+constexpr const char* kMouse = "config/devices/mouse.yaml";
+constexpr const char* kTrack = "config/tracks/test-short.yaml";
+constexpr double kLapCap_s = 60.0;  // test-short.yaml's lap_cap_s
+
+/// `haptel run` of a person at the mouse device, in a window, on `domain`.
+std::vector<std::string> MouseRun(const std::string& interface, int domain,
+                                  const std::string& vehicle, const std::filesystem::path& dir,
+                                  std::vector<std::string> extra = {}) {
+  std::vector<std::string> argv{Bin("haptel"),
+                                "run",
+                                "--operator",
+                                "person",
+                                "--device",
+                                kMouse,
+                                "--view",
+                                "window",
+                                "--interface",
+                                interface,
+                                "--track",
+                                kTrack,
+                                "--json",
+                                "--domain",
+                                std::to_string(domain),
+                                "--vehicle-name",
+                                vehicle,
+                                "--database",
+                                (dir / "runs.db").string(),
+                                "--vehicle-timeout",
+                                "5"};
+  argv.insert(argv.end(), extra.begin(), extra.end());
+  return argv;
+}
+
+interfaces::HandGoal At(double x, double y, double z) {
+  interfaces::HandGoal g;
+  g.position = {x, y, z};
+  return g;
+}
+
+}  // namespace
+
+TEST_CASE("the pointer pilot's hands: a pixel for the pointer hand, keys for the key hand",
+          "[pilot]") {
+  MouseDeviceConfig mouse;
+  mouse.centre = {0.1, 0.0, 0.05};
+  mouse.key_hand_rest = {0.0, 0.2, 0.0};
+  mouse.key_hand_speed = 0.1;
+  PointerHands hands(mouse);
+  REQUIRE(hands.pointer_index() == 1);  // the right hand by default
+
+  SECTION("the pointer hand's target is the pixel PointerTarget maps back to it") {
+    interfaces::HandTargets targets;
+    targets[1] = At(0.15, -0.02, 0.05);
+    const auto g = hands.Step(targets, {}, 0.02, 800, 600);
+    CHECK(g.pointer_used);
+    haptics::PointerState p;
+    p.x_px = g.pixel[0];
+    p.y_px = g.pixel[1];
+    p.width_px = 800;
+    p.height_px = 600;
+    const auto back = haptics::PointerTarget(p, mouse);
+    CHECK(back[0] == Approx(0.15).margin(mouse.metres_per_pixel));
+    CHECK(back[1] == Approx(-0.02).margin(mouse.metres_per_pixel));
+    CHECK(g.wheel_notches == 0);
+    CHECK(g.button);  // nothing to grasp: the button is held to engage
+    // Beyond the window: kept at its edge (outside, the hand is let go).
+    targets[1] = At(5.0, -5.0, 0.05 + 3 * mouse.wheel_step);
+    const auto edge = hands.Step(targets, {}, 0.02, 800, 600);
+    CHECK(edge.pixel == std::array<int, 2>{799, 0});
+    CHECK(edge.wheel_notches == 3);
+  }
+
+  SECTION("the key hand is brought to its target by held keys and stays near it") {
+    interfaces::HandTargets targets;
+    targets[0] = At(0.05, 0.15, 0.0);  // forward and to the right of rest
+    PointerGesture g;
+    for (int i = 0; i < 100; ++i) g = hands.Step(targets, {}, 0.02, 800, 600);
+    CHECK(hands.key_hand()[0] == Approx(0.05).margin(0.005));
+    CHECK(hands.key_hand()[1] == Approx(0.15).margin(0.005));
+    CHECK(hands.key_hand()[2] == Approx(0.0).margin(1e-9));
+    // Short of it along x: W (+x) held, not S.
+    targets[0] = At(0.2, 0.15, 0.0);
+    g = hands.Step(targets, {}, 0.02, 800, 600);
+    g = hands.Step(targets, {}, 0.02, 800, 600);
+    CHECK(g.keys[0]);
+    CHECK_FALSE(g.keys[1]);
+    // No target: every key released.
+    g = hands.Step({}, {}, 0.02, 800, 600);
+    for (const bool k : g.keys) CHECK_FALSE(k);
+  }
+
+  SECTION("controls to grasp: the button goes down once the fingers are half closed") {
+    interfaces::HandTargets neutral;
+    neutral[1] = At(0.1, 0.0, 0.05);
+    neutral[1]->glove.fill(1.0);
+    interfaces::HandTargets open = neutral;
+    open[1]->glove.fill(0.2);
+    CHECK_FALSE(hands.Step(open, neutral, 0.02, 800, 600).button);
+    interfaces::HandTargets closing = neutral;
+    closing[1]->glove.fill(0.6);
+    CHECK(hands.Step(closing, neutral, 0.02, 800, 600).button);
+  }
+}
+
+/// One lap with `interface`, a run of its own: the pilot drives the whole
+/// lap through the pointer, the button and the key hand's keys. Finished,
+/// not at the cap.
+void DriveALap(const std::string& interface) {
+  INFO("interface " << interface);
+  XServer x;
+  const int domain = test::UniqueDomain(361);
+  const std::string vehicle = "mouse-lap";
+  const auto dir = test::ScratchDir("e2e-mouse-lap-" + interface);
+  Child run(MouseRun(interface, domain, vehicle, dir, {"--quiet"}));
+  PilotSetup setup;
+  setup.domain = domain;
+  setup.vehicle_name = vehicle;
+  setup.track = kTrack;
+  setup.device = kMouse;
+  setup.interface = interface;
+  PointerPilot pilot(setup);
+  pilot.Start();
+  // Bounds a hang, asserts no timing: the lap's cap is 60 s of driving.
+  const int code = run.Wait(240.0);
+  pilot.Stop();
+  const auto counts = pilot.counts();
+  INFO(run.out() << run.err() << "\npilot: states " << counts.states << ", steps " << counts.steps
+                 << ", moves " << counts.pointer_moves << ", keys " << counts.key_presses
+                 << ", contacts " << counts.contacts << ", error '" << counts.error << "'");
+  CHECK(counts.error.empty());
+  CHECK(counts.window_found);
+  CHECK(counts.pointer_moves > 0);
+  REQUIRE(code == 0);
+  const std::string json = run.LastLine();
+  CHECK(JsonField(json, "outcome") == "completed");
+  CHECK(JsonField(json, "device") == "mouse");
+  CHECK(std::stod(JsonField(json, "lap_time_s")) < kLapCap_s);
+}
+
+// Two cases, so that ctest runs them side by side (tests/e2e/CMakeLists.txt).
+TEST_CASE("the pointer pilot drives a lap of the short track with the gesture interfaces",
+          "[mouse][laps]") {
+  DriveALap(GENERATE(as<std::string>{}, "gesture", "gesture-shared"));
+}
+
+TEST_CASE("the pointer pilot drives a lap of the short track with the cockpits",
+          "[mouse][laps-cockpit]") {
+  DriveALap(GENERATE(as<std::string>{}, "cockpit", "cockpit-assisted"));
+}
+
+namespace {
+
+/// The run's window, once up, and the vehicle answering (bounds a wait).
+testing::XWindowInfo WindowOf(Child& run, testing::XDesktop& desktop) {
+  std::optional<testing::XWindowInfo> window;
+  REQUIRE(test::WaitFor(
+      [&] {
+        run.Pump();
+        return (window = desktop.FindWindow("Haptel")).has_value();
+      },
+      60.0));
+  REQUIRE(test::WaitForVehicle(run, 60.0));
+  desktop.Focus(*window);
+  return *window;
+}
+
+/// Where the screenshots are kept for the docs (docs/haptics.md): build/mouse-screens/.
+std::filesystem::path ScreensDir() {
+  const auto dir = test::BinDir().parent_path() / "mouse-screens";
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+}  // namespace
+
+TEST_CASE("a mouse run with the pointer outside the window moves the vehicle 0 m in 60 s",
+          "[mouse][away]") {
+  XServer x;
+  const int domain = test::UniqueDomain(362);
+  const auto dir = test::ScratchDir("e2e-mouse-away");
+  Child run(MouseRun("gesture", domain, "mouse-away", dir, {"--time-limit", "60"}));
+  testing::XDesktop desktop;
+  const testing::XWindowInfo window = WindowOf(run, desktop);
+  // Left of and above the window (the screen is larger), the button held and
+  // the key hand's forward key too: nobody's hand is in the window.
+  desktop.MovePointer(window, -60, -60);
+  desktop.Button(1, true);
+  desktop.Key(testing::kKeyHandKeysyms[0], true);
+  const int code = run.Wait(180.0);
+  desktop.Key(testing::kKeyHandKeysyms[0], false);
+  desktop.Button(1, false);
+  INFO(run.out() << run.err());
+  CHECK(code == 1);  // the time limit: no lap
+  const std::string json = run.LastLine();
+  CHECK(JsonField(json, "outcome") == "time limit");
+  CHECK(std::stod(JsonField(json, "distance_m")) == Approx(0.0).margin(1e-3));
+  // Disengaged throughout, and counted.
+  CHECK(std::stod(JsonField(json, "disengaged_s")) > 50.0);
+}
+
+TEST_CASE(
+    "screenshots: the hand follows the cursor, and against the gesture's wall after a contact it "
+    "is bent away from it",
+    "[mouse][screens]") {
+  XServer x;
+  const int domain = test::UniqueDomain(363);
+  const auto dir = test::ScratchDir("e2e-mouse-screens");
+  const auto track = testing::WriteObstacleAheadTrack(kTrack, dir);
+  const auto trace = dir / "hands.trace";
+  std::vector<std::string> argv = MouseRun("gesture", domain, "mouse-screens", dir,
+                                           {"--trace", trace.string(), "--time-limit", "90"});
+  argv[std::find(argv.begin(), argv.end(), std::string(kTrack)) - argv.begin()] = track.string();
+  LinkConfig link = LoadRun("config/haptel.yaml").link;
+  link.domain_id = domain;
+  testing::RunWatch watch(link, "mouse-screens");
+  Child run(argv);
+  testing::XDesktop desktop;
+  const testing::XWindowInfo window = WindowOf(run, desktop);
+  const int cx = window.width_px / 2, cy = window.height_px / 2;
+  auto settle = [] { std::this_thread::sleep_for(std::chrono::milliseconds(1500)); };
+  auto shot = [&](const std::string& name) {
+    CHECK(cv::imwrite((ScreensDir() / (name + ".png")).string(), desktop.Capture(window)));
+  };
+  // Centre, then 120 px right with the button held: the hand follows (a turn
+  // in place, right).
+  desktop.MovePointer(window, cx, cy);
+  desktop.Button(1, true);
+  settle();
+  const int64_t centre_ns = MonotonicNs();
+  shot("mouse-hand-centre");
+  desktop.MovePointer(window, cx + 120, cy);
+  settle();
+  const int64_t right_ns = MonotonicNs();
+  shot("mouse-hand-right");
+  // Forward until the bumper touches the obstacle ahead; then pushed 120 px
+  // further forward, against the wall.
+  watch.Arm();
+  desktop.MovePointer(window, cx, cy - 100);
+  REQUIRE(test::WaitFor([&] { return watch.contact_ns() != 0; }, 30.0));
+  settle();
+  const int64_t wall_ns = MonotonicNs();
+  shot("mouse-hand-at-wall");
+  desktop.MovePointer(window, cx, cy - 220);
+  settle();
+  const int64_t pushed_ns = MonotonicNs();
+  shot("mouse-hand-pushed-into-wall");
+  desktop.Button(1, false);
+  desktop.Key(XK_Escape, true);
+  desktop.Key(XK_Escape, false);
+  run.Wait(60.0);
+  INFO(run.out() << run.err());
+  const std::string json = run.LastLine();
+  REQUIRE_FALSE(JsonField(json, "outcome").empty());
+
+  // The device's own account of the hand (its trace), against the cursor's
+  // target (PointerTarget: the hand where the pointer alone would put it).
+  const MouseDeviceConfig mouse = LoadDevice(kMouse).mouse;
+  const auto hand = testing::WristsOf(haptics::ReadTrace(trace), haptics::Side::kRight);
+  REQUIRE_FALSE(hand.empty());
+  const double m = mouse.metres_per_pixel;
+  // Following: 120 px right is 120·m to the device's −y; the centring field
+  // holds it back somewhat (pseudo-haptics), never past the cursor.
+  const double followed =
+      testing::PositionAt(hand, centre_ns)[1] - testing::PositionAt(hand, right_ns)[1];
+  CHECK(followed > 0.4 * 120 * m);
+  CHECK(followed <= 120 * m + 1e-3);
+  // Bent at the wall: the cursor went 120 px further forward, the hand a small part of it.
+  const double pushed =
+      testing::PositionAt(hand, pushed_ns)[0] - testing::PositionAt(hand, wall_ns)[0];
+  CHECK(pushed < 0.3 * 120 * m);
+  // The run says it bent the cursor.
+  CHECK(std::stod(JsonField(json, "pseudo_haptic_gain_mean")) < 1.0);
+}
