@@ -320,8 +320,8 @@ ALTER TABLE study_trials ADD COLUMN device TEXT NOT NULL DEFAULT '';
 ALTER TABLE study_superseded_trials ADD COLUMN device TEXT NOT NULL DEFAULT '';
 )sql";
 
-constexpr const char* kMigrations[] = {kSchemaV1,  kSchemaV2,  kSchemaV3, kSchemaV4, kSchemaV5,
-                                       kSchemaV6,  kSchemaV7,  kSchemaV8, kSchemaV9, kSchemaV10,
+constexpr const char* kMigrations[] = {kSchemaV1,  kSchemaV2,  kSchemaV3,  kSchemaV4, kSchemaV5,
+                                       kSchemaV6,  kSchemaV7,  kSchemaV8,  kSchemaV9, kSchemaV10,
                                        kSchemaV11, kSchemaV12, kSchemaV13, kSchemaV14};
 static_assert(std::size(kMigrations) == kSchemaVersion, "one migration per schema version");
 

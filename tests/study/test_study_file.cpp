@@ -82,6 +82,17 @@ TEST_CASE(
   CHECK(s.questionnaires.size() == 2);
   CHECK(s.demographics == "demographics");  // the participants' background, asked once
   CHECK(PlanTrials(s).size() == 16);
+  // With a mouse alone: every hand condition on the mouse device.
+  for (const StudyCondition& c : s.conditions) CHECK(c.device_name == "mouse");
+  CHECK(s.practice);  // with the keys, as before
+  // The variant with force feedback: the cockpits on a wheel, the gesture on a joystick.
+  const StudyConfig ff = LoadStudy("config/studies/grand-prix-ff.yaml");
+  REQUIRE(ff.conditions.size() == 4);
+  for (const StudyCondition& c : ff.conditions) {
+    INFO(c.name);
+    CHECK(c.device_name == (c.interface == "gesture" ? "sdl-ff" : "sdl-ff-wheel"));
+  }
+  for (const PlannedTrial& t : PlanTrials(ff)) CHECK(t.device.rfind("sdl-ff", 0) == 0);
 }
 
 TEST_CASE("Conditions may differ only in the predictive display; the link's fault is the study's") {

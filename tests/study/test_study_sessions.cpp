@@ -2,6 +2,7 @@
 // in the third person as well as through its camera; a trial never does. A
 // trial is driven with its condition's device.
 #include <catch2/catch.hpp>
+#include <cstdlib>
 
 #include "haptel/config/device.hpp"
 #include "haptel/config/study.hpp"
@@ -79,4 +80,18 @@ TEST_CASE(
   REQUIRE(shown.unavailable);
   CHECK(shown.unavailable().empty());  // the simulated device is always there
   CHECK(DeviceOf(StudyCondition{"x", "gesture"}).name.empty());
+
+  // The shipped people's study's mouse, without a display: what is missing, said.
+  const TrialDevice mouse = DeviceOf(LoadStudy("config/studies/grand-prix.yaml").conditions[0]);
+  CHECK(mouse.name == "mouse");
+  const char* display = std::getenv("DISPLAY");
+  const std::string saved = display != nullptr ? display : "";
+  const char* wayland = std::getenv("WAYLAND_DISPLAY");
+  const std::string saved_wayland = wayland != nullptr ? wayland : "";
+  unsetenv("DISPLAY");
+  unsetenv("WAYLAND_DISPLAY");
+  const std::string missing = mouse.unavailable();
+  if (!saved.empty()) setenv("DISPLAY", saved.c_str(), 1);
+  if (!saved_wayland.empty()) setenv("WAYLAND_DISPLAY", saved_wayland.c_str(), 1);
+  CHECK_THAT(missing, Catch::Contains("needs a display"));
 }
