@@ -3,6 +3,7 @@
 #include <set>
 
 #include "haptel/config/check.hpp"
+#include "haptel/config/device.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/config/interface_kinds.hpp"
 #include "haptel/config/link.hpp"
@@ -120,9 +121,25 @@ void ReadStudyLink(YamlMap& root, const std::filesystem::path& dir, StudyConfig&
   }
 }
 
+/// A condition's input device: the file it names (relative to the study
+/// file's folder), else the run configuration's; loaded and checked as a
+/// device file is, a bad one named with the condition's key.
+void ReadConditionDevice(YamlMap& c, const std::filesystem::path& dir, const RunConfig& run_config,
+                         StudyCondition& condition) {
+  const std::string named = c.String("device", "");  // an empty one is refused as such
+  condition.device = named.empty() ? run_config.device : dir / named;
+  try {
+    condition.device_name = LoadDevice(condition.device).name;
+  } catch (const ConfigError& e) {
+    c.Fail("device", "a device file (config/devices/*.yaml) that loads: " + std::string(e.what()));
+  }
+}
+
 /// The conditions: each names an interface file of the run configuration
-/// (`run_config`), one a simulated driver can use when `synthetic`.
-void ReadConditions(YamlMap& root, const RunConfig& run_config, bool synthetic, StudyConfig& s) {
+/// (`run_config`), one a simulated driver can use when `synthetic`, and the
+/// device it is driven with.
+void ReadConditions(YamlMap& root, const std::filesystem::path& dir, const RunConfig& run_config,
+                    bool synthetic, StudyConfig& s) {
   std::vector<YamlMap> conditions = root.MapList("conditions");
   if (conditions.size() < 2 || conditions.size() > 10) {
     root.Fail("conditions", "a list of 2 to 10 conditions, each {name, interface, predict}");
@@ -133,6 +150,7 @@ void ReadConditions(YamlMap& root, const RunConfig& run_config, bool synthetic, 
     condition.interface = c.RequireString("interface");
     condition.name = c.String("name", condition.interface);
     condition.predict = c.Bool("predict", false);
+    ReadConditionDevice(c, dir, run_config, condition);
     if (!PlainName(condition.name)) c.Fail("name", kPlainName);
     if (!condition_names.insert(condition.name).second) {
       c.Fail("name", "a name no other condition has ('" + condition.name + "' is taken)");
@@ -253,7 +271,7 @@ StudyConfig LoadStudy(const std::filesystem::path& file) {
     root.Fail("operators", "synthetic or person");
   const bool synthetic = s.operators == "synthetic";
 
-  ReadConditions(root, run_config, synthetic, s);
+  ReadConditions(root, dir, run_config, synthetic, s);
   // Simulated drivers' profiles, by name.
   YamlMap profiles = root.Map("profiles");
   for (const std::string& name : profiles.Keys()) {

@@ -39,7 +39,7 @@ namespace {
 using namespace haptel::sql;
 
 /// Schema version stored in PRAGMA user_version.
-constexpr int kSchemaVersion = 13;
+constexpr int kSchemaVersion = 14;
 
 /// Schema steps: kMigrations[v - 1] takes a database from version v - 1 to v.
 /// A new database runs them all, so the upgrade path of an old file is the
@@ -310,9 +310,19 @@ ALTER TABLE runs ADD COLUMN pseudo_haptic_gain_mean REAL DEFAULT NULL;
 ALTER TABLE runs ADD COLUMN ff_effects_played INTEGER DEFAULT NULL;
 )sql";
 
-constexpr const char* kMigrations[] = {kSchemaV1,  kSchemaV2,  kSchemaV3, kSchemaV4, kSchemaV5,
-                                       kSchemaV6,  kSchemaV7,  kSchemaV8, kSchemaV9, kSchemaV10,
-                                       kSchemaV11, kSchemaV12, kSchemaV13};
+// v14: the input device of each study trial (a study names one per
+// condition: the mouse, a force-feedback wheel...), by its device file's
+// name: the one planned, and the one a recorded (or superseded) trial was
+// driven with. Trials planned before v14 get '' (not kept).
+constexpr const char* kSchemaV14 = R"sql(
+ALTER TABLE study_plan ADD COLUMN device TEXT NOT NULL DEFAULT '';
+ALTER TABLE study_trials ADD COLUMN device TEXT NOT NULL DEFAULT '';
+ALTER TABLE study_superseded_trials ADD COLUMN device TEXT NOT NULL DEFAULT '';
+)sql";
+
+constexpr const char* kMigrations[] = {kSchemaV1,  kSchemaV2,  kSchemaV3,  kSchemaV4, kSchemaV5,
+                                       kSchemaV6,  kSchemaV7,  kSchemaV8,  kSchemaV9, kSchemaV10,
+                                       kSchemaV11, kSchemaV12, kSchemaV13, kSchemaV14};
 static_assert(std::size(kMigrations) == kSchemaVersion, "one migration per schema version");
 
 constexpr const char* kInsertRun = R"sql(

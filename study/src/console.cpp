@@ -307,6 +307,7 @@ struct StudyConsole::Impl {
   /// The trial the experimenter may start (empty: none waits), and whether
   /// they did; what the study waits for otherwise (questionnaires).
   std::string next;
+  TrialDevice next_device;  ///< what the offered trial is driven with
   bool start_requested = false;
   std::string waiting;
   std::condition_variable started;
@@ -441,14 +442,17 @@ struct StudyConsole::Impl {
       << (live.empty() ? "No trial under way." : Html(live)) << "</p>\n";
     if (!live.empty()) LiveTrial(h);
     if (!waiting.empty()) h << "<p id=\"waiting\">Waiting for " << Html(waiting) << "</p>\n";
+    std::string missing;
     if (!next.empty()) {
       h << "<form method=\"post\" action=\"/start\">" << TokenField(access.form_token)
         << "<p id=\"next\">Next: " << Html(next)
         << " <button id=\"start\">Start</button></p></form>\n";
+      missing = NextDeviceMissing();
+      NextDevice(h, missing);
     }
     h << "<table "
-         "id=\"schedule\"><tr><th>participant</th><th>position</th><th>condition</th><th>lap</th>"
-         "<th>questionnaires</th><th>notes</th></tr>\n";
+         "id=\"schedule\"><tr><th>participant</th><th>position</th><th>condition</th>"
+         "<th>device</th><th>lap</th><th>questionnaires</th><th>notes</th></tr>\n";
     for (const PlannedTrial& t : plan) ScheduleRow(h, t, trials, notes);
     h << "</table>\n";
     ParticipantNotes(h, notes);
@@ -465,9 +469,28 @@ struct StudyConsole::Impl {
     }
     // Refreshed while something changes by itself (a trial under way, answers
     // awaited from another screen); still otherwise, so that links hold.
-    const bool changing = !live.empty() || !waiting.empty();
+    // A device not there yet: the page shows when it is plugged in.
+    const bool changing = !live.empty() || !waiting.empty() || !missing.empty();
     return Page("Study " + config.name, h.str(),
                 changing ? "<meta http-equiv=\"refresh\" content=\"2\">" : "");
+  }
+
+  /// What the offered trial's device lacks ("" when it is there, or there
+  /// is none to check). The caller holds `mutex`.
+  std::string NextDeviceMissing() const {
+    return next_device.unavailable ? next_device.unavailable() : std::string();
+  }
+
+  /// The offered trial's device, and what is missing while it is not there.
+  /// The caller holds `mutex`.
+  void NextDevice(std::ostringstream& h, const std::string& missing) const {
+    if (next_device.name.empty()) return;
+    h << "<p id=\"next-device\">Device: <b>" << Html(next_device.name) << "</b> ("
+      << Html(next_device.file.string()) << ")</p>\n";
+    if (!missing.empty()) {
+      h << "<p id=\"device-missing\" class=\"error\">The device " << Html(next_device.name)
+        << " is not there: " << Html(missing) << ". The trial cannot start until it is.</p>\n";
+    }
   }
 
   /// The trial under way: its progress, the thumbnail, Abort, and its note
@@ -508,7 +531,8 @@ struct StudyConsole::Impl {
           : flagged      ? " class=\"done flagged\""
                          : " class=\"done\"")
       << "><td>" << Html(t.participant) << "</td><td>" << t.position << "</td><td>"
-      << Html(t.condition) << "</td><td>"
+      << Html(t.condition) << "</td><td>" << Html(row != nullptr ? row->device : t.device)
+      << "</td><td>"
       << (row == nullptr ? "" : FormatSeconds(row->lap_time_s) + (row->completed ? "" : " (cap)"));
     // What could have spoiled it: the experimenter decides whether to redo it.
     if (flagged) h << " <span class=\"flags\">! " << Html(row->flags) << "</span>";
@@ -733,9 +757,11 @@ void StudyConsole::Impl::Status(const httplib::Request&, httplib::Response& res)
           ",\"participants\":" + std::to_string(store->Participants().size()) +
           ",\"live\":" + JsonString(live) + ",\"lap_time_s\":" + JsonNumber(progress.lap_time_s) +
           ",\"gates_passed\":" + std::to_string(progress.gates_passed) +
-          ",\"obstacles\":" + std::to_string(progress.obstacles) +
-          ",\"video_frames\":" + std::to_string(thumbnail ? thumbnail->frames() : 0) +
-          ",\"next\":" + JsonString(next) + ",\"waiting\":" + JsonString(waiting) +
+          ",\"obstacles\":" + std::to_string(progress.obstacles) + ",\"video_frames\":" +
+          std::to_string(thumbnail ? thumbnail->frames() : 0) + ",\"next\":" + JsonString(next) +
+          ",\"next_device\":" + JsonString(next.empty() ? std::string() : next_device.name) +
+          ",\"device_missing\":" + JsonString(next.empty() ? std::string() : NextDeviceMissing()) +
+          ",\"waiting\":" + JsonString(waiting) +
           ",\"waiting_for_participants\":" + (waiting_for_more ? "true" : "false") +
           ",\"connections\":{\"served\":" + std::to_string(c.served) + ",\"refused_busy\":" +
           std::to_string(c.refused_busy) + ",\"cut_deadline\":" + std::to_string(c.cut_deadline) +
@@ -752,6 +778,16 @@ void StudyConsole::Impl::Start(const httplib::Request&, httplib::Response& res) 
     const std::string why =
         waiting.empty() ? "no trial is waiting to start" : "waiting for " + waiting;
     res.set_content(ErrorPage("Not started", why), "text/html; charset=utf-8");
+    return;
+  }
+  // A trial whose device is not there would fail at its start, or run with
+  // nobody able to drive it: refused, saying what is missing.
+  if (const std::string missing = NextDeviceMissing(); !missing.empty()) {
+    res.status = 409;
+    res.set_content(ErrorPage("Not started",
+                              "the trial is driven with the device " + next_device.name + " (" +
+                                  next_device.file.string() + "), and it is not there: " + missing),
+                    "text/html; charset=utf-8");
     return;
   }
   start_requested = true;
@@ -1000,15 +1036,18 @@ void StudyConsole::SetWaiting(const std::string& text) {
   impl_->waiting = text;
 }
 
-bool StudyConsole::WaitForStart(const std::string& next, const std::atomic<bool>& stop) {
+bool StudyConsole::WaitForStart(const std::string& next, const std::atomic<bool>& stop,
+                                const TrialDevice& device) {
   std::unique_lock<std::mutex> lock(impl_->mutex);
   impl_->next = next;
+  impl_->next_device = device;
   impl_->start_requested = false;
   // Polled as well: a signal sets `stop` without notifying.
   while (!impl_->start_requested && !stop.load()) {
     impl_->started.wait_for(lock, std::chrono::milliseconds(50));
   }
   impl_->next.clear();
+  impl_->next_device = {};
   const bool start = impl_->start_requested;
   impl_->start_requested = false;
   impl_->abort_requested.store(false);

@@ -146,6 +146,9 @@ std::vector<DefiningValue> StudyDefinition(const StudyConfig& config) {
     out.push_back({"conditions." + c.name + ".interface", c.interface});
     // Keys written only when set: forms stored before they existed still match.
     if (c.predict) out.push_back({"conditions." + c.name + ".predict", "true"});
+    // Form 2: the device a person holds changes what the trial is. By path,
+    // as the run file is (its contents are not compared).
+    out.push_back({"conditions." + c.name + ".device", FromStudyFolder(config, c.device)});
   }
 
   out.push_back({"design.order", ToString(config.order)});

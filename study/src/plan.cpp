@@ -31,7 +31,7 @@ std::vector<PlannedTrial> PlanTrials(const StudyConfig& config) {
     for (size_t i = 0; i < orders[p].size(); ++i) {
       const StudyCondition& condition = config.conditions.at(static_cast<size_t>(orders[p][i]));
       plan.push_back({config.participants[p].id, static_cast<int>(i) + 1, condition.name,
-                      static_cast<int>(i / per_repetition) + 1});
+                      static_cast<int>(i / per_repetition) + 1, condition.device_name});
     }
   }
   return plan;
@@ -58,8 +58,9 @@ std::vector<PlannedTrial> PlanParticipant(const StudyConfig& config, const std::
   std::vector<PlannedTrial> trials;
   for (int r = 0; r < config.repetitions; ++r) {
     for (const int c : order) {
-      trials.push_back({id, static_cast<int>(trials.size()) + 1,
-                        config.conditions.at(static_cast<size_t>(c)).name, r + 1});
+      const StudyCondition& condition = config.conditions.at(static_cast<size_t>(c));
+      trials.push_back(
+          {id, static_cast<int>(trials.size()) + 1, condition.name, r + 1, condition.device_name});
     }
   }
   return trials;

@@ -28,6 +28,26 @@ std::string Describe(const PlannedTrial& t) {
   return t.participant + " #" + std::to_string(t.position) + " " + t.condition;
 }
 
+/// Planned trials' rows (a new study's, or a participant's added later).
+void InsertPlan(const std::filesystem::path& file, sqlite3* db, int64_t study,
+                const std::vector<PlannedTrial>& plan) {
+  Stmt planned = Prepare(file, db,
+                         "INSERT INTO study_plan (study_id, participant, position, condition, "
+                         "repetition, device) VALUES (?, ?, ?, ?, ?, ?)",
+                         "cannot insert the plan");
+  for (const PlannedTrial& t : plan) {
+    sqlite3_reset(planned.get());
+    Binder(file, db, planned.get())
+        .Int(study)
+        .Text(t.participant)
+        .Int(t.position)
+        .Text(t.condition)
+        .Int(t.repetition)
+        .Text(t.device);
+    StepDone(file, db, planned.get(), "cannot insert planned trial " + Describe(t));
+  }
+}
+
 /// A new study's rows: the study with its definition, its conditions, the
 /// file's participants and the plan. Returns its id.
 int64_t InsertStudy(const std::filesystem::path& file, sqlite3* db, const StudyConfig& config,
@@ -75,20 +95,7 @@ int64_t InsertStudy(const std::filesystem::path& file, sqlite3* db, const StudyC
         .Text(NowUtc());
     StepDone(file, db, participant.get(), "cannot insert participant " + config.participants[i].id);
   }
-  Stmt planned = Prepare(file, db,
-                         "INSERT INTO study_plan (study_id, participant, position, condition, "
-                         "repetition) VALUES (?, ?, ?, ?, ?)",
-                         "cannot insert the plan");
-  for (const PlannedTrial& t : plan) {
-    sqlite3_reset(planned.get());
-    Binder(file, db, planned.get())
-        .Int(id)
-        .Text(t.participant)
-        .Int(t.position)
-        .Text(t.condition)
-        .Int(t.repetition);
-    StepDone(file, db, planned.get(), "cannot insert planned trial " + Describe(t));
-  }
+  InsertPlan(file, db, id, plan);
   return id;
 }
 
@@ -232,21 +239,9 @@ void StudyStore::AddParticipant(const std::string& participant,
         .Int(static_cast<int64_t>(ids.size()))
         .Text(NowUtc());
     StepDone(file, db, insert.get(), "cannot insert participant " + participant);
-    Stmt planned =
-        Prepare(file, db,
-                "INSERT INTO study_plan (study_id, participant, position, condition, repetition) "
-                "VALUES (?, ?, ?, ?, ?)",
-                "cannot insert the plan");
-    for (const PlannedTrial& t : trials) {
-      sqlite3_reset(planned.get());
-      Binder(file, db, planned.get())
-          .Int(id_)
-          .Text(participant)
-          .Int(t.position)
-          .Text(t.condition)
-          .Int(t.repetition);
-      StepDone(file, db, planned.get(), "cannot insert planned trial " + Describe(t));
-    }
+    std::vector<PlannedTrial> planned = trials;
+    for (PlannedTrial& t : planned) t.participant = participant;
+    InsertPlan(file, db, id_, planned);
     Event("participant added", participant, 0, std::to_string(trials.size()) + " trials planned");
   }
   txn.Commit();
@@ -258,7 +253,7 @@ std::vector<PlannedTrial> StudyStore::Plan() const {
   // Participants in the order they were added, each by position.
   Stmt select = Prepare(
       file, db,
-      "SELECT p.participant, p.position, p.condition, p.repetition FROM study_plan p "
+      "SELECT p.participant, p.position, p.condition, p.repetition, p.device FROM study_plan p "
       "JOIN study_participants s ON s.study_id = p.study_id AND s.participant = p.participant "
       "WHERE p.study_id = ? ORDER BY s.row_index, p.position",
       "cannot read the plan");
@@ -271,6 +266,7 @@ std::vector<PlannedTrial> StudyStore::Plan() const {
     t.position = static_cast<int>(r.Int());
     t.condition = r.Text();
     t.repetition = static_cast<int>(r.Int());
+    t.device = r.Text();
     plan.push_back(t);
   }
   return plan;
@@ -280,7 +276,7 @@ namespace {
 
 /// A trial's row in the column order both Trials() and Superseded() select:
 /// participant, position, condition, run_id, lap_time_s, completed,
-/// obstacles, outcome, attempt, approach_s, flags.
+/// obstacles, outcome, attempt, approach_s, flags, device.
 void ReadTrialRow(Reader& r, TrialRow& t) {
   t.participant = r.Text();
   t.position = static_cast<int>(r.Int());
@@ -293,6 +289,7 @@ void ReadTrialRow(Reader& r, TrialRow& t) {
   t.attempt = static_cast<int>(r.Int());
   t.approach_s = r.Real();
   t.flags = r.Text();
+  t.device = r.Text();
 }
 
 }  // namespace
@@ -300,14 +297,15 @@ void ReadTrialRow(Reader& r, TrialRow& t) {
 std::vector<TrialRow> StudyStore::Trials() const {
   sqlite3* db = recorder_.handle();
   const std::filesystem::path& file = recorder_.path();
-  Stmt select =
-      Prepare(file, db,
-              "SELECT t.participant, t.position, t.condition, t.run_id, t.lap_time_s, t.completed, "
-              "t.obstacles, t.outcome, t.attempt, t.approach_s, t.flags FROM study_trials t JOIN "
-              "study_participants s ON "
-              "s.study_id = t.study_id AND s.participant = t.participant WHERE t.study_id = ? "
-              "ORDER BY s.row_index, t.position",
-              "cannot read the trials");
+  Stmt select = Prepare(
+      file, db,
+      "SELECT t.participant, t.position, t.condition, t.run_id, t.lap_time_s, t.completed, "
+      "t.obstacles, t.outcome, t.attempt, t.approach_s, t.flags, t.device FROM study_trials t "
+      "JOIN "
+      "study_participants s ON "
+      "s.study_id = t.study_id AND s.participant = t.participant WHERE t.study_id = ? "
+      "ORDER BY s.row_index, t.position",
+      "cannot read the trials");
   Binder(file, db, select.get()).Int(id_);
   std::vector<TrialRow> rows;
   while (sqlite3_step(select.get()) == SQLITE_ROW) {
@@ -378,10 +376,10 @@ record::Recorder::AlsoSave StudyStore::TrialWriter(const PlannedTrial& trial, do
     Stmt insert = Prepare(
         file, db,
         "INSERT INTO study_trials (study_id, participant, position, condition, run_id, "
-        "lap_time_s, completed, obstacles, outcome, attempt, finished_utc, approach_s, flags) "
-        "VALUES "
+        "lap_time_s, completed, obstacles, outcome, attempt, finished_utc, approach_s, flags, "
+        "device) VALUES "
         "(?, ?, ?, ?, ?, ?, ?, ?, ?, 1 + (SELECT COUNT(*) FROM study_events WHERE study_id = ? "
-        "AND kind = 'redo' AND participant = ? AND position = ?), ?, ?, ?)",
+        "AND kind = 'redo' AND participant = ? AND position = ?), ?, ?, ?, ?)",
         "cannot prepare the trial row");
     Binder(file, db, insert.get())
         .Int(study)
@@ -398,7 +396,8 @@ record::Recorder::AlsoSave StudyStore::TrialWriter(const PlannedTrial& trial, do
         .Int(trial.position)
         .Text(NowUtc())
         .RealOrNull(run.approach_s, std::isfinite(run.approach_s))
-        .Text(TrialFlags(run));
+        .Text(TrialFlags(run))
+        .Text(trial.device);
     StepDone(file, db, insert.get(),
              "cannot record trial " + Describe(trial) + " (already recorded?)");
   };
@@ -415,9 +414,9 @@ bool StudyStore::Redo(const std::string& participant, int position, const std::s
         file, db,
         "INSERT INTO study_superseded_trials (study_id, participant, position, condition, run_id, "
         "lap_time_s, completed, obstacles, outcome, attempt, finished_utc, approach_s, flags, "
-        "superseded_utc, why) SELECT study_id, participant, position, condition, run_id, "
-        "lap_time_s, "
-        "completed, obstacles, outcome, attempt, finished_utc, approach_s, flags, ?, ? FROM "
+        "device, superseded_utc, why) SELECT study_id, participant, position, condition, run_id, "
+        "lap_time_s, completed, obstacles, outcome, attempt, finished_utc, approach_s, flags, "
+        "device, ?, ? FROM "
         "study_trials WHERE study_id = ? AND participant = ? AND position = ?",
         "cannot keep the trial taken back");
     Binder(file, db, keep.get()).Text(NowUtc()).Text(why).Int(id_).Text(participant).Int(position);
@@ -451,7 +450,8 @@ std::vector<SupersededTrial> StudyStore::Superseded() const {
   Stmt select = Prepare(
       file, db,
       "SELECT participant, position, condition, run_id, lap_time_s, completed, obstacles, outcome, "
-      "attempt, approach_s, flags, why, superseded_utc FROM study_superseded_trials WHERE "
+      "attempt, approach_s, flags, device, why, superseded_utc FROM study_superseded_trials "
+      "WHERE "
       "study_id = ? ORDER BY id",
       "cannot read the superseded trials");
   Binder(file, db, select.get()).Int(id_);

@@ -69,7 +69,15 @@ mediator::SessionSetup TrialSetup(const StudyConfig& config, const PlannedTrial&
                                     cap,
                                     "--database",
                                     database.string()};
-  if (synthetic) words.insert(words.end(), {"--view", "none"});
+  // The condition's device (the run file's when it names none).
+  if (!condition.device.empty()) words.insert(words.end(), {"--device", condition.device.string()});
+  // A person drives in the view's window (the mouse device reads its
+  // pointer); without a display the trial's device says what is missing.
+  if (synthetic) {
+    words.insert(words.end(), {"--view", "none"});
+  } else if (view::View::DisplayAvailable()) {
+    words.insert(words.end(), {"--view", "window"});
+  }
   if (simulated_time) words.push_back("--simulated-time");
   if (!domain.empty()) words.insert(words.end(), {"--domain", domain});
   if (condition.predict) words.insert(words.end(), {"--predict", "on"});
@@ -101,6 +109,19 @@ void ShowPictures(mediator::SessionSetup& setup, StudyConsole& console) {
 }
 
 }  // namespace
+
+bool PersonCanDrive(const mediator::SessionSetup& trial) {
+  const bool manual = !trial.interfaces.empty() &&
+                      trial.interfaces[static_cast<size_t>(trial.start_interface)].manual();
+  return manual || !haptics::DriverOf(trial.device).simulated;
+}
+
+TrialDevice DeviceOf(const StudyCondition& condition) {
+  if (condition.device.empty()) return {};
+  const DeviceConfig device = LoadDevice(condition.device);
+  return {condition.device_name, condition.device,
+          [device] { return haptics::DeviceUnavailable(device); }};
+}
 
 void MakePracticeLap(mediator::SessionSetup& setup, const std::string& participant) {
   setup.direct_view = true;
@@ -214,7 +235,9 @@ struct StudyRunPlan {
   std::vector<PlannedTrial> plan;
   std::map<std::string, Questionnaire> questionnaires;
   std::filesystem::path database;
-  std::string simulated_device;  ///< the run's haptic device, when it is the simulated one
+  /// The conditions a person cannot drive: a hand interface on a simulated
+  /// device (nobody can move its arms), each "NAME (DEVICE FILE)".
+  std::vector<std::string> undrivable;
   ConsoleOptions console_options;
 };
 
@@ -259,22 +282,36 @@ StudyRunPlan PlanStudyRun(const StudyRunOptions& options) {
   }
   p.plan = PlanTrials(config);
   const RunConfig run_config = LoadRun(config.run);
-  const DeviceConfig device = LoadDevice(run_config.device);
-  std::string simulated_device;
-  if (haptics::DriverOf(device).simulated)
-    simulated_device = run_config.device.lexically_normal().string();
-  p.simulated_device = simulated_device;
   p.database = options.database.value_or(!config.database.empty() ? config.database.string()
                                                                   : run_config.database.string());
   // Each condition's session as its trials will ask for it, checked now:
   // one a trial cannot start (e.g. --simulated-time with a vehicle that
   // does not step in this process) is refused before the study is
   // started and its plan written.
-  std::set<std::string> conditions_checked;
-  for (const PlannedTrial& t : p.plan) {
-    if (conditions_checked.insert(t.condition).second) {
-      TrialSetup(config, t, p.database, options.domain, options.verbose, 0, options.simulated_time);
+  // Every condition, also of an open study (its participants come later).
+  for (size_t i = 0; i < config.conditions.size(); ++i) {
+    const StudyCondition& c = config.conditions[i];
+    // Simulated drivers move the simulated device's arms, and no other's.
+    if (config.operators == "synthetic" && !c.device.empty() &&
+        !haptics::DriverOf(LoadDevice(c.device)).simulated) {
+      throw ConfigError(config.file.string() + ": key 'conditions[" + std::to_string(i) +
+                        "].device': expected a simulated device for simulated drivers (they move "
+                        "its arms), got '" +
+                        c.device_name + "' (" + c.device.string() + ")");
     }
+    // Its first planned trial (a simulated driver's profile is its
+    // participant's), else one of an open person study's participants to come.
+    PlannedTrial first{"", 1, c.name, 1, c.device_name};
+    for (const PlannedTrial& t : p.plan) {
+      if (t.condition == c.name) {
+        first = t;
+        break;
+      }
+    }
+    const mediator::SessionSetup setup = TrialSetup(config, first, p.database, options.domain,
+                                                    options.verbose, 0, options.simulated_time);
+    if (config.operators == "person" && !PersonCanDrive(setup))
+      p.undrivable.push_back(c.name + " (" + setup.run.device.lexically_normal().string() + ")");
   }
   p.console_options = options.console_options;
   // The console's thumbnail: the trial's camera, through its session.
@@ -363,15 +400,20 @@ void StudyRun::Open() {
   }
   store_ =
       cli::ReadInput([&] { return std::make_unique<StudyStore>(*recorder_, config_, plan_.plan); });
-  // People hold the haptic conditions' controls with a real device: the
-  // simulated one has no arms a person can move (its trials end at the cap).
-  if (person_ && !plan_.simulated_device.empty()) {
-    std::fprintf(
-        stderr,
-        "[study] note: the run's device '%s' is simulated: nobody can move its arms, so the "
-        "haptic conditions' trials end at the cap; for people name a run file whose device is a "
-        "real one (e.g. devices/udp.yaml, the exoskeleton's arms)\n",
-        plan_.simulated_device.c_str());
+  // People hold the haptic conditions' controls with a device they can
+  // move: the simulated one has no arms a person can move (its trials end
+  // at the cap).
+  if (!plan_.undrivable.empty()) {
+    std::string which;
+    for (const std::string& c : plan_.undrivable) which += (which.empty() ? "" : ", ") + c;
+    std::fprintf(stderr,
+                 "[study] note: condition%s %s %s driven with a simulated device: nobody can move "
+                 "its arms, so %s trials end at the cap; name a person's device per condition "
+                 "(device: ../devices/mouse.yaml, the mouse; devices/sdl-ff.yaml, a "
+                 "force-feedback joystick; devices/udp.yaml, the arms)\n",
+                 plan_.undrivable.size() == 1 ? "" : "s", which.c_str(),
+                 plan_.undrivable.size() == 1 ? "is" : "are",
+                 plan_.undrivable.size() == 1 ? "its" : "their");
   }
   tally_.done_before = store_->Trials().size();
   // The console plans a new study before this store opens it: ask the one that planned.
@@ -425,7 +467,7 @@ StudyRun::Then StudyRun::PrepareForPerson(const PlannedTrial& trial) {
   }
   if (!console_->WaitForStart("participant " + trial.participant + ", " + trial.condition +
                                   " (position " + std::to_string(trial.position) + ")",
-                              interrupted_)) {
+                              interrupted_, DeviceOf(ConditionNamed(config_, trial.condition)))) {
     return Then::kOffer;  // interrupted: the loop's first check ends the study
   }
   return Then::kRunTrial;
@@ -691,7 +733,7 @@ std::string StudyRunJson(const StudyConfig& config, const std::filesystem::path&
     if (i > 0) out += ",";
     out += "{\"participant\":" + JsonString(t.participant) +
            ",\"position\":" + std::to_string(t.position) +
-           ",\"condition\":" + JsonString(t.condition) +
+           ",\"condition\":" + JsonString(t.condition) + ",\"device\":" + JsonString(t.device) +
            ",\"lap_time_s\":" + JsonNumber(t.lap_time_s) + ",\"approach_s\":" +
            (std::isfinite(t.approach_s) ? JsonNumber(t.approach_s) : std::string("null")) +
            ",\"completed\":" + (t.completed ? "true" : "false") +

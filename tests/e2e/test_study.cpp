@@ -423,6 +423,18 @@ TEST_CASE("a study that cannot work is refused before anything runs") {
     CHECK(run.err().find("participants[2].id") != std::string::npos);
     CHECK_FALSE(std::filesystem::exists(fresh));
   }
+  {  // Simulated drivers move the simulated arms: a condition on a person's device, exit 2.
+    const auto arms = SmallStudy(
+        dir, 2,
+        ", device: " + (std::filesystem::current_path() / "config/devices/udp.yaml").string());
+    const auto fresh = dir / "arms.db";
+    Child run({Bin("haptel"), "study", "run", arms.string(), "--database", fresh.string()});
+    CHECK(run.Wait(60.0) == 2);
+    INFO(run.err());
+    CHECK(run.err().find("small-study.yaml: key 'conditions[1].device'") != std::string::npos);
+    CHECK(run.err().find("expected a simulated device") != std::string::npos);
+    CHECK_FALSE(std::filesystem::exists(fresh));
+  }
   {  // A person's practice lap is driven in a window: without a display, exit 2 naming the key.
     const char* display = std::getenv("DISPLAY");
     const std::string saved = display != nullptr ? display : "";

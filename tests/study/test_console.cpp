@@ -13,6 +13,7 @@
 
 #include "console_client.hpp"
 #include "haptel/config/paths.hpp"
+#include "haptel/core/json.hpp"
 #include "haptel/record/recorder.hpp"
 #include "haptel/study/console.hpp"
 #include "haptel/study/report.hpp"
@@ -564,4 +565,66 @@ TEST_CASE(
         std::string::npos);
   CHECK(text.find("A, gesture (position 1, attempt 1, run 1): 25.00 s; from the console") !=
         std::string::npos);
+}
+
+TEST_CASE(
+    "The console names each trial's device, and refuses to start one whose device is not there") {
+  const auto dir = test::ScratchDir("study-console-device");
+  StudyConfig config = SmallStudy(dir, "device", "person",
+                                  {{"cockpit", "cockpit", false, dir / "wheel.yaml", "wheel"},
+                                   {"gesture", "gesture", false, dir / "mouse.yaml", "mouse"}});
+  config.participants = {{"A", ""}};
+  const std::vector<PlannedTrial> plan = {{"A", 1, "gesture", 1, "mouse"},
+                                          {"A", 2, "cockpit", 1, "wheel"}};
+  ConsoleOptions options;
+  options.port = 0;
+  StudyConsole console(config, plan, dir / "s.db", {}, options);
+  test::ConsoleClient client("127.0.0.1", console.port());
+  // The trial's device as its driver would answer: missing, then plugged in.
+  std::atomic<bool> plugged{false};
+  const TrialDevice mouse{"mouse", dir / "mouse.yaml", [&plugged] {
+                            return plugged.load() ? std::string()
+                                                  : std::string("no display (DISPLAY is not set)");
+                          }};
+  std::atomic<bool> stop{false};
+  std::atomic<bool> started{false};
+  std::thread study([&] {
+    started.store(console.WaitForStart("participant A, gesture (position 1)", stop, mouse));
+  });
+  auto status = [&](const std::string& key) {
+    const auto r = client.Get("/status.json");
+    return r ? JsonFieldOf(r->body, key) : std::string();
+  };
+  REQUIRE(test::WaitFor([&] { return !status("next").empty(); }, 20.0));
+  CHECK(status("next_device") == "mouse");
+  CHECK(status("device_missing") == "no display (DISPLAY is not set)");
+  // The schedule: each planned trial's device, and the offered one's, with what it lacks.
+  const auto page = client.Get("/");
+  REQUIRE(page);
+  CHECK(page->body.find("<th>device</th>") != std::string::npos);
+  CHECK(page->body.find("<td>wheel</td>") != std::string::npos);
+  CHECK(page->body.find("id=\"next-device\">Device: <b>mouse</b>") != std::string::npos);
+  CHECK(page->body.find("id=\"device-missing\"") != std::string::npos);
+  CHECK(page->body.find("no display (DISPLAY is not set)") != std::string::npos);
+  // Start is refused while it is missing, saying so; the trial still waits.
+  const auto refused = client.Post("/start");
+  REQUIRE(refused);
+  CHECK(refused->status == 409);
+  CHECK(refused->body.find("device mouse") != std::string::npos);
+  CHECK(refused->body.find("no display (DISPLAY is not set)") != std::string::npos);
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  CHECK_FALSE(started.load());
+  CHECK_FALSE(status("next").empty());
+  // Plugged in: no longer said, and Start starts it.
+  plugged.store(true);
+  CHECK(status("device_missing").empty());
+  const auto page_now = client.Get("/");
+  REQUIRE(page_now);
+  CHECK(page_now->body.find("id=\"device-missing\"") == std::string::npos);
+  const auto start = client.Post("/start");
+  REQUIRE(start);
+  CHECK(start->status == 303);
+  study.join();
+  CHECK(started.load());
+  CHECK(status("next_device").empty());
 }

@@ -116,10 +116,10 @@ TEST_CASE("The report on the thesis's data gives its tables, ranks and statistic
   const ReportFiles files = WriteReport(results, report, dir / "out");
   const std::string trials = Read(files.trials_csv);
   CHECK(trials.rfind(
-            "study,participant,condition,position,lap_time_s,approach_s,completed,obstacles", 0) ==
-        0);
-  CHECK(trials.find("\nthesis,B,cockpit,1,600.000,,false,5,") != std::string::npos);
-  CHECK(trials.find("\nthesis,E,gesture,4,200.000,,true,0,") != std::string::npos);
+            "study,participant,condition,device,position,lap_time_s,approach_s,completed,obstacles",
+            0) == 0);
+  CHECK(trials.find("\nthesis,B,cockpit,,1,600.000,,false,5,") != std::string::npos);
+  CHECK(trials.find("\nthesis,E,gesture,,4,200.000,,true,0,") != std::string::npos);
   CHECK(std::count(trials.begin(), trials.end(), '\n') == 21);
   const std::string answers = Read(files.answers_csv);
   CHECK(

@@ -134,7 +134,7 @@ TEST_CASE(
   // trials.csv says each lap's percentage over the reference lap, as the
   // table does: P1's cockpit lap, 113.51 s against 30 s.
   const std::string trials = Read(files.trials_csv);
-  CHECK(trials.rfind("study,participant,condition,position,lap_time_s,", 0) == 0);
+  CHECK(trials.rfind("study,participant,condition,device,position,lap_time_s,", 0) == 0);
   CHECK(trials.find(",flags,over_reference_percent\n") != std::string::npos);
   CHECK(trials.find(",113.510,") != std::string::npos);
   CHECK(trials.find(",278.37\n") != std::string::npos);

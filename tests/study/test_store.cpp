@@ -38,8 +38,12 @@ StudyConfig FourConditions(const std::filesystem::path& dir, int participants) {
   test::WriteFile(config.file, "name: s\n");
   config.name = "store-study";
   config.operators = "person";
-  config.conditions = {
-      {"a", "cockpit"}, {"b", "cockpit-hud"}, {"c", "cockpit-assisted"}, {"d", "gesture"}};
+  // The cockpits on a wheel, the gesture with the mouse (devices by name:
+  // the store keeps the name, the definition the file).
+  config.conditions = {{"a", "cockpit", false, "wheel.yaml", "wheel"},
+                       {"b", "cockpit-hud", false, "wheel.yaml", "wheel"},
+                       {"c", "cockpit-assisted", false, "wheel.yaml", "wheel"},
+                       {"d", "gesture", false, "mouse.yaml", "mouse"}};
   for (int i = 0; i < participants; ++i) config.participants.push_back({Id(i + 1), ""});
   return config;
 }
@@ -141,6 +145,11 @@ TEST_CASE("The store keeps a study's plan, trials and answers across restarts, e
   CHECK(store.NextTrial()->position == 3);
   CHECK(store.TrialsDone("P1") == 2);
   CHECK(store.TrialsDone("P2") == 0);
+  // Each trial's device, planned and driven with: the condition's.
+  for (const PlannedTrial& t : store.Plan())
+    CHECK(t.device == (t.condition == "d" ? "mouse" : "wheel"));
+  CHECK(trials[0].device == plan[0].device);
+  CHECK(trials[1].device == plan[1].device);
 
   SECTION("answers: once per participant, condition and questionnaire") {
     CHECK_FALSE(store.Answered("P1", plan[0].condition, "thesis"));
@@ -163,6 +172,7 @@ TEST_CASE("The store keeps a study's plan, trials and answers across restarts, e
     CHECK(superseded[0].trial.attempt == 1);
     CHECK(superseded[0].trial.flags == "servo rate short; vehicle watchdog trips 2");
     CHECK(superseded[0].trial.approach_s == 3.25);
+    CHECK(superseded[0].trial.device == plan[0].device);
     CHECK(superseded[0].why == "test");
   }
   SECTION("a synthetic study's flagged trial is run again once: the first attempt only") {
@@ -204,6 +214,8 @@ TEST_CASE("The store keeps a study's plan, trials and answers across restarts, e
   SECTION("a participant added in the console comes after the file's, and survives a restart") {
     store.AddParticipant("E", PlanParticipant(config, "E", 4));
     CHECK(store.Plan().size() == 20);
+    CHECK(store.Plan().back().device == PlanParticipant(config, "E", 4).back().device);
+    CHECK_FALSE(store.Plan().back().device.empty());
     CHECK(store.Participants().back() == "E");
     CHECK_THROWS_AS(store.AddParticipant("E", PlanParticipant(config, "E", 5)), AlreadyAnswered);
     CHECK_THROWS_AS(store.AddParticipant("P1", PlanParticipant(config, "P1", 5)), AlreadyAnswered);
@@ -345,6 +357,15 @@ TEST_CASE(
         Catch::Contains("conditions: a, b, the file now says a, g") &&
             Catch::Contains("conditions.b.interface: gesture, the file now says (absent)"));
   }
+  SECTION("a condition driven with another device") {
+    const auto udp = std::filesystem::current_path() / "config/devices/udp.yaml";
+    const std::string what =
+        refusal(Replaced(study, "{name: b, interface: gesture}",
+                         "{name: b, interface: gesture, device: " + udp.string() + "}"));
+    CHECK_THAT(what, Catch::Contains("conditions.b.device: ") &&
+                         Catch::Contains("devices/sim.yaml, the file now says ") &&
+                         Catch::Contains("devices/udp.yaml"));
+  }
   SECTION("other questionnaires") {
     CHECK_THAT(refusal(Replaced(study, "questionnaires: [thesis]", "questionnaires: [tlx, sus]")),
                Catch::Contains("questionnaires: thesis, the file now says tlx, sus"));
@@ -436,7 +457,8 @@ TEST_CASE(
   // and the runs' prediction and link fault (v7), the approach (v8), the
   // video's bitrate and stale time (v9), the notes and the superseded
   // trials (v10), the simulated-time speed-up (v11), the servo controller's
-  // errors (v12).
+  // errors (v12), the runs' engagement and device use (v13), the trials'
+  // devices (v14).
   {
     sqlite3* raw = nullptr;
     REQUIRE(sqlite3_open(db.c_str(), &raw) == SQLITE_OK);
@@ -453,11 +475,15 @@ TEST_CASE(
             "flags; "
             "ALTER TABLE runs DROP COLUMN video_kbps; ALTER TABLE runs DROP COLUMN video_stale_s; "
             "ALTER TABLE runs DROP COLUMN speedup; ALTER TABLE runs DROP COLUMN controller_errors; "
+            "ALTER TABLE runs DROP COLUMN disengaged_s; ALTER TABLE runs DROP COLUMN "
+            "pseudo_haptic_gain_mean; ALTER TABLE runs DROP COLUMN ff_effects_played; "
+            "ALTER TABLE study_plan DROP COLUMN device; ALTER TABLE study_trials DROP COLUMN "
+            "device; "
             "DROP TABLE study_notes; DROP TABLE study_superseded_trials; PRAGMA user_version = 5",
             nullptr, nullptr, nullptr) == SQLITE_OK);
     sqlite3_close(raw);
   }
-  record::Recorder recorder(db);  // migrated to v12: the study has no definition on record
+  record::Recorder recorder(db);  // migrated to v14: the study has no definition on record
   auto resume = [&](const std::string& text) {
     test::WriteFile(file, text);
     const StudyConfig config = LoadStudy(file);

@@ -3,11 +3,14 @@
 // and what was expected.
 #include <catch2/catch.hpp>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <set>
 #include <string>
 
 #include "haptel/config/error.hpp"
 #include "haptel/config/study.hpp"
+#include "haptel/study/definition.hpp"
 #include "haptel/study/design.hpp"
 #include "haptel/study/plan.hpp"
 #include "test_env.hpp"
@@ -79,6 +82,17 @@ TEST_CASE(
   CHECK(s.questionnaires.size() == 2);
   CHECK(s.demographics == "demographics");  // the participants' background, asked once
   CHECK(PlanTrials(s).size() == 16);
+  // With a mouse alone: every hand condition on the mouse device.
+  for (const StudyCondition& c : s.conditions) CHECK(c.device_name == "mouse");
+  CHECK(s.practice);  // with the keys, as before
+  // The variant with force feedback: the cockpits on a wheel, the gesture on a joystick.
+  const StudyConfig ff = LoadStudy("config/studies/grand-prix-ff.yaml");
+  REQUIRE(ff.conditions.size() == 4);
+  for (const StudyCondition& c : ff.conditions) {
+    INFO(c.name);
+    CHECK(c.device_name == (c.interface == "gesture" ? "sdl-ff" : "sdl-ff-wheel"));
+  }
+  for (const PlannedTrial& t : PlanTrials(ff)) CHECK(t.device.rfind("sdl-ff", 0) == 0);
 }
 
 TEST_CASE("Conditions may differ only in the predictive display; the link's fault is the study's") {
@@ -166,5 +180,78 @@ TEST_CASE(
     std::string spaced = person;
     spaced.replace(spaced.find("demographics: demographics"), 26, "demographics: about you");
     CHECK_THAT(ErrorOf(spaced), Catch::Contains("'demographics'") && Catch::Contains("1 to 40"));
+  }
+}
+
+namespace {
+
+std::string Text(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+/// A person study on the shipped run file whose conditions are `conditions`.
+std::string PersonStudy(const std::string& conditions) {
+  const auto source = std::filesystem::current_path();
+  return "name: p\nrun: " + (source / "config/haptel.yaml").string() +
+         "\noperators: person\nconditions:\n" + conditions +
+         "design: {order: fixed}\nparticipants:\n  - {id: A}\n";
+}
+
+}  // namespace
+
+TEST_CASE(
+    "Each condition names the device it is driven with, a device file checked as one; the plan "
+    "carries it") {
+  const auto source = std::filesystem::current_path();
+  const auto dir = test::ScratchDir("study-file-devices");
+  // A device file beside the study, named relative to it.
+  std::string sim = Text(source / "config/devices/sim.yaml");
+  sim.replace(sim.find("name: sim"), 9, "name: mine");
+  test::WriteFile(dir / "mine.yaml", sim);
+  const StudyConfig s = LoadStudy(
+      test::WriteFile(dir / "devices.yaml",
+                      PersonStudy("  - {name: a, interface: gesture, device: " +
+                                  (source / "config/devices/udp.yaml").string() +
+                                  "}\n"
+                                  "  - {name: b, interface: cockpit}\n"
+                                  "  - {name: c, interface: cockpit-hud, device: mine.yaml}\n")));
+  REQUIRE(s.conditions.size() == 3);
+  CHECK(s.conditions[0].device_name == "udp");
+  // None named: the run file's.
+  CHECK(std::filesystem::equivalent(s.conditions[1].device, source / "config/devices/sim.yaml"));
+  CHECK(s.conditions[1].device_name == "sim");
+  CHECK(s.conditions[2].device == dir / "mine.yaml");
+  CHECK(s.conditions[2].device_name == "mine");
+  const std::vector<PlannedTrial> plan = PlanTrials(s);
+  REQUIRE(plan.size() == 3);
+  CHECK(plan[0].device == "udp");
+  CHECK(plan[1].device == "sim");
+  CHECK(plan[2].device == "mine");
+  CHECK(PlanParticipant(s, "B", 1)[2].device == "mine");
+  // The device defines the study: a resumed one is held to it.
+  std::string form;
+  for (const DefiningValue& v : StudyDefinition(s)) {
+    if (v.key == "conditions.c.device") form = v.value;
+  }
+  CHECK(form == "mine.yaml");
+
+  SECTION("a device file that is not there, or not a device file, or empty, is refused") {
+    CHECK_THAT(ErrorOf(PersonStudy("  - {name: a, interface: gesture}\n"
+                                   "  - {name: b, interface: gesture, device: nowhere.yaml}\n")),
+               Catch::Contains("bad.yaml") && Catch::Contains("conditions[1].device") &&
+                   Catch::Contains("nowhere.yaml") && Catch::Contains("expected a device file"));
+    std::string slow = Text(source / "config/devices/sim.yaml");
+    slow.replace(slow.find("rate_hz: 1000"), 13, "rate_hz: 5");
+    const auto slow_file = test::WriteFile(dir / "slow.yaml", slow);
+    CHECK_THAT(
+        ErrorOf(PersonStudy("  - {name: a, interface: gesture, device: " + slow_file.string() +
+                            "}\n"
+                            "  - {name: b, interface: gesture}\n")),
+        Catch::Contains("conditions[0].device") && Catch::Contains("slow.yaml") &&
+            Catch::Contains("servo.rate_hz"));
+    CHECK_THAT(ErrorOf(PersonStudy("  - {name: a, interface: gesture, device: ''}\n"
+                                   "  - {name: b, interface: gesture}\n")),
+               Catch::Contains("conditions[0].device") && Catch::Contains("non-empty"));
   }
 }

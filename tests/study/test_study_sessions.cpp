@@ -1,7 +1,10 @@
 // The sessions a study runs: a person's practice lap shows a simulated robot
-// in the third person as well as through its camera; a trial never does.
+// in the third person as well as through its camera; a trial never does. A
+// trial is driven with its condition's device.
 #include <catch2/catch.hpp>
+#include <cstdlib>
 
+#include "haptel/config/device.hpp"
 #include "haptel/config/study.hpp"
 #include "haptel/config/vehicle.hpp"
 #include "haptel/study/plan.hpp"
@@ -39,4 +42,56 @@ TEST_CASE("A practice lap shows the simulated robot in the third person; a trial
   MakePracticeLap(real, "P3");
   CHECK_FALSE(real.third_person);
   CHECK(real.direct_view);
+}
+
+TEST_CASE(
+    "A trial is driven with its condition's device; a person cannot drive hands on the simulated "
+    "one") {
+  const auto source = std::filesystem::current_path();
+  const auto dir = test::ScratchDir("study-sessions-device");
+  const StudyConfig config = LoadStudy(
+      test::WriteFile(dir / "people.yaml",
+                      "name: people\nrun: " + (source / "config/haptel.yaml").string() +
+                          "\noperators: person\nconditions:\n"
+                          "  - {name: hands, interface: gesture}\n"
+                          "  - {name: pad, interface: gamepad}\n"
+                          "design: {order: fixed}\npractice: false\nparticipants: [{id: A}]\n"));
+  const std::vector<PlannedTrial> plan = PlanTrials(config);
+  REQUIRE(plan.size() == 2);
+  for (const PlannedTrial& t : plan) {
+    const mediator::SessionSetup trial =
+        TrialSetup(config, t, dir / "study.db", "", false, 0, false);
+    // The condition's device (here the run file's, named by --device).
+    CHECK(std::filesystem::equivalent(trial.run.device, source / "config/devices/sim.yaml"));
+    CHECK(trial.device.name == t.device);
+    // A controller needs no arms; the gesture's hands on the simulated
+    // device cannot be moved by anyone: the study says so before it starts.
+    CHECK(PersonCanDrive(trial) == (t.condition == "pad"));
+    if (t.condition == "hands") {
+      mediator::SessionSetup held = trial;
+      held.device = LoadDevice(source / "config/devices/udp.yaml");  // arms a person moves
+      CHECK(PersonCanDrive(held));
+    }
+  }
+  // The console is shown each condition's device, and asks it whether it is there.
+  const TrialDevice shown = DeviceOf(config.conditions[0]);
+  CHECK(shown.name == "sim");
+  CHECK(shown.file == config.conditions[0].device);
+  REQUIRE(shown.unavailable);
+  CHECK(shown.unavailable().empty());  // the simulated device is always there
+  CHECK(DeviceOf(StudyCondition{"x", "gesture"}).name.empty());
+
+  // The shipped people's study's mouse, without a display: what is missing, said.
+  const TrialDevice mouse = DeviceOf(LoadStudy("config/studies/grand-prix.yaml").conditions[0]);
+  CHECK(mouse.name == "mouse");
+  const char* display = std::getenv("DISPLAY");
+  const std::string saved = display != nullptr ? display : "";
+  const char* wayland = std::getenv("WAYLAND_DISPLAY");
+  const std::string saved_wayland = wayland != nullptr ? wayland : "";
+  unsetenv("DISPLAY");
+  unsetenv("WAYLAND_DISPLAY");
+  const std::string missing = mouse.unavailable();
+  if (!saved.empty()) setenv("DISPLAY", saved.c_str(), 1);
+  if (!saved_wayland.empty()) setenv("WAYLAND_DISPLAY", saved_wayland.c_str(), 1);
+  CHECK_THAT(missing, Catch::Contains("needs a display"));
 }

@@ -181,6 +181,7 @@ void ReadTrial(Reader& row, StudyResults::Trial& t) {
   t.attempt = static_cast<int>(row.Int());
   t.approach_s = row.Real();
   t.flags = row.Text();
+  t.device = row.Text();
 }
 
 /// The study named `name` in the database: its id (0: none), operators and cap.
@@ -240,15 +241,16 @@ void ReadDesign(const std::filesystem::path& database, sqlite3* raw, int64_t id,
 
 /// The trials, in the participants' order. Read-only, so not migrated: a
 /// database from before v8 has neither the approach nor the flags (read as
-/// unknown and none).
+/// unknown and none), one before v14 not the device ('').
 void ReadTrials(const std::filesystem::path& database, sqlite3* raw, int64_t id, int version,
                 StudyResults& r) {
   const std::string v8 = version >= 8 ? "t.approach_s, t.flags" : "NULL, ''";
+  const std::string v14 = version >= 14 ? "t.device" : "''";
   const std::string select_trials =
       "SELECT t.participant, t.position, t.condition, t.lap_time_s, t.completed, t.obstacles, "
       "t.run_id, t.outcome, "
       "t.attempt, " +
-      v8 +
+      v8 + ", " + v14 +
       " FROM study_trials t JOIN study_participants s ON s.study_id = t.study_id AND "
       "s.participant = t.participant WHERE t.study_id = ? ORDER BY s.row_index, t.position";
   Stmt trials = Prepare(database, raw, select_trials.c_str(), "cannot read the trials");
@@ -282,13 +284,15 @@ void ReadAnswers(const std::filesystem::path& database, sqlite3* raw, int64_t id
 
 /// The superseded trials and the experimenter's notes (schema v10).
 void ReadSupersededAndNotes(const std::filesystem::path& database, sqlite3* raw, int64_t id,
-                            StudyResults& r) {
+                            int version, StudyResults& r) {
+  const std::string select_superseded =
+      std::string(
+          "SELECT participant, position, condition, lap_time_s, completed, obstacles, run_id, "
+          "outcome, attempt, approach_s, flags, ") +
+      (version >= 14 ? "device" : "''") +
+      ", why FROM study_superseded_trials WHERE study_id = ? ORDER BY id";
   Stmt superseded =
-      Prepare(database, raw,
-              "SELECT participant, position, condition, lap_time_s, completed, obstacles, run_id, "
-              "outcome, attempt, approach_s, flags, why FROM study_superseded_trials WHERE "
-              "study_id = ? ORDER BY id",
-              "cannot read the superseded trials");
+      Prepare(database, raw, select_superseded.c_str(), "cannot read the superseded trials");
   Binder(database, raw, superseded.get()).Int(id);
   while (sqlite3_step(superseded.get()) == SQLITE_ROW) {
     Reader row(superseded.get());
@@ -353,7 +357,7 @@ StudyResults LoadStudyResults(const std::filesystem::path& database, const std::
   }
   ReadTrials(database, raw, id, version, r);
   ReadAnswers(database, raw, id, r);
-  if (version >= 10) ReadSupersededAndNotes(database, raw, id, r);
+  if (version >= 10) ReadSupersededAndNotes(database, raw, id, version, r);
   return r;
 }
 
@@ -573,7 +577,8 @@ namespace {
 /// trials.csv: a row per trial, with its lap against the track's reference.
 std::string TrialsCsv(const StudyResults& results) {
   std::string trials =
-      "study,participant,condition,position,lap_time_s,approach_s,completed,obstacles,run_id,"
+      "study,participant,condition,device,position,lap_time_s,approach_s,completed,obstacles,"
+      "run_id,"
       "outcome,attempt,"
       "flags,over_reference_percent\n";
   for (const StudyResults::Trial& t : results.trials) {
@@ -584,8 +589,8 @@ std::string TrialsCsv(const StudyResults& results) {
             ? Fixed(PercentOverReference(t.lap_time_s, *results.reference_lap_s), 2)
             : "";
     trials += Csv(results.name) + "," + Csv(t.participant) + "," + Csv(t.condition) + "," +
-              std::to_string(t.position) + "," + Fixed(t.lap_time_s, 3) + "," +
-              (std::isfinite(t.approach_s) ? Fixed(t.approach_s, 3) : std::string()) + "," +
+              Csv(t.device) + "," + std::to_string(t.position) + "," + Fixed(t.lap_time_s, 3) +
+              "," + (std::isfinite(t.approach_s) ? Fixed(t.approach_s, 3) : std::string()) + "," +
               (t.completed ? "true" : "false") + "," + std::to_string(t.obstacles) + "," +
               std::to_string(t.run_id) + "," + Csv(t.outcome) + "," + std::to_string(t.attempt) +
               "," + Csv(t.flags) + "," + over_reference + "\n";

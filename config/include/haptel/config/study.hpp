@@ -83,13 +83,21 @@ struct DriverProfileTrait {
 const std::vector<DriverProfileTrait>& DriverProfileTraits();
 
 /// One compared variant: a mediator interface (a file interfaces/NAME.yaml of
-/// the run configuration).
+/// the run configuration), driven with an input device.
 struct StudyCondition {
   std::string name;       ///< as the report shows it
   std::string interface;  ///< interfaces/<interface>.yaml
   /// The predictive display on (haptel run --predict on): two conditions
   /// may differ in this alone, to A/B-test it with the same interface.
   bool predict = false;
+  /// The input device its trials are driven with (a device file,
+  /// config/devices/*.yaml; `device:` in the file, relative to the study
+  /// file's folder), loaded and checked by LoadStudy. Empty: the run
+  /// configuration's device (LoadStudy fills it in).
+  std::filesystem::path device{};
+  /// That device file's `name:` ("mouse", "sdl-ff-wheel", "sim"), as the
+  /// plan, the trials' rows and the report show it; filled in by LoadStudy.
+  std::string device_name{};
 };
 
 struct StudyParticipant {

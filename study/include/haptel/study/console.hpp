@@ -15,22 +15,25 @@
 /// certificate `haptel security init DIR --console NAME` makes, and the page
 /// asks once for an access token.
 ///
-/// Routes: `GET /` the schedule; `GET /questionnaire?participant=P&condition=C&name=Q`
-/// a form; `POST /answers` a filled-in form; `POST /start` starts the trial
-/// offered; `POST /abort` aborts the trial under way (it is run again);
-/// `POST /redo` (participant, position) takes a finished trial back, to be
-/// run again; `POST /notes` (participant, position, text) one of the
-/// experimenter's notes on a trial (SubmitNote; position 0: on the
-/// participant as a whole), from the schedule's rows or the trial under way;
-/// `POST /participants` (id) adds a participant, planned by the design;
-/// `POST /finish` ends an open study (one whose file lists no participants);
-/// `GET /video.jpg` the vehicle's latest camera picture (the thumbnail);
-/// `GET /status.json` the counts, the live trial, the next, what is awaited;
+/// Routes: `GET /` the schedule (each trial's device); `GET
+/// /questionnaire?participant=P&condition=C&name=Q` a form; `POST /answers` a
+/// filled-in form; `POST /start` starts the trial offered (refused, saying
+/// what is missing, while its device is not there); `POST /abort` aborts the trial under way (it is
+/// run again); `POST /redo` (participant, position) takes a finished trial back, to be run again;
+/// `POST /notes` (participant, position, text) one of the experimenter's notes on a trial
+/// (SubmitNote; position 0: on the participant as a whole), from the schedule's rows or the trial
+/// under way; `POST /participants` (id) adds a participant, planned by the design; `POST /finish`
+/// ends an open study (one whose file lists no participants); `GET /video.jpg` the vehicle's latest
+/// camera picture (the thumbnail); `GET /status.json` the counts, the live trial, the next and its
+/// device
+/// (`next_device`, and `device_missing`: what is missing, "" when it is there),
+/// what is awaited;
 /// `GET|POST /login` the access token's form (beyond loopback).
 #include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <stdexcept>
@@ -133,6 +136,17 @@ struct LiveProgress {
   std::string last_contact;  ///< e.g. "left bumper at 12.3 s"
 };
 
+/// The input device a trial is driven with, as the console shows and checks
+/// it before the experimenter may start the trial.
+struct TrialDevice {
+  std::string name;            ///< the device file's name ("mouse"); empty: none to show
+  std::filesystem::path file;  ///< its file
+  /// "" when the device is there to be opened now, else what is missing
+  /// (haptics::DeviceUnavailable: "no display...", "no joystick..."). Asked
+  /// when the page is drawn and when Start is pressed. Empty: always there.
+  std::function<std::string()> unavailable;
+};
+
 class StudyConsole {
  public:
   /// Opens its own connection to `database` (the study must be planned there
@@ -170,7 +184,11 @@ class StudyConsole {
   void SetWaiting(const std::string& text);
   /// Offers `next` with a Start button and blocks until the experimenter
   /// presses it (true) or `stop` is set (false). Clears a previous abort.
-  bool WaitForStart(const std::string& next, const std::atomic<bool>& stop);
+  /// The page names the device the trial is driven with (`device`), and a
+  /// Start while its `unavailable` says something is missing is refused,
+  /// that line on the page.
+  bool WaitForStart(const std::string& next, const std::atomic<bool>& stop,
+                    const TrialDevice& device = {});
   /// Set by the page's Abort button during a trial.
   const std::atomic<bool>& abort_requested() const;
   /// Whether Abort was pressed, and clears it: the trial is ended once, and

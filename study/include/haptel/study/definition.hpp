@@ -8,7 +8,8 @@
 /// or how it is scored, in a fixed order: the operators, the run
 /// configuration and the track (by path, relative to the study file's
 /// folder, and the track's geometry as loaded: gates, obstacles, lap cap,
-/// corridor, centre line), the conditions in order with their interfaces, the
+/// corridor, centre line), the conditions in order with their interfaces and
+/// devices (by path), the
 /// design (order, seed, repetitions), the practice lap, the cap per trial,
 /// the questionnaires in order and their folder, the participants the file
 /// lists in order, and the profiles those participants drive with (every
@@ -35,9 +36,10 @@ struct DefiningValue {
   std::string value;  ///< e.g. "600", "cockpit-hud"
 };
 
-/// The version of the form's keys, its first line ("form: 1"). Forms of
-/// different versions are compared only on the keys both have.
-constexpr int kDefinitionFormVersion = 1;
+/// The version of the form's keys, its first line ("form: 2"). Forms of
+/// different versions are compared only on the keys both have. Form 2 adds
+/// each condition's device (conditions.NAME.device, by path).
+constexpr int kDefinitionFormVersion = 2;
 
 /// The canonical form of `config` (see the file's comment). Loads the track
 /// when `config.track` is set: throws ConfigError naming the track file when

@@ -1,6 +1,6 @@
 #pragma once
 /// @file A study's tables in the run database (schema v4, v6's
-/// definition_form, v10's notes; recorder.cpp): the study, what defines it
+/// definition_form, v10's notes, v14's devices; recorder.cpp): the study, what defines it
 /// (definition.hpp) and its plan, written once when it is first run; one trial row per
 /// planned trial, written in its run's own transaction; the questionnaire
 /// answers, one transaction per questionnaire; the experimenter's notes; and
@@ -23,12 +23,15 @@
 namespace haptel::study {
 
 /// One trial of the plan: a participant drives a condition at a position of
-/// their sequence (1-based).
+/// their sequence (1-based), with the condition's input device.
 struct PlannedTrial {
   std::string participant;
   int position = 0;
   std::string condition;
   int repetition = 1;
+  /// The device's name (StudyCondition::device_name: "mouse", "sim"); "":
+  /// planned before the database kept it (schema v14).
+  std::string device{};
 };
 
 /// Whether a run with this outcome (mediator::ToString) finishes a trial:
@@ -53,6 +56,9 @@ struct TrialRow {
   int attempt = 1;
   /// What could have spoiled the trial, from its run (TrialFlags); "": nothing.
   std::string flags;
+  /// The input device it was driven with (PlannedTrial::device); "":
+  /// recorded before the database kept it (schema v14).
+  std::string device{};
 };
 
 /// A trial row taken back to be run again (a redo), kept: the report counts

@@ -40,6 +40,9 @@ struct StudyResults {
     int attempt = 1;
     /// What could have spoiled the trial (store.hpp TrialFlags); "": nothing.
     std::string flags;
+    /// The input device it was driven with (its device file's name); "":
+    /// recorded before the database kept it (schema v14).
+    std::string device{};
   };
   std::vector<Trial> trials;  ///< the latest attempt of each trial: what is counted
   /// Trials taken back to be run again (a redo; a synthetic study's flagged
