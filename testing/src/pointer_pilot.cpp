@@ -117,12 +117,16 @@ PointerPilot::PointerPilot(PilotSetup setup) : setup_(std::move(setup)), parts_(
                    .track_width = p.vehicle.drive.track_width,
                    .body_radius = p.vehicle.body.radius};
   p.interface = interfaces::MakeInterface(p.spec, parts);
-  // The pilot takes hold at the interface's neutral itself (Run), hands
-  // closed on any controls there: the operator's own reach and grasp would
-  // open them again, which a mouse's button held throughout does not.
+  // Nothing to grasp: the pilot takes hold at the interface's neutral
+  // itself (Run), the button held throughout. Controls to grasp: the
+  // operator's own reach brings the open hands onto them (the mouse's hands
+  // follow the pointer with the button up) and its grasp closes them (the
+  // button goes down), as a person would.
   OperatorConfig op = p.run.op;
-  op.grasp_reach_s = 0.0;
-  op.grasp_close_s = 0.0;
+  if (GloveSum(p.interface->HandTargetsFor({})) == 0.0) {
+    op.grasp_reach_s = 0.0;
+    op.grasp_close_s = 0.0;
+  }
   p.driver = std::make_unique<mediator::AutoOperator>(*p.track, op, p.vehicle.drive);
 }
 
@@ -174,6 +178,8 @@ void PointerPilot::Run() {
     desktop.Focus(*window);
     PointerHands hands(p.device.mouse);
     const interfaces::HandTargets neutral = p.interface->HandTargetsFor({});
+    // Controls to grasp: the operator's reach and grasp take hold (no hold at neutral).
+    const bool grasps = GloveSum(neutral) > 0.0;
     PointerGesture sent;
     bool first = true;
     bool touching = false;
@@ -226,7 +232,7 @@ void PointerPilot::Run() {
       if (hold_until_s >= 0.0 && t >= hold_until_s + kRetakeAfter_s && still_s > kRetakeAfter_s) {
         hold_until_s = t + kTakeHold_s;
       }
-      const bool holding = hold_until_s < 0.0 || t < hold_until_s;
+      const bool holding = !grasps && (hold_until_s < 0.0 || t < hold_until_s);
       const PointerGesture g = hands.Step(holding ? neutral : p.driver->Act(t, *p.interface),
                                           neutral, dt, window->width_px, window->height_px);
       int moves = 0, presses = 0, notches = 0;

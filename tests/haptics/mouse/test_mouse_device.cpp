@@ -355,5 +355,5 @@ TEST_CASE("mouse driver: without a display it says what is missing", "[mouse]") 
   REQUIRE(driver != nullptr);
   CHECK_FALSE(driver->simulated);
   CHECK(driver->reads_window);
-  CHECK(driver->calibration == CalibrationSource::kOptional);
+  CHECK(driver->calibration == CalibrationSource::kSelf);
 }
