@@ -30,7 +30,7 @@ constexpr const char* kUsage =
     "       haptel discovery-server [--listen ADDR:PORT]  a Fast DDS discovery server for the "
     "link\n"
     "       haptel bench NAME [options]  benchmarks: servo, view, gravity, blimp, link, video,\n"
-    "                                    fuzz, skip, physics, stability, soak, passivity, fleet;\n"
+    "                                    fuzz, skip, physics, stability, soak, passivity, fleet, hands;\n"
     "                                    --smoke for a short run of any (haptel bench --help\n"
     "                                    gives each one's options)\n"
     "\n"
