@@ -65,6 +65,37 @@ std::vector<const char*> Argv(const std::vector<std::string>& words) {
   return argv;
 }
 
+/// A person's attached run on the short track with `device` and `interface`,
+/// no view, for `time_limit_s` (a word of the command line).
+mediator::SessionSetup PersonAtDevice(int domain, const fs::path& dir, const std::string& device,
+                                      const std::string& interface,
+                                      const std::string& time_limit_s) {
+  const std::vector<std::string> words = {"run",
+                                          "--attach",
+                                          "--domain",
+                                          std::to_string(domain),
+                                          "--operator",
+                                          "person",
+                                          "--device",
+                                          device,
+                                          "--interface",
+                                          interface,
+                                          "--view",
+                                          "none",
+                                          "--quiet",
+                                          "--database",
+                                          (dir / "runs.db").string(),
+                                          "--vehicle-timeout",
+                                          "10",
+                                          "--track",
+                                          "config/tracks/test-short.yaml",
+                                          "--time-limit",
+                                          time_limit_s};
+  const std::vector<const char*> argv = Argv(words);
+  return mediator::RunSetupFromArgs(
+      mediator::ParseRunArgs(static_cast<int>(argv.size()), argv.data()));
+}
+
 }  // namespace
 
 TEST_CASE("a real-time run attached to a robot in this process drives it and is recorded",
@@ -150,30 +181,8 @@ TEST_CASE("a joystick unplugged mid-run: the run ends aborted, saying so, the ro
     std::lock_guard lock(mutex);
     return last ? static_cast<double>(last->speed()) : 0.0;
   };
-  const std::vector<std::string> words = {"run",
-                                          "--attach",
-                                          "--domain",
-                                          std::to_string(domain),
-                                          "--operator",
-                                          "person",
-                                          "--device",
-                                          "config/devices/sdl-ff.yaml",
-                                          "--interface",
-                                          "gesture",
-                                          "--view",
-                                          "none",
-                                          "--quiet",
-                                          "--database",
-                                          (dir / "runs.db").string(),
-                                          "--vehicle-timeout",
-                                          "10",
-                                          "--track",
-                                          "config/tracks/test-short.yaml",
-                                          "--time-limit",
-                                          "60"};
-  const std::vector<const char*> argv = Argv(words);
-  const mediator::SessionSetup setup = mediator::RunSetupFromArgs(
-      mediator::ParseRunArgs(static_cast<int>(argv.size()), argv.data()));
+  const mediator::SessionSetup setup =
+      PersonAtDevice(domain, dir, "config/devices/sdl-ff.yaml", "gesture", "60");
   // The person holds the trigger and pushes the stick forward, from
   // neutral again now and then (a run engages only from rest); once the
   // robot drives, the stick is unplugged.
@@ -214,30 +223,8 @@ TEST_CASE("a wheel and pedals drive the cockpit: the hands grip while the deadma
   const int domain = test::UniqueDomain(3);
   const fs::path dir = test::ScratchDir("session-threads-wheel");
   const std::unique_ptr<vehicles::Node> robot = StartRobot("robot1", domain);
-  const std::vector<std::string> words = {"run",
-                                          "--attach",
-                                          "--domain",
-                                          std::to_string(domain),
-                                          "--operator",
-                                          "person",
-                                          "--device",
-                                          "config/devices/sdl-ff-wheel.yaml",
-                                          "--interface",
-                                          "cockpit",
-                                          "--view",
-                                          "none",
-                                          "--quiet",
-                                          "--database",
-                                          (dir / "runs.db").string(),
-                                          "--vehicle-timeout",
-                                          "10",
-                                          "--track",
-                                          "config/tracks/test-short.yaml",
-                                          "--time-limit",
-                                          "8"};
-  const std::vector<const char*> argv = Argv(words);
-  const mediator::SessionSetup setup = mediator::RunSetupFromArgs(
-      mediator::ParseRunArgs(static_cast<int>(argv.size()), argv.data()));
+  const mediator::SessionSetup setup =
+      PersonAtDevice(domain, dir, "config/devices/sdl-ff-wheel.yaml", "cockpit", "8");
   std::thread person([&] {
     std::this_thread::sleep_for(std::chrono::seconds(1));
     wheel.SetButton(4, true);  // the deadman: the hands close on the rim and the lever
