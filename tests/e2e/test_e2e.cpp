@@ -345,9 +345,17 @@ TEST_CASE("bad options and bad config files exit 2 with a one-line error naming 
     CHECK(folder.err().find("option --record: '" + dir.string() + "' is a folder") !=
           std::string::npos);
     CHECK(folder.err().find("started, pid") == std::string::npos);
-    Child nowhere({Bin("haptel"), "run", "--record", (dir / "gone" / "run.mp4").string()});
+    // A folder under a file cannot be made: refused, naming it.
+    { std::ofstream(dir / "a-file") << "x"; }
+    Child nowhere({Bin("haptel"), "run", "--record", (dir / "a-file" / "run.mp4").string()});
     CHECK(nowhere.Wait(30.0) == 2);
-    CHECK(nowhere.err().find("does not exist") != std::string::npos);
+    CHECK(nowhere.err().find("cannot be made") != std::string::npos);
+    // A missing folder is made (here the run then stops at a later bad option, before spawning).
+    Child made({Bin("haptel"), "run", "--record", (dir / "new" / "run.mp4").string(),
+                "--time-limit", "0"});
+    CHECK(made.Wait(30.0) == 2);
+    CHECK(made.err().find("--time-limit") != std::string::npos);
+    CHECK(std::filesystem::is_directory(dir / "new"));
   }
   {
     // The third-person view draws the track the operator side hands a

@@ -119,7 +119,10 @@ TEST_CASE("a recorded device replayed through the same interface reproduces the 
   CHECK(JsonField(second, "gates_missed") == JsonField(first, "gates_missed"));
   const double lap_recorded = std::stod(JsonField(first, "lap_time_s"));
   const double lap_replayed = std::stod(JsonField(second, "lap_time_s"));
-  CHECK(std::abs(lap_replayed - lap_recorded) <= 0.02 * lap_recorded);
+  // The same lap, not the same timing: a loaded machine stretches either run (timing is the
+  // benchmarks' business), but a replay at the wrong pace or through the wrong map is far off.
+  CHECK(std::abs(lap_replayed - lap_recorded) <= 0.25 * lap_recorded);
+  CHECK(JsonField(second, "outcome") == JsonField(first, "outcome"));
   CHECK(std::stod(JsonField(second, "distance_m")) > 1.0);
 }
 
