@@ -145,6 +145,12 @@ void Codec::Compress(Compression compression, int zstd_level, std::string_view i
 
 void Codec::Decompress(Compression compression, const uint8_t* in, size_t in_size, uint64_t size,
                        std::string& out, const std::string& where) {
+  // A chunk is what a writer buffered (ours: about 1 MiB): a size past 4 GiB
+  // is a damaged field, not a chunk to allocate.
+  if (size > (uint64_t{1} << 32)) {
+    throw McapError(where + ": a chunk says it holds " + std::to_string(size) +
+                    " bytes uncompressed (damaged)");
+  }
   out.resize(size);
   switch (compression) {
     case Compression::kNone:

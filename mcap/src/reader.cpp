@@ -126,7 +126,7 @@ struct Reader::Impl {
 
   /// A whole record at `offset` with the expected opcode; returns its content.
   std::string ReadRecord(uint64_t offset, uint64_t length, Opcode expected) const {
-    if (offset + length > file_size || length < detail::kRecordPrefix) {
+    if (length > file_size || offset > file_size - length || length < detail::kRecordPrefix) {
       throw McapError(At(path, offset) + ": an index points past the end of the file");
     }
     std::string record = ReadString(offset, length);
@@ -455,7 +455,7 @@ struct Reader::Impl {
     for (const auto& [id, channel] : summary.channels) s.channel_message_counts.try_emplace(id, 0);
     if (loss.truncated || loss.bytes_lost > 0) {
       loss.what = std::string(loss.truncated ? "truncated (not closed): " : "damaged: ") +
-                  "read by a scan; " + std::to_string(loss.bytes_lost) + " bytes lost at the end" +
+                  "read by a scan; " + std::to_string(loss.bytes_lost) + " bytes lost" +
                   (loss.chunks_lost > 0 ? " (" + std::to_string(loss.chunks_lost) + " chunk" +
                                               (loss.chunks_lost == 1 ? "" : "s") + ")"
                                         : "");

@@ -2,11 +2,18 @@
 // McapIndexedReader and McapStreamReader, CRCs validated) and prints what it
 // found as one JSON line, for a C++ test to compare with what was written.
 //
-//   node mcap_reference_reader.mjs FILE.mcap [--decode]
+//   node mcap_reference_reader.mjs FILE.mcap [--decode] [--dump TOPIC,...]
 //
 // --decode: every message of a channel with an `omgidl` schema and `cdr`
 // encoding is decoded against the file's own schema with
-// @foxglove/omgidl-serialization; counts and the first failures are reported.
+// @foxglove/omgidl-serialization; "decoded" reports ok (and ok per topic),
+// failed, skipped (other encodings) and the first five failures.
+// --dump TOPIC,...: each decoded message of those topics is printed first,
+// one JSON line each: {"topic","log_time","message"} (64-bit integers as
+// strings, byte arrays as arrays). The summary is always the last line:
+// {"file","indexed":{messages,per_topic,in_log_time_order,channels,schemas,
+// chunks,attachments,metadata,statistics_messages,profile},"stream":{...},
+// "crc":{"data_section_ok","summary_ok"},"decoded":{...}}.
 //
 // The packages come from HAPTEL_NODE_TOOLS (scripts/test installs them
 // there: `npm install --prefix build/node-tools`). Exit 1 on any error.
@@ -25,7 +32,11 @@ const { loadDecompressHandlers } = require("@mcap/support");
 const { crc32 } = require("@foxglove/crc");
 
 const file = process.argv[2];
-const decode = process.argv.includes("--decode");
+const dumpAt = process.argv.indexOf("--dump");
+const dump = new Set(dumpAt > 0 ? (process.argv[dumpAt + 1] ?? "").split(",") : []);
+const decode = process.argv.includes("--decode") || dump.size > 0;
+const jsonValue = (_, v) =>
+  typeof v === "bigint" ? v.toString() : ArrayBuffer.isView(v) ? Array.from(v) : v;
 const bytes = new Uint8Array(readFileSync(file));
 const view = new DataView(bytes.buffer, bytes.byteOffset, bytes.byteLength);
 const decompressHandlers = await loadDecompressHandlers();
@@ -89,7 +100,7 @@ const indexed = await McapIndexedReader.Initialize({ readable, decompressHandler
   const channels = new Map();
   const schemas = new Map();
   let messages = 0, attachments = 0, metadata = 0, footer = false;
-  const decoded = { ok: 0, failed: 0, skipped: 0, failures: [] };
+  const decoded = { ok: 0, per_topic: {}, failed: 0, skipped: 0, failures: [] };
   const decoders = new Map();
   let omgidl;
   if (decode) {
@@ -121,8 +132,12 @@ const indexed = await McapIndexedReader.Initialize({ readable, decompressHandler
             decoder = new omgidl.MessageReader(schema.name, omgidl.parseIDL(text));
             decoders.set(schema.id, decoder);
           }
-          decoder.readMessage(record.data);
+          const message = decoder.readMessage(record.data);
           ++decoded.ok;
+          count(decoded.per_topic, channel.topic);
+          if (dump.has(channel.topic)) {
+            console.log(JSON.stringify({ topic: channel.topic, log_time: record.logTime, message }, jsonValue));
+          }
         } catch (e) {
           ++decoded.failed;
           if (decoded.failures.length < 5) decoded.failures.push(`${channel.topic}: ${e.message}`);

@@ -4,6 +4,9 @@
 /// start: every complete chunk is read, a torn last record is counted and
 /// skipped, and the summary is rebuilt in memory, so reading afterwards is the
 /// same either way.
+///
+/// Messages outside chunks (which this writer never writes) are not read.
+/// One thread at a time (ForEachMessage reuses the reader's decompressor).
 #include <cstdint>
 #include <filesystem>
 #include <functional>
