@@ -29,6 +29,21 @@ std::string Compressions(const Summary& summary) {
   return out.empty() ? "none" : out;
 }
 
+/// 812 B, 3.4 kB, 12.0 MB, 1.04 GB.
+std::string Size(uint64_t bytes) {
+  char text[32];
+  if (bytes < 1000) {
+    std::snprintf(text, sizeof text, "%llu B", static_cast<unsigned long long>(bytes));
+  } else if (bytes < 1'000'000) {
+    std::snprintf(text, sizeof text, "%.1f kB", bytes * 1e-3);
+  } else if (bytes < 1'000'000'000) {
+    std::snprintf(text, sizeof text, "%.1f MB", bytes * 1e-6);
+  } else {
+    std::snprintf(text, sizeof text, "%.2f GB", bytes * 1e-9);
+  }
+  return text;
+}
+
 std::string Format(const char* format, auto... args) {
   char line[512];
   std::snprintf(line, sizeof line, format, args...);
@@ -54,9 +69,9 @@ std::string DescribeFile(const Reader& reader) {
   out += Format("duration:    %.3f s (log times %.9f to %.9f s)\n", duration,
                 st.message_start_time_ns * 1e-9, st.message_end_time_ns * 1e-9);
   out += Format("messages:    %llu\n", static_cast<unsigned long long>(st.message_count));
-  out += Format("chunks:      %zu (%s), %.1f MB compressed from %.1f MB\n",
-                summary.chunk_indexes.size(), Compressions(summary).c_str(), compressed * 1e-6,
-                uncompressed * 1e-6);
+  out +=
+      Format("chunks:      %zu (%s), %s compressed from %s\n", summary.chunk_indexes.size(),
+             Compressions(summary).c_str(), Size(compressed).c_str(), Size(uncompressed).c_str());
   out += Format("channels:    %zu\n", summary.channels.size());
   for (const auto& [id, channel] : summary.channels) {
     const auto count = st.channel_message_counts.find(id);
@@ -72,8 +87,8 @@ std::string DescribeFile(const Reader& reader) {
   }
   out += Format("attachments: %zu\n", summary.attachment_indexes.size());
   for (const AttachmentIndex& a : summary.attachment_indexes) {
-    out += Format("  %-40s %-24s %llu bytes\n", a.name.c_str(), a.media_type.c_str(),
-                  static_cast<unsigned long long>(a.data_size));
+    out += Format("  %-40s %-24s %s\n", a.name.c_str(), a.media_type.c_str(),
+                  Size(a.data_size).c_str());
   }
   out += Format("metadata:    %zu\n", summary.metadata_indexes.size());
   for (const MetadataIndex& index : summary.metadata_indexes) {

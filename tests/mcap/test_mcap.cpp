@@ -345,7 +345,8 @@ TEST_CASE("--info describes a session file: channels, counts, rates, attachments
   // 200 messages on /events over 0.634 s (a late one at 0.965 s to the last at 1.599 s).
   CHECK_THAT(text, Catch::Contains("duration:    0.634 s"));
   CHECK_THAT(text, Catch::Contains("200 msgs    315.46 Hz  json, test::Text (jsonschema)"));
-  CHECK_THAT(text, Catch::Contains("lz4"));
+  CHECK_THAT(text, Catch::Contains("(lz4 13)"));
+  CHECK_THAT(text, Catch::Contains("application/yaml         3.0 kB"));
   CHECK_THAT(text, Catch::Contains("config/tracks/test-short.yaml"));
   CHECK_THAT(text, Catch::Contains("command_line: haptel run --session x"));
   CHECK_THAT(text, !Catch::Contains("truncated"));
