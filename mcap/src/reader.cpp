@@ -158,6 +158,22 @@ struct Reader::Impl {
     if (header_out != nullptr) *header_out = h;
   }
 
+  /// A Schema or Channel record into the summary (the first of an id
+  /// stays); false for any other record.
+  bool TakeDefinition(Opcode opcode, Cursor& c) {
+    if (opcode == Opcode::kSchema) {
+      Schema schema = ParseSchema(c);
+      summary.schemas.try_emplace(schema.id, std::move(schema));
+      return true;
+    }
+    if (opcode == Opcode::kChannel) {
+      Channel channel = ParseChannel(c);
+      summary.channels.try_emplace(channel.id, std::move(channel));
+      return true;
+    }
+    return false;
+  }
+
   void Open() {
     fd.reset(::open(path.c_str(), O_RDONLY | O_CLOEXEC));
     if (!fd) throw McapError(path.string() + ": cannot open: " + std::strerror(errno));
@@ -229,16 +245,10 @@ struct Reader::Impl {
       const uint64_t length = prefix.U64();
       Cursor c(prefix.Take(length), length, where);
       switch (static_cast<Opcode>(opcode)) {
-        case Opcode::kSchema: {
-          Schema s = ParseSchema(c);
-          summary.schemas[s.id] = std::move(s);
+        case Opcode::kSchema:
+        case Opcode::kChannel:
+          TakeDefinition(static_cast<Opcode>(opcode), c);
           break;
-        }
-        case Opcode::kChannel: {
-          Channel ch = ParseChannel(c);
-          summary.channels[ch.id] = std::move(ch);
-          break;
-        }
         case Opcode::kStatistics: {
           Statistics& s = summary.statistics;
           s.message_count = c.U64();
@@ -322,20 +332,9 @@ struct Reader::Impl {
     Statistics& s = summary.statistics;
     ForEachRecord(reinterpret_cast<const uint8_t*>(records.data()), records.size(), where,
                   [&](uint8_t opcode, const uint8_t* content, uint64_t size, size_t) {
-                    if (opcode == static_cast<uint8_t>(Opcode::kSchema)) {
-                      Cursor c(content, size, where);
-                      Schema schema = ParseSchema(c);
-                      summary.schemas.try_emplace(schema.id, std::move(schema));
-                      return;
-                    }
-                    if (opcode == static_cast<uint8_t>(Opcode::kChannel)) {
-                      Cursor c(content, size, where);
-                      Channel channel = ParseChannel(c);
-                      summary.channels.try_emplace(channel.id, std::move(channel));
-                      return;
-                    }
-                    if (opcode != static_cast<uint8_t>(Opcode::kMessage)) return;
                     Cursor c(content, size, where);
+                    if (TakeDefinition(static_cast<Opcode>(opcode), c)) return;
+                    if (opcode != static_cast<uint8_t>(Opcode::kMessage)) return;
                     const uint16_t channel = c.U16();
                     c.U32();
                     const uint64_t time = c.U64();
@@ -395,16 +394,10 @@ struct Reader::Impl {
           library = c.String();
           header_seen = true;
           break;
-        case Opcode::kSchema: {
-          Schema s = ParseSchema(c);
-          summary.schemas[s.id] = std::move(s);
+        case Opcode::kSchema:
+        case Opcode::kChannel:
+          TakeDefinition(opcode, c);
           break;
-        }
-        case Opcode::kChannel: {
-          Channel ch = ParseChannel(c);
-          summary.channels[ch.id] = std::move(ch);
-          break;
-        }
         case Opcode::kChunk: {
           ChunkHeader h;
           try {

@@ -186,6 +186,24 @@ TEST_CASE("a flipped byte anywhere is caught by a CRC", "[mcap]") {
                                " (Chunk): chunk CRC mismatch"));
     CHECK_THROWS_WITH(ReadAll(bad), Catch::Contains("chunk CRC mismatch"));
   }
+  SECTION(
+      "in a chunk of a file that was not closed: the scan skips that chunk alone, and says so") {
+    WriteSample(dir / "closed.mcap", mcap::Compression::kNone, dir / "killed.mcap");
+    std::string damaged = Bytes(dir / "killed.mcap");
+    damaged[chunk.chunk_start_offset + chunk.chunk_length - 50] ^= 0x10;
+    Put(dir / "killed.mcap", damaged);
+    const mcap::Reader scanned = mcap::Reader::Open(dir / "killed.mcap");
+    CHECK(scanned.loss().chunks_lost == 1);
+    CHECK(scanned.loss().bytes_lost == chunk.chunk_length);
+    CHECK_THAT(scanned.loss().what, Catch::Contains("(1 chunk)"));
+    CHECK(scanned.summary().chunk_indexes.size() == reader.summary().chunk_indexes.size() - 1);
+    uint64_t in_chunk = 0;
+    reader.ForEachMessage(chunk.message_start_time_ns, chunk.message_end_time_ns + 1, {},
+                          [&](const mcap::MessageView&) { ++in_chunk; });
+    CHECK(scanned.statistics().message_count < 600);
+    CHECK(scanned.statistics().message_count >= 600 - in_chunk);
+    CHECK(ReadAll(scanned).size() == scanned.statistics().message_count);
+  }
   SECTION("in an attachment: reading it says so") {
     std::string damaged = bytes;
     damaged[attachment.offset + attachment.length - 100] ^= 0x01;
