@@ -73,6 +73,11 @@ struct SessionSetup {
   std::optional<GravityGridData> gravity;
   /// haptel-vehicle to spawn; empty: the vehicle runs elsewhere, do not spawn.
   std::filesystem::path vehicle_program;
+  /// vehicle.truth_file (the simulated vehicle's truth record, which
+  /// `haptel run` asks of it; vehicle.reality the reality it runs) is a
+  /// temporary file of this run's: RunAndRecord reads the reality's name
+  /// and seed from it, then removes it. Score against it before then.
+  bool truth_temporary = false;
   /// Drive a vehicle already running on the domain (`--attach`): nothing is
   /// spawned (vehicle_program is empty) and nothing is stopped at the end
   /// but this run's hold on it.
@@ -212,6 +217,10 @@ struct SessionResult {
   uint64_t servo_ticks = 0;
   uint64_t physics_ticks = 0;
   uint64_t vehicle_ticks = 0;
+  /// The reality the simulated vehicle ran (its name and seed, from its
+  /// truth record's header after the run; "" when it wrote none).
+  std::string reality;
+  uint64_t reality_seed = 0;
   /// Every error bit the vehicle's servo controller reported over the run
   /// (the Maestro's register, controller_errors.hpp; 0: none, or no such
   /// controller).
