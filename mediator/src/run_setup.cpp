@@ -113,9 +113,12 @@ void ReadRunOptions(const Args& args, SessionSetup& setup) {
   setup.run.link.fault = LinkFaultFromOptions(args.Value("link-profile"), args.Value("link-fault"),
                                               setup.run.link.fault);
   if (auto predict = args.Value("predict")) {
-    if (*predict != "on" && *predict != "off")
-      throw UsageError("option --predict: expected on or off, got '" + *predict + "'");
-    setup.predict = *predict == "on";
+    if (*predict != "on" && *predict != "off" && *predict != "learn" && *predict != "nominal")
+      throw UsageError("option --predict: expected off, on, learn or nominal, got '" + *predict +
+                       "'");
+    setup.predict = *predict != "off";
+    setup.predict_model =
+        *predict == "nominal" ? PredictionModel::kNominal : PredictionModel::kLearn;
   }
   if (auto security = args.Value("security")) setup.run.link.security = *security;
   if (auto list = args.Value("dds-interfaces"))

@@ -40,6 +40,7 @@
 #include "haptel/core/cli.hpp"
 #include "haptel/interfaces/catalog.hpp"
 #include "haptel/mediator/interface_set.hpp"
+#include "haptel/mediator/prediction.hpp"
 #include "haptel/mediator/run_record.hpp"
 #include "haptel/view/view_model.hpp"
 
@@ -83,6 +84,10 @@ struct SessionSetup {
   /// where its delayed state says it was. The model runs either way, for
   /// its error in the record.
   bool predict = false;
+  /// The model it runs (prediction.hpp): the vehicle file's, or with what
+  /// is learnt of the vehicle while it drives (the default: --predict on is
+  /// learn; nominal is for comparing the two).
+  PredictionModel predict_model = PredictionModel::kLearn;
   /// Record the device's readings here for the `replay` driver (empty: none).
   std::filesystem::path trace;
   /// "auto" (the simulated driver; needs the sim device) or "person".
@@ -200,6 +205,14 @@ struct SessionResult {
   CanLogReport can_log;
   /// The simulated driver: times a control slipped out of its hand.
   int operator_slips = 0;
+  /// What the predictor showed as the vehicle now, one pose a state (the
+  /// operator's clock, s from `started_ns`, its MonotonicNs), for scoring
+  /// against the simulated vehicle's truth record after the run
+  /// (prediction_score.hpp); the 3-D distance counts with `shown_height`
+  /// (the blimp).
+  std::vector<ShownPose> shown;
+  int64_t started_ns = 0;
+  bool shown_height = false;
   /// A simulated-time run: its session's simulated seconds, and the wall
   /// seconds the whole run took (set-up included); 0 in real time.
   double simulated_s = 0.0;
@@ -212,6 +225,10 @@ struct SessionResult {
   uint64_t servo_ticks = 0;
   uint64_t physics_ticks = 0;
   uint64_t vehicle_ticks = 0;
+  /// The reality the simulated vehicle ran (its name and seed, from its
+  /// truth record's header after the run; "" when it wrote none).
+  std::string reality;
+  uint64_t reality_seed = 0;
   /// Every error bit the vehicle's servo controller reported over the run
   /// (the Maestro's register, controller_errors.hpp; 0: none, or no such
   /// controller).
