@@ -51,8 +51,15 @@ std::vector<std::string> VehicleArgv(int argc, const char* const* argv,
       continue;
     }
     if (word.rfind("--fleet=", 0) == 0) continue;
+    // The fleet file's reality for this vehicle wins over the run's.
+    if (!vehicle.reality.empty() && word == "--reality") {
+      ++i;
+      continue;
+    }
+    if (!vehicle.reality.empty() && word.rfind("--reality=", 0) == 0) continue;
     out.push_back(word);
   }
+  if (!vehicle.reality.empty()) out.insert(out.end(), {"--reality", vehicle.reality.string()});
   out.insert(out.end(), {"--vehicle", vehicle.vehicle.string(), "--track", vehicle.world.string(),
                          "--vehicle-name", vehicle.name});
   if (!vehicle.interface.empty()) out.insert(out.end(), {"--interface", vehicle.interface});
@@ -174,7 +181,12 @@ std::string FleetJson(const FleetSetup& setup, const FleetResult& fleet,
       << ",\"gates_total\":" << r.gates_total << ",\"driven_s\":" << JsonNumber(v.driven_s)
       << ",\"neglected_s\":" << JsonNumber(v.neglected_s) << ",\"handovers\":" << v.handovers
       << ",\"selected\":" << JsonString(v.selected) << ",\"vehicle_pid\":" << r.vehicle_pid
-      << ",\"distance_m\":" << JsonNumber(r.distance_m) << ",\"run_id\":" << ids[i] << "}";
+      << ",\"distance_m\":" << JsonNumber(r.distance_m) << ",\"run_id\":" << ids[i]
+      << ",\"reality\":"
+      << (v.result.reality.empty() ? std::string("null")
+                                   : "{\"name\":" + JsonString(v.result.reality) +
+                                         ",\"seed\":" + std::to_string(v.result.reality_seed) + "}")
+      << "}";
   }
   o << "]}";
   return o.str();
@@ -273,6 +285,8 @@ int RunFleetCommand(int argc, const char* const* argv, const std::atomic<bool>& 
   auto recorder =
       cli::ReadInput([&] { return std::make_unique<Recorder>(setup.vehicles.at(0).run.database); });
   FleetResult fleet = mediator::RunSession(setup, interrupted);
+  for (size_t i = 0; i < fleet.vehicles.size(); ++i)
+    mediator::TakeReality(setup.vehicles[i], fleet.vehicles[i].result);
   std::vector<int64_t> ids;
   bool recorded = true;
   for (size_t i = 0; i < fleet.vehicles.size(); ++i) {

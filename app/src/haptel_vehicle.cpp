@@ -10,6 +10,7 @@
 
 #include "haptel/config/error.hpp"
 #include "haptel/config/paths.hpp"
+#include "haptel/config/reality.hpp"
 #include "haptel/core/args.hpp"
 #include "haptel/core/cli.hpp"
 #include "haptel/core/log.hpp"
@@ -46,7 +47,12 @@ constexpr const char* kUsage =
     "  --dds-peers LIST       where the operator's host is: unicast discovery (overrides "
     "link.peers)\n"
     "  --discovery-server ADDR:PORT  meet through a Fast DDS discovery server (haptel "
-    "discovery-server)\n";
+    "discovery-server)\n"
+    "  --reality NAME|FILE  a simulated vehicle's hidden truth (config/realities/NAME.yaml: none,\n"
+    "                 lab, harsh; or a file; overrides the file's 'reality')\n"
+    "  --reality-seed N  the reality's draws (default: the reality file's seed)\n"
+    "  --truth FILE   write the truth record here: the drawn reality, then the true pose at\n"
+    "                 the control rate (for scoring; the state never says it)\n";
 }  // namespace
 
 namespace {
@@ -132,11 +138,11 @@ int main(int argc, char** argv) {
     VehicleConfig config;
     vehicles::OpenedVehicle vehicle;
     cli::ReadInput([&] {
-      const Args args(
-          argc, argv,
-          {"config", "track", "name", "domain", "can", "serial-port", "link-fault", "link-profile",
-           "security", "dds-interfaces", "dds-peers", "discovery-server"},
-          {});
+      const Args args(argc, argv,
+                      {"config", "track", "name", "domain", "can", "serial-port", "link-fault",
+                       "link-profile", "security", "dds-interfaces", "dds-peers",
+                       "discovery-server", "reality", "reality-seed", "truth"},
+                      {});
       if (!args.positional().empty())
         throw UsageError("unexpected argument '" + args.positional()[0] + "'");
       const std::filesystem::path file =
@@ -163,6 +169,18 @@ int main(int argc, char** argv) {
         link::CheckSecurity(config.link.security, config.link.security_identity);
       }
       if (auto world = args.Value("track")) config.world = *world;
+      if (auto reality = args.Value("reality")) config.reality = RealityFile(*reality);
+      if (auto seed = args.Int("reality-seed", 0, 2147483647)) config.reality_seed = *seed;
+      if (auto truth = args.Value("truth")) config.truth_file = *truth;
+      if (!config.reality.empty() || !config.truth_file.empty()) {
+        if (!config.Kind().simulated) {
+          throw UsageError(std::string("option --") +
+                           (config.reality.empty() ? "truth" : "reality") + ": the vehicle '" +
+                           file.string() + "' is of kind " + config.kind +
+                           ", not simulated: its reality and truth are the world's");
+        }
+        config.ValidateOrThrow();
+      }
       if (auto can = args.Value("can")) {
         if (!config.Kind().Uses(kCanSection)) {
           throw UsageError("option --can: the vehicle '" + file.string() + "' is of kind " +

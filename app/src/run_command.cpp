@@ -65,6 +65,13 @@ constexpr const char* kRunUsage =
     "  --vehicle FILE       vehicle configuration the spawned vehicle runs (overrides 'vehicle'),\n"
     "                       e.g. config/vehicles/can-robot-sim.yaml (the CAN code path)\n"
     "  --vehicle-name NAME  vehicle name in DDS topic names\n"
+    "  --reality NAME|FILE  the simulated vehicle's hidden truth: config/realities/NAME.yaml\n"
+    "                       (none: the twin the operator predicts with; lab, the default: a\n"
+    "                       Lego tank on a lab floor, the blimp in a breeze; harsh) or a file;\n"
+    "                       passed to the vehicle, never read here (overrides its 'reality')\n"
+    "  --reality-seed N     the reality's draws (default: the reality file's seed)\n"
+    "  --truth FILE         keep the vehicle's truth record here (its drawn reality, then its\n"
+    "                       true pose at the control rate; default: a temporary file, removed)\n"
     "  --attach             spawn no vehicle: drive the one already running under that name\n"
     "                       on the domain (a haptel-vehicle started by hand, here or on\n"
     "                       another host); --vehicle still says what kind it is\n"
@@ -237,6 +244,11 @@ void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRu
         run.result.simulated_s, run.result.wall_s, r.speedup, run.result.cpu_s,
         run.result.cpu_s > 0.0 ? run.result.simulated_s / run.result.cpu_s : 0.0);
   }
+  if (!run.result.reality.empty()) {
+    std::fprintf(out, "  the vehicle's reality: %s, seed %llu (hidden from the operator side)\n",
+                 run.result.reality.c_str(),
+                 static_cast<unsigned long long>(run.result.reality_seed));
+  }
   if (r.prediction_error_odometry_m_p95 >= 0.0 || r.prediction_error_m_p95 >= 0.0) {
     std::fprintf(out, "  prediction (%s model%s):", r.predict_model.c_str(),
                  r.predict ? ", shown to the operator" : ", not shown");
@@ -360,7 +372,11 @@ std::string RunJson(const SessionSetup& setup, const RecordedRun& run) {
     << ",\"unsaved_file\":" << JsonString(run.unsaved.string())
     << ",\"picture\":" << JsonString(r.picture)
     << ",\"record_error\":" << JsonString(run.result.view_record_error)
-    << ",\"can_log\":" << CanLogJson(run.result.can_log) << "}";
+    << ",\"can_log\":" << CanLogJson(run.result.can_log) << ",\"reality\":"
+    << (run.result.reality.empty() ? std::string("null")
+                                   : "{\"name\":" + JsonString(run.result.reality) + ",\"seed\":" +
+                                         std::to_string(run.result.reality_seed) + "}")
+    << "}";
   return o.str();
 }
 

@@ -75,6 +75,11 @@ FleetConfig LoadFleet(const std::filesystem::path& file) {
       }
     }
     vehicle.attach = v.Bool("attach", false);
+    if (v.Has("reality")) {
+      vehicle.reality = ExistingFile(v, dir, "reality",
+                                     "a reality file such as ../realities/lab.yaml (a simulated "
+                                     "vehicle's hidden truth)");
+    }
     v.Finish();
     fleet.vehicles.push_back(std::move(vehicle));
   }

@@ -144,6 +144,10 @@ void VehicleConfig::ValidateOrThrow() const {
   if (info->Uses(kAirshipSection)) check::Nested("airship", airship);
   if (info->Uses(kServoSection)) check::Nested("servo", servo);
   if (info->Uses(kRos2Section)) check::Nested("ros2", ros2);
+  if (!reality.empty() && !info->simulated) {
+    check::Fail("reality", "no reality for kind " + kind +
+                               " (hardware has its own); only a simulated kind runs one");
+  }
 }
 
 namespace {

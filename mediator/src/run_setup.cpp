@@ -2,7 +2,10 @@
 // one recorded (what a study's trial repeats too).
 #include "haptel/mediator/run_setup.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <atomic>
 #include <cstdio>
 #include <filesystem>
 #include <optional>
@@ -15,6 +18,7 @@
 #include "haptel/config/gravity_grid.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/physics.hpp"
+#include "haptel/config/reality.hpp"
 #include "haptel/config/scene.hpp"
 #include "haptel/core/args.hpp"
 #include "haptel/core/child_process.hpp"
@@ -26,6 +30,7 @@
 #include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/third_person_view.hpp"
 #include "haptel/record/run_picture.hpp"
+#include "haptel/record/truth_record.hpp"
 #include "haptel/record/unsaved_run.hpp"
 #include "haptel/view/view.hpp"
 #include "simulated_time.hpp"
@@ -33,13 +38,13 @@
 namespace haptel::mediator {
 
 Args ParseRunArgs(int argc, const char* const* argv) {
-  return Args(argc, argv, {"config",       "track",          "interface",  "scene",
-                           "vehicle-name", "domain",         "database",   "vehicle-timeout",
-                           "trace",        "operator",       "device",     "trace-in",
-                           "time-limit",   "lap-limit",      "view",       "record",
-                           "vehicle",      "predict",        "link-fault", "link-profile",
-                           "security",     "dds-interfaces", "dds-peers",  "discovery-server",
-                           "fleet"},
+  return Args(argc, argv, {"config",       "track",          "interface",    "scene",
+                           "vehicle-name", "domain",         "database",     "vehicle-timeout",
+                           "trace",        "operator",       "device",       "trace-in",
+                           "time-limit",   "lap-limit",      "view",         "record",
+                           "vehicle",      "predict",        "link-fault",   "link-profile",
+                           "security",     "dds-interfaces", "dds-peers",    "discovery-server",
+                           "fleet",        "reality",        "reality-seed", "truth"},
               {"json", "quiet", "attach", "third-person", "simulated-time", "insecure"});
 }
 
@@ -192,6 +197,50 @@ Operation ReadOperation(const Args& args, SessionSetup& setup) {
   return op;
 }
 
+/// A simulated vehicle's reality and its truth record: the path goes to the
+/// vehicle (--reality, else its file's `reality:`, else lab); the operator
+/// side never reads the file. The truth record is written where --truth
+/// says, else in a temporary file (RemoveTemporaryTruth after the run).
+constexpr const char* kDefaultReality = "lab";
+
+void ReadReality(const Args& args, SessionSetup& setup) {
+  VehicleConfig& v = setup.vehicle;
+  const VehicleKindInfo& kind = v.Kind();
+  const bool spawned_or_stepped = !setup.attach;
+  if (!kind.simulated || !spawned_or_stepped) {
+    for (const char* option : {"reality", "reality-seed", "truth"}) {
+      if (args.Value(option)) {
+        throw UsageError(std::string("option --") + option + ": the vehicle '" + v.file.string() +
+                         "' (" + v.kind + ") " +
+                         (spawned_or_stepped
+                              ? "is not simulated: it has no reality of ours"
+                              : "runs elsewhere (--attach): its reality is its own"));
+      }
+    }
+    return;
+  }
+  if (auto reality = args.Value("reality")) {
+    v.reality = RealityFile(*reality);
+  } else if (v.reality.empty()) {
+    v.reality = RealityFile(kDefaultReality);
+  }
+  if (!std::filesystem::is_regular_file(v.reality)) {
+    throw UsageError("option --reality: no reality file '" + v.reality.string() +
+                     "'; expected a name of config/realities/ (none, lab, harsh) or a file");
+  }
+  if (auto seed = args.Int("reality-seed", 0, 2147483647)) v.reality_seed = *seed;
+  if (auto truth = args.Value("truth")) {
+    CheckFileOption("truth", *truth, "the vehicle's truth record");
+    v.truth_file = *truth;
+  } else {
+    static std::atomic<int> runs{0};
+    v.truth_file = std::filesystem::temp_directory_path() /
+                   ("haptel-truth-" + std::to_string(getpid()) + "-" +
+                    std::to_string(runs.fetch_add(1)) + "-" + v.name + ".csv");
+    setup.truth_temporary = true;
+  }
+}
+
 /// The vehicle, and what it drives through: the link's faults, the chase
 /// camera, simulated time, its track or course, its name.
 void ReadVehicle(const Args& args, SessionSetup& setup) {
@@ -237,6 +286,7 @@ void ReadVehicle(const Args& args, SessionSetup& setup) {
     }
     setup.vehicle.name = *name;
   }
+  ReadReality(args, setup);
 }
 
 /// The device a person holds a hand interface with when the run names a
@@ -405,11 +455,28 @@ SessionSetup RunSetupFromArgs(const Args& args) {
   return setup;
 }
 
+void TakeReality(const SessionSetup& setup, SessionResult& result) {
+  const std::filesystem::path& file = setup.vehicle.truth_file;
+  if (file.empty()) return;
+  std::error_code ignored;
+  if (std::filesystem::exists(file)) {
+    try {
+      const record::TruthRecord truth = record::TruthRecord::Load(file);
+      result.reality = truth.reality();
+      result.reality_seed = truth.seed();
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "haptel: warning: the vehicle's truth record: %s\n", e.what());
+    }
+  }
+  if (setup.truth_temporary) std::filesystem::remove(file, ignored);
+}
+
 RecordedRun RunAndRecord(const SessionSetup& setup, Recorder& recorder,
                          const std::atomic<bool>& interrupted, const Recorder::AlsoSave& also,
                          const std::optional<record::TrialOfRun>& trial) {
   RecordedRun run;
   run.result = RunSession(setup, interrupted);
+  TakeReality(setup, run.result);
   // Saved, or — when the database fails at the end — kept in a file beside it.
   try {
     run.run_id = recorder.Save(run.result.record, also);

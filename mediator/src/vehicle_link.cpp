@@ -246,6 +246,13 @@ VehicleLink::VehicleLink(const VehicleLinkOptions& options)
     // The run's link faults on both ends: each delays and drops what it receives.
     if (options_.link.fault.enabled)
       arguments.insert(arguments.end(), {"--link-fault", LinkFaultText(options_.link.fault)});
+    // The vehicle's hidden truth: passed on, never read here.
+    const VehicleConfig& v = options_.vehicle;
+    if (!v.reality.empty()) arguments.insert(arguments.end(), {"--reality", v.reality.string()});
+    if (v.reality_seed)
+      arguments.insert(arguments.end(), {"--reality-seed", std::to_string(*v.reality_seed)});
+    if (!v.truth_file.empty())
+      arguments.insert(arguments.end(), {"--truth", v.truth_file.string()});
     if (!options_.link.security.empty())
       arguments.insert(arguments.end(), {"--security", options_.link.security.string()});
     if (!options_.link.discovery_server.empty()) {

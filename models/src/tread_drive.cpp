@@ -22,6 +22,11 @@ double StepTreads(const TreadDriveConfig& drive, double target_left, double targ
   state.v_right += (target_right * drive.right_gain - state.v_right) * alpha;
   const double v = 0.5 * (state.v_left + state.v_right);
   const double omega = (state.v_right - state.v_left) / drive.track_width;
+  MoveOnArc(v, omega, dt, state);
+  return omega;
+}
+
+void MoveOnArc(double v, double omega, double dt, TreadState& state) {
   // Exact integration of a constant-curvature arc over dt.
   const double h0 = state.heading;
   const double h1 = h0 + omega * dt;
@@ -33,7 +38,6 @@ double StepTreads(const TreadDriveConfig& drive, double target_left, double targ
     state.y += v * dt * std::sin(h0);
   }
   state.heading = WrapAngle(h1);
-  return omega;
 }
 
 }  // namespace haptel::models

@@ -18,6 +18,7 @@
 #include "child.hpp"
 #include "haptel/link/topic.hpp"
 #include "haptel/record/recorder.hpp"
+#include "haptel/record/truth_record.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;
@@ -31,11 +32,15 @@ std::string Bin(const std::string& name) { return (test::BinDir() / name).string
 TEST_CASE("haptel run completes the short track over DDS with a separate vehicle process") {
   const auto dir = test::ScratchDir("e2e-lap");
   const auto db = dir / "runs.db";
+  const auto truth = dir / "truth.csv";
   // A generous vehicle timeout: a loaded machine may stall a process for a
-  // moment, and losing the vehicle is not what this test is about.
+  // moment, and losing the vehicle is not what this test is about. The
+  // vehicle runs the lab reality (the default, named here with its seed)
+  // and keeps its truth record where asked.
   Child haptel({Bin("haptel"), "run", "--track", "config/tracks/test-short.yaml", "--json",
                 "--quiet", "--domain", std::to_string(test::UniqueDomain(11)), "--database",
-                db.string(), "--vehicle-timeout", "5"});
+                db.string(), "--vehicle-timeout", "5", "--reality", "lab", "--reality-seed", "3",
+                "--truth", truth.string()});
   // Signals it does not document leave it running: SIGUSR1 cuts the link
   // only with --link-fault (it used to end the run unrecorded, exit 138).
   std::this_thread::sleep_for(std::chrono::seconds(2));
@@ -66,6 +71,14 @@ TEST_CASE("haptel run completes the short track over DDS with a separate vehicle
   CHECK(std::stod(JsonField(json, "command_rtt_ms_p50")) > 0.0);
   // The vehicle process is gone after the run.
   CHECK(kill(vehicle_pid, 0) != 0);
+  // The JSON names the reality as the vehicle's truth record does; the
+  // record has its drawn values and the true path, a row per control tick.
+  CHECK(json.find("\"reality\":{\"name\":\"lab\",\"seed\":3}") != std::string::npos);
+  const record::TruthRecord record = record::TruthRecord::Load(truth);
+  CHECK(record.reality() == "lab");
+  CHECK(record.seed() == 3);
+  CHECK(record.params().effective_track_width > record.params().track_width);
+  CHECK(record.rows().size() > 200);  // 200 Hz over a lap of seconds
 
   // The run is in the database with its splits.
   record::Recorder recorder(db);

@@ -1,5 +1,6 @@
 #include "haptel/vehicles/blimp_adapters.hpp"
 
+#include <cmath>
 #include <stdexcept>
 
 #include "haptel/servo/calibration.hpp"
@@ -47,8 +48,38 @@ void PoseFromSim(const models::SimBlimp& sim, BlimpAdapterState& s) {
   s.contacts = static_cast<uint32_t>(sim.contacts());
 }
 
-SimBlimpAdapter::SimBlimpAdapter(const AirshipConfig& airship, const BlimpCourseConfig& course)
-    : sim_(airship, course) {}
+AirshipConfig AirshipInReality(const AirshipConfig& airship, const DrawnReality& r) {
+  AirshipConfig a = airship;
+  a.wind.mean[0] = r.wind_x;
+  a.wind.mean[1] = r.wind_y;
+  a.wind.gust_rms = r.gust_rms;
+  if (r.volume > 0.0) a.volume = r.volume;
+  a.payload_mass = r.payload_mass;
+  // Another robot of the make, another gust pattern; the twin keeps the file's.
+  if (r.seed != 0) a.wind.seed = a.wind.seed ^ (r.seed * 0x9E3779B97F4A7C15ULL) % (1U << 30);
+  return a;
+}
+
+void TruthFromSim(const models::SimBlimp& sim, TruthRow* row) {
+  const Eigen::Vector3d p = sim.position();
+  const Eigen::Vector3d v = sim.ground_velocity();
+  const models::AirshipState& s = sim.airship().state();
+  row->x = p.x();
+  row->y = p.y();
+  row->z = p.z();
+  row->heading = sim.yaw();
+  row->speed = std::hypot(v.x(), v.y());
+  row->yaw_rate = (s.attitude * s.rates).z();
+}
+
+SimBlimpAdapter::SimBlimpAdapter(const AirshipConfig& airship, const BlimpCourseConfig& course,
+                                 const DrawnReality& reality)
+    : reality_(reality), sim_(AirshipInReality(airship, reality), course) {}
+
+bool SimBlimpAdapter::Truth(TruthRow* row) const {
+  TruthFromSim(sim_, row);
+  return true;
+}
 
 BlimpAdapterState SimBlimpAdapter::State() const {
   BlimpAdapterState s;
@@ -104,8 +135,9 @@ BlimpAdapterState ServoBlimpAdapter::State() const {
 
 SimulatedServoBlimp::SimulatedServoBlimp(const ServoControllerConfig& config,
                                          const AirshipConfig& airship,
-                                         const BlimpCourseConfig& course)
-    : config_(config), sim_(airship, course) {
+                                         const BlimpCourseConfig& course,
+                                         const DrawnReality& reality)
+    : reality_(reality), config_(config), sim_(AirshipInReality(airship, reality), course) {
   // The adapter opens the pty's far end by its path, as it would a device.
   adapter_ = std::make_unique<ServoBlimpAdapter>(
       config_, std::make_unique<servo::SerialPort>(pty_.slave_path(), config_.baud));

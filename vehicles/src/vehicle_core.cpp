@@ -7,6 +7,7 @@
 
 #include "haptel/config/error.hpp"
 #include "haptel/core/cli.hpp"
+#include "haptel/core/clock.hpp"
 #include "haptel/core/process_identity.hpp"
 
 namespace haptel::vehicles {
@@ -23,6 +24,19 @@ VehicleCoreOf<Family>::VehicleCoreOf(const VehicleConfig& config, std::unique_pt
   state_msg_.vehicle_pid(static_cast<int64_t>(getpid()));
   state_msg_.vehicle_host(HostName());
   Family::Prepare(*adapter_);
+  if (const DrawnReality* reality = adapter_->reality()) {
+    clock_offset_ns_ = SToNs(reality->clock_offset_s);
+    clock_drift_ = reality->clock_drift_ppm * 1e-6;
+  }
+  if (!config_.truth_file.empty()) {
+    const DrawnReality* reality = adapter_->reality();
+    if (reality == nullptr) {
+      throw ConfigError(config_.file.string() + ": kind '" + config_.kind +
+                        "' has no truth to record (only a simulated vehicle knows where it "
+                        "truly is); expected no truth record (--truth)");
+    }
+    truth_ = std::make_unique<TruthWriter>(config_.truth_file, *reality);
+  }
 }
 
 template <class Family>
@@ -47,6 +61,14 @@ bool VehicleCoreOf<Family>::ControlTick(int64_t now_ns) {
       Family::Apply(*adapter_, commands_.applied().command, config_);
     }
     adapter_->Update(dt);
+    if (first_tick_ns_ == 0) first_tick_ns_ = now_ns;
+    if (truth_) {
+      TruthRow row;
+      if (adapter_->Truth(&row)) {
+        row.operator_ns = now_ns;
+        truth_->Write(row);
+      }
+    }
   } catch (const cli::HardwareLost& e) {
     // A port or bus that vanished: stop driving it and say so once; the
     // node's owner ends the process (exit 3).
@@ -63,7 +85,10 @@ typename Family::StateMsg& VehicleCoreOf<Family>::MakeState(int64_t now_ns) {
   const typename Family::AdapterState s = adapter_->State();
   typename Family::StateMsg& m = state_msg_;
   m.seq(++state_seq_);
-  m.stamp_ns(now_ns);
+  const int64_t measured_ns = now_ns - SToNs(s.measured_age_s);
+  const int64_t since_ns = first_tick_ns_ != 0 ? measured_ns - first_tick_ns_ : 0;
+  m.stamp_ns(measured_ns + clock_offset_ns_ +
+             static_cast<int64_t>(clock_drift_ * static_cast<double>(since_ns)));
   Family::FillState(s, commands_.watchdog_expired(), m);
   m.last_command_seq(commands_.applied().seq);
   m.last_command_sent_ns(commands_.applied().sent_ns);

@@ -108,7 +108,8 @@ FactoryTable<BlimpFamily>& Factories<BlimpFamily>() {
   static FactoryTable<BlimpFamily> table{
       {"sim-blimp",
        [](const VehicleConfig& c, const BlimpCourseConfig& course) {
-         return AdapterOnly<BlimpFamily>(std::make_unique<SimBlimpAdapter>(c.airship, course));
+         return AdapterOnly<BlimpFamily>(
+             std::make_unique<SimBlimpAdapter>(c.airship, course, VehicleReality(c, nullptr)));
        }},
       {"servo-blimp",
        [](const VehicleConfig& c, const BlimpCourseConfig&) {
@@ -124,8 +125,8 @@ FactoryTable<BlimpFamily>& Factories<BlimpFamily>() {
        }},
       {"servo-blimp-sim",
        [](const VehicleConfig& c, const BlimpCourseConfig& course) {
-         return AdapterOnly<BlimpFamily>(
-             std::make_unique<SimulatedServoBlimp>(c.servo, c.airship, course));
+         return AdapterOnly<BlimpFamily>(std::make_unique<SimulatedServoBlimp>(
+             c.servo, c.airship, course, VehicleReality(c, nullptr)));
        }},
   };
   return table;

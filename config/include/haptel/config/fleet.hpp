@@ -30,6 +30,9 @@ struct FleetVehicle {
   std::filesystem::path world;    ///< its track (robot) or course (blimp) file
   std::string interface;          ///< the interface it is driven with ("": the run's)
   bool attach = false;            ///< already running: spawn none
+  /// Its reality (config/reality.hpp; a simulated vehicle's), over the
+  /// vehicle file's and the run's --reality; empty: those.
+  std::filesystem::path reality;
 };
 
 struct FleetConfig {

@@ -1,7 +1,9 @@
 #pragma once
 /// @file A vehicle node's configuration.
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -247,6 +249,19 @@ struct VehicleConfig {
   AirshipConfig airship;        ///< kinds that use kAirshipSection (the simulated airship)
   ServoControllerConfig servo;  ///< kinds that use kServoSection
   Ros2Config ros2;              ///< kinds that use kRos2Section
+  /// A simulated kind's reality (config/reality.hpp): what the simulator
+  /// runs instead of its nominal model. Only the vehicle reads it; the
+  /// operator side passes the path on (haptel-vehicle --reality). Empty:
+  /// none, the file's model exactly (the twin).
+  std::filesystem::path reality;
+  /// The reality's seed (haptel-vehicle --reality-seed); unset: the reality
+  /// file's. Not in the file.
+  std::optional<uint64_t> reality_seed;
+  /// Where a simulated vehicle writes its truth record
+  /// (record/truth_record.hpp): its drawn reality, then its true pose at
+  /// the control rate on the host's CLOCK_MONOTONIC (haptel-vehicle
+  /// --truth; `haptel run` sets one per run). Empty: none. Not in the file.
+  std::filesystem::path truth_file;
 
   /// The kind's entry in the table (valid once validated).
   const VehicleKindInfo& Kind() const { return VehicleKind(kind); }
@@ -271,6 +286,7 @@ struct VehicleConfig {
     a->Visit(HAPTEL_NVP(airship), config::IfPresent{});
     a->Visit(HAPTEL_NVP(servo), config::IfPresent{});
     a->Visit(HAPTEL_NVP(ros2), config::IfPresent{});
+    a->Visit(HAPTEL_NVP(reality), config::RelativeToFile{});
   }
 
   /// Throws ConfigFieldError unless the name suits DDS topic names, the kind

@@ -33,6 +33,13 @@ Args ParseRunArgs(int argc, const char* const* argv);
 /// ConfigError (bad input).
 SessionSetup RunSetupFromArgs(const Args& args);
 
+/// After a session: the reality its simulated vehicle ran (name and seed,
+/// from the header of its truth record, setup.vehicle.truth_file) into
+/// `result`; a temporary truth record (setup.truth_temporary) is removed.
+/// A vehicle that never started wrote none: nothing is said. RunAndRecord
+/// calls it; a fleet's command, for each vehicle.
+void TakeReality(const SessionSetup& setup, SessionResult& result);
+
 /// Runs the session, then saves it into `recorder` — or, if the database
 /// fails at the end, into a fallback file beside it — with its picture.
 /// Throws only for parts that cannot be set up (nothing moved).

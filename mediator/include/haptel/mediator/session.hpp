@@ -74,6 +74,11 @@ struct SessionSetup {
   std::optional<GravityGridData> gravity;
   /// haptel-vehicle to spawn; empty: the vehicle runs elsewhere, do not spawn.
   std::filesystem::path vehicle_program;
+  /// vehicle.truth_file (the simulated vehicle's truth record, which
+  /// `haptel run` asks of it; vehicle.reality the reality it runs) is a
+  /// temporary file of this run's: RunAndRecord reads the reality's name
+  /// and seed from it, then removes it. Score against it before then.
+  bool truth_temporary = false;
   /// Drive a vehicle already running on the domain (`--attach`): nothing is
   /// spawned (vehicle_program is empty) and nothing is stopped at the end
   /// but this run's hold on it.

@@ -42,6 +42,10 @@ inline double LevelSpeed(const TreadDriveConfig& drive, int level) {
 double StepTreads(const TreadDriveConfig& drive, double target_left, double target_right, double dt,
                   TreadState& state);
 
+/// Moves the body in `state` by `dt` on the exact arc of forward speed `v`
+/// and yaw rate `omega` (what StepTreads does after the lag).
+void MoveOnArc(double v, double omega, double dt, TreadState& state);
+
 /// The treads' speeds from a body's forward speed and yaw rate.
 inline void TreadsFromMotion(const TreadDriveConfig& drive, double speed, double yaw_rate,
                              TreadState& state) {

@@ -4,6 +4,8 @@
 #include <cstdint>
 #include <string>
 
+#include "haptel/config/reality.hpp"
+#include "haptel/config/truth_format.hpp"
 #include "haptel/core/range_scan.hpp"
 #include "haptel/models/tread_drive.hpp"
 
@@ -26,6 +28,9 @@ struct AdapterState {
   std::string fault_message;  ///< one line: what, where (empty: no fault)
   /// What the range sensors see now (count 0: the vehicle has none).
   RangeScan ranges;
+  /// How long before now the pose, speed and yaw rate were measured (a
+  /// simulator's state jitter, config/reality.hpp): the state's stamp says so.
+  double measured_age_s = 0.0;
 };
 
 class VehicleAdapter {
@@ -39,6 +44,12 @@ class VehicleAdapter {
   /// Advances by dt seconds: simulators step, hardware polls its bus.
   virtual void Update(double dt) = 0;
   virtual AdapterState State() const = 0;
+  /// A simulator's drawn reality (its truth record's header, its clock);
+  /// null: hardware, whose truth nobody knows.
+  virtual const DrawnReality* reality() const { return nullptr; }
+  /// Where the vehicle truly is (a simulator; false: hardware). The
+  /// caller stamps operator_ns.
+  virtual bool Truth(TruthRow*) const { return false; }
 };
 
 }  // namespace haptel::vehicles

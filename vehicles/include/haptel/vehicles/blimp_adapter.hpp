@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <string>
 
+#include "haptel/config/reality.hpp"
+#include "haptel/config/truth_format.hpp"
 #include "haptel/core/blimp_command.hpp"
 
 namespace haptel::vehicles {
@@ -25,6 +27,8 @@ struct BlimpAdapterState {
   uint16_t controller_errors = 0;    ///< the servo controller's error register (Maestro bits)
   bool fault = false;
   std::string fault_message;
+  /// How long before now the pose was measured (the state's stamp says so).
+  double measured_age_s = 0.0;
 };
 
 class BlimpAdapter {
@@ -38,6 +42,12 @@ class BlimpAdapter {
   /// Advances by dt seconds: simulators step, hardware talks to its controller.
   virtual void Update(double dt) = 0;
   virtual BlimpAdapterState State() const = 0;
+  /// A simulator's drawn reality (its truth record's header, its clock);
+  /// null: the real blimp.
+  virtual const DrawnReality* reality() const { return nullptr; }
+  /// Where the blimp truly is (a simulator; false: the real one). The
+  /// caller stamps operator_ns.
+  virtual bool Truth(TruthRow*) const { return false; }
 };
 
 }  // namespace haptel::vehicles

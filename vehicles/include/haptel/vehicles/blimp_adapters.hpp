@@ -27,21 +27,36 @@ std::array<double, kBlimpChannels> ChannelValues(const BlimpCommand& command);
 /// The inverse: channel fractions back to a command.
 BlimpCommand CommandFromChannels(const std::array<double, kBlimpChannels>& values);
 
+/// The airship a reality flies (config/reality.hpp): the file's with the
+/// reality's steady wind and gusts, envelope volume (buoyancy) and payload
+/// (the heavier gondola). NominalReality gives `airship` back unchanged.
+AirshipConfig AirshipInReality(const AirshipConfig& airship, const DrawnReality& reality);
+
 class SimBlimpAdapter final : public BlimpAdapter {
  public:
-  SimBlimpAdapter(const AirshipConfig& airship, const BlimpCourseConfig& course);
+  /// Flies the file's airship in `reality` (AirshipInReality; the twin with
+  /// NominalReality); the state says nothing of the wind, only where the
+  /// blimp is and its airspeed.
+  SimBlimpAdapter(const AirshipConfig& airship, const BlimpCourseConfig& course,
+                  const DrawnReality& reality);
   void Apply(const BlimpCommand& command) override { command_ = command; }
   void Update(double dt) override { sim_.Step(dt, command_); }
   BlimpAdapterState State() const override;
+  const DrawnReality* reality() const override { return &reality_; }
+  bool Truth(TruthRow* row) const override;
   const models::SimBlimp& sim() const { return sim_; }
 
  private:
+  DrawnReality reality_;
   models::SimBlimp sim_;
   BlimpCommand command_;
 };
 
 /// Fills the pose part of `state` from the simulator.
 void PoseFromSim(const models::SimBlimp& sim, BlimpAdapterState& state);
+/// Where the simulated blimp truly is: its yaw as the heading, its
+/// horizontal ground speed and its yaw rate (world z).
+void TruthFromSim(const models::SimBlimp& sim, TruthRow* row);
 
 /// The real blimp's channels through its servo controller. A Maestro judged
 /// untrustworthy (ServoOutput::untrusted(): its errors, its silence or stray
@@ -81,12 +96,18 @@ class ServoBlimpAdapter final : public BlimpAdapter {
 class SimulatedServoBlimp final : public BlimpAdapter {
  public:
   SimulatedServoBlimp(const ServoControllerConfig& config, const AirshipConfig& airship,
-                      const BlimpCourseConfig& course);
+                      const BlimpCourseConfig& course, const DrawnReality& reality);
   void Apply(const BlimpCommand& command) override { adapter_->Apply(command); }
   void Update(double dt) override;
   BlimpAdapterState State() const override;
+  const DrawnReality* reality() const override { return &reality_; }
+  bool Truth(TruthRow* row) const override {
+    TruthFromSim(sim_, row);
+    return true;
+  }
 
  private:
+  DrawnReality reality_;
   ServoControllerConfig config_;
   servo::PtyPair pty_;
   std::unique_ptr<ServoBlimpAdapter> adapter_;

@@ -86,6 +86,8 @@ class SimulatedCanRobot final : public VehicleAdapter {
   void Stop() override { adapter_->Stop(); }
   void Update(double dt) override;
   AdapterState State() const override;
+  const DrawnReality* reality() const override { return robot_.reality(); }
+  bool Truth(TruthRow* row) const override { return robot_.Truth(row); }
 
   CanRobot& adapter() { return *adapter_; }
   SimCanNodes& nodes() { return *nodes_; }

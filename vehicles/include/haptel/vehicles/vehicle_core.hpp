@@ -20,6 +20,7 @@
 #include "haptel/config/vehicle.hpp"
 #include "haptel/vehicles/command_intake.hpp"
 #include "haptel/vehicles/families.hpp"
+#include "haptel/vehicles/truth_writer.hpp"
 
 namespace haptel::vehicles {
 
@@ -31,6 +32,9 @@ class VehicleCoreOf {
 
   /// Validates `config` (VehicleConfig::ValidateOrThrow: ConfigFieldError);
   /// `adapter` must not be null. The adapter starts at rest (Family::Prepare).
+  /// With config.truth_file, the truth record is created there (a ConfigError
+  /// when the adapter has no truth: hardware; std::runtime_error when the
+  /// file cannot be written).
   VehicleCoreOf(const VehicleConfig& config, std::unique_ptr<Adapter> adapter);
 
   /// A command message from `writer` (as DDS gave it with the sample)
@@ -44,7 +48,8 @@ class VehicleCoreOf {
     OnCommand(cmd, link::kInProcessWriter, now_ns);
   }
   /// One control tick at `now_ns`: the watchdog (expired: made safe), else
-  /// the newest command applied, then the adapter stepped. False when the
+  /// the newest command applied, then the adapter stepped (and its truth
+  /// written, stamped `now_ns`, with a truth record). False when the
   /// adapter has lost its hardware (cli::HardwareLost; nothing more is
   /// driven; AdapterFailure says why).
   bool ControlTick(int64_t now_ns);
@@ -52,7 +57,9 @@ class VehicleCoreOf {
   /// sim_rate_hz / state_rate_hz ticks, from the first).
   bool state_due() const { return state_due_; }
   /// The state message at `now_ns`, the next in sequence: the adapter's
-  /// state, the watchdog, the command it echoes, its owner, a fault.
+  /// state, the watchdog, the command it echoes, its owner, a fault. Its
+  /// stamp is the vehicle's own clock when it measured (a simulator's
+  /// reality offsets and drifts it from `now_ns`'s).
   typename Family::StateMsg& MakeState(int64_t now_ns);
   /// The end: made safe and stepped once (unless the hardware is gone).
   void MakeSafe();
@@ -78,6 +85,11 @@ class VehicleCoreOf {
   std::atomic<bool> faulted_{false};
   std::string fault_;  ///< written once before faulted_ is set
   typename Family::StateMsg state_msg_;
+  std::unique_ptr<TruthWriter> truth_;
+  /// The vehicle's clock: now + offset + drift × (now − first tick).
+  int64_t clock_offset_ns_ = 0;
+  double clock_drift_ = 0.0;
+  int64_t first_tick_ns_ = 0;
 };
 
 using RobotCore = VehicleCoreOf<RobotFamily>;

@@ -1,0 +1,210 @@
+// The simulated vehicles in a reality (config/reality.hpp): `none` is the
+// twin bit for bit, `lab` ends measurably elsewhere on one command script
+// and repeats exactly with one seed; the robot's state is its odometry, not
+// the truth, stamped on its own clock; the truth goes only to the truth
+// record; the blimp drifts in a steady wind with every channel at neutral.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "haptel/config/reality.hpp"
+#include "haptel/config/track.hpp"
+#include "haptel/config/vehicle.hpp"
+#include "haptel/record/truth_record.hpp"
+#include "haptel/vehicles/blimp_adapters.hpp"
+#include "haptel/vehicles/sim_robot.hpp"
+#include "haptel/vehicles/vehicle_core.hpp"
+#include "test_env.hpp"
+
+using namespace haptel;
+using namespace haptel::vehicles;
+
+namespace {
+
+const VehicleConfig& Robot() {
+  static const VehicleConfig robot = LoadVehicle("config/vehicles/sim-robot.yaml");
+  return robot;
+}
+const Track& ShortTrack() {
+  static const Track track(LoadTrack("config/tracks/test-short.yaml"));
+  return track;
+}
+DrawnReality Lab(uint64_t seed) {
+  return DrawReality(LoadReality(RealityFile("lab")), seed, Robot(), &ShortTrack());
+}
+
+/// One sample of a drive: what the state said and where the robot truly was.
+struct Sample {
+  AdapterState state;
+  TruthRow truth;
+};
+
+/// 12 s of a fixed script at 200 Hz: ahead, a left turn, ahead, a right
+/// turn, ahead (levels of 8; no wall reached on the short track's start).
+std::vector<Sample> DriveScript(SimRobot& robot) {
+  std::vector<Sample> out;
+  const struct {
+    double until_s;
+    models::MotorLevels levels;
+  } script[] = {{2.0, {6, 6}}, {4.0, {2, 6}}, {7.0, {6, 6}}, {9.0, {6, 2}}, {12.0, {5, 5}}};
+  double t = 0.0;
+  for (const auto& step : script) {
+    for (; t < step.until_s - 1e-9; t += 1.0 / 200) {
+      robot.SetMotors(step.levels);
+      robot.Update(1.0 / 200);
+      Sample s{robot.State(), {}};
+      REQUIRE(robot.Truth(&s.truth));
+      out.push_back(s);
+    }
+  }
+  return out;
+}
+
+double Distance(const TruthRow& a, const TruthRow& b) { return std::hypot(a.x - b.x, a.y - b.y); }
+
+}  // namespace
+
+TEST_CASE("in the reality none the robot is its twin bit for bit") {
+  SimRobot twin(ShortTrack(), Robot());
+  VehicleConfig with_none = Robot();
+  with_none.reality = RealityFile("none");
+  SimRobot none(ShortTrack(), with_none);
+  const std::vector<Sample> a = DriveScript(twin);
+  const std::vector<Sample> b = DriveScript(none);
+  REQUIRE(a.size() == b.size());
+  for (size_t i = 0; i < a.size(); ++i) {
+    CHECK(a[i].state.x == b[i].state.x);
+    CHECK(a[i].state.y == b[i].state.y);
+    CHECK(a[i].state.heading == b[i].state.heading);
+    CHECK(a[i].state.speed == b[i].state.speed);
+    CHECK(a[i].state.ranges.ranges == b[i].state.ranges.ranges);
+    // The twin reports the truth.
+    CHECK(a[i].state.x == a[i].truth.x);
+  }
+}
+
+TEST_CASE("a lab robot ends measurably elsewhere than its twin, the same with one seed") {
+  SimRobot twin(ShortTrack(), Robot());
+  SimRobot lab(ShortTrack(), Robot(), Lab(5));
+  SimRobot again(ShortTrack(), Robot(), Lab(5));
+  SimRobot other(ShortTrack(), Robot(), Lab(6));
+  const std::vector<Sample> t = DriveScript(twin);
+  const std::vector<Sample> a = DriveScript(lab);
+  const std::vector<Sample> b = DriveScript(again);
+  const std::vector<Sample> c = DriveScript(other);
+  // The effective track width alone turns the lab robot 1.2-1.5 times less.
+  const double apart = Distance(a.back().truth, t.back().truth);
+  INFO("lab seed 5 ends " << apart << " m from the twin; seed 6 "
+                          << Distance(c.back().truth, t.back().truth) << " m");
+  CHECK(apart > 0.10);
+  CHECK(Distance(c.back().truth, a.back().truth) > 0.01);
+  for (size_t i = 0; i < a.size(); ++i) {
+    CHECK(a[i].truth.x == b[i].truth.x);
+    CHECK(a[i].truth.y == b[i].truth.y);
+    CHECK(a[i].state.x == b[i].state.x);
+    CHECK(a[i].state.heading == b[i].state.heading);
+  }
+}
+
+TEST_CASE("a lab robot's state is its odometry, which drifts from the truth") {
+  SimRobot lab(ShortTrack(), Robot(), Lab(5));
+  const std::vector<Sample> a = DriveScript(lab);
+  const Sample& end = a.back();
+  const double drift = std::hypot(end.state.x - end.truth.x, end.state.y - end.truth.y);
+  INFO("odometry " << drift << " m from the truth after 12 s");
+  CHECK(drift > 0.005);
+  CHECK(drift < 0.5);  // still the robot's estimate of itself
+  CHECK(end.state.heading != end.truth.heading);
+}
+
+TEST_CASE("the truth goes to the truth record; the state's stamp is the vehicle's clock") {
+  const auto dir = test::ScratchDir("vehicles-truth");
+  VehicleConfig config = Robot();
+  config.reality = RealityFile("lab");
+  config.reality_seed = 9;
+  config.truth_file = dir / "truth.csv";
+  DrawnReality drawn = DrawReality(LoadReality(config.reality), 9, config, &ShortTrack());
+  {
+    RobotCore core(config, std::make_unique<SimRobot>(ShortTrack(), config));
+    msg::TreadCommand command;
+    command.session(1);
+    command.seq(1);
+    command.left(0.75);
+    command.right(0.5);
+    const int64_t t0 = 1'000'000'000;
+    core.OnCommand(command, t0);
+    int64_t now = t0;
+    for (int i = 0; i < 400; ++i) {
+      now = t0 + i * 5'000'000;
+      if (i % 20 == 0) {
+        command.seq(static_cast<uint32_t>(2 + i));
+        core.OnCommand(command, now);
+      }
+      core.ControlTick(now);
+    }
+    const msg::VehicleState& state = core.MakeState(now);
+    // The clock's offset and drift, and the state's own jitter (< 10 ms).
+    const double offset_s = 1e-9 * static_cast<double>(state.stamp_ns() - now);
+    CHECK(offset_s == Approx(drawn.clock_offset_s).margin(0.011));
+    CHECK(drawn.clock_offset_s != 0.0);
+    // The state says the odometry, which is not the truth.
+    TruthRow truth;
+    REQUIRE(core.adapter().Truth(&truth));
+    CHECK(std::hypot(state.x() - truth.x, state.y() - truth.y) > 1e-4);
+  }
+  const record::TruthRecord record = record::TruthRecord::Load(config.truth_file);
+  CHECK(record.reality() == "lab");
+  CHECK(record.seed() == 9);
+  CHECK(record.params().effective_track_width == drawn.effective_track_width);
+  CHECK(record.params().left_gain == drawn.left_gain);
+  CHECK(record.params().floor_patches.size() == drawn.floor_patches.size());
+  REQUIRE(record.rows().size() == 400);
+  // Stamped with the operator's clock, one row a control tick.
+  CHECK(record.rows().front().operator_ns == 1'000'000'000);
+  CHECK(record.rows()[1].operator_ns - record.rows()[0].operator_ns == 5'000'000);
+  const TruthRow& r10 = record.rows()[10];
+  const TruthRow& r11 = record.rows()[11];
+  const TruthRow mid = record.PoseAt(1e-9 * static_cast<double>(r10.operator_ns + 2'500'000));
+  CHECK(mid.x == Approx(0.5 * (r10.x + r11.x)).margin(1e-6));
+  CHECK(mid.y == Approx(0.5 * (r10.y + r11.y)).margin(1e-6));
+  CHECK(record.PoseAt(0.0).x == record.rows().front().x);
+  CHECK(record.Covers(1.5));
+  CHECK_FALSE(record.Covers(10.0));
+}
+
+TEST_CASE("a vehicle without a truth refuses a truth record") {
+  VehicleConfig config = Robot();
+  config.truth_file = test::ScratchDir("vehicles-no-truth") / "truth.csv";
+  struct Hardware final : VehicleAdapter {
+    void SetMotors(const models::MotorLevels&) override {}
+    void Update(double) override {}
+    AdapterState State() const override { return {}; }
+  };
+  CHECK_THROWS_AS(RobotCore(config, std::make_unique<Hardware>()), ConfigError);
+}
+
+TEST_CASE("the blimp drifts in a steady wind with every channel at neutral") {
+  const VehicleConfig blimp = LoadVehicle("config/vehicles/sim-blimp.yaml");
+  const BlimpCourseConfig course = LoadBlimpCourse(blimp.world);
+  DrawnReality windy = NominalReality(blimp);
+  windy.name = "windy";
+  windy.seed = 1;
+  windy.wind_x = 2.0;  // m/s towards +x
+  SimBlimpAdapter twin(blimp.airship, course, NominalReality(blimp));
+  SimBlimpAdapter blown(blimp.airship, course, windy);
+  for (SimBlimpAdapter* a : {&twin, &blown}) {
+    a->Failsafe();
+    for (int i = 0; i < 10 * 200; ++i) a->Update(1.0 / 200);
+  }
+  TruthRow still, moved;
+  REQUIRE(twin.Truth(&still));
+  REQUIRE(blown.Truth(&moved));
+  const BlimpAdapterState start = SimBlimpAdapter(blimp.airship, course, windy).State();
+  INFO("the twin moved " << std::hypot(still.x - start.x, still.y - start.y) << " m, the blown one "
+                         << moved.x - start.x << " m along the wind");
+  CHECK(std::hypot(still.x - start.x, still.y - start.y) < 0.01);
+  CHECK(moved.x - start.x > 0.5);
+  // Its state says where it is, never the wind.
+  CHECK(blown.State().x == moved.x);
+}
