@@ -37,7 +37,7 @@
 ///   residuals keep one sign, each over the noise, for half a second (the
 ///   robot changed: a battery that sagged, a floor of less grip);
 /// - estimates are clamped to bounds (gains 0.3–2, width 0.8–3× the
-///   file's), and used once each has first been known to 2 % (its standard
+///   file's), and used once each has first been known to 5 % (its standard
 ///   deviation, from the covariance and the residuals' noise:
 ///   gains_known(), width_known()), from then on.
 ///
@@ -72,8 +72,9 @@ class DriveEstimator {
     /// parameters scaled by the file's width²).
     double reset_covariance = 100.0;
     /// A parameter is known once its standard deviation is under this
-    /// share of its value.
-    double known_share = 0.02;
+    /// share of its value: well inside what the file's numbers may be off
+    /// by (a motor's gain by 5-10 %, a skid-steer's width by 20-60 %).
+    double known_share = 0.05;
     /// The measurements' noise is never taken as less than this (m/s; rad/s).
     double speed_noise_floor = 0.002;
     double yaw_noise_floor = 0.01;
