@@ -49,9 +49,13 @@ constexpr const char* kRunUsage =
     "  --lap-limit S        end the run when the lap's clock (from the start line) passes S,\n"
     "                       outcome 'time limit'; before the line the approach counts (a\n"
     "                       study's trial cap: every interface gets the same lap time)\n"
-    "  --predict on|off     the predictive display (default off): the operator sees the vehicle\n"
+    "  --predict off|on|learn|nominal\n"
+    "                       the predictive display (default off): the operator sees the vehicle\n"
     "                       where its model says it is now, from the delayed states and the\n"
-    "                       commands sent since; the model's error is reported either way\n"
+    "                       commands sent since; on = learn: the vehicle file's model with what\n"
+    "                       is estimated of the vehicle while it drives (the robot's tread gains\n"
+    "                       and track width, the blimp's wind); nominal: the file's alone. The\n"
+    "                       model's error and estimates are reported either way\n"
     "  --view KIND          window (default with a display) or none\n"
     "  --third-person       beside the camera's picture, a chase camera's view of the robot on\n"
     "                       its track (a simulated robot only: its track is known here)\n"
@@ -141,6 +145,25 @@ std::string CountersJson(const std::vector<haptel::record::RunCounter>& counters
   return out + "}";
 }
 
+/// A figure in metres or seconds, null when unknown (negative or NaN).
+std::string NumberOrNull(double value) {
+  return std::isfinite(value) && value >= 0.0 ? haptel::JsonNumber(value) : std::string("null");
+}
+
+/// {"left_gain":{"estimate":…,"truth":…,"known_s":…},…}: truth null without
+/// a truth record, known_s null when never known.
+std::string EstimatedJson(const std::vector<haptel::record::EstimatedParameter>& estimated) {
+  std::string out = "{";
+  for (const auto& p : estimated) {
+    if (out.size() > 1) out += ",";
+    out += haptel::JsonString(p.name) + ":{\"estimate\":" + haptel::JsonNumber(p.estimate) +
+           ",\"truth\":" +
+           (std::isfinite(p.truth) ? haptel::JsonNumber(p.truth) : std::string("null")) +
+           ",\"known_s\":" + NumberOrNull(p.known_s) + "}";
+  }
+  return out + "}";
+}
+
 /// ["name",...]
 std::string NamesJson(const std::vector<std::string>& names) {
   std::string out = "[";
@@ -226,10 +249,30 @@ void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRu
                  run.result.reality.c_str(),
                  static_cast<unsigned long long>(run.result.reality_seed));
   }
-  if (r.prediction_error_m_p95 >= 0.0) {
-    std::fprintf(out, "  predicted pose against each state: error p50 %.1f mm, p95 %.1f mm%s\n",
-                 r.prediction_error_m_p50 * 1e3, r.prediction_error_m_p95 * 1e3,
-                 r.predict ? " (shown to the operator: --predict on)" : "");
+  if (r.prediction_error_odometry_m_p95 >= 0.0 || r.prediction_error_m_p95 >= 0.0) {
+    std::fprintf(out, "  prediction (%s model%s):", r.predict_model.c_str(),
+                 r.predict ? ", shown to the operator" : ", not shown");
+    if (r.prediction_error_m_p95 >= 0.0) {
+      std::fprintf(out, " error against the truth p50 %.1f mm, p95 %.1f mm;",
+                   r.prediction_error_m_p50 * 1e3, r.prediction_error_m_p95 * 1e3);
+    } else {
+      std::fprintf(out, " no truth to score against (not a simulated vehicle);");
+    }
+    if (r.prediction_error_odometry_m_p95 >= 0.0) {
+      std::fprintf(out, " against each state (odometry) p50 %.1f mm, p95 %.1f mm",
+                   r.prediction_error_odometry_m_p50 * 1e3,
+                   r.prediction_error_odometry_m_p95 * 1e3);
+    }
+    std::fprintf(out, "\n");
+  }
+  for (const haptel::record::EstimatedParameter& p : r.estimated) {
+    std::fprintf(out, "  estimated %s %.4g", p.name.c_str(), p.estimate);
+    if (std::isfinite(p.truth)) std::fprintf(out, " (truth %.4g)", p.truth);
+    if (std::isfinite(p.known_s)) {
+      std::fprintf(out, ", known after %.1f s\n", p.known_s);
+    } else {
+      std::fprintf(out, ", never known: the vehicle file's value\n");
+    }
   }
   std::fprintf(out,
                "  video %lld frames, %.1f fps, %.0f kbit/s, latency p50 %.1f ms, stale %.2f s\n",
@@ -295,6 +338,10 @@ std::string RunJson(const SessionSetup& setup, const RecordedRun& run) {
     << ",\"prediction_error_m_p95\":"
     << (r.prediction_error_m_p95 >= 0.0 ? JsonNumber(r.prediction_error_m_p95)
                                         : std::string("null"))
+    << ",\"predict_model\":" << JsonString(r.predict_model)
+    << ",\"prediction_error_odometry_m_p50\":" << NumberOrNull(r.prediction_error_odometry_m_p50)
+    << ",\"prediction_error_odometry_m_p95\":" << NumberOrNull(r.prediction_error_odometry_m_p95)
+    << ",\"estimated\":" << EstimatedJson(r.estimated)
     << ",\"speedup\":" << (r.speedup > 0.0 ? JsonNumber(r.speedup) : std::string("null"))
     << ",\"simulated_s\":" << JsonNumber(run.result.simulated_s)
     << ",\"cpu_s\":" << JsonNumber(run.result.cpu_s)

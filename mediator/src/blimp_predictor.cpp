@@ -14,6 +14,17 @@ namespace {
 /// little of the rates now (states lost); the model's own rates are kept.
 constexpr double kMaxRateGap_s = 0.25;
 
+/// The wind estimator (blimp_predictor.hpp): two scalar updates a state,
+/// λ = 0.9995 each: a memory of 1000 states, 20 s at 50 Hz; a prior worth
+/// nothing; the velocity residual's noise taken as at least 5 mm/s; the
+/// nudge (m/s) the sensitivity is taken over; the covariance's bound; the
+/// largest wind believed (m/s).
+constexpr double kWindForgetting = 0.9995;
+constexpr double kWindInitialCovariance = 1e8;
+constexpr double kWindNoiseFloor_mps = 0.005;
+constexpr double kWindNudge_mps = 0.5;
+constexpr double kWindMax_mps = 15.0;
+
 /// The model the predictor runs: the vehicle file's, without the gusts
 /// (their phases are the vehicle's own: foreseeing them would be a guess).
 AirshipConfig WithoutGusts(AirshipConfig airship) {
@@ -31,8 +42,53 @@ void SettleActuators(const AirshipConfig& k, const BlimpCommand& applied, models
 }  // namespace
 
 BlimpPredictor::BlimpPredictor(const AirshipConfig& airship, const BlimpCourseConfig& course,
-                               double watchdog_s)
-    : airship_(WithoutGusts(airship)), watchdog_s_(watchdog_s), model_(airship_, course) {}
+                               double watchdog_s, PredictionModel model)
+    : airship_(WithoutGusts(airship)),
+      model_kind_(model),
+      watchdog_s_(watchdog_s),
+      replay_wind_(airship.wind.mean[0], airship.wind.mean[1], airship.wind.mean[2]),
+      wind_(replay_wind_.head<2>(), kWindInitialCovariance, kWindForgetting, kWindNoiseFloor_mps),
+      model_(airship_, course) {}
+
+Eigen::Vector2d BlimpPredictor::wind() const {
+  if (!wind_known()) return {airship_.wind.mean[0], airship_.wind.mean[1]};
+  const Eigen::Vector2d w = wind_.estimate();
+  return w.norm() > kWindMax_mps ? Eigen::Vector2d(w * (kWindMax_mps / w.norm())) : w;
+}
+
+void BlimpPredictor::UpdateWind(const Base& before, double sample_s,
+                                const BlimpStateSample& state) {
+  const double run_s = sample_s - before.sample_s;
+  if (!(run_s > 1e-3) || run_s > kMaxRateGap_s) return;
+  const Eigen::Vector2d w = wind_.estimate();
+  const Eigen::Vector3d kept = replay_wind_;
+  Eigen::Vector2d v[3];
+  bool contact = false;
+  const Eigen::Vector2d nudge[3] = {{0.0, 0.0}, {kWindNudge_mps, 0.0}, {0.0, kWindNudge_mps}};
+  for (int i = 0; i < 3; ++i) {
+    replay_wind_ = {w.x() + nudge[i].x(), w.y() + nudge[i].y(), kept.z()};
+    Run(before, nullptr, {sample_s}, [&](double, const models::SimBlimp& m) {
+      v[i] = m.ground_velocity().head<2>();
+      contact = contact || m.in_contact();
+    });
+  }
+  replay_wind_ = kept;
+  if (contact) return;  // friction holds it, not the air
+  Eigen::Matrix2d sensitivity;
+  sensitivity.col(0) = (v[1] - v[0]) / kWindNudge_mps;
+  sensitivity.col(1) = (v[2] - v[0]) / kWindNudge_mps;
+  const Eigen::Vector2d residual = state.velocity.head<2>() - v[0];
+  for (int row = 0; row < 2; ++row) {
+    const Eigen::Vector2d phi = sensitivity.row(row).transpose();
+    wind_.Update(phi, residual(row) + phi.dot(w));
+  }
+  wind_.BoundCovariance(2.0 * kWindInitialCovariance);
+  ++wind_updates_;
+  if (!wind_known() && wind_.StandardDeviation(0) < kWindKnown_mps &&
+      wind_.StandardDeviation(1) < kWindKnown_mps) {
+    wind_known_s_ = state.received_s;
+  }
+}
 
 void BlimpPredictor::OnCommand(double t_s, const BlimpCommand& command) {
   commands_.push_back({t_s, Clamped(command)});
@@ -73,6 +129,11 @@ double BlimpPredictor::OnState(const BlimpStateSample& state) {
     // before: the actuators (driven by the commands alone) and, unless the
     // two states' turn gives them, the rates.
     const Base& before = bases_.back();
+    UpdateWind(before, sample_s, state);
+    if (model_kind_ == PredictionModel::kLearn && wind_known()) {
+      const Eigen::Vector2d w = wind();
+      replay_wind_ = {w.x(), w.y(), airship_.wind.mean[2]};
+    }
     Eigen::Quaterniond model_attitude = before.state.attitude;
     Run(before, nullptr, {sample_s}, [&](double, const models::SimBlimp& m) {
       const models::AirshipState& run = m.airship().state();
@@ -105,6 +166,8 @@ double BlimpPredictor::OnState(const BlimpStateSample& state) {
   // applied channels; a second's margin for a late state.
   while (!commands_.empty() && commands_.front().sent_s + d < bases_.front().sample_s - 1.0)
     commands_.pop_front();
+  const BlimpPredictedPose now = PoseAt(state.received_s);
+  shown_.push_back({now.t_s, now.position.x(), now.position.y(), now.position.z()});
   return error_m;
 }
 
@@ -122,6 +185,7 @@ double BlimpPredictor::SampleTime(const BlimpStateSample& state, double d) {
 void BlimpPredictor::Run(const Base& base, const Command* extra, const std::vector<double>& at,
                          const std::function<void(double, const models::SimBlimp&)>& emit) const {
   const double d = delay_.one_way_s();
+  model_.airship().set_mean_wind(replay_wind_);
   model_.Place(base.state, base.applied);
   double t = base.sample_s;
   BlimpCommand command = base.applied;

@@ -159,10 +159,12 @@ class BlimpSession final : public FamilySession {
         lap_(course_),
         spec_(setup.interfaces.at(0)),
         overlay_feed_(setup, spec_.name, static_cast<int>(course_.gates.size())),
-        predictor_(setup.vehicle.airship, course_, setup.vehicle.watchdog_timeout_s) {
+        predictor_(setup.vehicle.airship, course_, setup.vehicle.watchdog_timeout_s,
+                   setup.predict_model) {
     hull_length_ = setup.vehicle.airship.length;
     rec.track = course_.name;
     rec.predict = setup.predict;
+    rec.predict_model = PredictionModelName(setup.predict_model);
     rec.gates_total = static_cast<int>(course_.gates.size());
     // The gesture cockpit, or a person's keys or game controller.
     interfaces::InterfaceParts parts;
@@ -199,6 +201,7 @@ class BlimpSession final : public FamilySession {
 
   void Drain(VehicleLink& link, VehicleHealth& health, HapticSide& haptic, RunTrace& trace,
              int64_t t0) override {
+    t0_ns_ = t0;  // the shown poses' clock, for scoring after the run
     for (const auto& e : link.channel<link::BlimpMessages>().inbox().Drain()) {
       const msg::BlimpState& s = e.state;
       if (health.FromAnotherProcess(s))
@@ -349,6 +352,14 @@ class BlimpSession final : public FamilySession {
     for (const BlimpGateSplit& split : lap_.splits())
       rec.splits.push_back({split.gate, split.passed, split.split_s});
     RecordPredictionErrors(predictor_.errors_m(), rec);
+    result.shown = predictor_.shown();
+    result.started_ns = t0_ns_;
+    result.shown_height = true;
+    // The wind estimated, under the truth record's names.
+    const Eigen::Vector2d wind = predictor_.wind();
+    const double known_s = predictor_.wind_known() ? predictor_.wind_known_s() : std::nan("");
+    rec.estimated = {{"wind_x", wind.x(), std::nan(""), known_s},
+                     {"wind_y", wind.y(), std::nan(""), known_s}};
   }
 
  private:
@@ -373,6 +384,7 @@ class BlimpSession final : public FamilySession {
   int64_t next_command_ns_ = 0;
   /// Runs with prediction on or off: its error goes into the record either way.
   BlimpPredictor predictor_;
+  int64_t t0_ns_ = 0;  ///< the session's start (MonotonicNs), as Drain is given it
   static constexpr double kPredictionPeriod_s = 0.05;
   bool have_state_ = false;
   bool flown_ = false;  ///< the pilot has flown (engaged) since the start

@@ -22,6 +22,7 @@
 #include "haptel/mediator/fleet.hpp"
 #include "haptel/mediator/haptic_side.hpp"
 #include "haptel/mediator/interface_handover.hpp"
+#include "haptel/mediator/prediction.hpp"
 #include "haptel/mediator/run_counters.hpp"
 #include "haptel/mediator/session.hpp"
 #include "haptel/mediator/session_physics.hpp"
@@ -31,18 +32,14 @@
 
 namespace haptel::mediator {
 
-/// A predictor's per-state errors (m) into the record's
-/// prediction_error_m_p50 and _p95 (nearest rank); left as they are
-/// (unknown) without any.
-inline void RecordPredictionErrors(std::vector<double> errors_m, RunRecord& rec) {
+/// A predictor's per-state errors (m), against the vehicle's odometry, into
+/// the record's prediction_error_odometry_m_p50 and _p95 (nearest rank);
+/// left as they are (unknown) without any.
+inline void RecordPredictionErrors(const std::vector<double>& errors_m, RunRecord& rec) {
   if (errors_m.empty()) return;
-  std::sort(errors_m.begin(), errors_m.end());
-  auto nearest_rank = [&](double p) {
-    const size_t rank = static_cast<size_t>(std::ceil(p * static_cast<double>(errors_m.size())));
-    return errors_m[std::clamp<size_t>(rank, 1, errors_m.size()) - 1];
-  };
-  rec.prediction_error_m_p50 = nearest_rank(0.50);
-  rec.prediction_error_m_p95 = nearest_rank(0.95);
+  const ErrorPercentiles e = PercentilesOf(errors_m);
+  rec.prediction_error_odometry_m_p50 = e.p50;
+  rec.prediction_error_odometry_m_p95 = e.p95;
 }
 
 /// In a fleet it is also one side of the person's interface handover

@@ -6,15 +6,23 @@
 
 namespace haptel::mediator {
 
-RobotPredictor::RobotPredictor(const TreadDriveConfig& drive, double watchdog_s, double step_s)
-    : drive_(drive), watchdog_s_(watchdog_s), step_s_(step_s) {}
+RobotPredictor::RobotPredictor(const TreadDriveConfig& drive, double watchdog_s, double step_s,
+                               PredictionModel model)
+    : drive_(drive), model_(model), estimator_(drive), watchdog_s_(watchdog_s), step_s_(step_s) {}
+
+void RobotPredictor::OnRoundTrip(double rtt_s) {
+  if (keep_inputs_) inputs_.round_trips_s.push_back(rtt_s);
+  delay_.AddRoundTrip(rtt_s);
+}
 
 void RobotPredictor::OnCommand(double t_s, double left, double right) {
+  if (keep_inputs_) inputs_.commands.push_back({t_s, left, right});
   commands_.push_back({t_s, models::QuantiseCommand(left, drive_.speed_levels),
                        models::QuantiseCommand(right, drive_.speed_levels)});
 }
 
 double RobotPredictor::OnState(const RobotStateSample& state) {
+  if (keep_inputs_) inputs_.states.push_back(state);
   const double d = delay_.one_way_s();
   const double sample_s = state.received_s - d;
   // What the operator was shown of this moment at this moment: the
@@ -30,6 +38,12 @@ double RobotPredictor::OnState(const RobotStateSample& state) {
     error_m = std::hypot(predicted.front().x - state.x, predicted.front().y - state.y);
     errors_m_.push_back(error_m);
   }
+  // Then what the state teaches, for the predictions from now on.
+  estimator_.Observe({state.stamp_s != 0.0 ? state.stamp_s : state.received_s, state.speed,
+                      state.yaw_rate, state.applied_left, state.applied_right, state.touching});
+  if (estimator_.gains_known() && gains_known_s_ < 0.0) gains_known_s_ = state.received_s;
+  if (estimator_.width_known() && width_known_s_ < 0.0) width_known_s_ = state.received_s;
+  if (model_ == PredictionModel::kLearn) drive_ = estimator_.Drive();
   Base base{state.received_s,
             sample_s,
             {state.x, state.y, state.heading, 0.0, 0.0},
@@ -43,6 +57,8 @@ double RobotPredictor::OnState(const RobotStateSample& state) {
   // applied levels; a second's margin for a late state.
   while (!commands_.empty() && commands_.front().sent_s + d < bases_.front().sample_s - 1.0)
     commands_.pop_front();
+  const PredictedPose now = PoseAt(state.received_s);
+  shown_.push_back({now.t_s, now.x, now.y, 0.0});
   return error_m;
 }
 

@@ -31,6 +31,8 @@ namespace {
 /// The predictive display's path ahead: how far, and a pose how often.
 constexpr double kPathAhead_s = 1.0;
 constexpr double kPathSpacing_s = 0.05;
+/// The predictor's integration step (RobotPredictor's default).
+constexpr double kPredictorStep_s = 0.005;
 
 /// How long the end of a run waits for a physics step in progress.
 constexpr double kPhysicsStopWait_s = 0.1;
@@ -55,6 +57,18 @@ RangeScan RangesOf(const msg::VehicleState& s) {
   return scan;
 }
 
+/// What the predictor estimated of the drive, under the truth record's
+/// names (its truths filled in when the run is scored).
+void RecordEstimates(const RobotPredictor& predictor, RunRecord& rec) {
+  const DriveEstimator& e = predictor.estimator();
+  const auto known = [](double s) { return s >= 0.0 ? s : std::nan(""); };
+  rec.estimated = {
+      {"left_gain", e.left_gain(), std::nan(""), known(predictor.gains_known_s())},
+      {"right_gain", e.right_gain(), std::nan(""), known(predictor.gains_known_s())},
+      {"effective_track_width", e.track_width(), std::nan(""), known(predictor.width_known_s())},
+  };
+}
+
 class RobotSession final : public FamilySession {
  public:
   RobotSession(const SessionSetup& setup, HapticSide& haptic, interfaces::InputBox& input,
@@ -64,11 +78,14 @@ class RobotSession final : public FamilySession {
         lap_(track_),
         overlay_feed_(setup, track_),
         input_(&input),
-        predictor_(setup.vehicle.drive, setup.vehicle.watchdog_timeout_s),
+        predictor_(setup.vehicle.drive, setup.vehicle.watchdog_timeout_s, kPredictorStep_s,
+                   setup.predict_model),
         display_(setup.vehicle.camera, setup.vehicle.body.radius) {
     path_ahead_.reserve(static_cast<size_t>(kPathAhead_s / kPathSpacing_s) + 2);
+    if (setup.keep_predictor_inputs) predictor_.KeepInputs();
     rec.track = setup.track.name;
     rec.predict = setup.predict;
+    rec.predict_model = PredictionModelName(setup.predict_model);
     rec.gates_total = static_cast<int>(track_.gates().size());
     rec.interface = start_spec().name;
     if (setup.operator_kind == "auto") {
@@ -153,6 +170,7 @@ class RobotSession final : public FamilySession {
 
   void Drain(VehicleLink& link, VehicleHealth& health, HapticSide& haptic, RunTrace& trace,
              int64_t t0) override {
+    t0_ns_ = t0;  // the shown poses' clock, for scoring after the run
     for (const auto& e : link.channel<link::RobotMessages>().inbox().Drain()) {
       const msg::VehicleState& s = e.state;
       if (health.FromAnotherProcess(s))
@@ -167,7 +185,8 @@ class RobotSession final : public FamilySession {
       bumpers_ = {s.bumper_left(), s.bumper_right()};
       if (s.pose_valid()) {
         predictor_.OnState({ts, s.x(), s.y(), s.heading(), s.speed(), s.yaw_rate(),
-                            s.motor_left_level(), s.motor_right_level()});
+                            s.motor_left_level(), s.motor_right_level(), NsToS(s.stamp_ns()),
+                            touching});
         reported_ = {ts, s.x(), s.y(), s.heading()};
         // With prediction the operator sees the vehicle where it is now (Command).
         if (!setup_.predict)
@@ -356,6 +375,11 @@ class RobotSession final : public FamilySession {
     rec.splits = lap_.splits();
     rec.switches = interfaces_->switches();
     RecordPredictionErrors(predictor_.errors_m(), rec);
+    result.shown = predictor_.shown();
+    result.predictor_inputs = predictor_.inputs();
+    result.started_ns = t0_ns_;
+    result.shown_height = false;
+    RecordEstimates(predictor_, rec);
     result.can_log = can_log_;
   }
 
@@ -499,6 +523,7 @@ class RobotSession final : public FamilySession {
   double grasp_s_ = 0.0;
   bool acted_ = false;  ///< the operator has driven (engaged) since the start
   RobotPredictor predictor_;
+  int64_t t0_ns_ = 0;  ///< the session's start (MonotonicNs), as Drain is given it
   PredictiveDisplay display_;
   std::optional<PredictedPose> reported_;  ///< the newest state's pose, when one had a pose
   /// The third-person view (setup.third_person with a view; null otherwise),

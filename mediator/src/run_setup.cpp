@@ -28,6 +28,7 @@
 #include "haptel/link/fault_transport.hpp"
 #include "haptel/link/security.hpp"
 #include "haptel/mediator/haptic_side.hpp"
+#include "haptel/mediator/prediction_score.hpp"
 #include "haptel/mediator/third_person_view.hpp"
 #include "haptel/record/run_picture.hpp"
 #include "haptel/record/truth_record.hpp"
@@ -118,9 +119,12 @@ void ReadRunOptions(const Args& args, SessionSetup& setup) {
   setup.run.link.fault = LinkFaultFromOptions(args.Value("link-profile"), args.Value("link-fault"),
                                               setup.run.link.fault);
   if (auto predict = args.Value("predict")) {
-    if (*predict != "on" && *predict != "off")
-      throw UsageError("option --predict: expected on or off, got '" + *predict + "'");
-    setup.predict = *predict == "on";
+    if (*predict != "on" && *predict != "off" && *predict != "learn" && *predict != "nominal")
+      throw UsageError("option --predict: expected off, on, learn or nominal, got '" + *predict +
+                       "'");
+    setup.predict = *predict != "off";
+    setup.predict_model =
+        *predict == "nominal" ? PredictionModel::kNominal : PredictionModel::kLearn;
   }
   if (auto security = args.Value("security")) setup.run.link.security = *security;
   if (auto list = args.Value("dds-interfaces"))
@@ -464,6 +468,7 @@ void TakeReality(const SessionSetup& setup, SessionResult& result) {
       const record::TruthRecord truth = record::TruthRecord::Load(file);
       result.reality = truth.reality();
       result.reality_seed = truth.seed();
+      ScorePrediction(truth, result);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "haptel: warning: the vehicle's truth record: %s\n", e.what());
     }

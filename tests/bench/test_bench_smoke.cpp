@@ -341,7 +341,9 @@ TEST_CASE("bench link --smoke", "[bench][smoke][network]") {
   CHECK(laps[0]["completed"].boolean());
   CHECK(laps[0]["outcome"].string() == "completed");
   CHECK(laps[0]["predict"].boolean());
-  CHECK(Finite(laps[0]["prediction_error_m_p95"]) < 0.05);
+  // Against the truth of the run's default robot (lab): at no delay that is
+  // its odometry's own drift, 5-6 cm p95 on the short track (issue 39).
+  CHECK(Finite(laps[0]["prediction_error_m_p95"]) < 0.1);
   CHECK(Finite(laps[0]["lap_time_s"]) > 0.0);
   RequireFiles({"link_rtt.csv", "link_laps.csv", "link_laps.png"});
 }

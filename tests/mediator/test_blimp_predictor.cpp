@@ -280,3 +280,36 @@ TEST_CASE("When commands stop, the predicted blimp goes to neutral as its watchd
   CHECK((coasted.position - link.blimp.position()).norm() < 0.05);
   CHECK(link.blimp.airship().state().thrust < 0.01 * link.airship.max_thrust);
 }
+
+TEST_CASE("A steady wind the file does not know: estimated, and the learnt model flies it") {
+  AirshipConfig windy;
+  windy.wind.mean = {1.5, -1.0, 0.0};  // m/s; the file the predictor has says calm
+  auto late_p95 = [&](PredictionModel model, Eigen::Vector2d* wind, double* known_s) {
+    DelayedLink link(0.2, windy);
+    BlimpPredictor predictor(AirshipConfig{}, link.course, link.watchdog_s, model);
+    while (link.t < 30.0) {
+      link.Step(predictor, Commands(link.t),
+                [&](const BlimpStateSample& s) { predictor.OnState(s); });
+    }
+    if (wind != nullptr) *wind = predictor.wind();
+    if (known_s != nullptr) *known_s = predictor.wind_known_s();
+    CHECK(predictor.shown().size() > 1000);
+    // The last 10 s.
+    const std::vector<double>& e = predictor.errors_m();
+    return Percentile(std::vector<double>(e.end() - 500, e.end()), 0.95);
+  };
+  Eigen::Vector2d wind;
+  double known_s = -1.0;
+  const double learning = late_p95(PredictionModel::kLearn, &wind, &known_s);
+  Eigen::Vector2d wind_seen_by_nominal;
+  const double nominal = late_p95(PredictionModel::kNominal, &wind_seen_by_nominal, nullptr);
+  CAPTURE(learning, nominal, wind.x(), wind.y(), known_s);
+  CHECK(known_s > 0.0);
+  CHECK(known_s < 15.0);
+  CHECK(wind.x() == Approx(1.5).margin(0.15));
+  CHECK(wind.y() == Approx(-1.0).margin(0.15));
+  // The estimator runs with the nominal model too (to be reported).
+  CHECK((wind_seen_by_nominal - wind).norm() < 0.3);
+  CHECK(nominal > 0.02);
+  CHECK(learning < 0.3 * nominal);
+}

@@ -48,6 +48,16 @@ struct DelayedLink {
   explicit DelayedLink(double delay) : delay_s(delay), measured_rtt_s(2.0 * delay) {
     robot.Place(25.0, 0.0, 0.0);
   }
+  /// A robot that drives as `drive` says, whatever its file says.
+  DelayedLink(double delay, const TreadDriveConfig& drive)
+      : vehicle(WithDrive(drive)), delay_s(delay), measured_rtt_s(2.0 * delay) {
+    robot.Place(25.0, 0.0, 0.0);
+  }
+  static VehicleConfig WithDrive(const TreadDriveConfig& drive) {
+    VehicleConfig v;
+    v.drive = drive;
+    return v;
+  }
 
   /// One step: the operator sends (left, right); commands that arrived are
   /// applied; the robot moves; its state leaves now and arrives delay_s later.
@@ -144,6 +154,43 @@ TEST_CASE("A wrong delay or a wrong model shows in the prediction error") {
   CHECK(misfitted > 10.0 * fitted);
   CHECK(misfitted > 5e-4);
   CHECK(wrong_delay > 5e-3);  // a tenth of a second at up to 0.24 m/s: millimetres to centimetres
+}
+
+TEST_CASE("A robot that is not its file: the learnt model predicts it, the file's does not") {
+  // Weaker left tread, stronger right, and a skid that turns it as a 1.4×
+  // wider one would (the simulated robot's own model, other numbers).
+  const VehicleConfig file;
+  TreadDriveConfig truth = file.drive;
+  truth.left_gain = 0.9;
+  truth.right_gain = 1.05;
+  truth.track_width = 1.4 * file.drive.track_width;
+  auto late_p95 = [&](PredictionModel model, RobotPredictor* out = nullptr) {
+    DelayedLink link(0.2, truth);
+    RobotPredictor predictor(file.drive, 0.2, link.dt, model);
+    for (int i = 0; i < 1200; ++i) {
+      const auto [left, right] = Commands(link.t);
+      link.Step(predictor, left, right, [&](const RobotStateSample& s) { predictor.OnState(s); });
+    }
+    if (out != nullptr) *out = predictor;
+    // The last 6 s: long after the estimate is known.
+    const std::vector<double>& e = predictor.errors_m();
+    return Percentile(std::vector<double>(e.end() - 600, e.end()), 0.95);
+  };
+  RobotPredictor learnt(file.drive);
+  const double learning = late_p95(PredictionModel::kLearn, &learnt);
+  const double nominal = late_p95(PredictionModel::kNominal);
+  CAPTURE(learning, nominal);
+  // A delay's extrapolation (0.2 s) with the file's numbers: millimetres;
+  // with the learnt ones, the integration's rounding.
+  CHECK(nominal > 1e-3);
+  CHECK(learning < 0.01 * nominal);
+  REQUIRE(learnt.estimator().width_known());
+  CHECK(learnt.gains_known_s() < 3.0);
+  CHECK(learnt.drive().left_gain == Approx(0.9).epsilon(0.01));
+  CHECK(learnt.drive().right_gain == Approx(1.05).epsilon(0.01));
+  CHECK(learnt.drive().track_width == Approx(truth.track_width).epsilon(0.01));
+  // What the operator was shown, one pose a state.
+  CHECK(learnt.shown().size() > 1000);
 }
 
 TEST_CASE("The path ahead runs on from now with the commands in flight, then the one being given") {

@@ -25,8 +25,21 @@
 ///   the state before (the commands' history drives them alone); at the
 ///   first state, settled at the applied channels.
 ///
-/// The wind is the vehicle file's mean wind: gusts cannot be foreseen (the
-/// model runs without them) and show in the error.
+/// The wind is the vehicle file's mean wind (PredictionModel::kNominal), or
+/// with kLearn the steady wind estimated while the blimp flies, once known:
+/// a constant disturbance, learnt by recursive least squares
+/// (recursive_least_squares.hpp) on the velocity residual. At each state
+/// the model is run from the state before with the estimate ŵ and with ŵ
+/// nudged east and north: the residual r (measured ground velocity less
+/// the model's, horizontal) is linear in the wind's error through the
+/// nudges' sensitivity J, r ≈ J (w − ŵ), two scalar measurements a state.
+/// No update while the model touches the ground or a building (friction,
+/// not the air, holds it) nor across a gap in the states. Known once each
+/// component's standard deviation is under kWindKnown_mps. Gusts cannot be
+/// foreseen (the model runs without them): they show in the error, and
+/// their mean over the estimator's memory (20 s) in the estimate. The
+/// estimator runs with either model, so that a nominal run still says what
+/// it would have learnt.
 ///
 /// The one-way delay is half the command round trip's running median
 /// (DelayEstimate). When a state was sampled, on the operator's clock, is
@@ -51,6 +64,8 @@
 #include "haptel/config/blimp_course.hpp"
 #include "haptel/core/blimp_command.hpp"
 #include "haptel/mediator/delay_estimate.hpp"
+#include "haptel/mediator/prediction.hpp"
+#include "haptel/mediator/recursive_least_squares.hpp"
 #include "haptel/models/sim_blimp.hpp"
 
 namespace haptel::mediator {
@@ -94,9 +109,13 @@ class BlimpPredictor {
  public:
   /// `airship`, `course`: the vehicle file's model and the course flown
   /// (validated: ConfigFieldError). `watchdog_s`: every channel goes to
-  /// neutral this long after the last command reached the blimp.
+  /// neutral this long after the last command reached the blimp. `model`:
+  /// the file's wind, or the one estimated once known.
   BlimpPredictor(const AirshipConfig& airship, const BlimpCourseConfig& course,
-                 double watchdog_s = 0.2);
+                 double watchdog_s = 0.2, PredictionModel model = PredictionModel::kNominal);
+
+  /// A wind component is known once its standard deviation is under this (m/s).
+  static constexpr double kWindKnown_mps = 0.2;
 
   /// A command as sent at `t_s` (the blimp clamps it as it applies it).
   void OnCommand(double t_s, const BlimpCommand& command);
@@ -119,8 +138,18 @@ class BlimpPredictor {
   /// first at now (into `path`, which is cleared first).
   void PathAhead(double now_s, double horizon_s, const BlimpCommand& given,
                  std::vector<BlimpPredictedPose>& path, double spacing_s = 0.1) const;
-  /// Every state's prediction error so far (m, 3-D).
+  /// Every state's prediction error so far (m, 3-D), against its own
+  /// reported position.
   const std::vector<double>& errors_m() const { return errors_m_; }
+  /// The pose shown as the blimp now, each time a state arrived.
+  const std::vector<ShownPose>& shown() const { return shown_; }
+  /// The steady horizontal wind estimated (world frame, m/s; the file's
+  /// until known), and when it first was (operator's clock, s; negative:
+  /// not yet).
+  Eigen::Vector2d wind() const;
+  bool wind_known() const { return wind_known_s_ >= 0.0; }
+  double wind_known_s() const { return wind_known_s_; }
+  int wind_updates() const { return wind_updates_; }
 
  private:
   struct Command {
@@ -146,9 +175,18 @@ class BlimpPredictor {
   /// When `state` was sampled, operator's clock (s), with the delay `d`;
   /// notes its latency for those after.
   double SampleTime(const BlimpStateSample& state, double d);
+  /// The wind estimator's update from `state`, sampled at `sample_s`, with
+  /// the model run from `before`.
+  void UpdateWind(const Base& before, double sample_s, const BlimpStateSample& state);
 
   AirshipConfig airship_;
+  PredictionModel model_kind_;
   double watchdog_s_;
+  /// The steady wind the replays fly (the file's, or the estimate), world, m/s.
+  Eigen::Vector3d replay_wind_;
+  RecursiveLeastSquares2 wind_;
+  double wind_known_s_ = -1.0;
+  int wind_updates_ = 0;
   /// The model the replays run on (set to each replay's start): scratch,
   /// hence mutable; a predictor is used from one thread.
   mutable models::SimBlimp model_;
@@ -165,6 +203,7 @@ class BlimpPredictor {
   /// sampled (that one's prediction is the newest's error), newest last.
   std::deque<Base> bases_;
   std::vector<double> errors_m_;
+  std::vector<ShownPose> shown_;
 };
 
 }  // namespace haptel::mediator

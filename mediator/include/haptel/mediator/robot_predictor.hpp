@@ -7,8 +7,13 @@
 /// (from its speed and yaw rate) and the speed levels it had applied. The
 /// predictor starts from it and replays every command sent after, each from
 /// the moment it reaches the robot (sent + the one-way delay), through the
-/// robot's own drive model (models/tread_drive.hpp, the numbers of its vehicle
-/// file), including the robot's watchdog stopping it when commands stop.
+/// robot's drive model (models/tread_drive.hpp), including the robot's
+/// watchdog stopping it when commands stop. The model's numbers are the
+/// vehicle file's (PredictionModel::kNominal) or, with kLearn, the file's
+/// with each tread's gain and the effective track width as estimated from
+/// the states so far, once known (DriveEstimator, drive_estimator.hpp). The
+/// estimator runs either way, so that a run with the nominal model still
+/// says what it would have learnt.
 /// Walls are not modelled: a robot pressed against one is predicted to move
 /// on, and the next state corrects it.
 ///
@@ -18,12 +23,16 @@
 /// Each state that arrives is compared with what the predictor said, at the
 /// moment the state was sampled, of that moment (from the states it had
 /// then: a delay's extrapolation): errors_m(), a fitted model's figure of
-/// merit.
+/// merit. Each time a state arrives, the pose the operator is then shown
+/// as the robot now is kept (shown()): scored against the truth after the
+/// run (prediction.hpp).
 #include <deque>
 #include <vector>
 
 #include "haptel/config/vehicle.hpp"
 #include "haptel/mediator/delay_estimate.hpp"
+#include "haptel/mediator/drive_estimator.hpp"
+#include "haptel/mediator/prediction.hpp"
 #include "haptel/models/tread_drive.hpp"
 
 namespace haptel::mediator {
@@ -36,30 +45,19 @@ struct PredictedPose {
   double heading = 0.0;
 };
 
-/// A vehicle state as the predictor needs it.
-struct RobotStateSample {
-  double received_s = 0.0;  ///< when it arrived, operator's clock
-  double x = 0.0;
-  double y = 0.0;
-  double heading = 0.0;
-  double speed = 0.0;     ///< m/s, forward
-  double yaw_rate = 0.0;  ///< rad/s
-  int applied_left = 0;   ///< speed levels in effect when it was sampled
-  int applied_right = 0;
-};
-
 class RobotPredictor {
  public:
   /// `watchdog_s`: the robot stops this long after the last command reached
-  /// it. `step_s`: the model's integration step.
+  /// it. `step_s`: the model's integration step. `model`: the file's
+  /// numbers alone, or with what is learnt.
   explicit RobotPredictor(const TreadDriveConfig& drive, double watchdog_s = 0.2,
-                          double step_s = 0.005);
+                          double step_s = 0.005, PredictionModel model = PredictionModel::kNominal);
 
   /// A command as sent at `t_s` (normalised tread commands in [-1, 1], as
   /// the link carries them; the robot quantises them to its levels).
   void OnCommand(double t_s, double left, double right);
   /// A command round trip (s).
-  void OnRoundTrip(double rtt_s) { delay_.AddRoundTrip(rtt_s); }
+  void OnRoundTrip(double rtt_s);
   /// A state arrived. Returns the distance (m) between its pose and the pose
   /// the predictor gave for that moment at that moment (negative when no
   /// state had arrived by then: nothing was predicted), and records it in
@@ -77,8 +75,21 @@ class RobotPredictor {
   /// the first at now (appended to `path`, which is cleared first).
   void PathAhead(double now_s, double horizon_s, double left, double right,
                  std::vector<PredictedPose>& path, double spacing_s = 0.05) const;
-  /// Every state's prediction error so far (m).
+  /// Every state's prediction error so far (m), against its odometry.
   const std::vector<double>& errors_m() const { return errors_m_; }
+  /// The pose shown as the robot now, each time a state arrived.
+  const std::vector<ShownPose>& shown() const { return shown_; }
+  /// What is learnt of the drive (used by the model with kLearn).
+  const DriveEstimator& estimator() const { return estimator_; }
+  /// From now on, every input is kept (inputs()).
+  void KeepInputs() { keep_inputs_ = true; }
+  const RobotPredictorInputs& inputs() const { return inputs_; }
+  /// The drive the model runs now.
+  const TreadDriveConfig& drive() const { return drive_; }
+  /// When (operator's clock, s) the gains and the track width first became
+  /// known (negative: not yet).
+  double gains_known_s() const { return gains_known_s_; }
+  double width_known_s() const { return width_known_s_; }
 
  private:
   struct Command {
@@ -101,6 +112,8 @@ class RobotPredictor {
            std::vector<PredictedPose>& out) const;
 
   TreadDriveConfig drive_;
+  PredictionModel model_;
+  DriveEstimator estimator_;
   double watchdog_s_;
   double step_s_;
   DelayEstimate delay_;
@@ -109,6 +122,10 @@ class RobotPredictor {
   /// sampled (that one's prediction is the newest's error), newest last.
   std::deque<Base> bases_;
   std::vector<double> errors_m_;
+  std::vector<ShownPose> shown_;
+  double gains_known_s_ = -1.0, width_known_s_ = -1.0;
+  bool keep_inputs_ = false;
+  RobotPredictorInputs inputs_;
 };
 
 }  // namespace haptel::mediator

@@ -6,6 +6,7 @@
 namespace haptel::mediator {
 
 using record::ContactPoint;
+using record::EstimatedParameter;
 using record::GateSplit;
 using record::PathPoint;
 using record::Recorder;

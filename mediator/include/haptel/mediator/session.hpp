@@ -40,6 +40,7 @@
 #include "haptel/core/cli.hpp"
 #include "haptel/interfaces/catalog.hpp"
 #include "haptel/mediator/interface_set.hpp"
+#include "haptel/mediator/prediction.hpp"
 #include "haptel/mediator/run_record.hpp"
 #include "haptel/view/view_model.hpp"
 
@@ -88,6 +89,12 @@ struct SessionSetup {
   /// where its delayed state says it was. The model runs either way, for
   /// its error in the record.
   bool predict = false;
+  /// The model it runs (prediction.hpp): the vehicle file's, or with what
+  /// is learnt of the vehicle while it drives (the default: --predict on is
+  /// learn; nominal is for comparing the two).
+  PredictionModel predict_model = PredictionModel::kLearn;
+  /// Keep everything a robot's predictor consumes (SessionResult::predictor_inputs).
+  bool keep_predictor_inputs = false;
   /// Record the device's readings here for the `replay` driver (empty: none).
   std::filesystem::path trace;
   /// "auto" (the simulated driver; needs the sim device) or "person".
@@ -205,6 +212,17 @@ struct SessionResult {
   CanLogReport can_log;
   /// The simulated driver: times a control slipped out of its hand.
   int operator_slips = 0;
+  /// What the predictor showed as the vehicle now, one pose a state (the
+  /// operator's clock, s from `started_ns`, its MonotonicNs), for scoring
+  /// against the simulated vehicle's truth record after the run
+  /// (prediction_score.hpp); the 3-D distance counts with `shown_height`
+  /// (the blimp).
+  std::vector<ShownPose> shown;
+  int64_t started_ns = 0;
+  bool shown_height = false;
+  /// With SessionSetup::keep_predictor_inputs, a robot's: everything its
+  /// predictor consumed.
+  RobotPredictorInputs predictor_inputs;
   /// A simulated-time run: its session's simulated seconds, and the wall
   /// seconds the whole run took (set-up included); 0 in real time.
   double simulated_s = 0.0;

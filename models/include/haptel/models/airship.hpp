@@ -94,6 +94,11 @@ class Airship {
 
   const AirshipState& state() const { return state_; }
   void set_state(const AirshipState& state) { state_ = state; }
+  /// The steady wind (world frame, m/s) in place of the config's: the
+  /// operator's predictor flies the wind it estimates (blimp_predictor.hpp).
+  void set_mean_wind(const Eigen::Vector3d& mean) {
+    config_.wind.mean = {mean.x(), mean.y(), mean.z()};
+  }
   double time_s() const { return time_s_; }
   const AirshipConfig& config() const { return config_; }
   const AirshipMassProperties& mass_properties() const { return mass_; }

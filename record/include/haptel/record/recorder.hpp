@@ -55,6 +55,18 @@ struct RunCounter {
   uint64_t value = 0;
 };
 
+/// A parameter the operator side estimated of the vehicle while it drove
+/// (mediator/drive_estimator.hpp; the blimp's wind), against the value the
+/// simulated vehicle drew (its truth record). JSON only.
+struct EstimatedParameter {
+  std::string name;  ///< the truth record's name for it ("left_gain", "wind_x")
+  double estimate = 0.0;
+  double truth = std::numeric_limits<double>::quiet_NaN();  ///< NaN: no truth record
+  /// When it first became known, s since the session started (NaN: never;
+  /// the estimate is then the vehicle file's value).
+  double known_s = std::numeric_limits<double>::quiet_NaN();
+};
+
 /// Everything a run reports, as stored in the database. A metric that was not
 /// measured is NaN (stored as NULL); runs recorded before schema v2 load with
 /// NaN for v2's metrics, empty strings and empty vectors; before v3, with NaN
@@ -91,13 +103,22 @@ struct RunRecord {
   /// H.264 key frame after a lost or corrupt frame (v8; 0 for JPEG).
   double video_stale_s = 0.0;
   /// The predictive display: whether the operator saw the prediction, and
-  /// the model's error against each state at the moment it was sampled
-  /// (m; -1: no state to compare).
+  /// the error of the pose it showed as the vehicle now against where the
+  /// vehicle truly was then (m; from a simulated vehicle's truth record,
+  /// after the run; -1: no truth record, or nothing predicted).
   bool predict = false;
   /// The link's injected fault, as LinkFaultText writes it (v7; "": none).
   std::string link_fault;
   double prediction_error_m_p50 = -1.0;
   double prediction_error_m_p95 = -1.0;
+  /// The model the prediction ran: "nominal" or "learn" (JSON only).
+  std::string predict_model;
+  /// The model's error against each state at the moment it was sampled: its
+  /// fit to the vehicle's own odometry (m; -1: no state to compare; JSON only).
+  double prediction_error_odometry_m_p50 = -1.0;
+  double prediction_error_odometry_m_p95 = -1.0;
+  /// What the predictor estimated of the vehicle, each against its truth.
+  std::vector<EstimatedParameter> estimated;
   /// A run in simulated time (`haptel run --simulated-time`): simulated
   /// seconds per wall-clock second over the run (v11; -1: a real-time run).
   double speedup = -1.0;

@@ -1,0 +1,137 @@
+#pragma once
+/// @file What the operator side learns of the tank robot it drives: each
+/// tread's gain (its speed per level against the vehicle file's) and the
+/// effective track width, online, from the states alone (the odometry's
+/// speed and yaw rate, the levels the robot says it applied, the vehicle's
+/// stamps). Never from the simulator's truth: a real robot gives no more.
+///
+/// The model is the predictor's own (models/tread_drive.hpp): each tread
+/// follows gain × its level's speed through the motor's first-order lag,
+/// and
+///
+///     speed    = (g_l u_l + g_r u_r) / 2
+///     yaw rate = (g_r u_r − g_l u_l) / B
+///
+/// where u is a level's nominal speed passed through the lag (the vehicle
+/// file's time constant, from the applied levels between two states) and B
+/// the effective track width: a skid-steer turns slower than its geometric
+/// width says, because its treads slip sideways (Martínez et al., IJRR 2005,
+/// "Approximating kinematics for tracked mobile robots"; Mandow et al., IROS
+/// 2007, "Experimental kinematics for wheeled skid-steer mobile robots", who
+/// fit it as an expansion factor of the geometric width). Both lines are
+/// linear in their parameters: (g_l, g_r) from the speed, and (a_l, a_r) =
+/// (g_l / B, g_r / B) from the yaw rate, each by recursive least squares
+/// with exponential forgetting (Ljung, "System Identification", 2nd ed.
+/// 1999, §11.2), so that slow changes (the battery's sag) are followed. B is
+/// then the least-squares ratio of the two: g = B a.
+///
+/// Guards, so that what it has not seen does not move it:
+/// - no update while a bumper is pressed (the treads stall, the robot does
+///   not move), while the robot is at rest with no level applied (nothing
+///   to learn), nor across a gap in the states, nor after either until the
+///   lag has settled (its state is lost);
+/// - the yaw rate's estimator only while the robot turns (its nominal tread
+///   speeds differ by kMinTurn of the top speed): driven straight, the
+///   width is not seen, and forgetting would only inflate its covariance;
+/// - each covariance's trace is bounded (no wind-up), and reset when the
+///   residuals keep one sign, each over the noise, for half a second (the
+///   robot changed: a battery that sagged, a floor of less grip);
+/// - estimates are clamped to bounds (gains 0.3–2, width 0.8–3× the
+///   file's), and used once each has first been known to 5 % (its standard
+///   deviation, from the covariance and the residuals' noise:
+///   gains_known(), width_known()), from then on.
+///
+/// The motor's time constant is not estimated: the vehicle file's is used.
+/// Its misfit shows in the gains during speed changes only.
+///
+/// Allocates nothing; a few dozen flops a state.
+#include "haptel/config/vehicle.hpp"
+#include "haptel/mediator/recursive_least_squares.hpp"
+
+namespace haptel::mediator {
+
+/// One state as the estimator needs it.
+struct DriveObservation {
+  double stamp_s = 0.0;   ///< when it was sampled, the vehicle's clock (s)
+  double speed = 0.0;     ///< m/s
+  double yaw_rate = 0.0;  ///< rad/s
+  int applied_left = 0;   ///< levels in effect
+  int applied_right = 0;
+  bool touching = false;  ///< a bumper pressed
+};
+
+class DriveEstimator {
+ public:
+  struct Options {
+    /// Per state (50 Hz): a memory of 1/(1 − λ) = 500 states, 10 s.
+    double forgetting = 0.998;
+    /// Initial covariance (per unit noise variance): a prior worth nothing.
+    double initial_covariance = 1e10;
+    /// The bound on each covariance's trace once known, and what a reset
+    /// starts again from (per unit noise variance, gain²; the width's
+    /// parameters scaled by the file's width²).
+    double reset_covariance = 100.0;
+    /// A parameter is known once its standard deviation is under this
+    /// share of its value: well inside what the file's numbers may be off
+    /// by (a motor's gain by 5-10 %, a skid-steer's width by 20-60 %).
+    double known_share = 0.05;
+    /// The measurements' noise is never taken as less than this (m/s; rad/s).
+    double speed_noise_floor = 0.002;
+    double yaw_noise_floor = 0.01;
+    /// The turn needed to update the yaw rate's estimator: the nominal
+    /// tread speeds differ by this share of the top speed.
+    double min_turn = 0.15;
+    /// A moving robot: some tread's nominal speed over this share of the top speed.
+    double min_motion = 0.05;
+    /// A gap (vehicle clock, s) over which the lag's state is taken as lost.
+    double max_gap_s = 0.5;
+    /// Residuals of one sign, each over the noise, for this many updates in
+    /// a row reset the covariance (half a second at 50 Hz).
+    int reset_run = 25;
+  };
+
+  explicit DriveEstimator(const TreadDriveConfig& nominal) : DriveEstimator(nominal, Options{}) {}
+  DriveEstimator(const TreadDriveConfig& nominal, const Options& options);
+
+  void Observe(const DriveObservation& state);
+
+  /// Estimates (the vehicle file's values until known; clamped to their bounds).
+  double left_gain() const;
+  double right_gain() const;
+  double track_width() const;  ///< m
+  bool gains_known() const { return gains_known_; }
+  bool width_known() const { return width_known_; }
+  /// The vehicle file's drive with what is known in place of its numbers.
+  TreadDriveConfig Drive() const;
+
+  /// When (vehicle clock, s) each first became known (negative: not yet).
+  double gains_known_at_s() const { return gains_known_at_s_; }
+  double width_known_at_s() const { return width_known_at_s_; }
+  int gain_updates() const { return gain_updates_; }
+  int width_updates() const { return width_updates_; }
+  int resets() const { return resets_; }
+
+ private:
+  /// After an update of `rls` with `residual`: bounds its covariance once
+  /// known, resets it after `reset_run` outliers of one sign in a row
+  /// (`run`: their count, signed).
+  void Guard(RecursiveLeastSquares2& rls, double reset_covariance, bool known, double residual,
+             int& run);
+  bool Known(const RecursiveLeastSquares2& rls) const;
+
+  TreadDriveConfig nominal_;
+  Options options_;
+  // The lagged nominal tread speeds (m/s) and the stamp they are at.
+  double u_left_ = 0.0, u_right_ = 0.0;
+  double last_stamp_s_ = 0.0;
+  bool seeded_ = false;
+  double settled_s_ = 0.0;  ///< no update before (vehicle clock): the lag seeded
+  /// (g_l, g_r) from the speed; (g_l / B, g_r / B) from the yaw rate.
+  RecursiveLeastSquares2 gains_, per_width_;
+  bool gains_known_ = false, width_known_ = false;
+  double gains_known_at_s_ = -1.0, width_known_at_s_ = -1.0;
+  int gain_updates_ = 0, width_updates_ = 0, resets_ = 0;
+  int gain_outliers_ = 0, width_outliers_ = 0;
+};
+
+}  // namespace haptel::mediator
