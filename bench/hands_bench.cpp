@@ -26,6 +26,7 @@
 #include "haptel/haptics/trace.hpp"
 #include "haptel/testing/hand_trace.hpp"
 #include "haptel/testing/obstacle_track.hpp"
+#include "haptel/testing/pointer_pilot.hpp"
 #include "haptel/testing/run_watch.hpp"
 #include "haptel/testing/x_desktop.hpp"
 #include "haptel/testing/xvfb.hpp"
@@ -238,10 +239,41 @@ class Cursor {
 
 void Sleep(double s) { std::this_thread::sleep_for(std::chrono::duration<double>(s)); }
 
+/// Where the path takes hold. Nothing to grasp (the gestures): the button
+/// at the window's centre. Controls (the cockpits): the pointer hand brought
+/// round to its control open, as the pointer pilot brings it
+/// (PointerApproach), then onto its grip, then the button; the path's steps
+/// are then taken from the grip (the lever pushed and pulled).
+struct Hold {
+  std::optional<testing::PointerApproach> approach;
+  haptics::Vec3d grip{};
+};
+
+Hold HoldFor(const Options& o, const std::string& interface, const std::filesystem::path& track,
+             const MouseDeviceConfig& mouse) {
+  testing::PilotSetup setup;
+  setup.run_file = ShippedFile("config/haptel.yaml");
+  setup.device = o.device;
+  setup.track = track;
+  setup.interface = interface;
+  const interfaces::HandTargets neutral = testing::PointerPilot(setup).Neutral();
+  const auto& hand = neutral[mouse.pointer_on_left ? 0 : 1];
+  Hold hold;
+  if (!hand || std::all_of(hand->glove.begin(), hand->glove.end(),
+                           [](double angle) { return angle == 0.0; })) {
+    return hold;
+  }
+  haptics::Vec3d open = hand->position;
+  for (int k = 0; k < 3; ++k) open[k] += hand->approach[k];
+  hold.approach.emplace(haptics::Vec3d{mouse.centre[0], mouse.centre[1], mouse.centre[2]}, open);
+  hold.grip = hand->position;
+  return hold;
+}
+
 /// The engaged run: the scripted path with the button held. Fills the row's
 /// commands, latencies, ratios and contact figures.
 void Engaged(const Options& o, const std::filesystem::path& dir, const std::filesystem::path& track,
-             const MouseDeviceConfig& mouse, Row& row) {
+             const MouseDeviceConfig& mouse, const Hold& hold, Row& row) {
   // The script's length and a margin: the run ends by Escape, or by this limit.
   const double limit_s = o.steps * kStepHold_s + o.contact_bound_s + 20.0;
   const auto args = RunArgs(o, row.interface, dir, track, "engaged", limit_s);
@@ -264,9 +296,39 @@ void Engaged(const Options& o, const std::filesystem::path& dir, const std::file
       }
       desktop.Focus(*window);
       Cursor cursor(desktop, *window);
-      const int cx = window->width_px / 2, cy = window->height_px / 2;
+      int cx = window->width_px / 2, cy = window->height_px / 2;
       cursor.MoveTo(cx, cy);
       Sleep(0.3);
+      if (hold.approach) {
+        int64_t notches = 0;
+        const auto to = [&](const haptics::Vec3d& target) {
+          const std::array<int, 2> px =
+              haptics::PointerPixelFor(target, mouse, window->width_px, window->height_px);
+          cursor.MoveTo(px[0], px[1]);
+          const int64_t want = mouse.wheel_step > 0.0
+                                   ? std::lround((target[2] - mouse.centre[2]) / mouse.wheel_step)
+                                   : 0;
+          for (; notches != want; notches += notches < want ? 1 : -1)
+            desktop.WheelNotch(notches < want);
+          return px;
+        };
+        const double approach_s = hold.approach->duration_s();
+        for (double s = 0.0; s < approach_s; s += 0.01) {
+          to(hold.approach->At(s));
+          Sleep(0.01);
+        }
+        // Onto the grip in half a second, as the operator's reach goes.
+        const haptics::Vec3d open = hold.approach->At(approach_s);
+        for (int i = 1; i <= 50; ++i) {
+          haptics::Vec3d p;
+          for (int k = 0; k < 3; ++k) p[k] = open[k] + (hold.grip[k] - open[k]) * i / 50.0;
+          const std::array<int, 2> px = to(p);
+          cx = px[0];
+          cy = px[1];
+          Sleep(0.01);
+        }
+        Sleep(0.3);
+      }
       desktop.Button(1, true);
       Sleep(0.5);
       // Steps up and down (forward and back), the same for every interface.
@@ -518,7 +580,11 @@ int BenchHandsMain(int argc, const char* const* argv) {
     row.bare_alone_p99_us =
         MeasureBareLoop(device.servo.rate_hz, device.servo.realtime_priority, o.bare_s)
             .stats.period_p99_us;
-    Engaged(o, dir, track, device.mouse, row);
+    try {
+      Engaged(o, dir, track, device.mouse, HoldFor(o, interface, track, device.mouse), row);
+    } catch (const std::exception& e) {
+      row.error = e.what();  // the interface's files: nothing to take hold of
+    }
     Nobody(o, dir, track, row);
     if (!row.error.empty()) {
       std::fprintf(stderr, "haptel bench hands: %s: %s (the run's output: %s)\n", interface.c_str(),

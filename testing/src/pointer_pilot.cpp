@@ -196,6 +196,10 @@ void PointerPilot::Stop() {
   if (parts_) parts_->states.reset();  // no callback after this
 }
 
+interfaces::HandTargets PointerPilot::Neutral() const {
+  return parts_->interface->HandTargetsFor({});
+}
+
 PilotCounts PointerPilot::counts() const {
   std::lock_guard lock(counts_mutex_);
   return counts_;

@@ -198,6 +198,11 @@ struct View::Impl {
       }
       SDL_SetHint(SDL_HINT_JOYSTICK_ALLOW_BACKGROUND_EVENTS, "1");
       SDL_SetHint(SDL_HINT_NO_SIGNAL_HANDLERS, "1");  // Ctrl-C stays the session's
+      // A click that gives the window the focus grasps too: the mouse
+      // device's hand is held from that press (SDL drops a press within
+      // 10 ms of its focus event by default, and a loaded view thread reads
+      // both at once: the hand then followed the pointer and was never held).
+      SDL_SetHint(SDL_HINT_MOUSE_FOCUS_CLICKTHROUGH, "1");
       if (SDL_Init(SDL_INIT_VIDEO | SDL_INIT_GAMECONTROLLER) != 0) {
         throw ViewError(std::string("view: SDL cannot start its video: ") + SDL_GetError());
       }

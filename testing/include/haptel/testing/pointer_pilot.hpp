@@ -141,6 +141,9 @@ class PointerPilot {
   /// where it was.
   void Stop();
   PilotCounts counts() const;
+  /// The interface's hands at rest (HandTargetsFor no intent): where a
+  /// person takes hold (`haptel bench hands` takes hold of the cockpits there).
+  interfaces::HandTargets Neutral() const;
 
  private:
   struct Parts;
