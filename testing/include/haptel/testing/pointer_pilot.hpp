@@ -134,11 +134,11 @@ class PointerPilot {
   PointerPilot& operator=(const PointerPilot&) = delete;
 
   /// Subscribes to the vehicle's state and starts driving on a thread of its
-  /// own: waits for the window (its title), then acts at rate_hz once the
-  /// vehicle answers.
+  /// own: parks the pointer, waits for the window (its title), then acts at
+  /// rate_hz once the vehicle answers.
   void Start();
-  /// Stops driving and lets go: button and keys released, the pointer left
-  /// where it was.
+  /// Stops driving and lets go: button and keys released, the pointer
+  /// parked off the window (XDesktop::ParkPointer).
   void Stop();
   PilotCounts counts() const;
 
