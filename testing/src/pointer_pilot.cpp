@@ -205,10 +205,6 @@ void PointerPilot::Run() {
   Parts& p = *parts_;
   try {
     XDesktop desktop;
-    // Off the window before it opens: a hand that follows a pointer left
-    // over a control (the last trial's lever) would go straight at it, into
-    // the cockpit's wheel. It comes in at the window's centre, the hand's rest.
-    desktop.ParkPointer();
     std::optional<XWindowInfo> window;
     while (!stop_ && !(window = desktop.FindWindow(setup_.window_title))) {
       std::this_thread::sleep_for(std::chrono::milliseconds(100));

@@ -134,11 +134,13 @@ class PointerPilot {
   PointerPilot& operator=(const PointerPilot&) = delete;
 
   /// Subscribes to the vehicle's state and starts driving on a thread of its
-  /// own: parks the pointer, waits for the window (its title), then acts at
-  /// rate_hz once the vehicle answers.
+  /// own: waits for the window (its title), then acts at rate_hz once the
+  /// vehicle answers.
   void Start();
   /// Stops driving and lets go: button and keys released, the pointer
-  /// parked off the window (XDesktop::ParkPointer).
+  /// parked off the window (XDesktop::ParkPointer), so that the next
+  /// window (a study's next trial) does not open with the hand following a
+  /// pointer left over a control, straight into the cockpit's wheel.
   void Stop();
   PilotCounts counts() const;
 
