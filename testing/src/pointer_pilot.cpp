@@ -279,16 +279,20 @@ void PointerPilot::Run() {
       last_t = t;
       // A person takes hold first, at neutral, and drives once the run
       // engages (its commands reach the vehicle, and a moment after): an
-      // interface engages only from rest (mediator/engagement.hpp).
-      if (commanded && hold_until_s < 0.0) hold_until_s = t + kTakeHold_s;
+      // interface engages only from rest (mediator/engagement.hpp). With
+      // controls to grasp, the operator's reach and grasp are that hold.
+      if (commanded && hold_until_s < 0.0 && !grasps) hold_until_s = t + kTakeHold_s;
+      if (grasps && hold_until_s < 0.0 && p.driver->grasped(t)) hold_until_s = t;
       // Driving, yet the motors have not moved for a while: the run did not
-      // engage (it took hold later than the pilot thought). A person told
-      // so on screen goes back to neutral and takes hold again.
+      // engage (it took hold later than the pilot thought, or it let go
+      // mid-lap and waits for the command at rest: a lever held forward
+      // never is). A person told so on screen goes back to neutral (the
+      // controls at zero, still held) and takes hold again.
       const double still_s = 1e-9 * static_cast<double>(now_ns - std::max(moving_ns, p.t0_ns));
       if (hold_until_s >= 0.0 && t >= hold_until_s + kRetakeAfter_s && still_s > kRetakeAfter_s) {
         hold_until_s = t + kTakeHold_s;
       }
-      const bool holding = !grasps && (hold_until_s < 0.0 || t < hold_until_s);
+      const bool holding = hold_until_s < 0.0 ? !grasps : t < hold_until_s;
       // Controls to grasp: the open pointer hand goes round to its control
       // first (PointerApproach); the operator's reach and grasp start there.
       if (grasps && approach_start_s < 0.0) approach_start_s = t;
@@ -325,11 +329,12 @@ void PointerPilot::Run() {
       counts_.key_presses += presses;
       counts_.wheel_notches += notches;
     }
-    // Let go.
+    // Let go, and take the pointer off the window (for the next one).
     if (sent.button) desktop.Button(1, false);
     for (size_t k = 0; k < sent.keys.size(); ++k) {
       if (sent.keys[k]) desktop.Key(kKeyHandKeysyms[k], false);
     }
+    desktop.ParkPointer();
   } catch (const std::exception& e) {
     std::lock_guard lock(counts_mutex_);
     counts_.error = e.what();

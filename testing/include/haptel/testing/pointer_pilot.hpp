@@ -137,8 +137,10 @@ class PointerPilot {
   /// own: waits for the window (its title), then acts at rate_hz once the
   /// vehicle answers.
   void Start();
-  /// Stops driving and lets go: button and keys released, the pointer left
-  /// where it was.
+  /// Stops driving and lets go: button and keys released, the pointer
+  /// parked off the window (XDesktop::ParkPointer), so that the next
+  /// window (a study's next trial) does not open with the hand following a
+  /// pointer left over a control, straight into the cockpit's wheel.
   void Stop();
   PilotCounts counts() const;
   /// The interface's hands at rest (HandTargetsFor no intent): where a
