@@ -26,6 +26,7 @@
 #include "haptel/haptics/trace.hpp"
 #include "haptel/testing/hand_trace.hpp"
 #include "haptel/testing/obstacle_track.hpp"
+#include "haptel/testing/pointer_pilot.hpp"
 #include "haptel/testing/run_watch.hpp"
 #include "haptel/testing/x_desktop.hpp"
 #include "haptel/testing/xvfb.hpp"
@@ -52,15 +53,31 @@ constexpr int kStep_px = 100;
 constexpr double kStepHold_s = 0.6;
 constexpr int kPush_px = 60;
 constexpr double kPushHold_s = 0.8;
-/// A hand's first motion after a contact counts from this far, m.
-constexpr double kShakeFrom_m = 0.001;
+/// The pointer hand has taken a step once it moved this far its way, m.
+constexpr double kHandMoved_m = 0.0001;
+/// A shake this long before the bench heard the contact is still its own:
+/// the run may hear the bumper's state first.
+constexpr int64_t kShakeEarly_ns = 20'000'000;
 /// Bounds on waits (a hang, not a timing check).
 constexpr double kStartBound_s = 90.0;
 constexpr double kRunBound_s = 600.0;
 constexpr const char* kVehicleName = "hands";
+/// The bench's vehicle reports a state each of its simulation ticks (the
+/// shipped 50 Hz would hide a command overtaken within 20 ms, and the
+/// session sends up to its 100 Hz): every command sent is heard.
+constexpr double kStateRate_hz = 200.0;
 
 double Nan() { return std::nan(""); }
 std::string Num(double v) { return std::isfinite(v) ? JsonNumber(v) : std::string("null"); }
+
+/// A JSON array of `v`, in its order.
+std::string Numbers(const std::vector<double>& v) {
+  std::ostringstream out;
+  out << "[";
+  for (size_t i = 0; i < v.size(); ++i) out << (i ? "," : "") << Num(v[i]);
+  out << "]";
+  return out.str();
+}
 
 double Percentile(std::vector<double> v, double p) {
   if (v.empty()) return Nan();
@@ -83,6 +100,34 @@ struct CursorAt {
   int x = 0, y = 0;
 };
 
+/// The run's vehicle (config/haptel.yaml's sim-robot.yaml) reporting at
+/// kStateRate_hz, written to `dir`; the rest of its file as shipped.
+std::filesystem::path WriteReportingVehicle(const std::filesystem::path& dir) {
+  const std::filesystem::path shipped = ShippedFile("config/vehicles/sim-robot.yaml");
+  std::ifstream in(shipped);
+  if (!in) throw std::runtime_error("cannot read " + shipped.string());
+  const auto file = dir / "hands-vehicle.yaml";
+  std::ofstream out(file);
+  bool rate = false;
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("state_rate_hz:", 0) == 0) {
+      line =
+          "state_rate_hz: " + JsonNumber(kStateRate_hz) + "  # haptel bench hands: every command";
+      rate = true;
+    } else if (line.rfind("world:", 0) == 0) {
+      // Relative to the shipped file's folder, not this one's.
+      std::istringstream words(line.substr(6));
+      std::string world;
+      words >> world;
+      line = "world: " + std::filesystem::absolute(shipped.parent_path() / world).string();
+    }
+    out << line << "\n";
+  }
+  if (!rate) throw std::runtime_error(shipped.string() + ": no state_rate_hz line to raise");
+  if (!out) throw std::runtime_error("cannot write " + file.string());
+  return file;
+}
+
 /// The run's link settings on the bench's domain.
 LinkConfig LinkOn(int domain) {
   LinkConfig link = LoadRun(ShippedFile("config/haptel.yaml")).link;
@@ -93,7 +138,8 @@ LinkConfig LinkOn(int domain) {
 struct Options {
   std::vector<std::string> interfaces{"gesture", "gesture-shared", "cockpit", "cockpit-assisted"};
   std::filesystem::path device;
-  int steps = 20;
+  std::filesystem::path vehicle;  ///< WriteReportingVehicle's
+  int steps = 40;
   double nobody_s = 60.0;
   double contact_bound_s = 15.0;
   double bare_s = 2.0;
@@ -111,10 +157,14 @@ struct Row {
   int commands = 0;
   double max_forward = 0.0, max_turn = 0.0;
   std::vector<double> latencies_ms;
+  /// Each step's pointer to the device's hand: the X server, SDL, the view's
+  /// event pump and the servo tick; the rest of latencies_ms is the session.
+  std::vector<double> to_hand_ms;
   int steps_unanswered = 0;
   double ratio_free = Nan(), ratio_across = Nan(), ratio_along = Nan();
   bool contact = false;
   double contact_to_shake_ms = Nan();
+  int shakes = 0;  ///< shakes the device started (the trace's shake records), all sides
   double servo_p99_us = Nan(), bare_beside_p99_us = Nan(), bare_alone_p99_us = Nan();
   double pseudo_haptic_gain_mean = Nan();
   int nobody_moving_commands = -1;
@@ -143,6 +193,8 @@ std::vector<std::string> RunArgs(const Options& o, const std::string& interface,
           "--quiet",
           "--domain",
           std::to_string(o.domain),
+          "--vehicle",
+          o.vehicle.string(),
           "--vehicle-name",
           kVehicleName,
           "--database",
@@ -187,10 +239,41 @@ class Cursor {
 
 void Sleep(double s) { std::this_thread::sleep_for(std::chrono::duration<double>(s)); }
 
+/// Where the path takes hold. Nothing to grasp (the gestures): the button
+/// at the window's centre. Controls (the cockpits): the pointer hand brought
+/// round to its control open, as the pointer pilot brings it
+/// (PointerApproach), then onto its grip, then the button; the path's steps
+/// are then taken from the grip (the lever pushed and pulled).
+struct Hold {
+  std::optional<testing::PointerApproach> approach;
+  haptics::Vec3d grip{};
+};
+
+Hold HoldFor(const Options& o, const std::string& interface, const std::filesystem::path& track,
+             const MouseDeviceConfig& mouse) {
+  testing::PilotSetup setup;
+  setup.run_file = ShippedFile("config/haptel.yaml");
+  setup.device = o.device;
+  setup.track = track;
+  setup.interface = interface;
+  const interfaces::HandTargets neutral = testing::PointerPilot(setup).Neutral();
+  const auto& hand = neutral[mouse.pointer_on_left ? 0 : 1];
+  Hold hold;
+  if (!hand || std::all_of(hand->glove.begin(), hand->glove.end(),
+                           [](double angle) { return angle == 0.0; })) {
+    return hold;
+  }
+  haptics::Vec3d open = hand->position;
+  for (int k = 0; k < 3; ++k) open[k] += hand->approach[k];
+  hold.approach.emplace(haptics::Vec3d{mouse.centre[0], mouse.centre[1], mouse.centre[2]}, open);
+  hold.grip = hand->position;
+  return hold;
+}
+
 /// The engaged run: the scripted path with the button held. Fills the row's
 /// commands, latencies, ratios and contact figures.
 void Engaged(const Options& o, const std::filesystem::path& dir, const std::filesystem::path& track,
-             const MouseDeviceConfig& mouse, Row& row) {
+             const MouseDeviceConfig& mouse, const Hold& hold, Row& row) {
   // The script's length and a margin: the run ends by Escape, or by this limit.
   const double limit_s = o.steps * kStepHold_s + o.contact_bound_s + 20.0;
   const auto args = RunArgs(o, row.interface, dir, track, "engaged", limit_s);
@@ -213,9 +296,39 @@ void Engaged(const Options& o, const std::filesystem::path& dir, const std::file
       }
       desktop.Focus(*window);
       Cursor cursor(desktop, *window);
-      const int cx = window->width_px / 2, cy = window->height_px / 2;
+      int cx = window->width_px / 2, cy = window->height_px / 2;
       cursor.MoveTo(cx, cy);
       Sleep(0.3);
+      if (hold.approach) {
+        int64_t notches = 0;
+        const auto to = [&](const haptics::Vec3d& target) {
+          const std::array<int, 2> px =
+              haptics::PointerPixelFor(target, mouse, window->width_px, window->height_px);
+          cursor.MoveTo(px[0], px[1]);
+          const int64_t want = mouse.wheel_step > 0.0
+                                   ? std::lround((target[2] - mouse.centre[2]) / mouse.wheel_step)
+                                   : 0;
+          for (; notches != want; notches += notches < want ? 1 : -1)
+            desktop.WheelNotch(notches < want);
+          return px;
+        };
+        const double approach_s = hold.approach->duration_s();
+        for (double s = 0.0; s < approach_s; s += 0.01) {
+          to(hold.approach->At(s));
+          Sleep(0.01);
+        }
+        // Onto the grip in half a second, as the operator's reach goes.
+        const haptics::Vec3d open = hold.approach->At(approach_s);
+        for (int i = 1; i <= 50; ++i) {
+          haptics::Vec3d p;
+          for (int k = 0; k < 3; ++k) p[k] = open[k] + (hold.grip[k] - open[k]) * i / 50.0;
+          const std::array<int, 2> px = to(p);
+          cx = px[0];
+          cy = px[1];
+          Sleep(0.01);
+        }
+        Sleep(0.3);
+      }
       desktop.Button(1, true);
       Sleep(0.5);
       // Steps up and down (forward and back), the same for every interface.
@@ -303,8 +416,19 @@ void Engaged(const Options& o, const std::filesystem::path& dir, const std::file
   }
   using haptics::Side;
   const WristTrack hand = WristsOf(trace, mouse.pointer_on_left ? Side::kLeft : Side::kRight);
-  const WristTrack other = WristsOf(trace, mouse.pointer_on_left ? Side::kRight : Side::kLeft);
   const double m = mouse.metres_per_pixel;
+  // Each step's pointer to the hand: the first tick the hand moved its way.
+  for (size_t i = 0; i + 1 < step_ns.size(); ++i) {
+    const double way = i % 2 == 0 ? 1.0 : -1.0;  // up the window: forward, +x
+    const double from = PositionAt(hand, step_ns[i])[0];
+    for (const auto& [t, p] : hand) {
+      if (t <= step_ns[i] || t > step_ns[i + 1]) continue;
+      if (way * (p[0] - from) >= kHandMoved_m) {
+        row.to_hand_ms.push_back(1e-6 * static_cast<double>(t - step_ns[i]));
+        break;
+      }
+    }
+  }
   // The hand's forward offset over the cursor's, step by step: each step's
   // settled hand (just before the next step) against the one before.
   std::vector<double> free;
@@ -320,20 +444,14 @@ void Engaged(const Options& o, const std::filesystem::path& dir, const std::file
       std::abs(PositionAt(hand, along_to)[1] - PositionAt(hand, along_from)[1]) / (kPush_px * m);
   const int64_t contact = listener.contact_ns();
   row.contact = contact != 0;
-  if (row.contact) {
-    for (const auto* w : {&hand, &other}) {
-      const haptics::Vec3d p0 = PositionAt(*w, contact);
-      for (const auto& [t, p] : *w) {
-        if (t <= contact || t > still_from + 1'000'000'000) continue;
-        const double d = std::hypot(p[0] - p0[0], p[1] - p0[1], p[2] - p0[2]);
-        if (d >= kShakeFrom_m) {
-          const double ms = 1e-6 * static_cast<double>(t - contact);
-          row.contact_to_shake_ms =
-              std::isfinite(row.contact_to_shake_ms) ? std::min(row.contact_to_shake_ms, ms) : ms;
-          break;
-        }
-      }
-    }
+  // The contact's shake: the device's first after the contact, either hand
+  // (its trace records each start, Device::PseudoHaptics).
+  for (const haptics::TraceRecord& r : trace) {
+    if (r.kind != haptics::TraceRecord::kShake) continue;
+    ++row.shakes;
+    if (!row.contact || std::isfinite(row.contact_to_shake_ms)) continue;
+    if (r.t_ns >= contact - kShakeEarly_ns && r.t_ns <= still_from + 1'000'000'000)
+      row.contact_to_shake_ms = 1e-6 * static_cast<double>(r.t_ns - contact);
   }
   // The plot: the pointer hand's forward offset and the cursor's, mm, over the path.
   if (!hand.empty() && !cursor_log.empty()) {
@@ -446,14 +564,15 @@ int BenchHandsMain(int argc, const char* const* argv) {
   }
   const std::filesystem::path track =
       testing::WriteObstacleAheadTrack(ShippedFile("config/tracks/test-short.yaml"), dir);
+  o.vehicle = WriteReportingVehicle(dir);
   std::printf(
       "haptel bench hands: %s through the real window on Xvfb %s, the short track with an "
       "obstacle ahead\n\n",
       o.device.c_str(), x->display().c_str());
   std::printf(
-      "  interface          outcome   cmds  fwd max turn max  in->cmd p50/p95 ms  ratio "
-      "free/across/"
-      "along  contact->hand ms  servo p99 us  bare beside/alone  nobody: moving/cmds  m\n");
+      "  interface          outcome   cmds  fwd max turn max  in->cmd p50/p95 ms  in->hand "
+      "p50/p95  ratio free/across/along  contact->shake ms  servo p99 us  bare beside/alone  "
+      "nobody: moving/cmds  m\n");
   std::vector<Row> rows;
   for (const std::string& interface : o.interfaces) {
     Row row;
@@ -461,19 +580,24 @@ int BenchHandsMain(int argc, const char* const* argv) {
     row.bare_alone_p99_us =
         MeasureBareLoop(device.servo.rate_hz, device.servo.realtime_priority, o.bare_s)
             .stats.period_p99_us;
-    Engaged(o, dir, track, device.mouse, row);
+    try {
+      Engaged(o, dir, track, device.mouse, HoldFor(o, interface, track, device.mouse), row);
+    } catch (const std::exception& e) {
+      row.error = e.what();  // the interface's files: nothing to take hold of
+    }
     Nobody(o, dir, track, row);
     if (!row.error.empty()) {
       std::fprintf(stderr, "haptel bench hands: %s: %s (the run's output: %s)\n", interface.c_str(),
                    row.error.c_str(), (dir / ("hands-" + interface + "-engaged.log")).c_str());
     }
     std::printf(
-        "  %-17s  %-8s  %4d  %7.2f  %8.2f  %7.1f / %7.1f    %5.2f / %5.2f / %5.2f  %16.0f  %12.0f  "
-        "%6.0f / %5.0f  %7d / %5d  %5.3f\n",
+        "  %-17s  %-8s  %4d  %7.2f  %8.2f  %7.1f / %7.1f    %5.1f / %5.1f   %5.2f / %5.2f / %5.2f  "
+        "%17.1f  %12.0f  %6.0f / %5.0f  %7d / %5d  %5.3f\n",
         interface.c_str(), row.ran ? row.outcome.c_str() : "failed", row.commands, row.max_forward,
         row.max_turn, Percentile(row.latencies_ms, 0.5), Percentile(row.latencies_ms, 0.95),
-        row.ratio_free, row.ratio_across, row.ratio_along, row.contact_to_shake_ms,
-        row.servo_p99_us, row.bare_beside_p99_us, row.bare_alone_p99_us, row.nobody_moving_commands,
+        Percentile(row.to_hand_ms, 0.5), Percentile(row.to_hand_ms, 0.95), row.ratio_free,
+        row.ratio_across, row.ratio_along, row.contact_to_shake_ms, row.servo_p99_us,
+        row.bare_beside_p99_us, row.bare_alone_p99_us, row.nobody_moving_commands,
         row.nobody_commands, row.nobody_distance_m);
     std::fflush(stdout);
     rows.push_back(std::move(row));
@@ -489,14 +613,20 @@ int BenchHandsMain(int argc, const char* const* argv) {
         r.servo_p99_us <= std::max(r.bare_beside_p99_us, r.bare_alone_p99_us) + kBin_us;
   }
   std::printf(
-      "\n  in->cmd: a pointer step sent through XTest to the first command after it that differs; "
-      "ratio: the\n"
-      "  pointer hand's displacement over the cursor's (1: it follows; below: bent by a force), "
-      "free (the\n"
-      "  steps), across the wall (pushed on towards the obstacle) and along it; contact->hand: the "
-      "bumper's\n"
-      "  state to the hands' first 1 mm with the pointer still (the shake or the push-back); servo "
-      "p99: the\n"
+      "\n  in->cmd: a pointer step sent through XTest to the first command after it that differs "
+      "(as the\n"
+      "  vehicle's states report it, 50 Hz: a command overtaken within a state's period is not "
+      "heard, so an\n"
+      "  upper bound); in->hand: the step to the device's hand first moving its way (X, SDL, the "
+      "view's\n"
+      "  event pump, a servo tick); ratio: the pointer hand's displacement over the cursor's (1: "
+      "it "
+      "follows;\n"
+      "  below: bent by a force), free (the steps), across the wall (pushed on towards the "
+      "obstacle) and\n"
+      "  along it; contact->shake: the bumper's state to the device's shake starting (its trace's "
+      "shake\n"
+      "  record), with the pointer still; servo p99: the\n"
       "  run's, against an empty loop at its rate beside the run and alone; nobody: the same path "
       "with no\n"
       "  button, commands that would move the vehicle, and the metres it went.\n\n");
@@ -510,17 +640,19 @@ int BenchHandsMain(int argc, const char* const* argv) {
   {
     std::ofstream csv(dir / "hands.csv");
     csv << "interface,outcome,commands,max_forward,max_turn,input_to_command_ms_p50,"
-           "input_to_command_ms_p95,steps_unanswered,ratio_free,ratio_across_wall,"
-           "ratio_along_wall,contact,contact_to_hand_ms,pseudo_haptic_gain_mean,servo_p99_us,"
+           "input_to_command_ms_p95,input_to_hand_ms_p50,input_to_hand_ms_p95,steps_unanswered,"
+           "ratio_free,ratio_across_wall,ratio_along_wall,contact,contact_to_shake_ms,shakes,"
+           "pseudo_haptic_gain_mean,servo_p99_us,"
            "bare_beside_p99_us,bare_alone_p99_us,nobody_moving_commands,nobody_commands,"
            "nobody_distance_m\n";
     for (const Row& r : rows) {
       csv << r.interface << "," << r.outcome << "," << r.commands << "," << r.max_forward << ","
           << r.max_turn << "," << Percentile(r.latencies_ms, 0.5) << ","
-          << Percentile(r.latencies_ms, 0.95) << "," << r.steps_unanswered << "," << r.ratio_free
+          << Percentile(r.latencies_ms, 0.95) << "," << Percentile(r.to_hand_ms, 0.5) << ","
+          << Percentile(r.to_hand_ms, 0.95) << "," << r.steps_unanswered << "," << r.ratio_free
           << "," << r.ratio_across << "," << r.ratio_along << "," << r.contact << ","
-          << r.contact_to_shake_ms << "," << r.pseudo_haptic_gain_mean << "," << r.servo_p99_us
-          << "," << r.bare_beside_p99_us << "," << r.bare_alone_p99_us << ","
+          << r.contact_to_shake_ms << "," << r.shakes << "," << r.pseudo_haptic_gain_mean << ","
+          << r.servo_p99_us << "," << r.bare_beside_p99_us << "," << r.bare_alone_p99_us << ","
           << r.nobody_moving_commands << "," << r.nobody_commands << "," << r.nobody_distance_m
           << "\n";
     }
@@ -550,13 +682,17 @@ int BenchHandsMain(int argc, const char* const* argv) {
           << ",\"max_forward\":" << Num(r.max_forward) << ",\"max_turn\":" << Num(r.max_turn)
           << ",\"input_to_command_ms_p50\":" << Num(Percentile(r.latencies_ms, 0.5))
           << ",\"input_to_command_ms_p95\":" << Num(Percentile(r.latencies_ms, 0.95))
+          << ",\"input_to_hand_ms_p50\":" << Num(Percentile(r.to_hand_ms, 0.5))
+          << ",\"input_to_hand_ms_p95\":" << Num(Percentile(r.to_hand_ms, 0.95))
+          << ",\"input_to_command_ms\":" << Numbers(r.latencies_ms)
+          << ",\"input_to_hand_ms\":" << Numbers(r.to_hand_ms)
           << ",\"steps\":" << r.latencies_ms.size() + static_cast<size_t>(r.steps_unanswered)
           << ",\"steps_unanswered\":" << r.steps_unanswered
           << ",\"ratio_free\":" << Num(r.ratio_free)
           << ",\"ratio_across_wall\":" << Num(r.ratio_across)
           << ",\"ratio_along_wall\":" << Num(r.ratio_along)
           << ",\"contact\":" << (r.contact ? "true" : "false")
-          << ",\"contact_to_hand_ms\":" << Num(r.contact_to_shake_ms)
+          << ",\"contact_to_shake_ms\":" << Num(r.contact_to_shake_ms) << ",\"shakes\":" << r.shakes
           << ",\"pseudo_haptic_gain_mean\":" << Num(r.pseudo_haptic_gain_mean)
           << ",\"servo_p99_us\":" << Num(r.servo_p99_us)
           << ",\"bare_beside_p99_us\":" << Num(r.bare_beside_p99_us)

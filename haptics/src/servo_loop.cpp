@@ -153,6 +153,11 @@ void ServoLoop::TrackWrist(Arm& arm, Side side, int64_t now_ns) {
       shown.shake[i] *= cal.tracker_scale[i];
     }
     hal_.PublishPseudoHaptics(side, shown);
+    // A shake started: one record, so a trace can time it from the contact.
+    if (trace_ != nullptr && shown.shakes != arm.shakes_traced) {
+      arm.shakes_traced = shown.shakes;
+      trace_->Push(TraceRecord::FromShake(side, shown));
+    }
   }
   if (trace_ != nullptr) trace_->Push(TraceRecord::FromWrist(side, arm.wrist));
   const Vec3d p = TrackerToMetres(cal, arm.wrist.position);

@@ -35,6 +35,22 @@ TraceRecord TraceRecord::FromGlove(Side side, const GloveRaw& raw) {
   return r;
 }
 
+TraceRecord TraceRecord::FromShake(Side side, const PseudoHapticReport& report) {
+  TraceRecord r;
+  r.kind = kShake;
+  r.side = static_cast<uint8_t>(Index(side));
+  r.t_ns = report.shake_start_ns;
+  for (int i = 0; i < 3; ++i) {
+    r.values[i] = report.target[i];
+    r.values[3 + i] = report.hand[i];
+    r.values[6 + i] = report.force[i];
+    r.values[9 + i] = report.shake[i];
+  }
+  r.values[12] = report.held ? 1.0 : 0.0;
+  r.values[13] = static_cast<double>(report.shakes);
+  return r;
+}
+
 WristRaw TraceRecord::ToWrist() const {
   WristRaw w;
   w.t_ns = t_ns;
@@ -49,6 +65,20 @@ GloveRaw TraceRecord::ToGlove() const {
   for (int j = 0; j < kGloveJoints; ++j) g.sensors[j] = values[j];
   for (int f = 0; f < kFingers; ++f) g.grasp[f] = values[kGloveJoints + f];
   return g;
+}
+
+PseudoHapticReport TraceRecord::ToShake() const {
+  PseudoHapticReport p;
+  for (int i = 0; i < 3; ++i) {
+    p.target[i] = values[i];
+    p.hand[i] = values[3 + i];
+    p.force[i] = values[6 + i];
+    p.shake[i] = values[9 + i];
+  }
+  p.held = values[12] != 0.0;
+  p.shakes = static_cast<uint64_t>(values[13]);
+  p.shake_start_ns = t_ns;
+  return p;
 }
 
 TraceWriter::TraceWriter(const std::filesystem::path& file, size_t ring_capacity) : file_(file) {
@@ -110,7 +140,9 @@ std::vector<TraceRecord> ReadTrace(const std::filesystem::path& file) {
   for (;;) {
     const size_t got = std::fread(&r, 1, sizeof r, in);
     if (got == 0) break;
-    if (got != sizeof r || (r.kind != TraceRecord::kWrist && r.kind != TraceRecord::kGlove) ||
+    if (got != sizeof r ||
+        (r.kind != TraceRecord::kWrist && r.kind != TraceRecord::kGlove &&
+         r.kind != TraceRecord::kShake) ||
         r.side >= kSides) {
       std::fclose(in);
       throw std::runtime_error("trace: '" + file.string() + "': record " +

@@ -260,10 +260,12 @@ class RobotSession final : public FamilySession {
         1e9 /
         setup_.interfaces[static_cast<size_t>(interfaces_->current_index())].command_rate_hz());
     if (next_command_ns_ == 0) next_command_ns_ = now;
-    if (CommandDue(next_command_ns_, now, command_period_ns)) {
-      const TreadCommand sent = vehicle_up && engaged ? motors_ : TreadCommand{};
-      link.Send(sent);
-      predictor_.OnCommand(t, sent.left, sent.right);
+    const TreadCommand due = vehicle_up && engaged ? motors_ : TreadCommand{};
+    const bool changed = due.left != last_sent_.left || due.right != last_sent_.right;
+    if (CommandDue(next_command_ns_, now, command_period_ns, changed)) {
+      link.Send(due);
+      last_sent_ = due;
+      predictor_.OnCommand(t, due.left, due.right);
     }
     return std::nullopt;
   }
@@ -517,6 +519,7 @@ class RobotSession final : public FamilySession {
   /// The beams the range scan had when last said (SayRanges).
   int range_beams_said_ = 0;
   TreadCommand motors_;
+  TreadCommand last_sent_;  ///< the command last sent (a change goes out at once)
   uint32_t requests_seen_ = 0;
   uint32_t disconnects_seen_ = 0;
   int64_t next_command_ns_ = 0;

@@ -179,7 +179,11 @@ void RunTrace::Add(double t_s, double x, double y, double z, double speed, bool 
   touching_ = touching;
 }
 
-bool CommandDue(int64_t& next_ns, int64_t now_ns, int64_t period_ns) {
+bool CommandDue(int64_t& next_ns, int64_t now_ns, int64_t period_ns, bool changed) {
+  if (changed) {
+    next_ns = now_ns + period_ns;  // the period counts from the last command sent
+    return true;
+  }
   if (now_ns < next_ns) return false;
   next_ns += period_ns;
   if (next_ns < now_ns) next_ns = now_ns;

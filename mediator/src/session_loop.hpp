@@ -137,9 +137,12 @@ class RunTrace {
   bool touching_ = false;
 };
 
-/// True when a command is due at `now_ns`, at most one per `period_ns`; a
-/// late loop sends one, it does not catch up.
-bool CommandDue(int64_t& next_ns, int64_t now_ns, int64_t period_ns);
+/// True when a command is due at `now_ns`: at once when it `changed` from
+/// the last one sent (a person's input does not wait for the next period),
+/// else once per `period_ns` (the vehicle's watchdog hears the link alive);
+/// a late loop sends one, it does not catch up. Called once a session tick,
+/// so the link carries at most the session's rate (session_rate_hz).
+bool CommandDue(int64_t& next_ns, int64_t now_ns, int64_t period_ns, bool changed = false);
 
 /// The session's own limits at `t_s` (s since the session started): the time
 /// limit on the session's clock (0: none); then the lap limit (a study's cap;

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <deque>
+#include <optional>
 
 #include "haptel/config/run.hpp"
 #include "haptel/config/track.hpp"
@@ -85,6 +86,44 @@ PointerGesture PointerHands::Step(const interfaces::HandTargets& targets,
   return g;
 }
 
+PointerApproach::PointerApproach(const haptics::Vec3d& rest, const haptics::Vec3d& goal) {
+  const double back = std::min(rest[0], goal[0]) - kBack_m;
+  points_ = {rest, haptics::Vec3d{back, rest[1], rest[2]}, haptics::Vec3d{back, goal[1], rest[2]},
+             haptics::Vec3d{goal[0], goal[1], rest[2]}, goal};
+}
+
+namespace {
+
+double Distance(const haptics::Vec3d& a, const haptics::Vec3d& b) {
+  return std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
+}
+
+}  // namespace
+
+double PointerApproach::duration_s() const {
+  double s = kSettle_s * static_cast<double>(points_.size());
+  for (size_t k = 1; k < points_.size(); ++k)
+    s += Distance(points_[k - 1], points_[k]) / kSpeed_mps;
+  return s;
+}
+
+haptics::Vec3d PointerApproach::At(double s) const {
+  // Each point: a pause, then the leg to the next.
+  for (size_t k = 0; k + 1 < points_.size(); ++k) {
+    s -= kSettle_s;
+    if (s <= 0.0) return points_[k];
+    const double leg_s = Distance(points_[k], points_[k + 1]) / kSpeed_mps;
+    if (s < leg_s) {
+      const double a = s / leg_s;
+      haptics::Vec3d p;
+      for (int i = 0; i < 3; ++i) p[i] = points_[k][i] + (points_[k + 1][i] - points_[k][i]) * a;
+      return p;
+    }
+    s -= leg_s;
+  }
+  return points_.back();
+}
+
 struct PointerPilot::Parts {
   RunConfig run;
   VehicleConfig vehicle;
@@ -157,6 +196,10 @@ void PointerPilot::Stop() {
   if (parts_) parts_->states.reset();  // no callback after this
 }
 
+interfaces::HandTargets PointerPilot::Neutral() const {
+  return parts_->interface->HandTargetsFor({});
+}
+
 PilotCounts PointerPilot::counts() const {
   std::lock_guard lock(counts_mutex_);
   return counts_;
@@ -180,6 +223,19 @@ void PointerPilot::Run() {
     const interfaces::HandTargets neutral = p.interface->HandTargetsFor({});
     // Controls to grasp: the operator's reach and grasp take hold (no hold at neutral).
     const bool grasps = GloveSum(neutral) > 0.0;
+    // Where the operator's reach starts: each hand open above its control.
+    interfaces::HandTargets open_at_approach = neutral;
+    for (auto& hand : open_at_approach) {
+      if (!hand) continue;
+      for (int k = 0; k < 3; ++k) hand->position[k] += hand->approach[k];
+      hand->glove = {};
+    }
+    std::optional<PointerApproach> approach;
+    if (const auto& goal = open_at_approach[hands.pointer_index()]; grasps && goal) {
+      const auto& c = p.device.mouse.centre;
+      approach.emplace(haptics::Vec3d{c[0], c[1], c[2]}, goal->position);
+    }
+    double approach_start_s = -1.0;
     PointerGesture sent;
     bool first = true;
     bool touching = false;
@@ -223,18 +279,32 @@ void PointerPilot::Run() {
       last_t = t;
       // A person takes hold first, at neutral, and drives once the run
       // engages (its commands reach the vehicle, and a moment after): an
-      // interface engages only from rest (mediator/engagement.hpp).
-      if (commanded && hold_until_s < 0.0) hold_until_s = t + kTakeHold_s;
+      // interface engages only from rest (mediator/engagement.hpp). With
+      // controls to grasp, the operator's reach and grasp are that hold.
+      if (commanded && hold_until_s < 0.0 && !grasps) hold_until_s = t + kTakeHold_s;
+      if (grasps && hold_until_s < 0.0 && p.driver->grasped(t)) hold_until_s = t;
       // Driving, yet the motors have not moved for a while: the run did not
-      // engage (it took hold later than the pilot thought). A person told
-      // so on screen goes back to neutral and takes hold again.
+      // engage (it took hold later than the pilot thought, or it let go
+      // mid-lap and waits for the command at rest: a lever held forward
+      // never is). A person told so on screen goes back to neutral (the
+      // controls at zero, still held) and takes hold again.
       const double still_s = 1e-9 * static_cast<double>(now_ns - std::max(moving_ns, p.t0_ns));
       if (hold_until_s >= 0.0 && t >= hold_until_s + kRetakeAfter_s && still_s > kRetakeAfter_s) {
         hold_until_s = t + kTakeHold_s;
       }
-      const bool holding = !grasps && (hold_until_s < 0.0 || t < hold_until_s);
-      const PointerGesture g = hands.Step(holding ? neutral : p.driver->Act(t, *p.interface),
-                                          neutral, dt, window->width_px, window->height_px);
+      const bool holding = hold_until_s < 0.0 ? !grasps : t < hold_until_s;
+      // Controls to grasp: the open pointer hand goes round to its control
+      // first (PointerApproach); the operator's reach and grasp start there.
+      if (grasps && approach_start_s < 0.0) approach_start_s = t;
+      interfaces::HandTargets targets;
+      if (approach && t - approach_start_s < approach->duration_s()) {
+        targets[hands.pointer_index()] = open_at_approach[hands.pointer_index()];
+        targets[hands.pointer_index()]->position = approach->At(t - approach_start_s);
+      } else {
+        targets = holding ? neutral : p.driver->Act(t, *p.interface);
+      }
+      const PointerGesture g =
+          hands.Step(targets, neutral, dt, window->width_px, window->height_px);
       int moves = 0, presses = 0, notches = 0;
       if (g.pointer_used && (first || g.pixel != sent.pixel)) {
         desktop.MovePointer(*window, g.pixel[0], g.pixel[1]);
@@ -259,11 +329,12 @@ void PointerPilot::Run() {
       counts_.key_presses += presses;
       counts_.wheel_notches += notches;
     }
-    // Let go.
+    // Let go, and take the pointer off the window (for the next one).
     if (sent.button) desktop.Button(1, false);
     for (size_t k = 0; k < sent.keys.size(); ++k) {
       if (sent.keys[k]) desktop.Key(kKeyHandKeysyms[k], false);
     }
+    desktop.ParkPointer();
   } catch (const std::exception& e) {
     std::lock_guard lock(counts_mutex_);
     counts_.error = e.what();

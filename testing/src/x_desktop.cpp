@@ -82,6 +82,12 @@ void XDesktop::MovePointer(const XWindowInfo& window, int x_px, int y_px) {
   Flush();
 }
 
+void XDesktop::ParkPointer() {
+  Display* d = display_.get();
+  XTestFakeMotionEvent(d, DefaultScreen(d), 0, 0, CurrentTime);
+  Flush();
+}
+
 void XDesktop::Button(unsigned button, bool down) {
   XTestFakeButtonEvent(display_.get(), button, down ? True : False, CurrentTime);
   Flush();

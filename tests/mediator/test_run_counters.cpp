@@ -81,6 +81,28 @@ TEST_CASE(
   CHECK(inbox.Counts().video_feedback_refused == 9);
 }
 
+TEST_CASE(
+    "a command goes out the tick it changes; an unchanged one once a period, counted from the "
+    "last one sent") {
+  using haptel::mediator::CommandDue;
+  constexpr int64_t kMs = 1'000'000, kPeriod = 20 * kMs;  // the interfaces' 50 Hz
+  int64_t next = 0;
+  const auto due = [&](int64_t t_ms, bool changed) {
+    return CommandDue(next, t_ms * kMs, kPeriod, changed);
+  };
+  CHECK(due(0, false));
+  CHECK_FALSE(due(10, false));
+  CHECK(due(20, false));
+  CHECK(due(25, true));  // not 40: the person's input does not wait
+  CHECK_FALSE(due(35, false));
+  CHECK_FALSE(due(40, false));
+  CHECK(due(45, false));  // a period after the change
+  // Changing every 10-ms session tick: one each tick, no more (the link's bound).
+  int sent = 0;
+  for (int64_t t = 100; t < 200; t += 10) sent += due(t, true) ? 1 : 0;
+  CHECK(sent == 10);
+}
+
 TEST_CASE("a loop below 90 % of its target says so, interval by interval and for the run") {
   const int64_t t0 = SToNs(100.0);
   RateCheck servo("servo", 1000.0, 50, t0);

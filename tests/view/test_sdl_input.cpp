@@ -383,6 +383,12 @@ TEST_CASE(
   input.OnWindowClosed();
   CHECK_FALSE(pointer.Load().window_open);
   CHECK_FALSE(pointer.Load().in_window);
+  // The next window (a study's next trial, in this process): its hand
+  // starts at its rest height, not the last window's notches.
+  REQUIRE(pointer.Load().wheel_notches == 1);
+  SdlInput next(box, pointer);
+  next.OnWindowOpened(1024, 576);
+  CHECK(pointer.Load().wheel_notches == 0);
 }
 
 TEST_CASE("sdl input: F turns the force arrows on and off", "[sdl_input]") {

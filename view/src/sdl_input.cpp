@@ -46,6 +46,10 @@ void SdlInput::OnWindowOpened(int width_px, int height_px) {
   pointer_.height_px = height_px;
   pointer_.in_window = SDL_GetMouseFocus() != nullptr;
   pointer_.grasp_button = false;
+  // A new window's hand starts at its rest height: the notches of the last
+  // one (a study's previous trial, in this process) would put it above or
+  // below, and a person (or the pointer pilot) starts counting from there.
+  pointer_.wheel_notches = 0;
   StorePointer();
 }
 

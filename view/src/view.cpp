@@ -198,6 +198,11 @@ struct View::Impl {
       }
       SDL_SetHint(SDL_HINT_JOYSTICK_ALLOW_BACKGROUND_EVENTS, "1");
       SDL_SetHint(SDL_HINT_NO_SIGNAL_HANDLERS, "1");  // Ctrl-C stays the session's
+      // A click that gives the window the focus grasps too: the mouse
+      // device's hand is held from that press (SDL drops a press within
+      // 10 ms of its focus event by default, and a loaded view thread reads
+      // both at once: the hand then followed the pointer and was never held).
+      SDL_SetHint(SDL_HINT_MOUSE_FOCUS_CLICKTHROUGH, "1");
       if (SDL_Init(SDL_INIT_VIDEO | SDL_INIT_GAMECONTROLLER) != 0) {
         throw ViewError(std::string("view: SDL cannot start its video: ") + SDL_GetError());
       }
@@ -257,10 +262,7 @@ struct View::Impl {
     uint64_t recorded_ticks = 0;
     uint64_t last_video_id = 0;
     while (!stop.load()) {
-      SDL_Event event;
-      while (SDL_PollEvent(&event) != 0) {
-        if (sink != nullptr) sink->OnEvent(event);
-      }
+      PumpEvents();
       const int64_t start = Now(CLOCK_MONOTONIC);
       const double t_s = static_cast<double>(start - t0) * 1e-9;
       source.Fill(model);
@@ -269,6 +271,7 @@ struct View::Impl {
       const auto due_ticks = static_cast<uint64_t>(t_s / record_period_s) + 1;
       const bool record_now = recorder != nullptr && due_ticks > recorded_ticks;
       if (record_now) renderer.ReadPixelsRaw(readback);
+      WaitForFrameDrawn();
       SDL_GL_SwapWindow(&window);
       glFinish();  // the frame is on the screen (or in the offscreen buffer) now
       const int64_t shown = Now(CLOCK_MONOTONIC);
@@ -295,8 +298,47 @@ struct View::Impl {
       next += period_ns;
       const int64_t now = Now(CLOCK_MONOTONIC);
       if (next < now - period_ns) next = now;  // fell behind: do not race to catch up
-      SleepUntil(next);
+      WaitForEventsUntil(next);
     }
+  }
+
+  /// The events SDL has now, each handed to the sink.
+  void PumpEvents() {
+    SDL_Event event;
+    while (SDL_PollEvent(&event) != 0) {
+      if (sink != nullptr) sink->OnEvent(event);
+    }
+  }
+
+  /// Until the frame just drawn is rasterised, a window's events handed on
+  /// each millisecond: the GL draws it on threads of its own (llvmpipe's, a
+  /// GPU), and the swap would otherwise wait for it with the events queued.
+  void WaitForFrameDrawn() {
+    if (sink == nullptr || options.mode != ViewMode::kWindow) return;  // the swap waits
+    GLsync drawn = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
+    if (drawn == nullptr) return;
+    glFlush();
+    while (glClientWaitSync(drawn, 0, 1'000'000) == GL_TIMEOUT_EXPIRED) PumpEvents();
+    glDeleteSync(drawn);
+  }
+
+  /// Until `until_ns`, a window's events handed on as they come rather than
+  /// at the next frame: the mouse device reads the pointer every servo tick,
+  /// so the frame's wait would be the pointer's latency (SDL waits on the X
+  /// connection's socket; with a joystick open it polls every millisecond).
+  /// Offscreen, nobody points: a plain sleep.
+  void WaitForEventsUntil(int64_t until_ns) {
+    if (sink == nullptr || options.mode != ViewMode::kWindow) {
+      SleepUntil(until_ns);
+      return;
+    }
+    for (int64_t left = until_ns - Now(CLOCK_MONOTONIC); left >= 1'000'000;
+         left = until_ns - Now(CLOCK_MONOTONIC)) {
+      SDL_Event event;
+      if (SDL_WaitEventTimeout(&event, static_cast<int>(left / 1'000'000)) != 0)
+        sink->OnEvent(event);
+    }
+    SleepUntil(until_ns);
   }
 };
 

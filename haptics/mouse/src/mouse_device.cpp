@@ -77,6 +77,17 @@ void MouseDevice::Step(Hand& h, const PointerState& pointer, double dt_s) {
   }
 }
 
+void MouseDevice::StartShake(Hand& h, const Vec3d& direction, double amplitude_m) {
+  // A shake already running plays on: its own motion steps the force too.
+  if (h.shaking) return;
+  h.shaking = true;
+  h.shake_start_ns = h.last_ns;
+  h.shake_direction = direction;
+  h.shake_amplitude = std::min(kMaxShakeM, amplitude_m);
+  ++h.shakes;
+  shakes_.fetch_add(1, std::memory_order_relaxed);
+}
+
 void MouseDevice::UpdateShake(Hand& h, int64_t now_ns) {
   h.shake = Vec3d{};
   if (!h.shaking) return;
@@ -151,16 +162,22 @@ DeviceStatus MouseDevice::WriteWristForce(Side side, const Vec3d& command) {
   Vec3d step{};
   for (int i = 0; i < 3; ++i) step[i] = command[i] - h.force[i];
   const double size = Norm(step);
-  // A shake already running plays on: its own motion steps the force too.
-  if (!h.shaking && size >= config_.shake_threshold && size > 0.0) {
-    h.shaking = true;
-    h.shake_start_ns = h.last_ns;
-    for (int i = 0; i < 3; ++i) h.shake_direction[i] = step[i] / size;
-    h.shake_amplitude = std::min(kMaxShakeM, config_.shake_amplitude * size);
-    shakes_.fetch_add(1, std::memory_order_relaxed);
+  if (size >= config_.shake_threshold && size > 0.0) {
+    Vec3d along{};
+    for (int i = 0; i < 3; ++i) along[i] = step[i] / size;
+    StartShake(h, along, config_.shake_amplitude * size);
   }
   h.force = command;
   return DeviceStatus::kOk;
+}
+
+void MouseDevice::SetpointHint(Side side, const ForceSetpoint& setpoint) {
+  Hand& h = hands_[static_cast<size_t>(Index(side))];
+  const ForceField& field = setpoint.field;
+  const bool wall = field.enabled && field.wall_active;
+  // The wall is a contact's: it rises where the hand is, so no force steps.
+  if (wall && !h.wall) StartShake(h, field.wall_normal, kMaxShakeM);
+  h.wall = wall;
 }
 
 DeviceStatus MouseDevice::WriteFingerForces(Side, const std::array<double, kFingers>&) {
@@ -189,6 +206,8 @@ bool MouseDevice::PseudoHaptics(Side side, PseudoHapticReport& out) {
   out.force = h.force;
   out.shake = h.shake;
   out.held = h.held;
+  out.shakes = h.shakes;
+  out.shake_start_ns = h.shakes > 0 ? h.shake_start_ns : 0;
   return true;
 }
 

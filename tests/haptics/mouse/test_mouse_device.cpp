@@ -13,7 +13,9 @@
 #include "haptel/haptics/device_drivers.hpp"
 #include "haptel/haptics/hal.hpp"
 #include "haptel/haptics/servo_loop.hpp"
+#include "haptel/haptics/trace.hpp"
 #include "haptel/mouse/mouse_device.hpp"
+#include "test_env.hpp"
 
 using namespace haptel;
 using namespace haptel::haptics;
@@ -215,6 +217,55 @@ TEST_CASE("mouse device: a force step shakes the shown hand, a ramp does not", "
   }
 }
 
+TEST_CASE(
+    "mouse device: a wall rising is a contact: it shakes the hand once along the wall's normal, "
+    "the HAL says when, and the trace records it",
+    "[mouse]") {
+  const auto file = test::ScratchDir("mouse-shake") / "shake.trace";
+  Rig rig;
+  const Vec3d centre = rig.mouse().centre;
+  ForceField f = Spring(40.0, centre);
+  rig.field = f;
+  rig.pointer.Store(PointerAt(centre, rig.mouse(), true));
+  int64_t wall_ns = 0;
+  {
+    TraceWriter trace(file);
+    rig.loop.SetTrace(&trace);
+    rig.Run(0.6);  // past the soft start: a ramp, no shake
+    CHECK(rig.device.UseReport().shakes == 0);
+    CHECK(rig.hal.pseudo_haptics(Side::kRight).report.shake_start_ns == 0);
+    // The gesture's answer to a bumper: a wall where the hand is (no force steps).
+    f.wall_active = true;
+    f.wall_point = rig.Hand(Side::kRight);
+    f.wall_normal = {1.0, 0.0, 0.0};
+    f.wall_stiffness = 1500.0;
+    rig.field = f;
+    wall_ns = rig.now_ns + kMs;  // the next tick's
+    rig.Tick();
+    rig.Run(0.05);
+    const PseudoHapticReport shown = rig.hal.pseudo_haptics(Side::kRight).report;
+    CHECK(shown.shakes == 1);
+    CHECK(shown.shake_start_ns == wall_ns);
+    CHECK(std::abs(shown.shake[0]) > 0.0);  // along the normal only
+    CHECK(shown.shake[1] == 0.0);
+    CHECK(shown.shake[2] == 0.0);
+    rig.Run(1.0);  // the wall stands: no more shakes
+    CHECK(rig.hal.pseudo_haptics(Side::kRight).report.shakes == 1);
+    rig.loop.SetTrace(nullptr);
+  }  // the writer drains and closes
+  // Both hands met the wall (the rig sets the field on both): a record each, at its rise.
+  int shakes = 0;
+  for (const TraceRecord& r : ReadTrace(file)) {
+    if (r.kind != TraceRecord::kShake) continue;
+    ++shakes;
+    CHECK(r.t_ns == wall_ns);
+    CHECK(r.ToShake().shakes == 1);
+    CHECK(r.ToShake().held);
+  }
+  CHECK(shakes == 2);
+  CHECK(rig.device.UseReport().shakes == 2);
+}
+
 TEST_CASE("mouse device: a side is held only with a window, the pointer in it and the button down",
           "[mouse]") {
   const DeviceConfig config = ShippedMouse();
@@ -330,6 +381,8 @@ TEST_CASE("mouse device: its servo calls allocate nothing", "[mouse][alloc]") {
     PointerState p = PointerAt({0.0005 * (i % 100), 0.0, 0.0}, rig.mouse(), i % 200 < 150);
     p.key_hand[0] = i % 50 < 25;
     rig.pointer.Store(p);
+    f.wall_active = i % 400 >= 350;  // a wall rises and falls: a contact's shake
+    rig.field = f;
     rig.Tick();
     // A step now and then: shakes start and run.
     if (i % 300 == 0) rig.device.WriteWristForce(Side::kRight, {5.0, 0.0, 0.0});

@@ -48,7 +48,9 @@ struct PseudoHapticReport {
   Vec3d hand{};    ///< where the hand is (what ReadWrist reports)
   Vec3d force{};   ///< the wrist force last written
   Vec3d shake{};   ///< the shown hand's offset from `hand` now (a contact's shake; zero when none)
-  bool held = false;  ///< the input moves the hand now (else it is free)
+  bool held = false;           ///< the input moves the hand now (else it is free)
+  uint64_t shakes = 0;         ///< shakes started on this side so far
+  int64_t shake_start_ns = 0;  ///< servo time (CLOCK_MONOTONIC) the newest one started; 0: none
 };
 
 /// What a device is and may be asked: from its driver or its YAML file.

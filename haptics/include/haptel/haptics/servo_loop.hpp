@@ -132,6 +132,7 @@ class ServoLoop {
     WristRaw wrist{};
     GloveRaw glove{};
     bool cue_felt = false;             ///< the last tick added a cue's force
+    uint64_t shakes_traced = 0;        ///< the device's shakes already in the trace
     ServoCounters counters;            ///< the arm's thread only
     Seqlock<ServoCounters> published;  ///< copy for readers, every cycle
   };

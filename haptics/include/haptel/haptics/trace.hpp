@@ -5,7 +5,12 @@
 /// File format (little-endian): the 8 bytes "HAPTRC01", then records of
 /// {u8 kind, u8 side, 6 bytes zero, i64 t_ns, f64 values[27]} — a wrist record
 /// carries position (3, device units) and orientation (w, x, y, z); a glove
-/// record carries the 22 sensors and the 5 grasp values.
+/// record carries the 22 sensors and the 5 grasp values; a shake record (a
+/// device that shows its forces, Device::PseudoHaptics: one each time a
+/// contact's shake starts, stamped with its start) carries the report in
+/// metres and newtons: target, hand, force, shake (3 each), held (0/1) and
+/// the side's shakes so far. Replay plays wrists and gloves; a shake is for
+/// whoever times it (`haptel bench hands`).
 #include <array>
 #include <atomic>
 #include <cstdint>
@@ -19,7 +24,7 @@
 namespace haptel::haptics {
 
 struct TraceRecord {
-  enum Kind : uint8_t { kWrist = 1, kGlove = 2 };
+  enum Kind : uint8_t { kWrist = 1, kGlove = 2, kShake = 3 };
   uint8_t kind = kWrist;
   uint8_t side = 0;
   uint8_t reserved[6] = {};
@@ -28,8 +33,11 @@ struct TraceRecord {
 
   static TraceRecord FromWrist(Side side, const WristRaw& raw);
   static TraceRecord FromGlove(Side side, const GloveRaw& raw);
+  /// At `report.shake_start_ns`.
+  static TraceRecord FromShake(Side side, const PseudoHapticReport& report);
   WristRaw ToWrist() const;
   GloveRaw ToGlove() const;
+  PseudoHapticReport ToShake() const;
 };
 
 /// Records a trace: the servo loop pushes (wait-free), a writer thread drains

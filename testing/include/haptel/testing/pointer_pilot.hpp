@@ -71,6 +71,35 @@ class PointerHands {
   std::array<bool, 6> keys_{};
 };
 
+/// How a person brings the pointer hand, open, to a control before taking
+/// hold of it (the cockpit's lever): drawn back out of whatever lies before
+/// the hand's rest (the window's centre puts it behind the cockpit's wheel,
+/// its fingers by the rim), across to the control's side, forward beside it,
+/// then to its height (the scroll wheel), at a hand's pace and pausing at
+/// each turn. A straight line catches the proxy hand on the rim from behind,
+/// where it stays: the device's hand follows the pointer only through a soft
+/// coupling (pseudo-haptics), which a contact holds back, and a hand hurried
+/// round a corner lags behind the pointer and cuts it.
+class PointerApproach {
+ public:
+  /// The path is walked at kSpeed_mps, pausing kSettle_s at each point.
+  static constexpr double kSpeed_mps = 0.2;
+  static constexpr double kSettle_s = 0.3;
+  /// How far back the hand is drawn: the palm's half width (4 cm,
+  /// config/physics.yaml) past the rim's tube (1.2 cm), and a margin.
+  static constexpr double kBack_m = 0.06;
+
+  /// From the pointer hand's `rest` to `goal` (the control's approach point).
+  PointerApproach(const haptics::Vec3d& rest, const haptics::Vec3d& goal);
+  /// The pointer hand's target `s` after setting off (`goal` from duration_s on).
+  haptics::Vec3d At(double s) const;
+  double duration_s() const;
+  const std::array<haptics::Vec3d, 5>& points() const { return points_; }
+
+ private:
+  std::array<haptics::Vec3d, 5> points_;
+};
+
 /// Where a pilot drives.
 struct PilotSetup {
   int domain = 0;            ///< the run's DDS domain
@@ -108,10 +137,15 @@ class PointerPilot {
   /// own: waits for the window (its title), then acts at rate_hz once the
   /// vehicle answers.
   void Start();
-  /// Stops driving and lets go: button and keys released, the pointer left
-  /// where it was.
+  /// Stops driving and lets go: button and keys released, the pointer
+  /// parked off the window (XDesktop::ParkPointer), so that the next
+  /// window (a study's next trial) does not open with the hand following a
+  /// pointer left over a control, straight into the cockpit's wheel.
   void Stop();
   PilotCounts counts() const;
+  /// The interface's hands at rest (HandTargetsFor no intent): where a
+  /// person takes hold (`haptel bench hands` takes hold of the cockpits there).
+  interfaces::HandTargets Neutral() const;
 
  private:
   struct Parts;

@@ -39,6 +39,10 @@ class XDesktop {
   /// Moves the pointer to (x, y) from `window`'s top-left corner (outside
   /// the window too: negative or past its size).
   void MovePointer(const XWindowInfo& window, int x_px, int y_px);
+  /// Moves the pointer to the screen's top-left corner, off a window
+  /// centred on it (a window that opens under the pointer has the mouse
+  /// device's hand follow it at once, from wherever it rests).
+  void ParkPointer();
   /// Presses (`down`) or releases X button `button` (1 left, 4/5 the wheel).
   void Button(unsigned button, bool down);
   /// One wheel notch: away from the user (`away`) or towards.

@@ -17,9 +17,12 @@
 /// the hand closed) while the grasp button is down too. With the pointer
 /// out of the window it is free: dH/dt = F/(τ·k_c), so a centring field
 /// pulls it back as an unheld arm would go.
-/// A force step of at least `shake_threshold` in one tick starts a shake of
-/// the shown hand (PseudoHaptics' `shake`, not the reading the interfaces
-/// drive with) along the step, decaying over `shake_s`.
+/// A contact starts a shake of the shown hand (PseudoHaptics' `shake`, not
+/// the reading the interfaces drive with), decaying over `shake_s`: a force
+/// step of at least `shake_threshold` in one tick, along the step and
+/// `shake_amplitude` a newton of it; or a wall rising in the set-point (the
+/// gesture's answer to a bumper, which stands where the hand is and so
+/// steps no force), along the wall's normal, the largest shake.
 ///
 /// The device reports metres and radians and takes newtons (its driver's
 /// CalibrationSource::kSelf): without a calibration file the session gives
@@ -61,6 +64,7 @@ class MouseDevice final : public Device {
   DeviceStatus ReadGlove(Side side, int64_t now_ns, GloveRaw& out) override;
   DeviceStatus WriteWristForce(Side side, const Vec3d& command) override;
   DeviceStatus WriteFingerForces(Side side, const std::array<double, kFingers>& command) override;
+  void SetpointHint(Side side, const ForceSetpoint& setpoint) override;
   HandPresence Presence(Side side) override;
   DeviceUseReport UseReport() const override;
   bool PseudoHaptics(Side side, PseudoHapticReport& out) override;
@@ -80,7 +84,9 @@ class MouseDevice final : public Device {
     bool coupled = false;  ///< the pointer is in an open window: the hand follows
     bool held = false;     ///< coupled, and the grasp button is down
     int64_t last_ns = 0;
+    bool wall = false;  ///< the last set-point had a wall up
     // The shake: started at shake_start_ns along shake_direction.
+    uint64_t shakes = 0;
     bool shaking = false;
     int64_t shake_start_ns = 0;
     Vec3d shake_direction{};
@@ -93,6 +99,8 @@ class MouseDevice final : public Device {
   };
 
   void Step(Hand& h, const PointerState& pointer, double dt_s);
+  /// Starts a shake along the unit `direction` (none while one plays).
+  void StartShake(Hand& h, const Vec3d& direction, double amplitude_m);
   void UpdateShake(Hand& h, int64_t now_ns);
   void MeasureGain(Hand& h, int64_t now_ns);
 
