@@ -82,6 +82,10 @@ void ClockRealityConfig::ValidateOrThrow() const {
 void RealityConfig::ValidateOrThrow() const {
   config_detail::CheckFields(*this);
   check::NonEmpty("name", name);
+  // Sections a file may leave out are checked here, not by CheckFields.
+  check::Nested("robot", robot);
+  check::Nested("blimp", blimp);
+  check::Nested("clock", clock);
 }
 
 RealityConfig LoadReality(const std::filesystem::path& file) {

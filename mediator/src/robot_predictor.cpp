@@ -10,12 +10,19 @@ RobotPredictor::RobotPredictor(const TreadDriveConfig& drive, double watchdog_s,
                                PredictionModel model)
     : drive_(drive), model_(model), estimator_(drive), watchdog_s_(watchdog_s), step_s_(step_s) {}
 
+void RobotPredictor::OnRoundTrip(double rtt_s) {
+  if (keep_inputs_) inputs_.round_trips_s.push_back(rtt_s);
+  delay_.AddRoundTrip(rtt_s);
+}
+
 void RobotPredictor::OnCommand(double t_s, double left, double right) {
+  if (keep_inputs_) inputs_.commands.push_back({t_s, left, right});
   commands_.push_back({t_s, models::QuantiseCommand(left, drive_.speed_levels),
                        models::QuantiseCommand(right, drive_.speed_levels)});
 }
 
 double RobotPredictor::OnState(const RobotStateSample& state) {
+  if (keep_inputs_) inputs_.states.push_back(state);
   const double d = delay_.one_way_s();
   const double sample_s = state.received_s - d;
   // What the operator was shown of this moment at this moment: the

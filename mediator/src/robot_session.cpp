@@ -82,6 +82,7 @@ class RobotSession final : public FamilySession {
                    setup.predict_model),
         display_(setup.vehicle.camera, setup.vehicle.body.radius) {
     path_ahead_.reserve(static_cast<size_t>(kPathAhead_s / kPathSpacing_s) + 2);
+    if (setup.keep_predictor_inputs) predictor_.KeepInputs();
     rec.track = setup.track.name;
     rec.predict = setup.predict;
     rec.predict_model = PredictionModelName(setup.predict_model);
@@ -375,6 +376,7 @@ class RobotSession final : public FamilySession {
     rec.switches = interfaces_->switches();
     RecordPredictionErrors(predictor_.errors_m(), rec);
     result.shown = predictor_.shown();
+    result.predictor_inputs = predictor_.inputs();
     result.started_ns = t0_ns_;
     result.shown_height = false;
     RecordEstimates(predictor_, rec);

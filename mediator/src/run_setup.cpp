@@ -28,6 +28,7 @@
 #include "haptel/link/fault_transport.hpp"
 #include "haptel/link/security.hpp"
 #include "haptel/mediator/haptic_side.hpp"
+#include "haptel/mediator/prediction_score.hpp"
 #include "haptel/mediator/third_person_view.hpp"
 #include "haptel/record/run_picture.hpp"
 #include "haptel/record/truth_record.hpp"
@@ -464,6 +465,7 @@ void TakeReality(const SessionSetup& setup, SessionResult& result) {
       const record::TruthRecord truth = record::TruthRecord::Load(file);
       result.reality = truth.reality();
       result.reality_seed = truth.seed();
+      ScorePrediction(truth, result);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "haptel: warning: the vehicle's truth record: %s\n", e.what());
     }

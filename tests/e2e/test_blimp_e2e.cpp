@@ -53,7 +53,7 @@ TEST_CASE(
   Child haptel({Bin("haptel"), "run", "--config", "config/blimp.yaml", "--vehicle",
                 "config/vehicles/sim-blimp-maestro.yaml", "--track", "config/tracks/blimp-hop.yaml",
                 "--json", "--quiet", "--domain", std::to_string(test::UniqueDomain(71)),
-                "--database", db.string(), "--vehicle-timeout", "5"});
+                "--database", db.string(), "--vehicle-timeout", "5", "--reality", "none"});
   const int code = haptel.Wait(300.0);
   INFO("stdout:\n" << haptel.out() << "\nstderr:\n" << haptel.err());
   REQUIRE(code == 0);
@@ -70,7 +70,8 @@ TEST_CASE(
   CHECK(std::stod(JsonField(json, "command_rtt_ms_p50")) > 0.0);
   // The blimp's predictor runs with the display off too: the pilot saw the
   // states as they came, and the model's error against them is recorded
-  // (the airship model of the vehicle file behind the Maestro's pulses).
+  // (the airship model of the vehicle file behind the Maestro's pulses; the
+  // twin, --reality none, flies that very model).
   CHECK(JsonField(json, "predict") == "false");
   REQUIRE(JsonField(json, "prediction_error_m_p95") != "null");
   CHECK(std::stod(JsonField(json, "prediction_error_m_p95")) < 0.1);
@@ -96,10 +97,26 @@ TEST_CASE(
     "and its error recorded") {
   const auto dir = test::ScratchDir("e2e-blimp-predict");
   const auto db = dir / "runs.db";
-  Child haptel({Bin("haptel"), "run", "--config", "config/blimp.yaml", "--track",
-                "config/tracks/blimp-hop.yaml", "--link-fault", "delay=400ms", "--predict", "on",
-                "--json", "--quiet", "--domain", std::to_string(test::UniqueDomain(77)),
-                "--database", db.string(), "--vehicle-timeout", "5"});
+  Child haptel({Bin("haptel"),
+                "run",
+                "--config",
+                "config/blimp.yaml",
+                "--track",
+                "config/tracks/blimp-hop.yaml",
+                "--link-fault",
+                "delay=400ms",
+                "--predict",
+                "on",
+                "--json",
+                "--quiet",
+                "--domain",
+                std::to_string(test::UniqueDomain(77)),
+                "--database",
+                db.string(),
+                "--vehicle-timeout",
+                "5",
+                "--reality",
+                "none"});
   const int code = haptel.Wait(300.0);
   INFO("stdout:\n" << haptel.out() << "\nstderr:\n" << haptel.err());
   REQUIRE(code == 0);
@@ -109,8 +126,8 @@ TEST_CASE(
   CHECK(JsonField(json, "gates_passed") == "1");
   CHECK(JsonField(json, "predict") == "true");
   CHECK(std::stod(JsonField(json, "command_rtt_ms_p50")) > 700.0);
-  // The model is the simulated blimp's own: centimetres at most, where the
-  // delayed state is metres behind.
+  // The model is the simulated blimp's own (the twin, --reality none):
+  // centimetres at most, where the delayed state is metres behind.
   REQUIRE(JsonField(json, "prediction_error_m_p95") != "null");
   CHECK(std::stod(JsonField(json, "prediction_error_m_p95")) < 0.1);
 

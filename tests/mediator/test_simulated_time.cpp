@@ -2,6 +2,7 @@
 // process. The same seed gives the same lap to the tick; the lap is timed
 // by the same lap timer and stored in the same row as a real-time one; the
 // link's delay is the configured one; what cannot be stepped here is refused.
+#include <algorithm>
 #include <atomic>
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -84,6 +85,24 @@ TEST_CASE("simulated time: the same seed drives the same gesture lap to the tick
   INFO(first.result.message);
   REQUIRE(first.result.outcome == mediator::Outcome::kCompleted);
   CheckSameLap(first, second);
+  // The robot ran the default reality, lab, with its file's seed: one seed,
+  // one lap. The twin (--reality none) drives another path.
+  CHECK(first.result.reality == "lab");
+  CHECK(first.result.reality_seed == 1);
+  const mediator::RecordedRun twin = Run(
+      Setup(dir / "twin.db", {"--interface", "gesture", "--simulated-time", "--reality", "none"}));
+  CHECK(twin.result.reality == "none");
+  REQUIRE(twin.result.outcome == mediator::Outcome::kCompleted);
+  double apart_m = 0.0;
+  const auto& lab_path = first.result.record.path;
+  const auto& twin_path = twin.result.record.path;
+  for (size_t i = 0; i < std::min(lab_path.size(), twin_path.size()); ++i) {
+    apart_m = std::max(apart_m,
+                       std::hypot(lab_path[i].x - twin_path[i].x, lab_path[i].y - twin_path[i].y));
+  }
+  INFO("lab lap " << first.result.record.lap_time_s << " s, twin's "
+                  << twin.result.record.lap_time_s << " s; paths up to " << apart_m << " m apart");
+  CHECK(apart_m > 0.02);
   // Every part kept its rate on the simulated clock: 1 kHz servo, the
   // vehicle's 200 Hz, for the session's whole simulated span.
   const double span_s = first.result.simulated_s;

@@ -37,6 +37,35 @@ struct ShownPose {
   double z = 0.0;  ///< height (the blimp); 0 for the robot
 };
 
+/// A vehicle state as the predictor needs it.
+struct RobotStateSample {
+  double received_s = 0.0;  ///< when it arrived, operator's clock
+  double x = 0.0;
+  double y = 0.0;
+  double heading = 0.0;
+  double speed = 0.0;     ///< m/s, forward
+  double yaw_rate = 0.0;  ///< rad/s
+  int applied_left = 0;   ///< speed levels in effect when it was sampled
+  int applied_right = 0;
+  /// When it was sampled, the vehicle's clock (s; intervals between states
+  /// for the estimator); 0: unknown (its arrival is used).
+  double stamp_s = 0.0;
+  bool touching = false;  ///< a bumper pressed
+};
+
+/// Everything a robot's predictor consumed, in order, when asked to keep it
+/// (RobotPredictor::KeepInputs; SessionSetup::keep_predictor_inputs): what
+/// shows that it reads nothing but what crossed the link.
+struct RobotPredictorInputs {
+  struct Command {
+    double sent_s;  ///< operator's clock
+    double left, right;
+  };
+  std::vector<Command> commands;
+  std::vector<double> round_trips_s;
+  std::vector<RobotStateSample> states;
+};
+
 /// Percentiles of errors (m), by nearest rank; -1 without any.
 struct ErrorPercentiles {
   double p50 = -1.0;

@@ -45,22 +45,6 @@ struct PredictedPose {
   double heading = 0.0;
 };
 
-/// A vehicle state as the predictor needs it.
-struct RobotStateSample {
-  double received_s = 0.0;  ///< when it arrived, operator's clock
-  double x = 0.0;
-  double y = 0.0;
-  double heading = 0.0;
-  double speed = 0.0;     ///< m/s, forward
-  double yaw_rate = 0.0;  ///< rad/s
-  int applied_left = 0;   ///< speed levels in effect when it was sampled
-  int applied_right = 0;
-  /// When it was sampled, the vehicle's clock (s; intervals between states
-  /// for the estimator); 0: unknown (its arrival is used).
-  double stamp_s = 0.0;
-  bool touching = false;  ///< a bumper pressed
-};
-
 class RobotPredictor {
  public:
   /// `watchdog_s`: the robot stops this long after the last command reached
@@ -73,7 +57,7 @@ class RobotPredictor {
   /// the link carries them; the robot quantises them to its levels).
   void OnCommand(double t_s, double left, double right);
   /// A command round trip (s).
-  void OnRoundTrip(double rtt_s) { delay_.AddRoundTrip(rtt_s); }
+  void OnRoundTrip(double rtt_s);
   /// A state arrived. Returns the distance (m) between its pose and the pose
   /// the predictor gave for that moment at that moment (negative when no
   /// state had arrived by then: nothing was predicted), and records it in
@@ -97,6 +81,9 @@ class RobotPredictor {
   const std::vector<ShownPose>& shown() const { return shown_; }
   /// What is learnt of the drive (used by the model with kLearn).
   const DriveEstimator& estimator() const { return estimator_; }
+  /// From now on, every input is kept (inputs()).
+  void KeepInputs() { keep_inputs_ = true; }
+  const RobotPredictorInputs& inputs() const { return inputs_; }
   /// The drive the model runs now.
   const TreadDriveConfig& drive() const { return drive_; }
   /// When (operator's clock, s) the gains and the track width first became
@@ -137,6 +124,8 @@ class RobotPredictor {
   std::vector<double> errors_m_;
   std::vector<ShownPose> shown_;
   double gains_known_s_ = -1.0, width_known_s_ = -1.0;
+  bool keep_inputs_ = false;
+  RobotPredictorInputs inputs_;
 };
 
 }  // namespace haptel::mediator

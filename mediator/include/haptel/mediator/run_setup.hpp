@@ -35,7 +35,9 @@ SessionSetup RunSetupFromArgs(const Args& args);
 
 /// After a session: the reality its simulated vehicle ran (name and seed,
 /// from the header of its truth record, setup.vehicle.truth_file) into
-/// `result`; a temporary truth record (setup.truth_temporary) is removed.
+/// `result`, and the run's prediction scored against it (prediction_score.hpp:
+/// the error against the truth, each estimate's truth); a temporary truth
+/// record (setup.truth_temporary) is removed.
 /// A vehicle that never started wrote none: nothing is said. RunAndRecord
 /// calls it; a fleet's command, for each vehicle.
 void TakeReality(const SessionSetup& setup, SessionResult& result);

@@ -93,6 +93,8 @@ struct SessionSetup {
   /// is learnt of the vehicle while it drives (the default: --predict on is
   /// learn; nominal is for comparing the two).
   PredictionModel predict_model = PredictionModel::kLearn;
+  /// Keep everything a robot's predictor consumes (SessionResult::predictor_inputs).
+  bool keep_predictor_inputs = false;
   /// Record the device's readings here for the `replay` driver (empty: none).
   std::filesystem::path trace;
   /// "auto" (the simulated driver; needs the sim device) or "person".
@@ -218,6 +220,9 @@ struct SessionResult {
   std::vector<ShownPose> shown;
   int64_t started_ns = 0;
   bool shown_height = false;
+  /// With SessionSetup::keep_predictor_inputs, a robot's: everything its
+  /// predictor consumed.
+  RobotPredictorInputs predictor_inputs;
   /// A simulated-time run: its session's simulated seconds, and the wall
   /// seconds the whole run took (set-up included); 0 in real time.
   double simulated_s = 0.0;
