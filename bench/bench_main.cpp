@@ -61,11 +61,11 @@ constexpr Usage kUsage[] = {
     {"blimp", "[--vehicle FILE] [--smoke] [--json]",
      "airship model: integrators x steps, error against CPU; physics checks"},
     {"link",
-     "[--seconds S] [--track FILE] [--delays MS,...] [--losses PERCENT,...] [--predict "
-     "off|on|both] "
+     "[--seconds S] [--vehicles robot,blimp] [--track FILE] [--blimp-track FILE] [--reality "
+     "NAME,...] [--delays MS,...] [--losses PERCENT,...] [--predict off,nominal,learn] "
      "[--link-profile NAME] [--domain D] [--lap-domain D] [--rtt-only] [--smoke] [--json]",
-     "DDS round trip against raw Fast DDS; the lap against the link's delay and loss, with and "
-     "without prediction"},
+     "DDS round trip against raw Fast DDS; the lap against the link's delay per reality, "
+     "prediction off, nominal and learning, its error against the truth"},
     {"video",
      "[--vehicle FILE] [--track FILE] [--schedule default|both|jpeg|h264|off] [--phase-s S] "
      "[--domain D] [--smoke] [--json]",

@@ -2,6 +2,7 @@
 
 #include <signal.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -11,10 +12,13 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "haptel/config/link.hpp"
 #include "haptel/config/paths.hpp"
+#include "haptel/config/reality.hpp"
 #include "haptel/config/vehicle.hpp"
 #include "haptel/core/args.hpp"
 #include "haptel/core/child_process.hpp"
@@ -25,6 +29,7 @@
 #include "haptel/link/security.hpp"
 #include "haptel/link/topic.hpp"
 #include "haptel/mediator/vehicle_link.hpp"
+#include "haptel/record/truth_record.hpp"
 #include "plot.hpp"
 #include "smoke.hpp"
 
@@ -207,60 +212,233 @@ RttFigures HaptelRoundTrip(int domain, double seconds, const std::filesystem::pa
   return figures;
 }
 
-struct LapRow {
+/// How the operator side predicts (`haptel run --predict`): not at all, with
+/// the vehicle's nominal model only, or learning the vehicle it drives.
+enum class PredictMode { kOff, kNominal, kLearn };
+
+const char* ModeName(PredictMode mode) {
+  switch (mode) {
+    case PredictMode::kOff:
+      return "off";
+    case PredictMode::kNominal:
+      return "nominal";
+    case PredictMode::kLearn:
+      return "learn";
+  }
+  return "?";
+}
+
+/// --predict: a list of off, nominal, learn (on = learn); `both` (off and
+/// on) and `all` (the three) as before.
+std::vector<PredictMode> ParseModes(const std::string& text) {
+  std::vector<PredictMode> out;
+  const auto add = [&](PredictMode m) {
+    if (std::find(out.begin(), out.end(), m) == out.end()) out.push_back(m);
+  };
+  for (const std::string& item : SplitList(text)) {
+    if (item == "off") {
+      add(PredictMode::kOff);
+    } else if (item == "nominal") {
+      add(PredictMode::kNominal);
+    } else if (item == "on" || item == "learn") {
+      add(PredictMode::kLearn);
+    } else if (item == "both") {
+      add(PredictMode::kOff);
+      add(PredictMode::kLearn);
+    } else if (item == "all") {
+      add(PredictMode::kOff);
+      add(PredictMode::kNominal);
+      add(PredictMode::kLearn);
+    } else {
+      throw UsageError(
+          "option --predict: expected off, nominal, learn (or on), both or all, got '" + item +
+          "'");
+    }
+  }
+  if (out.empty()) throw UsageError("option --predict: expected at least one mode");
+  return out;
+}
+
+std::string JoinModes(const std::vector<PredictMode>& modes) {
+  std::vector<std::string> names;
+  for (const PredictMode m : modes) names.push_back(ModeName(m));
+  return JoinList(names);
+}
+
+std::string JoinNumbers(const std::vector<double>& values) {
+  std::vector<std::string> texts;
+  for (const double v : values) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%g", v);
+    texts.push_back(text);
+  }
+  return JoinList(texts);
+}
+
+/// A vehicle the laps are driven with: its name in the tables and the
+/// `haptel run` options that pick it and its track.
+struct LapVehicle {
+  std::string name;
+  std::vector<std::string> words;
+};
+
+/// One lap of the sweep: which vehicle, in which reality, predicted how,
+/// over which link.
+struct LapSpec {
+  const LapVehicle* vehicle = nullptr;
+  std::string reality;  ///< a name (config/realities/NAME.yaml) or a file
+  PredictMode mode = PredictMode::kOff;
   double delay_ms = 0.0;
   double loss_percent = 0.0;
-  bool predict = false;
-  double prediction_error_m_p95 = std::nan("");
+};
+
+/// The `haptel run` options of a lap's reality, prediction and link fault:
+/// the one place the sweep's dimensions become the run's options.
+std::vector<std::string> LapOptions(const LapSpec& spec, const std::string& profile) {
+  char fault[96];
+  std::snprintf(fault, sizeof fault, "delay=%gms,loss=%g%%", spec.delay_ms, spec.loss_percent);
+  std::vector<std::string> words{"--link-fault",      fault,       "--predict",
+                                 ModeName(spec.mode), "--reality", spec.reality};
+  // The profile's rate, queue and jitter; the sweep's delay and loss replace its own.
+  if (!profile.empty()) words.insert(words.end(), {"--link-profile", profile});
+  return words;
+}
+
+/// A parameter the predictor estimated, beside the vehicle's truth.
+struct Estimate {
+  std::string param;
+  double estimate = std::nan("");
+  double truth = std::nan("");
+  double known_s = std::nan("");  ///< when the estimator first held it known (its sd under 2 %)
+};
+
+struct LapRow {
+  LapSpec spec;
+  std::string reality;  ///< as the run names it (from the truth record)
+  std::string seed;
   bool ran = false;
   bool completed = false;
   std::string outcome;
   double lap_time_s = std::nan("");
+  double ratio_to_0ms = std::nan("");  ///< to the 0 ms lap of the same vehicle, reality, loss, mode
   int obstacles = 0;
   int gates_passed = 0;
   int gates_total = 0;
   double rtt_p50_ms = std::nan("");
+  double error_m_p50 = std::nan("");  ///< the prediction against the truth
+  double error_m_p95 = std::nan("");
+  double odometry_error_m_p95 = std::nan("");  ///< against the vehicle's own (reported) states
+  /// When every estimated parameter was known (the last one's known_s), s
+  /// since the session started; NaN when one never was.
+  double converged_s = std::nan("");
+  std::vector<Estimate> estimated;
+  std::vector<TruthRow> path;  ///< where the vehicle truly was (its truth record)
+  double path_gap_m_mean =
+      std::nan("");  ///< from the `none` reality's path (same vehicle, mode, link)
+  double path_gap_m_max = std::nan("");
   double wall_s = 0.0;
 };
 
-LapRow Lap(const std::filesystem::path& dir, const std::string& track, int domain, double delay_ms,
-           double loss_percent, bool predict, const std::string& profile) {
+/// The text of `{…}` that follows `"key":` in a one-line JSON object; "" when
+/// absent or not an object.
+std::string JsonObjectOf(const std::string& json, const std::string& key) {
+  const std::string needle = "\"" + key + "\":{";
+  const auto at = json.find(needle);
+  if (at == std::string::npos) return "";
+  const size_t start = at + needle.size() - 1;
+  int depth = 0;
+  bool in_string = false;
+  for (size_t i = start; i < json.size(); ++i) {
+    const char c = json[i];
+    if (in_string) {
+      if (c == '\\') {
+        ++i;
+      } else if (c == '"') {
+        in_string = false;
+      }
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '{') {
+      ++depth;
+    } else if (c == '}' && --depth == 0) {
+      return json.substr(start, i - start + 1);
+    }
+  }
+  return "";
+}
+
+/// The keys of a JSON object's members whose values are objects, in order.
+std::vector<std::string> ObjectMemberKeys(const std::string& object) {
+  std::vector<std::string> keys;
+  size_t at = 0;
+  while ((at = object.find("\":{", at)) != std::string::npos) {
+    const auto open = object.rfind('"', at - 1);
+    if (open == std::string::npos) break;
+    const std::string key = object.substr(open + 1, at - open - 1);
+    const std::string inner = JsonObjectOf(object, key);
+    keys.push_back(key);
+    at += inner.size() + 3;
+  }
+  return keys;
+}
+
+/// Distance from (x, y) to the polyline `path` (its nearest segment).
+double DistanceToPath(double x, double y, const std::vector<TruthRow>& path) {
+  double best = INFINITY;
+  for (size_t i = 0; i + 1 < path.size(); ++i) {
+    const double ax = path[i].x, ay = path[i].y;
+    const double dx = path[i + 1].x - ax, dy = path[i + 1].y - ay;
+    const double len2 = dx * dx + dy * dy;
+    const double t =
+        len2 > 0.0 ? std::clamp(((x - ax) * dx + (y - ay) * dy) / len2, 0.0, 1.0) : 0.0;
+    best = std::min(best, std::hypot(x - (ax + t * dx), y - (ay + t * dy)));
+  }
+  if (path.size() == 1) best = std::hypot(x - path[0].x, y - path[0].y);
+  return best;
+}
+
+/// How far apart two driven paths are: the mean and the largest distance
+/// from a point of either to the other (the symmetric Hausdorff distance).
+std::pair<double, double> PathGap(const std::vector<TruthRow>& a, const std::vector<TruthRow>& b) {
+  if (a.empty() || b.empty()) return {std::nan(""), std::nan("")};
+  double sum = 0.0, most = 0.0;
+  size_t n = 0;
+  for (const auto& [from, to] : {std::pair{&a, &b}, std::pair{&b, &a}}) {
+    for (const TruthRow& p : *from) {
+      const double d = DistanceToPath(p.x, p.y, *to);
+      sum += d;
+      most = std::max(most, d);
+      ++n;
+    }
+  }
+  return {sum / static_cast<double>(n), most};
+}
+
+/// Runs one lap (`haptel run` with the automatic operator, no view) and
+/// reads its JSON line, and the vehicle's true path from its truth record
+/// (kept in `truth`).
+LapRow Lap(const std::filesystem::path& db, const std::filesystem::path& truth, int domain,
+           const LapSpec& spec, const std::string& profile) {
   LapRow row;
-  row.delay_ms = delay_ms;
-  row.loss_percent = loss_percent;
-  row.predict = predict;
-  char fault[96];
-  std::snprintf(fault, sizeof fault, "delay=%gms,loss=%g%%", delay_ms, loss_percent);
-  const std::string db = (dir / "link.db").string();
-  std::vector<std::string> words{"run",
-                                 "--operator",
-                                 "auto",
-                                 "--view",
-                                 "none",
-                                 "--link-fault",
-                                 fault,
-                                 "--track",
-                                 track,
-                                 "--json",
-                                 "--quiet",
-                                 "--domain",
-                                 std::to_string(domain),
-                                 "--database",
-                                 db,
-                                 "--vehicle-timeout",
-                                 "5",
-                                 "--predict",
-                                 predict ? "on" : "off"};
-  // The profile's rate, queue and jitter; the sweep's delay and loss replace its own.
-  if (!profile.empty()) words.insert(words.end(), {"--link-profile", profile});
+  row.spec = spec;
+  std::filesystem::remove(truth);
+  std::vector<std::string> words{"run",        "--operator", "auto",
+                                 "--view",     "none",       "--json",
+                                 "--quiet",    "--domain",   std::to_string(domain),
+                                 "--database", db.string(),  "--vehicle-timeout",
+                                 "5",          "--truth",    truth.string()};
+  words.insert(words.end(), spec.vehicle->words.begin(), spec.vehicle->words.end());
+  const std::vector<std::string> options = LapOptions(spec, profile);
+  words.insert(words.end(), options.begin(), options.end());
   const int64_t start = MonotonicNs();
   ChildProcess run((ProgramDirectory() / "haptel").string(), words, ChildProcess::Options{true});
   run.Wait(1800.0);
   row.wall_s = NsToS(MonotonicNs() - start);
   const std::string json = run.LastLine();
   if (json.empty() || json.front() != '{') {
-    std::fprintf(stderr, "haptel bench link: the lap at %s gave no result: %s\n", fault,
-                 run.err().c_str());
+    std::fprintf(stderr, "haptel bench link: the %s lap (%s, predict %s, %s) gave no result: %s\n",
+                 spec.vehicle->name.c_str(), spec.reality.c_str(), ModeName(spec.mode),
+                 options[1].c_str(), run.err().c_str());
     return row;
   }
   row.ran = true;
@@ -271,8 +449,109 @@ LapRow Lap(const std::filesystem::path& dir, const std::string& track, int domai
   row.gates_passed = static_cast<int>(Number(json, "gates_passed"));
   row.gates_total = static_cast<int>(Number(json, "gates_total"));
   row.rtt_p50_ms = Number(json, "command_rtt_ms_p50");
-  row.prediction_error_m_p95 = Number(json, "prediction_error_m_p95");
+  row.error_m_p50 = Number(json, "prediction_error_m_p50");
+  row.error_m_p95 = Number(json, "prediction_error_m_p95");
+  row.odometry_error_m_p95 = Number(json, "prediction_error_odometry_m_p95");
+  const std::string reality = JsonObjectOf(json, "reality");
+  row.reality = reality.empty() ? spec.reality : JsonFieldOf(reality, "name");
+  row.seed = JsonFieldOf(reality, "seed");
+  const std::string estimated = JsonObjectOf(json, "estimated");
+  for (const std::string& param : ObjectMemberKeys(estimated)) {
+    const std::string e = JsonObjectOf(estimated, param);
+    row.estimated.push_back(
+        {param, Number(e, "estimate"), Number(e, "truth"), Number(e, "known_s")});
+  }
+  bool all_known = !row.estimated.empty();
+  double last_known_s = 0.0;
+  for (const Estimate& e : row.estimated) {
+    all_known = all_known && std::isfinite(e.known_s);
+    if (all_known) last_known_s = std::max(last_known_s, e.known_s);
+  }
+  if (all_known) row.converged_s = last_known_s;
+  try {
+    // Every 5th row (the control rate's 0.01 s or so): paths a few centimetres a point.
+    const record::TruthRecord record = record::TruthRecord::Load(truth);
+    for (size_t i = 0; i < record.rows().size(); i += 5) row.path.push_back(record.rows()[i]);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "haptel bench link: the lap's truth: %s\n", e.what());
+  }
   return row;
+}
+
+/// A figure for a table: "-" when there is none.
+std::string Cell(double v, double scale = 1.0, const char* format = "%.1f") {
+  if (!std::isfinite(v)) return "-";
+  char text[32];
+  std::snprintf(text, sizeof text, format, v * scale);
+  return text;
+}
+
+std::string JsonOrNull(double v) { return std::isfinite(v) ? JsonNumber(v) : std::string("null"); }
+
+/// The issue's targets, judged on the sweep's laps (NaN / unknown where the
+/// sweep has no lap to judge them by).
+struct Targets {
+  // lab: the 400 ms lap learning within 1.3x the 0 ms lap, its error p95 within 5 cm.
+  double lab_ratio_400ms = std::nan("");
+  double lab_error_m_p95_400ms = std::nan("");
+  // harsh: every learning lap completed, and learning better than the
+  // nominal model (a lower error p95) at every delay.
+  std::optional<bool> harsh_completed;
+  std::optional<bool> harsh_learn_beats_nominal;
+  // none: the twin's error, which must stay ~0 (the scoring's own check).
+  double none_error_m_p95_max = std::nan("");
+
+  std::optional<bool> LabRatioMet() const {
+    if (!std::isfinite(lab_ratio_400ms)) return std::nullopt;
+    return lab_ratio_400ms <= 1.3;
+  }
+  std::optional<bool> LabErrorMet() const {
+    if (!std::isfinite(lab_error_m_p95_400ms)) return std::nullopt;
+    return lab_error_m_p95_400ms <= 0.05;
+  }
+};
+
+/// Judges the robot's laps (the targets are the robot's) at 0 % loss.
+Targets Judge(const std::vector<LapRow>& rows) {
+  Targets t;
+  const auto find = [&](const std::string& reality, PredictMode mode,
+                        double delay) -> const LapRow* {
+    for (const LapRow& r : rows) {
+      if (r.spec.vehicle->name == "robot" && r.reality == reality && r.spec.mode == mode &&
+          r.spec.delay_ms == delay && r.spec.loss_percent == 0.0)
+        return &r;
+    }
+    return nullptr;
+  };
+  if (const LapRow* r = find("lab", PredictMode::kLearn, 400.0)) {
+    t.lab_ratio_400ms = r->ratio_to_0ms;
+    t.lab_error_m_p95_400ms = r->error_m_p95;
+  }
+  for (const LapRow& r : rows) {
+    if (r.spec.vehicle->name != "robot" || r.spec.loss_percent != 0.0) continue;
+    if (r.reality == "harsh" && r.spec.mode == PredictMode::kLearn) {
+      t.harsh_completed = t.harsh_completed.value_or(true) && r.completed;
+      const LapRow* nominal = find("harsh", PredictMode::kNominal, r.spec.delay_ms);
+      if (nominal) {
+        t.harsh_learn_beats_nominal =
+            t.harsh_learn_beats_nominal.value_or(true) && r.error_m_p95 < nominal->error_m_p95;
+      }
+    }
+    if (r.reality == "none" && r.spec.mode != PredictMode::kOff && std::isfinite(r.error_m_p95)) {
+      t.none_error_m_p95_max = std::isfinite(t.none_error_m_p95_max)
+                                   ? std::max(t.none_error_m_p95_max, r.error_m_p95)
+                                   : r.error_m_p95;
+    }
+  }
+  return t;
+}
+
+const char* Verdict(const std::optional<bool>& met) {
+  return !met ? "not measured" : *met ? "met" : "MISSED";
+}
+
+std::string JsonVerdict(const std::optional<bool>& met) {
+  return !met ? "null" : *met ? "true" : "false";
 }
 
 }  // namespace
@@ -281,47 +560,55 @@ int BenchLinkMain(int argc, const char* const* argv) {
   bool json = false, smoke = false, rtt_only = false;
   double seconds = 10.0;
   std::string track = ShippedFile("config/tracks/grand-prix.yaml").string();
-  std::vector<double> delays{0, 50, 100, 200, 400, 800};
-  std::vector<double> losses{0, 5};
-  std::vector<bool> predicts{false, true};
+  std::string blimp_track = ShippedFile("config/tracks/blimp-hop.yaml").string();
+  std::vector<std::string> vehicle_names{"robot", "blimp"};
+  std::vector<std::string> realities{"none", "lab", "harsh"};
+  std::vector<double> delays{0, 100, 200, 400};
+  std::vector<double> losses{0};
+  std::vector<PredictMode> modes{PredictMode::kOff, PredictMode::kNominal, PredictMode::kLearn};
   // Domains of the bench's own, away from a default installation's 0.
   int domain = 200 + static_cast<int>(getpid() % 30);
   std::optional<int> lap_domain;
   std::string profile;  // --link-profile: every lap on that link
   try {
-    const Args args(
-        argc, argv,
-        {"seconds", "track", "delays", "losses", "domain", "lap-domain", "predict", "link-profile"},
-        {"json", "echo", "rtt-only", kSmokeFlag});
+    const Args args(argc, argv,
+                    {"seconds", "track", "blimp-track", "vehicles", "reality", "delays", "losses",
+                     "domain", "lap-domain", "predict", "link-profile"},
+                    {"json", "echo", "rtt-only", kSmokeFlag});
     if (args.Flag("echo")) return Echo(args.Int("domain", 0, 232).value_or(0));
     json = args.Flag("json");
     smoke = args.Flag(kSmokeFlag);
     rtt_only = args.Flag("rtt-only");  // the round trips alone, no laps
-    if (smoke) {  // every part once: the shortest round trips, one lap of the short track, no fault
+    if (smoke) {  // every part once: the shortest round trips, one learning lap of the short
+                  // track (the predictor's path, the one a change is likelier to break) in the
+                  // twin's reality (the quickest lap, its truth record and estimates all the
+                  // same), no fault
       seconds = 2.0;
       track = ShippedFile("config/tracks/test-short.yaml").string();
+      vehicle_names = {"robot"};
+      realities = {"none"};
       delays = {0};
-      losses = {0};
-      predicts = {true};  // the predictor's path, the one a change is likelier to break
+      modes = {PredictMode::kLearn};
     }
     seconds = args.Number("seconds", 2.0, 600.0).value_or(seconds);
     track = args.Value("track").value_or(track);
+    blimp_track = args.Value("blimp-track").value_or(blimp_track);
     domain = args.Int("domain", 0, 231).value_or(domain);  // the laps default to the next one
     lap_domain = args.Int("lap-domain", 0, 232);
     if (auto d = args.Value("delays")) delays = ParseList("delays", *d);
     if (rtt_only) delays.clear();
     if (auto l = args.Value("losses")) losses = ParseList("losses", *l);
-    if (auto p = args.Value("predict")) {
-      if (*p == "off") {
-        predicts = {false};
-      } else if (*p == "on") {
-        predicts = {true};
-      } else if (*p == "both") {
-        predicts = {false, true};
-      } else {
-        throw UsageError("option --predict: expected off, on or both, got '" + *p + "'");
-      }
+    if (auto p = args.Value("predict")) modes = ParseModes(*p);
+    if (auto v = args.Value("vehicles")) vehicle_names = SplitList(*v);
+    for (const std::string& v : vehicle_names) {
+      if (v != "robot" && v != "blimp")
+        throw UsageError("option --vehicles: expected robot and/or blimp, got '" + v + "'");
     }
+    if (vehicle_names.empty()) throw UsageError("option --vehicles: expected robot and/or blimp");
+    if (auto r = args.Value("reality")) realities = SplitList(*r);
+    if (realities.empty()) throw UsageError("option --reality: expected at least one reality");
+    // A missing or bad reality is refused now (naming its file, key and line), not by every lap.
+    for (const std::string& r : realities) LoadReality(RealityFile(r));
     for (const double l : losses) {
       if (l > 99.0) throw UsageError("option --losses: expected percentages below 100");
     }
@@ -334,12 +621,25 @@ int BenchLinkMain(int argc, const char* const* argv) {
     std::fprintf(stderr, "haptel bench link: %s\n", e.what());
     return 2;
   }
+  std::vector<LapVehicle> vehicles;
+  for (const std::string& name : vehicle_names) {
+    if (name == "robot") vehicles.push_back({"robot", {"--track", track}});
+    if (name == "blimp") {
+      vehicles.push_back(
+          {"blimp",
+           {"--config", ShippedFile("config/blimp.yaml").string(), "--track", blimp_track}});
+    }
+  }
   const auto dir = OutputDir(smoke);
-  PrintSmokeNote("link", smoke, "%.0f s per round trip, %zu lap(s) on %s", seconds,
-                 delays.size() * losses.size() * predicts.size(),
+  const size_t laps =
+      vehicles.size() * realities.size() * delays.size() * losses.size() * modes.size();
+  PrintSmokeNote("link", smoke, "%.0f s per round trip, %zu lap(s) on %s", seconds, laps,
                  std::filesystem::path(track).filename().c_str());
-  std::printf("haptel bench link: round trip at %.0f Hz for %.0f s, then laps on %s\n\n", kRateHz,
-              seconds, track.c_str());
+  std::printf(
+      "haptel bench link: round trip at %.0f Hz for %.0f s, then %zu laps (%s; realities %s, "
+      "delays %s ms, prediction %s)\n\n",
+      kRateHz, seconds, laps, JoinList(vehicle_names).c_str(), JoinList(realities).c_str(),
+      JoinNumbers(delays).c_str(), JoinModes(modes).c_str());
 
   RttFigures raw, haptel, secured;
   bool rtt_ok = true;
@@ -387,62 +687,162 @@ int BenchLinkMain(int argc, const char* const* argv) {
     }
   }
 
+  // ---- the laps: vehicles x realities x losses x modes x delays
+  const int laps_domain = lap_domain.value_or(domain + 1);
+  const std::filesystem::path db = dir / "link.db";            // the laps' runs
+  const std::filesystem::path truth_dir = dir / "link_truth";  // and their vehicles' truth records
+  std::filesystem::create_directories(truth_dir);
   std::vector<LapRow> rows;
-  std::printf(
-      "  delay ms  loss %%  predict  outcome         lap s   x 0 ms  gates  obstacles  rtt p50 ms  "
-      "pred. err p95 mm  wall s\n");
-  for (const double loss : losses) {
-    for (const bool predict : predicts) {
-      double lap_at_zero = std::nan("");
-      for (const double delay : delays) {
-        const LapRow row =
-            Lap(dir, track, lap_domain.value_or(domain + 1), delay, loss, predict, profile);
-        rows.push_back(row);
-        if (delay == 0.0 && row.completed) lap_at_zero = row.lap_time_s;
-        std::printf(
-            "  %8.0f  %6.1f  %-7s  %-14s %6.2f  %6.2f   %d/%d   %9d  %10.2f  %16.1f  %6.1f\n",
-            delay, loss, predict ? "on" : "off", row.ran ? row.outcome.c_str() : "no result",
-            row.lap_time_s, row.completed ? row.lap_time_s / lap_at_zero : std::nan(""),
-            row.gates_passed, row.gates_total, row.obstacles, row.rtt_p50_ms,
-            row.prediction_error_m_p95 * 1e3, row.wall_s);
-        std::fflush(stdout);
+  for (const LapVehicle& vehicle : vehicles) {
+    if (delays.empty()) break;
+    std::printf("  [%s]\n", vehicle.name.c_str());
+    std::printf(
+        "  reality  seed        predict  delay ms  loss %%  outcome         lap s  x 0 ms  gates  "
+        "obst.  rtt p50 ms  err p50 mm  err p95 mm  odom. p95 mm  converged s  gap to none m  "
+        "wall s\n");
+    for (const std::string& reality : realities) {
+      for (const double loss : losses) {
+        for (const PredictMode mode : modes) {
+          double lap_at_zero = std::nan("");
+          for (const double delay : delays) {
+            char name[128];
+            std::snprintf(name, sizeof name, "%s-%s-%s-%gms-%gpc.csv", vehicle.name.c_str(),
+                          std::filesystem::path(reality).stem().c_str(), ModeName(mode), delay,
+                          loss);
+            LapRow row = Lap(db, truth_dir / name, laps_domain,
+                             {&vehicle, reality, mode, delay, loss}, profile);
+            if (delay == 0.0 && row.completed) lap_at_zero = row.lap_time_s;
+            if (row.completed) row.ratio_to_0ms = row.lap_time_s / lap_at_zero;
+            // The reality gap: this lap's path against the twin's (the same lap in `none`).
+            for (const LapRow& twin : rows) {
+              if (twin.spec.vehicle == &vehicle && twin.reality == "none" &&
+                  twin.spec.mode == mode && twin.spec.delay_ms == delay &&
+                  twin.spec.loss_percent == loss && twin.completed && row.completed) {
+                std::tie(row.path_gap_m_mean, row.path_gap_m_max) = PathGap(row.path, twin.path);
+              }
+            }
+            std::printf(
+                "  %-7s  %-10s  %-7s  %8.0f  %6.1f  %-14s %6.2f  %6s  %2d/%-2d  %5d  %10s  %10s  "
+                "%10s  %12s  %11s  %13s  %6.1f\n",
+                row.reality.c_str(), row.seed.empty() ? "-" : row.seed.c_str(), ModeName(mode),
+                delay, loss, row.ran ? row.outcome.c_str() : "no result", row.lap_time_s,
+                Cell(row.ratio_to_0ms, 1.0, "%.2f").c_str(), row.gates_passed, row.gates_total,
+                row.obstacles, Cell(row.rtt_p50_ms, 1.0, "%.2f").c_str(),
+                Cell(row.error_m_p50, 1e3).c_str(), Cell(row.error_m_p95, 1e3).c_str(),
+                Cell(row.odometry_error_m_p95, 1e3).c_str(), Cell(row.converged_s).c_str(),
+                row.path_gap_m_mean >= 0.0 ? (Cell(row.path_gap_m_mean, 1.0, "%.2f") + "/" +
+                                              Cell(row.path_gap_m_max, 1.0, "%.2f"))
+                                                 .c_str()
+                                           : "-",
+                row.wall_s);
+            if (!row.estimated.empty()) {
+              std::string line = "      estimated (truth, known at s):";
+              for (const Estimate& e : row.estimated) {
+                line += " " + e.param + " " + Cell(e.estimate, 1.0, "%.4g") + " (" +
+                        Cell(e.truth, 1.0, "%.4g") + ", " + Cell(e.known_s) + ")";
+              }
+              std::printf("%s\n", line.c_str());
+            }
+            std::fflush(stdout);
+            rows.push_back(std::move(row));
+          }
+        }
       }
     }
+    std::printf("\n");
+  }
+
+  // The reality gap at 0 ms: each reality's lap beside the twin's.
+  if (!rows.empty()) {
+    std::printf("  the 0 ms laps (the reality gap; path gap to none: mean / max m)\n");
+    for (const LapRow& r : rows) {
+      if (r.spec.delay_ms != 0.0 || r.spec.loss_percent != losses.front()) continue;
+      std::printf("    %-6s %-7s predict %-7s  %-14s lap %6.2f s  path gap %s / %s m\n",
+                  r.spec.vehicle->name.c_str(), r.reality.c_str(), ModeName(r.spec.mode),
+                  r.ran ? r.outcome.c_str() : "no result", r.lap_time_s,
+                  Cell(r.path_gap_m_mean, 1.0, "%.3f").c_str(),
+                  Cell(r.path_gap_m_max, 1.0, "%.3f").c_str());
+    }
+  }
+  const Targets targets = Judge(rows);
+  if (!rows.empty()) {
+    std::printf(
+        "\n  targets (the robot, 0 %% loss):\n"
+        "    lab, 400 ms, learning: lap %s x the 0 ms lap (<= 1.3): %s; error p95 %s mm (<= 50): "
+        "%s\n"
+        "    harsh: every learning lap completed: %s; learning's error p95 below the nominal "
+        "model's at every delay: %s\n"
+        "    none (the twin): largest error p95 with prediction %s mm (must be ~0)\n",
+        Cell(targets.lab_ratio_400ms, 1.0, "%.2f").c_str(), Verdict(targets.LabRatioMet()),
+        Cell(targets.lab_error_m_p95_400ms, 1e3).c_str(), Verdict(targets.LabErrorMet()),
+        Verdict(targets.harsh_completed), Verdict(targets.harsh_learn_beats_nominal),
+        Cell(targets.none_error_m_p95_max, 1e3, "%.2f").c_str());
   }
   {
     std::ofstream csv(dir / "link_laps.csv");
-    csv << "delay_ms,loss_percent,predict,outcome,completed,lap_time_s,gates_passed,gates_total,"
-           "obstacles,"
-           "rtt_p50_ms,prediction_error_m_p95\n";
+    csv << "vehicle,reality,seed,predict,delay_ms,loss_percent,outcome,completed,lap_time_s,"
+           "ratio_to_0ms,gates_passed,gates_total,obstacles,rtt_p50_ms,prediction_error_m_p50,"
+           "prediction_error_m_p95,prediction_error_odometry_m_p95,estimate_converged_s,"
+           "path_gap_m_mean,path_gap_m_max,wall_s\n";
+    std::ofstream est(dir / "link_estimates.csv");
+    est << "vehicle,reality,seed,predict,delay_ms,loss_percent,param,estimate,truth,known_s\n";
     for (const LapRow& r : rows) {
-      csv << r.delay_ms << "," << r.loss_percent << "," << (r.predict ? 1 : 0) << "," << r.outcome
-          << "," << (r.completed ? 1 : 0) << "," << r.lap_time_s << "," << r.gates_passed << ","
-          << r.gates_total << "," << r.obstacles << "," << r.rtt_p50_ms << ","
-          << r.prediction_error_m_p95 << "\n";
-    }
-  }
-  std::vector<Series> series;
-  for (const double loss : losses) {
-    for (const bool predict : predicts) {
-      Series s;
-      char name[64];
-      std::snprintf(name, sizeof name, "%g%% loss, prediction %s", loss, predict ? "on" : "off");
-      s.name = name;
-      for (const LapRow& r : rows) {
-        if (r.loss_percent != loss || r.predict != predict || !r.completed) continue;
-        s.x.push_back(r.delay_ms);
-        s.y.push_back(r.lap_time_s);
+      csv << r.spec.vehicle->name << "," << r.reality << "," << r.seed << ","
+          << ModeName(r.spec.mode) << "," << r.spec.delay_ms << "," << r.spec.loss_percent << ","
+          << r.outcome << "," << (r.completed ? 1 : 0) << "," << r.lap_time_s << ","
+          << r.ratio_to_0ms << "," << r.gates_passed << "," << r.gates_total << "," << r.obstacles
+          << "," << r.rtt_p50_ms << "," << r.error_m_p50 << "," << r.error_m_p95 << ","
+          << r.odometry_error_m_p95 << "," << r.converged_s << "," << r.path_gap_m_mean << ","
+          << r.path_gap_m_max << "," << r.wall_s << "\n";
+      for (const Estimate& e : r.estimated) {
+        est << r.spec.vehicle->name << "," << r.reality << "," << r.seed << ","
+            << ModeName(r.spec.mode) << "," << r.spec.delay_ms << "," << r.spec.loss_percent << ","
+            << e.param << "," << e.estimate << "," << e.truth << "," << e.known_s << "\n";
       }
-      if (!s.x.empty()) series.push_back(s);
     }
   }
-  if (!series.empty()) {
-    PlotLines(dir / "link_laps.png", series,
-              {"The automatic operator's lap against the link's delay (each way)",
-               "delay each way, ms", "lap time, s (completed laps)"});
+  // Per vehicle, one curve per reality and mode (at the first loss): the lap
+  // against the delay, and the prediction's error against the truth.
+  for (const LapVehicle& vehicle : vehicles) {
+    std::vector<Series> laps, errors;
+    for (const std::string& reality : realities) {
+      for (const PredictMode mode : modes) {
+        Series lap{reality + ", " + ModeName(mode), {}, {}};
+        Series error = lap;
+        for (const LapRow& r : rows) {
+          if (r.spec.vehicle != &vehicle || r.spec.reality != reality || r.spec.mode != mode ||
+              r.spec.loss_percent != losses.front())
+            continue;
+          if (r.completed) {
+            lap.x.push_back(r.spec.delay_ms);
+            lap.y.push_back(r.lap_time_s);
+          }
+          if (std::isfinite(r.error_m_p95)) {
+            error.x.push_back(r.spec.delay_ms);
+            error.y.push_back(std::max(r.error_m_p95 * 1e3, 0.01));  // log scale: 10 µm floor
+          }
+        }
+        if (!lap.x.empty()) laps.push_back(lap);
+        if (!error.x.empty() && mode != PredictMode::kOff) errors.push_back(error);
+      }
+    }
+    const std::string stem = vehicle.name == "robot" ? "link_laps" : "link_laps_" + vehicle.name;
+    if (!laps.empty()) {
+      PlotLines(
+          dir / (stem + ".png"), laps,
+          {"The automatic " + std::string(vehicle.name == "robot" ? "operator" : "pilot") +
+               "'s lap against the link's delay, per reality and prediction (" + vehicle.name + ")",
+           "delay each way, ms", "lap time, s (completed laps)"});
+    }
+    if (!errors.empty()) {
+      PlotLines(dir / (stem + "_error.png"), errors,
+                {"Prediction error p95 against the truth (" + vehicle.name + ")",
+                 "delay each way, ms", "error p95, mm", true});
+    }
   }
   const bool all_ran = std::all_of(rows.begin(), rows.end(), [](const LapRow& r) { return r.ran; });
-  std::printf("\n  wrote %s/link_{rtt,laps}.csv, link_laps.png\n", dir.c_str());
+  std::printf("\n  wrote %s/link_{rtt,laps,estimates}.csv, link_laps*.png, link_truth/\n",
+              dir.c_str());
   if (json) {
     std::ostringstream o;
     o << "{\"rtt\":{\"raw_p50_ms\":" << JsonNumber(raw.p50_ms)
@@ -463,19 +863,39 @@ int BenchLinkMain(int argc, const char* const* argv) {
       << ",\"secured_video_p50_ms\":" << JsonNumber(secured.video_p50_ms) << "},\"laps\":[";
     for (size_t i = 0; i < rows.size(); ++i) {
       const LapRow& r = rows[i];
-      o << (i ? "," : "") << "{\"delay_ms\":" << JsonNumber(r.delay_ms)
-        << ",\"loss_percent\":" << JsonNumber(r.loss_percent)
+      o << (i ? "," : "") << "{\"vehicle\":" << JsonString(r.spec.vehicle->name)
+        << ",\"reality\":{\"name\":" << JsonString(r.reality)
+        << ",\"seed\":" << (r.seed.empty() ? std::string("null") : r.seed) << "}"
+        << ",\"mode\":" << JsonString(ModeName(r.spec.mode))
+        << ",\"predict\":" << (r.spec.mode != PredictMode::kOff ? "true" : "false")
+        << ",\"delay_ms\":" << JsonNumber(r.spec.delay_ms)
+        << ",\"loss_percent\":" << JsonNumber(r.spec.loss_percent)
         << ",\"outcome\":" << JsonString(r.outcome)
-        << ",\"predict\":" << (r.predict ? "true" : "false") << ",\"prediction_error_m_p95\":"
-        << (std::isfinite(r.prediction_error_m_p95) ? JsonNumber(r.prediction_error_m_p95)
-                                                    : std::string("null"))
         << ",\"completed\":" << (r.completed ? "true" : "false")
         << ",\"lap_time_s\":" << JsonNumber(std::isfinite(r.lap_time_s) ? r.lap_time_s : -1.0)
-        << ",\"obstacles\":" << r.obstacles
+        << ",\"ratio_to_0ms\":" << JsonOrNull(r.ratio_to_0ms) << ",\"obstacles\":" << r.obstacles
         << ",\"rtt_p50_ms\":" << JsonNumber(std::isfinite(r.rtt_p50_ms) ? r.rtt_p50_ms : -1.0)
-        << "}";
+        << ",\"prediction_error_m_p50\":" << JsonOrNull(r.error_m_p50)
+        << ",\"prediction_error_m_p95\":" << JsonOrNull(r.error_m_p95)
+        << ",\"prediction_error_odometry_m_p95\":" << JsonOrNull(r.odometry_error_m_p95)
+        << ",\"estimate_converged_s\":" << JsonOrNull(r.converged_s) << ",\"estimated\":{";
+      for (size_t k = 0; k < r.estimated.size(); ++k) {
+        o << (k ? "," : "") << JsonString(r.estimated[k].param)
+          << ":{\"estimate\":" << JsonOrNull(r.estimated[k].estimate)
+          << ",\"truth\":" << JsonOrNull(r.estimated[k].truth)
+          << ",\"known_s\":" << JsonOrNull(r.estimated[k].known_s) << "}";
+      }
+      o << "},\"path_gap_m_mean\":" << JsonOrNull(r.path_gap_m_mean)
+        << ",\"path_gap_m_max\":" << JsonOrNull(r.path_gap_m_max)
+        << ",\"wall_s\":" << JsonNumber(r.wall_s) << "}";
     }
-    o << "]}";
+    o << "],\"targets\":{\"lab_ratio_400ms\":" << JsonOrNull(targets.lab_ratio_400ms)
+      << ",\"lab_ratio_met\":" << JsonVerdict(targets.LabRatioMet())
+      << ",\"lab_error_m_p95_400ms\":" << JsonOrNull(targets.lab_error_m_p95_400ms)
+      << ",\"lab_error_met\":" << JsonVerdict(targets.LabErrorMet())
+      << ",\"harsh_completed\":" << JsonVerdict(targets.harsh_completed)
+      << ",\"harsh_learn_beats_nominal\":" << JsonVerdict(targets.harsh_learn_beats_nominal)
+      << ",\"none_error_m_p95_max\":" << JsonOrNull(targets.none_error_m_p95_max) << "}}";
     std::printf("%s\n", JsonLine(o.str(), smoke).c_str());
   }
   return rtt_ok && all_ran ? 0 : 1;

@@ -59,10 +59,13 @@ void PlotLines(const std::filesystem::path& file, const std::vector<Series>& ser
               black, 1, cv::LINE_AA);
   cv::putText(img, o.y_label + (o.log_y ? " (log)" : ""), {5, top - 8}, cv::FONT_HERSHEY_SIMPLEX,
               0.45, black, 1, cv::LINE_AA);
-  static const cv::Scalar kColours[] = {{200, 80, 30},  {30, 30, 200}, {40, 160, 40},
-                                        {160, 40, 160}, {0, 140, 220}, {90, 90, 90}};
+  // Ten distinguishable colours (BGR): a sweep of three realities by three modes fits.
+  static const cv::Scalar kColours[] = {
+      {200, 80, 30}, {30, 30, 200}, {40, 160, 40}, {160, 40, 160}, {0, 140, 220},
+      {90, 90, 90},  {200, 200, 0}, {120, 60, 0},  {0, 90, 160},   {180, 120, 255}};
+  constexpr size_t kColourCount = sizeof kColours / sizeof kColours[0];
   for (size_t k = 0; k < series.size(); ++k) {
-    const cv::Scalar c = kColours[k % 6];
+    const cv::Scalar c = kColours[k % kColourCount];
     std::vector<cv::Point> pts;
     for (size_t i = 0; i < series[k].x.size() && i < series[k].y.size(); ++i) {
       if (o.log_y && series[k].y[i] <= 0) continue;
