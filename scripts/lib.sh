@@ -15,6 +15,7 @@ HAPTEL_PACKAGES=(
   libavformat-dev libavcodec-dev libavutil-dev   # the --record MP4 (H.264 through libx264), each write checked
   openssl libssl-dev   # DDS Security: `haptel security init` and the certificates' check at start
   libcpp-httplib-dev   # the study's experimenter's console (a web page on 127.0.0.1)
+  libzstd-dev liblz4-dev   # the session file's chunks (MCAP: zstd or LZ4 frames)
   # The operator's view: OpenGL 3.3 core through Mesa (llvmpipe without a GPU).
   libgl-dev libegl-dev libgl1-mesa-dri libegl-mesa0
 )
