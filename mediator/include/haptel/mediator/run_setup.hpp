@@ -41,6 +41,11 @@ SessionSetup RunSetupFromArgs(const Args& args);
 /// A vehicle that never started wrote none: nothing is said. RunAndRecord
 /// calls it; a fleet's command, for each vehicle.
 void TakeReality(const SessionSetup& setup, SessionResult& result);
+/// The session file's metadata (configuration, vehicle, device, operator,
+/// interfaces) and attachments (the run's, vehicle's, device's and track's
+/// files) from `setup`; the caller adds the command line and, for a study,
+/// its own metadata.
+void DescribeSessionFile(SessionSetup& setup);
 
 /// Runs the session, then saves it into `recorder` — or, if the database
 /// fails at the end, into a fallback file beside it — with its picture.
