@@ -10,6 +10,8 @@
 
 #include "haptel/app/in_process_robot.hpp"
 #include "haptel/app/link_commands.hpp"
+#include "haptel/app/record_command.hpp"
+#include "haptel/app/replay_command.hpp"
 #include "haptel/app/run_command.hpp"
 #include "haptel/app/scene_command.hpp"
 #include "haptel/app/study_command.hpp"
@@ -29,6 +31,8 @@ constexpr const char* kUsage =
     "       haptel security init DIR     DDS Security: a CA and signed identities for the link\n"
     "       haptel discovery-server [--listen ADDR:PORT]  a Fast DDS discovery server for the "
     "link\n"
+    "       haptel replay --info FILE.mcap  a session file's channels, counts, rates, duration\n"
+    "       haptel record --recover IN OUT   a complete session file from a truncated one\n"
     "       haptel bench NAME [options]  benchmarks: servo, view, gravity, blimp, link, video,\n"
     "                                    fuzz, skip, physics, stability, soak, passivity, fleet, "
     "hands;\n"
@@ -64,11 +68,15 @@ int main(int argc, char** argv) {
   if (command == "study") return app::StudyCommand(argc - 1, argv + 1);
   if (command == "security") return app::SecurityCommand(argc - 1, argv + 1);
   if (command == "discovery-server") return app::DiscoveryServerCommand(argc - 1, argv + 1);
+  if (command == "replay") return app::ReplayCommand(argc - 1, argv + 1);
+  if (command == "record") return app::RecordCommand(argc - 1, argv + 1);
   return cli::Main({"haptel", kUsage}, argc, argv, [&]() -> int {
     if (command.empty())
       throw UsageError(
-          "missing command (run, calibrate, scene, study, security, discovery-server, bench)");
-    throw UsageError("unknown command '" + command +
-                     "' (run, calibrate, scene, study, security, discovery-server, bench)");
+          "missing command (run, calibrate, scene, study, replay, record, security, "
+          "discovery-server, bench)");
+    throw UsageError(
+        "unknown command '" + command +
+        "' (run, calibrate, scene, study, replay, record, security, discovery-server, bench)");
   });
 }

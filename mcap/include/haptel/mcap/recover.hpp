@@ -22,5 +22,7 @@ struct RecoverResult {
 /// `in` is not MCAP, std::runtime_error when `out` cannot be written.
 /// `in` and `out` must differ.
 RecoverResult Recover(const std::filesystem::path& in, const std::filesystem::path& out);
+/// The same from a reader already open on the input.
+RecoverResult Recover(const Reader& in, const std::filesystem::path& out);
 
 }  // namespace haptel::mcap
