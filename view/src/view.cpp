@@ -60,18 +60,22 @@ class Mp4Recorder {
   ~Mp4Recorder() { Finish(); }
 
   /// View thread: queue `rgba` (GL order) `copies` times (fixed-rate video:
-  /// a slow frame is shown for as long as it was on the screen).
-  void Push(const cv::Mat& rgba, int copies) {
+  /// a slow frame is shown for as long as it was on the screen). Returns
+  /// how many were queued (the others dropped).
+  int Push(const cv::Mat& rgba, int copies) {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (ended_) return;  // the file failed: nothing more goes to it
+    if (ended_) return 0;  // the file failed: nothing more goes to it
+    int queued = 0;
     for (int i = 0; i < copies; ++i) {
       if (queue_.size() >= kCapacity) {
         ++dropped_;
         continue;
       }
-      queue_.push_back(i == 0 ? rgba.clone() : queue_.back());
+      queue_.push_back(queued == 0 ? rgba.clone() : queue_.back());
+      ++queued;
     }
     wake_.notify_one();
+    return queued;
   }
   void Finish() {
     {
@@ -288,11 +292,12 @@ struct View::Impl {
       const bool record_now = recorder != nullptr && tick_due;
       if (record_now) renderer.ReadPixelsRaw(readback);
       canvas.Swap();
-      const int copies = static_cast<int>(std::min<uint64_t>(due_ticks - recorded_ticks, 30));
+      int copies = static_cast<int>(std::min<uint64_t>(due_ticks - recorded_ticks, 30));
+      // The tap's frames are the MP4's: those the encoder dropped are not in it.
+      if (record_now) copies = recorder->Push(readback, copies);
       if (tick_due && options.tap != nullptr) options.tap->OnFrame(model, t_s, copies);
       const int64_t shown = Now(CLOCK_MONOTONIC);
       const int64_t shown_wall = Now(CLOCK_REALTIME);
-      if (record_now) recorder->Push(readback, copies);
       if (tick_due) recorded_ticks = due_ticks;
       frame_us.Record(static_cast<double>(shown - start) * 1e-3);
       frames.fetch_add(1);

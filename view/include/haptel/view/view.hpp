@@ -44,7 +44,8 @@ class FrameTap {
   virtual ~FrameTap() = default;
   /// `model` was drawn at `t_s` on the view's clock (what the indicators
   /// flash by) and stands for `copies` consecutive frames at record_fps (a
-  /// slow frame is shown, and recorded, for as long as it was on screen).
+  /// slow frame is shown, and recorded, for as long as it was on screen;
+  /// with an MP4, the copies it took: 0 when its encoder dropped them all).
   virtual void OnFrame(const ViewModel& model, double t_s, int copies) = 0;
 };
 
