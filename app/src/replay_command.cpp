@@ -6,8 +6,8 @@
 #include <optional>
 #include <set>
 #include <string>
-#include <vector>
 #include <string_view>
+#include <vector>
 
 #include "haptel/core/args.hpp"
 #include "haptel/core/cli.hpp"
@@ -144,8 +144,8 @@ mediator::SessionSetup RecordedSetup(const mcap::Reader& reader) {
     return mediator::RunSetupFromArgs(
         mediator::ParseRunArgs(static_cast<int>(argv.size()), argv.data()));
   } catch (const cli::InputError& e) {
-    throw cli::InputError(file + ": the recorded run (" + line + ") cannot be set up again: " +
-                          e.what());
+    throw cli::InputError(file + ": the recorded run (" + line +
+                          ") cannot be set up again: " + e.what());
   }
 }
 
@@ -251,8 +251,8 @@ int ReplayViewCommand(int argc, const char* const* argv) {
     } else if (options.show == replay::ReplayOptions::Show::kNone) {
       report = replay::ReadReplay(playback, options.from_s);
     } else {
-      report = replay::PlayReplayWindow(playback, options.from_s, options.speed,
-                                        InstallStopSignals());
+      report =
+          replay::PlayReplayWindow(playback, options.from_s, options.speed, InstallStopSignals());
     }
     std::printf("replayed %s: %.1f s, %llu view frames%s, %llu camera pictures", path.c_str(),
                 report.duration_s, static_cast<unsigned long long>(report.frames),

@@ -1,7 +1,8 @@
 #include "haptel/replay/drive_again.hpp"
 
-#include <cstring>
 #include <fastdds/rtps/common/SerializedPayload.h>
+
+#include <cstring>
 #include <string>
 
 #include "haptel/config/track.hpp"
@@ -71,39 +72,40 @@ RecordedDrive ReadRecordedDrive(const mcap::Reader& reader) {
   }
   RecordedDrive recorded;
   uint64_t undecoded = 0;
-  reader.ForEachMessage(
-      0, UINT64_MAX, {command_topic, state_topic, std::string(channels::kLapEventsTopic)},
-      [&](const mcap::MessageView& m) {
-        if (m.channel->topic == state_topic) {
-          if (recorded.first_state_ns == 0) recorded.first_state_ns = m.log_time_ns;
-          return;
-        }
-        if (m.channel->topic == command_topic) {
-          msg::TreadCommand c;
-          if (!DecodeCdr<msg::TreadCommandPubSubType>(m, c)) {
-            ++undecoded;
-            return;
-          }
-          if (c.release()) return;  // the run's end: this drive releases its own
-          if (recorded.first_state_ns == 0) {
-            ++recorded.commands_before_up;
-            return;
-          }
-          recorded.commands.push_back({m.log_time_ns, {c.left(), c.right()}});
-          return;
-        }
-        session::Event e;
-        if (!DecodeCdr<session::EventPubSubType>(m, e)) {
-          ++undecoded;
-          return;
-        }
-        if (recorded.gates < 0) recorded.gates = 0;
-        if (e.kind() == "gate") ++recorded.gates;
-        if (e.kind() == "finish") {
-          recorded.completed = true;
-          recorded.lap_time_s = e.value();
-        }
-      });
+  reader.ForEachMessage(0, UINT64_MAX,
+                        {command_topic, state_topic, std::string(channels::kLapEventsTopic)},
+                        [&](const mcap::MessageView& m) {
+                          if (m.channel->topic == state_topic) {
+                            if (recorded.first_state_ns == 0)
+                              recorded.first_state_ns = m.log_time_ns;
+                            return;
+                          }
+                          if (m.channel->topic == command_topic) {
+                            msg::TreadCommand c;
+                            if (!DecodeCdr<msg::TreadCommandPubSubType>(m, c)) {
+                              ++undecoded;
+                              return;
+                            }
+                            if (c.release()) return;  // the run's end: this drive releases its own
+                            if (recorded.first_state_ns == 0) {
+                              ++recorded.commands_before_up;
+                              return;
+                            }
+                            recorded.commands.push_back({m.log_time_ns, {c.left(), c.right()}});
+                            return;
+                          }
+                          session::Event e;
+                          if (!DecodeCdr<session::EventPubSubType>(m, e)) {
+                            ++undecoded;
+                            return;
+                          }
+                          if (recorded.gates < 0) recorded.gates = 0;
+                          if (e.kind() == "gate") ++recorded.gates;
+                          if (e.kind() == "finish") {
+                            recorded.completed = true;
+                            recorded.lap_time_s = e.value();
+                          }
+                        });
   if (undecoded > 0) {
     throw cli::InputError(file + ": " + std::to_string(undecoded) +
                           " commands or lap events do not decode against their schema");
@@ -138,8 +140,8 @@ DriveReport DriveAgain(const RecordedDrive& recorded, const mediator::SessionSet
 
   const int64_t t0 = MonotonicNs();
   int64_t up_ns = 0;  // when this vehicle first answered (0: not yet)
-  size_t next = 0;  // the commands due so far
-  size_t sent = 0;  // the commands due when one was last sent
+  size_t next = 0;    // the commands due so far
+  size_t sent = 0;    // the commands due when one was last sent
   int64_t tick = t0;
   for (;;) {
     tick += kTickNs;

@@ -1,11 +1,11 @@
 #include "haptel/replay/view_playback.hpp"
 
 #include <SDL2/SDL.h>
+#include <fastdds/rtps/common/SerializedPayload.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <fastdds/rtps/common/SerializedPayload.h>
 #include <thread>
 
 #include "haptel/core/cli.hpp"
@@ -65,23 +65,22 @@ ViewPlayback::ViewPlayback(const mcap::Reader& reader) : reader_(reader) {
     }
   }
   if (view_channel_ == 0 && video_channel_ == 0) {
-    throw cli::InputError(file + ": no view channel (" + view::kViewFrameTopic +
-                          ") and no video channel (" + std::string(channels::kCompressedVideoSchema) +
-                          " or " + std::string(channels::kCompressedImageSchema) +
-                          "): nothing to replay; haptel replay --info " + file +
-                          " lists what it holds");
+    throw cli::InputError(
+        file + ": no view channel (" + view::kViewFrameTopic + ") and no video channel (" +
+        std::string(channels::kCompressedVideoSchema) + " or " +
+        std::string(channels::kCompressedImageSchema) +
+        "): nothing to replay; haptel replay --info " + file + " lists what it holds");
   }
   if (view_channel_ != 0) topics_.push_back(view::kViewFrameTopic);
   if (video_channel_ != 0) topics_.push_back(reader.channels().at(video_channel_).topic);
   // The set-up, said once at the view's start.
-  reader.ForEachMessage(0, UINT64_MAX, {view::kViewSetupTopic},
-                        [&](const mcap::MessageView& m) {
-                          try {
-                            setup_ = view::DecodeViewSetup(m.data, m.size);
-                          } catch (const view::ViewRecordError& e) {
-                            throw cli::InputError(file + ": " + e.what());
-                          }
-                        });
+  reader.ForEachMessage(0, UINT64_MAX, {view::kViewSetupTopic}, [&](const mcap::MessageView& m) {
+    try {
+      setup_ = view::DecodeViewSetup(m.data, m.size);
+    } catch (const view::ViewRecordError& e) {
+      throw cli::InputError(file + ": " + e.what());
+    }
+  });
   const mcap::Statistics& stats = reader.statistics();
   start_ns_ = stats.message_start_time_ns;
   end_ns_ = std::max(stats.message_end_time_ns, start_ns_);
@@ -120,8 +119,8 @@ void ViewPlayback::OnVideo(const mcap::MessageView& message) {
     return;
   }
   Picture p;
-  p.capture_wall_ns = static_cast<int64_t>(picture.timestamp().sec()) * 1'000'000'000 +
-                      picture.timestamp().nsec();
+  p.capture_wall_ns =
+      static_cast<int64_t>(picture.timestamp().sec()) * 1'000'000'000 + picture.timestamp().nsec();
   p.frame.image = std::make_shared<const cv::Mat>(std::move(image));
   p.frame.id = next_picture_id_++;
   p.frame.capture_wall_ns = p.capture_wall_ns;
@@ -319,15 +318,30 @@ class WindowReplay final : public view::ViewSource, public view::EventSink {
     if (event.type == SDL_QUIT) quit_.store(true);
     if (event.type != SDL_KEYDOWN) return;
     switch (event.key.keysym.sym) {
-      case SDLK_SPACE: clock_.TogglePause(wall); break;
-      case SDLK_PERIOD: clock_.Step(1, wall); break;
-      case SDLK_COMMA: clock_.Step(-1, wall); break;
-      case SDLK_RIGHT: clock_.Seek(5.0, wall); break;
-      case SDLK_LEFT: clock_.Seek(-5.0, wall); break;
-      case SDLK_HOME: clock_.Home(wall); break;
+      case SDLK_SPACE:
+        clock_.TogglePause(wall);
+        break;
+      case SDLK_PERIOD:
+        clock_.Step(1, wall);
+        break;
+      case SDLK_COMMA:
+        clock_.Step(-1, wall);
+        break;
+      case SDLK_RIGHT:
+        clock_.Seek(5.0, wall);
+        break;
+      case SDLK_LEFT:
+        clock_.Seek(-5.0, wall);
+        break;
+      case SDLK_HOME:
+        clock_.Home(wall);
+        break;
       case SDLK_ESCAPE:
-      case SDLK_q: quit_.store(true); break;
-      default: break;
+      case SDLK_q:
+        quit_.store(true);
+        break;
+      default:
+        break;
     }
   }
 
@@ -356,6 +370,11 @@ ReplayReport PlayReplayWindow(ViewPlayback& playback, double from_s, double spee
   options.rate_hz = setup.rate_hz;
   options.screen = setup.screen;
   options.title = "Haptel replay - " + playback.file();
+  if (!view::View::DisplayAvailable()) {
+    throw view::ViewError(
+        "no display for a window ($DISPLAY is not set or not reachable); use --mp4 OUT.mp4 to "
+        "render offscreen, or --view none");
+  }
   WindowReplay replay(playback, FromS(playback, from_s), speed);
   view::View view(options, replay, &replay);
   // The window stays at the last frame once the record ends, until closed.

@@ -4,9 +4,10 @@
 // pictures (SSIM computed by video::Ssim on frames FFmpeg decodes through
 // OpenCV's videoio); a file cut mid-chunk, as a killed recording leaves it,
 // read to its last whole chunk.
+#include <fastdds/rtps/common/SerializedPayload.h>
+
 #include <catch2/catch.hpp>
 #include <cstdio>
-#include <fastdds/rtps/common/SerializedPayload.h>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgproc.hpp>
@@ -81,13 +82,13 @@ std::vector<uint8_t> CompressedVideo(const std::vector<uint8_t>& h264, int64_t c
 /// chunk flushed halfway, where `flushed_size` says the file ended then.
 void WriteSession(const std::filesystem::path& file, uintmax_t* flushed_size = nullptr) {
   mcap::Writer writer(file, {});
-  const uint16_t view_schema = writer.AddSchema(view::kViewFrameSchemaName, "omgidl",
-                                                view::kViewRecordIdl);
-  const uint16_t setup_schema = writer.AddSchema(view::kViewSetupSchemaName, "omgidl",
-                                                 view::kViewRecordIdl);
-  const uint16_t video_schema = writer.AddSchema(
-      std::string(record::session::kCompressedVideoSchema), "omgidl",
-      std::string(record::session::FoxgloveIdl()));
+  const uint16_t view_schema =
+      writer.AddSchema(view::kViewFrameSchemaName, "omgidl", view::kViewRecordIdl);
+  const uint16_t setup_schema =
+      writer.AddSchema(view::kViewSetupSchemaName, "omgidl", view::kViewRecordIdl);
+  const uint16_t video_schema =
+      writer.AddSchema(std::string(record::session::kCompressedVideoSchema), "omgidl",
+                       std::string(record::session::FoxgloveIdl()));
   const uint16_t setup_channel = writer.AddChannel(setup_schema, view::kViewSetupTopic, "cdr");
   const uint16_t view_channel = writer.AddChannel(view_schema, view::kViewFrameTopic, "cdr");
   const uint16_t video_channel =
@@ -113,8 +114,8 @@ void WriteSession(const std::filesystem::path& file, uintmax_t* flushed_size = n
     writer.Write(video_channel, static_cast<uint32_t>(k + 1), t + 1'000'000,
                  static_cast<uint64_t>(capture), video.data(), video.size());
     view::EncodeViewFrame(Frame(k, capture), bytes);
-    writer.Write(view_channel, static_cast<uint32_t>(k), t + 5'000'000, t + 5'000'000,
-                 bytes.data(), bytes.size());
+    writer.Write(view_channel, static_cast<uint32_t>(k), t + 5'000'000, t + 5'000'000, bytes.data(),
+                 bytes.size());
     if (k == kFrames / 2) {
       writer.Flush();
       if (flushed_size != nullptr) *flushed_size = std::filesystem::file_size(file);
@@ -156,7 +157,8 @@ std::vector<cv::Mat> DrawnLive() {
 
 }  // namespace
 
-TEST_CASE("the replay clock plays at its speed, pauses, steps a frame and seeks within the record") {
+TEST_CASE(
+    "the replay clock plays at its speed, pauses, steps a frame and seeks within the record") {
   const uint64_t start = 1'000'000'000'000;
   const uint64_t end = start + 60'000'000'000;  // a minute
   replay::ReplayClock clock(start, end, 2.0, 0.1);

@@ -35,8 +35,7 @@ struct DriveReport {
   double recorded_lap_time_s = 0.0;
   /// The drive passed the gates the record passed (and finished if it did).
   bool Reproduced() const {
-    return recorded_gates >= 0 && gates_passed == recorded_gates &&
-           completed == recorded_completed;
+    return recorded_gates >= 0 && gates_passed == recorded_gates && completed == recorded_completed;
   }
 };
 

@@ -122,12 +122,12 @@ struct ReplayOptions {
 
 /// What a replay went through.
 struct ReplayReport {
-  uint64_t frames = 0;         ///< view frames read (or drawn)
-  uint64_t mp4_frames = 0;     ///< frames written to the MP4
-  uint64_t pictures = 0;       ///< camera pictures shown
+  uint64_t frames = 0;      ///< view frames read (or drawn)
+  uint64_t mp4_frames = 0;  ///< frames written to the MP4
+  uint64_t pictures = 0;    ///< camera pictures shown
   uint64_t pictures_missing = 0;
   uint64_t pictures_undecoded = 0;
-  double duration_s = 0.0;     ///< of the record's view
+  double duration_s = 0.0;  ///< of the record's view
   bool has_view = false;
 };
 
