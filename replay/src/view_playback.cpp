@@ -112,6 +112,10 @@ void ViewPlayback::OnVideo(const mcap::MessageView& message) {
   encoded.size = bytes.size();
   encoded.seq = message.sequence;
   encoded.key_frame = jpeg_ || AnnexBKeyFrame(bytes.data(), bytes.size());
+  // After a seek the pictures start at a key frame: those before it cannot
+  // decode (their references were not read).
+  if (awaiting_key_frame_ && !encoded.key_frame) return;
+  awaiting_key_frame_ = false;
   cv::Mat image;
   const video::DecodeResult result = decoder_->DecodeFrame(encoded, image);
   if (result != video::DecodeResult::kPicture) {
@@ -146,6 +150,7 @@ void ViewPlayback::Play(
     // A seek: the decoder starts again at the key frame before `from_ns`.
     decoder_ = video::MakeVideoDecoder(jpeg_ ? CameraCodec::kJpeg : CameraCodec::kH264);
     pictures_.clear();
+    awaiting_key_frame_ = true;
     read_from = from_ns > kKeyFrameBackNs ? from_ns - kKeyFrameBackNs : 0;
   }
   played_to_ns_ = to_ns;

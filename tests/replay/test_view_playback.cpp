@@ -230,3 +230,31 @@ TEST_CASE("a session file cut mid-chunk, as a killed recording leaves it, replay
   CHECK(report.pictures_missing == 0);
   CHECK(report.pictures_undecoded == 0);
 }
+
+TEST_CASE(
+    "a seek plays from the sought frame with its own picture, decoded from the key frame "
+    "before it") {
+  const std::filesystem::path dir = test::ScratchDir("replay_seek");
+  const std::filesystem::path file = dir / "session.mcap";
+  WriteSession(file);
+  const mcap::Reader reader = mcap::Reader::Open(file);
+  replay::ViewPlayback playback(reader);
+  // Frame 15 of 24 (10 fps; a key frame every second, at 0, 10 and 20).
+  const uint64_t from = kT0 + static_cast<uint64_t>(15 * 1e9 / kFps);
+  std::vector<int64_t> shown;
+  playback.Play(from, playback.end_ns() + 1, [&](const view::ViewFrame& f, uint64_t) {
+    shown.push_back(f.video_capture_wall_ns);
+    CHECK(f.model.video.image != nullptr);
+  });
+  CHECK(shown.size() == kFrames - 15);
+  CHECK(playback.pictures_missing() == 0);
+  CHECK(playback.pictures_undecoded() == 0);
+  // Read on from where it ended: nothing more; back to the start: all of it.
+  size_t more = 0;
+  playback.Play(playback.end_ns() + 1, playback.end_ns() + 2,
+                [&](const view::ViewFrame&, uint64_t) { ++more; });
+  CHECK(more == 0);
+  playback.Play(playback.start_ns(), from, [&](const view::ViewFrame&, uint64_t) { ++more; });
+  CHECK(more == 15);
+  CHECK(playback.pictures_missing() == 0);
+}

@@ -72,7 +72,8 @@ class ViewPlayback {
   bool jpeg_ = false;
   uint64_t start_ns_ = 0;
   uint64_t end_ns_ = 0;
-  uint64_t played_to_ns_ = 0;  ///< where the last Play ended (0: nothing played)
+  uint64_t played_to_ns_ = 0;       ///< where the last Play ended (0: nothing played)
+  bool awaiting_key_frame_ = true;  ///< since a seek: the video starts at a key frame
   std::unique_ptr<video::VideoDecoder> decoder_;
   std::deque<Picture> pictures_;  ///< the latest few decoded, oldest first
   uint64_t next_picture_id_ = 1;
