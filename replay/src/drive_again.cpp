@@ -127,7 +127,8 @@ DriveReport DriveAgain(const RecordedDrive& recorded, const mediator::SessionSet
   options.decode_video = false;
   mediator::VehicleLink link(options);
   auto& channel = link.channel<link::RobotMessages>();
-  mediator::LapTimer lap(Track(setup.track));
+  const Track track(setup.track);
+  mediator::LapTimer lap(track);  // keeps a reference to the track
 
   DriveReport report;
   report.commands_before_up = recorded.commands_before_up;
