@@ -12,6 +12,7 @@
 #include "haptel/core/clock.hpp"
 #include "haptel/record/session_channels.hpp"
 #include "haptel/session/foxglovePubSubTypes.h"
+#include "haptel/video/video_receiver.hpp"
 #include "haptel/view/canvas.hpp"
 #include "haptel/view/mp4_writer.hpp"
 
@@ -176,6 +177,17 @@ void ViewPlayback::Play(
     }
     const video::Frame* picture = PictureFor(frame_.video_capture_wall_ns);
     frame_.model.video = picture != nullptr ? *picture : video::Frame{};
+    if (picture != nullptr && frame_.video_stale) {
+      // Marked as the live receiver marked it, once per picture.
+      if (stale_of_id_ != picture->id) {
+        stale_of_id_ = picture->id;
+        stale_ = *picture;
+        stale_.image = std::make_shared<const cv::Mat>(video::MarkStale(*picture->image));
+        stale_.id = next_picture_id_++;
+        stale_.stale = true;
+      }
+      frame_.model.video = stale_;
+    }
     on_frame(frame_, m.log_time_ns);
   });
 }

@@ -54,6 +54,7 @@ ViewFrame SomeFrame() {
   f.copies = 2;
   f.video_capture_wall_ns = 1'700'000'000'123'456'789;
   f.video_id = 41;
+  f.video_stale = true;
   return f;
 }
 
@@ -103,6 +104,7 @@ TEST_CASE("a view frame comes back from its CDR as it was drawn") {
   CHECK(out.copies == 2);
   CHECK(out.video_capture_wall_ns == 1'700'000'000'123'456'789);
   CHECK(out.video_id == 41);
+  CHECK(out.video_stale);
 }
 
 TEST_CASE("the view's set-up comes back with its map, and without one") {

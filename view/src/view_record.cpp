@@ -100,6 +100,7 @@ module haptel {
       long copies;                      // the live MP4's frames it stands for
       long long video_capture_wall_ns;  // the picture on the screen (video channel's stamp)
       unsigned long long video_id;
+      boolean video_stale;              // shown marked stale (waiting for a key frame)
     };
     struct Line {
       double ax;
@@ -393,6 +394,7 @@ void Visit(A& a, ViewFrame& f) {
   a.Long(f.copies);
   a.Int64(f.video_capture_wall_ns);
   a.Uint64(f.video_id);
+  a.Bool(f.video_stale);
 }
 
 template <typename A>
@@ -479,6 +481,7 @@ void ViewFrameEncoder::OnFrame(const ViewModel& model, double t_s, int copies) {
   frame_.copies = copies;
   frame_.video_capture_wall_ns = model.video.image ? model.video.capture_wall_ns : 0;
   frame_.video_id = model.video.image ? model.video.id : 0;
+  frame_.video_stale = model.video.image && model.video.stale;
   EncodeViewFrame(frame_, bytes_);
   ++frames_;
   sink_(bytes_.data(), bytes_.size());

@@ -77,6 +77,8 @@ class ViewPlayback {
   std::unique_ptr<video::VideoDecoder> decoder_;
   std::deque<Picture> pictures_;  ///< the latest few decoded, oldest first
   uint64_t next_picture_id_ = 1;
+  video::Frame stale_;        ///< the latest picture shown marked stale
+  uint64_t stale_of_id_ = 0;  ///< the picture it marks
   view::ViewFrame frame_;
   uint64_t pictures_missing_ = 0;
   uint64_t pictures_undecoded_ = 0;

@@ -51,6 +51,9 @@ struct ViewFrame {
   int copies = 1;                     ///< the live MP4's frames it stands for (FrameTap::OnFrame's)
   int64_t video_capture_wall_ns = 0;  ///< the screen's picture (0: none yet)
   uint64_t video_id = 0;              ///< the receiver's picture number (0: none)
+  /// The picture was shown marked stale (video::MarkStale: the video waited
+  /// for a key frame).
+  bool video_stale = false;
 };
 
 /// A message that is not what its schema says: too short, or a count past
