@@ -25,8 +25,8 @@
 namespace haptel::view {
 
 /// The session file's channels of the view.
-inline constexpr const char* kViewSetupTopic = "/haptel/view/setup";
-inline constexpr const char* kViewFrameTopic = "/haptel/view/frame";
+inline constexpr const char* kViewSetupTopic = "haptel/view/setup";
+inline constexpr const char* kViewFrameTopic = "haptel/view/frame";
 inline constexpr const char* kViewSetupSchemaName = "haptel::view::ViewSetup";
 inline constexpr const char* kViewFrameSchemaName = "haptel::view::ViewFrame";
 /// The OMG IDL of both (one text: each schema's data).
