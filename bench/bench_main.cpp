@@ -15,6 +15,7 @@
 #include "link_bench.hpp"
 #include "passivity_bench.hpp"
 #include "physics_bench.hpp"
+#include "record_bench.hpp"
 #include "servo_bench.hpp"
 #include "skip_bench.hpp"
 #include "soak_bench.hpp"
@@ -91,6 +92,9 @@ constexpr Usage kUsage[] = {
      "[--json]",
      "the mouse device as every interface's hands, through the real window under Xvfb: commands, "
      "input-to-command, pseudo-haptic ratios, contact to shake, servo p99, nobody engaged"},
+    {"record", "[--track FILE] [--hours H] [--domain D] [--smoke] [--json]",
+     "a grand prix lap with the view, without and with its session file: the recorder's CPU "
+     "share, bytes per minute per channel, drops, servo p99; open and seek a one-hour file"},
 };
 
 using BenchMain = int (*)(int argc, const char* const* argv);
@@ -99,11 +103,14 @@ struct Bench {
   BenchMain main;
 };
 constexpr Bench kBenches[] = {
-    {"servo", BenchServoMain},         {"gravity", BenchGravityMain},     {"skip", BenchSkipMain},
-    {"physics", BenchPhysicsMain},     {"stability", BenchStabilityMain}, {"view", BenchViewMain},
-    {"blimp", BenchBlimpMain},         {"link", BenchLinkMain},           {"fuzz", BenchFuzzMain},
-    {"passivity", BenchPassivityMain}, {"video", BenchVideoMain},         {"fleet", BenchFleetMain},
+    {"servo", BenchServoMain},         {"gravity", BenchGravityMain},
+    {"skip", BenchSkipMain},           {"physics", BenchPhysicsMain},
+    {"stability", BenchStabilityMain}, {"view", BenchViewMain},
+    {"blimp", BenchBlimpMain},         {"link", BenchLinkMain},
+    {"fuzz", BenchFuzzMain},           {"passivity", BenchPassivityMain},
+    {"video", BenchVideoMain},         {"fleet", BenchFleetMain},
     {"soak", BenchSoakMain},           {"hands", BenchHandsMain},
+    {"record", BenchRecordMain},
 };
 
 std::string UsageText(const std::string& only) {

@@ -33,7 +33,36 @@ HAPTEL_TEST_PACKAGES=(
   clang-format   # the suite's check that every C++ file is as .clang-format says (scripts/format)
 )
 
+# Node.js for the session files' reference reader (tests only). Debian's
+# nodejs and npm; a machine whose Node.js comes from elsewhere (NodeSource's
+# nodejs carries its own npm and conflicts with Debian's) keeps its own.
+HAPTEL_TEST_NODE_PACKAGES=(nodejs npm)
+# What npm installs into build/node-tools/ (pinned; cached there, installed
+# again only when this list changes): the TypeScript reference reader of
+# MCAP (@mcap/core, with @mcap/support's zstd and LZ4), and the OMG IDL
+# parser and CDR decoder the session tests decode every message with.
+HAPTEL_TEST_NODE_MODULES=(
+  @mcap/core@2.2.2 @mcap/support@1.1.0
+  @foxglove/omgidl-parser@1.1.0 @foxglove/omgidl-serialization@1.0.3
+)
+
 haptel_log() { echo "[haptel] $*" >&2; }
+
+# haptel_install_node_tools: node and npm (Debian's, when there are none),
+# then HAPTEL_TEST_NODE_MODULES into $BUILD_DIR/node-tools/ unless that
+# exact list is there already (tests/mcap/mcap_reference_reader.mjs loads
+# them from there).
+haptel_install_node_tools() {
+  command -v npm >/dev/null 2>&1 || haptel_install_deps "${HAPTEL_TEST_NODE_PACKAGES[@]}"
+  local dir="$BUILD_DIR/node-tools" wanted="${HAPTEL_TEST_NODE_MODULES[*]}"
+  if [ -f "$dir/.installed" ] && [ "$(cat "$dir/.installed")" = "$wanted" ]; then
+    return 0
+  fi
+  haptel_log "installing the MCAP reference reader (npm) into $dir"
+  mkdir -p "$dir"
+  npm install --prefix "$dir" --no-audit --no-fund --silent "${HAPTEL_TEST_NODE_MODULES[@]}" >&2
+  echo "$wanted" >"$dir/.installed"
+}
 
 # haptel_install_deps [PACKAGE...]: installs what is missing of the given
 # packages (default: what running needs).

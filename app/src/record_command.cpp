@@ -32,8 +32,7 @@ bool HasOption(int argc, const char* const* argv, std::string_view option) {
 
 int RecordCommand(int argc, const char* const* argv) {
   if (HasOption(argc, argv, "--recover")) return RecordRecoverCommand(argc, argv);
-  return cli::Main({"haptel record", kRecordUsage}, argc, argv,
-                   [&]() -> int { throw UsageError("expected --recover IN.mcap OUT.mcap"); });
+  return RecordDomainCommand(argc, argv);
 }
 
 int RecordRecoverCommand(int argc, const char* const* argv) {

@@ -12,6 +12,7 @@
 
 #include "haptel/core/args.hpp"
 #include "haptel/core/cli.hpp"
+#include "haptel/core/command_line.hpp"
 #include "haptel/core/json.hpp"
 #include "haptel/core/log.hpp"
 #include "haptel/core/stop_signals.hpp"
@@ -86,6 +87,10 @@ constexpr const char* kRunUsage =
     "  --database FILE      SQLite file for the results (overrides 'database')\n"
     "  --vehicle-timeout S  no vehicle state for S seconds: vehicle lost\n"
     "  --trace FILE         record the haptic device's readings (for the replay driver)\n"
+    "  --session FILE       record the whole run into an MCAP session file (the folder is\n"
+    "                       created): every DDS sample sent and received, the video, the\n"
+    "                       servo ticks, the events, the metadata and configuration files;\n"
+    "                       opens in Foxglove or Lichtblick, plays with `haptel replay`\n"
     "  --fleet FILE         one operator, several vehicles (config/fleets/*.yaml): each vehicle\n"
     "                       spawned or attached as the file says, driven one at a time, the\n"
     "                       others held safe; one row per vehicle in the database. The automatic\n"
@@ -156,6 +161,8 @@ bool ReportsControllerErrors(const SessionSetup& setup) {
 int ExitCode(const RecordedRun& run) {
   if (run.run_id == 0) return cli::kExitNotRecorded;
   if (!run.result.view_record_error.empty() || !run.result.can_log.error.empty())
+    return cli::kExitOutputFailed;
+  if (const auto& file = run.result.session_file; !file.file.empty() && !file.saved)
     return cli::kExitOutputFailed;
   return mediator::ExitCode(run.result.outcome);
 }
@@ -236,6 +243,8 @@ void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRu
                  setup.record.c_str(),
                  static_cast<unsigned long long>(run.result.view_record_dropped));
   }
+  if (!run.result.session_file.file.empty())
+    std::fprintf(out, "  %s\n", record::SessionFileLine(run.result.session_file).c_str());
   if (const CanLogReport& log = run.result.can_log; !log.error.empty()) {
     std::fprintf(out, "  vehicle's CAN bus log NOT recorded whole: %s; %llu frames lost\n",
                  log.error.c_str(), static_cast<unsigned long long>(log.frames_lost));
@@ -313,7 +322,11 @@ std::string RunJson(const SessionSetup& setup, const RecordedRun& run) {
     << ",\"unsaved_file\":" << JsonString(run.unsaved.string())
     << ",\"picture\":" << JsonString(r.picture)
     << ",\"record_error\":" << JsonString(run.result.view_record_error)
-    << ",\"can_log\":" << CanLogJson(run.result.can_log) << "}";
+    << ",\"can_log\":" << CanLogJson(run.result.can_log)
+    << ",\"commands_sent\":" << run.result.commands_sent
+    << ",\"states_received\":" << run.result.states_received
+    << ",\"servo_ticks\":" << run.result.servo_arm_ticks
+    << ",\"session_file\":" << record::SessionFileJson(run.result.session_file) << "}";
   return o.str();
 }
 
@@ -337,7 +350,9 @@ int RunCommand(int argc, const char* const* argv) {
       }
       json = args.Flag("json");
       insecure = args.Flag("insecure");
-      return mediator::RunSetupFromArgs(args);
+      SessionSetup s = mediator::RunSetupFromArgs(args);
+      s.session_file.run_metadata["command_line"] = cli::CommandLine(argc, argv);
+      return s;
     });
     if (const std::string warning = link::InsecureLinkWarning(setup.run.link, insecure);
         !warning.empty()) {

@@ -282,6 +282,7 @@ StudyConfig LoadStudy(const std::filesystem::path& file) {
   ReadParticipants(root, synthetic, s);
   ReadDesign(root, s);
   s.practice = root.Bool("practice", s.practice);
+  s.sessions = root.Bool("sessions", s.sessions);
   s.trial_cap_s = root.Number("trial_cap_s", s.trial_cap_s);
   ReadQuestionnaires(root, synthetic, s);
   const std::string qdir = root.String("questionnaires_dir", "");

@@ -4,6 +4,7 @@
 #include <cstring>
 
 #include "haptel/core/args.hpp"
+#include "haptel/core/command_line.hpp"
 
 namespace haptel::cli {
 
@@ -13,6 +14,22 @@ bool HelpRequested(int argc, const char* const* argv) {
     if (std::strcmp(argv[i], "--help") == 0 || std::strcmp(argv[i], "-h") == 0) return true;
   }
   return false;
+}
+
+std::string CommandLine(int argc, const char* const* argv) {
+  std::string line = "haptel";
+  for (int i = 0; i < argc; ++i) {
+    const std::string word = argv[i];
+    line += ' ';
+    if (!word.empty() && word.find_first_of(" \t\n'\"\\$`*?;&|<>()[]{}!#~") == std::string::npos) {
+      line += word;
+      continue;
+    }
+    line += '\'';
+    for (const char c : word) line += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    line += '\'';
+  }
+  return line;
 }
 
 int Main(const Program& program, int argc, const char* const* argv,

@@ -71,6 +71,15 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
   TrackWrist(arm, side, now_ns);
   if (!arm.connected || !arm.have_previous) {
     arm.published.Store(c);
+    if (tap_ != nullptr) {  // a tick all the same: no forces, the wrist if read
+      ServoSample s;
+      s.t_ns = now_ns;
+      s.cycle = c.cycles;
+      s.side = static_cast<uint8_t>(Index(side));
+      s.tracked_position = arm.previous_position;
+      s.tracked_orientation = arm.wrist.orientation;
+      tap_->Push(s);
+    }
     return;  // lost (forces zeroed), or nothing to compute forces from yet
   }
 
@@ -108,6 +117,23 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
   WriteForces(arm, side, now_ns, wrist, fingers);
   c.safety = arm.safety.counters();
   arm.published.Store(c);
+  if (tap_ != nullptr) {
+    ServoSample s;
+    s.t_ns = now_ns;
+    s.cycle = c.cycles;
+    s.side = static_cast<uint8_t>(Index(side));
+    s.coupling = sp.coupling_enabled;
+    s.period_s = period_s;
+    s.tracked_position = arm.previous_position;
+    s.tracked_orientation = arm.wrist.orientation;
+    s.proxy_position = sp.coupling_target;
+    s.field_force = ports.field;
+    s.wrist_force = wrist;
+    s.finger_forces = fingers;
+    s.passivity_energy_j = arm.passivity.energy_j();
+    s.passivity_dissipated_j = c.passivity_dissipated_j;
+    tap_->Push(s);
+  }
 }
 
 /// The glove and grasp strings, every `slow_channel_divider`-th cycle.

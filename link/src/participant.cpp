@@ -100,7 +100,8 @@ dds::DataReaderQos DataReaderQosFor(Profile profile, const LinkConfig& config) {
   return WithProfile(dds::DataReaderQos(dds::DATAREADER_QOS_DEFAULT), profile, config);
 }
 
-Participant::Participant(const LinkConfig& config, const std::string& name)
+Participant::Participant(const LinkConfig& config, const std::string& name,
+                         eprosima::fastdds::dds::DomainParticipantListener* listener)
     : config_(Validated(config)) {
   LogToStderr();
   dds::DomainParticipantQos qos = dds::PARTICIPANT_QOS_DEFAULT;
@@ -171,7 +172,7 @@ Participant::Participant(const LinkConfig& config, const std::string& name)
   builtin.discovery_config.initial_announcements.period = ToDuration(0.05);
 
   participant_ = dds::DomainParticipantFactory::get_instance()->create_participant(
-      static_cast<dds::DomainId_t>(config.domain_id), qos);
+      static_cast<dds::DomainId_t>(config.domain_id), qos, listener);
   if (participant_ == nullptr) {
     throw std::runtime_error("link: DDS refused to create participant '" + name + "' in domain " +
                              std::to_string(config.domain_id));

@@ -39,7 +39,7 @@ Args ParseRunArgs(int argc, const char* const* argv) {
                            "time-limit",   "lap-limit",      "view",       "record",
                            "vehicle",      "predict",        "link-fault", "link-profile",
                            "security",     "dds-interfaces", "dds-peers",  "discovery-server",
-                           "fleet"},
+                           "fleet",        "session"},
               {"json", "quiet", "attach", "third-person", "simulated-time", "insecure"});
 }
 
@@ -135,6 +135,11 @@ void ReadRunOptions(const Args& args, SessionSetup& setup) {
   if (auto trace = args.Value("trace")) {
     CheckFileOption("trace", *trace, "a file name for the device's trace, such as arms.trace");
     setup.trace = *trace;
+  }
+  if (auto session = args.Value("session")) {
+    CheckFileOption("session", *session,
+                    "a file name for the session, such as runs/sessions/lap.mcap");
+    setup.session_file.file = *session;
   }
   if (auto s = args.Number("vehicle-timeout", 0.05, 60.0)) setup.run.vehicle_timeout_s = *s;
 }
@@ -399,7 +404,30 @@ SessionSetup RunSetupFromArgs(const Args& args) {
   ReadVehicle(args, setup);
   ReadInterfaces(args, op, setup);
   ReadWorld(args, setup);
+  if (!setup.session_file.file.empty()) DescribeSessionFile(setup);
   return setup;
+}
+
+void DescribeSessionFile(SessionSetup& setup) {
+  std::map<std::string, std::string>& m = setup.session_file.run_metadata;
+  m["configuration"] = setup.run.name;
+  m["vehicle"] = setup.vehicle.name;
+  m["vehicle_kind"] = setup.vehicle.kind;
+  m["device"] = setup.device.name;
+  m["operator"] = setup.operator_kind;
+  std::string interfaces;
+  for (const interfaces::InterfaceSpec& spec : setup.interfaces)
+    interfaces += (interfaces.empty() ? "" : ",") + spec.name;
+  m["interfaces"] = interfaces;
+  std::vector<std::filesystem::path>& files = setup.session_file.attachments;
+  files.clear();
+  for (const std::filesystem::path& file :
+       {setup.run.file, setup.vehicle.file, setup.device.file, setup.track.file}) {
+    std::error_code ec;
+    if (!file.empty() && std::filesystem::is_regular_file(file, ec) &&
+        std::find(files.begin(), files.end(), file) == files.end())
+      files.push_back(file);
+  }
 }
 
 RecordedRun RunAndRecord(const SessionSetup& setup, Recorder& recorder,

@@ -7,8 +7,10 @@
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <ctime>
 #include <limits>
 #include <memory>
@@ -153,6 +155,15 @@ class SessionLoop {
   /// now (engagement.hpp); a change is said, the time disengaged counted.
   bool Engage(VehicleRun& vehicle, double t_s, double dt_s);
   void FeedView(int64_t now_ns, double t_s);
+  /// The session file's records of this tick (with one): the interfaces'
+  /// switches and engagement, the lap's start and contacts, the force
+  /// fields as they change, the ghost.
+  void FeedSessionFile(int64_t now_ns, double t_s);
+  /// The part of it the records hold (switches, contacts, the lap's start):
+  /// also at the end, when the parts are stopped.
+  void FileRecords(int64_t now_ns, double t_s);
+  /// The session file's last records (the lap's gates and end) and its close.
+  void CloseSessionFile();
   std::optional<LoopEnd> CheckLimits(double t_s);
   void LogProgress(int64_t now_ns, double t_s);
   /// A vehicle's end: the session's for a single run; a fleet's turns say.
@@ -169,6 +180,9 @@ class SessionLoop {
   // Declared in the order they are built; destroyed the other way round
   // (the simulated clock last, back to the real clock).
   std::unique_ptr<SimulatedTime> simulated_;
+  /// The session file (none without SessionSetup::session_file): made
+  /// before the parts it taps, closed after they stopped.
+  std::unique_ptr<record::SessionRecorder> session_file_;
   std::unique_ptr<HapticSide> haptic_;
   interfaces::InputBox input_;
   std::vector<std::unique_ptr<VehicleRun>> vehicles_;
@@ -185,6 +199,16 @@ class SessionLoop {
   int64_t next_progress_ns_ = 0;
   int64_t next_live_ns_ = 0;
   uint64_t pictures_seen_ = 0;
+  /// What the session file has of each vehicle's record, and the fields.
+  struct SessionFileSeen {
+    size_t switches = 0;
+    size_t contacts = 0;
+    bool lap_started = false;
+  };
+  std::vector<SessionFileSeen> file_seen_;
+  std::array<haptics::ForceField, haptics::kSides> fields_seen_{};
+  std::array<bool, haptics::kSides> field_said_{};
+  Disengaged engagement_filed_ = Disengaged::kNone;
   double last_t_ = 0.0;
   double loop_cpu_start_s_ = 0.0;  ///< the process's, when the loop began
 };
@@ -223,8 +247,13 @@ SessionLoop::SessionLoop(const std::vector<const SessionSetup*>& setups, const F
 bool SessionLoop::SetUp() {
   // The haptic side first, then each vehicle's family part (its world, its
   // interfaces, its operator): the hands are held before anything moves.
+  if (!first_.session_file.file.empty()) {
+    session_file_ = std::make_unique<record::SessionRecorder>(first_.session_file);
+    file_seen_.resize(vehicles_.size());
+  }
   haptic_ = std::make_unique<HapticSide>(first_.device, first_.calibration, first_.gravity,
                                          first_.run.op, first_.trace);
+  if (session_file_) haptic_->SetServoTap(session_file_.get());
   for (auto& v : vehicles_) {
     v->family = MakeFamilySession(v->setup, *haptic_, input_, interrupted_, v->out.result.record);
     if (interrupted_.load()) break;
@@ -298,6 +327,7 @@ void SessionLoop::Link(VehicleRun& v) {
   options.program = v.setup.vehicle_program;
   options.decode_video = first_.run.video_decode && DecodesVideo(first_.view);
   options.publish_selected = turns_ != nullptr;  // who commands each of a fleet's vehicles
+  options.tap = session_file_.get();
   if (simulated_) {
     options.program.clear();
     options.in_process_robot = [simulated = simulated_.get()](const msg::TreadCommand& command) {
@@ -370,6 +400,7 @@ std::optional<LoopEnd> SessionLoop::Loop() {
     if (turns_ && !turns_->Turn(person, now, t)) return std::nullopt;  // every course is over
     if (auto end = CommandVehicles(person, now, t, dt)) return end;
     FeedView(now, t);
+    if (session_file_) FeedSessionFile(now, t);
     if (auto end = CheckLimits(t)) return end;
     LogProgress(now, t);
   }
@@ -596,6 +627,107 @@ void SessionLoop::Finish(const std::optional<LoopEnd>& end) {
     result.cpu_s = ThreadCpuSeconds() - cpu_start_s_;
   }
   if (turns_) turns_->Finish(end, *haptic_);
+  if (session_file_) CloseSessionFile();
+}
+
+void SessionLoop::FileRecords(int64_t now, double t) {
+  record::SessionRecorder& file = *session_file_;
+  using record::SessionEvent;
+  for (size_t i = 0; i < vehicles_.size(); ++i) {
+    VehicleRun& v = *vehicles_[i];
+    SessionFileSeen& seen = file_seen_[i];
+    const RunRecord& rec = v.out.result.record;
+    for (; seen.switches < rec.switches.size(); ++seen.switches) {
+      const record::SwitchRecord& s = rec.switches[seen.switches];
+      const std::string text = s.from + " -> " + s.to;
+      file.InterfaceEvent(
+          SessionEvent::Make(now, t, "switch", static_cast<int32_t>(i), 255, 0.0, text.c_str()));
+    }
+    for (; seen.contacts < rec.contacts.size(); ++seen.contacts) {
+      const record::ContactPoint& c = rec.contacts[seen.contacts];
+      file.LapEvent(
+          SessionEvent::Make(now, c.t_s, "contact", -1, 255, 0.0, v.setup.vehicle.name.c_str()));
+    }
+    if (!seen.lap_started && v.family->lap_start_s()) {
+      seen.lap_started = true;
+      file.LapEvent(SessionEvent::Make(now, *v.family->lap_start_s(), "start", -1, 255, 0.0,
+                                       v.setup.vehicle.name.c_str()));
+    }
+  }
+}
+
+void SessionLoop::FeedSessionFile(int64_t now, double t) {
+  FileRecords(now, t);
+  record::SessionRecorder& file = *session_file_;
+  using record::SessionEvent;
+  for (size_t i = 0; i < vehicles_.size(); ++i) {
+    VehicleRun& v = *vehicles_[i];
+    if (const std::optional<view::Prediction> p = v.family->Prediction(t); p && p->shown) {
+      record::SessionGhost g;
+      g.t_ns = now;
+      g.valid = true;
+      g.x = p->predicted.x;
+      g.y = p->predicted.y;
+      g.z = p->predicted.z;
+      g.heading = p->predicted.heading;
+      g.reported_x = p->reported.x;
+      g.reported_y = p->reported.y;
+      g.reported_z = p->reported.z;
+      g.delay_s = p->one_way_delay_s;
+      file.Ghost(g);
+    }
+  }
+  if (engagement_.why() != engagement_filed_) {
+    engagement_filed_ = engagement_.why();
+    const bool engaged = engagement_.engaged();
+    file.InterfaceEvent(SessionEvent::Make(now, t, engaged ? "engaged" : "disengaged", -1, 255, 0.0,
+                                           engaged ? "" : ToString(engagement_.why())));
+  }
+  // The fields as the interfaces set them (the servo loop's set-points): a
+  // change is filed, and a wall going up is an interface event.
+  for (const haptics::Side side : {haptics::Side::kLeft, haptics::Side::kRight}) {
+    haptics::ForceSetpoint sp;
+    if (!haptic_->hal().TrySetpoint(side, sp)) continue;
+    const auto k = static_cast<size_t>(haptics::Index(side));
+    if (field_said_[k] && std::memcmp(&sp.field, &fields_seen_[k], sizeof sp.field) == 0) continue;
+    if (sp.field.wall_active && (!field_said_[k] || !fields_seen_[k].wall_active)) {
+      file.InterfaceEvent(SessionEvent::Make(now, t, "wall", -1, static_cast<uint8_t>(k)));
+    }
+    fields_seen_[k] = sp.field;
+    field_said_[k] = true;
+    file.Field(now, static_cast<uint8_t>(k), sp.field);
+  }
+}
+
+void SessionLoop::CloseSessionFile() {
+  record::SessionRecorder& file = *session_file_;
+  using record::SessionEvent;
+  const int64_t now = MonotonicNs();
+  const double t = NsToS(now - t0_);
+  if (t0_ != 0) {
+    FileRecords(now, t);
+    for (auto& v : vehicles_) {
+      const RunRecord& rec = v->out.result.record;
+      const char* name = v->setup.vehicle.name.c_str();
+      for (const record::GateSplit& split : rec.splits) {
+        if (split.passed)
+          file.LapEvent(SessionEvent::Make(now, t, "gate", split.gate, 255, split.split_s, name));
+      }
+      const Outcome outcome = v->out.result.outcome;
+      const char* kind = outcome == Outcome::kCompleted ? "finish"
+                         : outcome == Outcome::kLapCap  ? "cap"
+                                                        : "end";
+      file.LapEvent(
+          SessionEvent::Make(now, t, kind, -1, 255, rec.lap_time_s, ToString(outcome).c_str()));
+    }
+  }
+  const record::SessionFileReport report = file.Close();
+  for (auto& v : vehicles_) {
+    v->out.result.session_file = report;
+    if (report.saved) v->out.result.record.session_file = report.file.string();
+  }
+  if (first_.progress && !report.saved)
+    log::Warn("session file " + report.file.string() + " NOT saved: " + report.error);
 }
 
 void SessionLoop::StopLinks() {

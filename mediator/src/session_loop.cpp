@@ -225,6 +225,12 @@ void RecordLinkFigures(const HapticSide& haptic, const VehicleLink& vehicle,
   rec.video_kbps = v.kbps;
   rec.video_stale_s = v.stale_s;
   result.servo_overruns = servo.overruns;
+  const LinkCounts counts = vehicle.Counts();
+  result.commands_sent = counts.commands_sent;
+  result.states_received = counts.states_received;
+  result.servo_arm_ticks = 0;
+  for (const haptics::Side side : {haptics::Side::kLeft, haptics::Side::kRight})
+    result.servo_arm_ticks += haptic.Counters(side).cycles;
 }
 
 }  // namespace haptel::mediator

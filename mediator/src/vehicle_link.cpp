@@ -256,6 +256,7 @@ VehicleLink::VehicleLink(const VehicleLinkOptions& options)
   LinkConfig link = options_.link;
   link.security_identity = link::OperatorIdentity();
   participant_ = std::make_unique<link::Participant>(link, "haptel-mediator");
+  participant_->SetTap(options_.tap);  // before any writer or reader: each is tapped
   const std::string who = OperatorName();
   switch (family()) {
     case VehicleFamily::kRobot:

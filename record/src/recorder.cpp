@@ -39,7 +39,7 @@ namespace {
 using namespace haptel::sql;
 
 /// Schema version stored in PRAGMA user_version.
-constexpr int kSchemaVersion = 14;
+constexpr int kSchemaVersion = 15;
 
 /// Schema steps: kMigrations[v - 1] takes a database from version v - 1 to v.
 /// A new database runs them all, so the upgrade path of an old file is the
@@ -320,9 +320,15 @@ ALTER TABLE study_trials ADD COLUMN device TEXT NOT NULL DEFAULT '';
 ALTER TABLE study_superseded_trials ADD COLUMN device TEXT NOT NULL DEFAULT '';
 )sql";
 
-constexpr const char* kMigrations[] = {kSchemaV1,  kSchemaV2,  kSchemaV3,  kSchemaV4, kSchemaV5,
-                                       kSchemaV6,  kSchemaV7,  kSchemaV8,  kSchemaV9, kSchemaV10,
-                                       kSchemaV11, kSchemaV12, kSchemaV13, kSchemaV14};
+// v15: the run's session file (haptel run --session, a study's trials;
+// record/session_recorder.hpp), as its path was given; '' without one.
+constexpr const char* kSchemaV15 = R"sql(
+ALTER TABLE runs ADD COLUMN session_file TEXT NOT NULL DEFAULT '';
+)sql";
+
+constexpr const char* kMigrations[] = {kSchemaV1,  kSchemaV2,  kSchemaV3,  kSchemaV4,  kSchemaV5,
+                                       kSchemaV6,  kSchemaV7,  kSchemaV8,  kSchemaV9,  kSchemaV10,
+                                       kSchemaV11, kSchemaV12, kSchemaV13, kSchemaV14, kSchemaV15};
 static_assert(std::size(kMigrations) == kSchemaVersion, "one migration per schema version");
 
 constexpr const char* kInsertRun = R"sql(
@@ -335,9 +341,10 @@ INSERT INTO runs (started_utc, started_wall_ns, config_name, track, interface, v
                   servo_target_hz, servo_rate_short, physics_rate_hz, physics_target_hz,
                   physics_rate_short, vehicle_kind, predict, link_fault, prediction_error_m_p50,
                   prediction_error_m_p95, approach_s, video_kbps, video_stale_s, speedup,
-                  controller_errors, disengaged_s, pseudo_haptic_gain_mean, ff_effects_played)
+                  controller_errors, disengaged_s, pseudo_haptic_gain_mean, ff_effects_played,
+                  session_file)
 VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?,
-        ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)
+        ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)
 )sql";
 
 constexpr const char* kInsertSplit =
@@ -362,7 +369,7 @@ SELECT id, started_wall_ns, config_name, track, interface, vehicle, completed, o
        servo_target_hz, servo_rate_short, physics_rate_hz, physics_target_hz, physics_rate_short,
        vehicle_kind, predict, link_fault, prediction_error_m_p50, prediction_error_m_p95, approach_s,
        video_kbps, video_stale_s, speedup, controller_errors, disengaged_s,
-       pseudo_haptic_gain_mean, ff_effects_played
+       pseudo_haptic_gain_mean, ff_effects_played, session_file
 FROM runs ORDER BY id
 )sql";
 
@@ -634,7 +641,8 @@ int64_t Recorder::Save(const RunRecord& run, const AlsoSave& also) {
       .IntOrNull(run.controller_errors, run.controller_errors >= 0)
       .RealOrNull(run.disengaged_s, std::isfinite(run.disengaged_s))
       .RealOrNull(run.pseudo_haptic_gain_mean, std::isfinite(run.pseudo_haptic_gain_mean))
-      .IntOrNull(run.ff_effects_played, run.ff_effects_played >= 0);
+      .IntOrNull(run.ff_effects_played, run.ff_effects_played >= 0)
+      .Text(run.session_file);
   StepDone(path_, db_, insert_run.get(), "cannot insert run");
   const int64_t run_id = sqlite3_last_insert_rowid(db_);
 
@@ -780,6 +788,7 @@ std::vector<RunRecord> Recorder::LoadAll() const {
       run.disengaged_s = r.Real();             // NaN for NULL: recorded before v13
       run.pseudo_haptic_gain_mean = r.Real();  // NaN for NULL: not measured, or before v13
       run.ff_effects_played = r.IntOr(-1);     // NULL: recorded before v13
+      run.session_file = r.Text();             // '' before v15
       index_of.emplace(run.id, runs.size());
       runs.push_back(std::move(run));
     }

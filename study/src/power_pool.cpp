@@ -36,6 +36,7 @@ StudyConfig PowerPoolStudy(const StudyConfig& study, int pool, int rows, std::ui
   config.description = "the simulated participants of `haptel study power` for study " + study.name;
   config.participants.clear();
   config.profiles.clear();
+  config.sessions = false;  // thousands of simulated laps: their estimate, not their recordings
   const int width = pool >= 100 ? 3 : 2;
   for (int i = 0; i < pool; ++i) {
     const StudyParticipant& model = study.participants.at(

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <functional>
 #include <map>
 #include <memory>
@@ -21,6 +22,7 @@
 #include "haptel/config/error.hpp"
 #include "haptel/core/cli.hpp"
 #include "haptel/core/clock.hpp"
+#include "haptel/core/command_line.hpp"
 #include "haptel/core/json.hpp"
 #include "haptel/haptics/device_drivers.hpp"
 #include "haptel/mediator/run_setup.hpp"
@@ -49,6 +51,20 @@ const StudyParticipant* ParticipantNamed(const StudyConfig& config, const std::s
 }
 
 }  // namespace
+
+std::filesystem::path TrialSessionFile(const StudyConfig& config, const PlannedTrial& trial,
+                                       const std::filesystem::path& database) {
+  const std::filesystem::path folder =
+      std::filesystem::absolute(database).parent_path() / "sessions" / config.name;
+  // Stamped: a trial run again (a redo) keeps the first attempt's file.
+  const std::time_t seconds = static_cast<std::time_t>(WallNs() / 1000000000);
+  std::tm utc{};
+  gmtime_r(&seconds, &utc);
+  char stamp[24];
+  std::strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%SZ", &utc);
+  return folder / (trial.participant + "-" + std::to_string(trial.position) + "-" +
+                   trial.condition + "-" + stamp + ".mcap");
+}
 
 mediator::SessionSetup TrialSetup(const StudyConfig& config, const PlannedTrial& trial,
                                   const std::filesystem::path& database, const std::string& domain,
@@ -85,10 +101,22 @@ mediator::SessionSetup TrialSetup(const StudyConfig& config, const PlannedTrial&
     words.insert(words.end(), {"--link-profile", config.link_profile});
   if (!config.link_fault.empty()) words.insert(words.end(), {"--link-fault", config.link_fault});
   if (!verbose) words.push_back("--quiet");
+  if (config.sessions)
+    words.insert(words.end(), {"--session", TrialSessionFile(config, trial, database).string()});
   std::vector<const char*> argv;
   for (const std::string& w : words) argv.push_back(w.c_str());
   mediator::SessionSetup setup = mediator::RunSetupFromArgs(
       mediator::ParseRunArgs(static_cast<int>(argv.size()), argv.data()));
+  if (config.sessions) {
+    setup.session_file.run_metadata["command_line"] =
+        cli::CommandLine(static_cast<int>(argv.size()), argv.data());
+    setup.session_file.study_metadata = {{"study", config.name},
+                                         {"participant", trial.participant},
+                                         {"condition", trial.condition},
+                                         {"position", std::to_string(trial.position)},
+                                         {"repetition", std::to_string(trial.repetition)},
+                                         {"device", condition.device.string()}};
+  }
   if (synthetic) {
     const StudyParticipant* p = ParticipantNamed(config, trial.participant);
     if (p == nullptr)

@@ -491,6 +491,21 @@ TEST_CASE("bench video --smoke", "[bench][smoke][network]") {
                 "video_schedule_" + j["default"]["codec"].string() + ".png"});
 }
 
+TEST_CASE("bench record --smoke: two laps, without and with a session file, and a seek",
+          "[bench][smoke][network]") {
+  const JsonValue j =
+      Smoke("record", {"--domain", std::to_string(haptel::test::UniqueDomain(86))}).json;
+  CHECK(j["saved"].boolean());
+  CHECK(j["dropped"].number() == 0);  // behaviour: the rings keep up with a short lap
+  CHECK(Finite(j["cpu_share"]) > 0.0);
+  CHECK(Finite(j["bytes_per_minute"]) > 0.0);
+  CHECK(Finite(j["servo_p99_us_bare_run"]) > 0.0);
+  CHECK(Finite(j["servo_p99_us_recorded_run"]) > 0.0);
+  CHECK(Finite(j["seek_open_ms"]) >= 0.0);
+  CHECK(j["session_file"]["channels"].array().size() >= 5);
+  RequireFiles({"record.csv", "record-lap.mcap"});
+}
+
 TEST_CASE("bench hands --smoke: the gesture interface through the real window, engaged and not",
           "[bench][smoke][hands]") {
   const JsonValue j = Smoke("hands").json;

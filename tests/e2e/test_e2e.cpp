@@ -1,4 +1,5 @@
 // End to end: the real `haptel` and `haptel-vehicle` programs, linked by DDS.
+#include <fastdds/rtps/common/SerializedPayload.h>
 #include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -8,7 +9,9 @@
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <csignal>
+#include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -17,7 +20,13 @@
 
 #include "child.hpp"
 #include "haptel/link/topic.hpp"
+#include "haptel/mcap/reader.hpp"
 #include "haptel/record/recorder.hpp"
+#include "haptel/record/session_channels.hpp"
+#include "haptel/session/foxglove.h"
+#include "haptel/session/foxglovePubSubTypes.h"
+#include "haptel/video/h264_codec.hpp"
+#include "mcap_reference.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;
@@ -26,6 +35,78 @@ using haptel::test::JsonField;
 
 namespace {
 std::string Bin(const std::string& name) { return (test::BinDir() / name).string(); }
+
+/// Whether an H.264 access unit (Annex B) holds an IDR slice: it decodes alone.
+bool HasIdr(const std::string& au) {
+  for (size_t i = 0; i + 3 < au.size(); ++i) {
+    if (au[i] == 0 && au[i + 1] == 0 && au[i + 2] == 1 && (au[i + 3] & 0x1f) == 5) return true;
+  }
+  return false;
+}
+
+/// The session file of a run (`haptel run --session`), checked against the
+/// run's JSON line: read by the reference reader with every message decoded
+/// against the file's own schemas, the counts of each channel as the run
+/// counted them itself (commands sent, states and video frames taken,
+/// servo ticks), and the video decoded by FFmpeg frame for frame.
+void CheckSessionFile(const std::filesystem::path& file, const std::string& json) {
+  INFO("session file " << file);
+  CHECK(json.find("\"saved\":true") != std::string::npos);
+  CHECK(json.find("\"dropped\":0,") != std::string::npos);
+  const std::string read = test::ReferenceRead(file, /*decode=*/true);
+  INFO(read);
+  CHECK(JsonField(read, "failed") == "0");
+  CHECK(JsonField(read, "skipped") == "0");
+  CHECK(JsonField(read, "ok") == JsonField(read, "statistics_messages"));
+  const std::string vehicle = JsonField(json, "vehicle");
+  const auto count = [&](const std::string& topic) {
+    const std::string n = JsonField(read, topic);
+    return n.empty() ? 0L : std::stol(n);
+  };
+  CHECK(count("haptel/" + vehicle + "/command") == std::stol(JsonField(json, "commands_sent")));
+  CHECK(count("haptel/" + vehicle + "/state") == std::stol(JsonField(json, "states_received")));
+  CHECK(count("haptel/" + vehicle + "/video") == std::stol(JsonField(json, "video_frames")));
+  CHECK(count(std::string(record::session::kServoTopic)) ==
+        std::stol(JsonField(json, "servo_ticks")));
+  CHECK(count(std::string(record::session::kLapEventsTopic)) >= 3);  // start, 2 gates, finish
+
+  // FFmpeg (the operator's own H.264 decoder) decodes every frame from the
+  // first key frame on, but those after a frame lost on the link until the
+  // next key frame, as the live receiver would.
+  const mcap::Reader reader = mcap::Reader::Open(file);
+  video::H264Decoder decoder;
+  foxglove::CompressedVideoPubSubType type;
+  int frames = 0, pictures = 0, undecodable = 0;
+  bool awaiting_key = true;
+  uint64_t last_seq = 0;
+  reader.ForEachMessage(
+      0, UINT64_MAX, {"haptel/" + vehicle + "/video"}, [&](const mcap::MessageView& m) {
+        foxglove::CompressedVideo v;
+        eprosima::fastrtps::rtps::SerializedPayload_t payload(static_cast<uint32_t>(m.size));
+        std::memcpy(payload.data, m.data, m.size);
+        payload.length = static_cast<uint32_t>(m.size);
+        REQUIRE(type.deserialize(&payload, &v));
+        REQUIRE(v.format() == "h264");
+        ++frames;
+        const std::string au(v.data().begin(), v.data().end());
+        const bool key = HasIdr(au);
+        if (frames > 1 && m.sequence != last_seq + 1) awaiting_key = true;
+        last_seq = m.sequence;
+        if (key) awaiting_key = false;
+        cv::Mat image;
+        const auto result =
+            decoder.DecodeFrame({v.data().data(), v.data().size(), m.sequence, key}, image);
+        if (awaiting_key) {
+          ++undecodable;
+        } else {
+          CHECK(result == video::DecodeResult::kPicture);
+          if (result == video::DecodeResult::kPicture) ++pictures;
+        }
+      });
+  CHECK(frames == count("haptel/" + vehicle + "/video"));
+  CHECK(pictures + undecodable == frames);
+  CHECK(pictures > 30);
+}
 }  // namespace
 
 TEST_CASE("haptel run completes the short track over DDS with a separate vehicle process") {
@@ -33,9 +114,11 @@ TEST_CASE("haptel run completes the short track over DDS with a separate vehicle
   const auto db = dir / "runs.db";
   // A generous vehicle timeout: a loaded machine may stall a process for a
   // moment, and losing the vehicle is not what this test is about.
+  // Recorded whole into a session file, in a folder the run makes.
+  const auto session = dir / "sessions" / "lap.mcap";
   Child haptel({Bin("haptel"), "run", "--track", "config/tracks/test-short.yaml", "--json",
                 "--quiet", "--domain", std::to_string(test::UniqueDomain(11)), "--database",
-                db.string(), "--vehicle-timeout", "5"});
+                db.string(), "--vehicle-timeout", "5", "--session", session.string()});
   // Signals it does not document leave it running: SIGUSR1 cuts the link
   // only with --link-fault (it used to end the run unrecorded, exit 138).
   std::this_thread::sleep_for(std::chrono::seconds(2));
@@ -66,6 +149,7 @@ TEST_CASE("haptel run completes the short track over DDS with a separate vehicle
   CHECK(std::stod(JsonField(json, "command_rtt_ms_p50")) > 0.0);
   // The vehicle process is gone after the run.
   CHECK(kill(vehicle_pid, 0) != 0);
+  CheckSessionFile(session, json);
 
   // The run is in the database with its splits.
   record::Recorder recorder(db);
@@ -89,6 +173,7 @@ TEST_CASE("haptel run completes the short track over DDS with a separate vehicle
   CHECK(runs[0].path.size() > 100);
   CHECK(runs[0].picture == JsonField(json, "picture"));
   CHECK(runs[0].picture == std::filesystem::absolute(dir / "pictures" / "runs-run-1.png").string());
+  CHECK(runs[0].session_file == session.string());
   CHECK(std::filesystem::file_size(runs[0].picture) > 0);
 }
 
@@ -159,6 +244,10 @@ TEST_CASE("when commands stop, the vehicle's watchdog stops its motors") {
   Child vehicle({Bin("haptel-vehicle"), "--config", "config/vehicles/sim-robot.yaml", "--track",
                  "config/tracks/grand-prix.yaml", "--name", "wd", "--domain",
                  std::to_string(domain)});
+  // Recorded on the side all along, as `ros2 bag record` would (haptel record).
+  const auto session = test::ScratchDir("e2e-record-side") / "side.mcap";
+  Child recorder({Bin("haptel"), "record", "--domain", std::to_string(domain), "--vehicle", "wd",
+                  session.string()});
   LinkConfig config;
   config.domain_id = domain;
   link::Participant participant(config, "test-operator");
@@ -222,6 +311,20 @@ TEST_CASE("when commands stop, the vehicle's watchdog stops its motors") {
   // SIGTERM: a clean exit.
   kill(vehicle.pid(), SIGTERM);
   CHECK(vehicle.Wait(20.0) == 0);
+
+  // SIGINT ends the recording with a complete file: this test's commands,
+  // the vehicle's states and video, each message decoded by its schema.
+  kill(recorder.pid(), SIGINT);
+  const int code = recorder.Wait(30.0);
+  INFO("stdout:\n" << recorder.out() << "\nstderr:\n" << recorder.err());
+  REQUIRE(code == 0);
+  const std::string read = test::ReferenceRead(session, /*decode=*/true);
+  INFO(read);
+  CHECK(JsonField(read, "footer") == "true");
+  CHECK(JsonField(read, "failed") == "0");
+  CHECK(std::stol(JsonField(read, "haptel/wd/command")) > 0);  // from its discovery on
+  CHECK(std::stol(JsonField(read, "haptel/wd/state")) > 0);
+  CHECK(std::stol(JsonField(read, "haptel/wd/video")) > 0);
 }
 
 TEST_CASE(

@@ -3,12 +3,14 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <thread>
 
 #include "alloc_counter.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/haptics/servo_loop.hpp"
 #include "haptel/haptics/sim_device.hpp"
+#include "haptel/record/session_recorder.hpp"
 #include "scripted_device.hpp"
 #include "seqlock_access.hpp"
 #include "test_env.hpp"
@@ -174,42 +176,59 @@ TEST_CASE("non-finite and oversized forces are made safe and counted") {
   CHECK(loop.Counters(Side::kRight).safety.non_finite == 1);
 }
 
-TEST_CASE("a servo tick allocates nothing, with the passivity controller off and on") {
-  for (const bool passivity : {false, true}) {
-    INFO("passivity " << (passivity ? "on" : "off"));
-    ScriptedDevice dev(true, true);
-    Hal hal(Identity());
-    DeviceConfig config = Immediate();
-    config.servo.passivity = passivity;
-    ServoLoop loop(dev, hal, config, Identity());
-    ForceField f = Spring(40);
-    f.wall_active = true;
-    f.wall_stiffness = 1000;
-    // Shared control's guidance too (gesture-shared), the hand past its plane.
-    f.guidance_active = true;
-    f.guidance_point = {0.005, 0, 0};
-    f.guidance_normal = {-1, 0, 0};
-    f.guidance_stiffness = 150;
-    f.guidance_max_force = 3;
-    ForceSetpoint coupling;
-    coupling.coupling_enabled = true;
-    coupling.coupling_stiffness = 3000;
-    for (int i = 1; i <= 10; ++i) {  // warm up
-      loop.Tick(Side::kLeft, i * kMs);
-      loop.Tick(Side::kRight, i * kMs);
+TEST_CASE(
+    "a servo tick allocates nothing, with the passivity controller off and on, recorded into a "
+    "session file or not") {
+  for (const bool passivity : {false, true})
+    for (const bool recording : {false, true}) {
+      INFO("passivity " << (passivity ? "on" : "off") << ", recording " << recording);
+      ScriptedDevice dev(true, true);
+      Hal hal(Identity());
+      DeviceConfig config = Immediate();
+      config.servo.passivity = passivity;
+      ServoLoop loop(dev, hal, config, Identity());
+      std::optional<record::SessionRecorder> session;
+      if (recording) {
+        record::SessionFileOptions options;
+        options.file = test::ScratchDir("servo-session") / "ticks.mcap";
+        session.emplace(options);
+        loop.SetTap(&*session);
+      }
+      ForceField f = Spring(40);
+      f.wall_active = true;
+      f.wall_stiffness = 1000;
+      // Shared control's guidance too (gesture-shared), the hand past its plane.
+      f.guidance_active = true;
+      f.guidance_point = {0.005, 0, 0};
+      f.guidance_normal = {-1, 0, 0};
+      f.guidance_stiffness = 150;
+      f.guidance_max_force = 3;
+      ForceSetpoint coupling;
+      coupling.coupling_enabled = true;
+      coupling.coupling_stiffness = 3000;
+      for (int i = 1; i <= 10; ++i) {  // warm up
+        loop.Tick(Side::kLeft, i * kMs);
+        loop.Tick(Side::kRight, i * kMs);
+      }
+      SetField(hal, Side::kRight, f, 10 * kMs);
+      const uint64_t before = test::ThreadAllocations();
+      for (int i = 11; i < 2000; ++i) {
+        // The hand oscillates, so the sampled springs leak and the controller acts.
+        dev.position[1] = {0.01 * std::sin(i * 0.05), 0, 0};
+        hal.SetSetpoint(Side::kRight, coupling, i * kMs);
+        loop.Tick(Side::kLeft, i * kMs);
+        loop.Tick(Side::kRight, i * kMs);
+      }
+      CHECK(test::ThreadAllocations() == before);
+      CHECK((loop.Counters(Side::kRight).passivity_ticks > 0) == passivity);
+      if (recording) {  // every tick of each arm is in the file
+        const record::SessionFileReport report = session->Close();
+        CHECK(report.saved);
+        CHECK(report.dropped == 0);
+        CHECK(report.Messages("haptel/session/servo") ==
+              loop.Counters(Side::kLeft).cycles + loop.Counters(Side::kRight).cycles);
+      }
     }
-    SetField(hal, Side::kRight, f, 10 * kMs);
-    const uint64_t before = test::ThreadAllocations();
-    for (int i = 11; i < 2000; ++i) {
-      // The hand oscillates, so the sampled springs leak and the controller acts.
-      dev.position[1] = {0.01 * std::sin(i * 0.05), 0, 0};
-      hal.SetSetpoint(Side::kRight, coupling, i * kMs);
-      loop.Tick(Side::kLeft, i * kMs);
-      loop.Tick(Side::kRight, i * kMs);
-    }
-    CHECK(test::ThreadAllocations() == before);
-    CHECK((loop.Counters(Side::kRight).passivity_ticks > 0) == passivity);
-  }
 }
 
 TEST_CASE(

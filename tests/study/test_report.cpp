@@ -36,9 +36,11 @@ std::string Read(const std::filesystem::path& file) {
   return text.str();
 }
 
-/// The thesis's study recorded in `db`: every trial, and two answers.
+/// The thesis's study recorded in `db`: every trial, and two answers; with
+/// `sessions`, each trial's session file (a stand-in's bytes) in
+/// dir/sessions/, named in its run.
 void RecordThesis(const std::filesystem::path& dir, const std::filesystem::path& db,
-                  int drivers = 5) {
+                  int drivers = 5, bool sessions = false) {
   StudyConfig config;
   config.file = dir / "thesis.yaml";
   test::WriteFile(config.file, "name: thesis\n");
@@ -55,13 +57,20 @@ void RecordThesis(const std::filesystem::path& dir, const std::filesystem::path&
   }
   record::Recorder recorder(db);
   StudyStore store(recorder, config, plan);
+  if (sessions) std::filesystem::create_directories(dir / "sessions");
   for (const PlannedTrial& t : plan) {
     const size_t c = static_cast<size_t>(t.position - 1);
     const size_t p = static_cast<size_t>(
         std::find(kDrivers.begin(), kDrivers.end(), t.participant) - kDrivers.begin());
     const double lap = kTimes[c][p];
-    recorder.Save(test::TrialRun(lap, lap < 600, kObstacles[c][p]),
-                  store.TrialWriter(t, config.trial_cap_s));
+    record::RunRecord run = test::TrialRun(lap, lap < 600, kObstacles[c][p]);
+    if (sessions) {
+      const auto file =
+          dir / "sessions" / (t.participant + "-" + std::to_string(t.position) + ".mcap");
+      test::WriteFile(file, "MCAP stand-in");
+      run.session_file = file.string();
+    }
+    recorder.Save(run, store.TrialWriter(t, config.trial_cap_s));
   }
   store.SaveAnswers("A", "gesture", "thesis",
                     {{"easy_to_learn", "3"}, {"remarks", "<script>alert(1)</script>, \"odd\""}});
@@ -204,6 +213,35 @@ TEST_CASE("The report marks capped and flagged trials in its tables and lists wh
   CHECK(trials.find(",attempt,flags,over_reference_percent\n") != std::string::npos);
   // No reference lap on this track: the percentage's column is empty.
   CHECK(trials.find(",physics rate short,\n") != std::string::npos);
+}
+
+TEST_CASE("The report links each trial to its session file and says which are gone") {
+  const auto dir = test::ScratchDir("study-report-sessions");
+  const auto db = dir / "thesis.db";
+  RecordThesis(dir, db, 2, /*sessions=*/true);
+  const auto deleted = dir / "sessions" / "B-3.mcap";
+  REQUIRE(std::filesystem::remove(deleted));
+  const StudyResults results = LoadStudyResults(db, "thesis");
+  int missing = 0;
+  for (const StudyResults::Trial& t : results.trials) {
+    CHECK(
+        t.session_file ==
+        (dir / "sessions" / (t.participant + "-" + std::to_string(t.position) + ".mcap")).string());
+    missing += t.session_missing ? 1 : 0;
+  }
+  CHECK(missing == 1);
+  const StudyReport report = ComputeReport(results, PostHocMethod::kNemenyi);
+  const std::string text = FormatReport(results, report);
+  CHECK(text.find("session files") != std::string::npos);
+  CHECK(text.find("A, cockpit (position 1, run 1): " + (dir / "sessions" / "A-1.mcap").string() +
+                  "\n") != std::string::npos);
+  CHECK(text.find(deleted.string() + " (MISSING: deleted or moved)") != std::string::npos);
+  const ReportFiles files = WriteReport(results, report, dir / "out");
+  const std::string html = Read(files.html);
+  CHECK(html.find("<ul id=\"sessions\">") != std::string::npos);
+  CHECK(html.find("<a href=\"file://" + (dir / "sessions" / "A-1.mcap").string()) !=
+        std::string::npos);
+  CHECK(html.find(deleted.string() + " <strong>missing</strong>") != std::string::npos);
 }
 
 TEST_CASE("The report says what it lacks instead of failing") {

@@ -182,6 +182,22 @@ void ReadTrial(Reader& row, StudyResults::Trial& t) {
   t.approach_s = row.Real();
   t.flags = row.Text();
   t.device = row.Text();
+  t.session_file = row.Text();
+  std::error_code ec;
+  t.session_missing = !t.session_file.empty() && !std::filesystem::exists(t.session_file, ec);
+}
+
+/// The trials' session files, one line each ("" when no trial has one): a
+/// file gone from the disk is said, never opened.
+std::vector<std::string> SessionFiles(const StudyResults& results) {
+  std::vector<std::string> lines;
+  for (const StudyResults::Trial& t : results.trials) {
+    if (t.session_file.empty()) continue;
+    lines.push_back(t.participant + ", " + t.condition + " (position " +
+                    std::to_string(t.position) + ", run " + std::to_string(t.run_id) + "): " +
+                    t.session_file + (t.session_missing ? " (MISSING: deleted or moved)" : ""));
+  }
+  return lines;
 }
 
 /// The study named `name` in the database: its id (0: none), operators and cap.
@@ -246,11 +262,13 @@ void ReadTrials(const std::filesystem::path& database, sqlite3* raw, int64_t id,
                 StudyResults& r) {
   const std::string v8 = version >= 8 ? "t.approach_s, t.flags" : "NULL, ''";
   const std::string v14 = version >= 14 ? "t.device" : "''";
+  const std::string v15 =
+      version >= 15 ? "(SELECT session_file FROM runs WHERE id = t.run_id)" : "''";
   const std::string select_trials =
       "SELECT t.participant, t.position, t.condition, t.lap_time_s, t.completed, t.obstacles, "
       "t.run_id, t.outcome, "
       "t.attempt, " +
-      v8 + ", " + v14 +
+      v8 + ", " + v14 + ", " + v15 +
       " FROM study_trials t JOIN study_participants s ON s.study_id = t.study_id AND "
       "s.participant = t.participant WHERE t.study_id = ? ORDER BY s.row_index, t.position";
   Stmt trials = Prepare(database, raw, select_trials.c_str(), "cannot read the trials");
@@ -289,7 +307,8 @@ void ReadSupersededAndNotes(const std::filesystem::path& database, sqlite3* raw,
       std::string(
           "SELECT participant, position, condition, lap_time_s, completed, obstacles, run_id, "
           "outcome, attempt, approach_s, flags, ") +
-      (version >= 14 ? "device" : "''") +
+      (version >= 14 ? "device" : "''") + ", " +
+      (version >= 15 ? "(SELECT session_file FROM runs r WHERE r.id = run_id)" : "''") +
       ", why FROM study_superseded_trials WHERE study_id = ? ORDER BY id";
   Stmt superseded =
       Prepare(database, raw, select_superseded.c_str(), "cannot read the superseded trials");
@@ -523,6 +542,10 @@ std::string FormatReport(const StudyResults& results, const StudyReport& report)
     o << "  superseded trials (run again; only the latest attempt is counted):\n";
     for (const std::string& line : superseded) o << "    " << line << "\n";
   }
+  if (const std::vector<std::string> files = SessionFiles(results); !files.empty()) {
+    o << "  session files (each trial whole: open in Foxglove or Lichtblick, or haptel replay):\n";
+    for (const std::string& line : files) o << "    " << line << "\n";
+  }
   o << "\n";
   if (!report.analysis) {
     o << "  " << report.why_no_statistics << "\n";
@@ -710,6 +733,27 @@ std::string ReportPage(const StudyResults& results, const StudyReport& report,
     h << "<h2>Superseded trials</h2>\n<p>Run again; only the latest attempt is counted above.</p>\n"
          "<ul id=\"superseded\">\n";
     for (const std::string& line : superseded) h << "<li>" << Html(line) << "</li>\n";
+    h << "</ul>\n";
+  }
+  if (std::any_of(results.trials.begin(), results.trials.end(),
+                  [](const StudyResults::Trial& t) { return !t.session_file.empty(); })) {
+    h << "<h2>Session files</h2>\n<p>Each trial whole (MCAP): open it in Foxglove or Lichtblick, "
+         "or play it with <code>haptel replay</code>.</p>\n<ul id=\"sessions\">\n";
+    for (const StudyResults::Trial& t : results.trials) {
+      if (t.session_file.empty()) continue;
+      h << "<li>"
+        << Html(t.participant + ", " + t.condition + " (position " + std::to_string(t.position) +
+                "): ");
+      if (t.session_missing) {
+        h << Html(t.session_file) << " <strong>missing</strong> (deleted or moved)";
+      } else {
+        std::error_code ec;
+        const std::filesystem::path absolute = std::filesystem::absolute(t.session_file, ec);
+        const std::string url = "file://" + (ec ? t.session_file : absolute.string());
+        h << "<a href=\"" << Html(url) << "\">" << Html(t.session_file) << "</a>";
+      }
+      h << "</li>\n";
+    }
     h << "</ul>\n";
   }
   h << "<h2>Statistics</h2>\n<pre>";

@@ -149,6 +149,11 @@ struct StudyConfig {
   /// their first trial; its answers are stored with an empty condition.
   /// Empty: not asked. People only.
   std::string demographics;
+  /// Each trial recorded whole into a session file (MCAP, `haptel run
+  /// --session`: the link's samples, the video, the hands, the events), in
+  /// `sessions/<study>/` beside the database; the database and the report
+  /// name each trial's file. Practice laps are not recorded.
+  bool sessions = true;
 
   /// Throws ConfigFieldError naming the first field that cannot work (the
   /// checks against files — interfaces, profiles named — are the loader's).

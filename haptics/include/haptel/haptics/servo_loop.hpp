@@ -51,6 +51,7 @@
 #include "haptel/haptics/hal.hpp"
 #include "haptel/haptics/safety.hpp"
 #include "haptel/haptics/servo_passivity.hpp"
+#include "haptel/haptics/servo_tap.hpp"
 
 namespace haptel::haptics {
 
@@ -92,6 +93,9 @@ class ServoLoop {
 
   /// Records every device reading into `trace` (null: none). Before Start.
   void SetTrace(TraceWriter* trace) { trace_ = trace; }
+  /// Tells `tap` every tick of each arm (null: none; a session file's
+  /// recorder), the forces zero on a tick that computed none. Before Start.
+  void SetTap(ServoTap* tap) { tap_ = tap; }
   void Start();
   void Stop();
   bool running() const { return running_.load(); }
@@ -159,6 +163,7 @@ class ServoLoop {
   /// does each tick observe the link's port and report it.
   bool observe_link_;
   TraceWriter* trace_ = nullptr;
+  ServoTap* tap_ = nullptr;
   std::array<std::unique_ptr<Arm>, kSides> arms_;
   std::array<LoopMeter, kSides> meters_;
   /// Per thread, as meters_: the periods of the ticks that felt a cue.

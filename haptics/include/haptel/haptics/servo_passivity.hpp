@@ -54,6 +54,14 @@ class ArmPassivity {
   /// report the commands carry. Nothing without a link.
   void ReportLink(Device& device, Side side, const Vec3d& wrist, const ServoCounters& counters);
 
+  /// The one-port observers' energy now, J, summed over both ports and the
+  /// axes (< 0: the virtual side generated energy); 0 with passivity off.
+  double energy_j() const {
+    double e = 0.0;
+    for (int i = 0; i < 3; ++i) e += field_port_.energy()[i] + coupling_port_.energy()[i];
+    return e;
+  }
+
  private:
   bool one_port_ = false;        ///< `servo.passivity`
   bool observe_link_ = false;    ///< and a device behind a link

@@ -8,6 +8,7 @@
 /// and everything that would bypass it is off: shared memory, data sharing
 /// and intra-process delivery.
 #include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/domain/DomainParticipantListener.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
 #include <fastdds/dds/publisher/qos/DataWriterQos.hpp>
 #include <fastdds/dds/subscriber/Subscriber.hpp>
@@ -16,6 +17,7 @@
 
 #include "haptel/config/link.hpp"
 #include "haptel/link/fault_transport.hpp"
+#include "haptel/link/sample_tap.hpp"
 
 namespace haptel::link {
 
@@ -42,7 +44,11 @@ class Participant {
  public:
   /// Throws std::runtime_error when DDS refuses to create the participant,
   /// ConfigFieldError for a `config` LinkConfig::ValidateOrThrow refuses.
-  Participant(const LinkConfig& config, const std::string& name);
+  /// `listener` (optional; it must outlive the participant) hears the
+  /// discovery from the first announcement on (`haptel record` finds the
+  /// domain's writers through it).
+  Participant(const LinkConfig& config, const std::string& name,
+              eprosima::fastdds::dds::DomainParticipantListener* listener = nullptr);
   ~Participant();
   Participant(const Participant&) = delete;
   Participant& operator=(const Participant&) = delete;
@@ -53,9 +59,14 @@ class Participant {
   const LinkConfig& config() const { return config_; }
   /// The fault transport's line (null without LinkConfig::fault).
   FaultLine* fault_line() const { return line_.get(); }
+  /// Taps every writer and reader made on this participant from now on
+  /// (null: none): a session file's recorder. It must outlive them.
+  void SetTap(SampleTap* tap) { tap_ = tap; }
+  SampleTap* tap() const { return tap_; }
 
  private:
   LinkConfig config_;
+  SampleTap* tap_ = nullptr;
   std::shared_ptr<FaultLine> line_;  ///< with LinkConfig::fault: its delay line
   eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
   eprosima::fastdds::dds::Publisher* publisher_ = nullptr;

@@ -38,6 +38,42 @@ eprosima::fastdds::dds::Topic* MakeTopic(Participant& p, const std::string& name
   if (topic == nullptr) throw std::runtime_error("link: cannot create topic '" + name + "'");
   return topic;
 }
+
+/// A writer's or reader's end of its participant's SampleTap: the channel
+/// it was given and the type support that serializes its samples into a
+/// buffer kept from one sample to the next.
+template <typename Msg, typename PubSubType>
+class Tapped {
+ public:
+  Tapped(Participant& participant, const std::string& topic, TapDirection direction)
+      : tap_(participant.tap()) {
+    if (tap_ == nullptr) return;
+    channel_ = tap_->OnTopic(topic, type_.getName(), direction);
+    bytes_ = channel_ >= 0 && tap_->WantsBytes(channel_);
+  }
+  /// Hands `msg` to the tap (nothing without one). Its caller's thread.
+  void operator()(const Msg& msg, int64_t now_ns) {
+    if (channel_ < 0) return;
+    if (!bytes_) {
+      tap_->OnSample(channel_, now_ns, &msg, nullptr, 0);
+      return;
+    }
+    Msg* data = const_cast<Msg*>(&msg);  // type support's API; it only reads
+    const uint32_t size = type_.getSerializedSizeProvider(data)();
+    if (payload_.max_size < size) payload_.reserve(size);
+    payload_.length = 0;
+    payload_.pos = 0;
+    if (!type_.serialize(data, &payload_)) return;
+    tap_->OnSample(channel_, now_ns, &msg, payload_.data, payload_.length);
+  }
+
+ private:
+  SampleTap* tap_;
+  int channel_ = -1;
+  bool bytes_ = false;
+  PubSubType type_;
+  eprosima::fastrtps::rtps::SerializedPayload_t payload_;
+};
 }  // namespace detail
 
 /// The WriterId of a DDS GUID.
@@ -66,7 +102,7 @@ template <typename Msg, typename PubSubType>
 class Writer : private eprosima::fastdds::dds::DataWriterListener {
  public:
   Writer(Participant& participant, const std::string& topic, Profile profile)
-      : participant_(participant) {
+      : participant_(participant), tapped_(participant, topic, TapDirection::kSent) {
     topic_ = detail::MakeTopic<PubSubType>(participant, topic);
     writer_ = participant.publisher()->create_datawriter(
         topic_, DataWriterQosFor(profile, participant.config()), this);
@@ -84,6 +120,7 @@ class Writer : private eprosima::fastdds::dds::DataWriterListener {
   bool Write(Msg& msg) {
     const bool ok = writer_->write(&msg);
     if (!ok) failed_writes_.fetch_add(1, std::memory_order_relaxed);
+    if (ok) tapped_(msg, MonotonicNs());
     return ok;
   }
   int matched() const { return matched_.load(); }
@@ -104,6 +141,7 @@ class Writer : private eprosima::fastdds::dds::DataWriterListener {
   }
 
   Participant& participant_;
+  detail::Tapped<Msg, PubSubType> tapped_;
   eprosima::fastdds::dds::Topic* topic_ = nullptr;
   eprosima::fastdds::dds::DataWriter* writer_ = nullptr;
   std::atomic<int> matched_{0};
@@ -132,7 +170,9 @@ class Reader : private eprosima::fastdds::dds::DataReaderListener {
                })) {}
   Reader(Participant& participant, const std::string& topic, Profile profile,
          StampedCallback on_sample)
-      : participant_(participant), on_sample_(std::move(on_sample)) {
+      : participant_(participant),
+        on_sample_(std::move(on_sample)),
+        tapped_(participant, topic, TapDirection::kReceived) {
     topic_ = detail::MakeTopic<PubSubType>(participant, topic);
     reader_ = participant.subscriber()->create_datareader(
         topic_, DataReaderQosFor(profile, participant.config()), this);
@@ -162,6 +202,7 @@ class Reader : private eprosima::fastdds::dds::DataReaderListener {
       stamps.writer = ToWriterId(info.sample_identity.writer_guid());
       stamps.sent_ns = info.source_timestamp.to_ns();
       stamps.arrived_ns = MonotonicNs();
+      tapped_(sample_, stamps.arrived_ns);
       on_sample_(sample_, stamps);
     }
   }
@@ -178,6 +219,7 @@ class Reader : private eprosima::fastdds::dds::DataReaderListener {
 
   Participant& participant_;
   StampedCallback on_sample_;
+  detail::Tapped<Msg, PubSubType> tapped_;
   Msg sample_;  ///< reused for every take: no allocation per sample for fixed-size types
   eprosima::fastdds::dds::Topic* topic_ = nullptr;
   eprosima::fastdds::dds::DataReader* reader_ = nullptr;

@@ -68,6 +68,8 @@ class HapticSide {
   void OnVehicleUp();
 
   haptics::Hal& hal() { return *hal_; }
+  /// Tells `tap` every servo tick (a session file's recorder; null: none). Before Start.
+  void SetServoTap(haptics::ServoTap* tap) { servo_->SetTap(tap); }
   /// The simulated device, for the automatic operator (null for others).
   haptics::SimDevice* sim() { return sim_; }
   /// A replay that has played its whole trace.

@@ -33,6 +33,12 @@ Args ParseRunArgs(int argc, const char* const* argv);
 /// ConfigError (bad input).
 SessionSetup RunSetupFromArgs(const Args& args);
 
+/// The session file's metadata (configuration, vehicle, device, operator,
+/// interfaces) and attachments (the run's, vehicle's, device's and track's
+/// files) from `setup`; the caller adds the command line and, for a study,
+/// its own metadata.
+void DescribeSessionFile(SessionSetup& setup);
+
 /// Runs the session, then saves it into `recorder` — or, if the database
 /// fails at the end, into a fallback file beside it — with its picture.
 /// Throws only for parts that cannot be set up (nothing moved).

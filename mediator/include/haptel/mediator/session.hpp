@@ -41,6 +41,7 @@
 #include "haptel/interfaces/catalog.hpp"
 #include "haptel/mediator/interface_set.hpp"
 #include "haptel/mediator/run_record.hpp"
+#include "haptel/record/session_recorder.hpp"
 #include "haptel/view/view_model.hpp"
 
 namespace haptel::mediator {
@@ -102,6 +103,10 @@ struct SessionSetup {
   ViewKind view = ViewKind::kNone;
   /// The operator's view as H.264 MP4 (empty: none; needs a view).
   std::filesystem::path record;
+  /// The whole run into a session file (record/session_recorder.hpp; its
+  /// `file` empty: none): the link's samples, the video, the servo ticks,
+  /// the events, the metadata and configuration files.
+  record::SessionFileOptions session_file;
   /// The camera's picture fills the view (the thesis's practice lap: the
   /// keyboard and a direct view of the camera) instead of hanging on a
   /// screen before the hands.
@@ -193,6 +198,8 @@ struct SessionResult {
   /// Seconds from the start until the operator's hands held the controls
   /// (0 when there was nothing to grasp; negative if they never did).
   double grasp_s = 0.0;
+  /// The session file's fate and counts (its `file` empty: none was asked).
+  record::SessionFileReport session_file;
   uint64_t view_record_dropped = 0;  ///< MP4 frames the encoder could not take in time
   /// "" when the --record MP4 was written whole (or none was asked for);
   /// else why not: a failed write ended it (file, OS reason, frames kept).
@@ -210,6 +217,11 @@ struct SessionResult {
   /// A simulated-time run's ticks, on its clock: the servo loop's (each
   /// of every arm), the physics world's and the vehicle's control loop's.
   uint64_t servo_ticks = 0;
+  /// Every arm's servo ticks, summed (a tick of each arm is one servo
+  /// message in a session file); commands sent and states taken by the link.
+  uint64_t servo_arm_ticks = 0;
+  uint64_t commands_sent = 0;
+  uint64_t states_received = 0;
   uint64_t physics_ticks = 0;
   uint64_t vehicle_ticks = 0;
   /// Every error bit the vehicle's servo controller reported over the run

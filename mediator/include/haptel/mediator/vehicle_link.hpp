@@ -47,6 +47,11 @@ struct LinkCounts {
   /// owner sent it (a stranger on the domain), from the first state this
   /// run received.
   uint64_t video_feedback_refused = 0;
+  /// Commands this run sent (safe and release commands included), and the
+  /// states its reader took, whoever sent them: what a session file of the
+  /// run holds on the command and state topics.
+  uint64_t commands_sent = 0;
+  uint64_t states_received = 0;
 };
 
 /// Vehicle states as they arrive (DDS thread), drained by the session loop.
@@ -150,7 +155,12 @@ class CommandChannel final : public LinkChannel {
   const Histogram& Rtt() const override { return inbox_.Rtt(); }
   void ResetRtt() override { inbox_.ResetRtt(); }
   int64_t last_received_ns() const override { return inbox_.last_received_ns(); }
-  LinkCounts Counts() const override { return inbox_.Counts(); }
+  LinkCounts Counts() const override {
+    LinkCounts counts = inbox_.Counts();
+    counts.commands_sent = seq_;
+    counts.states_received = reader_ ? reader_->received() : 0;
+    return counts;
+  }
   int VehiclesOnTopic() const override;
   void SendSafe(bool release) override;
   void WatchEcho(int64_t sent_ns) override { inbox_.WatchEcho(sent_ns); }
@@ -187,6 +197,9 @@ struct VehicleLinkOptions {
   /// it is sent, the states are pushed into the robot channel's inbox by
   /// the caller, and no video comes.
   std::function<void(const msg::TreadCommand&)> in_process_robot;
+  /// Taps every sample the link sends and receives (a session file's
+  /// recorder; null: none). It must outlive the link.
+  link::SampleTap* tap = nullptr;
 };
 
 /// The writer of haptel/<vehicle>/selected (the IDL's SelectedSource).

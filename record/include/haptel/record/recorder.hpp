@@ -121,6 +121,9 @@ struct RunRecord {
   /// Force-feedback effects the device started (SDL's haptic API; 0 for a
   /// device without; -1: recorded before v13).
   int64_t ff_effects_played = 0;
+  /// The run's session file (MCAP: record/session_recorder.hpp), as its
+  /// path was given; "" without one, or one that was not saved (v15).
+  std::string session_file;
   double distance_m = 0.0;  ///< driven, summed over the vehicle's positions
   double view_fps = 0.0;    ///< the operator's view (0: none)
   double view_frame_p99_ms = 0.0;

@@ -43,6 +43,11 @@ struct StudyResults {
     /// The input device it was driven with (its device file's name); "":
     /// recorded before the database kept it (schema v14).
     std::string device{};
+    /// The trial's session file (MCAP; "": none, or recorded before the
+    /// database kept it, schema v15), and whether it is gone from the disk
+    /// now (deleted or moved): the report says so.
+    std::string session_file{};
+    bool session_missing = false;
   };
   std::vector<Trial> trials;  ///< the latest attempt of each trial: what is counted
   /// Trials taken back to be run again (a redo; a synthetic study's flagged
