@@ -44,7 +44,7 @@ constexpr const char* kReplayUsage =
     "(its vehicle file and track, from the command line the file recorded), on the run's\n"
     "domain or --domain D, or one already running there (--attach). It times the lap on\n"
     "the run's track and says the gates passed beside the record's; it exits 0 when the\n"
-    "drive passed the record's gates (and finished if the record did), 1 when not.\n"
+    "drive passed as many gates as the record, 1 when not.\n"
     "\n"
     "--info: the session file's channels (topic, schema, encodings), message counts and\n"
     "rates, duration, chunks and their compression, attachments and metadata; a file whose\n"

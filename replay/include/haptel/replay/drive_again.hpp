@@ -33,10 +33,9 @@ struct DriveReport {
   int recorded_gates = -1;
   bool recorded_completed = false;
   double recorded_lap_time_s = 0.0;
-  /// The drive passed the gates the record passed (and finished if it did).
-  bool Reproduced() const {
-    return recorded_gates >= 0 && gates_passed == recorded_gates && completed == recorded_completed;
-  }
+  /// The drive passed as many gates as the record (whether it also crossed
+  /// the finish is said apart: open loop, the last metres drift most).
+  bool Reproduced() const { return recorded_gates >= 0 && gates_passed == recorded_gates; }
 };
 
 /// The file's robot commands, states and lap events, read once. Throws
