@@ -27,6 +27,8 @@ constexpr size_t kPicturesKept = 8;
 /// How far before a sought time the video is read again for its key frame
 /// (the streamer sends one at least every second).
 constexpr uint64_t kKeyFrameBackNs = 3'000'000'000;
+/// How long (log time) a view frame waits for its picture to be filed.
+constexpr uint64_t kPictureWaitNs = 200'000'000;
 
 /// Whether an H.264 Annex B access unit decodes alone: it holds an IDR
 /// slice (NAL type 5) or a sequence parameter set (7), as every key frame
@@ -155,10 +157,27 @@ void ViewPlayback::Play(
     read_from = from_ns > kKeyFrameBackNs ? from_ns - kKeyFrameBackNs : 0;
   }
   played_to_ns_ = to_ns;
+  // A view frame waits for its picture: the run files a picture when the
+  // link hands it over, which may be a few milliseconds after the view,
+  // whose receiver had it first, drew it.
+  const auto emit_ready = [&](uint64_t now_ns, bool all) {
+    while (!pending_.empty()) {
+      auto& [frame, log_ns] = pending_.front();
+      const int64_t stamp = frame.video_capture_wall_ns;
+      const bool ready = all || stamp == 0 || Decoded(stamp) ||
+                         (!pictures_.empty() && pictures_.back().capture_wall_ns >= stamp) ||
+                         now_ns > log_ns + kPictureWaitNs;
+      if (!ready) return;
+      Show(frame);
+      on_frame(frame, log_ns);
+      pending_.pop_front();
+    }
+  };
   reader_.ForEachMessage(read_from, to_ns, topics_, [&](const mcap::MessageView& m) {
     const bool shown = m.log_time_ns >= from_ns;
     if (m.channel->id == video_channel_) {
       OnVideo(m);
+      emit_ready(m.log_time_ns, false);
       if (!shown || view_channel_ != 0 || pictures_.empty()) return;
       // No view channel: each picture alone on the screen.
       frame_.model.shapes.clear();
@@ -175,21 +194,31 @@ void ViewPlayback::Play(
     } catch (const view::ViewRecordError& e) {
       throw cli::InputError(reader_.path().string() + ": " + e.what());
     }
-    const video::Frame* picture = PictureFor(frame_.video_capture_wall_ns);
-    frame_.model.video = picture != nullptr ? *picture : video::Frame{};
-    if (picture != nullptr && frame_.video_stale) {
-      // Marked as the live receiver marked it, once per picture.
-      if (stale_of_id_ != picture->id) {
-        stale_of_id_ = picture->id;
-        stale_ = *picture;
-        stale_.image = std::make_shared<const cv::Mat>(video::MarkStale(*picture->image));
-        stale_.id = next_picture_id_++;
-        stale_.stale = true;
-      }
-      frame_.model.video = stale_;
-    }
-    on_frame(frame_, m.log_time_ns);
+    pending_.emplace_back(frame_, m.log_time_ns);
+    emit_ready(m.log_time_ns, false);
   });
+  emit_ready(to_ns, true);
+}
+
+bool ViewPlayback::Decoded(int64_t capture_wall_ns) const {
+  return std::any_of(pictures_.begin(), pictures_.end(),
+                     [&](const Picture& p) { return p.capture_wall_ns == capture_wall_ns; });
+}
+
+void ViewPlayback::Show(view::ViewFrame& frame) {
+  const video::Frame* picture = PictureFor(frame.video_capture_wall_ns);
+  frame.model.video = picture != nullptr ? *picture : video::Frame{};
+  if (picture != nullptr && frame.video_stale) {
+    // Marked as the live receiver marked it, once per picture.
+    if (stale_of_id_ != picture->id) {
+      stale_of_id_ = picture->id;
+      stale_ = *picture;
+      stale_.image = std::make_shared<const cv::Mat>(video::MarkStale(*picture->image));
+      stale_.id = next_picture_id_++;
+      stale_.stale = true;
+    }
+    frame.model.video = stale_;
+  }
 }
 
 ReplayClock::ReplayClock(uint64_t start_ns, uint64_t end_ns, double speed, double frame_s)

@@ -16,6 +16,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <utility>
 
 #include "haptel/mcap/reader.hpp"
 #include "haptel/video/codec.hpp"
@@ -63,6 +64,9 @@ class ViewPlayback {
   };
   void OnVideo(const mcap::MessageView& message);
   const video::Frame* PictureFor(int64_t capture_wall_ns);
+  bool Decoded(int64_t capture_wall_ns) const;
+  /// Puts the picture `frame` showed on its screen (marked if it was stale).
+  void Show(view::ViewFrame& frame);
 
   const mcap::Reader& reader_;
   view::ViewSetup setup_;
@@ -80,6 +84,8 @@ class ViewPlayback {
   video::Frame stale_;        ///< the latest picture shown marked stale
   uint64_t stale_of_id_ = 0;  ///< the picture it marks
   view::ViewFrame frame_;
+  /// View frames read, waiting for their picture (with their log time).
+  std::deque<std::pair<view::ViewFrame, uint64_t>> pending_;
   uint64_t pictures_missing_ = 0;
   uint64_t pictures_undecoded_ = 0;
 };
