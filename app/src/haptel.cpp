@@ -31,6 +31,8 @@ constexpr const char* kUsage =
     "       haptel security init DIR     DDS Security: a CA and signed identities for the link\n"
     "       haptel discovery-server [--listen ADDR:PORT]  a Fast DDS discovery server for the "
     "link\n"
+    "       haptel replay FILE.mcap      draw a session file's operator's view again (a window,\n"
+    "                                    --mp4, --view none), or --drive its commands again\n"
     "       haptel replay --info FILE.mcap  a session file's channels, counts, rates, duration\n"
     "       haptel record --domain D FILE.mcap  record what a DDS domain shows into a session "
     "file\n"

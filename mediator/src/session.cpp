@@ -25,6 +25,7 @@
 #include "haptel/mediator/fleet.hpp"
 #include "haptel/mediator/run_counters.hpp"
 #include "haptel/view/sdl_input.hpp"
+#include "haptel/view/view_record.hpp"
 #include "simulated_time.hpp"
 
 namespace haptel::mediator {
@@ -144,6 +145,10 @@ class SessionLoop {
   void Link(VehicleRun& vehicle);
   void SayLinked(const VehicleRun& vehicle) const;
   void OpenView();
+  /// The session file's view channel: the view's set-up now, and through
+  /// `options`' tap every frame it draws at the MP4's rate
+  /// (view/view_record.hpp), so that haptel replay draws them again.
+  void TapView(view::ViewOptions& options, std::shared_ptr<const view::TrackMap> map);
   /// The loops until the session's end (none: every course of a fleet is over).
   std::optional<LoopEnd> Loop();
   /// Sleeps until the next tick (in simulated time: steps every part to it).
@@ -187,6 +192,9 @@ class SessionLoop {
   interfaces::InputBox input_;
   std::vector<std::unique_ptr<VehicleRun>> vehicles_;
   std::unique_ptr<FleetTurns> turns_;  ///< a fleet's; none for one vehicle
+  /// The session file's view channel (with a session file and a view):
+  /// the view's tap, outliving the view that calls it.
+  std::unique_ptr<view::ViewFrameEncoder> view_tap_;
   std::unique_ptr<SessionView> view_;
   std::unique_ptr<view::InputPump> pump_;
   Engagement engagement_;  ///< the person's, with whichever vehicle they drive
@@ -383,7 +391,33 @@ void SessionLoop::OpenView() {
     v.family->ConfigureView(p, i == 0 ? options : own);
     parts.push_back(p);
   }
+  if (session_file_) TapView(options, parts.front().map);
   view_ = std::make_unique<SessionView>(options, std::move(parts), input_);
+}
+
+void SessionLoop::TapView(view::ViewOptions& options, std::shared_ptr<const view::TrackMap> map) {
+  record::SessionRecorder& file = *session_file_;
+  const int setup_channel =
+      file.AddOwnChannel(view::kViewSetupTopic, view::kViewSetupSchemaName, view::kViewRecordIdl);
+  const int frame_channel =
+      file.AddOwnChannel(view::kViewFrameTopic, view::kViewFrameSchemaName, view::kViewRecordIdl);
+  if (setup_channel < 0 || frame_channel < 0) return;  // the recorder says why in its report
+  view::ViewSetup setup;
+  setup.width = options.width;
+  setup.height = options.height;
+  setup.rate_hz = options.rate_hz;
+  setup.record_fps = options.record_fps;
+  setup.title = options.title;
+  setup.screen = options.screen;
+  setup.map = std::move(map);
+  std::vector<uint8_t> bytes;
+  view::EncodeViewSetup(setup, bytes);
+  file.OnSample(setup_channel, MonotonicNs(), nullptr, bytes.data(), bytes.size());
+  view_tap_ = std::make_unique<view::ViewFrameEncoder>(
+      [&file, frame_channel](const uint8_t* data, size_t size) {
+        file.OnSample(frame_channel, MonotonicNs(), nullptr, data, size);
+      });
+  options.tap = view_tap_.get();
 }
 
 std::optional<LoopEnd> SessionLoop::Loop() {

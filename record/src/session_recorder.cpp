@@ -314,6 +314,26 @@ int SessionRecorder::OnTopic(const std::string& topic, const std::string& type_n
   return index;
 }
 
+int SessionRecorder::AddOwnChannel(const std::string& topic, const std::string& schema,
+                                   const std::string& idl) {
+  std::lock_guard<std::mutex> lock(writer_mutex_);
+  const int index = byte_channel_count_.load();
+  if (index >= kMaxByteChannels || closed_) return -1;
+  auto channel = std::make_unique<ByteChannel>(options_.channel_ring_bytes, false);
+  channel->topic = topic;
+  channel->schema = schema;
+  try {
+    channel->id = McapChannel(topic, schema, idl, {});
+  } catch (const std::exception& e) {
+    Fail(e.what());
+    return -1;
+  }
+  channel->count = {topic, schema};
+  byte_channels_[index] = std::move(channel);
+  byte_channel_count_.store(index + 1, std::memory_order_release);
+  return index;
+}
+
 bool SessionRecorder::WantsBytes(int channel) const {
   return channel >= 0 && channel < kMaxByteChannels && byte_channels_[channel] &&
          !byte_channels_[channel]->video;

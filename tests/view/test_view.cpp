@@ -301,6 +301,19 @@ class QuadrantSource final : public ViewSource {
   uint64_t calls_ = 0;
 };
 
+/// Counts the frames the view hands its tap, and the MP4's copies of them.
+class CountingTap final : public FrameTap {
+ public:
+  void OnFrame(const ViewModel& model, double, int copies) override {
+    ++frames;
+    copies_total += static_cast<uint64_t>(copies);
+    last_video_id = model.video.id;
+  }
+  uint64_t frames = 0;
+  uint64_t copies_total = 0;
+  uint64_t last_video_id = 0;
+};
+
 }  // namespace
 
 TEST_CASE("the View records what it draws offscreen to an H.264 MP4 at the fixed frame rate") {
@@ -313,6 +326,8 @@ TEST_CASE("the View records what it draws offscreen to an H.264 MP4 at the fixed
   options.height = kHeight;
   options.record = mp4;
   options.record_fps = 30.0;
+  CountingTap tap;
+  options.tap = &tap;
   uint64_t recorded = 0;
   {
     View view(options, source, nullptr);
@@ -325,6 +340,11 @@ TEST_CASE("the View records what it draws offscreen to an H.264 MP4 at the fixed
     // How many frames per wall second it keeps up with is the benchmark's
     // question (haptel bench view); here, that what it wrote is in the file.
     CHECK(recorded > 0);
+    // The tap had every frame the MP4 holds, each as many times (a session
+    // file's view channel replays into this MP4's frames).
+    CHECK(tap.frames > 0);
+    CHECK(tap.copies_total == recorded);
+    CHECK(tap.last_video_id > 0);
   }
   cv::VideoCapture video(mp4.string(), cv::CAP_FFMPEG);
   REQUIRE(video.isOpened());

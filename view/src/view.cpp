@@ -17,6 +17,7 @@
 
 #include "haptel/core/histogram.hpp"
 #include "haptel/core/log.hpp"
+#include "haptel/view/canvas.hpp"
 #include "haptel/view/mp4_writer.hpp"
 #include "haptel/view/renderer.hpp"
 
@@ -59,18 +60,22 @@ class Mp4Recorder {
   ~Mp4Recorder() { Finish(); }
 
   /// View thread: queue `rgba` (GL order) `copies` times (fixed-rate video:
-  /// a slow frame is shown for as long as it was on the screen).
-  void Push(const cv::Mat& rgba, int copies) {
+  /// a slow frame is shown for as long as it was on the screen). Returns
+  /// how many were queued (the others dropped).
+  int Push(const cv::Mat& rgba, int copies) {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (ended_) return;  // the file failed: nothing more goes to it
+    if (ended_) return 0;  // the file failed: nothing more goes to it
+    int queued = 0;
     for (int i = 0; i < copies; ++i) {
       if (queue_.size() >= kCapacity) {
         ++dropped_;
         continue;
       }
-      queue_.push_back(i == 0 ? rgba.clone() : queue_.back());
+      queue_.push_back(queued == 0 ? rgba.clone() : queue_.back());
+      ++queued;
     }
     wake_.notify_one();
+    return queued;
   }
   void Finish() {
     {
@@ -152,6 +157,67 @@ class Mp4Recorder {
 
 }  // namespace
 
+Canvas::Canvas(const ViewOptions& options) {
+  bool sdl_up = false;
+  try {
+    if (options.mode == ViewMode::kOffscreen && std::getenv("SDL_VIDEODRIVER") == nullptr) {
+      SDL_SetHint(SDL_HINT_VIDEODRIVER, "offscreen");
+    }
+    if (options.mode == ViewMode::kWindow && !View::DisplayAvailable()) {
+      throw ViewError(
+          "no display for a window ($DISPLAY is not set or not reachable); use --record FILE.mp4 "
+          "to "
+          "render offscreen, or --view none");
+    }
+    SDL_SetHint(SDL_HINT_JOYSTICK_ALLOW_BACKGROUND_EVENTS, "1");
+    SDL_SetHint(SDL_HINT_NO_SIGNAL_HANDLERS, "1");  // Ctrl-C stays the session's
+    // A click that gives the window the focus grasps too: the mouse
+    // device's hand is held from that press (SDL drops a press within
+    // 10 ms of its focus event by default, and a loaded view thread reads
+    // both at once: the hand then followed the pointer and was never held).
+    SDL_SetHint(SDL_HINT_MOUSE_FOCUS_CLICKTHROUGH, "1");
+    if (SDL_Init(SDL_INIT_VIDEO | SDL_INIT_GAMECONTROLLER) != 0) {
+      throw ViewError(std::string("view: SDL cannot start its video: ") + SDL_GetError());
+    }
+    sdl_up = true;
+    SDL_GL_SetAttribute(SDL_GL_CONTEXT_PROFILE_MASK, SDL_GL_CONTEXT_PROFILE_CORE);
+    SDL_GL_SetAttribute(SDL_GL_CONTEXT_MAJOR_VERSION, 3);
+    SDL_GL_SetAttribute(SDL_GL_CONTEXT_MINOR_VERSION, 3);
+    SDL_GL_SetAttribute(SDL_GL_DOUBLEBUFFER, 1);
+    SDL_GL_SetAttribute(SDL_GL_DEPTH_SIZE, 24);
+    const Uint32 flags =
+        SDL_WINDOW_OPENGL | (options.mode == ViewMode::kOffscreen ? SDL_WINDOW_HIDDEN : 0);
+    window_ = SDL_CreateWindow(options.title.c_str(), SDL_WINDOWPOS_CENTERED,
+                               SDL_WINDOWPOS_CENTERED, options.width, options.height, flags);
+    if (window_ == nullptr)
+      throw ViewError(std::string("view: cannot open a window: ") + SDL_GetError());
+    context_ = SDL_GL_CreateContext(window_);
+    if (context_ == nullptr) {
+      throw ViewError(std::string("view: no OpenGL 3.3 core context: ") + SDL_GetError());
+    }
+    SDL_GL_SetSwapInterval(0);  // paced by the caller, not the display
+    renderer_ = std::make_unique<Renderer>(options.width, options.height, options.screen);
+  } catch (...) {
+    renderer_.reset();
+    if (context_ != nullptr) SDL_GL_DeleteContext(context_);
+    if (window_ != nullptr) SDL_DestroyWindow(window_);
+    if (sdl_up) QuitViewSdl();
+    throw;
+  }
+}
+
+Canvas::~Canvas() {
+  renderer_.reset();
+  SDL_GL_DeleteContext(context_);
+  SDL_DestroyWindow(window_);
+  QuitViewSdl();
+}
+
+void Canvas::Swap() {
+  SDL_GL_SwapWindow(window_);
+  glFinish();  // the frame is on the screen (or in the offscreen buffer) now
+}
+
 bool View::DisplayAvailable() {
   const char* display = std::getenv("DISPLAY");
   if (display == nullptr || display[0] == '\0') return false;
@@ -182,48 +248,9 @@ struct View::Impl {
   Impl(const ViewOptions& o, ViewSource& s, EventSink* k) : options(o), source(s), sink(k) {}
 
   void Run(std::promise<void>& ready) {
-    SDL_Window* window = nullptr;
-    SDL_GLContext context = nullptr;
-    std::unique_ptr<Renderer> renderer;
-    bool sdl_up = false;
+    std::unique_ptr<Canvas> canvas;
     try {
-      if (options.mode == ViewMode::kOffscreen && std::getenv("SDL_VIDEODRIVER") == nullptr) {
-        SDL_SetHint(SDL_HINT_VIDEODRIVER, "offscreen");
-      }
-      if (options.mode == ViewMode::kWindow && !DisplayAvailable()) {
-        throw ViewError(
-            "no display for a window ($DISPLAY is not set or not reachable); use --record FILE.mp4 "
-            "to "
-            "render offscreen, or --view none");
-      }
-      SDL_SetHint(SDL_HINT_JOYSTICK_ALLOW_BACKGROUND_EVENTS, "1");
-      SDL_SetHint(SDL_HINT_NO_SIGNAL_HANDLERS, "1");  // Ctrl-C stays the session's
-      // A click that gives the window the focus grasps too: the mouse
-      // device's hand is held from that press (SDL drops a press within
-      // 10 ms of its focus event by default, and a loaded view thread reads
-      // both at once: the hand then followed the pointer and was never held).
-      SDL_SetHint(SDL_HINT_MOUSE_FOCUS_CLICKTHROUGH, "1");
-      if (SDL_Init(SDL_INIT_VIDEO | SDL_INIT_GAMECONTROLLER) != 0) {
-        throw ViewError(std::string("view: SDL cannot start its video: ") + SDL_GetError());
-      }
-      sdl_up = true;
-      SDL_GL_SetAttribute(SDL_GL_CONTEXT_PROFILE_MASK, SDL_GL_CONTEXT_PROFILE_CORE);
-      SDL_GL_SetAttribute(SDL_GL_CONTEXT_MAJOR_VERSION, 3);
-      SDL_GL_SetAttribute(SDL_GL_CONTEXT_MINOR_VERSION, 3);
-      SDL_GL_SetAttribute(SDL_GL_DOUBLEBUFFER, 1);
-      SDL_GL_SetAttribute(SDL_GL_DEPTH_SIZE, 24);
-      const Uint32 flags =
-          SDL_WINDOW_OPENGL | (options.mode == ViewMode::kOffscreen ? SDL_WINDOW_HIDDEN : 0);
-      window = SDL_CreateWindow(options.title.c_str(), SDL_WINDOWPOS_CENTERED,
-                                SDL_WINDOWPOS_CENTERED, options.width, options.height, flags);
-      if (window == nullptr)
-        throw ViewError(std::string("view: cannot open a window: ") + SDL_GetError());
-      context = SDL_GL_CreateContext(window);
-      if (context == nullptr) {
-        throw ViewError(std::string("view: no OpenGL 3.3 core context: ") + SDL_GetError());
-      }
-      SDL_GL_SetSwapInterval(0);  // paced by rate_hz, not the display
-      renderer = std::make_unique<Renderer>(options.width, options.height, options.screen);
+      canvas = std::make_unique<Canvas>(options);
       if (!options.record.empty()) {
         recorder = std::make_unique<Mp4Recorder>(options.record, options.width, options.height,
                                                  options.record_fps);
@@ -232,25 +259,19 @@ struct View::Impl {
         sink->OnWindowOpened(options.width, options.height);
       ready.set_value();
     } catch (...) {
-      renderer.reset();
-      if (context != nullptr) SDL_GL_DeleteContext(context);
-      if (window != nullptr) SDL_DestroyWindow(window);
-      if (sdl_up) QuitViewSdl();
+      canvas.reset();
       ready.set_exception(std::current_exception());
       return;
     }
 
-    Loop(*window, *renderer);
+    Loop(*canvas);
     if (sink != nullptr && options.mode == ViewMode::kWindow) sink->OnWindowClosed();
 
     if (recorder) recorder->Finish();
-    renderer.reset();
-    SDL_GL_DeleteContext(context);
-    SDL_DestroyWindow(window);
-    QuitViewSdl();
   }
 
-  void Loop(SDL_Window& window, Renderer& renderer) {
+  void Loop(Canvas& canvas) {
+    Renderer& renderer = canvas.renderer();
     ViewModel model;
     model.shapes.reserve(256);
     cv::Mat readback;
@@ -269,18 +290,18 @@ struct View::Impl {
       renderer.Draw(model, t_s);
       // Read back before the swap: the back buffer is what was just drawn.
       const auto due_ticks = static_cast<uint64_t>(t_s / record_period_s) + 1;
-      const bool record_now = recorder != nullptr && due_ticks > recorded_ticks;
+      const bool tick_due = due_ticks > recorded_ticks;
+      const bool record_now = recorder != nullptr && tick_due;
       if (record_now) renderer.ReadPixelsRaw(readback);
       WaitForFrameDrawn();
-      SDL_GL_SwapWindow(&window);
-      glFinish();  // the frame is on the screen (or in the offscreen buffer) now
+      canvas.Swap();
+      int copies = static_cast<int>(std::min<uint64_t>(due_ticks - recorded_ticks, 30));
+      // The tap's frames are the MP4's: those the encoder dropped are not in it.
+      if (record_now) copies = recorder->Push(readback, copies);
+      if (tick_due && options.tap != nullptr) options.tap->OnFrame(model, t_s, copies);
       const int64_t shown = Now(CLOCK_MONOTONIC);
       const int64_t shown_wall = Now(CLOCK_REALTIME);
-      if (record_now) {
-        recorder->Push(readback,
-                       static_cast<int>(std::min<uint64_t>(due_ticks - recorded_ticks, 30)));
-        recorded_ticks = due_ticks;
-      }
+      if (tick_due) recorded_ticks = due_ticks;
       frame_us.Record(static_cast<double>(shown - start) * 1e-3);
       frames.fetch_add(1);
       if (model.video.image && model.video.id != last_video_id) {

@@ -123,6 +123,12 @@ class SessionRecorder final : public link::SampleTap, public haptics::ServoTap {
   bool WantsBytes(int channel) const override;
   void OnSample(int channel, int64_t now_ns, const void* sample, const uint8_t* cdr,
                 size_t size) override;
+  /// A channel of a type of the caller's own (`schema`, described by the OMG
+  /// IDL `idl`, `cdr` encoded), fed by one producer thread through OnSample
+  /// with its CDR bytes (`sample` unused): the operator's view
+  /// (view/view_record.hpp). Set-up only; -1 when no channel can be had (as
+  /// OnTopic).
+  int AddOwnChannel(const std::string& topic, const std::string& schema, const std::string& idl);
 
   // haptics::ServoTap: from each arm's servo thread.
   void Push(const haptics::ServoSample& sample) noexcept override;

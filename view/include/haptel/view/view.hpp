@@ -35,13 +35,28 @@ enum class ViewMode {
   kOffscreen,  ///< no window: rendered for the recorder only (SDL offscreen driver / EGL)
 };
 
+/// Takes the frames the view draws at ViewOptions::record_fps — the live
+/// MP4's frames, whether an MP4 is written or not — for a session file's
+/// view channel (view_record.hpp). Runs on the view thread: it must not
+/// block (copy, encode, push into a ring).
+class FrameTap {
+ public:
+  virtual ~FrameTap() = default;
+  /// `model` was drawn at `t_s` on the view's clock (what the indicators
+  /// flash by) and stands for `copies` consecutive frames at record_fps (a
+  /// slow frame is shown, and recorded, for as long as it was on screen;
+  /// with an MP4, the copies it took: 0 when its encoder dropped them all).
+  virtual void OnFrame(const ViewModel& model, double t_s, int copies) = 0;
+};
+
 struct ViewOptions {
   ViewMode mode = ViewMode::kWindow;
   int width = 1024;
   int height = 576;
   double rate_hz = 60.0;         ///< frames per second drawn (vsync off)
   std::filesystem::path record;  ///< MP4 to write (empty: none)
-  double record_fps = 30.0;      ///< fixed frame rate of the MP4
+  double record_fps = 30.0;      ///< fixed frame rate of the MP4 (and of the tap)
+  FrameTap* tap = nullptr;       ///< the frames at record_fps (null: none); outlives the View
   std::string title = "Haptel";
   ScreenPlacement screen;  ///< where the camera's picture hangs
 };
