@@ -22,8 +22,8 @@
 #include "haptel/link/topic.hpp"
 #include "haptel/mcap/reader.hpp"
 #include "haptel/record/recorder.hpp"
-#include "haptel/record/truth_record.hpp"
 #include "haptel/record/session_channels.hpp"
+#include "haptel/record/truth_record.hpp"
 #include "haptel/session/foxglove.h"
 #include "haptel/session/foxglovePubSubTypes.h"
 #include "haptel/video/h264_codec.hpp"
@@ -120,10 +120,12 @@ TEST_CASE("haptel run completes the short track over DDS with a separate vehicle
   // and keeps its truth record where asked. Recorded whole into a session
   // file, in a folder the run makes.
   const auto session = dir / "sessions" / "lap.mcap";
-  Child haptel({Bin("haptel"), "run", "--track", "config/tracks/test-short.yaml", "--json",
-                "--quiet", "--domain", std::to_string(test::UniqueDomain(11)), "--database",
-                db.string(), "--vehicle-timeout", "5", "--reality", "lab", "--reality-seed", "3",
-                "--truth", truth.string(), "--session", session.string()});
+  Child haptel(
+      {Bin("haptel"), "run",          "--track",           "config/tracks/test-short.yaml",
+       "--json",      "--quiet",      "--domain",          std::to_string(test::UniqueDomain(11)),
+       "--database",  db.string(),    "--vehicle-timeout", "5",
+       "--reality",   "lab",          "--reality-seed",    "3",
+       "--truth",     truth.string(), "--session",         session.string()});
   // Signals it does not document leave it running: SIGUSR1 cuts the link
   // only with --link-fault (it used to end the run unrecorded, exit 138).
   std::this_thread::sleep_for(std::chrono::seconds(2));
