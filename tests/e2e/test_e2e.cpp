@@ -283,6 +283,14 @@ TEST_CASE("when commands stop, the vehicle's watchdog stops its motors") {
   };
   REQUIRE(test::WaitFor([&] { return states.load() > 0; }, 30.0));
   CHECK(latest().watchdog_tripped());  // no command yet: stopped
+  // The recorder takes a topic from its discovery on (a loaded machine discovered this test's
+  // writer after the commands were sent): drive once it records them.
+  REQUIRE(test::WaitFor(
+      [&] {
+        recorder.Pump();
+        return recorder.err().find("recording haptel/wd/command") != std::string::npos;
+      },
+      30.0));
 
   // Drive forward at 50 Hz until the motors run.
   msg::TreadCommand cmd;

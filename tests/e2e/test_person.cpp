@@ -79,10 +79,28 @@ TEST_CASE("a recorded device replayed through the same interface reproduces the 
   const auto dir = test::ScratchDir("e2e-replay");
   const auto trace = dir / "lap.trace";
   const std::string domain = std::to_string(test::UniqueDomain(21));
-  Child recorded({Bin("haptel"), "run", "--operator", "auto", "--view", "none", "--track",
-                  "config/tracks/test-short.yaml", "--json", "--quiet", "--domain", domain,
-                  "--database", (dir / "runs.db").string(), "--vehicle-timeout", "5", "--trace",
-                  trace.string()});
+  // The twin (--reality none): a replay drives open-loop, as recorded, and only a vehicle that
+  // answers the same each time can repeat a lap that way.
+  Child recorded({Bin("haptel"),
+                  "run",
+                  "--operator",
+                  "auto",
+                  "--view",
+                  "none",
+                  "--track",
+                  "config/tracks/test-short.yaml",
+                  "--json",
+                  "--quiet",
+                  "--domain",
+                  domain,
+                  "--database",
+                  (dir / "runs.db").string(),
+                  "--vehicle-timeout",
+                  "5",
+                  "--trace",
+                  trace.string(),
+                  "--reality",
+                  "none"});
   REQUIRE(recorded.Wait(120.0) == 0);
   const std::string first = recorded.LastLine();
   REQUIRE(std::filesystem::exists(trace.string() + ".calibration.yaml"));
@@ -108,7 +126,9 @@ TEST_CASE("a recorded device replayed through the same interface reproduces the 
                   "--database",
                   (dir / "runs.db").string(),
                   "--vehicle-timeout",
-                  "5"});
+                  "5",
+                  "--reality",
+                  "none"});
   const int code = replayed.Wait(120.0);
   INFO("recorded: " << first << "\nreplayed: " << replayed.out() << "\n" << replayed.err());
   REQUIRE(code == 0);
@@ -266,11 +286,12 @@ TEST_CASE(
   XServer x;
   const auto dir = test::ScratchDir("e2e-blimp-keys");
   // No --operator, no --interface: at a display with the simulated device,
-  // a person and the blimp's keys.
+  // a person and the blimp's keys. In still air (the twin): keys pressed
+  // once, with nobody steering after, do not hold a course in the lab's wind.
   Child run({Bin("haptel"), "run", "--config", "config/blimp.yaml", "--track",
              "config/tracks/blimp-hop.yaml", "--json", "--domain",
              std::to_string(test::UniqueDomain(24)), "--database", (dir / "runs.db").string(),
-             "--vehicle-timeout", "5", "--time-limit", "150"});
+             "--vehicle-timeout", "5", "--time-limit", "150", "--reality", "none"});
   // The blimp is up and resting on its pad, nothing pressed.
   REQUIRE(test::WaitFor(
       [&] {

@@ -458,7 +458,7 @@ TEST_CASE(
   // video's bitrate and stale time (v9), the notes and the superseded
   // trials (v10), the simulated-time speed-up (v11), the servo controller's
   // errors (v12), the runs' engagement and device use (v13), the trials'
-  // devices (v14).
+  // devices (v14), the runs' session files (v15).
   {
     sqlite3* raw = nullptr;
     REQUIRE(sqlite3_open(db.c_str(), &raw) == SQLITE_OK);
@@ -478,12 +478,12 @@ TEST_CASE(
             "ALTER TABLE runs DROP COLUMN disengaged_s; ALTER TABLE runs DROP COLUMN "
             "pseudo_haptic_gain_mean; ALTER TABLE runs DROP COLUMN ff_effects_played; "
             "ALTER TABLE study_plan DROP COLUMN device; ALTER TABLE study_trials DROP COLUMN "
-            "device; "
+            "device; ALTER TABLE runs DROP COLUMN session_file; "
             "DROP TABLE study_notes; DROP TABLE study_superseded_trials; PRAGMA user_version = 5",
             nullptr, nullptr, nullptr) == SQLITE_OK);
     sqlite3_close(raw);
   }
-  record::Recorder recorder(db);  // migrated to v14: the study has no definition on record
+  record::Recorder recorder(db);  // migrated to v15: the study has no definition on record
   auto resume = [&](const std::string& text) {
     test::WriteFile(file, text);
     const StudyConfig config = LoadStudy(file);
