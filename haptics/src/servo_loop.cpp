@@ -69,17 +69,20 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
   arm.cue_felt = false;
   ReadSlowChannels(arm, side, now_ns);
   TrackWrist(arm, side, now_ns);
+  // The session file's sample of this tick (servo_tap.hpp): what every tick has.
+  const auto tracked_sample = [&] {
+    ServoSample s;
+    s.t_ns = now_ns;
+    s.cycle = c.cycles;
+    s.side = static_cast<uint8_t>(Index(side));
+    s.tracked_position = arm.previous_position;
+    s.tracked_orientation = arm.wrist.orientation;
+    return s;
+  };
   if (!arm.connected || !arm.have_previous) {
     arm.published.Store(c);
-    if (tap_ != nullptr) {  // a tick all the same: no forces, the wrist if read
-      ServoSample s;
-      s.t_ns = now_ns;
-      s.cycle = c.cycles;
-      s.side = static_cast<uint8_t>(Index(side));
-      s.tracked_position = arm.previous_position;
-      s.tracked_orientation = arm.wrist.orientation;
-      tap_->Push(s);
-    }
+    // A tick all the same: no forces, the wrist if read.
+    if (tap_ != nullptr) tap_->Push(tracked_sample());
     return;  // lost (forces zeroed), or nothing to compute forces from yet
   }
 
@@ -118,14 +121,9 @@ void ServoLoop::Tick(Side side, int64_t now_ns) {
   c.safety = arm.safety.counters();
   arm.published.Store(c);
   if (tap_ != nullptr) {
-    ServoSample s;
-    s.t_ns = now_ns;
-    s.cycle = c.cycles;
-    s.side = static_cast<uint8_t>(Index(side));
+    ServoSample s = tracked_sample();
     s.coupling = sp.coupling_enabled;
     s.period_s = period_s;
-    s.tracked_position = arm.previous_position;
-    s.tracked_orientation = arm.wrist.orientation;
     s.proxy_position = sp.coupling_target;
     s.field_force = ports.field;
     s.wrist_force = wrist;

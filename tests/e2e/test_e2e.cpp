@@ -54,7 +54,7 @@ void CheckSessionFile(const std::filesystem::path& file, const std::string& json
   INFO("session file " << file);
   CHECK(json.find("\"saved\":true") != std::string::npos);
   CHECK(json.find("\"dropped\":0,") != std::string::npos);
-  const std::string read = test::ReferenceRead(file, /*decode=*/true);
+  const std::string read = test::ReferenceRead(file, "--decode");
   INFO(read);
   CHECK(JsonField(read, "failed") == "0");
   CHECK(JsonField(read, "skipped") == "0");
@@ -341,7 +341,7 @@ TEST_CASE("when commands stop, the vehicle's watchdog stops its motors") {
   const int code = recorder.Wait(30.0);
   INFO("stdout:\n" << recorder.out() << "\nstderr:\n" << recorder.err());
   REQUIRE(code == 0);
-  const std::string read = test::ReferenceRead(session, /*decode=*/true);
+  const std::string read = test::ReferenceRead(session, "--decode");
   INFO(read);
   CHECK(JsonField(read, "footer") == "true");
   CHECK(JsonField(read, "failed") == "0");

@@ -11,32 +11,13 @@
 #include "haptel/core/json.hpp"
 #include "haptel/mcap/recover.hpp"
 #include "haptel/mcap/writer.hpp"
+#include "mcap_reference.hpp"
 #include "test_env.hpp"
 
 namespace fs = std::filesystem;
 namespace mcap = haptel::mcap;
 
 namespace {
-
-/// The script's JSON line (the test fails, saying why, when node or the
-/// packages are missing: scripts/test installs them).
-std::string ReferenceRead(const fs::path& file, const std::string& options = "") {
-  const char* tools = std::getenv("HAPTEL_NODE_TOOLS");
-  REQUIRE(tools != nullptr);
-  INFO("the reference reader is installed by scripts/test into " << tools);
-  REQUIRE(fs::exists(fs::path(tools) / "node_modules" / "@mcap" / "core"));
-  const std::string command =
-      "node tests/mcap/mcap_reference_reader.mjs '" + file.string() + "' " + options + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  REQUIRE(pipe != nullptr);
-  std::string out;
-  char buffer[4096];
-  while (size_t n = fread(buffer, 1, sizeof buffer, pipe)) out.append(buffer, n);
-  const int status = pclose(pipe);
-  INFO(out);
-  REQUIRE(status == 0);
-  return out;
-}
 
 /// A CDR (little-endian, plain) test::Point.
 std::string Point(double x, double y) {
@@ -83,7 +64,7 @@ TEST_CASE("the reference reader reads our files whole, CRCs checked, every CDR m
     const fs::path path =
         dir / ("session-" + std::string(mcap::CompressionName(compression)) + ".mcap");
     WriteSession(path, compression);
-    const std::string json = ReferenceRead(path, "--decode --dump /hands");
+    const std::string json = haptel::test::ReferenceRead(path, "--decode --dump /hands");
     INFO(json);
     CHECK_THAT(
         json,
@@ -114,7 +95,7 @@ TEST_CASE("the reference reader reads a recovered file", "[mcap]") {
   REQUIRE(result.loss.truncated);
   REQUIRE(result.messages > 0);
   REQUIRE(result.messages < 400);
-  const std::string json = ReferenceRead(dir / "recovered.mcap");
+  const std::string json = haptel::test::ReferenceRead(dir / "recovered.mcap");
   INFO(json);
   CHECK(haptel::JsonFieldOf(json, "messages") == std::to_string(result.messages));
   CHECK_THAT(json, Catch::Contains(R"("statistics_messages":)" + std::to_string(result.messages)));

@@ -14,14 +14,18 @@
 
 namespace haptel::test {
 
-inline std::string ReferenceRead(const std::filesystem::path& file, bool decode = false) {
+/// The JSON lines tests/mcap/mcap_reference_reader.mjs prints for `file`
+/// with `options` (e.g. "--decode --dump /hands"); the test fails, saying
+/// why, when node or the packages are missing (scripts/test installs them).
+inline std::string ReferenceRead(const std::filesystem::path& file,
+                                 const std::string& options = "") {
   const char* tools = std::getenv("HAPTEL_NODE_TOOLS");
   REQUIRE(tools != nullptr);
   INFO("the reference reader is installed by scripts/test into " << tools);
   REQUIRE(
       std::filesystem::exists(std::filesystem::path(tools) / "node_modules" / "@mcap" / "core"));
-  const std::string command = "node tests/mcap/mcap_reference_reader.mjs '" + file.string() + "'" +
-                              (decode ? " --decode" : "") + " 2>&1";
+  const std::string command =
+      "node tests/mcap/mcap_reference_reader.mjs '" + file.string() + "' " + options + " 2>&1";
   FILE* pipe = popen(command.c_str(), "r");
   REQUIRE(pipe != nullptr);
   std::string out;
