@@ -5,10 +5,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
-#include <string_view>
 
 #include "haptel/core/args.hpp"
 #include "haptel/core/cli.hpp"
+#include "haptel/core/command_line.hpp"
 #include "haptel/mcap/recover.hpp"
 
 namespace haptel::app {
@@ -21,17 +21,10 @@ constexpr const char* kRecordUsage =
     "one whose recording was killed before it was closed: every complete chunk survives,\n"
     "the torn tail is dropped and counted.\n";
 
-bool HasOption(int argc, const char* const* argv, std::string_view option) {
-  for (int i = 1; i < argc; ++i) {
-    if (argv[i] == option) return true;
-  }
-  return false;
-}
-
 }  // namespace
 
 int RecordCommand(int argc, const char* const* argv) {
-  if (HasOption(argc, argv, "--recover")) return RecordRecoverCommand(argc, argv);
+  if (cli::HasOption(argc, argv, "--recover")) return RecordRecoverCommand(argc, argv);
   return RecordDomainCommand(argc, argv);
 }
 

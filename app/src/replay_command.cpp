@@ -6,11 +6,11 @@
 #include <optional>
 #include <set>
 #include <string>
-#include <string_view>
 #include <vector>
 
 #include "haptel/core/args.hpp"
 #include "haptel/core/cli.hpp"
+#include "haptel/core/command_line.hpp"
 #include "haptel/core/json.hpp"
 #include "haptel/core/stop_signals.hpp"
 #include "haptel/mcap/info.hpp"
@@ -60,44 +60,6 @@ constexpr const char* kReplayUsage =
     "  --attach          (--drive) drive the vehicle already running there; spawn none\n"
     "  --json    (--info, --drive) one JSON object instead of the table or the line\n";
 
-bool HasOption(int argc, const char* const* argv, std::string_view option) {
-  for (int i = 1; i < argc; ++i) {
-    if (argv[i] == option) return true;
-  }
-  return false;
-}
-
-/// `haptel ... run ...` as cli::CommandLine wrote it (words separated by
-/// spaces, single-quoted where they hold a shell character) back into its
-/// words.
-std::vector<std::string> CommandLineWords(const std::string& line) {
-  std::vector<std::string> words;
-  std::string word;
-  bool in_word = false;
-  for (size_t i = 0; i < line.size(); ++i) {
-    const char c = line[i];
-    if (c == ' ') {
-      if (in_word) words.push_back(word);
-      word.clear();
-      in_word = false;
-    } else if (c == '\'') {
-      in_word = true;
-      const size_t close = line.find('\'', i + 1);
-      if (close == std::string::npos) throw UsageError("an unterminated quote in: " + line);
-      word += line.substr(i + 1, close - i - 1);
-      i = close;
-    } else if (c == '\\' && i + 1 < line.size()) {
-      word += line[++i];
-      in_word = true;
-    } else {
-      word += c;
-      in_word = true;
-    }
-  }
-  if (in_word) words.push_back(word);
-  return words;
-}
-
 /// The session the file's run drove, set up again from the command line
 /// the file recorded, without its outputs (no view, MP4, session file).
 mediator::SessionSetup RecordedSetup(const mcap::Reader& reader) {
@@ -114,7 +76,7 @@ mediator::SessionSetup RecordedSetup(const mcap::Reader& reader) {
                           "\" with the run's command_line: which vehicle and track it drove is "
                           "not known");
   }
-  const std::vector<std::string> words = CommandLineWords(line);
+  const std::vector<std::string> words = cli::CommandLineWords(line);
   std::vector<std::string> run;  // from "run" on, its outputs left out
   static const std::set<std::string> kOutputs = {"--session", "--record", "--view", "--output"};
   bool started = false;
@@ -210,8 +172,8 @@ int ReplayDriveCommand(int argc, const char* const* argv) {
 }
 
 int ReplayCommand(int argc, const char* const* argv) {
-  if (HasOption(argc, argv, "--info")) return ReplayInfoCommand(argc, argv);
-  if (HasOption(argc, argv, "--drive")) return ReplayDriveCommand(argc, argv);
+  if (cli::HasOption(argc, argv, "--info")) return ReplayInfoCommand(argc, argv);
+  if (cli::HasOption(argc, argv, "--drive")) return ReplayDriveCommand(argc, argv);
   return ReplayViewCommand(argc, argv);
 }
 

@@ -2,6 +2,8 @@
 
 #include <cstdio>
 #include <cstring>
+#include <string>
+#include <vector>
 
 #include "haptel/core/args.hpp"
 #include "haptel/core/command_line.hpp"
@@ -30,6 +32,41 @@ std::string CommandLine(int argc, const char* const* argv) {
     line += '\'';
   }
   return line;
+}
+
+std::vector<std::string> CommandLineWords(const std::string& line) {
+  std::vector<std::string> words;
+  std::string word;
+  bool in_word = false;
+  for (size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (c == ' ') {
+      if (in_word) words.push_back(word);
+      word.clear();
+      in_word = false;
+    } else if (c == '\'') {
+      in_word = true;
+      const size_t close = line.find('\'', i + 1);
+      if (close == std::string::npos) throw UsageError("an unterminated quote in: " + line);
+      word += line.substr(i + 1, close - i - 1);
+      i = close;
+    } else if (c == '\\' && i + 1 < line.size()) {
+      word += line[++i];
+      in_word = true;
+    } else {
+      word += c;
+      in_word = true;
+    }
+  }
+  if (in_word) words.push_back(word);
+  return words;
+}
+
+bool HasOption(int argc, const char* const* argv, std::string_view option) {
+  for (int i = 1; i < argc; ++i) {
+    if (argv[i] == option) return true;
+  }
+  return false;
 }
 
 int Main(const Program& program, int argc, const char* const* argv,
