@@ -3,10 +3,12 @@
 #include <fastdds/rtps/common/SerializedPayload.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -14,6 +16,7 @@
 #include "haptel/core/json.hpp"
 #include "haptel/mcap/writer.hpp"
 #include "haptel/msg/haptel.h"
+#include "haptel/msg/haptelPubSubTypes.h"
 #include "haptel/record/session_channels.hpp"
 #include "haptel/session/foxglove.h"
 #include "haptel/session/foxglovePubSubTypes.h"
@@ -131,6 +134,50 @@ void CopyText(char* out, size_t capacity, const char* text) {
   out[n] = '\0';
 }
 
+/// A body's orientation from its yaw (about z, counter-clockwise from +x),
+/// pitch (nose up positive) and roll (right side down positive), in a frame
+/// of x forward, y left, z up: yaw, then pitch, then roll (z-y-x).
+foxglove::Quaternion Orientation(double yaw, double pitch = 0.0, double roll = 0.0) {
+  // Nose up is a negative turn about the body's y axis (which points left).
+  const double cy = std::cos(yaw / 2), sy = std::sin(yaw / 2);
+  const double cp = std::cos(-pitch / 2), sp = std::sin(-pitch / 2);
+  const double cr = std::cos(roll / 2), sr = std::sin(roll / 2);
+  foxglove::Quaternion q;
+  q.w(cy * cp * cr + sy * sp * sr);
+  q.x(cy * cp * sr - sy * sp * cr);
+  q.y(cy * sp * cr + sy * cp * sr);
+  q.z(sy * cp * cr - cy * sp * sr);
+  return q;
+}
+
+foxglove::PoseInFrame PoseIn(int64_t wall_ns, double x, double y, double z,
+                             const foxglove::Quaternion& orientation) {
+  foxglove::PoseInFrame m;
+  m.timestamp().sec(static_cast<uint32_t>(wall_ns / 1000000000));
+  m.timestamp().nsec(static_cast<uint32_t>(wall_ns % 1000000000));
+  m.frame_id(std::string(session::kPoseFrame));
+  m.pose().position().x(x);
+  m.pose().position().y(y);
+  m.pose().position().z(z);
+  m.pose().orientation(orientation);
+  return m;
+}
+
+/// A sample back from the CDR bytes the tap kept; false when they do not
+/// decode (then no pose is derived from it).
+template <typename PubSubType, typename Msg>
+bool Deserialize(const uint8_t* data, size_t size, Msg& msg) {
+  static PubSubType type;
+  eprosima::fastrtps::rtps::SerializedPayload_t payload(static_cast<uint32_t>(size));
+  std::memcpy(payload.data, data, size);
+  payload.length = static_cast<uint32_t>(size);
+  try {
+    return type.deserialize(&payload, &msg);
+  } catch (const std::exception&) {
+    return false;  // Fast CDR throws on a short buffer
+  }
+}
+
 /// "2026-11-28T23:38:07Z".
 std::string UtcText(int64_t wall_ns) {
   const std::time_t seconds = static_cast<std::time_t>(wall_ns / 1000000000);
@@ -163,6 +210,10 @@ struct SessionRecorder::ByteChannel {
   SessionChannelCount count;
   std::array<SessionChannelCount, 2> video_counts;
   std::atomic<uint64_t> dropped{0};
+  /// A received state's pose, derived from its bytes (kNone: not a state).
+  PoseSource pose = PoseSource::kNone;
+  uint16_t pose_id = 0;
+  SessionChannelCount pose_count;
 };
 
 SessionEvent SessionEvent::Make(int64_t t_ns, double t_s, const char* kind, int32_t index,
@@ -257,12 +308,17 @@ SessionRecorder::SessionRecorder(SessionFileOptions options)
                           session_idl, {});
   field_.id = McapChannel(std::string(session::kFieldTopic), std::string(session::kFieldSchema),
                           session_idl, {});
+  ghost_pose_.id =
+      McapChannel(std::string(session::kGhostPoseTopic), std::string(session::kPoseInFrameSchema),
+                  std::string(session::FoxgloveIdl()), {});
   servo_.count = {std::string(session::kServoTopic), std::string(session::kServoTickSchema)};
   interface_events_.count = {std::string(session::kInterfaceEventsTopic),
                              std::string(session::kEventSchema)};
   lap_events_.count = {std::string(session::kLapEventsTopic), std::string(session::kEventSchema)};
   ghost_.count = {std::string(session::kGhostTopic), std::string(session::kGhostSchema)};
   field_.count = {std::string(session::kFieldTopic), std::string(session::kFieldSchema)};
+  ghost_pose_.count = {std::string(session::kGhostPoseTopic),
+                       std::string(session::kPoseInFrameSchema)};
   thread_ = std::thread([this] { Run(); });
 }
 
@@ -288,47 +344,51 @@ uint16_t SessionRecorder::McapChannel(const std::string& topic, const std::strin
 
 int SessionRecorder::OnTopic(const std::string& topic, const std::string& type_name,
                              link::TapDirection direction) {
-  std::lock_guard<std::mutex> lock(writer_mutex_);
-  const int index = byte_channel_count_.load();
-  if (index >= kMaxByteChannels || closed_) return -1;
   const bool video = type_name == "haptel::msg::VideoFrame";
-  if (video && direction == link::TapDirection::kSent) return -1;  // an operator sends none
-  auto channel = std::make_unique<ByteChannel>(
-      video ? options_.video_ring_bytes : options_.channel_ring_bytes, video);
-  channel->topic = topic;
-  channel->schema = type_name;
-  channel->metadata = {{"direction", direction == link::TapDirection::kSent ? "sent" : "received"},
-                       {"dds_type", type_name}};
-  if (!video) {
-    try {
-      channel->id =
-          McapChannel(topic, type_name, std::string(session::HaptelIdl()), channel->metadata);
-    } catch (const std::exception& e) {
-      Fail(e.what());
-      return -1;
-    }
-    channel->count = {topic, type_name};
-  }
-  byte_channels_[index] = std::move(channel);
-  byte_channel_count_.store(index + 1, std::memory_order_release);
-  return index;
+  const bool sent = direction == link::TapDirection::kSent;
+  if (video && sent) return -1;  // an operator sends none
+  PoseSource pose = PoseSource::kNone;
+  if (!sent && type_name == "haptel::msg::VehicleState") pose = PoseSource::kRobot;
+  if (!sent && type_name == "haptel::msg::BlimpState") pose = PoseSource::kBlimp;
+  return AddByteChannel(topic, type_name, std::string(session::HaptelIdl()),
+                        {{"direction", sent ? "sent" : "received"}, {"dds_type", type_name}}, video,
+                        pose);
 }
 
 int SessionRecorder::AddOwnChannel(const std::string& topic, const std::string& schema,
                                    const std::string& idl) {
+  return AddByteChannel(topic, schema, idl, {}, false, PoseSource::kNone);
+}
+
+int SessionRecorder::AddByteChannel(const std::string& topic, const std::string& schema,
+                                    const std::string& idl,
+                                    std::map<std::string, std::string> metadata, bool video,
+                                    PoseSource pose) {
   std::lock_guard<std::mutex> lock(writer_mutex_);
   const int index = byte_channel_count_.load();
   if (index >= kMaxByteChannels || closed_) return -1;
-  auto channel = std::make_unique<ByteChannel>(options_.channel_ring_bytes, false);
+  auto channel = std::make_unique<ByteChannel>(
+      video ? options_.video_ring_bytes : options_.channel_ring_bytes, video);
   channel->topic = topic;
   channel->schema = schema;
-  try {
-    channel->id = McapChannel(topic, schema, idl, {});
-  } catch (const std::exception& e) {
-    Fail(e.what());
-    return -1;
+  channel->metadata = std::move(metadata);
+  if (!video) {  // the video's channels are made at its first frame, by its codec
+    try {
+      channel->id = McapChannel(topic, schema, idl, channel->metadata);
+      if (pose != PoseSource::kNone) {
+        // "haptel/<vehicle>/state" -> "haptel/<vehicle>/pose"
+        const std::string pose_topic = topic.substr(0, topic.rfind('/') + 1) + "pose";
+        channel->pose_id = McapChannel(pose_topic, std::string(session::kPoseInFrameSchema),
+                                       std::string(session::FoxgloveIdl()), {{"from", topic}});
+        channel->pose_count = {pose_topic, std::string(session::kPoseInFrameSchema)};
+        channel->pose = pose;
+      }
+    } catch (const std::exception& e) {
+      Fail(e.what());
+      return -1;
+    }
+    channel->count = {topic, schema};
   }
-  channel->count = {topic, schema};
   byte_channels_[index] = std::move(channel);
   byte_channel_count_.store(index + 1, std::memory_order_release);
   return index;
@@ -430,6 +490,7 @@ void SessionRecorder::DrainBytes(ByteChannel& c) {
     if (!c.video) {
       WriteMessage(c.id, static_cast<uint32_t>(c.count.messages), h.mono_ns, 0, data, h.size,
                    c.count);
+      if (c.pose != PoseSource::kNone) WritePose(c, h.mono_ns, data, h.size);
       return;
     }
     const int codec = h.codec;
@@ -474,6 +535,32 @@ void SessionRecorder::DrainBytes(ByteChannel& c) {
       write(m, foxglove::CompressedImagePubSubType{});
     }
   });
+}
+
+void SessionRecorder::WritePose(ByteChannel& c, int64_t mono_ns, const uint8_t* data, size_t size) {
+  std::optional<foxglove::PoseInFrame> pose;
+  const auto wall_ns = static_cast<int64_t>(LogTime(mono_ns));
+  if (c.pose == PoseSource::kRobot) {
+    msg::VehicleState state;
+    if (Deserialize<msg::VehicleStatePubSubType>(data, size, state) && state.pose_valid())
+      pose = PoseIn(wall_ns, state.x(), state.y(), 0.0, Orientation(state.heading()));
+  } else {
+    msg::BlimpState state;
+    if (Deserialize<msg::BlimpStatePubSubType>(data, size, state) && state.pose_valid()) {
+      pose = PoseIn(wall_ns, state.x(), state.y(), state.z(),
+                    Orientation(state.yaw(), state.pitch(), state.roll()));
+    }
+  }
+  if (!pose) return;
+  eprosima::fastrtps::rtps::SerializedPayload_t payload;
+  try {
+    Serialize<foxglove::PoseInFramePubSubType>(*pose, payload);
+  } catch (const std::exception& e) {
+    Fail(e.what());
+    return;
+  }
+  WriteMessage(c.pose_id, static_cast<uint32_t>(c.pose_count.messages), mono_ns, 0, payload.data,
+               payload.length, c.pose_count);
 }
 
 void SessionRecorder::DrainSessionRings() {
@@ -536,6 +623,11 @@ void SessionRecorder::DrainSessionRings() {
     m.reported_z(g.reported_z);
     m.delay_s(g.delay_s);
     write(idl::GhostPubSubType{}, m, ghost_, g.t_ns);
+    if (g.valid) {
+      foxglove::PoseInFrame pose =
+          PoseIn(static_cast<int64_t>(LogTime(g.t_ns)), g.x, g.y, g.z, Orientation(g.heading));
+      write(foxglove::PoseInFramePubSubType{}, pose, ghost_pose_, g.t_ns);
+    }
   }
   FieldRecord f;
   while (fields_.Pop(f)) {
@@ -581,6 +673,7 @@ SessionFileReport SessionRecorder::Close() {
     ByteChannel& c = *byte_channels_[i];
     if (!c.video) {
       add(c.count, c.dropped.load());
+      if (c.pose != PoseSource::kNone) add(c.pose_count, 0);
       continue;
     }
     bool any = false;
@@ -591,7 +684,8 @@ SessionFileReport SessionRecorder::Close() {
     }
     if (!any) add({c.topic, std::string(session::kCompressedVideoSchema)}, c.dropped.load());
   }
-  for (SideChannel* side : {&servo_, &interface_events_, &lap_events_, &ghost_, &field_})
+  for (SideChannel* side :
+       {&servo_, &interface_events_, &lap_events_, &ghost_, &field_, &ghost_pose_})
     add(side->count, side->dropped.load());
   std::error_code ec;
   const auto size = std::filesystem::file_size(options_.file, ec);

@@ -6,6 +6,7 @@
 #include <fastdds/rtps/common/SerializedPayload.h>
 
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <map>
@@ -221,4 +222,76 @@ TEST_CASE("a session file that cannot be made is said, naming it") {
   } catch (const std::runtime_error& e) {
     CHECK(std::string(e.what()).find(blocker.string()) != std::string::npos);
   }
+}
+
+TEST_CASE(
+    "each received state's pose and the ghost's are recorded as foxglove::PoseInFrame in the world "
+    "frame") {
+  const fs::path file = test::ScratchDir("session-recorder-pose") / "pose.mcap";
+  record::SessionFileOptions options;
+  options.file = file;
+  record::SessionRecorder recorder(options);
+  const int robot = recorder.OnTopic("haptel/robot1/state", "haptel::msg::VehicleState",
+                                     link::TapDirection::kReceived);
+  const int blimp = recorder.OnTopic("haptel/blimp1/state", "haptel::msg::BlimpState",
+                                     link::TapDirection::kReceived);
+  // A vehicle node's own states (sent) are not the run's odometry: no pose.
+  const int own = recorder.OnTopic("haptel/robot2/state", "haptel::msg::VehicleState",
+                                   link::TapDirection::kSent);
+  REQUIRE(robot >= 0);
+  REQUIRE(blimp >= 0);
+  REQUIRE(own >= 0);
+  msg::VehicleState s;
+  s.pose_valid(true);
+  s.x(1.0f);
+  s.y(2.0f);
+  s.heading(static_cast<float>(M_PI / 2));
+  std::vector<uint8_t> bytes = Cdr<msg::VehicleStatePubSubType>(s);
+  recorder.OnSample(robot, 1000, &s, bytes.data(), bytes.size());
+  recorder.OnSample(own, 1000, &s, bytes.data(), bytes.size());
+  s.pose_valid(false);  // a real robot that knows no pose: none recorded
+  bytes = Cdr<msg::VehicleStatePubSubType>(s);
+  recorder.OnSample(robot, 1001, &s, bytes.data(), bytes.size());
+  msg::BlimpState b;
+  b.pose_valid(true);
+  b.z(3.0f);
+  b.pitch(static_cast<float>(M_PI / 2));  // nose straight up
+  bytes = Cdr<msg::BlimpStatePubSubType>(b);
+  recorder.OnSample(blimp, 1002, &b, bytes.data(), bytes.size());
+  record::SessionGhost ghost;
+  ghost.t_ns = 1003;
+  ghost.valid = true;
+  ghost.x = 4.0;
+  ghost.heading = M_PI;
+  recorder.Ghost(ghost);
+  const record::SessionFileReport report = recorder.Close();
+  REQUIRE(report.saved);
+  CHECK(report.Messages("haptel/robot1/pose") == 1);
+  CHECK(report.Messages("haptel/robot1/state") == 2);
+  CHECK(report.Messages("haptel/blimp1/pose") == 1);
+  CHECK(report.Messages("haptel/robot2/pose") == 0);
+  CHECK(report.Messages(std::string(channels::kGhostPoseTopic)) == 1);
+
+  const mcap::Reader reader = mcap::Reader::Open(file);
+  std::map<std::string, foxglove::PoseInFrame> poses;
+  reader.ForEachMessage([&](const mcap::MessageView& m) {
+    if (reader.schemas().at(m.channel->schema_id).name != channels::kPoseInFrameSchema) return;
+    Decode<foxglove::PoseInFramePubSubType>(m, poses[m.channel->topic]);
+  });
+  REQUIRE(poses.size() == 3);
+  const auto& r = poses["haptel/robot1/pose"];
+  CHECK(r.frame_id() == channels::kPoseFrame);
+  CHECK(r.pose().position().x() == 1.0);
+  CHECK(r.pose().position().y() == 2.0);
+  // A quarter turn counter-clockwise about z.
+  CHECK(r.pose().orientation().z() == Approx(std::sqrt(0.5)));
+  CHECK(r.pose().orientation().w() == Approx(std::sqrt(0.5)));
+  const auto& up = poses["haptel/blimp1/pose"];
+  CHECK(up.pose().position().z() == 3.0);
+  // Nose up: a negative quarter turn about the body's y (left) axis.
+  CHECK(up.pose().orientation().y() == Approx(-std::sqrt(0.5)));
+  CHECK(up.pose().orientation().w() == Approx(std::sqrt(0.5)));
+  const auto& g = poses[std::string(channels::kGhostPoseTopic)];
+  CHECK(g.pose().position().x() == 4.0);
+  CHECK(std::abs(g.pose().orientation().z()) == Approx(1.0));
 }

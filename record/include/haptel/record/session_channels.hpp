@@ -18,6 +18,12 @@
 ///   one frame per message exactly as received, `timestamp` the capture's
 ///   CLOCK_REALTIME, the MCAP message's `sequence` the frame's
 ///   VideoFrame.seq (a gap: a frame lost on the link).
+/// - The vehicle's pose as the run received it (its state's odometry, never
+///   a simulator's truth): topic `haptel/<vehicle>/pose`,
+///   `foxglove::PoseInFrame` in frame "world" (the track's or the course's
+///   frame, z up), one per state received with a pose; and the predictor's
+///   ghost, `haptel/session/ghost_pose`, the same schema: Foxglove's and
+///   Lichtblick's 3-D panel draws both.
 /// - The operator's side, record/idl/session.idl: the servo ticks, the
 ///   interface's and the lap's events, the predictor's ghost, the
 ///   interface's force field (the wall, shared control's guidance).
@@ -40,6 +46,7 @@ inline constexpr std::string_view kInterfaceEventsTopic = "haptel/session/interf
 inline constexpr std::string_view kLapEventsTopic = "haptel/session/lap_events";
 inline constexpr std::string_view kGhostTopic = "haptel/session/ghost";
 inline constexpr std::string_view kFieldTopic = "haptel/session/field";
+inline constexpr std::string_view kGhostPoseTopic = "haptel/session/ghost_pose";
 
 // Their schemas' names (record/idl/session.idl).
 inline constexpr std::string_view kServoTickSchema = "haptel::session::ServoTick";
@@ -53,6 +60,14 @@ inline constexpr std::string_view kCompressedImageSchema = "foxglove::Compressed
 /// The video's topic for `vehicle` (the DDS video topic's name).
 inline std::string VideoTopic(std::string_view vehicle) {
   return "haptel/" + std::string(vehicle) + "/video";
+}
+
+// The poses (record/idl/foxglove.idl): the frame they are in.
+inline constexpr std::string_view kPoseInFrameSchema = "foxglove::PoseInFrame";
+inline constexpr std::string_view kPoseFrame = "world";
+/// The pose's topic for `vehicle`.
+inline std::string PoseTopic(std::string_view vehicle) {
+  return "haptel/" + std::string(vehicle) + "/pose";
 }
 
 /// The DDS types' schema names are "haptel::msg::" + the IDL struct's name.

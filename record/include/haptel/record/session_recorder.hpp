@@ -1,10 +1,11 @@
 #pragma once
 /// @file Records a whole run into a session file (MCAP; the channels are
 /// listed in session_channels.hpp): the DDS samples the run sends and
-/// receives (a link::SampleTap on its participant), the video as received,
-/// the servo loop's ticks (a haptics::ServoTap), the interface's and the
-/// lap's events, the predictor's ghost and the interface's force field,
-/// beside the run's metadata and configuration files.
+/// receives (a link::SampleTap on its participant) and each received
+/// state's pose (foxglove::PoseInFrame), the video as received, the servo
+/// loop's ticks (a haptics::ServoTap), the interface's and the lap's
+/// events, the predictor's ghost (and its pose) and the interface's force
+/// field, beside the run's metadata and configuration files.
 ///
 /// Nothing a producer does waits: each producer has its own wait-free
 /// single-producer ring (a byte ring per DDS channel and the video, a
@@ -150,6 +151,11 @@ class SessionRecorder final : public link::SampleTap, public haptics::ServoTap {
  private:
   struct ByteChannel;
   struct Pending;
+  /// Which state a byte channel's samples are, to derive a pose from.
+  enum class PoseSource : uint8_t { kNone, kRobot, kBlimp };
+  int AddByteChannel(const std::string& topic, const std::string& schema, const std::string& idl,
+                     std::map<std::string, std::string> metadata, bool video, PoseSource pose);
+  void WritePose(ByteChannel& channel, int64_t mono_ns, const uint8_t* data, size_t size);
   void Run();
   void Drain();
   void DrainBytes(ByteChannel& channel);
@@ -191,7 +197,7 @@ class SessionRecorder final : public link::SampleTap, public haptics::ServoTap {
   SpscRing<EventRecord> events_;
   SpscRing<SessionGhost> ghosts_;
   SpscRing<FieldRecord> fields_;
-  SideChannel servo_, interface_events_, lap_events_, ghost_, field_;
+  SideChannel servo_, interface_events_, lap_events_, ghost_, field_, ghost_pose_;
 
   std::vector<uint8_t> scratch_;
   std::atomic<bool> stop_{false};
