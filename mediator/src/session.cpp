@@ -212,8 +212,16 @@ class SessionLoop {
     size_t switches = 0;
     size_t contacts = 0;
     bool lap_started = false;
+    /// Each hand's hold on its control as filed (a cockpit's: the left
+    /// hand's on the wheel, the right's on the lever).
+    std::array<bool, haptics::kSides> holds{};
   };
   std::vector<SessionFileSeen> file_seen_;
+  /// A vehicle's hands' grasps and releases of its controls (with any) as
+  /// they change: interface events "grasp", "release" (side: the hand;
+  /// text: the control).
+  void FileGrasps(const VehicleRun& v, SessionFileSeen& seen, int32_t vehicle, int64_t now_ns,
+                  double t_s);
   std::array<haptics::ForceField, haptics::kSides> fields_seen_{};
   std::array<bool, haptics::kSides> field_said_{};
   Disengaged engagement_filed_ = Disengaged::kNone;
@@ -710,6 +718,7 @@ void SessionLoop::FeedSessionFile(int64_t now, double t) {
       g.delay_s = p->one_way_delay_s;
       file.Ghost(g);
     }
+    FileGrasps(v, file_seen_[i], static_cast<int32_t>(i), now, t);
   }
   if (engagement_.why() != engagement_filed_) {
     engagement_filed_ = engagement_.why();
@@ -730,6 +739,22 @@ void SessionLoop::FeedSessionFile(int64_t now, double t) {
     fields_seen_[k] = sp.field;
     field_said_[k] = true;
     file.Field(now, static_cast<uint8_t>(k), sp.field);
+  }
+}
+
+void SessionLoop::FileGrasps(const VehicleRun& v, SessionFileSeen& seen, int32_t vehicle,
+                             int64_t now, double t) {
+  const SessionPhysics* physics = v.family->physics();
+  if (physics == nullptr || !physics->port) return;  // no controls to grasp
+  const interfaces::CockpitControls controls = physics->port->Controls();
+  const std::array<bool, haptics::kSides> holds{controls.wheel_held, controls.throttle_held};
+  static constexpr std::array<const char*, haptics::kSides> kControl{"wheel", "lever"};
+  for (size_t k = 0; k < holds.size(); ++k) {
+    if (holds[k] == seen.holds[k]) continue;
+    seen.holds[k] = holds[k];
+    session_file_->InterfaceEvent(record::SessionEvent::Make(now, t, holds[k] ? "grasp" : "release",
+                                                             vehicle, static_cast<uint8_t>(k), 0.0,
+                                                             kControl[k]));
   }
 }
 

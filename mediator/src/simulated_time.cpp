@@ -114,7 +114,7 @@ void SimulatedTime::AdvanceTo(int64_t deadline_ns, HapticSide& haptic,
       commands_.pop_front();
     }
     while (!states_.empty() && states_.front().due_ns <= t) {
-      link.channel<link::RobotMessages>().inbox().Push(states_.front().message);
+      link.channel<link::RobotMessages>().Deliver(states_.front().message);
       states_.pop_front();
     }
     if (next_servo == t) {

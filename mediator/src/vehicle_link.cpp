@@ -192,11 +192,23 @@ CommandChannel<Messages>::CommandChannel(link::Participant& participant, const s
 template <class Messages>
 CommandChannel<Messages>::CommandChannel(
     std::function<void(const typename Messages::CommandMsg&)> sink, uint64_t session,
-    const std::string& operator_name)
+    const std::string& operator_name, link::SampleTap* tap, const std::string& vehicle)
     : sink_(std::move(sink)) {
   inbox_.SetOwnWriter(writer_id_);
   message_.session(session);
   message_.operator_name(operator_name);
+  if (tap != nullptr) {
+    sent_tap_ = std::make_unique<typename decltype(sent_tap_)::element_type>(
+        tap, link::TopicName(vehicle, "command"), link::TapDirection::kSent);
+    received_tap_ = std::make_unique<typename decltype(received_tap_)::element_type>(
+        tap, link::TopicName(vehicle, "state"), link::TapDirection::kReceived);
+  }
+}
+
+template <class Messages>
+void CommandChannel<Messages>::Deliver(const typename Messages::StateMsg& state) {
+  if (received_tap_) (*received_tap_)(state, MonotonicNs());
+  inbox_.Push(state);
 }
 
 template <class Messages>
@@ -205,6 +217,7 @@ void CommandChannel<Messages>::Send(const Command& command) {
   Messages::Encode(command, message_);
   message_.sent_ns(MonotonicNs());
   if (sink_) {
+    if (sent_tap_) (*sent_tap_)(message_, MonotonicNs());
     sink_(message_);
   } else {
     writer_->Write(message_);
@@ -234,7 +247,8 @@ VehicleLink::VehicleLink(const VehicleLinkOptions& options)
       throw std::logic_error("vehicle link: '" + name() + "' is a " + ToString(family()) +
                              "; only a robot steps in this process");
     }
-    channel_ = std::make_unique<RobotChannel>(options_.in_process_robot, session_, operator_name_);
+    channel_ = std::make_unique<RobotChannel>(options_.in_process_robot, session_, operator_name_,
+                                              options_.tap, name());
     video_ = std::make_unique<video::VideoReceiver>();
     return;
   }

@@ -2,10 +2,14 @@
 // process. The same seed gives the same lap to the tick; the lap is timed
 // by the same lap timer and stored in the same row as a real-time one; the
 // link's delay is the configured one; what cannot be stepped here is refused.
+#include <fastdds/rtps/common/SerializedPayload.h>
+
 #include <algorithm>
 #include <atomic>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstring>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -14,8 +18,11 @@
 #include "haptel/core/args.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/core/json.hpp"
+#include "haptel/mcap/reader.hpp"
 #include "haptel/mediator/engagement.hpp"
 #include "haptel/mediator/run_setup.hpp"
+#include "haptel/record/session_channels.hpp"
+#include "haptel/session/sessionPubSubTypes.h"
 #include "test_env.hpp"
 
 using namespace haptel;
@@ -121,9 +128,12 @@ TEST_CASE("simulated time: a cockpit's physics steps in lock-step, the same ever
           "[simulated-time]") {
   const auto dir = test::ScratchDir("simtime-cockpit");
   // Long enough to grasp the wheel and the lever and drive off (the lap limit
-  // ends it on the lap's clock, or before the line).
-  const mediator::SessionSetup setup = Setup(
-      dir / "runs.db", {"--interface", "cockpit-assisted", "--simulated-time", "--lap-limit", "3"});
+  // ends it on the lap's clock, or before the line). Recorded whole, as a
+  // real-time run is.
+  const auto session = dir / "lap.mcap";
+  const mediator::SessionSetup setup =
+      Setup(dir / "runs.db", {"--interface", "cockpit-assisted", "--simulated-time", "--lap-limit",
+                              "3", "--session", session.string()});
   const mediator::RecordedRun first = Run(setup);
   const mediator::RecordedRun second = Run(setup);
   INFO(first.result.message);
@@ -133,6 +143,36 @@ TEST_CASE("simulated time: a cockpit's physics steps in lock-step, the same ever
   CheckSameLap(first, second);
   CHECK(first.result.physics_ticks ==
         static_cast<uint64_t>(std::llround(first.result.simulated_s / setup.physics.step_s)));
+
+  // No DDS carried the robot's commands and states, yet the session file
+  // holds them as it would have; and each hand's grasp of its control.
+  const record::SessionFileReport& file = second.result.session_file;
+  INFO(file.error);
+  REQUIRE(file.saved);
+  CHECK(file.Messages("haptel/robot1/command") == second.result.commands_sent);
+  CHECK(file.Messages("haptel/robot1/command") > 10);
+  CHECK(file.Messages("haptel/robot1/state") > 10);
+  CHECK(file.Messages("haptel/robot1/pose") == file.Messages("haptel/robot1/state"));
+  const mcap::Reader reader = mcap::Reader::Open(session);
+  std::set<std::string> grasps;  // "kind side control"
+  reader.ForEachMessage(
+      0, UINT64_MAX, {std::string(record::session::kInterfaceEventsTopic)},
+      [&](const mcap::MessageView& m) {
+        haptel::session::EventPubSubType type;
+        haptel::session::Event e;
+        eprosima::fastrtps::rtps::SerializedPayload_t payload(static_cast<uint32_t>(m.size));
+        std::memcpy(payload.data, m.data, m.size);
+        payload.length = static_cast<uint32_t>(m.size);
+        REQUIRE(type.deserialize(&payload, &e));
+        grasps.insert(e.kind() + " " + std::to_string(e.side()) + " " + e.text());
+      });
+  INFO("interface events:" << [&] {
+    std::string all;
+    for (const std::string& g : grasps) all += " [" + g + "]";
+    return all;
+  }());
+  CHECK(grasps.count("grasp 0 wheel") == 1);
+  CHECK(grasps.count("grasp 1 lever") == 1);
 }
 
 TEST_CASE("simulated time: the lap is timed and stored as a real-time one, with its speed-up",

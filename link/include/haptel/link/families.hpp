@@ -19,6 +19,8 @@ struct RobotMessages {
   using Command = TreadCommand;
   using CommandMsg = msg::TreadCommand;
   using StateMsg = msg::VehicleState;
+  using CommandType = msg::TreadCommandPubSubType;
+  using StateType = msg::VehicleStatePubSubType;
   using CommandWriter = link::TreadCommandWriter;
   using CommandReader = link::TreadCommandReader;
   using StateWriter = link::StateWriter;
@@ -47,6 +49,8 @@ struct BlimpMessages {
   using Command = BlimpCommand;
   using CommandMsg = msg::BlimpCommand;
   using StateMsg = msg::BlimpState;
+  using CommandType = msg::BlimpCommandPubSubType;
+  using StateType = msg::BlimpStatePubSubType;
   using CommandWriter = link::BlimpCommandWriter;
   using CommandReader = link::BlimpCommandReader;
   using StateWriter = link::BlimpStateWriter;

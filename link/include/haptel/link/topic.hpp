@@ -39,14 +39,19 @@ eprosima::fastdds::dds::Topic* MakeTopic(Participant& p, const std::string& name
   return topic;
 }
 
-/// A writer's or reader's end of its participant's SampleTap: the channel
-/// it was given and the type support that serializes its samples into a
-/// buffer kept from one sample to the next.
+}  // namespace detail
+
+/// A writer's or reader's end of its participant's SampleTap (or of a link
+/// on no DDS: a vehicle stepped in this process): the channel it was given
+/// and the type support that serializes its samples into a buffer kept from
+/// one sample to the next.
 template <typename Msg, typename PubSubType>
 class Tapped {
  public:
   Tapped(Participant& participant, const std::string& topic, TapDirection direction)
-      : tap_(participant.tap()) {
+      : Tapped(participant.tap(), topic, direction) {}
+  /// On `tap` (null: nothing is tapped).
+  Tapped(SampleTap* tap, const std::string& topic, TapDirection direction) : tap_(tap) {
     if (tap_ == nullptr) return;
     channel_ = tap_->OnTopic(topic, type_.getName(), direction);
     bytes_ = channel_ >= 0 && tap_->WantsBytes(channel_);
@@ -74,7 +79,6 @@ class Tapped {
   PubSubType type_;
   eprosima::fastrtps::rtps::SerializedPayload_t payload_;
 };
-}  // namespace detail
 
 /// The WriterId of a DDS GUID.
 inline WriterId ToWriterId(const eprosima::fastrtps::rtps::GUID_t& guid) {
@@ -141,7 +145,7 @@ class Writer : private eprosima::fastdds::dds::DataWriterListener {
   }
 
   Participant& participant_;
-  detail::Tapped<Msg, PubSubType> tapped_;
+  Tapped<Msg, PubSubType> tapped_;
   eprosima::fastdds::dds::Topic* topic_ = nullptr;
   eprosima::fastdds::dds::DataWriter* writer_ = nullptr;
   std::atomic<int> matched_{0};
@@ -219,7 +223,7 @@ class Reader : private eprosima::fastdds::dds::DataReaderListener {
 
   Participant& participant_;
   StampedCallback on_sample_;
-  detail::Tapped<Msg, PubSubType> tapped_;
+  Tapped<Msg, PubSubType> tapped_;
   Msg sample_;  ///< reused for every take: no allocation per sample for fixed-size types
   eprosima::fastdds::dds::Topic* topic_ = nullptr;
   eprosima::fastdds::dds::DataReader* reader_ = nullptr;

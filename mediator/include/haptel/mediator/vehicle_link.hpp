@@ -143,12 +143,17 @@ class CommandChannel final : public LinkChannel {
   CommandChannel(link::Participant& participant, const std::string& vehicle, uint64_t session,
                  const std::string& operator_name);
   /// A channel on no DDS: each command message goes to `sink` as it is
-  /// sent, and states come only as the caller pushes them into the inbox
-  /// (a vehicle stepped in this process; one vehicle answers).
+  /// sent, and states come only as the caller delivers them (a vehicle
+  /// stepped in this process; one vehicle answers). `tap` (null: none) is
+  /// handed both as DDS would have carried them, on `vehicle`'s topics.
   CommandChannel(std::function<void(const typename Messages::CommandMsg&)> sink, uint64_t session,
-                 const std::string& operator_name);
+                 const std::string& operator_name, link::SampleTap* tap = nullptr,
+                 const std::string& vehicle = "");
   /// Sends `command` stamped now.
   void Send(const Command& command);
+  /// A state from the vehicle stepped in this process (a channel on no
+  /// DDS), as if it had arrived now: tapped, then into the inbox.
+  void Deliver(const typename Messages::StateMsg& state);
   Inbox& inbox() { return inbox_; }
   const Inbox& inbox() const { return inbox_; }
 
@@ -173,6 +178,12 @@ class CommandChannel final : public LinkChannel {
   typename Messages::CommandMsg message_;
   uint64_t seq_ = 0;
   std::function<void(const typename Messages::CommandMsg&)> sink_;  ///< set: no DDS
+  /// With no DDS, what the link would have tapped (nothing on DDS: its
+  /// writer and reader tap their own).
+  std::unique_ptr<link::Tapped<typename Messages::CommandMsg, typename Messages::CommandType>>
+      sent_tap_;
+  std::unique_ptr<link::Tapped<typename Messages::StateMsg, typename Messages::StateType>>
+      received_tap_;
   // Last: destroyed first, so no DDS callback outlives the inbox.
   std::unique_ptr<typename Messages::CommandWriter> writer_;
   std::unique_ptr<typename Messages::StateReader> reader_;
