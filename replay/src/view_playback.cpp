@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <iterator>
 #include <thread>
 
 #include "haptel/core/cli.hpp"
@@ -22,8 +23,15 @@ namespace {
 namespace channels = record::session;
 
 /// Decoded pictures kept for the view frames that name them: a frame names
-/// a picture received before it, usually the latest.
-constexpr size_t kPicturesKept = 8;
+/// a picture received before it, usually the latest, but the live screen
+/// may show one well behind the latest the file has: its receiver decodes
+/// up to 15 frames behind their arrival (video_receiver.cpp's
+/// kMaxQueuedH264), and after a dropped queue or a frame lost on the link
+/// shows its last good picture, marked stale, until the next key frame
+/// (at most a second: 30 pictures). Pictures older than one a frame named
+/// are let go at once (the screen never goes back), so these are kept only
+/// while the screen lags.
+constexpr size_t kPicturesKept = 64;
 /// How far before a sought time the video is read again for its key frame
 /// (the streamer sends one at least every second).
 constexpr uint64_t kKeyFrameBackNs = 3'000'000'000;
@@ -132,13 +140,18 @@ void ViewPlayback::OnVideo(const mcap::MessageView& message) {
   p.frame.id = next_picture_id_++;
   p.frame.capture_wall_ns = p.capture_wall_ns;
   pictures_.push_back(std::move(p));
-  if (pictures_.size() > kPicturesKept) pictures_.pop_front();
+  // Without a view channel each picture is shown alone, as it comes.
+  const size_t kept = view_channel_ != 0 ? kPicturesKept : 1;
+  while (pictures_.size() > kept) pictures_.pop_front();
 }
 
 const video::Frame* ViewPlayback::PictureFor(int64_t capture_wall_ns) {
   if (capture_wall_ns == 0) return nullptr;  // the live screen had no picture yet
   for (auto it = pictures_.rbegin(); it != pictures_.rend(); ++it) {
-    if (it->capture_wall_ns == capture_wall_ns) return &it->frame;
+    if (it->capture_wall_ns != capture_wall_ns) continue;
+    // The live screen never shows an older picture than this one again.
+    pictures_.erase(pictures_.begin(), std::prev(it.base()));
+    return &pictures_.front().frame;
   }
   ++pictures_missing_;
   return pictures_.empty() ? nullptr : &pictures_.back().frame;

@@ -79,7 +79,7 @@ class ViewPlayback {
   uint64_t played_to_ns_ = 0;       ///< where the last Play ended (0: nothing played)
   bool awaiting_key_frame_ = true;  ///< since a seek: the video starts at a key frame
   std::unique_ptr<video::VideoDecoder> decoder_;
-  std::deque<Picture> pictures_;  ///< the latest few decoded, oldest first
+  std::deque<Picture> pictures_;  ///< decoded, oldest first, from the last one named
   uint64_t next_picture_id_ = 1;
   video::Frame stale_;        ///< the latest picture shown marked stale
   uint64_t stale_of_id_ = 0;  ///< the picture it marks
