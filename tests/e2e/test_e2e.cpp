@@ -15,7 +15,9 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <mutex>
+#include <regex>
 #include <thread>
 
 #include "child.hpp"
@@ -45,6 +47,52 @@ bool HasIdr(const std::string& au) {
   return false;
 }
 
+/// docs/foxglove-layout.json's panels against a recorded session: every
+/// topic a panel names is a channel of the file, with a schema that panel
+/// draws (the image panel: foxglove's video or image; the 3-D panel: a
+/// pose; a plot or the raw messages: any). The layout's vehicle is the
+/// shipped robot's (robot1), as the recorded lap's.
+void CheckLayoutTopics(const mcap::Reader& reader) {
+  std::ifstream in("docs/foxglove-layout.json");
+  REQUIRE(in);
+  const std::string layout((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::map<std::string, std::string> schema_of;  // topic -> schema name
+  for (const auto& [id, channel] : reader.channels())
+    schema_of[channel.topic] = reader.schemas().at(channel.schema_id).name;
+  // Each panel's text runs from its id ("Kind!name") to the next panel's
+  // id or the layout's tree.
+  static const std::regex panel_id(R"re("(Image|3D|Plot|RawMessages)!([^"]+)"\s*:\s*\{)re");
+  static const std::regex topic(R"(haptel/[A-Za-z0-9_/]+)");
+  const size_t tree = layout.find("\"layout\"");
+  REQUIRE(tree != std::string::npos);
+  std::vector<std::pair<std::string, size_t>> panels;
+  for (auto it = std::sregex_iterator(layout.begin(), layout.begin() + tree, panel_id);
+       it != std::sregex_iterator(); ++it)
+    panels.emplace_back((*it)[1], static_cast<size_t>(it->position()));
+  REQUIRE(panels.size() == 5);  // video, 3-D, speed, force, lap events
+  int topics = 0;
+  for (size_t i = 0; i < panels.size(); ++i) {
+    const auto& [kind, at] = panels[i];
+    const size_t end = i + 1 < panels.size() ? panels[i + 1].second : tree;
+    const std::string text = layout.substr(at, end - at);
+    for (auto it = std::sregex_iterator(text.begin(), text.end(), topic);
+         it != std::sregex_iterator(); ++it) {
+      const std::string name = it->str();
+      INFO(kind << " panel's topic " << name);
+      ++topics;
+      REQUIRE(schema_of.count(name) == 1);
+      const std::string& schema = schema_of[name];
+      if (kind == "Image") {
+        CHECK((schema == record::session::kCompressedVideoSchema ||
+               schema == record::session::kCompressedImageSchema));
+      } else if (kind == "3D") {
+        CHECK(schema == record::session::kPoseInFrameSchema);
+      }
+    }
+  }
+  CHECK(topics >= 6);
+}
+
 /// The session file of a run (`haptel run --session`), checked against the
 /// run's JSON line: read by the reference reader with every message decoded
 /// against the file's own schemas, the counts of each channel as the run
@@ -70,11 +118,14 @@ void CheckSessionFile(const std::filesystem::path& file, const std::string& json
   CHECK(count(std::string(record::session::kServoTopic)) ==
         std::stol(JsonField(json, "servo_ticks")));
   CHECK(count(std::string(record::session::kLapEventsTopic)) >= 3);  // start, 2 gates, finish
+  // The pose of every state received (a simulator's odometry always has one).
+  CHECK(count("haptel/" + vehicle + "/pose") == std::stol(JsonField(json, "states_received")));
 
   // FFmpeg (the operator's own H.264 decoder) decodes every frame from the
   // first key frame on, but those after a frame lost on the link until the
   // next key frame, as the live receiver would.
   const mcap::Reader reader = mcap::Reader::Open(file);
+  CheckLayoutTopics(reader);
   video::H264Decoder decoder;
   foxglove::CompressedVideoPubSubType type;
   int frames = 0, pictures = 0, undecodable = 0;

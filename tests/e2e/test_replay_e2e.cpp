@@ -3,16 +3,19 @@
 // frames match the live MP4's (SSIM by video::Ssim on both decoded by
 // FFmpeg through OpenCV's videoio), and driven again on a simulated robot
 // through the same gates; a recording killed mid-lap (SIGKILL) is read
-// whole by haptel replay --view none.
+// whole by haptel replay --view none, and recovered by haptel record
+// --recover into a file the reference reader reads whole.
 #include <signal.h>
 
 #include <catch2/catch.hpp>
+#include <chrono>
 #include <filesystem>
 #include <opencv2/videoio.hpp>
 #include <regex>
 
 #include "child.hpp"
 #include "haptel/video/image_quality.hpp"
+#include "mcap_reference.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;
@@ -127,6 +130,9 @@ TEST_CASE("a session killed mid-lap is read by haptel replay") {
       },
       30.0));
   ::kill(run.pid(), SIGKILL);
+  const auto killed_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                             std::chrono::system_clock::now().time_since_epoch())
+                             .count();
   run.Wait(30.0);
 
   Child replay({Bin("haptel"), "replay", file.string(), "--view", "none"});
@@ -136,4 +142,31 @@ TEST_CASE("a session killed mid-lap is read by haptel replay") {
   CHECK(replay.err().find("was not closed") != std::string::npos);
   CHECK(replay.out().find("replayed " + file.string()) != std::string::npos);
   CHECK(replay.out().find(" 0 view frames") == std::string::npos);
+
+  // haptel record --recover writes a complete copy, which the reference
+  // reader reads whole (indexes, summary, every CRC).
+  const auto recovered = dir / "recovered.mcap";
+  Child recover({Bin("haptel"), "record", "--recover", file.string(), recovered.string()});
+  const int recover_code = recover.Wait(60.0);
+  INFO(recover.out() << recover.err());
+  REQUIRE(recover_code == 0);
+  const std::string read = test::ReferenceRead(recovered, "--decode");
+  INFO(read);
+  CHECK(JsonField(read, "footer") == "true");
+  CHECK(JsonField(read, "data_section_ok") == "true");
+  CHECK(JsonField(read, "summary_ok") == "true");
+  CHECK(JsonField(read, "failed") == "0");
+  CHECK(std::stol(JsonField(read, "ok")) > 1000);
+  CHECK(JsonField(read, "ok") == JsonField(read, "statistics_messages"));
+  // Only the last second is lost: the recorder drains its rings every 10 ms
+  // and closes a chunk every second (SessionFileOptions::flush_period_s),
+  // so the last message kept is at most that second (plus a drain, and
+  // 1.5 s for a loaded machine's scheduling) older than the kill.
+  Child info({Bin("haptel"), "replay", "--info", recovered.string(), "--json"});
+  REQUIRE(info.Wait(60.0) == 0);
+  const double end_before_kill_s =
+      static_cast<double>(killed_ns - std::stoll(JsonField(info.LastLine(), "end_ns"))) * 1e-9;
+  INFO(info.out());
+  CHECK(end_before_kill_s >= 0.0);
+  CHECK(end_before_kill_s < 2.5);
 }
