@@ -28,10 +28,11 @@ namespace channels = record::session;
 /// up to 15 frames behind their arrival (video_receiver.cpp's
 /// kMaxQueuedH264), and after a dropped queue or a frame lost on the link
 /// shows its last good picture, marked stale, until the next key frame
-/// (at most a second: 30 pictures). Pictures older than one a frame named
-/// are let go at once (the screen never goes back), so these are kept only
-/// while the screen lags.
-constexpr size_t kPicturesKept = 64;
+/// (the streamer sends one at least every second: 30 pictures, more while
+/// its request waits on a loaded host). Pictures older than one a frame
+/// named are let go at once (the screen never goes back), so these are kept
+/// only while the screen lags; 96 (about 3 s at 30 fps) is the most.
+constexpr size_t kPicturesKept = 96;
 /// How far before a sought time the video is read again for its key frame
 /// (the streamer sends one at least every second).
 constexpr uint64_t kKeyFrameBackNs = 3'000'000'000;
