@@ -30,6 +30,7 @@
 #include "haptel/session/foxglovePubSubTypes.h"
 #include "haptel/video/h264_codec.hpp"
 #include "mcap_reference.hpp"
+#include "recorded_lap.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;
@@ -161,22 +162,28 @@ void CheckSessionFile(const std::filesystem::path& file, const std::string& json
 }
 }  // namespace
 
-TEST_CASE("haptel run completes the short track over DDS with a separate vehicle process") {
-  const auto dir = test::ScratchDir("e2e-lap");
+// The lap test_e2e_replay reads again (the fixture e2e_lap, tests/e2e/CMakeLists.txt): its session
+// file and its offscreen view's MP4.
+TEST_CASE("haptel run completes the short track over DDS with a separate vehicle process",
+          "[lap]") {
+  const auto dir = test::RecordedLapDir();
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
   const auto db = dir / "runs.db";
   const auto truth = dir / "truth.csv";
   // A generous vehicle timeout: a loaded machine may stall a process for a
   // moment, and losing the vehicle is not what this test is about. The
   // vehicle runs the lab reality (the default, named here with its seed)
   // and keeps its truth record where asked. Recorded whole into a session
-  // file, in a folder the run makes.
+  // file, in a folder the run makes, and its view offscreen into an MP4.
   const auto session = dir / "sessions" / "lap.mcap";
   Child haptel(
       {Bin("haptel"), "run",          "--track",           "config/tracks/test-short.yaml",
        "--json",      "--quiet",      "--domain",          std::to_string(test::UniqueDomain(11)),
        "--database",  db.string(),    "--vehicle-timeout", "5",
        "--reality",   "lab",          "--reality-seed",    "3",
-       "--truth",     truth.string(), "--session",         session.string()});
+       "--truth",     truth.string(), "--session",         session.string(),
+       "--view",      "none",         "--record",          (dir / "live.mp4").string()});
   // Signals it does not document leave it running: SIGUSR1 cuts the link
   // only with --link-fault (it used to end the run unrecorded, exit 138).
   std::this_thread::sleep_for(std::chrono::seconds(2));
@@ -250,7 +257,7 @@ TEST_CASE(
   Child haptel({Bin("haptel"), "run", "--interface", "cockpit-assisted", "--track",
                 "config/tracks/test-short.yaml", "--json", "--quiet", "--domain",
                 std::to_string(test::UniqueDomain(14)), "--database", db.string(),
-                "--vehicle-timeout", "5"});
+                "--vehicle-timeout", "5", "--reality", "none"});
   const int code = haptel.Wait(150.0);
   INFO("stdout:\n" << haptel.out() << "\nstderr:\n" << haptel.err());
   REQUIRE(code == 0);

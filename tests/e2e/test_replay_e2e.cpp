@@ -1,10 +1,11 @@
-// End to end, haptel replay: a short-track lap recorded whole (haptel run
-// --session, offscreen with --record) is drawn again into an MP4 whose
-// frames match the live MP4's (SSIM by video::Ssim on both decoded by
-// FFmpeg through OpenCV's videoio), and driven again on a simulated robot
-// through the same gates; a recording killed mid-lap (SIGKILL) is read
-// whole by haptel replay --view none, and recovered by haptel record
-// --recover into a file the reference reader reads whole.
+// End to end, haptel replay: the short-track lap test_e2e_lap recorded whole
+// (haptel run --session, its view offscreen with --record; the ctest fixture
+// e2e_lap) is drawn again into an MP4 whose frames match the live MP4's (SSIM
+// by video::Ssim on both decoded by FFmpeg through OpenCV's videoio), and
+// driven again on a simulated robot through the same gates; a recording
+// killed mid-lap (SIGKILL) is read whole by haptel replay --view none, and
+// recovered by haptel record --recover into a file the reference reader
+// reads whole.
 #include <signal.h>
 
 #include <catch2/catch.hpp>
@@ -16,6 +17,7 @@
 #include "child.hpp"
 #include "haptel/video/image_quality.hpp"
 #include "mcap_reference.hpp"
+#include "recorded_lap.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;
@@ -26,31 +28,29 @@ namespace {
 
 std::string Bin(const std::string& name) { return (test::BinDir() / name).string(); }
 
-/// `haptel run` recording a short-track lap whole; `progress`: its lines
-/// every 2 s on stderr (else --quiet).
-std::vector<std::string> RecordedLap(const std::filesystem::path& dir, int domain,
-                                     bool progress = false) {
-  std::vector<std::string> argv{Bin("haptel"),
-                                "run",
-                                "--operator",
-                                "auto",
-                                "--view",
-                                "none",
-                                "--record",
-                                (dir / "live.mp4").string(),
-                                "--session",
-                                (dir / "lap.mcap").string(),
-                                "--track",
-                                "config/tracks/test-short.yaml",
-                                "--json",
-                                "--domain",
-                                std::to_string(domain),
-                                "--database",
-                                (dir / "runs.db").string(),
-                                "--vehicle-timeout",
-                                "5"};
-  if (!progress) argv.push_back("--quiet");
-  return argv;
+/// `haptel run` recording a short-track lap whole, on the twin (what is
+/// tested is the file, not the vehicle's reality), with its progress lines
+/// every 2 s on stderr.
+std::vector<std::string> RecordedLap(const std::filesystem::path& dir, int domain) {
+  return {Bin("haptel"),
+          "run",
+          "--operator",
+          "auto",
+          "--view",
+          "none",
+          "--session",
+          (dir / "lap.mcap").string(),
+          "--track",
+          "config/tracks/test-short.yaml",
+          "--json",
+          "--domain",
+          std::to_string(domain),
+          "--database",
+          (dir / "runs.db").string(),
+          "--vehicle-timeout",
+          "5",
+          "--reality",
+          "none"};
 }
 
 }  // namespace
@@ -58,14 +58,15 @@ std::vector<std::string> RecordedLap(const std::filesystem::path& dir, int domai
 TEST_CASE(
     "a recorded lap replays into the live MP4's frames, and driven again passes the record's "
     "gates") {
+  // test_e2e_lap's lap (the lab robot, seed 3), completed: ctest runs it first.
+  const auto lap = test::RecordedLapDir();
+  const auto session = lap / "sessions" / "lap.mcap";
+  INFO("the lap test_e2e_lap records (ctest -R test_e2e_replay runs it first): " << lap);
+  REQUIRE(std::filesystem::is_regular_file(session));
+  REQUIRE(std::filesystem::is_regular_file(lap / "live.mp4"));
   const auto dir = test::ScratchDir("e2e-replay");
-  Child run(RecordedLap(dir, test::UniqueDomain(71)));
-  REQUIRE(run.Wait(180.0) == 0);
-  INFO(run.err());
-  CHECK(JsonField(run.LastLine(), "outcome") == "completed");
 
-  Child replay({Bin("haptel"), "replay", (dir / "lap.mcap").string(), "--mp4",
-                (dir / "replay.mp4").string()});
+  Child replay({Bin("haptel"), "replay", session.string(), "--mp4", (dir / "replay.mp4").string()});
   const int replayed = replay.Wait(120.0);
   INFO(replay.out() << replay.err());
   REQUIRE(replayed == 0);
@@ -82,7 +83,7 @@ TEST_CASE(
   CHECK(view_frames > 30);
   CHECK(missing == 0);
 
-  cv::VideoCapture live((dir / "live.mp4").string(), cv::CAP_FFMPEG);
+  cv::VideoCapture live((lap / "live.mp4").string(), cv::CAP_FFMPEG);
   cv::VideoCapture again((dir / "replay.mp4").string(), cv::CAP_FFMPEG);
   REQUIRE(live.isOpened());
   REQUIRE(again.isOpened());
@@ -106,7 +107,7 @@ TEST_CASE(
   CHECK(frames > 30);
   CHECK(worst >= 0.95);
 
-  Child drive({Bin("haptel"), "replay", (dir / "lap.mcap").string(), "--drive", "--domain",
+  Child drive({Bin("haptel"), "replay", session.string(), "--drive", "--domain",
                std::to_string(test::UniqueDomain(72)), "--json"});
   const int drove = drive.Wait(180.0);
   INFO(drive.out() << drive.err());
@@ -119,7 +120,7 @@ TEST_CASE(
 
 TEST_CASE("a session killed mid-lap is read by haptel replay") {
   const auto dir = test::ScratchDir("e2e-replay-killed");
-  Child run(RecordedLap(dir, test::UniqueDomain(73), true));
+  Child run(RecordedLap(dir, test::UniqueDomain(73)));
   // Mid-lap: past the first gate (the progress lines say), and a chunk
   // flushed since.
   REQUIRE(test::WaitForErr(run, "gates 1/", 120.0));
