@@ -164,7 +164,8 @@ TEST_CASE("simulated time: a cockpit's physics steps in lock-step, the same ever
         std::memcpy(payload.data, m.data, m.size);
         payload.length = static_cast<uint32_t>(m.size);
         REQUIRE(type.deserialize(&payload, &e));
-        grasps.insert(e.kind() + " " + std::to_string(e.side()) + " " + e.text());
+        grasps.insert(std::string(e.kind().c_str()) + " " + std::to_string(e.side()) + " " +
+                      e.text().c_str());
       });
   INFO("interface events:" << [&] {
     std::string all;
