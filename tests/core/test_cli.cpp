@@ -10,6 +10,7 @@
 
 #include "haptel/core/args.hpp"
 #include "haptel/core/cli.hpp"
+#include "haptel/core/command_line.hpp"
 #include "haptel/core/stop_signals.hpp"
 
 namespace cli = haptel::cli;
@@ -123,4 +124,20 @@ TEST_CASE("The stop signals set the flag instead of ending the process") {
   CHECK(stop.load());
   CHECK(haptel::StopSignal() == SIGHUP);
   CHECK(&haptel::InstallStopSignals() == &stop);  // idempotent: the same flag
+}
+
+TEST_CASE("A command line written by cli::CommandLine reads back into its words") {
+  const std::vector<const char*> argv = {"run", "--track", "my tracks/it's.yaml", "--json",
+                                         "$HOME"};
+  const std::string line = cli::CommandLine(static_cast<int>(argv.size()), argv.data());
+  CHECK(line == "haptel run --track 'my tracks/it'\\''s.yaml' --json '$HOME'");
+  const std::vector<std::string> words = cli::CommandLineWords(line);
+  REQUIRE(words.size() == argv.size() + 1);
+  CHECK(words[0] == "haptel");
+  for (size_t i = 0; i < argv.size(); ++i) CHECK(words[i + 1] == argv[i]);
+  CHECK_THROWS_AS(cli::CommandLineWords("haptel run 'open"), haptel::UsageError);
+  // A mode's option is found as a word of its own, not inside another.
+  CHECK(cli::HasOption(static_cast<int>(argv.size()), argv.data(), "--json"));
+  CHECK_FALSE(cli::HasOption(static_cast<int>(argv.size()), argv.data(), "--js"));
+  CHECK_FALSE(cli::HasOption(static_cast<int>(argv.size()), argv.data(), "run"));  // argv[0]
 }
