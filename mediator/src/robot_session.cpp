@@ -197,7 +197,10 @@ class RobotSession final : public FamilySession {
         if (!setup_.predict)
           op_->Observe({ts, at.x, at.y, at.heading, s.bumper_left(), s.bumper_right()});
         lap_.Update(ts, Vec2(at.x, at.y));
-        trace.Add(ts, at.x, at.y, 0.0, s.speed(), touching);
+        // The distance driven is the odometry's (the encoders count it).
+        const double driven_m = odometry_ ? (Vec2(s.x(), s.y()) - *odometry_).norm() : 0.0;
+        odometry_ = Vec2(s.x(), s.y());
+        trace.Add(ts, at.x, at.y, 0.0, s.speed(), touching, driven_m);
       }
       lap_.UpdateContact(ts, touching);
       feedback_ = {s.bumper_left(), s.bumper_right(), s.speed(), ranges};
@@ -537,6 +540,7 @@ class RobotSession final : public FamilySession {
   int64_t t0_ns_ = 0;  ///< the session's start (MonotonicNs), as Drain is given it
   PredictiveDisplay display_;
   std::optional<PredictedPose> reported_;  ///< the newest state's pose, when one had a pose
+  std::optional<Vec2> odometry_;           ///< the newest state's odometry position
   /// The third-person view (setup.third_person with a view; null otherwise),
   /// whether a pose came since it last drew, and when it may draw next.
   std::unique_ptr<ThirdPersonView> third_person_;
