@@ -27,7 +27,14 @@
 /// the corrected pose by its odometry alone.
 ///
 /// The one-way delay is half the command round trip's running median
-/// (DelayEstimate, delay_estimate.hpp).
+/// (DelayEstimate, delay_estimate.hpp). A state stamped by the vehicle is
+/// dated by its stamp on the operator's clock: the vehicle's clock is its
+/// own, so its offset is estimated as the smallest arrival less stamp over
+/// the last few seconds less half the smallest round trip (the minimum
+/// filter of clock synchronisation: the fastest state crossed in the
+/// fastest one-way time). A state that a loaded host delivered late is
+/// then taken for as old as it is, not as fresh as its arrival says. An
+/// unstamped state is dated by its arrival less the one-way delay.
 ///
 /// Each state that arrives is compared with what the predictor said, at the
 /// moment the state was sampled, of that moment (from the states it had
@@ -35,6 +42,7 @@
 /// merit. Each time a state arrives, the pose the operator is then shown
 /// as the robot now is kept (shown()): scored against the truth after the
 /// run (prediction.hpp).
+#include <array>
 #include <deque>
 #include <optional>
 #include <vector>
@@ -142,6 +150,12 @@ class RobotPredictor {
   double watchdog_s_;
   double step_s_;
   DelayEstimate delay_;
+  /// The last kClockWindow arrivals less stamps and round trips (s), for
+  /// the vehicle clock's offset (see above).
+  static constexpr size_t kClockWindow = 250;
+  std::array<double, kClockWindow> transit_s_{};
+  std::array<double, kClockWindow> rtt_s_{};
+  size_t transits_ = 0, rtts_ = 0;
   std::deque<Command> commands_;
   /// The states since the one the operator had when the newest was
   /// sampled (that one's prediction is the newest's error), newest last.
