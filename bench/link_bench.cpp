@@ -328,6 +328,10 @@ struct LapRow {
   double error_m_p50 = std::nan("");  ///< the prediction against the truth
   double error_m_p95 = std::nan("");
   double odometry_error_m_p95 = std::nan("");  ///< against the vehicle's own (reported) states
+  /// The robot's pose at each state's moment against the truth: as the run
+  /// took it (localised on the track, or its odometry), and its odometry's.
+  double pose_error_m_p95 = std::nan("");
+  double odometry_truth_error_m_p95 = std::nan("");
   /// When every estimated parameter was known (the last one's known_s), s
   /// since the session started; NaN when one never was.
   double converged_s = std::nan("");
@@ -452,6 +456,8 @@ LapRow Lap(const std::filesystem::path& db, const std::filesystem::path& truth, 
   row.error_m_p50 = Number(json, "prediction_error_m_p50");
   row.error_m_p95 = Number(json, "prediction_error_m_p95");
   row.odometry_error_m_p95 = Number(json, "prediction_error_odometry_m_p95");
+  row.pose_error_m_p95 = Number(json, "localisation_error_m_p95");
+  row.odometry_truth_error_m_p95 = Number(json, "odometry_error_m_p95");
   const std::string reality = JsonObjectOf(json, "reality");
   row.reality = reality.empty() ? spec.reality : JsonFieldOf(reality, "name");
   row.seed = JsonFieldOf(reality, "seed");
@@ -698,8 +704,8 @@ int BenchLinkMain(int argc, const char* const* argv) {
     std::printf("  [%s]\n", vehicle.name.c_str());
     std::printf(
         "  reality  seed        predict  delay ms  loss %%  outcome         lap s  x 0 ms  gates  "
-        "obst.  rtt p50 ms  err p50 mm  err p95 mm  odom. p95 mm  converged s  gap to none m  "
-        "wall s\n");
+        "obst.  rtt p50 ms  err p50 mm  err p95 mm  odom. p95 mm  pose p95 mm  odo-truth p95 mm  "
+        "converged s  gap to none m  wall s\n");
     for (const std::string& reality : realities) {
       for (const double loss : losses) {
         for (const PredictMode mode : modes) {
@@ -723,13 +729,15 @@ int BenchLinkMain(int argc, const char* const* argv) {
             }
             std::printf(
                 "  %-7s  %-10s  %-7s  %8.0f  %6.1f  %-14s %6.2f  %6s  %2d/%-2d  %5d  %10s  %10s  "
-                "%10s  %12s  %11s  %13s  %6.1f\n",
+                "%10s  %12s  %11s  %16s  %11s  %13s  %6.1f\n",
                 row.reality.c_str(), row.seed.empty() ? "-" : row.seed.c_str(), ModeName(mode),
                 delay, loss, row.ran ? row.outcome.c_str() : "no result", row.lap_time_s,
                 Cell(row.ratio_to_0ms, 1.0, "%.2f").c_str(), row.gates_passed, row.gates_total,
                 row.obstacles, Cell(row.rtt_p50_ms, 1.0, "%.2f").c_str(),
                 Cell(row.error_m_p50, 1e3).c_str(), Cell(row.error_m_p95, 1e3).c_str(),
-                Cell(row.odometry_error_m_p95, 1e3).c_str(), Cell(row.converged_s).c_str(),
+                Cell(row.odometry_error_m_p95, 1e3).c_str(),
+                Cell(row.pose_error_m_p95, 1e3).c_str(),
+                Cell(row.odometry_truth_error_m_p95, 1e3).c_str(), Cell(row.converged_s).c_str(),
                 row.path_gap_m_mean >= 0.0 ? (Cell(row.path_gap_m_mean, 1.0, "%.2f") + "/" +
                                               Cell(row.path_gap_m_max, 1.0, "%.2f"))
                                                  .c_str()
@@ -782,7 +790,8 @@ int BenchLinkMain(int argc, const char* const* argv) {
     std::ofstream csv(dir / "link_laps.csv");
     csv << "vehicle,reality,seed,predict,delay_ms,loss_percent,outcome,completed,lap_time_s,"
            "ratio_to_0ms,gates_passed,gates_total,obstacles,rtt_p50_ms,prediction_error_m_p50,"
-           "prediction_error_m_p95,prediction_error_odometry_m_p95,estimate_converged_s,"
+           "prediction_error_m_p95,prediction_error_odometry_m_p95,localisation_error_m_p95,"
+           "odometry_error_m_p95,estimate_converged_s,"
            "path_gap_m_mean,path_gap_m_max,wall_s\n";
     std::ofstream est(dir / "link_estimates.csv");
     est << "vehicle,reality,seed,predict,delay_ms,loss_percent,param,estimate,truth,known_s\n";
@@ -792,7 +801,8 @@ int BenchLinkMain(int argc, const char* const* argv) {
           << r.outcome << "," << (r.completed ? 1 : 0) << "," << r.lap_time_s << ","
           << r.ratio_to_0ms << "," << r.gates_passed << "," << r.gates_total << "," << r.obstacles
           << "," << r.rtt_p50_ms << "," << r.error_m_p50 << "," << r.error_m_p95 << ","
-          << r.odometry_error_m_p95 << "," << r.converged_s << "," << r.path_gap_m_mean << ","
+          << r.odometry_error_m_p95 << "," << r.pose_error_m_p95 << ","
+          << r.odometry_truth_error_m_p95 << "," << r.converged_s << "," << r.path_gap_m_mean << ","
           << r.path_gap_m_max << "," << r.wall_s << "\n";
       for (const Estimate& e : r.estimated) {
         est << r.spec.vehicle->name << "," << r.reality << "," << r.seed << ","
@@ -878,6 +888,8 @@ int BenchLinkMain(int argc, const char* const* argv) {
         << ",\"prediction_error_m_p50\":" << JsonOrNull(r.error_m_p50)
         << ",\"prediction_error_m_p95\":" << JsonOrNull(r.error_m_p95)
         << ",\"prediction_error_odometry_m_p95\":" << JsonOrNull(r.odometry_error_m_p95)
+        << ",\"localisation_error_m_p95\":" << JsonOrNull(r.pose_error_m_p95)
+        << ",\"odometry_error_m_p95\":" << JsonOrNull(r.odometry_truth_error_m_p95)
         << ",\"estimate_converged_s\":" << JsonOrNull(r.converged_s) << ",\"estimated\":{";
       for (size_t k = 0; k < r.estimated.size(); ++k) {
         o << (k ? "," : "") << JsonString(r.estimated[k].param)

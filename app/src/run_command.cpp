@@ -57,6 +57,9 @@ constexpr const char* kRunUsage =
     "                       is estimated of the vehicle while it drives (the robot's tread gains\n"
     "                       and track width, the blimp's wind); nominal: the file's alone. The\n"
     "                       model's error and estimates are reported either way\n"
+    "  --localise on|off    a robot whose states carry range scans is localised on the track\n"
+    "                       (default on): its odometry corrected against the walls and posts,\n"
+    "                       for the prediction, the gates and the view; off: its odometry alone\n"
     "  --view KIND          window (default with a display) or none\n"
     "  --third-person       beside the camera's picture, a chase camera's view of the robot on\n"
     "                       its track (a simulated robot only: its track is known here)\n"
@@ -272,6 +275,14 @@ void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRu
     }
     std::fprintf(out, "\n");
   }
+  if (r.odometry_error_m_p95 >= 0.0) {
+    std::fprintf(out,
+                 "  the robot's pose against the truth: %s p50 %.1f mm, p95 %.1f mm; its odometry "
+                 "p50 %.1f mm, p95 %.1f mm\n",
+                 r.localised ? "localised on the track" : "odometry (not localised)",
+                 r.localisation_error_m_p50 * 1e3, r.localisation_error_m_p95 * 1e3,
+                 r.odometry_error_m_p50 * 1e3, r.odometry_error_m_p95 * 1e3);
+  }
   for (const haptel::record::EstimatedParameter& p : r.estimated) {
     std::fprintf(out, "  estimated %s %.4g", p.name.c_str(), p.estimate);
     if (std::isfinite(p.truth)) std::fprintf(out, " (truth %.4g)", p.truth);
@@ -350,6 +361,11 @@ std::string RunJson(const SessionSetup& setup, const RecordedRun& run) {
     << ",\"predict_model\":" << JsonString(r.predict_model)
     << ",\"prediction_error_odometry_m_p50\":" << NumberOrNull(r.prediction_error_odometry_m_p50)
     << ",\"prediction_error_odometry_m_p95\":" << NumberOrNull(r.prediction_error_odometry_m_p95)
+    << ",\"localised\":" << (r.localised ? "true" : "false")
+    << ",\"localisation_error_m_p50\":" << NumberOrNull(r.localisation_error_m_p50)
+    << ",\"localisation_error_m_p95\":" << NumberOrNull(r.localisation_error_m_p95)
+    << ",\"odometry_error_m_p50\":" << NumberOrNull(r.odometry_error_m_p50)
+    << ",\"odometry_error_m_p95\":" << NumberOrNull(r.odometry_error_m_p95)
     << ",\"estimated\":" << EstimatedJson(r.estimated)
     << ",\"speedup\":" << (r.speedup > 0.0 ? JsonNumber(r.speedup) : std::string("null"))
     << ",\"simulated_s\":" << JsonNumber(run.result.simulated_s)

@@ -10,8 +10,13 @@ RobotPredictor::RobotPredictor(const TreadDriveConfig& drive, double watchdog_s,
                                PredictionModel model)
     : drive_(drive), model_(model), estimator_(drive), watchdog_s_(watchdog_s), step_s_(step_s) {}
 
+void RobotPredictor::Localise(const Track& track, const LocaliserConfig& config) {
+  localiser_.emplace(track, config);
+}
+
 void RobotPredictor::OnRoundTrip(double rtt_s) {
   if (keep_inputs_) inputs_.round_trips_s.push_back(rtt_s);
+  if (std::isfinite(rtt_s) && rtt_s >= 0.0) rtt_s_[rtts_++ % kClockWindow] = rtt_s;
   delay_.AddRoundTrip(rtt_s);
 }
 
@@ -24,7 +29,23 @@ void RobotPredictor::OnCommand(double t_s, double left, double right) {
 double RobotPredictor::OnState(const RobotStateSample& state) {
   if (keep_inputs_) inputs_.states.push_back(state);
   const double d = delay_.one_way_s();
-  const double sample_s = state.received_s - d;
+  double sample_s = state.received_s - d;
+  if (state.stamp_s != 0.0 && rtts_ > 0) {
+    // Its stamp on the operator's clock (the offset by the minimum filter).
+    transit_s_[transits_++ % kClockWindow] = state.received_s - state.stamp_s;
+    const double fastest_transit = *std::min_element(
+        transit_s_.begin(), transit_s_.begin() + std::min(transits_, kClockWindow));
+    const double fastest_rtt =
+        *std::min_element(rtt_s_.begin(), rtt_s_.begin() + std::min(rtts_, kClockWindow));
+    sample_s = std::min(state.received_s, state.stamp_s + fastest_transit - 0.5 * fastest_rtt);
+  }
+  // Where the state says the robot is: its odometry, localised on the track
+  // once there are ranges to do it with.
+  pose_ = {state.x, state.y, state.heading};
+  if (localiser_ && (state.ranges.count > 0 || localiser_->started()))
+    pose_ = localiser_->Update(pose_, state.ranges, state.touching);
+  located_.push_back({sample_s, pose_.x, pose_.y, 0.0});
+  odometry_.push_back({sample_s, state.x, state.y, 0.0});
   // What the operator was shown of this moment at this moment: the
   // prediction from the newest state it had then.
   double error_m = -1.0;
@@ -35,7 +56,7 @@ double RobotPredictor::OnState(const RobotStateSample& state) {
   if (known != nullptr) {
     std::vector<PredictedPose> predicted;
     Run(*known, nullptr, {sample_s}, predicted);
-    error_m = std::hypot(predicted.front().x - state.x, predicted.front().y - state.y);
+    error_m = std::hypot(predicted.front().x - pose_.x, predicted.front().y - pose_.y);
     errors_m_.push_back(error_m);
   }
   // Then what the state teaches, for the predictions from now on.
@@ -46,7 +67,7 @@ double RobotPredictor::OnState(const RobotStateSample& state) {
   if (model_ == PredictionModel::kLearn) drive_ = estimator_.Drive();
   Base base{state.received_s,
             sample_s,
-            {state.x, state.y, state.heading, 0.0, 0.0},
+            {pose_.x, pose_.y, pose_.heading, 0.0, 0.0},
             state.applied_left,
             state.applied_right};
   models::TreadsFromMotion(drive_, state.speed, state.yaw_rate, base.treads);

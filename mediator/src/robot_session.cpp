@@ -83,6 +83,7 @@ class RobotSession final : public FamilySession {
         display_(setup.vehicle.camera, setup.vehicle.body.radius) {
     path_ahead_.reserve(static_cast<size_t>(kPathAhead_s / kPathSpacing_s) + 2);
     if (setup.keep_predictor_inputs) predictor_.KeepInputs();
+    if (setup.localise) predictor_.Localise(track_);
     rec.track = setup.track.name;
     rec.predict = setup.predict;
     rec.predict_model = PredictionModelName(setup.predict_model);
@@ -183,19 +184,26 @@ class RobotSession final : public FamilySession {
             NsToS(e.received_ns - s.last_command_sent_ns() - s.last_command_age_ns()));
       }
       bumpers_ = {s.bumper_left(), s.bumper_right()};
+      const RangeScan ranges = RangesOf(s);
       if (s.pose_valid()) {
         predictor_.OnState({ts, s.x(), s.y(), s.heading(), s.speed(), s.yaw_rate(),
                             s.motor_left_level(), s.motor_right_level(), NsToS(s.stamp_ns()),
-                            touching});
-        reported_ = {ts, s.x(), s.y(), s.heading()};
+                            touching, ranges});
+        // Where the robot is: its odometry, localised on the track when it
+        // has ranges (the predictor's pose).
+        const Pose2& at = predictor_.pose();
+        reported_ = {ts, at.x, at.y, at.heading};
         // With prediction the operator sees the vehicle where it is now (Command).
         if (!setup_.predict)
-          op_->Observe({ts, s.x(), s.y(), s.heading(), s.bumper_left(), s.bumper_right()});
-        lap_.Update(ts, Vec2(s.x(), s.y()));
-        trace.Add(ts, s.x(), s.y(), 0.0, s.speed(), touching);
+          op_->Observe({ts, at.x, at.y, at.heading, s.bumper_left(), s.bumper_right()});
+        lap_.Update(ts, Vec2(at.x, at.y));
+        // The distance driven is the odometry's (the encoders count it).
+        const double driven_m = odometry_ ? (Vec2(s.x(), s.y()) - *odometry_).norm() : 0.0;
+        odometry_ = Vec2(s.x(), s.y());
+        trace.Add(ts, at.x, at.y, 0.0, s.speed(), touching, driven_m);
       }
       lap_.UpdateContact(ts, touching);
-      feedback_ = {s.bumper_left(), s.bumper_right(), s.speed(), RangesOf(s)};
+      feedback_ = {s.bumper_left(), s.bumper_right(), s.speed(), ranges};
       if (feedback_.ranges.count != range_beams_said_) SayRanges(feedback_.ranges);
       third_person_pose_new_ = third_person_pose_new_ || s.pose_valid();
     }
@@ -378,6 +386,9 @@ class RobotSession final : public FamilySession {
     rec.switches = interfaces_->switches();
     RecordPredictionErrors(predictor_.errors_m(), rec);
     result.shown = predictor_.shown();
+    result.located = predictor_.located();
+    result.odometry = predictor_.odometry();
+    rec.localised = predictor_.localiser() != nullptr && predictor_.localiser()->started();
     result.predictor_inputs = predictor_.inputs();
     result.started_ns = t0_ns_;
     result.shown_height = false;
@@ -529,6 +540,7 @@ class RobotSession final : public FamilySession {
   int64_t t0_ns_ = 0;  ///< the session's start (MonotonicNs), as Drain is given it
   PredictiveDisplay display_;
   std::optional<PredictedPose> reported_;  ///< the newest state's pose, when one had a pose
+  std::optional<Vec2> odometry_;           ///< the newest state's odometry position
   /// The third-person view (setup.third_person with a view; null otherwise),
   /// whether a pose came since it last drew, and when it may draw next.
   std::unique_ptr<ThirdPersonView> third_person_;

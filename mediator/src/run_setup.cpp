@@ -39,14 +39,13 @@
 namespace haptel::mediator {
 
 Args ParseRunArgs(int argc, const char* const* argv) {
-  return Args(argc, argv, {"config",       "track",          "interface",    "scene",
-                           "vehicle-name", "domain",         "database",     "vehicle-timeout",
-                           "trace",        "operator",       "device",       "trace-in",
-                           "time-limit",   "lap-limit",      "view",         "record",
-                           "vehicle",      "predict",        "link-fault",   "link-profile",
-                           "security",     "dds-interfaces", "dds-peers",    "discovery-server",
-                           "fleet",        "reality",        "reality-seed", "truth",
-                           "session"},
+  return Args(argc, argv,
+              {"config",       "track",    "interface",       "scene",     "vehicle-name",
+               "domain",       "database", "vehicle-timeout", "trace",     "operator",
+               "device",       "trace-in", "time-limit",      "lap-limit", "view",
+               "record",       "vehicle",  "predict",         "localise",  "link-fault",
+               "link-profile", "security", "dds-interfaces",  "dds-peers", "discovery-server",
+               "fleet",        "reality",  "reality-seed",    "truth",     "session"},
               {"json", "quiet", "attach", "third-person", "simulated-time", "insecure"});
 }
 
@@ -119,6 +118,11 @@ void ReadRunOptions(const Args& args, SessionSetup& setup) {
   if (auto domain = args.Int("domain", 0, 232)) setup.run.link.domain_id = *domain;
   setup.run.link.fault = LinkFaultFromOptions(args.Value("link-profile"), args.Value("link-fault"),
                                               setup.run.link.fault);
+  if (auto localise = args.Value("localise")) {
+    if (*localise != "on" && *localise != "off")
+      throw UsageError("option --localise: expected on or off, got '" + *localise + "'");
+    setup.localise = *localise == "on";
+  }
   if (auto predict = args.Value("predict")) {
     if (*predict != "on" && *predict != "off" && *predict != "learn" && *predict != "nominal")
       throw UsageError("option --predict: expected off, on, learn or nominal, got '" + *predict +

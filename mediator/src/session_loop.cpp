@@ -160,13 +160,17 @@ std::optional<LoopEnd> VehicleHealth::CheckStates(const VehicleLink& vehicle, in
   return std::nullopt;
 }
 
-void RunTrace::Add(double t_s, double x, double y, double z, double speed, bool touching) {
+void RunTrace::Add(double t_s, double x, double y, double z, double speed, bool touching,
+                   double driven_m) {
   // A contact the run starts in (the blimp resting on its pad) did not begin
   // during the run: only later onsets are contacts.
   if (!have_position_) touching_ = touching;
-  if (have_position_)
-    record_.distance_m += std::sqrt((x - last_x_) * (x - last_x_) + (y - last_y_) * (y - last_y_) +
+  if (have_position_) {
+    record_.distance_m +=
+        driven_m >= 0.0 ? driven_m
+                        : std::sqrt((x - last_x_) * (x - last_x_) + (y - last_y_) * (y - last_y_) +
                                     (z - last_z_) * (z - last_z_));
+  }
   have_position_ = true;
   last_x_ = x;
   last_y_ = y;

@@ -126,7 +126,11 @@ class RunTrace {
  public:
   explicit RunTrace(RunRecord& record) : record_(record) {}
   /// A pose at `t_s` (z: 0 for a ground vehicle); `touching`: in contact.
-  void Add(double t_s, double x, double y, double z, double speed, bool touching);
+  /// `driven_m`: how far the vehicle moved since the previous pose as it
+  /// measured it (a robot's odometry: a localised pose's corrections are
+  /// not driving); negative: the distance between the poses.
+  void Add(double t_s, double x, double y, double z, double speed, bool touching,
+           double driven_m = -1.0);
   bool touching() const { return touching_; }
 
  private:

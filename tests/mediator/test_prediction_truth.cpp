@@ -117,7 +117,13 @@ TEST_CASE("The operator side reads nothing of the truth: the predictor's inputs 
     CHECK(s.yaw_rate == m.yaw_rate());
     CHECK(s.applied_left == m.motor_left_level());
     CHECK(s.applied_right == m.motor_right_level());
+    // The range scan the localiser corrects the odometry with, too.
+    REQUIRE(s.ranges.count == static_cast<int>(m.ranges().size()));
+    CHECK(s.ranges.range_max == m.range_max());
+    for (int i = 0; i < s.ranges.count; ++i)
+      CHECK(s.ranges.ranges[static_cast<size_t>(i)] == m.ranges()[static_cast<size_t>(i)]);
   }
+  CHECK(in.states.back().ranges.count > 0);
   // What is still on its way at the end is all that is missing.
   CHECK(in.states.size() + 20 >= published.size());
   // Every command the predictor replays is one the vehicle was sent, in
@@ -147,6 +153,10 @@ TEST_CASE("The operator side reads nothing of the truth: the predictor's inputs 
   const record::RunRecord& r = run.result.record;
   CHECK(r.prediction_error_m_p95 >= 0.0);
   CHECK(r.prediction_error_odometry_m_p95 >= 0.0);
+  // The robot was localised on the track from those scans, and scored.
+  CHECK(r.localised);
+  CHECK(r.localisation_error_m_p95 >= 0.0);
+  CHECK(r.odometry_error_m_p95 >= 0.0);
   bool found = false;
   for (const record::EstimatedParameter& p : r.estimated) {
     if (p.name != "effective_track_width") continue;

@@ -243,3 +243,22 @@ TEST_CASE("The delay estimate follows a step in the round trip and ignores a sin
   estimate.AddRoundTrip(-1.0);
   CHECK(estimate.one_way_s() == Approx(0.2));
 }
+
+TEST_CASE("a stamped state is dated by its stamp on the operator's clock, a late one too") {
+  // The vehicle's clock 1000 s ahead of the operator's; states cross in
+  // 0.2 s, one of them 0.1 s late (a loaded host), commands likewise.
+  for (const bool stamped : {true, false}) {
+    RobotPredictor predictor(VehicleConfig{}.drive);
+    for (int i = 0; i < 5; ++i) predictor.OnRoundTrip(0.4);
+    for (int i = 1; i <= 20; ++i) {
+      const double sampled = 0.02 * i;
+      const double late = i == 15 ? 0.1 : 0.0;
+      RobotStateSample s{sampled + 0.2 + late, 0.01 * i, 0.0, 0.0, 0.5, 0.0, 4, 4};
+      s.stamp_s = stamped ? 1000.0 + sampled : 0.0;
+      predictor.OnState(s);
+      // When the predictor takes this state to have been sampled.
+      const double dated = predictor.located().back().t_s;
+      CHECK(dated == Approx(stamped ? sampled : sampled + late).margin(1e-9));
+    }
+  }
+}

@@ -17,6 +17,8 @@
 #include <string_view>
 #include <vector>
 
+#include "haptel/core/range_scan.hpp"
+
 namespace haptel::mediator {
 
 /// The model a predictor runs ahead of the delayed states.
@@ -51,6 +53,8 @@ struct RobotStateSample {
   /// for the estimator); 0: unknown (its arrival is used).
   double stamp_s = 0.0;
   bool touching = false;  ///< a bumper pressed
+  /// Its range scan (count 0: the vehicle has none), from the same moment.
+  RangeScan ranges{};
 };
 
 /// Everything a robot's predictor consumed, in order, when asked to keep it

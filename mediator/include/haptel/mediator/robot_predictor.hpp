@@ -17,8 +17,24 @@
 /// Walls are not modelled: a robot pressed against one is predicted to move
 /// on, and the next state corrects it.
 ///
+/// Where a state says the robot is: its odometry, or — once Localise gave
+/// the predictor the track and states carry range scans — its odometry
+/// corrected by the scan against the track's walls and posts
+/// (TrackLocaliser, track_localiser.hpp). That pose is what the model starts
+/// from, what each state's error is measured against, and pose(). A state
+/// without ranges before any with leaves the odometry as it is (the CAN
+/// robot: nothing changes); once localising, a state without a scan moves
+/// the corrected pose by its odometry alone.
+///
 /// The one-way delay is half the command round trip's running median
-/// (DelayEstimate, delay_estimate.hpp).
+/// (DelayEstimate, delay_estimate.hpp). A state stamped by the vehicle is
+/// dated by its stamp on the operator's clock: the vehicle's clock is its
+/// own, so its offset is estimated as the smallest arrival less stamp over
+/// the last few seconds less half the smallest round trip (the minimum
+/// filter of clock synchronisation: the fastest state crossed in the
+/// fastest one-way time). A state that a loaded host delivered late is
+/// then taken for as old as it is, not as fresh as its arrival says. An
+/// unstamped state is dated by its arrival less the one-way delay.
 ///
 /// Each state that arrives is compared with what the predictor said, at the
 /// moment the state was sampled, of that moment (from the states it had
@@ -26,13 +42,16 @@
 /// merit. Each time a state arrives, the pose the operator is then shown
 /// as the robot now is kept (shown()): scored against the truth after the
 /// run (prediction.hpp).
+#include <array>
 #include <deque>
+#include <optional>
 #include <vector>
 
 #include "haptel/config/vehicle.hpp"
 #include "haptel/mediator/delay_estimate.hpp"
 #include "haptel/mediator/drive_estimator.hpp"
 #include "haptel/mediator/prediction.hpp"
+#include "haptel/mediator/track_localiser.hpp"
 #include "haptel/models/tread_drive.hpp"
 
 namespace haptel::mediator {
@@ -52,6 +71,12 @@ class RobotPredictor {
   /// numbers alone, or with what is learnt.
   explicit RobotPredictor(const TreadDriveConfig& drive, double watchdog_s = 0.2,
                           double step_s = 0.005, PredictionModel model = PredictionModel::kNominal);
+
+  /// From now on, states with range scans are localised on `track` (its
+  /// walls and posts are copied: it may go).
+  void Localise(const Track& track, const LocaliserConfig& config = {});
+  /// The localiser, once Localise was called (null otherwise).
+  const TrackLocaliser* localiser() const { return localiser_ ? &*localiser_ : nullptr; }
 
   /// A command as sent at `t_s` (normalised tread commands in [-1, 1], as
   /// the link carries them; the robot quantises them to its levels).
@@ -75,7 +100,15 @@ class RobotPredictor {
   /// the first at now (appended to `path`, which is cleared first).
   void PathAhead(double now_s, double horizon_s, double left, double right,
                  std::vector<PredictedPose>& path, double spacing_s = 0.05) const;
-  /// Every state's prediction error so far (m), against its odometry.
+  /// The newest state's pose: its odometry, or localised (see above).
+  const Pose2& pose() const { return pose_; }
+  /// Each state's pose as the predictor took it (localised or not) and its
+  /// odometry alone, at the moment it was sampled (operator's clock:
+  /// arrival less the one-way delay): scored against the truth after the
+  /// run (prediction_score.hpp).
+  const std::vector<ShownPose>& located() const { return located_; }
+  const std::vector<ShownPose>& odometry() const { return odometry_; }
+  /// Every state's prediction error so far (m), against its pose.
   const std::vector<double>& errors_m() const { return errors_m_; }
   /// The pose shown as the robot now, each time a state arrived.
   const std::vector<ShownPose>& shown() const { return shown_; }
@@ -117,12 +150,22 @@ class RobotPredictor {
   double watchdog_s_;
   double step_s_;
   DelayEstimate delay_;
+  /// The last kClockWindow arrivals less stamps and round trips (s), for
+  /// the vehicle clock's offset (see above).
+  static constexpr size_t kClockWindow = 250;
+  std::array<double, kClockWindow> transit_s_{};
+  std::array<double, kClockWindow> rtt_s_{};
+  size_t transits_ = 0, rtts_ = 0;
   std::deque<Command> commands_;
   /// The states since the one the operator had when the newest was
   /// sampled (that one's prediction is the newest's error), newest last.
   std::deque<Base> bases_;
   std::vector<double> errors_m_;
   std::vector<ShownPose> shown_;
+  std::optional<TrackLocaliser> localiser_;
+  Pose2 pose_;
+  std::vector<ShownPose> located_;
+  std::vector<ShownPose> odometry_;
   double gains_known_s_ = -1.0, width_known_s_ = -1.0;
   bool keep_inputs_ = false;
   RobotPredictorInputs inputs_;

@@ -96,6 +96,12 @@ struct SessionSetup {
   PredictionModel predict_model = PredictionModel::kLearn;
   /// Keep everything a robot's predictor consumes (SessionResult::predictor_inputs).
   bool keep_predictor_inputs = false;
+  /// Localise a robot whose states carry range scans on the track it drives
+  /// (track_localiser.hpp; `--localise on|off`): its pose for the
+  /// predictor, the lap's gates, the view and the automatic operator is its
+  /// odometry corrected against the track's walls and posts. Without ranges
+  /// (the CAN robot) nothing changes either way.
+  bool localise = true;
   /// Record the device's readings here for the `replay` driver (empty: none).
   std::filesystem::path trace;
   /// "auto" (the simulated driver; needs the sim device) or "person".
@@ -225,6 +231,11 @@ struct SessionResult {
   /// (prediction_score.hpp); the 3-D distance counts with `shown_height`
   /// (the blimp).
   std::vector<ShownPose> shown;
+  /// A robot's pose at each state's moment as the run took it (localised,
+  /// or its odometry) and its odometry alone, on the same clock, scored
+  /// like `shown` (RobotPredictor::located, odometry).
+  std::vector<ShownPose> located;
+  std::vector<ShownPose> odometry;
   int64_t started_ns = 0;
   bool shown_height = false;
   /// With SessionSetup::keep_predictor_inputs, a robot's: everything its

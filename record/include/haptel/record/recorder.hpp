@@ -117,6 +117,16 @@ struct RunRecord {
   /// fit to the vehicle's own odometry (m; -1: no state to compare; JSON only).
   double prediction_error_odometry_m_p50 = -1.0;
   double prediction_error_odometry_m_p95 = -1.0;
+  /// Whether the robot's pose was localised on the track (its range scan
+  /// against the walls and posts) or its odometry alone (JSON only).
+  bool localised = false;
+  /// The pose each state gave the run (localised, or the odometry) and the
+  /// odometry alone, against the truth at that state's moment (m; -1: no
+  /// truth record; JSON only): the floor under the prediction's error.
+  double localisation_error_m_p50 = -1.0;
+  double localisation_error_m_p95 = -1.0;
+  double odometry_error_m_p50 = -1.0;
+  double odometry_error_m_p95 = -1.0;
   /// What the predictor estimated of the vehicle, each against its truth.
   std::vector<EstimatedParameter> estimated;
   /// A run in simulated time (`haptel run --simulated-time`): simulated

@@ -1,0 +1,132 @@
+#pragma once
+/// @file Where the robot is on the track it drives, from its odometry and its
+/// range scan against the track's known walls and posts: the operator side's
+/// correction of the odometry's drift (a skid the encoders cannot see, a
+/// gyro's bias, a floor patch), never from the vehicle's truth.
+///
+/// An extended Kalman filter on the pose (x, y, heading), as in Thrun,
+/// Burgard and Fox, *Probabilistic Robotics* (2005), ch. 7.4 (EKF
+/// localisation), with:
+/// - the odometry motion model (ch. 5.4): each state's odometry pose, taken
+///   as an increment in the robot's frame since the previous state's, moves
+///   the estimate; its noise grows with the distance and the turn (and with
+///   the distance alone while a bumper is pressed: treads slipping on a
+///   wall move the encoders, not the robot);
+/// - the likelihood-field measurement model (ch. 6.4): a beam that meets
+///   something ends on the track's walls or posts, so its endpoint's distance
+///   to the nearest of them is a measurement of zero. Beams that meet nothing
+///   tell nothing (as in the book); an endpoint farther than a gate from
+///   everything is an outlier. The update is iterated (Gauss-Newton on the
+///   prior and every beam, re-associating each beam with its nearest shape
+///   every iteration: the iterated EKF of Bell and Cathey, 1993), with a
+///   Huber weight on each beam.
+///
+/// The nearest shapes are looked up in a grid precomputed from the track
+/// (each cell lists the shapes that can be nearest to a point in it), and the
+/// distance to them is exact, so the field has no grid error. All memory is
+/// taken at construction: an update allocates nothing. Deterministic: no
+/// random draw.
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "haptel/config/track.hpp"
+#include "haptel/core/range_scan.hpp"
+
+namespace haptel::mediator {
+
+/// A planar pose (m, m, rad).
+struct Pose2 {
+  double x = 0.0;
+  double y = 0.0;
+  double heading = 0.0;
+};
+
+/// The filter's noise model. Defaults fit a small tracked robot with
+/// ultrasonic-class range sensors (config/realities/lab.yaml's spreads,
+/// with margin): the model's, not the reality's (which the operator side
+/// never reads).
+struct LocaliserConfig {
+  /// A beam's endpoint against the map (m): the sensor's noise, inflated
+  /// because beams of one scan are not independent (ch. 6.3.4).
+  double beam_sd = 0.02;
+  /// Beyond this from every wall and post (m), an endpoint is an outlier.
+  double outlier_m = 0.3;
+  /// Odometry noise per metre driven: along, across (m/m), and heading
+  /// (rad/m); and per radian turned (rad/rad).
+  double along_per_m = 0.1;
+  double across_per_m = 0.05;
+  double heading_per_m = 0.05;
+  double heading_per_rad = 0.05;
+  /// Along the heading per metre the treads drive while a bumper is pressed.
+  double pressed_along_per_m = 1.0;
+  /// Added each update, however still the robot (m, rad): what the
+  /// odometry cannot see at all.
+  double floor_m = 0.001;
+  double floor_rad = 0.001;
+  /// The first pose's uncertainty (m, rad): odometry starts where the
+  /// vehicle was placed.
+  double initial_sd_m = 0.05;
+  double initial_sd_rad = 0.05;
+  /// Gauss-Newton iterations per scan at most.
+  int iterations = 10;
+};
+
+class TrackLocaliser {
+ public:
+  /// Precomputes the track's nearest-shape grid (the walls and round posts,
+  /// Track::walls and Track::round_obstacles).
+  explicit TrackLocaliser(const Track& track, const LocaliserConfig& config = {});
+
+  /// Starts at `pose` with these standard deviations; the next Update's
+  /// odometry is the origin of the increments.
+  void Reset(const Pose2& pose, double sd_m, double sd_rad);
+  /// One state: `odometry` the pose the robot reports, `scan` its ranges
+  /// from the same moment, `pressed` a bumper closed. The first update (or
+  /// the first after Reset without one) starts at the odometry pose unless
+  /// Reset gave one. Returns the pose corrected.
+  const Pose2& Update(const Pose2& odometry, const RangeScan& scan, bool pressed);
+
+  const Pose2& pose() const { return pose_; }
+  /// The pose's covariance, row-major (x, y, heading).
+  const std::array<double, 9>& covariance() const { return cov_; }
+  /// Beams the last update used (hit something, not outliers).
+  int beams_used() const { return beams_used_; }
+  bool started() const { return started_; }
+
+  /// Distance (m) from `p` to the nearest wall or post surface, and its
+  /// gradient (unit, away from that surface); false when nothing is within
+  /// the outlier distance (the field's lookup, exposed for tests).
+  bool Field(double px, double py, double& distance, double& gx, double& gy) const;
+
+ private:
+  struct Circle {
+    double cx, cy, r;
+  };
+  struct Wall {
+    double ax, ay, bx, by;
+  };
+  /// Distance to shape `index` (walls first, then circles) and its gradient.
+  double ShapeDistance(uint32_t index, double px, double py, double& gx, double& gy) const;
+  void Motion(const Pose2& odometry, bool pressed);
+  void Correct(const RangeScan& scan);
+
+  LocaliserConfig config_;
+  std::vector<Wall> walls_;
+  std::vector<Circle> circles_;
+  // The grid: cell (i, j) covers [x0 + i·cell, +cell) × [y0 + j·cell, +cell);
+  // its candidate shapes are candidates_[starts_[c] .. starts_[c + 1]).
+  double x0_ = 0.0, y0_ = 0.0, cell_ = 0.05;
+  int nx_ = 0, ny_ = 0;
+  std::vector<uint32_t> starts_;
+  std::vector<uint32_t> candidates_;
+
+  Pose2 pose_;
+  std::array<double, 9> cov_{};
+  Pose2 last_odometry_;
+  bool started_ = false;
+  bool have_odometry_ = false;
+  int beams_used_ = 0;
+};
+
+}  // namespace haptel::mediator

@@ -1,0 +1,263 @@
+#include "haptel/mediator/track_localiser.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "haptel/core/geometry2d.hpp"
+
+namespace haptel::mediator {
+
+namespace {
+
+/// The grid's cell (m) and the most cells it may have (a larger track gets
+/// coarser cells: more candidates each, the same exact distances).
+constexpr double kCell_m = 0.05;
+constexpr size_t kMaxCells = 4'000'000;
+
+using Mat3 = Eigen::Matrix3d;
+using Vec3 = Eigen::Vector3d;
+
+Mat3 ToMat(const std::array<double, 9>& a) {
+  return Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(a.data());
+}
+void FromMat(const Mat3& m, std::array<double, 9>& a) {
+  Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(a.data()) = m;
+}
+std::array<double, 9> Diagonal(double sd_m, double sd_rad) {
+  return {sd_m * sd_m, 0.0, 0.0, 0.0, sd_m * sd_m, 0.0, 0.0, 0.0, sd_rad * sd_rad};
+}
+
+}  // namespace
+
+TrackLocaliser::TrackLocaliser(const Track& track, const LocaliserConfig& config)
+    : config_(config) {
+  double lo_x = std::numeric_limits<double>::infinity(), lo_y = lo_x;
+  double hi_x = -lo_x, hi_y = -lo_x;
+  auto extend = [&](double x, double y, double r) {
+    lo_x = std::min(lo_x, x - r);
+    lo_y = std::min(lo_y, y - r);
+    hi_x = std::max(hi_x, x + r);
+    hi_y = std::max(hi_y, y + r);
+  };
+  for (const Segment2& w : track.walls()) {
+    walls_.push_back({w.a.x(), w.a.y(), w.b.x(), w.b.y()});
+    extend(w.a.x(), w.a.y(), 0.0);
+    extend(w.b.x(), w.b.y(), 0.0);
+  }
+  for (const CircleObstacle& c : track.round_obstacles()) {
+    circles_.push_back({c.center.x(), c.center.y(), c.radius});
+    extend(c.center.x(), c.center.y(), c.radius);
+  }
+  const size_t shapes = walls_.size() + circles_.size();
+  if (shapes == 0) return;  // nothing to localise against: every endpoint is an outlier
+
+  // Cells: the shapes' box with the outlier distance around it.
+  cell_ = kCell_m;
+  const double margin = config_.outlier_m + 2.0 * cell_;
+  for (;;) {
+    x0_ = lo_x - margin;
+    y0_ = lo_y - margin;
+    nx_ = static_cast<int>(std::ceil((hi_x - lo_x + 2.0 * margin) / cell_));
+    ny_ = static_cast<int>(std::ceil((hi_y - lo_y + 2.0 * margin) / cell_));
+    if (static_cast<size_t>(nx_) * static_cast<size_t>(ny_) <= kMaxCells) break;
+    cell_ *= 2.0;
+  }
+  const size_t cells = static_cast<size_t>(nx_) * static_cast<size_t>(ny_);
+  const double diagonal = cell_ * std::sqrt(2.0);
+  // A shape is a candidate of a cell when a point of the cell may have it
+  // nearest: its distance to the cell's centre is within the nearest's plus
+  // the diagonal. Only cells within reach of the outlier distance keep any.
+  const double keep_within = config_.outlier_m + 0.5 * diagonal;
+  const double reach = keep_within + diagonal;
+  auto for_cells_near = [&](uint32_t shape, auto&& visit) {
+    double sx0, sy0, sx1, sy1;
+    if (shape < walls_.size()) {
+      const Wall& w = walls_[shape];
+      sx0 = std::min(w.ax, w.bx), sx1 = std::max(w.ax, w.bx);
+      sy0 = std::min(w.ay, w.by), sy1 = std::max(w.ay, w.by);
+    } else {
+      const Circle& c = circles_[shape - walls_.size()];
+      sx0 = c.cx - c.r, sx1 = c.cx + c.r, sy0 = c.cy - c.r, sy1 = c.cy + c.r;
+    }
+    const int i0 = std::max(0, static_cast<int>(std::floor((sx0 - reach - x0_) / cell_)));
+    const int i1 = std::min(nx_ - 1, static_cast<int>(std::floor((sx1 + reach - x0_) / cell_)));
+    const int j0 = std::max(0, static_cast<int>(std::floor((sy0 - reach - y0_) / cell_)));
+    const int j1 = std::min(ny_ - 1, static_cast<int>(std::floor((sy1 + reach - y0_) / cell_)));
+    for (int j = j0; j <= j1; ++j) {
+      for (int i = i0; i <= i1; ++i) {
+        double gx, gy;
+        const double d =
+            ShapeDistance(shape, x0_ + (i + 0.5) * cell_, y0_ + (j + 0.5) * cell_, gx, gy);
+        visit(static_cast<size_t>(j) * static_cast<size_t>(nx_) + static_cast<size_t>(i), d);
+      }
+    }
+  };
+  std::vector<double> nearest(cells, std::numeric_limits<double>::infinity());
+  for (uint32_t s = 0; s < shapes; ++s) {
+    for_cells_near(s, [&](size_t c, double d) { nearest[c] = std::min(nearest[c], d); });
+  }
+  std::vector<uint32_t> counts(cells + 1, 0);
+  auto is_candidate = [&](size_t c, double d) {
+    return nearest[c] <= keep_within && d <= nearest[c] + diagonal;
+  };
+  for (uint32_t s = 0; s < shapes; ++s) {
+    for_cells_near(s, [&](size_t c, double d) {
+      if (is_candidate(c, d)) ++counts[c];
+    });
+  }
+  starts_.assign(cells + 1, 0);
+  for (size_t c = 0; c < cells; ++c) starts_[c + 1] = starts_[c] + counts[c];
+  candidates_.assign(starts_[cells], 0);
+  std::fill(counts.begin(), counts.end(), 0);
+  for (uint32_t s = 0; s < shapes; ++s) {
+    for_cells_near(s, [&](size_t c, double d) {
+      if (is_candidate(c, d)) candidates_[starts_[c] + counts[c]++] = s;
+    });
+  }
+}
+
+double TrackLocaliser::ShapeDistance(uint32_t index, double px, double py, double& gx,
+                                     double& gy) const {
+  if (index < walls_.size()) {
+    const Wall& w = walls_[index];
+    const double ex = w.bx - w.ax, ey = w.by - w.ay;
+    const double length2 = ex * ex + ey * ey;
+    const double t =
+        length2 > 0.0 ? std::clamp(((px - w.ax) * ex + (py - w.ay) * ey) / length2, 0.0, 1.0) : 0.0;
+    const double vx = px - (w.ax + t * ex), vy = py - (w.ay + t * ey);
+    const double d = std::hypot(vx, vy);
+    if (d > 1e-12) {
+      gx = vx / d, gy = vy / d;
+    } else {  // on the wall: either normal will do (the step is nil)
+      const double l = std::sqrt(length2);
+      gx = l > 0.0 ? -ey / l : 1.0, gy = l > 0.0 ? ex / l : 0.0;
+    }
+    return d;
+  }
+  const Circle& c = circles_[index - walls_.size()];
+  const double vx = px - c.cx, vy = py - c.cy;
+  const double n = std::hypot(vx, vy);
+  if (n < 1e-12) {
+    gx = 1.0, gy = 0.0;
+    return c.r;
+  }
+  const double sign = n >= c.r ? 1.0 : -1.0;
+  gx = sign * vx / n, gy = sign * vy / n;
+  return std::abs(n - c.r);
+}
+
+bool TrackLocaliser::Field(double px, double py, double& distance, double& gx, double& gy) const {
+  const double fi = (px - x0_) / cell_, fj = (py - y0_) / cell_;
+  if (!(fi >= 0.0 && fj >= 0.0 && fi < nx_ && fj < ny_)) return false;
+  const size_t c = static_cast<size_t>(fj) * static_cast<size_t>(nx_) + static_cast<size_t>(fi);
+  distance = std::numeric_limits<double>::infinity();
+  for (uint32_t k = starts_[c]; k < starts_[c + 1]; ++k) {
+    double x, y;
+    const double d = ShapeDistance(candidates_[k], px, py, x, y);
+    if (d < distance) distance = d, gx = x, gy = y;
+  }
+  return distance <= config_.outlier_m;
+}
+
+void TrackLocaliser::Reset(const Pose2& pose, double sd_m, double sd_rad) {
+  pose_ = pose;
+  cov_ = Diagonal(sd_m, sd_rad);
+  started_ = true;
+  have_odometry_ = false;
+}
+
+const Pose2& TrackLocaliser::Update(const Pose2& odometry, const RangeScan& scan, bool pressed) {
+  if (!started_) {
+    Reset(odometry, config_.initial_sd_m, config_.initial_sd_rad);
+  }
+  if (!have_odometry_) {
+    last_odometry_ = odometry;
+    have_odometry_ = true;
+  } else {
+    Motion(odometry, pressed);
+  }
+  Correct(scan);
+  return pose_;
+}
+
+void TrackLocaliser::Motion(const Pose2& odometry, bool pressed) {
+  // The increment in the frame of the previous odometry pose...
+  const double dx = odometry.x - last_odometry_.x, dy = odometry.y - last_odometry_.y;
+  const double c0 = std::cos(last_odometry_.heading), s0 = std::sin(last_odometry_.heading);
+  const double forward = c0 * dx + s0 * dy, left = -s0 * dx + c0 * dy;
+  const double turn = WrapAngle(odometry.heading - last_odometry_.heading);
+  last_odometry_ = odometry;
+  // ...applied in the estimate's.
+  const double c = std::cos(pose_.heading), s = std::sin(pose_.heading);
+  const double mx = c * forward - s * left, my = s * forward + c * left;
+  pose_.x += mx;
+  pose_.y += my;
+  pose_.heading = WrapAngle(pose_.heading + turn);
+
+  Mat3 f = Mat3::Identity();
+  f(0, 2) = -my;
+  f(1, 2) = mx;
+  const double distance = std::hypot(forward, left);
+  const double along = config_.along_per_m * distance +
+                       (pressed ? config_.pressed_along_per_m * distance : 0.0) + config_.floor_m;
+  const double across = config_.across_per_m * distance + config_.floor_m;
+  const double heading = config_.heading_per_m * distance +
+                         config_.heading_per_rad * std::abs(turn) + config_.floor_rad;
+  const double ch = std::cos(pose_.heading), sh = std::sin(pose_.heading);
+  Mat3 q = Mat3::Zero();
+  const double a2 = along * along, b2 = across * across;
+  q(0, 0) = ch * ch * a2 + sh * sh * b2;
+  q(1, 1) = sh * sh * a2 + ch * ch * b2;
+  q(0, 1) = q(1, 0) = ch * sh * (a2 - b2);
+  q(2, 2) = heading * heading;
+  FromMat(f * ToMat(cov_) * f.transpose() + q, cov_);
+}
+
+void TrackLocaliser::Correct(const RangeScan& scan) {
+  beams_used_ = 0;
+  if (scan.count <= 0 || starts_.empty()) return;
+  const Mat3 prior_cov = ToMat(cov_);
+  const Mat3 prior_info = prior_cov.inverse();
+  const Vec3 prior(pose_.x, pose_.y, pose_.heading);
+  const double sd = config_.beam_sd;
+  const double weight = 1.0 / (sd * sd);
+  Vec3 x = prior;
+  Mat3 info = prior_info;
+  for (int iteration = 0; iteration < config_.iterations; ++iteration) {
+    // Gauss-Newton on |x - prior|²_P⁻¹ + Σ w·d_i(x)²/sd²: info·step = b.
+    info = prior_info;
+    Vec3 offset = prior - x;
+    offset.z() = WrapAngle(offset.z());
+    Vec3 b = prior_info * offset;
+    int used = 0;
+    for (int i = 0; i < scan.count; ++i) {
+      const double r = scan.ranges[static_cast<size_t>(i)];
+      if (!scan.Hit(i) || !(r > 0.0)) continue;
+      const double angle = x.z() + scan.Angle(i);
+      const double ca = std::cos(angle), sa = std::sin(angle);
+      double d, gx, gy;
+      if (!Field(x.x() + r * ca, x.y() + r * sa, d, gx, gy)) continue;
+      const Vec3 j(gx, gy, r * (-gx * sa + gy * ca));
+      // Gated by what the prior allows this beam (3 sd), within the outlier distance.
+      const double predicted_sd = std::sqrt(j.dot(prior_cov * j) + sd * sd);
+      if (d > std::min(config_.outlier_m, 3.0 * predicted_sd)) continue;
+      const double huber = d <= 2.0 * sd ? 1.0 : 2.0 * sd / d;
+      info.noalias() += (huber * weight) * j * j.transpose();
+      b -= (huber * weight * d) * j;
+      ++used;
+    }
+    beams_used_ = used;
+    if (used == 0) break;
+    const Vec3 step = info.ldlt().solve(b);
+    x += step;
+    x.z() = WrapAngle(x.z());
+    if (std::abs(step.x()) + std::abs(step.y()) < 1e-5 && std::abs(step.z()) < 1e-5) break;
+  }
+  if (beams_used_ == 0) return;
+  pose_ = {x.x(), x.y(), x.z()};
+  FromMat(info.inverse(), cov_);
+}
+
+}  // namespace haptel::mediator

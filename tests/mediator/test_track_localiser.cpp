@@ -1,0 +1,200 @@
+// The operator side's localiser (mediator/track_localiser.hpp) on the real
+// track shapes, fed what the real simulated robot reports: it finds a pose
+// it was told wrongly from one scan cast from the truth; on a lab robot's
+// drive it stays on the truth where the odometry drifts away; and a robot
+// without range sensors is predicted exactly as without a localiser.
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "haptel/config/reality.hpp"
+#include "haptel/mediator/robot_predictor.hpp"
+#include "haptel/mediator/track_localiser.hpp"
+#include "haptel/vehicles/range_sensors.hpp"
+#include "haptel/vehicles/sim_robot.hpp"
+
+using namespace haptel;
+using namespace haptel::mediator;
+
+namespace {
+
+const VehicleConfig& Robot() {
+  static const VehicleConfig robot = LoadVehicle("config/vehicles/sim-robot.yaml");
+  return robot;
+}
+const Track& GrandPrix() {
+  static const Track track(LoadTrack("config/tracks/grand-prix.yaml"));
+  return track;
+}
+const Track& ShortTrack() {
+  static const Track track(LoadTrack("config/tracks/test-short.yaml"));
+  return track;
+}
+
+double HeadingError(double a, double b) { return std::abs(WrapAngle(a - b)); }
+
+/// The shipped robot's scan (31 beams over 180°, 1.5 m) with 1 cm of noise.
+RangeSensorConfig Sensors() {
+  RangeSensorConfig c = Robot().range_sensors;
+  c.noise_sd = 0.01;
+  return c;
+}
+
+}  // namespace
+
+TEST_CASE("the field is the exact distance to the nearest wall or post") {
+  const Track& track = ShortTrack();
+  const TrackLocaliser localiser(track);
+  // Halfway along the first straight's right wall, 5 cm in: 5 cm, pointing in.
+  const Segment2& wall = track.walls().front();
+  const Vec2 mid = 0.5 * (wall.a + wall.b);
+  double d = 0.0, gx = 0.0, gy = 0.0;
+  for (const double inward : {0.05, 0.0, 0.2}) {
+    const Vec2 p = mid + inward * Vec2(0.0, 1.0);  // the track's first leg runs along +x
+    double nearest = 1e9;
+    for (const Segment2& w : track.walls())
+      nearest = std::min(nearest, (p - ClosestPointOnSegment(w, p)).norm());
+    for (const CircleObstacle& c : track.round_obstacles())
+      nearest = std::min(nearest, std::abs((p - c.center).norm() - c.radius));
+    REQUIRE(localiser.Field(p.x(), p.y(), d, gx, gy));
+    CHECK(d == Approx(nearest).margin(1e-12));
+  }
+  // Far from everything: an outlier.
+  CHECK_FALSE(localiser.Field(50.0, 50.0, d, gx, gy));
+}
+
+TEST_CASE("a scan cast from a known pose brings a pose 0.2 m and 10 degrees off back to it") {
+  struct Case {
+    const Track* track;
+    double along;  ///< where on the centre line (m), heading along it
+  };
+  const Case cases[] = {{&ShortTrack(), 0.6}, {&ShortTrack(), 1.5}, {&ShortTrack(), 2.4},
+                        {&GrandPrix(), 4.6},  {&GrandPrix(), 7.5},  {&GrandPrix(), 12.0}};
+  std::mt19937_64 noise(7);
+  for (const Case& c : cases) {
+    const Vec2 at = c.track->PointAt(c.along);
+    const Vec2 t = c.track->TangentAt(c.along);
+    const double heading = std::atan2(t.y(), t.x());
+    // Off along and across the corridor, turned both ways.
+    for (const double direction : {0.0, 0.5 * std::numbers::pi, 1.25 * std::numbers::pi}) {
+      for (const double turn : {Radians(10.0), Radians(-10.0)}) {
+        CAPTURE(c.track->config().name, c.along, direction, turn);
+        TrackLocaliser localiser(*c.track);
+        const Pose2 told{at.x() + 0.2 * std::cos(heading + direction),
+                         at.y() + 0.2 * std::sin(heading + direction), heading + turn};
+        localiser.Reset(told, 0.2, Radians(15.0));
+        // The robot stands still: its odometry does not move, its scans come in.
+        for (int i = 0; i < 10; ++i) {
+          const RangeScan scan =
+              vehicles::ScanTrack(*c.track, at.x(), at.y(), heading, Sensors(), noise);
+          localiser.Update(told, scan, false);
+        }
+        const Pose2& p = localiser.pose();
+        CHECK(std::hypot(p.x - at.x(), p.y - at.y()) < 0.01);
+        CHECK(HeadingError(p.heading, heading) < Radians(1.0));
+        CHECK(localiser.beams_used() > 10);
+      }
+    }
+  }
+}
+
+namespace {
+
+/// A lab robot (config/realities/lab.yaml, its gyro's bias and its skid a
+/// little worse than the mean: a robot of the make that drifts) driven round
+/// the grand prix by a pure-pursuit driver that sees the truth (the test's
+/// rig, never the localiser's input), with its states at 50 Hz.
+struct LabDrive {
+  std::vector<double> odometry_error_m;
+  std::vector<double> localised_error_m;
+};
+
+LabDrive DriveLab(double seconds) {
+  RealityConfig lab = LoadReality(RealityFile("lab"));
+  lab.robot.gyro_drift_deg_per_min = {4.0, 0.0};
+  lab.robot.lateral_slip = {0.04, 0.0};
+  const Track& track = GrandPrix();
+  const DrawnReality drawn = DrawReality(lab, 11, Robot(), &track);
+  vehicles::SimRobot robot(track, Robot(), drawn);
+  TrackLocaliser localiser(track);
+  LabDrive out;
+  constexpr double kDt = 1.0 / 200;
+  const int levels = Robot().drive.speed_levels;
+  for (int tick = 1; tick <= static_cast<int>(seconds / kDt); ++tick) {
+    TruthRow truth;
+    REQUIRE(robot.Truth(&truth));
+    // Aim 0.35 m ahead along the centre line.
+    const Vec2 p(truth.x, truth.y);
+    const Vec2 aim = track.PointAt(track.ClosestArcLength(p) + 0.35);
+    const double error = WrapAngle(std::atan2(aim.y() - p.y(), aim.x() - p.x()) - truth.heading);
+    const double turn = std::clamp(1.5 * error, -0.6, 0.6);
+    robot.SetMotors(
+        {models::QuantiseCommand(0.6 - turn, levels), models::QuantiseCommand(0.6 + turn, levels)});
+    robot.Update(kDt);
+    if (tick % 4 != 0) continue;  // the state's rate: 50 Hz
+    const vehicles::AdapterState s = robot.State();
+    const Pose2& at =
+        localiser.Update({s.x, s.y, s.heading}, s.ranges, s.bumper_left || s.bumper_right);
+    REQUIRE(robot.Truth(&truth));
+    out.odometry_error_m.push_back(std::hypot(s.x - truth.x, s.y - truth.y));
+    out.localised_error_m.push_back(std::hypot(at.x - truth.x, at.y - truth.y));
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("on a lab robot's drive the localised pose stays on the truth where odometry drifts") {
+  const LabDrive drive = DriveLab(40.0);
+  const double odometry_end = drive.odometry_error_m.back();
+  const double odometry_max =
+      *std::max_element(drive.odometry_error_m.begin(), drive.odometry_error_m.end());
+  const double localised_max =
+      *std::max_element(drive.localised_error_m.begin(), drive.localised_error_m.end());
+  INFO("odometry: end " << odometry_end << " m, max " << odometry_max << " m; localised max "
+                        << localised_max << " m");
+  // The odometry has drifted well beyond the bound the localised pose keeps all along.
+  CHECK(odometry_end > 0.1);
+  CHECK(localised_max < 0.03);
+}
+
+TEST_CASE("without range sensors the predictor is exactly what it is without a localiser") {
+  const Track& track = ShortTrack();
+  RobotPredictor plain(Robot().drive);
+  RobotPredictor localising(Robot().drive);
+  localising.Localise(track);
+  // A drive's states as a CAN robot sends them (no scan), with a delay.
+  vehicles::SimRobot robot(track, Robot(), NominalReality(Robot()));
+  for (int tick = 1; tick <= 600; ++tick) {
+    const double t = tick * 0.005;
+    if (tick % 10 == 1) {
+      const double turn = 0.4 * std::sin(t);
+      plain.OnCommand(t, 0.5 - turn, 0.5 + turn);
+      localising.OnCommand(t, 0.5 - turn, 0.5 + turn);
+      robot.SetMotors(
+          {models::QuantiseCommand(0.5 - turn, 8), models::QuantiseCommand(0.5 + turn, 8)});
+    }
+    robot.Update(0.005);
+    if (tick % 4 != 0) continue;
+    const vehicles::AdapterState s = robot.State();
+    const RobotStateSample state{
+        t + 0.1, s.x, s.y, s.heading, s.speed, s.yaw_rate, s.applied.left, s.applied.right};
+    REQUIRE(state.ranges.count == 0);
+    plain.OnRoundTrip(0.2);
+    localising.OnRoundTrip(0.2);
+    CHECK(plain.OnState(state) == localising.OnState(state));
+    const PredictedPose a = plain.PoseAt(t + 0.2), b = localising.PoseAt(t + 0.2);
+    CHECK(a.x == b.x);
+    CHECK(a.y == b.y);
+    CHECK(a.heading == b.heading);
+  }
+  CHECK_FALSE(localising.localiser()->started());
+  REQUIRE(plain.shown().size() == localising.shown().size());
+  for (size_t i = 0; i < plain.shown().size(); ++i) {
+    CHECK(plain.shown()[i].x == localising.shown()[i].x);
+    CHECK(plain.shown()[i].y == localising.shown()[i].y);
+  }
+  CHECK(plain.errors_m() == localising.errors_m());
+}
