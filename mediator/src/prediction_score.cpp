@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "haptel/core/clock.hpp"
+#include "haptel/mediator/lap_timer.hpp"
 
 namespace haptel::mediator {
 
@@ -51,6 +53,38 @@ void ScorePrediction(const record::TruthRecord& truth, SessionResult& result) {
     p.truth = DrawnValue(drawn, p.name);
     if (p.name == "left_gain" || p.name == "right_gain") p.truth *= fade;
   }
+}
+
+void JudgeLapOnTruth(const record::TruthRecord& truth, const Track& track, SessionResult& result) {
+  record::TruthLap& lap = result.record.truth_lap;
+  lap = {};
+  if (truth.empty()) return;
+  LapTimer timer(track);
+  for (const TruthRow& row : truth.rows())
+    timer.Update(NsToS(row.operator_ns - result.started_ns), Vec2(row.x, row.y));
+  lap.judged = true;
+  lap.completed = timer.completed();
+  lap.lap_time_s = timer.completed() ? timer.lap_time_s() : std::nan("");
+  lap.gates_passed = timer.gates_passed();
+  lap.gates_missed = timer.gates_missed();
+  lap.splits = timer.splits();
+}
+
+std::vector<std::string> TruthLapDisagreements(const RunRecord& record) {
+  std::vector<std::string> lines;
+  if (!record.truth_lap.judged) return lines;
+  const std::vector<GateSplit>& truth = record.truth_lap.splits;
+  const auto what = [](const GateSplit& s) {
+    return s.split_s < 0.0 ? "never reached it" : s.passed ? "passed it" : "missed it";
+  };
+  for (size_t i = 0; i < record.splits.size() && i < truth.size(); ++i) {
+    const GateSplit& live = record.splits[i];
+    const GateSplit& real = truth[i];
+    if (live.passed == real.passed && (live.split_s < 0.0) == (real.split_s < 0.0)) continue;
+    lines.push_back("gate " + std::to_string(live.gate + 1) + ": the odometry " + what(live) +
+                    ", the vehicle truly " + what(real));
+  }
+  return lines;
 }
 
 }  // namespace haptel::mediator
