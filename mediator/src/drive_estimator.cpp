@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "haptel/models/tread_drive.hpp"
 
@@ -60,38 +61,52 @@ void DriveEstimator::Observe(const DriveObservation& state) {
   const double speed_residual =
       gains_.Update(Eigen::Vector2d(0.5 * u_left_, 0.5 * u_right_), state.speed);
   ++gain_updates_;
-  Guard(gains_, options_.reset_covariance, gains_known_, speed_residual, gain_outliers_);
+  if (Guard(gains_, options_.reset_covariance, gains_known_, speed_residual, gain_outliers_,
+            options_.reset_run))
+    gains_reset_at_s_ = state.stamp_s;
   if (std::abs(u_right_ - u_left_) > options_.min_turn * top) {
+    const double clip = width_known_ ? options_.outlier_sds * per_width_.noise_sd()
+                                     : std::numeric_limits<double>::infinity();
     const double yaw_residual =
-        per_width_.Update(Eigen::Vector2d(-u_left_, u_right_), state.yaw_rate);
+        per_width_.Update(Eigen::Vector2d(-u_left_, u_right_), state.yaw_rate, clip);
     ++width_updates_;
     const double width = nominal_.track_width;
+    const bool changed = state.stamp_s - gains_reset_at_s_ <= options_.changed_window_s;
     Guard(per_width_, options_.reset_covariance / (width * width), width_known_, yaw_residual,
-          width_outliers_);
+          width_outliers_, changed ? options_.reset_run : options_.width_reset_run);
   }
 
   // Known once converged, and from then on (a reset or a stretch without
   // turns widens the covariance again; the estimate is still the best there is).
-  if (!gains_known_ && Known(gains_)) {
+  const Eigen::Vector2d nominal_gains(nominal_.left_gain, nominal_.right_gain);
+  if (!gains_known_ && Known(gains_, nominal_gains)) {
     gains_known_ = true;
     gains_known_at_s_ = state.stamp_s;
   }
-  if (gains_known_ && !width_known_ && Known(per_width_)) {
+  if (gains_known_ && !width_known_ && Known(per_width_, nominal_gains / nominal_.track_width)) {
     width_known_ = true;
     width_known_at_s_ = state.stamp_s;
   }
 }
 
-bool DriveEstimator::Known(const RecursiveLeastSquares2& rls) const {
+bool DriveEstimator::Known(const RecursiveLeastSquares2& rls,
+                           const Eigen::Vector2d& nominal) const {
   for (int i = 0; i < 2; ++i) {
-    if (!(rls.StandardDeviation(i) < options_.known_share * std::abs(rls.estimate()(i))))
+    const double sd = rls.StandardDeviation(i);
+    const double estimate = rls.estimate()(i);
+    // Precise enough; or, far from the file's value, better than it: with
+    // sd under half the distance, the estimate's expected squared error
+    // (sd²) is under a quarter of the file's ((estimate − nominal)² − sd²
+    // or more), so the file's number is the worse guess.
+    if (!(sd < options_.known_share * std::abs(estimate) ||
+          (sd < 0.5 * std::abs(estimate - nominal(i)) && sd < 0.15 * std::abs(estimate))))
       return false;
   }
   return true;
 }
 
-void DriveEstimator::Guard(RecursiveLeastSquares2& rls, double reset_covariance, bool known,
-                           double residual, int& run) {
+bool DriveEstimator::Guard(RecursiveLeastSquares2& rls, double reset_covariance, bool known,
+                           double residual, int& run, int reset_after) {
   // No wind-up: forgetting in a direction nothing excites grows it without end.
   rls.BoundCovariance(known ? 2.0 * reset_covariance : 2.0 * options_.initial_covariance);
   // The system changed when the residuals keep one sign, each over the
@@ -99,11 +114,13 @@ void DriveEstimator::Guard(RecursiveLeastSquares2& rls, double reset_covariance,
   const bool out = std::abs(residual) > rls.noise_sd();
   const int sign = residual > 0.0 ? 1 : -1;
   run = out ? (run * sign > 0 ? run + sign : sign) : 0;
-  if (known && std::abs(run) >= options_.reset_run) {
+  if (known && std::abs(run) >= reset_after) {
     rls.ResetCovariance(reset_covariance);
     run = 0;
     ++resets_;
+    return true;
   }
+  return false;
 }
 
 double DriveEstimator::left_gain() const {
