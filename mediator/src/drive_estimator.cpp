@@ -78,28 +78,19 @@ void DriveEstimator::Observe(const DriveObservation& state) {
 
   // Known once converged, and from then on (a reset or a stretch without
   // turns widens the covariance again; the estimate is still the best there is).
-  const Eigen::Vector2d nominal_gains(nominal_.left_gain, nominal_.right_gain);
-  if (!gains_known_ && Known(gains_, nominal_gains)) {
+  if (!gains_known_ && Known(gains_)) {
     gains_known_ = true;
     gains_known_at_s_ = state.stamp_s;
   }
-  if (gains_known_ && !width_known_ && Known(per_width_, nominal_gains / nominal_.track_width)) {
+  if (gains_known_ && !width_known_ && Known(per_width_)) {
     width_known_ = true;
     width_known_at_s_ = state.stamp_s;
   }
 }
 
-bool DriveEstimator::Known(const RecursiveLeastSquares2& rls,
-                           const Eigen::Vector2d& nominal) const {
+bool DriveEstimator::Known(const RecursiveLeastSquares2& rls) const {
   for (int i = 0; i < 2; ++i) {
-    const double sd = rls.StandardDeviation(i);
-    const double estimate = rls.estimate()(i);
-    // Precise enough; or, far from the file's value, better than it: with
-    // sd under half the distance, the estimate's expected squared error
-    // (sd²) is under a quarter of the file's ((estimate − nominal)² − sd²
-    // or more), so the file's number is the worse guess.
-    if (!(sd < options_.known_share * std::abs(estimate) ||
-          (sd < 0.5 * std::abs(estimate - nominal(i)) && sd < 0.15 * std::abs(estimate))))
+    if (!(rls.StandardDeviation(i) < options_.known_share * std::abs(rls.estimate()(i))))
       return false;
   }
   return true;

@@ -65,6 +65,22 @@ void JudgeLapOnTruth(const record::TruthRecord& truth, const Track& track, Sessi
   lap.judged = true;
   lap.completed = timer.completed();
   lap.lap_time_s = timer.completed() ? timer.lap_time_s() : std::nan("");
+  const RunRecord& live = result.record;
+  if (!timer.completed() && timer.started() && timer.next_gate() == timer.gates_total() &&
+      live.completed && std::isfinite(live.approach_s)) {
+    // The run ended as the odometry crossed the finish; the robot truly
+    // short of it then: the rest of the way at its true speed.
+    constexpr double kMaxProjectedM = 0.5;
+    const double end_s = live.approach_s + live.lap_time_s;
+    const TruthRow at = truth.PoseAt(NsToS(result.started_ns) + end_s);
+    const Vec2 forward = track.TangentAt(0.0);
+    const double rest = (track.PointAt(0.0) - Vec2(at.x, at.y)).dot(forward);
+    const double speed = at.speed * std::cos(at.heading - std::atan2(forward.y(), forward.x()));
+    if (rest >= 0.0 && rest <= kMaxProjectedM && speed > 0.02) {
+      lap.completed = true;
+      lap.lap_time_s = end_s + rest / speed - timer.start_t_s();
+    }
+  }
   lap.gates_passed = timer.gates_passed();
   lap.gates_missed = timer.gates_missed();
   lap.splits = timer.splits();

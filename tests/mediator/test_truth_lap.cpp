@@ -98,3 +98,46 @@ TEST_CASE("without truth rows the lap stays unjudged and nothing disagrees") {
   CHECK(std::isnan(result.record.truth_lap.lap_time_s));
   CHECK(TruthLapDisagreements(result.record).empty());
 }
+
+TEST_CASE(
+    "the run ends as the odometry crosses the finish: a robot truly short of it is projected") {
+  const Track& track = ShortTrack();
+  // The odometry runs 0.1 m ahead of the truth along the centre line at
+  // 0.25 m/s; the run (and the truth record) ends at the odometry's finish.
+  const int64_t started_ns = 2'000'000'000'000;
+  const double speed = 0.25, dt = 0.02, lead = 0.1;
+  LapTimer live(track);
+  const auto file = test::ScratchDir("truth-lap-projected") / "truth.csv";
+  {
+    DrawnReality drawn;
+    drawn.name = "ahead";
+    std::ofstream out(file);
+    out << TruthHeaderText(drawn);
+    double t = 0.0;
+    for (double s = -track.config().start_behind; !live.completed(); s += speed * dt, t += dt) {
+      live.Update(t, Beside(track, s + lead, 0.0));
+      const Vec2 p = Beside(track, s, 0.0);
+      const Vec2 tangent = track.TangentAt(s);
+      char line[256];
+      const size_t n =
+          FormatTruthRow({started_ns + static_cast<int64_t>(std::llround(t * 1e9)), p.x(), p.y(),
+                          0.0, std::atan2(tangent.y(), tangent.x()), speed, 0.0},
+                         line, sizeof line);
+      REQUIRE(n > 0);
+      out.write(line, static_cast<std::streamsize>(n));
+    }
+  }
+  SessionResult result;
+  result.started_ns = started_ns;
+  result.record.completed = true;
+  result.record.approach_s = live.start_t_s();
+  result.record.lap_time_s = live.lap_time_s();
+  result.record.splits = live.splits();
+  JudgeLapOnTruth(record::TruthRecord::Load(file), track, result);
+  const record::TruthLap& truth = result.record.truth_lap;
+  REQUIRE(truth.judged);
+  CHECK(truth.completed);
+  CHECK(truth.gates_passed == 2);
+  // Lagging by the same 0.1 m at the start and the finish: the same lap.
+  CHECK(truth.lap_time_s == Approx(live.lap_time_s()).margin(0.05));
+}
