@@ -22,7 +22,11 @@ void ScorePrediction(const record::TruthRecord& truth, SessionResult& result);
 /// The lap judged again from the truth record's path (RunRecord::truth_lap):
 /// the same LapTimer the live lap runs on the vehicle's odometry, fed where
 /// the vehicle truly was (times in s since the session's start). Left
-/// unjudged when the record has no rows.
+/// unjudged when the record has no rows. The run ends as the odometry
+/// crosses the finish: a robot truly short of the line then (its odometry
+/// ran ahead), all gates reached, has its finish projected from where it
+/// truly was at that moment at its true speed along the track (at most
+/// 0.5 m short; further, the truth's lap is not completed).
 void JudgeLapOnTruth(const record::TruthRecord& truth, const Track& track, SessionResult& result);
 
 /// The gates the live lap and the truth judged differently, each as "gate N:
