@@ -319,7 +319,12 @@ struct LapRow {
   bool ran = false;
   bool completed = false;
   std::string outcome;
+  /// The lap as judged from where the vehicle truly went, where its truth
+  /// record judged it (`judged_on_truth`); else the live lap's (its odometry's).
   double lap_time_s = std::nan("");
+  bool judged_on_truth = false;
+  double lap_time_live_s = std::nan("");  ///< the live lap's, judged from the odometry
+  int gates_passed_live = 0;
   double ratio_to_0ms = std::nan("");  ///< to the 0 ms lap of the same vehicle, reality, loss, mode
   int obstacles = 0;
   int gates_passed = 0;
@@ -452,6 +457,17 @@ LapRow Lap(const std::filesystem::path& db, const std::filesystem::path& truth, 
   row.obstacles = static_cast<int>(Number(json, "obstacles_touched"));
   row.gates_passed = static_cast<int>(Number(json, "gates_passed"));
   row.gates_total = static_cast<int>(Number(json, "gates_total"));
+  // A real vehicle's lap is judged from its odometry, which may pass a gate
+  // the vehicle truly missed: where the truth judged it, that is the lap.
+  row.lap_time_live_s = row.lap_time_s;
+  row.gates_passed_live = row.gates_passed;
+  if (const std::string truth = JsonFieldOf(json, "completed_truth");
+      truth == "true" || truth == "false") {
+    row.judged_on_truth = true;
+    row.completed = row.completed && truth == "true";
+    row.lap_time_s = Number(json, "lap_time_truth_s");
+    row.gates_passed = static_cast<int>(Number(json, "gates_truth_passed"));
+  }
   row.rtt_p50_ms = Number(json, "command_rtt_ms_p50");
   row.error_m_p50 = Number(json, "prediction_error_m_p50");
   row.error_m_p95 = Number(json, "prediction_error_m_p95");
@@ -792,7 +808,7 @@ int BenchLinkMain(int argc, const char* const* argv) {
            "ratio_to_0ms,gates_passed,gates_total,obstacles,rtt_p50_ms,prediction_error_m_p50,"
            "prediction_error_m_p95,prediction_error_odometry_m_p95,localisation_error_m_p95,"
            "odometry_error_m_p95,estimate_converged_s,"
-           "path_gap_m_mean,path_gap_m_max,wall_s\n";
+           "path_gap_m_mean,path_gap_m_max,wall_s,judged_on,lap_time_live_s,gates_passed_live\n";
     std::ofstream est(dir / "link_estimates.csv");
     est << "vehicle,reality,seed,predict,delay_ms,loss_percent,param,estimate,truth,known_s\n";
     for (const LapRow& r : rows) {
@@ -803,7 +819,9 @@ int BenchLinkMain(int argc, const char* const* argv) {
           << "," << r.rtt_p50_ms << "," << r.error_m_p50 << "," << r.error_m_p95 << ","
           << r.odometry_error_m_p95 << "," << r.pose_error_m_p95 << ","
           << r.odometry_truth_error_m_p95 << "," << r.converged_s << "," << r.path_gap_m_mean << ","
-          << r.path_gap_m_max << "," << r.wall_s << "\n";
+          << r.path_gap_m_max << "," << r.wall_s << ","
+          << (r.judged_on_truth ? "truth" : "odometry") << "," << r.lap_time_live_s << ","
+          << r.gates_passed_live << "\n";
       for (const Estimate& e : r.estimated) {
         est << r.spec.vehicle->name << "," << r.reality << "," << r.seed << ","
             << ModeName(r.spec.mode) << "," << r.spec.delay_ms << "," << r.spec.loss_percent << ","
@@ -883,6 +901,10 @@ int BenchLinkMain(int argc, const char* const* argv) {
         << ",\"outcome\":" << JsonString(r.outcome)
         << ",\"completed\":" << (r.completed ? "true" : "false")
         << ",\"lap_time_s\":" << JsonNumber(std::isfinite(r.lap_time_s) ? r.lap_time_s : -1.0)
+        << ",\"judged_on\":" << JsonString(r.judged_on_truth ? "truth" : "odometry")
+        << ",\"lap_time_live_s\":" << JsonOrNull(r.lap_time_live_s)
+        << ",\"gates_passed\":" << r.gates_passed
+        << ",\"gates_passed_live\":" << r.gates_passed_live
         << ",\"ratio_to_0ms\":" << JsonOrNull(r.ratio_to_0ms) << ",\"obstacles\":" << r.obstacles
         << ",\"rtt_p50_ms\":" << JsonNumber(std::isfinite(r.rtt_p50_ms) ? r.rtt_p50_ms : -1.0)
         << ",\"prediction_error_m_p50\":" << JsonOrNull(r.error_m_p50)

@@ -19,6 +19,7 @@
 #include "haptel/link/fault_transport.hpp"
 #include "haptel/link/security.hpp"
 #include "haptel/mediator/controller_errors.hpp"
+#include "haptel/mediator/prediction_score.hpp"
 #include "haptel/mediator/run_counters.hpp"
 
 namespace haptel::app {
@@ -182,6 +183,22 @@ std::string NamesJson(const std::vector<std::string>& names) {
   return out + "]";
 }
 
+/// The lap judged from the truth record: ,"lap_time_truth_s":…,"completed_truth":…,
+/// "gates_truth_passed":…,"gates_truth_missed":…,"gates_disagree":["gate 3: …"]
+/// (all null when there is no truth to judge from).
+std::string TruthLapJson(const haptel::record::RunRecord& r) {
+  const haptel::record::TruthLap& t = r.truth_lap;
+  if (!t.judged) {
+    return ",\"lap_time_truth_s\":null,\"completed_truth\":null,\"gates_truth_passed\":null,"
+           "\"gates_truth_missed\":null,\"gates_disagree\":null";
+  }
+  return ",\"lap_time_truth_s\":" + NumberOrNull(t.lap_time_s) +
+         ",\"completed_truth\":" + (t.completed ? "true" : "false") +
+         ",\"gates_truth_passed\":" + std::to_string(t.gates_passed) +
+         ",\"gates_truth_missed\":" + std::to_string(t.gates_missed) +
+         ",\"gates_disagree\":" + NamesJson(haptel::mediator::TruthLapDisagreements(r));
+}
+
 /// Whether the run's vehicle has a servo controller that reports errors (a Maestro).
 bool ReportsControllerErrors(const SessionSetup& setup) {
   const haptel::VehicleKindInfo* kind = haptel::FindVehicleKind(setup.vehicle.kind);
@@ -224,6 +241,20 @@ void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRu
     if (s.split_s >= 0)
       std::fprintf(out, "    gate %d  %7.2f s  %s\n", s.gate + 1, s.split_s,
                    s.passed ? "passed" : "MISSED");
+  }
+  if (const haptel::record::TruthLap& t = r.truth_lap; t.judged) {
+    // The live lap is the vehicle's odometry's; where the truth is known,
+    // the lap it truly drove.
+    if (t.completed) {
+      std::fprintf(out, "  judged from the truth: lap time %.2f s, gates passed %d/%d, missed %d\n",
+                   t.lap_time_s, t.gates_passed, r.gates_total, t.gates_missed);
+    } else {
+      std::fprintf(out,
+                   "  judged from the truth: lap NOT completed, gates passed %d/%d, missed %d\n",
+                   t.gates_passed, r.gates_total, t.gates_missed);
+    }
+    for (const std::string& line : mediator::TruthLapDisagreements(r))
+      std::fprintf(out, "    %s\n", line.c_str());
   }
   constexpr const char* kShort = " CANNOT KEEP ITS RATE";
   std::fprintf(out, "  servo %.1f Hz of %.0f Hz%s (p99 period %.0f us, %llu overruns)\n",
@@ -366,7 +397,7 @@ std::string RunJson(const SessionSetup& setup, const RecordedRun& run) {
     << ",\"localisation_error_m_p95\":" << NumberOrNull(r.localisation_error_m_p95)
     << ",\"odometry_error_m_p50\":" << NumberOrNull(r.odometry_error_m_p50)
     << ",\"odometry_error_m_p95\":" << NumberOrNull(r.odometry_error_m_p95)
-    << ",\"estimated\":" << EstimatedJson(r.estimated)
+    << ",\"estimated\":" << EstimatedJson(r.estimated) << TruthLapJson(r)
     << ",\"speedup\":" << (r.speedup > 0.0 ? JsonNumber(r.speedup) : std::string("null"))
     << ",\"simulated_s\":" << JsonNumber(run.result.simulated_s)
     << ",\"cpu_s\":" << JsonNumber(run.result.cpu_s)

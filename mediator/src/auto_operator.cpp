@@ -22,7 +22,67 @@ AutoOperator::AutoOperator(const Track& track, const OperatorConfig& config,
   profile.ValidateOrThrow();
 }
 
+namespace {
+
+/// The turn response is learnt only from turns this fast (rad/s, expected):
+/// slower ones are in the heading's noise.
+constexpr double kMinLearntYawRate = 0.3;
+/// Its memory, s of turning: about one corner.
+constexpr double kTurnMemoryS = 1.0;
+/// Before this much turning was seen (s) the model's response is trusted.
+constexpr double kTurnSeenS = 0.5;
+/// What the vehicle shows of a command after the operator decided it: the
+/// arm's lag and the session's tick (s, beyond the arm time constant).
+constexpr double kCommandLagS = 0.05;
+/// It steers harder by at most this (a skid-steer turns as one at most
+/// 1.6x wider: Mandow et al. 2007), never softer than the model says.
+constexpr double kMaxTurnBoost = 1.6;
+/// A post or obstacle slows it from this far ahead (m, from the body's
+/// front edge to the obstacle's), to min_forward at contact.
+constexpr double kSlowDistance = 0.3;
+
+}  // namespace
+
+void AutoOperator::LearnTurnResponse(const Observation& o) {
+  if (seen_.empty()) return;
+  const Observation& last = seen_.back().observation;
+  const double dt = o.t_s - last.t_s;
+  if (!(dt > 0.0) || dt > 0.2 || o.bumper_left || o.bumper_right) return;
+  const double observed = WrapAngle(o.heading - last.heading) / dt;
+  // The yaw rate asked for when what is now seen was commanded.
+  const double asked_at = o.t_s - config_.arm_time_constant_s - kCommandLagS;
+  double expected = 0.0;
+  for (const auto& [t, rate] : decided_) {
+    if (t > asked_at) break;
+    expected = rate;
+  }
+  if (std::abs(expected) < kMinLearntYawRate) return;
+  // A ratio of yaw rates, exponentially averaged over kTurnMemoryS of turning.
+  const double ratio = std::clamp(observed / expected, 1.0 / kMaxTurnBoost, 1.5);
+  const double a = std::min(1.0, dt / kTurnMemoryS);
+  turn_response_ += (ratio - turn_response_) * a;
+  turn_seen_s_ += dt;
+}
+
+double AutoOperator::ObstacleSlowdown(const Observation& o) const {
+  const Vec2 p(o.x, o.y);
+  const Vec2 ahead(std::cos(o.heading), std::sin(o.heading));
+  const double half_width = drive_.track_width / 2.0;
+  double slow = 1.0;
+  for (const CircleObstacle& c : track_.round_obstacles()) {
+    const Vec2 to = c.center - p;
+    const double along = to.dot(ahead);
+    const double aside = std::abs(to.x() * ahead.y() - to.y() * ahead.x());
+    // In the band the body sweeps (its width and as much again to spare).
+    if (along <= 0.0 || aside > 2.0 * half_width + c.radius) continue;
+    const double gap = along - half_width - c.radius;
+    slow = std::min(slow, std::clamp(gap / kSlowDistance, 0.0, 1.0));
+  }
+  return slow;
+}
+
 void AutoOperator::Observe(const Observation& observation) {
+  LearnTurnResponse(observation);
   if (!observation.bumper_left && !observation.bumper_right) ++clears_;
   seen_.push_back({observation, clears_});
   // Keep a little more than the reaction delay's worth.
@@ -93,7 +153,10 @@ interfaces::MotionIntent AutoOperator::Decide(double t_s) {
                                                          : 0.0;
     aim_offset_ = PassingOffset(*o);
   }
-  if (backing_off(t_s)) return {-0.5, backoff_turn_};
+  if (backing_off(t_s)) {
+    decided_.emplace_back(t_s, 0.0);  // reversing against what it hit: nothing to learn from
+    return {-0.5, backoff_turn_};
+  }
 
   // Pure pursuit: steer onto the arc through a point `lookahead` ahead on the
   // centre line.
@@ -115,6 +178,7 @@ interfaces::MotionIntent AutoOperator::Decide(double t_s) {
     const double away = o->bumper_left && !o->bumper_right   ? -1.0
                         : o->bumper_right && !o->bumper_left ? 1.0
                                                              : std::copysign(1.0, alpha);
+    decided_.emplace_back(t_s, 0.0);
     return {0.0, 0.4 * away};
   }
   const double distance = std::max(d.norm(), 1e-3);
@@ -123,12 +187,22 @@ interfaces::MotionIntent AutoOperator::Decide(double t_s) {
   // radius slow_radius or tighter.
   const double tightness = std::min(1.0, std::abs(curvature) * config_.slow_radius);
   double forward = config_.cruise - (config_.cruise - config_.min_forward) * tightness;
+  // A post or obstacle in its way: slower as it comes near.
+  forward = std::min(
+      forward, config_.min_forward + (config_.cruise - config_.min_forward) * ObstacleSlowdown(*o));
   // Facing away from the goal: turn on the spot first.
   if (std::abs(alpha) > 1.2) forward = 0.0;
   const double speed = forward * drive_.max_speed;
   double turn = curvature * speed * drive_.track_width / 2.0 / drive_.max_speed;
   if (forward == 0.0) turn = std::copysign(0.4, alpha);
-  return {forward, std::clamp(turn, -0.7, 0.7)};
+  // Ask for more by what the vehicle has been seen to lack, and remember the
+  // yaw rate this asks of the model (a turn share of 1: the treads a whole
+  // top speed apart), to compare with what comes of it.
+  if (turn_seen_s_ >= kTurnSeenS) turn *= std::clamp(1.0 / turn_response_, 1.0, kMaxTurnBoost);
+  turn = std::clamp(turn, -1.0, 1.0);
+  decided_.emplace_back(t_s, turn * 2.0 * drive_.max_speed / drive_.track_width);
+  while (decided_.size() > 2 && decided_.front().first < t_s - 1.0) decided_.pop_front();
+  return {forward, turn};
 }
 
 namespace {

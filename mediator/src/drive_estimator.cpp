@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "haptel/models/tread_drive.hpp"
 
@@ -60,14 +61,19 @@ void DriveEstimator::Observe(const DriveObservation& state) {
   const double speed_residual =
       gains_.Update(Eigen::Vector2d(0.5 * u_left_, 0.5 * u_right_), state.speed);
   ++gain_updates_;
-  Guard(gains_, options_.reset_covariance, gains_known_, speed_residual, gain_outliers_);
+  if (Guard(gains_, options_.reset_covariance, gains_known_, speed_residual, gain_outliers_,
+            options_.reset_run))
+    gains_reset_at_s_ = state.stamp_s;
   if (std::abs(u_right_ - u_left_) > options_.min_turn * top) {
+    const double clip = width_known_ ? options_.outlier_sds * per_width_.noise_sd()
+                                     : std::numeric_limits<double>::infinity();
     const double yaw_residual =
-        per_width_.Update(Eigen::Vector2d(-u_left_, u_right_), state.yaw_rate);
+        per_width_.Update(Eigen::Vector2d(-u_left_, u_right_), state.yaw_rate, clip);
     ++width_updates_;
     const double width = nominal_.track_width;
+    const bool changed = state.stamp_s - gains_reset_at_s_ <= options_.changed_window_s;
     Guard(per_width_, options_.reset_covariance / (width * width), width_known_, yaw_residual,
-          width_outliers_);
+          width_outliers_, changed ? options_.reset_run : options_.width_reset_run);
   }
 
   // Known once converged, and from then on (a reset or a stretch without
@@ -90,8 +96,8 @@ bool DriveEstimator::Known(const RecursiveLeastSquares2& rls) const {
   return true;
 }
 
-void DriveEstimator::Guard(RecursiveLeastSquares2& rls, double reset_covariance, bool known,
-                           double residual, int& run) {
+bool DriveEstimator::Guard(RecursiveLeastSquares2& rls, double reset_covariance, bool known,
+                           double residual, int& run, int reset_after) {
   // No wind-up: forgetting in a direction nothing excites grows it without end.
   rls.BoundCovariance(known ? 2.0 * reset_covariance : 2.0 * options_.initial_covariance);
   // The system changed when the residuals keep one sign, each over the
@@ -99,11 +105,13 @@ void DriveEstimator::Guard(RecursiveLeastSquares2& rls, double reset_covariance,
   const bool out = std::abs(residual) > rls.noise_sd();
   const int sign = residual > 0.0 ? 1 : -1;
   run = out ? (run * sign > 0 ? run + sign : sign) : 0;
-  if (known && std::abs(run) >= options_.reset_run) {
+  if (known && std::abs(run) >= reset_after) {
     rls.ResetCovariance(reset_covariance);
     run = 0;
     ++resets_;
+    return true;
   }
+  return false;
 }
 
 double DriveEstimator::left_gain() const {

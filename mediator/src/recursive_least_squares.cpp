@@ -14,14 +14,15 @@ RecursiveLeastSquares2::RecursiveLeastSquares2(const Eigen::Vector2d& initial,
       noise_floor_(noise_floor),
       noise_variance_(noise_floor * noise_floor) {}
 
-double RecursiveLeastSquares2::Update(const Eigen::Vector2d& phi, double y) {
+double RecursiveLeastSquares2::Update(const Eigen::Vector2d& phi, double y, double max_residual) {
   const double residual = y - phi.dot(theta_);
+  const double used = std::clamp(residual, -max_residual, max_residual);
   const Eigen::Vector2d p_phi = p_ * phi;
   const Eigen::Vector2d gain = p_phi / (forgetting_ + phi.dot(p_phi));
-  theta_ += gain * residual;
+  theta_ += gain * used;
   p_ = (p_ - gain * p_phi.transpose()) / forgetting_;
   p_ = 0.5 * (p_ + p_.transpose());  // kept symmetric against rounding
-  noise_variance_ = forgetting_ * noise_variance_ + (1.0 - forgetting_) * residual * residual;
+  noise_variance_ = forgetting_ * noise_variance_ + (1.0 - forgetting_) * used * used;
   return residual;
 }
 

@@ -239,3 +239,45 @@ TEST_CASE("with nothing to grasp the operator drives from its first act") {
   op.Act(5.0, gesture);
   CHECK(op.grasped(5.0));
 }
+
+TEST_CASE("a post in the band its body sweeps slows the operator down") {
+  OperatorConfig cfg;
+  cfg.reaction_delay_s = 0.0;
+  // Beside the centre line, right of it, heading straight at gate 1's right post (0.2, -0.2).
+  AutoOperator near(ShortTrack(), cfg, TreadDriveConfig{});
+  near.Observe(At(0.0, Vec2(0.05, -0.2), 0.0));
+  // The same pose with the gate far behind: nothing in the way.
+  AutoOperator clear(ShortTrack(), cfg, TreadDriveConfig{});
+  clear.Observe(At(0.0, Vec2(0.3, -0.2), 0.0));
+  const double slowed = near.Decide(0.1).forward;
+  CHECK(slowed > 0.0);
+  CHECK(slowed < 0.5);
+  CHECK(clear.Decide(0.1).forward > 0.6);
+}
+
+TEST_CASE(
+    "a vehicle that turns less than asked is steered harder, one that turns as asked is not") {
+  OperatorConfig cfg;
+  cfg.reaction_delay_s = 0.0;
+  const TreadDriveConfig drive;
+  // Facing backwards, the operator turns on the spot; the vehicle answers
+  // with `response` of the yaw rate the operator's model expects.
+  const auto turn_after = [&](double response) {
+    AutoOperator op(ShortTrack(), cfg, drive);
+    const Vec2 p = ShortTrack().PointAt(0.1);
+    double heading = std::numbers::pi;
+    double turn = 0.0;
+    for (double t = 0.0; t < 1.0; t += 0.02) {
+      op.Observe(At(t, p, heading));
+      turn = op.Decide(t).turn;
+      heading += response * turn * 2.0 * drive.max_speed / drive.track_width * 0.02;
+    }
+    return std::abs(turn);
+  };
+  CHECK(turn_after(1.0) == Approx(0.4).margin(0.02));
+  // A skidding tank turning as a 1.35x wider one: steered harder within a
+  // second (towards 1.35x over its one-second memory), never past it.
+  const double harder = turn_after(1.0 / 1.35);
+  CHECK(harder > 0.4 * 1.12);
+  CHECK(harder <= 0.4 * 1.35);
+}

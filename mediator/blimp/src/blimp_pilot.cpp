@@ -30,6 +30,7 @@ void BlimpPilotConfig::ValidateOrThrow() const {
   check::Number("approach_slope", approach_slope, 0.0, 10.0);
   check::Number("building_clearance", building_clearance, 0.0, 100.0);
   check::Number("building_margin", building_margin, 0.0, 100.0);
+  check::Number("drift_lookahead_s", drift_lookahead_s, 0.0, 60.0);
   check::Number("takeoff_height", takeoff_height, 0.1, 50.0);
   check::Number("height_gain", height_gain, 0.01, 10.0);
   check::Number("max_climb", max_climb, 0.05, 10.0);
@@ -99,10 +100,13 @@ const BlimpObservation* BlimpAutoPilot::Seen(double t) const {
   return seen_count_ > kSeen ? &seen_[seen_count_ % kSeen] : nullptr;
 }
 
-double BlimpAutoPilot::SafeHeight(const Eigen::Vector3d& p, const Eigen::Vector2d& target) const {
+double BlimpAutoPilot::SafeHeight(const BlimpObservation& o, const Eigen::Vector2d& target) const {
+  const Eigen::Vector2d p = Horizontal(o.position);
+  const Eigen::Vector2d drift = p + Horizontal(o.velocity) * config_.drift_lookahead_s;
   double z = -std::numeric_limits<double>::infinity();
   for (const BlimpFootprint& b : footprints_) {
-    if (b.Distance(Horizontal(p), target) < config_.building_margin)
+    if (b.Distance(p, target) < config_.building_margin ||
+        b.Distance(p, drift) < config_.building_margin)
       z = std::max(z, b.height() + config_.building_clearance);
   }
   return z;
@@ -181,7 +185,7 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
     case Phase::kTakeOff: {
       const BlimpGateFrame& g = gates_.front();
       bearing = Bearing(Pursue(g, o.position) - position);
-      target_z_ = std::max(g.centre.z(), SafeHeight(o.position, Horizontal(g.centre)));
+      target_z_ = std::max(g.centre.z(), SafeHeight(o, Horizontal(g.centre)));
       forward_speed = 1.0;
       crab = false;
       break;
@@ -189,7 +193,7 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
     case Phase::kGates: {
       const BlimpGateFrame& g = gates_[static_cast<size_t>(gate_)];
       bearing = Bearing(Pursue(g, o.position) - position);
-      target_z_ = std::max(g.centre.z(), SafeHeight(o.position, Horizontal(g.centre)));
+      target_z_ = std::max(g.centre.z(), SafeHeight(o, Horizontal(g.centre)));
       // The landing near after the last gate: through it no faster than
       // the approach's speed there, or the hull coasts past the circle.
       if (gate_ == gates - 1) {
@@ -214,7 +218,7 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
         sinking_ = true;
       if (distance > config_.rise_share * course_.landing.radius) sinking_ = false;
       if (sinking_) target_z_ = start_z_ - 2.0;
-      target_z_ = std::max(target_z_, SafeHeight(o.position, landing));
+      target_z_ = std::max(target_z_, SafeHeight(o, landing));
       landing_vertical = true;
       // The ground velocity wanted: towards the centre, slowing as it nears
       // it as fast as the hull coasts down on its own drag.

@@ -19,6 +19,13 @@
 /// than one back-off per contact, so it never backs away for good from a
 /// finish it has not crossed.
 ///
+/// It drives a vehicle that is not its model the way a careful person
+/// would: it watches how much the vehicle turns for the turn it asks (the
+/// heading's change between what it sees against its own decisions a
+/// moment before) and steers harder by what it finds missing (a skidding
+/// tank turns as a wider one; Mandow et al. 2007), and it slows down as a
+/// post or obstacle comes into the band its body will sweep ahead.
+///
 /// When the interface has controls to grasp (a hand goal with an approach
 /// offset), the operator first brings its open hands down onto them over
 /// `grasp_reach_s`, closes its fingers over `grasp_close_s`, and only then
@@ -105,6 +112,16 @@ class AutoOperator {
   static constexpr double kObstacleReach = 0.2;
   /// The aim offset that passes the round obstacle `o`'s front touches.
   double PassingOffset(const Observation& o) const;
+  /// Observed against expected yaw rate while turning: the vehicle's turn
+  /// response (1: the model's), and how much turning it is made of (s).
+  void LearnTurnResponse(const Observation& o);
+  double turn_response_ = 1.0;
+  double turn_seen_s_ = 0.0;
+  /// The turns decided (time, expected yaw rate rad/s), the last second's.
+  std::deque<std::pair<double, double>> decided_;
+  /// The forward share allowed by the nearest round obstacle in the band
+  /// the body sweeps ahead (1: none near).
+  double ObstacleSlowdown(const Observation& o) const;
   double careful_until_s_ = -1.0;
   int repeat_contacts_ = 0;  ///< contacts in a row, each while aiming after the last
   interfaces::HandTargets arm_;

@@ -13,6 +13,7 @@
 /// (forgetting in a direction nothing excites grows it without end: "wind-up")
 /// and a reset (the system changed). Allocates nothing.
 #include <Eigen/Core>
+#include <limits>
 
 namespace haptel::mediator {
 
@@ -23,8 +24,13 @@ class RecursiveLeastSquares2 {
   RecursiveLeastSquares2(const Eigen::Vector2d& initial, double initial_covariance,
                          double forgetting, double noise_floor);
 
-  /// One measurement; returns its a-priori residual y − φᵀθ.
-  double Update(const Eigen::Vector2d& phi, double y);
+  /// One measurement; returns its a-priori residual y − φᵀθ. A residual
+  /// over `max_residual` pulls (and counts in the noise) as if it were
+  /// `max_residual`: Huber's M-estimator in recursive form (Huber, "Robust
+  /// Statistics", 1981, ch. 7; Ljung 1999, §15.2), so that a burst of
+  /// outliers moves the estimate by a bounded step each.
+  double Update(const Eigen::Vector2d& phi, double y,
+                double max_residual = std::numeric_limits<double>::infinity());
 
   const Eigen::Vector2d& estimate() const { return theta_; }
   const Eigen::Matrix2d& covariance() const { return p_; }

@@ -67,6 +67,22 @@ struct EstimatedParameter {
   double known_s = std::numeric_limits<double>::quiet_NaN();
 };
 
+/// The lap judged again from where a simulated vehicle truly went (its
+/// truth record, after the run), by the same rules as the live lap, which a
+/// real vehicle's odometry judges: a gate the odometry passed may have been
+/// truly missed, and the lap's time differs where the odometry drifted over
+/// a line. JSON only; `judged` false without a truth record (a real vehicle,
+/// the blimp's course).
+struct TruthLap {
+  bool judged = false;
+  bool completed = false;
+  /// From the true start-line crossing to the true finish (NaN: not completed).
+  double lap_time_s = std::numeric_limits<double>::quiet_NaN();
+  int gates_passed = 0;
+  int gates_missed = 0;
+  std::vector<GateSplit> splits;
+};
+
 /// Everything a run reports, as stored in the database. A metric that was not
 /// measured is NaN (stored as NULL); runs recorded before schema v2 load with
 /// NaN for v2's metrics, empty strings and empty vectors; before v3, with NaN
@@ -129,6 +145,8 @@ struct RunRecord {
   double odometry_error_m_p95 = -1.0;
   /// What the predictor estimated of the vehicle, each against its truth.
   std::vector<EstimatedParameter> estimated;
+  /// The lap judged from the truth record (JSON only).
+  TruthLap truth_lap;
   /// A run in simulated time (`haptel run --simulated-time`): simulated
   /// seconds per wall-clock second over the run (v11; -1: a real-time run).
   double speedup = -1.0;

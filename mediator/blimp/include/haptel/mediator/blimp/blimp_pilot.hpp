@@ -52,7 +52,12 @@ struct BlimpPilotConfig {
   double approach_slope = 1.0;
   double building_clearance = 4.5;  ///< m from a roof up to the centre of gravity
   double building_margin = 6.0;     ///< m: buildings this close to the way ahead are climbed over
-  double takeoff_height = 2.5;      ///< m above the start before heading off at speed
+  /// s: buildings this close to where the blimp drifts (its ground velocity
+  /// for this long) are climbed over too: slow, a cross wind carries it off
+  /// its way faster than it turns, onto what was beside it (lab's 1 m/s
+  /// wind, the hop's shed). Long enough to climb over a roof at max_climb.
+  double drift_lookahead_s = 8.0;
+  double takeoff_height = 2.5;  ///< m above the start before heading off at speed
   // Height.
   double height_gain = 0.6;  ///< 1/s: climb rate per metre of height error
   double max_climb = 1.5;    ///< m/s
@@ -148,8 +153,9 @@ class BlimpAutoPilot {
  private:
   /// The newest observation seen at or before t; null when none.
   const BlimpObservation* Seen(double t) const;
-  /// The lowest safe height on the way from p to the target point.
-  double SafeHeight(const Eigen::Vector3d& p, const Eigen::Vector2d& target) const;
+  /// The lowest safe height on the way from o's position to the target
+  /// point, and on the way it drifts (drift_lookahead_s of its ground velocity).
+  double SafeHeight(const BlimpObservation& o, const Eigen::Vector2d& target) const;
   Eigen::Vector2d Pursue(const BlimpGateFrame& gate, const Eigen::Vector3d& p) const;
   /// The ground speed wanted `distance` metres from the landing circle's
   /// centre: what a hull coasting on its drag keeps, at most the cruise.
