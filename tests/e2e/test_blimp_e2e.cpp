@@ -51,7 +51,7 @@ TEST_CASE(
   const auto dir = test::ScratchDir("e2e-blimp");
   const auto db = dir / "runs.db";
   Child haptel({Bin("haptel"), "run", "--config", "config/blimp.yaml", "--vehicle",
-                "config/vehicles/sim-blimp-maestro.yaml", "--track", "config/tracks/test-hop.yaml",
+                "config/vehicles/sim-blimp-maestro.yaml", "--track", "config/tracks/blimp-hop.yaml",
                 "--json", "--quiet", "--domain", std::to_string(test::UniqueDomain(71)),
                 "--database", db.string(), "--vehicle-timeout", "5", "--reality", "none"});
   const int code = haptel.Wait(300.0);
@@ -65,7 +65,7 @@ TEST_CASE(
   CHECK(JsonField(json, "gates_passed") == "1");
   CHECK(JsonField(json, "vehicle_kind") == "servo-blimp-sim");
   CHECK(JsonField(json, "interface") == "blimp-gesture");
-  CHECK(JsonField(json, "track") == "test-hop");
+  CHECK(JsonField(json, "track") == "blimp-hop");
   CHECK(std::stod(JsonField(json, "lap_time_s")) > 5.0);
   CHECK(std::stod(JsonField(json, "command_rtt_ms_p50")) > 0.0);
   // The blimp's predictor runs with the display off too: the pilot saw the
@@ -83,7 +83,7 @@ TEST_CASE(
   CHECK(runs[0].outcome == "completed");
   CHECK(runs[0].vehicle_kind == "servo-blimp-sim");
   CHECK(runs[0].interface == "blimp-gesture");
-  CHECK(runs[0].track == "test-hop");
+  CHECK(runs[0].track == "blimp-hop");
   CHECK(runs[0].controller_errors == 0);  // a servo controller, and no error from it
   CHECK(runs[0].prediction_error_m_p95 >= 0.0);
   REQUIRE(runs[0].splits.size() == 1);
@@ -102,7 +102,7 @@ TEST_CASE(
                 "--config",
                 "config/blimp.yaml",
                 "--track",
-                "config/tracks/test-hop.yaml",
+                "config/tracks/blimp-hop.yaml",
                 "--link-fault",
                 "delay=400ms",
                 "--predict",
