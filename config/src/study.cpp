@@ -8,7 +8,9 @@
 #include "haptel/config/interface_kinds.hpp"
 #include "haptel/config/link.hpp"
 #include "haptel/config/paths.hpp"
+#include "haptel/config/reality.hpp"
 #include "haptel/config/run.hpp"
+#include "haptel/config/vehicle.hpp"
 #include "haptel/config/yaml_map.hpp"
 
 namespace haptel {
@@ -118,6 +120,33 @@ void ReadStudyLink(YamlMap& root, const std::filesystem::path& dir, StudyConfig&
     } catch (const ConfigError& e) {
       root.Fail("link_profile", e.what());
     }
+  }
+}
+
+/// The trials' reality: a shipped name (none, lab, harsh) or a file relative
+/// to the study file, as `link_profile` is; only a simulated vehicle has one.
+void ReadStudyReality(YamlMap& root, const std::filesystem::path& dir, const RunConfig& run,
+                      StudyConfig& s) {
+  const std::string reality = root.String("reality", "");
+  if (reality.empty()) return;
+  s.reality = RealityFile(reality);
+  if (s.reality.string() != reality) {
+    if (!std::filesystem::is_regular_file(s.reality))
+      root.Fail("reality", "none, lab, harsh or a reality file (not '" + reality + "')");
+  } else {
+    s.reality = dir / reality;
+    if (!std::filesystem::is_regular_file(s.reality))
+      root.Fail("reality", "a reality file; no file '" + s.reality.string() + "'");
+  }
+  try {
+    LoadReality(s.reality);
+  } catch (const ConfigError& e) {
+    root.Fail("reality", e.what());
+  }
+  const VehicleConfig vehicle = LoadVehicle(run.vehicle);
+  if (!vehicle.Kind().simulated) {
+    root.Fail("reality", "a simulated vehicle; the run's vehicle '" + vehicle.file.string() +
+                             "' is " + vehicle.kind + ", whose reality is the world's");
   }
 }
 
@@ -266,6 +295,7 @@ StudyConfig LoadStudy(const std::filesystem::path& file) {
   s.track = track.empty() ? run_config.track : dir / track;
   if (const std::string db = root.String("database", ""); !db.empty()) s.database = db;
   ReadStudyLink(root, dir, s);
+  ReadStudyReality(root, dir, run_config, s);
   s.operators = root.String("operators", s.operators);
   if (s.operators != "synthetic" && s.operators != "person")
     root.Fail("operators", "synthetic or person");

@@ -163,6 +163,8 @@ std::vector<DefiningValue> StudyDefinition(const StudyConfig& config) {
     out.push_back({"link_profile", config.link_profile});
     out.push_back({"link_profile_fault", LinkFaultText(LoadLinkProfile(config.link_profile))});
   }
+  // Written only when set: studies planned before it existed still match.
+  if (!config.reality.empty()) out.push_back({"reality", FromStudyFolder(config, config.reality)});
   out.push_back({"questionnaires", Joined(config.questionnaires)});
   out.push_back({"questionnaires_dir", FromStudyFolder(config, config.questionnaires_dir)});
   // Written only when asked: studies planned before it existed still match.

@@ -100,6 +100,7 @@ mediator::SessionSetup TrialSetup(const StudyConfig& config, const PlannedTrial&
   if (!config.link_profile.empty())
     words.insert(words.end(), {"--link-profile", config.link_profile});
   if (!config.link_fault.empty()) words.insert(words.end(), {"--link-fault", config.link_fault});
+  if (!config.reality.empty()) words.insert(words.end(), {"--reality", config.reality.string()});
   if (!verbose) words.push_back("--quiet");
   if (config.sessions)
     words.insert(words.end(), {"--session", TrialSessionFile(config, trial, database).string()});
@@ -184,6 +185,7 @@ mediator::SessionSetup PracticeSetup(const StudyConfig& config,
                                     "--database",
                                     database.string()};
   if (!domain.empty()) words.insert(words.end(), {"--domain", domain});
+  if (!config.reality.empty()) words.insert(words.end(), {"--reality", config.reality.string()});
   if (!verbose) words.push_back("--quiet");
   std::vector<const char*> argv;
   for (const std::string& w : words) argv.push_back(w.c_str());

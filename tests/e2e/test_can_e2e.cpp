@@ -72,7 +72,7 @@ TEST_CASE(
   Child haptel({CanBin("haptel"), "run", "--vehicle", vehicle.string(), "--track",
                 "config/tracks/test-short.yaml", "--json", "--quiet", "--domain",
                 std::to_string(test::UniqueDomain(61)), "--database", db.string(),
-                "--vehicle-timeout", "5"});
+                "--vehicle-timeout", "5", "--reality", "none"});
   const int code = haptel.Wait(120.0);
   INFO("stdout:\n" << haptel.out() << "\nstderr:\n" << haptel.err());
   REQUIRE(code == 0);

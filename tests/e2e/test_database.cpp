@@ -102,7 +102,9 @@ std::vector<std::string> Run(const fs::path& db, int salt) {
           "--database",
           db.string(),
           "--vehicle-timeout",
-          "5"};
+          "5",
+          "--reality",
+          "none"};
 }
 
 /// The database is refused before anything starts: exit 2, one line naming

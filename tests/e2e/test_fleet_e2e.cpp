@@ -148,7 +148,8 @@ TEST_CASE(
   const auto dir = test::ScratchDir("e2e-fleet");
   const auto db = dir / "runs.db";
   auto argv = FleetArgs("config/fleets/three-robots.yaml", test::UniqueDomain(51), db);
-  argv.push_back("--quiet");
+  // The twin: the laps are the fleet's, not the vehicles' reality.
+  argv.insert(argv.end(), {"--quiet", "--reality", "none"});
   Child run(argv);
   const int code = run.Wait(400.0);
   INFO("stdout:\n" << run.out() << "\nstderr:\n" << run.err());

@@ -292,7 +292,7 @@ TEST_CASE(
   const auto dir = test::ScratchDir("e2e-stranger");
   Child run({Bin("haptel"), "run", "--track", "config/tracks/test-short.yaml", "--json", "--domain",
              std::to_string(domain), "--database", (dir / "runs.db").string(), "--vehicle-timeout",
-             "5", "--time-limit", "90"});
+             "5", "--time-limit", "90", "--reality", "none"});
   REQUIRE(test::WaitForVehicle(run, 60.0));
   Stranger stranger(domain);
   // Its commands and requests, 50 a second, until the run ends.
@@ -460,7 +460,7 @@ TEST_CASE(
   Child run({Bin("haptel"), "run", "--link-fault", "delay=100ms,jitter=20ms,loss=5%", "--track",
              "config/tracks/test-short.yaml", "--json", "--domain",
              std::to_string(test::UniqueDomain(44)), "--database", (dir / "runs.db").string(),
-             "--vehicle-timeout", "5"});
+             "--vehicle-timeout", "5", "--reality", "none"});
   const int code = run.Wait(180.0);
   INFO(run.out() << run.err());
   CHECK(code == 0);
@@ -497,7 +497,7 @@ TEST_CASE(
   Child run({Bin("haptel"), "run", "--link-profile", "lte-uplink", "--link-fault",
              "rate=1Mbit,loss=0", "--track", "config/tracks/test-short.yaml", "--json", "--domain",
              std::to_string(test::UniqueDomain(47)), "--database", (dir / "runs.db").string(),
-             "--vehicle-timeout", "5", "--vehicle", vehicle.string()});
+             "--vehicle-timeout", "5", "--vehicle", vehicle.string(), "--reality", "none"});
   const int code = run.Wait(180.0);
   INFO(run.out() << run.err());
   CHECK(code == 0);

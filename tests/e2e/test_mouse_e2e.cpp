@@ -70,7 +70,9 @@ std::vector<std::string> MouseRun(const std::string& interface, int domain,
                                 "--database",
                                 (dir / "runs.db").string(),
                                 "--vehicle-timeout",
-                                "5"};
+                                "5",
+                                "--reality",
+                                "none"};
   argv.insert(argv.end(), extra.begin(), extra.end());
   return argv;
 }

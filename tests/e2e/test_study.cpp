@@ -52,6 +52,7 @@ std::filesystem::path SmallStudy(const std::filesystem::path& dir, int participa
          "track: "
       << (source / "config/tracks/test-short.yaml").string()
       << "\n"
+         "reality: none\n"  // the twin: the tests are about the study, not the vehicle
          "operators: synthetic\n"
          "conditions:\n"
          "  - {name: first, interface: gesture}\n"
@@ -486,8 +487,9 @@ TEST_CASE(
                          "practice: true\n"
                          // Nobody holds the simulated arms: nothing moves (a hand nobody
                          // holds drives nothing) and each trial ends at the cap, before
-                         // the start line.
-                         "trial_cap_s: 12\n"
+                         // the start line. The cap of the other studies here: what is
+                         // checked is the console's flow, not the lap.
+                         "trial_cap_s: 6\n"
                          "questionnaires: [thesis]\n";  // no participants: added in the console
   const auto db = dir / "person.db";
   const int port = test::FreeLoopbackPort();

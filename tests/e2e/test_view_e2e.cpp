@@ -87,10 +87,26 @@ TEST_CASE(
   XServer x;
   const auto dir = test::ScratchDir("e2e-view-lap");
   const auto mp4 = dir / "lap.mp4";
-  Child run({Bin("haptel"), "run", "--operator", "auto", "--view", "window", "--record",
-             mp4.string(), "--track", "config/tracks/test-short.yaml", "--json", "--quiet",
-             "--domain", std::to_string(test::UniqueDomain(31)), "--database",
-             (dir / "runs.db").string(), "--vehicle-timeout", "5"});
+  Child run({Bin("haptel"),
+             "run",
+             "--operator",
+             "auto",
+             "--view",
+             "window",
+             "--record",
+             mp4.string(),
+             "--track",
+             "config/tracks/test-short.yaml",
+             "--json",
+             "--quiet",
+             "--domain",
+             std::to_string(test::UniqueDomain(31)),
+             "--database",
+             (dir / "runs.db").string(),
+             "--vehicle-timeout",
+             "5",
+             "--reality",
+             "none"});
   const int code = run.Wait(180.0);
   INFO(run.out() << run.err());
   REQUIRE(code == 0);

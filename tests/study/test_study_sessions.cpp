@@ -5,6 +5,7 @@
 #include <cstdlib>
 
 #include "haptel/config/device.hpp"
+#include "haptel/config/error.hpp"
 #include "haptel/config/study.hpp"
 #include "haptel/config/vehicle.hpp"
 #include "haptel/study/plan.hpp"
@@ -94,4 +95,56 @@ TEST_CASE(
   if (!saved.empty()) setenv("DISPLAY", saved.c_str(), 1);
   if (!saved_wayland.empty()) setenv("WAYLAND_DISPLAY", saved_wayland.c_str(), 1);
   CHECK_THAT(missing, Catch::Contains("needs a display"));
+}
+
+TEST_CASE(
+    "A study's reality is every trial's simulated vehicle's; a bad one names the file, the key "
+    "and what was expected") {
+  const auto source = std::filesystem::current_path();
+  const auto dir = test::ScratchDir("study-sessions-reality");
+  const std::string head = "name: twin\nrun: " + (source / "config/haptel.yaml").string() +
+                           "\noperators: synthetic\nconditions:\n"
+                           "  - {name: a, interface: gesture}\n  - {name: b, interface: cockpit}\n"
+                           "profiles:\n  p: {steering_noise: 0.02}\n"
+                           "participants: [{id: A, profile: p}, {id: B, profile: p}]\n";
+  // None named: the vehicle file's (sim-robot.yaml has none), else the run's default.
+  const StudyConfig plain = LoadStudy(test::WriteFile(dir / "plain.yaml", head));
+  CHECK(plain.reality.empty());
+  const mediator::SessionSetup lab =
+      TrialSetup(plain, PlanTrials(plain).front(), dir / "study.db", "", false, 0, false);
+  CHECK(lab.vehicle.reality.filename() == "lab.yaml");
+
+  const StudyConfig twin = LoadStudy(test::WriteFile(dir / "twin.yaml", head + "reality: none\n"));
+  CHECK(std::filesystem::equivalent(twin.reality, source / "config/realities/none.yaml"));
+  const mediator::SessionSetup trial =
+      TrialSetup(twin, PlanTrials(twin).front(), dir / "study.db", "", false, 0, false);
+  CHECK(trial.vehicle.reality == twin.reality);
+
+  // A file beside the study.
+  std::filesystem::copy_file(source / "config/realities/harsh.yaml", dir / "mine.yaml");
+  const StudyConfig mine =
+      LoadStudy(test::WriteFile(dir / "mine-study.yaml", head + "reality: mine.yaml\n"));
+  CHECK(mine.reality == dir / "mine.yaml");
+
+  const auto error = [&](const std::string& name, const std::string& text) {
+    const auto file = test::WriteFile(dir / name, text);
+    return test::WhatOf<ConfigError>([&] { LoadStudy(file); });
+  };
+  using Catch::Contains;
+  CHECK_THAT(error("moon.yaml", head + "reality: moon\n"),
+             Contains("moon.yaml") && Contains("reality") &&
+                 Contains("none, lab, harsh or a reality file (not 'moon')"));
+  CHECK_THAT(error("missing.yaml", head + "reality: nowhere.yaml\n"),
+             Contains("missing.yaml") && Contains("reality") && Contains("nowhere.yaml"));
+  // A real robot's reality is the world's.
+  const std::string can_run =
+      test::WriteFile(dir / "can-run.yaml",
+                      "vehicle: " + (source / "config/vehicles/can-robot.yaml").string() +
+                          "\ntrack: " + (source / "config/tracks/test-short.yaml").string() + "\n")
+          .string();
+  std::string can = head + "reality: none\n";
+  can.replace(can.find("run: ") + 5, (source / "config/haptel.yaml").string().size(), can_run);
+  CHECK_THAT(error("can.yaml", can), Contains("can.yaml") && Contains("reality") &&
+                                         Contains("a simulated vehicle") &&
+                                         Contains("can-robot.yaml"));
 }

@@ -126,6 +126,10 @@ struct StudyConfig {
   /// A link profile for every trial (config/links/NAME.yaml, or a file), as
   /// `--link-profile` takes it; `link_fault`'s keys override it. Empty: none.
   std::string link_profile;
+  /// The simulated vehicle's reality in every trial and practice lap
+  /// (config/realities/NAME.yaml, or a file beside the study), as
+  /// `--reality` takes it. Empty: the vehicle file's `reality:`, else lab.
+  std::filesystem::path reality;
   /// "synthetic" (simulated drivers, unattended) or "person".
   std::string operators = "person";
   std::vector<StudyCondition> conditions;
