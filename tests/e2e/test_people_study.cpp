@@ -118,10 +118,20 @@ void RunPeopleStudy(const std::string& name, const std::vector<Condition>& condi
   }
   // grand-prix.yaml on the short track with a short cap; its participants
   // are added in the console (A is the first row of the balanced square).
-  // The shipped run configuration, but for the vehicle's time-out: on a
+  // The shipped run configuration, but for the vehicle's time-out (on a
   // loaded 2-core machine the trial's DDS threads wait for a core longer
-  // than its 0.5 s now and then (the vehicle lost; the trial offered again).
-  const auto run = test::ShippedRunIn(dir, {{"vehicle_timeout_s: 0.5", "vehicle_timeout_s: 5.0"}});
+  // than its 0.5 s now and then: the vehicle lost, the trial offered again)
+  // and its reality: the twin (the test is about the study, not the
+  // vehicle; the pilot's operator is tuned to it).
+  const auto config = source / "config";
+  const auto twin = test::WriteFile(
+      dir / "sim-robot.yaml",
+      test::Rewritten(config / "vehicles/sim-robot.yaml",
+                      {{"world: ../tracks/", "world: " + (config / "tracks").string() + "/"}}) +
+          "reality: " + (config / "realities/none.yaml").string() + "\n");
+  const auto run =
+      test::ShippedRunIn(dir, {{"vehicle_timeout_s: 0.5", "vehicle_timeout_s: 5.0"},
+                               {"vehicle: vehicles/sim-robot.yaml", "vehicle: " + twin.string()}});
   std::string head = test::StudyFileHead("people-e2e");
   const std::string shipped_run = (source / "config/haptel.yaml").string();
   REQUIRE(head.find(shipped_run) != std::string::npos);
