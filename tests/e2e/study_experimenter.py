@@ -107,7 +107,12 @@ def run(browser, url, participant, trials, questionnaire):
     # Every trial of the open study done: it waits for more people, or Finish.
     until(browser, url, lambda: elements(browser, "#finish"), "the Finish button",
           lambda s: s.get("waiting_for_participants", False))
-    browser.find_element(By.ID, "finish").click()
+    finish = browser.find_element(By.ID, "finish")
+    finish.click()
+    # The console's answer replaces the page: only then has the study the
+    # press (quitting Chromium at once could cut the POST, and the study
+    # waited for more participants for ever).
+    WebDriverWait(browser, TIMEOUT_S).until(expected_conditions.staleness_of(finish))
     print("finished", flush=True)
 
 
