@@ -1,9 +1,12 @@
 // The experimenter's console through real HTTP on 127.0.0.1: the schedule,
 // a questionnaire's form, submissions (accepted once; refused twice, out of
 // order or incomplete, with a status and a message), and a port in use.
+// clang-format off
 // Before httplib.h: it brings <resolv.h>, whose `_res` macro breaks Eigen's
 // headers (which study_sessions.hpp brings through the run configuration).
+#include "haptel/study/study_sessions.hpp"
 #include <httplib.h>
+// clang-format on
 
 #include <atomic>
 #include <catch2/catch.hpp>
@@ -19,7 +22,6 @@
 #include "haptel/record/recorder.hpp"
 #include "haptel/study/console.hpp"
 #include "haptel/study/report.hpp"
-#include "haptel/study/study_sessions.hpp"
 #include "haptel/study/submission.hpp"
 #include "study_test_run.hpp"
 #include "test_env.hpp"
