@@ -80,6 +80,7 @@ bool Hal::TryCue(Side side, Cue& out) const {
 ForceSetpoint Hal::Combine(ForceSetpoint sp, const ForceField& latest_field,
                            int64_t field_stamp_ns) const {
   sp.field = latest_field;
+  sp.contacts = contacts_begun();
   if (sp.stamp_ns == 0 || (field_stamp_ns != 0 && field_stamp_ns < sp.stamp_ns))
     sp.stamp_ns = field_stamp_ns;
   const double k = force_scale_.load(std::memory_order_relaxed);

@@ -216,6 +216,13 @@ class BlimpSession final : public FamilySession {
             NsToS(e.received_ns - s.last_command_sent_ns() - s.last_command_age_ns()));
       }
       if (!s.pose_valid()) continue;
+      // A contact begun since (not the pad under it at the start): the
+      // devices show it on the hands (a shake) at their next tick.
+      if (contacts_marked_ < 0) contacts_marked_ = s.contacts();
+      if (s.contacts() > contacts_marked_) {
+        contacts_marked_ = s.contacts();
+        haptic.hal().MarkContact();
+      }
       predictor_.OnState(Sample(ts, s, t0));
       const BlimpObservation o = Observe(ts, s);
       // With prediction the pilot sees the blimp as it will be (Command).
@@ -387,6 +394,8 @@ class BlimpSession final : public FamilySession {
   int64_t t0_ns_ = 0;  ///< the session's start (MonotonicNs), as Drain is given it
   static constexpr double kPredictionPeriod_s = 0.05;
   bool have_state_ = false;
+  int64_t contacts_marked_ =
+      -1;               ///< the state's contact count last marked in the HAL (-1: none yet)
   bool flown_ = false;  ///< the pilot has flown (engaged) since the start
   double hull_length_ = 0.0;
   double next_prediction_s_ = 0.0;

@@ -179,6 +179,9 @@ class RobotSession final : public FamilySession {
       const double ts = NsToS(e.received_ns - t0);
       if (health.OnState(s, e.received_ns)) haptic.OnVehicleUp();
       const bool touching = s.bumper_left() || s.bumper_right();
+      // A contact begun: the devices show it on the hands (a shake) at their next tick.
+      if (touching && !touching_) haptic.hal().MarkContact();
+      touching_ = touching;
       if (s.last_command_sent_ns() > 0) {
         predictor_.OnRoundTrip(
             NsToS(e.received_ns - s.last_command_sent_ns() - s.last_command_age_ns()));
@@ -548,6 +551,7 @@ class RobotSession final : public FamilySession {
   int64_t next_third_person_ns_ = 0;
   std::vector<PredictedPose> path_ahead_;
   std::array<bool, 2> bumpers_{false, false};  ///< the newest state's, left and right
+  bool touching_ = false;                      ///< either bumper, in the newest state
   CanLogReport can_log_;
   /// The deferred physics world while it is built (BuildDeferred); last, so
   /// that it is waited for before the members its thread reads go.

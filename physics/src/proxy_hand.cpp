@@ -375,7 +375,8 @@ struct ProxyHand::Impl {
     btQuaternion q(s.orientation[1], s.orientation[2], s.orientation[3], s.orientation[0]);
     if (q.length2() < 1e-12) return false;
     q.normalize();
-    tracked_wrist = btTransform(q, btVector3(s.position[0], s.position[1], s.position[2]));
+    const btTransform wanted(q, btVector3(s.position[0], s.position[1], s.position[2]));
+    tracked_wrist = placed ? Followed(wanted) : wanted;
     SetTargets(s.finger_angles);
     ComputeTracked();
     anchor->setWorldTransform(tracked[0]);  // its velocity follows at the next step
@@ -384,6 +385,27 @@ struct ProxyHand::Impl {
       Reset();
     }
     return true;
+  }
+
+  /// The tracked wrist moved towards `wanted` by at most a hand's top speed
+  /// over one step (ProxyHand::kMaxFollowSpeed_mps, kMaxFollowTurn_radps).
+  /// The anchor is kinematic: Bullet gives it the velocity of its motion over
+  /// the step, so a sample that leapt while the physics thread was held up
+  /// (a loaded machine: a step late by a second, the hand moved on) would
+  /// otherwise drive the coupling's damping at metres a millisecond and fling
+  /// the hand off what it holds. Late steps make the hand catch up at a
+  /// hand's speed instead: the simulation slower, nothing dropped.
+  btTransform Followed(const btTransform& wanted) const {
+    const btVector3 from = tracked_wrist.getOrigin();
+    btVector3 move = wanted.getOrigin() - from;
+    const double reach = ProxyHand::kMaxFollowSpeed_mps * h;
+    if (move.length() > reach) move *= reach / move.length();
+    const btQuaternion q0 = tracked_wrist.getRotation();
+    btQuaternion q1 = wanted.getRotation();
+    const double turn = q0.angleShortestPath(q1);
+    const double turn_reach = ProxyHand::kMaxFollowTurn_radps * h;
+    if (turn > turn_reach) q1 = q0.slerp(q1, turn_reach / turn);
+    return btTransform(q1, from + move);
   }
 
   void Place(btRigidBody& body, const btTransform& pose) {

@@ -592,6 +592,19 @@ StudyRun::Then StudyRun::RunTrial(const PlannedTrial& trial) {
     AfterFinishedTrial(trial, run);
     return Then::kOffer;
   }
+  // A person's trial whose vehicle answered, then went silent for the
+  // vehicle time-out (a pause on a loaded host, a link that dropped), is
+  // spoiled, not the study: its run is recorded, the trial is not, and the
+  // console offers it again, with a vehicle of its own, for the
+  // experimenter to start (as after an Abort).
+  if (person_ && run.result.outcome == mediator::Outcome::kVehicleLost) {
+    store_->Event("vehicle lost", trial.participant, trial.position,
+                  "run " + std::to_string(run.run_id) + ": " + run.result.message +
+                      ": the trial is offered again");
+    std::fprintf(stderr, "[study]   %s: the trial is offered again (run %lld)\n",
+                 run.result.message.c_str(), static_cast<long long>(run.run_id));
+    return Then::kOffer;
+  }
   // A vehicle that answered, then went silent for the vehicle time-out
   // (one pause on a loaded host), spoils the trial, not the study: a
   // synthetic trial is run again once, with a vehicle of its own, as a

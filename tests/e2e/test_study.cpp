@@ -69,38 +69,18 @@ std::filesystem::path SmallStudy(const std::filesystem::path& dir, int participa
   return file;
 }
 
-/// The file at `from` with each of `replacements` made once (each must be there).
-std::string Rewritten(const std::filesystem::path& from,
-                      const std::vector<std::pair<std::string, std::string>>& replacements) {
-  std::ifstream in(from);
-  std::string text((std::istreambuf_iterator<char>(in)), {});
-  for (const auto& [old_text, new_text] : replacements) {
-    const size_t at = text.find(old_text);
-    REQUIRE(at != std::string::npos);
-    text.replace(at, old_text.size(), new_text);
-  }
-  return text;
-}
-
 /// The shipped run configuration in `dir`, its vehicle the simulated CAN
 /// robot named `name`, which logs its bus to `dir`/can.
 std::filesystem::path CanRunFile(const std::filesystem::path& dir, const std::string& name) {
   const auto config = std::filesystem::current_path() / "config";
   const auto vehicle = dir / "can-robot-sim.yaml";
-  std::ofstream(vehicle) << Rewritten(
+  std::ofstream(vehicle) << test::Rewritten(
       config / "vehicles/can-robot-sim.yaml",
       {{"name: robot1", "name: " + name},
        {"world: ../tracks/", "world: " + (config / "tracks").string() + "/"},
        {"log_dir: ../../runs/can", "log_dir: " + (dir / "can").string()}});
-  const auto run = dir / "can-run.yaml";
-  std::ofstream(run)
-      << Rewritten(config / "haptel.yaml",
-                   {{"track: tracks/", "track: " + (config / "tracks").string() + "/"},
-                    {"vehicle: vehicles/sim-robot.yaml", "vehicle: " + vehicle.string()},
-                    {"device: devices/", "device: " + (config / "devices").string() + "/"},
-                    {"physics: physics.yaml", "physics: " + (config / "physics.yaml").string()}})
-      << "interfaces_dir: " << (config / "interfaces").string() << "\n";
-  return run;
+  return test::ShippedRunIn(dir,
+                            {{"vehicle: vehicles/sim-robot.yaml", "vehicle: " + vehicle.string()}});
 }
 
 /// Runs a `haptel study run` says it saved, one "(run N)" per finished trial.

@@ -136,6 +136,34 @@ TEST_CASE("cockpit grasp: back and forth, the lever keeps its place in the hand"
 }
 
 TEST_CASE(
+    "cockpit grasp: hands that leapt between two steps (a late physics step on a loaded machine) "
+    "keep the lever, and bring it after",
+    "[physics][cockpit]") {
+  Cockpit c;
+  c.Grasp();
+  // The physics thread held up while the device's hands went on: the next
+  // step's hands are the whole way off, the lever's forward (6 cm) then back
+  // (12 cm), the wheel's turned half a turn command each way.
+  int let_go = 0;
+  for (const interfaces::MotionIntent to :
+       {interfaces::MotionIntent{1.0, 0.5}, interfaces::MotionIntent{-1.0, -0.5}}) {
+    const auto goals = c.cockpit.HandTargetsFor(to);
+    for (int i = 0; i < 600; ++i) {
+      c.Track(goals, 0.0, 1.0);
+      let_go += c.link.State().throttle_held ? 0 : 1;
+    }
+    const physics::ControlsState s = c.link.State();
+    const interfaces::CockpitControls wanted = c.cockpit.logic().ControlsFor(to);
+    INFO("lever " << s.throttle << " (wanted " << wanted.throttle << "), steps let go " << let_go);
+    CHECK(let_go == 0);
+    // Within a slip of the grip (GripGeometry::max_lever_slip): brought, not left behind.
+    CHECK(s.throttle == Approx(wanted.throttle).margin(0.015));
+    CHECK(s.wheel_held);
+  }
+  CHECK(c.world.Counters().hand_resets == 0);
+}
+
+TEST_CASE(
     "session physics: no world without controls or scene bodies; otherwise only what was asked for",
     "[physics]") {
   const PhysicsConfig config = LoadPhysics(ShippedFile("config/physics.yaml"));

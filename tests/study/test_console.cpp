@@ -1,7 +1,12 @@
 // The experimenter's console through real HTTP on 127.0.0.1: the schedule,
 // a questionnaire's form, submissions (accepted once; refused twice, out of
 // order or incomplete, with a status and a message), and a port in use.
+// clang-format off
+// Before httplib.h: it brings <resolv.h>, whose `_res` macro breaks Eigen's
+// headers (which study_sessions.hpp brings through the run configuration).
+#include "haptel/study/study_sessions.hpp"
 #include <httplib.h>
+// clang-format on
 
 #include <atomic>
 #include <catch2/catch.hpp>
@@ -627,4 +632,53 @@ TEST_CASE(
   study.join();
   CHECK(started.load());
   CHECK(status("next_device").empty());
+}
+
+TEST_CASE(
+    "A study's force-feedback joystick that is not plugged in: its trial is offered with the "
+    "device's line, and Start is refused saying so") {
+  const auto dir = test::ScratchDir("study-console-ff-missing");
+  // grand-prix-ff.yaml's gesture condition on the shipped joystick file, its
+  // SDL index one that no machine has (the shipped file takes the first there
+  // is): the driver's own check, as the study asks it, says it is missing.
+  StudyConfig config = LoadStudy("config/studies/grand-prix-ff.yaml");
+  StudyCondition gesture;
+  for (const StudyCondition& c : config.conditions)
+    if (c.name == "gesture") gesture = c;
+  REQUIRE(gesture.device_name == "sdl-ff");
+  std::string stick = ReadText(gesture.device);
+  const size_t index = stick.find("joystick: -1");
+  REQUIRE(index != std::string::npos);
+  stick.replace(index, std::string("joystick: -1").size(), "joystick: 31");
+  gesture.device = test::WriteFile(dir / "sdl-ff.yaml", stick);
+  const TrialDevice device = DeviceOf(gesture);
+  const std::string missing = device.unavailable();
+  CHECK_THAT(missing, Catch::Contains("joystick"));  // none connected, or not number 31
+
+  config.participants = {{"A", ""}};
+  ConsoleOptions options;
+  options.port = 0;
+  StudyConsole console(config, {{"A", 1, "gesture", 1, "sdl-ff"}}, dir / "s.db", {}, options);
+  test::ConsoleClient client("127.0.0.1", console.port());
+  std::atomic<bool> stop{false};
+  std::atomic<bool> started{false};
+  std::thread study([&] {
+    started.store(console.WaitForStart("participant A, gesture (position 1)", stop, device));
+  });
+  auto status = [&](const std::string& key) {
+    const auto r = client.Get("/status.json");
+    return r ? JsonFieldOf(r->body, key) : std::string();
+  };
+  REQUIRE(test::WaitFor([&] { return !status("next").empty(); }, 20.0));
+  CHECK(status("next_device") == "sdl-ff");
+  CHECK(status("device_missing") == missing);
+  const auto refused = client.Post("/start");
+  REQUIRE(refused);
+  CHECK(refused->status == 409);
+  CHECK(refused->body.find("device sdl-ff") != std::string::npos);
+  CHECK(refused->body.find((dir / "sdl-ff.yaml").string()) != std::string::npos);
+  CHECK(refused->body.find("joystick") != std::string::npos);
+  stop.store(true);
+  study.join();
+  CHECK_FALSE(started.load());
 }

@@ -391,6 +391,40 @@ TEST_CASE(
   CHECK(pointer.Load().wheel_notches == 0);
 }
 
+TEST_CASE(
+    "sdl input: a window closed with the key hand's keys held lets them go (the next trial's "
+    "mouse device does not start with them held)",
+    "[sdl_input]") {
+  InputBox box;
+  haptel::haptics::PointerBox pointer;
+  SdlInput input(box, pointer);
+  input.OnWindowOpened(1024, 576);
+  input.OnEvent(Down(SDL_SCANCODE_A));
+  input.OnEvent(Down(SDL_SCANCODE_Q));
+  const auto any_held = [](const haptel::haptics::PointerState& p) {
+    for (const bool held : p.key_hand)
+      if (held) return true;
+    return false;
+  };
+  REQUIRE(any_held(pointer.Load()));
+  // The trial ends with A and Q down: their releases come to no window.
+  input.OnWindowClosed();
+  CHECK_FALSE(any_held(pointer.Load()));
+  // What the next trial's mouse device reads until its window opens: its
+  // key hand stays at rest (a held +y walked it 0.15 m/s off).
+  MouseDeviceConfig mouse;
+  const haptel::haptics::Vec3d rest{mouse.key_hand_rest[0], mouse.key_hand_rest[1],
+                                    mouse.key_hand_rest[2]};
+  CHECK(haptel::haptics::StepKeyHand(rest, pointer.Load(), mouse, 3.0) == rest);
+  // Q pressed again in the next window is a new press, released as ever.
+  SdlInput next(box, pointer);
+  next.OnWindowOpened(1024, 576);
+  next.OnEvent(Down(SDL_SCANCODE_Q));
+  CHECK(any_held(pointer.Load()));
+  next.OnEvent(Up(SDL_SCANCODE_Q));
+  CHECK_FALSE(any_held(pointer.Load()));
+}
+
 TEST_CASE("sdl input: F turns the force arrows on and off", "[sdl_input]") {
   InputBox box;
   haptel::haptics::PointerBox pointer;

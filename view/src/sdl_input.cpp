@@ -57,6 +57,13 @@ void SdlInput::OnWindowClosed() {
   pointer_.window_open = false;
   pointer_.in_window = false;
   pointer_.grasp_button = false;
+  // The key hand's keys go with the window (no window reports their
+  // release): held on in the box, they walked the next mouse device's key
+  // hand away at its speed from the device's start to its window's (a
+  // study's next trial, in this process), and it swept back through the
+  // cockpit's wheel, turning it off zero.
+  pointer_.key_hand = {};
+  key_up_z_ = key_down_z_ = false;
   StorePointer();
 }
 

@@ -158,26 +158,23 @@ DeviceStatus MouseDevice::ReadGlove(Side side, int64_t now_ns, GloveRaw& out) {
 }
 
 DeviceStatus MouseDevice::WriteWristForce(Side side, const Vec3d& command) {
-  Hand& h = hands_[static_cast<size_t>(Index(side))];
-  Vec3d step{};
-  for (int i = 0; i < 3; ++i) step[i] = command[i] - h.force[i];
-  const double size = Norm(step);
-  if (size >= config_.shake_threshold && size > 0.0) {
-    Vec3d along{};
-    for (int i = 0; i < 3; ++i) along[i] = step[i] / size;
-    StartShake(h, along, config_.shake_amplitude * size);
-  }
-  h.force = command;
+  hands_[static_cast<size_t>(Index(side))].force = command;
   return DeviceStatus::kOk;
 }
 
 void MouseDevice::SetpointHint(Side side, const ForceSetpoint& setpoint) {
   Hand& h = hands_[static_cast<size_t>(Index(side))];
+  const uint64_t seen = h.contacts_seen;
+  h.contacts_seen = setpoint.contacts;
+  // The pointer hand shows a contact of the vehicle, and only that: the
+  // forces a driven control or a field bring step often (a cockpit's lever
+  // in its hand), a contact seldom, and a shake must mean one.
+  if (!h.pointer || setpoint.contacts <= seen) return;
+  // Pushed back from the contact: against the gesture's wall where one is up
+  // (it rises on the contact), else backwards (the vehicle's bumpers are in front).
   const ForceField& field = setpoint.field;
   const bool wall = field.enabled && field.wall_active;
-  // The wall is a contact's: it rises where the hand is, so no force steps.
-  if (wall && !h.wall) StartShake(h, field.wall_normal, kMaxShakeM);
-  h.wall = wall;
+  StartShake(h, wall ? field.wall_normal : Vec3d{-1.0, 0.0, 0.0}, config_.shake_amplitude);
 }
 
 DeviceStatus MouseDevice::WriteFingerForces(Side, const std::array<double, kFingers>&) {

@@ -192,23 +192,12 @@ FfPlan PlanEffects(const SdlFfDeviceConfig& config, const std::array<FfSide, kSi
 }
 
 bool ShakeTrigger::Step(double t_s, const std::array<FfSide, kSides>& sides) {
-  bool contact = false;
-  for (int s = 0; s < kSides; ++s) {
-    const FfSide& side = sides[s];
-    const bool wall = side.used && side.fresh && side.field.enabled && side.field.wall_active;
-    if (wall && !wall_[s]) contact = true;
-    wall_[s] = wall;
-    // A force that starts or stops being fresh is not a jump: it ramps in
-    // (the safety's soft start) or fades out (a stalled feeder).
-    const bool measured = side.used && side.fresh;
-    if (measured && have_force_[s]) {
-      Vec3d jump{};
-      for (int c = 0; c < 3; ++c) jump[c] = side.force[c] - force_[s][c];
-      if (threshold_ > 0.0 && std::sqrt(Dot(jump, jump)) >= threshold_) contact = true;
-    }
-    force_[s] = side.force;
-    have_force_[s] = measured;
+  uint64_t contacts = contacts_;
+  for (const FfSide& side : sides) {
+    if (side.used) contacts = std::max(contacts, side.contacts);
   }
+  const bool contact = contacts > contacts_;
+  contacts_ = contacts;
   if (!contact || t_s < until_s_) return false;
   until_s_ = t_s + shake_s_;
   return true;

@@ -180,6 +180,7 @@ struct SdlFfDevice::Io {
   struct StampedField {
     int64_t stamp_ns = 0;
     ForceField field;
+    uint64_t contacts = 0;  ///< the set-point's count of the vehicle's contacts
   };
 
   DeviceConfig config;
@@ -329,6 +330,7 @@ void SdlFfDevice::Io::Play(double t_s, const Axes& axes, sdl_ff::ShakeTrigger& s
     side.fresh = side.used && field.stamp_ns != 0 && now - field.stamp_ns <= fresh_ns &&
                  force.t_ns != 0 && now - force.t_ns <= fresh_ns;
     side.field = field.field;
+    side.contacts = field.contacts;
     side.force = force.force;
   }
   const bool shake_now = shake.Step(t_s, sides);
@@ -482,7 +484,7 @@ HandPresence SdlFfDevice::Presence(Side side) {
 }
 
 void SdlFfDevice::SetpointHint(Side side, const ForceSetpoint& setpoint) {
-  io_->fields[Index(side)].Store({setpoint.stamp_ns, setpoint.field});
+  io_->fields[Index(side)].Store({setpoint.stamp_ns, setpoint.field, setpoint.contacts});
 }
 
 DeviceUseReport SdlFfDevice::UseReport() const {

@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "alloc_counter.hpp"
 #include "haptel/config/paths.hpp"
@@ -174,52 +175,33 @@ TEST_CASE(
   CHECK(highest - lowest < 1e-4);             // still: no chatter
 }
 
-TEST_CASE("mouse device: a force step shakes the shown hand, a ramp does not", "[mouse]") {
-  const DeviceConfig config = ShippedMouse();
-  PointerBox pointer;
-  pointer.Store(PointerAt(config.mouse.centre, config.mouse, true));
+TEST_CASE("mouse device: forces never shake the hand: a force step, a wall rising", "[mouse]") {
+  // A cockpit's lever in the hand steps the coupling's force by newtons a
+  // tick; the gesture's wall rises on a contact the HAL already counts.
+  Rig rig;
+  const Vec3d centre = rig.mouse().centre;
+  ForceField f = Spring(40.0, centre);
+  rig.field = f;
+  rig.pointer.Store(PointerAt(centre, rig.mouse(), true));
+  rig.Run(0.6);  // past the soft start
   WristRaw wrist;
-  PseudoHapticReport shown;
-  SECTION("a step") {
-    MouseDevice device(config, pointer);
-    device.ReadWrist(Side::kRight, kMs, wrist);
-    device.WriteWristForce(Side::kRight, {0.0, 3.0, 0.0});  // 3 N at once: ≥ 1.5 N
-    CHECK(device.UseReport().shakes == 1);
-    double largest = 0.0;
-    for (int t = 2; t < 200; ++t) {
-      device.ReadWrist(Side::kRight, t * kMs, wrist);
-      device.WriteWristForce(Side::kRight, {0.0, 3.0, 0.0});
-      device.PseudoHaptics(Side::kRight, shown);
-      largest = std::max(largest, std::abs(shown.shake[1]));
-      CHECK(shown.shake[0] == 0.0);  // along the step only
-      CHECK(shown.shake[2] == 0.0);
-    }
-    CHECK(largest > 0.005);  // 0.004 m/N × 3 N = 12 mm, capped at 10 mm, decaying
-    CHECK(largest <= MouseDevice::kMaxShakeM);
-    // Over after shake_s (0.3 s), and the hand it is drawn on stays where it was.
-    for (int t = 200; t < 400; ++t) {
-      device.ReadWrist(Side::kRight, t * kMs, wrist);
-      device.WriteWristForce(Side::kRight, {0.0, 3.0, 0.0});
-    }
-    device.PseudoHaptics(Side::kRight, shown);
-    CHECK(shown.shake == Vec3d{});
-    CHECK(device.UseReport().shakes == 1);
+  for (int t = 1; t < 200; ++t) {
+    rig.device.ReadWrist(Side::kRight, rig.now_ns + t * kMs, wrist);
+    rig.device.WriteWristForce(Side::kRight, {0.0, t % 2 == 0 ? 3.0 : -3.0, 0.0});
   }
-  SECTION("a ramp to the same force") {
-    MouseDevice device(config, pointer);
-    for (int t = 1; t <= 1000; ++t) {
-      device.ReadWrist(Side::kRight, t * kMs, wrist);
-      device.WriteWristForce(Side::kRight, {0.0, 0.003 * t, 0.0});
-    }
-    device.PseudoHaptics(Side::kRight, shown);
-    CHECK(device.UseReport().shakes == 0);
-    CHECK(shown.shake == Vec3d{});
-  }
+  f.wall_active = true;
+  f.wall_point = rig.Hand(Side::kRight);
+  f.wall_normal = {1.0, 0.0, 0.0};
+  f.wall_stiffness = 1500.0;
+  rig.field = f;
+  rig.Run(0.5);
+  CHECK(rig.device.UseReport().shakes == 0);
+  CHECK(rig.hal.pseudo_haptics(Side::kRight).report.shake == Vec3d{});
 }
 
 TEST_CASE(
-    "mouse device: a wall rising is a contact: it shakes the hand once along the wall's normal, "
-    "the HAL says when, and the trace records it",
+    "mouse device: a contact of the vehicle shakes the pointer hand once, in the servo tick that "
+    "reads it, along the wall's normal where one is up; the HAL says when, the trace records it",
     "[mouse]") {
   const auto file = test::ScratchDir("mouse-shake") / "shake.trace";
   Rig rig;
@@ -227,43 +209,58 @@ TEST_CASE(
   ForceField f = Spring(40.0, centre);
   rig.field = f;
   rig.pointer.Store(PointerAt(centre, rig.mouse(), true));
-  int64_t wall_ns = 0;
+  std::vector<int64_t> contact_ns;
   {
     TraceWriter trace(file);
     rig.loop.SetTrace(&trace);
-    rig.Run(0.6);  // past the soft start: a ramp, no shake
+    rig.Run(0.6);
     CHECK(rig.device.UseReport().shakes == 0);
     CHECK(rig.hal.pseudo_haptics(Side::kRight).report.shake_start_ns == 0);
-    // The gesture's answer to a bumper: a wall where the hand is (no force steps).
-    f.wall_active = true;
-    f.wall_point = rig.Hand(Side::kRight);
-    f.wall_normal = {1.0, 0.0, 0.0};
-    f.wall_stiffness = 1500.0;
-    rig.field = f;
-    wall_ns = rig.now_ns + kMs;  // the next tick's
+    // The session learns of a bumper: the next servo tick shakes.
+    rig.hal.MarkContact();
+    contact_ns.push_back(rig.now_ns + kMs);
     rig.Tick();
-    rig.Run(0.05);
-    const PseudoHapticReport shown = rig.hal.pseudo_haptics(Side::kRight).report;
+    // Started in that tick (the HAL publishes the device's report at the next one).
+    PseudoHapticReport shown;
+    REQUIRE(rig.device.PseudoHaptics(Side::kRight, shown));
     CHECK(shown.shakes == 1);
-    CHECK(shown.shake_start_ns == wall_ns);
-    CHECK(std::abs(shown.shake[0]) > 0.0);  // along the normal only
+    CHECK(shown.shake_start_ns == contact_ns.back());
+    rig.Run(0.05);
+    shown = rig.hal.pseudo_haptics(Side::kRight).report;
+    CHECK(shown.shake_start_ns == contact_ns.back());
+    CHECK(std::abs(shown.shake[0]) > 0.0);  // backwards: along x only
     CHECK(shown.shake[1] == 0.0);
     CHECK(shown.shake[2] == 0.0);
-    rig.Run(1.0);  // the wall stands: no more shakes
+    rig.Run(1.0);  // nothing new: no more shakes
     CHECK(rig.hal.pseudo_haptics(Side::kRight).report.shakes == 1);
+    // A second contact, with the gesture's wall up across y: along its normal.
+    f.wall_active = true;
+    f.wall_point = rig.Hand(Side::kRight);
+    f.wall_normal = {0.0, 1.0, 0.0};
+    f.wall_stiffness = 1500.0;
+    rig.field = f;
+    rig.hal.MarkContact();
+    contact_ns.push_back(rig.now_ns + kMs);
+    rig.Run(0.05);
+    shown = rig.hal.pseudo_haptics(Side::kRight).report;
+    CHECK(shown.shakes == 2);
+    CHECK(shown.shake_start_ns == contact_ns.back());
+    CHECK(shown.shake[0] == 0.0);
+    CHECK(std::abs(shown.shake[1]) > 0.0);
+    CHECK(std::abs(shown.shake[1]) <= MouseDevice::kMaxShakeM);
     rig.loop.SetTrace(nullptr);
   }  // the writer drains and closes
-  // Both hands met the wall (the rig sets the field on both): a record each, at its rise.
-  int shakes = 0;
+  // The key hand shows none: a record per contact, the pointer hand's, at its tick.
+  std::vector<int64_t> shakes;
   for (const TraceRecord& r : ReadTrace(file)) {
     if (r.kind != TraceRecord::kShake) continue;
-    ++shakes;
-    CHECK(r.t_ns == wall_ns);
-    CHECK(r.ToShake().shakes == 1);
+    CHECK(r.side == Index(Side::kRight));
     CHECK(r.ToShake().held);
+    shakes.push_back(r.t_ns);
   }
-  CHECK(shakes == 2);
+  CHECK(shakes == contact_ns);
   CHECK(rig.device.UseReport().shakes == 2);
+  CHECK(rig.hal.pseudo_haptics(Side::kLeft).report.shakes == 0);
 }
 
 TEST_CASE("mouse device: a side is held only with a window, the pointer in it and the button down",
@@ -381,11 +378,11 @@ TEST_CASE("mouse device: its servo calls allocate nothing", "[mouse][alloc]") {
     PointerState p = PointerAt({0.0005 * (i % 100), 0.0, 0.0}, rig.mouse(), i % 200 < 150);
     p.key_hand[0] = i % 50 < 25;
     rig.pointer.Store(p);
-    f.wall_active = i % 400 >= 350;  // a wall rises and falls: a contact's shake
+    f.wall_active = i % 400 >= 350;  // a wall rises and falls
     rig.field = f;
+    // A contact now and then: shakes start and run.
+    if (i % 300 == 0) rig.hal.MarkContact();
     rig.Tick();
-    // A step now and then: shakes start and run.
-    if (i % 300 == 0) rig.device.WriteWristForce(Side::kRight, {5.0, 0.0, 0.0});
   }
   (void)rig.device.UseReport();
   CHECK(test::ThreadAllocations() == before);

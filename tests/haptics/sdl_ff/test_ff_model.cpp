@@ -218,24 +218,25 @@ TEST_CASE("sdl-ff: a wall pressed is measured for rumble; the wheel's coupling t
   CHECK(plan.constant[0] == Approx(-0.2));
 }
 
-TEST_CASE("sdl-ff: a contact shakes once: a wall rising or a force jump, not while shaking") {
-  SdlFfDeviceConfig config = Stick();  // 1.5 N, 0.3 s
+TEST_CASE("sdl-ff: a contact of the vehicle shakes once, not while shaking; forces never do") {
+  SdlFfDeviceConfig config = Stick();  // 0.3 s
   ShakeTrigger shake(config);
   std::array<FfSide, kSides> sides = RightOnly(Field(), {});
   CHECK_FALSE(shake.Step(0.00, sides));
-  sides[1].force = {-1.0, 0.0, 0.0};  // a field growing smoothly
+  sides[1].force = {-5.0, 0.0, 0.0};  // a driven control's force stepping: no contact
   CHECK_FALSE(shake.Step(0.01, sides));
-  sides[1].field.wall_active = true;  // the bumper closed
-  CHECK(shake.Step(0.02, sides));
-  sides[1].force = {-5.0, 0.0, 0.0};
-  CHECK_FALSE(shake.Step(0.03, sides));  // still shaking
-  CHECK_FALSE(shake.Step(0.40, sides));  // the wall stays up: no new contact
-  sides[1].force = {-3.0, 0.0, 0.0};
-  CHECK(shake.Step(0.41, sides));  // a 2 N jump
-  sides[1].field.wall_active = false;
+  sides[1].field.wall_active = true;  // the gesture's wall alone is no contact
+  CHECK_FALSE(shake.Step(0.02, sides));
+  sides[1].contacts = 1;  // the bumper closed
+  CHECK(shake.Step(0.03, sides));
+  CHECK_FALSE(shake.Step(0.04, sides));  // the same contact: once
+  sides[1].contacts = 2;
+  CHECK_FALSE(shake.Step(0.05, sides));  // still shaking: it plays on
+  CHECK_FALSE(shake.Step(0.40, sides));  // that contact was seen: no late shake
+  sides[1].contacts = 3;
+  CHECK(shake.Step(0.41, sides));
+  sides[0].contacts = 9;  // a side the device lacks counts nothing
   CHECK_FALSE(shake.Step(0.80, sides));
-  sides[1].field.wall_active = true;
-  CHECK(shake.Step(0.81, sides));
 }
 
 TEST_CASE("sdl-ff: SDL's effects: spring axes, constant force's direction and level, the sine") {

@@ -45,11 +45,13 @@ bool WaitForWrist(Device& device, Side side, const std::function<bool(const Wris
 
 bool WaitFor(const std::function<bool()>& done) { return test::WaitFor(done, 5.0); }
 
-/// One servo tick's worth of what the loop gives the device, stamped now.
-void Feed(Device& device, const ForceField& field, const Vec3d& force) {
+/// One servo tick's worth of what the loop gives the device, stamped now
+/// (`contacts`: the vehicle's contacts so far, Hal::MarkContact).
+void Feed(Device& device, const ForceField& field, const Vec3d& force, uint64_t contacts = 0) {
   ForceSetpoint sp;
   sp.stamp_ns = MonotonicNs();
   sp.field = field;
+  sp.contacts = contacts;
   device.SetpointHint(Side::kRight, sp);
   device.WriteWristForce(Side::kRight, force);
 }
@@ -109,21 +111,21 @@ TEST_CASE("sdl-ff on a virtual joystick with rumble only: a contact and a wall p
   CHECK(stick.rumbles() == 0);
   CHECK(device->UseReport().shakes == 0);
 
-  // The bumper closes: the gesture's wall rises where the hand is, and the
-  // hand presses 2 mm into it (3 N of 7).
+  // The bumper closes (the session counts the contact): the gesture's wall
+  // rises where the hand is, and the hand presses 2 mm into it (3 N of 7).
   field.wall_active = true;
   field.wall_point = {0.048, 0.0, 0.0};
   field.wall_normal = {1.0, 0.0, 0.0};
   field.wall_stiffness = 1500.0;
   REQUIRE(WaitFor([&] {
-    Feed(*device, field, {-5.0, 0.0, 0.0});
+    Feed(*device, field, {-5.0, 0.0, 0.0}, 1);
     return stick.rumbles() > 0;
   }));
   CHECK(stick.strongest_low() == 39321);  // the shake: 0.6 of full
   CHECK(device->UseReport().shakes == 1);
   // After the shake, the wall pressed rumbles on as hard as it is pressed.
   REQUIRE(WaitFor([&] {
-    Feed(*device, field, {-5.0, 0.0, 0.0});
+    Feed(*device, field, {-5.0, 0.0, 0.0}, 1);
     return stick.last_low() > 0 && stick.last_low() < 39321 && stick.last_high() == 0;
   }));
   CHECK(std::abs(stick.last_low() - 65535.0 * 3.0 / 7.0) < 700.0);
@@ -131,7 +133,7 @@ TEST_CASE("sdl-ff on a virtual joystick with rumble only: a contact and a wall p
   // The hand leaves the wall: the rumble stops.
   stick.SetAxis(1, 0);
   REQUIRE(WaitFor([&] {
-    Feed(*device, field, {0.0, 0.0, 0.0});
+    Feed(*device, field, {0.0, 0.0, 0.0}, 1);
     return stick.last_low() == 0;
   }));
 }

@@ -173,7 +173,7 @@ struct UdpDeviceConfig {
 /// target through a virtual coupling of `coupling_stiffness` whose time
 /// constant is `coupling_time_constant_s`, so a field of stiffness k lets the
 /// hand move k_c / (k_c + k) of the pointer's motion (Lécuyer's
-/// control/display ratio), and a force step over `shake_threshold` shakes it.
+/// control/display ratio), and a contact of the vehicle shakes it.
 /// The coupling's damping, τ·k_c, must stay well above the damping of what
 /// pushes the hand (the servo loop's force lags a tick and its velocity is
 /// filtered): 0.06 s × 100 N/m holds the gesture's wall (1500 N/m, 77 N·s/m)
@@ -191,8 +191,7 @@ struct MouseDeviceConfig {
   std::array<double, 3> key_hand_rest{0.0, 0.0, 0.0};  ///< m, device frame
   double coupling_stiffness = 100.0;                   ///< N/m
   double coupling_time_constant_s = 0.06;
-  double shake_threshold = 1.5;  ///< N: a force step at least this big in one tick shakes the hand
-  double shake_amplitude = 0.004;  ///< m per N of the step, capped at 0.01 m
+  double shake_amplitude = 0.008;  ///< m, a contact's shake (at most 0.01 m)
   double shake_hz = 12.0;
   double shake_s = 0.3;
   /// Each hand's wrist turned about z (up), degrees, positive to the left:
@@ -211,8 +210,7 @@ struct MouseDeviceConfig {
     a->Visit(HAPTEL_NVP(key_hand_rest), config::Range{-5.0, 5.0});
     a->Visit(HAPTEL_NVP(coupling_stiffness), config::Range{1.0, 1e5});
     a->Visit(HAPTEL_NVP(coupling_time_constant_s), config::Range{1e-4, 10.0});
-    a->Visit(HAPTEL_NVP(shake_threshold), config::Range{0.0, 1e3});
-    a->Visit(HAPTEL_NVP(shake_amplitude), config::Range{0.0, 1.0});
+    a->Visit(HAPTEL_NVP(shake_amplitude), config::Range{0.0, 0.01});
     a->Visit(HAPTEL_NVP(shake_hz), config::Range{0.1, 200.0});
     a->Visit(HAPTEL_NVP(shake_s), config::Range{0.0, 10.0});
     a->Visit(HAPTEL_NVP(pointer_hand_yaw_deg), config::Range{-180.0, 180.0});
@@ -320,9 +318,7 @@ struct SdlFfDeviceConfig {
   SdlFfHandMap left, right;
   double poll_hz = 250.0;    ///< the I/O thread reads the axes this often
   double effect_hz = 100.0;  ///< and updates the effects this often
-  /// A contact: the wall rising, or the wrist force jumping by this much
-  /// (N) within one effect period, plays a shake.
-  double shake_threshold = 1.5;
+  /// A contact of the vehicle (ForceSetpoint::contacts) plays a shake.
   double shake_level = 0.6;  ///< of the device's full effect level
   double shake_hz = 12.0;
   double shake_s = 0.3;
@@ -337,7 +333,6 @@ struct SdlFfDeviceConfig {
     a->Visit(HAPTEL_NVP(right));
     a->Visit(HAPTEL_NVP(poll_hz), config::Range{10.0, 2000.0});
     a->Visit(HAPTEL_NVP(effect_hz), config::Range{1.0, 1000.0});
-    a->Visit(HAPTEL_NVP(shake_threshold), config::Range{0.0, 1e3});
     a->Visit(HAPTEL_NVP(shake_level), config::Range{0.0, 1.0});
     a->Visit(HAPTEL_NVP(shake_hz), config::Range{0.1, 200.0});
     a->Visit(HAPTEL_NVP(shake_s), config::Range{0.0, 10.0});

@@ -110,6 +110,13 @@ class Hal {
   /// store stayed in progress through them.
   bool TryCue(Side side, Cue& out) const;
 
+  /// Session thread: the vehicle began a contact (a bumper touched). Every
+  /// side's set-point carries the count from the next servo tick on
+  /// (ForceSetpoint::contacts), so a device shakes the hand on the contact
+  /// itself, not on whatever force it brings.
+  void MarkContact() { contacts_begun_.fetch_add(1, std::memory_order_relaxed); }
+  uint64_t contacts_begun() const { return contacts_begun_.load(std::memory_order_relaxed); }
+
   /// Session thread: scales every force the set-points ask for (fields,
   /// coupling, direct and finger forces) by `scale` in [0, 1] — ramped by the
   /// session when it switches interfaces, so the hands feel no jolt.
@@ -150,6 +157,7 @@ class Hal {
   std::array<std::atomic<HandPresence>, kSides> presence_{};
   std::array<Seqlock<PseudoHaptics>, kSides> pseudo_haptics_;
   std::atomic<double> force_scale_{1.0};
+  std::atomic<uint64_t> contacts_begun_{0};
   std::array<std::atomic<uint64_t>, kSides> wrist_count_{};
   std::array<std::atomic<uint64_t>, kSides> glove_count_{};
   std::array<std::array<Seqlock<TrackerSample>, kTrackerHistory>, kSides> history_;

@@ -87,6 +87,9 @@ struct ForceSetpoint {
   double coupling_damping = 0.0;                 ///< N·s/m
   Vec3d wrist_force{};                           ///< added as is, N
   std::array<double, kFingers> finger_forces{};  ///< N, pulling each finger back (≥ 0)
+  /// The vehicle's contacts begun so far (Hal::MarkContact): a device that
+  /// shows or plays a contact (a shake) does so when this grows.
+  uint64_t contacts = 0;
 };
 
 }  // namespace haptel::haptics

@@ -56,6 +56,12 @@ struct HandPoses {
 
 class ProxyHand {
  public:
+  /// m/s and rad/s: how fast the tracked wrist the proxy follows may move, a
+  /// quick hand's top speed. A sample beyond it (the physics thread stepped
+  /// late, the device's hand went on) is followed at it, over the next steps.
+  static constexpr double kMaxFollowSpeed_mps = 3.0;
+  static constexpr double kMaxFollowTurn_radps = 30.0;
+
   /// Builds the bodies and joints in `world` (which must outlive the hand),
   /// at rest at the origin; the first SetTracked puts the hand on the tracked pose.
   ProxyHand(btDiscreteDynamicsWorld& world, const ProxyHandConfig& config, double step_s,
@@ -66,7 +72,9 @@ class ProxyHand {
 
   Side side() const;
   /// The tracked hand: the coupling's target (wrist pose) and the joint
-  /// drives' targets (glove angles). The first call places the whole hand there.
+  /// drives' targets (glove angles). The first call places the whole hand
+  /// there; later ones move the target towards the sample at most at
+  /// kMaxFollowSpeed_mps / kMaxFollowTurn_radps for one step (call once a step).
   /// Ignores (returns false) a sample that is not valid or not finite.
   bool SetTracked(const haptics::HandSample& tracked);
   /// True once a tracked sample placed the hand.

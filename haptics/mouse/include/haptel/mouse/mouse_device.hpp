@@ -17,12 +17,12 @@
 /// the hand closed) while the grasp button is down too. With the pointer
 /// out of the window it is free: dH/dt = F/(τ·k_c), so a centring field
 /// pulls it back as an unheld arm would go.
-/// A contact starts a shake of the shown hand (PseudoHaptics' `shake`, not
-/// the reading the interfaces drive with), decaying over `shake_s`: a force
-/// step of at least `shake_threshold` in one tick, along the step and
-/// `shake_amplitude` a newton of it; or a wall rising in the set-point (the
-/// gesture's answer to a bumper, which stands where the hand is and so
-/// steps no force), along the wall's normal, the largest shake.
+/// A contact of the vehicle (the set-point's `contacts` count growing,
+/// Hal::MarkContact) starts a shake of the shown pointer hand
+/// (PseudoHaptics' `shake`, not the reading the interfaces drive with) in
+/// the same tick, `shake_amplitude` m decaying over `shake_s`, along the
+/// gesture's wall's normal where one is up, else backwards. Forces never
+/// shake it: a driven control's coupling steps its force all the time.
 ///
 /// The device reports metres and radians and takes newtons (its driver's
 /// CalibrationSource::kSelf): without a calibration file the session gives
@@ -52,7 +52,7 @@ class MouseDevice final : public Device {
   /// The least pointer motion over a window that counts towards the mean
   /// (m): below it the ratio is noise.
   static constexpr double kGainFloorM = 0.005;
-  /// The largest shake, m (MouseDeviceConfig::shake_amplitude's cap).
+  /// The largest shake, m (MouseDeviceConfig::shake_amplitude's bound).
   static constexpr double kMaxShakeM = 0.01;
 
   /// `config.mouse` is the map; `pointer` the box the view stores into
@@ -84,7 +84,7 @@ class MouseDevice final : public Device {
     bool coupled = false;  ///< the pointer is in an open window: the hand follows
     bool held = false;     ///< coupled, and the grasp button is down
     int64_t last_ns = 0;
-    bool wall = false;  ///< the last set-point had a wall up
+    uint64_t contacts_seen = 0;  ///< the set-points' contact count, as last seen
     // The shake: started at shake_start_ns along shake_direction.
     uint64_t shakes = 0;
     bool shaking = false;

@@ -19,8 +19,8 @@
 /// - what the spring does not render — the wall, the field's damping and
 ///   growth, the proxy coupling, a cue — as one constant force: the written
 ///   force minus the spring's model of itself, along each axis;
-/// - a contact (ShakeTrigger): the wall rising, or the written force jumping
-///   by shake_threshold within an effect period, starts a sine shake;
+/// - a contact of the vehicle (ShakeTrigger: the set-point's contact count
+///   grew) starts a sine shake;
 /// - on a device with rumble only: the shake and a wall pressed (its force
 ///   over the limit) as rumble.
 #include <array>
@@ -58,10 +58,11 @@ std::array<double, kGloveJoints> GlovePosture(const std::array<double, 3>& flexi
 
 /// What the servo thread last gave one hand, as the effects see it.
 struct FfSide {
-  bool used = false;   ///< the device has this side
-  bool fresh = false;  ///< the set-point and force are recent (else: no force)
-  ForceField field;    ///< the tick's set-point's field (Device::SetpointHint)
-  Vec3d force{};       ///< N, the wrist force last written
+  bool used = false;      ///< the device has this side
+  bool fresh = false;     ///< the set-point and force are recent (else: no force)
+  ForceField field;       ///< the tick's set-point's field (Device::SetpointHint)
+  Vec3d force{};          ///< N, the wrist force last written
+  uint64_t contacts = 0;  ///< the set-point's count of the vehicle's contacts
 };
 
 struct SpringAxis {
@@ -88,19 +89,15 @@ FfPlan PlanEffects(const SdlFfDeviceConfig& config, const std::array<FfSide, kSi
 /// Decides when a contact starts a shake, once per effect period.
 class ShakeTrigger {
  public:
-  explicit ShakeTrigger(const SdlFfDeviceConfig& config)
-      : threshold_(config.shake_threshold), shake_s_(config.shake_s) {}
-  /// True when a shake starts at `t_s`: a wall came on, or a hand's written
-  /// force moved by at least shake_threshold since the last call (both
-  /// fresh), while no shake plays.
+  explicit ShakeTrigger(const SdlFfDeviceConfig& config) : shake_s_(config.shake_s) {}
+  /// True when a shake starts at `t_s`: a side's count of the vehicle's
+  /// contacts grew since the last call, while no shake plays. Forces never
+  /// start one (a driven control's coupling steps its force all the time).
   bool Step(double t_s, const std::array<FfSide, kSides>& sides);
 
  private:
-  double threshold_;
   double shake_s_;
-  std::array<bool, kSides> wall_{};
-  std::array<Vec3d, kSides> force_{};
-  std::array<bool, kSides> have_force_{};
+  uint64_t contacts_ = 0;
   double until_s_ = -1e9;
 };
 
