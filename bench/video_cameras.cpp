@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <fstream>
 #include <map>
 #include <stdexcept>
@@ -165,7 +166,8 @@ TwoCameraResult RunTwoCameraSchedule(const TwoCameraOptions& options) {
   std::ofstream csv(options.out_dir / "video_cameras.csv");
   csv << "capacity_kbps,camera,fps,kbps,latency_ms_p50,latency_ms_p95\n";
   for (const TwoCameraPhase& p : result.phases) {
-    for (const auto& [name, f] : {std::pair{"pilot", p.pilot}, {"surveillance", p.surveillance}}) {
+    for (const auto& [name, f] :
+         {std::pair{"pilot", p.pilot}, std::pair{"surveillance", p.surveillance}}) {
       csv << p.capacity_kbps << ',' << name << ',' << f.fps << ',' << f.kbps << ','
           << f.latency_ms_p50 << ',' << f.latency_ms_p95 << '\n';
     }

@@ -581,6 +581,15 @@ TEST_CASE("A vehicle's cameras: one camera: is the pilot; cameras: lists them, t
   CHECK(servo.camera_channels[0].camera == 1);
   CHECK(servo.camera_channels[2].axis == haptel::CameraServoChannel::Axis::kZoom);
   CHECK(servo.camera_channels[2].max == 10.0);
+
+  // The robot's rear camera looks backwards from its back.
+  const haptel::VehicleConfig robot =
+      haptel::LoadVehicle("config/vehicles/sim-robot-rear-camera.yaml");
+  REQUIRE(robot.extra_cameras.size() == 1);
+  CHECK(robot.extra_cameras[0].name == "rear");
+  CHECK(robot.extra_cameras[0].mount_yaw_deg == 180.0);
+  CHECK(robot.extra_cameras[0].mount_forward < 0.0);
+  CHECK(robot.camera.codec == haptel::CameraCodec::kH264);
 }
 
 TEST_CASE("Bad file: cameras", "[config][bad]") {

@@ -331,18 +331,19 @@ TEST_CASE(
   CHECK(f->width() == 64);
 
   // Out of range (zoom 9 of 4) and another writer's: dropped and counted.
+  // Sent over time (best effort, keep last 1: a burst may be cut short),
+  // with the holder's good command that keeps its hold.
   const uint64_t shown = f->command_seq();
-  for (int i = 0; i < 5; ++i) {
-    send(commands, {.pan = 0.0, .tilt = 0.0, .zoom = 9.0});
-    send(foreign, {.pan = -1.0, .tilt = 0.0, .zoom = 1.0});
-  }
   std::optional<msg::CameraStatus> s;
   REQUIRE(test::WaitFor(
       [&] {
+        send(commands, {.pan = 0.0, .tilt = 0.0, .zoom = 9.0});
+        send(foreign, {.pan = -1.0, .tilt = 0.0, .zoom = 1.0});
+        send(commands, {.pan = 0.5, .tilt = 0.0, .zoom = 3.0});
         std::lock_guard lock(mutex);
         s = status;
-        return s && s->cameras().size() == 2 && s->cameras()[1].commands_malformed() >= 5 &&
-               s->cameras()[1].commands_refused() >= 5;
+        return s && s->cameras().size() == 2 && s->cameras()[1].commands_malformed() >= 3 &&
+               s->cameras()[1].commands_refused() >= 3;
       },
       20.0));
   const msg::CameraInfo& info = s->cameras()[1];
@@ -370,7 +371,7 @@ TEST_CASE(
       20.0));
   node->Stop();
   const NodeCounters counters = node->Counters();
-  CHECK(counters.camera_commands_malformed >= 5);
-  CHECK(counters.camera_commands_refused >= 5);
+  CHECK(counters.camera_commands_malformed >= 3);
+  CHECK(counters.camera_commands_refused >= 3);
   CHECK(counters.camera_frames_published > 0);
 }
