@@ -1,11 +1,13 @@
 #include <algorithm>
 #include <atomic>
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <mutex>
 #include <vector>
 
 #include "haptel/config/error.hpp"
 #include "haptel/core/clock.hpp"
+#include "haptel/link/families.hpp"
 #include "haptel/link/security.hpp"
 #include "haptel/link/topic.hpp"
 #include "test_env.hpp"
@@ -24,6 +26,45 @@ LinkConfig Config(int salt) {
 TEST_CASE("topic names carry the vehicle name") {
   CHECK(TopicName("robot1", "command") == "haptel/robot1/command");
   CHECK(TopicName("blimp", "video") == "haptel/blimp/video");
+}
+
+TEST_CASE("each camera has its own topics; the driven camera keeps the single camera's") {
+  CHECK(VideoTopic("blimp", "pilot", true) == "haptel/blimp/video");
+  CHECK(VideoFeedbackTopic("blimp", "pilot", true) == "haptel/blimp/video_feedback");
+  CHECK(VideoTopic("blimp", "surveillance", false) == "haptel/blimp/video/surveillance");
+  CHECK(VideoFeedbackTopic("blimp", "surveillance", false) ==
+        "haptel/blimp/video_feedback/surveillance");
+  CHECK(CameraCommandTopic("blimp", "surveillance") == "haptel/blimp/camera/surveillance");
+  CHECK(CameraStatusTopic("blimp") == "haptel/blimp/cameras");
+}
+
+TEST_CASE("a camera command decodes for its own camera within its ranges only") {
+  const CameraRange range{
+      .pan_min = -3.0, .pan_max = 3.0, .tilt_min = -1.5, .tilt_max = 0.2, .zoom_max = 10.0};
+  msg::CameraCommand m;
+  CameraMessages::Encode("surveillance", {0.5, -0.25, 4.0}, m);
+  CameraAim aim;
+  REQUIRE(CameraMessages::Decode(m, "surveillance", range, aim));
+  CHECK(aim.pan == Approx(0.5));
+  CHECK(aim.tilt == Approx(-0.25));
+  CHECK(aim.zoom == Approx(4.0));
+  CHECK_FALSE(CameraMessages::Decode(m, "pilot", range, aim));  // another camera's topic
+  m.zoom(12.0F);
+  CHECK_FALSE(CameraMessages::Decode(m, "surveillance", range, aim));
+  CHECK(aim.zoom == Approx(10.0));  // clamped, for whoever uses it anyway
+  m.zoom(0.5F);
+  CHECK_FALSE(CameraMessages::Decode(m, "surveillance", range, aim));
+  m.zoom(1.0F);
+  m.tilt(std::nanf(""));
+  CHECK_FALSE(CameraMessages::Decode(m, "surveillance", range, aim));
+  m.tilt(0.2005F);  // a float's rounding past the end
+  CHECK(CameraMessages::Decode(m, "surveillance", range, aim));
+}
+
+TEST_CASE("a zoomed lens narrows its field of view by the tangent") {
+  CHECK(ZoomedFovDeg(60.0, 1.0) == Approx(60.0));
+  CHECK(ZoomedFovDeg(60.0, 10.0) == Approx(6.61).epsilon(0.01));
+  CHECK(ZoomedFovDeg(60.0, 0.5) == Approx(60.0));  // never wider than the widest
 }
 
 TEST_CASE("QoS profiles: command best effort with a deadline, state reliable, video best effort") {

@@ -5,9 +5,11 @@
 /// check). The vehicle node (vehicles/families.hpp) and the operator's link
 /// (mediator/vehicle_link.hpp) are written once over these.
 #include <cmath>
+#include <string>
 
 #include "haptel/config/vehicle_kinds.hpp"
 #include "haptel/core/blimp_command.hpp"
+#include "haptel/core/camera_aim.hpp"
 #include "haptel/core/tread_command.hpp"
 #include "haptel/link/topic.hpp"
 
@@ -76,6 +78,71 @@ struct BlimpMessages {
   }
   /// The vehicle's command watchdog holds every channel at neutral.
   static bool WatchdogTripped(const StateMsg& s) { return s.failsafe(); }
+};
+
+/// A vehicle's cameras (issue 38): each camera's video is its own stream
+/// with its own feedback; a steerable camera takes CameraCommands on a topic
+/// of its own, apart from the driving topics, so DDS Security can grant it
+/// alone (the camera station's identity); CameraStatus says what cameras
+/// there are and where each points. Names: a camera's name is a topic's
+/// path segment (config: [a-z0-9_-], at most 31 characters).
+///
+///   haptel/<vehicle>/video                   the driven camera's VideoFrame (as ever)
+///   haptel/<vehicle>/video_feedback          its VideoFeedback (as ever)
+///   haptel/<vehicle>/video/<camera>          every other camera's VideoFrame (kVideo)
+///   haptel/<vehicle>/video_feedback/<camera> its VideoFeedback (kState)
+///   haptel/<vehicle>/camera/<camera>         CameraCommand, station → vehicle (kCommand)
+///   haptel/<vehicle>/cameras                 CameraStatus, vehicle → anyone (kLatched)
+///
+/// The driven camera is the vehicle file's first: the driver's, steered by
+/// the driving command (the blimp's camera_pan/tilt), never by a CameraCommand.
+inline std::string VideoTopic(const std::string& vehicle, const std::string& camera, bool driven) {
+  return driven ? TopicName(vehicle, "video") : TopicName(vehicle, "video/" + camera);
+}
+inline std::string VideoFeedbackTopic(const std::string& vehicle, const std::string& camera,
+                                      bool driven) {
+  return driven ? TopicName(vehicle, "video_feedback")
+                : TopicName(vehicle, "video_feedback/" + camera);
+}
+inline std::string CameraCommandTopic(const std::string& vehicle, const std::string& camera) {
+  return TopicName(vehicle, "camera/" + camera);
+}
+inline std::string CameraStatusTopic(const std::string& vehicle) {
+  return TopicName(vehicle, "cameras");
+}
+
+/// A steerable camera's command (CameraCommand) and the vehicle's status of
+/// its cameras (CameraStatus). The command is an aim, not a rate: no
+/// watchdog moves a camera its holder stopped commanding.
+struct CameraMessages {
+  using Command = CameraAim;
+  using CommandMsg = msg::CameraCommand;
+  using CommandWriter = link::CameraCommandWriter;
+  using CommandReader = link::CameraCommandReader;
+  using StatusMsg = msg::CameraStatus;
+  using StatusWriter = link::CameraStatusWriter;
+  using StatusReader = link::CameraStatusReader;
+  static constexpr Profile kCommandProfile = Profile::kCommand;
+  static constexpr Profile kStatusProfile = Profile::kLatched;
+
+  /// A float's rounding past a range's end is not malformed.
+  static constexpr double kRangeSlack = 1e-3;
+  /// The values of `c` for `camera` into `m` (the caller stamps sequence,
+  /// time, session and operator).
+  static void Encode(const std::string& camera, const Command& c, CommandMsg& m) {
+    m.camera(camera);
+    m.pan(static_cast<float>(c.pan));
+    m.tilt(static_cast<float>(c.tilt));
+    m.zoom(static_cast<float>(c.zoom));
+  }
+  /// The aim in `m` for `camera`, clamped into `range`; false when it was
+  /// malformed: another camera's name, non-finite or out of range.
+  static bool Decode(const CommandMsg& m, const std::string& camera, const CameraRange& range,
+                     Command& out) {
+    const CameraAim aim{m.pan(), m.tilt(), m.zoom()};
+    out = Clamped(aim, range);
+    return m.camera() == camera && InRange(aim, range, kRangeSlack);
+  }
 };
 
 }  // namespace haptel::link

@@ -249,4 +249,11 @@ using BlimpCommandReader = Reader<msg::BlimpCommand, msg::BlimpCommandPubSubType
 using BlimpStateWriter = Writer<msg::BlimpState, msg::BlimpStatePubSubType>;
 using BlimpStateReader = Reader<msg::BlimpState, msg::BlimpStatePubSubType>;
 
+// A steerable camera's command and the vehicle's cameras (families.hpp:
+// CameraCommandTopic, CameraStatusTopic).
+using CameraCommandWriter = Writer<msg::CameraCommand, msg::CameraCommandPubSubType>;
+using CameraCommandReader = Reader<msg::CameraCommand, msg::CameraCommandPubSubType>;
+using CameraStatusWriter = Writer<msg::CameraStatus, msg::CameraStatusPubSubType>;
+using CameraStatusReader = Reader<msg::CameraStatus, msg::CameraStatusPubSubType>;
+
 }  // namespace haptel::link

@@ -69,8 +69,10 @@ class VideoReceiver final : public FrameSource {
   /// (the run's, as its commands: the vehicle takes its owner's feedback
   /// only). With `decode` false frames are only counted (no screen to show
   /// them on; no requests).
+  /// `camera`: another camera than the driven one (its name: the stream on
+  /// haptel/<vehicle>/video/<camera>, feedback on video_feedback/<camera>).
   VideoReceiver(link::Participant& participant, const std::string& vehicle, uint64_t session,
-                bool decode);
+                bool decode, const std::string& camera = {});
   /// A receiver on no link: it receives nothing (zero frames), and runs
   /// no thread (a simulated-time run, whose driver reads the state).
   VideoReceiver();
@@ -96,6 +98,8 @@ class VideoReceiver final : public FrameSource {
     std::vector<uint8_t> bytes;
     int64_t capture_ns = 0;
     uint64_t seq = 0;
+    uint64_t command_seq = 0;
+    float zoom = 1.0F;
     bool key_frame = false;
     bool h264 = false;
   };
