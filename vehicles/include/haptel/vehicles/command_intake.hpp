@@ -63,6 +63,7 @@ struct CommandOwnerInfo {
   link::WriterId writer;  ///< empty: nobody owns the vehicle
   uint64_t session = 0;   ///< the session its commands name (0: nobody owns the vehicle)
   char name[64] = "";
+  int64_t since_wall_ns = 0;  ///< when it took the vehicle (CLOCK_REALTIME; 0: nobody)
 };
 
 /// One operator at a time drives a vehicle: one command writer (its DDS
@@ -102,6 +103,7 @@ class CommandOwner {
         info.writer = writer_;
         info.session = from.session;
         std::snprintf(info.name, sizeof info.name, "%s", from.name != nullptr ? from.name : "");
+        info.since_wall_ns = WallNs();
       }
       info_.Store(info);
     }
@@ -117,6 +119,15 @@ class CommandOwner {
   int64_t last_ns_ = 0;
   Seqlock<CommandOwnerInfo> info_;
   std::atomic<uint64_t> refused_{0};
+};
+
+/// Writers that may not drive however free the vehicle is: those of a
+/// participant that holds one of its cameras (a camera station: CameraLeases,
+/// camera_lease.hpp). Asked on the DDS thread; allocation-free.
+class DrivingBar {
+ public:
+  virtual ~DrivingBar() = default;
+  virtual bool Bars(const link::WriterId& writer, int64_t now_ns) const = 0;
 };
 
 /// A command as the control loop applies it, with what the state echoes.
@@ -143,6 +154,10 @@ class CommandIntake {
              const Command& command, int64_t now_ns) {
     if (!valid) {
       malformed_.fetch_add(1, std::memory_order_relaxed);
+      return false;
+    }
+    if (bar_ != nullptr && bar_->Bars(from.writer, now_ns)) {
+      barred_.fetch_add(1, std::memory_order_relaxed);
       return false;
     }
     const CommandOwner::Verdict verdict = owner_.Admit(from, now_ns);
@@ -185,14 +200,19 @@ class CommandIntake {
   uint64_t accepted() const { return accepted_.load(); }
   uint64_t malformed() const { return malformed_.load(); }
   uint64_t stale() const { return stale_.load(); }
-  /// Commands from a writer that did not own the vehicle: dropped.
-  uint64_t refused() const { return owner_.refused(); }
+  /// Commands from a writer that did not own the vehicle, or that may not
+  /// drive it (SetBar): dropped.
+  uint64_t refused() const { return owner_.refused() + barred_.load(); }
+  /// Set-up, before the first Offer: writers `bar` bars are refused (it
+  /// must outlive the intake; null: none).
+  void SetBar(const DrivingBar* bar) { bar_ = bar; }
   /// The writer (and session) the vehicle obeys now.
   CommandOwnerInfo owner() const { return owner_.owner(); }
   uint64_t watchdog_trips() const { return trips_.load(); }
   bool watchdog_expired() const { return expired_.load(); }
 
  private:
+  const DrivingBar* bar_ = nullptr;
   CommandOwner owner_;        // DDS thread
   CommandSequence sequence_;  // DDS thread
   Seqlock<ReceivedCommand<Command>> latest_;
@@ -200,7 +220,7 @@ class CommandIntake {
   uint64_t
       applied_version_;  ///< the seqlock's version last taken (its initial value is no command)
   ReceivedCommand<Command> applied_;
-  std::atomic<uint64_t> accepted_{0}, malformed_{0}, stale_{0}, trips_{0};
+  std::atomic<uint64_t> accepted_{0}, malformed_{0}, stale_{0}, trips_{0}, barred_{0};
   std::atomic<bool> expired_{true};
 };
 

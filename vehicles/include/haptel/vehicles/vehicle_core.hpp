@@ -64,6 +64,11 @@ class VehicleCoreOf {
   /// The end: made safe and stepped once (unless the hardware is gone).
   void MakeSafe();
 
+  /// Set-up, before the first command: writers `bar` bars may not drive
+  /// (the participants that hold a camera: CameraLeases); it must outlive
+  /// the core.
+  void SetDrivingBar(const DrivingBar* bar) { commands_.SetBar(bar); }
+
   const Adapter& adapter() const { return *adapter_; }
   const CommandIntake<Command>& commands() const { return commands_; }
   const VehicleConfig& config() const { return config_; }
