@@ -37,13 +37,20 @@ VideoReceiver::VideoReceiver() : decode_(false) {}
 
 VideoReceiver::VideoReceiver(link::Participant& participant, const std::string& vehicle,
                              uint64_t session, bool decode)
+    : VideoReceiver(participant, link::TopicName(vehicle, "video"),
+                    link::TopicName(vehicle, "video_feedback"), session, decode, nullptr) {}
+
+VideoReceiver::VideoReceiver(link::Participant& participant, const std::string& video_topic,
+                             const std::string& feedback_topic, uint64_t session, bool decode,
+                             FrameObserver on_frame)
     : decode_(decode),
       session_(session),
-      feedback_(std::make_unique<link::VideoFeedbackWriter>(
-          participant, link::TopicName(vehicle, "video_feedback"), link::Profile::kState)) {
+      on_frame_(std::move(on_frame)),
+      feedback_(std::make_unique<link::VideoFeedbackWriter>(participant, feedback_topic,
+                                                            link::Profile::kState)) {
   decoder_thread_ = std::thread([this] { DecodeLoop(); });
   reader_ = std::make_unique<link::VideoReader>(
-      participant, link::TopicName(vehicle, "video"), link::Profile::kVideo,
+      participant, video_topic, link::Profile::kVideo,
       [this](const msg::VideoFrame& f, const link::SampleStamps& stamps) { OnFrame(f, stamps); });
   std::lock_guard lock(mutex_);
   reader_ready_ = true;
@@ -64,6 +71,7 @@ VideoReceiver::~VideoReceiver() {
 }
 
 void VideoReceiver::OnFrame(const msg::VideoFrame& frame, const link::SampleStamps& stamps) {
+  if (on_frame_) on_frame_(frame, stamps);
   const int64_t now = stamps.arrived_ns;
   const bool h264 = frame.encoding() == CameraCodecName(CameraCodec::kH264);
   msg::VideoFeedback rate;  // sent below when the estimate is due

@@ -24,6 +24,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <opencv2/core.hpp>
@@ -71,6 +72,16 @@ class VideoReceiver final : public FrameSource {
   /// them on; no requests).
   VideoReceiver(link::Participant& participant, const std::string& vehicle, uint64_t session,
                 bool decode);
+  /// Hears every frame as it arrives (on the DDS thread, before it waits
+  /// for the decoder): a camera station's command-to-picture latency from
+  /// the frame's command_seq. Short, no blocking.
+  using FrameObserver = std::function<void(const msg::VideoFrame&, const link::SampleStamps&)>;
+  /// The same for one camera's stream (link::VideoTopic and
+  /// VideoFeedbackTopic: a vehicle's second camera), each frame also handed
+  /// to `on_frame` (may be empty).
+  VideoReceiver(link::Participant& participant, const std::string& video_topic,
+                const std::string& feedback_topic, uint64_t session, bool decode,
+                FrameObserver on_frame);
   /// A receiver on no link: it receives nothing (zero frames), and runs
   /// no thread (a simulated-time run, whose driver reads the state).
   VideoReceiver();
@@ -113,6 +124,7 @@ class VideoReceiver final : public FrameSource {
 
   bool decode_;
   uint64_t session_ = 0;  ///< carried by every feedback sample
+  FrameObserver on_frame_;
   mutable std::mutex mutex_;
   std::condition_variable ready_;
   std::deque<Pending> pending_;
