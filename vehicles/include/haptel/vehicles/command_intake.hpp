@@ -97,6 +97,7 @@ class CommandOwner {
     writer_ = from.writer;
     last_ns_ = now_ns;
     owned_ = !from.release;
+    held_until_ns_.store(owned_ ? now_ns + free_after_ns_ : 0, std::memory_order_relaxed);
     if (changed || from.release) {
       CommandOwnerInfo info;
       if (owned_) {
@@ -111,6 +112,13 @@ class CommandOwner {
   }
   CommandOwnerInfo owner() const { return info_.Load(); }
   uint64_t refused() const { return refused_.load(); }
+  /// Whether a writer of `writer`'s participant owns it at `now_ns`: it
+  /// took it, has not released it and has not fallen silent. Any thread.
+  bool HeldByParticipantOf(const link::WriterId& writer, int64_t now_ns) const {
+    if (now_ns > held_until_ns_.load(std::memory_order_relaxed)) return false;
+    const CommandOwnerInfo info = info_.Load();
+    return !info.writer.empty() && info.writer.SameParticipant(writer);
+  }
 
  private:
   int64_t free_after_ns_;
@@ -118,12 +126,15 @@ class CommandOwner {
   link::WriterId writer_;
   int64_t last_ns_ = 0;
   Seqlock<CommandOwnerInfo> info_;
+  std::atomic<int64_t> held_until_ns_{0};  ///< the owner's lease ends (0: nobody owns it)
   std::atomic<uint64_t> refused_{0};
 };
 
 /// Writers that may not drive however free the vehicle is: those of a
-/// participant that holds one of its cameras (a camera station: CameraLeases,
-/// camera_lease.hpp). Asked on the DDS thread; allocation-free.
+/// participant that holds one of its cameras (a camera station, issue 38:
+/// the vehicle node asks each camera's intake, HeldByParticipantOf). With
+/// DDS Security a station's identity may not even write a driving command;
+/// without, this is what refuses it. Asked on the DDS thread; allocation-free.
 class DrivingBar {
  public:
   virtual ~DrivingBar() = default;
@@ -208,6 +219,10 @@ class CommandIntake {
   void SetBar(const DrivingBar* bar) { bar_ = bar; }
   /// The writer (and session) the vehicle obeys now.
   CommandOwnerInfo owner() const { return owner_.owner(); }
+  /// See CommandOwner::HeldByParticipantOf. Any thread.
+  bool HeldByParticipantOf(const link::WriterId& writer, int64_t now_ns) const {
+    return owner_.HeldByParticipantOf(writer, now_ns);
+  }
   uint64_t watchdog_trips() const { return trips_.load(); }
   bool watchdog_expired() const { return expired_.load(); }
 

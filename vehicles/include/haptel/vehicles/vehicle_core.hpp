@@ -65,8 +65,8 @@ class VehicleCoreOf {
   void MakeSafe();
 
   /// Set-up, before the first command: writers `bar` bars may not drive
-  /// (the participants that hold a camera: CameraLeases); it must outlive
-  /// the core.
+  /// (the participants that hold one of its cameras); it must outlive the
+  /// core.
   void SetDrivingBar(const DrivingBar* bar) { commands_.SetBar(bar); }
 
   const Adapter& adapter() const { return *adapter_; }
