@@ -23,6 +23,7 @@
 #include "haptel/video/image_quality.hpp"
 #include "plot.hpp"
 #include "smoke.hpp"
+#include "video_cameras.hpp"
 #include "video_schedule.hpp"
 
 namespace haptel::bench {
@@ -106,8 +107,10 @@ int BenchVideoMain(int argc, const char* const* argv) {
   std::string track_file;
   ScheduleOptions schedule;
   std::vector<CameraCodec> schedule_codecs;
+  TwoCameraOptions two_cameras;
+  bool run_two_cameras = true;
   try {
-    const Args args(argc, argv, {"vehicle", "track", "phase-s", "schedule", "domain"},
+    const Args args(argc, argv, {"vehicle", "track", "phase-s", "schedule", "domain", "cameras"},
                     {"json", kSmokeFlag});
     json = args.Flag("json");
     smoke = args.Flag(kSmokeFlag);
@@ -134,6 +137,18 @@ int BenchVideoMain(int argc, const char* const* argv) {
     } else {
       throw UsageError("option --schedule: expected default, both, jpeg, h264 or off, got '" +
                        which + "'");
+    }
+    // Part 3: two cameras sharing the link (the blimp's pilot and surveillance cameras).
+    const std::string cameras = args.Value("cameras").value_or(
+        ShippedFile("config/vehicles/sim-blimp-surveillance.yaml").string());
+    run_two_cameras = cameras != "off";
+    if (run_two_cameras) two_cameras.vehicle_file = cameras;
+    two_cameras.domain = schedule.domain == 232 ? 231 : schedule.domain + 1;
+    if (smoke) {
+      two_cameras.capacities_kbps = {3000.0, 800.0};
+      two_cameras.phase_s = 3.0;
+    } else {
+      two_cameras.phase_s = args.Number("phase-s", 1.0, 600.0).value_or(15.0);
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "haptel bench video: %s\n", e.what());
@@ -259,6 +274,37 @@ int BenchVideoMain(int argc, const char* const* argv) {
     std::fflush(stdout);
   }
 
+  TwoCameraResult two;
+  bool two_ok = true;
+  if (run_two_cameras) {
+    two_cameras.out_dir = dir;
+    std::printf("\n  two cameras (%s): the link's rate steps",
+                two_cameras.vehicle_file.filename().c_str());
+    for (const double c : two_cameras.capacities_kbps) std::printf(" %.2f", c / 1000.0);
+    std::printf(" Mbit/s, %.0f s each; the surveillance camera re-aimed every 0.5 s\n",
+                two_cameras.phase_s);
+    std::fflush(stdout);
+    two = RunTwoCameraSchedule(two_cameras);
+    if (!two.ok) {
+      std::fprintf(stderr, "haptel bench video: two cameras: %s\n", two.error.c_str());
+      two_ok = false;
+    }
+    std::printf("  %9s  %-12s %6s %9s %9s %9s\n", "capacity", "camera", "fps", "kbit/s", "lat p50",
+                "lat p95");
+    for (const TwoCameraPhase& p : two.phases) {
+      for (const auto& [name, f] :
+           {std::pair{"pilot", p.pilot}, std::pair{"surveillance", p.surveillance}}) {
+        std::printf("  %9.0f  %-12s %6.1f %9.0f %9.1f %9.1f\n", p.capacity_kbps, name, f.fps,
+                    f.kbps, f.latency_ms_p50, f.latency_ms_p95);
+      }
+    }
+    std::printf(
+        "  pan/tilt/zoom command to picture: p50 %.1f ms, p95 %.1f ms (%d of %d aims shown); "
+        "wrote %s/video_cameras.csv\n",
+        two.aim_latency_ms_p50, two.aim_latency_ms_p95, two.aims_shown, two.aims, dir.c_str());
+    std::fflush(stdout);
+  }
+
   if (json) {
     std::ostringstream o;
     o << "{\"codecs\":[";
@@ -305,10 +351,27 @@ int BenchVideoMain(int argc, const char* const* argv) {
       o << (first ? "" : ",") << "\"" << CameraCodecName(r.codec) << "\":" << JsonNumber(r.adapt_s);
       first = false;
     }
-    o << "}}";
+    o << "},\"cameras\":[";
+    first = true;
+    for (const TwoCameraPhase& p : two.phases) {
+      for (const auto& [name, f] :
+           {std::pair{"pilot", p.pilot}, std::pair{"surveillance", p.surveillance}}) {
+        o << (first ? "" : ",") << "{\"camera\":\"" << name
+          << "\",\"capacity_kbps\":" << JsonNumber(p.capacity_kbps)
+          << ",\"fps\":" << JsonNumber(f.fps) << ",\"kbps\":" << JsonNumber(f.kbps)
+          << ",\"latency_ms_p50\":" << JsonNumber(f.latency_ms_p50)
+          << ",\"latency_ms_p95\":" << JsonNumber(f.latency_ms_p95) << "}";
+        first = false;
+      }
+    }
+    o << "],\"aim_latency_ms_p50\":"
+      << (two.aims_shown > 0 ? JsonNumber(two.aim_latency_ms_p50) : std::string("null"))
+      << ",\"aim_latency_ms_p95\":"
+      << (two.aims_shown > 0 ? JsonNumber(two.aim_latency_ms_p95) : std::string("null"))
+      << ",\"aims\":" << two.aims << ",\"aims_shown\":" << two.aims_shown << "}";
     std::printf("%s\n", JsonLine(o.str(), smoke).c_str());
   }
-  return all_ok && schedules_ok ? 0 : 1;
+  return all_ok && schedules_ok && two_ok ? 0 : 1;
 }
 
 }  // namespace haptel::bench

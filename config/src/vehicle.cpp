@@ -72,6 +72,39 @@ void CameraConfig::ValidateOrThrow() const {
   if (file.empty() && source == CameraSourceKind::kFile) {
     check::Fail("file", "a video file (relative to the config file's folder) for source: file");
   }
+  if (name.empty() || name.size() > kMaxCameraNameLength ||
+      name.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789_-") != std::string::npos) {
+    check::Fail("name",
+                "a camera name of 1 to 31 lower-case letters, digits, '_' or '-' (it names the "
+                "camera's DDS topics)");
+  }
+  if (pan_max_deg < pan_min_deg) check::Fail("pan_max_deg", "at least pan_min_deg");
+  if (tilt_max_deg < tilt_min_deg) check::Fail("tilt_max_deg", "at least tilt_min_deg");
+  const std::pair<const char*, const ServoChannelConfig*> servos[] = {
+      {"pan_servo", &pan_servo}, {"tilt_servo", &tilt_servo}, {"zoom_servo", &zoom_servo}};
+  for (const auto& [key, servo] : servos) {
+    if (servo->channel >= 0) check::Nested(key, *servo);
+  }
+  if (pan_servo.channel >= 0 && !Range().pans())
+    check::Fail("pan_servo",
+                "no pan servo on a camera that does not pan (pan_min_deg < pan_max_deg)");
+  if (tilt_servo.channel >= 0 && !Range().tilts())
+    check::Fail("tilt_servo",
+                "no tilt servo on a camera that does not tilt (tilt_min_deg < tilt_max_deg)");
+  if (zoom_servo.channel >= 0 && !Range().zooms())
+    check::Fail("zoom_servo", "no zoom servo on a camera that does not zoom (zoom_max > 1)");
+}
+
+CameraRange CameraConfig::Range() const {
+  constexpr double kRadPerDeg = 0.017453292519943295;
+  return {pan_min_deg * kRadPerDeg, pan_max_deg * kRadPerDeg, tilt_min_deg * kRadPerDeg,
+          tilt_max_deg * kRadPerDeg, zoom_max};
+}
+
+std::vector<CameraConfig> VehicleConfig::Cameras() const {
+  std::vector<CameraConfig> all{camera};
+  all.insert(all.end(), extra_cameras.begin(), extra_cameras.end());
+  return all;
 }
 
 namespace {
@@ -143,10 +176,89 @@ void VehicleConfig::ValidateOrThrow() const {
   }
   if (info->Uses(kAirshipSection)) check::Nested("airship", airship);
   if (info->Uses(kServoSection)) check::Nested("servo", servo);
+  ValidateCameras();
   if (info->Uses(kRos2Section)) check::Nested("ros2", ros2);
   if (!reality.empty() && !info->simulated) {
     check::Fail("reality", "no reality for kind " + kind +
                                " (hardware has its own); only a simulated kind runs one");
+  }
+}
+
+ServoControllerConfig VehicleConfig::ServoWithCameras() const {
+  ServoControllerConfig out = servo;
+  out.camera_channels.clear();
+  const std::vector<CameraConfig> cameras = Cameras();
+  for (size_t i = 0; i < cameras.size(); ++i) {
+    const CameraConfig& c = cameras[i];
+    const CameraRange r = c.Range();
+    using Axis = CameraServoChannel::Axis;
+    const auto add = [&](const ServoChannelConfig& s, Axis axis, double lo, double hi) {
+      if (s.channel >= 0) out.camera_channels.push_back({s, static_cast<int>(i), axis, lo, hi});
+    };
+    add(c.pan_servo, Axis::kPan, r.pan_min, r.pan_max);
+    add(c.tilt_servo, Axis::kTilt, r.tilt_min, r.tilt_max);
+    add(c.zoom_servo, Axis::kZoom, 1.0, r.zoom_max);
+  }
+  return out;
+}
+
+void VehicleConfig::ValidateCameras() const {
+  const std::vector<CameraConfig> cameras = Cameras();
+  if (cameras.size() > static_cast<size_t>(kMaxVehicleCameras)) {
+    check::Fail("cameras", "at most " + std::to_string(kMaxVehicleCameras) + " cameras");
+  }
+  const auto key = [&](size_t i) {
+    return cameras_listed ? "cameras[" + std::to_string(i) + "]" : std::string("camera");
+  };
+  const VehicleKindInfo* info = FindVehicleKind(kind);
+  const bool servo_kind = info != nullptr && info->Uses(kServoSection);
+  // Each output once: the seven channels' and every camera axis's.
+  std::vector<int> outputs;
+  if (servo_kind) {
+    for (const ServoChannelConfig& c : servo.channels) outputs.push_back(c.channel);
+  }
+  const int outputs_max =
+      servo.protocol == ServoProtocol::kSc8000 ? kSc8000Channels : kMaestroChannels;
+  for (size_t i = 0; i < cameras.size(); ++i) {
+    const CameraConfig& c = cameras[i];
+    check::Nested(key(i), c);
+    for (size_t j = 0; j < i; ++j) {
+      if (cameras[j].name == c.name) {
+        check::Fail(key(i) + ".name", "a name no other camera of the vehicle has ('" + c.name +
+                                          "' appears twice: their topics would be one)");
+      }
+    }
+    const std::pair<const char*, const ServoChannelConfig*> servos[] = {
+        {"pan_servo", &c.pan_servo}, {"tilt_servo", &c.tilt_servo}, {"zoom_servo", &c.zoom_servo}};
+    for (const auto& [axis, s] : servos) {
+      if (s->channel < 0) continue;
+      const std::string at = key(i) + "." + axis + ".channel";
+      if (i == 0) {
+        check::Fail(key(i) + "." + axis,
+                    "no servo on the driven camera (it turns through the driving command's "
+                    "servo.channels.camera_pan and camera_tilt)");
+      }
+      if (!servo_kind) {
+        check::Fail(key(i) + "." + axis, "no servo for kind " + kind +
+                                             " (only a kind with a servo controller drives one)");
+      }
+      if (s->channel >= outputs_max) {
+        check::Fail(at, std::string("an output the ") + ServoProtocolName(servo.protocol) +
+                            " has: 0.." + std::to_string(outputs_max - 1) + " (" +
+                            std::to_string(s->channel) + " is not one of its outputs)");
+      }
+      if (servo.protocol == ServoProtocol::kSc8000 &&
+          (s->min_us < kSc8000MinPulse_us || s->max_us > kSc8000MaxPulse_us)) {
+        check::Fail(key(i) + "." + axis, "pulses within the SC-8000's 800..2200 us");
+      }
+      for (int used : outputs) {
+        if (used == s->channel) {
+          check::Fail(at,
+                      "an output no other channel uses (" + std::to_string(used) + " is taken)");
+        }
+      }
+      outputs.push_back(s->channel);
+    }
   }
 }
 
@@ -169,6 +281,32 @@ VehicleConfig LoadVehicle(const std::filesystem::path& file) {
     require("can", kCanSection, "its nodes and wheel velocities");
     require("airship", kAirshipSection, "its hull, fins and motors");
     require("servo", kServoSection, "its controller's protocol and channels");
+    // One camera (`camera:`, named pilot unless it says otherwise) or a
+    // list of them (`cameras:`, the driven one first); not both.
+    if (root.Has("cameras")) {
+      if (root.Has("camera")) {
+        root.Fail("cameras",
+                  "either 'camera:' (one camera) or 'cameras:' (a list, the driven camera "
+                  "first), not both: move the 'camera:' mapping into the list as its first item");
+      }
+      std::vector<YamlMap> list = root.MapList("cameras");
+      if (list.empty() || list.size() > static_cast<size_t>(kMaxVehicleCameras)) {
+        root.Fail("cameras", "a list of 1 to " + std::to_string(kMaxVehicleCameras) +
+                                 " cameras, each a mapping such as {name: pilot, fov_deg: 90}");
+      }
+      v.cameras_listed = true;
+      for (size_t i = 0; i < list.size(); ++i) {
+        CameraConfig c = config_detail::ReadSection<CameraConfig>(list[i], v.file.parent_path());
+        if (i == 0) {
+          v.camera = std::move(c);
+        } else {
+          // Not the driven camera: named by the file, or by its place.
+          if (!list[i].Has("name")) c.name = "camera" + std::to_string(i + 1);
+          if (!list[i].Has("priority")) c.priority = static_cast<int>(i);
+          v.extra_cameras.push_back(std::move(c));
+        }
+      }
+    }
     // One wheel velocity per speed level, whatever the kind (the section is
     // only validated for the kinds that use it).
     const size_t levels = static_cast<size_t>(std::max(1, v.drive.speed_levels));

@@ -80,9 +80,8 @@ CameraStation::CameraStation(const StationOptions& options) : options_(options) 
       link::CameraMessages::kStatusProfile,
       [this](const msg::CameraStatus& status) { OnStatus(status); });
   video_ = std::make_unique<video::VideoReceiver>(
-      *participant_, link::VideoTopic(options_.vehicle, options_.camera, false),
-      link::VideoFeedbackTopic(options_.vehicle, options_.camera, false), options_.session,
-      options_.decode, [this](const msg::VideoFrame& frame, const link::SampleStamps& stamps) {
+      *participant_, options_.vehicle, options_.session, options_.decode, options_.camera,
+      [this](const msg::VideoFrame& frame, const link::SampleStamps& stamps) {
         OnFrame(frame, stamps);
       });
   writer_ = std::make_unique<link::CameraCommandWriter>(

@@ -509,9 +509,22 @@ TEST_CASE("bench video --smoke", "[bench][smoke][network]") {
     CHECK(p["frames_lost"].number() >= 0.0);
   }
   CHECK(Finite(j["adapt_s"]) >= 0.0);
+  // Part 3 (issue 38): the blimp's two cameras sharing the link, two short phases.
+  const auto& cameras = j["cameras"].array();
+  REQUIRE(cameras.size() == 4);  // pilot and surveillance per phase
+  for (const JsonValue& c : cameras) {
+    INFO(c["camera"].string() << " at " << c["capacity_kbps"].number() << " kbit/s");
+    CHECK(Finite(c["fps"]) > 0.0);  // each camera's pictures came in every phase
+    CHECK(Finite(c["kbps"]) > 0.0);
+    CHECK(Finite(c["latency_ms_p95"]) >= c["latency_ms_p50"].number());
+  }
+  CHECK(cameras[0]["camera"].string() == "pilot");
+  CHECK(cameras[1]["camera"].string() == "surveillance");
+  CHECK(j["aims_shown"].number() > 0.0);  // a re-aimed camera's picture showed its command
+  CHECK(Finite(j["aim_latency_ms_p95"]) >= j["aim_latency_ms_p50"].number());
   RequireFiles({"video_codecs.csv", "video_codecs.png",
                 "video_schedule_" + j["default"]["codec"].string() + ".csv",
-                "video_schedule_" + j["default"]["codec"].string() + ".png"});
+                "video_schedule_" + j["default"]["codec"].string() + ".png", "video_cameras.csv"});
 }
 
 TEST_CASE("bench record --smoke: two laps, without and with a session file, and a seek",

@@ -556,6 +556,102 @@ TEST_CASE("Camera sources: synthetic, device or file", "[config]") {
   }
 }
 
+TEST_CASE("A vehicle's cameras: one camera: is the pilot; cameras: lists them, the driven first",
+          "[config][shipped]") {
+  const haptel::VehicleConfig one = haptel::LoadVehicle("config/vehicles/sim-blimp.yaml");
+  CHECK(one.camera.name == "pilot");
+  CHECK(one.extra_cameras.empty());
+  CHECK(one.Cameras().size() == 1);
+
+  const std::string path = "config/vehicles/sim-blimp-surveillance.yaml";
+  const std::string text = ReadText(path);
+  const haptel::VehicleConfig two = haptel::LoadVehicle(path);
+  CHECK(two.camera.name == "pilot");
+  CHECK(two.camera.fov_deg == 90.0);
+  REQUIRE(two.extra_cameras.size() == 1);
+  const haptel::CameraConfig& surv = two.extra_cameras[0];
+  CHECK(surv.name == "surveillance");
+  CHECK(surv.priority == 1);
+  CHECK(surv.zoom_max == NumberIn(text, "zoom_max"));
+  CHECK(surv.Range().zooms());
+  CHECK(surv.Range().pan_max == Approx(170.0 * 3.14159265 / 180.0));
+  CHECK(surv.zoom_servo.channel == 9);
+  const haptel::ServoControllerConfig servo = two.ServoWithCameras();
+  REQUIRE(servo.camera_channels.size() == 3);
+  CHECK(servo.camera_channels[0].camera == 1);
+  CHECK(servo.camera_channels[2].axis == haptel::CameraServoChannel::Axis::kZoom);
+  CHECK(servo.camera_channels[2].max == 10.0);
+}
+
+TEST_CASE("Bad file: cameras", "[config][bad]") {
+  TempDir tmp;
+  const std::string maestro =
+      "servo:\n  protocol: PROTOCOL\n  channels:\n"
+      "    elevator: {channel: 0}\n    rudder: {channel: 1}\n"
+      "    power: {channel: 2, min_us: 1000, neutral_us: 1000}\n    helix: {channel: 3}\n"
+      "    tail_rotor: {channel: 4}\n    camera_pan: {channel: 5}\n"
+      "    camera_tilt: {channel: 6}\n";
+  const auto blimp = [&](const std::string& protocol, int zoom_channel) {
+    std::string servo = maestro;
+    servo.replace(servo.find("PROTOCOL"), 8, protocol);
+    return "name: b\nkind: servo-blimp-sim\nairship: {}\ncameras:\n  - {name: pilot}\n"
+           "  - name: surveillance\n    zoom_max: 10\n    zoom_servo: {channel: " +
+           std::to_string(zoom_channel) + "}\n" + servo;
+  };
+  SECTION("a good one loads") {
+    CHECK(haptel::LoadVehicle(tmp.Write("good.yaml", blimp("maestro", 9))).extra_cameras.size() ==
+          1);
+  }
+  SECTION("both camera: and cameras:") {
+    const fs::path file =
+        tmp.Write("both.yaml", "name: r\ncamera: {fov_deg: 60}\ncameras:\n  - {name: a}\n");
+    const std::string msg = ErrorOf([&] { haptel::LoadVehicle(file); });
+    CHECK_THAT(msg, Contains(file.string()));
+    CHECK_THAT(msg, Contains("'cameras'"));
+    CHECK_THAT(msg, Contains("not both"));
+  }
+  SECTION("two cameras under one name") {
+    const std::string text = "name: r\ncameras:\n  - {name: front}\n  - {name: front}\n";
+    const std::string msg = ErrorOf([&] { haptel::LoadVehicle(tmp.Write("dup.yaml", text)); });
+    CHECK_THAT(msg, Contains("'cameras[1].name'"));
+    CHECK_THAT(msg, Contains("appears twice"));
+  }
+  SECTION("a name that cannot be a topic's") {
+    const std::string text = "name: r\ncameras:\n  - {name: pilot}\n  - {name: Rear Cam}\n";
+    const std::string msg = ErrorOf([&] { haptel::LoadVehicle(tmp.Write("name.yaml", text)); });
+    CHECK_THAT(msg, Contains("'cameras[1].name'"));
+    CHECK_THAT(msg, Contains("lower-case letters"));
+  }
+  SECTION("a range whose ends are swapped") {
+    const std::string text =
+        "name: r\ncameras:\n  - {name: pilot}\n  - {name: rear, pan_min_deg: 30, "
+        "pan_max_deg: -30}\n";
+    const std::string msg = ErrorOf([&] { haptel::LoadVehicle(tmp.Write("range.yaml", text)); });
+    CHECK_THAT(msg, Contains("'cameras[1].pan_max_deg'"));
+  }
+  SECTION("a channel the SC-8000 lacks") {
+    const fs::path file = tmp.Write("sc8000.yaml", blimp("sc8000", 9));
+    const std::string msg = ErrorOf([&] { haptel::LoadVehicle(file); });
+    CHECK_THAT(msg, Contains(file.string()));
+    CHECK_THAT(msg, Contains("'cameras[1].zoom_servo.channel'"));
+    CHECK_THAT(msg, Contains("0..7"));
+  }
+  SECTION("an output the seven channels use") {
+    const std::string msg =
+        ErrorOf([&] { haptel::LoadVehicle(tmp.Write("taken.yaml", blimp("maestro", 5))); });
+    CHECK_THAT(msg, Contains("'cameras[1].zoom_servo.channel'"));
+    CHECK_THAT(msg, Contains("5 is taken"));
+  }
+  SECTION("a servo on the driven camera") {
+    const std::string text =
+        "name: b\nkind: sim-blimp\nairship: {}\ncameras:\n  - {name: pilot, zoom_max: 2, "
+        "zoom_servo: {channel: 9}}\n";
+    const std::string msg = ErrorOf([&] { haptel::LoadVehicle(tmp.Write("driven.yaml", text)); });
+    CHECK_THAT(msg, Contains("'cameras[0].zoom_servo'"));
+    CHECK_THAT(msg, Contains("driven camera"));
+  }
+}
+
 TEST_CASE("Bad file: camera source", "[config][bad]") {
   TempDir tmp;
   SECTION("unknown source") {

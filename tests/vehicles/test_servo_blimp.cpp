@@ -13,6 +13,8 @@
 #include <string>
 
 #include "fake_maestro.hpp"
+#include "haptel/config/blimp_course.hpp"
+#include "haptel/config/reality.hpp"
 #include "haptel/config/vehicle.hpp"
 #include "haptel/servo/calibration.hpp"
 #include "haptel/servo/maestro.hpp"
@@ -43,7 +45,7 @@ struct Rig {
   std::unique_ptr<vehicles::ServoBlimpAdapter> adapter;
   std::unique_ptr<FakeMaestro> maestro;
 
-  explicit Rig(Manner manner) {
+  explicit Rig(Manner manner, ServoControllerConfig with = Shipped()) : config(std::move(with)) {
     adapter = std::make_unique<vehicles::ServoBlimpAdapter>(
         config, std::make_unique<servo::SerialPort>(pty.slave_path(), config.baud));
     maestro = std::make_unique<FakeMaestro>(pty.TakeMaster(), config.crc, manner);
@@ -189,4 +191,52 @@ TEST_CASE("a healthy Maestro is never judged") {
   CHECK(rig.counters().polls_wrong == 0);
   CHECK(rig.counters().error_replies >= 8);
   CHECK_FALSE(rig.adapter->State().fault);
+}
+
+TEST_CASE(
+    "the surveillance camera's pan, tilt and zoom go out on their own outputs; the pilot's camera "
+    "stays on its channels; the simulated blimp's controller holds them") {
+  const VehicleConfig blimp = LoadVehicle("config/vehicles/sim-blimp-surveillance.yaml");
+  const ServoControllerConfig config = blimp.ServoWithCameras();
+  REQUIRE(config.camera_channels.size() == 3);
+  Rig rig(Manner::kHealthy, config);
+  BlimpCommand pilot = Climbing();
+  pilot.camera_pan = 0.4;
+  const CameraAim aim{.pan = -1.2, .tilt = -0.6, .zoom = 7.5};
+  rig.adapter->AimCamera(1, aim);
+  rig.FlyWindow(pilot);
+
+  // Each axis's pulse from its own calibration: pan 7, tilt 8, zoom 9.
+  for (const CameraServoChannel& axis : config.camera_channels) {
+    const double want = servo::PulseFromCommand(axis.output, servo::CameraAxisCommand(axis, aim));
+    INFO("output " << axis.output.channel);
+    CHECK(std::abs(rig.maestro->output_us(axis.output.channel) - want) <= 0.26);
+  }
+  // Zoom 7.5 of 1..10 is command 0.44: 1722 µs.
+  CHECK(rig.maestro->output_us(9) == Approx(1722.2).margin(0.5));
+  // The driving command and the pilot's camera as ever.
+  const auto commanded = servo::PulsesFromCommands(config, vehicles::ChannelValues(pilot));
+  CHECK(Near(rig.WirePulses(), commanded));
+
+  // Aiming a camera without servos (the pilot's, index 0) moves none of them.
+  rig.adapter->AimCamera(0, {.pan = 1.0, .tilt = 0.0, .zoom = 1.0});
+  rig.FlyWindow(pilot);
+  CHECK(rig.maestro->output_us(9) == Approx(1722.2).margin(0.5));
+
+  // The simulated blimp: the same bytes through its own pty to its
+  // simulated Maestro, whose outputs read back are where the camera points.
+  vehicles::SimulatedServoBlimp sim(config, blimp.airship, LoadBlimpCourse(blimp.world),
+                                    NominalReality(blimp));
+  sim.AimCamera(1, aim);
+  CameraAim shown;
+  const bool reached = test::WaitFor(
+      [&] {
+        sim.Update(kTick_s);
+        return sim.CameraAimed(1, &shown) && std::abs(shown.zoom - aim.zoom) < 0.01;
+      },
+      kWait_s);
+  REQUIRE(reached);
+  CHECK(shown.pan == Approx(aim.pan).margin(0.005));
+  CHECK(shown.tilt == Approx(aim.tilt).margin(0.005));
+  CHECK_FALSE(sim.CameraAimed(0, &shown));  // the pilot's camera: its pan/tilt are the command's
 }

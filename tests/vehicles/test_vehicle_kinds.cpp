@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <mutex>
+#include <numbers>
 #include <optional>
 
 #include "haptel/config/vehicle.hpp"
@@ -252,4 +253,124 @@ TEST_CASE(
   CHECK(std::filesystem::path(s->path()).parent_path() == std::filesystem::absolute(dir / "can"));
   CHECK(s->frames_lost() == 0);
   CHECK(s->error().empty());
+}
+
+TEST_CASE(
+    "a robot with a rear camera streams it on its own topic, aimed only by its holder's camera "
+    "commands; malformed and foreign ones are counted, the status says who holds it") {
+  RegisterToy();
+  const int domain = test::UniqueDomain(73);
+  const auto dir = test::ScratchDir("toy-cameras");
+  const std::string world = std::filesystem::absolute("config/tracks/test-short.yaml").string();
+  const auto file = test::WriteFile(
+      dir / "toy.yaml",
+      "name: toy1\nkind: toy-robot\nworld: " + world +
+          "\ncameras:\n"
+          "  - {rate_hz: 5, width: 64, height: 48}\n"
+          "  - {name: rear, rate_hz: 10, width: 64, height: 48, mount_forward: -0.1,\n"
+          "     mount_yaw_deg: 180, pan_min_deg: -90, pan_max_deg: 90, zoom_max: 4}\n"
+          "link: {domain_id: " +
+          std::to_string(domain) + "}\n");
+  const VehicleConfig config = LoadVehicle(file);
+  REQUIRE(config.extra_cameras.size() == 1);
+  OpenedVehicle opened = OpenVehicle(config, file.string());
+  CHECK_THAT(opened.description, Catch::Contains("camera rear"));
+  const std::unique_ptr<Node> node = opened.make_node();
+  node->Start();
+
+  link::Participant station(config.link, "test-station");
+  link::Participant stranger(config.link, "test-stranger");
+  link::CameraCommandWriter commands(station, link::CameraCommandTopic("toy1", "rear"),
+                                     link::CameraMessages::kCommandProfile);
+  link::CameraCommandWriter foreign(stranger, link::CameraCommandTopic("toy1", "rear"),
+                                    link::CameraMessages::kCommandProfile);
+  std::mutex mutex;
+  std::optional<msg::VideoFrame> frame;
+  std::optional<msg::CameraStatus> status;
+  uint64_t pilot_frames = 0;
+  link::VideoReader rear(station, link::VideoTopic("toy1", "rear", false), link::Profile::kVideo,
+                         [&](const msg::VideoFrame& f) {
+                           std::lock_guard lock(mutex);
+                           frame = f;
+                         });
+  link::VideoReader pilot(station, link::VideoTopic("toy1", "pilot", true), link::Profile::kVideo,
+                          [&](const msg::VideoFrame& f) {
+                            std::lock_guard lock(mutex);
+                            if (f.camera() == "pilot") ++pilot_frames;
+                          });
+  link::CameraStatusReader statuses(station, link::CameraStatusTopic("toy1"),
+                                    link::CameraMessages::kStatusProfile,
+                                    [&](const msg::CameraStatus& s) {
+                                      std::lock_guard lock(mutex);
+                                      status = s;
+                                    });
+  msg::CameraCommand m;
+  m.session(7);
+  m.operator_name("station eve");
+  uint64_t seq = 0;
+  const auto send = [&](link::CameraCommandWriter& writer, const CameraAim& aim) {
+    link::CameraMessages::Encode("rear", aim, m);
+    m.seq(++seq);
+    m.sent_ns(MonotonicNs());
+    writer.Write(m);
+  };
+  // Aimed 0.5 rad left, zoomed 3x: a frame says so, and the command it shows.
+  std::optional<msg::VideoFrame> f;
+  REQUIRE(test::WaitFor(
+      [&] {
+        send(commands, {.pan = 0.5, .tilt = 0.0, .zoom = 3.0});
+        std::lock_guard lock(mutex);
+        f = frame;
+        return f && f->command_seq() > 0;
+      },
+      20.0));
+  CHECK(f->camera() == "rear");
+  CHECK(f->zoom() == Approx(3.0));
+  CHECK(f->pan() == Approx(std::numbers::pi + 0.5).margin(1e-4));  // mounted backwards
+  CHECK(f->fov_deg() == Approx(ZoomedFovDeg(config.extra_cameras[0].fov_deg, 3.0)).margin(1e-3));
+  CHECK(f->width() == 64);
+
+  // Out of range (zoom 9 of 4) and another writer's: dropped and counted.
+  const uint64_t shown = f->command_seq();
+  for (int i = 0; i < 5; ++i) {
+    send(commands, {.pan = 0.0, .tilt = 0.0, .zoom = 9.0});
+    send(foreign, {.pan = -1.0, .tilt = 0.0, .zoom = 1.0});
+  }
+  std::optional<msg::CameraStatus> s;
+  REQUIRE(test::WaitFor(
+      [&] {
+        std::lock_guard lock(mutex);
+        s = status;
+        return s && s->cameras().size() == 2 && s->cameras()[1].commands_malformed() >= 5 &&
+               s->cameras()[1].commands_refused() >= 5;
+      },
+      20.0));
+  const msg::CameraInfo& info = s->cameras()[1];
+  CHECK(info.name() == "rear");
+  CHECK(info.video_topic() == "haptel/toy1/video/rear");
+  CHECK(info.holder_session() == 7);
+  CHECK(info.holder() == "station eve");
+  CHECK(link::WriterId{info.holder_writer()} == commands.id());
+  CHECK(info.held_since_wall_ns() > 0);
+  CHECK(info.zoom() == Approx(3.0));  // where the holder's last good command left it
+  CHECK(info.zoom_max() == Approx(4.0));
+  CHECK(s->cameras()[0].driven());
+  CHECK(s->cameras()[0].name() == "pilot");
+  {
+    std::lock_guard lock(mutex);
+    CHECK(frame->zoom() == Approx(3.0));
+    CHECK(frame->command_seq() >= shown);
+  }
+  // The driven camera streams on as before, on its own topic, named.
+  CHECK(test::WaitFor(
+      [&] {
+        std::lock_guard lock(mutex);
+        return pilot_frames > 0;
+      },
+      20.0));
+  node->Stop();
+  const NodeCounters counters = node->Counters();
+  CHECK(counters.camera_commands_malformed >= 5);
+  CHECK(counters.camera_commands_refused >= 5);
+  CHECK(counters.camera_frames_published > 0);
 }

@@ -7,6 +7,7 @@
 #include <limits>
 #include <numbers>
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 #include <random>
 #include <string>
 #include <vector>
@@ -372,7 +373,7 @@ TEST_CASE("blimp camera survives poses inside, against and around buildings and 
 
   SECTION("a meaningless pose is a uniform grey image") {
     const double nan = std::numeric_limits<double>::quiet_NaN();
-    for (const CameraPose p :
+    for (const CameraPose& p :
          {CameraPose{nan, 0.0, 0.0, 5.0}, CameraPose{0.0, 0.0, 0.0, 1e9},
           CameraPose{0.0, 0.0, 0.0, 5.0, 0.0, 0.0, 0.0, std::numeric_limits<double>::infinity()}}) {
       const cv::Mat image = Render(camera, p);
@@ -433,4 +434,109 @@ TEST_CASE("blimp camera renders the shipped course: the first gate ahead of the 
   CHECK(gate_pixels > 100);
   // The opening's centre is at the centre of the picture: sky or ground, not frame.
   CHECK_FALSE(IsGateColour(At(image, kH / 2, kW / 2)));
+}
+
+namespace {
+
+/// Pixels white enough to be a gate number's fill (the sky never is).
+cv::Mat WhiteMask(const cv::Mat& image) {
+  cv::Mat white;
+  cv::inRange(image, cv::Scalar(236, 236, 236), cv::Scalar(255, 255, 255), white);
+  return white;
+}
+
+struct Reading {
+  int digit = -1;
+  double score = 0.0;  ///< intersection over union of the template and the picture's white
+};
+
+/// Reads one digit from `white` (0/255), as a person would by its shape:
+/// each digit drawn in the gate labels' font (Hershey simplex, thickness 4
+/// at scale 2), at scales from 0.5 to 3, slid over the picture; the best
+/// overlap of a digit's pixels with the picture's white pixels wins.
+Reading ReadDigit(const cv::Mat& white) {
+  cv::Mat picture;
+  white.convertTo(picture, CV_32F, 1.0 / 255.0);
+  cv::Mat sums;
+  cv::integral(picture, sums, CV_64F);
+  Reading best;
+  for (int digit = 0; digit <= 9; ++digit) {
+    const std::string text = std::to_string(digit);
+    int baseline = 0;
+    const cv::Size size = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, 2.0, 4, &baseline);
+    cv::Mat glyph = cv::Mat::zeros(size.height + 8, size.width + 8, CV_8UC1);
+    cv::putText(glyph, text, cv::Point(4, 4 + size.height), cv::FONT_HERSHEY_SIMPLEX, 2.0,
+                cv::Scalar(255), 4, cv::LINE_AA);
+    cv::threshold(glyph, glyph, 127, 255, cv::THRESH_BINARY);
+    glyph = glyph(cv::boundingRect(glyph)).clone();
+    for (double scale = 0.5; scale <= 3.0; scale += 0.1) {
+      cv::Mat t;
+      cv::resize(glyph, t, cv::Size(), scale, scale, cv::INTER_NEAREST);
+      if (t.rows >= picture.rows || t.cols >= picture.cols) continue;
+      cv::Mat tf;
+      t.convertTo(tf, CV_32F, 1.0 / 255.0);
+      const double glyph_pixels = cv::sum(tf)[0];
+      cv::Mat overlap;
+      cv::matchTemplate(picture, tf, overlap, cv::TM_CCORR);
+      for (int y = 0; y < overlap.rows; ++y) {
+        for (int x = 0; x < overlap.cols; ++x) {
+          const double both = overlap.at<float>(y, x);
+          if (both < 0.3 * glyph_pixels) continue;
+          const double window = sums.at<double>(y + t.rows, x + t.cols) -
+                                sums.at<double>(y, x + t.cols) - sums.at<double>(y + t.rows, x) +
+                                sums.at<double>(y, x);
+          const double iou = both / (glyph_pixels + window - both);
+          if (iou > best.score) best = {digit, iou};
+        }
+      }
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+TEST_CASE(
+    "the surveillance camera zoomed in reads a gate's number 200 m off that its wide view cannot; "
+    "the picture says its zoom") {
+  BlimpCourseConfig course = Empty();
+  // Gates 1 and 2 behind the camera; gate 3, the thesis's size, 200 m ahead.
+  course.gates.push_back(Gate(-60.0, 0.0, 5.0, 12.0, 7.0));
+  course.gates.push_back(Gate(-60.0, 40.0, 5.0, 12.0, 7.0));
+  course.gates.push_back(Gate(200.0, 0.0, 5.0, 12.0, 7.0));
+  CameraConfig config = Config();
+  config.name = "surveillance";
+  config.fov_deg = 60.0;
+  config.zoom_max = 10.0;
+  const BlimpCourseCamera camera(course, config);
+  CameraPose pose = Level();
+  const cv::Mat wide = Render(camera, pose);
+  pose.zoom = 10.0;
+  const cv::Mat zoomed = Render(camera, pose);
+
+  // The zoom line at the bottom left is left out of the reading.
+  const cv::Rect above_zoom_line(0, 0, kW, kH - 40);
+  const Reading far = ReadDigit(WhiteMask(wide)(above_zoom_line));
+  const Reading near = ReadDigit(WhiteMask(zoomed)(above_zoom_line));
+  INFO("wide: " << far.digit << " (" << far.score << "), zoomed: " << near.digit << " ("
+                << near.score << ")");
+  CHECK(near.digit == 3);
+  CHECK(near.score > 0.6);
+  CHECK(far.score < 0.3);  // nothing there to read
+
+  // "SURV 1.0x" and "SURV 10.0x": yellow text in the bottom left corner,
+  // different at the two zooms; nothing of it elsewhere.
+  const auto zoom_line = [](const cv::Mat& image) {
+    cv::Mat yellow;
+    cv::inRange(image(cv::Rect(0, kH - 40, 200, 40)), cv::Scalar(0, 200, 200),
+                cv::Scalar(140, 255, 255), yellow);
+    return yellow;
+  };
+  CHECK(cv::countNonZero(zoom_line(wide)) > 30);
+  CHECK(cv::countNonZero(zoom_line(zoomed)) > cv::countNonZero(zoom_line(wide)));
+  // The pilot's camera (no zoom) has no such line.
+  const cv::Mat pilot = Render(BlimpCourseCamera(course, Config()), Level());
+  cv::Mat yellow;
+  cv::inRange(pilot, cv::Scalar(0, 200, 200), cv::Scalar(140, 255, 255), yellow);
+  CHECK(cv::countNonZero(yellow) == 0);
 }

@@ -284,7 +284,7 @@ TEST_CASE("synthetic camera survives any pose") {
   const double inf = std::numeric_limits<double>::infinity();
 
   SECTION("NaN or infinite pose: a uniform image") {
-    for (const CameraPose pose :
+    for (const CameraPose& pose :
          {CameraPose{nan, 0, 0}, CameraPose{0, nan, 0}, CameraPose{0, 0, nan},
           CameraPose{inf, 0, 0}, CameraPose{0, -inf, 0}, CameraPose{1e300, 1e300, 0}}) {
       cv::Mat image;

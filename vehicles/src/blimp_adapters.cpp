@@ -1,5 +1,6 @@
 #include "haptel/vehicles/blimp_adapters.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -105,6 +106,20 @@ void ServoBlimpAdapter::Apply(const BlimpCommand& command) {
   pulse_us_ = pulses;
 }
 
+void ServoBlimpAdapter::AimCamera(size_t camera, const CameraAim& aim) {
+  const std::vector<CameraServoChannel>& axes = config_.camera_channels;
+  for (size_t i = 0; i < axes.size(); ++i) {
+    if (axes[i].camera != static_cast<int>(camera)) continue;
+    const double pulse =
+        output_.untrusted()
+            ? axes[i].output.neutral_us
+            : servo::PulseFromCommand(axes[i].output, servo::CameraAxisCommand(axes[i], aim));
+    // A change goes out at the next update, as a command's does.
+    if (pulse != output_.camera_pulse_us(i)) next_send_s_ = std::min(next_send_s_, time_s_);
+    output_.SetCameraPulse(i, pulse);
+  }
+}
+
 void ServoBlimpAdapter::Update(double dt) {
   time_s_ += dt;
   if (time_s_ >= next_send_s_) {
@@ -116,6 +131,8 @@ void ServoBlimpAdapter::Update(double dt) {
   // Judged untrustworthy just now: neutral at once, not at the next command.
   if (trusted && output_.untrusted()) {
     Apply(BlimpCommand{});
+    for (size_t i = 0; i < config_.camera_channels.size(); ++i)
+      output_.SetCameraPulse(i, config_.camera_channels[i].output.neutral_us);
     next_send_s_ = time_s_ + kSendPeriod_s;
     output_.Send(pulse_us_);
   }
@@ -155,6 +172,17 @@ void SimulatedServoBlimp::Update(double dt) {
     values[i] = servo::CommandFromPulse(config_.channels[i], controller_->pulse_us()[i]);
   }
   sim_.Step(dt, CommandFromChannels(values));
+}
+
+bool SimulatedServoBlimp::CameraAimed(size_t camera, CameraAim* aim) const {
+  bool any = false;
+  for (const CameraServoChannel& axis : config_.camera_channels) {
+    if (axis.camera != static_cast<int>(camera)) continue;
+    const double pulse = controller_->output_pulse_us(axis.output.channel);
+    servo::SetCameraAxis(axis, servo::CommandFromPulse(axis.output, pulse), aim);
+    any = true;
+  }
+  return any;
 }
 
 BlimpAdapterState SimulatedServoBlimp::State() const {

@@ -120,13 +120,14 @@ FactoryTable<BlimpFamily>& Factories<BlimpFamily>() {
          }
          return AdapterOnly<BlimpFamily>(
              std::make_unique<ServoBlimpAdapter>(
-                 c.servo, std::make_unique<servo::SerialPort>(c.servo.port, c.servo.baud)),
+                 c.ServoWithCameras(),
+                 std::make_unique<servo::SerialPort>(c.servo.port, c.servo.baud)),
              ", servo controller on " + c.servo.port);
        }},
       {"servo-blimp-sim",
        [](const VehicleConfig& c, const BlimpCourseConfig& course) {
          return AdapterOnly<BlimpFamily>(std::make_unique<SimulatedServoBlimp>(
-             c.servo, c.airship, course, VehicleReality(c, nullptr)));
+             c.ServoWithCameras(), c.airship, course, VehicleReality(c, nullptr)));
        }},
   };
   return table;
@@ -169,6 +170,13 @@ OpenedVehicle Open(const VehicleConfig& config, const std::string& file) {
   if (parts.adapter == nullptr)
     throw std::logic_error("vehicle kind '" + config.kind + "': its factory made no adapter");
   if (!parts.camera) parts.camera = FileCamera(config, *world, file);
+  // Every further camera the vehicle file lists, looking at the same world.
+  std::vector<std::unique_ptr<video::CameraSource>> extra;
+  for (const CameraConfig& camera : config.extra_cameras) {
+    VehicleConfig one = config;
+    one.camera = camera;
+    extra.push_back(FileCamera(one, *world, file));
+  }
   OpenedVehicle opened;
   opened.description =
       WorldName(*world) + ", camera " + parts.camera->Describe() + " " +
@@ -176,8 +184,15 @@ OpenedVehicle Open(const VehicleConfig& config, const std::string& file) {
       std::to_string(static_cast<int>(std::lround(config.camera.rate_hz))) + " Hz" + parts.detail;
   // The node owns the world with its adapter: a std::function must be
   // copyable, so the parts wait in a shared holder until it is built.
+  for (size_t i = 0; i < extra.size(); ++i) {
+    const CameraConfig& c = config.extra_cameras[i];
+    opened.description += ", camera " + c.name + " " + extra[i]->Describe() + " " +
+                          std::to_string(c.width) + "x" + std::to_string(c.height);
+  }
   auto held = std::make_shared<KindParts<Family>>(std::move(parts));
-  opened.make_node = [config, world, held]() -> std::unique_ptr<Node> {
+  auto held_extra =
+      std::make_shared<std::vector<std::unique_ptr<video::CameraSource>>>(std::move(extra));
+  opened.make_node = [config, world, held, held_extra]() -> std::unique_ptr<Node> {
     // The world is a base declared first, so it outlives the node's own
     // destructor (which still steps the adapter once to stop it).
     struct WorldHolder {
@@ -185,12 +200,12 @@ OpenedVehicle Open(const VehicleConfig& config, const std::string& file) {
     };
     struct Owning final : WorldHolder, VehicleNodeOf<Family> {
       Owning(const VehicleConfig& c, std::shared_ptr<const typename Family::World> w,
-             KindParts<Family>& p)
+             KindParts<Family>& p, std::vector<std::unique_ptr<video::CameraSource>>& extra)
           : WorldHolder{std::move(w)},
-            VehicleNodeOf<Family>(c, std::move(p.camera), std::move(p.adapter),
-                                  std::move(p.report)) {}
+            VehicleNodeOf<Family>(c, std::move(p.camera), std::move(p.adapter), std::move(p.report),
+                                  std::move(extra)) {}
     };
-    return std::make_unique<Owning>(config, world, *held);
+    return std::make_unique<Owning>(config, world, *held, *held_extra);
   };
   return opened;
 }

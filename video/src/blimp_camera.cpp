@@ -2,7 +2,9 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <initializer_list>
 #include <numbers>
 #include <opencv2/imgproc.hpp>
@@ -461,6 +463,9 @@ GroundPolygon Polygon(std::initializer_list<Vec3> points, const cv::Vec3d& colou
 
 BlimpCourseCamera::BlimpCourseCamera(const BlimpCourseConfig& course, const CameraConfig& config)
     : config_(Validated(config)) {
+  for (char ch : config_.name.substr(0, 4)) {
+    overlay_name_ += static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+  }
   // Start pad: a square with an arrow along the start heading.
   {
     const Vec3 c(course.start.position[0], course.start.position[1], 0.0);
@@ -517,6 +522,20 @@ BlimpCourseCamera::BlimpCourseCamera(const BlimpCourseConfig& course, const Came
   }
 }
 
+namespace {
+/// A zoom lens's picture says its zoom, bottom left: "SURV 4.0x". Digits
+/// drawn small, in the corner a gate's number is never read from.
+void DrawZoomLine(cv::Mat& image, const std::string& name, double zoom) {
+  char text[48];
+  std::snprintf(text, sizeof text, "%s %.1fx", name.c_str(), std::max(1.0, zoom));
+  const cv::Point at(8, image.rows - 10);
+  cv::putText(image, text, at, cv::FONT_HERSHEY_SIMPLEX, 0.6, cv::Scalar(20, 20, 20), 4,
+              cv::LINE_AA);
+  cv::putText(image, text, at, cv::FONT_HERSHEY_SIMPLEX, 0.6, cv::Scalar(80, 255, 255), 1,
+              cv::LINE_AA);
+}
+}  // namespace
+
 void BlimpCourseCamera::Render(const CameraPose& pose, cv::Mat& image) const {
   image.create(config_.height, config_.width, CV_8UC3);  // no-op when it already fits
   const double values[] = {pose.x,     pose.y,    pose.z,   pose.heading,
@@ -542,7 +561,8 @@ void BlimpCourseCamera::Render(const CameraPose& pose, cv::Mat& image) const {
   frame.F = r.col(0);
   frame.L = r.col(1);
   frame.U = r.col(2);
-  frame.f = (config_.width / 2.0) / std::tan(Radians(config_.fov_deg) / 2.0);
+  const double fov_deg = ZoomedFovDeg(config_.fov_deg, pose.zoom);
+  frame.f = (config_.width / 2.0) / std::tan(Radians(fov_deg) / 2.0);
   frame.cx = config_.width / 2.0;
   frame.cy = config_.height / 2.0;
   frame.tu = (frame.cx + kMarginPx) / frame.f;
@@ -579,6 +599,7 @@ void BlimpCourseCamera::Render(const CameraPose& pose, cv::Mat& image) const {
   std::sort(order.begin(), order.end(),
             [](const Order& a, const Order& b) { return a.dist > b.dist; });
   for (const Order& o : order) DrawBox(image, frame, boxes_[o.index], o.dist);
+  if (config_.zoom_max > 1.0) DrawZoomLine(image, overlay_name_, pose.zoom);
 }
 
 std::unique_ptr<CameraSource> MakeBlimpCameraSource(const CameraConfig& config,

@@ -8,6 +8,7 @@
 
 #include "haptel/core/clock.hpp"
 #include "haptel/core/log.hpp"
+#include "haptel/link/families.hpp"
 #include "haptel/video/h264_codec.hpp"
 
 namespace haptel::video {
@@ -32,9 +33,68 @@ CameraConfig PreviewConfig(const CameraConfig& full) {
 
 }  // namespace
 
+int LinkShare::Add(int priority) {
+  if (count_ >= kMaxSlots) throw std::invalid_argument("LinkShare: too many cameras");
+  slots_[static_cast<size_t>(count_)].priority = priority;
+  return count_++;
+}
+
+void LinkShare::OnEstimate(int slot, uint32_t kbps, int64_t now_ns) {
+  if (slot < 0 || slot >= count_ || kbps == 0) return;
+  slots_[static_cast<size_t>(slot)].estimate_kbps.store(kbps, std::memory_order_relaxed);
+  slots_[static_cast<size_t>(slot)].estimate_ns.store(now_ns, std::memory_order_relaxed);
+}
+
+void LinkShare::OnSent(int slot, size_t bytes, int64_t now_ns) {
+  if (slot < 0 || slot >= count_) return;
+  Slot& s = slots_[static_cast<size_t>(slot)];  // one camera thread per slot writes it
+  const int64_t start = s.window_start_ns.load(std::memory_order_relaxed);
+  if (now_ns - start >= 1'000'000'000) {
+    // Two seconds or more since: the previous second sent nothing.
+    s.bytes_before.store(now_ns - start >= 2'000'000'000 ? 0 : s.bytes_now.load(),
+                         std::memory_order_relaxed);
+    s.bytes_now.store(0, std::memory_order_relaxed);
+    s.window_start_ns.store(now_ns, std::memory_order_relaxed);
+  }
+  s.bytes_now.fetch_add(bytes, std::memory_order_relaxed);
+}
+
+uint32_t LinkShare::SentKbps(int slot, int64_t now_ns) const {
+  if (slot < 0 || slot >= count_) return 0;
+  const Slot& s = slots_[static_cast<size_t>(slot)];
+  const int64_t start = s.window_start_ns.load(std::memory_order_relaxed);
+  if (now_ns - start >= 2'000'000'000) return 0;
+  // The last whole second, or the part of this one when it is the first.
+  const uint64_t before = s.bytes_before.load(std::memory_order_relaxed);
+  const uint64_t now_bytes = s.bytes_now.load(std::memory_order_relaxed);
+  const double seconds = before > 0 ? 1.0 : std::max(0.1, NsToS(now_ns - start));
+  return static_cast<uint32_t>((before > 0 ? before : now_bytes) * 8.0 / 1000.0 / seconds);
+}
+
+uint32_t LinkShare::TargetFor(int slot, int64_t now_ns) const {
+  if (slot < 0 || slot >= count_) return 0;
+  constexpr int64_t kFresh_ns = 3'000'000'000;
+  const int mine = slots_[static_cast<size_t>(slot)].priority;
+  uint32_t capacity = 0;
+  uint64_t before_me = 0;
+  for (int i = 0; i < count_; ++i) {
+    const Slot& s = slots_[static_cast<size_t>(i)];
+    if (now_ns - s.estimate_ns.load(std::memory_order_relaxed) < kFresh_ns)
+      capacity = std::max(capacity, s.estimate_kbps.load(std::memory_order_relaxed));
+    // Ahead of me: a lower number, or the same number listed earlier.
+    if (s.priority < mine || (s.priority == mine && i < slot)) before_me += SentKbps(i, now_ns);
+  }
+  if (capacity == 0) return 0;
+  const uint32_t own = slots_[static_cast<size_t>(slot)].estimate_kbps.load();
+  // The first camera follows its own receiver, as a single camera does.
+  if (before_me == 0 && own > 0) return own;
+  const uint64_t left = capacity > before_me ? capacity - before_me : 0;
+  return static_cast<uint32_t>(std::max<uint64_t>(kFloor_kbps, left));
+}
+
 CameraStreamer::CameraStreamer(const CameraConfig& config, std::unique_ptr<CameraSource> camera,
                                link::Participant& participant, const std::string& vehicle_name,
-                               OwnerWriter owner_writer)
+                               OwnerWriter owner_writer, bool driven, LinkShare* share)
     : config_(config),
       owner_writer_(std::move(owner_writer)),
       passthrough_possible_(config.codec == CameraCodec::kJpeg),
@@ -42,7 +102,11 @@ CameraStreamer::CameraStreamer(const CameraConfig& config, std::unique_ptr<Camer
       encoder_(MakeVideoEncoder(config)),
       preview_config_(PreviewConfig(config)),
       codec_name_(CameraCodecName(config.codec)),
-      writer_(participant, link::TopicName(vehicle_name, "video"), link::Profile::kVideo) {
+      share_(share),
+      writer_(participant, link::VideoTopic(vehicle_name, config.name, driven),
+              link::Profile::kVideo) {
+  if (share_ != nullptr) share_slot_ = share_->Add(config.priority);
+  frame_msg_.camera(config.name);
   if (camera_ == nullptr) throw std::invalid_argument("CameraStreamer: no camera source");
   if (!owner_writer_) throw std::invalid_argument("CameraStreamer: no owner writer");
   loop_ = std::make_unique<PeriodicThread>(
@@ -55,7 +119,8 @@ CameraStreamer::CameraStreamer(const CameraConfig& config, std::unique_ptr<Camer
   // Reliable: a request is small and rare (at most ten a second, while the
   // operator waits), and one lost would leave the picture stale longer.
   feedback_ = std::make_unique<link::VideoFeedbackReader>(
-      participant, link::TopicName(vehicle_name, "video_feedback"), link::Profile::kState,
+      participant, link::VideoFeedbackTopic(vehicle_name, config.name, driven),
+      link::Profile::kState,
       [this](const msg::VideoFeedback& f, const link::WriterId& sender) { OnFeedback(f, sender); });
 }
 
@@ -68,6 +133,7 @@ void CameraStreamer::OnFeedback(const msg::VideoFeedback& feedback, const link::
   }
   if (feedback.target_kbps() > 0)
     target_kbps_.store(feedback.target_kbps(), std::memory_order_relaxed);
+  if (share_ != nullptr) share_->OnEstimate(share_slot_, feedback.target_kbps(), MonotonicNs());
   preview_wanted_.store(feedback.preview(), std::memory_order_relaxed);
   if (!feedback.key_frame_request()) return;
   key_frame_requests_.fetch_add(1, std::memory_order_relaxed);
@@ -125,7 +191,8 @@ void CameraStreamer::Tick(int64_t now_ns) {
     encoder.RequestKeyFrame();
   }
   // The operator's estimate of the link, followed by the encoder.
-  const uint32_t target = target_kbps_.load(std::memory_order_relaxed);
+  const uint32_t target = share_ != nullptr ? share_->TargetFor(share_slot_, now_ns)
+                                            : target_kbps_.load(std::memory_order_relaxed);
   if (target != followed_kbps_) {
     followed_kbps_ = target;
     encoder_->FollowBitrate(target);
@@ -164,6 +231,12 @@ void CameraStreamer::Tick(int64_t now_ns) {
   f.encoding(codec_name_);
   f.key_frame(pass_through || encoder.last_was_key_frame());
   f.data().assign(bytes.begin(), bytes.end());
+  f.pan(static_cast<float>(pose.pan));
+  f.tilt(static_cast<float>(pose.tilt));
+  f.zoom(static_cast<float>(pose.zoom));
+  f.fov_deg(static_cast<float>(ZoomedFovDeg(config_.fov_deg, pose.zoom)));
+  f.command_seq(pose.command_seq);
+  if (share_ != nullptr) share_->OnSent(share_slot_, bytes.size(), now_ns);
   if (pass_through) frames_passed_through_.fetch_add(1, std::memory_order_relaxed);
   writer_.Write(f);
   frames_.fetch_add(1, std::memory_order_relaxed);

@@ -26,6 +26,18 @@
 
 namespace haptel::video {
 
+CameraPose MountedPose(const CameraPose& body, const CameraConfig& camera, const CameraAim& aim) {
+  constexpr double kRadPerDeg = 0.017453292519943295;
+  CameraPose p = body;
+  const double c = std::cos(body.heading), s = std::sin(body.heading);
+  p.x += camera.mount_forward * c - camera.mount_left * s;
+  p.y += camera.mount_forward * s + camera.mount_left * c;
+  p.pan = camera.mount_yaw_deg * kRadPerDeg + aim.pan;
+  p.tilt = camera.mount_pitch_deg * kRadPerDeg + aim.tilt;
+  p.zoom = aim.zoom;
+  return p;
+}
+
 namespace {
 
 constexpr double kNear = LevelCamera::kNear;  // near plane, m
@@ -248,7 +260,14 @@ void SyntheticCamera::Render(const CameraPose& pose, cv::Mat& image) const {
     return;
   }
 
-  const LevelCamera view = LevelCamera::At(config_, pose.x, pose.y, pose.heading);
+  // A zoomed lens is a narrower camera (a copy only while zoomed: never for the pilot's).
+  CameraConfig zoomed;
+  if (pose.zoom > 1.0) {
+    zoomed = config_;
+    zoomed.fov_deg = ZoomedFovDeg(config_.fov_deg, pose.zoom);
+  }
+  const LevelCamera view =
+      LevelCamera::At(pose.zoom > 1.0 ? zoomed : config_, pose.x, pose.y, pose.heading + pose.pan);
 
   DrawSky(image, view.cy);
   DrawFloor(image, view);

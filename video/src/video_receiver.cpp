@@ -8,6 +8,7 @@
 
 #include "haptel/core/clock.hpp"
 #include "haptel/core/loop_meter.hpp"
+#include "haptel/link/families.hpp"
 #include "haptel/video/h264_codec.hpp"
 
 namespace haptel::video {
@@ -36,21 +37,17 @@ cv::Mat MarkStale(const cv::Mat& picture) {
 VideoReceiver::VideoReceiver() : decode_(false) {}
 
 VideoReceiver::VideoReceiver(link::Participant& participant, const std::string& vehicle,
-                             uint64_t session, bool decode)
-    : VideoReceiver(participant, link::TopicName(vehicle, "video"),
-                    link::TopicName(vehicle, "video_feedback"), session, decode, nullptr) {}
-
-VideoReceiver::VideoReceiver(link::Participant& participant, const std::string& video_topic,
-                             const std::string& feedback_topic, uint64_t session, bool decode,
+                             uint64_t session, bool decode, const std::string& camera,
                              FrameObserver on_frame)
     : decode_(decode),
       session_(session),
       on_frame_(std::move(on_frame)),
-      feedback_(std::make_unique<link::VideoFeedbackWriter>(participant, feedback_topic,
-                                                            link::Profile::kState)) {
+      feedback_(std::make_unique<link::VideoFeedbackWriter>(
+          participant, link::VideoFeedbackTopic(vehicle, camera, camera.empty()),
+          link::Profile::kState)) {
   decoder_thread_ = std::thread([this] { DecodeLoop(); });
   reader_ = std::make_unique<link::VideoReader>(
-      participant, video_topic, link::Profile::kVideo,
+      participant, link::VideoTopic(vehicle, camera, camera.empty()), link::Profile::kVideo,
       [this](const msg::VideoFrame& f, const link::SampleStamps& stamps) { OnFrame(f, stamps); });
   std::lock_guard lock(mutex_);
   reader_ready_ = true;
@@ -112,6 +109,8 @@ void VideoReceiver::OnFrame(const msg::VideoFrame& frame, const link::SampleStam
     p.bytes.assign(frame.data().begin(), frame.data().end());
     p.capture_ns = frame.capture_wall_ns();
     p.seq = frame.seq();
+    p.command_seq = frame.command_seq();
+    p.zoom = frame.zoom();
     p.key_frame = frame.key_frame();
     p.h264 = h264;
     pending_.push_back(std::move(p));
@@ -227,10 +226,14 @@ void VideoReceiver::DecodeLoop() {
     }
     bool shown_any = false;
     int64_t capture_ns = 0, decoded_wall_ns = 0;
+    uint64_t command_seq = 0;
+    float zoom = 1.0F;
     for (Pending& frame : batch) {
       if (decode_ && !DecodeOne(frame, image)) continue;
       shown_any = true;
       capture_ns = frame.capture_ns;
+      command_seq = frame.command_seq;
+      zoom = frame.zoom;
       const int64_t now_wall = WallNs();
       decoded_wall_ns = now_wall;
       std::lock_guard lock(mutex_);
@@ -258,7 +261,8 @@ void VideoReceiver::DecodeLoop() {
       if (stale_since_ns_ != 0) stale_ns_ += now - stale_since_ns_;
       stale_since_ns_ = 0;
       latest_good_ = shown;
-      latest_ = {std::move(shown), latest_.id + 1, capture_ns, false, decoded_wall_ns};
+      latest_ = {std::move(shown), latest_.id + 1, capture_ns, false,
+                 decoded_wall_ns,  command_seq,    zoom};
     }
     if (decoder_ != nullptr && decoder_->awaiting_key_frame()) {
       // Stale only once a picture was shown: before the first there is none
@@ -274,8 +278,13 @@ void VideoReceiver::DecodeLoop() {
         auto marked = std::make_shared<const cv::Mat>(MarkStale(*good));
         std::lock_guard lock(mutex_);
         stale_since_ns_ = now;
-        latest_ = {std::move(marked), latest_.id + 1, latest_.capture_wall_ns, true,
-                   latest_.decoded_wall_ns};
+        latest_ = {std::move(marked),
+                   latest_.id + 1,
+                   latest_.capture_wall_ns,
+                   true,
+                   latest_.decoded_wall_ns,
+                   latest_.command_seq,
+                   latest_.zoom};
       }
       RequestKeyFrameIfDue(now);
     }

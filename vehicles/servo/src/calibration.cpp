@@ -39,4 +39,30 @@ std::array<double, kBlimpChannels> NeutralPulses(const ServoControllerConfig& co
   return out;
 }
 
+namespace {
+double& AxisOf(CameraServoChannel::Axis axis, CameraAim& aim) {
+  switch (axis) {
+    case CameraServoChannel::Axis::kPan:
+      return aim.pan;
+    case CameraServoChannel::Axis::kTilt:
+      return aim.tilt;
+    case CameraServoChannel::Axis::kZoom:
+      break;
+  }
+  return aim.zoom;
+}
+}  // namespace
+
+double CameraAxisCommand(const CameraServoChannel& axis, const CameraAim& aim) {
+  const double span = axis.max - axis.min;
+  if (!(span > 0.0)) return 0.0;
+  CameraAim copy = aim;
+  return std::clamp(2.0 * (AxisOf(axis.axis, copy) - axis.min) / span - 1.0, -1.0, 1.0);
+}
+
+void SetCameraAxis(const CameraServoChannel& axis, double command, CameraAim* aim) {
+  AxisOf(axis.axis, *aim) =
+      axis.min + 0.5 * (std::clamp(command, -1.0, 1.0) + 1.0) * (axis.max - axis.min);
+}
+
 }  // namespace haptel::servo

@@ -26,6 +26,17 @@ constexpr uint8_t kUnusedHighBits = 0xFE;
 ServoOutput::ServoOutput(const ServoControllerConfig& config, std::unique_ptr<ByteStream> port)
     : config_(Validated(config)), port_(std::move(port)) {
   if (port_ == nullptr) throw SerialUnavailable("servo output: no port");
+  if (config_.camera_channels.size() > camera_pulse_us_.size()) {
+    throw ConfigError("servo output: " + std::to_string(config_.camera_channels.size()) +
+                      " camera servo channels; expected at most " +
+                      std::to_string(camera_pulse_us_.size()));
+  }
+  for (size_t i = 0; i < config_.camera_channels.size(); ++i)
+    camera_pulse_us_[i] = config_.camera_channels[i].output.neutral_us;
+}
+
+void ServoOutput::SetCameraPulse(size_t index, double pulse_us) {
+  if (index < config_.camera_channels.size()) camera_pulse_us_[index] = pulse_us;
 }
 
 bool ServoOutput::Flush() {
@@ -69,6 +80,13 @@ void ServoOutput::Send(const std::array<double, kBlimpChannels>& pulse_us) {
       std::memcpy(frame_.data() + size, p.data(), p.size);
       size += p.size;
     }
+    for (size_t i = 0; i < config_.camera_channels.size(); ++i) {
+      const ServoChannelConfig& c = config_.camera_channels[i].output;
+      const maestro::Packet p = maestro::SetTarget(
+          c.channel, maestro::QuarterUs(Clamped(c, camera_pulse_us_[i])), config_.crc);
+      std::memcpy(frame_.data() + size, p.data(), p.size);
+      size += p.size;
+    }
     WriteFrame(frame_.data(), size);
     return;
   }
@@ -78,6 +96,12 @@ void ServoOutput::Send(const std::array<double, kBlimpChannels>& pulse_us) {
     const ServoChannelConfig& c = config_.channels[i];
     mask = static_cast<uint8_t>(mask | (1U << c.channel));
     values[static_cast<size_t>(c.channel)] = sc8000::TenthUs(Clamped(c, pulse_us[i]));
+  }
+  for (size_t i = 0; i < config_.camera_channels.size(); ++i) {
+    const ServoChannelConfig& c = config_.camera_channels[i].output;
+    if (c.channel < 0 || c.channel >= sc8000::kChannels) continue;  // refused by the vehicle file
+    mask = static_cast<uint8_t>(mask | (1U << c.channel));
+    values[static_cast<size_t>(c.channel)] = sc8000::TenthUs(Clamped(c, camera_pulse_us_[i]));
   }
   const sc8000::Frame f = sc8000::MakeFrame(mask, values);
   WriteFrame(f.data(), f.size);
@@ -89,6 +113,8 @@ void ServoOutput::GoHome() {
     WriteFrame(p.data(), p.size);
     return;
   }
+  for (size_t i = 0; i < config_.camera_channels.size(); ++i)
+    camera_pulse_us_[i] = config_.camera_channels[i].output.neutral_us;
   Send(NeutralPulses(config_));
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstring>
 #include <utility>
+#include <vector>
 
 #include "haptel/config/error.hpp"
 
@@ -29,7 +30,11 @@ SimServoController::SimServoController(const ServoControllerConfig& config,
     min_us_[i] = sc8000 ? kSc8000MinPulse_us : kServoMinPulse_us;
     max_us_[i] = sc8000 ? kSc8000MaxPulse_us : kServoMaxPulse_us;
   }
-  for (const ServoChannelConfig& c : config_.channels) {
+  std::vector<ServoChannelConfig> used(config_.channels.begin(), config_.channels.end());
+  for (const CameraServoChannel& c : config_.camera_channels) {
+    if (c.output.channel >= 0 && c.output.channel < outputs_) used.push_back(c.output);
+  }
+  for (const ServoChannelConfig& c : used) {
     const auto i = static_cast<size_t>(c.channel);
     home_us_[i] = c.neutral_us;
     if (!sc8000) {  // the Maestro's own Min/Max settings; the SC-8000 has none

@@ -5,6 +5,7 @@
 /// [-1, 1] to a pulse width. Read by haptel_servo (haptel/servo/*.hpp).
 #include <array>
 #include <string>
+#include <vector>
 
 #include "haptel/config/archive.hpp"
 
@@ -68,6 +69,21 @@ struct ServoChannelConfig {
   void ValidateOrThrow() const;
 };
 
+/// A servo output beyond the seven: one axis of a camera the blimp carries
+/// (the vehicle file's cameras[i].pan_servo, tilt_servo, zoom_servo; not in
+/// the `servo:` section: VehicleConfig::ServoWithCameras collects them).
+/// The axis's range maps onto the channel's command -1..1.
+struct CameraServoChannel {
+  enum class Axis { kPan, kTilt, kZoom };
+  ServoChannelConfig output;
+  int camera = 0;  ///< its camera's index in VehicleConfig::Cameras()
+  Axis axis = Axis::kPan;
+  double min = 0.0;  ///< the axis's value at command -1 (rad; a zoom's 1)
+  double max = 0.0;  ///< at command +1 (rad; the zoom's zoom_max)
+};
+/// The most camera axes one controller drives beyond the seven channels.
+constexpr int kMaxCameraServoChannels = 12;
+
 struct ServoControllerConfig {
   ServoProtocol protocol = ServoProtocol::kMaestro;
   /// Serial device path, e.g. /dev/ttyACM0 (may be empty in a file: given by --serial-port).
@@ -86,6 +102,9 @@ struct ServoControllerConfig {
   double error_poll_s = 0.5;
   /// Per BlimpChannel, in its order.
   std::array<ServoChannelConfig, kBlimpChannels> channels;
+  /// The cameras' axes on further outputs (not in the file; at most
+  /// kMaxCameraServoChannels, their outputs checked by the vehicle file).
+  std::vector<CameraServoChannel> camera_channels;
 
   template <typename Archive>
   void Serialize(Archive* a) {

@@ -12,6 +12,7 @@
 #include "haptel/config/link.hpp"
 #include "haptel/config/servo.hpp"
 #include "haptel/config/vehicle_kinds.hpp"
+#include "haptel/core/camera_aim.hpp"
 #include "haptel/core/range_scan.hpp"
 
 namespace haptel {
@@ -102,7 +103,28 @@ enum class CameraCodec {
 /// "jpeg" or "h264", as written in the config file and in each video sample.
 const char* CameraCodecName(CameraCodec codec);
 
+/// A servo output a camera's axis goes to (the blimp's servo controller);
+/// channel -1: none (the key absent).
+inline ServoChannelConfig NoServoChannel() {
+  ServoChannelConfig c;
+  c.channel = -1;
+  return c;
+}
+
+/// The longest camera name: a DDS topic's path segment (link/families.hpp).
+constexpr std::size_t kMaxCameraNameLength = 31;
+/// The most cameras one vehicle carries (CameraStatus's bound).
+constexpr int kMaxVehicleCameras = 8;
+
+/// One camera of a vehicle (`camera:`, or each of `cameras:`). The first a
+/// file lists is the driven camera: the driver's, on haptel/<vehicle>/video,
+/// turned by the driving command where the vehicle has a head (the blimp's
+/// camera_pan/tilt). Every other is its own stream on
+/// haptel/<vehicle>/video/<name>, aimed by CameraCommands from its holder
+/// within its pan/tilt/zoom ranges (link/families.hpp).
 struct CameraConfig {
+  /// Names its topics: [a-z0-9_-], 1 to 31 characters, unique on the vehicle.
+  std::string name = "pilot";
   CameraSourceKind source = CameraSourceKind::kSynthetic;
   /// V4L2 device for source: device, a path ("/dev/video0") or an index ("0").
   std::string device;
@@ -122,10 +144,39 @@ struct CameraConfig {
   /// asks for another; its VBV buffer holds about one frame at this rate.
   int bitrate_kbps = 1000;
   double mount_height = 0.12;  ///< m above the floor
+  /// Where it sits on the vehicle and where it looks at rest: m ahead of and
+  /// left of the body's centre, degrees left of straight ahead (180: a rear
+  /// camera) and up (negative: down). A blimp's camera hangs at its gondola:
+  /// its height is the blimp's.
+  double mount_forward = 0.0;
+  double mount_left = 0.0;
+  double mount_yaw_deg = 0.0;
+  double mount_pitch_deg = 0.0;
+  /// The link's capacity goes to the lowest number first (the driven camera: 0).
+  int priority = 0;
+  /// Its head's travel about the mount (degrees, positive: left, up) and
+  /// its lens's zoom (1: none; the field of view is fov_deg at 1×, narrower
+  /// by the zoom: ZoomedFovDeg). Equal ends: it does not pan or tilt.
+  double pan_min_deg = 0.0;
+  double pan_max_deg = 0.0;
+  double tilt_min_deg = 0.0;
+  double tilt_max_deg = 0.0;
+  double zoom_max = 1.0;
+  /// The blimp's servo outputs that move its pan, tilt and zoom (each a
+  /// servo channel: channel, min_us, neutral_us, max_us, reversed; command
+  /// -1..1 over the axis's range, zoom 1× at -1). Absent: not driven by a
+  /// servo (a simulator's head, or an axis it lacks).
+  ServoChannelConfig pan_servo = NoServoChannel();
+  ServoChannelConfig tilt_servo = NoServoChannel();
+  ServoChannelConfig zoom_servo = NoServoChannel();
+
+  /// Its ranges in radians (core/camera_aim.hpp).
+  CameraRange Range() const;
 
   template <typename Archive>
   void Serialize(Archive* a) {
     using Source = CameraSourceKind;
+    a->Visit(HAPTEL_NVP(name));
     a->Visit(HAPTEL_NVP(source), config::Choice<Source>{{{Source::kSynthetic, "synthetic"},
                                                          {Source::kDevice, "device"},
                                                          {Source::kFile, "file"}}});
@@ -141,10 +192,25 @@ struct CameraConfig {
     a->Visit(HAPTEL_NVP(jpeg_quality), config::Range{1, 100});
     a->Visit(HAPTEL_NVP(bitrate_kbps), config::Range{50, 50000});
     a->Visit(HAPTEL_NVP(mount_height), config::Range{0.01, 5.0});
+    a->Visit(HAPTEL_NVP(mount_forward), config::Range{-50.0, 50.0});
+    a->Visit(HAPTEL_NVP(mount_left), config::Range{-50.0, 50.0});
+    a->Visit(HAPTEL_NVP(mount_yaw_deg), config::Range{-180.0, 180.0});
+    a->Visit(HAPTEL_NVP(mount_pitch_deg), config::Range{-90.0, 90.0});
+    a->Visit(HAPTEL_NVP(priority), config::Range{0, 100});
+    a->Visit(HAPTEL_NVP(pan_min_deg), config::Range{-180.0, 180.0});
+    a->Visit(HAPTEL_NVP(pan_max_deg), config::Range{-180.0, 180.0});
+    a->Visit(HAPTEL_NVP(tilt_min_deg), config::Range{-90.0, 90.0});
+    a->Visit(HAPTEL_NVP(tilt_max_deg), config::Range{-90.0, 90.0});
+    a->Visit(HAPTEL_NVP(zoom_max), config::Range{1.0, 50.0});
+    a->Visit(HAPTEL_NVP(pan_servo), config::IfPresent{});
+    a->Visit(HAPTEL_NVP(tilt_servo), config::IfPresent{});
+    a->Visit(HAPTEL_NVP(zoom_servo), config::IfPresent{});
   }
 
   /// Throws ConfigFieldError unless every value is in range, `device` (when
-  /// set) is a V4L2 path or index, and the source has the device or file it needs.
+  /// set) is a V4L2 path or index, the source has the device or file it
+  /// needs, the name suits a topic, each range's ends are in order and
+  /// each servo channel given is valid.
   void ValidateOrThrow() const;
 };
 
@@ -243,7 +309,12 @@ struct VehicleConfig {
   BodyConfig body;
   RangeSensorConfig
       range_sensors;  ///< the simulated robot's (other kinds report their own, or none)
+  /// The driven camera (the file's `camera:`, or the first of `cameras:`).
   CameraConfig camera;
+  /// Every other camera of `cameras:`, in the file's order.
+  std::vector<CameraConfig> extra_cameras;
+  /// The file wrote `cameras:` (errors name "cameras[i]"), not `camera:`.
+  bool cameras_listed = false;
   LinkConfig link;
   CanConfig can;                ///< kinds that use kCanSection
   AirshipConfig airship;        ///< kinds that use kAirshipSection (the simulated airship)
@@ -263,6 +334,11 @@ struct VehicleConfig {
   /// --truth; `haptel run` sets one per run). Empty: none. Not in the file.
   std::filesystem::path truth_file;
 
+  /// Every camera, the driven one first.
+  std::vector<CameraConfig> Cameras() const;
+  /// `servo` with the cameras' axes that have a servo (camera_channels).
+  ServoControllerConfig ServoWithCameras() const;
+
   /// The kind's entry in the table (valid once validated).
   const VehicleKindInfo& Kind() const { return VehicleKind(kind); }
   VehicleFamily family() const { return Kind().family; }
@@ -280,7 +356,8 @@ struct VehicleConfig {
     a->Visit(HAPTEL_NVP(drive));
     a->Visit(HAPTEL_NVP(body));
     a->Visit(HAPTEL_NVP(range_sensors));
-    a->Visit(HAPTEL_NVP(camera));
+    // `camera:` one camera, or `cameras:` a list (LoadVehicle reads it).
+    a->Visit(HAPTEL_NVP(camera), config::IfPresent{});
     a->Visit(HAPTEL_NVP(link));
     a->Visit(HAPTEL_NVP(can), config::IfPresent{});
     a->Visit(HAPTEL_NVP(airship), config::IfPresent{});
@@ -292,6 +369,11 @@ struct VehicleConfig {
   /// Throws ConfigFieldError unless the name suits DDS topic names, the kind
   /// is known, the rates are in range and every part is valid ("drive.*", ...).
   void ValidateOrThrow() const;
+
+ private:
+  /// Each camera (named "camera" or "cameras[i]"), their names unique, and
+  /// each camera servo an output the controller has that no other uses.
+  void ValidateCameras() const;
 };
 
 /// Loads and validates (VehicleConfig::ValidateOrThrow) a vehicle file

@@ -244,6 +244,9 @@ class VehicleLink {
   /// receives (states, video) passes it, so its FaultLine::SetRate is the
   /// rate the video arrives at (a capacity schedule).
   link::FaultLine* fault_line() const;
+  /// The participant the link's topics are on (a vehicle's further camera
+  /// is received on it too: haptel bench video's two cameras).
+  link::Participant& participant() { return *participant_; }
   /// The first state echoing a command sent at or after `sent_ns`: when it
   /// arrived (0: none yet). See StateInboxOf::WatchEcho.
   void WatchEcho(int64_t sent_ns) { channel_->WatchEcho(sent_ns); }

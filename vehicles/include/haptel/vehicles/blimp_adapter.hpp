@@ -2,12 +2,14 @@
 /// @file The seam between a blimp node and what it flies: the simulated
 /// airship, or the servo controller of the real one (seven channels).
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <string>
 
 #include "haptel/config/reality.hpp"
 #include "haptel/config/truth_format.hpp"
 #include "haptel/core/blimp_command.hpp"
+#include "haptel/core/camera_aim.hpp"
 
 namespace haptel::vehicles {
 
@@ -39,6 +41,13 @@ class BlimpAdapter {
   /// Every channel to neutral: no power, tail rotor off, surfaces centred,
   /// the helix plane level, the camera straight ahead.
   virtual void Failsafe() { Apply(BlimpCommand{}); }
+  /// Points camera `camera` (its index in VehicleConfig::Cameras(); not the
+  /// driven one, which the command turns) where its holder asked: its
+  /// servos, where it has them. A simulator's head needs nothing.
+  virtual void AimCamera(size_t /*camera*/, const CameraAim& /*aim*/) {}
+  /// Where camera `camera` points as the vehicle knows it (the servo
+  /// controller's outputs read back); false: as it was aimed.
+  virtual bool CameraAimed(size_t /*camera*/, CameraAim* /*aim*/) const { return false; }
   /// Advances by dt seconds: simulators step, hardware talks to its controller.
   virtual void Update(double dt) = 0;
   virtual BlimpAdapterState State() const = 0;

@@ -78,6 +78,9 @@ class ServoBlimpAdapter final : public BlimpAdapter {
   /// vanished.
   void Update(double dt) override;
   BlimpAdapterState State() const override;
+  /// The camera's axes that have servos (config.camera_channels) to their
+  /// pulses; neutral once the controller is untrusted.
+  void AimCamera(size_t camera, const CameraAim& aim) override;
   const servo::ServoOutput& output() const { return output_; }
 
   /// How often the pulses go out: every channel's target at 50 Hz, the
@@ -98,6 +101,9 @@ class SimulatedServoBlimp final : public BlimpAdapter {
   SimulatedServoBlimp(const ServoControllerConfig& config, const AirshipConfig& airship,
                       const BlimpCourseConfig& course, const DrawnReality& reality);
   void Apply(const BlimpCommand& command) override { adapter_->Apply(command); }
+  void AimCamera(size_t camera, const CameraAim& aim) override { adapter_->AimCamera(camera, aim); }
+  /// The camera's axes as the simulated controller's outputs hold them.
+  bool CameraAimed(size_t camera, CameraAim* aim) const override;
   void Update(double dt) override;
   BlimpAdapterState State() const override;
   const DrawnReality* reality() const override { return &reality_; }

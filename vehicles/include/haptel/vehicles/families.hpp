@@ -39,6 +39,9 @@ struct RobotFamily : link::RobotMessages {
   }
   /// Hardware: zero velocity, then idle.
   static void MakeSafe(Adapter& adapter) { adapter.Stop(); }
+  /// A robot's further cameras have no servos: they look as they are aimed.
+  static void AimCamera(Adapter&, size_t, const CameraAim&) {}
+  static bool CameraAimed(const Adapter&, size_t, CameraAim*) { return false; }
   static video::CameraPose CameraPoseOf(const AdapterState& s) {
     return {.x = s.x, .y = s.y, .heading = s.heading};
   }
@@ -75,6 +78,13 @@ struct BlimpFamily : link::BlimpMessages {
   static void Prepare(Adapter& adapter) { adapter.Failsafe(); }
   static void Apply(Adapter& adapter, const Command& c, const VehicleConfig&) { adapter.Apply(c); }
   static void MakeSafe(Adapter& adapter) { adapter.Failsafe(); }
+  /// A further camera's pan, tilt and zoom: to its servos, where it has them.
+  static void AimCamera(Adapter& adapter, size_t camera, const CameraAim& aim) {
+    adapter.AimCamera(camera, aim);
+  }
+  static bool CameraAimed(const Adapter& adapter, size_t camera, CameraAim* aim) {
+    return adapter.CameraAimed(camera, aim);
+  }
   /// The camera looks where its head points, from the vehicle's pose.
   static video::CameraPose CameraPoseOf(const AdapterState& s) {
     return {.x = s.x,

@@ -70,6 +70,8 @@ class VehicleCoreOf {
   void SetDrivingBar(const DrivingBar* bar) { commands_.SetBar(bar); }
 
   const Adapter& adapter() const { return *adapter_; }
+  /// The control thread's, between ticks (a further camera's aim).
+  Adapter& adapter() { return *adapter_; }
   const CommandIntake<Command>& commands() const { return commands_; }
   const VehicleConfig& config() const { return config_; }
   /// See Node::AdapterFailure and Node::Fault. Any thread.

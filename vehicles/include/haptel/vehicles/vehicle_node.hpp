@@ -15,9 +15,11 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "haptel/config/vehicle.hpp"
 #include "haptel/core/periodic_thread.hpp"
+#include "haptel/core/seqlock.hpp"
 #include "haptel/link/topic.hpp"
 #include "haptel/vehicles/command_intake.hpp"
 #include "haptel/vehicles/families.hpp"
@@ -50,6 +52,11 @@ struct NodeCounters {
   uint64_t video_feedback_refused =
       0;  ///< video feedback from another session than the owner: ignored
   bool watchdog_expired = true;
+  // The further cameras' (every camera but the driven one), summed.
+  uint64_t camera_commands_accepted = 0;
+  uint64_t camera_commands_malformed = 0;  ///< wrong camera name, non-finite, out of range
+  uint64_t camera_commands_refused = 0;    ///< from another writer than the camera's holder
+  uint64_t camera_frames_published = 0;
 };
 
 /// A node's counters: its commands' and its camera's.
@@ -107,8 +114,11 @@ class VehicleNodeOf : public Node {
   /// ConfigFieldError), before any DDS participant exists. `camera` (the
   /// opened source of its video) and `adapter` must not be null; `report`
   /// (the kind's own topic, over the adapter) may be.
+  /// `extra_cameras`: the sources of config.extra_cameras, in their order
+  /// (each its own stream, aimed by CameraCommands from its holder).
   VehicleNodeOf(const VehicleConfig& config, std::unique_ptr<video::CameraSource> camera,
-                std::unique_ptr<Adapter> adapter, std::unique_ptr<KindReport> report = nullptr);
+                std::unique_ptr<Adapter> adapter, std::unique_ptr<KindReport> report = nullptr,
+                std::vector<std::unique_ptr<video::CameraSource>> extra_cameras = {});
   ~VehicleNodeOf() override;
   VehicleNodeOf(const VehicleNodeOf&) = delete;
   VehicleNodeOf& operator=(const VehicleNodeOf&) = delete;
@@ -122,20 +132,62 @@ class VehicleNodeOf : public Node {
   const char* AtRest() const override { return Family::kAtRest; }
 
  private:
+  /// A further camera: its holder's commands (one writer at a time, as the
+  /// driving owner: CommandIntake, whose watchdog is not used — a camera
+  /// left alone stays where it was), its stream, its aim.
+  struct CameraRig {
+    size_t index = 0;  ///< in VehicleConfig::Cameras()
+    CameraConfig config;
+    CameraRange range;
+    CommandIntake<CameraAim> commands{CommandOwner::kFreeAfter_s};
+    std::unique_ptr<link::CameraCommandReader> reader;
+    std::unique_ptr<video::CameraStreamer> streamer;
+    Seqlock<CameraAim> shown;  ///< as the picture shows it (control thread writes)
+    std::atomic<uint64_t> last_seq{0};
+    std::atomic<int64_t> held_since_wall_ns{0};
+    uint64_t holder_writer_hash = 0;  ///< status thread: who held it last
+  };
   void ControlTick(int64_t now_ns);
   void PublishState(int64_t now_ns);
+  void OnCameraCommand(CameraRig& rig, const msg::CameraCommand& cmd, const link::WriterId& writer);
+  /// Control thread: each further camera's newest aim to the adapter (its
+  /// servos), before the tick; after it, the picture's pose from where the
+  /// adapter says it points.
+  void AimCameras();
+  void ShowCameras();
+  void PublishCameras(int64_t now_ns);
 
   /// The control step (commands, watchdog, adapter, state): the same one a
   /// simulated-time run steps in the operator's process.
   VehicleCoreOf<Family> core_;
   std::atomic<uint64_t> states_{0};
   std::atomic<bool> stopped_{false};
+  /// A participant that holds one of the further cameras (a camera
+  /// station) may not drive: the driving intake's bar over the rigs' leases.
+  struct CameraHolders final : DrivingBar {
+    const std::vector<std::unique_ptr<CameraRig>>* rigs = nullptr;
+    bool Bars(const link::WriterId& writer, int64_t now_ns) const override {
+      for (const auto& r : *rigs) {
+        if (r->commands.HeldByParticipantOf(writer, now_ns)) return true;
+      }
+      return false;
+    }
+  };
+  CameraHolders camera_holders_;
 
   // Declared last: destroyed first, so no DDS callback outlives the rest.
   std::unique_ptr<link::Participant> participant_;
   std::unique_ptr<typename Family::StateWriter> state_writer_;
   std::unique_ptr<KindReport> report_;  ///< null: the kind has none
   std::unique_ptr<video::CameraStreamer> camera_;
+  /// The cameras' shares of the link (only with further cameras).
+  std::unique_ptr<video::LinkShare> share_;
+  std::vector<std::unique_ptr<CameraRig>> rigs_;
+  std::unique_ptr<link::CameraStatusWriter> camera_status_;
+  msg::CameraStatus camera_status_msg_;
+  uint64_t camera_status_seq_ = 0;
+  int64_t camera_status_ns_ = 0;
+  uint64_t camera_status_sum_ = 0;  ///< the last published cameras' seqs and holders, summed
   std::unique_ptr<typename Family::CommandReader> command_reader_;
   std::unique_ptr<PeriodicThread> control_;
 };

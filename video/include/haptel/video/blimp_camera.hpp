@@ -11,6 +11,10 @@
 /// (1, 2, ... in course order) above its frame. Every gate has the same
 /// colour: the camera cannot know which one is next. Everything 3-D is clipped
 /// against the near plane and the sides of the view before it is projected.
+/// A camera that zooms (zoom_max > 1) narrows its field of view by the
+/// pose's zoom (ZoomedFovDeg) and says it in a line at the bottom left
+/// ("SURV 4.0x"); a gate's number, drawn only once it is 7 px tall, shows
+/// from afar only zoomed in.
 /// Plain OpenCV drawing, no GPU: a 640x480 frame costs about a millisecond.
 #include <Eigen/Core>
 #include <array>
@@ -72,6 +76,8 @@ class BlimpCourseCamera {
 
  private:
   CameraConfig config_;
+  /// A zoom lens's overlay names it: its name's first four letters, upper case.
+  std::string overlay_name_;
   std::vector<Box> boxes_;
   std::vector<GroundPolygon> ground_;
 };

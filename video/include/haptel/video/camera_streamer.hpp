@@ -16,6 +16,7 @@
 /// — a tile needs far fewer pixels and frames than the driven screen, and
 /// the operator's host decodes them for three vehicles on two cores. Asked
 /// for the full picture again, the next frame is a full-size key frame.
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <functional>
@@ -62,6 +63,44 @@ inline bool FeedbackFromOwner(const link::WriterId& owner, const link::WriterId&
   return owner.empty() || owner.SameParticipant(sender);
 }
 
+/// The link's capacity shared among one vehicle's cameras by priority:
+/// the first camera (lowest priority number) follows its own receiver's
+/// estimate of the link; each next one is given what the cameras before it
+/// leave of the largest fresh estimate any receiver sent (their sent
+/// rates over the last second subtracted), never less than kFloor_kbps.
+/// Two receivers on one host measure one link; on two hosts, the vehicle's
+/// uplink is what they share. Thread-safe (atomics): each camera's thread
+/// and feedback thread call it.
+class LinkShare {
+ public:
+  static constexpr uint32_t kFloor_kbps = 150;
+  /// Camera `slot`'s priority (0 first). Call for each before the cameras start.
+  int Add(int priority);
+  /// Camera `slot`'s receiver estimated the link at `kbps` (0: none).
+  void OnEstimate(int slot, uint32_t kbps, int64_t now_ns);
+  /// Camera `slot` sent `bytes` at `now_ns`.
+  void OnSent(int slot, size_t bytes, int64_t now_ns);
+  /// What camera `slot`'s encoder is to follow now (0: its own setting,
+  /// no estimate yet).
+  uint32_t TargetFor(int slot, int64_t now_ns) const;
+  /// Camera `slot`'s sent rate over the last second, kbit/s.
+  uint32_t SentKbps(int slot, int64_t now_ns) const;
+
+ private:
+  static constexpr int kMaxSlots = kMaxVehicleCameras;
+  struct Slot {
+    int priority = 0;
+    std::atomic<uint32_t> estimate_kbps{0};
+    std::atomic<int64_t> estimate_ns{0};
+    // Bytes sent in the current and the previous second.
+    std::atomic<int64_t> window_start_ns{0};
+    std::atomic<uint64_t> bytes_now{0};
+    std::atomic<uint64_t> bytes_before{0};
+  };
+  std::array<Slot, kMaxSlots> slots_;
+  int count_ = 0;
+};
+
 class CameraStreamer {
  public:
   /// A preview's most frames per second.
@@ -71,11 +110,16 @@ class CameraStreamer {
   using OwnerWriter = std::function<link::WriterId()>;
 
   /// `camera` must not be null; `participant` must outlive the streamer.
-  /// `owner_writer` says whose feedback is taken (FeedbackFromOwner). It
-  /// must not be null.
+  /// `owner_writer` says whose feedback is taken (FeedbackFromOwner): the
+  /// vehicle's owner for the driven camera, the camera's holder for any
+  /// other. It must not be null. `driven`: the vehicle's driven camera, on
+  /// haptel/<vehicle>/video; else on haptel/<vehicle>/video/<camera name>
+  /// (link::VideoTopic), each with its feedback topic. `share` (optional,
+  /// must outlive the streamer) shares the link's capacity among the
+  /// vehicle's cameras by priority (LinkShare).
   CameraStreamer(const CameraConfig& config, std::unique_ptr<CameraSource> camera,
                  link::Participant& participant, const std::string& vehicle_name,
-                 OwnerWriter owner_writer);
+                 OwnerWriter owner_writer, bool driven = true, LinkShare* share = nullptr);
   ~CameraStreamer();
   CameraStreamer(const CameraStreamer&) = delete;
   CameraStreamer& operator=(const CameraStreamer&) = delete;
@@ -130,6 +174,8 @@ class CameraStreamer {
   std::atomic<uint64_t> preview_frames_{0};
   std::atomic<uint64_t> feedback_refused_{0};
   std::atomic<bool> camera_ended_{false};
+  LinkShare* share_ = nullptr;
+  int share_slot_ = -1;
   link::VideoWriter writer_;
   std::unique_ptr<PeriodicThread> loop_;
   std::unique_ptr<link::VideoFeedbackReader> feedback_;  // last: destroyed first

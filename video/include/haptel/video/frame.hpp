@@ -23,6 +23,10 @@ struct Frame {
   /// When it was decoded (CLOCK_REALTIME, as the capture stamp; 0: not
   /// decoded): minus capture_wall_ns, the frame's latency as the view gets it.
   int64_t decoded_wall_ns = 0;
+  /// The last command that steered the camera before capture
+  /// (VideoFrame.command_seq; 0: none): a command's first picture.
+  uint64_t command_seq = 0;
+  float zoom = 1.0F;  ///< the camera's zoom at capture
 };
 
 /// Whatever hands the screen its latest picture: the video receiver (a

@@ -6,16 +6,18 @@
 /// and round obstacles as vertical bars — with a narrow, webcam-like field of
 /// view. Plain OpenCV drawing, no GPU: a 640x480 frame costs about a
 /// millisecond of CPU, its JPEG encode a little less (`haptel bench skip`).
+#include <cstdint>
 #include <opencv2/core.hpp>
 
 #include "haptel/config/track.hpp"
 #include "haptel/config/vehicle.hpp"
+#include "haptel/core/camera_aim.hpp"
 
 namespace haptel::video {
 
 /// Camera position (m, world frame: x east, y north, z up) and orientation.
-/// The robot's SyntheticCamera uses x, y and heading only (its camera is
-/// level, `mount_height` above the floor); the 3-D fields, all 0 by default,
+/// The robot's SyntheticCamera uses x, y, heading plus pan, and zoom only
+/// (its camera is level, `mount_height` above the floor); the 3-D fields, all 0 by default,
 /// are for flying vehicles (video::BlimpCourseCamera).
 struct CameraPose {
   double x = 0.0;
@@ -26,7 +28,18 @@ struct CameraPose {
   double roll = 0.0;     ///< body attitude, rad: right side down positive
   double pan = 0.0;      ///< camera head relative to the body, rad: look left positive
   double tilt = 0.0;     ///< camera head relative to the body, rad: look up positive
+  /// The lens's zoom: the field of view is the camera's fov_deg narrowed by
+  /// it (ZoomedFovDeg); 1: the widest.
+  double zoom = 1.0;
+  /// The last command that steered the camera (VideoFrame.command_seq; 0: none).
+  uint64_t command_seq = 0;
 };
+
+/// Where camera `camera` looks from a vehicle at `body` (the family's
+/// CameraPoseOf), aimed at `aim`: moved by its mount (ahead, left; its
+/// height is the body's z for a flying vehicle), its head turned by the
+/// mount's yaw and pitch plus the aim's pan and tilt, zoomed by the aim.
+CameraPose MountedPose(const CameraPose& body, const CameraConfig& camera, const CameraAim& aim);
 
 class SyntheticCamera {
  public:

@@ -62,6 +62,7 @@ struct VideoStats {
 
 class VideoReceiver final : public FrameSource {
  public:
+  using FrameObserver = std::function<void(const msg::VideoFrame&, const link::SampleStamps&)>;
   /// Key frame requests while one is awaited: at most one per this period.
   static constexpr int64_t kKeyFrameRequestPeriodNs = 100'000'000;
 
@@ -70,18 +71,13 @@ class VideoReceiver final : public FrameSource {
   /// (the run's, as its commands: the vehicle takes its owner's feedback
   /// only). With `decode` false frames are only counted (no screen to show
   /// them on; no requests).
+  /// `camera`: another camera than the driven one (its name: the stream on
+  /// haptel/<vehicle>/video/<camera>, feedback on video_feedback/<camera>).
+  /// `on_frame` (may be empty) hears every frame as it arrives (on the DDS
+  /// thread, before it waits for the decoder; short, no blocking): a camera
+  /// station's command-to-picture latency from the frame's command_seq.
   VideoReceiver(link::Participant& participant, const std::string& vehicle, uint64_t session,
-                bool decode);
-  /// Hears every frame as it arrives (on the DDS thread, before it waits
-  /// for the decoder): a camera station's command-to-picture latency from
-  /// the frame's command_seq. Short, no blocking.
-  using FrameObserver = std::function<void(const msg::VideoFrame&, const link::SampleStamps&)>;
-  /// The same for one camera's stream (link::VideoTopic and
-  /// VideoFeedbackTopic: a vehicle's second camera), each frame also handed
-  /// to `on_frame` (may be empty).
-  VideoReceiver(link::Participant& participant, const std::string& video_topic,
-                const std::string& feedback_topic, uint64_t session, bool decode,
-                FrameObserver on_frame);
+                bool decode, const std::string& camera = {}, FrameObserver on_frame = {});
   /// A receiver on no link: it receives nothing (zero frames), and runs
   /// no thread (a simulated-time run, whose driver reads the state).
   VideoReceiver();
@@ -107,6 +103,8 @@ class VideoReceiver final : public FrameSource {
     std::vector<uint8_t> bytes;
     int64_t capture_ns = 0;
     uint64_t seq = 0;
+    uint64_t command_seq = 0;
+    float zoom = 1.0F;
     bool key_frame = false;
     bool h264 = false;
   };

@@ -6,6 +6,7 @@
 #include <array>
 
 #include "haptel/config/servo.hpp"
+#include "haptel/core/camera_aim.hpp"
 
 namespace haptel::servo {
 
@@ -25,5 +26,11 @@ std::array<double, kBlimpChannels> PulsesFromCommands(
 
 /// Every channel's neutral_us, in BlimpChannel order.
 std::array<double, kBlimpChannels> NeutralPulses(const ServoControllerConfig& config);
+
+/// A camera axis's command in [-1, 1]: its value in `aim` over the axis's
+/// range (min → -1, max → +1; an empty range → 0).
+double CameraAxisCommand(const CameraServoChannel& axis, const CameraAim& aim);
+/// The inverse: `aim`'s value on the axis from its command in [-1, 1].
+void SetCameraAxis(const CameraServoChannel& axis, double command, CameraAim* aim);
 
 }  // namespace haptel::servo

@@ -64,6 +64,14 @@ class ServoOutput {
   /// Maestro Set Target commands (with CRC when configured) in one write,
   /// or one SC-8000 frame.
   void Send(const std::array<double, kBlimpChannels>& pulse_us);
+  /// The cameras' outputs (ServoControllerConfig::camera_channels, in its
+  /// order, µs; clamped as above), sent in the same command or frame as the
+  /// seven channels from the next Send on. Out of range `index`: ignored.
+  void SetCameraPulse(size_t index, double pulse_us);
+  /// What SetCameraPulse last set (the neutral before).
+  double camera_pulse_us(size_t index) const {
+    return index < camera_pulse_us_.size() ? camera_pulse_us_[index] : 0.0;
+  }
 
   /// Reads what the controller sent. Maestro: asks Get Errors at the first
   /// call and every error_poll_s after (`now_s`: any monotonic clock, s),
@@ -110,7 +118,8 @@ class ServoOutput {
   ServoControllerConfig config_;
   std::unique_ptr<ByteStream> port_;
   ServoOutputCounters counters_;
-  static constexpr size_t kFrameBytes = 64;
+  std::array<double, kMaxCameraServoChannels> camera_pulse_us_{};
+  static constexpr size_t kFrameBytes = 128;
   std::array<uint8_t, kFrameBytes> frame_{};
   std::array<uint8_t, kFrameBytes> pending_{};
   size_t pending_size_ = 0;
