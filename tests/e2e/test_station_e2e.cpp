@@ -4,8 +4,9 @@
 // (the vehicle's status and its pictures say so), records it, and never
 // drives (the blimp's driving commands stay unheard); a second station
 // asking for the held camera is refused with one line naming the holder and
-// since when; and the same secured, the station a `camera-surveillance`
-// identity of `haptel security init`.
+// since when; a participant that holds the camera is refused the driving
+// commands, however free the blimp is; and the same secured, the station a
+// `camera-surveillance` identity of `haptel security init`.
 #include <atomic>
 #include <catch2/catch.hpp>
 #include <chrono>
@@ -93,10 +94,11 @@ TEST_CASE(
                                });
 
   Child first(Station(
-      domain, {"--aim", "30,-10,4", "--time-limit", "9", "--record",
+      domain, {"--aim", "30,-10,4", "--time-limit", "12", "--record",
                (dir / "surveillance.mp4").string(), "--session", (dir / "station.mcap").string()}));
   REQUIRE(test::WaitForErr(first, "camera surveillance of blimp1 is yours", 30.0));
-  Child second(Station(domain, {"--time-limit", "3"}));
+  // Asks while the first holds the camera, and ends before the first lets it go.
+  Child second(Station(domain, {"--time-limit", "5"}));
   const int refused = second.Wait(60.0);
   INFO("second:\n" << second.out() << second.err());
   CHECK(refused == 1);
