@@ -3,6 +3,7 @@
 // line and its exit code.
 #include "haptel/app/station_command.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -156,9 +157,9 @@ void PrintSummary(std::FILE* out, const station::StationSetup& setup,
                   const station::StationResult& r) {
   const station::StationFigures& f = r.figures;
   std::fprintf(out, "haptel station: %s — %s\n", station::ToString(r.outcome), r.message.c_str());
-  std::fprintf(out, "  camera %s of %s: %s; held %.1f s of %.1f s, %llu commands sent\n",
-               setup.station.camera.c_str(), setup.station.vehicle.c_str(), r.holder_line.c_str(),
-               f.held_s, r.duration_s, static_cast<unsigned long long>(f.commands_sent));
+  std::fprintf(out, "  %s; held %.1f s of %.1f s, %llu commands sent\n", r.holder_line.c_str(),
+               std::min(f.held_s, r.duration_s), r.duration_s,
+               static_cast<unsigned long long>(f.commands_sent));
   std::fprintf(out, "  as applied: pan %+.1f deg, tilt %+.1f deg, zoom %.2fx\n",
                r.camera.applied.pan * kDegPerRad, r.camera.applied.tilt * kDegPerRad,
                r.camera.applied.zoom);

@@ -86,9 +86,13 @@ TEST_CASE(
   std::atomic<uint64_t> driving_heard{0};
   std::atomic<bool> failsafe_always{true};
   std::atomic<int> states{0};
+  std::atomic<uint64_t> refused{0};
+  std::atomic<uint64_t> received{0};
   link::BlimpStateReader state(participant, link::TopicName("blimp1", "state"),
                                link::Profile::kState, [&](const msg::BlimpState& s) {
                                  driving_heard.store(s.commands_received() + s.commands_refused());
+                                 refused.store(s.commands_refused());
+                                 received.store(s.commands_received());
                                  if (!s.failsafe()) failsafe_always.store(false);
                                  states.fetch_add(1);
                                });
@@ -99,9 +103,9 @@ TEST_CASE(
   REQUIRE(test::WaitForErr(first, "camera surveillance of blimp1 is yours", 30.0));
   // Asks while the first holds the camera, and ends before the first lets it go.
   Child second(Station(domain, {"--time-limit", "5"}));
-  const int refused = second.Wait(60.0);
+  const int second_code = second.Wait(60.0);
   INFO("second:\n" << second.out() << second.err());
-  CHECK(refused == 1);
+  CHECK(second_code == 1);
   CHECK(JsonField(second.LastLine(), "outcome") == "refused");
   CHECK(JsonField(second.LastLine(), "held") == "false");
   CHECK(second.err().find("camera surveillance of blimp1 is held by haptel station, ") !=
@@ -124,13 +128,6 @@ TEST_CASE(
 
   // A participant that holds the camera may not drive, however free the blimp is: this test's
   // own, steering the camera and sending driving commands beside.
-  std::atomic<uint64_t> refused{0};
-  std::atomic<uint64_t> received{0};
-  link::BlimpStateReader counts(participant, link::TopicName("blimp1", "state"),
-                                link::Profile::kState, [&](const msg::BlimpState& s) {
-                                  refused.store(s.commands_refused());
-                                  received.store(s.commands_received());
-                                });
   link::CameraCommandWriter camera(participant, link::CameraCommandTopic("blimp1", "surveillance"),
                                    link::Profile::kCommand);
   link::BlimpCommandWriter drive(participant, link::TopicName("blimp1", "command"),
