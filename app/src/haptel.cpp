@@ -14,6 +14,7 @@
 #include "haptel/app/replay_command.hpp"
 #include "haptel/app/run_command.hpp"
 #include "haptel/app/scene_command.hpp"
+#include "haptel/app/station_command.hpp"
 #include "haptel/app/study_command.hpp"
 #include "haptel/calibration/calibration_procedure.hpp"
 #include "haptel/core/child_process.hpp"
@@ -28,6 +29,8 @@ constexpr const char* kUsage =
     "       haptel scene FILE [--json]   load a haptic scene, print its objects, mass and bounds\n"
     "       haptel study run FILE        run an A/B study; `haptel study report` reports on it,\n"
     "                                    `haptel study power` says how many participants it needs\n"
+    "       haptel station --vehicle NAME --camera CAMERA  a camera station: steer and record one\n"
+    "                                    camera of a vehicle (the blimp's surveillance camera)\n"
     "       haptel security init DIR     DDS Security: a CA and signed identities for the link\n"
     "       haptel discovery-server [--listen ADDR:PORT]  a Fast DDS discovery server for the "
     "link\n"
@@ -71,6 +74,7 @@ int main(int argc, char** argv) {
   if (command == "scene") return app::SceneCommand(argc - 1, argv + 1, std::cout, std::cerr);
   if (command == "bench") return ExecBench(argv + 1);
   if (command == "study") return app::StudyCommand(argc - 1, argv + 1);
+  if (command == "station") return app::StationCommand(argc - 1, argv + 1);
   if (command == "security") return app::SecurityCommand(argc - 1, argv + 1);
   if (command == "discovery-server") return app::DiscoveryServerCommand(argc - 1, argv + 1);
   if (command == "replay") return app::ReplayCommand(argc - 1, argv + 1);
@@ -78,10 +82,11 @@ int main(int argc, char** argv) {
   return cli::Main({"haptel", kUsage}, argc, argv, [&]() -> int {
     if (command.empty())
       throw UsageError(
-          "missing command (run, calibrate, scene, study, replay, record, security, "
+          "missing command (run, station, calibrate, scene, study, replay, record, security, "
           "discovery-server, bench)");
     throw UsageError(
         "unknown command '" + command +
-        "' (run, calibrate, scene, study, replay, record, security, discovery-server, bench)");
+        "' (run, station, calibrate, scene, study, replay, record, security, discovery-server, "
+        "bench)");
   });
 }

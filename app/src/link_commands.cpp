@@ -20,13 +20,17 @@ namespace haptel::app {
 namespace {
 
 constexpr const char* kUsage =
-    "usage: haptel security init DIR [--vehicles NAME,...] [--console NAME,...] [--days N]\n"
+    "usage: haptel security init DIR [--vehicles NAME,...] [--cameras NAME,...] [--console "
+    "NAME,...]\n"
+    "                                [--days N]\n"
     "       haptel security console DIR --console NAME,... [--days N]\n"
-    "  makes DIR for DDS Security: a CA (ca.pem, ca.key: keep it safe), the operator's identity\n"
-    "  and one per vehicle (default robot1,blimp1), the signed governance (everything\n"
-    "  authenticated and encrypted) and each identity's signed permissions (the operator\n"
-    "  commands, a vehicle publishes only its own state and video), valid for N days\n"
-    "  (default 365). Then: haptel run --security DIR, haptel-vehicle --security DIR.\n"
+    "  makes DIR for DDS Security: a CA (ca.pem, ca.key: keep it safe), the operator's identity,\n"
+    "  one per vehicle (default robot1,blimp1) and one per camera for its stations (identity\n"
+    "  camera-NAME, default surveillance), the signed governance (everything authenticated and\n"
+    "  encrypted) and each identity's signed permissions (the operator commands, a vehicle\n"
+    "  publishes only its own state and video, a camera station steers only that camera and\n"
+    "  cannot drive), valid for N days (default 365). Then: haptel run --security DIR,\n"
+    "  haptel-vehicle --security DIR, haptel station --security DIR.\n"
     "  --console NAME,...: also the study console's HTTPS certificate (console.pem, console.key)\n"
     "  for those host names or addresses, signed by the CA: haptel study run --bind ADDR --tls "
     "DIR.\n"
@@ -38,11 +42,12 @@ int SecurityCommand(int argc, const char* const* argv) {
   return cli::Main({"haptel security", kUsage}, argc, argv, [&]() -> int {
     std::filesystem::path dir;
     std::vector<std::string> vehicles{"robot1", "blimp1"};
+    std::vector<std::string> cameras{"surveillance"};
     std::vector<std::string> console_names;
     int days = 365;
     bool console_only = false;
     cli::ReadInput([&] {
-      const Args args(argc, argv, {"vehicles", "days", "console"}, {});
+      const Args args(argc, argv, {"vehicles", "cameras", "days", "console"}, {});
       const auto& words = args.positional();
       if (words.empty() || (words[0] != "init" && words[0] != "console")) {
         throw UsageError(
@@ -77,6 +82,14 @@ int SecurityCommand(int argc, const char* const* argv) {
           vehicles.push_back(name);
         }
       }
+      if (auto list = args.Value("cameras")) {
+        cameras.clear();
+        for (const std::string& name : SplitList(*list)) {
+          if (const std::string problem = link::CameraIdentityProblem(name); !problem.empty())
+            throw UsageError("option --cameras: '" + name + "': expected " + problem);
+          cameras.push_back(name);
+        }
+      }
       // A folder with identities, or anything else in it: refused before anything is made (exit 2).
       if (const std::string problem = link::InitFolderProblem(dir); !problem.empty())
         throw UsageError(problem);
@@ -88,13 +101,17 @@ int SecurityCommand(int argc, const char* const* argv) {
                   JoinList(console_names).c_str(), days);
       return 0;
     }
-    link::InitSecurity(dir, vehicles, days, console_names);
+    link::InitSecurity(dir, vehicles, days, console_names, cameras);
     std::string names = link::OperatorIdentity();
     for (const auto& v : vehicles) names += ", " + link::VehicleIdentity(v);
+    std::string stations;
+    for (const auto& c : cameras)
+      stations += (stations.empty() ? "" : ", ") + link::CameraIdentity(c);
+    if (!stations.empty()) stations = "; camera stations " + stations;
     if (!console_names.empty())
-      names += "; the console's certificate for " + JoinList(console_names);
-    std::printf("wrote %s: CA, governance, identities %s (valid %d days)\n", dir.c_str(),
-                names.c_str(), days);
+      stations += "; the console's certificate for " + JoinList(console_names);
+    std::printf("wrote %s: CA, governance, identities %s (valid %d days)%s\n", dir.c_str(),
+                names.c_str(), days, stations.c_str());
     return 0;
   });
 }

@@ -302,13 +302,26 @@ GrantedTopics TopicsOf(const std::string& identity) {
   if (identity == OperatorIdentity()) {
     // The operator commands, asks for key frames and bitrates
     // (video_feedback) and says who drives (selected, a fleet's); a CAN
-    // robot also says how its bus log fares (can_log).
+    // robot also says how its bus log fares (can_log); a vehicle with
+    // several cameras says what they are (cameras) and streams each.
     return {{"haptel/*/command", "haptel/*/video_feedback", "haptel/*/selected"},
-            {"haptel/*/state", "haptel/*/video", "haptel/*/selected", "haptel/*/can_log"}};
+            {"haptel/*/state", "haptel/*/video", "haptel/*/selected", "haptel/*/can_log",
+             "haptel/*/cameras", "haptel/*/video/*"}};
+  }
+  const std::string camera_prefix = CameraIdentity("");
+  if (identity.rfind(camera_prefix, 0) == 0) {
+    // A camera station steers that camera and asks its stream for key
+    // frames and bitrates; it reads the vehicles' states, their cameras and
+    // that camera's video. No driving topic: DDS refuses it a command writer.
+    const std::string camera = identity.substr(camera_prefix.size());
+    return {{"haptel/*/camera/" + camera, "haptel/*/video_feedback/" + camera},
+            {"haptel/*/state", "haptel/*/cameras", "haptel/*/video/" + camera}};
   }
   const std::string name = identity.substr(VehicleIdentity("").size());
-  return {{"haptel/" + name + "/state", "haptel/" + name + "/video", "haptel/" + name + "/can_log"},
-          {"haptel/" + name + "/command", "haptel/" + name + "/video_feedback"}};
+  return {{"haptel/" + name + "/state", "haptel/" + name + "/video", "haptel/" + name + "/can_log",
+           "haptel/" + name + "/cameras", "haptel/" + name + "/video/*"},
+          {"haptel/" + name + "/command", "haptel/" + name + "/video_feedback",
+           "haptel/" + name + "/camera/*", "haptel/" + name + "/video_feedback/*"}};
 }
 
 /// The topic names listed under `rule`'s <`direction`><topics>.
@@ -387,6 +400,7 @@ void CheckPermissions(const fs::path& file, const fs::path& ca, const std::strin
 
 std::string OperatorIdentity() { return "operator"; }
 std::string VehicleIdentity(const std::string& name) { return "vehicle-" + name; }
+std::string CameraIdentity(const std::string& camera) { return "camera-" + camera; }
 
 SecurityFiles SecurityFilesFor(const fs::path& dir, const std::string& identity) {
   return {dir / "ca.pem", dir / "governance.p7s", dir / (identity + ".pem"),
@@ -401,11 +415,10 @@ void CheckSecurity(const fs::path& dir, const std::string& identity) {
   const SecurityFiles f = SecurityFilesFor(dir, identity);
   for (const fs::path& file : {f.governance, f.private_key, f.permissions}) {
     if (!fs::exists(file)) {
-      throw ConfigError(
-          "security " + dir.string() + ": no " + file.filename().string() + " for identity '" +
-          identity +
-          "'; `haptel security init` makes one for the operator and each vehicle it is "
-          "given (--vehicles)");
+      throw ConfigError("security " + dir.string() + ": no " + file.filename().string() +
+                        " for identity '" + identity +
+                        "'; `haptel security init` makes one for the operator, each vehicle it is "
+                        "given (--vehicles) and each camera's stations (--cameras)");
     }
   }
   CheckValidNow(dir, f.ca);
@@ -445,6 +458,23 @@ std::string VehicleIdentityProblem(const std::string& name) {
          " characters for a certificate (its common name 'haptel-" + VehicleIdentity("NAME") +
          "' holds at most " + std::to_string(kMaxCommonName) + "); '" + name + "' has " +
          std::to_string(name.size());
+}
+
+std::string CameraIdentityProblem(const std::string& camera) {
+  constexpr size_t kMaxCommonName = 64;  // X.520 ub-common-name
+  const size_t most =
+      kMaxCommonName - Subject(CameraIdentity("")).size() + std::string("CN=").size();
+  if (camera.empty() || camera.find_first_not_of(
+                            "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_") !=
+                            std::string::npos) {
+    return "a camera's name of letters, digits, '-' and '_' (it is part of topic names); '" +
+           camera + "' is not";
+  }
+  if (camera.size() <= most) return "";
+  return "a camera's name of at most " + std::to_string(most) +
+         " characters for a certificate (its common name 'haptel-" + CameraIdentity("NAME") +
+         "' holds at most " + std::to_string(kMaxCommonName) + "); '" + camera + "' has " +
+         std::to_string(camera.size());
 }
 
 std::string ConsoleNameProblem(const std::string& name) {
@@ -522,6 +552,7 @@ namespace {
 
 /// Makes every file of a security folder in `dir` (which exists, empty).
 void MakeSecurityFiles(const fs::path& dir, const std::vector<std::string>& vehicles,
+                       const std::vector<std::string>& cameras,
                        const std::vector<std::string>& console_names, int days) {
   OpenSsl(dir, {"req", "-x509", "-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1",
                 "-nodes", "-keyout", (dir / "ca.key").string(), "-out", (dir / "ca.pem").string(),
@@ -534,8 +565,10 @@ void MakeSecurityFiles(const fs::path& dir, const std::vector<std::string>& vehi
   Write(dir / (op + "-permissions.xml"),
         Permissions(op, TopicsOf(op).publish, TopicsOf(op).subscribe, days));
   Sign(dir, op + "-permissions");
-  for (const std::string& name : vehicles) {
-    const std::string id = VehicleIdentity(name);
+  std::vector<std::string> identities;
+  for (const std::string& name : vehicles) identities.push_back(VehicleIdentity(name));
+  for (const std::string& camera : cameras) identities.push_back(CameraIdentity(camera));
+  for (const std::string& id : identities) {
     MakeIdentity(dir, id, days);
     Write(dir / (id + "-permissions.xml"),
           Permissions(id, TopicsOf(id).publish, TopicsOf(id).subscribe, days));
@@ -593,7 +626,8 @@ std::string InitFolderProblem(const fs::path& dir) {
 }
 
 void InitSecurity(const fs::path& given, const std::vector<std::string>& vehicles, int days,
-                  const std::vector<std::string>& console_names) {
+                  const std::vector<std::string>& console_names,
+                  const std::vector<std::string>& cameras) {
   // "DIR/" and "." name the folder itself: without a trailing separator its
   // name is the last part (the partial folder is built beside it, not in it).
   fs::path dir = fs::absolute(given).lexically_normal();
@@ -610,6 +644,11 @@ void InitSecurity(const fs::path& given, const std::vector<std::string>& vehicle
       throw std::invalid_argument("vehicle '" + name + "': expected " + problem);
     }
   }
+  for (const std::string& camera : cameras) {
+    if (const std::string problem = CameraIdentityProblem(camera); !problem.empty()) {
+      throw std::invalid_argument("camera '" + camera + "': expected " + problem);
+    }
+  }
   CheckConsoleNames(console_names);
   const fs::path parent = dir.parent_path();
   fs::create_directories(parent);
@@ -619,7 +658,7 @@ void InitSecurity(const fs::path& given, const std::vector<std::string>& vehicle
   fs::remove_all(partial);
   fs::create_directory(partial);
   try {
-    MakeSecurityFiles(partial, vehicles, console_names, days);
+    MakeSecurityFiles(partial, vehicles, cameras, console_names, days);
     if (!fs::exists(dir)) {
       fs::rename(partial, dir);  // whole or not at all
     } else {

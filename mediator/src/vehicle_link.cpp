@@ -1,11 +1,9 @@
 #include "haptel/mediator/vehicle_link.hpp"
 
-#include <pwd.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cstdlib>
-#include <random>
 
 #include "haptel/core/clock.hpp"
 #include "haptel/core/process_identity.hpp"
@@ -149,32 +147,6 @@ int64_t StateInboxOf<State>::last_received_ns() const {
 template class StateInboxOf<msg::VehicleState>;
 template class StateInboxOf<msg::BlimpState>;
 
-namespace {
-
-/// A random session id, never 0.
-uint64_t NewSession() {
-  std::random_device random;
-  uint64_t id = 0;
-  while (id == 0) id = (static_cast<uint64_t>(random()) << 32) ^ random();
-  return id;
-}
-
-/// "haptel run, user@host pid N": what another operator is told of this one.
-std::string OperatorName() {
-  const std::string host = HostName();
-  const char* user = std::getenv("USER");
-  if (user == nullptr) {
-    const passwd* entry = getpwuid(getuid());
-    if (entry != nullptr) user = entry->pw_name;
-  }
-  std::string name = "haptel run, " + std::string(user != nullptr ? user : "?") + "@" + host +
-                     " pid " + std::to_string(getpid());
-  if (name.size() > 63) name.resize(63);
-  return name;
-}
-
-}  // namespace
-
 template <class Messages>
 CommandChannel<Messages>::CommandChannel(link::Participant& participant, const std::string& vehicle,
                                          uint64_t session, const std::string& operator_name) {
@@ -240,8 +212,8 @@ template class CommandChannel<link::RobotMessages>;
 template class CommandChannel<link::BlimpMessages>;
 
 VehicleLink::VehicleLink(const VehicleLinkOptions& options)
-    : options_(options), session_(NewSession()) {
-  operator_name_ = OperatorName();
+    : options_(options), session_(NewSessionId()) {
+  operator_name_ = ProcessOperatorName("haptel run");
   if (options_.in_process_robot) {
     if (family() != VehicleFamily::kRobot) {
       throw std::logic_error("vehicle link: '" + name() + "' is a " + ToString(family()) +
@@ -278,7 +250,7 @@ VehicleLink::VehicleLink(const VehicleLinkOptions& options)
   link.security_identity = link::OperatorIdentity();
   participant_ = std::make_unique<link::Participant>(link, "haptel-mediator");
   participant_->SetTap(options_.tap);  // before any writer or reader: each is tapped
-  const std::string who = OperatorName();
+  const std::string who = ProcessOperatorName("haptel run");
   switch (family()) {
     case VehicleFamily::kRobot:
       channel_ = std::make_unique<RobotChannel>(*participant_, name(), session_, who);

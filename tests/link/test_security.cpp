@@ -17,11 +17,13 @@
 #include <ctime>
 #include <fstream>
 #include <functional>
+#include <memory>
 #include <string>
 #include <thread>
 
 #include "haptel/config/error.hpp"
 #include "haptel/core/child_process.hpp"
+#include "haptel/link/families.hpp"
 #include "haptel/link/security.hpp"
 #include "haptel/link/topic.hpp"
 #include "test_env.hpp"
@@ -35,7 +37,7 @@ namespace {
 const fs::path& Folder() {
   static const fs::path dir = [] {
     const fs::path d = test::ScratchDir("security") / "deployment";
-    link::InitSecurity(d, {"robot1"}, 30);
+    link::InitSecurity(d, {"robot1"}, 30, {}, {"surveillance"});
     return d;
   }();
   return dir;
@@ -169,13 +171,18 @@ TEST_CASE(
     "security init: a CA, the identities and signed documents; the check names what is missing or "
     "expired") {
   const fs::path& dir = Folder();
-  for (const char* file :
-       {"ca.pem", "governance.p7s", "operator.pem", "operator.key", "operator-permissions.p7s",
-        "vehicle-robot1.pem", "vehicle-robot1.key", "vehicle-robot1-permissions.p7s"}) {
+  for (const char* file : {"ca.pem", "governance.p7s", "operator.pem", "operator.key",
+                           "operator-permissions.p7s", "vehicle-robot1.pem", "vehicle-robot1.key",
+                           "vehicle-robot1-permissions.p7s", "camera-surveillance.pem",
+                           "camera-surveillance.key", "camera-surveillance-permissions.p7s"}) {
     CHECK(fs::exists(dir / file));
   }
   CHECK(CheckMessage(dir, "operator") == "valid");
   CHECK(CheckMessage(dir, link::VehicleIdentity("robot1")) == "valid");
+  CHECK(CheckMessage(dir, link::CameraIdentity("surveillance")) == "valid");
+  CHECK(CheckMessage(dir, link::CameraIdentity("rear")).find("(--cameras)") != std::string::npos);
+  CHECK_THAT(link::CameraIdentityProblem("rear/up"), Catch::Contains("letters, digits"));
+  CHECK(link::CameraIdentityProblem("rear-1").empty());
   CHECK(CheckMessage(dir, link::VehicleIdentity("blimp9"))
             .find("no vehicle-blimp9.key for identity 'vehicle-blimp9'") != std::string::npos);
   CHECK(CheckMessage(dir / "nowhere", "operator").find("no such folder") != std::string::npos);
@@ -335,6 +342,58 @@ TEST_CASE(
   Command(Link(domain, Folder(), link::OperatorIdentity()), 60.0, "",
           [&] { return vehicle.received.load() > 0; });
   CHECK(vehicle.received.load() > 0);
+}
+
+TEST_CASE(
+    "secured: a camera station (identity camera-surveillance) steers its camera; its driving "
+    "commands and another camera's never reach the vehicle") {
+  const int domain = test::UniqueDomain(64);
+  Vehicle vehicle(domain);  // vehicle-robot1: reads its driving commands
+  std::atomic<int> steered{0};
+  std::atomic<int> other_camera{0};
+  link::CameraCommandReader surveillance(
+      vehicle.participant, link::CameraCommandTopic("robot1", "surveillance"),
+      link::Profile::kCommand, [&](const msg::CameraCommand&) { steered.fetch_add(1); });
+  link::CameraCommandReader rear(vehicle.participant, link::CameraCommandTopic("robot1", "rear"),
+                                 link::Profile::kCommand,
+                                 [&](const msg::CameraCommand&) { other_camera.fetch_add(1); });
+  const LinkConfig station = Link(domain, Folder(), link::CameraIdentity("surveillance"));
+  // Driving: DDS's access control refuses the writer (or, at the least,
+  // delivers nothing it writes).
+  try {
+    Command(station, 3.0);
+  } catch (const std::runtime_error& e) {
+    CHECK(std::string(e.what()).find("cannot create writer") != std::string::npos);
+  }
+  link::Participant participant(station, "station");
+  const auto steer = [&](const std::string& camera, const std::function<bool()>& until,
+                         double seconds) {
+    std::unique_ptr<link::CameraCommandWriter> writer;
+    try {
+      writer = std::make_unique<link::CameraCommandWriter>(
+          participant, link::CameraCommandTopic("robot1", camera), link::Profile::kCommand);
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    msg::CameraCommand m;
+    m.camera(camera);
+    m.zoom(2.0f);
+    for (int i = 0; i < static_cast<int>(seconds * 100) && !(until && until()); ++i) {
+      m.seq(static_cast<uint64_t>(i + 1));
+      writer->Write(m);
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    return std::string("written");
+  };
+  const std::string rear_writer = steer("rear", nullptr, 2.0);
+  INFO(rear_writer);
+  CHECK(
+      (rear_writer == "written" || rear_writer.find("cannot create writer") != std::string::npos));
+  CHECK(steer(
+            "surveillance", [&] { return steered.load() > 0; }, 60.0) == "written");
+  CHECK(steered.load() > 0);
+  CHECK(other_camera.load() == 0);
+  CHECK(vehicle.received.load() == 0);
 }
 
 TEST_CASE("secured: no command payload crosses the wire in plain text (without security it does)") {

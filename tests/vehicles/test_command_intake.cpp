@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "alloc_counter.hpp"
 #include "haptel/vehicles/command_intake.hpp"
@@ -168,4 +169,52 @@ TEST_CASE("control step: nominal first, then the time since the last tick, at mo
   CHECK(ControlStep(last, 1'000'000'000, 200.0) == Approx(0.005));
   CHECK(ControlStep(last, 1'010'000'000, 200.0) == Approx(0.010));
   CHECK(ControlStep(last, 2'000'000'000, 200.0) == Approx(0.05));
+}
+
+namespace {
+/// A vehicle's cameras' intakes as its driving bar (what the vehicle node
+/// does over its steerable cameras).
+struct CameraHolders : DrivingBar {
+  std::vector<const CommandIntake<int>*> cameras;
+  bool Bars(const haptel::link::WriterId& writer, int64_t now_ns) const override {
+    for (const auto* c : cameras) {
+      if (c->HeldByParticipantOf(writer, now_ns)) return true;
+    }
+    return false;
+  }
+};
+}  // namespace
+
+TEST_CASE(
+    "the camera role: a camera's holder is named with since when; a participant that holds a "
+    "camera may not drive, however free the vehicle is, until it lets the camera go") {
+  const int64_t ms = 1'000'000;
+  CommandIntake<int> camera(0.25);
+  CommandIntake<int> driving(0.25);
+  CameraHolders holders;
+  holders.cameras = {&camera};
+  driving.SetBar(&holders);
+  const CommandSender station_camera{Writer(1, 3), 11, "haptel station, eve", false};
+  const CommandSender station_driving{Writer(1, 4), 11, "haptel station, eve", false};
+  const CommandSender pilot{Writer(2, 3), 22, "haptel run, ana", false};
+
+  const int64_t before = haptel::WallNs();
+  CHECK(camera.Offer(true, station_camera, 1, 0, 1, 10 * ms));
+  CHECK(camera.owner().since_wall_ns >= before);
+  CHECK(camera.owner().since_wall_ns <= haptel::WallNs());
+  // Another writer of the station's participant: barred, counted, and it does not take the vehicle.
+  CHECK_FALSE(driving.Offer(true, station_driving, 1, 0, 1, 11 * ms));
+  CHECK(driving.refused() == 1);
+  CHECK(driving.owner().writer.empty());
+  CHECK(driving.Offer(true, pilot, 1, 0, 2, 12 * ms));
+
+  // Silent past its lease, the station holds nothing, and bars nothing.
+  const int64_t silent = 10 * ms + haptel::SToNs(CommandOwner::kFreeAfter_s) + ms;
+  CHECK(camera.HeldByParticipantOf(station_driving.writer, 11 * ms));
+  CHECK_FALSE(camera.HeldByParticipantOf(station_driving.writer, silent));
+  CHECK_FALSE(camera.HeldByParticipantOf(pilot.writer, 11 * ms));
+  // Released: at once.
+  CHECK(camera.Offer(true, station_camera, 2, 0, 2, 20 * ms));
+  CHECK(camera.Offer(true, {Writer(1, 3), 11, "", true}, 3, 0, 2, 21 * ms));
+  CHECK_FALSE(holders.Bars(station_driving.writer, 22 * ms));
 }

@@ -15,6 +15,7 @@
 #include "haptel/config/blimp_course.hpp"
 #include "haptel/config/error.hpp"
 #include "haptel/config/vehicle.hpp"
+#include "haptel/testing/read_digit.hpp"
 #include "haptel/video/blimp_camera.hpp"
 #include "test_env.hpp"
 
@@ -436,65 +437,10 @@ TEST_CASE("blimp camera renders the shipped course: the first gate ahead of the 
   CHECK_FALSE(IsGateColour(At(image, kH / 2, kW / 2)));
 }
 
-namespace {
-
-/// Pixels white enough to be a gate number's fill (the sky never is).
-cv::Mat WhiteMask(const cv::Mat& image) {
-  cv::Mat white;
-  cv::inRange(image, cv::Scalar(236, 236, 236), cv::Scalar(255, 255, 255), white);
-  return white;
-}
-
-struct Reading {
-  int digit = -1;
-  double score = 0.0;  ///< intersection over union of the template and the picture's white
-};
-
-/// Reads one digit from `white` (0/255), as a person would by its shape:
-/// each digit drawn in the gate labels' font (Hershey simplex, thickness 4
-/// at scale 2), at scales from 0.5 to 3, slid over the picture; the best
-/// overlap of a digit's pixels with the picture's white pixels wins.
-Reading ReadDigit(const cv::Mat& white) {
-  cv::Mat picture;
-  white.convertTo(picture, CV_32F, 1.0 / 255.0);
-  cv::Mat sums;
-  cv::integral(picture, sums, CV_64F);
-  Reading best;
-  for (int digit = 0; digit <= 9; ++digit) {
-    const std::string text = std::to_string(digit);
-    int baseline = 0;
-    const cv::Size size = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, 2.0, 4, &baseline);
-    cv::Mat glyph = cv::Mat::zeros(size.height + 8, size.width + 8, CV_8UC1);
-    cv::putText(glyph, text, cv::Point(4, 4 + size.height), cv::FONT_HERSHEY_SIMPLEX, 2.0,
-                cv::Scalar(255), 4, cv::LINE_AA);
-    cv::threshold(glyph, glyph, 127, 255, cv::THRESH_BINARY);
-    glyph = glyph(cv::boundingRect(glyph)).clone();
-    for (double scale = 0.5; scale <= 3.0; scale += 0.1) {
-      cv::Mat t;
-      cv::resize(glyph, t, cv::Size(), scale, scale, cv::INTER_NEAREST);
-      if (t.rows >= picture.rows || t.cols >= picture.cols) continue;
-      cv::Mat tf;
-      t.convertTo(tf, CV_32F, 1.0 / 255.0);
-      const double glyph_pixels = cv::sum(tf)[0];
-      cv::Mat overlap;
-      cv::matchTemplate(picture, tf, overlap, cv::TM_CCORR);
-      for (int y = 0; y < overlap.rows; ++y) {
-        for (int x = 0; x < overlap.cols; ++x) {
-          const double both = overlap.at<float>(y, x);
-          if (both < 0.3 * glyph_pixels) continue;
-          const double window = sums.at<double>(y + t.rows, x + t.cols) -
-                                sums.at<double>(y, x + t.cols) - sums.at<double>(y + t.rows, x) +
-                                sums.at<double>(y, x);
-          const double iou = both / (glyph_pixels + window - both);
-          if (iou > best.score) best = {digit, iou};
-        }
-      }
-    }
-  }
-  return best;
-}
-
-}  // namespace
+// The gate number's reader, shared with the control room's window test.
+using haptel::testing::ReadDigit;
+using haptel::testing::WhiteMask;
+using Reading = haptel::testing::DigitReading;
 
 TEST_CASE(
     "the surveillance camera zoomed in reads a gate's number 200 m off that its wide view cannot; "

@@ -65,6 +65,10 @@ VehicleNodeOf<Family>::VehicleNodeOf(
     }
     ShowCameras();
   }
+  if (!rigs_.empty()) {
+    camera_holders_.rigs = &rigs_;
+    core_.SetDrivingBar(&camera_holders_);
+  }
   command_reader_ = std::make_unique<typename Family::CommandReader>(
       *participant_, link::TopicName(c.name, "command"), link::Profile::kCommand,
       [this](const typename Family::CommandMsg& cmd, const link::WriterId& writer) {

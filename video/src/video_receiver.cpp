@@ -37,9 +37,11 @@ cv::Mat MarkStale(const cv::Mat& picture) {
 VideoReceiver::VideoReceiver() : decode_(false) {}
 
 VideoReceiver::VideoReceiver(link::Participant& participant, const std::string& vehicle,
-                             uint64_t session, bool decode, const std::string& camera)
+                             uint64_t session, bool decode, const std::string& camera,
+                             FrameObserver on_frame)
     : decode_(decode),
       session_(session),
+      on_frame_(std::move(on_frame)),
       feedback_(std::make_unique<link::VideoFeedbackWriter>(
           participant, link::VideoFeedbackTopic(vehicle, camera, camera.empty()),
           link::Profile::kState)) {
@@ -66,6 +68,7 @@ VideoReceiver::~VideoReceiver() {
 }
 
 void VideoReceiver::OnFrame(const msg::VideoFrame& frame, const link::SampleStamps& stamps) {
+  if (on_frame_) on_frame_(frame, stamps);
   const int64_t now = stamps.arrived_ns;
   const bool h264 = frame.encoding() == CameraCodecName(CameraCodec::kH264);
   msg::VideoFeedback rate;  // sent below when the estimate is due

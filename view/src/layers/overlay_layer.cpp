@@ -17,18 +17,24 @@ std::vector<std::string> OverlayLines(const Overlay& o) {
   char line[160];
   std::snprintf(line, sizeof line, "%s  (%s)", o.interface_name, o.operator_name);
   lines.emplace_back(line);
-  if (o.time_left_s >= 0) {
-    std::snprintf(line, sizeof line, "lap %.1f s   time left %.0f s", o.lap_time_s, o.time_left_s);
-  } else {
-    std::snprintf(line, sizeof line, "lap %.1f s", o.lap_time_s);
+  if (o.lap_time_s >= 0) {
+    if (o.time_left_s >= 0) {
+      std::snprintf(line, sizeof line, "lap %.1f s   time left %.0f s", o.lap_time_s,
+                    o.time_left_s);
+    } else {
+      std::snprintf(line, sizeof line, "lap %.1f s", o.lap_time_s);
+    }
+    lines.emplace_back(line);
+    std::snprintf(line, sizeof line, "gates %d/%d   obstacles %d", o.gates_passed, o.gates_total,
+                  o.obstacles_touched);
+    lines.emplace_back(line);
+    std::snprintf(line, sizeof line, "last contact: %s",
+                  o.last_contact[0] != '\0' ? o.last_contact : "none");
+    lines.emplace_back(line);
+  } else if (o.time_left_s >= 0) {
+    std::snprintf(line, sizeof line, "%.0f s   time left %.0f s", o.t_s, o.time_left_s);
+    lines.emplace_back(line);
   }
-  lines.emplace_back(line);
-  std::snprintf(line, sizeof line, "gates %d/%d   obstacles %d", o.gates_passed, o.gates_total,
-                o.obstacles_touched);
-  lines.emplace_back(line);
-  std::snprintf(line, sizeof line, "last contact: %s",
-                o.last_contact[0] != '\0' ? o.last_contact : "none");
-  lines.emplace_back(line);
   if (o.status[0] != '\0') lines.emplace_back(o.status);
   if (o.hud) {
     lines.push_back("speed " + HudSpeedText(o));

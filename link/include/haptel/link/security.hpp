@@ -9,8 +9,12 @@
 /// encrypted: discovery, liveliness, metadata and data), and per identity a
 /// certificate, its key and signed permissions. The operator may publish
 /// commands and read states and video of any vehicle; vehicle NAME may
-/// publish only haptel/NAME/state and haptel/NAME/video and read only
-/// haptel/NAME/command. Anything else is denied.
+/// publish only its own state, video and cameras and read only its own
+/// commands (the driving one and its cameras'); camera station CAMERA
+/// (`haptel station --camera CAMERA`) may publish only the camera command
+/// of a camera of that name (haptel/*/camera/CAMERA) and read the states,
+/// the cameras' status and that camera's video: never a driving command,
+/// which DDS itself refuses it. Anything else is denied.
 #include <filesystem>
 #include <string>
 #include <utility>
@@ -24,6 +28,9 @@ namespace haptel::link {
 std::string OperatorIdentity();
 /// The identity of vehicle `name` ("vehicle-robot1").
 std::string VehicleIdentity(const std::string& name);
+/// The identity of the camera stations that steer cameras named `camera`
+/// ("camera-surveillance"), on any vehicle.
+std::string CameraIdentity(const std::string& camera);
 
 /// The files of `identity` in security folder `dir`.
 struct SecurityFiles {
@@ -58,13 +65,17 @@ std::vector<std::pair<std::string, std::string>> SecurityProperties(
 /// "haptel-vehicle-NAME" holds at most 64 characters (X.520), so the name at
 /// most 49.
 std::string VehicleIdentityProblem(const std::string& name);
+/// The same for a camera's name (its identity "haptel-camera-NAME"); also
+/// "" only for letters, digits, '-' and '_' (it is part of topic names).
+std::string CameraIdentityProblem(const std::string& camera);
 
 /// Why `dir` cannot be made by InitSecurity, "" when it can: a file, a
 /// folder holding a CA (ca.pem) or any other file. Nothing is changed.
 std::string InitFolderProblem(const std::filesystem::path& dir);
 
-/// `haptel security init DIR`: creates the CA, the operator's identity and
-/// one for each of `vehicles`, the governance and each identity's
+/// `haptel security init DIR`: creates the CA, the operator's identity,
+/// one for each of `vehicles` and one for the stations of each of
+/// `cameras` (CameraIdentity), the governance and each identity's
 /// permissions, all signed, with the `openssl` program; valid for `days`.
 /// Refuses a folder that already holds a CA (nothing is overwritten), one
 /// that holds other files, and names a certificate cannot hold
@@ -82,7 +93,8 @@ std::string InitFolderProblem(const std::filesystem::path& dir);
 /// certificate (console.key, console.pem), signed by the same CA, for those
 /// host names and addresses (AddConsoleCertificate).
 void InitSecurity(const std::filesystem::path& dir, const std::vector<std::string>& vehicles,
-                  int days, const std::vector<std::string>& console_names = {});
+                  int days, const std::vector<std::string>& console_names = {},
+                  const std::vector<std::string>& cameras = {});
 
 /// `haptel security console DIR --names NAME,...`: the console's HTTPS key
 /// and certificate (console.key, console.pem) in an existing folder, signed

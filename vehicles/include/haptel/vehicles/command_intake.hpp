@@ -63,6 +63,7 @@ struct CommandOwnerInfo {
   link::WriterId writer;  ///< empty: nobody owns the vehicle
   uint64_t session = 0;   ///< the session its commands name (0: nobody owns the vehicle)
   char name[64] = "";
+  int64_t since_wall_ns = 0;  ///< when it took the vehicle (CLOCK_REALTIME; 0: nobody)
 };
 
 /// One operator at a time drives a vehicle: one command writer (its DDS
@@ -96,12 +97,14 @@ class CommandOwner {
     writer_ = from.writer;
     last_ns_ = now_ns;
     owned_ = !from.release;
+    held_until_ns_.store(owned_ ? now_ns + free_after_ns_ : 0, std::memory_order_relaxed);
     if (changed || from.release) {
       CommandOwnerInfo info;
       if (owned_) {
         info.writer = writer_;
         info.session = from.session;
         std::snprintf(info.name, sizeof info.name, "%s", from.name != nullptr ? from.name : "");
+        info.since_wall_ns = WallNs();
       }
       info_.Store(info);
     }
@@ -109,6 +112,13 @@ class CommandOwner {
   }
   CommandOwnerInfo owner() const { return info_.Load(); }
   uint64_t refused() const { return refused_.load(); }
+  /// Whether a writer of `writer`'s participant owns it at `now_ns`: it
+  /// took it, has not released it and has not fallen silent. Any thread.
+  bool HeldByParticipantOf(const link::WriterId& writer, int64_t now_ns) const {
+    if (now_ns > held_until_ns_.load(std::memory_order_relaxed)) return false;
+    const CommandOwnerInfo info = info_.Load();
+    return !info.writer.empty() && info.writer.SameParticipant(writer);
+  }
 
  private:
   int64_t free_after_ns_;
@@ -116,7 +126,19 @@ class CommandOwner {
   link::WriterId writer_;
   int64_t last_ns_ = 0;
   Seqlock<CommandOwnerInfo> info_;
+  std::atomic<int64_t> held_until_ns_{0};  ///< the owner's lease ends (0: nobody owns it)
   std::atomic<uint64_t> refused_{0};
+};
+
+/// Writers that may not drive however free the vehicle is: those of a
+/// participant that holds one of its cameras (a camera station, issue 38:
+/// the vehicle node asks each camera's intake, HeldByParticipantOf). With
+/// DDS Security a station's identity may not even write a driving command;
+/// without, this is what refuses it. Asked on the DDS thread; allocation-free.
+class DrivingBar {
+ public:
+  virtual ~DrivingBar() = default;
+  virtual bool Bars(const link::WriterId& writer, int64_t now_ns) const = 0;
 };
 
 /// A command as the control loop applies it, with what the state echoes.
@@ -143,6 +165,10 @@ class CommandIntake {
              const Command& command, int64_t now_ns) {
     if (!valid) {
       malformed_.fetch_add(1, std::memory_order_relaxed);
+      return false;
+    }
+    if (bar_ != nullptr && bar_->Bars(from.writer, now_ns)) {
+      barred_.fetch_add(1, std::memory_order_relaxed);
       return false;
     }
     const CommandOwner::Verdict verdict = owner_.Admit(from, now_ns);
@@ -185,14 +211,23 @@ class CommandIntake {
   uint64_t accepted() const { return accepted_.load(); }
   uint64_t malformed() const { return malformed_.load(); }
   uint64_t stale() const { return stale_.load(); }
-  /// Commands from a writer that did not own the vehicle: dropped.
-  uint64_t refused() const { return owner_.refused(); }
+  /// Commands from a writer that did not own the vehicle, or that may not
+  /// drive it (SetBar): dropped.
+  uint64_t refused() const { return owner_.refused() + barred_.load(); }
+  /// Set-up, before the first Offer: writers `bar` bars are refused (it
+  /// must outlive the intake; null: none).
+  void SetBar(const DrivingBar* bar) { bar_ = bar; }
   /// The writer (and session) the vehicle obeys now.
   CommandOwnerInfo owner() const { return owner_.owner(); }
+  /// See CommandOwner::HeldByParticipantOf. Any thread.
+  bool HeldByParticipantOf(const link::WriterId& writer, int64_t now_ns) const {
+    return owner_.HeldByParticipantOf(writer, now_ns);
+  }
   uint64_t watchdog_trips() const { return trips_.load(); }
   bool watchdog_expired() const { return expired_.load(); }
 
  private:
+  const DrivingBar* bar_ = nullptr;
   CommandOwner owner_;        // DDS thread
   CommandSequence sequence_;  // DDS thread
   Seqlock<ReceivedCommand<Command>> latest_;
@@ -200,7 +235,7 @@ class CommandIntake {
   uint64_t
       applied_version_;  ///< the seqlock's version last taken (its initial value is no command)
   ReceivedCommand<Command> applied_;
-  std::atomic<uint64_t> accepted_{0}, malformed_{0}, stale_{0}, trips_{0};
+  std::atomic<uint64_t> accepted_{0}, malformed_{0}, stale_{0}, trips_{0}, barred_{0};
   std::atomic<bool> expired_{true};
 };
 

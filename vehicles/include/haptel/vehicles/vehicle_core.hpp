@@ -64,6 +64,11 @@ class VehicleCoreOf {
   /// The end: made safe and stepped once (unless the hardware is gone).
   void MakeSafe();
 
+  /// Set-up, before the first command: writers `bar` bars may not drive
+  /// (the participants that hold one of its cameras); it must outlive the
+  /// core.
+  void SetDrivingBar(const DrivingBar* bar) { commands_.SetBar(bar); }
+
   const Adapter& adapter() const { return *adapter_; }
   /// The control thread's, between ticks (a further camera's aim).
   Adapter& adapter() { return *adapter_; }

@@ -162,6 +162,18 @@ class VehicleNodeOf : public Node {
   VehicleCoreOf<Family> core_;
   std::atomic<uint64_t> states_{0};
   std::atomic<bool> stopped_{false};
+  /// A participant that holds one of the further cameras (a camera
+  /// station) may not drive: the driving intake's bar over the rigs' leases.
+  struct CameraHolders final : DrivingBar {
+    const std::vector<std::unique_ptr<CameraRig>>* rigs = nullptr;
+    bool Bars(const link::WriterId& writer, int64_t now_ns) const override {
+      for (const auto& r : *rigs) {
+        if (r->commands.HeldByParticipantOf(writer, now_ns)) return true;
+      }
+      return false;
+    }
+  };
+  CameraHolders camera_holders_;
 
   // Declared last: destroyed first, so no DDS callback outlives the rest.
   std::unique_ptr<link::Participant> participant_;

@@ -24,6 +24,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <opencv2/core.hpp>
@@ -61,6 +62,7 @@ struct VideoStats {
 
 class VideoReceiver final : public FrameSource {
  public:
+  using FrameObserver = std::function<void(const msg::VideoFrame&, const link::SampleStamps&)>;
   /// Key frame requests while one is awaited: at most one per this period.
   static constexpr int64_t kKeyFrameRequestPeriodNs = 100'000'000;
 
@@ -71,8 +73,11 @@ class VideoReceiver final : public FrameSource {
   /// them on; no requests).
   /// `camera`: another camera than the driven one (its name: the stream on
   /// haptel/<vehicle>/video/<camera>, feedback on video_feedback/<camera>).
+  /// `on_frame` (may be empty) hears every frame as it arrives (on the DDS
+  /// thread, before it waits for the decoder; short, no blocking): a camera
+  /// station's command-to-picture latency from the frame's command_seq.
   VideoReceiver(link::Participant& participant, const std::string& vehicle, uint64_t session,
-                bool decode, const std::string& camera = {});
+                bool decode, const std::string& camera = {}, FrameObserver on_frame = {});
   /// A receiver on no link: it receives nothing (zero frames), and runs
   /// no thread (a simulated-time run, whose driver reads the state).
   VideoReceiver();
@@ -117,6 +122,7 @@ class VideoReceiver final : public FrameSource {
 
   bool decode_;
   uint64_t session_ = 0;  ///< carried by every feedback sample
+  FrameObserver on_frame_;
   mutable std::mutex mutex_;
   std::condition_variable ready_;
   std::deque<Pending> pending_;

@@ -38,8 +38,10 @@ struct Shape {
 struct Overlay {
   char interface_name[32] = "";
   char operator_name[16] = "";
-  double t_s = 0.0;         ///< run clock
-  double lap_time_s = 0.0;  ///< lap clock
+  double t_s = 0.0;  ///< run clock
+  /// Lap clock. Negative: no lap (a camera station's view): no lap, gates
+  /// or contact lines are drawn.
+  double lap_time_s = 0.0;
   double time_left_s = -1;  ///< until the time limit (negative: none)
   int gates_passed = 0;
   int gates_total = 0;
