@@ -8,12 +8,11 @@
 #include <stdexcept>
 #include <thread>
 
-#include "haptel/config/link.hpp"
-#include "haptel/core/child_process.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/link/families.hpp"
 #include "haptel/mediator/vehicle_link.hpp"
 #include "haptel/video/video_receiver.hpp"
+#include "video_schedule.hpp"
 
 namespace haptel::bench {
 namespace {
@@ -53,22 +52,13 @@ struct Watch {
 TwoCameraResult RunTwoCameraSchedule(const TwoCameraOptions& options) {
   TwoCameraResult result;
   try {
-    mediator::VehicleLinkOptions link_options;
-    link_options.vehicle = LoadVehicle(options.vehicle_file);
-    const VehicleConfig& vehicle = link_options.vehicle;
+    const VehicleConfig vehicle = LoadVehicle(options.vehicle_file);
     if (vehicle.extra_cameras.empty() || vehicle.extra_cameras[0].name != kSurveillance) {
       throw std::runtime_error(options.vehicle_file.string() +
                                ": expected a second camera named surveillance");
     }
-    link_options.link = vehicle.link;
-    link_options.link.domain_id = options.domain;
-    char fault[48];
-    std::snprintf(fault, sizeof fault, "rate=%gkbit", options.capacities_kbps.front());
-    link_options.link.fault = ParseLinkFault(fault);
-    link_options.track_file = vehicle.world;
-    link_options.program = ProgramDirectory() / "haptel-vehicle";
-    link_options.decode_video = true;
-    mediator::VehicleLink link(link_options);
+    mediator::VehicleLink link(ScheduleLinkOptions(vehicle, options.domain,
+                                                   options.capacities_kbps.front(), vehicle.world));
     link::FaultLine* line = link.fault_line();
     if (line == nullptr) throw std::logic_error("the receiving side has no fault line");
     video::VideoReceiver surveillance(link.participant(), vehicle.name, link.session(), true,

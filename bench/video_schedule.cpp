@@ -77,6 +77,22 @@ double AdaptSeconds(const std::vector<Shown>& shown, double step_s, double phase
 
 }  // namespace
 
+mediator::VehicleLinkOptions ScheduleLinkOptions(VehicleConfig vehicle, int domain,
+                                                 double first_kbps,
+                                                 std::filesystem::path track_file) {
+  mediator::VehicleLinkOptions link_options;
+  link_options.vehicle = std::move(vehicle);
+  link_options.link = link_options.vehicle.link;
+  link_options.link.domain_id = domain;
+  char fault[48];
+  std::snprintf(fault, sizeof fault, "rate=%gkbit", first_kbps);
+  link_options.link.fault = ParseLinkFault(fault);
+  link_options.track_file = std::move(track_file);
+  link_options.program = ProgramDirectory() / "haptel-vehicle";
+  link_options.decode_video = true;
+  return link_options;
+}
+
 ScheduleResult RunCapacitySchedule(const VehicleConfig& vehicle, CameraCodec codec,
                                    const std::vector<cv::Mat>& frames,
                                    const ScheduleOptions& options) {
@@ -95,17 +111,9 @@ ScheduleResult RunCapacitySchedule(const VehicleConfig& vehicle, CameraCodec cod
   try {
     if (!std::filesystem::exists(source)) WriteLosslessSource(source, frames, rate_hz);
     WriteVehicleFileWithSource(vehicle, codec, source, vehicle_file);
-    mediator::VehicleLinkOptions link_options;
-    link_options.vehicle = LoadVehicle(vehicle_file);
-    link_options.link = link_options.vehicle.link;
-    link_options.link.domain_id = options.domain;
-    char fault[48];
-    std::snprintf(fault, sizeof fault, "rate=%gkbit", options.capacities_kbps.front());
-    link_options.link.fault = ParseLinkFault(fault);
-    link_options.track_file = options.track_file;
-    link_options.program = ProgramDirectory() / "haptel-vehicle";
-    link_options.decode_video = true;
-    mediator::VehicleLink link(link_options);
+    mediator::VehicleLink link(ScheduleLinkOptions(LoadVehicle(vehicle_file), options.domain,
+                                                   options.capacities_kbps.front(),
+                                                   options.track_file));
     link::FaultLine* line = link.fault_line();
     if (line == nullptr) throw std::logic_error("the operator's side has no fault line");
     // Up: a state and a first picture.

@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "haptel/config/vehicle.hpp"
+#include "haptel/mediator/vehicle_link.hpp"
 
 namespace haptel::bench {
 
@@ -72,5 +73,13 @@ struct ScheduleOptions {
 ScheduleResult RunCapacitySchedule(const VehicleConfig& vehicle, CameraCodec codec,
                                    const std::vector<cv::Mat>& frames,
                                    const ScheduleOptions& options);
+
+/// The operator's side of a capacity schedule: `vehicle` spawned as
+/// haptel-vehicle on `domain` (`track_file` its world), its video decoded, the
+/// link behind a fault line that starts at `first_kbps` (each phase then
+/// steps it with FaultLine::SetRate).
+mediator::VehicleLinkOptions ScheduleLinkOptions(VehicleConfig vehicle, int domain,
+                                                 double first_kbps,
+                                                 std::filesystem::path track_file);
 
 }  // namespace haptel::bench
