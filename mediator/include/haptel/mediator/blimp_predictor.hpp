@@ -28,7 +28,11 @@
 /// The wind is the vehicle file's mean wind (PredictionModel::kNominal), or
 /// with kLearn the steady wind estimated while the blimp flies, once known:
 /// a constant disturbance, learnt by recursive least squares
-/// (recursive_least_squares.hpp) on the velocity residual. At each state
+/// (recursive_least_squares.hpp) on the velocity residual, with exponential
+/// forgetting: the steady-state equivalent of a Kalman filter with the wind
+/// as a random-walk state (Ljung and Söderström, *Theory and Practice of
+/// Recursive Identification*, 1983, ch. 2.6; Ljung and Gunnarsson 1990),
+/// its process noise set by the forgetting factor (a 20-s memory). At each state
 /// the model is run from the state before with the estimate ŵ and with ŵ
 /// nudged east and north: the residual r (measured ground velocity less
 /// the model's, horizontal) is linear in the wind's error through the
