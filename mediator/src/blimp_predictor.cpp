@@ -172,14 +172,7 @@ double BlimpPredictor::OnState(const BlimpStateSample& state) {
 }
 
 double BlimpPredictor::SampleTime(const BlimpStateSample& state, double d) {
-  if (state.stamp_ns == 0) return state.received_s - d;
-  const double stamp_s = 1e-9 * static_cast<double>(state.stamp_ns);
-  latency_s_[latency_next_] = state.received_s - stamp_s;
-  latency_next_ = (latency_next_ + 1) % kLatencyWindow;
-  latency_count_ = std::min(latency_count_ + 1, kLatencyWindow);
-  const double least =
-      *std::min_element(latency_s_.begin(), latency_s_.begin() + static_cast<long>(latency_count_));
-  return stamp_s + least - d;
+  return dating_.SampleTime(state.received_s, 1e-9 * static_cast<double>(state.stamp_ns), d);
 }
 
 void BlimpPredictor::Run(const Base& base, const Command* extra, const std::vector<double>& at,

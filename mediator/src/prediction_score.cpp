@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "haptel/core/clock.hpp"
+#include "haptel/mediator/blimp/blimp_lap_timer.hpp"
 #include "haptel/mediator/lap_timer.hpp"
 
 namespace haptel::mediator {
@@ -91,6 +92,39 @@ void JudgeLapOnTruth(const record::TruthRecord& truth, const Track& track, Sessi
   lap.gates_passed = timer.gates_passed();
   lap.gates_missed = timer.gates_missed();
   lap.splits = timer.splits();
+}
+
+void JudgeLapOnTruth(const record::TruthRecord& truth, const BlimpCourseConfig& course,
+                     SessionResult& result) {
+  record::TruthLap& lap = result.record.truth_lap;
+  lap = {};
+  if (truth.empty()) return;
+  BlimpLapTimer timer(course);
+  const std::vector<TruthRow>& rows = truth.rows();
+  const double start_z = rows.front().z;
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const TruthRow& row = rows[i];
+    BlimpObservation o;
+    o.t_s = NsToS(row.operator_ns - result.started_ns);
+    o.position = Eigen::Vector3d(row.x, row.y, row.z);
+    o.yaw = row.heading;
+    // The truth's horizontal ground speed along the heading (the course of
+    // a crabbing hull differs, its speed not), its climb from the rows.
+    double climb = 0.0;
+    if (i > 0 && row.operator_ns > rows[i - 1].operator_ns)
+      climb = (row.z - rows[i - 1].z) / NsToS(row.operator_ns - rows[i - 1].operator_ns);
+    o.velocity = Eigen::Vector3d(row.speed * std::cos(row.heading),
+                                 row.speed * std::sin(row.heading), climb);
+    o.contact = row.z <= start_z + kBlimpRestingM;
+    timer.Update(o);
+  }
+  lap.judged = true;
+  lap.completed = timer.completed();
+  lap.lap_time_s = timer.completed() ? timer.lap_time_s() : std::nan("");
+  lap.gates_passed = timer.gates_passed();
+  lap.gates_missed = timer.gates_missed();
+  for (const BlimpGateSplit& split : timer.splits())
+    lap.splits.push_back({split.gate, split.passed, split.split_s});
 }
 
 std::vector<std::string> TruthLapDisagreements(const RunRecord& record) {

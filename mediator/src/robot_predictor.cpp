@@ -16,7 +16,7 @@ void RobotPredictor::Localise(const Track& track, const LocaliserConfig& config)
 
 void RobotPredictor::OnRoundTrip(double rtt_s) {
   if (keep_inputs_) inputs_.round_trips_s.push_back(rtt_s);
-  if (std::isfinite(rtt_s) && rtt_s >= 0.0) rtt_s_[rtts_++ % kClockWindow] = rtt_s;
+  dating_.AddRoundTrip(rtt_s);
   delay_.AddRoundTrip(rtt_s);
 }
 
@@ -29,16 +29,8 @@ void RobotPredictor::OnCommand(double t_s, double left, double right) {
 double RobotPredictor::OnState(const RobotStateSample& state) {
   if (keep_inputs_) inputs_.states.push_back(state);
   const double d = delay_.one_way_s();
-  double sample_s = state.received_s - d;
-  if (state.stamp_s != 0.0 && rtts_ > 0) {
-    // Its stamp on the operator's clock (the offset by the minimum filter).
-    transit_s_[transits_++ % kClockWindow] = state.received_s - state.stamp_s;
-    const double fastest_transit = *std::min_element(
-        transit_s_.begin(), transit_s_.begin() + std::min(transits_, kClockWindow));
-    const double fastest_rtt =
-        *std::min_element(rtt_s_.begin(), rtt_s_.begin() + std::min(rtts_, kClockWindow));
-    sample_s = std::min(state.received_s, state.stamp_s + fastest_transit - 0.5 * fastest_rtt);
-  }
+  // Its stamp on the operator's clock (the offset by the minimum filter).
+  const double sample_s = dating_.SampleTime(state.received_s, state.stamp_s, d);
   // Where the state says the robot is: its odometry, localised on the track
   // once there are ranges to do it with.
   pose_ = {state.x, state.y, state.heading};

@@ -480,9 +480,12 @@ void TakeReality(const SessionSetup& setup, SessionResult& result) {
       result.reality = truth.reality();
       result.reality_seed = truth.seed();
       ScorePrediction(truth, result);
-      // A robot's lap judged again from where it truly went (the blimp's
-      // course is judged in the air, by its own rules: not yet from its truth).
-      if (!setup.course) JudgeLapOnTruth(truth, Track(setup.track), result);
+      // The lap judged again from where the vehicle truly went.
+      if (setup.course) {
+        JudgeLapOnTruth(truth, *setup.course, result);
+      } else {
+        JudgeLapOnTruth(truth, Track(setup.track), result);
+      }
     } catch (const std::exception& e) {
       std::fprintf(stderr, "haptel: warning: the vehicle's truth record: %s\n", e.what());
     }

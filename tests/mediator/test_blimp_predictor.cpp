@@ -313,3 +313,23 @@ TEST_CASE("A steady wind the file does not know: estimated, and the learnt model
   CHECK(nominal > 0.02);
   CHECK(learning < 0.3 * nominal);
 }
+
+TEST_CASE("A stamped state is dated by its stamp, the clocks' offset from the fastest trips") {
+  // The vehicle's clock 1000 s ahead of the operator's; states cross in
+  // 0.2 s, one of them 0.1 s late (a busy receiver). The round trips are
+  // 0.4 s at their fastest, but most take 0.6 s (a jittery link): the
+  // blimp's predictor took the clocks' offset less half the median round
+  // trip, and dated every state 0.1 s older than it was (at 6 m/s, 60 cm).
+  StampDating dating;
+  const double one_way_s = 0.3;  // half the median: what an unstamped state is dated by
+  CHECK(dating.SampleTime(5.0, 1004.8, one_way_s) == Approx(4.7));  // no round trip yet
+  for (const double rtt : {0.6, 0.4, 0.6, 0.6, 0.6}) dating.AddRoundTrip(rtt);
+  dating.AddRoundTrip(std::nan(""));  // ignored
+  for (int i = 1; i <= 20; ++i) {
+    const double sampled = 10.0 + 0.02 * i;
+    const double late = i == 15 ? 0.1 : 0.0;
+    const double dated = dating.SampleTime(sampled + 0.2 + late, 1000.0 + sampled, one_way_s);
+    CHECK(dated == Approx(sampled).margin(1e-9));
+  }
+  CHECK(dating.SampleTime(12.0, 0.0, one_way_s) == Approx(11.7));  // unstamped
+}

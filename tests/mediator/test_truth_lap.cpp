@@ -1,11 +1,13 @@
 // The lap judged again from a simulated vehicle's truth record: the live lap
 // is judged from the odometry the vehicle reports, which drifts; where the
 // truth is known, the run also says which gates the vehicle truly passed.
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <fstream>
 #include <string>
 
+#include "haptel/config/blimp_course.hpp"
 #include "haptel/config/truth_format.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/mediator/lap_timer.hpp"
@@ -140,4 +142,61 @@ TEST_CASE(
   CHECK(truth.gates_passed == 2);
   // Lagging by the same 0.1 m at the start and the finish: the same lap.
   CHECK(truth.lap_time_s == Approx(live.lap_time_s()).margin(0.05));
+}
+
+TEST_CASE(
+    "the blimp's lap judged on its truth: through the gate, down on the circle; or beside it") {
+  // The hop (gate at (35, 0, 4), 12 m wide; the circle at (95, 10), 10 m
+  // across): 2 s resting on the pad at 0.8 m, up to 4 m by x = 10 (the lap
+  // starts 1 m up), along y = `off` through the gate's plane at 2 m/s, to
+  // the circle's centre and down onto the ground there, slowly.
+  const BlimpCourseConfig course = LoadBlimpCourse("config/tracks/blimp-hop.yaml");
+  const int64_t started_ns = 2'000'000'000'000;
+  const auto judge = [&](double off) {
+    const auto file = test::ScratchDir("truth-lap") / "blimp_truth.csv";
+    {
+      std::ofstream out(file);
+      out << TruthHeaderText(DrawnReality{});
+      const auto row = [&](double t, double x, double y, double z, double speed) {
+        char line[256];
+        const size_t n = FormatTruthRow(
+            {started_ns + static_cast<int64_t>(std::llround(t * 1e9)), x, y, z, 0.0, speed, 0.0},
+            line, sizeof line);
+        REQUIRE(n > 0);
+        out.write(line, static_cast<std::streamsize>(n));
+      };
+      const double dt = 0.02;
+      double t = 0.0;
+      for (; t < 2.0; t += dt) row(t, 0.0, 0.0, 0.8, 0.0);
+      for (double x = 0.0; x < 95.0; x += 2.0 * dt, t += dt) {  // climb, cruise, glide
+        const double y =
+            x < 50.0 ? off * std::min(1.0, x / 10.0) : off + (10.0 - off) * (x - 50.0) / 45.0;
+        const double z = x < 10.0 ? 0.8 + 0.32 * x : x < 50.0 ? 4.0 : 4.0 - 3.0 * (x - 50.0) / 45.0;
+        row(t, x, y, z, 2.0);
+      }
+      for (double z = 1.0; z > 0.8; z -= 0.2 * dt, t += dt) row(t, 95.0, 10.0, z, 0.0);
+      for (int i = 0; i < 50; ++i, t += dt) row(t, 95.0, 10.0, 0.8, 0.0);  // landed
+    }
+    SessionResult result;
+    result.started_ns = started_ns;
+    JudgeLapOnTruth(record::TruthRecord::Load(file), course, result);
+    return result.record.truth_lap;
+  };
+  const record::TruthLap through = judge(0.0);
+  REQUIRE(through.judged);
+  CHECK(through.completed);
+  CHECK(through.gates_passed == 1);
+  CHECK(through.gates_missed == 0);
+  // Lifted 1 m (the course's takeoff_height) at x = 3.125 m, t = 3.5625 s;
+  // through the gate at x = 35, t = 19.5 s; over the centre at 1 m at
+  // t = 49.5 s, resting (within kBlimpRestingM of 0.8 m) 0.75 s later.
+  REQUIRE(through.splits.size() == 1);
+  CHECK(through.splits[0].split_s == Approx(19.5 - 3.5625).margin(0.03));
+  CHECK(through.lap_time_s == Approx(50.25 - 3.5625).margin(0.03));
+
+  const record::TruthLap beside = judge(8.0);  // 8 m off a 12 m gate's centre
+  REQUIRE(beside.judged);
+  CHECK(beside.gates_passed == 0);
+  CHECK(beside.gates_missed == 1);
+  CHECK(beside.completed);  // the landing counts after the last gate, passed or missed
 }

@@ -60,6 +60,7 @@ void BlimpPilotConfig::ValidateOrThrow() const {
   check::Number("turnabout_max_s", turnabout_max_s, 0.5, 120.0);
   check::Number("turnabout_height_error", turnabout_height_error, 0.05, 100.0);
   check::Number("turnabout_climb", turnabout_climb, 0.01, 10.0);
+  check::Number("landing_min_air", landing_min_air, 0.0, 5.0);
   check::Number("landing_turnabout_error", landing_turnabout_error, turnabout_done_error, 3.2);
   check::Number("pitch_gain", pitch_gain, 0.0, 100.0);
   check::Number("pitch_rate_gain", pitch_rate_gain, 0.0, 100.0);
@@ -125,6 +126,148 @@ Eigen::Vector2d BlimpAutoPilot::Pursue(const BlimpGateFrame& gate, const Eigen::
   return c + ahead * forward;
 }
 
+void BlimpAutoPilot::TakeIn(const BlimpObservation& o) {
+  if (!have_used_) {
+    have_used_ = true;
+    start_z_ = o.position.z();
+    phase_ = Phase::kTakeOff;
+    used_ = o;
+    return;
+  }
+  if (o.t_s <= used_.t_s) return;
+  const double h = o.t_s - used_.t_s;
+  yaw_rate_ = WrapAngle(o.yaw - used_.yaw) / h;
+  pitch_rate_ = (o.pitch - used_.pitch) / h;
+  // The gate flown to, crossed (through it, or near it: missed, on to the next).
+  if (phase_ == Phase::kGates) {
+    const auto pass = CrossGate(gates_[static_cast<size_t>(gate_)], used_.position, o.position);
+    if (pass && pass->crossing != BlimpGateCrossing::kIgnored) ++gate_;
+    if (gate_ >= static_cast<int>(gates_.size())) phase_ = Phase::kLanding;
+  }
+  // The wind: what the ground speed has beyond the airspeed along the
+  // heading (sideslip neglected), smoothed over a few seconds.
+  if (!o.contact) {
+    const Eigen::Vector2d heading(std::cos(o.yaw), std::sin(o.yaw));
+    const Eigen::Vector2d measured = Horizontal(o.velocity) - o.airspeed * heading;
+    wind_ += (measured - wind_) * std::min(1.0, h / 4.0);
+  }
+  used_ = o;
+}
+
+void BlimpAutoPilot::NextPhase(const BlimpObservation& o) {
+  if (phase_ == Phase::kTakeOff && o.position.z() - start_z_ > config_.takeoff_height)
+    phase_ = Phase::kGates;  // a course has at least one gate
+  if (phase_ == Phase::kLanding && o.contact && OnLandingGround(course_, o.position, start_z_))
+    phase_ = Phase::kLanded;
+  // Slid out of the circle on the ground: up and in again.
+  const Eigen::Vector2d landing(course_.landing.centre[0], course_.landing.centre[1]);
+  if (phase_ == Phase::kLanded &&
+      (Horizontal(o.position) - landing).norm() > course_.landing.radius) {
+    phase_ = Phase::kLanding;
+    sinking_ = false;
+  }
+}
+
+BlimpAutoPilot::Aim BlimpAutoPilot::ClimbOut(const BlimpObservation& o) {
+  const BlimpGateFrame& g = gates_.front();
+  Aim aim;
+  aim.bearing = Bearing(Pursue(g, o.position) - Horizontal(o.position));
+  aim.crab = false;
+  aim.forward_speed = 1.0;
+  target_z_ = std::max(g.centre.z(), SafeHeight(o, Horizontal(g.centre)));
+  return aim;
+}
+
+BlimpAutoPilot::Aim BlimpAutoPilot::FlyGate(const BlimpObservation& o) {
+  const BlimpGateFrame& g = gates_[static_cast<size_t>(gate_)];
+  const Eigen::Vector2d position = Horizontal(o.position);
+  Aim aim;
+  aim.bearing = Bearing(Pursue(g, o.position) - position);
+  aim.forward_speed = config_.cruise_airspeed;
+  target_z_ = std::max(g.centre.z(), SafeHeight(o, Horizontal(g.centre)));
+  // The landing near after the last gate: through it no faster than
+  // the approach's speed there, or the hull coasts past the circle.
+  if (gate_ == static_cast<int>(gates_.size()) - 1) {
+    const Eigen::Vector2d landing(course_.landing.centre[0], course_.landing.centre[1]);
+    const double to_landing =
+        (Horizontal(g.centre) - position).norm() + (landing - Horizontal(g.centre)).norm();
+    aim.forward_speed = std::max(ApproachSpeed(to_landing),
+                                 std::min(2.0 * config_.tail_rotor_speed, config_.cruise_airspeed));
+  }
+  return aim;
+}
+
+BlimpAutoPilot::Aim BlimpAutoPilot::Land(const BlimpObservation& o) {
+  const Eigen::Vector2d landing(course_.landing.centre[0], course_.landing.centre[1]);
+  const Eigen::Vector2d to = landing - Horizontal(o.position);
+  const double distance = to.norm();
+  // A glide down to a little above the ground, then, over the circle
+  // and slow, down onto it.
+  target_z_ = std::min(gates_.back().centre.z(),
+                       start_z_ + config_.landing_hover + config_.landing_glide * distance);
+  // Once sinking it sinks on, unless it drifts out towards the circle's edge.
+  if (distance < config_.sink_share * course_.landing.radius &&
+      Horizontal(o.velocity).norm() < 0.9 * course_.landing.max_speed)
+    sinking_ = true;
+  if (distance > config_.rise_share * course_.landing.radius) sinking_ = false;
+  if (sinking_) target_z_ = start_z_ - 2.0;
+  target_z_ = std::max(target_z_, SafeHeight(o, landing));
+  // The ground velocity wanted: towards the centre, slowing as it nears
+  // it as fast as the hull coasts down on its own drag.
+  const double speed = ApproachSpeed(distance) * std::min(1.0, distance / 2.0);
+  const Eigen::Vector2d wanted =
+      distance > 1e-6 ? Eigen::Vector2d(to / distance * speed) : Eigen::Vector2d::Zero();
+  Aim aim;
+  aim.landing = true;
+  aim.ground_speed = true;
+  const Eigen::Vector2d heading(std::cos(o.yaw), std::sin(o.yaw));
+  aim.forward_speed = wanted.dot(heading);
+  if (StrongWind()) {
+    // A wind the rudder bites in: the wind triangle. The hull heads along
+    // the velocity through the air that makes good the ground velocity
+    // wanted (the wanted less the wind): into the wind, crabbed across it
+    // towards the circle, its last metres flown from downwind, nose to the
+    // wind, the rudder biting on the airspeed the wind gives — a blimp's
+    // landing. (Heading for the circle at the approach's speed instead,
+    // under a metre a second, the rudder does not bite, the tail rotor
+    // loses to the wind, and the hull hovers against it off the circle.)
+    const Eigen::Vector2d air = wanted - wind_;
+    aim.crab = false;
+    aim.bearing = air.norm() > config_.landing_min_air ? Bearing(air) : Bearing(-wind_);
+  } else if (distance > (wind_.norm() > 0.4 ? 0.8 * course_.landing.radius : 3.0)) {
+    // A light wind: for the centre, the tail rotor turning the slow hull.
+    aim.bearing = Bearing(to);
+  } else {
+    // Close: face into the wind (the thrust can only push forwards).
+    aim.bearing = wind_.norm() > 0.4 ? Bearing(-wind_) : o.yaw;
+    aim.crab = false;
+  }
+  return aim;
+}
+
+BlimpCommand BlimpAutoPilot::Landed() {
+  // Down: the helix plane down, pressing the gondola onto the ground
+  // until it stops sliding, then the power off; surfaces centred.
+  BlimpCommand c;
+  c.helix = -1.0;
+  c.power = config_.landed_press_power;
+  speed_i_ = vertical_i_ = 0.0;
+  return c;
+}
+
+void BlimpAutoPilot::Look(const BlimpObservation& o, BlimpCommand& c) const {
+  // The camera: at the next gate, or at the landing circle.
+  const Eigen::Vector3d look =
+      phase_ == Phase::kGates || phase_ == Phase::kTakeOff
+          ? gates_[static_cast<size_t>(gate_)].centre
+          : Eigen::Vector3d(course_.landing.centre[0], course_.landing.centre[1], 0.0);
+  const Eigen::Vector3d sight = look - o.position;
+  c.camera_pan = std::clamp(WrapAngle(Bearing(Horizontal(sight)) - o.yaw), -kBlimpCameraPanMax,
+                            kBlimpCameraPanMax);
+  c.camera_tilt = std::clamp(std::atan2(sight.z(), Horizontal(sight).norm()) - o.pitch,
+                             -kBlimpCameraTiltMax, kBlimpCameraTiltMax);
+}
+
 BlimpCommand BlimpAutoPilot::Decide(double t_s) {
   const double dt = decided_ ? std::clamp(t_s - last_decide_t_, 0.0, 0.5) : 0.0;
   decided_ = true;
@@ -132,155 +275,69 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
   const BlimpObservation* seen = Seen(t_s - config_.reaction_delay_s);
   if (seen == nullptr) return BlimpCommand{};
   const BlimpObservation o = *seen;
-  const int gates = static_cast<int>(gates_.size());
-
-  if (!have_used_) {
-    have_used_ = true;
-    start_z_ = o.position.z();
-    phase_ = Phase::kTakeOff;
-    used_ = o;
-  } else if (o.t_s > used_.t_s) {
-    const double h = o.t_s - used_.t_s;
-    yaw_rate_ = WrapAngle(o.yaw - used_.yaw) / h;
-    pitch_rate_ = (o.pitch - used_.pitch) / h;
-    // The gate flown to, crossed (through it, or near it: missed, on to the next).
-    if (phase_ == Phase::kGates) {
-      const auto pass = CrossGate(gates_[static_cast<size_t>(gate_)], used_.position, o.position);
-      if (pass && pass->crossing != BlimpGateCrossing::kIgnored) ++gate_;
-      if (gate_ >= gates) phase_ = Phase::kLanding;
-    }
-    // The wind: what the ground speed has beyond the airspeed along the
-    // heading (sideslip neglected), smoothed over a few seconds.
-    if (!o.contact) {
-      const Eigen::Vector2d heading(std::cos(o.yaw), std::sin(o.yaw));
-      const Eigen::Vector2d measured = Horizontal(o.velocity) - o.airspeed * heading;
-      wind_ += (measured - wind_) * std::min(1.0, h / 4.0);
-    }
-    used_ = o;
-  }
-
-  const Eigen::Vector2d position = Horizontal(o.position);
-  const Eigen::Vector2d heading(std::cos(o.yaw), std::sin(o.yaw));
-  const double height = o.position.z() - start_z_;
-  const Eigen::Vector2d ground = Horizontal(o.velocity);
-  const Eigen::Vector2d landing(course_.landing.centre[0], course_.landing.centre[1]);
-
-  // Where to, how high, how fast.
-  double bearing = o.yaw;  // the direction wanted over the ground
-  bool crab = true;        // head into the wind enough to make good the bearing
-  double forward_speed = config_.cruise_airspeed;
-  bool ground_speed = false;      // control the ground speed along the heading, not the airspeed
-  bool landing_vertical = false;  // thrust up only: it sinks on its own weight
-  if (phase_ == Phase::kTakeOff && height > config_.takeoff_height)
-    phase_ = Phase::kGates;  // a course has at least one gate
-  if (phase_ == Phase::kLanding && o.contact && OnLandingGround(course_, o.position, start_z_))
-    phase_ = Phase::kLanded;
-  // Slid out of the circle on the ground: up and in again.
-  if (phase_ == Phase::kLanded && (position - landing).norm() > course_.landing.radius) {
-    phase_ = Phase::kLanding;
-    sinking_ = false;
-  }
+  TakeIn(o);
+  NextPhase(o);
+  Aim aim;
   switch (phase_) {
     case Phase::kGround:
-    case Phase::kTakeOff: {
-      const BlimpGateFrame& g = gates_.front();
-      bearing = Bearing(Pursue(g, o.position) - position);
-      target_z_ = std::max(g.centre.z(), SafeHeight(o, Horizontal(g.centre)));
-      forward_speed = 1.0;
-      crab = false;
+    case Phase::kTakeOff:
+      aim = ClimbOut(o);
       break;
+    case Phase::kGates:
+      aim = FlyGate(o);
+      break;
+    case Phase::kLanding:
+      aim = Land(o);
+      break;
+    case Phase::kLanded: {
+      BlimpCommand c = Landed();
+      Look(o, c);
+      return c;
     }
-    case Phase::kGates: {
-      const BlimpGateFrame& g = gates_[static_cast<size_t>(gate_)];
-      bearing = Bearing(Pursue(g, o.position) - position);
-      target_z_ = std::max(g.centre.z(), SafeHeight(o, Horizontal(g.centre)));
-      // The landing near after the last gate: through it no faster than
-      // the approach's speed there, or the hull coasts past the circle.
-      if (gate_ == gates - 1) {
-        const double to_landing =
-            (Horizontal(g.centre) - position).norm() + (landing - Horizontal(g.centre)).norm();
-        forward_speed = std::max(ApproachSpeed(to_landing),
-                                 std::min(2.0 * config_.tail_rotor_speed, config_.cruise_airspeed));
-      }
-      break;
-    }
-    case Phase::kLanding: {
-      const Eigen::Vector2d to = landing - position;
-      const double distance = to.norm();
-      const double last_gate_z = gates_.back().centre.z();
-      // A glide down to a little above the ground, then, over the circle
-      // and slow, down onto it.
-      target_z_ = std::min(last_gate_z,
-                           start_z_ + config_.landing_hover + config_.landing_glide * distance);
-      // Once sinking it sinks on, unless it drifts out towards the circle's edge.
-      if (distance < config_.sink_share * course_.landing.radius &&
-          ground.norm() < 0.9 * course_.landing.max_speed)
-        sinking_ = true;
-      if (distance > config_.rise_share * course_.landing.radius) sinking_ = false;
-      if (sinking_) target_z_ = start_z_ - 2.0;
-      target_z_ = std::max(target_z_, SafeHeight(o, landing));
-      landing_vertical = true;
-      // The ground velocity wanted: towards the centre, slowing as it nears
-      // it as fast as the hull coasts down on its own drag.
-      const double speed = ApproachSpeed(distance) * std::min(1.0, distance / 2.0);
-      const Eigen::Vector2d wanted =
-          distance > 1e-6 ? Eigen::Vector2d(to / distance * speed) : Eigen::Vector2d::Zero();
-      ground_speed = true;
-      forward_speed = wanted.dot(heading);
-      if (distance > (wind_.norm() > 0.4 ? 0.8 * course_.landing.radius : 3.0)) {
-        bearing = Bearing(to);
-      } else {
-        // Close: face into the wind (the thrust can only push forwards).
-        bearing = wind_.norm() > 0.4 ? Bearing(-wind_) : o.yaw;
-        crab = false;
-      }
-      break;
-    }
-    case Phase::kLanded:
-      break;
   }
-
   BlimpCommand c;
-  // The camera: at the next gate, or at the landing circle.
-  const Eigen::Vector3d look = phase_ == Phase::kGates || phase_ == Phase::kTakeOff
-                                   ? gates_[static_cast<size_t>(gate_)].centre
-                                   : Eigen::Vector3d(landing.x(), landing.y(), 0.0);
-  const Eigen::Vector3d sight = look - o.position;
-  c.camera_pan = std::clamp(WrapAngle(Bearing(Horizontal(sight)) - o.yaw), -kBlimpCameraPanMax,
-                            kBlimpCameraPanMax);
-  c.camera_tilt = std::clamp(std::atan2(sight.z(), Horizontal(sight).norm()) - o.pitch,
-                             -kBlimpCameraTiltMax, kBlimpCameraTiltMax);
-  if (phase_ == Phase::kLanded) {
-    // Down: the helix plane down, pressing the gondola onto the ground
-    // until it stops sliding, then the power off; surfaces centred.
-    c.helix = -1.0;
-    c.power = config_.landed_press_power;
-    speed_i_ = vertical_i_ = 0.0;
-    return c;
+  Look(o, c);
+  const double turn = Steer(o, aim, t_s);
+  c.rudder = turn;
+  Thrust(o, aim, dt, c);
+  // The tail rotor with the power off, as the cockpit allows; a weak thrust
+  // is let go too, so that the tail rotor can hold the heading.
+  if (turnabout_ || c.power < 0.02) {
+    c.power = 0.0;
+    c.tail_rotor = turn;
   }
+  // The elevator: a little nose-up to climb, damped; landing, level only
+  // (slow, the surface's own force is most of what it does: nose-down
+  // pushes the tail, and so the blimp, up).
+  const double pitch_wanted =
+      aim.landing ? 0.0 : std::clamp(config_.pitch_per_climb * climb_, -0.15, 0.15);
+  c.elevator = std::clamp(
+      config_.pitch_gain * (pitch_wanted - o.pitch) - config_.pitch_rate_gain * pitch_rate_, -1.0,
+      1.0);
+  return Clamped(c);
+}
 
+double BlimpAutoPilot::Steer(const BlimpObservation& o, const Aim& aim, double t_s) {
   // Steering on the heading: the bearing, turned into the wind by the wind
   // triangle's angle (steering on the track over the ground instead lags the
   // heading by the hull's sideways inertia, and weaves).
-  double heading_wanted = bearing;
-  if (crab && o.airspeed > 1.5) {
-    const double across = wind_.dot(Eigen::Vector2d(-std::sin(bearing), std::cos(bearing)));
+  double heading_wanted = aim.bearing;
+  if (aim.crab && o.airspeed > 1.5) {
+    const double across = wind_.dot(Eigen::Vector2d(-std::sin(aim.bearing), std::cos(aim.bearing)));
     heading_wanted -= std::asin(std::clamp(across / o.airspeed, -0.7, 0.7));
   }
   const double error = WrapAngle(heading_wanted - o.yaw);
   const double turn =
       std::clamp(config_.heading_gain * error - config_.yaw_rate_gain * yaw_rate_, -1.0, 1.0);
-  c.rudder = turn;
   // The power is the only way up or down: landing, near the ground, a
   // turnabout waits for the height to settle, and ends when it drifts off
   // (higher up, the height can wait for the heading).
   const double height_error = target_z_ - o.position.z();
   const double climb_rate = std::abs(o.velocity.z());
-  const bool height_settled =
-      !landing_vertical || (std::abs(height_error) < config_.turnabout_height_error &&
-                            climb_rate < config_.turnabout_climb);
+  height_settled_ = !aim.landing || (std::abs(height_error) < config_.turnabout_height_error &&
+                                     climb_rate < config_.turnabout_climb);
   const bool height_lost =
-      landing_vertical &&
+      aim.landing &&
       (std::abs(height_error) > 2.0 * config_.turnabout_height_error ||
        (climb_rate > 2.0 * config_.turnabout_climb && o.velocity.z() * height_error < 0.0));
   // Slow and off course, a turnabout: the gesture cockpit's tail rotor turns
@@ -300,41 +357,50 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
       turnabout_since_ = t_s;
     }
   } else if (o.airspeed < config_.tail_rotor_speed &&
-             std::abs(error) > (phase_ == Phase::kLanding ? config_.landing_turnabout_error
-                                                          : config_.turnabout_error) &&
-             t_s - turnabout_since_ > config_.turnabout_max_s && height_settled) {
+             std::abs(error) >
+                 (aim.landing ? config_.landing_turnabout_error : config_.turnabout_error) &&
+             t_s - turnabout_since_ > config_.turnabout_max_s && height_settled_) {
     turnabout_ = true;
     turnabout_since_ = t_s;
   }
+  return turn;
+}
 
+void BlimpAutoPilot::Thrust(const BlimpObservation& o, const Aim& aim, double dt, BlimpCommand& c) {
   // Height: a climb rate towards the target, a vertical force for it.
   // Landing, the sink slows as the ground nears (a flare): touchdown well
   // under the course's crash speed.
+  const double height = o.position.z() - start_z_;
   const double max_sink =
-      landing_vertical
-          ? std::min(config_.landing_max_sink,
-                     config_.touchdown_sink + config_.flare_gain * std::max(0.0, height))
-          : config_.max_sink;
-  const double climb = std::clamp(config_.height_gain * (target_z_ - o.position.z()), -max_sink,
-                                  landing_vertical ? config_.landing_climb : config_.max_climb);
-  const double climb_error = climb - o.velocity.z();
+      aim.landing ? std::min(config_.landing_max_sink,
+                             config_.touchdown_sink + config_.flare_gain * std::max(0.0, height))
+                  : config_.max_sink;
+  climb_ = std::clamp(config_.height_gain * (target_z_ - o.position.z()), -max_sink,
+                      aim.landing ? config_.landing_climb : config_.max_climb);
+  const double climb_error = climb_ - o.velocity.z();
   // (The integrators hold still while the power is off for a turnabout.)
   if (!turnabout_)
     vertical_i_ = std::clamp(vertical_i_ + config_.vertical_integral * climb_error * dt, -6.0, 6.0);
   double up_force = config_.vertical_gain * climb_error + vertical_i_ +
-                    config_.vertical_drag_per_speed2 * climb * std::abs(climb);
+                    config_.vertical_drag_per_speed2 * climb_ * std::abs(climb_);
   // Landing, near enough the height and steady: no vertical thrust, so the
   // power can stay off and the tail rotor steer (the hull floats level).
-  if (landing_vertical && !sinking_ && height_settled) {
+  // In a wind the rudder bites in (Land's wind triangle) the rudder steers
+  // on the airspeed the wind gives, and the height is held: a hull heavier
+  // than the air it displaces (harsh's short buoyancy, a heavier gondola)
+  // would sink onto the ground short of the circle.
+  if (aim.landing && !sinking_ && height_settled_ && !StrongWind()) {
     up_force = 0.0;
     vertical_i_ = 0.0;
   }
 
   // Speed: a forward force (the propellers push only forwards).
-  const double measured = ground_speed ? ground.dot(heading) : o.airspeed;
-  const double speed_error = forward_speed - measured;
+  const Eigen::Vector2d heading(std::cos(o.yaw), std::sin(o.yaw));
+  const Eigen::Vector2d ground = Horizontal(o.velocity);
+  const double measured = aim.ground_speed ? ground.dot(heading) : o.airspeed;
+  const double speed_error = aim.forward_speed - measured;
   const double air_target =
-      ground_speed ? std::max(0.0, forward_speed - wind_.dot(heading)) : forward_speed;
+      aim.ground_speed ? std::max(0.0, aim.forward_speed - wind_.dot(heading)) : aim.forward_speed;
   double forward_force = config_.drag_per_speed2 * air_target * air_target +
                          config_.speed_gain * speed_error + speed_i_;
   if (!turnabout_ && (forward_force > 0.0 || speed_error > 0.0)) {
@@ -348,11 +414,11 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
   // way to it: some forward thrust with any vertical thrust, so the tilt
   // passes smoothly through level. Else the plane turns over only for a
   // firm need.
-  if (landing_vertical && sinking_) {
+  if (aim.landing && sinking_) {
     up_force = std::min(0.0, up_force);
-  } else if (landing_vertical && speed_error > 0.0) {
+  } else if (aim.landing && speed_error > 0.0) {
     forward_force = std::max(forward_force, 0.5 * std::abs(up_force));
-  } else if (landing_vertical) {
+  } else if (aim.landing) {
     // Too fast for the approach: no forward thrust at all, whatever the
     // height wants (the plane may turn straight up or down).
     forward_force = 0.0;
@@ -369,22 +435,6 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
     helix_ = std::atan2(up_force, forward_force);  // (a weak thrust's direction is noise)
   c.power = thrust / config_.full_thrust_n;
   c.helix = std::clamp(helix_ / (config_.max_helix_deg * std::numbers::pi / 180.0), -1.0, 1.0);
-  // The tail rotor with the power off, as the cockpit allows; a weak thrust
-  // is let go too, so that the tail rotor can hold the heading.
-  if (turnabout_ || c.power < 0.02) {
-    c.power = 0.0;
-    c.tail_rotor = turn;
-  }
-
-  // The elevator: a little nose-up to climb, damped; landing, level only
-  // (slow, the surface's own force is most of what it does: nose-down
-  // pushes the tail, and so the blimp, up).
-  const double pitch_wanted =
-      landing_vertical ? 0.0 : std::clamp(config_.pitch_per_climb * climb, -0.15, 0.15);
-  c.elevator = std::clamp(
-      config_.pitch_gain * (pitch_wanted - o.pitch) - config_.pitch_rate_gain * pitch_rate_, -1.0,
-      1.0);
-  return Clamped(c);
 }
 
 }  // namespace haptel::mediator

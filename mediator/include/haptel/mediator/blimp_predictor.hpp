@@ -28,7 +28,11 @@
 /// The wind is the vehicle file's mean wind (PredictionModel::kNominal), or
 /// with kLearn the steady wind estimated while the blimp flies, once known:
 /// a constant disturbance, learnt by recursive least squares
-/// (recursive_least_squares.hpp) on the velocity residual. At each state
+/// (recursive_least_squares.hpp) on the velocity residual, with exponential
+/// forgetting: the steady-state equivalent of a Kalman filter with the wind
+/// as a random-walk state (Ljung and Söderström, *Theory and Practice of
+/// Recursive Identification*, 1983, ch. 2.6; Ljung and Gunnarsson 1990),
+/// its process noise set by the forgetting factor (a 20-s memory). At each state
 /// the model is run from the state before with the estimate ŵ and with ŵ
 /// nudged east and north: the residual r (measured ground velocity less
 /// the model's, horizontal) is linear in the wind's error through the
@@ -42,15 +46,18 @@
 /// it would have learnt.
 ///
 /// The one-way delay is half the command round trip's running median
-/// (DelayEstimate). When a state was sampled, on the operator's clock, is
-/// its arrival less that delay, de-jittered: the vehicle's stamp plus the
-/// clocks' offset, taken from the least delayed of the last states (a busy
-/// receiver only ever adds to a state's latency; at 6 m/s each 10 ms of it
-/// would be 6 cm of error). Each state that arrives is compared with what the
-/// predictor said, at the moment the state was sampled, of that moment
-/// (from the states it had then: a delay's extrapolation): errors_m(), the
-/// 3-D distance between the two centres of gravity (horizontal and height
-/// error together: both matter to a blimp among buildings).
+/// (DelayEstimate). A stamped state is dated by its stamp on the operator's
+/// clock as the robot's are (StampDating, delay_estimate.hpp: the clocks'
+/// offset from the least delayed of the last states less half the
+/// smallest round trip; a busy receiver only ever adds to a state's
+/// latency, and at 6 m/s each 10 ms of it would be 6 cm of error). It was
+/// dated by the least arrival less stamp over a second less half the
+/// *median* round trip: on a jittery link the median's excess over the
+/// fastest made every state older than it was by half of it. Each state that arrives is compared
+/// with what the predictor said, at the moment the state was sampled, of that moment (from the
+/// states it had then: a delay's extrapolation): errors_m(), the 3-D distance between the two
+/// centres of gravity (horizontal and height error together: both matter to a blimp among
+/// buildings).
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <array>
@@ -120,7 +127,10 @@ class BlimpPredictor {
   /// A command as sent at `t_s` (the blimp clamps it as it applies it).
   void OnCommand(double t_s, const BlimpCommand& command);
   /// A command round trip (s).
-  void OnRoundTrip(double rtt_s) { delay_.AddRoundTrip(rtt_s); }
+  void OnRoundTrip(double rtt_s) {
+    delay_.AddRoundTrip(rtt_s);
+    dating_.AddRoundTrip(rtt_s);
+  }
   /// A state arrived. Returns the distance (m) between its centre of gravity
   /// and where the predictor put it for that moment at that moment
   /// (negative when no state had arrived by then: nothing was predicted),
@@ -191,13 +201,7 @@ class BlimpPredictor {
   /// hence mutable; a predictor is used from one thread.
   mutable models::SimBlimp model_;
   DelayEstimate delay_;
-  /// Arrival less stamp (s) of the last kLatencyWindow states: a second at
-  /// 50 Hz, long enough for one state to have come through unhurried, short
-  /// enough that a step up in the link's delay is followed within it.
-  static constexpr size_t kLatencyWindow = 50;
-  std::array<double, kLatencyWindow> latency_s_{};
-  size_t latency_count_ = 0;
-  size_t latency_next_ = 0;
+  StampDating dating_;  ///< the vehicle clock's offset (SampleTime)
   std::deque<Command> commands_;
   /// The states since the one the operator had when the newest was
   /// sampled (that one's prediction is the newest's error), newest last.

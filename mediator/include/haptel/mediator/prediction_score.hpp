@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "haptel/config/blimp_course.hpp"
 #include "haptel/config/track.hpp"
 #include "haptel/mediator/session.hpp"
 #include "haptel/record/truth_record.hpp"
@@ -31,6 +32,19 @@ void ScorePrediction(const record::TruthRecord& truth, SessionResult& result);
 /// truly was at that moment at its true speed along the track (at most
 /// 0.5 m short; further, the truth's lap is not completed).
 void JudgeLapOnTruth(const record::TruthRecord& truth, const Track& track, SessionResult& result);
+
+/// The blimp's lap judged again from the truth record's path: the same
+/// BlimpLapTimer the live lap runs on the states, fed where the blimp truly
+/// was — the take-off, each gate passed or missed and its split, and the
+/// landing: on the circle's ground (OnLandingGround) resting on it (its
+/// true height within kBlimpRestingM of its height at the start, on the
+/// same flat ground) and slower than the circle's max_speed. The truth
+/// records no contacts: crashes and obstacles touched stay the live lap's
+/// (the simulated blimp reports its contacts as they happened).
+void JudgeLapOnTruth(const record::TruthRecord& truth, const BlimpCourseConfig& course,
+                     SessionResult& result);
+/// m: a blimp this close to its starting height is resting on the ground.
+inline constexpr double kBlimpRestingM = 0.05;
 
 /// The gates the live lap and the truth judged differently, each as "gate N:
 /// the odometry passed it, the vehicle truly missed it" (or the reverse, or

@@ -28,7 +28,8 @@
 ///
 /// The one-way delay is half the command round trip's running median
 /// (DelayEstimate, delay_estimate.hpp). A state stamped by the vehicle is
-/// dated by its stamp on the operator's clock: the vehicle's clock is its
+/// dated by its stamp on the operator's clock (StampDating, shared with
+/// the blimp's predictor): the vehicle's clock is its
 /// own, so its offset is estimated as the smallest arrival less stamp over
 /// the last few seconds less half the smallest round trip (the minimum
 /// filter of clock synchronisation: the fastest state crossed in the
@@ -150,12 +151,7 @@ class RobotPredictor {
   double watchdog_s_;
   double step_s_;
   DelayEstimate delay_;
-  /// The last kClockWindow arrivals less stamps and round trips (s), for
-  /// the vehicle clock's offset (see above).
-  static constexpr size_t kClockWindow = 250;
-  std::array<double, kClockWindow> transit_s_{};
-  std::array<double, kClockWindow> rtt_s_{};
-  size_t transits_ = 0, rtts_ = 0;
+  StampDating dating_;  ///< the vehicle clock's offset (see above)
   std::deque<Command> commands_;
   /// The states since the one the operator had when the newest was
   /// sampled (that one's prediction is the newest's error), newest last.

@@ -71,8 +71,9 @@ struct EstimatedParameter {
 /// truth record, after the run), by the same rules as the live lap, which a
 /// real vehicle's odometry judges: a gate the odometry passed may have been
 /// truly missed, and the lap's time differs where the odometry drifted over
-/// a line. JSON only; `judged` false without a truth record (a real vehicle,
-/// the blimp's course).
+/// a line (the blimp's: its landing judged resting on the circle's ground,
+/// its contacts the live lap's). JSON only; `judged` false without a truth
+/// record (a real vehicle).
 struct TruthLap {
   bool judged = false;
   bool completed = false;

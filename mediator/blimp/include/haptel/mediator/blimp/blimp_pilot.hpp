@@ -10,7 +10,11 @@
 /// above any building near the way to it — then the landing: power cut back
 /// to coast down to a slow approach, gliding down to a metre above the
 /// ground; over the circle and slow, facing into the wind it estimates, it
-/// sinks onto the ground (thrust forwards to hold its place, down to sink);
+/// sinks onto the ground (thrust forwards to hold its place, down to sink).
+/// In a wind the rudder bites in (at least tail_rotor_speed) the whole
+/// approach heads along the wind triangle's air velocity (the ground
+/// velocity wanted less the wind): nose into the wind, crabbed across it,
+/// the circle reached from downwind, the height held by thrust;
 /// on touchdown the helix plane goes down and a little power holds the
 /// gondola on the ground.
 ///
@@ -106,6 +110,10 @@ struct BlimpPilotConfig {
   /// rad: landing, slow all the way, the tail rotor is the only steering
   /// left: a turnabout for smaller errors.
   double landing_turnabout_error = 0.35;
+  /// m/s: landing in a wind faster than tail_rotor_speed, the air velocity
+  /// wanted (the ground velocity wanted less the wind) gives the heading
+  /// when faster than this; slower, the nose goes into the wind.
+  double landing_min_air = 0.4;
   /// s: a turnabout lasts at most this long, and the next begins no sooner
   /// after it (flying on with power in between).
   double turnabout_max_s = 8.0;
@@ -149,6 +157,8 @@ class BlimpAutoPilot {
   Phase phase() const { return phase_; }
   /// The height it aims at now, m.
   double target_height() const { return target_z_; }
+  /// The horizontal wind it estimates (world frame, m/s).
+  const Eigen::Vector2d& wind() const { return wind_; }
 
  private:
   /// The newest observation seen at or before t; null when none.
@@ -157,6 +167,34 @@ class BlimpAutoPilot {
   /// point, and on the way it drifts (drift_lookahead_s of its ground velocity).
   double SafeHeight(const BlimpObservation& o, const Eigen::Vector2d& target) const;
   Eigen::Vector2d Pursue(const BlimpGateFrame& gate, const Eigen::Vector3d& p) const;
+
+  /// What a phase wants of the hands: a direction and a speed.
+  struct Aim {
+    double bearing = 0.0;  ///< rad: the direction wanted over the ground (crab) or the heading
+    bool crab = true;      ///< head into the wind enough to make good the bearing
+    double forward_speed = 0.0;  ///< m/s along the heading
+    bool ground_speed = false;   ///< forward_speed over the ground, not through the air
+    bool landing = false;        ///< thrust up only: it sinks on its own weight
+  };
+  /// What an observation newer than the last one used tells: the rates, the
+  /// gate crossed, the wind. The first one starts the take-off.
+  void TakeIn(const BlimpObservation& o);
+  /// Off the ground, through the last gate, down in (or out of) the circle.
+  void NextPhase(const BlimpObservation& o);
+  // One function per phase: each sets target_z_ and says what it wants.
+  Aim ClimbOut(const BlimpObservation& o);
+  Aim FlyGate(const BlimpObservation& o);
+  Aim Land(const BlimpObservation& o);
+  BlimpCommand Landed();
+  /// A wind the rudder bites in, heading into it (at least tail_rotor_speed).
+  bool StrongWind() const { return wind_.norm() >= config_.tail_rotor_speed; }
+  /// The camera at the next gate, or at the landing circle.
+  void Look(const BlimpObservation& o, BlimpCommand& c) const;
+  /// The turn (rudder, or tail rotor) towards the aim's heading; begins and
+  /// ends a turnabout.
+  double Steer(const BlimpObservation& o, const Aim& aim, double t_s);
+  /// The forward and vertical forces as power and the helix plane's tilt.
+  void Thrust(const BlimpObservation& o, const Aim& aim, double dt, BlimpCommand& c);
   /// The ground speed wanted `distance` metres from the landing circle's
   /// centre: what a hull coasting on its drag keeps, at most the cruise.
   double ApproachSpeed(double distance) const;
@@ -179,6 +217,8 @@ class BlimpAutoPilot {
   bool decided_ = false;
   double speed_i_ = 0.0, vertical_i_ = 0.0;
   double target_z_ = 0.0;
+  double climb_ = 0.0;          ///< m/s: the climb rate wanted
+  bool height_settled_ = true;  ///< landing: near the height wanted and steady
   double helix_ = 0.0;
   bool helix_up_ = true;
   bool sinking_ = false;           ///< over the landing circle, on the way down
