@@ -44,99 +44,101 @@ bool PulsesAre(const std::array<double, kBlimpChannels>& have,
 
 }  // namespace
 
+// The two hops fly side by side (each about a minute of real time: a blimp
+// does not step in simulated time), each on its own domain and database.
 TEST_CASE(
-    "a blimp hop over DDS through the Maestro adapter and a pty: completed, the JSON and the "
-    "database "
-    "name the vehicle and the interface") {
+    "blimp hops over DDS: through the Maestro adapter and a pty, completed, the JSON and the "
+    "database name the vehicle and the interface; at 400 ms each way, the pilot flying the "
+    "predicted blimp, completed, prediction and its error recorded") {
   const auto dir = test::ScratchDir("e2e-blimp");
   const auto db = dir / "runs.db";
-  Child haptel({Bin("haptel"), "run", "--config", "config/blimp.yaml", "--vehicle",
-                "config/vehicles/sim-blimp-maestro.yaml", "--track", "config/tracks/blimp-hop.yaml",
-                "--json", "--quiet", "--domain", std::to_string(test::UniqueDomain(71)),
-                "--database", db.string(), "--vehicle-timeout", "5", "--reality", "none"});
-  const int code = haptel.Wait(300.0);
-  INFO("stdout:\n" << haptel.out() << "\nstderr:\n" << haptel.err());
-  REQUIRE(code == 0);
-  const std::string json = haptel.LastLine();
-  REQUIRE(json.front() == '{');
-  CHECK(JsonField(json, "outcome") == "completed");
-  CHECK(JsonField(json, "completed") == "true");
-  CHECK(JsonField(json, "gates_total") == "1");
-  CHECK(JsonField(json, "gates_passed") == "1");
-  CHECK(JsonField(json, "vehicle_kind") == "servo-blimp-sim");
-  CHECK(JsonField(json, "interface") == "blimp-gesture");
-  CHECK(JsonField(json, "track") == "blimp-hop");
-  CHECK(std::stod(JsonField(json, "lap_time_s")) > 5.0);
-  CHECK(std::stod(JsonField(json, "command_rtt_ms_p50")) > 0.0);
-  // The blimp's predictor runs with the display off too: the pilot saw the
-  // states as they came, and the model's error against them is recorded
-  // (the airship model of the vehicle file behind the Maestro's pulses; the
-  // twin, --reality none, flies that very model).
-  CHECK(JsonField(json, "predict") == "false");
-  REQUIRE(JsonField(json, "prediction_error_m_p95") != "null");
-  CHECK(std::stod(JsonField(json, "prediction_error_m_p95")) < 0.1);
+  const auto predict_db = dir / "predict-runs.db";
+  auto hops = test::StartAll(
+      {{Bin("haptel"), "run", "--config", "config/blimp.yaml", "--vehicle",
+        "config/vehicles/sim-blimp-maestro.yaml", "--track", "config/tracks/blimp-hop.yaml",
+        "--json", "--quiet", "--domain", std::to_string(test::UniqueDomain(71)), "--database",
+        db.string(), "--vehicle-timeout", "5", "--reality", "none"},
+       {Bin("haptel"),
+        "run",
+        "--config",
+        "config/blimp.yaml",
+        "--track",
+        "config/tracks/blimp-hop.yaml",
+        "--link-fault",
+        "delay=400ms",
+        "--predict",
+        "on",
+        "--json",
+        "--quiet",
+        "--domain",
+        std::to_string(test::UniqueDomain(77)),
+        "--database",
+        predict_db.string(),
+        "--vehicle-timeout",
+        "5",
+        "--reality",
+        "none"}});
+  {
+    Child& haptel = *hops[0];
+    const int code = haptel.Wait(300.0);
+    INFO("stdout:\n" << haptel.out() << "\nstderr:\n" << haptel.err());
+    REQUIRE(code == 0);
+    const std::string json = haptel.LastLine();
+    REQUIRE(json.front() == '{');
+    CHECK(JsonField(json, "outcome") == "completed");
+    CHECK(JsonField(json, "completed") == "true");
+    CHECK(JsonField(json, "gates_total") == "1");
+    CHECK(JsonField(json, "gates_passed") == "1");
+    CHECK(JsonField(json, "vehicle_kind") == "servo-blimp-sim");
+    CHECK(JsonField(json, "interface") == "blimp-gesture");
+    CHECK(JsonField(json, "track") == "blimp-hop");
+    CHECK(std::stod(JsonField(json, "lap_time_s")) > 5.0);
+    CHECK(std::stod(JsonField(json, "command_rtt_ms_p50")) > 0.0);
+    // The blimp's predictor runs with the display off too: the pilot saw the
+    // states as they came, and the model's error against them is recorded
+    // (the airship model of the vehicle file behind the Maestro's pulses; the
+    // twin, --reality none, flies that very model).
+    CHECK(JsonField(json, "predict") == "false");
+    REQUIRE(JsonField(json, "prediction_error_m_p95") != "null");
+    CHECK(std::stod(JsonField(json, "prediction_error_m_p95")) < 0.1);
 
-  record::Recorder recorder(db);
-  const auto runs = recorder.LoadAll();
-  REQUIRE(runs.size() == 1);
-  CHECK(runs[0].completed);
-  CHECK(runs[0].outcome == "completed");
-  CHECK(runs[0].vehicle_kind == "servo-blimp-sim");
-  CHECK(runs[0].interface == "blimp-gesture");
-  CHECK(runs[0].track == "blimp-hop");
-  CHECK(runs[0].controller_errors == 0);  // a servo controller, and no error from it
-  CHECK(runs[0].prediction_error_m_p95 >= 0.0);
-  REQUIRE(runs[0].splits.size() == 1);
-  CHECK(runs[0].splits[0].passed);
-  CHECK_FALSE(runs[0].path.empty());
-}
+    record::Recorder recorder(db);
+    const auto runs = recorder.LoadAll();
+    REQUIRE(runs.size() == 1);
+    CHECK(runs[0].completed);
+    CHECK(runs[0].outcome == "completed");
+    CHECK(runs[0].vehicle_kind == "servo-blimp-sim");
+    CHECK(runs[0].interface == "blimp-gesture");
+    CHECK(runs[0].track == "blimp-hop");
+    CHECK(runs[0].controller_errors == 0);  // a servo controller, and no error from it
+    CHECK(runs[0].prediction_error_m_p95 >= 0.0);
+    REQUIRE(runs[0].splits.size() == 1);
+    CHECK(runs[0].splits[0].passed);
+    CHECK_FALSE(runs[0].path.empty());
+  }
+  {  // 400 ms each way, the pilot flying the predicted blimp.
+    Child& haptel = *hops[1];
+    const int code = haptel.Wait(300.0);
+    INFO("stdout:\n" << haptel.out() << "\nstderr:\n" << haptel.err());
+    REQUIRE(code == 0);
+    const std::string json = haptel.LastLine();
+    REQUIRE(json.front() == '{');
+    CHECK(JsonField(json, "outcome") == "completed");
+    CHECK(JsonField(json, "gates_passed") == "1");
+    CHECK(JsonField(json, "predict") == "true");
+    CHECK(std::stod(JsonField(json, "command_rtt_ms_p50")) > 700.0);
+    // The model is the simulated blimp's own (the twin, --reality none):
+    // centimetres at most, where the delayed state is metres behind.
+    REQUIRE(JsonField(json, "prediction_error_m_p95") != "null");
+    CHECK(std::stod(JsonField(json, "prediction_error_m_p95")) < 0.1);
 
-TEST_CASE(
-    "the blimp's hop at 400 ms each way, the pilot flying the predicted blimp: completed, "
-    "prediction "
-    "and its error recorded") {
-  const auto dir = test::ScratchDir("e2e-blimp-predict");
-  const auto db = dir / "runs.db";
-  Child haptel({Bin("haptel"),
-                "run",
-                "--config",
-                "config/blimp.yaml",
-                "--track",
-                "config/tracks/blimp-hop.yaml",
-                "--link-fault",
-                "delay=400ms",
-                "--predict",
-                "on",
-                "--json",
-                "--quiet",
-                "--domain",
-                std::to_string(test::UniqueDomain(77)),
-                "--database",
-                db.string(),
-                "--vehicle-timeout",
-                "5",
-                "--reality",
-                "none"});
-  const int code = haptel.Wait(300.0);
-  INFO("stdout:\n" << haptel.out() << "\nstderr:\n" << haptel.err());
-  REQUIRE(code == 0);
-  const std::string json = haptel.LastLine();
-  REQUIRE(json.front() == '{');
-  CHECK(JsonField(json, "outcome") == "completed");
-  CHECK(JsonField(json, "gates_passed") == "1");
-  CHECK(JsonField(json, "predict") == "true");
-  CHECK(std::stod(JsonField(json, "command_rtt_ms_p50")) > 700.0);
-  // The model is the simulated blimp's own (the twin, --reality none):
-  // centimetres at most, where the delayed state is metres behind.
-  REQUIRE(JsonField(json, "prediction_error_m_p95") != "null");
-  CHECK(std::stod(JsonField(json, "prediction_error_m_p95")) < 0.1);
-
-  record::Recorder recorder(db);
-  const auto runs = recorder.LoadAll();
-  REQUIRE(runs.size() == 1);
-  CHECK(runs[0].predict);
-  CHECK(runs[0].link_fault == JsonField(json, "link_fault"));
-  CHECK(runs[0].prediction_error_m_p95 >= 0.0);
+    record::Recorder recorder(predict_db);
+    const auto runs = recorder.LoadAll();
+    REQUIRE(runs.size() == 1);
+    CHECK(runs[0].predict);
+    CHECK(runs[0].link_fault == JsonField(json, "link_fault"));
+    CHECK(runs[0].prediction_error_m_p95 >= 0.0);
+  }
 }
 
 TEST_CASE(

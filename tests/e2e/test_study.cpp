@@ -361,94 +361,114 @@ TEST_CASE("a study that cannot work is refused before anything runs") {
   const auto dir = test::ScratchDir("e2e-study-bad");
   const auto study = SmallStudy(dir);
   const auto db = dir / "bad.db";
-  {  // The same study file, planned differently on record: refused, exit 2.
-    std::string text;
-    {
-      std::ifstream in(study);
-      text.assign(std::istreambuf_iterator<char>(in), {});
-    }
-    Child first({Bin("haptel"), "study", "run", study.string(), "--database", db.string(),
-                 "--domain", std::to_string(test::UniqueDomain(43))});
-    REQUIRE(test::WaitFor(
-        [&] {
-          first.Pump();
-          return first.err().find("trial 1/4") != std::string::npos || !first.Alive();
-        },
-        120.0));
-    first.Terminate();
-    const auto changed = dir / "changed.yaml";
-    std::ofstream(changed) << text + "  - {id: P3, profile: plain}\n";
-    Child again({Bin("haptel"), "study", "run", changed.string(), "--database", db.string()});
-    CHECK(again.Wait(60.0) == 2);
-    CHECK(again.err().find("participants: P1, P2, the file now says P1, P2, P3") !=
-          std::string::npos);
-    // The plan the same, what a trial is not: refused too, naming the key and both values.
-    const auto capped = dir / "capped.yaml";
-    const size_t cap = text.find("trial_cap_s: 6");
-    REQUIRE(cap != std::string::npos);
-    std::ofstream(capped) << std::string(text).replace(cap, 14, "trial_cap_s: 3600");
-    Child longer({Bin("haptel"), "study", "run", capped.string(), "--database", db.string()});
-    CHECK(longer.Wait(60.0) == 2);
-    CHECK(longer.err().find("trial_cap_s: 6, the file now says 3600") != std::string::npos);
-    CHECK(longer.err().find("give it another name") != std::string::npos);
-  }
-  {  // A duplicate participant: exit 2 naming the file, no database touched.
-    const auto bad = dir / "dup.yaml";
+  std::string text;
+  {
     std::ifstream in(study);
-    std::string text((std::istreambuf_iterator<char>(in)), {});
-    std::ofstream(bad) << text + "  - {id: P1, profile: plain}\n";
-    const auto fresh = dir / "fresh.db";
-    Child run({Bin("haptel"), "study", "run", bad.string(), "--database", fresh.string()});
+    text.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  // Every refusal that needs no study on record starts beside the first
+  // study (each start is about half a second of loading; one after another
+  // they were most of this case's time).
+  // A duplicate participant: exit 2 naming the file, no database touched.
+  const auto dup = dir / "dup.yaml";
+  std::ofstream(dup) << text + "  - {id: P1, profile: plain}\n";
+  const auto dup_db = dir / "fresh.db";
+  // Simulated drivers move the simulated arms: a condition on a person's device, exit 2.
+  // (Each study file in a folder of its own: SmallStudy names them alike.)
+  std::filesystem::create_directories(dir / "arms");
+  std::filesystem::create_directories(dir / "can");
+  const auto arms = SmallStudy(
+      dir / "arms", 2,
+      ", device: " + (std::filesystem::current_path() / "config/devices/udp.yaml").string());
+  const auto arms_db = dir / "arms.db";
+  // A trial's session that cannot run as asked (the simulated CAN robot does
+  // not step in this process, so not in simulated time): exit 2 on one
+  // line, before the study is started or its plan written.
+  const auto can_study = SmallStudy(dir / "can", 1, "", "", CanRunFile(dir, "canrefused"));
+  const auto can_db = dir / "simulated-can.db";
+  // A person's practice lap is driven in a window: without a display, exit 2 naming the key.
+  const auto person = dir / "practice.yaml";
+  std::ofstream(person) << test::StudyFileHead("practice-e2e")
+                        << "operators: person\n"
+                           "conditions: [{name: one, interface: gesture}, {name: two, interface: "
+                           "cockpit}]\n"
+                           "design: {order: fixed}\n";
+  const auto person_db = dir / "practice.db";
+
+  auto refused = test::StartAll(
+      {{Bin("haptel"), "study", "run", dup.string(), "--database", dup_db.string()},
+       {Bin("haptel"), "study", "run", arms.string(), "--database", arms_db.string()},
+       {Bin("haptel"), "study", "run", can_study.string(), "--database", can_db.string(),
+        "--simulated-time"}});
+  {  // The practice study alone without DISPLAY: the child takes the environment as it starts.
+    const char* display = std::getenv("DISPLAY");
+    const std::string saved = display != nullptr ? display : "";
+    unsetenv("DISPLAY");
+    refused.push_back(std::make_unique<Child>(std::vector<std::string>{
+        Bin("haptel"), "study", "run", person.string(), "--database", person_db.string()}));
+    if (!saved.empty()) setenv("DISPLAY", saved.c_str(), 1);
+  }
+  // The same study file, planned differently on record: refused, exit 2.
+  Child first({Bin("haptel"), "study", "run", study.string(), "--database", db.string(), "--domain",
+               std::to_string(test::UniqueDomain(43))});
+
+  {
+    Child& run = *refused[0];
     CHECK(run.Wait(60.0) == 2);
+    INFO(run.err());
     CHECK(run.err().find("dup.yaml") != std::string::npos);
     CHECK(run.err().find("participants[2].id") != std::string::npos);
-    CHECK_FALSE(std::filesystem::exists(fresh));
+    CHECK_FALSE(std::filesystem::exists(dup_db));
   }
-  {  // Simulated drivers move the simulated arms: a condition on a person's device, exit 2.
-    const auto arms = SmallStudy(
-        dir, 2,
-        ", device: " + (std::filesystem::current_path() / "config/devices/udp.yaml").string());
-    const auto fresh = dir / "arms.db";
-    Child run({Bin("haptel"), "study", "run", arms.string(), "--database", fresh.string()});
+  {
+    Child& run = *refused[1];
     CHECK(run.Wait(60.0) == 2);
     INFO(run.err());
     CHECK(run.err().find("small-study.yaml: key 'conditions[1].device'") != std::string::npos);
     CHECK(run.err().find("expected a simulated device") != std::string::npos);
-    CHECK_FALSE(std::filesystem::exists(fresh));
+    CHECK_FALSE(std::filesystem::exists(arms_db));
   }
-  {  // A person's practice lap is driven in a window: without a display, exit 2 naming the key.
-    const char* display = std::getenv("DISPLAY");
-    const std::string saved = display != nullptr ? display : "";
-    unsetenv("DISPLAY");
-    const auto person = dir / "practice.yaml";
-    std::ofstream(person)
-        << test::StudyFileHead("practice-e2e")
-        << "operators: person\n"
-           "conditions: [{name: one, interface: gesture}, {name: two, interface: cockpit}]\n"
-           "design: {order: fixed}\n";
-    const auto fresh = dir / "practice.db";
-    Child run({Bin("haptel"), "study", "run", person.string(), "--database", fresh.string()});
-    const int code = run.Wait(60.0);
-    if (!saved.empty()) setenv("DISPLAY", saved.c_str(), 1);
-    CHECK(code == 2);
-    CHECK(run.err().find("practice.yaml: key 'practice'") != std::string::npos);
-    CHECK(run.err().find("no display") != std::string::npos);
-    CHECK_FALSE(std::filesystem::exists(fresh));
-  }
-  {  // A trial's session that cannot run as asked (the simulated CAN robot does
-     // not step in this process, so not in simulated time): exit 2 on one
-     // line, before the study is started or its plan written.
-    const auto can_study = SmallStudy(dir, 1, "", "", CanRunFile(dir, "canrefused"));
-    const auto fresh = dir / "simulated-can.db";
-    Child run({Bin("haptel"), "study", "run", can_study.string(), "--database", fresh.string(),
-               "--simulated-time"});
+  {
+    Child& run = *refused[2];
     CHECK(run.Wait(60.0) == 2);
     INFO(run.err());
     CHECK(run.err().find("--simulated-time") != std::string::npos);
     CHECK(std::count(run.err().begin(), run.err().end(), '\n') == 1);
     CHECK(run.err().find("[study]") == std::string::npos);
-    CHECK_FALSE(std::filesystem::exists(fresh));
+    CHECK_FALSE(std::filesystem::exists(can_db));
   }
+  {
+    Child& run = *refused[3];
+    CHECK(run.Wait(60.0) == 2);
+    INFO(run.err());
+    CHECK(run.err().find("practice.yaml: key 'practice'") != std::string::npos);
+    CHECK(run.err().find("no display") != std::string::npos);
+    CHECK_FALSE(std::filesystem::exists(person_db));
+  }
+
+  REQUIRE(test::WaitFor(
+      [&] {
+        first.Pump();
+        return first.err().find("trial 1/4") != std::string::npos || !first.Alive();
+      },
+      120.0));
+  first.Terminate();
+  const auto changed = dir / "changed.yaml";
+  std::ofstream(changed) << text + "  - {id: P3, profile: plain}\n";
+  // The plan the same, what a trial is not: refused too, naming the key and both values.
+  const auto capped = dir / "capped.yaml";
+  const size_t cap = text.find("trial_cap_s: 6");
+  REQUIRE(cap != std::string::npos);
+  std::ofstream(capped) << std::string(text).replace(cap, 14, "trial_cap_s: 3600");
+  auto again =
+      test::StartAll({{Bin("haptel"), "study", "run", changed.string(), "--database", db.string()},
+                      {Bin("haptel"), "study", "run", capped.string(), "--database", db.string()}});
+  CHECK(again[0]->Wait(60.0) == 2);
+  CHECK(again[0]->err().find("participants: P1, P2, the file now says P1, P2, P3") !=
+        std::string::npos);
+  CHECK(again[1]->Wait(60.0) == 2);
+  CHECK(again[1]->err().find("trial_cap_s: 6, the file now says 3600") != std::string::npos);
+  CHECK(again[1]->err().find("give it another name") != std::string::npos);
 }
 
 TEST_CASE(

@@ -244,34 +244,44 @@ TEST_CASE(
     "--predict off: neither") {
   const ViewAreas areas = AreasOfDefaultView();
   XServer x;
+  // Both laps side by side, each in its window on the one display.
+  std::vector<std::vector<std::string>> argvs;
+  std::vector<std::filesystem::path> dirs;
   for (const bool predict : {true, false}) {
-    const auto dir = test::ScratchDir(predict ? "e2e-view-predict-on" : "e2e-view-predict-off");
+    const auto& dir = dirs.emplace_back(
+        test::ScratchDir(predict ? "e2e-view-predict-on" : "e2e-view-predict-off"));
     const auto mp4 = dir / "view.mp4";
     // 200 ms each way: the ghost leads its picture by a few centimetres at speed.
-    Child run({Bin("haptel"),
-               "run",
-               "--operator",
-               "auto",
-               "--view",
-               "window",
-               "--record",
-               mp4.string(),
-               "--track",
-               "config/tracks/test-short.yaml",
-               "--link-fault",
-               "delay=200ms",
-               "--predict",
-               predict ? "on" : "off",
-               "--time-limit",
-               "8",
-               "--json",
-               "--quiet",
-               "--domain",
-               std::to_string(test::UniqueDomain(predict ? 76 : 77)),
-               "--database",
-               (dir / "runs.db").string(),
-               "--vehicle-timeout",
-               "5"});
+    argvs.push_back({Bin("haptel"),
+                     "run",
+                     "--operator",
+                     "auto",
+                     "--view",
+                     "window",
+                     "--record",
+                     mp4.string(),
+                     "--track",
+                     "config/tracks/test-short.yaml",
+                     "--link-fault",
+                     "delay=200ms",
+                     "--predict",
+                     predict ? "on" : "off",
+                     "--time-limit",
+                     "8",
+                     "--json",
+                     "--quiet",
+                     "--domain",
+                     std::to_string(test::UniqueDomain(predict ? 76 : 77)),
+                     "--database",
+                     (dir / "runs.db").string(),
+                     "--vehicle-timeout",
+                     "5"});
+  }
+  auto runs = test::StartAll(argvs);
+  for (const bool predict : {true, false}) {
+    const auto& dir = dirs[predict ? 0 : 1];
+    const auto mp4 = dir / "view.mp4";
+    Child& run = *runs[predict ? 0 : 1];
     const int code = run.Wait(180.0);
     INFO("--predict " << (predict ? "on" : "off") << "\n" << run.out() << run.err());
     REQUIRE((code == 0 || code == 1));  // a lap, or the time limit
