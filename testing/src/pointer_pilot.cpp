@@ -40,6 +40,14 @@ class NoControls final : public interfaces::ControlsPort {
 constexpr double kTakeHold_s = 1.0;
 /// Driving this long with the motors still: take hold again.
 constexpr double kRetakeAfter_s = 3.0;
+/// Having taken hold of controls, the pilot holds them at neutral for
+/// kTakeHold_s and sways the key hand this far each way along the wheel's
+/// rim (±12° of its 0.12 m radius), once over the hold, as a person works a
+/// wheel the run says is not yet at zero: a free wheel (the cockpit without
+/// return to zero) nudged a few degrees as the hands closed on it stays
+/// there, past the engagement's band (6.4° of wheel), and the run waited
+/// for zero until the cap. Swayed, it passes zero and the run engages.
+constexpr double kSway_m = 0.025;
 
 }  // namespace
 
@@ -291,7 +299,7 @@ void PointerPilot::Run() {
       // interface engages only from rest (mediator/engagement.hpp). With
       // controls to grasp, the operator's reach and grasp are that hold.
       if (commanded && hold_until_s < 0.0 && !grasps) hold_until_s = t + kTakeHold_s;
-      if (grasps && hold_until_s < 0.0 && p.driver->grasped(t)) hold_until_s = t;
+      if (grasps && hold_until_s < 0.0 && p.driver->grasped(t)) hold_until_s = t + kTakeHold_s;
       // Driving, yet the motors have not moved for a while: the run did not
       // engage (it took hold later than the pilot thought, or it let go
       // mid-lap and waits for the command at rest: a lever held forward
@@ -324,6 +332,11 @@ void PointerPilot::Run() {
         targets[hands.pointer_index()]->position = approach->At(t - approach_start_s);
       } else {
         targets = holding ? neutral : p.driver->Act(t, *p.interface);
+        auto& wheel_hand = targets[hands.key_index()];
+        if (holding && grasps && wheel_hand) {
+          const double phase = (t - (hold_until_s - kTakeHold_s)) / kTakeHold_s;
+          wheel_hand->position[1] += kSway_m * std::sin(2.0 * M_PI * phase);
+        }
       }
       if (const auto& hand = targets[hands.pointer_index()]) pointer_target = hand->position;
       const PointerGesture g =
