@@ -254,6 +254,9 @@ void DriveALap(const std::string& interface) {
                  << ", moves " << counts.pointer_moves << ", keys " << counts.key_presses
                  << ", contacts " << counts.contacts << ", regrasps " << counts.regrasps
                  << ", error '" << counts.error << "'");
+  // Said on success too: how the pilot got there (a retake costs seconds).
+  WARN("pilot (" << interface << "): steps " << counts.steps << ", contacts " << counts.contacts
+                 << ", regrasps " << counts.regrasps);
   CHECK(counts.error.empty());
   CHECK(counts.window_found);
   CHECK(counts.pointer_moves > 0);
