@@ -160,6 +160,10 @@ struct Row {
   /// Each step's pointer to the device's hand: the X server, SDL, the view's
   /// event pump and the servo tick; the rest of latencies_ms is the session.
   std::vector<double> to_hand_ms;
+  /// Per step with both: its command's time less its hand's (the coupling,
+  /// the proxy hand and the lever on the physics thread, the session tick),
+  /// apart from the pointer's way into the device.
+  std::vector<double> hand_to_command_ms;
   int steps_unanswered = 0;
   double ratio_free = Nan(), ratio_across = Nan(), ratio_along = Nan();
   bool contact = false;
@@ -167,6 +171,10 @@ struct Row {
   int shakes = 0;  ///< shakes the device started (the trace's shake records), all sides
   double servo_p99_us = Nan(), bare_beside_p99_us = Nan(), bare_alone_p99_us = Nan();
   double pseudo_haptic_gain_mean = Nan();
+  /// The run's physics thread (the proxy hands and the cockpit's controls):
+  /// the steps it took per second (the world's 1000 Hz when it keeps real
+  /// time) and its period's p99; NaN without a world (the gestures).
+  double physics_rate_hz = Nan(), physics_period_p99_us = Nan();
   int nobody_moving_commands = -1;
   int nobody_commands = 0;
   double nobody_distance_m = Nan();
@@ -380,6 +388,8 @@ void Engaged(const Options& o, const std::filesystem::path& dir, const std::file
   row.outcome = JsonFieldOf(json, "outcome");
   row.servo_p99_us = Number(json, "servo_period_p99_us");
   row.pseudo_haptic_gain_mean = Number(json, "pseudo_haptic_gain_mean");
+  row.physics_rate_hz = Number(json, "physics_rate_hz");
+  row.physics_period_p99_us = Number(json, "physics_period_p99_us");
 
   // Commands: how many, their largest forward and turn, and each step's answer.
   const std::vector<HeardCommand> commands = listener.commands();
@@ -388,6 +398,7 @@ void Engaged(const Options& o, const std::filesystem::path& dir, const std::file
     row.max_forward = std::max(row.max_forward, std::abs(0.5 * (c.left + c.right)));
     row.max_turn = std::max(row.max_turn, std::abs(0.5 * (c.right - c.left)));
   }
+  std::vector<double> step_command_ms(step_ns.size(), Nan());  // per step, NaN: unanswered
   for (size_t i = 0; i + 1 < step_ns.size(); ++i) {
     const int64_t sent = step_ns[i];
     HeardCommand before{};
@@ -399,6 +410,7 @@ void Engaged(const Options& o, const std::filesystem::path& dir, const std::file
       if (c.t_ns < sent || c.t_ns > step_ns[i + 1]) continue;
       if (c.left != before.left || c.right != before.right) {
         row.latencies_ms.push_back(1e-6 * static_cast<double>(c.t_ns - sent));
+        step_command_ms[i] = row.latencies_ms.back();
         answered = true;
         break;
       }
@@ -425,6 +437,8 @@ void Engaged(const Options& o, const std::filesystem::path& dir, const std::file
       if (t <= step_ns[i] || t > step_ns[i + 1]) continue;
       if (way * (p[0] - from) >= kHandMoved_m) {
         row.to_hand_ms.push_back(1e-6 * static_cast<double>(t - step_ns[i]));
+        if (std::isfinite(step_command_ms[i]))
+          row.hand_to_command_ms.push_back(step_command_ms[i] - row.to_hand_ms.back());
         break;
       }
     }
@@ -599,6 +613,15 @@ int BenchHandsMain(int argc, const char* const* argv) {
         row.ratio_across, row.ratio_along, row.contact_to_shake_ms, row.servo_p99_us,
         row.bare_beside_p99_us, row.bare_alone_p99_us, row.nobody_moving_commands,
         row.nobody_commands, row.nobody_distance_m);
+    // The lever's chain runs on the physics thread: behind real time, the
+    // lever follows the hand late.
+    std::printf("  %-17s  hand->cmd p50/p95 %.1f / %.1f ms", "",
+                Percentile(row.hand_to_command_ms, 0.5), Percentile(row.hand_to_command_ms, 0.95));
+    if (row.physics_rate_hz > 0.0) {
+      std::printf(", physics thread %.0f steps/s (p99 period %.0f us)", row.physics_rate_hz,
+                  row.physics_period_p99_us);
+    }
+    std::printf("\n");
     std::fflush(stdout);
     rows.push_back(std::move(row));
   }
@@ -684,6 +707,10 @@ int BenchHandsMain(int argc, const char* const* argv) {
           << ",\"input_to_command_ms_p95\":" << Num(Percentile(r.latencies_ms, 0.95))
           << ",\"input_to_hand_ms_p50\":" << Num(Percentile(r.to_hand_ms, 0.5))
           << ",\"input_to_hand_ms_p95\":" << Num(Percentile(r.to_hand_ms, 0.95))
+          << ",\"hand_to_command_ms_p50\":" << Num(Percentile(r.hand_to_command_ms, 0.5))
+          << ",\"hand_to_command_ms_p95\":" << Num(Percentile(r.hand_to_command_ms, 0.95))
+          << ",\"physics_rate_hz\":" << Num(r.physics_rate_hz)
+          << ",\"physics_period_p99_us\":" << Num(r.physics_period_p99_us)
           << ",\"input_to_command_ms\":" << Numbers(r.latencies_ms)
           << ",\"input_to_hand_ms\":" << Numbers(r.to_hand_ms)
           << ",\"steps\":" << r.latencies_ms.size() + static_cast<size_t>(r.steps_unanswered)

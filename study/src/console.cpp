@@ -765,8 +765,8 @@ void StudyConsole::Impl::Status(const httplib::Request&, httplib::Response& res)
           ",\"waiting_for_participants\":" + (waiting_for_more ? "true" : "false") +
           ",\"connections\":{\"served\":" + std::to_string(c.served) + ",\"refused_busy\":" +
           std::to_string(c.refused_busy) + ",\"cut_deadline\":" + std::to_string(c.cut_deadline) +
-          ",\"cut_for_room\":" + std::to_string(c.cut_for_room) +
-          ",\"tls_failed\":" + std::to_string(c.tls_failed) +
+          ",\"cut_for_room\":" + std::to_string(c.cut_for_room) + ",\"workers\":" +
+          std::to_string(c.workers) + ",\"tls_failed\":" + std::to_string(c.tls_failed) +
           ",\"refused_requests\":" + std::to_string(refused_requests.load()) + "}}",
       "application/json");
 }

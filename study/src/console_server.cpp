@@ -10,6 +10,8 @@
 
 #include <cerrno>
 #include <climits>
+#include <condition_variable>
+#include <deque>
 #include <functional>
 #include <stdexcept>
 #include <string_view>
@@ -250,6 +252,8 @@ void ConnectionPolicy::ValidateOrThrow() const {
         "ConnectionPolicy::threads: expected more than max_per_client, so that one address cannot "
         "hold them all");
   }
+  if (worker_linger.count() <= 0)
+    throw std::invalid_argument("ConnectionPolicy::worker_linger: expected more than 0");
 }
 
 TlsContext MakeTlsContext(const std::filesystem::path& certificate,
@@ -272,25 +276,114 @@ TlsContext MakeTlsContext(const std::filesystem::path& certificate,
 }
 
 /// The workers' queue: before a connection waits for a worker, the server
-/// makes room for it (ConsoleServer::MakeRoom).
+/// makes room for it (ConsoleServer::MakeRoom). Its workers are started as
+/// connections come, up to `max`, and end after `linger` idle: a study's
+/// trial locks the process's memory for its servo loop (mlockall), and with
+/// it every thread's whole stack, 8 MB each. A fixed pool of 128 idle
+/// workers made a people study 1 GB more resident from its first trial on.
 class ConsoleServer::Queue final : public httplib::TaskQueue {
  public:
-  Queue(ConsoleServer& server, size_t threads) : server_(server), pool_(threads) {}
+  Queue(ConsoleServer& server, size_t max, std::chrono::milliseconds linger)
+      : server_(server), max_(max), linger_(linger) {}
+  ~Queue() override { shutdown(); }
+
   void enqueue(std::function<void()> fn) override {
     server_.MakeRoom();
-    pool_.enqueue(std::move(fn));
+    std::vector<std::thread> ended;
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      jobs_.push_back(std::move(fn));
+      ended = TakeEnded();
+      // Each idle worker takes one queued job; a job beyond them starts a
+      // worker while there is room for one (else it waits its turn).
+      if (jobs_.size() > idle_ && workers_.size() < max_) {
+        std::thread worker([this] { Work(); });
+        workers_.emplace(worker.get_id(), std::move(worker));
+        server_.workers_.store(workers_.size());
+      } else {
+        ready_.notify_one();
+      }
+    }
+    for (std::thread& t : ended) t.join();
   }
-  void shutdown() override { pool_.shutdown(); }
+
+  void shutdown() override {
+    std::map<std::thread::id, std::thread> all;
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      stopping_ = true;
+      all.swap(workers_);
+      ended_.clear();
+      server_.workers_.store(0);
+    }
+    ready_.notify_all();
+    for (auto& [id, t] : all) t.join();  // after the jobs queued (as httplib's pool)
+  }
+
+  /// The server waits for connections: the workers that ended are joined.
+  void on_idle() override {
+    std::vector<std::thread> ended;
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      ended = TakeEnded();
+    }
+    for (std::thread& t : ended) t.join();
+  }
 
  private:
+  void Work() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    for (;;) {
+      ++idle_;
+      const bool woken =
+          ready_.wait_for(lock, linger_, [this] { return !jobs_.empty() || stopping_; });
+      --idle_;
+      if (jobs_.empty()) {
+        if (stopping_ || !woken) break;
+        continue;
+      }
+      std::function<void()> job = std::move(jobs_.front());
+      jobs_.pop_front();
+      lock.unlock();
+      job();
+      lock.lock();
+    }
+    // Idle for `linger`: joined by the next enqueue (or shutdown).
+    if (!stopping_) {
+      ended_.push_back(std::this_thread::get_id());
+      server_.workers_.store(workers_.size() - ended_.size());
+    }
+  }
+
+  /// The workers that ended, out of `workers_`, to be joined. Under `mutex_`.
+  std::vector<std::thread> TakeEnded() {
+    std::vector<std::thread> ended;
+    for (const std::thread::id id : ended_) {
+      if (const auto it = workers_.find(id); it != workers_.end()) {
+        ended.push_back(std::move(it->second));
+        workers_.erase(it);
+      }
+    }
+    ended_.clear();
+    return ended;
+  }
+
   ConsoleServer& server_;
-  httplib::ThreadPool pool_;
+  const size_t max_;
+  const std::chrono::milliseconds linger_;
+  std::mutex mutex_;
+  std::condition_variable ready_;
+  std::deque<std::function<void()>> jobs_;
+  std::map<std::thread::id, std::thread> workers_;  ///< started, not yet joined
+  std::vector<std::thread::id> ended_;              ///< of `workers_`, ended idle
+  size_t idle_ = 0;
+  bool stopping_ = false;
 };
 
 ConsoleServer::ConsoleServer(const ConnectionPolicy& policy, TlsContext tls)
     : policy_(policy), tls_(std::move(tls)) {
   policy_.ValidateOrThrow();
-  new_task_queue = [this] { return new Queue(*this, policy_.threads); };
+  new_task_queue = [this] { return new Queue(*this, policy_.threads, policy_.worker_linger); };
 }
 
 ConsoleServer::~ConsoleServer() = default;
@@ -375,6 +468,7 @@ ConnectionCounters ConsoleServer::counters() const {
   c.cut_deadline = cut_deadline_.load();
   c.cut_for_room = cut_for_room_.load();
   c.tls_failed = tls_failed_.load();
+  c.workers = workers_.load();
   return c;
 }
 

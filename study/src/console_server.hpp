@@ -19,6 +19,7 @@
 #include <map>
 #include <mutex>
 #include <string>
+#include <thread>
 
 #include "haptel/study/console.hpp"
 
@@ -83,6 +84,7 @@ class ConsoleServer : public httplib::Server {
   std::atomic<uint64_t> cut_deadline_{0};
   std::atomic<uint64_t> cut_for_room_{0};
   std::atomic<uint64_t> tls_failed_{0};
+  std::atomic<size_t> workers_{0};  ///< the Queue's worker threads now
 };
 
 }  // namespace haptel::study

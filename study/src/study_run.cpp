@@ -3,6 +3,8 @@
 // start resumes at the first unfinished one.
 #include "haptel/study/study_run.hpp"
 
+#include <malloc.h>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -670,6 +672,10 @@ mediator::RecordedRun StudyRun::RunWatched(const mediator::SessionSetup& setup,
   trial_over.store(true);
   watch.join();
   if (console_) console_->SetLive("");
+  // The trial's threads are gone (its DDS participant, physics, view,
+  // decoder), their heaps freed but kept by the allocator's arenas: given
+  // back, so that a study's memory does not grow by each trial's.
+  malloc_trim(0);
   return run;
 }
 

@@ -40,6 +40,14 @@ class NoControls final : public interfaces::ControlsPort {
 constexpr double kTakeHold_s = 1.0;
 /// Driving this long with the motors still: take hold again.
 constexpr double kRetakeAfter_s = 3.0;
+/// Having taken hold of controls, the pilot holds them at neutral for
+/// kTakeHold_s and sways the key hand this far each way along the wheel's
+/// rim (±12° of its 0.12 m radius), once over the hold, as a person works a
+/// wheel the run says is not yet at zero: a free wheel (the cockpit without
+/// return to zero) nudged a few degrees as the hands closed on it stays
+/// there, past the engagement's band (6.4° of wheel), and the run waited
+/// for zero until the cap. Swayed, it passes zero and the run engages.
+constexpr double kSway_m = 0.025;
 
 }  // namespace
 
@@ -161,12 +169,18 @@ PointerPilot::PointerPilot(PilotSetup setup) : setup_(std::move(setup)), parts_(
   // operator's own reach brings the open hands onto them (the mouse's hands
   // follow the pointer with the button up) and its grasp closes them (the
   // button goes down), as a person would.
+  RestartOperator(p, std::nullopt);
+}
+
+void PointerPilot::RestartOperator(Parts& p, const std::optional<mediator::Observation>& seen) {
   OperatorConfig op = p.run.op;
   if (GloveSum(p.interface->HandTargetsFor({})) == 0.0) {
     op.grasp_reach_s = 0.0;
     op.grasp_close_s = 0.0;
   }
+  // A fresh operator reaches and grasps again from its first Act.
   p.driver = std::make_unique<mediator::AutoOperator>(*p.track, op, p.vehicle.drive);
+  if (seen) p.driver->Observe(*seen);
 }
 
 PointerPilot::~PointerPilot() { Stop(); }
@@ -236,6 +250,8 @@ void PointerPilot::Run() {
       approach.emplace(haptics::Vec3d{c[0], c[1], c[2]}, goal->position);
     }
     double approach_start_s = -1.0;
+    std::optional<haptics::Vec3d> pointer_target;  ///< where the pointer hand was sent last
+    std::optional<mediator::Observation> seen_last;
     PointerGesture sent;
     bool first = true;
     bool touching = false;
@@ -257,6 +273,7 @@ void PointerPilot::Run() {
         moving_ns = p.moving_ns;
       }
       int contacts = 0;
+      if (!seen.empty()) seen_last = seen.back();
       for (const auto& o : seen) {
         p.driver->Observe(o);
         const bool now_touching = o.bumper_left || o.bumper_right;
@@ -282,15 +299,28 @@ void PointerPilot::Run() {
       // interface engages only from rest (mediator/engagement.hpp). With
       // controls to grasp, the operator's reach and grasp are that hold.
       if (commanded && hold_until_s < 0.0 && !grasps) hold_until_s = t + kTakeHold_s;
-      if (grasps && hold_until_s < 0.0 && p.driver->grasped(t)) hold_until_s = t;
+      if (grasps && hold_until_s < 0.0 && p.driver->grasped(t)) hold_until_s = t + kTakeHold_s;
       // Driving, yet the motors have not moved for a while: the run did not
       // engage (it took hold later than the pilot thought, or it let go
       // mid-lap and waits for the command at rest: a lever held forward
       // never is). A person told so on screen goes back to neutral (the
       // controls at zero, still held) and takes hold again.
+      // With controls to grasp, the hand may not hold them at all (it closed
+      // beside the lever, or was caught on the wheel's rim on its way): a
+      // person sees the lever stay put, lets go and takes hold again, from
+      // the approach (PointerApproach from where the hand is).
       const double still_s = 1e-9 * static_cast<double>(now_ns - std::max(moving_ns, p.t0_ns));
       if (hold_until_s >= 0.0 && t >= hold_until_s + kRetakeAfter_s && still_s > kRetakeAfter_s) {
-        hold_until_s = t + kTakeHold_s;
+        if (grasps && pointer_target) {
+          approach.emplace(*pointer_target, open_at_approach[hands.pointer_index()]->position);
+          approach_start_s = t;
+          hold_until_s = -1.0;
+          RestartOperator(p, seen_last);
+          std::lock_guard lock(counts_mutex_);
+          ++counts_.regrasps;
+        } else {
+          hold_until_s = t + kTakeHold_s;
+        }
       }
       const bool holding = hold_until_s < 0.0 ? !grasps : t < hold_until_s;
       // Controls to grasp: the open pointer hand goes round to its control
@@ -302,7 +332,13 @@ void PointerPilot::Run() {
         targets[hands.pointer_index()]->position = approach->At(t - approach_start_s);
       } else {
         targets = holding ? neutral : p.driver->Act(t, *p.interface);
+        auto& wheel_hand = targets[hands.key_index()];
+        if (holding && grasps && wheel_hand) {
+          const double phase = (t - (hold_until_s - kTakeHold_s)) / kTakeHold_s;
+          wheel_hand->position[1] += kSway_m * std::sin(2.0 * M_PI * phase);
+        }
       }
+      if (const auto& hand = targets[hands.pointer_index()]) pointer_target = hand->position;
       const PointerGesture g =
           hands.Step(targets, neutral, dt, window->width_px, window->height_px);
       int moves = 0, presses = 0, notches = 0;

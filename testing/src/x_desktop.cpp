@@ -82,10 +82,12 @@ void XDesktop::MovePointer(const XWindowInfo& window, int x_px, int y_px) {
   Flush();
 }
 
-void XDesktop::ParkPointer() {
+void XDesktop::ParkPointer() { MovePointerOnScreen(0, 0); }
+
+void XDesktop::MovePointerOnScreen(int x_px, int y_px) {
   Display* d = display_.get();
-  XTestFakeMotionEvent(d, DefaultScreen(d), 0, 0, CurrentTime);
-  Flush();
+  XTestFakeMotionEvent(d, DefaultScreen(d), x_px, y_px, CurrentTime);
+  XSync(d, False);  // moved when this returns: a window opened next opens under it
 }
 
 void XDesktop::Button(unsigned button, bool down) {

@@ -14,12 +14,12 @@ usage: study_experimenter.py URL PARTICIPANT TRIALS QUESTIONNAIRE
 import json
 import sys
 import time
-import urllib.error
 import urllib.request
 
 from selenium import webdriver
 from selenium.webdriver.chrome.options import Options
 from selenium.webdriver.chrome.service import Service
+from selenium.common.exceptions import StaleElementReferenceException, WebDriverException
 from selenium.webdriver.common.by import By
 from selenium.webdriver.support import expected_conditions
 from selenium.webdriver.support.ui import WebDriverWait
@@ -29,11 +29,12 @@ TIMEOUT_S = 120  # a trial on a loaded 2-core machine
 
 def status(url):
     """The console's status.json: a small request, not a page for the browser
-    to render. {} when it did not answer in time (a loaded machine): asked again."""
+    to render. {} when it did not answer (in time: a loaded machine; or not
+    yet: the study still starting): asked again."""
     try:
         with urllib.request.urlopen(url + "status.json", timeout=10) as reply:
             return json.load(reply)
-    except (TimeoutError, urllib.error.URLError):
+    except OSError:  # URLError (refused), a timeout, a connection cut
         return {}
 
 
@@ -63,11 +64,29 @@ def until(browser, url, find, what, ready=None):
     raise AssertionError(f"waited {TIMEOUT_S} s for {what}; the page said:\n{browser.page_source[:3000]}")
 
 
+def replaced(element):
+    """True once the page that held `element` is replaced. Chromium says so
+    as a stale element or, now and then, as a node that "does not belong to
+    the document" (a plain WebDriverException, which staleness_of lets through)."""
+    try:
+        element.is_enabled()
+        return False
+    except StaleElementReferenceException:
+        return True
+    except WebDriverException as e:
+        if "does not belong to the document" in str(e):
+            return True
+        raise
+
+
 def elements(browser, selector):
     return browser.find_elements(By.CSS_SELECTOR, selector)
 
 
 def run(browser, url, participant, trials, questionnaire):
+    # Started beside the study: its console answers first (Chromium refuses
+    # to load a page whose port is not yet open).
+    wait_status(url, lambda s: s != {}, "the console to answer")
     until(browser, url, lambda: elements(browser, "#new-participant"), "the participants' form")
     browser.find_element(By.ID, "new-participant").send_keys(participant)
     browser.find_element(By.ID, "add").click()
@@ -112,7 +131,7 @@ def run(browser, url, participant, trials, questionnaire):
     # The console's answer replaces the page: only then has the study the
     # press (quitting Chromium at once could cut the POST, and the study
     # waited for more participants for ever).
-    WebDriverWait(browser, TIMEOUT_S).until(expected_conditions.staleness_of(finish))
+    WebDriverWait(browser, TIMEOUT_S).until(lambda _: replaced(finish))
     print("finished", flush=True)
 
 

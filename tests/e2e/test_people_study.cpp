@@ -93,6 +93,19 @@ std::vector<TrialRowSeen> TrialRows(const std::filesystem::path& db) {
   return rows;
 }
 
+/// A process's resident memory and threads (/proc/PID/status), for the
+/// timeline: "1234 MB resident, 56 threads".
+std::string ProcessSize(pid_t pid) {
+  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
+  long rss_kb = -1;
+  int threads = -1;
+  for (std::string line; std::getline(status, line);) {
+    if (line.rfind("VmRSS:", 0) == 0) rss_kb = std::stol(line.substr(6));
+    if (line.rfind("Threads:", 0) == 0) threads = std::stoi(line.substr(8));
+  }
+  return std::to_string(rss_kb / 1024) + " MB resident, " + std::to_string(threads) + " threads";
+}
+
 /// Seconds since `t0_ns`, for the timeline.
 double Since(int64_t t0_ns) { return 1e-9 * static_cast<double>(MonotonicNs() - t0_ns); }
 
@@ -146,14 +159,16 @@ void RunPeopleStudy(const std::string& name, const std::vector<Condition>& condi
   const auto db = dir / "people.db";
   const int domain = test::UniqueDomain(371);
   const int port = test::FreeLoopbackPort();
-  mark("Xvfb up, study starting");
+  mark("Xvfb up, study and Chromium starting");
   Child study({Bin("haptel"), "study", "run", file.string(), "--database", db.string(), "--domain",
                std::to_string(domain), "--port", std::to_string(port), "--json"});
-  REQUIRE(test::WaitForErr(study, "[study] console:", 60.0));
-  mark("console up");
+  // The experimenter's browser starts beside the study (each takes seconds
+  // to load on a loaded machine); it asks for the page until the console answers.
   Child experimenter({"/usr/bin/python3", (source / "tests/e2e/study_experimenter.py").string(),
                       "http://127.0.0.1:" + std::to_string(port) + "/", "A",
                       std::to_string(conditions.size()), "thesis"});
+  REQUIRE(test::WaitForErr(study, "[study] console:", 60.0));
+  mark("console up");
 
   // The pilot sits at the mouse for each trial the experimenter starts, and
   // lets go when the study says the trial ended.
@@ -186,7 +201,8 @@ void RunPeopleStudy(const std::string& name, const std::vector<Condition>& condi
         }
         if (pilot && RunsEnded(study.err()) >= started) {
           const std::vector<std::string> said = LinesAfter(study.err(), "[study]   ");
-          mark("  run ended: " + (said.empty() ? std::string() : said.back()));
+          mark("  run ended: " + (said.empty() ? std::string() : said.back()) + "; study " +
+               ProcessSize(study.pid()));
           let_go();
         }
         if (const size_t n = LinesAfter(experimenter.out(), "answered ").size(); n > answered) {

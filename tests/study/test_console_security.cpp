@@ -13,6 +13,7 @@
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <cstdlib>
+#include <fstream>
 #include <thread>
 #include <vector>
 
@@ -430,6 +431,52 @@ TEST_CASE(
   const ConnectionCounters counters = console.connection_counters();
   CAPTURE(counters.served, counters.refused_busy, counters.cut_deadline);
   CHECK(counters.refused_busy == 0);
+}
+
+/// The test process's threads now (/proc/self/status).
+int ProcessThreads() {
+  std::ifstream status("/proc/self/status");
+  for (std::string line; std::getline(status, line);) {
+    if (line.rfind("Threads:", 0) == 0) return std::stoi(line.substr(8));
+  }
+  return -1;
+}
+
+TEST_CASE("The console's workers come with its connections and go when idle") {
+  // A study's trial locks the process's memory for its servo loop, every
+  // thread's stack with it: idle workers are a study's resident memory.
+  Study study("console-workers");
+  ConsoleOptions options;  // the defaults (128 workers at most), but a short linger
+  options.port = 0;
+  options.connections.worker_linger = std::chrono::milliseconds(100);
+  // Silent connections hold their workers until closed here, however slowly
+  // a loaded machine accepts them.
+  options.connections.head_deadline = std::chrono::seconds(60);
+  options.connections.deadline = std::chrono::seconds(60);
+  options.connections.idle = std::chrono::seconds(60);
+  const int before = ProcessThreads();
+  StudyConsole console(study.config, study.plan, study.db, study.questionnaires, options);
+  const int port = console.port();
+  const std::string get =
+      "GET /status.json HTTP/1.1\r\nHost: 127.0.0.1:" + std::to_string(port) + "\r\n\r\n";
+
+  // A page's requests one after another: a worker or two, not the pool's 128.
+  for (int i = 0; i < 40; ++i) REQUIRE(StatusLine(Exchange(port, get)) == "HTTP/1.1 200 OK");
+  CHECK(console.connection_counters().workers <= 8);
+  CHECK(ProcessThreads() - before <= 10);  // the listener and the workers
+
+  // Twenty connections at once (from as many addresses) that send nothing:
+  // a worker each, ...
+  std::vector<int> silent;
+  for (int i = 0; i < 20; ++i)
+    silent.push_back(test::ConnectFrom("127.0.0." + std::to_string(2 + i), port));
+  REQUIRE(test::WaitFor([&] { return console.connection_counters().workers >= 20; }, 60.0));
+  // ... closed here; then idle, they end.
+  for (const int fd : silent) close(fd);
+  // Bounds a hang; asserts no timing.
+  CHECK(test::WaitFor([&] { return console.connection_counters().workers == 0; }, 30.0));
+  CHECK(test::WaitFor([&] { return ProcessThreads() - before <= 1; }, 30.0));
+  CHECK(StatusLine(Exchange(port, get)) == "HTTP/1.1 200 OK");
 }
 
 TEST_CASE("Beyond loopback the console asks once for its access token") {

@@ -319,7 +319,7 @@ TEST_CASE(
     return p.key_hand[static_cast<size_t>(k)];
   };
   CHECK_FALSE(pointer.Load().window_open);
-  input.OnWindowOpened(1024, 576);
+  input.OnWindowOpened(nullptr, 1024, 576);
   PointerState p = pointer.Load();
   CHECK(p.window_open);
   CHECK(p.width_px == 1024);
@@ -387,7 +387,7 @@ TEST_CASE(
   // starts at its rest height, not the last window's notches.
   REQUIRE(pointer.Load().wheel_notches == 1);
   SdlInput next(box, pointer);
-  next.OnWindowOpened(1024, 576);
+  next.OnWindowOpened(nullptr, 1024, 576);
   CHECK(pointer.Load().wheel_notches == 0);
 }
 
@@ -398,7 +398,7 @@ TEST_CASE(
   InputBox box;
   haptel::haptics::PointerBox pointer;
   SdlInput input(box, pointer);
-  input.OnWindowOpened(1024, 576);
+  input.OnWindowOpened(nullptr, 1024, 576);
   input.OnEvent(Down(SDL_SCANCODE_A));
   input.OnEvent(Down(SDL_SCANCODE_Q));
   const auto any_held = [](const haptel::haptics::PointerState& p) {
@@ -418,7 +418,7 @@ TEST_CASE(
   CHECK(haptel::haptics::StepKeyHand(rest, pointer.Load(), mouse, 3.0) == rest);
   // Q pressed again in the next window is a new press, released as ever.
   SdlInput next(box, pointer);
-  next.OnWindowOpened(1024, 576);
+  next.OnWindowOpened(nullptr, 1024, 576);
   next.OnEvent(Down(SDL_SCANCODE_Q));
   CHECK(any_held(pointer.Load()));
   next.OnEvent(Up(SDL_SCANCODE_Q));

@@ -40,12 +40,15 @@ SdlInput::SdlInput(interfaces::InputBox& box, haptics::PointerBox& pointer)
   pointer_.key_hand = {};
 }
 
-void SdlInput::OnWindowOpened(int width_px, int height_px) {
+void SdlInput::OnWindowOpened(SDL_Window* window, int width_px, int height_px) {
   pointer_.window_open = true;
   pointer_.width_px = width_px;
   pointer_.height_px = height_px;
-  pointer_.in_window = SDL_GetMouseFocus() != nullptr;
+  pointer_.in_window = false;
+  // A press is taken only in the window: a button already down as it opens
+  // (a study's next trial) does not grasp.
   pointer_.grasp_button = false;
+  PlaceFromDesktop(window);
   // A new window's hand starts at its rest height: the notches of the last
   // one (a study's previous trial, in this process) would put it above or
   // below, and a person (or the pointer pilot) starts counting from there.
@@ -88,23 +91,35 @@ void SdlInput::UpdateKeyHand() {
   set(KeyHandKey::kMinusZ, key_down_z_);
 }
 
+// The pointer is in the window when it is inside its bounds (a drag that
+// leaves the window keeps reporting, from outside).
+void SdlInput::Place(int x_px, int y_px) {
+  pointer_.x_px = x_px;
+  pointer_.y_px = y_px;
+  if (pointer_.width_px > 0 && pointer_.height_px > 0) {
+    pointer_.in_window =
+        x_px >= 0 && y_px >= 0 && x_px < pointer_.width_px && y_px < pointer_.height_px;
+  }
+}
+
+void SdlInput::PlaceFromDesktop(SDL_Window* window) {
+  if (window == nullptr) return;
+  // SDL's own idea of the pointer moves only with its events; the desktop's
+  // (X: XQueryPointer) is where it is now. Both in screen pixels.
+  int screen_x = 0, screen_y = 0, window_x = 0, window_y = 0;
+  SDL_GetGlobalMouseState(&screen_x, &screen_y);
+  SDL_GetWindowPosition(window, &window_x, &window_y);
+  Place(screen_x - window_x, screen_y - window_y);
+}
+
 bool SdlInput::OnPointerEvent(const SDL_Event& event) {
-  // The pointer is in the window when SDL reports it inside its bounds (a
-  // drag that leaves the window keeps reporting, from outside).
-  const auto place = [this](int x, int y) {
-    pointer_.x_px = x;
-    pointer_.y_px = y;
-    if (pointer_.width_px > 0 && pointer_.height_px > 0) {
-      pointer_.in_window = x >= 0 && y >= 0 && x < pointer_.width_px && y < pointer_.height_px;
-    }
-  };
   switch (event.type) {
     case SDL_MOUSEMOTION:
-      place(event.motion.x, event.motion.y);
+      Place(event.motion.x, event.motion.y);
       return true;
     case SDL_MOUSEBUTTONDOWN:
     case SDL_MOUSEBUTTONUP:
-      place(event.button.x, event.button.y);
+      Place(event.button.x, event.button.y);
       if (event.button.button == SDL_BUTTON_LEFT)
         pointer_.grasp_button = event.type == SDL_MOUSEBUTTONDOWN;
       return true;
@@ -115,7 +130,11 @@ bool SdlInput::OnPointerEvent(const SDL_Event& event) {
     case SDL_WINDOWEVENT:
       switch (event.window.event) {
         case SDL_WINDOWEVENT_ENTER:
-          pointer_.in_window = true;
+        case SDL_WINDOWEVENT_FOCUS_GAINED:
+          // Entered (or raised) with no motion yet: the place is the
+          // desktop's, else the last one stored (another window's, or none).
+          pointer_.in_window = event.window.event == SDL_WINDOWEVENT_ENTER || pointer_.in_window;
+          PlaceFromDesktop(SDL_GetWindowFromID(event.window.windowID));
           return true;
         case SDL_WINDOWEVENT_LEAVE:
           pointer_.in_window = false;

@@ -256,7 +256,7 @@ struct View::Impl {
                                                  options.record_fps);
       }
       if (sink != nullptr && options.mode == ViewMode::kWindow)
-        sink->OnWindowOpened(options.width, options.height);
+        sink->OnWindowOpened(&canvas->window(), options.width, options.height);
       ready.set_value();
     } catch (...) {
       canvas.reset();

@@ -75,10 +75,14 @@ struct ConnectionPolicy {
   std::chrono::milliseconds deadline{10000};
   /// Silence from the client that ends the connection, within the deadlines.
   std::chrono::milliseconds idle{2000};
-  /// Worker threads, one per connection being read or answered. When every
-  /// one is taken, the oldest connection still without its head is cut for
-  /// the new one.
+  /// Worker threads, one per connection being read or answered, at most.
+  /// When every one is taken, the oldest connection still without its head
+  /// is cut for the new one.
   size_t threads = 128;
+  /// Workers are started as connections come and end after this long idle,
+  /// so that a burst leaves no threads behind (a trial's servo loop locks
+  /// every thread's stack into memory).
+  std::chrono::milliseconds worker_linger{5000};
 
   /// Throws std::invalid_argument naming the field that is out of range.
   void ValidateOrThrow() const;
@@ -91,6 +95,7 @@ struct ConnectionCounters {
   uint64_t cut_deadline = 0;  ///< ended at a deadline or after `idle`
   uint64_t cut_for_room = 0;  ///< cut before its head to make room (`max_per_client`, `threads`)
   uint64_t tls_failed = 0;    ///< TLS handshakes that did not complete
+  size_t workers = 0;  ///< worker threads now (idle ones end, ConnectionPolicy::worker_linger)
   uint64_t refused_requests = 0;  ///< refused by the access checks (403, 401, 413)
 };
 

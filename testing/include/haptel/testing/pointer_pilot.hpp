@@ -22,6 +22,7 @@
 #include <filesystem>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -29,6 +30,7 @@
 #include "haptel/config/device.hpp"
 #include "haptel/haptics/pointer.hpp"
 #include "haptel/interfaces/interface.hpp"
+#include "haptel/mediator/auto_operator.hpp"
 #include "haptel/testing/x_desktop.hpp"
 
 namespace haptel::testing {
@@ -120,6 +122,7 @@ struct PilotCounts {
   int key_presses = 0;    ///< key-down events sent
   int wheel_notches = 0;  ///< wheel notches sent
   int contacts = 0;       ///< states with a bumper pressed, from none
+  int regrasps = 0;       ///< controls let go and taken hold of again (the vehicle did not answer)
   bool window_found = false;
   std::string error;  ///< why the pilot stopped early (empty: it did not)
 };
@@ -150,6 +153,9 @@ class PointerPilot {
  private:
   struct Parts;
   void Run();
+  /// A fresh automatic operator (its reach and grasp start again), having
+  /// seen `seen`.
+  static void RestartOperator(Parts& p, const std::optional<mediator::Observation>& seen);
   PilotSetup setup_;
   std::unique_ptr<Parts> parts_;
   std::atomic<bool> stop_{false};

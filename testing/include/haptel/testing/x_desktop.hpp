@@ -43,6 +43,9 @@ class XDesktop {
   /// centred on it (a window that opens under the pointer has the mouse
   /// device's hand follow it at once, from wherever it rests).
   void ParkPointer();
+  /// Moves the pointer to (x, y) from the screen's top-left corner (where
+  /// a window will open, before it does).
+  void MovePointerOnScreen(int x_px, int y_px);
   /// Presses (`down`) or releases X button `button` (1 left, 4/5 the wheel).
   void Button(unsigned button, bool down);
   /// One wheel notch: away from the user (`away`) or towards.

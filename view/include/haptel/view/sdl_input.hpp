@@ -52,9 +52,11 @@ class SdlInput : public EventSink {
   /// Allocation-free for key, axis, button and window events (opening a
   /// newly added controller is SDL's own allocation, once per device).
   void OnEvent(const SDL_Event& event) override;
-  /// The pointer's window is open at this size (the pointer inside it if
-  /// SDL says the window has the mouse's focus).
-  void OnWindowOpened(int width_px, int height_px) override;
+  /// The pointer's window is open at this size. Where the pointer is is
+  /// asked of the desktop (PlaceFromDesktop): a window that opens under a
+  /// still pointer gets no motion to say so. `window` null (a test's): only
+  /// events place it.
+  void OnWindowOpened(SDL_Window* window, int width_px, int height_px) override;
   /// No window reports the pointer any more: the mouse device lets go.
   void OnWindowClosed() override;
 
@@ -87,6 +89,11 @@ class SdlInput : public EventSink {
   /// The key hand's keys from the held keys (W/S/A/D and arrows, Q/E).
   void UpdateKeyHand();
   void StorePointer();
+  /// The pointer's place (and whether it is in `window`) from the desktop's
+  /// pointer now, not from an event: on open, and on entering or taking
+  /// focus (a window that opened or rose under a still pointer).
+  void PlaceFromDesktop(SDL_Window* window);
+  void Place(int x_px, int y_px);
   void OnControllerAdded(int device_index);
   void OnControllerRemoved(SDL_JoystickID instance);
   void ClearPad();

@@ -20,6 +20,7 @@
 #include "haptel/view/view_model.hpp"
 
 union SDL_Event;
+struct SDL_Window;
 
 namespace haptel::view {
 
@@ -75,9 +76,10 @@ class EventSink {
  public:
   virtual ~EventSink() = default;
   virtual void OnEvent(const SDL_Event& event) = 0;
-  /// The window is open, `width_px` × `height_px`, before its first event
+  /// `window` is open, `width_px` × `height_px`, before its first event
   /// (SDL says a size only when it changes). Not called offscreen.
-  virtual void OnWindowOpened(int width_px, int height_px) {
+  virtual void OnWindowOpened(SDL_Window* window, int width_px, int height_px) {
+    (void)window;
     (void)width_px;
     (void)height_px;
   }
