@@ -289,18 +289,24 @@ int BenchVideoMain(int argc, const char* const* argv) {
       std::fprintf(stderr, "haptel bench video: two cameras: %s\n", two.error.c_str());
       two_ok = false;
     }
-    std::printf("  %9s  %-12s %6s %9s %9s %9s\n", "capacity", "camera", "fps", "kbit/s", "lat p50",
-                "lat p95");
+    std::printf("  %9s  %-12s %6s %9s %9s %9s %9s %9s %9s %9s\n", "capacity", "camera", "fps",
+                "kbit/s", "settled", "share", "lat p50", "lat p95", "aim p50", "aim p95");
     for (const TwoCameraPhase& p : two.phases) {
       for (const auto& [name, f] :
            {std::pair{"pilot", p.pilot}, std::pair{"surveillance", p.surveillance}}) {
-        std::printf("  %9.0f  %-12s %6.1f %9.0f %9.1f %9.1f\n", p.capacity_kbps, name, f.fps,
-                    f.kbps, f.latency_ms_p50, f.latency_ms_p95);
+        const bool aimed = std::string(name) == "surveillance" && p.aims_shown > 0;
+        std::printf("  %9.0f  %-12s %6.1f %9.0f %9.0f %9.0f %9.1f %9.1f %9s %9s\n",
+                    p.capacity_kbps, name, f.fps, f.kbps, f.settled_kbps, f.target_kbps,
+                    f.latency_ms_p50, f.latency_ms_p95,
+                    aimed ? std::to_string(p.aim_latency_ms_p50).substr(0, 6).c_str() : "",
+                    aimed ? std::to_string(p.aim_latency_ms_p95).substr(0, 6).c_str() : "");
       }
     }
     std::printf(
+        "  (kbit/s over the phase and its second half; share: the vehicle's target for the "
+        "camera; latency capture to decoded, aim: pan/tilt/zoom command to picture, ms)\n"
         "  pan/tilt/zoom command to picture: p50 %.1f ms, p95 %.1f ms (%d of %d aims shown); "
-        "wrote %s/video_cameras.csv\n",
+        "wrote %s/video_cameras.csv, _trace.csv, .png\n",
         two.aim_latency_ms_p50, two.aim_latency_ms_p95, two.aims_shown, two.aims, dir.c_str());
     std::fflush(stdout);
   }
@@ -359,6 +365,8 @@ int BenchVideoMain(int argc, const char* const* argv) {
         o << (first ? "" : ",") << "{\"camera\":\"" << name
           << "\",\"capacity_kbps\":" << JsonNumber(p.capacity_kbps)
           << ",\"fps\":" << JsonNumber(f.fps) << ",\"kbps\":" << JsonNumber(f.kbps)
+          << ",\"settled_kbps\":" << JsonNumber(f.settled_kbps)
+          << ",\"share_kbps\":" << JsonNumber(f.target_kbps)
           << ",\"latency_ms_p50\":" << JsonNumber(f.latency_ms_p50)
           << ",\"latency_ms_p95\":" << JsonNumber(f.latency_ms_p95) << "}";
         first = false;

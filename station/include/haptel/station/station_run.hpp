@@ -50,6 +50,7 @@ struct StationResult {
   std::string holder_line;  ///< the camera's holder as last said (HolderLine)
   bool held = false;        ///< the vehicle named this station the holder at some time
   CameraNow camera;         ///< the camera as the vehicle last said it
+  link::VehicleGlance vehicle;  ///< the vehicle as its last state said (seq 0: none came)
   StationFigures figures;
   video::VideoStats video;
   view::ViewStats view;
