@@ -56,7 +56,7 @@ struct TwoCameraOptions {
   double phase_s = 15.0;
   int domain = 0;
   std::filesystem::path vehicle_file;  ///< a vehicle with a "surveillance" camera
-  std::filesystem::path out_dir;  ///< video_cameras.csv, _trace.csv and .png go here
+  std::filesystem::path out_dir;       ///< video_cameras.csv, _trace.csv and .png go here
 };
 
 TwoCameraResult RunTwoCameraSchedule(const TwoCameraOptions& options);

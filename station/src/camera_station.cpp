@@ -48,7 +48,8 @@ std::string HeldByText(const CameraNow& now) {
   std::string text = "held by " +
                      std::string(now.holder[0] != '\0' ? now.holder : "another station") +
                      " since " + WallClockText(now.held_since_wall_ns);
-  if (now.holder_heard_wall_ns != 0) text += ", last heard " + WallClockText(now.holder_heard_wall_ns);
+  if (now.holder_heard_wall_ns != 0)
+    text += ", last heard " + WallClockText(now.holder_heard_wall_ns);
   return text;
 }
 

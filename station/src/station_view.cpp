@@ -18,7 +18,8 @@ view::Overlay StationOverlay(const std::string& camera, const std::string& perso
   o.t_s = t_s;
   o.lap_time_s = -1.0;  // no lap: the control room has none
   if (vehicle.empty() || status.empty()) {
-    std::snprintf(o.status, sizeof o.status, "%s", status.empty() ? vehicle.c_str() : status.c_str());
+    std::snprintf(o.status, sizeof o.status, "%s",
+                  status.empty() ? vehicle.c_str() : status.c_str());
     std::snprintf(o.message, sizeof o.message, "%s", message.c_str());
   } else {
     std::snprintf(o.status, sizeof o.status, "%s", vehicle.c_str());

@@ -14,18 +14,18 @@
 #include <atomic>
 #include <catch2/catch.hpp>
 #include <chrono>
-#include <csignal>
 #include <cmath>
+#include <csignal>
 #include <filesystem>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "child.hpp"
-#include "mcap_reference.hpp"
 #include "haptel/link/families.hpp"
 #include "haptel/link/participant.hpp"
 #include "haptel/link/topic.hpp"
+#include "mcap_reference.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;
@@ -77,9 +77,8 @@ void CheckAimed(const std::string& json) {
   CHECK(std::stoull(JsonField(json, "command_to_picture_count")) > 0);
   // The blimp's state, through the family its status names.
   CHECK(JsonField(json, "vehicle_states") == "true");
-  CHECK_THAT(JsonField(json, "vehicle_line"), Catch::StartsWith("blimp1 x ") &&
-                                                  Catch::Contains(" alt ") &&
-                                                  Catch::Contains(" m/s"));
+  CHECK_THAT(JsonField(json, "vehicle_line"),
+             Catch::StartsWith("blimp1 x ") && Catch::Contains(" alt ") && Catch::Contains(" m/s"));
 }
 
 }  // namespace

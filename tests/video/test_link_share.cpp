@@ -59,8 +59,9 @@ TEST_CASE("LinkShare::Split: the first camera first, a floor for the next, nothi
   }
 }
 
-TEST_CASE("LinkShare: the link's capacity is the sum of the receivers' estimates, given by priority",
-          "[video]") {
+TEST_CASE(
+    "LinkShare: the link's capacity is the sum of the receivers' estimates, given by priority",
+    "[video]") {
   LinkShare share;
   // Added surveillance first: its priority, not its place, orders it.
   const int surveillance = share.Add(1);

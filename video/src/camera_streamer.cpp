@@ -41,8 +41,8 @@ int LinkShare::Add(int priority, uint32_t most_kbps) {
   slots_[static_cast<size_t>(slot)].most_kbps = most_kbps;
   // Kept in priority order; equal priorities in the order added.
   int at = slot;
-  while (at > 0 && slots_[static_cast<size_t>(order_[static_cast<size_t>(at - 1)])].priority >
-                       priority) {
+  while (at > 0 &&
+         slots_[static_cast<size_t>(order_[static_cast<size_t>(at - 1)])].priority > priority) {
     order_[static_cast<size_t>(at)] = order_[static_cast<size_t>(at - 1)];
     --at;
   }

@@ -72,8 +72,8 @@ struct CameraNow {
   /// When the vehicle last heard the holder (CLOCK_REALTIME; 0: unknown).
   /// A holder silent for the vehicle's lease (2 s) is named no more.
   int64_t holder_heard_wall_ns = 0;
-  char family[16] = "";            ///< the vehicle's family, "robot" or "blimp" ("": not said)
-  char cameras[128] = "";          ///< the vehicle's cameras, "pilot, surveillance"
+  char family[16] = "";    ///< the vehicle's family, "robot" or "blimp" ("": not said)
+  char cameras[128] = "";  ///< the vehicle's cameras, "pilot, surveillance"
   uint64_t statuses = 0;
 };
 
@@ -82,8 +82,8 @@ struct CameraNow {
 std::string HeldByText(const CameraNow& now);
 /// One line for the person: who holds the camera, since when and when it
 /// was last heard ("camera surveillance of blimp1 is held by haptel
-/// station, eve@lab2 pid 77 since 03:12:45 UTC, last heard 03:12:50 UTC"); what the camera is when it cannot be steered; or what is
-/// awaited.
+/// station, eve@lab2 pid 77 since 03:12:45 UTC, last heard 03:12:50 UTC"); what the camera is when
+/// it cannot be steered; or what is awaited.
 std::string HolderLine(const CameraNow& now, const std::string& vehicle, const std::string& camera,
                        int domain);
 
