@@ -38,12 +38,13 @@ TEST_CASE("LinkShare::Split: the first camera first, a floor for the next, nothi
   CHECK(targets[0] == 2000);
   CHECK(targets[1] == 1000);
 
-  // A pilot sending 1000 of what it could have (its top JPEG rung) keeps a
-  // margin over it; the rest goes on.
+  // A pilot sending 1000 of the 2850 it could have (its top JPEG rung)
+  // takes a margin over what it sends; the rest goes on. Its target stays:
+  // a ladder following what was sent would ratchet down to the floor.
   const LinkShare::Demand sending[2] = {{0, 1000}, {0, 400}};
   LinkShare::Split(3000, sending, 2, targets);
-  CHECK(targets[0] == 1250);
-  CHECK(targets[1] == 500);  // the same margin over its own 400
+  CHECK(targets[0] == 3000 - LinkShare::kFloor_kbps);
+  CHECK(targets[1] == 3000 - 1250);
 
   // Less than the floors: an equal share each, and never more than the link.
   const LinkShare::Demand three[3] = {};
@@ -79,11 +80,12 @@ TEST_CASE(
   const uint32_t pilot_target = share.TargetFor(pilot, now);
   const uint32_t surveillance_target = share.TargetFor(surveillance, now);
   // The pilot is given more than its own receiver's estimate: the link's
-  // all but the floor, up to a margin over what it sends.
-  CHECK(pilot_target == 437);  // 1.25 x 350, under 680 - 150
-  CHECK(surveillance_target == 680 - 437);
+  // all but the floor; the surveillance camera what the pilot's 350 and a
+  // margin leave, and together they take no more than the link.
+  CHECK(pilot_target == 680 - LinkShare::kFloor_kbps);
+  CHECK(surveillance_target == 680 - 437);  // 437: 1.25 x 350
   CHECK(pilot_target > surveillance_target);
-  CHECK(pilot_target + surveillance_target <= share.CapacityKbps(now));
+  CHECK(437 + surveillance_target <= share.CapacityKbps(now));
 
   // Nobody watches the pilot any more (its estimate ages): the surveillance
   // camera has the link, and the pilot its own setting.

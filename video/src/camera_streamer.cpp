@@ -61,16 +61,19 @@ void LinkShare::Split(uint32_t capacity_kbps, const Demand* demands, int count,
     const uint64_t reserved = floor * static_cast<uint64_t>(count - 1 - i);
     uint64_t given = left > reserved ? left - reserved : 0;
     if (demands[i].most_kbps > 0) given = std::min<uint64_t>(given, demands[i].most_kbps);
-    // Sending less than that (a JPEG camera on its top rung, or one still
-    // climbing after a cut), it is given a margin over what it sends, and
-    // the rest is the next camera's: the link is used, never overfilled.
-    if (demands[i].sent_kbps > 0) {
-      given = std::min<uint64_t>(
-          given, static_cast<uint64_t>(kHeadroom * static_cast<double>(demands[i].sent_kbps)));
-    }
     given = std::max(given, std::min(floor, left));
     targets_kbps[i] = static_cast<uint32_t>(given);
-    left -= given;
+    // What it takes of the link: what it was given, or, sending less (a
+    // JPEG camera on its top rung), a margin over what it sends; the rest
+    // is the next camera's. Its target is not cut to that margin: a
+    // ladder's rungs lie below their target, and a target that followed
+    // what was sent would ratchet down to the floor.
+    uint64_t taken = given;
+    if (demands[i].sent_kbps > 0) {
+      taken = std::min<uint64_t>(
+          given, static_cast<uint64_t>(kHeadroom * static_cast<double>(demands[i].sent_kbps)));
+    }
+    left -= std::min(left, taken);
   }
 }
 

@@ -80,21 +80,21 @@ inline bool FeedbackFromOwner(const link::WriterId& owner, const link::WriterId&
 /// The split (Split), in priority order (the lowest number first; equal
 /// numbers in the order added): each camera is given what is left less a
 /// floor (kFloor_kbps) for each camera after it, at most its most (an
-/// H.264 encoder's configured bitrate; JPEG's ladder has none), and when
-/// it sends less than that (a JPEG camera on its top rung, or one climbing
-/// back after a cut) at most kHeadroom times what it sent over the last
-/// second: the rest goes to the cameras after it, so the link is used.
-/// The targets never add up to more than the capacity; when it cannot hold
-/// every floor, they share it equally. A camera whose receiver sent no
+/// H.264 encoder's configured bitrate; JPEG's ladder has none). What it
+/// takes of the link is what it was given or, when it sends less (a JPEG
+/// camera on its top rung), kHeadroom times what it sent over the last
+/// second: the rest goes to the cameras after it, so the link is used. What
+/// the cameras take never adds up to more than the capacity; when it cannot
+/// hold every floor, they share it equally. A camera whose receiver sent no
 /// estimate for kFresh_ns (nobody watches it: its frames cross no link) is
-/// given 0 (its own setting) and no share. Thread-safe (atomics): each camera's thread and feedback
-/// thread call it; allocation-free.
+/// given 0 (its own setting) and no share. Thread-safe (atomics): each
+/// camera's thread and feedback thread call it; allocation-free.
 class LinkShare {
  public:
   static constexpr uint32_t kFloor_kbps = 150;
   /// An estimate older than this is no receiver's any more.
   static constexpr int64_t kFresh_ns = 3'000'000'000;
-  /// A camera sending less than given keeps this many times what it sends.
+  /// A camera sending less than given takes this many times what it sends.
   static constexpr double kHeadroom = 1.25;
 
   /// One camera in the split, in priority order.
