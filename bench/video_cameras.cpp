@@ -228,9 +228,8 @@ TwoCameraResult RunTwoCameraSchedule(const TwoCameraOptions& options) {
     }
     PlotLines(options.out_dir / "video_cameras.png",
               {capacity_series, pilot_series, surv_series, pilot_share_series, surv_share_series},
-              {"two cameras on one link: each camera's rate and its share (drawn up to 1.5x the "
-               "top capacity)",
-               "time, s", "kbit/s"});
+              {"two cameras, one link: rates and shares (shares cut at 1.5x the top)", "time, s",
+               "kbit/s"});
     result.aim_latency_ms_p50 = Percentile(aim_latencies, 0.5);
     result.aim_latency_ms_p95 = Percentile(aim_latencies, 0.95);
     result.ok = std::all_of(result.phases.begin(), result.phases.end(), [](const auto& p) {
