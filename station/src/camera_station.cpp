@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <cstring>
 #include <ctime>
+#include <exception>
 #include <thread>
 
 #include "haptel/core/clock.hpp"
@@ -169,13 +170,20 @@ void CameraStation::OnFrame(const msg::VideoFrame& frame, const link::SampleStam
 void CameraStation::SubscribeState(const char* family) {
   for (const VehicleFamily f : {VehicleFamily::kRobot, VehicleFamily::kBlimp}) {
     if (std::strcmp(family, ToString(f)) != 0) continue;
-    state_reader_ = link::ForFamily(f, [this]<class Messages>() -> std::shared_ptr<void> {
-      return std::make_shared<typename Messages::StateReader>(
-          *participant_, link::TopicName(options_.vehicle, "state"), link::Profile::kState,
-          [this](const typename Messages::StateMsg& state) {
-            vehicle_.Store(Messages::Glance(state));
-          });
-    });
+    try {
+      state_reader_ = link::ForFamily(f, [this]<class Messages>() -> std::shared_ptr<void> {
+        return std::make_shared<typename Messages::StateReader>(
+            *participant_, link::TopicName(options_.vehicle, "state"), link::Profile::kState,
+            [this](const typename Messages::StateMsg& state) {
+              vehicle_.Store(Messages::Glance(state));
+            });
+      });
+    } catch (const std::exception&) {
+      // DDS refused the reader (a security identity without the state's
+      // topic): the station steers its camera without the vehicle's line,
+      // and does not ask again.
+      state_reader_ = std::make_shared<int>(0);
+    }
   }
 }
 
