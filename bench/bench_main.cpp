@@ -69,10 +69,11 @@ constexpr Usage kUsage[] = {
      "prediction off, nominal and learning, its error against the truth"},
     {"video",
      "[--vehicle FILE] [--track FILE] [--schedule default|both|jpeg|h264|off] [--phase-s S] "
-     "[--domain D] [--smoke] [--json]",
+     "[--cameras FILE|off] [--cameras-only] [--domain D] [--smoke] [--json]",
      "the link's video codecs: JPEG qualities and H.264 bitrates against SSIM, PSNR and CPU; the "
      "Pareto front; "
-     "then a capacity schedule through a real vehicle (bitrate, SSIM, latency, adapt_s)"},
+     "then a capacity schedule through a real vehicle (bitrate, SSIM, latency, adapt_s); then two "
+     "cameras sharing the link (fps, kbit/s, share, latency, pan/tilt/zoom to picture)"},
     {"fuzz", "[--inputs N] [--target NAME] [--seed S] [--smoke] [--json]",
      "every parser fed 10^6 mutated inputs: configs, scenes, UDP, servo bytes, CAN, DDS samples, "
      "console HTTP"},

@@ -1,6 +1,7 @@
 #include "video_cameras.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -12,6 +13,7 @@
 #include "haptel/link/families.hpp"
 #include "haptel/mediator/vehicle_link.hpp"
 #include "haptel/video/video_receiver.hpp"
+#include "plot.hpp"
 #include "video_schedule.hpp"
 
 namespace haptel::bench {
@@ -41,9 +43,12 @@ struct Watch {
     return true;
   }
   CameraPhaseFigures Figures(uint64_t bytes, double seconds) const {
-    return {static_cast<double>(pictures) / seconds,
-            static_cast<double>(bytes) * 8.0 / seconds / 1000.0, Percentile(latencies_ms, 0.5),
-            Percentile(latencies_ms, 0.95)};
+    CameraPhaseFigures f;
+    f.fps = static_cast<double>(pictures) / seconds;
+    f.kbps = static_cast<double>(bytes) * 8.0 / seconds / 1000.0;
+    f.latency_ms_p50 = Percentile(latencies_ms, 0.5);
+    f.latency_ms_p95 = Percentile(latencies_ms, 0.95);
+    return f;
   }
 };
 
@@ -63,6 +68,15 @@ TwoCameraResult RunTwoCameraSchedule(const TwoCameraOptions& options) {
     if (line == nullptr) throw std::logic_error("the receiving side has no fault line");
     video::VideoReceiver surveillance(link.participant(), vehicle.name, link.session(), true,
                                       kSurveillance);
+    // The vehicle's share for each camera (LinkShare's target), as its status says.
+    std::atomic<uint32_t> pilot_share{0}, surv_share{0};
+    link::CameraStatusReader status(
+        link.participant(), link::CameraStatusTopic(vehicle.name),
+        link::CameraMessages::kStatusProfile, [&](const msg::CameraStatus& st) {
+          for (const msg::CameraInfo& c : st.cameras()) {
+            (c.driven() ? pilot_share : surv_share).store(c.target_kbps());
+          }
+        });
     link::CameraCommandWriter aim_writer(link.participant(),
                                          link::CameraCommandTopic(vehicle.name, kSurveillance),
                                          link::CameraMessages::kCommandProfile);
@@ -98,6 +112,15 @@ TwoCameraResult RunTwoCameraSchedule(const TwoCameraOptions& options) {
     int64_t next_command = start_ns, next_aim = start_ns;
     int turn = 0;
     Watch pilot_watch, surv_watch;
+    std::ofstream trace(options.out_dir / "video_cameras_trace.csv");
+    trace << "t_s,capacity_kbps,pilot_kbps,surveillance_kbps,pilot_share_kbps,"
+             "surveillance_share_kbps\n";
+    Series capacity_series{"capacity", {}, {}}, pilot_series{"pilot", {}, {}},
+        surv_series{"surveillance", {}, {}}, pilot_share_series{"pilot share", {}, {}},
+        surv_share_series{"surveillance share", {}, {}};
+    constexpr double kTraceEvery_s = 0.5;
+    int64_t next_trace = start_ns + SToNs(kTraceEvery_s);
+    uint64_t traced_pilot = link.video().Stats().bytes, traced_surv = surveillance.Stats().bytes;
     for (size_t p = 0; p < options.capacities_kbps.size(); ++p) {
       TwoCameraPhase phase;
       phase.capacity_kbps = options.capacities_kbps[p];
@@ -108,9 +131,44 @@ TwoCameraResult RunTwoCameraSchedule(const TwoCameraOptions& options) {
       surv_watch = {surveillance.Latest().id, 0, {}};
       const int64_t phase_start = MonotonicNs();
       const int64_t phase_end = start_ns + SToNs(options.phase_s * static_cast<double>(p + 1));
+      const int64_t half = phase_start + (phase_end - phase_start) / 2;
+      uint64_t pilot_half_bytes = 0, surv_half_bytes = 0;
+      int64_t half_start = 0;
+      double pilot_share_sum = 0, surv_share_sum = 0;
+      int share_samples = 0;
+      const size_t aims_before = aim_latencies.size();
       while (MonotonicNs() < phase_end) {
         std::this_thread::sleep_for(std::chrono::milliseconds(2));
         const int64_t now = MonotonicNs();
+        if (now >= half && half_start == 0) {
+          half_start = now;
+          pilot_half_bytes = link.video().Stats().bytes;
+          surv_half_bytes = surveillance.Stats().bytes;
+        }
+        if (now >= next_trace) {
+          next_trace += SToNs(kTraceEvery_s);
+          const uint64_t pb = link.video().Stats().bytes, sb = surveillance.Stats().bytes;
+          const double t = NsToS(now - start_ns);
+          const double to_kbps = 8.0 / 1000.0 / kTraceEvery_s;
+          const double pk = static_cast<double>(pb - traced_pilot) * to_kbps;
+          const double sk = static_cast<double>(sb - traced_surv) * to_kbps;
+          traced_pilot = pb;
+          traced_surv = sb;
+          trace << t << ',' << phase.capacity_kbps << ',' << pk << ',' << sk << ','
+                << pilot_share.load() << ',' << surv_share.load() << '\n';
+          for (auto [series, y] : {std::pair{&capacity_series, phase.capacity_kbps},
+                                   std::pair{&pilot_series, pk}, std::pair{&surv_series, sk},
+                                   std::pair{&pilot_share_series, 1.0 * pilot_share.load()},
+                                   std::pair{&surv_share_series, 1.0 * surv_share.load()}}) {
+            series->x.push_back(t);
+            series->y.push_back(y);
+          }
+          if (half_start != 0) {
+            pilot_share_sum += pilot_share.load();
+            surv_share_sum += surv_share.load();
+            ++share_samples;
+          }
+        }
         if (now >= next_aim) {
           next_aim += SToNs(kAimEvery_s);
           ++turn;
@@ -135,14 +193,43 @@ TwoCameraResult RunTwoCameraSchedule(const TwoCameraOptions& options) {
           shown_up_to = surv.command_seq;
         }
       }
-      const double seconds = NsToS(MonotonicNs() - phase_start);
+      const int64_t phase_stop = MonotonicNs();
+      const double seconds = NsToS(phase_stop - phase_start);
       phase.pilot = pilot_watch.Figures(link.video().Stats().bytes - pilot_bytes, seconds);
       phase.surveillance = surv_watch.Figures(surveillance.Stats().bytes - surv_bytes, seconds);
+      const double half_s = half_start != 0 ? NsToS(phase_stop - half_start) : 0.0;
+      if (half_s > 0) {
+        phase.pilot.settled_kbps =
+            static_cast<double>(link.video().Stats().bytes - pilot_half_bytes) * 8e-3 / half_s;
+        phase.surveillance.settled_kbps =
+            static_cast<double>(surveillance.Stats().bytes - surv_half_bytes) * 8e-3 / half_s;
+      }
+      if (share_samples > 0) {
+        phase.pilot.target_kbps = pilot_share_sum / share_samples;
+        phase.surveillance.target_kbps = surv_share_sum / share_samples;
+      }
+      const std::vector<double> phase_aims(aim_latencies.begin() + static_cast<long>(aims_before),
+                                           aim_latencies.end());
+      phase.aims_shown = static_cast<int>(phase_aims.size());
+      phase.aim_latency_ms_p50 = Percentile(phase_aims, 0.5);
+      phase.aim_latency_ms_p95 = Percentile(phase_aims, 0.95);
       result.phases.push_back(phase);
       if (!link.ProcessAlive())
         throw std::runtime_error("haptel-vehicle ended: " + link.ExitDescription());
     }
     link.Stop();
+    // The receivers start at their estimate's top (20 Mbit/s) until the
+    // delay trend first says overuse: shares are drawn up to 1.5 times the
+    // largest capacity, so the rates stay readable.
+    const double top =
+        1.5 * *std::max_element(options.capacities_kbps.begin(), options.capacities_kbps.end());
+    for (Series* share : {&pilot_share_series, &surv_share_series}) {
+      for (double& y : share->y) y = std::min(y, top);
+    }
+    PlotLines(options.out_dir / "video_cameras.png",
+              {capacity_series, pilot_series, surv_series, pilot_share_series, surv_share_series},
+              {"two cameras, one link: rates and shares (shares cut at 1.5x the top)", "time, s",
+               "kbit/s"});
     result.aim_latency_ms_p50 = Percentile(aim_latencies, 0.5);
     result.aim_latency_ms_p95 = Percentile(aim_latencies, 0.95);
     result.ok = std::all_of(result.phases.begin(), result.phases.end(), [](const auto& p) {
@@ -154,12 +241,17 @@ TwoCameraResult RunTwoCameraSchedule(const TwoCameraOptions& options) {
     return result;
   }
   std::ofstream csv(options.out_dir / "video_cameras.csv");
-  csv << "capacity_kbps,camera,fps,kbps,latency_ms_p50,latency_ms_p95\n";
-  for (const TwoCameraPhase& p : result.phases) {
+  csv << "phase,capacity_kbps,camera,fps,kbps,settled_kbps,share_kbps,latency_ms_p50,"
+         "latency_ms_p95,aim_latency_ms_p50,aim_latency_ms_p95\n";
+  for (size_t i = 0; i < result.phases.size(); ++i) {
+    const TwoCameraPhase& p = result.phases[i];
     for (const auto& [name, f] :
          {std::pair{"pilot", p.pilot}, std::pair{"surveillance", p.surveillance}}) {
-      csv << p.capacity_kbps << ',' << name << ',' << f.fps << ',' << f.kbps << ','
-          << f.latency_ms_p50 << ',' << f.latency_ms_p95 << '\n';
+      const bool aimed = name == std::string("surveillance") && p.aims_shown > 0;
+      csv << i + 1 << ',' << p.capacity_kbps << ',' << name << ',' << f.fps << ',' << f.kbps << ','
+          << f.settled_kbps << ',' << f.target_kbps << ',' << f.latency_ms_p50 << ','
+          << f.latency_ms_p95 << ',' << (aimed ? std::to_string(p.aim_latency_ms_p50) : "") << ','
+          << (aimed ? std::to_string(p.aim_latency_ms_p95) : "") << '\n';
     }
   }
   return result;

@@ -9,9 +9,12 @@
 /// 0.5 s, and the command-to-picture latency is from a command's sending to
 /// the first decoded frame carrying its seq (VideoFrame.command_seq; one
 /// host, one clock). Per phase and camera: pictures per second, kbit/s,
-/// capture-to-decoded latency p50/p95 and the vehicle's share
-/// (video::LinkShare: the pilot's first, the surveillance camera what it
-/// leaves, at least 150 kbit/s).
+/// capture-to-decoded latency p50/p95, the rate over the phase's second
+/// half (settled: after the estimate's adaptation) and the vehicle's share
+/// as its CameraStatus says it (video::LinkShare: the pilot's first, the
+/// surveillance camera what it leaves, at least 150 kbit/s); the aim's
+/// command-to-picture latency per phase. A trace every 0.5 s of each
+/// camera's rate and share, video_cameras_trace.csv and video_cameras.png.
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -23,12 +26,18 @@ struct CameraPhaseFigures {
   double kbps = 0.0;
   double latency_ms_p50 = 0.0;
   double latency_ms_p95 = 0.0;
+  double settled_kbps = 0.0;  ///< over the phase's second half
+  double target_kbps = 0.0;   ///< the vehicle's share for it, mean over the second half (0: none)
 };
 
 struct TwoCameraPhase {
   double capacity_kbps = 0.0;
   CameraPhaseFigures pilot;
   CameraPhaseFigures surveillance;
+  /// The surveillance camera's aim, command to the first picture showing it, ms.
+  double aim_latency_ms_p50 = 0.0;
+  double aim_latency_ms_p95 = 0.0;
+  int aims_shown = 0;
 };
 
 struct TwoCameraResult {
@@ -43,11 +52,11 @@ struct TwoCameraResult {
 };
 
 struct TwoCameraOptions {
-  std::vector<double> capacities_kbps{3000.0, 1500.0, 800.0};
+  std::vector<double> capacities_kbps{3000.0, 1500.0, 800.0, 3000.0};
   double phase_s = 15.0;
   int domain = 0;
   std::filesystem::path vehicle_file;  ///< a vehicle with a "surveillance" camera
-  std::filesystem::path out_dir;       ///< video_cameras.csv goes here
+  std::filesystem::path out_dir;       ///< video_cameras.csv, _trace.csv and .png go here
 };
 
 TwoCameraResult RunTwoCameraSchedule(const TwoCameraOptions& options);

@@ -80,6 +80,10 @@ const std::map<std::string, ReaderMaker>& Makers() {
        MakerOf<msg::SelectedSource, msg::SelectedSourcePubSubType>()},
       {"haptel::msg::BlimpCommand", MakerOf<msg::BlimpCommand, msg::BlimpCommandPubSubType>()},
       {"haptel::msg::BlimpState", MakerOf<msg::BlimpState, msg::BlimpStatePubSubType>()},
+      // The cameras (issue 38): a station's commands, the vehicle's status
+      // of its cameras; each camera's video is a VideoFrame on its own topic.
+      {"haptel::msg::CameraCommand", MakerOf<msg::CameraCommand, msg::CameraCommandPubSubType>()},
+      {"haptel::msg::CameraStatus", MakerOf<msg::CameraStatus, msg::CameraStatusPubSubType>()},
   };
   return makers;
 }

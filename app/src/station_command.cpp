@@ -21,6 +21,7 @@
 #include "haptel/core/stop_signals.hpp"
 #include "haptel/link/security.hpp"
 #include "haptel/station/station_run.hpp"
+#include "haptel/station/station_view.hpp"
 
 namespace haptel::app {
 
@@ -160,6 +161,8 @@ void PrintSummary(std::FILE* out, const station::StationSetup& setup,
   std::fprintf(out, "  %s; held %.1f s of %.1f s, %llu commands sent\n", r.holder_line.c_str(),
                std::min(f.held_s, r.duration_s), r.duration_s,
                static_cast<unsigned long long>(f.commands_sent));
+  if (r.vehicle.seq != 0)
+    std::fprintf(out, "  %s\n", station::VehicleText(setup.station.vehicle, r.vehicle).c_str());
   std::fprintf(out, "  as applied: pan %+.1f deg, tilt %+.1f deg, zoom %.2fx\n",
                r.camera.applied.pan * kDegPerRad, r.camera.applied.tilt * kDegPerRad,
                r.camera.applied.zoom);
@@ -208,6 +211,12 @@ std::string StationJson(const station::StationSetup& setup, const station::Stati
     << ",\"picture_tilt_deg\":" << JsonNumber(f.picture_aim.tilt * kDegPerRad)
     << ",\"picture_zoom\":" << JsonNumber(f.picture_aim.zoom)
     << ",\"picture_fov_deg\":" << JsonNumber(f.picture_fov_deg)
+    << ",\"vehicle_states\":" << (r.vehicle.seq != 0 ? "true" : "false")
+    << ",\"vehicle_line\":" << JsonString(station::VehicleText(setup.station.vehicle, r.vehicle))
+    << ",\"vehicle_x\":" << JsonNumber(r.vehicle.x) << ",\"vehicle_y\":" << JsonNumber(r.vehicle.y)
+    << ",\"vehicle_z\":" << JsonNumber(r.vehicle.z)
+    << ",\"vehicle_heading_deg\":" << JsonNumber(r.vehicle.heading * kDegPerRad)
+    << ",\"vehicle_speed\":" << JsonNumber(r.vehicle.speed)
     << ",\"commands_sent\":" << f.commands_sent
     << ",\"commands_refused\":" << r.camera.commands_refused
     << ",\"video_frames\":" << r.video.frames << ",\"video_fps\":" << JsonNumber(r.video.fps)

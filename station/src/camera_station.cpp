@@ -2,7 +2,9 @@
 
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <ctime>
+#include <exception>
 #include <thread>
 
 #include "haptel/core/clock.hpp"
@@ -44,8 +46,12 @@ std::string WallClockText(int64_t wall_ns) {
 }  // namespace
 
 std::string HeldByText(const CameraNow& now) {
-  return "held by " + std::string(now.holder[0] != '\0' ? now.holder : "another station") +
-         " since " + WallClockText(now.held_since_wall_ns);
+  std::string text = "held by " +
+                     std::string(now.holder[0] != '\0' ? now.holder : "another station") +
+                     " since " + WallClockText(now.held_since_wall_ns);
+  if (now.holder_heard_wall_ns != 0)
+    text += ", last heard " + WallClockText(now.holder_heard_wall_ns);
+  return text;
 }
 
 std::string HolderLine(const CameraNow& now, const std::string& vehicle, const std::string& camera,
@@ -109,8 +115,10 @@ void CameraStation::OnStatus(const msg::CameraStatus& status) {
     if (options_.camera == c.name().c_str()) mine = &c;
   }
   std::snprintf(now.cameras, sizeof now.cameras, "%s", names.c_str());
+  std::snprintf(now.family, sizeof now.family, "%s", status.family().c_str());
   now.holder[0] = '\0';
   now.held_since_wall_ns = 0;
+  now.holder_heard_wall_ns = 0;
   if (mine == nullptr) {
     now.role = Role::kNoSuchCamera;
     now_.Store(now);
@@ -132,6 +140,7 @@ void CameraStation::OnStatus(const msg::CameraStatus& status) {
     now.role = holder == writer_id_ ? Role::kHolding : Role::kRefused;
     std::snprintf(now.holder, sizeof now.holder, "%s", c.holder().c_str());
     now.held_since_wall_ns = c.held_since_wall_ns();
+    now.holder_heard_wall_ns = c.holder_heard_wall_ns();
     if (now.role == Role::kHolding) now.last_command_seq = c.last_command_seq();
   }
   now_.Store(now);
@@ -158,9 +167,32 @@ void CameraStation::OnFrame(const msg::VideoFrame& frame, const link::SampleStam
   measured_up_to_ = carried;
 }
 
+void CameraStation::SubscribeState(const char* family) {
+  for (const VehicleFamily f : {VehicleFamily::kRobot, VehicleFamily::kBlimp}) {
+    if (std::strcmp(family, ToString(f)) != 0) continue;
+    try {
+      state_reader_ = link::ForFamily(f, [this]<class Messages>() -> std::shared_ptr<void> {
+        return std::make_shared<typename Messages::StateReader>(
+            *participant_, link::TopicName(options_.vehicle, "state"), link::Profile::kState,
+            [this](const typename Messages::StateMsg& state) {
+              vehicle_.Store(Messages::Glance(state));
+            });
+      });
+    } catch (const std::exception&) {
+      // DDS refused the reader (a security identity without the state's
+      // topic): the station steers its camera without the vehicle's line,
+      // and does not ask again.
+      state_reader_ = std::make_shared<int>(0);
+    }
+  }
+}
+
 void CameraStation::SendTick(int64_t now_ns) {
   if (released_.load()) return;
   const CameraNow now = now_.Load();
+  // The vehicle's state, once its status said its family (not on the
+  // status's DDS thread: a reader is made off DDS's own threads).
+  if (!state_reader_ && now.family[0] != '\0') SubscribeState(now.family);
   const int64_t dt = last_tick_ns_ != 0 ? now_ns - last_tick_ns_ : 0;
   last_tick_ns_ = now_ns;
   if (now.role == Role::kHolding) held_ns_.fetch_add(dt, std::memory_order_relaxed);

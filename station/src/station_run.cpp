@@ -54,6 +54,8 @@ constexpr double kLoopRate_hz = 50.0;
 /// driver's, a fixed one) is waited on before the station ends: the
 /// vehicle's status may be one from before its cameras were all up.
 constexpr double kNoCameraAfter_s = 3.0;
+/// How often `--view none` says the vehicle and the camera on stderr.
+constexpr double kLogEvery_s = 5.0;
 /// How long the vehicle's first status is waited for.
 constexpr double kNoVehicleAfter_s = 20.0;
 
@@ -132,6 +134,7 @@ StationResult RunStation(const StationSetup& setup, const std::atomic<bool>& sto
   Role said = Role::kWaiting;
   const int64_t t0 = MonotonicNs();
   int64_t unsteerable_since = 0;
+  int64_t next_log_ns = 0;
   const auto period = std::chrono::nanoseconds(static_cast<int64_t>(1e9 / kLoopRate_hz));
   auto next = std::chrono::steady_clock::now();
   for (;;) {
@@ -176,12 +179,23 @@ StationResult RunStation(const StationSetup& setup, const std::atomic<bool>& sto
     station.Aim(control.Step(person_input, pointer.Load(), 1.0 / kLoopRate_hz));
 
     const bool holding = now.role == Role::kHolding || now.role == Role::kFree;
-    screen.Publish(
-        StationOverlay(camera_name, person, t,
-                       now.role == Role::kWaiting ? std::string() : StatusText(now.applied),
-                       holding                      ? std::string(kStationHelp)
-                       : now.role == Role::kRefused ? "REFUSED: " + HeldByText(now)
-                                                    : result.holder_line));
+    const link::VehicleGlance glance = station.Vehicle();
+    if (glance.seq != 0) result.vehicle = glance;
+    const std::string vehicle_line = VehicleText(vehicle, glance);
+    const std::string camera_line =
+        now.role == Role::kWaiting ? std::string() : StatusText(now.applied);
+    screen.Publish(StationOverlay(camera_name, person, t, camera_line,
+                                  holding                      ? std::string(kStationHelp)
+                                  : now.role == Role::kRefused ? "REFUSED: " + HeldByText(now)
+                                                               : result.holder_line,
+                                  vehicle_line));
+    // Without a window, a line now and then says what the screen would.
+    if (setup.view == ViewChoice::kNone && setup.progress && !vehicle_line.empty() &&
+        now_ns >= next_log_ns) {
+      next_log_ns = now_ns + SToNs(kLogEvery_s);
+      log::Info(vehicle_line + "; camera " + camera_name + " " + camera_line + " (" +
+                ToString(now.role) + ")");
+    }
 
     if (stop.load()) {
       result.outcome = StationOutcome::kInterrupted;

@@ -543,7 +543,8 @@ TEST_CASE("bench video --smoke", "[bench][smoke][network]") {
   CHECK(Finite(j["aim_latency_ms_p95"]) >= j["aim_latency_ms_p50"].number());
   RequireFiles({"video_codecs.csv", "video_codecs.png",
                 "video_schedule_" + j["default"]["codec"].string() + ".csv",
-                "video_schedule_" + j["default"]["codec"].string() + ".png", "video_cameras.csv"});
+                "video_schedule_" + j["default"]["codec"].string() + ".png", "video_cameras.csv",
+                "video_cameras_trace.csv", "video_cameras.png"});
 }
 
 TEST_CASE("bench record --smoke: two laps, without and with a session file, and a seek",

@@ -6,11 +6,16 @@
 // asking for the held camera is refused with one line naming the holder and
 // since when; a participant that holds the camera is refused the driving
 // commands, however free the blimp is; and the same secured, the station a
-// `camera-surveillance` identity of `haptel security init`.
+// `camera-surveillance` identity of `haptel security init`. The station
+// shows the blimp's state (its JSON and its log line); `haptel record
+// --domain` beside records the camera topics, each decoded by its schema;
+// a holder that falls silent (SIGSTOP) is released by the vehicle's lease
+// and a new station takes the camera.
 #include <atomic>
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <filesystem>
 #include <string>
 #include <thread>
@@ -20,6 +25,7 @@
 #include "haptel/link/families.hpp"
 #include "haptel/link/participant.hpp"
 #include "haptel/link/topic.hpp"
+#include "mcap_reference.hpp"
 #include "test_env.hpp"
 
 using namespace haptel;
@@ -69,6 +75,10 @@ void CheckAimed(const std::string& json) {
   CHECK(std::stod(JsonField(json, "picture_pan_deg")) == Approx(30.0).margin(0.1));
   CHECK(std::stoull(JsonField(json, "video_frames")) > 0);
   CHECK(std::stoull(JsonField(json, "command_to_picture_count")) > 0);
+  // The blimp's state, through the family its status names.
+  CHECK(JsonField(json, "vehicle_states") == "true");
+  CHECK_THAT(JsonField(json, "vehicle_line"),
+             Catch::StartsWith("blimp1 x ") && Catch::Contains(" alt ") && Catch::Contains(" m/s"));
 }
 
 }  // namespace
@@ -79,6 +89,11 @@ TEST_CASE(
   const int domain = test::UniqueDomain(380);
   const auto dir = test::ScratchDir("e2e-station");
   const auto blimp = StartBlimp(domain);
+  // Recorded on the side, as `ros2 bag record` would: the camera topics too.
+  const auto side = dir / "side.mcap";
+  Child recorder({Bin("haptel"), "record", "--domain", std::to_string(domain), "--vehicle",
+                  "blimp1", side.string()});
+  REQUIRE(test::WaitForErr(recorder, "recording haptel/blimp1/cameras", 30.0));
   // The blimp's own state, heard beside the stations: its driving commands.
   LinkConfig link;
   link.domain_id = domain;
@@ -101,6 +116,7 @@ TEST_CASE(
       domain, {"--aim", "30,-10,4", "--time-limit", "12", "--record",
                (dir / "surveillance.mp4").string(), "--session", (dir / "station.mcap").string()}));
   REQUIRE(test::WaitForErr(first, "camera surveillance of blimp1 is yours", 30.0));
+  CHECK(test::WaitForErr(recorder, "recording haptel/blimp1/camera/surveillance", 30.0));
   // Asks while the first holds the camera, and ends before the first lets it go.
   Child second(Station(domain, {"--time-limit", "5"}));
   const int second_code = second.Wait(60.0);
@@ -111,6 +127,7 @@ TEST_CASE(
   CHECK(second.err().find("camera surveillance of blimp1 is held by haptel station, ") !=
         std::string::npos);
   CHECK(second.err().find(" UTC") != std::string::npos);  // since when
+  CHECK(second.err().find(", last heard ") != std::string::npos);
 
   const int code = first.Wait(60.0);
   INFO("first:\n" << first.out() << first.err());
@@ -121,6 +138,22 @@ TEST_CASE(
   CHECK(std::filesystem::file_size(dir / "surveillance.mp4") > 10000);
   CHECK(first.out().find("session file") != std::string::npos);
   CHECK(JsonField(json, "saved") == "true");  // the session file's
+  // Without a window, its log line says where the blimp is.
+  CHECK(first.err().find("blimp1 x ") != std::string::npos);
+
+  // The side recording: the station's commands, the cameras' status and
+  // the surveillance camera's video, each message decoded by its schema.
+  kill(recorder.pid(), SIGINT);
+  const int recorded = recorder.Wait(30.0);
+  INFO("recorder:\n" << recorder.out() << recorder.err());
+  REQUIRE(recorded == 0);
+  const std::string read = test::ReferenceRead(side, "--decode");
+  INFO(read);
+  CHECK(JsonField(read, "footer") == "true");
+  CHECK(JsonField(read, "failed") == "0");
+  CHECK(std::stol(JsonField(read, "haptel/blimp1/camera/surveillance")) > 0);
+  CHECK(std::stol(JsonField(read, "haptel/blimp1/cameras")) > 0);
+  CHECK(std::stol(JsonField(read, "haptel/blimp1/video/surveillance")) > 0);
   // Nobody drove the blimp: no driving command reached it, and it stayed at neutral.
   CHECK(states.load() > 0);
   CHECK(driving_heard.load() == 0);
@@ -150,6 +183,23 @@ TEST_CASE(
       },
       30.0));
   CHECK(received.load() == 0);
+
+  // A holder that falls silent (stopped, not ended: no release) is
+  // released by the vehicle's lease (2 s without its commands), and a new
+  // station takes the camera.
+  Child silent(Station(domain, {"--aim", "-20,0,2", "--time-limit", "60"}));
+  REQUIRE(test::WaitForErr(silent, "camera surveillance of blimp1 is yours", 30.0));
+  kill(silent.pid(), SIGSTOP);
+  Child next(Station(domain, {"--time-limit", "60"}));
+  const bool taken = test::WaitForErr(next, "camera surveillance of blimp1 is yours", 30.0);
+  kill(silent.pid(), SIGCONT);
+  kill(next.pid(), SIGINT);
+  kill(silent.pid(), SIGINT);
+  CHECK(next.Wait(30.0) == 0);
+  INFO("next:\n" << next.out() << next.err());
+  CHECK(taken);
+  CHECK(JsonField(next.LastLine(), "held") == "true");
+  CHECK(silent.Wait(30.0) == 0);
 }
 
 TEST_CASE(

@@ -137,3 +137,44 @@ TEST_CASE("the station's screen: its camera, where it points and zooms, who hold
   view::Overlay lap;
   CHECK(view::OverlayLines(lap).size() == 4);
 }
+
+TEST_CASE("the station's screen says where the vehicle is, whatever its family") {
+  // The blimp's state, read through the family table as the station reads it.
+  msg::BlimpState blimp;
+  blimp.seq(7);
+  blimp.pose_valid(true);
+  blimp.x(12.34f);
+  blimp.y(-4.5f);
+  blimp.z(3.2f);
+  blimp.yaw(static_cast<float>(-90 * kDeg));
+  blimp.vx(1.2f);
+  blimp.vy(1.6f);
+  blimp.failsafe(true);
+  const link::VehicleGlance flying = link::BlimpMessages::Glance(blimp);
+  // The family the vehicle's status names picks the messages.
+  CHECK(link::ForFamily(VehicleFamily::kBlimp, []<class M>() { return M::kFamily; }) ==
+        VehicleFamily::kBlimp);
+  CHECK(link::ForFamily(VehicleFamily::kRobot, []<class M>() { return M::kFamily; }) ==
+        VehicleFamily::kRobot);
+  CHECK(station::VehicleText("blimp1", flying) ==
+        "blimp1 x +12.3 y -4.5 alt 3.2 m hdg 270 2.0 m/s failsafe");
+  msg::VehicleState robot;
+  robot.seq(3);
+  robot.pose_valid(true);
+  robot.x(1.0f);
+  robot.y(2.0f);
+  robot.heading(static_cast<float>(90 * kDeg));
+  robot.speed(-0.4f);
+  const link::VehicleGlance driving = link::RobotMessages::Glance(robot);
+  CHECK(station::VehicleText("robot1", driving) == "robot1 x +1.0 y +2.0 hdg 90 0.4 m/s");
+  CHECK(station::VehicleText("robot1", {}).empty());  // no state yet
+
+  // On the screen: the vehicle's line is the status, the camera's leads the message.
+  const view::Overlay o = station::StationOverlay(
+      "surveillance", "eve", 12.0, station::StatusText({12 * kDeg, -5 * kDeg, 3.0}),
+      station::kStationHelp, station::VehicleText("blimp1", flying));
+  const std::vector<std::string> lines = view::OverlayLines(o);
+  REQUIRE(lines.size() == 3);
+  CHECK(lines[1] == "blimp1 x +12.3 y -4.5 alt 3.2 m hdg 270 2.0 m/s failsafe");
+  CHECK(lines[2] == std::string("pan +12.0 tilt -5.0 zoom 3.0x  ") + station::kStationHelp);
+}

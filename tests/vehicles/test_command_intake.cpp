@@ -116,6 +116,12 @@ TEST_CASE(
   // An owner that falls silent keeps the vehicle through a link's hiccup...
   CHECK_FALSE(in.Offer(true, ana, 1, 0, 7, 61 * ms + haptel::SToNs(1.0)));
   CHECK(in.owner().session == 22);
+  CHECK(in.OwnerAt(61 * ms + haptel::SToNs(1.0)).session == 22);
+  CHECK(in.owner_heard_wall_ns() > 0);  // its last command, heard
+  // ...is named no more once its lease ran out, though nobody took it yet
+  // (a camera's status stops naming a silent holder)...
+  CHECK(in.OwnerAt(62 * ms + haptel::SToNs(CommandOwner::kFreeAfter_s)).writer.empty());
+  CHECK(in.OwnerAt(62 * ms + haptel::SToNs(CommandOwner::kFreeAfter_s)).session == 0);
   // ...and loses it after CommandOwner::kFreeAfter_s.
   CHECK(in.Offer(true, ana, 1, 0, 8, 62 * ms + haptel::SToNs(CommandOwner::kFreeAfter_s)));
   CHECK(in.owner().session == 11);

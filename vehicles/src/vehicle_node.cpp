@@ -45,10 +45,11 @@ VehicleNodeOf<Family>::VehicleNodeOf(
     r.range = r.config.Range();
     r.shown.Store(Clamped(CameraAim{}, r.range));
     if (extra_cameras[i] == nullptr) throw std::invalid_argument("vehicle node: no camera source");
-    // Its feedback from its holder's participant (anybody's while nobody holds it).
+    // Its feedback from its holder's participant (anybody's while nobody
+    // holds it, or once the holder's lease ran out).
     r.streamer = std::make_unique<video::CameraStreamer>(
         r.config, std::move(extra_cameras[i]), *participant_, c.name,
-        [&r] { return r.commands.owner().writer; }, false, share_.get());
+        [&r] { return r.commands.OwnerAt(MonotonicNs()).writer; }, false, share_.get());
     rigs_.push_back(std::move(rig));
   }
   if (!rigs_.empty()) {
@@ -130,10 +131,11 @@ void VehicleNodeOf<Family>::ShowCameras() {
 
 template <class Family>
 void VehicleNodeOf<Family>::PublishCameras(int64_t now_ns) {
-  // When a camera's aim or holder changed, and once a second.
+  // When a camera's aim or holder changed (a holder silent for its lease,
+  // CommandOwner::kFreeAfter_s, is named no more), and once a second.
   uint64_t sum = 0;
   for (const auto& rig : rigs_) {
-    sum = sum * 31 + rig->last_seq.load() + rig->commands.owner().session * 7 +
+    sum = sum * 31 + rig->last_seq.load() + rig->commands.OwnerAt(now_ns).session * 7 +
           static_cast<uint64_t>(rig->held_since_wall_ns.load());
   }
   if (sum == camera_status_sum_ && now_ns - camera_status_ns_ < 1'000'000'000) return;
@@ -142,6 +144,7 @@ void VehicleNodeOf<Family>::PublishCameras(int64_t now_ns) {
   msg::CameraStatus& m = camera_status_msg_;
   m.seq(++camera_status_seq_);
   m.stamp_ns(now_ns);
+  m.family(ToString(Family::kFamily));
   m.cameras().resize(rigs_.size() + 1);
   const auto fill = [&](msg::CameraInfo& info, const CameraConfig& c, bool driven) {
     info.name(c.name);
@@ -174,11 +177,12 @@ void VehicleNodeOf<Family>::PublishCameras(int64_t now_ns) {
     info.commands_received(r.commands.accepted());
     info.commands_refused(r.commands.refused());
     info.commands_malformed(r.commands.malformed());
-    const CommandOwnerInfo holder = r.commands.owner();
+    const CommandOwnerInfo holder = r.commands.OwnerAt(now_ns);
     info.holder_session(holder.session);
     info.holder(holder.name);
     info.holder_writer(holder.writer.guid);
     info.held_since_wall_ns(holder.writer.empty() ? 0 : r.held_since_wall_ns.load());
+    info.holder_heard_wall_ns(holder.writer.empty() ? 0 : r.commands.owner_heard_wall_ns());
     info.target_kbps(share_ ? share_->TargetFor(static_cast<int>(i + 1), now_ns) : 0U);
   }
   if (share_) m.cameras()[0].target_kbps(share_->TargetFor(0, now_ns));

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <utility>
@@ -33,10 +34,56 @@ CameraConfig PreviewConfig(const CameraConfig& full) {
 
 }  // namespace
 
-int LinkShare::Add(int priority) {
+int LinkShare::Add(int priority, uint32_t most_kbps) {
   if (count_ >= kMaxSlots) throw std::invalid_argument("LinkShare: too many cameras");
-  slots_[static_cast<size_t>(count_)].priority = priority;
-  return count_++;
+  const int slot = count_++;
+  slots_[static_cast<size_t>(slot)].priority = priority;
+  slots_[static_cast<size_t>(slot)].most_kbps = most_kbps;
+  // Kept in priority order; equal priorities in the order added.
+  int at = slot;
+  while (at > 0 &&
+         slots_[static_cast<size_t>(order_[static_cast<size_t>(at - 1)])].priority > priority) {
+    order_[static_cast<size_t>(at)] = order_[static_cast<size_t>(at - 1)];
+    --at;
+  }
+  order_[static_cast<size_t>(at)] = slot;
+  return slot;
+}
+
+void LinkShare::Split(uint32_t capacity_kbps, const Demand* demands, int count,
+                      uint32_t* targets_kbps) {
+  if (count <= 0) return;
+  // A floor for each camera; an equal share when the link cannot hold them all.
+  const uint64_t floor =
+      std::min<uint64_t>(kFloor_kbps, capacity_kbps / static_cast<uint64_t>(count));
+  uint64_t left = capacity_kbps;
+  for (int i = 0; i < count; ++i) {
+    const uint64_t reserved = floor * static_cast<uint64_t>(count - 1 - i);
+    uint64_t given = left > reserved ? left - reserved : 0;
+    if (demands[i].most_kbps > 0) given = std::min<uint64_t>(given, demands[i].most_kbps);
+    given = std::max(given, std::min(floor, left));
+    targets_kbps[i] = static_cast<uint32_t>(given);
+    // What it takes of the link: what it was given, or, sending less (a
+    // JPEG camera on its top rung), a margin over what it sends; the rest
+    // is the next camera's. Its target is not cut to that margin: a
+    // ladder's rungs lie below their target, and a target that followed
+    // what was sent would ratchet down to the floor.
+    uint64_t taken = given;
+    if (demands[i].sent_kbps > 0) {
+      taken = std::min<uint64_t>(
+          given, static_cast<uint64_t>(kHeadroom * static_cast<double>(demands[i].sent_kbps)));
+    }
+    left -= std::min(left, taken);
+  }
+}
+
+uint32_t LinkShare::CapacityKbps(int64_t now_ns) const {
+  uint64_t sum = 0;
+  for (int i = 0; i < count_; ++i) {
+    const Slot& s = slots_[static_cast<size_t>(i)];
+    if (Fresh(s, now_ns)) sum += s.estimate_kbps.load(std::memory_order_relaxed);
+  }
+  return static_cast<uint32_t>(std::min<uint64_t>(sum, std::numeric_limits<uint32_t>::max()));
 }
 
 void LinkShare::OnEstimate(int slot, uint32_t kbps, int64_t now_ns) {
@@ -73,23 +120,20 @@ uint32_t LinkShare::SentKbps(int slot, int64_t now_ns) const {
 
 uint32_t LinkShare::TargetFor(int slot, int64_t now_ns) const {
   if (slot < 0 || slot >= count_) return 0;
-  constexpr int64_t kFresh_ns = 3'000'000'000;
-  const int mine = slots_[static_cast<size_t>(slot)].priority;
-  uint32_t capacity = 0;
-  uint64_t before_me = 0;
-  for (int i = 0; i < count_; ++i) {
+  if (!Fresh(slots_[static_cast<size_t>(slot)], now_ns)) return 0;
+  // The watched cameras, in priority order.
+  std::array<Demand, kMaxSlots> demands{};
+  std::array<uint32_t, kMaxSlots> targets{};
+  int watched = 0, mine = -1;
+  for (int k = 0; k < count_; ++k) {
+    const int i = order_[static_cast<size_t>(k)];
     const Slot& s = slots_[static_cast<size_t>(i)];
-    if (now_ns - s.estimate_ns.load(std::memory_order_relaxed) < kFresh_ns)
-      capacity = std::max(capacity, s.estimate_kbps.load(std::memory_order_relaxed));
-    // Ahead of me: a lower number, or the same number listed earlier.
-    if (s.priority < mine || (s.priority == mine && i < slot)) before_me += SentKbps(i, now_ns);
+    if (!Fresh(s, now_ns)) continue;
+    if (i == slot) mine = watched;
+    demands[static_cast<size_t>(watched++)] = {s.most_kbps, SentKbps(i, now_ns)};
   }
-  if (capacity == 0) return 0;
-  const uint32_t own = slots_[static_cast<size_t>(slot)].estimate_kbps.load();
-  // The first camera follows its own receiver, as a single camera does.
-  if (before_me == 0 && own > 0) return own;
-  const uint64_t left = capacity > before_me ? capacity - before_me : 0;
-  return static_cast<uint32_t>(std::max<uint64_t>(kFloor_kbps, left));
+  Split(CapacityKbps(now_ns), demands.data(), watched, targets.data());
+  return targets[static_cast<size_t>(mine)];
 }
 
 CameraStreamer::CameraStreamer(const CameraConfig& config, std::unique_ptr<CameraSource> camera,
@@ -105,7 +149,12 @@ CameraStreamer::CameraStreamer(const CameraConfig& config, std::unique_ptr<Camer
       share_(share),
       writer_(participant, link::VideoTopic(vehicle_name, config.name, driven),
               link::Profile::kVideo) {
-  if (share_ != nullptr) share_slot_ = share_->Add(config.priority);
+  // H.264's encoder never goes over its configured bitrate; JPEG's ladder has no bound.
+  if (share_ != nullptr) {
+    share_slot_ = share_->Add(config.priority, config.codec == CameraCodec::kH264
+                                                   ? static_cast<uint32_t>(config.bitrate_kbps)
+                                                   : 0U);
+  }
   frame_msg_.camera(config.name);
   if (camera_ == nullptr) throw std::invalid_argument("CameraStreamer: no camera source");
   if (!owner_writer_) throw std::invalid_argument("CameraStreamer: no owner writer");

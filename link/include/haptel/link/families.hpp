@@ -5,6 +5,7 @@
 /// check). The vehicle node (vehicles/families.hpp) and the operator's link
 /// (mediator/vehicle_link.hpp) are written once over these.
 #include <cmath>
+#include <cstdint>
 #include <string>
 
 #include "haptel/config/vehicle_kinds.hpp"
@@ -14,6 +15,19 @@
 #include "haptel/link/topic.hpp"
 
 namespace haptel::link {
+
+/// Where a vehicle is and how it moves, whatever its family: what a person
+/// beside the driver (a camera station) reads of its state. SI units.
+struct VehicleGlance {
+  bool pose_valid = false;  ///< the vehicle knows its pose (simulators do)
+  double x = 0.0, y = 0.0;  ///< m, the track's or course's frame
+  bool flies = false;       ///< z is an altitude (the blimp)
+  double z = 0.0;           ///< m, up
+  double heading = 0.0;     ///< rad, counter-clockwise from +x
+  double speed = 0.0;       ///< m/s over the ground
+  bool failsafe = false;    ///< its watchdog holds it (no fresh driving command)
+  uint64_t seq = 0;         ///< the state's seq (0: none yet)
+};
 
 /// The robot: each tread's command (TreadCommand), the ground state (VehicleState).
 struct RobotMessages {
@@ -43,6 +57,17 @@ struct RobotMessages {
   }
   /// The vehicle's command watchdog holds it stopped.
   static bool WatchdogTripped(const StateMsg& s) { return s.watchdog_tripped(); }
+  static VehicleGlance Glance(const StateMsg& s) {
+    VehicleGlance g;
+    g.pose_valid = s.pose_valid();
+    g.x = s.x();
+    g.y = s.y();
+    g.heading = s.heading();
+    g.speed = std::abs(s.speed());
+    g.failsafe = s.watchdog_tripped();
+    g.seq = s.seq();
+    return g;
+  }
 };
 
 /// The blimp: seven channels (BlimpCommand), the flight state (BlimpState).
@@ -78,7 +103,35 @@ struct BlimpMessages {
   }
   /// The vehicle's command watchdog holds every channel at neutral.
   static bool WatchdogTripped(const StateMsg& s) { return s.failsafe(); }
+  static VehicleGlance Glance(const StateMsg& s) {
+    VehicleGlance g;
+    g.pose_valid = s.pose_valid();
+    g.x = s.x();
+    g.y = s.y();
+    g.flies = true;
+    g.z = s.z();
+    g.heading = s.yaw();
+    g.speed = std::hypot(s.vx(), s.vy(), s.vz());
+    g.failsafe = s.failsafe();
+    g.seq = s.seq();
+    return g;
+  }
 };
+
+/// Calls `f.template operator()<Messages>()` with the family's messages
+/// (RobotMessages, BlimpMessages): code written once over every family,
+/// for a family known only at run time (a station learns it from the
+/// vehicle's CameraStatus). Returns what `f` returns.
+template <class F>
+decltype(auto) ForFamily(VehicleFamily family, F&& f) {
+  switch (family) {
+    case VehicleFamily::kBlimp:
+      return f.template operator()<BlimpMessages>();
+    case VehicleFamily::kRobot:
+      break;
+  }
+  return f.template operator()<RobotMessages>();
+}
 
 /// A vehicle's cameras (issue 38): each camera's video is its own stream
 /// with its own feedback; a steerable camera takes CameraCommands on a topic

@@ -69,16 +69,21 @@ struct CameraNow {
   uint64_t commands_refused = 0;   ///< the vehicle's count, every station's
   char holder[64] = "";            ///< the holder's name (kHolding, kRefused)
   int64_t held_since_wall_ns = 0;  ///< since when (CLOCK_REALTIME)
-  char cameras[128] = "";          ///< the vehicle's cameras, "pilot, surveillance"
+  /// When the vehicle last heard the holder (CLOCK_REALTIME; 0: unknown).
+  /// A holder silent for the vehicle's lease (2 s) is named no more.
+  int64_t holder_heard_wall_ns = 0;
+  char family[16] = "";    ///< the vehicle's family, "robot" or "blimp" ("": not said)
+  char cameras[128] = "";  ///< the vehicle's cameras, "pilot, surveillance"
   uint64_t statuses = 0;
 };
 
-/// "held by NAME since 03:12:45 UTC": who holds the camera (Role::kRefused).
+/// "held by NAME since 03:12:45 UTC, last heard 03:12:50 UTC": who holds
+/// the camera and when the vehicle last heard it (Role::kRefused).
 std::string HeldByText(const CameraNow& now);
-/// One line for the person: who holds the camera, since when ("camera
-/// surveillance of blimp1 is held by haptel station, eve@lab2 pid 77 since
-/// 03:12:45 UTC"); what the camera is when it cannot be steered; or what is
-/// awaited.
+/// One line for the person: who holds the camera, since when and when it
+/// was last heard ("camera surveillance of blimp1 is held by haptel
+/// station, eve@lab2 pid 77 since 03:12:45 UTC, last heard 03:12:50 UTC"); what the camera is when
+/// it cannot be steered; or what is awaited.
 std::string HolderLine(const CameraNow& now, const std::string& vehicle, const std::string& camera,
                        int domain);
 
@@ -113,6 +118,10 @@ class CameraStation {
   void Aim(const CameraAim& aim) { aim_.Store(aim); }
   /// The camera as the vehicle said it last (any thread).
   CameraNow Now() const { return now_.Load(); }
+  /// The vehicle as its last state says (any thread; seq 0: none yet).
+  /// Subscribed once the vehicle's status says its family, through the
+  /// family table (link::ForFamily): the station needs no vehicle file.
+  link::VehicleGlance Vehicle() const { return vehicle_.Load(); }
   /// Stops the commands and frees the camera at once (a few release
   /// commands: they are best effort). Idempotent.
   void Release();
@@ -125,6 +134,8 @@ class CameraStation {
   void OnStatus(const msg::CameraStatus& status);
   void OnFrame(const msg::VideoFrame& frame, const link::SampleStamps& stamps);
   void SendTick(int64_t now_ns);
+  /// Command thread: reads the vehicle's state, of `family`'s type.
+  void SubscribeState(const char* family);
   void Send(const CameraAim& aim, bool release, int64_t now_ns);
 
   StationOptions options_;
@@ -160,12 +171,16 @@ class CameraStation {
     uint64_t frames = 0;
   };
   Seqlock<PictureAim> picture_;
+  Seqlock<link::VehicleGlance> vehicle_;  ///< written by the state's DDS thread
 
   // Declared last: destroyed first, so no DDS callback outlives the rest.
   std::unique_ptr<link::Participant> participant_;
   std::unique_ptr<link::CameraStatusReader> status_reader_;
   std::unique_ptr<video::VideoReceiver> video_;
   std::unique_ptr<link::CameraCommandWriter> writer_;
+  /// The vehicle's state reader, of its family's type (made by the command
+  /// thread once the family is known; a shared_ptr<void> keeps its deleter).
+  std::shared_ptr<void> state_reader_;
   std::unique_ptr<PeriodicThread> sender_;
 };
 

@@ -46,10 +46,11 @@ const char* ToString(StationOutcome outcome);
 
 struct StationResult {
   StationOutcome outcome = StationOutcome::kEnded;
-  std::string message;      ///< one line: why it ended
-  std::string holder_line;  ///< the camera's holder as last said (HolderLine)
-  bool held = false;        ///< the vehicle named this station the holder at some time
-  CameraNow camera;         ///< the camera as the vehicle last said it
+  std::string message;          ///< one line: why it ended
+  std::string holder_line;      ///< the camera's holder as last said (HolderLine)
+  bool held = false;            ///< the vehicle named this station the holder at some time
+  CameraNow camera;             ///< the camera as the vehicle last said it
+  link::VehicleGlance vehicle;  ///< the vehicle as its last state said (seq 0: none came)
   StationFigures figures;
   video::VideoStats video;
   view::ViewStats view;

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "haptel/core/seqlock.hpp"
+#include "haptel/link/families.hpp"
 #include "haptel/station/camera_station.hpp"
 #include "haptel/video/frame.hpp"
 #include "haptel/view/view.hpp"
@@ -16,10 +17,20 @@ namespace haptel::station {
 
 /// The station's overlay: its name and person, the clock, the camera's
 /// status line (StatusText) and one message (the holder's line, or what to
-/// press). No lap: lap_time_s is negative (view::OverlayLines draws no lap,
-/// gates or contacts then).
+/// press). With the vehicle's line (VehicleText; empty: no state yet) that
+/// line is the overlay's status (the vehicle's own line) and the camera's
+/// leads the message. No lap: lap_time_s is negative (view::OverlayLines
+/// draws no lap, gates or contacts then).
 view::Overlay StationOverlay(const std::string& camera, const std::string& person, double t_s,
-                             const std::string& status, const std::string& message);
+                             const std::string& status, const std::string& message,
+                             const std::string& vehicle = {});
+
+/// "blimp1 x +12.3 y -4.5 alt 3.2 m hdg 270 2.1 m/s" (m, degrees
+/// counter-clockwise from +x, m/s over the ground; alt for a vehicle that
+/// flies): where `vehicle` is and how it moves, as its last state says;
+/// " failsafe" appended while its watchdog holds it (no fresh driving
+/// command). Empty before any state.
+std::string VehicleText(const std::string& vehicle, const link::VehicleGlance& glance);
 
 /// "pan +12.0 tilt -5.0 zoom 3.0x" (degrees): where the camera points now,
 /// as the vehicle applied it; short enough for the overlay's panel.

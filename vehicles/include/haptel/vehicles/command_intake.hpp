@@ -96,6 +96,7 @@ class CommandOwner {
     const bool changed = !owned_ || from.writer != writer_;
     writer_ = from.writer;
     last_ns_ = now_ns;
+    heard_wall_ns_.store(WallNs(), std::memory_order_relaxed);
     owned_ = !from.release;
     held_until_ns_.store(owned_ ? now_ns + free_after_ns_ : 0, std::memory_order_relaxed);
     if (changed || from.release) {
@@ -110,7 +111,17 @@ class CommandOwner {
     }
     return changed ? Verdict::kNewOwner : Verdict::kOwner;
   }
+  /// The owner as it took the vehicle, even after its lease ran out (see OwnerAt).
   CommandOwnerInfo owner() const { return info_.Load(); }
+  /// The owner at `now_ns`: nobody once its lease ran out (released, or
+  /// silent for free_after_s: its commands are its heartbeat), though no
+  /// other writer has taken it yet. Any thread.
+  CommandOwnerInfo OwnerAt(int64_t now_ns) const {
+    if (now_ns > held_until_ns_.load(std::memory_order_relaxed)) return {};
+    return info_.Load();
+  }
+  /// When the owner's last command came (CLOCK_REALTIME; 0: none yet). Any thread.
+  int64_t heard_wall_ns() const { return heard_wall_ns_.load(std::memory_order_relaxed); }
   uint64_t refused() const { return refused_.load(); }
   /// Whether a writer of `writer`'s participant owns it at `now_ns`: it
   /// took it, has not released it and has not fallen silent. Any thread.
@@ -127,6 +138,7 @@ class CommandOwner {
   int64_t last_ns_ = 0;
   Seqlock<CommandOwnerInfo> info_;
   std::atomic<int64_t> held_until_ns_{0};  ///< the owner's lease ends (0: nobody owns it)
+  std::atomic<int64_t> heard_wall_ns_{0};
   std::atomic<uint64_t> refused_{0};
 };
 
@@ -219,6 +231,9 @@ class CommandIntake {
   void SetBar(const DrivingBar* bar) { bar_ = bar; }
   /// The writer (and session) the vehicle obeys now.
   CommandOwnerInfo owner() const { return owner_.owner(); }
+  /// See CommandOwner::OwnerAt and heard_wall_ns. Any thread.
+  CommandOwnerInfo OwnerAt(int64_t now_ns) const { return owner_.OwnerAt(now_ns); }
+  int64_t owner_heard_wall_ns() const { return owner_.heard_wall_ns(); }
   /// See CommandOwner::HeldByParticipantOf. Any thread.
   bool HeldByParticipantOf(const link::WriterId& writer, int64_t now_ns) const {
     return owner_.HeldByParticipantOf(writer, now_ns);

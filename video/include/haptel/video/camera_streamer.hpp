@@ -63,26 +63,63 @@ inline bool FeedbackFromOwner(const link::WriterId& owner, const link::WriterId&
   return owner.empty() || owner.SameParticipant(sender);
 }
 
-/// The link's capacity shared among one vehicle's cameras by priority:
-/// the first camera (lowest priority number) follows its own receiver's
-/// estimate of the link; each next one is given what the cameras before it
-/// leave of the largest fresh estimate any receiver sent (their sent
-/// rates over the last second subtracted), never less than kFloor_kbps.
-/// Two receivers on one host measure one link; on two hosts, the vehicle's
-/// uplink is what they share. Thread-safe (atomics): each camera's thread
-/// and feedback thread call it.
+/// The link's capacity shared among one vehicle's cameras by priority
+/// (issue 38: the driven camera first), as WebRTC's BitrateAllocator
+/// shares one transport's estimate among its streams.
+///
+/// The capacity is the link's, not one stream's: each camera's receiver
+/// estimates only what reaches it (video::RateEstimator: on overuse 85 % of
+/// its own stream's arrivals, otherwise at most 1.5 times them), so on a
+/// link the streams share the sum of their receivers' fresh estimates is
+/// what the link carries (and what it could carry more). Following its own
+/// receiver alone, the first camera never got more than its own share (at
+/// 800 kbit/s the pilot's 266 kbit/s against the surveillance camera's
+/// 331). Two receivers on one host measure one link; on two hosts, the
+/// vehicle's uplink is what they share.
+///
+/// The split (Split), in priority order (the lowest number first; equal
+/// numbers in the order added): each camera is given what is left less a
+/// floor (kFloor_kbps) for each camera after it, at most its most (an
+/// H.264 encoder's configured bitrate; JPEG's ladder has none). What it
+/// takes of the link is what it was given or, when it sends less (a JPEG
+/// camera on its top rung), kHeadroom times what it sent over the last
+/// second: the rest goes to the cameras after it, so the link is used. What
+/// the cameras take never adds up to more than the capacity; when it cannot
+/// hold every floor, they share it equally. A camera whose receiver sent no
+/// estimate for kFresh_ns (nobody watches it: its frames cross no link) is
+/// given 0 (its own setting) and no share. Thread-safe (atomics): each
+/// camera's thread and feedback thread call it; allocation-free.
 class LinkShare {
  public:
   static constexpr uint32_t kFloor_kbps = 150;
-  /// Camera `slot`'s priority (0 first). Call for each before the cameras start.
-  int Add(int priority);
+  /// An estimate older than this is no receiver's any more.
+  static constexpr int64_t kFresh_ns = 3'000'000'000;
+  /// A camera sending less than given takes this many times what it sends.
+  static constexpr double kHeadroom = 1.25;
+
+  /// One camera in the split, in priority order.
+  struct Demand {
+    uint32_t most_kbps = 0;  ///< what its encoder can use at most (0: no bound)
+    uint32_t sent_kbps = 0;  ///< what it sent over the last second (0: unknown)
+  };
+  /// Splits `capacity_kbps` among `count` cameras listed in priority order
+  /// (first first) into `targets_kbps` (kbit/s each): see the class comment.
+  static void Split(uint32_t capacity_kbps, const Demand* demands, int count,
+                    uint32_t* targets_kbps);
+
+  /// A camera of `priority` (0 first) whose encoder uses at most
+  /// `most_kbps` (0: no bound); returns its slot. Call for each before the
+  /// cameras start.
+  int Add(int priority, uint32_t most_kbps = 0);
   /// Camera `slot`'s receiver estimated the link at `kbps` (0: none).
   void OnEstimate(int slot, uint32_t kbps, int64_t now_ns);
   /// Camera `slot` sent `bytes` at `now_ns`.
   void OnSent(int slot, size_t bytes, int64_t now_ns);
   /// What camera `slot`'s encoder is to follow now (0: its own setting,
-  /// no estimate yet).
+  /// no fresh estimate from its receiver).
   uint32_t TargetFor(int slot, int64_t now_ns) const;
+  /// The link's capacity now: the sum of the fresh estimates (0: none).
+  uint32_t CapacityKbps(int64_t now_ns) const;
   /// Camera `slot`'s sent rate over the last second, kbit/s.
   uint32_t SentKbps(int slot, int64_t now_ns) const;
 
@@ -90,6 +127,7 @@ class LinkShare {
   static constexpr int kMaxSlots = kMaxVehicleCameras;
   struct Slot {
     int priority = 0;
+    uint32_t most_kbps = 0;
     std::atomic<uint32_t> estimate_kbps{0};
     std::atomic<int64_t> estimate_ns{0};
     // Bytes sent in the current and the previous second.
@@ -97,7 +135,12 @@ class LinkShare {
     std::atomic<uint64_t> bytes_now{0};
     std::atomic<uint64_t> bytes_before{0};
   };
+  bool Fresh(const Slot& s, int64_t now_ns) const {
+    return s.estimate_kbps.load(std::memory_order_relaxed) > 0 &&
+           now_ns - s.estimate_ns.load(std::memory_order_relaxed) < kFresh_ns;
+  }
   std::array<Slot, kMaxSlots> slots_;
+  std::array<int, kMaxSlots> order_{};  ///< slots by priority (set by Add)
   int count_ = 0;
 };
 
