@@ -149,6 +149,9 @@ std::vector<DefiningValue> StudyDefinition(const StudyConfig& config) {
     // Form 2: the device a person holds changes what the trial is. By path,
     // as the run file is (its contents are not compared).
     out.push_back({"conditions." + c.name + ".device", FromStudyFolder(config, c.device)});
+    // Its camera set-up, written only when set (as predict).
+    if (!c.cameras.empty()) out.push_back({"conditions." + c.name + ".cameras", Joined(c.cameras)});
+    if (!c.station.empty()) out.push_back({"conditions." + c.name + ".station", c.station});
   }
 
   out.push_back({"design.order", ToString(config.order)});
