@@ -302,6 +302,12 @@ int BenchVideoMain(int argc, const char* const* argv) {
         "  pan/tilt/zoom command to picture: p50 %.1f ms, p95 %.1f ms (%d of %d aims shown); "
         "wrote %s/video_cameras.csv\n",
         two.aim_latency_ms_p50, two.aim_latency_ms_p95, two.aims_shown, two.aims, dir.c_str());
+    for (const auto& [name, h] :
+         {std::pair{"mouse", two.head_mouse}, std::pair{"gamepad", two.head_gamepad}}) {
+      std::printf(
+          "  pilot's head by %-7s to picture: p50 %.1f ms, p95 %.1f ms (%d of %d motions shown)\n",
+          name, h.ms_p50, h.ms_p95, h.shown, h.moves);
+    }
     std::fflush(stdout);
   }
 
@@ -368,7 +374,15 @@ int BenchVideoMain(int argc, const char* const* argv) {
       << (two.aims_shown > 0 ? JsonNumber(two.aim_latency_ms_p50) : std::string("null"))
       << ",\"aim_latency_ms_p95\":"
       << (two.aims_shown > 0 ? JsonNumber(two.aim_latency_ms_p95) : std::string("null"))
-      << ",\"aims\":" << two.aims << ",\"aims_shown\":" << two.aims_shown << "}";
+      << ",\"aims\":" << two.aims << ",\"aims_shown\":" << two.aims_shown;
+    for (const auto& [name, h] :
+         {std::pair{"head_mouse", two.head_mouse}, std::pair{"head_gamepad", two.head_gamepad}}) {
+      o << ",\"" << name
+        << "\":{\"ms_p50\":" << (h.shown > 0 ? JsonNumber(h.ms_p50) : std::string("null"))
+        << ",\"ms_p95\":" << (h.shown > 0 ? JsonNumber(h.ms_p95) : std::string("null"))
+        << ",\"moves\":" << h.moves << ",\"shown\":" << h.shown << "}";
+    }
+    o << "}";
     std::printf("%s\n", JsonLine(o.str(), smoke).c_str());
   }
   return all_ok && schedules_ok && two_ok ? 0 : 1;
