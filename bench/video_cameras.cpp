@@ -10,6 +10,7 @@
 
 #include "haptel/core/clock.hpp"
 #include "haptel/link/families.hpp"
+#include "haptel/link/participant.hpp"
 #include "haptel/mediator/vehicle_link.hpp"
 #include "haptel/video/video_receiver.hpp"
 #include "haptel/view/head_source.hpp"
@@ -142,13 +143,17 @@ TwoCameraResult RunTwoCameraSchedule(const TwoCameraOptions& options) {
       throw std::runtime_error(options.vehicle_file.string() +
                                ": expected a second camera named surveillance");
     }
-    mediator::VehicleLink link(ScheduleLinkOptions(vehicle, options.domain,
-                                                   options.capacities_kbps.front(), vehicle.world));
+    const mediator::VehicleLinkOptions link_options = ScheduleLinkOptions(
+        vehicle, options.domain, options.capacities_kbps.front(), vehicle.world);
+    mediator::VehicleLink link(link_options);
     link::FaultLine* line = link.fault_line();
     if (line == nullptr) throw std::logic_error("the receiving side has no fault line");
     video::VideoReceiver surveillance(link.participant(), vehicle.name, link.session(), true,
                                       kSurveillance);
-    link::CameraCommandWriter aim_writer(link.participant(),
+    // The surveillance camera's holder is a station of its own: a participant
+    // that holds a camera may not drive, and the pilot's head commands do.
+    link::Participant station(link_options.link, "haptel-bench-station");
+    link::CameraCommandWriter aim_writer(station,
                                          link::CameraCommandTopic(vehicle.name, kSurveillance),
                                          link::CameraMessages::kCommandProfile);
     msg::CameraCommand command;
