@@ -119,6 +119,12 @@ void PrintTwoCameras(const TwoCameraResult& two, const std::filesystem::path& di
       "  pan/tilt/zoom command to picture: p50 %.1f ms, p95 %.1f ms (%d of %d aims shown); "
       "wrote %s/video_cameras.csv, _trace.csv, .png\n",
       two.aim_latency_ms_p50, two.aim_latency_ms_p95, two.aims_shown, two.aims, dir.c_str());
+  for (const auto& [name, h] :
+       {std::pair{"mouse", two.head_mouse}, std::pair{"gamepad", two.head_gamepad}}) {
+    std::printf(
+        "  pilot's head by %-7s to picture: p50 %.1f ms, p95 %.1f ms (%d of %d motions shown)\n",
+        name, h.ms_p50, h.ms_p95, h.shown, h.moves);
+  }
 }
 
 /// Part 3's JSON members: "cameras":[...],"aim_latency_ms_p50":...
@@ -144,6 +150,13 @@ std::string TwoCamerasJson(const TwoCameraResult& two) {
     << ",\"aim_latency_ms_p95\":"
     << (two.aims_shown > 0 ? JsonNumber(two.aim_latency_ms_p95) : std::string("null"))
     << ",\"aims\":" << two.aims << ",\"aims_shown\":" << two.aims_shown;
+  for (const auto& [name, h] :
+       {std::pair{"head_mouse", two.head_mouse}, std::pair{"head_gamepad", two.head_gamepad}}) {
+    o << ",\"" << name
+      << "\":{\"ms_p50\":" << (h.shown > 0 ? JsonNumber(h.ms_p50) : std::string("null"))
+      << ",\"ms_p95\":" << (h.shown > 0 ? JsonNumber(h.ms_p95) : std::string("null"))
+      << ",\"moves\":" << h.moves << ",\"shown\":" << h.shown << "}";
+  }
   return o.str();
 }
 

@@ -11,8 +11,10 @@
 
 #include "haptel/core/clock.hpp"
 #include "haptel/link/families.hpp"
+#include "haptel/link/participant.hpp"
 #include "haptel/mediator/vehicle_link.hpp"
 #include "haptel/video/video_receiver.hpp"
+#include "haptel/view/head_source.hpp"
 #include "plot.hpp"
 #include "video_schedule.hpp"
 
@@ -22,6 +24,84 @@ namespace {
 constexpr char kSurveillance[] = "surveillance";
 constexpr double kAimEvery_s = 0.5;
 constexpr double kCommandRateHz = 10.0;
+constexpr double kPilotCommandRateHz = 50.0;  ///< the blimp session's command rate
+
+/// The pilot's head, moved by a mouse and a stick in turn, sent as the
+/// blimp's camera pan; each motion timed to the first picture that shows it.
+class HeadMotions {
+ public:
+  explicit HeadMotions(mediator::VehicleLink& link) : link_(link), stick_(HeadConfig{}, {}) {
+    person_.pad_connected = true;
+  }
+  /// Every 0.5 s a motion, the mouse's (a drag: the pan jumps 0.5 rad) and
+  /// the stick's (full deflection for 0.2 s) in turn; the command at 50 Hz.
+  void Tick(int64_t now_ns) {
+    if (start_ns_ == 0) start_ns_ = now_ns;
+    const double t = NsToS(now_ns - start_ns_);
+    if (now_ns >= next_motion_ns_) {
+      next_motion_ns_ = now_ns + SToNs(0.5);
+      by_stick_ = !by_stick_;
+      motion_wall_ns_ = WallNs();
+      motion_pending_ = true;
+      if (by_stick_) {
+        right_x_ = right_x_ > 0 ? -1.0 : 1.0;
+        stick_until_ns_ = now_ns + SToNs(0.2);
+      } else {
+        person_.head_pan = person_.head_pan > 0 ? -0.5 : 0.5;
+      }
+    }
+    person_.pad_axes[static_cast<size_t>(interfaces::PadAxis::kRightX)] =
+        by_stick_ && now_ns < stick_until_ns_ ? right_x_ : 0.0;
+    if (now_ns < next_command_ns_) return;
+    next_command_ns_ = now_ns + static_cast<int64_t>(1e9 / kPilotCommandRateHz);
+    // Both heads follow the person each tick; the one moved last turns the camera.
+    const double mouse_pan = mouse_.Update(t, person_).pan;
+    const double stick_pan = stick_.Update(t, person_).pan;
+    const double pan = by_stick_ ? stick_pan : mouse_pan;
+    const double before = by_stick_ ? stick_pan_ : mouse_pan_;
+    mouse_pan_ = mouse_pan;
+    stick_pan_ = stick_pan;
+    BlimpCommand command;
+    command.camera_pan = pan;
+    link_.Send(command);
+    if (motion_pending_ && pan != before) {
+      // The first command carrying this motion: its seq, and when the head moved.
+      motion_pending_ = false;
+      const uint64_t seq = link_.channel<link::BlimpMessages>().Counts().commands_sent;
+      moves_[seq] = {motion_wall_ns_, by_stick_};
+      ++(by_stick_ ? gamepad_.moves : mouse_figures_.moves);
+    }
+  }
+  /// A pilot picture: the motions it is the first to show.
+  void OnPicture(const video::Frame& f) {
+    for (auto it = moves_.begin(); it != moves_.end() && it->first <= f.command_seq;) {
+      const double ms = static_cast<double>(f.decoded_wall_ns - it->second.wall_ns) * 1e-6;
+      (it->second.stick ? gamepad_ms_ : mouse_ms_).push_back(ms);
+      ++(it->second.stick ? gamepad_.shown : mouse_figures_.shown);
+      it = moves_.erase(it);
+    }
+  }
+  HeadLatency Mouse() const { return Figures(mouse_figures_, mouse_ms_); }
+  HeadLatency Gamepad() const { return Figures(gamepad_, gamepad_ms_); }
+
+ private:
+  struct Move {
+    int64_t wall_ns;
+    bool stick;
+  };
+  static HeadLatency Figures(HeadLatency h, const std::vector<double>& ms);
+  mediator::VehicleLink& link_;
+  view::MouseHead mouse_;
+  view::GamepadHead stick_;
+  interfaces::InputState person_;
+  int64_t start_ns_ = 0, next_motion_ns_ = 0, next_command_ns_ = 0, stick_until_ns_ = 0;
+  int64_t motion_wall_ns_ = 0;
+  bool by_stick_ = true, motion_pending_ = false;
+  double right_x_ = -1.0, mouse_pan_ = 0.0, stick_pan_ = 0.0;
+  std::map<uint64_t, Move> moves_;
+  HeadLatency mouse_figures_, gamepad_;
+  std::vector<double> mouse_ms_, gamepad_ms_;
+};
 
 double Percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0.0;
@@ -52,6 +132,12 @@ struct Watch {
   }
 };
 
+HeadLatency HeadMotions::Figures(HeadLatency h, const std::vector<double>& ms) {
+  h.ms_p50 = Percentile(ms, 0.5);
+  h.ms_p95 = Percentile(ms, 0.95);
+  return h;
+}
+
 }  // namespace
 
 TwoCameraResult RunTwoCameraSchedule(const TwoCameraOptions& options) {
@@ -62,8 +148,9 @@ TwoCameraResult RunTwoCameraSchedule(const TwoCameraOptions& options) {
       throw std::runtime_error(options.vehicle_file.string() +
                                ": expected a second camera named surveillance");
     }
-    mediator::VehicleLink link(ScheduleLinkOptions(vehicle, options.domain,
-                                                   options.capacities_kbps.front(), vehicle.world));
+    const mediator::VehicleLinkOptions link_options = ScheduleLinkOptions(
+        vehicle, options.domain, options.capacities_kbps.front(), vehicle.world);
+    mediator::VehicleLink link(link_options);
     link::FaultLine* line = link.fault_line();
     if (line == nullptr) throw std::logic_error("the receiving side has no fault line");
     video::VideoReceiver surveillance(link.participant(), vehicle.name, link.session(), true,
@@ -77,7 +164,10 @@ TwoCameraResult RunTwoCameraSchedule(const TwoCameraOptions& options) {
             (c.driven() ? pilot_share : surv_share).store(c.target_kbps());
           }
         });
-    link::CameraCommandWriter aim_writer(link.participant(),
+    // The surveillance camera's holder is a station of its own: a participant
+    // that holds a camera may not drive, and the pilot's head commands do.
+    link::Participant station(link_options.link, "haptel-bench-station");
+    link::CameraCommandWriter aim_writer(station,
                                          link::CameraCommandTopic(vehicle.name, kSurveillance),
                                          link::CameraMessages::kCommandProfile);
     msg::CameraCommand command;
@@ -121,6 +211,7 @@ TwoCameraResult RunTwoCameraSchedule(const TwoCameraOptions& options) {
     constexpr double kTraceEvery_s = 0.5;
     int64_t next_trace = start_ns + SToNs(kTraceEvery_s);
     uint64_t traced_pilot = link.video().Stats().bytes, traced_surv = surveillance.Stats().bytes;
+    HeadMotions head(link);
     for (size_t p = 0; p < options.capacities_kbps.size(); ++p) {
       TwoCameraPhase phase;
       phase.capacity_kbps = options.capacities_kbps[p];
@@ -181,7 +272,9 @@ TwoCameraResult RunTwoCameraSchedule(const TwoCameraOptions& options) {
           next_command += static_cast<int64_t>(1e9 / kCommandRateHz);
           send();  // the same aim again: the holder's lease
         }
-        pilot_watch.Poll(link.video().Latest());
+        head.Tick(now);
+        if (const video::Frame pilot = link.video().Latest(); pilot_watch.Poll(pilot))
+          head.OnPicture(pilot);
         const video::Frame surv = surveillance.Latest();
         if (surv_watch.Poll(surv) && surv.command_seq > shown_up_to) {
           // The first picture since these commands: each aim change up to it is shown now.
@@ -230,6 +323,8 @@ TwoCameraResult RunTwoCameraSchedule(const TwoCameraOptions& options) {
               {capacity_series, pilot_series, surv_series, pilot_share_series, surv_share_series},
               {"two cameras, one link: rates and shares (shares cut at 1.5x the top)", "time, s",
                "kbit/s"});
+    result.head_mouse = head.Mouse();
+    result.head_gamepad = head.Gamepad();
     result.aim_latency_ms_p50 = Percentile(aim_latencies, 0.5);
     result.aim_latency_ms_p95 = Percentile(aim_latencies, 0.95);
     result.ok = std::all_of(result.phases.begin(), result.phases.end(), [](const auto& p) {

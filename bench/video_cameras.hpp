@@ -40,6 +40,17 @@ struct TwoCameraPhase {
   int aims_shown = 0;
 };
 
+/// The pilot's camera turned by a head source (view/head_source.hpp): from
+/// the head's motion (a mouse drag, the stick pushed) to the first decoded
+/// pilot picture whose command_seq is the first command carrying the new
+/// pan, ms.
+struct HeadLatency {
+  double ms_p50 = 0.0;
+  double ms_p95 = 0.0;
+  int moves = 0;  ///< head motions made
+  int shown = 0;  ///< of which a picture came
+};
+
 struct TwoCameraResult {
   std::vector<TwoCameraPhase> phases;
   /// Command to the first picture showing it, over the whole schedule, ms.
@@ -47,7 +58,11 @@ struct TwoCameraResult {
   double aim_latency_ms_p95 = 0.0;
   int aims = 0;        ///< aim changes sent
   int aims_shown = 0;  ///< of which a picture came
-  bool ok = false;     ///< both cameras sent pictures in every phase
+  /// Meanwhile the pilot's head moves every 0.5 s, by the mouse and the
+  /// game controller's stick in turn, through the same link.
+  HeadLatency head_mouse;
+  HeadLatency head_gamepad;
+  bool ok = false;  ///< both cameras sent pictures in every phase
   std::string error;
 };
 

@@ -12,6 +12,7 @@ HAPTEL_PACKAGES=(
   libopencv-dev libyaml-cpp-dev libsqlite3-dev sqlite3
   libtinyxml2-dev   # the MHaptic XML scene files (also a Fast DDS dependency)
   libsdl2-dev
+  libopenxr-dev libopenxr-loader1   # a head-mounted display's head pose (haptel run --head openxr)
   libavformat-dev libavcodec-dev libavutil-dev   # the --record MP4 (H.264 through libx264), each write checked
   openssl libssl-dev   # DDS Security: `haptel security init` and the certificates' check at start
   libcpp-httplib-dev   # the study's experimenter's console (a web page on 127.0.0.1)

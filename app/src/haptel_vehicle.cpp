@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <sstream>
 #include <string>
 #include <thread>
 
@@ -52,7 +53,9 @@ constexpr const char* kUsage =
     "                 lab, harsh; or a file; overrides the file's 'reality')\n"
     "  --reality-seed N  the reality's draws (default: the reality file's seed)\n"
     "  --truth FILE   write the truth record here: the drawn reality, then the true pose at\n"
-    "                 the control rate (for scoring; the state never says it)\n";
+    "                 the control rate (for scoring; the state never says it)\n"
+    "  --cameras LIST  which of the file's cameras stream, e.g. pilot or pilot,surveillance\n"
+    "                 (a study condition's camera set-up; the driven camera always)\n";
 }  // namespace
 
 namespace {
@@ -141,7 +144,7 @@ int main(int argc, char** argv) {
       const Args args(argc, argv,
                       {"config", "track", "name", "domain", "can", "serial-port", "link-fault",
                        "link-profile", "security", "dds-interfaces", "dds-peers",
-                       "discovery-server", "reality", "reality-seed", "truth"},
+                       "discovery-server", "reality", "reality-seed", "truth", "cameras"},
                       {});
       if (!args.positional().empty())
         throw UsageError("unexpected argument '" + args.positional()[0] + "'");
@@ -167,6 +170,13 @@ int main(int argc, char** argv) {
       if (!config.link.security.empty()) {
         config.link.security_identity = link::VehicleIdentity(config.name);
         link::CheckSecurity(config.link.security, config.link.security_identity);
+      }
+      if (auto list = args.Value("cameras")) {
+        std::vector<std::string> names;
+        std::stringstream words(*list);
+        for (std::string name; std::getline(words, name, ',');) names.push_back(name);
+        if (const std::string problem = KeepOnlyCameras(config, names); !problem.empty())
+          throw UsageError("option --cameras " + *list + ": " + problem);
       }
       if (auto world = args.Value("track")) config.world = *world;
       if (auto reality = args.Value("reality")) config.reality = RealityFile(*reality);

@@ -65,6 +65,17 @@ constexpr const char* kRunUsage =
     "  --third-person       beside the camera's picture, a chase camera's view of the robot on\n"
     "                       its track (a simulated robot only: its track is known here)\n"
     "  --record FILE.mp4    record the operator's view as H.264 MP4 (offscreen without a window)\n"
+    "  --head mouse|gamepad|openxr\n"
+    "                       what turns the blimp pilot's camera (overrides the run file's\n"
+    "                       head.source): mouse (the default: drag with the right button, Home\n"
+    "                       looks ahead), gamepad (the right stick turns it at a rate, clicking\n"
+    "                       the stick looks ahead) or openxr (a head-mounted display's pose; with\n"
+    "                       no OpenXR runtime the run says so and the mouse turns it)\n"
+    "  --stereo             side by side for a head-mounted display: the world from each eye\n"
+    "                       in its half of the view (the run file's view.stereo)\n"
+    "  --ipd-mm MM          the eyes' distance apart for --stereo (default 64; view.ipd_m)\n"
+    "  --cameras LIST       which of the vehicle's cameras stream (a camera set-up), e.g. pilot\n"
+    "                       or pilot,surveillance; the driven camera always (default: all)\n"
     "  --scene FILE         haptic scene for the hands (YAML, or the thesis's MHaptic .xml),\n"
     "                       moved by the configuration's scene_placement\n"
     "  --vehicle FILE       vehicle configuration the spawned vehicle runs (overrides 'vehicle'),\n"
@@ -427,6 +438,9 @@ std::string RunJson(const SessionSetup& setup, const RecordedRun& run) {
     << ",\"video_to_screen_ms_p99\":" << JsonNumber(r.video_to_screen_ms_p99)
     << ",\"distance_m\":" << JsonNumber(r.distance_m)
     << ",\"operator\":" << JsonString(r.operator_kind) << ",\"device\":" << JsonString(r.device)
+    << ",\"head_source\":" << JsonString(run.result.head_source)
+    << ",\"head_fallback\":" << JsonString(run.result.head_fallback)
+    << ",\"cameras\":" << JsonString(CameraNames(setup.vehicle))
     << ",\"disengaged_s\":" << JsonNumber(r.disengaged_s)
     << ",\"pseudo_haptic_gain_mean\":" << JsonNumber(r.pseudo_haptic_gain_mean)
     << ",\"ff_effects_played\":" << r.ff_effects_played

@@ -16,6 +16,21 @@ void OperatorConfig::ValidateOrThrow() const {
   if (min_forward > cruise) check::Fail("min_forward", "min_forward <= cruise", {"cruise"});
 }
 
+const char* ToString(HeadSourceKind kind) {
+  switch (kind) {
+    case HeadSourceKind::kGamepad:
+      return "gamepad";
+    case HeadSourceKind::kOpenXr:
+      return "openxr";
+    case HeadSourceKind::kMouse:
+      break;
+  }
+  return "mouse";
+}
+
+void HeadConfig::ValidateOrThrow() const { config_detail::CheckFields(*this); }
+void ViewConfig::ValidateOrThrow() const { config_detail::CheckFields(*this); }
+
 void RunConfig::ValidateOrThrow() const {
   config_detail::CheckFields(*this);
   if (interfaces.empty() || interfaces.size() > 6) {

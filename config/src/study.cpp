@@ -1,5 +1,7 @@
 #include "haptel/config/study.hpp"
 
+#include <algorithm>
+#include <optional>
 #include <set>
 
 #include "haptel/config/check.hpp"
@@ -164,6 +166,46 @@ void ReadConditionDevice(YamlMap& c, const std::filesystem::path& dir, const Run
   }
 }
 
+/// A condition's camera set-up (`cameras:`, `station:`) against the cameras
+/// of the run's vehicle file: names it has, each once, the driven one among
+/// them (the pilot flies by it); a station's camera one that streams and
+/// that a station can hold (not the driven one).
+void ReadConditionCameras(YamlMap& c, const VehicleConfig& vehicle, StudyCondition& condition) {
+  std::vector<std::string> names{vehicle.camera.name};
+  for (const CameraConfig& extra : vehicle.extra_cameras) names.push_back(extra.name);
+  std::string known;
+  for (const std::string& n : names) known += (known.empty() ? "" : ", ") + n;
+  const std::string of = " of vehicle '" + vehicle.file.string() + "' (" + known + ")";
+  const auto has = [&names](const std::string& n) {
+    return std::find(names.begin(), names.end(), n) != names.end();
+  };
+  condition.cameras = c.Strings("cameras", {});
+  if (c.Has("cameras")) {
+    std::set<std::string> seen;
+    for (const std::string& n : condition.cameras) {
+      if (!has(n)) c.Fail("cameras", "a list of cameras" + of + "; no camera '" + n + "'");
+      if (!seen.insert(n).second) c.Fail("cameras", "each camera once ('" + n + "' twice)");
+    }
+    if (seen.count(vehicle.camera.name) == 0) {
+      c.Fail("cameras", "the driven camera '" + vehicle.camera.name +
+                            "' among them (the pilot flies by its picture)");
+    }
+  }
+  condition.station = c.String("station", "");
+  if (!c.Has("station")) return;
+  if (!has(condition.station))
+    c.Fail("station", "a camera" + of + " a station holds; no camera '" + condition.station + "'");
+  if (condition.station == vehicle.camera.name) {
+    c.Fail("station", "a camera other than the driven one ('" + vehicle.camera.name +
+                          "' turns with the pilot's commands, not a station's)");
+  }
+  if (!condition.cameras.empty() && std::find(condition.cameras.begin(), condition.cameras.end(),
+                                              condition.station) == condition.cameras.end()) {
+    c.Fail("station", "a camera of this condition's 'cameras' (a station needs its picture); '" +
+                          condition.station + "' is not streamed");
+  }
+}
+
 /// The conditions: each names an interface file of the run configuration
 /// (`run_config`), one a simulated driver can use when `synthetic`, and the
 /// device it is driven with.
@@ -174,12 +216,17 @@ void ReadConditions(YamlMap& root, const std::filesystem::path& dir, const RunCo
     root.Fail("conditions", "a list of 2 to 10 conditions, each {name, interface, predict}");
   }
   std::set<std::string> condition_names;
+  std::optional<VehicleConfig> vehicle;  // read once, when a condition names cameras
   for (YamlMap& c : conditions) {
     StudyCondition condition;
     condition.interface = c.RequireString("interface");
     condition.name = c.String("name", condition.interface);
     condition.predict = c.Bool("predict", false);
     ReadConditionDevice(c, dir, run_config, condition);
+    if (c.Has("cameras") || c.Has("station")) {
+      if (!vehicle) vehicle = LoadVehicle(run_config.vehicle);
+      ReadConditionCameras(c, *vehicle, condition);
+    }
     if (!PlainName(condition.name)) c.Fail("name", kPlainName);
     if (!condition_names.insert(condition.name).second) {
       c.Fail("name", "a name no other condition has ('" + condition.name + "' is taken)");
@@ -279,6 +326,15 @@ void ReadQuestionnaires(YamlMap& root, bool synthetic, StudyConfig& s) {
 }
 
 }  // namespace
+
+std::string CameraSetupText(const StudyCondition& condition) {
+  std::string text;
+  for (const std::string& camera : condition.cameras)
+    text += (text.empty() ? "cameras " : " + ") + camera;
+  if (!condition.station.empty())
+    text += (text.empty() ? "" : ", ") + std::string("a station holds ") + condition.station;
+  return text;
+}
 
 StudyConfig LoadStudy(const std::filesystem::path& file) {
   YamlMap root = YamlMap::Load(file);

@@ -317,4 +317,38 @@ VehicleConfig LoadVehicle(const std::filesystem::path& file) {
   });
 }
 
+std::string CameraNames(const VehicleConfig& vehicle) {
+  std::string names = vehicle.camera.name;
+  for (const CameraConfig& c : vehicle.extra_cameras) names += "," + c.name;
+  return names;
+}
+
+std::string KeepOnlyCameras(VehicleConfig& vehicle, const std::vector<std::string>& names) {
+  std::vector<CameraConfig> kept;
+  bool driven = false;
+  for (size_t i = 0; i < names.size(); ++i) {
+    if (std::find(names.begin(), names.begin() + static_cast<std::ptrdiff_t>(i), names[i]) !=
+        names.begin() + static_cast<std::ptrdiff_t>(i))
+      return "camera '" + names[i] + "' named twice";
+    if (names[i] == vehicle.camera.name) {
+      driven = true;
+      continue;
+    }
+    const auto found = std::find_if(vehicle.extra_cameras.begin(), vehicle.extra_cameras.end(),
+                                    [&](const CameraConfig& c) { return c.name == names[i]; });
+    if (found == vehicle.extra_cameras.end()) {
+      return "vehicle '" + vehicle.file.string() + "' has no camera '" + names[i] +
+             "'; expected some of " + CameraNames(vehicle);
+    }
+    kept.push_back(*found);
+  }
+  if (!driven) {
+    return "the driven camera '" + vehicle.camera.name +
+           "' must stream (the pilot flies by its picture); expected it among " +
+           CameraNames(vehicle);
+  }
+  vehicle.extra_cameras = std::move(kept);
+  return "";
+}
+
 }  // namespace haptel

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -45,8 +46,9 @@ Args ParseRunArgs(int argc, const char* const* argv) {
                "device",       "trace-in", "time-limit",      "lap-limit", "view",
                "record",       "vehicle",  "predict",         "localise",  "link-fault",
                "link-profile", "security", "dds-interfaces",  "dds-peers", "discovery-server",
-               "fleet",        "reality",  "reality-seed",    "truth",     "session"},
-              {"json", "quiet", "attach", "third-person", "simulated-time", "insecure"});
+               "fleet",        "reality",  "reality-seed",    "truth",     "session",
+               "head",         "ipd-mm",   "cameras"},
+              {"json", "quiet", "attach", "third-person", "simulated-time", "insecure", "stereo"});
 }
 
 namespace {
@@ -301,6 +303,14 @@ void ReadVehicle(const Args& args, SessionSetup& setup) {
     setup.vehicle.name = *name;
   }
   ReadReality(args, setup);
+  // A camera set-up (a study condition's): which of the vehicle's cameras stream.
+  if (auto list = args.Value("cameras")) {
+    std::vector<std::string> names;
+    std::stringstream words(*list);
+    for (std::string name; std::getline(words, name, ',');) names.push_back(name);
+    if (const std::string problem = KeepOnlyCameras(setup.vehicle, names); !problem.empty())
+      throw UsageError("option --cameras " + *list + ": " + problem);
+  }
 }
 
 /// The device a person holds a hand interface with when the run names a
@@ -436,6 +446,51 @@ void ReadInterfaces(const Args& args, const Operation& op, SessionSetup& setup) 
   }
 }
 
+/// The head that turns the pan/tilt camera (--head, else the run file's
+/// `head.source`) and the view's stereo (--stereo and --ipd-mm, else its
+/// `view:`). A head other than the mouse needs a person, a camera it turns
+/// (the blimp's pilot camera) and a stick nothing else flies with.
+void ReadHeadAndView(const Args& args, const Operation& op, SessionSetup& setup) {
+  if (auto head = args.Value("head")) {
+    if (*head == "mouse") {
+      setup.run.head.source = HeadSourceKind::kMouse;
+    } else if (*head == "gamepad") {
+      setup.run.head.source = HeadSourceKind::kGamepad;
+    } else if (*head == "openxr") {
+      setup.run.head.source = HeadSourceKind::kOpenXr;
+    } else {
+      throw UsageError("option --head: expected mouse, gamepad or openxr, got '" + *head + "'");
+    }
+  }
+  if (args.Flag("stereo")) setup.run.view.stereo = true;
+  if (auto mm = args.Number("ipd-mm", 40.0, 90.0)) setup.run.view.ipd_m = *mm / 1000.0;
+  if (setup.run.view.stereo && setup.view == ViewKind::kNone) {
+    throw UsageError(
+        "option --stereo: it is a way of drawing the operator's view, and there is none (--view "
+        "none); use --view window, or --record FILE.mp4");
+  }
+  const HeadSourceKind head = setup.run.head.source;
+  if (head == HeadSourceKind::kMouse) return;
+  const std::string asked = args.Value("head")
+                                ? std::string("option --head ") + ToString(head)
+                                : setup.run.file.string() + ": key 'head.source' " + ToString(head);
+  if (setup.vehicle.family() != VehicleFamily::kBlimp) {
+    throw UsageError(asked + ": the vehicle '" + setup.run.vehicle.string() +
+                     "' has no camera the head turns (the blimp's pilot camera pans and tilts "
+                     "with it); expected --head mouse");
+  }
+  if (!op.person) {
+    throw UsageError(asked + ": the automatic pilot aims the camera itself; use --operator person");
+  }
+  const interfaces::InterfaceSpec& first =
+      setup.interfaces[static_cast<size_t>(setup.start_interface)];
+  if (head == HeadSourceKind::kGamepad && first.is_gamepad()) {
+    throw UsageError(asked + ": interface '" + first.name +
+                     "' flies with the controller's right stick; use --head mouse or openxr, or "
+                     "--interface blimp-keys");
+  }
+}
+
 /// What the run builds besides: the scene and the physics world (the
 /// robot's), the device's calibration and gravity grid, the vehicle's program.
 void ReadWorld(const Args& args, SessionSetup& setup) {
@@ -465,6 +520,7 @@ SessionSetup RunSetupFromArgs(const Args& args) {
   ReadDevice(args, op, setup);
   ReadVehicle(args, setup);
   ReadInterfaces(args, op, setup);
+  ReadHeadAndView(args, op, setup);
   ReadWorld(args, setup);
   if (!setup.session_file.file.empty()) DescribeSessionFile(setup);
   return setup;

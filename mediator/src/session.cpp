@@ -23,7 +23,9 @@
 #include "haptel/core/clock.hpp"
 #include "haptel/core/log.hpp"
 #include "haptel/mediator/fleet.hpp"
+#include "haptel/mediator/notice_log.hpp"
 #include "haptel/mediator/run_counters.hpp"
+#include "haptel/view/head_source.hpp"
 #include "haptel/view/sdl_input.hpp"
 #include "haptel/view/view_record.hpp"
 #include "simulated_time.hpp"
@@ -78,6 +80,9 @@ int ExitCode(Outcome outcome) {
 }
 
 namespace {
+
+/// How long the view says that the run's head is not the one it asked for.
+constexpr double kHeadFallbackShown_s = 10.0;
 
 /// A simulated-time run's loops, counted on its clock (no thread measured
 /// them: each kept its rate exactly), and its speed-up over real time.
@@ -145,6 +150,9 @@ class SessionLoop {
   void Link(VehicleRun& vehicle);
   void SayLinked(const VehicleRun& vehicle) const;
   void OpenView();
+  /// The head source the run's `head:` names (the mouse when it cannot have
+  /// it, said on screen and in the log).
+  void MakeHead();
   /// The session file's view channel: the view's set-up now, and through
   /// `options`' tap every frame it draws at the MP4's rate
   /// (view/view_record.hpp), so that haptel replay draws them again.
@@ -197,6 +205,16 @@ class SessionLoop {
   std::unique_ptr<view::ViewFrameEncoder> view_tap_;
   std::unique_ptr<SessionView> view_;
   std::unique_ptr<view::InputPump> pump_;
+  /// Where the person's head looks (the pan/tilt camera follows it): the
+  /// InputState's head_pan/head_tilt each tick are this source's.
+  std::unique_ptr<view::HeadSource> head_;
+  NoticeLog head_notice_;
+  /// Said on screen for the first seconds: the source the run asked for is
+  /// not the one it got (view::MadeHeadSource::fallback).
+  std::string head_fallback_;
+  /// The head's pose, applied to what the person does (the pan/tilt
+  /// camera's source), and what it says logged once it settles.
+  void TurnHead(interfaces::InputState& person, double t_s);
   Engagement engagement_;  ///< the person's, with whichever vehicle they drive
   /// What the progress log said of it last (as if engaged before the start:
   /// a run that starts without a hand says so).
@@ -290,9 +308,12 @@ bool SessionLoop::SetUp() {
   }
   for (auto& v : vehicles_) Link(*v);
   OpenView();
+  MakeHead();
   // A person's controller without a view: a thread of its own polls it.
-  if (!view_ && std::any_of(vehicles_.begin(), vehicles_.end(),
-                            [](const auto& v) { return v->family->UsesGamepad(); })) {
+  const bool gamepad_head = head_->kind() == HeadSourceKind::kGamepad;
+  if (!view_ && (gamepad_head || std::any_of(vehicles_.begin(), vehicles_.end(), [](const auto& v) {
+                   return v->family->UsesGamepad();
+                 }))) {
     pump_ = std::make_unique<view::InputPump>(input_);
   }
   if (turns_) turns_->Begin(view_.get(), input_.Load().vehicle_requests);
@@ -436,8 +457,9 @@ std::optional<LoopEnd> SessionLoop::Loop() {
     const double dt = t - last_t_;
     last_t_ = t;
     if (auto end = CheckOperatorSide(interrupted_, *haptic_, first_.device.name)) return end;
-    const interfaces::InputState person = input_.Load();
+    interfaces::InputState person = input_.Load();
     if (person.quit) return LoopEnd{Outcome::kAborted, "the view was closed"};
+    TurnHead(person, t);
     if (auto end = WatchVehicles(now, t)) return end;
     if (turns_ && !turns_->Turn(person, now, t)) return std::nullopt;  // every course is over
     if (auto end = CommandVehicles(person, now, t, dt)) return end;
@@ -446,6 +468,24 @@ std::optional<LoopEnd> SessionLoop::Loop() {
     if (auto end = CheckLimits(t)) return end;
     LogProgress(now, t);
   }
+}
+
+void SessionLoop::MakeHead() {
+  view::MadeHeadSource made = view::MakeHeadSource(first_.run.head, input_.Load());
+  head_ = std::move(made.source);
+  head_fallback_ = std::move(made.fallback);
+  if (!head_fallback_.empty()) log::Warn(head_fallback_);
+  for (auto& v : vehicles_) {
+    v->out.result.head_source = ToString(head_->kind());
+    v->out.result.head_fallback = head_fallback_;
+  }
+}
+
+void SessionLoop::TurnHead(interfaces::InputState& person, double t) {
+  const view::HeadPose pose = head_->Update(t, person);
+  person.head_pan = pose.pan;
+  person.head_tilt = pose.tilt;
+  if (const char* notice = head_notice_.Update(t, head_->Notice())) log::Warn(notice);
 }
 
 void SessionLoop::Pace() {
@@ -533,6 +573,13 @@ void SessionLoop::FeedView(int64_t now, double t) {
           !v.family->SwitchingInterface()) {
         std::snprintf(v.overlay.message, sizeof v.overlay.message, "%s", engagement_.Line());
       }
+      // The head's trouble (a tracker lost) over the rest; the source the
+      // run did not get, for its first seconds.
+      const char* head = head_->Notice();
+      if (head == nullptr && !head_fallback_.empty() && t < kHeadFallbackShown_s)
+        head = head_fallback_.c_str();
+      if (static_cast<int>(i) == shown && head != nullptr)
+        std::snprintf(v.overlay.message, sizeof v.overlay.message, "%s", head);
     }
     if (view_ && shown >= 0) {
       VehicleRun& v = *vehicles_[static_cast<size_t>(shown)];

@@ -97,6 +97,7 @@ view::ViewOptions ViewOptionsFor(const SessionSetup& setup) {
   options.record = setup.record;
   options.title = setup.title.empty() ? "Haptel - " + setup.run.name : setup.title;
   if (setup.direct_view) options.screen = view::DirectViewScreen();
+  options.stereo = {setup.run.view.stereo, setup.run.view.ipd_m};
   return options;
 }
 

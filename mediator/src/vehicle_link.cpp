@@ -225,10 +225,11 @@ VehicleLink::VehicleLink(const VehicleLinkOptions& options)
     return;
   }
   if (!options_.program.empty()) {
-    std::vector<std::string> arguments{"--config", options_.vehicle.file.string(),
-                                       "--track",  options_.track_file.string(),
-                                       "--name",   options_.vehicle.name,
-                                       "--domain", std::to_string(options_.link.domain_id)};
+    std::vector<std::string> arguments{
+        "--config", options_.vehicle.file.string(), "--track", options_.track_file.string(),
+        "--name", options_.vehicle.name, "--domain", std::to_string(options_.link.domain_id),
+        // Which of its cameras stream (a camera set-up may leave some out).
+        "--cameras", CameraNames(options_.vehicle)};
     // The run's link faults on both ends: each delays and drops what it receives.
     if (options_.link.fault.enabled)
       arguments.insert(arguments.end(), {"--link-fault", LinkFaultText(options_.link.fault)});

@@ -5,8 +5,11 @@
 #include <map>
 #include <set>
 
+#include "haptel/config/blimp_course.hpp"
 #include "haptel/config/link.hpp"
+#include "haptel/config/run.hpp"
 #include "haptel/config/track.hpp"
+#include "haptel/config/vehicle.hpp"
 #include "haptel/core/args.hpp"
 
 namespace haptel::study {
@@ -69,6 +72,16 @@ void AddTrack(const fs::path& file, std::vector<DefiningValue>& out) {
                    "centre " + Point(track.obstacles[i].center) + " m, radius " +
                        Number(track.obstacles[i].radius) + " m"});
   }
+}
+
+/// A blimp's course as its trials fly and score it.
+void AddCourse(const fs::path& file, std::vector<DefiningValue>& out) {
+  const BlimpCourseConfig course = LoadBlimpCourse(file);
+  out.push_back({"track.name", course.name});
+  out.push_back({"track.lap_cap_s", Number(course.lap_cap_s)});
+  out.push_back({"track.gates", std::to_string(course.gates.size())});
+  out.push_back({"track.buildings", std::to_string(course.buildings.size())});
+  out.push_back({"track.crash_speed_m_s", Number(course.crash_speed)});
 }
 
 void AddProfile(const std::string& name, const DriverProfile& p, std::vector<DefiningValue>& out) {
@@ -137,7 +150,11 @@ std::vector<DefiningValue> StudyDefinition(const StudyConfig& config) {
   out.push_back({"operators", config.operators});
   out.push_back({"run", FromStudyFolder(config, config.run)});
   out.push_back({"track", FromStudyFolder(config, config.track)});
-  if (!config.track.empty()) AddTrack(config.track, out);
+  if (!config.track.empty()) {
+    // A blimp study flies a course (the run file's vehicle says which).
+    const bool blimp = LoadVehicle(LoadRun(config.run).vehicle).family() == VehicleFamily::kBlimp;
+    (blimp ? AddCourse : AddTrack)(config.track, out);
+  }
 
   std::vector<std::string> conditions;
   for (const StudyCondition& c : config.conditions) conditions.push_back(c.name);
@@ -149,6 +166,9 @@ std::vector<DefiningValue> StudyDefinition(const StudyConfig& config) {
     // Form 2: the device a person holds changes what the trial is. By path,
     // as the run file is (its contents are not compared).
     out.push_back({"conditions." + c.name + ".device", FromStudyFolder(config, c.device)});
+    // Its camera set-up, written only when set (as predict).
+    if (!c.cameras.empty()) out.push_back({"conditions." + c.name + ".cameras", Joined(c.cameras)});
+    if (!c.station.empty()) out.push_back({"conditions." + c.name + ".station", c.station});
   }
 
   out.push_back({"design.order", ToString(config.order)});

@@ -29,6 +29,7 @@
 #include "haptel/haptics/device_drivers.hpp"
 #include "haptel/mediator/run_setup.hpp"
 #include "haptel/mediator/third_person_view.hpp"
+#include "haptel/study/camera_setup.hpp"
 #include "haptel/study/console.hpp"
 #include "haptel/study/plan.hpp"
 #include "haptel/study/store.hpp"
@@ -99,6 +100,12 @@ mediator::SessionSetup TrialSetup(const StudyConfig& config, const PlannedTrial&
   if (simulated_time) words.push_back("--simulated-time");
   if (!domain.empty()) words.insert(words.end(), {"--domain", domain});
   if (condition.predict) words.insert(words.end(), {"--predict", "on"});
+  // Its camera set-up: which of the vehicle's cameras stream.
+  if (!condition.cameras.empty()) {
+    std::string list;
+    for (const std::string& c : condition.cameras) list += (list.empty() ? "" : ",") + c;
+    words.insert(words.end(), {"--cameras", list});
+  }
   if (!config.link_profile.empty())
     words.insert(words.end(), {"--link-profile", config.link_profile});
   if (!config.link_fault.empty()) words.insert(words.end(), {"--link-fault", config.link_fault});
@@ -118,7 +125,9 @@ mediator::SessionSetup TrialSetup(const StudyConfig& config, const PlannedTrial&
                                          {"condition", trial.condition},
                                          {"position", std::to_string(trial.position)},
                                          {"repetition", std::to_string(trial.repetition)},
-                                         {"device", condition.device.string()}};
+                                         {"device", condition.device.string()},
+                                         {"cameras", CameraNames(setup.vehicle)},
+                                         {"station", condition.station}};
   }
   if (synthetic) {
     const StudyParticipant* p = ParticipantNamed(config, trial.participant);
@@ -497,9 +506,27 @@ StudyRun::Then StudyRun::PrepareForPerson(const PlannedTrial& trial) {
       !store_->Practised(trial.participant)) {
     return RunPracticeLap(trial);
   }
-  if (!console_->WaitForStart("participant " + trial.participant + ", " + trial.condition +
-                                  " (position " + std::to_string(trial.position) + ")",
-                              interrupted_, DeviceOf(ConditionNamed(config_, trial.condition)))) {
+  const StudyCondition& condition = ConditionNamed(config_, trial.condition);
+  TrialDevice device = DeviceOf(condition);
+  // A condition with a station: not started until a second person is at it.
+  std::unique_ptr<StationWatch> station;
+  if (!condition.station.empty()) {
+    // The trial's link and vehicle name, as its run file says and --domain overrides.
+    const RunConfig run = LoadRun(config_.run);
+    LinkConfig link = run.link;
+    if (!options_.domain.empty()) link.domain_id = std::stoi(options_.domain);
+    station = std::make_unique<StationWatch>(link, LoadVehicle(run.vehicle).name, condition.station,
+                                             condition.name);
+    device.unavailable = [station = station.get(), own = device.unavailable] {
+      const std::string missing = own ? own() : std::string();
+      return missing.empty() ? station->Missing() : missing;
+    };
+  }
+  if (!console_->WaitForStart(
+          WithCameraSetup("participant " + trial.participant + ", " + trial.condition +
+                              " (position " + std::to_string(trial.position) + ")",
+                          condition),
+          interrupted_, device)) {
     return Then::kOffer;  // interrupted: the loop's first check ends the study
   }
   return Then::kRunTrial;

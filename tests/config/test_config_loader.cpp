@@ -272,6 +272,36 @@ TEST_CASE("Run config: scene_placement (identity when shipped, a position and ro
   CHECK_THAT(msg, Contains("'scene_placement.rpy'") && Contains(LineTag(3)));
 }
 
+TEST_CASE("Run config: the head that turns the camera and the view's stereo (head:, view:)",
+          "[config]") {
+  const haptel::RunConfig shipped = haptel::LoadRun("config/haptel.yaml");
+  CHECK(shipped.head.source == haptel::HeadSourceKind::kMouse);
+  CHECK(shipped.head.stick_rate_rad_s == 1.5);
+  CHECK_FALSE(shipped.view.stereo);
+  CHECK(shipped.view.ipd_m == 0.064);
+
+  TempDir tmp;
+  const haptel::RunConfig r = haptel::LoadRun(
+      tmp.Write("head.yaml",
+                "track: t.yaml\nvehicle: v.yaml\nhead: {source: gamepad, stick_dead_zone: 0.2}\n"
+                "view: {stereo: true, ipd_m: 0.07}\n"));
+  CHECK(r.head.source == haptel::HeadSourceKind::kGamepad);
+  CHECK(r.head.stick_dead_zone == 0.2);
+  CHECK(r.view.stereo);
+  CHECK(r.view.ipd_m == 0.07);
+  const std::string bad_source = ErrorOf([&] {
+    haptel::LoadRun(
+        tmp.Write("bad-head.yaml", "track: t.yaml\nvehicle: v.yaml\nhead: {source: kinect}\n"));
+  });
+  CHECK_THAT(bad_source, Contains("bad-head.yaml") && Contains("'head.source'") &&
+                             Contains("mouse") && Contains("openxr"));
+  const std::string bad_ipd = ErrorOf([&] {
+    haptel::LoadRun(
+        tmp.Write("bad-ipd.yaml", "track: t.yaml\nvehicle: v.yaml\nview: {ipd_m: 64}\n"));
+  });
+  CHECK_THAT(bad_ipd, Contains("bad-ipd.yaml") && Contains("'view.ipd_m'"));
+}
+
 TEST_CASE("Shipped tracks load with the values their files give", "[config][shipped]") {
   const std::string name = GENERATE(as<std::string>{}, "grand-prix", "test-short");
   const fs::path file = "config/tracks/" + name + ".yaml";

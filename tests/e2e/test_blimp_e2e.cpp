@@ -340,3 +340,62 @@ TEST_CASE(
   CHECK(PulsesAre(wire, neutral));
   CHECK(vehicle.Terminate(5.0) == "exited with code 0");
 }
+
+TEST_CASE(
+    "the pilot's head: --head openxr with no OpenXR runtime says so and the mouse turns the "
+    "camera, the JSON names the head; a head the run cannot have is refused") {
+  const auto dir = test::ScratchDir("e2e-blimp-head");
+  // No runtime, whatever this machine has: a runtime file that is not there.
+  setenv("XR_RUNTIME_JSON", "/nonexistent/haptel-test-openxr-runtime.json", 1);
+  // A person at a game controller (none plugged in): the run waits for it until its time limit.
+  Child haptel({Bin("haptel"),
+                "run",
+                "--config",
+                "config/blimp.yaml",
+                "--track",
+                "config/tracks/blimp-hop.yaml",
+                "--interface",
+                "blimp-gamepad",
+                "--operator",
+                "person",
+                "--view",
+                "none",
+                "--head",
+                "openxr",
+                "--time-limit",
+                "1",
+                "--json",
+                "--domain",
+                std::to_string(test::UniqueDomain(79)),
+                "--database",
+                (dir / "runs.db").string(),
+                "--reality",
+                "none"});
+  // Refused before anything starts: the stick that flies cannot also look, and a robot's
+  // camera does not turn.
+  Child both({Bin("haptel"), "run", "--config", "config/blimp.yaml", "--interface", "blimp-gamepad",
+              "--operator", "person", "--view", "none", "--head", "gamepad", "--database",
+              (dir / "refused.db").string()});
+  Child robot({Bin("haptel"), "run", "--operator", "auto", "--view", "none", "--head", "gamepad",
+               "--database", (dir / "refused.db").string()});
+  const int code = haptel.Wait(120.0);
+  unsetenv("XR_RUNTIME_JSON");
+  INFO("stdout:\n" << haptel.out() << "\nstderr:\n" << haptel.err());
+  CHECK(code == 1);  // the time limit
+  const std::string line =
+      "no OpenXR runtime (XR_ERROR_RUNTIME_UNAVAILABLE): head follows the mouse";
+  CHECK(haptel.err().find(line) != std::string::npos);
+  const std::string json = haptel.LastLine();
+  REQUIRE(json.front() == '{');
+  CHECK(JsonField(json, "outcome") == "time limit");
+  CHECK(JsonField(json, "head_source") == "mouse");
+  CHECK(JsonField(json, "head_fallback") == line);
+
+  CHECK(both.Wait(60.0) != 0);
+  INFO(both.err());
+  CHECK(both.err().find("option --head gamepad: interface 'blimp-gamepad' flies with the "
+                        "controller's right stick") != std::string::npos);
+  CHECK(robot.Wait(60.0) != 0);
+  INFO(robot.err());
+  CHECK(robot.err().find("has no camera the head turns") != std::string::npos);
+}

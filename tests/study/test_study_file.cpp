@@ -10,6 +10,10 @@
 
 #include "haptel/config/error.hpp"
 #include "haptel/config/study.hpp"
+#include "haptel/link/families.hpp"
+#include "haptel/link/participant.hpp"
+#include "haptel/link/topic.hpp"
+#include "haptel/study/camera_setup.hpp"
 #include "haptel/study/definition.hpp"
 #include "haptel/study/design.hpp"
 #include "haptel/study/plan.hpp"
@@ -254,4 +258,93 @@ TEST_CASE(
                                    "  - {name: b, interface: gesture}\n")),
                Catch::Contains("conditions[0].device") && Catch::Contains("non-empty"));
   }
+}
+
+namespace {
+
+/// A person study of the blimp with both cameras, its conditions `conditions`.
+std::string BlimpStudy(const std::string& conditions) {
+  const auto source = std::filesystem::current_path();
+  return "name: s\nrun: " + (source / "config/blimp-surveillance.yaml").string() +
+         "\ntrack: " + (source / "config/tracks/blimp-hop.yaml").string() +
+         "\noperators: person\npractice: false\nconditions:\n" + conditions;
+}
+
+}  // namespace
+
+TEST_CASE(
+    "A condition names its camera set-up: the shipped study's three, and each bad key refused "
+    "naming the file, the key and what was expected",
+    "[cameras]") {
+  const StudyConfig s = LoadStudy("config/studies/blimp-camera-setups.yaml");
+  REQUIRE(s.conditions.size() == 3);
+  CHECK(s.conditions[0].cameras == std::vector<std::string>{"pilot"});
+  CHECK(s.conditions[0].station.empty());
+  CHECK(s.conditions[1].cameras == std::vector<std::string>{"pilot", "surveillance"});
+  CHECK(s.conditions[2].station == "surveillance");
+  CHECK(CameraSetupText(s.conditions[0]) == "cameras pilot");
+  CHECK(CameraSetupText(s.conditions[2]) ==
+        "cameras pilot + surveillance, a station holds surveillance");
+  // The console's trial card says it before the trial starts.
+  CHECK(WithCameraSetup("participant A, with-station (position 1)", s.conditions[2]) ==
+        "participant A, with-station (position 1); cameras pilot + surveillance, a station holds "
+        "surveillance");
+  // The database's record of the study holds each condition's set-up.
+  const std::string definition = DefinitionText(StudyDefinition(s));
+  CHECK_THAT(definition, Catch::Contains("conditions.one-camera.cameras: pilot\n") &&
+                             Catch::Contains("conditions.with-station.station: surveillance\n"));
+  StudyCondition plain;
+  CHECK(WithCameraSetup("participant A, x (position 1)", plain) == "participant A, x (position 1)");
+
+  const std::string keys = "  - {name: a, interface: blimp-keys}\n";
+  SECTION("a camera the vehicle does not have") {
+    const std::string e = ErrorOf(
+        BlimpStudy(keys + "  - {name: b, interface: blimp-keys, cameras: [pilot, rear]}\n"));
+    CHECK_THAT(e, Catch::Contains("bad.yaml") && Catch::Contains("conditions[1].cameras") &&
+                      Catch::Contains("no camera 'rear'") &&
+                      Catch::Contains("(pilot, surveillance)"));
+  }
+  SECTION("the driven camera left out") {
+    const std::string e = ErrorOf(
+        BlimpStudy(keys + "  - {name: b, interface: blimp-keys, cameras: [surveillance]}\n"));
+    CHECK_THAT(e, Catch::Contains("conditions[1].cameras") &&
+                      Catch::Contains("the driven camera 'pilot' among them"));
+  }
+  SECTION("a station on the driven camera") {
+    const std::string e =
+        ErrorOf(BlimpStudy(keys + "  - {name: b, interface: blimp-keys, station: pilot}\n"));
+    CHECK_THAT(e, Catch::Contains("conditions[1].station") &&
+                      Catch::Contains("a camera other than the driven one"));
+  }
+  SECTION("a station on a camera the condition does not stream") {
+    const std::string e = ErrorOf(BlimpStudy(
+        keys + "  - {name: b, interface: blimp-keys, cameras: [pilot], station: surveillance}\n"));
+    CHECK_THAT(e, Catch::Contains("conditions[1].station") &&
+                      Catch::Contains("'surveillance' is not streamed"));
+  }
+}
+
+TEST_CASE(
+    "A station condition's trial is refused until a station is at the camera, with a line naming "
+    "the command that starts one",
+    "[cameras]") {
+  LinkConfig link;
+  link.domain_id = test::UniqueDomain(41);
+  StationWatch watch(link, "blimp1", "surveillance", "with-station");
+  const std::string refused = watch.Missing();
+  CHECK(refused == StationMissingLine("with-station", "surveillance", "blimp1", link.domain_id));
+  CHECK_THAT(refused,
+             Catch::Contains("condition 'with-station'") &&
+                 Catch::Contains("haptel station --vehicle blimp1 --camera surveillance") &&
+                 Catch::Contains("--domain " + std::to_string(link.domain_id)));
+  // A station starts (its command writer, as `haptel station` makes it while it waits for the
+  // vehicle): the trial may start.
+  {
+    link::Participant station(link, "test-station");
+    link::CameraCommandWriter writer(station, link::CameraCommandTopic("blimp1", "surveillance"),
+                                     link::CameraMessages::kCommandProfile);
+    REQUIRE(test::WaitFor([&] { return watch.Missing().empty(); }, 20.0));
+  }
+  // It went away: refused again.
+  REQUIRE(test::WaitFor([&] { return !watch.Missing().empty(); }, 20.0));
 }

@@ -2,6 +2,7 @@
 // the video on the screen quad, shapes, the overlay's contact border and
 // flashing indicators, the MP4 the View records, and its set-up errors.
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <opencv2/imgproc.hpp>
@@ -593,4 +594,74 @@ TEST_CASE("a fleet's line is drawn bottom left in the tiles' yellow, with the ti
   no_tiles.tiles.count = 0;
   CHECK(yellow_in_bottom_left(no_tiles) == 0);
   CHECK(yellow_in_bottom_left(model) > 30);  // drawn again when it comes back
+}
+
+TEST_CASE(
+    "side-by-side stereo: a near ball lands apart in the two halves by the eyes' parallax, a far "
+    "one alike") {
+  OffscreenGl gl;
+  StereoOptions stereo;
+  stereo.on = true;  // 64 mm apart
+  Renderer renderer(kWidth, kHeight, {}, stereo);
+  REQUIRE(renderer.eye_width() == kWidth / 2);
+  ViewModel model;
+  model.gaze.tracked = true;  // the head looks level, straight ahead (+x)
+  const std::array<double, 3> eye{-0.45, 0.0, 0.30};
+  const double near_m = 0.5;
+  const double far_m = 18.0;
+  Shape near_ball;
+  near_ball.kind = ShapeKind::kSphere;
+  near_ball.position = {eye[0] + near_m, 0.0, eye[2]};
+  near_ball.size = {0.03, 0, 0};
+  near_ball.color = {1.0f, 0.0f, 0.0f, 1.0f};
+  // Far ahead and up, clear of the video screen's frame.
+  Shape far_ball = near_ball;
+  far_ball.position = {eye[0] + far_m, 0.0, eye[2] + far_m * std::tan(0.35)};
+  far_ball.size = {0.6, 0, 0};
+  far_ball.color = {0.0f, 0.0f, 1.0f, 1.0f};
+  model.shapes = {near_ball, far_ball};
+  renderer.Draw(model, 0.0);
+  cv::Mat image;
+  renderer.ReadPixels(image);
+  const int half = renderer.eye_width();
+  // Where a colour class sits in one half: its centroid's column in that half's pixels.
+  const auto column = [&](int which, bool (*is)(cv::Vec3b)) {
+    double sum = 0.0;
+    int n = 0;
+    for (int y = 0; y < image.rows; ++y) {
+      for (int x = 0; x < half; ++x) {
+        if (is(image.at<cv::Vec3b>(y, which * half + x))) {
+          sum += x;
+          ++n;
+        }
+      }
+    }
+    REQUIRE(n > 30);
+    return sum / n;
+  };
+  // The left eye sees a point straight ahead of the head to its right, the
+  // right eye to its left: f·ipd/d apart.
+  // Shaded balls: the colour that dominates.
+  bool (*reddish)(cv::Vec3b) = [](cv::Vec3b c) {
+    return c[2] > 60 && c[2] > 2 * std::max(c[0], c[1]);
+  };
+  bool (*bluish)(cv::Vec3b) = [](cv::Vec3b c) {
+    return c[0] > 60 && c[0] > 2 * std::max(c[1], c[2]);
+  };
+  const double near_left = column(0, reddish), near_right = column(1, reddish);
+  const double far_left = column(0, bluish), far_right = column(1, bluish);
+  const double f = renderer.focal_px();
+  CHECK(near_left - near_right == Approx(f * stereo.ipd_m / near_m).margin(1.5));
+  CHECK(near_left - near_right > 30.0);
+  CHECK(std::abs(far_left - far_right) < 2.0);
+  CHECK(far_left - far_right == Approx(f * stereo.ipd_m / far_m).margin(1.0));
+  // Each half is a whole view: the near ball about the middle of each.
+  CHECK(std::abs((near_left + near_right) / 2.0 - half / 2.0) < 2.0);
+
+  // A wider interpupillary distance, a wider parallax.
+  stereo.ipd_m = 0.072;
+  Renderer wide(kWidth, kHeight, {}, stereo);
+  wide.Draw(model, 0.0);
+  wide.ReadPixels(image);
+  CHECK(column(0, reddish) - column(1, reddish) == Approx(f * 0.072 / near_m).margin(1.5));
 }

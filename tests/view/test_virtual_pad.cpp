@@ -15,6 +15,7 @@
 #include "haptel/models/sim_blimp.hpp"
 #include "haptel/models/tread_drive.hpp"
 #include "haptel/vehicles/sim_robot.hpp"
+#include "haptel/view/head_source.hpp"
 #include "haptel/view/sdl_input.hpp"
 #include "test_env.hpp"
 
@@ -265,4 +266,124 @@ TEST_CASE(
   REQUIRE(WaitFor([&] { return box.Load().vehicle_requests == before + 2; }, 10.0));
   // The fleet turns from the driven vehicle to the next whose course is not over.
   CHECK(mediator::RequestedVehicle(box.Load().vehicle_request, 0, {false, true, false}) == 2);
+}
+
+TEST_CASE(
+    "the head by a game controller: the right stick turns the blimp's camera at a rate, a release "
+    "holds it, a click recentres it, an unplugged controller holds it still and says so",
+    "[view_input][virtual_pad][head]") {
+  InputBox box;
+  InputPump pump(box);
+  VirtualPad stick(pump);
+  REQUIRE(stick.attached());
+  REQUIRE(WaitFor([&] { return box.Load().pad_connected; }, 10.0));
+
+  HeadConfig config;  // 1.5 rad/s at full deflection
+  view::GamepadHead head(config, box.Load());
+  BlimpManualConfig keys;
+  keys.name = "blimp-keys";
+  BlimpManualInterface pilot(keys, box.Load());
+  haptics::Hal hal;
+  double t = 0.0;
+  view::HeadPose pose;
+  // The session's tick at 100 Hz: the head's pose into the person's input,
+  // which the interface turns the camera by.
+  BlimpCommand command;
+  const auto run = [&](double seconds) {
+    for (int i = 0; i < static_cast<int>(std::lround(seconds * 100)); ++i, t += 0.01) {
+      InputState person = box.Load();
+      pose = head.Update(t, person);
+      person.head_pan = pose.pan;
+      person.head_tilt = pose.tilt;
+      command = pilot.Update(t, person, hal);
+    }
+  };
+  run(0.2);
+  CHECK(pose.pan == 0.0);
+  CHECK(head.Notice() == nullptr);
+
+  // Full right for half a second: the head turns right (pan negative) at 1.5 rad/s.
+  stick.Axis(SDL_CONTROLLER_AXIS_RIGHTX, 1.0);
+  REQUIRE(WaitFor([&] { return AxisOf(box.Load(), PadAxis::kRightX) == 1.0; }, 10.0));
+  run(0.5);
+  CHECK(pose.pan == Approx(-0.75).margin(0.02));
+  CHECK(command.camera_pan == Approx(pose.pan));
+  CHECK(pose.tilt == 0.0);
+  // Released: it stays where it looks.
+  stick.Axis(SDL_CONTROLLER_AXIS_RIGHTX, 0.0);
+  REQUIRE(WaitFor([&] { return AxisOf(box.Load(), PadAxis::kRightX) == 0.0; }, 10.0));
+  run(0.5);
+  CHECK(pose.pan == Approx(-0.75).margin(0.02));
+  // Inside the dead zone: no turn.
+  stick.Axis(SDL_CONTROLLER_AXIS_RIGHTY, 0.1);
+  REQUIRE(WaitFor([&] { return AxisOf(box.Load(), PadAxis::kRightY) > 0.05; }, 10.0));
+  run(0.5);
+  CHECK(pose.tilt == 0.0);
+  // Pushed up (SDL's y negative): it looks up, as far as the camera tilts.
+  stick.Axis(SDL_CONTROLLER_AXIS_RIGHTY, -1.0);
+  REQUIRE(WaitFor([&] { return AxisOf(box.Load(), PadAxis::kRightY) == -1.0; }, 10.0));
+  run(1.0);
+  CHECK(pose.tilt == Approx(kBlimpCameraTiltMax));
+  CHECK(command.camera_tilt == Approx(kBlimpCameraTiltMax));
+  stick.Axis(SDL_CONTROLLER_AXIS_RIGHTY, 0.0);
+  REQUIRE(WaitFor([&] { return AxisOf(box.Load(), PadAxis::kRightY) == 0.0; }, 10.0));
+
+  // Clicking the stick looks straight ahead.
+  stick.Button(SDL_CONTROLLER_BUTTON_RIGHTSTICK, true);
+  REQUIRE(WaitFor([&] { return ButtonOf(box.Load(), PadButton::kRightStick); }, 10.0));
+  run(0.1);
+  CHECK(pose.pan == 0.0);
+  CHECK(pose.tilt == 0.0);
+  stick.Button(SDL_CONTROLLER_BUTTON_RIGHTSTICK, false);
+
+  // Turned a little, then unplugged: the camera holds still, and the head says why.
+  stick.Axis(SDL_CONTROLLER_AXIS_RIGHTX, -1.0);
+  REQUIRE(WaitFor([&] { return AxisOf(box.Load(), PadAxis::kRightX) == -1.0; }, 10.0));
+  run(0.2);
+  const double held = pose.pan;
+  CHECK(held == Approx(0.3).margin(0.02));
+  stick.Detach();
+  REQUIRE(WaitFor([&] { return box.Load().pad_disconnects == 1; }, 10.0));
+  run(0.5);
+  CHECK(pose.pan == held);
+  CHECK(command.camera_pan == Approx(held));
+  REQUIRE(head.Notice() != nullptr);
+  CHECK(std::string(head.Notice()) == view::GamepadHead::kLostNotice);
+}
+
+TEST_CASE("the head by OpenXR with no runtime: one clear line, and the mouse turns the head",
+          "[view_input][head]") {
+  // Whatever this machine has installed: a runtime file that is not there.
+  setenv("XR_RUNTIME_JSON", "/nonexistent/haptel-test-openxr-runtime.json", 1);
+  HeadConfig config;
+  config.source = HeadSourceKind::kOpenXr;
+  InputState person;
+  view::MadeHeadSource made = view::MakeHeadSource(config, person);
+  unsetenv("XR_RUNTIME_JSON");
+  REQUIRE(made.source);
+  CHECK(made.source->kind() == HeadSourceKind::kMouse);
+  CHECK(made.fallback ==
+        "no OpenXR runtime (XR_ERROR_RUNTIME_UNAVAILABLE): head follows the mouse");
+  person.head_pan = 0.4;  // the mouse dragged
+  person.head_tilt = -0.2;
+  const view::HeadPose pose = made.source->Update(1.0, person);
+  CHECK(pose.pan == 0.4);
+  CHECK(pose.tilt == -0.2);
+  CHECK(made.source->Notice() == nullptr);
+}
+
+TEST_CASE("an HMD's orientation as the camera's pan and tilt: left and up positive, clamped",
+          "[view_input][head]") {
+  const double a = 0.5;  // rad
+  // About OpenXR's up (+y) by a: looking left.
+  view::HeadPose p = view::HeadPoseOfOrientation(0, std::sin(a / 2), 0, std::cos(a / 2));
+  CHECK(p.pan == Approx(a));
+  CHECK(p.tilt == Approx(0.0).margin(1e-9));
+  // About +x by a: looking up.
+  p = view::HeadPoseOfOrientation(std::sin(a / 2), 0, 0, std::cos(a / 2));
+  CHECK(p.pan == Approx(0.0).margin(1e-9));
+  CHECK(p.tilt == Approx(a));
+  // Looking straight down: the camera's lowest tilt.
+  p = view::HeadPoseOfOrientation(std::sin(-0.8), 0, 0, std::cos(-0.8));
+  CHECK(p.tilt == Approx(-kBlimpCameraTiltMax));
 }

@@ -1,5 +1,7 @@
 #include "haptel/view/renderer.hpp"
 
+#include <cmath>
+#include <numbers>
 #include <opencv2/imgproc.hpp>
 
 #include "haptel/view/view.hpp"
@@ -31,6 +33,19 @@ struct Renderer::State {
   layers::TexturedQuads quads;
   std::vector<std::unique_ptr<layers::Layer>> layers;
   const layers::MapLayer* map = nullptr;  ///< for MapPoint
+
+  /// The layers as one eye sees them, into a `width`×`height` viewport from
+  /// column `x0`.
+  void DrawEye(const ViewModel& model, double t_s, const Eigen::Matrix4f& eye_view_projection,
+               int x0, int width, int height) {
+    glViewport(x0, 0, width, height);
+    glEnable(GL_DEPTH_TEST);
+    glDisable(GL_BLEND);
+    const layers::Frame frame{width, height, eye_view_projection, t_s};
+    for (const auto& layer : layers) layer->Draw(model, frame);
+    glDisable(GL_BLEND);
+    glBindVertexArray(0);
+  }
 };
 
 namespace {
@@ -68,15 +83,17 @@ void RequireGl33() {
 
 }  // namespace
 
-Renderer::Renderer(int width, int height, const ScreenPlacement& screen)
-    : width_(width), height_(height) {
+Renderer::Renderer(int width, int height, const ScreenPlacement& screen,
+                   const StereoOptions& stereo)
+    : width_(width), height_(height), stereo_(stereo) {
   RequireGl33();
   state_ = std::make_unique<State>();
   State& s = *state_;
   s.screen.placement = screen;
-  s.layers = MakeLayers(width, height, s.screen, s.quads, s.map);
+  // In stereo every layer draws into one eye's half, as into a frame of its own.
+  s.layers = MakeLayers(eye_width(), height, s.screen, s.quads, s.map);
   s.projection = layers::Perspective(
-      kFovYDeg, static_cast<float>(width) / static_cast<float>(height), kNear, kFar);
+      kFovYDeg, static_cast<float>(eye_width()) / static_cast<float>(height), kNear, kFar);
   s.view_projection =
       s.projection * layers::LookAt(layers::kEye, layers::kTarget, Eigen::Vector3f::UnitZ());
   glViewport(0, 0, width, height);
@@ -99,6 +116,10 @@ std::array<std::array<double, 3>, 4> Renderer::ScreenCorners() const {
   return corners;
 }
 
+double Renderer::focal_px() const {
+  return height_ / 2.0 / std::tan(kFovYDeg / 2.0 * std::numbers::pi / 180.0);
+}
+
 bool Renderer::Project(const std::array<double, 3>& point, double& px, double& py) const {
   const Eigen::Vector4f clip =
       state_->view_projection * Eigen::Vector4f(static_cast<float>(point[0]),
@@ -107,7 +128,7 @@ bool Renderer::Project(const std::array<double, 3>& point, double& px, double& p
   if (clip.w() <= 0.0f) return false;
   const double ndc_x = clip.x() / clip.w();
   const double ndc_y = clip.y() / clip.w();
-  px = (ndc_x + 1.0) / 2.0 * width_;
+  px = (ndc_x + 1.0) / 2.0 * eye_width();
   py = (1.0 - ndc_y) / 2.0 * height_;
   return true;
 }
@@ -116,13 +137,13 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
   State& s = *state_;
   // A tracked gaze turns the view with the head and the screen with the camera.
   const Gaze& gaze = model.gaze;
+  // A tracked head looks level when it looks ahead (a pilot's eyes, not a
+  // desk's): the screen should hang at the eye's height in front of it.
+  const Eigen::Vector3f target =
+      gaze.tracked ? Eigen::Vector3f(layers::kEye + layers::Turn(gaze.look_pan, gaze.look_tilt) *
+                                                        Eigen::Vector3f::UnitX())
+                   : layers::kTarget;
   if (gaze.tracked || s.gaze_tracked) {
-    // A tracked head looks level when it looks ahead (a pilot's eyes, not a
-    // desk's): the screen should hang at the eye's height in front of it.
-    const Eigen::Vector3f target =
-        gaze.tracked ? Eigen::Vector3f(layers::kEye + layers::Turn(gaze.look_pan, gaze.look_tilt) *
-                                                          Eigen::Vector3f::UnitX())
-                     : layers::kTarget;
     s.view_projection =
         s.projection * layers::LookAt(layers::kEye, target, Eigen::Vector3f::UnitZ());
   }
@@ -132,13 +153,24 @@ void Renderer::Draw(const ViewModel& model, double t_s) {
   glViewport(0, 0, width_, height_);
   glClearColor(0.55f, 0.62f, 0.70f, 1.0f);  // a light room
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-  glEnable(GL_DEPTH_TEST);
-  glDisable(GL_BLEND);
   glDisable(GL_CULL_FACE);  // few triangles: both sides cost nothing, and no winding to get wrong
-  const layers::Frame frame{width_, height_, s.view_projection, t_s};
-  for (const auto& layer : s.layers) layer->Draw(model, frame);
-  glDisable(GL_BLEND);
-  glBindVertexArray(0);
+  if (!stereo_.on) {
+    s.DrawEye(model, t_s, s.view_projection, 0, width_, height_);
+    return;
+  }
+  // Each eye half the distance apart to its side of the head's centre,
+  // looking parallel to it (no toe-in: a far point lands alike in both).
+  const Eigen::Vector3f forward = target - layers::kEye;
+  const Eigen::Vector3f left = Eigen::Vector3f::UnitZ().cross(forward).normalized();
+  for (int eye = 0; eye < 2; ++eye) {
+    const Eigen::Vector3f shift =
+        left * static_cast<float>((eye == 0 ? 0.5 : -0.5) * stereo_.ipd_m);
+    const Eigen::Matrix4f eye_view_projection =
+        s.projection *
+        layers::LookAt(layers::kEye + shift, target + shift, Eigen::Vector3f::UnitZ());
+    glClear(GL_DEPTH_BUFFER_BIT);  // the second eye's depth is its own
+    s.DrawEye(model, t_s, eye_view_projection, eye * eye_width(), eye_width(), height_);
+  }
 }
 
 bool Renderer::MapPoint(double x, double y, double& px, double& py) const {

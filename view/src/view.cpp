@@ -196,7 +196,8 @@ Canvas::Canvas(const ViewOptions& options) {
       throw ViewError(std::string("view: no OpenGL 3.3 core context: ") + SDL_GetError());
     }
     SDL_GL_SetSwapInterval(0);  // paced by the caller, not the display
-    renderer_ = std::make_unique<Renderer>(options.width, options.height, options.screen);
+    renderer_ =
+        std::make_unique<Renderer>(options.width, options.height, options.screen, options.stereo);
   } catch (...) {
     renderer_.reset();
     if (context_ != nullptr) SDL_GL_DeleteContext(context_);

@@ -10,6 +10,51 @@
 
 namespace haptel {
 
+/// Where the pilot's camera head looks from (view/head_source.hpp): the
+/// mouse dragged in the window, a game controller's right stick, or an
+/// OpenXR head-mounted display's pose.
+enum class HeadSourceKind { kMouse, kGamepad, kOpenXr };
+const char* ToString(HeadSourceKind kind);
+
+/// The head that turns a pan/tilt camera (`head:` in the run file;
+/// `haptel run --head` overrides the source).
+struct HeadConfig {
+  HeadSourceKind source = HeadSourceKind::kMouse;
+  /// The stick turns the head at this rate at full deflection (rate control:
+  /// a released stick leaves the head where it looks), rad/s.
+  double stick_rate_rad_s = 1.5;
+  /// Deflection below this (radially, of 1) is no turn: a stick rests off centre.
+  double stick_dead_zone = 0.15;
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    using K = HeadSourceKind;
+    a->Visit(HAPTEL_NVP(source),
+             config::Choice<K>{
+                 {{K::kMouse, "mouse"}, {K::kGamepad, "gamepad"}, {K::kOpenXr, "openxr"}}});
+    a->Visit(HAPTEL_NVP(stick_rate_rad_s), config::Range{0.1, 10.0});
+    a->Visit(HAPTEL_NVP(stick_dead_zone), config::Range{0.0, 0.9});
+  }
+  void ValidateOrThrow() const;
+};
+
+/// The operator's view (`view:` in the run file; `haptel run --stereo`,
+/// `--ipd-mm` override).
+struct ViewConfig {
+  /// Side by side for a head-mounted display: the left eye's picture in the
+  /// window's left half, the right's in the right half.
+  bool stereo = false;
+  /// The eyes' distance apart, m (an adult's is 54-74 mm; 64 mm the mean).
+  double ipd_m = 0.064;
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(HAPTEL_NVP(stereo));
+    a->Visit(HAPTEL_NVP(ipd_m), config::Range{0.04, 0.09});
+  }
+  void ValidateOrThrow() const;
+};
+
 /// The automatic operator: a simulated person driving through the interface.
 struct OperatorConfig {
   double reaction_delay_s = 0.15;
@@ -93,6 +138,8 @@ struct RunConfig {
   ScenePlacement scene_placement;
   OperatorConfig op;
   LinkConfig link;
+  HeadConfig head;
+  ViewConfig view;
 
   template <typename Archive>
   void Serialize(Archive* a) {
@@ -117,6 +164,8 @@ struct RunConfig {
     a->Visit(HAPTEL_NVP(switch_ramp_s), Range{0.01, 5.0});
     a->Visit(MakeNameValue("operator", &op));
     a->Visit(HAPTEL_NVP(link));
+    a->Visit(HAPTEL_NVP(head));
+    a->Visit(HAPTEL_NVP(view));
   }
 
   /// Throws ConfigFieldError (keys as in the file: "operator.cruise") unless

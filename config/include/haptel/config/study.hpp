@@ -98,7 +98,21 @@ struct StudyCondition {
   /// That device file's `name:` ("mouse", "sdl-ff-wheel", "sim"), as the
   /// plan, the trials' rows and the report show it; filled in by LoadStudy.
   std::string device_name{};
+  /// Its camera set-up, so camera layouts are A/B-tested like interfaces:
+  /// the run vehicle's cameras that stream in its trials (`cameras: [pilot,
+  /// surveillance]`; the driven one always among them), the others off.
+  /// Empty: every camera of the vehicle file.
+  std::vector<std::string> cameras{};
+  /// A camera a second person must hold from a station (`station:
+  /// surveillance`, `haptel station --camera surveillance`) before a trial
+  /// may start; it streams. Empty: no station.
+  std::string station{};
 };
+
+/// A condition's camera set-up as the console and the plan say it:
+/// "cameras pilot + surveillance, a station holds surveillance"; "" for the
+/// vehicle's own (no `cameras:`, no `station:`).
+std::string CameraSetupText(const StudyCondition& condition);
 
 struct StudyParticipant {
   std::string id;       ///< e.g. "A"; unique in the study

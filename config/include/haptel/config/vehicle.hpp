@@ -380,6 +380,14 @@ struct VehicleConfig {
 /// (strict: unknown keys are errors naming file, key and line).
 VehicleConfig LoadVehicle(const std::filesystem::path& file);
 
+/// The names of `vehicle`'s cameras, the driven one first ("pilot,surveillance").
+std::string CameraNames(const VehicleConfig& vehicle);
+/// Keeps only the cameras `names` lists (a camera set-up: which of the
+/// vehicle's cameras stream), the driven one always among them. Returns ""
+/// when done, else what is wrong (nothing is changed then): an unknown name
+/// (saying the vehicle's), a name twice, or the driven camera left out.
+std::string KeepOnlyCameras(VehicleConfig& vehicle, const std::vector<std::string>& names);
+
 /// The longest vehicle name. The name is part of the DDS topic names
 /// "haptel/<name>/<channel>" (channels: command, state, video), and RTPS
 /// carries a topic name in at most 255 characters: 255 - 15 = 240.

@@ -205,6 +205,11 @@ struct SessionResult {
   Outcome outcome = Outcome::kInterrupted;
   std::string message;  ///< one line: why it ended
   RunRecord record;     ///< everything measured, ready for the recorder
+  /// What turned the pan/tilt camera's head (view/head_source.hpp: mouse,
+  /// gamepad, openxr), and, when it is not what the run asked for, why
+  /// ("no OpenXR runtime (...): head follows the mouse"; else empty).
+  std::string head_source = "mouse";
+  std::string head_fallback;
   uint64_t servo_overruns = 0;
   double lost_detect_s = 0.0;  ///< vehicle or device lost: last sign of life -> detection
   /// The physics thread, when there was one (rate 0 otherwise).

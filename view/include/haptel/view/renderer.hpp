@@ -30,6 +30,15 @@ struct ScreenPlacement {
   double width = 0.80;
 };
 
+/// Side-by-side stereo for a head-mounted display: the world drawn twice,
+/// from two eyes `ipd_m` apart (each turned with the head, looking
+/// parallel), the left eye's picture in the frame's left half and the
+/// right's in the right half, each half with its own overlay.
+struct StereoOptions {
+  bool on = false;
+  double ipd_m = 0.064;  ///< the interpupillary distance, m
+};
+
 /// The screen close before the eye, filling the picture: the camera's view
 /// with nothing in front of it (no hands to show).
 inline ScreenPlacement DirectViewScreen() { return {{0.35, 0.0, 0.10}, 1.05}; }
@@ -94,7 +103,8 @@ class Renderer {
   /// Compiles the shaders and builds the meshes and textures for a
   /// `width`×`height` framebuffer. Throws ViewError when GL is below 3.3 or a
   /// shader does not compile (with GL's log).
-  Renderer(int width, int height, const ScreenPlacement& screen = {});
+  Renderer(int width, int height, const ScreenPlacement& screen = {},
+           const StereoOptions& stereo = {});
   ~Renderer();
   Renderer(const Renderer&) = delete;
   Renderer& operator=(const Renderer&) = delete;
@@ -112,7 +122,8 @@ class Renderer {
 
   /// Where a device-frame point lands in the image as last drawn (the view
   /// turns with a tracked gaze): pixels from the top-left corner. False when
-  /// the point is behind the camera.
+  /// the point is behind the camera. In stereo: as the cyclopean eye between
+  /// the two would see it, in a half's pixels.
   bool Project(const std::array<double, 3>& point, double& px, double& py) const;
   /// The screen's corners now (top-left, top-right, bottom-right,
   /// bottom-left as the operator sees them), device frame: turned about the
@@ -124,12 +135,18 @@ class Renderer {
 
   int width() const { return width_; }
   int height() const { return height_; }
+  /// The width one eye's picture has: the frame's, or half of it in stereo.
+  int eye_width() const { return stereo_.on ? width_ / 2 : width_; }
+  /// The eyes' focal length in pixels (both axes: square pixels), so that a
+  /// point d metres ahead and x to the side lands f·x/d from the centre.
+  double focal_px() const;
 
  private:
   /// The camera, the screen and the layers (view/src/layers/).
   struct State;
   int width_;
   int height_;
+  StereoOptions stereo_;
   std::unique_ptr<State> state_;
 };
 

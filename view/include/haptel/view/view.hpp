@@ -60,6 +60,7 @@ struct ViewOptions {
   FrameTap* tap = nullptr;       ///< the frames at record_fps (null: none); outlives the View
   std::string title = "Haptel";
   ScreenPlacement screen;  ///< where the camera's picture hangs
+  StereoOptions stereo;    ///< side by side for a head-mounted display (off: one eye)
 };
 
 /// Fills the frame's model on the view thread. Must not block on anything a
