@@ -183,16 +183,19 @@ std::string NamesJson(const std::vector<std::string>& names) {
   return out + "]";
 }
 
-/// The lap judged from the truth record: ,"lap_time_truth_s":…,"completed_truth":…,
-/// "gates_truth_passed":…,"gates_truth_missed":…,"gates_disagree":["gate 3: …"]
-/// (all null when there is no truth to judge from).
+/// The lap judged from the truth record: ,"lap_time_truth_s":…,
+/// "lap_time_truth_projected":… (true: its finish projected, not crossed),
+/// "completed_truth":…,"gates_truth_passed":…,"gates_truth_missed":…,
+/// "gates_disagree":["gate 3: …"] (all null when there is no truth to judge from).
 std::string TruthLapJson(const haptel::record::RunRecord& r) {
   const haptel::record::TruthLap& t = r.truth_lap;
   if (!t.judged) {
-    return ",\"lap_time_truth_s\":null,\"completed_truth\":null,\"gates_truth_passed\":null,"
+    return ",\"lap_time_truth_s\":null,\"lap_time_truth_projected\":null,"
+           "\"completed_truth\":null,\"gates_truth_passed\":null,"
            "\"gates_truth_missed\":null,\"gates_disagree\":null";
   }
   return ",\"lap_time_truth_s\":" + NumberOrNull(t.lap_time_s) +
+         ",\"lap_time_truth_projected\":" + (t.projected ? "true" : "false") +
          ",\"completed_truth\":" + (t.completed ? "true" : "false") +
          ",\"gates_truth_passed\":" + std::to_string(t.gates_passed) +
          ",\"gates_truth_missed\":" + std::to_string(t.gates_missed) +
@@ -246,8 +249,10 @@ void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRu
     // The live lap is the vehicle's odometry's; where the truth is known,
     // the lap it truly drove.
     if (t.completed) {
-      std::fprintf(out, "  judged from the truth: lap time %.2f s, gates passed %d/%d, missed %d\n",
-                   t.lap_time_s, t.gates_passed, r.gates_total, t.gates_missed);
+      std::fprintf(out,
+                   "  judged from the truth: lap time %.2f s%s, gates passed %d/%d, missed %d\n",
+                   t.lap_time_s, t.projected ? " (finish projected)" : "", t.gates_passed,
+                   r.gates_total, t.gates_missed);
     } else {
       std::fprintf(out,
                    "  judged from the truth: lap NOT completed, gates passed %d/%d, missed %d\n",
@@ -313,6 +318,10 @@ void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRu
                  r.localised ? "localised on the track" : "odometry (not localised)",
                  r.localisation_error_m_p50 * 1e3, r.localisation_error_m_p95 * 1e3,
                  r.odometry_error_m_p50 * 1e3, r.odometry_error_m_p95 * 1e3);
+    if (r.localiser_scans_refused > 0) {
+      std::fprintf(out, "  the localiser refused %lld scans that disagreed with the map\n",
+                   static_cast<long long>(r.localiser_scans_refused));
+    }
   }
   for (const haptel::record::EstimatedParameter& p : r.estimated) {
     std::fprintf(out, "  estimated %s %.4g", p.name.c_str(), p.estimate);
@@ -392,7 +401,8 @@ std::string RunJson(const SessionSetup& setup, const RecordedRun& run) {
     << ",\"predict_model\":" << JsonString(r.predict_model)
     << ",\"prediction_error_odometry_m_p50\":" << NumberOrNull(r.prediction_error_odometry_m_p50)
     << ",\"prediction_error_odometry_m_p95\":" << NumberOrNull(r.prediction_error_odometry_m_p95)
-    << ",\"localised\":" << (r.localised ? "true" : "false")
+    << ",\"localised\":" << (r.localised ? "true" : "false") << ",\"localiser_scans_refused\":"
+    << (r.localiser_scans_refused >= 0 ? std::to_string(r.localiser_scans_refused) : "null")
     << ",\"localisation_error_m_p50\":" << NumberOrNull(r.localisation_error_m_p50)
     << ",\"localisation_error_m_p95\":" << NumberOrNull(r.localisation_error_m_p95)
     << ",\"odometry_error_m_p50\":" << NumberOrNull(r.odometry_error_m_p50)

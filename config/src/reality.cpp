@@ -53,6 +53,11 @@ void FloorPatchesConfig::ValidateOrThrow() const {
   CheckSpread("traction", traction, 0.1, 1.0);
 }
 
+void MapErrorConfig::ValidateOrThrow() const {
+  config_detail::CheckFields(*this);
+  CheckSpread("layout_rotation_deg", layout_rotation_deg, -10.0, 10.0);
+}
+
 void RobotRealityConfig::ValidateOrThrow() const {
   config_detail::CheckFields(*this);
   CheckSpread("tread_gain", tread_gain, 0.5, 1.5);
@@ -137,6 +142,8 @@ DrawnReality DrawReality(const RealityConfig& reality, uint64_t seed, const Vehi
   d.gyro_bias = draw(r.gyro_drift_deg_per_min) * std::numbers::pi / 180.0 / 60.0;
   d.gyro_noise = r.gyro_noise;
   if (r.range_noise_sd > 0.0) d.range_noise_sd = r.range_noise_sd;
+  d.range_spurious_fraction = r.range_spurious_fraction;
+  d.range_dropout_fraction = r.range_dropout_fraction;
   d.command_jitter_s = r.command_jitter_s;
   d.state_jitter_s = r.state_jitter_s;
   if (track != nullptr) {
@@ -165,7 +172,49 @@ DrawnReality DrawReality(const RealityConfig& reality, uint64_t seed, const Vehi
   d.payload_mass += std::max(0.0, draw(b.gondola_extra_mass));
   d.clock_offset_s = draw(reality.clock.offset_s);
   d.clock_drift_ppm = draw(reality.clock.drift_ppm);
+  // Drawn last: a file without map error draws everything above as before.
+  const MapErrorConfig& map = r.map_error;
+  if (track != nullptr &&
+      (map.post_sd > 0.0 || map.wall_corner_sd > 0.0 || map.layout_rotation_deg.sd > 0.0 ||
+       map.layout_rotation_deg.mean != 0.0)) {
+    const double turn = draw(map.layout_rotation_deg) * std::numbers::pi / 180.0;
+    const Vec2 pivot = track->StartPosition();
+    const double c = std::cos(turn), s = std::sin(turn);
+    const auto rotated = [&](const Vec2& p) {
+      const Vec2 v = p - pivot;
+      return Vec2(pivot.x() + c * v.x() - s * v.y(), pivot.y() + s * v.x() + c * v.y());
+    };
+    // A corner shared by two walls moves once: both walls keep meeting there.
+    std::vector<std::pair<Vec2, Vec2>> corners;  // file's point, true point
+    const auto corner = [&](const Vec2& p) {
+      for (const auto& [file, moved] : corners) {
+        if (file == p) return moved;
+      }
+      const Spread offset{0.0, map.wall_corner_sd};
+      const double dx = draw(offset);
+      const Vec2 moved = rotated(p) + Vec2(dx, draw(offset));
+      corners.emplace_back(p, moved);
+      return moved;
+    };
+    for (const Segment2& wall : track->walls()) {
+      const Vec2 a = corner(wall.a);
+      d.true_walls.push_back({a, corner(wall.b)});
+    }
+    for (const CircleObstacle& post : track->round_obstacles()) {
+      const Spread offset{0.0, map.post_sd};
+      const double dx = draw(offset);
+      d.true_posts.push_back({rotated(post.center) + Vec2(dx, draw(offset)), post.radius});
+    }
+  }
   return d;
+}
+
+const std::vector<Segment2>& TrueWalls(const DrawnReality& reality, const Track& track) {
+  return reality.true_walls.empty() ? track.walls() : reality.true_walls;
+}
+
+const std::vector<CircleObstacle>& TruePosts(const DrawnReality& reality, const Track& track) {
+  return reality.true_posts.empty() ? track.round_obstacles() : reality.true_posts;
 }
 
 DrawnReality VehicleReality(const VehicleConfig& vehicle, const Track* track) {

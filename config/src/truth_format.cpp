@@ -31,6 +31,14 @@ std::string TruthHeaderText(const DrawnReality& reality) {
     out += "# floor_patch " + Exact(p.x) + " " + Exact(p.y) + " " + Exact(p.radius) + " " +
            Exact(p.traction) + "\n";
   }
+  for (const Segment2& w : reality.true_walls) {
+    out += "# wall " + Exact(w.a.x()) + " " + Exact(w.a.y()) + " " + Exact(w.b.x()) + " " +
+           Exact(w.b.y()) + "\n";
+  }
+  for (const CircleObstacle& c : reality.true_posts) {
+    out +=
+        "# post " + Exact(c.center.x()) + " " + Exact(c.center.y()) + " " + Exact(c.radius) + "\n";
+  }
   out += std::string(kColumns) + "\n";
   return out;
 }
@@ -62,6 +70,20 @@ bool ParseTruthHeaderLine(const std::string& line, DrawnReality& reality) {
     if (!(in >> p.x >> p.y >> p.radius >> p.traction))
       throw std::invalid_argument("'# floor_patch X Y RADIUS TRACTION', four numbers");
     reality.floor_patches.push_back(p);
+    return true;
+  }
+  if (key == "wall") {
+    double ax, ay, bx, by;
+    if (!(in >> ax >> ay >> bx >> by))
+      throw std::invalid_argument("'# wall AX AY BX BY', four numbers");
+    reality.true_walls.push_back({Vec2(ax, ay), Vec2(bx, by)});
+    return true;
+  }
+  if (key == "post") {
+    double x, y, radius;
+    if (!(in >> x >> y >> radius))
+      throw std::invalid_argument("'# post X Y RADIUS', three numbers");
+    reality.true_posts.push_back({Vec2(x, y), radius});
     return true;
   }
   bool known = false;

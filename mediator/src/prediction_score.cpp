@@ -85,6 +85,7 @@ void JudgeLapOnTruth(const record::TruthRecord& truth, const Track& track, Sessi
     const double speed = at.speed * std::cos(at.heading - std::atan2(forward.y(), forward.x()));
     if (rest >= 0.0 && rest <= kMaxProjectedM && speed > 0.02) {
       lap.completed = true;
+      lap.projected = true;
       lap.lap_time_s = end_s + rest / speed - timer.start_t_s();
     }
   }

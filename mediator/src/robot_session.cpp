@@ -392,6 +392,7 @@ class RobotSession final : public FamilySession {
     result.located = predictor_.located();
     result.odometry = predictor_.odometry();
     rec.localised = predictor_.localiser() != nullptr && predictor_.localiser()->started();
+    if (rec.localised) rec.localiser_scans_refused = predictor_.localiser()->scans_refused();
     result.predictor_inputs = predictor_.inputs();
     result.started_ns = t0_ns_;
     result.shown_height = false;

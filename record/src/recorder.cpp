@@ -39,7 +39,7 @@ namespace {
 using namespace haptel::sql;
 
 /// Schema version stored in PRAGMA user_version.
-constexpr int kSchemaVersion = 15;
+constexpr int kSchemaVersion = 16;
 
 /// Schema steps: kMigrations[v - 1] takes a database from version v - 1 to v.
 /// A new database runs them all, so the upgrade path of an old file is the
@@ -326,9 +326,21 @@ constexpr const char* kSchemaV15 = R"sql(
 ALTER TABLE runs ADD COLUMN session_file TEXT NOT NULL DEFAULT '';
 )sql";
 
-constexpr const char* kMigrations[] = {kSchemaV1,  kSchemaV2,  kSchemaV3,  kSchemaV4,  kSchemaV5,
-                                       kSchemaV6,  kSchemaV7,  kSchemaV8,  kSchemaV9,  kSchemaV10,
-                                       kSchemaV11, kSchemaV12, kSchemaV13, kSchemaV14, kSchemaV15};
+// v16: the lap judged from a simulated vehicle's truth record (issue 39;
+// JSON only before): whether it was completed, its time and whether that
+// time's finish was projected rather than crossed, its gates. NULL: not
+// judged (no truth record: a real vehicle, the blimp's course, or before v16).
+constexpr const char* kSchemaV16 = R"sql(
+ALTER TABLE runs ADD COLUMN completed_truth INTEGER DEFAULT NULL;
+ALTER TABLE runs ADD COLUMN lap_time_truth_s REAL DEFAULT NULL;
+ALTER TABLE runs ADD COLUMN lap_time_truth_projected INTEGER DEFAULT NULL;
+ALTER TABLE runs ADD COLUMN gates_truth_passed INTEGER DEFAULT NULL;
+ALTER TABLE runs ADD COLUMN gates_truth_missed INTEGER DEFAULT NULL;
+)sql";
+
+constexpr const char* kMigrations[] = {
+    kSchemaV1, kSchemaV2,  kSchemaV3,  kSchemaV4,  kSchemaV5,  kSchemaV6,  kSchemaV7,  kSchemaV8,
+    kSchemaV9, kSchemaV10, kSchemaV11, kSchemaV12, kSchemaV13, kSchemaV14, kSchemaV15, kSchemaV16};
 static_assert(std::size(kMigrations) == kSchemaVersion, "one migration per schema version");
 
 constexpr const char* kInsertRun = R"sql(
@@ -342,9 +354,10 @@ INSERT INTO runs (started_utc, started_wall_ns, config_name, track, interface, v
                   physics_rate_short, vehicle_kind, predict, link_fault, prediction_error_m_p50,
                   prediction_error_m_p95, approach_s, video_kbps, video_stale_s, speedup,
                   controller_errors, disengaged_s, pseudo_haptic_gain_mean, ff_effects_played,
-                  session_file)
+                  session_file, completed_truth, lap_time_truth_s, lap_time_truth_projected,
+                  gates_truth_passed, gates_truth_missed)
 VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?,
-        ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)
+        ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)
 )sql";
 
 constexpr const char* kInsertSplit =
@@ -369,7 +382,8 @@ SELECT id, started_wall_ns, config_name, track, interface, vehicle, completed, o
        servo_target_hz, servo_rate_short, physics_rate_hz, physics_target_hz, physics_rate_short,
        vehicle_kind, predict, link_fault, prediction_error_m_p50, prediction_error_m_p95, approach_s,
        video_kbps, video_stale_s, speedup, controller_errors, disengaged_s,
-       pseudo_haptic_gain_mean, ff_effects_played, session_file
+       pseudo_haptic_gain_mean, ff_effects_played, session_file, completed_truth,
+       lap_time_truth_s, lap_time_truth_projected, gates_truth_passed, gates_truth_missed
 FROM runs ORDER BY id
 )sql";
 
@@ -642,7 +656,13 @@ int64_t Recorder::Save(const RunRecord& run, const AlsoSave& also) {
       .RealOrNull(run.disengaged_s, std::isfinite(run.disengaged_s))
       .RealOrNull(run.pseudo_haptic_gain_mean, std::isfinite(run.pseudo_haptic_gain_mean))
       .IntOrNull(run.ff_effects_played, run.ff_effects_played >= 0)
-      .Text(run.session_file);
+      .Text(run.session_file)
+      .IntOrNull(run.truth_lap.completed ? 1 : 0, run.truth_lap.judged)
+      .RealOrNull(run.truth_lap.lap_time_s,
+                  run.truth_lap.judged && std::isfinite(run.truth_lap.lap_time_s))
+      .IntOrNull(run.truth_lap.projected ? 1 : 0, run.truth_lap.judged)
+      .IntOrNull(run.truth_lap.gates_passed, run.truth_lap.judged)
+      .IntOrNull(run.truth_lap.gates_missed, run.truth_lap.judged);
   StepDone(path_, db_, insert_run.get(), "cannot insert run");
   const int64_t run_id = sqlite3_last_insert_rowid(db_);
 
@@ -789,6 +809,14 @@ std::vector<RunRecord> Recorder::LoadAll() const {
       run.pseudo_haptic_gain_mean = r.Real();  // NaN for NULL: not measured, or before v13
       run.ff_effects_played = r.IntOr(-1);     // NULL: recorded before v13
       run.session_file = r.Text();             // '' before v15
+      // NULL: not judged from a truth record, or recorded before v16.
+      const int64_t completed_truth = r.IntOr(-1);
+      run.truth_lap.judged = completed_truth >= 0;
+      run.truth_lap.completed = completed_truth == 1;
+      run.truth_lap.lap_time_s = r.Real();
+      run.truth_lap.projected = r.IntOr(0) == 1;
+      run.truth_lap.gates_passed = static_cast<int>(r.IntOr(0));
+      run.truth_lap.gates_missed = static_cast<int>(r.IntOr(0));
       index_of.emplace(run.id, runs.size());
       runs.push_back(std::move(run));
     }

@@ -76,6 +76,9 @@ std::string RunRecordJson(const RunRecord& r) {
     counters += JsonString(c.name) + ":" + std::to_string(c.value);
   }
   counters += "}";
+  // The truth's lap as the database stores it (v16): null when not judged.
+  const TruthLap& t = r.truth_lap;
+  const auto judged = [&](const std::string& value) { return t.judged ? value : "null"; };
   return Object()
       .Int("started_wall_ns", r.started_wall_ns)
       .Str("config_name", r.config_name)
@@ -111,6 +114,11 @@ std::string RunRecordJson(const RunRecord& r) {
       .Num("disengaged_s", r.disengaged_s)
       .Num("pseudo_haptic_gain_mean", r.pseudo_haptic_gain_mean)
       .Int("ff_effects_played", r.ff_effects_played)
+      .Raw("completed_truth", judged(t.completed ? "true" : "false"))
+      .Num("lap_time_truth_s", t.lap_time_s)
+      .Raw("lap_time_truth_projected", judged(t.projected ? "true" : "false"))
+      .Raw("gates_truth_passed", judged(std::to_string(t.gates_passed)))
+      .Raw("gates_truth_missed", judged(std::to_string(t.gates_missed)))
       .Num("distance_m", r.distance_m)
       .Num("view_fps", r.view_fps)
       .Num("view_frame_p99_ms", r.view_frame_p99_ms)

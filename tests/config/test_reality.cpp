@@ -3,7 +3,9 @@
 // file's model exactly, and a mistake is refused naming file, key and what
 // was expected. The truth record's lines read back what was written.
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <filesystem>
+#include <numbers>
 #include <string>
 
 #include "haptel/config/error.hpp"
@@ -93,6 +95,50 @@ TEST_CASE("one seed draws one robot, another seed another") {
   CHECK(Draw("harsh", 3).effective_track_width > Robot().drive.track_width * 1.3);
 }
 
+TEST_CASE("a lab's track stands off its file within the spread; none's is the file") {
+  const Track& track = ShortTrack();
+  const DrawnReality none = Draw("none", 3);
+  CHECK(none.true_walls.empty());
+  CHECK(none.true_posts.empty());
+  CHECK(&TrueWalls(none, track) == &track.walls());
+  CHECK(&TruePosts(none, track) == &track.round_obstacles());
+  CHECK(none.range_spurious_fraction == 0.0);
+  CHECK(none.range_dropout_fraction == 0.0);
+
+  const RealityConfig lab = LoadReality(RealityFile("lab"));
+  const MapErrorConfig& map = lab.robot.map_error;
+  const DrawnReality d = Draw("lab", 3);
+  CHECK(d.range_spurious_fraction == lab.robot.range_spurious_fraction);
+  CHECK(d.range_spurious_fraction > 0.0);
+  REQUIRE(d.true_walls.size() == track.walls().size());
+  REQUIRE(d.true_posts.size() == track.round_obstacles().size());
+  // Turned about the start by at most 2 sd, then each point by at most 2 sd per axis.
+  const double turn = 2.0 * map.layout_rotation_deg.sd * std::numbers::pi / 180.0;
+  const auto bound = [&](const Vec2& p, double sd) {
+    return turn * (p - track.StartPosition()).norm() + 2.0 * sd * std::sqrt(2.0) + 1e-9;
+  };
+  bool moved = false;
+  for (size_t i = 0; i < d.true_posts.size(); ++i) {
+    const CircleObstacle& file = track.round_obstacles()[i];
+    const double off = (d.true_posts[i].center - file.center).norm();
+    CHECK(off <= bound(file.center, map.post_sd));
+    CHECK(d.true_posts[i].radius == file.radius);
+    moved = moved || off > 1e-3;
+  }
+  CHECK(moved);
+  for (size_t i = 0; i < d.true_walls.size(); ++i) {
+    const Segment2& file = track.walls()[i];
+    CHECK((d.true_walls[i].a - file.a).norm() <= bound(file.a, map.wall_corner_sd));
+    // Walls meeting at a corner in the file still meet there: the corner moved once.
+    for (size_t j = 0; j < d.true_walls.size(); ++j) {
+      if (track.walls()[j].a == file.b) CHECK(d.true_walls[j].a == d.true_walls[i].b);
+    }
+  }
+  // One seed, one layout; another seed, another.
+  CHECK(Draw("lab", 3).true_posts[0].center == d.true_posts[0].center);
+  CHECK(Draw("lab", 4).true_posts[0].center != d.true_posts[0].center);
+}
+
 TEST_CASE("a reality file's mistakes name the file, the key and what was expected") {
   CHECK_THAT(RealityError("name: x\nrobot: {tread_gain: {mean: 1.0, sd: 0.0}, wobble: 2}\n"),
              Contains("wobble"));
@@ -103,6 +149,10 @@ TEST_CASE("a reality file's mistakes name the file, the key and what was expecte
   CHECK_THAT(RealityError("seed: 3\n"), Contains("name"));
   CHECK_THAT(RealityError("name: x\nrobot:\n  command_jitter_s: 2\n"),
              Contains("robot.command_jitter_s"));
+  CHECK_THAT(RealityError("name: x\nrobot:\n  map_error: {post_sd: -0.1}\n"),
+             Contains("robot.map_error.post_sd"));
+  CHECK_THAT(RealityError("name: x\nrobot:\n  range_spurious_fraction: 0.9\n"),
+             Contains("robot.range_spurious_fraction"));
 }
 
 TEST_CASE("a vehicle file's reality is a simulated kind's, and a path beside the file") {
@@ -142,6 +192,18 @@ TEST_CASE("the truth record's header and rows read back what was written") {
   CHECK(back.name == "lab");
   CHECK(back.seed == 11);
   CHECK(Numbers(back) == Numbers(d));
+  // Where the walls and posts truly stood, exactly.
+  REQUIRE(back.true_walls.size() == d.true_walls.size());
+  REQUIRE(back.true_posts.size() == d.true_posts.size());
+  REQUIRE_FALSE(d.true_posts.empty());
+  for (size_t i = 0; i < d.true_walls.size(); ++i) {
+    CHECK(back.true_walls[i].a == d.true_walls[i].a);
+    CHECK(back.true_walls[i].b == d.true_walls[i].b);
+  }
+  for (size_t i = 0; i < d.true_posts.size(); ++i) {
+    CHECK(back.true_posts[i].center == d.true_posts[i].center);
+    CHECK(back.true_posts[i].radius == d.true_posts[i].radius);
+  }
 
   const TruthRow row{123456789012345, 1.5, -0.25, 0.0, 3.0, 0.3, -0.5};
   char text[256];

@@ -239,7 +239,14 @@ TEST_CASE("haptel run completes the short track over DDS with a separate vehicle
   CHECK(record.seed() == 3);
   CHECK(record.params().effective_track_width > record.params().track_width);
   CHECK(record.rows().size() > 200);  // 200 Hz over a lap of seconds
+  // Where the lab's posts and walls truly stood: the short track's 2 gates'
+  // 4 posts and its 16 walls, none where the file has it.
+  CHECK(record.params().true_posts.size() == 4);
+  CHECK(record.params().true_walls.size() == 16);
   CheckSessionFile(session, json);
+  // The lap judged on the truth, its finish crossed or projected (and said so).
+  const std::string projected = JsonField(json, "lap_time_truth_projected");
+  CHECK((projected == "true" || projected == "false"));
 
   // The run is in the database with its splits.
   record::Recorder recorder(db);
@@ -265,6 +272,15 @@ TEST_CASE("haptel run completes the short track over DDS with a separate vehicle
   CHECK(runs[0].picture == std::filesystem::absolute(dir / "pictures" / "runs-run-1.png").string());
   CHECK(runs[0].session_file == session.string());
   CHECK(std::filesystem::file_size(runs[0].picture) > 0);
+  // And the truth's lap, as the JSON gave it.
+  CHECK(runs[0].truth_lap.judged);
+  CHECK(runs[0].truth_lap.completed == (JsonField(json, "completed_truth") == "true"));
+  CHECK(runs[0].truth_lap.projected == (projected == "true"));
+  if (runs[0].truth_lap.completed) {
+    CHECK(runs[0].truth_lap.lap_time_s ==
+          Approx(std::stod(JsonField(json, "lap_time_truth_s"))).epsilon(1e-4));
+  }
+  CHECK(std::to_string(runs[0].truth_lap.gates_passed) == JsonField(json, "gates_truth_passed"));
 }
 
 TEST_CASE(

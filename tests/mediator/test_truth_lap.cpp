@@ -73,7 +73,8 @@ TEST_CASE("the truth judges the lap again: a gate the drifting odometry passed i
   JudgeLapOnTruth(record::TruthRecord::Load(file), track, result);
   const record::TruthLap& truth = result.record.truth_lap;
   REQUIRE(truth.judged);
-  CHECK(truth.completed);  // the start line spans the corridor
+  CHECK(truth.completed);        // the start line spans the corridor
+  CHECK_FALSE(truth.projected);  // the truth crossed the finish itself
   CHECK(truth.gates_passed == 1);
   CHECK(truth.gates_missed == 1);
   REQUIRE(truth.splits.size() == 2);
@@ -95,6 +96,7 @@ TEST_CASE("without truth rows the lap stays unjudged and nothing disagrees") {
   result.record.splits = {{0, true, 1.0}, {1, true, 5.0}};
   JudgeLapOnTruth(record::TruthRecord::Load(file), ShortTrack(), result);
   CHECK_FALSE(result.record.truth_lap.judged);
+  CHECK_FALSE(result.record.truth_lap.projected);
   CHECK(std::isnan(result.record.truth_lap.lap_time_s));
   CHECK(TruthLapDisagreements(result.record).empty());
 }
@@ -137,6 +139,7 @@ TEST_CASE(
   const record::TruthLap& truth = result.record.truth_lap;
   REQUIRE(truth.judged);
   CHECK(truth.completed);
+  CHECK(truth.projected);  // an estimate, labelled as one
   CHECK(truth.gates_passed == 2);
   // Lagging by the same 0.1 m at the start and the finish: the same lap.
   CHECK(truth.lap_time_s == Approx(live.lap_time_s()).margin(0.05));

@@ -169,6 +169,14 @@ RunRecord MakeRun(int n, int split_count) {
   run.physics_rate_hz = 306.5 + n;
   run.physics_target_hz = 10000.0;
   run.physics_rate_short = true;
+  // The truth's lap (v16): not judged, completed with its finish projected,
+  // or not completed.
+  run.truth_lap.judged = n % 3 != 0;
+  run.truth_lap.completed = n % 3 == 1;
+  run.truth_lap.projected = n % 3 == 1;
+  if (n % 3 == 1) run.truth_lap.lap_time_s = 111.5 + n;
+  run.truth_lap.gates_passed = n % 3 == 0 ? 0 : 3 + n % 3;
+  run.truth_lap.gates_missed = n % 3 == 2 ? 2 : 0;
   run.counters = {{"servo_overruns", uint64_t(3 + n)},
                   {"servo_forces_clamped", 0},
                   {"video_frames_dropped", uint64_t{1} << 40}};  // needs more than 32 bits
@@ -196,6 +204,12 @@ void CheckSame(const RunRecord& got, const RunRecord& want) {
   CHECK(SameReal(got.disengaged_s, want.disengaged_s));
   CHECK(SameReal(got.pseudo_haptic_gain_mean, want.pseudo_haptic_gain_mean));
   CHECK(got.ff_effects_played == want.ff_effects_played);
+  CHECK(got.truth_lap.judged == want.truth_lap.judged);
+  CHECK(got.truth_lap.completed == want.truth_lap.completed);
+  CHECK(SameReal(got.truth_lap.lap_time_s, want.truth_lap.lap_time_s));
+  CHECK(got.truth_lap.projected == want.truth_lap.projected);
+  CHECK(got.truth_lap.gates_passed == want.truth_lap.gates_passed);
+  CHECK(got.truth_lap.gates_missed == want.truth_lap.gates_missed);
   CHECK(got.completed == want.completed);
   CHECK(got.outcome == want.outcome);
   CHECK(SameReal(got.lap_time_s, want.lap_time_s));
@@ -323,6 +337,7 @@ TEST_CASE("Recorder round-trips runs and splits through a reopened database", "[
   second.picture.clear();
   second.switches.clear();
   second.contacts.clear();
+  const RunRecord third = MakeRun(2, 1);  // its truth's lap judged, not completed
 
   int64_t id1 = 0;
   int64_t id2 = 0;
@@ -332,13 +347,14 @@ TEST_CASE("Recorder round-trips runs and splits through a reopened database", "[
     CHECK(recorder.LoadAll().empty());
     id1 = recorder.Save(first);
     id2 = recorder.Save(second);
+    recorder.Save(third);
   }
   CHECK(id1 > 0);
   CHECK(id2 > id1);
 
   Recorder reopened(file);
   const std::vector<RunRecord> runs = reopened.LoadAll();
-  REQUIRE(runs.size() == 2);
+  REQUIRE(runs.size() == 3);
   CHECK(runs[0].id == id1);
   CHECK(runs[1].id == id2);
   {
@@ -348,6 +364,10 @@ TEST_CASE("Recorder round-trips runs and splits through a reopened database", "[
   {
     INFO("second run");
     CheckSame(runs[1], second);
+  }
+  {
+    INFO("third run");
+    CheckSame(runs[2], third);
   }
 }
 
@@ -362,7 +382,7 @@ TEST_CASE("Recorder stores the start time as ISO-8601 UTC and a schema version",
   }
   RawDb raw(file);
   CHECK(raw.Text("SELECT started_utc FROM runs") == "2024-05-01T12:34:56.789Z");
-  CHECK(raw.Integer("PRAGMA user_version") == 15);
+  CHECK(raw.Integer("PRAGMA user_version") == 16);
 }
 
 TEST_CASE("Recorder creates missing parent folders", "[recorder]") {
@@ -399,10 +419,10 @@ TEST_CASE("Recorder set-up errors name the database file", "[recorder]") {
     const fs::path file = tmp.path() / "future.db";
     {
       RawDb raw(file);
-      raw.Exec("PRAGMA user_version = 16");
+      raw.Exec("PRAGMA user_version = 17");
     }
     RequireThrowsMentioning([&] { Recorder recorder(file); }, file.string());
-    RequireThrowsMentioning([&] { Recorder recorder(file); }, "schema version 16");
+    RequireThrowsMentioning([&] { Recorder recorder(file); }, "schema version 17");
   }
 
   SECTION("the path is a folder") {
@@ -518,6 +538,10 @@ TEST_CASE("A run the database did not take is written whole beside it", "[record
        {std::string("\"config_name\":\"quote \\\" and\\u000anewline\""),
         std::string("\"lap_time_s\":null"), std::string("\"physics_rate_short\":true"),
         std::string("\"disengaged_s\":2,\"pseudo_haptic_gain_mean\":null,\"ff_effects_played\":0"),
+        // MakeRun(2)'s truth: judged, not completed.
+        std::string("\"completed_truth\":false,\"lap_time_truth_s\":null,"
+                    "\"lap_time_truth_projected\":false,\"gates_truth_passed\":5,"
+                    "\"gates_truth_missed\":2"),
         std::string("\"counters\":{\"servo_overruns\":5,\"servo_forces_clamped\":0,"
                     "\"video_frames_dropped\":1099511627776}"),
         std::string("\"splits\":[{\"gate\":0,"), std::string("\"switches\":[{\"t_s\":3.25,"),
@@ -733,7 +757,7 @@ TEST_CASE("A v1 database is migrated to the current schema in place and keeps it
   }
 
   RawDb raw(file);
-  CHECK(raw.Integer("PRAGMA user_version") == 15);
+  CHECK(raw.Integer("PRAGMA user_version") == 16);
   CHECK(raw.Text("PRAGMA integrity_check") == "ok");
   CHECK(raw.Integer("SELECT COUNT(*) FROM pragma_foreign_key_check") == 0);
   for (const char* table : {"interface_switches", "run_path", "run_contacts", "run_counters"}) {
@@ -751,7 +775,7 @@ TEST_CASE("A v1 database is migrated to the current schema in place and keeps it
     Recorder again(file);
     CHECK(again.LoadAll().size() == 2);
   }
-  CHECK(raw.Integer("PRAGMA user_version") == 15);
+  CHECK(raw.Integer("PRAGMA user_version") == 16);
 }
 
 namespace {
@@ -840,7 +864,7 @@ TEST_CASE("A v2 database is migrated to v3: its runs keep everything, new runs k
   CheckSame(runs[0], V2Run());
   CheckSame(runs[1], fresh);
   RawDb raw(file);
-  CHECK(raw.Integer("PRAGMA user_version") == 15);
+  CHECK(raw.Integer("PRAGMA user_version") == 16);
   CHECK(raw.Text("PRAGMA integrity_check") == "ok");
   CHECK(raw.Integer(
             "SELECT value FROM run_counters WHERE run_id = 2 AND name = 'servo_overruns'") == 9);

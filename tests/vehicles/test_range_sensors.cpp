@@ -87,6 +87,38 @@ TEST_CASE("range noise is seeded, spread as configured, and spares beams that me
   CHECK(std::sqrt(sum2 / kScans - mean * mean) == Approx(0.01).epsilon(0.1));
 }
 
+TEST_CASE("false and missing echoes come at their rates, seeded, without moving the noise") {
+  const Track track(Corridor());
+  const RangeSensorConfig config{
+      .beams = 31, .fov_deg = 180.0, .max_range = 1.5, .noise_sd = 0.0, .seed = 7};
+  const RangeFaults faults{.spurious = 0.1, .dropout = 0.2};
+  std::mt19937_64 noise(1), echoes(2), again_noise(1), again_echoes(2), plain_noise(1);
+  const RangeScan exact = ScanTrack(track, 1.0, 0.0, 0.0, config, plain_noise);
+  int hits = 0, spurious = 0, dropped = 0, beams = 0;
+  for (int i = 0; i < 400; ++i) {
+    const RangeScan a = ScanTrack(track.walls(), track.round_obstacles(), 1.0, 0.0, 0.0, config,
+                                  noise, faults, echoes);
+    const RangeScan b = ScanTrack(track.walls(), track.round_obstacles(), 1.0, 0.0, 0.0, config,
+                                  again_noise, faults, again_echoes);
+    REQUIRE(a.ranges == b.ranges);  // one seed, one scan
+    for (int k = 0; k < a.count; ++k) {
+      ++beams;
+      const float got = a.ranges[static_cast<size_t>(k)];
+      const float want = exact.ranges[static_cast<size_t>(k)];
+      if (exact.Hit(k)) ++hits;
+      if (got == want) continue;
+      if (exact.Hit(k) && got == 1.5f) {
+        ++dropped;
+      } else {
+        ++spurious;
+      }
+    }
+  }
+  // A false echo on any beam; a missing one only on a beam that met something.
+  CHECK(spurious == Approx(0.1 * beams).epsilon(0.15));
+  CHECK(dropped == Approx(0.9 * 0.2 * hits).epsilon(0.15));
+}
+
 TEST_CASE("a robot without range sensors reports an empty scan") {
   const Track track(Corridor());
   VehicleConfig config;

@@ -14,6 +14,7 @@
 #include "haptel/config/vehicle.hpp"
 #include "haptel/record/truth_record.hpp"
 #include "haptel/vehicles/blimp_adapters.hpp"
+#include "haptel/vehicles/range_sensors.hpp"
 #include "haptel/vehicles/sim_robot.hpp"
 #include "haptel/vehicles/vehicle_core.hpp"
 #include "test_env.hpp"
@@ -89,7 +90,14 @@ TEST_CASE("in the reality none the robot is its twin bit for bit") {
   const std::vector<Sample> a = DriveScript(twin);
   const std::vector<Sample> b = DriveScript(none);
   REQUIRE(a.size() == b.size());
+  // Its scan is the file's track's, with the file's noise alone: no wall or
+  // post moved, no false or missing echo.
+  std::mt19937_64 file_noise(Robot().range_sensors.seed);
+  ScanTrack(Arena(), 1.0, 0.0, 0.0, Robot().range_sensors, file_noise);  // Place's scan
   for (size_t i = 0; i < a.size(); ++i) {
+    const RangeScan file = ScanTrack(Arena(), b[i].truth.x, b[i].truth.y, b[i].truth.heading,
+                                     Robot().range_sensors, file_noise);
+    CHECK(b[i].state.ranges.ranges == file.ranges);
     CHECK(a[i].state.x == b[i].state.x);
     CHECK(a[i].state.y == b[i].state.y);
     CHECK(a[i].state.heading == b[i].state.heading);
@@ -121,6 +129,33 @@ TEST_CASE("a lab robot ends measurably elsewhere than its twin, the same with on
     CHECK(a[i].state.x == b[i].state.x);
     CHECK(a[i].state.heading == b[i].state.heading);
   }
+}
+
+TEST_CASE("a lab robot's beams and bumper meet the posts where they truly stand") {
+  const Track& track = ShortTrack();
+  const DrawnReality lab = DrawReality(LoadReality(RealityFile("lab")), 2, Robot(), &track);
+  REQUIRE(lab.true_posts.size() == track.round_obstacles().size());
+  // Facing the first gate's left post from 0.25 m where the file has it: the
+  // beam ahead reads the distance to where it truly is.
+  const CircleObstacle& file = track.round_obstacles()[0];
+  const CircleObstacle& real = lab.true_posts[0];
+  const Vec2 from = file.center - Vec2(0.25, 0.0);
+  SimRobot robot(track, Robot(), lab);
+  robot.Place(from.x(), from.y(), 0.0);
+  const RangeScan scan = robot.State().ranges;
+  const double ahead = CastRay(lab.true_walls, lab.true_posts, from, Vec2(1.0, 0.0), 1.5);
+  CHECK(ahead != Approx(0.25 - file.radius).margin(1e-3));  // not where the file says
+  // Within the lab's noise and its false echoes (of which the beam ahead is
+  // not one at this seed).
+  CHECK(scan.ranges[15] == Approx(ahead).margin(0.04));
+  // The body stops against the true post, not the file's.
+  robot.Place(real.center.x() - Robot().body.radius - real.radius - 0.01, real.center.y(), 0.0);
+  robot.SetMotors({8, 8});
+  for (int i = 0; i < 100; ++i) robot.Update(0.005);
+  TruthRow truth;
+  REQUIRE(robot.Truth(&truth));
+  CHECK((Vec2(truth.x, truth.y) - real.center).norm() >= Robot().body.radius + real.radius - 1e-6);
+  CHECK((robot.State().bumper_left || robot.State().bumper_right));  // touching it
 }
 
 TEST_CASE("a lab robot's state is its odometry, which drifts from the truth") {

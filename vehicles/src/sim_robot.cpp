@@ -42,6 +42,8 @@ SimRobot::SimRobot(const Track& track, const VehicleConfig& config, const DrawnR
       body_(config.body),
       range_sensors_(RealRangeSensors(config.range_sensors, reality)),
       range_noise_(config.range_sensors.seed),
+      range_faults_{reality.range_spurious_fraction, reality.range_dropout_fraction},
+      echoes_(reality.seed * 0xD1B54A32D192ED03ULL + 0x8CB92BA72F3D8DD7ULL),
       // Its own stream: the encoders' and gyro's noise never shift the ranges'.
       noise_(reality.seed * 0x9E3779B97F4A7C15ULL + 0x632BE59BD9B4E019ULL) {
   const Vec2 start = track.StartPosition();
@@ -61,7 +63,12 @@ void SimRobot::Place(double x, double y, double heading) {
   v_left_ = v_right_ = 0.0;
   levels_ = {};
   pending_due_s_ = -1.0;
-  state_.ranges = ScanTrack(track_, x, y, heading, range_sensors_, range_noise_);
+  state_.ranges = Scan();
+}
+
+RangeScan SimRobot::Scan() {
+  return ScanTrack(TrueWalls(reality_, track_), TruePosts(reality_, track_), truth_.x, truth_.y,
+                   truth_.heading, range_sensors_, range_noise_, range_faults_, echoes_);
 }
 
 void SimRobot::SetMotors(const models::MotorLevels& levels) {
@@ -159,8 +166,7 @@ void SimRobot::Update(double dt) {
   true_speed_ = (after - before).dot(forward) / dt;  // blocked robots move 0
   true_yaw_rate_ = omega;
   // The range sensors see the world from where the robot truly is.
-  state_.ranges =
-      ScanTrack(track_, truth_.x, truth_.y, truth_.heading, range_sensors_, range_noise_);
+  state_.ranges = Scan();
 
   Measured now{time_s_, truth_.x, truth_.y, truth_.heading, true_speed_, true_yaw_rate_};
   if (reality_.odometry != 0.0) {
@@ -217,7 +223,7 @@ void SimRobot::ResolveContacts() {
   // A few passes settle corners where two walls push at once.
   for (int pass = 0; pass < 3; ++pass) {
     Vec2 p(truth_.x, truth_.y);
-    for (const Segment2& wall : track_.walls()) {
+    for (const Segment2& wall : TrueWalls(reality_, track_)) {
       const Vec2 q = ClosestPointOnSegment(wall, p);
       const Vec2 d = p - q;
       const double dist = d.norm();
@@ -226,7 +232,7 @@ void SimRobot::ResolveContacts() {
         if (dist < r && dist > 1e-12) p = q + d * (r / dist);
       }
     }
-    for (const CircleObstacle& c : track_.round_obstacles()) {
+    for (const CircleObstacle& c : TruePosts(reality_, track_)) {
       const Vec2 d = p - c.center;
       const double dist = d.norm();
       const double reach = r + c.radius;

@@ -25,10 +25,10 @@
 #include <vector>
 
 #include "haptel/config/archive.hpp"
+#include "haptel/config/track.hpp"
 
 namespace haptel {
 
-class Track;
 struct VehicleConfig;
 
 /// A value drawn once per run: normal about `mean` with standard deviation
@@ -64,6 +64,28 @@ struct FloorPatchesConfig {
   void ValidateOrThrow() const;
 };
 
+/// The track as it was really laid out against its file (the map the operator
+/// side localises on): no lab lays boards and posts where the drawing puts
+/// them. Every draw is independent, in the track frame, and clipped at 2 sd.
+struct MapErrorConfig {
+  /// Each round post's centre (gate posts and obstacles), per axis, m.
+  double post_sd = 0.0;
+  /// Each wall corner (the walls' polylines stay closed: a board shifted
+  /// and turned a little), per axis, m.
+  double wall_corner_sd = 0.0;
+  /// The whole layout turned about the start position, degrees (the first
+  /// board laid along a slightly wrong line).
+  Spread layout_rotation_deg{0.0, 0.0};
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(HAPTEL_NVP(post_sd), config::Range{0.0, 0.5});
+    a->Visit(HAPTEL_NVP(wall_corner_sd), config::Range{0.0, 0.5});
+    a->Visit(HAPTEL_NVP(layout_rotation_deg));
+  }
+  void ValidateOrThrow() const;
+};
+
 /// The tank robot's reality, relative to its vehicle file's nominal drive
 /// (factors of 1 and zeros: the file's model exactly).
 struct RobotRealityConfig {
@@ -95,6 +117,15 @@ struct RobotRealityConfig {
   double gyro_noise = 0.0;
   /// Each range reading's noise (m); 0: the vehicle file's range_sensors.noise_sd.
   double range_noise_sd = 0.0;
+  /// The fraction of beams that read a false echo: a range uniform in
+  /// [0, max_range) whatever is there (crosstalk, a shoe, dust on the window).
+  double range_spurious_fraction = 0.0;
+  /// The fraction of beams that meet something and yet read max_range (no
+  /// echo: a dark or glancing surface).
+  double range_dropout_fraction = 0.0;
+  /// Walls and posts displaced from the track file; the robot's beams and
+  /// bumpers meet them where they really are.
+  MapErrorConfig map_error;
   /// A new command takes effect after a delay drawn uniformly in [0, this] s
   /// (the brick's command loop).
   double command_jitter_s = 0.0;
@@ -116,6 +147,9 @@ struct RobotRealityConfig {
     a->Visit(HAPTEL_NVP(gyro_drift_deg_per_min));
     a->Visit(HAPTEL_NVP(gyro_noise), config::Range{0.0, 1.0});
     a->Visit(HAPTEL_NVP(range_noise_sd), config::Range{0.0, 1.0});
+    a->Visit(HAPTEL_NVP(range_spurious_fraction), config::Range{0.0, 0.5});
+    a->Visit(HAPTEL_NVP(range_dropout_fraction), config::Range{0.0, 0.5});
+    a->Visit(HAPTEL_NVP(map_error));
     a->Visit(HAPTEL_NVP(command_jitter_s), config::Range{0.0, 0.5});
     a->Visit(HAPTEL_NVP(state_jitter_s), config::Range{0.0, 0.04});
   }
@@ -213,9 +247,17 @@ struct DrawnReality {
   double gyro_bias = 0.0;   ///< rad/s
   double gyro_noise = 0.0;  ///< rad/s
   double range_noise_sd = 0.0;
+  double range_spurious_fraction = 0.0;
+  double range_dropout_fraction = 0.0;
   double command_jitter_s = 0.0;
   double state_jitter_s = 0.0;
   std::vector<FloorPatch> floor_patches;
+  /// The track as it truly stands when the reality displaces it from the
+  /// file (map_error): every wall (Track::walls' order) and round post
+  /// (Track::round_obstacles' order) where it really is. Both empty: the
+  /// file's own (TrueWalls / TruePosts choose).
+  std::vector<Segment2> true_walls;
+  std::vector<CircleObstacle> true_posts;
   // The blimp.
   double wind_x = 0.0;  ///< m/s, world frame
   double wind_y = 0.0;
@@ -226,7 +268,7 @@ struct DrawnReality {
   double clock_offset_s = 0.0;
   double clock_drift_ppm = 0.0;
 
-  /// Calls visit(name, value) for every number above but the patches, in
+  /// Calls visit(name, value) for every number above but the patches, walls and posts, in
   /// this order: the truth record's header writes and reads them so.
   template <typename Self, typename Visit>
   static void ForEach(Self& self, Visit&& visit) {
@@ -242,6 +284,8 @@ struct DrawnReality {
     visit("gyro_bias", self.gyro_bias);
     visit("gyro_noise", self.gyro_noise);
     visit("range_noise_sd", self.range_noise_sd);
+    visit("range_spurious_fraction", self.range_spurious_fraction);
+    visit("range_dropout_fraction", self.range_dropout_fraction);
     visit("command_jitter_s", self.command_jitter_s);
     visit("state_jitter_s", self.state_jitter_s);
     visit("wind_x", self.wind_x);
@@ -259,6 +303,11 @@ struct DrawnReality {
 /// blimp). The same arguments give the same draw.
 DrawnReality DrawReality(const RealityConfig& reality, uint64_t seed, const VehicleConfig& vehicle,
                          const Track* track);
+
+/// The walls and round posts where they truly stand in `reality`: its
+/// displaced ones, else `track`'s own.
+const std::vector<Segment2>& TrueWalls(const DrawnReality& reality, const Track& track);
+const std::vector<CircleObstacle>& TruePosts(const DrawnReality& reality, const Track& track);
 
 /// The reality of the vehicle file alone (no reality file): its nominal
 /// model exactly, named "none", seed 0.

@@ -8,6 +8,8 @@
 ///     # seed 7
 ///     # left_gain 1.0312            (every DrawnReality::ForEach number)
 ///     # floor_patch x y radius traction   (one line per patch)
+///     # wall ax ay bx by   (where each wall truly stands, with map error)
+///     # post x y radius    (where each round post truly stands, likewise)
 ///     operator_ns,x,y,z,heading,speed,yaw_rate
 ///     123456789012,0.1,0.2,0,1.57,0.25,0.01
 ///

@@ -14,12 +14,22 @@
 ///   wall move the encoders, not the robot);
 /// - the likelihood-field measurement model (ch. 6.4): a beam that meets
 ///   something ends on the track's walls or posts, so its endpoint's distance
-///   to the nearest of them is a measurement of zero. Beams that meet nothing
-///   tell nothing (as in the book); an endpoint farther than a gate from
-///   everything is an outlier. The update is iterated (Gauss-Newton on the
-///   prior and every beam, re-associating each beam with its nearest shape
-///   every iteration: the iterated EKF of Bell and Cathey, 1993), with a
-///   Huber weight on each beam.
+///   to the nearest of them is a measurement of zero. Beams that read max
+///   range tell nothing (the book's z_max: a missing echo is no evidence);
+///   an endpoint farther than a gate from everything is an outlier. The
+///   update is iterated (Gauss-Newton on the prior and every beam,
+///   re-associating each beam with its nearest shape every iteration: the
+///   iterated EKF of Bell and Cathey, 1993), each beam gated at 3 sd of what
+///   the prior allows it and weighted by Huber's function beyond 2 sd: a
+///   false echo or a misplaced post pulls with a bounded force, or none.
+///   (The book's z_hit/z_rand mixture weight, tried in its place, held the
+///   pose less well on false echoes: docs/architecture.md.)
+/// - an innovation gate on the whole scan: when fewer than
+///   min_inlier_fraction of the beams that met something end within 3 sd
+///   of the map at the pose the update found, the scan disagrees with the
+///   map wherever the robot is (a sensor's bad frame, a lidar whose angle
+///   slipped, a crowd around the robot): it is refused, and the pose
+///   stays the odometry's (scans_refused counts them).
 ///
 /// The nearest shapes are looked up in a grid precomputed from the track
 /// (each cell lists the shapes that can be nearest to a point in it), and the
@@ -42,14 +52,18 @@ struct Pose2 {
   double heading = 0.0;
 };
 
-/// The filter's noise model. Defaults fit a small tracked robot with
-/// ultrasonic-class range sensors (config/realities/lab.yaml's spreads,
-/// with margin): the model's, not the reality's (which the operator side
-/// never reads).
+/// The filter's noise model. Defaults fit a small tracked robot with a
+/// low-cost scanning range sensor on a hand-laid track (config/realities/
+/// lab.yaml's spreads, with margin): the model's, not the reality's (which
+/// the operator side never reads).
 struct LocaliserConfig {
-  /// A beam's endpoint against the map (m): the sensor's noise, inflated
-  /// because beams of one scan are not independent (ch. 6.3.4).
+  /// A beam's endpoint against the map (m): the sensor's noise and the
+  /// map's error, inflated because beams of one scan are not independent
+  /// (ch. 6.3.4; the beams on one misplaced wall share its error).
   double beam_sd = 0.02;
+  /// A scan is refused when fewer than this fraction of its beams that met
+  /// something end within 3 beam_sd of the map at the pose found.
+  double min_inlier_fraction = 0.5;
   /// Beyond this from every wall and post (m), an endpoint is an outlier.
   double outlier_m = 0.3;
   /// Odometry noise per metre driven: along, across (m/m), and heading
@@ -90,8 +104,11 @@ class TrackLocaliser {
   const Pose2& pose() const { return pose_; }
   /// The pose's covariance, row-major (x, y, heading).
   const std::array<double, 9>& covariance() const { return cov_; }
-  /// Beams the last update used (hit something, not outliers).
+  /// Beams the last update used (hit something, not outliers; 0 when it
+  /// was refused).
   int beams_used() const { return beams_used_; }
+  /// Scans refused by the innovation gate since construction.
+  int64_t scans_refused() const { return scans_refused_; }
   bool started() const { return started_; }
 
   /// Distance (m) from `p` to the nearest wall or post surface, and its
@@ -127,6 +144,7 @@ class TrackLocaliser {
   bool started_ = false;
   bool have_odometry_ = false;
   int beams_used_ = 0;
+  int64_t scans_refused_ = 0;
 };
 
 }  // namespace haptel::mediator

@@ -71,13 +71,19 @@ struct EstimatedParameter {
 /// truth record, after the run), by the same rules as the live lap, which a
 /// real vehicle's odometry judges: a gate the odometry passed may have been
 /// truly missed, and the lap's time differs where the odometry drifted over
-/// a line. JSON only; `judged` false without a truth record (a real vehicle,
-/// the blimp's course).
+/// a line. In the JSON and the database (v16; its splits in the JSON
+/// only); `judged` false without a truth record (a real vehicle, the
+/// blimp's course).
 struct TruthLap {
   bool judged = false;
   bool completed = false;
   /// From the true start-line crossing to the true finish (NaN: not completed).
   double lap_time_s = std::numeric_limits<double>::quiet_NaN();
+  /// The finish was projected, not crossed: the run ended as the odometry
+  /// crossed the line with the robot truly short of it, and lap_time_s
+  /// adds the rest of the way at its true speed (JudgeLapOnTruth). An
+  /// estimate, to be reported as one.
+  bool projected = false;
   int gates_passed = 0;
   int gates_missed = 0;
   std::vector<GateSplit> splits;
@@ -136,6 +142,9 @@ struct RunRecord {
   /// Whether the robot's pose was localised on the track (its range scan
   /// against the walls and posts) or its odometry alone (JSON only).
   bool localised = false;
+  /// Scans the localiser refused whole, disagreeing with the map wherever
+  /// the robot was (track_localiser.hpp; -1: not localised; JSON only).
+  int64_t localiser_scans_refused = -1;
   /// The pose each state gave the run (localised, or the odometry) and the
   /// odometry alone, against the truth at that state's moment (m; -1: no
   /// truth record; JSON only): the floor under the prediction's error.
@@ -145,7 +154,7 @@ struct RunRecord {
   double odometry_error_m_p95 = -1.0;
   /// What the predictor estimated of the vehicle, each against its truth.
   std::vector<EstimatedParameter> estimated;
-  /// The lap judged from the truth record (JSON only).
+  /// The lap judged from the truth record (v16; NULL before, and when not judged).
   TruthLap truth_lap;
   /// A run in simulated time (`haptel run --simulated-time`): simulated
   /// seconds per wall-clock second over the run (v11; -1: a real-time run).

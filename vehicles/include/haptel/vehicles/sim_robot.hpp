@@ -15,7 +15,9 @@
 /// command and state jitter. Its state says what the robot itself knows:
 /// with the reality's `odometry`, the pose it integrates from its tread
 /// encoders along its gyro's heading (both noisy), which drifts from the
-/// truth; bumpers; ranges scanned from where it truly is. Truth() says
+/// truth; bumpers; ranges scanned from where it truly is, against the walls
+/// and posts where they truly stand (the reality's map error), with its
+/// false and missing echoes. Truth() says
 /// where it truly is, for the truth record only. Without a reality file
 /// (NominalReality) it is the file's model exactly, and reports the truth.
 #include <array>
@@ -26,6 +28,7 @@
 #include "haptel/config/vehicle.hpp"
 #include "haptel/models/tread_drive.hpp"
 #include "haptel/vehicles/adapter.hpp"
+#include "haptel/vehicles/range_sensors.hpp"
 
 namespace haptel::vehicles {
 
@@ -70,6 +73,8 @@ class SimRobot final : public VehicleAdapter {
   void ResolveContacts();
   void Contact(const Vec2& point);
   double Gaussian() { return normal_(noise_); }
+  /// The scan from the true pose against the true walls and posts.
+  RangeScan Scan();
 
   const Track& track_;
   TreadDriveConfig drive_;       ///< the file's: the levels' speeds
@@ -78,7 +83,9 @@ class SimRobot final : public VehicleAdapter {
   BodyConfig body_;
   RangeSensorConfig range_sensors_;
   std::mt19937_64 range_noise_;
-  std::mt19937_64 noise_;  ///< encoders, gyro, jitter
+  RangeFaults range_faults_;
+  std::mt19937_64 echoes_;  ///< the range faults' draws
+  std::mt19937_64 noise_;   ///< encoders, gyro, jitter
   std::normal_distribution<double> normal_{0.0, 1.0};
   models::MotorLevels levels_;   ///< the motors run at these
   models::MotorLevels pending_;  ///< commanded, in effect at pending_due_s_
