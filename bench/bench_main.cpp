@@ -63,10 +63,12 @@ constexpr Usage kUsage[] = {
      "airship model: integrators x steps, error against CPU; physics checks"},
     {"link",
      "[--seconds S] [--vehicles robot,blimp] [--track FILE] [--blimp-track FILE] [--reality "
-     "NAME,...] [--delays MS,...] [--losses PERCENT,...] [--predict off,nominal,learn] "
-     "[--link-profile NAME] [--domain D] [--lap-domain D] [--rtt-only] [--smoke] [--json]",
+     "NAME,...] [--seeds 1-5] [--delays MS,...] [--losses PERCENT,...] [--predict "
+     "off,nominal,learn] [--link-profile NAME] [--simulated-time] [--domain D] [--lap-domain D] "
+     "[--rtt-only] [--smoke] [--json]",
      "DDS round trip against raw Fast DDS; the lap against the link's delay per reality, "
-     "prediction off, nominal and learning, its error against the truth"},
+     "prediction off, nominal and learning, its error against the truth; over seeds, each "
+     "cell's spread and learning against nominal seed by seed"},
     {"video",
      "[--vehicle FILE] [--track FILE] [--schedule default|both|jpeg|h264|off] [--phase-s S] "
      "[--cameras FILE|off] [--cameras-only] [--domain D] [--smoke] [--json]",

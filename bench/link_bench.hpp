@@ -36,12 +36,30 @@
 ///   ~0. With --link-profile NAME every lap runs on that link
 ///   (config/links/), its delay and loss replaced by the sweep's (its rate,
 ///   queue and jitter kept).
+/// - Over seeds: --seeds 1-5 (a list of seeds and ranges, "1,3,7-9") drives
+///   every lap once per seed of the reality's draws (`haptel run
+///   --reality-seed`), and then reports each cell (vehicle, reality,
+///   prediction, delay, loss) over the seeds: completed laps, the lap's and
+///   the error's mean, standard deviation and the mean's 95 % interval
+///   (Student's t, n − 1 degrees of freedom), and learning against the
+///   nominal model seed by seed: the paired difference learn − nominal of
+///   the lap and the error p95, its mean and 95 % interval, "better" or
+///   "worse" only when the interval excludes 0. One seed's lap is one draw
+///   of the reality and one lap's chances; a paired difference over seeds
+///   is what a claim rests on. The harsh target is then judged on those
+///   intervals (every cell better).
+/// - --simulated-time: the robot's laps run `haptel run --simulated-time`
+///   (the robot stepped in the run's process on one simulated clock, the
+///   link its delay alone: no loss, no --link-profile, no blimp): a grand
+///   prix lap in a second or two of CPU instead of 80 s of wall time, and
+///   the same lap for the same seed to the tick.
 ///
 /// Prints the tables; writes build/bench/link_rtt.csv, link_laps.csv,
 /// link_estimates.csv, link_laps.png and link_laps_error.png (the blimp's:
 /// link_laps_blimp*.png), and each lap's truth record in link_truth/; with --json the last stdout
 /// line is
-/// {"rtt":{…},"laps":[…],"targets":{…}}.
+/// {"rtt":{…},"laps":[…],"seeds":[…],"simulated_time":…,"cells":[…],
+/// "learn_minus_nominal":[…],"targets":{…}}.
 ///
 /// DDS domains: the round trips on --domain D (default 200 + pid % 30), the
 /// laps on --lap-domain (default D + 1).
@@ -51,8 +69,9 @@
 namespace haptel::bench {
 
 /// `haptel bench link [--seconds S] [--vehicles robot,blimp] [--track FILE] [--blimp-track FILE]
-/// [--reality LIST] [--delays LIST] [--losses LIST] [--predict LIST] [--link-profile NAME]
-/// [--domain D] [--lap-domain D] [--rtt-only] [--smoke] [--json]`.
+/// [--reality LIST] [--seeds LIST] [--delays LIST] [--losses LIST] [--predict LIST]
+/// [--link-profile NAME] [--simulated-time] [--domain D] [--lap-domain D] [--rtt-only] [--smoke]
+/// [--json]`.
 /// Returns 0 when every lap ran and the round trip was measured, 1 when one
 /// could not be, 2 for bad usage.
 int BenchLinkMain(int argc, const char* const* argv);

@@ -12,6 +12,7 @@ namespace {
 
 constexpr double kMinGain = 0.3, kMaxGain = 2.0;
 constexpr double kMinWidthShare = 0.8, kMaxWidthShare = 3.0;
+constexpr double kMinRatio = 0.5, kMaxRatio = 2.0;
 
 }  // namespace
 
@@ -29,7 +30,15 @@ void DriveEstimator::Observe(const DriveObservation& state) {
   const double target_right = models::LevelSpeed(nominal_, state.applied_right);
   const double dt = state.stamp_s - last_stamp_s_;
   const double tau = nominal_.motor_time_constant;
-  if (!seeded_ || !(dt > 0.0) || dt > options_.max_gap_s) {
+  // A state sampled no later than the last one (a vehicle that sends a
+  // measurement a little older than the one before: harsh's state jitter
+  // does, one state in eleven) is out of sequence: the lag is already past
+  // it. It is left out, as out-of-sequence measurements are when they are
+  // few (Bar-Shalom, "Update with out-of-sequence measurements", IEEE TAES
+  // 2002, discusses the alternatives); taking it as a gap instead stopped
+  // all learning for 10 time constants each, and on harsh for good.
+  if (seeded_ && !(dt > 0.0)) return;
+  if (!seeded_ || dt > options_.max_gap_s) {
     // The first state, one after a gap or after a bumper let go: the lag
     // taken as settled at the levels applied, and nothing learnt until it
     // would be (10 time constants: 5e-5 of a step left) unless at rest.
@@ -64,28 +73,55 @@ void DriveEstimator::Observe(const DriveObservation& state) {
   if (Guard(gains_, options_.reset_covariance, gains_known_, speed_residual, gain_outliers_,
             options_.reset_run))
     gains_reset_at_s_ = state.stamp_s;
-  if (std::abs(u_right_ - u_left_) > options_.min_turn * top) {
-    const double clip = width_known_ ? options_.outlier_sds * per_width_.noise_sd()
-                                     : std::numeric_limits<double>::infinity();
-    const double yaw_residual =
-        per_width_.Update(Eigen::Vector2d(-u_left_, u_right_), state.yaw_rate, clip);
-    ++width_updates_;
-    const double width = nominal_.track_width;
-    const bool changed = state.stamp_s - gains_reset_at_s_ <= options_.changed_window_s;
-    Guard(per_width_, options_.reset_covariance / (width * width), width_known_, yaw_residual,
-          width_outliers_, changed ? options_.reset_run : options_.width_reset_run);
-  }
+  // The yaw rate while driving straight shows the treads' difference
+  // (a_r − a_l); while turning, their sum, which is the width.
+  const bool turning = std::abs(u_right_ - u_left_) > options_.min_turn * top;
+  if (turning) ++width_updates_;
+  const double clip = width_known_ ? options_.outlier_sds * per_width_.noise_sd()
+                                   : std::numeric_limits<double>::infinity();
+  const double yaw_residual =
+      per_width_.Update(Eigen::Vector2d(-u_left_, u_right_), state.yaw_rate, clip, turning);
+  const double width = nominal_.track_width;
+  const bool changed = state.stamp_s - gains_reset_at_s_ <= options_.changed_window_s;
+  Guard(per_width_, options_.reset_covariance / (width * width), width_known_, yaw_residual,
+        width_outliers_, changed ? options_.reset_run : options_.width_reset_run);
 
   // Known once converged, and from then on (a reset or a stretch without
   // turns widens the covariance again; the estimate is still the best there is).
-  if (!gains_known_ && Known(gains_)) {
+  if (!gains_known_ && MeanGainSd() < options_.known_share * MeanGain()) {
     gains_known_ = true;
     gains_known_at_s_ = state.stamp_s;
+  }
+  if (!ratio_known_ && RatioSd() < options_.known_ratio_sd) {
+    ratio_known_ = true;
+    ratio_known_at_s_ = state.stamp_s;
   }
   if (gains_known_ && !width_known_ && Known(per_width_)) {
     width_known_ = true;
     width_known_at_s_ = state.stamp_s;
   }
+}
+
+double DriveEstimator::MeanGain() const {
+  return 0.5 * (gains_.estimate()(0) + gains_.estimate()(1));
+}
+
+double DriveEstimator::MeanGainSd() const {
+  const Eigen::Vector2d half(0.5, 0.5);
+  return gains_.noise_sd() * std::sqrt(std::max(half.dot(gains_.covariance() * half), 0.0));
+}
+
+double DriveEstimator::Ratio() const {
+  const Eigen::Vector2d& a = per_width_.estimate();
+  return a(1) / a(0);
+}
+
+double DriveEstimator::RatioSd() const {
+  // The delta method: ρ = a_r / a_l, ∇ρ = (−a_r / a_l², 1 / a_l).
+  const Eigen::Vector2d& a = per_width_.estimate();
+  if (!(a(0) > 0.0) || !(a(1) > 0.0)) return std::numeric_limits<double>::infinity();
+  const Eigen::Vector2d grad(-a(1) / (a(0) * a(0)), 1.0 / a(0));
+  return per_width_.noise_sd() * std::sqrt(std::max(grad.dot(per_width_.covariance() * grad), 0.0));
 }
 
 bool DriveEstimator::Known(const RecursiveLeastSquares2& rls) const {
@@ -114,20 +150,27 @@ bool DriveEstimator::Guard(RecursiveLeastSquares2& rls, double reset_covariance,
   return false;
 }
 
+double DriveEstimator::gain_ratio() const {
+  const double nominal = nominal_.right_gain / nominal_.left_gain;
+  return ratio_known_ ? std::clamp(Ratio(), kMinRatio, kMaxRatio) : nominal;
+}
+
 double DriveEstimator::left_gain() const {
-  return gains_known_ ? std::clamp(gains_.estimate()(0), kMinGain, kMaxGain) : nominal_.left_gain;
+  if (!gains_known_) return nominal_.left_gain;
+  return std::clamp(2.0 * MeanGain() / (1.0 + gain_ratio()), kMinGain, kMaxGain);
 }
 
 double DriveEstimator::right_gain() const {
-  return gains_known_ ? std::clamp(gains_.estimate()(1), kMinGain, kMaxGain) : nominal_.right_gain;
+  if (!gains_known_) return nominal_.right_gain;
+  const double ratio = gain_ratio();
+  return std::clamp(2.0 * MeanGain() * ratio / (1.0 + ratio), kMinGain, kMaxGain);
 }
 
 double DriveEstimator::track_width() const {
   if (!width_known_) return nominal_.track_width;
-  // g = B a for both treads: B by least squares.
-  const Eigen::Vector2d& g = gains_.estimate();
+  // g_l + g_r = B (a_l + a_r): the mean gain's scale over the yaw's.
   const Eigen::Vector2d& a = per_width_.estimate();
-  return std::clamp(g.dot(a) / a.squaredNorm(), kMinWidthShare * nominal_.track_width,
+  return std::clamp(2.0 * MeanGain() / (a(0) + a(1)), kMinWidthShare * nominal_.track_width,
                     kMaxWidthShare * nominal_.track_width);
 }
 

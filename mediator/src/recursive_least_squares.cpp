@@ -14,13 +14,15 @@ RecursiveLeastSquares2::RecursiveLeastSquares2(const Eigen::Vector2d& initial,
       noise_floor_(noise_floor),
       noise_variance_(noise_floor * noise_floor) {}
 
-double RecursiveLeastSquares2::Update(const Eigen::Vector2d& phi, double y, double max_residual) {
+double RecursiveLeastSquares2::Update(const Eigen::Vector2d& phi, double y, double max_residual,
+                                      bool forget) {
   const double residual = y - phi.dot(theta_);
   const double used = std::clamp(residual, -max_residual, max_residual);
+  const double lambda = forget ? forgetting_ : 1.0;
   const Eigen::Vector2d p_phi = p_ * phi;
-  const Eigen::Vector2d gain = p_phi / (forgetting_ + phi.dot(p_phi));
+  const Eigen::Vector2d gain = p_phi / (lambda + phi.dot(p_phi));
   theta_ += gain * used;
-  p_ = (p_ - gain * p_phi.transpose()) / forgetting_;
+  p_ = (p_ - gain * p_phi.transpose()) / lambda;
   p_ = 0.5 * (p_ + p_.transpose());  // kept symmetric against rounding
   noise_variance_ = forgetting_ * noise_variance_ + (1.0 - forgetting_) * used * used;
   return residual;

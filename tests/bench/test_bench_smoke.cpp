@@ -398,6 +398,52 @@ TEST_CASE("bench link --smoke; beside it, --rtt-only: the round trips alone, no 
   CHECK(r["laps"].array().empty());
 }
 
+TEST_CASE(
+    "bench link --smoke over seeds, in simulated time: each cell's spread, learning "
+    "against nominal seed by seed",
+    "[bench][smoke][network]") {
+  // harsh on the short track, seeds 1 and 2, nominal and learning at 0 ms:
+  // four laps of a second or less each (simulated time), beside the round trips.
+  const JsonValue j =
+      Smoke("link", {"--domain", std::to_string(haptel::test::UniqueDomain(86)), "--reality",
+                     "harsh", "--predict", "nominal,learn", "--seeds", "1-2", "--simulated-time"})
+          .json;
+  CHECK(j["simulated_time"].boolean());
+  REQUIRE(j["seeds"].array().size() == 2);
+  const auto& laps = j["laps"].array();
+  REQUIRE(laps.size() == 4);
+  // Each seed's learn − nominal lap, by hand from the laps.
+  double lap[2][2] = {};  // [mode: nominal, learn][seed 1, 2]
+  for (const JsonValue& l : laps) {
+    CHECK(l["reality"]["name"].string() == "harsh");
+    const int seed = static_cast<int>(Finite(l["reality"]["seed"]));
+    REQUIRE((seed == 1 || seed == 2));
+    REQUIRE(l["completed"].boolean());
+    lap[l["mode"].string() == "learn" ? 1 : 0][seed - 1] = Finite(l["lap_time_s"]);
+  }
+  const auto& cells = j["cells"].array();
+  REQUIRE(cells.size() == 2);  // nominal and learning at 0 ms
+  for (const JsonValue& c : cells) {
+    const int m = c["mode"].string() == "learn" ? 1 : 0;
+    CHECK(Finite(c["laps"]) == 2);
+    CHECK(Finite(c["lap_time_s"]["n"]) == 2);
+    CHECK(Finite(c["lap_time_s"]["mean"]) == Approx(0.5 * (lap[m][0] + lap[m][1])));
+    CHECK(Finite(c["lap_time_s"]["sd"]) ==
+          Approx(std::abs(lap[m][0] - lap[m][1]) / std::sqrt(2.0)).margin(1e-9));
+  }
+  const auto& paired = j["learn_minus_nominal"].array();
+  REQUIRE(paired.size() == 2);  // the lap and the error p95 at 0 ms
+  const JsonValue& d = paired[0];
+  CHECK(d["figure"].string() == "lap_time_s");
+  const double d1 = lap[1][0] - lap[0][0], d2 = lap[1][1] - lap[0][1];
+  CHECK(Finite(d["difference"]["mean"]) == Approx(0.5 * (d1 + d2)).margin(1e-9));
+  // Two seeds: t(0.975, 1) = 12.706, the interval ± 12.706 × sd / √2.
+  const double half = 12.7062 * std::abs(d1 - d2) / std::sqrt(2.0) / std::sqrt(2.0);
+  CHECK(Finite(d["difference"]["ci95"].array()[1]) - Finite(d["difference"]["mean"]) ==
+        Approx(half).margin(1e-3));
+  CHECK(j["targets"]["harsh_learn_better_every_cell"].kind() == JsonValue::Kind::kBool);
+}
+
 TEST_CASE("bench fleet --smoke: the fewest and the most vehicles, each count's figures",
           "[bench][smoke][network]") {
   const JsonValue j =

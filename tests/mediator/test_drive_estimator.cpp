@@ -203,3 +203,69 @@ TEST_CASE("Floor patches of less grip do not carry the track width away") {
   CHECK(estimator.left_gain() == Approx(0.88).epsilon(0.02));
   CHECK(estimator.right_gain() == Approx(1.07).epsilon(0.02));
 }
+
+TEST_CASE(
+    "The mean gain first, from the speed; the split between the treads once a turn shows it") {
+  // No motor lag. Truth: g_l 0.9, g_r 1.1, B 0.2 m; the file says 1.0 / 0.95.
+  //   levels 4, 4 (straight): treads 0.135, 0.165 m/s → speed 0.15, yaw 0.15
+  //   levels 2, 6 (a turn):   treads 0.0675, 0.2475  → speed 0.1575, yaw 0.9
+  // Straight, the speed gives the mean gain 0.15 / 0.15 = 1.0, but not how it
+  // splits (each tread's level is the same): the file's split stands,
+  // g_l = 2 × 1.0 / (1 + 0.95) = 1.025641, g_r = 2 × 1.0 × 0.95 / 1.95 = 0.974359.
+  TreadDriveConfig nominal = Nominal();
+  nominal.motor_time_constant = 0.0;
+  DriveEstimator estimator(nominal);
+  double t = 0.0;
+  estimator.Observe({t, 0.0, 0.0, 0, 0, false});
+  for (int i = 0; i < 20; ++i) {
+    t += 0.02;
+    estimator.Observe({t, 0.15, 0.15, 4, 4, false});
+  }
+  REQUIRE(estimator.gains_known());
+  CHECK_FALSE(estimator.ratio_known());
+  CHECK_FALSE(estimator.width_known());
+  CHECK(estimator.left_gain() == Approx(2.0 / 1.95).epsilon(1e-9));
+  CHECK(estimator.right_gain() == Approx(1.9 / 1.95).epsilon(1e-9));
+  CHECK(estimator.track_width() == nominal.track_width);
+  // One turn: with a = g / B, the yaw rate's two lines are
+  //   straight: −0.15 a_l + 0.15 a_r = 0.15  → a_r − a_l = 1
+  //   turning:  −0.075 a_l + 0.225 a_r = 0.9 → a_l = 4.5, a_r = 5.5
+  // so the split is 5.5 / 4.5 and the width 2 × 1.0 / (4.5 + 5.5) = 0.2 m.
+  for (int i = 0; i < 10; ++i) {
+    t += 0.02;
+    estimator.Observe({t, 0.1575, 0.9, 2, 6, false});
+  }
+  REQUIRE(estimator.ratio_known());
+  REQUIRE(estimator.width_known());
+  CHECK(estimator.gain_ratio() == Approx(1.1 / 0.9).epsilon(1e-9));
+  CHECK(estimator.left_gain() == Approx(0.9).epsilon(1e-9));
+  CHECK(estimator.right_gain() == Approx(1.1).epsilon(1e-9));
+  CHECK(estimator.track_width() == Approx(0.2).epsilon(1e-9));
+}
+
+TEST_CASE("A state sampled before the one ahead of it is left out, not taken as a gap") {
+  // harsh's state jitter sends a measurement up to 30 ms old: one state in
+  // eleven is older than the one before. Taken as a gap, each stopped the
+  // learning for 10 motor time constants (0.8 s), and on harsh for good.
+  SyntheticDrive drive;
+  DriveEstimator estimator(Nominal());
+  estimator.Observe({0.0, 0.0, 0.0, 0, 0, false});
+  DriveObservation previous{};
+  int late = 0;
+  for (int i = 1; drive.t < 20.0; ++i) {
+    const DriveObservation now = drive.Next();
+    estimator.Observe(now);
+    if (i % 11 == 0) {
+      estimator.Observe(previous);  // the older one again, after the newer
+      ++late;
+    }
+    previous = now;
+  }
+  REQUIRE(late > 80);
+  REQUIRE(estimator.width_known());
+  CHECK(estimator.gains_known_at_s() < 1.5);
+  CHECK(estimator.width_known_at_s() < 2.0);
+  CHECK(std::abs(estimator.left_gain() - 0.88) < 1e-6);
+  CHECK(std::abs(estimator.right_gain() - 1.07) < 1e-6);
+  CHECK(std::abs(estimator.track_width() - 1.4 * 0.16) < 1e-6);
+}

@@ -22,17 +22,29 @@
 /// linear in their parameters: (g_l, g_r) from the speed, and (a_l, a_r) =
 /// (g_l / B, g_r / B) from the yaw rate, each by recursive least squares
 /// with exponential forgetting (Ljung, "System Identification", 2nd ed.
-/// 1999, §11.2), so that slow changes (the battery's sag) are followed. B is
-/// then the least-squares ratio of the two: g = B a.
+/// 1999, §11.2), so that slow changes (the battery's sag) are followed.
+///
+/// What each line shows decides what is taken from it. The speed shows the
+/// mean gain m = (g_l + g_r) / 2 at once (every state moving), but the split
+/// between the treads only in turns, and then faintly (on harsh's grand prix
+/// it took 18 s to be known, and was split the wrong way round before: 0.73
+/// / 0.90 against 0.83 / 0.79). The yaw rate shows the split strongly, even
+/// driven straight (a_r − a_l: a tank that pulls to one side), and the sum
+/// a_l + a_r in turns. So: m from the speed; the ratio g_r / g_l = a_r / a_l
+/// from the yaw rate (the file's until known: a prior that holds the split
+/// where the file says until the data say otherwise); each gain m split by
+/// that ratio; and B = 2 m / (a_l + a_r). Driven straight, the yaw rate's
+/// estimator updates without forgetting: it learns the difference and
+/// forgets nothing of the sum it did not see (Kulhavý 1987, restricted
+/// forgetting), so the sum is not wound up between turns.
 ///
 /// Guards, so that what it has not seen does not move it:
 /// - no update while a bumper is pressed (the treads stall, the robot does
 ///   not move), while the robot is at rest with no level applied (nothing
 ///   to learn), nor across a gap in the states, nor after either until the
 ///   lag has settled (its state is lost);
-/// - the yaw rate's estimator only while the robot turns (its nominal tread
-///   speeds differ by kMinTurn of the top speed): driven straight, the
-///   width is not seen, and forgetting would only inflate its covariance;
+/// - a state sampled no later than the one before (out of sequence: a
+///   vehicle's state jitter) is left out;
 /// - each covariance's trace is bounded (no wind-up), and reset when the
 ///   residuals keep one sign, each over the noise, for half a second (the
 ///   robot changed: a battery that sagged);
@@ -56,7 +68,9 @@
 ///   it is two deviations from the file's value instead latched a gain at
 ///   0.51 against a truth of 0.83 on harsh's grand prix: the deviations the
 ///   covariance gives are too small there, the residuals being neither
-///   white nor Gaussian: the motor lag's misfit, the jitter.)
+///   white nor Gaussian: the motor lag's misfit, the jitter.) The mean gain
+///   is known when its deviation is under 5 %, the ratio under 0.02, the
+///   width when both its parameters are under 5 %.
 ///
 /// The motor's time constant is not estimated: the vehicle file's is used.
 /// Its misfit shows in the gains during speed changes only.
@@ -92,11 +106,15 @@ class DriveEstimator {
     /// share of its value: well inside what the file's numbers may be off
     /// by (a motor's gain by 5-10 %, a skid-steer's width by 20-60 %).
     double known_share = 0.05;
+    /// The treads' gain ratio g_r / g_l is known once its standard
+    /// deviation is under this (a 2 % ratio: each gain within 1 %).
+    double known_ratio_sd = 0.02;
     /// The measurements' noise is never taken as less than this (m/s; rad/s).
     double speed_noise_floor = 0.002;
     double yaw_noise_floor = 0.01;
-    /// The turn needed to update the yaw rate's estimator: the nominal
-    /// tread speeds differ by this share of the top speed.
+    /// A turn (it shows the width): the nominal tread speeds differ by this
+    /// share of the top speed. The yaw rate's estimator forgets only in
+    /// turns; width_updates() counts them.
     double min_turn = 0.15;
     /// A moving robot: some tread's nominal speed over this share of the top speed.
     double min_motion = 0.05;
@@ -129,7 +147,10 @@ class DriveEstimator {
   double left_gain() const;
   double right_gain() const;
   double track_width() const;  ///< m
+  /// The right tread's gain over the left's (the file's until known).
+  double gain_ratio() const;
   bool gains_known() const { return gains_known_; }
+  bool ratio_known() const { return ratio_known_; }
   bool width_known() const { return width_known_; }
   /// The vehicle file's drive with what is known in place of its numbers.
   TreadDriveConfig Drive() const;
@@ -137,6 +158,7 @@ class DriveEstimator {
   /// When (vehicle clock, s) each first became known (negative: not yet).
   double gains_known_at_s() const { return gains_known_at_s_; }
   double width_known_at_s() const { return width_known_at_s_; }
+  double ratio_known_at_s() const { return ratio_known_at_s_; }
   int gain_updates() const { return gain_updates_; }
   int width_updates() const { return width_updates_; }
   int resets() const { return resets_; }
@@ -149,6 +171,12 @@ class DriveEstimator {
   bool Guard(RecursiveLeastSquares2& rls, double reset_covariance, bool known, double residual,
              int& run, int reset_after);
   bool Known(const RecursiveLeastSquares2& rls) const;
+  /// (g_l + g_r) / 2 from the speed, and its standard deviation.
+  double MeanGain() const;
+  double MeanGainSd() const;
+  /// a_r / a_l = g_r / g_l from the yaw rate, and its standard deviation.
+  double Ratio() const;
+  double RatioSd() const;
 
   TreadDriveConfig nominal_;
   Options options_;
@@ -159,8 +187,8 @@ class DriveEstimator {
   double settled_s_ = 0.0;  ///< no update before (vehicle clock): the lag seeded
   /// (g_l, g_r) from the speed; (g_l / B, g_r / B) from the yaw rate.
   RecursiveLeastSquares2 gains_, per_width_;
-  bool gains_known_ = false, width_known_ = false;
-  double gains_known_at_s_ = -1.0, width_known_at_s_ = -1.0;
+  bool gains_known_ = false, width_known_ = false, ratio_known_ = false;
+  double gains_known_at_s_ = -1.0, width_known_at_s_ = -1.0, ratio_known_at_s_ = -1.0;
   int gain_updates_ = 0, width_updates_ = 0, resets_ = 0;
   int gain_outliers_ = 0, width_outliers_ = 0;
   double gains_reset_at_s_ = -1e300;  ///< the speed's estimator's last reset (vehicle clock)

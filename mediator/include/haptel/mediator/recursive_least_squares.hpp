@@ -29,8 +29,12 @@ class RecursiveLeastSquares2 {
   /// `max_residual`: Huber's M-estimator in recursive form (Huber, "Robust
   /// Statistics", 1981, ch. 7; Ljung 1999, §15.2), so that a burst of
   /// outliers moves the estimate by a bounded step each.
+  /// `forget`: false for a measurement that excites one direction only, so
+  /// that the other, which it says nothing of, is not forgotten either (a
+  /// restricted form of directional forgetting: Kulhavý, "Restricted
+  /// exponential forgetting in real-time identification", Automatica 1987).
   double Update(const Eigen::Vector2d& phi, double y,
-                double max_residual = std::numeric_limits<double>::infinity());
+                double max_residual = std::numeric_limits<double>::infinity(), bool forget = true);
 
   const Eigen::Vector2d& estimate() const { return theta_; }
   const Eigen::Matrix2d& covariance() const { return p_; }
