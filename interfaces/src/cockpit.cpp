@@ -55,7 +55,7 @@ TreadCommand CockpitInterface::Update(double t_s, const VehicleFeedback& feedbac
     // hand feels the same push on either.
     const double r = c.wheel_radius;
     const Vec3d here{controls_.throttle, controls_.wheel_angle * r, 0.0};
-    guidance_ = shared_->Guide(feedback.ranges, here, Vec3d{}, [&](const Vec3d& q) {
+    guidance_ = shared_->Guide(echoes_.Filter(feedback.ranges), here, Vec3d{}, [&](const Vec3d& q) {
       CockpitControls at = controls_;
       at.throttle = q[0];
       at.wheel_angle = q[1] / r;

@@ -71,7 +71,7 @@ TreadCommand GestureInterface::Update(double t_s, const VehicleFeedback& feedbac
     field_.wall_active = false;
   }
   if (shared_) {
-    guidance_ = shared_->Guide(feedback.ranges, hand.position, config_.neutral,
+    guidance_ = shared_->Guide(echoes_.Filter(feedback.ranges), hand.position, config_.neutral,
                                [this](const Vec3d& p) { return Map(p); });
     shared_->Apply(guidance_, field_);
   }

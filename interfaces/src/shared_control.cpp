@@ -76,6 +76,34 @@ double TimeToCollision(const RangeScan& scan, const TreadCommand& command,
   }
 }
 
+const RangeScan& PersistentEchoes::Filter(const RangeScan& scan) {
+  const int count = std::clamp(scan.count, 0, kMaxRangeBeams);
+  const bool same =
+      have_last_ && scan.count == last_.count &&
+      std::equal(scan.ranges.begin(), scan.ranges.begin() + count, last_.ranges.begin());
+  if (!same) {
+    before_ = last_;
+    have_before_ = have_last_;
+    last_ = scan;
+    have_last_ = true;
+    filtered_ = scan;
+    // The first scan (or one of another layout) has nothing to be checked
+    // against: taken as it is, erring towards guidance.
+    const bool comparable = have_before_ && before_.count == count;
+    for (int i = 0; comparable && i < count; ++i) {
+      if (!scan.Hit(i)) continue;
+      bool seen = false;
+      for (int j = std::max(0, i - 1); j <= std::min(count - 1, i + 1); ++j) {
+        seen = seen ||
+               (before_.Hit(j) && std::abs(before_.ranges[static_cast<size_t>(j)] -
+                                           scan.ranges[static_cast<size_t>(i)]) <= tolerance_m_);
+      }
+      if (!seen) filtered_.ranges[static_cast<size_t>(i)] = static_cast<float>(scan.range_max);
+    }
+  }
+  return filtered_;
+}
+
 SharedControl::SharedControl(const SharedControlConfig& config, const VehicleGeometry& vehicle)
     : config_(Validated(config)), vehicle_(vehicle) {}
 

@@ -151,8 +151,10 @@ std::vector<DefiningValue> StudyDefinition(const StudyConfig& config) {
   out.push_back({"run", FromStudyFolder(config, config.run)});
   out.push_back({"track", FromStudyFolder(config, config.track)});
   if (!config.track.empty()) {
-    // A blimp study flies a course (the run file's vehicle says which).
-    const bool blimp = LoadVehicle(LoadRun(config.run).vehicle).family() == VehicleFamily::kBlimp;
+    // A blimp study flies a course (the run file's vehicle says which; with
+    // no run file, haptel run's default vehicle, a robot, drives a track).
+    const bool blimp = !config.run.empty() &&
+                       LoadVehicle(LoadRun(config.run).vehicle).family() == VehicleFamily::kBlimp;
     (blimp ? AddCourse : AddTrack)(config.track, out);
   }
 

@@ -327,3 +327,38 @@ TEST_CASE(
   CHECK_THROWS_WITH(CockpitInterface(SharedCockpit(1.5, 40.0), port, GripGeometry{}, kVehicle),
                     Catch::Contains("shared_control.max_force"));
 }
+
+TEST_CASE(
+    "a false echo that lasts one scan does not reach shared control; an obstacle that stays does") {
+  PersistentEchoes echoes;
+  const RangeScan wall = WallAhead(0.6);
+  // The first scan has nothing to be checked against: taken as it is.
+  CHECK(echoes.Filter(wall).ranges == wall.ranges);
+  // A speckle in the second scan, and the same scan again (the interface steps faster than
+  // states come): not a second look, so the speckle stays out.
+  RangeScan wall_speckle = wall;
+  wall_speckle.ranges[0] = 0.2f;
+  CHECK_FALSE(echoes.Filter(wall_speckle).Hit(0));
+  CHECK_FALSE(echoes.Filter(wall_speckle).Hit(0));
+  CHECK(echoes.Filter(wall_speckle).Hit(15));
+  // The wall 1 cm nearer in the next scan: it stands, and the path meets it as the raw scan's does.
+  const RangeScan nearer = WallAhead(0.59);
+  const double raw = TimeToCollision(nearer, {1.0, 1.0}, kVehicle, 0.03, 3.0);
+  REQUIRE(std::isfinite(raw));
+  CHECK(TimeToCollision(echoes.Filter(nearer), {1.0, 1.0}, kVehicle, 0.03, 3.0) == Approx(raw));
+  // A false echo straight ahead for one scan, in a clear field: left out, while the raw
+  // scan would stop the vehicle.
+  const RangeScan clear = Empty();
+  echoes.Filter(clear);
+  RangeScan speckle = clear;
+  speckle.ranges[15] = 0.3f;
+  speckle.ranges[16] = static_cast<float>(kRangeMax) - 0.001f;  // a different scan
+  REQUIRE(std::isfinite(TimeToCollision(speckle, {1.0, 1.0}, kVehicle, 0.03, 3.0)));
+  CHECK(std::isinf(TimeToCollision(echoes.Filter(speckle), {1.0, 1.0}, kVehicle, 0.03, 3.0)));
+  // A turn shifts the obstacle by a beam between scans: still the same obstacle.
+  RangeScan post = clear, post_turned = clear;
+  post.ranges[15] = 0.4f;
+  post_turned.ranges[16] = 0.41f;
+  echoes.Filter(post);
+  CHECK(echoes.Filter(post_turned).Hit(16));
+}

@@ -458,7 +458,7 @@ TEST_CASE(
   // video's bitrate and stale time (v9), the notes and the superseded
   // trials (v10), the simulated-time speed-up (v11), the servo controller's
   // errors (v12), the runs' engagement and device use (v13), the trials'
-  // devices (v14), the runs' session files (v15).
+  // devices (v14), the runs' session files (v15), the truth's lap (v16).
   {
     sqlite3* raw = nullptr;
     REQUIRE(sqlite3_open(db.c_str(), &raw) == SQLITE_OK);
@@ -479,11 +479,15 @@ TEST_CASE(
             "pseudo_haptic_gain_mean; ALTER TABLE runs DROP COLUMN ff_effects_played; "
             "ALTER TABLE study_plan DROP COLUMN device; ALTER TABLE study_trials DROP COLUMN "
             "device; ALTER TABLE runs DROP COLUMN session_file; "
+            "ALTER TABLE runs DROP COLUMN completed_truth; ALTER TABLE runs DROP COLUMN "
+            "lap_time_truth_s; ALTER TABLE runs DROP COLUMN lap_time_truth_projected; "
+            "ALTER TABLE runs DROP COLUMN gates_truth_passed; ALTER TABLE runs DROP COLUMN "
+            "gates_truth_missed; "
             "DROP TABLE study_notes; DROP TABLE study_superseded_trials; PRAGMA user_version = 5",
             nullptr, nullptr, nullptr) == SQLITE_OK);
     sqlite3_close(raw);
   }
-  record::Recorder recorder(db);  // migrated to v15: the study has no definition on record
+  record::Recorder recorder(db);  // migrated to v16: the study has no definition on record
   auto resume = [&](const std::string& text) {
     test::WriteFile(file, text);
     const StudyConfig config = LoadStudy(file);

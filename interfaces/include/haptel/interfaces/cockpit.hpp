@@ -118,6 +118,7 @@ class CockpitInterface final : public MediatorInterface {
   double wheel_slip_ = 0.0;
   double last_update_s_ = -1.0;
   std::optional<SharedControl> shared_;
+  PersistentEchoes echoes_;
   Guidance guidance_;
   ControlActuation actuation_;
 };

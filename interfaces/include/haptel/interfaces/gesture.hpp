@@ -57,6 +57,7 @@ class GestureInterface final : public MediatorInterface {
   haptics::ForceField field_;
   double last_contact_s_ = -1e9;
   std::optional<SharedControl> shared_;
+  PersistentEchoes echoes_;
   Guidance guidance_;
 };
 

@@ -52,6 +52,30 @@ struct VehicleGeometry {
 double TimeToCollision(const RangeScan& scan, const TreadCommand& command,
                        const VehicleGeometry& vehicle, double clearance, double horizon_s);
 
+/// A scan with the echoes that were not there a scan before left out: a
+/// scanner's false echo (a speckle, a reflection) lasts one scan, and shared
+/// control looking along the path would push the hand from an obstacle that
+/// is not there, over and over (a `lab` reality's 2 % false echoes held the
+/// cockpit-shared lap at its first gate). A beam's echo stands when the
+/// previous distinct scan had one within `tolerance_m` on the same beam or a
+/// neighbour (a turn shifts what a beam sees by up to a beam a scan); the
+/// first scan is taken as it is. It costs one scan's delay on a new obstacle. Fixed capacity: no
+/// allocation.
+class PersistentEchoes {
+ public:
+  explicit PersistentEchoes(double tolerance_m = 0.05) : tolerance_m_(tolerance_m) {}
+
+  /// `scan` with its unconfirmed echoes read as range_max; the same scan
+  /// passed again (the interface steps faster than states arrive) is not a
+  /// second look.
+  const RangeScan& Filter(const RangeScan& scan);
+
+ private:
+  double tolerance_m_;
+  RangeScan last_{}, before_{}, filtered_{};
+  bool have_last_ = false, have_before_ = false;
+};
+
 class SharedControl {
  public:
   /// Validates `config` (SharedControlConfig::ValidateOrThrow: ConfigFieldError).
