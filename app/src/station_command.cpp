@@ -131,17 +131,8 @@ station::StationSetup SetupFromArgs(int argc, const char* const* argv, bool& jso
     throw UsageError("option --view: expected window or none, got '" + view + "'");
   }
   if (auto record = args.Value("record")) {
-    CheckFileOption("record", *record, "a file name such as surveillance.mp4");
-    const std::filesystem::path file = *record;
-    const std::filesystem::path folder = file.parent_path().empty() ? "." : file.parent_path();
-    std::error_code ec;
-    std::filesystem::create_directories(folder, ec);
-    if (!std::filesystem::is_directory(folder)) {
-      throw UsageError("option --record: the folder '" + folder.string() + "' cannot be made (" +
-                       (ec ? ec.message() : "a file is in the way") +
-                       "); expected a file in a folder that exists or can be made");
-    }
-    setup.record = file;
+    CheckOutputFileOption("record", *record, "a file name such as surveillance.mp4");
+    setup.record = *record;
   }
   if (auto session = args.Value("session")) {
     CheckFileOption("session", *session, "a file name for the session, such as station.mcap");

@@ -27,4 +27,17 @@ void CheckFileOption(const std::string& option, const std::filesystem::path& fil
   }
 }
 
+void CheckOutputFileOption(const std::string& option, const std::filesystem::path& file,
+                           const std::string& expected) {
+  CheckFileOption(option, file, expected);
+  const std::filesystem::path folder = file.parent_path().empty() ? "." : file.parent_path();
+  std::error_code ec;
+  std::filesystem::create_directories(folder, ec);
+  if (!std::filesystem::is_directory(folder)) {
+    throw UsageError("option --" + option + ": the folder '" + folder.string() +
+                     "' cannot be made (" + (ec ? ec.message() : "a file is in the way") +
+                     "); expected a file in a folder that exists or can be made");
+  }
+}
+
 }  // namespace haptel

@@ -190,17 +190,7 @@ Operation ReadOperation(const Args& args, SessionSetup& setup) {
   if (auto record = args.Value("record")) {
     // Before anything is spawned: a recording that cannot be written is an error now, not after the
     // lap.
-    const std::filesystem::path file = *record;
-    const std::filesystem::path folder = file.parent_path().empty() ? "." : file.parent_path();
-    CheckFileOption("record", file, "a file name such as run.mp4");
-    // A new folder is made, as --database and --trace make theirs; one that cannot be is refused.
-    std::error_code ec;
-    std::filesystem::create_directories(folder, ec);
-    if (!std::filesystem::is_directory(folder)) {
-      throw UsageError("option --record: the folder '" + folder.string() + "' cannot be made (" +
-                       (ec ? ec.message() : "a file is in the way") +
-                       "); expected a file in a folder that exists or can be made");
-    }
+    CheckOutputFileOption("record", *record, "a file name such as run.mp4");
     setup.record = *record;
     if (setup.view == ViewKind::kNone) setup.view = ViewKind::kOffscreen;
   }

@@ -431,22 +431,14 @@ void SessionLoop::TapView(view::ViewOptions& options, std::shared_ptr<const view
   const int frame_channel =
       file.AddOwnChannel(view::kViewFrameTopic, view::kViewFrameSchemaName, view::kViewRecordIdl);
   if (setup_channel < 0 || frame_channel < 0) return;  // the recorder says why in its report
-  view::ViewSetup setup;
-  setup.width = options.width;
-  setup.height = options.height;
-  setup.rate_hz = options.rate_hz;
-  setup.record_fps = options.record_fps;
-  setup.title = options.title;
-  setup.screen = options.screen;
-  setup.map = std::move(map);
-  std::vector<uint8_t> bytes;
-  view::EncodeViewSetup(setup, bytes);
-  file.OnSample(setup_channel, MonotonicNs(), nullptr, bytes.data(), bytes.size());
-  view_tap_ = std::make_unique<view::ViewFrameEncoder>(
+  view_tap_ = view::StartViewRecord(
+      options, std::move(map),
+      [&file, setup_channel](const uint8_t* data, size_t size) {
+        file.OnSample(setup_channel, MonotonicNs(), nullptr, data, size);
+      },
       [&file, frame_channel](const uint8_t* data, size_t size) {
         file.OnSample(frame_channel, MonotonicNs(), nullptr, data, size);
       });
-  options.tap = view_tap_.get();
 }
 
 std::optional<LoopEnd> SessionLoop::Loop() {

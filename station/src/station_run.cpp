@@ -73,22 +73,14 @@ std::unique_ptr<view::ViewFrameEncoder> TapView(record::SessionRecorder& file,
   const int frame_channel =
       file.AddOwnChannel(view::kViewFrameTopic, view::kViewFrameSchemaName, view::kViewRecordIdl);
   if (setup_channel < 0 || frame_channel < 0) return nullptr;  // its report says why
-  view::ViewSetup setup;
-  setup.width = options.width;
-  setup.height = options.height;
-  setup.rate_hz = options.rate_hz;
-  setup.record_fps = options.record_fps;
-  setup.title = options.title;
-  setup.screen = options.screen;
-  std::vector<uint8_t> bytes;
-  view::EncodeViewSetup(setup, bytes);
-  file.OnSample(setup_channel, MonotonicNs(), nullptr, bytes.data(), bytes.size());
-  auto tap = std::make_unique<view::ViewFrameEncoder>(
+  return view::StartViewRecord(
+      options, nullptr,
+      [&file, setup_channel](const uint8_t* data, size_t size) {
+        file.OnSample(setup_channel, MonotonicNs(), nullptr, data, size);
+      },
       [&file, frame_channel](const uint8_t* data, size_t size) {
         file.OnSample(frame_channel, MonotonicNs(), nullptr, data, size);
       });
-  options.tap = tap.get();
-  return tap;
 }
 
 }  // namespace

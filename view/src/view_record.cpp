@@ -487,4 +487,24 @@ void ViewFrameEncoder::OnFrame(const ViewModel& model, double t_s, int copies) {
   sink_(bytes_.data(), bytes_.size());
 }
 
+std::unique_ptr<ViewFrameEncoder> StartViewRecord(ViewOptions& options,
+                                                  std::shared_ptr<const TrackMap> map,
+                                                  const ViewFrameEncoder::Sink& write_setup,
+                                                  ViewFrameEncoder::Sink write_frame) {
+  ViewSetup setup;
+  setup.width = options.width;
+  setup.height = options.height;
+  setup.rate_hz = options.rate_hz;
+  setup.record_fps = options.record_fps;
+  setup.title = options.title;
+  setup.screen = options.screen;
+  setup.map = std::move(map);
+  std::vector<uint8_t> bytes;
+  EncodeViewSetup(setup, bytes);
+  write_setup(bytes.data(), bytes.size());
+  auto tap = std::make_unique<ViewFrameEncoder>(std::move(write_frame));
+  options.tap = tap.get();
+  return tap;
+}
+
 }  // namespace haptel::view

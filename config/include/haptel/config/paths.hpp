@@ -25,4 +25,11 @@ std::string NotRegularFile(const std::filesystem::path& file);
 void CheckFileOption(const std::string& option, const std::filesystem::path& file,
                      const std::string& expected);
 
+/// For a command-line option naming a file to write (--record): the
+/// CheckFileOption check, then its folder made, as --database and --trace
+/// make theirs; throws UsageError "option --OPTION: the folder 'F' cannot be
+/// made (WHY); expected a file in a folder that exists or can be made".
+void CheckOutputFileOption(const std::string& option, const std::filesystem::path& file,
+                           const std::string& expected);
+
 }  // namespace haptel

@@ -82,6 +82,16 @@ class ViewFrameEncoder final : public FrameTap {
 };
 
 void EncodeViewSetup(const ViewSetup& setup, std::vector<uint8_t>& out);
+
+/// Starts recording a view as `haptel replay` reads it: `options`' set-up
+/// (with `map`, null for none) written once through `write_setup`, then each
+/// frame the view draws through `write_frame`, by the encoder returned and set
+/// as `options.tap` (it must outlive the view). One home for `haptel run`'s
+/// and `haptel station`'s session files.
+std::unique_ptr<ViewFrameEncoder> StartViewRecord(ViewOptions& options,
+                                                  std::shared_ptr<const TrackMap> map,
+                                                  const ViewFrameEncoder::Sink& write_setup,
+                                                  ViewFrameEncoder::Sink write_frame);
 ViewSetup DecodeViewSetup(const uint8_t* data, size_t size);
 /// Reuses `out`'s capacity (no allocation once it has grown).
 void EncodeViewFrame(const ViewFrame& frame, std::vector<uint8_t>& out);
