@@ -51,6 +51,15 @@ TraceRecord TraceRecord::FromShake(Side side, const PseudoHapticReport& report) 
   return r;
 }
 
+TraceRecord TraceRecord::Engaged(Side side, int64_t t_ns, bool engaged) {
+  TraceRecord r;
+  r.kind = kEngaged;
+  r.side = static_cast<uint8_t>(Index(side));
+  r.t_ns = t_ns;
+  r.values[0] = engaged ? 1.0 : 0.0;
+  return r;
+}
+
 WristRaw TraceRecord::ToWrist() const {
   WristRaw w;
   w.t_ns = t_ns;
@@ -108,6 +117,14 @@ bool TraceWriter::Push(const TraceRecord& record) {
   return true;
 }
 
+void TraceWriter::PushEngaged(int64_t t_ns, bool engaged) {
+  if (!recording_.load(std::memory_order_acquire)) return;
+  for (const Side side : {Side::kLeft, Side::kRight}) {
+    if (!rings_[kSides]->Push(TraceRecord::Engaged(side, t_ns, engaged)))
+      dropped_.fetch_add(1, std::memory_order_relaxed);
+  }
+}
+
 void TraceWriter::Drain() {
   TraceRecord r;
   for (;;) {
@@ -142,7 +159,7 @@ std::vector<TraceRecord> ReadTrace(const std::filesystem::path& file) {
     if (got == 0) break;
     if (got != sizeof r ||
         (r.kind != TraceRecord::kWrist && r.kind != TraceRecord::kGlove &&
-         r.kind != TraceRecord::kShake) ||
+         r.kind != TraceRecord::kShake && r.kind != TraceRecord::kEngaged) ||
         r.side >= kSides) {
       std::fclose(in);
       throw std::runtime_error("trace: '" + file.string() + "': record " +
@@ -152,7 +169,7 @@ std::vector<TraceRecord> ReadTrace(const std::filesystem::path& file) {
     records.push_back(r);
   }
   std::fclose(in);
-  // Two sides were written by two rings: restore time order.
+  // The sides and the session were written by their own rings: restore time order.
   std::stable_sort(records.begin(), records.end(),
                    [](const TraceRecord& a, const TraceRecord& b) { return a.t_ns < b.t_ns; });
   return records;
@@ -165,6 +182,8 @@ ReplayDevice::ReplayDevice(std::vector<TraceRecord> records, const DeviceDescrip
   trace_start_ns_ = records_.front().t_ns;
   trace_span_ns_ = std::max<int64_t>(1, records_.back().t_ns - trace_start_ns_ + 1);
   for (auto& i : ignored_) i.store(0);
+  has_engaged_ = std::any_of(records_.begin(), records_.end(),
+                             [](const TraceRecord& r) { return r.kind == TraceRecord::kEngaged; });
 }
 
 bool ReplayDevice::finished(int64_t now_ns) const {
@@ -215,6 +234,15 @@ HandPresence ReplayDevice::Presence(Side side) {
   if (holding_.load(std::memory_order_acquire)) return HandPresence::kHeld;
   const int64_t start = start_ns_.load();
   const int64_t played = last_read_ns_[Index(side)] - start;
+  if (has_engaged_) {
+    const auto i = static_cast<size_t>(Index(side));
+    if (start == 0) return HandPresence::kHeld;
+    if (finished(last_read_ns_[i])) return HandPresence::kReleased;
+    const long due =
+        Due(side, TraceRecord::kEngaged, last_read_ns_[i], engaged_cursor_[i], engaged_round_[i]);
+    if (due >= 0) engaged_[i] = records_[static_cast<size_t>(due)].values[0] != 0.0;
+    return engaged_[i] ? HandPresence::kHeld : HandPresence::kReleased;
+  }
   if (start == 0 || played < static_cast<int64_t>(kHeldAtStart_s * 1e9)) return HandPresence::kHeld;
   return HandPresence::kUnknown;
 }

@@ -126,8 +126,15 @@ void HapticSide::Tick(int64_t now_ns) {
 }
 
 void HapticSide::OnVehicleUp() {
+  trace_engaged_ = -1;
   if (trace_) trace_->SetRecording(true);
   if (replay_ != nullptr) replay_->Begin(MonotonicNs());
+}
+
+void HapticSide::RecordEngaged(int64_t now_ns, bool engaged) {
+  if (!trace_ || trace_engaged_ == static_cast<int>(engaged)) return;
+  trace_engaged_ = static_cast<int>(engaged);
+  trace_->PushEngaged(now_ns, engaged);
 }
 
 bool HapticSide::replay_finished() const {

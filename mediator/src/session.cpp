@@ -166,7 +166,7 @@ class SessionLoop {
                                          double t_s, double dt_s);
   /// Whether the operator engages the interface `vehicle` is driven with
   /// now (engagement.hpp); a change is said, the time disengaged counted.
-  bool Engage(VehicleRun& vehicle, double t_s, double dt_s);
+  bool Engage(VehicleRun& vehicle, int64_t now_ns, double t_s, double dt_s);
   void FeedView(int64_t now_ns, double t_s);
   /// The session file's records of this tick (with one): the interfaces'
   /// switches and engagement, the lap's start and contacts, the force
@@ -516,7 +516,7 @@ std::optional<LoopEnd> SessionLoop::CommandVehicles(const interfaces::InputState
     VehicleRun& v = *vehicles_[i];
     if (v.lost) continue;
     if (!turns_ || turns_->Operated(i, now, t, dt)) {
-      const bool engaged = Engage(v, t, dt);
+      const bool engaged = Engage(v, now, t, dt);
       if (auto end = v.family->Command(t, now, person, v.health->up(), engaged, *haptic_, *v.link))
         return end;
     }
@@ -532,8 +532,9 @@ std::optional<LoopEnd> SessionLoop::CommandVehicles(const interfaces::InputState
 
 // Disengaged, the vehicle gets a zero command; the time it was up and not
 // engaged is the run's disengaged_s.
-bool SessionLoop::Engage(VehicleRun& v, double t, double dt) {
+bool SessionLoop::Engage(VehicleRun& v, int64_t now, double t, double dt) {
   const bool engaged = engagement_.Update(haptic_->hal(), v.family->Rest());
+  haptic_->RecordEngaged(now, engaged);
   if (!engaged && v.health->up()) v.out.result.record.disengaged_s += dt;
   if (engagement_.why() != engagement_said_ && first_.progress) {
     engagement_said_ = engagement_.why();

@@ -137,6 +137,58 @@ TEST_CASE("replay plays a trace at its original timing, per side") {
   CHECK(replay.commands_ignored(Side::kRight) == 1);
 }
 
+TEST_CASE(
+    "a trace carries the session's engaged decisions, and replay says the hand is held or "
+    "released as they say, released at the end") {
+  const auto dir = test::ScratchDir("trace-engaged");
+  const auto file = dir / "engaged.trace";
+  {
+    TraceWriter writer(file);
+    writer.PushEngaged(1000 * kMs, true);  // the session's ring: both sides
+    for (int i = 0; i < 50; ++i) {
+      const int64_t t = 1000 * kMs + i * 10 * kMs;
+      writer.Push(TraceRecord::FromWrist(Side::kLeft, Wrist(t, i)));
+      writer.Push(TraceRecord::FromWrist(Side::kRight, Wrist(t, i)));
+    }
+    writer.PushEngaged(1200 * kMs, false);
+    writer.PushEngaged(1300 * kMs, true);
+  }
+  const auto records = ReadTrace(file);
+  size_t engaged_records = 0;
+  for (const auto& r : records) engaged_records += r.kind == TraceRecord::kEngaged;
+  CHECK(engaged_records == 6);
+  for (size_t i = 1; i < records.size(); ++i) CHECK(records[i].t_ns >= records[i - 1].t_ns);
+
+  ReplayDevice replay(records, DeviceDescription{}, false);
+  WristRaw w;
+  const int64_t start = 3 * kMs;
+  CHECK(replay.Presence(Side::kRight) == HandPresence::kHeld);  // nothing played yet
+  REQUIRE(replay.ReadWrist(Side::kRight, start, w) == DeviceStatus::kOk);
+  CHECK(replay.Presence(Side::kRight) == HandPresence::kHeld);
+  // 1.5 s and more after the first read: still held as recorded, though a
+  // still hand would be judged gone from its motion.
+  replay.ReadWrist(Side::kRight, start + 150 * kMs, w);
+  CHECK(replay.Presence(Side::kRight) == HandPresence::kHeld);
+  replay.ReadWrist(Side::kRight, start + 250 * kMs, w);
+  CHECK(replay.Presence(Side::kRight) == HandPresence::kReleased);
+  replay.ReadWrist(Side::kLeft, start + 250 * kMs, w);
+  CHECK(replay.Presence(Side::kLeft) == HandPresence::kReleased);
+  replay.ReadWrist(Side::kRight, start + 350 * kMs, w);
+  CHECK(replay.Presence(Side::kRight) == HandPresence::kHeld);
+  replay.ReadWrist(Side::kRight, start + 600 * kMs, w);  // past the end: the hand is gone
+  CHECK(replay.Presence(Side::kRight) == HandPresence::kReleased);
+
+  // A trace without them: the session judges from the motion after the first second.
+  std::vector<TraceRecord> bare;
+  for (const auto& r : records)
+    if (r.kind != TraceRecord::kEngaged) bare.push_back(r);
+  ReplayDevice judged(bare, DeviceDescription{}, false);
+  judged.ReadWrist(Side::kRight, start, w);
+  CHECK(judged.Presence(Side::kRight) == HandPresence::kHeld);
+  judged.ReadWrist(Side::kRight, start + 1100 * kMs, w);
+  CHECK(judged.Presence(Side::kRight) == HandPresence::kUnknown);
+}
+
 TEST_CASE("replay can loop") {
   std::vector<TraceRecord> recs;
   for (int i = 0; i < 4; ++i)

@@ -9,8 +9,11 @@
 /// device that shows its forces, Device::PseudoHaptics: one each time a
 /// contact's shake starts, stamped with its start) carries the report in
 /// metres and newtons: target, hand, force, shake (3 each), held (0/1) and
-/// the side's shakes so far. Replay plays wrists and gloves; a shake is for
-/// whoever times it (`haptel bench hands`).
+/// the side's shakes so far; an engaged record (one per side, from the
+/// session each time it changes, and once when the trace starts) carries
+/// whether the session let the hands drive (values[0], 0/1). Replay plays
+/// wrists and gloves, and says the hand is held or released as the engaged
+/// records say; a shake is for whoever times it (`haptel bench hands`).
 #include <array>
 #include <atomic>
 #include <cstdint>
@@ -24,7 +27,7 @@
 namespace haptel::haptics {
 
 struct TraceRecord {
-  enum Kind : uint8_t { kWrist = 1, kGlove = 2, kShake = 3 };
+  enum Kind : uint8_t { kWrist = 1, kGlove = 2, kShake = 3, kEngaged = 4 };
   uint8_t kind = kWrist;
   uint8_t side = 0;
   uint8_t reserved[6] = {};
@@ -35,6 +38,7 @@ struct TraceRecord {
   static TraceRecord FromGlove(Side side, const GloveRaw& raw);
   /// At `report.shake_start_ns`.
   static TraceRecord FromShake(Side side, const PseudoHapticReport& report);
+  static TraceRecord Engaged(Side side, int64_t t_ns, bool engaged);
   WristRaw ToWrist() const;
   GloveRaw ToGlove() const;
   PseudoHapticReport ToShake() const;
@@ -54,6 +58,9 @@ class TraceWriter {
   /// Servo thread(s): one producer per side, so each side has its own ring.
   /// While not recording, records are let go (not counted as dropped).
   bool Push(const TraceRecord& record);
+  /// Session thread (the one producer of its own ring): whether the session
+  /// let the hands drive from `t_ns` on, for both sides.
+  void PushEngaged(int64_t t_ns, bool engaged);
   /// Starts or pauses recording (default: recording). A session starts its
   /// trace when the vehicle answers, so that a replay begun at that moment
   /// lines up with the vehicle.
@@ -65,7 +72,8 @@ class TraceWriter {
   void Drain();
   std::filesystem::path file_;
   std::FILE* out_ = nullptr;
-  std::array<std::unique_ptr<SpscRing<TraceRecord>>, kSides> rings_;
+  /// One ring per side (the servo threads), and the session thread's last.
+  std::array<std::unique_ptr<SpscRing<TraceRecord>>, kSides + 1> rings_;
   std::atomic<bool> stop_{false};
   std::atomic<bool> recording_{true};
   std::atomic<uint64_t> written_{0};
@@ -99,13 +107,16 @@ class ReplayDevice final : public Device {
   DeviceStatus ReadGlove(Side side, int64_t now_ns, GloveRaw& out) override;
   DeviceStatus WriteWristForce(Side side, const Vec3d&) override;
   DeviceStatus WriteFingerForces(Side side, const std::array<double, kFingers>&) override;
-  /// A trace records what the hand did, not whether it was held: the
-  /// session judges that from the replayed motion (kUnknown), as it does
-  /// for a live arm — but it needs half a second of motion to see a hand
-  /// (mediator/engagement.hpp), and a trace starts when the vehicle
-  /// answered, with no motion before. So while it holds its first reading
-  /// and for its first kHeldAtStart_s it says kHeld, as the recorded hand
-  /// was when the recorded vehicle answered (it drove that lap).
+  /// A trace with engaged records says what the recorded session decided:
+  /// kHeld while it let the hands drive, kReleased while not, and kReleased
+  /// once a trace that does not loop has played to its end (the recorded
+  /// hand is gone). Judging again from the replayed motion would not repeat
+  /// the recording: a replay read late on a loaded machine loses tremor
+  /// reversals, and a hand judged gone mid-lap waits for a rest the open-loop
+  /// replay never comes back to. A trace without them (recorded before
+  /// they were, or written by hand) leaves it to the session to judge from
+  /// the motion (kUnknown), as for a live arm, after kHeldAtStart_s of kHeld:
+  /// it needs half a second of motion to see a hand (mediator/engagement.hpp).
   HandPresence Presence(Side side) override;
   static constexpr double kHeldAtStart_s = 1.0;
 
@@ -126,6 +137,10 @@ class ReplayDevice final : public Device {
   std::array<size_t, kSides> glove_cursor_{};
   std::array<int64_t, kSides> wrist_round_{};
   std::array<int64_t, kSides> glove_round_{};
+  bool has_engaged_ = false;  ///< the trace has engaged records
+  std::array<size_t, kSides> engaged_cursor_{};
+  std::array<int64_t, kSides> engaged_round_{};
+  std::array<bool, kSides> engaged_{true, true};  ///< the newest engaged record played
   std::array<std::atomic<uint64_t>, kSides> ignored_{};
   std::array<int64_t, kSides> last_read_ns_{};  ///< the servo thread's, per side
 };

@@ -66,6 +66,10 @@ class HapticSide {
   void Tick(int64_t now_ns);
   /// The vehicle answered: the trace starts recording and a replay starts playing.
   void OnVehicleUp();
+  /// Session thread, each tick: whether the session lets the hands drive;
+  /// the trace records each change (and the state when it starts), so that
+  /// a replay repeats the recorded session's decisions. Allocates nothing.
+  void RecordEngaged(int64_t now_ns, bool engaged);
 
   haptics::Hal& hal() { return *hal_; }
   /// Tells `tap` every servo tick (a session file's recorder; null: none). Before Start.
@@ -106,6 +110,7 @@ class HapticSide {
   std::unique_ptr<haptics::Hal> hal_;
   std::unique_ptr<haptics::GravityGrid> gravity_;
   std::unique_ptr<haptics::TraceWriter> trace_;
+  int trace_engaged_ = -1;  ///< the engaged state last recorded (-1: none yet)
   std::unique_ptr<haptics::ServoLoop> servo_;
   bool stopped_ = false;
 };
