@@ -222,3 +222,46 @@ TEST_CASE("PeriodicThread: by default the loop runs at its creator's priority", 
   loop.Stop();
   CHECK(seen.load() == haptel::ThreadNice());
 }
+
+TEST_CASE(
+    "PeriodicThread: SCHED_FIFO is earned by ticks that fit their period and given up for good "
+    "after a tick far too long",
+    "[periodic]") {
+  std::atomic<int> policy_seen{-1};
+  std::atomic<int> first_policy{-1};
+  std::atomic<int> ticks{0};
+  std::atomic<bool> stall{false};
+  PeriodicThread::Options o = Rate(100.0, "test-earn");
+  o.realtime_priority = 10;
+  o.earn_realtime_ticks = 3;
+  o.lose_realtime_periods = 5;
+  PeriodicThread loop(o, [&](int64_t) {
+    int policy = 0;
+    sched_param param{};
+    pthread_getschedparam(pthread_self(), &policy, &param);
+    policy_seen.store(policy);
+    if (ticks.fetch_add(1) == 0) first_policy.store(policy);
+    // One tick of 100 ms: ten periods, past the five that lose real time.
+    if (stall.exchange(false)) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  });
+  loop.Start();
+  // The first ticks run as their creator does, before any is judged.
+  REQUIRE(WaitFor([&] { return ticks.load() >= 1; }));
+  CHECK(first_policy.load() == SCHED_OTHER);
+  // Quick ticks earn it, where the process may have it (root, or an rtprio limit).
+  const bool granted = WaitFor([&] { return loop.Stats().realtime; }, std::chrono::seconds(10));
+  if (!granted) {
+    loop.Stop();
+    WARN("SCHED_FIFO refused here: the loop runs on at its priority");
+    CHECK_FALSE(loop.realtime_given_up());
+    return;
+  }
+  REQUIRE(WaitFor([&] { return policy_seen.load() == SCHED_FIFO; }));
+  stall.store(true);
+  REQUIRE(WaitFor([&] { return loop.realtime_given_up(); }));
+  CHECK_FALSE(loop.Stats().realtime);
+  const int after = ticks.load();
+  REQUIRE(WaitFor([&] { return ticks.load() >= after + 20; }));
+  loop.Stop();
+  CHECK(policy_seen.load() == SCHED_OTHER);  // and it does not ask again
+}

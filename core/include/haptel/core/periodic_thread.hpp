@@ -23,8 +23,17 @@ class PeriodicThread {
   struct Options {
     std::string name = "loop";
     double rate_hz = 1000.0;
-    /// Ask for SCHED_FIFO at this priority (0 = do not ask).
+    /// Ask for SCHED_FIFO at this priority (0 = do not ask). The loop earns
+    /// it: asked for only after `earn_realtime_ticks` ticks in a row each
+    /// done within its period, and given up for good (Stats().realtime
+    /// false again, realtime_given_up() true) after a tick longer than
+    /// `lose_realtime_periods` periods. A tick stuck for seconds at
+    /// SCHED_FIFO (a physics step of a scene too big for its rate) holds a
+    /// core from every ordinary thread of the process — its signal
+    /// handling, its link — and of the host.
     int realtime_priority = 0;
+    int earn_realtime_ticks = 100;
+    int lose_realtime_periods = 10;
     /// Lower the thread's priority by this many nice steps (0 = as its
     /// creator): background work such as the video's
     /// (kBackgroundNiceSteps), which must yield to the link and control.
@@ -52,6 +61,8 @@ class PeriodicThread {
   bool running() const { return running_.load(); }
 
   LoopStats Stats() const { return meter_.Stats(); }
+  /// It had SCHED_FIFO and gave it up after a tick far longer than its period.
+  bool realtime_given_up() const { return realtime_given_up_.load(); }
   const Histogram& period_histogram() const { return meter_.period_histogram(); }
   const Options& options() const { return options_; }
 
@@ -68,6 +79,7 @@ class PeriodicThread {
   std::mutex ended_mutex_;
   std::condition_variable ended_cv_;
   LoopMeter meter_;
+  std::atomic<bool> realtime_given_up_{false};
 };
 
 }  // namespace haptel
