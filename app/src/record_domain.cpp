@@ -7,7 +7,6 @@
 #include <atomic>
 #include <chrono>
 #include <cstdio>
-#include <fastdds/dds/domain/DomainParticipantListener.hpp>
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -28,6 +27,7 @@
 #include "haptel/core/command_line.hpp"
 #include "haptel/core/log.hpp"
 #include "haptel/core/stop_signals.hpp"
+#include "haptel/link/discovered_writers.hpp"
 #include "haptel/link/participant.hpp"
 #include "haptel/link/security.hpp"
 #include "haptel/link/topic.hpp"
@@ -88,26 +88,6 @@ const std::map<std::string, ReaderMaker>& Makers() {
   return makers;
 }
 
-/// The writers DDS discovers on the domain: their topics and types, for the
-/// main thread to read (the callback runs on DDS's discovery thread).
-class Discovery : public eprosima::fastdds::dds::DomainParticipantListener {
- public:
-  void on_publisher_discovery(eprosima::fastdds::dds::DomainParticipant*,
-                              eprosima::fastrtps::rtps::WriterDiscoveryInfo&& info) override {
-    if (info.status != eprosima::fastrtps::rtps::WriterDiscoveryInfo::DISCOVERED_WRITER) return;
-    std::lock_guard<std::mutex> lock(mutex_);
-    found_.emplace_back(info.info.topicName().to_string(), info.info.typeName().to_string());
-  }
-  std::vector<std::pair<std::string, std::string>> Take() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return std::exchange(found_, {});
-  }
-
- private:
-  std::mutex mutex_;
-  std::vector<std::pair<std::string, std::string>> found_;
-};
-
 /// Whether `topic` is one of Haptel's, of `vehicle` when one is named.
 bool Wanted(const std::string& topic, const std::string& vehicle) {
   if (topic.rfind("haptel/", 0) != 0) return false;
@@ -158,7 +138,7 @@ int RecordDomainCommand(int argc, const char* const* argv) {
     record::SessionRecorder recorder(options);
     LinkConfig link = run.link;
     link.security_identity = link::OperatorIdentity();
-    Discovery discovery;
+    link::DiscoveredWriters discovery;
     link::Participant participant(link, "haptel-record", &discovery);
     participant.SetTap(&recorder);
 

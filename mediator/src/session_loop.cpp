@@ -143,6 +143,15 @@ std::optional<LoopEnd> VehicleHealth::CheckStates(const VehicleLink& vehicle, in
                          std::to_string(silent_s).substr(0, 4) + " s",
                      silent_s};
     }
+  } else if (const std::string other = vehicle.ForeignStateType(); !other.empty()) {
+    // Discovery names the type of every writer, matched or not: a vehicle
+    // of the other family (a blimp under a robot's name) is told at once,
+    // not after the start-up time-out.
+    return LoopEnd{
+        Outcome::kVehicleDidNotStart,
+        "vehicle '" + name_ + "' on domain " + std::to_string(domain_id_) + " publishes " + other +
+            " as its state, not a " + ToString(vehicle.family()) +
+            "'s: is it another kind of vehicle (its file here says kind " + vehicle.kind() + ")?"};
   } else if (t_s > startup_timeout_s_) {
     std::string message = "vehicle '" + name_ + "' did not answer within " +
                           std::to_string(static_cast<int>(startup_timeout_s_)) + " s on domain " +

@@ -249,7 +249,7 @@ VehicleLink::VehicleLink(const VehicleLinkOptions& options)
   }
   LinkConfig link = options_.link;
   link.security_identity = link::OperatorIdentity();
-  participant_ = std::make_unique<link::Participant>(link, "haptel-mediator");
+  participant_ = std::make_unique<link::Participant>(link, "haptel-mediator", &discovered_);
   participant_->SetTap(options_.tap);  // before any writer or reader: each is tapped
   const std::string who = ProcessOperatorName("haptel run");
   switch (family()) {
@@ -268,6 +268,19 @@ VehicleLink::VehicleLink(const VehicleLinkOptions& options)
     selected_ = std::make_unique<SelectedWriter>(*participant_, link::TopicName(name(), "selected"),
                                                  link::Profile::kLatched);
   }
+}
+
+std::string VehicleLink::ForeignStateType() const {
+  std::string expected;
+  switch (family()) {
+    case VehicleFamily::kRobot:
+      expected = link::RobotMessages::StateType().getName();
+      break;
+    case VehicleFamily::kBlimp:
+      expected = link::BlimpMessages::StateType().getName();
+      break;
+  }
+  return discovered_.OtherTypeOn(link::TopicName(name(), "state"), expected);
 }
 
 bool VehicleLink::PublishSelected(const std::string& source, const std::string& lock) {

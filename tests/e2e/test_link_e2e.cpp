@@ -433,8 +433,8 @@ TEST_CASE("a second vehicle under the same name is a conflict: exit 2, nothing d
 }
 
 TEST_CASE(
-    "a blimp answering under the robot's name: the run says it is another kind of vehicle, not "
-    "only silence") {
+    "a blimp answering under the robot's name: the run says at once it is another kind of "
+    "vehicle, not only silence") {
   const auto dir = test::ScratchDir("e2e-wrong-kind");
   const int domain = test::UniqueDomain(48);
   HandStartedVehicle blimp({Bin("haptel-vehicle"), "--config", "config/vehicles/sim-blimp.yaml",
@@ -446,10 +446,13 @@ TEST_CASE(
   CHECK(code == 3);
   const std::string json = run.LastLine();
   CHECK(JsonField(json, "outcome") == "vehicle did not start");
+  // Told from discovery (the state topic's writer has the blimp's type), not after the
+  // start-up time-out's 15 s.
   CHECK(JsonField(json, "message")
-            .find("camera frames arrived under that name but no robot's state") !=
+            .find("publishes haptel::msg::BlimpState as its state, not a robot's") !=
         std::string::npos);
   CHECK(JsonField(json, "message").find("another kind of vehicle") != std::string::npos);
+  CHECK(run.err().find("did not answer within") == std::string::npos);
 }
 
 TEST_CASE(

@@ -21,6 +21,7 @@
 #include "haptel/config/vehicle.hpp"
 #include "haptel/core/child_process.hpp"
 #include "haptel/core/histogram.hpp"
+#include "haptel/link/discovered_writers.hpp"
 #include "haptel/link/families.hpp"
 #include "haptel/link/fault_transport.hpp"
 #include "haptel/link/topic.hpp"
@@ -288,6 +289,10 @@ class VehicleLink {
   /// state or reading its commands (DDS discovery). More than one is a
   /// conflict: two vehicles named alike on one domain.
   int VehiclesOnTopic() const { return channel_->VehiclesOnTopic(); }
+  /// The DDS type of a writer on this vehicle's state topic that is not
+  /// its family's state ("" when none was seen): a vehicle of another kind
+  /// answering under this name (its state never matches our reader).
+  std::string ForeignStateType() const;
 
   /// Publishes who commands the vehicle now on haptel/<vehicle>/selected
   /// (reliable, transient local: a reader that joins later gets the last):
@@ -308,6 +313,7 @@ class VehicleLink {
   VehicleLinkOptions options_;
   uint64_t session_ = 0;
   std::unique_ptr<ChildProcess> process_;
+  link::DiscoveredWriters discovered_;  ///< the participant's listener: outlives it
   std::unique_ptr<link::Participant> participant_;
   std::unique_ptr<LinkChannel> channel_;
   std::unique_ptr<video::VideoReceiver> video_;
