@@ -114,6 +114,7 @@ DrawnReality NominalReality(const VehicleConfig& vehicle) {
   d.track_width = d.effective_track_width = vehicle.drive.track_width;
   d.motor_time_constant = vehicle.drive.motor_time_constant;
   d.range_noise_sd = vehicle.range_sensors.noise_sd;
+  d.range_noise_seed = vehicle.range_sensors.seed;
   d.wind_x = vehicle.airship.wind.mean[0];
   d.wind_y = vehicle.airship.wind.mean[1];
   d.gust_rms = vehicle.airship.wind.gust_rms;
@@ -141,7 +142,13 @@ DrawnReality DrawReality(const RealityConfig& reality, uint64_t seed, const Vehi
   d.encoder_noise = r.encoder_noise;
   d.gyro_bias = draw(r.gyro_drift_deg_per_min) * std::numbers::pi / 180.0 / 60.0;
   d.gyro_noise = r.gyro_noise;
-  if (r.range_noise_sd > 0.0) d.range_noise_sd = r.range_noise_sd;
+  if (r.range_noise_sd > 0.0) {
+    d.range_noise_sd = r.range_noise_sd;
+    // Its own stream per reality seed (and per vehicle file's seed, so a
+    // fleet's robots differ): seeded from the file alone, every reality
+    // seed gave one scan noise.
+    d.range_noise_seed = seed * 0xBF58476D1CE4E5B9ULL + vehicle.range_sensors.seed;
+  }
   d.range_spurious_fraction = r.range_spurious_fraction;
   d.range_dropout_fraction = r.range_dropout_fraction;
   d.command_jitter_s = r.command_jitter_s;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 
 namespace haptel::mediator {
@@ -42,7 +43,7 @@ double RobotPredictor::OnState(const RobotStateSample& state) {
   // prediction from the newest state it had then.
   double error_m = -1.0;
   const Base* known = nullptr;
-  for (const Base& b : bases_) {
+  for (const Base& b : bases_) {  // by sample: the newest that had arrived
     if (b.received_s <= sample_s && b.sample_s <= sample_s) known = &b;
   }
   if (known != nullptr) {
@@ -63,8 +64,15 @@ double RobotPredictor::OnState(const RobotStateSample& state) {
             state.applied_left,
             state.applied_right};
   models::TreadsFromMotion(drive_, state.speed, state.yaw_rate, base.treads);
-  bases_.push_back(base);
-  // A state is needed while no later one had arrived by the newest's sample.
+  // In sample order: a state sampled before one that arrived ahead of it (a
+  // vehicle's state jitter: harsh's, one state in eleven) is not the
+  // newest, and the model runs on from the newest. Kept by arrival, the
+  // prediction went back to the older state until the next arrived, a
+  // state period's more to extrapolate and a jump in the ghost each time.
+  auto at = bases_.end();
+  while (at != bases_.begin() && std::prev(at)->sample_s > sample_s) --at;
+  bases_.insert(at, base);
+  // A state is needed while no later sampled one had arrived by the newest's sample.
   while (bases_.size() > 1 && bases_[1].received_s <= sample_s) bases_.pop_front();
   // Commands that took effect before the oldest state kept are in its
   // applied levels; a second's margin for a late state.

@@ -41,7 +41,7 @@ SimRobot::SimRobot(const Track& track, const VehicleConfig& config, const DrawnR
       reality_(reality),
       body_(config.body),
       range_sensors_(RealRangeSensors(config.range_sensors, reality)),
-      range_noise_(config.range_sensors.seed),
+      range_noise_(reality.range_noise_seed),
       range_faults_{reality.range_spurious_fraction, reality.range_dropout_fraction},
       echoes_(reality.seed * 0xD1B54A32D192ED03ULL + 0x8CB92BA72F3D8DD7ULL),
       // Its own stream: the encoders' and gyro's noise never shift the ranges'.

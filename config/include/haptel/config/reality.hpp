@@ -247,6 +247,11 @@ struct DrawnReality {
   double gyro_bias = 0.0;   ///< rad/s
   double gyro_noise = 0.0;  ///< rad/s
   double range_noise_sd = 0.0;
+  /// The range noise's seed: the vehicle file's while the noise is the
+  /// file's (none: the twin's scans), the reality's seed mixed with it once
+  /// the reality draws its own (another reality seed, other noise). Not a
+  /// truth figure: not in ForEach.
+  uint64_t range_noise_seed = 1;
   double range_spurious_fraction = 0.0;
   double range_dropout_fraction = 0.0;
   double command_jitter_s = 0.0;

@@ -154,7 +154,9 @@ class RobotPredictor {
   StampDating dating_;  ///< the vehicle clock's offset (see above)
   std::deque<Command> commands_;
   /// The states since the one the operator had when the newest was
-  /// sampled (that one's prediction is the newest's error), newest last.
+  /// sampled (that one's prediction is the newest's error), in the order
+  /// they were sampled (not arrived), the newest sampled last: the one the
+  /// model runs on from.
   std::deque<Base> bases_;
   std::vector<double> errors_m_;
   std::vector<ShownPose> shown_;
