@@ -1,12 +1,14 @@
 #include "hands_bench.hpp"
 
 #include <X11/keysym.h>
+#include <fastdds/rtps/common/SerializedPayload.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <optional>
 #include <sstream>
@@ -24,6 +26,10 @@
 #include "haptel/core/json.hpp"
 #include "haptel/haptics/pointer.hpp"
 #include "haptel/haptics/trace.hpp"
+#include "haptel/mcap/reader.hpp"
+#include "haptel/msg/haptelPubSubTypes.h"
+#include "haptel/record/session_channels.hpp"
+#include "haptel/session/sessionPubSubTypes.h"
 #include "haptel/testing/hand_trace.hpp"
 #include "haptel/testing/obstacle_track.hpp"
 #include "haptel/testing/pointer_pilot.hpp"
@@ -164,6 +170,13 @@ struct Row {
   /// the proxy hand and the lever on the physics thread, the session tick),
   /// apart from the pointer's way into the device.
   std::vector<double> hand_to_command_ms;
+  /// The stages after the hand, each step's from the pointer step (from the
+  /// run's session file): the proxy hand first moving its way (the physics
+  /// thread's, as the servo ticks saw it; none without a world), the first
+  /// command sent that moved its way at all (the interface read at the
+  /// session's tick or between ticks), and the first whose motor levels
+  /// changed (latencies_ms: the control's travel to the first level).
+  std::vector<double> to_proxy_ms, to_first_change_ms;
   int steps_unanswered = 0;
   double ratio_free = Nan(), ratio_across = Nan(), ratio_along = Nan();
   bool contact = false;
@@ -181,6 +194,77 @@ struct Row {
   Series hand{"", {}, {}};
   Series cursor{"", {}, {}};
 };
+
+/// The run's session file (its commands with their values, its servo ticks).
+std::filesystem::path SessionFileOf(const std::filesystem::path& dir, const std::string& interface,
+                                    const std::string& tag) {
+  return dir / ("hands-" + interface + "-" + tag + ".mcap");
+}
+
+/// A sample's CDR, as the session file holds it, into `out`; false when it
+/// does not decode.
+template <typename PubSub, typename Msg>
+bool DecodeCdr(const mcap::MessageView& m, Msg& out) {
+  PubSub type;
+  eprosima::fastrtps::rtps::SerializedPayload_t payload(
+      static_cast<uint32_t>(std::max<size_t>(m.size, 1)));
+  std::memcpy(payload.data, m.data, m.size);
+  payload.length = static_cast<uint32_t>(m.size);
+  try {
+    return type.deserialize(&payload, &out);
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+/// A command the run sent (its own stamp, CLOCK_MONOTONIC ns) and its values.
+struct SentCommand {
+  int64_t t_ns = 0;
+  double forward = 0.0;  ///< (left + right) / 2
+};
+/// The pointer hand's proxy as a servo tick saw it (CLOCK_MONOTONIC ns, m).
+struct ProxyAt {
+  int64_t t_ns = 0;
+  double x = 0.0;
+};
+struct SessionFileStages {
+  std::vector<SentCommand> commands;
+  std::vector<ProxyAt> proxy;  ///< only the ticks with the proxy coupled
+};
+
+/// The commands sent and the pointer side's coupled proxy from `file`.
+SessionFileStages ReadStages(const std::filesystem::path& file, haptics::Side pointer_side) {
+  namespace channels = record::session;
+  const mcap::Reader reader = mcap::Reader::Open(file);
+  std::string command_topic;
+  for (const auto& [id, channel] : reader.channels()) {
+    const auto schema = reader.schemas().find(channel.schema_id);
+    const auto direction = channel.metadata.find("direction");
+    if (schema != reader.schemas().end() &&
+        schema->second.name == std::string(channels::kDdsSchemaPrefix) + "TreadCommand" &&
+        direction != channel.metadata.end() && direction->second == "sent")
+      command_topic = channel.topic;
+  }
+  if (command_topic.empty()) throw std::runtime_error(file.string() + ": no commands sent");
+  SessionFileStages out;
+  reader.ForEachMessage(0, UINT64_MAX, {command_topic, std::string(channels::kServoTopic)},
+                        [&](const mcap::MessageView& m) {
+                          if (m.channel->topic == command_topic) {
+                            msg::TreadCommand c;
+                            if (DecodeCdr<msg::TreadCommandPubSubType>(m, c) && !c.release())
+                              out.commands.push_back({c.sent_ns(), 0.5 * (c.left() + c.right())});
+                            return;
+                          }
+                          session::ServoTick tick;
+                          if (DecodeCdr<session::ServoTickPubSubType>(m, tick) &&
+                              tick.side() == static_cast<uint8_t>(haptics::Index(pointer_side)) &&
+                              tick.coupling())
+                            out.proxy.push_back({tick.t_ns(), tick.proxy_position()[0]});
+                        });
+  std::sort(out.commands.begin(), out.commands.end(),
+            [](const SentCommand& a, const SentCommand& b) { return a.t_ns < b.t_ns; });
+  return out;
+}
 
 std::vector<std::string> RunArgs(const Options& o, const std::string& interface,
                                  const std::filesystem::path& dir,
@@ -212,7 +296,9 @@ std::vector<std::string> RunArgs(const Options& o, const std::string& interface,
           "--vehicle-timeout",
           "5",
           "--time-limit",
-          JsonNumber(time_limit_s)};
+          JsonNumber(time_limit_s),
+          "--session",
+          SessionFileOf(dir, interface, tag).string()};
 }
 
 /// The pointer, moved and logged: where the cursor was sent, and when.
@@ -443,6 +529,41 @@ void Engaged(const Options& o, const std::filesystem::path& dir, const std::file
       }
     }
   }
+  // The stages after the hand, from the run's session file.
+  try {
+    const SessionFileStages stages = ReadStages(SessionFileOf(dir, row.interface, "engaged"),
+                                                mouse.pointer_on_left ? Side::kLeft : Side::kRight);
+    for (size_t i = 0; i + 1 < step_ns.size(); ++i) {
+      const double way = i % 2 == 0 ? 1.0 : -1.0;
+      const int64_t from = step_ns[i], to = step_ns[i + 1];
+      std::optional<double> proxy_from;
+      for (const ProxyAt& p : stages.proxy) {
+        if (p.t_ns <= from) {
+          proxy_from = p.x;
+          continue;
+        }
+        if (p.t_ns > to || !proxy_from) break;
+        if (way * (p.x - *proxy_from) >= kHandMoved_m) {
+          row.to_proxy_ms.push_back(1e-6 * static_cast<double>(p.t_ns - from));
+          break;
+        }
+      }
+      std::optional<double> before;
+      for (const SentCommand& c : stages.commands) {
+        if (c.t_ns <= from) {
+          before = c.forward;
+          continue;
+        }
+        if (c.t_ns > to || !before) break;
+        if (way * (c.forward - *before) > 0.0) {
+          row.to_first_change_ms.push_back(1e-6 * static_cast<double>(c.t_ns - from));
+          break;
+        }
+      }
+    }
+  } catch (const std::exception& e) {
+    row.error = e.what();
+  }
   // The hand's forward offset over the cursor's, step by step: each step's
   // settled hand (just before the next step) against the one before.
   std::vector<double> free;
@@ -622,6 +743,13 @@ int BenchHandsMain(int argc, const char* const* argv) {
                   row.physics_period_p99_us);
     }
     std::printf("\n");
+    std::printf(
+        "  %-17s  stages from the step, p50/p95 ms: hand %.1f / %.1f, proxy %.1f / %.1f, first "
+        "change of command %.1f / %.1f, first change of levels %.1f / %.1f\n",
+        "", Percentile(row.to_hand_ms, 0.5), Percentile(row.to_hand_ms, 0.95),
+        Percentile(row.to_proxy_ms, 0.5), Percentile(row.to_proxy_ms, 0.95),
+        Percentile(row.to_first_change_ms, 0.5), Percentile(row.to_first_change_ms, 0.95),
+        Percentile(row.latencies_ms, 0.5), Percentile(row.latencies_ms, 0.95));
     std::fflush(stdout);
     rows.push_back(std::move(row));
   }
@@ -636,11 +764,15 @@ int BenchHandsMain(int argc, const char* const* argv) {
         r.servo_p99_us <= std::max(r.bare_beside_p99_us, r.bare_alone_p99_us) + kBin_us;
   }
   std::printf(
-      "\n  in->cmd: a pointer step sent through XTest to the first command after it that differs "
-      "(as the\n"
-      "  vehicle's states report it, 50 Hz: a command overtaken within a state's period is not "
-      "heard, so an\n"
-      "  upper bound); in->hand: the step to the device's hand first moving its way (X, SDL, the "
+      "\n  in->cmd: a pointer step sent through XTest to the send time of the first command "
+      "after it whose motor\n"
+      "  levels differ (as the vehicle's states report it, at 200 Hz: every command heard); "
+      "stages: the step to\n"
+      "  the hand, to the proxy hand (the physics world's, as the servo ticks saw it), to the "
+      "first command sent\n"
+      "  that moved its way at all (the run's session file), to the first that changed the "
+      "levels (in->cmd);\n"
+      "  in->hand: the step to the device's hand first moving its way (X, SDL, the "
       "view's\n"
       "  event pump, a servo tick); ratio: the pointer hand's displacement over the cursor's (1: "
       "it "
@@ -709,6 +841,11 @@ int BenchHandsMain(int argc, const char* const* argv) {
           << ",\"input_to_hand_ms_p95\":" << Num(Percentile(r.to_hand_ms, 0.95))
           << ",\"hand_to_command_ms_p50\":" << Num(Percentile(r.hand_to_command_ms, 0.5))
           << ",\"hand_to_command_ms_p95\":" << Num(Percentile(r.hand_to_command_ms, 0.95))
+          << ",\"input_to_proxy_ms_p50\":" << Num(Percentile(r.to_proxy_ms, 0.5))
+          << ",\"input_to_proxy_ms_p95\":" << Num(Percentile(r.to_proxy_ms, 0.95))
+          << ",\"input_to_first_change_ms_p50\":" << Num(Percentile(r.to_first_change_ms, 0.5))
+          << ",\"input_to_first_change_ms_p95\":" << Num(Percentile(r.to_first_change_ms, 0.95))
+          << ",\"input_to_first_change_ms\":" << Numbers(r.to_first_change_ms)
           << ",\"physics_rate_hz\":" << Num(r.physics_rate_hz)
           << ",\"physics_period_p99_us\":" << Num(r.physics_period_p99_us)
           << ",\"input_to_command_ms\":" << Numbers(r.latencies_ms)
