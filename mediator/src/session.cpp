@@ -161,6 +161,14 @@ class SessionLoop {
   std::optional<LoopEnd> Loop();
   /// Sleeps until the next tick (in simulated time: steps every part to it).
   void Pace();
+  /// Until the next tick, the driven interface's command is looked at every
+  /// kBetweenTicks_ns, while its family part asks (FamilySession::
+  /// CommandBetweenTicks): a person's input reaches the vehicle within a
+  /// physics step of moving the control, not at the next 10-ms tick.
+  void CommandBetweenTicks();
+  /// The physics world's step (config/physics.yaml's 1000 Hz): the controls
+  /// move no more often.
+  static constexpr int64_t kBetweenTicks_ns = 1'000'000;
   std::optional<LoopEnd> WatchVehicles(int64_t now_ns, double t_s);
   std::optional<LoopEnd> CommandVehicles(const interfaces::InputState& person, int64_t now_ns,
                                          double t_s, double dt_s);
@@ -485,9 +493,23 @@ void SessionLoop::Pace() {
     const VehicleRun& v = *vehicles_.front();
     simulated_->AdvanceTo(next_tick_, *haptic_, v.family->physics(), *v.link);
   } else {
+    CommandBetweenTicks();
     SleepUntilNs(next_tick_);
   }
   next_tick_ += period_ns_;
+}
+
+void SessionLoop::CommandBetweenTicks() {
+  // A single run's vehicle only: a fleet's turns hand the person over at
+  // the tick. Simulated time has nothing between its ticks.
+  if (turns_ || vehicles_.size() != 1) return;
+  VehicleRun& v = *vehicles_.front();
+  for (int64_t at = MonotonicNs() + kBetweenTicks_ns; at < next_tick_; at += kBetweenTicks_ns) {
+    SleepUntilNs(at);
+    if (v.lost || !v.health->up()) return;
+    const int64_t now = MonotonicNs();
+    if (!v.family->CommandBetweenTicks(NsToS(now - t0_), now, *haptic_, *v.link)) return;
+  }
 }
 
 // Every vehicle's health and states, driven or not: a fleet's operator
