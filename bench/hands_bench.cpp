@@ -64,6 +64,10 @@ constexpr double kHandMoved_m = 0.0001;
 /// A shake this long before the bench heard the contact is still its own:
 /// the run may hear the bumper's state first.
 constexpr int64_t kShakeEarly_ns = 20'000'000;
+/// A contact of the vehicle holds the command this long: the cockpits'
+/// throttle lock (config/interfaces/cockpit*.yaml, throttle_lock_s: 1 s);
+/// the gesture's wall stands until 0.3 s after it.
+constexpr int64_t kContactHold_ns = 1'000'000'000;
 /// Bounds on waits (a hang, not a timing check).
 constexpr double kStartBound_s = 90.0;
 constexpr double kRunBound_s = 600.0;
@@ -178,6 +182,8 @@ struct Row {
   /// changed (latencies_ms: the control's travel to the first level).
   std::vector<double> to_proxy_ms, to_first_change_ms;
   int steps_unanswered = 0;
+  /// Steps a contact of the vehicle held (left out of every stage above).
+  int steps_after_contact = 0;
   double ratio_free = Nan(), ratio_across = Nan(), ratio_along = Nan();
   bool contact = false;
   double contact_to_shake_ms = Nan();
@@ -484,8 +490,29 @@ void Engaged(const Options& o, const std::filesystem::path& dir, const std::file
     row.max_forward = std::max(row.max_forward, std::abs(0.5 * (c.left + c.right)));
     row.max_turn = std::max(row.max_turn, std::abs(0.5 * (c.right - c.left)));
   }
+  // The hands, from the run's device trace.
+  std::vector<haptics::TraceRecord> trace;
+  try {
+    trace = haptics::ReadTrace(dir / ("hands-" + row.interface + "-engaged.trace"));
+  } catch (const std::exception& e) {
+    row.error = e.what();
+    return;
+  }
+  // A step the vehicle's contact holds (its shake, the trace's shake record,
+  // within kContactHold_ns before the step or during it) is no measure of
+  // the chain: the cockpits lock the lever at zero for a second.
+  std::vector<bool> held(step_ns.size(), false);
+  for (const haptics::TraceRecord& r : trace) {
+    if (r.kind != haptics::TraceRecord::kShake) continue;
+    for (size_t i = 0; i + 1 < step_ns.size(); ++i)
+      held[i] = held[i] || (r.t_ns >= step_ns[i] - kContactHold_ns && r.t_ns < step_ns[i + 1]);
+  }
   std::vector<double> step_command_ms(step_ns.size(), Nan());  // per step, NaN: unanswered
   for (size_t i = 0; i + 1 < step_ns.size(); ++i) {
+    if (held[i]) {
+      ++row.steps_after_contact;
+      continue;
+    }
     const int64_t sent = step_ns[i];
     HeardCommand before{};
     for (const HeardCommand& c : commands) {
@@ -504,19 +531,12 @@ void Engaged(const Options& o, const std::filesystem::path& dir, const std::file
     row.steps_unanswered += answered ? 0 : 1;
   }
 
-  // The hands, from the run's device trace.
-  std::vector<haptics::TraceRecord> trace;
-  try {
-    trace = haptics::ReadTrace(dir / ("hands-" + row.interface + "-engaged.trace"));
-  } catch (const std::exception& e) {
-    row.error = e.what();
-    return;
-  }
   using haptics::Side;
   const WristTrack hand = WristsOf(trace, mouse.pointer_on_left ? Side::kLeft : Side::kRight);
   const double m = mouse.metres_per_pixel;
   // Each step's pointer to the hand: the first tick the hand moved its way.
   for (size_t i = 0; i + 1 < step_ns.size(); ++i) {
+    if (held[i]) continue;
     const double way = i % 2 == 0 ? 1.0 : -1.0;  // up the window: forward, +x
     const double from = PositionAt(hand, step_ns[i])[0];
     for (const auto& [t, p] : hand) {
@@ -534,6 +554,7 @@ void Engaged(const Options& o, const std::filesystem::path& dir, const std::file
     const SessionFileStages stages = ReadStages(SessionFileOf(dir, row.interface, "engaged"),
                                                 mouse.pointer_on_left ? Side::kLeft : Side::kRight);
     for (size_t i = 0; i + 1 < step_ns.size(); ++i) {
+      if (held[i]) continue;
       const double way = i % 2 == 0 ? 1.0 : -1.0;
       const int64_t from = step_ns[i], to = step_ns[i + 1];
       std::optional<double> proxy_from;
@@ -750,6 +771,10 @@ int BenchHandsMain(int argc, const char* const* argv) {
         Percentile(row.to_proxy_ms, 0.5), Percentile(row.to_proxy_ms, 0.95),
         Percentile(row.to_first_change_ms, 0.5), Percentile(row.to_first_change_ms, 0.95),
         Percentile(row.latencies_ms, 0.5), Percentile(row.latencies_ms, 0.95));
+    if (row.steps_after_contact > 0) {
+      std::printf("  %-17s  %d step(s) left out: a contact of the vehicle held the command\n", "",
+                  row.steps_after_contact);
+    }
     std::fflush(stdout);
     rows.push_back(std::move(row));
   }
@@ -772,6 +797,8 @@ int BenchHandsMain(int argc, const char* const* argv) {
       "first command sent\n"
       "  that moved its way at all (the run's session file), to the first that changed the "
       "levels (in->cmd);\n"
+      "  a step a contact of the vehicle held (the cockpits lock the lever at zero for 1 s) is "
+      "left out and counted;\n"
       "  in->hand: the step to the device's hand first moving its way (X, SDL, the "
       "view's\n"
       "  event pump, a servo tick); ratio: the pointer hand's displacement over the cursor's (1: "
@@ -852,6 +879,7 @@ int BenchHandsMain(int argc, const char* const* argv) {
           << ",\"input_to_hand_ms\":" << Numbers(r.to_hand_ms)
           << ",\"steps\":" << r.latencies_ms.size() + static_cast<size_t>(r.steps_unanswered)
           << ",\"steps_unanswered\":" << r.steps_unanswered
+          << ",\"steps_after_contact\":" << r.steps_after_contact
           << ",\"ratio_free\":" << Num(r.ratio_free)
           << ",\"ratio_across_wall\":" << Num(r.ratio_across)
           << ",\"ratio_along_wall\":" << Num(r.ratio_along)
