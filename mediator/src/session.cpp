@@ -4,6 +4,7 @@
 // parts (VehicleRun), whatever their family (FamilySession).
 #include "haptel/mediator/session.hpp"
 
+#include <sched.h>
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -31,6 +32,42 @@
 #include "simulated_time.hpp"
 
 namespace haptel::mediator {
+
+namespace {
+
+/// The session thread's SCHED_FIFO priority while its loop runs in real
+/// time: below the physics thread's (config/physics.yaml, 70) and the servo
+/// loop's (80), whose steps it reads, above every normal thread. On a loaded
+/// host a normal session thread waited tens to hundreds of milliseconds for
+/// the CPU: commands late by as much (issue 36: input to command p95) and,
+/// past 200 ms, the vehicle's watchdog stopping it.
+constexpr int kSessionPriority = 60;
+
+/// The calling thread at SCHED_FIFO `priority` (where the process may) for
+/// its lifetime, then back to what it was. With SCHED_RESET_ON_FORK: the
+/// threads and processes it starts meanwhile (a physics world built late,
+/// the vehicle's process) start as normal ones.
+class RealtimeWhile {
+ public:
+  explicit RealtimeWhile(int priority) : policy_(sched_getscheduler(0)) {
+    if (policy_ < 0 || sched_getparam(0, &param_) != 0) return;
+    sched_param wanted{};
+    wanted.sched_priority = priority;
+    granted_ = sched_setscheduler(0, SCHED_FIFO | SCHED_RESET_ON_FORK, &wanted) == 0;
+  }
+  ~RealtimeWhile() {
+    if (granted_) sched_setscheduler(0, policy_, &param_);
+  }
+  RealtimeWhile(const RealtimeWhile&) = delete;
+  RealtimeWhile& operator=(const RealtimeWhile&) = delete;
+
+ private:
+  int policy_;
+  sched_param param_{};
+  bool granted_ = false;
+};
+
+}  // namespace
 
 std::string ToString(Outcome outcome) {
   switch (outcome) {
@@ -450,6 +487,9 @@ void SessionLoop::TapView(view::ViewOptions& options, std::shared_ptr<const view
 }
 
 std::optional<LoopEnd> SessionLoop::Loop() {
+  // Simulated time never sleeps: a real-time thread there would hold a core.
+  std::optional<RealtimeWhile> realtime;
+  if (!simulated_) realtime.emplace(kSessionPriority);
   for (;;) {
     Pace();
     const int64_t now = MonotonicNs();
