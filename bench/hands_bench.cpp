@@ -20,6 +20,7 @@
 #include "haptel/config/device.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/run.hpp"
+#include "haptel/config/vehicle.hpp"
 #include "haptel/core/args.hpp"
 #include "haptel/core/child_process.hpp"
 #include "haptel/core/clock.hpp"
@@ -27,6 +28,7 @@
 #include "haptel/haptics/pointer.hpp"
 #include "haptel/haptics/trace.hpp"
 #include "haptel/mcap/reader.hpp"
+#include "haptel/models/tread_drive.hpp"
 #include "haptel/msg/haptelPubSubTypes.h"
 #include "haptel/record/session_channels.hpp"
 #include "haptel/session/sessionPubSubTypes.h"
@@ -181,6 +183,13 @@ struct Row {
   /// session's tick or between ticks), and the first whose motor levels
   /// changed (latencies_ms: the control's travel to the first level).
   std::vector<double> to_proxy_ms, to_first_change_ms;
+  /// The first command sent whose motor levels differ (the run's session
+  /// file, quantised as the vehicle does): latencies_ms without the
+  /// vehicle's process, which may read a command late.
+  std::vector<double> to_levels_sent_ms;
+  /// The gaps between the commands the run sent over the steps, ms: the
+  /// session thread's own stalls (it sends one at least every 20 ms).
+  std::vector<double> command_gaps_ms;
   int steps_unanswered = 0;
   /// Steps a contact of the vehicle held (left out of every stage above).
   int steps_after_contact = 0;
@@ -227,6 +236,7 @@ bool DecodeCdr(const mcap::MessageView& m, Msg& out) {
 struct SentCommand {
   int64_t t_ns = 0;
   double forward = 0.0;  ///< (left + right) / 2
+  double left = 0.0, right = 0.0;
 };
 /// The pointer hand's proxy as a servo tick saw it (CLOCK_MONOTONIC ns, m).
 struct ProxyAt {
@@ -258,7 +268,8 @@ SessionFileStages ReadStages(const std::filesystem::path& file, haptics::Side po
                           if (m.channel->topic == command_topic) {
                             msg::TreadCommand c;
                             if (DecodeCdr<msg::TreadCommandPubSubType>(m, c) && !c.release())
-                              out.commands.push_back({c.sent_ns(), 0.5 * (c.left() + c.right())});
+                              out.commands.push_back(
+                                  {c.sent_ns(), 0.5 * (c.left() + c.right()), c.left(), c.right()});
                             return;
                           }
                           session::ServoTick tick;
@@ -551,8 +562,14 @@ void Engaged(const Options& o, const std::filesystem::path& dir, const std::file
   }
   // The stages after the hand, from the run's session file.
   try {
+    const int speed_levels = LoadVehicle(o.vehicle).drive.speed_levels;
     const SessionFileStages stages = ReadStages(SessionFileOf(dir, row.interface, "engaged"),
                                                 mouse.pointer_on_left ? Side::kLeft : Side::kRight);
+    for (size_t k = 1; k < stages.commands.size(); ++k) {
+      const int64_t t = stages.commands[k].t_ns;
+      if (!step_ns.empty() && t > step_ns.front() && t <= step_ns.back())
+        row.command_gaps_ms.push_back(1e-6 * static_cast<double>(t - stages.commands[k - 1].t_ns));
+    }
     for (size_t i = 0; i + 1 < step_ns.size(); ++i) {
       if (held[i]) continue;
       const double way = i % 2 == 0 ? 1.0 : -1.0;
@@ -578,6 +595,24 @@ void Engaged(const Options& o, const std::filesystem::path& dir, const std::file
         if (c.t_ns > to || !before) break;
         if (way * (c.forward - *before) > 0.0) {
           row.to_first_change_ms.push_back(1e-6 * static_cast<double>(c.t_ns - from));
+          break;
+        }
+      }
+      // The first sent whose levels (as the vehicle quantises them) differ:
+      // the operator's side alone, without the vehicle's reading of it.
+      const auto levels = [&](const SentCommand& c) {
+        return std::array<int, 2>{models::QuantiseCommand(c.left, speed_levels),
+                                  models::QuantiseCommand(c.right, speed_levels)};
+      };
+      std::optional<std::array<int, 2>> levels_before;
+      for (const SentCommand& c : stages.commands) {
+        if (c.t_ns <= from) {
+          levels_before = levels(c);
+          continue;
+        }
+        if (c.t_ns > to || !levels_before) break;
+        if (levels(c) != *levels_before) {
+          row.to_levels_sent_ms.push_back(1e-6 * static_cast<double>(c.t_ns - from));
           break;
         }
       }
@@ -766,11 +801,19 @@ int BenchHandsMain(int argc, const char* const* argv) {
     std::printf("\n");
     std::printf(
         "  %-17s  stages from the step, p50/p95 ms: hand %.1f / %.1f, proxy %.1f / %.1f, first "
-        "change of command %.1f / %.1f, first change of levels %.1f / %.1f\n",
+        "change of command %.1f / %.1f, first change of levels sent %.1f / %.1f, obeyed %.1f / "
+        "%.1f\n",
         "", Percentile(row.to_hand_ms, 0.5), Percentile(row.to_hand_ms, 0.95),
         Percentile(row.to_proxy_ms, 0.5), Percentile(row.to_proxy_ms, 0.95),
         Percentile(row.to_first_change_ms, 0.5), Percentile(row.to_first_change_ms, 0.95),
+        Percentile(row.to_levels_sent_ms, 0.5), Percentile(row.to_levels_sent_ms, 0.95),
         Percentile(row.latencies_ms, 0.5), Percentile(row.latencies_ms, 0.95));
+    if (!row.command_gaps_ms.empty()) {
+      std::printf(
+          "  %-17s  the session's commands over the steps: gap p99 %.1f ms, largest %.1f ms\n", "",
+          Percentile(row.command_gaps_ms, 0.99),
+          *std::max_element(row.command_gaps_ms.begin(), row.command_gaps_ms.end()));
+    }
     if (row.steps_after_contact > 0) {
       std::printf("  %-17s  %d step(s) left out: a contact of the vehicle held the command\n", "",
                   row.steps_after_contact);
@@ -795,8 +838,11 @@ int BenchHandsMain(int argc, const char* const* argv) {
       "stages: the step to\n"
       "  the hand, to the proxy hand (the physics world's, as the servo ticks saw it), to the "
       "first command sent\n"
-      "  that moved its way at all (the run's session file), to the first that changed the "
-      "levels (in->cmd);\n"
+      "  that moved its way at all (the run's session file), to the first sent that changed "
+      "the levels (the\n"
+      "  session file's, quantised as the vehicle does), to the first obeyed that did "
+      "(in->cmd: with the vehicle's\n"
+      "  process, which may read a command late);\n"
       "  a step a contact of the vehicle held (the cockpits lock the lever at zero for 1 s) is "
       "left out and counted;\n"
       "  in->hand: the step to the device's hand first moving its way (X, SDL, the "
@@ -873,6 +919,13 @@ int BenchHandsMain(int argc, const char* const* argv) {
           << ",\"input_to_first_change_ms_p50\":" << Num(Percentile(r.to_first_change_ms, 0.5))
           << ",\"input_to_first_change_ms_p95\":" << Num(Percentile(r.to_first_change_ms, 0.95))
           << ",\"input_to_first_change_ms\":" << Numbers(r.to_first_change_ms)
+          << ",\"input_to_levels_sent_ms_p50\":" << Num(Percentile(r.to_levels_sent_ms, 0.5))
+          << ",\"input_to_levels_sent_ms_p95\":" << Num(Percentile(r.to_levels_sent_ms, 0.95))
+          << ",\"command_gap_ms_p99\":" << Num(Percentile(r.command_gaps_ms, 0.99))
+          << ",\"command_gap_ms_max\":"
+          << Num(r.command_gaps_ms.empty()
+                     ? Nan()
+                     : *std::max_element(r.command_gaps_ms.begin(), r.command_gaps_ms.end()))
           << ",\"physics_rate_hz\":" << Num(r.physics_rate_hz)
           << ",\"physics_period_p99_us\":" << Num(r.physics_period_p99_us)
           << ",\"input_to_command_ms\":" << Numbers(r.latencies_ms)
