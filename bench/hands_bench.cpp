@@ -929,8 +929,8 @@ int BenchHandsMain(int argc, const char* const* argv) {
           << ",\"physics_rate_hz\":" << Num(r.physics_rate_hz)
           << ",\"physics_period_p99_us\":" << Num(r.physics_period_p99_us)
           << ",\"input_to_command_ms\":" << Numbers(r.latencies_ms)
-          << ",\"input_to_hand_ms\":" << Numbers(r.to_hand_ms)
-          << ",\"steps\":" << r.latencies_ms.size() + static_cast<size_t>(r.steps_unanswered)
+          << ",\"input_to_hand_ms\":" << Numbers(r.to_hand_ms) << ",\"steps\":"
+          << r.latencies_ms.size() + static_cast<size_t>(r.steps_unanswered + r.steps_after_contact)
           << ",\"steps_unanswered\":" << r.steps_unanswered
           << ",\"steps_after_contact\":" << r.steps_after_contact
           << ",\"ratio_free\":" << Num(r.ratio_free)
