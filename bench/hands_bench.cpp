@@ -1,12 +1,14 @@
 #include "hands_bench.hpp"
 
 #include <X11/keysym.h>
+#include <fastdds/rtps/common/SerializedPayload.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <optional>
 #include <sstream>
@@ -18,12 +20,18 @@
 #include "haptel/config/device.hpp"
 #include "haptel/config/paths.hpp"
 #include "haptel/config/run.hpp"
+#include "haptel/config/vehicle.hpp"
 #include "haptel/core/args.hpp"
 #include "haptel/core/child_process.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/core/json.hpp"
 #include "haptel/haptics/pointer.hpp"
 #include "haptel/haptics/trace.hpp"
+#include "haptel/mcap/reader.hpp"
+#include "haptel/models/tread_drive.hpp"
+#include "haptel/msg/haptelPubSubTypes.h"
+#include "haptel/record/session_channels.hpp"
+#include "haptel/session/sessionPubSubTypes.h"
 #include "haptel/testing/hand_trace.hpp"
 #include "haptel/testing/obstacle_track.hpp"
 #include "haptel/testing/pointer_pilot.hpp"
@@ -58,6 +66,10 @@ constexpr double kHandMoved_m = 0.0001;
 /// A shake this long before the bench heard the contact is still its own:
 /// the run may hear the bumper's state first.
 constexpr int64_t kShakeEarly_ns = 20'000'000;
+/// A contact of the vehicle holds the command this long: the cockpits'
+/// throttle lock (config/interfaces/cockpit*.yaml, throttle_lock_s: 1 s);
+/// the gesture's wall stands until 0.3 s after it.
+constexpr int64_t kContactHold_ns = 1'000'000'000;
 /// Bounds on waits (a hang, not a timing check).
 constexpr double kStartBound_s = 90.0;
 constexpr double kRunBound_s = 600.0;
@@ -164,7 +176,23 @@ struct Row {
   /// the proxy hand and the lever on the physics thread, the session tick),
   /// apart from the pointer's way into the device.
   std::vector<double> hand_to_command_ms;
+  /// The stages after the hand, each step's from the pointer step (from the
+  /// run's session file): the proxy hand first moving its way (the physics
+  /// thread's, as the servo ticks saw it; none without a world), the first
+  /// command sent that moved its way at all (the interface read at the
+  /// session's tick or between ticks), and the first whose motor levels
+  /// changed (latencies_ms: the control's travel to the first level).
+  std::vector<double> to_proxy_ms, to_first_change_ms;
+  /// The first command sent whose motor levels differ (the run's session
+  /// file, quantised as the vehicle does): latencies_ms without the
+  /// vehicle's process, which may read a command late.
+  std::vector<double> to_levels_sent_ms;
+  /// The gaps between the commands the run sent over the steps, ms: the
+  /// session thread's own stalls (it sends one at least every 20 ms).
+  std::vector<double> command_gaps_ms;
   int steps_unanswered = 0;
+  /// Steps a contact of the vehicle held (left out of every stage above).
+  int steps_after_contact = 0;
   double ratio_free = Nan(), ratio_across = Nan(), ratio_along = Nan();
   bool contact = false;
   double contact_to_shake_ms = Nan();
@@ -181,6 +209,79 @@ struct Row {
   Series hand{"", {}, {}};
   Series cursor{"", {}, {}};
 };
+
+/// The run's session file (its commands with their values, its servo ticks).
+std::filesystem::path SessionFileOf(const std::filesystem::path& dir, const std::string& interface,
+                                    const std::string& tag) {
+  return dir / ("hands-" + interface + "-" + tag + ".mcap");
+}
+
+/// A sample's CDR, as the session file holds it, into `out`; false when it
+/// does not decode.
+template <typename PubSub, typename Msg>
+bool DecodeCdr(const mcap::MessageView& m, Msg& out) {
+  PubSub type;
+  eprosima::fastrtps::rtps::SerializedPayload_t payload(
+      static_cast<uint32_t>(std::max<size_t>(m.size, 1)));
+  std::memcpy(payload.data, m.data, m.size);
+  payload.length = static_cast<uint32_t>(m.size);
+  try {
+    return type.deserialize(&payload, &out);
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+/// A command the run sent (its own stamp, CLOCK_MONOTONIC ns) and its values.
+struct SentCommand {
+  int64_t t_ns = 0;
+  double forward = 0.0;  ///< (left + right) / 2
+  double left = 0.0, right = 0.0;
+};
+/// The pointer hand's proxy as a servo tick saw it (CLOCK_MONOTONIC ns, m).
+struct ProxyAt {
+  int64_t t_ns = 0;
+  double x = 0.0;
+};
+struct SessionFileStages {
+  std::vector<SentCommand> commands;
+  std::vector<ProxyAt> proxy;  ///< only the ticks with the proxy coupled
+};
+
+/// The commands sent and the pointer side's coupled proxy from `file`.
+SessionFileStages ReadStages(const std::filesystem::path& file, haptics::Side pointer_side) {
+  namespace channels = record::session;
+  const mcap::Reader reader = mcap::Reader::Open(file);
+  std::string command_topic;
+  for (const auto& [id, channel] : reader.channels()) {
+    const auto schema = reader.schemas().find(channel.schema_id);
+    const auto direction = channel.metadata.find("direction");
+    if (schema != reader.schemas().end() &&
+        schema->second.name == std::string(channels::kDdsSchemaPrefix) + "TreadCommand" &&
+        direction != channel.metadata.end() && direction->second == "sent")
+      command_topic = channel.topic;
+  }
+  if (command_topic.empty()) throw std::runtime_error(file.string() + ": no commands sent");
+  SessionFileStages out;
+  reader.ForEachMessage(0, UINT64_MAX, {command_topic, std::string(channels::kServoTopic)},
+                        [&](const mcap::MessageView& m) {
+                          if (m.channel->topic == command_topic) {
+                            msg::TreadCommand c;
+                            if (DecodeCdr<msg::TreadCommandPubSubType>(m, c) && !c.release())
+                              out.commands.push_back(
+                                  {c.sent_ns(), 0.5 * (c.left() + c.right()), c.left(), c.right()});
+                            return;
+                          }
+                          session::ServoTick tick;
+                          if (DecodeCdr<session::ServoTickPubSubType>(m, tick) &&
+                              tick.side() == static_cast<uint8_t>(haptics::Index(pointer_side)) &&
+                              tick.coupling())
+                            out.proxy.push_back({tick.t_ns(), tick.proxy_position()[0]});
+                        });
+  std::sort(out.commands.begin(), out.commands.end(),
+            [](const SentCommand& a, const SentCommand& b) { return a.t_ns < b.t_ns; });
+  return out;
+}
 
 std::vector<std::string> RunArgs(const Options& o, const std::string& interface,
                                  const std::filesystem::path& dir,
@@ -212,7 +313,9 @@ std::vector<std::string> RunArgs(const Options& o, const std::string& interface,
           "--vehicle-timeout",
           "5",
           "--time-limit",
-          JsonNumber(time_limit_s)};
+          JsonNumber(time_limit_s),
+          "--session",
+          SessionFileOf(dir, interface, tag).string()};
 }
 
 /// The pointer, moved and logged: where the cursor was sent, and when.
@@ -398,8 +501,29 @@ void Engaged(const Options& o, const std::filesystem::path& dir, const std::file
     row.max_forward = std::max(row.max_forward, std::abs(0.5 * (c.left + c.right)));
     row.max_turn = std::max(row.max_turn, std::abs(0.5 * (c.right - c.left)));
   }
+  // The hands, from the run's device trace.
+  std::vector<haptics::TraceRecord> trace;
+  try {
+    trace = haptics::ReadTrace(dir / ("hands-" + row.interface + "-engaged.trace"));
+  } catch (const std::exception& e) {
+    row.error = e.what();
+    return;
+  }
+  // A step the vehicle's contact holds (its shake, the trace's shake record,
+  // within kContactHold_ns before the step or during it) is no measure of
+  // the chain: the cockpits lock the lever at zero for a second.
+  std::vector<bool> held(step_ns.size(), false);
+  for (const haptics::TraceRecord& r : trace) {
+    if (r.kind != haptics::TraceRecord::kShake) continue;
+    for (size_t i = 0; i + 1 < step_ns.size(); ++i)
+      held[i] = held[i] || (r.t_ns >= step_ns[i] - kContactHold_ns && r.t_ns < step_ns[i + 1]);
+  }
   std::vector<double> step_command_ms(step_ns.size(), Nan());  // per step, NaN: unanswered
   for (size_t i = 0; i + 1 < step_ns.size(); ++i) {
+    if (held[i]) {
+      ++row.steps_after_contact;
+      continue;
+    }
     const int64_t sent = step_ns[i];
     HeardCommand before{};
     for (const HeardCommand& c : commands) {
@@ -418,19 +542,12 @@ void Engaged(const Options& o, const std::filesystem::path& dir, const std::file
     row.steps_unanswered += answered ? 0 : 1;
   }
 
-  // The hands, from the run's device trace.
-  std::vector<haptics::TraceRecord> trace;
-  try {
-    trace = haptics::ReadTrace(dir / ("hands-" + row.interface + "-engaged.trace"));
-  } catch (const std::exception& e) {
-    row.error = e.what();
-    return;
-  }
   using haptics::Side;
   const WristTrack hand = WristsOf(trace, mouse.pointer_on_left ? Side::kLeft : Side::kRight);
   const double m = mouse.metres_per_pixel;
   // Each step's pointer to the hand: the first tick the hand moved its way.
   for (size_t i = 0; i + 1 < step_ns.size(); ++i) {
+    if (held[i]) continue;
     const double way = i % 2 == 0 ? 1.0 : -1.0;  // up the window: forward, +x
     const double from = PositionAt(hand, step_ns[i])[0];
     for (const auto& [t, p] : hand) {
@@ -442,6 +559,66 @@ void Engaged(const Options& o, const std::filesystem::path& dir, const std::file
         break;
       }
     }
+  }
+  // The stages after the hand, from the run's session file.
+  try {
+    const int speed_levels = LoadVehicle(o.vehicle).drive.speed_levels;
+    const SessionFileStages stages = ReadStages(SessionFileOf(dir, row.interface, "engaged"),
+                                                mouse.pointer_on_left ? Side::kLeft : Side::kRight);
+    for (size_t k = 1; k < stages.commands.size(); ++k) {
+      const int64_t t = stages.commands[k].t_ns;
+      if (!step_ns.empty() && t > step_ns.front() && t <= step_ns.back())
+        row.command_gaps_ms.push_back(1e-6 * static_cast<double>(t - stages.commands[k - 1].t_ns));
+    }
+    for (size_t i = 0; i + 1 < step_ns.size(); ++i) {
+      if (held[i]) continue;
+      const double way = i % 2 == 0 ? 1.0 : -1.0;
+      const int64_t from = step_ns[i], to = step_ns[i + 1];
+      std::optional<double> proxy_from;
+      for (const ProxyAt& p : stages.proxy) {
+        if (p.t_ns <= from) {
+          proxy_from = p.x;
+          continue;
+        }
+        if (p.t_ns > to || !proxy_from) break;
+        if (way * (p.x - *proxy_from) >= kHandMoved_m) {
+          row.to_proxy_ms.push_back(1e-6 * static_cast<double>(p.t_ns - from));
+          break;
+        }
+      }
+      std::optional<double> before;
+      for (const SentCommand& c : stages.commands) {
+        if (c.t_ns <= from) {
+          before = c.forward;
+          continue;
+        }
+        if (c.t_ns > to || !before) break;
+        if (way * (c.forward - *before) > 0.0) {
+          row.to_first_change_ms.push_back(1e-6 * static_cast<double>(c.t_ns - from));
+          break;
+        }
+      }
+      // The first sent whose levels (as the vehicle quantises them) differ:
+      // the operator's side alone, without the vehicle's reading of it.
+      const auto levels = [&](const SentCommand& c) {
+        return std::array<int, 2>{models::QuantiseCommand(c.left, speed_levels),
+                                  models::QuantiseCommand(c.right, speed_levels)};
+      };
+      std::optional<std::array<int, 2>> levels_before;
+      for (const SentCommand& c : stages.commands) {
+        if (c.t_ns <= from) {
+          levels_before = levels(c);
+          continue;
+        }
+        if (c.t_ns > to || !levels_before) break;
+        if (levels(c) != *levels_before) {
+          row.to_levels_sent_ms.push_back(1e-6 * static_cast<double>(c.t_ns - from));
+          break;
+        }
+      }
+    }
+  } catch (const std::exception& e) {
+    row.error = e.what();
   }
   // The hand's forward offset over the cursor's, step by step: each step's
   // settled hand (just before the next step) against the one before.
@@ -622,6 +799,25 @@ int BenchHandsMain(int argc, const char* const* argv) {
                   row.physics_period_p99_us);
     }
     std::printf("\n");
+    std::printf(
+        "  %-17s  stages from the step, p50/p95 ms: hand %.1f / %.1f, proxy %.1f / %.1f, first "
+        "change of command %.1f / %.1f, first change of levels sent %.1f / %.1f, obeyed %.1f / "
+        "%.1f\n",
+        "", Percentile(row.to_hand_ms, 0.5), Percentile(row.to_hand_ms, 0.95),
+        Percentile(row.to_proxy_ms, 0.5), Percentile(row.to_proxy_ms, 0.95),
+        Percentile(row.to_first_change_ms, 0.5), Percentile(row.to_first_change_ms, 0.95),
+        Percentile(row.to_levels_sent_ms, 0.5), Percentile(row.to_levels_sent_ms, 0.95),
+        Percentile(row.latencies_ms, 0.5), Percentile(row.latencies_ms, 0.95));
+    if (!row.command_gaps_ms.empty()) {
+      std::printf(
+          "  %-17s  the session's commands over the steps: gap p99 %.1f ms, largest %.1f ms\n", "",
+          Percentile(row.command_gaps_ms, 0.99),
+          *std::max_element(row.command_gaps_ms.begin(), row.command_gaps_ms.end()));
+    }
+    if (row.steps_after_contact > 0) {
+      std::printf("  %-17s  %d step(s) left out: a contact of the vehicle held the command\n", "",
+                  row.steps_after_contact);
+    }
     std::fflush(stdout);
     rows.push_back(std::move(row));
   }
@@ -636,11 +832,20 @@ int BenchHandsMain(int argc, const char* const* argv) {
         r.servo_p99_us <= std::max(r.bare_beside_p99_us, r.bare_alone_p99_us) + kBin_us;
   }
   std::printf(
-      "\n  in->cmd: a pointer step sent through XTest to the first command after it that differs "
-      "(as the\n"
-      "  vehicle's states report it, 50 Hz: a command overtaken within a state's period is not "
-      "heard, so an\n"
-      "  upper bound); in->hand: the step to the device's hand first moving its way (X, SDL, the "
+      "\n  in->cmd: a pointer step sent through XTest to the send time of the first command "
+      "after it whose motor\n"
+      "  levels differ (as the vehicle's states report it, at 200 Hz: every command heard); "
+      "stages: the step to\n"
+      "  the hand, to the proxy hand (the physics world's, as the servo ticks saw it), to the "
+      "first command sent\n"
+      "  that moved its way at all (the run's session file), to the first sent that changed "
+      "the levels (the\n"
+      "  session file's, quantised as the vehicle does), to the first obeyed that did "
+      "(in->cmd: with the vehicle's\n"
+      "  process, which may read a command late);\n"
+      "  a step a contact of the vehicle held (the cockpits lock the lever at zero for 1 s) is "
+      "left out and counted;\n"
+      "  in->hand: the step to the device's hand first moving its way (X, SDL, the "
       "view's\n"
       "  event pump, a servo tick); ratio: the pointer hand's displacement over the cursor's (1: "
       "it "
@@ -709,12 +914,25 @@ int BenchHandsMain(int argc, const char* const* argv) {
           << ",\"input_to_hand_ms_p95\":" << Num(Percentile(r.to_hand_ms, 0.95))
           << ",\"hand_to_command_ms_p50\":" << Num(Percentile(r.hand_to_command_ms, 0.5))
           << ",\"hand_to_command_ms_p95\":" << Num(Percentile(r.hand_to_command_ms, 0.95))
+          << ",\"input_to_proxy_ms_p50\":" << Num(Percentile(r.to_proxy_ms, 0.5))
+          << ",\"input_to_proxy_ms_p95\":" << Num(Percentile(r.to_proxy_ms, 0.95))
+          << ",\"input_to_first_change_ms_p50\":" << Num(Percentile(r.to_first_change_ms, 0.5))
+          << ",\"input_to_first_change_ms_p95\":" << Num(Percentile(r.to_first_change_ms, 0.95))
+          << ",\"input_to_first_change_ms\":" << Numbers(r.to_first_change_ms)
+          << ",\"input_to_levels_sent_ms_p50\":" << Num(Percentile(r.to_levels_sent_ms, 0.5))
+          << ",\"input_to_levels_sent_ms_p95\":" << Num(Percentile(r.to_levels_sent_ms, 0.95))
+          << ",\"command_gap_ms_p99\":" << Num(Percentile(r.command_gaps_ms, 0.99))
+          << ",\"command_gap_ms_max\":"
+          << Num(r.command_gaps_ms.empty()
+                     ? Nan()
+                     : *std::max_element(r.command_gaps_ms.begin(), r.command_gaps_ms.end()))
           << ",\"physics_rate_hz\":" << Num(r.physics_rate_hz)
           << ",\"physics_period_p99_us\":" << Num(r.physics_period_p99_us)
           << ",\"input_to_command_ms\":" << Numbers(r.latencies_ms)
-          << ",\"input_to_hand_ms\":" << Numbers(r.to_hand_ms)
-          << ",\"steps\":" << r.latencies_ms.size() + static_cast<size_t>(r.steps_unanswered)
+          << ",\"input_to_hand_ms\":" << Numbers(r.to_hand_ms) << ",\"steps\":"
+          << r.latencies_ms.size() + static_cast<size_t>(r.steps_unanswered + r.steps_after_contact)
           << ",\"steps_unanswered\":" << r.steps_unanswered
+          << ",\"steps_after_contact\":" << r.steps_after_contact
           << ",\"ratio_free\":" << Num(r.ratio_free)
           << ",\"ratio_across_wall\":" << Num(r.ratio_across)
           << ",\"ratio_along_wall\":" << Num(r.ratio_along)

@@ -75,6 +75,11 @@ TreadCommand CockpitInterface::Update(double t_s, const VehicleFeedback& feedbac
   return logic_.Map(controls_, t_s);
 }
 
+std::optional<TreadCommand> CockpitInterface::CommandNow(double t_s,
+                                                         const haptics::Hal& /*hal*/) const {
+  return logic_.Map(port_.Controls(), t_s);
+}
+
 HandTargets CockpitInterface::HandTargetsFor(const MotionIntent& intent) const {
   const CockpitConfig& c = logic_.config();
   CockpitControls wanted = logic_.ControlsFor(intent);

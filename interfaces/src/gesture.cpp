@@ -80,6 +80,12 @@ TreadCommand GestureInterface::Update(double t_s, const VehicleFeedback& feedbac
   return Map(hand.position);
 }
 
+std::optional<TreadCommand> GestureInterface::CommandNow(double /*t_s*/,
+                                                         const haptics::Hal& hal) const {
+  const haptics::HandSample hand = hal.LatestSample(Side::kRight);
+  return hand.valid ? Map(hand.position) : TreadCommand{};
+}
+
 namespace {
 
 // The gesture interfaces in the catalogue (catalog.hpp).

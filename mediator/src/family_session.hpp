@@ -76,6 +76,16 @@ class FamilySession : public HandoverSide {
   virtual std::optional<LoopEnd> Command(double t_s, int64_t now_ns,
                                          const interfaces::InputState& person, bool vehicle_up,
                                          bool engaged, HapticSide& haptic, VehicleLink& link) = 0;
+  /// Between ticks, every millisecond while it says so (a single run in
+  /// real time; the tick's Command decided `engaged` and the vehicle up):
+  /// sends the interface's command at once when its motor levels changed
+  /// since the last one sent, so that a person's input does not wait for
+  /// the next tick (issue 36). Returns whether it wants to be asked again
+  /// before the next tick (false: nothing to look at; the loop sleeps).
+  virtual bool CommandBetweenTicks(double /*t_s*/, int64_t /*now_ns*/, HapticSide& /*haptic*/,
+                                   VehicleLink& /*link*/) {
+    return false;
+  }
   /// What engagement asks of the interface driven now: the device's arms it
   /// uses, their neutral places, whether its last command is at rest.
   virtual InterfaceRest Rest() const = 0;

@@ -278,7 +278,24 @@ class RobotSession final : public FamilySession {
       last_sent_ = due;
       predictor_.OnCommand(t, due.left, due.right);
     }
+    command_period_ns_ = command_period_ns;
+    // A person's hands move between ticks; the automatic operator's only at
+    // a tick, so its commands keep to the tick.
+    between_ticks_ = vehicle_up && engaged && op_ == person_.get();
     return std::nullopt;
+  }
+
+  bool CommandBetweenTicks(double t, int64_t now, HapticSide& haptic, VehicleLink& link) override {
+    if (!between_ticks_ || interfaces_->switching()) return false;
+    const std::optional<TreadCommand> command = interfaces_->current().CommandNow(t, haptic.hal());
+    if (!command) return false;
+    if (LevelsChange(last_sent_, *command, setup_.vehicle.drive.speed_levels)) {
+      link.Send(*command);
+      last_sent_ = motors_ = *command;
+      predictor_.OnCommand(t, command->left, command->right);
+      next_command_ns_ = now + command_period_ns_;  // the period counts from the last one sent
+    }
+    return true;
   }
 
   InterfaceRest Rest() const override {
@@ -538,6 +555,10 @@ class RobotSession final : public FamilySession {
   uint32_t requests_seen_ = 0;
   uint32_t disconnects_seen_ = 0;
   int64_t next_command_ns_ = 0;
+  int64_t command_period_ns_ = 0;  ///< the current interface's, as of the last tick
+  /// The last tick had the person engaged with the vehicle up: commands may
+  /// go between ticks (CommandBetweenTicks).
+  bool between_ticks_ = false;
   double grasp_s_ = 0.0;
   bool acted_ = false;  ///< the operator has driven (engaged) since the start
   RobotPredictor predictor_;

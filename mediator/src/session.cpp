@@ -4,6 +4,7 @@
 // parts (VehicleRun), whatever their family (FamilySession).
 #include "haptel/mediator/session.hpp"
 
+#include <sched.h>
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -31,6 +32,42 @@
 #include "simulated_time.hpp"
 
 namespace haptel::mediator {
+
+namespace {
+
+/// The session thread's SCHED_FIFO priority while its loop runs in real
+/// time: below the physics thread's (config/physics.yaml, 70) and the servo
+/// loop's (80), whose steps it reads, above every normal thread. On a loaded
+/// host a normal session thread waited tens to hundreds of milliseconds for
+/// the CPU: commands late by as much (issue 36: input to command p95) and,
+/// past 200 ms, the vehicle's watchdog stopping it.
+constexpr int kSessionPriority = 60;
+
+/// The calling thread at SCHED_FIFO `priority` (where the process may) for
+/// its lifetime, then back to what it was. With SCHED_RESET_ON_FORK: the
+/// threads and processes it starts meanwhile (a physics world built late,
+/// the vehicle's process) start as normal ones.
+class RealtimeWhile {
+ public:
+  explicit RealtimeWhile(int priority) : policy_(sched_getscheduler(0)) {
+    if (policy_ < 0 || sched_getparam(0, &param_) != 0) return;
+    sched_param wanted{};
+    wanted.sched_priority = priority;
+    granted_ = sched_setscheduler(0, SCHED_FIFO | SCHED_RESET_ON_FORK, &wanted) == 0;
+  }
+  ~RealtimeWhile() {
+    if (granted_) sched_setscheduler(0, policy_, &param_);
+  }
+  RealtimeWhile(const RealtimeWhile&) = delete;
+  RealtimeWhile& operator=(const RealtimeWhile&) = delete;
+
+ private:
+  int policy_;
+  sched_param param_{};
+  bool granted_ = false;
+};
+
+}  // namespace
 
 std::string ToString(Outcome outcome) {
   switch (outcome) {
@@ -161,6 +198,14 @@ class SessionLoop {
   std::optional<LoopEnd> Loop();
   /// Sleeps until the next tick (in simulated time: steps every part to it).
   void Pace();
+  /// Until the next tick, the driven interface's command is looked at every
+  /// kBetweenTicks_ns, while its family part asks (FamilySession::
+  /// CommandBetweenTicks): a person's input reaches the vehicle within a
+  /// physics step of moving the control, not at the next 10-ms tick.
+  void CommandBetweenTicks();
+  /// The physics world's step (config/physics.yaml's 1000 Hz): the controls
+  /// move no more often.
+  static constexpr int64_t kBetweenTicks_ns = 1'000'000;
   std::optional<LoopEnd> WatchVehicles(int64_t now_ns, double t_s);
   std::optional<LoopEnd> CommandVehicles(const interfaces::InputState& person, int64_t now_ns,
                                          double t_s, double dt_s);
@@ -442,6 +487,9 @@ void SessionLoop::TapView(view::ViewOptions& options, std::shared_ptr<const view
 }
 
 std::optional<LoopEnd> SessionLoop::Loop() {
+  // Simulated time never sleeps: a real-time thread there would hold a core.
+  std::optional<RealtimeWhile> realtime;
+  if (!simulated_) realtime.emplace(kSessionPriority);
   for (;;) {
     Pace();
     const int64_t now = MonotonicNs();
@@ -485,9 +533,23 @@ void SessionLoop::Pace() {
     const VehicleRun& v = *vehicles_.front();
     simulated_->AdvanceTo(next_tick_, *haptic_, v.family->physics(), *v.link);
   } else {
+    CommandBetweenTicks();
     SleepUntilNs(next_tick_);
   }
   next_tick_ += period_ns_;
+}
+
+void SessionLoop::CommandBetweenTicks() {
+  // A single run's vehicle only: a fleet's turns hand the person over at
+  // the tick. Simulated time has nothing between its ticks.
+  if (turns_ || vehicles_.size() != 1) return;
+  VehicleRun& v = *vehicles_.front();
+  for (int64_t at = MonotonicNs() + kBetweenTicks_ns; at < next_tick_; at += kBetweenTicks_ns) {
+    SleepUntilNs(at);
+    if (v.lost || !v.health->up()) return;
+    const int64_t now = MonotonicNs();
+    if (!v.family->CommandBetweenTicks(NsToS(now - t0_), now, *haptic_, *v.link)) return;
+  }
 }
 
 // Every vehicle's health and states, driven or not: a fleet's operator

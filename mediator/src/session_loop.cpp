@@ -6,6 +6,7 @@
 #include "haptel/core/json.hpp"
 #include "haptel/core/log.hpp"
 #include "haptel/core/process_identity.hpp"
+#include "haptel/models/tread_drive.hpp"
 
 namespace haptel::mediator {
 
@@ -201,6 +202,13 @@ bool CommandDue(int64_t& next_ns, int64_t now_ns, int64_t period_ns, bool change
   next_ns += period_ns;
   if (next_ns < now_ns) next_ns = now_ns;
   return true;
+}
+
+bool LevelsChange(const TreadCommand& sent, const TreadCommand& now, int speed_levels) {
+  return models::QuantiseCommand(sent.left, speed_levels) !=
+             models::QuantiseCommand(now.left, speed_levels) ||
+         models::QuantiseCommand(sent.right, speed_levels) !=
+             models::QuantiseCommand(now.right, speed_levels);
 }
 
 std::optional<LoopEnd> CheckLimits(double t_s, std::optional<double> lap_start_s,

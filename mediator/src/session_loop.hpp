@@ -148,6 +148,13 @@ class RunTrace {
 /// so the link carries at most the session's rate (session_rate_hz).
 bool CommandDue(int64_t& next_ns, int64_t now_ns, int64_t period_ns, bool changed = false);
 
+/// Between the session's ticks (FamilySession::CommandBetweenTicks): whether
+/// `now` sets other motor levels than `sent` once the robot quantises both to
+/// its `speed_levels` per direction (models::QuantiseCommand). Only such a
+/// change goes out before the tick: one within a level moves nothing, and
+/// the link keeps to about the session's rate.
+bool LevelsChange(const TreadCommand& sent, const TreadCommand& now, int speed_levels);
+
 /// The session's own limits at `t_s` (s since the session started): the time
 /// limit on the session's clock (0: none); then the lap limit (a study's cap;
 /// 0: none) and the track's lap cap, both on the lap's clock — from

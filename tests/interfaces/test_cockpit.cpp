@@ -76,6 +76,32 @@ TEST_CASE("cockpit: Update maps the controls read through the port and actuates 
   CHECK(m.left + m.right > 0.5);
 }
 
+TEST_CASE("cockpit: CommandNow is Update's command for the controls now, and actuates nothing") {
+  PlainPort port;
+  CockpitInterface cockpit(Shipped("cockpit-assisted"), port);
+  haptics::Hal hal(Metres());
+  port.state = {.wheel_angle = 0.2, .throttle = 0.01, .wheel_held = true, .throttle_held = true};
+  const TreadCommand updated = cockpit.Update(0.0, {}, hal);
+  REQUIRE(port.actuations == 1);
+  // The lever moved on since the tick: the command between ticks is the new one's.
+  port.state.throttle = 0.02;
+  const std::optional<TreadCommand> now = cockpit.CommandNow(0.005, hal);
+  REQUIRE(now);
+  CHECK(now->left + now->right > updated.left + updated.right);
+  CHECK(port.actuations == 1);
+  CHECK(cockpit.controls().throttle == 0.01);  // what the tick read, untouched
+  const TreadCommand next = cockpit.Update(0.01, {}, hal);
+  CHECK(now->left == Approx(next.left));
+  CHECK(now->right == Approx(next.right));
+  // A contact locks the lever: between ticks too, nothing forward.
+  cockpit.Update(0.02, VehicleFeedback(true, true, 0.1), hal);
+  port.state.wheel_angle = 0.0;
+  const std::optional<TreadCommand> locked = cockpit.CommandNow(0.025, hal);
+  REQUIRE(locked);
+  CHECK(locked->left == 0.0);
+  CHECK(locked->right == 0.0);
+}
+
 TEST_CASE("cockpit: only the HUD cockpits show speed and indicators") {
   PlainPort port;
   port.state.wheel_angle = 0.6;

@@ -88,6 +88,21 @@ TEST_CASE("Update puts a centring field for the right hand in the HAL") {
   CHECK_FALSE(hal.Setpoint(Side::kLeft).field.enabled);
 }
 
+TEST_CASE("CommandNow maps the hand's latest sample and sets no field") {
+  GestureInterface g(Config());
+  haptics::Hal hal(Metres());
+  const std::optional<TreadCommand> none = g.CommandNow(0.0, hal);
+  REQUIRE(none);
+  CHECK(none->left == 0.0);  // no sample yet: stopped, as Update
+  PutHand(hal, {0.15, 0.02, 0});
+  const std::optional<TreadCommand> now = g.CommandNow(0.0, hal);
+  REQUIRE(now);
+  const TreadCommand mapped = g.Map({0.15, 0.02, 0});
+  CHECK(now->left == mapped.left);
+  CHECK(now->right == mapped.right);
+  CHECK_FALSE(hal.Setpoint(Side::kRight).field.enabled);  // the tick's Update sets fields, not this
+}
+
 TEST_CASE("without a valid hand sample Update commands stop and zero forces") {
   GestureInterface g(Config());
   haptics::Hal hal(Metres());

@@ -103,6 +103,16 @@ TEST_CASE(
   CHECK(sent == 10);
 }
 
+TEST_CASE("between ticks a command goes out only when the robot's motor levels change") {
+  using haptel::mediator::LevelsChange;
+  constexpr int kLevels = 8;  // per direction: a level is 0.125, the first from 0.0625
+  CHECK_FALSE(LevelsChange({0.0, 0.0}, {0.05, 0.05}, kLevels));  // within the stopped level
+  CHECK(LevelsChange({0.0, 0.0}, {0.07, 0.07}, kLevels));        // the first level forward
+  CHECK(LevelsChange({0.0, 0.0}, {0.0, -0.07}, kLevels));        // either tread
+  CHECK_FALSE(LevelsChange({0.5, 0.3}, {0.52, 0.31}, kLevels));  // within the same levels
+  CHECK(LevelsChange({0.5, 0.3}, {0.5, 0.15}, kLevels));  // the right tread from level 2 to 1
+}
+
 TEST_CASE("a loop below 90 % of its target says so, interval by interval and for the run") {
   const int64_t t0 = SToNs(100.0);
   RateCheck servo("servo", 1000.0, 50, t0);

@@ -76,6 +76,9 @@ class CockpitInterface final : public MediatorInterface {
   /// lever at the intent's position, both closed — each shifted by how far
   /// that control has slipped in the hand holding it (seen in Update).
   HandTargets HandTargetsFor(const MotionIntent& intent) const override;
+  /// The controls as the physics world holds them now, mapped (the lock on
+  /// the lever after a contact included).
+  std::optional<TreadCommand> CommandNow(double t_s, const haptics::Hal& hal) const override;
   bool NeedsPhysics() const override { return true; }
   bool ShowsSpeed() const override { return logic_.config().hud; }
   bool ControlsStayPut() const override { return !logic_.config().return_to_zero; }

@@ -29,6 +29,8 @@ class GestureInterface final : public MediatorInterface {
   std::string name() const override { return config_.name; }
   TreadCommand Update(double t_s, const VehicleFeedback& feedback, haptics::Hal& hal) override;
   HandTargets HandTargetsFor(const MotionIntent& intent) const override;
+  /// Map of the right hand's latest sample (zero without one, as Update).
+  std::optional<TreadCommand> CommandNow(double t_s, const haptics::Hal& hal) const override;
   bool NeedsPhysics() const override { return false; }
   /// The thesis kept the speedometer and the indicators on the gesture interface.
   bool ShowsSpeed() const override { return true; }

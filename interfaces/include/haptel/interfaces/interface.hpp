@@ -147,6 +147,17 @@ class MediatorInterface : public Interface<RobotFamily> {
   /// draw what pushes the hand; nullopt for interfaces without it.
   virtual std::optional<Guidance> CurrentGuidance() const { return std::nullopt; }
 
+  /// Between the session's ticks: the command the hands or controls give
+  /// now, read without stepping anything (no field set, no control
+  /// actuated, no filter advanced), so that a change reaches the vehicle
+  /// within a millisecond rather than at the next tick (issue 36: input to
+  /// command). The same command Update would return for the same hands or
+  /// controls; nullopt: only Update gives it (keys, controllers). Session thread.
+  virtual std::optional<TreadCommand> CommandNow(double /*t_s*/,
+                                                 const haptics::Hal& /*hal*/) const {
+    return std::nullopt;
+  }
+
   /// A line about its controls for the run's progress log, given the command
   /// they gave ("": nothing beyond the command).
   virtual std::string ProgressLine(const TreadCommand& /*motors*/) const { return {}; }
