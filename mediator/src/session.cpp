@@ -42,6 +42,8 @@ namespace {
 /// the CPU: commands late by as much (issue 36: input to command p95) and,
 /// past 200 ms, the vehicle's watchdog stopping it.
 constexpr int kSessionPriority = 60;
+/// A session tick this many periods long gives the real-time priority up.
+constexpr int64_t kLoseRealtimePeriods = 10;
 
 /// The calling thread at SCHED_FIFO `priority` (where the process may) for
 /// its lifetime, then back to what it was. With SCHED_RESET_ON_FORK: the
@@ -507,6 +509,10 @@ std::optional<LoopEnd> SessionLoop::Loop() {
     if (session_file_) FeedSessionFile(now, t);
     if (auto end = CheckLimits(t)) return end;
     LogProgress(now, t);
+    // A tick of ten periods is no real-time work: at SCHED_FIFO it would
+    // hold a core from the view, DDS's threads and the host. Given up for
+    // good, as the physics thread gives it up (core/periodic_thread.hpp).
+    if (realtime && MonotonicNs() - now > kLoseRealtimePeriods * period_ns_) realtime.reset();
   }
 }
 
