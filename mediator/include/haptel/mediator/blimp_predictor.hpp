@@ -176,11 +176,23 @@ class BlimpPredictor {
     double applied_sent_s;   ///< when the applied command was sent; negative: no echo
     double applied_since_s;  ///< when the applied command reached the blimp (operator's clock)
   };
+  /// What a state says had reached the blimp by its sample: the command it
+  /// echoes, sent at `sent_s`, arrived at `arrival_s` (operator's clock);
+  /// none sent after it.
+  struct Arrived {
+    double sent_s;
+    double arrival_s;
+  };
   /// Runs the model from `base` through the commands sent, and `extra` (if
   /// given) after them, held on; calls `emit` with the model at each time of
-  /// `at` (ascending).
+  /// `at` (ascending). With `arrived` (a run up to a state's sample), the
+  /// commands arrive as that state says, not at the delay's estimate.
   void Run(const Base& base, const Command* extra, const std::vector<double>& at,
-           const std::function<void(double, const models::SimBlimp&)>& emit) const;
+           const std::function<void(double, const models::SimBlimp&)>& emit,
+           const Arrived* arrived = nullptr) const;
+  /// What `state`, sampled at `sample_s`, says had arrived; null without an echo.
+  static const Arrived* ArrivedBy(const BlimpStateSample& state, double sample_s,
+                                  const Base& before, Arrived& out);
   static BlimpPredictedPose PoseOf(double t_s, const models::SimBlimp& model);
   /// When `state` was sampled, operator's clock (s), with the delay `d`;
   /// notes its latency for those after.
