@@ -11,6 +11,9 @@
 /// to coast down to a slow approach, gliding down to a metre above the
 /// ground; over the circle and slow, facing into the wind it estimates, it
 /// sinks onto the ground (thrust forwards to hold its place, down to sink).
+/// (The wind: from what the blimp reports, its ground velocity against its
+/// airspeed along the heading; with a predictive display, from the states
+/// as reported, not the predicted blimp it flies by.)
 /// In a wind the rudder bites in (at least tail_rotor_speed) the whole
 /// approach heads along the wind triangle's air velocity (the ground
 /// velocity wanted less the wind): nose into the wind, crabbed across it,
