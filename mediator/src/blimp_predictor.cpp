@@ -15,13 +15,20 @@ namespace {
 constexpr double kMaxRateGap_s = 0.25;
 
 /// The wind estimator (blimp_predictor.hpp): two scalar updates a state,
-/// λ = 0.9995 each: a memory of 1000 states, 20 s at 50 Hz; a prior worth
-/// nothing; the velocity residual's noise taken as at least 5 mm/s; the
+/// λ = 0.9995 each: a memory of 1000 states, 20 s at 50 Hz; the velocity
+/// residual's noise taken as at least 5 mm/s; a prior (the file's mean
+/// wind) worth a standard deviation of 3 m/s, a fresh wind for a blimp; the
 /// nudge (m/s) the sensitivity is taken over; the covariance's bound; the
-/// largest wind believed (m/s).
+/// largest wind believed (m/s). (A prior worth nothing let the first state
+/// off the ground, whose run says almost nothing of the wind — the
+/// sensitivity 2e-4 — turn a few mm/s of a loaded machine's timing into a
+/// 25-m/s wind, from which the estimate crept back over twenty seconds,
+/// taken as known on the way.)
 constexpr double kWindForgetting = 0.9995;
-constexpr double kWindInitialCovariance = 1e8;
 constexpr double kWindNoiseFloor_mps = 0.005;
+constexpr double kWindPriorSd_mps = 3.0;
+constexpr double kWindInitialCovariance =
+    (kWindPriorSd_mps / kWindNoiseFloor_mps) * (kWindPriorSd_mps / kWindNoiseFloor_mps);
 constexpr double kWindNudge_mps = 0.5;
 constexpr double kWindMax_mps = 15.0;
 
@@ -56,10 +63,23 @@ Eigen::Vector2d BlimpPredictor::wind() const {
   return w.norm() > kWindMax_mps ? Eigen::Vector2d(w * (kWindMax_mps / w.norm())) : w;
 }
 
+const BlimpPredictor::Arrived* BlimpPredictor::ArrivedBy(const BlimpStateSample& state,
+                                                         double sample_s, const Base& before,
+                                                         Arrived& out) {
+  if (state.command_sent_s < 0.0 || state.command_age_s < 0.0) return nullptr;
+  out.sent_s = state.command_sent_s;
+  out.arrival_s = std::clamp(sample_s - state.command_age_s, before.sample_s, sample_s);
+  return &out;
+}
+
 void BlimpPredictor::UpdateWind(const Base& before, double sample_s,
                                 const BlimpStateSample& state) {
   const double run_s = sample_s - before.sample_s;
   if (!(run_s > 1e-3) || run_s > kMaxRateGap_s) return;
+  // The commands as they truly arrived: a delay's jitter (a loaded machine's
+  // late threads) would otherwise be read as wind.
+  Arrived arrived_store;
+  const Arrived* arrived = ArrivedBy(state, sample_s, before, arrived_store);
   const Eigen::Vector2d w = wind_.estimate();
   const Eigen::Vector3d kept = replay_wind_;
   Eigen::Vector2d v[3];
@@ -67,10 +87,13 @@ void BlimpPredictor::UpdateWind(const Base& before, double sample_s,
   const Eigen::Vector2d nudge[3] = {{0.0, 0.0}, {kWindNudge_mps, 0.0}, {0.0, kWindNudge_mps}};
   for (int i = 0; i < 3; ++i) {
     replay_wind_ = {w.x() + nudge[i].x(), w.y() + nudge[i].y(), kept.z()};
-    Run(before, nullptr, {sample_s}, [&](double, const models::SimBlimp& m) {
-      v[i] = m.ground_velocity().head<2>();
-      contact = contact || m.in_contact();
-    });
+    Run(
+        before, nullptr, {sample_s},
+        [&](double, const models::SimBlimp& m) {
+          v[i] = m.ground_velocity().head<2>();
+          contact = contact || m.in_contact();
+        },
+        arrived);
   }
   replay_wind_ = kept;
   if (contact) return;  // friction holds it, not the air
@@ -135,14 +158,18 @@ double BlimpPredictor::OnState(const BlimpStateSample& state) {
       replay_wind_ = {w.x(), w.y(), airship_.wind.mean[2]};
     }
     Eigen::Quaterniond model_attitude = before.state.attitude;
-    Run(before, nullptr, {sample_s}, [&](double, const models::SimBlimp& m) {
-      const models::AirshipState& run = m.airship().state();
-      s.thrust = run.thrust;
-      s.helix_rad = run.helix_rad;
-      s.tail = run.tail;
-      s.rates = run.rates;
-      model_attitude = run.attitude;
-    });
+    Arrived arrived_store;
+    Run(
+        before, nullptr, {sample_s},
+        [&](double, const models::SimBlimp& m) {
+          const models::AirshipState& run = m.airship().state();
+          s.thrust = run.thrust;
+          s.helix_rad = run.helix_rad;
+          s.tail = run.tail;
+          s.rates = run.rates;
+          model_attitude = run.attitude;
+        },
+        ArrivedBy(state, sample_s, before, arrived_store));
     const double gap_s = 1e-9 * static_cast<double>(state.stamp_ns - before.stamp_ns);
     const double run_s = sample_s - before.sample_s;
     if (gap_s > 0.0 && gap_s <= kMaxRateGap_s) {
@@ -176,7 +203,8 @@ double BlimpPredictor::SampleTime(const BlimpStateSample& state, double d) {
 }
 
 void BlimpPredictor::Run(const Base& base, const Command* extra, const std::vector<double>& at,
-                         const std::function<void(double, const models::SimBlimp&)>& emit) const {
+                         const std::function<void(double, const models::SimBlimp&)>& emit,
+                         const Arrived* arrived) const {
   const double d = delay_.one_way_s();
   model_.airship().set_mean_wind(replay_wind_);
   model_.Place(base.state, base.applied);
@@ -207,14 +235,20 @@ void BlimpPredictor::Run(const Base& base, const Command* extra, const std::vect
       ++next_time;
     }
   };
-  auto apply = [&](const Command& c, bool is_extra) {
+  // `echoed`: the command `arrived` names (arrived then); those before it
+  // arrived by then.
+  auto apply = [&](const Command& c, bool is_extra, bool echoed) {
     // In the state's applied channels already: the one it echoes and those
     // before (without an echo: those that had arrived by its sample).
     if (base.applied_sent_s >= 0.0 ? c.sent_s <= base.applied_sent_s
                                    : c.sent_s + d <= base.sample_s)
       return;
     // Not there yet when the state was sampled, whatever the delay says.
-    const double arrival = std::max(c.sent_s + d, base.sample_s);
+    double arrival = std::max(c.sent_s + d, base.sample_s);
+    if (arrived != nullptr) {
+      if (c.sent_s > arrived->sent_s) return;  // not arrived by the run's end
+      arrival = echoed ? arrived->arrival_s : std::min(arrival, arrived->arrival_s);
+    }
     if (next_time == at.size()) return;  // every pose wanted is out
     emit_until(arrival);
     advance(arrival);
@@ -222,8 +256,14 @@ void BlimpPredictor::Run(const Base& base, const Command* extra, const std::vect
     last_arrival = arrival;
     held = is_extra;
   };
-  for (const Command& c : commands_) apply(c, false);
-  if (extra != nullptr) apply(*extra, true);
+  for (size_t i = 0; i < commands_.size(); ++i) {
+    // The echoed command: the last one sent by the echo's send time (a
+    // command is noted when its loop began, before it went out).
+    const bool echoed = arrived != nullptr && commands_[i].sent_s <= arrived->sent_s &&
+                        (i + 1 == commands_.size() || commands_[i + 1].sent_s > arrived->sent_s);
+    apply(commands_[i], false, echoed);
+  }
+  if (extra != nullptr) apply(*extra, true, false);
   emit_until(std::numeric_limits<double>::infinity());
 }
 

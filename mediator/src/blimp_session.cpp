@@ -225,8 +225,10 @@ class BlimpSession final : public FamilySession {
       }
       predictor_.OnState(Sample(ts, s, t0));
       const BlimpObservation o = Observe(ts, s);
-      // With prediction the pilot sees the blimp as it will be (Command).
+      // With prediction the pilot sees the blimp as it will be (Command),
+      // and the wind in what the blimp reports (the model's is its own).
       if (pilot_ && !setup_.predict) pilot_->Observe(o);
+      if (pilot_ && setup_.predict) pilot_->ObserveReported(o);
       lap_.Update(o);
       trace.Add(ts, s.x(), s.y(), s.z(), o.velocity.norm(), s.contact());
     }

@@ -42,6 +42,26 @@ TEST_CASE("full forward reaches the configured top speed in a straight line") {
   CHECK_FALSE(s.bumper_left);
 }
 
+TEST_CASE(
+    "a late tick's whole time is driven (a starved vehicle thread): 0.3 s in one update goes as "
+    "far as in 5-ms ticks") {
+  const Track track(Corridor());
+  VehicleConfig cfg;
+  SimRobot ticked(track, cfg), late(track, cfg);
+  for (SimRobot* r : {&ticked, &late}) {
+    r->Place(0.2, -0.25, 0.0);
+    Drive(*r, {8, 6}, 0.5);  // moving and turning
+  }
+  const AdapterState before = late.State();
+  Drive(ticked, {8, 6}, 0.3);
+  late.Update(0.3);
+  const AdapterState a = ticked.State(), b = late.State();
+  CHECK(std::hypot(b.x - a.x, b.y - a.y) < 0.002);  // the body stepped in 50-ms pieces
+  CHECK(b.heading == Approx(a.heading).margin(0.01));
+  // It moved for all 0.3 s (capped at 50 ms, a sixth of it).
+  CHECK(std::hypot(b.x - before.x, b.y - before.y) > 0.3 * 0.5 * cfg.drive.max_speed);
+}
+
 TEST_CASE("uneven motor gains make equal levels curve toward the weaker side") {
   const Track track(Corridor());
   VehicleConfig cfg;

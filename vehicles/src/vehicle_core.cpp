@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -52,15 +53,26 @@ template <class Family>
 bool VehicleCoreOf<Family>::ControlTick(int64_t now_ns) {
   state_due_ = false;
   if (failed_.load(std::memory_order_relaxed)) return false;
+  const uint64_t applied_seq = commands_.applied().seq;
+  const int64_t tick_before_ns = last_tick_ns_;
   const bool expired = commands_.Poll(now_ns);
   const double dt = ControlStep(last_tick_ns_, now_ns, config_.sim_rate_hz);
+  // A simulated world moves on under the command it had until a new one
+  // came (applied from the last tick on, a late tick's command would act a
+  // stall's length early; the truth and the predictor's replay then part).
+  double before_s = 0.0;
+  if (adapter_->reality() != nullptr && tick_before_ns != 0 &&
+      commands_.applied().seq != applied_seq) {
+    before_s = std::clamp(NsToS(commands_.applied().received_ns - tick_before_ns), 0.0, dt);
+  }
   try {
+    if (before_s > 0.0) adapter_->Update(before_s);
     if (expired) {
       Family::MakeSafe(*adapter_);
     } else {
       Family::Apply(*adapter_, commands_.applied().command, config_);
     }
-    adapter_->Update(dt);
+    adapter_->Update(dt - before_s);
     if (first_tick_ns_ == 0) first_tick_ns_ = now_ns;
     if (truth_) {
       TruthRow row;

@@ -144,14 +144,24 @@ void BlimpAutoPilot::TakeIn(const BlimpObservation& o) {
     if (pass && pass->crossing != BlimpGateCrossing::kIgnored) ++gate_;
     if (gate_ >= static_cast<int>(gates_.size())) phase_ = Phase::kLanding;
   }
-  // The wind: what the ground speed has beyond the airspeed along the
-  // heading (sideslip neglected), smoothed over a few seconds.
-  if (!o.contact) {
-    const Eigen::Vector2d heading(std::cos(o.yaw), std::sin(o.yaw));
-    const Eigen::Vector2d measured = Horizontal(o.velocity) - o.airspeed * heading;
-    wind_ += (measured - wind_) * std::min(1.0, h / 4.0);
-  }
+  if (!wind_from_reports_) EstimateWind(o, h);
   used_ = o;
+}
+
+void BlimpAutoPilot::EstimateWind(const BlimpObservation& o, double h) {
+  // What the ground speed has beyond the airspeed along the heading
+  // (sideslip neglected), smoothed over a few seconds.
+  if (o.contact) return;
+  const Eigen::Vector2d heading(std::cos(o.yaw), std::sin(o.yaw));
+  const Eigen::Vector2d measured = Horizontal(o.velocity) - o.airspeed * heading;
+  wind_ += (measured - wind_) * std::min(1.0, h / 4.0);
+}
+
+void BlimpAutoPilot::ObserveReported(const BlimpObservation& reported) {
+  if (wind_from_reports_ && reported.t_s > last_report_t_)
+    EstimateWind(reported, reported.t_s - last_report_t_);
+  wind_from_reports_ = true;
+  last_report_t_ = reported.t_s;
 }
 
 void BlimpAutoPilot::NextPhase(const BlimpObservation& o) {

@@ -452,6 +452,28 @@ TEST_CASE(
   CHECK(std::abs(c.camera_pan) == Approx(kBlimpCameraPanMax));
 }
 
+TEST_CASE(
+    "blimp pilot with a predictive display: the wind from the states the blimp reported, not "
+    "from the model it flies by") {
+  BlimpPilotConfig config;
+  config.reaction_delay_s = 0.0;
+  BlimpAutoPilot pilot(Line(), config);
+  pilot.Observe(At(0.0, 0.0, 0.0, 0.8, true, 0.0, 0.0));
+  pilot.Decide(0.0);
+  // The predicted blimp flies east at 6 m/s in the model's calm air; the
+  // reported one crabs north in a 2 m/s wind from the south.
+  for (int i = 1; i <= 500; ++i) {
+    const double t = 0.02 * i;
+    BlimpObservation reported = At(t, 6.0 * t, 2.0 * t, 5.0, false, 0.0, 6.0);
+    reported.velocity.y() = 2.0;
+    pilot.ObserveReported(reported);
+    pilot.Observe(At(t + 0.4, 6.0 * (t + 0.4), 0.0, 5.0, false, 0.0, 6.0));
+    pilot.Decide(t + 0.4);
+  }
+  CHECK(pilot.wind().x() == Approx(0.0).margin(0.05));
+  CHECK(pilot.wind().y() == Approx(2.0).margin(0.2));  // 10 s of a 4-s smoothing
+}
+
 TEST_CASE("blimp pilot and lap timer: Observe, Decide and Update allocate nothing") {
   const BlimpCourseConfig course = LoadBlimpCourse(kCourse);
   BlimpAutoPilot pilot(course);

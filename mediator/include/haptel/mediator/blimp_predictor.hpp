@@ -33,16 +33,16 @@
 /// as a random-walk state (Ljung and Söderström, *Theory and Practice of
 /// Recursive Identification*, 1983, ch. 2.6; Ljung and Gunnarsson 1990),
 /// its process noise set by the forgetting factor (a 20-s memory). At each state
-/// the model is run from the state before with the estimate ŵ and with ŵ
-/// nudged east and north: the residual r (measured ground velocity less
-/// the model's, horizontal) is linear in the wind's error through the
-/// nudges' sensitivity J, r ≈ J (w − ŵ), two scalar measurements a state.
-/// No update while the model touches the ground or a building (friction,
-/// not the air, holds it) nor across a gap in the states. Known once each
-/// component's standard deviation is under kWindKnown_mps. Gusts cannot be
-/// foreseen (the model runs without them): they show in the error, and
-/// their mean over the estimator's memory (20 s) in the estimate. The
-/// estimator runs with either model, so that a nominal run still says what
+/// the model is run from the state before — the commands timed as the
+/// state's echo says they arrived, not by the delay, lest a loaded link's
+/// jitter read as wind — with the estimate ŵ (the prior: the file's wind,
+/// worth a standard deviation of 3 m/s) and with ŵ nudged east and north: the residual r (measured
+/// ground velocity less the model's, horizontal) is linear in the wind's error through the nudges'
+/// sensitivity J, r ≈ J (w − ŵ), two scalar measurements a state. No update while the model touches
+/// the ground or a building (friction, not the air, holds it) nor across a gap in the states. Known
+/// once each component's standard deviation is under kWindKnown_mps. Gusts cannot be foreseen (the
+/// model runs without them): they show in the error, and their mean over the estimator's memory (20
+/// s) in the estimate. The estimator runs with either model, so that a nominal run still says what
 /// it would have learnt.
 ///
 /// The one-way delay is half the command round trip's running median
@@ -176,11 +176,23 @@ class BlimpPredictor {
     double applied_sent_s;   ///< when the applied command was sent; negative: no echo
     double applied_since_s;  ///< when the applied command reached the blimp (operator's clock)
   };
+  /// What a state says had reached the blimp by its sample: the command it
+  /// echoes, sent at `sent_s`, arrived at `arrival_s` (operator's clock);
+  /// none sent after it.
+  struct Arrived {
+    double sent_s;
+    double arrival_s;
+  };
   /// Runs the model from `base` through the commands sent, and `extra` (if
   /// given) after them, held on; calls `emit` with the model at each time of
-  /// `at` (ascending).
+  /// `at` (ascending). With `arrived` (a run up to a state's sample), the
+  /// commands arrive as that state says, not at the delay's estimate.
   void Run(const Base& base, const Command* extra, const std::vector<double>& at,
-           const std::function<void(double, const models::SimBlimp&)>& emit) const;
+           const std::function<void(double, const models::SimBlimp&)>& emit,
+           const Arrived* arrived = nullptr) const;
+  /// What `state`, sampled at `sample_s`, says had arrived; null without an echo.
+  static const Arrived* ArrivedBy(const BlimpStateSample& state, double sample_s,
+                                  const Base& before, Arrived& out);
   static BlimpPredictedPose PoseOf(double t_s, const models::SimBlimp& model);
   /// When `state` was sampled, operator's clock (s), with the delay `d`;
   /// notes its latency for those after.

@@ -254,12 +254,20 @@ class CommandIntake {
   std::atomic<bool> expired_{true};
 };
 
+/// s: the longest control step: a thread this late was stopped (SIGSTOP, a
+/// debugger), not slow, and the simulated world is taken as paused with it.
+inline constexpr double kMaxControlStep_s = 1.0;
+
 /// The control loop's step (s) at `now_ns`: the nominal period on the first
-/// tick, then the time since the last, at most 50 ms (a stalled thread does
-/// not make the simulation leap).
+/// tick, then the time since the last, at most kMaxControlStep_s. A thread
+/// starved on a loaded machine is late by tenths of a second: a simulated
+/// vehicle steps through that time (in pieces of its own), as a real one
+/// moves on meanwhile. (Capped at 50 ms, a blimp at 3 m/s lost 0.6 m
+/// against its stamps in a 0.2-s stall, and the predictor's error against
+/// the truth with it.)
 inline double ControlStep(int64_t& last_tick_ns, int64_t now_ns, double rate_hz) {
   const double dt =
-      last_tick_ns == 0 ? 1.0 / rate_hz : std::min(0.05, NsToS(now_ns - last_tick_ns));
+      last_tick_ns == 0 ? 1.0 / rate_hz : std::min(kMaxControlStep_s, NsToS(now_ns - last_tick_ns));
   last_tick_ns = now_ns;
   return dt;
 }

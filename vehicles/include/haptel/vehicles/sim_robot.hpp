@@ -65,6 +65,10 @@ class SimRobot final : public VehicleAdapter {
     double t_s = 0.0;
     double x = 0.0, y = 0.0, heading = 0.0, speed = 0.0, yaw_rate = 0.0;
   };
+  /// s: the longest step of the body (Update steps a longer time in pieces).
+  static constexpr double kMaxStep_s = 0.05;
+  /// Moves the robot, its measurements and its state on by `dt` (at most kMaxStep_s).
+  void Step(double dt);
   /// Moves the true body one step; returns its yaw rate.
   double StepBody(double target_left, double target_right, double dt);
   /// Integrates the encoders and the gyro over a step of the true motion.

@@ -11,6 +11,9 @@
 /// to coast down to a slow approach, gliding down to a metre above the
 /// ground; over the circle and slow, facing into the wind it estimates, it
 /// sinks onto the ground (thrust forwards to hold its place, down to sink).
+/// (The wind: from what the blimp reports, its ground velocity against its
+/// airspeed along the heading; with a predictive display, from the states
+/// as reported, not the predicted blimp it flies by.)
 /// In a wind the rudder bites in (at least tail_rotor_speed) the whole
 /// approach heads along the wind triangle's air velocity (the ground
 /// velocity wanted less the wind): nose into the wind, crabbed across it,
@@ -149,6 +152,15 @@ class BlimpAutoPilot {
 
   /// Something the pilot saw (t_s increasing). Allocation-free.
   void Observe(const BlimpObservation& observation);
+  /// With a predictive display, what the pilot flies by (Observe) is the
+  /// blimp as the predictor models it, whose ground velocity and airspeed
+  /// differ by the model's own wind (the file's, or the predictor's
+  /// estimate): a wind the model does not know the pilot would never see.
+  /// The wind it estimates comes from the states as the blimp reported them
+  /// instead (`reported`, t_s increasing: their ground velocity against the
+  /// airspeed the blimp measured along its heading), once this is called.
+  /// Allocation-free.
+  void ObserveReported(const BlimpObservation& reported);
   /// What the pilot commands at t_s (increasing), from what it saw
   /// reaction_delay_s before. Neutral until it has seen anything.
   /// Allocation-free.
@@ -177,8 +189,11 @@ class BlimpAutoPilot {
     bool landing = false;        ///< thrust up only: it sinks on its own weight
   };
   /// What an observation newer than the last one used tells: the rates, the
-  /// gate crossed, the wind. The first one starts the take-off.
+  /// gate crossed, the wind (unless the reported states tell it). The first
+  /// one starts the take-off.
   void TakeIn(const BlimpObservation& o);
+  /// The wind from `o`, `h` seconds after the last one it came from.
+  void EstimateWind(const BlimpObservation& o, double h);
   /// Off the ground, through the last gate, down in (or out of) the circle.
   void NextPhase(const BlimpObservation& o);
   // One function per phase: each sets target_z_ and says what it wants.
@@ -225,6 +240,8 @@ class BlimpAutoPilot {
   bool turnabout_ = false;         ///< power off, turning on the tail rotor
   double turnabout_since_ = -1e9;  ///< when the turnabout began, or the last one ended
   Eigen::Vector2d wind_ = Eigen::Vector2d::Zero();
+  bool wind_from_reports_ = false;  ///< ObserveReported was called: the wind is theirs
+  double last_report_t_ = 0.0;
 };
 
 }  // namespace haptel::mediator
