@@ -25,12 +25,12 @@
 ///   what it receives by D, so the round trip is 2D). Per lap: outcome, lap
 ///   time and its ratio to the 0 ms lap (same vehicle, reality, loss and
 ///   prediction), obstacles, measured round trip, the prediction's error
-///   p50/p95 against the truth (where the vehicle really was) and p95
-///   against its own odometry, the estimate's convergence time and each
-///   estimated parameter beside its truth, and the true path's gap to the
-///   twin's (the same lap in `none`: mean and largest distance between the
-///   two true paths, from the vehicles' truth records).
-///   Then the targets on the robot's laps: lab at 400 ms, learning,
+///   p50/p95 against the truth (where the vehicle really was, in the map's
+///   frame: prediction_score.hpp; p95 in the world's beside it) and p95
+///   against each state's pose, the localised pose's p95 (both frames), the estimate's convergence
+///   time and each estimated parameter beside its truth, and the true path's gap to the twin's (the
+///   same lap in `none`: mean and largest distance between the two true paths, from the vehicles'
+///   truth records). Then the targets on the robot's laps: lab at 400 ms, learning,
 ///   within 1.3x the 0 ms lap and error p95 within 5 cm; harsh completed and
 ///   learning's error below the nominal model's at every delay; none's error
 ///   ~0. With --link-profile NAME every lap runs on that link

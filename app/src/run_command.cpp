@@ -194,6 +194,19 @@ std::string NamesJson(const std::vector<std::string>& names) {
   return out + "]";
 }
 
+/// The frame the truth is scored in (prediction_score.hpp): {"frame":"map",
+/// "rotation_deg":…,"offset_m":[x,y],"features":N,"residual_m_rms":…}, the
+/// rigid fit of the as-built track onto its file; "frame":"world" (the fit the
+/// identity) when the reality displaced nothing or there is no truth.
+std::string TruthFrameJson(const haptel::record::RunRecord& r) {
+  const haptel::record::RunRecord::MapFrameFit& f = r.map_fit;
+  if (f.features == 0) return "{\"frame\":\"world\"}";
+  return "{\"frame\":\"map\",\"rotation_deg\":" + haptel::JsonNumber(f.rotation_deg) +
+         ",\"offset_m\":[" + haptel::JsonNumber(f.offset_x_m) + "," +
+         haptel::JsonNumber(f.offset_y_m) + "],\"features\":" + std::to_string(f.features) +
+         ",\"residual_m_rms\":" + haptel::JsonNumber(f.residual_m_rms) + "}";
+}
+
 /// The lap judged from the truth record: ,"lap_time_truth_s":…,
 /// "lap_time_truth_projected":… (true: its finish projected, not crossed),
 /// "completed_truth":…,"gates_truth_passed":…,"gates_truth_missed":…,
@@ -309,7 +322,13 @@ void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRu
   if (r.prediction_error_odometry_m_p95 >= 0.0 || r.prediction_error_m_p95 >= 0.0) {
     std::fprintf(out, "  prediction (%s model%s):", r.predict_model.c_str(),
                  r.predict ? ", shown to the operator" : ", not shown");
-    if (r.prediction_error_m_p95 >= 0.0) {
+    if (r.prediction_error_m_p95 >= 0.0 && r.map_fit.features > 0) {
+      std::fprintf(out,
+                   " error against the truth in the map's frame p50 %.1f mm, p95 %.1f mm (in the "
+                   "world's p50 %.1f mm, p95 %.1f mm);",
+                   r.prediction_error_m_p50 * 1e3, r.prediction_error_m_p95 * 1e3,
+                   r.prediction_error_world_m_p50 * 1e3, r.prediction_error_world_m_p95 * 1e3);
+    } else if (r.prediction_error_m_p95 >= 0.0) {
       std::fprintf(out, " error against the truth p50 %.1f mm, p95 %.1f mm;",
                    r.prediction_error_m_p50 * 1e3, r.prediction_error_m_p95 * 1e3);
     } else {
@@ -329,6 +348,16 @@ void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRu
                  r.localised ? "localised on the track" : "odometry (not localised)",
                  r.localisation_error_m_p50 * 1e3, r.localisation_error_m_p95 * 1e3,
                  r.odometry_error_m_p50 * 1e3, r.odometry_error_m_p95 * 1e3);
+    if (r.map_fit.features > 0) {
+      std::fprintf(out,
+                   "  the track as built against its file: turned %.3f deg, offset %.1f, %.1f mm "
+                   "(the map's frame: the best rigid fit of %d features), each feature %.1f mm rms "
+                   "from the map beyond it; the localised pose in the world's frame p50 %.1f mm, "
+                   "p95 %.1f mm\n",
+                   r.map_fit.rotation_deg, r.map_fit.offset_x_m * 1e3, r.map_fit.offset_y_m * 1e3,
+                   r.map_fit.features, r.map_fit.residual_m_rms * 1e3,
+                   r.localisation_error_world_m_p50 * 1e3, r.localisation_error_world_m_p95 * 1e3);
+    }
     if (r.localiser_scans_refused > 0) {
       std::fprintf(out, "  the localiser refused %lld scans that disagreed with the map\n",
                    static_cast<long long>(r.localiser_scans_refused));
@@ -409,6 +438,9 @@ std::string RunJson(const SessionSetup& setup, const RecordedRun& run) {
     << ",\"prediction_error_m_p95\":"
     << (r.prediction_error_m_p95 >= 0.0 ? JsonNumber(r.prediction_error_m_p95)
                                         : std::string("null"))
+    << ",\"prediction_error_world_m_p50\":" << NumberOrNull(r.prediction_error_world_m_p50)
+    << ",\"prediction_error_world_m_p95\":" << NumberOrNull(r.prediction_error_world_m_p95)
+    << ",\"truth_frame\":" << TruthFrameJson(r)
     << ",\"predict_model\":" << JsonString(r.predict_model)
     << ",\"prediction_error_odometry_m_p50\":" << NumberOrNull(r.prediction_error_odometry_m_p50)
     << ",\"prediction_error_odometry_m_p95\":" << NumberOrNull(r.prediction_error_odometry_m_p95)
@@ -416,6 +448,8 @@ std::string RunJson(const SessionSetup& setup, const RecordedRun& run) {
     << (r.localiser_scans_refused >= 0 ? std::to_string(r.localiser_scans_refused) : "null")
     << ",\"localisation_error_m_p50\":" << NumberOrNull(r.localisation_error_m_p50)
     << ",\"localisation_error_m_p95\":" << NumberOrNull(r.localisation_error_m_p95)
+    << ",\"localisation_error_world_m_p50\":" << NumberOrNull(r.localisation_error_world_m_p50)
+    << ",\"localisation_error_world_m_p95\":" << NumberOrNull(r.localisation_error_world_m_p95)
     << ",\"odometry_error_m_p50\":" << NumberOrNull(r.odometry_error_m_p50)
     << ",\"odometry_error_m_p95\":" << NumberOrNull(r.odometry_error_m_p95)
     << ",\"estimated\":" << EstimatedJson(r.estimated) << TruthLapJson(r)

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "haptel/core/clock.hpp"
@@ -24,27 +26,87 @@ double DrawnValue(const DrawnReality& drawn, const std::string& name) {
 
 }  // namespace
 
-void ScorePrediction(const record::TruthRecord& truth, SessionResult& result) {
+Vec2 RigidFit2::Apply(const Vec2& p) const {
+  const double c = std::cos(rotation_rad), s = std::sin(rotation_rad);
+  return Vec2(c * p.x() - s * p.y(), s * p.x() + c * p.y()) + offset;
+}
+
+RigidFit2 FitAsBuiltToFile(const DrawnReality& drawn, const Track& track) {
+  RigidFit2 fit;
+  if (drawn.true_walls.empty() && drawn.true_posts.empty()) return fit;
+  // Pairs (as built, file's): each wall corner once (walls share corners), each post's centre.
+  std::vector<std::pair<Vec2, Vec2>> pairs;
+  const auto add = [&](const Vec2& built, const Vec2& file) {
+    for (const auto& [b, f] : pairs) {
+      if (f == file) return;
+    }
+    pairs.emplace_back(built, file);
+  };
+  const std::vector<Segment2>& walls = TrueWalls(drawn, track);
+  for (size_t i = 0; i < walls.size() && i < track.walls().size(); ++i) {
+    add(walls[i].a, track.walls()[i].a);
+    add(walls[i].b, track.walls()[i].b);
+  }
+  const std::vector<CircleObstacle>& posts = TruePosts(drawn, track);
+  for (size_t i = 0; i < posts.size() && i < track.round_obstacles().size(); ++i)
+    add(posts[i].center, track.round_obstacles()[i].center);
+  if (pairs.size() < 2) return fit;
+  // Umeyama's least squares in the plane: the centroids matched, the turn
+  // from the centred points' cross terms.
+  Vec2 built_mean = Vec2::Zero(), file_mean = Vec2::Zero();
+  for (const auto& [b, f] : pairs) built_mean += b, file_mean += f;
+  built_mean /= static_cast<double>(pairs.size());
+  file_mean /= static_cast<double>(pairs.size());
+  double dot = 0.0, cross = 0.0;
+  for (const auto& [b, f] : pairs) {
+    const Vec2 u = b - built_mean, v = f - file_mean;
+    dot += u.dot(v);
+    cross += u.x() * v.y() - u.y() * v.x();
+  }
+  fit.rotation_rad = std::atan2(cross, dot);
+  fit.offset = file_mean - RigidFit2{fit.rotation_rad}.Apply(built_mean);
+  fit.features = static_cast<int>(pairs.size());
+  double sum = 0.0;
+  for (const auto& [b, f] : pairs) sum += (fit.Apply(b) - f).squaredNorm();
+  fit.residual_m_rms = std::sqrt(sum / static_cast<double>(pairs.size()));
+  return fit;
+}
+
+void ScorePrediction(const record::TruthRecord& truth, const Track* track, SessionResult& result) {
   RunRecord& rec = result.record;
   if (!truth.empty()) {
+    const RigidFit2 fit = track != nullptr ? FitAsBuiltToFile(truth.params(), *track) : RigidFit2{};
+    rec.map_fit = {fit.rotation_rad * 180.0 / std::numbers::pi, fit.offset.x(), fit.offset.y(),
+                   fit.features, fit.residual_m_rms};
     const double start_s = NsToS(result.started_ns);
-    const TruthAt truth_at = [&](double t_s, double& x, double& y, double& z) {
-      if (!truth.Covers(start_s + t_s)) return false;
-      const TruthRow row = truth.PoseAt(start_s + t_s);
-      x = row.x;
-      y = row.y;
-      z = row.z;
-      return true;
+    // Where the vehicle truly was: in the world, or in the map's frame.
+    const auto truth_in = [&](bool map_frame) -> TruthAt {
+      return [&truth, &fit, start_s, map_frame](double t_s, double& x, double& y, double& z) {
+        if (!truth.Covers(start_s + t_s)) return false;
+        const TruthRow row = truth.PoseAt(start_s + t_s);
+        const Vec2 p = map_frame ? fit.Apply(Vec2(row.x, row.y)) : Vec2(row.x, row.y);
+        x = p.x();
+        y = p.y();
+        z = row.z;
+        return true;
+      };
     };
-    const ErrorPercentiles e = ScoreAgainstTruth(result.shown, truth_at, result.shown_height);
+    const TruthAt in_map = truth_in(true), in_world = truth_in(false);
+    const ErrorPercentiles e = ScoreAgainstTruth(result.shown, in_map, result.shown_height);
+    const ErrorPercentiles w = ScoreAgainstTruth(result.shown, in_world, result.shown_height);
     rec.prediction_error_m_p50 = e.p50;
     rec.prediction_error_m_p95 = e.p95;
+    rec.prediction_error_world_m_p50 = w.p50;
+    rec.prediction_error_world_m_p95 = w.p95;
     // The robot's pose at each state's moment, localised or not, and its odometry.
     if (!result.located.empty()) {
-      const ErrorPercentiles l = ScoreAgainstTruth(result.located, truth_at, false);
-      const ErrorPercentiles o = ScoreAgainstTruth(result.odometry, truth_at, false);
+      const ErrorPercentiles l = ScoreAgainstTruth(result.located, in_map, false);
+      const ErrorPercentiles lw = ScoreAgainstTruth(result.located, in_world, false);
+      const ErrorPercentiles o = ScoreAgainstTruth(result.odometry, in_map, false);
       rec.localisation_error_m_p50 = l.p50;
       rec.localisation_error_m_p95 = l.p95;
+      rec.localisation_error_world_m_p50 = lw.p50;
+      rec.localisation_error_world_m_p95 = lw.p95;
       rec.odometry_error_m_p50 = o.p50;
       rec.odometry_error_m_p95 = o.p95;
     }

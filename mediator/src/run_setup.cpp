@@ -525,12 +525,14 @@ void TakeReality(const SessionSetup& setup, SessionResult& result) {
       const record::TruthRecord truth = record::TruthRecord::Load(file);
       result.reality = truth.reality();
       result.reality_seed = truth.seed();
-      ScorePrediction(truth, result);
       // The lap judged again from where the vehicle truly went.
       if (setup.course) {
+        ScorePrediction(truth, nullptr, result);
         JudgeLapOnTruth(truth, *setup.course, result);
       } else {
-        JudgeLapOnTruth(truth, Track(setup.track), result);
+        const Track track(setup.track);
+        ScorePrediction(truth, &track, result);
+        JudgeLapOnTruth(truth, track, result);
       }
     } catch (const std::exception& e) {
       std::fprintf(stderr, "haptel: warning: the vehicle's truth record: %s\n", e.what());

@@ -276,6 +276,25 @@ void TrackLocaliser::Correct(const RangeScan& scan) {
     ++scans_refused_;
     return;
   }
+  // A correction the map's own error can explain is taken slowly (see
+  // LocaliserConfig::map_error_m); a larger one is the odometry's drift and
+  // is taken whole. The scan's information S (the update's less the prior's)
+  // is weighed by w: (P⁻¹ + w·S)·(x − prior) = w·S·(x_scan − prior).
+  Vec3 correction = x - prior;
+  correction.z() = WrapAngle(correction.z());
+  const double tolerance = config_.map_error_m;
+  const double size = std::hypot(correction.x(), correction.y()) +
+                      config_.heading_lever_m * std::abs(correction.z());
+  const double w =
+      tolerance > 0.0 ? std::clamp(config_.within_map_error_weight + (size - tolerance) / tolerance,
+                                   config_.within_map_error_weight, 1.0)
+                      : 1.0;
+  if (w < 1.0) {
+    const Mat3 scan_info = info - prior_info;
+    info = prior_info + w * scan_info;
+    x = prior + info.ldlt().solve(w * scan_info * correction);
+    x.z() = WrapAngle(x.z());
+  }
   pose_ = {x.x(), x.y(), x.z()};
   FromMat(info.inverse(), cov_);
 }

@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <fstream>
+#include <numbers>
 #include <string>
 
 #include "haptel/config/blimp_course.hpp"
@@ -202,4 +203,73 @@ TEST_CASE(
   CHECK(beside.gates_passed == 0);
   CHECK(beside.gates_missed == 1);
   CHECK(beside.completed);  // the landing counts after the last gate, passed or missed
+}
+
+TEST_CASE(
+    "the truth is scored in the map's frame: the layout turned and shifted as a whole does not "
+    "count, a post's own error does") {
+  const Track& track = ShortTrack();
+  REQUIRE(!track.round_obstacles().empty());
+  // As built: the whole layout turned 0.5° about (1, 2) and shifted (3, -2) cm.
+  const double turn = 0.5 * std::numbers::pi / 180.0;
+  const Vec2 pivot(1.0, 2.0), shift(0.03, -0.02);
+  const auto built = [&](const Vec2& p) -> Vec2 {
+    const Vec2 v = p - pivot;
+    return pivot +
+           Vec2(std::cos(turn) * v.x() - std::sin(turn) * v.y(),
+                std::sin(turn) * v.x() + std::cos(turn) * v.y()) +
+           shift;
+  };
+  DrawnReality drawn;
+  drawn.name = "turned";
+  for (const Segment2& w : track.walls()) drawn.true_walls.push_back({built(w.a), built(w.b)});
+  for (const CircleObstacle& c : track.round_obstacles())
+    drawn.true_posts.push_back({built(c.center), c.radius});
+
+  // The fit undoes the layout's motion exactly: no local error left.
+  const RigidFit2 fit = FitAsBuiltToFile(drawn, track);
+  CHECK(fit.features > static_cast<int>(track.round_obstacles().size()));
+  CHECK(fit.rotation_rad == Approx(-turn).margin(1e-9));
+  CHECK(fit.residual_m_rms < 1e-9);
+  const Vec2 far = track.PointAt(track.length() / 2);
+  CHECK((fit.Apply(built(far)) - far).norm() < 1e-9);
+
+  // The robot truly drives the as-built centre line; the ghost shows it
+  // exactly where the map puts it (a perfect localiser on the file's map).
+  const int64_t started_ns = 3'000'000'000'000;
+  const auto file = test::ScratchDir("truth-map-frame") / "truth.csv";
+  SessionResult result;
+  result.started_ns = started_ns;
+  {
+    std::ofstream out(file);
+    out << TruthHeaderText(drawn);
+    double t = 0.0;
+    for (double s = 0.0; s <= track.length(); s += 0.01, t += 0.04) {
+      const Vec2 p = built(track.PointAt(s));
+      char line[256];
+      const size_t n = FormatTruthRow({started_ns + static_cast<int64_t>(std::llround(t * 1e9)),
+                                       p.x(), p.y(), 0.0, 0.0, 0.25, 0.0},
+                                      line, sizeof line);
+      REQUIRE(n > 0);
+      out.write(line, static_cast<std::streamsize>(n));
+      const Vec2 shown = track.PointAt(s);
+      result.shown.push_back({t, shown.x(), shown.y(), 0.0});
+    }
+  }
+  ScorePrediction(record::TruthRecord::Load(file), &track, result);
+  const RunRecord& r = result.record;
+  CHECK(r.map_fit.features == fit.features);
+  CHECK(r.map_fit.rotation_deg == Approx(-0.5).margin(1e-6));
+  CHECK(r.prediction_error_m_p95 < 1e-4);  // in the map's frame: the ghost was right
+  // In the world's, the layout's motion: at least its shift's 3.6 cm less the turn's share.
+  CHECK(r.prediction_error_world_m_p95 > 0.02);
+
+  // One post 4 cm from where the map says: the map's own error, left by the fit.
+  drawn.true_posts[0].center += Vec2(0.04, 0.0);
+  const RigidFit2 local = FitAsBuiltToFile(drawn, track);
+  CHECK(local.residual_m_rms > 0.005);
+  CHECK(local.rotation_rad == Approx(-turn).margin(0.01));
+
+  // No map error: no fit, the frames are one.
+  CHECK(FitAsBuiltToFile(DrawnReality{}, track).features == 0);
 }

@@ -21,7 +21,32 @@
 
 namespace haptel::mediator {
 
-void ScorePrediction(const record::TruthRecord& truth, SessionResult& result);
+///
+/// Every figure against the truth is in the map's frame: the truth moved by
+/// the best rigid fit of the as-built track onto its file (FitAsBuiltToFile),
+/// so that a lab's arbitrary global turn and offset of the whole layout (a
+/// choice of frame: the operator's map and the ghost are in the file's) does
+/// not count, while each post and wall's own error against the map does (the
+/// operator meets it). The prediction's and the localisation's error against
+/// the raw truth (the world frame the vehicle was placed in) are kept beside
+/// them (*_world_m_*). `track`: the robot's (null for the blimp: no map, the
+/// frames are one).
+void ScorePrediction(const record::TruthRecord& truth, const Track* track, SessionResult& result);
+
+/// A rigid motion of the plane: p ↦ R(rotation)·p + offset.
+struct RigidFit2 {
+  double rotation_rad = 0.0;
+  Vec2 offset = Vec2::Zero();
+  int features = 0;             ///< the points fitted (0: the identity, nothing displaced)
+  double residual_m_rms = 0.0;  ///< what the fit leaves: the local map error
+  Vec2 Apply(const Vec2& p) const;
+};
+
+/// The best rigid fit, in least squares, taking the track as `drawn` built it
+/// (TrueWalls' corners, each once, and TruePosts' centres) onto `track`'s file:
+/// Umeyama (1991) without scale, in closed form for the plane, every
+/// feature weighted alike. The identity when the reality displaced nothing.
+RigidFit2 FitAsBuiltToFile(const DrawnReality& drawn, const Track& track);
 
 /// The lap judged again from the truth record's path (RunRecord::truth_lap):
 /// the same LapTimer the live lap runs on the vehicle's odometry, fed where

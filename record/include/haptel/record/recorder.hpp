@@ -132,8 +132,29 @@ struct RunRecord {
   bool predict = false;
   /// The link's injected fault, as LinkFaultText writes it (v7; "": none).
   std::string link_fault;
+  /// The truth is taken in the map's frame (TruthInMapFrame in
+  /// mediator/prediction_score.hpp): where the vehicle truly was relative to
+  /// the as-built track, expressed in the track file's frame by the best
+  /// rigid fit of the as-built features onto the file's. A survey's global
+  /// turn and offset is a choice of frame, not the predictor's error; a post
+  /// standing 2 cm from where the map says still counts.
   double prediction_error_m_p50 = -1.0;
   double prediction_error_m_p95 = -1.0;
+  /// The same against the raw truth, in the world frame the vehicle was
+  /// placed in (JSON only; equal to the above without map error).
+  double prediction_error_world_m_p50 = -1.0;
+  double prediction_error_world_m_p95 = -1.0;
+  /// The rigid fit taking the as-built track onto its file (JSON only):
+  /// its turn (deg), offset (m), the features fitted (wall corners, post
+  /// centres; 0: no map error, the identity) and what it leaves (rms, m: the
+  /// local map error).
+  struct MapFrameFit {
+    double rotation_deg = 0.0;
+    double offset_x_m = 0.0;
+    double offset_y_m = 0.0;
+    int features = 0;
+    double residual_m_rms = 0.0;
+  } map_fit;
   /// The model the prediction ran: "nominal" or "learn" (JSON only).
   std::string predict_model;
   /// The model's error against each state at the moment it was sampled: its
@@ -148,9 +169,13 @@ struct RunRecord {
   int64_t localiser_scans_refused = -1;
   /// The pose each state gave the run (localised, or the odometry) and the
   /// odometry alone, against the truth at that state's moment (m; -1: no
-  /// truth record; JSON only): the floor under the prediction's error.
+  /// truth record; JSON only): the floor under the prediction's error. In
+  /// the map's frame, as prediction_error_m_*.
   double localisation_error_m_p50 = -1.0;
   double localisation_error_m_p95 = -1.0;
+  /// The localised pose against the raw truth (world frame; JSON only).
+  double localisation_error_world_m_p50 = -1.0;
+  double localisation_error_world_m_p95 = -1.0;
   double odometry_error_m_p50 = -1.0;
   double odometry_error_m_p95 = -1.0;
   /// What the predictor estimated of the vehicle, each against its truth.
