@@ -502,6 +502,8 @@ struct StudyConsole::Impl {
         << " &middot; contacts " << progress.obstacles;
       if (!progress.last_contact.empty()) h << " (last: " << Html(progress.last_contact) << ")";
       h << "</p>\n";
+      if (!progress.message.empty())
+        h << "<p id=\"screen-line\">their screen: " << Html(progress.message) << "</p>\n";
     }
     if (thumbnail) {
       h << "<p><img id=\"thumbnail\" src=\"/video.jpg?n=" << thumbnail->frames()
@@ -756,9 +758,10 @@ void StudyConsole::Impl::Status(const httplib::Request&, httplib::Response& res)
           ",\"trials_planned\":" + std::to_string(store->Plan().size()) +
           ",\"participants\":" + std::to_string(store->Participants().size()) +
           ",\"live\":" + JsonString(live) + ",\"lap_time_s\":" + JsonNumber(progress.lap_time_s) +
-          ",\"gates_passed\":" + std::to_string(progress.gates_passed) +
-          ",\"obstacles\":" + std::to_string(progress.obstacles) + ",\"video_frames\":" +
-          std::to_string(thumbnail ? thumbnail->frames() : 0) + ",\"next\":" + JsonString(next) +
+          ",\"gates_passed\":" + std::to_string(progress.gates_passed) + ",\"obstacles\":" +
+          std::to_string(progress.obstacles) + ",\"live_message\":" + JsonString(progress.message) +
+          ",\"video_frames\":" + std::to_string(thumbnail ? thumbnail->frames() : 0) +
+          ",\"next\":" + JsonString(next) +
           ",\"next_device\":" + JsonString(next.empty() ? std::string() : next_device.name) +
           ",\"device_missing\":" + JsonString(next.empty() ? std::string() : NextDeviceMissing()) +
           ",\"waiting\":" + JsonString(waiting) +

@@ -591,8 +591,8 @@ StudyRun::Then StudyRun::RunTrial(const PlannedTrial& trial) {
                       trial.participant, trial.position);
     StudyConsole* page = console_.get();
     setup.on_live = [page](const view::Overlay& o) {
-      page->SetLiveProgress(
-          {o.lap_time_s, o.gates_passed, o.gates_total, o.obstacles_touched, o.last_contact});
+      page->SetLiveProgress({o.lap_time_s, o.gates_passed, o.gates_total, o.obstacles_touched,
+                             o.last_contact, o.message});
     };
     ShowPictures(setup, *page);
   }

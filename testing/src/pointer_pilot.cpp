@@ -41,13 +41,28 @@ constexpr double kTakeHold_s = 1.0;
 /// Driving this long with the motors still: take hold again.
 constexpr double kRetakeAfter_s = 3.0;
 /// Having taken hold of controls, the pilot holds them at neutral for
-/// kTakeHold_s and sways the key hand this far each way along the wheel's
-/// rim (±12° of its 0.12 m radius), once over the hold, as a person works a
-/// wheel the run says is not yet at zero: a free wheel (the cockpit without
-/// return to zero) nudged a few degrees as the hands closed on it stays
-/// there, past the engagement's band (6.4° of wheel), and the run waited
-/// for zero until the cap. Swayed, it passes zero and the run engages.
-constexpr double kSway_m = 0.025;
+/// kTakeHold_s and sways the wheel's hand along the rim, once over the hold,
+/// to where the interface puts it for this turn each way (±12.6° of the
+/// cockpits' wheel, full turn at 90°), as a person works a wheel the run
+/// says is not yet at zero: a free wheel (the cockpit without return to
+/// zero) nudged a few degrees as the hands closed on it stays there, past
+/// the engagement's band (6.4° of wheel), and the run waited for zero until
+/// the cap. Swayed, it passes zero and the run engages.
+constexpr double kSwayTurn = 0.14;
+/// The screen saying the run waits for the controls at neutral, the pilot
+/// holds them there again, swaying wider each time (up to this many times
+/// kSwayTurn): the wheel's grip may have slipped mid-turn, leaving the free
+/// wheel further from zero than one sway reaches.
+constexpr int kMaxSwayScale = 3;
+/// A line read this long after a hold began is news (the console's line
+/// lags the screen by up to its half-second push and the reading).
+constexpr double kScreenLag_s = 1.5;
+
+/// The run's line when it is held but waits for the controls (or the hand)
+/// at neutral (mediator::Engagement::Line): "Not engaged - ... neutral ...".
+bool SaysBackToNeutral(const std::string& line) {
+  return line.rfind("Not engaged", 0) == 0 && line.find("neutral") != std::string::npos;
+}
 
 }  // namespace
 
@@ -214,6 +229,12 @@ interfaces::HandTargets PointerPilot::Neutral() const {
   return parts_->interface->HandTargetsFor({});
 }
 
+void PointerPilot::SeeScreenLine(const std::string& line) {
+  std::lock_guard lock(counts_mutex_);
+  screen_line_ = line;
+  screen_line_ns_ = MonotonicNs();
+}
+
 PilotCounts PointerPilot::counts() const {
   std::lock_guard lock(counts_mutex_);
   return counts_;
@@ -259,6 +280,7 @@ void PointerPilot::Run() {
     auto next = std::chrono::steady_clock::now();
     double last_t = -1.0;
     double hold_until_s = -1.0;
+    int sway_scale = 1;
     int64_t next_refresh_ns = 0;
     while (!stop_) {
       next += period;
@@ -322,6 +344,24 @@ void PointerPilot::Run() {
           hold_until_s = t + kTakeHold_s;
         }
       }
+      // The screen says the run waits for the controls at neutral (a hand
+      // that slipped, a wheel left off zero): a person holds them there
+      // again, turning the wheel through zero, and drives on once engaged.
+      std::string screen_line;
+      int64_t screen_line_ns = 0;
+      {
+        std::lock_guard lock(counts_mutex_);
+        screen_line = screen_line_;
+        screen_line_ns = screen_line_ns_;
+      }
+      const double line_t = 1e-9 * static_cast<double>(screen_line_ns - p.t0_ns);
+      if (hold_until_s >= 0.0 && t >= hold_until_s && SaysBackToNeutral(screen_line) &&
+          line_t > hold_until_s - kTakeHold_s + kScreenLag_s) {
+        hold_until_s = t + kTakeHold_s;
+        sway_scale = std::min(sway_scale + 1, kMaxSwayScale);
+        std::lock_guard lock(counts_mutex_);
+        ++counts_.back_to_neutral;
+      }
       const bool holding = hold_until_s < 0.0 ? !grasps : t < hold_until_s;
       // Controls to grasp: the open pointer hand goes round to its control
       // first (PointerApproach); the operator's reach and grasp start there.
@@ -335,7 +375,9 @@ void PointerPilot::Run() {
         auto& wheel_hand = targets[hands.key_index()];
         if (holding && grasps && wheel_hand) {
           const double phase = (t - (hold_until_s - kTakeHold_s)) / kTakeHold_s;
-          wheel_hand->position[1] += kSway_m * std::sin(2.0 * M_PI * phase);
+          const double turn = sway_scale * kSwayTurn * std::sin(2.0 * M_PI * phase);
+          const interfaces::HandTargets swayed = p.interface->HandTargetsFor({0.0, turn});
+          if (const auto& along = swayed[hands.key_index()]) wheel_hand->position = along->position;
         }
       }
       if (const auto& hand = targets[hands.pointer_index()]) pointer_target = hand->position;

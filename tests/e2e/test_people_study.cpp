@@ -26,6 +26,10 @@
 #include "test_env.hpp"
 #include "xserver.hpp"
 
+// After Eigen (through the configs): it brings <resolv.h>, whose _res macro
+// breaks Eigen's products.
+#include <httplib.h>
+
 using namespace haptel;
 using haptel::test::Child;
 
@@ -179,8 +183,18 @@ void RunPeopleStudy(const std::string& name, const std::vector<Condition>& condi
   size_t answered = 0;
   bool window_seen = false;
   bool states_seen = false;
+  // The pilot reads the trial's screen line as the experimenter does: the
+  // console's status.json (`live_message`), which the run pushes twice a second.
+  httplib::Client console("127.0.0.1", port);
+  console.set_connection_timeout(1);
+  console.set_read_timeout(1);
+  int64_t next_look_ns = 0;
   auto let_go = [&] {
     if (!pilot) return;
+    const testing::PilotCounts c = pilot->counts();
+    mark("  pilot: " + std::to_string(c.back_to_neutral) +
+         " back to neutral on the screen's word, " + std::to_string(c.regrasps) +
+         " grasps again, " + std::to_string(c.contacts) + " contacts");
     pilot->Stop();
     if (!pilot->counts().error.empty()) pilot_errors.push_back(pilot->counts().error);
     pilot.reset();
@@ -194,6 +208,11 @@ void RunPeopleStudy(const std::string& name, const std::vector<Condition>& condi
         if (pilot && !window_seen && pilot->counts().window_found) {
           window_seen = true;
           mark("  window open");
+        }
+        if (pilot && MonotonicNs() >= next_look_ns) {
+          next_look_ns = MonotonicNs() + 500'000'000;
+          if (const auto status = console.Get("/status.json"); status && status->status == 200)
+            pilot->SeeScreenLine(test::JsonField(status->body, "live_message"));
         }
         if (pilot && !states_seen && pilot->counts().steps > 0) {
           states_seen = true;

@@ -82,6 +82,17 @@ TEST_CASE("The console serves the schedule and forms, and takes each questionnai
   CHECK(schedule->body.find("1 of 2 trials done") != std::string::npos);
   CHECK(schedule->body.find("21.50 s") != std::string::npos);
   CHECK(schedule->body.find("participant A, cockpit: lap 3.2 s") != std::string::npos);
+  CHECK(schedule->body.find("screen-line") == std::string::npos);  // nothing said yet
+  // The participant's screen's line, for the experimenter (page and status).
+  console.SetLiveProgress({3.2, 0, 2, 0, "", "Not engaged - bring the hand back to neutral"});
+  const auto live = client.Get("/");
+  REQUIRE(live);
+  CHECK(live->body.find("their screen: Not engaged - bring the hand back to neutral") !=
+        std::string::npos);
+  const auto status = client.Get("/status.json");
+  REQUIRE(status);
+  CHECK(status->body.find("\"live_message\":\"Not engaged - bring the hand back to neutral\"") !=
+        std::string::npos);
   CHECK(schedule->body.find("/questionnaire?participant=A&amp;condition=gesture&amp;name=thesis") !=
         std::string::npos);
 

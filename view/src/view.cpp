@@ -17,6 +17,7 @@
 
 #include "haptel/core/histogram.hpp"
 #include "haptel/core/log.hpp"
+#include "haptel/core/loop_meter.hpp"
 #include "haptel/view/canvas.hpp"
 #include "haptel/view/mp4_writer.hpp"
 #include "haptel/view/renderer.hpp"
@@ -256,8 +257,14 @@ struct View::Impl {
         recorder = std::make_unique<Mp4Recorder>(options.record, options.width, options.height,
                                                  options.record_fps);
       }
-      if (sink != nullptr && options.mode == ViewMode::kWindow)
+      if (sink != nullptr && options.mode == ViewMode::kWindow) {
         sink->OnWindowOpened(&canvas->window(), options.width, options.height);
+        // The window's events are the person's hands (the mouse device):
+        // handed on late, a held key moves the key hand for as long as the
+        // thread waited. Asked now, after the GL context started its own
+        // threads (llvmpipe's rasterisers), which would inherit it.
+        TryRealtime(options.realtime_priority);
+      }
       ready.set_value();
     } catch (...) {
       canvas.reset();

@@ -24,7 +24,8 @@
 /// (SubmitNote; position 0: on the participant as a whole), from the schedule's rows or the trial
 /// under way; `POST /participants` (id) adds a participant, planned by the design; `POST /finish`
 /// ends an open study (one whose file lists no participants); `GET /video.jpg` the vehicle's latest
-/// camera picture (the thumbnail); `GET /status.json` the counts, the live trial, the next and its
+/// camera picture (the thumbnail); `GET /status.json` the counts, the live trial (`live_message`:
+/// the participant's screen's line), the next and its
 /// device
 /// (`next_device`, and `device_missing`: what is missing, "" when it is there),
 /// what is awaited;
@@ -139,6 +140,10 @@ struct LiveProgress {
   int gates_total = 0;
   int obstacles = 0;
   std::string last_contact;  ///< e.g. "left bumper at 12.3 s"
+  /// The line the participant's screen shows them now (view::Overlay's
+  /// message, e.g. "Not engaged - bring the hand back to neutral (zero
+  /// command) to drive"): why the vehicle does not move; empty: none.
+  std::string message;
 };
 
 /// The input device a trial is driven with, as the console shows and checks

@@ -123,6 +123,7 @@ struct PilotCounts {
   int wheel_notches = 0;  ///< wheel notches sent
   int contacts = 0;       ///< states with a bumper pressed, from none
   int regrasps = 0;       ///< controls let go and taken hold of again (the vehicle did not answer)
+  int back_to_neutral = 0;  ///< held at neutral again, the screen saying the run waits for it
   bool window_found = false;
   std::string error;  ///< why the pilot stopped early (empty: it did not)
 };
@@ -146,6 +147,11 @@ class PointerPilot {
   /// pointer left over a control, straight into the cockpit's wheel.
   void Stop();
   PilotCounts counts() const;
+  /// What the run's screen says to the person now (its one line, e.g. "Not
+  /// engaged - bring the hand back to neutral (zero command) to drive"), as
+  /// the person reads it: a study's console shows it to the experimenter
+  /// (status.json's `live_message`, pushed twice a second). Any thread.
+  void SeeScreenLine(const std::string& line);
   /// The interface's hands at rest (HandTargetsFor no intent): where a
   /// person takes hold (`haptel bench hands` takes hold of the cockpits there).
   interfaces::HandTargets Neutral() const;
@@ -161,6 +167,8 @@ class PointerPilot {
   std::atomic<bool> stop_{false};
   mutable std::mutex counts_mutex_;
   PilotCounts counts_;
+  std::string screen_line_;     ///< counts_mutex_
+  int64_t screen_line_ns_ = 0;  ///< when it was read (counts_mutex_)
   std::thread thread_;
 };
 

@@ -61,6 +61,13 @@ struct ViewOptions {
   std::string title = "Haptel";
   ScreenPlacement screen;  ///< where the camera's picture hangs
   StereoOptions stereo;    ///< side by side for a head-mounted display (off: one eye)
+  /// SCHED_FIFO priority a window's thread asks for once its GL context is
+  /// up (the GL's own threads keep theirs), when the process may; 0: do not
+  /// ask. It hands the person's pointer and keys to the mouse device, which
+  /// moves the key hand for as long as a key is held: a starved view thread
+  /// moved it by its own lateness. Below the physics thread's 70 and the
+  /// servo loop's 80.
+  int realtime_priority = 60;
 };
 
 /// Fills the frame's model on the view thread. Must not block on anything a
