@@ -1,6 +1,7 @@
 #include "haptel/view/view.hpp"
 
 #include <SDL2/SDL.h>
+#include <pthread.h>
 #include <time.h>
 
 #include <atomic>
@@ -246,6 +247,7 @@ struct View::Impl {
   std::atomic<double> fps{0.0};  // mean over the run
   std::atomic<double> cpu_share{0.0};
   std::unique_ptr<Mp4Recorder> recorder;
+  bool realtime = false;  ///< the view thread's, while it has SCHED_FIFO
 
   Impl(const ViewOptions& o, ViewSource& s, EventSink* k) : options(o), source(s), sink(k) {}
 
@@ -263,7 +265,7 @@ struct View::Impl {
         // handed on late, a held key moves the key hand for as long as the
         // thread waited. Asked now, after the GL context started its own
         // threads (llvmpipe's rasterisers), which would inherit it.
-        TryRealtime(options.realtime_priority);
+        realtime = TryRealtime(options.realtime_priority);
       }
       ready.set_value();
     } catch (...) {
@@ -293,6 +295,7 @@ struct View::Impl {
     while (!stop.load()) {
       PumpEvents();
       const int64_t start = Now(CLOCK_MONOTONIC);
+      const int64_t cpu_start = Now(CLOCK_THREAD_CPUTIME_ID);
       const double t_s = static_cast<double>(start - t0) * 1e-9;
       source.Fill(model);
       renderer.Draw(model, t_s);
@@ -324,6 +327,15 @@ struct View::Impl {
                 static_cast<double>(std::max<int64_t>(shown - t0, 1)));
       cpu_share.store(static_cast<double>(Now(CLOCK_THREAD_CPUTIME_ID) - cpu0) /
                       static_cast<double>(std::max<int64_t>(shown - t0, 1)));
+      // A frame that took this thread ten periods of its own CPU is no
+      // real-time work: at SCHED_FIFO it would hold a core from the rest.
+      // Given up for good, as the physics and session threads give it up.
+      // (Waiting for llvmpipe's rasterisers is not counted: they run apart.)
+      if (realtime && Now(CLOCK_THREAD_CPUTIME_ID) - cpu_start > 10 * period_ns) {
+        sched_param normal{};
+        pthread_setschedparam(pthread_self(), SCHED_OTHER, &normal);
+        realtime = false;
+      }
       next += period_ns;
       const int64_t now = Now(CLOCK_MONOTONIC);
       if (next < now - period_ns) next = now;  // fell behind: do not race to catch up
