@@ -12,6 +12,7 @@
 #include "haptel/mediator/lap_timer.hpp"
 #include "haptel/mediator/vehicle_link.hpp"
 #include "haptel/msg/haptelPubSubTypes.h"
+#include "haptel/record/session_cdr.hpp"
 #include "haptel/record/session_channels.hpp"
 #include "haptel/session/sessionPubSubTypes.h"
 
@@ -20,21 +21,7 @@ namespace {
 
 namespace channels = record::session;
 
-/// A message's CDR into `out` through its fastddsgen type; false when it
-/// does not decode.
-template <typename PubSub, typename Msg>
-bool DecodeCdr(const mcap::MessageView& m, Msg& out) {
-  PubSub type;
-  eprosima::fastrtps::rtps::SerializedPayload_t payload(
-      static_cast<uint32_t>(std::max<size_t>(m.size, 1)));
-  std::memcpy(payload.data, m.data, m.size);
-  payload.length = static_cast<uint32_t>(m.size);
-  try {
-    return type.deserialize(&payload, &out);
-  } catch (const std::exception&) {
-    return false;  // Fast CDR throws on a short buffer
-  }
-}
+using record::DecodeCdr;
 
 /// The channel of schema `schema` (and `direction`, when the channel says
 /// one), or empty.
