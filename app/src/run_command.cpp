@@ -244,20 +244,11 @@ int ExitCode(const RecordedRun& run) {
   return mediator::ExitCode(run.result.outcome);
 }
 
-void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRun& run) {
+namespace {
+
+/// The lap: its time, gates and splits, and the lap judged from the truth.
+void PrintLap(std::FILE* out, const RecordedRun& run) {
   const RunRecord& r = run.result.record;
-  std::fprintf(out, "haptel: %s — %s\n", ToString(run.result.outcome).c_str(),
-               run.result.message.c_str());
-  std::fprintf(out, "  track %s, interface %s, vehicle %s (pid %d), operator %s, device %s\n",
-               r.track.c_str(), r.interface.c_str(), r.vehicle.c_str(), r.vehicle_pid,
-               r.operator_kind.c_str(), r.device.c_str());
-  std::fprintf(out, "  distance driven %.2f m, %zu interface switches, not engaged %.1f s\n",
-               r.distance_m, r.switches.size(), r.disengaged_s);
-  if (std::isfinite(r.pseudo_haptic_gain_mean) || r.ff_effects_played > 0) {
-    std::fprintf(out,
-                 "  device: pseudo-haptic gain mean %.2f, force-feedback effects played %lld\n",
-                 r.pseudo_haptic_gain_mean, static_cast<long long>(r.ff_effects_played));
-  }
   std::fprintf(
       out,
       "  lap time %.2f s (from the start line; %.2f s before it), gates passed %d/%d, missed %d, "
@@ -285,6 +276,11 @@ void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRu
     for (const std::string& line : mediator::TruthLapDisagreements(r))
       std::fprintf(out, "    %s\n", line.c_str());
   }
+}
+
+/// The loops' rates, the counters and the link's round trip.
+void PrintLoops(std::FILE* out, const SessionSetup& setup, const RecordedRun& run) {
+  const RunRecord& r = run.result.record;
   constexpr const char* kShort = " CANNOT KEEP ITS RATE";
   std::fprintf(out, "  servo %.1f Hz of %.0f Hz%s (p99 period %.0f us, %llu overruns)\n",
                r.servo_rate_hz, r.servo_target_hz, r.servo_rate_short ? kShort : "",
@@ -314,6 +310,11 @@ void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRu
         run.result.simulated_s, run.result.wall_s, r.speedup, run.result.cpu_s,
         run.result.cpu_s > 0.0 ? run.result.simulated_s / run.result.cpu_s : 0.0);
   }
+}
+
+/// The hidden reality, the prediction and the pose scored against it, the estimates.
+void PrintPrediction(std::FILE* out, const RecordedRun& run) {
+  const RunRecord& r = run.result.record;
   if (!run.result.reality.empty()) {
     std::fprintf(out, "  the vehicle's reality: %s, seed %llu (hidden from the operator side)\n",
                  run.result.reality.c_str(),
@@ -372,6 +373,11 @@ void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRu
       std::fprintf(out, ", never known: the vehicle file's value\n");
     }
   }
+}
+
+/// The video and the view, and where the run's files and record went.
+void PrintOutputs(std::FILE* out, const SessionSetup& setup, const RecordedRun& run) {
+  const RunRecord& r = run.result.record;
   std::fprintf(out,
                "  video %lld frames, %.1f fps, %.0f kbit/s, latency p50 %.1f ms, stale %.2f s\n",
                static_cast<long long>(r.video_frames), r.video_fps, r.video_kbps,
@@ -407,6 +413,28 @@ void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRu
         run.unsaved.empty() ? "no file either (see the error above)" : run.unsaved.c_str());
   }
   if (!r.picture.empty()) std::fprintf(out, "  picture %s\n", r.picture.c_str());
+}
+
+}  // namespace
+
+void PrintRunSummary(std::FILE* out, const SessionSetup& setup, const RecordedRun& run) {
+  const RunRecord& r = run.result.record;
+  std::fprintf(out, "haptel: %s — %s\n", ToString(run.result.outcome).c_str(),
+               run.result.message.c_str());
+  std::fprintf(out, "  track %s, interface %s, vehicle %s (pid %d), operator %s, device %s\n",
+               r.track.c_str(), r.interface.c_str(), r.vehicle.c_str(), r.vehicle_pid,
+               r.operator_kind.c_str(), r.device.c_str());
+  std::fprintf(out, "  distance driven %.2f m, %zu interface switches, not engaged %.1f s\n",
+               r.distance_m, r.switches.size(), r.disengaged_s);
+  if (std::isfinite(r.pseudo_haptic_gain_mean) || r.ff_effects_played > 0) {
+    std::fprintf(out,
+                 "  device: pseudo-haptic gain mean %.2f, force-feedback effects played %lld\n",
+                 r.pseudo_haptic_gain_mean, static_cast<long long>(r.ff_effects_played));
+  }
+  PrintLap(out, run);
+  PrintLoops(out, setup, run);
+  PrintPrediction(out, run);
+  PrintOutputs(out, setup, run);
 }
 
 std::string RunJson(const SessionSetup& setup, const RecordedRun& run) {

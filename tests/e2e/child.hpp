@@ -1,6 +1,7 @@
 #pragma once
 // The program under an end-to-end test: the product's own ChildProcess with
 // its stdout and stderr captured (one way to start processes in Haptel).
+#include <catch2/catch.hpp>
 #include <memory>
 #include <regex>
 #include <string>
@@ -60,6 +61,22 @@ inline std::vector<std::unique_ptr<Child>> StartAll(
   children.reserve(argvs.size());
   for (const auto& argv : argvs) children.push_back(std::make_unique<Child>(argv));
   return children;
+}
+
+/// What `child` printed, for an INFO: every failing check after it shows it.
+inline std::string Output(const Child& child) {
+  return "stdout:\n" + child.out() + "\nstderr:\n" + child.err();
+}
+
+/// Waits for `child` (at most `timeout_s`), requires that it exited 0 with a
+/// JSON line last (a run's --json), and returns that line.
+inline std::string FinishedJson(Child& child, double timeout_s) {
+  const int code = child.Wait(timeout_s);
+  INFO(Output(child));
+  REQUIRE(code == 0);
+  std::string json = child.LastLine();
+  REQUIRE(json.rfind('{', 0) == 0);
+  return json;
 }
 
 /// Value of a top-level key in a flat JSON object line (numbers, bools, strings).

@@ -27,7 +27,9 @@
 
 using namespace haptel;
 using haptel::test::Child;
+using haptel::test::FinishedJson;
 using haptel::test::JsonField;
+using haptel::test::Output;
 
 namespace {
 
@@ -80,11 +82,8 @@ TEST_CASE(
         "none"}});
   {
     Child& haptel = *hops[0];
-    const int code = haptel.Wait(300.0);
-    INFO("stdout:\n" << haptel.out() << "\nstderr:\n" << haptel.err());
-    REQUIRE(code == 0);
-    const std::string json = haptel.LastLine();
-    REQUIRE(json.front() == '{');
+    const std::string json = FinishedJson(haptel, 300.0);
+    INFO(Output(haptel));
     CHECK(JsonField(json, "outcome") == "completed");
     CHECK(JsonField(json, "completed") == "true");
     CHECK(JsonField(json, "gates_total") == "1");
@@ -118,11 +117,8 @@ TEST_CASE(
   }
   {  // 400 ms each way, the pilot flying the predicted blimp.
     Child& haptel = *hops[1];
-    const int code = haptel.Wait(300.0);
-    INFO("stdout:\n" << haptel.out() << "\nstderr:\n" << haptel.err());
-    REQUIRE(code == 0);
-    const std::string json = haptel.LastLine();
-    REQUIRE(json.front() == '{');
+    const std::string json = FinishedJson(haptel, 300.0);
+    INFO(Output(haptel));
     CHECK(JsonField(json, "outcome") == "completed");
     CHECK(JsonField(json, "gates_passed") == "1");
     CHECK(JsonField(json, "predict") == "true");

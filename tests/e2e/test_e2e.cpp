@@ -35,7 +35,9 @@
 
 using namespace haptel;
 using haptel::test::Child;
+using haptel::test::FinishedJson;
 using haptel::test::JsonField;
+using haptel::test::Output;
 
 namespace {
 std::string Bin(const std::string& name) { return (test::BinDir() / name).string(); }
@@ -206,11 +208,8 @@ TEST_CASE("haptel run completes the short track over DDS with a separate vehicle
   REQUIRE(std::filesystem::exists(session));
   for (const int signal : {SIGUSR1, SIGUSR2, SIGPIPE, SIGXFSZ})
     REQUIRE(kill(haptel.pid(), signal) == 0);
-  const int code = haptel.Wait(120.0);
-  INFO("stdout:\n" << haptel.out() << "\nstderr:\n" << haptel.err());
-  REQUIRE(code == 0);
-  const std::string json = haptel.LastLine();
-  REQUIRE(json.front() == '{');
+  const std::string json = FinishedJson(haptel, 120.0);
+  INFO(Output(haptel));
   CHECK(JsonField(json, "completed") == "true");
   CHECK(JsonField(json, "gates_passed") == JsonField(json, "gates_total"));
   CHECK(std::stoi(JsonField(json, "gates_total")) == 2);
@@ -291,11 +290,8 @@ TEST_CASE(
                 "config/tracks/test-short.yaml", "--json", "--quiet", "--domain",
                 std::to_string(test::UniqueDomain(14)), "--database", db.string(),
                 "--vehicle-timeout", "5", "--reality", "none"});
-  const int code = haptel.Wait(150.0);
-  INFO("stdout:\n" << haptel.out() << "\nstderr:\n" << haptel.err());
-  REQUIRE(code == 0);
-  const std::string json = haptel.LastLine();
-  REQUIRE(json.front() == '{');
+  const std::string json = FinishedJson(haptel, 150.0);
+  INFO(Output(haptel));
   CHECK(JsonField(json, "completed") == "true");
   CHECK(JsonField(json, "gates_passed") == JsonField(json, "gates_total"));
   CHECK(JsonField(json, "interface") == "cockpit-assisted");

@@ -25,7 +25,9 @@
 
 using namespace haptel;
 using haptel::test::Child;
+using haptel::test::FinishedJson;
 using haptel::test::JsonField;
+using haptel::test::Output;
 namespace fs = std::filesystem;
 
 namespace {
@@ -151,11 +153,8 @@ TEST_CASE(
   // The twin: the laps are the fleet's, not the vehicles' reality.
   argv.insert(argv.end(), {"--quiet", "--reality", "none"});
   Child run(argv);
-  const int code = run.Wait(400.0);
-  INFO("stdout:\n" << run.out() << "\nstderr:\n" << run.err());
-  REQUIRE(code == 0);
-  const std::string json = run.LastLine();
-  REQUIRE(json.front() == '{');
+  const std::string json = FinishedJson(run, 400.0);
+  INFO(Output(run));
   CHECK(JsonField(json, "completed") == "true");
   CHECK(JsonField(json, "outcome") == "completed");
   CHECK(JsonField(json, "vehicles_completed") == "3");
