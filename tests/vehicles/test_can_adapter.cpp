@@ -351,6 +351,22 @@ TEST_CASE("the simulated CAN robot drives through the bus, and stops itself on a
   CHECK(std::abs(sim.robot().State().speed) < 0.02);  // stopped within a further 0.5 s
 }
 
+TEST_CASE("a stalled control tick does not read as the simulated nodes' silence") {
+  // A loaded host's tick half a second late: the nodes are simulated in the
+  // same tick, so their heartbeats of that half second are on the bus too
+  // (a real bus queues them); in one piece the adapter counted it silence.
+  const Track track(LoadTrack("config/tracks/test-short.yaml"));
+  SimulatedCanRobot sim(track, CanConfigured());
+  sim.SetMotors({8, 8});
+  for (int i = 0; i < 100; ++i) sim.Update(0.005);
+  REQUIRE_FALSE(sim.State().fault);
+  const double x0 = sim.robot().State().x, y0 = sim.robot().State().y;
+  sim.Update(0.5);
+  INFO(sim.State().fault_message);
+  CHECK_FALSE(sim.State().fault);
+  CHECK(std::hypot(sim.robot().State().x - x0, sim.robot().State().y - y0) > 0.05);  // drove on
+}
+
 TEST_CASE(
     "the CAN robot's log on a full disk (/dev/full): its log status reports it and the robot "
     "drives on") {

@@ -141,8 +141,17 @@ SimulatedCanRobot::SimulatedCanRobot(const Track& track, const VehicleConfig& co
 }
 
 void SimulatedCanRobot::Update(double dt) {
-  adapter_->Update(dt);
-  nodes_->Step(dt);
+  if (!(dt > 0.0)) return;
+  // A late control tick's time in pieces of at most half a heartbeat
+  // period: in one piece the adapter would count the whole stall as the
+  // nodes' silence before they had sent a frame of it, and stop the robot
+  // (a real bus queues the nodes' frames while the host stalls).
+  const double piece_s = 0.5 * nodes_->heartbeat_period_s();
+  const int pieces = std::max(1, static_cast<int>(std::ceil(dt / piece_s - 1e-9)));
+  for (int i = 0; i < pieces; ++i) {
+    adapter_->Update(dt / pieces);
+    nodes_->Step(dt / pieces);
+  }
 }
 
 AdapterState SimulatedCanRobot::State() const {

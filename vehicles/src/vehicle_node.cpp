@@ -18,9 +18,11 @@ namespace {
 /// runs the watchdog and sends the states. At normal priority on a loaded
 /// host (a simulated twin beside the operator's processes) it waited for
 /// the CPU long enough to hold a command past its time and stop on the
-/// watchdog. Below the operator side's loops (servo 80, physics 70,
-/// session 60): on a shared host the operator's hand comes first.
-constexpr int kControlPriority = 50;
+/// watchdog. Above the link's threads (55, link/participant.hpp), which
+/// only deliver what it reads and may carry video; below the operator
+/// side's loops (session 60, physics 70, servo 80): on a shared host the
+/// operator's hand comes first.
+constexpr int kControlPriority = 57;
 
 }  // namespace
 

@@ -41,6 +41,7 @@ class SimCanNodes {
   uint32_t axis_error(int wheel) const { return axes_[static_cast<size_t>(wheel)].error; }
   float input_vel(int wheel) const { return axes_[static_cast<size_t>(wheel)].input_vel; }
   float vel(int wheel) const { return axes_[static_cast<size_t>(wheel)].vel; }
+  double heartbeat_period_s() const { return can_.heartbeat_period_s; }
   uint64_t frames_in() const { return frames_in_; }
   uint64_t frames_refused() const { return frames_refused_; }
 
