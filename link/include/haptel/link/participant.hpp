@@ -44,9 +44,9 @@ std::string TopicName(const std::string& vehicle, const std::string& channel);
 /// (ThreadsStartRealtime, core/loop_meter.hpp), as a participant, reader
 /// or writer is made. At normal priority on a loaded host they held a
 /// command or a state for up to a second: the vehicle's watchdog stopped
-/// it mid-drive, and the operator's states came late. Above a vehicle's
-/// control loop (50), which reads what they deliver; below the operator's
-/// session (60), physics (70) and servo (80) loops.
+/// it mid-drive, and the operator's states came late. Below a vehicle's
+/// control loop (57) and the operator's session (60), physics (70) and
+/// servo (80) loops, whose ticks are short: these threads also carry video.
 inline constexpr int kLinkThreadPriority = 55;
 
 /// Owns a DomainParticipant with one publisher and one subscriber.
