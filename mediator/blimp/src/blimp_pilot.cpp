@@ -32,6 +32,7 @@ void BlimpPilotConfig::ValidateOrThrow() const {
   check::Number("building_margin", building_margin, 0.0, 100.0);
   check::Number("drift_lookahead_s", drift_lookahead_s, 0.0, 60.0);
   check::Number("takeoff_height", takeoff_height, 0.1, 50.0);
+  check::Number("climb_out_airspeed", climb_out_airspeed, 0.0, cruise_airspeed);
   check::Number("height_gain", height_gain, 0.01, 10.0);
   check::Number("max_climb", max_climb, 0.05, 10.0);
   check::Number("max_sink", max_sink, 0.05, 10.0);
@@ -183,7 +184,7 @@ BlimpAutoPilot::Aim BlimpAutoPilot::ClimbOut(const BlimpObservation& o) {
   Aim aim;
   aim.bearing = Bearing(Pursue(g, o.position) - Horizontal(o.position));
   aim.crab = false;
-  aim.forward_speed = 1.0;
+  aim.forward_speed = config_.climb_out_airspeed;
   target_z_ = std::max(g.centre.z(), SafeHeight(o, Horizontal(g.centre)));
   return aim;
 }

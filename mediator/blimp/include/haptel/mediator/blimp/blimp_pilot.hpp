@@ -3,7 +3,8 @@
 /// from what the link reports, as the thesis's pilot did (ch. 8.2).
 ///
 /// It sees the blimp after a reaction delay and flies in phases: take-off
-/// (the helix plane tilted up, little forward thrust), the gates in order —
+/// (the helix plane tilted up, thrust forwards for the cruise's airspeed:
+/// climbing out slowly, the hull went where the wind took it), the gates in order —
 /// each approached along its direction of travel by pursuing a point on
 /// the gate's approach line some metres ahead (a point before the gate
 /// first, then through it), at the gate's height or at a safety height
@@ -65,6 +66,13 @@ struct BlimpPilotConfig {
   /// wind, the hop's shed). Long enough to climb over a roof at max_climb.
   double drift_lookahead_s = 8.0;
   double takeoff_height = 2.5;  ///< m above the start before heading off at speed
+  /// m/s: the airspeed wanted while climbing out to takeoff_height. Slower,
+  /// the rudder does not bite (tail_rotor_speed) and the hull goes where a
+  /// cross wind carries it and turns as the air turns it (a tail wind turns
+  /// it broadside), so that it meets a near first gate far off its
+  /// approach line; the cruise's climbs out as an aeroplane does, the
+  /// thrust forwards and up, and the rudder bites within a couple of seconds.
+  double climb_out_airspeed = 6.0;
   // Height.
   double height_gain = 0.6;  ///< 1/s: climb rate per metre of height error
   double max_climb = 1.5;    ///< m/s
