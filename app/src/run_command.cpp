@@ -184,6 +184,16 @@ std::string EstimatedJson(const std::vector<haptel::record::EstimatedParameter>&
   return out + "}";
 }
 
+/// A localised robot's map against the truth (RunRecord::map_estimated):
+/// {"features":N,"learnt_m_rms":…,"file_m_rms":…}, null when not scored.
+std::string MapJson(const haptel::record::RunRecord& r) {
+  const haptel::record::RunRecord::MapEstimate& m = r.map_estimated;
+  if (m.features == 0) return "null";
+  return "{\"features\":" + std::to_string(m.features) +
+         ",\"learnt_m_rms\":" + NumberOrNull(m.learnt_m_rms) +
+         ",\"file_m_rms\":" + NumberOrNull(m.file_m_rms) + "}";
+}
+
 /// ["name",...]
 std::string NamesJson(const std::vector<std::string>& names) {
   std::string out = "[";
@@ -480,7 +490,8 @@ std::string RunJson(const SessionSetup& setup, const RecordedRun& run) {
     << ",\"localisation_error_world_m_p95\":" << NumberOrNull(r.localisation_error_world_m_p95)
     << ",\"odometry_error_m_p50\":" << NumberOrNull(r.odometry_error_m_p50)
     << ",\"odometry_error_m_p95\":" << NumberOrNull(r.odometry_error_m_p95)
-    << ",\"estimated\":" << EstimatedJson(r.estimated) << TruthLapJson(r)
+    << ",\"estimated\":" << EstimatedJson(r.estimated) << ",\"estimated_map\":" << MapJson(r)
+    << TruthLapJson(r)
     << ",\"speedup\":" << (r.speedup > 0.0 ? JsonNumber(r.speedup) : std::string("null"))
     << ",\"simulated_s\":" << JsonNumber(run.result.simulated_s)
     << ",\"cpu_s\":" << JsonNumber(run.result.cpu_s)

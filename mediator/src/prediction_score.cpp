@@ -24,17 +24,9 @@ double DrawnValue(const DrawnReality& drawn, const std::string& name) {
   return value;
 }
 
-}  // namespace
-
-Vec2 RigidFit2::Apply(const Vec2& p) const {
-  const double c = std::cos(rotation_rad), s = std::sin(rotation_rad);
-  return Vec2(c * p.x() - s * p.y(), s * p.x() + c * p.y()) + offset;
-}
-
-RigidFit2 FitAsBuiltToFile(const DrawnReality& drawn, const Track& track) {
-  RigidFit2 fit;
-  if (drawn.true_walls.empty() && drawn.true_posts.empty()) return fit;
-  // Pairs (as built, file's): each wall corner once (walls share corners), each post's centre.
+/// Each feature of the track as built and in its file (built, file's): each
+/// wall corner once (walls share corners), then each post's centre.
+std::vector<std::pair<Vec2, Vec2>> AsBuiltFeatures(const DrawnReality& drawn, const Track& track) {
   std::vector<std::pair<Vec2, Vec2>> pairs;
   const auto add = [&](const Vec2& built, const Vec2& file) {
     for (const auto& [b, f] : pairs) {
@@ -50,6 +42,38 @@ RigidFit2 FitAsBuiltToFile(const DrawnReality& drawn, const Track& track) {
   const std::vector<CircleObstacle>& posts = TruePosts(drawn, track);
   for (size_t i = 0; i < posts.size() && i < track.round_obstacles().size(); ++i)
     add(posts[i].center, track.round_obstacles()[i].center);
+  return pairs;
+}
+
+/// The RMS distance (m) of the map's features from where they truly stand
+/// in the map's frame, as learnt (`learnt` true) or as the file has them;
+/// NaN when no feature of `map` is on the track.
+double MapRms(const std::vector<std::pair<Vec2, Vec2>>& map,
+              const std::vector<std::pair<Vec2, Vec2>>& built, const RigidFit2& fit, bool learnt) {
+  double sum = 0.0;
+  int n = 0;
+  for (const auto& [file, position] : map) {
+    for (const auto& [b, f] : built) {
+      if (f != file) continue;
+      sum += ((learnt ? position : file) - fit.Apply(b)).squaredNorm();
+      ++n;
+      break;
+    }
+  }
+  return n > 0 ? std::sqrt(sum / n) : std::nan("");
+}
+
+}  // namespace
+
+Vec2 RigidFit2::Apply(const Vec2& p) const {
+  const double c = std::cos(rotation_rad), s = std::sin(rotation_rad);
+  return Vec2(c * p.x() - s * p.y(), s * p.x() + c * p.y()) + offset;
+}
+
+RigidFit2 FitAsBuiltToFile(const DrawnReality& drawn, const Track& track) {
+  RigidFit2 fit;
+  if (drawn.true_walls.empty() && drawn.true_posts.empty()) return fit;
+  const std::vector<std::pair<Vec2, Vec2>> pairs = AsBuiltFeatures(drawn, track);
   if (pairs.size() < 2) return fit;
   // Umeyama's least squares in the plane: the centroids matched, the turn
   // from the centred points' cross terms.
@@ -122,6 +146,15 @@ void ScorePrediction(const record::TruthRecord& truth, const Track* track, Sessi
   for (EstimatedParameter& p : rec.estimated) {
     p.truth = DrawnValue(drawn, p.name);
     if (p.name == "left_gain" || p.name == "right_gain") p.truth *= fade;
+  }
+  // The map: its features' distance from where they truly stand (the map's
+  // frame), as learnt and as the file has them.
+  if (!truth.empty() && track != nullptr && !result.learnt_map.empty()) {
+    const RigidFit2 fit = FitAsBuiltToFile(drawn, *track);
+    const std::vector<std::pair<Vec2, Vec2>> built = AsBuiltFeatures(drawn, *track);
+    rec.map_estimated = {static_cast<int>(result.learnt_map.size()),
+                         MapRms(result.learnt_map, built, fit, true),
+                         MapRms(result.learnt_map, built, fit, false)};
   }
 }
 

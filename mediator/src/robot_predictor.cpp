@@ -12,7 +12,11 @@ RobotPredictor::RobotPredictor(const TreadDriveConfig& drive, double watchdog_s,
     : drive_(drive), model_(model), estimator_(drive), watchdog_s_(watchdog_s), step_s_(step_s) {}
 
 void RobotPredictor::Localise(const Track& track, const LocaliserConfig& config) {
-  localiser_.emplace(track, config);
+  // Learning, the map as built is learnt too (it is part of what differs
+  // from the files); the nominal model keeps the file's.
+  LocaliserConfig used = config;
+  if (model_ == PredictionModel::kLearn) used.learn_map = true;
+  localiser_.emplace(track, used);
 }
 
 void RobotPredictor::OnRoundTrip(double rtt_s) {

@@ -74,7 +74,8 @@ class RobotPredictor {
                           double step_s = 0.005, PredictionModel model = PredictionModel::kNominal);
 
   /// From now on, states with range scans are localised on `track` (its
-  /// walls and posts are copied: it may go).
+  /// walls and posts are copied: it may go); with kLearn, the localiser
+  /// learns the map as built as it drives (LocaliserConfig::learn_map).
   void Localise(const Track& track, const LocaliserConfig& config = {});
   /// The localiser, once Localise was called (null otherwise).
   const TrackLocaliser* localiser() const { return localiser_ ? &*localiser_ : nullptr; }
