@@ -63,6 +63,32 @@ double MapRms(const std::vector<std::pair<Vec2, Vec2>>& map,
   return n > 0 ? std::sqrt(sum / n) : std::nan("");
 }
 
+/// The track's gates where their posts truly stand (TruePosts: each gate's
+/// left and right post, in the track's order), in the truth's world: each
+/// gate's line and direction turned with its posts about their midpoint.
+/// The file's gates when the reality moved nothing.
+std::vector<Gate> GatesAsBuilt(const DrawnReality& drawn, const Track& track) {
+  std::vector<Gate> gates = track.gates();
+  const std::vector<CircleObstacle>& posts = TruePosts(drawn, track);
+  for (size_t i = 0; i < gates.size() && 2 * i + 1 < posts.size(); ++i) {
+    Gate& g = gates[i];
+    const Vec2 left = posts[2 * i].center, right = posts[2 * i + 1].center;
+    if (left == g.left_post && right == g.right_post) continue;
+    const Vec2 file_across = g.left_post - g.right_post, across = left - right;
+    const double turn = std::atan2(file_across.x() * across.y() - file_across.y() * across.x(),
+                                   file_across.dot(across));
+    const RigidFit2 move{turn, Vec2::Zero()};
+    const Vec2 centre = 0.5 * (left + right);
+    const auto moved = [&](const Vec2& p) -> Vec2 { return centre + move.Apply(p - g.center); };
+    g.line = {moved(g.line.a), moved(g.line.b)};
+    g.tangent = move.Apply(g.tangent);
+    g.center = centre;
+    g.left_post = left;
+    g.right_post = right;
+  }
+  return gates;
+}
+
 }  // namespace
 
 Vec2 RigidFit2::Apply(const Vec2& p) const {
@@ -162,7 +188,7 @@ void JudgeLapOnTruth(const record::TruthRecord& truth, const Track& track, Sessi
   record::TruthLap& lap = result.record.truth_lap;
   lap = {};
   if (truth.empty()) return;
-  LapTimer timer(track);
+  LapTimer timer(track, GatesAsBuilt(truth.params(), track));
   for (const TruthRow& row : truth.rows())
     timer.Update(NsToS(row.operator_ns - result.started_ns), Vec2(row.x, row.y));
   lap.judged = true;

@@ -8,7 +8,9 @@
 // localiser.
 #include <algorithm>
 #include <catch2/catch.hpp>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <tuple>
 #include <vector>
@@ -126,6 +128,12 @@ namespace {
 struct LabDrive {
   std::vector<double> odometry_error_m;
   std::vector<double> localised_error_m;
+  struct Input {
+    Pose2 odometry;
+    RangeScan scan;
+    bool pressed;
+  };
+  std::vector<Input> inputs;  ///< what the localiser was given, state by state
 };
 
 LabDrive DriveLab(double seconds, RealityConfig lab = LoadReality(RealityFile("lab")),
@@ -152,8 +160,9 @@ LabDrive DriveLab(double seconds, RealityConfig lab = LoadReality(RealityFile("l
     robot.Update(kDt);
     if (tick % 4 != 0) continue;  // the state's rate: 50 Hz
     const vehicles::AdapterState s = robot.State();
-    const Pose2& at =
-        localiser.Update({s.x, s.y, s.heading}, s.ranges, s.bumper_left || s.bumper_right);
+    out.inputs.push_back({{s.x, s.y, s.heading}, s.ranges, s.bumper_left || s.bumper_right});
+    const Pose2& at = localiser.Update(out.inputs.back().odometry, out.inputs.back().scan,
+                                       out.inputs.back().pressed);
     REQUIRE(robot.Truth(&truth));
     out.odometry_error_m.push_back(std::hypot(s.x - truth.x, s.y - truth.y));
     out.localised_error_m.push_back(std::hypot(at.x - truth.x, at.y - truth.y));
@@ -434,4 +443,27 @@ TEST_CASE("on a track laid as its file says, learning the map costs the pose mil
               << learnt_max << " m, " << file_max << " m");
   CHECK(learnt_p95 <= file_p95 + 0.005);
   CHECK(learnt_max <= file_max + 0.012);
+}
+
+// A measurement, not a test (hidden: `build/tests/test_track_localiser
+// "[.timing]"`): the time of an update on the grand prix (22 walls on 22
+// corners, 12 posts: a state of 71 with the map), over the states of a lab
+// robot's first 40 s, the file's map against the learning one.
+TEST_CASE("the time of an update on the grand prix", "[.timing]") {
+  const LabDrive drive = DriveLab(40.0);
+  for (const auto& [name, config] :
+       {std::pair{"file's map", LocaliserConfig{}}, std::pair{"learning", Learning()}}) {
+    double best_s = 1e9;
+    for (int run = 0; run < 5; ++run) {
+      TrackLocaliser localiser(GrandPrix(), config);
+      const auto start = std::chrono::steady_clock::now();
+      for (const LabDrive::Input& in : drive.inputs)
+        localiser.Update(in.odometry, in.scan, in.pressed);
+      best_s = std::min(
+          best_s, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    }
+    std::printf("%s: %zu updates, the best of 5 runs %.1f ms: %.1f us an update\n", name,
+                drive.inputs.size(), 1e3 * best_s,
+                1e6 * best_s / static_cast<double>(drive.inputs.size()));
+  }
 }

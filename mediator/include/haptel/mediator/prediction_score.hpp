@@ -55,7 +55,9 @@ RigidFit2 FitAsBuiltToFile(const DrawnReality& drawn, const Track& track);
 
 /// The lap judged again from the truth record's path (RunRecord::truth_lap):
 /// the same LapTimer the live lap runs on the vehicle's odometry, fed where
-/// the vehicle truly was (times in s since the session's start). Left
+/// the vehicle truly was (times in s since the session's start), at the
+/// gates as built: where their posts truly stand (the reality's map error),
+/// not where the file puts them. Left
 /// unjudged when the record has no rows. The run ends as the odometry
 /// crosses the finish: a robot truly short of the line then (its odometry
 /// ran ahead), all gates reached, has its finish projected from where it
