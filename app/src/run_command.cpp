@@ -369,6 +369,13 @@ void PrintPrediction(std::FILE* out, const RecordedRun& run) {
                    r.map_fit.features, r.map_fit.residual_m_rms * 1e3,
                    r.localisation_error_world_m_p50 * 1e3, r.localisation_error_world_m_p95 * 1e3);
     }
+    const haptel::record::RunRecord::MapEstimate& m = r.map_estimated;
+    if (m.features > 0 && m.learnt_m_rms != m.file_m_rms) {
+      std::fprintf(out,
+                   "  the map learnt: its %d wall corners and posts %.1f mm rms from where they "
+                   "truly stand (the file's %.1f mm)\n",
+                   m.features, m.learnt_m_rms * 1e3, m.file_m_rms * 1e3);
+    }
     if (r.localiser_scans_refused > 0) {
       std::fprintf(out, "  the localiser refused %lld scans that disagreed with the map\n",
                    static_cast<long long>(r.localiser_scans_refused));

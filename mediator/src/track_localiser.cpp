@@ -314,6 +314,24 @@ void TrackLocaliser::Motion(const Pose2& odometry, bool pressed) {
   }
 }
 
+bool TrackLocaliser::Agrees(const RangeScan& scan, double x, double y, double heading) const {
+  // At the pose found, how many of the beams that met something end on the
+  // map (within 3 sd of a wall or post)?
+  int hits = 0, inliers = 0;
+  for (int i = 0; i < scan.count; ++i) {
+    const double r = scan.ranges[static_cast<size_t>(i)];
+    if (!scan.Hit(i) || !(r > 0.0)) continue;
+    ++hits;
+    const double angle = heading + scan.Angle(i);
+    double d, gx, gy;
+    if (Field(x + r * std::cos(angle), y + r * std::sin(angle), d, gx, gy) &&
+        d <= 3.0 * config_.beam_sd) {
+      ++inliers;
+    }
+  }
+  return inliers >= config_.min_inlier_fraction * hits;
+}
+
 void TrackLocaliser::Correct(const RangeScan& scan) {
   beams_used_ = 0;
   if (scan.count <= 0 || starts_.empty()) return;
@@ -356,21 +374,7 @@ void TrackLocaliser::Correct(const RangeScan& scan) {
     if (std::abs(step.x()) + std::abs(step.y()) < 1e-5 && std::abs(step.z()) < 1e-5) break;
   }
   if (beams_used_ == 0) return;
-  // The innovation gate: at the pose found, how many of the beams that met
-  // something end on the map (within 3 sd of a wall or post)?
-  int hits = 0, inliers = 0;
-  for (int i = 0; i < scan.count; ++i) {
-    const double r = scan.ranges[static_cast<size_t>(i)];
-    if (!scan.Hit(i) || !(r > 0.0)) continue;
-    ++hits;
-    const double angle = x.z() + scan.Angle(i);
-    double d, gx, gy;
-    if (Field(x.x() + r * std::cos(angle), x.y() + r * std::sin(angle), d, gx, gy) &&
-        d <= 3.0 * sd) {
-      ++inliers;
-    }
-  }
-  if (inliers < config_.min_inlier_fraction * hits) {
+  if (!Agrees(scan, x.x(), x.y(), x.z())) {
     // It disagrees with the map wherever the robot is: the odometry's pose stands.
     beams_used_ = 0;
     ++scans_refused_;
@@ -541,19 +545,7 @@ void TrackLocaliser::CorrectWithMap(const RangeScan& scan) {
   };
   if (beams_used_ == 0) return keep_prior();
   // The innovation gate, as Correct's, on the map as the update placed it.
-  int hits = 0, inliers = 0;
-  for (int i = 0; i < scan.count; ++i) {
-    const double r = scan.ranges[static_cast<size_t>(i)];
-    if (!scan.Hit(i) || !(r > 0.0)) continue;
-    ++hits;
-    const double angle = x.z() + scan.Angle(i);
-    double d, gx, gy;
-    if (Field(x.x() + r * std::cos(angle), x.y() + r * std::sin(angle), d, gx, gy) &&
-        d <= 3.0 * sd) {
-      ++inliers;
-    }
-  }
-  if (inliers < config_.min_inlier_fraction * hits) {
+  if (!Agrees(scan, x.x(), x.y(), x.z())) {
     beams_used_ = 0;
     ++scans_refused_;
     return keep_prior();

@@ -32,6 +32,18 @@ Vec2 Beside(const Track& track, double s, double offset) {
   return track.PointAt(s) + Vec2(-tangent.y(), tangent.x()) * offset;
 }
 
+/// Appends the truth's row `t_s` after `started_ns`: at (x, y, z), heading
+/// `heading`, at `speed` along it.
+void WriteTruthRow(std::ofstream& out, int64_t started_ns, double t_s, double x, double y, double z,
+                   double heading, double speed) {
+  char line[256];
+  const size_t n = FormatTruthRow(
+      {started_ns + static_cast<int64_t>(std::llround(t_s * 1e9)), x, y, z, heading, speed, 0.0},
+      line, sizeof line);
+  REQUIRE(n > 0);
+  out.write(line, static_cast<std::streamsize>(n));
+}
+
 }  // namespace
 
 TEST_CASE("the truth judges the lap again: a gate the drifting odometry passed is truly missed") {
@@ -59,12 +71,7 @@ TEST_CASE("the truth judges the lap again: a gate the drifting odometry passed i
     for (double s = from; s <= to; s += speed * dt, t += dt) {
       live.Update(t, Beside(track, s, 0.0));
       const Vec2 p = Beside(track, s, drift(s));
-      char line[256];
-      const size_t n = FormatTruthRow({started_ns + static_cast<int64_t>(std::llround(t * 1e9)),
-                                       p.x(), p.y(), 0.0, 0.0, speed, 0.0},
-                                      line, sizeof line);
-      REQUIRE(n > 0);
-      out.write(line, static_cast<std::streamsize>(n));
+      WriteTruthRow(out, started_ns, t, p.x(), p.y(), 0.0, 0.0, speed);
     }
   }
   SessionResult result;
@@ -123,13 +130,8 @@ TEST_CASE(
       live.Update(t, Beside(track, s + lead, 0.0));
       const Vec2 p = Beside(track, s, 0.0);
       const Vec2 tangent = track.TangentAt(s);
-      char line[256];
-      const size_t n =
-          FormatTruthRow({started_ns + static_cast<int64_t>(std::llround(t * 1e9)), p.x(), p.y(),
-                          0.0, std::atan2(tangent.y(), tangent.x()), speed, 0.0},
-                         line, sizeof line);
-      REQUIRE(n > 0);
-      out.write(line, static_cast<std::streamsize>(n));
+      WriteTruthRow(out, started_ns, t, p.x(), p.y(), 0.0, std::atan2(tangent.y(), tangent.x()),
+                    speed);
     }
   }
   SessionResult result;
@@ -162,12 +164,7 @@ TEST_CASE(
       std::ofstream out(file);
       out << TruthHeaderText(DrawnReality{});
       const auto row = [&](double t, double x, double y, double z, double speed) {
-        char line[256];
-        const size_t n = FormatTruthRow(
-            {started_ns + static_cast<int64_t>(std::llround(t * 1e9)), x, y, z, 0.0, speed, 0.0},
-            line, sizeof line);
-        REQUIRE(n > 0);
-        out.write(line, static_cast<std::streamsize>(n));
+        WriteTruthRow(out, started_ns, t, x, y, z, 0.0, speed);
       };
       const double dt = 0.02;
       double t = 0.0;
@@ -246,12 +243,7 @@ TEST_CASE(
     double t = 0.0;
     for (double s = 0.0; s <= track.length(); s += 0.01, t += 0.04) {
       const Vec2 p = built(track.PointAt(s));
-      char line[256];
-      const size_t n = FormatTruthRow({started_ns + static_cast<int64_t>(std::llround(t * 1e9)),
-                                       p.x(), p.y(), 0.0, 0.0, 0.25, 0.0},
-                                      line, sizeof line);
-      REQUIRE(n > 0);
-      out.write(line, static_cast<std::streamsize>(n));
+      WriteTruthRow(out, started_ns, t, p.x(), p.y(), 0.0, 0.0, 0.25);
       const Vec2 shown = track.PointAt(s);
       result.shown.push_back({t, shown.x(), shown.y(), 0.0});
     }
@@ -302,12 +294,7 @@ TEST_CASE("the truth's lap is judged at the gates as built, and the map learnt a
          s += 0.005, t += 0.02) {
       const Vec2 p = Beside(track, s, offset(s));
       at_file.Update(t, p);
-      char line[256];
-      const size_t n = FormatTruthRow({started_ns + static_cast<int64_t>(std::llround(t * 1e9)),
-                                       p.x(), p.y(), 0.0, 0.0, 0.25, 0.0},
-                                      line, sizeof line);
-      REQUIRE(n > 0);
-      out.write(line, static_cast<std::streamsize>(n));
+      WriteTruthRow(out, started_ns, t, p.x(), p.y(), 0.0, 0.0, 0.25);
     }
   }
   REQUIRE(at_file.completed());

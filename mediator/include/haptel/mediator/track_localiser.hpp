@@ -202,6 +202,9 @@ class TrackLocaliser {
   bool Nearest(double px, double py, double& distance, double& gx, double& gy, uint32_t& shape,
                double& t) const;
   void Motion(const Pose2& odometry, bool pressed);
+  /// The innovation gate: whether at least min_inlier_fraction of the beams
+  /// that met something end within 3 beam_sd of the map at this pose.
+  bool Agrees(const RangeScan& scan, double x, double y, double heading) const;
   void Correct(const RangeScan& scan);
   /// learn_map's update (Correct's, with the map's offsets in the state).
   void CorrectWithMap(const RangeScan& scan);
