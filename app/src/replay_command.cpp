@@ -146,14 +146,15 @@ int ReplayDriveCommand(int argc, const char* const* argv) {
           "{\"file\":%s,\"vehicle\":%s,\"domain\":%d,\"commands_sent\":%llu,"
           "\"commands_before_up\":%llu,\"commands_s\":%s,\"gates_total\":%d,"
           "\"gates_passed\":%d,\"completed\":%s,\"lap_time_s\":%s,\"recorded_gates\":%d,"
-          "\"recorded_completed\":%s,\"recorded_lap_time_s\":%s,\"reproduced\":%s}\n",
+          "\"recorded_completed\":%s,\"recorded_lap_time_s\":%s,\"watchdog_stops\":%llu,"
+          "\"reproduced\":%s}\n",
           JsonString(path).c_str(), JsonString(setup.vehicle.name).c_str(),
           setup.run.link.domain_id, static_cast<unsigned long long>(r.commands_sent),
           static_cast<unsigned long long>(r.commands_before_up), JsonNumber(r.commands_s).c_str(),
           r.gates_total, r.gates_passed, r.completed ? "true" : "false",
           JsonNumber(r.lap_time_s).c_str(), r.recorded_gates,
           r.recorded_completed ? "true" : "false", JsonNumber(r.recorded_lap_time_s).c_str(),
-          r.Reproduced() ? "true" : "false");
+          static_cast<unsigned long long>(r.watchdog_stops), r.Reproduced() ? "true" : "false");
     } else {
       std::printf("drove '%s' again on domain %d: %llu commands over %.1f s; gates %d of %d%s",
                   setup.vehicle.name.c_str(), setup.run.link.domain_id,
@@ -165,6 +166,12 @@ int ReplayDriveCommand(int argc, const char* const* argv) {
                     r.Reproduced() ? "reproduced" : "NOT reproduced");
       }
       std::printf("\n");
+      if (r.watchdog_stops > 0) {
+        std::printf(
+            "  the vehicle's watchdog stopped it in %llu states while commands were due: this "
+            "host or link starved the drive, and an open-loop path differs after it\n",
+            static_cast<unsigned long long>(r.watchdog_stops));
+      }
     }
     std::fflush(stdout);
     return r.Reproduced() || r.recorded_gates < 0 ? cli::kExitOk : cli::kExitFailed;

@@ -17,6 +17,7 @@
 #include <stdexcept>
 
 #include "haptel/config/error.hpp"
+#include "haptel/core/loop_meter.hpp"
 #include "haptel/link/security.hpp"
 
 namespace haptel::link {
@@ -103,6 +104,8 @@ dds::DataReaderQos DataReaderQosFor(Profile profile, const LinkConfig& config) {
 Participant::Participant(const LinkConfig& config, const std::string& name,
                          eprosima::fastdds::dds::DomainParticipantListener* listener)
     : config_(Validated(config)) {
+  // Every thread the participant starts (below) inherits the link's priority.
+  const ThreadsStartRealtime realtime(kLinkThreadPriority);
   LogToStderr();
   dds::DomainParticipantQos qos = dds::PARTICIPANT_QOS_DEFAULT;
   qos.name(name);

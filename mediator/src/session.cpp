@@ -4,7 +4,6 @@
 // parts (VehicleRun), whatever their family (FamilySession).
 #include "haptel/mediator/session.hpp"
 
-#include <sched.h>
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -23,6 +22,7 @@
 #include "haptel/config/link.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/core/log.hpp"
+#include "haptel/core/loop_meter.hpp"
 #include "haptel/mediator/fleet.hpp"
 #include "haptel/mediator/notice_log.hpp"
 #include "haptel/mediator/run_counters.hpp"
@@ -44,30 +44,6 @@ namespace {
 constexpr int kSessionPriority = 60;
 /// A session tick this many periods long gives the real-time priority up.
 constexpr int64_t kLoseRealtimePeriods = 10;
-
-/// The calling thread at SCHED_FIFO `priority` (where the process may) for
-/// its lifetime, then back to what it was. With SCHED_RESET_ON_FORK: the
-/// threads and processes it starts meanwhile (a physics world built late,
-/// the vehicle's process) start as normal ones.
-class RealtimeWhile {
- public:
-  explicit RealtimeWhile(int priority) : policy_(sched_getscheduler(0)) {
-    if (policy_ < 0 || sched_getparam(0, &param_) != 0) return;
-    sched_param wanted{};
-    wanted.sched_priority = priority;
-    granted_ = sched_setscheduler(0, SCHED_FIFO | SCHED_RESET_ON_FORK, &wanted) == 0;
-  }
-  ~RealtimeWhile() {
-    if (granted_) sched_setscheduler(0, policy_, &param_);
-  }
-  RealtimeWhile(const RealtimeWhile&) = delete;
-  RealtimeWhile& operator=(const RealtimeWhile&) = delete;
-
- private:
-  int policy_;
-  sched_param param_{};
-  bool granted_ = false;
-};
 
 }  // namespace
 

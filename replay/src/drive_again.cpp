@@ -2,13 +2,16 @@
 
 #include <fastdds/rtps/common/SerializedPayload.h>
 
+#include <cmath>
 #include <cstring>
+#include <optional>
 #include <string>
 
 #include "haptel/config/track.hpp"
 #include "haptel/core/cli.hpp"
 #include "haptel/core/clock.hpp"
 #include "haptel/core/geometry2d.hpp"
+#include "haptel/core/loop_meter.hpp"
 #include "haptel/mediator/lap_timer.hpp"
 #include "haptel/mediator/vehicle_link.hpp"
 #include "haptel/msg/haptelPubSubTypes.h"
@@ -38,7 +41,20 @@ std::string TopicOf(const mcap::Reader& reader, std::string_view schema,
 }
 
 constexpr int64_t kTickNs = 5'000'000;  ///< the drive's loop: 200 Hz
-constexpr double kSettleS = 1.0;        ///< after the last command
+/// The sender's SCHED_FIFO priority, as the session thread's whose commands
+/// it sends again (mediator/src/session.cpp): starved on a loaded host, a
+/// command came late past the vehicle's 0.2-s watchdog and the open-loop
+/// path was not the record's. Given up for good after a tick of ten periods.
+constexpr int kSenderPriority = 60;
+constexpr int64_t kLoseRealtimePeriods = 10;
+constexpr double kSettleS = 1.0;  ///< after the last command
+/// After the settle time, the drive waits at most this much longer for a
+/// state saying the vehicle is at rest: on a loaded host the states came
+/// up to a second behind, and the drive ended before the one that crossed
+/// the gate had arrived.
+constexpr double kCatchUpS = 10.0;
+/// At rest: its motors at level 0 and its speed below this (m/s).
+constexpr double kRestSpeed = 0.005;
 /// A vehicle must answer this long after the start (the run's own start-up
 /// timeout, session_loop.hpp's VehicleHealth::kStartupTimeout_s).
 constexpr double kStartupTimeoutS = 15.0;
@@ -127,10 +143,13 @@ DriveReport DriveAgain(const RecordedDrive& recorded, const mediator::SessionSet
   report.recorded_lap_time_s = recorded.lap_time_s;
 
   const int64_t t0 = MonotonicNs();
-  int64_t up_ns = 0;  // when this vehicle first answered (0: not yet)
-  size_t next = 0;    // the commands due so far
-  size_t sent = 0;    // the commands due when one was last sent
+  int64_t up_ns = 0;        // when this vehicle first answered this sender (0: not yet)
+  int64_t heard_from = -1;  // its commands received in its first state
+  bool at_rest = false;     // the newest state: motors at level 0, not moving
+  size_t next = 0;          // the commands due so far
+  size_t sent = 0;          // the commands due when one was last sent
   int64_t tick = t0;
+  std::optional<RealtimeWhile> realtime(std::in_place, kSenderPriority);
   for (;;) {
     tick += kTickNs;
     SleepUntilNs(tick);
@@ -138,10 +157,21 @@ DriveReport DriveAgain(const RecordedDrive& recorded, const mediator::SessionSet
     if (interrupted.load()) break;
     for (const auto& entry : channel.inbox().Drain()) {
       const msg::VehicleState& s = entry.state;
-      if (up_ns == 0) up_ns = entry.received_ns;
+      // Up once it has heard this sender (the safe commands below: its count
+      // of commands grew since its first state): a state can arrive before
+      // the command topic's reader has matched the sender, and the drive's
+      // first commands were then lost on a loaded host, its turn coming
+      // early on a shorter straight.
+      if (heard_from < 0) heard_from = static_cast<int64_t>(s.commands_received());
+      if (up_ns == 0 && static_cast<int64_t>(s.commands_received()) > heard_from)
+        up_ns = entry.received_ns;
       const double ts = NsToS(entry.received_ns - t0);
       if (s.pose_valid()) lap.Update(ts, Vec2(s.x(), s.y()));
       lap.UpdateContact(ts, s.bumper_left() || s.bumper_right());
+      if (s.watchdog_tripped() && sent > 0 && next < recorded.commands.size())
+        ++report.watchdog_stops;
+      at_rest = s.motor_left_level() == 0 && s.motor_right_level() == 0 &&
+                std::abs(s.speed()) < kRestSpeed;
     }
     if (lap.completed()) break;
     if (up_ns == 0) {
@@ -165,7 +195,12 @@ DriveReport DriveAgain(const RecordedDrive& recorded, const mediator::SessionSet
       ++report.commands_sent;
       sent = next;
     }
-    if (next == recorded.commands.size() && NsToS(since_up) > report.commands_s + kSettleS) break;
+    // Done once every command was sent, the vehicle had time to settle, and
+    // its states have caught up with it: the newest says it is at rest.
+    const double after_s = NsToS(since_up) - report.commands_s - kSettleS;
+    if (next == recorded.commands.size() && after_s > 0.0 && (at_rest || after_s > kCatchUpS))
+      break;
+    if (realtime && MonotonicNs() - now > kLoseRealtimePeriods * kTickNs) realtime.reset();
   }
   link.Stop();
   report.gates_passed = lap.gates_passed();

@@ -42,6 +42,7 @@ TEST_CASE("recorded commands sent again drive a simulated robot through the gate
   recorded.gates = 1;
   const std::atomic<bool> interrupted{false};
   const replay::DriveReport r = replay::DriveAgain(recorded, setup, interrupted);
+  INFO("watchdog stops while commands were due: " << r.watchdog_stops);
   CHECK(r.commands_sent > 100);  // one per due command, a late loop skipping some
   CHECK(r.commands_sent <= recorded.commands.size());
   CHECK(r.gates_total == 2);

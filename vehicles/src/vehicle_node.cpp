@@ -11,6 +11,18 @@
 #include "haptel/link/fault_transport.hpp"
 
 namespace haptel::vehicles {
+namespace {
+
+/// The control loop's SCHED_FIFO priority, earned and lost as every
+/// PeriodicThread's (core/periodic_thread.hpp): it applies the commands,
+/// runs the watchdog and sends the states. At normal priority on a loaded
+/// host (a simulated twin beside the operator's processes) it waited for
+/// the CPU long enough to hold a command past its time and stop on the
+/// watchdog. Below the operator side's loops (servo 80, physics 70,
+/// session 60): on a shared host the operator's hand comes first.
+constexpr int kControlPriority = 50;
+
+}  // namespace
 
 template <class Family>
 VehicleNodeOf<Family>::VehicleNodeOf(
@@ -76,7 +88,9 @@ VehicleNodeOf<Family>::VehicleNodeOf(
         core_.OnCommand(cmd, writer, MonotonicNs());
       });
   control_ = std::make_unique<PeriodicThread>(
-      PeriodicThread::Options{.name = "vehicle-control", .rate_hz = c.sim_rate_hz},
+      PeriodicThread::Options{.name = "vehicle-control",
+                              .rate_hz = c.sim_rate_hz,
+                              .realtime_priority = kControlPriority},
       [this](int64_t now) { ControlTick(now); });
 }
 

@@ -48,6 +48,45 @@ class LoopMeter {
 /// Asks for SCHED_FIFO at `priority` for the calling thread; true if granted.
 bool TryRealtime(int priority);
 
+/// The calling thread at SCHED_FIFO `priority` (where the process may) for
+/// the object's lifetime, then back to what it was. With
+/// SCHED_RESET_ON_FORK: the threads and processes it starts meanwhile (a
+/// physics world built late, the vehicle's process) start as normal ones.
+/// For a loop that paces itself (the session's, a replay's sender); a
+/// PeriodicThread earns its own (periodic_thread.hpp).
+class RealtimeWhile {
+ public:
+  explicit RealtimeWhile(int priority);
+  ~RealtimeWhile();
+  RealtimeWhile(const RealtimeWhile&) = delete;
+  RealtimeWhile& operator=(const RealtimeWhile&) = delete;
+  bool granted() const { return granted_; }
+
+ private:
+  int policy_;
+  int priority_ = 0;
+  bool granted_ = false;
+};
+
+/// The calling thread at SCHED_FIFO `priority` while the object lives, so
+/// that the threads it starts meanwhile inherit it (pthread_create's
+/// default): for a library's threads that take no priority of their own
+/// (Fast DDS 2.9's receive, event and data-sharing threads; 2.13 added
+/// settings for them). A thread already at SCHED_FIFO `priority` or above
+/// is left as it is; where the process may not, nothing changes.
+class ThreadsStartRealtime {
+ public:
+  explicit ThreadsStartRealtime(int priority);
+  ~ThreadsStartRealtime();
+  ThreadsStartRealtime(const ThreadsStartRealtime&) = delete;
+  ThreadsStartRealtime& operator=(const ThreadsStartRealtime&) = delete;
+
+ private:
+  int policy_ = 0;
+  int priority_ = 0;
+  bool changed_ = false;
+};
+
 /// How many nice steps background threads (the video's encoder and decoder)
 /// lower their own priority by. On a loaded host the scheduler then gives
 /// the CPU first to the threads a command and a state pass through (the

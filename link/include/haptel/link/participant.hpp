@@ -38,6 +38,17 @@ eprosima::fastdds::dds::DataReaderQos DataReaderQosFor(Profile profile, const Li
 /// "haptel/<vehicle>/<channel>": several vehicles can share one domain.
 std::string TopicName(const std::string& vehicle, const std::string& channel);
 
+/// The SCHED_FIFO priority of the link's own threads (Fast DDS's receive,
+/// event and data-sharing threads, the fault transport's delivery), where
+/// the process may: they start from a thread raised to it for the moment
+/// (ThreadsStartRealtime, core/loop_meter.hpp), as a participant, reader
+/// or writer is made. At normal priority on a loaded host they held a
+/// command or a state for up to a second: the vehicle's watchdog stopped
+/// it mid-drive, and the operator's states came late. Above a vehicle's
+/// control loop (50), which reads what they deliver; below the operator's
+/// session (60), physics (70) and servo (80) loops.
+inline constexpr int kLinkThreadPriority = 55;
+
 /// Owns a DomainParticipant with one publisher and one subscriber.
 /// Writers and readers made on it must be destroyed before it.
 class Participant {

@@ -20,6 +20,7 @@
 #include <string>
 
 #include "haptel/core/clock.hpp"
+#include "haptel/core/loop_meter.hpp"
 #include "haptel/link/participant.hpp"
 #include "haptel/link/writer_id.hpp"
 #include "haptel/msg/haptel.h"
@@ -108,6 +109,7 @@ class Writer : private eprosima::fastdds::dds::DataWriterListener {
   Writer(Participant& participant, const std::string& topic, Profile profile)
       : participant_(participant), tapped_(participant, topic, TapDirection::kSent) {
     topic_ = detail::MakeTopic<PubSubType>(participant, topic);
+    const ThreadsStartRealtime realtime(kLinkThreadPriority);  // its threads, if any
     writer_ = participant.publisher()->create_datawriter(
         topic_, DataWriterQosFor(profile, participant.config()), this);
     if (writer_ == nullptr)
@@ -178,6 +180,7 @@ class Reader : private eprosima::fastdds::dds::DataReaderListener {
         on_sample_(std::move(on_sample)),
         tapped_(participant, topic, TapDirection::kReceived) {
     topic_ = detail::MakeTopic<PubSubType>(participant, topic);
+    const ThreadsStartRealtime realtime(kLinkThreadPriority);  // its data-sharing thread
     reader_ = participant.subscriber()->create_datareader(
         topic_, DataReaderQosFor(profile, participant.config()), this);
     if (reader_ == nullptr)

@@ -9,7 +9,10 @@
 ///
 /// The recorded commands start counting when the recorded vehicle first
 /// answered (its first state in the file: the run's commands before it
-/// reached no one) and are sent from when this vehicle first answers.
+/// reached no one) and are sent from when this vehicle first answers this
+/// sender: a state saying it heard the stopped commands sent until then (a
+/// state alone may come before its command reader has matched the sender,
+/// and the first commands would be lost).
 #include <atomic>
 #include <cstdint>
 #include <string>
@@ -28,6 +31,11 @@ struct DriveReport {
   int gates_passed = 0;
   bool completed = false;
   double lap_time_s = 0.0;
+  /// States in which the vehicle said its watchdog had stopped it while
+  /// recorded commands were still due: the sender or the link starved past
+  /// the vehicle's time-out, so this drive is not the record's (an open-loop
+  /// path differs after it).
+  uint64_t watchdog_stops = 0;
   /// The file's lap events (haptel/session/lap_events): gates and the
   /// finish; -1 when the file has no lap events.
   int recorded_gates = -1;
