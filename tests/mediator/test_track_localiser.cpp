@@ -467,3 +467,48 @@ TEST_CASE("the time of an update on the grand prix", "[.timing]") {
                 1e6 * best_s / static_cast<double>(drive.inputs.size()));
   }
 }
+
+TEST_CASE("a localiser's correction is blended into the pose shown, not stepped") {
+  // A robot standing on the short track whose odometry skids 4 cm sideways
+  // in one state (the encoders saw a move the robot did not make): the
+  // localised pose is taken back towards the truth by the scan; the pose
+  // shown and predicted from moves with the odometry and is drawn to the
+  // localised one over the blend's time (RobotPredictor::kPositionBlendS).
+  for (const PredictionModel model : {PredictionModel::kNominal, PredictionModel::kLearn}) {
+    RobotPredictor predictor(Robot().drive, 0.2, 0.005, model);
+    predictor.Localise(ShortTrack());
+    const Vec2 at = ShortTrack().PointAt(0.6);
+    const Vec2 t = ShortTrack().TangentAt(0.6);
+    const double heading = std::atan2(t.y(), t.x());
+    const Vec2 skid = 0.04 * Vec2(-t.y(), t.x());
+    std::mt19937_64 noise(5);
+    // One state; the localised pose's and the shown pose's distance from the truth,
+    // and from each other.
+    const auto state = [&](double t_s, const Vec2& odometry) {
+      RobotStateSample s;
+      s.received_s = t_s;
+      s.x = odometry.x();
+      s.y = odometry.y();
+      s.heading = heading;
+      s.ranges = vehicles::ScanTrack(ShortTrack(), at.x(), at.y(), heading, Sensors(), noise);
+      predictor.OnRoundTrip(0.0);
+      predictor.OnState(s);
+      const Vec2 localised(predictor.pose().x, predictor.pose().y);
+      const PredictedPose p = predictor.PoseAt(t_s);
+      const Vec2 shown(p.x, p.y);
+      return std::tuple{(localised - at).norm(), (shown - at).norm(), (shown - localised).norm()};
+    };
+    double t_s = 0.0;
+    for (; t_s < 1.0; t_s += 0.02) state(t_s, at);
+    const auto [localised_m, shown_m, apart_m] = state(t_s, at + skid);
+    INFO("model " << static_cast<int>(model) << ": localised " << localised_m << " m, shown "
+                  << shown_m << " m off after the skid");
+    CHECK(localised_m < 0.035);  // the scan took some of the skid back at once
+    CHECK(shown_m > 0.035);      // the shown pose: nearly all of it still
+    CHECK(apart_m > 0.01);
+    double apart_later_m = 1.0;
+    for (double until = t_s + 1.5; t_s < until;)
+      apart_later_m = std::get<2>(state(t_s += 0.02, at + skid));
+    CHECK(apart_later_m < 0.004);  // 5 blend times on: drawn to it (the scans still move it)
+  }
+}
