@@ -375,6 +375,10 @@ struct LapRow {
   double pose_error_m_p95 = std::nan("");
   double pose_error_world_m_p95 = std::nan("");
   double odometry_truth_error_m_p95 = std::nan("");
+  /// The localiser's map against the track as built (map's frame, RMS m):
+  /// as learnt, and as the file has it (the run's estimated_map).
+  double map_learnt_m_rms = std::nan("");
+  double map_file_m_rms = std::nan("");
   /// When every estimated parameter was known (the last one's known_s), s
   /// since the session started; NaN when one never was.
   double converged_s = std::nan("");
@@ -514,6 +518,10 @@ LapRow Lap(const std::filesystem::path& db, const std::filesystem::path& truth, 
   row.pose_error_m_p95 = Number(json, "localisation_error_m_p95");
   row.pose_error_world_m_p95 = Number(json, "localisation_error_world_m_p95");
   row.odometry_truth_error_m_p95 = Number(json, "odometry_error_m_p95");
+  if (const std::string map = JsonObjectOf(json, "estimated_map"); !map.empty()) {
+    row.map_learnt_m_rms = Number(map, "learnt_m_rms");
+    row.map_file_m_rms = Number(map, "file_m_rms");
+  }
   const std::string reality = JsonObjectOf(json, "reality");
   row.reality = reality.empty() ? spec.reality : JsonFieldOf(reality, "name");
   row.seed = JsonFieldOf(reality, "seed");
@@ -1063,7 +1071,8 @@ int BenchLinkMain(int argc, const char* const* argv) {
            "prediction_error_m_p95,prediction_error_odometry_m_p95,localisation_error_m_p95,"
            "odometry_error_m_p95,estimate_converged_s,"
            "path_gap_m_mean,path_gap_m_max,wall_s,judged_on,lap_time_live_s,gates_passed_live,"
-           "prediction_error_world_m_p95,localisation_error_world_m_p95\n";
+           "prediction_error_world_m_p95,localisation_error_world_m_p95,map_learnt_m_rms,"
+           "map_file_m_rms\n";
     std::ofstream est(dir / "link_estimates.csv");
     est << "vehicle,reality,seed,predict,delay_ms,loss_percent,param,estimate,truth,known_s\n";
     for (const LapRow& r : rows) {
@@ -1077,7 +1086,7 @@ int BenchLinkMain(int argc, const char* const* argv) {
           << r.path_gap_m_max << "," << r.wall_s << ","
           << (r.judged_on_truth ? "truth" : "odometry") << "," << r.lap_time_live_s << ","
           << r.gates_passed_live << "," << r.error_world_m_p95 << "," << r.pose_error_world_m_p95
-          << "\n";
+          << "," << r.map_learnt_m_rms << "," << r.map_file_m_rms << "\n";
       for (const Estimate& e : r.estimated) {
         est << r.spec.vehicle->name << "," << r.reality << "," << r.seed << ","
             << ModeName(r.spec.mode) << "," << r.spec.delay_ms << "," << r.spec.loss_percent << ","
@@ -1170,6 +1179,8 @@ int BenchLinkMain(int argc, const char* const* argv) {
         << ",\"localisation_error_m_p95\":" << JsonOrNull(r.pose_error_m_p95)
         << ",\"localisation_error_world_m_p95\":" << JsonOrNull(r.pose_error_world_m_p95)
         << ",\"odometry_error_m_p95\":" << JsonOrNull(r.odometry_truth_error_m_p95)
+        << ",\"map_learnt_m_rms\":" << JsonOrNull(r.map_learnt_m_rms)
+        << ",\"map_file_m_rms\":" << JsonOrNull(r.map_file_m_rms)
         << ",\"estimate_converged_s\":" << JsonOrNull(r.converged_s) << ",\"estimated\":{";
       for (size_t k = 0; k < r.estimated.size(); ++k) {
         o << (k ? "," : "") << JsonString(r.estimated[k].param)

@@ -184,6 +184,16 @@ std::string EstimatedJson(const std::vector<haptel::record::EstimatedParameter>&
   return out + "}";
 }
 
+/// A localised robot's map against the truth (RunRecord::map_estimated):
+/// {"features":N,"learnt_m_rms":…,"file_m_rms":…}, null when not scored.
+std::string MapJson(const haptel::record::RunRecord& r) {
+  const haptel::record::RunRecord::MapEstimate& m = r.map_estimated;
+  if (m.features == 0) return "null";
+  return "{\"features\":" + std::to_string(m.features) +
+         ",\"learnt_m_rms\":" + NumberOrNull(m.learnt_m_rms) +
+         ",\"file_m_rms\":" + NumberOrNull(m.file_m_rms) + "}";
+}
+
 /// ["name",...]
 std::string NamesJson(const std::vector<std::string>& names) {
   std::string out = "[";
@@ -359,6 +369,13 @@ void PrintPrediction(std::FILE* out, const RecordedRun& run) {
                    r.map_fit.features, r.map_fit.residual_m_rms * 1e3,
                    r.localisation_error_world_m_p50 * 1e3, r.localisation_error_world_m_p95 * 1e3);
     }
+    const haptel::record::RunRecord::MapEstimate& m = r.map_estimated;
+    if (m.features > 0 && m.learnt_m_rms != m.file_m_rms) {
+      std::fprintf(out,
+                   "  the map learnt: its %d wall corners and posts %.1f mm rms from where they "
+                   "truly stand (the file's %.1f mm)\n",
+                   m.features, m.learnt_m_rms * 1e3, m.file_m_rms * 1e3);
+    }
     if (r.localiser_scans_refused > 0) {
       std::fprintf(out, "  the localiser refused %lld scans that disagreed with the map\n",
                    static_cast<long long>(r.localiser_scans_refused));
@@ -480,7 +497,8 @@ std::string RunJson(const SessionSetup& setup, const RecordedRun& run) {
     << ",\"localisation_error_world_m_p95\":" << NumberOrNull(r.localisation_error_world_m_p95)
     << ",\"odometry_error_m_p50\":" << NumberOrNull(r.odometry_error_m_p50)
     << ",\"odometry_error_m_p95\":" << NumberOrNull(r.odometry_error_m_p95)
-    << ",\"estimated\":" << EstimatedJson(r.estimated) << TruthLapJson(r)
+    << ",\"estimated\":" << EstimatedJson(r.estimated) << ",\"estimated_map\":" << MapJson(r)
+    << TruthLapJson(r)
     << ",\"speedup\":" << (r.speedup > 0.0 ? JsonNumber(r.speedup) : std::string("null"))
     << ",\"simulated_s\":" << JsonNumber(run.result.simulated_s)
     << ",\"cpu_s\":" << JsonNumber(run.result.cpu_s)

@@ -1,6 +1,7 @@
 #include "haptel/mediator/lap_timer.hpp"
 
 #include <algorithm>
+#include <utility>
 
 namespace haptel::mediator {
 
@@ -18,9 +19,11 @@ std::optional<std::pair<double, Vec2>> ForwardCrossing(const Vec2& p0, double t0
 }  // namespace
 
 LapTimer::LapTimer(const Track& track, double contact_clear_s)
-    : track_(track), contact_clear_s_(contact_clear_s) {
-  for (int i = 0; i < static_cast<int>(track.gates().size()); ++i)
-    splits_.push_back({i, false, -1.0});
+    : LapTimer(track, track.gates(), contact_clear_s) {}
+
+LapTimer::LapTimer(const Track& track, std::vector<Gate> gates, double contact_clear_s)
+    : track_(track), gates_(std::move(gates)), contact_clear_s_(contact_clear_s) {
+  for (int i = 0; i < static_cast<int>(gates_.size()); ++i) splits_.push_back({i, false, -1.0});
 }
 
 void LapTimer::Update(double t_s, const Vec2& position) {
@@ -45,7 +48,7 @@ void LapTimer::Update(double t_s, const Vec2& position) {
     }
     return;
   }
-  const auto& gates = track_.gates();
+  const std::vector<Gate>& gates = gates_;
   if (next_gate_ < static_cast<int>(gates.size())) {
     const Gate& g = gates[next_gate_];
     if (auto c = ForwardCrossing(p0, t0, position, t_s, g.line, g.tangent)) {

@@ -24,17 +24,9 @@ double DrawnValue(const DrawnReality& drawn, const std::string& name) {
   return value;
 }
 
-}  // namespace
-
-Vec2 RigidFit2::Apply(const Vec2& p) const {
-  const double c = std::cos(rotation_rad), s = std::sin(rotation_rad);
-  return Vec2(c * p.x() - s * p.y(), s * p.x() + c * p.y()) + offset;
-}
-
-RigidFit2 FitAsBuiltToFile(const DrawnReality& drawn, const Track& track) {
-  RigidFit2 fit;
-  if (drawn.true_walls.empty() && drawn.true_posts.empty()) return fit;
-  // Pairs (as built, file's): each wall corner once (walls share corners), each post's centre.
+/// Each feature of the track as built and in its file (built, file's): each
+/// wall corner once (walls share corners), then each post's centre.
+std::vector<std::pair<Vec2, Vec2>> AsBuiltFeatures(const DrawnReality& drawn, const Track& track) {
   std::vector<std::pair<Vec2, Vec2>> pairs;
   const auto add = [&](const Vec2& built, const Vec2& file) {
     for (const auto& [b, f] : pairs) {
@@ -50,6 +42,64 @@ RigidFit2 FitAsBuiltToFile(const DrawnReality& drawn, const Track& track) {
   const std::vector<CircleObstacle>& posts = TruePosts(drawn, track);
   for (size_t i = 0; i < posts.size() && i < track.round_obstacles().size(); ++i)
     add(posts[i].center, track.round_obstacles()[i].center);
+  return pairs;
+}
+
+/// The RMS distance (m) of the map's features from where they truly stand
+/// in the map's frame, as learnt (`learnt` true) or as the file has them;
+/// NaN when no feature of `map` is on the track.
+double MapRms(const std::vector<std::pair<Vec2, Vec2>>& map,
+              const std::vector<std::pair<Vec2, Vec2>>& built, const RigidFit2& fit, bool learnt) {
+  double sum = 0.0;
+  int n = 0;
+  for (const auto& [file, position] : map) {
+    for (const auto& [b, f] : built) {
+      if (f != file) continue;
+      sum += ((learnt ? position : file) - fit.Apply(b)).squaredNorm();
+      ++n;
+      break;
+    }
+  }
+  return n > 0 ? std::sqrt(sum / n) : std::nan("");
+}
+
+/// The track's gates where their posts truly stand (TruePosts: each gate's
+/// left and right post, in the track's order), in the truth's world: each
+/// gate's line and direction turned with its posts about their midpoint.
+/// The file's gates when the reality moved nothing.
+std::vector<Gate> GatesAsBuilt(const DrawnReality& drawn, const Track& track) {
+  std::vector<Gate> gates = track.gates();
+  const std::vector<CircleObstacle>& posts = TruePosts(drawn, track);
+  for (size_t i = 0; i < gates.size() && 2 * i + 1 < posts.size(); ++i) {
+    Gate& g = gates[i];
+    const Vec2 left = posts[2 * i].center, right = posts[2 * i + 1].center;
+    if (left == g.left_post && right == g.right_post) continue;
+    const Vec2 file_across = g.left_post - g.right_post, across = left - right;
+    const double turn = std::atan2(file_across.x() * across.y() - file_across.y() * across.x(),
+                                   file_across.dot(across));
+    const RigidFit2 move{turn, Vec2::Zero()};
+    const Vec2 centre = 0.5 * (left + right);
+    const auto moved = [&](const Vec2& p) -> Vec2 { return centre + move.Apply(p - g.center); };
+    g.line = {moved(g.line.a), moved(g.line.b)};
+    g.tangent = move.Apply(g.tangent);
+    g.center = centre;
+    g.left_post = left;
+    g.right_post = right;
+  }
+  return gates;
+}
+
+}  // namespace
+
+Vec2 RigidFit2::Apply(const Vec2& p) const {
+  const double c = std::cos(rotation_rad), s = std::sin(rotation_rad);
+  return Vec2(c * p.x() - s * p.y(), s * p.x() + c * p.y()) + offset;
+}
+
+RigidFit2 FitAsBuiltToFile(const DrawnReality& drawn, const Track& track) {
+  RigidFit2 fit;
+  if (drawn.true_walls.empty() && drawn.true_posts.empty()) return fit;
+  const std::vector<std::pair<Vec2, Vec2>> pairs = AsBuiltFeatures(drawn, track);
   if (pairs.size() < 2) return fit;
   // Umeyama's least squares in the plane: the centroids matched, the turn
   // from the centred points' cross terms.
@@ -123,13 +173,22 @@ void ScorePrediction(const record::TruthRecord& truth, const Track* track, Sessi
     p.truth = DrawnValue(drawn, p.name);
     if (p.name == "left_gain" || p.name == "right_gain") p.truth *= fade;
   }
+  // The map: its features' distance from where they truly stand (the map's
+  // frame), as learnt and as the file has them.
+  if (!truth.empty() && track != nullptr && !result.learnt_map.empty()) {
+    const RigidFit2 fit = FitAsBuiltToFile(drawn, *track);
+    const std::vector<std::pair<Vec2, Vec2>> built = AsBuiltFeatures(drawn, *track);
+    rec.map_estimated = {static_cast<int>(result.learnt_map.size()),
+                         MapRms(result.learnt_map, built, fit, true),
+                         MapRms(result.learnt_map, built, fit, false)};
+  }
 }
 
 void JudgeLapOnTruth(const record::TruthRecord& truth, const Track& track, SessionResult& result) {
   record::TruthLap& lap = result.record.truth_lap;
   lap = {};
   if (truth.empty()) return;
-  LapTimer timer(track);
+  LapTimer timer(track, GatesAsBuilt(truth.params(), track));
   for (const TruthRow& row : truth.rows())
     timer.Update(NsToS(row.operator_ns - result.started_ns), Vec2(row.x, row.y));
   lap.judged = true;

@@ -12,7 +12,42 @@ RobotPredictor::RobotPredictor(const TreadDriveConfig& drive, double watchdog_s,
     : drive_(drive), model_(model), estimator_(drive), watchdog_s_(watchdog_s), step_s_(step_s) {}
 
 void RobotPredictor::Localise(const Track& track, const LocaliserConfig& config) {
-  localiser_.emplace(track, config);
+  // Learning, the map as built is learnt too (it is part of what differs
+  // from the files); the nominal model keeps the file's.
+  LocaliserConfig used = config;
+  if (model_ == PredictionModel::kLearn) used.learn_map = true;
+  localiser_.emplace(track, used);
+}
+
+void RobotPredictor::BlendIn(const Pose2& odometry, double sample_s) {
+  // Nothing to blend until there is a localised pose to blend from: the
+  // odometry (or the localiser's first pose) is shown as it is.
+  if (!blending_ || !localiser_ || !localiser_->started()) {
+    shown_pose_ = pose_;
+    blend_odometry_ = odometry;
+    blend_s_ = sample_s;
+    blending_ = localiser_ && localiser_->started();
+    return;
+  }
+  // The shown pose moves by the odometry's increment (in the robot's frame)...
+  const double dx = odometry.x - blend_odometry_.x, dy = odometry.y - blend_odometry_.y;
+  const double c0 = std::cos(blend_odometry_.heading), s0 = std::sin(blend_odometry_.heading);
+  const double along = c0 * dx + s0 * dy, across = -s0 * dx + c0 * dy;
+  const double c = std::cos(shown_pose_.heading), s = std::sin(shown_pose_.heading);
+  shown_pose_.x += c * along - s * across;
+  shown_pose_.y += s * along + c * across;
+  shown_pose_.heading += std::remainder(odometry.heading - blend_odometry_.heading, 2.0 * M_PI);
+  // ...and is drawn to the localised pose at the blends' rates (a state
+  // sampled before the last one, jitter's, moves nothing).
+  const double dt = std::max(0.0, sample_s - blend_s_);
+  const double to_position = 1.0 - std::exp(-dt / kPositionBlendS);
+  const double to_heading = 1.0 - std::exp(-dt / kHeadingBlendS);
+  shown_pose_.x += (pose_.x - shown_pose_.x) * to_position;
+  shown_pose_.y += (pose_.y - shown_pose_.y) * to_position;
+  shown_pose_.heading +=
+      std::remainder(pose_.heading - shown_pose_.heading, 2.0 * M_PI) * to_heading;
+  blend_odometry_ = odometry;
+  blend_s_ = std::max(blend_s_, sample_s);
 }
 
 void RobotPredictor::OnRoundTrip(double rtt_s) {
@@ -34,9 +69,11 @@ double RobotPredictor::OnState(const RobotStateSample& state) {
   const double sample_s = dating_.SampleTime(state.received_s, state.stamp_s, d);
   // Where the state says the robot is: its odometry, localised on the track
   // once there are ranges to do it with.
-  pose_ = {state.x, state.y, state.heading};
+  const Pose2 odometry{state.x, state.y, state.heading};
+  pose_ = odometry;
   if (localiser_ && (state.ranges.count > 0 || localiser_->started()))
     pose_ = localiser_->Update(pose_, state.ranges, state.touching);
+  BlendIn(odometry, sample_s);
   located_.push_back({sample_s, pose_.x, pose_.y, 0.0});
   odometry_.push_back({sample_s, state.x, state.y, 0.0});
   // What the operator was shown of this moment at this moment: the
@@ -60,7 +97,7 @@ double RobotPredictor::OnState(const RobotStateSample& state) {
   if (model_ == PredictionModel::kLearn) drive_ = estimator_.Drive();
   Base base{state.received_s,
             sample_s,
-            {pose_.x, pose_.y, pose_.heading, 0.0, 0.0},
+            {shown_pose_.x, shown_pose_.y, shown_pose_.heading, 0.0, 0.0},
             state.applied_left,
             state.applied_right};
   models::TreadsFromMotion(drive_, state.speed, state.yaw_rate, base.treads);

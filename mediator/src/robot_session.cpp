@@ -409,7 +409,11 @@ class RobotSession final : public FamilySession {
     result.located = predictor_.located();
     result.odometry = predictor_.odometry();
     rec.localised = predictor_.localiser() != nullptr && predictor_.localiser()->started();
-    if (rec.localised) rec.localiser_scans_refused = predictor_.localiser()->scans_refused();
+    if (rec.localised) {
+      rec.localiser_scans_refused = predictor_.localiser()->scans_refused();
+      for (const MapFeature& f : predictor_.localiser()->Map())
+        result.learnt_map.emplace_back(f.file, f.learnt);
+    }
     result.predictor_inputs = predictor_.inputs();
     result.started_ns = t0_ns_;
     result.shown_height = false;

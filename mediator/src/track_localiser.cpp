@@ -15,6 +15,13 @@ namespace {
 /// coarser cells: more candidates each, the same exact distances).
 constexpr double kCell_m = 0.05;
 constexpr size_t kMaxCells = 4'000'000;
+/// learn_map: the most shapes one scan's update moves (each beam's nearest:
+/// a wall's two corners or a post). A beam on a shape beyond them corrects
+/// the pose with the shape held where it is learnt.
+constexpr int kMaxSeenFeatures = 24;
+constexpr int kMaxSeen = 3 + 2 * kMaxSeenFeatures;
+using MatSeen = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxSeen, kMaxSeen>;
+using VecSeen = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxSeen, 1>;
 
 using Mat3 = Eigen::Matrix3d;
 using Vec3 = Eigen::Vector3d;
@@ -51,11 +58,44 @@ TrackLocaliser::TrackLocaliser(const Track& track, const LocaliserConfig& config
     extend(c.center.x(), c.center.y(), c.radius);
   }
   const size_t shapes = walls_.size() + circles_.size();
+  if (config_.learn_map) {
+    // Each unique corner once, in the order of the walls (as a reality
+    // draws them and the scoring pairs them), then the posts.
+    file_walls_ = walls_;
+    file_circles_ = circles_;
+    for (const Wall& w : walls_) {
+      std::array<uint32_t, 2> ends{};
+      for (int e = 0; e < 2; ++e) {
+        const Vec2 p = e == 0 ? Vec2(w.ax, w.ay) : Vec2(w.bx, w.by);
+        const auto found = std::find(corners_.begin(), corners_.end(), p);
+        ends[static_cast<size_t>(e)] = static_cast<uint32_t>(found - corners_.begin());
+        if (found == corners_.end()) corners_.push_back(p);
+      }
+      wall_corners_.push_back(ends);
+    }
+    const Eigen::Index features = static_cast<Eigen::Index>(corners_.size() + circles_.size());
+    offsets_ = Eigen::VectorXd::Zero(2 * features);
+    prior_offsets_ = offsets_;
+    step_offsets_ = offsets_;
+    joint_cov_ = Eigen::MatrixXd::Zero(3 + 2 * features, 3 + 2 * features);
+    for (Eigen::Index f = 0; f < features; ++f) {
+      const double sd =
+          f < static_cast<Eigen::Index>(corners_.size()) ? config_.corner_sd_m : config_.post_sd_m;
+      joint_cov_(3 + 2 * f, 3 + 2 * f) = joint_cov_(4 + 2 * f, 4 + 2 * f) = sd * sd;
+    }
+    seen_cov_ = Eigen::MatrixXd::Zero(3 + 2 * features, kMaxSeen);
+    seen_gain_ = seen_cov_;
+    slot_.assign(static_cast<size_t>(features), -1);
+  }
   if (shapes == 0) return;  // nothing to localise against: every endpoint is an outlier
 
+  // A displaced shape is within `bound` of the file's everywhere (a wall's
+  // points are its corners' blends): its distance from a point differs from
+  // the file's by at most that, so the margins below widen by it.
+  const double bound = config_.learn_map ? config_.offset_bound_m : 0.0;
   // Cells: the shapes' box with the outlier distance around it.
   cell_ = kCell_m;
-  const double margin = config_.outlier_m + 2.0 * cell_;
+  const double margin = config_.outlier_m + 2.0 * cell_ + bound;
   for (;;) {
     x0_ = lo_x - margin;
     y0_ = lo_y - margin;
@@ -69,8 +109,8 @@ TrackLocaliser::TrackLocaliser(const Track& track, const LocaliserConfig& config
   // A shape is a candidate of a cell when a point of the cell may have it
   // nearest: its distance to the cell's centre is within the nearest's plus
   // the diagonal. Only cells within reach of the outlier distance keep any.
-  const double keep_within = config_.outlier_m + 0.5 * diagonal;
-  const double reach = keep_within + diagonal;
+  const double keep_within = config_.outlier_m + 0.5 * diagonal + bound;
+  const double reach = keep_within + diagonal + 2.0 * bound;
   auto for_cells_near = [&](uint32_t shape, auto&& visit) {
     double sx0, sy0, sx1, sy1;
     if (shape < walls_.size()) {
@@ -100,7 +140,7 @@ TrackLocaliser::TrackLocaliser(const Track& track, const LocaliserConfig& config
   }
   std::vector<uint32_t> counts(cells + 1, 0);
   auto is_candidate = [&](size_t c, double d) {
-    return nearest[c] <= keep_within && d <= nearest[c] + diagonal;
+    return nearest[c] <= keep_within && d <= nearest[c] + diagonal + 2.0 * bound;
   };
   for (uint32_t s = 0; s < shapes; ++s) {
     for_cells_near(s, [&](size_t c, double d) {
@@ -118,14 +158,15 @@ TrackLocaliser::TrackLocaliser(const Track& track, const LocaliserConfig& config
   }
 }
 
-double TrackLocaliser::ShapeDistance(uint32_t index, double px, double py, double& gx,
-                                     double& gy) const {
+double TrackLocaliser::ShapeDistance(uint32_t index, double px, double py, double& gx, double& gy,
+                                     double* t_out) const {
   if (index < walls_.size()) {
     const Wall& w = walls_[index];
     const double ex = w.bx - w.ax, ey = w.by - w.ay;
     const double length2 = ex * ex + ey * ey;
     const double t =
         length2 > 0.0 ? std::clamp(((px - w.ax) * ex + (py - w.ay) * ey) / length2, 0.0, 1.0) : 0.0;
+    if (t_out != nullptr) *t_out = t;
     const double vx = px - (w.ax + t * ex), vy = py - (w.ay + t * ey);
     const double d = std::hypot(vx, vy);
     if (d > 1e-12) {
@@ -149,21 +190,69 @@ double TrackLocaliser::ShapeDistance(uint32_t index, double px, double py, doubl
 }
 
 bool TrackLocaliser::Field(double px, double py, double& distance, double& gx, double& gy) const {
+  uint32_t shape;
+  double t;
+  return Nearest(px, py, distance, gx, gy, shape, t);
+}
+
+bool TrackLocaliser::Nearest(double px, double py, double& distance, double& gx, double& gy,
+                             uint32_t& shape, double& t) const {
   const double fi = (px - x0_) / cell_, fj = (py - y0_) / cell_;
   if (!(fi >= 0.0 && fj >= 0.0 && fi < nx_ && fj < ny_)) return false;
   const size_t c = static_cast<size_t>(fj) * static_cast<size_t>(nx_) + static_cast<size_t>(fi);
   distance = std::numeric_limits<double>::infinity();
   for (uint32_t k = starts_[c]; k < starts_[c + 1]; ++k) {
-    double x, y;
-    const double d = ShapeDistance(candidates_[k], px, py, x, y);
-    if (d < distance) distance = d, gx = x, gy = y;
+    double x, y, along = 0.0;
+    const double d = ShapeDistance(candidates_[k], px, py, x, y, &along);
+    if (d < distance) distance = d, gx = x, gy = y, shape = candidates_[k], t = along;
   }
   return distance <= config_.outlier_m;
+}
+
+std::vector<MapFeature> TrackLocaliser::Map() const {
+  std::vector<MapFeature> map;
+  if (!config_.learn_map) {
+    for (const Wall& w : walls_) {
+      for (const Vec2& p : {Vec2(w.ax, w.ay), Vec2(w.bx, w.by)}) {
+        if (std::none_of(map.begin(), map.end(), [&](const MapFeature& f) { return f.file == p; }))
+          map.push_back({p, p});
+      }
+    }
+    for (const Circle& c : circles_) map.push_back({Vec2(c.cx, c.cy), Vec2(c.cx, c.cy)});
+    return map;
+  }
+  const auto offset = [&](size_t f) { return Vec2(offsets_(2 * f), offsets_(2 * f + 1)); };
+  for (size_t f = 0; f < corners_.size(); ++f)
+    map.push_back({corners_[f], corners_[f] + offset(f)});
+  for (size_t p = 0; p < file_circles_.size(); ++p) {
+    const Vec2 centre(file_circles_[p].cx, file_circles_[p].cy);
+    map.push_back({centre, centre + offset(corners_.size() + p)});
+  }
+  return map;
+}
+
+void TrackLocaliser::PlaceShapes(const Eigen::VectorXd& offsets) {
+  for (size_t w = 0; w < walls_.size(); ++w) {
+    const auto [a, b] = wall_corners_[w];
+    walls_[w] = {file_walls_[w].ax + offsets(2 * a), file_walls_[w].ay + offsets(2 * a + 1),
+                 file_walls_[w].bx + offsets(2 * b), file_walls_[w].by + offsets(2 * b + 1)};
+  }
+  const Eigen::Index first_post = 2 * static_cast<Eigen::Index>(corners_.size());
+  for (size_t p = 0; p < circles_.size(); ++p) {
+    const Eigen::Index i = first_post + 2 * static_cast<Eigen::Index>(p);
+    circles_[p].cx = file_circles_[p].cx + offsets(i);
+    circles_[p].cy = file_circles_[p].cy + offsets(i + 1);
+  }
 }
 
 void TrackLocaliser::Reset(const Pose2& pose, double sd_m, double sd_rad) {
   pose_ = pose;
   cov_ = Diagonal(sd_m, sd_rad);
+  if (config_.learn_map) {  // the map learnt stays; the pose is now known apart from it
+    joint_cov_.topRows(3).setZero();
+    joint_cov_.leftCols(3).setZero();
+    joint_cov_.topLeftCorner<3, 3>() = ToMat(cov_);
+  }
   started_ = true;
   have_odometry_ = false;
 }
@@ -213,11 +302,40 @@ void TrackLocaliser::Motion(const Pose2& odometry, bool pressed) {
   q(0, 1) = q(1, 0) = ch * sh * (a2 - b2);
   q(2, 2) = heading * heading;
   FromMat(f * ToMat(cov_) * f.transpose() + q, cov_);
+  if (config_.learn_map) {  // the pose's correlation with the map moves with it
+    const Eigen::Index n = joint_cov_.rows();
+    for (Eigen::Index j = 3; j < n; ++j) {
+      joint_cov_(0, j) += f(0, 2) * joint_cov_(2, j);
+      joint_cov_(1, j) += f(1, 2) * joint_cov_(2, j);
+      joint_cov_(j, 0) = joint_cov_(0, j);
+      joint_cov_(j, 1) = joint_cov_(1, j);
+    }
+    joint_cov_.topLeftCorner<3, 3>() = ToMat(cov_);
+  }
+}
+
+bool TrackLocaliser::Agrees(const RangeScan& scan, double x, double y, double heading) const {
+  // At the pose found, how many of the beams that met something end on the
+  // map (within 3 sd of a wall or post)?
+  int hits = 0, inliers = 0;
+  for (int i = 0; i < scan.count; ++i) {
+    const double r = scan.ranges[static_cast<size_t>(i)];
+    if (!scan.Hit(i) || !(r > 0.0)) continue;
+    ++hits;
+    const double angle = heading + scan.Angle(i);
+    double d, gx, gy;
+    if (Field(x + r * std::cos(angle), y + r * std::sin(angle), d, gx, gy) &&
+        d <= 3.0 * config_.beam_sd) {
+      ++inliers;
+    }
+  }
+  return inliers >= config_.min_inlier_fraction * hits;
 }
 
 void TrackLocaliser::Correct(const RangeScan& scan) {
   beams_used_ = 0;
   if (scan.count <= 0 || starts_.empty()) return;
+  if (config_.learn_map) return CorrectWithMap(scan);
   const Mat3 prior_cov = ToMat(cov_);
   const Mat3 prior_info = prior_cov.inverse();
   const Vec3 prior(pose_.x, pose_.y, pose_.heading);
@@ -256,21 +374,7 @@ void TrackLocaliser::Correct(const RangeScan& scan) {
     if (std::abs(step.x()) + std::abs(step.y()) < 1e-5 && std::abs(step.z()) < 1e-5) break;
   }
   if (beams_used_ == 0) return;
-  // The innovation gate: at the pose found, how many of the beams that met
-  // something end on the map (within 3 sd of a wall or post)?
-  int hits = 0, inliers = 0;
-  for (int i = 0; i < scan.count; ++i) {
-    const double r = scan.ranges[static_cast<size_t>(i)];
-    if (!scan.Hit(i) || !(r > 0.0)) continue;
-    ++hits;
-    const double angle = x.z() + scan.Angle(i);
-    double d, gx, gy;
-    if (Field(x.x() + r * std::cos(angle), x.y() + r * std::sin(angle), d, gx, gy) &&
-        d <= 3.0 * sd) {
-      ++inliers;
-    }
-  }
-  if (inliers < config_.min_inlier_fraction * hits) {
+  if (!Agrees(scan, x.x(), x.y(), x.z())) {
     // It disagrees with the map wherever the robot is: the odometry's pose stands.
     beams_used_ = 0;
     ++scans_refused_;
@@ -297,6 +401,169 @@ void TrackLocaliser::Correct(const RangeScan& scan) {
   }
   pose_ = {x.x(), x.y(), x.z()};
   FromMat(info.inverse(), cov_);
+}
+
+}  // namespace haptel::mediator
+
+namespace haptel::mediator {
+
+void TrackLocaliser::CorrectWithMap(const RangeScan& scan) {
+  // Correct's update with the map's offsets in the state. In covariance
+  // form: with the scan's information Λ and gradient g (linearised at the
+  // prior) on the k parameters it saw (the pose and the seen shapes'
+  // offsets, A), the Gauss-Newton step from the prior is
+  // −P_{·A}(I + Λ·P_AA)⁻¹·g and the covariance P − P_{·A}(I + Λ·P_AA)⁻¹Λ·P_{A·}
+  // (the Woodbury identity on P⁻¹ + Λ): a k×k solve, no n×n one.
+  const Eigen::Index n = joint_cov_.rows();
+  const Vec3 prior(pose_.x, pose_.y, pose_.heading);
+  prior_offsets_ = offsets_;
+  const double sd = config_.beam_sd;
+  const double weight = 1.0 / (sd * sd);
+  const auto walls = static_cast<uint32_t>(walls_.size());
+  const auto first_post = static_cast<int>(corners_.size());
+  // The features seen (slot → feature; slot_ the reverse, -1: unseen) and
+  // each local parameter's index in the state.
+  std::array<int, kMaxSeenFeatures> seen{};
+  std::array<Eigen::Index, kMaxSeen> global{0, 1, 2};
+  int seen_count = 0;
+  MatSeen lambda(kMaxSeen, kMaxSeen), p_seen(kMaxSeen, kMaxSeen), m1(kMaxSeen, kMaxSeen);
+  VecSeen g(kMaxSeen), v(kMaxSeen);
+  Eigen::PartialPivLU<MatSeen> lu(kMaxSeen);
+  Eigen::Index k = 3;
+  // The step from the prior, into pose and offsets.
+  const auto solve = [&](Vec3& pose) {
+    m1.setIdentity(k, k);
+    m1.noalias() += lambda.topLeftCorner(k, k) * p_seen.topLeftCorner(k, k);
+    lu.compute(m1);
+    v = lu.solve(g.head(k));
+    for (Eigen::Index i = 0; i < n; ++i) {
+      double y = 0.0;
+      for (Eigen::Index l = 0; l < k; ++l) y -= seen_cov_(i, l) * v(l);
+      if (i < 3) {
+        pose(i) = prior(i) + y;
+      } else {
+        offsets_(i - 3) = prior_offsets_(i - 3) + y;
+      }
+    }
+    pose.z() = WrapAngle(pose.z());
+    for (Eigen::Index f = 0; f < offsets_.size(); f += 2) {  // within the grid's margin
+      const double norm = std::hypot(offsets_(f), offsets_(f + 1));
+      if (norm > config_.offset_bound_m) offsets_.segment<2>(f) *= config_.offset_bound_m / norm;
+    }
+  };
+  Vec3 x = prior;
+  for (int iteration = 0; iteration < config_.iterations; ++iteration) {
+    std::fill(slot_.begin(), slot_.end(), -1);
+    seen_count = 0;
+    lambda.setZero();
+    g.setZero();
+    int used = 0;
+    for (int i = 0; i < scan.count; ++i) {
+      const double r = scan.ranges[static_cast<size_t>(i)];
+      if (!scan.Hit(i) || !(r > 0.0)) continue;
+      const double angle = x.z() + scan.Angle(i);
+      const double ca = std::cos(angle), sa = std::sin(angle);
+      double d, gx, gy, t;
+      uint32_t shape;
+      if (!Nearest(x.x() + r * ca, x.y() + r * sa, d, gx, gy, shape, t)) continue;
+      // The beam's Jacobian: on the pose, and on its shape's offsets (a
+      // wall's corners by −(1−t)·n and −t·n, a post's centre by −n).
+      std::array<Eigen::Index, 7> local{0, 1, 2};
+      std::array<double, 7> j{gx, gy, r * (-gx * sa + gy * ca)};
+      int m = 3;
+      const auto add_feature = [&](int feature, double share) {
+        int& slot = slot_[static_cast<size_t>(feature)];
+        if (slot < 0) {
+          if (seen_count == kMaxSeenFeatures) return;  // held where it is learnt
+          slot = seen_count;
+          seen[static_cast<size_t>(seen_count++)] = feature;
+          global[static_cast<size_t>(3 + 2 * slot)] = 3 + 2 * feature;
+          global[static_cast<size_t>(4 + 2 * slot)] = 4 + 2 * feature;
+        }
+        local[static_cast<size_t>(m)] = 3 + 2 * slot;
+        local[static_cast<size_t>(m + 1)] = 4 + 2 * slot;
+        j[static_cast<size_t>(m)] = -share * gx;
+        j[static_cast<size_t>(m + 1)] = -share * gy;
+        m += 2;
+      };
+      if (shape < walls) {
+        add_feature(static_cast<int>(wall_corners_[shape][0]), 1.0 - t);
+        add_feature(static_cast<int>(wall_corners_[shape][1]), t);
+      } else {
+        add_feature(first_post + static_cast<int>(shape - walls), 1.0);
+      }
+      // Gated by what the prior allows this beam (3 sd), within the outlier distance.
+      double jpj = 0.0;
+      for (int a = 0; a < m; ++a) {
+        const Eigen::Index ga = global[static_cast<size_t>(local[static_cast<size_t>(a)])];
+        for (int b = 0; b < m; ++b) {
+          jpj += j[static_cast<size_t>(a)] * j[static_cast<size_t>(b)] *
+                 joint_cov_(ga, global[static_cast<size_t>(local[static_cast<size_t>(b)])]);
+        }
+      }
+      const double predicted_sd = std::sqrt(jpj + sd * sd);
+      if (d > std::min(config_.outlier_m, 3.0 * predicted_sd)) continue;
+      const double huber = d <= 2.0 * sd ? 1.0 : 2.0 * sd / d;
+      // The residual linearised at the prior: d + J·(prior − x).
+      double residual = d + j[0] * (prior.x() - x.x()) + j[1] * (prior.y() - x.y()) +
+                        j[2] * WrapAngle(prior.z() - x.z());
+      for (int a = 3; a < m; ++a) {
+        const Eigen::Index o = global[static_cast<size_t>(local[static_cast<size_t>(a)])] - 3;
+        residual += j[static_cast<size_t>(a)] * (prior_offsets_(o) - offsets_(o));
+      }
+      for (int a = 0; a < m; ++a) {
+        const Eigen::Index la = local[static_cast<size_t>(a)];
+        g(la) += huber * weight * j[static_cast<size_t>(a)] * residual;
+        for (int b = 0; b < m; ++b) {
+          lambda(la, local[static_cast<size_t>(b)]) +=
+              huber * weight * j[static_cast<size_t>(a)] * j[static_cast<size_t>(b)];
+        }
+      }
+      ++used;
+    }
+    beams_used_ = used;
+    if (used == 0) break;
+    k = 3 + 2 * seen_count;
+    for (Eigen::Index l = 0; l < k; ++l)
+      seen_cov_.col(l) = joint_cov_.col(global[static_cast<size_t>(l)]);
+    for (Eigen::Index a = 0; a < k; ++a) {
+      for (Eigen::Index b = 0; b < k; ++b)
+        p_seen(a, b) = seen_cov_(global[static_cast<size_t>(a)], b);
+    }
+    step_offsets_ = offsets_;
+    const Vec3 before = x;
+    solve(x);
+    PlaceShapes(offsets_);
+    const double moved = (offsets_ - step_offsets_).cwiseAbs().maxCoeff();
+    if (std::abs(x.x() - before.x()) + std::abs(x.y() - before.y()) < 1e-5 &&
+        std::abs(WrapAngle(x.z() - before.z())) < 1e-5 && moved < 1e-5)
+      break;
+  }
+  const auto keep_prior = [&] {
+    offsets_ = prior_offsets_;
+    PlaceShapes(offsets_);
+  };
+  if (beams_used_ == 0) return keep_prior();
+  // The innovation gate, as Correct's, on the map as the update placed it.
+  if (!Agrees(scan, x.x(), x.y(), x.z())) {
+    beams_used_ = 0;
+    ++scans_refused_;
+    return keep_prior();
+  }
+  // No map-error band (LocaliserConfig::map_error_m): the map's error is in
+  // the state. P −= P_{·A}·(I + Λ·P_AA)⁻¹·Λ·P_{A·} (the last iteration's
+  // factors, as Correct's information), kept symmetric.
+  const MatSeen gain = lu.solve(lambda.topLeftCorner(k, k));
+  seen_gain_.leftCols(k).noalias() = seen_cov_.leftCols(k).lazyProduct(gain);
+  joint_cov_ -= seen_gain_.leftCols(k).lazyProduct(seen_cov_.leftCols(k).transpose());
+  for (Eigen::Index a = 0; a < n; ++a) {
+    for (Eigen::Index b = a + 1; b < n; ++b) {
+      const double mean = 0.5 * (joint_cov_(a, b) + joint_cov_(b, a));
+      joint_cov_(a, b) = joint_cov_(b, a) = mean;
+    }
+  }
+  pose_ = {x.x(), x.y(), x.z()};
+  FromMat(joint_cov_.topLeftCorner<3, 3>(), cov_);
 }
 
 }  // namespace haptel::mediator

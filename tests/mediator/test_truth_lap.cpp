@@ -32,6 +32,18 @@ Vec2 Beside(const Track& track, double s, double offset) {
   return track.PointAt(s) + Vec2(-tangent.y(), tangent.x()) * offset;
 }
 
+/// Appends the truth's row `t_s` after `started_ns`: at (x, y, z), heading
+/// `heading`, at `speed` along it.
+void WriteTruthRow(std::ofstream& out, int64_t started_ns, double t_s, double x, double y, double z,
+                   double heading, double speed) {
+  char line[256];
+  const size_t n = FormatTruthRow(
+      {started_ns + static_cast<int64_t>(std::llround(t_s * 1e9)), x, y, z, heading, speed, 0.0},
+      line, sizeof line);
+  REQUIRE(n > 0);
+  out.write(line, static_cast<std::streamsize>(n));
+}
+
 }  // namespace
 
 TEST_CASE("the truth judges the lap again: a gate the drifting odometry passed is truly missed") {
@@ -59,12 +71,7 @@ TEST_CASE("the truth judges the lap again: a gate the drifting odometry passed i
     for (double s = from; s <= to; s += speed * dt, t += dt) {
       live.Update(t, Beside(track, s, 0.0));
       const Vec2 p = Beside(track, s, drift(s));
-      char line[256];
-      const size_t n = FormatTruthRow({started_ns + static_cast<int64_t>(std::llround(t * 1e9)),
-                                       p.x(), p.y(), 0.0, 0.0, speed, 0.0},
-                                      line, sizeof line);
-      REQUIRE(n > 0);
-      out.write(line, static_cast<std::streamsize>(n));
+      WriteTruthRow(out, started_ns, t, p.x(), p.y(), 0.0, 0.0, speed);
     }
   }
   SessionResult result;
@@ -123,13 +130,8 @@ TEST_CASE(
       live.Update(t, Beside(track, s + lead, 0.0));
       const Vec2 p = Beside(track, s, 0.0);
       const Vec2 tangent = track.TangentAt(s);
-      char line[256];
-      const size_t n =
-          FormatTruthRow({started_ns + static_cast<int64_t>(std::llround(t * 1e9)), p.x(), p.y(),
-                          0.0, std::atan2(tangent.y(), tangent.x()), speed, 0.0},
-                         line, sizeof line);
-      REQUIRE(n > 0);
-      out.write(line, static_cast<std::streamsize>(n));
+      WriteTruthRow(out, started_ns, t, p.x(), p.y(), 0.0, std::atan2(tangent.y(), tangent.x()),
+                    speed);
     }
   }
   SessionResult result;
@@ -162,12 +164,7 @@ TEST_CASE(
       std::ofstream out(file);
       out << TruthHeaderText(DrawnReality{});
       const auto row = [&](double t, double x, double y, double z, double speed) {
-        char line[256];
-        const size_t n = FormatTruthRow(
-            {started_ns + static_cast<int64_t>(std::llround(t * 1e9)), x, y, z, 0.0, speed, 0.0},
-            line, sizeof line);
-        REQUIRE(n > 0);
-        out.write(line, static_cast<std::streamsize>(n));
+        WriteTruthRow(out, started_ns, t, x, y, z, 0.0, speed);
       };
       const double dt = 0.02;
       double t = 0.0;
@@ -246,12 +243,7 @@ TEST_CASE(
     double t = 0.0;
     for (double s = 0.0; s <= track.length(); s += 0.01, t += 0.04) {
       const Vec2 p = built(track.PointAt(s));
-      char line[256];
-      const size_t n = FormatTruthRow({started_ns + static_cast<int64_t>(std::llround(t * 1e9)),
-                                       p.x(), p.y(), 0.0, 0.0, 0.25, 0.0},
-                                      line, sizeof line);
-      REQUIRE(n > 0);
-      out.write(line, static_cast<std::streamsize>(n));
+      WriteTruthRow(out, started_ns, t, p.x(), p.y(), 0.0, 0.0, 0.25);
       const Vec2 shown = track.PointAt(s);
       result.shown.push_back({t, shown.x(), shown.y(), 0.0});
     }
@@ -272,4 +264,71 @@ TEST_CASE(
 
   // No map error: no fit, the frames are one.
   CHECK(FitAsBuiltToFile(DrawnReality{}, track).features == 0);
+}
+
+TEST_CASE("the truth's lap is judged at the gates as built, and the map learnt against them") {
+  // Gate 2's posts stand 8 cm to the right of where the file has them; the
+  // robot truly drives the centre line, and 0.2 m right of it at gate 2:
+  // outside the file's posts (0.17 m from its centre, less a post's
+  // radius), between the posts as built (0.12 m from theirs).
+  const Track& track = ShortTrack();
+  const double gate2 = track.config().gates[1].along;
+  const Vec2 moved = Beside(track, gate2, -0.08) - track.PointAt(gate2);
+  DrawnReality drawn;
+  drawn.name = "moved-gate";
+  drawn.true_posts = track.round_obstacles();
+  drawn.true_posts[2].center += moved;
+  drawn.true_posts[3].center += moved;
+  const auto offset = [&](double s) {
+    return -0.2 * std::min(std::clamp((s - (gate2 - 0.5)) / 0.5, 0.0, 1.0),
+                           std::clamp((gate2 + 0.5 - s) / 0.5, 0.0, 1.0));
+  };
+  const int64_t started_ns = 4'000'000'000'000;
+  const auto file = test::ScratchDir("truth-gates-built") / "truth.csv";
+  LapTimer at_file(track);  // the same path at the file's gates
+  {
+    std::ofstream out(file);
+    out << TruthHeaderText(drawn);
+    double t = 0.0;
+    for (double s = -track.config().start_behind; s <= track.length() + 0.2;
+         s += 0.005, t += 0.02) {
+      const Vec2 p = Beside(track, s, offset(s));
+      at_file.Update(t, p);
+      WriteTruthRow(out, started_ns, t, p.x(), p.y(), 0.0, 0.0, 0.25);
+    }
+  }
+  REQUIRE(at_file.completed());
+  CHECK(at_file.gates_passed() == 1);  // gate 2 missed where the file has it
+  SessionResult result;
+  result.started_ns = started_ns;
+  const record::TruthRecord truth = record::TruthRecord::Load(file);
+  JudgeLapOnTruth(truth, track, result);
+  const record::TruthLap& lap = result.record.truth_lap;
+  REQUIRE(lap.judged);
+  CHECK(lap.completed);
+  CHECK(lap.gates_passed == 2);  // passed where it stands
+
+  // The localiser's map at the end: every feature where the file has it,
+  // but gate 2's right post, learnt where it stands. Scored in the map's
+  // frame (the fit takes a little of the two posts' 8 cm): learning one
+  // post takes the map's error down.
+  for (const Segment2& w : track.walls()) {
+    for (const Vec2& p : {w.a, w.b}) {
+      if (std::none_of(result.learnt_map.begin(), result.learnt_map.end(),
+                       [&](const auto& f) { return f.first == p; }))
+        result.learnt_map.emplace_back(p, p);
+    }
+  }
+  const size_t corners = result.learnt_map.size();
+  for (const CircleObstacle& c : track.round_obstacles())
+    result.learnt_map.emplace_back(c.center, c.center);
+  ScorePrediction(truth, &track, result);
+  const double file_rms = FitAsBuiltToFile(drawn, track).residual_m_rms;
+  CHECK(result.record.map_estimated.features == static_cast<int>(result.learnt_map.size()));
+  CHECK(result.record.map_estimated.file_m_rms == Approx(file_rms));
+  CHECK(result.record.map_estimated.learnt_m_rms == Approx(file_rms));  // nothing learnt
+  result.learnt_map[corners + 3].second += moved;
+  ScorePrediction(truth, &track, result);
+  CHECK(result.record.map_estimated.file_m_rms == Approx(file_rms));
+  CHECK(result.record.map_estimated.learnt_m_rms < 0.8 * file_rms);
 }

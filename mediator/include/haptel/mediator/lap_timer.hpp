@@ -18,6 +18,10 @@ class LapTimer {
   /// Keeps a reference to `track`. `contact_clear_s`: a contact counts as a new
   /// obstacle touch only after the bumper has been clear this long.
   explicit LapTimer(const Track& track, double contact_clear_s = 0.3);
+  /// Judges the lap at `gates` (one for each of the track's, in order)
+  /// instead of the file's: the truth's lap at the gates as built, where
+  /// their posts truly stand (prediction_score.hpp).
+  LapTimer(const Track& track, std::vector<Gate> gates, double contact_clear_s = 0.3);
 
   /// A new vehicle position at time t (s, any monotonic origin).
   void Update(double t_s, const Vec2& position);
@@ -41,6 +45,7 @@ class LapTimer {
 
  private:
   const Track& track_;
+  std::vector<Gate> gates_;
   double contact_clear_s_;
   bool have_previous_ = false;
   Vec2 previous_{0, 0};

@@ -11,6 +11,11 @@
 /// and each estimated parameter's truth (RunRecord::estimated), the drawn
 /// value under the same name. A tread's gain is its truth at the run's end
 /// (the battery's fade applied: the estimator follows it), the rest as drawn.
+/// A localised robot's map (SessionResult::learnt_map) is scored into
+/// RunRecord::map_estimated: the RMS distance of its wall corners and post
+/// centres, as learnt and as the file has them, from where they truly
+/// stand in the map's frame (the two equal with the nominal model, which
+/// learns no map).
 #include <string>
 #include <vector>
 
@@ -50,7 +55,9 @@ RigidFit2 FitAsBuiltToFile(const DrawnReality& drawn, const Track& track);
 
 /// The lap judged again from the truth record's path (RunRecord::truth_lap):
 /// the same LapTimer the live lap runs on the vehicle's odometry, fed where
-/// the vehicle truly was (times in s since the session's start). Left
+/// the vehicle truly was (times in s since the session's start), at the
+/// gates as built: where their posts truly stand (the reality's map error),
+/// not where the file puts them. Left
 /// unjudged when the record has no rows. The run ends as the odometry
 /// crosses the finish: a robot truly short of the line then (its odometry
 /// ran ahead), all gates reached, has its finish projected from where it

@@ -25,6 +25,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "haptel/config/blimp_course.hpp"
@@ -241,6 +242,11 @@ struct SessionResult {
   /// like `shown` (RobotPredictor::located, odometry).
   std::vector<ShownPose> located;
   std::vector<ShownPose> odometry;
+  /// A localised robot's map at the run's end: each wall corner and post
+  /// centre, where the file has it and where the localiser learnt it stands
+  /// (the file's, with the nominal model), scored against the as-built
+  /// track into RunRecord::estimated (prediction_score.hpp).
+  std::vector<std::pair<Vec2, Vec2>> learnt_map;
   int64_t started_ns = 0;
   bool shown_height = false;
   /// With SessionSetup::keep_predictor_inputs, a robot's: everything its

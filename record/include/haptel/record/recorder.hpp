@@ -155,6 +155,15 @@ struct RunRecord {
     int features = 0;
     double residual_m_rms = 0.0;
   } map_fit;
+  /// A localised robot's map against the track as built, in the map's frame
+  /// (JSON only): its wall corners' and post centres' RMS distance (m) from
+  /// where they truly stand, as the localiser learnt them (the file's with
+  /// the nominal model) and as the file has them; NaN: not scored.
+  struct MapEstimate {
+    int features = 0;
+    double learnt_m_rms = std::numeric_limits<double>::quiet_NaN();
+    double file_m_rms = std::numeric_limits<double>::quiet_NaN();
+  } map_estimated;
   /// The model the prediction ran: "nominal" or "learn" (JSON only).
   std::string predict_model;
   /// The model's error against each state at the moment it was sampled: its
