@@ -36,6 +36,20 @@ std::array<double, 9> Diagonal(double sd_m, double sd_rad) {
   return {sd_m * sd_m, 0.0, 0.0, 0.0, sd_m * sd_m, 0.0, 0.0, 0.0, sd_rad * sd_rad};
 }
 
+/// Each beam of `scan` that met something (a hit, a positive range), seen
+/// from the pose (x, y, heading): visit(r, cos, sin, end_x, end_y), the
+/// beam's direction and where it ended.
+template <class Visit>
+void ForEachHit(const RangeScan& scan, double x, double y, double heading, Visit&& visit) {
+  for (int i = 0; i < scan.count; ++i) {
+    const double r = scan.ranges[static_cast<size_t>(i)];
+    if (!scan.Hit(i) || !(r > 0.0)) continue;
+    const double angle = heading + scan.Angle(i);
+    const double ca = std::cos(angle), sa = std::sin(angle);
+    visit(r, ca, sa, x + r * ca, y + r * sa);
+  }
+}
+
 }  // namespace
 
 TrackLocaliser::TrackLocaliser(const Track& track, const LocaliserConfig& config)
@@ -318,17 +332,11 @@ bool TrackLocaliser::Agrees(const RangeScan& scan, double x, double y, double he
   // At the pose found, how many of the beams that met something end on the
   // map (within 3 sd of a wall or post)?
   int hits = 0, inliers = 0;
-  for (int i = 0; i < scan.count; ++i) {
-    const double r = scan.ranges[static_cast<size_t>(i)];
-    if (!scan.Hit(i) || !(r > 0.0)) continue;
+  ForEachHit(scan, x, y, heading, [&](double, double, double, double ex, double ey) {
     ++hits;
-    const double angle = heading + scan.Angle(i);
     double d, gx, gy;
-    if (Field(x + r * std::cos(angle), y + r * std::sin(angle), d, gx, gy) &&
-        d <= 3.0 * config_.beam_sd) {
-      ++inliers;
-    }
-  }
+    if (Field(ex, ey, d, gx, gy) && d <= 3.0 * config_.beam_sd) ++inliers;
+  });
   return inliers >= config_.min_inlier_fraction * hits;
 }
 
@@ -350,22 +358,19 @@ void TrackLocaliser::Correct(const RangeScan& scan) {
     offset.z() = WrapAngle(offset.z());
     Vec3 b = prior_info * offset;
     int used = 0;
-    for (int i = 0; i < scan.count; ++i) {
-      const double r = scan.ranges[static_cast<size_t>(i)];
-      if (!scan.Hit(i) || !(r > 0.0)) continue;
-      const double angle = x.z() + scan.Angle(i);
-      const double ca = std::cos(angle), sa = std::sin(angle);
-      double d, gx, gy;
-      if (!Field(x.x() + r * ca, x.y() + r * sa, d, gx, gy)) continue;
-      const Vec3 j(gx, gy, r * (-gx * sa + gy * ca));
-      // Gated by what the prior allows this beam (3 sd), within the outlier distance.
-      const double predicted_sd = std::sqrt(j.dot(prior_cov * j) + sd * sd);
-      if (d > std::min(config_.outlier_m, 3.0 * predicted_sd)) continue;
-      const double huber = d <= 2.0 * sd ? 1.0 : 2.0 * sd / d;
-      info.noalias() += (huber * weight) * j * j.transpose();
-      b -= (huber * weight * d) * j;
-      ++used;
-    }
+    ForEachHit(scan, x.x(), x.y(), x.z(),
+               [&](double r, double ca, double sa, double ex, double ey) {
+                 double d, gx, gy;
+                 if (!Field(ex, ey, d, gx, gy)) return;
+                 const Vec3 j(gx, gy, r * (-gx * sa + gy * ca));
+                 // Gated by what the prior allows this beam (3 sd), within the outlier distance.
+                 const double predicted_sd = std::sqrt(j.dot(prior_cov * j) + sd * sd);
+                 if (d > std::min(config_.outlier_m, 3.0 * predicted_sd)) return;
+                 const double huber = d <= 2.0 * sd ? 1.0 : 2.0 * sd / d;
+                 info.noalias() += (huber * weight) * j * j.transpose();
+                 b -= (huber * weight * d) * j;
+                 ++used;
+               });
     beams_used_ = used;
     if (used == 0) break;
     const Vec3 step = info.ldlt().solve(b);
@@ -403,9 +408,20 @@ void TrackLocaliser::Correct(const RangeScan& scan) {
   FromMat(info.inverse(), cov_);
 }
 
-}  // namespace haptel::mediator
-
-namespace haptel::mediator {
+/// One learn_map update's linear system on the parameters the scan saw:
+/// the pose (0-2) and the seen features' offsets (3 + 2·slot, x and y),
+/// with each one's index in the joint state. Fixed-size: on the stack.
+struct TrackLocaliser::SeenSystem {
+  std::array<Eigen::Index, kMaxSeen> global{0, 1, 2};
+  int features = 0;                              ///< the features seen (slots taken)
+  Eigen::Index k = 3;                            ///< the parameters in use: 3 + 2·features
+  MatSeen lambda = MatSeen(kMaxSeen, kMaxSeen);  ///< the scan's information Λ
+  VecSeen g = VecSeen(kMaxSeen);                 ///< its gradient, linearised at the prior
+  MatSeen p_seen = MatSeen(kMaxSeen, kMaxSeen);  ///< P_AA
+  MatSeen m1 = MatSeen(kMaxSeen, kMaxSeen);      ///< I + Λ·P_AA
+  VecSeen v = VecSeen(kMaxSeen);
+  Eigen::PartialPivLU<MatSeen> lu = Eigen::PartialPivLU<MatSeen>(kMaxSeen);
+};
 
 void TrackLocaliser::CorrectWithMap(const RangeScan& scan) {
   // Correct's update with the map's offsets in the state. In covariance
@@ -414,125 +430,16 @@ void TrackLocaliser::CorrectWithMap(const RangeScan& scan) {
   // offsets, A), the Gauss-Newton step from the prior is
   // −P_{·A}(I + Λ·P_AA)⁻¹·g and the covariance P − P_{·A}(I + Λ·P_AA)⁻¹Λ·P_{A·}
   // (the Woodbury identity on P⁻¹ + Λ): a k×k solve, no n×n one.
-  const Eigen::Index n = joint_cov_.rows();
   const Vec3 prior(pose_.x, pose_.y, pose_.heading);
   prior_offsets_ = offsets_;
-  const double sd = config_.beam_sd;
-  const double weight = 1.0 / (sd * sd);
-  const auto walls = static_cast<uint32_t>(walls_.size());
-  const auto first_post = static_cast<int>(corners_.size());
-  // The features seen (slot → feature; slot_ the reverse, -1: unseen) and
-  // each local parameter's index in the state.
-  std::array<int, kMaxSeenFeatures> seen{};
-  std::array<Eigen::Index, kMaxSeen> global{0, 1, 2};
-  int seen_count = 0;
-  MatSeen lambda(kMaxSeen, kMaxSeen), p_seen(kMaxSeen, kMaxSeen), m1(kMaxSeen, kMaxSeen);
-  VecSeen g(kMaxSeen), v(kMaxSeen);
-  Eigen::PartialPivLU<MatSeen> lu(kMaxSeen);
-  Eigen::Index k = 3;
-  // The step from the prior, into pose and offsets.
-  const auto solve = [&](Vec3& pose) {
-    m1.setIdentity(k, k);
-    m1.noalias() += lambda.topLeftCorner(k, k) * p_seen.topLeftCorner(k, k);
-    lu.compute(m1);
-    v = lu.solve(g.head(k));
-    for (Eigen::Index i = 0; i < n; ++i) {
-      double y = 0.0;
-      for (Eigen::Index l = 0; l < k; ++l) y -= seen_cov_(i, l) * v(l);
-      if (i < 3) {
-        pose(i) = prior(i) + y;
-      } else {
-        offsets_(i - 3) = prior_offsets_(i - 3) + y;
-      }
-    }
-    pose.z() = WrapAngle(pose.z());
-    for (Eigen::Index f = 0; f < offsets_.size(); f += 2) {  // within the grid's margin
-      const double norm = std::hypot(offsets_(f), offsets_(f + 1));
-      if (norm > config_.offset_bound_m) offsets_.segment<2>(f) *= config_.offset_bound_m / norm;
-    }
-  };
+  SeenSystem system;
   Vec3 x = prior;
   for (int iteration = 0; iteration < config_.iterations; ++iteration) {
-    std::fill(slot_.begin(), slot_.end(), -1);
-    seen_count = 0;
-    lambda.setZero();
-    g.setZero();
-    int used = 0;
-    for (int i = 0; i < scan.count; ++i) {
-      const double r = scan.ranges[static_cast<size_t>(i)];
-      if (!scan.Hit(i) || !(r > 0.0)) continue;
-      const double angle = x.z() + scan.Angle(i);
-      const double ca = std::cos(angle), sa = std::sin(angle);
-      double d, gx, gy, t;
-      uint32_t shape;
-      if (!Nearest(x.x() + r * ca, x.y() + r * sa, d, gx, gy, shape, t)) continue;
-      // The beam's Jacobian: on the pose, and on its shape's offsets (a
-      // wall's corners by −(1−t)·n and −t·n, a post's centre by −n).
-      std::array<Eigen::Index, 7> local{0, 1, 2};
-      std::array<double, 7> j{gx, gy, r * (-gx * sa + gy * ca)};
-      int m = 3;
-      const auto add_feature = [&](int feature, double share) {
-        int& slot = slot_[static_cast<size_t>(feature)];
-        if (slot < 0) {
-          if (seen_count == kMaxSeenFeatures) return;  // held where it is learnt
-          slot = seen_count;
-          seen[static_cast<size_t>(seen_count++)] = feature;
-          global[static_cast<size_t>(3 + 2 * slot)] = 3 + 2 * feature;
-          global[static_cast<size_t>(4 + 2 * slot)] = 4 + 2 * feature;
-        }
-        local[static_cast<size_t>(m)] = 3 + 2 * slot;
-        local[static_cast<size_t>(m + 1)] = 4 + 2 * slot;
-        j[static_cast<size_t>(m)] = -share * gx;
-        j[static_cast<size_t>(m + 1)] = -share * gy;
-        m += 2;
-      };
-      if (shape < walls) {
-        add_feature(static_cast<int>(wall_corners_[shape][0]), 1.0 - t);
-        add_feature(static_cast<int>(wall_corners_[shape][1]), t);
-      } else {
-        add_feature(first_post + static_cast<int>(shape - walls), 1.0);
-      }
-      // Gated by what the prior allows this beam (3 sd), within the outlier distance.
-      double jpj = 0.0;
-      for (int a = 0; a < m; ++a) {
-        const Eigen::Index ga = global[static_cast<size_t>(local[static_cast<size_t>(a)])];
-        for (int b = 0; b < m; ++b) {
-          jpj += j[static_cast<size_t>(a)] * j[static_cast<size_t>(b)] *
-                 joint_cov_(ga, global[static_cast<size_t>(local[static_cast<size_t>(b)])]);
-        }
-      }
-      const double predicted_sd = std::sqrt(jpj + sd * sd);
-      if (d > std::min(config_.outlier_m, 3.0 * predicted_sd)) continue;
-      const double huber = d <= 2.0 * sd ? 1.0 : 2.0 * sd / d;
-      // The residual linearised at the prior: d + J·(prior − x).
-      double residual = d + j[0] * (prior.x() - x.x()) + j[1] * (prior.y() - x.y()) +
-                        j[2] * WrapAngle(prior.z() - x.z());
-      for (int a = 3; a < m; ++a) {
-        const Eigen::Index o = global[static_cast<size_t>(local[static_cast<size_t>(a)])] - 3;
-        residual += j[static_cast<size_t>(a)] * (prior_offsets_(o) - offsets_(o));
-      }
-      for (int a = 0; a < m; ++a) {
-        const Eigen::Index la = local[static_cast<size_t>(a)];
-        g(la) += huber * weight * j[static_cast<size_t>(a)] * residual;
-        for (int b = 0; b < m; ++b) {
-          lambda(la, local[static_cast<size_t>(b)]) +=
-              huber * weight * j[static_cast<size_t>(a)] * j[static_cast<size_t>(b)];
-        }
-      }
-      ++used;
-    }
-    beams_used_ = used;
-    if (used == 0) break;
-    k = 3 + 2 * seen_count;
-    for (Eigen::Index l = 0; l < k; ++l)
-      seen_cov_.col(l) = joint_cov_.col(global[static_cast<size_t>(l)]);
-    for (Eigen::Index a = 0; a < k; ++a) {
-      for (Eigen::Index b = 0; b < k; ++b)
-        p_seen(a, b) = seen_cov_(global[static_cast<size_t>(a)], b);
-    }
+    beams_used_ = LineariseWithMap(scan, prior, x, system);
+    if (beams_used_ == 0) break;
     step_offsets_ = offsets_;
     const Vec3 before = x;
-    solve(x);
+    StepFromPrior(prior, system, x);
     PlaceShapes(offsets_);
     const double moved = (offsets_ - step_offsets_).cwiseAbs().maxCoeff();
     if (std::abs(x.x() - before.x()) + std::abs(x.y() - before.y()) < 1e-5 &&
@@ -553,7 +460,9 @@ void TrackLocaliser::CorrectWithMap(const RangeScan& scan) {
   // No map-error band (LocaliserConfig::map_error_m): the map's error is in
   // the state. P −= P_{·A}·(I + Λ·P_AA)⁻¹·Λ·P_{A·} (the last iteration's
   // factors, as Correct's information), kept symmetric.
-  const MatSeen gain = lu.solve(lambda.topLeftCorner(k, k));
+  const Eigen::Index n = joint_cov_.rows();
+  const Eigen::Index k = system.k;
+  const MatSeen gain = system.lu.solve(system.lambda.topLeftCorner(k, k));
   seen_gain_.leftCols(k).noalias() = seen_cov_.leftCols(k).lazyProduct(gain);
   joint_cov_ -= seen_gain_.leftCols(k).lazyProduct(seen_cov_.leftCols(k).transpose());
   for (Eigen::Index a = 0; a < n; ++a) {
@@ -564,6 +473,108 @@ void TrackLocaliser::CorrectWithMap(const RangeScan& scan) {
   }
   pose_ = {x.x(), x.y(), x.z()};
   FromMat(joint_cov_.topLeftCorner<3, 3>(), cov_);
+}
+
+int TrackLocaliser::LineariseWithMap(const RangeScan& scan, const Eigen::Vector3d& prior,
+                                     const Eigen::Vector3d& x, SeenSystem& s) {
+  const double sd = config_.beam_sd;
+  const double weight = 1.0 / (sd * sd);
+  const auto walls = static_cast<uint32_t>(walls_.size());
+  const auto first_post = static_cast<int>(corners_.size());
+  std::fill(slot_.begin(), slot_.end(), -1);
+  s.features = 0;
+  s.lambda.setZero();
+  s.g.setZero();
+  int used = 0;
+  ForEachHit(scan, x.x(), x.y(), x.z(), [&](double r, double ca, double sa, double ex, double ey) {
+    double d, gx, gy, t;
+    uint32_t shape;
+    if (!Nearest(ex, ey, d, gx, gy, shape, t)) return;
+    // The beam's Jacobian: on the pose, and on its shape's offsets (a
+    // wall's corners by −(1−t)·n and −t·n, a post's centre by −n).
+    std::array<Eigen::Index, 7> local{0, 1, 2};
+    std::array<double, 7> j{gx, gy, r * (-gx * sa + gy * ca)};
+    int m = 3;
+    const auto add_feature = [&](int feature, double share) {
+      int& slot = slot_[static_cast<size_t>(feature)];
+      if (slot < 0) {
+        if (s.features == kMaxSeenFeatures) return;  // held where it is learnt
+        slot = s.features++;
+        s.global[static_cast<size_t>(3 + 2 * slot)] = 3 + 2 * feature;
+        s.global[static_cast<size_t>(4 + 2 * slot)] = 4 + 2 * feature;
+      }
+      local[static_cast<size_t>(m)] = 3 + 2 * slot;
+      local[static_cast<size_t>(m + 1)] = 4 + 2 * slot;
+      j[static_cast<size_t>(m)] = -share * gx;
+      j[static_cast<size_t>(m + 1)] = -share * gy;
+      m += 2;
+    };
+    if (shape < walls) {
+      add_feature(static_cast<int>(wall_corners_[shape][0]), 1.0 - t);
+      add_feature(static_cast<int>(wall_corners_[shape][1]), t);
+    } else {
+      add_feature(first_post + static_cast<int>(shape - walls), 1.0);
+    }
+    const auto at = [&](int a) {
+      return s.global[static_cast<size_t>(local[static_cast<size_t>(a)])];
+    };
+    const auto ja = [&](int a) { return j[static_cast<size_t>(a)]; };
+    // Gated by what the prior allows this beam (3 sd), within the outlier distance.
+    double jpj = 0.0;
+    for (int a = 0; a < m; ++a) {
+      for (int b = 0; b < m; ++b) jpj += ja(a) * ja(b) * joint_cov_(at(a), at(b));
+    }
+    const double predicted_sd = std::sqrt(jpj + sd * sd);
+    if (d > std::min(config_.outlier_m, 3.0 * predicted_sd)) return;
+    const double huber = d <= 2.0 * sd ? 1.0 : 2.0 * sd / d;
+    // The residual linearised at the prior: d + J·(prior − x).
+    double residual = d + j[0] * (prior.x() - x.x()) + j[1] * (prior.y() - x.y()) +
+                      j[2] * WrapAngle(prior.z() - x.z());
+    for (int a = 3; a < m; ++a) {
+      const Eigen::Index o = at(a) - 3;
+      residual += ja(a) * (prior_offsets_(o) - offsets_(o));
+    }
+    for (int a = 0; a < m; ++a) {
+      const Eigen::Index la = local[static_cast<size_t>(a)];
+      s.g(la) += huber * weight * ja(a) * residual;
+      for (int b = 0; b < m; ++b)
+        s.lambda(la, local[static_cast<size_t>(b)]) += huber * weight * ja(a) * ja(b);
+    }
+    ++used;
+  });
+  if (used > 0) s.k = 3 + 2 * s.features;
+  return used;
+}
+
+void TrackLocaliser::StepFromPrior(const Eigen::Vector3d& prior, SeenSystem& s,
+                                   Eigen::Vector3d& pose) {
+  const Eigen::Index n = joint_cov_.rows();
+  const Eigen::Index k = s.k;
+  for (Eigen::Index l = 0; l < k; ++l)
+    seen_cov_.col(l) = joint_cov_.col(s.global[static_cast<size_t>(l)]);
+  for (Eigen::Index a = 0; a < k; ++a) {
+    for (Eigen::Index b = 0; b < k; ++b)
+      s.p_seen(a, b) = seen_cov_(s.global[static_cast<size_t>(a)], b);
+  }
+  // The step from the prior, into pose and offsets.
+  s.m1.setIdentity(k, k);
+  s.m1.noalias() += s.lambda.topLeftCorner(k, k) * s.p_seen.topLeftCorner(k, k);
+  s.lu.compute(s.m1);
+  s.v = s.lu.solve(s.g.head(k));
+  for (Eigen::Index i = 0; i < n; ++i) {
+    double y = 0.0;
+    for (Eigen::Index l = 0; l < k; ++l) y -= seen_cov_(i, l) * s.v(l);
+    if (i < 3) {
+      pose(i) = prior(i) + y;
+    } else {
+      offsets_(i - 3) = prior_offsets_(i - 3) + y;
+    }
+  }
+  pose.z() = WrapAngle(pose.z());
+  for (Eigen::Index f = 0; f < offsets_.size(); f += 2) {  // within the grid's margin
+    const double norm = std::hypot(offsets_(f), offsets_(f + 1));
+    if (norm > config_.offset_bound_m) offsets_.segment<2>(f) *= config_.offset_bound_m / norm;
+  }
 }
 
 }  // namespace haptel::mediator

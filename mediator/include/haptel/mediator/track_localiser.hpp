@@ -206,8 +206,15 @@ class TrackLocaliser {
   /// that met something end within 3 beam_sd of the map at this pose.
   bool Agrees(const RangeScan& scan, double x, double y, double heading) const;
   void Correct(const RangeScan& scan);
-  /// learn_map's update (Correct's, with the map's offsets in the state).
+  /// learn_map's update (Correct's, with the map's offsets in the state):
+  /// each iteration linearises the scan on the parameters it saw
+  /// (LineariseWithMap: returns the beams used) and steps from the prior
+  /// (StepFromPrior), into the pose and offsets_.
   void CorrectWithMap(const RangeScan& scan);
+  struct SeenSystem;
+  int LineariseWithMap(const RangeScan& scan, const Eigen::Vector3d& prior,
+                       const Eigen::Vector3d& x, SeenSystem& system);
+  void StepFromPrior(const Eigen::Vector3d& prior, SeenSystem& system, Eigen::Vector3d& pose);
   /// Moves walls_ and circles_ to the file's shapes displaced by `offsets`.
   void PlaceShapes(const Eigen::VectorXd& offsets);
 
