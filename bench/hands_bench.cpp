@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -337,6 +338,24 @@ class Cursor {
 
 void Sleep(double s) { std::this_thread::sleep_for(std::chrono::duration<double>(s)); }
 
+/// How long (ms) after `from` the first of `samples` (in time order) within
+/// (from, to] had a value that `changed(value, before)` from the last one's
+/// at or before `from`; none when none did (or none came before `from`).
+template <class Sample, class ValueOf, class Changed>
+std::optional<double> FirstChangeMs(const std::vector<Sample>& samples, int64_t from, int64_t to,
+                                    ValueOf value_of, Changed changed) {
+  std::optional<decltype(value_of(samples.front()))> before;
+  for (const Sample& sample : samples) {
+    if (sample.t_ns <= from) {
+      before = value_of(sample);
+      continue;
+    }
+    if (sample.t_ns > to || !before) break;
+    if (changed(value_of(sample), *before)) return 1e-6 * static_cast<double>(sample.t_ns - from);
+  }
+  return std::nullopt;
+}
+
 /// Where the path takes hold. Nothing to grasp (the gestures): the button
 /// at the window's centre. Controls (the cockpits): the pointer hand brought
 /// round to its control open, as the pointer pilot brings it
@@ -561,48 +580,27 @@ void Engaged(const Options& o, const std::filesystem::path& dir, const std::file
       if (held[i]) continue;
       const double way = i % 2 == 0 ? 1.0 : -1.0;
       const int64_t from = step_ns[i], to = step_ns[i + 1];
-      std::optional<double> proxy_from;
-      for (const ProxyAt& p : stages.proxy) {
-        if (p.t_ns <= from) {
-          proxy_from = p.x;
-          continue;
-        }
-        if (p.t_ns > to || !proxy_from) break;
-        if (way * (p.x - *proxy_from) >= kHandMoved_m) {
-          row.to_proxy_ms.push_back(1e-6 * static_cast<double>(p.t_ns - from));
-          break;
-        }
-      }
-      std::optional<double> before;
-      for (const SentCommand& c : stages.commands) {
-        if (c.t_ns <= from) {
-          before = c.forward;
-          continue;
-        }
-        if (c.t_ns > to || !before) break;
-        if (way * (c.forward - *before) > 0.0) {
-          row.to_first_change_ms.push_back(1e-6 * static_cast<double>(c.t_ns - from));
-          break;
-        }
-      }
+      const auto moved = [&](double now, double before) {
+        return way * (now - before) >= kHandMoved_m;
+      };
+      const auto forward_more = [&](double now, double before) {
+        return way * (now - before) > 0.0;
+      };
+      if (auto ms = FirstChangeMs(
+              stages.proxy, from, to, [](const ProxyAt& p) { return p.x; }, moved))
+        row.to_proxy_ms.push_back(*ms);
+      if (auto ms = FirstChangeMs(
+              stages.commands, from, to, [](const SentCommand& c) { return c.forward; },
+              forward_more))
+        row.to_first_change_ms.push_back(*ms);
       // The first sent whose levels (as the vehicle quantises them) differ:
       // the operator's side alone, without the vehicle's reading of it.
       const auto levels = [&](const SentCommand& c) {
         return std::array<int, 2>{models::QuantiseCommand(c.left, speed_levels),
                                   models::QuantiseCommand(c.right, speed_levels)};
       };
-      std::optional<std::array<int, 2>> levels_before;
-      for (const SentCommand& c : stages.commands) {
-        if (c.t_ns <= from) {
-          levels_before = levels(c);
-          continue;
-        }
-        if (c.t_ns > to || !levels_before) break;
-        if (levels(c) != *levels_before) {
-          row.to_levels_sent_ms.push_back(1e-6 * static_cast<double>(c.t_ns - from));
-          break;
-        }
-      }
+      if (auto ms = FirstChangeMs(stages.commands, from, to, levels, std::not_equal_to<>()))
+        row.to_levels_sent_ms.push_back(*ms);
     }
   } catch (const std::exception& e) {
     row.error = e.what();
