@@ -121,6 +121,48 @@ double Distance(const haptics::Vec3d& a, const haptics::Vec3d& b) {
   return std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
 }
 
+/// Each hand open above its control (its approach offset away): where the
+/// operator's reach starts.
+interfaces::HandTargets OpenAbove(const interfaces::HandTargets& at_controls) {
+  interfaces::HandTargets open = at_controls;
+  for (auto& hand : open) {
+    if (!hand) continue;
+    for (int k = 0; k < 3; ++k) hand->position[k] += hand->approach[k];
+    hand->glove = {};
+  }
+  return open;
+}
+
+/// What one gesture changed on the desktop.
+struct GestureSent {
+  int moves = 0;
+  int presses = 0;
+  int notches = 0;
+};
+
+/// Puts on the desktop what `gesture` changes from `sent` (everything, the
+/// `first` time): the pointer, the wheel's notches, the button, the keys.
+GestureSent SendGesture(XDesktop& desktop, const XWindowInfo& window, const PointerGesture& gesture,
+                        const PointerGesture& sent, bool first) {
+  GestureSent out;
+  if (gesture.pointer_used && (first || gesture.pixel != sent.pixel)) {
+    desktop.MovePointer(window, gesture.pixel[0], gesture.pixel[1]);
+    ++out.moves;
+  }
+  for (int64_t n = sent.wheel_notches; n != gesture.wheel_notches;
+       n += n < gesture.wheel_notches ? 1 : -1) {
+    desktop.WheelNotch(n < gesture.wheel_notches);
+    ++out.notches;
+  }
+  if (first || gesture.button != sent.button) desktop.Button(1, gesture.button);
+  for (size_t k = 0; k < gesture.keys.size(); ++k) {
+    if (gesture.keys[k] == sent.keys[k]) continue;
+    desktop.Key(kKeyHandKeysyms[k], gesture.keys[k]);
+    out.presses += gesture.keys[k] ? 1 : 0;
+  }
+  return out;
+}
+
 }  // namespace
 
 double PointerApproach::duration_s() const {
@@ -240,31 +282,35 @@ PilotCounts PointerPilot::counts() const {
   return counts_;
 }
 
+std::pair<std::string, int64_t> PointerPilot::ScreenLine() const {
+  std::lock_guard lock(counts_mutex_);
+  return {screen_line_, screen_line_ns_};
+}
+
+std::optional<XWindowInfo> PointerPilot::AwaitWindow(XDesktop& desktop) {
+  std::optional<XWindowInfo> window;
+  while (!stop_ && !(window = desktop.FindWindow(setup_.window_title))) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  if (window) {
+    std::lock_guard lock(counts_mutex_);
+    counts_.window_found = true;
+  }
+  return window;
+}
+
 void PointerPilot::Run() {
   Parts& p = *parts_;
   try {
     XDesktop desktop;
-    std::optional<XWindowInfo> window;
-    while (!stop_ && !(window = desktop.FindWindow(setup_.window_title))) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    }
+    std::optional<XWindowInfo> window = AwaitWindow(desktop);
     if (!window) return;
-    {
-      std::lock_guard lock(counts_mutex_);
-      counts_.window_found = true;
-    }
     desktop.Focus(*window);
     PointerHands hands(p.device.mouse);
     const interfaces::HandTargets neutral = p.interface->HandTargetsFor({});
     // Controls to grasp: the operator's reach and grasp take hold (no hold at neutral).
     const bool grasps = GloveSum(neutral) > 0.0;
-    // Where the operator's reach starts: each hand open above its control.
-    interfaces::HandTargets open_at_approach = neutral;
-    for (auto& hand : open_at_approach) {
-      if (!hand) continue;
-      for (int k = 0; k < 3; ++k) hand->position[k] += hand->approach[k];
-      hand->glove = {};
-    }
+    const interfaces::HandTargets open_at_approach = OpenAbove(neutral);
     std::optional<PointerApproach> approach;
     if (const auto& goal = open_at_approach[hands.pointer_index()]; grasps && goal) {
       const auto& c = p.device.mouse.centre;
@@ -347,13 +393,7 @@ void PointerPilot::Run() {
       // The screen says the run waits for the controls at neutral (a hand
       // that slipped, a wheel left off zero): a person holds them there
       // again, turning the wheel through zero, and drives on once engaged.
-      std::string screen_line;
-      int64_t screen_line_ns = 0;
-      {
-        std::lock_guard lock(counts_mutex_);
-        screen_line = screen_line_;
-        screen_line_ns = screen_line_ns_;
-      }
+      const auto [screen_line, screen_line_ns] = ScreenLine();
       const double line_t = 1e-9 * static_cast<double>(screen_line_ns - p.t0_ns);
       if (hold_until_s >= 0.0 && t >= hold_until_s && SaysBackToNeutral(screen_line) &&
           line_t > hold_until_s - kTakeHold_s + kScreenLag_s) {
@@ -383,29 +423,14 @@ void PointerPilot::Run() {
       if (const auto& hand = targets[hands.pointer_index()]) pointer_target = hand->position;
       const PointerGesture g =
           hands.Step(targets, neutral, dt, window->width_px, window->height_px);
-      int moves = 0, presses = 0, notches = 0;
-      if (g.pointer_used && (first || g.pixel != sent.pixel)) {
-        desktop.MovePointer(*window, g.pixel[0], g.pixel[1]);
-        ++moves;
-      }
-      for (int64_t n = sent.wheel_notches; n != g.wheel_notches;
-           n += n < g.wheel_notches ? 1 : -1) {
-        desktop.WheelNotch(n < g.wheel_notches);
-        ++notches;
-      }
-      if (first || g.button != sent.button) desktop.Button(1, g.button);
-      for (size_t k = 0; k < g.keys.size(); ++k) {
-        if (g.keys[k] == sent.keys[k]) continue;
-        desktop.Key(kKeyHandKeysyms[k], g.keys[k]);
-        presses += g.keys[k] ? 1 : 0;
-      }
+      const GestureSent changed = SendGesture(desktop, *window, g, sent, first);
       sent = g;
       first = false;
       std::lock_guard lock(counts_mutex_);
       ++counts_.steps;
-      counts_.pointer_moves += moves;
-      counts_.key_presses += presses;
-      counts_.wheel_notches += notches;
+      counts_.pointer_moves += changed.moves;
+      counts_.key_presses += changed.presses;
+      counts_.wheel_notches += changed.notches;
     }
     // Let go, and take the pointer off the window (for the next one).
     if (sent.button) desktop.Button(1, false);

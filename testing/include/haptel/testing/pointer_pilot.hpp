@@ -25,6 +25,7 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "haptel/config/device.hpp"
@@ -159,6 +160,11 @@ class PointerPilot {
  private:
   struct Parts;
   void Run();
+  /// Waits until the window titled setup_.window_title is up (counts it
+  /// found); none when stopped first.
+  std::optional<XWindowInfo> AwaitWindow(XDesktop& desktop);
+  /// The participant's screen line as last read, and when (ns, monotonic).
+  std::pair<std::string, int64_t> ScreenLine() const;
   /// A fresh automatic operator (its reach and grasp start again), having
   /// seen `seen`.
   static void RestartOperator(Parts& p, const std::optional<mediator::Observation>& seen);
