@@ -631,8 +631,13 @@ void SessionLoop::FeedView(int64_t now, double t) {
     const video::VideoReceiver& video = vehicles_.front()->link->video();
     const uint64_t frames = video.Stats().frames;
     if (frames != pictures_seen_) {
-      pictures_seen_ = frames;
-      first_.on_picture(video.LatestPicture(), frames);
+      // Frames can be counted before one decodes (an H.264 stream's first
+      // key frame still on its way): no picture yet is tried again next time.
+      std::vector<uint8_t> jpeg = video.LatestPicture();
+      if (!jpeg.empty()) {
+        pictures_seen_ = frames;
+        first_.on_picture(std::move(jpeg), frames);
+      }
     }
   }
 }

@@ -103,7 +103,9 @@ size_t LargestAnswers(const std::map<std::string, Questionnaire>& questionnaires
 /// the session that runs the trial (SessionSetup::on_picture).
 class Thumbnail {
  public:
+  /// An empty picture keeps the last one: the page never counts frames it cannot show.
   void Set(std::vector<uint8_t> jpeg, uint64_t frames) {
+    if (jpeg.empty()) return;
     const std::lock_guard<std::mutex> lock(mutex_);
     jpeg_ = std::move(jpeg);
     frames_ = frames;

@@ -298,6 +298,15 @@ TEST_CASE("the thumbnail is the picture the trial's session hands over, as it ca
   CHECK(picture->get_header_value("Content-Type") == "image/jpeg");
   CHECK(std::vector<uint8_t>(picture->body.begin(), picture->body.end()) == jpeg);
   CHECK(console.video_frames() == 17);
+  // Frames counted before one decodes hand over no picture: the page keeps
+  // the last one and its count, never a count with nothing to show (an
+  // e2e study read 404 after seeing frames).
+  console.SetPicture({}, 25);
+  const auto kept = client.Get("/video.jpg");
+  REQUIRE(kept);
+  CHECK(kept->status == 200);
+  CHECK(std::vector<uint8_t>(kept->body.begin(), kept->body.end()) == jpeg);
+  CHECK(console.video_frames() == 17);
 }
 
 TEST_CASE("Simulated drivers come from the study file, not the console") {
