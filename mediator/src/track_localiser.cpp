@@ -245,6 +245,48 @@ std::vector<MapFeature> TrackLocaliser::Map() const {
   return map;
 }
 
+Pose2 TrackLocaliser::OnFileMap(const Pose2& pose) const {
+  if (!config_.learn_map) return pose;
+  // Weighted 2-D Procrustes from the learnt features onto the file's:
+  // centroids, then the rotation from the cross-covariance.
+  const double inv_two_r2 = 1.0 / (2.0 * config_.local_radius_m * config_.local_radius_m);
+  const auto feature = [&](size_t f, Vec2& file, Vec2& learnt) {
+    file = f < corners_.size()
+               ? corners_[f]
+               : Vec2(file_circles_[f - corners_.size()].cx, file_circles_[f - corners_.size()].cy);
+    learnt = file + Vec2(offsets_(2 * static_cast<Eigen::Index>(f)),
+                         offsets_(2 * static_cast<Eigen::Index>(f) + 1));
+  };
+  const size_t features = corners_.size() + file_circles_.size();
+  const Vec2 p(pose.x, pose.y);
+  double weights = 0.0;
+  Vec2 learnt_centre = Vec2::Zero(), file_centre = Vec2::Zero();
+  Vec2 file, learnt;
+  for (size_t f = 0; f < features; ++f) {
+    feature(f, file, learnt);
+    const double w = std::exp(-(learnt - p).squaredNorm() * inv_two_r2);
+    weights += w;
+    learnt_centre += w * learnt;
+    file_centre += w * file;
+  }
+  if (weights < 1e-12) return pose;  // nothing of the track near: nothing to carry it by
+  learnt_centre /= weights;
+  file_centre /= weights;
+  double cos_sum = 0.0, sin_sum = 0.0;
+  for (size_t f = 0; f < features; ++f) {
+    feature(f, file, learnt);
+    const double w = std::exp(-(learnt - p).squaredNorm() * inv_two_r2);
+    const Vec2 a = learnt - learnt_centre, b = file - file_centre;
+    cos_sum += w * a.dot(b);
+    sin_sum += w * (a.x() * b.y() - a.y() * b.x());
+  }
+  const double turn = std::atan2(sin_sum, cos_sum);
+  const double c = std::cos(turn), s = std::sin(turn);
+  const Vec2 d = p - learnt_centre;
+  return {file_centre.x() + c * d.x() - s * d.y(), file_centre.y() + s * d.x() + c * d.y(),
+          pose.heading + turn};
+}
+
 void TrackLocaliser::PlaceShapes(const Eigen::VectorXd& offsets) {
   for (size_t w = 0; w < walls_.size(); ++w) {
     const auto [a, b] = wall_corners_[w];

@@ -143,6 +143,9 @@ struct LocaliserConfig {
   double corner_sd_m = 0.03;
   double post_sd_m = 0.03;
   double offset_bound_m = 0.12;
+  /// OnFileMap's reach (m): about a corridor's width, the walls and posts
+  /// that bound it where the robot is.
+  double local_radius_m = 1.0;
 };
 
 /// A wall corner or a post's centre: where the file has it, and where the
@@ -179,6 +182,15 @@ class TrackLocaliser {
   /// The map as learnt: each unique wall corner (in the order of the walls,
   /// a before b) and then each post's centre (Track::round_obstacles).
   std::vector<MapFeature> Map() const;
+  /// `pose` (in the map as learnt) carried to the same place among the
+  /// file's walls and posts: the rigid motion that best takes the learnt
+  /// features near it onto the file's (weighted least squares, weights
+  /// exp(-d²/2r²) with d the feature's distance from the pose and r
+  /// config local_radius_m), applied to it. What a driver steering by the
+  /// corridor around the robot sees of it on the file's track, however the
+  /// learnt map's frame has settled. `pose` itself without learn_map.
+  /// Allocation-free.
+  Pose2 OnFileMap(const Pose2& pose) const;
   /// The joint state's size: 3, and 2 per feature with learn_map.
   int state_size() const { return 3 + static_cast<int>(offsets_.size()); }
 
