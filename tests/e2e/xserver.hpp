@@ -45,8 +45,11 @@ inline std::string EndWithEscape(Child& run) {
         XDoTool({"search", "--sync", "--name", "Haptel", "windowfocus", "--sync", "key", "Escape"});
   }
   const int code = run.Wait(60.0);
-  INFO(run.out() << run.err());
-  REQUIRE(pressed == 0);
+  // What says the key reached the window is the run's end, aborted by it:
+  // xdotool itself may not come back while the window it typed into closes
+  // (a suite at load: the run aborted, "the view was closed", and xdotool
+  // still waiting at 30 s).
+  INFO("xdotool: " << pressed << "\n" << run.out() << run.err());
   CHECK(code == 1);
   const std::string json = run.LastLine();
   CHECK(JsonFieldOf(json, "outcome") == "aborted");
