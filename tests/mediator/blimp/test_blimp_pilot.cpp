@@ -6,6 +6,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -386,7 +387,8 @@ TEST_CASE(
 
 TEST_CASE(
     "blimp pilot: neutral until it has seen the blimp, then it acts on what it saw a reaction "
-    "ago, climbing out with thrust up and forwards") {
+    "ago: a second on the pad reading the wind, then (still air) climbing out with thrust up "
+    "and forwards") {
   BlimpAutoPilot pilot(Line());
   BlimpCommand c = pilot.Decide(0.0);
   CHECK(c.power == 0.0);
@@ -395,7 +397,13 @@ TEST_CASE(
   CHECK(c.power == 0.0);
   CHECK(pilot.phase() == BlimpAutoPilot::Phase::kGround);
   c = pilot.Decide(0.2);
-  CHECK(pilot.phase() == BlimpAutoPilot::Phase::kTakeOff);
+  CHECK(pilot.phase() == BlimpAutoPilot::Phase::kGround);  // reading the wind on the pad
+  CHECK(c.power == 0.0);
+  CHECK_FALSE(pilot.wind_known());
+  pilot.Observe(At(1.0, 0.0, 0.0, 0.8, true, 0.0, 0.0));
+  c = pilot.Decide(1.2);
+  CHECK(pilot.phase() == BlimpAutoPilot::Phase::kClimbOut);
+  CHECK(pilot.wind_known());  // calm: known enough
   CHECK(c.power > 0.2);
   // The helix plane tilted up, and forwards: it climbs out at speed.
   CHECK(c.helix > 0.1);
@@ -534,9 +542,12 @@ BlimpObservation Observed(const models::SimBlimp& sim) {
 /// loop ticked in simulated time — and the cockpit reads the command from
 /// where the hands are; without, from where the pilot holds them (and
 /// `cockpit_ok` says whether that is the command it wanted). Simulated time
-/// only. `through_gates`: ends once past the last gate's plane.
+/// only. `through_gates`: ends once past the last gate's plane. `watch`:
+/// shown each observation and the pilot that has just seen it.
+using Watch = std::function<void(const BlimpObservation&, const BlimpAutoPilot&)>;
 Flight Fly(const AirshipConfig& airship, const BlimpCourseConfig& course, bool arms = true,
-           const BlimpPilotConfig& pilot_config = {}, bool through_gates = false) {
+           const BlimpPilotConfig& pilot_config = {}, bool through_gates = false,
+           const Watch& watch = nullptr) {
   models::SimBlimp sim(airship, course);
   BlimpAutoPilot pilot(course, PilotKnowing(airship, pilot_config));
   BlimpLapTimer lap(course);
@@ -577,6 +588,7 @@ Flight Fly(const AirshipConfig& airship, const BlimpCourseConfig& course, bool a
       last_p = o.position;
       pilot.Observe(o);
       lap.Update(o);
+      if (watch) watch(o, pilot);
     }
     if (k % decide_every == 0) {
       const BlimpCommand intent = pilot.Decide(sim.time_s());

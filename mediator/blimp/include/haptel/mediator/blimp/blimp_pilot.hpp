@@ -66,6 +66,33 @@ struct BlimpPilotConfig {
   /// wind, the hop's shed). Long enough to climb over a roof at max_climb.
   double drift_lookahead_s = 8.0;
   double takeoff_height = 2.5;  ///< m above the start before heading off at speed
+  /// The take-off, as an airship is launched: the wind is found first. The
+  /// blimp rises straight up over the pad (no forward thrust) to
+  /// takeoff_height — higher where its drift would take it onto a building —
+  /// and holds there, drifting with the air, until its wind estimate is
+  /// steady: at least wind_watch_min_s off the ground, and the drift's
+  /// measured wind within wind_steady_mps of the estimate for wind_steady_s
+  /// (at most wind_watch_max_s). Only then does it head off, into the wind
+  /// first (until the rudder bites), with the wind it knows in its crab.
+  /// s on the pad reading the airspeed, which at rest is the wind's speed
+  /// (less, once the wind drags the hull: then it goes at once).
+  double pad_watch_s = 1.0;
+  /// m/s: a wind read on the pad at least this fast is watched from over the
+  /// pad before leaving; a lighter one is learnt on the way (the take-off
+  /// at the cruise's airspeed, as before). It drifts the hull a couple of
+  /// metres in the second or two before the rudder bites; harsh's 3 m/s
+  /// carried it 20 m onto the hop's shed with a 400-ms link. (lab blows
+  /// 1.0 +/- 0.3 m/s, harsh 3.0 +/- 0.5.)
+  double watch_wind_speed = 1.6;
+  double wind_watch_min_s = 3.0;
+  double wind_watch_tau_s = 2.0;  ///< s: the estimate's smoothing while watching (4 s after)
+  double wind_settle_s = 1.5;     ///< s off the ground before the drift tells the wind
+  /// m/s: the climb while watching; faster, the hull pitches and rocks on its
+  /// vertical thrust and glides off through the air along its axis.
+  double watch_climb = 1.5;
+  double wind_steady_mps = 0.8;
+  double wind_steady_s = 1.0;
+  double wind_watch_max_s = 12.0;
   /// m/s: the airspeed wanted while climbing out to takeoff_height. Slower,
   /// the rudder does not bite (tail_rotor_speed) and the hull goes where a
   /// cross wind carries it and turns as the air turns it (a tail wind turns
@@ -137,14 +164,15 @@ struct BlimpPilotConfig {
   double pitch_rate_gain = 1.0;   ///< elevator per rad/s of pitch rate
   double pitch_per_climb = 0.08;  ///< rad of nose-up per m/s of climb wanted
   // What the pilot knows of its blimp (PilotKnowing).
-  double full_thrust_n = 29.4;  ///< both main motors at full power
-  double max_helix_deg = 90.0;  ///< the helix plane's tilt at full command
+  double full_thrust_n = 29.4;     ///< both main motors at full power
+  double max_helix_deg = 90.0;     ///< the helix plane's tilt at full command
+  double helix_rate_deg_s = 90.0;  ///< how fast the helix plane tilts
 
   void ValidateOrThrow() const;
 };
 
 /// The pilot's knowledge of its blimp taken from the airship's own
-/// parameters — full thrust and the helix plane's range — so that its
+/// parameters — full thrust, the helix plane's range and rate — so that its
 /// hands give the forces it means on the blimp the vehicle file describes;
 /// the rest of `config` as given. (Its feel for the drag stays its own:
 /// drag_per_speed2 is a rounded 0.31 where ½·ρ·Cd·V^⅔ of sim-blimp.yaml is
@@ -153,7 +181,9 @@ BlimpPilotConfig PilotKnowing(const AirshipConfig& airship, BlimpPilotConfig con
 
 class BlimpAutoPilot {
  public:
-  enum class Phase { kGround, kTakeOff, kGates, kLanding, kLanded };
+  /// kTakeOff: up over the pad, watching the wind; kClimbOut: into the
+  /// wind until the rudder bites (in a wind that needs it).
+  enum class Phase { kGround, kTakeOff, kClimbOut, kGates, kLanding, kLanded };
 
   /// Validates and copies both (ConfigFieldError).
   BlimpAutoPilot(const BlimpCourseConfig& course, const BlimpPilotConfig& config = {});
@@ -179,6 +209,9 @@ class BlimpAutoPilot {
   double target_height() const { return target_z_; }
   /// The horizontal wind it estimates (world frame, m/s).
   const Eigen::Vector2d& wind() const { return wind_; }
+  /// The wind estimate is steady (the take-off's watch is over); when.
+  bool wind_known() const { return wind_known_s_ >= 0.0; }
+  double wind_known_s() const { return wind_known_s_; }
 
  private:
   /// The newest observation seen at or before t; null when none.
@@ -205,12 +238,15 @@ class BlimpAutoPilot {
   /// Off the ground, through the last gate, down in (or out of) the circle.
   void NextPhase(const BlimpObservation& o);
   // One function per phase: each sets target_z_ and says what it wants.
+  Aim WatchWind(const BlimpObservation& o);
   Aim ClimbOut(const BlimpObservation& o);
   Aim FlyGate(const BlimpObservation& o);
   Aim Land(const BlimpObservation& o);
   BlimpCommand Landed();
   /// A wind the rudder bites in, heading into it (at least tail_rotor_speed).
   bool StrongWind() const { return wind_.norm() >= config_.tail_rotor_speed; }
+  /// The wind read on the pad is fresh: watched before leaving, then into it.
+  bool StrongPadWind() const { return pad_wind_ >= config_.watch_wind_speed; }
   /// The camera at the next gate, or at the landing circle.
   void Look(const BlimpObservation& o, BlimpCommand& c) const;
   /// The turn (rudder, or tail rotor) towards the aim's heading; begins and
@@ -249,6 +285,12 @@ class BlimpAutoPilot {
   double turnabout_since_ = -1e9;  ///< when the turnabout began, or the last one ended
   Eigen::Vector2d wind_ = Eigen::Vector2d::Zero();
   bool wind_from_reports_ = false;  ///< ObserveReported was called: the wind is theirs
+  double airborne_since_ = -1.0;    ///< the first observation off the ground (watching the wind)
+  double wind_steady_since_ = 0.0;  ///< since when the measured wind agrees with the estimate
+  double wind_known_s_ = -1.0;      ///< when the wind estimate became steady
+  double pad_since_ = 0.0, pad_airspeed_sum_ = 0.0, pad_wind_ = 0.0;
+  int pad_samples_ = 0;
+  double takeoff_t_ = -1.0;  ///< when the first decision was taken (the helix plane tilts up)
   double last_report_t_ = 0.0;
 };
 
