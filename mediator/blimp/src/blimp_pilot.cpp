@@ -45,7 +45,6 @@ void BlimpPilotConfig::ValidateOrThrow() const {
   check::Number("wind_watch_min_s", wind_watch_min_s, 0.0, 60.0);
   check::Number("wind_watch_tau_s", wind_watch_tau_s, 0.1, 60.0);
   check::Number("wind_settle_s", wind_settle_s, 0.0, wind_watch_min_s);
-  check::Number("watch_climb", watch_climb, 0.05, max_climb);
   check::Number("wind_steady_mps", wind_steady_mps, 0.01, 10.0);
   check::Number("wind_steady_s", wind_steady_s, 0.0, 60.0);
   check::Number("wind_watch_max_s", wind_watch_max_s, wind_watch_min_s, 120.0);
@@ -150,7 +149,7 @@ void BlimpAutoPilot::TakeIn(const BlimpObservation& o) {
     have_used_ = true;
     start_z_ = o.position.z();
     phase_ = Phase::kGround;
-    pad_since_ = o.t_s;
+    if (!wind_from_reports_) ReadPad(o);
     used_ = o;
     return;
   }
@@ -159,13 +158,32 @@ void BlimpAutoPilot::TakeIn(const BlimpObservation& o) {
   yaw_rate_ = WrapAngle(o.yaw - used_.yaw) / h;
   pitch_rate_ = (o.pitch - used_.pitch) / h;
   // The gate flown to, crossed (through it, or near it: missed, on to the next).
-  if (phase_ == Phase::kGates) {
+  if (phase_ == Phase::kGates || phase_ == Phase::kClimbOut) {
     const auto pass = CrossGate(gates_[static_cast<size_t>(gate_)], used_.position, o.position);
     if (pass && pass->crossing != BlimpGateCrossing::kIgnored) ++gate_;
     if (gate_ >= static_cast<int>(gates_.size())) phase_ = Phase::kLanding;
   }
-  if (!wind_from_reports_) EstimateWind(o, h);
+  if (!wind_from_reports_) {
+    ReadPad(o);
+    EstimateWind(o, h);
+  }
   used_ = o;
+}
+
+void BlimpAutoPilot::ReadPad(const BlimpObservation& o) {
+  // At rest on the pad the airspeed is the wind's speed (an anemometer at
+  // the mast). Read for pad_watch_s, or until the wind drags the hull along.
+  if (pad_read_) return;
+  if (pad_samples_ == 0) pad_since_ = o.t_s;
+  const bool at_rest = Horizontal(o.velocity).norm() < 0.3;
+  if (at_rest) {
+    pad_airspeed_sum_ += o.airspeed;
+    ++pad_samples_;
+  }
+  if (o.t_s - pad_since_ >= config_.pad_watch_s || !at_rest) {
+    pad_read_ = true;
+    pad_wind_ = pad_samples_ > 0 ? pad_airspeed_sum_ / pad_samples_ : 0.0;
+  }
 }
 
 void BlimpAutoPilot::EstimateWind(const BlimpObservation& o, double h) {
@@ -177,7 +195,12 @@ void BlimpAutoPilot::EstimateWind(const BlimpObservation& o, double h) {
   const Eigen::Vector2d measured =
       Horizontal(o.velocity) - (wind_known() ? o.airspeed : HorizontalAirspeed(o)) * heading;
   if (wind_known()) {
-    wind_ += (measured - wind_) * std::min(1.0, h / 4.0);
+    // Slower than the rudder bites the hull slips sideways through the air
+    // (turnabouts, the landing), and the slip would be read as wind (0.8
+    // m/s of it in lab's landings, and the nose put 25 deg off the wind):
+    // the estimate holds until the hull flies along its heading again.
+    if (HorizontalAirspeed(o) >= config_.tail_rotor_speed)
+      wind_ += (measured - wind_) * std::min(1.0, h / 4.0);
     return;
   }
   // Watching: the first second off the pad tells nothing (the air still
@@ -202,6 +225,7 @@ void BlimpAutoPilot::EstimateWind(const BlimpObservation& o, double h) {
 }
 
 void BlimpAutoPilot::ObserveReported(const BlimpObservation& reported) {
+  ReadPad(reported);
   if (wind_from_reports_ && reported.t_s > last_report_t_)
     EstimateWind(reported, reported.t_s - last_report_t_);
   wind_from_reports_ = true;
@@ -209,24 +233,14 @@ void BlimpAutoPilot::ObserveReported(const BlimpObservation& reported) {
 }
 
 void BlimpAutoPilot::NextPhase(const BlimpObservation& o) {
-  // On the pad the airspeed is the wind's speed (an anemometer at the
-  // mast): a fresh wind is watched from over the pad before leaving; a
-  // light one is not.
-  if (phase_ == Phase::kGround) {
-    // (At rest only; once the wind drags the hull along, it must be up and away.)
-    const bool at_rest = Horizontal(o.velocity).norm() < 0.3;
-    if (at_rest) {
-      pad_airspeed_sum_ += o.airspeed;
-      ++pad_samples_;
-    }
-    if (o.t_s - pad_since_ >= config_.pad_watch_s || !at_rest) {
-      pad_wind_ = pad_samples_ > 0 ? pad_airspeed_sum_ / pad_samples_ : 0.0;
-      if (StrongPadWind()) {
-        phase_ = Phase::kTakeOff;
-      } else {
-        phase_ = Phase::kClimbOut;
-        wind_known_s_ = o.t_s;  // light: learnt on the way, the rudder biting over it
-      }
+  // The wind read on the pad: a fresh one is watched from over the pad
+  // before leaving; a light one is not.
+  if (phase_ == Phase::kGround && pad_read_) {
+    if (StrongPadWind()) {
+      phase_ = Phase::kTakeOff;
+    } else {
+      phase_ = Phase::kClimbOut;
+      wind_known_s_ = o.t_s;  // light: learnt on the way, the rudder biting over it
     }
   }
   // Up over the pad, and the wind known: into it.
@@ -254,8 +268,10 @@ void BlimpAutoPilot::NextPhase(const BlimpObservation& o) {
 BlimpAutoPilot::Aim BlimpAutoPilot::WatchWind(const BlimpObservation& o) {
   // Straight up and hold, no forward thrust, the heading let be: the hull
   // drifts with the air, which shows the wind. Higher over what it drifts onto.
+  // Once the drift shows which way the wind blows, the nose turns into it
+  // (on the tail rotor: slow, the rudder does not bite), ready to leave.
   Aim aim;
-  aim.bearing = o.yaw;
+  aim.bearing = airborne_since_ >= 0.0 && wind_.norm() > 0.5 ? Bearing(-wind_) : o.yaw;
   aim.crab = false;
   aim.forward_speed = 0.0;
   target_z_ =
@@ -325,7 +341,17 @@ BlimpAutoPilot::Aim BlimpAutoPilot::Land(const BlimpObservation& o) {
   target_z_ = std::max(target_z_, SafeHeight(o, landing));
   // The ground velocity wanted: towards the centre, slowing as it nears
   // it as fast as the hull coasts down on its own drag.
-  const double speed = ApproachSpeed(distance) * std::min(1.0, distance / 2.0);
+  double speed = ApproachSpeed(distance) * std::min(1.0, distance / 2.0);
+  // Against the wind, short of the circle, no slower than the rudder bites
+  // through the air: the head wind brakes the hull when the power goes
+  // (downwind of the circle, at the coasting speed the rudder did not bite
+  // and the hull circled on its tail rotor, drifting away).
+  if (distance > 0.8 * course_.landing.radius) {
+    const double headwind = -wind_.dot(to / distance);
+    if (headwind > config_.landing_headwind)
+      speed = std::max(speed, std::min(config_.tail_rotor_speed + 0.5 - headwind,
+                                       config_.cruise_airspeed - headwind));
+  }
   const Eigen::Vector2d wanted =
       distance > 1e-6 ? Eigen::Vector2d(to / distance * speed) : Eigen::Vector2d::Zero();
   Aim aim;
@@ -345,11 +371,13 @@ BlimpAutoPilot::Aim BlimpAutoPilot::Land(const BlimpObservation& o) {
     const Eigen::Vector2d air = wanted - wind_;
     aim.crab = false;
     aim.bearing = air.norm() > config_.landing_min_air ? Bearing(air) : Bearing(-wind_);
-  } else if (distance > (wind_.norm() > 0.4 ? 0.8 * course_.landing.radius : 3.0)) {
+  } else if (distance > 0.8 * course_.landing.radius) {
     // A light wind: for the centre, the tail rotor turning the slow hull.
     aim.bearing = Bearing(to);
   } else {
-    // Close: face into the wind (the thrust can only push forwards).
+    // Close: face into the wind (the thrust can only push forwards); in
+    // calm air hold the heading (steered for the centre to the last 3 m,
+    // the hull turned on its tail rotor round the centre and touched).
     aim.bearing = wind_.norm() > 0.4 ? Bearing(-wind_) : o.yaw;
     aim.crab = false;
   }
@@ -467,10 +495,14 @@ double BlimpAutoPilot::Steer(const BlimpObservation& o, const Aim& aim, double t
                                      climb_rate < config_.turnabout_climb);
   // (Climbing out too: a hull heavier than its air sinks with the power
   // off, and near the pad the ground is close.)
+  // Nor with the ground a metre below and coming up, unless landing on it
+  // (a heavier gondola sank 3 m onto it, the height error never twice the limit).
   const bool height_lost =
-      (aim.landing || phase_ == Phase::kClimbOut) &&
-      (std::abs(height_error) > 2.0 * config_.turnabout_height_error ||
-       (climb_rate > 2.0 * config_.turnabout_climb && o.velocity.z() * height_error < 0.0));
+      ((aim.landing || phase_ == Phase::kTakeOff || phase_ == Phase::kClimbOut) &&
+       (std::abs(height_error) > 2.0 * config_.turnabout_height_error ||
+        (climb_rate > 2.0 * config_.turnabout_climb && o.velocity.z() * height_error < 0.0))) ||
+      (!sinking_ && height_error > 0.0 && o.position.z() - start_z_ < config_.landing_hover &&
+       o.velocity.z() < -0.1);
   // Slow and off course, a turnabout: the gesture cockpit's tail rotor turns
   // only with the power off (the left hand sideways at zero power), so the
   // pilot lets go of the power and turns on the tail rotor until it heads
@@ -506,10 +538,8 @@ void BlimpAutoPilot::Thrust(const BlimpObservation& o, const Aim& aim, double dt
       aim.landing ? std::min(config_.landing_max_sink,
                              config_.touchdown_sink + config_.flare_gain * std::max(0.0, height))
                   : config_.max_sink;
-  const double max_climb = aim.landing                 ? config_.landing_climb
-                           : phase_ == Phase::kTakeOff ? config_.watch_climb
-                                                       : config_.max_climb;
-  climb_ = std::clamp(config_.height_gain * (target_z_ - o.position.z()), -max_sink, max_climb);
+  climb_ = std::clamp(config_.height_gain * (target_z_ - o.position.z()), -max_sink,
+                      aim.landing ? config_.landing_climb : config_.max_climb);
   const double climb_error = climb_ - o.velocity.z();
   // (The integrators hold still while the power is off for a turnabout.)
   if (!turnabout_)
