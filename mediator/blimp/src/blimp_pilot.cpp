@@ -19,6 +19,13 @@ Eigen::Vector2d Horizontal(const Eigen::Vector3d& v) { return {v.x(), v.y()}; }
 
 double Bearing(const Eigen::Vector2d& d) { return std::atan2(d.y(), d.x()); }
 
+/// The airspeed's horizontal part: the air's vertical speed taken as the
+/// climb's (no vertical wind). Climbing straight up in still air, the whole
+/// airspeed is the climb's, none of it along the heading.
+double HorizontalAirspeed(const BlimpObservation& o) {
+  return std::sqrt(std::max(0.0, o.airspeed * o.airspeed - o.velocity.z() * o.velocity.z()));
+}
+
 }  // namespace
 
 void BlimpPilotConfig::ValidateOrThrow() const {
@@ -33,6 +40,14 @@ void BlimpPilotConfig::ValidateOrThrow() const {
   check::Number("drift_lookahead_s", drift_lookahead_s, 0.0, 60.0);
   check::Number("takeoff_height", takeoff_height, 0.1, 50.0);
   check::Number("climb_out_airspeed", climb_out_airspeed, 0.0, cruise_airspeed);
+  check::Number("pad_watch_s", pad_watch_s, 0.0, 60.0);
+  check::Number("watch_wind_speed", watch_wind_speed, 0.0, 20.0);
+  check::Number("wind_watch_min_s", wind_watch_min_s, 0.0, 60.0);
+  check::Number("wind_watch_tau_s", wind_watch_tau_s, 0.1, 60.0);
+  check::Number("wind_settle_s", wind_settle_s, 0.0, wind_watch_min_s);
+  check::Number("wind_steady_mps", wind_steady_mps, 0.01, 10.0);
+  check::Number("wind_steady_s", wind_steady_s, 0.0, 60.0);
+  check::Number("wind_watch_max_s", wind_watch_max_s, wind_watch_min_s, 120.0);
   check::Number("height_gain", height_gain, 0.01, 10.0);
   check::Number("max_climb", max_climb, 0.05, 10.0);
   check::Number("max_sink", max_sink, 0.05, 10.0);
@@ -68,11 +83,13 @@ void BlimpPilotConfig::ValidateOrThrow() const {
   check::Number("pitch_per_climb", pitch_per_climb, 0.0, 1.0);
   check::Number("full_thrust_n", full_thrust_n, 0.01, 1e5);
   check::Number("max_helix_deg", max_helix_deg, 1.0, 180.0);
+  check::Number("helix_rate_deg_s", helix_rate_deg_s, 1.0, 10000.0);
 }
 
 BlimpPilotConfig PilotKnowing(const AirshipConfig& airship, BlimpPilotConfig config) {
   config.full_thrust_n = airship.max_thrust;
   config.max_helix_deg = airship.max_helix_deg;
+  config.helix_rate_deg_s = airship.helix_rate_deg_s;
   return config;
 }
 
@@ -131,7 +148,8 @@ void BlimpAutoPilot::TakeIn(const BlimpObservation& o) {
   if (!have_used_) {
     have_used_ = true;
     start_z_ = o.position.z();
-    phase_ = Phase::kTakeOff;
+    phase_ = Phase::kGround;
+    if (!wind_from_reports_) ReadPad(o);
     used_ = o;
     return;
   }
@@ -140,13 +158,37 @@ void BlimpAutoPilot::TakeIn(const BlimpObservation& o) {
   yaw_rate_ = WrapAngle(o.yaw - used_.yaw) / h;
   pitch_rate_ = (o.pitch - used_.pitch) / h;
   // The gate flown to, crossed (through it, or near it: missed, on to the next).
-  if (phase_ == Phase::kGates) {
+  if (phase_ == Phase::kGates || phase_ == Phase::kClimbOut) {
     const auto pass = CrossGate(gates_[static_cast<size_t>(gate_)], used_.position, o.position);
     if (pass && pass->crossing != BlimpGateCrossing::kIgnored) ++gate_;
     if (gate_ >= static_cast<int>(gates_.size())) phase_ = Phase::kLanding;
   }
-  if (!wind_from_reports_) EstimateWind(o, h);
+  if (!wind_from_reports_) {
+    ReadPad(o);
+    EstimateWind(o, h);
+  }
   used_ = o;
+}
+
+void BlimpAutoPilot::ReadPad(const BlimpObservation& o) {
+  // At rest on the pad the airspeed is the wind's speed (an anemometer at
+  // the mast). Read for pad_watch_s, or until the wind drags the hull along.
+  if (pad_read_) return;
+  if (pad_samples_ == 0) pad_since_ = o.t_s;
+  const bool at_rest = Horizontal(o.velocity).norm() < 0.3;
+  if (at_rest) {
+    pad_airspeed_sum_ += o.airspeed;
+    ++pad_samples_;
+  }
+  if (o.t_s - pad_since_ >= config_.pad_watch_s || !at_rest) {
+    pad_read_ = true;
+    pad_wind_ = pad_samples_ > 0 ? pad_airspeed_sum_ / pad_samples_ : 0.0;
+    // Dragged along the ground, the hull goes with the wind, slower than it
+    // (harsh's heavier gondola slides from the start: seen a moment late,
+    // through a 400-ms link, it was never at rest and read as calm).
+    if (!at_rest && o.contact)
+      pad_wind_ = std::max(pad_wind_, Horizontal(o.velocity).norm() + o.airspeed);
+  }
 }
 
 void BlimpAutoPilot::EstimateWind(const BlimpObservation& o, double h) {
@@ -154,11 +196,44 @@ void BlimpAutoPilot::EstimateWind(const BlimpObservation& o, double h) {
   // (sideslip neglected), smoothed over a few seconds.
   if (o.contact) return;
   const Eigen::Vector2d heading(std::cos(o.yaw), std::sin(o.yaw));
-  const Eigen::Vector2d measured = Horizontal(o.velocity) - o.airspeed * heading;
-  wind_ += (measured - wind_) * std::min(1.0, h / 4.0);
+  // (While watching the wind, the airspeed's horizontal part: the hull climbs straight up.)
+  const Eigen::Vector2d measured =
+      Horizontal(o.velocity) - (wind_known() ? o.airspeed : HorizontalAirspeed(o)) * heading;
+  if (wind_known()) {
+    // Slower than the rudder bites the hull slips sideways through the air
+    // (turnabouts, the landing), and the slip would be read as wind (0.8
+    // m/s of it in lab's landings, and the nose put 25 deg off the wind):
+    // the estimate holds until the hull flies along its heading again.
+    if (HorizontalAirspeed(o) >= config_.tail_rotor_speed)
+      wind_ += (measured - wind_) * std::min(1.0, h / 4.0);
+    return;
+  }
+  // Watching: the first second off the pad tells nothing (the air still
+  // comes from the side, taken as from ahead); then the drift, smoothed.
+  // (Clear of the pad: a hull the wind drags along the ground is held back by it.)
+  // (Nor before the pilot has seen where the pad is: the reported states
+  // come before its first decision, and at rest on the pad they would read
+  // the air from the side as a steady wind from ahead.)
+  if (airborne_since_ < 0.0 && (!have_used_ || o.position.z() - start_z_ < 0.5)) return;
+  if (airborne_since_ < 0.0) airborne_since_ = o.t_s;
+  if (o.t_s - airborne_since_ < config_.wind_settle_s) {
+    wind_ = measured;
+    wind_steady_since_ = o.t_s;
+    return;
+  }
+  wind_ += (measured - wind_) * std::min(1.0, h / config_.wind_watch_tau_s);
+  // Known once off the ground long enough and the drift measures what the
+  // estimate says for a while (or at the latest wind_watch_max_s).
+  if ((measured - wind_).norm() > config_.wind_steady_mps) wind_steady_since_ = o.t_s;
+  const double airborne = o.t_s - airborne_since_;
+  if ((airborne >= config_.wind_watch_min_s &&
+       o.t_s - wind_steady_since_ >= config_.wind_steady_s) ||
+      airborne >= config_.wind_watch_max_s)
+    wind_known_s_ = o.t_s;
 }
 
 void BlimpAutoPilot::ObserveReported(const BlimpObservation& reported) {
+  ReadPad(reported);
   if (wind_from_reports_ && reported.t_s > last_report_t_)
     EstimateWind(reported, reported.t_s - last_report_t_);
   wind_from_reports_ = true;
@@ -166,7 +241,26 @@ void BlimpAutoPilot::ObserveReported(const BlimpObservation& reported) {
 }
 
 void BlimpAutoPilot::NextPhase(const BlimpObservation& o) {
-  if (phase_ == Phase::kTakeOff && o.position.z() - start_z_ > config_.takeoff_height)
+  // The wind read on the pad: a fresh one is watched from over the pad
+  // before leaving; a light one is not.
+  if (phase_ == Phase::kGround && pad_read_) {
+    if (StrongPadWind()) {
+      phase_ = Phase::kTakeOff;
+    } else {
+      phase_ = Phase::kClimbOut;
+      wind_known_s_ = o.t_s;  // light: learnt on the way, the rudder biting over it
+    }
+  }
+  // Up over the pad, and the wind known: into it.
+  if (phase_ == Phase::kTakeOff && wind_known() &&
+      o.position.z() - start_z_ > config_.takeoff_height)
+    phase_ = Phase::kClimbOut;
+  // Climbing out: in a strong wind until the rudder bites, heading into
+  // it; in a light one, up to takeoff_height.
+  if (phase_ == Phase::kClimbOut &&
+      (StrongPadWind() ? HorizontalAirspeed(o) > config_.tail_rotor_speed + 1.0 &&
+                             std::abs(WrapAngle(Bearing(-wind_) - o.yaw)) < config_.turnabout_error
+                       : o.position.z() - start_z_ > config_.takeoff_height))
     phase_ = Phase::kGates;  // a course has at least one gate
   if (phase_ == Phase::kLanding && o.contact && OnLandingGround(course_, o.position, start_z_))
     phase_ = Phase::kLanded;
@@ -179,13 +273,37 @@ void BlimpAutoPilot::NextPhase(const BlimpObservation& o) {
   }
 }
 
+BlimpAutoPilot::Aim BlimpAutoPilot::WatchWind(const BlimpObservation& o) {
+  // Straight up and hold, no forward thrust, the heading let be: the hull
+  // drifts with the air, which shows the wind. Higher over what it drifts onto.
+  // Once the drift shows which way the wind blows, the nose turns into it
+  // (on the tail rotor: slow, the rudder does not bite), ready to leave.
+  Aim aim;
+  aim.bearing = airborne_since_ >= 0.0 && wind_.norm() > 0.5 ? Bearing(-wind_) : o.yaw;
+  aim.crab = false;
+  aim.forward_speed = 0.0;
+  target_z_ =
+      std::max(start_z_ + config_.takeoff_height + 0.5, SafeHeight(o, Horizontal(o.position)));
+  return aim;
+}
+
 BlimpAutoPilot::Aim BlimpAutoPilot::ClimbOut(const BlimpObservation& o) {
+  // In a strong wind, into it, as an airship is launched: the airspeed
+  // (and with it the rudder) comes without ground speed, and the hull is
+  // not blown broadside onto what lies downwind; over anything on the way
+  // upwind. In a light one, for the first gate at the cruise's airspeed.
   const BlimpGateFrame& g = gates_.front();
   Aim aim;
-  aim.bearing = Bearing(Pursue(g, o.position) - Horizontal(o.position));
   aim.crab = false;
   aim.forward_speed = config_.climb_out_airspeed;
   target_z_ = std::max(g.centre.z(), SafeHeight(o, Horizontal(g.centre)));
+  if (StrongPadWind()) {
+    aim.bearing = Bearing(-wind_);
+    const Eigen::Vector2d upwind = Horizontal(o.position) - wind_.normalized() * config_.lookahead;
+    target_z_ = std::max(target_z_, SafeHeight(o, upwind));
+  } else {
+    aim.bearing = Bearing(Pursue(g, o.position) - Horizontal(o.position));
+  }
   return aim;
 }
 
@@ -198,12 +316,21 @@ BlimpAutoPilot::Aim BlimpAutoPilot::FlyGate(const BlimpObservation& o) {
   target_z_ = std::max(g.centre.z(), SafeHeight(o, Horizontal(g.centre)));
   // The landing near after the last gate: through it no faster than
   // the approach's speed there, or the hull coasts past the circle.
-  if (gate_ == static_cast<int>(gates_.size()) - 1) {
+  // (Only once lined up on it: slow, the rudder bites less, and turning
+  // onto the line in a tail wind the hull is carried past the post.)
+  const Eigen::Vector2d forward = Horizontal(g.forward);
+  const bool lined_up =
+      std::abs((position - Horizontal(g.centre)).dot(Horizontal(g.left))) < g.half_width &&
+      std::abs(WrapAngle(Bearing(Horizontal(o.velocity)) - Bearing(forward))) < 0.35;
+  if (gate_ == static_cast<int>(gates_.size()) - 1 && lined_up) {
     const Eigen::Vector2d landing(course_.landing.centre[0], course_.landing.centre[1]);
     const double to_landing =
         (Horizontal(g.centre) - position).norm() + (landing - Horizontal(g.centre)).norm();
+    // (No slower than half as fast again as the rudder bites; at twice, the
+    // hull coasted through the circle at 1.3-1.5 m/s with a 400-ms link and
+    // turned back from beyond it: the twin's hop 60 s, not 38.)
     aim.forward_speed = std::max(ApproachSpeed(to_landing),
-                                 std::min(2.0 * config_.tail_rotor_speed, config_.cruise_airspeed));
+                                 std::min(1.5 * config_.tail_rotor_speed, config_.cruise_airspeed));
   }
   return aim;
 }
@@ -225,7 +352,17 @@ BlimpAutoPilot::Aim BlimpAutoPilot::Land(const BlimpObservation& o) {
   target_z_ = std::max(target_z_, SafeHeight(o, landing));
   // The ground velocity wanted: towards the centre, slowing as it nears
   // it as fast as the hull coasts down on its own drag.
-  const double speed = ApproachSpeed(distance) * std::min(1.0, distance / 2.0);
+  double speed = ApproachSpeed(distance) * std::min(1.0, distance / 2.0);
+  // Against the wind, short of the circle, no slower than the rudder bites
+  // through the air: the head wind brakes the hull when the power goes
+  // (downwind of the circle, at the coasting speed the rudder did not bite
+  // and the hull circled on its tail rotor, drifting away).
+  if (distance > 0.8 * course_.landing.radius) {
+    const double headwind = -wind_.dot(to / distance);
+    if (headwind > config_.landing_headwind)
+      speed = std::max(speed, std::min(config_.tail_rotor_speed + 0.5 - headwind,
+                                       config_.cruise_airspeed - headwind));
+  }
   const Eigen::Vector2d wanted =
       distance > 1e-6 ? Eigen::Vector2d(to / distance * speed) : Eigen::Vector2d::Zero();
   Aim aim;
@@ -245,11 +382,13 @@ BlimpAutoPilot::Aim BlimpAutoPilot::Land(const BlimpObservation& o) {
     const Eigen::Vector2d air = wanted - wind_;
     aim.crab = false;
     aim.bearing = air.norm() > config_.landing_min_air ? Bearing(air) : Bearing(-wind_);
-  } else if (distance > (wind_.norm() > 0.4 ? 0.8 * course_.landing.radius : 3.0)) {
+  } else if (distance > 0.8 * course_.landing.radius) {
     // A light wind: for the centre, the tail rotor turning the slow hull.
     aim.bearing = Bearing(to);
   } else {
-    // Close: face into the wind (the thrust can only push forwards).
+    // Close: face into the wind (the thrust can only push forwards); in
+    // calm air hold the heading (steered for the centre to the last 3 m,
+    // the hull turned on its tail rotor round the centre and touched).
     aim.bearing = wind_.norm() > 0.4 ? Bearing(-wind_) : o.yaw;
     aim.crab = false;
   }
@@ -269,7 +408,7 @@ BlimpCommand BlimpAutoPilot::Landed() {
 void BlimpAutoPilot::Look(const BlimpObservation& o, BlimpCommand& c) const {
   // The camera: at the next gate, or at the landing circle.
   const Eigen::Vector3d look =
-      phase_ == Phase::kGates || phase_ == Phase::kTakeOff
+      phase_ != Phase::kLanding && phase_ != Phase::kLanded
           ? gates_[static_cast<size_t>(gate_)].centre
           : Eigen::Vector3d(course_.landing.centre[0], course_.landing.centre[1], 0.0);
   const Eigen::Vector3d sight = look - o.position;
@@ -289,9 +428,17 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
   TakeIn(o);
   NextPhase(o);
   Aim aim;
+  if (phase_ == Phase::kGround) {  // on the pad, reading the wind
+    BlimpCommand c;
+    Look(o, c);
+    return c;
+  }
   switch (phase_) {
     case Phase::kGround:
     case Phase::kTakeOff:
+      aim = WatchWind(o);
+      break;
+    case Phase::kClimbOut:
       aim = ClimbOut(o);
       break;
     case Phase::kGates:
@@ -313,6 +460,13 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
   Thrust(o, aim, dt, c);
   // The tail rotor with the power off, as the cockpit allows; a weak thrust
   // is let go too, so that the tail rotor can hold the heading.
+  // Lifting off, no power until the helix plane has tilted up from level:
+  // the propellers would push the hull forwards, and on its low axial drag
+  // it coasts on for tens of metres (the drift would not show the wind).
+  if (takeoff_t_ < 0.0 && phase_ == Phase::kTakeOff) takeoff_t_ = t_s;
+  if (phase_ == Phase::kTakeOff &&
+      t_s - takeoff_t_ < config_.max_helix_deg / config_.helix_rate_deg_s + 0.3)
+    c.power = 0.0;
   if (turnabout_ || c.power < 0.02) {
     c.power = 0.0;
     c.tail_rotor = turn;
@@ -320,8 +474,11 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
   // The elevator: a little nose-up to climb, damped; landing, level only
   // (slow, the surface's own force is most of what it does: nose-down
   // pushes the tail, and so the blimp, up).
-  const double pitch_wanted =
-      aim.landing ? 0.0 : std::clamp(config_.pitch_per_climb * climb_, -0.15, 0.15);
+  // Watching the wind, level too: a pitched hull going up or down glides
+  // off along its axis through the air, and the drift no longer shows the wind.
+  const double pitch_wanted = aim.landing || phase_ == Phase::kTakeOff
+                                  ? 0.0
+                                  : std::clamp(config_.pitch_per_climb * climb_, -0.15, 0.15);
   c.elevator = std::clamp(
       config_.pitch_gain * (pitch_wanted - o.pitch) - config_.pitch_rate_gain * pitch_rate_, -1.0,
       1.0);
@@ -347,10 +504,16 @@ double BlimpAutoPilot::Steer(const BlimpObservation& o, const Aim& aim, double t
   const double climb_rate = std::abs(o.velocity.z());
   height_settled_ = !aim.landing || (std::abs(height_error) < config_.turnabout_height_error &&
                                      climb_rate < config_.turnabout_climb);
+  // (Climbing out too: a hull heavier than its air sinks with the power
+  // off, and near the pad the ground is close.)
+  // Nor with the ground a metre below and coming up, unless landing on it
+  // (a heavier gondola sank 3 m onto it, the height error never twice the limit).
   const bool height_lost =
-      aim.landing &&
-      (std::abs(height_error) > 2.0 * config_.turnabout_height_error ||
-       (climb_rate > 2.0 * config_.turnabout_climb && o.velocity.z() * height_error < 0.0));
+      ((aim.landing || phase_ == Phase::kTakeOff || phase_ == Phase::kClimbOut) &&
+       (std::abs(height_error) > 2.0 * config_.turnabout_height_error ||
+        (climb_rate > 2.0 * config_.turnabout_climb && o.velocity.z() * height_error < 0.0))) ||
+      (!sinking_ && height_error > 0.0 && o.position.z() - start_z_ < config_.landing_hover &&
+       o.velocity.z() < -0.1);
   // Slow and off course, a turnabout: the gesture cockpit's tail rotor turns
   // only with the power off (the left hand sideways at zero power), so the
   // pilot lets go of the power and turns on the tail rotor until it heads
@@ -400,7 +563,11 @@ void BlimpAutoPilot::Thrust(const BlimpObservation& o, const Aim& aim, double dt
   // on the airspeed the wind gives, and the height is held: a hull heavier
   // than the air it displaces (harsh's short buoyancy, a heavier gondola)
   // would sink onto the ground short of the circle.
-  if (aim.landing && !sinking_ && height_settled_ && !StrongWind()) {
+  // Not below the height wanted, though: a hull heavier than its air (a
+  // heavier gondola) sinks while it floats, onto the ground short of the
+  // circle in a light wind, before the height counts as lost.
+  if (aim.landing && !sinking_ && height_settled_ && !StrongWind() &&
+      o.position.z() > target_z_ - 0.5) {
     up_force = 0.0;
     vertical_i_ = 0.0;
   }

@@ -2,9 +2,15 @@
 /// @file The automatic blimp pilot: a simulated person who flies the course
 /// from what the link reports, as the thesis's pilot did (ch. 8.2).
 ///
-/// It sees the blimp after a reaction delay and flies in phases: take-off
-/// (the helix plane tilted up, thrust forwards for the cruise's airspeed:
-/// climbing out slowly, the hull went where the wind took it), the gates in order —
+/// It sees the blimp after a reaction delay and flies in phases: on the pad
+/// it reads the wind's speed (the airspeed at rest); in a fresh wind it
+/// rises straight over the pad and drifts with the air until its wind
+/// estimate is steady, turns its nose into the wind (tail rotor) and leaves
+/// into it until the rudder bites — an airship is launched into the wind,
+/// and nothing is flown towards while the wind is unknown; in a light one
+/// it climbs out as an aeroplane does (the helix plane tilted up, thrust
+/// forwards for the cruise's airspeed: climbing out slowly, the hull went
+/// where the wind took it). Then the gates in order —
 /// each approached along its direction of travel by pursuing a point on
 /// the gate's approach line some metres ahead (a point before the gate
 /// first, then through it), at the gate's height or at a safety height
@@ -13,8 +19,11 @@
 /// ground; over the circle and slow, facing into the wind it estimates, it
 /// sinks onto the ground (thrust forwards to hold its place, down to sink).
 /// (The wind: from what the blimp reports, its ground velocity against its
-/// airspeed along the heading; with a predictive display, from the states
-/// as reported, not the predicted blimp it flies by.)
+/// airspeed along the heading, held while slower than the rudder bites (the
+/// sideslip would be read as wind); with a predictive display, from the
+/// states as reported, not the predicted blimp it flies by, and so is the
+/// pad's reading.) Landing against a head wind, it comes no slower than
+/// the rudder bites through the air until near the circle.
 /// In a wind the rudder bites in (at least tail_rotor_speed) the whole
 /// approach heads along the wind triangle's air velocity (the ground
 /// velocity wanted less the wind): nose into the wind, crabbed across it,
@@ -66,6 +75,30 @@ struct BlimpPilotConfig {
   /// wind, the hop's shed). Long enough to climb over a roof at max_climb.
   double drift_lookahead_s = 8.0;
   double takeoff_height = 2.5;  ///< m above the start before heading off at speed
+  // The take-off, as an airship is launched: the wind is found first.
+  /// s on the pad reading the airspeed, which at rest is the wind's speed
+  /// (less, once the wind drags the hull along: then it goes at once).
+  double pad_watch_s = 1.0;
+  /// m/s: a wind read on the pad at least this fast is watched from over
+  /// the pad before leaving: the hull rises straight up (no forward thrust;
+  /// the power waits for the helix plane to tilt up, the hull kept level) to
+  /// half a metre over takeoff_height — higher where its drift would take it
+  /// onto a building — and drifts with the air, its nose turned into the
+  /// wind as the drift shows it, until its estimate is steady: at least
+  /// wind_watch_min_s clear of the pad, and the drift's measured wind within
+  /// wind_steady_mps of the estimate for wind_steady_s (at most
+  /// wind_watch_max_s). Then it leaves into the wind until the rudder bites.
+  /// A lighter wind is learnt on the way (the take-off at the cruise's
+  /// airspeed). Climbing out at once in harsh's 3.5 m/s, the hull was blown
+  /// 20 m onto the hop's shed in 2 s with a 400-ms link. (lab blows 1.0 +/-
+  /// 0.3 m/s, harsh 3.0 +/- 0.5.)
+  double watch_wind_speed = 1.6;
+  double wind_watch_min_s = 3.0;
+  double wind_watch_tau_s = 2.0;  ///< s: the estimate's smoothing while watching (4 s after)
+  double wind_settle_s = 1.5;     ///< s clear of the pad before the drift tells the wind
+  double wind_steady_mps = 0.8;   ///< (harsh's gusts are 1 m/s rms)
+  double wind_steady_s = 1.0;
+  double wind_watch_max_s = 12.0;
   /// m/s: the airspeed wanted while climbing out to takeoff_height. Slower,
   /// the rudder does not bite (tail_rotor_speed) and the hull goes where a
   /// cross wind carries it and turns as the air turns it (a tail wind turns
@@ -125,6 +158,13 @@ struct BlimpPilotConfig {
   /// wanted (the ground velocity wanted less the wind) gives the heading
   /// when faster than this; slower, the nose goes into the wind.
   double landing_min_air = 0.4;
+  /// m/s: a head wind over this on the way to the circle (beyond 0.8 of its
+  /// radius): the ground speed wanted is no slower than gives the rudder's
+  /// bite through the air (tail_rotor_speed + 0.5) — the head wind brakes
+  /// the hull when the power goes. At the coasting speed instead, downwind
+  /// of the circle in lab's 1 m/s, the rudder did not bite and the hull
+  /// circled on its tail rotor, drifting away to the lap's cap.
+  double landing_headwind = 0.3;
   /// s: a turnabout lasts at most this long, and the next begins no sooner
   /// after it (flying on with power in between).
   double turnabout_max_s = 8.0;
@@ -137,14 +177,15 @@ struct BlimpPilotConfig {
   double pitch_rate_gain = 1.0;   ///< elevator per rad/s of pitch rate
   double pitch_per_climb = 0.08;  ///< rad of nose-up per m/s of climb wanted
   // What the pilot knows of its blimp (PilotKnowing).
-  double full_thrust_n = 29.4;  ///< both main motors at full power
-  double max_helix_deg = 90.0;  ///< the helix plane's tilt at full command
+  double full_thrust_n = 29.4;     ///< both main motors at full power
+  double max_helix_deg = 90.0;     ///< the helix plane's tilt at full command
+  double helix_rate_deg_s = 90.0;  ///< how fast the helix plane tilts
 
   void ValidateOrThrow() const;
 };
 
 /// The pilot's knowledge of its blimp taken from the airship's own
-/// parameters — full thrust and the helix plane's range — so that its
+/// parameters — full thrust, the helix plane's range and rate — so that its
 /// hands give the forces it means on the blimp the vehicle file describes;
 /// the rest of `config` as given. (Its feel for the drag stays its own:
 /// drag_per_speed2 is a rounded 0.31 where ½·ρ·Cd·V^⅔ of sim-blimp.yaml is
@@ -153,7 +194,9 @@ BlimpPilotConfig PilotKnowing(const AirshipConfig& airship, BlimpPilotConfig con
 
 class BlimpAutoPilot {
  public:
-  enum class Phase { kGround, kTakeOff, kGates, kLanding, kLanded };
+  /// kTakeOff: up over the pad, watching the wind; kClimbOut: into the
+  /// wind until the rudder bites (in a wind that needs it).
+  enum class Phase { kGround, kTakeOff, kClimbOut, kGates, kLanding, kLanded };
 
   /// Validates and copies both (ConfigFieldError).
   BlimpAutoPilot(const BlimpCourseConfig& course, const BlimpPilotConfig& config = {});
@@ -179,6 +222,9 @@ class BlimpAutoPilot {
   double target_height() const { return target_z_; }
   /// The horizontal wind it estimates (world frame, m/s).
   const Eigen::Vector2d& wind() const { return wind_; }
+  /// The wind estimate is steady (the take-off's watch is over); when.
+  bool wind_known() const { return wind_known_s_ >= 0.0; }
+  double wind_known_s() const { return wind_known_s_; }
 
  private:
   /// The newest observation seen at or before t; null when none.
@@ -202,15 +248,20 @@ class BlimpAutoPilot {
   void TakeIn(const BlimpObservation& o);
   /// The wind from `o`, `h` seconds after the last one it came from.
   void EstimateWind(const BlimpObservation& o, double h);
+  /// On the pad: the airspeed at rest, the wind's speed (pad_wind_).
+  void ReadPad(const BlimpObservation& o);
   /// Off the ground, through the last gate, down in (or out of) the circle.
   void NextPhase(const BlimpObservation& o);
   // One function per phase: each sets target_z_ and says what it wants.
+  Aim WatchWind(const BlimpObservation& o);
   Aim ClimbOut(const BlimpObservation& o);
   Aim FlyGate(const BlimpObservation& o);
   Aim Land(const BlimpObservation& o);
   BlimpCommand Landed();
   /// A wind the rudder bites in, heading into it (at least tail_rotor_speed).
   bool StrongWind() const { return wind_.norm() >= config_.tail_rotor_speed; }
+  /// The wind read on the pad is fresh: watched before leaving, then into it.
+  bool StrongPadWind() const { return pad_wind_ >= config_.watch_wind_speed; }
   /// The camera at the next gate, or at the landing circle.
   void Look(const BlimpObservation& o, BlimpCommand& c) const;
   /// The turn (rudder, or tail rotor) towards the aim's heading; begins and
@@ -249,6 +300,14 @@ class BlimpAutoPilot {
   double turnabout_since_ = -1e9;  ///< when the turnabout began, or the last one ended
   Eigen::Vector2d wind_ = Eigen::Vector2d::Zero();
   bool wind_from_reports_ = false;  ///< ObserveReported was called: the wind is theirs
+  double airborne_since_ = -1.0;    ///< the first observation off the ground (watching the wind)
+  double wind_steady_since_ = 0.0;  ///< since when the measured wind agrees with the estimate
+  double wind_known_s_ = -1.0;      ///< when the wind estimate became steady
+  // The pad's reading (ReadPad): from the reported states once they come apart.
+  double pad_since_ = 0.0, pad_airspeed_sum_ = 0.0, pad_wind_ = 0.0;
+  int pad_samples_ = 0;
+  bool pad_read_ = false;
+  double takeoff_t_ = -1.0;  ///< when the first decision was taken (the helix plane tilts up)
   double last_report_t_ = 0.0;
 };
 
