@@ -1095,24 +1095,32 @@ int BenchLinkMain(int argc, const char* const* argv) {
     }
   }
   // Per vehicle, one curve per reality and mode (at the first loss): the lap
-  // against the delay, and the prediction's error against the truth.
+  // against the delay, and the prediction's error against the truth; over
+  // several seeds, each point the seeds' mean (completed laps only).
   for (const LapVehicle& vehicle : vehicles) {
     std::vector<Series> laps, errors;
+    const std::string over = seeds.size() > 1 ? ", mean of seeds" : "";
     for (const std::string& reality : realities) {
       for (const PredictMode mode : modes) {
-        Series lap{reality + ", " + ModeName(mode), {}, {}};
+        Series lap{reality + ", " + ModeName(mode) + over, {}, {}};
         Series error = lap;
-        for (const LapRow& r : rows) {
-          if (r.spec.vehicle != &vehicle || r.spec.reality != reality || r.spec.mode != mode ||
-              r.spec.loss_percent != losses.front())
-            continue;
-          if (r.completed) {
-            lap.x.push_back(r.spec.delay_ms);
-            lap.y.push_back(r.lap_time_s);
+        for (const double delay : delays) {
+          std::vector<double> lap_s, error_m;
+          for (const LapRow& r : rows) {
+            if (r.spec.vehicle != &vehicle || r.spec.reality != reality || r.spec.mode != mode ||
+                r.spec.loss_percent != losses.front() || r.spec.delay_ms != delay)
+              continue;
+            if (r.completed) lap_s.push_back(r.lap_time_s);
+            if (std::isfinite(r.error_m_p95)) error_m.push_back(r.error_m_p95);
           }
-          if (std::isfinite(r.error_m_p95)) {
-            error.x.push_back(r.spec.delay_ms);
-            error.y.push_back(std::max(r.error_m_p95 * 1e3, 0.01));  // log scale: 10 µm floor
+          if (!lap_s.empty()) {
+            lap.x.push_back(delay);
+            lap.y.push_back(Summarise(lap_s).mean);
+          }
+          if (!error_m.empty()) {
+            error.x.push_back(delay);
+            // log scale: a 10 µm floor
+            error.y.push_back(std::max(Summarise(error_m).mean * 1e3, 0.01));
           }
         }
         if (!lap.x.empty()) laps.push_back(lap);
@@ -1123,8 +1131,7 @@ int BenchLinkMain(int argc, const char* const* argv) {
     if (!laps.empty()) {
       PlotLines(
           dir / (stem + ".png"), laps,
-          {"The automatic " + std::string(vehicle.name == "robot" ? "operator" : "pilot") +
-               "'s lap against the link's delay, per reality and prediction (" + vehicle.name + ")",
+          {"The lap against the link's delay, per reality and prediction (" + vehicle.name + ")",
            "delay each way, ms", "lap time, s (completed laps)"});
     }
     if (!errors.empty()) {

@@ -19,9 +19,18 @@ std::filesystem::path BenchDir() {
 
 void PlotLines(const std::filesystem::path& file, const std::vector<Series>& series,
                const PlotOptions& o) {
-  cv::Mat img(o.height, o.width, CV_8UC3, cv::Scalar(255, 255, 255));
-  const int left = 80, right = 20, top = 40, bottom = 60;
+  // The title on its own line above the y axis's label; the legend right
+  // of the axes (over the lines it hid them), the picture that much wider.
+  int text_w = 0;
+  for (const Series& s : series) {
+    int baseline = 0;
+    text_w = std::max(text_w,
+                      cv::getTextSize(s.name, cv::FONT_HERSHEY_SIMPLEX, 0.45, 1, &baseline).width);
+  }
+  const int legend_w = series.empty() ? 0 : text_w + 45;
+  const int left = 80, right = 20, top = 60, bottom = 60;
   const int w = o.width - left - right, h = o.height - top - bottom;
+  cv::Mat img(o.height, o.width + legend_w, CV_8UC3, cv::Scalar(255, 255, 255));
   double x0 = std::numeric_limits<double>::infinity(), x1 = -x0, y0 = x0, y1 = -x0;
   auto ty = [&](double y) { return o.log_y ? std::log10(std::max(y, 1e-12)) : y; };
   for (const Series& s : series) {
@@ -73,9 +82,13 @@ void PlotLines(const std::filesystem::path& file, const std::vector<Series>& ser
     }
     if (pts.size() > 1) cv::polylines(img, pts, false, c, 2, cv::LINE_AA);
     for (const cv::Point& p : pts) cv::circle(img, p, 2, c, cv::FILLED);
+  }
+  const int legend_x = left + w + 15;
+  for (size_t k = 0; k < series.size(); ++k) {
+    const cv::Scalar c = kColours[k % kColourCount];
     const int ly = top + 20 + 20 * static_cast<int>(k);
-    cv::line(img, {left + w - 250, ly - 4}, {left + w - 225, ly - 4}, c, 2);
-    cv::putText(img, series[k].name, {left + w - 220, ly}, cv::FONT_HERSHEY_SIMPLEX, 0.45, black, 1,
+    cv::line(img, {legend_x, ly - 4}, {legend_x + 25, ly - 4}, c, 2);
+    cv::putText(img, series[k].name, {legend_x + 30, ly}, cv::FONT_HERSHEY_SIMPLEX, 0.45, black, 1,
                 cv::LINE_AA);
   }
   if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path());
