@@ -251,8 +251,16 @@ ScheduleResult RunCapacitySchedule(const VehicleConfig& vehicle, CameraCodec cod
              "kbit/s (target shown up to 3000)", false, 900, 360});
   PlotLines(bottom, {latency, limit},
             {"capture to decoded latency", "time, s", "ms", false, 900, 300});
+  // Each as wide as its legend makes it: the narrower padded white on the right.
+  cv::Mat upper = cv::imread(top.string()), lower = cv::imread(bottom.string());
+  const int width = std::max(upper.cols, lower.cols);
+  for (cv::Mat* m : {&upper, &lower}) {
+    if (m->cols < width)
+      cv::copyMakeBorder(*m, *m, 0, 0, 0, width - m->cols, cv::BORDER_CONSTANT,
+                         cv::Scalar(255, 255, 255));
+  }
   cv::Mat stacked;
-  cv::vconcat(cv::imread(top.string()), cv::imread(bottom.string()), stacked);
+  cv::vconcat(upper, lower, stacked);
   cv::imwrite((options.out_dir / (name + ".png")).string(), stacked);
   std::filesystem::remove(top);
   std::filesystem::remove(bottom);
