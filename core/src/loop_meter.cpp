@@ -66,30 +66,19 @@ bool TryRealtime(int priority) {
   return pthread_setschedparam(pthread_self(), SCHED_FIFO, &param) == 0;
 }
 
-RealtimeWhile::RealtimeWhile(int priority) : policy_(sched_getscheduler(0)) {
+RealtimeWhile::RealtimeWhile(int priority, StartedThreads started)
+    : policy_(sched_getscheduler(0)) {
   sched_param param{};
-  if (policy_ < 0 || sched_getparam(0, &param) != 0) return;
+  if (priority <= 0 || policy_ < 0 || sched_getparam(0, &param) != 0) return;
   priority_ = param.sched_priority;
+  const bool inherit = started == StartedThreads::kInherit;
+  // (A thread raised with reset-on-fork would start its threads normal:
+  // raised again here without it.)
+  if (inherit && policy_ == SCHED_FIFO && priority_ >= priority) return;
   sched_param wanted{};
   wanted.sched_priority = priority;
-  granted_ = sched_setscheduler(0, SCHED_FIFO | SCHED_RESET_ON_FORK, &wanted) == 0;
-}
-
-ThreadsStartRealtime::ThreadsStartRealtime(int priority) {
-  sched_param param{};
-  if (priority <= 0 || pthread_getschedparam(pthread_self(), &policy_, &param) != 0) return;
-  priority_ = param.sched_priority;
-  if (policy_ == SCHED_FIFO && priority_ >= priority) return;
-  sched_param wanted{};
-  wanted.sched_priority = priority;
-  changed_ = pthread_setschedparam(pthread_self(), SCHED_FIFO, &wanted) == 0;
-}
-
-ThreadsStartRealtime::~ThreadsStartRealtime() {
-  if (!changed_) return;
-  sched_param param{};
-  param.sched_priority = priority_;
-  pthread_setschedparam(pthread_self(), policy_, &param);
+  granted_ =
+      sched_setscheduler(0, inherit ? SCHED_FIFO : SCHED_FIFO | SCHED_RESET_ON_FORK, &wanted) == 0;
 }
 
 RealtimeWhile::~RealtimeWhile() {

@@ -105,7 +105,7 @@ Participant::Participant(const LinkConfig& config, const std::string& name,
                          eprosima::fastdds::dds::DomainParticipantListener* listener)
     : config_(Validated(config)) {
   // Every thread the participant starts (below) inherits the link's priority.
-  const ThreadsStartRealtime realtime(kLinkThreadPriority);
+  const RealtimeWhile realtime(kLinkThreadPriority, StartedThreads::kInherit);
   LogToStderr();
   dds::DomainParticipantQos qos = dds::PARTICIPANT_QOS_DEFAULT;
   qos.name(name);

@@ -1,6 +1,7 @@
 // PeriodicThread: calls the tick repeatedly, stops cleanly, counts itself.
 // Behaviour only: waits are generous loops, never rate or jitter bounds.
 #include <pthread.h>
+#include <sched.h>
 
 #include <algorithm>
 #include <atomic>
@@ -264,4 +265,40 @@ TEST_CASE(
   REQUIRE(WaitFor([&] { return ticks.load() >= after + 20; }));
   loop.Stop();
   CHECK(policy_seen.load() == SCHED_OTHER);  // and it does not ask again
+}
+
+TEST_CASE("A thread raised for a while: what the threads it starts get, and back after") {
+  const int before = sched_getscheduler(0);
+  // The policy of a thread started now (with its reset-on-fork flag).
+  auto started_policy = [] {
+    int policy = -1;
+    std::thread t([&] { policy = sched_getscheduler(0); });
+    t.join();
+    return policy;
+  };
+  {
+    const haptel::RealtimeWhile raised(20, haptel::StartedThreads::kInherit);
+    if (!raised.granted()) {
+      WARN("SCHED_FIFO refused here: nothing to check");
+      return;
+    }
+    CHECK(sched_getscheduler(0) == SCHED_FIFO);
+    CHECK(started_policy() == SCHED_FIFO);  // a library's threads take it on
+  }
+  CHECK(sched_getscheduler(0) == before);
+  {
+    const haptel::RealtimeWhile raised(20);
+    REQUIRE(raised.granted());
+    CHECK((sched_getscheduler(0) & ~SCHED_RESET_ON_FORK) == SCHED_FIFO);
+    CHECK(started_policy() == SCHED_OTHER);  // what it starts runs normal
+    // Raised for a library's threads meanwhile: raised again without the
+    // reset, so that they do take it on.
+    {
+      const haptel::RealtimeWhile inner(10, haptel::StartedThreads::kInherit);
+      CHECK(inner.granted());
+      CHECK(started_policy() == SCHED_FIFO);
+    }
+    CHECK(started_policy() == SCHED_OTHER);
+  }
+  CHECK(sched_getscheduler(0) == before);
 }

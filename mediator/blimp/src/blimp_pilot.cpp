@@ -428,13 +428,12 @@ BlimpCommand BlimpAutoPilot::Decide(double t_s) {
   TakeIn(o);
   NextPhase(o);
   Aim aim;
-  if (phase_ == Phase::kGround) {  // on the pad, reading the wind
-    BlimpCommand c;
-    Look(o, c);
-    return c;
-  }
   switch (phase_) {
-    case Phase::kGround:
+    case Phase::kGround: {  // on the pad, reading the wind
+      BlimpCommand c;
+      Look(o, c);
+      return c;
+    }
     case Phase::kTakeOff:
       aim = WatchWind(o);
       break;

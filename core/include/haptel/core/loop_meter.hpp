@@ -48,43 +48,35 @@ class LoopMeter {
 /// Asks for SCHED_FIFO at `priority` for the calling thread; true if granted.
 bool TryRealtime(int priority);
 
+/// What the threads and processes a thread starts while it is raised get.
+enum class StartedThreads {
+  /// Normal ones (SCHED_RESET_ON_FORK): a physics world built late, the
+  /// vehicle's process.
+  kNormal,
+  /// Its SCHED_FIFO priority (pthread_create's default): for a library's
+  /// threads that take no priority of their own (Fast DDS 2.9's receive,
+  /// event and data-sharing threads; 2.13 added settings for them).
+  kInherit,
+};
+
 /// The calling thread at SCHED_FIFO `priority` (where the process may) for
-/// the object's lifetime, then back to what it was. With
-/// SCHED_RESET_ON_FORK: the threads and processes it starts meanwhile (a
-/// physics world built late, the vehicle's process) start as normal ones.
-/// For a loop that paces itself (the session's, a replay's sender); a
-/// PeriodicThread earns its own (periodic_thread.hpp).
+/// the object's lifetime, then back to what it was. For a loop that paces
+/// itself (the session's, a replay's sender: kNormal; a PeriodicThread
+/// earns its own, periodic_thread.hpp), or around the creation of a
+/// library's threads (kInherit; a thread already at SCHED_FIFO `priority`
+/// or above is then left as it is).
 class RealtimeWhile {
  public:
-  explicit RealtimeWhile(int priority);
+  explicit RealtimeWhile(int priority, StartedThreads started = StartedThreads::kNormal);
   ~RealtimeWhile();
   RealtimeWhile(const RealtimeWhile&) = delete;
   RealtimeWhile& operator=(const RealtimeWhile&) = delete;
   bool granted() const { return granted_; }
 
  private:
-  int policy_;
+  int policy_ = 0;  ///< as sched_getscheduler gave it (with its reset-on-fork flag)
   int priority_ = 0;
   bool granted_ = false;
-};
-
-/// The calling thread at SCHED_FIFO `priority` while the object lives, so
-/// that the threads it starts meanwhile inherit it (pthread_create's
-/// default): for a library's threads that take no priority of their own
-/// (Fast DDS 2.9's receive, event and data-sharing threads; 2.13 added
-/// settings for them). A thread already at SCHED_FIFO `priority` or above
-/// is left as it is; where the process may not, nothing changes.
-class ThreadsStartRealtime {
- public:
-  explicit ThreadsStartRealtime(int priority);
-  ~ThreadsStartRealtime();
-  ThreadsStartRealtime(const ThreadsStartRealtime&) = delete;
-  ThreadsStartRealtime& operator=(const ThreadsStartRealtime&) = delete;
-
- private:
-  int policy_ = 0;
-  int priority_ = 0;
-  bool changed_ = false;
 };
 
 /// How many nice steps background threads (the video's encoder and decoder)

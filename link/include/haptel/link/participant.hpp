@@ -41,7 +41,7 @@ std::string TopicName(const std::string& vehicle, const std::string& channel);
 /// The SCHED_FIFO priority of the link's own threads (Fast DDS's receive,
 /// event and data-sharing threads, the fault transport's delivery), where
 /// the process may: they start from a thread raised to it for the moment
-/// (ThreadsStartRealtime, core/loop_meter.hpp), as a participant, reader
+/// (RealtimeWhile with StartedThreads::kInherit, core/loop_meter.hpp), as a participant, reader
 /// or writer is made. At normal priority on a loaded host they held a
 /// command or a state for up to a second: the vehicle's watchdog stopped
 /// it mid-drive, and the operator's states came late. Below a vehicle's

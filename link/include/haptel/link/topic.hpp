@@ -109,7 +109,8 @@ class Writer : private eprosima::fastdds::dds::DataWriterListener {
   Writer(Participant& participant, const std::string& topic, Profile profile)
       : participant_(participant), tapped_(participant, topic, TapDirection::kSent) {
     topic_ = detail::MakeTopic<PubSubType>(participant, topic);
-    const ThreadsStartRealtime realtime(kLinkThreadPriority);  // its threads, if any
+    const RealtimeWhile realtime(kLinkThreadPriority,
+                                 StartedThreads::kInherit);  // its threads, if any
     writer_ = participant.publisher()->create_datawriter(
         topic_, DataWriterQosFor(profile, participant.config()), this);
     if (writer_ == nullptr)
@@ -180,7 +181,8 @@ class Reader : private eprosima::fastdds::dds::DataReaderListener {
         on_sample_(std::move(on_sample)),
         tapped_(participant, topic, TapDirection::kReceived) {
     topic_ = detail::MakeTopic<PubSubType>(participant, topic);
-    const ThreadsStartRealtime realtime(kLinkThreadPriority);  // its data-sharing thread
+    const RealtimeWhile realtime(kLinkThreadPriority,
+                                 StartedThreads::kInherit);  // its data-sharing thread
     reader_ = participant.subscriber()->create_datareader(
         topic_, DataReaderQosFor(profile, participant.config()), this);
     if (reader_ == nullptr)
