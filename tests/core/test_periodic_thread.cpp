@@ -293,12 +293,19 @@ TEST_CASE("A thread raised for a while: what the threads it starts get, and back
     CHECK(started_policy() == SCHED_OTHER);  // what it starts runs normal
     // Raised for a library's threads meanwhile: raised again without the
     // reset, so that they do take it on.
+    // Asked for less than it has, it keeps what it has.
     {
       const haptel::RealtimeWhile inner(10, haptel::StartedThreads::kInherit);
       CHECK(inner.granted());
       CHECK(started_policy() == SCHED_FIFO);
+      sched_param param{};
+      sched_getparam(0, &param);
+      CHECK(param.sched_priority == 20);
     }
     CHECK(started_policy() == SCHED_OTHER);
+    sched_param param{};
+    sched_getparam(0, &param);
+    CHECK(param.sched_priority == 20);
   }
   CHECK(sched_getscheduler(0) == before);
 }

@@ -46,6 +46,7 @@ class LoopMeter {
 };
 
 /// Asks for SCHED_FIFO at `priority` for the calling thread; true if granted.
+/// Never granted in a ThreadSanitizer build (loop_meter.cpp says why).
 bool TryRealtime(int priority);
 
 /// What the threads and processes a thread starts while it is raised get.
@@ -64,7 +65,8 @@ enum class StartedThreads {
 /// itself (the session's, a replay's sender: kNormal; a PeriodicThread
 /// earns its own, periodic_thread.hpp), or around the creation of a
 /// library's threads (kInherit; a thread already at SCHED_FIFO `priority`
-/// or above is then left as it is).
+/// or above is then left as it is). Never lowers a thread: one at SCHED_FIFO
+/// above `priority` keeps its own. Not granted under ThreadSanitizer.
 class RealtimeWhile {
  public:
   explicit RealtimeWhile(int priority, StartedThreads started = StartedThreads::kNormal);
