@@ -224,14 +224,18 @@ void CameraStreamer::Tick(int64_t now_ns) {
   grabs_failed_.store(grab_monitor_.failures(), std::memory_order_relaxed);
   camera_stalls_.store(grab_monitor_.stalls(), std::memory_order_relaxed);
   if (!grabbed) return;
-  // A tile's preview: one grab in every (rate / preview rate), the first at once.
+  // A tile's preview: at most its rate, the first at once. Paced by the
+  // clock, not by counting grabs: after a stall the camera's thread catches
+  // up (up to 10 ticks back to back), and one grab in three then sent 13
+  // previews in a second on a loaded host. The due time keeps its phase
+  // through a tick's jitter, and starts again from now after a stall.
   const bool preview = preview_wanted_.load(std::memory_order_relaxed);
-  if (preview != previewing_) grabs_since_preview_ = 0;
-  if (preview &&
-      grabs_since_preview_++ % static_cast<uint64_t>(std::max(
-                                   1.0, std::round(config_.rate_hz / preview_config_.rate_hz))) !=
-          0) {
-    return;
+  if (preview) {
+    if (!previewing_) next_preview_ns_ = now_ns;
+    if (now_ns < next_preview_ns_) return;
+    const auto period_ns = static_cast<int64_t>(std::llround(1e9 / preview_config_.rate_hz));
+    next_preview_ns_ += period_ns;
+    if (next_preview_ns_ <= now_ns) next_preview_ns_ = now_ns + period_ns;
   }
   VideoEncoder& encoder = EncoderFor(preview);
   if (preview != previewing_) {

@@ -194,8 +194,8 @@ class CameraStreamer {
   const CameraConfig preview_config_;  ///< half the size, kPreviewRate_hz
   std::unique_ptr<VideoEncoder> preview_encoder_;
   cv::Mat preview_image_;
-  bool previewing_ = false;           ///< camera thread only: the last frame sent was a preview
-  uint64_t grabs_since_preview_ = 0;  ///< camera thread only
+  bool previewing_ = false;      ///< camera thread only: the last frame sent was a preview
+  int64_t next_preview_ns_ = 0;  ///< camera thread only: when a preview is next due
   const char* codec_name_;
   cv::Mat image_;
   msg::VideoFrame frame_msg_;
