@@ -126,7 +126,7 @@ TEST_CASE(
   while (video.read(frame)) ++frames;
   CHECK(frame.empty());
   // Every frame due is in the file or counted: a loaded host's encoder falls
-  // behind, and its queue drops what it cannot take (CI's suite: 358 written
+  // behind, and its queue drops what it cannot take (the loaded suite: 358 written
   // and 132 dropped for a lap of 14.7 s). Most are written all the same.
   const long dropped = std::stol(JsonField(json, "view_record_dropped"));
   CHECK(frames + dropped >= 25.0 * lap_s);
